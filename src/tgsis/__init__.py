@@ -1,0 +1,77 @@
+"""tgsis: a spatio-temporal geoscience information system on PostgreSQL.
+
+Geological objects (points, lines, triangulated surfaces, tetrahedral solids)
+with topology and properties, their change through time, and many versions of
+them in long transactions, stored by the ``tgsis`` PostgreSQL extension and
+reached from Python through this package.
+
+>>> import tgsis                                          # doctest: +SKIP
+>>> with tgsis.connect() as conn:                         # local server if no DSN
+...     print(conn.execute("select tgsis.version()").fetchone())
+"""
+
+from __future__ import annotations
+
+import logging
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _package_version
+
+from tgsis.db import (
+    ExtensionSources,
+    InstalledVersion,
+    InstallResult,
+    LocalServer,
+    connect,
+    find_binaries,
+    install,
+    installed_version,
+    uninstall,
+)
+from tgsis.errors import (
+    AlreadyExistsError,
+    DatabaseError,
+    Error,
+    InstallationError,
+    InUseError,
+    InvalidGeometryError,
+    InvalidInputError,
+    InvalidNameError,
+    InvalidPropertyError,
+    LocalServerError,
+    MissingPrivilegeError,
+    NotFoundError,
+)
+
+try:
+    __version__ = _package_version("tgsis")
+except PackageNotFoundError:  # running from a source tree that is not installed
+    __version__ = ExtensionSources.default().version
+
+logging.getLogger("tgsis").addHandler(logging.NullHandler())
+
+__all__ = [
+    "__version__",
+    # connections and installation
+    "connect",
+    "install",
+    "installed_version",
+    "uninstall",
+    "InstallResult",
+    "InstalledVersion",
+    "ExtensionSources",
+    "LocalServer",
+    "find_binaries",
+    # errors
+    "Error",
+    "AlreadyExistsError",
+    "DatabaseError",
+    "InstallationError",
+    "InUseError",
+    "InvalidGeometryError",
+    "InvalidInputError",
+    "InvalidNameError",
+    "InvalidPropertyError",
+    "LocalServerError",
+    "MissingPrivilegeError",
+    "NotFoundError",
+]

@@ -1,0 +1,25 @@
+"""Database side of the client: connections, installation, the local server."""
+
+from tgsis.db.connect import Target, connect, local_dsn, release_local_server, resolve_target
+from tgsis.db.install import InstalledVersion, InstallResult, install, installed_version, uninstall
+from tgsis.db.local import Lease, LocalServer, PgBinaries, default_home, find_binaries
+from tgsis.db.sqlsource import ExtensionSources
+
+__all__ = [
+    "ExtensionSources",
+    "InstallResult",
+    "InstalledVersion",
+    "Lease",
+    "LocalServer",
+    "PgBinaries",
+    "Target",
+    "connect",
+    "default_home",
+    "find_binaries",
+    "install",
+    "installed_version",
+    "local_dsn",
+    "release_local_server",
+    "resolve_target",
+    "uninstall",
+]

@@ -1,0 +1,102 @@
+"""Stop a local PostgreSQL server when the process that started it goes away.
+
+Run as a script (``python reaper.py ...``, never imported by tgsis) in a
+session of its own, so that Ctrl-C in the terminal does not reach it. Its
+standard input is a pipe whose write end only the owning process holds: the
+read returns end-of-file when the owner closes it (normal release) or dies
+(Ctrl-C, SIGTERM, SIGKILL, a crash). Then:
+
+* ``--mode throwaway``: stop the server at once and remove its whole folder
+  (test clusters);
+* ``--mode lease``: under the transition lock, if no other process holds a
+  lease on the server (an exclusive ``flock`` on the lease file succeeds) and
+  the server was started implicitly, stop it; a server started by
+  ``tgsis local start`` stays up.
+
+Standard library only: it must start fast and must not import tgsis.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import fcntl
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+
+
+def _stop(pg_ctl: str, data: str, mode: str, uid: int | None, gid: int | None) -> None:
+    if not os.path.exists(os.path.join(data, "postmaster.pid")):
+        return
+    kwargs: dict[str, object] = {}
+    if uid is not None and gid is not None:
+        kwargs.update(user=uid, group=gid, extra_groups=[])
+    subprocess.run(  # noqa: S603 - fixed argument list
+        [pg_ctl, "stop", "-D", data, "-m", mode, "-w", "-t", "60"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        cwd="/",
+        check=False,
+        **kwargs,  # type: ignore[arg-type]
+    )
+
+
+def _implicitly_started(state_file: str) -> bool:
+    try:
+        with open(state_file, encoding="utf-8") as handle:
+            return bool(json.load(handle).get("started_by") == "implicit")
+    except (OSError, ValueError):
+        return False
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--pg-ctl", required=True)
+    parser.add_argument("--data", required=True)
+    parser.add_argument("--root", required=True)
+    parser.add_argument("--mode", choices=("throwaway", "lease"), required=True)
+    parser.add_argument("--lock-file")
+    parser.add_argument("--transition-lock-file")
+    parser.add_argument("--state-file")
+    parser.add_argument("--uid", type=int)
+    parser.add_argument("--gid", type=int)
+    args = parser.parse_args(argv)
+
+    for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+
+    while sys.stdin.buffer.read(65536):
+        pass
+
+    if args.mode == "throwaway":
+        _stop(args.pg_ctl, args.data, "immediate", args.uid, args.gid)
+        shutil.rmtree(args.root, ignore_errors=True)
+        return 0
+
+    # The same protocol as LocalServer: decide inside the transition lock, stop
+    # only when no other process holds the lease file.
+    transition = os.open(args.transition_lock_file, os.O_RDWR | os.O_CREAT, 0o644)
+    lease = os.open(args.lock_file, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(transition, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(lease, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return 0  # another process still uses the server; the last one stops it
+        if _implicitly_started(args.state_file):
+            _stop(args.pg_ctl, args.data, "fast", args.uid, args.gid)
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(args.state_file)
+    finally:
+        os.close(lease)
+        os.close(transition)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

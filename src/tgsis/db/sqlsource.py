@@ -1,0 +1,202 @@
+"""The extension's SQL sources, as the Python client sees them.
+
+``sql/Makefile`` (PGXS) and this module build the same script from the same
+files: ``sources.txt`` gives the order, ``tgsis.control`` the version, and
+``@TGSIS_VERSION@`` in the sources is replaced by it. Upgrade scripts are
+``updates/tgsis--FROM--TO.sql``, installed by PGXS and applied by
+:func:`tgsis.install` on the plain-SQL route.
+
+The sources are found, in this order, in ``$TGSIS_SQL_DIR``, inside the
+installed package (``tgsis/_sql``, put there by the wheel build) or in the
+``sql/`` folder of a source checkout.
+"""
+
+from __future__ import annotations
+
+import collections
+import os
+import re
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+from tgsis.errors import InstallationError
+
+__all__ = ["ExtensionSources", "find_sql_dir", "parse_version", "EXTENSION"]
+
+EXTENSION = "tgsis"
+VERSION_TOKEN = "@TGSIS_VERSION@"
+PSQL_GUARD = '\\echo Use "CREATE EXTENSION tgsis" to load this file. \\quit'
+
+_CONTROL_VERSION_RE = re.compile(r"^default_version\s*=\s*'([^']+)'", re.MULTILINE)
+_UPDATE_RE = re.compile(rf"^{EXTENSION}--([0-9][0-9.]*)--([0-9][0-9.]*)\.sql$")
+_VERSION_RE = re.compile(r"^[0-9]+(\.[0-9]+)*$")
+
+
+def parse_version(version: str) -> tuple[int, ...]:
+    """Return a dotted version ``"1.2.3"`` as a comparable tuple ``(1, 2, 3)``.
+
+    Raises
+    ------
+    InstallationError
+        If ``version`` is not dotted decimal numbers.
+    """
+    if not _VERSION_RE.match(version):
+        raise InstallationError(f"tgsis version {version!r} is not of the form N.N.N")
+    return tuple(int(part) for part in version.split("."))
+
+
+def find_sql_dir() -> Path:
+    """Return the folder holding ``tgsis.control`` and the SQL sources.
+
+    Raises
+    ------
+    InstallationError
+        If no folder with a ``tgsis.control`` is found.
+    """
+    here = Path(__file__).resolve()
+    candidates: list[Path] = []
+    if env := os.environ.get("TGSIS_SQL_DIR"):
+        candidates.append(Path(env))
+    candidates.append(here.parents[1] / "_sql")  # installed wheel
+    candidates.append(here.parents[3] / "sql")  # source checkout: src/tgsis/db/ -> repo
+    for candidate in candidates:
+        if (candidate / f"{EXTENSION}.control").is_file():
+            return candidate
+    raise InstallationError(
+        "cannot find the tgsis SQL sources",
+        detail="looked in: " + ", ".join(str(c) for c in candidates),
+        hint="set TGSIS_SQL_DIR to the sql/ folder of a tgsis checkout",
+    )
+
+
+@dataclass(frozen=True)
+class ExtensionSources:
+    """The SQL sources of one tgsis version.
+
+    Parameters
+    ----------
+    root : Path
+        Folder with ``tgsis.control``, ``sources.txt``, the listed files and
+        ``updates/``.
+    """
+
+    root: Path
+
+    @classmethod
+    def default(cls) -> ExtensionSources:
+        """Sources found by :func:`find_sql_dir`."""
+        return cls(find_sql_dir())
+
+    @cached_property
+    def control(self) -> str:
+        """Text of ``tgsis.control``."""
+        return (self.root / f"{EXTENSION}.control").read_text(encoding="utf-8")
+
+    @cached_property
+    def version(self) -> str:
+        """``default_version`` of the control file."""
+        match = _CONTROL_VERSION_RE.search(self.control)
+        if match is None:
+            raise InstallationError(f"{self.root / 'tgsis.control'} has no default_version")
+        parse_version(match.group(1))
+        return match.group(1)
+
+    @cached_property
+    def files(self) -> list[str]:
+        """Source files in install order, relative to :attr:`root`."""
+        listing = (self.root / "sources.txt").read_text(encoding="utf-8")
+        names = [line.split("#", 1)[0].strip() for line in listing.splitlines()]
+        return [name for name in names if name]
+
+    def script(self, *, psql_guard: bool = True) -> str:
+        """The install script ``tgsis--<version>.sql``.
+
+        Parameters
+        ----------
+        psql_guard : bool
+            Keep the ``\\echo ... \\quit`` line that stops psql from running
+            the file by hand. ``False`` gives the SQL a driver can execute.
+        """
+        header = [f"-- tgsis {self.version}: built from sql/sources.txt, do not edit"]
+        if psql_guard:
+            header.append(PSQL_GUARD)
+        parts = ["\n".join(header) + "\n"]
+        for name in self.files:
+            parts.append(f"\n-- ==== {name} ====\n")
+            parts.append((self.root / name).read_text(encoding="utf-8"))
+        return "".join(parts).replace(VERSION_TOKEN, self.version)
+
+    @cached_property
+    def updates(self) -> dict[tuple[str, str], Path]:
+        """Upgrade scripts by ``(from_version, to_version)``."""
+        found: dict[tuple[str, str], Path] = {}
+        folder = self.root / "updates"
+        if folder.is_dir():
+            for path in sorted(folder.iterdir()):
+                match = _UPDATE_RE.match(path.name)
+                if match:
+                    found[(match.group(1), match.group(2))] = path
+        return found
+
+    def upgrade_path(self, from_version: str, to_version: str) -> list[Path]:
+        """Shortest chain of upgrade scripts from one version to another.
+
+        Raises
+        ------
+        InstallationError
+            If no chain of ``updates/`` scripts connects the two versions.
+        """
+        if from_version == to_version:
+            return []
+        previous: dict[str, tuple[str, Path]] = {}
+        queue = collections.deque([from_version])
+        seen = {from_version}
+        while queue:
+            current = queue.popleft()
+            for (start, end), path in self.updates.items():
+                if start == current and end not in seen:
+                    seen.add(end)
+                    previous[end] = (current, path)
+                    queue.append(end)
+        if to_version not in previous:
+            raise InstallationError(
+                f"no upgrade path from tgsis {from_version} to {to_version}",
+                detail=f"upgrade scripts in {self.root / 'updates'}: "
+                + (", ".join(p.name for p in self.updates.values()) or "none"),
+            )
+        chain: list[Path] = []
+        version = to_version
+        while version != from_version:
+            version, path = previous[version]
+            chain.append(path)
+        return chain[::-1]
+
+    def upgrade_sql(self, path: Path) -> str:
+        """An upgrade script as a driver can execute it (psql guard removed)."""
+        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+        return "".join(line for line in lines if line.strip() != PSQL_GUARD)
+
+    def write_extension_dir(self, prefix: Path) -> Path:
+        """Write control file and scripts as PostgreSQL expects them in ``prefix/extension``.
+
+        PostgreSQL 18's ``extension_control_path`` appends ``/extension`` to
+        each of its entries, so ``prefix`` is what goes into that setting.
+
+        Returns
+        -------
+        Path
+            ``prefix / "extension"``.
+        """
+        target = prefix / "extension"
+        target.mkdir(parents=True, exist_ok=True)
+        files = {f"{EXTENSION}.control": self.control, f"{EXTENSION}--{self.version}.sql": self.script()}
+        for path in self.updates.values():
+            files[path.name] = path.read_text(encoding="utf-8")
+        for name, text in files.items():
+            destination = target / name
+            if not destination.exists() or destination.read_text(encoding="utf-8") != text:
+                tmp = destination.with_suffix(destination.suffix + ".tmp")
+                tmp.write_text(text, encoding="utf-8")
+                tmp.replace(destination)
+        return target

@@ -1,0 +1,235 @@
+"""The tgsis exception tree.
+
+Every error tgsis raises derives from :class:`Error`. Errors raised by the
+database carry one of our SQLSTATEs (class ``TG``, listed in the table
+``tgsis.error_codes`` and in ``docs/errors.md``); :func:`translate` maps them to
+the class whose :attr:`Error.sqlstate` matches, or, for a code this client does
+not know yet, to the class of its area (``TG1xx`` to :class:`InvalidInputError`,
+and so on). Database errors that are not ours become :class:`DatabaseError`.
+
+Errors found by the client before anything reaches the database (a bad mesh, a
+server that cannot start) use the same classes, with ``sqlstate`` left at the
+class's code so that callers catch one thing whichever side noticed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+from collections.abc import Iterator
+from typing import ClassVar
+
+import psycopg
+
+__all__ = [
+    "Error",
+    "InstallationError",
+    "MissingPrivilegeError",
+    "InvalidInputError",
+    "InvalidNameError",
+    "InvalidGeometryError",
+    "InvalidPropertyError",
+    "NotFoundError",
+    "AlreadyExistsError",
+    "InUseError",
+    "DatabaseError",
+    "LocalServerError",
+    "class_for_sqlstate",
+    "translate",
+    "reraise",
+]
+
+
+class Error(Exception):
+    """Root of every tgsis error.
+
+    Attributes
+    ----------
+    sqlstate : str or None
+        The SQLSTATE of the condition: the class's own code, or the code the
+        server sent when the error came from the database.
+    detail, hint : str or None
+        The server's DETAIL and HINT fields, when the error came from the
+        database (client-side errors may set them too).
+    """
+
+    #: SQLSTATE this class stands for (``None``: not one of ours).
+    code: ClassVar[str | None] = "TG000"
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        sqlstate: str | None = None,
+        detail: str | None = None,
+        hint: str | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.message = message
+        self.sqlstate = sqlstate if sqlstate is not None else self.code
+        self.detail = detail
+        self.hint = hint
+
+    def __str__(self) -> str:
+        parts = [self.message]
+        if self.detail:
+            parts.append(f"DETAIL: {self.detail}")
+        if self.hint:
+            parts.append(f"HINT: {self.hint}")
+        return "\n".join(parts)
+
+
+class InstallationError(Error):
+    """The tgsis objects cannot be installed, upgraded or used at this version."""
+
+    code = "TG001"
+
+
+class MissingPrivilegeError(Error):
+    """The current role lacks a right tgsis needs."""
+
+    code = "TG002"
+
+
+class InvalidInputError(Error, ValueError):
+    """An argument is out of range, missing or malformed."""
+
+    code = "TG100"
+
+
+class InvalidNameError(InvalidInputError):
+    """A name is empty, too long, or would need quoting where that is not allowed."""
+
+    code = "TG101"
+
+
+class InvalidGeometryError(InvalidInputError):
+    """NaN/infinite coordinates, or simplices with out-of-range or repeated indices."""
+
+    code = "TG102"
+
+
+class InvalidPropertyError(InvalidInputError):
+    """Unknown property, disallowed type, or wrong number of values."""
+
+    code = "TG103"
+
+
+class NotFoundError(Error, LookupError):
+    """A named object (feature class, feature, version, table) does not exist."""
+
+    code = "TG200"
+
+
+class AlreadyExistsError(Error):
+    """An object with that name or key exists already."""
+
+    code = "TG201"
+
+
+class InUseError(Error):
+    """An object cannot be dropped or changed while others depend on it."""
+
+    code = "TG202"
+
+
+class DatabaseError(Error):
+    """A database error that is not one of tgsis's own SQLSTATEs.
+
+    The original :class:`psycopg.Error` is the ``__cause__``; its SQLSTATE is in
+    :attr:`sqlstate`.
+    """
+
+    code = None
+
+
+class LocalServerError(Error):
+    """The local PostgreSQL server that tgsis manages could not be found, started or stopped."""
+
+    code = None
+
+
+_AREA_FALLBACK: dict[str, type[Error]] = {
+    "TG0": Error,
+    "TG1": InvalidInputError,
+    "TG2": NotFoundError,
+}
+
+# PostgreSQL's own conditions that mean the same as one of ours.
+_POSTGRES_EQUIVALENTS: dict[str, type[Error]] = {
+    "42501": MissingPrivilegeError,  # insufficient_privilege
+}
+
+_SQLSTATE_RE = re.compile(r"^TG[0-9A-Z]{3}$")
+
+
+def _all_subclasses(cls: type[Error]) -> Iterator[type[Error]]:
+    for sub in cls.__subclasses__():
+        yield sub
+        yield from _all_subclasses(sub)
+
+
+def class_for_sqlstate(sqlstate: str | None) -> type[Error]:
+    """Return the exception class for an SQLSTATE.
+
+    Parameters
+    ----------
+    sqlstate : str or None
+        A five-character SQLSTATE.
+
+    Returns
+    -------
+    type[Error]
+        The class with that exact code; for an unknown ``TG`` code the class of
+        its area; PostgreSQL's ``42501`` (insufficient privilege) gives
+        :class:`MissingPrivilegeError`; :class:`DatabaseError` for the rest.
+    """
+    if sqlstate in _POSTGRES_EQUIVALENTS:
+        return _POSTGRES_EQUIVALENTS[sqlstate]
+    if sqlstate is None or not _SQLSTATE_RE.match(sqlstate):
+        return DatabaseError
+    if sqlstate == Error.code:
+        return Error
+    for sub in _all_subclasses(Error):
+        if sub.code == sqlstate:
+            return sub
+    return _AREA_FALLBACK.get(sqlstate[:3], Error)
+
+
+def translate(exc: psycopg.Error) -> Error:
+    """Turn a psycopg error into the matching tgsis error (not raised).
+
+    Parameters
+    ----------
+    exc : psycopg.Error
+        The error psycopg raised.
+
+    Returns
+    -------
+    Error
+        An instance of :func:`class_for_sqlstate` for the error's SQLSTATE, with
+        the server's message, detail and hint, and ``exc`` as ``__cause__``.
+    """
+    diag = exc.diag
+    sqlstate = exc.sqlstate
+    message = diag.message_primary or str(exc).strip()
+    err = class_for_sqlstate(sqlstate)(
+        message, sqlstate=sqlstate, detail=diag.message_detail, hint=diag.message_hint
+    )
+    err.__cause__ = exc
+    return err
+
+
+@contextlib.contextmanager
+def reraise() -> Iterator[None]:
+    """Re-raise psycopg errors from the block as tgsis errors.
+
+    Examples
+    --------
+    >>> with reraise():                                   # doctest: +SKIP
+    ...     conn.execute("select tgsis.goto_version('nope')")
+    """
+    try:
+        yield
+    except psycopg.Error as exc:
+        raise translate(exc) from exc

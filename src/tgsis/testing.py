@@ -1,0 +1,283 @@
+"""pytest fixtures: a real PostgreSQL for every test, never a mock.
+
+Load with ``pytest_plugins = ["tgsis.testing"]`` in a ``conftest.py``.
+
+Which server, first match wins:
+
+1. ``$TGSIS_TEST_DSN``: an existing server, as a role that may create
+   databases (and roles, unless the ``tgsis_*`` roles exist);
+2. Docker, through testcontainers, with the image of ``docker/``, when an
+   engine answers and ``$TGSIS_PG`` does not ask for local binaries;
+3. a throwaway local cluster (:meth:`tgsis.db.local.LocalServer.throwaway`)
+   with the binaries ``$TGSIS_PG`` selects (embedded PostgreSQL 18 or the
+   system's).
+
+If none starts, every test that needs a database fails with the reasons:
+a run without the database tests is a failed run.
+
+Isolation: the session installs tgsis once into a template database; the
+``db_dsn`` and ``conn`` fixtures give each test a fresh database cloned from
+it (``CREATE DATABASE ... TEMPLATE``) and drop it afterwards, so tests may
+commit, create roles' grants or break things freely.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import logging
+import os
+import uuid
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import psycopg
+import pytest
+from psycopg import sql
+from psycopg.conninfo import conninfo_to_dict, make_conninfo
+
+from tgsis.db.install import install
+from tgsis.db.local import LocalServer, find_binaries
+from tgsis.db.sqlsource import ExtensionSources, find_sql_dir
+
+__all__ = ["TestServer", "pg", "db_dsn", "conn", "make_database"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class TestServer:
+    """The PostgreSQL server of a test session.
+
+    Attributes
+    ----------
+    admin_dsn : str
+        DSN of its maintenance database, as a role that may create databases.
+    provider : {"dsn", "docker", "local"}
+        Where it came from.
+    description : str
+        One line for reports.
+    server_version : str
+        ``server_version`` of the server, e.g. ``"15.18"``.
+    extension_files : str or None
+        ``None`` when ``CREATE EXTENSION tgsis`` works on this server, else why not.
+    local : LocalServer or None
+        The throwaway cluster, for provider ``local``.
+    """
+
+    __test__ = False  # not a test class, despite its name
+
+    admin_dsn: str
+    provider: Literal["dsn", "docker", "local"]
+    description: str
+    server_version: str = ""
+    extension_files: str | None = None
+    local: LocalServer | None = None
+    _teardown: list[Callable[[], None]] = field(default_factory=list, repr=False)
+
+    @property
+    def major(self) -> int:
+        """Major version of the server."""
+        return int(self.server_version.split(".")[0])
+
+    def dsn(self, dbname: str) -> str:
+        """DSN of another database of this server."""
+        params = conninfo_to_dict(self.admin_dsn)
+        params["dbname"] = dbname
+        return make_conninfo(**{k: str(v) for k, v in params.items() if v is not None})
+
+    def create_database(self, name: str, template: str = "template0") -> str:
+        """Create a database and return its DSN."""
+        with psycopg.connect(self.admin_dsn, autocommit=True) as conn:
+            conn.execute(sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(
+                sql.Identifier(name), sql.Identifier(template)))
+        return self.dsn(name)
+
+    def drop_database(self, name: str) -> None:
+        """Drop a database, ending its sessions."""
+        with psycopg.connect(self.admin_dsn, autocommit=True) as conn:
+            conn.execute(sql.SQL("DROP DATABASE IF EXISTS {} WITH (FORCE)").format(sql.Identifier(name)))
+
+    def close(self) -> None:
+        for step in reversed(self._teardown):
+            with contextlib.suppress(Exception):
+                step()
+        self._teardown.clear()
+
+
+def _check_extension_files(server: TestServer) -> None:
+    """Set ``extension_files`` to why CREATE EXTENSION tgsis would not give this client's SQL."""
+    sources = ExtensionSources.default()
+    with psycopg.connect(server.admin_dsn) as conn:
+        server.server_version = str(conn.execute("SHOW server_version").fetchone()[0]).split()[0]  # type: ignore[index]
+        available = conn.execute(
+            "SELECT 1 FROM pg_available_extension_versions WHERE name = 'tgsis' AND version = %s",
+            (sources.version,),
+        ).fetchone()
+    if not available:
+        server.extension_files = (
+            f"the server has no extension files for tgsis {sources.version}: run `make -C sql install` "
+            "for its PostgreSQL (PGXS), or use the embedded PostgreSQL 18"
+        )
+        return
+    local = server.local
+    if local is not None and not local.binaries.has_extension_control_path and local.binaries.sharedir:
+        installed = local.binaries.sharedir / "extension" / f"tgsis--{sources.version}.sql"
+        if installed.read_text(encoding="utf-8") != sources.script():
+            server.extension_files = (
+                f"{installed} differs from this checkout's SQL: run `make -C sql install` again"
+            )
+
+
+def _from_dsn(dsn: str) -> TestServer:
+    return TestServer(dsn, "dsn", f"existing server from TGSIS_TEST_DSN ({conninfo_to_dict(dsn).get('host')})")
+
+
+def _from_docker() -> TestServer:
+    import docker  # installed with testcontainers
+
+    client = docker.from_env(timeout=5)
+    client.ping()
+    from testcontainers.core.image import DockerImage
+    from testcontainers.postgres import PostgresContainer
+
+    repo = find_sql_dir().parent
+    if not (repo / "docker" / "Dockerfile").is_file():
+        raise RuntimeError(f"no docker/Dockerfile beside {find_sql_dir()}")
+    image = DockerImage(path=str(repo), dockerfile_path="docker/Dockerfile", tag="tgsis-test:dev")
+    image.build()
+    container = PostgresContainer(str(image), username="postgres", password="postgres", dbname="postgres")
+    container.start()
+    url = container.get_connection_url(driver=None)
+    server = TestServer(url, "docker", f"Docker container of {image}")
+    server._teardown.append(container.stop)
+    return server
+
+
+def _from_local() -> TestServer:
+    local = LocalServer.throwaway(find_binaries())
+    server = TestServer(local.dsn(), "local",
+                        f"{local.binaries.describe()}, throwaway cluster {local.root}", local=local)
+    server._teardown.append(local.destroy)
+    return server
+
+
+def start_test_server() -> TestServer:
+    """Start (or reach) the session's server, in the order of the module documentation.
+
+    Raises
+    ------
+    RuntimeError
+        No server could be had; the message lists why for each way tried.
+    """
+    tried: list[str] = []
+    providers: list[tuple[str, Callable[[], TestServer]]] = []
+    if dsn := os.environ.get("TGSIS_TEST_DSN"):
+        providers.append(("TGSIS_TEST_DSN", lambda: _from_dsn(dsn)))
+    else:
+        if not os.environ.get("TGSIS_PG") and os.environ.get("TGSIS_TEST_DOCKER", "1") != "0":
+            providers.append(("Docker", _from_docker))
+        providers.append(("local cluster", _from_local))
+    for name, provider in providers:
+        try:
+            server = provider()
+        except Exception as exc:  # noqa: BLE001 - every reason is reported
+            tried.append(f"{name}: {type(exc).__name__}: {exc}".strip())
+            log.info("test server via %s unavailable: %s", name, exc)
+            continue
+        try:
+            _check_extension_files(server)
+        except BaseException:
+            server.close()
+            raise
+        server.description += f"; tried before: {'; '.join(tried)}" if tried else ""
+        return server
+    raise RuntimeError("no PostgreSQL server for the tests:\n  " + "\n  ".join(tried))
+
+
+# --------------------------------------------------------------------------- fixtures
+
+_SESSION: dict[str, Any] = {}
+_counter = itertools.count()
+
+
+@pytest.fixture(scope="session")
+def pg() -> Iterator[TestServer]:
+    """The session's PostgreSQL server (fails every test that needs it if none can start)."""
+    try:
+        server = start_test_server()
+    except RuntimeError as exc:
+        pytest.fail(str(exc), pytrace=False)
+    _SESSION["server"] = server
+    try:
+        yield server
+    finally:
+        server.close()
+
+
+@pytest.fixture(scope="session")
+def template_db(pg: TestServer) -> Iterator[str]:
+    """Name of a database with tgsis installed, cloned by :func:`db_dsn`.
+
+    Installed with ``CREATE EXTENSION`` when the server has the files, else
+    with the plain SQL.
+    """
+    name = f"tgsis_tpl_{os.getpid()}_{uuid.uuid4().hex[:6]}"
+    dsn = pg.create_database(name)
+    with psycopg.connect(dsn) as conn:
+        result = install(conn, method="extension" if pg.extension_files is None else "sql")
+    _SESSION["template_method"] = result.method
+    try:
+        yield name
+    finally:
+        with contextlib.suppress(Exception):
+            pg.drop_database(name)
+
+
+@pytest.fixture
+def make_database(pg: TestServer) -> Iterator[Callable[..., str]]:
+    """Factory ``make_database(template="template0") -> dsn`` of databases dropped after the test."""
+    created: list[str] = []
+
+    def make(template: str = "template0") -> str:
+        name = f"tgsis_t_{os.getpid()}_{next(_counter)}_{uuid.uuid4().hex[:6]}"
+        dsn = pg.create_database(name, template)
+        created.append(name)
+        return dsn
+
+    yield make
+    for name in created:
+        pg.drop_database(name)
+
+
+@pytest.fixture
+def db_dsn(make_database: Callable[..., str], template_db: str) -> str:
+    """DSN of a fresh database with tgsis installed, dropped after the test."""
+    return make_database(template_db)
+
+
+@pytest.fixture
+def conn(db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
+    """Connection (not autocommit) to a fresh database with tgsis installed."""
+    with psycopg.connect(db_dsn) as connection:
+        yield connection
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    """Say which server the database tests ran against (CI logs show it per run)."""
+    server: TestServer | None = _SESSION.get("server")
+    if server is None:
+        return
+    terminalreporter.write_sep("-", "tgsis test database")
+    terminalreporter.write_line(f"server: PostgreSQL {server.server_version}: {server.description}")
+    terminalreporter.write_line(
+        f"template installed with: {_SESSION.get('template_method', '?')}; CREATE EXTENSION tgsis: "
+        + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
+    )
+
+
+def repo_root() -> Path:
+    """Root of the source checkout the SQL comes from."""
+    return find_sql_dir().parent

@@ -1,0 +1,81 @@
+"""The `tgsis` command: versions, install, status, errors."""
+
+from __future__ import annotations
+
+import psycopg
+import pytest
+
+import tgsis
+from tests.local_helpers import private_home, tgsis_cli
+from tgsis.cli import main
+
+
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"tgsis {tgsis.__version__}"
+
+
+def test_db_install_then_again_is_a_no_op(make_database: object, capsys: pytest.CaptureFixture[str]) -> None:
+    dsn = make_database()  # type: ignore[operator]
+    assert main(["--dsn", dsn, "db", "install", "--method", "sql"]) == 0
+    assert capsys.readouterr().out.strip() == f"installed tgsis {tgsis.__version__} (sql)"
+    assert main(["--dsn", dsn, "db", "install"]) == 0
+    assert "already installed (sql): nothing to do" in capsys.readouterr().out
+    with psycopg.connect(dsn) as conn:
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (tgsis.__version__,)
+
+
+def test_db_status_reports_versions(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", db_dsn, "db", "status"]) == 0
+    out = capsys.readouterr().out
+    assert f"tgsis:    {tgsis.__version__}" in out
+    assert "(from argument)" in out and "PostgreSQL" in out
+
+
+def test_uninstall_needs_yes(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", db_dsn, "db", "uninstall"]) == 1
+    assert "repeat with --yes" in capsys.readouterr().err
+    with psycopg.connect(db_dsn) as conn:
+        assert tgsis.installed_version(conn) is not None
+    assert main(["--dsn", db_dsn, "db", "uninstall", "--yes"]) == 0
+    with psycopg.connect(db_dsn) as conn:
+        assert tgsis.installed_version(conn) is None
+
+
+def test_errors_are_one_clear_line_and_exit_1(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["--dsn", "host=/nonexistent-dir port=1 dbname=x connect_timeout=2", "db", "status"])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert err.startswith("tgsis: error: ") and "nonexistent-dir" in err
+    assert "Traceback" not in err
+
+
+def test_dsn_from_environment(db_dsn: str, monkeypatch: pytest.MonkeyPatch,
+                              capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setenv("TGSIS_DSN", db_dsn)
+    assert main(["db", "status"]) == 0
+    assert "(from TGSIS_DSN)" in capsys.readouterr().out
+
+
+def test_local_status_and_dsn_without_a_server() -> None:
+    with private_home() as home:
+        status = tgsis_cli("local", "status", home=home)
+        assert status.returncode == 3
+        assert "not created yet" in status.stdout
+        dsn = tgsis_cli("local", "dsn", home=home)
+        assert dsn.returncode == 0 and "dbname=tgsis" in dsn.stdout
+        assert "not running" in dsn.stderr
+
+
+def test_demo_reports_what_it_talks_to() -> None:
+    with private_home() as home:
+        result = tgsis_cli("demo", home=home)
+        assert result.returncode == 0, result.stderr
+        lines = result.stdout.splitlines()
+        assert lines[0].startswith("PostgreSQL ") and "database 'tgsis' (local server)" in lines[0]
+        assert lines[1] == f"tgsis {tgsis.__version__} (installed as extension)" or \
+            lines[1] == f"tgsis {tgsis.__version__} (installed as sql)"
+        assert lines[2] == "roles: tgsis_reader, tgsis_editor, tgsis_admin"
+        assert lines[3].startswith("dsn: host=") and str(home) in lines[3]

@@ -1,0 +1,151 @@
+"""The local PostgreSQL tgsis runs by itself: binaries, clusters, leases."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import psycopg
+import pytest
+
+from tests.local_helpers import private_home, process_alive
+from tgsis.db.local import LocalServer, default_home, find_binaries
+from tgsis.errors import LocalServerError
+
+
+@pytest.fixture
+def home() -> Iterator[Path]:
+    with private_home() as path:
+        yield path
+
+
+def _owner_uid(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("Uid:"):
+            return int(line.split()[1])
+    raise AssertionError("no Uid line")
+
+
+def test_unknown_binaries_selection_is_refused() -> None:
+    with pytest.raises(LocalServerError, match="neither 'auto', 'embedded', 'system' nor a folder"):
+        find_binaries("/nonexistent/bin")
+
+
+def test_selected_binaries_are_a_real_server() -> None:
+    binaries = find_binaries()
+    assert binaries.major >= 15
+    assert binaries.describe().startswith(f"PostgreSQL {binaries.version}")
+    if os.environ.get("TGSIS_PG") in ("embedded", "system"):
+        assert binaries.flavor == os.environ["TGSIS_PG"]
+
+
+def test_default_home_follows_tgsis_home(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
+    assert default_home() == tmp_path
+    monkeypatch.delenv("TGSIS_HOME")
+    assert default_home() == (Path("/var/lib/tgsis") if os.geteuid() == 0
+                              else Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local/share") / "tgsis")
+
+
+def test_throwaway_cluster_settings_and_removal() -> None:
+    server = LocalServer.throwaway()
+    try:
+        pid = server.pid()
+        assert process_alive(pid)
+        if os.geteuid() == 0:
+            assert _owner_uid(pid) != 0, "the server must not run as root"  # type: ignore[arg-type]
+        assert (server.data_dir.stat().st_mode & 0o777) == 0o700
+        with psycopg.connect(server.dsn()) as conn:
+            settings = dict(conn.execute(
+                "SELECT name, setting FROM pg_settings WHERE name IN "
+                "('fsync', 'listen_addresses', 'unix_socket_directories', 'full_page_writes')").fetchall())
+            assert settings == {"fsync": "off", "full_page_writes": "off", "listen_addresses": "",
+                                "unix_socket_directories": str(server.socket_dir)}
+            if server.binaries.has_extension_control_path:
+                path = conn.execute("SHOW extension_control_path").fetchone()
+                assert path == (f"$system:{server.root}",)
+    finally:
+        server.destroy()
+    assert not server.root.exists()
+    assert not process_alive(pid)
+
+
+def test_persistent_cluster_is_durable_and_listens_on_a_socket(home: Path) -> None:
+    server = LocalServer.persistent(home=home)
+    assert server.root == home / f"pg{server.binaries.major}"
+    with server.acquire():
+        with psycopg.connect(server.dsn()) as conn:
+            assert conn.execute("SHOW fsync").fetchone() == ("on",)
+            assert conn.execute("SHOW listen_addresses").fetchone() == ("",)
+
+
+def test_last_lease_stops_an_implicitly_started_server(home: Path) -> None:
+    first = LocalServer.persistent(home=home).acquire()
+    server = first.server
+    assert server.is_running() and server.started_by() == "implicit"
+    second = LocalServer.persistent(home=home).acquire()  # another user of the same cluster
+    pid = server.pid()
+    first.release()
+    assert server.is_running() and server.pid() == pid, "still in use by the second lease"
+    second.release()
+    assert not server.is_running()
+    assert not process_alive(pid)
+    first.release()  # releasing twice is harmless
+
+
+def test_explicit_start_outlives_leases(home: Path) -> None:
+    server = LocalServer.persistent(home=home)
+    assert server.start_explicitly() is True
+    assert server.start_explicitly() is False  # already running
+    with LocalServer.persistent(home=home).acquire():
+        pass
+    assert server.is_running() and server.started_by() == "explicit"
+    assert server.stop_explicitly() is True
+    assert not server.is_running()
+    assert server.stop_explicitly() is False
+
+
+def test_stop_waits_for_users_unless_forced(home: Path) -> None:
+    lease = LocalServer.persistent(home=home).acquire()
+    other = LocalServer.persistent(home=home)
+    with pytest.raises(LocalServerError, match="in use by other tgsis processes"):
+        other.stop_explicitly(wait=0.3)
+    assert other.is_running()
+    assert other.stop_explicitly(force=True, wait=0)
+    assert not other.is_running()
+    lease.release()
+
+
+def test_long_cluster_path_gets_a_short_socket_dir(home: Path) -> None:
+    deep = home / ("d" * 60) / ("e" * 60)
+    deep.mkdir(parents=True)
+    for folder in (deep, deep.parent):
+        folder.chmod(0o755)
+    server = LocalServer(deep / "pg", find_binaries(), durable=False)
+    try:
+        server.start()
+        assert len(str(server.socket_dir)) < 60 and not str(server.socket_dir).startswith(str(deep))
+        with psycopg.connect(server.dsn()) as conn:
+            assert conn.execute("SELECT 1").fetchone() == (1,)
+    finally:
+        server.destroy()
+    assert not server.socket_dir.exists()
+
+
+def test_a_foreign_non_empty_data_dir_is_refused(home: Path) -> None:
+    root = home / "pgx"
+    (root / "data").mkdir(parents=True)
+    (root / "data" / "notes.txt").write_text("mine")
+    with pytest.raises(LocalServerError, match="is not empty and holds no PostgreSQL cluster"):
+        LocalServer(root, find_binaries()).initdb()
+    assert (root / "data" / "notes.txt").read_text() == "mine"
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="only root runs the server as another OS user")
+def test_unreachable_cluster_folder_is_explained(home: Path) -> None:
+    private = home / "private"
+    private.mkdir(mode=0o700)
+    private.chmod(0o700)
+    with pytest.raises(LocalServerError, match="cannot reach the cluster folder"):
+        LocalServer(private / "pg", find_binaries()).initdb()
