@@ -82,3 +82,4 @@ def test_connection_failures_are_database_errors() -> None:
     with pytest.raises(tgsis.DatabaseError) as info:
         tgsis.connect("host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2")
     assert "nonexistent-socket-dir" in str(info.value)
+

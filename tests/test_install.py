@@ -6,6 +6,7 @@ import shutil
 import threading
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import psycopg
 import pytest
@@ -240,7 +241,7 @@ def test_uninstall_refuses_dependent_objects_without_cascade(make_database: Make
         assert conn.execute("SELECT count(*) FROM public.log").fetchone() == (0,), "the table itself stays"
 
 
-def test_roles_form_a_hierarchy(conn: psycopg.Connection[object]) -> None:
+def test_roles_form_a_hierarchy(conn: psycopg.Connection[Any]) -> None:
     def member(role: str, group: str) -> bool:
         row = conn.execute("SELECT pg_has_role(%s, %s, 'MEMBER')", (role, group)).fetchone()
         return bool(row and row[0])
@@ -252,7 +253,7 @@ def test_roles_form_a_hierarchy(conn: psycopg.Connection[object]) -> None:
     assert rows == []
 
 
-def test_reader_role_can_read_the_core_catalog(conn: psycopg.Connection[object]) -> None:
+def test_reader_role_can_read_the_core_catalog(conn: psycopg.Connection[Any]) -> None:
     conn.execute("SET ROLE tgsis_reader")
     assert conn.execute("SELECT tgsis.version()").fetchone() == (tgsis.__version__,)
     assert conn.execute("SELECT count(*) > 0 FROM tgsis.error_codes").fetchone() == (True,)

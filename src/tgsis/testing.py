@@ -18,7 +18,9 @@ a run without the database tests is a failed run.
 Isolation: the session installs tgsis once into a template database; the
 ``db_dsn`` and ``conn`` fixtures give each test a fresh database cloned from
 it (``CREATE DATABASE ... TEMPLATE``) and drop it afterwards, so tests may
-commit, create roles' grants or break things freely.
+commit, open several connections or break things freely. ``tx`` is the cheap
+alternative for tests that only need one transaction: a connection to a
+shared database inside a transaction that is rolled back after the test.
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ from tgsis.db.install import install
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis.db.sqlsource import ExtensionSources, find_sql_dir
 
-__all__ = ["TestServer", "pg", "db_dsn", "conn", "make_database"]
+__all__ = ["TestServer", "pg", "db_dsn", "conn", "tx", "make_database", "start_test_server"]
 
 log = logging.getLogger(__name__)
 
@@ -138,7 +140,7 @@ def _from_dsn(dsn: str) -> TestServer:
 def _from_docker() -> TestServer:
     import docker  # installed with testcontainers
 
-    client = docker.from_env(timeout=5)
+    client = docker.from_env(timeout=5)  # type: ignore[attr-defined]
     client.ping()
     from testcontainers.core.image import DockerImage
     from testcontainers.postgres import PostgresContainer
@@ -181,18 +183,18 @@ def start_test_server() -> TestServer:
             providers.append(("Docker", _from_docker))
         providers.append(("local cluster", _from_local))
     for name, provider in providers:
+        server: TestServer | None = None
         try:
             server = provider()
+            _check_extension_files(server)
         except Exception as exc:  # noqa: BLE001 - every reason is reported
+            if server is not None:
+                server.close()
             tried.append(f"{name}: {type(exc).__name__}: {exc}".strip())
             log.info("test server via %s unavailable: %s", name, exc)
             continue
-        try:
-            _check_extension_files(server)
-        except BaseException:
-            server.close()
-            raise
-        server.description += f"; tried before: {'; '.join(tried)}" if tried else ""
+        if tried:
+            server.description += f"; tried before: {'; '.join(tried)}"
         return server
     raise RuntimeError("no PostgreSQL server for the tests:\n  " + "\n  ".join(tried))
 
@@ -265,6 +267,31 @@ def conn(db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
         yield connection
 
 
+@pytest.fixture(scope="session")
+def shared_db_dsn(pg: TestServer, template_db: str) -> Iterator[str]:
+    """DSN of one database with tgsis installed, shared by the tests that use :func:`tx`."""
+    name = f"tgsis_shared_{os.getpid()}_{uuid.uuid4().hex[:6]}"
+    dsn = pg.create_database(name, template_db)
+    try:
+        yield dsn
+    finally:
+        with contextlib.suppress(Exception):
+            pg.drop_database(name)
+
+
+@pytest.fixture
+def tx(shared_db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
+    """Connection inside a transaction that is rolled back after the test (cheaper than :func:`conn`).
+
+    The test must not commit (psycopg refuses ``commit()`` inside the
+    transaction block); tests that commit, or that need several connections
+    to see each other's data, use :func:`conn` / :func:`db_dsn`.
+    """
+    with psycopg.connect(shared_db_dsn) as connection:
+        with connection.transaction(force_rollback=True):
+            yield connection
+
+
 def pytest_terminal_summary(terminalreporter: Any) -> None:
     """Say which server the database tests ran against (CI logs show it per run)."""
     server: TestServer | None = _SESSION.get("server")
@@ -273,7 +300,7 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
     terminalreporter.write_sep("-", "tgsis test database")
     terminalreporter.write_line(f"server: PostgreSQL {server.server_version}: {server.description}")
     terminalreporter.write_line(
-        f"template installed with: {_SESSION.get('template_method', '?')}; CREATE EXTENSION tgsis: "
+        f"template installed with: {_SESSION.get('template_method', 'not used')}; CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import psycopg
 from psycopg import sql
@@ -74,7 +74,7 @@ class InstallResult:
     previous_version: str | None = None
 
 
-def installed_version(conn: psycopg.Connection[object]) -> InstalledVersion | None:
+def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
     """Return the tgsis version installed in the connected database, or ``None``.
 
     Raises
@@ -106,7 +106,7 @@ def installed_version(conn: psycopg.Connection[object]) -> InstalledVersion | No
     return InstalledVersion(max(versions, key=parse_version), "sql")
 
 
-def _extension_available(conn: psycopg.Connection[object], version: str) -> bool:
+def _extension_available(conn: psycopg.Connection[Any], version: str) -> bool:
     row = conn.execute(
         "SELECT 1 FROM pg_catalog.pg_available_extension_versions WHERE name = %s AND version = %s",
         (EXTENSION, version),
@@ -114,7 +114,7 @@ def _extension_available(conn: psycopg.Connection[object], version: str) -> bool
     return row is not None
 
 
-def _create_extension(conn: psycopg.Connection[object], version: str) -> None:
+def _create_extension(conn: psycopg.Connection[Any], version: str) -> None:
     conn.execute(
         sql.SQL("CREATE EXTENSION {} VERSION {} CASCADE").format(
             sql.Identifier(EXTENSION), sql.Literal(version)
@@ -123,7 +123,7 @@ def _create_extension(conn: psycopg.Connection[object], version: str) -> None:
 
 
 def _install_fresh(
-    conn: psycopg.Connection[object], sources: ExtensionSources, method: Method
+    conn: psycopg.Connection[Any], sources: ExtensionSources, method: Method
 ) -> Literal["extension", "sql"]:
     available = _extension_available(conn, sources.version)
     if method == "extension" and not available:
@@ -145,7 +145,7 @@ def _install_fresh(
 
 
 def _upgrade(
-    conn: psycopg.Connection[object], current: InstalledVersion, sources: ExtensionSources
+    conn: psycopg.Connection[Any], current: InstalledVersion, sources: ExtensionSources
 ) -> None:
     if current.method == "extension":
         if not _extension_available(conn, sources.version):
@@ -166,7 +166,7 @@ def _upgrade(
 
 
 def install(
-    conn: psycopg.Connection[object],
+    conn: psycopg.Connection[Any],
     *,
     method: Method = "auto",
     sources: ExtensionSources | None = None,
@@ -255,12 +255,12 @@ SELECT 'pg_policy'::regclass::oid, o.oid, 0
 _PG_CLASS = 1259  # pg_class's own oid, fixed in every PostgreSQL
 
 
-def _outside_objects(conn: psycopg.Connection[object], namespace: int) -> set[tuple[int, int, int]]:
+def _outside_objects(conn: psycopg.Connection[Any], namespace: int) -> set[tuple[int, int, int]]:
     rows = conn.execute(_OUTSIDE_OBJECTS_SQL, {"ns": namespace}).fetchall()
     return {(int(r[0]), int(r[1]), int(r[2])) for r in rows}
 
 
-def _describe(conn: psycopg.Connection[object], objects: set[tuple[int, int, int]]) -> list[str]:
+def _describe(conn: psycopg.Connection[Any], objects: set[tuple[int, int, int]]) -> list[str]:
     relations = {o[1] for o in objects if o[0] == _PG_CLASS and o[2] == 0}
     objects = {o for o in objects if not (o[0] == _PG_CLASS and o[2] != 0 and o[1] in relations)}
     rows = conn.execute(
@@ -270,13 +270,13 @@ def _describe(conn: psycopg.Connection[object], objects: set[tuple[int, int, int
     return sorted(str(r[0]) for r in rows)
 
 
-def _drop_tgsis(conn: psycopg.Connection[object], method: str) -> None:
+def _drop_tgsis(conn: psycopg.Connection[Any], method: str) -> None:
     if method == "extension":
         conn.execute(sql.SQL("DROP EXTENSION {} CASCADE").format(sql.Identifier(EXTENSION)))
     conn.execute(sql.SQL("DROP SCHEMA {} CASCADE").format(sql.Identifier("tgsis")))
 
 
-def uninstall(conn: psycopg.Connection[object], *, cascade: bool = False) -> InstalledVersion | None:
+def uninstall(conn: psycopg.Connection[Any], *, cascade: bool = False) -> InstalledVersion | None:
     """Remove tgsis and its data from the connected database (the cluster-wide roles stay).
 
     Parameters

@@ -366,9 +366,7 @@ class LocalServer:
     # ---- process helpers
 
     def _run(self, args: list[str], *, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-        kwargs: dict[str, object] = {}
-        if self.os_user is not None:
-            kwargs.update(user=self.os_user.uid, group=self.os_user.gid, extra_groups=[])
+        user = self.os_user
         env = {k: v for k, v in os.environ.items() if not k.startswith("PG")}
         env["LC_ALL"] = "C"
         # Files, not pipes: a server started by pg_ctl could keep a pipe open.
@@ -383,7 +381,9 @@ class LocalServer:
                 timeout=timeout,
                 text=True,
                 check=False,
-                **kwargs,  # type: ignore[arg-type]
+                user=user.uid if user else None,
+                group=user.gid if user else None,
+                extra_groups=[] if user else None,
             )
             out.seek(0)
             return subprocess.CompletedProcess(args, proc.returncode, out.read(), "")

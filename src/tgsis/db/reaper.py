@@ -32,9 +32,6 @@ import sys
 def _stop(pg_ctl: str, data: str, mode: str, uid: int | None, gid: int | None) -> None:
     if not os.path.exists(os.path.join(data, "postmaster.pid")):
         return
-    kwargs: dict[str, object] = {}
-    if uid is not None and gid is not None:
-        kwargs.update(user=uid, group=gid, extra_groups=[])
     subprocess.run(  # noqa: S603 - fixed argument list
         [pg_ctl, "stop", "-D", data, "-m", mode, "-w", "-t", "60"],
         stdin=subprocess.DEVNULL,
@@ -42,7 +39,9 @@ def _stop(pg_ctl: str, data: str, mode: str, uid: int | None, gid: int | None) -
         stderr=subprocess.DEVNULL,
         cwd="/",
         check=False,
-        **kwargs,  # type: ignore[arg-type]
+        user=uid,
+        group=gid,
+        extra_groups=[] if uid is not None else None,
     )
 
 
