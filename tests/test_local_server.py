@@ -10,7 +10,7 @@ import psycopg
 import pytest
 
 from tests.local_helpers import private_home, process_alive
-from tgsis.db.local import LocalServer, default_home, find_binaries
+from tgsis.db.local import LocalServer, _check_reachable, _OsUser, default_home, find_binaries
 from tgsis.errors import LocalServerError
 
 
@@ -142,10 +142,13 @@ def test_a_foreign_non_empty_data_dir_is_refused(home: Path) -> None:
     assert (root / "data" / "notes.txt").read_text() == "mine"
 
 
-@pytest.mark.skipif(os.geteuid() != 0, reason="only root runs the server as another OS user")
 def test_unreachable_cluster_folder_is_explained(home: Path) -> None:
+    """As root the server runs as another OS user, who must be able to reach the folder."""
     private = home / "private"
-    private.mkdir(mode=0o700)
+    private.mkdir()
     private.chmod(0o700)
-    with pytest.raises(LocalServerError, match="cannot reach the cluster folder"):
-        LocalServer(private / "pg", find_binaries()).initdb()
+    nobody = _OsUser("nobody", 65534, 65534)
+    with pytest.raises(LocalServerError, match="who cannot reach the cluster folder") as info:
+        _check_reachable(private / "pg", nobody, "the cluster folder")
+    assert f"{private} is not searchable by nobody" in (info.value.detail or "")
+    _check_reachable(home / "pg", nobody, "the cluster folder")  # 0755 all the way: fine

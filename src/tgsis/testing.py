@@ -48,6 +48,8 @@ __all__ = ["TestServer", "pg", "db_dsn", "conn", "tx", "make_database", "start_t
 
 log = logging.getLogger(__name__)
 
+_counter = itertools.count()
+
 
 @dataclass
 class TestServer:
@@ -101,6 +103,17 @@ class TestServer:
         """Drop a database, ending its sessions."""
         with psycopg.connect(self.admin_dsn, autocommit=True) as conn:
             conn.execute(sql.SQL("DROP DATABASE IF EXISTS {} WITH (FORCE)").format(sql.Identifier(name)))
+
+    @contextlib.contextmanager
+    def database(self, prefix: str, template: str = "template0") -> Iterator[tuple[str, str]]:
+        """A database with a unique name, dropped on exit; yields ``(name, dsn)``."""
+        name = f"{prefix}_{os.getpid()}_{next(_counter)}_{uuid.uuid4().hex[:6]}"
+        dsn = self.create_database(name, template)
+        try:
+            yield name, dsn
+        finally:
+            with contextlib.suppress(Exception):
+                self.drop_database(name)
 
     def close(self) -> None:
         for step in reversed(self._teardown):
@@ -202,7 +215,6 @@ def start_test_server() -> TestServer:
 # --------------------------------------------------------------------------- fixtures
 
 _SESSION: dict[str, Any] = {}
-_counter = itertools.count()
 
 
 @pytest.fixture(scope="session")
@@ -226,32 +238,22 @@ def template_db(pg: TestServer) -> Iterator[str]:
     Installed with ``CREATE EXTENSION`` when the server has the files, else
     with the plain SQL.
     """
-    name = f"tgsis_tpl_{os.getpid()}_{uuid.uuid4().hex[:6]}"
-    dsn = pg.create_database(name)
-    with psycopg.connect(dsn) as conn:
-        result = install(conn, method="extension" if pg.extension_files is None else "sql")
-    _SESSION["template_method"] = result.method
-    try:
+    with pg.database("tgsis_tpl") as (name, dsn):
+        with psycopg.connect(dsn) as conn:
+            result = install(conn, method="extension" if pg.extension_files is None else "sql")
+        _SESSION["template_method"] = result.method
         yield name
-    finally:
-        with contextlib.suppress(Exception):
-            pg.drop_database(name)
 
 
 @pytest.fixture
 def make_database(pg: TestServer) -> Iterator[Callable[..., str]]:
     """Factory ``make_database(template="template0") -> dsn`` of databases dropped after the test."""
-    created: list[str] = []
+    with contextlib.ExitStack() as stack:
 
-    def make(template: str = "template0") -> str:
-        name = f"tgsis_t_{os.getpid()}_{next(_counter)}_{uuid.uuid4().hex[:6]}"
-        dsn = pg.create_database(name, template)
-        created.append(name)
-        return dsn
+        def make(template: str = "template0") -> str:
+            return stack.enter_context(pg.database("tgsis_t", template))[1]
 
-    yield make
-    for name in created:
-        pg.drop_database(name)
+        yield make
 
 
 @pytest.fixture
@@ -270,13 +272,8 @@ def conn(db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
 @pytest.fixture(scope="session")
 def shared_db_dsn(pg: TestServer, template_db: str) -> Iterator[str]:
     """DSN of one database with tgsis installed, shared by the tests that use :func:`tx`."""
-    name = f"tgsis_shared_{os.getpid()}_{uuid.uuid4().hex[:6]}"
-    dsn = pg.create_database(name, template_db)
-    try:
+    with pg.database("tgsis_shared", template_db) as (_, dsn):
         yield dsn
-    finally:
-        with contextlib.suppress(Exception):
-            pg.drop_database(name)
 
 
 @pytest.fixture
