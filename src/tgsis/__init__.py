@@ -27,10 +27,12 @@ from tgsis.db import (
     installed_version,
     uninstall,
 )
+from tgsis.mesh import Geotype, LineSet, Mesh, MeshReport, PointSet, Surface, TetraMesh, mesh_class
 from tgsis.errors import (
     AlreadyExistsError,
     DatabaseError,
     Error,
+    FileFormatError,
     InstallationError,
     InUseError,
     InvalidGeometryError,
@@ -61,10 +63,20 @@ __all__ = [
     "ExtensionSources",
     "LocalServer",
     "find_binaries",
+    # meshes (numpy, no database)
+    "Geotype",
+    "Mesh",
+    "MeshReport",
+    "PointSet",
+    "LineSet",
+    "Surface",
+    "TetraMesh",
+    "mesh_class",
     # errors
     "Error",
     "AlreadyExistsError",
     "DatabaseError",
+    "FileFormatError",
     "InstallationError",
     "InUseError",
     "InvalidGeometryError",

@@ -17,7 +17,7 @@ from __future__ import annotations
 import contextlib
 import re
 from collections.abc import Iterator
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import psycopg
 
@@ -29,6 +29,7 @@ __all__ = [
     "InvalidNameError",
     "InvalidGeometryError",
     "InvalidPropertyError",
+    "FileFormatError",
     "NotFoundError",
     "AlreadyExistsError",
     "InUseError",
@@ -113,6 +114,24 @@ class InvalidPropertyError(InvalidInputError):
     """Unknown property, disallowed type, or wrong number of values."""
 
     code = "TG103"
+
+
+class FileFormatError(InvalidInputError):
+    """A geometry file cannot be read or written: unknown format, or bad content.
+
+    Attributes
+    ----------
+    path : str or None
+        The file.
+    line : int or None
+        1-based line number of the offending line, for text formats.
+    """
+
+    def __init__(self, message: str, *, path: object = None, line: int | None = None, **kwargs: Any) -> None:
+        where = f"{path}:{line}: " if path is not None and line is not None else (f"{path}: " if path else "")
+        super().__init__(where + message, **kwargs)
+        self.path = None if path is None else str(path)
+        self.line = line
 
 
 class NotFoundError(Error, LookupError):

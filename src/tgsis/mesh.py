@@ -1,0 +1,385 @@
+"""Mesh types on numpy arrays: point sets, line sets, triangle surfaces, tetrahedral meshes.
+
+No database here. A mesh is an indexed face set, the form of model 1:
+``vertices`` (n, 3) float64 and ``cells`` (m, k) int64 indices into them, with
+k = 1 (points), 2 (segments), 3 (triangles) or 4 (tetrahedra), plus named
+per-vertex and per-cell property arrays.
+
+Constructing a mesh validates it and raises on what cannot be stored:
+
+* :class:`~tgsis.errors.InvalidGeometryError`: wrong array shapes, NaN or
+  infinite coordinates, a cell index outside ``0..n-1``, a cell that uses one
+  vertex twice;
+* :class:`~tgsis.errors.InvalidPropertyError`: a property with the wrong
+  number of values, a non-numeric or multi-dimensional property, a bad name.
+
+What is legal but usually a mistake — duplicate vertices, zero-length,
+zero-area or zero-volume cells — is *flagged* by :meth:`Mesh.report`.
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import InvalidGeometryError, InvalidPropertyError
+
+__all__ = [
+    "Geotype",
+    "Mesh",
+    "PointSet",
+    "LineSet",
+    "Surface",
+    "TetraMesh",
+    "MeshReport",
+    "mesh_class",
+    "PROPERTY_NAME_RE",
+]
+
+#: Property names: what SQL accepts without quoting (lower case, no leading underscore).
+PROPERTY_NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,62}$")
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+class Geotype(str, enum.Enum):
+    """Geometry types of model 1."""
+
+    MULTIPOINT = "MULTIPOINT"
+    MULTILINESTRING = "MULTILINESTRING"
+    SURFACE = "SURFACE"
+    MULTITETRA = "MULTITETRA"
+    GEOMETRYCOLLECTION = "GEOMETRYCOLLECTION"
+
+
+@dataclass(frozen=True)
+class MeshReport:
+    """What :meth:`Mesh.report` flags (legal, but usually a mistake).
+
+    Attributes
+    ----------
+    duplicate_vertices : (d, 2) int64
+        Pairs ``(i, j)``, ``i < j``: vertex ``j`` has exactly the coordinates
+        of the lower-numbered vertex ``i``.
+    degenerate_cells : (q,) int64
+        Cells of zero length, area or volume (at most ``tolerance``).
+    """
+
+    duplicate_vertices: IntArray
+    degenerate_cells: IntArray
+
+    @property
+    def ok(self) -> bool:
+        """Nothing flagged."""
+        return len(self.duplicate_vertices) == 0 and len(self.degenerate_cells) == 0
+
+    def summary(self) -> str:
+        """One line for logs and the command line."""
+        if self.ok:
+            return "no duplicate vertices, no degenerate cells"
+        return (f"{len(self.duplicate_vertices)} duplicate vertices, "
+                f"{len(self.degenerate_cells)} degenerate cells")
+
+
+def _as_vertices(vertices: npt.ArrayLike) -> FloatArray:
+    try:
+        array = np.ascontiguousarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidGeometryError(f"vertices are not numbers: {exc}") from None
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise InvalidGeometryError(f"vertices must be an (n, 3) array, got shape {array.shape}")
+    bad = ~np.isfinite(array)
+    if bad.any():
+        row, col = (int(v) for v in np.argwhere(bad)[0])
+        raise InvalidGeometryError(
+            f"vertex {row} has a non-finite {'xyz'[col]} coordinate ({array[row, col]})",
+            detail=f"{int(bad.any(axis=1).sum())} vertices have NaN or infinite coordinates",
+        )
+    return array
+
+
+def _as_properties(
+    properties: Mapping[str, npt.ArrayLike] | None, count: int, what: str
+) -> dict[str, npt.NDArray[Any]]:
+    result: dict[str, npt.NDArray[Any]] = {}
+    for name, values in (properties or {}).items():
+        if not isinstance(name, str) or not PROPERTY_NAME_RE.match(name):
+            raise InvalidPropertyError(
+                f"{what} property name {name!r} is not allowed",
+                hint="use lower-case letters, digits and underscores, starting with a letter (at most 63)",
+            )
+        array = np.ascontiguousarray(values)
+        if array.dtype.kind not in "biuf":
+            raise InvalidPropertyError(f"{what} property {name!r} has values of type {array.dtype}, not numbers")
+        if array.ndim != 1:
+            raise InvalidPropertyError(f"{what} property {name!r} must be one value per {what}, "
+                                       f"got shape {array.shape}")
+        if len(array) != count:
+            raise InvalidPropertyError(f"{what} property {name!r} has {len(array)} values for {count} {what}s")
+        result[name] = array
+    return result
+
+
+class Mesh:
+    """Base of the mesh types: vertices, cells of ``cell_size`` vertices, properties.
+
+    Parameters
+    ----------
+    vertices : (n, 3) array_like of float
+        Vertex coordinates; stored as float64.
+    cells : (m, k) array_like of int
+        Vertex indices of each cell, k = :attr:`cell_size`; stored as int64.
+    vertex_properties : mapping of str to (n,) array_like, optional
+        Numeric values per vertex.
+    cell_properties : mapping of str to (m,) array_like, optional
+        Numeric values per cell.
+    name : str, optional
+        The object's name (e.g. from a GOCAD header).
+    metadata : mapping, optional
+        Free-form facts a file format keeps for a faithful round trip
+        (colour, GOCAD header lines, original property names, ...).
+
+    Raises
+    ------
+    InvalidGeometryError, InvalidPropertyError
+        See the module documentation.
+    """
+
+    geotype: ClassVar[Geotype]
+    cell_size: ClassVar[int]
+    cell_name: ClassVar[str]
+
+    vertices: FloatArray
+    cells: IntArray
+
+    def __init__(
+        self,
+        vertices: npt.ArrayLike,
+        cells: npt.ArrayLike,
+        *,
+        vertex_properties: Mapping[str, npt.ArrayLike] | None = None,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+        name: str | None = None,
+        metadata: Mapping[str, Any] | None = None,
+    ) -> None:
+        self.vertices = _as_vertices(vertices)
+        self.cells = self._as_cells(cells, len(self.vertices))
+        self.vertex_properties = _as_properties(vertex_properties, len(self.vertices), "vertex")
+        self.cell_properties = _as_properties(cell_properties, len(self.cells), self.cell_name)
+        self.name = name
+        self.metadata: dict[str, Any] = dict(metadata or {})
+
+    @classmethod
+    def _as_cells(cls, cells: npt.ArrayLike, n_vertices: int) -> IntArray:
+        k, what = cls.cell_size, cls.cell_name
+        raw = np.asarray(cells)
+        if raw.size == 0:
+            return np.empty((0, k), dtype=np.int64)
+        if raw.dtype.kind not in "iu" and not (raw.dtype.kind == "f" and np.all(raw == np.round(raw))):
+            raise InvalidGeometryError(f"{what} indices must be integers, got {raw.dtype}")
+        array = np.ascontiguousarray(raw, dtype=np.int64)
+        if array.ndim != 2 or array.shape[1] != k:
+            raise InvalidGeometryError(f"{what}s must be an (m, {k}) array of vertex indices, got shape {array.shape}")
+        outside = (array < 0) | (array >= n_vertices)
+        if outside.any():
+            row, col = (int(v) for v in np.argwhere(outside)[0])
+            raise InvalidGeometryError(
+                f"{what} {row} refers to vertex {array[row, col]}, but the mesh has {n_vertices} vertices",
+                detail=f"{int(outside.any(axis=1).sum())} {what}s have out-of-range vertex indices",
+            )
+        if k > 1:
+            ordered = np.sort(array, axis=1)
+            repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
+            if repeated.any():
+                row = int(np.flatnonzero(repeated)[0])
+                raise InvalidGeometryError(
+                    f"{what} {row} uses a vertex twice: {array[row].tolist()}",
+                    detail=f"{int(repeated.sum())} {what}s repeat a vertex index",
+                )
+        return array
+
+    # ---- facts
+
+    @property
+    def n_vertices(self) -> int:
+        """Number of vertices n."""
+        return len(self.vertices)
+
+    @property
+    def n_cells(self) -> int:
+        """Number of cells m."""
+        return len(self.cells)
+
+    def bounds(self) -> FloatArray:
+        """Axis-aligned bounding box as a (2, 3) array ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``.
+
+        Raises
+        ------
+        InvalidGeometryError
+            The mesh has no vertex.
+        """
+        if self.n_vertices == 0:
+            raise InvalidGeometryError(f"{type(self).__name__} {self.name or ''} has no vertex: no bounding box")
+        return np.stack([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+
+    def cell_measures(self) -> FloatArray:
+        """Length, area or volume of every cell: (m,) float64 (zeros for points)."""
+        v = self.vertices[self.cells]
+        if self.cell_size == 1:
+            return np.zeros(self.n_cells)
+        if self.cell_size == 2:
+            return np.asarray(np.linalg.norm(v[:, 1] - v[:, 0], axis=1))
+        if self.cell_size == 3:
+            return np.asarray(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1))
+        edges = v[:, 1:] - v[:, :1]
+        return np.asarray(np.abs(np.linalg.det(edges)) / 6.0)
+
+    def duplicate_vertex_pairs(self) -> IntArray:
+        """(d, 2) int64 pairs ``(first, duplicate)`` of vertices with identical coordinates."""
+        if self.n_vertices < 2:
+            return np.empty((0, 2), dtype=np.int64)
+        # -0.0 and 0.0 are the same point: compare values, not bits
+        coords = self.vertices + 0.0
+        order = np.lexsort(coords.T[::-1])  # stable: equal rows keep index order
+        ordered = coords[order]
+        starts_group = np.concatenate([[True], (ordered[1:] != ordered[:-1]).any(axis=1)])
+        if starts_group.all():
+            return np.empty((0, 2), dtype=np.int64)
+        group = np.cumsum(starts_group) - 1
+        first = order[np.flatnonzero(starts_group)][group]
+        dup = ~starts_group
+        pairs = np.stack([first[dup], order[dup]], axis=1).astype(np.int64)
+        return pairs[np.lexsort(pairs.T[::-1])]
+
+    def report(self, tolerance: float = 0.0) -> MeshReport:
+        """Flag duplicate vertices and cells whose measure is at most ``tolerance``.
+
+        Parameters
+        ----------
+        tolerance : float
+            Largest length/area/volume still counted as degenerate (0: exactly zero).
+        """
+        degenerate = (np.flatnonzero(self.cell_measures() <= tolerance) if self.cell_size > 1
+                      else np.empty(0, dtype=np.int64))
+        return MeshReport(self.duplicate_vertex_pairs(), degenerate.astype(np.int64))
+
+    # ---- comparison and copies
+
+    def same_as(self, other: Mesh) -> bool:
+        """Same type, bit-identical vertices and cells, and equal properties (NaN equals NaN)."""
+        def same_props(a: Mapping[str, npt.NDArray[Any]], b: Mapping[str, npt.NDArray[Any]]) -> bool:
+            return a.keys() == b.keys() and all(
+                a[k].shape == b[k].shape and np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f")
+                for k in a)
+
+        return (type(self) is type(other)
+                and self.vertices.shape == other.vertices.shape
+                and bool(np.all(self.vertices.view(np.int64) == other.vertices.view(np.int64)))
+                and np.array_equal(self.cells, other.cells)
+                and same_props(self.vertex_properties, other.vertex_properties)
+                and same_props(self.cell_properties, other.cell_properties))
+
+    def copy(self) -> Mesh:
+        """A deep copy."""
+        return type(self)(self.vertices.copy(), self.cells.copy(),
+                          vertex_properties={k: v.copy() for k, v in self.vertex_properties.items()},
+                          cell_properties={k: v.copy() for k, v in self.cell_properties.items()},
+                          name=self.name, metadata=dict(self.metadata))
+
+    def __repr__(self) -> str:
+        props = list(self.vertex_properties) + list(self.cell_properties)
+        return (f"{type(self).__name__}(name={self.name!r}, n_vertices={self.n_vertices}, "
+                f"n_{self.cell_name}s={self.n_cells}, properties={props})")
+
+
+class PointSet(Mesh):
+    """Points (MULTIPOINT): cells are (m, 1); by default one cell per vertex."""
+
+    geotype = Geotype.MULTIPOINT
+    cell_size = 1
+    cell_name = "point"
+
+    def __init__(self, vertices: npt.ArrayLike, cells: npt.ArrayLike | None = None, **kwargs: Any) -> None:
+        n = len(np.asarray(vertices)) if np.ndim(vertices) else 0
+        super().__init__(vertices, np.arange(n).reshape(-1, 1) if cells is None else cells, **kwargs)
+
+
+class LineSet(Mesh):
+    """Lines (MULTILINESTRING) as segments: cells are (m, 2)."""
+
+    geotype = Geotype.MULTILINESTRING
+    cell_size = 2
+    cell_name = "segment"
+
+
+class Surface(Mesh):
+    """Triangulated surface (SURFACE): cells are (m, 3) triangles."""
+
+    geotype = Geotype.SURFACE
+    cell_size = 3
+    cell_name = "triangle"
+
+    @property
+    def triangles(self) -> IntArray:
+        """The cells: (m, 3) int64."""
+        return self.cells
+
+    def to_trimesh(self) -> Any:
+        """A :class:`trimesh.Trimesh` with the same vertices, faces and properties (not processed)."""
+        import trimesh
+
+        return trimesh.Trimesh(
+            vertices=self.vertices.copy(), faces=self.cells.copy(), process=False, validate=False,
+            vertex_attributes={k: v.copy() for k, v in self.vertex_properties.items()},
+            face_attributes={k: v.copy() for k, v in self.cell_properties.items()},
+            metadata={"name": self.name} if self.name else {},
+        )
+
+    @classmethod
+    def from_trimesh(cls, mesh: Any, *, name: str | None = None) -> Surface:
+        """A surface from a :class:`trimesh.Trimesh` (its vertex/face attributes become properties)."""
+        def numeric(attrs: Mapping[str, Any], count: int) -> dict[str, npt.NDArray[Any]]:
+            return {k: np.asarray(v) for k, v in attrs.items()
+                    if np.asarray(v).ndim == 1 and len(v) == count and np.asarray(v).dtype.kind in "biuf"}
+
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(mesh.faces, dtype=np.int64)
+        return cls(vertices, faces,
+                   vertex_properties=numeric(getattr(mesh, "vertex_attributes", {}), len(vertices)),
+                   cell_properties=numeric(getattr(mesh, "face_attributes", {}), len(faces)),
+                   name=name or (mesh.metadata or {}).get("name"))
+
+
+class TetraMesh(Mesh):
+    """Tetrahedral solid (MULTITETRA): cells are (m, 4) tetrahedra."""
+
+    geotype = Geotype.MULTITETRA
+    cell_size = 4
+    cell_name = "tetrahedron"
+
+
+_CLASSES: dict[Geotype, type[Mesh]] = {c.geotype: c for c in (PointSet, LineSet, Surface, TetraMesh)}
+
+
+def mesh_class(geotype: Geotype | str) -> type[Mesh]:
+    """The mesh class of a geotype (``"SURFACE"`` gives :class:`Surface`).
+
+    Raises
+    ------
+    InvalidGeometryError
+        Unknown geotype, or GEOMETRYCOLLECTION (which has no single mesh).
+    """
+    try:
+        return _CLASSES[Geotype(str(geotype).upper())]
+    except (ValueError, KeyError):
+        raise InvalidGeometryError(
+            f"no mesh type for geotype {geotype!r}",
+            hint="use MULTIPOINT, MULTILINESTRING, SURFACE or MULTITETRA",
+        ) from None
