@@ -35,7 +35,7 @@ def _objects(dsn: str) -> dict[str, list[tuple[str, ...]]]:
 def test_create_extension(extension_route: None, make_database: MakeDb) -> None:
     dsn = make_database()
     with psycopg.connect(dsn, autocommit=True) as conn:
-        conn.execute("CREATE EXTENSION tgsis")
+        conn.execute("CREATE EXTENSION tgsis CASCADE")  # CASCADE: cube
         assert conn.execute("SELECT tgsis.version()").fetchone() == (tgsis.__version__,)
         ext = conn.execute("SELECT extversion, extrelocatable, extnamespace::regnamespace::text "
                            "FROM pg_extension WHERE extname = 'tgsis'").fetchone()

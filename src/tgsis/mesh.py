@@ -105,6 +105,13 @@ def _as_vertices(vertices: npt.ArrayLike) -> FloatArray:
     return array
 
 
+_PLURAL = {"vertex": "vertices", "tetrahedron": "tetrahedra"}
+
+
+def _plural(what: str) -> str:
+    return _PLURAL.get(what, what + "s")
+
+
 def _as_properties(
     properties: Mapping[str, npt.ArrayLike] | None, count: int, what: str
 ) -> dict[str, npt.NDArray[Any]]:
@@ -122,7 +129,7 @@ def _as_properties(
             raise InvalidPropertyError(f"{what} property {name!r} must be one value per {what}, "
                                        f"got shape {array.shape}")
         if len(array) != count:
-            raise InvalidPropertyError(f"{what} property {name!r} has {len(array)} values for {count} {what}s")
+            raise InvalidPropertyError(f"{what} property {name!r} has {len(array)} values for {count} {_plural(what)}")
         result[name] = array
     return result
 
@@ -186,13 +193,14 @@ class Mesh:
             raise InvalidGeometryError(f"{what} indices must be integers, got {raw.dtype}")
         array = np.ascontiguousarray(raw, dtype=np.int64)
         if array.ndim != 2 or array.shape[1] != k:
-            raise InvalidGeometryError(f"{what}s must be an (m, {k}) array of vertex indices, got shape {array.shape}")
+            raise InvalidGeometryError(f"{_plural(what)} must be an (m, {k}) array of vertex indices, "
+                                       f"got shape {array.shape}")
         outside = (array < 0) | (array >= n_vertices)
         if outside.any():
             row, col = (int(v) for v in np.argwhere(outside)[0])
             raise InvalidGeometryError(
                 f"{what} {row} refers to vertex {array[row, col]}, but the mesh has {n_vertices} vertices",
-                detail=f"{int(outside.any(axis=1).sum())} {what}s have out-of-range vertex indices",
+                detail=f"{int(outside.any(axis=1).sum())} {_plural(what)} have out-of-range vertex indices",
             )
         if k > 1:
             ordered = np.sort(array, axis=1)
@@ -201,7 +209,7 @@ class Mesh:
                 row = int(np.flatnonzero(repeated)[0])
                 raise InvalidGeometryError(
                     f"{what} {row} uses a vertex twice: {array[row].tolist()}",
-                    detail=f"{int(repeated.sum())} {what}s repeat a vertex index",
+                    detail=f"{int(repeated.sum())} {_plural(what)} repeat a vertex index",
                 )
         return array
 
@@ -296,7 +304,7 @@ class Mesh:
     def __repr__(self) -> str:
         props = list(self.vertex_properties) + list(self.cell_properties)
         return (f"{type(self).__name__}(name={self.name!r}, n_vertices={self.n_vertices}, "
-                f"n_{self.cell_name}s={self.n_cells}, properties={props})")
+                f"n_{_plural(self.cell_name)}={self.n_cells}, properties={props})")
 
 
 class PointSet(Mesh):
@@ -377,7 +385,8 @@ def mesh_class(geotype: Geotype | str) -> type[Mesh]:
         Unknown geotype, or GEOMETRYCOLLECTION (which has no single mesh).
     """
     try:
-        return _CLASSES[Geotype(str(geotype).upper())]
+        key = geotype if isinstance(geotype, Geotype) else Geotype(str(geotype).upper())
+        return _CLASSES[key]
     except (ValueError, KeyError):
         raise InvalidGeometryError(
             f"no mesh type for geotype {geotype!r}",

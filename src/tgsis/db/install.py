@@ -140,8 +140,28 @@ def _install_fresh(
             if method == "extension":
                 raise
             log.warning("CREATE EXTENSION tgsis refused (%s); installing with plain SQL", exc.diag.message_primary)
+    _prepare_plain_sql(conn, sources)
     conn.execute(sources.script(psql_guard=False).encode("utf-8"))
     return "sql"
+
+
+def _prepare_plain_sql(conn: psycopg.Connection[Any], sources: ExtensionSources) -> None:
+    """Do for the plain-SQL route what CREATE EXTENSION does before running a script.
+
+    Creates the required extensions (``requires`` of the control file) and sets
+    the search path to tgsis, their schemas and pg_temp, for this transaction.
+    """
+    for name in sources.requires:
+        conn.execute(sql.SQL("CREATE EXTENSION IF NOT EXISTS {}").format(sql.Identifier(name)))
+    rows = conn.execute(
+        "SELECT e.extnamespace::regnamespace::text FROM pg_catalog.pg_extension e "
+        "JOIN unnest(%s::text[]) WITH ORDINALITY AS r(name, ord) ON r.name = e.extname ORDER BY r.ord",
+        (sources.requires,),
+    ).fetchall()
+    # the same value CREATE EXTENSION sets, so that SET search_path FROM CURRENT
+    # gives both routes identical functions
+    schemas = list(dict.fromkeys(["tgsis", *(str(r[0]) for r in rows), "pg_temp"]))
+    conn.execute("SELECT set_config('search_path', %s, true)", (", ".join(schemas),))
 
 
 def _upgrade(
@@ -160,6 +180,7 @@ def _upgrade(
             )
         )
         return
+    _prepare_plain_sql(conn, sources)
     for path in sources.upgrade_path(current.version, sources.version):
         log.info("applying %s", path.name)
         conn.execute(sources.upgrade_sql(path).encode("utf-8"))

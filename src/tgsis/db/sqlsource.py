@@ -29,6 +29,7 @@ VERSION_TOKEN = "@TGSIS_VERSION@"
 PSQL_GUARD = '\\echo Use "CREATE EXTENSION tgsis" to load this file. \\quit'
 
 _CONTROL_VERSION_RE = re.compile(r"^default_version\s*=\s*'([^']+)'", re.MULTILINE)
+_CONTROL_REQUIRES_RE = re.compile(r"^requires\s*=\s*'([^']*)'", re.MULTILINE)
 _UPDATE_RE = re.compile(rf"^{EXTENSION}--([0-9][0-9.]*)--([0-9][0-9.]*)\.sql$")
 _VERSION_RE = re.compile(r"^[0-9]+(\.[0-9]+)*$")
 
@@ -101,6 +102,12 @@ class ExtensionSources:
             raise InstallationError(f"{self.root / 'tgsis.control'} has no default_version")
         parse_version(match.group(1))
         return match.group(1)
+
+    @cached_property
+    def requires(self) -> list[str]:
+        """Extensions tgsis needs (``requires`` of the control file), e.g. ``["cube"]``."""
+        match = _CONTROL_REQUIRES_RE.search(self.control)
+        return [name.strip() for name in match.group(1).split(",") if name.strip()] if match else []
 
     @cached_property
     def files(self) -> list[str]:

@@ -1,0 +1,82 @@
+-- tgsis.property_columns(properties, per_cell, what): validated (name, type) pairs of a property list.
+-- Accepts {"name": "type", ...} or [["name", "type"], ...] or [{"name": ..., "type": ...}, ...].
+CREATE FUNCTION tgsis.property_columns(p_properties jsonb, p_per_cell boolean, p_what text)
+RETURNS TABLE (name text, typename text, ord int)
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_pairs   jsonb;
+    v_item    jsonb;
+    v_name    text;
+    v_type    text;
+    v_canon   text;
+    v_seen    text[] := '{}';
+    v_i       int := 0;
+BEGIN
+    IF p_properties IS NULL OR p_properties = 'null'::jsonb THEN
+        RETURN;
+    END IF;
+    CASE jsonb_typeof(p_properties)
+        WHEN 'object' THEN
+            SELECT coalesce(jsonb_agg(jsonb_build_array(key, value)), '[]') INTO v_pairs FROM jsonb_each(p_properties);
+        WHEN 'array' THEN
+            v_pairs := p_properties;
+        ELSE
+            RAISE EXCEPTION '% properties must be a JSON object {"name": "type"} or an array of [name, type] pairs, not %',
+                    p_what, jsonb_typeof(p_properties)
+                USING ERRCODE = 'TG103';
+    END CASE;
+
+    FOR v_item IN SELECT value FROM jsonb_array_elements(v_pairs) LOOP
+        v_i := v_i + 1;
+        IF jsonb_typeof(v_item) = 'array' AND jsonb_array_length(v_item) = 2 THEN
+            v_name := v_item ->> 0;
+            v_type := v_item ->> 1;
+        ELSIF jsonb_typeof(v_item) = 'object' THEN
+            v_name := v_item ->> 'name';
+            v_type := v_item ->> 'type';
+        ELSE
+            RAISE EXCEPTION '% property % is %, expected [name, type] or {"name": ..., "type": ...}', p_what, v_i, v_item
+                USING ERRCODE = 'TG103';
+        END IF;
+
+        IF v_name IS NULL OR v_name !~ '^[a-z][a-z0-9_]{0,62}$' OR quote_ident(v_name) <> v_name THEN
+            RAISE EXCEPTION '% property name % is not allowed', p_what, coalesce(quote_literal(v_name), 'NULL')
+                USING ERRCODE = 'TG101',
+                      DETAIL = 'Names must be lower-case letters, digits and underscores, start with a letter, '
+                               'have at most 63 characters and not be an SQL keyword that needs quoting.',
+                      HINT = 'Names starting with "_" are reserved for tgsis columns (_geoid, _idx).';
+        END IF;
+        IF v_name = ANY (v_seen) THEN
+            RAISE EXCEPTION '% property % is given twice', p_what, quote_literal(v_name) USING ERRCODE = 'TG103';
+        END IF;
+        v_seen := v_seen || v_name;
+
+        SELECT t.typename INTO v_canon
+          FROM tgsis.property_types t
+         WHERE t.typename = lower(btrim(v_type)) OR lower(btrim(v_type)) = ANY (t.aliases);
+        IF v_canon IS NULL THEN
+            RAISE EXCEPTION '% property % has type %, which is not allowed', p_what, quote_literal(v_name),
+                    coalesce(quote_literal(v_type), 'NULL')
+                USING ERRCODE = 'TG103',
+                      HINT = (SELECT 'allowed: ' || string_agg(t.typename, ', ' ORDER BY t.typename)
+                                FROM tgsis.property_types t WHERE t.per_cell OR NOT p_per_cell);
+        END IF;
+        IF p_per_cell AND NOT (SELECT t.per_cell FROM tgsis.property_types t WHERE t.typename = v_canon) THEN
+            RAISE EXCEPTION '% property % has type %: vertex and cell properties must be numbers or booleans',
+                    p_what, quote_literal(v_name), v_canon
+                USING ERRCODE = 'TG103',
+                      HINT = (SELECT 'allowed: ' || string_agg(t.typename, ', ' ORDER BY t.typename)
+                                FROM tgsis.property_types t WHERE t.per_cell);
+        END IF;
+        name := v_name;
+        typename := v_canon;
+        ord := v_i;
+        RETURN NEXT;
+    END LOOP;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.property_columns(jsonb, boolean, text) IS
+    'validate a property list (names that need no quoting, types from tgsis.property_types) and return it as ordered (name, typename) rows';

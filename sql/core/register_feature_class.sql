@@ -1,0 +1,100 @@
+-- tgsis.register_feature_class(...): create a feature class (feature table, cell-property table, view) and catalog it.
+CREATE FUNCTION tgsis.register_feature_class(
+    p_name               text,
+    p_geotype            text,
+    p_feature_properties jsonb   DEFAULT '[]',
+    p_cell_properties    jsonb   DEFAULT '[]',
+    p_proalignment       text    DEFAULT 'VERTEX',
+    p_srs                integer DEFAULT 0,
+    p_schema             text    DEFAULT 'public',
+    p_description        text    DEFAULT NULL)
+RETURNS tgsis.catalog
+LANGUAGE plpgsql
+AS $$
+DECLARE
+    v_geotype   text := upper(btrim(p_geotype));
+    v_align     text := upper(btrim(p_proalignment));
+    v_cellpros  text := p_name || '_cellpros';
+    v_view      text := p_name || '_v';
+    v_fcols     text;
+    v_ccols     text;
+    v_fprops    jsonb;
+    v_cprops    jsonb;
+    v_row       tgsis.catalog;
+BEGIN
+    IF p_name IS NULL OR p_name !~ '^[a-z][a-z0-9_]*$' OR quote_ident(p_name) <> p_name OR length(v_cellpros) > 63 THEN
+        RAISE EXCEPTION 'feature class name % is not allowed', coalesce(quote_literal(p_name), 'NULL')
+            USING ERRCODE = 'TG101',
+                  DETAIL = 'A class name is also a table name: lower-case letters, digits and underscores, '
+                           'starting with a letter, at most 54 characters, not an SQL keyword.';
+    END IF;
+    IF v_geotype IS NULL OR v_geotype NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+        RAISE EXCEPTION 'unknown geotype % for feature class %', coalesce(quote_literal(p_geotype), 'NULL'), p_name
+            USING ERRCODE = 'TG100', HINT = 'MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA or GEOMETRYCOLLECTION';
+    END IF;
+    IF v_align IS NULL OR v_align NOT IN ('VERTEX', 'CELL') THEN
+        RAISE EXCEPTION 'property alignment % of feature class % must be VERTEX or CELL',
+                coalesce(quote_literal(p_proalignment), 'NULL'), p_name
+            USING ERRCODE = 'TG100';
+    END IF;
+    IF p_srs IS NULL OR p_srs < 0 THEN
+        RAISE EXCEPTION 'SRS % of feature class % must be an id >= 0 (0: undefined)', p_srs, p_name USING ERRCODE = 'TG100';
+    END IF;
+    IF p_schema IS NULL OR to_regnamespace(quote_ident(p_schema)) IS NULL THEN
+        RAISE EXCEPTION 'schema % does not exist', coalesce(quote_literal(p_schema), 'NULL')
+            USING ERRCODE = 'TG200', HINT = 'create it first, or leave the schema at its default (public)';
+    END IF;
+    IF EXISTS (SELECT FROM tgsis.catalog WHERE classname = p_name) THEN
+        RAISE EXCEPTION 'feature class % exists already', p_name
+            USING ERRCODE = 'TG201', HINT = 'tgsis.drop_feature_class removes it';
+    END IF;
+    IF to_regclass(format('%I.%I', p_schema, p_name)) IS NOT NULL
+       OR to_regclass(format('%I.%I', p_schema, v_cellpros)) IS NOT NULL
+       OR to_regclass(format('%I.%I', p_schema, v_view)) IS NOT NULL THEN
+        RAISE EXCEPTION 'a table or view named %, % or % exists already in schema %', p_name, v_cellpros, v_view, p_schema
+            USING ERRCODE = 'TG201';
+    END IF;
+
+    SELECT coalesce(string_agg(format(', %I %s', name, typename), '' ORDER BY ord), ''),
+           coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
+      INTO v_fcols, v_fprops
+      FROM tgsis.property_columns(p_feature_properties, false, 'feature');
+    SELECT coalesce(string_agg(format(', %I %s NOT NULL', name, typename), '' ORDER BY ord), ''),
+           coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
+      INTO v_ccols, v_cprops
+      FROM tgsis.property_columns(p_cell_properties, true, lower(v_align));
+
+    EXECUTE format('CREATE TABLE %I.%I (_geoid bigint PRIMARY KEY REFERENCES tgsis.geometry (geoid) ON DELETE CASCADE%s)',
+                   p_schema, p_name, v_fcols);
+    -- no foreign key to the feature table: a per-row check would dominate bulk uploads
+    EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, _idx bigint NOT NULL%s, PRIMARY KEY (_geoid, _idx))',
+                   p_schema, v_cellpros, v_ccols);
+    EXECUTE format('CREATE VIEW %I.%I AS SELECT g.geoname, f.*, g.geotype, g.nvrtx, g.ncell, g.bbox, g.created_at
+                      FROM %I.%I f JOIN tgsis.geometry g ON g.geoid = f._geoid', p_schema, v_view, p_schema, p_name);
+
+    EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, p_name,
+                   format('tgsis feature class %s: one row per %s feature (_geoid = tgsis.geometry.geoid)', p_name, v_geotype));
+    EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, p_name, 'the feature''s geometry (tgsis.geometry.geoid)');
+    EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_cellpros,
+                   format('tgsis feature class %s: %s properties (_idx = %s)', p_name, lower(v_align),
+                          CASE v_align WHEN 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
+                                       ELSE format('tgsis.%s id', tgsis.simplex_table(v_geotype)) END));
+    EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_cellpros, 'the feature (_geoid of ' || p_name || ')');
+    EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
+                   CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
+    EXECUTE format('COMMENT ON VIEW %I.%I IS %L', p_schema, v_view,
+                   format('tgsis feature class %s: features with their name, geotype, counts and bounding box', p_name));
+
+    EXECUTE format('GRANT SELECT ON %I.%I, %I.%I, %I.%I TO tgsis_reader', p_schema, p_name, p_schema, v_cellpros, p_schema, v_view);
+    EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I, %I.%I TO tgsis_editor', p_schema, p_name, p_schema, v_cellpros);
+
+    INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, proalignment, srs,
+                               feature_properties, cell_properties, description)
+    VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_align, p_srs, v_fprops, v_cprops, p_description)
+    RETURNING * INTO v_row;
+    RETURN v_row;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text) IS
+    'register a feature class: creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties) and <name>_v (view), records it in tgsis.catalog';

@@ -1,0 +1,59 @@
+-- tgsis.check_geometry(geoid): what is wrong with a stored geometry (no rows: nothing).
+-- The client validates before writing; this checks rows written by other means.
+CREATE FUNCTION tgsis.check_geometry(p_geoid bigint)
+RETURNS TABLE (problem text, count bigint, example text)
+LANGUAGE plpgsql
+STABLE
+SET search_path FROM CURRENT
+AS $$
+DECLARE
+    v_geo   tgsis.geometry;
+    v_table text;
+    v_k     int;
+    v_i     int;
+BEGIN
+    SELECT * INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION 'geometry % does not exist', p_geoid USING ERRCODE = 'TG200';
+    END IF;
+    IF v_geo.geotype = 'GEOMETRYCOLLECTION' THEN
+        RETURN QUERY SELECT 'member geometry does not exist'::text, count(*), min(m)::text
+                       FROM unnest(v_geo.geoids) AS m
+                      WHERE NOT EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = m)
+                     HAVING count(*) > 0;
+        RETURN;
+    END IF;
+
+    RETURN QUERY SELECT 'vertex with a NaN or infinite coordinate'::text, count(*), min(vrtxid)::text
+                   FROM tgsis.vrtx
+                  WHERE geoid = p_geoid
+                    AND (x IN ('NaN', 'Infinity', '-Infinity') OR y IN ('NaN', 'Infinity', '-Infinity')
+                         OR z IN ('NaN', 'Infinity', '-Infinity'))
+                 HAVING count(*) > 0;
+
+    v_table := tgsis.simplex_table(v_geo.geotype);
+    v_k := CASE v_table WHEN 'point' THEN 1 WHEN 'segment' THEN 2 WHEN 'trgl' THEN 3 ELSE 4 END;
+    FOR v_i IN 1 .. v_k LOOP
+        RETURN QUERY EXECUTE format(
+            'SELECT %L::text, count(*), min(s.%I)::text FROM tgsis.%I s
+              WHERE s.geoid = $1
+                AND NOT EXISTS (SELECT FROM tgsis.vrtx v WHERE v.geoid = s.geoid AND v.vrtxid = s.%I)
+             HAVING count(*) > 0',
+            format('%s refers to a missing vertex (vrtxid%s)', v_table, v_i),
+            CASE v_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid'
+                         WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END,
+            v_table, 'vrtxid' || v_i) USING p_geoid;
+    END LOOP;
+
+    RETURN QUERY
+        SELECT 'bounding box or counts out of date (run tgsis.refresh_geometry)'::text, 1::bigint, NULL::text
+          FROM (SELECT count(*) AS n,
+                       CASE WHEN count(*) > 0
+                            THEN cube(ARRAY[min(x), min(y), min(z)], ARRAY[max(x), max(y), max(z)]) END AS bbox
+                  FROM tgsis.vrtx WHERE geoid = p_geoid) AS v
+         WHERE v.n <> v_geo.nvrtx OR v.bbox IS DISTINCT FROM v_geo.bbox;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.check_geometry(bigint) IS
+    'problems of a stored geometry: non-finite coordinates, simplices pointing at missing vertices, stale bbox/counts, missing collection members';

@@ -1,0 +1,500 @@
+"""Feature classes and features of model 1: register classes, upload and download meshes.
+
+Uploads and downloads go through binary COPY built and parsed with numpy
+(:mod:`tgsis.db.copy`); every write is one transaction. A feature is one row
+of the class's feature table whose ``_geoid`` is its geometry in
+``tgsis.geometry``; vertices and simplices are in ``tgsis.vrtx`` and
+``tgsis.point|segment|trgl|tetra``, vertex or cell properties in the class's
+``<name>_cellpros`` table.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
+from tgsis.errors import InvalidGeometryError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.mesh import Geotype, Mesh, mesh_class
+
+__all__ = [
+    "Property",
+    "FeatureClass",
+    "Feature",
+    "create_feature_class",
+    "get_feature_class",
+    "list_feature_classes",
+    "drop_feature_class",
+    "insert_feature",
+    "fetch_feature",
+    "fetch_features",
+    "features_in_box",
+    "delete_feature",
+]
+
+log = logging.getLogger(__name__)
+
+Conn = psycopg.Connection[Any]
+PropertySpec = Mapping[str, str] | Sequence[tuple[str, str]]
+
+_SIMPLEX = {
+    Geotype.MULTIPOINT: ("point", "pointid"),
+    Geotype.MULTILINESTRING: ("segment", "segid"),
+    Geotype.SURFACE: ("trgl", "trglid"),
+    Geotype.MULTITETRA: ("tetra", "tetraid"),
+}
+
+
+@dataclass(frozen=True)
+class Property:
+    """A property of a feature class: column name and SQL type."""
+
+    name: str
+    type: str
+
+
+@dataclass(frozen=True)
+class FeatureClass:
+    """A row of ``tgsis.catalog``.
+
+    Attributes
+    ----------
+    name : str
+        Class name (= feature table name).
+    schema : str
+        Schema of its tables.
+    geotype : Geotype
+        Geotype of its features.
+    alignment : {"VERTEX", "CELL"}
+        Whether ``cell_properties`` are per vertex or per simplex.
+    srs : int
+        Spatial reference id (0: undefined).
+    feature_properties, cell_properties : tuple of Property
+        In column order.
+    """
+
+    name: str
+    schema: str
+    geotype: Geotype
+    alignment: Literal["VERTEX", "CELL"]
+    srs: int
+    feature_properties: tuple[Property, ...]
+    cell_properties: tuple[Property, ...]
+    featuretable: str
+    cellprotable: str
+    viewname: str
+    description: str | None = None
+
+    @property
+    def mesh_class(self) -> type[Mesh]:
+        """The mesh type of the features."""
+        return mesh_class(self.geotype)
+
+    def _table(self, name: str) -> sql.Composed:
+        return sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(name))
+
+
+@dataclass
+class Feature:
+    """A feature fetched from the database.
+
+    Attributes
+    ----------
+    id : int
+        Its geoid.
+    feature_class : str
+        Name of its class.
+    name : str or None
+        Geometry name.
+    properties : dict
+        Per-feature property values (None where NULL).
+    mesh : Mesh
+        Geometry with its vertex or cell properties, in stored id order.
+    """
+
+    id: int
+    feature_class: str
+    name: str | None
+    properties: dict[str, Any] = field(default_factory=dict)
+    mesh: Mesh | None = None
+
+
+# --------------------------------------------------------------------------- classes
+
+
+_CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
+                    "featuretable, cellprotable, viewname, description")
+
+
+def _class_from_row(row: Sequence[Any]) -> FeatureClass:
+    def props(value: Any) -> tuple[Property, ...]:
+        items = json.loads(value) if isinstance(value, str) else value
+        return tuple(Property(p["name"], p["type"]) for p in items)
+
+    return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
+                        feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
+                        cellprotable=row[8], viewname=row[9], description=row[10])
+
+
+def _spec_json(spec: PropertySpec | None) -> str:
+    pairs = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
+    return json.dumps([[name, typ] for name, typ in pairs])
+
+
+def create_feature_class(
+    conn: Conn,
+    name: str,
+    geotype: Geotype | str,
+    *,
+    feature_properties: PropertySpec | None = None,
+    cell_properties: PropertySpec | None = None,
+    alignment: Literal["VERTEX", "CELL"] = "VERTEX",
+    srs: int = 0,
+    schema: str = "public",
+    description: str | None = None,
+) -> FeatureClass:
+    """Register a feature class (``tgsis.register_feature_class``).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    name : str
+        Class and feature-table name: lower case, no quoting needed.
+    geotype : Geotype or str
+    feature_properties, cell_properties : mapping or sequence of (name, type)
+        Property names and SQL types (see ``tgsis.property_types``); order kept.
+    alignment : {"VERTEX", "CELL"}
+    srs : int
+    schema : str
+        Existing schema for the class's tables.
+    description : str, optional
+
+    Raises
+    ------
+    InvalidNameError, InvalidPropertyError, InvalidInputError, AlreadyExistsError, NotFoundError
+    """
+    geotype_value = geotype.value if isinstance(geotype, Geotype) else str(geotype)
+    with reraise(), conn.transaction():
+        row = conn.execute(
+            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s)",
+            (name, geotype_value, _spec_json(feature_properties), _spec_json(cell_properties), alignment, srs,
+             schema, description),
+        ).fetchone()
+    assert row is not None
+    return _class_from_row(row)
+
+
+def get_feature_class(conn: Conn, name: str) -> FeatureClass:
+    """The class called ``name``.
+
+    Raises
+    ------
+    NotFoundError
+        No such class.
+    """
+    with reraise():
+        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.catalog WHERE classname = %s", (name,)).fetchone()
+    if row is None:
+        raise NotFoundError(f"feature class {name!r} does not exist", hint="`tgsis class list` shows the classes")
+    return _class_from_row(row)
+
+
+def list_feature_classes(conn: Conn) -> list[FeatureClass]:
+    """All feature classes, by name."""
+    with reraise():
+        rows = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.catalog ORDER BY classname").fetchall()
+    return [_class_from_row(r) for r in rows]
+
+
+def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
+    """Drop a class; with ``force`` also its features. Returns the number of features deleted.
+
+    Raises
+    ------
+    NotFoundError, InUseError
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT tgsis.drop_feature_class(%s, %s)", (name, force)).fetchone()
+    return int(row[0]) if row else 0
+
+
+# --------------------------------------------------------------------------- upload
+
+
+def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool) -> dict[str, npt.NDArray[Any]]:
+    """The mesh properties the class stores, checked and cast to the column types."""
+    stored, other = ((mesh.vertex_properties, mesh.cell_properties) if fc.alignment == "VERTEX"
+                     else (mesh.cell_properties, mesh.vertex_properties))
+    kind = "vertex" if fc.alignment == "VERTEX" else mesh.cell_name
+    wanted = {p.name: p for p in fc.cell_properties}
+    missing = sorted(set(wanted) - set(stored))
+    if missing:
+        raise InvalidPropertyError(f"feature class {fc.name} needs {kind} properties {missing}, which the mesh lacks")
+    extra = sorted(set(stored) - set(wanted)) + sorted(other)
+    if extra and not drop_extra:
+        raise InvalidPropertyError(
+            f"feature class {fc.name} has no column for properties {extra} of the mesh",
+            hint=f"it stores {fc.alignment.lower()} properties {sorted(wanted) or 'none'}; "
+                 "drop the others (drop_extra_properties=True) or register them in the class",
+        )
+    if extra:
+        log.warning("not stored by feature class %s: properties %s", fc.name, extra)
+    result: dict[str, npt.NDArray[Any]] = {}
+    for prop in fc.cell_properties:
+        values = stored[prop.name]
+        target = numpy_dtype(SQL_TYPES[prop.type])
+        cast = values.astype(target)
+        if target.kind in "iub" and not np.array_equal(cast, values):
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} has values that are not {prop.type}")
+        result[prop.name] = cast
+    return result
+
+
+def _feature_columns(fc: FeatureClass, properties: Mapping[str, Any] | None) -> dict[str, Any]:
+    known = {p.name for p in fc.feature_properties}
+    values = dict(properties or {})
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise InvalidPropertyError(f"feature class {fc.name} has no feature properties {unknown}",
+                                   hint=f"its feature properties: {sorted(known) or 'none'}")
+    return {k: (json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in values.items()}
+
+
+def _copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: bytes) -> None:
+    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
+        table, sql.SQL(", ").join(sql.Identifier(c) for c in columns))
+    with conn.cursor().copy(statement) as copy:
+        copy.write(payload)
+
+
+def insert_feature(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    mesh: Mesh,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    drop_extra_properties: bool = False,
+) -> int:
+    """Store a mesh as a new feature; return its id (geoid).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+    mesh : Mesh
+        Of the class's geotype, with exactly the class's vertex (or cell)
+        properties.
+    properties : mapping, optional
+        Per-feature property values; missing ones are NULL.
+    name : str, optional
+        Geometry name (default: ``mesh.name``).
+    drop_extra_properties : bool
+        Ignore mesh properties the class does not store instead of failing.
+
+    Raises
+    ------
+    NotFoundError, InvalidGeometryError, InvalidPropertyError
+        Nothing is written.
+    """
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if mesh.geotype != fc.geotype:
+        raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
+                                   f"not {mesh.geotype.value} ({type(mesh).__name__})")
+    cell_values = _aligned_properties(fc, mesh, drop_extra_properties)
+    feature_values = _feature_columns(fc, properties)
+    table, key = _SIMPLEX[fc.geotype]
+    n, m = mesh.n_vertices, mesh.n_cells
+    bounds = mesh.bounds().ravel().tolist() if n else None
+
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s)",
+                           (fc.geotype.value, name if name is not None else mesh.name, bounds, n, m)).fetchone()
+        assert row is not None
+        geoid = int(row[0])
+        geoids = np.full(max(n, m), geoid, dtype=np.int64)
+        _copy_in(conn, sql.SQL("tgsis.vrtx"), ("geoid", "vrtxid", "x", "y", "z"), encode_rows([
+            (geoids[:n], "int8"), (np.arange(n), "int8"),
+            (mesh.vertices[:, 0], "float8"), (mesh.vertices[:, 1], "float8"), (mesh.vertices[:, 2], "float8")]))
+        vertex_columns = [f"vrtxid{i + 1}" for i in range(mesh.cell_size)]
+        _copy_in(conn, sql.SQL("tgsis.{}").format(sql.Identifier(table)), ("geoid", key, *vertex_columns),
+                 encode_rows([(geoids[:m], "int8"), (np.arange(m), "int8"),
+                              *((mesh.cells[:, i], "int8") for i in range(mesh.cell_size))]))
+        if fc.cell_properties:
+            count = n if fc.alignment == "VERTEX" else m
+            _copy_in(conn, fc._table(fc.cellprotable), ("_geoid", "_idx", *cell_values),
+                     encode_rows([(geoids[:count], "int8"), (np.arange(count), "int8"),
+                                  *((cell_values[p.name], SQL_TYPES[p.type]) for p in fc.cell_properties)]))
+        columns = ["_geoid", *feature_values]
+        conn.execute(
+            sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+                fc._table(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+                sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
+            [geoid, *feature_values.values()])
+    log.info("stored %s feature %d: %d vertices, %d cells", fc.name, geoid, n, m)
+    return geoid
+
+
+# --------------------------------------------------------------------------- download
+
+
+def _copy_out(conn: Conn, query: sql.Composable, types: Sequence[str]) -> list[npt.NDArray[Any]]:
+    statement = sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(query)
+    with conn.cursor().copy(statement) as copy:
+        data = b"".join(bytes(chunk) for chunk in copy)
+    return decode_rows(data, types)
+
+
+def _split(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],
+           wanted: Sequence[int]) -> dict[int, npt.NDArray[np.int64]]:
+    """Row positions of each wanted geoid, ordered by the local id."""
+    order = np.lexsort((ids, geoids))
+    sorted_geoids = geoids[order]
+    starts = np.searchsorted(sorted_geoids, wanted, side="left")
+    ends = np.searchsorted(sorted_geoids, wanted, side="right")
+    return {g: order[s:e] for g, s, e in zip(wanted, starts.tolist(), ends.tolist())}
+
+
+def _positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: str, geoid: int) -> npt.NDArray[np.int64]:
+    """Indices of ``lookup`` values in the sorted ``ids`` (vertex ids to mesh indices)."""
+    if len(ids) and ids[0] == 0 and ids[-1] == len(ids) - 1:
+        positions = lookup  # ids 0..n-1: index = id
+        if len(lookup) and (lookup.min() < 0 or lookup.max() >= len(ids)):
+            raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
+                                       hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+        return positions
+    positions = np.searchsorted(ids, lookup)
+    if len(lookup) and (np.any(positions >= len(ids)) or np.any(ids[np.minimum(positions, len(ids) - 1)] != lookup)):
+        raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
+                                   hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+    return positions
+
+
+def fetch_features(conn: Conn, feature_class: str | FeatureClass,
+                   ids: Sequence[int] | None = None) -> list[Feature]:
+    """Fetch features with their meshes and properties (three COPYs for all of them).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+    ids : sequence of int, optional
+        Feature ids (geoids); all features of the class when omitted.
+
+    Returns
+    -------
+    list of Feature
+        In the order of ``ids`` (by id when omitted).
+
+    Raises
+    ------
+    NotFoundError
+        An id is not a feature of the class.
+    """
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    table, key = _SIMPLEX[fc.geotype]
+    props = [p.name for p in fc.feature_properties]
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():
+        if fresh:  # one snapshot for the four statements below
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        rows = conn.execute(
+            sql.SQL("SELECT f._geoid, g.geoname{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid {} "
+                    "ORDER BY f._geoid").format(
+                sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
+                fc._table(fc.featuretable),
+                sql.SQL("WHERE f._geoid = ANY({})").format(sql.Literal(list(ids))) if ids is not None
+                else sql.SQL("")),
+        ).fetchall()
+        found = {int(r[0]): r for r in rows}
+        wanted = [int(i) for i in ids] if ids is not None else sorted(found)
+        missing = [i for i in wanted if i not in found]
+        if missing:
+            raise NotFoundError(f"feature class {fc.name} has no feature(s) {missing}")
+        if not wanted:
+            return []
+        id_list = sql.Literal(wanted)
+        vg, vid, x, y, z = _copy_out(conn, sql.SQL(
+            "SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = ANY({})").format(id_list),
+            ["int8", "int8", "float8", "float8", "float8"])
+        cell_cols = [f"vrtxid{i + 1}" for i in range(fc.mesh_class.cell_size)]
+        cells = _copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
+            sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
+            id_list), ["int8"] * (2 + len(cell_cols)))
+        prop_arrays: list[npt.NDArray[Any]] = []
+        if fc.cell_properties:
+            prop_arrays = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
+                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties),
+                fc._table(fc.cellprotable), id_list),
+                ["int8", "int8", *(SQL_TYPES[p.type] for p in fc.cell_properties)])
+
+    vertex_rows = _split(vg, vid, wanted)
+    cell_rows = _split(cells[0], cells[1], wanted)
+    prop_rows = _split(prop_arrays[0], prop_arrays[1], wanted) if prop_arrays else {}
+    xyz = np.stack([x, y, z], axis=1)
+    features = []
+    for geoid in wanted:
+        vrows, crows = vertex_rows[geoid], cell_rows[geoid]
+        vertex_ids = vid[vrows]
+        simplices = np.stack([_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]], axis=1)
+        values: dict[str, npt.NDArray[Any]] = {}
+        if fc.cell_properties:
+            prows = prop_rows[geoid]
+            target_ids = vertex_ids if fc.alignment == "VERTEX" else cells[1][crows]
+            if len(prows) != len(target_ids) or not np.array_equal(prop_arrays[1][prows], target_ids):
+                raise InvalidPropertyError(f"feature {geoid} of class {fc.name}: {fc.cellprotable} has "
+                                           f"{len(prows)} rows for {len(target_ids)} {'vertices' if fc.alignment == 'VERTEX' else 'cells'}")
+            values = {p.name: prop_arrays[2 + i][prows] for i, p in enumerate(fc.cell_properties)}
+        row = found[geoid]
+        mesh = fc.mesh_class(
+            xyz[vrows], simplices,
+            vertex_properties=values if fc.alignment == "VERTEX" else None,
+            cell_properties=values if fc.alignment == "CELL" else None,
+            name=row[1])
+        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[2:])), mesh))
+    return features
+
+
+def fetch_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> Feature:
+    """One feature with its mesh and properties (see :func:`fetch_features`)."""
+    return fetch_features(conn, feature_class, [feature_id])[0]
+
+
+def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.ArrayLike) -> list[int]:
+    """Ids of the class's features whose bounding box meets ``bounds`` (GiST index scan).
+
+    Parameters
+    ----------
+    bounds : (2, 3) array_like
+        ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``.
+    """
+    box = np.asarray(bounds, dtype=np.float64)
+    if box.shape != (2, 3) or not np.all(np.isfinite(box)):
+        raise InvalidGeometryError(f"a box is [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {box.tolist()}")
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    with reraise():
+        rows = conn.execute(
+            sql.SQL("SELECT f._geoid FROM {} f JOIN tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) AS b(geoid) "
+                    "ON b.geoid = f._geoid ORDER BY 1").format(fc._table(fc.featuretable)),
+            box.ravel().tolist()).fetchall()
+    return [int(r[0]) for r in rows]
+
+
+def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> bool:
+    """Delete a feature with its geometry and properties; ``False`` if it was not there."""
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    with reraise(), conn.transaction():
+        exists = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc._table(fc.featuretable)),
+                              (feature_id,)).fetchone()
+        if exists is None:
+            return False
+        conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,))
+    return True
