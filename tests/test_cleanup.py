@@ -112,7 +112,9 @@ def test_cli_killed_midway_leaves_no_server() -> None:
             assert process_alive(pid)
             os.killpg(child.pid, signal.SIGKILL)
             child.wait(30)
-            assert wait_until(lambda: not process_alive(pid)), "the lease watcher did not stop the server"
+            stopped = wait_until(lambda: not process_alive(pid), timeout=60)
+            assert stopped, "the lease watcher did not stop the server:\n" + subprocess.run(
+                ["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout
             assert not server.is_running()
         finally:
             if child.poll() is None:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
 import psycopg
 import pytest
 
@@ -79,3 +82,65 @@ def test_demo_reports_what_it_talks_to() -> None:
             lines[1] == f"tgsis {tgsis.__version__} (installed as sql)"
         assert lines[2] == "roles: tgsis_reader, tgsis_editor, tgsis_admin"
         assert lines[3].startswith("dsn: host=") and str(home) in lines[3]
+
+
+# --------------------------------------------------------------------------- classes and features
+
+CFM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cfm"
+
+
+def _cfm(name: str) -> Path:
+    path = CFM / name
+    if not path.is_file():
+        pytest.fail(f"missing shared test data {path} (the repository expects ../shared beside it)")
+    return path
+
+
+def test_class_create_list_drop(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", db_dsn, "class", "create", "faults", "--geotype", "surface",
+                 "--feature-property", "release:text", "--property", "azi:float8", "--property", "dip:float8",
+                 "--srs", "26911"]) == 0
+    assert "created feature class faults (SURFACE)" in capsys.readouterr().out
+    assert main(["--dsn", db_dsn, "class", "list"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("faults\tSURFACE\tsrs 26911\tpublic\tfeature: release text\tvertex: azi double precision")
+    assert main(["--dsn", db_dsn, "class", "create", "Bad", "--geotype", "SURFACE"]) == 1
+    assert "feature class name 'Bad' is not allowed" in capsys.readouterr().err
+    assert main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--property", "porosity"]) == 1
+    assert "must be NAME:TYPE" in capsys.readouterr().err
+    assert main(["--dsn", db_dsn, "class", "drop", "faults"]) == 0
+    assert main(["--dsn", db_dsn, "class", "drop", "faults"]) == 1
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_import_ls_export_a_real_gocad_fault(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from tgsis import formats
+
+    source = _cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
+    assert main(["--dsn", db_dsn, "class", "create", "faults", "--geotype", "SURFACE",
+                 "--feature-property", "release:text", "--property", "azi:float8", "--property", "dip:float8"]) == 0
+    capsys.readouterr()
+    assert main(["--dsn", db_dsn, "import", str(source), "--class", "faults", "--set", "release=CFM5"]) == 0
+    fid, name, *_ = capsys.readouterr().out.split("\t")
+    assert name == "CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5"
+    assert main(["--dsn", db_dsn, "ls"]) == 0
+    assert capsys.readouterr().out.startswith(f"{fid}\tfaults\t{name}\tSURFACE\t")
+    out = tmp_path / "back.ts"
+    assert main(["--dsn", db_dsn, "export", fid, str(out)]) == 0
+    original, back = formats.read_one(source), formats.read_one(out)
+    assert back.vertices.tobytes() == original.vertices.tobytes()
+    assert np.array_equal(back.cells, original.cells)
+    assert np.array_equal(back.vertex_properties["azi"], original.vertex_properties["azi"], equal_nan=True)
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT release FROM faults").fetchone() == ("CFM5",)
+
+
+def test_import_of_properties_the_class_lacks_needs_a_flag(db_dsn: str,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    source = _cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
+    assert main(["--dsn", db_dsn, "class", "create", "plain", "--geotype", "SURFACE"]) == 0
+    assert main(["--dsn", db_dsn, "import", str(source), "--class", "plain"]) == 1
+    assert "has no column for properties ['azi', 'dip']" in capsys.readouterr().err
+    assert main(["--dsn", db_dsn, "import", str(source), "--class", "plain", "--drop-extra-properties"]) == 0
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT count(*) FROM plain").fetchone() == (1,)

@@ -14,13 +14,25 @@ import os
 import signal
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import NoReturn
+
+from psycopg import sql as psycopg_sql
 
 import tgsis
 from tgsis.db.connect import connect, release_local_server, resolve_target
 from tgsis.db.install import install, installed_version, uninstall
 from tgsis.db.local import LocalServer, find_binaries
-from tgsis.errors import Error
+from tgsis.db.features import (
+    class_of_feature,
+    create_feature_class,
+    drop_feature_class,
+    fetch_feature,
+    get_feature_class,
+    insert_feature,
+    list_feature_classes,
+)
+from tgsis.errors import Error, InvalidInputError
 
 __all__ = ["main", "build_parser"]
 
@@ -115,6 +127,109 @@ def cmd_local_dsn(args: argparse.Namespace) -> int:
     return 0
 
 
+# --------------------------------------------------------------------------- feature classes
+
+
+def _pairs(items: Sequence[str] | None, what: str) -> list[tuple[str, str]]:
+    pairs = []
+    for item in items or []:
+        name, sep, value = item.partition(":")
+        if not sep or not name or not value:
+            raise InvalidInputError(f"{what} {item!r} must be NAME:TYPE, e.g. porosity:float8")
+        pairs.append((name, value))
+    return pairs
+
+
+def cmd_class_create(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        fc = create_feature_class(
+            conn, args.name, args.geotype, feature_properties=_pairs(args.feature_property, "--feature-property"),
+            cell_properties=_pairs(args.property, "--property"), alignment=args.alignment.upper(), srs=args.srs,
+            schema=args.schema, description=args.description)
+    _out(f"created feature class {fc.name} ({fc.geotype.value}) in schema {fc.schema}: "
+         f"tables {fc.featuretable}, {fc.cellprotable}, view {fc.viewname}")
+    return 0
+
+
+def cmd_class_list(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        classes = list_feature_classes(conn)
+    for fc in classes:
+        fprops = ", ".join(f"{p.name} {p.type}" for p in fc.feature_properties) or "-"
+        cprops = ", ".join(f"{p.name} {p.type}" for p in fc.cell_properties) or "-"
+        _out(f"{fc.name}\t{fc.geotype.value}\tsrs {fc.srs}\t{fc.schema}\tfeature: {fprops}\t"
+             f"{fc.alignment.lower()}: {cprops}")
+    if not classes:
+        print("no feature classes", file=sys.stderr)
+    return 0
+
+
+def cmd_class_drop(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        deleted = drop_feature_class(conn, args.name, force=args.force)
+    _out(f"dropped feature class {args.name}" + (f" and its {deleted} feature(s)" if deleted else ""))
+    return 0
+
+
+# --------------------------------------------------------------------------- features
+
+
+def _feature_values(items: Sequence[str] | None) -> dict[str, str]:
+    values = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise InvalidInputError(f"--set {item!r} must be NAME=VALUE")
+        values[name] = value
+    return values
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    from tgsis import formats
+
+    meshes = formats.read(args.file, format=args.format)
+    if args.name and len(meshes) > 1:
+        raise InvalidInputError(f"{args.file} holds {len(meshes)} objects: --name names only one")
+    values = _feature_values(args.set)
+    with connect(args.dsn) as conn:
+        fc = get_feature_class(conn, args.feature_class)
+        with conn.transaction():  # all objects of the file, or none
+            ids = [insert_feature(conn, fc, mesh, values, name=args.name or mesh.name or Path(args.file).stem,
+                                  drop_extra_properties=args.drop_extra_properties) for mesh in meshes]
+    for fid, mesh in zip(ids, meshes):
+        _out(f"{fid}\t{args.name or mesh.name or Path(args.file).stem}\t{mesh.n_vertices} vertices\t"
+             f"{mesh.n_cells} {type(mesh).cell_name}s\t{mesh.report().summary()}")
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from tgsis import formats
+
+    with connect(args.dsn) as conn:
+        fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
+        feature = fetch_feature(conn, fc, args.id)
+    assert feature.mesh is not None
+    formats.write(feature.mesh, args.file, format=args.format)
+    _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices) to {args.file}")
+    return 0
+
+
+def cmd_ls(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
+        rows = []
+        for fc in classes:
+            rows += [(fc.name, *r) for r in conn.execute(
+                psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell FROM {}.{} f "
+                                "JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
+                    psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
+    for cls, geoid, name, geotype, nvrtx, ncell in rows:
+        _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells")
+    if not rows:
+        print("no features", file=sys.stderr)
+    return 0
+
+
 # --------------------------------------------------------------------------- demo
 
 
@@ -157,6 +272,49 @@ def build_parser() -> argparse.ArgumentParser:
     db_uninstall.set_defaults(handler=cmd_db_uninstall)
     db_status = db_commands.add_parser("status", help="server and tgsis versions")
     db_status.set_defaults(handler=cmd_db_status)
+
+    cls = commands.add_parser("class", help="feature classes: create, list, drop")
+    cls_commands = cls.add_subparsers(dest="class_command", metavar="ACTION", required=True)
+    cls_create = cls_commands.add_parser("create", help="register a feature class")
+    cls_create.add_argument("name")
+    cls_create.add_argument("--geotype", required=True, type=str.upper,
+                            choices=("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION"))
+    cls_create.add_argument("--feature-property", action="append", metavar="NAME:TYPE",
+                            help="a property of the whole feature (repeatable), e.g. creator:text")
+    cls_create.add_argument("--property", action="append", metavar="NAME:TYPE",
+                            help="a per-vertex (or per-cell) property (repeatable), e.g. porosity:float8")
+    cls_create.add_argument("--alignment", default="VERTEX", type=str.upper, choices=("VERTEX", "CELL"))
+    cls_create.add_argument("--srs", type=int, default=0, help="spatial reference id (EPSG), 0 = undefined")
+    cls_create.add_argument("--schema", default="public")
+    cls_create.add_argument("--description")
+    cls_create.set_defaults(handler=cmd_class_create)
+    cls_list = cls_commands.add_parser("list", help="list the feature classes")
+    cls_list.set_defaults(handler=cmd_class_list)
+    cls_drop = cls_commands.add_parser("drop", help="drop a feature class (refused while it has features)")
+    cls_drop.add_argument("name")
+    cls_drop.add_argument("--force", action="store_true", help="also delete its features and their geometries")
+    cls_drop.set_defaults(handler=cmd_class_drop)
+
+    imp = commands.add_parser("import", help="store the objects of a geometry file as features of a class")
+    imp.add_argument("file")
+    imp.add_argument("--class", dest="feature_class", required=True)
+    imp.add_argument("--name", help="feature name (default: the name in the file, else the file name)")
+    imp.add_argument("--format", help="file format (default: from the extension)")
+    imp.add_argument("--set", action="append", metavar="NAME=VALUE", help="a feature property value (repeatable)")
+    imp.add_argument("--drop-extra-properties", action="store_true",
+                     help="ignore properties of the file that the class does not store")
+    imp.set_defaults(handler=cmd_import)
+
+    exp = commands.add_parser("export", help="write a feature to a geometry file")
+    exp.add_argument("id", type=int)
+    exp.add_argument("file")
+    exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
+    exp.add_argument("--format", help="file format (default: from the extension)")
+    exp.set_defaults(handler=cmd_export)
+
+    ls = commands.add_parser("ls", help="list features")
+    ls.add_argument("--class", dest="feature_class", help="only this feature class")
+    ls.set_defaults(handler=cmd_ls)
 
     local = commands.add_parser("local", help="the local PostgreSQL server tgsis runs by itself")
     local_commands = local.add_subparsers(dest="local_command", metavar="ACTION", required=True)

@@ -37,6 +37,7 @@ __all__ = [
     "fetch_feature",
     "fetch_features",
     "features_in_box",
+    "class_of_feature",
     "delete_feature",
 ]
 
@@ -356,6 +357,12 @@ def _copy_out(conn: Conn, query: sql.Composable, types: Sequence[str]) -> list[n
 def _split(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],
            wanted: Sequence[int]) -> dict[int, npt.NDArray[np.int64]]:
     """Row positions of each wanted geoid, ordered by the local id."""
+    def ascending(values: npt.NDArray[np.int64]) -> bool:
+        return bool(np.all(values[1:] >= values[:-1]))
+
+    if len(wanted) == 1:  # the common case: skip the two-key sort
+        order = np.arange(len(ids)) if ascending(ids) else np.argsort(ids, kind="stable")
+        return {wanted[0]: order}
     order = np.lexsort((ids, geoids))
     sorted_geoids = geoids[order]
     starts = np.searchsorted(sorted_geoids, wanted, side="left")
@@ -486,6 +493,23 @@ def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.A
                     "ON b.geoid = f._geoid ORDER BY 1").format(fc._table(fc.featuretable)),
             box.ravel().tolist()).fetchall()
     return [int(r[0]) for r in rows]
+
+
+def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
+    """The feature class that holds feature ``feature_id``.
+
+    Raises
+    ------
+    NotFoundError
+        No class has a feature with that id.
+    """
+    for fc in list_feature_classes(conn):
+        with reraise():
+            row = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc._table(fc.featuretable)),
+                               (feature_id,)).fetchone()
+        if row is not None:
+            return fc
+    raise NotFoundError(f"no feature class has a feature {feature_id}", hint="`tgsis ls` lists the features")
 
 
 def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> bool:

@@ -1,0 +1,124 @@
+"""Helpers shared by the format modules: file access, property names, type checks."""
+
+from __future__ import annotations
+
+import os
+import re
+import string
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import FileFormatError
+from tgsis.mesh import PROPERTY_NAME_RE, Mesh
+
+__all__ = [
+    "PathLike",
+    "read_bytes",
+    "read_text",
+    "write_bytes",
+    "write_text",
+    "sanitize_property_name",
+    "sanitize_property_names",
+    "check_mesh",
+]
+
+PathLike = str | os.PathLike[str]
+
+_INVALID_CHARS = re.compile(r"[^a-z0-9_]")
+
+
+def read_bytes(path: PathLike) -> bytes:
+    """The content of ``path``; an unreadable file raises :class:`FileFormatError`."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise FileFormatError(f"cannot read the file: {exc.strerror or exc}", path=path) from exc
+
+
+def read_text(path: PathLike) -> str:
+    """The content of a text file: UTF-8, or Latin-1 when it is not valid UTF-8.
+
+    Old GOCAD files come from Windows and Unix tools alike; Latin-1 decodes any
+    byte, so a stray accented letter in a header does not make the file unreadable.
+    """
+    data = read_bytes(path)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def write_bytes(path: PathLike, chunks: Iterable[bytes]) -> None:
+    """Write ``chunks`` to ``path``; an unwritable file raises :class:`FileFormatError`."""
+    try:
+        with open(path, "wb") as handle:
+            for chunk in chunks:
+                handle.write(chunk)
+    except OSError as exc:
+        raise FileFormatError(f"cannot write the file: {exc.strerror or exc}", path=path) from exc
+
+
+def write_text(path: PathLike, chunks: Iterable[str]) -> None:
+    """Write text ``chunks`` as UTF-8 with ``\\n`` line ends."""
+    try:
+        with open(path, "w", encoding="utf-8", newline="\n") as handle:
+            handle.writelines(chunks)
+    except OSError as exc:
+        raise FileFormatError(f"cannot write the file: {exc.strerror or exc}", path=path) from exc
+
+
+def sanitize_property_name(name: str, taken: Iterable[str] = ()) -> str:
+    """A valid mesh property name (``^[a-z][a-z0-9_]{0,62}$``) for ``name``.
+
+    Lower-cases, replaces every other character by ``_``, prefixes ``p_`` when
+    the result does not start with a letter, truncates to 63 characters and
+    appends ``_2``, ``_3``, ... when the result is in ``taken``.
+
+    Parameters
+    ----------
+    name : str
+        The name as found in a file.
+    taken : iterable of str
+        Names already in use.
+
+    Returns
+    -------
+    str
+        ``name`` itself when it is valid and free.
+    """
+    used = set(taken)
+    base = _INVALID_CHARS.sub("_", name.lower())
+    if not base or base[0] not in string.ascii_lowercase:
+        base = "p_" + base
+    base = base[:63]
+    candidate, counter = base, 2
+    while candidate in used:
+        suffix = f"_{counter}"
+        candidate, counter = base[: 63 - len(suffix)] + suffix, counter + 1
+    assert PROPERTY_NAME_RE.match(candidate)
+    return candidate
+
+
+def sanitize_property_names(names: Iterable[str]) -> dict[str, str]:
+    """Valid, distinct mesh property names for ``names``: ``{file name: mesh name}``."""
+    result: dict[str, str] = {}
+    for name in names:
+        result[name] = sanitize_property_name(name, result.values())
+    return result
+
+
+def check_mesh(mesh: object, what: str) -> Mesh:
+    """``mesh`` if it is a :class:`Mesh`, else :class:`FileFormatError` naming ``what`` is written."""
+    if not isinstance(mesh, Mesh):
+        raise FileFormatError(f"{what} can only write tgsis meshes, got {type(mesh).__name__}")
+    return mesh
+
+
+def property_columns(properties: Mapping[str, npt.NDArray[Any]]) -> list[tuple[str, npt.NDArray[Any]]]:
+    """Properties as ``(name, array)`` in insertion order, booleans as uint8 (no file type has bool)."""
+    return [(name, values.astype(np.uint8) if values.dtype.kind == "b" else values)
+            for name, values in properties.items()]

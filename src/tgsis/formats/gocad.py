@@ -1,0 +1,1134 @@
+"""GOCAD ASCII objects: TSurf, PLine, VSet and TSolid, read and written.
+
+A GOCAD ASCII file holds one or more objects, each from a ``GOCAD <type> 1``
+line to an ``END`` line:
+
+========  ======  ===============  ==========  ===========
+type      ext.    parts            cells       mesh
+========  ======  ===============  ==========  ===========
+TSurf     ``.ts``  ``TFACE``        ``TRGL``    Surface
+PLine     ``.pl``  ``ILINE``        ``SEG``     LineSet
+VSet      ``.vs``  (none)           (none)      PointSet
+TSolid    ``.so``  ``TVOLUME``      ``TETRA``   TetraMesh
+========  ======  ===============  ==========  ===========
+
+Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
+---------------------------------------------------------------------
+* Vertices come from ``VRTX id x y z``, ``PVRTX id x y z p1 p2 ...``,
+  ``ATOM id ref`` and ``PATOM id ref [p1 p2 ...]``, numbered 0..n-1 in file
+  order whatever their ids (ids are arbitrary integers, usually 1-based with
+  gaps). An ATOM is a new vertex at the position (and with the properties) of
+  vertex ``ref``; a PATOM may give its own property values. By default an ATOM
+  stays a vertex of its own (the mesh then has two vertices at one place, as
+  GOCAD does to cut a surface along a line); ``merge_atoms=True`` makes cells
+  use ``ref`` instead (a PATOM's own property values are then lost). ATOMs may
+  repeat PATOMs or other ATOMs, also ones further down the file; a cycle is
+  an error. Which vertices were ATOMs is kept in
+  ``metadata["gocad_atoms"]`` (pairs ``[atom, ref]`` of vertex indices), so the
+  writer writes them as ATOMs again.
+* Coordinates are kept exactly as written: ``ZPOSITIVE Depth`` does not flip z;
+  it is recorded in ``metadata["zpositive"]``.
+* ``PROPERTIES`` become float64 vertex properties; values equal to the
+  property's ``NO_DATA_VALUES`` entry become NaN; a property with ``ESIZES``
+  k > 1 becomes k properties ``name_0`` .. ``name_{k-1}``. Names that are not
+  valid mesh property names are sanitised (see
+  :func:`~tgsis.formats._common.sanitize_property_name`);
+  ``metadata["property_names"]`` maps every mesh property name to its name in
+  the file.
+* When an object has more than one non-empty part (``TFACE``, ``ILINE``,
+  ``TVOLUME``), the int64 cell property ``part`` numbers the parts 0, 1, ... in
+  file order.
+* ``HEADER``, the coordinate system, ``PROPERTY_CLASS_HEADER`` blocks and the
+  per-property lines (``PROPERTY_CLASSES``, ``PROPERTY_KINDS``,
+  ``PROPERTY_SUBCLASSES``, ``PROP_LEGAL_RANGES``, ``UNITS``) are kept in
+  ``metadata`` (keys below) for writing back. ``BSTONE``, ``BORDER`` and other
+  keywords after the geometry has begun are counted in
+  ``metadata["gocad_ignored"]`` and otherwise ignored; unknown lines before it
+  (``GEOLOGICAL_FEATURE`` ...) are kept in ``metadata["gocad_extra_lines"]``.
+
+Writing (:func:`write_gocad`, :func:`write_gocad_many`, :func:`format_gocad`)
+-----------------------------------------------------------------------------
+The type follows the mesh class. Floats are written with :func:`repr`, the
+shortest text that parses back to the same double, so write→read is bit-exact
+for vertices, cells and vertex properties. Vertex ids are 1..n in vertex order.
+A ``part`` cell property gives one part keyword per distinct value (in
+increasing order; cells of a part keep their relative order, so a mesh whose
+parts are interleaved comes back with its cells grouped by part, and part values
+come back renumbered 0, 1, ...). GOCAD has no other cell properties: the writer
+raises :class:`~tgsis.errors.FileFormatError` naming them unless
+``drop_cell_properties=True``. Vertex properties come back as float64, whatever
+their dtype; NaN is written as the property's no-data value.
+
+Metadata keys
+-------------
+``color`` (tuple of float), ``zpositive`` (``"Elevation"``/``"Depth"``),
+``property_names`` ({mesh name: file name}), ``gocad_kind``, ``gocad_header``
+(lines inside ``HEADER { }``), ``gocad_coordinate_system`` (lines inside the
+coordinate system block), ``gocad_extra_lines``,
+``gocad_property_class_headers`` (list of line lists), ``gocad_esizes``
+({file name: k} for k > 1), ``gocad_no_data_values`` ({file name: value}),
+``gocad_property_info`` ({keyword: {file name: text}}), ``gocad_atoms``,
+``gocad_ignored`` ({keyword: count}). All are JSON-compatible.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import io
+import itertools
+import math
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
+from tgsis.formats._common import PathLike, check_mesh, property_columns, read_text, sanitize_property_name, write_text
+from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
+
+__all__ = [
+    "GOCAD_TYPES",
+    "read_gocad",
+    "read_tsurf",
+    "parse_gocad",
+    "write_gocad",
+    "write_gocad_many",
+    "format_gocad",
+]
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class _Kind:
+    """One GOCAD object type and how it maps to a mesh."""
+
+    name: str
+    mesh_type: type[Mesh]
+    part_keyword: str | None
+    cell_keyword: str | None
+    color_key: str
+    extension: str
+
+
+_KINDS: tuple[_Kind, ...] = (
+    _Kind("TSurf", Surface, "TFACE", "TRGL", "*solid*color", ".ts"),
+    _Kind("PLine", LineSet, "ILINE", "SEG", "*line*color", ".pl"),
+    _Kind("VSet", PointSet, None, None, "*atoms*color", ".vs"),
+    _Kind("TSolid", TetraMesh, "TVOLUME", "TETRA", "*solid*color", ".so"),
+)
+_KIND_BY_NAME = {kind.name.lower(): kind for kind in _KINDS}
+
+#: GOCAD type name -> (mesh class, usual file extension).
+GOCAD_TYPES: dict[str, tuple[type[Mesh], str]] = {k.name: (k.mesh_type, k.extension) for k in _KINDS}
+
+_COLOR_KEYS = ("*solid*color", "*line*color", "*atoms*color")
+# Per-property lines kept as text, in the order GOCAD writes them.
+_INFO_KEYWORDS = ("PROP_LEGAL_RANGES", "PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES", "UNITS")
+_PROPERTY_KEYWORDS = frozenset(("PROPERTIES", "NO_DATA_VALUES", "ESIZES") + _INFO_KEYWORDS)
+_DEFAULT_NO_DATA = -99999.0
+
+
+# ---------------------------------------------------------------- reading
+
+
+@dataclass
+class _Records:
+    """What one pass over an object's lines collects; numbers are parsed afterwards in bulk."""
+
+    kind: _Kind
+    start: int  # 0-based index of the GOCAD line
+    header: list[str] = field(default_factory=list)
+    coordinate_system: list[str] = field(default_factory=list)
+    extra: list[str] = field(default_factory=list)
+    class_headers: list[list[str]] = field(default_factory=list)
+    property_lines: dict[str, tuple[int, list[str]]] = field(default_factory=dict)
+    ignored: dict[str, int] = field(default_factory=dict)
+    # vertex records (VRTX/PVRTX) and atom records (ATOM/PATOM); seq is the position among all vertex records
+    vertex_lines: list[int] = field(default_factory=list)
+    vertex_texts: list[str] = field(default_factory=list)
+    vertex_is_p: list[bool] = field(default_factory=list)
+    vertex_seq: list[int] = field(default_factory=list)
+    atom_lines: list[int] = field(default_factory=list)
+    atom_texts: list[str] = field(default_factory=list)
+    atom_is_p: list[bool] = field(default_factory=list)
+    atom_seq: list[int] = field(default_factory=list)
+    cell_lines: list[int] = field(default_factory=list)
+    cell_texts: list[str] = field(default_factory=list)
+    cell_parts: list[int] = field(default_factory=list)
+
+
+def read_gocad(path: PathLike, *, merge_atoms: bool = False) -> list[Mesh]:
+    """Read every object of a GOCAD ASCII file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.ts``, ``.pl``, ``.vs`` or ``.so`` file (the extension is not checked:
+        the ``GOCAD <type>`` lines decide).
+    merge_atoms : bool
+        Map each ATOM/PATOM onto the vertex it repeats instead of keeping it as a
+        vertex of its own.
+
+    Returns
+    -------
+    list of Mesh
+        One mesh per ``GOCAD ... END`` object, in file order: Surface for TSurf,
+        LineSet for PLine, PointSet for VSet, TetraMesh for TSolid.
+
+    Raises
+    ------
+    FileFormatError
+        The file cannot be read or is not valid GOCAD; the message gives the
+        file and line.
+    """
+    return parse_gocad(read_text(path), path=path, merge_atoms=merge_atoms)
+
+
+def read_tsurf(path: PathLike, *, merge_atoms: bool = False) -> Surface:
+    """Read a file that holds exactly one TSurf.
+
+    Raises
+    ------
+    FileFormatError
+        The file is invalid, or holds more than one object or an object that
+        is not a TSurf.
+    """
+    meshes = read_gocad(path, merge_atoms=merge_atoms)
+    kinds = [m.metadata.get("gocad_kind", type(m).__name__) for m in meshes]
+    if len(meshes) != 1 or not isinstance(meshes[0], Surface):
+        raise FileFormatError(f"expected exactly one TSurf, found {len(meshes)} objects ({', '.join(kinds)})",
+                              path=path)
+    return meshes[0]
+
+
+def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = False) -> list[Mesh]:
+    """Parse the text of a GOCAD ASCII file; see :func:`read_gocad`.
+
+    ``path`` is only used in error messages.
+    """
+    with _gc_paused():
+        return _parse_lines(text.removeprefix("\ufeff").splitlines(), path, merge_atoms)
+
+
+@contextlib.contextmanager
+def _gc_paused() -> Iterator[None]:
+    """Pause the cyclic garbage collector.
+
+    Parsing makes millions of small lists and strings, none of them cyclic; the
+    collector would otherwise walk them over and over (about half the time on
+    a million-vertex file).
+    """
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool) -> list[Mesh]:
+    meshes: list[Mesh] = []
+    i = 0
+    while i < len(lines):
+        stripped = lines[i].strip()
+        if not stripped or stripped.startswith("#"):
+            i += 1
+            continue
+        kind = _kind_of(stripped, path, i)
+        records, end = _scan_object(lines, i, kind, path)
+        meshes.append(_build_mesh(records, path, merge_atoms))
+        i = end + 1
+    if not meshes:
+        raise FileFormatError("no GOCAD object in the file (no 'GOCAD <type> <version>' line)", path=path)
+    return meshes
+
+
+def _kind_of(line: str, path: PathLike | None, index: int) -> _Kind:
+    """The object type of a ``GOCAD <type> <version>`` line."""
+    words = line.split()
+    if words[0] != "GOCAD":
+        raise FileFormatError(f"expected a 'GOCAD <type> <version>' line, found {line[:60]!r}",
+                              path=path, line=index + 1)
+    supported = ", ".join(k.name for k in _KINDS)
+    if len(words) < 2:
+        raise FileFormatError(f"the GOCAD line names no object type (supported: {supported})",
+                              path=path, line=index + 1)
+    kind = _KIND_BY_NAME.get(words[1].lower())
+    if kind is None:
+        raise FileFormatError(f"unsupported GOCAD object type {words[1]!r} (supported: {supported})",
+                              path=path, line=index + 1)
+    return kind
+
+
+def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike | None) -> tuple[_Records, int]:
+    """Collect the records of the object whose GOCAD line is ``lines[start]``; return them and the END index.
+
+    Only keywords are looked at here; numbers are parsed later, all at once,
+    because per-token Python work is what makes large files slow.
+    """
+    rec = _Records(kind, start)
+    part_keyword, cell_keyword = kind.part_keyword, kind.cell_keyword
+    part = -1  # cells before any part keyword form a part of their own
+    seq = 0
+    geometry_started = False
+    cell_prefix = f"{cell_keyword} " if cell_keyword else "\0"
+    i = start + 1
+    while i < len(lines):
+        line = lines[i]
+        # fast path for the lines that make up nearly all of a big file; the rest is split in full
+        if line.startswith(cell_prefix):
+            keyword, rest = cell_prefix[:-1], line[len(cell_prefix):]
+        elif line.startswith("VRTX "):
+            keyword, rest = "VRTX", line[5:]
+        elif line.startswith("PVRTX "):
+            keyword, rest = "PVRTX", line[6:]
+        else:
+            words = line.split(None, 1)
+            if not words:
+                i += 1
+                continue
+            keyword = words[0]
+            rest = words[1] if len(words) > 1 else ""
+        if keyword == cell_keyword:
+            rec.cell_lines.append(i)
+            rec.cell_texts.append(rest)
+            rec.cell_parts.append(part)
+        elif keyword == "VRTX" or keyword == "PVRTX":
+            rec.vertex_lines.append(i)
+            rec.vertex_texts.append(rest)
+            rec.vertex_is_p.append(keyword == "PVRTX")
+            rec.vertex_seq.append(seq)
+            seq += 1
+            geometry_started = True
+        elif keyword == "ATOM" or keyword == "PATOM":
+            rec.atom_lines.append(i)
+            rec.atom_texts.append(rest)
+            rec.atom_is_p.append(keyword == "PATOM")
+            rec.atom_seq.append(seq)
+            seq += 1
+            geometry_started = True
+        elif keyword == part_keyword:
+            part += 1
+            geometry_started = True
+        elif keyword == "END":
+            return rec, i
+        else:
+            i = _scan_other(lines, i, keyword, rest, rec, geometry_started, path)
+        i += 1
+    raise FileFormatError(f"the {kind.name} begun at line {start + 1} has no END (the file ends first)",
+                          path=path, line=len(lines))
+
+
+def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Records, geometry_started: bool,
+                path: PathLike | None) -> int:
+    """Handle a line that is not geometry: blocks, property declarations, unknown keywords.
+
+    Returns the index of the last line consumed (the closing line of a block).
+    """
+    if keyword == "GOCAD":
+        raise FileFormatError(f"the {rec.kind.name} begun at line {rec.start + 1} has no END before the next "
+                              "GOCAD object", path=path, line=i + 1)
+    if keyword == "HEADER":
+        return _scan_block(lines, i, "}", rec.header, path, inline_open=True)
+    if keyword == "GOCAD_ORIGINAL_COORDINATE_SYSTEM":
+        return _scan_block(lines, i, "END_ORIGINAL_COORDINATE_SYSTEM", rec.coordinate_system, path)
+    if keyword == "PROPERTY_CLASS_HEADER":
+        block = [lines[i].strip()]
+        end = _scan_block(lines, i, "}", block, path, inline_open=True, keep_close=True)
+        rec.class_headers.append(block)
+        return end
+    if keyword in _PROPERTY_KEYWORDS:
+        rec.property_lines[keyword] = (i, rest.split())
+    elif keyword.startswith("#"):
+        pass  # a comment
+    elif not geometry_started:
+        rec.extra.append(lines[i].strip())  # GEOLOGICAL_FEATURE and the like: written back as they are
+    else:
+        rec.ignored[keyword] = rec.ignored.get(keyword, 0) + 1  # BSTONE, BORDER, ...
+    return i
+
+
+def _scan_block(lines: Sequence[str], start: int, close: str, into: list[str], path: PathLike | None,
+                *, inline_open: bool = False, keep_close: bool = False) -> int:
+    """Append the lines of a block opened at ``lines[start]`` to ``into``; return the index of its closing line.
+
+    ``inline_open``: the block opens with ``{`` on the first line, which may
+    already hold content or even the closing ``}`` (``HEADER {name:x}``).
+    """
+    opening = lines[start].strip()
+    if inline_open:
+        after = opening.partition("{")[2]
+        if "}" in after:  # a one-line block: HEADER {name:x}
+            inside = after.rpartition("}")[0].strip()
+            if inside and not keep_close:  # keep_close blocks already hold the whole line
+                into.append(inside)
+            return start
+        if after.strip():
+            into.append(after.strip())
+    i = start + 1
+    while i < len(lines):
+        stripped = lines[i].strip()
+        if stripped == close:
+            if keep_close:
+                into.append(stripped)
+            return i
+        first = stripped.split(None, 1)[0] if stripped else ""
+        if first in ("END", "GOCAD") or (close == "}" and first in ("VRTX", "PVRTX", "TFACE")):
+            break
+        into.append(stripped)
+        i += 1
+    raise FileFormatError(f"{opening.split()[0]} block is not closed by {close!r}", path=path, line=start + 1)
+
+
+@dataclass(frozen=True)
+class _PropertyLayout:
+    """The declared vertex properties: file names, sizes, column names and no-data values."""
+
+    file_names: list[str]
+    sizes: list[int]
+    columns: list[str]  # mesh property names, one per value column
+    column_file_names: list[str]
+    no_data: list[float]  # one per column (NaN: none)
+
+    @property
+    def n_columns(self) -> int:
+        return len(self.columns)
+
+
+def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
+    """Read PROPERTIES, ESIZES and NO_DATA_VALUES into column names and no-data values."""
+    names = rec.property_lines.get("PROPERTIES", (0, []))[1]
+    sizes = [1] * len(names)
+    if "ESIZES" in rec.property_lines:
+        line, words = rec.property_lines["ESIZES"]
+        try:
+            sizes = [int(w) for w in words]
+        except ValueError:
+            raise FileFormatError(f"ESIZES must be integers, got {' '.join(words)!r}", path=path, line=line + 1) from None
+        if len(sizes) != len(names) or min(sizes, default=1) < 1:
+            raise FileFormatError(f"ESIZES gives {len(sizes)} sizes for {len(names)} properties "
+                                  f"({' '.join(names)}); each must be at least 1", path=path, line=line + 1)
+    columns: list[str] = []
+    column_file_names: list[str] = []
+    for name, size in zip(names, sizes):
+        base = sanitize_property_name(name, columns)
+        if size == 1:
+            columns.append(base)
+        else:
+            columns.extend(sanitize_property_name(f"{base}_{j}", columns) for j in range(size))
+        column_file_names.extend([name] * size)
+    no_data = [math.nan] * len(columns)
+    if "NO_DATA_VALUES" in rec.property_lines:
+        line, words = rec.property_lines["NO_DATA_VALUES"]
+        try:
+            values = [float(w) for w in words]
+        except ValueError:
+            raise FileFormatError(f"NO_DATA_VALUES must be numbers, got {' '.join(words)!r}",
+                                  path=path, line=line + 1) from None
+        if len(values) == len(names):
+            no_data = [v for v, size in zip(values, sizes) for _ in range(size)]
+        elif len(values) == len(columns):  # some writers give one value per component
+            no_data = values
+        else:
+            raise FileFormatError(f"NO_DATA_VALUES gives {len(values)} values for {len(names)} properties",
+                                  path=path, line=line + 1)
+    return _PropertyLayout(list(names), sizes, columns, column_file_names, no_data)
+
+
+def _fast_table(texts: Sequence[str], dtype: type[np.generic], columns: Sequence[int]) -> npt.NDArray[Any] | None:
+    """All ``texts`` parsed at once in C, or None if they are not one clean table with an allowed width.
+
+    None sends the caller to the slow path, which finds and names the bad line.
+    """
+    if not texts:
+        return None
+    try:
+        table = np.loadtxt(io.StringIO("\n".join(texts)), dtype=dtype, ndmin=2, comments=None)
+    except ValueError:
+        return None
+    # loadtxt skips empty lines: a record without values would shift the rows
+    if table.shape[0] != len(texts) or table.shape[1] not in columns:
+        return None
+    return table
+
+
+def _float_table(rows: list[list[str]], line_of: Sequence[int], keyword: str, path: PathLike | None) -> FloatArray:
+    """Parse rows of equally many numeric words into a float64 array; name the first bad word on failure."""
+    try:
+        return np.array(rows, dtype=np.float64).reshape(len(rows), -1)
+    except ValueError:
+        pass
+    for row, line in zip(rows, line_of):
+        for word in row:
+            try:
+                float(word)
+            except ValueError:
+                raise FileFormatError(f"{keyword} has a non-numeric value {word!r}", path=path, line=line + 1) from None
+    raise AssertionError("unreachable: numpy rejected a table that float() accepts")  # pragma: no cover
+
+
+def _int_column(words: list[str], line_of: Sequence[int], keyword: str, what: str,
+                path: PathLike | None) -> IntArray:
+    """Parse integer words (vertex ids); name the first word that is not an integer."""
+    try:
+        return np.array(words, dtype=np.int64).reshape(len(words))
+    except (ValueError, OverflowError):
+        pass
+    for word, line in zip(words, line_of):
+        try:
+            int(word)
+        except ValueError:
+            raise FileFormatError(f"{keyword} has a {what} that is not an integer: {word!r}",
+                                  path=path, line=line + 1) from None
+    raise FileFormatError(f"{keyword} has a {what} that is too large", path=path)  # pragma: no cover
+
+
+def _bad_count(lengths: IntArray, allowed: Sequence[int], is_p: Sequence[bool] = (),
+               allowed_p: Sequence[int] = ()) -> int | None:
+    """Index of the first record with a number of values not in ``allowed`` (``allowed_p`` where ``is_p``)."""
+    ok = np.isin(lengths, allowed)
+    if len(is_p):
+        ok = np.where(np.asarray(is_p, dtype=bool), np.isin(lengths, allowed_p), ok)
+    return None if ok.all() else int(np.flatnonzero(~ok)[0])
+
+
+def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
+                          path: PathLike | None) -> tuple[IntArray, FloatArray]:
+    """Ids (k,) and values (k, 3 + columns) of the VRTX/PVRTX records; missing property values are NaN."""
+    p = layout.n_columns
+    fast = _fast_table(rec.vertex_texts, np.float64, (4 + p,) if any(rec.vertex_is_p) or not p else (4, 4 + p))
+    if fast is not None:
+        ids = fast[:, 0]
+        if np.all(np.isfinite(fast[:, 1:4])) and np.all(ids == np.round(ids)) and np.all(np.abs(ids) < 2**53):
+            values = np.full((len(fast), 3 + p), np.nan)
+            values[:, : fast.shape[1] - 1] = fast[:, 1:]
+            return ids.astype(np.int64), values
+    tokens = [text.split() for text in rec.vertex_texts]
+    lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
+    j = _bad_count(lengths, (4, 4 + p), rec.vertex_is_p, (4 + p,))
+    if j is not None:
+        keyword = "PVRTX" if rec.vertex_is_p[j] else "VRTX"
+        counts = f"4 or {4 + p}" if p and keyword == "VRTX" else str(4 + p)
+        raise FileFormatError(f"{keyword} has {lengths[j]} values, expected {counts} "
+                              f"(id, x, y, z{f' and {p} property values' if p else ''})",
+                              path=path, line=rec.vertex_lines[j] + 1)
+    ids = _int_column([t[0] for t in tokens], rec.vertex_lines, "VRTX", "vertex id", path)
+    values = np.full((len(tokens), 3 + p), np.nan)
+    full = lengths == 4 + p
+    for mask in (full, ~full):  # at most two shapes of row: with and without property values
+        where = np.flatnonzero(mask)
+        if len(where) == 0:
+            continue
+        rows = tokens if len(where) == len(tokens) else [tokens[j] for j in where]
+        lines = rec.vertex_lines if len(where) == len(tokens) else [rec.vertex_lines[j] for j in where]
+        table = _float_table(rows, lines, "VRTX", path)
+        values[where, : table.shape[1] - 1] = table[:, 1:]
+    bad = ~np.isfinite(values[:, :3])
+    if bad.any():
+        j, col = (int(v) for v in np.argwhere(bad)[0])
+        raise FileFormatError(f"VRTX has a non-finite {'xyz'[col]} coordinate {tokens[j][1 + col]!r}",
+                              path=path, line=rec.vertex_lines[j] + 1)
+    return ids, values
+
+
+def _parse_atom_records(rec: _Records, layout: _PropertyLayout,
+                        path: PathLike | None) -> tuple[IntArray, IntArray, FloatArray]:
+    """Ids (a,), referenced ids (a,) and own property values (a, columns) (NaN rows: inherit) of ATOM/PATOM."""
+    p = layout.n_columns
+    tokens = [text.split() for text in rec.atom_texts]
+    lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
+    j = _bad_count(lengths, (2,), rec.atom_is_p, (2, 2 + p))
+    if j is not None:
+        expected = (f"2 or {2 + p} (id, vertex id, property values)" if rec.atom_is_p[j]
+                    else "2 (id, id of the vertex it repeats)")
+        raise FileFormatError(f"{'PATOM' if rec.atom_is_p[j] else 'ATOM'} has {lengths[j]} values, "
+                              f"expected {expected}", path=path, line=rec.atom_lines[j] + 1)
+    ids = _int_column([t[0] for t in tokens], rec.atom_lines, "ATOM", "vertex id", path)
+    refs = _int_column([t[1] for t in tokens], rec.atom_lines, "ATOM", "vertex id", path)
+    own = np.full((len(tokens), p), np.nan)
+    with_values = np.flatnonzero(lengths == 2 + p) if p else np.empty(0, dtype=np.int64)
+    if len(with_values):
+        rows = [tokens[j][2:] for j in with_values]
+        own[with_values] = _float_table(rows, [rec.atom_lines[j] for j in with_values], "PATOM", path)
+    return ids, refs, own
+
+
+class _IdIndex:
+    """Looks vertex ids up: file id -> position among the vertex records."""
+
+    def __init__(self, ids: IntArray) -> None:
+        self.order = np.argsort(ids, kind="stable")
+        self.sorted = ids[self.order]
+
+    def duplicates(self) -> IntArray:
+        """Record positions (later ones) whose id an earlier record already has."""
+        same = self.sorted[1:] == self.sorted[:-1]
+        return np.sort(self.order[1:][same])
+
+    def find(self, refs: IntArray) -> tuple[IntArray, npt.NDArray[np.bool_]]:
+        """Positions of ``refs`` and whether each was found."""
+        if len(self.sorted) == 0:
+            return np.zeros(refs.shape, dtype=np.int64), np.zeros(refs.shape, dtype=bool)
+        pos = np.clip(np.searchsorted(self.sorted, refs), 0, len(self.sorted) - 1)
+        return self.order[pos], self.sorted[pos] == refs
+
+
+@dataclass(frozen=True)
+class _VertexTable:
+    """All vertex records (VRTX, PVRTX, ATOM, PATOM) of an object, in file order."""
+
+    ids: IntArray  # (r,) ids as written
+    values: FloatArray  # (r, 3 + property columns): x, y, z, properties
+    index: _IdIndex
+    atom_seq: IntArray  # (a,) positions of the ATOM/PATOM records
+    ref_seq: IntArray  # (a,) positions of the records they repeat
+    root: IntArray  # (r,) for every record, the VRTX/PVRTX it finally repeats (itself for those)
+
+
+def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh:
+    """Turn the collected records of one object into a mesh."""
+    kind = rec.kind
+    layout = _property_layout(rec, path)
+    table = _vertex_table(rec, layout, path)
+    if merge_atoms:
+        kept = np.ones(len(table.ids), dtype=bool)
+        kept[table.atom_seq] = False
+        seq_to_vertex = (np.cumsum(kept) - 1)[table.root]
+        values = table.values[kept]
+        atoms: list[list[int]] = []
+    else:
+        seq_to_vertex = np.arange(len(table.ids))
+        values = table.values
+        atoms = [[int(a), int(r)] for a, r in zip(table.atom_seq, table.ref_seq)]
+    cells, parts = _parse_cells(rec, table.index, seq_to_vertex, merge_atoms, path)
+    if cells is None:  # a VSet: one point per vertex
+        cells = np.arange(len(values), dtype=np.int64).reshape(-1, 1)
+    try:
+        return kind.mesh_type(values[:, :3], cells, vertex_properties=_vertex_properties(values[:, 3:], layout),
+                              cell_properties={} if parts is None else {"part": parts},
+                              name=_header_value(rec.header, "name"), metadata=_metadata(rec, layout, atoms))
+    except (InvalidGeometryError, InvalidPropertyError) as exc:
+        raise FileFormatError(f"the {kind.name} is not a valid mesh: {exc.message}", path=path,
+                              line=rec.start + 1) from exc
+
+
+def _vertex_table(rec: _Records, layout: _PropertyLayout, path: PathLike | None) -> _VertexTable:
+    """Parse the vertex records, check their ids, and give ATOMs the values of what they repeat."""
+    vertex_ids, vertex_values = _parse_vertex_records(rec, layout, path)
+    atom_ids, atom_refs, atom_own = _parse_atom_records(rec, layout, path)
+    n_records = len(rec.vertex_seq) + len(rec.atom_seq)
+    vertex_seq = np.asarray(rec.vertex_seq, dtype=np.int64)
+    atom_seq = np.asarray(rec.atom_seq, dtype=np.int64)
+    ids = np.empty(n_records, dtype=np.int64)
+    ids[vertex_seq], ids[atom_seq] = vertex_ids, atom_ids
+    line_of = np.empty(n_records, dtype=np.int64)
+    line_of[vertex_seq], line_of[atom_seq] = rec.vertex_lines, rec.atom_lines
+    index = _IdIndex(ids)
+    duplicates = index.duplicates()
+    if len(duplicates):
+        j = int(duplicates[0])
+        first = int(line_of[np.flatnonzero(ids == ids[j])[0]])
+        raise FileFormatError(f"vertex id {ids[j]} is defined twice (first at line {first + 1})",
+                              path=path, line=int(line_of[j]) + 1)
+    ref_seq, found = index.find(atom_refs)
+    if not found.all():
+        j = int(np.flatnonzero(~found)[0])
+        raise FileFormatError(f"{'PATOM' if rec.atom_is_p[j] else 'ATOM'} refers to vertex {atom_refs[j]}, "
+                              "which is not defined", path=path, line=rec.atom_lines[j] + 1)
+    root = _atom_roots(ids, line_of, atom_seq, ref_seq, path)
+    values = np.full((n_records, 3 + layout.n_columns), np.nan)
+    values[vertex_seq] = vertex_values
+    own = np.asarray(~np.isnan(atom_own).all(axis=1), dtype=np.bool_).reshape(len(atom_seq))  # PATOMs with values
+    _fill_atoms(values, atom_seq, ref_seq, own, atom_own)
+    return _VertexTable(ids, values, index, atom_seq, ref_seq, root)
+
+
+def _atom_roots(ids: IntArray, line_of: IntArray, atom_seq: IntArray, ref_seq: IntArray,
+                path: PathLike | None) -> IntArray:
+    """For every record the VRTX/PVRTX it repeats, following chains of ATOMs; a cycle is an error."""
+    root = np.arange(len(ids))
+    root[atom_seq] = ref_seq
+    for _ in range(max(1, len(ids).bit_length() + 1)):  # pointer jumping: chains halve each step
+        root = root[root]
+    is_atom = np.zeros(len(ids), dtype=bool)
+    is_atom[atom_seq] = True
+    cyclic = is_atom[root]
+    if cyclic.any():
+        j = int(np.flatnonzero(cyclic)[0])
+        raise FileFormatError(f"ATOM {ids[j]} repeats itself through a chain of ATOMs", path=path,
+                              line=int(line_of[j]) + 1)
+    return root
+
+
+def _fill_atoms(values: FloatArray, atom_seq: IntArray, ref_seq: IntArray, own: npt.NDArray[np.bool_],
+                atom_own: FloatArray) -> None:
+    """Give each ATOM the values of the record it repeats, and each PATOM its own property values.
+
+    An ATOM may repeat a PATOM (whose own values it then takes) or another ATOM,
+    so values are copied until nothing changes; chains are short (cycles were
+    rejected before), usually one step.
+    """
+    for _ in range(len(atom_seq) + 1):
+        before = values[atom_seq].copy()
+        values[atom_seq] = values[ref_seq]
+        values[atom_seq[own], 3:] = atom_own[own]
+        if np.array_equal(before, values[atom_seq], equal_nan=True):
+            return
+
+
+def _parse_cells(rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_atoms: bool,
+                 path: PathLike | None) -> tuple[IntArray | None, IntArray | None]:
+    """Cells (m, k) as vertex indices and the part of each cell (None: one part), or (None, None) for a VSet."""
+    kind = rec.kind
+    keyword = kind.cell_keyword
+    if keyword is None:
+        return None, None
+    k = kind.mesh_type.cell_size
+    fast = _fast_table(rec.cell_texts, np.int64, (k,))
+    if fast is not None:
+        refs = fast.astype(np.int64, copy=False)
+    else:
+        tokens = [text.split() for text in rec.cell_texts]
+        lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
+        j = _bad_count(lengths, (k,))
+        if j is not None:
+            raise FileFormatError(f"{keyword} has {lengths[j]} values, expected {k} vertex ids",
+                                  path=path, line=rec.cell_lines[j] + 1)
+        refs = _int_column(list(itertools.chain.from_iterable(tokens)),
+                           [line for line in rec.cell_lines for _ in range(k)], keyword, "vertex id", path)
+        refs = refs.reshape(len(tokens), k)
+    seq, found = index.find(refs)
+    if not found.all():
+        j, col = (int(v) for v in np.argwhere(~found)[0])
+        raise FileFormatError(f"{keyword} refers to vertex {refs[j, col]}, which is not defined",
+                              path=path, line=rec.cell_lines[j] + 1)
+    cells = seq_to_vertex[seq]
+    ordered = np.sort(cells, axis=1)
+    repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
+    if repeated.any():
+        j = int(np.flatnonzero(repeated)[0])
+        written = " ".join(rec.cell_texts[j].split())
+        if merge_atoms and not (np.sort(refs[j])[1:] == np.sort(refs[j])[:-1]).any():
+            message = (f"{keyword} {written} uses one vertex twice once ATOMs are merged onto the vertices "
+                       "they repeat (read with merge_atoms=False)")
+        else:
+            message = f"{keyword} {written} uses one vertex twice"
+        raise FileFormatError(message, path=path, line=rec.cell_lines[j] + 1)
+    raw_parts = np.asarray(rec.cell_parts, dtype=np.int64)
+    distinct, parts = np.unique(raw_parts, return_inverse=True)
+    return cells, (parts.astype(np.int64).reshape(-1) if len(distinct) > 1 else None)
+
+
+def _vertex_properties(values: FloatArray, layout: _PropertyLayout) -> dict[str, FloatArray]:
+    """Property columns with no-data values replaced by NaN."""
+    result: dict[str, FloatArray] = {}
+    for j, name in enumerate(layout.columns):
+        column = np.ascontiguousarray(values[:, j])
+        if not math.isnan(layout.no_data[j]):
+            column[column == layout.no_data[j]] = np.nan
+        result[name] = column
+    return result
+
+
+def _header_value(header: Sequence[str], key: str) -> str | None:
+    """The value of ``key:value`` in header lines (the last one wins, as in GOCAD)."""
+    value = None
+    for line in header:
+        k, sep, v = line.partition(":")
+        if sep and k.strip() == key:
+            value = v.strip()
+    return value
+
+
+def _parse_color(text: str | None) -> tuple[float, ...] | None:
+    """``"0.7 0.2 0.6 1"`` as a tuple of floats, or None when it is not numbers (e.g. ``#ff0000``)."""
+    if not text:
+        return None
+    try:
+        return tuple(float(w) for w in text.split())
+    except ValueError:
+        return None
+
+
+def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]]) -> dict[str, Any]:
+    """The facts kept for a faithful rewrite (see the module documentation)."""
+    meta: dict[str, Any] = {"gocad_kind": rec.kind.name}
+    if rec.header:
+        meta["gocad_header"] = list(rec.header)
+    for key in (rec.kind.color_key, *_COLOR_KEYS):
+        color = _parse_color(_header_value(rec.header, key))
+        if color is not None:
+            meta["color"] = color
+            break
+    if rec.coordinate_system:
+        meta["gocad_coordinate_system"] = list(rec.coordinate_system)
+        for line in rec.coordinate_system:
+            words = line.split()
+            if len(words) >= 2 and words[0] == "ZPOSITIVE":
+                meta["zpositive"] = words[1]
+    if rec.extra:
+        meta["gocad_extra_lines"] = list(rec.extra)
+    if rec.class_headers:
+        meta["gocad_property_class_headers"] = [list(b) for b in rec.class_headers]
+    if layout.columns:
+        meta["property_names"] = dict(zip(layout.columns, layout.column_file_names))
+        esizes = {n: s for n, s in zip(layout.file_names, layout.sizes) if s > 1}
+        if esizes:
+            meta["gocad_esizes"] = esizes
+        no_data = {}
+        for column_name, value in zip(layout.column_file_names, layout.no_data):
+            if not math.isnan(value):
+                no_data[column_name] = value
+        if no_data:
+            meta["gocad_no_data_values"] = no_data
+        info = _property_info(rec, layout.file_names)
+        if info:
+            meta["gocad_property_info"] = info
+    if atoms:
+        meta["gocad_atoms"] = atoms
+    if rec.ignored:
+        meta["gocad_ignored"] = dict(rec.ignored)
+    return meta
+
+
+def _property_info(rec: _Records, names: Sequence[str]) -> dict[str, dict[str, str]]:
+    """Per-property words of PROPERTY_CLASSES, UNITS, ...: ``{keyword: {file name: words}}``.
+
+    Each keyword has the same number of words per property (1 for classes, 2
+    for ``QUANTITY Float`` subclasses or ``**none** **none**`` ranges); a line
+    whose word count does not divide evenly cannot be split and is dropped.
+    """
+    info: dict[str, dict[str, str]] = {}
+    for keyword in _INFO_KEYWORDS:
+        if keyword not in rec.property_lines or not names:
+            continue
+        words = rec.property_lines[keyword][1]
+        if len(words) % len(names) or not words:
+            continue
+        per = len(words) // len(names)
+        info[keyword] = {name: " ".join(words[j * per:(j + 1) * per]) for j, name in enumerate(names)}
+    return info
+
+
+# ---------------------------------------------------------------- writing
+
+
+def write_gocad(mesh: Mesh, path: PathLike, *, drop_cell_properties: bool = False) -> None:
+    """Write one mesh as a GOCAD ASCII object (TSurf, PLine, VSet or TSolid by mesh type).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        A Surface, LineSet, PointSet or TetraMesh.
+    path : str or path-like
+        The file to write (replaced if it exists).
+    drop_cell_properties : bool
+        Leave out cell properties GOCAD cannot store (all but ``part``) instead
+        of raising.
+
+    Raises
+    ------
+    FileFormatError
+        The mesh has cell properties GOCAD cannot store, a PointSet's cells are
+        not one per vertex in order, or the file cannot be written.
+    """
+    write_gocad_many([mesh], path, drop_cell_properties=drop_cell_properties)
+
+
+def write_gocad_many(meshes: Iterable[Mesh], path: PathLike, *, drop_cell_properties: bool = False) -> None:
+    """Write several meshes, one GOCAD object after the other, into one file; see :func:`write_gocad`."""
+    chunks = _format_chunks(meshes, path, drop_cell_properties)
+    write_text(path, chunks)
+
+
+def format_gocad(meshes: Mesh | Iterable[Mesh], *, drop_cell_properties: bool = False) -> str:
+    """The GOCAD ASCII text of one mesh or of several; see :func:`write_gocad`."""
+    return "".join(_format_chunks([meshes] if isinstance(meshes, Mesh) else meshes, None, drop_cell_properties))
+
+
+def _format_chunks(meshes: Iterable[Mesh], path: PathLike | None, drop_cell_properties: bool) -> list[str]:
+    chunks: list[str] = []
+    count = 0
+    for mesh in meshes:
+        chunks.extend(_object_chunks(check_mesh(mesh, "the GOCAD writer"), path, drop_cell_properties))
+        count += 1
+    if count == 0:
+        raise FileFormatError("no mesh to write: a GOCAD file holds at least one object", path=path)
+    return chunks
+
+
+def _kind_for(mesh: Mesh) -> _Kind:
+    for kind in _KINDS:
+        if isinstance(mesh, kind.mesh_type):
+            return kind
+    raise FileFormatError(f"GOCAD has no object type for {type(mesh).__name__}")
+
+
+def _object_chunks(mesh: Mesh, path: PathLike | None, drop_cell_properties: bool) -> list[str]:
+    """The text of one object, as a list of lines and blocks of lines."""
+    kind = _kind_for(mesh)
+    groups = _cell_groups(mesh, kind, path, drop_cell_properties)
+    meta = mesh.metadata
+    chunks = [f"GOCAD {kind.name} 1\n", "HEADER {\n"]
+    chunks.extend(line + "\n" for line in _header_lines(mesh, kind))
+    chunks.append("}\n")
+    chunks.extend(_coordinate_system_lines(meta))
+    chunks.extend(line + "\n" for line in _string_list(meta.get("gocad_extra_lines")))
+    properties = _written_properties(mesh)
+    chunks.extend(_property_lines(properties, meta))
+    vertex_lines = _vertex_lines(mesh, properties)
+    if kind.part_keyword is None:
+        chunks.extend(vertex_lines)
+    else:
+        assert kind.cell_keyword is not None
+        cell_lines = _cell_lines(kind.cell_keyword, mesh.cells)
+        start = 0
+        for cells, end in zip(groups, _vertex_ranges(mesh, groups)):
+            chunks.append(f"{kind.part_keyword}\n")
+            chunks.extend(vertex_lines[start:end])
+            chunks.extend(cell_lines[c] for c in cells.tolist())
+            start = end
+    chunks.append("END\n")
+    return chunks
+
+
+def _cell_lines(keyword: str, cells: IntArray) -> list[str]:
+    """One ``TRGL a b c`` (SEG, TETRA) line per cell, with 1-based vertex ids."""
+    # zipping columns of Python ints is several times faster than formatting rows
+    columns = (cells + 1).T.tolist()
+    return [f"{keyword} {' '.join(map(str, ids))}\n" for ids in zip(*columns)] if len(cells) else []
+
+
+def _cell_groups(mesh: Mesh, kind: _Kind, path: PathLike | None, drop_cell_properties: bool) -> list[IntArray]:
+    """Cell indices of each part to write, after checking what GOCAD cannot store."""
+    storable = {"part"} if kind.cell_keyword else set()
+    lost = [name for name in mesh.cell_properties if name not in storable]
+    if lost and not drop_cell_properties:
+        raise FileFormatError(f"GOCAD {kind.name} cannot store the {mesh.cell_name} properties {', '.join(lost)}",
+                              path=path, hint="pass drop_cell_properties=True to write the mesh without them")
+    if kind.cell_keyword is None:
+        if not np.array_equal(mesh.cells[:, 0], np.arange(mesh.n_vertices)):
+            raise FileFormatError("a GOCAD VSet holds one point per vertex, in vertex order; this PointSet's "
+                                  "cells are not 0, 1, ..., n-1", path=path)
+        return []
+    if "part" not in mesh.cell_properties:
+        return [np.arange(mesh.n_cells)]
+    _, inverse = np.unique(mesh.cell_properties["part"], return_inverse=True)
+    inverse = inverse.reshape(-1)
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.cumsum(np.bincount(inverse))[:-1]
+    return [np.asarray(g, dtype=np.int64) for g in np.split(order, bounds)]
+
+
+def _vertex_ranges(mesh: Mesh, groups: Sequence[IntArray]) -> list[int]:
+    """End of the vertex range written in each part.
+
+    Vertices are written in index order (so that reading gives them back in that
+    order), cut so that each part comes after every vertex its cells use: readers
+    that resolve ids as they go need a vertex before the cells that refer to it.
+    """
+    ends: list[int] = []
+    end = 0
+    for cells in groups:
+        if len(cells):
+            end = max(end, int(mesh.cells[cells].max()) + 1)
+        ends.append(end)
+    if ends:
+        ends[-1] = mesh.n_vertices
+    return ends
+
+
+def _string_list(value: object) -> list[str]:
+    """``value`` if it is a list of str (metadata may have been edited by hand), else []."""
+    if isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+        return list(value)
+    return []
+
+
+def _meta_dict(meta: Mapping[str, Any], key: str) -> dict[str, Any]:
+    """``meta[key]`` if it is a dict (metadata may have been edited by hand), else {}."""
+    value = meta.get(key)
+    return value if isinstance(value, dict) else {}
+
+
+def _format_number(value: float) -> str:
+    """A float as the shortest text that reads back to the same double (integers without ``.0``)."""
+    return repr(int(value)) if float(value).is_integer() and abs(value) < 2**53 else repr(float(value))
+
+
+def _header_lines(mesh: Mesh, kind: _Kind) -> list[str]:
+    """The HEADER lines: the ones read, with ``name`` and colour set from the mesh."""
+    lines = _string_list(mesh.metadata.get("gocad_header"))
+    if mesh.name is not None:
+        _set_key(lines, ("name",), "name", " ".join(mesh.name.splitlines()))  # one line, or the file breaks
+    color = mesh.metadata.get("color")
+    if isinstance(color, (list, tuple)) and color and all(isinstance(c, (int, float)) for c in color):
+        present = [line for line in lines if line.partition(":")[0].strip() in _COLOR_KEYS]
+        if not present or _parse_color(present[-1].partition(":")[2]) != tuple(float(c) for c in color):
+            _set_key(lines, _COLOR_KEYS, kind.color_key, " ".join(_format_number(c) for c in color))
+    return lines
+
+
+def _set_key(lines: list[str], keys: Sequence[str], key: str, value: str) -> None:
+    """Set ``key:value`` in header lines: replace the last line with one of ``keys``, else append."""
+    for j in range(len(lines) - 1, -1, -1):
+        k = lines[j].partition(":")[0].strip()
+        if lines[j].partition(":")[1] and k in keys:
+            if lines[j].partition(":")[2].strip() != value:
+                lines[j] = f"{k}:{value}"
+            return
+    lines.append(f"{key}:{value}")
+
+
+def _coordinate_system_lines(meta: Mapping[str, Any]) -> list[str]:
+    """The coordinate system block as read, with ZPOSITIVE from ``metadata["zpositive"]``."""
+    lines = _string_list(meta.get("gocad_coordinate_system"))
+    zpositive = meta.get("zpositive")
+    if not lines and not isinstance(zpositive, str):
+        return []
+    if not lines:
+        lines = ["NAME Default", 'AXIS_NAME "X" "Y" "Z"', 'AXIS_UNIT "m" "m" "m"']
+    if isinstance(zpositive, str):
+        z_lines = [j for j, line in enumerate(lines) if line.split()[:1] == ["ZPOSITIVE"]]
+        if z_lines:
+            lines[z_lines[-1]] = f"ZPOSITIVE {zpositive}"
+        else:
+            lines.append(f"ZPOSITIVE {zpositive}")
+    return ["GOCAD_ORIGINAL_COORDINATE_SYSTEM\n", *(line + "\n" for line in lines),
+            "END_ORIGINAL_COORDINATE_SYSTEM\n"]
+
+
+@dataclass(frozen=True)
+class _WrittenProperty:
+    """One GOCAD property to write: its name, value columns (1 or ESIZES of them) and no-data value."""
+
+    name: str
+    columns: list[npt.NDArray[Any]]
+    no_data: float
+
+
+def _written_properties(mesh: Mesh) -> list[_WrittenProperty]:
+    """Vertex properties grouped back into GOCAD properties under their file names."""
+    meta = mesh.metadata
+    file_names = _meta_dict(meta, "property_names")
+    esizes = _meta_dict(meta, "gocad_esizes")
+    no_data = _meta_dict(meta, "gocad_no_data_values")
+
+    groups: list[tuple[str, list[str]]] = []
+    for column in mesh.vertex_properties:
+        name = file_names.get(column, column)
+        name = name if isinstance(name, str) and name and not any(c.isspace() for c in name) else column
+        size = esizes.get(name, 1)
+        if size > 1 and groups and groups[-1][0] == name and len(groups[-1][1]) < size:
+            groups[-1][1].append(column)
+        else:
+            groups.append((name, [column]))
+    # a vector property with components missing, or a name used twice, is written column by column
+    resolved: list[tuple[str, list[str]]] = []
+    for name, columns in groups:
+        if esizes.get(name, 1) not in (1, len(columns)):
+            resolved.extend((c, [c]) for c in columns)
+        else:
+            resolved.append((name, columns))
+    result: list[_WrittenProperty] = []
+    used: set[str] = set()
+    values = dict(property_columns(mesh.vertex_properties))
+    for name, columns in resolved:
+        if name in used:
+            name = next(c for c in [columns[0], *(f"{columns[0]}_{j}" for j in itertools.count(2))] if c not in used)
+        used.add(name)
+        arrays = [values[c] for c in columns]
+        stored = no_data.get(name)
+        result.append(_WrittenProperty(name, arrays, _no_data_value(arrays, stored)))
+    return result
+
+
+def _no_data_value(columns: Sequence[npt.NDArray[Any]], stored: object) -> float:
+    """The property's no-data value: the one read, else -99999; never a value the property really has."""
+    value = float(stored) if isinstance(stored, (int, float)) and math.isfinite(stored) else _DEFAULT_NO_DATA
+    while any(np.any(c == value) for c in columns):
+        value = value * 10 - 9  # -99999 -> -999999 -> ...
+    return value
+
+
+def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, Any]) -> list[str]:
+    """PROPERTIES and its companion lines, then the PROPERTY_CLASS_HEADER blocks that still apply."""
+    if not properties:
+        return []
+    names = [p.name for p in properties]
+    info = _meta_dict(meta, "gocad_property_info")
+    defaults = {"PROP_LEGAL_RANGES": "**none** **none**", "PROPERTY_KINDS": "unknown",
+                "PROPERTY_SUBCLASSES": "QUANTITY Float", "UNITS": "none"}
+
+    def info_line(keyword: str) -> str | None:
+        known = info.get(keyword)
+        if not isinstance(known, dict):
+            return None
+        words = [str(known[n]) if n in known else defaults.get(keyword, n) for n in names]
+        return f"{keyword} {' '.join(words)}\n"
+
+    lines = [f"PROPERTIES {' '.join(names)}\n"]
+    lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
+    lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
+    lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
+              if line]
+    lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
+    lines += [line for line in [info_line("UNITS")] if line]
+
+    classes = set(names) | {"X", "Y", "Z"}
+    known_classes = info.get("PROPERTY_CLASSES")
+    if isinstance(known_classes, dict):
+        classes |= {str(known_classes[n]) for n in names if n in known_classes}
+    blocks = meta.get("gocad_property_class_headers")
+    for block in blocks if isinstance(blocks, list) else []:
+        block_lines = _string_list(block)
+        words = block_lines[0].split() if block_lines else []
+        if len(words) >= 2 and words[0] == "PROPERTY_CLASS_HEADER" and words[1] in classes:
+            lines.extend(line + "\n" for line in block_lines)
+    return lines
+
+
+def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[str]:
+    """One VRTX/PVRTX/ATOM line per vertex, in index order, ids 1..n."""
+    n = mesh.n_vertices
+    x, y, z = mesh.vertices.T.tolist() if n else ([], [], [])
+    ids = range(1, n + 1)
+    if not properties:
+        lines = [f"VRTX {i} {a!r} {b!r} {c!r}\n" for i, a, b, c in zip(ids, x, y, z)]
+    else:
+        columns = []
+        for prop in properties:
+            for values in prop.columns:
+                if values.dtype.kind == "f":
+                    values = np.where(np.isnan(values), prop.no_data, values)
+                columns.append(list(map(repr, values.tolist())))
+        texts = list(map(" ".join, zip(*columns)))
+        lines = [f"PVRTX {i} {a!r} {b!r} {c!r} {t}\n" for i, a, b, c, t in zip(ids, x, y, z, texts)]
+    for atom, ref in _valid_atoms(mesh):
+        lines[atom] = f"ATOM {atom + 1} {ref + 1}\n"
+    return lines
+
+
+def _valid_atoms(mesh: Mesh) -> list[tuple[int, int]]:
+    """The ``metadata["gocad_atoms"]`` pairs that still hold: same position and properties, ref earlier."""
+    pairs = mesh.metadata.get("gocad_atoms")
+    if not isinstance(pairs, (list, tuple)):
+        return []
+    valid = []
+    bits = mesh.vertices.view(np.int64)
+    for pair in pairs:
+        if not (isinstance(pair, (list, tuple)) and len(pair) == 2 and all(isinstance(v, int) for v in pair)):
+            continue
+        atom, ref = int(pair[0]), int(pair[1])
+        if not 0 <= ref < atom < mesh.n_vertices or not np.array_equal(bits[atom], bits[ref]):
+            continue
+        if all(np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f")
+               for v in mesh.vertex_properties.values()):
+            valid.append((atom, ref))
+    return valid

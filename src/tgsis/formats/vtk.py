@@ -1,0 +1,481 @@
+"""VTK XML UnstructuredGrid files (``.vtu``), read and written with the standard library and numpy.
+
+Writing (:func:`write_vtu`)
+---------------------------
+One ``Piece`` with
+
+* ``Points``: Float64, 3 components;
+* ``Cells``: ``connectivity`` and ``offsets`` as Int64, ``types`` as UInt8
+  (VERTEX = 1 for a PointSet, LINE = 3 for a LineSet, TRIANGLE = 5 for a
+  Surface, TETRA = 10 for a TetraMesh);
+* ``PointData`` from the vertex properties and ``CellData`` from the cell
+  properties, each in its own dtype (Int8 ... UInt64, Float32, Float64).
+  VTK has no boolean or 16-bit float type: bool is written as UInt8 and
+  float16 as Float32, and they come back as such;
+* ``FieldData``: the mesh name (String array ``name``, when there is one) and
+  the geotype (String array ``tgsis_geotype``), so that a mesh without cells
+  comes back as the right type.
+
+``encoding="binary"`` (the default) puts every DataArray inline as base64 of
+a UInt64 byte count followed by the little-endian values
+(``header_type="UInt64"``, no compression); ``encoding="appended"`` writes the
+same bytes unencoded in one ``AppendedData`` section (``encoding="raw"``),
+smaller and faster for big meshes. Both are standard VTK XML (file version
+1.0) that ParaView and VTK read. The round trip is bit-exact for vertices,
+cells and properties (dtypes included, except bool and float16); the mesh's
+other metadata is not stored.
+
+Reading (:func:`read_vtu`)
+--------------------------
+Reads what the writer writes and also: ``format="ascii"`` arrays, appended
+data in ``raw`` or ``base64`` encoding, ``header_type`` UInt32 or UInt64, big-
+or little-endian files, and ``vtkZLibDataCompressor`` compression (ParaView's
+default). The file must have one Piece whose cells are all of one type among
+VERTEX, LINE, TRIANGLE and TETRA. A data array with k > 1 components becomes k
+properties ``name_0`` .. ``name_{k-1}``; names that are not valid mesh
+property names are sanitised and the file's names are kept in
+``metadata["vtk_array_names"]`` (``{"point_data": {mesh name: file name},
+"cell_data": {...}}``, only for names that changed).
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import xml.etree.ElementTree as ET
+import zlib
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
+from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
+from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
+
+__all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "write_vtu", "format_vtu"]
+
+#: VTK cell type of each mesh class.
+VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
+_MESH_OF_CELL_TYPE = {code: cls for cls, code in VTK_CELL_TYPES.items()}
+_CELL_TYPE_NAMES = {1: "VERTEX", 2: "POLY_VERTEX", 3: "LINE", 4: "POLY_LINE", 5: "TRIANGLE",
+                    6: "TRIANGLE_STRIP", 7: "POLYGON", 8: "PIXEL", 9: "QUAD", 10: "TETRA", 11: "VOXEL",
+                    12: "HEXAHEDRON", 13: "WEDGE", 14: "PYRAMID", 42: "POLYHEDRON"}
+
+_VTK_TYPE_OF: dict[str, str] = {
+    "i1": "Int8", "u1": "UInt8", "i2": "Int16", "u2": "UInt16", "i4": "Int32", "u4": "UInt32",
+    "i8": "Int64", "u8": "UInt64", "f4": "Float32", "f8": "Float64",
+}
+_DTYPE_OF: dict[str, str] = {v: k for k, v in _VTK_TYPE_OF.items()}
+_DTYPE_OF["String"] = "u1"  # FieldData strings: null-terminated bytes
+
+Encoding = Literal["binary", "appended"]
+
+
+# ---------------------------------------------------------------- writing
+
+
+def write_vtu(mesh: Mesh, path: PathLike, *, encoding: Encoding = "binary") -> None:
+    """Write a mesh as a VTK XML UnstructuredGrid file.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        A PointSet, LineSet, Surface or TetraMesh.
+    path : str or path-like
+        The ``.vtu`` file to write (replaced if it exists).
+    encoding : {"binary", "appended"}
+        Inline base64 DataArrays, or one raw AppendedData section.
+
+    Raises
+    ------
+    FileFormatError
+        The file cannot be written.
+    """
+    write_bytes(path, [format_vtu(mesh, encoding=encoding)])
+
+
+def format_vtu(mesh: Mesh, *, encoding: Encoding = "binary") -> bytes:
+    """The ``.vtu`` file content for ``mesh``; see :func:`write_vtu`."""
+    mesh = check_mesh(mesh, "the VTU writer")
+    if encoding not in ("binary", "appended"):
+        raise FileFormatError(f"unknown VTU encoding {encoding!r}: use 'binary' or 'appended'")
+    writer = _ArrayWriter(appended=encoding == "appended")
+    root = ET.Element("VTKFile", type="UnstructuredGrid", version="1.0", byte_order="LittleEndian",
+                      header_type="UInt64")
+    grid = ET.SubElement(root, "UnstructuredGrid")
+    field_data = ET.SubElement(grid, "FieldData")
+    if mesh.name:
+        field_data.append(_string_array("name", mesh.name))
+    field_data.append(_string_array("tgsis_geotype", mesh.geotype.value))
+    piece = ET.SubElement(grid, "Piece", NumberOfPoints=str(mesh.n_vertices), NumberOfCells=str(mesh.n_cells))
+    point_data = ET.SubElement(piece, "PointData")
+    for name, values in mesh.vertex_properties.items():
+        point_data.append(writer.array(name, values))
+    cell_data = ET.SubElement(piece, "CellData")
+    for name, values in mesh.cell_properties.items():
+        cell_data.append(writer.array(name, values))
+    points = ET.SubElement(piece, "Points")
+    points.append(writer.array("Points", mesh.vertices, components=3))
+    cells = ET.SubElement(piece, "Cells")
+    k = mesh.cell_size
+    cells.append(writer.array("connectivity", mesh.cells.reshape(-1)))
+    cells.append(writer.array("offsets", np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k))
+    cells.append(writer.array("types", np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8)))
+    ET.indent(root)
+    text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False))
+    if not writer.appended:
+        return text + b"\n"
+    # raw bytes are not XML: the AppendedData section goes after the serialised tree, by hand
+    head, _, _ = text.rpartition(b"</VTKFile>")
+    return b"".join([head, b'  <AppendedData encoding="raw">\n   _', *writer.blocks,
+                     b"\n  </AppendedData>\n</VTKFile>\n"])
+
+
+class _ArrayWriter:
+    """Makes DataArray elements; in appended mode collects their bytes and offsets."""
+
+    def __init__(self, *, appended: bool) -> None:
+        self.appended = appended
+        self.blocks: list[bytes] = []
+        self.offset = 0
+
+    def array(self, name: str, values: npt.NDArray[Any], *, components: int = 1) -> ET.Element:
+        data = _vtk_values(values)
+        element = ET.Element("DataArray", type=_VTK_TYPE_OF[data.dtype.str[1:]], Name=name)
+        if components != 1:
+            element.set("NumberOfComponents", str(components))
+        payload = np.uint64(data.nbytes).astype("<u8").tobytes() + data.tobytes()
+        if self.appended:
+            element.set("format", "appended")
+            element.set("offset", str(self.offset))
+            self.blocks.append(payload)
+            self.offset += len(payload)
+        else:
+            element.set("format", "binary")
+            element.text = base64.b64encode(payload).decode("ascii")
+        return element
+
+
+def _vtk_values(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
+    """Values as a little-endian array of a type VTK has (bool -> UInt8, float16 -> Float32)."""
+    if values.dtype.kind == "b":
+        values = values.astype(np.uint8)
+    elif values.dtype.kind == "f" and values.dtype.itemsize < 4:
+        values = values.astype(np.float32)
+    return np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("<"))
+
+
+def _string_array(name: str, value: str) -> ET.Element:
+    """A FieldData string array holding one string.
+
+    As VTK writes a vtkStringArray: an ``<Array>`` (not ``<DataArray>``) element
+    with the bytes as decimal codes, each string terminated by 0.
+    """
+    element = ET.Element("Array", type="String", Name=name, NumberOfTuples="1", format="ascii")
+    element.text = " ".join(str(b) for b in [*value.encode("utf-8"), 0])
+    return element
+
+
+# ---------------------------------------------------------------- reading
+
+
+def read_vtu(path: PathLike) -> Mesh:
+    """Read a VTK XML UnstructuredGrid file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.vtu`` file.
+
+    Returns
+    -------
+    Mesh
+        PointSet, LineSet, Surface or TetraMesh after the cell type.
+
+    Raises
+    ------
+    FileFormatError
+        The file cannot be read, is not a valid ``.vtu``, or holds cells that
+        are not all VERTEX, all LINE, all TRIANGLE or all TETRA.
+    """
+    return parse_vtu(read_bytes(path), path=path)
+
+
+def parse_vtu(data: bytes, *, path: PathLike | None = None) -> Mesh:
+    """Parse the content of a ``.vtu`` file; see :func:`read_vtu`. ``path`` is for messages only."""
+    xml_bytes, appended = _split_appended(data)
+    try:
+        root = ET.fromstring(xml_bytes)
+    except ET.ParseError as exc:
+        raise FileFormatError(f"not well-formed XML: {exc}", path=path, line=exc.position[0]) from None
+    if root.tag != "VTKFile" or root.get("type") != "UnstructuredGrid":
+        raise FileFormatError(f"not a VTK UnstructuredGrid file (root <{root.tag} type={root.get('type')!r}>)",
+                              path=path)
+    decoder = _Decoder.for_root(root, appended, path)
+    grid = root.find("UnstructuredGrid")
+    pieces = grid.findall("Piece") if grid is not None else []
+    if len(pieces) != 1:
+        raise FileFormatError(f"expected one Piece in the UnstructuredGrid, found {len(pieces)}", path=path)
+    piece = pieces[0]
+    n_points = _int_attribute(piece, "NumberOfPoints", path)
+    n_cells = _int_attribute(piece, "NumberOfCells", path)
+
+    vertices = decoder.array(_find_array(piece, "Points", None, path), n_points, 3).astype(np.float64)
+    mesh_type, cells = _cells(piece, decoder, n_cells, path)
+    fields = _field_strings(grid, decoder) if grid is not None else {}
+    if n_cells == 0 and "tgsis_geotype" in fields:
+        try:
+            mesh_type = mesh_class(fields["tgsis_geotype"])
+        except InvalidGeometryError:
+            pass
+    names: dict[str, dict[str, str]] = {}
+    vertex_properties = _data_arrays(piece.find("PointData"), decoder, n_points, names, "point_data")
+    cell_properties = _data_arrays(piece.find("CellData"), decoder, n_cells, names, "cell_data")
+    metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
+    try:
+        return mesh_type(vertices.reshape(n_points, 3), cells.reshape(n_cells, mesh_type.cell_size),
+                         vertex_properties=vertex_properties, cell_properties=cell_properties,
+                         name=fields.get("name"), metadata=metadata)
+    except (InvalidGeometryError, InvalidPropertyError) as exc:
+        raise FileFormatError(f"the grid is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
+
+
+def _split_appended(data: bytes) -> tuple[bytes, bytes]:
+    """The XML without the AppendedData payload, and the payload (after its ``_`` marker)."""
+    start = data.find(b"<AppendedData")
+    if start < 0:
+        return data, b""
+    tag_end = data.find(b">", start)
+    close = data.rfind(b"</AppendedData>")
+    marker = data.find(b"_", tag_end)
+    if tag_end < 0 or close < 0 or marker < 0 or marker > close:
+        return data, b""  # let the XML parser report what is wrong
+    return data[: tag_end + 1] + data[close:], data[marker + 1: close]
+
+
+def _int_attribute(element: ET.Element, name: str, path: PathLike | None) -> int:
+    text = element.get(name)
+    try:
+        value = int(text) if text is not None else -1
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise FileFormatError(f"<{element.tag}> needs a non-negative integer {name}, got {text!r}", path=path)
+    return value
+
+
+def _find_array(piece: ET.Element, section: str, name: str | None, path: PathLike | None) -> ET.Element:
+    """The DataArray of ``section`` (the named one, or the first)."""
+    parent = piece.find(section)
+    arrays = parent.findall("DataArray") if parent is not None else []
+    for array in arrays:
+        if name is None or array.get("Name") == name:
+            return array
+    what = f"a DataArray {name!r}" if name else "a DataArray"
+    raise FileFormatError(f"<{section}> has no {what}", path=path)
+
+
+def _cells(piece: ET.Element, decoder: _Decoder, n_cells: int,
+           path: PathLike | None) -> tuple[type[Mesh], npt.NDArray[np.int64]]:
+    """The mesh class after the (single) cell type, and the connectivity."""
+    if piece.find("Cells") is None:
+        if n_cells:
+            raise FileFormatError(f"the Piece declares {n_cells} cells but has no <Cells>", path=path)
+        return PointSet, np.empty(0, dtype=np.int64)
+    types = decoder.array(_find_array(piece, "Cells", "types", path), n_cells, 1)
+    offsets = decoder.array(_find_array(piece, "Cells", "offsets", path), None, 1).astype(np.int64)
+    if len(offsets) == n_cells + 1 and offsets[0] == 0:
+        offsets = offsets[1:]  # the in-memory vtkCellArray layout, with the leading 0
+    connectivity_element = _find_array(piece, "Cells", "connectivity", path)
+    distinct = sorted({int(t) for t in np.unique(types)})
+    if len(distinct) > 1:
+        listed = ", ".join(f"{t} ({_CELL_TYPE_NAMES.get(t, 'unknown')})" for t in distinct)
+        raise FileFormatError(f"the grid mixes cell types {listed}; a tgsis mesh has one cell type", path=path)
+    if distinct and distinct[0] not in _MESH_OF_CELL_TYPE:
+        t = distinct[0]
+        raise FileFormatError(f"VTK cell type {t} ({_CELL_TYPE_NAMES.get(t, 'unknown')}) is not supported: "
+                              "tgsis reads VERTEX (1), LINE (3), TRIANGLE (5) and TETRA (10)", path=path)
+    mesh_type = _MESH_OF_CELL_TYPE[distinct[0]] if distinct else PointSet
+    k = mesh_type.cell_size
+    if not np.array_equal(offsets, np.arange(1, n_cells + 1, dtype=np.int64) * k):
+        raise FileFormatError(f"cell offsets do not match {n_cells} {_CELL_TYPE_NAMES[VTK_CELL_TYPES[mesh_type]]} "
+                              f"cells of {k} points each", path=path)
+    connectivity = decoder.array(connectivity_element, n_cells * k, 1)
+    if connectivity.dtype.kind not in "iu":
+        raise FileFormatError(f"cell connectivity must be integers, got {connectivity_element.get('type')}",
+                              path=path)
+    return mesh_type, connectivity.astype(np.int64)
+
+
+def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, names: dict[str, dict[str, str]],
+                 key: str) -> dict[str, npt.NDArray[Any]]:
+    """PointData/CellData arrays as properties; k-component arrays are split into name_0 .. name_{k-1}."""
+    result: dict[str, npt.NDArray[Any]] = {}
+    renamed: dict[str, str] = {}
+    for element in section.findall("DataArray") if section is not None else []:
+        if element.get("type") == "String":
+            continue  # not numeric: no property can hold it
+        file_name = element.get("Name") or "array"
+        components = _int_attribute(element, "NumberOfComponents", decoder.path) \
+            if "NumberOfComponents" in element.attrib else 1
+        if components < 1:
+            raise FileFormatError(f"DataArray {file_name!r} has NumberOfComponents 0", path=decoder.path)
+        values = decoder.array(element, count, components).reshape(count, components)
+        column_names = ([file_name] if components == 1 else [f"{file_name}_{j}" for j in range(components)])
+        for j, column_name in enumerate(column_names):
+            name = sanitize_property_name(column_name, result)
+            if name != column_name:
+                renamed[name] = file_name if components == 1 else column_name
+            result[name] = np.ascontiguousarray(values[:, j])
+    if renamed:
+        names[key] = renamed
+    return result
+
+
+def _field_strings(grid: ET.Element, decoder: _Decoder) -> dict[str, str]:
+    """The first string of each String array in FieldData."""
+    result: dict[str, str] = {}
+    # FieldData belongs to the grid; some writers put it in the Piece
+    elements = [e for section in (grid.find("FieldData"), grid.find("Piece/FieldData")) if section is not None
+                for e in section if e.tag in ("Array", "DataArray")]
+    for element in elements:
+        if element.get("type") != "String" or not element.get("Name"):
+            continue
+        try:
+            raw = decoder.array(element, None, 1).astype(np.uint8).tobytes()
+        except FileFormatError:
+            continue  # a field we cannot decode is not worth failing the file for
+        result[str(element.get("Name"))] = raw.split(b"\0", 1)[0].decode("utf-8", errors="replace")
+    return result
+
+
+@dataclass(frozen=True)
+class _Decoder:
+    """Decodes DataArrays after the file's byte order, header type, compressor and appended data."""
+
+    byte_order: str  # "<" or ">"
+    header: np.dtype[Any]
+    compressed: bool
+    appended: bytes
+    appended_base64: bool
+    path: PathLike | None
+
+    @classmethod
+    def for_root(cls, root: ET.Element, appended: bytes, path: PathLike | None) -> _Decoder:
+        order = {"LittleEndian": "<", "BigEndian": ">"}.get(root.get("byte_order", "LittleEndian"))
+        header = {"UInt32": "u4", "UInt64": "u8"}.get(root.get("header_type", "UInt32"))
+        compressor = root.get("compressor", "")
+        if order is None or header is None:
+            raise FileFormatError(f"unsupported byte_order {root.get('byte_order')!r} or header_type "
+                                  f"{root.get('header_type')!r}", path=path)
+        if compressor not in ("", "vtkZLibDataCompressor"):
+            raise FileFormatError(f"unsupported compressor {compressor!r}: tgsis reads uncompressed and "
+                                  "vtkZLibDataCompressor data", path=path)
+        section = root.find("AppendedData")
+        is_base64 = section is not None and section.get("encoding", "raw") == "base64"
+        return cls(order, np.dtype(order + header), bool(compressor), appended, is_base64, path)
+
+    def array(self, element: ET.Element, count: int | None, components: int) -> npt.NDArray[Any]:
+        """The values of a DataArray, flat; ``count`` tuples of ``components`` expected (None: any)."""
+        type_name = element.get("type", "")
+        name = element.get("Name", "?")
+        if type_name not in _DTYPE_OF:
+            raise FileFormatError(f"DataArray {name!r} has unsupported type {type_name!r}", path=self.path)
+        dtype = np.dtype(self.byte_order + _DTYPE_OF[type_name])
+        fmt = element.get("format", "ascii")
+        if fmt == "ascii":
+            values = self._ascii(element, dtype)
+        elif fmt == "binary":
+            # base64 may be wrapped over lines; translate() drops the whitespace far faster than a regex
+            text = (element.text or "").encode("ascii", errors="replace").translate(None, b" \t\n\r\f\v")
+            values = np.frombuffer(self._from_base64(text, 0, name), dtype=dtype)
+        elif fmt == "appended":
+            offset = _int_attribute(element, "offset", self.path)
+            raw = (self._from_base64(self.appended, offset, name) if self.appended_base64
+                   else self._from_raw(self.appended, offset, name))
+            values = np.frombuffer(raw[: len(raw) - len(raw) % dtype.itemsize], dtype=dtype)
+        else:
+            raise FileFormatError(f"DataArray {name!r} has unknown format {fmt!r}", path=self.path)
+        values = values.astype(dtype.newbyteorder("="))
+        if count is not None and len(values) != count * components:
+            raise FileFormatError(f"DataArray {name!r} has {len(values)} values, expected {count} x {components}",
+                                  path=self.path)
+        return values
+
+    def _ascii(self, element: ET.Element, dtype: np.dtype[Any]) -> npt.NDArray[Any]:
+        words = (element.text or "").split()
+        try:
+            if dtype.kind == "f":
+                return np.array([float(w) for w in words], dtype=dtype)
+            return np.array([int(w) for w in words], dtype=dtype)
+        except (ValueError, OverflowError):
+            raise FileFormatError(f"DataArray {element.get('Name', '?')!r} has values that are not "
+                                  f"{dtype.name}", path=self.path) from None
+
+    def _from_raw(self, data: bytes, offset: int, name: str) -> bytes:
+        """Bytes of one appended raw block at ``offset``."""
+        h = self.header.itemsize
+        if self.compressed:
+            head = self._header_values(data[offset: offset + 3 * h], 3, name)
+            n_blocks = int(head[0])
+            sizes = self._header_values(data[offset + 3 * h: offset + (3 + n_blocks) * h], n_blocks, name)
+            return self._inflate(data[offset + (3 + n_blocks) * h:], head, sizes, name)
+        (size,) = self._header_values(data[offset: offset + h], 1, name)
+        return self._exact(data[offset + h: offset + h + int(size)], int(size), name)
+
+    def _from_base64(self, text: bytes, offset: int, name: str) -> bytes:
+        """Bytes of one base64 block starting at character ``offset``.
+
+        Uncompressed, VTK encodes the byte count and the data as one base64
+        stream; compressed, the header and the data are two streams.
+        """
+        h = self.header.itemsize
+        if self.compressed:
+            head = self._header_values(self._b64(text, offset, 3 * h, name)[: 3 * h], 3, name)
+            n_blocks = int(head[0])
+            header_chars = 4 * math.ceil((3 + n_blocks) * h / 3)
+            full = self._b64(text, offset, (3 + n_blocks) * h, name)
+            sizes = self._header_values(full[3 * h: (3 + n_blocks) * h], n_blocks, name)
+            body = self._b64(text, offset + header_chars, int(sizes.sum()), name)
+            return self._inflate(body, head, sizes, name)
+        (size,) = self._header_values(self._b64(text, offset, h, name)[:h], 1, name)
+        header_chars = 4 * math.ceil(h / 3)
+        if text[offset + header_chars - 1: offset + header_chars] == b"=":
+            # some writers encode the byte count as a base64 stream of its own (it ends in padding)
+            return self._exact(self._b64(text, offset + header_chars, int(size), name), int(size), name)
+        return self._exact(self._b64(text, offset, h + int(size), name)[h:], int(size), name)
+
+    def _b64(self, text: bytes, offset: int, n_bytes: int, name: str) -> bytes:
+        """Decode the base64 characters at ``offset`` that hold (at least) ``n_bytes`` bytes."""
+        chunk = text[offset: offset + 4 * math.ceil(n_bytes / 3)]
+        try:
+            return base64.b64decode(chunk, validate=True)
+        except ValueError:
+            raise FileFormatError(f"DataArray {name!r} is not valid base64", path=self.path) from None
+
+    def _header_values(self, raw: bytes, count: int, name: str) -> npt.NDArray[np.uint64]:
+        if len(raw) != count * self.header.itemsize:
+            raise FileFormatError(f"DataArray {name!r} is truncated (incomplete block header)", path=self.path)
+        return np.frombuffer(raw, dtype=self.header).astype(np.uint64)
+
+    def _exact(self, raw: bytes, size: int, name: str) -> bytes:
+        if len(raw) != size:
+            raise FileFormatError(f"DataArray {name!r} is truncated: {len(raw)} of {size} bytes", path=self.path)
+        return raw
+
+    def _inflate(self, body: bytes, head: npt.NDArray[np.uint64], sizes: npt.NDArray[np.uint64], name: str) -> bytes:
+        """Decompress vtkZLibDataCompressor blocks (header: count, block size, last block size, sizes)."""
+        parts: list[bytes] = []
+        position = 0
+        for size in sizes.tolist():
+            try:
+                parts.append(zlib.decompress(body[position: position + size]))
+            except zlib.error:
+                raise FileFormatError(f"DataArray {name!r} has a corrupt zlib block", path=self.path) from None
+            position += size
+        raw = b"".join(parts)
+        n_blocks, block_size, last_size = (int(v) for v in head)
+        expected = (n_blocks - 1) * block_size + (last_size or block_size) if n_blocks else 0
+        return self._exact(raw, expected, name)

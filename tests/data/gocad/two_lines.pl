@@ -1,0 +1,16 @@
+GOCAD PLine 1
+HEADER {
+name:fault trace
+*line*color:0 0 1 1
+}
+ILINE
+VRTX 1 0 0 0
+VRTX 2 10 0 0
+VRTX 3 20 5 -0.5
+SEG 1 2
+SEG 2 3
+ILINE
+VRTX 7 0 10 -5
+VRTX 8 10 10 -5
+SEG 7 8
+END
