@@ -9,7 +9,6 @@ CREATE EXTENSION for the client's plain-SQL install.
 
 from __future__ import annotations
 
-import statistics
 import time
 import uuid
 from collections.abc import Callable
@@ -19,18 +18,11 @@ from psycopg import sql
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
+from timing import timed
 
 REPEAT = 10
 
 
-def timed(action: Callable[[], object], repeat: int = REPEAT) -> float:
-    """Median wall time of ``action`` in seconds."""
-    samples = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        action()
-        samples.append(time.perf_counter() - start)
-    return statistics.median(samples)
 
 
 def main() -> None:
@@ -53,16 +45,16 @@ def main() -> None:
         with psycopg.connect(server.dsn(template)) as conn:
             tgsis.install(conn, method="sql")
 
-        plain_db = timed(lambda: create("template0"))
-        tgsis_db = timed(lambda: create(template))
+        plain_db = timed(lambda: create("template0"), REPEAT)
+        tgsis_db = timed(lambda: create(template), REPEAT)
 
         def install(method: str) -> None:
             with psycopg.connect(server.dsn(create("template0"))) as conn:
                 tgsis.install(conn, method=method)  # type: ignore[arg-type]
 
-        empty_db_and_connect = timed(lambda: psycopg.connect(server.dsn(create("template0"))).close())
-        sql_install = timed(lambda: install("sql")) - empty_db_and_connect
-        ext_install = (timed(lambda: install("extension")) - empty_db_and_connect
+        empty_db_and_connect = timed(lambda: psycopg.connect(server.dsn(create("template0"))).close(), REPEAT)
+        sql_install = timed(lambda: install("sql"), REPEAT) - empty_db_and_connect
+        ext_install = (timed(lambda: install("extension"), REPEAT) - empty_db_and_connect
                        if binaries.has_extension_control_path or binaries.flavor == "system" else float("nan"))
         admin.close()
     finally:

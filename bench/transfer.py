@@ -12,7 +12,6 @@ tgsis uses, to show what index maintenance alone costs.
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 from collections.abc import Callable
 
@@ -24,6 +23,7 @@ import tgsis
 from tgsis.db import features as F
 from tgsis.db.copy import decode_rows, encode_rows
 from tgsis.db.local import LocalServer, find_binaries
+from timing import timed
 
 
 def grid_surface(side: int) -> tgsis.Surface:
@@ -38,13 +38,6 @@ def grid_surface(side: int) -> tgsis.Surface:
     return tgsis.Surface(vertices, triangles, vertex_properties={"porosity": porosity}, name="bench")
 
 
-def timed(action: Callable[[], object], repeat: int) -> float:
-    samples = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        action()
-        samples.append(time.perf_counter() - start)
-    return statistics.median(samples)
 
 
 def main() -> None:
