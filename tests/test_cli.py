@@ -10,6 +10,7 @@ import pytest
 
 import tgsis
 from tests.local_helpers import private_home, tgsis_cli
+from tests.shared_data import cfm
 from tgsis.cli import main
 
 
@@ -86,14 +87,6 @@ def test_demo_reports_what_it_talks_to() -> None:
 
 # --------------------------------------------------------------------------- classes and features
 
-CFM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cfm"
-
-
-def _cfm(name: str) -> Path:
-    path = CFM / name
-    if not path.is_file():
-        pytest.fail(f"missing shared test data {path} (the repository expects ../shared beside it)")
-    return path
 
 
 def test_class_create_list_drop(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
@@ -116,7 +109,7 @@ def test_class_create_list_drop(db_dsn: str, capsys: pytest.CaptureFixture[str])
 def test_import_ls_export_a_real_gocad_fault(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from tgsis import formats
 
-    source = _cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
+    source = cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
     assert main(["--dsn", db_dsn, "class", "create", "faults", "--geotype", "SURFACE",
                  "--feature-property", "release:text", "--property", "azi:float8", "--property", "dip:float8"]) == 0
     capsys.readouterr()
@@ -137,7 +130,7 @@ def test_import_ls_export_a_real_gocad_fault(db_dsn: str, tmp_path: Path, capsys
 
 def test_import_of_properties_the_class_lacks_needs_a_flag(db_dsn: str,
                                                            capsys: pytest.CaptureFixture[str]) -> None:
-    source = _cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
+    source = cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
     assert main(["--dsn", db_dsn, "class", "create", "plain", "--geotype", "SURFACE"]) == 0
     assert main(["--dsn", db_dsn, "import", str(source), "--class", "plain"]) == 1
     assert "has no column for properties ['azi', 'dip']" in capsys.readouterr().err

@@ -12,10 +12,10 @@ import pytest
 from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import format_gocad, parse_gocad, read_gocad, read_tsurf, write_gocad, write_gocad_many
+from tests.shared_data import CFM, cfm
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 DATA = Path(__file__).resolve().parent / "data" / "gocad"
-CFM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cfm"
 
 # The CFM files the shared data set is documented to hold (README.md there).
 CFM_FILES = [
@@ -35,13 +35,6 @@ EIGHT_PARTS_FILE = "formats/ETRA-LSBM-MULT-Burnt_Mountain-East_Wide_Canyon_fault
 ATOM_FILE = "formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts"
 BIG_FILE = "formats/SAFS-SAFZ-MULT-San_Andreas_fault_Fuis-ALT6_500m.ts"
 
-
-def cfm(relative: str) -> Path:
-    """A CFM file; a missing data set is a failure, not a skip."""
-    path = CFM / relative
-    if not path.is_file():
-        pytest.fail(f"shared CFM test data missing: {path} (expected under /work/shared/data/cfm, see its README.md)")
-    return path
 
 
 def keyword_counts(path: Path) -> dict[str, int]:

@@ -14,16 +14,10 @@ from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import read_tsurf
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
+from tests.shared_data import cfm
 from tgsis.mesh import LineSet, Surface
 
-CFM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cfm"
 
-
-def cfm(relative: str) -> Path:
-    path = CFM / relative
-    if not path.is_file():
-        pytest.fail(f"shared CFM test data missing: {path} (expected under /work/shared/data/cfm, see its README.md)")
-    return path
 
 
 @pytest.fixture

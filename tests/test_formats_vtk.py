@@ -16,17 +16,11 @@ from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import read_tsurf
 from tgsis.formats.vtk import format_vtu, parse_vtu, read_vtu, write_vtu
+from tests.shared_data import cfm
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 DATA = Path(__file__).resolve().parent / "data"
-CFM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cfm"
 
-
-def cfm(relative: str) -> Path:
-    path = CFM / relative
-    if not path.is_file():
-        pytest.fail(f"shared CFM test data missing: {path} (expected under /work/shared/data/cfm, see its README.md)")
-    return path
 
 
 def meshes() -> list[Mesh]:
