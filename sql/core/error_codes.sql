@@ -27,4 +27,6 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG103', 'invalid_property', 'input',   'a property has an unknown name, a type outside the allowed list, or the wrong number of values'),
     ('TG200', 'not_found',        'catalog', 'a named object (feature class, feature, geometry, table) does not exist'),
     ('TG201', 'already_exists',   'catalog', 'an object with that name or key exists already'),
-    ('TG202', 'in_use',           'catalog', 'an object cannot be dropped or changed while others depend on it');
+    ('TG202', 'in_use',           'catalog', 'an object cannot be dropped or changed while others depend on it'),
+    ('TG300', 'versioning',       'versioning', 'a versioning error that fits no narrower code'),
+    ('TG301', 'read_only_revision', 'versioning', 'a write while the session views an older revision, or into a frozen (saved) revision');

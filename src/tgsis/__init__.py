@@ -42,6 +42,8 @@ from tgsis.errors import (
     LocalServerError,
     MissingPrivilegeError,
     NotFoundError,
+    ReadOnlyRevisionError,
+    VersioningError,
 )
 
 try:
@@ -86,4 +88,6 @@ __all__ = [
     "LocalServerError",
     "MissingPrivilegeError",
     "NotFoundError",
+    "ReadOnlyRevisionError",
+    "VersioningError",
 ]

@@ -33,6 +33,8 @@ __all__ = [
     "NotFoundError",
     "AlreadyExistsError",
     "InUseError",
+    "VersioningError",
+    "ReadOnlyRevisionError",
     "DatabaseError",
     "LocalServerError",
     "class_for_sqlstate",
@@ -152,6 +154,18 @@ class InUseError(Error):
     code = "TG202"
 
 
+class VersioningError(Error):
+    """A versioning error that fits no narrower code."""
+
+    code = "TG300"
+
+
+class ReadOnlyRevisionError(VersioningError):
+    """A write while the session views an older revision, or into a frozen (saved) revision."""
+
+    code = "TG301"
+
+
 class DatabaseError(Error):
     """A database error that is not one of tgsis's own SQLSTATEs.
 
@@ -172,6 +186,7 @@ _AREA_FALLBACK: dict[str, type[Error]] = {
     "TG0": Error,
     "TG1": InvalidInputError,
     "TG2": NotFoundError,
+    "TG3": VersioningError,
 }
 
 # PostgreSQL's own conditions that mean the same as one of ours.

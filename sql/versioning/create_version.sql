@@ -1,0 +1,42 @@
+-- tgsis.create_version(name, parent): a new child version; returns its working revision.
+-- Hand-out order (observable, part of the contract): the child's initrevision
+-- is the parent's working revision; then the parent gets a new revision; then
+-- the child gets its first one.
+CREATE FUNCTION tgsis.create_version(p_name text, p_parent text DEFAULT 'DEFAULT', p_description text DEFAULT NULL)
+RETURNS integer
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_parent     tgsis.versions;
+    v_parent_rev integer;
+    v_child_rev  integer;
+    v_child_id   integer;
+BEGIN
+    PERFORM tgsis.check_version_name(p_name);
+    PERFORM tgsis.version_id(p_parent);
+    -- waits for writers of the parent's working revision (write_revision share-locks it)
+    SELECT * INTO v_parent FROM tgsis.versions WHERE name = p_parent FOR UPDATE;
+    IF EXISTS (SELECT FROM tgsis.versions WHERE name = p_name) THEN
+        RAISE EXCEPTION 'version % exists already', quote_literal(p_name)
+            USING ERRCODE = 'TG201', HINT = 'choose another name, or tgsis.delete_version it first';
+    END IF;
+
+    v_parent_rev := nextval('tgsis.revision_seq');
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_parent_rev, v_parent.versionid, current_user);
+    UPDATE tgsis.versions
+       SET workingrevision = v_parent_rev, workingset = workingset || v_parent_rev
+     WHERE versionid = v_parent.versionid;
+
+    v_child_rev := nextval('tgsis.revision_seq');
+    INSERT INTO tgsis.versions (name, parentid, initrevision, workingrevision, workingset, owner, description)
+    VALUES (p_name, v_parent.versionid, v_parent.workingrevision, v_child_rev, v_parent.workingset || v_child_rev,
+            current_user, p_description)
+    RETURNING versionid INTO v_child_id;
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_child_rev, v_child_id, current_user);
+    RETURN v_child_rev;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.create_version(text, text, text) IS
+    'create a child version of p_parent (default DEFAULT): initrevision := parent''s working revision, then a new revision for the parent, then one for the child; returns the child''s working revision';

@@ -1,0 +1,43 @@
+-- tgsis.delete_version(name): remove a leaf version, its revisions and its row versions; returns the rows removed.
+CREATE FUNCTION tgsis.delete_version(p_name text)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_id       integer := tgsis.version_id(p_name);
+    v_children text;
+    v_revs     integer[];
+    v_t        tgsis.versioned_tables;
+    v_count    bigint;
+    v_removed  bigint := 0;
+BEGIN
+    IF v_id = 0 THEN
+        RAISE EXCEPTION 'version DEFAULT cannot be deleted' USING ERRCODE = 'TG100', DETAIL = 'It is the root of the version tree.';
+    END IF;
+    PERFORM FROM tgsis.versions WHERE versionid = v_id FOR UPDATE;
+    SELECT string_agg(quote_literal(name), ', ' ORDER BY name) INTO v_children FROM tgsis.versions WHERE parentid = v_id;
+    IF v_children IS NOT NULL THEN
+        RAISE EXCEPTION 'version % has child versions: %', quote_literal(p_name), v_children
+            USING ERRCODE = 'TG202', HINT = 'delete (or merge) the children first';
+    END IF;
+    SELECT array_agg(revision ORDER BY revision) INTO v_revs FROM tgsis.revisions WHERE versionid = v_id;
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY iudorder DESC, schemaname, tablename LOOP
+        EXECUTE format('DELETE FROM %I.%I WHERE revision = ANY ($1)', v_t.schemaname, v_t.tablename || '_ver') USING v_revs;
+        GET DIAGNOSTICS v_count = ROW_COUNT;
+        v_removed := v_removed + v_count;
+        -- rows of ancestors that the version closed become live again for nobody else: drop its revisions
+        EXECUTE format('UPDATE %I.%I SET lastrevs = ARRAY(SELECT r FROM unnest(lastrevs) AS r WHERE r <> ALL ($1))
+                         WHERE lastrevs && $1', v_t.schemaname, v_t.tablename || '_ver') USING v_revs;
+    END LOOP;
+    DELETE FROM tgsis.versions WHERE versionid = v_id;  -- its revisions go with it
+    IF tgsis.get_working_version() = p_name THEN
+        PERFORM set_config('tgsis.version', '', false);
+        PERFORM set_config('tgsis.revision', '', false);
+    END IF;
+    RETURN v_removed;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.delete_version(text) IS
+    'delete a version without children: its revisions, the row versions written in them, and its revisions in other rows'' lastrevs; returns the row versions removed';

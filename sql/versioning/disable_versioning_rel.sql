@@ -1,0 +1,65 @@
+-- tgsis.disable_versioning_rel(view, force): the work of tgsis.disable_versioning on a resolved view.
+-- Refuses while versions other than DEFAULT have changes in it (they would be
+-- lost) unless forced.
+CREATE FUNCTION tgsis.disable_versioning_rel(p_table regclass, p_force boolean DEFAULT false)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_t         tgsis.versioned_tables := tgsis.versioned_table(p_table);
+    v_view      regclass;
+    v_ver       text := v_t.tablename || '_ver';
+    v_default   integer[];
+    v_dependent text;
+    v_name      text;
+    v_removed   bigint;
+BEGIN
+    v_view := format('%I.%I', v_t.schemaname, v_t.tablename)::regclass;
+    IF NOT pg_has_role(current_user, (SELECT relowner FROM pg_class WHERE oid = v_view), 'USAGE') THEN
+        RAISE EXCEPTION 'only the owner of %.% may stop versioning it', v_t.schemaname, v_t.tablename USING ERRCODE = 'TG002';
+    END IF;
+    SELECT string_agg(DISTINCT r.ev_class::regclass::text, ', ') INTO v_dependent
+      FROM pg_depend d JOIN pg_rewrite r ON d.classid = 'pg_rewrite'::regclass AND d.objid = r.oid
+     WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_view AND r.ev_class <> v_view;
+    IF v_dependent IS NOT NULL THEN
+        RAISE EXCEPTION 'views depend on %.%: %', v_t.schemaname, v_t.tablename, v_dependent
+            USING ERRCODE = 'TG202', HINT = 'drop them first and create them again afterwards';
+    END IF;
+    SELECT workingset INTO v_default FROM tgsis.versions WHERE versionid = 0;
+    IF NOT coalesce(p_force, false) THEN
+        EXECUTE format('SELECT string_agg(DISTINCT x.name, '', '') FROM %I.%I v, tgsis.revisions r, tgsis.versions x
+                         WHERE x.versionid = r.versionid AND r.versionid <> 0
+                           AND (r.revision = v.revision OR r.revision = ANY (v.lastrevs))', v_t.schemaname, v_ver)
+           INTO v_dependent;
+        IF v_dependent IS NOT NULL THEN
+            RAISE EXCEPTION 'versions other than DEFAULT changed %.%: %', v_t.schemaname, v_t.tablename, v_dependent
+                USING ERRCODE = 'TG202',
+                      DETAIL = 'Only the rows DEFAULT sees now are kept; those changes would be lost.',
+                      HINT = 'merge or delete those versions first, or pass p_force => true';
+        END IF;
+    END IF;
+
+    EXECUTE format('DROP VIEW %I.%I', v_t.schemaname, v_t.tablename);
+    EXECUTE format('DROP FUNCTION %I.%I()', v_t.schemaname, v_t.tablename || '_ver_write');
+    EXECUTE format('DELETE FROM %I.%I v WHERE NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1))', v_t.schemaname, v_ver)
+      USING v_default;
+    GET DIAGNOSTICS v_removed = ROW_COUNT;
+    EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_t.schemaname, v_ver, v_ver || '_pkey');
+    EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
+    EXECUTE format('ALTER TABLE %I.%I RENAME TO %I', v_t.schemaname, v_ver, v_t.tablename);
+    EXECUTE format('ALTER TABLE %I.%I ADD CONSTRAINT %I PRIMARY KEY (%s)', v_t.schemaname, v_t.tablename, v_t.pkeyname,
+                   (SELECT string_agg(format('%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)));
+    FOREACH v_name IN ARRAY v_t.identity_always LOOP
+        EXECUTE format('ALTER TABLE %I.%I ALTER COLUMN %I SET GENERATED ALWAYS', v_t.schemaname, v_t.tablename, v_name);
+    END LOOP;
+    EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_t.schemaname, v_t.tablename, v_t.tablecomment);
+    DELETE FROM tgsis.versioned_tables WHERE schemaname = v_t.schemaname AND tablename = v_t.tablename;
+    PERFORM tgsis.restore_dropped_constraints();
+    RETURN v_removed;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.disable_versioning_rel(regclass, boolean) IS
+    'the work of tgsis.disable_versioning on a resolved view: make a versioned table plain again with the rows DEFAULT sees (refused while other versions changed it, unless p_force); restores dropped constraints; returns the row versions removed';

@@ -1,0 +1,230 @@
+-- tgsis.enable_versioning_rel(table, objectkeyfield, objectclass, iudorder, shortname): version a table in place.
+-- Called by tgsis.enable_versioning, which resolves the table name in the
+-- caller's search_path; this one runs with a fixed search_path so that the
+-- constraint definitions it records are schema-qualified.
+-- The table's storage becomes <table>_ver (its columns plus revision and
+-- lastrevs, primary key extended by revision) and a view <table> with the
+-- original columns, defaults, comments and grants takes its place, so that
+-- plain SELECT/INSERT/UPDATE/DELETE keep working, in the session's version.
+-- Constraints that cannot hold across versions (foreign keys between
+-- versioned tables, other unique keys) are dropped and recorded so that
+-- disable_versioning can restore them.
+CREATE FUNCTION tgsis.enable_versioning_rel(
+    p_table          regclass,
+    p_objectkeyfield text,
+    p_objectclass    text,
+    p_iudorder       integer DEFAULT 0,
+    p_shortname      text    DEFAULT NULL)
+RETURNS tgsis.versioned_tables
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_rel       regclass := p_table;
+    v_schema    text;
+    v_table     text;
+    v_kind      "char";
+    v_owner     oid;
+    v_ver       text;
+    v_pkey      text;
+    v_keys      text[];
+    v_columns   text[];
+    v_writable  text[];
+    v_dependent text;
+    v_identity  text[];
+    v_name      text;
+    v_con       record;
+    v_col       record;
+    v_acl       record;
+    v_row       tgsis.versioned_tables;
+BEGIN
+    SELECT n.nspname, c.relname, c.relkind, c.relowner INTO v_schema, v_table, v_kind, v_owner
+      FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace WHERE c.oid = v_rel;
+    IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_schema AND tablename = v_table) THEN
+        RAISE EXCEPTION 'table %.% is versioned already', v_schema, v_table USING ERRCODE = 'TG201';
+    END IF;
+    IF v_kind <> 'r' THEN
+        RAISE EXCEPTION '%.% is not an ordinary table: only ordinary tables can be versioned', v_schema, v_table
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('Its kind is %s.', CASE v_kind WHEN 'v' THEN 'a view' WHEN 'm' THEN 'a materialized view'
+                                                              WHEN 'p' THEN 'a partitioned table' WHEN 'f' THEN 'a foreign table'
+                                                              ELSE v_kind::text END);
+    END IF;
+    IF v_schema = 'tgsis' AND v_table NOT IN ('geometry', 'vrtx', 'point', 'segment', 'trgl', 'tetra') THEN
+        RAISE EXCEPTION 'tgsis.% is part of tgsis''s own catalog and cannot be versioned', v_table USING ERRCODE = 'TG100';
+    END IF;
+    IF NOT pg_has_role(current_user, v_owner, 'USAGE') THEN
+        RAISE EXCEPTION 'only the owner of %.% (%) may version it', v_schema, v_table, pg_get_userbyid(v_owner)
+            USING ERRCODE = 'TG002';
+    END IF;
+    v_ver := v_table || '_ver';
+    IF octet_length(v_table || '_ver_write') > 63 THEN
+        RAISE EXCEPTION 'table name % is too long to be versioned', quote_literal(v_table)
+            USING ERRCODE = 'TG101', DETAIL = 'Versioning adds <table>_ver and <table>_ver_write(), which must fit in 63 bytes.';
+    END IF;
+    IF to_regclass(format('%I.%I', v_schema, v_ver)) IS NOT NULL
+       OR to_regprocedure(format('%I.%I()', v_schema, v_table || '_ver_write')) IS NOT NULL THEN
+        RAISE EXCEPTION '%.% or %.%() exists already', v_schema, v_ver, v_schema, v_table || '_ver_write'
+            USING ERRCODE = 'TG201', HINT = 'versioning needs these names for the table''s storage and trigger';
+    END IF;
+    IF p_objectclass IS NULL OR btrim(p_objectclass) = '' OR p_iudorder IS NULL THEN
+        RAISE EXCEPTION 'versioning %.% needs an object class and an iudorder', v_schema, v_table USING ERRCODE = 'TG100';
+    END IF;
+    IF EXISTS (SELECT FROM tgsis.versioned_tables
+                WHERE objectclass = p_objectclass AND shortname = coalesce(p_shortname, v_table)) THEN
+        RAISE EXCEPTION 'object class % has a table with short name % already', quote_literal(p_objectclass),
+                quote_literal(coalesce(p_shortname, v_table))
+            USING ERRCODE = 'TG201', HINT = 'pass another p_shortname';
+    END IF;
+
+    SELECT con.conname, array_agg(a.attname::text ORDER BY k.ord) INTO v_pkey, v_keys
+      FROM pg_constraint con
+      CROSS JOIN LATERAL unnest(con.conkey) WITH ORDINALITY AS k(attnum, ord)
+      JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = k.attnum
+     WHERE con.conrelid = v_rel AND con.contype = 'p'
+     GROUP BY con.conname;
+    IF v_pkey IS NULL THEN
+        RAISE EXCEPTION 'table %.% has no primary key', v_schema, v_table
+            USING ERRCODE = 'TG100', HINT = 'versioning tells the rows of a table apart by its primary key: add one first';
+    END IF;
+    SELECT array_agg(attname::text ORDER BY attnum), array_agg(attname::text ORDER BY attnum) FILTER (WHERE attgenerated = '')
+      INTO v_columns, v_writable
+      FROM pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
+    IF 'revision' = ANY (v_columns) OR 'lastrevs' = ANY (v_columns) THEN
+        RAISE EXCEPTION 'table %.% has a column named revision or lastrevs, which versioning needs', v_schema, v_table
+            USING ERRCODE = 'TG100', HINT = 'rename the column first';
+    END IF;
+    IF p_objectkeyfield IS NULL OR NOT p_objectkeyfield = ANY (v_columns) THEN
+        RAISE EXCEPTION 'table %.% has no column % to hold the object key', v_schema, v_table,
+                coalesce(quote_literal(p_objectkeyfield), 'NULL')
+            USING ERRCODE = 'TG200', DETAIL = format('Its columns: %s.', array_to_string(v_columns, ', '));
+    END IF;
+
+    -- views and rules reading the table would read every row version afterwards
+    SELECT string_agg(DISTINCT r.ev_class::regclass::text, ', ') INTO v_dependent
+      FROM pg_depend d JOIN pg_rewrite r ON d.classid = 'pg_rewrite'::regclass AND d.objid = r.oid
+     WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_rel AND r.ev_class <> v_rel;
+    IF v_dependent IS NOT NULL THEN
+        RAISE EXCEPTION 'views depend on %.%: %', v_schema, v_table, v_dependent
+            USING ERRCODE = 'TG202', HINT = 'drop them, enable versioning, then create them again: they will read the versioned view';
+    END IF;
+    -- foreign keys into the table from plain tables cannot follow it
+    SELECT string_agg(format('%s (%s)', con.conrelid::regclass, con.conname), ', ') INTO v_dependent
+      FROM pg_constraint con
+     WHERE con.confrelid = v_rel AND con.contype = 'f' AND con.conrelid <> v_rel
+       AND NOT EXISTS (SELECT FROM tgsis.versioned_tables t JOIN pg_class c ON c.relname = t.tablename || '_ver'
+                         JOIN pg_namespace n ON n.oid = c.relnamespace AND n.nspname = t.schemaname
+                        WHERE c.oid = con.conrelid);
+    IF v_dependent IS NOT NULL THEN
+        RAISE EXCEPTION 'foreign keys of plain tables refer to %.%: %', v_schema, v_table, v_dependent
+            USING ERRCODE = 'TG202', HINT = 'version those tables too (their keys are then dropped), or drop the constraints';
+    END IF;
+
+    -- what cannot hold across versions: foreign keys to versioned tables (and
+    -- from them into this one), self references, unique keys other than the
+    -- primary key, exclusion constraints
+    FOR v_con IN
+        SELECT con.oid, con.conname, con.conrelid, con.confrelid, pg_get_constraintdef(con.oid) AS def
+          FROM pg_constraint con
+         WHERE (con.conrelid = v_rel AND con.contype IN ('u', 'x'))
+            OR (con.contype = 'f' AND (con.confrelid = v_rel OR (con.conrelid = v_rel AND (
+                    con.confrelid = v_rel OR EXISTS (
+                        SELECT FROM tgsis.versioned_tables t JOIN pg_class c ON c.relname = t.tablename || '_ver'
+                          JOIN pg_namespace n ON n.oid = c.relnamespace AND n.nspname = t.schemaname
+                         WHERE c.oid = con.confrelid)))))
+         ORDER BY con.contype, con.conname
+    LOOP
+        INSERT INTO tgsis.versioning_dropped (schemaname, tablename, name, definition, refschema, reftable, dropped_for)
+        -- a constraint of another versioned table is recorded under its plain name
+        SELECT n.nspname, coalesce(t.tablename, c.relname), v_con.conname, v_con.def, rn.nspname, rc.relname,
+               format('%I.%I', v_schema, v_table)
+          FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace
+          LEFT JOIN tgsis.versioned_tables t ON t.schemaname = n.nspname AND t.tablename || '_ver' = c.relname
+          LEFT JOIN pg_class rc ON rc.oid = v_con.confrelid LEFT JOIN pg_namespace rn ON rn.oid = rc.relnamespace
+         WHERE c.oid = v_con.conrelid;
+        EXECUTE format('ALTER TABLE %s DROP CONSTRAINT %I', v_con.conrelid::regclass, v_con.conname);
+    END LOOP;
+    FOR v_con IN
+        SELECT c.relname::text AS idx, pg_get_indexdef(i.indexrelid) AS def
+          FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid
+         WHERE i.indrelid = v_rel AND i.indisunique
+           AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conindid = i.indexrelid)
+    LOOP
+        INSERT INTO tgsis.versioning_dropped (schemaname, tablename, name, definition, is_index, dropped_for)
+        VALUES (v_schema, v_table, v_con.idx, v_con.def, true, format('%I.%I', v_schema, v_table));
+        EXECUTE format('DROP INDEX %I.%I', v_schema, v_con.idx);
+    END LOOP;
+    SELECT coalesce(array_agg(attname::text ORDER BY attnum), '{}') INTO v_identity
+      FROM pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped AND attidentity = 'a';
+
+    -- storage
+    EXECUTE format('ALTER TABLE %I.%I RENAME TO %I', v_schema, v_table, v_ver);
+    FOREACH v_name IN ARRAY v_identity LOOP
+        EXECUTE format('ALTER TABLE %I.%I ALTER COLUMN %I SET GENERATED BY DEFAULT', v_schema, v_ver, v_name);
+    END LOOP;
+    EXECUTE format('ALTER TABLE %I.%I ADD COLUMN revision integer NOT NULL DEFAULT 0, '
+                   'ADD COLUMN lastrevs integer[] NOT NULL DEFAULT ''{}''', v_schema, v_ver);
+    -- existing rows are revision 0: DEFAULT's first revision, in every version's set
+    EXECUTE format('ALTER TABLE %I.%I ALTER COLUMN revision DROP DEFAULT', v_schema, v_ver);
+    EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_schema, v_ver, v_pkey);
+    EXECUTE format('ALTER TABLE %I.%I ADD CONSTRAINT %I PRIMARY KEY (%s, revision)', v_schema, v_ver, v_ver || '_pkey',
+                   (SELECT string_agg(format('%I', k), ', ' ORDER BY o) FROM unnest(v_keys) WITH ORDINALITY AS u(k, o)));
+    IF v_keys[1] <> p_objectkeyfield THEN
+        EXECUTE format('CREATE INDEX %I ON %I.%I (%I, revision)', v_ver || '_object_idx', v_schema, v_ver, p_objectkeyfield);
+    END IF;
+    EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_schema, v_ver,
+                   format('row versions of %s.%s (tgsis versioning): read and write it through the view %s.%s',
+                          v_schema, v_table, v_schema, v_table));
+    EXECUTE format('COMMENT ON COLUMN %I.%I.revision IS %L', v_schema, v_ver, 'revision in which this row version was written');
+    EXECUTE format('COMMENT ON COLUMN %I.%I.lastrevs IS %L', v_schema, v_ver,
+                   'revisions in which this row version stopped being current (updated or deleted there); empty while live');
+
+    -- the view in the table's place, with its defaults, comments, grants and owner
+    EXECUTE tgsis.versioned_view_source(v_schema, v_table, v_columns);
+    FOR v_col IN
+        SELECT a.attname,
+               CASE WHEN a.attidentity <> '' THEN format('nextval(%L::regclass)', pg_get_serial_sequence(v_rel::text, a.attname))
+                    ELSE pg_get_expr(d.adbin, d.adrelid) END AS expr,
+               col_description(v_rel, a.attnum) AS note
+          FROM pg_attribute a LEFT JOIN pg_attrdef d ON d.adrelid = a.attrelid AND d.adnum = a.attnum
+         WHERE a.attrelid = v_rel AND a.attnum > 0 AND NOT a.attisdropped AND a.attname::text = ANY (v_columns)
+    LOOP
+        IF v_col.expr IS NOT NULL AND v_col.attname::text = ANY (v_writable) THEN
+            -- a deparsed default from the catalog: SQL text, not a value to quote
+            EXECUTE format('ALTER VIEW %I.%I ALTER COLUMN %I SET DEFAULT %s', v_schema, v_table, v_col.attname, v_col.expr);
+        END IF;
+        IF v_col.note IS NOT NULL THEN
+            EXECUTE format('COMMENT ON COLUMN %I.%I.%I IS %L', v_schema, v_table, v_col.attname, v_col.note);
+        END IF;
+    END LOOP;
+    EXECUTE format('COMMENT ON VIEW %I.%I IS %L', v_schema, v_table,
+                   coalesce(obj_description(v_rel, 'pg_class') || ' ', '')
+                   || format('(versioned by tgsis: rows of the session''s version; storage %s)', v_ver));
+    FOR v_acl IN
+        SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+         WHERE c.oid = v_rel AND a.grantee <> c.relowner
+    LOOP
+        EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, v_schema, v_table,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+    END LOOP;
+    EXECUTE tgsis.versioning_trigger_source(v_schema, v_table, v_keys, v_writable, v_pkey);
+    EXECUTE format('COMMENT ON FUNCTION %I.%I() IS %L', v_schema, v_table || '_ver_write',
+                   format('tgsis versioning: INSTEAD OF trigger routing writes on %s.%s into %s', v_schema, v_table, v_ver));
+    EXECUTE format('CREATE TRIGGER %I INSTEAD OF INSERT OR UPDATE OR DELETE ON %I.%I FOR EACH ROW EXECUTE FUNCTION %I.%I()',
+                   'tgsis_versioning', v_schema, v_table, v_schema, v_table || '_ver_write');
+    EXECUTE format('ALTER VIEW %I.%I OWNER TO %I', v_schema, v_table, pg_get_userbyid(v_owner));
+    EXECUTE format('ALTER FUNCTION %I.%I() OWNER TO %I', v_schema, v_table || '_ver_write', pg_get_userbyid(v_owner));
+    EXECUTE format('REVOKE ALL ON FUNCTION %I.%I() FROM PUBLIC', v_schema, v_table || '_ver_write');
+
+    INSERT INTO tgsis.versioned_tables (schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder,
+                                        keycolumns, pkeyname, tablecomment, identity_always)
+    VALUES (v_schema, v_table, coalesce(p_shortname, v_table), p_objectkeyfield, p_objectclass, p_iudorder,
+            v_keys, v_pkey, obj_description(v_rel, 'pg_class'), v_identity)
+    RETURNING * INTO v_row;
+    RETURN v_row;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.enable_versioning_rel(regclass, text, text, integer, text) IS
+    'the work of tgsis.enable_versioning on a resolved table: version a table: storage renamed <table>_ver (+ revision, lastrevs), a view <table> with INSTEAD OF triggers takes its place; registered in tgsis.versioned_tables';

@@ -1,0 +1,42 @@
+-- tgsis.rows_at(NULL::table, version, revision): the rows of a versioned table as a version (at a revision) sees them.
+-- Does not change the session's version. Usage:
+--   SELECT * FROM tgsis.rows_at(NULL::public.wells, 'v1');
+--   SELECT * FROM tgsis.rows_at(NULL::public.wells, 'DEFAULT', 12);
+CREATE FUNCTION tgsis.rows_at(p_table anyelement, p_version text, p_revision integer DEFAULT NULL)
+RETURNS SETOF anyelement
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_t    tgsis.versioned_tables;
+    v_rel  oid := (SELECT typrelid FROM pg_catalog.pg_type WHERE oid = pg_typeof(p_table));
+    v_set  integer[];
+    v_cols text;
+BEGIN
+    SELECT t.* INTO v_t
+      FROM tgsis.versioned_tables t
+      JOIN pg_catalog.pg_class c ON c.relname = t.tablename
+      JOIN pg_catalog.pg_namespace n ON n.oid = c.relnamespace AND n.nspname = t.schemaname
+     WHERE c.oid = v_rel;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION '% is not a versioned table', pg_typeof(p_table)
+            USING ERRCODE = 'TG200', HINT = 'call it as tgsis.rows_at(NULL::schema.table, version[, revision])';
+    END IF;
+    SELECT workingset INTO v_set FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    IF p_revision IS NOT NULL THEN
+        IF NOT p_revision = ANY (v_set) THEN
+            RAISE EXCEPTION 'revision % is not in the history of version %', p_revision, quote_literal(p_version)
+                USING ERRCODE = 'TG200', DETAIL = format('It can look at revisions %s.', array_to_string(v_set, ', '));
+        END IF;
+        v_set := ARRAY(SELECT r FROM unnest(v_set) AS r WHERE r <= p_revision ORDER BY r);
+    END IF;
+    SELECT string_agg(format('v.%I', attname), ', ' ORDER BY attnum) INTO v_cols
+      FROM pg_catalog.pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
+    RETURN QUERY EXECUTE format('SELECT %s FROM %I.%I v WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)',
+                                v_cols, v_t.schemaname, v_t.tablename || '_ver')
+                 USING v_set;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.rows_at(anyelement, text, integer) IS
+    'rows of a versioned table as version p_version sees them (at p_revision, default its working revision), without changing the session: tgsis.rows_at(NULL::schema.table, ''v1'')';
