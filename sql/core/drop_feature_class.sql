@@ -1,4 +1,6 @@
 -- tgsis.drop_feature_class(name, force): remove a feature class; with force also its features and their geometries.
+-- Table definitions are not versioned: a class is dropped in every version,
+-- so its features' rows go from the storage of every version too.
 CREATE FUNCTION tgsis.drop_feature_class(p_name text, p_force boolean DEFAULT false)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -7,32 +9,41 @@ DECLARE
     v_class tgsis.catalog;
     v_count bigint;
     v_ids   bigint[];
+    v_table text;
 BEGIN
     SELECT * INTO v_class FROM tgsis.catalog WHERE classname = p_name FOR UPDATE;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'feature class % does not exist', coalesce(quote_literal(p_name), 'NULL')
             USING ERRCODE = 'TG200', HINT = 'SELECT classname FROM tgsis.catalog lists the classes';
     END IF;
-    EXECUTE format('SELECT count(*), array_agg(_geoid) FROM %I.%I', v_class.schemaname, v_class.featuretable)
+    EXECUTE format('SELECT count(DISTINCT _geoid), array_agg(DISTINCT _geoid) FROM %s',
+                   tgsis.storage_table(v_class.schemaname, v_class.featuretable))
        INTO v_count, v_ids;
     IF v_count > 0 AND NOT p_force THEN
         RAISE EXCEPTION 'feature class % still has % feature(s)', p_name, v_count
-            USING ERRCODE = 'TG202', HINT = 'delete them first, or drop with force => true to delete them with their geometries';
+            USING ERRCODE = 'TG202',
+                  DETAIL = 'Features stored in any version count.',
+                  HINT = 'delete them first, or drop with force => true to delete them with their geometries';
     END IF;
     IF v_count > 0 THEN
-        DELETE FROM tgsis.vrtx WHERE geoid = ANY (v_ids);
-        IF v_class.geotype <> 'GEOMETRYCOLLECTION' THEN
-            EXECUTE format('DELETE FROM tgsis.%I WHERE geoid = ANY ($1)', tgsis.simplex_table(v_class.geotype)) USING v_ids;
-        END IF;
+        PERFORM tgsis.delete_stored_geometries(v_ids);
     END IF;
     EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_class.viewname);
-    EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_class.cellprotable);
-    EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_class.featuretable);
-    DELETE FROM tgsis.geometry WHERE geoid = ANY (v_ids);
+    FOREACH v_table IN ARRAY ARRAY[v_class.cellprotable, v_class.featuretable] LOOP
+        IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table) THEN
+            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
+            EXECUTE format('DROP FUNCTION %I.%I()', v_class.schemaname, v_table || '_ver_write');
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_ver');
+            DELETE FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table;
+            DELETE FROM tgsis.versioning_dropped WHERE schemaname = v_class.schemaname AND tablename = v_table;
+        ELSE
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table);
+        END IF;
+    END LOOP;
     DELETE FROM tgsis.catalog WHERE classname = p_name;
     RETURN v_count;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.drop_feature_class(text, boolean) IS
-    'drop a feature class and its tables; refuses (TG202) while features exist unless force, which deletes them and their geometries; returns the number of features deleted';
+    'drop a feature class and its tables (in every version); refuses (TG202) while features exist unless force, which deletes them and their geometries; returns the number of features deleted';

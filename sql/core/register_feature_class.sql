@@ -69,8 +69,6 @@ BEGIN
     -- no foreign key to the feature table: a per-row check would dominate bulk uploads
     EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, _idx bigint NOT NULL%s, PRIMARY KEY (_geoid, _idx))',
                    p_schema, v_cellpros, v_ccols);
-    EXECUTE format('CREATE VIEW %I.%I AS SELECT g.geoname, f.*, g.geotype, g.nvrtx, g.ncell, g.bbox, g.created_at
-                      FROM %I.%I f JOIN tgsis.geometry g ON g.geoid = f._geoid', p_schema, v_view, p_schema, p_name);
 
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, p_name,
                    format('tgsis feature class %s: one row per %s feature (_geoid = tgsis.geometry.geoid)', p_name, v_geotype));
@@ -82,16 +80,19 @@ BEGIN
     EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_cellpros, 'the feature (_geoid of ' || p_name || ')');
     EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
                    CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
-    EXECUTE format('COMMENT ON VIEW %I.%I IS %L', p_schema, v_view,
-                   format('tgsis feature class %s: features with their name, geotype, counts and bounding box', p_name));
 
-    EXECUTE format('GRANT SELECT ON %I.%I, %I.%I, %I.%I TO tgsis_reader', p_schema, p_name, p_schema, v_cellpros, p_schema, v_view);
+    EXECUTE format('GRANT SELECT ON %I.%I, %I.%I TO tgsis_reader', p_schema, p_name, p_schema, v_cellpros);
     EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I, %I.%I TO tgsis_editor', p_schema, p_name, p_schema, v_cellpros);
 
     INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, proalignment, srs,
                                feature_properties, cell_properties, description)
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_align, p_srs, v_fprops, v_cprops, p_description)
     RETURNING * INTO v_row;
+    -- once model 1 is versioned, every new class is versioned with it
+    IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
+        PERFORM tgsis.version_class_tables(p_name);
+    END IF;
+    PERFORM tgsis.create_class_view(p_name);
     RETURN v_row;
 END
 $$;

@@ -7,12 +7,12 @@ STABLE
 SET search_path FROM CURRENT
 AS $$
 DECLARE
-    v_geo   tgsis.geometry;
+    v_geo   record;
     v_table text;
     v_k     int;
     v_i     int;
 BEGIN
-    SELECT * INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
+    SELECT geotype, geoids, nvrtx, bbox INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % does not exist', p_geoid USING ERRCODE = 'TG200';
     END IF;

@@ -1,4 +1,6 @@
 -- tgsis.delete_geometry(geoid): remove a geometry with its vertices, simplices, feature row and cell properties.
+-- Works in the session's version: on versioned tables the rows are closed
+-- set-based (tgsis.delete_object_rows), not one trigger call per vertex.
 CREATE FUNCTION tgsis.delete_geometry(p_geoid bigint)
 RETURNS boolean
 LANGUAGE plpgsql
@@ -11,18 +13,20 @@ BEGIN
     IF NOT FOUND THEN
         RETURN false;
     END IF;
-    -- cell properties have no foreign key (bulk upload speed): remove them by class
-    FOR v_class IN SELECT schemaname, cellprotable FROM tgsis.catalog WHERE geotype = v_geotype LOOP
-        EXECUTE format('DELETE FROM %I.%I WHERE _geoid = $1', v_class.schemaname, v_class.cellprotable) USING p_geoid;
+    -- cell properties and feature rows: the feature table's foreign key is
+    -- gone once model 1 is versioned, so delete them explicitly
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog WHERE geotype = v_geotype LOOP
+        PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', p_geoid);
+        PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.featuretable, '_geoid', p_geoid);
     END LOOP;
-    DELETE FROM tgsis.vrtx WHERE geoid = p_geoid;
+    PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', p_geoid);
     IF v_geotype <> 'GEOMETRYCOLLECTION' THEN
-        EXECUTE format('DELETE FROM tgsis.%I WHERE geoid = $1', tgsis.simplex_table(v_geotype)) USING p_geoid;
+        PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geotype), 'geoid', p_geoid);
     END IF;
-    DELETE FROM tgsis.geometry WHERE geoid = p_geoid;  -- the feature row goes with it (ON DELETE CASCADE)
+    PERFORM tgsis.delete_object_rows('tgsis', 'geometry', 'geoid', p_geoid);
     RETURN true;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.delete_geometry(bigint) IS
-    'delete a geometry, its vertices, simplices, feature row and cell properties; false if it did not exist';
+    'delete a geometry, its vertices, simplices, feature row and cell properties in the session''s version; false if it did not exist';

@@ -1,47 +1,44 @@
 -- tgsis.refresh_geometry(geoid): recompute a geometry's bounding box and counts from its rows.
 -- The client's write path sets them itself; this is for edits made with plain SQL.
+-- Returns the new values (not the table's row type: once model 1 is
+-- versioned, tgsis.geometry is a view and its storage type has more columns).
 CREATE FUNCTION tgsis.refresh_geometry(p_geoid bigint)
-RETURNS tgsis.geometry
+RETURNS TABLE (geoid bigint, bbox cube, nvrtx bigint, ncell bigint)
 LANGUAGE plpgsql
 SET search_path FROM CURRENT
 AS $$
+#variable_conflict use_column
 DECLARE
     v_geotype text;
+    v_bbox    cube;
+    v_nvrtx   bigint;
     v_ncell   bigint;
-    v_row     tgsis.geometry;
 BEGIN
-    SELECT geotype INTO v_geotype FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
+    SELECT g.geotype INTO v_geotype FROM tgsis.geometry g WHERE g.geoid = p_geoid FOR UPDATE;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % does not exist', p_geoid
             USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.geometry lists the stored geometries';
     END IF;
 
     IF v_geotype = 'GEOMETRYCOLLECTION' THEN
-        UPDATE tgsis.geometry g
-           SET bbox = m.bbox, nvrtx = m.nvrtx, ncell = m.ncell
-          FROM (SELECT cube(ARRAY[min(cube_ll_coord(bbox, 1)), min(cube_ll_coord(bbox, 2)), min(cube_ll_coord(bbox, 3))],
-                            ARRAY[max(cube_ur_coord(bbox, 1)), max(cube_ur_coord(bbox, 2)), max(cube_ur_coord(bbox, 3))]) AS bbox,
-                       coalesce(sum(nvrtx), 0) AS nvrtx, coalesce(sum(ncell), 0) AS ncell
-                  FROM tgsis.geometry
-                 WHERE geoid = ANY ((SELECT geoids FROM tgsis.geometry WHERE geoid = p_geoid)::bigint[])) AS m
-         WHERE g.geoid = p_geoid
-        RETURNING g.* INTO v_row;
-        RETURN v_row;
+        SELECT cube(ARRAY[min(cube_ll_coord(m.bbox, 1)), min(cube_ll_coord(m.bbox, 2)), min(cube_ll_coord(m.bbox, 3))],
+                    ARRAY[max(cube_ur_coord(m.bbox, 1)), max(cube_ur_coord(m.bbox, 2)), max(cube_ur_coord(m.bbox, 3))]),
+               coalesce(sum(m.nvrtx), 0), coalesce(sum(m.ncell), 0)
+          INTO v_bbox, v_nvrtx, v_ncell
+          FROM tgsis.geometry m
+         WHERE m.geoid = ANY ((SELECT c.geoids FROM tgsis.geometry c WHERE c.geoid = p_geoid)::bigint[]);
+    ELSE
+        EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', tgsis.simplex_table(v_geotype))
+           INTO v_ncell USING p_geoid;
+        SELECT count(*),
+               CASE WHEN count(*) > 0 THEN cube(ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]) END
+          INTO v_nvrtx, v_bbox
+          FROM tgsis.vrtx v WHERE v.geoid = p_geoid;
     END IF;
-
-    EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', tgsis.simplex_table(v_geotype))
-       INTO v_ncell USING p_geoid;
-    UPDATE tgsis.geometry g
-       SET bbox = v.bbox, nvrtx = v.n, ncell = v_ncell
-      FROM (SELECT count(*) AS n,
-                   CASE WHEN count(*) > 0
-                        THEN cube(ARRAY[min(x), min(y), min(z)], ARRAY[max(x), max(y), max(z)]) END AS bbox
-              FROM tgsis.vrtx WHERE geoid = p_geoid) AS v
-     WHERE g.geoid = p_geoid
-    RETURNING g.* INTO v_row;
-    RETURN v_row;
+    UPDATE tgsis.geometry g SET bbox = v_bbox, nvrtx = v_nvrtx, ncell = v_ncell WHERE g.geoid = p_geoid;
+    RETURN QUERY SELECT p_geoid, v_bbox, v_nvrtx, v_ncell;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.refresh_geometry(bigint) IS
-    'recompute bbox, nvrtx and ncell of a geometry from its vertex and simplex rows (after edits with plain SQL); returns the row';
+    'recompute bbox, nvrtx and ncell of a geometry from its vertex and simplex rows (after edits with plain SQL); returns them';

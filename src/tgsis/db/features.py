@@ -276,6 +276,35 @@ def _copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload:
         copy.write(payload)
 
 
+@dataclass(frozen=True)
+class _Storage:
+    """Where bulk rows go: the tables themselves, or for versioned tables their
+    ``_ver`` storage with the session's working revision (no trigger per row)."""
+
+    versioned: frozenset[tuple[str, str]]
+    revision: int | None
+
+    @classmethod
+    def of(cls, conn: Conn) -> _Storage:
+        versioned = frozenset((r[0], r[1]) for r in conn.execute(
+            "SELECT schemaname, tablename FROM tgsis.versioned_tables").fetchall())
+        if not versioned:
+            return cls(versioned, None)
+        row = conn.execute("SELECT revision FROM tgsis.write_revision()").fetchone()  # TG301 when read-only
+        assert row is not None
+        return cls(versioned, int(row[0]))
+
+    def copy(self, conn: Conn, schema: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> None:
+        """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision."""
+        count = len(np.asarray(columns[0][1])) if columns else 0
+        if (schema, table) in self.versioned:
+            assert self.revision is not None
+            table += "_ver"
+            columns = [*columns, ("revision", np.full(count, self.revision, dtype=np.int32), "int4")]
+        _copy_in(conn, sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table)),
+                 [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
+
+
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
@@ -322,18 +351,18 @@ def insert_feature(
         assert row is not None
         geoid = int(row[0])
         geoids = np.full(max(n, m), geoid, dtype=np.int64)
-        _copy_in(conn, sql.SQL("tgsis.vrtx"), ("geoid", "vrtxid", "x", "y", "z"), encode_rows([
-            (geoids[:n], "int8"), (np.arange(n), "int8"),
-            (mesh.vertices[:, 0], "float8"), (mesh.vertices[:, 1], "float8"), (mesh.vertices[:, 2], "float8")]))
-        vertex_columns = [f"vrtxid{i + 1}" for i in range(mesh.cell_size)]
-        _copy_in(conn, sql.SQL("tgsis.{}").format(sql.Identifier(table)), ("geoid", key, *vertex_columns),
-                 encode_rows([(geoids[:m], "int8"), (np.arange(m), "int8"),
-                              *((mesh.cells[:, i], "int8") for i in range(mesh.cell_size))]))
+        storage = _Storage.of(conn)
+        storage.copy(conn, "tgsis", "vrtx", [
+            ("geoid", geoids[:n], "int8"), ("vrtxid", np.arange(n), "int8"),
+            ("x", mesh.vertices[:, 0], "float8"), ("y", mesh.vertices[:, 1], "float8"), ("z", mesh.vertices[:, 2], "float8")])
+        storage.copy(conn, "tgsis", table, [
+            ("geoid", geoids[:m], "int8"), (key, np.arange(m), "int8"),
+            *((f"vrtxid{i + 1}", mesh.cells[:, i], "int8") for i in range(mesh.cell_size))])
         if fc.cell_properties:
             count = n if fc.alignment == "VERTEX" else m
-            _copy_in(conn, fc._table(fc.cellprotable), ("_geoid", "_idx", *cell_values),
-                     encode_rows([(geoids[:count], "int8"), (np.arange(count), "int8"),
-                                  *((cell_values[p.name], SQL_TYPES[p.type]) for p in fc.cell_properties)]))
+            storage.copy(conn, fc.schema, fc.cellprotable, [
+                ("_geoid", geoids[:count], "int8"), ("_idx", np.arange(count), "int8"),
+                *((p.name, cell_values[p.name], SQL_TYPES[p.type]) for p in fc.cell_properties)])
         columns = ["_geoid", *feature_values]
         conn.execute(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(

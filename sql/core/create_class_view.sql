@@ -1,0 +1,25 @@
+-- tgsis.create_class_view(class): (re)create the view <class>_v joining a class's features with their geometry rows.
+CREATE FUNCTION tgsis.create_class_view(p_class text)
+RETURNS void
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_class tgsis.catalog;
+BEGIN
+    SELECT * INTO v_class FROM tgsis.catalog WHERE classname = p_class;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION 'feature class % does not exist', coalesce(quote_literal(p_class), 'NULL') USING ERRCODE = 'TG200';
+    END IF;
+    EXECUTE format('DROP VIEW IF EXISTS %I.%I', v_class.schemaname, v_class.viewname);
+    EXECUTE format('CREATE VIEW %I.%I AS SELECT g.geoname, f.*, g.geotype, g.nvrtx, g.ncell, g.bbox, g.created_at
+                      FROM %I.%I f JOIN tgsis.geometry g ON g.geoid = f._geoid',
+                   v_class.schemaname, v_class.viewname, v_class.schemaname, v_class.featuretable);
+    EXECUTE format('COMMENT ON VIEW %I.%I IS %L', v_class.schemaname, v_class.viewname,
+                   format('tgsis feature class %s: features with their name, geotype, counts and bounding box', p_class));
+    EXECUTE format('GRANT SELECT ON %I.%I TO tgsis_reader', v_class.schemaname, v_class.viewname);
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.create_class_view(text) IS
+    '(re)create <class>_v: the class''s features joined with tgsis.geometry (name, geotype, counts, bbox), for psql users';

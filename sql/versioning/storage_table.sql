@@ -1,0 +1,14 @@
+-- tgsis.storage_table(schema, table): where a table's rows are physically stored: <table>_ver when versioned, else the table.
+CREATE FUNCTION tgsis.storage_table(p_schema text, p_table text)
+RETURNS text
+LANGUAGE sql
+STABLE
+PARALLEL SAFE
+AS $$
+    SELECT format('%I.%I', p_schema,
+                  CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = p_schema AND t.tablename = p_table)
+                       THEN p_table || '_ver' ELSE p_table END)
+$$;
+
+COMMENT ON FUNCTION tgsis.storage_table(text, text) IS
+    'quoted schema.name of the relation that stores a table''s rows: <table>_ver when the table is versioned, else the table itself';

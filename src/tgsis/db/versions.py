@@ -1,0 +1,313 @@
+"""Long transactions: versions, revisions and versioned tables (``sql/versioning``).
+
+A version is a named logical copy of the database; versions form a tree
+rooted at ``DEFAULT``. A session works in one version (and may look at an
+older revision of it, read-only); plain SQL on a versioned table then reads
+and writes that version's rows. These functions are thin, typed wrappers of
+the SQL API, so Python and ``psql`` users get the same answers.
+
+The session's version lives in the settings ``tgsis.version`` and
+``tgsis.revision``. Like every setting changed in a transaction, a change
+made by :func:`goto_version` is undone if that transaction rolls back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+import psycopg
+
+from tgsis.errors import reraise
+
+__all__ = [
+    "Version",
+    "VersionedTable",
+    "create_version",
+    "delete_version",
+    "save_revision",
+    "goto_version",
+    "goto_revision",
+    "working_version",
+    "working_revision",
+    "viewing_revision",
+    "revisions",
+    "list_versions",
+    "format_tree",
+    "in_version",
+    "at_revision",
+    "enable_versioning",
+    "disable_versioning",
+    "versioned_tables",
+    "enable_feature_versioning",
+    "disable_feature_versioning",
+]
+
+Conn = psycopg.Connection[Any]
+
+
+@dataclass(frozen=True)
+class Version:
+    """A row of ``tgsis.version_tree``.
+
+    Attributes
+    ----------
+    name : str
+    parent : str or None
+        None for DEFAULT.
+    depth : int
+        Distance from DEFAULT.
+    initrevision : int or None
+        The parent's working revision when the version was created.
+    workingrevision : int
+        The revision its changes are labelled with.
+    revisions : tuple of int
+        Its own revisions, ascending.
+    saved : dict of str to int
+        Saved (frozen) revisions by name.
+    owner : str
+    created_at : datetime
+    description : str or None
+    """
+
+    name: str
+    parent: str | None
+    depth: int
+    initrevision: int | None
+    workingrevision: int
+    revisions: tuple[int, ...]
+    saved: dict[str, int]
+    owner: str
+    created_at: datetime
+    description: str | None
+
+
+@dataclass(frozen=True)
+class VersionedTable:
+    """A row of ``tgsis.versioned_tables``."""
+
+    schema: str
+    table: str
+    shortname: str
+    objectkeyfield: str
+    objectclass: str
+    iudorder: int
+    keycolumns: tuple[str, ...]
+
+
+def _scalar(conn: Conn, query: str, params: Sequence[Any] = ()) -> Any:
+    with reraise():
+        row = conn.execute(query, params).fetchone()
+    assert row is not None
+    return row[0]
+
+
+def _run_committed(conn: Conn, query: str, params: Sequence[Any] = ()) -> Any:
+    """Run a statement in its own transaction when none is open, so that it sticks."""
+    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE and not conn.autocommit:
+        with reraise(), conn.transaction():
+            return _scalar(conn, query, params)
+    return _scalar(conn, query, params)
+
+
+# --------------------------------------------------------------------------- versions and revisions
+
+
+def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, description: str | None = None) -> int:
+    """Create a child version of ``parent``; return the child's working revision.
+
+    Raises
+    ------
+    InvalidNameError, NotFoundError, AlreadyExistsError
+    """
+    return int(_run_committed(conn, "SELECT tgsis.create_version(%s, %s, %s)", (name, parent, description)))
+
+
+def delete_version(conn: Conn, name: str) -> int:
+    """Delete a version without children, its revisions and row versions; return the rows removed.
+
+    Raises
+    ------
+    NotFoundError, InUseError (it has children), InvalidInputError (DEFAULT)
+    """
+    return int(_run_committed(conn, "SELECT tgsis.delete_version(%s)", (name,)))
+
+
+def save_revision(conn: Conn, name: str) -> int:
+    """Freeze the working revision of the session's version under ``name``; return its number.
+
+    Raises
+    ------
+    ReadOnlyRevisionError
+        The session views an older revision.
+    """
+    return int(_run_committed(conn, "SELECT tgsis.save_revision(%s)", (name,)))
+
+
+def goto_version(conn: Conn, name: str, *, local: bool = False) -> None:
+    """Work in version ``name`` (``local``: only until the current transaction ends)."""
+    _run_committed(conn, "SELECT tgsis.goto_version(%s, %s)", (name, local))
+
+
+def goto_revision(conn: Conn, version: str, revision: int, *, local: bool = False) -> None:
+    """Look at ``revision`` of ``version``'s history, read-only, until :func:`goto_version`."""
+    _run_committed(conn, "SELECT tgsis.goto_revision(%s, %s, %s)", (version, revision, local))
+
+
+def working_version(conn: Conn) -> str:
+    """Name of the session's working version."""
+    return str(_scalar(conn, "SELECT tgsis.get_working_version()"))
+
+
+def working_revision(conn: Conn) -> int:
+    """Working revision of the session's working version."""
+    return int(_scalar(conn, "SELECT tgsis.get_working_revision()"))
+
+
+def viewing_revision(conn: Conn) -> int | None:
+    """The older revision the session looks at, or None."""
+    value = _scalar(conn, "SELECT tgsis.get_viewing_revision()")
+    return None if value is None else int(value)
+
+
+def revisions(conn: Conn, viewing: bool = True) -> list[int]:
+    """The session's viewing (``True``) or working (``False``) revision set, ascending."""
+    return [int(r) for r in _scalar(conn, "SELECT tgsis.get_revisions(%s)", (viewing,))]
+
+
+def list_versions(conn: Conn) -> list[Version]:
+    """All versions, depth-first from DEFAULT."""
+    with reraise():
+        rows = conn.execute(
+            "SELECT name, parent, depth, initrevision, workingrevision, revisions, saved, owner, created_at, "
+            "description FROM tgsis.version_tree").fetchall()
+    return [Version(r[0], r[1], int(r[2]), r[3], int(r[4]), tuple(r[5] or ()),
+                    dict(json.loads(r[6]) if isinstance(r[6], str) else r[6]), r[7], r[8], r[9]) for r in rows]
+
+
+def format_tree(versions: Sequence[Version]) -> str:
+    """The version tree as indented text, one line per version with its revisions.
+
+    Parameters
+    ----------
+    versions : sequence of Version
+        In depth-first order, as :func:`list_versions` returns them.
+    """
+    lines = []
+    for v in versions:
+        saved = {rev: name for name, rev in v.saved.items()}
+        revs = ", ".join(f"{r} ({saved[r]})" if r in saved else str(r) for r in v.revisions)
+        base = "" if v.initrevision is None else f" from {v.parent}@{v.initrevision}"
+        lines.append(f"{'    ' * v.depth}{v.name}{base}: revisions {revs}; working {v.workingrevision}")
+    return "\n".join(lines)
+
+
+@contextlib.contextmanager
+def _restoring_settings(conn: Conn, local: bool) -> Iterator[None]:
+    if local and conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
+        with conn.transaction():  # SET LOCAL values vanish when this transaction ends
+            yield
+        return
+    with reraise():
+        row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
+                           ).fetchone()
+    assert row is not None
+    try:
+        yield
+    finally:
+        if conn.info.transaction_status == psycopg.pq.TransactionStatus.INERROR:
+            conn.rollback()  # the block failed; nothing of it can be kept, but the settings can be put back
+        _run_committed(conn, "SELECT set_config('tgsis.version', coalesce(%s, ''), %s), "
+                             "set_config('tgsis.revision', coalesce(%s, ''), %s)", (row[0], local, row[1], local))
+
+
+@contextlib.contextmanager
+def in_version(conn: Conn, name: str, *, local: bool = False) -> Iterator[Conn]:
+    """Work in version ``name`` inside the block; the previous version is restored after it.
+
+    Parameters
+    ----------
+    local : bool
+        Run the block as one transaction with the version set only for it
+        (``SET LOCAL``): the form to use behind a pooler in transaction mode.
+
+    Examples
+    --------
+    >>> with tgsis.in_version(conn, "v1"):                  # doctest: +SKIP
+    ...     conn.execute("UPDATE wells SET depth = 2 WHERE id = 1")
+    """
+    with _restoring_settings(conn, local):
+        goto_version(conn, name, local=local)
+        yield conn
+
+
+@contextlib.contextmanager
+def at_revision(conn: Conn, revision: int, version: str | None = None, *, local: bool = False) -> Iterator[Conn]:
+    """Look at ``revision`` of ``version`` (default: the working version) inside the block, read-only."""
+    with _restoring_settings(conn, local):
+        goto_revision(conn, version if version is not None else working_version(conn), revision, local=local)
+        yield conn
+
+
+# --------------------------------------------------------------------------- versioned tables
+
+
+def _table_from_row(row: Sequence[Any]) -> VersionedTable:
+    return VersionedTable(row[0], row[1], row[2], row[3], row[4], int(row[5]), tuple(row[6]))
+
+
+_TABLE_COLUMNS = "schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder, keycolumns"
+
+
+def enable_versioning(conn: Conn, table: str, objectkeyfield: str, objectclass: str, iudorder: int = 0,
+                      shortname: str | None = None) -> VersionedTable:
+    """Version a table in place (``tgsis.enable_versioning``); applications keep using its name.
+
+    Parameters
+    ----------
+    table : str
+        ``name`` or ``schema.name`` as SQL would spell it.
+    objectkeyfield : str
+        Column holding the key of the object a row belongs to.
+    objectclass : str
+        Object class: the tables that together store one kind of object.
+    iudorder : int
+        Order of the table within its class when changes are merged.
+    shortname : str, optional
+        Name in conflict reports (default: the table name).
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute(f"SELECT {_TABLE_COLUMNS} FROM tgsis.enable_versioning(%s, %s, %s, %s, %s)",
+                           (table, objectkeyfield, objectclass, iudorder, shortname)).fetchone()
+    assert row is not None
+    return _table_from_row(row)
+
+
+def disable_versioning(conn: Conn, table: str, *, force: bool = False) -> int:
+    """Make a versioned table plain again with DEFAULT's rows; return the row versions removed."""
+    with reraise(), conn.transaction():
+        return int(_scalar(conn, "SELECT tgsis.disable_versioning(%s, %s)", (table, force)))
+
+
+def versioned_tables(conn: Conn) -> list[VersionedTable]:
+    """The versioned tables, by object class and iudorder."""
+    with reraise():
+        rows = conn.execute(f"SELECT {_TABLE_COLUMNS} FROM tgsis.versioned_tables "
+                            "ORDER BY objectclass, iudorder, schemaname, tablename").fetchall()
+    return [_table_from_row(r) for r in rows]
+
+
+def enable_feature_versioning(conn: Conn) -> int:
+    """Version model 1 and all feature classes as object class ``feature``; return the tables newly versioned."""
+    with reraise(), conn.transaction():
+        return int(_scalar(conn, "SELECT tgsis.enable_feature_versioning()"))
+
+
+def disable_feature_versioning(conn: Conn, *, force: bool = False) -> int:
+    """Undo :func:`enable_feature_versioning`, keeping DEFAULT's rows; return the row versions removed."""
+    with reraise(), conn.transaction():
+        return int(_scalar(conn, "SELECT tgsis.disable_feature_versioning(%s)", (force,)))
