@@ -34,6 +34,7 @@ DECLARE
     v_dependent text;
     v_identity  text[];
     v_name      text;
+    v_comment   text := obj_description(p_table, 'pg_class');
     v_con       record;
     v_col       record;
     v_acl       record;
@@ -199,7 +200,7 @@ BEGIN
         END IF;
     END LOOP;
     EXECUTE format('COMMENT ON VIEW %I.%I IS %L', v_schema, v_table,
-                   coalesce(obj_description(v_rel, 'pg_class') || ' ', '')
+                   coalesce(v_comment || ' ', '')
                    || format('(versioned by tgsis: rows of the session''s version; storage %s)', v_ver));
     FOR v_acl IN
         SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
@@ -220,7 +221,7 @@ BEGIN
     INSERT INTO tgsis.versioned_tables (schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder,
                                         keycolumns, pkeyname, tablecomment, identity_always)
     VALUES (v_schema, v_table, coalesce(p_shortname, v_table), p_objectkeyfield, p_objectclass, p_iudorder,
-            v_keys, v_pkey, obj_description(v_rel, 'pg_class'), v_identity)
+            v_keys, v_pkey, v_comment, v_identity)
     RETURNING * INTO v_row;
     RETURN v_row;
 END
