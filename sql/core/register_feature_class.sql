@@ -64,8 +64,18 @@ BEGIN
       INTO v_ccols, v_cprops
       FROM tgsis.property_columns(p_cell_properties, true, lower(v_align));
 
-    EXECUTE format('CREATE TABLE %I.%I (_geoid bigint PRIMARY KEY REFERENCES tgsis.geometry (geoid) ON DELETE CASCADE%s)',
-                   p_schema, p_name, v_fcols);
+    IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
+        -- model 1 is versioned: the key to tgsis.geometry cannot hold across
+        -- versions; record it as versioning would have dropped it
+        EXECUTE format('CREATE TABLE %I.%I (_geoid bigint PRIMARY KEY%s)', p_schema, p_name, v_fcols);
+        INSERT INTO tgsis.versioning_dropped (schemaname, tablename, name, definition, refschema, reftable, dropped_for)
+        VALUES (p_schema, p_name, p_name || '__geoid_fkey',
+                'FOREIGN KEY (_geoid) REFERENCES tgsis.geometry(geoid) ON DELETE CASCADE', 'tgsis', 'geometry',
+                format('%I.%I', p_schema, p_name));
+    ELSE
+        EXECUTE format('CREATE TABLE %I.%I (_geoid bigint PRIMARY KEY REFERENCES tgsis.geometry (geoid) ON DELETE CASCADE%s)',
+                       p_schema, p_name, v_fcols);
+    END IF;
     -- no foreign key to the feature table: a per-row check would dominate bulk uploads
     EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, _idx bigint NOT NULL%s, PRIMARY KEY (_geoid, _idx))',
                    p_schema, v_cellpros, v_ccols);
