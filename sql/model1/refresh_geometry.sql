@@ -19,8 +19,10 @@ BEGIN
     IF v_geotype = 'GEOMETRYCOLLECTION' THEN
         UPDATE tgsis.geometry g
            SET bbox = m.bbox, nvrtx = m.nvrtx, ncell = m.ncell
-          FROM (SELECT cube(ARRAY[min(cube_ll_coord(bbox, 1)), min(cube_ll_coord(bbox, 2)), min(cube_ll_coord(bbox, 3))],
-                            ARRAY[max(cube_ur_coord(bbox, 1)), max(cube_ur_coord(bbox, 2)), max(cube_ur_coord(bbox, 3))]) AS bbox,
+          FROM (SELECT CASE WHEN count(bbox) > 0 THEN  -- members without vertices have no bbox
+                           cube(ARRAY[min(cube_ll_coord(bbox, 1)), min(cube_ll_coord(bbox, 2)), min(cube_ll_coord(bbox, 3))],
+                                ARRAY[max(cube_ur_coord(bbox, 1)), max(cube_ur_coord(bbox, 2)), max(cube_ur_coord(bbox, 3))])
+                       END AS bbox,
                        coalesce(sum(nvrtx), 0) AS nvrtx, coalesce(sum(ncell), 0) AS ncell
                   FROM tgsis.geometry
                  WHERE geoid = ANY ((SELECT geoids FROM tgsis.geometry WHERE geoid = p_geoid)::bigint[])) AS m

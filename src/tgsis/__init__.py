@@ -27,7 +27,17 @@ from tgsis.db import (
     installed_version,
     uninstall,
 )
-from tgsis.mesh import Geotype, LineSet, Mesh, MeshReport, PointSet, Surface, TetraMesh, mesh_class
+from tgsis.mesh import (
+    GeometryCollection,
+    Geotype,
+    LineSet,
+    Mesh,
+    MeshReport,
+    PointSet,
+    Surface,
+    TetraMesh,
+    mesh_class,
+)
 from tgsis.errors import (
     AlreadyExistsError,
     DatabaseError,
@@ -71,6 +81,7 @@ __all__ = [
     "LineSet",
     "Surface",
     "TetraMesh",
+    "GeometryCollection",
     "mesh_class",
     # errors
     "Error",
