@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import signal
 import sys
@@ -32,8 +33,8 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
-from tgsis.errors import Error, InvalidInputError
-from tgsis.mesh import GeometryCollection, Geotype
+from tgsis.errors import Error, InvalidGeometryError, InvalidInputError
+from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
 
 __all__ = ["main", "build_parser"]
 
@@ -185,11 +186,30 @@ def _feature_values(items: Sequence[str] | None) -> dict[str, str]:
     return values
 
 
+def _object_label(index: int, mesh: Mesh) -> str:
+    """How messages name object ``index`` of a file: its name, else its 1-based position."""
+    return f"object {mesh.name!r}" if mesh.name else f"object #{index + 1}"
+
+
+def _check_flagged(file: str, meshes: Sequence[Mesh], reports: Sequence[MeshReport]) -> None:
+    """Refuse the file when any object has flagged defects (``--reject-flagged``)."""
+    flagged = [f"{_object_label(i, mesh)}: {report.summary()}"
+               for i, (mesh, report) in enumerate(zip(meshes, reports)) if not report.ok]
+    if flagged:
+        raise InvalidGeometryError(f"{file}: refused, nothing imported: " + "; ".join(flagged),
+                                   hint="fix the file, raise --tolerance, or import without --reject-flagged "
+                                        "to store it as it is")
+
+
 def cmd_import(args: argparse.Namespace) -> int:
     from tgsis import formats
 
+    if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
+        raise InvalidInputError(f"--tolerance must be a finite number >= 0, got {args.tolerance}")
     meshes = formats.read(args.file, format=args.format)
-    reports = [mesh.report() for mesh in meshes]
+    reports = [mesh.report(args.tolerance) for mesh in meshes]
+    if args.reject_flagged:
+        _check_flagged(args.file, meshes, reports)
     values = _feature_values(args.set)
     stem = Path(args.file).stem
     with connect(args.dsn) as conn:
@@ -320,6 +340,10 @@ def build_parser() -> argparse.ArgumentParser:
     imp.add_argument("--set", action="append", metavar="NAME=VALUE", help="a feature property value (repeatable)")
     imp.add_argument("--drop-extra-properties", action="store_true",
                      help="ignore properties of the file that the class does not store")
+    imp.add_argument("--reject-flagged", action="store_true",
+                     help="refuse the whole file if any object has duplicate vertices or degenerate cells")
+    imp.add_argument("--tolerance", type=float, default=0.0, metavar="T",
+                     help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)")
     imp.set_defaults(handler=cmd_import)
 
     exp = commands.add_parser("export", help="write a feature to a geometry file")
