@@ -137,3 +137,55 @@ def test_import_of_properties_the_class_lacks_needs_a_flag(db_dsn: str,
     assert main(["--dsn", db_dsn, "import", str(source), "--class", "plain", "--drop-extra-properties"]) == 0
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT count(*) FROM plain").fetchone() == (1,)
+
+
+FLAGGED = Path(__file__).parent / "data" / "gocad" / "flagged.ts"  # F1: a duplicate vertex, a zero-area triangle
+
+
+def _stored(dsn: str) -> tuple[int, ...]:
+    with psycopg.connect(dsn) as conn:
+        row = conn.execute("SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
+                           "(SELECT count(*) FROM tgsis.trgl), (SELECT count(*) FROM faults), "
+                           "(SELECT count(*) FROM blocks)").fetchone()
+    assert row is not None
+    return tuple(row)
+
+
+def test_reject_flagged_refuses_the_whole_file(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", db_dsn, "class", "create", "faults", "--geotype", "SURFACE"]) == 0
+    assert main(["--dsn", db_dsn, "class", "create", "blocks", "--geotype", "GEOMETRYCOLLECTION"]) == 0
+    capsys.readouterr()
+    empty = _stored(db_dsn)
+    for target in ("faults", "blocks"):
+        assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", target, "--reject-flagged"]) == 1
+        err = capsys.readouterr().err
+        assert err.startswith(f"tgsis: error: {FLAGGED}: refused, nothing imported: "
+                              "object 'F1': 1 duplicate vertices, 1 degenerate cells\n")
+        assert "F2" not in err and "HINT: fix the file, raise --tolerance" in err
+        assert _stored(db_dsn) == empty
+
+    # a thin triangle of F2 (area 5e-5) is flagged too once the tolerance says so
+    assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--reject-flagged",
+                 "--tolerance", "1e-3"]) == 1
+    assert ("object 'F1': 1 duplicate vertices, 1 degenerate cells; "
+            "object 'F2': 0 duplicate vertices, 1 degenerate cells") in capsys.readouterr().err
+    assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--tolerance", "-1"]) == 1
+    assert "--tolerance must be a finite number >= 0, got -1.0" in capsys.readouterr().err
+    assert _stored(db_dsn) == empty
+
+    # without the flag the file goes in, with the flags reported
+    assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--tolerance", "1e-3"]) == 0
+    lines = [line.split("\t") for line in capsys.readouterr().out.splitlines()]
+    assert [(line[1], line[-1]) for line in lines] == [
+        ("F1", "1 duplicate vertices, 1 degenerate cells"), ("F2", "0 duplicate vertices, 1 degenerate cells")]
+    assert _stored(db_dsn) == (2, 10, 6, 2, 0)
+
+
+def test_reject_flagged_passes_clean_files(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    source = Path(__file__).parent / "data" / "gocad" / "two_lines.pl"
+    assert main(["--dsn", db_dsn, "class", "create", "traces", "--geotype", "MULTILINESTRING"]) == 0
+    assert main(["--dsn", db_dsn, "import", str(source), "--class", "traces", "--reject-flagged",
+                 "--drop-extra-properties"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1].endswith("no duplicate vertices, no degenerate cells")
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT count(*) FROM traces").fetchone() == (1,)

@@ -126,3 +126,25 @@ def test_disable_feature_versioning_keeps_default(conn: Conn, horizons: F.Featur
                       "AND contype = 'f'").fetchone()
     assert fk == ("FOREIGN KEY (_geoid) REFERENCES tgsis.geometry(geoid) ON DELETE CASCADE",)
     assert conn.execute("SELECT count(*) FROM horizons_v").fetchone() == (1,)
+
+
+def test_a_collection_added_and_deleted_in_a_version(conn: Conn) -> None:
+    F.create_feature_class(conn, "blocks", "GEOMETRYCOLLECTION", cell_properties={"porosity": "float8"})
+    tgsis.enable_feature_versioning(conn)
+    line = tgsis.LineSet([[0, 0, 0], [1, 1, 1]], [[0, 1]], vertex_properties={"porosity": [0.5, 0.25]})
+    block = tgsis.GeometryCollection([_grid(3), line], name="block")
+    kept = F.insert_feature(conn, "blocks", block)
+    tgsis.create_version(conn, "v1")
+    with tgsis.in_version(conn, "v1"):
+        added = F.insert_feature(conn, "blocks", block)
+        assert F.delete_feature(conn, "blocks", kept)
+        assert [f.id for f in F.fetch_features(conn, "blocks")] == [added]
+        got = F.fetch_feature(conn, "blocks", added).mesh
+        assert isinstance(got, tgsis.GeometryCollection) and got.same_as(block)
+    default = F.fetch_features(conn, "blocks")
+    assert [f.id for f in default] == [kept]
+    assert isinstance(default[0].mesh, tgsis.GeometryCollection) and default[0].mesh.same_as(block)
+    # the members the collection owns are closed in v1 with it, not deleted from DEFAULT
+    members = conn.execute("SELECT geoids FROM tgsis.geometry WHERE geoid = %s", (kept,)).fetchone()
+    assert members is not None and conn.execute(
+        "SELECT count(*) FROM tgsis.geometry WHERE geoid = ANY (%s)", (members[0],)).fetchone() == (2,)

@@ -1,6 +1,7 @@
 -- tgsis.drop_feature_class(name, force): remove a feature class; with force also its features and their geometries.
 -- Table definitions are not versioned: a class is dropped in every version,
 -- so its features' rows go from the storage of every version too.
+-- A collection's owned members go with it, their cell properties with the table.
 CREATE FUNCTION tgsis.drop_feature_class(p_name text, p_force boolean DEFAULT false)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -10,6 +11,7 @@ DECLARE
     v_count bigint;
     v_ids   bigint[];
     v_table text;
+    v_all   bigint[];
 BEGIN
     SELECT * INTO v_class FROM tgsis.catalog WHERE classname = p_name FOR UPDATE;
     IF NOT FOUND THEN
@@ -26,7 +28,11 @@ BEGIN
                   HINT = 'delete them first, or drop with force => true to delete them with their geometries';
     END IF;
     IF v_count > 0 THEN
-        PERFORM tgsis.delete_stored_geometries(v_ids);
+        -- the features' geometries and the collection members they own (not geometries a collection only lists)
+        EXECUTE format('SELECT $1 || coalesce(array_agg(DISTINCT geoid), ''{}'') FROM %s WHERE collection = ANY ($1)',
+                       tgsis.storage_table('tgsis', 'geometry'))
+           INTO v_all USING v_ids;
+        PERFORM tgsis.delete_stored_geometries(v_all);
     END IF;
     EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_class.viewname);
     FOREACH v_table IN ARRAY ARRAY[v_class.cellprotable, v_class.featuretable] LOOP
@@ -46,4 +52,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.drop_feature_class(text, boolean) IS
-    'drop a feature class and its tables (in every version); refuses (TG202) while features exist unless force, which deletes them and their geometries; returns the number of features deleted';
+    'drop a feature class and its tables (in every version); refuses (TG202) while features exist unless force, which deletes them and their geometries (with the members collections own); returns the number of features deleted';

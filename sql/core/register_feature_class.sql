@@ -83,11 +83,17 @@ BEGIN
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, p_name,
                    format('tgsis feature class %s: one row per %s feature (_geoid = tgsis.geometry.geoid)', p_name, v_geotype));
     EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, p_name, 'the feature''s geometry (tgsis.geometry.geoid)');
+    -- a collection's properties belong to its members: _geoid is a member geometry, not the feature
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_cellpros,
-                   format('tgsis feature class %s: %s properties (_idx = %s)', p_name, lower(v_align),
-                          CASE v_align WHEN 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
-                                       ELSE format('tgsis.%s id', tgsis.simplex_table(v_geotype)) END));
-    EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_cellpros, 'the feature (_geoid of ' || p_name || ')');
+                   format('tgsis feature class %s: %s properties (%s_idx = %s)', p_name, lower(v_align),
+                          CASE WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN '_geoid = member geometry, ' ELSE '' END,
+                          CASE WHEN v_align = 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
+                               WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN 'simplex id in the member''s point/segment/trgl/tetra'
+                               ELSE format('tgsis.%s id', tgsis.simplex_table(v_geotype)) END));
+    EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_cellpros,
+                   CASE WHEN v_geotype = 'GEOMETRYCOLLECTION'
+                        THEN 'a member geometry (tgsis.geometry.geoid) of a feature of ' || p_name
+                        ELSE 'the feature (_geoid of ' || p_name || ')' END);
     EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
                    CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
 

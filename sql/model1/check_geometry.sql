@@ -12,7 +12,7 @@ DECLARE
     v_k     int;
     v_i     int;
 BEGIN
-    SELECT geotype, geoids, nvrtx, bbox INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
+    SELECT geotype, geoids, nvrtx, ncell, bbox INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % does not exist', p_geoid USING ERRCODE = 'TG200';
     END IF;
@@ -21,6 +21,23 @@ BEGIN
                        FROM unnest(v_geo.geoids) AS m
                       WHERE NOT EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = m)
                      HAVING count(*) > 0;
+        RETURN QUERY SELECT 'member is a GEOMETRYCOLLECTION (collections do not nest)'::text, count(*), min(g.geoid)::text
+                       FROM tgsis.geometry g
+                      WHERE g.geoid = ANY (v_geo.geoids) AND g.geotype = 'GEOMETRYCOLLECTION'
+                     HAVING count(*) > 0;
+        RETURN QUERY SELECT 'owned member not listed in geoids'::text, count(*), min(g.geoid)::text
+                       FROM tgsis.geometry g
+                      WHERE g.collection = p_geoid AND NOT g.geoid = ANY (v_geo.geoids)
+                     HAVING count(*) > 0;
+        RETURN QUERY
+            SELECT 'bounding box or counts out of date (run tgsis.refresh_geometry)'::text, 1::bigint, NULL::text
+              FROM (SELECT coalesce(sum(g.nvrtx), 0) AS n, coalesce(sum(g.ncell), 0) AS m,
+                           CASE WHEN count(g.bbox) > 0 THEN
+                               cube(ARRAY[min(cube_ll_coord(g.bbox, 1)), min(cube_ll_coord(g.bbox, 2)), min(cube_ll_coord(g.bbox, 3))],
+                                    ARRAY[max(cube_ur_coord(g.bbox, 1)), max(cube_ur_coord(g.bbox, 2)), max(cube_ur_coord(g.bbox, 3))])
+                           END AS bbox
+                      FROM tgsis.geometry g WHERE g.geoid = ANY (v_geo.geoids)) AS u
+             WHERE u.n <> v_geo.nvrtx OR u.m <> v_geo.ncell OR u.bbox IS DISTINCT FROM v_geo.bbox;
         RETURN;
     END IF;
 
@@ -56,4 +73,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.check_geometry(bigint) IS
-    'problems of a stored geometry: non-finite coordinates, simplices pointing at missing vertices, stale bbox/counts, missing collection members';
+    'problems of a stored geometry: non-finite coordinates, simplices pointing at missing vertices, stale bbox/counts, missing, nested or unlisted collection members';

@@ -1,4 +1,7 @@
--- tgsis.delete_geometry(geoid): remove a geometry with its vertices, simplices, feature row and cell properties.
+-- tgsis.delete_geometry(geoid): remove a geometry with its vertices, simplices, feature row, cell properties and owned members.
+-- A GEOMETRYCOLLECTION takes the members it owns (tgsis.geometry.collection)
+-- with it, each with its rows; geometries it only lists in geoids stay.
+-- Members cannot be collections, so one level is the whole recursion.
 -- Works in the session's version: on versioned tables the rows are closed
 -- set-based (tgsis.delete_object_rows), not one trigger call per vertex.
 CREATE FUNCTION tgsis.delete_geometry(p_geoid bigint)
@@ -6,27 +9,44 @@ RETURNS boolean
 LANGUAGE plpgsql
 AS $$
 DECLARE
-    v_geotype text;
-    v_class   record;
+    v_geo   record;
+    v_ids   bigint[];
+    v_id    bigint;
+    v_class record;
 BEGIN
-    SELECT geotype INTO v_geotype FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
+    SELECT geotype, collection INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
     IF NOT FOUND THEN
         RETURN false;
     END IF;
-    -- cell properties and feature rows: the feature table's foreign key is
-    -- gone once model 1 is versioned, so delete them explicitly
-    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog WHERE geotype = v_geotype LOOP
-        PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', p_geoid);
+    IF v_geo.collection IS NOT NULL THEN
+        RAISE EXCEPTION 'geometry % is a member of collection % and is deleted only with it', p_geoid, v_geo.collection
+            USING ERRCODE = 'TG202',
+                  HINT = format('SELECT tgsis.delete_geometry(%s) deletes the collection with its members', v_geo.collection);
+    END IF;
+    -- members first, the collection last (its row is what owns them)
+    SELECT coalesce(array_agg(geoid ORDER BY geoid), '{}') || p_geoid INTO v_ids
+      FROM tgsis.geometry WHERE collection = p_geoid;
+    -- the feature row: its foreign key is gone once model 1 is versioned, so
+    -- delete it explicitly; cell properties of a collection's members are in
+    -- its class's table, keyed by member geoid
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog WHERE geotype = v_geo.geotype LOOP
+        FOREACH v_id IN ARRAY v_ids LOOP
+            PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', v_id);
+        END LOOP;
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.featuretable, '_geoid', p_geoid);
     END LOOP;
-    PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', p_geoid);
-    IF v_geotype <> 'GEOMETRYCOLLECTION' THEN
-        PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geotype), 'geoid', p_geoid);
-    END IF;
-    PERFORM tgsis.delete_object_rows('tgsis', 'geometry', 'geoid', p_geoid);
+    FOR v_geo IN SELECT geoid, geotype FROM tgsis.geometry WHERE geoid = ANY (v_ids) LOOP
+        PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', v_geo.geoid);
+        IF v_geo.geotype <> 'GEOMETRYCOLLECTION' THEN
+            PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geo.geotype), 'geoid', v_geo.geoid);
+        END IF;
+    END LOOP;
+    FOREACH v_id IN ARRAY v_ids LOOP
+        PERFORM tgsis.delete_object_rows('tgsis', 'geometry', 'geoid', v_id);
+    END LOOP;
     RETURN true;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.delete_geometry(bigint) IS
-    'delete a geometry, its vertices, simplices, feature row and cell properties in the session''s version; false if it did not exist';
+    'delete a geometry, its vertices, simplices, feature row and cell properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';

@@ -1,27 +1,44 @@
--- tgsis.new_geometry(geotype, name, bounds, nvrtx, ncell): insert a geometry row and return its geoid.
+-- tgsis.new_geometry(geotype, name, bounds, nvrtx, ncell, geoids, collection): insert a geometry row and return its geoid.
 -- The client's write path calls it before copying vertices and simplices;
--- bounds is {xmin, ymin, zmin, xmax, ymax, zmax} (NULL: no vertex).
+-- bounds is {xmin, ymin, zmin, xmax, ymax, zmax} (NULL: no vertex); a member
+-- stored with its GEOMETRYCOLLECTION names the collection that owns it.
 CREATE FUNCTION tgsis.new_geometry(
-    p_geotype text,
-    p_name    text,
-    p_bounds  double precision[],
-    p_nvrtx   bigint,
-    p_ncell   bigint,
-    p_geoids  bigint[] DEFAULT NULL)
+    p_geotype    text,
+    p_name       text,
+    p_bounds     double precision[],
+    p_nvrtx      bigint,
+    p_ncell      bigint,
+    p_geoids     bigint[] DEFAULT NULL,
+    p_collection bigint   DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 SET search_path FROM CURRENT
 AS $$
 DECLARE
     v_geoid bigint;
+    v_owner text;
 BEGIN
     IF p_bounds IS NOT NULL AND (cardinality(p_bounds) <> 6 OR array_position(p_bounds, NULL) IS NOT NULL
                                  OR 'NaN' = ANY (p_bounds) OR 'Infinity' = ANY (p_bounds) OR '-Infinity' = ANY (p_bounds)) THEN
         RAISE EXCEPTION 'bounds of a new geometry must be 6 finite numbers {xmin, ymin, zmin, xmax, ymax, zmax}, got %', p_bounds
             USING ERRCODE = 'TG102';
     END IF;
-    INSERT INTO tgsis.geometry (geotype, geoname, geoids, bbox, nvrtx, ncell)
-    VALUES (upper(p_geotype), p_name, p_geoids,
+    IF p_collection IS NOT NULL THEN
+        IF upper(p_geotype) = 'GEOMETRYCOLLECTION' THEN
+            RAISE EXCEPTION 'a GEOMETRYCOLLECTION cannot be a member of collection %: collections do not nest', p_collection
+                USING ERRCODE = 'TG102', HINT = 'store the inner collection''s members in the outer one';
+        END IF;
+        SELECT geotype INTO v_owner FROM tgsis.geometry WHERE geoid = p_collection;
+        IF NOT FOUND THEN
+            RAISE EXCEPTION 'collection % of a new % geometry does not exist', p_collection, upper(p_geotype)
+                USING ERRCODE = 'TG200';
+        ELSIF v_owner <> 'GEOMETRYCOLLECTION' THEN
+            RAISE EXCEPTION 'geometry % is a %, not a GEOMETRYCOLLECTION: it cannot own members', p_collection, v_owner
+                USING ERRCODE = 'TG102';
+        END IF;
+    END IF;
+    INSERT INTO tgsis.geometry (geotype, geoname, geoids, collection, bbox, nvrtx, ncell)
+    VALUES (upper(p_geotype), p_name, p_geoids, p_collection,
             CASE WHEN p_bounds IS NOT NULL THEN cube(p_bounds[1:3], p_bounds[4:6]) END,
             p_nvrtx, p_ncell)
     RETURNING geoid INTO v_geoid;
@@ -29,5 +46,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[]) IS
-    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax}) and return its geoid';
+COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint) IS
+    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax}; members of a GEOMETRYCOLLECTION name their owning collection) and return its geoid';

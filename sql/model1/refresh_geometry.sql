@@ -21,8 +21,10 @@ BEGIN
     END IF;
 
     IF v_geotype = 'GEOMETRYCOLLECTION' THEN
-        SELECT cube(ARRAY[min(cube_ll_coord(m.bbox, 1)), min(cube_ll_coord(m.bbox, 2)), min(cube_ll_coord(m.bbox, 3))],
-                    ARRAY[max(cube_ur_coord(m.bbox, 1)), max(cube_ur_coord(m.bbox, 2)), max(cube_ur_coord(m.bbox, 3))]),
+        SELECT CASE WHEN count(m.bbox) > 0 THEN  -- members without vertices have no bbox
+                    cube(ARRAY[min(cube_ll_coord(m.bbox, 1)), min(cube_ll_coord(m.bbox, 2)), min(cube_ll_coord(m.bbox, 3))],
+                         ARRAY[max(cube_ur_coord(m.bbox, 1)), max(cube_ur_coord(m.bbox, 2)), max(cube_ur_coord(m.bbox, 3))])
+               END,
                coalesce(sum(m.nvrtx), 0), coalesce(sum(m.ncell), 0)
           INTO v_bbox, v_nvrtx, v_ncell
           FROM tgsis.geometry m

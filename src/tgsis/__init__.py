@@ -8,6 +8,8 @@ reached from Python through this package.
 >>> import tgsis                                          # doctest: +SKIP
 >>> with tgsis.connect() as conn:                         # local server if no DSN
 ...     print(conn.execute("select tgsis.version()").fetchone())
+...     fc = tgsis.create_feature_class(conn, "horizons", "SURFACE")
+...     fid = tgsis.insert_feature(conn, fc, tgsis.Surface(vertices, triangles))
 """
 
 from __future__ import annotations
@@ -48,7 +50,30 @@ from tgsis.db.versions import (
     working_revision,
     working_version,
 )
-from tgsis.mesh import Geotype, LineSet, Mesh, MeshReport, PointSet, Surface, TetraMesh, mesh_class
+from tgsis.db.features import (
+    Feature,
+    FeatureClass,
+    create_feature_class,
+    delete_feature,
+    drop_feature_class,
+    features_in_box,
+    fetch_feature,
+    fetch_features,
+    get_feature_class,
+    insert_feature,
+    list_feature_classes,
+)
+from tgsis.mesh import (
+    GeometryCollection,
+    Geotype,
+    LineSet,
+    Mesh,
+    MeshReport,
+    PointSet,
+    Surface,
+    TetraMesh,
+    mesh_class,
+)
 from tgsis.errors import (
     AlreadyExistsError,
     DatabaseError,
@@ -114,7 +139,20 @@ __all__ = [
     "LineSet",
     "Surface",
     "TetraMesh",
+    "GeometryCollection",
     "mesh_class",
+    # feature classes and features
+    "FeatureClass",
+    "Feature",
+    "create_feature_class",
+    "get_feature_class",
+    "list_feature_classes",
+    "drop_feature_class",
+    "insert_feature",
+    "fetch_feature",
+    "fetch_features",
+    "features_in_box",
+    "delete_feature",
     # errors
     "Error",
     "AlreadyExistsError",

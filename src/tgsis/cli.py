@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import signal
 import sys
@@ -32,7 +33,8 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
-from tgsis.errors import Error, InvalidInputError
+from tgsis.errors import Error, InvalidGeometryError, InvalidInputError
+from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
 
 __all__ = ["main", "build_parser"]
 
@@ -184,21 +186,52 @@ def _feature_values(items: Sequence[str] | None) -> dict[str, str]:
     return values
 
 
+def _object_label(index: int, mesh: Mesh) -> str:
+    """How messages name object ``index`` of a file: its name, else its 1-based position."""
+    return f"object {mesh.name!r}" if mesh.name else f"object #{index + 1}"
+
+
+def _check_flagged(file: str, meshes: Sequence[Mesh], reports: Sequence[MeshReport]) -> None:
+    """Refuse the file when any object has flagged defects (``--reject-flagged``)."""
+    flagged = [f"{_object_label(i, mesh)}: {report.summary()}"
+               for i, (mesh, report) in enumerate(zip(meshes, reports)) if not report.ok]
+    if flagged:
+        raise InvalidGeometryError(f"{file}: refused, nothing imported: " + "; ".join(flagged),
+                                   hint="fix the file, raise --tolerance, or import without --reject-flagged "
+                                        "to store it as it is")
+
+
 def cmd_import(args: argparse.Namespace) -> int:
     from tgsis import formats
 
+    if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
+        raise InvalidInputError(f"--tolerance must be a finite number >= 0, got {args.tolerance}")
     meshes = formats.read(args.file, format=args.format)
-    if args.name and len(meshes) > 1:
-        raise InvalidInputError(f"{args.file} holds {len(meshes)} objects: --name names only one")
+    reports = [mesh.report(args.tolerance) for mesh in meshes]
+    if args.reject_flagged:
+        _check_flagged(args.file, meshes, reports)
     values = _feature_values(args.set)
+    stem = Path(args.file).stem
     with connect(args.dsn) as conn:
         fc = get_feature_class(conn, args.feature_class)
+        if fc.geotype is Geotype.GEOMETRYCOLLECTION:  # the whole file is one feature
+            collection = GeometryCollection(meshes, name=args.name or stem)
+            fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
+            _out(f"{fid}\t{collection.name}\t{collection.geotype.value}\t{len(collection)} members\t"
+                 f"{collection.n_vertices} vertices\t{collection.n_cells} cells")
+            for i, (mesh, report) in enumerate(zip(meshes, reports)):
+                _out(f"\tmember {i}\t{mesh.name or ''}\t{mesh.n_vertices} vertices\t"
+                     f"{mesh.n_cells} {type(mesh).cell_name}s\t{report.summary()}")
+            return 0
+        if args.name and len(meshes) > 1:
+            raise InvalidInputError(f"{args.file} holds {len(meshes)} objects: --name names only one",
+                                    hint="import into a GEOMETRYCOLLECTION class to store them as one feature")
         with conn.transaction():  # all objects of the file, or none
-            ids = [insert_feature(conn, fc, mesh, values, name=args.name or mesh.name or Path(args.file).stem,
+            ids = [insert_feature(conn, fc, mesh, values, name=args.name or mesh.name or stem,
                                   drop_extra_properties=args.drop_extra_properties) for mesh in meshes]
-    for fid, mesh in zip(ids, meshes):
-        _out(f"{fid}\t{args.name or mesh.name or Path(args.file).stem}\t{mesh.n_vertices} vertices\t"
-             f"{mesh.n_cells} {type(mesh).cell_name}s\t{mesh.report().summary()}")
+    for fid, mesh, report in zip(ids, meshes, reports):
+        _out(f"{fid}\t{args.name or mesh.name or stem}\t{mesh.n_vertices} vertices\t"
+             f"{mesh.n_cells} {type(mesh).cell_name}s\t{report.summary()}")
     return 0
 
 
@@ -210,7 +243,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         feature = fetch_feature(conn, fc, args.id)
     assert feature.mesh is not None
     formats.write(feature.mesh, args.file, format=args.format)
-    _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices) to {args.file}")
+    members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
+    _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
     return 0
 
 
@@ -220,11 +254,12 @@ def cmd_ls(args: argparse.Namespace) -> int:
         rows = []
         for fc in classes:
             rows += [(fc.name, *r) for r in conn.execute(
-                psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell FROM {}.{} f "
-                                "JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
+                psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
+                                "FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
                     psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
-    for cls, geoid, name, geotype, nvrtx, ncell in rows:
-        _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells")
+    for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows:
+        members = f"\t{nmembers} members" if nmembers is not None else ""
+        _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells{members}")
     if not rows:
         print("no features", file=sys.stderr)
     return 0
@@ -295,14 +330,20 @@ def build_parser() -> argparse.ArgumentParser:
     cls_drop.add_argument("--force", action="store_true", help="also delete its features and their geometries")
     cls_drop.set_defaults(handler=cmd_class_drop)
 
-    imp = commands.add_parser("import", help="store the objects of a geometry file as features of a class")
+    imp = commands.add_parser("import", help="store the objects of a geometry file as features of a class "
+                                             "(as one feature in a GEOMETRYCOLLECTION class)")
     imp.add_argument("file")
     imp.add_argument("--class", dest="feature_class", required=True)
-    imp.add_argument("--name", help="feature name (default: the name in the file, else the file name)")
+    imp.add_argument("--name", help="feature name (default: the name in the file, else the file name; "
+                                    "for a GEOMETRYCOLLECTION class the file name)")
     imp.add_argument("--format", help="file format (default: from the extension)")
     imp.add_argument("--set", action="append", metavar="NAME=VALUE", help="a feature property value (repeatable)")
     imp.add_argument("--drop-extra-properties", action="store_true",
                      help="ignore properties of the file that the class does not store")
+    imp.add_argument("--reject-flagged", action="store_true",
+                     help="refuse the whole file if any object has duplicate vertices or degenerate cells")
+    imp.add_argument("--tolerance", type=float, default=0.0, metavar="T",
+                     help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)")
     imp.set_defaults(handler=cmd_import)
 
     exp = commands.add_parser("export", help="write a feature to a geometry file")

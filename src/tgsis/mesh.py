@@ -1,4 +1,4 @@
-"""Mesh types on numpy arrays: point sets, line sets, triangle surfaces, tetrahedral meshes.
+"""Mesh types on numpy arrays: point sets, line sets, triangle surfaces, tetrahedral meshes, collections.
 
 No database here. A mesh is an indexed face set, the form of model 1:
 ``vertices`` (n, 3) float64 and ``cells`` (m, k) int64 indices into them, with
@@ -15,15 +15,18 @@ Constructing a mesh validates it and raises on what cannot be stored:
 
 What is legal but usually a mistake — duplicate vertices, zero-length,
 zero-area or zero-volume cells — is *flagged* by :meth:`Mesh.report`.
+
+A :class:`GeometryCollection` (GEOMETRYCOLLECTION) is an ordered tuple of such
+meshes, possibly of different types; collections do not nest.
 """
 
 from __future__ import annotations
 
 import enum
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -37,6 +40,8 @@ __all__ = [
     "LineSet",
     "Surface",
     "TetraMesh",
+    "GeometryCollection",
+    "Geometry",
     "MeshReport",
     "mesh_class",
     "PROPERTY_NAME_RE",
@@ -376,13 +381,136 @@ class TetraMesh(Mesh):
 _CLASSES: dict[Geotype, type[Mesh]] = {c.geotype: c for c in (PointSet, LineSet, Surface, TetraMesh)}
 
 
+class GeometryCollection:
+    """An ordered collection of meshes (GEOMETRYCOLLECTION), possibly of different types.
+
+    Parameters
+    ----------
+    members : iterable of Mesh
+        At least one PointSet, LineSet, Surface or TetraMesh, in order; each
+        keeps its own vertices, cells, properties and name. Collections do
+        not nest.
+    name : str, optional
+        The collection's name.
+    metadata : mapping, optional
+        Free-form facts about the whole collection.
+
+    Raises
+    ------
+    InvalidGeometryError
+        No member, or a member that is not one of the four mesh types (a
+        collection, a plain :class:`Mesh`, anything else).
+
+    Examples
+    --------
+    >>> c = GeometryCollection([Surface(v, t), PointSet(p)], name="block")   # doctest: +SKIP
+    >>> c.n_vertices == c.members[0].n_vertices + c.members[1].n_vertices    # doctest: +SKIP
+    True
+    """
+
+    geotype: ClassVar[Geotype] = Geotype.GEOMETRYCOLLECTION
+
+    members: tuple[Mesh, ...]
+
+    def __init__(self, members: Iterable[Mesh], *, name: str | None = None,
+                 metadata: Mapping[str, Any] | None = None) -> None:
+        if isinstance(members, (Mesh, GeometryCollection)):
+            raise InvalidGeometryError(f"the members of a GeometryCollection are a sequence of meshes, "
+                                       f"got one {type(members).__name__}", hint="wrap it in a list")
+        items = tuple(members)
+        for i, member in enumerate(items):
+            if isinstance(member, GeometryCollection):
+                raise InvalidGeometryError(f"member {i} of collection {name!r} is a GeometryCollection: "
+                                           "collections do not nest",
+                                           hint="add its members to the outer collection instead")
+            if not isinstance(member, (PointSet, LineSet, Surface, TetraMesh)):
+                raise InvalidGeometryError(f"member {i} of collection {name!r} is a {type(member).__name__}, "
+                                           "not a PointSet, LineSet, Surface or TetraMesh")
+        if not items:
+            raise InvalidGeometryError(f"collection {name!r} has no member: a GeometryCollection needs at least one")
+        self.members = items
+        self.name = name
+        self.metadata: dict[str, Any] = dict(metadata or {})
+
+    # ---- facts
+
+    def __len__(self) -> int:
+        return len(self.members)
+
+    def __iter__(self) -> Iterator[Mesh]:
+        return iter(self.members)
+
+    def __getitem__(self, index: int) -> Mesh:
+        return self.members[index]
+
+    @property
+    def n_vertices(self) -> int:
+        """Number of vertices of all members."""
+        return sum(m.n_vertices for m in self.members)
+
+    @property
+    def n_cells(self) -> int:
+        """Number of cells (points, segments, triangles, tetrahedra) of all members."""
+        return sum(m.n_cells for m in self.members)
+
+    @property
+    def geotypes(self) -> tuple[Geotype, ...]:
+        """Geotype of each member, in order."""
+        return tuple(m.geotype for m in self.members)
+
+    def bounds(self) -> FloatArray:
+        """Bounding box of all members' vertices: (2, 3) ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``.
+
+        Raises
+        ------
+        InvalidGeometryError
+            No member has a vertex.
+        """
+        boxes = [m.bounds() for m in self.members if m.n_vertices]
+        if not boxes:
+            raise InvalidGeometryError(f"collection {self.name or ''} has no vertex: no bounding box")
+        stacked = np.stack(boxes)
+        return np.stack([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])
+
+    def report(self, tolerance: float = 0.0) -> tuple[MeshReport, ...]:
+        """:meth:`Mesh.report` of each member, in order.
+
+        Parameters
+        ----------
+        tolerance : float
+            Largest length/area/volume still counted as degenerate (0: exactly zero).
+        """
+        return tuple(m.report(tolerance) for m in self.members)
+
+    # ---- comparison and copies
+
+    def same_as(self, other: Mesh | GeometryCollection) -> bool:
+        """Also a collection, with as many members, each :meth:`Mesh.same_as` its counterpart."""
+        return (isinstance(other, GeometryCollection) and len(self.members) == len(other.members)
+                and all(a.same_as(b) for a, b in zip(self.members, other.members)))
+
+    def copy(self) -> GeometryCollection:
+        """A deep copy."""
+        return GeometryCollection([m.copy() for m in self.members], name=self.name, metadata=dict(self.metadata))
+
+    def __repr__(self) -> str:
+        kinds = ", ".join(type(m).__name__ for m in self.members)
+        return (f"GeometryCollection(name={self.name!r}, members=[{kinds}], n_vertices={self.n_vertices}, "
+                f"n_cells={self.n_cells})")
+
+
+#: What a feature's geometry can be: one mesh or a collection of meshes.
+Geometry: TypeAlias = Mesh | GeometryCollection
+
+
 def mesh_class(geotype: Geotype | str) -> type[Mesh]:
     """The mesh class of a geotype (``"SURFACE"`` gives :class:`Surface`).
 
     Raises
     ------
     InvalidGeometryError
-        Unknown geotype, or GEOMETRYCOLLECTION (which has no single mesh).
+        Unknown geotype, or GEOMETRYCOLLECTION (which has no single mesh: its
+        members are meshes of a :class:`GeometryCollection`).
     """
     try:
         key = geotype if isinstance(geotype, Geotype) else Geotype(str(geotype).upper())
@@ -390,5 +518,6 @@ def mesh_class(geotype: Geotype | str) -> type[Mesh]:
     except (ValueError, KeyError):
         raise InvalidGeometryError(
             f"no mesh type for geotype {geotype!r}",
-            hint="use MULTIPOINT, MULTILINESTRING, SURFACE or MULTITETRA",
+            hint="use MULTIPOINT, MULTILINESTRING, SURFACE or MULTITETRA; a GEOMETRYCOLLECTION is a "
+                 "GeometryCollection of such meshes",
         ) from None

@@ -6,6 +6,12 @@ of the class's feature table whose ``_geoid`` is its geometry in
 ``tgsis.geometry``; vertices and simplices are in ``tgsis.vrtx`` and
 ``tgsis.point|segment|trgl|tetra``, vertex or cell properties in the class's
 ``<name>_cellpros`` table.
+
+A feature of a GEOMETRYCOLLECTION class is a :class:`~tgsis.mesh.GeometryCollection`:
+every member is a geometry row of its own, owned by the collection row
+(``tgsis.geometry.collection``), which lists the members in order in
+``geoids``; the member rows hold the vertices, simplices and cell properties
+(``_geoid`` = member geoid), the feature row points at the collection.
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ from psycopg import sql
 
 from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError, NotFoundError, reraise
-from tgsis.mesh import Geotype, Mesh, mesh_class
+from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh, mesh_class
 
 __all__ = [
     "Property",
@@ -96,7 +102,14 @@ class FeatureClass:
 
     @property
     def mesh_class(self) -> type[Mesh]:
-        """The mesh type of the features."""
+        """The mesh type of the features.
+
+        Raises
+        ------
+        InvalidGeometryError
+            For a GEOMETRYCOLLECTION class: its features are
+            :class:`~tgsis.mesh.GeometryCollection` objects of meshes of any type.
+        """
         return mesh_class(self.geotype)
 
     def _table(self, name: str) -> sql.Composed:
@@ -117,15 +130,17 @@ class Feature:
         Geometry name.
     properties : dict
         Per-feature property values (None where NULL).
-    mesh : Mesh
-        Geometry with its vertex or cell properties, in stored id order.
+    mesh : Mesh or GeometryCollection
+        Geometry with its vertex or cell properties, in stored id order; a
+        GeometryCollection (members in stored order) for GEOMETRYCOLLECTION
+        classes.
     """
 
     id: int
     feature_class: str
     name: str | None
     properties: dict[str, Any] = field(default_factory=dict)
-    mesh: Mesh | None = None
+    mesh: Geometry | None = None
 
 
 # --------------------------------------------------------------------------- classes
@@ -230,31 +245,33 @@ def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
 # --------------------------------------------------------------------------- upload
 
 
-def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool) -> dict[str, npt.NDArray[Any]]:
-    """The mesh properties the class stores, checked and cast to the column types."""
+def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
+                        what: str = "the mesh") -> dict[str, npt.NDArray[Any]]:
+    """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh)."""
     stored, other = ((mesh.vertex_properties, mesh.cell_properties) if fc.alignment == "VERTEX"
                      else (mesh.cell_properties, mesh.vertex_properties))
     kind = "vertex" if fc.alignment == "VERTEX" else mesh.cell_name
     wanted = {p.name: p for p in fc.cell_properties}
     missing = sorted(set(wanted) - set(stored))
     if missing:
-        raise InvalidPropertyError(f"feature class {fc.name} needs {kind} properties {missing}, which the mesh lacks")
+        raise InvalidPropertyError(f"feature class {fc.name} needs {kind} properties {missing}, which {what} lacks")
     extra = sorted(set(stored) - set(wanted)) + sorted(other)
     if extra and not drop_extra:
         raise InvalidPropertyError(
-            f"feature class {fc.name} has no column for properties {extra} of the mesh",
+            f"feature class {fc.name} has no column for properties {extra} of {what}",
             hint=f"it stores {fc.alignment.lower()} properties {sorted(wanted) or 'none'}; "
                  "drop the others (drop_extra_properties=True) or register them in the class",
         )
     if extra:
-        log.warning("not stored by feature class %s: properties %s", fc.name, extra)
+        log.warning("not stored by feature class %s: properties %s of %s", fc.name, extra, what)
     result: dict[str, npt.NDArray[Any]] = {}
     for prop in fc.cell_properties:
         values = stored[prop.name]
         target = numpy_dtype(SQL_TYPES[prop.type])
         cast = values.astype(target)
         if target.kind in "iub" and not np.array_equal(cast, values):
-            raise InvalidPropertyError(f"{kind} property {prop.name!r} has values that are not {prop.type}")
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} has values that are not {prop.type} "
+                                       f"in {what}")
         result[prop.name] = cast
     return result
 
@@ -305,28 +322,98 @@ class _Storage:
                  [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
 
 
+def _member_label(index: int, mesh: Mesh) -> str:
+    """How messages name member ``index`` of a collection."""
+    named = f" {mesh.name!r}" if mesh.name else ""
+    return f"member {index} ({type(mesh).__name__}{named})"
+
+
+def _new_geometry(conn: Conn, geometry: Geometry, name: str | None, *, collection: int | None = None) -> int:
+    """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid."""
+    bounds = geometry.bounds().ravel().tolist() if geometry.n_vertices else None
+    geoids: list[int] | None = [] if isinstance(geometry, GeometryCollection) else None  # members come next
+    row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s)",
+                       (geometry.geotype.value, name, bounds, geometry.n_vertices, geometry.n_cells, geoids,
+                        collection)).fetchone()
+    assert row is not None
+    return int(row[0])
+
+
+def _concat(arrays: Sequence[npt.NDArray[Any]]) -> npt.NDArray[Any]:
+    """The arrays one after the other (no copy for one array)."""
+    return arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
+
+
+def _keys(geoids: Sequence[int], counts: Sequence[int]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """(geoid, local id) columns for ``counts[i]`` rows of each ``geoids[i]``: ids 0..counts[i]-1."""
+    total = int(sum(counts))
+    if len(counts) == 1:
+        return np.full(total, geoids[0], dtype=np.int64), np.arange(total, dtype=np.int64)
+    starts = np.cumsum([0, *counts[:-1]])
+    return (np.repeat(np.asarray(geoids, dtype=np.int64), counts),
+            np.arange(total, dtype=np.int64) - np.repeat(starts, counts).astype(np.int64))
+
+
+def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
+                 cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], storage: _Storage) -> None:
+    """COPY the vertices, simplices and cell properties of meshes: one COPY per table, whatever their number.
+
+    Parameters
+    ----------
+    geoids : sequence of int
+        Geometry row of each mesh.
+    meshes : sequence of Mesh
+        Of any of the four types.
+    cell_values : sequence of mapping
+        Per mesh, the class's property arrays from :func:`_aligned_properties`:
+        (n_i,) for VERTEX alignment, (m_i,) for CELL.
+    storage : _Storage
+        Plain or versioned targets.
+    """
+    vertex_geoids, vertex_ids = _keys(geoids, [m.n_vertices for m in meshes])
+    xyz = _concat([m.vertices for m in meshes])
+    storage.copy(conn, "tgsis", "vrtx", [("geoid", vertex_geoids, "int8"), ("vrtxid", vertex_ids, "int8"),
+                                         ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+    for geotype in dict.fromkeys(m.geotype for m in meshes):  # each simplex table once, in member order
+        group = [i for i, m in enumerate(meshes) if m.geotype == geotype]
+        table, key = _SIMPLEX[geotype]
+        k = meshes[group[0]].cell_size
+        cell_geoids, cell_ids = _keys([geoids[i] for i in group], [meshes[i].n_cells for i in group])
+        cells = _concat([meshes[i].cells for i in group])
+        storage.copy(conn, "tgsis", table, [("geoid", cell_geoids, "int8"), (key, cell_ids, "int8"),
+                                            *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(k))])
+    if fc.cell_properties:
+        counts = [m.n_vertices if fc.alignment == "VERTEX" else m.n_cells for m in meshes]
+        prop_geoids, prop_ids = _keys(geoids, counts)
+        storage.copy(conn, fc.schema, fc.cellprotable, [
+            ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
+            *((p.name, _concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+
+
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
-    mesh: Mesh,
+    mesh: Geometry,
     properties: Mapping[str, Any] | None = None,
     *,
     name: str | None = None,
     drop_extra_properties: bool = False,
 ) -> int:
-    """Store a mesh as a new feature; return its id (geoid).
+    """Store a mesh (or a collection of meshes) as a new feature; return its id (geoid).
 
     Parameters
     ----------
     conn : psycopg.Connection
     feature_class : str or FeatureClass
-    mesh : Mesh
+    mesh : Mesh or GeometryCollection
         Of the class's geotype, with exactly the class's vertex (or cell)
-        properties.
+        properties; for a GEOMETRYCOLLECTION class a GeometryCollection whose
+        every member has them.
     properties : mapping, optional
         Per-feature property values; missing ones are NULL.
     name : str, optional
-        Geometry name (default: ``mesh.name``).
+        Geometry name (default: ``mesh.name``). Members of a collection keep
+        their own names.
     drop_extra_properties : bool
         Ignore mesh properties the class does not store instead of failing.
 
@@ -334,42 +421,41 @@ def insert_feature(
     ------
     NotFoundError, InvalidGeometryError, InvalidPropertyError
         Nothing is written.
+
+    Notes
+    -----
+    A collection is stored as one ``tgsis.geometry`` row per member (owned by
+    the collection: ``collection`` = its geoid) and the collection row
+    (``geoids`` = member geoids in order, bbox = union, counts = sums); the
+    feature's id is the collection's geoid. One transaction, and one COPY per
+    table whatever the number of members.
     """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
     if mesh.geotype != fc.geotype:
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
                                    f"not {mesh.geotype.value} ({type(mesh).__name__})")
-    cell_values = _aligned_properties(fc, mesh, drop_extra_properties)
+    members = mesh.members if isinstance(mesh, GeometryCollection) else (mesh,)
+    cell_values = [_aligned_properties(fc, m, drop_extra_properties,
+                                       _member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh")
+                   for i, m in enumerate(members)]
     feature_values = _feature_columns(fc, properties)
-    table, key = _SIMPLEX[fc.geotype]
-    n, m = mesh.n_vertices, mesh.n_cells
-    bounds = mesh.bounds().ravel().tolist() if n else None
 
     with reraise(), conn.transaction():
-        row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s)",
-                           (fc.geotype.value, name if name is not None else mesh.name, bounds, n, m)).fetchone()
-        assert row is not None
-        geoid = int(row[0])
-        geoids = np.full(max(n, m), geoid, dtype=np.int64)
-        storage = _Storage.of(conn)
-        storage.copy(conn, "tgsis", "vrtx", [
-            ("geoid", geoids[:n], "int8"), ("vrtxid", np.arange(n), "int8"),
-            ("x", mesh.vertices[:, 0], "float8"), ("y", mesh.vertices[:, 1], "float8"), ("z", mesh.vertices[:, 2], "float8")])
-        storage.copy(conn, "tgsis", table, [
-            ("geoid", geoids[:m], "int8"), (key, np.arange(m), "int8"),
-            *((f"vrtxid{i + 1}", mesh.cells[:, i], "int8") for i in range(mesh.cell_size))])
-        if fc.cell_properties:
-            count = n if fc.alignment == "VERTEX" else m
-            storage.copy(conn, fc.schema, fc.cellprotable, [
-                ("_geoid", geoids[:count], "int8"), ("_idx", np.arange(count), "int8"),
-                *((p.name, cell_values[p.name], SQL_TYPES[p.type]) for p in fc.cell_properties)])
+        geoid = _new_geometry(conn, mesh, name if name is not None else mesh.name)
+        if isinstance(mesh, GeometryCollection):
+            member_ids = [_new_geometry(conn, m, m.name, collection=geoid) for m in members]
+            conn.execute("UPDATE tgsis.geometry SET geoids = %s WHERE geoid = %s", (member_ids, geoid))
+        else:
+            member_ids = [geoid]
+        _copy_meshes(conn, fc, member_ids, members, cell_values, _Storage.of(conn))
         columns = ["_geoid", *feature_values]
         conn.execute(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
                 fc._table(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
                 sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
             [geoid, *feature_values.values()])
-    log.info("stored %s feature %d: %d vertices, %d cells", fc.name, geoid, n, m)
+    log.info("stored %s feature %d: %d vertices, %d cells%s", fc.name, geoid, mesh.n_vertices, mesh.n_cells,
+             f" in {len(members)} members" if isinstance(mesh, GeometryCollection) else "")
     return geoid
 
 
@@ -414,6 +500,106 @@ def _positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: 
     return positions
 
 
+@dataclass(frozen=True)
+class _Part:
+    """A geometry to download: its geotype, name, and how messages name it."""
+
+    geotype: Geotype
+    name: str | None
+    label: str
+
+
+def _collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> dict[int, list[tuple[int, _Part]]]:
+    """Members of each collection in ``wanted``, in stored order: ``{collection: [(member geoid, part)]}``."""
+    rows = conn.execute(
+        "SELECT c.geoid, m.geoid, g.geotype, g.geoname FROM tgsis.geometry c "
+        "CROSS JOIN LATERAL unnest(c.geoids) WITH ORDINALITY AS m(geoid, ord) "
+        "LEFT JOIN tgsis.geometry g ON g.geoid = m.geoid "
+        "WHERE c.geoid = ANY(%s) ORDER BY c.geoid, m.ord", (list(wanted),)).fetchall()
+    members: dict[int, list[tuple[int, _Part]]] = {int(g): [] for g in wanted}
+    for cid, mid, geotype, geoname in rows:
+        where = f"member {len(members[cid])} (geometry {mid}) of feature {cid} of class {fc.name}"
+        if geotype is None:
+            raise InvalidGeometryError(f"{where} does not exist", hint=f"SELECT * FROM tgsis.check_geometry({cid})")
+        if geotype == Geotype.GEOMETRYCOLLECTION.value:
+            raise InvalidGeometryError(f"{where} is a GEOMETRYCOLLECTION: collections do not nest",
+                                       hint=f"SELECT * FROM tgsis.check_geometry({cid})")
+        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where)))
+    empty = [cid for cid, listed in members.items() if not listed]
+    if empty:
+        raise InvalidGeometryError(f"feature(s) {empty} of class {fc.name} are collections without members",
+                                   hint="a collection lists its members in tgsis.geometry.geoids")
+    return members
+
+
+@dataclass
+class _Download:
+    """What the COPYs of :func:`_download` returned (columns as numpy arrays)."""
+
+    vertices: list[npt.NDArray[Any]]
+    cells: dict[Geotype, list[npt.NDArray[Any]]]
+    properties: list[npt.NDArray[Any]]
+
+
+def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Download:
+    """COPY the vertices, simplices and cell properties of the geometries ``parts``.
+
+    One COPY for the vertices, one per geotype for the simplices, one for the
+    properties: a bounded number whatever the number of geometries.
+    """
+    id_list = sql.Literal(list(parts))
+    vertices = _copy_out(conn, sql.SQL("SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = ANY({})").format(
+        id_list), ["int8", "int8", "float8", "float8", "float8"])
+    cells: dict[Geotype, list[npt.NDArray[Any]]] = {}
+    for geotype in dict.fromkeys(part.geotype for part in parts.values()):
+        table, key = _SIMPLEX[geotype]
+        cell_cols = [f"vrtxid{i + 1}" for i in range(mesh_class(geotype).cell_size)]
+        group = sql.Literal([g for g, part in parts.items() if part.geotype == geotype])
+        cells[geotype] = _copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
+            sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
+            group), ["int8"] * (2 + len(cell_cols)))
+    properties: list[npt.NDArray[Any]] = []
+    if fc.cell_properties:
+        properties = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
+            sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc._table(fc.cellprotable),
+            id_list), ["int8", "int8", *(SQL_TYPES[p.type] for p in fc.cell_properties)])
+    return _Download(vertices, cells, properties)
+
+
+def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> dict[int, Mesh]:
+    """The mesh of every geometry of ``parts`` from the downloaded rows, in stored id order."""
+    wanted = list(parts)
+    vg, vid, x, y, z = data.vertices
+    vertex_rows = _split(vg, vid, wanted)
+    prop_rows = _split(data.properties[0], data.properties[1], wanted) if data.properties else {}
+    xyz = np.stack([x, y, z], axis=1)
+    meshes: dict[int, Mesh] = {}
+    for geotype, cells in data.cells.items():
+        table, _ = _SIMPLEX[geotype]
+        group = [g for g, part in parts.items() if part.geotype == geotype]
+        cell_rows = _split(cells[0], cells[1], group)
+        for geoid in group:
+            vrows, crows = vertex_rows[geoid], cell_rows[geoid]
+            vertex_ids = vid[vrows]
+            simplices = np.stack([_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]],
+                                 axis=1)
+            values: dict[str, npt.NDArray[Any]] = {}
+            if fc.cell_properties:
+                prows = prop_rows[geoid]
+                target_ids = vertex_ids if fc.alignment == "VERTEX" else cells[1][crows]
+                if len(prows) != len(target_ids) or not np.array_equal(data.properties[1][prows], target_ids):
+                    raise InvalidPropertyError(
+                        f"{parts[geoid].label}: {fc.cellprotable} has {len(prows)} rows for {len(target_ids)} "
+                        f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}")
+                values = {p.name: data.properties[2 + i][prows] for i, p in enumerate(fc.cell_properties)}
+            meshes[geoid] = mesh_class(geotype)(
+                xyz[vrows], simplices,
+                vertex_properties=values if fc.alignment == "VERTEX" else None,
+                cell_properties=values if fc.alignment == "CELL" else None,
+                name=parts[geoid].name)
+    return meshes
+
+
 def fetch_features(conn: Conn, feature_class: str | FeatureClass,
                    ids: Sequence[int] | None = None) -> list[Feature]:
     """Fetch features with their meshes and properties (three COPYs for all of them).
@@ -428,19 +614,26 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
     Returns
     -------
     list of Feature
-        In the order of ``ids`` (by id when omitted).
+        In the order of ``ids`` (by id when omitted). For a GEOMETRYCOLLECTION
+        class each ``mesh`` is a GeometryCollection with its members in stored
+        order; all members of all the features come with one COPY for the
+        vertices, one per member geotype for the simplices and one for the
+        properties.
 
     Raises
     ------
     NotFoundError
         An id is not a feature of the class.
+    InvalidGeometryError, InvalidPropertyError
+        Stored rows that do not make a valid mesh (written by other means:
+        see ``tgsis.check_geometry``).
     """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
-    table, key = _SIMPLEX[fc.geotype]
     props = [p.name for p in fc.feature_properties]
+    is_collection = fc.geotype is Geotype.GEOMETRYCOLLECTION
     fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     with reraise(), conn.transaction():
-        if fresh:  # one snapshot for the four statements below
+        if fresh:  # one snapshot for the statements below
             conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
         rows = conn.execute(
             sql.SQL("SELECT f._geoid, g.geoname{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid {} "
@@ -457,45 +650,30 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
             raise NotFoundError(f"feature class {fc.name} has no feature(s) {missing}")
         if not wanted:
             return []
-        id_list = sql.Literal(wanted)
-        vg, vid, x, y, z = _copy_out(conn, sql.SQL(
-            "SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = ANY({})").format(id_list),
-            ["int8", "int8", "float8", "float8", "float8"])
-        cell_cols = [f"vrtxid{i + 1}" for i in range(fc.mesh_class.cell_size)]
-        cells = _copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
-            sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
-            id_list), ["int8"] * (2 + len(cell_cols)))
-        prop_arrays: list[npt.NDArray[Any]] = []
-        if fc.cell_properties:
-            prop_arrays = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
-                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties),
-                fc._table(fc.cellprotable), id_list),
-                ["int8", "int8", *(SQL_TYPES[p.type] for p in fc.cell_properties)])
+        members: dict[int, list[tuple[int, _Part]]] = {}
+        if is_collection:
+            members = _collection_members(conn, fc, list(dict.fromkeys(wanted)))
+            parts = {mid: part for listed in members.values() for mid, part in listed}
+        else:
+            parts = {g: _Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}") for g in wanted}
+        data = _download(conn, fc, parts)
 
-    vertex_rows = _split(vg, vid, wanted)
-    cell_rows = _split(cells[0], cells[1], wanted)
-    prop_rows = _split(prop_arrays[0], prop_arrays[1], wanted) if prop_arrays else {}
-    xyz = np.stack([x, y, z], axis=1)
+    meshes = _assemble(fc, parts, data)
     features = []
+    used: set[int] = set()
     for geoid in wanted:
-        vrows, crows = vertex_rows[geoid], cell_rows[geoid]
-        vertex_ids = vid[vrows]
-        simplices = np.stack([_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]], axis=1)
-        values: dict[str, npt.NDArray[Any]] = {}
-        if fc.cell_properties:
-            prows = prop_rows[geoid]
-            target_ids = vertex_ids if fc.alignment == "VERTEX" else cells[1][crows]
-            if len(prows) != len(target_ids) or not np.array_equal(prop_arrays[1][prows], target_ids):
-                raise InvalidPropertyError(f"feature {geoid} of class {fc.name}: {fc.cellprotable} has "
-                                           f"{len(prows)} rows for {len(target_ids)} {'vertices' if fc.alignment == 'VERTEX' else 'cells'}")
-            values = {p.name: prop_arrays[2 + i][prows] for i, p in enumerate(fc.cell_properties)}
         row = found[geoid]
-        mesh = fc.mesh_class(
-            xyz[vrows], simplices,
-            vertex_properties=values if fc.alignment == "VERTEX" else None,
-            cell_properties=values if fc.alignment == "CELL" else None,
-            name=row[1])
-        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[2:])), mesh))
+        geometry: Geometry
+        if is_collection:
+            member_meshes = []
+            for mid, _ in members[geoid]:  # a geometry listed twice comes as two meshes
+                member_meshes.append(meshes[mid].copy() if mid in used else meshes[mid])
+                used.add(mid)
+            geometry = GeometryCollection(member_meshes, name=row[1])
+        else:
+            geometry = meshes[geoid].copy() if geoid in used else meshes[geoid]
+            used.add(geoid)
+        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[2:])), geometry))
     return features
 
 
@@ -506,6 +684,8 @@ def fetch_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int
 
 def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.ArrayLike) -> list[int]:
     """Ids of the class's features whose bounding box meets ``bounds`` (GiST index scan).
+
+    A collection's box is the union of its members' boxes.
 
     Parameters
     ----------
@@ -542,7 +722,11 @@ def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
 
 
 def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> bool:
-    """Delete a feature with its geometry and properties; ``False`` if it was not there."""
+    """Delete a feature with its geometry and properties; ``False`` if it was not there.
+
+    A collection goes with the members it owns (the ones stored with it), not
+    with geometries it only lists.
+    """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
     with reraise(), conn.transaction():
         exists = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc._table(fc.featuretable)),

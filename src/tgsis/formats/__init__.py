@@ -3,11 +3,11 @@
 =========  ====================  ====================================  ==========================
 name       extensions            geotypes                              module
 =========  ====================  ====================================  ==========================
-tsurf      ``.ts``               SURFACE                               :mod:`tgsis.formats.gocad`
-pline      ``.pl``               MULTILINESTRING                       :mod:`tgsis.formats.gocad`
-vset       ``.vs``               MULTIPOINT                            :mod:`tgsis.formats.gocad`
-tsolid     ``.so``               MULTITETRA                            :mod:`tgsis.formats.gocad`
-vtu        ``.vtu``              all four                              :mod:`tgsis.formats.vtk`
+tsurf      ``.ts``               SURFACE, collections of them          :mod:`tgsis.formats.gocad`
+pline      ``.pl``               MULTILINESTRING, collections of them  :mod:`tgsis.formats.gocad`
+vset       ``.vs``               MULTIPOINT, collections of them       :mod:`tgsis.formats.gocad`
+tsolid     ``.so``               MULTITETRA, collections of them       :mod:`tgsis.formats.gocad`
+vtu        ``.vtu``              all four, mixed collections           :mod:`tgsis.formats.vtk`
 obj, ply,  ``.obj .ply``         SURFACE                               :mod:`tgsis.formats.trimesh_io`
 off, stl   ``.off .stl``
 =========  ====================  ====================================  ==========================
@@ -15,6 +15,13 @@ off, stl   ``.off .stl``
 >>> from tgsis import formats                                   # doctest: +SKIP
 >>> [fault] = formats.read("fault.ts")                          # doctest: +SKIP
 >>> formats.write(fault, "fault.vtu")                           # doctest: +SKIP
+
+A :class:`~tgsis.mesh.GeometryCollection` is written to the formats that
+hold several objects: a GOCAD file takes the members when they are all of
+its type (one object each), a ``.vtu`` file takes members of mixed types
+(one grid of mixed cell types); OBJ, PLY, OFF and STL hold one object and
+refuse collections. Reading gives the list of objects (the members of a
+collection ``.vtu``).
 
 Each module's documentation says what its format keeps and loses. The
 format is chosen from the file extension unless ``format=`` names it (by name
@@ -34,8 +41,9 @@ from tgsis.formats._common import PathLike, check_mesh
 from tgsis.formats.gocad import (format_gocad, parse_gocad, read_gocad, read_tsurf, write_gocad,
                                  write_gocad_many)
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
-from tgsis.formats.vtk import format_vtu, parse_vtu, read_vtu, write_vtu
-from tgsis.mesh import Geotype, Mesh
+from tgsis.formats.vtk import (format_vtu, parse_vtu, parse_vtu_collection, read_vtu, read_vtu_collection,
+                               write_vtu)
+from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh
 
 __all__ = [
     "FileFormat",
@@ -52,6 +60,8 @@ __all__ = [
     "format_gocad",
     "read_vtu",
     "parse_vtu",
+    "read_vtu_collection",
+    "parse_vtu_collection",
     "write_vtu",
     "format_vtu",
     "read_trimesh_file",
@@ -77,6 +87,11 @@ class FileFormat:
         ``writer(mesh, path, **options) -> None``.
     description : str
         One line for users.
+    collection_writer : callable or None
+        ``collection_writer(collection, path, **options) -> None`` for formats
+        that hold several objects (members of ``geotypes`` only; a format of
+        one geotype takes collections of that type only); None: the format
+        holds one object.
     """
 
     name: str
@@ -85,13 +100,19 @@ class FileFormat:
     reader: Callable[..., list[Mesh]]
     writer: Callable[..., None]
     description: str
+    collection_writer: Callable[..., None] | None = None
 
     def read(self, path: PathLike, **options: Any) -> list[Mesh]:
         """Read every mesh of ``path``."""
         return self.reader(path, **options)
 
-    def write(self, mesh: Mesh, path: PathLike, **options: Any) -> None:
-        """Write ``mesh`` to ``path``, after checking the format can store its geotype."""
+    def write(self, mesh: Geometry, path: PathLike, **options: Any) -> None:
+        """Write ``mesh`` (or a collection) to ``path``, after checking the format can store its geotype(s)."""
+        if isinstance(mesh, GeometryCollection):
+            self._check_collection(mesh, path)
+            assert self.collection_writer is not None
+            self.collection_writer(mesh, path, **options)
+            return
         mesh = check_mesh(mesh, f"the {self.name} writer")
         if mesh.geotype not in self.geotypes:
             fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values() if mesh.geotype in f.geotypes]
@@ -100,9 +121,34 @@ class FileFormat:
                                   hint=f"formats for {mesh.geotype.value}: {', '.join(fits)}")
         self.writer(mesh, path, **options)
 
+    def _check_collection(self, collection: GeometryCollection, path: PathLike) -> None:
+        """Raise FileFormatError unless this format holds all the members of ``collection``."""
+        what = f"a GEOMETRYCOLLECTION of {len(collection)} members"
+        if self.collection_writer is None:
+            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values() if f.collection_writer]
+            raise FileFormatError(f"{self.name} files hold one object, not {what}", path=path,
+                                  hint=f"formats for collections: {', '.join(fits)}")
+        types = list(dict.fromkeys(collection.geotypes))
+        listed = ", ".join(t.value for t in types)
+        if len(self.geotypes) == 1 and len(types) > 1:
+            raise FileFormatError(f"{self.name} files hold objects of one type ({self.geotypes[0].value}); "
+                                  f"{what} mixes {listed}", path=path,
+                                  hint="vtu (.vtu) holds members of mixed types; or export the members one by one")
+        wrong = [t for t in types if t not in self.geotypes]
+        if wrong:
+            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
+                    if f.collection_writer and all(t in f.geotypes for t in types)]
+            raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
+                                  f"{', '.join(t.value for t in wrong)} ({what})", path=path,
+                                  hint=f"formats for this collection: {', '.join(fits)}")
+
 
 def _vtu_reader(path: PathLike, **options: Any) -> list[Mesh]:
-    return [read_vtu(path, **options)]
+    return list(read_vtu_collection(path, **options))
+
+
+def _gocad_collection_writer(collection: GeometryCollection, path: PathLike, **options: Any) -> None:
+    write_gocad_many(collection.members, path, **options)
 
 
 def _trimesh_format(name: str, description: str) -> FileFormat:
@@ -119,11 +165,15 @@ _ALL = (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE, Geotype.MU
 
 #: The known formats by name, in the order they are listed to users.
 FORMATS: dict[str, FileFormat] = {f.name: f for f in (
-    FileFormat("tsurf", (".ts",), (Geotype.SURFACE,), read_gocad, write_gocad, "GOCAD TSurf (triangulated surface)"),
-    FileFormat("pline", (".pl",), (Geotype.MULTILINESTRING,), read_gocad, write_gocad, "GOCAD PLine (polylines)"),
-    FileFormat("vset", (".vs",), (Geotype.MULTIPOINT,), read_gocad, write_gocad, "GOCAD VSet (points)"),
-    FileFormat("tsolid", (".so",), (Geotype.MULTITETRA,), read_gocad, write_gocad, "GOCAD TSolid (tetrahedra)"),
-    FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView)"),
+    FileFormat("tsurf", (".ts",), (Geotype.SURFACE,), read_gocad, write_gocad, "GOCAD TSurf (triangulated surface)",
+               _gocad_collection_writer),
+    FileFormat("pline", (".pl",), (Geotype.MULTILINESTRING,), read_gocad, write_gocad, "GOCAD PLine (polylines)",
+               _gocad_collection_writer),
+    FileFormat("vset", (".vs",), (Geotype.MULTIPOINT,), read_gocad, write_gocad, "GOCAD VSet (points)",
+               _gocad_collection_writer),
+    FileFormat("tsolid", (".so",), (Geotype.MULTITETRA,), read_gocad, write_gocad, "GOCAD TSolid (tetrahedra)",
+               _gocad_collection_writer),
+    FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView)", write_vtu),
     _trimesh_format("obj", "Wavefront OBJ (text, 8 decimals, no properties)"),
     _trimesh_format("ply", "Stanford PLY (binary, exact, with properties)"),
     _trimesh_format("off", "Object File Format (text, 10 decimals, no properties)"),
@@ -165,7 +215,8 @@ def read(path: PathLike, format: str | None = None, **options: Any) -> list[Mesh
     Returns
     -------
     list of Mesh
-        GOCAD files may hold several objects; the other formats give one mesh.
+        GOCAD files may hold several objects, and ``.vtu`` files written from
+        a collection its members; the other formats give one mesh.
     """
     return format_for(path, format).read(path, **options)
 
@@ -185,13 +236,15 @@ def read_one(path: PathLike, format: str | None = None, **options: Any) -> Mesh:
     return meshes[0]
 
 
-def write(mesh: Mesh, path: PathLike, format: str | None = None, **options: Any) -> None:
-    """Write a mesh to a file in the format named or implied by the extension.
+def write(mesh: Geometry, path: PathLike, format: str | None = None, **options: Any) -> None:
+    """Write a mesh (or a collection) to a file in the format named or implied by the extension.
 
     Parameters
     ----------
-    mesh : Mesh
-        The mesh; its geotype must be one the format stores.
+    mesh : Mesh or GeometryCollection
+        The mesh; its geotype must be one the format stores. A collection
+        needs a format that holds several objects of its members' types
+        (GOCAD: all members of the file's type; ``.vtu``: any).
     path : str or path-like
         The file (replaced if it exists).
     format : str, optional
@@ -204,7 +257,8 @@ def write(mesh: Mesh, path: PathLike, format: str | None = None, **options: Any)
     Raises
     ------
     FileFormatError
-        Unknown format, a geotype the format cannot store, data the format
-        cannot hold, or an unwritable file.
+        Unknown format, a geotype the format cannot store (for a collection:
+        a format of one object, or a GOCAD type that is not every member's),
+        data the format cannot hold, or an unwritable file.
     """
     format_for(path, format).write(mesh, path, **options)

@@ -25,6 +25,17 @@ smaller and faster for big meshes. Both are standard VTK XML (file version
 cells and properties (dtypes included, except bool and float16); the mesh's
 other metadata is not stored.
 
+A :class:`~tgsis.mesh.GeometryCollection` is written as one grid of mixed
+cell types: the members' points one member after the other, their cells
+likewise (connectivity shifted to the member's first point), and in
+``FieldData`` the geotype ``GEOMETRYCOLLECTION``, ``tgsis_member_geotypes``
+and ``tgsis_member_names`` (String arrays, one string per member; no name is
+written as the empty string) and ``tgsis_member_sizes`` (Int64, 2 components:
+points and cells of each member). ParaView shows the whole grid. A vertex or
+cell property must be on every member (a VTU array covers all points or all
+cells); members with different dtypes of one property come back with the
+common dtype (numpy promotion).
+
 Reading (:func:`read_vtu`)
 --------------------------
 Reads what the writer writes and also: ``format="ascii"`` arrays, appended
@@ -36,6 +47,8 @@ properties ``name_0`` .. ``name_{k-1}``; names that are not valid mesh
 property names are sanitised and the file's names are kept in
 ``metadata["vtk_array_names"]`` (``{"point_data": {mesh name: file name},
 "cell_data": {...}}``, only for names that changed).
+:func:`read_vtu_collection` reads the collections the writer writes back into
+their members (and a file of one mesh as a collection of that mesh).
 """
 
 from __future__ import annotations
@@ -52,9 +65,10 @@ import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
-from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
+from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
-__all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "write_vtu", "format_vtu"]
+__all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "read_vtu_collection", "parse_vtu_collection", "write_vtu",
+           "format_vtu"]
 
 #: VTK cell type of each mesh class.
 VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
@@ -76,13 +90,14 @@ Encoding = Literal["binary", "appended"]
 # ---------------------------------------------------------------- writing
 
 
-def write_vtu(mesh: Mesh, path: PathLike, *, encoding: Encoding = "binary") -> None:
-    """Write a mesh as a VTK XML UnstructuredGrid file.
+def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") -> None:
+    """Write a mesh or a collection as a VTK XML UnstructuredGrid file.
 
     Parameters
     ----------
-    mesh : Mesh
-        A PointSet, LineSet, Surface or TetraMesh.
+    mesh : Mesh or GeometryCollection
+        A PointSet, LineSet, Surface or TetraMesh, or a collection of them
+        (one grid of mixed cell types, see the module documentation).
     path : str or path-like
         The ``.vtu`` file to write (replaced if it exists).
     encoding : {"binary", "appended"}
@@ -91,38 +106,100 @@ def write_vtu(mesh: Mesh, path: PathLike, *, encoding: Encoding = "binary") -> N
     Raises
     ------
     FileFormatError
-        The file cannot be written.
+        The file cannot be written, or a collection has a property that not
+        every member has.
     """
     write_bytes(path, [format_vtu(mesh, encoding=encoding)])
 
 
-def format_vtu(mesh: Mesh, *, encoding: Encoding = "binary") -> bytes:
-    """The ``.vtu`` file content for ``mesh``; see :func:`write_vtu`."""
-    mesh = check_mesh(mesh, "the VTU writer")
+@dataclass(frozen=True)
+class _Grid:
+    """What one Piece holds: points (n, 3), cells as connectivity (c,), offsets (m,), types (m,), data."""
+
+    name: str | None
+    geotype: str
+    vertices: npt.NDArray[np.float64]
+    connectivity: npt.NDArray[np.int64]
+    offsets: npt.NDArray[np.int64]
+    types: npt.NDArray[np.uint8]
+    point_data: dict[str, npt.NDArray[Any]]
+    cell_data: dict[str, npt.NDArray[Any]]
+    members: GeometryCollection | None = None
+
+
+def _mesh_grid(mesh: Mesh) -> _Grid:
+    k = mesh.cell_size
+    return _Grid(mesh.name, mesh.geotype.value, mesh.vertices, mesh.cells.reshape(-1),
+                 np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k,
+                 np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8),
+                 mesh.vertex_properties, mesh.cell_properties)
+
+
+def _collection_grid(collection: GeometryCollection) -> _Grid:
+    """One grid of mixed cell types: the members' points and cells one member after the other."""
+    members = collection.members
+    first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
+    connectivity = np.concatenate([m.cells.reshape(-1) + start for m, start in zip(members, first_point)])
+    sizes = np.concatenate([np.full(m.n_cells, m.cell_size, dtype=np.int64) for m in members])
+    types = np.concatenate([np.full(m.n_cells, VTK_CELL_TYPES[mesh_class(m.geotype)], dtype=np.uint8)
+                            for m in members])
+    return _Grid(collection.name, collection.geotype.value, np.concatenate([m.vertices for m in members]),
+                 connectivity.astype(np.int64), np.cumsum(sizes).astype(np.int64), types,
+                 _shared_properties(members, "vertex"), _shared_properties(members, "cell"), collection)
+
+
+def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"]) -> dict[str, npt.NDArray[Any]]:
+    """The members' ``kind`` properties concatenated; each must be on every member."""
+    def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
+        return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
+
+    names = dict.fromkeys(name for m in members for name in of(m))
+    for name in names:
+        lacking = [i for i, m in enumerate(members) if name not in of(m)]
+        if lacking:
+            raise FileFormatError(
+                f"{kind} property {name!r} is on some members of the collection but not on members {lacking}: "
+                f"a VTU grid holds one value per {'point' if kind == 'vertex' else 'cell'} of all members",
+                hint="give every member the property, or remove it before writing")
+    return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
+
+
+def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary") -> bytes:
+    """The ``.vtu`` file content for ``mesh`` or a collection; see :func:`write_vtu`."""
     if encoding not in ("binary", "appended"):
         raise FileFormatError(f"unknown VTU encoding {encoding!r}: use 'binary' or 'appended'")
+    source = (_collection_grid(mesh) if isinstance(mesh, GeometryCollection)
+              else _mesh_grid(check_mesh(mesh, "the VTU writer")))
     writer = _ArrayWriter(appended=encoding == "appended")
     root = ET.Element("VTKFile", type="UnstructuredGrid", version="1.0", byte_order="LittleEndian",
                       header_type="UInt64")
     grid = ET.SubElement(root, "UnstructuredGrid")
     field_data = ET.SubElement(grid, "FieldData")
-    if mesh.name:
-        field_data.append(_string_array("name", mesh.name))
-    field_data.append(_string_array("tgsis_geotype", mesh.geotype.value))
-    piece = ET.SubElement(grid, "Piece", NumberOfPoints=str(mesh.n_vertices), NumberOfCells=str(mesh.n_cells))
+    if source.name:
+        field_data.append(_string_array("name", source.name))
+    field_data.append(_string_array("tgsis_geotype", source.geotype))
+    if source.members is not None:
+        members = source.members.members
+        field_data.append(_string_array("tgsis_member_geotypes", *(m.geotype.value for m in members)))
+        field_data.append(_string_array("tgsis_member_names", *(m.name or "" for m in members)))
+        sizes = writer.array("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members],
+                                                            dtype=np.int64), components=2)
+        sizes.set("NumberOfTuples", str(len(members)))
+        field_data.append(sizes)
+    n_points, n_cells = len(source.vertices), len(source.types)
+    piece = ET.SubElement(grid, "Piece", NumberOfPoints=str(n_points), NumberOfCells=str(n_cells))
     point_data = ET.SubElement(piece, "PointData")
-    for name, values in mesh.vertex_properties.items():
+    for name, values in source.point_data.items():
         point_data.append(writer.array(name, values))
     cell_data = ET.SubElement(piece, "CellData")
-    for name, values in mesh.cell_properties.items():
+    for name, values in source.cell_data.items():
         cell_data.append(writer.array(name, values))
     points = ET.SubElement(piece, "Points")
-    points.append(writer.array("Points", mesh.vertices, components=3))
+    points.append(writer.array("Points", source.vertices, components=3))
     cells = ET.SubElement(piece, "Cells")
-    k = mesh.cell_size
-    cells.append(writer.array("connectivity", mesh.cells.reshape(-1)))
-    cells.append(writer.array("offsets", np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k))
-    cells.append(writer.array("types", np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8)))
+    cells.append(writer.array("connectivity", source.connectivity))
+    cells.append(writer.array("offsets", source.offsets))
+    cells.append(writer.array("types", source.types))
     ET.indent(root)
     text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False))
     if not writer.appended:
@@ -167,14 +244,14 @@ def _vtk_values(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
     return np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("<"))
 
 
-def _string_array(name: str, value: str) -> ET.Element:
-    """A FieldData string array holding one string.
+def _string_array(name: str, *values: str) -> ET.Element:
+    """A FieldData string array holding ``values`` (one string each).
 
     As VTK writes a vtkStringArray: an ``<Array>`` (not ``<DataArray>``) element
     with the bytes as decimal codes, each string terminated by 0.
     """
-    element = ET.Element("Array", type="String", Name=name, NumberOfTuples="1", format="ascii")
-    element.text = " ".join(str(b) for b in [*value.encode("utf-8"), 0])
+    element = ET.Element("Array", type="String", Name=name, NumberOfTuples=str(len(values)), format="ascii")
+    element.text = " ".join(str(b) for value in values for b in [*value.encode("utf-8"), 0])
     return element
 
 
@@ -182,7 +259,7 @@ def _string_array(name: str, value: str) -> ET.Element:
 
 
 def read_vtu(path: PathLike) -> Mesh:
-    """Read a VTK XML UnstructuredGrid file.
+    """Read a VTK XML UnstructuredGrid file of one mesh.
 
     Parameters
     ----------
@@ -197,14 +274,52 @@ def read_vtu(path: PathLike) -> Mesh:
     Raises
     ------
     FileFormatError
-        The file cannot be read, is not a valid ``.vtu``, or holds cells that
-        are not all VERTEX, all LINE, all TRIANGLE or all TETRA.
+        The file cannot be read, is not a valid ``.vtu``, holds cells that
+        are not all VERTEX, all LINE, all TRIANGLE or all TETRA, or holds a
+        collection (:func:`read_vtu_collection` reads those).
     """
     return parse_vtu(read_bytes(path), path=path)
 
 
 def parse_vtu(data: bytes, *, path: PathLike | None = None) -> Mesh:
     """Parse the content of a ``.vtu`` file; see :func:`read_vtu`. ``path`` is for messages only."""
+    result = _parse(data, path)
+    if isinstance(result, GeometryCollection):
+        raise FileFormatError(f"the file holds a GEOMETRYCOLLECTION of {len(result)} members, not one mesh",
+                              path=path, hint="tgsis.formats.read or read_vtu_collection reads the members")
+    return result
+
+
+def read_vtu_collection(path: PathLike) -> GeometryCollection:
+    """Read a ``.vtu`` file written from a GeometryCollection (a file of one mesh gives a collection of it).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.vtu`` file.
+
+    Returns
+    -------
+    GeometryCollection
+        The members in file order, with their names and properties.
+
+    Raises
+    ------
+    FileFormatError
+        As :func:`read_vtu`; also when the member table in ``FieldData`` does
+        not match the grid.
+    """
+    return parse_vtu_collection(read_bytes(path), path=path)
+
+
+def parse_vtu_collection(data: bytes, *, path: PathLike | None = None) -> GeometryCollection:
+    """Parse the content of a ``.vtu`` file; see :func:`read_vtu_collection`."""
+    result = _parse(data, path)
+    return result if isinstance(result, GeometryCollection) else GeometryCollection([result], name=result.name)
+
+
+def _parse(data: bytes, path: PathLike | None) -> Mesh | GeometryCollection:
+    """A mesh, or a collection when the FieldData says GEOMETRYCOLLECTION."""
     xml_bytes, appended = _split_appended(data)
     try:
         root = ET.fromstring(xml_bytes)
@@ -223,8 +338,10 @@ def parse_vtu(data: bytes, *, path: PathLike | None = None) -> Mesh:
     n_cells = _int_attribute(piece, "NumberOfCells", path)
 
     vertices = decoder.array(_find_array(piece, "Points", None, path), n_points, 3).astype(np.float64)
-    mesh_type, cells = _cells(piece, decoder, n_cells, path)
     fields = _field_strings(grid, decoder) if grid is not None else {}
+    if grid is not None and fields.get("tgsis_geotype") == GeometryCollection.geotype.value:
+        return _collection(grid, piece, decoder, vertices.reshape(n_points, 3), n_cells, fields.get("name"))
+    mesh_type, cells = _cells(piece, decoder, n_cells, path)
     if n_cells == 0 and "tgsis_geotype" in fields:
         try:
             mesh_type = mesh_class(fields["tgsis_geotype"])
@@ -240,6 +357,82 @@ def parse_vtu(data: bytes, *, path: PathLike | None = None) -> Mesh:
                          name=fields.get("name"), metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the grid is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
+
+
+def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices: npt.NDArray[np.float64],
+                n_cells: int, name: str | None) -> GeometryCollection:
+    """The members of a grid written from a GeometryCollection, after its FieldData member table."""
+    path = decoder.path
+    strings = _field_string_lists(grid, decoder)
+    geotypes = strings.get("tgsis_member_geotypes")
+    sizes_element = _field_element(grid, "tgsis_member_sizes")
+    if not geotypes or sizes_element is None:
+        raise FileFormatError("a GEOMETRYCOLLECTION grid needs the FieldData arrays tgsis_member_geotypes and "
+                              "tgsis_member_sizes", path=path)
+    names = strings.get("tgsis_member_names", [])
+    sizes = decoder.array(sizes_element, len(geotypes), 2).astype(np.int64).reshape(-1, 2)
+    if sizes.min() < 0 or sizes[:, 0].sum() != len(vertices) or sizes[:, 1].sum() != n_cells:
+        raise FileFormatError(f"tgsis_member_sizes lists {int(sizes[:, 0].sum())} points and "
+                              f"{int(sizes[:, 1].sum())} cells, the grid has {len(vertices)} and {n_cells}", path=path)
+    types, ends, connectivity = _mixed_cells(piece, decoder, n_cells)
+    arrays: dict[str, dict[str, str]] = {}
+    point_data = _data_arrays(piece.find("PointData"), decoder, len(vertices), arrays, "point_data")
+    cell_data = _data_arrays(piece.find("CellData"), decoder, n_cells, arrays, "cell_data")
+    members: list[Mesh] = []
+    first_point = first_cell = 0
+    for i, (geotype, (n_p, n_c)) in enumerate(zip(geotypes, sizes.tolist())):
+        try:
+            mesh_type = mesh_class(geotype)
+        except InvalidGeometryError:
+            raise FileFormatError(f"member {i} has geotype {geotype!r}, not one of a mesh", path=path) from None
+        code, k = VTK_CELL_TYPES[mesh_type], mesh_type.cell_size
+        cells = slice(first_cell, first_cell + n_c)
+        if np.any(types[cells] != code):
+            raise FileFormatError(f"member {i} is a {geotype} but has cells that are not "
+                                  f"{_CELL_TYPE_NAMES[code]} ({code})", path=path)
+        start = int(ends[first_cell - 1]) if first_cell else 0
+        points = slice(first_point, first_point + n_p)
+        try:
+            members.append(mesh_type(
+                vertices[points], (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k),
+                vertex_properties={key: values[points] for key, values in point_data.items()},
+                cell_properties={key: values[cells] for key, values in cell_data.items()},
+                name=(names[i] if i < len(names) else "") or None))
+        except (InvalidGeometryError, InvalidPropertyError) as exc:
+            raise FileFormatError(f"member {i} is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
+        first_point, first_cell = first_point + n_p, first_cell + n_c
+    return GeometryCollection(members, name=name, metadata={"vtk_array_names": arrays} if arrays else None)
+
+
+def _mixed_cells(piece: ET.Element, decoder: _Decoder,
+                 n_cells: int) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Cell types (m,), offsets (m,) = end of each cell in the connectivity, connectivity, of any known types."""
+    path = decoder.path
+    if piece.find("Cells") is None:
+        if n_cells:
+            raise FileFormatError(f"the Piece declares {n_cells} cells but has no <Cells>", path=path)
+        empty = np.empty(0, dtype=np.int64)
+        return empty, empty, empty
+    types = decoder.array(_find_array(piece, "Cells", "types", path), n_cells, 1)
+    offsets = decoder.array(_find_array(piece, "Cells", "offsets", path), None, 1).astype(np.int64)
+    if len(offsets) == n_cells + 1 and offsets[0] == 0:
+        offsets = offsets[1:]  # the in-memory vtkCellArray layout, with the leading 0
+    unknown = sorted({int(t) for t in np.unique(types)} - set(_MESH_OF_CELL_TYPE))
+    if unknown:
+        listed = ", ".join(f"{t} ({_CELL_TYPE_NAMES.get(t, 'unknown')})" for t in unknown)
+        raise FileFormatError(f"VTK cell types {listed} are not supported: tgsis reads VERTEX (1), LINE (3), "
+                              "TRIANGLE (5) and TETRA (10)", path=path)
+    size_of = np.zeros(256, dtype=np.int64)
+    for code, cls in _MESH_OF_CELL_TYPE.items():
+        size_of[code] = cls.cell_size
+    if len(offsets) != n_cells or not np.array_equal(offsets, np.cumsum(size_of[types.astype(np.int64)])):
+        raise FileFormatError(f"cell offsets do not match the sizes of the {n_cells} cells' types", path=path)
+    connectivity_element = _find_array(piece, "Cells", "connectivity", path)
+    connectivity = decoder.array(connectivity_element, int(offsets[-1]) if n_cells else 0, 1)
+    if connectivity.dtype.kind not in "iu":
+        raise FileFormatError(f"cell connectivity must be integers, got {connectivity_element.get('type')}",
+                              path=path)
+    return types, offsets, connectivity.astype(np.int64)
 
 
 def _split_appended(data: bytes) -> tuple[bytes, bytes]:
@@ -334,13 +527,38 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
     return result
 
 
+def _field_elements(grid: ET.Element) -> list[ET.Element]:
+    """The arrays of FieldData (it belongs to the grid; some writers put it in the Piece)."""
+    return [e for section in (grid.find("FieldData"), grid.find("Piece/FieldData")) if section is not None
+            for e in section if e.tag in ("Array", "DataArray")]
+
+
+def _field_element(grid: ET.Element, name: str) -> ET.Element | None:
+    """The FieldData array called ``name``, if any."""
+    return next((e for e in _field_elements(grid) if e.get("Name") == name), None)
+
+
+def _field_string_lists(grid: ET.Element, decoder: _Decoder) -> dict[str, list[str]]:
+    """Every string of each String array in FieldData."""
+    result: dict[str, list[str]] = {}
+    for element in _field_elements(grid):
+        if element.get("type") != "String" or not element.get("Name"):
+            continue
+        try:
+            raw = decoder.array(element, None, 1).astype(np.uint8).tobytes()
+        except FileFormatError:
+            continue
+        parts = raw.split(b"\0")
+        if raw.endswith(b"\0"):
+            parts.pop()
+        result[str(element.get("Name"))] = [p.decode("utf-8", errors="replace") for p in parts]
+    return result
+
+
 def _field_strings(grid: ET.Element, decoder: _Decoder) -> dict[str, str]:
     """The first string of each String array in FieldData."""
     result: dict[str, str] = {}
-    # FieldData belongs to the grid; some writers put it in the Piece
-    elements = [e for section in (grid.find("FieldData"), grid.find("Piece/FieldData")) if section is not None
-                for e in section if e.tag in ("Array", "DataArray")]
-    for element in elements:
+    for element in _field_elements(grid):
         if element.get("type") != "String" or not element.get("Name"):
             continue
         try:
