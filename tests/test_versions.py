@@ -149,7 +149,7 @@ def test_unknown_version_everywhere(conn: Conn) -> None:
     assert _tree(conn) == {"DEFAULT": (None, None, 0, [0])}
 
 
-@pytest.mark.parametrize("name", ["", " a", "a b", "x" * 64, "-a", "a;drop", None])
+@pytest.mark.parametrize("name", ["", " a", "a b", "x" * 64, "-a", "a;drop", "a@1", None])
 def test_bad_version_names_are_refused_and_nothing_is_written(conn: Conn, name: Any) -> None:
     with pytest.raises(tgsis.InvalidNameError, match="version name"):
         tgsis.create_version(conn, name)

@@ -9,14 +9,17 @@ one running).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import math
 import os
 import signal
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
+
+import psycopg
 
 from psycopg import sql as psycopg_sql
 
@@ -24,6 +27,8 @@ import tgsis
 from tgsis.db.connect import connect, release_local_server, resolve_target
 from tgsis.db.install import install, installed_version, uninstall
 from tgsis.db.local import LocalServer, find_binaries
+from tgsis import clistate
+from tgsis.db import versions as V
 from tgsis.db.features import (
     class_of_feature,
     create_feature_class,
@@ -81,6 +86,43 @@ def cmd_db_status(args: argparse.Namespace) -> int:
     _out(f"tgsis:    {f'{current.version} ({current.method})' if current else 'not installed'}")
     _out(f"client:   {tgsis.__version__}")
     return 0
+
+
+# --------------------------------------------------------------------------- working version
+
+
+def _target_key(args: argparse.Namespace) -> str:
+    target = resolve_target(args.dsn)
+    return target.dsn if target.dsn is not None else "local"
+
+
+def _chosen_version(args: argparse.Namespace) -> str | None:
+    """--in, else $TGSIS_VERSION, else what `tgsis version goto` remembered for this database."""
+    return args.in_version or os.environ.get("TGSIS_VERSION") or clistate.remembered_version(_target_key(args))
+
+
+def _split_version(text: str) -> tuple[str, int | None]:
+    """``VERSION`` or ``VERSION@REVISION``."""
+    name, sep, revision = text.partition("@")
+    if not sep:
+        return name, None
+    if not revision.isdigit():
+        raise InvalidInputError(f"{text!r} is not VERSION or VERSION@REVISION")
+    return name, int(revision)
+
+
+@contextlib.contextmanager
+def _connect(args: argparse.Namespace) -> Iterator[psycopg.Connection[Any]]:
+    """A connection working in the chosen version, or looking at VERSION@REVISION (DEFAULT when none is chosen)."""
+    with connect(args.dsn) as conn:
+        chosen = _chosen_version(args)
+        if chosen is not None:
+            name, revision = _split_version(chosen)
+            if revision is None:
+                V.goto_version(conn, name)
+            else:
+                V.goto_revision(conn, name, revision)
+        yield conn
 
 
 # --------------------------------------------------------------------------- local
@@ -143,7 +185,7 @@ def _pairs(items: Sequence[str] | None, what: str) -> list[tuple[str, str]]:
 
 
 def cmd_class_create(args: argparse.Namespace) -> int:
-    with connect(args.dsn) as conn:
+    with _connect(args) as conn:
         fc = create_feature_class(
             conn, args.name, args.geotype, feature_properties=_pairs(args.feature_property, "--feature-property"),
             cell_properties=_pairs(args.property, "--property"), alignment=args.alignment.upper(), srs=args.srs,
@@ -154,7 +196,7 @@ def cmd_class_create(args: argparse.Namespace) -> int:
 
 
 def cmd_class_list(args: argparse.Namespace) -> int:
-    with connect(args.dsn) as conn:
+    with _connect(args) as conn:
         classes = list_feature_classes(conn)
     for fc in classes:
         fprops = ", ".join(f"{p.name} {p.type}" for p in fc.feature_properties) or "-"
@@ -167,7 +209,7 @@ def cmd_class_list(args: argparse.Namespace) -> int:
 
 
 def cmd_class_drop(args: argparse.Namespace) -> int:
-    with connect(args.dsn) as conn:
+    with _connect(args) as conn:
         deleted = drop_feature_class(conn, args.name, force=args.force)
     _out(f"dropped feature class {args.name}" + (f" and its {deleted} feature(s)" if deleted else ""))
     return 0
@@ -212,7 +254,7 @@ def cmd_import(args: argparse.Namespace) -> int:
         _check_flagged(args.file, meshes, reports)
     values = _feature_values(args.set)
     stem = Path(args.file).stem
-    with connect(args.dsn) as conn:
+    with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class)
         if fc.geotype is Geotype.GEOMETRYCOLLECTION:  # the whole file is one feature
             collection = GeometryCollection(meshes, name=args.name or stem)
@@ -238,7 +280,7 @@ def cmd_import(args: argparse.Namespace) -> int:
 def cmd_export(args: argparse.Namespace) -> int:
     from tgsis import formats
 
-    with connect(args.dsn) as conn:
+    with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
         feature = fetch_feature(conn, fc, args.id)
     assert feature.mesh is not None
@@ -249,7 +291,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def cmd_ls(args: argparse.Namespace) -> int:
-    with connect(args.dsn) as conn:
+    with _connect(args) as conn:
         classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
         rows = []
         for fc in classes:
@@ -262,6 +304,112 @@ def cmd_ls(args: argparse.Namespace) -> int:
         _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells{members}")
     if not rows:
         print("no features", file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------- versions
+
+
+def cmd_version_create(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        revision = V.create_version(conn, args.name, args.parent, description=args.description)
+    _out(f"created version {args.name} (parent {args.parent}), working revision {revision}")
+    return 0
+
+
+def cmd_version_list(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        versions = V.list_versions(conn)
+        current = V.working_version(conn)
+    for v in versions:
+        mark = "*" if v.name == current else " "
+        _out(f"{mark} {v.name}\tparent {v.parent or '-'}\tinitrevision {v.initrevision if v.initrevision is not None else '-'}"
+             f"\tworking {v.workingrevision}\towner {v.owner}\t{v.created_at:%Y-%m-%d %H:%M}\t{v.description or ''}")
+    return 0
+
+
+def cmd_version_tree(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        _out(V.format_tree(V.list_versions(conn)))
+    return 0
+
+
+def cmd_version_goto(args: argparse.Namespace) -> int:
+    name, revision = _split_version(args.name)
+    with connect(args.dsn) as conn:
+        if revision is None:
+            V.goto_version(conn, name)  # checks that it exists
+            working = V.working_revision(conn)
+        else:
+            V.goto_revision(conn, name, revision)
+    clistate.remember_version(_target_key(args), args.name)
+    if revision is None:
+        _out(f"commands on this database now work in version {name} (working revision {working})")
+    else:
+        _out(f"commands on this database now look at revision {revision} of version {name} (read-only)")
+    return 0
+
+
+def cmd_version_current(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        name, working, viewing = V.working_version(conn), V.working_revision(conn), V.viewing_revision(conn)
+    source = ("--in" if args.in_version else "$TGSIS_VERSION" if os.environ.get("TGSIS_VERSION")
+              else "tgsis version goto" if clistate.remembered_version(_target_key(args)) else "default")
+    looking = f"\tviewing revision {viewing} (read-only)" if viewing is not None else ""
+    _out(f"{name}\tworking revision {working}{looking}\t(from {source})")
+    return 0
+
+
+def cmd_version_save(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        saved = V.save_revision(conn, args.name)
+        version, working = V.working_version(conn), V.working_revision(conn)
+    _out(f"saved revision {saved} of {version} as {args.name}; new working revision {working}")
+    return 0
+
+
+def cmd_version_delete(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        removed = V.delete_version(conn, args.name)
+    if clistate.remembered_version(_target_key(args)) == args.name:
+        clistate.remember_version(_target_key(args), None)
+    _out(f"deleted version {args.name} and {removed} row version(s)")
+    return 0
+
+
+def cmd_versioning_enable(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        if args.table == "features":
+            count = V.enable_feature_versioning(conn)
+            _out(f"model 1 and the feature classes are versioned (object class feature): {count} table(s) newly versioned")
+            return 0
+        if not (args.key and args.object_class):
+            raise InvalidInputError("versioning a table needs --key and --class",
+                                    hint="e.g. tgsis versioning enable wells --key id --class well")
+        t = V.enable_versioning(conn, args.table, args.key, args.object_class, args.order, args.shortname)
+    _out(f"{t.schema}.{t.table} is versioned (object class {t.objectclass}, key {t.objectkeyfield}, "
+         f"storage {t.table}_ver)")
+    return 0
+
+
+def cmd_versioning_disable(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        if args.table == "features":
+            removed = V.disable_feature_versioning(conn, force=args.force)
+        else:
+            removed = V.disable_versioning(conn, args.table, force=args.force)
+    _out(f"{args.table}: versioning disabled, DEFAULT's rows kept, {removed} row version(s) removed")
+    return 0
+
+
+def cmd_versioning_list(args: argparse.Namespace) -> int:
+    with connect(args.dsn) as conn:
+        tables = V.versioned_tables(conn)
+    for t in tables:
+        _out(f"{t.schema}.{t.table}\t{t.objectclass}\tkey {t.objectkeyfield}\torder {t.iudorder}\t"
+             f"short {t.shortname}\trow key ({', '.join(t.keycolumns)})")
+    if not tables:
+        print("no versioned tables", file=sys.stderr)
     return 0
 
 
@@ -287,6 +435,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"tgsis {tgsis.__version__}")
     parser.add_argument("--dsn", help="libpq connection string (default: $TGSIS_DSN, PG* variables, "
                                       "else the local server tgsis runs itself)")
+    parser.add_argument("--in", dest="in_version", metavar="VERSION[@REVISION]",
+                        help="work in this version, or look at one of its revisions (default: $TGSIS_VERSION, "
+                             "else what `tgsis version goto` chose, else DEFAULT)")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)")
     parser.add_argument("-q", "--quiet", action="store_true", help="errors only")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -356,6 +507,46 @@ def build_parser() -> argparse.ArgumentParser:
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
     ls.set_defaults(handler=cmd_ls)
+
+    ver = commands.add_parser("version", help="versions (long transactions): create, list, tree, goto, save, delete")
+    ver_commands = ver.add_subparsers(dest="version_command", metavar="ACTION", required=True)
+    ver_create = ver_commands.add_parser("create", help="create a child version")
+    ver_create.add_argument("name")
+    ver_create.add_argument("--parent", default="DEFAULT", help="parent version (default: DEFAULT)")
+    ver_create.add_argument("--description")
+    ver_create.set_defaults(handler=cmd_version_create)
+    ver_list = ver_commands.add_parser("list", help="list the versions (* marks the one commands work in)")
+    ver_list.set_defaults(handler=cmd_version_list)
+    ver_tree = ver_commands.add_parser("tree", help="print the version tree with revisions")
+    ver_tree.set_defaults(handler=cmd_version_tree)
+    ver_goto = ver_commands.add_parser("goto", help="work in a version from now on (remembered per database)")
+    ver_goto.add_argument("name", metavar="VERSION[@REVISION]",
+                          help="a version, or a revision of its history to look at read-only")
+    ver_goto.set_defaults(handler=cmd_version_goto)
+    ver_current = ver_commands.add_parser("current", help="the version commands work in, and its working revision")
+    ver_current.set_defaults(handler=cmd_version_current)
+    ver_save = ver_commands.add_parser("save", help="freeze the working revision under a name, start a new one")
+    ver_save.add_argument("name")
+    ver_save.set_defaults(handler=cmd_version_save)
+    ver_delete = ver_commands.add_parser("delete", help="delete a version without children, with its changes")
+    ver_delete.add_argument("name")
+    ver_delete.set_defaults(handler=cmd_version_delete)
+
+    vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
+    vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)
+    vt_enable = vt_commands.add_parser("enable", help="version a table (or 'features': model 1 and all feature classes)")
+    vt_enable.add_argument("table", help="name or schema.name, or 'features'")
+    vt_enable.add_argument("--key", help="column holding the object key")
+    vt_enable.add_argument("--class", dest="object_class", help="object class")
+    vt_enable.add_argument("--order", type=int, default=0, help="iudorder within the object class (default 0)")
+    vt_enable.add_argument("--shortname", help="name in conflict reports (default: the table name)")
+    vt_enable.set_defaults(handler=cmd_versioning_enable)
+    vt_disable = vt_commands.add_parser("disable", help="make a versioned table plain again with DEFAULT's rows")
+    vt_disable.add_argument("table", help="name or schema.name, or 'features'")
+    vt_disable.add_argument("--force", action="store_true", help="even if versions other than DEFAULT changed it")
+    vt_disable.set_defaults(handler=cmd_versioning_disable)
+    vt_list = vt_commands.add_parser("list", help="list the versioned tables")
+    vt_list.set_defaults(handler=cmd_versioning_list)
 
     local = commands.add_parser("local", help="the local PostgreSQL server tgsis runs by itself")
     local_commands = local.add_subparsers(dest="local_command", metavar="ACTION", required=True)

@@ -1,0 +1,88 @@
+"""`tgsis version ...` and `tgsis versioning ...`: versions from the command line, remembered per database."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import psycopg
+import pytest
+
+from tests.shared_data import cfm
+from tgsis.cli import main
+
+RELEASE_5 = "cfm5.3/GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts"
+RELEASE_6 = "cfm6.1/GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts"
+
+
+@pytest.fixture(autouse=True)
+def private_state(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
+    monkeypatch.delenv("TGSIS_VERSION", raising=False)
+    return tmp_path / "cli-state.json"
+
+
+def _run(dsn: str, capsys: pytest.CaptureFixture[str], *argv: str, code: int = 0) -> str:
+    assert main(["--dsn", dsn, *argv]) == code, capsys.readouterr()
+    captured = capsys.readouterr()
+    return captured.out if code == 0 else captured.err
+
+
+def test_a_fault_reinterpreted_in_a_version(db_dsn: str, capsys: pytest.CaptureFixture[str],
+                                            private_state: Path) -> None:
+    _run(db_dsn, capsys, "class", "create", "faults", "--geotype", "SURFACE", "--feature-property", "release:text")
+    assert "newly versioned" in _run(db_dsn, capsys, "versioning", "enable", "features")
+    out = _run(db_dsn, capsys, "import", str(cfm(RELEASE_5)), "--class", "faults", "--set", "release=5.3",
+               "--drop-extra-properties")
+    fid = out.split("\t")[0]
+    assert _run(db_dsn, capsys, "version", "create", "cfm6") == \
+        "created version cfm6 (parent DEFAULT), working revision 2\n"
+    assert "now work in version cfm6 (working revision 2)" in _run(db_dsn, capsys, "version", "goto", "cfm6")
+    assert private_state.is_file()
+    # the new release goes into the version; DEFAULT still has the old one only
+    _run(db_dsn, capsys, "import", str(cfm(RELEASE_6)), "--class", "faults", "--set", "release=6.1",
+         "--drop-extra-properties")
+    assert _run(db_dsn, capsys, "version", "current") == "cfm6\tworking revision 2\t(from tgsis version goto)\n"
+    assert len(_run(db_dsn, capsys, "ls").splitlines()) == 2
+    assert len(_run(db_dsn, capsys, "--in", "DEFAULT", "ls").splitlines()) == 1
+    saved = _run(db_dsn, capsys, "version", "save", "imported")
+    assert saved == "saved revision 2 of cfm6 as imported; new working revision 3\n"
+    tree = _run(db_dsn, capsys, "version", "tree")
+    assert tree == "DEFAULT: revisions 0, 1; working 1\n    cfm6 from DEFAULT@0: revisions 2 (imported), 3; working 3\n"
+    listing = _run(db_dsn, capsys, "version", "list")
+    assert listing.startswith("  DEFAULT\tparent -") and "\n* cfm6\tparent DEFAULT\tinitrevision 0\tworking 3" in listing
+    # looking at a revision is read-only
+    assert "look at revision 0 of version cfm6" in _run(db_dsn, capsys, "version", "goto", "cfm6@0")
+    assert len(_run(db_dsn, capsys, "ls").splitlines()) == 1
+    err = _run(db_dsn, capsys, "import", str(cfm(RELEASE_6)), "--class", "faults", "--drop-extra-properties", code=1)
+    assert "viewed at revision 0, which cannot be changed" in err
+    # back to DEFAULT; deleting the version removes its rows
+    _run(db_dsn, capsys, "version", "goto", "DEFAULT")
+    assert "deleted version cfm6" in _run(db_dsn, capsys, "version", "delete", "cfm6")
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT release FROM faults").fetchall() == [("5.3",)]
+        assert conn.execute("SELECT count(DISTINCT geoid) FROM tgsis.vrtx_ver").fetchone() == (1,)
+    assert _run(db_dsn, capsys, "ls").startswith(f"{fid}\tfaults\t")
+
+
+def test_errors(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert "version 'nope' does not exist" in _run(db_dsn, capsys, "version", "goto", "nope", code=1)
+    assert "version 'nope' does not exist" in _run(db_dsn, capsys, "--in", "nope", "ls", code=1)
+    assert "is not VERSION or VERSION@REVISION" in _run(db_dsn, capsys, "--in", "a@b", "ls", code=1)
+    assert "version name 'bad name' is not allowed" in _run(db_dsn, capsys, "version", "create", "bad name", code=1)
+    assert "needs --key and --class" in _run(db_dsn, capsys, "versioning", "enable", "wells", code=1)
+    _run(db_dsn, capsys, "version", "create", "a")
+    _run(db_dsn, capsys, "version", "create", "b", "--parent", "a")
+    assert "version 'a' has child versions: 'b'" in _run(db_dsn, capsys, "version", "delete", "a", code=1)
+
+
+def test_versioning_a_table_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with psycopg.connect(db_dsn) as conn:
+        conn.execute("CREATE TABLE wells (id int PRIMARY KEY, name text)")
+        conn.execute("INSERT INTO wells VALUES (1, 'w1')")
+    assert "public.wells is versioned (object class well, key id, storage wells_ver)" in _run(
+        db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
+    assert _run(db_dsn, capsys, "versioning", "list") == \
+        "public.wells\twell\tkey id\torder 0\tshort wells\trow key (id)\n"
+    assert "DEFAULT's rows kept, 0 row version(s) removed" in _run(db_dsn, capsys, "versioning", "disable", "wells")
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT relkind FROM pg_class WHERE relname = 'wells'").fetchone() == ("r",)
