@@ -47,7 +47,7 @@ BEGIN
       USING v_default;
     GET DIAGNOSTICS v_removed = ROW_COUNT;
     EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_t.schemaname, v_ver, v_ver || '_pkey');
-    EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
+    EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN revclosed, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I RENAME TO %I', v_t.schemaname, v_ver, v_t.tablename);
     EXECUTE format('ALTER TABLE %I.%I ADD CONSTRAINT %I PRIMARY KEY (%s)', v_t.schemaname, v_t.tablename, v_t.pkeyname,
                    (SELECT string_agg(format('%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)));

@@ -32,7 +32,8 @@ BEGIN
     END IF;
     SELECT string_agg(format('v.%I', attname), ', ' ORDER BY attnum) INTO v_cols
       FROM pg_catalog.pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
-    RETURN QUERY EXECUTE format('SELECT %s FROM %I.%I v WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)',
+    RETURN QUERY EXECUTE format('SELECT %s FROM %I.%I v WHERE (v.revision = ANY ($1)) IS TRUE '
+                                'AND (NOT v.revclosed OR NOT (v.lastrevs && $1))',
                                 v_cols, v_t.schemaname, v_t.tablename || '_ver')
                  USING v_set;
 END
