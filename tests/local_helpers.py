@@ -65,7 +65,8 @@ def child_env(**extra: str) -> dict[str, str]:
     return env
 
 
-def tgsis_cli(*args: str, home: Path, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    """Run the ``tgsis`` console script of this venv with a private TGSIS_HOME."""
-    return subprocess.run([str(Path(sys.executable).parent / "tgsis"), *args], env=child_env(TGSIS_HOME=str(home)),
+def tgsis_cli(*args: str, home: Path, timeout: float = 120, **env: str) -> subprocess.CompletedProcess[str]:
+    """Run the ``tgsis`` console script of this venv with a private TGSIS_HOME (and more ``env``)."""
+    return subprocess.run([str(Path(sys.executable).parent / "tgsis"), *args],
+                          env=child_env(TGSIS_HOME=str(home), **env),
                           capture_output=True, text=True, timeout=timeout, check=False)

@@ -73,16 +73,36 @@ def test_local_status_and_dsn_without_a_server() -> None:
         assert "not running" in dsn.stderr
 
 
-def test_demo_reports_what_it_talks_to() -> None:
+def test_demo_runs_the_release_story() -> None:
     with private_home() as home:
         result = tgsis_cli("demo", home=home)
         assert result.returncode == 0, result.stderr
         lines = result.stdout.splitlines()
-        assert lines[0].startswith("PostgreSQL ") and "database 'tgsis' (local server)" in lines[0]
-        assert lines[1] == f"tgsis {tgsis.__version__} (installed as extension)" or \
-            lines[1] == f"tgsis {tgsis.__version__} (installed as sql)"
+        assert lines[0].startswith("PostgreSQL ") and "database 'tgsis_demo' (local server)" in lines[0]
+        assert lines[1] in (f"tgsis {tgsis.__version__} (installed as extension)",
+                            f"tgsis {tgsis.__version__} (installed as sql)")
         assert lines[2] == "roles: tgsis_reader, tgsis_editor, tgsis_admin"
-        assert lines[3].startswith("dsn: host=") and str(home) in lines[3]
+        assert lines[3].startswith("data: SCEC Community Fault Model, releases 5.3 and 6.1")
+        assert lines[4].startswith("1. stored 3 faults of release 5.3 in DEFAULT")
+        assert lines[5].endswith(": CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m, "
+                                 "CRFA-SLRS-MULT-San_Luis_Range_fault_system-CFM4_1000m")
+        assert lines[6].startswith("3. version cfm6.1: replaced 3 changed fault(s)")
+        assert "Oceanic_fault-CFM5_1000m: DEFAULT sees release 5.3 (716 vertices); " \
+               "cfm6.1 sees release 6.1 (722 vertices)" in result.stdout
+        assert "    cfm6.1 from DEFAULT@0: revisions 2 (release-6.1), 3; working 3" in result.stdout
+        again = tgsis_cli("demo", home=home)     # a database of its own, made afresh
+        assert again.returncode == 0, again.stderr
+        assert again.stdout.splitlines()[4:] == lines[4:]
+
+
+def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> None:
+    with private_home() as home:
+        result = tgsis_cli("demo", home=home, TGSIS_DEMO_DATA=str(tmp_path / "none"))
+        assert result.returncode == 0, result.stderr
+        assert "data: synthetic faults (no CFM data found)" in result.stdout
+        assert "3. version cfm6.1: replaced 1 changed fault(s) (middle_fault)" in result.stdout
+        assert "middle_fault: DEFAULT sees release 5.3 (360 vertices); cfm6.1 sees release 6.1 (360 vertices)" \
+            in result.stdout
 
 
 # --------------------------------------------------------------------------- classes and features

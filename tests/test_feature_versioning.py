@@ -49,7 +49,7 @@ def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureCla
 
 
 def test_surface_edited_in_a_child_is_invisible_in_default(conn: Conn, horizons: F.FeatureClass) -> None:
-    base = _grid(100)                                          # 10,000 vertices
+    base = _grid(317)                                          # 100,489 vertices, 200,000 triangles
     fid = F.insert_feature(conn, horizons, base, {"creator": "ann"})
     tgsis.create_version(conn, "edit")
     before = _rows(conn)
@@ -60,7 +60,7 @@ def test_surface_edited_in_a_child_is_invisible_in_default(conn: Conn, horizons:
         conn.commit()
         edited = F.fetch_feature(conn, horizons, fid)
     assert _rows(conn) == {**before, "tgsis.vrtx_ver": before["tgsis.vrtx_ver"] + 1,
-                           "horizons_ver": before["horizons_ver"] + 1}   # one row each, not 10,000
+                           "horizons_ver": before["horizons_ver"] + 1}   # one row each, not 100,000
     assert edited.properties == {"creator": "bob"} and edited.mesh is not None
     assert edited.mesh.vertices[42, 2] == 5 and np.count_nonzero(edited.mesh.vertices != base.vertices) == 1
     default = F.fetch_feature(conn, horizons, fid)

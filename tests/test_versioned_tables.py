@@ -298,3 +298,22 @@ def test_a_role_with_table_rights_writes_through_the_view(wells: Conn) -> None:
         wells.execute(f"DROP OWNED BY {role}")
         wells.execute(f"DROP ROLE {role}")
         wells.commit()
+
+
+def test_create_version_waits_for_writers_of_the_parent(wells: Conn, db_dsn: str) -> None:
+    """A row written in the parent's working revision by an open transaction must not slip into a child."""
+    tgsis.enable_versioning(wells, "wells", "id", "well")
+    wells.execute("INSERT INTO wells (name) VALUES ('in flight')")      # holds DEFAULT's revision 0, not committed
+    with psycopg.connect(db_dsn) as other:
+        other.execute("SET lock_timeout = '300ms'")
+        with pytest.raises(tgsis.DatabaseError, match="lock timeout"):
+            tgsis.create_version(other, "child")
+        other.rollback()
+        wells.commit()                                                  # the writer is done
+        assert tgsis.create_version(other, "child") == 2
+        tgsis.goto_version(other, "child")
+        assert ("in flight",) in other.execute("SELECT name FROM wells").fetchall()
+    wells.execute("INSERT INTO wells (name) VALUES ('after')")          # DEFAULT's new working revision 1
+    wells.commit()
+    rows = wells.execute("SELECT name FROM tgsis.rows_at(NULL::wells, 'child') ORDER BY id").fetchall()
+    assert ("after",) not in rows and ("in flight",) in rows

@@ -1,48 +1,189 @@
 """The demo scenario behind ``tgsis demo`` (the README's first command).
 
-It connects (starting the local server when no DSN is given), makes sure tgsis
-is installed, and reports what it talks to. Later parts of the product extend
-it with the application scenarios (salt dome, versions of a fault model, ...).
+Two releases of a fault model, the way a geomodelling team lives them:
+
+1. a fresh database ``tgsis_demo`` on the target server (the local server
+   tgsis starts itself when no DSN is given) with tgsis installed;
+2. a feature class ``faults`` and the three faults of release 5.3 of the SCEC
+   Community Fault Model (real GOCAD TSurf files from ``../shared/data``; a
+   synthetic stand-in when that folder is missing), stored in DEFAULT;
+3. a bounding-box query;
+4. versioning switched on, a version ``cfm6.1`` in which the faults that
+   changed in release 6.1 are replaced, and that state saved as a revision;
+5. what DEFAULT and the version each see, how many rows the version stored,
+   and the version tree.
+
+Every step uses the public API; the same steps work from ``psql`` and the
+``tgsis`` command (see docs/versioning.md).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
+import numpy as np
+import psycopg
+from psycopg import sql
+from psycopg.conninfo import make_conninfo
+
+from tgsis.db import features as F
+from tgsis.db import versions as V
 from tgsis.db.connect import connect, resolve_target
 from tgsis.db.install import install, installed_version
+from tgsis.errors import MissingPrivilegeError, reraise
+from tgsis.mesh import Mesh, Surface
 
-__all__ = ["run_demo"]
+__all__ = ["run_demo", "DEMO_DATABASE"]
+
+DEMO_DATABASE = "tgsis_demo"
+RELEASES = ("cfm5.3", "cfm6.1")
+
+
+@dataclass(frozen=True)
+class _Fault:
+    name: str
+    mesh: Mesh
+
+
+def _cfm_folder() -> Path | None:
+    """The shared CFM data: ``$TGSIS_DEMO_DATA`` when set, else ``../shared/data/cfm`` beside the source tree."""
+    env = os.environ.get("TGSIS_DEMO_DATA")
+    folder = Path(env) if env else Path(__file__).resolve().parents[3] / "shared" / "data" / "cfm"
+    return folder if all((folder / r).is_dir() for r in RELEASES) else None
+
+
+def _synthetic_release(release: int) -> list[_Fault]:
+    """Three gridded fault-like surfaces; release 1 moves part of the second one."""
+    faults = []
+    for i, name in enumerate(("north_fault", "middle_fault", "south_fault")):
+        u, w = np.meshgrid(np.linspace(0, 20_000, 30), np.linspace(-10_000, 0, 12))
+        x = u + 40_000 * i
+        y = 3_900_000 + 0.3 * w + 2_000 * np.sin(u / 5_000)
+        if release == 1 and i == 1:
+            y = y + np.where(u > 10_000, 150.0, 0.0)   # re-interpreted eastern half
+        vertices = np.stack([x.ravel(), y.ravel(), w.ravel()], axis=1)
+        idx = np.arange(u.size).reshape(u.shape)
+        a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+        triangles = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+        faults.append(_Fault(name, Surface(vertices, triangles, name=name)))
+    return faults
+
+
+def _load_releases() -> tuple[str, list[list[_Fault]]]:
+    folder = _cfm_folder()
+    if folder is None:
+        return "synthetic faults (no CFM data found)", [_synthetic_release(0), _synthetic_release(1)]
+    from tgsis import formats
+
+    releases = []
+    for release in RELEASES:
+        files = sorted((folder / release).glob("*.ts"))
+        releases.append([_Fault(m.name or f.stem, m) for f in files for m in formats.read(f)])
+    return f"SCEC Community Fault Model, releases 5.3 and 6.1 ({folder})", releases
+
+
+def _demo_conninfo(dsn: str | None) -> str:
+    """A fresh, empty database ``tgsis_demo`` on the target server; return its conninfo."""
+    with connect(dsn, autocommit=True) as admin:
+        base = admin.info.dsn
+        try:
+            with reraise():
+                admin.execute(sql.SQL("DROP DATABASE IF EXISTS {} WITH (FORCE)").format(sql.Identifier(DEMO_DATABASE)))
+                admin.execute(sql.SQL("CREATE DATABASE {}").format(sql.Identifier(DEMO_DATABASE)))
+        except MissingPrivilegeError as exc:
+            raise MissingPrivilegeError(
+                f"the demo needs a database of its own ({DEMO_DATABASE}) and this role may not create one",
+                hint="run it without --dsn (tgsis starts a local server), or with a DSN of a role that has CREATEDB",
+            ) from exc
+    return make_conninfo(base, dbname=DEMO_DATABASE)
+
+
+def _store_release(conn: psycopg.Connection[Any], faults: Sequence[_Fault], release: str) -> dict[str, int]:
+    return {f.name: F.insert_feature(conn, "faults", f.mesh, {"release": release}, drop_extra_properties=True)
+            for f in faults}
+
+
+def _stored_rows(conn: psycopg.Connection[Any]) -> int:
+    row = conn.execute("SELECT (SELECT count(*) FROM tgsis.vrtx_ver) + (SELECT count(*) FROM tgsis.trgl_ver)"
+                       ).fetchone()
+    assert row is not None
+    return int(row[0])
+
+
+def _releases_seen(conn: psycopg.Connection[Any]) -> dict[str, str]:
+    """Per fault name, the release and size the session's version sees."""
+    return {f.name or str(f.id): f"release {f.properties['release']} ({f.mesh.n_vertices if f.mesh else 0} vertices)"
+            for f in F.fetch_features(conn, "faults")}
 
 
 def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print) -> None:
-    """Run the demo against ``dsn`` (``None``: the local server).
+    """Run the demo against the server of ``dsn`` (``None``: the local server), in a database of its own.
 
     Parameters
     ----------
     dsn : str, optional
-        Where to run it; see :func:`tgsis.connect`.
+        Where to run it; see :func:`tgsis.connect`. The demo creates (and
+        first drops) the database ``tgsis_demo`` there.
     out : callable
         Receives each line of the report.
     """
     target = resolve_target(dsn)
-    with connect(dsn) as conn:
+    conninfo = _demo_conninfo(dsn)
+    source, (old, new) = _load_releases()
+    with psycopg.connect(conninfo) as conn:
         install(conn)
         current = installed_version(conn)
         assert current is not None
         row = conn.execute("SELECT tgsis.version(), current_setting('server_version')").fetchone()
         assert row is not None
-        tgsis_version, server_version = row
         roles = [r[0] for r in conn.execute(
             "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' ORDER BY oid").fetchall()]
-        dbname, server_dsn = conn.info.dbname, conn.info.dsn
-    out(f"PostgreSQL {server_version}, database {dbname!r} ({target.source})")
-    out(f"tgsis {tgsis_version} (installed as {current.method})")
-    out(f"roles: {', '.join(roles)}")
-    if target.dsn is None:
-        from tgsis.db.connect import local_dsn
+        out(f"PostgreSQL {row[1]}, database {DEMO_DATABASE!r} ({target.source})")
+        out(f"tgsis {row[0]} (installed as {current.method})")
+        out(f"roles: {', '.join(roles)}")
+        out(f"data: {source}")
 
-        out(f"dsn: {local_dsn()}")
-        out("the local server stops when this command ends; `tgsis local start` keeps it running")
+        F.create_feature_class(conn, "faults", "SURFACE", feature_properties={"release": "text"}, srs=26911,
+                               description="fault surfaces, UTM zone 11 metres, z up")
+        V.enable_feature_versioning(conn)
+        ids = _store_release(conn, old, "5.3")
+        out(f"1. stored {len(ids)} faults of release 5.3 in DEFAULT: "
+            + ", ".join(f"{name} ({old[i].mesh.n_vertices} vertices)" for i, name in enumerate(ids)))
+
+        box = old[0].mesh.bounds() + np.array([[-10_000.0], [10_000.0]])
+        found = F.features_in_box(conn, "faults", box)
+        names = {fid: name for name, fid in ids.items()}
+        out(f"2. faults within 10 km of the box of {old[0].name} (GiST index): {', '.join(names[i] for i in found)}")
+
+        V.create_version(conn, "cfm6.1", description="release 6.1 of the fault model")
+        rows_before = _stored_rows(conn)
+        changed = []
+        with V.in_version(conn, "cfm6.1"):
+            for fault in new:
+                previous = next((f for f in old if f.name == fault.name), None)
+                if previous is not None and previous.mesh.same_as(fault.mesh):
+                    continue   # unchanged: nothing is stored again
+                if previous is not None:
+                    F.delete_feature(conn, "faults", ids[fault.name])
+                ids[fault.name] = _store_release(conn, [fault], "6.1")[fault.name]
+                changed.append(fault.name)
+            saved = V.save_revision(conn, "release-6.1")
+            seen_in_version = _releases_seen(conn)
+        out(f"3. version cfm6.1: replaced {len(changed)} changed fault(s) ({', '.join(changed) or 'none'}), "
+            f"saved as revision {saved}; rows stored for it: {_stored_rows(conn) - rows_before}")
+        seen_in_default = _releases_seen(conn)
+        for name in sorted(set(seen_in_default) | set(seen_in_version)):
+            out(f"   {name}: DEFAULT sees {seen_in_default.get(name, 'nothing')}; "
+                f"cfm6.1 sees {seen_in_version.get(name, 'nothing')}")
+        out("4. version tree:")
+        for line in V.format_tree(V.list_versions(conn)).splitlines():
+            out("   " + line)
+    if target.dsn is None:
+        out("the local server stops when this command ends; to look around: `tgsis local start`, "
+            f"`psql \"$(tgsis local dsn)\"`, then `\\c {DEMO_DATABASE}`")
     else:
-        out(f"dsn: {server_dsn}")
+        out(f"dsn: {conninfo}")
