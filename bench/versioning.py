@@ -24,13 +24,14 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import time
+from collections.abc import Callable
 from typing import Any
 
 import psycopg
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
-from timing import timed
 
 Conn = psycopg.Connection[Any]
 
@@ -78,6 +79,17 @@ def executor_s(conn: Conn, query: str, params: tuple[Any, ...], repeat: int) -> 
         document = json.loads(plan[0]) if isinstance(plan[0], str) else plan[0]
         samples.append(float(document[0]["Execution Time"]) / 1000)
     return statistics.median(samples)
+
+
+def paired(versioned: Callable[[], object], plain: Callable[[], object], repeat: int) -> tuple[float, float]:
+    """Median times of two actions run alternately (so that drift of the machine hits both alike)."""
+    samples: tuple[list[float], list[float]] = ([], [])
+    for _ in range(repeat):
+        for action, into in ((versioned, samples[0]), (plain, samples[1])):
+            start = time.perf_counter()
+            action()
+            into.append(time.perf_counter() - start)
+    return statistics.median(samples[0]), statistics.median(samples[1])
 
 
 def copy_out(conn: Conn, query: str) -> int:
@@ -128,12 +140,12 @@ def main() -> None:
 
             untouched = args.objects - 1  # no version edited it
             figures = {
-                "fetch_one_e2e": (timed(lambda: copy_out(conn, one_view % obj), args.repeat * 4),
-                                  timed(lambda: copy_out(conn, one_plain % obj), args.repeat * 4)),
-                "fetch_unedited_e2e": (timed(lambda: copy_out(conn, one_view % untouched), args.repeat * 4),
-                                       timed(lambda: copy_out(conn, one_plain % untouched), args.repeat * 4)),
-                "full_scan_e2e": (timed(lambda: copy_out(conn, all_view), args.repeat),
-                                  timed(lambda: copy_out(conn, all_plain), args.repeat)),
+                "fetch_one_e2e": paired(lambda: copy_out(conn, one_view % obj),
+                                        lambda: copy_out(conn, one_plain % obj), args.repeat * 10),
+                "fetch_unedited_e2e": paired(lambda: copy_out(conn, one_view % untouched),
+                                             lambda: copy_out(conn, one_plain % untouched), args.repeat * 10),
+                "full_scan_e2e": paired(lambda: copy_out(conn, all_view), lambda: copy_out(conn, all_plain),
+                                        args.repeat),
                 # the server's own clock (EXPLAIN ANALYZE), not the round trip
                 "fetch_one_executor": (executor_s(conn, one_view, (obj,), args.repeat * 4),
                                        executor_s(conn, one_plain, (obj,), args.repeat * 4)),

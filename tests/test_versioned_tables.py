@@ -317,3 +317,21 @@ def test_create_version_waits_for_writers_of_the_parent(wells: Conn, db_dsn: str
     wells.commit()
     rows = wells.execute("SELECT name FROM tgsis.rows_at(NULL::wells, 'child') ORDER BY id").fetchall()
     assert ("after",) not in rows and ("in flight",) in rows
+
+
+def test_names_that_need_quoting(conn: Conn) -> None:
+    conn.execute("""CREATE TABLE "Odd Table" ("o'k" int, "my%col" int, "v" text, PRIMARY KEY ("o'k", "my%col"))""")
+    conn.execute("""INSERT INTO "Odd Table" VALUES (1, 2, 'a')""")
+    t = tgsis.enable_versioning(conn, '"Odd Table"', "o'k", "odd class")
+    assert (t.table, t.keycolumns) == ("Odd Table", ("o'k", "my%col"))
+    tgsis.create_version(conn, "v")
+    tgsis.goto_version(conn, "v")
+    conn.execute("""UPDATE "Odd Table" SET v = 'b' WHERE "o'k" = 1""")
+    conn.commit()
+    with pytest.raises(psycopg.errors.UniqueViolation) as err:
+        conn.execute("""INSERT INTO "Odd Table" VALUES (1, 2, 'c')""")
+    assert err.value.diag.message_detail == "Key (\"o'k\", \"my%col\")=(1, 2) already exists in version v."
+    conn.rollback()
+    assert conn.execute('SELECT v FROM "Odd Table"').fetchall() == [("b",)]
+    tgsis.goto_version(conn, "DEFAULT")
+    assert conn.execute('SELECT v FROM "Odd Table"').fetchall() == [("a",)]

@@ -39,9 +39,11 @@ BEGIN
     v_dup := format($dup$
             RAISE EXCEPTION 'duplicate key value violates unique constraint %%', %L
                 USING ERRCODE = 'unique_violation',
-                      DETAIL = format('Key (%s)=(%%s) already exists in version %%s.', concat_ws(', ', %s), tgsis.get_working_version()),
+                      DETAIL = format(%L, concat_ws(', ', %s), tgsis.get_working_version()),
                       CONSTRAINT = %L, TABLE = %L, SCHEMA = %L;$dup$,
-        '"' || p_pkey || '"', v_key_list, v_key_vals, p_pkey, p_table, p_schema);
+        '"' || p_pkey || '"',
+        'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) already exists in version %s.',
+        v_key_vals, p_pkey, p_table, p_schema);
 
     RETURN format($fn$
 CREATE FUNCTION %1$I.%2$I()
