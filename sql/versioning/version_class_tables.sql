@@ -5,12 +5,8 @@ LANGUAGE plpgsql
 VOLATILE
 AS $$
 DECLARE
-    v_class tgsis.catalog;
+    v_class tgsis.catalog := tgsis.catalog_row(p_class);
 BEGIN
-    SELECT * INTO v_class FROM tgsis.catalog WHERE classname = p_class;
-    IF NOT FOUND THEN
-        RAISE EXCEPTION 'feature class % does not exist', coalesce(quote_literal(p_class), 'NULL') USING ERRCODE = 'TG200';
-    END IF;
     EXECUTE format('DROP VIEW IF EXISTS %I.%I', v_class.schemaname, v_class.viewname);  -- re-created over the versioned views
     IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_class.featuretable) THEN
         PERFORM tgsis.enable_versioning_rel(format('%I.%I', v_class.schemaname, v_class.featuretable)::regclass,
