@@ -86,3 +86,23 @@ def test_versioning_a_table_from_the_command_line(db_dsn: str, capsys: pytest.Ca
     assert "DEFAULT's rows kept, 0 row version(s) removed" in _run(db_dsn, capsys, "versioning", "disable", "wells")
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT relkind FROM pg_class WHERE relname = 'wells'").fetchone() == ("r",)
+
+
+def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with psycopg.connect(db_dsn) as conn:
+        conn.execute("CREATE TABLE wells (id int PRIMARY KEY, depth float8)")
+        conn.execute("INSERT INTO wells VALUES (1, 10), (2, 20)")
+    _run(db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
+    _run(db_dsn, capsys, "version", "create", "a")
+    with psycopg.connect(db_dsn) as conn:
+        conn.execute("UPDATE wells SET depth = 11 WHERE id = 1")
+        conn.execute("SELECT tgsis.goto_version('a')")
+        conn.execute("UPDATE wells SET depth = 12 WHERE id = 1")
+        conn.execute("UPDATE wells SET depth = 22 WHERE id = 2")
+    out = _run(db_dsn, capsys, "version", "conflicts", "a", "--rows")
+    assert out.splitlines() == [
+        "well\t1\tunsolved\tboth changed: wells\ta: wells\tparent: wells",
+        '\twells\tchild\t{"id": 1}\t{"id": 1, "depth": 12}',
+        '\twells\tparent\t{"id": 1}\t{"id": 1, "depth": 11}']
+    assert _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child") == "well 1 in a: child\n"
+    assert "not in conflict" in _run(db_dsn, capsys, "version", "resolve", "a", "well", "2", "child", code=1)

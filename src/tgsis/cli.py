@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import logging
 import math
 import os
@@ -377,6 +378,29 @@ def cmd_version_delete(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_version_conflicts(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        conflicts = V.find_conflicts(conn, args.name)
+        details = {(c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
+                   for c in conflicts} if args.rows else {}
+    for c in conflicts:
+        both = ", ".join(c.conflicttype) or "different tables"
+        _out(f"{c.objectclass}\t{c.objectkey}\t{c.solution}\tboth changed: {both}\t"
+             f"{args.name}: {', '.join(c.childtables)}\tparent: {', '.join(c.parenttables)}")
+        for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
+            _out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
+    if not conflicts:
+        print(f"version {args.name} has no conflicts with its parent", file=sys.stderr)
+    return 0
+
+
+def cmd_version_resolve(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution)
+    _out(f"{c.objectclass} {c.objectkey} in {args.name}: {c.solution}")
+    return 0
+
+
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
@@ -531,6 +555,17 @@ def build_parser() -> argparse.ArgumentParser:
     ver_delete = ver_commands.add_parser("delete", help="delete a version without children, with its changes")
     ver_delete.add_argument("name")
     ver_delete.set_defaults(handler=cmd_version_delete)
+
+    ver_conflicts = ver_commands.add_parser("conflicts", help="objects changed both in a version and in its parent")
+    ver_conflicts.add_argument("name")
+    ver_conflicts.add_argument("--rows", action="store_true", help="also print the rows that differ, per side")
+    ver_conflicts.set_defaults(handler=cmd_version_conflicts)
+    ver_resolve = ver_commands.add_parser("resolve", help="record how a conflicting object is merged")
+    ver_resolve.add_argument("name")
+    ver_resolve.add_argument("objectclass")
+    ver_resolve.add_argument("objectkey")
+    ver_resolve.add_argument("solution", type=str.lower, choices=("parent", "child", "manual", "unsolved"))
+    ver_resolve.set_defaults(handler=cmd_version_resolve)
 
     vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)

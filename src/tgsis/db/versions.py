@@ -45,6 +45,10 @@ __all__ = [
     "versioned_tables",
     "enable_feature_versioning",
     "disable_feature_versioning",
+    "Conflict",
+    "find_conflicts",
+    "resolve_conflict",
+    "conflict_rows",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -311,3 +315,71 @@ def disable_feature_versioning(conn: Conn, *, force: bool = False) -> int:
     """Undo :func:`enable_feature_versioning`, keeping DEFAULT's rows; return the row versions removed."""
     with reraise(), conn.transaction():
         return int(_scalar(conn, "SELECT tgsis.disable_feature_versioning(%s)", (force,)))
+
+
+# --------------------------------------------------------------------------- conflicts
+
+
+@dataclass(frozen=True)
+class Conflict:
+    """An object changed both in a version and in its parent (a row of ``tgsis.conflicts``).
+
+    Attributes
+    ----------
+    objectclass, objectkey : str
+        The object (its key as text).
+    conflicttype : tuple of str
+        Short names of the tables changed on both sides.
+    childtables, parenttables : tuple of str
+        Tables each side changed.
+    solution : {"unsolved", "parent", "child", "manual"}
+    """
+
+    objectclass: str
+    objectkey: str
+    conflicttype: tuple[str, ...]
+    childtables: tuple[str, ...]
+    parenttables: tuple[str, ...]
+    solution: str
+
+
+_CONFLICT_COLUMNS = "objectclass, objectkey, conflicttype, childtables, parenttables, solution"
+
+
+def _conflict(row: Sequence[Any]) -> Conflict:
+    return Conflict(row[0], row[1], tuple(row[2]), tuple(row[3]), tuple(row[4]), row[5])
+
+
+def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
+    """(Re)compute the objects changed both in ``version`` and in its parent since its base.
+
+    Solutions recorded before are kept while neither side changed the object again.
+    """
+    with reraise(), conn.transaction():
+        rows = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.find_conflicts(%s)", (version,)).fetchall()
+    return [_conflict(r) for r in rows]
+
+
+def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: object, solution: str) -> Conflict:
+    """Record how a conflicting object is merged: ``parent``, ``child``, ``manual`` (or back to ``unsolved``).
+
+    Raises
+    ------
+    NotFoundError
+        The object is not in conflict in that version.
+    InvalidInputError
+        Unknown solution.
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
+                           (version, objectclass, str(objectkey), solution)).fetchone()
+    assert row is not None
+    return _conflict(row)
+
+
+def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object) -> list[tuple[str, str, Any, Any]]:
+    """Rows of an object that differ between ``version`` (side ``child``) and its parent: (table, side, key, row)."""
+    with reraise():
+        return [(r[0], r[1], r[2], r[3]) for r in conn.execute(
+            "SELECT shortname, side, rowkey, row FROM tgsis.conflict_rows(%s, %s, %s)",
+            (version, objectclass, str(objectkey))).fetchall()]

@@ -1,0 +1,31 @@
+-- tgsis.changed_objects(revisions): objects with rows written or closed in any of the given revisions, per table.
+-- One scan of each versioned table's storage.
+CREATE FUNCTION tgsis.changed_objects(p_revisions integer[])
+RETURNS TABLE (objectclass text, objectkey text, shortname text, mark text)
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_t tgsis.versioned_tables;
+BEGIN
+    IF cardinality(p_revisions) = 0 THEN
+        RETURN;
+    END IF;
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
+        -- mark: a fingerprint of the object's changed row versions, so that
+        -- any later write to them (even in the same revision) shows
+        RETURN QUERY EXECUTE format(
+            'SELECT %L::text, v.%I::text, %L::text, md5(string_agg(v::text, ''|'' ORDER BY %s, v.revision))
+               FROM %I.%I v
+              WHERE v.revision = ANY ($1) OR v.lastrevs && $1
+              GROUP BY 2',
+            v_t.objectclass, v_t.objectkeyfield, v_t.shortname,
+            (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)),
+            v_t.schemaname, v_t.tablename || '_ver')
+          USING p_revisions;
+    END LOOP;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.changed_objects(integer[]) IS
+    'per versioned table, the objects (class, key as text) with row versions written or closed in the given revisions, and a fingerprint (md5) of those row versions';

@@ -1,0 +1,35 @@
+-- tgsis.conflict_rows(version, objectclass, objectkey): both sides' rows of a conflicting object, for psql users.
+-- side 'child' is what the version sees, 'parent' what the parent sees now;
+-- rows equal on both sides are left out.
+CREATE FUNCTION tgsis.conflict_rows(p_version text, p_objectclass text, p_objectkey text)
+RETURNS TABLE (shortname text, side text, rowkey jsonb, "row" jsonb)
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_version tgsis.versions;
+    v_parent  integer[];
+    v_t       tgsis.versioned_tables;
+BEGIN
+    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    SELECT workingset INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP
+        RETURN QUERY EXECUTE format(
+            'WITH rows AS (
+                 SELECT s.side, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r, v.revision
+                   FROM %I.%I v, (VALUES (''child'', $2), (''parent'', $3)) AS s(side, revs)
+                  WHERE v.%I::text = $1 AND v.revision = ANY (s.revs) AND NOT (v.lastrevs && s.revs))
+             SELECT %L::text, a.side, jsonb_object_agg_keys.k, a.r
+               FROM rows a
+               CROSS JOIN LATERAL (SELECT jsonb_object_agg(key, a.r -> key) AS k FROM unnest($4::text[]) AS key)
+                    AS jsonb_object_agg_keys
+              WHERE NOT EXISTS (SELECT FROM rows b WHERE b.side <> a.side AND b.r = a.r)
+              ORDER BY 3, 2',
+            v_t.schemaname, v_t.tablename || '_ver', v_t.objectkeyfield, v_t.shortname)
+          USING p_objectkey, v_version.workingset, v_parent, v_t.keycolumns;
+    END LOOP;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.conflict_rows(text, text, text) IS
+    'rows of an object that differ between a version (side child) and its parent (side parent), per table, as jsonb with their row key';

@@ -1,0 +1,37 @@
+-- tgsis.resolve_conflict(version, objectclass, objectkey, solution): record how a conflicting object is to be merged.
+-- parent: keep the parent's object; child: take the version's; manual: the
+-- version already holds the merged object (write it there first). The
+-- solution holds for the current state of both sides (find_conflicts sets
+-- it back to unsolved when either changes the object again).
+CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
+RETURNS tgsis.conflicts
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_id  integer := tgsis.version_id(p_version);
+    v_row tgsis.conflicts;
+BEGIN
+    IF p_solution IS NULL OR lower(p_solution) NOT IN ('parent', 'child', 'manual', 'unsolved') THEN
+        RAISE EXCEPTION 'solution % is not parent, child, manual or unsolved', coalesce(quote_literal(p_solution), 'NULL')
+            USING ERRCODE = 'TG100';
+    END IF;
+    -- the marks must be those of now: a manual solution is written just before it is recorded
+    PERFORM tgsis.find_conflicts(p_version);
+    UPDATE tgsis.conflicts
+       SET solution = lower(p_solution),
+           solved_at = CASE WHEN lower(p_solution) <> 'unsolved' THEN now() END,
+           solved_by = CASE WHEN lower(p_solution) <> 'unsolved' THEN current_user END
+     WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = p_objectkey
+    RETURNING * INTO v_row;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION 'object % of class % is not in conflict in version %', quote_literal(p_objectkey),
+                quote_literal(p_objectclass), quote_literal(p_version)
+            USING ERRCODE = 'TG200', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the conflicts', p_version);
+    END IF;
+    RETURN v_row;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.resolve_conflict(text, text, text, text) IS
+    'record the solution of a conflicting object: parent (keep the parent''s), child (take the version''s), manual (the version holds the merged object), or unsolved';
