@@ -22,6 +22,7 @@ BEGIN
             USING ERRCODE = 'TG201', HINT = 'choose another name, or tgsis.delete_version it first';
     END IF;
 
+    UPDATE tgsis.revisions SET visibleset = v_parent.workingset WHERE revision = v_parent.workingrevision;
     v_parent_rev := nextval('tgsis.revision_seq');
     INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_parent_rev, v_parent.versionid, current_user);
     UPDATE tgsis.versions

@@ -17,7 +17,9 @@ BEGIN
     IF v_version.parentid IS NULL THEN
         RAISE EXCEPTION 'version DEFAULT has no parent to conflict with' USING ERRCODE = 'TG100';
     END IF;
-    SELECT array_agg(revision) INTO v_child FROM tgsis.revisions WHERE versionid = v_version.versionid;
+    -- the version's own revisions in its working set (a merge leaves the older ones behind)
+    SELECT coalesce(array_agg(revision), '{}') INTO v_child FROM tgsis.revisions
+     WHERE versionid = v_version.versionid AND revision = ANY (v_version.workingset);
     SELECT coalesce(array_agg(revision), '{}') INTO v_parent
       FROM tgsis.revisions WHERE versionid = v_version.parentid AND revision > v_version.initrevision;
 

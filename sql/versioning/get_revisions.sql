@@ -29,13 +29,7 @@ BEGIN
     IF v_viewing IS NULL OR v_viewing = v_working THEN
         RETURN v_set;
     END IF;
-    IF NOT v_viewing = ANY (v_set) THEN
-        RAISE EXCEPTION 'revision % is not in the history of version %', v_viewing, quote_literal(v_name)
-            USING ERRCODE = 'TG200', HINT = 'tgsis.get_revisions(false) lists the revisions a version can look at';
-    END IF;
-    -- the set of (version, r) is the part of the working set up to r: ancestors'
-    -- revisions in it are all older than the version's own (one sequence)
-    RETURN ARRAY(SELECT r FROM unnest(v_set) AS r WHERE r <= v_viewing ORDER BY r);
+    RETURN tgsis.revision_set((SELECT versionid FROM tgsis.versions WHERE name = v_name), v_viewing);
 END
 $$;
 

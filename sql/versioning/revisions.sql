@@ -8,6 +8,7 @@ CREATE TABLE tgsis.revisions (
     created_at timestamptz NOT NULL DEFAULT now(),
     created_by name        NOT NULL DEFAULT current_user,
     saved_at   timestamptz,
+    visibleset integer[],
     UNIQUE (versionid, name),
     CONSTRAINT revisions_saved_named CHECK ((name IS NULL) = (saved_at IS NULL))
 );
@@ -21,3 +22,5 @@ COMMENT ON COLUMN tgsis.revisions.name IS 'name given by save_revision (NULL: no
 COMMENT ON COLUMN tgsis.revisions.created_at IS 'when the revision was handed out';
 COMMENT ON COLUMN tgsis.revisions.created_by IS 'role whose call handed it out';
 COMMENT ON COLUMN tgsis.revisions.saved_at IS 'when save_revision froze it (NULL: not saved)';
+COMMENT ON COLUMN tgsis.revisions.visibleset IS
+    'the revision set its version saw while it was the working revision, stored when it stopped being one (NULL while working): what goto_revision shows';

@@ -22,14 +22,7 @@ BEGIN
         RAISE EXCEPTION '% is not a versioned table', pg_typeof(p_table)
             USING ERRCODE = 'TG200', HINT = 'call it as tgsis.rows_at(NULL::schema.table, version[, revision])';
     END IF;
-    SELECT workingset INTO v_set FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    IF p_revision IS NOT NULL THEN
-        IF NOT p_revision = ANY (v_set) THEN
-            RAISE EXCEPTION 'revision % is not in the history of version %', p_revision, quote_literal(p_version)
-                USING ERRCODE = 'TG200', DETAIL = format('It can look at revisions %s.', array_to_string(v_set, ', '));
-        END IF;
-        v_set := ARRAY(SELECT r FROM unnest(v_set) AS r WHERE r <= p_revision ORDER BY r);
-    END IF;
+    v_set := tgsis.revision_set(tgsis.version_id(p_version), p_revision);
     SELECT string_agg(format('v.%I', attname), ', ' ORDER BY attnum) INTO v_cols
       FROM pg_catalog.pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
     RETURN QUERY EXECUTE format('SELECT %s FROM %I.%I v WHERE (v.revision = ANY ($1)) IS TRUE '

@@ -16,7 +16,7 @@ BEGIN
         RAISE EXCEPTION 'version % has a revision named % already', quote_literal(v_version.name), quote_literal(p_name)
             USING ERRCODE = 'TG201';
     END IF;
-    UPDATE tgsis.revisions SET name = p_name, saved_at = now() WHERE revision = v_saved;
+    UPDATE tgsis.revisions SET name = p_name, saved_at = now(), visibleset = v_version.workingset WHERE revision = v_saved;
     v_new := nextval('tgsis.revision_seq');
     INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_new, v_version.versionid, current_user);
     UPDATE tgsis.versions

@@ -46,6 +46,8 @@ from tgsis.db.versions import (
     goto_version,
     in_version,
     list_versions,
+    merge_version,
+    refresh_version,
     resolve_conflict,
     revisions,
     save_revision,
@@ -93,6 +95,7 @@ from tgsis.errors import (
     MissingPrivilegeError,
     NotFoundError,
     ReadOnlyRevisionError,
+    UnsolvedConflictsError,
     VersioningError,
 )
 
@@ -139,6 +142,8 @@ __all__ = [
     "find_conflicts",
     "resolve_conflict",
     "conflict_rows",
+    "merge_version",
+    "refresh_version",
     # meshes (numpy, no database)
     "Geotype",
     "Mesh",
@@ -176,5 +181,6 @@ __all__ = [
     "MissingPrivilegeError",
     "NotFoundError",
     "ReadOnlyRevisionError",
+    "UnsolvedConflictsError",
     "VersioningError",
 ]

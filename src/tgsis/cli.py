@@ -401,6 +401,22 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_version_merge(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        written = V.merge_version(conn, args.name, remove=args.remove)
+    _out(f"merged {args.name} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
+    if args.remove and clistate.remembered_version(_target_key(args)) == args.name:
+        clistate.remember_version(_target_key(args), None)
+    return 0
+
+
+def cmd_version_refresh(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        written = V.refresh_version(conn, args.name)
+    _out(f"refreshed {args.name} from its parent: {written} row(s) written")
+    return 0
+
+
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
@@ -566,6 +582,14 @@ def build_parser() -> argparse.ArgumentParser:
     ver_resolve.add_argument("objectkey")
     ver_resolve.add_argument("solution", type=str.lower, choices=("parent", "child", "manual", "unsolved"))
     ver_resolve.set_defaults(handler=cmd_version_resolve)
+
+    ver_merge = ver_commands.add_parser("merge", help="apply a version's changes to its parent (one transaction)")
+    ver_merge.add_argument("name")
+    ver_merge.add_argument("--remove", action="store_true", help="delete the version after merging it")
+    ver_merge.set_defaults(handler=cmd_version_merge)
+    ver_refresh = ver_commands.add_parser("refresh", help="bring the parent's changes into a version")
+    ver_refresh.add_argument("name")
+    ver_refresh.set_defaults(handler=cmd_version_refresh)
 
     vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)

@@ -35,6 +35,7 @@ __all__ = [
     "InUseError",
     "VersioningError",
     "ReadOnlyRevisionError",
+    "UnsolvedConflictsError",
     "DatabaseError",
     "LocalServerError",
     "class_for_sqlstate",
@@ -164,6 +165,12 @@ class ReadOnlyRevisionError(VersioningError):
     """A write while the session views an older revision, or into a frozen (saved) revision."""
 
     code = "TG301"
+
+
+class UnsolvedConflictsError(VersioningError):
+    """A merge or refresh while objects changed on both sides have no recorded solution."""
+
+    code = "TG302"
 
 
 class DatabaseError(Error):

@@ -49,6 +49,8 @@ __all__ = [
     "find_conflicts",
     "resolve_conflict",
     "conflict_rows",
+    "merge_version",
+    "refresh_version",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -383,3 +385,29 @@ def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object)
         return [(r[0], r[1], r[2], r[3]) for r in conn.execute(
             "SELECT shortname, side, rowkey, row FROM tgsis.conflict_rows(%s, %s, %s)",
             (version, objectclass, str(objectkey))).fetchall()]
+
+
+def merge_version(conn: Conn, version: str, *, remove: bool = False) -> int:
+    """Apply ``version``'s changes to its parent in one transaction; return the rows written.
+
+    Without ``remove`` the version goes on from the merged state; with it, it is deleted.
+
+    Raises
+    ------
+    UnsolvedConflictsError
+        Objects changed on both sides have no recorded solution (the message names them).
+    """
+    with reraise(), conn.transaction():
+        return int(_scalar(conn, "SELECT tgsis.merge_version(%s, %s)", (version, remove)))
+
+
+def refresh_version(conn: Conn, version: str) -> int:
+    """Bring the parent's changes since ``version``'s base into it; return the rows written.
+
+    Raises
+    ------
+    UnsolvedConflictsError
+        Objects changed on both sides have no recorded solution.
+    """
+    with reraise(), conn.transaction():
+        return int(_scalar(conn, "SELECT tgsis.refresh_version(%s)", (version,)))

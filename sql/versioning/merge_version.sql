@@ -1,0 +1,74 @@
+-- tgsis.merge_version(version, remove): apply a version's changes to its parent's working revision; returns the rows written.
+-- One transaction: for every object the version changed (except conflicts
+-- solved 'parent') the parent is made to see the version's state, rows the
+-- version did not change are not touched. The parent's working revision is
+-- then frozen and a new one started. Without p_remove the version goes on
+-- from the merged state (its base moves to that revision); with it, the
+-- version is deleted. Refused (TG302) while a conflict is unsolved.
+CREATE FUNCTION tgsis.merge_version(p_version text, p_remove boolean DEFAULT false)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_child   tgsis.versions;
+    v_parent  tgsis.versions;
+    v_own     integer[];
+    v_class   record;
+    v_written bigint := 0;
+    v_next    integer;
+BEGIN
+    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    IF v_child.parentid IS NULL THEN
+        RAISE EXCEPTION 'version DEFAULT has no parent to merge into' USING ERRCODE = 'TG100';
+    END IF;
+    IF coalesce(p_remove, false) AND EXISTS (SELECT FROM tgsis.versions WHERE parentid = v_child.versionid) THEN
+        RAISE EXCEPTION 'version % has child versions and cannot be removed by the merge', quote_literal(p_version)
+            USING ERRCODE = 'TG202', HINT = 'merge without removing it, or merge or delete its children first';
+    END IF;
+    -- parent first, then child (the order every merge and refresh takes): waits for their writers
+    -- (write_revision share-locks a version) and for another merge of either
+    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
+    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
+    PERFORM tgsis.check_no_unsolved_conflicts(p_version, 'merge');
+
+    v_own := ARRAY(SELECT r FROM unnest(v_child.workingset) AS r
+                    WHERE r IN (SELECT revision FROM tgsis.revisions WHERE versionid = v_child.versionid));
+    FOR v_class IN
+        SELECT c.objectclass, array_agg(DISTINCT c.objectkey) AS keys
+          FROM tgsis.changed_objects(v_own) AS c
+         WHERE NOT EXISTS (SELECT FROM tgsis.conflicts k
+                            WHERE k.versionid = v_child.versionid AND k.objectclass = c.objectclass
+                              AND k.objectkey = c.objectkey AND k.solution = 'parent')
+         GROUP BY c.objectclass
+    LOOP
+        v_written := v_written + tgsis.copy_object_state(v_class.objectclass, v_class.keys, v_child.workingset,
+                                                         v_parent.workingset, v_parent.workingrevision);
+    END LOOP;
+
+    -- the parent's working revision now holds the merge: freeze it, start the next
+    UPDATE tgsis.revisions SET visibleset = v_parent.workingset WHERE revision = v_parent.workingrevision;
+    v_next := nextval('tgsis.revision_seq');
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_parent.versionid, current_user);
+    UPDATE tgsis.versions SET workingrevision = v_next, workingset = workingset || v_next
+     WHERE versionid = v_parent.versionid;
+
+    IF coalesce(p_remove, false) THEN
+        PERFORM tgsis.delete_version(p_version);
+    ELSE
+        -- the version goes on from the merged state: everything it had is in the parent now
+        UPDATE tgsis.revisions SET visibleset = v_child.workingset WHERE revision = v_child.workingrevision;
+        v_next := nextval('tgsis.revision_seq');
+        INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_child.versionid, current_user);
+        UPDATE tgsis.versions
+           SET initrevision = v_parent.workingrevision, workingrevision = v_next,
+               workingset = v_parent.workingset || v_next
+         WHERE versionid = v_child.versionid;
+        DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
+    END IF;
+    RETURN v_written;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.merge_version(text, boolean) IS
+    'apply a version''s changes (object by object, unchanged rows untouched) to its parent''s working revision in one transaction; refused while conflicts are unsolved; the version goes on from the merged state, or is removed; returns the rows written';

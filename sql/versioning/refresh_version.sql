@@ -1,0 +1,64 @@
+-- tgsis.refresh_version(version): bring the parent's changes since the version's base into it; returns the rows written.
+-- The version's base moves to the parent's working revision (which is then
+-- frozen): objects only the parent changed now look as in the parent, objects
+-- only the version changed keep the version's state, and each conflicting
+-- object follows its solution ('parent' takes the parent's object, 'child'
+-- and 'manual' keep the version's). Refused (TG302) while a conflict is
+-- unsolved.
+CREATE FUNCTION tgsis.refresh_version(p_version text)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_child   tgsis.versions;
+    v_parent  tgsis.versions;
+    v_own     integer[];
+    v_newset  integer[];
+    v_next    integer;
+    v_class   record;
+    v_written bigint := 0;
+BEGIN
+    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    IF v_child.parentid IS NULL THEN
+        RAISE EXCEPTION 'version DEFAULT has no parent to refresh from' USING ERRCODE = 'TG100';
+    END IF;
+    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
+    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
+    PERFORM tgsis.check_no_unsolved_conflicts(p_version, 'refresh');
+
+    -- freeze the parent's working revision: the new base
+    UPDATE tgsis.revisions SET visibleset = v_parent.workingset WHERE revision = v_parent.workingrevision;
+    v_next := nextval('tgsis.revision_seq');
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_parent.versionid, current_user);
+    UPDATE tgsis.versions SET workingrevision = v_next, workingset = workingset || v_next
+     WHERE versionid = v_parent.versionid;
+
+    -- the version: the parent's set up to the base, its own revisions, a new working one
+    v_own := ARRAY(SELECT r FROM unnest(v_child.workingset) AS r
+                    WHERE r IN (SELECT revision FROM tgsis.revisions WHERE versionid = v_child.versionid));
+    UPDATE tgsis.revisions SET visibleset = v_child.workingset WHERE revision = v_child.workingrevision;
+    v_next := nextval('tgsis.revision_seq');
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_child.versionid, current_user);
+    v_newset := ARRAY(SELECT DISTINCT r FROM unnest(v_parent.workingset || v_own) AS r ORDER BY r) || v_next;
+    UPDATE tgsis.versions SET initrevision = v_parent.workingrevision, workingrevision = v_next, workingset = v_newset
+     WHERE versionid = v_child.versionid;
+
+    -- objects changed on both sides would now show both sides' rows: give each the state its solution says
+    FOR v_class IN
+        SELECT objectclass, solution = 'parent' AS take_parent, array_agg(objectkey) AS keys
+          FROM tgsis.conflicts WHERE versionid = v_child.versionid
+         GROUP BY 1, 2
+    LOOP
+        v_written := v_written + tgsis.copy_object_state(
+            v_class.objectclass, v_class.keys,
+            CASE WHEN v_class.take_parent THEN v_parent.workingset ELSE v_child.workingset END,
+            v_newset, v_next);
+    END LOOP;
+    DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
+    RETURN v_written;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.refresh_version(text) IS
+    'bring the parent''s changes since the version''s base into the version (its base moves to the parent''s working revision); conflicting objects follow their solutions; refused while conflicts are unsolved; returns the rows written';
