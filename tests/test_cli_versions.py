@@ -106,3 +106,21 @@ def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
         '\twells\tparent\t{"id": 1}\t{"id": 1, "depth": 11}']
     assert _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child") == "well 1 in a: child\n"
     assert "not in conflict" in _run(db_dsn, capsys, "version", "resolve", "a", "well", "2", "child", code=1)
+
+
+def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with psycopg.connect(db_dsn) as conn:
+        conn.execute("CREATE TABLE wells (id int PRIMARY KEY, depth float8)")
+        conn.execute("INSERT INTO wells VALUES (1, 10), (2, 20)")
+    _run(db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
+    _run(db_dsn, capsys, "version", "create", "a")
+    with psycopg.connect(db_dsn) as conn:
+        conn.execute("SELECT tgsis.goto_version('a')")
+        conn.execute("UPDATE wells SET depth = 12 WHERE id = 1")
+        conn.execute("INSERT INTO wells VALUES (3, 30)")
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == "well\t1\twells\t+0\t-0\t~1\nwell\t3\twells\t+1\t-0\t~0\n"
+    assert _run(db_dsn, capsys, "version", "merge", "a") == "merged a into its parent: 3 row(s) written\n"
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ""   # "hold the same rows" goes to stderr
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT@0", "DEFAULT").count("\n") == 2
+    assert "refreshed a from its parent: 0 row(s) written" in _run(db_dsn, capsys, "version", "refresh", "a")
+    assert "version removed" in _run(db_dsn, capsys, "version", "merge", "a", "--remove")

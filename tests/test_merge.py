@@ -204,3 +204,22 @@ def test_killing_the_backend_mid_merge_leaves_both_sides_as_they_were(conn: Conn
     merger.close()
     assert {t: conn.execute(snapshot.format(t)).fetchall() for t in before} == before
     assert conn.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall() == versions
+
+
+def test_diff_between_versions_and_revisions(conn: Conn, story: dict[str, int]) -> None:
+    assert tgsis.diff_versions(conn, "DEFAULT", "e1") == []
+    _set_z(conn, "e1", story["A"], 0, 10.0)
+    _set_z(conn, "e1", story["A"], 1, 11.0)
+    with tgsis.in_version(conn, "e1"):
+        F.delete_feature(conn, "horizons", story["C"])
+        conn.commit()
+    diff = {(d.objectkey, d.table): (d.added, d.removed, d.changed) for d in tgsis.diff_versions(conn, "DEFAULT", "e1")}
+    a, c = str(story["A"]), str(story["C"])
+    assert diff == {(a, "vrtx"): (0, 0, 2), (c, "geometry"): (0, 1, 0), (c, "vrtx"): (0, 25, 0),
+                    (c, "trgl"): (0, 32, 0), (c, "public.horizons"): (0, 1, 0)}
+    # after a merge the parent holds copies with equal values: no difference, though the row versions differ
+    tgsis.merge_version(conn, "e1")
+    assert tgsis.diff_versions(conn, "DEFAULT", "e1") == []
+    # against a revision of the past: DEFAULT at 0 still had the old A and C
+    back = {(d.objectkey, d.table) for d in tgsis.diff_versions(conn, "DEFAULT", "DEFAULT", a_revision=0)}
+    assert (a, "vrtx") in back and (c, "trgl") in back

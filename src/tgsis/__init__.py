@@ -31,12 +31,14 @@ from tgsis.db import (
 )
 from tgsis.db.versions import (
     Conflict,
+    Difference,
     Version,
     VersionedTable,
     at_revision,
     conflict_rows,
     create_version,
     delete_version,
+    diff_versions,
     disable_feature_versioning,
     disable_versioning,
     enable_feature_versioning,
@@ -144,6 +146,8 @@ __all__ = [
     "conflict_rows",
     "merge_version",
     "refresh_version",
+    "Difference",
+    "diff_versions",
     # meshes (numpy, no database)
     "Geotype",
     "Mesh",

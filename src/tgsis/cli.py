@@ -417,6 +417,18 @@ def cmd_version_refresh(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_version_diff(args: argparse.Namespace) -> int:
+    a, a_rev = _split_version(args.a)
+    b, b_rev = _split_version(args.b)
+    with _connect(args) as conn:
+        differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
+    for d in differences:
+        _out(f"{d.objectclass}\t{d.objectkey}\t{d.table}\t+{d.added}\t-{d.removed}\t~{d.changed}")
+    if not differences:
+        print(f"{args.a} and {args.b} hold the same rows", file=sys.stderr)
+    return 0
+
+
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
@@ -590,6 +602,11 @@ def build_parser() -> argparse.ArgumentParser:
     ver_refresh = ver_commands.add_parser("refresh", help="bring the parent's changes into a version")
     ver_refresh.add_argument("name")
     ver_refresh.set_defaults(handler=cmd_version_refresh)
+
+    ver_diff = ver_commands.add_parser("diff", help="objects whose rows differ between two versions or revisions")
+    ver_diff.add_argument("a", metavar="A[@REVISION]")
+    ver_diff.add_argument("b", metavar="B[@REVISION]")
+    ver_diff.set_defaults(handler=cmd_version_diff)
 
     vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)

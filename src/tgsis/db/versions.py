@@ -51,6 +51,8 @@ __all__ = [
     "conflict_rows",
     "merge_version",
     "refresh_version",
+    "Difference",
+    "diff_versions",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -411,3 +413,28 @@ def refresh_version(conn: Conn, version: str) -> int:
     """
     with reraise(), conn.transaction():
         return int(_scalar(conn, "SELECT tgsis.refresh_version(%s)", (version,)))
+
+
+@dataclass(frozen=True)
+class Difference:
+    """Rows of one object and table that differ from version ``a`` to version ``b``."""
+
+    objectclass: str
+    objectkey: str
+    table: str
+    added: int
+    removed: int
+    changed: int
+
+
+def diff_versions(conn: Conn, a: str, b: str, *, a_revision: int | None = None,
+                  b_revision: int | None = None) -> list[Difference]:
+    """Objects whose rows differ between two versions (or revisions of them), per table.
+
+    ``added`` rows are seen in ``b`` only, ``removed`` in ``a`` only, ``changed``
+    rows have the same row key and other values.
+    """
+    with reraise():
+        rows = conn.execute("SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)",
+                            (a, b, a_revision, b_revision)).fetchall()
+    return [Difference(r[0], r[1], r[2], int(r[3]), int(r[4]), int(r[5])) for r in rows]

@@ -1,0 +1,45 @@
+-- tgsis.diff_versions(a, b, a_revision, b_revision): objects whose rows differ between two versions (or revisions).
+-- Per table and object: rows added (seen in b only), removed (in a only) and
+-- changed (same row key, other values). Rows both sides see as the same row
+-- version are skipped without reading them twice; rows that are different
+-- row versions with equal values (e.g. copied by a merge) are not differences.
+CREATE FUNCTION tgsis.diff_versions(
+    p_a          text,
+    p_b          text,
+    p_a_revision integer DEFAULT NULL,
+    p_b_revision integer DEFAULT NULL)
+RETURNS TABLE (objectclass text, objectkey text, shortname text, added bigint, removed bigint, changed bigint)
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_a    integer[] := tgsis.revision_set(tgsis.version_id(p_a), p_a_revision);
+    v_b    integer[] := tgsis.revision_set(tgsis.version_id(p_b), p_b_revision);
+    v_t    tgsis.versioned_tables;
+    v_keys text;
+BEGIN
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
+        SELECT string_agg(format('%I', k), ', ' ORDER BY o) INTO v_keys FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o);
+        RETURN QUERY EXECUTE format(
+            'WITH a AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
+                          FROM %3$I.%4$I v
+                         WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)
+                           AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))),
+                  b AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
+                          FROM %3$I.%4$I v
+                         WHERE v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
+                           AND NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1)))
+             SELECT %5$L::text, coalesce(a.obj, b.obj), %6$L::text,
+                    count(*) FILTER (WHERE a.r IS NULL), count(*) FILTER (WHERE b.r IS NULL),
+                    count(*) FILTER (WHERE a.r IS NOT NULL AND b.r IS NOT NULL)
+               FROM a FULL JOIN b USING (%1$s)
+              WHERE a.r IS DISTINCT FROM b.r
+              GROUP BY 2 ORDER BY 2',
+            v_keys, v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.objectclass, v_t.shortname)
+          USING v_a, v_b;
+    END LOOP;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.diff_versions(text, text, integer, integer) IS
+    'objects whose rows differ from version a (at a revision) to version b: per table, rows added, removed and changed (by row key and values)';
