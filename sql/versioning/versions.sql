@@ -12,6 +12,9 @@ CREATE TABLE tgsis.versions (
     owner           name        NOT NULL DEFAULT current_user,
     description     text,
     created_at      timestamptz NOT NULL DEFAULT now(),
+    valid_from      timestamptz,
+    valid_to        timestamptz,
+    CONSTRAINT versions_validity CHECK (valid_to IS NULL OR (valid_from IS NOT NULL AND valid_to > valid_from)),
     CONSTRAINT versions_root CHECK ((versionid = 0) = (parentid IS NULL) AND (parentid IS NULL) = (initrevision IS NULL)),
     CONSTRAINT versions_not_own_parent CHECK (parentid <> versionid),
     CONSTRAINT versions_working_in_set CHECK (workingrevision = workingset[cardinality(workingset)])
@@ -30,3 +33,5 @@ COMMENT ON COLUMN tgsis.versions.workingset IS
 COMMENT ON COLUMN tgsis.versions.owner IS 'role that created the version';
 COMMENT ON COLUMN tgsis.versions.description IS 'free text';
 COMMENT ON COLUMN tgsis.versions.created_at IS 'when the version was created';
+COMMENT ON COLUMN tgsis.versions.valid_from IS 'start of the period in which the version was believed true (NULL: no validity period)';
+COMMENT ON COLUMN tgsis.versions.valid_to IS 'end of that period, exclusive (NULL: still believed)';

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import datetime
 import json
 import logging
 import math
@@ -429,6 +430,34 @@ def cmd_version_diff(args: argparse.Namespace) -> int:
     return 0
 
 
+def _moment(text: str) -> datetime.datetime:
+    try:
+        moment = datetime.datetime.fromisoformat(text)
+    except ValueError:
+        raise InvalidInputError(f"{text!r} is not a date or time (ISO 8601, e.g. 2026-03-01 or 2026-03-01T12:00+01:00)"
+                                ) from None
+    return moment if moment.tzinfo else moment.replace(tzinfo=datetime.timezone.utc)
+
+
+def cmd_version_valid(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        V.set_version_validity(conn, args.name, _moment(args.valid_from), _moment(args.valid_to) if args.valid_to else None)
+    _out(f"version {args.name} believed from {args.valid_from}" + (f" to {args.valid_to}" if args.valid_to else " on"))
+    return 0
+
+
+def cmd_version_chain(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        if args.at:
+            believed = V.version_believed_at(conn, _moment(args.at), args.root)
+            _out(believed if believed is not None else "-")
+            return 0 if believed is not None else 3
+        chain = V.version_chain(conn, args.root)
+    for name, start, end in chain:
+        _out(f"{name}\t{start.isoformat()}\t{end.isoformat() if end else 'still believed'}")
+    return 0
+
+
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
@@ -607,6 +636,16 @@ def build_parser() -> argparse.ArgumentParser:
     ver_diff.add_argument("a", metavar="A[@REVISION]")
     ver_diff.add_argument("b", metavar="B[@REVISION]")
     ver_diff.set_defaults(handler=cmd_version_diff)
+
+    ver_valid = ver_commands.add_parser("valid", help="set the period in which a version was believed true")
+    ver_valid.add_argument("name")
+    ver_valid.add_argument("valid_from", metavar="FROM", help="ISO date or time")
+    ver_valid.add_argument("valid_to", metavar="TO", nargs="?", help="ISO date or time (omitted: still believed)")
+    ver_valid.set_defaults(handler=cmd_version_valid)
+    ver_chain = ver_commands.add_parser("chain", help="the chain of believed versions, or the one believed --at a time")
+    ver_chain.add_argument("--root", default="DEFAULT")
+    ver_chain.add_argument("--at", help="ISO date or time: print the version believed then (exit 3: none)")
+    ver_chain.set_defaults(handler=cmd_version_chain)
 
     vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)

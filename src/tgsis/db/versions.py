@@ -53,6 +53,9 @@ __all__ = [
     "refresh_version",
     "Difference",
     "diff_versions",
+    "set_version_validity",
+    "version_chain",
+    "version_believed_at",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -438,3 +441,31 @@ def diff_versions(conn: Conn, a: str, b: str, *, a_revision: int | None = None,
         rows = conn.execute("SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)",
                             (a, b, a_revision, b_revision)).fetchall()
     return [Difference(r[0], r[1], r[2], int(r[3]), int(r[4]), int(r[5])) for r in rows]
+
+
+# --------------------------------------------------------------------------- valid time
+
+
+def set_version_validity(conn: Conn, version: str, valid_from: datetime | None,
+                         valid_to: datetime | None = None) -> None:
+    """Set the period ``[valid_from, valid_to)`` in which ``version`` was believed true (``valid_to`` None: still)."""
+    _run_committed(conn, "SELECT tgsis.set_version_validity(%s, %s, %s)", (version, valid_from, valid_to))
+
+
+def version_chain(conn: Conn, root: str = "DEFAULT") -> list[tuple[str, datetime, datetime | None]]:
+    """The versions with a validity period at or below ``root``, oldest first: (name, valid_from, valid_to).
+
+    Raises
+    ------
+    InvalidInputError
+        They are not one line of descent, or their periods overlap.
+    """
+    with reraise():
+        rows = conn.execute("SELECT name, valid_from, valid_to FROM tgsis.version_chain(%s)", (root,)).fetchall()
+    return [(r[0], r[1], r[2]) for r in rows]
+
+
+def version_believed_at(conn: Conn, at: datetime, root: str = "DEFAULT") -> str | None:
+    """The version of the chain below ``root`` believed true at ``at``, or None."""
+    value = _scalar(conn, "SELECT tgsis.version_believed_at(%s, %s)", (at, root))
+    return None if value is None else str(value)
