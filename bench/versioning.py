@@ -16,6 +16,9 @@ is a binary COPY of the query's rows to this process (the way tgsis reads);
 "executor" is the server's execution time (EXPLAIN ANALYZE, no timing of
 nodes), which shows the cost of the visibility predicate alone.
 
+Last, a child of DEFAULT edits 1 % of the rows (two objects) and is merged
+back: time and rows written.
+
     python bench/versioning.py [--objects 200] [--rows 10000] [--repeat 5]    # TGSIS_PG=system|embedded
 """
 
@@ -61,6 +64,21 @@ def build(conn: Conn, objects: int, rows: int) -> tuple[str, list[int]]:
             parent = name
     vacuum_analyze(conn, "parts_ver")
     return deepest, chain_objects
+
+
+def time_merge(conn: Conn, objects: int, rows: int) -> tuple[float, int, int]:
+    """A child of DEFAULT edits 1 % of the rows (two objects); time its merge back."""
+    tgsis.goto_version(conn, "DEFAULT")
+    tgsis.create_version(conn, "one_percent")
+    edited = max(1, objects // 100)
+    with tgsis.in_version(conn, "one_percent"):
+        changed = 0
+        for objid in range(objects - edited, objects):
+            changed += conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s", (objid,)).rowcount
+        conn.commit()
+    start = time.perf_counter()
+    written = tgsis.merge_version(conn, "one_percent")
+    return time.perf_counter() - start, written, changed
 
 
 def vacuum_analyze(conn: Conn, table: str) -> None:
@@ -154,13 +172,18 @@ def main() -> None:
                 "full_scan_executor": (executor_s(conn, all_view, (), args.repeat),
                                        executor_s(conn, all_plain, (), args.repeat)),
             }
+            merge_s, merge_rows, changed = time_merge(conn, args.objects, args.rows)
     finally:
         server.destroy()
 
+    print(f"merge of a version with {changed} changed rows ({changed / (args.objects * args.rows):.0%}): "
+          f"{merge_s:.2f} s, {merge_rows} rows written")
     for name, (versioned, plain) in figures.items():
         print(f"{name:22s} versioned view {versioned * 1000:9.2f} ms   plain table {plain * 1000:9.2f} ms")
     for name, (versioned, plain) in figures.items():
         print(f"{name}_vs_plain: {versioned / plain:.2f}")
+    print(f"merge_1pct_s: {merge_s:.3f}")
+    print(f"merge_1pct_rows_written: {merge_rows}")
 
 
 if __name__ == "__main__":
