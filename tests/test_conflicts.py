@@ -4,22 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 import psycopg
 import pytest
 
 import tgsis
+from tests.synthetic import flat_grid
 from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
-
-
-def _grid(side: int, z: float) -> tgsis.Surface:
-    u, v = np.meshgrid(np.arange(side, dtype=float), np.arange(side, dtype=float))
-    vertices = np.stack([u.ravel(), v.ravel(), np.full(side * side, z)], axis=1)
-    idx = np.arange(side * side).reshape(side, side)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name=f"z{z}")
 
 
 @pytest.fixture
@@ -27,7 +19,7 @@ def surfaces(conn: Conn) -> dict[str, int]:
     """Three surfaces A, B, C in DEFAULT, versioned, and a child version 'edit'."""
     F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"note": "text"})
     tgsis.enable_feature_versioning(conn)
-    ids = {name: F.insert_feature(conn, "horizons", _grid(4, z)) for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))}
+    ids = {name: F.insert_feature(conn, "horizons", flat_grid(4, z)) for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))}
     tgsis.create_version(conn, "edit")
     return ids
 

@@ -6,22 +6,14 @@ import threading
 import time
 from typing import Any
 
-import numpy as np
 import psycopg
 import pytest
 
 import tgsis
+from tests.synthetic import flat_grid
 from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
-
-
-def _grid(side: int, z: float) -> tgsis.Surface:
-    u, v = np.meshgrid(np.arange(side, dtype=float), np.arange(side, dtype=float))
-    vertices = np.stack([u.ravel(), v.ravel(), np.full(side * side, z)], axis=1)
-    idx = np.arange(side * side).reshape(side, side)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name=f"z{z}")
 
 
 @pytest.fixture
@@ -29,7 +21,7 @@ def story(conn: Conn) -> dict[str, int]:
     """Surfaces A, B, C in DEFAULT; editors' sibling versions e1 and e2."""
     F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"note": "text"})
     tgsis.enable_feature_versioning(conn)
-    ids = {name: F.insert_feature(conn, "horizons", _grid(5, z), {"note": name})
+    ids = {name: F.insert_feature(conn, "horizons", flat_grid(5, z), {"note": name})
            for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))}
     tgsis.create_version(conn, "e1")
     tgsis.create_version(conn, "e2")
