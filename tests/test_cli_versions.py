@@ -88,12 +88,16 @@ def test_versioning_a_table_from_the_command_line(db_dsn: str, capsys: pytest.Ca
         assert conn.execute("SELECT relkind FROM pg_class WHERE relname = 'wells'").fetchone() == ("r",)
 
 
-def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
-    with psycopg.connect(db_dsn) as conn:
+def _versioned_wells_and_version_a(dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with psycopg.connect(dsn) as conn:
         conn.execute("CREATE TABLE wells (id int PRIMARY KEY, depth float8)")
         conn.execute("INSERT INTO wells VALUES (1, 10), (2, 20)")
-    _run(db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
-    _run(db_dsn, capsys, "version", "create", "a")
+    _run(dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
+    _run(dsn, capsys, "version", "create", "a")
+
+
+def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    _versioned_wells_and_version_a(db_dsn, capsys)
     with psycopg.connect(db_dsn) as conn:
         conn.execute("UPDATE wells SET depth = 11 WHERE id = 1")
         conn.execute("SELECT tgsis.goto_version('a')")
@@ -109,11 +113,7 @@ def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
 
 
 def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
-    with psycopg.connect(db_dsn) as conn:
-        conn.execute("CREATE TABLE wells (id int PRIMARY KEY, depth float8)")
-        conn.execute("INSERT INTO wells VALUES (1, 10), (2, 20)")
-    _run(db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
-    _run(db_dsn, capsys, "version", "create", "a")
+    _versioned_wells_and_version_a(db_dsn, capsys)
     with psycopg.connect(db_dsn) as conn:
         conn.execute("SELECT tgsis.goto_version('a')")
         conn.execute("UPDATE wells SET depth = 12 WHERE id = 1")

@@ -25,6 +25,7 @@ def story(conn: Conn) -> dict[str, int]:
            for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))}
     tgsis.create_version(conn, "e1")
     tgsis.create_version(conn, "e2")
+    conn.commit()
     return ids
 
 
@@ -146,8 +147,16 @@ def test_merge_refusals_change_nothing(conn: Conn, story: dict[str, int]) -> Non
         tgsis.merge_version(conn, "e1", remove=True)
     with pytest.raises(tgsis.InvalidInputError, match="DEFAULT has no parent"):
         tgsis.merge_version(conn, "DEFAULT")
-    with pytest.raises(tgsis.NotFoundError):
+    with pytest.raises(tgsis.NotFoundError, match="version 'nope' does not exist"):
         tgsis.refresh_version(conn, "nope")
+    with pytest.raises(tgsis.NotFoundError, match="version 'nope' does not exist"):
+        tgsis.merge_version(conn, "nope")
+    with pytest.raises(tgsis.NotFoundError, match="version 'nope' does not exist"):
+        tgsis.diff_versions(conn, "DEFAULT", "nope")
+    conn.rollback()
+    with pytest.raises(tgsis.NotFoundError, match="revision 2 is not in the history of version 'e2'"):
+        tgsis.diff_versions(conn, "DEFAULT", "e2", b_revision=2)     # e1's revision
+    conn.rollback()
     assert conn.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall() == state
 
 

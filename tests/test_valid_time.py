@@ -56,6 +56,9 @@ def test_empty_periods_are_refused(surveys: Conn) -> None:
     with pytest.raises(tgsis.InvalidInputError, match="is empty"):
         tgsis.set_version_validity(surveys, "s1", _day("2024-06-01"), _day("2024-01-01"))
     surveys.rollback()
+    with pytest.raises(tgsis.NotFoundError, match="version 'nope' does not exist"):
+        tgsis.set_version_validity(surveys, "nope", _day("2024-01-01"))
+    surveys.rollback()
     assert surveys.execute("SELECT valid_from::date::text FROM tgsis.versions WHERE name = 's1'").fetchone() == (
         "2024-01-01",)
 

@@ -96,6 +96,8 @@ BEGIN
                         ELSE 'the feature (_geoid of ' || p_name || ')' END);
     EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
                    CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
+    PERFORM tgsis.comment_property_columns(p_schema, p_name, v_fprops, 'per-feature property');
+    PERFORM tgsis.comment_property_columns(p_schema, v_cellpros, v_cprops, format('%s property', lower(v_align)));
 
     EXECUTE format('GRANT SELECT ON %I.%I, %I.%I TO tgsis_reader', p_schema, p_name, p_schema, v_cellpros);
     EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I, %I.%I TO tgsis_editor', p_schema, p_name, p_schema, v_cellpros);

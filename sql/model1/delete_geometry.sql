@@ -11,7 +11,6 @@ AS $$
 DECLARE
     v_geo   record;
     v_ids   bigint[];
-    v_id    bigint;
     v_class record;
 BEGIN
     SELECT geotype, collection INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
@@ -30,20 +29,14 @@ BEGIN
     -- delete it explicitly; cell properties of a collection's members are in
     -- its class's table, keyed by member geoid
     FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog WHERE geotype = v_geo.geotype LOOP
-        FOREACH v_id IN ARRAY v_ids LOOP
-            PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', v_id);
-        END LOOP;
-        PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.featuretable, '_geoid', p_geoid);
+        PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', v_ids);
+        PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.featuretable, '_geoid', ARRAY[p_geoid]);
     END LOOP;
-    FOR v_geo IN SELECT geoid, geotype FROM tgsis.geometry WHERE geoid = ANY (v_ids) LOOP
-        PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', v_geo.geoid);
-        IF v_geo.geotype <> 'GEOMETRYCOLLECTION' THEN
-            PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geo.geotype), 'geoid', v_geo.geoid);
-        END IF;
+    PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', v_ids);
+    FOR v_geo IN SELECT DISTINCT geotype FROM tgsis.geometry WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' LOOP
+        PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geo.geotype), 'geoid', v_ids);
     END LOOP;
-    FOREACH v_id IN ARRAY v_ids LOOP
-        PERFORM tgsis.delete_object_rows('tgsis', 'geometry', 'geoid', v_id);
-    END LOOP;
+    PERFORM tgsis.delete_object_rows('tgsis', 'geometry', 'geoid', v_ids);
     RETURN true;
 END
 $$;

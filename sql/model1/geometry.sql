@@ -23,6 +23,7 @@ CREATE INDEX geometry_bbox_idx ON tgsis.geometry USING gist (bbox);
 -- finds the members of a collection (delete_geometry, and the foreign-key check when a collection is deleted)
 CREATE INDEX geometry_collection_idx ON tgsis.geometry (collection) WHERE collection IS NOT NULL;
 
+COMMENT ON SEQUENCE tgsis.geometry_geoid_seq IS 'geometry ids (identity of tgsis.geometry)';
 COMMENT ON TABLE tgsis.geometry IS
     'model 1: one row per geometry (indexed face set); vertices and simplices are in tgsis.vrtx, point, segment, trgl, tetra';
 COMMENT ON COLUMN tgsis.geometry.geoid IS 'geometry id; also the feature id (_geoid) in feature tables';

@@ -19,10 +19,8 @@ BEGIN
                  SELECT s.side, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r, v.revision
                    FROM %I.%I v, (VALUES (''child'', $2), (''parent'', $3)) AS s(side, revs)
                   WHERE v.%I::text = $1 AND v.revision = ANY (s.revs) AND NOT (v.lastrevs && s.revs))
-             SELECT %L::text, a.side, jsonb_object_agg_keys.k, a.r
+             SELECT %L::text, a.side, (SELECT jsonb_object_agg(key, a.r -> key) FROM unnest($4::text[]) AS key), a.r
                FROM rows a
-               CROSS JOIN LATERAL (SELECT jsonb_object_agg(key, a.r -> key) AS k FROM unnest($4::text[]) AS key)
-                    AS jsonb_object_agg_keys
               WHERE NOT EXISTS (SELECT FROM rows b WHERE b.side <> a.side AND b.r = a.r)
               ORDER BY 3, 2',
             v_t.schemaname, v_t.tablename || '_ver', v_t.objectkeyfield, v_t.shortname)

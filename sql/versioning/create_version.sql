@@ -9,7 +9,6 @@ VOLATILE
 AS $$
 DECLARE
     v_parent     tgsis.versions;
-    v_parent_rev integer;
     v_child_rev  integer;
     v_child_id   integer;
 BEGIN
@@ -22,12 +21,7 @@ BEGIN
             USING ERRCODE = 'TG201', HINT = 'choose another name, or tgsis.delete_version it first';
     END IF;
 
-    UPDATE tgsis.revisions SET visibleset = v_parent.workingset WHERE revision = v_parent.workingrevision;
-    v_parent_rev := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_parent_rev, v_parent.versionid, current_user);
-    UPDATE tgsis.versions
-       SET workingrevision = v_parent_rev, workingset = workingset || v_parent_rev
-     WHERE versionid = v_parent.versionid;
+    PERFORM tgsis.next_working_revision(v_parent.versionid);
 
     v_child_rev := nextval('tgsis.revision_seq');
     INSERT INTO tgsis.versions (name, parentid, initrevision, workingrevision, workingset, owner, description)

@@ -10,42 +10,35 @@ VOLATILE
 AS $$
 DECLARE
     v_version tgsis.versions;
-    v_child   integer[];
     v_parent  integer[];
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
         RAISE EXCEPTION 'version DEFAULT has no parent to conflict with' USING ERRCODE = 'TG100';
     END IF;
-    -- the version's own revisions in its working set (a merge leaves the older ones behind)
-    SELECT coalesce(array_agg(revision), '{}') INTO v_child FROM tgsis.revisions
-     WHERE versionid = v_version.versionid AND revision = ANY (v_version.workingset);
     SELECT coalesce(array_agg(revision), '{}') INTO v_parent
       FROM tgsis.revisions WHERE versionid = v_version.parentid AND revision > v_version.initrevision;
 
-    CREATE TEMP TABLE IF NOT EXISTS tgsis_found_conflicts (
-        objectclass text, objectkey text, conflicttype text[], childtables text[], parenttables text[],
-        childmark text, parentmark text) ON COMMIT DROP;
-    TRUNCATE tgsis_found_conflicts;
-    INSERT INTO tgsis_found_conflicts
-    SELECT c.objectclass, c.objectkey,
-           ARRAY(SELECT unnest(c.tables) INTERSECT SELECT unnest(p.tables) ORDER BY 1),
-           c.tables, p.tables, c.mark, p.mark
-      FROM (SELECT objectclass, objectkey, array_agg(shortname ORDER BY shortname) AS tables,
-                   md5(string_agg(shortname || ':' || mark, ',' ORDER BY shortname)) AS mark
-              FROM tgsis.changed_objects(v_child) GROUP BY 1, 2) AS c
-      JOIN (SELECT objectclass, objectkey, array_agg(shortname ORDER BY shortname) AS tables,
-                   md5(string_agg(shortname || ':' || mark, ',' ORDER BY shortname)) AS mark
-              FROM tgsis.changed_objects(v_parent) GROUP BY 1, 2) AS p
-     USING (objectclass, objectkey);
-
-    DELETE FROM tgsis.conflicts k
-     WHERE k.versionid = v_version.versionid
-       AND NOT EXISTS (SELECT FROM tgsis_found_conflicts f
-                        WHERE f.objectclass = k.objectclass AND f.objectkey = k.objectkey);
+    WITH changes AS (
+        SELECT side, objectclass, objectkey, array_agg(shortname ORDER BY shortname) AS tables,
+               md5(string_agg(shortname || ':' || mark, ',' ORDER BY shortname)) AS mark
+          FROM (SELECT 'child' AS side, * FROM tgsis.changed_objects(tgsis.own_working_revisions(v_version.versionid))
+                UNION ALL
+                SELECT 'parent', * FROM tgsis.changed_objects(v_parent)) AS c
+         GROUP BY 1, 2, 3),
+    found AS (
+        SELECT c.objectclass, c.objectkey,
+               ARRAY(SELECT unnest(c.tables) INTERSECT SELECT unnest(p.tables) ORDER BY 1) AS conflicttype,
+               c.tables AS childtables, p.tables AS parenttables, c.mark AS childmark, p.mark AS parentmark
+          FROM changes c JOIN changes p USING (objectclass, objectkey)
+         WHERE c.side = 'child' AND p.side = 'parent'),
+    gone AS (
+        DELETE FROM tgsis.conflicts k
+         WHERE k.versionid = v_version.versionid
+           AND NOT EXISTS (SELECT FROM found f WHERE f.objectclass = k.objectclass AND f.objectkey = k.objectkey))
     INSERT INTO tgsis.conflicts AS k (versionid, objectclass, objectkey, conflicttype, childtables, parenttables,
                                       childmark, parentmark)
-    SELECT v_version.versionid, f.* FROM tgsis_found_conflicts f
+    SELECT v_version.versionid, f.* FROM found f
         ON CONFLICT (versionid, objectclass, objectkey) DO UPDATE
        SET conflicttype = excluded.conflicttype, childtables = excluded.childtables,
            parenttables = excluded.parenttables, childmark = excluded.childmark, parentmark = excluded.parentmark,
@@ -56,7 +49,6 @@ BEGIN
                             THEN k.solved_at END,
            solved_by = CASE WHEN (k.childmark, k.parentmark) = (excluded.childmark, excluded.parentmark)
                             THEN k.solved_by END;
-    DROP TABLE tgsis_found_conflicts;
     RETURN QUERY SELECT * FROM tgsis.conflicts WHERE versionid = v_version.versionid ORDER BY objectclass, objectkey;
 END
 $$;

@@ -16,7 +16,6 @@ DECLARE
     v_own     integer[];
     v_class   record;
     v_written bigint := 0;
-    v_next    integer;
 BEGIN
     SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_child.parentid IS NULL THEN
@@ -32,8 +31,7 @@ BEGIN
     SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
     PERFORM tgsis.check_no_unsolved_conflicts(p_version, 'merge');
 
-    v_own := ARRAY(SELECT r FROM unnest(v_child.workingset) AS r
-                    WHERE r IN (SELECT revision FROM tgsis.revisions WHERE versionid = v_child.versionid));
+    v_own := tgsis.own_working_revisions(v_child.versionid);
     FOR v_class IN
         SELECT c.objectclass, array_agg(DISTINCT c.objectkey) AS keys
           FROM tgsis.changed_objects(v_own) AS c
@@ -47,23 +45,13 @@ BEGIN
     END LOOP;
 
     -- the parent's working revision now holds the merge: freeze it, start the next
-    UPDATE tgsis.revisions SET visibleset = v_parent.workingset WHERE revision = v_parent.workingrevision;
-    v_next := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_parent.versionid, current_user);
-    UPDATE tgsis.versions SET workingrevision = v_next, workingset = workingset || v_next
-     WHERE versionid = v_parent.versionid;
+    PERFORM tgsis.next_working_revision(v_parent.versionid);
 
     IF coalesce(p_remove, false) THEN
         PERFORM tgsis.delete_version(p_version);
     ELSE
         -- the version goes on from the merged state: everything it had is in the parent now
-        UPDATE tgsis.revisions SET visibleset = v_child.workingset WHERE revision = v_child.workingrevision;
-        v_next := nextval('tgsis.revision_seq');
-        INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_child.versionid, current_user);
-        UPDATE tgsis.versions
-           SET initrevision = v_parent.workingrevision, workingrevision = v_next,
-               workingset = v_parent.workingset || v_next
-         WHERE versionid = v_child.versionid;
+        PERFORM tgsis.next_working_revision(v_child.versionid, v_parent.workingset, v_parent.workingrevision);
         DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
     END IF;
     RETURN v_written;

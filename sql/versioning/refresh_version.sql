@@ -27,22 +27,14 @@ BEGIN
     SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
     PERFORM tgsis.check_no_unsolved_conflicts(p_version, 'refresh');
 
-    -- freeze the parent's working revision: the new base
-    UPDATE tgsis.revisions SET visibleset = v_parent.workingset WHERE revision = v_parent.workingrevision;
-    v_next := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_parent.versionid, current_user);
-    UPDATE tgsis.versions SET workingrevision = v_next, workingset = workingset || v_next
-     WHERE versionid = v_parent.versionid;
-
-    -- the version: the parent's set up to the base, its own revisions, a new working one
-    v_own := ARRAY(SELECT r FROM unnest(v_child.workingset) AS r
-                    WHERE r IN (SELECT revision FROM tgsis.revisions WHERE versionid = v_child.versionid));
-    UPDATE tgsis.revisions SET visibleset = v_child.workingset WHERE revision = v_child.workingrevision;
-    v_next := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, v_child.versionid, current_user);
-    v_newset := ARRAY(SELECT DISTINCT r FROM unnest(v_parent.workingset || v_own) AS r ORDER BY r) || v_next;
-    UPDATE tgsis.versions SET initrevision = v_parent.workingrevision, workingrevision = v_next, workingset = v_newset
-     WHERE versionid = v_child.versionid;
+    -- the parent's working revision becomes the new base; the version sees
+    -- the parent's set up to it, its own revisions, and a new working one
+    PERFORM tgsis.next_working_revision(v_parent.versionid);
+    v_own := tgsis.own_working_revisions(v_child.versionid);
+    v_next := tgsis.next_working_revision(v_child.versionid,
+                                          ARRAY(SELECT DISTINCT r FROM unnest(v_parent.workingset || v_own) AS r ORDER BY r),
+                                          v_parent.workingrevision);
+    SELECT workingset INTO v_newset FROM tgsis.versions WHERE versionid = v_child.versionid;
 
     -- objects changed on both sides would now show both sides' rows: give each the state its solution says
     FOR v_class IN

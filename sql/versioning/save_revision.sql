@@ -7,7 +7,6 @@ AS $$
 DECLARE
     v_version tgsis.versions;
     v_saved   integer;
-    v_new     integer;
 BEGIN
     PERFORM tgsis.check_version_name(p_name, 'revision');
     v_saved := (tgsis.write_revision()).revision;  -- TG301 while an older revision is viewed
@@ -16,12 +15,8 @@ BEGIN
         RAISE EXCEPTION 'version % has a revision named % already', quote_literal(v_version.name), quote_literal(p_name)
             USING ERRCODE = 'TG201';
     END IF;
-    UPDATE tgsis.revisions SET name = p_name, saved_at = now(), visibleset = v_version.workingset WHERE revision = v_saved;
-    v_new := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_new, v_version.versionid, current_user);
-    UPDATE tgsis.versions
-       SET workingrevision = v_new, workingset = workingset || v_new
-     WHERE versionid = v_version.versionid;
+    UPDATE tgsis.revisions SET name = p_name, saved_at = now() WHERE revision = v_saved;
+    PERFORM tgsis.next_working_revision(v_version.versionid);
     RETURN v_saved;
 END
 $$;

@@ -14,6 +14,7 @@ CREATE TABLE tgsis.versioning_dropped (
     dropped_at  timestamptz NOT NULL DEFAULT now()
 );
 
+COMMENT ON SEQUENCE tgsis.versioning_dropped_id_seq IS 'row ids of tgsis.versioning_dropped';
 COMMENT ON TABLE tgsis.versioning_dropped IS
     'constraints and unique indexes dropped by enable_versioning (they cannot hold across versions), restored by disable_versioning';
 COMMENT ON COLUMN tgsis.versioning_dropped.id IS 'row id';

@@ -22,6 +22,7 @@ CREATE TABLE tgsis.versions (
 
 CREATE INDEX versions_parentid_idx ON tgsis.versions (parentid);
 
+COMMENT ON SEQUENCE tgsis.versions_versionid_seq IS 'version ids (identity of tgsis.versions; DEFAULT is 0)';
 COMMENT ON TABLE tgsis.versions IS 'versions (long transactions): a tree rooted at DEFAULT';
 COMMENT ON COLUMN tgsis.versions.versionid IS 'version id (0: DEFAULT)';
 COMMENT ON COLUMN tgsis.versions.name IS 'version name, unique; DEFAULT is the root';
