@@ -180,9 +180,13 @@ def test_rows_at_reads_other_versions_without_moving(wells: Conn) -> None:
     assert wells.execute("SELECT id, depth FROM tgsis.rows_at(NULL::wells, 'a', 0) ORDER BY id").fetchall() == [
         (1, 10.0), (2, 20.0)]
     assert tgsis.working_version(wells) == "DEFAULT"
-    with pytest.raises(psycopg.Error, match="not a versioned table") as err:
+    with pytest.raises(psycopg.Error, match="table tgsis.catalog is not versioned") as err:
         wells.execute("SELECT * FROM tgsis.rows_at(NULL::tgsis.catalog, 'a')")
     assert err.value.sqlstate == "TG200"
+    wells.rollback()
+    with pytest.raises(psycopg.Error, match="rows_at takes a row of the versioned table, not a integer") as err:
+        wells.execute("SELECT * FROM tgsis.rows_at(NULL::int, 'a')")
+    assert err.value.sqlstate == "TG100"
 
 
 def test_delete_version_removes_its_rows_and_reopens_closed_ones(wells: Conn) -> None:

@@ -17,19 +17,12 @@ DECLARE
     v_class   record;
     v_written bigint := 0;
 BEGIN
-    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    IF v_child.parentid IS NULL THEN
-        RAISE EXCEPTION 'version DEFAULT has no parent to merge into' USING ERRCODE = 'TG100';
-    END IF;
-    IF coalesce(p_remove, false) AND EXISTS (SELECT FROM tgsis.versions WHERE parentid = v_child.versionid) THEN
+    IF coalesce(p_remove, false) AND EXISTS (SELECT FROM tgsis.versions WHERE parentid = tgsis.version_id(p_version)) THEN
         RAISE EXCEPTION 'version % has child versions and cannot be removed by the merge', quote_literal(p_version)
             USING ERRCODE = 'TG202', HINT = 'merge without removing it, or merge or delete its children first';
     END IF;
-    -- parent first, then child (the order every merge and refresh takes): waits for their writers
-    -- (write_revision share-locks a version) and for another merge of either
-    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
-    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
-    PERFORM tgsis.check_no_unsolved_conflicts(p_version, 'merge');
+    v_child := tgsis.lock_for_merge(p_version, 'merge');
+    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
 
     v_own := tgsis.own_working_revisions(v_child.versionid);
     FOR v_class IN

@@ -19,13 +19,8 @@ DECLARE
     v_class   record;
     v_written bigint := 0;
 BEGIN
-    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    IF v_child.parentid IS NULL THEN
-        RAISE EXCEPTION 'version DEFAULT has no parent to refresh from' USING ERRCODE = 'TG100';
-    END IF;
-    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
-    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
-    PERFORM tgsis.check_no_unsolved_conflicts(p_version, 'refresh');
+    v_child := tgsis.lock_for_merge(p_version, 'refresh');
+    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
 
     -- the parent's working revision becomes the new base; the version sees
     -- the parent's set up to it, its own revisions, and a new working one

@@ -13,15 +13,11 @@ DECLARE
     v_set  integer[];
     v_cols text;
 BEGIN
-    SELECT t.* INTO v_t
-      FROM tgsis.versioned_tables t
-      JOIN pg_catalog.pg_class c ON c.relname = t.tablename
-      JOIN pg_catalog.pg_namespace n ON n.oid = c.relnamespace AND n.nspname = t.schemaname
-     WHERE c.oid = v_rel;
-    IF NOT FOUND THEN
-        RAISE EXCEPTION '% is not a versioned table', pg_typeof(p_table)
-            USING ERRCODE = 'TG200', HINT = 'call it as tgsis.rows_at(NULL::schema.table, version[, revision])';
+    IF v_rel = 0 THEN
+        RAISE EXCEPTION 'rows_at takes a row of the versioned table, not a %', pg_typeof(p_table)
+            USING ERRCODE = 'TG100', HINT = 'call it as tgsis.rows_at(NULL::schema.table, version[, revision])';
     END IF;
+    v_t := tgsis.versioned_table(v_rel::regclass);  -- TG200 unless it is a versioned table's view
     v_set := tgsis.revision_set(tgsis.version_id(p_version), p_revision);
     SELECT string_agg(format('v.%I', attname), ', ' ORDER BY attnum) INTO v_cols
       FROM pg_catalog.pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;

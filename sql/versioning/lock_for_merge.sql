@@ -1,0 +1,26 @@
+-- tgsis.lock_for_merge(version, action): lock a version and its parent for a merge or refresh; returns the version's row.
+-- Parent first, then child: the order every merge and refresh takes. It waits
+-- for writers of either (write_revision share-locks a version) and for another
+-- merge or refresh of either. Then the conflicts are recomputed: TG302 names
+-- the unsolved ones.
+CREATE FUNCTION tgsis.lock_for_merge(p_version text, p_action text)
+RETURNS tgsis.versions
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_child tgsis.versions;
+BEGIN
+    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    IF v_child.parentid IS NULL THEN
+        RAISE EXCEPTION 'version DEFAULT has no parent: nothing to %', p_action USING ERRCODE = 'TG100';
+    END IF;
+    PERFORM FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
+    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
+    PERFORM tgsis.check_no_unsolved_conflicts(p_version, p_action);
+    RETURN v_child;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.lock_for_merge(text, text) IS
+    'lock a version and its parent (parent first) for a merge or refresh, then refuse (TG302) while conflicts are unsolved; returns the version''s row';
