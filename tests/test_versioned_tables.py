@@ -281,6 +281,14 @@ def test_a_role_with_table_rights_writes_through_the_view(wells: Conn) -> None:
         tgsis.enable_versioning(wells, "wells", "id", "well")
         wells.commit()
         wells.execute(f"SET ROLE {role}")
+        # table rights say which tables, version rights which versions
+        with pytest.raises(psycopg.Error, match=f"role {role} may not write in version 'DEFAULT'") as refused:
+            wells.execute("INSERT INTO wells (name) VALUES ('by app')")
+        assert refused.value.sqlstate == "TG002"
+        wells.rollback()
+        tgsis.grant_version(wells, "DEFAULT", "write", role)
+        wells.commit()
+        wells.execute(f"SET ROLE {role}")
         wells.execute("INSERT INTO wells (name) VALUES ('by app')")
         wells.execute("UPDATE wells SET depth = 1 WHERE name = 'w1'")
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
@@ -299,6 +307,7 @@ def test_a_role_with_table_rights_writes_through_the_view(wells: Conn) -> None:
         wells.rollback()
     finally:
         wells.rollback()
+        tgsis.revoke_version(wells, "DEFAULT", "all", role)
         wells.execute(f"DROP OWNED BY {role}")
         wells.execute(f"DROP ROLE {role}")
         wells.commit()

@@ -30,4 +30,5 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG202', 'in_use',           'catalog', 'an object cannot be dropped or changed while others depend on it'),
     ('TG300', 'versioning',       'versioning', 'a versioning error that fits no narrower code'),
     ('TG301', 'read_only_revision', 'versioning', 'a write while the session views an older revision, or into a frozen (saved) revision'),
-    ('TG302', 'unsolved_conflicts', 'versioning', 'a merge or refresh while objects changed on both sides have no recorded solution');
+    ('TG302', 'unsolved_conflicts', 'versioning', 'a merge or refresh while objects changed on both sides have no recorded solution'),
+    ('TG303', 'object_locked',    'versioning', 'a write (or merge) would change an object another version, or another role, holds a lock on');

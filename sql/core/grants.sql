@@ -11,10 +11,15 @@ GRANT INSERT, UPDATE, DELETE ON tgsis.catalog TO tgsis_admin;
 -- versioning: readers see the version tree; editors create, save and delete
 -- versions (per-version owner rights are enforced by the functions)
 GRANT SELECT ON tgsis.versions, tgsis.revisions, tgsis.version_tree, tgsis.versioned_tables, tgsis.versioning_dropped,
-                tgsis.conflicts
+                tgsis.conflicts, tgsis.version_privileges
     TO tgsis_reader;
-GRANT INSERT, UPDATE, DELETE ON tgsis.conflicts TO tgsis_editor;
-GRANT INSERT, UPDATE, DELETE ON tgsis.versions, tgsis.revisions TO tgsis_editor;
-GRANT USAGE ON SEQUENCE tgsis.revision_seq, tgsis.versions_versionid_seq TO tgsis_editor;
+-- the generated write triggers run as each table's owner and probe the locks
+GRANT SELECT ON tgsis.object_locks TO PUBLIC;
+-- version state changes only through the SECURITY DEFINER functions, which
+-- check the caller's version rights (tgsis.has_version_privilege); the
+-- helpers they share are theirs alone
+REVOKE ALL ON FUNCTION tgsis.next_working_revision(integer, integer[], integer), tgsis.lock_for_merge(text, text),
+                       tgsis.copy_object_state(text, text[], integer[], integer[], integer)
+    FROM PUBLIC;
 GRANT INSERT, UPDATE, DELETE ON tgsis.versioned_tables, tgsis.versioning_dropped TO tgsis_admin;
 GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean) TO tgsis_admin;

@@ -6,6 +6,8 @@ CREATE FUNCTION tgsis.create_version(p_name text, p_parent text DEFAULT 'DEFAULT
 RETURNS integer
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_parent     tgsis.versions;
@@ -13,7 +15,7 @@ DECLARE
     v_child_id   integer;
 BEGIN
     PERFORM tgsis.check_version_name(p_name);
-    PERFORM tgsis.version_id(p_parent);
+    PERFORM tgsis.require_version_privilege(tgsis.version_id(p_parent), 'create', 'create a child of');
     -- waits for writers of the parent's working revision (write_revision share-locks it)
     SELECT * INTO v_parent FROM tgsis.versions WHERE name = p_parent FOR UPDATE;
     IF EXISTS (SELECT FROM tgsis.versions WHERE name = p_name) THEN
@@ -26,9 +28,9 @@ BEGIN
     v_child_rev := nextval('tgsis.revision_seq');
     INSERT INTO tgsis.versions (name, parentid, initrevision, workingrevision, workingset, owner, description)
     VALUES (p_name, v_parent.versionid, v_parent.workingrevision, v_child_rev, v_parent.workingset || v_child_rev,
-            current_user, p_description)
+            tgsis.calling_role(), p_description)
     RETURNING versionid INTO v_child_id;
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_child_rev, v_child_id, current_user);
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_child_rev, v_child_id, tgsis.calling_role());
     RETURN v_child_rev;
 END
 $$;

@@ -11,13 +11,16 @@ DECLARE
     v_write   record;
     v_deleted bigint;
     v_closed  bigint;
+    v_class   text;
 BEGIN
-    IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table) THEN
+    SELECT objectclass INTO v_class FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
+    IF NOT FOUND THEN
         EXECUTE format('DELETE FROM %I.%I WHERE %I = ANY ($1)', p_schema, p_table, p_keyfield) USING p_keys;
         GET DIAGNOSTICS v_deleted = ROW_COUNT;
         RETURN v_deleted;
     END IF;
     SELECT * INTO v_write FROM tgsis.write_revision();
+    PERFORM tgsis.check_objects_unlocked(v_class, p_keys::text[]);
     EXECUTE format('DELETE FROM %I.%I WHERE %I = ANY ($1) AND revision = $2', p_schema, p_table || '_ver', p_keyfield)
       USING p_keys, v_write.revision;
     GET DIAGNOSTICS v_deleted = ROW_COUNT;

@@ -3,6 +3,8 @@ CREATE FUNCTION tgsis.delete_version(p_name text)
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_id       integer := tgsis.version_id(p_name);
@@ -15,6 +17,7 @@ BEGIN
     IF v_id = 0 THEN
         RAISE EXCEPTION 'version DEFAULT cannot be deleted' USING ERRCODE = 'TG100', DETAIL = 'It is the root of the version tree.';
     END IF;
+    PERFORM tgsis.require_version_privilege(v_id, 'delete', 'delete');
     PERFORM FROM tgsis.versions WHERE versionid = v_id FOR UPDATE;
     SELECT string_agg(quote_literal(name), ', ' ORDER BY name) INTO v_children FROM tgsis.versions WHERE parentid = v_id;
     IF v_children IS NOT NULL THEN

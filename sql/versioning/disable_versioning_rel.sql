@@ -46,6 +46,7 @@ BEGIN
     EXECUTE format('DELETE FROM %I.%I v WHERE NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1))', v_t.schemaname, v_ver)
       USING v_default;
     GET DIAGNOSTICS v_removed = ROW_COUNT;
+    EXECUTE format('DROP TRIGGER tgsis_storage_write ON %I.%I', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_t.schemaname, v_ver, v_ver || '_pkey');
     EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN revclosed, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I RENAME TO %I', v_t.schemaname, v_ver, v_t.tablename);

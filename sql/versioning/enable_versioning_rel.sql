@@ -186,6 +186,10 @@ BEGIN
     EXECUTE format('COMMENT ON COLUMN %I.%I.lastrevs IS %L', v_schema, v_ver,
                    'revisions in which this row version stopped being current (updated or deleted there); empty while live');
 
+    -- the table's grants stay on storage for the client's bulk path: direct writers need the version's write right
+    EXECUTE format('CREATE TRIGGER tgsis_storage_write BEFORE INSERT OR UPDATE OR DELETE OR TRUNCATE ON %I.%I '
+                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.storage_write_check()', v_schema, v_ver);
+
     -- the view in the table's place, with its defaults, comments, grants and owner
     EXECUTE tgsis.versioned_view_source(v_schema, v_table, v_columns);
     FOR v_col IN
@@ -214,7 +218,7 @@ BEGIN
         EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, v_schema, v_table,
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
     END LOOP;
-    EXECUTE tgsis.versioning_trigger_source(v_schema, v_table, v_keys, v_writable, v_pkey);
+    EXECUTE tgsis.versioning_trigger_source(v_schema, v_table, v_keys, v_writable, v_pkey, p_objectclass, p_objectkeyfield);
     EXECUTE format('COMMENT ON FUNCTION %I.%I() IS %L', v_schema, v_table || '_ver_write',
                    format('tgsis versioning: INSTEAD OF trigger routing writes on %s.%s into %s', v_schema, v_table, v_ver));
     EXECUTE format('CREATE TRIGGER %I INSTEAD OF INSERT OR UPDATE OR DELETE ON %I.%I FOR EACH ROW EXECUTE FUNCTION %I.%I()',

@@ -7,6 +7,8 @@ CREATE FUNCTION tgsis.find_conflicts(p_version text)
 RETURNS SETOF tgsis.conflicts
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_version tgsis.versions;

@@ -9,6 +9,8 @@ CREATE FUNCTION tgsis.merge_version(p_version text, p_remove boolean DEFAULT fal
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_child   tgsis.versions;
@@ -17,6 +19,11 @@ DECLARE
     v_class   record;
     v_written bigint := 0;
 BEGIN
+    -- the right to merge into the parent, and to change (or delete) the version itself, whose base moves
+    PERFORM tgsis.require_version_privilege(parentid, 'merge', 'merge into'),
+            tgsis.require_version_privilege(versionid, CASE WHEN p_remove THEN 'delete' ELSE 'write' END,
+                                            CASE WHEN p_remove THEN 'delete' ELSE 'write in' END)
+       FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version) AND parentid IS NOT NULL;
     IF coalesce(p_remove, false) AND EXISTS (SELECT FROM tgsis.versions WHERE parentid = tgsis.version_id(p_version)) THEN
         RAISE EXCEPTION 'version % has child versions and cannot be removed by the merge', quote_literal(p_version)
             USING ERRCODE = 'TG202', HINT = 'merge without removing it, or merge or delete its children first';
@@ -33,6 +40,8 @@ BEGIN
                               AND k.objectkey = c.objectkey AND k.solution = 'parent')
          GROUP BY c.objectclass
     LOOP
+        -- an object another version locked stays as it is in the parent too
+        PERFORM tgsis.check_objects_unlocked(v_class.objectclass, v_class.keys, v_child.versionid, false);
         v_written := v_written + tgsis.copy_object_state(v_class.objectclass, v_class.keys, v_child.workingset,
                                                          v_parent.workingset, v_parent.workingrevision);
     END LOOP;

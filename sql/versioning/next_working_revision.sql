@@ -19,7 +19,7 @@ BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = p_versionid;
     UPDATE tgsis.revisions SET visibleset = v_version.workingset WHERE revision = v_version.workingrevision;
     v_next := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, p_versionid, current_user);
+    INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_next, p_versionid, tgsis.calling_role());
     UPDATE tgsis.versions
        SET workingrevision = v_next,
            workingset = coalesce(p_base, workingset) || v_next,

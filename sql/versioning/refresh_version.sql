@@ -9,6 +9,8 @@ CREATE FUNCTION tgsis.refresh_version(p_version text)
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_child   tgsis.versions;
@@ -19,6 +21,7 @@ DECLARE
     v_class   record;
     v_written bigint := 0;
 BEGIN
+    PERFORM tgsis.require_version_privilege(tgsis.version_id(p_version), 'write', 'refresh');
     v_child := tgsis.lock_for_merge(p_version, 'refresh');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
 

@@ -7,6 +7,8 @@ CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_obj
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_id  integer := tgsis.version_id(p_version);
@@ -16,12 +18,13 @@ BEGIN
         RAISE EXCEPTION 'solution % is not parent, child, manual or unsolved', coalesce(quote_literal(p_solution), 'NULL')
             USING ERRCODE = 'TG100';
     END IF;
+    PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     -- the marks must be those of now: a manual solution is written just before it is recorded
     PERFORM tgsis.find_conflicts(p_version);
     UPDATE tgsis.conflicts
        SET solution = lower(p_solution),
            solved_at = CASE WHEN lower(p_solution) <> 'unsolved' THEN now() END,
-           solved_by = CASE WHEN lower(p_solution) <> 'unsolved' THEN current_user END
+           solved_by = CASE WHEN lower(p_solution) <> 'unsolved' THEN tgsis.calling_role() END
      WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = p_objectkey
     RETURNING * INTO v_row;
     IF NOT FOUND THEN

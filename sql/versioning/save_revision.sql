@@ -3,6 +3,8 @@ CREATE FUNCTION tgsis.save_revision(p_name text)
 RETURNS integer
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_version tgsis.versions;

@@ -4,8 +4,11 @@ CREATE FUNCTION tgsis.set_version_validity(p_version text, p_valid_from timestam
 RETURNS void
 LANGUAGE plpgsql
 VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 BEGIN
+    PERFORM tgsis.require_version_owner(tgsis.version_id(p_version), 'set the validity of');
     IF p_valid_to IS NOT NULL AND (p_valid_from IS NULL OR p_valid_to <= p_valid_from) THEN
         RAISE EXCEPTION 'validity period [%, %) of version % is empty', p_valid_from, p_valid_to, quote_literal(p_version)
             USING ERRCODE = 'TG100', HINT = 'valid_to must be later than valid_from (NULL: still believed)';

@@ -1,13 +1,15 @@
--- tgsis.versioning_trigger_source(schema, table, key columns, columns, pkey name): the
+-- tgsis.versioning_trigger_source(schema, table, key columns, columns, pkey name, object class, object key column): the
 -- CREATE FUNCTION statement of the INSTEAD OF trigger that routes writes on
 -- the view <table> into <table>_ver. Generated per table with static SQL so
 -- that PL/pgSQL caches the plans (dynamic SQL would be planned per row).
 CREATE FUNCTION tgsis.versioning_trigger_source(
-    p_schema  text,
-    p_table   text,
-    p_keys    text[],
-    p_columns text[],
-    p_pkey    text)
+    p_schema    text,
+    p_table     text,
+    p_keys      text[],
+    p_columns   text[],
+    p_pkey      text,
+    p_class     text,
+    p_keyfield  text)
 RETURNS text
 LANGUAGE plpgsql
 IMMUTABLE
@@ -59,6 +61,13 @@ DECLARE
     v_set integer[];
 BEGIN
     SELECT w.revision, w.revisions INTO v_w, v_set FROM tgsis.write_revision() AS w;
+    -- object locks: one index probe per row; the check names the holders
+    IF TG_OP <> 'INSERT' AND EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = OLD.%15$I::text) THEN
+        PERFORM tgsis.check_objects_unlocked(%14$L, ARRAY[OLD.%15$I::text]);
+    END IF;
+    IF TG_OP <> 'DELETE' AND EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = NEW.%15$I::text) THEN
+        PERFORM tgsis.check_objects_unlocked(%14$L, ARRAY[NEW.%15$I::text]);
+    END IF;
     IF TG_OP = 'INSERT' THEN
         IF EXISTS (SELECT FROM %4$s v WHERE %6$s AND %9$s) THEN%10$s
         END IF;
@@ -86,9 +95,9 @@ $body$$fn$,
         p_schema, p_table || '_ver_write', p_table, v_ver, v_cols, v_new_key, v_new, v_assign, v_visible, v_dup,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
-        v_old_key);
+        v_old_key, p_class, p_keyfield);
 END
 $gen$;
 
-COMMENT ON FUNCTION tgsis.versioning_trigger_source(text, text, text[], text[], text) IS
+COMMENT ON FUNCTION tgsis.versioning_trigger_source(text, text, text[], text[], text, text, text) IS
     'source of the INSTEAD OF INSERT/UPDATE/DELETE trigger function <table>_ver_write() that enable_versioning creates';

@@ -1,4 +1,4 @@
--- tgsis.write_revision(): the revision and revision set a write of this session uses, or TG301 if it may not write.
+-- tgsis.write_revision(): the revision and revision set a write of this session uses, or TG301/TG002 if it may not write.
 -- It share-locks the version's row until the transaction ends, so that
 -- create_version and save_revision (which lock it for update) never hand the
 -- working revision on while a writer is still labelling rows with it.
@@ -12,8 +12,9 @@ DECLARE
     v_name    text := tgsis.get_working_version();
     v_viewing integer := tgsis.get_viewing_revision();
     v_saved   text;
+    v_id      integer;
 BEGIN
-    SELECT v.workingrevision, v.workingset INTO revision, revisions
+    SELECT v.versionid, v.workingrevision, v.workingset INTO v_id, revision, revisions
       FROM tgsis.versions v WHERE v.name = v_name
        FOR SHARE;
     IF NOT FOUND THEN
@@ -30,6 +31,7 @@ BEGIN
                                 ELSE format('Only the working revision %s of %s can change.', revision, v_name) END,
                   HINT = format('SELECT tgsis.goto_version(%L) to work in its working revision', v_name);
     END IF;
+    PERFORM tgsis.require_version_privilege(v_id, 'write', 'write in');
 END
 $$;
 

@@ -31,6 +31,7 @@ __all__ = [
     "InvalidPropertyError",
     "FileFormatError",
     "NotFoundError",
+    "ObjectLockedError",
     "AlreadyExistsError",
     "InUseError",
     "VersioningError",
@@ -171,6 +172,12 @@ class UnsolvedConflictsError(VersioningError):
     """A merge or refresh while objects changed on both sides have no recorded solution."""
 
     code = "TG302"
+
+
+class ObjectLockedError(VersioningError):
+    """A write (or merge) would change an object another version, or another role, holds a lock on."""
+
+    code = "TG303"
 
 
 class DatabaseError(Error):

@@ -56,6 +56,16 @@ __all__ = [
     "set_version_validity",
     "version_chain",
     "version_believed_at",
+    "VersionGrant",
+    "grant_version",
+    "revoke_version",
+    "set_version_owner",
+    "has_version_privilege",
+    "version_privileges",
+    "ObjectLock",
+    "lock_objects",
+    "unlock_objects",
+    "object_locks",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -469,3 +479,119 @@ def version_believed_at(conn: Conn, at: datetime, root: str = "DEFAULT") -> str 
     """The version of the chain below ``root`` believed true at ``at``, or None."""
     value = _scalar(conn, "SELECT tgsis.version_believed_at(%s, %s)", (at, root))
     return None if value is None else str(value)
+
+
+# --------------------------------------------------------------------------- rights on versions
+
+VERSION_PRIVILEGES = ("write", "create", "merge", "delete")
+
+
+@dataclass(frozen=True)
+class VersionGrant:
+    """A row of ``tgsis.version_privileges``: ``grantee`` (a role, or ``public``) holds ``privilege`` on ``version``."""
+
+    version: str
+    grantee: str
+    privilege: str
+    granted_by: str
+    granted_at: datetime
+
+
+def grant_version(conn: Conn, version: str, privilege: str, role: str) -> None:
+    """Give ``role`` (or ``"public"``) a right on ``version``: ``write``, ``create``, ``merge``, ``delete`` or ``all``.
+
+    Owners and members of ``tgsis_admin`` hold every right without grants.
+
+    Raises
+    ------
+    MissingPrivilegeError
+        The caller neither owns the version nor is a ``tgsis_admin``.
+    NotFoundError, InvalidInputError
+    """
+    _run_committed(conn, "SELECT tgsis.grant_version(%s, %s, %s)", (version, privilege, role))
+
+
+def revoke_version(conn: Conn, version: str, privilege: str, role: str) -> None:
+    """Take back a right granted with :func:`grant_version` (``all``: every one)."""
+    _run_committed(conn, "SELECT tgsis.revoke_version(%s, %s, %s)", (version, privilege, role))
+
+
+def set_version_owner(conn: Conn, version: str, role: str) -> None:
+    """Make ``role`` the owner of ``version`` (owner or ``tgsis_admin`` only)."""
+    _run_committed(conn, "SELECT tgsis.set_version_owner(%s, %s)", (version, role))
+
+
+def has_version_privilege(conn: Conn, version: str, privilege: str, role: str | None = None) -> bool:
+    """Whether ``role`` (default: the session's role) holds ``privilege`` on ``version``."""
+    return bool(_scalar(conn, "SELECT tgsis.has_version_privilege(%s, %s, %s)", (version, privilege, role)))
+
+
+def version_privileges(conn: Conn, version: str | None = None) -> list[VersionGrant]:
+    """The grants on ``version`` (default: on every version), by version, grantee and right."""
+    with reraise():
+        rows = conn.execute(
+            "SELECT v.name, p.grantee, p.privilege, p.granted_by, p.granted_at"
+            "  FROM tgsis.version_privileges p JOIN tgsis.versions v USING (versionid)"
+            " WHERE %s::text IS NULL OR v.name = %s"
+            " ORDER BY v.name, p.grantee, array_position(%s::text[], p.privilege)",
+            (version, version, list(VERSION_PRIVILEGES))).fetchall()
+    return [VersionGrant(*r) for r in rows]
+
+
+# --------------------------------------------------------------------------- object locks
+
+
+@dataclass(frozen=True)
+class ObjectLock:
+    """A row of ``tgsis.object_locks``: ``version`` holds the object; nobody else may change it."""
+
+    objectclass: str
+    objectkey: str
+    version: str
+    exclusive: bool
+    locked_by: str
+    locked_at: datetime
+
+
+def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[object], *,
+                 exclusive: bool = False) -> int:
+    """Lock objects for ``version``: writes to them from any other version fail until unlocked.
+
+    Parameters
+    ----------
+    keys : sequence
+        Object keys (for features: feature ids); they must exist in ``version``.
+    exclusive : bool
+        Also keep other roles from changing them in ``version``.
+
+    Returns
+    -------
+    int
+        Locks newly taken (objects the version held already do not count).
+
+    Raises
+    ------
+    ObjectLockedError
+        Another version (or role) holds one of them: nothing is locked.
+    MissingPrivilegeError, NotFoundError
+    """
+    return int(_run_committed(conn, "SELECT tgsis.lock_objects(%s, %s, %s, %s)",
+                              (version, objectclass, [str(k) for k in keys], exclusive)))
+
+
+def unlock_objects(conn: Conn, version: str, objectclass: str | None = None,
+                   keys: Sequence[object] | None = None) -> int:
+    """Release ``version``'s locks (all, those of a class, or of some keys); return how many."""
+    return int(_run_committed(conn, "SELECT tgsis.unlock_objects(%s, %s, %s)",
+                              (version, objectclass, None if keys is None else [str(k) for k in keys])))
+
+
+def object_locks(conn: Conn, version: str | None = None) -> list[ObjectLock]:
+    """The object locks ``version`` holds (default: every lock), by class and key."""
+    with reraise():
+        rows = conn.execute(
+            "SELECT l.objectclass, l.objectkey, v.name, l.exclusive, l.locked_by, l.locked_at"
+            "  FROM tgsis.object_locks l JOIN tgsis.versions v USING (versionid)"
+            " WHERE %s::text IS NULL OR v.name = %s ORDER BY l.objectclass, l.objectkey",
+            (version, version)).fetchall()
+    return [ObjectLock(*r) for r in rows]

@@ -1,0 +1,51 @@
+-- tgsis.lock_objects(version, objectclass, keys, exclusive): lock objects for a version so that no other version can change them; returns the locks taken.
+-- Needs the write right on the version; the objects must exist in it.
+-- Taking a lock the version holds already changes nothing (or makes it
+-- exclusive for the caller); a lock held elsewhere fails with TG303.
+CREATE FUNCTION tgsis.lock_objects(p_version text, p_objectclass text, p_keys text[], p_exclusive boolean DEFAULT false)
+RETURNS integer
+LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_id      integer := tgsis.version_id(p_version);
+    v_role    name := tgsis.calling_role();
+    v_missing text[];
+    v_taken   integer;
+BEGIN
+    PERFORM tgsis.require_version_privilege(v_id, 'write', 'lock objects in');
+    IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = p_objectclass) THEN
+        RAISE EXCEPTION 'object class % does not exist', coalesce(quote_literal(p_objectclass), 'NULL')
+            USING ERRCODE = 'TG200', HINT = 'SELECT DISTINCT objectclass FROM tgsis.versioned_tables lists them';
+    END IF;
+    IF p_keys IS NULL OR cardinality(p_keys) = 0 OR array_position(p_keys, NULL) IS NOT NULL THEN
+        RAISE EXCEPTION 'no object keys to lock' USING ERRCODE = 'TG100', HINT = 'pass a non-empty array of keys without NULLs';
+    END IF;
+    SELECT array_agg(k ORDER BY k) INTO v_missing
+      FROM unnest(p_keys) AS k
+     WHERE k <> ALL (tgsis.visible_object_keys(p_objectclass, p_keys,
+                                               (SELECT workingset FROM tgsis.versions WHERE versionid = v_id)));
+    IF v_missing IS NOT NULL THEN
+        RAISE EXCEPTION 'version % has no object % of class %', quote_literal(p_version), array_to_string(v_missing, ', '),
+                quote_literal(p_objectclass)
+            USING ERRCODE = 'TG200';
+    END IF;
+
+    INSERT INTO tgsis.object_locks (objectclass, objectkey, versionid, exclusive, locked_by)
+    SELECT DISTINCT p_objectclass, k, v_id, coalesce(p_exclusive, false), v_role FROM unnest(p_keys) AS k
+        ON CONFLICT DO NOTHING;
+    GET DIAGNOSTICS v_taken = ROW_COUNT;
+    -- locks the version held already: the caller may make its own exclusive
+    UPDATE tgsis.object_locks SET exclusive = true, locked_by = v_role, locked_at = now()
+     WHERE objectclass = p_objectclass AND objectkey = ANY (p_keys) AND versionid = v_id
+       AND coalesce(p_exclusive, false) AND NOT exclusive;
+    -- whatever is held elsewhere (or exclusively by another role) now fails the whole call
+    PERFORM tgsis.check_objects_unlocked(p_objectclass, p_keys, v_id);
+    RETURN v_taken;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.lock_objects(text, text, text[], boolean) IS
+    'lock objects of a class for a version (write right needed): other versions, and with p_exclusive other roles, cannot change them (TG303) until tgsis.unlock_objects; returns the number of new locks';

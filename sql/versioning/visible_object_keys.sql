@@ -1,0 +1,31 @@
+-- tgsis.visible_object_keys(objectclass, keys, revisions): which of the keys name an object a revision set sees in any table of its class.
+CREATE FUNCTION tgsis.visible_object_keys(p_objectclass text, p_keys text[], p_revisions integer[])
+RETURNS text[]
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_t     record;
+    v_found text[] := '{}';
+    v_some  text[];
+BEGIN
+    FOR v_t IN
+        SELECT t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype
+          FROM tgsis.versioned_tables t
+          JOIN pg_catalog.pg_attribute a
+            ON a.attrelid = format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass AND a.attname = t.objectkeyfield
+         WHERE t.objectclass = p_objectclass
+    LOOP
+        -- the keys cast to the column's type, so that the key index serves the lookup
+        EXECUTE format('SELECT coalesce(array_agg(DISTINCT v.%1$I::text), ''{}'') FROM %2$I.%3$I v
+                         WHERE v.%1$I = ANY ($1::%4$s[]) AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+                       v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype)
+           INTO v_some USING p_keys, p_revisions;
+        v_found := v_found || v_some;
+    END LOOP;
+    RETURN ARRAY(SELECT DISTINCT k FROM unnest(v_found) AS k ORDER BY k);
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.visible_object_keys(text, text[], integer[]) IS
+    'the keys among p_keys of objects of a class that the revision set sees in at least one of the class''s tables';
