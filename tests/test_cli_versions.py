@@ -124,3 +124,40 @@ def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str])
     assert _run(db_dsn, capsys, "version", "diff", "DEFAULT@0", "DEFAULT").count("\n") == 2
     assert "refreshed a from its parent: 0 row(s) written" in _run(db_dsn, capsys, "version", "refresh", "a")
     assert "version removed" in _run(db_dsn, capsys, "version", "merge", "a", "--remove")
+
+
+def test_locks_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    _versioned_wells_and_version_a(db_dsn, capsys)
+    _run(db_dsn, capsys, "version", "create", "b")
+    assert _run(db_dsn, capsys, "version", "lock", "a", "well", "1", "2") == "a holds 2 well object(s) (2 newly locked)\n"
+    with psycopg.connect(db_dsn) as conn:
+        me = conn.execute("SELECT current_user").fetchone()[0]  # type: ignore[index]
+    assert [line.split("\t")[:5] for line in _run(db_dsn, capsys, "version", "locks").splitlines()] == [
+        ["well", "1", "a", me, "version"], ["well", "2", "a", me, "version"]]
+    assert _run(db_dsn, capsys, "version", "locks", "b") == ""
+    err = _run(db_dsn, capsys, "--in", "b", "version", "lock", "b", "well", "2", code=1)
+    assert "locked by version a" in err
+    assert "has no object 9" in _run(db_dsn, capsys, "version", "lock", "b", "well", "9", code=1)
+    assert _run(db_dsn, capsys, "version", "unlock", "a", "well", "1") == "released 1 lock(s) of a\n"
+    assert [line.split("\t")[:3] for line in _run(db_dsn, capsys, "version", "locks").splitlines()] == [["well", "2", "a"]]
+    assert _run(db_dsn, capsys, "version", "unlock", "a") == "released 1 lock(s) of a\n"
+    assert _run(db_dsn, capsys, "version", "locks") == ""
+
+
+def test_rights_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    _run(db_dsn, capsys, "version", "create", "a")
+    assert _run(db_dsn, capsys, "version", "grant", "a", "write", "tgsis_editor") == "granted write on a to tgsis_editor\n"
+    assert _run(db_dsn, capsys, "version", "grant", "a", "merge", "public") == "granted merge on a to public\n"
+    listing = _run(db_dsn, capsys, "version", "privileges", "a").splitlines()
+    assert [line.split("\t")[1:3] for line in listing[1:]] == [["public", "merge"], ["tgsis_editor", "write"]]
+    assert listing[0].endswith("\towner (every right)")
+    assert "granted by" in listing[1]
+    _run(db_dsn, capsys, "version", "revoke", "a", "all", "public")
+    assert len(_run(db_dsn, capsys, "version", "privileges", "a").splitlines()) == 2
+    assert _run(db_dsn, capsys, "version", "owner", "a", "tgsis_admin") == "version a is owned by tgsis_admin\n"
+    assert _run(db_dsn, capsys, "version", "privileges", "a").startswith("a\ttgsis_admin\towner")
+    assert "role 'nobody' does not exist" in _run(db_dsn, capsys, "version", "grant", "a", "write", "nobody", code=1)
+    assert "version 'zz' does not exist" in _run(db_dsn, capsys, "version", "privileges", "zz", code=1)
+    # DEFAULT's grants come with the installation
+    assert [line.split("\t")[1:3] for line in _run(db_dsn, capsys, "version", "privileges", "DEFAULT").splitlines()[1:]] \
+        == [["tgsis_editor", "write"], ["tgsis_editor", "create"]]

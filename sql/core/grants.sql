@@ -8,6 +8,8 @@ GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.s
     TO tgsis_editor;
 GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq TO tgsis_editor;
 GRANT INSERT, UPDATE, DELETE ON tgsis.catalog TO tgsis_admin;
+-- class tables of feature classes refer to their geometry rows
+GRANT REFERENCES ON tgsis.geometry TO tgsis_admin;
 -- versioning: readers see the version tree; editors create, save and delete
 -- versions (per-version owner rights are enforced by the functions)
 GRANT SELECT ON tgsis.versions, tgsis.revisions, tgsis.version_tree, tgsis.versioned_tables, tgsis.versioning_dropped,

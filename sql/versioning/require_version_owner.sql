@@ -16,7 +16,7 @@ BEGIN
     IF NOT tgsis.is_version_owner(p_versionid, v_role) THEN
         RAISE EXCEPTION 'role % may not % version %', quote_ident(v_role), p_doing, quote_literal(v_version.name)
             USING ERRCODE = 'TG002',
-                  DETAIL = format('Only its owner %s and tgsis_admin may.', quote_ident(v_version.owner));
+                  DETAIL = format('Only its owner %s, the owners of its ancestors and tgsis_admin may.', quote_ident(v_version.owner));
     END IF;
 END
 $$;

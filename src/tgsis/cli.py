@@ -40,7 +40,7 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
-from tgsis.errors import Error, InvalidGeometryError, InvalidInputError
+from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
 
 __all__ = ["main", "build_parser"]
@@ -458,6 +458,60 @@ def cmd_version_chain(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_version_lock(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        taken = V.lock_objects(conn, args.name, args.objectclass, args.keys, exclusive=args.exclusive)
+    _out(f"{args.name} holds {len(set(args.keys))} {args.objectclass} object(s) ({taken} newly locked"
+         + (", exclusive" if args.exclusive else "") + ")")
+    return 0
+
+
+def cmd_version_unlock(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        released = V.unlock_objects(conn, args.name, args.objectclass, args.keys or None)
+    _out(f"released {released} lock(s) of {args.name}")
+    return 0
+
+
+def cmd_version_locks(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        locks = V.object_locks(conn, args.name)
+    for lk in locks:
+        _out(f"{lk.objectclass}\t{lk.objectkey}\t{lk.version}\t{lk.locked_by}\t"
+             f"{'exclusive' if lk.exclusive else 'version'}\t{lk.locked_at.isoformat()}")
+    if not locks:
+        print("no object locks" + (f" in {args.name}" if args.name else ""), file=sys.stderr)
+    return 0
+
+
+def cmd_version_grant(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        (V.revoke_version if args.revoke else V.grant_version)(conn, args.name, args.privilege, args.role)
+    _out(f"{'revoked' if args.revoke else 'granted'} {args.privilege} on {args.name} "
+         f"{'from' if args.revoke else 'to'} {args.role}")
+    return 0
+
+
+def cmd_version_owner(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        V.set_version_owner(conn, args.name, args.role)
+    _out(f"version {args.name} is owned by {args.role}")
+    return 0
+
+
+def cmd_version_privileges(args: argparse.Namespace) -> int:
+    with _connect(args) as conn:
+        owners = {v.name: v.owner for v in V.list_versions(conn) if args.name in (None, v.name)}
+        grants = V.version_privileges(conn, args.name)
+    if args.name is not None and not owners:
+        raise NotFoundError(f"version {args.name!r} does not exist")
+    for name, owner in owners.items():
+        _out(f"{name}\t{owner}\towner (every right)")
+        for g in (g for g in grants if g.version == name):
+            _out(f"{name}\t{g.grantee}\t{g.privilege}\tgranted by {g.granted_by}")
+    return 0
+
+
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
@@ -589,7 +643,7 @@ def build_parser() -> argparse.ArgumentParser:
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
     ls.set_defaults(handler=cmd_ls)
 
-    ver = commands.add_parser("version", help="versions (long transactions): create, list, tree, goto, save, delete")
+    ver = commands.add_parser("version", help="versions (long transactions): create, goto, save, merge, lock, grant, ...")
     ver_commands = ver.add_subparsers(dest="version_command", metavar="ACTION", required=True)
     ver_create = ver_commands.add_parser("create", help="create a child version")
     ver_create.add_argument("name")
@@ -646,6 +700,36 @@ def build_parser() -> argparse.ArgumentParser:
     ver_chain.add_argument("--root", default="DEFAULT")
     ver_chain.add_argument("--at", help="ISO date or time: print the version believed then (exit 3: none)")
     ver_chain.set_defaults(handler=cmd_version_chain)
+
+    ver_lock = ver_commands.add_parser("lock", help="lock objects for a version: no other version may change them")
+    ver_lock.add_argument("name")
+    ver_lock.add_argument("objectclass", help="object class ('feature' for features)")
+    ver_lock.add_argument("keys", nargs="+", metavar="KEY", help="object keys (feature ids)")
+    ver_lock.add_argument("--exclusive", action="store_true", help="also keep other roles from changing them in the version")
+    ver_lock.set_defaults(handler=cmd_version_lock)
+    ver_unlock = ver_commands.add_parser("unlock", help="release a version's object locks (all, of a class, or some keys)")
+    ver_unlock.add_argument("name")
+    ver_unlock.add_argument("objectclass", nargs="?")
+    ver_unlock.add_argument("keys", nargs="*", metavar="KEY")
+    ver_unlock.set_defaults(handler=cmd_version_unlock)
+    ver_locks = ver_commands.add_parser("locks", help="list object locks (of one version, or all)")
+    ver_locks.add_argument("name", nargs="?")
+    ver_locks.set_defaults(handler=cmd_version_locks)
+
+    privileges = ("write", "create", "merge", "delete", "all")
+    for verb in ("grant", "revoke"):
+        ver_grant = ver_commands.add_parser(verb, help=f"{verb} a right on a version (owner or tgsis_admin only)")
+        ver_grant.add_argument("name")
+        ver_grant.add_argument("privilege", type=str.lower, choices=privileges)
+        ver_grant.add_argument("role", help="a role, or public")
+        ver_grant.set_defaults(handler=cmd_version_grant, revoke=verb == "revoke")
+    ver_owner = ver_commands.add_parser("owner", help="hand a version to another role")
+    ver_owner.add_argument("name")
+    ver_owner.add_argument("role")
+    ver_owner.set_defaults(handler=cmd_version_owner)
+    ver_privileges = ver_commands.add_parser("privileges", help="owners and granted rights (of one version, or all)")
+    ver_privileges.add_argument("name", nargs="?")
+    ver_privileges.set_defaults(handler=cmd_version_privileges)
 
     vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)

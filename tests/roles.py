@@ -1,0 +1,53 @@
+"""Login roles for the tests of version rights: real roles that log in with their own connection."""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import psycopg
+from psycopg.conninfo import make_conninfo
+
+Conn = psycopg.Connection[Any]
+
+
+class Roles:
+    """LOGIN roles of one test, by short name (``alice``): ``name()`` in the cluster, ``connect()`` as them."""
+
+    def __init__(self, dsn: str, names: dict[str, str]) -> None:
+        self._dsn = dsn
+        self._names = names
+        self.opened: list[Conn] = []
+
+    def name(self, short: str) -> str:
+        return self._names[short]
+
+    def connect(self, short: str) -> Conn:
+        """A new connection that logs in as the role (not SET ROLE)."""
+        connection = psycopg.connect(make_conninfo(self._dsn, user=self._names[short]))
+        self.opened.append(connection)
+        return connection
+
+
+@contextmanager
+def login_roles(dsn: str, groups: dict[str, str]) -> Iterator[Roles]:
+    """Create a LOGIN role per ``{short name: tgsis group role}`` for the database of ``dsn``.
+
+    The roles belong to the cluster: they get unique names and are dropped,
+    with what they own or were granted in that database, when the block ends.
+    """
+    suffix = uuid.uuid4().hex[:6]
+    roles = Roles(dsn, {short: f"{short}_{suffix}" for short in groups})
+    with psycopg.connect(dsn, autocommit=True) as admin:
+        for short, group in groups.items():
+            admin.execute(f"CREATE ROLE {roles.name(short)} LOGIN IN ROLE {group}")
+        try:
+            yield roles
+        finally:
+            for connection in roles.opened:
+                connection.close()
+            for short in groups:
+                admin.execute(f"DROP OWNED BY {roles.name(short)} CASCADE")
+                admin.execute(f"DROP ROLE {roles.name(short)}")
