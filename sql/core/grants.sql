@@ -17,4 +17,5 @@ GRANT INSERT, UPDATE, DELETE ON tgsis.conflicts TO tgsis_editor;
 GRANT INSERT, UPDATE, DELETE ON tgsis.versions, tgsis.revisions TO tgsis_editor;
 GRANT USAGE ON SEQUENCE tgsis.revision_seq, tgsis.versions_versionid_seq TO tgsis_editor;
 GRANT INSERT, UPDATE, DELETE ON tgsis.versioned_tables, tgsis.versioning_dropped TO tgsis_admin;
-GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean) TO tgsis_admin;
+GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean),
+                          tgsis.compress_versions(boolean) TO tgsis_admin;

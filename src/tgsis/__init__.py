@@ -30,11 +30,13 @@ from tgsis.db import (
     uninstall,
 )
 from tgsis.db.versions import (
+    Compressed,
     Conflict,
     Difference,
     Version,
     VersionedTable,
     at_revision,
+    compress_versions,
     conflict_rows,
     create_version,
     delete_version,
@@ -154,6 +156,8 @@ __all__ = [
     "set_version_validity",
     "version_chain",
     "version_believed_at",
+    "Compressed",
+    "compress_versions",
     # meshes (numpy, no database)
     "Geotype",
     "Mesh",
