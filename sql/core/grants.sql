@@ -24,4 +24,5 @@ REVOKE ALL ON FUNCTION tgsis.next_working_revision(integer, integer[], integer),
                        tgsis.copy_object_state(text, text[], integer[], integer[], integer)
     FROM PUBLIC;
 GRANT INSERT, UPDATE, DELETE ON tgsis.versioned_tables, tgsis.versioning_dropped TO tgsis_admin;
-GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean) TO tgsis_admin;
+GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean),
+                          tgsis.compress_versions(boolean) TO tgsis_admin;

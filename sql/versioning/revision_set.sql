@@ -24,9 +24,8 @@ BEGIN
         RAISE EXCEPTION 'revision % is not in the history of version %', p_revision, quote_literal(v_version.name)
             USING ERRCODE = 'TG200',
                   DETAIL = format('Version %s can look at revisions %s.', v_version.name,
-                                  (SELECT string_agg(r::text, ', ' ORDER BY r) FROM (
-                                      SELECT unnest(v_version.workingset) UNION
-                                      SELECT revision FROM tgsis.revisions WHERE versionid = p_versionid) AS h(r))),
+                                  (SELECT string_agg(h.revision::text, ', ' ORDER BY h.revision) FROM tgsis.revisions h
+                                    WHERE h.revision = ANY (v_version.workingset) OR h.versionid = p_versionid)),
                   HINT = 'a version sees its own revisions and its ancestors'' revisions up to the moment it was based on them';
     END IF;
     RETURN v_set;

@@ -30,6 +30,7 @@ from tgsis.db import (
     uninstall,
 )
 from tgsis.db.versions import (
+    Compressed,
     Conflict,
     Difference,
     ObjectLock,
@@ -37,6 +38,7 @@ from tgsis.db.versions import (
     VersionGrant,
     VersionedTable,
     at_revision,
+    compress_versions,
     conflict_rows,
     create_version,
     delete_version,
@@ -175,6 +177,8 @@ __all__ = [
     "lock_objects",
     "unlock_objects",
     "object_locks",
+    "Compressed",
+    "compress_versions",
     # meshes (numpy, no database)
     "Geotype",
     "Mesh",

@@ -512,6 +512,30 @@ def cmd_version_privileges(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_version_compress(args: argparse.Namespace) -> int:
+    remembered = clistate.remembered_version(_target_key(args))
+    looked_at = _split_version(remembered)[1] if remembered else None
+    with connect(args.dsn) as conn:
+        report = V.compress_versions(conn, dry_run=args.dry_run)
+        gone = looked_at is not None and not args.dry_run and conn.execute(
+            "SELECT NOT EXISTS (SELECT FROM tgsis.revisions WHERE revision = %s)", (looked_at,)).fetchone() == (True,)
+    for item in report:
+        _out(f"{item.what}\t{item.name}\t{item.removed}")
+    totals = {what: sum(i.removed for i in report if i.what == what)
+              for what in ("rows", "lastrevs", "revisions", "set entries")}
+    summary = (f"{totals['rows']} row version(s), {totals['lastrevs']} lastrevs entr(ies), "
+               f"{totals['revisions']} revision(s), {totals['set entries']} revision set entr(ies)")
+    if args.dry_run:
+        _out(f"compress would remove {summary} (dry run: nothing changed)" if report
+             else "compress would remove nothing (dry run)")
+    else:
+        _out(f"compress removed {summary}" if report else "compress removed nothing")
+    if gone:
+        clistate.remember_version(_target_key(args), None)
+        _out(f"revision {looked_at} is gone: commands on this database work in DEFAULT again (was {remembered})")
+    return 0
+
+
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
@@ -700,6 +724,11 @@ def build_parser() -> argparse.ArgumentParser:
     ver_chain.add_argument("--root", default="DEFAULT")
     ver_chain.add_argument("--at", help="ISO date or time: print the version believed then (exit 3: none)")
     ver_chain.set_defaults(handler=cmd_version_chain)
+
+    ver_compress = ver_commands.add_parser(
+        "compress", help="remove revisions and row versions no version, named revision or child can reach")
+    ver_compress.add_argument("--dry-run", action="store_true", help="only report what would be removed")
+    ver_compress.set_defaults(handler=cmd_version_compress)
 
     ver_lock = ver_commands.add_parser("lock", help="lock objects for a version: no other version may change them")
     ver_lock.add_argument("name")

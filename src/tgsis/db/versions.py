@@ -66,6 +66,8 @@ __all__ = [
     "lock_objects",
     "unlock_objects",
     "object_locks",
+    "Compressed",
+    "compress_versions",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -595,3 +597,64 @@ def object_locks(conn: Conn, version: str | None = None) -> list[ObjectLock]:
             " WHERE %s::text IS NULL OR v.name = %s ORDER BY l.objectclass, l.objectkey",
             (version, version)).fetchall()
     return [ObjectLock(*r) for r in rows]
+
+
+# --------------------------------------------------------------------------- compress
+
+
+@dataclass(frozen=True)
+class Compressed:
+    """One line of the report of :func:`compress_versions`.
+
+    Attributes
+    ----------
+    what : {"rows", "lastrevs", "revisions", "set entries"}
+        Row versions deleted, entries taken out of ``lastrevs``, revisions
+        deleted, or revision numbers taken out of working sets and of the
+        stored sets of kept revisions.
+    name : str
+        ``schema.table`` for ``rows`` and ``lastrevs``, the version for
+        ``revisions`` and ``set entries``.
+    removed : int
+        How many (always more than 0).
+    """
+
+    what: str
+    name: str
+    removed: int
+
+
+def compress_versions(conn: Conn, *, dry_run: bool = False) -> list[Compressed]:
+    """Remove the revisions, and the row versions, that no version, named revision or child can reach any more.
+
+    Kept are every version's working revision, every named (saved) revision,
+    every version's base (``initrevision``), and the revisions a version's
+    next merge or conflict check reads (its own revisions since its base,
+    its parent's revisions since its base). Every version and every kept
+    revision sees exactly what it saw before, and ``find_conflicts`` gives
+    the same conflicts and solutions; other revisions can no longer be
+    looked at (:class:`NotFoundError` from :func:`goto_revision`).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        As a member of ``tgsis_admin``. Runs in one transaction (a
+        savepoint if one is open): writers of any version wait for it, and
+        it waits for them.
+    dry_run : bool
+        Only report what would be removed; change nothing and block no writer.
+
+    Returns
+    -------
+    list of Compressed
+        What was (or would be) removed, per table and per version; empty
+        when there is nothing to compress.
+
+    Raises
+    ------
+    MissingPrivilegeError
+        The role is not a member of ``tgsis_admin``.
+    """
+    with reraise(), conn.transaction():
+        rows = conn.execute("SELECT what, name, removed FROM tgsis.compress_versions(%s)", (dry_run,)).fetchall()
+    return [Compressed(r[0], r[1], int(r[2])) for r in rows]
