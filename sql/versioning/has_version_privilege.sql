@@ -21,10 +21,7 @@ BEGIN
         RAISE EXCEPTION 'role % does not exist', quote_literal(v_role) USING ERRCODE = 'TG200';
     END IF;
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    RETURN tgsis.is_version_owner(v_version.versionid, v_role)
-        OR EXISTS (SELECT FROM tgsis.version_privileges p LEFT JOIN pg_roles r ON r.rolname = p.grantee
-                    WHERE p.versionid = v_version.versionid AND p.privilege = lower(p_privilege)
-                      AND (p.grantee = 'public' OR (r.oid IS NOT NULL AND pg_has_role(v_role, r.oid, 'USAGE'))));
+    RETURN tgsis.holds_version_privilege(v_version.versionid, lower(p_privilege), v_role);
 END
 $$;
 

@@ -5,8 +5,6 @@ CREATE FUNCTION tgsis.require_version_owner(p_versionid integer, p_doing text)
 RETURNS void
 LANGUAGE plpgsql
 STABLE
-SECURITY DEFINER
-SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_version tgsis.versions;

@@ -57,16 +57,22 @@ AS $body$
 -- Written by tgsis.enable_versioning: writes on the view %1$s.%3$s go to %4$s
 -- as row versions labelled with the session's working revision.
 DECLARE
-    v_w   integer;
-    v_set integer[];
+    v_w    integer;
+    v_set  integer[];
+    v_keys text[];
 BEGIN
-    SELECT w.revision, w.revisions INTO v_w, v_set FROM tgsis.write_revision() AS w;
+    -- the write right was checked once for the statement (tgsis.view_write_check)
+    SELECT w.revision, w.revisions INTO v_w, v_set FROM tgsis.write_revision(false) AS w;
     -- object locks: one index probe per row; the check names the holders
-    IF TG_OP <> 'INSERT' AND EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = OLD.%15$I::text) THEN
-        PERFORM tgsis.check_objects_unlocked(%14$L, ARRAY[OLD.%15$I::text]);
+    IF TG_OP = 'INSERT' THEN
+        v_keys := ARRAY[NEW.%15$I::text];
+    ELSIF TG_OP = 'DELETE' THEN
+        v_keys := ARRAY[OLD.%15$I::text];
+    ELSE
+        v_keys := ARRAY[OLD.%15$I::text, NEW.%15$I::text];
     END IF;
-    IF TG_OP <> 'DELETE' AND EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = NEW.%15$I::text) THEN
-        PERFORM tgsis.check_objects_unlocked(%14$L, ARRAY[NEW.%15$I::text]);
+    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = ANY (v_keys)) THEN
+        PERFORM tgsis.check_objects_unlocked(%14$L, v_keys);
     END IF;
     IF TG_OP = 'INSERT' THEN
         IF EXISTS (SELECT FROM %4$s v WHERE %6$s AND %9$s) THEN%10$s
