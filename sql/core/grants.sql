@@ -21,7 +21,8 @@ GRANT SELECT ON tgsis.object_locks TO PUBLIC;
 -- check the caller's version rights (tgsis.has_version_privilege); the
 -- helpers they share are theirs alone
 REVOKE ALL ON FUNCTION tgsis.next_working_revision(integer, integer[], integer), tgsis.lock_for_merge(text, text),
-                       tgsis.copy_object_state(text, text[], integer[], integer[], integer)
+                       tgsis.copy_object_state(text, text[], integer[], integer[], integer),
+                       tgsis.update_shared_rows(text, text, text, text[], integer[], integer[], integer)
     FROM PUBLIC;
 GRANT INSERT, UPDATE, DELETE ON tgsis.versioned_tables, tgsis.versioning_dropped TO tgsis_admin;
 GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean),

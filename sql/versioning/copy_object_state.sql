@@ -41,13 +41,13 @@ BEGIN
             v_ver, v_t.objectkeyfield, v_keytype) USING p_keys, p_from, p_to, p_revision;
         GET DIAGNOSTICS v_count = ROW_COUNT;
         v_written := v_written + v_count;
-        EXECUTE format(
-            'UPDATE %s v SET lastrevs = v.lastrevs || $4
-              WHERE v.%I = ANY ($1::%s[]) AND v.revision <> $4
+        -- other versions see these rows too (the siblings of a merged version share
+        -- the parent's rows): closed without waiting for one while holding others
+        v_count := tgsis.update_shared_rows(v_ver, 'lastrevs = v.lastrevs || $4', format(
+            'v.%I = ANY ($1::%s[]) AND v.revision <> $4
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
                 AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))',
-            v_ver, v_t.objectkeyfield, v_keytype) USING p_keys, p_from, p_to, p_revision;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
+            v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision);
         v_written := v_written + v_count;
     END LOOP;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP

@@ -13,11 +13,18 @@ DECLARE
     v_parent     tgsis.versions;
     v_child_rev  integer;
     v_child_id   integer;
+    v_constraint text;
 BEGIN
     PERFORM tgsis.check_version_name(p_name);
     PERFORM tgsis.require_version_privilege(tgsis.version_id(p_parent), 'create', 'create a child of');
     -- waits for writers of the parent's working revision (write_revision share-locks it)
     SELECT * INTO v_parent FROM tgsis.versions WHERE name = p_parent FOR UPDATE;
+    IF NOT FOUND THEN
+        -- deleted (or merged away) by the transaction this one waited for: without
+        -- this check the new version would get a NULL parent and a NULL-violation
+        RAISE EXCEPTION 'version % does not exist', quote_literal(p_parent)
+            USING ERRCODE = 'TG200', DETAIL = 'It was deleted while this create_version waited for it.';
+    END IF;
     IF EXISTS (SELECT FROM tgsis.versions WHERE name = p_name) THEN
         RAISE EXCEPTION 'version % exists already', quote_literal(p_name)
             USING ERRCODE = 'TG201', HINT = 'choose another name, or tgsis.delete_version it first';
@@ -26,10 +33,23 @@ BEGIN
     PERFORM tgsis.next_working_revision(v_parent.versionid);
 
     v_child_rev := nextval('tgsis.revision_seq');
-    INSERT INTO tgsis.versions (name, parentid, initrevision, workingrevision, workingset, owner, description)
-    VALUES (p_name, v_parent.versionid, v_parent.workingrevision, v_child_rev, v_parent.workingset || v_child_rev,
-            tgsis.calling_role(), p_description)
-    RETURNING versionid INTO v_child_id;
+    BEGIN
+        INSERT INTO tgsis.versions (name, parentid, initrevision, workingrevision, workingset, owner, description)
+        VALUES (p_name, v_parent.versionid, v_parent.workingrevision, v_child_rev, v_parent.workingset || v_child_rev,
+                tgsis.calling_role(), p_description)
+        RETURNING versionid INTO v_child_id;
+    EXCEPTION WHEN unique_violation THEN
+        GET STACKED DIAGNOSTICS v_constraint = CONSTRAINT_NAME;
+        IF v_constraint IS DISTINCT FROM 'versions_name_key' THEN
+            RAISE;
+        END IF;
+        -- a concurrent create_version of the same name under another parent (it
+        -- locked that parent, not ours, so the check above could not see it yet):
+        -- the unique index waited for it; say so as the check above would have
+        RAISE EXCEPTION 'version % exists already', quote_literal(p_name)
+            USING ERRCODE = 'TG201', HINT = 'choose another name, or tgsis.delete_version it first',
+                  DETAIL = 'It was created by a concurrent transaction.';
+    END;
     INSERT INTO tgsis.revisions (revision, versionid, created_by) VALUES (v_child_rev, v_child_id, tgsis.calling_role());
     RETURN v_child_rev;
 END

@@ -19,6 +19,12 @@ BEGIN
     END IF;
     PERFORM tgsis.require_version_privilege(v_id, 'delete', 'delete');
     PERFORM FROM tgsis.versions WHERE versionid = v_id FOR UPDATE;
+    IF NOT FOUND THEN
+        -- deleted (or merged away) by the transaction this one waited for:
+        -- say so rather than report 0 rows removed
+        RAISE EXCEPTION 'version % does not exist', quote_literal(p_name)
+            USING ERRCODE = 'TG200', DETAIL = 'It was deleted while this delete_version waited for it.';
+    END IF;
     SELECT string_agg(quote_literal(name), ', ' ORDER BY name) INTO v_children FROM tgsis.versions WHERE parentid = v_id;
     IF v_children IS NOT NULL THEN
         RAISE EXCEPTION 'version % has child versions: %', quote_literal(p_name), v_children
@@ -30,8 +36,10 @@ BEGIN
         GET DIAGNOSTICS v_count = ROW_COUNT;
         v_removed := v_removed + v_count;
         -- rows of ancestors that the version closed become live again for nobody else: drop its revisions
-        EXECUTE format('UPDATE %I.%I SET lastrevs = ARRAY(SELECT r FROM unnest(lastrevs) AS r WHERE r <> ALL ($1))
-                         WHERE lastrevs && $1', v_t.schemaname, v_t.tablename || '_ver') USING v_revs;
+        -- (rows that sibling versions see too: changed without waiting for one while holding others)
+        PERFORM tgsis.update_shared_rows(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver'),
+                                         'lastrevs = ARRAY(SELECT r FROM unnest(v.lastrevs) AS r WHERE r <> ALL ($2))',
+                                         'v.lastrevs && $2', NULL, v_revs, NULL, NULL);
     END LOOP;
     DELETE FROM tgsis.versions WHERE versionid = v_id;  -- its revisions go with it
     IF tgsis.get_working_version() = p_name THEN

@@ -17,6 +17,13 @@ BEGIN
     END IF;
     PERFORM FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
     SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
+    IF NOT FOUND THEN
+        -- a merge with remove (or delete_version) committed while this one waited: go
+        -- no further with an empty row (a version re-created under the same name
+        -- meanwhile is another version, and not the one asked for)
+        RAISE EXCEPTION 'version % does not exist', quote_literal(p_version)
+            USING ERRCODE = 'TG200', DETAIL = format('It was removed while this %s waited for it.', p_action);
+    END IF;
     PERFORM tgsis.check_no_unsolved_conflicts(p_version, p_action);
     RETURN v_child;
 END

@@ -1,0 +1,72 @@
+-- tgsis.update_shared_rows(table, set, condition, $1, $2, $3, $4): UPDATE rows other versions' writers may hold, never waiting while holding some; returns the rows updated.
+-- A stored row of a version is shared by every version that sees it: the
+-- children of a parent all see its rows, and writers in each of them close
+-- those rows (append to lastrevs) in their own revisions, row by row in the
+-- order of their statements. Merge, refresh and delete_version change such
+-- rows for many at once, locking only the versions they involve. Had their
+-- UPDATE waited for one row while holding others, a writer elsewhere wanting
+-- one of those would deadlock with it (40P01; tests/test_concurrency.py). So
+-- the UPDATE never waits (a 1 ms lock_timeout undoes it as a whole), and
+-- when a row is taken, its holder is waited for with no row lock held (under
+-- the caller's lock_timeout), then the UPDATE is tried again.
+-- p_set and p_where are SQL over the alias v of p_table and the parameters
+-- $1 text[], $2 integer[], $3 integer[], $4 integer.
+CREATE FUNCTION tgsis.update_shared_rows(
+    p_table text,
+    p_set   text,
+    p_where text,
+    p_1     text[],
+    p_2     integer[],
+    p_3     integer[],
+    p_4     integer)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+AS $$
+DECLARE
+    v_count   bigint;
+    v_busy    tid;
+    v_timeout text := current_setting('lock_timeout');
+    v_undo    CONSTANT text := 'tgsis: undo the row locks of this block';
+BEGIN
+    LOOP
+        BEGIN
+            PERFORM set_config('lock_timeout', '1ms', true);
+            EXECUTE format('UPDATE %s v SET %s WHERE %s', p_table, p_set, p_where) USING p_1, p_2, p_3, p_4;
+            GET DIAGNOSTICS v_count = ROW_COUNT;
+            PERFORM set_config('lock_timeout', v_timeout, true);
+            RETURN v_count;
+        EXCEPTION WHEN lock_not_available THEN
+            NULL;   -- the block's row locks, changes and setting are undone
+        END;
+        -- a row another transaction holds: one the UPDATE would change that
+        -- cannot be locked now (found in a block then undone: none stays locked)
+        v_busy := NULL;
+        BEGIN
+            EXECUTE format('SELECT v.ctid FROM %1$s v WHERE %2$s EXCEPT
+                            SELECT f.ctid FROM (SELECT v.ctid FROM %1$s v WHERE %2$s FOR UPDATE SKIP LOCKED) f
+                            LIMIT 1', p_table, p_where)
+              INTO v_busy USING p_1, p_2, p_3, p_4;
+            RAISE EXCEPTION USING MESSAGE = v_undo;
+        EXCEPTION WHEN OTHERS THEN
+            IF SQLERRM IS DISTINCT FROM v_undo THEN
+                RAISE;
+            END IF;
+        END;
+        IF v_busy IS NOT NULL THEN
+            -- wait for its holder, then let go of the row again
+            BEGIN
+                EXECUTE format('SELECT FROM %s v WHERE v.ctid = $1 FOR UPDATE', p_table) USING v_busy;
+                RAISE EXCEPTION USING MESSAGE = v_undo;
+            EXCEPTION WHEN OTHERS THEN
+                IF SQLERRM IS DISTINCT FROM v_undo THEN
+                    RAISE;
+                END IF;
+            END;
+        END IF;
+    END LOOP;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.update_shared_rows(text, text, text, text[], integer[], integer[], integer) IS
+    'UPDATE p_table v SET p_set WHERE p_where ($1..$4 = p_1..p_4) without ever waiting for a row while holding others, so that it cannot deadlock with writers of other versions that see the same stored rows; returns the rows updated';
