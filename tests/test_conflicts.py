@@ -43,6 +43,9 @@ def test_only_objects_changed_on_both_sides_conflict(conn: Conn, surfaces: dict[
     assert [(t, side, key) for t, side, key, _ in rows] == [
         ("vrtx", "child", {"geoid": surfaces["A"], "vrtxid": 0}), ("vrtx", "parent", {"geoid": surfaces["A"], "vrtxid": 0})]
     assert rows[0][3]["z"] == 2.0 and rows[1][3]["z"] == 0.0
+    with pytest.raises(tgsis.NotFoundError, match="object class 'features' does not exist"):
+        tgsis.conflict_rows(conn, "edit", "features", surfaces["A"])
+    conn.rollback()
 
 
 def test_different_tables_of_one_object_still_conflict(conn: Conn, surfaces: dict[str, int]) -> None:

@@ -78,6 +78,13 @@ def test_locking_is_all_or_nothing(tree: Conn) -> None:
     with pytest.raises(tgsis.InvalidInputError):
         tgsis.lock_objects(tree, "v2", "well", [])
     tree.rollback()
+    with pytest.raises(tgsis.NotFoundError, match="object class 'wel' does not exist"):
+        tgsis.unlock_objects(tree, "v1", "wel")
+    tree.rollback()
+    with pytest.raises(tgsis.NotFoundError, match="version 'v9' does not exist"):
+        tgsis.unlock_objects(tree, "v9")
+    tree.rollback()
+    assert [lk.objectkey for lk in tgsis.object_locks(tree)] == ["2"]      # still held after the refusals
     _write(tree, "v2", "DELETE FROM wells WHERE id = 3")
     with pytest.raises(tgsis.NotFoundError, match="has no object 3"):    # deleted in v2: nothing to lock there
         tgsis.lock_objects(tree, "v2", "well", [3])

@@ -221,3 +221,34 @@ def test_feature_versioning_by_an_admin_and_feature_writes_by_rights(roles: Role
         assert F.fetch_feature(carol, "horizons", geoid).mesh.n_vertices == 16
     carol.rollback()
     assert F.fetch_features(carol, "horizons") == []     # DEFAULT does not see a1's feature
+
+
+def test_bad_arguments_are_named_and_change_nothing(roles: Roles, db_dsn: str) -> None:
+    alice = roles.connect("alice")
+    tgsis.create_version(alice, "a1")
+    before = _state(db_dsn)
+    for call, error, message in (
+            (lambda: tgsis.has_version_privilege(alice, "a1", "read"), tgsis.InvalidInputError,
+             "unknown version privilege 'read'"),
+            (lambda: tgsis.has_version_privilege(alice, "a1", "write", "nobody_at_all"), tgsis.NotFoundError,
+             "role 'nobody_at_all' does not exist"),
+            (lambda: tgsis.has_version_privilege(alice, "a1", "write", "public"), tgsis.NotFoundError,
+             "role 'public' does not exist"),          # public holds what is granted to it: no role to ask about
+            (lambda: tgsis.has_version_privilege(alice, "nope", "write"), tgsis.NotFoundError,
+             "version 'nope' does not exist"),
+            (lambda: tgsis.revoke_version(alice, "a1", "read", "public"), tgsis.InvalidInputError,
+             "unknown version privilege 'read'"),
+            (lambda: tgsis.revoke_version(alice, "a1", "write", "nobody_at_all"), tgsis.NotFoundError,
+             "role 'nobody_at_all' does not exist"),
+            (lambda: tgsis.set_version_owner(alice, "a1", "public"), tgsis.NotFoundError,
+             "role 'public' does not exist"),
+            (lambda: tgsis.grant_version(alice, "nope", "write", "public"), tgsis.NotFoundError,
+             "version 'nope' does not exist")):
+        with pytest.raises(error, match=message):
+            call()
+        alice.rollback()
+    assert _state(db_dsn) == before
+    # 'all' asks for the four rights at once
+    assert tgsis.has_version_privilege(alice, "a1", "all")
+    assert not tgsis.has_version_privilege(alice, "DEFAULT", "all")        # editors: write and create only
+    assert tgsis.has_version_privilege(alice, "DEFAULT", "create")

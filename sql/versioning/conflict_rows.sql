@@ -12,6 +12,7 @@ DECLARE
     v_t       tgsis.versioned_tables;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    PERFORM tgsis.check_object_class(p_objectclass);
     SELECT workingset INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP
         RETURN QUERY EXECUTE format(

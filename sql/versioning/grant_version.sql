@@ -10,8 +10,9 @@ DECLARE
     v_id integer := tgsis.version_id(p_version);
 BEGIN
     PERFORM tgsis.require_version_owner(v_id, 'grant rights on');
+    PERFORM tgsis.check_role(p_role, true);
     INSERT INTO tgsis.version_privileges (versionid, grantee, privilege, granted_by)
-    SELECT v_id, p_role, p, tgsis.calling_role() FROM unnest(tgsis.version_privilege_list(p_privilege, p_role)) AS p
+    SELECT v_id, p_role, p, tgsis.calling_role() FROM unnest(tgsis.version_privilege_list(p_privilege)) AS p
         ON CONFLICT DO NOTHING;
 END
 $$;

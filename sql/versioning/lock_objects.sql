@@ -16,10 +16,7 @@ DECLARE
     v_taken   integer;
 BEGIN
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'lock objects in');
-    IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = p_objectclass) THEN
-        RAISE EXCEPTION 'object class % does not exist', coalesce(quote_literal(p_objectclass), 'NULL')
-            USING ERRCODE = 'TG200', HINT = 'SELECT DISTINCT objectclass FROM tgsis.versioned_tables lists them';
-    END IF;
+    PERFORM tgsis.check_object_class(p_objectclass);
     IF p_keys IS NULL OR cardinality(p_keys) = 0 OR array_position(p_keys, NULL) IS NOT NULL THEN
         RAISE EXCEPTION 'no object keys to lock' USING ERRCODE = 'TG100', HINT = 'pass a non-empty array of keys without NULLs';
     END IF;

@@ -11,8 +11,9 @@ DECLARE
     v_id integer := tgsis.version_id(p_version);
 BEGIN
     PERFORM tgsis.require_version_owner(v_id, 'revoke rights on');
+    PERFORM tgsis.check_role(p_role, true);
     DELETE FROM tgsis.version_privileges
-     WHERE versionid = v_id AND grantee = p_role AND privilege = ANY (tgsis.version_privilege_list(p_privilege, p_role));
+     WHERE versionid = v_id AND grantee = p_role AND privilege = ANY (tgsis.version_privilege_list(p_privilege));
 END
 $$;
 

@@ -10,9 +10,7 @@ DECLARE
     v_id integer := tgsis.version_id(p_version);
 BEGIN
     PERFORM tgsis.require_version_owner(v_id, 'change the owner of');
-    IF p_role IS NULL OR NOT EXISTS (SELECT FROM pg_roles WHERE rolname = p_role) THEN
-        RAISE EXCEPTION 'role % does not exist', coalesce(quote_literal(p_role), 'NULL') USING ERRCODE = 'TG200';
-    END IF;
+    PERFORM tgsis.check_role(p_role);
     UPDATE tgsis.versions SET owner = p_role WHERE versionid = v_id;
 END
 $$;

@@ -15,6 +15,9 @@ DECLARE
     v_released integer;
 BEGIN
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'unlock objects in');
+    IF p_objectclass IS NOT NULL THEN
+        PERFORM tgsis.check_object_class(p_objectclass);
+    END IF;
     IF NOT tgsis.is_version_owner(v_id, v_role) THEN
         SELECT string_agg(format('%s %s (%s)', objectclass, objectkey, quote_ident(locked_by)), ', ') INTO v_others
           FROM tgsis.object_locks
