@@ -48,7 +48,10 @@ property names are sanitised and the file's names are kept in
 ``metadata["vtk_array_names"]`` (``{"point_data": {mesh name: file name},
 "cell_data": {...}}``, only for names that changed).
 :func:`read_vtu_collection` reads the collections the writer writes back into
-their members (and a file of one mesh as a collection of that mesh).
+their members (and a file of one mesh as a collection of that mesh);
+:func:`read_vtu_geometry` gives a mesh or a collection as written, and None
+for the typeless empty grid of :func:`format_empty_vtu` (how
+:mod:`tgsis.formats.pvd` writes a time at which an object does not exist).
 """
 
 from __future__ import annotations
@@ -58,7 +61,7 @@ import math
 import xml.etree.ElementTree as ET
 import zlib
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -67,8 +70,8 @@ from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyE
 from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
-__all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "read_vtu_collection", "parse_vtu_collection", "write_vtu",
-           "format_vtu"]
+__all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "read_vtu_collection", "parse_vtu_collection",
+           "read_vtu_geometry", "parse_vtu_geometry", "write_vtu", "format_vtu", "format_empty_vtu"]
 
 #: VTK cell type of each mesh class.
 VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
@@ -117,7 +120,7 @@ class _Grid:
     """What one Piece holds: points (n, 3), cells as connectivity (c,), offsets (m,), types (m,), data."""
 
     name: str | None
-    geotype: str
+    geotype: str | None  # None: no tgsis_geotype field (the empty grid of format_empty_vtu)
     vertices: npt.NDArray[np.float64]
     connectivity: npt.NDArray[np.int64]
     offsets: npt.NDArray[np.int64]
@@ -166,10 +169,40 @@ def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"
 
 def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary") -> bytes:
     """The ``.vtu`` file content for ``mesh`` or a collection; see :func:`write_vtu`."""
+    _check_encoding(encoding)
+    return _format_grid(_collection_grid(mesh) if isinstance(mesh, GeometryCollection)
+                        else _mesh_grid(check_mesh(mesh, "the VTU writer")), encoding)
+
+
+def format_empty_vtu(*, encoding: Encoding = "binary") -> bytes:
+    """The ``.vtu`` file content of a grid of 0 points and 0 cells that names no geotype.
+
+    It stands for "no object": :func:`read_vtu_geometry` reads it as None
+    (:func:`read_vtu` as an empty PointSet). ParaView shows nothing for it.
+
+    Parameters
+    ----------
+    encoding : {"binary", "appended"}
+        As for :func:`write_vtu`.
+
+    Returns
+    -------
+    bytes
+        A valid VTK XML UnstructuredGrid file (empty Points and Cells arrays).
+    """
+    _check_encoding(encoding)
+    empty = np.empty(0, dtype=np.int64)
+    return _format_grid(_Grid(None, None, np.empty((0, 3)), empty, empty, np.empty(0, dtype=np.uint8), {}, {}),
+                        encoding)
+
+
+def _check_encoding(encoding: str) -> None:
     if encoding not in ("binary", "appended"):
         raise FileFormatError(f"unknown VTU encoding {encoding!r}: use 'binary' or 'appended'")
-    source = (_collection_grid(mesh) if isinstance(mesh, GeometryCollection)
-              else _mesh_grid(check_mesh(mesh, "the VTU writer")))
+
+
+def _format_grid(source: _Grid, encoding: Encoding) -> bytes:
+    """The file content of one grid."""
     writer = _ArrayWriter(appended=encoding == "appended")
     root = ET.Element("VTKFile", type="UnstructuredGrid", version="1.0", byte_order="LittleEndian",
                       header_type="UInt64")
@@ -177,7 +210,8 @@ def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary") -> bytes:
     field_data = ET.SubElement(grid, "FieldData")
     if source.name:
         field_data.append(_string_array("name", source.name))
-    field_data.append(_string_array("tgsis_geotype", source.geotype))
+    if source.geotype is not None:
+        field_data.append(_string_array("tgsis_geotype", source.geotype))
     if source.members is not None:
         members = source.members.members
         field_data.append(_string_array("tgsis_member_geotypes", *(m.geotype.value for m in members)))
@@ -290,6 +324,36 @@ def parse_vtu(data: bytes, *, path: PathLike | None = None) -> Mesh:
     return result
 
 
+def read_vtu_geometry(path: PathLike) -> Geometry | None:
+    """Read a ``.vtu`` file as written: a mesh, a collection, or None for "no object".
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.vtu`` file.
+
+    Returns
+    -------
+    Mesh or GeometryCollection or None
+        A collection for a file written from one (even of one member), a
+        mesh otherwise; None for a grid of 0 points and 0 cells whose
+        ``FieldData`` names no ``tgsis_geotype`` (:func:`format_empty_vtu`
+        writes one; so do other writers for an empty dataset). An empty
+        mesh written by :func:`write_vtu` keeps its type.
+
+    Raises
+    ------
+    FileFormatError
+        As :func:`read_vtu` (except for collections).
+    """
+    return parse_vtu_geometry(read_bytes(path), path=path)
+
+
+def parse_vtu_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry | None:
+    """Parse the content of a ``.vtu`` file; see :func:`read_vtu_geometry`."""
+    return _parse(data, path, absent_as_none=True)
+
+
 def read_vtu_collection(path: PathLike) -> GeometryCollection:
     """Read a ``.vtu`` file written from a GeometryCollection (a file of one mesh gives a collection of it).
 
@@ -318,8 +382,19 @@ def parse_vtu_collection(data: bytes, *, path: PathLike | None = None) -> Geomet
     return result if isinstance(result, GeometryCollection) else GeometryCollection([result], name=result.name)
 
 
-def _parse(data: bytes, path: PathLike | None) -> Mesh | GeometryCollection:
-    """A mesh, or a collection when the FieldData says GEOMETRYCOLLECTION."""
+@overload
+def _parse(data: bytes, path: PathLike | None, *, absent_as_none: Literal[False] = False) -> Geometry: ...
+
+
+@overload
+def _parse(data: bytes, path: PathLike | None, *, absent_as_none: bool) -> Geometry | None: ...
+
+
+def _parse(data: bytes, path: PathLike | None, *, absent_as_none: bool = False) -> Geometry | None:
+    """A mesh, or a collection when the FieldData says GEOMETRYCOLLECTION.
+
+    With ``absent_as_none``, None for an empty grid that names no geotype.
+    """
     xml_bytes, appended = _split_appended(data)
     try:
         root = ET.fromstring(xml_bytes)
@@ -337,8 +412,13 @@ def _parse(data: bytes, path: PathLike | None) -> Mesh | GeometryCollection:
     n_points = _int_attribute(piece, "NumberOfPoints", path)
     n_cells = _int_attribute(piece, "NumberOfCells", path)
 
-    vertices = decoder.array(_find_array(piece, "Points", None, path), n_points, 3).astype(np.float64)
+    if n_points == 0 and piece.find("Points/DataArray") is None:
+        vertices = np.empty((0, 3))  # VTK writes <Points></Points> for a grid without points
+    else:
+        vertices = decoder.array(_find_array(piece, "Points", None, path), n_points, 3).astype(np.float64)
     fields = _field_strings(grid, decoder) if grid is not None else {}
+    if absent_as_none and n_points == 0 and n_cells == 0 and "tgsis_geotype" not in fields:
+        return None
     if grid is not None and fields.get("tgsis_geotype") == GeometryCollection.geotype.value:
         return _collection(grid, piece, decoder, vertices.reshape(n_points, 3), n_cells, fields.get("name"))
     mesh_type, cells = _cells(piece, decoder, n_cells, path)
@@ -473,9 +553,9 @@ def _find_array(piece: ET.Element, section: str, name: str | None, path: PathLik
 def _cells(piece: ET.Element, decoder: _Decoder, n_cells: int,
            path: PathLike | None) -> tuple[type[Mesh], npt.NDArray[np.int64]]:
     """The mesh class after the (single) cell type, and the connectivity."""
-    if piece.find("Cells") is None:
+    if piece.find("Cells/DataArray") is None:
         if n_cells:
-            raise FileFormatError(f"the Piece declares {n_cells} cells but has no <Cells>", path=path)
+            raise FileFormatError(f"the Piece declares {n_cells} cells but has no <Cells> arrays", path=path)
         return PointSet, np.empty(0, dtype=np.int64)
     types = decoder.array(_find_array(piece, "Cells", "types", path), n_cells, 1)
     offsets = decoder.array(_find_array(piece, "Cells", "offsets", path), None, 1).astype(np.int64)
