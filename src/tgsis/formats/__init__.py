@@ -27,6 +27,17 @@ Each module's documentation says what its format keeps and loses. The
 format is chosen from the file extension unless ``format=`` names it (by name
 or extension). Every problem with a file raises
 :class:`~tgsis.errors.FileFormatError`.
+
+Time series go to ParaView collection files (``.pvd``, one ``.vtu`` per
+time) with :func:`~tgsis.formats.pvd.write_pvd` and
+:func:`~tgsis.formats.pvd.read_pvd` of :mod:`tgsis.formats.pvd`. They are
+not in :data:`FORMATS`: a registry format reads one file into a list of
+meshes and writes one geometry to one file, while a ``.pvd`` lists files
+that give one geometry, or none, per time; :func:`read` and :func:`write`
+on a ``.pvd`` point to those functions.
+
+>>> formats.write_pvd([(0.0, None), (1.5, fault)], "fault.pvd")   # doctest: +SKIP
+>>> [(t0, gone), (t1, back)] = formats.read_pvd("fault.pvd")     # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -40,6 +51,7 @@ from tgsis.errors import FileFormatError
 from tgsis.formats._common import PathLike, check_mesh
 from tgsis.formats.gocad import (format_gocad, parse_gocad, read_gocad, read_tsurf, write_gocad,
                                  write_gocad_many)
+from tgsis.formats.pvd import read_pvd, write_pvd
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
 from tgsis.formats.vtk import (format_vtu, parse_vtu, parse_vtu_collection, read_vtu, read_vtu_collection,
                                write_vtu)
@@ -66,6 +78,8 @@ __all__ = [
     "format_vtu",
     "read_trimesh_file",
     "write_trimesh_file",
+    "read_pvd",
+    "write_pvd",
 ]
 
 
@@ -190,6 +204,9 @@ def format_for(path: PathLike, format: str | None = None) -> FileFormat:
         The format or extension is not known; the message lists the known ones.
     """
     key = (format if format is not None else Path(path).suffix).lower()
+    if key in ("pvd", ".pvd"):
+        raise FileFormatError("a .pvd file is a time series of .vtu files, not a file of meshes", path=path,
+                              hint="use tgsis.formats.read_pvd or write_pvd")
     for candidate in FORMATS.values():
         if key == candidate.name or key in candidate.extensions or "." + key in candidate.extensions:
             return candidate
