@@ -9,15 +9,20 @@ CREATE TABLE tgsis.catalog (
     cellprotable       text        NOT NULL,
     viewname           text        NOT NULL,
     protablename       text,
+    timemodel          text        NOT NULL DEFAULT 'STATIC' CHECK (timemodel IN ('STATIC', 'INSTANTS', 'EVOLVING')),
+    timeunit           text,
     proalignment       text        NOT NULL CHECK (proalignment IN ('VERTEX', 'CELL')),
     srs                integer     NOT NULL CHECK (srs >= 0),
     feature_properties jsonb       NOT NULL DEFAULT '[]',
     cell_properties    jsonb       NOT NULL DEFAULT '[]',
+    instant_properties jsonb       NOT NULL DEFAULT '[]',
     description        text,
     created_at         timestamptz NOT NULL DEFAULT now(),
     created_by         name        NOT NULL DEFAULT current_user,
     UNIQUE (schemaname, featuretable),
-    UNIQUE (schemaname, cellprotable)
+    UNIQUE (schemaname, cellprotable),
+    CONSTRAINT catalog_temporal_classes CHECK ((timemodel = 'STATIC') = (protablename IS NULL)
+                                               AND (timemodel = 'STATIC' OR geotype = 'SURFACE'))
 );
 
 COMMENT ON TABLE tgsis.catalog IS 'feature classes: where their features and properties are stored and how';
@@ -25,13 +30,17 @@ COMMENT ON COLUMN tgsis.catalog.classname IS 'class name; also the name of its f
 COMMENT ON COLUMN tgsis.catalog.schemaname IS 'schema of the feature, cell-property and view tables';
 COMMENT ON COLUMN tgsis.catalog.geotype IS 'geotype of every feature of the class';
 COMMENT ON COLUMN tgsis.catalog.featuretable IS '<features>: one row per feature (_geoid = tgsis.geometry.geoid), one column per feature property';
-COMMENT ON COLUMN tgsis.catalog.cellprotable IS '<features>_cellpros: (_geoid, _idx) and one column per vertex or cell property';
+COMMENT ON COLUMN tgsis.catalog.cellprotable IS '<features>_cellpros: (_geoid, _idx) and one column per vertex or cell property; temporal classes add _times (INSTANTS) or _timem, _timet (EVOLVING)';
 COMMENT ON COLUMN tgsis.catalog.viewname IS '<features>_v: features joined with their geometry row, for psql users';
-COMMENT ON COLUMN tgsis.catalog.protablename IS 'per-instant property table of temporal classes (model 2); NULL for static classes';
+COMMENT ON COLUMN tgsis.catalog.protablename IS
+    '<features>_pros: per-instant feature properties of temporal classes (_geoid, _times for INSTANTS; _geoid, _timem, _timet for EVOLVING); NULL for static classes';
+COMMENT ON COLUMN tgsis.catalog.timemodel IS 'STATIC (model 1), INSTANTS (model 2: surfaces at instants) or EVOLVING (model 3: continuously evolving surfaces)';
+COMMENT ON COLUMN tgsis.catalog.timeunit IS 'unit of model time for temporal classes (e.g. Ma, ages stored as negative numbers); larger is later';
 COMMENT ON COLUMN tgsis.catalog.proalignment IS 'VERTEX: _idx is a vrtxid; CELL: _idx is a pointid/segid/trglid/tetraid';
 COMMENT ON COLUMN tgsis.catalog.srs IS 'spatial reference id (EPSG code; 0 = undefined/local)';
 COMMENT ON COLUMN tgsis.catalog.feature_properties IS 'per-feature properties in column order: [{"name": ..., "type": ...}]';
 COMMENT ON COLUMN tgsis.catalog.cell_properties IS 'per-vertex or per-cell properties in column order: [{"name": ..., "type": ...}]';
+COMMENT ON COLUMN tgsis.catalog.instant_properties IS 'per-instant feature properties (columns of protablename) in column order: [{"name": ..., "type": ...}]';
 COMMENT ON COLUMN tgsis.catalog.description IS 'free text';
 COMMENT ON COLUMN tgsis.catalog.created_at IS 'when the class was registered';
 COMMENT ON COLUMN tgsis.catalog.created_by IS 'role that registered it';

@@ -2,9 +2,13 @@
 -- theirs from tgsis.register_feature_class.
 GRANT USAGE ON SCHEMA tgsis TO tgsis_reader;
 GRANT SELECT ON tgsis.error_codes, tgsis.installation, tgsis.property_types, tgsis.catalog,
-                tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra
+                tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
+                tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
+                tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
     TO tgsis_reader;
-GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra
+GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
+                                tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
+                                tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
     TO tgsis_editor;
 GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq TO tgsis_editor;
 GRANT INSERT, UPDATE, DELETE ON tgsis.catalog TO tgsis_admin;

@@ -1,4 +1,7 @@
 -- tgsis.register_feature_class(...): create a feature class (feature table, cell-property table, view) and catalog it.
+-- A temporal class (time model INSTANTS = model 2, EVOLVING = model 3) holds
+-- SURFACE features; it gets a per-instant property table <name>_pros, and the
+-- time keys (_times, or _timem and _timet) in it and in <name>_cellpros.
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -7,7 +10,10 @@ CREATE FUNCTION tgsis.register_feature_class(
     p_proalignment       text    DEFAULT 'VERTEX',
     p_srs                integer DEFAULT 0,
     p_schema             text    DEFAULT 'public',
-    p_description        text    DEFAULT NULL)
+    p_description        text    DEFAULT NULL,
+    p_time_model         text    DEFAULT 'STATIC',
+    p_instant_properties jsonb   DEFAULT '[]',
+    p_time_unit          text    DEFAULT NULL)
 RETURNS tgsis.catalog
 LANGUAGE plpgsql
 AS $$
@@ -16,6 +22,11 @@ DECLARE
     v_align     text := upper(btrim(p_proalignment));
     v_cellpros  text := p_name || '_cellpros';
     v_view      text := p_name || '_v';
+    v_model     text := upper(btrim(p_time_model));
+    v_pros      text;
+    v_timekey   text;
+    v_icols     text;
+    v_iprops    jsonb;
     v_fcols     text;
     v_ccols     text;
     v_fprops    jsonb;
@@ -37,6 +48,25 @@ BEGIN
                 coalesce(quote_literal(p_proalignment), 'NULL'), p_name
             USING ERRCODE = 'TG100';
     END IF;
+    IF v_model IS NULL OR v_model NOT IN ('STATIC', 'INSTANTS', 'EVOLVING') THEN
+        RAISE EXCEPTION 'time model % of feature class % must be STATIC, INSTANTS or EVOLVING',
+                coalesce(quote_literal(p_time_model), 'NULL'), p_name
+            USING ERRCODE = 'TG100',
+                  HINT = 'STATIC: model 1; INSTANTS: surfaces known at instants (model 2); EVOLVING: continuously evolving surfaces (model 3)';
+    END IF;
+    IF v_model <> 'STATIC' AND v_geotype <> 'SURFACE' THEN
+        RAISE EXCEPTION 'a % feature class holds SURFACE features, not %', v_model, v_geotype
+            USING ERRCODE = 'TG100', HINT = 'temporal classes (time models INSTANTS and EVOLVING) are classes of surfaces';
+    END IF;
+    IF v_model = 'STATIC' AND (p_time_unit IS NOT NULL OR coalesce(p_instant_properties, '[]') NOT IN ('[]', '{}')) THEN
+        RAISE EXCEPTION 'static feature class % takes no time unit or per-instant properties', p_name
+            USING ERRCODE = 'TG100', HINT = 'give time_model => ''INSTANTS'' or ''EVOLVING'' for a temporal class';
+    END IF;
+    IF v_model <> 'STATIC' THEN
+        v_pros := p_name || '_pros';
+        v_timekey := CASE v_model WHEN 'INSTANTS' THEN '_times double precision NOT NULL, '
+                                  ELSE '_timem double precision NOT NULL, _timet double precision NOT NULL, ' END;
+    END IF;
     IF p_srs IS NULL OR p_srs < 0 THEN
         RAISE EXCEPTION 'SRS % of feature class % must be an id >= 0 (0: undefined)', p_srs, p_name USING ERRCODE = 'TG100';
     END IF;
@@ -50,8 +80,10 @@ BEGIN
     END IF;
     IF to_regclass(format('%I.%I', p_schema, p_name)) IS NOT NULL
        OR to_regclass(format('%I.%I', p_schema, v_cellpros)) IS NOT NULL
-       OR to_regclass(format('%I.%I', p_schema, v_view)) IS NOT NULL THEN
-        RAISE EXCEPTION 'a table or view named %, % or % exists already in schema %', p_name, v_cellpros, v_view, p_schema
+       OR to_regclass(format('%I.%I', p_schema, v_view)) IS NOT NULL
+       OR to_regclass(format('%I.%I', p_schema, coalesce(v_pros, v_cellpros))) IS NOT NULL THEN
+        RAISE EXCEPTION 'a table or view named %, %, % or % exists already in schema %',
+                p_name, v_cellpros, v_view, coalesce(v_pros, p_name || '_pros'), p_schema
             USING ERRCODE = 'TG201';
     END IF;
 
@@ -63,6 +95,10 @@ BEGIN
            coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
       INTO v_ccols, v_cprops
       FROM tgsis.property_columns(p_cell_properties, true, lower(v_align));
+    SELECT coalesce(string_agg(format(', %I %s', name, typename), '' ORDER BY ord), ''),
+           coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
+      INTO v_icols, v_iprops
+      FROM tgsis.property_columns(p_instant_properties, false, 'per-instant');
 
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
         -- model 1 is versioned: the key to tgsis.geometry cannot hold across
@@ -77,8 +113,22 @@ BEGIN
                        p_schema, p_name, v_fcols);
     END IF;
     -- no foreign key to the feature table: a per-row check would dominate bulk uploads
-    EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, _idx bigint NOT NULL%s, PRIMARY KEY (_geoid, _idx))',
-                   p_schema, v_cellpros, v_ccols);
+    EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, %s_idx bigint NOT NULL%s, PRIMARY KEY (_geoid, %s_idx))',
+                   p_schema, v_cellpros, coalesce(v_timekey, ''), v_ccols, tgsis.time_key_columns(v_model));
+    IF v_pros IS NOT NULL THEN
+        EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, %s%s, PRIMARY KEY (_geoid, %s))',
+                       p_schema, v_pros, rtrim(v_timekey, ', '), v_icols, rtrim(tgsis.time_key_columns(v_model), ', '));
+        EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_pros,
+                       format('tgsis feature class %s: per-instant feature properties (%s)', p_name,
+                              CASE v_model WHEN 'INSTANTS' THEN 'one row per feature and instant _times'
+                                           ELSE 'one row per feature and geometry instant (_timem, _timet)' END));
+        EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_pros, 'the feature (_geoid of ' || p_name || ')');
+        PERFORM tgsis.comment_time_key_columns(p_schema, v_pros, v_model);
+        PERFORM tgsis.comment_property_columns(p_schema, v_pros, v_iprops, 'per-instant feature property');
+        EXECUTE format('GRANT SELECT ON %I.%I TO tgsis_reader', p_schema, v_pros);
+        EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I TO tgsis_editor', p_schema, v_pros);
+        PERFORM tgsis.comment_time_key_columns(p_schema, v_cellpros, v_model);
+    END IF;
 
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, p_name,
                    format('tgsis feature class %s: one row per %s feature (_geoid = tgsis.geometry.geoid)', p_name, v_geotype));
@@ -102,9 +152,11 @@ BEGIN
     EXECUTE format('GRANT SELECT ON %I.%I, %I.%I TO tgsis_reader', p_schema, p_name, p_schema, v_cellpros);
     EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I, %I.%I TO tgsis_editor', p_schema, p_name, p_schema, v_cellpros);
 
-    INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, proalignment, srs,
-                               feature_properties, cell_properties, description)
-    VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_align, p_srs, v_fprops, v_cprops, p_description)
+    INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, protablename,
+                               timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
+                               instant_properties, description)
+    VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
+            v_fprops, v_cprops, v_iprops, p_description)
     RETURNING * INTO v_row;
     -- once model 1 is versioned, every new class is versioned with it
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
@@ -115,5 +167,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text) IS
-    'register a feature class: creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties) and <name>_v (view), records it in tgsis.catalog';
+COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text) IS
+    'register a feature class: creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';

@@ -12,8 +12,9 @@ DECLARE
     v_geo   record;
     v_ids   bigint[];
     v_class record;
+    v_table text;
 BEGIN
-    SELECT geotype, collection INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
+    SELECT geotype, collection, timemodel INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
     IF NOT FOUND THEN
         RETURN false;
     END IF;
@@ -28,10 +29,23 @@ BEGIN
     -- the feature row: its foreign key is gone once model 1 is versioned, so
     -- delete it explicitly; cell properties of a collection's members are in
     -- its class's table, keyed by member geoid
-    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog WHERE geotype = v_geo.geotype LOOP
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable, protablename FROM tgsis.catalog
+                    WHERE geotype = v_geo.geotype AND timemodel = v_geo.timemodel LOOP
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', v_ids);
+        IF v_class.protablename IS NOT NULL THEN
+            PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.protablename, '_geoid', v_ids);
+        END IF;
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.featuretable, '_geoid', ARRAY[p_geoid]);
     END LOOP;
+    IF v_geo.timemodel = 'INSTANTS' THEN
+        FOREACH v_table IN ARRAY ARRAY['times_trgl', 'times_vrtx', 'times'] LOOP
+            PERFORM tgsis.delete_object_rows('tgsis', v_table, 'geoid', v_ids);
+        END LOOP;
+    ELSIF v_geo.timemodel = 'EVOLVING' THEN
+        FOREACH v_table IN ARRAY ARRAY['d4dvrtx', 'd4dtrgl', 'node', 'timet', 'timem'] LOOP
+            PERFORM tgsis.delete_object_rows('tgsis', v_table, 'geoid', v_ids);
+        END LOOP;
+    END IF;
     PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', v_ids);
     FOR v_geo IN SELECT DISTINCT geotype FROM tgsis.geometry WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' LOOP
         PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geo.geotype), 'geoid', v_ids);
@@ -42,4 +56,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.delete_geometry(bigint) IS
-    'delete a geometry, its vertices, simplices, feature row and cell properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';
+    'delete a geometry, its vertices, simplices (instants and periods of temporal ones), feature row, cell and per-instant properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';

@@ -13,7 +13,13 @@ CREATE TABLE tgsis.geometry (
     bbox       cube,
     nvrtx      bigint NOT NULL DEFAULT 0 CHECK (nvrtx >= 0),
     ncell      bigint NOT NULL DEFAULT 0 CHECK (ncell >= 0),
+    timemodel  text   NOT NULL DEFAULT 'STATIC' CHECK (timemodel IN ('STATIC', 'INSTANTS', 'EVOLVING')),
+    alive      boolean NOT NULL DEFAULT false,
+    colorred   real   CHECK (colorred BETWEEN 0 AND 1),
+    colorgreen real   CHECK (colorgreen BETWEEN 0 AND 1),
+    colorblue  real   CHECK (colorblue BETWEEN 0 AND 1),
     created_at timestamptz NOT NULL DEFAULT now(),
+    CONSTRAINT geometry_temporal_surfaces CHECK (timemodel = 'STATIC' OR geotype = 'SURFACE'),
     CONSTRAINT geometry_collection_members CHECK ((geotype = 'GEOMETRYCOLLECTION') = (geoids IS NOT NULL)),
     CONSTRAINT geometry_bbox_is_3d CHECK (bbox IS NULL OR cube_dim(bbox) = 3),
     CONSTRAINT geometry_members_do_not_nest CHECK (collection IS NULL OR geotype <> 'GEOMETRYCOLLECTION')
@@ -33,7 +39,14 @@ COMMENT ON COLUMN tgsis.geometry.geoids IS 'members of a GEOMETRYCOLLECTION in o
 COMMENT ON COLUMN tgsis.geometry.collection IS
     'the GEOMETRYCOLLECTION that owns this geometry (deleted with it by tgsis.delete_geometry); NULL for geometries of their own';
 COMMENT ON COLUMN tgsis.geometry.bbox IS
-    '3D bounding box (cube) of the vertices, kept by the write path (tgsis.refresh_geometry after raw SQL edits); GiST-indexed';
-COMMENT ON COLUMN tgsis.geometry.nvrtx IS 'number of vertices, kept by the write path';
-COMMENT ON COLUMN tgsis.geometry.ncell IS 'number of simplices (points, segments, triangles or tetrahedra), kept by the write path';
+    '3D bounding box (cube) of the vertices (of a temporal geometry: of all its instants), kept by the write path (tgsis.refresh_geometry after raw SQL edits); GiST-indexed';
+COMMENT ON COLUMN tgsis.geometry.nvrtx IS 'number of vertices (temporal: vertex rows of model 2, nodes of model 3), kept by the write path';
+COMMENT ON COLUMN tgsis.geometry.ncell IS 'number of simplices (points, segments, triangles or tetrahedra; temporal: of all instants or periods), kept by the write path';
+COMMENT ON COLUMN tgsis.geometry.timemodel IS
+    'STATIC (model 1: tgsis.vrtx and simplices), INSTANTS (model 2: a surface at instants, tgsis.times*) or EVOLVING (model 3: tgsis.timem, timet, node, d4dtrgl, d4dvrtx)';
+COMMENT ON COLUMN tgsis.geometry.alive IS
+    'temporal geometries: whether the object still exists after its last instant (it keeps its last shape); ignored for STATIC';
+COMMENT ON COLUMN tgsis.geometry.colorred IS 'display colour, red component in [0, 1] (NULL: none)';
+COMMENT ON COLUMN tgsis.geometry.colorgreen IS 'display colour, green component in [0, 1]';
+COMMENT ON COLUMN tgsis.geometry.colorblue IS 'display colour, blue component in [0, 1]';
 COMMENT ON COLUMN tgsis.geometry.created_at IS 'when the geometry was stored';

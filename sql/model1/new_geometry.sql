@@ -1,4 +1,4 @@
--- tgsis.new_geometry(geotype, name, bounds, nvrtx, ncell, geoids, collection): insert a geometry row and return its geoid.
+-- tgsis.new_geometry(geotype, name, bounds, nvrtx, ncell, geoids, collection, timemodel, alive, color): insert a geometry row and return its geoid.
 -- The client's write path calls it before copying vertices and simplices;
 -- bounds is {xmin, ymin, zmin, xmax, ymax, zmax} (NULL: no vertex); a member
 -- stored with its GEOMETRYCOLLECTION names the collection that owns it.
@@ -9,7 +9,10 @@ CREATE FUNCTION tgsis.new_geometry(
     p_nvrtx      bigint,
     p_ncell      bigint,
     p_geoids     bigint[] DEFAULT NULL,
-    p_collection bigint   DEFAULT NULL)
+    p_collection bigint   DEFAULT NULL,
+    p_timemodel  text     DEFAULT 'STATIC',
+    p_alive      boolean  DEFAULT false,
+    p_color      real[]   DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 SET search_path FROM CURRENT
@@ -22,6 +25,16 @@ BEGIN
                                  OR 'NaN' = ANY (p_bounds) OR 'Infinity' = ANY (p_bounds) OR '-Infinity' = ANY (p_bounds)) THEN
         RAISE EXCEPTION 'bounds of a new geometry must be 6 finite numbers {xmin, ymin, zmin, xmax, ymax, zmax}, got %', p_bounds
             USING ERRCODE = 'TG102';
+    END IF;
+    IF p_color IS NOT NULL AND (cardinality(p_color) <> 3 OR array_position(p_color, NULL) IS NOT NULL
+                                OR EXISTS (SELECT FROM unnest(p_color) c WHERE NOT c BETWEEN 0 AND 1)) THEN
+        RAISE EXCEPTION 'colour of a new geometry must be 3 numbers {red, green, blue} in [0, 1], got %', p_color
+            USING ERRCODE = 'TG102';
+    END IF;
+    IF coalesce(upper(p_timemodel), '') NOT IN ('STATIC', 'INSTANTS', 'EVOLVING')
+       OR (upper(p_timemodel) <> 'STATIC' AND upper(p_geotype) <> 'SURFACE') THEN
+        RAISE EXCEPTION 'time model % is not one of a % geometry', coalesce(quote_literal(p_timemodel), 'NULL'), upper(p_geotype)
+            USING ERRCODE = 'TG102', HINT = 'STATIC for every geotype; INSTANTS or EVOLVING for SURFACE';
     END IF;
     IF p_collection IS NOT NULL THEN
         IF upper(p_geotype) = 'GEOMETRYCOLLECTION' THEN
@@ -37,14 +50,15 @@ BEGIN
                 USING ERRCODE = 'TG102';
         END IF;
     END IF;
-    INSERT INTO tgsis.geometry (geotype, geoname, geoids, collection, bbox, nvrtx, ncell)
+    INSERT INTO tgsis.geometry (geotype, geoname, geoids, collection, bbox, nvrtx, ncell, timemodel, alive,
+                                colorred, colorgreen, colorblue)
     VALUES (upper(p_geotype), p_name, p_geoids, p_collection,
             CASE WHEN p_bounds IS NOT NULL THEN cube(p_bounds[1:3], p_bounds[4:6]) END,
-            p_nvrtx, p_ncell)
+            p_nvrtx, p_ncell, upper(p_timemodel), coalesce(p_alive, false), p_color[1], p_color[2], p_color[3])
     RETURNING geoid INTO v_geoid;
     RETURN v_geoid;
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint) IS
-    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax}; members of a GEOMETRYCOLLECTION name their owning collection) and return its geoid';
+COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint, text, boolean, real[]) IS
+    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax}; members of a GEOMETRYCOLLECTION name their owning collection; time model, alive and colour {r, g, b} of temporal surfaces) and return its geoid';

@@ -10,11 +10,12 @@ AS $$
 #variable_conflict use_column
 DECLARE
     v_geotype text;
+    v_model   text;
     v_bbox    cube;
     v_nvrtx   bigint;
     v_ncell   bigint;
 BEGIN
-    SELECT g.geotype INTO v_geotype FROM tgsis.geometry g WHERE g.geoid = p_geoid FOR UPDATE;
+    SELECT g.geotype, g.timemodel INTO v_geotype, v_model FROM tgsis.geometry g WHERE g.geoid = p_geoid FOR UPDATE;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % does not exist', p_geoid
             USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.geometry lists the stored geometries';
@@ -29,6 +30,18 @@ BEGIN
           INTO v_bbox, v_nvrtx, v_ncell
           FROM tgsis.geometry m
          WHERE m.geoid = ANY ((SELECT c.geoids FROM tgsis.geometry c WHERE c.geoid = p_geoid)::bigint[]);
+    ELSIF v_model = 'INSTANTS' THEN
+        SELECT count(*) INTO v_ncell FROM tgsis.times_trgl c WHERE c.geoid = p_geoid;
+        SELECT count(*),
+               CASE WHEN count(*) > 0 THEN cube(ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]) END
+          INTO v_nvrtx, v_bbox
+          FROM tgsis.times_vrtx v WHERE v.geoid = p_geoid;
+    ELSIF v_model = 'EVOLVING' THEN
+        SELECT count(*) INTO v_ncell FROM tgsis.d4dtrgl c WHERE c.geoid = p_geoid;
+        SELECT count(*) INTO v_nvrtx FROM tgsis.node n WHERE n.geoid = p_geoid;
+        SELECT CASE WHEN count(*) > 0 THEN cube(ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]) END
+          INTO v_bbox
+          FROM tgsis.d4dvrtx v WHERE v.geoid = p_geoid;
     ELSE
         EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', tgsis.simplex_table(v_geotype))
            INTO v_ncell USING p_geoid;
@@ -43,4 +56,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.refresh_geometry(bigint) IS
-    'recompute bbox, nvrtx and ncell of a geometry from its vertex and simplex rows (after edits with plain SQL); returns them';
+    'recompute bbox, nvrtx and ncell of a geometry from its vertex and simplex rows (after edits with plain SQL); temporal geometries: over all instants (model 2: vertex and triangle rows; model 3: nodes and triangles, bbox of every node position); returns them';

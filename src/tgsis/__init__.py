@@ -86,6 +86,15 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
+from tgsis.db.temporal import (
+    add_instant,
+    delete_instant,
+    features_at,
+    get_at,
+    instants,
+    surfaces_at,
+)
+from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -201,6 +210,16 @@ __all__ = [
     "fetch_features",
     "features_in_box",
     "delete_feature",
+    # time: surfaces at instants (model 2) and evolving surfaces (model 3)
+    "SurfaceSeries",
+    "EvolvingSurface",
+    "TopologyPeriod",
+    "add_instant",
+    "delete_instant",
+    "instants",
+    "get_at",
+    "surfaces_at",
+    "features_at",
     # errors
     "Error",
     "AlreadyExistsError",

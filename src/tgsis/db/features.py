@@ -28,8 +28,9 @@ import psycopg
 from psycopg import sql
 
 from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
-from tgsis.errors import InvalidGeometryError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh, mesh_class
+from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
 __all__ = [
     "Property",
@@ -86,6 +87,16 @@ class FeatureClass:
         Spatial reference id (0: undefined).
     feature_properties, cell_properties : tuple of Property
         In column order.
+    time_model : {"STATIC", "INSTANTS", "EVOLVING"}
+        Model 1 (static), model 2 (surfaces at instants) or model 3
+        (continuously evolving surfaces).
+    time_unit : str or None
+        Unit of model time of a temporal class.
+    instant_properties : tuple of Property
+        Per-instant feature properties of a temporal class (columns of
+        ``protable``).
+    protable : str or None
+        ``<name>_pros`` of a temporal class.
     """
 
     name: str
@@ -99,6 +110,10 @@ class FeatureClass:
     cellprotable: str
     viewname: str
     description: str | None = None
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING"] = "STATIC"
+    time_unit: str | None = None
+    instant_properties: tuple[Property, ...] = ()
+    protable: str | None = None
 
     @property
     def mesh_class(self) -> type[Mesh]:
@@ -147,7 +162,8 @@ class Feature:
 
 
 _CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
-                    "featuretable, cellprotable, viewname, description")
+                    "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
+                    "protablename")
 
 
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
@@ -157,7 +173,8 @@ def _class_from_row(row: Sequence[Any]) -> FeatureClass:
 
     return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
                         feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
-                        cellprotable=row[8], viewname=row[9], description=row[10])
+                        cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
+                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14])
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
@@ -176,6 +193,9 @@ def create_feature_class(
     srs: int = 0,
     schema: str = "public",
     description: str | None = None,
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING"] = "STATIC",
+    time_unit: str | None = None,
+    instant_properties: PropertySpec | None = None,
 ) -> FeatureClass:
     """Register a feature class (``tgsis.register_feature_class``).
 
@@ -192,6 +212,15 @@ def create_feature_class(
     schema : str
         Existing schema for the class's tables.
     description : str, optional
+    time_model : {"STATIC", "INSTANTS", "EVOLVING"}
+        ``"INSTANTS"``: surfaces known at instants (model 2,
+        :class:`~tgsis.temporal.SurfaceSeries`); ``"EVOLVING"``: continuously
+        evolving surfaces (model 3, :class:`~tgsis.temporal.EvolvingSurface`).
+        Temporal classes hold SURFACE features.
+    time_unit : str, optional
+        Unit of model time (e.g. ``"Ma"``, ages stored as negative numbers).
+    instant_properties : mapping or sequence of (name, type), optional
+        Per-instant feature properties of a temporal class (``<name>_pros``).
 
     Raises
     ------
@@ -200,9 +229,10 @@ def create_feature_class(
     geotype_value = geotype.value if isinstance(geotype, Geotype) else str(geotype)
     with reraise(), conn.transaction():
         row = conn.execute(
-            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s)",
+            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s, "
+            "%s, %s::jsonb, %s)",
             (name, geotype_value, _spec_json(feature_properties), _spec_json(cell_properties), alignment, srs,
-             schema, description),
+             schema, description, time_model, _spec_json(instant_properties), time_unit),
         ).fetchone()
     assert row is not None
     return _class_from_row(row)
@@ -250,7 +280,18 @@ def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
     """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh)."""
     stored, other = ((mesh.vertex_properties, mesh.cell_properties) if fc.alignment == "VERTEX"
                      else (mesh.cell_properties, mesh.vertex_properties))
-    kind = "vertex" if fc.alignment == "VERTEX" else mesh.cell_name
+    return class_property_arrays(fc, stored, other, "vertex" if fc.alignment == "VERTEX" else mesh.cell_name,
+                                 drop_extra, what)
+
+
+def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any]],
+                          other: Mapping[str, npt.NDArray[Any]], kind: str, drop_extra: bool,
+                          what: str) -> dict[str, npt.NDArray[Any]]:
+    """The class's vertex/cell property arrays (any shape) out of ``stored``, checked and cast to the column types.
+
+    ``other`` holds the properties of the other alignment (never stored);
+    ``kind`` and ``what`` name them and their owner in messages.
+    """
     wanted = {p.name: p for p in fc.cell_properties}
     missing = sorted(set(wanted) - set(stored))
     if missing:
@@ -393,13 +434,13 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
-    mesh: Geometry,
+    mesh: Geometry | SurfaceSeries | EvolvingSurface,
     properties: Mapping[str, Any] | None = None,
     *,
     name: str | None = None,
     drop_extra_properties: bool = False,
 ) -> int:
-    """Store a mesh (or a collection of meshes) as a new feature; return its id (geoid).
+    """Store a mesh (or a collection of meshes, or a temporal surface) as a new feature; return its id (geoid).
 
     Parameters
     ----------
@@ -408,7 +449,10 @@ def insert_feature(
     mesh : Mesh or GeometryCollection
         Of the class's geotype, with exactly the class's vertex (or cell)
         properties; for a GEOMETRYCOLLECTION class a GeometryCollection whose
-        every member has them.
+        every member has them. For a temporal class a
+        :class:`~tgsis.temporal.SurfaceSeries` (INSTANTS) or
+        :class:`~tgsis.temporal.EvolvingSurface` (EVOLVING), stored by
+        :func:`tgsis.db.temporal.insert_series` / ``insert_evolving``.
     properties : mapping, optional
         Per-feature property values; missing ones are NULL.
     name : str, optional
@@ -431,6 +475,15 @@ def insert_feature(
     table whatever the number of members.
     """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if isinstance(mesh, (SurfaceSeries, EvolvingSurface)):
+        from tgsis.db import temporal  # it builds on this module
+
+        store = temporal.insert_series if isinstance(mesh, SurfaceSeries) else temporal.insert_evolving
+        return store(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties)  # type: ignore[arg-type]
+    if fc.time_model != "STATIC":
+        raise InvalidGeometryError(f"feature class {fc.name} holds {fc.time_model} surfaces, not a static "
+                                   f"{type(mesh).__name__}",
+                                   hint="give a tgsis.SurfaceSeries (INSTANTS) or tgsis.EvolvingSurface (EVOLVING)")
     if mesh.geotype != fc.geotype:
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
                                    f"not {mesh.geotype.value} ({type(mesh).__name__})")
@@ -629,6 +682,9 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
         see ``tgsis.check_geometry``).
     """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if fc.time_model != "STATIC":
+        raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): its features have a shape "
+                                "at each time", hint="tgsis.get_at(conn, id, t) gives the surface at model time t")
     props = [p.name for p in fc.feature_properties]
     is_collection = fc.geotype is Geotype.GEOMETRYCOLLECTION
     fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE

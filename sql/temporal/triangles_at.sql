@@ -1,0 +1,23 @@
+-- tgsis.triangles_at(geoid, t, convention): the triangles of a surface at model time t, pointing at the vrtxid of tgsis.vertices_at.
+CREATE FUNCTION tgsis.triangles_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
+RETURNS TABLE (trglid bigint, vrtxid1 bigint, vrtxid2 bigint, vrtxid3 bigint)
+LANGUAGE sql
+STABLE
+PARALLEL SAFE
+AS $$
+    SELECT c.trglid, c.nodeid1, c.nodeid2, c.nodeid3
+      FROM tgsis.evolving_frame(p_geoid, p_t) f
+      JOIN tgsis.d4dtrgl c ON c.geoid = p_geoid AND c.timem = f.timem
+    UNION ALL
+    SELECT c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3
+      FROM tgsis.times_trgl c
+     WHERE c.geoid = p_geoid AND c.times = tgsis.instant_at(p_geoid, p_t, p_convention)
+    UNION ALL
+    SELECT c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3
+      FROM tgsis.trgl c
+     WHERE c.geoid = p_geoid
+       AND EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = p_geoid AND g.timemodel = 'STATIC')
+$$;
+
+COMMENT ON FUNCTION tgsis.triangles_at(bigint, double precision, text) IS
+    'triangles (trglid, vrtxid1..3) of a surface at model time t, with the period (model 3) or instant (model 2) tgsis.vertices_at uses; empty when it does not exist at t';

@@ -1,0 +1,443 @@
+"""Temporal feature classes in the database: surfaces at instants (model 2) and evolving surfaces (model 3).
+
+Storage (see ``docs/data-models.md``):
+
+* model 2: ``tgsis.times`` (instants), ``tgsis.times_vrtx`` and
+  ``tgsis.times_trgl`` (the surface at each instant), the class's
+  ``<name>_cellpros`` with ``_times`` and ``<name>_pros`` (per-instant
+  feature properties);
+* model 3: ``tgsis.timem`` (topology instants), ``tgsis.timet`` (geometry
+  instants of each period), ``tgsis.node``, ``tgsis.d4dtrgl``,
+  ``tgsis.d4dvrtx`` (node positions at each geometry instant), the class's
+  tables with ``_timem, _timet``.
+
+Uploads are one transaction with one binary COPY per table, into the
+versioned storage of the session's working revision when the tables are
+versioned (as for model 1). Snapshots at t are computed in SQL by
+``tgsis.vertices_at`` / ``tgsis.triangles_at`` and downloaded with binary COPY.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.db.copy import SQL_TYPES
+from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
+                               _positions, _split, _Storage, class_of_feature, get_feature_class)
+from tgsis.errors import InvalidInputError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.mesh import Surface
+from tgsis.temporal import Convention, EvolvingSurface, SurfaceSeries, check_convention, check_time
+
+__all__ = [
+    "insert_series",
+    "insert_evolving",
+    "add_instant",
+    "delete_instant",
+    "instants",
+    "get_at",
+    "surfaces_at",
+    "features_at",
+]
+
+log = logging.getLogger(__name__)
+
+Conn = psycopg.Connection[Any]
+
+
+def _temporal_class(conn: Conn, feature_class: str | FeatureClass, model: str) -> FeatureClass:
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if fc.time_model != model:
+        raise InvalidInputError(f"feature class {fc.name} has time model {fc.time_model}, not {model}",
+                                hint="SurfaceSeries go to INSTANTS classes, EvolvingSurface to EVOLVING classes")
+    return fc
+
+
+def _bounds(points: npt.NDArray[np.float64]) -> list[float] | None:
+    """[xmin, ymin, zmin, xmax, ymax, zmax] of (..., 3) points, None when there are none."""
+    flat = points.reshape(-1, 3)
+    return None if len(flat) == 0 else [*flat.min(axis=0).tolist(), *flat.max(axis=0).tolist()]
+
+
+def _new_temporal_geometry(conn: Conn, model: str, name: str | None, bounds: list[float] | None, nvrtx: int,
+                           ncell: int, alive: bool, color: Sequence[float] | None) -> int:
+    row = conn.execute("SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[])",
+                       (name, bounds, nvrtx, ncell, model, alive, list(color) if color else None)).fetchone()
+    assert row is not None
+    return int(row[0])
+
+
+def _instant_rows(fc: FeatureClass, values: Mapping[str, npt.NDArray[Any]], count: int) -> list[list[Any]]:
+    """Per-instant feature property values as ``count`` rows in the class's column order (missing: NULL)."""
+    known = [p.name for p in fc.instant_properties]
+    unknown = sorted(set(values) - set(known))
+    if unknown:
+        raise InvalidPropertyError(f"feature class {fc.name} has no per-instant properties {unknown}",
+                                   hint=f"its per-instant properties: {known or 'none'}")
+    return [[values[name][i].item() if name in values else None for name in known] for i in range(count)]
+
+
+def _insert_instant_properties(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[Sequence[Any]],
+                               rows: Sequence[Sequence[Any]], key_columns: Sequence[str]) -> None:
+    """One row per instant into ``<name>_pros`` (few rows, any column type: a plain INSERT)."""
+    if not fc.instant_properties or not rows:
+        return
+    assert fc.protable is not None
+    columns = ["_geoid", *key_columns, *(p.name for p in fc.instant_properties)]
+    with conn.cursor() as cur:
+        cur.executemany(
+            sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+                fc._table(fc.protable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+                sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
+            [[geoid, *k, *r] for k, r in zip(keys, rows)])
+
+
+def _insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
+    values = _feature_columns(fc, properties)
+    columns = ["_geoid", *values]
+    conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+        fc._table(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+        sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])
+
+
+# --------------------------------------------------------------------------- model 2
+
+
+def _local_ids(counts: Sequence[int]) -> npt.NDArray[np.int64]:
+    """Ids 0..counts[i]-1 for each of the consecutive groups."""
+    return _keys([0] * len(counts), counts)[1]
+
+
+def _copy_instants(conn: Conn, fc: FeatureClass, geoid: int, times: Sequence[float], surfaces: Sequence[Surface],
+                   storage: _Storage, drop_extra: bool) -> None:
+    """COPY the vertices, triangles and cell properties of surfaces at instants of geometry ``geoid``."""
+    cell_values = [_aligned_properties(fc, s, drop_extra, f"the surface at instant {t!r}") for t, s in zip(times, surfaces)]
+    n = [s.n_vertices for s in surfaces]
+    m = [s.n_cells for s in surfaces]
+    vertex_ids, triangle_ids = _local_ids(n), _local_ids(m)
+    geoids_v = np.full(sum(n), geoid, dtype=np.int64)
+    geoids_t = np.full(sum(m), geoid, dtype=np.int64)
+    xyz = _concat([s.vertices for s in surfaces])
+    tri = _concat([s.cells for s in surfaces])
+    storage.copy(conn, "tgsis", "times_vrtx", [
+        ("geoid", geoids_v, "int8"), ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
+        ("vrtxid", vertex_ids, "int8"), ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+    storage.copy(conn, "tgsis", "times_trgl", [
+        ("geoid", geoids_t, "int8"), ("times", np.repeat(np.asarray(times, dtype=np.float64), m), "float8"),
+        ("trglid", triangle_ids, "int8"), *((f"vrtxid{j + 1}", tri[:, j], "int8") for j in range(3))])
+    if fc.cell_properties:
+        counts = n if fc.alignment == "VERTEX" else m
+        idx = _local_ids(counts)
+        storage.copy(conn, fc.schema, fc.cellprotable, [
+            ("_geoid", np.full(sum(counts), geoid, dtype=np.int64), "int8"),
+            ("_times", np.repeat(np.asarray(times, dtype=np.float64), counts), "float8"), ("_idx", idx, "int8"),
+            *((p.name, _concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+
+
+def insert_series(conn: Conn, feature_class: str | FeatureClass, series: SurfaceSeries,
+                  properties: Mapping[str, Any] | None = None, *, name: str | None = None,
+                  drop_extra_properties: bool = False) -> int:
+    """Store a surface known at instants as a new feature of an INSTANTS class; return its id.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+        A class registered with ``time_model="INSTANTS"``.
+    series : SurfaceSeries
+        Each surface with exactly the class's vertex (or cell) properties;
+        ``series.properties`` holds per-instant feature properties.
+    properties : mapping, optional
+        Per-feature property values.
+    name : str, optional
+        Geometry name (default ``series.name``).
+    drop_extra_properties : bool
+        Ignore surface properties the class does not store.
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError, InvalidPropertyError
+        Nothing is written.
+    """
+    fc = _temporal_class(conn, feature_class, "INSTANTS")
+    times = series.times.tolist()
+    instant_rows = _instant_rows(fc, series.properties, len(times))
+    with reraise(), conn.transaction():
+        geoid = _new_temporal_geometry(
+            conn, "INSTANTS", name if name is not None else series.name,
+            _bounds(_concat([s.vertices for s in series.surfaces])),
+            sum(s.n_vertices for s in series.surfaces), sum(s.n_cells for s in series.surfaces), series.alive,
+            series.color)
+        storage = _Storage.of(conn)
+        storage.copy(conn, "tgsis", "times", [("geoid", np.full(len(times), geoid, dtype=np.int64), "int8"),
+                                              ("times", series.times, "float8")])
+        _copy_instants(conn, fc, geoid, times, series.surfaces, storage, drop_extra_properties)
+        _insert_instant_properties(conn, fc, geoid, [(t,) for t in times], instant_rows, ["_times"])
+        _insert_feature_row(conn, fc, geoid, properties)
+    log.info("stored %s feature %d: %d instants", fc.name, geoid, len(times))
+    return geoid
+
+
+def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, t: float, surface: Surface,
+                properties: Mapping[str, Any] | None = None, *, drop_extra_properties: bool = False) -> None:
+    """Store the surface of feature ``feature_id`` at a new instant ``t`` (model 2).
+
+    Parameters
+    ----------
+    t : float
+        Finite; the feature must not have this instant yet.
+    surface : Surface
+        With exactly the class's vertex (or cell) properties.
+    properties : mapping, optional
+        Per-instant feature property values at ``t`` (missing: NULL).
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError, AlreadyExistsError, InvalidPropertyError
+        Nothing is written.
+    """
+    fc = _temporal_class(conn, feature_class, "INSTANTS")
+    rows = _instant_rows(fc, {k: np.asarray([v]) for k, v in (properties or {}).items()}, 1)
+    bounds = _bounds(surface.vertices)
+    with reraise(), conn.transaction():
+        conn.execute("SELECT tgsis.add_instant(%s, %s)", (feature_id, float(t)))
+        _copy_instants(conn, fc, feature_id, [float(t)], [surface], _Storage.of(conn), drop_extra_properties)
+        _insert_instant_properties(conn, fc, feature_id, [(float(t),)], rows, ["_times"])
+        conn.execute(
+            "UPDATE tgsis.geometry SET nvrtx = nvrtx + %s, ncell = ncell + %s, "
+            "bbox = CASE WHEN %s::float8[] IS NULL THEN bbox "
+            "            WHEN bbox IS NULL THEN cube((%s::float8[])[1:3], (%s::float8[])[4:6]) "
+            "            ELSE cube_union(bbox, cube((%s::float8[])[1:3], (%s::float8[])[4:6])) END "
+            "WHERE geoid = %s",
+            (surface.n_vertices, surface.n_cells, bounds, bounds, bounds, bounds, bounds, feature_id))
+
+
+def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
+    """Delete instant ``t`` of a model-2 feature with its surface and properties; False if it had none.
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError, InUseError
+        InUseError for the feature's only instant (delete the feature instead).
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT tgsis.delete_instant(%s, %s)", (feature_id, float(t))).fetchone()
+    return bool(row and row[0])
+
+
+def instants(conn: Conn, feature_id: int) -> list[tuple[float, bool]]:
+    """The instants of a temporal feature, ascending, with whether its topology is (re)defined there.
+
+    Model 2: every instant (each has its own triangles). Model 3: every
+    geometry instant; True where a topology period starts.
+    """
+    with reraise():
+        rows = conn.execute("SELECT t, topology FROM tgsis.geometry_instants(%s)", (feature_id,)).fetchall()
+    return [(float(r[0]), bool(r[1])) for r in rows]
+
+
+# --------------------------------------------------------------------------- model 3
+
+
+def _period_columns(fc: FeatureClass, surface: EvolvingSurface,
+                    drop_extra: bool) -> list[dict[str, npt.NDArray[Any]]]:
+    """Per period, the class's vertex or cell property arrays (g, n) or (g, m), checked and cast."""
+    return [class_property_arrays(fc, *((p.vertex_properties, p.cell_properties) if fc.alignment == "VERTEX"
+                                        else (p.cell_properties, p.vertex_properties)),
+                                  "vertex" if fc.alignment == "VERTEX" else "triangle", drop_extra,
+                                  f"topology period {i}")
+            for i, p in enumerate(surface.periods)]
+
+
+def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: EvolvingSurface,
+                    properties: Mapping[str, Any] | None = None, *, name: str | None = None,
+                    drop_extra_properties: bool = False) -> int:
+    """Store an evolving surface as a new feature of an EVOLVING class; return its id.
+
+    Nodes and triangles are numbered on through the periods (period 0 has
+    nodes 0..n0-1, period 1 n0..n0+n1-1, ...), so ids are unique in the
+    feature and ``_idx`` of properties names one node or triangle.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+        A class registered with ``time_model="EVOLVING"``.
+    surface : EvolvingSurface
+        Every period with exactly the class's vertex (or cell) properties,
+        (g, n) or (g, m) arrays; per-instant feature properties in
+        ``period.properties``.
+    properties : mapping, optional
+        Per-feature property values.
+    name : str, optional
+        Geometry name (default ``surface.name``).
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError, InvalidPropertyError
+        Nothing is written.
+    """
+    fc = _temporal_class(conn, feature_class, "EVOLVING")
+    cell_values = _period_columns(fc, surface, drop_extra_properties)
+    periods = surface.periods
+    starts = [p.start for p in periods]
+    g = [len(p.times) for p in periods]
+    n = [p.n_nodes for p in periods]
+    m = [p.n_triangles for p in periods]
+    node_offsets = np.cumsum([0, *n[:-1]])
+    triangle_offsets = np.cumsum([0, *m[:-1]])
+    instant_rows = [row for p in periods for row in _instant_rows(fc, dict(p.properties), len(p.times))]
+    with reraise(), conn.transaction():
+        geoid = _new_temporal_geometry(
+            conn, "EVOLVING", name if name is not None else surface.name,
+            _bounds(_concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
+            surface.color)
+        storage = _Storage.of(conn)
+
+        def full(count: int) -> npt.NDArray[np.int64]:
+            return np.full(count, geoid, dtype=np.int64)
+
+        storage.copy(conn, "tgsis", "timem", [("geoid", full(len(periods)), "int8"),
+                                              ("timem", np.asarray(starts, dtype=np.float64), "float8")])
+        storage.copy(conn, "tgsis", "timet", [("geoid", full(sum(g)), "int8"),
+                                              ("timem", np.repeat(starts, g).astype(np.float64), "float8"),
+                                              ("timet", _concat([p.times for p in periods]), "float8")])
+        storage.copy(conn, "tgsis", "node", [("geoid", full(sum(n)), "int8"),
+                                             ("timem", np.repeat(starts, n).astype(np.float64), "float8"),
+                                             ("nodeid", np.arange(sum(n), dtype=np.int64), "int8")])
+        triangles = _concat([p.triangles + off for p, off in zip(periods, node_offsets.tolist())])
+        storage.copy(conn, "tgsis", "d4dtrgl", [("geoid", full(sum(m)), "int8"),
+                                                ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
+                                                ("trglid", np.arange(sum(m), dtype=np.int64), "int8"),
+                                                *((f"nodeid{j + 1}", triangles[:, j], "int8") for j in range(3))])
+        # per period and geometry instant, every node: g_i * n_i rows
+        samples = [gi * ni for gi, ni in zip(g, n)]
+        xyz = _concat([p.positions.reshape(-1, 3) for p in periods])
+        storage.copy(conn, "tgsis", "d4dvrtx", [
+            ("geoid", full(sum(samples)), "int8"),
+            ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
+            ("timet", _concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
+            ("nodeid", _concat([np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
+                                for p, off in zip(periods, node_offsets.tolist())]), "int8"),
+            ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+        if fc.cell_properties:
+            per = n if fc.alignment == "VERTEX" else m
+            offsets = node_offsets if fc.alignment == "VERTEX" else triangle_offsets
+            rows = [gi * ci for gi, ci in zip(g, per)]
+            storage.copy(conn, fc.schema, fc.cellprotable, [
+                ("_geoid", full(sum(rows)), "int8"),
+                ("_timem", np.repeat(starts, rows).astype(np.float64), "float8"),
+                ("_timet", _concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
+                ("_idx", _concat([np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
+                                  for p, c, off in zip(periods, per, offsets.tolist())]), "int8"),
+                *((prop.name, _concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
+                  for prop in fc.cell_properties)])
+        keys = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
+        _insert_instant_properties(conn, fc, geoid, keys, instant_rows, ["_timem", "_timet"])
+        _insert_feature_row(conn, fc, geoid, properties)
+    log.info("stored %s feature %d: %d topology periods, %d nodes, %d triangles", fc.name, geoid, len(periods),
+             sum(n), sum(m))
+    return geoid
+
+
+# --------------------------------------------------------------------------- snapshots
+
+
+def _time_args(t: float, convention: str) -> tuple[sql.Literal, sql.Literal]:
+    return sql.Literal(check_time(t)), sql.Literal(check_convention(convention))
+
+
+def _assemble(geoid: int, ids: npt.NDArray[np.int64], xyz: Sequence[npt.NDArray[np.float64]],
+              triangles: Sequence[npt.NDArray[np.int64]], name: str | None) -> Surface:
+    """A Surface from vertex rows (ids in any order) and triangle rows pointing at those ids."""
+    order = np.argsort(ids, kind="stable")
+    sorted_ids = ids[order]
+    vertices = np.stack([xyz[0][order], xyz[1][order], xyz[2][order]], axis=1)
+    cells = np.stack([_positions(sorted_ids, t, "triangles", geoid) for t in triangles], axis=1) if len(triangles[0]) \
+        else np.empty((0, 3), dtype=np.int64)
+    return Surface(vertices, cells, name=name)
+
+
+def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "left") -> Surface | None:
+    """The surface of a feature at model time ``t``, or None when it does not exist then.
+
+    Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``):
+    model 3 interpolates node positions linearly inside the topology period
+    containing t; model 2 takes the instant the step ``convention`` chooses;
+    a static surface is returned whatever t. Vertex order is the stored id
+    order; properties are not included.
+
+    Raises
+    ------
+    NotFoundError
+        No geometry ``feature_id``.
+    InvalidInputError
+        NaN time or an unknown convention.
+    """
+    t_lit, c_lit = _time_args(t, convention)
+    with reraise(), conn.transaction():
+        row = conn.execute(sql.SQL("SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype FROM tgsis.geometry "
+                                   "WHERE geoid = %s").format(t_lit, c_lit), (feature_id, feature_id)).fetchone()
+        if row is None:
+            raise NotFoundError(f"feature {feature_id} does not exist", hint="`tgsis ls` lists the features")
+        if row[2] != "SURFACE":
+            raise InvalidInputError(f"feature {feature_id} is a {row[2]}, not a surface")
+        if not row[0]:
+            return None
+        ids, x, y, z = _copy_out(conn, sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
+            sql.Literal(feature_id), t_lit, c_lit), ["int8", "float8", "float8", "float8"])
+        _, a, b, c = _copy_out(conn, sql.SQL(
+            "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {}) ORDER BY trglid").format(
+            sql.Literal(feature_id), t_lit, c_lit), ["int8", "int8", "int8", "int8"])
+    return _assemble(feature_id, ids, (x, y, z), (a, b, c), row[1])
+
+
+def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
+                convention: Convention = "left") -> list[int]:
+    """Ids of the features of a class that exist at ``t`` (``tgsis.features_at``), ascending."""
+    name = feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
+    with reraise():
+        rows = conn.execute("SELECT * FROM tgsis.features_at(%s, %s, %s)",
+                            (name, check_time(t), check_convention(convention))).fetchall()
+    return [int(r[0]) for r in rows]
+
+
+def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
+                convention: Convention = "left") -> dict[int, Surface]:
+    """Every feature of a SURFACE class that exists at ``t`` with its surface then, by id.
+
+    One COPY for the vertices and one for the triangles of all features.
+    """
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    t_lit, c_lit = _time_args(t, convention)
+    with reraise(), conn.transaction():
+        alive = features_at(conn, fc, t, convention=convention)
+        names = dict(conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)",
+                                  (alive,)).fetchall())
+        wanted = sql.Literal(alive)
+        vg, vid, x, y, z = _copy_out(conn, sql.SQL(
+            "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
+            "LATERAL tgsis.vertices_at(f.geoid, {}, {}) v").format(wanted, t_lit, c_lit),
+            ["int8", "int8", "float8", "float8", "float8"])
+        tg, tid, a, b, c = _copy_out(conn, sql.SQL(
+            "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
+            "LATERAL tgsis.triangles_at(f.geoid, {}, {}) c").format(wanted, t_lit, c_lit),
+            ["int8", "int8", "int8", "int8", "int8"])
+    vertex_rows = _split(vg, vid, alive) if alive else {}
+    triangle_rows = _split(tg, tid, alive) if alive else {}
+    result: dict[int, Surface] = {}
+    for geoid in alive:
+        v, tr = vertex_rows[geoid], triangle_rows[geoid]
+        result[geoid] = _assemble(geoid, vid[v], (x[v], y[v], z[v]), (a[tr], b[tr], c[tr]), names.get(geoid))
+    return result
+
+
+def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
+    """The class of a feature (see :func:`tgsis.db.features.class_of_feature`)."""
+    return class_of_feature(conn, feature_id)

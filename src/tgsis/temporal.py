@@ -1,0 +1,367 @@
+"""Surfaces in time on numpy arrays: known at instants (model 2) and evolving continuously (model 3).
+
+No database here; :mod:`tgsis.db.temporal` stores and queries these objects.
+Model time is a float where larger is later (the feature class records its
+unit).
+
+* :class:`SurfaceSeries` (model 2): a surface known at instants
+  t0 < t1 < ... < tk and constant in between. Its shape at t is a step
+  function with either convention:
+
+  - ``"left"`` (left-closed): G(t) = G_i for t_i <= t < t_i+1, and G_k at t_k;
+  - ``"right"`` (right-closed): G(t) = G_0 at t_0, G_i for t_i-1 < t <= t_i.
+
+* :class:`EvolvingSurface` (model 3): a list of :class:`TopologyPeriod`. Each
+  period keeps one triangle list while its nodes move along straight lines
+  between the period's geometry instants; the topology changes only where a
+  period starts. The shape at t: take the last period starting at or before
+  t; inside it the bracketing geometry instants t_j <= t <= t_j+1 and every
+  node at x(t) = x_j + w (x_j+1 - x_j), w = (t - t_j) / (t_j+1 - t_j). At the
+  start of a period the new topology applies.
+
+For both: nothing exists before the first instant, and after the last one
+the last shape holds if the object is ``alive``, else nothing exists.
+:meth:`SurfaceSeries.at` and :meth:`EvolvingSurface.at` compute exactly what
+the SQL functions ``tgsis.vertices_at`` / ``tgsis.triangles_at`` return (the
+same float operations in the same order).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError
+from tgsis.mesh import PROPERTY_NAME_RE, Surface
+
+__all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color"]
+
+#: Step convention of model 2 queries.
+Convention = Literal["left", "right"]
+#: Display colour (red, green, blue), each in [0, 1].
+Color = tuple[float, float, float]
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+def check_convention(convention: str) -> Convention:
+    """``"left"`` or ``"right"``; :class:`~tgsis.errors.InvalidInputError` otherwise."""
+    if convention == "left":
+        return "left"
+    if convention == "right":
+        return "right"
+    raise InvalidInputError(f"step convention {convention!r} must be 'left' or 'right'")
+
+
+def check_time(t: float) -> float:
+    """``t`` as a float; :class:`~tgsis.errors.InvalidInputError` for NaN (infinities mean before/after all)."""
+    value = float(t)
+    if np.isnan(value):
+        raise InvalidInputError("model time NaN is not a time")
+    return value
+
+
+def _as_times(times: npt.ArrayLike, what: str) -> FloatArray:
+    """(k,) float64 instants, finite and strictly increasing, at least one."""
+    array = np.ascontiguousarray(times, dtype=np.float64)
+    if array.ndim != 1 or len(array) == 0:
+        raise InvalidInputError(f"{what} must be a non-empty list of instants, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise InvalidInputError(f"{what} must be finite numbers, got {array[~np.isfinite(array)][0]!r}")
+    steps = np.diff(array)
+    if np.any(steps <= 0):
+        bad = int(np.argmax(steps <= 0))
+        raise InvalidInputError(f"{what} must be strictly increasing: {array[bad]!r} then {array[bad + 1]!r}")
+    return array
+
+
+def _as_color(color: Sequence[float] | None) -> Color | None:
+    if color is None:
+        return None
+    values = tuple(float(c) for c in color)
+    if len(values) != 3 or not all(0.0 <= c <= 1.0 for c in values):
+        raise InvalidInputError(f"colour must be (red, green, blue) in [0, 1], got {color!r}")
+    return (values[0], values[1], values[2])
+
+
+def _as_series(values: Mapping[str, npt.ArrayLike] | None, shape: tuple[int, ...],
+               what: str) -> dict[str, npt.NDArray[np.generic]]:
+    """Numeric arrays of exactly ``shape`` under valid property names."""
+    result: dict[str, npt.NDArray[np.generic]] = {}
+    for name, raw in (values or {}).items():
+        if not PROPERTY_NAME_RE.match(name):
+            raise InvalidPropertyError(f"{what} name {name!r} is not allowed (lower case, digits, _; not starting with _)")
+        array = np.ascontiguousarray(raw)
+        if array.dtype.kind not in "biuf":
+            raise InvalidPropertyError(f"{what} {name!r} must be numeric or boolean, got {array.dtype}")
+        if array.shape != shape:
+            raise InvalidPropertyError(f"{what} {name!r} must have shape {shape}, got {array.shape}")
+        result[name] = array
+    return result
+
+
+# --------------------------------------------------------------------------- model 2
+
+
+class SurfaceSeries:
+    """A surface known at instants and constant in between (model 2).
+
+    Parameters
+    ----------
+    times : (k,) array_like of float
+        The instants, strictly increasing and finite.
+    surfaces : sequence of k Surface
+        The shape at each instant, each with its own vertices, triangles and
+        (for storage) the class's vertex or cell properties.
+    properties : mapping of str to (k,) array_like, optional
+        Per-instant feature properties (e.g. fault throw at each instant).
+    alive : bool
+        Whether the object still exists after its last instant (it keeps its
+        last shape).
+    name : str, optional
+    color : (3,) sequence of float in [0, 1], optional
+
+    Raises
+    ------
+    InvalidInputError, InvalidPropertyError
+    """
+
+    def __init__(self, times: npt.ArrayLike, surfaces: Sequence[Surface], *,
+                 properties: Mapping[str, npt.ArrayLike] | None = None, alive: bool = False,
+                 name: str | None = None, color: Sequence[float] | None = None) -> None:
+        self.times = _as_times(times, "instants of a surface series")
+        self.surfaces = tuple(surfaces)
+        if len(self.surfaces) != len(self.times) or not all(isinstance(s, Surface) for s in self.surfaces):
+            raise InvalidInputError(f"a surface series needs one Surface per instant: {len(self.times)} instants, "
+                                    f"{len(self.surfaces)} surfaces")
+        self.properties = _as_series(properties, (len(self.times),), "per-instant property")
+        self.alive = bool(alive)
+        self.name = name
+        self.color = _as_color(color)
+
+    @property
+    def start(self) -> float:
+        """The first instant."""
+        return float(self.times[0])
+
+    @property
+    def end(self) -> float:
+        """The last instant (the object lasts for ever after it if alive)."""
+        return float(self.times[-1])
+
+    def instant_index(self, t: float, convention: Convention = "left") -> int | None:
+        """Index of the instant whose surface holds at ``t``, or None when the object does not exist then."""
+        t = check_time(t)
+        check_convention(convention)
+        if t < self.times[0]:
+            return None
+        if t > self.times[-1]:
+            return len(self.times) - 1 if self.alive else None
+        if convention == "left":
+            return int(np.searchsorted(self.times, t, side="right")) - 1
+        return int(np.searchsorted(self.times, t, side="left"))
+
+    def at(self, t: float, convention: Convention = "left") -> Surface | None:
+        """The surface at ``t`` (the stored Surface object of the chosen instant), or None."""
+        index = self.instant_index(t, convention)
+        return None if index is None else self.surfaces[index]
+
+    def __repr__(self) -> str:
+        return (f"SurfaceSeries({len(self.times)} instants {self.start!r}..{self.end!r}, alive={self.alive}, "
+                f"name={self.name!r})")
+
+
+# --------------------------------------------------------------------------- model 3
+
+
+@dataclass(frozen=True, eq=False)
+class TopologyPeriod:
+    """One topology period of an :class:`EvolvingSurface`: fixed triangles, moving nodes.
+
+    Parameters
+    ----------
+    times : (g,) array_like of float
+        Geometry instants of the period, strictly increasing; ``times[0]`` is
+        where the period (and its topology) starts.
+    triangles : (m, 3) array_like of int
+        Node indices 0..n-1 of each triangle, the same through the period.
+    positions : (g, n, 3) array_like of float
+        Node coordinates at each geometry instant.
+    vertex_properties : mapping of str to (g, n) array_like, optional
+        Node values at each geometry instant (linear in between).
+    cell_properties : mapping of str to (g, m) array_like, optional
+        Triangle values at each geometry instant.
+    properties : mapping of str to (g,) array_like, optional
+        Per-instant feature properties at each geometry instant.
+
+    Raises
+    ------
+    InvalidInputError, InvalidGeometryError, InvalidPropertyError
+    """
+
+    times: FloatArray
+    triangles: IntArray
+    positions: FloatArray
+    vertex_properties: Mapping[str, npt.NDArray[np.generic]]
+    cell_properties: Mapping[str, npt.NDArray[np.generic]]
+    properties: Mapping[str, npt.NDArray[np.generic]]
+
+    def __init__(self, times: npt.ArrayLike, triangles: npt.ArrayLike, positions: npt.ArrayLike, *,
+                 vertex_properties: Mapping[str, npt.ArrayLike] | None = None,
+                 cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+                 properties: Mapping[str, npt.ArrayLike] | None = None) -> None:
+        times_array = _as_times(times, "geometry instants of a topology period")
+        xyz = np.ascontiguousarray(positions, dtype=np.float64)
+        if xyz.ndim != 3 or xyz.shape[0] != len(times_array) or xyz.shape[2] != 3:
+            raise InvalidGeometryError(f"node positions must have shape (g, n, 3) with g = {len(times_array)} "
+                                       f"geometry instants, got {xyz.shape}")
+        if not np.all(np.isfinite(xyz)):
+            raise InvalidGeometryError("node positions must be finite (NaN or infinite coordinate found)")
+        first = Surface(xyz[0], triangles)  # validates the triangles against the nodes
+        g, n, m = len(times_array), xyz.shape[1], len(first.cells)
+        object.__setattr__(self, "times", times_array)
+        object.__setattr__(self, "triangles", first.cells)
+        object.__setattr__(self, "positions", xyz)
+        object.__setattr__(self, "vertex_properties", _as_series(vertex_properties, (g, n), "vertex property"))
+        object.__setattr__(self, "cell_properties", _as_series(cell_properties, (g, m), "triangle property"))
+        object.__setattr__(self, "properties", _as_series(properties, (g,), "per-instant property"))
+
+    @property
+    def start(self) -> float:
+        """Where the period starts (its topology instant)."""
+        return float(self.times[0])
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes n."""
+        return int(self.positions.shape[1])
+
+    @property
+    def n_triangles(self) -> int:
+        """Number of triangles m."""
+        return len(self.triangles)
+
+    def shape_at(self, j0: int, j1: int, w: float) -> Surface:
+        """The surface between geometry instants ``j0 <= j1`` at weight ``w`` of the later one.
+
+        Node positions and vertex/cell properties (as float64) are
+        ``a + w * (b - a)``, the formula the SQL snapshot uses.
+        """
+        def mix(a: npt.NDArray[np.generic], b: npt.NDArray[np.generic]) -> FloatArray:
+            a64, b64 = a.astype(np.float64), b.astype(np.float64)
+            return a64 if j0 == j1 else a64 + w * (b64 - a64)
+
+        return Surface(mix(self.positions[j0], self.positions[j1]), self.triangles,
+                       vertex_properties={k: mix(v[j0], v[j1]) for k, v in self.vertex_properties.items()},
+                       cell_properties={k: mix(v[j0], v[j1]) for k, v in self.cell_properties.items()})
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Where a time falls in an :class:`EvolvingSurface`: period index, bracketing instants j0 <= j1, weight."""
+
+    period: int
+    j0: int
+    j1: int
+    w: float
+
+
+class EvolvingSurface:
+    """A surface evolving continuously, with topology changes at period starts (model 3).
+
+    Parameters
+    ----------
+    periods : sequence of TopologyPeriod
+        In time order. Each period but the last ends at the next one's start:
+        its last geometry instant equals the next period's first (both hold a
+        shape there, the new one applies from it on).
+    alive : bool
+        Whether the surface still exists after its last geometry instant.
+    name : str, optional
+    color : (3,) sequence of float in [0, 1], optional
+
+    Raises
+    ------
+    InvalidInputError
+        No period, or periods that do not follow each other.
+    """
+
+    def __init__(self, periods: Sequence[TopologyPeriod], *, alive: bool = False, name: str | None = None,
+                 color: Sequence[float] | None = None) -> None:
+        self.periods = tuple(periods)
+        if not self.periods or not all(isinstance(p, TopologyPeriod) for p in self.periods):
+            raise InvalidInputError("an evolving surface needs at least one TopologyPeriod")
+        for i, (a, b) in enumerate(zip(self.periods, self.periods[1:])):
+            if a.times[-1] != b.times[0]:
+                raise InvalidInputError(
+                    f"topology period {i} must end where period {i + 1} starts: its last geometry instant is "
+                    f"{a.times[-1]!r}, period {i + 1} starts at {b.times[0]!r}",
+                    hint="a sudden change is a change over a very short period")
+        self.alive = bool(alive)
+        self.name = name
+        self.color = _as_color(color)
+        self._starts = np.array([p.start for p in self.periods])
+
+    @property
+    def start(self) -> float:
+        """The first topology instant."""
+        return float(self.periods[0].times[0])
+
+    @property
+    def end(self) -> float:
+        """The last geometry instant (the surface lasts for ever after it if alive)."""
+        return float(self.periods[-1].times[-1])
+
+    @property
+    def topology_instants(self) -> FloatArray:
+        """(k,) float64: where each period starts."""
+        return self._starts.copy()
+
+    @property
+    def geometry_instants(self) -> FloatArray:
+        """(G,) float64: every geometry instant, ascending, each once."""
+        return np.unique(np.concatenate([p.times for p in self.periods]))
+
+    @property
+    def n_nodes(self) -> int:
+        """Nodes over all periods."""
+        return sum(p.n_nodes for p in self.periods)
+
+    @property
+    def n_triangles(self) -> int:
+        """Triangles over all periods."""
+        return sum(p.n_triangles for p in self.periods)
+
+    def frame(self, t: float) -> Frame | None:
+        """The period and bracketing geometry instants at ``t``, or None when the surface does not exist then."""
+        t = check_time(t)
+        if t < self._starts[0]:
+            return None
+        index = int(np.searchsorted(self._starts, t, side="right")) - 1
+        times = self.periods[index].times
+        if t > times[-1]:
+            last = len(times) - 1
+            return Frame(index, last, last, 0.0) if self.alive or index < len(self.periods) - 1 else None
+        j1 = int(np.searchsorted(times, t, side="left"))
+        if times[j1] == t:
+            return Frame(index, j1, j1, 0.0)
+        j0 = j1 - 1
+        return Frame(index, j0, j1, float((t - times[j0]) / (times[j1] - times[j0])))
+
+    def at(self, t: float) -> Surface | None:
+        """The surface at ``t`` with its vertex/cell properties interpolated, or None when it does not exist."""
+        frame = self.frame(t)
+        if frame is None:
+            return None
+        surface = self.periods[frame.period].shape_at(frame.j0, frame.j1, frame.w)
+        surface.name = self.name
+        return surface
+
+    def __repr__(self) -> str:
+        return (f"EvolvingSurface({len(self.periods)} periods {self.start!r}..{self.end!r}, "
+                f"{self.n_nodes} nodes, alive={self.alive}, name={self.name!r})")

@@ -1,0 +1,48 @@
+"""Synthetic temporal surfaces for the model 2 and model 3 tests: grids that move and re-triangulate."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tgsis.mesh import Surface
+from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
+
+
+def grid(side: int) -> tuple[np.ndarray, np.ndarray]:
+    """(side², 3) flat grid vertices on [0, 1]² and its (2 (side-1)², 3) triangles."""
+    u, v = np.meshgrid(np.linspace(0, 1, side), np.linspace(0, 1, side))
+    vertices = np.stack([u.ravel(), v.ravel(), np.zeros(side * side)], axis=1)
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+
+
+def evolving(rng: np.random.Generator, starts: list[float], instants_per_period: int = 3, side: int = 5,
+             alive: bool = False, with_properties: bool = False) -> EvolvingSurface:
+    """Periods starting at ``starts`` (the last one lasting 1.0), each a grid of its own size whose nodes move randomly."""
+    ends = [*starts[1:], starts[-1] + 1.0]
+    periods = []
+    for i, (t0, t1) in enumerate(zip(starts, ends)):
+        vertices, triangles = grid(side + i)
+        inner = np.sort(rng.uniform(t0, t1, instants_per_period - 2))
+        times = np.concatenate([[t0], inner, [t1]])
+        positions = vertices[None] + rng.normal(scale=0.1, size=(len(times), len(vertices), 3))
+        extra = {}
+        if with_properties:
+            extra = dict(vertex_properties={"porosity": rng.uniform(0, 0.4, (len(times), len(vertices)))},
+                         properties={"throw": rng.uniform(0, 100, len(times)), "note_code": np.arange(len(times))})
+        periods.append(TopologyPeriod(times, triangles, positions, **extra))
+    return EvolvingSurface(periods, alive=alive, name="evolving fault")
+
+
+def series(rng: np.random.Generator, times: list[float], alive: bool = False,
+           with_properties: bool = False) -> SurfaceSeries:
+    """A surface at each instant, each a grid of its own size with random heights."""
+    surfaces = []
+    for i, _ in enumerate(times):
+        vertices, triangles = grid(3 + i)
+        vertices[:, 2] = rng.normal(size=len(vertices))
+        props = {"porosity": rng.uniform(0, 0.4, len(vertices))} if with_properties else {}
+        surfaces.append(Surface(vertices, triangles, vertex_properties=props))
+    properties = {"throw": rng.uniform(0, 100, len(times))} if with_properties else {}
+    return SurfaceSeries(times, surfaces, properties=properties, alive=alive, name="stepped horizon")
