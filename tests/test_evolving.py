@@ -168,3 +168,27 @@ def test_numpy_model_refuses_bad_periods() -> None:
         EvolvingSurface([TopologyPeriod([0.0, 1.0], triangles, positions), TopologyPeriod([2.0, 3.0], triangles, positions)])
     with pytest.raises(tgsis.InvalidGeometryError):
         TopologyPeriod([0.0, 1.0], [[0, 1, 99]], positions)
+
+
+def problems(tx: Conn, fid: int) -> set[str]:
+    return {r[0] for r in tx.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchall()}
+
+
+def test_check_geometry_finds_rows_edited_wrongly(tx: Conn, faults: tgsis.FeatureClass) -> None:
+    surface = evolving(np.random.default_rng(9), STARTS, with_properties=True)
+    fid = tgsis.insert_feature(tx, faults, surface)
+    assert problems(tx, fid) == set()
+    tx.execute("DELETE FROM tgsis.d4dvrtx WHERE geoid = %s AND nodeid = 3 AND timet = %s", (fid, STARTS[0]))
+    assert problems(tx, fid) == {"node without a position at a geometry instant of its period"}
+    tx.execute("DELETE FROM tgsis.timet WHERE geoid = %s AND timet = %s AND timem = %s", (fid, STARTS[1], STARTS[0]))
+    tx.execute("UPDATE tgsis.d4dtrgl SET nodeid1 = 10000 WHERE geoid = %s AND trglid = 0", (fid,))
+    tx.execute("UPDATE tgsis.d4dvrtx SET x = 'NaN' WHERE geoid = %s AND nodeid = 1", (fid,))
+    tx.execute("UPDATE tgsis.geometry SET nvrtx = 1 WHERE geoid = %s", (fid,))
+    assert problems(tx, fid) == {
+        "node without a position at a geometry instant of its period",
+        "topology period does not end where the next one starts",
+        "position of a node or at an instant its period does not have",
+        "triangle refers to a missing node of its period",
+        "node position with a NaN or infinite coordinate",
+        "bounding box or counts out of date (run tgsis.refresh_geometry)",
+    }

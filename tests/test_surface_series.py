@@ -153,3 +153,17 @@ def test_bad_input_changes_nothing(tx: Conn, horizons: tgsis.FeatureClass) -> No
         tgsis.get_at(tx, 1, 0.0, convention="middle")  # type: ignore[arg-type]
     with pytest.raises(tgsis.NotFoundError):
         tgsis.add_instant(tx, horizons, 424242, 0.0, plain)
+
+
+def test_check_geometry_finds_rows_edited_wrongly(tx: Conn, horizons: tgsis.FeatureClass) -> None:
+    fid = tgsis.insert_feature(tx, horizons, series(np.random.default_rng(5), TIMES, with_properties=True))
+    assert tx.execute("SELECT * FROM tgsis.check_geometry(%s)", (fid,)).fetchall() == []
+    tx.execute("DELETE FROM tgsis.times WHERE geoid = %s AND times = %s", (fid, TIMES[1]))
+    tx.execute("DELETE FROM tgsis.times_vrtx WHERE geoid = %s AND times = %s AND vrtxid = 0", (fid, TIMES[2]))
+    found = {r[0] for r in tx.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchall()}
+    assert found == {"vertex or triangle at an instant not in tgsis.times",
+                     "triangle refers to a missing vertex of its instant",
+                     "bounding box or counts out of date (run tgsis.refresh_geometry)"}
+    tx.execute("SELECT tgsis.refresh_geometry(%s)", (fid,))
+    found = {r[0] for r in tx.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchall()}
+    assert "bounding box or counts out of date (run tgsis.refresh_geometry)" not in found

@@ -12,9 +12,13 @@ DECLARE
     v_k     int;
     v_i     int;
 BEGIN
-    SELECT geotype, geoids, nvrtx, ncell, bbox INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
+    SELECT geotype, geoids, nvrtx, ncell, bbox, timemodel INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % does not exist', p_geoid USING ERRCODE = 'TG200';
+    END IF;
+    IF v_geo.timemodel <> 'STATIC' THEN
+        RETURN QUERY SELECT * FROM tgsis.check_temporal_geometry(p_geoid);
+        RETURN;
     END IF;
     IF v_geo.geotype = 'GEOMETRYCOLLECTION' THEN
         RETURN QUERY SELECT 'member geometry does not exist'::text, count(*), min(m)::text
@@ -73,4 +77,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.check_geometry(bigint) IS
-    'problems of a stored geometry: non-finite coordinates, simplices pointing at missing vertices, stale bbox/counts, missing, nested or unlisted collection members';
+    'problems of a stored geometry (temporal ones: see tgsis.check_temporal_geometry): non-finite coordinates, simplices pointing at missing vertices, stale bbox/counts, missing, nested or unlisted collection members';
