@@ -192,3 +192,21 @@ def test_check_geometry_finds_rows_edited_wrongly(tx: Conn, faults: tgsis.Featur
         "node position with a NaN or infinite coordinate",
         "bounding box or counts out of date (run tgsis.refresh_geometry)",
     }
+
+
+def test_fetch_evolving_round_trip(tx: Conn, faults: tgsis.FeatureClass) -> None:
+    surface = evolving(np.random.default_rng(10), STARTS, instants_per_period=4, alive=True, with_properties=True)
+    surface = EvolvingSurface(surface.periods, alive=True, name="F", color=(0.5, 0.25, 1.0))
+    fid = tgsis.insert_feature(tx, faults, surface)
+    back = tgsis.fetch_evolving(tx, faults, fid)
+    assert (back.alive, back.name, back.color) == (True, "F", (0.5, 0.25, 1.0))
+    assert len(back.periods) == len(surface.periods)
+    for got, sent in zip(back.periods, surface.periods):
+        np.testing.assert_array_equal(got.times, sent.times)
+        np.testing.assert_array_equal(got.triangles, sent.triangles)
+        np.testing.assert_array_equal(got.positions, sent.positions)
+        np.testing.assert_array_equal(got.vertex_properties["porosity"], sent.vertex_properties["porosity"])
+        np.testing.assert_array_equal(got.properties["throw"], sent.properties["throw"])
+        np.testing.assert_array_equal(got.properties["note_code"], sent.properties["note_code"])
+    with pytest.raises(tgsis.InvalidInputError, match="EVOLVING"):
+        tgsis.fetch_series(tx, faults, fid)

@@ -167,3 +167,17 @@ def test_check_geometry_finds_rows_edited_wrongly(tx: Conn, horizons: tgsis.Feat
     tx.execute("SELECT tgsis.refresh_geometry(%s)", (fid,))
     found = {r[0] for r in tx.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchall()}
     assert "bounding box or counts out of date (run tgsis.refresh_geometry)" not in found
+
+
+def test_fetch_series_round_trip(tx: Conn, horizons: tgsis.FeatureClass) -> None:
+    sent = series(np.random.default_rng(6), TIMES, alive=True, with_properties=True)
+    fid = tgsis.insert_feature(tx, horizons, sent)
+    back = tgsis.fetch_series(tx, horizons, fid)
+    np.testing.assert_array_equal(back.times, sent.times)
+    assert back.alive and back.name == sent.name
+    np.testing.assert_array_equal(back.properties["throw"], sent.properties["throw"])
+    for got, surface in zip(back.surfaces, sent.surfaces):
+        np.testing.assert_array_equal(got.vertices, surface.vertices)
+        np.testing.assert_array_equal(got.triangles, surface.triangles)
+        np.testing.assert_array_equal(got.vertex_properties["porosity"],
+                                      surface.vertex_properties["porosity"].astype(np.float32))

@@ -90,6 +90,8 @@ from tgsis.db.temporal import (
     add_instant,
     delete_instant,
     features_at,
+    fetch_evolving,
+    fetch_series,
     get_at,
     instants,
     surfaces_at,
@@ -220,6 +222,8 @@ __all__ = [
     "get_at",
     "surfaces_at",
     "features_at",
+    "fetch_series",
+    "fetch_evolving",
     # errors
     "Error",
     "AlreadyExistsError",

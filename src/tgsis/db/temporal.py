@@ -31,9 +31,10 @@ from psycopg import sql
 from tgsis.db.copy import SQL_TYPES
 from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
                                _positions, _split, _Storage, class_of_feature, get_feature_class)
-from tgsis.errors import InvalidInputError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.mesh import Surface
-from tgsis.temporal import Convention, EvolvingSurface, SurfaceSeries, check_convention, check_time
+from tgsis.temporal import (Convention, EvolvingSurface, SurfaceSeries, TopologyPeriod, check_convention,
+                            check_time)
 
 __all__ = [
     "insert_series",
@@ -44,6 +45,8 @@ __all__ = [
     "get_at",
     "surfaces_at",
     "features_at",
+    "fetch_series",
+    "fetch_evolving",
 ]
 
 log = logging.getLogger(__name__)
@@ -441,3 +444,139 @@ def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
 def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
     """The class of a feature (see :func:`tgsis.db.features.class_of_feature`)."""
     return class_of_feature(conn, feature_id)
+
+
+# --------------------------------------------------------------------------- whole temporal features
+
+
+def _ordered_copy(conn: Conn, table: sql.Composable, columns: Sequence[str], types: Sequence[str], geoid: int,
+                  key: str = "geoid") -> list[npt.NDArray[Any]]:
+    """Binary COPY of ``columns`` of one geometry's rows, ordered by those columns' leading keys."""
+    names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
+    return _copy_out(conn, sql.SQL("SELECT {} FROM {} WHERE {} = {} ORDER BY {}").format(
+        names, table, sql.Identifier(key), sql.Literal(geoid), names), types)
+
+
+def _tgsis(table: str) -> sql.Composed:
+    return sql.SQL("tgsis.{}").format(sql.Identifier(table))
+
+
+def _instant_values(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[str]) -> dict[tuple[float, ...], list[Any]]:
+    """Per-instant feature property rows of a feature, by their time key."""
+    if not fc.instant_properties or fc.protable is None:
+        return {}
+    rows = conn.execute(sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
+        sql.SQL(", ").join(sql.Identifier(k) for k in keys),
+        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.instant_properties), fc._table(fc.protable)),
+        (geoid,)).fetchall()
+    return {tuple(float(v) for v in r[:len(keys)]): list(r[len(keys):]) for r in rows}
+
+
+def _property_arrays(fc: FeatureClass, values: Mapping[tuple[float, ...], list[Any]],
+                     keys: Sequence[tuple[float, ...]]) -> dict[str, npt.NDArray[Any]]:
+    """Per-instant properties as arrays over ``keys`` (NaN / None where there is no row or NULL)."""
+    result: dict[str, npt.NDArray[Any]] = {}
+    for i, prop in enumerate(fc.instant_properties):
+        column = [values[k][i] if k in values else None for k in keys]
+        if prop.type in SQL_TYPES and prop.type != "boolean" and all(v is not None for v in column):
+            result[prop.name] = np.asarray(column, dtype=np.float64 if "precision" in prop.type or prop.type == "real"
+                                           else np.int64)
+        elif prop.type in SQL_TYPES and prop.type != "boolean":
+            result[prop.name] = np.asarray([np.nan if v is None else v for v in column], dtype=np.float64)
+    return result
+
+
+def _cell_columns(fc: FeatureClass) -> tuple[list[str], list[str]]:
+    return [p.name for p in fc.cell_properties], [SQL_TYPES[p.type] for p in fc.cell_properties]
+
+
+def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> SurfaceSeries:
+    """A model-2 feature as a :class:`~tgsis.temporal.SurfaceSeries`, with its cell and per-instant properties.
+
+    Per-instant numeric properties come back as float64 or int64 arrays
+    (NULLs as NaN); properties of other types are not included.
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError, InvalidGeometryError
+    """
+    fc = _temporal_class(conn, feature_class, "INSTANTS")
+    names, types = _cell_columns(fc)
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
+                           "WHERE geoid = %s AND timemodel = 'INSTANTS'", (feature_id,)).fetchone()
+        if row is None:
+            raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")
+        (times,) = _ordered_copy(conn, _tgsis("times"), ["times"], ["float8"], feature_id)
+        vt, vid, x, y, z = _ordered_copy(conn, _tgsis("times_vrtx"), ["times", "vrtxid", "x", "y", "z"],
+                                         ["float8", "int8", "float8", "float8", "float8"], feature_id)
+        tt, tid, a, b, c = _ordered_copy(conn, _tgsis("times_trgl"), ["times", "trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
+                                         ["float8", "int8", "int8", "int8", "int8"], feature_id)
+        props = _ordered_copy(conn, fc._table(fc.cellprotable), ["_times", "_idx", *names],
+                              ["float8", "int8", *types], feature_id, "_geoid") if names else []
+        values = _instant_values(conn, fc, feature_id, ["_times"])
+    surfaces = []
+    for t in times.tolist():
+        v = np.flatnonzero(vt == t)
+        tr = np.flatnonzero(tt == t)
+        surface = _assemble(feature_id, vid[v], (x[v], y[v], z[v]), (a[tr], b[tr], c[tr]), row[0])
+        if names:
+            p = np.flatnonzero(props[0] == t)
+            target = surface.vertex_properties if fc.alignment == "VERTEX" else surface.cell_properties
+            target.update({name: props[2 + i][p] for i, name in enumerate(names)})
+        surfaces.append(surface)
+    return SurfaceSeries(times, surfaces, properties=_property_arrays(fc, values, [(t,) for t in times.tolist()]),
+                         alive=bool(row[1]), name=row[0], color=None if row[2] is None else row[2:5])
+
+
+def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingSurface:
+    """A model-3 feature as an :class:`~tgsis.temporal.EvolvingSurface`, with its cell and per-instant properties.
+
+    Node and triangle ids become 0-based positions in each period (in id
+    order). Per-instant numeric properties come back as float64 or int64
+    arrays (NULLs as NaN).
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError
+    InvalidGeometryError
+        Rows edited with plain SQL that do not form periods (see
+        ``tgsis.check_geometry``).
+    """
+    fc = _temporal_class(conn, feature_class, "EVOLVING")
+    names, types = _cell_columns(fc)
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
+                           "WHERE geoid = %s AND timemodel = 'EVOLVING'", (feature_id,)).fetchone()
+        if row is None:
+            raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")
+        tm, tt = _ordered_copy(conn, _tgsis("timet"), ["timem", "timet"], ["float8", "float8"], feature_id)
+        cm, _, a, b, c = _ordered_copy(conn, _tgsis("d4dtrgl"), ["timem", "trglid", "nodeid1", "nodeid2", "nodeid3"],
+                                       ["float8", "int8", "int8", "int8", "int8"], feature_id)
+        vm, vt, nid, x, y, z = _ordered_copy(conn, _tgsis("d4dvrtx"), ["timem", "timet", "nodeid", "x", "y", "z"],
+                                             ["float8", "float8", "int8", "float8", "float8", "float8"], feature_id)
+        props = _ordered_copy(conn, fc._table(fc.cellprotable), ["_timem", "_timet", "_idx", *names],
+                              ["float8", "float8", "int8", *types], feature_id, "_geoid") if names else []
+        values = _instant_values(conn, fc, feature_id, ["_timem", "_timet"])
+    periods = []
+    for start in np.unique(tm).tolist():
+        times = tt[tm == start]
+        rows = np.flatnonzero(vm == start)
+        nodes = np.unique(nid[rows])
+        if len(rows) != len(times) * len(nodes):
+            raise InvalidGeometryError(f"feature {feature_id}: the period starting at {start!r} lacks node positions",
+                                       hint=f"SELECT * FROM tgsis.check_geometry({feature_id})")
+        xyz = np.stack([x[rows], y[rows], z[rows]], axis=1).reshape(len(times), len(nodes), 3)
+        cells = np.flatnonzero(cm == start)
+        triangles = np.stack([_positions(nodes, k[cells], "triangles", feature_id) for k in (a, b, c)], axis=1)
+        per_cell: dict[str, npt.NDArray[Any]] = {}
+        if names:
+            p = np.flatnonzero(props[0] == start)
+            per_cell = {name: props[3 + i][p].reshape(len(times), -1) for i, name in enumerate(names)}
+        keys = [(start, t) for t in times.tolist()]
+        periods.append(TopologyPeriod(
+            times, triangles, xyz,
+            vertex_properties=per_cell if fc.alignment == "VERTEX" else None,
+            cell_properties=per_cell if fc.alignment == "CELL" else None,
+            properties=_property_arrays(fc, values, keys)))
+    return EvolvingSurface(periods, alive=bool(row[1]), name=row[0], color=None if row[2] is None else row[2:5])
