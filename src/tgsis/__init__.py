@@ -89,12 +89,15 @@ from tgsis.db.features import (
 from tgsis.db.temporal import (
     add_instant,
     delete_instant,
+    export_series,
     features_at,
+    frames_at,
     get_at,
     instants,
+    lifespan,
     surfaces_at,
 )
-from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
+from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -220,6 +223,11 @@ __all__ = [
     "get_at",
     "surfaces_at",
     "features_at",
+    "lifespan",
+    "frames_at",
+    "export_series",
+    "write_series_pvd",
+    "WrittenSeries",
     # errors
     "Error",
     "AlreadyExistsError",
