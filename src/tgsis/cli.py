@@ -32,6 +32,7 @@ from tgsis.db.local import LocalServer, find_binaries
 from tgsis import clistate
 from tgsis.db import versions as V
 from tgsis.db.features import (
+    FeatureClass,
     class_of_feature,
     create_feature_class,
     drop_feature_class,
@@ -39,7 +40,6 @@ from tgsis.db.features import (
     get_feature_class,
     insert_feature,
     list_feature_classes,
-    FeatureClass,
 )
 from tgsis.db.temporal import export_series, get_at, lifespan
 from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError
@@ -657,7 +657,7 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
 def cmd_demo(args: argparse.Namespace) -> int:
     from tgsis.demo import run_demo
 
-    run_demo(args.dsn, out=_out)
+    run_demo(args.dsn, out=_out, folder=args.dir)
     return 0
 
 
@@ -681,6 +681,7 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     demo = commands.add_parser("demo", help="run the demo scenario")
+    demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
     demo.set_defaults(handler=cmd_demo)
 
     db = commands.add_parser("db", help="install, upgrade or inspect tgsis in a database")
