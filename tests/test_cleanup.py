@@ -91,9 +91,9 @@ def test_interrupted_test_run_leaves_no_server(tmp_path: Path, signals: tuple[si
             child.kill()
 
 
-def test_cli_command_stops_the_server_it_started() -> None:
+def test_cli_command_stops_the_server_it_started(tmp_path: Path) -> None:
     with private_home() as home:
-        result = tgsis_cli("demo", home=home)
+        result = tgsis_cli("demo", "--dir", str(tmp_path), home=home)
         assert result.returncode == 0, result.stderr
         server = LocalServer.persistent(find_binaries(), home=home)
         assert server.is_initialized()

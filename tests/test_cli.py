@@ -73,9 +73,11 @@ def test_local_status_and_dsn_without_a_server() -> None:
         assert "not running" in dsn.stderr
 
 
-def test_demo_runs_the_release_story() -> None:
+def test_demo_runs_the_release_story(tmp_path: Path) -> None:
+    from tgsis.formats.pvd import read_pvd
+
     with private_home() as home:
-        result = tgsis_cli("demo", home=home)
+        result = tgsis_cli("demo", "--dir", str(tmp_path / "demo"), home=home)
         assert result.returncode == 0, result.stderr
         lines = result.stdout.splitlines()
         assert lines[0].startswith("PostgreSQL ") and "database 'tgsis_demo' (local server)" in lines[0]
@@ -90,19 +92,30 @@ def test_demo_runs_the_release_story() -> None:
         assert "Oceanic_fault-CFM5_1000m: DEFAULT sees release 5.3 (716 vertices); " \
                "cfm6.1 sees release 6.1 (722 vertices)" in result.stdout
         assert "    cfm6.1 from DEFAULT@0: revisions 2 (release-6.1), 3; working 3" in result.stdout
-        again = tgsis_cli("demo", home=home)     # a database of its own, made afresh
+        history = lines.index("5. fault history (model 3): CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m slipping 500 m "
+                              "at depth from -2.0 Ma to today, stored as feature 7 of class fault_history (EVOLVING)")
+        assert lines[history + 1:history + 3] == [
+            "   at -1.0 Ma (SQL snapshot): 716 vertices, the deepest 250 m from where it is today",
+            f"   21 frames from -2.0 to 0.0 Ma written to {tmp_path / 'demo' / 'fault_history.pvd'} (open it in ParaView)"]
+        frames = read_pvd(tmp_path / "demo" / "fault_history.pvd")
+        assert [t for t, _ in frames] == np.linspace(-2.0, 0.0, 21).tolist()
+        assert all(isinstance(g, tgsis.Surface) and g.n_vertices == 716 for _, g in frames)
+        again = tgsis_cli("demo", "--dir", str(tmp_path / "demo"), home=home)  # a database of its own, made afresh
         assert again.returncode == 0, again.stderr
         assert again.stdout.splitlines()[4:] == lines[4:]
 
 
 def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> None:
     with private_home() as home:
-        result = tgsis_cli("demo", home=home, TGSIS_DEMO_DATA=str(tmp_path / "none"))
+        result = tgsis_cli("demo", "--dir", str(tmp_path / "out"), home=home, TGSIS_DEMO_DATA=str(tmp_path / "none"))
         assert result.returncode == 0, result.stderr
         assert "data: synthetic faults (no CFM data found)" in result.stdout
         assert "3. version cfm6.1: replaced 1 changed fault(s) (middle_fault)" in result.stdout
         assert "middle_fault: DEFAULT sees release 5.3 (360 vertices); cfm6.1 sees release 6.1 (360 vertices)" \
             in result.stdout
+        assert "5. fault history (model 3): north_fault slipping 500 m at depth" in result.stdout
+        assert "   at -1.0 Ma (SQL snapshot): 360 vertices, the deepest 250 m from where it is today" in result.stdout
+        assert (tmp_path / "out" / "fault_history.pvd").is_file()
 
 
 # --------------------------------------------------------------------------- classes and features

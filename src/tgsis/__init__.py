@@ -89,14 +89,17 @@ from tgsis.db.features import (
 from tgsis.db.temporal import (
     add_instant,
     delete_instant,
+    export_series,
     features_at,
     fetch_evolving,
     fetch_series,
+    frames_at,
     get_at,
     instants,
+    lifespan,
     surfaces_at,
 )
-from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
+from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -224,6 +227,11 @@ __all__ = [
     "features_at",
     "fetch_series",
     "fetch_evolving",
+    "lifespan",
+    "frames_at",
+    "export_series",
+    "write_series_pvd",
+    "WrittenSeries",
     # errors
     "Error",
     "AlreadyExistsError",

@@ -32,6 +32,7 @@ from tgsis.db.local import LocalServer, find_binaries
 from tgsis import clistate
 from tgsis.db import versions as V
 from tgsis.db.features import (
+    FeatureClass,
     class_of_feature,
     create_feature_class,
     drop_feature_class,
@@ -40,8 +41,10 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
+from tgsis.db.temporal import export_series, get_at, lifespan
 from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
+from tgsis.temporal import even_times
 
 __all__ = ["main", "build_parser"]
 
@@ -306,6 +309,82 @@ def cmd_ls(args: argparse.Namespace) -> int:
         _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells{members}")
     if not rows:
         print("no features", file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------- time
+
+
+def _unit(fc: FeatureClass) -> str:
+    """`` Ma``: the class's unit of model time for messages (empty when it records none)."""
+    return f" {fc.time_unit}" if fc.time_unit else ""
+
+
+def _life(span: tuple[float, float, bool] | None, fc: FeatureClass) -> str:
+    """When a feature exists, for messages."""
+    if span is None:
+        return "it is static: it exists at every time"
+    first, last, alive = span
+    return (f"it exists from t = {first!r}{_unit(fc)} on (alive)" if alive
+            else f"it exists from t = {first!r} to {last!r}{_unit(fc)}")
+
+
+def cmd_at(args: argparse.Namespace) -> int:
+    from tgsis import formats
+
+    if not math.isfinite(args.time):
+        raise InvalidInputError(f"T must be a finite number, got {args.time!r}")
+    if (args.format or Path(args.file).suffix).lower().lstrip(".") == "pvd":
+        raise InvalidInputError(f"{args.file}: tgsis at writes one surface; a .pvd is a time series",
+                                hint="tgsis series writes a .pvd")
+    target = formats.format_for(args.file, args.format)  # an unknown format fails before connecting
+    with _connect(args) as conn:
+        fc = class_of_feature(conn, args.id)
+        surface = get_at(conn, args.id, args.time, convention=args.convention)
+        if surface is None:
+            raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
+                                hint=_life(lifespan(conn, args.id), fc))
+    target.write(surface, args.file)
+    _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
+         f"{surface.n_cells} triangles, to {args.file}")
+    return 0
+
+
+def _series_name(name: str) -> str:
+    """The stem of the .pvd file (a trailing .pvd dropped); no folders."""
+    stem = name[:-4] if name.lower().endswith(".pvd") else name
+    if not stem or stem in (".", "..") or "/" in stem or os.sep in stem:
+        raise InvalidInputError(f"--name {name!r} must be a file name without folders, e.g. fault_history")
+    return stem
+
+
+def cmd_series(args: argparse.Namespace) -> int:
+    sampling = (args.start, args.end, args.steps)
+    if any(v is not None for v in sampling):
+        if any(v is None for v in sampling):
+            raise InvalidInputError("--from, --to and --steps go together",
+                                    hint="without all three, the frames are at the feature's own instants")
+        even_times(args.start, args.end, args.steps, labels=("--from", "--to", "--steps"))  # clear messages
+    stem = _series_name(args.name or f"feature_{args.id}")
+    folder = Path(args.dir)
+    with _connect(args) as conn:
+        fc = class_of_feature(conn, args.id)
+        if args.steps is None and lifespan(conn, args.id) is None:
+            raise InvalidInputError(f"feature {args.id} ({fc.name}) is static: it has no instants of its own",
+                                    hint="give --from, --to and --steps")
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InvalidInputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from exc
+        written = export_series(conn, args.id, folder / f"{stem}.pvd", start=args.start, end=args.end,
+                                steps=args.steps, convention=args.convention)
+    for (t, surface), file in zip(written.frames, written.files):
+        _out(f"{t!r}\t{file}\t" + (f"{surface.n_vertices} vertices\t{surface.n_cells} triangles" if surface
+                                     else "no object (empty grid)"))
+    times = [t for t, _ in written.frames]
+    missing = f", {len(written.missing)} without the object" if written.missing else ""
+    _out(f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from {times[0]!r} "
+         f"to {times[-1]!r}{_unit(fc)}{missing}")
     return 0
 
 
@@ -578,7 +657,7 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
 def cmd_demo(args: argparse.Namespace) -> int:
     from tgsis.demo import run_demo
 
-    run_demo(args.dsn, out=_out)
+    run_demo(args.dsn, out=_out, folder=args.dir)
     return 0
 
 
@@ -602,6 +681,7 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     demo = commands.add_parser("demo", help="run the demo scenario")
+    demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
     demo.set_defaults(handler=cmd_demo)
 
     db = commands.add_parser("db", help="install, upgrade or inspect tgsis in a database")
@@ -662,6 +742,28 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     exp.add_argument("--format", help="file format (default: from the extension)")
     exp.set_defaults(handler=cmd_export)
+
+    at = commands.add_parser("at", help="write the surface of a feature at model time T to a file")
+    at.add_argument("id", type=int)
+    at.add_argument("time", type=float, metavar="T", help="model time (in the class's unit)")
+    at.add_argument("file")
+    at.add_argument("--format", help="file format (default: from the extension)")
+    at.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
+                    help="step convention of a surface known at instants (default: left)")
+    at.set_defaults(handler=cmd_at)
+
+    series = commands.add_parser("series", help="write a feature over model time as a ParaView .pvd time series")
+    series.add_argument("id", type=int)
+    series.add_argument("dir", metavar="DIR", help="folder of the .pvd and its frames (created if missing)")
+    series.add_argument("--from", dest="start", type=float, metavar="T0", help="first time")
+    series.add_argument("--to", dest="end", type=float, metavar="T1", help="last time")
+    series.add_argument("--steps", type=int, metavar="N",
+                        help="N frames evenly spaced from T0 to T1, both included (without --from/--to/--steps: "
+                             "one frame at each of the feature's own instants)")
+    series.add_argument("--name", help="name of the .pvd file (default: feature_ID)")
+    series.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
+                        help="step convention of a surface known at instants (default: left)")
+    series.set_defaults(handler=cmd_series)
 
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")

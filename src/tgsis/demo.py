@@ -11,7 +11,11 @@ Two releases of a fault model, the way a geomodelling team lives them:
 4. versioning switched on, a version ``cfm6.1`` in which the faults that
    changed in release 6.1 are replaced, and that state saved as a revision;
 5. what DEFAULT and the version each see, how many rows the version stored,
-   and the version tree.
+   and the version tree;
+6. a fault through geological time (model 3): the first fault of release 5.3
+   as it is today and, 2 Ma ago, displaced along strike by a synthetic slip
+   growing with depth to 500 m; its shape at -1 Ma computed in SQL, and the
+   last 2 Ma written as a ParaView time series (``.pvd``) to a folder.
 
 Every step uses the public API; the same steps work from ``psql`` and the
 ``tgsis`` command (see docs/versioning.md).
@@ -20,6 +24,7 @@ Every step uses the public API; the same steps work from ``psql`` and the
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,16 +36,21 @@ from psycopg import sql
 from psycopg.conninfo import make_conninfo
 
 from tgsis.db import features as F
+from tgsis.db import temporal as T
 from tgsis.db import versions as V
 from tgsis.db.connect import connect, resolve_target
 from tgsis.db.install import install, installed_version
-from tgsis.errors import MissingPrivilegeError, reraise
+from tgsis.errors import InvalidInputError, MissingPrivilegeError, reraise
 from tgsis.mesh import Mesh, Surface
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 __all__ = ["run_demo", "DEMO_DATABASE"]
 
 DEMO_DATABASE = "tgsis_demo"
 RELEASES = ("cfm5.3", "cfm6.1")
+#: Synthetic slip of the fault history (metres at the fault's deepest node) over HISTORY (Ma, ages negative).
+SLIP = 500.0
+HISTORY = (-2.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -120,7 +130,43 @@ def _releases_seen(conn: psycopg.Connection[Any]) -> dict[str, str]:
             for f in F.fetch_features(conn, "faults")}
 
 
-def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print) -> None:
+def _fault_history(fault: _Fault) -> tuple[EvolvingSurface, int]:
+    """The fault over HISTORY: displaced along strike 2 Ma ago (SLIP at depth, none at the top), as it is today.
+
+    One topology period, two geometry instants; returns it and the index of
+    the deepest node (the one that moved most).
+    """
+    assert isinstance(fault.mesh, Surface)
+    today = fault.mesh.vertices
+    xy = today[:, :2] - today[:, :2].mean(axis=0)
+    strike = np.linalg.svd(xy, full_matrices=False)[2][0]      # horizontal direction of the longest extent
+    top, bottom = today[:, 2].max(), today[:, 2].min()
+    depth = (top - today[:, 2]) / (top - bottom)                # 0 at the top, 1 at the bottom
+    past = today - SLIP * depth[:, None] * np.array([strike[0], strike[1], 0.0])
+    period = TopologyPeriod(list(HISTORY), fault.mesh.triangles, [past, today])
+    return EvolvingSurface([period], alive=True, name=fault.name), int(np.argmax(depth))
+
+
+def _store_history(conn: psycopg.Connection[Any], fault: _Fault, folder: Path) -> list[str]:
+    """Step 6: store the fault history, take its shape at the middle time in SQL, export it as a .pvd."""
+    history, deepest = _fault_history(fault)
+    F.create_feature_class(conn, "fault_history", "SURFACE", time_model="EVOLVING", time_unit="Ma", srs=26911,
+                           description="faults through geological time (ages in Ma, negative)")
+    fid = F.insert_feature(conn, "fault_history", history)
+    middle = (HISTORY[0] + HISTORY[1]) / 2
+    shape = T.get_at(conn, fid, middle)
+    assert shape is not None
+    moved = float(np.linalg.norm(shape.vertices[deepest] - fault.mesh.vertices[deepest]))
+    written = T.export_series(conn, fid, folder / "fault_history.pvd", start=HISTORY[0], end=HISTORY[1], steps=21)
+    return [f"5. fault history (model 3): {fault.name} slipping {SLIP:.0f} m at depth from {HISTORY[0]} Ma to today, "
+            f"stored as feature {fid} of class fault_history (EVOLVING)",
+            f"   at {middle} Ma (SQL snapshot): {shape.n_vertices} vertices, the deepest "
+            f"{moved:.0f} m from where it is today",
+            f"   {len(written.files)} frames from {HISTORY[0]} to {HISTORY[1]} Ma written to {written.pvd} "
+            "(open it in ParaView)"]
+
+
+def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, folder: str | Path | None = None) -> None:
     """Run the demo against the server of ``dsn`` (``None``: the local server), in a database of its own.
 
     Parameters
@@ -130,6 +176,9 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print) -> N
         first drops) the database ``tgsis_demo`` there.
     out : callable
         Receives each line of the report.
+    folder : str or path-like, optional
+        Where the demo writes its files (the fault history as ``.pvd``);
+        created if missing. Default: a new temporary folder.
     """
     target = resolve_target(dsn)
     conninfo = _demo_conninfo(dsn)
@@ -182,6 +231,13 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print) -> N
         out("4. version tree:")
         for line in V.format_tree(V.list_versions(conn)).splitlines():
             out("   " + line)
+        files = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix="tgsis-demo-"))
+        try:
+            files.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InvalidInputError(f"cannot create the folder {files}: {exc.strerror or exc}") from exc
+        for line in _store_history(conn, old[0], files):
+            out(line)
     if target.dsn is None:
         out("the local server stops when this command ends; to look around: `tgsis local start`, "
             f"`psql \"$(tgsis local dsn)\"`, then `\\c {DEMO_DATABASE}`")

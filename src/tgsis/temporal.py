@@ -24,21 +24,36 @@ the last shape holds if the object is ``alive``, else nothing exists.
 :meth:`SurfaceSeries.at` and :meth:`EvolvingSurface.at` compute exactly what
 the SQL functions ``tgsis.vertices_at`` / ``tgsis.triangles_at`` return (the
 same float operations in the same order).
+
+Time series for ParaView: :func:`series_frames` samples either object at
+given times (by default at its own instants, :func:`own_instants`;
+:func:`even_times` spaces them evenly), and :func:`write_series_pvd` writes
+the samples as a ``.pvd`` collection of ``.vtu`` frames
+(:func:`tgsis.formats.pvd.write_pvd`; a time where the object does not exist
+becomes an empty grid). :func:`tgsis.db.temporal.export_series` does the same
+from the database.
 """
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Literal
+from pathlib import Path
+from typing import Literal, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError
+from tgsis.formats._common import PathLike
+from tgsis.formats.pvd import write_pvd
+from tgsis.formats.vtk import Encoding
 from tgsis.mesh import PROPERTY_NAME_RE, Surface
 
-__all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color"]
+__all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color", "TemporalSurface",
+           "SurfaceFrame", "WrittenSeries", "own_instants", "even_times", "series_frames", "write_frames_pvd",
+           "write_series_pvd"]
 
 #: Step convention of model 2 queries.
 Convention = Literal["left", "right"]
@@ -365,3 +380,152 @@ class EvolvingSurface:
     def __repr__(self) -> str:
         return (f"EvolvingSurface({len(self.periods)} periods {self.start!r}..{self.end!r}, "
                 f"{self.n_nodes} nodes, alive={self.alive}, name={self.name!r})")
+
+
+# --------------------------------------------------------------------------- time series export
+
+#: A surface in time: known at instants (model 2) or evolving continuously (model 3).
+TemporalSurface: TypeAlias = SurfaceSeries | EvolvingSurface
+#: One sample of a surface in time: the time and the surface then (None: it does not exist then).
+SurfaceFrame: TypeAlias = tuple[float, Surface | None]
+
+
+def own_instants(obj: TemporalSurface) -> FloatArray:
+    """(k,) float64: where ``obj`` is known, ascending (``SurfaceSeries.times``, ``EvolvingSurface.geometry_instants``)."""
+    if isinstance(obj, SurfaceSeries):
+        return obj.times.copy()
+    if isinstance(obj, EvolvingSurface):
+        return obj.geometry_instants
+    raise InvalidInputError(f"expected a SurfaceSeries or an EvolvingSurface, got {type(obj).__name__}")
+
+
+def even_times(start: float, end: float, steps: int, *,
+               labels: tuple[str, str, str] = ("start", "end", "steps")) -> FloatArray:
+    """``steps`` times evenly spaced from ``start`` to ``end``, both included (exactly).
+
+    Parameters
+    ----------
+    start, end : float
+        Finite, ``start <= end``; equal only for one step.
+    steps : int
+        At least 1; 1 only when ``start == end``.
+    labels : (str, str, str)
+        How error messages name the three arguments (e.g. command-line options).
+
+    Raises
+    ------
+    InvalidInputError
+        Any of the conditions above, or so many steps that neighbouring times
+        are the same float.
+    """
+    first, last, count = labels
+    if not isinstance(steps, numbers.Integral) or isinstance(steps, bool) or steps < 1:
+        raise InvalidInputError(f"{count} must be an integer >= 1, got {steps!r}")
+    for label, value in ((first, start), (last, end)):
+        if not isinstance(value, numbers.Real) or isinstance(value, bool) or not np.isfinite(float(value)):
+            raise InvalidInputError(f"{label} must be a finite number, got {value!r}")
+    a, b, n = float(start), float(end), int(steps)
+    if a > b:
+        raise InvalidInputError(f"{first} ({a!r}) must not be after {last} ({b!r})")
+    if n == 1 and a != b:
+        raise InvalidInputError(f"{count} 1 gives one time, so {first} and {last} must be equal, got {a!r} and {b!r}",
+                                hint=f"{count} 2 gives just the two ends")
+    if n > 1 and a == b:
+        raise InvalidInputError(f"{count} {n} needs {first} before {last}: both are {a!r}",
+                                hint=f"{count} 1 gives the one time")
+    times = np.linspace(a, b, n)
+    if n > 1 and not np.all(np.diff(times) > 0):
+        raise InvalidInputError(f"{n} {count} between {a!r} and {b!r} give equal neighbouring times (float precision)")
+    return times
+
+
+def series_frames(obj: TemporalSurface, times: npt.ArrayLike | None = None,
+                  convention: Convention = "left") -> list[SurfaceFrame]:
+    """The surface of ``obj`` at each time: ``[(t, obj.at(t) or None), ...]``.
+
+    Parameters
+    ----------
+    obj : SurfaceSeries or EvolvingSurface
+    times : (k,) array_like of float, optional
+        Finite and strictly increasing (as a ``.pvd`` needs them); by default
+        the object's own instants (:func:`own_instants`).
+    convention : {"left", "right"}
+        Step convention of a SurfaceSeries (an EvolvingSurface has none).
+
+    Returns
+    -------
+    list of (float, Surface or None)
+        None where the object does not exist. A SurfaceSeries gives its
+        stored Surface objects (with their properties); an EvolvingSurface
+        new ones with interpolated properties.
+
+    Raises
+    ------
+    InvalidInputError
+    """
+    check_convention(convention)
+    samples = own_instants(obj) if times is None else _as_times(times, "sample times")
+    if isinstance(obj, SurfaceSeries):
+        return [(t, obj.at(t, convention)) for t in samples.tolist()]
+    return [(t, obj.at(t)) for t in samples.tolist()]
+
+
+@dataclass(frozen=True)
+class WrittenSeries:
+    """What a time-series export wrote.
+
+    Attributes
+    ----------
+    pvd : Path
+        The ``.pvd`` file.
+    files : tuple of Path
+        The ``.vtu`` frame files, one per frame, in time order.
+    frames : tuple of (float, Surface or None)
+        The time and surface of each frame (None: written as an empty grid).
+    """
+
+    pvd: Path
+    files: tuple[Path, ...]
+    frames: tuple[SurfaceFrame, ...]
+
+    @property
+    def missing(self) -> list[float]:
+        """Times of the frames without an object."""
+        return [t for t, surface in self.frames if surface is None]
+
+
+def write_frames_pvd(frames: Sequence[SurfaceFrame], path: PathLike, *,
+                     encoding: Encoding = "binary") -> WrittenSeries:
+    """Write surface frames with :func:`tgsis.formats.pvd.write_pvd`; return what was written."""
+    written = write_pvd(frames, path, encoding=encoding)
+    return WrittenSeries(written[-1], tuple(written[:-1]), tuple(frames))
+
+
+def write_series_pvd(obj: TemporalSurface, path: PathLike, times: npt.ArrayLike | None = None, *,
+                     convention: Convention = "left", encoding: Encoding = "binary") -> WrittenSeries:
+    """Write a surface in time as a ParaView ``.pvd`` time series, one ``.vtu`` frame per time.
+
+    Parameters
+    ----------
+    obj : SurfaceSeries or EvolvingSurface
+    path : str or path-like
+        The ``.pvd`` file; frames go to ``<stem>/<stem>_000000.vtu``, ...
+        beside it (see :func:`tgsis.formats.pvd.write_pvd`).
+    times : (k,) array_like of float, optional
+        Sample times, finite and strictly increasing; by default the object's
+        own instants (where a model-3 surface's trajectories bend, where a
+        model-2 surface steps). :func:`even_times` spaces them evenly.
+    convention : {"left", "right"}
+        Step convention of a SurfaceSeries.
+    encoding : {"binary", "appended"}
+        Of the ``.vtu`` files.
+
+    Returns
+    -------
+    WrittenSeries
+
+    Raises
+    ------
+    InvalidInputError, FileFormatError
+    """
+    return write_frames_pvd(series_frames(obj, times, convention), path, encoding=encoding)

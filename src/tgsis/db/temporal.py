@@ -15,6 +15,8 @@ Uploads are one transaction with one binary COPY per table, into the
 versioned storage of the session's working revision when the tables are
 versioned (as for model 1). Snapshots at t are computed in SQL by
 ``tgsis.vertices_at`` / ``tgsis.triangles_at`` and downloaded with binary COPY.
+:func:`export_series` writes snapshots at several times as a ParaView
+``.pvd`` time series (the numpy side is :func:`tgsis.temporal.write_series_pvd`).
 """
 
 from __future__ import annotations
@@ -30,11 +32,13 @@ from psycopg import sql
 
 from tgsis.db.copy import SQL_TYPES
 from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
-                               _positions, _split, _Storage, class_of_feature, get_feature_class)
+                               _positions, _split, _Storage, get_feature_class)
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.formats._common import PathLike
+from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Surface
-from tgsis.temporal import (Convention, EvolvingSurface, SurfaceSeries, TopologyPeriod, check_convention,
-                            check_time)
+from tgsis.temporal import (Convention, EvolvingSurface, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
+                            check_convention, check_time, even_times, write_frames_pvd)
 
 __all__ = [
     "insert_series",
@@ -47,6 +51,9 @@ __all__ = [
     "features_at",
     "fetch_series",
     "fetch_evolving",
+    "lifespan",
+    "frames_at",
+    "export_series",
 ]
 
 log = logging.getLogger(__name__)
@@ -441,10 +448,6 @@ def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
     return result
 
 
-def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
-    """The class of a feature (see :func:`tgsis.db.features.class_of_feature`)."""
-    return class_of_feature(conn, feature_id)
-
 
 # --------------------------------------------------------------------------- whole temporal features
 
@@ -580,3 +583,107 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
             cell_properties=per_cell if fc.alignment == "CELL" else None,
             properties=_property_arrays(fc, values, keys)))
     return EvolvingSurface(periods, alive=bool(row[1]), name=row[0], color=None if row[2] is None else row[2:5])
+
+
+# --------------------------------------------------------------------------- time series export
+
+
+def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
+    """First and last instant of a temporal feature, and whether it is alive after the last one.
+
+    None for a static feature (it exists at every time).
+
+    Raises
+    ------
+    NotFoundError
+        No geometry ``feature_id``.
+    """
+    with reraise():
+        row = conn.execute("SELECT g.timemodel, g.alive, i.first, i.last FROM tgsis.geometry g, "
+                           "LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid)) i "
+                           "WHERE g.geoid = %s", (feature_id,)).fetchone()
+    if row is None:
+        raise NotFoundError(f"feature {feature_id} does not exist", hint="`tgsis ls` lists the features")
+    if row[0] == "STATIC" or row[2] is None:
+        return None
+    return float(row[2]), float(row[3]), bool(row[1])
+
+
+def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
+              convention: Convention = "left") -> list[SurfaceFrame]:
+    """The surface of a feature at each of ``times`` by the SQL snapshot (:func:`get_at`), all from one snapshot.
+
+    Returns
+    -------
+    list of (float, Surface or None)
+        None where the feature does not exist; surfaces without properties.
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError
+        As :func:`get_at`.
+    """
+    check_convention(convention)
+    samples = [check_time(t) for t in np.atleast_1d(np.asarray(times, dtype=np.float64)).tolist()]
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():
+        if fresh:  # every frame from the same state of the database
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        return [(t, get_at(conn, feature_id, t, convention=convention)) for t in samples]
+
+
+def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float | None = None,
+                  end: float | None = None, steps: int | None = None, convention: Convention = "left",
+                  encoding: Encoding = "binary") -> WrittenSeries:
+    """Write a feature's surface over time as a ParaView ``.pvd`` time series, one ``.vtu`` per time.
+
+    Each frame is the SQL snapshot (:func:`get_at`, the same float operations
+    as :meth:`tgsis.EvolvingSurface.at`); a time where the feature does not
+    exist is written as an empty grid (see :func:`tgsis.formats.pvd.write_pvd`).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_id : int
+        A surface feature: temporal (model 2 or 3), or static (the same
+        surface at every time).
+    path : str or path-like
+        The ``.pvd`` file; frames go to ``<stem>/<stem>_000000.vtu``, ...
+        beside it.
+    start, end, steps : optional
+        ``steps`` times evenly spaced from ``start`` to ``end``, both included
+        (:func:`tgsis.temporal.even_times`). All three, or none: then the
+        feature's own instants (:func:`instants`).
+    convention : {"left", "right"}
+        Step convention of a model-2 feature.
+    encoding : {"binary", "appended"}
+        Of the ``.vtu`` files.
+
+    Returns
+    -------
+    WrittenSeries
+        The files and the frames (surfaces without properties).
+
+    Raises
+    ------
+    NotFoundError
+        No feature ``feature_id``.
+    InvalidInputError
+        Some but not all of start, end, steps; bad values of them; no times
+        given for a static feature; a feature that is not a surface.
+    FileFormatError
+        The files cannot be written.
+    """
+    given = [v is not None for v in (start, end, steps)]
+    if any(given) and not all(given):
+        raise InvalidInputError("give start, end and steps together, or none of them (the feature's own instants)")
+    if start is not None and end is not None and steps is not None:
+        times = even_times(start, end, steps)
+    else:
+        own = [t for t, _ in instants(conn, feature_id)]
+        if not own:
+            lifespan(conn, feature_id)  # NotFoundError for an unknown feature
+            raise InvalidInputError(f"feature {feature_id} is static: it has no instants of its own to sample",
+                                    hint="give start, end and steps")
+        times = np.asarray(own, dtype=np.float64)
+    return write_frames_pvd(frames_at(conn, feature_id, times, convention=convention), path, encoding=encoding)
