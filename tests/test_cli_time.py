@@ -273,3 +273,18 @@ def test_at_and_series_in_a_version(db_dsn: str, stored: tuple[dict[str, int], E
     back = read_pvd(tmp_path / "moved.pvd")
     np.testing.assert_allclose(back[0][1].vertices[:, 2],  # type: ignore[union-attr]
                                fault.periods[0].positions[0][:, 2] + 1000, rtol=0, atol=1e-9)
+
+
+def test_class_create_temporal(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", db_dsn, "class", "create", "growth", "--geotype", "SURFACE", "--time-model", "evolving",
+                 "--time-unit", "Ma", "--instant-property", "throw:float8", "--property", "porosity:float8"]) == 0
+    assert "created feature class growth (SURFACE, EVOLVING in Ma) in schema public: tables growth, growth_cellpros, " \
+           "growth_pros, view growth_v" in capsys.readouterr().out
+    assert main(["--dsn", db_dsn, "class", "list"]) == 0
+    assert capsys.readouterr().out.rstrip("\n").endswith(
+        "vertex: porosity double precision\ttime: EVOLVING in Ma\tper instant: throw double precision")
+    assert main(["--dsn", db_dsn, "class", "create", "wells", "--geotype", "MULTILINESTRING",
+                 "--time-model", "INSTANTS"]) == 1
+    assert "holds SURFACE features" in capsys.readouterr().err
+    assert main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--instant-property", "a:float8"]) == 1
+    assert "static feature class x takes no time unit or per-instant properties" in capsys.readouterr().err

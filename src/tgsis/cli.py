@@ -194,10 +194,19 @@ def cmd_class_create(args: argparse.Namespace) -> int:
         fc = create_feature_class(
             conn, args.name, args.geotype, feature_properties=_pairs(args.feature_property, "--feature-property"),
             cell_properties=_pairs(args.property, "--property"), alignment=args.alignment.upper(), srs=args.srs,
-            schema=args.schema, description=args.description)
-    _out(f"created feature class {fc.name} ({fc.geotype.value}) in schema {fc.schema}: "
-         f"tables {fc.featuretable}, {fc.cellprotable}, view {fc.viewname}")
+            schema=args.schema, description=args.description, time_model=args.time_model, time_unit=args.time_unit,
+            instant_properties=_pairs(args.instant_property, "--instant-property"))
+    pros = f", {fc.protable}" if fc.protable else ""
+    _out(f"created feature class {fc.name} ({fc.geotype.value}{_time_label(fc)}) in schema {fc.schema}: "
+         f"tables {fc.featuretable}, {fc.cellprotable}{pros}, view {fc.viewname}")
     return 0
+
+
+def _time_label(fc: FeatureClass) -> str:
+    """`` EVOLVING, Ma``-like suffix naming the time model of a temporal class ('' for static ones)."""
+    if fc.time_model == "STATIC":
+        return ""
+    return f", {fc.time_model}" + (f" in {fc.time_unit}" if fc.time_unit else "")
 
 
 def cmd_class_list(args: argparse.Namespace) -> int:
@@ -206,8 +215,10 @@ def cmd_class_list(args: argparse.Namespace) -> int:
     for fc in classes:
         fprops = ", ".join(f"{p.name} {p.type}" for p in fc.feature_properties) or "-"
         cprops = ", ".join(f"{p.name} {p.type}" for p in fc.cell_properties) or "-"
+        iprops = ", ".join(f"{p.name} {p.type}" for p in fc.instant_properties) or "-"
+        temporal = f"\ttime: {_time_label(fc)[2:]}\tper instant: {iprops}" if fc.time_model != "STATIC" else ""
         _out(f"{fc.name}\t{fc.geotype.value}\tsrs {fc.srs}\t{fc.schema}\tfeature: {fprops}\t"
-             f"{fc.alignment.lower()}: {cprops}")
+             f"{fc.alignment.lower()}: {cprops}{temporal}")
     if not classes:
         print("no feature classes", file=sys.stderr)
     return 0
@@ -712,6 +723,12 @@ def build_parser() -> argparse.ArgumentParser:
     cls_create.add_argument("--srs", type=int, default=0, help="spatial reference id (EPSG), 0 = undefined")
     cls_create.add_argument("--schema", default="public")
     cls_create.add_argument("--description")
+    cls_create.add_argument("--time-model", default="STATIC", type=str.upper, choices=("STATIC", "INSTANTS", "EVOLVING"),
+                            help="STATIC (model 1), INSTANTS: surfaces at instants (model 2), "
+                                 "EVOLVING: continuously evolving surfaces (model 3)")
+    cls_create.add_argument("--time-unit", help="unit of model time of a temporal class, e.g. Ma")
+    cls_create.add_argument("--instant-property", action="append", metavar="NAME:TYPE",
+                            help="per-instant feature property of a temporal class (repeatable)")
     cls_create.set_defaults(handler=cmd_class_create)
     cls_list = cls_commands.add_parser("list", help="list the feature classes")
     cls_list.set_defaults(handler=cmd_class_list)
