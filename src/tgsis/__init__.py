@@ -90,11 +90,13 @@ from tgsis.db.temporal import (
     add_instant,
     delete_instant,
     features_at,
+    first_times,
     get_at,
     instants,
+    property_periods,
     surfaces_at,
 )
-from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
+from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -220,6 +222,9 @@ __all__ = [
     "get_at",
     "surfaces_at",
     "features_at",
+    "Period",
+    "property_periods",
+    "first_times",
     # errors
     "Error",
     "AlreadyExistsError",

@@ -38,7 +38,7 @@ import numpy.typing as npt
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError
 from tgsis.mesh import PROPERTY_NAME_RE, Surface
 
-__all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color"]
+__all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color", "Period"]
 
 #: Step convention of model 2 queries.
 Convention = Literal["left", "right"]
@@ -365,3 +365,44 @@ class EvolvingSurface:
     def __repr__(self) -> str:
         return (f"EvolvingSurface({len(self.periods)} periods {self.start!r}..{self.end!r}, "
                 f"{self.n_nodes} nodes, alive={self.alive}, name={self.name!r})")
+
+
+# --------------------------------------------------------------------------- answers of temporal questions
+
+
+@dataclass(frozen=True)
+class Period:
+    """An interval of model time, as ``tgsis.property_periods`` returns them.
+
+    Parameters
+    ----------
+    start, end : float
+        Bounds, ``start <= end``; ``-inf`` / ``inf`` for an unbounded end
+        (an alive feature keeps its last value for ever).
+    start_closed, end_closed : bool
+        Whether the bound itself belongs to the interval (always False for an
+        infinite bound). ``Period(t, t, True, True)`` is the single instant t.
+
+    Examples
+    --------
+    >>> p = Period(1.0, 2.0, True, False)   # [1, 2)
+    >>> 1.0 in p, 2.0 in p, str(p)
+    (True, False, '[1.0, 2.0)')
+    """
+
+    start: float
+    end: float
+    start_closed: bool
+    end_closed: bool
+
+    def __contains__(self, t: object) -> bool:
+        """Whether model time ``t`` lies in the interval (NaN never does)."""
+        if not isinstance(t, (int, float, np.floating, np.integer)):
+            return False
+        value = float(t)
+        after_start = self.start < value or (self.start_closed and value == self.start)
+        before_end = value < self.end or (self.end_closed and value == self.end)
+        return after_start and before_end
+
+    def __str__(self) -> str:
+        return f"{'[' if self.start_closed else '('}{self.start!r}, {self.end!r}{']' if self.end_closed else ')'}"
