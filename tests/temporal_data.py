@@ -17,9 +17,17 @@ def grid(side: int) -> tuple[np.ndarray, np.ndarray]:
     return vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
 
 
+def _values(rng: np.random.Generator, low: float, high: float, shape: tuple[int, ...], levels: int | None) -> np.ndarray:
+    """Uniform values, or with ``levels`` whole numbers 0..levels-1 (so that equal values and plateaus occur)."""
+    return rng.uniform(low, high, shape) if levels is None else rng.integers(0, levels, shape).astype(np.float64)
+
+
 def evolving(rng: np.random.Generator, starts: list[float], instants_per_period: int = 3, side: int = 5,
-             alive: bool = False, with_properties: bool = False) -> EvolvingSurface:
-    """Periods starting at ``starts`` (the last one lasting 1.0), each a grid of its own size whose nodes move randomly."""
+             alive: bool = False, with_properties: bool = False, levels: int | None = None) -> EvolvingSurface:
+    """Periods starting at ``starts`` (the last one lasting 1.0), each a grid of its own size whose nodes move randomly.
+
+    With ``levels``, porosity and throw are whole numbers below it.
+    """
     ends = [*starts[1:], starts[-1] + 1.0]
     periods = []
     for i, (t0, t1) in enumerate(zip(starts, ends)):
@@ -29,20 +37,24 @@ def evolving(rng: np.random.Generator, starts: list[float], instants_per_period:
         positions = vertices[None] + rng.normal(scale=0.1, size=(len(times), len(vertices), 3))
         extra = {}
         if with_properties:
-            extra = dict(vertex_properties={"porosity": rng.uniform(0, 0.4, (len(times), len(vertices)))},
-                         properties={"throw": rng.uniform(0, 100, len(times)), "note_code": np.arange(len(times))})
+            extra = dict(vertex_properties={"porosity": _values(rng, 0, 0.4, (len(times), len(vertices)), levels)},
+                         properties={"throw": _values(rng, 0, 100, (len(times),), levels),
+                                     "note_code": np.arange(len(times))})
         periods.append(TopologyPeriod(times, triangles, positions, **extra))
     return EvolvingSurface(periods, alive=alive, name="evolving fault")
 
 
 def series(rng: np.random.Generator, times: list[float], alive: bool = False,
-           with_properties: bool = False) -> SurfaceSeries:
-    """A surface at each instant, each a grid of its own size with random heights."""
+           with_properties: bool = False, levels: int | None = None) -> SurfaceSeries:
+    """A surface at each instant, each a grid of its own size with random heights.
+
+    With ``levels``, porosity and throw are whole numbers below it.
+    """
     surfaces = []
     for i, _ in enumerate(times):
         vertices, triangles = grid(3 + i)
         vertices[:, 2] = rng.normal(size=len(vertices))
-        props = {"porosity": rng.uniform(0, 0.4, len(vertices))} if with_properties else {}
+        props = {"porosity": _values(rng, 0, 0.4, (len(vertices),), levels)} if with_properties else {}
         surfaces.append(Surface(vertices, triangles, vertex_properties=props))
-    properties = {"throw": rng.uniform(0, 100, len(times))} if with_properties else {}
+    properties = {"throw": _values(rng, 0, 100, (len(times),), levels)} if with_properties else {}
     return SurfaceSeries(times, surfaces, properties=properties, alive=alive, name="stepped horizon")

@@ -19,10 +19,18 @@ SELECT 'relation ' || n.nspname || '.' || c.relname
   FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace
  WHERE n.nspname IN ('tgsis', 'public') AND c.relkind IN ('r', 'v', 'S') AND obj_description(c.oid, 'pg_class') IS NULL
 UNION ALL
+SELECT 'type ' || t.oid::regtype::text
+  FROM pg_type t JOIN pg_namespace n ON n.oid = t.typnamespace
+ WHERE n.nspname = 'tgsis' AND t.typtype IN ('r', 'm') AND obj_description(t.oid, 'pg_type') IS NULL
+UNION ALL
 SELECT 'function ' || p.oid::regprocedure::text
   FROM pg_proc p JOIN pg_namespace n ON n.oid = p.pronamespace
  WHERE (n.nspname = 'tgsis' OR (n.nspname = 'public' AND p.proname LIKE '%\\_ver\\_write'))
    AND obj_description(p.oid, 'pg_proc') IS NULL
+   -- constructors PostgreSQL makes for a range type (tgsis.timerange): owned by the bootstrap
+   -- superuser, so only a superuser may comment on them; the type's comment covers them
+   AND NOT EXISTS (SELECT FROM pg_depend d WHERE d.classid = 'pg_proc'::regclass AND d.objid = p.oid
+                      AND d.refclassid = 'pg_type'::regclass AND d.deptype = 'i')
 ORDER BY 1"""
 
 

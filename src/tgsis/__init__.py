@@ -93,13 +93,15 @@ from tgsis.db.temporal import (
     features_at,
     fetch_evolving,
     fetch_series,
+    first_times,
     frames_at,
     get_at,
     instants,
     lifespan,
+    property_periods,
     surfaces_at,
 )
-from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
+from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -232,6 +234,9 @@ __all__ = [
     "export_series",
     "write_series_pvd",
     "WrittenSeries",
+    "Period",
+    "property_periods",
+    "first_times",
     # errors
     "Error",
     "AlreadyExistsError",

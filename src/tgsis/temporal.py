@@ -53,7 +53,7 @@ from tgsis.mesh import PROPERTY_NAME_RE, Surface
 
 __all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color", "TemporalSurface",
            "SurfaceFrame", "WrittenSeries", "own_instants", "even_times", "series_frames", "write_frames_pvd",
-           "write_series_pvd"]
+           "write_series_pvd", "Period"]
 
 #: Step convention of model 2 queries.
 Convention = Literal["left", "right"]
@@ -529,3 +529,44 @@ def write_series_pvd(obj: TemporalSurface, path: PathLike, times: npt.ArrayLike 
     InvalidInputError, FileFormatError
     """
     return write_frames_pvd(series_frames(obj, times, convention), path, encoding=encoding)
+
+
+# --------------------------------------------------------------------------- answers of temporal questions
+
+
+@dataclass(frozen=True)
+class Period:
+    """An interval of model time, as ``tgsis.property_periods`` returns them.
+
+    Parameters
+    ----------
+    start, end : float
+        Bounds, ``start <= end``; ``-inf`` / ``inf`` for an unbounded end
+        (an alive feature keeps its last value for ever).
+    start_closed, end_closed : bool
+        Whether the bound itself belongs to the interval (always False for an
+        infinite bound). ``Period(t, t, True, True)`` is the single instant t.
+
+    Examples
+    --------
+    >>> p = Period(1.0, 2.0, True, False)   # [1, 2)
+    >>> 1.0 in p, 2.0 in p, str(p)
+    (True, False, '[1.0, 2.0)')
+    """
+
+    start: float
+    end: float
+    start_closed: bool
+    end_closed: bool
+
+    def __contains__(self, t: object) -> bool:
+        """Whether model time ``t`` lies in the interval (NaN never does)."""
+        if not isinstance(t, (int, float, np.floating, np.integer)):
+            return False
+        value = float(t)
+        after_start = self.start < value or (self.start_closed and value == self.start)
+        before_end = value < self.end or (self.end_closed and value == self.end)
+        return after_start and before_end
+
+    def __str__(self) -> str:
+        return f"{'[' if self.start_closed else '('}{self.start!r}, {self.end!r}{']' if self.end_closed else ')'}"

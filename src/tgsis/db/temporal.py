@@ -37,7 +37,7 @@ from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropert
 from tgsis.formats._common import PathLike
 from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Surface
-from tgsis.temporal import (Convention, EvolvingSurface, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
+from tgsis.temporal import (Convention, EvolvingSurface, Period, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
                             check_convention, check_time, even_times, write_frames_pvd)
 
 __all__ = [
@@ -54,6 +54,8 @@ __all__ = [
     "lifespan",
     "frames_at",
     "export_series",
+    "property_periods",
+    "first_times",
 ]
 
 log = logging.getLogger(__name__)
@@ -687,3 +689,102 @@ def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float |
                                     hint="give start, end and steps")
         times = np.asarray(own, dtype=np.float64)
     return write_frames_pvd(frames_at(conn, feature_id, times, convention=convention), path, encoding=encoding)
+
+
+# --------------------------------------------------------------------------- temporal questions
+
+
+def _class_name(feature_class: str | FeatureClass) -> str:
+    return feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
+
+
+def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str,
+                     value: float, *, convention: Convention = "left") -> list[Period]:
+    """The maximal periods over which a per-instant property of a feature satisfies ``prop op value``.
+
+    Computed in SQL by ``tgsis.property_periods``: model 2 (INSTANTS) as a
+    step function under ``convention`` (left-closed pieces ``[t_i, t_i+1)``,
+    the last instant ``[t_k, t_k]``; right-closed ``(t_i-1, t_i]``, the first
+    ``[t_0, t_0]``), model 3 (EVOLVING) linear between geometry instants with
+    crossing times by interpolation (closed at a crossing for ``<=``, ``>=``,
+    ``=``, open for ``<``, ``>``, ``<>``). An alive feature keeps its last
+    value: the last period may end at ``inf``. NULL or NaN values never
+    satisfy the condition. When the property first satisfies it is
+    ``periods[0].start`` (right after it if ``not periods[0].start_closed``).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+        An INSTANTS or EVOLVING class.
+    feature_id : int
+        A feature of that class.
+    prop : str
+        A numeric per-instant property of the class (column of ``<class>_pros``).
+    op : {"<", "<=", ">", ">=", "=", "<>"}
+    value : float
+        A number (infinities allowed, not NaN).
+    convention : {"left", "right"}
+        Step convention of model 2; not used by model 3.
+
+    Returns
+    -------
+    list of Period
+        Disjoint, ascending, not adjacent; empty when the condition never holds.
+
+    Raises
+    ------
+    NotFoundError
+        Unknown class, or the feature is not one of it.
+    InvalidPropertyError
+        Unknown or non-numeric per-instant property.
+    InvalidInputError
+        Static class, unknown operator or convention, NaN value.
+    """
+    with reraise(), conn.transaction():
+        rows = conn.execute(
+            "SELECT coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
+            "upper_inc(period) FROM tgsis.property_periods(%s, %s, %s, %s, %s, %s)",
+            (_class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention))).fetchall()
+    return [Period(float(r[0]), float(r[1]), bool(r[2]), bool(r[3])) for r in rows]
+
+
+def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str, value: float, *,
+                convention: Convention = "left") -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+    """For each vertex/node or cell of a feature, the first time its property satisfies ``prop op value``.
+
+    Computed in SQL by ``tgsis.first_time`` and downloaded with one binary
+    COPY into two arrays (for a million cells a dict would cost more than
+    the query). The first time is the infimum of the times at which the
+    condition holds (it may hold only right after it): model 2 stepwise,
+    left-closed the instant ``t_i`` itself, right-closed the instant before it
+    ``t_i-1`` (the value of ``t_i`` holds from right after ``t_i-1``), ``t_0``
+    for the first instant; model 3 linear between the geometry instants of
+    the topology period the node or triangle belongs to.
+
+    Parameters
+    ----------
+    conn, feature_class, feature_id, op, value, convention
+        As :func:`property_periods`.
+    prop : str
+        A numeric vertex or cell property of the class (column of ``<class>_cellpros``).
+
+    Returns
+    -------
+    idx : (n,) ndarray of int64
+        ``_idx`` (vertex/node or triangle id) of the n cells that ever satisfy
+        the condition, ascending; the others are absent.
+    t : (n,) ndarray of float64
+        Their first times.
+
+    Raises
+    ------
+    NotFoundError, InvalidPropertyError, InvalidInputError
+        As :func:`property_periods`.
+    """
+    query = sql.SQL("SELECT idx, t FROM tgsis.first_time({}, {}, {}, {}, {}, {})").format(
+        sql.Literal(_class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
+        sql.Literal(float(value)), sql.Literal(check_convention(convention)))
+    with reraise(), conn.transaction():
+        idx, t = _copy_out(conn, query, ["int8", "float8"])
+    return idx, t
