@@ -210,3 +210,16 @@ def test_fetch_evolving_round_trip(tx: Conn, faults: tgsis.FeatureClass) -> None
         np.testing.assert_array_equal(got.properties["note_code"], sent.properties["note_code"])
     with pytest.raises(tgsis.InvalidInputError, match="EVOLVING"):
         tgsis.fetch_series(tx, faults, fid)
+
+
+@pytest.mark.parametrize("function", ["vertices_at", "triangles_at", "exists_at"])
+def test_bad_convention_is_an_error_whatever_the_model_and_t(tx: Conn, faults: tgsis.FeatureClass,
+                                                            function: str) -> None:
+    fid = tgsis.insert_feature(tx, faults, evolving(np.random.default_rng(12), STARTS, with_properties=True))
+    static = tgsis.create_feature_class(tx, "plain_faults", "SURFACE")
+    vertices, triangles = grid(3)
+    sid = tgsis.insert_feature(tx, static, tgsis.Surface(vertices, triangles))
+    for geoid, t in ((fid, 0.0), (fid, -100.0), (sid, 0.0)):
+        with pytest.raises(psycopg.Error, match="convention 'middle'") as raised, tx.transaction():
+            tx.execute(f"SELECT * FROM tgsis.{function}(%s, %s, 'middle')", (geoid, t))
+        assert raised.value.sqlstate == "TG100"

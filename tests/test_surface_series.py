@@ -181,3 +181,11 @@ def test_fetch_series_round_trip(tx: Conn, horizons: tgsis.FeatureClass) -> None
         np.testing.assert_array_equal(got.triangles, surface.triangles)
         np.testing.assert_array_equal(got.vertex_properties["porosity"],
                                       surface.vertex_properties["porosity"].astype(np.float32))
+
+
+def test_bad_convention_is_an_error_outside_the_instants_too(tx: Conn, horizons: tgsis.FeatureClass) -> None:
+    fid = tgsis.insert_feature(tx, horizons, series(np.random.default_rng(7), TIMES, with_properties=True))
+    for t in (-500.0, -50.0, 500.0):
+        with pytest.raises(psycopg.Error, match="convention 'middle'") as raised, tx.transaction():
+            tx.execute("SELECT tgsis.instant_at(%s, %s, 'middle')", (fid, t))
+        assert raised.value.sqlstate == "TG100"

@@ -12,6 +12,7 @@ AS $$
            END
       FROM tgsis.geometry g
      WHERE g.geoid = p_geoid
+       AND tgsis.checked_convention(p_convention) IS NOT NULL  -- an error for every model, not only model 2
 $$;
 
 COMMENT ON FUNCTION tgsis.exists_at(bigint, double precision, text) IS

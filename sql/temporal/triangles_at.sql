@@ -8,6 +8,7 @@ AS $$
     SELECT c.trglid, c.nodeid1, c.nodeid2, c.nodeid3
       FROM tgsis.evolving_frame(p_geoid, p_t) f
       JOIN tgsis.d4dtrgl c ON c.geoid = p_geoid AND c.timem = f.timem
+     WHERE tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
     UNION ALL
     SELECT c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3
       FROM tgsis.times_trgl c
@@ -17,6 +18,7 @@ AS $$
       FROM tgsis.trgl c
      WHERE c.geoid = p_geoid
        AND EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = p_geoid AND g.timemodel = 'STATIC')
+       AND tgsis.checked_convention(p_convention) IS NOT NULL
 $$;
 
 COMMENT ON FUNCTION tgsis.triangles_at(bigint, double precision, text) IS

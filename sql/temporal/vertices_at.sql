@@ -13,6 +13,7 @@ AS $$
       FROM tgsis.evolving_frame(p_geoid, p_t) f
       JOIN tgsis.d4dvrtx a ON a.geoid = p_geoid AND a.timem = f.timem AND a.timet = f.t0
       JOIN tgsis.d4dvrtx b ON b.geoid = p_geoid AND b.timem = f.timem AND b.timet = f.t1 AND b.nodeid = a.nodeid
+     WHERE tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
     UNION ALL
     SELECT v.vrtxid, v.x, v.y, v.z
       FROM tgsis.times_vrtx v
@@ -22,6 +23,7 @@ AS $$
       FROM tgsis.vrtx v
      WHERE v.geoid = p_geoid
        AND EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = p_geoid AND g.timemodel = 'STATIC')
+       AND tgsis.checked_convention(p_convention) IS NOT NULL
 $$;
 
 COMMENT ON FUNCTION tgsis.vertices_at(bigint, double precision, text) IS
