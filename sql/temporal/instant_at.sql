@@ -11,15 +11,15 @@ AS $$
     SELECT CASE
                WHEN tgsis.checked_time(p_t) < s.first THEN NULL
                WHEN p_t > s.last THEN CASE WHEN g.alive THEN s.last END
-               WHEN v.convention = 'left'
+               WHEN lower(p_convention) = 'left'
                    THEN (SELECT max(i.times) FROM tgsis.times i WHERE i.geoid = p_geoid AND i.times <= p_t)
                ELSE (SELECT min(i.times) FROM tgsis.times i WHERE i.geoid = p_geoid AND i.times >= p_t)
            END
       FROM tgsis.geometry g,
            LATERAL (SELECT min(i.times) AS first, max(i.times) AS last FROM tgsis.times i WHERE i.geoid = p_geoid) s
-           -- checked whatever t and the geometry: a bad convention is an error, not an empty answer
-           , (SELECT tgsis.checked_convention(p_convention) AS convention) v
      WHERE g.geoid = p_geoid AND g.timemodel = 'INSTANTS'
+       -- a one-time filter, checked whatever t: a bad convention is an error, not an empty answer
+       AND tgsis.checked_convention(p_convention) IS NOT NULL
 $$;
 
 COMMENT ON FUNCTION tgsis.instant_at(bigint, double precision, text) IS
