@@ -356,7 +356,7 @@ def _time_args(t: float, convention: str) -> tuple[sql.Literal, sql.Literal]:
 def _assemble(geoid: int, ids: npt.NDArray[np.int64], xyz: Sequence[npt.NDArray[np.float64]],
               triangles: Sequence[npt.NDArray[np.int64]], name: str | None) -> Surface:
     """A Surface from vertex rows (ids in any order) and triangle rows pointing at those ids."""
-    order = np.argsort(ids, kind="stable")
+    order = _split(ids, ids, [geoid])[geoid]  # no sort when the rows come in id order
     sorted_ids = ids[order]
     vertices = np.stack([xyz[0][order], xyz[1][order], xyz[2][order]], axis=1)
     cells = np.stack([_positions(sorted_ids, t, "triangles", geoid) for t in triangles], axis=1) if len(triangles[0]) \
@@ -392,10 +392,13 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
             return None
         ids, x, y, z = _copy_out(conn, sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
             sql.Literal(feature_id), t_lit, c_lit), ["int8", "float8", "float8", "float8"])
-        _, a, b, c = _copy_out(conn, sql.SQL(
-            "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {}) ORDER BY trglid").format(
+        # ordered by trglid here, not by the server: a sort of every triangle there (on disk
+        # past work_mem) where the rows mostly come in stored order already
+        tid, a, b, c = _copy_out(conn, sql.SQL(
+            "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
             sql.Literal(feature_id), t_lit, c_lit), ["int8", "int8", "int8", "int8"])
-    return _assemble(feature_id, ids, (x, y, z), (a, b, c), row[1])
+    order = _split(tid, tid, [feature_id])[feature_id]
+    return _assemble(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
 
 
 def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
