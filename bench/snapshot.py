@@ -73,7 +73,8 @@ def vacuum_analyze(conn: Conn) -> None:
 
 
 def executor_s(conn: Conn, query: str, repeat: int) -> float:
-    """Median execution time the server reports for a query, in seconds."""
+    """Median execution time the server reports for a query, in seconds (JIT off, as get_at runs it)."""
+    conn.execute("SET LOCAL jit = off")
     samples = []
     for _ in range(repeat):
         row = conn.execute(f"EXPLAIN (ANALYZE, TIMING OFF, FORMAT JSON) {query}").fetchone()
@@ -85,6 +86,7 @@ def executor_s(conn: Conn, query: str, repeat: int) -> float:
 
 
 def plan(conn: Conn, query: str) -> str:
+    conn.execute("SET LOCAL jit = off")
     text = "\n".join(r[0] for r in conn.execute(f"EXPLAIN (ANALYZE, BUFFERS) {query}").fetchall())
     conn.rollback()
     return text
