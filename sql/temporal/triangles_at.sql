@@ -1,4 +1,6 @@
 -- tgsis.triangles_at(geoid, t, convention): the triangles of a surface at model time t, pointing at the vrtxid of tgsis.vertices_at.
+-- The period comes from a scalar subquery (a constant to the planner, as in
+-- tgsis.vertices_at): an index scan of that period, not a scan of every period.
 CREATE FUNCTION tgsis.triangles_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
 RETURNS TABLE (trglid bigint, vrtxid1 bigint, vrtxid2 bigint, vrtxid3 bigint)
 LANGUAGE sql
@@ -6,9 +8,9 @@ STABLE
 PARALLEL SAFE
 AS $$
     SELECT c.trglid, c.nodeid1, c.nodeid2, c.nodeid3
-      FROM tgsis.evolving_frame(p_geoid, p_t) f
-      JOIN tgsis.d4dtrgl c ON c.geoid = p_geoid AND c.timem = f.timem
-     WHERE tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
+      FROM tgsis.d4dtrgl c
+     WHERE c.geoid = p_geoid AND c.timem = (SELECT f.timem FROM tgsis.evolving_frame(p_geoid, p_t) f)
+       AND tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
     UNION ALL
     SELECT c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3
       FROM tgsis.times_trgl c

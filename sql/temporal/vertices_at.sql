@@ -1,19 +1,38 @@
 -- tgsis.vertices_at(geoid, t, convention): the vertices of a surface at model time t (ids as stored; any order).
 -- Model 3: nodes of the period containing t, each moved linearly between the
--- bracketing geometry instants, x(t) = x0 + w (x1 - x0). Model 2: the
--- vertices of the instant tgsis.instant_at chooses. Static geometries: their
--- vertices at every t. One set-based query.
+-- bracketing geometry instants, x(t) = x0 + w (x1 - x0); at a geometry
+-- instant exactly, the stored positions (one index scan, no join). Model 2:
+-- the vertices of the instant tgsis.instant_at chooses. Static geometries:
+-- their vertices at every t. One set-based query, inlined into the caller.
+--
+-- The frame is read through scalar subqueries (InitPlans), not joined: their
+-- values are constants to the planner, so each side of the join is an index
+-- scan of (geoid, timem, timet) that returns one instant's nodes in nodeid
+-- order, and the two sides merge-join (or hash-join) on nodeid. Joined to the
+-- frame instead, the planner could not bound d4dvrtx by the instants: it
+-- scanned every row of the table (all instants, all surfaces) into a hash
+-- join (see docs/performance.md).
 CREATE FUNCTION tgsis.vertices_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE sql
 STABLE
 PARALLEL SAFE
 AS $$
-    SELECT a.nodeid, a.x + f.w * (b.x - a.x), a.y + f.w * (b.y - a.y), a.z + f.w * (b.z - a.z)
-      FROM tgsis.evolving_frame(p_geoid, p_t) f
-      JOIN tgsis.d4dvrtx a ON a.geoid = p_geoid AND a.timem = f.timem AND a.timet = f.t0
-      JOIN tgsis.d4dvrtx b ON b.geoid = p_geoid AND b.timem = f.timem AND b.timet = f.t1 AND b.nodeid = a.nodeid
-     WHERE tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
+    WITH f AS MATERIALIZED (SELECT * FROM tgsis.evolving_frame(p_geoid, p_t))
+    SELECT a.nodeid, a.x + (SELECT f.w FROM f) * (b.x - a.x), a.y + (SELECT f.w FROM f) * (b.y - a.y),
+           a.z + (SELECT f.w FROM f) * (b.z - a.z)
+      FROM tgsis.d4dvrtx a
+      JOIN tgsis.d4dvrtx b ON b.nodeid = a.nodeid
+     WHERE a.geoid = p_geoid AND a.timem = (SELECT f.timem FROM f) AND a.timet = (SELECT f.t0 FROM f)
+       AND b.geoid = p_geoid AND b.timem = (SELECT f.timem FROM f) AND b.timet = (SELECT f.t1 FROM f)
+       AND (SELECT f.t0 < f.t1 FROM f)
+       AND tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
+    UNION ALL
+    SELECT a.nodeid, a.x, a.y, a.z
+      FROM tgsis.d4dvrtx a
+     WHERE a.geoid = p_geoid AND a.timem = (SELECT f.timem FROM f) AND a.timet = (SELECT f.t0 FROM f)
+       AND (SELECT f.t0 = f.t1 FROM f)
+       AND tgsis.checked_convention(p_convention) IS NOT NULL
     UNION ALL
     SELECT v.vrtxid, v.x, v.y, v.z
       FROM tgsis.times_vrtx v

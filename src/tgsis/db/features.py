@@ -540,9 +540,9 @@ def _split(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],
 
 def _positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: str, geoid: int) -> npt.NDArray[np.int64]:
     """Indices of ``lookup`` values in the sorted ``ids`` (vertex ids to mesh indices)."""
-    if len(ids) and ids[0] == 0 and ids[-1] == len(ids) - 1:
-        positions = lookup  # ids 0..n-1: index = id
-        if len(lookup) and (lookup.min() < 0 or lookup.max() >= len(ids)):
+    if len(ids) and ids[-1] - ids[0] == len(ids) - 1:
+        positions = lookup - ids[0] if ids[0] else lookup  # ids k..k+n-1 (unique): index = id - k
+        if len(lookup) and (positions.min() < 0 or positions.max() >= len(ids)):
             raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
                                        hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
         return positions
