@@ -189,3 +189,43 @@ def test_bad_convention_is_an_error_outside_the_instants_too(tx: Conn, horizons:
         with pytest.raises(psycopg.Error, match="convention 'middle'") as raised, tx.transaction():
             tx.execute("SELECT tgsis.instant_at(%s, %s, 'middle')", (fid, t))
         assert raised.value.sqlstate == "TG100"
+
+
+def test_bad_calls_raise_and_leave_the_database_unchanged(tx: Conn, horizons: tgsis.FeatureClass) -> None:
+    from tests.temporal_data import evolving
+
+    fid = tgsis.insert_feature(tx, horizons, series(np.random.default_rng(8), TIMES, with_properties=True))
+    moving = tgsis.create_feature_class(tx, "moving", "SURFACE", time_model="EVOLVING")
+    mid = tgsis.insert_feature(tx, moving, evolving(np.random.default_rng(8), [0.0]))
+    lines = tgsis.create_feature_class(tx, "lines", "MULTILINESTRING")
+
+    def snapshot() -> Any:
+        return tx.execute("SELECT (SELECT count(*) FROM tgsis.times), (SELECT count(*) FROM tgsis.times_vrtx),"
+                          " (SELECT count(*) FROM stepped_cellpros), (SELECT count(*) FROM stepped_pros),"
+                          " (SELECT count(*) FROM tgsis.geometry), (SELECT nvrtx FROM tgsis.geometry WHERE geoid = %s)",
+                          (fid,)).fetchone()
+
+    before = snapshot()
+    vertices, triangles = grid(3)
+    good = tgsis.Surface(vertices, triangles, vertex_properties={"porosity": np.zeros(9)})
+    with pytest.raises(tgsis.InvalidInputError, match="finite"):
+        tgsis.add_instant(tx, horizons, fid, float("nan"), good)
+    with pytest.raises(tgsis.InvalidPropertyError, match="porosity"):       # refused after the instant row was written
+        tgsis.add_instant(tx, horizons, fid, 7.0, tgsis.Surface(vertices, triangles))
+    with pytest.raises(tgsis.InvalidPropertyError, match="depth"):
+        tgsis.add_instant(tx, horizons, fid, 7.0, good, {"depth": 1.0})
+    with pytest.raises(tgsis.InvalidInputError, match="EVOLVING"):
+        tgsis.add_instant(tx, horizons, mid, 7.0, good)
+    with pytest.raises(tgsis.InvalidInputError, match="EVOLVING"):
+        tgsis.delete_instant(tx, mid, 0.0)
+    with pytest.raises(tgsis.NotFoundError):
+        tgsis.delete_instant(tx, 987654, 0.0)
+    with pytest.raises(tgsis.InvalidInputError, match="INSTANTS"):
+        tgsis.insert_feature(tx, moving, series(np.random.default_rng(9), [0.0]))
+    with pytest.raises(tgsis.NotFoundError, match="nowhere"):
+        tgsis.features_at(tx, "nowhere", 0.0)
+    with pytest.raises(tgsis.InvalidInputError, match="not surfaces"):
+        tgsis.surfaces_at(tx, lines, 0.0)
+    with pytest.raises(tgsis.InvalidInputError, match="NaN"):
+        tgsis.features_at(tx, horizons, float("nan"))
+    assert snapshot() == before

@@ -202,11 +202,16 @@ def cmd_class_create(args: argparse.Namespace) -> int:
     return 0
 
 
+def _unit(fc: FeatureClass) -> str:
+    """`` Ma``: the class's unit of model time for messages (empty when it records none)."""
+    return f" {fc.time_unit}" if fc.time_unit else ""
+
+
 def _time_label(fc: FeatureClass) -> str:
-    """`` EVOLVING, Ma``-like suffix naming the time model of a temporal class ('' for static ones)."""
+    """``, EVOLVING in Ma``-like suffix naming the time model of a temporal class ('' for static ones)."""
     if fc.time_model == "STATIC":
         return ""
-    return f", {fc.time_model}" + (f" in {fc.time_unit}" if fc.time_unit else "")
+    return f", {fc.time_model}" + (f" in{_unit(fc)}" if fc.time_unit else "")
 
 
 def cmd_class_list(args: argparse.Namespace) -> int:
@@ -324,11 +329,6 @@ def cmd_ls(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------- time
-
-
-def _unit(fc: FeatureClass) -> str:
-    """`` Ma``: the class's unit of model time for messages (empty when it records none)."""
-    return f" {fc.time_unit}" if fc.time_unit else ""
 
 
 def _life(span: tuple[float, float, bool] | None, fc: FeatureClass) -> str:

@@ -478,8 +478,11 @@ def insert_feature(
     if isinstance(mesh, (SurfaceSeries, EvolvingSurface)):
         from tgsis.db import temporal  # it builds on this module
 
-        store = temporal.insert_series if isinstance(mesh, SurfaceSeries) else temporal.insert_evolving
-        return store(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties)  # type: ignore[arg-type]
+        if isinstance(mesh, SurfaceSeries):
+            return temporal.insert_series(conn, fc, mesh, properties, name=name,
+                                          drop_extra_properties=drop_extra_properties)
+        return temporal.insert_evolving(conn, fc, mesh, properties, name=name,
+                                        drop_extra_properties=drop_extra_properties)
     if fc.time_model != "STATIC":
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.time_model} surfaces, not a static "
                                    f"{type(mesh).__name__}",

@@ -31,13 +31,13 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.db.copy import SQL_TYPES
+from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
                                _positions, _split, _Storage, get_feature_class)
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.formats._common import PathLike
 from tgsis.formats.vtk import Encoding
-from tgsis.mesh import Surface
+from tgsis.mesh import Geotype, Surface
 from tgsis.temporal import (Convention, EvolvingSurface, Period, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
                             check_convention, check_time, even_times, write_frames_pvd)
 
@@ -250,7 +250,7 @@ def instants(conn: Conn, feature_id: int) -> list[tuple[float, bool]]:
     Model 2: every instant (each has its own triangles). Model 3: every
     geometry instant; True where a topology period starts.
     """
-    with reraise():
+    with reraise(), conn.transaction():  # a savepoint: an error leaves the caller's transaction usable
         rows = conn.execute("SELECT t, topology FROM tgsis.geometry_instants(%s)", (feature_id,)).fetchall()
     return [(float(r[0]), bool(r[1])) for r in rows]
 
@@ -434,7 +434,7 @@ def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
                 convention: Convention = "left") -> list[int]:
     """Ids of the features of a class that exist at ``t`` (``tgsis.features_at``), ascending."""
     name = feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
-    with reraise():
+    with reraise(), conn.transaction():
         rows = conn.execute("SELECT * FROM tgsis.features_at(%s, %s, %s)",
                             (name, check_time(t), check_convention(convention))).fetchall()
     return [int(r[0]) for r in rows]
@@ -447,6 +447,9 @@ def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
     One COPY for the vertices and one for the triangles of all features.
     """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if fc.geotype != Geotype.SURFACE:
+        raise InvalidInputError(f"feature class {fc.name} holds {fc.geotype.value} features, not surfaces",
+                                hint="features_at lists the features of any class that exist at t")
     t_lit, c_lit = _time_args(t, convention)
     with reraise(), conn.transaction():
         alive = features_at(conn, fc, t, convention=convention)
@@ -499,15 +502,16 @@ def _instant_values(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[str
 
 def _property_arrays(fc: FeatureClass, values: Mapping[tuple[float, ...], list[Any]],
                      keys: Sequence[tuple[float, ...]]) -> dict[str, npt.NDArray[Any]]:
-    """Per-instant properties as arrays over ``keys`` (NaN / None where there is no row or NULL)."""
+    """Per-instant numeric properties as arrays over ``keys``, in their column's dtype (float64 with NaN where a
+    value is NULL or has no row); properties of other types are left out."""
     result: dict[str, npt.NDArray[Any]] = {}
     for i, prop in enumerate(fc.instant_properties):
+        if prop.type not in SQL_TYPES or prop.type == "boolean":
+            continue
         column = [values[k][i] if k in values else None for k in keys]
-        if prop.type in SQL_TYPES and prop.type != "boolean" and all(v is not None for v in column):
-            result[prop.name] = np.asarray(column, dtype=np.float64 if "precision" in prop.type or prop.type == "real"
-                                           else np.int64)
-        elif prop.type in SQL_TYPES and prop.type != "boolean":
-            result[prop.name] = np.asarray([np.nan if v is None else v for v in column], dtype=np.float64)
+        complete = all(v is not None for v in column)
+        result[prop.name] = (np.asarray(column, dtype=numpy_dtype(SQL_TYPES[prop.type])) if complete
+                             else np.asarray([np.nan if v is None else v for v in column], dtype=np.float64))
     return result
 
 
@@ -620,7 +624,7 @@ def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
     NotFoundError
         No geometry ``feature_id``.
     """
-    with reraise():
+    with reraise(), conn.transaction():
         row = conn.execute("SELECT g.timemodel, g.alive, i.first, i.last FROM tgsis.geometry g, "
                            "LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid)) i "
                            "WHERE g.geoid = %s", (feature_id,)).fetchone()
