@@ -101,6 +101,7 @@ from tgsis.db.temporal import (
     property_periods,
     surfaces_at,
 )
+from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
 from tgsis.mesh import (
     GeometryCollection,
@@ -205,6 +206,10 @@ __all__ = [
     "TetraMesh",
     "GeometryCollection",
     "mesh_class",
+    # mesh comparison (numpy, no database)
+    "MeshDiff",
+    "MeshIndex",
+    "compare_meshes",
     # feature classes and features
     "FeatureClass",
     "Feature",

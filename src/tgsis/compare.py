@@ -1,0 +1,391 @@
+"""Mesh comparison: which vertices and cells of an edited mesh are the old ones.
+
+A modeller edits a stored surface in a desktop tool and saves it back: the
+client holds the *edited* mesh, the database the *old* one. Writing only what
+changed needs the answer to "what changed", by the definitions of
+``../shared/spec/mesh-comparison.md``:
+
+- an edited-mesh vertex is **non-edited** when an old vertex has exactly the
+  same coordinates (that old vertex is non-edited too); all other vertices are
+  edited (old ones to remove, new ones to insert);
+- a cell is **non-edited** when its k vertices are non-edited and the other
+  mesh has a cell on the corresponding vertices *with the same orientation*
+  (an even permutation of them). A flipped edge makes two edited triangles
+  although all four vertices survive; a triangle whose normal was reversed is
+  edited too, since keeping the old row would lose the reversal.
+
+Equality is of numbers: ``-0.0`` equals ``0.0`` (they are the same
+coordinate), and a vertex moved by one ulp is edited. With ``tolerance > 0``
+a vertex within that Euclidean distance of an old vertex is non-edited (for
+clients that round coordinates); the old coordinates are then the ones kept.
+
+The same code compares point sets, line sets, surfaces and tetrahedral meshes
+(cells of k = 1, 2, 3, 4 vertices). Everything is vectorised numpy: rows
+(coordinate triples, sorted vertex tuples) are hashed to 64 bits, both sides
+sorted by hash and merged with ``searchsorted``, and every candidate pair is
+verified for exact equality, so a hash collision can never make a false
+match. ``scipy.spatial.cKDTree`` is used only for a non-zero tolerance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import InvalidGeometryError, InvalidInputError
+from tgsis.mesh import Mesh
+
+__all__ = ["MeshDiff", "MeshIndex", "compare_meshes"]
+
+IntArray = npt.NDArray[np.int64]
+U64Array = npt.NDArray[np.uint64]
+
+# odd 64-bit constants of splitmix64 / murmur3's finaliser: good avalanche, wrap-around arithmetic
+_MULTIPLIERS = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
+
+
+def _mix(h: U64Array) -> U64Array:
+    """splitmix64's finaliser, in place on a fresh array."""
+    h ^= h >> np.uint64(30)
+    h *= _MULTIPLIERS[1]
+    h ^= h >> np.uint64(27)
+    h *= _MULTIPLIERS[2]
+    h ^= h >> np.uint64(31)
+    return h
+
+
+def _row_hashes(columns: list[U64Array]) -> U64Array:
+    """A 64-bit hash of each row of k equal-length uint64 columns."""
+    h = np.full(len(columns[0]), _MULTIPLIERS[0], dtype=np.uint64)
+    for column in columns:
+        h ^= column
+        h = _mix(h)
+    return h
+
+
+def _coordinate_columns(vertices: npt.NDArray[np.float64]) -> list[U64Array]:
+    """The bits of the x, y and z coordinates, with ``-0.0`` made ``0.0`` (equal numbers, equal bits)."""
+    return [(np.ascontiguousarray(vertices[:, j], dtype=np.float64) + 0.0).view(np.uint64)  # -0.0 + 0.0 == +0.0
+            for j in range(3)]
+
+
+# Sorting (hash << 32 | row index) with np.sort is about twice as fast as
+# np.argsort of the hashes (measured: docs/performance.md): the order comes
+# out of the low bits. Rows whose 32-bit hash prefixes collide are paired
+# exactly by _match_crowded.
+_INDEX_BITS = np.uint64(32)
+_LOW = np.uint64((1 << 32) - 1)
+
+
+@dataclass(frozen=True)
+class _SortedRows:
+    """Rows (as k uint64 columns) in the order of their hashes, so that many comparisons can reuse them."""
+
+    columns: list[U64Array]
+    order: IntArray
+    sorted_hashes: U64Array
+    sorted_columns: list[U64Array]
+
+    @classmethod
+    def of(cls, columns: list[U64Array]) -> _SortedRows:
+        hashes = _row_hashes(columns)
+        n = len(hashes)
+        if n <= int(_LOW):
+            keys = (hashes & ~_LOW) | np.arange(n, dtype=np.uint64)
+            keys.sort()
+            order = (keys & _LOW).view(np.int64)
+            prefixes = keys >> _INDEX_BITS
+        else:  # beyond 2**32 rows the index does not fit in the low bits
+            order = np.argsort(hashes)
+            prefixes = hashes[order] >> _INDEX_BITS
+        # one column: the hash is a bijection of it (xor and splitmix's steps are invertible), so the
+        # sorted full hashes verify a match exactly; several columns are compared value by value
+        sorted_columns = [hashes[order]] if len(columns) == 1 else [c[order] for c in columns]
+        return cls(columns, order, prefixes, sorted_columns)
+
+    def __len__(self) -> int:
+        return len(self.order)
+
+    def unique_hash(self) -> npt.NDArray[np.bool_]:
+        """Per sorted position: whether no other row has the same hash prefix."""
+        s = self.sorted_hashes
+        alone = np.ones(len(s), dtype=bool)
+        if len(s) > 1:
+            same = s[1:] == s[:-1]
+            alone[1:] &= ~same
+            alone[:-1] &= ~same
+        return alone
+
+
+def _match(old: _SortedRows, new: _SortedRows) -> IntArray:
+    """For each row of ``new``, the index of the equal row of ``old`` (one-to-one), or -1.
+
+    Equal rows are paired in index order when either side repeats a row (not
+    a normal mesh) or different rows share a hash prefix (a collision).
+    """
+    result = np.full(len(new), -1, dtype=np.int64)
+    if len(old) == 0 or len(new) == 0:
+        return result
+    pos = np.searchsorted(old.sorted_hashes, new.sorted_hashes)  # queries in sorted order: a merge
+    np.minimum(pos, len(old) - 1, out=pos)
+    same_hash = old.sorted_hashes[pos] == new.sorted_hashes
+    simple = same_hash & old.unique_hash()[pos] & new.unique_hash()
+    at = pos[simple]  # both sides read in hash order: sequential memory access
+    exact = np.ones(len(at), dtype=bool)
+    for old_column, new_column in zip(old.sorted_columns, new.sorted_columns):
+        exact &= old_column[at] == new_column[simple]
+    result[new.order[simple][exact]] = old.order[at[exact]]
+    crowded = same_hash & ~simple  # a hash shared by several rows of one side: pair exactly, in index order
+    if crowded.any():
+        _match_crowded(old, new, np.unique(new.sorted_hashes[crowded]), result)
+    return result
+
+
+def _match_crowded(old: _SortedRows, new: _SortedRows, hashes: U64Array, result: IntArray) -> None:
+    """Pair the rows whose hash prefix is one of ``hashes`` by exact value (rare: collisions, repeated rows)."""
+    def rows_with(side: _SortedRows) -> IntArray:
+        lo = np.searchsorted(side.sorted_hashes, hashes, side="left")
+        hi = np.searchsorted(side.sorted_hashes, hashes, side="right")
+        return np.sort(np.concatenate([side.order[a:b] for a, b in zip(lo.tolist(), hi.tolist())]))
+
+    def row(side: _SortedRows, i: int) -> tuple[int, ...]:
+        return tuple(int(c[i]) for c in side.columns)
+
+    waiting: dict[tuple[int, ...], list[int]] = {}
+    for i in rows_with(old).tolist():
+        waiting.setdefault(row(old, i), []).append(i)
+    for taken in waiting.values():
+        taken.reverse()  # pop() from the end hands out the lowest index first
+    for j in rows_with(new).tolist():
+        queue = waiting.get(row(new, j))
+        if queue:
+            result[j] = queue.pop()
+
+
+def _permutation_parity(cells: IntArray) -> npt.NDArray[np.uint64]:
+    """0 for cells whose vertex order is an even permutation of the ascending order, 1 for odd."""
+    k = cells.shape[1]
+    columns = [np.ascontiguousarray(cells[:, i]) for i in range(k)]
+    odd = np.zeros(len(cells), dtype=bool)
+    for i in range(k):
+        for j in range(i + 1, k):
+            odd ^= columns[i] > columns[j]
+    return odd.astype(np.uint64)
+
+
+def _cell_columns(cells: IntArray, n_vertices: int) -> list[U64Array]:
+    """Oriented cells as rows: sorted vertex ids and the parity of the stored order.
+
+    When k ids of ``n_vertices`` and the parity bit fit in 64 bits (a
+    surface of up to 2M vertices) they are packed into one exact key.
+    """
+    k = cells.shape[1]
+    if k == 1:
+        return [cells[:, 0].astype(np.uint64)]
+    bits = max(1, (max(n_vertices, 1) - 1).bit_length())
+    if k == 3:  # the common case, with a sorting network on contiguous columns (3x faster than np.sort)
+        a, b, c = (np.ascontiguousarray(cells[:, i]).view(np.uint64) for i in range(3))
+        low, high = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+        ordered = [low, a + b + c - low - high, high]  # ids < 2**63: no overflow
+        parity = ((a > b) ^ (a > c) ^ (b > c)).view(np.uint8).astype(np.uint64)
+    else:
+        sorted_cells = np.sort(cells, axis=1).view(np.uint64)
+        ordered = [np.ascontiguousarray(sorted_cells[:, i]) for i in range(k)]
+        parity = _permutation_parity(cells)
+    if k * bits + 1 > 64:
+        return [*ordered, parity]
+    key = ordered[0].copy()
+    for column in ordered[1:]:
+        key <<= np.uint64(bits)
+        key |= column
+    key <<= np.uint64(1)
+    key |= parity
+    return [key]
+
+
+class MeshIndex:
+    """An old mesh prepared for comparisons: its vertex and cell rows hashed and sorted once.
+
+    :func:`tgsis.checkout` keeps one, so that a check-in hashes only the
+    edited mesh. Comparing against a ``MeshIndex`` gives the same result as
+    comparing against its mesh.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The old mesh (any of the four types).
+    """
+
+    def __init__(self, mesh: Mesh) -> None:
+        self.mesh = mesh
+        self._vertices = _SortedRows.of(_coordinate_columns(mesh.vertices))
+        self._cells = _SortedRows.of(_cell_columns(mesh.cells, mesh.n_vertices))
+        self._tree: Any = None
+
+    def tree(self) -> Any:
+        """A ``scipy.spatial.cKDTree`` of the vertices (built on first use)."""
+        if self._tree is None:
+            from scipy.spatial import cKDTree
+
+            self._tree = cKDTree(self.mesh.vertices)
+        return self._tree
+
+
+@dataclass(frozen=True)
+class MeshDiff:
+    """What changed from an old mesh to an edited one (see the module documentation).
+
+    Attributes
+    ----------
+    vertex_map : (n_edited,) int64
+        Per edited-mesh vertex, the index of the same old vertex, or -1 for an
+        edited (new) vertex.
+    cell_map : (m_edited,) int64
+        Per edited-mesh cell, the index of the same old cell, or -1 for an
+        edited (new) cell.
+    removed_vertices : (r,) int64
+        Old vertex indices that no edited vertex matches, ascending.
+    removed_cells : (s,) int64
+        Old cell indices that no edited cell matches, ascending.
+    n_old_vertices, n_old_cells : int
+        Sizes of the old mesh.
+    """
+
+    vertex_map: IntArray
+    cell_map: IntArray
+    removed_vertices: IntArray
+    removed_cells: IntArray
+    n_old_vertices: int
+    n_old_cells: int
+
+    @property
+    def added_vertices(self) -> IntArray:
+        """(a,) int64: edited-mesh indices of the new vertices, ascending."""
+        return np.flatnonzero(self.vertex_map < 0).astype(np.int64)
+
+    @property
+    def added_cells(self) -> IntArray:
+        """(b,) int64: edited-mesh indices of the new cells, ascending."""
+        return np.flatnonzero(self.cell_map < 0).astype(np.int64)
+
+    @property
+    def kept_vertices(self) -> IntArray:
+        """(n_edited - a,) int64: edited-mesh indices of the non-edited vertices."""
+        return np.flatnonzero(self.vertex_map >= 0).astype(np.int64)
+
+    @property
+    def kept_cells(self) -> IntArray:
+        """(m_edited - b,) int64: edited-mesh indices of the non-edited cells."""
+        return np.flatnonzero(self.cell_map >= 0).astype(np.int64)
+
+    @property
+    def identical(self) -> bool:
+        """Whether nothing was edited (same vertices and oriented cells, in any order)."""
+        return (len(self.removed_vertices) == 0 and len(self.removed_cells) == 0
+                and bool(np.all(self.vertex_map >= 0)) and bool(np.all(self.cell_map >= 0)))
+
+    def counts(self) -> dict[str, int]:
+        """Numbers of kept, removed and added vertices and cells."""
+        added_v, added_c = int(np.count_nonzero(self.vertex_map < 0)), int(np.count_nonzero(self.cell_map < 0))
+        return {"vertices_kept": len(self.vertex_map) - added_v, "vertices_removed": len(self.removed_vertices),
+                "vertices_added": added_v, "cells_kept": len(self.cell_map) - added_c,
+                "cells_removed": len(self.removed_cells), "cells_added": added_c}
+
+    def __repr__(self) -> str:
+        return "MeshDiff(" + ", ".join(f"{k}={v}" for k, v in self.counts().items()) + ")"
+
+
+def _tolerance_matches(index: MeshIndex, edited: Mesh, vertex_map: IntArray, tolerance: float) -> None:
+    """Match still-unmatched edited vertices to unmatched old vertices within ``tolerance`` (nearest first)."""
+    free_new = np.flatnonzero(vertex_map < 0)
+    if len(free_new) == 0 or index.mesh.n_vertices == 0:
+        return
+    taken = np.zeros(index.mesh.n_vertices, dtype=bool)
+    taken[vertex_map[vertex_map >= 0]] = True
+    # cKDTree's bound is strict (distance < bound): nudge it so that distance == tolerance counts
+    k = min(4, index.mesh.n_vertices)
+    distances, neighbours = index.tree().query(edited.vertices[free_new], k=k,
+                                               distance_upper_bound=float(np.nextafter(tolerance, np.inf)))
+    distances, neighbours = distances.reshape(len(free_new), k), neighbours.reshape(len(free_new), k)
+    # candidate pairs, nearest first; an old vertex goes to the nearest edited vertex that wants it
+    rows, cols = np.nonzero(np.isfinite(distances) & (distances <= tolerance))
+    pair_old = neighbours[rows, cols]
+    keep = ~taken[pair_old]
+    rows, pair_old, pair_distance = rows[keep], pair_old[keep], distances[rows, cols][keep]
+    order = np.lexsort((pair_old, pair_distance))
+    rows, pair_old = rows[order], pair_old[order]
+    assigned_new = np.zeros(len(free_new), dtype=bool)
+    for r, o in zip(rows.tolist(), pair_old.tolist()):  # only candidates within tolerance: few
+        if not assigned_new[r] and not taken[o]:
+            assigned_new[r] = True
+            taken[o] = True
+            vertex_map[free_new[r]] = o
+
+
+def compare_meshes(old: Mesh | MeshIndex, edited: Mesh, tolerance: float = 0.0) -> MeshDiff:
+    """Compare an edited mesh with the old one it was made from.
+
+    Parameters
+    ----------
+    old : Mesh or MeshIndex
+        The old mesh (a :class:`MeshIndex` of it reuses its hashes).
+    edited : Mesh
+        The edited mesh, of the same type (same cell size).
+    tolerance : float
+        0 (default): vertices match when their coordinates are equal. > 0:
+        when within this Euclidean distance (each old vertex matched at most
+        once, nearest pairs first).
+
+    Returns
+    -------
+    MeshDiff
+
+    Raises
+    ------
+    InvalidGeometryError
+        The meshes have cells of different sizes.
+    InvalidInputError
+        A negative or non-finite tolerance.
+    """
+    index = old if isinstance(old, MeshIndex) else MeshIndex(old)
+    old_mesh = index.mesh
+    if old_mesh.cell_size != edited.cell_size:
+        raise InvalidGeometryError(f"cannot compare a {type(old_mesh).__name__} with a {type(edited).__name__}: "
+                                   f"cells of {old_mesh.cell_size} and {edited.cell_size} vertices")
+    if not (np.isfinite(tolerance) and tolerance >= 0):
+        raise InvalidInputError(f"tolerance must be a finite number >= 0, got {tolerance}")
+
+    vertex_map = _match(index._vertices, _SortedRows.of(_coordinate_columns(edited.vertices)))
+    if tolerance > 0:
+        _tolerance_matches(index, edited, vertex_map, tolerance)
+
+    # edited cells on surviving vertices, renamed to old vertex indices, then matched as oriented rows
+    cell_map = np.full(edited.n_cells, -1, dtype=np.int64)
+    if edited.n_cells and old_mesh.n_cells:
+        renamed = vertex_map[edited.cells]
+        survives = renamed.min(axis=1) >= 0
+        if survives.all():
+            cell_map = _match(index._cells, _SortedRows.of(_cell_columns(renamed, old_mesh.n_vertices)))
+        elif survives.any():
+            candidates = np.flatnonzero(survives)
+            cell_map[candidates] = _match(index._cells,
+                                          _SortedRows.of(_cell_columns(renamed[candidates], old_mesh.n_vertices)))
+
+    return MeshDiff(
+        vertex_map=vertex_map,
+        cell_map=cell_map,
+        removed_vertices=_unmatched(old_mesh.n_vertices, vertex_map),
+        removed_cells=_unmatched(old_mesh.n_cells, cell_map),
+        n_old_vertices=old_mesh.n_vertices,
+        n_old_cells=old_mesh.n_cells,
+    )
+
+
+def _unmatched(count: int, mapping: IntArray) -> IntArray:
+    """Indices in ``range(count)`` that ``mapping`` does not hit, ascending."""
+    hit = np.zeros(count, dtype=bool)
+    hit[mapping[mapping >= 0]] = True
+    return np.flatnonzero(~hit).astype(np.int64)
