@@ -31,4 +31,5 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG300', 'versioning',       'versioning', 'a versioning error that fits no narrower code'),
     ('TG301', 'read_only_revision', 'versioning', 'a write while the session views an older revision, or into a frozen (saved) revision'),
     ('TG302', 'unsolved_conflicts', 'versioning', 'a merge or refresh while objects changed on both sides have no recorded solution'),
-    ('TG303', 'object_locked',    'versioning', 'a write (or merge) would change an object another version, or another role, holds a lock on');
+    ('TG303', 'object_locked',    'versioning', 'a write (or merge) would change an object another version, or another role, holds a lock on'),
+    ('TG304', 'checkout_conflict', 'versioning', 'a check-in of an object that another writer changed (or deleted) since it was checked out');

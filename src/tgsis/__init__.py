@@ -86,6 +86,15 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
+from tgsis.db.checkin import (
+    CheckinResult,
+    Checkout,
+    CheckoutToken,
+    SaveResult,
+    checkin,
+    checkout,
+    save_feature,
+)
 from tgsis.db.temporal import (
     add_instant,
     delete_instant,
@@ -129,6 +138,7 @@ from tgsis.errors import (
     MissingPrivilegeError,
     NotFoundError,
     ObjectLockedError,
+    CheckoutConflictError,
     ReadOnlyRevisionError,
     UnsolvedConflictsError,
     VersioningError,
@@ -222,6 +232,14 @@ __all__ = [
     "fetch_features",
     "features_in_box",
     "delete_feature",
+    # saving by difference, check-out and check-in
+    "save_feature",
+    "SaveResult",
+    "checkout",
+    "checkin",
+    "Checkout",
+    "CheckoutToken",
+    "CheckinResult",
     # time: surfaces at instants (model 2) and evolving surfaces (model 3)
     "SurfaceSeries",
     "EvolvingSurface",
@@ -257,6 +275,7 @@ __all__ = [
     "MissingPrivilegeError",
     "NotFoundError",
     "ObjectLockedError",
+    "CheckoutConflictError",
     "ReadOnlyRevisionError",
     "UnsolvedConflictsError",
     "VersioningError",

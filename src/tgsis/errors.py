@@ -32,6 +32,7 @@ __all__ = [
     "FileFormatError",
     "NotFoundError",
     "ObjectLockedError",
+    "CheckoutConflictError",
     "AlreadyExistsError",
     "InUseError",
     "VersioningError",
@@ -178,6 +179,12 @@ class ObjectLockedError(VersioningError):
     """A write (or merge) would change an object another version, or another role, holds a lock on."""
 
     code = "TG303"
+
+
+class CheckoutConflictError(VersioningError):
+    """A check-in of an object that another writer changed (or deleted) since it was checked out."""
+
+    code = "TG304"
 
 
 class DatabaseError(Error):

@@ -1,0 +1,62 @@
+-- tgsis.object_fingerprint(geoid): a digest of everything the session's version holds of a model-1 feature.
+-- Per table (the geometry row, its vertices, simplices, cell properties and
+-- feature row; a collection's members too) the row count and the xor of the
+-- 64-bit hashes of the whole rows (bit_xor is safe: a primary key never
+-- lets two equal rows cancel out), so that any insert, delete or change of
+-- a value shows, whatever the row order. Read through the tables' names,
+-- i.e. through the versioned views when versioning is on: it is the state
+-- the session sees. Check-out keeps it; check-in compares it (no lost update).
+CREATE FUNCTION tgsis.object_fingerprint(p_geoid bigint)
+RETURNS text
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_geo     record;
+    v_ids     bigint[];
+    v_class   record;
+    v_parts   text[] := '{}';
+    v_part    text;
+    v_table   text;
+BEGIN
+    SELECT geotype, timemodel INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
+    IF NOT FOUND THEN
+        RETURN NULL;
+    END IF;
+    IF v_geo.timemodel <> 'STATIC' THEN
+        RAISE EXCEPTION 'geometry % is temporal (%): fingerprints are of static (model-1) objects', p_geoid, v_geo.timemodel
+            USING ERRCODE = 'TG100';
+    END IF;
+    SELECT p_geoid || coalesce(array_agg(geoid ORDER BY geoid), '{}') INTO v_ids FROM tgsis.geometry WHERE collection = p_geoid;
+    -- rows of the geometry and feature tables hash as text: cube (bbox) and some
+    -- feature property types have no hash function, and there are few such rows
+    SELECT count(*) || ':' || coalesce(bit_xor(hashtextextended(g::text, 0)), 0) INTO v_part
+      FROM tgsis.geometry g WHERE g.geoid = ANY (v_ids);
+    v_parts := v_parts || ('geometry ' || v_part);
+    SELECT count(*) || ':' || coalesce(bit_xor(hash_record_extended(v, 0)), 0) INTO v_part
+      FROM tgsis.vrtx v WHERE v.geoid = ANY (v_ids);
+    v_parts := v_parts || ('vrtx ' || v_part);
+    FOR v_table IN SELECT DISTINCT tgsis.simplex_table(geotype) FROM tgsis.geometry
+                    WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' ORDER BY 1 LOOP
+        EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hash_record_extended(s, 0)), 0) FROM tgsis.%I s WHERE s.geoid = ANY ($1)',
+                       v_table)
+           INTO v_part USING v_ids;
+        v_parts := v_parts || (v_table || ' ' || v_part);
+    END LOOP;
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog
+                    WHERE geotype = v_geo.geotype AND timemodel = 'STATIC' ORDER BY classname LOOP
+        EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hashtextextended(f::text, 0)), 0) FROM %I.%I f WHERE f._geoid = $1',
+                       v_class.schemaname, v_class.featuretable)
+           INTO v_part USING p_geoid;
+        v_parts := v_parts || (v_class.featuretable || ' ' || v_part);
+        EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hash_record_extended(c, 0)), 0) FROM %I.%I c WHERE c._geoid = ANY ($1)',
+                       v_class.schemaname, v_class.cellprotable)
+           INTO v_part USING v_ids;
+        v_parts := v_parts || (v_class.cellprotable || ' ' || v_part);
+    END LOOP;
+    RETURN md5(array_to_string(v_parts, '|'));
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.object_fingerprint(bigint) IS
+    'digest (md5 of per-table row counts and xor of row hashes) of a static feature''s rows as the session''s version sees them: geometry, vertices, simplices, cell properties, feature row, members; NULL when the geometry does not exist';

@@ -1,0 +1,757 @@
+"""Save only what changed, and check-out / check-in without lost updates.
+
+A modeller checks a stored surface out, edits it in a desktop tool and checks
+it back in. :func:`save_feature` writes the edited mesh over a stored feature
+by difference (:func:`tgsis.compare_meshes`): deletes for the removed
+vertices, simplices and property rows, binary COPY inserts for the new ones,
+nothing for the rest, in one transaction. Unchanged vertices keep their
+database ids, so unchanged simplices keep pointing at them; on versioned
+tables a 1 % edit stores about 1 % new row versions instead of a copy.
+
+:func:`checkout` returns the mesh with a :class:`CheckoutToken` recording the
+version and revision it came from and a fingerprint of the stored object
+(``tgsis.object_fingerprint``). :func:`checkin` locks the object
+(``tgsis.check_unchanged``), compares the fingerprint with the database's
+current state and refuses with :class:`~tgsis.errors.CheckoutConflictError`
+when another writer changed the object meanwhile, or, with
+``on_conflict="child"``, writes the edit into a new child version so that
+nothing is lost; otherwise it saves the difference from the checked-out base.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import logging
+import os
+from collections.abc import Mapping
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
+from tgsis.edits import EditPlan, plan_edit
+from tgsis.db.copy import SQL_TYPES
+from tgsis.db.features import (
+    FeatureClass,
+    _aligned_properties,
+    _download,
+    _feature_columns,
+    _Part,
+    _positions,
+    _SIMPLEX,
+    _Storage,
+    class_of_feature,
+    get_feature_class,
+)
+from tgsis.errors import (
+    CheckoutConflictError,
+    FileFormatError,
+    InvalidGeometryError,
+    InvalidInputError,
+    NotFoundError,
+    reraise,
+)
+from tgsis.mesh import Geotype, Mesh, mesh_class
+
+__all__ = [
+    "StoredMesh",
+    "SaveResult",
+    "CheckoutToken",
+    "Checkout",
+    "CheckinResult",
+    "save_feature",
+    "checkout",
+    "checkin",
+]
+
+log = logging.getLogger(__name__)
+
+Conn = psycopg.Connection[Any]
+IntArray = npt.NDArray[np.int64]
+
+
+# --------------------------------------------------------------------------- the stored object with its ids
+
+
+@dataclass
+class StoredMesh:
+    """A stored model-1 geometry with the database ids of its rows.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        In stored id order, with the class's vertex or cell properties.
+    vertex_ids : (n,) int64
+        ``tgsis.vrtx.vrtxid`` of each vertex, ascending.
+    cell_ids : (m,) int64
+        Simplex id (``trglid``, ``segid``, ...) of each cell, ascending.
+    """
+
+    mesh: Mesh
+    vertex_ids: IntArray
+    cell_ids: IntArray
+
+
+def _feature_row(conn: Conn, fc: FeatureClass, geoid: int) -> tuple[str | None, str, dict[str, Any]]:
+    """(geoname, geotype, feature properties) of a feature; NotFoundError when the class has no such feature."""
+    props = [p.name for p in fc.feature_properties]
+    row = conn.execute(
+        sql.SQL("SELECT g.geoname, g.geotype{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
+                "WHERE f._geoid = %s").format(
+            sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
+            fc._table(fc.featuretable)), (geoid,)).fetchone()
+    if row is None:
+        raise NotFoundError(f"feature class {fc.name} has no feature {geoid}")
+    return row[0], row[1], dict(zip(props, row[2:]))
+
+
+def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> StoredMesh:
+    """Download one static, non-collection geometry with its row ids (three COPYs)."""
+    data = _download(conn, fc, {geoid: _Part(fc.geotype, name, f"feature {geoid} of class {fc.name}")})
+    _, vid, x, y, z = data.vertices
+    vorder = np.argsort(vid, kind="stable")
+    vertex_ids = vid[vorder]
+    cells = data.cells[fc.geotype]
+    corder = np.argsort(cells[1], kind="stable")
+    cell_ids = cells[1][corder]
+    table = _SIMPLEX[fc.geotype][0]
+    simplices = np.stack([_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
+        if len(cells) > 2 else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
+    values: dict[str, npt.NDArray[Any]] = {}
+    if fc.cell_properties:
+        pid = data.properties[1]
+        porder = np.argsort(pid, kind="stable")
+        targets = vertex_ids if fc.alignment == "VERTEX" else cell_ids
+        if not np.array_equal(pid[porder], targets):
+            raise InvalidGeometryError(f"feature {geoid} of class {fc.name}: {fc.cellprotable} has {len(pid)} rows "
+                                       f"that do not match its {len(targets)} "
+                                       f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}",
+                                       hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+        values = {p.name: data.properties[2 + i][porder] for i, p in enumerate(fc.cell_properties)}
+    mesh = mesh_class(fc.geotype)(
+        np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
+        vertex_properties=values if fc.alignment == "VERTEX" else None,
+        cell_properties=values if fc.alignment == "CELL" else None, name=name)
+    return StoredMesh(mesh, vertex_ids.astype(np.int64), cell_ids.astype(np.int64))
+
+
+def _checked_class(conn: Conn, feature_class: str | FeatureClass | None, feature_id: int) -> FeatureClass:
+    """The feature's class, refusing the kinds of features saving by difference does not handle."""
+    fc = (feature_class if isinstance(feature_class, FeatureClass)
+          else get_feature_class(conn, feature_class) if feature_class is not None
+          else class_of_feature(conn, feature_id))
+    if fc.time_model != "STATIC":
+        raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): check-out and saving by "
+                                "difference are for static (model-1) features",
+                                hint="store a new SurfaceSeries or EvolvingSurface, or edit its instants")
+    if fc.geotype is Geotype.GEOMETRYCOLLECTION:
+        raise InvalidInputError(f"feature class {fc.name} holds GEOMETRYCOLLECTION features: check-out and saving by "
+                                "difference take one mesh",
+                                hint="delete the feature and insert the edited collection (tgsis.insert_feature)")
+    return fc
+
+
+# --------------------------------------------------------------------------- save by difference
+
+
+@dataclass(frozen=True)
+class SaveResult:
+    """What a save by difference wrote.
+
+    Attributes
+    ----------
+    feature_id : int
+    version : str
+        The version written to.
+    diff : MeshDiff
+        Edited mesh against the stored one.
+    rows_deleted : int
+        Rows deleted or closed (vertices, simplices, property rows).
+    rows_inserted : int
+        Rows inserted (vertices, simplices, property rows).
+    rows_updated : int
+        Geometry and feature rows updated (bounding box, counts, name, feature properties).
+    property_rows_changed : int
+        Property rows of kept vertices or cells whose values changed (counted
+        in both ``rows_deleted`` and ``rows_inserted``).
+    vertices_moved : int
+        Removed-and-added vertex pairs written as one vertex moved
+        (:mod:`tgsis.edits`): its row rewritten, its cells kept.
+    """
+
+    feature_id: int
+    version: str
+    diff: MeshDiff
+    rows_deleted: int
+    rows_inserted: int
+    rows_updated: int
+    property_rows_changed: int
+    vertices_moved: int = 0
+
+    @property
+    def rows_written(self) -> int:
+        """All rows deleted, closed, inserted or updated."""
+        return self.rows_deleted + self.rows_inserted + self.rows_updated
+
+
+def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.bool_]:
+    """Elementwise equality in which NaN equals NaN (a NaN property that stays NaN is no change)."""
+    same: npt.NDArray[np.bool_] = a == b
+    if a.dtype.kind == "f":
+        same |= np.isnan(a) & np.isnan(b)
+    return same
+
+
+def _next_id(conn: Conn, storage: _Storage, table: str, key: str, idfield: str, geoid: int) -> int:
+    """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
+    target = table + "_ver" if ("tgsis", table) in storage.versioned else table
+    row = conn.execute(sql.SQL("SELECT max({}) FROM tgsis.{} WHERE {} = %s").format(
+        sql.Identifier(idfield), sql.Identifier(target), sql.Identifier(key)), (geoid,)).fetchone()
+    return 0 if row is None or row[0] is None else int(row[0]) + 1
+
+
+def _next_property_id(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: int) -> int:
+    target = fc.cellprotable + "_ver" if (fc.schema, fc.cellprotable) in storage.versioned else fc.cellprotable
+    row = conn.execute(sql.SQL("SELECT max(_idx) FROM {}.{} WHERE _geoid = %s").format(
+        sql.Identifier(fc.schema), sql.Identifier(target)), (geoid,)).fetchone()
+    return 0 if row is None or row[0] is None else int(row[0]) + 1
+
+
+def _delete_parts(conn: Conn, schema: str, table: str, key: str, geoid: int, idfield: str, ids: IntArray) -> int:
+    if len(ids) == 0:
+        return 0
+    row = conn.execute("SELECT tgsis.delete_object_parts(%s, %s, %s, %s, %s, %s)",
+                       (schema, table, key, geoid, idfield, ids.tolist())).fetchone()
+    return int(row[0]) if row else 0
+
+
+@dataclass(frozen=True)
+class _Written:
+    """Database ids of the edited mesh's vertices and cells after a save, and the row counts."""
+
+    vertex_ids: IntArray
+    cell_ids: IntArray
+    cell_values: Mapping[str, npt.NDArray[Any]]
+    deleted: int
+    inserted: int
+    property_changes: int
+
+
+def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: Mesh, plan: EditPlan,
+                cell_values: Mapping[str, npt.NDArray[Any]], storage: _Storage) -> _Written:
+    """Write the difference ``stored`` -> ``edited`` of one geometry in the session's version (caller's transaction).
+
+    Moved vertices are rewritten under their old id (delete + insert: on a
+    versioned table that is closing the old row version and adding one).
+    """
+    table, idfield = _SIMPLEX[fc.geotype]
+    if storage.versioned and ("tgsis", "vrtx") in storage.versioned:
+        conn.execute("SELECT tgsis.check_objects_unlocked(objectclass, ARRAY[%s]) FROM tgsis.versioned_tables "
+                     "WHERE schemaname = 'tgsis' AND tablename = 'vrtx'", (str(geoid),))
+
+    # ids: kept and moved vertices and kept cells keep theirs, new ones get fresh ones above every id used before
+    added_v, added_c, moved = plan.added_vertices, plan.added_cells, plan.moved_vertices
+    vertex_ids = np.empty(edited.n_vertices, dtype=np.int64)
+    kept_v = plan.vertex_map >= 0
+    vertex_ids[kept_v] = stored.vertex_ids[plan.vertex_map[kept_v]]
+    if len(added_v):
+        vertex_ids[added_v] = _next_id(conn, storage, "vrtx", "geoid", "vrtxid", geoid) + np.arange(len(added_v))
+    cell_ids = np.empty(edited.n_cells, dtype=np.int64)
+    kept_c = plan.cell_map >= 0
+    cell_ids[kept_c] = stored.cell_ids[plan.cell_map[kept_c]]
+    if len(added_c):
+        cell_ids[added_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(len(added_c))
+
+    # property rows: those of removed elements go, those of new elements come, changed values are replaced
+    deleted = inserted = changes = 0
+    if fc.cell_properties:
+        if fc.alignment == "VERTEX":
+            element_map, old_ids, new_ids, removed = plan.vertex_map, stored.vertex_ids, vertex_ids, plan.removed_vertices
+            old_values = stored.mesh.vertex_properties
+        else:
+            element_map, old_ids, new_ids, removed = plan.cell_map, stored.cell_ids, cell_ids, plan.removed_cells
+            old_values = stored.mesh.cell_properties
+        kept = np.flatnonzero(element_map >= 0)
+        changed = np.zeros(len(kept), dtype=bool)
+        for p in fc.cell_properties:
+            changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
+        rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
+        changes = int(changed.sum())
+        deleted += _delete_parts(conn, fc.schema, fc.cellprotable, "_geoid", geoid, "_idx",
+                                 np.concatenate([old_ids[removed], new_ids[kept[changed]]]))
+        if len(rewrite):
+            storage.copy(conn, fc.schema, fc.cellprotable, [
+                ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"), ("_idx", new_ids[rewrite], "int8"),
+                *((p.name, cell_values[p.name][rewrite], SQL_TYPES[p.type]) for p in fc.cell_properties)])
+            inserted += len(rewrite)
+
+    deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
+    deleted += _delete_parts(conn, "tgsis", "vrtx", "geoid", geoid, "vrtxid",
+                             np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]))
+    written_v = np.concatenate([moved, added_v])
+    if len(written_v):
+        xyz = edited.vertices[written_v]
+        storage.copy(conn, "tgsis", "vrtx", [
+            ("geoid", np.full(len(written_v), geoid, dtype=np.int64), "int8"), ("vrtxid", vertex_ids[written_v], "int8"),
+            ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+        inserted += len(written_v)
+    if len(added_c):
+        cells = vertex_ids[edited.cells[added_c]]
+        storage.copy(conn, "tgsis", table, [
+            ("geoid", np.full(len(added_c), geoid, dtype=np.int64), "int8"), (idfield, cell_ids[added_c], "int8"),
+            *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(edited.cell_size))])
+        inserted += len(added_c)
+    return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
+
+
+def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, name: str | None,
+                 feature_values: Mapping[str, Any] | None) -> int:
+    """Bring the geometry row (box, counts, name) and the feature row up to date; rows changed (0 when equal)."""
+    low, high = (edited.bounds().tolist() if edited.n_vertices else (None, None))
+    box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
+    changed = conn.execute(sql.SQL(
+        "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s, geoname = %(name)s "
+        "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s "
+        "OR geoname IS DISTINCT FROM %(name)s)").format(box=box),
+        {"low": low, "high": high, "n": edited.n_vertices, "m": edited.n_cells, "name": name, "g": geoid}).rowcount
+    if feature_values:
+        columns = list(feature_values)
+        changed += conn.execute(sql.SQL("UPDATE {} SET {} WHERE _geoid = %s AND ({}) IS DISTINCT FROM ({})").format(
+            fc._table(fc.featuretable),
+            sql.SQL(", ").join(sql.SQL("{} = %s").format(sql.Identifier(c)) for c in columns),
+            sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+            sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
+            [*feature_values.values(), geoid, *feature_values.values()]).rowcount
+    return max(changed, 0)
+
+
+def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: Mesh, plan: EditPlan,
+          properties: Mapping[str, Any] | None, name: str | None, drop_extra: bool) -> tuple[SaveResult, _Written]:
+    """Write the edit in the caller's transaction and describe it."""
+    if edited.geotype != fc.geotype:
+        raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
+                                   f"not {edited.geotype.value} ({type(edited).__name__})")
+    cell_values = _aligned_properties(fc, edited, drop_extra, "the edited mesh")
+    feature_values = _feature_columns(fc, properties)
+    storage = _Storage.of(conn)
+    written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
+    updated = _update_rows(conn, fc, geoid, edited, name, feature_values)
+    version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
+    result = SaveResult(geoid, version, plan.diff, written.deleted, written.inserted, updated,
+                        written.property_changes, len(plan.moved_vertices))
+    log.info("saved %s feature %d in %s by difference: %s, %d vertices moved; %d rows written", fc.name, geoid,
+             version, plan.diff, result.vertices_moved, result.rows_written)
+    return result, written
+
+
+def _plan(old: Mesh | MeshIndex, edited: Mesh, tolerance: float) -> EditPlan:
+    """Compare, then plan the rows to write."""
+    return plan_edit(old, edited, compare_meshes(old, edited, tolerance))
+
+
+def _new_name(name: str | None, edited: Mesh, stored_name: str | None) -> str | None:
+    """The geometry name after a save: the one asked for, else the edited mesh's, else the stored one."""
+    return name if name is not None else edited.name if edited.name is not None else stored_name
+
+
+def _mesh_arg(edited: Any) -> Mesh:
+    if not isinstance(edited, Mesh):
+        raise InvalidGeometryError(f"an edited mesh must be a PointSet, LineSet, Surface or TetraMesh, "
+                                   f"not {type(edited).__name__}")
+    return edited
+
+
+def save_feature(
+    conn: Conn,
+    feature_class: str | FeatureClass | None,
+    feature_id: int,
+    edited: Mesh,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    tolerance: float = 0.0,
+    drop_extra_properties: bool = False,
+) -> SaveResult:
+    """Write an edited mesh over a stored feature, by difference, in the session's version.
+
+    Compares ``edited`` with what the database holds now and writes only the
+    difference (one transaction). Unlike :func:`checkin` it does not ask
+    whether someone changed the feature since you read it: it is "save over".
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str, FeatureClass or None
+        None: found from the feature id.
+    feature_id : int
+    edited : Mesh
+        Of the class's geotype, with the class's vertex or cell properties.
+    properties : mapping, optional
+        Feature properties to change (others are left as they are).
+    name : str, optional
+        New geometry name (default: ``edited.name``, or the stored name when that is None).
+    tolerance : float
+        Vertex matching tolerance (see :func:`tgsis.compare_meshes`).
+    drop_extra_properties : bool
+        Ignore mesh properties the class does not store instead of failing.
+
+    Returns
+    -------
+    SaveResult
+
+    Raises
+    ------
+    NotFoundError, InvalidGeometryError, InvalidPropertyError, InvalidInputError
+        Nothing is written.
+    ReadOnlyRevisionError, ObjectLockedError, MissingPrivilegeError
+        The session may not write the feature in its version.
+    """
+    mesh = _mesh_arg(edited)
+    with reraise(), conn.transaction():
+        fc = _checked_class(conn, feature_class, feature_id)
+        conn.execute("SELECT tgsis.feature_write_lock(%s)", (feature_id,))
+        stored_name, _, _ = _feature_row(conn, fc, feature_id)
+        stored = _stored_mesh(conn, fc, feature_id, stored_name)
+        result, _ = _save(conn, fc, feature_id, stored, mesh, _plan(stored.mesh, mesh, tolerance), properties,
+                          _new_name(name, mesh, stored_name), drop_extra_properties)
+    return result
+
+
+# --------------------------------------------------------------------------- check-out / check-in
+
+
+@dataclass(frozen=True)
+class CheckoutToken:
+    """Where a checked-out mesh came from.
+
+    Attributes
+    ----------
+    feature_id : int
+    feature_class : str
+    version : str
+        The version it was checked out of (check-in writes there).
+    revision : int
+        That version's working revision at check-out.
+    fingerprint : str
+        ``tgsis.object_fingerprint`` of the feature at check-out.
+    database : str
+        ``current_database()`` at check-out.
+    checked_out_at : str
+        ISO time of the check-out.
+    """
+
+    feature_id: int
+    feature_class: str
+    version: str
+    revision: int
+    fingerprint: str
+    database: str
+    checked_out_at: str
+
+    def to_json(self) -> str:
+        """The token as a JSON object."""
+        return json.dumps(self.__dict__, sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> CheckoutToken:
+        """A token from :meth:`to_json`."""
+        try:
+            data = json.loads(text)
+            return cls(**{k: data[k] for k in cls.__dataclass_fields__})
+        except (ValueError, KeyError, TypeError) as exc:
+            raise FileFormatError(f"not a tgsis check-out token: {exc}") from None
+
+
+@dataclass
+class Checkout:
+    """A checked-out feature: the mesh to edit, and the base and token that check-in needs.
+
+    Attributes
+    ----------
+    token : CheckoutToken
+    base : StoredMesh
+        The feature as checked out, with its database ids (do not modify).
+    properties : dict
+        Feature properties at check-out.
+    mesh : Mesh
+        A copy of the base mesh to edit (or replace by any edited mesh).
+    """
+
+    token: CheckoutToken
+    base: StoredMesh
+    properties: dict[str, Any] = field(default_factory=dict)
+    mesh: Mesh = field(init=False)
+    _index: MeshIndex | None = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.mesh = self.base.mesh.copy()
+
+    def index(self) -> MeshIndex:
+        """The base mesh prepared for comparison (built on first use, so that check-in hashes only the edit)."""
+        if self._index is None:
+            self._index = MeshIndex(self.base.mesh)
+        return self._index
+
+    # ---- files (the command line keeps a check-out beside the edited file)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the token and base to ``path`` (a ``.npz`` file); returns the path."""
+        base = self.base.mesh
+        arrays: dict[str, Any] = {
+            "token": np.array(self.token.to_json()),
+            "properties": np.array(json.dumps(self.properties, default=str)),
+            "geotype": np.array(base.geotype.value),
+            "name": np.array(json.dumps(base.name)),
+            "vertices": base.vertices, "cells": base.cells,
+            "vertex_ids": self.base.vertex_ids, "cell_ids": self.base.cell_ids,
+        }
+        for kind, values in (("vertex", base.vertex_properties), ("cell", base.cell_properties)):
+            for key, array in values.items():
+                arrays[f"{kind}_property__{key}"] = array
+        target = Path(path)
+        with open(target, "wb") as out:
+            np.savez(out, **arrays)
+        return target
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Checkout:
+        """A check-out written by :meth:`save`."""
+        try:
+            with np.load(Path(path), allow_pickle=False) as data:
+                token = CheckoutToken.from_json(str(data["token"]))
+                props = {kind: {k.split("__", 1)[1]: data[k] for k in data.files if k.startswith(f"{kind}_property__")}
+                         for kind in ("vertex", "cell")}
+                mesh = mesh_class(Geotype(str(data["geotype"])))(
+                    data["vertices"], data["cells"], vertex_properties=props["vertex"],
+                    cell_properties=props["cell"], name=json.loads(str(data["name"])))
+                base = StoredMesh(mesh, data["vertex_ids"].astype(np.int64), data["cell_ids"].astype(np.int64))
+                properties = json.loads(str(data["properties"]))
+        except (OSError, ValueError, KeyError) as exc:
+            raise FileFormatError(f"{path}: not a tgsis check-out file: {exc}") from None
+        return cls(token, base, properties)
+
+
+@dataclass(frozen=True)
+class CheckinResult:
+    """What a check-in did.
+
+    Attributes
+    ----------
+    save : SaveResult
+        The rows written (in ``save.version``).
+    conflict : bool
+        True when the feature had changed since check-out and the edit went
+        into the new child version ``save.version`` (``on_conflict="child"``).
+    checkout : Checkout or None
+        With ``keep=True``: a check-out of the new state, to go on editing.
+    """
+
+    save: SaveResult
+    conflict: bool = False
+    checkout: Checkout | None = None
+
+    @property
+    def version(self) -> str:
+        """The version the edit was written to."""
+        return self.save.version
+
+
+def _working_state(conn: Conn) -> tuple[str, int]:
+    row = conn.execute("SELECT tgsis.get_working_version(), tgsis.get_working_revision()").fetchone()
+    assert row is not None
+    return str(row[0]), int(row[1])
+
+
+def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | None = None) -> Checkout:
+    """Check a feature out of the session's version for editing.
+
+    The mesh, its row ids and the fingerprint come from one snapshot.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_id : int
+    feature_class : str or FeatureClass, optional
+        Found from the id when omitted.
+
+    Returns
+    -------
+    Checkout
+        ``.mesh`` to edit; give it (or any edited mesh) to :func:`checkin`.
+
+    Raises
+    ------
+    NotFoundError
+        No such feature.
+    InvalidInputError
+        A temporal or GEOMETRYCOLLECTION feature.
+    """
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():
+        if fresh:  # one snapshot for the fingerprint and the rows
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        fc = _checked_class(conn, feature_class, feature_id)
+        name, _, properties = _feature_row(conn, fc, feature_id)
+        version, revision = _working_state(conn)
+        row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
+        assert row is not None
+        base = _stored_mesh(conn, fc, feature_id, name)
+    token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
+                          _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
+    log.info("checked out %s feature %d from %s at revision %d", fc.name, feature_id, version, revision)
+    return Checkout(token, base, properties)
+
+
+def _unique_version_name(conn: Conn, wanted: str) -> str:
+    name, n = wanted, 1
+    while conn.execute("SELECT 1 FROM tgsis.versions WHERE name = %s", (name,)).fetchone() is not None:
+        n += 1
+        name = f"{wanted}_{n}"
+    return name
+
+
+def checkin(
+    conn: Conn,
+    checked_out: Checkout,
+    edited: Mesh | None = None,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    tolerance: float = 0.0,
+    on_conflict: Literal["raise", "child"] = "raise",
+    child_version: str | None = None,
+    keep: bool = False,
+    drop_extra_properties: bool = False,
+) -> CheckinResult:
+    """Write an edited mesh back to the feature it was checked out as, if nobody changed the feature meanwhile.
+
+    In one transaction, in the version of the check-out: lock the feature
+    (``tgsis.feature_write_lock``, which other check-ins, saves and deletes
+    take too), compare its fingerprint with the token's and, when they are
+    equal, write the difference between the checked-out base and ``edited``
+    (:func:`save_feature` semantics). The comparison of the meshes runs
+    beside the server's fingerprint.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    checked_out : Checkout
+        From :func:`checkout` (or :meth:`Checkout.load`).
+    edited : Mesh, optional
+        The edited mesh (default: ``checked_out.mesh``).
+    properties : mapping, optional
+        Feature properties to change.
+    name : str, optional
+        New geometry name (default: ``edited.name``).
+    tolerance : float
+        Vertex matching tolerance (see :func:`tgsis.compare_meshes`).
+    on_conflict : {"raise", "child"}
+        When the feature changed since check-out: ``"raise"``
+        :class:`~tgsis.errors.CheckoutConflictError` and write nothing, or
+        ``"child"``: create a child version of the check-out's version (named
+        ``child_version``, default ``checkin_<id>``, made unique) and write
+        the edited mesh there, where it can be compared with the other
+        writer's and merged; the other writer's change stays in the parent.
+    child_version : str, optional
+        Name for that child version.
+    keep : bool
+        Return a new :class:`Checkout` of the written state, to go on editing.
+    drop_extra_properties : bool
+
+    Returns
+    -------
+    CheckinResult
+
+    Raises
+    ------
+    CheckoutConflictError
+        The feature changed (or was deleted) since check-out, with
+        ``on_conflict="raise"``; nothing is written.
+    NotFoundError, InvalidGeometryError, InvalidPropertyError, InvalidInputError
+        Nothing is written.
+    """
+    token = checked_out.token
+    mesh = _mesh_arg(edited if edited is not None else checked_out.mesh)
+    if on_conflict not in ("raise", "child"):
+        raise InvalidInputError(f"on_conflict must be 'raise' or 'child', not {on_conflict!r}")
+    with reraise(), conn.transaction():
+        database = conn.execute("SELECT current_database()").fetchone()
+        if database is None or database[0] != token.database:
+            raise InvalidInputError(f"feature {token.feature_id} was checked out of database {token.database!r}, "
+                                    f"not {database[0] if database else None!r}")
+        settings = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
+                                ).fetchone()
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (token.version,))
+        fc = _checked_class(conn, token.feature_class, token.feature_id)
+        with ThreadPoolExecutor(max_workers=1) as pool:  # numpy compares while the server fingerprints
+            pending = pool.submit(_plan, checked_out.index(), mesh, tolerance)
+            try:
+                with conn.transaction():
+                    conn.execute("SELECT tgsis.check_unchanged(%s, %s, %s)",
+                                 (token.feature_id, token.fingerprint, token.revision))
+                conflict = None
+            except psycopg.Error as exc:
+                if getattr(exc, "sqlstate", None) != CheckoutConflictError.code or on_conflict == "raise":
+                    raise
+                conflict = exc
+            plan = pending.result()
+        if conflict is None:
+            result, written = _save(conn, fc, token.feature_id, checked_out.base, mesh, plan, properties,
+                                    _new_name(name, mesh, checked_out.base.mesh.name), drop_extra_properties)
+        else:
+            result, written = _checkin_into_child(conn, fc, token, mesh, properties, name, tolerance,
+                                                  child_version, drop_extra_properties, str(conflict))
+        kept = _kept_checkout(conn, fc, token, mesh, written) if keep else None
+        assert settings is not None  # back to the caller's version for the rest of an enclosing transaction
+        conn.execute("SELECT set_config('tgsis.version', coalesce(%s, ''), true), "
+                     "set_config('tgsis.revision', coalesce(%s, ''), true)", (settings[0], settings[1]))
+    return CheckinResult(result, conflict is not None, kept)
+
+
+def _checkin_into_child(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh,
+                        properties: Mapping[str, Any] | None, name: str | None, tolerance: float,
+                        child_version: str | None, drop_extra: bool, reason: str) -> tuple[SaveResult, _Written]:
+    """Create a child of the check-out's version and save the edited mesh there over the feature's current state."""
+    versioned = conn.execute("SELECT 1 FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'vrtx'"
+                             ).fetchone()
+    if versioned is None:
+        raise CheckoutConflictError(
+            f"{reason.splitlines()[0]}; no child version can take the edit: feature versioning is off",
+            hint="tgsis.enable_feature_versioning(conn) (or `tgsis versioning enable`) makes on_conflict='child' work")
+    child = _unique_version_name(conn, child_version or f"checkin_{token.feature_id}")
+    conn.execute("SELECT tgsis.create_version(%s, %s, %s)",
+                 (child, token.version, f"check-in of feature {token.feature_id} checked out at revision "
+                                        f"{token.revision}, which conflicted in {token.version}"))
+    conn.execute("SELECT tgsis.goto_version(%s, true)", (child,))
+    stored_name, _, _ = _feature_row(conn, fc, token.feature_id)
+    stored = _stored_mesh(conn, fc, token.feature_id, stored_name)
+    log.warning("feature %d changed in %s since check-out: the edit goes into new child version %s",
+                token.feature_id, token.version, child)
+    return _save(conn, fc, token.feature_id, stored, mesh, _plan(stored.mesh, mesh, tolerance), properties, _new_name(name, mesh, stored_name),
+                 drop_extra)
+
+
+def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh, written: _Written) -> Checkout:
+    """A check-out of the state just written (same transaction), ordered by database id like a fresh check-out."""
+    version, revision = _working_state(conn)
+    row = conn.execute("SELECT tgsis.object_fingerprint(%s)", (token.feature_id,)).fetchone()
+    assert row is not None
+    name, _, properties = _feature_row(conn, fc, token.feature_id)
+    vorder, corder = np.argsort(written.vertex_ids), np.argsort(written.cell_ids)
+    rank = np.empty_like(vorder)
+    rank[vorder] = np.arange(len(vorder))
+    stored = {k: v[vorder if fc.alignment == "VERTEX" else corder] for k, v in written.cell_values.items()}
+    base_mesh = type(mesh)(mesh.vertices[vorder], rank[mesh.cells[corder]],
+                           vertex_properties=stored if fc.alignment == "VERTEX" else None,
+                           cell_properties=stored if fc.alignment == "CELL" else None, name=name)
+    new_token = replace(token, version=version, revision=revision, fingerprint=str(row[0]),
+                        checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
+    return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),
+                    properties)
