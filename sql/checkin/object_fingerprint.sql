@@ -1,8 +1,8 @@
 -- tgsis.object_fingerprint(geoid): a digest of everything the session's version holds of a model-1 feature.
 -- Per table (the geometry row, its vertices, simplices, cell properties and
 -- feature row; a collection's members too) the row count and the xor of the
--- 64-bit hashes of the whole rows (bit_xor is safe: a primary key never
--- lets two equal rows cancel out), so that any insert, delete or change of
+-- 64-bit hashes of the rows (tgsis.table_fingerprint; bit_xor is safe: a
+-- primary key never lets two equal rows cancel out), so that any insert, delete or change of
 -- a value shows, whatever the row order. Read through the tables' names,
 -- i.e. through the versioned views when versioning is on: it is the state
 -- the session sees. Check-out keeps it; check-in compares it (no lost update).
@@ -33,15 +33,12 @@ BEGIN
     SELECT count(*) || ':' || coalesce(bit_xor(hashtextextended(g::text, 0)), 0) INTO v_part
       FROM tgsis.geometry g WHERE g.geoid = ANY (v_ids);
     v_parts := v_parts || ('geometry ' || v_part);
-    SELECT count(*) || ':' || coalesce(bit_xor(hash_record_extended(v, 0)), 0) INTO v_part
-      FROM tgsis.vrtx v WHERE v.geoid = ANY (v_ids);
-    v_parts := v_parts || ('vrtx ' || v_part);
+    v_parts := v_parts || ('vrtx ' || tgsis.table_fingerprint('tgsis', 'vrtx', 'geoid', 'vrtxid', v_ids));
     FOR v_table IN SELECT DISTINCT tgsis.simplex_table(geotype) FROM tgsis.geometry
                     WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' ORDER BY 1 LOOP
-        EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hash_record_extended(s, 0)), 0) FROM tgsis.%I s WHERE s.geoid = ANY ($1)',
-                       v_table)
-           INTO v_part USING v_ids;
-        v_parts := v_parts || (v_table || ' ' || v_part);
+        v_parts := v_parts || (v_table || ' ' || tgsis.table_fingerprint(
+            'tgsis', v_table, 'geoid', CASE v_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid'
+                                                     WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END, v_ids));
     END LOOP;
     FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog
                     WHERE geotype = v_geo.geotype AND timemodel = 'STATIC' ORDER BY classname LOOP
@@ -49,10 +46,8 @@ BEGIN
                        v_class.schemaname, v_class.featuretable)
            INTO v_part USING p_geoid;
         v_parts := v_parts || (v_class.featuretable || ' ' || v_part);
-        EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hash_record_extended(c, 0)), 0) FROM %I.%I c WHERE c._geoid = ANY ($1)',
-                       v_class.schemaname, v_class.cellprotable)
-           INTO v_part USING v_ids;
-        v_parts := v_parts || (v_class.cellprotable || ' ' || v_part);
+        v_parts := v_parts || (v_class.cellprotable || ' ' || tgsis.table_fingerprint(
+            v_class.schemaname, v_class.cellprotable, '_geoid', '_idx', v_ids));
     END LOOP;
     RETURN md5(array_to_string(v_parts, '|'));
 END

@@ -21,6 +21,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
+import numpy as np
 import psycopg
 
 from psycopg import sql as psycopg_sql
@@ -325,6 +326,66 @@ def cmd_ls(args: argparse.Namespace) -> int:
         _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells{members}")
     if not rows:
         print("no features", file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------- check-out / check-in
+
+
+def _checkout_file(path: str) -> Path:
+    """Where ``tgsis checkout`` keeps the token and base of the mesh it wrote to ``path``."""
+    return Path(f"{path}.tgsis-checkout.npz")
+
+
+def cmd_checkout(args: argparse.Namespace) -> int:
+    from tgsis import formats
+    from tgsis.db.checkin import checkout
+
+    with _connect(args) as conn:
+        co = checkout(conn, args.id, args.feature_class)
+    formats.write(co.mesh, args.file, format=args.format)
+    written = formats.read_one(args.file, format=args.format)
+    if not np.array_equal(written.vertices, co.mesh.vertices):  # the format must keep every bit of the base
+        raise InvalidInputError(f"{args.file}: the format does not keep the coordinates exactly, so a check-in "
+                                "would see every vertex as moved", hint="use .ts (GOCAD) or .vtu (VTK)")
+    side = co.save(_checkout_file(args.file))
+    _out(f"checked out feature {co.token.feature_id} ({co.token.feature_class}, {co.mesh.n_vertices} vertices, "
+         f"{co.mesh.n_cells} {type(co.mesh).cell_name}s) of version {co.token.version} at revision "
+         f"{co.token.revision} to {args.file} (check-out record: {side})")
+    return 0
+
+
+def cmd_checkin(args: argparse.Namespace) -> int:
+    from tgsis import formats
+    from tgsis.db.checkin import Checkout, checkin
+
+    side = _checkout_file(args.file)
+    if not side.is_file():
+        raise NotFoundError(f"{args.file} was not checked out here: {side} is missing",
+                            hint="tgsis checkout ID FILE writes the file and its check-out record")
+    if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
+        raise InvalidInputError(f"--tolerance must be a finite number >= 0, got {args.tolerance}")
+    co = Checkout.load(side)
+    edited = formats.read_one(args.file, format=args.format)
+    with connect(args.dsn) as conn:  # the check-out's version, whatever version commands work in now
+        result = checkin(conn, co, edited, _feature_values(args.set) or None, name=args.name,
+                         tolerance=args.tolerance, on_conflict=args.on_conflict, child_version=args.child_version,
+                         keep=not args.no_keep, drop_extra_properties=args.drop_extra_properties)
+    save = result.save
+    counts = save.diff.counts()
+    _out(f"checked in feature {save.feature_id} into version {save.version}"
+         + (" (a new child version: the feature had changed since check-out)" if result.conflict else ""))
+    _out(f"  vertices: {counts['vertices_kept']} kept, {save.vertices_moved} moved, "
+         f"{counts['vertices_removed'] - save.vertices_moved} removed, {counts['vertices_added'] - save.vertices_moved} "
+         f"added; {type(edited).cell_name}s: {counts['cells_kept']} kept by definition, "
+         f"{counts['cells_removed']} removed, {counts['cells_added']} added")
+    _out(f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
+         f"{save.rows_updated} updated)")
+    if result.checkout is not None and not result.conflict:
+        result.checkout.save(side)
+    elif result.conflict:
+        _out(f"  compare and merge: tgsis version diff {co.token.version} {save.version}; "
+             f"tgsis version merge {save.version}")
     return 0
 
 
@@ -781,6 +842,33 @@ def build_parser() -> argparse.ArgumentParser:
     series.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                         help="step convention of a surface known at instants (default: left)")
     series.set_defaults(handler=cmd_series)
+
+    co = commands.add_parser("checkout", help="write a feature to a file for editing, recording what it was")
+    co.add_argument("id", type=int)
+    co.add_argument("file", help="the file to edit (.ts, .vtk, .vtu, ...); the record goes to FILE.tgsis-checkout.npz")
+    co.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
+    co.add_argument("--format", help="file format (default: from the extension)")
+    co.set_defaults(handler=cmd_checkout)
+
+    ci = commands.add_parser("checkin", help="write an edited file back by difference, unless the feature changed "
+                                             "since check-out")
+    ci.add_argument("file", help="a file written by tgsis checkout, edited")
+    ci.add_argument("--format", help="file format (default: from the extension)")
+    ci.add_argument("--tolerance", type=float, default=0.0, metavar="T",
+                    help="vertices within distance T of a checked-out vertex are unchanged (default 0: equal "
+                         "coordinates)")
+    ci.add_argument("--on-conflict", choices=("raise", "child"), default="raise",
+                    help="when the feature changed since check-out: fail (default) or write the edit into a new "
+                         "child version")
+    ci.add_argument("--child-version", metavar="NAME", help="name of that child version (default checkin_ID)")
+    ci.add_argument("--name", help="new feature name")
+    ci.add_argument("--set", action="append", metavar="NAME=VALUE", help="a feature property value (repeatable)")
+    ci.add_argument("--drop-extra-properties", action="store_true",
+                    help="ignore properties of the file that the class does not store")
+    ci.add_argument("--no-keep", dest="no_keep", action="store_true",
+                    help="do not update the check-out record (by default it follows the new state, so that the "
+                         "file can be edited and checked in again)")
+    ci.set_defaults(handler=cmd_checkin)
 
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")

@@ -87,13 +87,18 @@ def _one_missing_keys(cells: IntArray, mapped: IntArray, sentinel: int) -> tuple
     return rows.astype(np.int64), vertex.astype(np.int64), _cell_columns(keyed, sentinel + 1)
 
 
-def _pair_moves(old: Mesh, edited: Mesh, vertex_map: IntArray, old_free: npt.NDArray[np.bool_]) -> int:
-    """One round: pair new vertices with removed old ones whose one-missing cells match; returns pairs made."""
-    sentinel = old.n_vertices  # above every old vertex index
-    old_mapped = np.where(old_free[old.cells], -1, old.cells)
-    new_mapped = vertex_map[edited.cells]
-    old_rows, old_vertex, old_keys = _one_missing_keys(old.cells, old_mapped, sentinel)
-    new_rows, new_vertex, new_keys = _one_missing_keys(edited.cells, new_mapped, sentinel)
+def _pair_moves(old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_map: IntArray,
+                old_free: npt.NDArray[np.bool_]) -> int:
+    """One round: pair new vertices with removed old ones whose one-missing cells match; returns pairs made.
+
+    ``old_cells`` are the removed old cells, ``new_cells`` the added edited
+    cells (the only ones a move can explain); ``sentinel`` is above every old
+    vertex index.
+    """
+    old_mapped = np.where(old_free[old_cells], -1, old_cells)
+    new_mapped = vertex_map[new_cells]
+    old_rows, old_vertex, old_keys = _one_missing_keys(old_cells, old_mapped, sentinel)
+    new_rows, new_vertex, new_keys = _one_missing_keys(new_cells, new_mapped, sentinel)
     if len(old_rows) == 0 or len(new_rows) == 0:
         return 0
     hit = _match(_SortedRows.of(old_keys), _SortedRows.of(new_keys))
@@ -103,17 +108,18 @@ def _pair_moves(old: Mesh, edited: Mesh, vertex_map: IntArray, old_free: npt.NDA
     pair_new, pair_old = new_vertex[matched], old_vertex[hit[matched]]
     if len(pair_new) == 0:
         return 0
-    pairs, votes = np.unique(np.stack([pair_new, pair_old], axis=1), axis=0, return_counts=True)
-    new_cells = np.bincount(new_vertex, minlength=edited.n_vertices)
-    old_cells = np.bincount(old_vertex, minlength=old.n_vertices)
-    candidates_of_new = np.bincount(pairs[:, 0], minlength=edited.n_vertices)
-    candidates_of_old = np.bincount(pairs[:, 1], minlength=old.n_vertices)
-    good = ((candidates_of_new[pairs[:, 0]] == 1) & (candidates_of_old[pairs[:, 1]] == 1)
-            & (votes == new_cells[pairs[:, 0]]) & (votes == old_cells[pairs[:, 1]]))
-    accepted = pairs[good]
-    vertex_map[accepted[:, 0]] = accepted[:, 1]
-    old_free[accepted[:, 1]] = False
-    return len(accepted)
+    pairs, votes = np.unique(pair_new * np.int64(sentinel + 1) + pair_old, return_counts=True)
+    pair_new, pair_old = pairs // (sentinel + 1), pairs % (sentinel + 1)
+    size = max(len(vertex_map), sentinel)
+    new_cells_of = np.bincount(new_vertex, minlength=size)
+    old_cells_of = np.bincount(old_vertex, minlength=size)
+    candidates_of_new = np.bincount(pair_new, minlength=size)
+    candidates_of_old = np.bincount(pair_old, minlength=size)
+    good = ((candidates_of_new[pair_new] == 1) & (candidates_of_old[pair_old] == 1)
+            & (votes == new_cells_of[pair_new]) & (votes == old_cells_of[pair_old]))
+    vertex_map[pair_new[good]] = pair_old[good]
+    old_free[pair_old[good]] = False
+    return int(good.sum())
 
 
 def plan_edit(old: Mesh | MeshIndex, edited: Mesh, diff: MeshDiff) -> EditPlan:
@@ -131,23 +137,26 @@ def plan_edit(old: Mesh | MeshIndex, edited: Mesh, diff: MeshDiff) -> EditPlan:
     -------
     EditPlan
     """
-    index = old if isinstance(old, MeshIndex) else MeshIndex(old)
-    old_mesh = index.mesh
+    old_mesh = old.mesh if isinstance(old, MeshIndex) else old
     vertex_map = diff.vertex_map.copy()
     old_free = np.zeros(old_mesh.n_vertices, dtype=bool)
     old_free[diff.removed_vertices] = True
-    if edited.cell_size > 1 and old_free.any() and bool(np.any(vertex_map < 0)):
+    # only removed old cells and added edited cells can be explained by moves: work on them alone
+    old_cells, new_cells = old_mesh.cells[diff.removed_cells], edited.cells[diff.added_cells]
+    if edited.cell_size > 1 and old_free.any() and len(new_cells):
         for _ in range(_ROUNDS):
-            if _pair_moves(old_mesh, edited, vertex_map, old_free) == 0:
+            if _pair_moves(old_cells, new_cells, old_mesh.n_vertices, vertex_map, old_free) == 0:
                 break
     moved = (vertex_map >= 0) & (diff.vertex_map < 0)
     cell_map = diff.cell_map
-    if moved.any():  # cells around moved vertices are the old cells again
-        cell_map = np.full(edited.n_cells, -1, dtype=np.int64)
-        renamed = vertex_map[edited.cells]
+    if moved.any():  # added cells around moved vertices may be removed old cells again
+        cell_map = cell_map.copy()
+        renamed = vertex_map[new_cells]
         survives = np.flatnonzero(renamed.min(axis=1) >= 0)
         if len(survives):
-            cell_map[survives] = _match(index._cells, _SortedRows.of(_cell_columns(renamed[survives],
-                                                                                   old_mesh.n_vertices)))
+            hit = _match(_SortedRows.of(_cell_columns(old_cells, old_mesh.n_vertices)),
+                         _SortedRows.of(_cell_columns(renamed[survives], old_mesh.n_vertices)))
+            found = hit >= 0
+            cell_map[diff.added_cells[survives[found]]] = diff.removed_cells[hit[found]]
     return EditPlan(diff, vertex_map, moved, cell_map, _unmatched(old_mesh.n_vertices, vertex_map),
                     _unmatched(old_mesh.n_cells, cell_map))
