@@ -407,6 +407,12 @@ def test_bad_saves_and_checkins_change_nothing(conn: Conn, horizons: F.FeatureCl
     with pytest.raises(tgsis.InvalidInputError, match="elsewhere"):
         tgsis.checkin(conn, other, base)
     conn.rollback()
+    # a snapshot that would not see a concurrent check-in's commit
+    with conn.transaction():
+        conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+        with pytest.raises(tgsis.InvalidInputError, match="repeatable read"):
+            tgsis.checkin(conn, co, base)
+    conn.rollback()
     # after all that, the token is still good
     tgsis.checkin(conn, co, _edit(co.mesh, 0.1))  # type: ignore[arg-type]
     conn.commit()
@@ -432,3 +438,37 @@ def test_fingerprint_sees_every_kind_of_change(conn: Conn, horizons: F.FeatureCl
         now = _fingerprint(conn, fid)
         assert now not in seen, change
         seen.add(now)
+
+
+# --------------------------------------------------------------------------- real data: two releases of the CFM
+
+
+def test_cfm_releases_checked_in_over_each_other(conn: Conn) -> None:
+    """CFM 6.1 checked in over 5.3: the re-exported Garlock fault writes almost nothing with a tolerance,
+    the re-interpreted Oceanic fault is rewritten, exactly."""
+    from tests.shared_data import cfm
+    from tgsis import formats
+
+    fc = F.create_feature_class(conn, "faults", "SURFACE")
+    conn.commit()
+    for name, tolerance, expect_small in (("GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts", 1e-2, True),
+                                          ("CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m.ts", 0.0, False)):
+        old, new = formats.read_one(cfm(f"cfm5.3/{name}")), formats.read_one(cfm(f"cfm6.1/{name}"))
+        fid = F.insert_feature(conn, fc, old)
+        conn.commit()
+        co = tgsis.checkout(conn, fid)
+        result = tgsis.checkin(conn, co, new, tolerance=tolerance)
+        conn.commit()
+        stored = F.fetch_feature(conn, fc, fid).mesh
+        assert isinstance(stored, tgsis.Surface)
+        rows = 2 * old.n_vertices + old.n_cells  # vertices, triangles, and the mesh's own count again for scale
+        if expect_small:
+            # every vertex within 1 cm keeps its stored (5.3) coordinates; only 4 triangles differ
+            assert result.save.diff.counts()["vertices_kept"] == new.n_vertices
+            assert result.save.rows_written <= 10 and result.save.rows_written < 0.01 * rows
+            diff = tgsis.compare_meshes(new, stored, tolerance=tolerance)
+            assert diff.identical
+            assert np.abs(stored.vertices - new.vertices[diff.vertex_map]).max() <= tolerance
+        else:
+            assert _same_surface(stored, new)
+            assert result.save.rows_written > new.n_vertices

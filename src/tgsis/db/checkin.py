@@ -682,7 +682,11 @@ def checkin(
     if on_conflict not in ("raise", "child"):
         raise InvalidInputError(f"on_conflict must be 'raise' or 'child', not {on_conflict!r}")
     with reraise(), conn.transaction():
-        database = conn.execute("SELECT current_database()").fetchone()
+        database = conn.execute("SELECT current_database(), current_setting('transaction_isolation')").fetchone()
+        if database is not None and database[1] != "read committed":
+            raise InvalidInputError(f"check-in runs in a {database[1]} transaction: it must see commits made while "
+                                    "it waits for the feature's lock",
+                                    hint="check in outside a transaction, or in a READ COMMITTED one")
         if database is None or database[0] != token.database:
             raise InvalidInputError(f"feature {token.feature_id} was checked out of database {token.database!r}, "
                                     f"not {database[0] if database else None!r}")
