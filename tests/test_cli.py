@@ -88,15 +88,23 @@ def test_demo_runs_the_release_story(tmp_path: Path) -> None:
         assert lines[4].startswith("1. stored 3 faults of release 5.3 in DEFAULT")
         assert lines[5].endswith(": CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m, "
                                  "CRFA-SLRS-MULT-San_Luis_Range_fault_system-CFM4_1000m")
-        assert lines[6].startswith("3. version cfm6.1: replaced 3 changed fault(s)")
+        assert lines[6].startswith("3. version cfm6.1: release 6.1 checked in over 3 fault(s) by difference")
+        # the re-exported Garlock fault: every vertex kept within 1 cm, a handful of rows instead of 6754
+        garlock = next(line for line in lines[7:10] if "Garlock" in line)
+        assert "1746 of 1746 vertices kept, 0 moved" in garlock and "(a full upload: 6754)" in garlock
+        assert int(garlock.split("; ")[1].split()[0]) <= 12
         assert "Oceanic_fault-CFM5_1000m: DEFAULT sees release 5.3 (716 vertices); " \
                "cfm6.1 sees release 6.1 (722 vertices)" in result.stdout
         assert "    cfm6.1 from DEFAULT@0: revisions 2 (release-6.1), 3; working 3" in result.stdout
         history = lines.index("5. fault history (model 3): CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m slipping 500 m "
-                              "at depth from -2.0 Ma to today, stored as feature 7 of class fault_history (EVOLVING)")
+                              "at depth from -2.0 Ma to today, stored as feature 4 of class fault_history (EVOLVING)")
         assert lines[history + 1:history + 3] == [
             "   at -1.0 Ma (SQL snapshot): 716 vertices, the deepest 250 m from where it is today",
             f"   21 frames from -2.0 to 0.0 Ma written to {tmp_path / 'demo' / 'fault_history.pvd'} (open it in ParaView)"]
+        lost = lines.index("6. no lost update: ann and bob check out feature 3 in DEFAULT and both edit it")
+        assert lines[lost + 1].startswith("   ann checks in first; bob's check-in is refused: feature 3 was changed in "
+                                          "version 'DEFAULT' since it was checked out")
+        assert lines[lost + 2].startswith("   with on_conflict='child' bob's edit goes into new version bob_edit")
         frames = read_pvd(tmp_path / "demo" / "fault_history.pvd")
         assert [t for t, _ in frames] == np.linspace(-2.0, 0.0, 21).tolist()
         assert all(isinstance(g, tgsis.Surface) and g.n_vertices == 716 for _, g in frames)
@@ -110,7 +118,9 @@ def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> N
         result = tgsis_cli("demo", "--dir", str(tmp_path / "out"), home=home, TGSIS_DEMO_DATA=str(tmp_path / "none"))
         assert result.returncode == 0, result.stderr
         assert "data: synthetic faults (no CFM data found)" in result.stdout
-        assert "3. version cfm6.1: replaced 1 changed fault(s) (middle_fault)" in result.stdout
+        assert "3. version cfm6.1: release 6.1 checked in over 3 fault(s) by difference" in result.stdout
+        assert "   north_fault: 360 of 360 vertices kept, 0 moved; 1 rows written" in result.stdout  # the release property
+        assert "6. no lost update:" in result.stdout
         assert "middle_fault: DEFAULT sees release 5.3 (360 vertices); cfm6.1 sees release 6.1 (360 vertices)" \
             in result.stdout
         assert "5. fault history (model 3): north_fault slipping 500 m at depth" in result.stdout

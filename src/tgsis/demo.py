@@ -8,14 +8,18 @@ Two releases of a fault model, the way a geomodelling team lives them:
    Community Fault Model (real GOCAD TSurf files from ``../shared/data``; a
    synthetic stand-in when that folder is missing), stored in DEFAULT;
 3. a bounding-box query;
-4. versioning switched on, a version ``cfm6.1`` in which the faults that
-   changed in release 6.1 are replaced, and that state saved as a revision;
+4. versioning switched on, a version ``cfm6.1`` into which release 6.1 is
+   checked in over the checked-out 5.3 faults, by difference (a fault that
+   was only re-exported writes a handful of rows), and that state saved as a
+   revision;
 5. what DEFAULT and the version each see, how many rows the version stored,
    and the version tree;
 6. a fault through geological time (model 3): the first fault of release 5.3
    as it is today and, 2 Ma ago, displaced along strike by a synthetic slip
    growing with depth to 500 m; its shape at -1 Ma computed in SQL, and the
-   last 2 Ma written as a ParaView time series (``.pvd``) to a folder.
+   last 2 Ma written as a ParaView time series (``.pvd``) to a folder;
+7. no lost update: two modellers check out the same fault in DEFAULT and both
+   edit it; the second check-in is refused and goes into a child version.
 
 Every step uses the public API; the same steps work from ``psql`` and the
 ``tgsis`` command (see docs/versioning.md).
@@ -35,12 +39,13 @@ import psycopg
 from psycopg import sql
 from psycopg.conninfo import make_conninfo
 
+from tgsis.db import checkin as C
 from tgsis.db import features as F
 from tgsis.db import temporal as T
 from tgsis.db import versions as V
 from tgsis.db.connect import connect, resolve_target
 from tgsis.db.install import install, installed_version
-from tgsis.errors import InvalidInputError, MissingPrivilegeError, reraise
+from tgsis.errors import CheckoutConflictError, InvalidInputError, MissingPrivilegeError, reraise
 from tgsis.mesh import Mesh, Surface
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
@@ -51,6 +56,8 @@ RELEASES = ("cfm5.3", "cfm6.1")
 #: Synthetic slip of the fault history (metres at the fault's deepest node) over HISTORY (Ma, ages negative).
 SLIP = 500.0
 HISTORY = (-2.0, 0.0)
+#: Coordinates of the two releases are rounded differently: vertices within 1 cm are the same vertex.
+TOLERANCE = 0.01
 
 
 @dataclass(frozen=True)
@@ -166,6 +173,27 @@ def _store_history(conn: psycopg.Connection[Any], fault: _Fault, folder: Path) -
             "(open it in ParaView)"]
 
 
+def _no_lost_update(conninfo: str, fid: int) -> list[str]:
+    """Step 6: two modellers check the same fault out of DEFAULT; the second check-in cannot overwrite the first."""
+    with psycopg.connect(conninfo) as ann, psycopg.connect(conninfo) as bob:
+        ann_copy, bob_copy = C.checkout(ann, fid), C.checkout(bob, fid)
+        ann_mesh, bob_mesh = ann_copy.mesh.copy(), bob_copy.mesh.copy()
+        ann_mesh.vertices[0, 2] += 100.0                       # each lifts a different vertex
+        bob_mesh.vertices[-1, 2] -= 100.0
+        C.checkin(ann, ann_copy, ann_mesh, drop_extra_properties=True)
+        try:
+            C.checkin(bob, bob_copy, bob_mesh, drop_extra_properties=True)
+            refused = "accepted (unexpected)"
+        except CheckoutConflictError as exc:
+            refused = f"refused: {str(exc).splitlines()[0]}"
+        kept = C.checkin(bob, bob_copy, bob_mesh, on_conflict="child", child_version="bob_edit",
+                         drop_extra_properties=True)
+    return [f"6. no lost update: ann and bob check out feature {fid} in DEFAULT and both edit it",
+            f"   ann checks in first; bob's check-in is {refused}",
+            f"   with on_conflict='child' bob's edit goes into new version {kept.version} "
+            f"({kept.save.rows_written} rows); DEFAULT keeps ann's"]
+
+
 def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, folder: str | Path | None = None) -> None:
     """Run the demo against the server of ``dsn`` (``None``: the local server), in a database of its own.
 
@@ -210,20 +238,27 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
 
         V.create_version(conn, "cfm6.1", description="release 6.1 of the fault model")
         rows_before = _stored_rows(conn)
-        changed = []
+        report = []
         with V.in_version(conn, "cfm6.1"):
             for fault in new:
-                previous = next((f for f in old if f.name == fault.name), None)
-                if previous is not None and previous.mesh.same_as(fault.mesh):
-                    continue   # unchanged: nothing is stored again
-                if previous is not None:
-                    F.delete_feature(conn, "faults", ids[fault.name])
-                ids[fault.name] = _store_release(conn, [fault], "6.1")[fault.name]
-                changed.append(fault.name)
+                if fault.name not in ids:   # a fault new in this release
+                    ids[fault.name] = _store_release(conn, [fault], "6.1")[fault.name]
+                    report.append(f"   {fault.name}: new, {fault.mesh.n_vertices} vertices stored")
+                    continue
+                checked_out = C.checkout(conn, ids[fault.name])
+                result = C.checkin(conn, checked_out, fault.mesh, {"release": "6.1"}, tolerance=TOLERANCE,
+                                   drop_extra_properties=True).save
+                counts = result.diff.counts()
+                report.append(f"   {fault.name}: {counts['vertices_kept']} of {fault.mesh.n_vertices} vertices kept, "
+                              f"{result.vertices_moved} moved; {result.rows_written} rows written "
+                              f"(a full upload: {2 * fault.mesh.n_vertices + fault.mesh.n_cells})")
             saved = V.save_revision(conn, "release-6.1")
             seen_in_version = _releases_seen(conn)
-        out(f"3. version cfm6.1: replaced {len(changed)} changed fault(s) ({', '.join(changed) or 'none'}), "
-            f"saved as revision {saved}; rows stored for it: {_stored_rows(conn) - rows_before}")
+        out(f"3. version cfm6.1: release 6.1 checked in over {len(new)} fault(s) by difference "
+            f"(vertices within {TOLERANCE * 100:.0f} cm are the same), saved as revision {saved}; "
+            f"rows stored for it: {_stored_rows(conn) - rows_before}")
+        for line in report:
+            out(line)
         seen_in_default = _releases_seen(conn)
         for name in sorted(set(seen_in_default) | set(seen_in_version)):
             out(f"   {name}: DEFAULT sees {seen_in_default.get(name, 'nothing')}; "
@@ -237,6 +272,9 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
         except OSError as exc:
             raise InvalidInputError(f"cannot create the folder {files}: {exc.strerror or exc}") from exc
         for line in _store_history(conn, old[0], files):
+            out(line)
+        conn.commit()  # the two modellers below work in sessions of their own
+        for line in _no_lost_update(conninfo, ids[old[-1].name]):
             out(line)
     if target.dsn is None:
         out("the local server stops when this command ends; to look around: `tgsis local start`, "

@@ -28,7 +28,7 @@ __all__ = ["EditPlan", "plan_edit"]
 
 IntArray = npt.NDArray[np.int64]
 
-_ROUNDS = 8  # each round resolves moved vertices next to already-resolved ones; runs of 8 are rare
+_ROUNDS = 64  # each round resolves the ring of moved vertices next to resolved ones; stops early without progress
 
 
 @dataclass(frozen=True)
