@@ -472,3 +472,26 @@ def test_cfm_releases_checked_in_over_each_other(conn: Conn) -> None:
         else:
             assert _same_surface(stored, new)
             assert result.save.rows_written > new.n_vertices
+
+
+def test_checkout_in_a_child_goes_through_the_normal_conflict_path(conn: Conn, horizons: F.FeatureClass) -> None:
+    """Checked out in a version of one's own, the check-in always passes; the merge then finds the conflict."""
+    base = _grid(15)
+    fid = F.insert_feature(conn, horizons, base)
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "mine")
+    conn.commit()
+    with tgsis.in_version(conn, "mine"):
+        co = tgsis.checkout(conn, fid)
+    theirs = base.vertices.copy()
+    theirs[3, 2] = 7.0
+    tgsis.save_feature(conn, horizons, fid, tgsis.Surface(theirs, base.cells, vertex_properties=base.vertex_properties))
+    conn.commit()                                                        # DEFAULT changed it meanwhile
+    mine = co.mesh.copy()
+    mine.vertices[100, 2] = -7.0
+    assert tgsis.checkin(conn, co, mine).version == "mine"
+    conn.commit()
+    with pytest.raises(tgsis.UnsolvedConflictsError, match=str(fid)):
+        tgsis.merge_version(conn, "mine")
+    conn.rollback()
+    assert [c.objectkey for c in tgsis.find_conflicts(conn, "mine")] == [str(fid)]
