@@ -70,8 +70,8 @@ def annulus(nx: int = 6, ny: int = 6) -> Surface:
 
 def torus(nu: int = 6, nv: int = 5) -> Surface:
     """A closed torus, a periodic nu x nv grid, oriented consistently."""
-    u, v = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv)
-    u, v = u.ravel(), v.ravel()
+    uu, vv = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv)
+    u, v = uu.ravel(), vv.ravel()
     vertices = np.stack([(3 + np.cos(v)) * np.cos(u), (3 + np.cos(v)) * np.sin(u), np.sin(v)], 1)
     idx = np.arange(nu * nv).reshape(nv, nu)
     a = idx

@@ -7,7 +7,7 @@ import numpy.typing as npt
 import pytest
 
 from tests.interp_meshes import delaunay_disk, grid, vid
-from tgsis.interpolation import (CutResult, InterpolationSetupError, MeshTopology, border_edges, border_loops,
+from tgsis.interpolation import (CutResult, InterpolationSetupError, border_edges, border_loops,
                                  check_disk, cut_along_paths, interior_vertices, shortest_edge_path)
 from tgsis.mesh import Surface
 
@@ -140,12 +140,18 @@ def test_no_path_changes_nothing() -> None:
     assert cut.surface.same_as(before) and cut.surface is not before and cut.n_copies == 0
 
 
-def test_topology_can_be_reused() -> None:
-    before = wavy()
-    topo = MeshTopology.of(before)
-    a = cut_along_paths(before, [row(2, 0, 3)], topology=topo)
-    b = cut_along_paths(before, [row(2, 0, 3)])
-    assert np.array_equal(a.surface.triangles, b.surface.triangles)
+def test_only_the_triangles_around_the_path_matter() -> None:
+    """A non-manifold fin far from the crack does not stop the cut, and is left as it is."""
+    s = wavy()
+    fin = [[vid(NX, 5, 4), vid(NX, 6, 4), s.n_vertices]]  # a third triangle on the edge (33, 34)
+    before = Surface(np.vstack([s.vertices, [[5.5, 4.0, 1.0]]]), np.vstack([s.triangles, fin]),
+                     vertex_properties={"depth": np.append(s.vertex_properties["depth"], 0.0)},
+                     cell_properties={"tag": np.arange(s.n_cells + 1)}, name="horizon")
+    assert check_disk(before).nonmanifold_edges.tolist() == [[33, 34]]
+    cut = cut_along_paths(before, [row(2, 0, 3)])
+    check_cut_is_faithful(before, cut)
+    assert cut.n_copies == 3 and cut.surface.triangles[-1].tolist() == fin[0]
+    assert check_disk(cut.surface).nonmanifold_edges.tolist() == [[33, 34]]
 
 
 @pytest.mark.parametrize(("paths", "kwargs", "message"), [

@@ -196,6 +196,21 @@ def test_a_patch_that_is_not_a_disk() -> None:
         "2 border loops; Euler characteristic V - E + F = 36 - 84 + 48 = 0, not 1",)
 
 
+def test_a_patch_pinched_at_a_vertex() -> None:
+    """Two fences leave border vertex 58 into the interior and meet again at 31: the outer patch is pinched at 58."""
+    controls = [v(0, 0), v(8, 0), v(8, 6), v(0, 6), v(4, 6), v(4, 3)]
+    fences = [line((4, 6), (4, 3)), [v(4, 3), v(3, 3), v(2, 3), v(2, 4), v(2, 5), v(3, 5), v(4, 6)]]
+    with pytest.raises(InterpolationSetupError) as info:
+        partition_surface(source(), controls, fences)
+    assert info.value.problems[0] == (
+        "source patch 0 (triangles 0, 1, 2, 3 and 83 more; control vertices [0, 8, 62, 54, 58, 31]) is not a disk: "
+        "1 non-manifold vertex (whose triangles form separate fans): 58; "
+        "Euler characteristic V - E + F = 62 - 149 + 87 = 0, not 1")  # 58 as in the mesh, not the patch's own number
+    assert any(p.startswith("source patch 1 (") and p.endswith("has 2 control vertices: a patch needs at least 3 "
+                                                                "(the corners of its polygon)")
+               for p in info.value.problems)
+
+
 def test_a_patch_with_too_few_control_vertices() -> None:
     with pytest.raises(InterpolationSetupError, match=r"^source patch 1 \(triangles 4, 5, 6, 7 and 44 more; "
                        r"control vertices \[4, 58\]\) has 2 control vertices: a patch needs at least 3 "):

@@ -118,7 +118,6 @@ def cut_along_paths(
     *,
     names: Sequence[str | None] | None = None,
     ends: Sequence[CutEnds | None] | None = None,
-    topology: MeshTopology | None = None,
 ) -> CutResult:
     """Cut a surface along paths by duplicating their vertices and edges.
 
@@ -134,8 +133,6 @@ def cut_along_paths(
     ends : sequence of CutEnds or None, optional
         The end case the user means for each path; checked against where the
         end vertices are (``None``: whatever they are).
-    topology : MeshTopology, optional
-        The surface's topology, if already computed.
 
     Returns
     -------
@@ -155,8 +152,21 @@ def cut_along_paths(
     --------
     >>> cut = cut_along_paths(surface, [[12, 13, 14]])          # doctest: +SKIP
     >>> cut.surface.vertices[cut.original_vertex].tolist() == surface.vertices.tolist()  # doctest: +SKIP
+
+    Notes
+    -----
+    Only the triangles around the path vertices are looked at (everything a
+    cut needs to know is there), so a cut costs little more than copying the
+    surface, however large it is.
     """
-    topo = topology if topology is not None else MeshTopology.of(surface)
+    n = surface.n_vertices
+    on_path = np.zeros(n, dtype=bool)
+    for path in paths:
+        raw = np.asarray(path)
+        if raw.ndim == 1 and raw.dtype.kind in "iu":
+            on_path[raw[(raw >= 0) & (raw < n)]] = True
+    near = np.flatnonzero(on_path[surface.triangles].any(axis=1))
+    topo = MeshTopology(surface.triangles[near], n)  # the triangles around the paths
     count = topo.edge_triangle_count
     on_border = topo.is_border_vertex
     problems: list[str] = []
@@ -211,17 +221,16 @@ def cut_along_paths(
         cases.append(actual)
     if problems:
         raise InterpolationSetupError.collect("cutting paths", problems)
-    n = surface.n_vertices
-    corner_vertex = topo.triangles.reshape(-1)
     original = np.arange(n, dtype=np.int64)
-    new_corners = corner_vertex.copy()
+    new_corners = surface.triangles.reshape(-1).copy()
     if valid:
         blocked = np.zeros(len(topo.edges), dtype=bool)
         blocked[np.fromiter(edge_owner, dtype=np.int64)] = True
         labels = topo.corner_groups(blocked)  # each fan named by its lowest corner
-        on_path = np.zeros(n, dtype=bool)
-        on_path[np.concatenate(valid)] = True
-        corners = np.flatnonzero(on_path[corner_vertex])
+        corner_vertex = topo.corner_vertex
+        cut_here = np.zeros(n, dtype=bool)
+        cut_here[np.concatenate(valid)] = True
+        corners = np.flatnonzero(cut_here[corner_vertex])
         group = labels[corners]
         groups = np.unique(group)
         group_vertex = corner_vertex[groups]
@@ -235,7 +244,7 @@ def cut_along_paths(
         new_index[groups[keeps]] = group_vertex[keeps]
         new_index[groups[~keeps]] = n + np.arange(int((~keeps).sum()), dtype=np.int64)
         original = np.concatenate([original, group_vertex[~keeps]])
-        new_corners[corners] = new_index[group]
+        new_corners[3 * near[corners // 3] + corners % 3] = new_index[group]
     cut = Surface(
         surface.vertices[original], new_corners.reshape(-1, 3),
         vertex_properties={k: v[original] for k, v in surface.vertex_properties.items()},

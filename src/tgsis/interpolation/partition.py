@@ -200,7 +200,7 @@ def partition_surface(
         patch_controls = patch_controls[np.argsort(control_index[patch_controls])]
         label = _patch_label(mesh_name, p, tris, patch_controls)
         local_topo = MeshTopology(local.reshape(-1, 3), len(used))
-        disk = check_disk(local_topo)
+        disk = check_disk(local_topo, vertex_ids=used)
         if not disk.ok:
             problems.append(f"{label} is not a disk: {disk.summary()}")
             continue

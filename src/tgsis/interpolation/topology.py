@@ -789,12 +789,15 @@ def shortest_edge_path(mesh: Surface | MeshTopology, start: int, end: int, *,
     return np.array(path[::-1], dtype=np.int64)
 
 
-def check_disk(mesh: Surface | MeshTopology) -> DiskCheck:
+def check_disk(mesh: Surface | MeshTopology, *, vertex_ids: npt.ArrayLike | None = None) -> DiskCheck:
     """Check that a mesh is a topological disk, and say precisely why not.
 
     Parameters
     ----------
     mesh : Surface or MeshTopology
+    vertex_ids : (n,) array_like of int, optional
+        The name of each vertex in messages and in the returned arrays (for a
+        patch numbered ``0..n-1`` on its own: its vertices in the whole mesh).
 
     Returns
     -------
@@ -808,6 +811,7 @@ def check_disk(mesh: Surface | MeshTopology) -> DiskCheck:
     unused = np.flatnonzero(~topo.used_vertices).astype(np.int64)
     empty2 = np.empty((0, 2), dtype=np.int64)
     if topo.n_triangles == 0:
+        unused = unused if vertex_ids is None else np.asarray(vertex_ids, dtype=np.int64)[unused]
         return DiskCheck(("it has no triangle",), 0, 0, 0, 0, 0, 0, empty2, _EMPTY, empty2, unused)
     V = int(topo.used_vertices.sum())
     E = len(topo.edges)
@@ -819,6 +823,11 @@ def check_disk(mesh: Surface | MeshTopology) -> DiskCheck:
     inconsistent = topo.edges[topo.inconsistent_edges]
     fans = topo.fans_per_vertex
     nonmanifold_vertices = np.flatnonzero(fans > 1).astype(np.int64)
+    if vertex_ids is not None:
+        ids = np.asarray(vertex_ids, dtype=np.int64)
+        unused, nonmanifold_vertices = ids[unused], ids[nonmanifold_vertices]
+        nonmanifold_edges = np.sort(ids[nonmanifold_edges], axis=1)
+        inconsistent = np.sort(ids[inconsistent], axis=1)
     border = topo.edges[count == 1]
     if len(border):
         graph = sp.coo_matrix((np.ones(len(border), dtype=np.int8), (border[:, 0], border[:, 1])),
