@@ -66,10 +66,9 @@ _EMPTY = np.empty(0, dtype=np.int64)
 
 def few(items: npt.ArrayLike, limit: int = 6) -> str:
     """``"1, 2, 3"``, or the first ``limit`` items and how many more (for messages)."""
-    values = [str(v) for v in np.asarray(items).tolist()]
-    if len(values) <= limit:
-        return ", ".join(values)
-    return ", ".join(values[:limit]) + f" and {len(values) - limit} more"
+    values = np.asarray(items).reshape(-1)
+    shown = ", ".join(str(v) for v in values[:limit].tolist())
+    return shown if len(values) <= limit else f"{shown} and {len(values) - limit} more"
 
 
 _PLURALS = {"vertex": "vertices", "position": "positions", "edge": "edges", "triangle": "triangles",
@@ -90,10 +89,9 @@ def named(noun: str, items: npt.ArrayLike, limit: int = 6) -> str:
 
 def few_pairs(pairs: npt.ArrayLike, limit: int = 4) -> str:
     """``"(1, 2), (3, 4)"``, or the first ``limit`` pairs and how many more (for messages)."""
-    rows = [f"({a}, {b})" for a, b in np.asarray(pairs).reshape(-1, 2).tolist()]
-    if len(rows) <= limit:
-        return ", ".join(rows)
-    return ", ".join(rows[:limit]) + f" and {len(rows) - limit} more"
+    rows = np.asarray(pairs).reshape(-1, 2)
+    shown = ", ".join(f"({a}, {b})" for a, b in rows[:limit].tolist())
+    return shown if len(rows) <= limit else f"{shown} and {len(rows) - limit} more"
 
 
 def _list_rank(pred: IntArray, longest: int) -> tuple[IntArray, BoolArray]:
