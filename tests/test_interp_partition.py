@@ -43,6 +43,9 @@ def target() -> Surface:
 
 
 def check_partition(surface: Surface, part: Partition, controls: list[int]) -> None:
+    firsts = [int(p.triangles[0]) for p in part.patches]
+    assert firsts[0] == 0 and firsts == sorted(firsts)  # numbered in the order of their lowest triangle
+    assert [p.index for p in part.patches] == list(range(len(part.patches)))
     all_tris = np.concatenate([p.triangles for p in part.patches])
     assert np.array_equal(np.sort(all_tris), np.arange(surface.n_cells))  # every triangle in one patch
     topo = MeshTopology.of(surface)

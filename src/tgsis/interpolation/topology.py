@@ -558,14 +558,17 @@ class MeshTopology:
         graph = sp.csr_matrix((np.ones(int(keep.sum()), dtype=np.int8), (h[keep] // 3, f[keep] // 3)),
                               shape=(m, m))
         count, labels = connected_components(graph, directed=False)
-        return labels.astype(np.int64), int(count)
+        lowest = np.full(count, m, dtype=np.int64)
+        np.minimum.at(lowest, labels, np.arange(m, dtype=np.int64))
+        rank = np.empty(count, dtype=np.int64)
+        rank[np.argsort(lowest)] = np.arange(count, dtype=np.int64)
+        return rank[labels], int(count)
 
     # ---- rings
 
     @cached_property
     def one_rings(self) -> OneRings:
         """Ordered one-rings of all vertices, see :func:`one_rings`."""
-        tri = self.triangles
         n, m = self.n_vertices, self.n_triangles
         if m == 0:
             zeros = np.zeros(n + 1, dtype=np.int64)
