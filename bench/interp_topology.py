@@ -1,4 +1,4 @@
-"""Interpolation set-up helpers on a 100k-vertex disk: topology, border loops, one-rings, disk check, cutting, partition.
+"""Interpolation set-up helpers on a 100k-vertex disk: topology, borders, one-rings, disk check, cut, partition.
 
 The disk is a 317 x 317 grid (100,489 vertices, 199,712 triangles) with its
 vertices renumbered and its triangles shuffled, as a mesh read from a file
@@ -12,6 +12,7 @@ Run: ``python bench/interp_topology.py`` (no database).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from timing import timed
 
 from tgsis.interpolation import (MeshTopology, border_loops, check_disk, cut_along_paths, one_rings, partition_pair,
@@ -22,7 +23,7 @@ SIDE = 317
 REPEAT = 3
 
 
-def disk(seed: int = 1) -> tuple[Surface, np.ndarray]:
+def disk(seed: int = 1) -> tuple[Surface, npt.NDArray[np.int64]]:
     """The shuffled grid and the new index of each grid vertex (row-major)."""
     u, v = np.meshgrid(np.arange(SIDE, dtype=float), np.arange(SIDE, dtype=float))
     vertices = np.stack([u.ravel(), v.ravel(), 3 * np.sin(u.ravel() / 40) * np.cos(v.ravel() / 50)], 1)
@@ -30,7 +31,7 @@ def disk(seed: int = 1) -> tuple[Surface, np.ndarray]:
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     tri = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
     rng = np.random.default_rng(seed)
-    new_of_old = rng.permutation(SIDE * SIDE)
+    new_of_old = rng.permutation(SIDE * SIDE).astype(np.int64)
     shuffled = np.empty_like(vertices)
     shuffled[new_of_old] = vertices
     return Surface(shuffled, new_of_old[tri][rng.permutation(len(tri))]), new_of_old
@@ -64,7 +65,10 @@ def python_border_walk(surface: Surface) -> list[list[int]]:
 
 def main() -> None:
     surface, at = disk()
-    g = lambda c, r: int(at[r * SIDE + c])  # noqa: E731
+
+    def g(c: int, r: int) -> int:
+        return int(at[r * SIDE + c])
+
     print(f"disk: {surface.n_vertices} vertices, {surface.n_cells} triangles (renumbered, shuffled)")
     figures: dict[str, float] = {}
 

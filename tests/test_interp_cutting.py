@@ -192,3 +192,35 @@ def test_all_bad_paths_are_reported_at_once() -> None:
     assert lines[0] == "cutting paths: 2 problems"
     assert lines[1].startswith("- cutting path 1 ('edge'): edge (0, 1)")
     assert lines[2].startswith("- cutting path 2 ('gap') is not an edge path")
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_cracks_on_an_irregular_mesh(seed: int) -> None:
+    """Shortest paths between random vertices, inner vertices off the border: each end case changes the topology
+    as it should, and nothing moves."""
+    s = delaunay_disk(150, seed=seed)
+    s = Surface(s.vertices, s.triangles, vertex_properties={"depth": s.vertices[:, 2]},
+                cell_properties={"tag": np.arange(s.n_cells)})
+    rng = np.random.default_rng(seed)
+    border = border_loops(s)[0]
+    inner = interior_vertices(s)
+    a_border, b_border = border[0], border[len(border) // 2]
+    cases = {
+        "both_border": (a_border, b_border),
+        "end_inside": (a_border, int(rng.choice(inner))),
+        "start_inside": (int(rng.choice(inner)), b_border),
+        "both_inside": tuple(int(v) for v in rng.choice(inner, 2, replace=False)),
+    }
+    expected = {"both_border": (0, 2, 2, 2), "end_inside": (1, 1, 1, 1), "start_inside": (1, 1, 1, 1),
+                "both_inside": (2, 0, 2, 1)}  # (uncopied ends, Euler characteristic, border loops, pieces)
+    for ends, (a, b) in cases.items():
+        path = shortest_edge_path(s, a, b, avoid=border)
+        if ends == "both_inside" and len(path) < 3:
+            continue
+        cut = cut_along_paths(s, [path], ends=[ends])  # type: ignore[list-item]
+        check_cut_is_faithful(s, cut)
+        kept, euler, loops, pieces = expected[ends]
+        assert cut.n_copies == len(path) - kept
+        report = check_disk(cut.surface)
+        assert (report.euler_characteristic, report.n_border_loops, report.n_components) == (euler, loops, pieces)
+        assert report.nonmanifold_vertices.size == 0 and report.inconsistent_edges.size == 0
