@@ -1,7 +1,9 @@
-"""Morphological interpolation of triangulated surfaces (see docs/spec: interpolation).
+"""Morphological interpolation of triangulated surfaces: the shapes between a source and a target mesh.
 
-Set-up helpers: mesh topology, cutting along paths, constraints, partition
-into patches. No database here.
+Set-up helpers (no database): mesh topology (:mod:`.topology`), cutting along
+paths (:mod:`.cutting`), control vertices and fence paths (:mod:`.constraints`),
+partition into patches and their pairing (:mod:`.partition`). Set-up mistakes
+raise :class:`InterpolationSetupError`, naming the path or patch at fault.
 """
 
 from __future__ import annotations

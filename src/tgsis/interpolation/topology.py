@@ -1,7 +1,8 @@
 """Topology of triangulated surfaces: edges, borders, one-rings, disks, edge paths.
 
 Everything here works on index arrays with numpy and ``scipy.sparse.csgraph``:
-no Python loop runs over vertices, edges or triangles, so the helpers stay fast
+no Python loop runs over the vertices, edges or triangles of the mesh (only
+over the vertices of one returned path), so the helpers stay fast
 on meshes of 100k vertices and more. Loops and rings are put in order by list
 ranking (pointer jumping) on successor arrays, which takes ``O(log L)`` numpy
 passes for chains of length ``L``.
@@ -263,6 +264,9 @@ class DiskCheck:
 
 class MeshTopology:
     """Connectivity of a triangle set, computed on demand and kept.
+
+    The arrays are used as given (not copied): do not change a surface's
+    triangles while a topology built on them is in use.
 
     Parameters
     ----------
