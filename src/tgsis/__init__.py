@@ -95,6 +95,7 @@ from tgsis.db.checkin import (
     checkout,
     save_feature,
 )
+from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
 from tgsis.db.temporal import (
     add_instant,
     delete_instant,
@@ -240,6 +241,9 @@ __all__ = [
     "Checkout",
     "CheckoutToken",
     "CheckinResult",
+    "GeometryChanges",
+    "compare_stored",
+    "compare_versions",
     # time: surfaces at instants (model 2) and evolving surfaces (model 3)
     "SurfaceSeries",
     "EvolvingSurface",

@@ -4,7 +4,7 @@ Typed wrappers of the SQL functions ``tgsis.compare_geometries`` and
 ``tgsis.compare_geometry_versions`` (counts, and the ids of removed and added
 rows) and, with ``pairs=True``, of ``tgsis.geometry_changes`` and
 ``tgsis.geometry_version_changes`` (also the kept pairs). The definitions are
-those of :func:`tgsis.compare_meshes` (``docs/comparison-sql.md``): a vertex is
+those of :func:`tgsis.compare_meshes` (``docs/comparison.md``): a vertex is
 kept when the other side has one with numerically equal coordinates, a cell
 when its vertices are kept and the other side has the cell on them in the
 same orientation; the answers are in stored ids (``vrtxid`` and the cell ids
