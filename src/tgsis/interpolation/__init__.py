@@ -1,0 +1,67 @@
+"""Morphological interpolation of triangulated surfaces (issue 8; spec ``shared/spec/interpolation.md``).
+
+Pure numpy/scipy, no database:
+
+* :mod:`.parameterize`: disk patches onto the unit regular k-polygon (chord
+  length border, mean value interior), point location in parameter meshes,
+  compatible meshes refined to a tolerance;
+* :mod:`.trajectories`: vertex trajectories (linear, projected onto
+  controlling surfaces, interior by interpolated mean value weights) and the
+  model-3 :class:`~tgsis.temporal.EvolvingSurface` they make;
+* :mod:`.projection`: closest points on triangle meshes, controlling
+  surfaces and their intersection curves.
+"""
+
+from tgsis.interpolation.parameterize import (
+    CompatiblePatch,
+    Parameterization,
+    ParameterizationError,
+    PointLocator,
+    compatible_patch,
+    locate_points,
+    mean_value_embedding,
+    mean_value_weights,
+    mesh_error,
+    parameterize,
+    polygon_corners,
+)
+from tgsis.interpolation.projection import (
+    ClosestPoints,
+    ControllingSurface,
+    IntersectionCurve,
+    ProjectionError,
+    closest_points,
+    intersection_curve,
+)
+from tgsis.interpolation.trajectories import (
+    Attachments,
+    TrajectoryError,
+    border_trajectories,
+    evolving_surface,
+    trajectories,
+)
+
+__all__ = [
+    "Attachments",
+    "ClosestPoints",
+    "CompatiblePatch",
+    "ControllingSurface",
+    "IntersectionCurve",
+    "Parameterization",
+    "ParameterizationError",
+    "PointLocator",
+    "ProjectionError",
+    "TrajectoryError",
+    "border_trajectories",
+    "closest_points",
+    "compatible_patch",
+    "evolving_surface",
+    "intersection_curve",
+    "locate_points",
+    "mean_value_embedding",
+    "mean_value_weights",
+    "mesh_error",
+    "parameterize",
+    "polygon_corners",
+    "trajectories",
+]
