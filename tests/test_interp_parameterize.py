@@ -183,6 +183,9 @@ def test_point_location_exact_at_vertices_and_on_edges() -> None:
         assert np.abs(np.einsum("pk,pkj->pj", bary, uv[triangles[tri]]) - points).max() < 1e-14
         assert dist.max() <= 1e-15
     assert np.array_equal(locator.locate(inner)[0], np.arange(len(triangles)))
+    # a clockwise parameter mesh (controls against the triangles) is searched the same way
+    mirrored = PointLocator(uv[:, ::-1], triangles)
+    assert np.array_equal(mirrored.locate(inner[:, ::-1])[0], np.arange(len(triangles)))
 
 
 def test_point_location_at_the_border_within_tolerance_and_outside() -> None:

@@ -30,7 +30,7 @@ from scipy.sparse import csc_matrix, csr_matrix, identity
 from scipy.sparse.linalg import splu
 
 from tgsis.errors import InvalidInputError
-from tgsis.interpolation.projection import closest_points
+from tgsis.interpolation.projection import _as_points, closest_points
 
 __all__ = ["ParameterizationError", "WeightPattern", "mean_value_weights", "border_loop", "polygon_corners",
            "Parameterization", "mean_value_embedding", "parameterize", "PointLocator", "locate_points", "CompatiblePatch",
@@ -51,12 +51,7 @@ class ParameterizationError(InvalidInputError):
 
 
 def _as_vertices(vertices: npt.ArrayLike, what: str = "vertices") -> FloatArray:
-    xyz = np.ascontiguousarray(vertices, dtype=np.float64)
-    if xyz.ndim != 2 or xyz.shape[1] != 3:
-        raise ParameterizationError(f"{what} must have shape (n, 3), got {xyz.shape}")
-    if not np.all(np.isfinite(xyz)):
-        raise ParameterizationError(f"{what} must be finite")
-    return xyz
+    return _as_points(vertices, what, ParameterizationError)
 
 
 def _as_triangles(triangles: npt.ArrayLike, n: int, what: str = "triangles") -> IntArray:

@@ -47,12 +47,13 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return result
 
 
-def _as_points(points: npt.ArrayLike, what: str) -> FloatArray:
+def _as_points(points: npt.ArrayLike, what: str, error: type[InvalidInputError] = ProjectionError) -> FloatArray:
+    """(n, 3) finite float64 points; ``error`` otherwise."""
     array = np.ascontiguousarray(points, dtype=np.float64)
     if array.ndim != 2 or array.shape[1] != 3:
-        raise ProjectionError(f"{what} must have shape (p, 3), got {array.shape}")
+        raise error(f"{what} must have shape (n, 3), got {array.shape}")
     if not np.all(np.isfinite(array)):
-        raise ProjectionError(f"{what} must be finite")
+        raise error(f"{what} must be finite")
     return array
 
 
@@ -154,9 +155,17 @@ class _Nearest:
                  closest: Callable[[FloatArray, IntArray], FloatArray]) -> None:
         self.centres = centres
         self.radii = radii
-        self.max_radius = float(radii.max()) if len(radii) else 0.0
         self.closest = closest
         self.tree = cKDTree(centres)
+        # primitives in classes of similar radius, a tree each: a few large (sliver) ones then widen the
+        # search of their class only
+        bounds = np.unique(np.quantile(radii, [0.5, 0.9, 0.99, 1.0]))
+        label = np.searchsorted(bounds, radii)
+        self.classes: list[tuple[cKDTree, IntArray, float]] = []
+        for c in range(len(bounds)):
+            members = np.flatnonzero(label == c).astype(np.int64)
+            if len(members):
+                self.classes.append((cKDTree(centres[members]), members, float(radii[members].max())))
 
     def query(self, points: FloatArray) -> tuple[FloatArray, FloatArray, IntArray]:
         """Closest points (p, 3), distances (p,), primitive index (p,)."""
@@ -173,15 +182,17 @@ class _Nearest:
             rows = np.repeat(np.arange(len(block)), k)
             self._update(block, rows, seeds.ravel(), best[start:start + step], dist[start:start + step],
                          index[start:start + step])
-            upper = dist[start:start + step] * (1 + 1e-12) + self.max_radius
-            rows, cols = _pairs_within(self.tree, block, upper)
-            # lower bound |p - centre| - radius must not exceed the best distance found
-            gap = np.linalg.norm(block[rows] - self.centres[cols], axis=1) - self.radii[cols]
-            keep = gap <= dist[start:start + step][rows] * (1 + 1e-12)
-            rows, cols = rows[keep], cols[keep]
-            for s in range(0, len(rows), _CHUNK_PAIRS):
-                self._update(block, rows[s:s + _CHUNK_PAIRS], cols[s:s + _CHUNK_PAIRS], best[start:start + step],
-                             dist[start:start + step], index[start:start + step])
+            for tree, members, largest in self.classes:
+                bound = dist[start:start + step] * (1 + 1e-12)
+                rows, local = _pairs_within(tree, block, bound + largest)
+                cols = members[local]
+                # lower bound |p - centre| - radius must not exceed the best distance found
+                gap = np.linalg.norm(block[rows] - self.centres[cols], axis=1) - self.radii[cols]
+                keep = gap <= bound[rows]
+                rows, cols = rows[keep], cols[keep]
+                for s in range(0, len(rows), _CHUNK_PAIRS):
+                    self._update(block, rows[s:s + _CHUNK_PAIRS], cols[s:s + _CHUNK_PAIRS],
+                                 best[start:start + step], dist[start:start + step], index[start:start + step])
         return best, dist, index
 
     def _update(self, block: FloatArray, rows: IntArray, cols: IntArray, best: FloatArray, dist: FloatArray,
