@@ -28,7 +28,7 @@ from scipy.spatial import Delaunay
 from tgsis.interpolation.parameterize import (WeightPattern, _chord_border, _interior_mask, _ordered_border,
                                               _split_system, border_loop, compatible_patch, mean_value_data,
                                               sparse_solve)
-from tgsis.interpolation.trajectories import InteriorSteps, trajectories
+from tgsis.interpolation.trajectories import InteriorSteps, vertex_trajectories
 
 
 def disk(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -142,7 +142,7 @@ def main() -> None:
           f"fresh SuperLU {worst_krylov:.1e} (ordering reused: {worst_reuse:.1e})")
 
     # end to end: the trajectories call (interior solved) and a compatible patch onto a 20k-vertex dome
-    clock(f"trajectories(), m={steps}, interior solved", lambda: trajectories(
+    clock(f"vertex_trajectories(), m={steps}, interior solved", lambda: vertex_trajectories(
         xyz, target, tri, steps, interior_method="solve"), results)
     dome_xyz, dome_tri, dome_controls = disk(20_000, seed=1)
     dome_xyz[:, 2] = 0.5 * (1 - (dome_xyz[:, :2] ** 2).sum(axis=1))

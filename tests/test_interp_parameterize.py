@@ -20,7 +20,7 @@ from tgsis.interpolation.parameterize import (
     mean_value_embedding,
     mean_value_weights,
     mesh_error,
-    parameterize,
+    parameterize_patch,
     polygon_corners,
 )
 from tgsis.interpolation.projection import closest_on_triangles, closest_points
@@ -97,7 +97,7 @@ def test_linear_reproduction(seed: int) -> None:
 def test_linear_reproduction_of_a_square_onto_the_square_polygon() -> None:
     """parameterize itself: a flat square with its 4 corners as controls maps affinely onto the 4-polygon."""
     vertices, triangles, corners = grid(15, size=2.0)
-    result = parameterize(vertices, triangles, corners)
+    result = parameterize_patch(vertices, triangles, corners)
     # (0,0)->(1,0), (2,0)->(0,1), (2,2)->(-1,0), (0,2)->(0,-1)
     expected = np.array([1.0, 0.0]) + vertices[:, :2] @ np.array([[-0.5, 0.5], [-0.5, -0.5]])
     assert np.abs(result.uv - expected).max() < 1e-10
@@ -108,7 +108,7 @@ def test_linear_reproduction_of_a_square_onto_the_square_polygon() -> None:
 def test_bijective_on_random_bumpy_disks(seed: int, k: int) -> None:
     vertices, triangles, rim = random_disk(1500, seed, bump=0.5)
     controls = rim[np.linspace(0, len(rim), k, endpoint=False).astype(int)]
-    result = parameterize(vertices, triangles, controls)
+    result = parameterize_patch(vertices, triangles, controls)
     areas = signed_areas(result.uv, triangles) * result.orientation
     assert areas.min() > 0, f"{np.sum(areas <= 0)} parameter triangles flipped"
     assert np.isclose(areas.sum() / 2, k / 2 * np.sin(2 * np.pi / k))  # they tile the polygon
@@ -121,7 +121,7 @@ def test_bijective_on_random_bumpy_disks(seed: int, k: int) -> None:
 def test_controls_against_the_orientation_give_a_mirrored_but_bijective_map() -> None:
     vertices, triangles, rim = random_disk(500, 8)
     controls = rim[[0, len(rim) // 3, 2 * len(rim) // 3]][::-1]
-    result = parameterize(vertices, triangles, controls)
+    result = parameterize_patch(vertices, triangles, controls)
     assert result.orientation == -1
     assert np.all(signed_areas(result.uv, triangles) < 0)
 
@@ -130,7 +130,7 @@ def test_chord_length_border() -> None:
     """Border vertices between two controls sit at their relative arc length along the polygon side."""
     vertices, triangles, corners = grid(6)
     vertices[1:5, 0] = [0.1, 0.2, 0.5, 0.9]  # uneven spacing along the first side
-    result = parameterize(vertices, triangles, corners)
+    result = parameterize_patch(vertices, triangles, corners)
     side = result.uv[:6]
     s = np.array([0, 0.1, 0.2, 0.5, 0.9, 1.0])
     assert np.abs(side - (np.array([1, 0]) + s[:, None] * np.array([-1, 1]))).max() < 1e-15
@@ -139,32 +139,32 @@ def test_chord_length_border() -> None:
 def test_set_up_errors() -> None:
     vertices, triangles, corners = grid(6)
     with pytest.raises(ParameterizationError, match="at least 3"):
-        parameterize(vertices, triangles, corners[:2])
+        parameterize_patch(vertices, triangles, corners[:2])
     with pytest.raises(ParameterizationError, match="not on the border"):
-        parameterize(vertices, triangles, [0, 5, 14])
+        parameterize_patch(vertices, triangles, [0, 5, 14])
     with pytest.raises(ParameterizationError, match="cyclic order"):
-        parameterize(vertices, triangles, [corners[0], corners[2], corners[1], corners[3]])
+        parameterize_patch(vertices, triangles, [corners[0], corners[2], corners[1], corners[3]])
     # an annulus: the square without the two triangles of its middle cell (row 2, column 2 of 5 x 5)
     annulus = np.delete(triangles, [12, 37], axis=0)
     with pytest.raises(ParameterizationError, match="several loops"):
-        parameterize(vertices, annulus, corners)
+        parameterize_patch(vertices, annulus, corners)
     # two squares sharing a corner vertex: the border touches itself
     shifted = vertices + [1.0, 1.0, 0.0]
     bowtie = np.r_[triangles, triangles + len(vertices)]
     both = np.r_[vertices, shifted]
     bowtie[bowtie == len(vertices)] = 35  # glue the second square's first corner to the first's last
     with pytest.raises(ParameterizationError):
-        parameterize(both, bowtie, corners)
+        parameterize_patch(both, bowtie, corners)
     flipped = triangles.copy()
     flipped[0] = flipped[0, ::-1]
     with pytest.raises(ParameterizationError, match="consistently oriented"):
-        parameterize(vertices, flipped, corners)
+        parameterize_patch(vertices, flipped, corners)
     assert issubclass(ParameterizationError, InvalidInputError)
 
 
 def test_point_location_exact_at_vertices_and_on_edges() -> None:
     vertices, triangles, _ = random_disk(800, 11)
-    uv = parameterize(vertices, triangles, [0, 20, 40, 60]).uv
+    uv = parameterize_patch(vertices, triangles, [0, 20, 40, 60]).uv
     locator = PointLocator(uv, triangles)
     tri, bary, _ = locator.locate(uv)
     assert np.all(tri >= 0)
@@ -190,7 +190,7 @@ def test_point_location_exact_at_vertices_and_on_edges() -> None:
 
 def test_point_location_at_the_border_within_tolerance_and_outside() -> None:
     vertices, triangles, corners = grid(9)
-    uv = parameterize(vertices, triangles, corners).uv
+    uv = parameterize_patch(vertices, triangles, corners).uv
     locator = PointLocator(uv, triangles)
     side = np.array([1.0, 0.0]) + np.linspace(0, 1, 37)[:, None] * np.array([-1.0, 1.0])
     outward = np.array([1.0, 1.0]) / np.sqrt(2)
@@ -264,7 +264,7 @@ def test_refinement_that_cannot_reach_the_tolerance_is_an_error() -> None:
     with pytest.raises(ParameterizationError, match="after 1 refinement rounds") as raised:
         compatible_patch(source, source_tri, corners, target, target_tri, target_corners, tolerance=1e-4,
                          max_rounds=1)
-    assert raised.value.hint
+    assert raised.value.hint and "the farthest is target vertex" in raised.value.message
     with pytest.raises(ParameterizationError, match="pair up"):
         compatible_patch(source, source_tri, corners, target, target_tri, target_corners[:3], tolerance=0.1)
 

@@ -17,7 +17,7 @@ from tgsis.interpolation.trajectories import (
     TrajectoryError,
     border_trajectories,
     evolving_surface,
-    trajectories,
+    vertex_trajectories,
 )
 from tgsis.temporal import EvolvingSurface
 
@@ -55,18 +55,18 @@ def relative_distance(surface: ControllingSurface, points: np.ndarray) -> float:
 def test_linear_trajectories_without_attachments() -> None:
     source, triangles, _ = grid(7)
     target = lifted(source)
-    paths = trajectories(source, target, triangles, 5)
+    paths = vertex_trajectories(source, target, triangles, 5)
     assert paths.shape == (5, 49, 3)
     assert np.array_equal(paths[0], source) and np.array_equal(paths[-1], target)
     assert np.allclose(paths[2], (source + target) / 2, atol=1e-15)
-    assert np.array_equal(trajectories(source, target, triangles, 2), np.stack([source, target]))
+    assert np.array_equal(vertex_trajectories(source, target, triangles, 2), np.stack([source, target]))
 
 
 def test_interior_steps_are_convex_combinations_with_interpolated_weights() -> None:
     source, triangles, _ = grid(9)
     target = lifted(source)
     m = 6
-    paths = trajectories(source, target, triangles, m, interior_method="solve")
+    paths = vertex_trajectories(source, target, triangles, m, interior_method="solve")
     assert np.array_equal(paths[0], source) and np.array_equal(paths[-1], target)
     first, last = mean_value_weights(source, triangles), mean_value_weights(target, triangles)
     border = np.r_[0:9, 72:81, 9:72:9, 17:72:9]
@@ -98,7 +98,7 @@ def test_attached_to_one_surface_stays_on_it() -> None:
     left = np.flatnonzero(source[:, 0] == 0)[1:-1]  # the side x = 0 without its corners
     assert relative_distance(WALL_X, source[left]) < 1e-12 and relative_distance(WALL_X, target[left]) < 1e-12
     m = 7
-    paths = trajectories(source, target, triangles, m, {int(v): [WALL_X] for v in left})
+    paths = vertex_trajectories(source, target, triangles, m, {int(v): [WALL_X] for v in left})
     assert np.array_equal(paths[0], source) and np.array_equal(paths[-1], target)
     for j in range(m):
         assert relative_distance(WALL_X, paths[j, left]) < 1e-9
@@ -121,7 +121,7 @@ def test_attached_to_two_surfaces_stays_on_their_intersection_curve() -> None:
     left = np.flatnonzero(source[:, 0] == 0)[1:-1]
     attachments = {corner: [WALL_X, WALL_Y], **{int(v): [WALL_X] for v in left}}
     m = 9
-    paths = trajectories(source, target, triangles, m, attachments, controls=corners)
+    paths = vertex_trajectories(source, target, triangles, m, attachments, controls=corners)
     assert np.array_equal(paths[0], source) and np.array_equal(paths[-1], target)
     for j in range(m):
         assert relative_distance(WALL_X, paths[j, [corner]]) < 1e-9
@@ -129,20 +129,36 @@ def test_attached_to_two_surfaces_stays_on_their_intersection_curve() -> None:
         assert relative_distance(WALL_X, paths[j, left]) < 1e-9
     assert abs(paths[m // 2, corner, 1]) > 1e-3  # it left the plane y = 0 to follow the curve
     with pytest.raises(TrajectoryError, match="not a control vertex"):
-        trajectories(source, target, triangles, m, {int(left[0]): [WALL_X, WALL_Y]}, controls=corners)
+        vertex_trajectories(source, target, triangles, m, {int(left[0]): [WALL_X, WALL_Y]}, controls=corners)
+
+
+def test_intersection_curve_closes_around_a_cylinder() -> None:
+    """A plane through a (seamed) cylinder: one closed polyline, first node repeated at the end."""
+    u = np.linspace(0, 2 * np.pi, 41)
+    cylinder = ControllingSurface(*sheet(u, np.linspace(-1, 1, 5), lambda a, z: np.c_[np.cos(a), np.sin(a), z]),
+                                  name="cylinder")
+    tilted = ControllingSurface(*sheet(np.linspace(-2, 2, 3), np.linspace(-2, 2, 3),
+                                       lambda x, y: np.c_[x, y, 0.2 * x + 0.1]), name="tilted")
+    curve = IntersectionCurve(cylinder, tilted)
+    assert len(curve.polylines) == 1
+    line = curve.polylines[0]
+    assert line[0] == line[-1] and len(line) > 40
+    points = np.array([[2.0, 0.0, 0.0], [0.0, 0.0, 0.3], [-0.5, 0.5, 1.0]])
+    projected = curve.project(points)
+    assert relative_distance(cylinder, projected) < 1e-9 and relative_distance(tilted, projected) < 1e-9
 
 
 def test_attachment_errors() -> None:
     source, triangles, corners = grid(5)
     target = lifted(source)
     with pytest.raises(TrajectoryError, match="not a border vertex"):
-        trajectories(source, target, triangles, 4, {12: [WALL_X]})
+        vertex_trajectories(source, target, triangles, 4, {12: [WALL_X]})
     with pytest.raises(TrajectoryError, match="one or two"):
-        trajectories(source, target, triangles, 4, {0: [WALL_X, WALL_Y, WALL_X]})
+        vertex_trajectories(source, target, triangles, 4, {0: [WALL_X, WALL_Y, WALL_X]})
     with pytest.raises(TrajectoryError, match="from controlling surface 'wall x' in the source"):
-        trajectories(source, target, triangles, 4, {4: [WALL_X]})  # (1, 0, 0) is off the wall
+        vertex_trajectories(source, target, triangles, 4, {4: [WALL_X]})  # (1, 0, 0) is off the wall
     with pytest.raises(TrajectoryError, match="m >= 2"):
-        trajectories(source, target, triangles, 1)
+        vertex_trajectories(source, target, triangles, 1)
     far = ControllingSurface([[5, 5, 5], [6, 5, 5], [5, 6, 5]], [[0, 1, 2]], name="far")
     with pytest.raises(ProjectionError, match="do not cross"):
         border_trajectories(source, target, [0], 4, {0: [WALL_X, far]})
@@ -158,7 +174,7 @@ def test_evolving_surface_from_a_compatible_patch() -> None:
                                name="plane")
     side = np.flatnonzero(patch.source_vertices[:, 0] == 0)
     m, t0, t1 = 6, -120.0, -80.0
-    paths = trajectories(patch.source_vertices, patch.target_positions, patch.triangles, m,
+    paths = vertex_trajectories(patch.source_vertices, patch.target_positions, patch.triangles, m,
                          {int(v): [plane] for v in side})
     assert np.array_equal(paths[0], patch.source_vertices)
     assert np.array_equal(paths[-1], patch.target_positions)

@@ -10,6 +10,10 @@ Pure numpy/scipy, no database:
   model-3 :class:`~tgsis.temporal.EvolvingSurface` they make;
 * :mod:`.projection`: closest points on triangle meshes, controlling
   surfaces and their intersection curves.
+
+The functions are not named after their modules (``parameterize_patch``,
+``vertex_trajectories``) so that ``tgsis.interpolation.parameterize`` and
+``tgsis.interpolation.trajectories`` stay the modules.
 """
 
 from tgsis.interpolation.parameterize import (
@@ -22,7 +26,7 @@ from tgsis.interpolation.parameterize import (
     mean_value_embedding,
     mean_value_weights,
     mesh_error,
-    parameterize,
+    parameterize_patch,
     polygon_corners,
 )
 from tgsis.interpolation.projection import (
@@ -38,7 +42,7 @@ from tgsis.interpolation.trajectories import (
     TrajectoryError,
     border_trajectories,
     evolving_surface,
-    trajectories,
+    vertex_trajectories,
 )
 
 __all__ = [
@@ -61,7 +65,7 @@ __all__ = [
     "mean_value_embedding",
     "mean_value_weights",
     "mesh_error",
-    "parameterize",
+    "parameterize_patch",
     "polygon_corners",
-    "trajectories",
+    "vertex_trajectories",
 ]

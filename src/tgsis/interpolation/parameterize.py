@@ -3,7 +3,7 @@
 Pure numpy/scipy; see the spec (``shared/spec/interpolation.md``, step 4,
 "Calculating").
 
-* :func:`parameterize` maps a disk patch onto the unit regular k-polygon:
+* :func:`parameterize_patch` maps a disk patch onto the unit regular k-polygon:
   control vertices to the corners, each border path between two of them by
   chord length, the interior by mean value coordinates (Floater 2003), two
   sparse solves. With a convex border and positive weights the map is a
@@ -30,10 +30,10 @@ from scipy.sparse import csc_matrix, csr_matrix, identity
 from scipy.sparse.linalg import splu
 
 from tgsis.errors import InvalidInputError
-from tgsis.interpolation.projection import _as_points, closest_points
+from tgsis.interpolation.projection import ClosestPoints, _as_points, closest_points
 
 __all__ = ["ParameterizationError", "WeightPattern", "mean_value_weights", "border_loop", "polygon_corners",
-           "Parameterization", "mean_value_embedding", "parameterize", "PointLocator", "locate_points", "CompatiblePatch",
+           "Parameterization", "mean_value_embedding", "parameterize_patch", "PointLocator", "locate_points", "CompatiblePatch",
            "compatible_patch", "mesh_error", "sparse_solve"]
 
 FloatArray = npt.NDArray[np.float64]
@@ -436,7 +436,7 @@ def mean_value_embedding(vertices: npt.ArrayLike, triangles: npt.ArrayLike, fixe
     return result
 
 
-def parameterize(vertices: npt.ArrayLike, triangles: npt.ArrayLike, controls: npt.ArrayLike) -> Parameterization:
+def parameterize_patch(vertices: npt.ArrayLike, triangles: npt.ArrayLike, controls: npt.ArrayLike) -> Parameterization:
     """Map a disk patch onto the unit regular k-polygon (chord-length border, mean value interior).
 
     Parameters
@@ -766,6 +766,25 @@ def _split_edges(tri: IntArray, edges: IntArray, owners: IntArray, new: IntArray
     return np.concatenate([tri, *added])
 
 
+def _refinement_error(error: float, tolerance: float, rounds: int, to_source: ClosestPoints,
+                      to_target: FloatArray, target_index: IntArray, tri: IntArray,
+                      is_interior: npt.NDArray[np.bool_]) -> ParameterizationError:
+    """What to say when refinement stops above the tolerance: which vertex, and why if it can be told."""
+    head = (f"the compatible mesh is still {error:.6g} from the target after {rounds} refinement rounds "
+            f"(tolerance {tolerance:.6g})")
+    if to_source.distances.max(initial=0.0) < to_target.max(initial=0.0):
+        return ParameterizationError(f"{head}: compatible vertices off the target (numerical trouble)")
+    worst = int(np.argmax(to_source.distances))
+    where = (f"; the farthest is target vertex {int(target_index[worst])} at "
+             f"{np.round(to_source.points[worst], 6).tolist()}")
+    if not np.all(is_interior[tri[to_source.triangles[worst]]]):
+        return ParameterizationError(
+            head + where + ", next to the patch border",
+            hint="refinement never splits patch borders (the neighbouring patch must still match): give the source "
+                 "border more vertices where the target's border bends, or raise the tolerance")
+    return ParameterizationError(head + where, hint="raise the tolerance or the number of rounds")
+
+
 def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.ArrayLike, source_controls: npt.ArrayLike,
                      target_vertices: npt.ArrayLike, target_triangles: npt.ArrayLike, target_controls: npt.ArrayLike,
                      tolerance: float, *, max_rounds: int = 30, split: str = "auto") -> CompatiblePatch:
@@ -830,10 +849,11 @@ def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.Array
     tc = np.ascontiguousarray(target_controls, dtype=np.int64).ravel()
     if len(sc) != len(tc):
         raise ParameterizationError(f"source has {len(sc)} control vertices, target {len(tc)}: they must pair up")
-    gs = parameterize(sx, st, sc)
-    gt = parameterize(tx, tt, tc)
+    gs = parameterize_patch(sx, st, sc)
+    gt = parameterize_patch(tx, tt, tc)
     locator = PointLocator(gt.uv, tt)
-    target_interior = tx[_interior_mask(tt, len(tx))]
+    target_index = np.flatnonzero(_interior_mask(tt, len(tx)))
+    target_interior = tx[target_index]
     xyz, uv, tri = sx, gs.uv, st
     positions = _map_to_target(uv, locator, tx)
     is_interior = _interior_mask(st, len(sx))
@@ -846,10 +866,7 @@ def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.Array
             return CompatiblePatch(xyz, tri, positions, uv, gs, gt, error, rounds)
         far = np.flatnonzero(to_source.distances > tolerance)
         if rounds == max_rounds or len(far) == 0:
-            raise ParameterizationError(
-                f"the compatible mesh is still {error:.6g} from the target after {rounds} refinement rounds "
-                f"(tolerance {tolerance:.6g})",
-                hint="raise the tolerance or the number of rounds, or give a source closer to the target's sampling")
+            raise _refinement_error(error, tolerance, rounds, to_source, to_target, target_index, tri, is_interior)
         rounds += 1
         held = to_source.triangles[far]
         order = np.argsort(-to_source.distances[far], kind="stable")

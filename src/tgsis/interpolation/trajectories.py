@@ -41,7 +41,7 @@ from tgsis.interpolation.parameterize import (
 from tgsis.interpolation.projection import ControllingSurface, IntersectionCurve
 from tgsis.temporal import EvolvingSurface, TopologyPeriod, even_times
 
-__all__ = ["TrajectoryError", "Attachments", "border_trajectories", "InteriorSteps", "trajectories",
+__all__ = ["TrajectoryError", "Attachments", "border_trajectories", "InteriorSteps", "vertex_trajectories",
            "evolving_surface"]
 
 FloatArray = npt.NDArray[np.float64]
@@ -243,7 +243,7 @@ class InteriorSteps:
         return result
 
 
-def trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles: npt.ArrayLike, steps: int,
+def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles: npt.ArrayLike, steps: int,
                  attachments: Attachments | None = None, *, controls: npt.ArrayLike | None = None,
                  tolerance: float | None = None, interior_method: str = "auto") -> FloatArray:
     """Trajectories of every vertex from the source mesh to its compatible target mesh.
