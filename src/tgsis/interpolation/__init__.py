@@ -1,14 +1,32 @@
 """Morphological interpolation of triangulated surfaces: the shapes between a source and a target mesh.
 
-Set-up helpers (no database): mesh topology (:mod:`.topology`), cutting along
-paths (:mod:`.cutting`), control vertices and fence paths (:mod:`.constraints`),
-partition into patches and their pairing (:mod:`.partition`). Set-up mistakes
-raise :class:`InterpolationSetupError`, naming the path or patch at fault.
+Spec ``../shared/spec/interpolation.md``. Pure numpy/scipy (networkx where a
+graph algorithm is needed), no database:
+
+* set-up: mesh topology (:mod:`.topology`), cutting along paths
+  (:mod:`.cutting`), control vertices and fence paths (:mod:`.constraints`),
+  partition into patches and their pairing (:mod:`.partition`), the set-up
+  file (:mod:`.setup`), proposed corners (:mod:`.corners`);
+* :mod:`.parameterize`: disk patches onto the unit regular k-polygon (chord
+  length border, mean value interior), point location in parameter meshes,
+  compatible meshes refined to a tolerance;
+* :mod:`.trajectories`: vertex trajectories (linear, projected onto
+  controlling surfaces, interior by interpolated mean value weights) and the
+  model-3 :class:`~tgsis.temporal.EvolvingSurface` they make;
+* :mod:`.projection`: closest points on triangle meshes, controlling
+  surfaces and their intersection curves.
+
+Set-up mistakes raise :class:`InterpolationSetupError`, naming the path or
+patch at fault. The functions are not named after their modules
+(``parameterize_patch``, ``vertex_trajectories``) so that
+``tgsis.interpolation.parameterize`` and ``.trajectories`` stay the modules.
 """
+
 
 from __future__ import annotations
 
 from tgsis.interpolation.constraints import validate_control_vertices, validate_fence_paths
+from tgsis.interpolation.corners import border_turns, propose_corners
 from tgsis.interpolation.cutting import CutEnds, CutResult, cut_along_paths
 from tgsis.interpolation.errors import InterpolationSetupError
 from tgsis.interpolation.partition import (
@@ -33,6 +51,35 @@ from tgsis.interpolation.topology import (
     one_ring,
     one_rings,
     shortest_edge_path,
+)
+from tgsis.interpolation.setup import Attachment, CutPath, InterpolationSetup
+from tgsis.interpolation.parameterize import (
+    CompatiblePatch,
+    Parameterization,
+    ParameterizationError,
+    PointLocator,
+    compatible_patch,
+    locate_points,
+    mean_value_embedding,
+    mean_value_weights,
+    mesh_error,
+    parameterize_patch,
+    polygon_corners,
+)
+from tgsis.interpolation.projection import (
+    ClosestPoints,
+    ControllingSurface,
+    IntersectionCurve,
+    ProjectionError,
+    closest_points,
+    intersection_curve,
+)
+from tgsis.interpolation.trajectories import (
+    Attachments,
+    TrajectoryError,
+    border_trajectories,
+    evolving_surface,
+    vertex_trajectories,
 )
 
 __all__ = [
@@ -65,4 +112,33 @@ __all__ = [
     "partition_surface",
     "pair_patches",
     "partition_pair",
+    # set-up file and corner proposals
+    "InterpolationSetup",
+    "CutPath",
+    "Attachment",
+    "propose_corners",
+    "border_turns",
+    # parameterisation, compatible meshes, projection, trajectories
+    "Attachments",
+    "ClosestPoints",
+    "CompatiblePatch",
+    "ControllingSurface",
+    "IntersectionCurve",
+    "Parameterization",
+    "ParameterizationError",
+    "PointLocator",
+    "ProjectionError",
+    "TrajectoryError",
+    "border_trajectories",
+    "closest_points",
+    "compatible_patch",
+    "evolving_surface",
+    "intersection_curve",
+    "locate_points",
+    "mean_value_embedding",
+    "mean_value_weights",
+    "mesh_error",
+    "parameterize_patch",
+    "polygon_corners",
+    "vertex_trajectories",
 ]
