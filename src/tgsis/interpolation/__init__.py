@@ -22,7 +22,6 @@ patch at fault. The functions are not named after their modules
 ``tgsis.interpolation.parameterize`` and ``.trajectories`` stay the modules.
 """
 
-
 from __future__ import annotations
 
 from tgsis.interpolation.constraints import validate_control_vertices, validate_fence_paths
@@ -53,6 +52,7 @@ from tgsis.interpolation.topology import (
     shortest_edge_path,
 )
 from tgsis.interpolation.setup import Attachment, CutPath, InterpolationSetup
+from tgsis.interpolation.interpolate import Interpolation, average_shape, interpolate
 from tgsis.interpolation.parameterize import (
     CompatiblePatch,
     Parameterization,
@@ -112,6 +112,10 @@ __all__ = [
     "partition_surface",
     "pair_patches",
     "partition_pair",
+    # the whole interpolation
+    "interpolate",
+    "Interpolation",
+    "average_shape",
     # set-up file and corner proposals
     "InterpolationSetup",
     "CutPath",

@@ -1,0 +1,124 @@
+"""Interpolation end to end: a salt-dome-like case, a fence splitting two patches, a cut; stored and read back."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+from scipy.spatial import Delaunay
+
+import tgsis
+from tgsis.interpolation import InterpolationSetup, InterpolationSetupError, mesh_error
+from tgsis.interpolation.interpolate import average_shape, interpolate
+from tgsis.interpolation.setup import CutPath
+
+Conn = psycopg.Connection[Any]
+
+
+def _flat(nx: int, ny: int) -> tgsis.Surface:
+    """A flat rectangle [0, 4] x [0, 2] as a regular grid; corners 0, nx-1, nx*ny-1, nx*(ny-1)."""
+    u, v = np.meshgrid(np.linspace(0, 4, nx), np.linspace(0, 2, ny))
+    idx = np.arange(nx * ny).reshape(ny, nx)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return tgsis.Surface(np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], 1),
+                         np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="flat")
+
+
+def _dome(seed: int = 0) -> tuple[tgsis.Surface, list[int]]:
+    """A dome over [0, 4] x [0, 2], Delaunay-triangulated from scattered points: another topology."""
+    rng = np.random.default_rng(seed)
+    corners = np.array([[0, 0], [4, 0], [4, 2], [0, 2]], dtype=float)
+    sides = np.concatenate([np.stack([np.linspace(0, 4, 13)[1:-1], np.zeros(11)], 1),
+                            np.stack([np.full(7, 4.0), np.linspace(0, 2, 9)[1:-1]], 1),
+                            np.stack([np.linspace(4, 0, 13)[1:-1], np.full(11, 2.0)], 1),
+                            np.stack([np.zeros(7), np.linspace(2, 0, 9)[1:-1]], 1)])
+    inside = rng.random((150, 2)) * [3.8, 1.8] + 0.1
+    xy = np.concatenate([corners, sides, inside])
+    z = 0.8 * np.exp(-((xy[:, 0] - 2) ** 2 + (xy[:, 1] - 1) ** 2) / 0.5)
+    tri = Delaunay(xy).simplices
+    e1, e2 = xy[tri[:, 1]] - xy[tri[:, 0]], xy[tri[:, 2]] - xy[tri[:, 0]]
+    normal_up = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] > 0
+    tri[~normal_up] = tri[~normal_up][:, [0, 2, 1]]
+    return tgsis.Surface(np.column_stack([xy, z]), tri, name="dome"), [0, 1, 2, 3]
+
+
+def _flat_corners(nx: int, ny: int) -> list[int]:
+    return [0, nx - 1, nx * ny - 1, nx * (ny - 1)]
+
+
+def test_salt_dome_into_the_database_and_back(conn: Conn) -> None:
+    source, (target, target_corners) = _flat(21, 11), _dome()
+    setup = InterpolationSetup(tuple(_flat_corners(21, 11)), tuple(target_corners), steps=5, tolerance=0.05)
+    result = interpolate(source, target, setup, -10.0, 0.0, name="dome")
+    assert result.error <= 0.05
+    # the ends: the source (refined, same shape) at t0, the compatible target at t1, on the target
+    at0, at1 = result.evolving.at(-10.0), result.evolving.at(0.0)
+    assert at0 is not None and at1 is not None
+    assert np.array_equal(at0.vertices, result.source.vertices)
+    assert np.array_equal(at1.vertices, result.target.vertices)
+    assert np.abs(result.source.vertices[:, 2]).max() == 0.0                     # refinement kept the plane
+    assert mesh_error(result.target.vertices, result.target.cells, target.vertices, target.cells) <= 0.05
+    assert set(result.timings) >= {"partition", "compatible", "trajectories"}
+    # stored as model 3 and read back
+    fc = tgsis.create_feature_class(conn, "domes", "SURFACE", time_model="EVOLVING", time_unit="Ma")
+    fid = tgsis.insert_feature(conn, fc, result.evolving)
+    conn.commit()
+    middle = tgsis.get_at(conn, fid, -5.0)
+    expected = result.evolving.at(-5.0)
+    assert middle is not None and expected is not None
+    assert np.array_equal(middle.vertices, expected.vertices)
+
+
+def test_a_fence_splits_the_surface_into_two_patches() -> None:
+    nx, ny = 21, 11
+    source, (target, target_corners) = _flat(nx, ny), _dome(1)
+    # controls: the four corners plus the middles of the long sides; the fence joins the two middles
+    s_mid = [nx // 2, nx * (ny - 1) + nx // 2]
+    t_mid = [int(np.argmin(np.linalg.norm(target.vertices[:, :2] - p, axis=1))) for p in ([2, 0], [2, 2])]
+    s_fence = [s_mid[0] + nx * j for j in range(ny)]
+    from tgsis.interpolation import shortest_edge_path
+    t_fence = shortest_edge_path(target, t_mid[0], t_mid[1]).tolist()
+    setup = InterpolationSetup(
+        (0, s_mid[0], nx - 1, nx * ny - 1, s_mid[1], nx * (ny - 1)),
+        (target_corners[0], t_mid[0], target_corners[1], target_corners[2], t_mid[1], target_corners[3]),
+        source_fences=(tuple(s_fence),), target_fences=(tuple(t_fence),), fence_names=("middle",),
+        steps=4, tolerance=0.1)
+    result = interpolate(source, target, setup, 0.0, 1.0)
+    assert result.error <= 0.1
+    # fence vertices go onto the target's fence path, and the two patches meet there (no gap)
+    fence_targets = result.target.vertices[s_fence]
+    fence_line = target.vertices[t_fence]
+    gaps = np.min(np.linalg.norm(fence_targets[:, None, :2] - fence_line[None, :, :2], axis=2), axis=1)
+    assert gaps.max() < 0.5
+    assert result.source.n_vertices == result.target.n_vertices
+
+
+def test_a_cut_opens_a_crack() -> None:
+    nx, ny = 21, 11
+    source = _flat(nx, ny)
+    # a crack from the middle of the bottom border up to the centre: ends inside at one end
+    crack = [nx // 2 + nx * j for j in range(6)]
+    target, corners = _dome(2)
+    setup = InterpolationSetup(tuple(_flat_corners(nx, ny)), tuple(corners), cuts=(CutPath(tuple(crack), "crack"),),
+                               steps=3, tolerance=0.2)
+    result = interpolate(source, target, setup, 0.0, 1.0)
+    assert result.source.n_vertices > source.n_vertices          # the crack's vertices were duplicated
+    assert np.allclose(result.source.vertices[source.n_vertices:, 2], 0.0)
+
+
+def test_set_up_mistakes_name_what_is_wrong() -> None:
+    source, (target, corners) = _flat(11, 6), _dome()
+    with pytest.raises(InterpolationSetupError, match="source time must come before"):
+        interpolate(source, target, InterpolationSetup((0, 10, 65, 55), tuple(corners)), 1.0, 0.0)
+    with pytest.raises(InterpolationSetupError, match="control"):
+        interpolate(source, target, InterpolationSetup((0, 10), tuple(corners[:2])), 0.0, 1.0)
+
+
+def test_average_of_two_versions_is_the_middle_shape() -> None:
+    source, (target, corners) = _flat(15, 8), _dome()
+    setup = InterpolationSetup(tuple(_flat_corners(15, 8)), tuple(corners), steps=3, tolerance=0.1)
+    middle = average_shape(source, target, setup)
+    full = interpolate(source, target, setup, 0.0, 1.0)
+    assert np.allclose(middle.vertices, 0.5 * (full.source.vertices + full.target.vertices))
