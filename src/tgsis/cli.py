@@ -389,6 +389,53 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     return 0
 
 
+# --------------------------------------------------------------------------- interpolation
+
+
+def _read_surface(path: str, what: str) -> tgsis.Surface:
+    from tgsis import formats
+
+    mesh = formats.read_one(path)
+    if not isinstance(mesh, tgsis.Surface):
+        raise InvalidInputError(f"the {what} {path} holds a {type(mesh).__name__}: interpolation morphs surfaces")
+    return mesh
+
+
+def cmd_interpolate(args: argparse.Namespace) -> int:
+    from tgsis.interpolation import InterpolationSetup, interpolate
+    from tgsis.interpolation.preview import write_previews
+
+    source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
+    setup = InterpolationSetup.load(args.setup)
+    name = args.name or source.name or Path(args.source).stem
+    result = interpolate(source, target, setup, args.t0, args.t1, name=name)
+    _out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
+         f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
+         f"error to the target {result.error:.3g}")
+    _out("  " + ", ".join(f"{stage} {seconds:.2f} s" for stage, seconds in result.timings.items()))
+    if args.preview:
+        times = np.linspace(args.t0, args.t1, args.frames).tolist()
+        paths = write_previews(result.evolving, times, args.preview, stem=Path(args.source).stem)
+        _out(f"  {len(paths)} previews in {args.preview}")
+    if args.feature_class:
+        with _connect(args) as conn:
+            fid = insert_feature(conn, args.feature_class, result.evolving)
+        _out(f"stored as feature {fid} of class {args.feature_class} from t = {args.t0:g} to {args.t1:g}")
+    return 0
+
+
+def cmd_corners(args: argparse.Namespace) -> int:
+    from tgsis.interpolation import propose_corners
+
+    surface = _read_surface(args.file, "surface")
+    corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
+    _out(json.dumps(corners.tolist()))
+    for vertex in corners.tolist():
+        x, y, z = surface.vertices[vertex]
+        print(f"vertex {vertex}: {x:.6g} {y:.6g} {z:.6g}", file=sys.stderr)
+    return 0
+
+
 # --------------------------------------------------------------------------- time
 
 
@@ -869,6 +916,27 @@ def build_parser() -> argparse.ArgumentParser:
                     help="do not update the check-out record (by default it follows the new state, so that the "
                          "file can be edited and checked in again)")
     ci.set_defaults(handler=cmd_checkin)
+
+    interp = commands.add_parser("interpolate", help="the surface evolving from SOURCE (at T0) to TARGET (at T1): "
+                                                     "morphological interpolation, stored as a model-3 feature")
+    interp.add_argument("source", help="surface file at T0")
+    interp.add_argument("target", help="surface file at T1")
+    interp.add_argument("--setup", required=True, help="JSON set-up: control vertices, fences, cuts, attachments, "
+                                                       "steps, tolerance (see docs/interpolation.md)")
+    interp.add_argument("--t0", type=float, required=True, help="time of the source")
+    interp.add_argument("--t1", type=float, required=True, help="time of the target")
+    interp.add_argument("--class", dest="feature_class", help="EVOLVING feature class to store it in "
+                                                               "(without: computed and previewed only)")
+    interp.add_argument("--name", help="feature name (default: the source's)")
+    interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
+    interp.add_argument("--frames", type=int, default=5, help="number of preview instants (default 5)")
+    interp.set_defaults(handler=cmd_interpolate)
+
+    corners = commands.add_parser("corners", help="propose control vertices: the sharp corners of a surface's border")
+    corners.add_argument("file")
+    corners.add_argument("--count", type=int, help="exactly this many corners")
+    corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
+    corners.set_defaults(handler=cmd_corners)
 
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
