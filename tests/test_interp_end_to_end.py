@@ -71,7 +71,19 @@ def test_salt_dome_into_the_database_and_back(conn: Conn) -> None:
     assert np.array_equal(middle.vertices, expected.vertices)
 
 
-def test_a_fence_splits_the_surface_into_two_patches() -> None:
+def _stored_and_read_back(conn: Conn, evolving: tgsis.EvolvingSurface, times: list[float]) -> None:
+    """Store as model 3, read the shape back at ``times``: bit-identical to EvolvingSurface.at."""
+    fc = tgsis.create_feature_class(conn, f"interp_{len(times)}_{evolving.periods[0].triangles.shape[0]}", "SURFACE",
+                                    time_model="EVOLVING")
+    fid = tgsis.insert_feature(conn, fc, evolving)
+    conn.commit()
+    for t in times:
+        got, expected = tgsis.get_at(conn, fid, t), evolving.at(t)
+        assert got is not None and expected is not None
+        assert np.array_equal(got.vertices, expected.vertices) and np.array_equal(got.cells, expected.cells)
+
+
+def test_a_fence_splits_the_surface_into_two_patches(conn: Conn) -> None:
     nx, ny = 21, 11
     source, (target, target_corners) = _flat(nx, ny), _dome(1)
     # controls: the four corners plus the middles of the long sides; the fence joins the two middles
@@ -93,9 +105,10 @@ def test_a_fence_splits_the_surface_into_two_patches() -> None:
     gaps = np.min(np.linalg.norm(fence_targets[:, None, :2] - fence_line[None, :, :2], axis=2), axis=1)
     assert gaps.max() < 0.5
     assert result.source.n_vertices == result.target.n_vertices
+    _stored_and_read_back(conn, result.evolving, [0.0, 0.4, 1.0])
 
 
-def test_a_cut_opens_a_crack() -> None:
+def test_a_cut_opens_a_crack(conn: Conn) -> None:
     nx, ny = 21, 11
     source = _flat(nx, ny)
     # a crack from the middle of the bottom border up to the centre: ends inside at one end
@@ -106,6 +119,7 @@ def test_a_cut_opens_a_crack() -> None:
     result = interpolate(source, target, setup, 0.0, 1.0)
     assert result.source.n_vertices > source.n_vertices          # the crack's vertices were duplicated
     assert np.allclose(result.source.vertices[source.n_vertices:, 2], 0.0)
+    _stored_and_read_back(conn, result.evolving, [0.0, 0.5, 1.0])
 
 
 def test_set_up_mistakes_name_what_is_wrong() -> None:
