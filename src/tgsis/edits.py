@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.compare import MeshDiff, MeshIndex, _cell_columns, _match, _SortedRows, _unmatched
+from tgsis.compare import MeshDiff, MeshIndex, _cell_columns, _columns, _match, _SortedRows, _unmatched
 from tgsis.mesh import Mesh
 
 __all__ = ["EditPlan", "plan_edit"]
@@ -84,7 +84,7 @@ def _one_missing_keys(cells: IntArray, mapped: IntArray, sentinel: int) -> tuple
     vertex = cells[rows, position]
     keyed = mapped[rows].copy()
     keyed[np.arange(len(rows)), position] = sentinel
-    return rows.astype(np.int64), vertex.astype(np.int64), _cell_columns(keyed, sentinel + 1)
+    return rows.astype(np.int64), vertex.astype(np.int64), _cell_columns(_columns(keyed), sentinel + 1)
 
 
 def _pair_moves(old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_map: IntArray,
@@ -154,8 +154,8 @@ def plan_edit(old: Mesh | MeshIndex, edited: Mesh, diff: MeshDiff) -> EditPlan:
         renamed = vertex_map[new_cells]
         survives = np.flatnonzero(renamed.min(axis=1) >= 0)
         if len(survives):
-            hit = _match(_SortedRows.of(_cell_columns(old_cells, old_mesh.n_vertices)),
-                         _SortedRows.of(_cell_columns(renamed[survives], old_mesh.n_vertices)))
+            hit = _match(_SortedRows.of(_cell_columns(_columns(old_cells), old_mesh.n_vertices)),
+                         _SortedRows.of(_cell_columns(_columns(renamed[survives]), old_mesh.n_vertices)))
             found = hit >= 0
             cell_map[diff.added_cells[survives[found]]] = diff.removed_cells[hit[found]]
     return EditPlan(diff, vertex_map, moved, cell_map, _unmatched(old_mesh.n_vertices, vertex_map),
