@@ -432,6 +432,9 @@ def test_fingerprint_sees_every_kind_of_change(conn: Conn, horizons: F.FeatureCl
         "UPDATE horizons SET creator = 'bob' WHERE _geoid = {g}",
         "UPDATE tgsis.geometry SET geoname = 'renamed' WHERE geoid = {g}",
         "INSERT INTO tgsis.vrtx VALUES ({g}, 99, 0, 0, 0)",
+        # a row renumbered (the id is not hashed itself: it seeds the hashes of the other columns)
+        "UPDATE tgsis.trgl SET trglid = 1000 WHERE geoid = {g} AND trglid = 5",
+        "UPDATE horizons_cellpros SET _idx = 1000 WHERE _geoid = {g} AND _idx = 2",
     ]
     for change in changes:
         conn.execute(change.format(g=fid))  # type: ignore[arg-type]

@@ -48,6 +48,9 @@ class EditPlan:
         Per edited cell, the old cell whose row it keeps, or -1 for a new row.
     removed_vertices, removed_cells : int64 arrays
         Old rows to remove, ascending.
+    bounds : (2, 3) float64 or None
+        The edited mesh's bounding box (None without vertices), for the
+        geometry row; computed here, where the comparison runs.
     """
 
     diff: MeshDiff
@@ -56,6 +59,7 @@ class EditPlan:
     cell_map: IntArray
     removed_vertices: IntArray
     removed_cells: IntArray
+    bounds: npt.NDArray[np.float64] | None = None
 
     @property
     def added_vertices(self) -> IntArray:
@@ -159,4 +163,4 @@ def plan_edit(old: Mesh | MeshIndex, edited: Mesh, diff: MeshDiff) -> EditPlan:
             found = hit >= 0
             cell_map[diff.added_cells[survives[found]]] = diff.removed_cells[hit[found]]
     return EditPlan(diff, vertex_map, moved, cell_map, _unmatched(old_mesh.n_vertices, vertex_map),
-                    _unmatched(old_mesh.n_cells, cell_map))
+                    _unmatched(old_mesh.n_cells, cell_map), edited.bounds() if edited.n_vertices else None)

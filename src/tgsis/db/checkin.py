@@ -311,10 +311,10 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
-def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, name: str | None,
-                 feature_values: Mapping[str, Any] | None) -> int:
+def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, bounds: npt.NDArray[np.float64] | None,
+                 name: str | None, feature_values: Mapping[str, Any] | None) -> int:
     """Bring the geometry row (box, counts, name) and the feature row up to date; rows changed (0 when equal)."""
-    low, high = (edited.bounds().tolist() if edited.n_vertices else (None, None))
+    low, high = (bounds.tolist() if bounds is not None else (None, None))
     box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
     changed = conn.execute(sql.SQL(
         "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s, geoname = %(name)s "
@@ -342,7 +342,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     feature_values = _feature_columns(fc, properties)
     storage = _Storage.of(conn)
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
-    updated = _update_rows(conn, fc, geoid, edited, name, feature_values)
+    updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
     result = SaveResult(geoid, version, plan.diff, written.deleted, written.inserted, updated,
                         written.property_changes, len(plan.moved_vertices))
@@ -352,7 +352,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
 
 
 def _plan(old: Mesh | MeshIndex, edited: Mesh, tolerance: float) -> EditPlan:
-    """Compare, then plan the rows to write."""
+    """Compare, then plan the rows to write (with the edited mesh's bounding box, for the geometry row)."""
     return plan_edit(old, edited, compare_meshes(old, edited, tolerance))
 
 
@@ -606,7 +606,9 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
     token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
                           _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
     log.info("checked out %s feature %d from %s at revision %d", fc.name, feature_id, version, revision)
-    return Checkout(token, base, properties)
+    checked_out = Checkout(token, base, properties)
+    checked_out.index()  # hashed now, so that the check-in hashes only the edited mesh
+    return checked_out
 
 
 def _unique_version_name(conn: Conn, wanted: str) -> str:
