@@ -25,11 +25,19 @@ time.sleep(300)
 """
 
 
+def _default_sigint() -> None:
+    # A suite started in the background by a non-interactive shell (`make test &`) inherits
+    # SIGINT ignored, and a Python started with SIGINT ignored never raises KeyboardInterrupt:
+    # the child must get Ctrl-C as a terminal's foreground job would.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _spawn(args: list[str], **extra_env: str) -> subprocess.Popen[str]:
     # Its own session: our signals go to the child's process group only, as
     # Ctrl-C in a terminal goes to the foreground group.
     return subprocess.Popen(args, env=child_env(**extra_env), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True,
+                            preexec_fn=_default_sigint)
 
 
 def _server_gone(pid: int, root: Path) -> bool:
