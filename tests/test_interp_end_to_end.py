@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -136,3 +137,23 @@ def test_average_of_two_versions_is_the_middle_shape() -> None:
     middle = average_shape(source, target, setup)
     full = interpolate(source, target, setup, 0.0, 1.0)
     assert np.allclose(middle.vertices, 0.5 * (full.source.vertices + full.target.vertices))
+
+
+def test_an_attached_border_stays_on_its_wall_read_from_the_set_up_file(tmp_path: Path) -> None:
+    from tgsis import formats
+    from tgsis.interpolation.setup import Attachment
+
+    nx, ny = 17, 9
+    source, (target, corners) = _flat(nx, ny), _dome(3)
+    wall = tgsis.Surface([[0, -1, -5], [0, 3, -5], [0, 3, 5], [0, -1, 5]], [[0, 1, 2], [0, 2, 3]], name="west")
+    formats.write(wall, tmp_path / "west.ts")
+    west = [nx * j for j in range(ny)]                                   # the source's x = 0 border
+    InterpolationSetup(tuple(_flat_corners(nx, ny)), tuple(corners), controlling_surfaces={"west": "west.ts"},
+                       attachments=tuple(Attachment(v, ("west",)) for v in west), steps=6,
+                       tolerance=0.2).save(tmp_path / "setup.json")
+    setup = InterpolationSetup.load(tmp_path / "setup.json")              # the wall is read from beside the file
+    result = interpolate(source, target, setup, 0.0, 1.0)
+    assert np.abs(result.trajectories[:, west, 0]).max() <= 1e-9          # on the wall at every sample
+    # the interior is solved per step (not linear): some interior vertex leaves its straight line
+    straight = result.trajectories[0] + 0.4 * (result.trajectories[-1] - result.trajectories[0])
+    assert np.abs(result.evolving.at(0.4).vertices - straight).max() > 1e-6  # type: ignore[union-attr]
