@@ -33,7 +33,7 @@ import numpy as np
 import psycopg
 
 import tgsis
-from tgsis.db.local import LocalServer, find_binaries
+from timing import bench_database
 from transfer import grid_surface
 
 Conn = psycopg.Connection[Any]
@@ -122,15 +122,8 @@ def main() -> None:
     base = grid_surface(args.side)
     mesh_rows = 2 * base.n_vertices + base.n_cells  # vertices, their property rows, triangles
     print(f"surface: {base.n_vertices} vertices, {base.n_cells} triangles ({mesh_rows} rows with the property)")
-    binaries = find_binaries()
-    print(f"server: {binaries.describe()} (throwaway cluster, fsync off)")
     figures: dict[str, float] = {}
-    server = LocalServer.throwaway(binaries)
-    try:
-        with psycopg.connect(server.dsn(), autocommit=True) as admin:
-            admin.execute("CREATE DATABASE bench")
-        conn = psycopg.connect(server.dsn("bench"))
-        tgsis.install(conn, method="sql")
+    with bench_database() as conn:
         fc = tgsis.create_feature_class(conn, "grid", "SURFACE", cell_properties={"porosity": "float8"})
         conn.commit()
 
@@ -183,9 +176,6 @@ def main() -> None:
             figures[f"{label}_mixed_rows_fraction"] = counted / mesh_rows
             tgsis.delete_feature(conn, fc, fid)
             conn.commit()
-        conn.close()
-    finally:
-        server.stop()
     for name, value in figures.items():
         print(f"{name}: {value:.4g}")
 

@@ -22,8 +22,6 @@ from this checkout's SQL (``method="sql"``) into a throwaway cluster.
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -32,7 +30,7 @@ import psycopg
 
 import tgsis
 from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
-from tgsis.db.local import LocalServer, find_binaries
+from timing import bench_database, paired
 from transfer import grid_surface
 
 Conn = psycopg.Connection[Any]
@@ -60,16 +58,6 @@ def same(got: GeometryChanges, diff: tgsis.MeshDiff) -> bool:
             and np.array_equal(got.cells_added, diff.added_cells))
 
 
-def paired(actions: list[Callable[[], object]], repeat: int) -> list[float]:
-    """Median times of actions run in turn (so that drift of the machine hits all alike)."""
-    samples: list[list[float]] = [[] for _ in actions]
-    for _ in range(repeat):
-        for action, into in zip(actions, samples):
-            start = time.perf_counter()
-            action()
-            into.append(time.perf_counter() - start)
-    return [statistics.median(s) for s in samples]
-
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
@@ -83,14 +71,7 @@ def main() -> None:
     new = edited(old, rng)
     diff = tgsis.compare_meshes(old, new)
     print(f"surface: {old.n_vertices} vertices, {old.n_cells} triangles; edited copy: {diff}")
-    binaries = find_binaries()
-    print(f"server: {binaries.describe()} (throwaway cluster)")
-    server = LocalServer.throwaway(binaries)
-    try:
-        with psycopg.connect(server.dsn(), autocommit=True) as admin:
-            admin.execute("CREATE DATABASE bench")
-        conn = psycopg.connect(server.dsn("bench"))
-        tgsis.install(conn, method="sql")
+    with bench_database() as conn:
         tgsis.create_feature_class(conn, "horizons", "SURFACE")
         a = tgsis.insert_feature(conn, "horizons", old)
         b = tgsis.insert_feature(conn, "horizons", new)
@@ -127,9 +108,6 @@ def main() -> None:
         assert same(compare_versions(conn, a, "DEFAULT", "edit"), tgsis.compare_meshes(old, child))
         conn.commit()
         (versions_s,) = paired([committed(lambda: compare_versions(conn, a, "DEFAULT", "edit"))], args.repeat)
-        conn.close()
-    finally:
-        server.destroy()
 
     print(f"compare_geometries (summary, ids of removed/added):   {summary_s:6.2f} s")
     print(f"geometry_changes by COPY (every kept pair too):        {pairs_s:6.2f} s")

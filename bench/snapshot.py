@@ -35,8 +35,8 @@ import numpy as np
 import psycopg
 
 import tgsis
-from tgsis.db.local import LocalServer, find_binaries
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
+from timing import bench_database, paired
 from transfer import grid_surface
 
 Conn = psycopg.Connection[Any]
@@ -92,16 +92,6 @@ def plan(conn: Conn, query: str) -> str:
     return text
 
 
-def paired(actions: list[Callable[[], object]], repeat: int) -> list[float]:
-    """Median times of actions run in turn (so that drift of the machine hits all alike)."""
-    samples: list[list[float]] = [[] for _ in actions]
-    for _ in range(repeat):
-        for action, into in zip(actions, samples):
-            start = time.perf_counter()
-            action()
-            into.append(time.perf_counter() - start)
-    return [statistics.median(s) for s in samples]
-
 
 def once(action: Callable[[], object]) -> float:
     start = time.perf_counter()
@@ -129,15 +119,7 @@ def main() -> None:
     print(f"static surface: {n} vertices, {m} triangles; evolving: {g} geometry instants in one period "
           f"({g * n} node positions)" + (f", and two periods 0..{half}, {half}..{g - 1} ({(g + 1) * n} positions)"
                                           if args.two_periods else ""))
-    binaries = find_binaries()
-    print(f"server: {binaries.describe()} (throwaway cluster, fsync off)")
-    server = LocalServer.throwaway(binaries)
-    try:
-        with psycopg.connect(server.dsn(), autocommit=True) as admin:
-            admin.execute("CREATE DATABASE bench")
-        conn = psycopg.connect(server.dsn("bench"))
-        # the client's own SQL sources, not an extension some other build put in the server's share dir
-        tgsis.install(conn, method="sql")
+    with bench_database() as conn:
         tgsis.create_feature_class(conn, "static_grid", "SURFACE")
         tgsis.create_feature_class(conn, "evolving_grid", "SURFACE", time_model="EVOLVING")
         conn.commit()
@@ -184,9 +166,6 @@ def main() -> None:
         downloads = dict(zip(cases, down))
         executor = {name: executor_s(conn, vertices_query(key, t), args.repeat) for name, (key, t) in cases.items()}
         executor_static = executor_s(conn, static_query, args.repeat)
-        conn.close()
-    finally:
-        server.destroy()
 
     print(f"upload, static surface (insert_feature):          {up_static:6.2f} s")
     print(f"upload, evolving, 1 period x {g} instants:          {up_one:6.2f} s  ({up_one / up_static:.2f}x static)")

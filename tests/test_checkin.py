@@ -498,3 +498,35 @@ def test_checkout_in_a_child_goes_through_the_normal_conflict_path(conn: Conn, h
         tgsis.merge_version(conn, "mine")
     conn.rollback()
     assert [c.objectkey for c in tgsis.find_conflicts(conn, "mine")] == [str(fid)]
+
+
+def test_bad_calls_to_the_check_in_functions_of_sql(conn: Conn, horizons: F.FeatureClass) -> None:
+    """What psql users call directly: our SQLSTATEs, and nothing changed."""
+    fid = F.insert_feature(conn, horizons, _grid(5))
+    evolving = tgsis.EvolvingSurface([tgsis.TopologyPeriod([0.0, 1.0], _grid(3).cells,
+                                                            [_grid(3).vertices, _grid(3).vertices + 1])])
+    moving = F.insert_feature(conn, F.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING"), evolving)
+    conn.commit()
+    state = _fingerprint(conn, fid)
+    calls = [
+        ("SELECT tgsis.object_fingerprint(%s)", (moving,), "TG100", "temporal"),
+        ("SELECT tgsis.check_unchanged(%s, NULL)", (fid,), "TG100", "needs a geoid and the fingerprint"),
+        ("SELECT tgsis.check_unchanged(%s, 'x')", (fid,), "TG304", f"feature {fid} was changed"),
+        ("SELECT tgsis.check_unchanged(%s, 'x')", (fid + 999,), "TG304", "was deleted"),
+        ("SELECT tgsis.table_fingerprint('tgsis', 'nope', 'geoid', 'id', ARRAY[1::bigint])", (), "TG200", "nope"),
+        ("SELECT tgsis.delete_object_rows('tgsis', 'nope', 'geoid', ARRAY[1::bigint])", (), "TG200", "nope"),
+        ("SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[%s::bigint], 'vrtxid', NULL)", (fid,),
+         "TG100", "id column and ids together"),
+    ]
+    for query, params, code, text in calls:
+        with pytest.raises(tgsis.Error, match=text) as raised:
+            with tgsis.errors.reraise():
+                conn.execute(query, params)  # type: ignore[arg-type]
+        assert raised.value.sqlstate == code, query
+        conn.rollback()
+        assert _fingerprint(conn, fid) == state
+    assert conn.execute("SELECT tgsis.object_fingerprint(NULL)").fetchone() == (None,)
+    # the id-restricted delete removes exactly those rows
+    assert conn.execute("SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[%s::bigint], 'vrtxid', "
+                        "ARRAY[1, 2]::bigint[])", (fid,)).fetchone() == (2,)
+    assert conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (fid,)).fetchone() == (23,)

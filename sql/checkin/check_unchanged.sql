@@ -12,6 +12,11 @@ DECLARE
     v_now      text;
     v_version  text := tgsis.get_working_version();
 BEGIN
+    IF p_geoid IS NULL OR p_fingerprint IS NULL THEN
+        RAISE EXCEPTION 'check_unchanged needs a geoid and the fingerprint taken at check-out, got % and %',
+                        coalesce(p_geoid::text, 'NULL'), coalesce(quote_literal(p_fingerprint), 'NULL')
+            USING ERRCODE = 'TG100', HINT = 'SELECT tgsis.object_fingerprint(geoid) at check-out gives the fingerprint';
+    END IF;
     PERFORM tgsis.feature_write_lock(p_geoid);
     v_now := tgsis.object_fingerprint(p_geoid);
     IF v_now IS NULL THEN

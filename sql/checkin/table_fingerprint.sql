@@ -17,9 +17,9 @@ DECLARE
     v_hash   text;
     v_result text;
 BEGIN
-    -- a versioned table is read from its storage with the view's predicate and the session's
-    -- revision set as a parameter: the view's own calls to tgsis.get_revisions() would keep
-    -- the scan from running in parallel (measured: twice as slow)
+    IF to_regclass(format('%I.%I', p_schema, p_table)) IS NULL THEN
+        RAISE EXCEPTION 'table %.% does not exist', quote_ident(p_schema), quote_ident(p_table) USING ERRCODE = 'TG200';
+    END IF;
     SELECT string_agg(format(
                'coalesce(%s, %s)',
                CASE t.typname
@@ -39,6 +39,9 @@ BEGIN
        AND a.attname NOT IN (p_keyfield, p_idfield);
     -- the key is the same on every row counted, and the id seeds every other column's hash
     v_hash := coalesce(v_hash, format('hashint8extended(r.%I, 0)', p_idfield));
+    -- a versioned table is read from its storage with the view's predicate and the session's
+    -- revision set as a parameter: the view's own calls to tgsis.get_revisions() would keep
+    -- the scan from running in parallel (measured: twice as slow)
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = p_schema AND t.tablename = p_table) THEN
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(%s), 0) FROM %I.%I r
                          WHERE r.%I = ANY ($1) AND (r.revision = ANY ($2)) IS TRUE

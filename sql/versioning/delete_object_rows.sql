@@ -1,8 +1,12 @@
--- tgsis.delete_object_rows(schema, table, keyfield, keys): delete objects' rows in the session's version, set-based.
+-- tgsis.delete_object_rows(schema, table, keyfield, keys, idfield, ids): delete objects' rows (or some of them) in the session's version, set-based.
 -- On a versioned table this is what the INSTEAD OF trigger does row by row,
 -- in two statements: rows written in the working revision go, older visible
--- rows get the working revision appended to lastrevs. Returns rows affected.
-CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[])
+-- rows get the working revision appended to lastrevs, and objects locked by
+-- another version are refused (TG303). With p_idfield and p_ids only the
+-- rows whose id is one of p_ids go: the removed vertices, simplices or
+-- property rows of an edited mesh (tgsis.save_feature). Returns rows affected.
+CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
+                                         p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
@@ -12,26 +16,42 @@ DECLARE
     v_deleted bigint;
     v_closed  bigint;
     v_class   text;
+    v_where   text;
 BEGIN
+    IF to_regclass(format('%I.%I', p_schema, p_table)) IS NULL THEN
+        RAISE EXCEPTION 'table %.% does not exist', quote_ident(p_schema), quote_ident(p_table)
+            USING ERRCODE = 'TG200';
+    END IF;
+    IF (p_idfield IS NULL) <> (p_ids IS NULL) THEN
+        RAISE EXCEPTION 'delete_object_rows takes an id column and ids together, or neither'
+            USING ERRCODE = 'TG100', DETAIL = format('idfield %s, ids %s', coalesce(p_idfield, 'NULL'),
+                                                      coalesce(p_ids::text, 'NULL'));
+    END IF;
+    IF p_ids IS NOT NULL AND cardinality(p_ids) = 0 THEN
+        RETURN 0;
+    END IF;
+    v_where := format('%I = ANY ($1)', p_keyfield)
+               || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
     SELECT objectclass INTO v_class FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
     IF NOT FOUND THEN
-        EXECUTE format('DELETE FROM %I.%I WHERE %I = ANY ($1)', p_schema, p_table, p_keyfield) USING p_keys;
+        EXECUTE format('DELETE FROM %I.%I WHERE %s', p_schema, p_table, v_where)
+          USING p_keys, NULL::integer, NULL::integer[], p_ids;
         GET DIAGNOSTICS v_deleted = ROW_COUNT;
         RETURN v_deleted;
     END IF;
     SELECT * INTO v_write FROM tgsis.write_revision();
     PERFORM tgsis.check_objects_unlocked(v_class, p_keys::text[]);
-    EXECUTE format('DELETE FROM %I.%I WHERE %I = ANY ($1) AND revision = $2', p_schema, p_table || '_ver', p_keyfield)
-      USING p_keys, v_write.revision;
+    EXECUTE format('DELETE FROM %I.%I WHERE %s AND revision = $2', p_schema, p_table || '_ver', v_where)
+      USING p_keys, v_write.revision, v_write.revisions, p_ids;
     GET DIAGNOSTICS v_deleted = ROW_COUNT;
     EXECUTE format('UPDATE %I.%I v SET lastrevs = v.lastrevs || $2
-                     WHERE v.%I = ANY ($1) AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)',
-                   p_schema, p_table || '_ver', p_keyfield)
-      USING p_keys, v_write.revision, v_write.revisions;
+                     WHERE %s AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)',
+                   p_schema, p_table || '_ver', v_where)
+      USING p_keys, v_write.revision, v_write.revisions, p_ids;
     GET DIAGNOSTICS v_closed = ROW_COUNT;
     RETURN v_deleted + v_closed;
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.delete_object_rows(text, text, text, bigint[]) IS
-    'delete the rows of objects (keyfield = any of keys) from a table in the session''s version: plain DELETE, or on a versioned table the set-based equivalent of its trigger; returns rows affected';
+COMMENT ON FUNCTION tgsis.delete_object_rows(text, text, text, bigint[], text, bigint[]) IS
+    'delete the rows of objects (keyfield = any of keys; with idfield and ids only those rows) from a table in the session''s version: plain DELETE, or on a versioned table the set-based equivalent of its trigger (TG303 when another version locked an object); returns rows affected';

@@ -243,8 +243,38 @@ class MeshIndex:
         return self._tree
 
 
+class IndexMaps:
+    """The index sets of a ``vertex_map`` and ``cell_map`` (edited index -> old index, -1 for a new one).
+
+    Shared by :class:`MeshDiff` and :class:`tgsis.edits.EditPlan`.
+    """
+
+    vertex_map: IntArray
+    cell_map: IntArray
+
+    @property
+    def added_vertices(self) -> IntArray:
+        """(a,) int64: edited-mesh indices of the new vertices, ascending."""
+        return np.flatnonzero(self.vertex_map < 0).astype(np.int64)
+
+    @property
+    def added_cells(self) -> IntArray:
+        """(b,) int64: edited-mesh indices of the new cells, ascending."""
+        return np.flatnonzero(self.cell_map < 0).astype(np.int64)
+
+    @property
+    def kept_vertices(self) -> IntArray:
+        """(n_edited - a,) int64: edited-mesh indices of the non-edited vertices."""
+        return np.flatnonzero(self.vertex_map >= 0).astype(np.int64)
+
+    @property
+    def kept_cells(self) -> IntArray:
+        """(m_edited - b,) int64: edited-mesh indices of the non-edited cells."""
+        return np.flatnonzero(self.cell_map >= 0).astype(np.int64)
+
+
 @dataclass(frozen=True)
-class MeshDiff:
+class MeshDiff(IndexMaps):
     """What changed from an old mesh to an edited one (see the module documentation).
 
     Attributes
@@ -269,26 +299,6 @@ class MeshDiff:
     removed_cells: IntArray
     n_old_vertices: int
     n_old_cells: int
-
-    @property
-    def added_vertices(self) -> IntArray:
-        """(a,) int64: edited-mesh indices of the new vertices, ascending."""
-        return np.flatnonzero(self.vertex_map < 0).astype(np.int64)
-
-    @property
-    def added_cells(self) -> IntArray:
-        """(b,) int64: edited-mesh indices of the new cells, ascending."""
-        return np.flatnonzero(self.cell_map < 0).astype(np.int64)
-
-    @property
-    def kept_vertices(self) -> IntArray:
-        """(n_edited - a,) int64: edited-mesh indices of the non-edited vertices."""
-        return np.flatnonzero(self.vertex_map >= 0).astype(np.int64)
-
-    @property
-    def kept_cells(self) -> IntArray:
-        """(m_edited - b,) int64: edited-mesh indices of the non-edited cells."""
-        return np.flatnonzero(self.cell_map >= 0).astype(np.int64)
 
     @property
     def identical(self) -> bool:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.compare import MeshDiff, MeshIndex, _cell_columns, _columns, _match, _SortedRows, _unmatched
+from tgsis.compare import IndexMaps, MeshDiff, MeshIndex, _cell_columns, _columns, _match, _SortedRows, _unmatched
 from tgsis.mesh import Mesh
 
 __all__ = ["EditPlan", "plan_edit"]
@@ -32,7 +32,7 @@ _ROUNDS = 64  # each round resolves the ring of moved vertices next to resolved 
 
 
 @dataclass(frozen=True)
-class EditPlan:
+class EditPlan(IndexMaps):
     """Rows to keep, rewrite, remove and add when an edited mesh replaces the old one.
 
     Attributes
@@ -46,6 +46,8 @@ class EditPlan:
         Edited vertices that are an old vertex moved (row rewritten, id kept).
     cell_map : (m_edited,) int64
         Per edited cell, the old cell whose row it keeps, or -1 for a new row.
+        ``added_vertices`` and ``added_cells`` (from :class:`~tgsis.compare.IndexMaps`)
+        are the edited rows written as new ones.
     removed_vertices, removed_cells : int64 arrays
         Old rows to remove, ascending.
     bounds : (2, 3) float64 or None
@@ -60,16 +62,6 @@ class EditPlan:
     removed_vertices: IntArray
     removed_cells: IntArray
     bounds: npt.NDArray[np.float64] | None = None
-
-    @property
-    def added_vertices(self) -> IntArray:
-        """Edited vertices written as new rows."""
-        return np.flatnonzero(self.vertex_map < 0).astype(np.int64)
-
-    @property
-    def added_cells(self) -> IntArray:
-        """Edited cells written as new rows."""
-        return np.flatnonzero(self.cell_map < 0).astype(np.int64)
 
     @property
     def moved_vertices(self) -> IntArray:

@@ -227,8 +227,8 @@ def _next_property_id(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: in
 def _delete_parts(conn: Conn, schema: str, table: str, key: str, geoid: int, idfield: str, ids: IntArray) -> int:
     if len(ids) == 0:
         return 0
-    row = conn.execute("SELECT tgsis.delete_object_parts(%s, %s, %s, %s, %s, %s)",
-                       (schema, table, key, geoid, idfield, ids.tolist())).fetchone()
+    row = conn.execute("SELECT tgsis.delete_object_rows(%s, %s, %s, %s, %s, %s)",
+                       (schema, table, key, [geoid], idfield, ids.tolist())).fetchone()
     return int(row[0]) if row else 0
 
 
