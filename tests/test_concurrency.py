@@ -47,6 +47,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.sessions import Background, connect, wait_until_blocked
 from tests.synthetic import flat_grid
 from tgsis.db import features as F
 
@@ -60,7 +61,6 @@ WRITER_TXNS = int(os.environ.get("TGSIS_CONCURRENCY_TXNS", "200"))  # transactio
 PARENT_TXNS = WRITER_TXNS // 2   # transactions written in DEFAULT
 MAX_NEW_VERSIONS = 14       # versions the merging session creates while the writers run
 MIN_MERGES = 6              # writers pause half-way until that many merges landed
-LOCK_TIMEOUT = "20s"        # safety net only: a wait that long is a failure, not a documented lock wait
 DEADLINE = 150.0            # seconds for the whole concurrent phase (test-level timeout)
 
 ITEMS = "CREATE TABLE items (obj int, part int, val int NOT NULL, note text NOT NULL, PRIMARY KEY (obj, part))"
@@ -235,11 +235,6 @@ class Model:
 
 
 # --------------------------------------------------------------------------- applying ops to a database
-
-
-def connect(dsn: str, role: str, *, autocommit: bool = False) -> Conn:
-    return psycopg.connect(dsn, autocommit=autocommit, application_name=f"tgsis-concurrency-{role}",
-                           options=f"-c lock_timeout={LOCK_TIMEOUT}")
 
 
 def _rows(cur: psycopg.Cursor[Any], expected: int, op: Op) -> None:
@@ -848,48 +843,6 @@ def _surfaces(conn: Conn, version: str) -> dict[str, list[float]]:
     with tgsis.in_version(conn, version, local=True):
         return {f.name: [float(z) for z in f.mesh.vertices[:, 2]] for f in F.fetch_features(conn, "horizons")
                 if f.name is not None and isinstance(f.mesh, tgsis.Surface)}
-
-
-class Background:
-    """A call run in a thread of its own, whose lock wait the test can watch."""
-
-    def __init__(self, dsn: str, name: str, call: Callable[[Conn], Any], version: str | None = None) -> None:
-        self.conn = connect(dsn, name)
-        if version is not None:
-            tgsis.goto_version(self.conn, version)
-        self.pid = self.conn.info.backend_pid
-        self.result: Any = None
-        self.error: BaseException | None = None
-        self.thread = threading.Thread(target=self._run, args=(call,), daemon=True)
-        self.thread.start()
-
-    def _run(self, call: Callable[[Conn], Any]) -> None:
-        try:
-            self.result = call(self.conn)
-            self.conn.commit()
-        except BaseException as exc:  # noqa: BLE001 - inspected by the test
-            self.error = exc
-            self.conn.rollback()
-
-    def finish(self) -> Any:
-        self.thread.join(30)
-        assert not self.thread.is_alive(), "the background call did not finish"
-        self.conn.close()
-        if self.error is not None:
-            raise self.error
-        return self.result
-
-
-def wait_until_blocked(observer: Conn, pid: int, by: int) -> None:
-    """Wait until backend ``pid`` waits for a lock held by backend ``by``."""
-    deadline = time.monotonic() + 15
-    while time.monotonic() < deadline:
-        row = observer.execute("SELECT %s = ANY (pg_blocking_pids(%s))", (by, pid)).fetchone()
-        observer.rollback()
-        if row == (True,):
-            return
-        time.sleep(0.02)
-    pytest.fail(f"backend {pid} never waited for backend {by}")
 
 
 @pytest.mark.parametrize("action", ["merge", "refresh"])

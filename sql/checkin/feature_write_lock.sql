@@ -1,15 +1,17 @@
--- tgsis.feature_write_lock(geoid): serialise writers of one stored object until the transaction ends.
--- A transaction-level advisory lock keyed by the geoid: check-in, save and
--- delete of the object take it before they look at the object, so that two
--- of them never both decide from the same state (no lost update). Writers
--- that go around these paths (raw SQL on the tables) do not take it.
+-- tgsis.feature_write_lock(geoid): serialise writers of one stored feature until the transaction ends.
+-- The object write lock (tgsis.object_write_lock) of object class 'feature':
+-- check-in, save and delete of the feature take it before they look at it,
+-- so that two of them never both decide from the same state, and writes
+-- through the versioned views (which hold it shared) are never in flight
+-- meanwhile. With feature versioning off, raw SQL writes on the plain tables
+-- take no lock: they are not seen (docs/comparison.md).
 CREATE FUNCTION tgsis.feature_write_lock(p_geoid bigint)
 RETURNS void
 LANGUAGE sql
 VOLATILE
 AS $$
-    SELECT pg_advisory_xact_lock(hashtextextended('tgsis.object', p_geoid))
+    SELECT tgsis.object_write_lock('feature', ARRAY[p_geoid::text])
 $$;
 
 COMMENT ON FUNCTION tgsis.feature_write_lock(bigint) IS
-    'take the transaction-level advisory lock that check-in, save and delete of a stored object hold while they decide from its state';
+    'take the exclusive object write lock of a feature (tgsis.object_write_lock(''feature'', ...)) that check-in, save and delete hold while they decide from its state';

@@ -1,8 +1,10 @@
 -- tgsis.delete_object_rows(schema, table, keyfield, keys, idfield, ids): delete objects' rows (or some of them) in the session's version, set-based.
--- On a versioned table this is what the INSTEAD OF trigger does row by row,
--- in two statements: rows written in the working revision go, older visible
--- rows get the working revision appended to lastrevs, and objects locked by
--- another version are refused (TG303). With p_idfield and p_ids only the
+-- A plain table's rows are deleted with the caller's rights. On a versioned
+-- table this is what the INSTEAD OF trigger does row by row, in two
+-- statements (tgsis.close_object_rows, with tgsis's rights after the same
+-- checks): rows written in the working revision go, older visible rows get
+-- the working revision appended to lastrevs, and objects locked by another
+-- version are refused (TG303). With p_idfield and p_ids only the
 -- rows whose id is one of p_ids go: the removed vertices, simplices or
 -- property rows of an edited mesh (tgsis.save_feature). Returns rows affected.
 CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
@@ -12,10 +14,7 @@ LANGUAGE plpgsql
 VOLATILE
 AS $$
 DECLARE
-    v_write   record;
     v_deleted bigint;
-    v_closed  bigint;
-    v_class   text;
     v_where   text;
 BEGIN
     IF to_regclass(format('%I.%I', p_schema, p_table)) IS NULL THEN
@@ -32,24 +31,13 @@ BEGIN
     END IF;
     v_where := format('%I = ANY ($1)', p_keyfield)
                || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
-    SELECT objectclass INTO v_class FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
-    IF NOT FOUND THEN
+    IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table) THEN
         EXECUTE format('DELETE FROM %I.%I WHERE %s', p_schema, p_table, v_where)
           USING p_keys, NULL::integer, NULL::integer[], p_ids;
         GET DIAGNOSTICS v_deleted = ROW_COUNT;
         RETURN v_deleted;
     END IF;
-    SELECT * INTO v_write FROM tgsis.write_revision();
-    PERFORM tgsis.check_objects_unlocked(v_class, p_keys::text[]);
-    EXECUTE format('DELETE FROM %I.%I WHERE %s AND revision = $2', p_schema, p_table || '_ver', v_where)
-      USING p_keys, v_write.revision, v_write.revisions, p_ids;
-    GET DIAGNOSTICS v_deleted = ROW_COUNT;
-    EXECUTE format('UPDATE %I.%I v SET lastrevs = v.lastrevs || $2
-                     WHERE %s AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)',
-                   p_schema, p_table || '_ver', v_where)
-      USING p_keys, v_write.revision, v_write.revisions, p_ids;
-    GET DIAGNOSTICS v_closed = ROW_COUNT;
-    RETURN v_deleted + v_closed;
+    RETURN tgsis.close_object_rows(p_schema, p_table, p_keyfield, p_keys, p_idfield, p_ids);
 END
 $$;
 

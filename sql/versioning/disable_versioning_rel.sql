@@ -15,6 +15,7 @@ DECLARE
     v_dependent text;
     v_name      text;
     v_removed   bigint;
+    v_acl       record;
 BEGIN
     v_view := format('%I.%I', v_t.schemaname, v_t.tablename)::regclass;
     IF NOT pg_has_role(current_user, (SELECT relowner FROM pg_class WHERE oid = v_view), 'USAGE') THEN
@@ -41,12 +42,22 @@ BEGIN
         END IF;
     END IF;
 
+    -- the rights storage did not keep (updates and deletes went through the view) come back from the view
+    FOR v_acl IN
+        SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+         WHERE c.oid = v_view AND a.grantee <> c.relowner
+           AND a.privilege_type IN ('UPDATE', 'DELETE', 'TRUNCATE', 'REFERENCES', 'TRIGGER')
+    LOOP
+        EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, v_t.schemaname, v_ver,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+    END LOOP;
     EXECUTE format('DROP VIEW %I.%I', v_t.schemaname, v_t.tablename);
     EXECUTE format('DROP FUNCTION %I.%I()', v_t.schemaname, v_t.tablename || '_ver_write');
     EXECUTE format('DELETE FROM %I.%I v WHERE NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1))', v_t.schemaname, v_ver)
       USING v_default;
     GET DIAGNOSTICS v_removed = ROW_COUNT;
     EXECUTE format('DROP TRIGGER tgsis_storage_write ON %I.%I', v_t.schemaname, v_ver);
+    EXECUTE format('DROP TRIGGER tgsis_storage_rows ON %I.%I', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_t.schemaname, v_ver, v_ver || '_pkey');
     EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN revclosed, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I RENAME TO %I', v_t.schemaname, v_ver, v_t.tablename);

@@ -33,6 +33,8 @@ DECLARE
     v_writable  text[];
     v_dependent text;
     v_identity  text[];
+    v_skip      text;
+    v_relacl    aclitem[];
     v_name      text;
     v_comment   text := obj_description(p_table, 'pg_class');
     v_con       record;
@@ -187,11 +189,29 @@ BEGIN
     EXECUTE format('COMMENT ON COLUMN %I.%I.lastrevs IS %L', v_schema, v_ver,
                    'revisions in which this row version stopped being current (updated or deleted there); empty while live');
 
-    -- the table's grants stay on storage for the client's bulk path: direct writers need the version's write right
-    -- (not for the table's owner, as whom the view's row trigger writes: the WHEN spares it a call per row)
+    -- storage keeps the table's SELECT and INSERT grants, for the client's bulk path (COPY upload); rows are
+    -- changed and closed only through the view and tgsis's functions, so no other role may update or delete
+    -- them (disable_versioning gives the grants back from the view's)
+    SELECT relacl INTO v_relacl FROM pg_class WHERE oid = v_rel;  -- the view gets them all, below
+    FOR v_acl IN
+        SELECT DISTINCT a.grantee FROM aclexplode(v_relacl) AS a
+         WHERE a.grantee <> v_owner
+           AND a.privilege_type IN ('UPDATE', 'DELETE', 'TRUNCATE', 'REFERENCES', 'TRIGGER')
+    LOOP
+        EXECUTE format('REVOKE UPDATE, DELETE, TRUNCATE, REFERENCES, TRIGGER ON %I.%I FROM %s', v_schema, v_ver,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+    END LOOP;
+    -- direct writers need the version's write right and may only add live rows of its working revision
+    -- (not the table's owner, as whom the view's row trigger writes, nor tgsis's, as whom merges write:
+    -- the WHEN spares them a call per statement)
+    v_skip := format('NOT pg_catalog.pg_has_role(current_user, %s::oid, ''USAGE'') '
+                     'AND NOT pg_catalog.pg_has_role(current_user, %s::oid, ''USAGE'')',
+                     v_owner, (SELECT nspowner FROM pg_namespace WHERE nspname = 'tgsis'));
     EXECUTE format('CREATE TRIGGER tgsis_storage_write BEFORE INSERT OR UPDATE OR DELETE OR TRUNCATE ON %I.%I '
-                   'FOR EACH STATEMENT WHEN (NOT pg_catalog.pg_has_role(current_user, %s::oid, ''USAGE'')) '
-                   'EXECUTE FUNCTION tgsis.storage_write_check()', v_schema, v_ver, v_owner);
+                   'FOR EACH STATEMENT WHEN (%s) EXECUTE FUNCTION tgsis.storage_write_check()', v_schema, v_ver, v_skip);
+    EXECUTE format('CREATE TRIGGER tgsis_storage_rows AFTER INSERT ON %I.%I REFERENCING NEW TABLE AS tgsis_new_rows '
+                   'FOR EACH STATEMENT WHEN (%s) EXECUTE FUNCTION tgsis.storage_rows_check(%L, %L)',
+                   v_schema, v_ver, v_skip, p_objectclass, p_objectkeyfield);
 
     -- the view in the table's place, with its defaults, comments, grants and owner
     EXECUTE tgsis.versioned_view_source(v_schema, v_table, v_columns);
@@ -215,8 +235,7 @@ BEGIN
                    coalesce(v_comment || ' ', '')
                    || format('(versioned by tgsis: rows of the session''s version; storage %s)', v_ver));
     FOR v_acl IN
-        SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
-         WHERE c.oid = v_rel AND a.grantee <> c.relowner
+        SELECT a.privilege_type, a.grantee FROM aclexplode(v_relacl) AS a WHERE a.grantee <> v_owner
     LOOP
         EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, v_schema, v_table,
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);

@@ -2,6 +2,32 @@
 -- CREATE FUNCTION statement of the INSTEAD OF trigger that routes writes on
 -- the view <table> into <table>_ver. Generated per table with static SQL so
 -- that PL/pgSQL caches the plans (dynamic SQL would be planned per row).
+--
+-- Concurrency. The view's row reached the trigger from the statement's
+-- snapshot; the write is made on the row version that is current when it is
+-- locked, as PostgreSQL's own re-check does for a plain table, or refused:
+--   * update, delete: the visible row version of the key is locked (FOR
+--     UPDATE waits for a concurrent writer and re-checks visibility after
+--     it). If it is gone because that writer closed it (the first change of
+--     a row inherited from an older revision writes a new row), the current
+--     one is looked up again with a new snapshot. Its values must still be
+--     the ones the statement read (binary equality, *=): otherwise the
+--     statement computed its new values from a stale row, and the write
+--     fails with 40001 (serialization_failure) naming table, key and version,
+--     so that the client retries. A row deleted meanwhile is skipped, as on
+--     a plain table.
+--   * insert: a visible row of the key is share-locked, which waits for a
+--     transaction closing it; the new row goes in with ON CONFLICT DO NOTHING
+--     on the storage key, which waits for a concurrent insert of the same key
+--     and revision. Either way a duplicate is the table's own 23505, never
+--     one of the storage key.
+--   * the object write lock (tgsis.object_lock_key) is held shared, so that
+--     bulk writers of the object (check-in, save by difference, set-based
+--     deletes, which take it exclusively) never decide from a state a view
+--     write is changing.
+-- Rights: tgsis.write_revision checks the calling role's write right on the
+-- session's version for every row (the version is a setting that a function
+-- called by the statement could change between rows) and share-locks it.
 CREATE FUNCTION tgsis.versioning_trigger_source(
     p_schema    text,
     p_table     text,
@@ -21,22 +47,29 @@ DECLARE
     v_assign   text;
     v_old_key  text;
     v_new_key  text;
-    v_key_vals text;
     v_key_list text;
-    v_visible  CONSTANT text := 'v.revision = ANY (v_set) AND NOT (v.lastrevs && v_set)';
+    v_visible  CONSTANT text := '(v.revision = ANY (v_set)) IS TRUE AND (NOT v.revclosed OR NOT (v.lastrevs && v_set))';
+    v_current  text;
+    v_same     text;
     v_dup      text;
+    v_stale    text;
 BEGIN
     SELECT string_agg(format('%I', c), ', ' ORDER BY o),
            string_agg(format('NEW.%I', c), ', ' ORDER BY o),
-           string_agg(format('%I = NEW.%I', c, c), ', ' ORDER BY o)
-      INTO v_cols, v_new, v_assign
+           string_agg(format('%I = NEW.%I', c, c), ', ' ORDER BY o),
+           format('pg_catalog.record_image_eq(ROW(%s), ROW(%s))', string_agg(format('v_cur.%I', c), ', ' ORDER BY o),
+                  string_agg(format('OLD.%I', c), ', ' ORDER BY o))
+      INTO v_cols, v_new, v_assign, v_same
       FROM unnest(p_columns) WITH ORDINALITY AS u(c, o);
     SELECT string_agg(format('v.%I = OLD.%I', k, k), ' AND ' ORDER BY o),
            string_agg(format('v.%I = NEW.%I', k, k), ' AND ' ORDER BY o),
-           string_agg(format('NEW.%I::text', k), ', ' ORDER BY o),
            string_agg(format('%I', k), ', ' ORDER BY o)
-      INTO v_old_key, v_new_key, v_key_vals, v_key_list
+      INTO v_old_key, v_new_key, v_key_list
       FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
+    -- the row version of the old key that is current now, locked: its place and revision, and its values
+    v_current := format('SELECT v.ctid AS t_ctid, v.revision AS t_revision, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
+                        (SELECT string_agg(format('v.%I', c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),
+                        v_ver, v_old_key, v_visible);
     -- the error a plain table would raise, so applications that catch 23505 keep working
     v_dup := format($dup$
             RAISE EXCEPTION 'duplicate key value violates unique constraint %%', %L
@@ -45,7 +78,20 @@ BEGIN
                       CONSTRAINT = %L, TABLE = %L, SCHEMA = %L;$dup$,
         '"' || p_pkey || '"',
         'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) already exists in version %s.',
-        v_key_vals, p_pkey, p_table, p_schema);
+        (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
+        p_pkey, p_table, p_schema);
+    -- what PostgreSQL raises when a repeatable-read transaction meets a concurrent update: clients retry it
+    v_stale := format($stale$
+            RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
+                    %L, concat_ws(', ', %s), %L, %L, tgsis.get_working_version()
+                USING ERRCODE = 'serialization_failure',
+                      DETAIL = 'A transaction that committed after this statement read the row changed or replaced it; '
+                               'writing values computed from the old row would undo that change.',
+                      HINT = 'Retry the transaction.',
+                      TABLE = %L, SCHEMA = %L;$stale$,
+        '(' || v_key_list || ')',
+        (SELECT string_agg(format('OLD.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
+        p_schema, p_table, p_table, p_schema);
 
     RETURN format($fn$
 CREATE FUNCTION %1$I.%2$I()
@@ -55,15 +101,17 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $body$
 -- Written by tgsis.enable_versioning: writes on the view %1$s.%3$s go to %4$s
--- as row versions labelled with the session's working revision.
+-- as row versions labelled with the session's working revision (see
+-- tgsis.versioning_trigger_source for how concurrent writers are handled).
 DECLARE
+    v_vid  integer;
     v_w    integer;
     v_set  integer[];
     v_keys text[];
+    v_cur  record;
 BEGIN
-    -- the write right was checked once for the statement (tgsis.view_write_check)
-    SELECT w.revision, w.revisions INTO v_w, v_set FROM tgsis.write_revision(false) AS w;
-    -- object locks: one index probe per row; the check names the holders
+    -- the write right on the session's version (checked for every row), its working revision and set
+    SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
     IF TG_OP = 'INSERT' THEN
         v_keys := ARRAY[NEW.%15$I::text];
     ELSIF TG_OP = 'DELETE' THEN
@@ -71,29 +119,67 @@ BEGIN
     ELSE
         v_keys := ARRAY[OLD.%15$I::text, NEW.%15$I::text];
     END IF;
+    -- object locks: one index probe per row; the check names the holders
     IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = ANY (v_keys)) THEN
         PERFORM tgsis.check_objects_unlocked(%14$L, v_keys);
     END IF;
+    -- no bulk writer of the object in flight (they take it exclusively)
+    PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[1], v_vid));
+    IF cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN
+        PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[2], v_vid));
+    END IF;
+
     IF TG_OP = 'INSERT' THEN
-        IF EXISTS (SELECT FROM %4$s v WHERE %6$s AND %9$s) THEN%10$s
+        -- a visible row of the key: wait for a transaction closing it; if it stays, a duplicate
+        PERFORM FROM %4$s v WHERE %6$s AND %9$s FOR SHARE;
+        IF FOUND THEN%10$s
         END IF;
-        INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w);
-        RETURN NEW;
-    ELSIF TG_OP = 'UPDATE' THEN
-        -- a new key is a delete of the old key and an insert of the new one
-        IF ROW(%11$s) IS DISTINCT FROM ROW(%12$s)
-           AND EXISTS (SELECT FROM %4$s v WHERE %6$s AND %9$s) THEN%10$s
-        END IF;
-        UPDATE %4$s v SET %8$s WHERE %13$s AND v.revision = v_w;
-        IF NOT FOUND THEN
-            UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE %13$s AND %9$s;
-            INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w);
+        -- waits for a concurrent insert of the same key in this revision
+        INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
+        IF NOT FOUND THEN%10$s
         END IF;
         RETURN NEW;
     END IF;
-    DELETE FROM %4$s v WHERE %13$s AND v.revision = v_w;
+
+    %17$s;
     IF NOT FOUND THEN
-        UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE %13$s AND %9$s;
+        -- a transaction that committed since this statement read the row closed it: the row current now, if any
+        %17$s;
+        IF NOT FOUND THEN
+            RETURN NULL;  -- deleted meanwhile: nothing to change, as on a plain table
+        END IF;
+    END IF;
+    IF NOT (%18$s) THEN%19$s
+    END IF;
+
+    IF TG_OP = 'UPDATE' THEN
+        IF ROW(%11$s) IS DISTINCT FROM ROW(%12$s) THEN
+            -- a new key is a delete of the old key and an insert of the new one
+            PERFORM FROM %4$s v WHERE %6$s AND %9$s FOR SHARE;
+            IF FOUND THEN%10$s
+            END IF;
+            IF v_cur.t_revision = v_w THEN
+                DELETE FROM %4$s v WHERE v.ctid = v_cur.t_ctid;
+            ELSE
+                UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.ctid = v_cur.t_ctid;
+            END IF;
+            INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
+            IF NOT FOUND THEN%10$s
+            END IF;
+        ELSIF v_cur.t_revision = v_w THEN
+            UPDATE %4$s v SET %8$s WHERE v.ctid = v_cur.t_ctid;
+        ELSE
+            UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.ctid = v_cur.t_ctid;
+            INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
+            IF NOT FOUND THEN%19$s
+            END IF;
+        END IF;
+        RETURN NEW;
+    END IF;
+    IF v_cur.t_revision = v_w THEN
+        DELETE FROM %4$s v WHERE v.ctid = v_cur.t_ctid;
+    ELSE
+        UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.ctid = v_cur.t_ctid;
     END IF;
     RETURN OLD;
 END
@@ -101,9 +187,9 @@ $body$$fn$,
         p_schema, p_table || '_ver_write', p_table, v_ver, v_cols, v_new_key, v_new, v_assign, v_visible, v_dup,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
-        v_old_key, p_class, p_keyfield);
+        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale);
 END
 $gen$;
 
 COMMENT ON FUNCTION tgsis.versioning_trigger_source(text, text, text[], text[], text, text, text) IS
-    'source of the INSTEAD OF INSERT/UPDATE/DELETE trigger function <table>_ver_write() that enable_versioning creates';
+    'source of the INSTEAD OF INSERT/UPDATE/DELETE trigger function <table>_ver_write() that enable_versioning creates: writes on the row version current when locked, or 40001 when the statement read a row a concurrent transaction changed';

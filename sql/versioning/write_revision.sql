@@ -1,31 +1,49 @@
--- tgsis.write_revision(check_rights): the revision and revision set a write of this session uses, or TG301/TG002 if it may not write.
--- It share-locks the version's row until the transaction ends, so that
--- create_version and save_revision (which lock it for update) never hand the
--- working revision on while a writer is still labelling rows with it.
--- p_check_rights false skips the write-right check: the row triggers of the
--- views pass it, because a statement trigger on each view made that check
--- once for the statement (per row it doubled the cost of a write).
-CREATE FUNCTION tgsis.write_revision(p_check_rights boolean DEFAULT true, OUT revision integer, OUT revisions integer[])
+-- tgsis.write_revision(): the version, revision and revision set a write of this session uses, or TG301/TG002 if it may not write.
+-- Every write path calls it: the statement and row triggers of versioned
+-- views, the statement triggers of storage, the client's bulk paths. It
+-- share-locks the version's row until the transaction ends, so that
+-- create_version, save_revision, merge and refresh (which lock it for update)
+-- never hand the working revision on while a writer is still labelling rows
+-- with it; the row is locked only when the calling role holds the write
+-- right, so that nobody else can take that lock and keep it (a reader
+-- holding it in an open transaction would stop them all).
+-- The row triggers call it once per row rather than trusting the check of
+-- their statement trigger: the session's version is a setting, which a
+-- function called by the statement itself could change between rows. So
+-- the usual case is one query: the right (tgsis_admin, the version's owner,
+-- a grant, an ancestor's owner: tgsis.holds_version_privilege's rule, in
+-- its cheapest order) is part of the locking query's condition.
+CREATE FUNCTION tgsis.write_revision(OUT versionid integer, OUT revision integer, OUT revisions integer[])
 LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_name    text := tgsis.get_working_version();
-    v_viewing integer := tgsis.get_viewing_revision();
+    v_name    text := coalesce(nullif(current_setting('tgsis.version', true), ''), 'DEFAULT');
+    v_viewing text := nullif(btrim(current_setting('tgsis.revision', true)), '');
+    v_role    name := tgsis.calling_role();
     v_saved   text;
-    v_id      integer;
 BEGIN
-    SELECT v.versionid, v.workingrevision, v.workingset INTO v_id, revision, revisions
-      FROM tgsis.versions v WHERE v.name = v_name
-       FOR SHARE;
+    SELECT v.versionid, v.workingrevision, v.workingset INTO versionid, revision, revisions
+      FROM tgsis.versions v
+     WHERE v.name = v_name
+       AND (pg_has_role(v_role, 'tgsis_admin', 'USAGE')
+            OR v.owner = v_role
+            OR EXISTS (SELECT FROM tgsis.version_privileges p LEFT JOIN pg_roles r ON r.rolname = p.grantee
+                        WHERE p.versionid = v.versionid AND p.privilege = 'write'
+                          AND (p.grantee = 'public' OR (r.oid IS NOT NULL AND pg_has_role(v_role, r.oid, 'USAGE'))))
+            OR tgsis.is_version_owner(v.versionid, v_role))
+       FOR SHARE OF v;
     IF NOT FOUND THEN
-        RAISE EXCEPTION 'version % does not exist', quote_literal(v_name)
-            USING ERRCODE = 'TG200', HINT = 'SELECT tgsis.goto_version(''DEFAULT'')';
+        -- no such version, or no right (require_version_privilege says which right, whose, and the grant)
+        PERFORM tgsis.require_version_privilege(tgsis.version_id(v_name), 'write', 'write in');
+        -- it had the right after all: deleted, or given the right, by a transaction this one waited for
+        RAISE EXCEPTION 'version % changed while this write waited for it', quote_literal(v_name)
+            USING ERRCODE = 'serialization_failure', HINT = 'retry the transaction';
     END IF;
-    IF v_viewing IS NOT NULL AND v_viewing <> revision THEN
-        SELECT r.name INTO v_saved FROM tgsis.revisions r WHERE r.revision = v_viewing;
+    IF v_viewing IS NOT NULL AND tgsis.get_viewing_revision() <> revision THEN  -- TG100 for a malformed setting
+        SELECT r.name INTO v_saved FROM tgsis.revisions r WHERE r.revision = v_viewing::integer;
         RAISE EXCEPTION 'version % is viewed at revision %, which cannot be changed', quote_literal(v_name), v_viewing
             USING ERRCODE = 'TG301',
                   DETAIL = CASE WHEN v_saved IS NOT NULL
@@ -34,11 +52,8 @@ BEGIN
                                 ELSE format('Only the working revision %s of %s can change.', revision, v_name) END,
                   HINT = format('SELECT tgsis.goto_version(%L) to work in its working revision', v_name);
     END IF;
-    IF p_check_rights THEN
-        PERFORM tgsis.require_version_privilege(v_id, 'write', 'write in');
-    END IF;
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.write_revision(boolean) IS
-    'working revision and working set for a write in the session''s version; TG301 while an older revision is viewed, TG002 without the write right (unless p_check_rights is false: the check was made for the statement); share-locks the version until commit';
+COMMENT ON FUNCTION tgsis.write_revision() IS
+    'version id, working revision and working set for a write in the session''s version, share-locking the version until commit when the calling role holds the write right; TG002 without it, TG301 while an older revision is viewed (the error ends the lock with the transaction)';

@@ -1,0 +1,75 @@
+-- tgsis.close_object_rows(schema, table, keyfield, keys, idfield, ids): the versioned half of tgsis.delete_object_rows.
+-- SECURITY DEFINER: roles other than storage's owner may not update or
+-- delete rows of <table>_ver (they could rewrite other versions), so the
+-- set-based delete of the client runs here, for the calling role, after the
+-- checks a write through the view makes: the table is one tgsis versions
+-- (tgsis.versioned_tables, which only tgsis writes), the role may DELETE
+-- from its view, holds the write right on its session's version
+-- (tgsis.write_revision) and no other version locked the objects. The
+-- objects' write locks are taken exclusively first: no write through the
+-- view is in flight on them (it would re-create a closed row), later ones
+-- find them changed. Rows written in the working revision go, older visible
+-- rows get the working revision appended to lastrevs. Returns rows affected.
+CREATE FUNCTION tgsis.close_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
+                                        p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_t       tgsis.versioned_tables;
+    v_write   record;
+    v_deleted bigint;
+    v_closed  bigint;
+    v_where   text;
+BEGIN
+    IF current_setting('transaction_isolation') = 'repeatable read' THEN
+        -- its snapshot would not see rows a view writer commits before the object lock below is granted:
+        -- they would stay
+        RAISE EXCEPTION 'set-based deletes of versioned objects cannot run in a REPEATABLE READ transaction'
+            USING ERRCODE = 'TG300',
+                  DETAIL = 'The transaction''s snapshot may miss rows of the objects written by a concurrent transaction.',
+                  HINT = 'run it in READ COMMITTED (the default) or SERIALIZABLE';
+    END IF;
+    SELECT * INTO v_t FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION 'table %.% is not versioned', quote_ident(p_schema), quote_ident(p_table)
+            USING ERRCODE = 'TG200', HINT = 'SELECT * FROM tgsis.versioned_tables lists the versioned tables';
+    END IF;
+    IF p_keyfield IS DISTINCT FROM v_t.objectkeyfield THEN
+        RAISE EXCEPTION 'the object key of %.% is %, not %', quote_ident(p_schema), quote_ident(p_table),
+                quote_ident(v_t.objectkeyfield), coalesce(quote_ident(p_keyfield), 'NULL')
+            USING ERRCODE = 'TG100';
+    END IF;
+    IF p_idfield IS NOT NULL AND NOT EXISTS (
+            SELECT FROM pg_attribute WHERE attrelid = format('%I.%I', p_schema, p_table)::regclass
+                                        AND attname = p_idfield AND attnum > 0 AND NOT attisdropped) THEN
+        RAISE EXCEPTION 'table %.% has no column %', quote_ident(p_schema), quote_ident(p_table), quote_ident(p_idfield)
+            USING ERRCODE = 'TG100';
+    END IF;
+    IF NOT has_table_privilege(tgsis.calling_role(), format('%I.%I', p_schema, p_table)::regclass, 'DELETE') THEN
+        RAISE EXCEPTION 'role % may not delete from %.%', quote_ident(tgsis.calling_role()), quote_ident(p_schema),
+                quote_ident(p_table)
+            USING ERRCODE = 'TG002', HINT = 'its owner can GRANT DELETE on it';
+    END IF;
+    SELECT * INTO v_write FROM tgsis.write_revision();
+    PERFORM tgsis.check_objects_unlocked(v_t.objectclass, p_keys::text[]);
+    PERFORM tgsis.object_write_lock(v_t.objectclass, p_keys::text[]);
+    v_where := format('%I = ANY ($1)', p_keyfield)
+               || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
+    EXECUTE format('DELETE FROM %I.%I WHERE %s AND revision = $2', p_schema, p_table || '_ver', v_where)
+      USING p_keys, v_write.revision, v_write.revisions, p_ids;
+    GET DIAGNOSTICS v_deleted = ROW_COUNT;
+    EXECUTE format('UPDATE %I.%I v SET lastrevs = v.lastrevs || $2
+                     WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)',
+                   p_schema, p_table || '_ver', v_where)
+      USING p_keys, v_write.revision, v_write.revisions, p_ids;
+    GET DIAGNOSTICS v_closed = ROW_COUNT;
+    RETURN v_deleted + v_closed;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.close_object_rows(text, text, text, bigint[], text, bigint[]) IS
+    'set-based delete of objects'' rows (some of them with idfield/ids) from a versioned table in the session''s version, for roles that may not write its storage: checks DELETE on the view, the write right, object locks; takes the objects'' write locks; returns rows affected';

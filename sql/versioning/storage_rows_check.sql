@@ -1,0 +1,44 @@
+-- tgsis.storage_rows_check(): AFTER INSERT statement trigger on every <table>_ver: rows written directly belong to the session's working revision.
+-- A role writing storage directly (the client's COPY upload) may only add
+-- live rows labelled with the working revision of a version where it holds
+-- the write right, and only to objects no other version has locked. The rows
+-- are read from the statement's transition table, once per statement (a
+-- row trigger would double the upload); a wrong one fails the statement,
+-- naming how many rows and which revision they had to carry.
+-- Trigger arguments: object class, object key column.
+CREATE FUNCTION tgsis.storage_rows_check()
+RETURNS trigger
+LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_write record;
+    v_bad   bigint;
+    v_first text;
+    v_keys  text[];
+BEGIN
+    SELECT * INTO v_write FROM tgsis.write_revision();  -- TG002, TG301
+    SELECT count(*), min(n.revision::text) INTO v_bad, v_first
+      FROM tgsis_new_rows n
+     WHERE n.revision IS DISTINCT FROM v_write.revision OR n.lastrevs IS DISTINCT FROM '{}'::integer[];
+    IF v_bad > 0 THEN
+        RAISE EXCEPTION '% row(s) written into %.% are not live rows of revision %, the working revision of version %',
+                v_bad, TG_TABLE_SCHEMA, TG_TABLE_NAME, v_write.revision, quote_literal(tgsis.get_working_version())
+            USING ERRCODE = 'TG002',
+                  DETAIL = format('Rows written directly into storage must have revision = %s and lastrevs = ''{}'' (one had revision %s).',
+                                  v_write.revision, coalesce(v_first, 'NULL')),
+                  HINT = format('write through the view %I.%I, or label the rows with SELECT revision FROM tgsis.write_revision()',
+                                TG_TABLE_SCHEMA, left(TG_TABLE_NAME, -4));
+    END IF;
+    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = TG_ARGV[0]) THEN
+        EXECUTE format('SELECT array_agg(DISTINCT n.%I::text) FROM tgsis_new_rows n', TG_ARGV[1]) INTO v_keys;
+        PERFORM tgsis.check_objects_unlocked(TG_ARGV[0], v_keys, v_write.versionid);
+    END IF;
+    RETURN NULL;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.storage_rows_check() IS
+    'AFTER INSERT statement trigger of <table>_ver storage (transition table tgsis_new_rows): rows a role other than the owners writes directly must be live rows of its working revision, in a version where it holds the write right, of objects no other version locked';

@@ -1,0 +1,65 @@
+"""Concurrent sessions for the tests: a call run in a thread of its own whose lock wait a test can watch."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import psycopg
+import pytest
+
+import tgsis
+
+Conn = psycopg.Connection[Any]
+
+LOCK_TIMEOUT = "20s"        # safety net only: a wait that long is a failure, not a documented lock wait
+
+
+def connect(dsn: str, role: str, *, autocommit: bool = False) -> Conn:
+    """A connection named after the part it plays (``application_name``), with a safety-net lock timeout."""
+    return psycopg.connect(dsn, autocommit=autocommit, application_name=f"tgsis-concurrency-{role}",
+                           options=f"-c lock_timeout={LOCK_TIMEOUT}")
+
+
+class Background:
+    """A call run in a thread of its own, whose lock wait the test can watch."""
+
+    def __init__(self, dsn: str, name: str, call: Callable[[Conn], Any], version: str | None = None) -> None:
+        self.conn = connect(dsn, name)
+        if version is not None:
+            tgsis.goto_version(self.conn, version)
+        self.pid = self.conn.info.backend_pid
+        self.result: Any = None
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._run, args=(call,), daemon=True)
+        self.thread.start()
+
+    def _run(self, call: Callable[[Conn], Any]) -> None:
+        try:
+            self.result = call(self.conn)
+            self.conn.commit()
+        except BaseException as exc:  # noqa: BLE001 - inspected by the test
+            self.error = exc
+            self.conn.rollback()
+
+    def finish(self) -> Any:
+        self.thread.join(30)
+        assert not self.thread.is_alive(), "the background call did not finish"
+        self.conn.close()
+        if self.error is not None:
+            raise self.error
+        return self.result
+
+
+def wait_until_blocked(observer: Conn, pid: int, by: int) -> None:
+    """Wait until backend ``pid`` waits for a lock held by backend ``by``."""
+    deadline = time.monotonic() + 15
+    while time.monotonic() < deadline:
+        row = observer.execute("SELECT %s = ANY (pg_blocking_pids(%s))", (by, pid)).fetchone()
+        observer.rollback()
+        if row == (True,):
+            return
+        time.sleep(0.02)
+    pytest.fail(f"backend {pid} never waited for backend {by}")
