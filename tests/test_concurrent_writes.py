@@ -319,10 +319,12 @@ def test_concurrent_increments_lose_nothing(items: Conn, db_dsn: str, version: s
 
 @pytest.fixture
 def surfaces(conn: Conn) -> tuple[Conn, int]:
-    """A versioned surface feature (3 x 3 grid) in DEFAULT, and its geoid."""
+    """A versioned surface feature (3 x 3 grid) in DEFAULT, and its geoid; a child version, so that DEFAULT's
+    working revision is a later one than the feature's rows (a write closes them and writes new ones)."""
     fc = F.create_feature_class(conn, "horizons", "SURFACE")
     tgsis.enable_feature_versioning(conn)
     geoid = F.insert_feature(conn, fc, flat_grid(3, 0.0))
+    tgsis.create_version(conn, "child")
     conn.commit()
     return conn, geoid
 

@@ -1,8 +1,11 @@
 -- tgsis.find_conflicts(version): (re)compute the conflicting objects of a version against its parent.
 -- An object conflicts when, since the version's initrevision, it was changed
--- both in the version and in the parent. Solutions recorded earlier are kept
--- while neither side changed the object again; conflicts that are gone are
--- removed.
+-- both in the version and in the parent (tgsis.current_conflicts). Solutions
+-- recorded earlier are kept while neither side changed the object again;
+-- conflicts that are gone are removed. Only a role that may write in the
+-- version or merge into its parent stores the result (which locks the
+-- version's conflict rows until its transaction ends): anyone else who may
+-- read gets the same answer computed, without writing or locking anything.
 CREATE FUNCTION tgsis.find_conflicts(p_version text)
 RETURNS SETOF tgsis.conflicts
 LANGUAGE plpgsql
@@ -12,28 +15,29 @@ SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_version tgsis.versions;
-    v_parent  integer[];
+    v_role    name := tgsis.calling_role();
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
         RAISE EXCEPTION 'version DEFAULT has no parent to conflict with' USING ERRCODE = 'TG100';
     END IF;
-    SELECT coalesce(array_agg(revision), '{}') INTO v_parent
-      FROM tgsis.revisions WHERE versionid = v_version.parentid AND revision > v_version.initrevision;
+    IF NOT (tgsis.holds_version_privilege(v_version.versionid, 'write', v_role)
+            OR tgsis.holds_version_privilege(v_version.parentid, 'merge', v_role)) THEN
+        RETURN QUERY
+            SELECT v_version.versionid, f.objectclass, f.objectkey, f.conflicttype, f.childtables, f.parenttables,
+                   f.childmark, f.parentmark,
+                   CASE WHEN (k.childmark, k.parentmark) = (f.childmark, f.parentmark) THEN k.solution ELSE 'unsolved' END,
+                   coalesce(k.detected_at, now()),
+                   CASE WHEN (k.childmark, k.parentmark) = (f.childmark, f.parentmark) THEN k.solved_at END,
+                   CASE WHEN (k.childmark, k.parentmark) = (f.childmark, f.parentmark) THEN k.solved_by END
+              FROM tgsis.current_conflicts(v_version.versionid) AS f
+              LEFT JOIN tgsis.conflicts k ON k.versionid = v_version.versionid AND k.objectclass = f.objectclass
+                                         AND k.objectkey = f.objectkey
+             ORDER BY f.objectclass, f.objectkey;
+        RETURN;
+    END IF;
 
-    WITH changes AS (
-        SELECT side, objectclass, objectkey, array_agg(shortname ORDER BY shortname) AS tables,
-               md5(string_agg(shortname || ':' || mark, ',' ORDER BY shortname)) AS mark
-          FROM (SELECT 'child' AS side, * FROM tgsis.changed_objects(tgsis.own_working_revisions(v_version.versionid))
-                UNION ALL
-                SELECT 'parent', * FROM tgsis.changed_objects(v_parent)) AS c
-         GROUP BY 1, 2, 3),
-    found AS (
-        SELECT c.objectclass, c.objectkey,
-               ARRAY(SELECT unnest(c.tables) INTERSECT SELECT unnest(p.tables) ORDER BY 1) AS conflicttype,
-               c.tables AS childtables, p.tables AS parenttables, c.mark AS childmark, p.mark AS parentmark
-          FROM changes c JOIN changes p USING (objectclass, objectkey)
-         WHERE c.side = 'child' AND p.side = 'parent'),
+    WITH found AS (SELECT * FROM tgsis.current_conflicts(v_version.versionid)),
     gone AS (
         DELETE FROM tgsis.conflicts k
          WHERE k.versionid = v_version.versionid
@@ -56,4 +60,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.find_conflicts(text) IS
-    '(re)compute and return the objects changed both in a version and in its parent since the version was based; keeps solutions while neither side changed the object again';
+    '(re)compute and return the objects changed both in a version and in its parent since the version was based; keeps solutions while neither side changed the object again; stored only for roles that may write in the version or merge into its parent';
