@@ -54,6 +54,8 @@ def test_docs_list_exactly_the_sql_codes(conn: psycopg.Connection[Any]) -> None:
         ("TG9ZZ", tgsis.Error),
         ("TG000", tgsis.Error),
         ("42501", tgsis.MissingPrivilegeError),
+        ("40001", tgsis.ConcurrentChangeError),   # a write through a view that read a row changed meanwhile
+        ("40P01", tgsis.ConcurrentChangeError),
         ("22012", tgsis.DatabaseError),
     ],
 )

@@ -126,6 +126,7 @@ from tgsis.mesh import (
 )
 from tgsis.errors import (
     AlreadyExistsError,
+    ConcurrentChangeError,
     DatabaseError,
     Error,
     FileFormatError,
@@ -267,6 +268,7 @@ __all__ = [
     # errors
     "Error",
     "AlreadyExistsError",
+    "ConcurrentChangeError",
     "DatabaseError",
     "FileFormatError",
     "InstallationError",

@@ -197,6 +197,18 @@ class DatabaseError(Error):
     code = None
 
 
+class ConcurrentChangeError(DatabaseError):
+    """The transaction met a concurrent one and was refused as a whole: retry it.
+
+    PostgreSQL's ``40001`` (serialization_failure), which a write through a
+    versioned view also raises when the row it read was changed by a
+    transaction that committed meanwhile, and ``40P01`` (deadlock_detected).
+    Nothing of the transaction was written.
+    """
+
+    code = None
+
+
 class LocalServerError(Error):
     """The local PostgreSQL server that tgsis manages could not be found, started or stopped."""
 
@@ -213,6 +225,8 @@ _AREA_FALLBACK: dict[str, type[Error]] = {
 # PostgreSQL's own conditions that mean the same as one of ours.
 _POSTGRES_EQUIVALENTS: dict[str, type[Error]] = {
     "42501": MissingPrivilegeError,  # insufficient_privilege
+    "40001": ConcurrentChangeError,  # serialization_failure
+    "40P01": ConcurrentChangeError,  # deadlock_detected
 }
 
 _SQLSTATE_RE = re.compile(r"^TG[0-9A-Z]{3}$")
@@ -237,7 +251,8 @@ def class_for_sqlstate(sqlstate: str | None) -> type[Error]:
     type[Error]
         The class with that exact code; for an unknown ``TG`` code the class of
         its area; PostgreSQL's ``42501`` (insufficient privilege) gives
-        :class:`MissingPrivilegeError`; :class:`DatabaseError` for the rest.
+        :class:`MissingPrivilegeError`, ``40001`` and ``40P01`` give
+        :class:`ConcurrentChangeError`; :class:`DatabaseError` for the rest.
     """
     if sqlstate in _POSTGRES_EQUIVALENTS:
         return _POSTGRES_EQUIVALENTS[sqlstate]
