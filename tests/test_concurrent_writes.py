@@ -388,3 +388,18 @@ def test_a_checkin_and_an_sql_update_of_the_same_vertex_never_lose_either(surfac
             expected = -7.0
     z = conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 0", (geoid,)).fetchall()
     assert z == [(expected,)]
+
+
+@pytest.mark.parametrize("isolation", ["REPEATABLE READ", "SERIALIZABLE"])
+def test_merge_refresh_and_bulk_deletes_refuse_an_old_snapshot(surfaces: tuple[Conn, int], isolation: str) -> None:
+    """They wait for writers and must see what those committed: a transaction's snapshot would miss it."""
+    conn, geoid = surfaces
+    before = conn.execute("SELECT count(*), sum(revision) FROM tgsis.vrtx_ver").fetchone()
+    conn.commit()
+    for call in (lambda: tgsis.merge_version(conn, "child"), lambda: tgsis.refresh_version(conn, "child"),
+                 lambda: F.delete_feature(conn, "horizons", geoid)):
+        conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation}")
+        with pytest.raises(tgsis.VersioningError, match=f"cannot run in a {isolation} transaction"):
+            call()
+        conn.rollback()
+    assert conn.execute("SELECT count(*), sum(revision) FROM tgsis.vrtx_ver").fetchone() == before

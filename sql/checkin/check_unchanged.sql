@@ -17,6 +17,7 @@ BEGIN
                         coalesce(p_geoid::text, 'NULL'), coalesce(quote_literal(p_fingerprint), 'NULL')
             USING ERRCODE = 'TG100', HINT = 'SELECT tgsis.object_fingerprint(geoid) at check-out gives the fingerprint';
     END IF;
+    PERFORM tgsis.require_read_committed('a check-in');
     PERFORM tgsis.feature_write_lock(p_geoid);
     v_now := tgsis.object_fingerprint(p_geoid);
     IF v_now IS NULL THEN

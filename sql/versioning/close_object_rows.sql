@@ -25,14 +25,7 @@ DECLARE
     v_closed  bigint;
     v_where   text;
 BEGIN
-    IF current_setting('transaction_isolation') = 'repeatable read' THEN
-        -- its snapshot would not see rows a view writer commits before the object lock below is granted:
-        -- they would stay
-        RAISE EXCEPTION 'set-based deletes of versioned objects cannot run in a REPEATABLE READ transaction'
-            USING ERRCODE = 'TG300',
-                  DETAIL = 'The transaction''s snapshot may miss rows of the objects written by a concurrent transaction.',
-                  HINT = 'run it in READ COMMITTED (the default) or SERIALIZABLE';
-    END IF;
+    PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
     SELECT * INTO v_t FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'table %.% is not versioned', quote_ident(p_schema), quote_ident(p_table)

@@ -11,6 +11,7 @@ AS $$
 DECLARE
     v_child tgsis.versions;
 BEGIN
+    PERFORM tgsis.require_read_committed(p_action);
     SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_child.parentid IS NULL THEN
         RAISE EXCEPTION 'version DEFAULT has no parent: nothing to %', p_action USING ERRCODE = 'TG100';
