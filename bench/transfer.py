@@ -57,7 +57,7 @@ def main() -> None:
         admin = psycopg.connect(server.dsn(), autocommit=True)
         admin.execute("CREATE DATABASE bench")
         conn = psycopg.connect(server.dsn("bench"))
-        tgsis.install(conn)
+        tgsis.install(conn, method="sql")  # this checkout's SQL, not an extension another build installed
         F.create_feature_class(conn, "horizon", "SURFACE", cell_properties={"porosity": "double precision"})
 
         geoid = np.full(max(n, m), 1, dtype=np.int64)

@@ -139,7 +139,7 @@ def main() -> None:
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute("CREATE DATABASE bench")
         with psycopg.connect(server.dsn("bench")) as conn:
-            tgsis.install(conn)
+            tgsis.install(conn, method="sql")  # this checkout's SQL, not an extension another build installed
             deepest, inherited = build(conn, args.objects, args.rows)
             tgsis.goto_version(conn, deepest)
             stored = conn.execute("SELECT count(*) FROM parts_ver").fetchone()

@@ -204,9 +204,10 @@ BEGIN
     -- direct writers need the version's write right and may only add live rows of its working revision
     -- (not the table's owner, as whom the view's row trigger writes, nor tgsis's, as whom merges write:
     -- the WHEN spares them a call per statement)
-    v_skip := format('NOT pg_catalog.pg_has_role(current_user, %s::oid, ''USAGE'') '
-                     'AND NOT pg_catalog.pg_has_role(current_user, %s::oid, ''USAGE'')',
-                     v_owner, (SELECT nspowner FROM pg_namespace WHERE nspname = 'tgsis'));
+    -- (by role name, not oid: a dump restored into another cluster keeps the names, not the oids)
+    v_skip := format('NOT pg_catalog.pg_has_role(current_user, %L::name, ''USAGE'') '
+                     'AND NOT pg_catalog.pg_has_role(current_user, %L::name, ''USAGE'')',
+                     pg_get_userbyid(v_owner), (SELECT pg_get_userbyid(nspowner) FROM pg_namespace WHERE nspname = 'tgsis'));
     EXECUTE format('CREATE TRIGGER tgsis_storage_write BEFORE INSERT OR UPDATE OR DELETE OR TRUNCATE ON %I.%I '
                    'FOR EACH STATEMENT WHEN (%s) EXECUTE FUNCTION tgsis.storage_write_check()', v_schema, v_ver, v_skip);
     EXECUTE format('CREATE TRIGGER tgsis_storage_rows AFTER INSERT ON %I.%I REFERENCING NEW TABLE AS tgsis_new_rows '
