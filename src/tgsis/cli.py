@@ -43,7 +43,7 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, lifespan
-from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError
+from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError, NotVersionedError
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
 from tgsis.temporal import even_times
 
@@ -1087,6 +1087,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return handler(args)
     except Error as exc:
+        if isinstance(exc, NotVersionedError):  # the hint in this interface's words
+            exc.hint = ("tgsis versioning enable features, to write features in versions; or work in DEFAULT "
+                        "(--in DEFAULT, or tgsis version goto DEFAULT)")
         print(f"tgsis: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

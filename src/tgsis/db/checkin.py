@@ -341,6 +341,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     cell_values = _aligned_properties(fc, edited, drop_extra, "the edited mesh")
     feature_values = _feature_columns(fc, properties)
     storage = _Storage.of(conn)
+    storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
     updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
