@@ -35,6 +35,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import check_module
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.edits import EditPlan, plan_edit
 from tgsis.db.copy import SQL_TYPES
@@ -762,3 +763,7 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
                         checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
     return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),
                     properties)
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -27,6 +27,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
 from tgsis.errors import (InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError,
                           NotVersionedError, reraise)
@@ -837,3 +838,7 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
         _Storage.of(conn).check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,))
     return True
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -31,6 +31,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
                                _positions, _split, _Storage, get_feature_class)
@@ -817,3 +818,7 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
     with reraise(), conn.transaction():
         idx, t = _copy_out(conn, query, ["int8", "float8"])
     return idx, t
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)
