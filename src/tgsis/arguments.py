@@ -10,7 +10,8 @@ the public functions of a module so that such arguments raise
 hints of the function:
 
 * ``str`` parameters (also inside sequences and mappings): no NUL byte; a
-  parameter that only takes ``str`` (or ``None``) must get one;
+  parameter that only takes ``str`` must get one (or ``None``, which the
+  function's own checks refuse where it is not allowed);
 * ``int`` parameters: an integer (not ``bool``) in the range of the SQL
   parameter: ``integer`` for revisions, orders and SRS ids
   (:data:`INT4_PARAMETERS`), else ``bigint``;
@@ -87,7 +88,7 @@ def _check_text(name: str, value: Any) -> None:
 
 def _check(name: str, kinds: frozenset[str], value: Any) -> None:
     _check_text(name, value)
-    if value is None and "none" in kinds:
+    if value is None:  # NULL where a value is needed: the function's own check says which (e.g. TG101 for names)
         return
     if kinds <= {"str", "none"} and not isinstance(value, str):
         raise InvalidInputError(f"{name} must be a string, not {type(value).__name__} {value!r}")
