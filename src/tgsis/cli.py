@@ -417,10 +417,16 @@ def _read_surface(path: str, what: str) -> tgsis.Surface:
     return mesh
 
 
+#: Most PNG views ``tgsis interpolate --preview`` writes.
+MAX_PREVIEWS = 1000
+
+
 def cmd_interpolate(args: argparse.Namespace) -> int:
     from tgsis.interpolation import InterpolationSetup, interpolate
     from tgsis.interpolation.preview import write_previews
 
+    if args.preview and not 1 <= args.frames <= MAX_PREVIEWS:
+        raise InvalidInputError(f"--frames must be from 1 to {MAX_PREVIEWS}, got {args.frames}")
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
@@ -443,6 +449,10 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
 def cmd_corners(args: argparse.Namespace) -> int:
     from tgsis.interpolation import propose_corners
 
+    if args.count is not None and args.count < 1:
+        raise InvalidInputError(f"--count must be >= 1, got {args.count}", hint="leave --count out for every corner")
+    if not 0 <= args.min_angle <= 180:  # NaN too
+        raise InvalidInputError(f"--min-angle must be from 0 to 180 degrees, got {args.min_angle}")
     surface = _read_surface(args.file, "surface")
     corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
     _out(json.dumps(corners.tolist()))
@@ -945,12 +955,12 @@ def build_parser() -> argparse.ArgumentParser:
                                                                "(without: computed and previewed only)")
     interp.add_argument("--name", help="feature name (default: the source's)")
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
-    interp.add_argument("--frames", type=int, default=5, help="number of preview instants (default 5)")
+    interp.add_argument("--frames", type=_INT4, default=5, help="number of preview instants (default 5)")
     interp.set_defaults(handler=cmd_interpolate)
 
     corners = commands.add_parser("corners", help="propose control vertices: the sharp corners of a surface's border")
     corners.add_argument("file")
-    corners.add_argument("--count", type=int, help="exactly this many corners")
+    corners.add_argument("--count", type=_INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
     corners.set_defaults(handler=cmd_corners)
 
