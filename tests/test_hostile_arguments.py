@@ -210,3 +210,15 @@ def test_cli_bad_values_name_the_argument(db: Conn, db_dsn: str, tmp_path: Path,
     code, err = _cli(db_dsn, capsys, *argv)
     assert code == 1 and message in err and "Traceback" not in err
     assert _state(db) == before
+
+
+@pytest.mark.parametrize("call", ["read", "write"])
+def test_file_names_with_a_nul_byte(call: str) -> None:
+    # before: a bare ValueError ("embedded null byte") from open()
+    from tgsis import formats
+
+    with pytest.raises(tgsis.FileFormatError, match="the file name contains a NUL byte"):
+        if call == "read":
+            formats.read("fault\x00.ts")
+        else:
+            formats.write(_surface(), "fault\x00.ts")
