@@ -108,31 +108,47 @@ def test_cli_command_stops_the_server_it_started(tmp_path: Path) -> None:
         assert not server.is_running()
 
 
-@pytest.mark.xfail(strict=False, reason="flaky here (about 1 run in 3 under load): the lease watcher sometimes "
-                   "does not stop the server within 60 s; under investigation, see the note on issue 2")
+HOLD_LEASE = "import time, tgsis; tgsis.connect().close(); print('up', flush=True); time.sleep(300)"
+
+# A dying process closes its pipe to the watcher and releases its lease-file lock
+# in an order the kernel chooses; a watcher that looked at the lease file at once
+# saw the dead process as another user now and then and left the server running.
+KILL_ROUNDS = 10
+
+
+def _kill_lease_holder(home: Path) -> None:
+    child = _spawn([sys.executable, "-c", HOLD_LEASE], TGSIS_HOME=str(home))
+    try:
+        assert child.stdout is not None
+        line = child.stdout.readline().strip()
+        assert line == "up", line + child.stdout.read()
+        server = LocalServer.persistent(find_binaries(), home=home)
+        pid = server.pid()
+        assert process_alive(pid)
+        # only the tgsis process crashes: its watcher (own session) and the
+        # postmaster (pg_ctl puts it in a session of its own) live on
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait(30)
+        # pg_ctl status (postmaster.pid and its process) says whether the server still runs
+        stopped = wait_until(lambda: not server.is_running(), timeout=60)
+        assert stopped, "the lease watcher did not stop the server:\n" + subprocess.run(
+            ["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout
+        assert not process_alive(pid)
+    finally:
+        if child.poll() is None:
+            child.kill()
+
+
 def test_cli_killed_midway_leaves_no_server() -> None:
     with private_home() as home:
-        hold = "import time, tgsis; tgsis.connect().close(); print('up', flush=True); time.sleep(300)"
-        child = _spawn([sys.executable, "-c", hold], TGSIS_HOME=str(home))
-        try:
-            assert child.stdout is not None
-            assert child.stdout.readline().strip() == "up"
-            server = LocalServer.persistent(find_binaries(), home=home)
-            pid = server.pid()
-            assert process_alive(pid)
-            # only the tgsis process crashes: SIGKILL to its whole group would also
-            # kill the postmaster (pg_ctl does not detach it), which then stays a
-            # zombie where PID 1 does not reap, and pg_ctl takes it for running
-            os.kill(child.pid, signal.SIGKILL)
-            child.wait(30)
-            # pg_ctl status (postmaster.pid and its process) says whether the server still runs
-            stopped = wait_until(lambda: not server.is_running(), timeout=60)
-            assert stopped, "the lease watcher did not stop the server:\n" + subprocess.run(
-                ["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout
-            assert not server.is_running()
-        finally:
-            if child.poll() is None:
-                child.kill()
+        _kill_lease_holder(home)
+
+
+def test_killed_lease_holders_never_leave_the_server(tmp_path: Path) -> None:
+    # before the fix about 1 round in 4 failed, so 10 rounds caught it almost always
+    with private_home() as home:
+        for _ in range(KILL_ROUNDS):
+            _kill_lease_holder(home)
 
 
 def test_local_start_keeps_the_server_until_local_stop() -> None:

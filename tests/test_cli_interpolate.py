@@ -59,3 +59,19 @@ def test_interpolate_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
         assert main(argv) == 1, argv
         err = capsys.readouterr().err
         assert err.startswith("tgsis: error: ") and message in err and "Traceback" not in err, (argv, err)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["corners", "{file}", "--count", "0"], "--count must be >= 1, got 0"),
+    (["corners", "{file}", "--min-angle", "nan"], "--min-angle must be from 0 to 180 degrees, got nan"),
+    (["interpolate", "{file}", "{file}", "--setup", "{file}", "--t0", "0", "--t1", "1", "--preview", "{dir}",
+      "--frames", "-1"], "--frames must be from 1 to 1000, got -1"),
+])
+def test_bad_option_values_name_the_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str],
+                                         message: str) -> None:
+    # before: --count 0 and --min-angle nan gave corners anyway, --frames -1 a numpy traceback after the work
+    surface = tmp_path / "flat.ts"
+    formats.write(_flat(5, 4), surface)
+    assert main([a.format(file=surface, dir=tmp_path / "previews") for a in argv]) == 1
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "previews").exists()

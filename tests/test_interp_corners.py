@@ -59,3 +59,17 @@ def test_surfaces_without_one_border_are_refused() -> None:
                             np.concatenate([two.cells, two.cells + 16]))
     with pytest.raises(InterpolationSetupError, match="one border loop, this one has 2"):
         propose_corners(shifted)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"count": 0}, "count must be an integer >= 1"),
+    ({"count": -3}, "count must be an integer >= 1"),
+    ({"count": 2.5}, "count must be an integer >= 1"),
+    ({"min_angle": float("nan")}, "min_angle must be a number of degrees from 0 to 180"),
+    ({"min_angle": -5.0}, "min_angle must be a number of degrees from 0 to 180"),
+    ({"window": 0.0}, "window must be a fraction"),
+])
+def test_bad_arguments_are_refused(kwargs: dict[str, float], message: str) -> None:
+    # before: count <= 0 or a NaN angle quietly gave some corners
+    with pytest.raises(InterpolationSetupError, match=message):
+        propose_corners(_rectangle(5, 5), **kwargs)  # type: ignore[arg-type]

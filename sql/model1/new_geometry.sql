@@ -21,6 +21,16 @@ DECLARE
     v_geoid bigint;
     v_owner text;
 BEGIN
+    PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
+    IF coalesce(upper(p_geotype), '') NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+        RAISE EXCEPTION 'geotype % of a new geometry is unknown', coalesce(quote_literal(p_geotype), 'NULL')
+            USING ERRCODE = 'TG102', HINT = 'p_geotype => MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA or GEOMETRYCOLLECTION';
+    END IF;
+    IF p_nvrtx IS NULL OR p_nvrtx < 0 OR p_ncell IS NULL OR p_ncell < 0 THEN
+        RAISE EXCEPTION 'vertex and cell counts of a new geometry must be numbers >= 0, got p_nvrtx => % and p_ncell => %',
+                        coalesce(p_nvrtx::text, 'NULL'), coalesce(p_ncell::text, 'NULL')
+            USING ERRCODE = 'TG102', HINT = 'give the number of vertices and of cells (0 for none)';
+    END IF;
     IF p_bounds IS NOT NULL AND (cardinality(p_bounds) <> 6 OR array_position(p_bounds, NULL) IS NOT NULL
                                  OR 'NaN' = ANY (p_bounds) OR 'Infinity' = ANY (p_bounds) OR '-Infinity' = ANY (p_bounds)) THEN
         RAISE EXCEPTION 'bounds of a new geometry must be 6 finite numbers {xmin, ymin, zmin, xmax, ymax, zmax}, got %', p_bounds

@@ -4,6 +4,7 @@ RETURNS void
 LANGUAGE plpgsql
 AS $$
 BEGIN
+    PERFORM tgsis.plain_write_check('tgsis', 'times');  -- not "in" a version while features are plain
     PERFORM tgsis.temporal_geometry(p_geoid, 'INSTANTS');
     IF p_t IS NULL OR p_t IN ('NaN', 'Infinity', '-Infinity') THEN
         RAISE EXCEPTION 'instant % of geometry % must be a finite number', coalesce(p_t::text, 'NULL'), p_geoid

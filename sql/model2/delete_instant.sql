@@ -7,6 +7,7 @@ AS $$
 DECLARE
     v_class tgsis.catalog;
 BEGIN
+    PERFORM tgsis.plain_write_check('tgsis', 'times');  -- not "in" a version while features are plain
     PERFORM tgsis.temporal_geometry(p_geoid, 'INSTANTS');
     IF NOT EXISTS (SELECT FROM tgsis.times WHERE geoid = p_geoid AND times = p_t) THEN
         RETURN false;

@@ -13,6 +13,8 @@ IMMUTABLE
 PARALLEL SAFE
 AS $$
     SELECT CASE
+               WHEN p_t0 = 'NaN' OR p_t1 = 'NaN' OR p_t0 > p_t1
+                   THEN tgsis.invalid_period('p_t0, p_t1', p_t0, p_t1)
                WHEN p_t1 IS NULL
                     OR NOT coalesce(p_a > '-Infinity' AND p_a < 'Infinity' AND p_b > '-Infinity' AND p_b < 'Infinity', false)
                    THEN tgsis.timemultirange()

@@ -9,7 +9,7 @@ DECLARE
 BEGIN
     BEGIN
         v_rel := to_regclass(p_table);
-    EXCEPTION WHEN invalid_name OR syntax_error THEN  -- to_regclass rejects malformed names
+    EXCEPTION WHEN invalid_name OR syntax_error OR feature_not_supported THEN  -- malformed names; db.schema.name
         v_rel := NULL;
     END;
     IF v_rel IS NULL THEN

@@ -8,6 +8,7 @@ DECLARE
     v_t     record;
     v_found text[] := '{}';
     v_some  text[];
+    v_key   text;
 BEGIN
     FOR v_t IN
         SELECT t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype
@@ -16,7 +17,19 @@ BEGIN
             ON a.attrelid = format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass AND a.attname = t.objectkeyfield
          WHERE t.objectclass = p_objectclass
     LOOP
-        -- the keys cast to the column's type, so that the key index serves the lookup
+        -- the keys cast to the column's type, so that the key index serves the lookup;
+        -- a key that is no value of that type ('abc' for a bigint key) is a bad argument
+        FOREACH v_key IN ARRAY coalesce(p_keys, '{}') LOOP
+            BEGIN
+                EXECUTE format('SELECT $1::%s', v_t.keytype) USING v_key;
+            EXCEPTION WHEN data_exception THEN
+                RAISE EXCEPTION 'object key % of class % is not a %', quote_nullable(v_key), quote_literal(p_objectclass), v_t.keytype
+                    USING ERRCODE = 'TG100',
+                          DETAIL = format('Column %I of %I.%I holds the keys of the class''s objects.',
+                                          v_t.objectkeyfield, v_t.schemaname, v_t.tablename),
+                          HINT = format('give keys that are %s values (for features: their ids)', v_t.keytype);
+            END;
+        END LOOP;
         EXECUTE format('SELECT coalesce(array_agg(DISTINCT v.%1$I::text), ''{}'') FROM %2$I.%3$I v
                          WHERE v.%1$I = ANY ($1::%4$s[]) AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
                        v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype)

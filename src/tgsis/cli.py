@@ -43,7 +43,7 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, lifespan
-from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError
+from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError, NotVersionedError
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
 from tgsis.temporal import even_times
 
@@ -54,6 +54,20 @@ Handler = Callable[[argparse.Namespace], int]
 
 def _out(text: str) -> None:
     print(text, flush=True)
+
+
+def _integer(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: an integer from ``low`` to ``high`` (the range of its SQL column), else a usage error."""
+    def integer(text: str) -> int:
+        value = int(text)  # ValueError: argparse says "invalid integer value"
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{value} is out of range: from {low} to {high}")
+        return value
+    return integer
+
+
+_ID = _integer(-(2**63), 2**63 - 1)     # feature ids (bigint)
+_INT4 = _integer(-(2**31), 2**31 - 1)   # SRS ids, orders (integer)
 
 
 # --------------------------------------------------------------------------- db
@@ -112,8 +126,10 @@ def _split_version(text: str) -> tuple[str, int | None]:
     name, sep, revision = text.partition("@")
     if not sep:
         return name, None
-    if not revision.isdigit():
+    if not (revision.isascii() and revision.isdigit()):  # '²' is a digit to str.isdigit, not to int()
         raise InvalidInputError(f"{text!r} is not VERSION or VERSION@REVISION")
+    if int(revision) > 2**31 - 1:
+        raise InvalidInputError(f"revision {revision} of {text!r} is out of range: revisions go up to {2**31 - 1}")
     return name, int(revision)
 
 
@@ -401,10 +417,16 @@ def _read_surface(path: str, what: str) -> tgsis.Surface:
     return mesh
 
 
+#: Most PNG views ``tgsis interpolate --preview`` writes.
+MAX_PREVIEWS = 1000
+
+
 def cmd_interpolate(args: argparse.Namespace) -> int:
     from tgsis.interpolation import InterpolationSetup, interpolate
     from tgsis.interpolation.preview import write_previews
 
+    if args.preview and not 1 <= args.frames <= MAX_PREVIEWS:
+        raise InvalidInputError(f"--frames must be from 1 to {MAX_PREVIEWS}, got {args.frames}")
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
@@ -427,6 +449,10 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
 def cmd_corners(args: argparse.Namespace) -> int:
     from tgsis.interpolation import propose_corners
 
+    if args.count is not None and args.count < 1:
+        raise InvalidInputError(f"--count must be >= 1, got {args.count}", hint="leave --count out for every corner")
+    if not 0 <= args.min_angle <= 180:  # NaN too
+        raise InvalidInputError(f"--min-angle must be from 0 to 180 degrees, got {args.min_angle}")
     surface = _read_surface(args.file, "surface")
     corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
     _out(json.dumps(corners.tolist()))
@@ -828,7 +854,7 @@ def build_parser() -> argparse.ArgumentParser:
     cls_create.add_argument("--property", action="append", metavar="NAME:TYPE",
                             help="a per-vertex (or per-cell) property (repeatable), e.g. porosity:float8")
     cls_create.add_argument("--alignment", default="VERTEX", type=str.upper, choices=("VERTEX", "CELL"))
-    cls_create.add_argument("--srs", type=int, default=0, help="spatial reference id (EPSG), 0 = undefined")
+    cls_create.add_argument("--srs", type=_INT4, default=0, help="spatial reference id (EPSG), 0 = undefined")
     cls_create.add_argument("--schema", default="public")
     cls_create.add_argument("--description")
     cls_create.add_argument("--time-model", default="STATIC", type=str.upper, choices=("STATIC", "INSTANTS", "EVOLVING"),
@@ -862,14 +888,14 @@ def build_parser() -> argparse.ArgumentParser:
     imp.set_defaults(handler=cmd_import)
 
     exp = commands.add_parser("export", help="write a feature to a geometry file")
-    exp.add_argument("id", type=int)
+    exp.add_argument("id", type=_ID)
     exp.add_argument("file")
     exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     exp.add_argument("--format", help="file format (default: from the extension)")
     exp.set_defaults(handler=cmd_export)
 
     at = commands.add_parser("at", help="write the surface of a feature at model time T to a file")
-    at.add_argument("id", type=int)
+    at.add_argument("id", type=_ID)
     at.add_argument("time", type=float, metavar="T", help="model time (in the class's unit)")
     at.add_argument("file")
     at.add_argument("--format", help="file format (default: from the extension)")
@@ -878,11 +904,11 @@ def build_parser() -> argparse.ArgumentParser:
     at.set_defaults(handler=cmd_at)
 
     series = commands.add_parser("series", help="write a feature over model time as a ParaView .pvd time series")
-    series.add_argument("id", type=int)
+    series.add_argument("id", type=_ID)
     series.add_argument("dir", metavar="DIR", help="folder of the .pvd and its frames (created if missing)")
     series.add_argument("--from", dest="start", type=float, metavar="T0", help="first time")
     series.add_argument("--to", dest="end", type=float, metavar="T1", help="last time")
-    series.add_argument("--steps", type=int, metavar="N",
+    series.add_argument("--steps", type=_INT4, metavar="N",
                         help="N frames evenly spaced from T0 to T1, both included (without --from/--to/--steps: "
                              "one frame at each of the feature's own instants)")
     series.add_argument("--name", help="name of the .pvd file (default: feature_ID)")
@@ -891,7 +917,7 @@ def build_parser() -> argparse.ArgumentParser:
     series.set_defaults(handler=cmd_series)
 
     co = commands.add_parser("checkout", help="write a feature to a file for editing, recording what it was")
-    co.add_argument("id", type=int)
+    co.add_argument("id", type=_ID)
     co.add_argument("file", help="the file to edit (.ts, .vtk, .vtu, ...); the record goes to FILE.tgsis-checkout.npz")
     co.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     co.add_argument("--format", help="file format (default: from the extension)")
@@ -929,12 +955,12 @@ def build_parser() -> argparse.ArgumentParser:
                                                                "(without: computed and previewed only)")
     interp.add_argument("--name", help="feature name (default: the source's)")
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
-    interp.add_argument("--frames", type=int, default=5, help="number of preview instants (default 5)")
+    interp.add_argument("--frames", type=_INT4, default=5, help="number of preview instants (default 5)")
     interp.set_defaults(handler=cmd_interpolate)
 
     corners = commands.add_parser("corners", help="propose control vertices: the sharp corners of a surface's border")
     corners.add_argument("file")
-    corners.add_argument("--count", type=int, help="exactly this many corners")
+    corners.add_argument("--count", type=_INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
     corners.set_defaults(handler=cmd_corners)
 
@@ -1041,7 +1067,7 @@ def build_parser() -> argparse.ArgumentParser:
     vt_enable.add_argument("table", help="name or schema.name, or 'features'")
     vt_enable.add_argument("--key", help="column holding the object key")
     vt_enable.add_argument("--class", dest="object_class", help="object class")
-    vt_enable.add_argument("--order", type=int, default=0, help="iudorder within the object class (default 0)")
+    vt_enable.add_argument("--order", type=_INT4, default=0, help="iudorder within the object class (default 0)")
     vt_enable.add_argument("--shortname", help="name in conflict reports (default: the table name)")
     vt_enable.set_defaults(handler=cmd_versioning_enable)
     vt_disable = vt_commands.add_parser("disable", help="make a versioned table plain again with DEFAULT's rows")
@@ -1087,6 +1113,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return handler(args)
     except Error as exc:
+        if isinstance(exc, NotVersionedError):  # the hint in this interface's words
+            exc.hint = ("tgsis versioning enable features, to write features in versions; or work in DEFAULT "
+                        "(--in DEFAULT, or tgsis version goto DEFAULT)")
         print(f"tgsis: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -33,6 +33,7 @@ __all__ = [
     "NotFoundError",
     "ObjectLockedError",
     "CheckoutConflictError",
+    "NotVersionedError",
     "AlreadyExistsError",
     "InUseError",
     "VersioningError",
@@ -185,6 +186,15 @@ class CheckoutConflictError(VersioningError):
     """A check-in of an object that another writer changed (or deleted) since it was checked out."""
 
     code = "TG304"
+
+
+class NotVersionedError(VersioningError):
+    """A write in a version other than DEFAULT (or at an older revision) to tables that are not versioned.
+
+    Such a write would land in DEFAULT, the one state plain tables hold.
+    """
+
+    code = "TG305"
 
 
 class DatabaseError(Error):

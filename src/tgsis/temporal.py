@@ -399,6 +399,10 @@ def own_instants(obj: TemporalSurface) -> FloatArray:
     raise InvalidInputError(f"expected a SurfaceSeries or an EvolvingSurface, got {type(obj).__name__}")
 
 
+#: Most times :func:`even_times` gives: each becomes a frame (a file, for a ParaView series).
+MAX_STEPS = 100_000
+
+
 def even_times(start: float, end: float, steps: int, *,
                labels: tuple[str, str, str] = ("start", "end", "steps")) -> FloatArray:
     """``steps`` times evenly spaced from ``start`` to ``end``, both included (exactly).
@@ -408,7 +412,7 @@ def even_times(start: float, end: float, steps: int, *,
     start, end : float
         Finite, ``start <= end``; equal only for one step.
     steps : int
-        At least 1; 1 only when ``start == end``.
+        At least 1 and at most :data:`MAX_STEPS`; 1 only when ``start == end``.
     labels : (str, str, str)
         How error messages name the three arguments (e.g. command-line options).
 
@@ -421,6 +425,9 @@ def even_times(start: float, end: float, steps: int, *,
     first, last, count = labels
     if not isinstance(steps, numbers.Integral) or isinstance(steps, bool) or steps < 1:
         raise InvalidInputError(f"{count} must be an integer >= 1, got {steps!r}")
+    if steps > MAX_STEPS:  # 1e11 steps asked for 745 GiB of times before a single frame was written
+        raise InvalidInputError(f"{count} {steps} is too many: at most {MAX_STEPS} times (one frame file each)",
+                                hint=f"give {count} {MAX_STEPS} or fewer")
     for label, value in ((first, start), (last, end)):
         if not isinstance(value, numbers.Real) or isinstance(value, bool) or not np.isfinite(float(value)):
             raise InvalidInputError(f"{label} must be a finite number, got {value!r}")

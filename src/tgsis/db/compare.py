@@ -22,6 +22,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import check_module
 from tgsis.db.copy import decode_rows
 from tgsis.errors import reraise
 
@@ -181,3 +182,7 @@ def compare_versions(conn: Conn, geoid: int, old_version: str, new_version: str,
             sql.Literal(old_revision), sql.Literal(new_revision)))
     return _summary(conn, "SELECT * FROM tgsis.compare_geometry_versions(%s, %s, %s, %s, %s)",
                     (geoid, old_version, new_version, old_revision, new_revision))
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -27,8 +27,10 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
-from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.errors import (InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError,
+                          NotVersionedError, reraise)
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh, mesh_class
 from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
@@ -337,23 +339,62 @@ def _copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload:
 @dataclass(frozen=True)
 class _Storage:
     """Where bulk rows go: the tables themselves, or for versioned tables their
-    ``_ver`` storage with the session's working revision (no trigger per row)."""
+    ``_ver`` storage with the session's working revision (no trigger per row).
+
+    ``version`` and ``viewing`` are the session's working version and viewing
+    revision when it is *not* in DEFAULT's working revision (else ``None``):
+    then a write to a plain table is refused (:meth:`check`), since it would
+    land in DEFAULT.
+    """
 
     versioned: frozenset[tuple[str, str]]
     revision: int | None
+    version: str | None = None
+    viewing: int | None = None
 
     @classmethod
     def of(cls, conn: Conn) -> _Storage:
         versioned = frozenset((r[0], r[1]) for r in conn.execute(
             "SELECT schemaname, tablename FROM tgsis.versioned_tables").fetchall())
+        session = conn.execute(
+            "SELECT tgsis.get_working_version(), tgsis.get_viewing_revision(), "
+            "(SELECT workingrevision FROM tgsis.versions WHERE name = tgsis.get_working_version())").fetchone()
+        assert session is not None
+        version, viewing, working = session
+        elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
         if not versioned:
-            return cls(versioned, None)
+            return cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None)
         row = conn.execute("SELECT revision FROM tgsis.write_revision()").fetchone()  # TG301 when read-only
         assert row is not None
-        return cls(versioned, int(row[0]))
+        return cls(versioned, int(row[0]), version if elsewhere else None, viewing if elsewhere else None)
+
+    def check(self, schema: str, table: str) -> None:
+        """Refuse a write to a plain ``schema.table`` while the session is not in DEFAULT's working revision.
+
+        Raises
+        ------
+        NotVersionedError
+            The write would land in DEFAULT (nothing is written).
+        """
+        if self.version is None or (schema, table) in self.versioned:
+            return
+        if self.version != "DEFAULT":
+            raise NotVersionedError(
+                f"table {schema}.{table} is not versioned: a write in version {self.version!r} would change DEFAULT, "
+                "which every version reads",
+                detail=f"the connection works in version {self.version!r}, but feature versioning is off, so the "
+                       "feature tables hold one state for all versions; nothing was written",
+                hint="tgsis.enable_feature_versioning(conn) to write features in versions, or write in DEFAULT "
+                     "(tgsis.goto_version(conn, 'DEFAULT'), or outside tgsis.in_version)")
+        raise NotVersionedError(
+            f"table {schema}.{table} is not versioned: DEFAULT viewed at revision {self.viewing} cannot be written",
+            detail="the connection looks at an older revision; the table holds only the current state; "
+                   "nothing was written",
+            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state")
 
     def copy(self, conn: Conn, schema: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> None:
         """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision."""
+        self.check(schema, table)
         count = len(np.asarray(columns[0][1])) if columns else 0
         if (schema, table) in self.versioned:
             assert self.revision is not None
@@ -497,13 +538,15 @@ def insert_feature(
     feature_values = _feature_columns(fc, properties)
 
     with reraise(), conn.transaction():
+        storage = _Storage.of(conn)
+        storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_geometry(conn, mesh, name if name is not None else mesh.name)
         if isinstance(mesh, GeometryCollection):
             member_ids = [_new_geometry(conn, m, m.name, collection=geoid) for m in members]
             conn.execute("UPDATE tgsis.geometry SET geoids = %s WHERE geoid = %s", (member_ids, geoid))
         else:
             member_ids = [geoid]
-        _copy_meshes(conn, fc, member_ids, members, cell_values, _Storage.of(conn))
+        _copy_meshes(conn, fc, member_ids, members, cell_values, storage)
         columns = ["_geoid", *feature_values]
         conn.execute(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
@@ -792,5 +835,10 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
                               (feature_id,)).fetchone()
         if exists is None:
             return False
+        _Storage.of(conn).check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,))
     return True
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -538,7 +538,7 @@ class LocalServer:
                 "--pg-ctl", str(self.binaries.tool("pg_ctl")), "--data", str(self.data_dir),
                 "--root", str(self.root), "--lock-file", str(self.lock_file),
                 "--transition-lock-file", str(self.transition_lock_file),
-                "--state-file", str(self.state_file)]
+                "--state-file", str(self.state_file), "--owner-pid", str(os.getpid())]
         if self.os_user is not None:
             args += ["--uid", str(self.os_user.uid), "--gid", str(self.os_user.gid)]
         try:
@@ -553,6 +553,9 @@ class LocalServer:
     def unwatch(self, wait: float = 30) -> None:
         """Let the watcher go: it does its end-of-owner work now and exits."""
         if self._watch_pipe is not None:
+            # "let go normally": the watcher need not wait for this process to end (see reaper.py)
+            with contextlib.suppress(OSError):
+                os.write(self._watch_pipe, b"released\n")
             os.close(self._watch_pipe)
             self._watch_pipe = None
         if self._reaper is not None:

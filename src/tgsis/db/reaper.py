@@ -13,6 +13,16 @@ read returns end-of-file when the owner closes it (normal release) or dies
   the server was started implicitly, stop it; a server started by
   ``tgsis local start`` stays up.
 
+A dying owner releases its files in the order the kernel chooses: the pipe
+may reach end-of-file a moment *before* the owner's ``flock`` on the lease
+file is gone, and a look at the lease file then would see the dead owner as
+another user and leave the server running (1 run in 3 under load). So the
+reaper tells the two ends apart: an owner that lets go normally writes
+:data:`RELEASED` first (it has closed its lease file already); without it the
+owner died, and the reaper waits until it has been re-parented (the kernel
+re-parents children after it has closed every file of the dead process, flock
+locks included) before it looks.
+
 Standard library only: it must start fast and must not import tgsis.
 """
 
@@ -27,12 +37,20 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
+
+#: What an owner writes to the pipe before closing it when it lets go normally.
+RELEASED = b"released\n"
+
+#: Longest wait for a dead owner to be re-parented (its files released), in seconds.
+OWNER_EXIT_WAIT = 30.0
 
 
 def _stop(pg_ctl: str, data: str, mode: str, uid: int | None, gid: int | None) -> None:
+    """``pg_ctl stop`` in ``mode``; a fast shutdown that fails or times out is followed by an immediate one."""
     if not os.path.exists(os.path.join(data, "postmaster.pid")):
         return
-    subprocess.run(  # noqa: S603 - fixed argument list
+    done = subprocess.run(  # noqa: S603 - fixed argument list
         [pg_ctl, "stop", "-D", data, "-m", mode, "-w", "-t", "60"],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
@@ -43,6 +61,17 @@ def _stop(pg_ctl: str, data: str, mode: str, uid: int | None, gid: int | None) -
         group=gid,
         extra_groups=[] if uid is not None else None,
     )
+    if done.returncode != 0 and mode != "immediate":
+        _stop(pg_ctl, data, "immediate", uid, gid)
+
+
+def _wait_for_owner_exit(owner: int | None) -> None:
+    """Return once the dead ``owner`` no longer is our parent: by then its files, flocks included, are closed."""
+    if owner is None:
+        return
+    deadline = time.monotonic() + OWNER_EXIT_WAIT
+    while os.getppid() == owner and time.monotonic() < deadline:
+        time.sleep(0.005)
 
 
 def _implicitly_started(state_file: str) -> bool:
@@ -64,13 +93,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--state-file")
     parser.add_argument("--uid", type=int)
     parser.add_argument("--gid", type=int)
+    parser.add_argument("--owner-pid", type=int, help="the process whose end the reaper waits for (its parent)")
     args = parser.parse_args(argv)
 
     for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
 
-    while sys.stdin.buffer.read(65536):
-        pass
+    tail = b""
+    while chunk := sys.stdin.buffer.read(65536):
+        tail = (tail + chunk)[-len(RELEASED):]
+    if tail != RELEASED:  # the owner died: its lease may outlive the pipe for a moment
+        _wait_for_owner_exit(args.owner_pid)
 
     if args.mode == "throwaway":
         _stop(args.pg_ctl, args.data, "immediate", args.uid, args.gid)

@@ -31,6 +31,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
                                _positions, _split, _Storage, get_feature_class)
@@ -182,12 +183,13 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
     times = series.times.tolist()
     instant_rows = _instant_rows(fc, series.properties, len(times))
     with reraise(), conn.transaction():
+        storage = _Storage.of(conn)
+        storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
             conn, "INSTANTS", name if name is not None else series.name,
             _bounds(_concat([s.vertices for s in series.surfaces])),
             sum(s.n_vertices for s in series.surfaces), sum(s.n_cells for s in series.surfaces), series.alive,
             series.color)
-        storage = _Storage.of(conn)
         storage.copy(conn, "tgsis", "times", [("geoid", np.full(len(times), geoid, dtype=np.int64), "int8"),
                                               ("times", series.times, "float8")])
         _copy_instants(conn, fc, geoid, times, series.surfaces, storage, drop_extra_properties)
@@ -219,8 +221,10 @@ def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
     rows = _instant_rows(fc, {k: np.asarray([v]) for k, v in (properties or {}).items()}, 1)
     bounds = _bounds(surface.vertices)
     with reraise(), conn.transaction():
+        storage = _Storage.of(conn)
+        storage.check("tgsis", "times")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.add_instant(%s, %s)", (feature_id, float(t)))
-        _copy_instants(conn, fc, feature_id, [float(t)], [surface], _Storage.of(conn), drop_extra_properties)
+        _copy_instants(conn, fc, feature_id, [float(t)], [surface], storage, drop_extra_properties)
         _insert_instant_properties(conn, fc, feature_id, [(float(t),)], rows, ["_times"])
         conn.execute(
             "UPDATE tgsis.geometry SET nvrtx = nvrtx + %s, ncell = ncell + %s, "
@@ -240,6 +244,7 @@ def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
         InUseError for the feature's only instant (delete the feature instead).
     """
     with reraise(), conn.transaction():
+        _Storage.of(conn).check("tgsis", "times")  # not "in" a version while the feature tables are plain
         row = conn.execute("SELECT tgsis.delete_instant(%s, %s)", (feature_id, float(t))).fetchone()
     return bool(row and row[0])
 
@@ -307,11 +312,12 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
     triangle_offsets = np.cumsum([0, *m[:-1]])
     instant_rows = [row for p in periods for row in _instant_rows(fc, dict(p.properties), len(p.times))]
     with reraise(), conn.transaction():
+        storage = _Storage.of(conn)
+        storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
             conn, "EVOLVING", name if name is not None else surface.name,
             _bounds(_concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
             surface.color)
-        storage = _Storage.of(conn)
 
         def full(count: int) -> npt.NDArray[np.int64]:
             return np.full(count, geoid, dtype=np.int64)
@@ -812,3 +818,7 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
     with reraise(), conn.transaction():
         idx, t = _copy_out(conn, query, ["int8", "float8"])
     return idx, t
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -22,6 +22,7 @@ from typing import Any
 
 import psycopg
 
+from tgsis.arguments import check_module
 from tgsis.errors import reraise
 
 __all__ = [
@@ -658,3 +659,7 @@ def compress_versions(conn: Conn, *, dry_run: bool = False) -> list[Compressed]:
     with reraise(), conn.transaction():
         rows = conn.execute("SELECT what, name, removed FROM tgsis.compress_versions(%s)", (dry_run,)).fetchall()
     return [Compressed(r[0], r[1], int(r[2])) for r in rows]
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

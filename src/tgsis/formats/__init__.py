@@ -42,6 +42,8 @@ on a ``.pvd`` point to those functions.
 
 from __future__ import annotations
 
+import os
+
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -202,7 +204,11 @@ def format_for(path: PathLike, format: str | None = None) -> FileFormat:
     ------
     FileFormatError
         The format or extension is not known; the message lists the known ones.
+        The path holds a NUL byte (no file system allows it).
     """
+    if "\x00" in os.fspath(path):
+        raise FileFormatError("the file name contains a NUL byte, which no file name can hold",
+                              path=repr(os.fspath(path)))
     key = (format if format is not None else Path(path).suffix).lower()
     if key in ("pvd", ".pvd"):
         raise FileFormatError("a .pvd file is a time series of .vtu files, not a file of meshes", path=path,

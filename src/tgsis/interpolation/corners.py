@@ -15,6 +15,8 @@ where that turn is at least ``min_angle`` and largest within the window.
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 import numpy.typing as npt
 
@@ -90,8 +92,16 @@ def propose_corners(surface: Surface, *, min_angle: float = 35.0, window: float 
     ------
     InterpolationSetupError
         The surface has no border or several border loops, or fewer than
-        ``count`` corners stand out.
+        ``count`` corners stand out; ``count`` < 1, ``min_angle`` outside
+        [0, 180] or NaN, ``window`` outside (0, 0.5).
     """
+    if isinstance(count, bool) or (count is not None and not (isinstance(count, numbers.Integral) and count >= 1)):
+        raise InterpolationSetupError(f"count must be an integer >= 1 (or None: every corner), got {count!r}")
+    if isinstance(min_angle, bool) or not (isinstance(min_angle, numbers.Real) and 0 <= min_angle <= 180):
+        raise InterpolationSetupError(f"min_angle must be a number of degrees from 0 to 180, got {min_angle!r}")
+    if isinstance(window, bool) or not (isinstance(window, numbers.Real) and 0 < window < 0.5):
+        raise InterpolationSetupError(f"window must be a fraction of the border's length between 0 and 0.5, "
+                                      f"got {window!r}")
     loops = MeshTopology.of(surface).border_loops
     if len(loops) != 1:
         raise InterpolationSetupError(f"corner detection needs a surface with one border loop, this one has "
