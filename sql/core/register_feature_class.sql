@@ -2,6 +2,12 @@
 -- A temporal class (time model INSTANTS = model 2, EVOLVING = model 3) holds
 -- SURFACE features; it gets a per-instant property table <name>_pros, and the
 -- time keys (_times, or _timem and _timet) in it and in <name>_cellpros.
+-- It runs as tgsis's owner (SECURITY DEFINER), so that the class's tables,
+-- views and generated functions are objects tgsis itself created: the
+-- definer code that later versions them (enable_feature_versioning) acts only
+-- on tables tgsis.catalog names, and only tgsis's definer code writes that.
+-- The calling role must be a tgsis_admin with CREATE on the target schema; the
+-- system schemas and tgsis's own are refused.
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -16,6 +22,9 @@ CREATE FUNCTION tgsis.register_feature_class(
     p_time_unit          text    DEFAULT NULL)
 RETURNS tgsis.catalog
 LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_geotype   text := upper(btrim(p_geotype));
@@ -32,7 +41,13 @@ DECLARE
     v_fprops    jsonb;
     v_cprops    jsonb;
     v_row       tgsis.catalog;
+    v_caller    name := tgsis.calling_role();
 BEGIN
+    IF NOT pg_has_role(v_caller, 'tgsis_admin', 'MEMBER') THEN
+        RAISE EXCEPTION 'role % may not register feature classes', v_caller
+            USING ERRCODE = 'TG002', DETAIL = 'Registering feature classes is for members of tgsis_admin.',
+                  HINT = format('a DBA may run: GRANT tgsis_admin TO %I', v_caller);
+    END IF;
     IF p_name IS NULL OR p_name !~ '^[a-z][a-z0-9_]*$' OR quote_ident(p_name) <> p_name OR length(v_cellpros) > 63 THEN
         RAISE EXCEPTION 'feature class name % is not allowed', coalesce(quote_literal(p_name), 'NULL')
             USING ERRCODE = 'TG101',
@@ -70,9 +85,25 @@ BEGIN
     IF p_srs IS NULL OR p_srs < 0 THEN
         RAISE EXCEPTION 'SRS % of feature class % must be an id >= 0 (0: undefined)', p_srs, p_name USING ERRCODE = 'TG100';
     END IF;
+    -- tgsis's own schema would make tgsis's catalog tables and the class's look alike
+    -- (enable_feature_versioning would then refuse to version them, for everyone)
+    IF p_schema = ANY (ARRAY['tgsis', 'information_schema']) OR p_schema LIKE 'pg\_%' THEN
+        RAISE EXCEPTION 'feature classes may not go into schema %', quote_literal(p_schema)
+            USING ERRCODE = 'TG101', DETAIL = 'It is tgsis''s own schema or a system schema.',
+                  HINT = 'choose a schema of your own, or leave the schema at its default (public)';
+    END IF;
     IF p_schema IS NULL OR to_regnamespace(quote_ident(p_schema)) IS NULL THEN
         RAISE EXCEPTION 'schema % does not exist', coalesce(quote_literal(p_schema), 'NULL')
             USING ERRCODE = 'TG200', HINT = 'create it first, or leave the schema at its default (public)';
+    END IF;
+    IF NOT has_schema_privilege(v_caller, p_schema, 'CREATE') THEN
+        RAISE EXCEPTION 'role % may not create tables in schema %', v_caller, p_schema
+            USING ERRCODE = 'TG002', HINT = format('the schema''s owner may run: GRANT CREATE ON SCHEMA %I TO %I', p_schema, v_caller);
+    END IF;
+    IF NOT has_schema_privilege(current_user, p_schema, 'CREATE') THEN  -- tgsis's owner creates the tables
+        RAISE EXCEPTION 'tgsis''s owner % may not create tables in schema %', current_user, p_schema
+            USING ERRCODE = 'TG002', DETAIL = 'The tables of a feature class belong to tgsis''s owner.',
+                  HINT = format('the schema''s owner may run: GRANT CREATE ON SCHEMA %I TO %I', p_schema, current_user);
     END IF;
     IF EXISTS (SELECT FROM tgsis.catalog WHERE classname = p_name) THEN
         RAISE EXCEPTION 'feature class % exists already', p_name
@@ -154,9 +185,9 @@ BEGIN
 
     INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, protablename,
                                timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
-                               instant_properties, description)
+                               instant_properties, description, created_by)
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
-            v_fprops, v_cprops, v_iprops, p_description)
+            v_fprops, v_cprops, v_iprops, p_description, v_caller)
     RETURNING * INTO v_row;
     -- once model 1 is versioned, every new class is versioned with it
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
@@ -168,4 +199,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text) IS
-    'register a feature class: creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';
+    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';
