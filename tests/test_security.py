@@ -66,6 +66,17 @@ def _state(dsn: str) -> tuple[Any, ...]:
             "SELECT * FROM vault_ver ORDER BY id, revision"))
 
 
+def _state_of(conn: Conn) -> tuple[Any, ...]:
+    """tgsis's catalog tables and the relations of public, as a role that may read them sees them."""
+    result = tuple(conn.execute(query).fetchall() for query in (
+        "SELECT * FROM tgsis.versioned_tables ORDER BY schemaname, tablename",
+        "SELECT * FROM tgsis.versioning_dropped ORDER BY id",
+        "SELECT relname, relkind, relowner::regrole::text FROM pg_class WHERE relnamespace = 'public'::regnamespace "
+        "ORDER BY 1"))
+    conn.rollback()
+    return result
+
+
 def _sqlstate(conn: Conn, statement: str, params: tuple[Any, ...] = ()) -> str:
     """Run a statement that must fail; roll back and return its SQLSTATE."""
     with pytest.raises(psycopg.Error) as caught:
@@ -193,6 +204,19 @@ def test_the_feature_object_class_is_tgsis_s(roles: Roles, db_dsn: str) -> None:
     assert tgsis.disable_versioning(carol, "mine") == 0
 
 
+def test_tgsis_s_tables_are_versioned_only_as_features(conn: Conn) -> None:
+    before = conn.execute("SELECT relname, relkind FROM pg_class WHERE relnamespace = 'tgsis'::regnamespace ORDER BY 1"
+                          ).fetchall()
+    error = _refused(lambda: tgsis.enable_versioning(conn, "tgsis.geometry", "geoid", "geo"))
+    assert isinstance(error, tgsis.InvalidInputError) and error.sqlstate == "TG100"
+    assert "tgsis.geometry is versioned with the features, in object class 'feature'" in str(error)
+    assert "tgsis.enable_feature_versioning versions it" in (error.hint or "")
+    conn.rollback()
+    assert conn.execute("SELECT relname, relkind FROM pg_class WHERE relnamespace = 'tgsis'::regnamespace ORDER BY 1"
+                        ).fetchall() == before
+    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables").fetchone() == (0,)
+
+
 def _definitions(conn: Conn) -> list[tuple[str, str]]:
     """mine's constraints and unique indexes, by name, as the catalogs give them with qualified names."""
     with conn.transaction():
@@ -249,6 +273,8 @@ def test_feature_classes_belong_to_tgsis_and_only_admins_register_them(roles: Ro
 
     with psycopg.connect(db_dsn, autocommit=True) as su:
         su.execute("CREATE SCHEMA private")                          # carol has no CREATE there
+        # carol's own schema: as its owner she could drop tgsis's tables there and put hers in their place
+        su.execute(sql.SQL("CREATE SCHEMA carols AUTHORIZATION {}").format(sql.Identifier(roles.name("carol"))))
     before = _state(db_dsn)
     for call, message, hint in (
             (lambda: F.create_feature_class(alice, "faults", "SURFACE"),
@@ -257,7 +283,10 @@ def test_feature_classes_belong_to_tgsis_and_only_admins_register_them(roles: Ro
              f"role {roles.name('alice')} may not drop feature classes", f"GRANT tgsis_admin TO {roles.name('alice')}"),
             (lambda: F.create_feature_class(carol, "faults", "SURFACE", schema="private"),
              f"role {roles.name('carol')} may not create tables in schema private",
-             f"GRANT CREATE ON SCHEMA private TO {roles.name('carol')}")):
+             f"GRANT CREATE ON SCHEMA private TO {roles.name('carol')}"),
+            (lambda: F.create_feature_class(carol, "faults", "SURFACE", schema="carols"),
+             f"schema carols belongs to {roles.name('carol')}, who could replace the tables of a feature class there",
+             "ALTER SCHEMA carols OWNER TO")):
         error = _refused(call)
         assert isinstance(error, tgsis.MissingPrivilegeError), message
         assert message in str(error) and hint in (error.hint or "")
@@ -291,8 +320,12 @@ def test_a_class_in_tgsis_s_or_a_system_schema_is_refused(roles: Roles, db_dsn: 
     tgsis.enable_feature_versioning(carol)
 
 
-def test_an_owner_that_is_no_superuser_runs_the_feature_classes(make_database: Callable[..., str]) -> None:
-    """The plain-SQL install on managed PostgreSQL: tgsis's owner owns the database, not the cluster."""
+def test_an_owner_that_is_no_superuser_runs_the_feature_classes(make_database: Callable[..., str],
+                                                               template_db: str) -> None:
+    """The plain-SQL install on managed PostgreSQL: tgsis's owner owns the database, not the cluster.
+
+    (``template_db`` made the cluster's group roles, as a DBA would have.)
+    """
     dsn = make_database()
     owner = f"tgsis_owner_{uuid.uuid4().hex[:6]}"
     database = conninfo_to_dict(dsn)["dbname"]
@@ -307,6 +340,20 @@ def test_an_owner_that_is_no_superuser_runs_the_feature_classes(make_database: C
             with login_roles(dsn, {"carol": "tgsis_admin", "alice": "tgsis_editor"}) as made:
                 carol, alice = made.connect("carol"), made.connect("alice")
                 F.create_feature_class(carol, "horizons", "SURFACE")
+                # carol's own versioned table refers to the geometries: tgsis's owner may not drop its key
+                carol.execute("CREATE TABLE picks (id int PRIMARY KEY, geoid bigint REFERENCES tgsis.geometry)")
+                carol.commit()
+                tgsis.enable_versioning(carol, "picks", "id", "pick")
+                before = _state_of(carol)
+                error = _refused(lambda: tgsis.enable_feature_versioning(carol))
+                assert isinstance(error, tgsis.MissingPrivilegeError)
+                assert f"foreign key picks_geoid_fkey of public.picks_ver refers to tgsis.geometry, and role {owner} may not drop it" \
+                    in str(error)
+                assert "the owner of public.picks_ver may drop the key" in (error.hint or "")
+                carol.rollback()
+                assert _state_of(carol) == before
+                carol.execute("ALTER TABLE picks_ver DROP CONSTRAINT picks_geoid_fkey")
+                carol.commit()
                 assert tgsis.enable_feature_versioning(carol) > 0
                 F.create_feature_class(carol, "faults", "SURFACE")          # versioned as it is created
                 tgsis.create_version(alice, "a1")

@@ -7,7 +7,8 @@
 -- definer code that later versions them (enable_feature_versioning) acts only
 -- on tables tgsis.catalog names, and only tgsis's definer code writes that.
 -- The calling role must be a tgsis_admin with CREATE on the target schema; the
--- system schemas and tgsis's own are refused.
+-- system schemas and tgsis's own are refused, and so are schemas of other
+-- owners than tgsis's or a superuser (they could replace the class's tables).
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -42,6 +43,7 @@ DECLARE
     v_cprops    jsonb;
     v_row       tgsis.catalog;
     v_caller    name := tgsis.calling_role();
+    v_nspowner  oid;
 BEGIN
     IF NOT pg_has_role(v_caller, 'tgsis_admin', 'MEMBER') THEN
         RAISE EXCEPTION 'role % may not register feature classes', v_caller
@@ -95,6 +97,18 @@ BEGIN
     IF p_schema IS NULL OR to_regnamespace(quote_ident(p_schema)) IS NULL THEN
         RAISE EXCEPTION 'schema % does not exist', coalesce(quote_literal(p_schema), 'NULL')
             USING ERRCODE = 'TG200', HINT = 'create it first, or leave the schema at its default (public)';
+    END IF;
+    -- a schema's owner may drop any table in it and put its own in its place,
+    -- which tgsis's definer code would then act on as tgsis's owner
+    SELECT CASE WHEN n.nspowner = 'pg_database_owner'::regrole THEN d.datdba ELSE n.nspowner END INTO v_nspowner
+      FROM pg_namespace n, pg_database d WHERE n.nspname = p_schema AND d.datname = current_database();
+    IF v_nspowner <> (SELECT relowner FROM pg_class WHERE oid = 'tgsis.catalog'::regclass)
+       AND NOT (SELECT rolsuper FROM pg_roles WHERE oid = v_nspowner) THEN
+        RAISE EXCEPTION 'schema % belongs to %, who could replace the tables of a feature class there', p_schema,
+                pg_get_userbyid(v_nspowner)
+            USING ERRCODE = 'TG002',
+                  DETAIL = 'Feature classes go into schemas owned by tgsis''s owner or by a superuser.',
+                  HINT = format('a superuser may run: ALTER SCHEMA %I OWNER TO %I', p_schema, current_user);
     END IF;
     IF NOT has_schema_privilege(v_caller, p_schema, 'CREATE') THEN
         RAISE EXCEPTION 'role % may not create tables in schema %', v_caller, p_schema

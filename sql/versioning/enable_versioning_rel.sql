@@ -136,6 +136,14 @@ BEGIN
                          WHERE c.oid = con.confrelid)))))
          ORDER BY con.contype, con.conname
     LOOP
+        -- a key of another versioned table into this one: only that table's owner may drop it
+        IF NOT pg_has_role(current_user, (SELECT relowner FROM pg_class WHERE oid = v_con.conrelid), 'USAGE') THEN
+            RAISE EXCEPTION 'foreign key % of % refers to %.%, and role % may not drop it', v_con.conname,
+                    v_con.conrelid::regclass, v_schema, v_table, current_user
+                USING ERRCODE = 'TG002',
+                      DETAIL = 'Keys between versioned tables cannot hold across versions; versioning drops them.',
+                      HINT = format('the owner of %s may drop the key, or make that table plain and drop it there', v_con.conrelid::regclass);
+        END IF;
         PERFORM tgsis.record_dropped(v_rel, v_con.oid);  -- its definition, read from the catalogs
         EXECUTE format('ALTER TABLE %s DROP CONSTRAINT %I', v_con.conrelid::regclass, v_con.conname);
     END LOOP;

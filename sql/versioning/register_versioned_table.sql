@@ -29,6 +29,7 @@ DECLARE
     v_owner  oid;
     v_ver    oid;
     v_keys   text[];
+    v_tgsis  boolean;
     v_row    tgsis.versioned_tables;
 BEGIN
     SELECT n.nspname, c.relname, c.relkind, c.relowner INTO v_schema, v_table, v_kind, v_owner
@@ -49,13 +50,16 @@ BEGIN
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_schema AND tablename = v_table) THEN
         RAISE EXCEPTION 'table %.% is versioned already', v_schema, v_table USING ERRCODE = 'TG201';
     END IF;
-    IF (p_objectclass = 'feature') <> (v_owner = (SELECT relowner FROM pg_class WHERE oid = 'tgsis.versioned_tables'::regclass)
-                                       AND (v_schema = 'tgsis' OR EXISTS (
-                                            SELECT FROM tgsis.catalog c WHERE c.schemaname = v_schema
-                                               AND v_table IN (c.featuretable, c.cellprotable, c.protablename)))) THEN
+    v_tgsis := v_owner = (SELECT relowner FROM pg_class WHERE oid = 'tgsis.versioned_tables'::regclass)
+               AND (v_schema = 'tgsis' OR EXISTS (SELECT FROM tgsis.catalog c WHERE c.schemaname = v_schema
+                                                     AND v_table IN (c.featuretable, c.cellprotable, c.protablename)));
+    IF p_objectclass = 'feature' AND NOT v_tgsis THEN
         RAISE EXCEPTION 'object class ''feature'' holds model 1 and the feature classes, not %.%', v_schema, v_table
             USING ERRCODE = 'TG100',
                   HINT = 'give the table an object class of its own (tgsis.enable_feature_versioning versions the features)';
+    ELSIF p_objectclass <> 'feature' AND v_tgsis THEN
+        RAISE EXCEPTION '%.% is versioned with the features, in object class ''feature''', v_schema, v_table
+            USING ERRCODE = 'TG100', HINT = 'tgsis.enable_feature_versioning versions it';
     END IF;
     -- the row key: the storage's primary key without revision
     SELECT array_agg(a.attname::text ORDER BY k.ord) FILTER (WHERE a.attname <> 'revision') INTO v_keys
