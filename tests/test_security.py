@@ -204,6 +204,28 @@ def test_the_feature_object_class_is_tgsis_s(roles: Roles, db_dsn: str) -> None:
     assert tgsis.disable_versioning(carol, "mine") == 0
 
 
+def test_only_admins_version_their_tables(roles: Roles, db_dsn: str) -> None:
+    alice = roles.connect("alice")
+    with psycopg.connect(db_dsn, autocommit=True) as su:
+        su.execute(sql.SQL("GRANT CREATE ON SCHEMA public TO {}").format(sql.Identifier(roles.name("alice"))))
+    alice.execute("CREATE TABLE hers (id int PRIMARY KEY, code text UNIQUE)")
+    alice.commit()
+    before = _state(db_dsn)
+    error = _refused(lambda: tgsis.enable_versioning(alice, "hers", "id", "hers"))
+    assert isinstance(error, tgsis.MissingPrivilegeError)
+    assert f"role {roles.name('alice')} may not version tables" in str(error)
+    assert f"GRANT tgsis_admin TO {roles.name('alice')}" in (error.hint or "")
+    alice.rollback()
+    assert _state(db_dsn) == before
+    # nor may she record or register through the helpers
+    for statement in ("SELECT tgsis.record_dropped('hers', oid) FROM pg_constraint WHERE conname = 'hers_code_key'",
+                      "SELECT tgsis.register_versioned_table('hers', 'id', 'hers', 0, NULL, 'hers_pkey', NULL, '{}')",
+                      "SELECT tgsis.unregister_versioned_table('public', 'hers')",
+                      "SELECT tgsis.forget_dropped(1)"):
+        assert _sqlstate(alice, statement) == "42501", statement
+    assert _state(db_dsn) == before
+
+
 def test_tgsis_s_tables_are_versioned_only_as_features(conn: Conn) -> None:
     before = conn.execute("SELECT relname, relkind FROM pg_class WHERE relnamespace = 'tgsis'::regnamespace ORDER BY 1"
                           ).fetchall()

@@ -59,6 +59,12 @@ BEGIN
         RAISE EXCEPTION 'only the owner of %.% (%) may version it', v_schema, v_table, pg_get_userbyid(v_owner)
             USING ERRCODE = 'TG002';
     END IF;
+    -- (its registration goes through definer helpers that only tgsis_admin may call)
+    IF NOT pg_has_role(tgsis.calling_role(), 'tgsis_admin', 'MEMBER') THEN
+        RAISE EXCEPTION 'role % may not version tables', tgsis.calling_role()
+            USING ERRCODE = 'TG002', DETAIL = 'Versioning tables is for members of tgsis_admin that own them.',
+                  HINT = format('a DBA may run: GRANT tgsis_admin TO %I', tgsis.calling_role());
+    END IF;
     v_ver := v_table || '_ver';
     IF octet_length(v_table || '_ver_write') > 63 THEN
         RAISE EXCEPTION 'table name % is too long to be versioned', quote_literal(v_table)
