@@ -408,7 +408,8 @@ def test_an_owner_without_rights_on_a_table_is_told_which(conn: Conn, tree: dict
     conn.execute(f"CREATE ROLE {role} NOLOGIN IN ROLE tgsis_admin")     # rolled back with the rest
     conn.execute(f"ALTER FUNCTION tgsis.compress_versions(boolean) OWNER TO {role}")
     # tgsis's own tables, which the real owner (the extension's) owns
-    conn.execute(f"GRANT SELECT, UPDATE, DELETE ON tgsis.versions, tgsis.revisions, tgsis.conflicts TO {role}")
+    conn.execute(f"GRANT SELECT, UPDATE, DELETE ON tgsis.versions, tgsis.revisions, tgsis.conflicts, tgsis.versioned_tables "
+                 f"TO {role}")
     # and every other storage table (only their owners may update or delete rows of storage)
     for schema, table in conn.execute("SELECT schemaname, tablename || '_ver' FROM tgsis.versioned_tables "
                                       "WHERE tablename <> 'wells'").fetchall():

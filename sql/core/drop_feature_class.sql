@@ -2,9 +2,14 @@
 -- Table definitions are not versioned: a class is dropped in every version,
 -- so its features' rows go from the storage of every version too.
 -- A collection's owned members go with it, their cell properties with the table.
+-- It runs as tgsis's owner (SECURITY DEFINER), who owns the class's tables
+-- (see register_feature_class), for members of tgsis_admin.
 CREATE FUNCTION tgsis.drop_feature_class(p_name text, p_force boolean DEFAULT false)
 RETURNS bigint
 LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_class tgsis.catalog;
@@ -13,6 +18,11 @@ DECLARE
     v_table text;
     v_all   bigint[];
 BEGIN
+    IF NOT pg_has_role(tgsis.calling_role(), 'tgsis_admin', 'MEMBER') THEN
+        RAISE EXCEPTION 'role % may not drop feature classes', tgsis.calling_role()
+            USING ERRCODE = 'TG002', DETAIL = 'Dropping feature classes is for members of tgsis_admin.',
+                  HINT = format('a DBA may run: GRANT tgsis_admin TO %I', tgsis.calling_role());
+    END IF;
     SELECT * INTO v_class FROM tgsis.catalog WHERE classname = p_name FOR UPDATE;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'feature class % does not exist', coalesce(quote_literal(p_name), 'NULL')
@@ -52,4 +62,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.drop_feature_class(text, boolean) IS
-    'drop a feature class and its tables (in every version); refuses (TG202) while features exist unless force, which deletes them and their geometries (with the members collections own); returns the number of features deleted';
+    'drop a feature class and its tables (tgsis_admin members) (in every version); refuses (TG202) while features exist unless force, which deletes them and their geometries (with the members collections own); returns the number of features deleted';

@@ -11,7 +11,6 @@ GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.s
                                 tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
     TO tgsis_editor;
 GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq TO tgsis_editor;
-GRANT INSERT, UPDATE, DELETE ON tgsis.catalog TO tgsis_admin;
 -- class tables of feature classes refer to their geometry rows
 GRANT REFERENCES ON tgsis.geometry TO tgsis_admin;
 -- versioning: readers see the version tree; editors create, save and delete
@@ -28,6 +27,13 @@ REVOKE ALL ON FUNCTION tgsis.next_working_revision(integer, integer[], integer),
                        tgsis.copy_object_state(text, text[], integer[], integer[], integer),
                        tgsis.update_shared_rows(text, text, text, text[], integer[], integer[], integer)
     FROM PUBLIC;
-GRANT INSERT, UPDATE, DELETE ON tgsis.versioned_tables, tgsis.versioning_dropped TO tgsis_admin;
+-- tgsis.catalog, versioned_tables and versioning_dropped are read-only too:
+-- definer code acts on what they name (and EXECUTEs the recorded constraint
+-- definitions), so only tgsis's definer functions write them, checking the
+-- calling role and reading what they record from the system catalogs
+GRANT EXECUTE ON FUNCTION tgsis.record_dropped(regclass, oid, boolean),
+                          tgsis.register_versioned_table(regclass, text, text, integer, text, text, text, text[]),
+                          tgsis.unregister_versioned_table(text, text), tgsis.forget_dropped(integer)
+    TO tgsis_admin;
 GRANT EXECUTE ON FUNCTION tgsis.enable_feature_versioning(), tgsis.disable_feature_versioning(boolean),
                           tgsis.compress_versions(boolean) TO tgsis_admin;

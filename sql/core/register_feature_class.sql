@@ -2,6 +2,13 @@
 -- A temporal class (time model INSTANTS = model 2, EVOLVING = model 3) holds
 -- SURFACE features; it gets a per-instant property table <name>_pros, and the
 -- time keys (_times, or _timem and _timet) in it and in <name>_cellpros.
+-- It runs as tgsis's owner (SECURITY DEFINER), so that the class's tables,
+-- views and generated functions are objects tgsis itself created: the
+-- definer code that later versions them (enable_feature_versioning) acts only
+-- on tables tgsis.catalog names, and only tgsis's definer code writes that.
+-- The calling role must be a tgsis_admin with CREATE on the target schema; the
+-- system schemas and tgsis's own are refused, and so are schemas of other
+-- owners than tgsis's or a superuser (they could replace the class's tables).
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -16,6 +23,9 @@ CREATE FUNCTION tgsis.register_feature_class(
     p_time_unit          text    DEFAULT NULL)
 RETURNS tgsis.catalog
 LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_geotype   text := upper(btrim(p_geotype));
@@ -32,7 +42,14 @@ DECLARE
     v_fprops    jsonb;
     v_cprops    jsonb;
     v_row       tgsis.catalog;
+    v_caller    name := tgsis.calling_role();
+    v_nspowner  oid;
 BEGIN
+    IF NOT pg_has_role(v_caller, 'tgsis_admin', 'MEMBER') THEN
+        RAISE EXCEPTION 'role % may not register feature classes', v_caller
+            USING ERRCODE = 'TG002', DETAIL = 'Registering feature classes is for members of tgsis_admin.',
+                  HINT = format('a DBA may run: GRANT tgsis_admin TO %I', v_caller);
+    END IF;
     IF p_name IS NULL OR p_name !~ '^[a-z][a-z0-9_]*$' OR quote_ident(p_name) <> p_name OR length(v_cellpros) > 63 THEN
         RAISE EXCEPTION 'feature class name % is not allowed', coalesce(quote_literal(p_name), 'NULL')
             USING ERRCODE = 'TG101',
@@ -70,9 +87,37 @@ BEGIN
     IF p_srs IS NULL OR p_srs < 0 THEN
         RAISE EXCEPTION 'SRS % of feature class % must be an id >= 0 (0: undefined)', p_srs, p_name USING ERRCODE = 'TG100';
     END IF;
+    -- tgsis's own schema would make tgsis's catalog tables and the class's look alike
+    -- (enable_feature_versioning would then refuse to version them, for everyone)
+    IF p_schema = ANY (ARRAY['tgsis', 'information_schema']) OR p_schema LIKE 'pg\_%' THEN
+        RAISE EXCEPTION 'feature classes may not go into schema %', quote_literal(p_schema)
+            USING ERRCODE = 'TG101', DETAIL = 'It is tgsis''s own schema or a system schema.',
+                  HINT = 'choose a schema of your own, or leave the schema at its default (public)';
+    END IF;
     IF p_schema IS NULL OR to_regnamespace(quote_ident(p_schema)) IS NULL THEN
         RAISE EXCEPTION 'schema % does not exist', coalesce(quote_literal(p_schema), 'NULL')
             USING ERRCODE = 'TG200', HINT = 'create it first, or leave the schema at its default (public)';
+    END IF;
+    -- a schema's owner may drop any table in it and put its own in its place,
+    -- which tgsis's definer code would then act on as tgsis's owner
+    SELECT CASE WHEN n.nspowner = 'pg_database_owner'::regrole THEN d.datdba ELSE n.nspowner END INTO v_nspowner
+      FROM pg_namespace n, pg_database d WHERE n.nspname = p_schema AND d.datname = current_database();
+    IF v_nspowner <> (SELECT relowner FROM pg_class WHERE oid = 'tgsis.catalog'::regclass)
+       AND NOT (SELECT rolsuper FROM pg_roles WHERE oid = v_nspowner) THEN
+        RAISE EXCEPTION 'schema % belongs to %, who could replace the tables of a feature class there', p_schema,
+                pg_get_userbyid(v_nspowner)
+            USING ERRCODE = 'TG002',
+                  DETAIL = 'Feature classes go into schemas owned by tgsis''s owner or by a superuser.',
+                  HINT = format('a superuser may run: ALTER SCHEMA %I OWNER TO %I', p_schema, current_user);
+    END IF;
+    IF NOT has_schema_privilege(v_caller, p_schema, 'CREATE') THEN
+        RAISE EXCEPTION 'role % may not create tables in schema %', v_caller, p_schema
+            USING ERRCODE = 'TG002', HINT = format('the schema''s owner may run: GRANT CREATE ON SCHEMA %I TO %I', p_schema, v_caller);
+    END IF;
+    IF NOT has_schema_privilege(current_user, p_schema, 'CREATE') THEN  -- tgsis's owner creates the tables
+        RAISE EXCEPTION 'tgsis''s owner % may not create tables in schema %', current_user, p_schema
+            USING ERRCODE = 'TG002', DETAIL = 'The tables of a feature class belong to tgsis''s owner.',
+                  HINT = format('the schema''s owner may run: GRANT CREATE ON SCHEMA %I TO %I', p_schema, current_user);
     END IF;
     IF EXISTS (SELECT FROM tgsis.catalog WHERE classname = p_name) THEN
         RAISE EXCEPTION 'feature class % exists already', p_name
@@ -154,9 +199,9 @@ BEGIN
 
     INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, protablename,
                                timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
-                               instant_properties, description)
+                               instant_properties, description, created_by)
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
-            v_fprops, v_cprops, v_iprops, p_description)
+            v_fprops, v_cprops, v_iprops, p_description, v_caller)
     RETURNING * INTO v_row;
     -- once model 1 is versioned, every new class is versioned with it
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
@@ -168,4 +213,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text) IS
-    'register a feature class: creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';
+    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';

@@ -67,8 +67,8 @@ BEGIN
         EXECUTE format('ALTER TABLE %I.%I ALTER COLUMN %I SET GENERATED ALWAYS', v_t.schemaname, v_t.tablename, v_name);
     END LOOP;
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_t.schemaname, v_t.tablename, v_t.tablecomment);
-    DELETE FROM tgsis.versioned_tables WHERE schemaname = v_t.schemaname AND tablename = v_t.tablename;
-    PERFORM tgsis.restore_dropped_constraints();
+    PERFORM tgsis.unregister_versioned_table(v_t.schemaname, v_t.tablename);
+    PERFORM tgsis.restore_dropped_constraints(v_t.schemaname, v_t.tablename);
     RETURN v_removed;
 END
 $$;

@@ -40,7 +40,6 @@ DECLARE
     v_con       record;
     v_col       record;
     v_acl       record;
-    v_row       tgsis.versioned_tables;
 BEGIN
     SELECT n.nspname, c.relname, c.relkind, c.relowner INTO v_schema, v_table, v_kind, v_owner
       FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace WHERE c.oid = v_rel;
@@ -61,6 +60,12 @@ BEGIN
     IF NOT pg_has_role(current_user, v_owner, 'USAGE') THEN
         RAISE EXCEPTION 'only the owner of %.% (%) may version it', v_schema, v_table, pg_get_userbyid(v_owner)
             USING ERRCODE = 'TG002';
+    END IF;
+    -- (its registration goes through definer helpers that only tgsis_admin may call)
+    IF NOT pg_has_role(tgsis.calling_role(), 'tgsis_admin', 'MEMBER') THEN
+        RAISE EXCEPTION 'role % may not version tables', tgsis.calling_role()
+            USING ERRCODE = 'TG002', DETAIL = 'Versioning tables is for members of tgsis_admin that own them.',
+                  HINT = format('a DBA may run: GRANT tgsis_admin TO %I', tgsis.calling_role());
     END IF;
     v_ver := v_table || '_ver';
     IF octet_length(v_table || '_ver_write') > 63 THEN
@@ -129,7 +134,7 @@ BEGIN
     -- from them into this one), self references, unique keys other than the
     -- primary key, exclusion constraints
     FOR v_con IN
-        SELECT con.oid, con.conname, con.conrelid, con.confrelid, pg_get_constraintdef(con.oid) AS def
+        SELECT con.oid, con.conname, con.conrelid, con.confrelid
           FROM pg_constraint con
          WHERE (con.conrelid = v_rel AND con.contype IN ('u', 'x'))
             OR (con.contype = 'f' AND (con.confrelid = v_rel OR (con.conrelid = v_rel AND (
@@ -139,24 +144,24 @@ BEGIN
                          WHERE c.oid = con.confrelid)))))
          ORDER BY con.contype, con.conname
     LOOP
-        INSERT INTO tgsis.versioning_dropped (schemaname, tablename, name, definition, refschema, reftable, dropped_for)
-        -- a constraint of another versioned table is recorded under its plain name
-        SELECT n.nspname, coalesce(t.tablename, c.relname), v_con.conname, v_con.def, rn.nspname, rc.relname,
-               format('%I.%I', v_schema, v_table)
-          FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace
-          LEFT JOIN tgsis.versioned_tables t ON t.schemaname = n.nspname AND t.tablename || '_ver' = c.relname
-          LEFT JOIN pg_class rc ON rc.oid = v_con.confrelid LEFT JOIN pg_namespace rn ON rn.oid = rc.relnamespace
-         WHERE c.oid = v_con.conrelid;
+        -- a key of another versioned table into this one: only that table's owner may drop it
+        IF NOT pg_has_role(current_user, (SELECT relowner FROM pg_class WHERE oid = v_con.conrelid), 'USAGE') THEN
+            RAISE EXCEPTION 'foreign key % of % refers to %.%, and role % may not drop it', v_con.conname,
+                    v_con.conrelid::regclass, v_schema, v_table, current_user
+                USING ERRCODE = 'TG002',
+                      DETAIL = 'Keys between versioned tables cannot hold across versions; versioning drops them.',
+                      HINT = format('the owner of %s may drop the key, or make that table plain and drop it there', v_con.conrelid::regclass);
+        END IF;
+        PERFORM tgsis.record_dropped(v_rel, v_con.oid);  -- its definition, read from the catalogs
         EXECUTE format('ALTER TABLE %s DROP CONSTRAINT %I', v_con.conrelid::regclass, v_con.conname);
     END LOOP;
     FOR v_con IN
-        SELECT c.relname::text AS idx, pg_get_indexdef(i.indexrelid) AS def
+        SELECT c.relname::text AS idx, i.indexrelid
           FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid
          WHERE i.indrelid = v_rel AND i.indisunique
            AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conindid = i.indexrelid)
     LOOP
-        INSERT INTO tgsis.versioning_dropped (schemaname, tablename, name, definition, is_index, dropped_for)
-        VALUES (v_schema, v_table, v_con.idx, v_con.def, true, format('%I.%I', v_schema, v_table));
+        PERFORM tgsis.record_dropped(v_rel, v_con.indexrelid, true);
         EXECUTE format('DROP INDEX %I.%I', v_schema, v_con.idx);
     END LOOP;
     SELECT coalesce(array_agg(attname::text ORDER BY attnum), '{}') INTO v_identity
@@ -252,12 +257,9 @@ BEGIN
     EXECUTE format('ALTER FUNCTION %I.%I() OWNER TO %I', v_schema, v_table || '_ver_write', pg_get_userbyid(v_owner));
     EXECUTE format('REVOKE ALL ON FUNCTION %I.%I() FROM PUBLIC', v_schema, v_table || '_ver_write');
 
-    INSERT INTO tgsis.versioned_tables (schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder,
-                                        keycolumns, pkeyname, tablecomment, identity_always)
-    VALUES (v_schema, v_table, coalesce(p_shortname, v_table), p_objectkeyfield, p_objectclass, p_iudorder,
-            v_keys, v_pkey, v_comment, v_identity)
-    RETURNING * INTO v_row;
-    RETURN v_row;
+    -- recorded by tgsis's definer helper, which checks what it records against the catalogs
+    RETURN tgsis.register_versioned_table(format('%I.%I', v_schema, v_table)::regclass, p_objectkeyfield, p_objectclass,
+                                          p_iudorder, p_shortname, v_pkey, v_comment, v_identity);
 END
 $$;
 

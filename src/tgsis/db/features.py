@@ -212,7 +212,9 @@ def create_feature_class(
     alignment : {"VERTEX", "CELL"}
     srs : int
     schema : str
-        Existing schema for the class's tables.
+        Existing schema for the class's tables (not ``tgsis`` nor a system
+        schema). The tables belong to tgsis's owner; the caller must be a
+        ``tgsis_admin`` with ``CREATE`` on the schema (docs/security.md).
     description : str, optional
     time_model : {"STATIC", "INSTANTS", "EVOLVING"}
         ``"INSTANTS"``: surfaces known at instants (model 2,
@@ -226,7 +228,8 @@ def create_feature_class(
 
     Raises
     ------
-    InvalidNameError, InvalidPropertyError, InvalidInputError, AlreadyExistsError, NotFoundError
+    InvalidNameError, InvalidPropertyError, InvalidInputError, AlreadyExistsError, NotFoundError,
+    MissingPrivilegeError
     """
     geotype_value = geotype.value if isinstance(geotype, Geotype) else str(geotype)
     with reraise(), conn.transaction():
@@ -267,7 +270,7 @@ def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
 
     Raises
     ------
-    NotFoundError, InUseError
+    NotFoundError, InUseError, MissingPrivilegeError (the caller is no ``tgsis_admin``)
     """
     with reraise(), conn.transaction():
         row = conn.execute("SELECT tgsis.drop_feature_class(%s, %s)", (name, force)).fetchone()
