@@ -175,6 +175,11 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
     tgsis.grant_version(conn, "edit", "write", roles.name("ann"))
     tgsis.grant_version(conn, "other", "create", roles.name("bob"))
     tgsis.revoke_version(conn, "DEFAULT", "create", "tgsis_editor")   # a shipped right taken back stays taken
+    # grants given after the install: on a catalog table and a function of the extension, on a versioned view
+    bob = sql.Identifier(roles.name("bob"))
+    conn.execute(sql.SQL("GRANT SELECT ON tgsis.conflicts TO {}").format(bob))
+    conn.execute(sql.SQL("GRANT EXECUTE ON FUNCTION tgsis.compress_versions(boolean) TO {}").format(bob))
+    conn.execute(sql.SQL("GRANT SELECT ON tgsis.vrtx, faults TO {}").format(bob))
     # a check-out edited and checked in, in a version
     with tgsis.in_version(conn, "other"):
         co = tgsis.checkout(conn, ids["f2"])
@@ -309,3 +314,26 @@ def test_create_extension_by_hand_is_completed_by_install(extension_route: None,
         config = conn.execute("SELECT array_length(extconfig, 1) FROM pg_extension WHERE extname = 'tgsis'").fetchone()
         assert config == (len(CATALOG) + 3,)
         assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (0,)
+
+
+@pytest.mark.parametrize("route", ["extension", "sql"])
+def test_nobody_else_can_replace_default_or_create_storage(route: str, pg: TestServer, make_database: Any) -> None:
+    """The restore trigger turns an insert of DEFAULT into an update: only tgsis's owner may insert there."""
+    if route == "extension" and pg.extension_files is not None:
+        pytest.fail(pg.extension_files, pytrace=False)
+    dsn = make_database()
+    with psycopg.connect(dsn) as conn:
+        tgsis.install(conn, method=route)  # type: ignore[arg-type]
+        before = conn.execute("SELECT v::text FROM tgsis.versions v").fetchall()
+    with login_roles(dsn, {"eve": "tgsis_admin"}) as roles:
+        eve = roles.connect("eve")
+        with pytest.raises(psycopg.errors.InsufficientPrivilege):
+            eve.execute("INSERT INTO tgsis.versions (versionid, name, workingrevision, workingset, owner) "
+                        "VALUES (0, 'DEFAULT', 99, '{99}', current_user)")
+        eve.rollback()
+        with pytest.raises(psycopg.errors.InsufficientPrivilege):
+            eve.execute("SELECT tgsis.create_storage()")
+        eve.rollback()
+    with psycopg.connect(dsn) as conn:
+        assert conn.execute("SELECT v::text FROM tgsis.versions v").fetchall() == before
+        assert conn.execute("SELECT tgsis.create_storage()").fetchone() == (False,)  # there already: nothing done
