@@ -1,18 +1,8 @@
 -- Rights of the group roles on the objects of tgsis. Feature-class tables get
 -- theirs from tgsis.register_feature_class.
 GRANT USAGE ON SCHEMA tgsis TO tgsis_reader;
-GRANT SELECT ON tgsis.error_codes, tgsis.installation, tgsis.property_types, tgsis.catalog,
-                tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
-                tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
-                tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
-    TO tgsis_reader;
-GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
-                                tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
-                                tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
-    TO tgsis_editor;
-GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq TO tgsis_editor;
--- class tables of feature classes refer to their geometry rows
-GRANT REFERENCES ON tgsis.geometry TO tgsis_admin;
+GRANT SELECT ON tgsis.error_codes, tgsis.installation, tgsis.property_types, tgsis.catalog TO tgsis_reader;
+-- (the storage tables get theirs from tgsis.create_storage)
 -- versioning: readers see the version tree; editors create, save and delete
 -- versions (per-version owner rights are enforced by the functions)
 GRANT SELECT ON tgsis.versions, tgsis.revisions, tgsis.version_tree, tgsis.versioned_tables, tgsis.versioning_dropped,

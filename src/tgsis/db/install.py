@@ -120,6 +120,20 @@ def _create_extension(conn: psycopg.Connection[Any], version: str) -> None:
             sql.Identifier(EXTENSION), sql.Literal(version)
         )
     )
+    _create_storage(conn)
+
+
+def _create_storage(conn: psycopg.Connection[Any]) -> None:
+    """Create the tables of stored objects after ``CREATE EXTENSION``, unless they exist.
+
+    They are left out of the extension script so that they are no extension
+    members: pg_dump dumps them whole (``sql/core/create_storage.sql`` says
+    why). Also completes a database where someone ran ``CREATE EXTENSION
+    tgsis`` by hand.
+    """
+    row = conn.execute("SELECT to_regclass('tgsis.geometry') IS NULL").fetchone()
+    if row is not None and row[0]:
+        conn.execute("SELECT tgsis.create_storage()")
 
 
 def _install_fresh(
@@ -179,6 +193,7 @@ def _upgrade(
                 sql.Identifier(EXTENSION), sql.Literal(sources.version)
             )
         )
+        _create_storage(conn)
         return
     _prepare_plain_sql(conn, sources)
     for path in sources.upgrade_path(current.version, sources.version):
@@ -240,6 +255,8 @@ def install(
                 hint="upgrade the tgsis Python package",
             )
         if current.version == target:
+            if current.method == "extension":
+                _create_storage(conn)
             return InstallResult("unchanged", current.method, target, current.version)
         _upgrade(conn, current, sources)
         log.info("upgraded tgsis %s -> %s (%s)", current.version, target, current.method)
