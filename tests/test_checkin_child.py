@@ -379,13 +379,13 @@ def test_a_base_compressed_away_or_rebased_is_refused_clearly(conn: Conn, faults
 def _sql_error(conn: Conn, query: str, params: tuple[Any, ...] = ()) -> tgsis.Error:
     with pytest.raises(tgsis.Error) as raised:
         with tgsis.errors.reraise():
-            conn.execute(query, params)  # type: ignore[arg-type]
+            conn.execute(query, params)
     conn.rollback()
     return raised.value
 
 
 def _scalar(conn: Conn, query: str, params: tuple[Any, ...] = ()) -> Any:
-    row = conn.execute(query, params).fetchone()  # type: ignore[arg-type]
+    row = conn.execute(query, params).fetchone()
     assert row is not None
     return row[0]
 
