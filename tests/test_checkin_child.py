@@ -11,6 +11,7 @@ without a decision.
 from __future__ import annotations
 
 import json
+import threading
 from dataclasses import replace
 from typing import Any
 
@@ -196,6 +197,20 @@ def test_checkout_freezes_the_working_revision_and_reads_there(conn: Conn, fault
     assert tgsis.working_revision(conn) == before + 1                # nothing more was frozen
 
 
+def test_a_snapshot_older_than_the_freeze_freezes_nothing(conn: Conn, faults: F.FeatureClass) -> None:
+    """Inside a caller's REPEATABLE READ transaction nothing is frozen; a session default of it does not matter."""
+    fid = F.insert_feature(conn, faults, _grid(6))
+    conn.commit()
+    state = _state(conn)
+    with conn.transaction():
+        conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+        assert tgsis.checkout(conn, fid).token.base_revision is None
+    assert _state(conn) == state
+    conn.execute("SET default_transaction_isolation = 'repeatable read'")
+    conn.commit()
+    assert tgsis.checkout(conn, fid).token.base_revision == state[2][-1]
+
+
 def test_versioning_off_freezes_nothing(conn: Conn) -> None:
     F.create_feature_class(conn, "faults", "SURFACE", cell_properties={"porosity": "float8"})
     fid = F.insert_feature(conn, "faults", _grid(6))
@@ -218,7 +233,7 @@ def test_a_reader_checks_out_without_freezing_or_waiting(db_dsn: str, conn: Conn
         for c in (reader, editor):
             c.execute("SET lock_timeout = '300ms'")
             c.commit()
-        writer.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = 0", (other,))  # open write
+        writer.execute("UPDATE tgsis.vrtx SET z = 77 WHERE geoid IN (%s, %s) AND vrtxid = 0", (fid, other))  # open
         state = _state(conn)
         co = tgsis.checkout(reader, fid)
         assert co.token.base_revision is None and co.token.revision == state[2][-1]
@@ -229,8 +244,20 @@ def test_a_reader_checks_out_without_freezing_or_waiting(db_dsn: str, conn: Conn
             tgsis.checkout(editor, fid)                            # the writer's check-out waits for the open write
         editor.rollback()
         assert _state(conn) == state
+        # without a timeout it waits, and then reads what the writer committed: the frozen revision holds it
+        editor.execute("SET lock_timeout = 0")
+        editor.commit()
+        done: list[tgsis.Checkout] = []
+        waiting = threading.Thread(target=lambda: done.append(tgsis.checkout(editor, fid)))
+        waiting.start()
+        waiting.join(0.5)
+        assert waiting.is_alive() and not done
         writer.commit()
-        assert tgsis.checkout(editor, fid).token.base_revision == state[2][-1]
+        waiting.join(10)
+        assert done and done[0].token.base_revision == state[2][-1]
+        assert 77.0 in done[0].mesh.vertices[:, 2]
+        result = tgsis.checkin(editor, done[0], _moved(done[0].mesh, base, {3: -1.0}), on_conflict="child")
+        assert not result.conflict and result.version == "DEFAULT"
 
 
 # --------------------------------------------------------------------------- kept check-outs and child versions

@@ -9,6 +9,9 @@
 --   feature versioning off, a read-only transaction, or a role without the
 --   write right: NULL, without writing or locking anything (readers check out
 --   as before; their check-in cannot take the child path);
+--   a REPEATABLE READ or SERIALIZABLE transaction: NULL too, because its
+--   snapshot may predate writes the freeze waited for, so what it reads is
+--   not what the frozen revision holds;
 --   otherwise the working revision is frozen (tgsis.next_working_revision
 --   under the version's row lock, which waits for open writers of the version,
 --   as create_version and save_revision do) and returned.
@@ -39,6 +42,7 @@ BEGIN
     END IF;
     IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'vrtx')
        OR current_setting('transaction_read_only')::boolean
+       OR current_setting('transaction_isolation') <> 'read committed'
        OR NOT tgsis.has_version_privilege(v_name, 'write') THEN
         RETURN NULL;
     END IF;
@@ -53,4 +57,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.checkout_revision() IS
-    'the frozen revision a check-out of the session''s version reads: the viewed older revision, else the working revision, frozen now (a new one starts; waits for open writers of the version); NULL without writing or locking when feature versioning is off, the transaction is read-only or the role may not write in the version';
+    'the frozen revision a check-out of the session''s version reads: the viewed older revision, else the working revision, frozen now (a new one starts; waits for open writers of the version); NULL without writing or locking when feature versioning is off, the transaction is read-only or not READ COMMITTED, or the role may not write in the version';

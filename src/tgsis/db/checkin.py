@@ -623,8 +623,9 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
     read at that revision, recorded as ``token.base_revision``: a
     conflicting :func:`checkin` with ``on_conflict="child"`` starts its child
     version there. Viewing an older revision, that revision is the base and
-    nothing is frozen; a role without the write right (or a read-only
-    transaction) freezes nothing and takes no lock.
+    nothing is frozen; a role without the write right (or a read-only, or
+    an enclosing REPEATABLE READ or SERIALIZABLE, transaction) freezes
+    nothing and takes no lock.
 
     Parameters
     ----------
@@ -648,6 +649,8 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
     fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     with reraise():
         with conn.transaction():  # bad input is refused before anything is frozen
+            if fresh:  # the freeze waits for open writers: later statements must see their commits
+                conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
             fc = _checked_class(conn, feature_class, feature_id)
             _feature_row(conn, fc, feature_id)
             frozen = _freeze(conn)
