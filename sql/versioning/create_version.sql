@@ -2,7 +2,18 @@
 -- Hand-out order (observable, part of the contract): the child's initrevision
 -- is the parent's working revision; then the parent gets a new revision; then
 -- the child gets its first one.
-CREATE FUNCTION tgsis.create_version(p_name text, p_parent text DEFAULT 'DEFAULT', p_description text DEFAULT NULL)
+-- p_base bases the child on an older, frozen revision of the parent instead
+-- (a conflicting check-in's child starts from the state the check-out saw,
+-- so that its edit and the parent's later ones meet in find_conflicts): then
+-- initrevision := p_base, the child sees what that revision saw, and the
+-- parent, whose later changes are in later revisions already, gets no new
+-- revision. Only the parent's own revisions since its base qualify (those
+-- find_conflicts and merge compare with: an older one, from before a merge
+-- or refresh re-based the parent, or a revision of an ancestor, would hide
+-- changes from the conflict check); p_base = the working revision is the
+-- default behaviour.
+CREATE FUNCTION tgsis.create_version(p_name text, p_parent text DEFAULT 'DEFAULT', p_description text DEFAULT NULL,
+                                     p_base integer DEFAULT NULL)
 RETURNS integer
 LANGUAGE plpgsql
 VOLATILE
@@ -14,6 +25,8 @@ DECLARE
     v_child_rev  integer;
     v_child_id   integer;
     v_constraint text;
+    v_base       integer;
+    v_baseset    integer[];
 BEGIN
     PERFORM tgsis.check_version_name(p_name);
     PERFORM tgsis.require_version_privilege(tgsis.version_id(p_parent), 'create', 'create a child of');
@@ -30,12 +43,41 @@ BEGIN
             USING ERRCODE = 'TG201', HINT = 'choose another name, or tgsis.delete_version it first';
     END IF;
 
-    PERFORM tgsis.next_working_revision(v_parent.versionid);
+    IF p_base IS NULL OR p_base = v_parent.workingrevision THEN
+        v_base := v_parent.workingrevision;
+        v_baseset := v_parent.workingset;
+        PERFORM tgsis.next_working_revision(v_parent.versionid);
+    ELSE
+        -- the parent's row lock keeps a merge or refresh from re-basing it meanwhile. The base
+        -- must see all the parent sees now but the parent's own later revisions: those are what
+        -- find_conflicts and merge_version read as the parent's side (after a refresh the parent
+        -- also sees ancestors' revisions the base did not, which no conflict check would show)
+        SELECT r.revision, r.visibleset INTO v_base, v_baseset FROM tgsis.revisions r
+         WHERE r.revision = p_base AND r.versionid = v_parent.versionid AND r.visibleset IS NOT NULL
+           AND r.visibleset <@ v_parent.workingset
+           AND NOT EXISTS (SELECT FROM unnest(v_parent.workingset) AS w(rev)
+                            WHERE w.rev <> ALL (r.visibleset)
+                              AND NOT (w.rev > p_base AND EXISTS (SELECT FROM tgsis.revisions o
+                                                                   WHERE o.revision = w.rev
+                                                                     AND o.versionid = v_parent.versionid)));
+        IF NOT FOUND THEN
+            RAISE EXCEPTION 'revision % is not a frozen revision of version % since its base', p_base, quote_literal(p_parent)
+                USING ERRCODE = 'TG200',
+                      DETAIL = format('A child can be based on the working revision of %s or on one of its own frozen '
+                                      'revisions since it was last merged or refreshed; revision %s %s.', p_parent, p_base,
+                                      CASE WHEN NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = p_base)
+                                           THEN 'does not exist (never handed out, or removed by compress_versions or delete_version)'
+                                           WHEN EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = p_base AND r.versionid <> v_parent.versionid)
+                                           THEN 'belongs to version ' || (SELECT v.name FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) WHERE r.revision = p_base)
+                                           ELSE 'is from before a merge or refresh re-based it' END),
+                      HINT = 'pass p_base => NULL to base the child on the parent''s working revision';
+        END IF;
+    END IF;
 
     v_child_rev := nextval('tgsis.revision_seq');
     BEGIN
         INSERT INTO tgsis.versions (name, parentid, initrevision, workingrevision, workingset, owner, description)
-        VALUES (p_name, v_parent.versionid, v_parent.workingrevision, v_child_rev, v_parent.workingset || v_child_rev,
+        VALUES (p_name, v_parent.versionid, v_base, v_child_rev, v_baseset || v_child_rev,
                 tgsis.calling_role(), p_description)
         RETURNING versionid INTO v_child_id;
     EXCEPTION WHEN unique_violation THEN
@@ -55,5 +97,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.create_version(text, text, text) IS
-    'create a child version of p_parent (default DEFAULT): initrevision := parent''s working revision, then a new revision for the parent, then one for the child; returns the child''s working revision';
+COMMENT ON FUNCTION tgsis.create_version(text, text, text, integer) IS
+    'create a child version of p_parent (default DEFAULT): initrevision := parent''s working revision, then a new revision for the parent, then one for the child; with p_base (a frozen revision of the parent since its base) the child is based on that revision and the parent gets none; returns the child''s working revision';

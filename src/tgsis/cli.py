@@ -400,8 +400,9 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     if result.checkout is not None and not result.conflict:
         result.checkout.save(side)
     elif result.conflict:
-        _out(f"  compare and merge: tgsis version diff {co.token.version} {save.version}; "
-             f"tgsis version merge {save.version}")
+        _out(f"  both edits meet as a conflict of {save.version}: tgsis version conflicts {save.version} --rows; "
+             f"tgsis version resolve {save.version} feature {save.feature_id} parent|child|manual; "
+             f"tgsis version merge {save.version} --remove")
     return 0
 
 

@@ -10,12 +10,18 @@ tables a 1 % edit stores about 1 % new row versions instead of a copy.
 
 :func:`checkout` returns the mesh with a :class:`CheckoutToken` recording the
 version and revision it came from and a fingerprint of the stored object
-(``tgsis.object_fingerprint``). :func:`checkin` locks the object
-(``tgsis.check_unchanged``), compares the fingerprint with the database's
-current state and refuses with :class:`~tgsis.errors.CheckoutConflictError`
-when another writer changed the object meanwhile, or, with
-``on_conflict="child"``, writes the edit into a new child version so that
-nothing is lost; otherwise it saves the difference from the checked-out base.
+(``tgsis.object_fingerprint``). With feature versioning on, and a role that
+may write in the version, the check-out freezes the version's working
+revision (``tgsis.checkout_revision``) and reads the mesh there, so that the
+state it saw stays stored whatever others write next. :func:`checkin` locks
+the object (``tgsis.check_unchanged``), compares the fingerprint with the
+database's current state and refuses with
+:class:`~tgsis.errors.CheckoutConflictError` when another writer changed the
+object meanwhile, or, with ``on_conflict="child"``, creates a child version
+based on that frozen revision and writes the edit there by difference from
+the check-out, so that the two edits meet as a conflict of the normal merge
+path (``find_conflicts``, ``resolve_conflict``, ``merge_version``); otherwise
+it saves the difference from the checked-out base.
 """
 
 from __future__ import annotations
@@ -440,13 +446,22 @@ class CheckoutToken:
     version : str
         The version it was checked out of (check-in writes there).
     revision : int
-        That version's working revision at check-out.
+        The revision whose state was checked out: ``base_revision`` when
+        there is one, else the version's working revision at check-out.
     fingerprint : str
         ``tgsis.object_fingerprint`` of the feature at check-out.
     database : str
         ``current_database()`` at check-out.
     checked_out_at : str
         ISO time of the check-out.
+    base_revision : int or None
+        The frozen revision that holds the checked-out state (the base of the
+        child version of a conflicting check-in); None when nothing was
+        frozen: feature versioning off, a role without the write right in the
+        version, a read-only transaction, or a token written before
+        check-outs froze revisions (such a check-in tries ``revision``, and
+        takes the child path only if that revision is frozen and still holds
+        the checked-out state).
     """
 
     feature_id: int
@@ -456,6 +471,7 @@ class CheckoutToken:
     fingerprint: str
     database: str
     checked_out_at: str
+    base_revision: int | None = None
 
     def to_json(self) -> str:
         """The token as a JSON object."""
@@ -466,9 +482,17 @@ class CheckoutToken:
         """A token from :meth:`to_json`."""
         try:
             data = json.loads(text)
-            return cls(**{k: data[k] for k in cls.__dataclass_fields__})
+            token = cls(**{k: data[k] for k in cls.__dataclass_fields__ if k in data or k not in _OPTIONAL_FIELDS})
         except (ValueError, KeyError, TypeError) as exc:
             raise FileFormatError(f"not a tgsis check-out token: {exc}") from None
+        for key in ("feature_id", "revision", "base_revision"):
+            value = getattr(token, key)
+            if (value is not None or key != "base_revision") and (isinstance(value, bool) or not isinstance(value, int)):
+                raise FileFormatError(f"not a tgsis check-out token: {key} is {value!r}, not an integer")
+        return token
+
+
+_OPTIONAL_FIELDS = frozenset({"base_revision"})  # absent from tokens written before check-outs froze revisions
 
 
 @dataclass
@@ -571,10 +595,39 @@ def _working_state(conn: Conn) -> tuple[str, int]:
     return str(row[0]), int(row[1])
 
 
+def _session_settings(conn: Conn) -> tuple[str | None, str | None]:
+    row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
+                       ).fetchone()
+    assert row is not None
+    return row[0], row[1]
+
+
+def _restore_settings(conn: Conn, settings: tuple[str | None, str | None]) -> None:
+    """Back to the caller's version and revision for the rest of an enclosing transaction."""
+    conn.execute("SELECT set_config('tgsis.version', coalesce(%s, ''), true), "
+                 "set_config('tgsis.revision', coalesce(%s, ''), true)", settings)
+
+
+def _freeze(conn: Conn) -> int | None:
+    """``tgsis.checkout_revision()``: the frozen revision holding the session's state, or None (nothing frozen)."""
+    row = conn.execute("SELECT tgsis.checkout_revision()").fetchone()
+    return None if row is None or row[0] is None else int(row[0])
+
+
 def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | None = None) -> Checkout:
     """Check a feature out of the session's version for editing.
 
-    The mesh, its row ids and the fingerprint come from one snapshot.
+    The mesh, its row ids and the fingerprint come from one snapshot. With
+    feature versioning on and the write right in the version, the version's
+    working revision is first frozen (``tgsis.checkout_revision``: a short
+    transaction of its own that waits for the version's open writers, or
+    part of the caller's transaction when one is open) and the feature is
+    read at that revision, recorded as ``token.base_revision``: a
+    conflicting :func:`checkin` with ``on_conflict="child"`` starts its child
+    version there. Viewing an older revision, that revision is the base and
+    nothing is frozen; a role without the write right (or a read-only, or
+    an enclosing REPEATABLE READ or SERIALIZABLE, transaction) freezes
+    nothing and takes no lock.
 
     Parameters
     ----------
@@ -596,18 +649,30 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
         A temporal or GEOMETRYCOLLECTION feature.
     """
     fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:  # one snapshot for the fingerprint and the rows
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
-        fc = _checked_class(conn, feature_class, feature_id)
-        name, _, properties = _feature_row(conn, fc, feature_id)
-        version, revision = _working_state(conn)
-        row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
-        assert row is not None
-        base = _stored_mesh(conn, fc, feature_id, name)
+    with reraise():
+        with conn.transaction():  # bad input is refused before anything is frozen
+            if fresh:  # the freeze waits for open writers: later statements must see their commits
+                conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
+            fc = _checked_class(conn, feature_class, feature_id)
+            _feature_row(conn, fc, feature_id)
+            frozen = _freeze(conn)
+        with conn.transaction():
+            if fresh:  # one snapshot for the fingerprint and the rows
+                conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+            settings = _session_settings(conn)
+            version, revision = _working_state(conn)
+            if frozen is not None:  # a frozen revision's state never changes: no lock is needed to read it
+                conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, frozen))
+                revision = frozen
+            name, _, properties = _feature_row(conn, fc, feature_id)
+            row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
+            assert row is not None
+            base = _stored_mesh(conn, fc, feature_id, name)
+            _restore_settings(conn, settings)
     token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
-                          _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
-    log.info("checked out %s feature %d from %s at revision %d", fc.name, feature_id, version, revision)
+                          _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"), frozen)
+    log.info("checked out %s feature %d from %s at revision %d%s", fc.name, feature_id, version, revision,
+             " (frozen)" if frozen is not None else "")
     checked_out = Checkout(token, base, properties)
     checked_out.index()  # hashed now, so that the check-in hashes only the edited mesh
     return checked_out
@@ -660,9 +725,13 @@ def checkin(
         When the feature changed since check-out: ``"raise"``
         :class:`~tgsis.errors.CheckoutConflictError` and write nothing, or
         ``"child"``: create a child version of the check-out's version (named
-        ``child_version``, default ``checkin_<id>``, made unique) and write
-        the edited mesh there, where it can be compared with the other
-        writer's and merged; the other writer's change stays in the parent.
+        ``child_version``, default ``checkin_<id>``, made unique) based on the
+        revision the check-out froze (``token.base_revision``), and write the
+        edit there by difference from the checked-out base. The other
+        writer's change stays in the parent, and :func:`tgsis.find_conflicts`
+        reports the feature, so that :func:`tgsis.resolve_conflict` decides
+        what :func:`tgsis.merge_version` keeps (``parent``: theirs,
+        ``child``: yours, ``manual``: a merged mesh you save in the child).
     child_version : str, optional
         Name for that child version.
     keep : bool
@@ -677,7 +746,11 @@ def checkin(
     ------
     CheckoutConflictError
         The feature changed (or was deleted) since check-out, with
-        ``on_conflict="raise"``; nothing is written.
+        ``on_conflict="raise"``; or with ``on_conflict="child"`` when no child
+        can start from the checked-out state (feature versioning off, the
+        check-out froze nothing, its revision was compressed away or its
+        version re-based by a merge or refresh since, or the token does not
+        match that revision); nothing is written.
     NotFoundError, InvalidGeometryError, InvalidPropertyError, InvalidInputError
         Nothing is written.
     """
@@ -694,8 +767,7 @@ def checkin(
         if database is None or database[0] != token.database:
             raise InvalidInputError(f"feature {token.feature_id} was checked out of database {token.database!r}, "
                                     f"not {database[0] if database else None!r}")
-        settings = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
-                                ).fetchone()
+        settings = _session_settings(conn)
         conn.execute("SELECT tgsis.goto_version(%s, true)", (token.version,))
         fc = _checked_class(conn, token.feature_class, token.feature_id)
         with ThreadPoolExecutor(max_workers=1) as pool:  # numpy compares while the server fingerprints
@@ -714,41 +786,74 @@ def checkin(
             result, written = _save(conn, fc, token.feature_id, checked_out.base, mesh, plan, properties,
                                     _new_name(name, mesh, checked_out.base.mesh.name), drop_extra_properties)
         else:
-            result, written = _checkin_into_child(conn, fc, token, mesh, properties, name, tolerance,
+            result, written = _checkin_into_child(conn, fc, checked_out, mesh, plan, properties, name,
                                                   child_version, drop_extra_properties, str(conflict))
         kept = _kept_checkout(conn, fc, token, mesh, written) if keep else None
-        assert settings is not None  # back to the caller's version for the rest of an enclosing transaction
-        conn.execute("SELECT set_config('tgsis.version', coalesce(%s, ''), true), "
-                     "set_config('tgsis.revision', coalesce(%s, ''), true)", (settings[0], settings[1]))
+        _restore_settings(conn, settings)
     return CheckinResult(result, conflict is not None, kept)
 
 
-def _checkin_into_child(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh,
-                        properties: Mapping[str, Any] | None, name: str | None, tolerance: float,
-                        child_version: str | None, drop_extra: bool, reason: str) -> tuple[SaveResult, _Written]:
-    """Create a child of the check-out's version and save the edited mesh there over the feature's current state."""
+_REDO_HINT = ("check out again and redo the edit on the current state (or save it over that state with "
+              "tgsis.save_feature), or check it in with on_conflict='raise' to see the conflict only")
+
+
+def _checkin_into_child(conn: Conn, fc: FeatureClass, checked_out: Checkout, mesh: Mesh, plan: EditPlan,
+                        properties: Mapping[str, Any] | None, name: str | None, child_version: str | None,
+                        drop_extra: bool, reason: str) -> tuple[SaveResult, _Written]:
+    """Create a child of the check-out's version based on the checked-out state and save the edit there by difference.
+
+    The child starts at the frozen revision the check-out read, so that its
+    difference holds only this edit and the other writer's change (made in
+    the parent's later revisions) shows as a conflict in ``find_conflicts``.
+    Before anything is written, the child must hold exactly what the token's
+    fingerprint says was checked out (a token from before check-outs froze
+    revisions, or an altered one, is refused).
+    """
+    token = checked_out.token
+    refused = reason.splitlines()[0]
     versioned = conn.execute("SELECT 1 FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'vrtx'"
                              ).fetchone()
     if versioned is None:
         raise CheckoutConflictError(
-            f"{reason.splitlines()[0]}; no child version can take the edit: feature versioning is off",
+            f"{refused}; no child version can take the edit: feature versioning is off",
             hint="tgsis.enable_feature_versioning(conn) (or `tgsis versioning enable`) makes on_conflict='child' work")
+    base = token.base_revision if token.base_revision is not None else token.revision
     child = _unique_version_name(conn, child_version or f"checkin_{token.feature_id}")
-    conn.execute("SELECT tgsis.create_version(%s, %s, %s)",
-                 (child, token.version, f"check-in of feature {token.feature_id} checked out at revision "
-                                        f"{token.revision}, which conflicted in {token.version}"))
+    try:
+        with conn.transaction():
+            conn.execute("SELECT tgsis.create_version(%s, %s, %s, %s)",
+                         (child, token.version, f"check-in of feature {token.feature_id} checked out at revision "
+                                                f"{base}, which conflicted in {token.version}", base))
+    except psycopg.Error as exc:
+        if getattr(exc, "sqlstate", None) != NotFoundError.code:
+            raise
+        raise CheckoutConflictError(
+            f"{refused}; no child version can start from the state it was checked out as: "
+            f"{exc.diag.message_primary}", detail=exc.diag.message_detail, hint=_REDO_HINT) from None
     conn.execute("SELECT tgsis.goto_version(%s, true)", (child,))
-    stored_name, _, _ = _feature_row(conn, fc, token.feature_id)
-    stored = _stored_mesh(conn, fc, token.feature_id, stored_name)
-    log.warning("feature %d changed in %s since check-out: the edit goes into new child version %s",
-                token.feature_id, token.version, child)
-    return _save(conn, fc, token.feature_id, stored, mesh, _plan(stored.mesh, mesh, tolerance), properties, _new_name(name, mesh, stored_name),
-                 drop_extra)
+    row = conn.execute("SELECT tgsis.object_fingerprint(%s)", (token.feature_id,)).fetchone()
+    if row is None or row[0] != token.fingerprint:
+        raise CheckoutConflictError(
+            f"{refused}; no child version can start from the state it was checked out as: revision {base} of "
+            f"version {token.version!r} does not hold feature {token.feature_id} as the check-out token describes "
+            "it (a token from before check-outs froze their revision, taken while others could still write in "
+            "that revision, or an altered one)", hint=_REDO_HINT)
+    log.warning("feature %d changed in %s since check-out: the edit goes into new child version %s, based on "
+                "revision %d", token.feature_id, token.version, child, base)
+    return _save(conn, fc, token.feature_id, checked_out.base, mesh, plan, properties,
+                 _new_name(name, mesh, checked_out.base.mesh.name), drop_extra)
 
 
 def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh, written: _Written) -> Checkout:
-    """A check-out of the state just written (same transaction), ordered by database id like a fresh check-out."""
+    """A check-out of the state just written (same transaction), ordered by database id like a fresh check-out.
+
+    The revision holding the write is frozen, as :func:`checkout` does, so
+    that the kept check-out has a base for a later conflicting check-in.
+    """
     version, revision = _working_state(conn)
+    frozen = _freeze(conn)
+    if frozen is not None:
+        revision = frozen
     row = conn.execute("SELECT tgsis.object_fingerprint(%s)", (token.feature_id,)).fetchone()
     assert row is not None
     name, _, properties = _feature_row(conn, fc, token.feature_id)
@@ -759,7 +864,7 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
     base_mesh = type(mesh)(mesh.vertices[vorder], rank[mesh.cells[corder]],
                            vertex_properties=stored if fc.alignment == "VERTEX" else None,
                            cell_properties=stored if fc.alignment == "CELL" else None, name=name)
-    new_token = replace(token, version=version, revision=revision, fingerprint=str(row[0]),
+    new_token = replace(token, version=version, revision=revision, fingerprint=str(row[0]), base_revision=frozen,
                         checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
     return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),
                     properties)

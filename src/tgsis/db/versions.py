@@ -141,14 +141,28 @@ def _run_committed(conn: Conn, query: str, params: Sequence[Any] = ()) -> Any:
 # --------------------------------------------------------------------------- versions and revisions
 
 
-def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, description: str | None = None) -> int:
+def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, description: str | None = None,
+                   base: int | None = None) -> int:
     """Create a child version of ``parent``; return the child's working revision.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    name : str
+    parent : str
+    description : str, optional
+    base : int, optional
+        Base the child on this frozen revision of ``parent`` (one of its own
+        revisions since its base) instead of its working revision: the child
+        sees what that revision saw, and the parent's later changes count as
+        the parent's side in :func:`find_conflicts`.
 
     Raises
     ------
     InvalidNameError, NotFoundError, AlreadyExistsError
+        NotFoundError also when ``base`` is not such a revision.
     """
-    return int(_run_committed(conn, "SELECT tgsis.create_version(%s, %s, %s)", (name, parent, description)))
+    return int(_run_committed(conn, "SELECT tgsis.create_version(%s, %s, %s, %s)", (name, parent, description, base)))
 
 
 def delete_version(conn: Conn, name: str) -> int:
