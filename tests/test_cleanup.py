@@ -133,7 +133,8 @@ def _kill_lease_holder(home: Path) -> None:
         stopped = wait_until(lambda: not server.is_running(), timeout=60)
         assert stopped, "the lease watcher did not stop the server:\n" + subprocess.run(
             ["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout
-        assert not process_alive(pid)
+        # the postmaster removes postmaster.pid a moment before its process ends
+        assert wait_until(lambda: not process_alive(pid), timeout=10), f"postmaster {pid} outlived its pid file"
     finally:
         if child.poll() is None:
             child.kill()

@@ -11,17 +11,9 @@ import pytest
 import tgsis
 from tgsis import formats
 from tgsis.cli import main
+from tests.test_cli_checkin import _surface
 
 ANN, BOB = 1, 100          # the vertex each moves
-
-
-def _surface() -> tgsis.Surface:
-    u, v = np.meshgrid(np.arange(12, dtype=float), np.arange(12, dtype=float))
-    vertices = np.stack([u.ravel() * 10.5, v.ravel() * 3.25, np.sin(u.ravel()) / 3], axis=1)
-    idx = np.arange(144).reshape(12, 12)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": np.linspace(0.1, 0.3, 144)}, name="f1")
 
 
 @pytest.fixture
