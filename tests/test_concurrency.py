@@ -1162,22 +1162,20 @@ def test_a_merge_or_delete_and_a_writer_in_a_sibling_changing_the_same_rows_in_t
     assert invariant_problems(small) == []
 
 
-# KNOWN FAILURE at d8c2c15, found by the two-writers test above (seeds 3, 4 and sometimes 5): a bug of
-# tgsis.save_revision, left failing on purpose for the integrator (issue 15, part 1; see the branch's report).
+# Found by the two-writers test above (seeds 3, 4, sometimes 5): save_revision took the writers' share lock on
+# the version row (tgsis.write_revision) and then upgraded it, so two saves in one version deadlocked (40P01).
 def test_two_writers_saving_in_one_version_at_once_wait_for_each_other_and_both_save(small: Conn,
                                                                                     db_dsn: str) -> None:
     """Writer b has written in w (its write share-locks w's row until it commits) and saves; writer a saves
     meanwhile in a transaction of its own. a must wait for b, then save the next working revision; b must not
-    wait for a, which holds nothing of w yet. save_revision share-locks w's row first (tgsis.write_revision)
-    and then asks for it FOR UPDATE: a's share lock and b's make a lock-upgrade deadlock (40P01), and with two
-    lone saves the same happens whenever both get their share lock before either upgrades."""
+    wait for a, which holds nothing of w yet (save_revision checks without locking, then locks for update)."""
     b = connect(db_dsn, "b")
     tgsis.goto_version(b, "w")
     b.commit()
     b.execute("UPDATE items SET val = 101 WHERE obj = 1 AND part = 1")
     a = Background(db_dsn, "a", lambda c: tgsis.save_revision(c, "a"), version="w")
     wait_until_blocked(small, a.pid, b.info.backend_pid)
-    saved_b = tgsis.save_revision(b, "b")       # 40P01 here, or in a, at d8c2c15
+    saved_b = tgsis.save_revision(b, "b")       # 40P01 here, or in a, before the fix
     b.commit()
     b.close()
     saved_a = a.finish()

@@ -1,4 +1,11 @@
 -- tgsis.save_revision(name): freeze the working revision of the session's version under a name; start a new one.
+-- The checks come first and take no lock; then the version's row is locked
+-- for update, which waits for open writers of the version (they share-lock
+-- it) and for another save. Taking the writers' share lock first and then
+-- upgrading it would deadlock two saves in one version (each holding the
+-- share lock the other's upgrade waits for). The revision frozen is the
+-- working revision once the lock is held: a save this one waited for has
+-- handed on the one it would have seen before.
 CREATE FUNCTION tgsis.save_revision(p_name text)
 RETURNS integer
 LANGUAGE plpgsql
@@ -11,8 +18,15 @@ DECLARE
     v_saved   integer;
 BEGIN
     PERFORM tgsis.check_version_name(p_name, 'revision');
-    v_saved := (tgsis.write_revision()).revision;  -- TG301 while an older revision is viewed
-    SELECT * INTO v_version FROM tgsis.versions WHERE name = tgsis.get_working_version() FOR UPDATE;
+    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(tgsis.get_working_version());
+    PERFORM tgsis.check_writable_revision(v_version.name, v_version.workingrevision);  -- TG301
+    PERFORM tgsis.require_version_privilege(v_version.versionid, 'write', 'write in');  -- TG002
+    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = v_version.versionid FOR UPDATE;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION 'version % does not exist', quote_literal(tgsis.get_working_version())
+            USING ERRCODE = 'TG200', DETAIL = 'It was deleted while this save_revision waited for it.';
+    END IF;
+    v_saved := v_version.workingrevision;
     IF EXISTS (SELECT FROM tgsis.revisions WHERE versionid = v_version.versionid AND name = p_name) THEN
         RAISE EXCEPTION 'version % has a revision named % already', quote_literal(v_version.name), quote_literal(p_name)
             USING ERRCODE = 'TG201';

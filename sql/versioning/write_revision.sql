@@ -23,7 +23,6 @@ DECLARE
     v_name    text := coalesce(nullif(current_setting('tgsis.version', true), ''), 'DEFAULT');
     v_viewing text := nullif(btrim(current_setting('tgsis.revision', true)), '');
     v_role    name := tgsis.calling_role();
-    v_saved   text;
 BEGIN
     SELECT v.versionid, v.workingrevision, v.workingset INTO versionid, revision, revisions
       FROM tgsis.versions v
@@ -42,15 +41,8 @@ BEGIN
         RAISE EXCEPTION 'version % changed while this write waited for it', quote_literal(v_name)
             USING ERRCODE = 'serialization_failure', HINT = 'retry the transaction';
     END IF;
-    IF v_viewing IS NOT NULL AND tgsis.get_viewing_revision() <> revision THEN  -- TG100 for a malformed setting
-        SELECT r.name INTO v_saved FROM tgsis.revisions r WHERE r.revision = v_viewing::integer;
-        RAISE EXCEPTION 'version % is viewed at revision %, which cannot be changed', quote_literal(v_name), v_viewing
-            USING ERRCODE = 'TG301',
-                  DETAIL = CASE WHEN v_saved IS NOT NULL
-                                THEN format('Revision %s was saved as %L and is frozen; only the working revision %s of %s can change.',
-                                            v_viewing, v_saved, revision, v_name)
-                                ELSE format('Only the working revision %s of %s can change.', revision, v_name) END,
-                  HINT = format('SELECT tgsis.goto_version(%L) to work in its working revision', v_name);
+    IF v_viewing IS NOT NULL THEN
+        PERFORM tgsis.check_writable_revision(v_name, revision);  -- TG301 (the error ends the lock with the transaction)
     END IF;
 END
 $$;
