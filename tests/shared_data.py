@@ -1,4 +1,4 @@
-"""The real GOCAD files of ../shared/data/cfm (beside the repository), for tests."""
+"""The real GOCAD files of data/cfm (SCEC CFM, BSD 3-Clause, shipped with the repository), for tests."""
 
 from __future__ import annotations
 
@@ -6,12 +6,12 @@ from pathlib import Path
 
 import pytest
 
-CFM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cfm"
+CFM = Path(__file__).resolve().parents[1] / "data" / "cfm"
 
 
 def cfm(relative: str) -> Path:
-    """Path of a CFM file; the test FAILS (never skips) when the shared data is missing."""
+    """Path of a CFM file; the test FAILS (never skips) when the data is missing."""
     path = CFM / relative
     if not path.is_file():
-        pytest.fail(f"shared CFM test data missing: {path} (the repository expects ../shared beside it)")
+        pytest.fail(f"CFM test data missing: {path} (the repository ships data/cfm)")
     return path

@@ -5,7 +5,7 @@ Two releases of a fault model, the way a geomodelling team lives them:
 1. a fresh database ``tgsis_demo`` on the target server (the local server
    tgsis starts itself when no DSN is given) with tgsis installed;
 2. a feature class ``faults`` and the three faults of release 5.3 of the SCEC
-   Community Fault Model (real GOCAD TSurf files from ``../shared/data``; a
+   Community Fault Model (real GOCAD TSurf files from ``data/cfm`` of the repository; a
    synthetic stand-in when that folder is missing), stored in DEFAULT;
 3. a bounding-box query;
 4. versioning switched on, a version ``cfm6.1`` into which release 6.1 is
@@ -67,9 +67,9 @@ class _Fault:
 
 
 def _cfm_folder() -> Path | None:
-    """The shared CFM data: ``$TGSIS_DEMO_DATA`` when set, else ``../shared/data/cfm`` beside the source tree."""
+    """The CFM data: ``$TGSIS_DEMO_DATA`` when set, else ``data/cfm`` of the source tree (shipped with it)."""
     env = os.environ.get("TGSIS_DEMO_DATA")
-    folder = Path(env) if env else Path(__file__).resolve().parents[3] / "shared" / "data" / "cfm"
+    folder = Path(env) if env else Path(__file__).resolve().parents[2] / "data" / "cfm"
     return folder if all((folder / r).is_dir() for r in RELEASES) else None
 
 
