@@ -218,7 +218,9 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
         row = conn.execute("SELECT tgsis.version(), current_setting('server_version')").fetchone()
         assert row is not None
         roles = [r[0] for r in conn.execute(
-            "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' ORDER BY oid").fetchall()]
+            # the group roles users are granted (not tgsis_nobody, which is tgsis's own)
+            "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' AND rolname <> 'tgsis_nobody' "
+            "ORDER BY oid").fetchall()]
         out(f"PostgreSQL {row[1]}, database {DEMO_DATABASE!r} ({target.source})")
         out(f"tgsis {row[0]} (installed as {current.method})")
         out(f"roles: {', '.join(roles)}")
