@@ -338,3 +338,10 @@ def test_read_tsurf_passes_the_options_on() -> None:
             read_tsurf(DATA / "mixed.ts")
     with pytest.raises(FileFormatError, match="unsupported GOCAD SGrid"):
         read_tsurf(DATA / "mixed.ts", skip_unsupported=False)
+
+
+def test_a_quoted_header_name_loses_its_quotes(tmp_path: Path) -> None:
+    text = 'GOCAD VSet 1\nHEADER {\nname: "Fault 1 east"\n}\nVRTX 1 0 0 0\nEND\n'
+    [points] = read_quietly(write(tmp_path, text, "f.vs"))
+    assert points.name == "Fault 1 east"
+    assert "name:Fault 1 east\n" in format_gocad(points)

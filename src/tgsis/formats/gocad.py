@@ -1,16 +1,55 @@
-"""GOCAD ASCII objects: TSurf, PLine, VSet and TSolid, read and written.
+"""GOCAD ASCII objects: TSurf, PLine, VSet and TSolid read and written; SKUA's LightTSolid read.
 
 A GOCAD ASCII file holds one or more objects, each from a ``GOCAD <type> 1``
 line to an ``END`` line:
 
-========  ======  ===============  ==========  ===========
-type      ext.    parts            cells       mesh
-========  ======  ===============  ==========  ===========
-TSurf     ``.ts``  ``TFACE``        ``TRGL``    Surface
-PLine     ``.pl``  ``ILINE``        ``SEG``     LineSet
-VSet      ``.vs``  (none)           (none)      PointSet
-TSolid    ``.so``  ``TVOLUME``      ``TETRA``   TetraMesh
-========  ======  ===============  ==========  ===========
+===========  ========  ====================  ==========  ===========
+type         ext.      parts                 cells       mesh
+===========  ========  ====================  ==========  ===========
+TSurf        ``.ts``   ``TFACE``             ``TRGL``    Surface
+PLine        ``.pl``   ``ILINE``             ``SEG``     LineSet
+VSet         ``.vs``   (none)                (none)      PointSet
+TSolid       ``.so``   ``TVOLUME``           ``TETRA``   TetraMesh
+LightTSolid  ``.lso``  ``# CTETRA`` regions  ``TETRA``   TetraMesh
+===========  ========  ====================  ==========  ===========
+
+Files as GOCAD, SKUA and other tools write them
+-----------------------------------------------
+* Words are cut by :func:`split_words`, GOCAD's rule: ``"quoted text"`` is one
+  word (SKUA writes ``PROPERTIES " default property" def-prop``,
+  ``PROPERTY_KINDS " Real Number"``); the writer quotes such words again
+  (:func:`quote_word`). A quoted ``name:`` in the header loses its quotes.
+* A vertex line may end with a control-node flag (:data:`VERTEX_FLAGS`:
+  ``CNXYZ`` from GOCAD and SKUA on VRTX, PVRTX (after the property values)
+  and ATOM lines; ``XYZ`` from SKUA's LightTSolid). The flag of each vertex is
+  kept in ``metadata["gocad_vertex_flags"]`` (``{flag: [[start, stop], ...]}``,
+  half-open vertex index ranges) and written back.
+* Objects of a type tgsis does not read (SGrid, Voxet, Model3d, Well ...) are
+  skipped with a :class:`~tgsis.errors.SkippedObjectWarning` naming the file,
+  line, type and name; ``skip_unsupported=False`` raises instead, and a file
+  with no object tgsis reads is an error. The members of a group
+  (``GOCAD HeterogeneousGroup`` / ``HomogeneousGroup``, ``BEGIN_MEMBERS`` ...
+  ``END_MEMBERS``, nested or not) are read as objects of their own; the
+  group's own header is not kept.
+* Inside an object, a keyword tgsis does not know is an error naming file,
+  line and keyword: it could be geometry (``VERTEX`` for ``VRTX``) and the
+  mesh would silently be shorter. Known keywords without geometry of the mesh
+  are counted in ``metadata["gocad_ignored"]`` (BSTONE, BORDER, SUBVSET, and
+  the MODEL section of a TSolid or LightTSolid: SURFACE, TFACE, KEYVERTICES,
+  TRGL, MODEL_REGION, which name boundary triangles of the tetrahedra; SKUA's
+  ``BEGIN_..._REGION_INDICATORS`` blocks) or kept as lines in
+  ``metadata["gocad_extra_lines"]`` (GEOLOGICAL_FEATURE, GEOLOGICAL_TYPE,
+  STRATIGRAPHIC_POSITION, CLASSIFICATION, NAME, FIXED, READ_ONLY, REGION).
+* A LightTSolid (SKUA) is VRTX/PVRTX lines, ``SHAREDVRTX``/``SHAREDPVRTX``
+  lines (read as ATOM/PATOM: a vertex at the place of another, with values of
+  its own), then ``TETRA`` lines each followed by ``# CTETRA <region> <flags of
+  the four faces>``: the region becomes the ``part`` of the tetrahedron and
+  its name a part name. The face flags and the MODEL section (the boundary
+  surfaces, which are faces of the tetrahedra) are not kept. A LightTSolid is
+  written back as a TSolid, one TVOLUME per region.
+* Part names (the words after TFACE, ILINE, TVOLUME; a LightTSolid's regions)
+  are kept in ``metadata["gocad_part_names"]``, one per part in part order,
+  and written back.
 
 Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
 ---------------------------------------------------------------------
@@ -41,10 +80,8 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
 * ``HEADER``, the coordinate system, ``PROPERTY_CLASS_HEADER`` blocks and the
   per-property lines (``PROPERTY_CLASSES``, ``PROPERTY_KINDS``,
   ``PROPERTY_SUBCLASSES``, ``PROP_LEGAL_RANGES``, ``UNITS``) are kept in
-  ``metadata`` (keys below) for writing back. ``BSTONE``, ``BORDER`` and other
-  keywords after the geometry has begun are counted in
-  ``metadata["gocad_ignored"]`` and otherwise ignored; unknown lines before it
-  (``GEOLOGICAL_FEATURE`` ...) are kept in ``metadata["gocad_extra_lines"]``.
+  ``metadata`` (keys below) for writing back. Other lines: see above (known
+  keywords are counted or kept, unknown ones are errors).
 
 Writing (:func:`write_gocad`, :func:`write_gocad_many`, :func:`format_gocad`)
 -----------------------------------------------------------------------------
@@ -68,7 +105,8 @@ coordinate system block), ``gocad_extra_lines``,
 ``gocad_property_class_headers`` (list of line lists), ``gocad_esizes``
 ({file name: k} for k > 1), ``gocad_no_data_values`` ({file name: value}),
 ``gocad_property_info`` ({keyword: {file name: text}}), ``gocad_atoms``,
-``gocad_ignored`` ({keyword: count}). All are JSON-compatible.
+``gocad_ignored`` ({keyword: count}), ``gocad_vertex_flags`` ({flag: [[start,
+stop], ...]}), ``gocad_part_names`` (list of str). All are JSON-compatible.
 """
 
 from __future__ import annotations
@@ -93,6 +131,9 @@ from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 __all__ = [
     "GOCAD_TYPES",
+    "VERTEX_FLAGS",
+    "split_words",
+    "quote_word",
     "read_gocad",
     "read_tsurf",
     "parse_gocad",
@@ -137,9 +178,10 @@ _PROPERTY_KEYWORDS = frozenset(("PROPERTIES", "NO_DATA_VALUES", "ESIZES") + _INF
 _DEFAULT_NO_DATA = -99999.0
 
 # Lines that describe an object without being geometry: kept as they are in metadata["gocad_extra_lines"] and
-# written back. FIXED (per property) and REGION (a named vertex flag) come with SKUA's LightTSolid.
+# written back. FIXED (per property) and REGION (a named vertex flag) come with SKUA's LightTSolid, READ_ONLY
+# (per property) with RINGMesh's TSolid.
 _DESCRIPTION_KEYWORDS = frozenset(("GEOLOGICAL_FEATURE", "GEOLOGICAL_TYPE", "STRATIGRAPHIC_POSITION",
-                                   "CLASSIFICATION", "NAME", "FIXED", "REGION"))
+                                   "CLASSIFICATION", "NAME", "FIXED", "READ_ONLY", "REGION"))
 # Lines that repeat what the geometry says (border stones, borders, the model section of a solid naming the
 # boundary triangles of its tetrahedra, subsets of points): counted in metadata["gocad_ignored"], not read.
 _REDUNDANT_KEYWORDS: dict[str, frozenset[str]] = {
@@ -819,7 +861,7 @@ def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh
     try:
         return kind.mesh_type(values[:, :3], cells, vertex_properties=_vertex_properties(values[:, 3:], layout),
                               cell_properties={} if parts is None else {"part": parts},
-                              name=_header_value(rec.header, "name"),
+                              name=_header_name(rec.header),
                               metadata=_metadata(rec, layout, atoms, flags, len(values)))
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.name} is not a valid mesh: {exc.message}", path=path,
@@ -953,6 +995,14 @@ def _header_value(header: Sequence[str], key: str) -> str | None:
         k, sep, v = line.partition(":")
         if sep and k.strip() == key:
             value = v.strip()
+    return value
+
+
+def _header_name(header: Sequence[str]) -> str | None:
+    """The object's name from its header; a name written in quotes (``name: "Fault 1"``) loses them."""
+    value = _header_value(header, "name")
+    if value is not None and len(value) >= 2 and value[0] == value[-1] == '"' and '"' not in value[1:-1]:
+        value = value[1:-1]
     return value
 
 

@@ -35,6 +35,13 @@ and float ones keep float32/float64; colours, normals and texture coordinates
 are properties like any other. OBJ, OFF and STL cannot store properties: the
 writer raises unless ``drop_properties=True``. Names are not stored (meshes
 read have ``name=None``).
+
+A file of points without faces (OBJ ``v`` lines alone, a PLY ``vertex``
+element alone) is read as a :class:`~tgsis.mesh.PointSet` with the PLY vertex
+properties, not as an empty surface (trimesh's ``force="mesh"`` drops the
+points); a PLY file that declares a ``face`` element with no face, as this
+writer writes a surface without triangles, is a Surface without triangles. A
+file without any vertex is an error.
 """
 
 from __future__ import annotations
