@@ -192,10 +192,9 @@ _REDUNDANT_KEYWORDS: dict[str, frozenset[str]] = {
     "LightTSolid": frozenset(("BSTONE", "BORDER", "MODEL", "SURFACE", "TFACE", "KEYVERTICES", "TRGL",
                               "MODEL_REGION")),
 }
-# Vertex records: keyword -> (is an ATOM, may carry property values).
-_VERTEX_KEYWORDS = {"VRTX": (False, False), "PVRTX": (False, True), "ATOM": (True, False), "PATOM": (True, True),
-                    # LightTSolid's names for ATOM and PATOM
-                    "SHAREDVRTX": (True, False), "SHAREDPVRTX": (True, True)}
+# Records of a vertex at the place of another: keyword -> may carry property values of its own.
+_ATOM_KEYWORDS = {"ATOM": False, "PATOM": True,
+                  "SHAREDVRTX": False, "SHAREDPVRTX": True}  # LightTSolid's names for ATOM and PATOM
 
 #: Words that may end a vertex line: a control node (CN) fixed in some of x, y, z. GOCAD and SKUA write
 #: ``CNXYZ`` (TSurf, TSolid); SKUA's LightTSolid writes ``XYZ``. Kept per vertex in
@@ -491,18 +490,17 @@ def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike |
             rec.cell_lines.append(i)
             rec.cell_texts.append(rest)
             rec.cell_parts.append(part)
-        elif keyword in _VERTEX_KEYWORDS:
-            is_atom, is_p = _VERTEX_KEYWORDS[keyword]
-            if is_atom:
-                rec.atom_lines.append(i)
-                rec.atom_texts.append(rest)
-                rec.atom_is_p.append(is_p)
-                rec.atom_seq.append(seq)
-            else:
-                rec.vertex_lines.append(i)
-                rec.vertex_texts.append(rest)
-                rec.vertex_is_p.append(is_p)
-                rec.vertex_seq.append(seq)
+        elif keyword == "VRTX" or keyword == "PVRTX":
+            rec.vertex_lines.append(i)
+            rec.vertex_texts.append(rest)
+            rec.vertex_is_p.append(keyword == "PVRTX")
+            rec.vertex_seq.append(seq)
+            seq += 1
+        elif keyword in _ATOM_KEYWORDS:
+            rec.atom_lines.append(i)
+            rec.atom_texts.append(rest)
+            rec.atom_is_p.append(_ATOM_KEYWORDS[keyword])
+            rec.atom_seq.append(seq)
             seq += 1
         elif keyword == part_keyword:
             part += 1
