@@ -230,10 +230,19 @@ def test_an_unsupported_object_cut_short_is_an_error(tmp_path: Path) -> None:
         read_gocad(write(tmp_path, "GOCAD SGrid 1\nAXIS_N 2 2 2\n"))
 
 
-def test_members_of_a_group_are_read() -> None:
+def test_members_of_a_group_are_read(tmp_path: Path) -> None:
     surface, points = read_quietly(DATA / "group.gp")
     assert isinstance(surface, Surface) and surface.name == "member surface" and surface.n_cells == 1
     assert isinstance(points, PointSet) and points.vertices.tolist() == [[5, 5, 5], [6, 6, 6]]
+    assert [m.name for m in formats.read(DATA / "group.gp")] == ["member surface", "member points"]
+    with pytest.raises(FileFormatError, match="does not write groups"):
+        formats.write(surface, tmp_path / "out.gp")
+
+
+def test_groups_nest(tmp_path: Path) -> None:
+    inner = (DATA / "group.gp").read_text().replace("GOCAD HeterogeneousGroup", "GOCAD HomogeneousGroup")
+    text = "GOCAD HeterogeneousGroup 1\nHEADER {\nname:outer\n}\nBEGIN_MEMBERS\n" + inner + "END_MEMBERS\nEND\n"
+    assert [m.name for m in read_quietly(write(tmp_path, text, "nested.gp"))] == ["member surface", "member points"]
 
 
 @pytest.mark.parametrize(("text", "message"), [
