@@ -143,6 +143,7 @@ from tgsis.errors import (
     ObjectLockedError,
     CheckoutConflictError,
     ReadOnlyRevisionError,
+    SkippedObjectWarning,
     UnsolvedConflictsError,
     VersioningError,
 )
@@ -272,6 +273,7 @@ __all__ = [
     "ConcurrentChangeError",
     "DatabaseError",
     "FileFormatError",
+    "SkippedObjectWarning",
     "InstallationError",
     "InUseError",
     "InvalidGeometryError",
