@@ -67,10 +67,18 @@ class _Fault:
 
 
 def _cfm_folder() -> Path | None:
-    """The CFM data: ``$TGSIS_DEMO_DATA`` when set, else ``data/cfm`` of the source tree (shipped with it)."""
+    """The CFM data: ``$TGSIS_DEMO_DATA`` when set, else the copy inside the installed package, else the source tree's.
+
+    The wheel holds ``data/cfm`` as ``tgsis/_data/cfm``; a source checkout
+    (an editable install) reads ``data/cfm`` itself.
+    """
     env = os.environ.get("TGSIS_DEMO_DATA")
-    folder = Path(env) if env else Path(__file__).resolve().parents[2] / "data" / "cfm"
-    return folder if all((folder / r).is_dir() for r in RELEASES) else None
+    here = Path(__file__).resolve().parent
+    candidates = [Path(env)] if env else [here / "_data" / "cfm", here.parents[1] / "data" / "cfm"]
+    for folder in candidates:
+        if all((folder / r).is_dir() for r in RELEASES):
+            return folder
+    return None
 
 
 def _synthetic_release(release: int) -> list[_Fault]:
