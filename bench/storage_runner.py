@@ -4,11 +4,12 @@ tgsis's definer code runs its statements on storage tgsis's owner owns
 directly, and on storage another role owns through that table's runner
 (``<table>_ver_run()``, called as ``tgsis_nobody``, the call recorded for the
 runner to check): docs/security.md, "A table's own code runs as the table's
-owner". Two tables of the same shape (``--objects`` objects of ``--rows``
-rows) are versioned, one owned by tgsis's owner, one by an admin role. Each
-round, a version edits 1 % of the rows of one of them and is merged back, and
-a second version edits the same share and is deleted; the two tables take
-turns (medians of ``--repeat`` rounds). Ratios are other owner / tgsis's owner.
+owner". Two databases of one server hold the same versioned table
+(``--objects`` objects of ``--rows`` rows), owned by tgsis's owner in one, by
+an admin role in the other. Each round, in each database in turn, a version
+edits 1 % of the rows and is merged back, and a second version edits the
+same share and is deleted (medians of ``--repeat`` rounds). Ratios are other
+owner / tgsis's owner.
 
     python bench/storage_runner.py [--objects 100] [--rows 2000] [--repeat 7]    # TGSIS_PG=system|embedded
 """
@@ -18,13 +19,13 @@ from __future__ import annotations
 import argparse
 import itertools
 import statistics
-import time
 from typing import Any
 
 import psycopg
 
 import tgsis
-from timing import bench_database
+from tgsis.db.local import LocalServer, find_binaries
+from timing import timed
 
 Conn = psycopg.Connection[Any]
 _names = itertools.count()
@@ -48,10 +49,18 @@ def edited_version(conn: Conn, table: str, objects: int) -> str:
     return name
 
 
-def timed(action: Any) -> float:
-    start = time.perf_counter()
-    action()
-    return time.perf_counter() - start
+def setup(dsn: str, owner: str | None, objects: int, rows: int) -> Conn:
+    """A database with one versioned table ``parts``, owned by tgsis's owner or by the admin role ``owner``."""
+    conn = psycopg.connect(dsn)
+    tgsis.install(conn, method="sql")  # this checkout's SQL
+    if owner is not None:
+        conn.execute(f"CREATE ROLE {owner} NOLOGIN IN ROLE tgsis_admin")
+        conn.execute(f"GRANT CREATE ON SCHEMA public TO {owner}")
+        conn.execute(f"SET ROLE {owner}")
+    make_table(conn, "parts", objects, rows)
+    conn.execute("RESET ROLE")
+    conn.commit()
+    return conn
 
 
 def main() -> None:
@@ -61,24 +70,28 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
     samples: dict[str, list[float]] = {f"{op}_{who}": [] for op in ("merge", "delete") for who in ("tgsis", "other")}
-    with bench_database() as conn:
-        conn.execute("CREATE ROLE bench_admin NOLOGIN IN ROLE tgsis_admin")
-        conn.execute("GRANT CREATE ON SCHEMA public TO bench_admin")
-        conn.commit()
-        make_table(conn, "ours", args.objects, args.rows)                  # tgsis's owner's (this superuser)
-        conn.execute("SET ROLE bench_admin")
-        make_table(conn, "theirs", args.objects, args.rows)                # the admin's: the runner path
-        conn.execute("RESET ROLE")
-        conn.commit()
-        for _ in range(args.repeat):
-            for who, table in (("tgsis", "ours"), ("other", "theirs")):
-                merged = edited_version(conn, table, args.objects)
-                samples[f"merge_{who}"].append(timed(lambda: tgsis.merge_version(conn, merged)))
-                dropped = edited_version(conn, table, args.objects)
-                samples[f"delete_{who}"].append(timed(lambda: tgsis.delete_version(conn, dropped)))
-        runner = conn.execute("SELECT count(*) FROM pg_proc WHERE proname = 'theirs_ver_run' "
-                              "AND proowner = 'bench_admin'::regrole").fetchone()
+    binaries = find_binaries()
+    print(f"server: {binaries.describe()} (throwaway cluster, fsync off)")
+    server = LocalServer.throwaway(binaries)
+    try:
+        with psycopg.connect(server.dsn(), autocommit=True) as admin:
+            admin.execute("CREATE DATABASE ours")
+            admin.execute("CREATE DATABASE theirs")
+        conns = {"tgsis": setup(server.dsn("ours"), None, args.objects, args.rows),
+                 "other": setup(server.dsn("theirs"), "bench_admin", args.objects, args.rows)}
+        runner = conns["other"].execute("SELECT count(*) FROM pg_proc WHERE proname = 'parts_ver_run' "
+                                        "AND proowner = 'bench_admin'::regrole").fetchone()
         assert runner == (1,), "the admin's table has no runner of its own"
+        for _ in range(args.repeat):
+            for who, conn in conns.items():
+                merged = edited_version(conn, "parts", args.objects)
+                samples[f"merge_{who}"].append(timed(lambda: tgsis.merge_version(conn, merged), 1))
+                dropped = edited_version(conn, "parts", args.objects)
+                samples[f"delete_{who}"].append(timed(lambda: tgsis.delete_version(conn, dropped), 1))
+        for conn in conns.values():
+            conn.close()
+    finally:
+        server.destroy()
     medians = {name: statistics.median(values) for name, values in samples.items()}
     print(f"{args.objects} objects x {args.rows} rows per table; each version edits "
           f"{max(1, args.objects // 100) * args.rows} rows; medians of {args.repeat} rounds")
