@@ -17,9 +17,10 @@ from __future__ import annotations
 import contextlib
 import re
 from collections.abc import Iterator
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-import psycopg
+if TYPE_CHECKING:  # imported where a database error is translated: the numpy modules raise these classes too
+    import psycopg
 
 __all__ = [
     "Error",
@@ -342,6 +343,8 @@ def reraise() -> Iterator[None]:
     >>> with reraise():                                   # doctest: +SKIP
     ...     conn.execute("select tgsis.goto_version('nope')")
     """
+    import psycopg  # only where a database is used
+
     try:
         yield
     except psycopg.Error as exc:
