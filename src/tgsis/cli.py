@@ -853,9 +853,13 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from tgsis.demo import run_demo
+    from tgsis.scenarios import SCENARIOS, run_scenario
 
-    run_demo(args.dsn, out=_out, folder=args.dir)
+    if args.list:
+        for scenario in SCENARIOS.values():
+            _out(f"{scenario.name}\t{scenario.summary}")
+        return 0
+    run_scenario(args.name, args.dsn, out=_out, folder=args.dir, size=args.size)
     return 0
 
 
@@ -878,8 +882,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-q", "--quiet", action="store_true", help="errors only")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    demo = commands.add_parser("demo", help="run the demo scenario")
+    demo = commands.add_parser("demo", help="run a sample application end to end (default: cfm, the release story)",
+                               epilog="example: tgsis demo saltdome --dir out  (then look at out/*.png, out/saltdome.gif)")
+    demo.add_argument("name", nargs="?", default="cfm", metavar="NAME",
+                      help="the scenario (tgsis demo --list names them; default: cfm)")
+    demo.add_argument("--list", action="store_true", help="list the scenarios and what each shows")
     demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
+    demo.add_argument("--size", choices=("small", "large"), default="small",
+                      help="how much data the scenario makes (default: small, under a minute)")
     demo.set_defaults(handler=cmd_demo)
 
     db = commands.add_parser("db", help="install, upgrade or inspect tgsis in a database")
