@@ -24,13 +24,13 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["saltdome", "cfm"]
+    assert names == ["saltdome", "interpretations", "cfm"]
 
 
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, saltdome" in err
+    assert "no scenario 'volcano'" in err and "cfm, interpretations, saltdome" in err
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
@@ -40,20 +40,24 @@ def _printed_sql(out: str) -> list[tuple[str, str]]:
             for i in range(len(lines) - 1) if lines[i].strip().startswith("SELECT ") and lines[i + 1].strip().startswith("->")]
 
 
+def _replays(db_dsn: str, scenario: str, out: str, count: int) -> None:
+    """The SQL the report shows runs as printed, in the scenario's database, and gives the answer shown."""
+    asked = _printed_sql(out)
+    assert len(asked) == count
+    with psycopg.connect(make_conninfo(db_dsn, dbname=f"tgsis_demo_{scenario}")) as conn:
+        for statement, answer in asked:
+            values = answer.split(": ", 1)[1]
+            rows = conn.execute(statement).fetchall()  # type: ignore[arg-type]  # the report's own text
+            assert "; ".join(", ".join(str(v) for v in row) for row in rows) == values, statement
+
+
 def test_saltdome(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = tmp_path / "salt"
     assert main(["--dsn", db_dsn, "demo", "saltdome", "--dir", str(folder)]) == 0
     out = capsys.readouterr().out
     assert out.count("equal to SQL to the bit: yes") == 2
     assert "flat at t = 0 (231 vertices, a grid), a dome at t = 1 (194 vertices, Delaunay)" in out
-    # the SQL shown runs as printed, in the scenario's database, and gives the answer shown
-    asked = _printed_sql(out)
-    assert len(asked) == 2
-    with psycopg.connect(make_conninfo(db_dsn, dbname="tgsis_demo_saltdome")) as conn:
-        for statement, answer in asked:
-            names, values = answer.split(": ")
-            row = conn.execute(statement).fetchone()  # type: ignore[arg-type]  # the report's own text
-            assert row is not None and ", ".join(str(v) for v in row) == values, statement
+    _replays(db_dsn, "saltdome", out, 2)
     tops = [float(m) for m in re.findall(r"-> vertices, top_m, lowest_m: \d+, (-?[\d.]+)", out)]
     assert -2500 < tops[1] < tops[0] < -1000                           # risen more by 2/3 than by 1/2
     # pictures, animation and series
@@ -65,3 +69,20 @@ def test_saltdome(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str
     frames = read_pvd(folder / "saltdome.pvd")
     assert len(frames) == 11 and frames[0][0] == 0.0 and frames[-1][0] == 1.0
     assert "summary: interpolation_error_m" in out
+
+
+def test_interpretations(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "interp"
+    assert main(["--dsn", db_dsn, "demo", "interpretations", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    # the hand-out rules (versioning.md), worked out by hand for this story
+    rules = "model1.1 0, model2.1 3, model2.2 4, model1.2 2, model3.1 8, model3.2 9"
+    assert f"   revisions by the hand-out rules: {rules}" in out
+    assert f"   revisions tgsis handed out:      {rules}" in out
+    assert "-> model, revision: model3.1, 8" in out                       # the fault appears in model 3.1
+    dilated = re.search(r"-> model, max_dilatancy: (.*)", out)
+    assert dilated is not None and [p.split(", ")[0] for p in dilated.group(1).split("; ")] == ["model2.2", "model3.2"]
+    _replays(db_dsn, "interpretations", out, 2)
+    for label in ("1", "2", "3"):
+        with Image.open(folder / f"interpretations_model{label}.png") as picture:
+            assert picture.format == "PNG"

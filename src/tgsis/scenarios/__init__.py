@@ -30,6 +30,12 @@ def _saltdome(context: Context) -> None:
     run(context)
 
 
+def _interpretations(context: Context) -> None:
+    from tgsis.scenarios.interpretations import run
+
+    run(context)
+
+
 def _cfm(context: Context) -> None:
     raise AssertionError("cfm runs through tgsis.demo.run_demo")  # pragma: no cover - dispatched below
 
@@ -37,6 +43,8 @@ def _cfm(context: Context) -> None:
 SCENARIOS: dict[str, Scenario] = {
     "saltdome": Scenario("saltdome", "a flat salt layer rising into a dome: the shape at any time, from SQL and Python",
                          _saltdome),
+    "interpretations": Scenario("interpretations", "one horizon, several models in versions and named revisions: "
+                                "where the fault first appears, where dilatancy passes a threshold", _interpretations),
     "cfm": Scenario("cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)",
                     _cfm),
 }

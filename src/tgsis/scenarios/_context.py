@@ -48,7 +48,7 @@ class Context:
     files: list[Path] = field(default_factory=list)
     figures: dict[str, Any] = field(default_factory=dict)
 
-    def ask(self, question: str, query: sql.Composed) -> list[tuple[Any, ...]]:
+    def ask(self, question: str, query: sql.SQL | sql.Composed) -> list[tuple[Any, ...]]:
         """Print the question, the statement as psql would take it (values inlined) and its answer rows."""
         text = query.as_string(self.conn)
         with reraise():
