@@ -28,7 +28,8 @@ test: $(VENV)/.installed $(if $(filter embedded,$(TGSIS_PG)),,extension)
 pictures: $(VENV)/.installed
 	rm -rf build/pictures && mkdir -p build/pictures docs/pictures
 	$(BIN)/tgsis demo saltdome --dir build/pictures
-	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif docs/pictures/
+	$(BIN)/tgsis demo synsed --dir build/pictures
+	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png docs/pictures/
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy

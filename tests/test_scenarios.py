@@ -24,13 +24,13 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["saltdome", "interpretations", "cfm"]
+    assert names == ["saltdome", "synsed", "interpretations", "cfm"]
 
 
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, interpretations, saltdome" in err
+    assert "no scenario 'volcano'" in err and "cfm, interpretations, saltdome, synsed" in err
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
@@ -85,4 +85,20 @@ def test_interpretations(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixt
     _replays(db_dsn, "interpretations", out, 2)
     for label in ("1", "2", "3"):
         with Image.open(folder / f"interpretations_model{label}.png") as picture:
+            assert picture.format == "PNG"
+
+
+def test_synsed(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "synsed"
+    assert main(["--dsn", db_dsn, "demo", "synsed", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "horizon A 3 period(s), horizon B 3 period(s), horizon C 2 period(s), horizon D 1 period(s)" in out
+    # at t = 2.5: the fault and the horizons deposited by then (D comes at 3), equal in SQL and Python
+    assert "-> surface, vertices, triangles: fault F, 15, 16; horizon A, 70, 96; horizon B, 70, 96; horizon C, 70, 96" in out
+    assert "equal to SQL to the bit: yes" in out
+    # throw = 60 m/Myr since deposition (A at 0, B at 1, C at 2): older horizons carry more
+    assert "-> horizon, throw_m: horizon A, 150.0; horizon B, 90.0; horizon C, 30.0" in out
+    _replays(db_dsn, "synsed", out, 2)
+    for name in ("synsed_t1.png", "synsed_t2_5.png", "synsed_t4.png"):
+        with Image.open(folder / name) as picture:
             assert picture.format == "PNG"

@@ -30,6 +30,12 @@ def _saltdome(context: Context) -> None:
     run(context)
 
 
+def _synsed(context: Context) -> None:
+    from tgsis.scenarios.synsed import run
+
+    run(context)
+
+
 def _interpretations(context: Context) -> None:
     from tgsis.scenarios.interpretations import run
 
@@ -43,6 +49,8 @@ def _cfm(context: Context) -> None:
 SCENARIOS: dict[str, Scenario] = {
     "saltdome": Scenario("saltdome", "a flat salt layer rising into a dome: the shape at any time, from SQL and Python",
                          _saltdome),
+    "synsed": Scenario("synsed", "horizons deposited while a normal fault slips: the whole structure at t = 2.5 "
+                       "from one SQL query; older horizons carry more throw", _synsed),
     "interpretations": Scenario("interpretations", "one horizon, several models in versions and named revisions: "
                                 "where the fault first appears, where dilatancy passes a threshold", _interpretations),
     "cfm": Scenario("cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)",
