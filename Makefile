@@ -29,7 +29,9 @@ pictures: $(VENV)/.installed
 	rm -rf build/pictures && mkdir -p build/pictures docs/pictures
 	$(BIN)/tgsis demo saltdome --dir build/pictures
 	$(BIN)/tgsis demo synsed --dir build/pictures
-	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png docs/pictures/
+	$(BIN)/tgsis demo river --dir build/pictures
+	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png \
+	    build/pictures/river_t4.png docs/pictures/
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy

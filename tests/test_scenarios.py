@@ -24,20 +24,20 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["saltdome", "synsed", "interpretations", "cfm"]
+    assert names == ["saltdome", "synsed", "river", "interpretations", "cfm"]
 
 
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, interpretations, saltdome, synsed" in err
+    assert "no scenario 'volcano'" in err and "cfm, interpretations, river, saltdome, synsed" in err
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
     """(statement, answer) pairs the report printed."""
     lines = out.splitlines()
     return [(lines[i].strip().rstrip(";"), lines[i + 1].strip().removeprefix("-> "))
-            for i in range(len(lines) - 1) if lines[i].strip().startswith("SELECT ") and lines[i + 1].strip().startswith("->")]
+            for i in range(len(lines) - 1) if lines[i].strip().startswith(("SELECT ", "WITH ")) and lines[i + 1].strip().startswith("->")]
 
 
 def _replays(db_dsn: str, scenario: str, out: str, count: int) -> None:
@@ -100,5 +100,24 @@ def test_synsed(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "-> horizon, throw_m: horizon A, 150.0; horizon B, 90.0; horizon C, 30.0" in out
     _replays(db_dsn, "synsed", out, 2)
     for name in ("synsed_t1.png", "synsed_t2_5.png", "synsed_t4.png"):
+        with Image.open(folder / name) as picture:
+            assert picture.format == "PNG"
+
+
+def test_river(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "river"
+    assert main(["--dsn", db_dsn, "demo", "river", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    # the pinch-outs attached to the basement stayed on it at every geometry instant
+    strayed = re.search(r"at most ([0-9.e+-]+) m off it at any instant", out)
+    assert strayed is not None and float(strayed.group(1)) < 1e-9
+    assert "unit 3 8 vertex-intervals" in out                                   # the later shape as the source too
+    assert "-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240" in out
+    assert "equal to SQL to the bit: yes" in out
+    # which unit lies on which: unit 3 reaches unit 1 between t = 3 and 4
+    assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 2" in out
+    assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 1, unit 2" in out
+    _replays(db_dsn, "river", out, 3)
+    for name in ("river_t1_5.png", "river_t3.png", "river_t4.png"):
         with Image.open(folder / name) as picture:
             assert picture.format == "PNG"

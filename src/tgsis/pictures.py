@@ -23,7 +23,7 @@ import numpy.typing as npt
 from tgsis.errors import InvalidInputError
 from tgsis.mesh import Surface
 
-__all__ = ["displacement", "scene", "animation"]
+__all__ = ["displacement", "scene", "section", "animation"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -141,6 +141,73 @@ def scene(surfaces: Sequence[Surface], path: str | Path, *, title: str,
         if any(c is not None for c in colours):
             figure.colorbar(mappable, ax=ax, shrink=0.6, pad=0.12, label=colour_label)
         ax.set_title(_title(title, exaggeration))
+        figure.savefig(target)
+    finally:
+        plt.close(figure)
+    return target
+
+
+def _cut(surface: Surface, y: float) -> FloatArray:
+    """(k, 2, 2) float64: the segments (x, z) where the plane of constant ``y`` cuts the surface's triangles."""
+    v, tri = surface.vertices, surface.cells
+    d = v[tri, 1] - y                                                     # (m, 3) signed distances
+    segments = []
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        crossing = (d[:, i] <= 0) != (d[:, j] <= 0)
+        w = np.where(crossing, d[:, i] / np.where(crossing, d[:, i] - d[:, j], 1.0), np.nan)
+        a, b = v[tri[:, i]], v[tri[:, j]]
+        segments.append(np.where(crossing[:, None], a + w[:, None] * (b - a), np.nan)[:, [0, 2]])
+    points = np.stack(segments, axis=1)                                   # (m, 3 edges, 2): two of them cross
+    keep = np.isfinite(points[:, :, 0]).sum(axis=1) == 2
+    pairs = points[keep][np.isfinite(points[keep][:, :, 0])].reshape(-1, 2, 2)
+    return np.asarray(pairs, dtype=np.float64)
+
+
+def section(surfaces: Sequence[Surface], path: str | Path, *, y: float, title: str,
+            units: Sequence[str] = ("m", "m"), exaggeration: float = 1.0, size: tuple[float, float] = (9.0, 4.0),
+            dpi: int = 100) -> Path:
+    """Write a PNG of a vertical cross-section: where the plane of constant ``y`` cuts each surface, in x and z.
+
+    Parameters
+    ----------
+    surfaces : sequence of Surface
+        Each drawn as the lines where the plane cuts its triangles, in a colour of its own, named in a legend.
+    y : float
+        The section's position.
+    units : two str
+        Units of x and z.
+    exaggeration : float
+        Vertical exaggeration (the aspect ratio of the axes; said in the title).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    palette = ("0.4", "tab:orange", "tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
+    figure, ax = plt.subplots(figsize=size, dpi=dpi)
+    try:
+        drawn = 0
+        for i, surface in enumerate(surfaces):
+            if not surface.n_vertices or not len(surface.cells):
+                continue
+            cut = _cut(surface, y)
+            if len(cut):
+                ax.add_collection(LineCollection(list(cut), colors=palette[i % len(palette)], linewidths=1.5,
+                                                 label=surface.name or f"surface {i + 1}"))
+                drawn += 1
+        if not drawn:
+            raise InvalidInputError(f"the section at y = {y:g} cuts none of the surfaces")
+        ax.autoscale()
+        ax.set_aspect(exaggeration)
+        ax.set_xlabel(f"x ({units[0]})" if units[0] else "x")
+        ax.set_ylabel(f"z ({units[1]})" if units[1] else "z")
+        ax.legend(loc="best", fontsize="small")
+        ax.set_title(_title(f"{title}, section at y = {y:g}{' ' + units[0] if units[0] else ''}", exaggeration))
+        figure.tight_layout()
         figure.savefig(target)
     finally:
         plt.close(figure)

@@ -36,6 +36,12 @@ def _synsed(context: Context) -> None:
     run(context)
 
 
+def _river(context: Context) -> None:
+    from tgsis.scenarios.river import run
+
+    run(context)
+
+
 def _interpretations(context: Context) -> None:
     from tgsis.scenarios.interpretations import run
 
@@ -51,6 +57,8 @@ SCENARIOS: dict[str, Scenario] = {
                          _saltdome),
     "synsed": Scenario("synsed", "horizons deposited while a normal fault slips: the whole structure at t = 2.5 "
                        "from one SQL query; older horizons carry more throw", _synsed),
+    "river": Scenario("river", "three units deposited and eroded on a fixed basement: the structure at t = 1.5, "
+                      "which unit lies on which at t = 3 and 4", _river),
     "interpretations": Scenario("interpretations", "one horizon, several models in versions and named revisions: "
                                 "where the fault first appears, where dilatancy passes a threshold", _interpretations),
     "cfm": Scenario("cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)",
