@@ -46,7 +46,7 @@ from tgsis.db.features import (
 from tgsis.db.temporal import export_series, get_at, lifespan
 from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
                           NotVersionedError, SkippedObjectWarning)
-from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
+from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
 __all__ = ["main", "build_parser"]
@@ -367,16 +367,44 @@ def cmd_import(args: argparse.Namespace) -> int:
     return 0
 
 
+def _picture_of(conn: Any, ids: Sequence[int], t: float | None, path: str, title: str) -> None:
+    """A PNG of features (at t, or static) in one scene; the first coloured by how far it moved since its start."""
+    from tgsis import pictures
+
+    meshes: list[Surface] = []
+    for fid in ids:
+        mesh = get_at(conn, fid, t) if t is not None else fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
+        if isinstance(mesh, Surface):
+            meshes.append(mesh)
+        elif mesh is not None:
+            raise InvalidInputError(f"feature {fid} is no surface: --png draws surfaces")
+    if not meshes:
+        raise NotFoundError("none of the features exists then: nothing to draw")
+    colour: list[Any] = [None] * len(meshes)
+    span = lifespan(conn, ids[0]) if t is not None else None
+    if span is not None and t is not None:
+        start = get_at(conn, ids[0], span[0])
+        if start is not None and get_at(conn, ids[0], t) is not None and start.vertices.shape == meshes[0].vertices.shape:
+            colour[0] = pictures.displacement(meshes[0], start)      # the same topology period: moved since its start
+    pictures.scene(meshes, path, title=title, colour=colour, colour_label=f"moved since t = {span[0]!r} (m)"
+                   if span is not None else "")
+    _out(f"drew {len(meshes)} surface(s) to {path}")
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     from tgsis import formats
 
     with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
         feature = fetch_feature(conn, fc, args.id)
-    assert feature.mesh is not None
-    formats.write(feature.mesh, args.file, format=args.format)
-    members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
-    _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
+        assert feature.mesh is not None
+        if args.png and not isinstance(feature.mesh, Surface):     # refused before any file is written
+            raise InvalidInputError(f"feature {args.id} is no surface: --png draws surfaces")
+        formats.write(feature.mesh, args.file, format=args.format)
+        members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
+        _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
+        if args.png:
+            _picture_of(conn, [args.id], None, args.png, title=f"feature {args.id} ({fc.name}) {feature.mesh.name or ''}")
     return 0
 
 
@@ -542,9 +570,12 @@ def cmd_at(args: argparse.Namespace) -> int:
         if surface is None:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))
-    target.write(surface, args.file)
-    _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
-         f"{surface.n_cells} triangles, to {args.file}")
+        target.write(surface, args.file)
+        _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
+             f"{surface.n_cells} triangles, to {args.file}")
+        if args.png:
+            _picture_of(conn, [args.id, *args.with_ids], args.time, args.png,
+                        title=f"feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)} (SQL snapshot)")
     return 0
 
 
@@ -576,6 +607,15 @@ def cmd_series(args: argparse.Namespace) -> int:
             raise InvalidInputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from exc
         written = export_series(conn, args.id, folder / f"{stem}.pvd", start=args.start, end=args.end,
                                 steps=args.steps, convention=args.convention)
+    if args.gif:
+        from tgsis import pictures
+
+        shown = [(t, [surface]) for t, surface in written.frames if surface is not None]
+        first = shown[0][1][0] if shown else None
+        same = first is not None and all(s[0].vertices.shape == first.vertices.shape for _, s in shown)
+        pictures.animation(shown, args.gif, title=f"feature {args.id} ({fc.name})", time_unit=fc.time_unit or "",
+                           reference=[first] if same and first is not None else None,
+                           colour_label=f"moved since t = {shown[0][0]!r} (m)" if shown else "")
     for (t, surface), file in zip(written.frames, written.files):
         _out(f"{t!r}\t{file}\t" + (f"{surface.n_vertices} vertices\t{surface.n_cells} triangles" if surface
                                      else "no object (empty grid)"))
@@ -583,6 +623,8 @@ def cmd_series(args: argparse.Namespace) -> int:
     missing = f", {len(written.missing)} without the object" if written.missing else ""
     _out(f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from {times[0]!r} "
          f"to {times[-1]!r}{_unit(fc)}{missing}")
+    if args.gif:
+        _out(f"drew {len(times)} frames to {args.gif}")
     return 0
 
 
@@ -959,6 +1001,7 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("file")
     exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     exp.add_argument("--format", help="file format (default: from the extension)")
+    exp.add_argument("--png", metavar="PNG", help="also draw the feature (a surface) to this PNG file")
     exp.set_defaults(handler=cmd_export)
 
     at = commands.add_parser("at", help="write the surface of a feature at model time T to a file")
@@ -968,6 +1011,10 @@ def build_parser() -> argparse.ArgumentParser:
     at.add_argument("--format", help="file format (default: from the extension)")
     at.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                     help="step convention of a surface known at instants (default: left)")
+    at.add_argument("--png", metavar="PNG", help="also draw the surface at T to this PNG file, coloured by how far "
+                                                  "it moved since its first instant")
+    at.add_argument("--with", dest="with_ids", type=_ID, nargs="+", default=[], metavar="ID",
+                    help="with --png: other features drawn at T in the same scene (the structure at T)")
     at.set_defaults(handler=cmd_at)
 
     series = commands.add_parser("series", help="write a feature over model time as a ParaView .pvd time series")
@@ -981,6 +1028,8 @@ def build_parser() -> argparse.ArgumentParser:
     series.add_argument("--name", help="name of the .pvd file (default: feature_ID)")
     series.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                         help="step convention of a surface known at instants (default: left)")
+    series.add_argument("--gif", metavar="GIF", help="also draw the frames as an animated GIF, coloured by how far "
+                                                     "the surface moved since the first frame")
     series.set_defaults(handler=cmd_series)
 
     co = commands.add_parser("checkout", help="write a feature to a file for editing, recording what it was")
