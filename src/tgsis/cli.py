@@ -408,6 +408,26 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_query(args: argparse.Namespace) -> int:
+    from tgsis.db.temporal import class_property_periods
+
+    if math.isnan(args.value):
+        raise InvalidInputError("VALUE must be a number, got nan", hint="-inf and inf are allowed")
+    with _connect(args) as conn:
+        found = class_property_periods(conn, args.feature_class, args.property, args.op, args.value,
+                                       convention=args.convention)
+    for fid, periods in found.items():
+        if args.first:
+            first = periods[0]
+            _out(f"{fid}\t{first.start!r}" + ("" if first.start_closed else "\t(right after it)"))
+        else:
+            _out(f"{fid}\t" + " ".join(str(p) for p in periods))
+    if not found:
+        print(f"no feature of {args.feature_class} has {args.property} {args.op} {args.value!r} at any time",
+              file=sys.stderr)
+    return 0
+
+
 def cmd_ls(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
@@ -1079,6 +1099,18 @@ def build_parser() -> argparse.ArgumentParser:
     corners.add_argument("--count", type=_INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
     corners.set_defaults(handler=cmd_corners)
+
+    query = commands.add_parser(
+        "query", help="the features of a temporal class whose per-instant property satisfies PROPERTY OP VALUE, and when",
+        epilog="example: tgsis query faults throw '>=' 100 --first   (when each fault's throw first reaches 100)")
+    query.add_argument("feature_class", metavar="CLASS", help="an INSTANTS or EVOLVING feature class")
+    query.add_argument("property", metavar="PROPERTY", help="a numeric per-instant property of the class")
+    query.add_argument("op", metavar="OP", choices=("<", "<=", "=", "<>", ">=", ">"), help="one of < <= = <> >= >")
+    query.add_argument("value", metavar="VALUE", type=float, help="the number compared with (-inf, inf allowed)")
+    query.add_argument("--first", action="store_true", help="only when the condition first holds, per feature")
+    query.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
+                       help="step convention of features known at instants (default: left)")
+    query.set_defaults(handler=cmd_query)
 
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
