@@ -43,7 +43,7 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
-from tgsis.db.temporal import export_series, get_at, lifespan
+from tgsis.db.temporal import export_series, get_at, instants, lifespan
 from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
                           NotVersionedError, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
@@ -405,6 +405,65 @@ def cmd_export(args: argparse.Namespace) -> int:
         _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
         if args.png:
             _picture_of(conn, [args.id], None, args.png, title=f"feature {args.id} ({fc.name}) {feature.mesh.name or ''}")
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from tgsis.db.versions import diff_versions, list_versions, working_version
+
+    with _connect(args) as conn:
+        fc = class_of_feature(conn, args.id)
+        row = conn.execute(
+            "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
+            "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
+            "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s", (args.id,)).fetchone()
+        assert row is not None
+        feature = fetch_feature(conn, fc, args.id) if fc.time_model == "STATIC" else None
+        values = conn.execute(psycopg_sql.SQL("SELECT * FROM {}.{} WHERE _geoid = %s").format(
+            psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable)), (args.id,))
+        names = [d.name for d in values.description or []]
+        properties = {n: v for n, v in zip(names, values.fetchone() or ()) if not n.startswith("_")}
+        span = lifespan(conn, args.id)
+        steps = instants(conn, args.id) if span is not None else []
+        here = working_version(conn)
+        versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
+                                 ).fetchone() == (True,)
+        differs = []
+        if versioned:
+            for version in list_versions(conn):
+                if version.name != here:
+                    changed = [d for d in diff_versions(conn, here, version.name)
+                               if d.objectclass == "feature" and d.objectkey == str(args.id)]
+                    if changed:
+                        added, removed = sum(d.added for d in changed), sum(d.removed for d in changed)
+                        what = ("only there" if removed == 0 and sum(d.changed for d in changed) == 0 and added
+                                else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
+                                else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
+                        differs.append(f"{version.name} ({what})")
+        conn.rollback()
+    name, geotype, nvrtx, ncell, members, timemodel, alive = row[:7]
+    _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), in version {here}")
+    _out(f"  {nvrtx} vertices, {ncell} cells" + (f", {members} members" if members is not None else ""))
+    if row[7] is not None:
+        _out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
+    if span is None:
+        _out("  static: the same at every time")
+    else:
+        topology = [t for t, starts in steps if starts]
+        _out(f"  exists from t = {span[0]!r} to {span[1]!r}{_unit(fc)}" + (" and after (alive)" if span[2] else "")
+             + f"; {len(steps)} instants, topology (re)defined at {', '.join(repr(t) for t in topology)}")
+    if properties:
+        _out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
+    if fc.instant_properties:
+        _out("  per-instant properties: " + ", ".join(p.name for p in fc.instant_properties))
+    mesh = feature.mesh if feature is not None else None
+    if mesh is not None and not isinstance(mesh, GeometryCollection):
+        if mesh.vertex_properties:
+            _out("  vertex properties: " + ", ".join(mesh.vertex_properties))
+        if mesh.cell_properties:
+            _out("  cell properties: " + ", ".join(mesh.cell_properties))
+    if versioned:
+        _out("  versions where it differs from " + here + ": " + (", ".join(differs) if differs else "none"))
     return 0
 
 
@@ -1099,6 +1158,11 @@ def build_parser() -> argparse.ArgumentParser:
     corners.add_argument("--count", type=_INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
     corners.set_defaults(handler=cmd_corners)
+
+    info = commands.add_parser("info", help="what a feature is: class, counts, box, lifespan and instants, properties, "
+                                            "the versions where it differs", epilog="example: tgsis info 3")
+    info.add_argument("id", type=_ID, help="the feature's id")
+    info.set_defaults(handler=cmd_info)
 
     query = commands.add_parser(
         "query", help="the features of a temporal class whose per-instant property satisfies PROPERTY OP VALUE, and when",
