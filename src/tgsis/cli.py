@@ -622,6 +622,30 @@ def cmd_corners(args: argparse.Namespace) -> int:
     return 0
 
 
+def _vertex_path(text: str) -> list[int]:
+    try:
+        path = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"a path is vertex indices separated by commas (e.g. 3,7,12), got {text!r}") from None
+    if len(path) < 2 or min(path) < 0:
+        raise argparse.ArgumentTypeError(f"a path has at least two vertex indices >= 0, got {text!r}")
+    return path
+
+
+def cmd_cut(args: argparse.Namespace) -> int:
+    from tgsis import formats
+    from tgsis.interpolation.cutting import cut_along_paths
+
+    target = formats.format_for(args.output, args.format)  # an unknown format fails before any work
+    surface = _read_surface(args.file, "surface")
+    cut = cut_along_paths(surface, args.path, names=[f"--path {','.join(map(str, p))}" for p in args.path])
+    target.write(cut.surface, args.output)
+    _out(f"cut {args.file} along {len(args.path)} path(s): {surface.n_vertices} vertices, {cut.n_copies} copied "
+         f"({cut.surface.n_vertices} now), {surface.n_cells} triangles; wrote {args.output}")
+    return 0
+
+
 # --------------------------------------------------------------------------- time
 
 
@@ -1175,6 +1199,16 @@ def build_parser() -> argparse.ArgumentParser:
     query.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                        help="step convention of features known at instants (default: left)")
     query.set_defaults(handler=cmd_query)
+
+    cut = commands.add_parser("cut", help="cut a surface along vertex paths (its edges become borders on both sides)",
+                              epilog="example: tgsis cut horizon.ts horizon_cut.ts --path 12,13,14,15")
+    cut.add_argument("file", metavar="FILE", help="a file holding one surface")
+    cut.add_argument("output", metavar="OUTPUT", help="the cut surface is written here")
+    cut.add_argument("--path", type=_vertex_path, action="append", required=True, metavar="V1,V2,...",
+                     help="a cutting path: vertex indices of FILE along interior edges, only its ends on the border "
+                          "(repeat for several paths)")
+    cut.add_argument("--format", help="format of OUTPUT (default: from its extension)")
+    cut.set_defaults(handler=cmd_cut)
 
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
