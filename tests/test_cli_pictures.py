@@ -64,3 +64,24 @@ def test_export_draws_a_surface_and_refuses_points(db_dsn: str, stored: dict[str
                  "--png", str(tmp_path / "points.png")]) == 1
     assert "is no surface: --png draws surfaces" in capsys.readouterr().err
     assert not (tmp_path / "points.png").exists() and not (tmp_path / "points.vs").exists()   # nothing written
+
+
+def test_version_diff_draws_what_moved(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    triangle = Surface([[0, 0, 0], [10, 0, 0], [0, 10, 0]], [[0, 1, 2]], name="t")
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "plain", "SURFACE")
+        fid = tgsis.insert_feature(conn, "plain", triangle)
+        other = tgsis.insert_feature(conn, "plain", triangle)
+        tgsis.enable_feature_versioning(conn)
+        tgsis.create_version(conn, "v1")
+        with tgsis.in_version(conn, "v1"):
+            moved = triangle.copy()
+            moved.vertices[2, 2] = 3.0
+            tgsis.save_feature(conn, "plain", fid, moved)
+            tgsis.delete_feature(conn, "plain", other)
+            conn.commit()
+    assert main(["--dsn", db_dsn, "version", "diff", "DEFAULT", "v1", "--png", str(tmp_path / "diff")]) == 0
+    out = capsys.readouterr().out
+    assert f"drew feature {fid} to" in out and f"drew feature {other} to" in out
+    assert _png(tmp_path / "diff" / f"diff_{fid}.png") == (800, 600)
+    assert _png(tmp_path / "diff" / f"diff_{other}.png") == (800, 600)          # only in DEFAULT: drawn as it was

@@ -840,11 +840,51 @@ def cmd_version_refresh(args: argparse.Namespace) -> int:
     return 0
 
 
+def _feature_as(conn: Any, fid: int, version: str, revision: int | None) -> Mesh | GeometryCollection | None:
+    """Feature ``fid`` as a version (at a revision) sees it, or None where it does not exist there."""
+    context = V.at_revision(conn, revision, version) if revision is not None else V.in_version(conn, version)
+    with context:
+        try:
+            return fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
+        except NotFoundError:
+            return None
+        finally:
+            conn.rollback()
+
+
+def _draw_differences(conn: Any, args: argparse.Namespace, differences: Sequence[Any],
+                      sides: tuple[tuple[str, int | None], tuple[str, int | None]]) -> None:
+    """One PNG per changed surface feature: the new side coloured by how far each vertex moved, or both sides."""
+    from tgsis import pictures
+
+    folder = Path(args.png)
+    folder.mkdir(parents=True, exist_ok=True)
+    for fid in sorted({int(d.objectkey) for d in differences if d.objectclass == "feature"}):
+        old, new = (_feature_as(conn, fid, version, revision) for version, revision in sides)
+        shown = [m for m in (old, new) if isinstance(m, Surface)]
+        if not shown:
+            continue
+        path = folder / f"diff_{fid}.png"
+        title = f"feature {fid}: {args.a} -> {args.b}"
+        if isinstance(old, Surface) and isinstance(new, Surface) and old.vertices.shape == new.vertices.shape:
+            pictures.scene([new], path, title=title, colour=[pictures.displacement(new, old)],
+                           colour_label=f"moved from {args.a} (m)")
+        else:
+            if isinstance(old, Surface):
+                old.name = f"{old.name or fid} in {args.a}"
+            if isinstance(new, Surface):
+                new.name = f"{new.name or fid} in {args.b}"
+            pictures.scene(shown, path, title=title)
+        _out(f"drew feature {fid} to {path}")
+
+
 def cmd_version_diff(args: argparse.Namespace) -> int:
     a, a_rev = _split_version(args.a)
     b, b_rev = _split_version(args.b)
     with _connect(args) as conn:
         differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
+        if args.png:
+            _draw_differences(conn, args, differences, ((a, a_rev), (b, b_rev)))
     for d in differences:
         _out(f"{d.objectclass}\t{d.objectkey}\t{d.table}\t+{d.added}\t-{d.removed}\t~{d.changed}")
     if not differences:
@@ -1260,6 +1300,8 @@ def build_parser() -> argparse.ArgumentParser:
     ver_diff = ver_commands.add_parser("diff", help="objects whose rows differ between two versions or revisions")
     ver_diff.add_argument("a", metavar="A[@REVISION]")
     ver_diff.add_argument("b", metavar="B[@REVISION]")
+    ver_diff.add_argument("--png", metavar="DIR", help="also draw each changed surface feature to DIR/diff_ID.png, "
+                                                       "coloured by how far its vertices moved from A")
     ver_diff.set_defaults(handler=cmd_version_diff)
 
     ver_valid = ver_commands.add_parser("valid", help="set the period in which a version was believed true")
