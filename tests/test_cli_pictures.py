@@ -85,3 +85,26 @@ def test_version_diff_draws_what_moved(db_dsn: str, tmp_path: Path, capsys: pyte
     assert f"drew feature {fid} to" in out and f"drew feature {other} to" in out
     assert _png(tmp_path / "diff" / f"diff_{fid}.png") == (800, 600)
     assert _png(tmp_path / "diff" / f"diff_{other}.png") == (800, 600)          # only in DEFAULT: drawn as it was
+
+
+def test_checkin_draws_the_edit(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from tgsis import formats
+
+    u, v = np.meshgrid(np.arange(6, dtype=float), np.arange(5, dtype=float))
+    idx = np.arange(30).reshape(5, 6)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    grid = Surface(np.stack([u.ravel() * 100, v.ravel() * 100, np.zeros(30)], 1),
+                   np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="grid")
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "plain", "SURFACE")
+        fid = tgsis.insert_feature(conn, "plain", grid)
+        tgsis.enable_feature_versioning(conn)
+    path = tmp_path / "grid.ts"
+    assert main(["--dsn", db_dsn, "checkout", str(fid), str(path)]) == 0
+    edited = formats.read_one(path)
+    edited.vertices[14, 2] = 40.0
+    formats.write(edited, path)
+    png = tmp_path / "edit.png"
+    assert main(["--dsn", db_dsn, "checkin", str(path), "--png", str(png)]) == 0
+    assert f"drew the edit to {png}" in capsys.readouterr().out
+    assert _png(png) == (800, 600)

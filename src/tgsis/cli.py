@@ -542,6 +542,8 @@ def cmd_checkin(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--tolerance must be a finite number >= 0, got {args.tolerance}")
     co = Checkout.load(side)
     edited = formats.read_one(args.file, format=args.format)
+    if args.png and not isinstance(edited, Surface):             # refused before anything is checked in
+        raise InvalidInputError(f"{args.file} holds a {type(edited).__name__}: --png draws surfaces")
     with connect(args.dsn) as conn:  # the check-out's version, whatever version commands work in now
         result = checkin(conn, co, edited, _feature_values(args.set) or None, name=args.name,
                          tolerance=args.tolerance, on_conflict=args.on_conflict, child_version=args.child_version,
@@ -556,6 +558,17 @@ def cmd_checkin(args: argparse.Namespace) -> int:
          f"{counts['cells_removed']} removed, {counts['cells_added']} added")
     _out(f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
          f"{save.rows_updated} updated)")
+    if args.png and isinstance(edited, Surface):
+        from scipy.spatial import cKDTree
+
+        from tgsis import pictures
+
+        # how far each vertex lies from the checked-out shape: 0 for the ones kept
+        moved = cKDTree(co.mesh.vertices).query(edited.vertices)[0]
+        moved[save.diff.vertex_map >= 0] = 0.0
+        pictures.scene([edited], args.png, colour=[moved], colour_label="moved from the check-out (m)",
+                       title=f"feature {save.feature_id} checked in to {save.version}")
+        _out(f"  drew the edit to {args.png}")
     if result.checkout is not None and not result.conflict:
         result.checkout.save(side)
     elif result.conflict:
@@ -1200,6 +1213,8 @@ def build_parser() -> argparse.ArgumentParser:
     ci.add_argument("--no-keep", dest="no_keep", action="store_true",
                     help="do not update the check-out record (by default it follows the new state, so that the "
                          "file can be edited and checked in again)")
+    ci.add_argument("--png", metavar="PNG", help="also draw the edited surface, coloured by how far each vertex lies "
+                                                  "from the checked-out shape (0 for the kept ones)")
     ci.set_defaults(handler=cmd_checkin)
 
     interp = commands.add_parser("interpolate", help="the surface evolving from SOURCE (at T0) to TARGET (at T1): "
