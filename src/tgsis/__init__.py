@@ -139,7 +139,9 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
     from tgsis.db.temporal import (
         add_instant,
+        append_period,
         delete_instant,
+        delete_period,
         export_series,
         features_at,
         fetch_evolving,
@@ -231,7 +233,9 @@ _LAZY: dict[str, str] = {
     "compare_stored": "tgsis.db.compare",
     "compare_versions": "tgsis.db.compare",
     "add_instant": "tgsis.db.temporal",
+    "append_period": "tgsis.db.temporal",
     "delete_instant": "tgsis.db.temporal",
+    "delete_period": "tgsis.db.temporal",
     "export_series": "tgsis.db.temporal",
     "features_at": "tgsis.db.temporal",
     "fetch_evolving": "tgsis.db.temporal",
@@ -368,6 +372,8 @@ __all__ = [
     "TopologyPeriod",
     "add_instant",
     "delete_instant",
+    "append_period",
+    "delete_period",
     "instants",
     "get_at",
     "surfaces_at",

@@ -273,6 +273,60 @@ def _period_columns(fc: FeatureClass, surface: EvolvingSurface,
             for i, p in enumerate(surface.periods)]
 
 
+def _copy_periods(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: int, periods: Sequence[TopologyPeriod],
+                  cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], first_node: int, first_triangle: int) -> None:
+    """COPY the rows of model-3 topology periods (instants, nodes, triangles, 4D vertices, vertex or cell properties).
+
+    Nodes and triangles are numbered on from ``first_node`` and ``first_triangle``
+    through the periods, so that ids stay unique in the feature.
+    """
+    starts = [p.start for p in periods]
+    g = [len(p.times) for p in periods]
+    n = [p.n_nodes for p in periods]
+    m = [p.n_triangles for p in periods]
+    node_offsets = first_node + np.cumsum([0, *n[:-1]])
+    triangle_offsets = first_triangle + np.cumsum([0, *m[:-1]])
+
+    def full(count: int) -> npt.NDArray[np.int64]:
+        return np.full(count, geoid, dtype=np.int64)
+
+    storage.copy(conn, "tgsis", "timem", [("geoid", full(len(periods)), "int8"),
+                                          ("timem", np.asarray(starts, dtype=np.float64), "float8")])
+    storage.copy(conn, "tgsis", "timet", [("geoid", full(sum(g)), "int8"),
+                                          ("timem", np.repeat(starts, g).astype(np.float64), "float8"),
+                                          ("timet", _concat([p.times for p in periods]), "float8")])
+    storage.copy(conn, "tgsis", "node", [("geoid", full(sum(n)), "int8"),
+                                         ("timem", np.repeat(starts, n).astype(np.float64), "float8"),
+                                         ("nodeid", first_node + np.arange(sum(n), dtype=np.int64), "int8")])
+    triangles = _concat([p.triangles + off for p, off in zip(periods, node_offsets.tolist())])
+    storage.copy(conn, "tgsis", "d4dtrgl", [("geoid", full(sum(m)), "int8"),
+                                            ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
+                                            ("trglid", first_triangle + np.arange(sum(m), dtype=np.int64), "int8"),
+                                            *((f"nodeid{j + 1}", triangles[:, j], "int8") for j in range(3))])
+    # per period and geometry instant, every node: g_i * n_i rows
+    samples = [gi * ni for gi, ni in zip(g, n)]
+    xyz = _concat([p.positions.reshape(-1, 3) for p in periods])
+    storage.copy(conn, "tgsis", "d4dvrtx", [
+        ("geoid", full(sum(samples)), "int8"),
+        ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
+        ("timet", _concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
+        ("nodeid", _concat([np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
+                            for p, off in zip(periods, node_offsets.tolist())]), "int8"),
+        ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+    if fc.cell_properties:
+        per = n if fc.alignment == "VERTEX" else m
+        offsets = node_offsets if fc.alignment == "VERTEX" else triangle_offsets
+        rows = [gi * ci for gi, ci in zip(g, per)]
+        storage.copy(conn, fc.schema, fc.cellprotable, [
+            ("_geoid", full(sum(rows)), "int8"),
+            ("_timem", np.repeat(starts, rows).astype(np.float64), "float8"),
+            ("_timet", _concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
+            ("_idx", _concat([np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
+                              for p, c, off in zip(periods, per, offsets.tolist())]), "int8"),
+            *((prop.name, _concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
+              for prop in fc.cell_properties)])
+
+
 def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: EvolvingSurface,
                     properties: Mapping[str, Any] | None = None, *, name: str | None = None,
                     drop_extra_properties: bool = False) -> int:
@@ -304,12 +358,8 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
     fc = _temporal_class(conn, feature_class, "EVOLVING")
     cell_values = _period_columns(fc, surface, drop_extra_properties)
     periods = surface.periods
-    starts = [p.start for p in periods]
-    g = [len(p.times) for p in periods]
     n = [p.n_nodes for p in periods]
     m = [p.n_triangles for p in periods]
-    node_offsets = np.cumsum([0, *n[:-1]])
-    triangle_offsets = np.cumsum([0, *m[:-1]])
     instant_rows = [row for p in periods for row in _instant_rows(fc, dict(p.properties), len(p.times))]
     with reraise(), conn.transaction():
         storage = _Storage.of(conn)
@@ -318,51 +368,79 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
             conn, "EVOLVING", name if name is not None else surface.name,
             _bounds(_concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
             surface.color)
-
-        def full(count: int) -> npt.NDArray[np.int64]:
-            return np.full(count, geoid, dtype=np.int64)
-
-        storage.copy(conn, "tgsis", "timem", [("geoid", full(len(periods)), "int8"),
-                                              ("timem", np.asarray(starts, dtype=np.float64), "float8")])
-        storage.copy(conn, "tgsis", "timet", [("geoid", full(sum(g)), "int8"),
-                                              ("timem", np.repeat(starts, g).astype(np.float64), "float8"),
-                                              ("timet", _concat([p.times for p in periods]), "float8")])
-        storage.copy(conn, "tgsis", "node", [("geoid", full(sum(n)), "int8"),
-                                             ("timem", np.repeat(starts, n).astype(np.float64), "float8"),
-                                             ("nodeid", np.arange(sum(n), dtype=np.int64), "int8")])
-        triangles = _concat([p.triangles + off for p, off in zip(periods, node_offsets.tolist())])
-        storage.copy(conn, "tgsis", "d4dtrgl", [("geoid", full(sum(m)), "int8"),
-                                                ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
-                                                ("trglid", np.arange(sum(m), dtype=np.int64), "int8"),
-                                                *((f"nodeid{j + 1}", triangles[:, j], "int8") for j in range(3))])
-        # per period and geometry instant, every node: g_i * n_i rows
-        samples = [gi * ni for gi, ni in zip(g, n)]
-        xyz = _concat([p.positions.reshape(-1, 3) for p in periods])
-        storage.copy(conn, "tgsis", "d4dvrtx", [
-            ("geoid", full(sum(samples)), "int8"),
-            ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
-            ("timet", _concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
-            ("nodeid", _concat([np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
-                                for p, off in zip(periods, node_offsets.tolist())]), "int8"),
-            ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
-        if fc.cell_properties:
-            per = n if fc.alignment == "VERTEX" else m
-            offsets = node_offsets if fc.alignment == "VERTEX" else triangle_offsets
-            rows = [gi * ci for gi, ci in zip(g, per)]
-            storage.copy(conn, fc.schema, fc.cellprotable, [
-                ("_geoid", full(sum(rows)), "int8"),
-                ("_timem", np.repeat(starts, rows).astype(np.float64), "float8"),
-                ("_timet", _concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
-                ("_idx", _concat([np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
-                                  for p, c, off in zip(periods, per, offsets.tolist())]), "int8"),
-                *((prop.name, _concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
-                  for prop in fc.cell_properties)])
+        _copy_periods(conn, storage, fc, geoid, periods, cell_values, 0, 0)
         keys = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
         _insert_instant_properties(conn, fc, geoid, keys, instant_rows, ["_timem", "_timet"])
         _insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d topology periods, %d nodes, %d triangles", fc.name, geoid, len(periods),
              sum(n), sum(m))
     return geoid
+
+
+def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int, period: TopologyPeriod, *,
+                  drop_extra_properties: bool = False) -> None:
+    """Append a topology period to an evolving feature, after its last one (one transaction).
+
+    The new period must start at the feature's last geometry instant (periods
+    follow each other: :class:`~tgsis.temporal.EvolvingSurface`); its nodes
+    and triangles are numbered on after the feature's.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+        The feature's EVOLVING class.
+    feature_id : int
+    period : TopologyPeriod
+        With the class's vertex (or cell) and per-instant properties.
+    drop_extra_properties : bool
+        Ignore properties the class does not store instead of failing.
+
+    Raises
+    ------
+    NotFoundError, InvalidInputError, InvalidPropertyError
+        Nothing is written.
+    """
+    fc = _temporal_class(conn, feature_class, "EVOLVING")
+    cell_values = _period_columns(fc, EvolvingSurface([period]), drop_extra_properties)
+    instant_rows = _instant_rows(fc, dict(period.properties), len(period.times))
+    with reraise(), conn.transaction():
+        storage = _Storage.of(conn)
+        storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
+        conn.execute("SELECT tgsis.temporal_geometry(%s, 'EVOLVING')", (feature_id,))
+        if conn.execute(sql.SQL("SELECT FROM {}.{} WHERE _geoid = %s").format(
+                sql.Identifier(fc.schema), sql.Identifier(fc.featuretable)), (feature_id,)).fetchone() is None:
+            raise NotFoundError(f"feature {feature_id} is not a feature of class {fc.name}")
+        row = conn.execute(
+            "SELECT (SELECT max(timet) FROM tgsis.timet WHERE geoid = %(g)s), "
+            "(SELECT coalesce(max(nodeid) + 1, 0) FROM tgsis.node WHERE geoid = %(g)s), "
+            "(SELECT coalesce(max(trglid) + 1, 0) FROM tgsis.d4dtrgl WHERE geoid = %(g)s)", {"g": feature_id}).fetchone()
+        assert row is not None
+        if row[0] is None or float(row[0]) != period.start:
+            raise InvalidInputError(
+                f"the new topology period of feature {feature_id} starts at {period.start!r}, not at its last geometry "
+                f"instant {row[0]!r}", hint="periods follow each other: start the new one where the last one ends")
+        _copy_periods(conn, storage, fc, feature_id, [period], cell_values, int(row[1]), int(row[2]))
+        _insert_instant_properties(conn, fc, feature_id, [(period.start, float(t)) for t in period.times.tolist()],
+                                   instant_rows, ["_timem", "_timet"])
+        conn.execute("SELECT tgsis.refresh_geometry(%s)", (feature_id,))
+
+
+def delete_period(conn: Conn, feature_id: int, start: float) -> bool:
+    """Remove the first or last topology period of an evolving feature (``tgsis.delete_period``).
+
+    Returns False when no period of it starts at ``start``.
+
+    Raises
+    ------
+    NotFoundError
+        No such feature.
+    InUseError
+        The only period (delete the feature), or one between others (it would leave a gap).
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT tgsis.delete_period(%s, %s)", (feature_id, check_time(start))).fetchone()
+    return bool(row and row[0])
 
 
 # --------------------------------------------------------------------------- snapshots
