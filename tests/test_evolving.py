@@ -223,3 +223,26 @@ def test_bad_convention_is_an_error_whatever_the_model_and_t(tx: Conn, faults: t
         with pytest.raises(psycopg.Error, match="convention 'middle'") as raised, tx.transaction():
             tx.execute(f"SELECT * FROM tgsis.{function}(%s, %s, 'middle')", (geoid, t))
         assert raised.value.sqlstate == "TG100"
+
+
+def test_a_constant_surface_and_a_chain_of_parts() -> None:
+    """EvolvingSurface.constant and .chain: what per-interval interpolations and fixed surfaces are built from."""
+    from tgsis.mesh import Surface
+
+    base = Surface([[0, 0, 0], [1, 0, 0], [0, 1, 1]], [[0, 1, 2]], vertex_properties={"p": [1.0, 2.0, 3.0]}, name="b")
+    still = EvolvingSurface.constant(base, 1.0, 4.0, alive=True)
+    at = still.at(2.5)
+    assert at is not None and np.array_equal(at.vertices, base.vertices) and still.alive and still.name == "b"
+    assert np.array_equal(still.periods[0].vertex_properties["p"], [[1.0, 2.0, 3.0]] * 2)
+    moved = base.vertices + [0, 0, 1]
+    part1 = EvolvingSurface([TopologyPeriod([0.0, 1.0], base.cells, np.stack([base.vertices, moved]))], name="h")
+    part2 = EvolvingSurface([TopologyPeriod([1.0, 2.0], base.cells, np.stack([moved, moved + 1]))], alive=True)
+    whole = EvolvingSurface.chain([part1, part2])
+    assert [p.start for p in whole.periods] == [0.0, 1.0] and whole.alive and whole.name == "h"
+    mid = whole.at(1.5)
+    assert mid is not None and np.allclose(mid.vertices, moved + 0.5)
+    with pytest.raises(tgsis.InvalidInputError, match="part 0 ends at 1.0 but part 1 starts at 2.0"):
+        EvolvingSurface.chain([part1, EvolvingSurface([TopologyPeriod([2.0, 3.0], base.cells,
+                                                                      np.stack([moved, moved]))])])
+    with pytest.raises(tgsis.InvalidInputError, match="at least one"):
+        EvolvingSurface.chain([])

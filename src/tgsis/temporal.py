@@ -322,6 +322,55 @@ class EvolvingSurface:
         self.color = _as_color(color)
         self._starts = np.array([p.start for p in self.periods])
 
+    @classmethod
+    def constant(cls, surface: Surface, start: float, end: float, *, alive: bool = False,
+                 name: str | None = None) -> EvolvingSurface:
+        """A surface that stays as it is from ``start`` to ``end`` (one period, two geometry instants).
+
+        Vertex and cell properties of ``surface`` are carried, constant too.
+
+        Parameters
+        ----------
+        surface : Surface
+        start, end : float
+            ``start < end``.
+        alive : bool
+            Whether it exists after ``end``.
+        """
+        positions = np.stack([surface.vertices, surface.vertices])
+        props = {k: np.stack([np.asarray(v), np.asarray(v)]) for k, v in surface.vertex_properties.items()}
+        cells = {k: np.stack([np.asarray(v), np.asarray(v)]) for k, v in surface.cell_properties.items()}
+        return cls([TopologyPeriod([start, end], surface.cells, positions, vertex_properties=props,
+                                   cell_properties=cells)], alive=alive, name=name if name is not None else surface.name)
+
+    @classmethod
+    def chain(cls, parts: Sequence[EvolvingSurface], *, alive: bool | None = None,
+              name: str | None = None) -> EvolvingSurface:
+        """One evolving surface over the whole life of consecutive ones (e.g. per-interval interpolations).
+
+        Parameters
+        ----------
+        parts : sequence of EvolvingSurface
+            In time order, each ending where the next starts.
+        alive : bool, optional
+            Default: the last part's.
+        name : str, optional
+            Default: the first part's.
+
+        Raises
+        ------
+        InvalidInputError
+            No parts, or parts that do not follow each other (named by position).
+        """
+        if not parts:
+            raise InvalidInputError("chaining needs at least one evolving surface")
+        for i, (a, b) in enumerate(zip(parts, parts[1:])):
+            if a.end != b.start:
+                raise InvalidInputError(f"part {i} ends at {a.end!r} but part {i + 1} starts at {b.start!r}",
+                                        hint="chain parts that follow each other: each starts where the one before ends")
+        return cls([p for part in parts for p in part.periods], alive=parts[-1].alive if alive is None else alive,
+                   name=name if name is not None else parts[0].name, color=parts[0].color)
+
     @property
     def start(self) -> float:
         """The first topology instant."""

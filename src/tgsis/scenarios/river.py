@@ -34,7 +34,7 @@ from tgsis.interpolation.interpolate import interpolate
 from tgsis.interpolation.setup import Attachment
 from tgsis.mesh import Surface
 from tgsis.scenarios._context import Context
-from tgsis.temporal import EvolvingSurface, TopologyPeriod
+from tgsis.temporal import EvolvingSurface
 
 WIDTH, LENGTH = 5000.0, 2000.0
 TIME_UNIT = "kyr"
@@ -111,7 +111,7 @@ def evolving_unit(unit: str, floor: Surface, nx: int, ny: int) -> tuple[Evolving
     known = sorted(UNITS[unit])
     corners = (0, nx - 1, nx * ny - 1, nx * (ny - 1))
     edges = [j * nx for j in range(ny)] + [j * nx + nx - 1 for j in range(ny)]
-    periods: list[TopologyPeriod] = []
+    parts: list[EvolvingSurface] = []
     attached, strayed = 0, 0.0
     for t0, t1 in zip(known, known[1:]):
         earlier, later = unit_top(unit, t0, nx, ny), unit_top(unit, t1, nx, ny)
@@ -124,11 +124,11 @@ def evolving_unit(unit: str, floor: Surface, nx: int, ny: int) -> tuple[Evolving
                                    attachments=tuple(Attachment(v, ("basement",)) for v in glued),
                                    steps=4, tolerance=1.0)
         result = interpolate(source, target, setup, ts, tt, name=unit, surfaces={"basement": floor})
-        periods += result.evolving.periods
+        parts.append(result.evolving)
         if glued:
             path = result.trajectories[:, glued]                        # (m, k, 3): every geometry instant
             strayed = max(strayed, float(np.abs(path[..., 2] - basement_z(path[..., 0])).max()))
-    return EvolvingSurface(periods, alive=True, name=unit), attached, strayed
+    return EvolvingSurface.chain(parts, alive=True, name=unit), attached, strayed
 
 
 def _lies_on(t: float) -> sql.Composed:
@@ -169,9 +169,7 @@ def run(context: Context) -> None:
                               description="a fixed basement and the tops of three units deposited and eroded on it")
     out(f"1. known at t = {', '.join(f'{t:g}' for t in TIMES)} {TIME_UNIT}: "
         + "; ".join(f"{u} from t = {min(k):g}" for u, k in UNITS.items()) + "; unit 1 partly eroded by t = 2")
-    evolving = {"basement": EvolvingSurface([TopologyPeriod([TIMES[0], TIMES[-1]], floor.cells,
-                                                            np.stack([floor.vertices, floor.vertices]))],
-                                            alive=True, name="basement")}
+    evolving = {"basement": EvolvingSurface.constant(floor, TIMES[0], TIMES[-1], alive=True)}
     glued, strayed = {}, 0.0
     for unit in UNITS:
         evolving[unit], glued[unit], off = evolving_unit(unit, floor, nx, ny)

@@ -81,15 +81,15 @@ def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, floa
         shape, _ = horizon_at(name, known[0], nx, ny)
         return EvolvingSurface([TopologyPeriod([known[0]], shape.cells, shape.vertices[None])], alive=True,
                                name=shape.name), 0.0
-    periods: list[TopologyPeriod] = []
+    parts: list[EvolvingSurface] = []
     worst = 0.0
     for t0, t1 in zip(known, known[1:]):
         (source, source_corners), (target, target_corners) = horizon_at(name, t0, nx, ny), horizon_at(name, t1, nx, ny)
         setup = InterpolationSetup(tuple(source_corners), tuple(target_corners), steps=3, tolerance=1.0)
         result = interpolate(source, target, setup, t0, t1, name=source.name)
-        periods += result.evolving.periods
+        parts.append(result.evolving)
         worst = max(worst, float(result.error))
-    return EvolvingSurface(periods, alive=True, name=f"horizon {name}"), worst
+    return EvolvingSurface.chain(parts, alive=True, name=f"horizon {name}"), worst
 
 
 def run(context: Context) -> None:
@@ -105,9 +105,7 @@ def run(context: Context) -> None:
         worst = max(worst, error)
         evolving[surface.name or name] = surface
     f = fault(ny)
-    evolving[f.name or "fault"] = EvolvingSurface([TopologyPeriod([KNOWN[0], KNOWN[-1]], f.cells,
-                                                                  np.stack([f.vertices, f.vertices]))],
-                                                  alive=True, name=f.name)
+    evolving[f.name or "fault"] = EvolvingSurface.constant(f, KNOWN[0], KNOWN[-1], alive=True)
     for label, surface in evolving.items():
         ids[label] = insert_feature(conn, fc, surface)
     conn.commit()
