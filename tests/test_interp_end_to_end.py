@@ -184,3 +184,26 @@ def test_the_source_and_target_times_must_differ() -> None:
     for t0, t1 in ((1.0, 1.0), (float("nan"), 1.0)):
         with pytest.raises(InterpolationSetupError, match="two different finite times"):
             interpolate(source, target, setup, t0, t1)
+
+
+def test_vertex_properties_travel_with_the_vertices() -> None:
+    """A property both meshes carry goes linearly from the source's value to the target's, along each trajectory."""
+    flat, (dome, corners) = _flat(21, 11), _dome()
+    source = tgsis.Surface(flat.vertices, flat.cells, vertex_properties={"age": np.zeros(flat.n_vertices),
+                                                                         "xpos": flat.vertices[:, 0],
+                                                                         "only_here": np.ones(flat.n_vertices)})
+    target = tgsis.Surface(dome.vertices, dome.cells, vertex_properties={"age": np.full(dome.n_vertices, 10.0),
+                                                                         "xpos": dome.vertices[:, 0]})
+    setup = InterpolationSetup(tuple(_flat_corners(21, 11)), tuple(corners), steps=5, tolerance=0.05)
+    result = interpolate(source, target, setup, 0.0, 1.0, alive=True)
+    assert result.dropped_properties == ("only_here",) and result.evolving.alive
+    period = result.evolving.periods[0]
+    assert set(period.vertex_properties) == {"age", "xpos"}
+    # a constant on each side: exactly 10 s at step s
+    assert np.allclose(period.vertex_properties["age"], 10.0 * np.linspace(0, 1, 5)[:, None], atol=1e-12)
+    # a linear field is reproduced exactly by the barycentric transfer: x at the source, x of the compatible target
+    assert np.allclose(period.vertex_properties["xpos"][0], result.source.vertices[:, 0], atol=1e-9)
+    assert np.allclose(period.vertex_properties["xpos"][-1], result.target.vertices[:, 0], atol=1e-6)
+    # and backwards in time, the values run the other way
+    back = interpolate(source, target, setup, 1.0, 0.0).evolving.periods[0]
+    assert np.allclose(back.vertex_properties["age"], period.vertex_properties["age"][::-1])

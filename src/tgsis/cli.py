@@ -603,7 +603,7 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
-    result = interpolate(source, target, setup, args.t0, args.t1, name=name)
+    result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive)
     _out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
          f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
          f"error to the target {result.error:.3g}")
@@ -1228,6 +1228,8 @@ def build_parser() -> argparse.ArgumentParser:
     interp.add_argument("--class", dest="feature_class", help="EVOLVING feature class to store it in "
                                                                "(without: computed and previewed only)")
     interp.add_argument("--name", help="feature name (default: the source's)")
+    interp.add_argument("--alive", action="store_true",
+                        help="the surface goes on existing after its last instant, in its last shape")
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
     interp.add_argument("--frames", type=_INT4, default=5, help="number of preview instants (default 5)")
     interp.set_defaults(handler=cmd_interpolate)

@@ -26,7 +26,7 @@ from tgsis.interpolation.projection import ControllingSurface
 from tgsis.interpolation.setup import InterpolationSetup
 from tgsis.interpolation.trajectories import evolving_surface, vertex_trajectories
 from tgsis.mesh import Surface
-from tgsis.temporal import EvolvingSurface
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 __all__ = ["Interpolation", "interpolate", "average_shape"]
 
@@ -55,6 +55,8 @@ class Interpolation:
         Largest error between a compatible target patch and its target patch.
     timings : dict of str to float
         Seconds spent per stage.
+    dropped_properties : tuple of str
+        Vertex properties of only one of the two meshes: not interpolated.
     """
 
     source: Surface
@@ -63,6 +65,7 @@ class Interpolation:
     evolving: EvolvingSurface
     error: float
     timings: dict[str, float] = field(default_factory=dict)
+    dropped_properties: tuple[str, ...] = ()
 
 
 def _patch_arrays(mesh: Surface, patch: Patch) -> tuple[FloatArray, IntArray, IntArray, IntArray]:
@@ -93,9 +96,64 @@ def _controlling_surfaces(setup: InterpolationSetup,
     return surfaces
 
 
+def _values_at(mesh: Surface, values: Mapping[str, npt.NDArray[np.generic]], points: FloatArray,
+               names: list[str]) -> dict[str, FloatArray]:
+    """Vertex property values of ``mesh`` at points on (or next to) it, barycentric in the nearest triangle.
+
+    The candidates are the triangles whose centroids are nearest; of those,
+    the one the point projects into (else the closest after clamping its
+    barycentric coordinates onto the triangle) gives the weights.
+    """
+    from scipy.spatial import cKDTree
+
+    corners = mesh.vertices[mesh.cells]                                   # (m, 3, 3)
+    k = min(8, len(mesh.cells))
+    _, nearest = cKDTree(corners.mean(axis=1)).query(points, k=k)
+    nearest = np.asarray(nearest).reshape(len(points), k)
+    a, b, c = (corners[nearest, i] for i in range(3))                     # (p, k, 3) each
+    e0, e1, d = b - a, c - a, points[:, None, :] - a
+    d00, d01, d11 = (e0 * e0).sum(-1), (e0 * e1).sum(-1), (e1 * e1).sum(-1)
+    d20, d21 = (d * e0).sum(-1), (d * e1).sum(-1)
+    det = np.where(np.abs(d00 * d11 - d01 * d01) > 0, d00 * d11 - d01 * d01, 1.0)
+    v = (d11 * d20 - d01 * d21) / det
+    w = (d00 * d21 - d01 * d20) / det
+    weights = np.stack([1.0 - v - w, v, w], axis=-1)                      # (p, k, 3)
+    clamped = np.clip(weights, 0.0, None)
+    clamped /= np.maximum(clamped.sum(-1, keepdims=True), 1e-300)
+    foot = (clamped[..., :, None] * np.stack([a, b, c], axis=-2)).sum(-2)
+    best = np.argmin(((points[:, None, :] - foot) ** 2).sum(-1), axis=1)   # (p,)
+    rows = np.arange(len(points))
+    chosen, triangle = clamped[rows, best], nearest[rows, best]
+    ids = mesh.cells[triangle]
+    return {name: np.asarray((chosen * np.asarray(values[name], dtype=np.float64)[ids]).sum(-1), dtype=np.float64)
+            for name in names}
+
+
+def _carried_properties(source: Surface, target: Surface, all_vertices: FloatArray, positions: FloatArray,
+                        steps: int) -> tuple[dict[str, FloatArray], tuple[str, ...]]:
+    """(m, n) values of the vertex properties both meshes have, linear along each trajectory; and the others' names.
+
+    A vertex starts with the source's value (its own, or for a vertex the
+    refinement added, the source's value where it lies) and ends with the
+    target's value where its compatible position lies on the target.
+    """
+    names = sorted(set(source.vertex_properties) & set(target.vertex_properties))
+    dropped = tuple(sorted(set(source.vertex_properties) ^ set(target.vertex_properties)))
+    if not names:
+        return {}, dropped
+    n = source.n_vertices
+    start = {name: np.asarray(source.vertex_properties[name], dtype=np.float64) for name in names}
+    if len(all_vertices) > n:
+        extra = _values_at(source, source.vertex_properties, all_vertices[n:], names)
+        start = {name: np.concatenate([start[name], extra[name]]) for name in names}
+    end = _values_at(target, target.vertex_properties, positions, names)
+    s = np.linspace(0.0, 1.0, steps)[:, None]
+    return {name: (1.0 - s) * start[name][None] + s * end[name][None] for name in names}, dropped
+
+
 def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0: float, t1: float, *,
                 name: str | None = None,
-                surfaces: Mapping[str, Surface] | None = None) -> Interpolation:
+                surfaces: Mapping[str, Surface] | None = None, alive: bool = False) -> Interpolation:
     """The surface evolving from ``source`` at ``t0`` to ``target`` at ``t1`` under the set-up's constraints.
 
     Parameters
@@ -112,6 +170,13 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         Name of the evolving surface.
     surfaces : mapping of str to Surface, optional
         The controlling surfaces by name (default: read from the set-up's files).
+    alive : bool
+        Whether the evolving surface exists after its last instant (keeping its last shape).
+
+    Vertex properties that both meshes carry travel with the vertices: each
+    goes linearly from the source's value to the target's value where its
+    compatible position lies (barycentric in the closest target triangle);
+    properties of one mesh only are left out (``dropped_properties``).
 
     Returns
     -------
@@ -180,14 +245,19 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     samples = vertex_trajectories(all_vertices, positions, cells, setup.steps, attachments or None,
                                   controls=list(setup.source_controls))
     lap("trajectories")
+    carried, dropped = _carried_properties(source, target, all_vertices, positions, setup.steps)
     # samples run from the source (t0) to the target (t1); an evolving surface runs forward in time
-    evolving = (evolving_surface(cells, samples, t0, t1, name=name) if t0 < t1
-                else evolving_surface(cells, samples[::-1].copy(), t1, t0, name=name))
+    forward = evolving_surface(cells, samples, min(t0, t1), max(t0, t1), name=name, alive=alive)
+    order = slice(None) if t0 < t1 else slice(None, None, -1)
+    period = forward.periods[0]
+    evolving = EvolvingSurface([TopologyPeriod(period.times, cells, samples[order].copy(),
+                                               vertex_properties={k: v[order].copy() for k, v in carried.items()})],
+                               name=name, alive=alive)
     lap("evolving")
     log.info("interpolated %d vertices, %d triangles, %d patches, m = %d: %s", len(all_vertices), len(cells),
              len(pairing.pairs), setup.steps, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return Interpolation(Surface(all_vertices, cells, name=source.name), Surface(positions, cells, name=target.name),
-                         samples, evolving, error, timings)
+                         samples, evolving, error, timings, dropped)
 
 
 def _named_surface(surfaces: Mapping[str, Surface] | None, path: str, setup: InterpolationSetup) -> Surface:
