@@ -36,16 +36,14 @@ from typing import Any
 
 import numpy as np
 import psycopg
-from psycopg import sql
-from psycopg.conninfo import make_conninfo
 
 from tgsis.db import checkin as C
 from tgsis.db import features as F
 from tgsis.db import temporal as T
 from tgsis.db import versions as V
-from tgsis.db.connect import connect, resolve_target
+from tgsis.db.connect import resolve_target
 from tgsis.db.install import install, installed_version
-from tgsis.errors import CheckoutConflictError, InvalidInputError, MissingPrivilegeError, reraise
+from tgsis.errors import CheckoutConflictError, InvalidInputError
 from tgsis.mesh import Mesh, Surface
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
@@ -113,18 +111,9 @@ def _load_releases() -> tuple[str, list[list[_Fault]]]:
 
 def _demo_conninfo(dsn: str | None) -> str:
     """A fresh, empty database ``tgsis_demo`` on the target server; return its conninfo."""
-    with connect(dsn, autocommit=True) as admin:
-        base = admin.info.dsn
-        try:
-            with reraise():
-                admin.execute(sql.SQL("DROP DATABASE IF EXISTS {} WITH (FORCE)").format(sql.Identifier(DEMO_DATABASE)))
-                admin.execute(sql.SQL("CREATE DATABASE {}").format(sql.Identifier(DEMO_DATABASE)))
-        except MissingPrivilegeError as exc:
-            raise MissingPrivilegeError(
-                f"the demo needs a database of its own ({DEMO_DATABASE}) and this role may not create one",
-                hint="run it without --dsn (tgsis starts a local server), or with a DSN of a role that has CREATEDB",
-            ) from exc
-    return make_conninfo(base, dbname=DEMO_DATABASE)
+    from tgsis.scenarios._context import fresh_database
+
+    return fresh_database(dsn, DEMO_DATABASE)
 
 
 def _store_release(conn: psycopg.Connection[Any], faults: Sequence[_Fault], release: str) -> dict[str, int]:

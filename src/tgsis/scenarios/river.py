@@ -28,7 +28,7 @@ from psycopg import sql
 
 from tgsis import pictures
 from tgsis.db.features import create_feature_class, insert_feature
-from tgsis.db.temporal import get_at, surfaces_at
+from tgsis.db.temporal import get_at
 from tgsis.interpolation import InterpolationSetup
 from tgsis.interpolation.interpolate import interpolate
 from tgsis.interpolation.setup import Attachment
@@ -184,19 +184,7 @@ def run(context: Context) -> None:
     context.figure("pinch_out_off_basement_m", strayed)
 
     out(f"2. the structure at t = {QUERY_TIME:g} {TIME_UNIT}")
-    rows = context.ask("every surface that exists then, from one query", sql.SQL(
-        "SELECT g.geoname AS surface, array_length(s.vertices, 1) AS vertices, array_length(s.triangles, 1) AS triangles "
-        "FROM tgsis.surfaces_at('river', {}) s JOIN tgsis.geometry g USING (geoid) ORDER BY g.geoname").format(
-            sql.Literal(QUERY_TIME)))
-    from_sql = {s.name or "": s for s in surfaces_at(conn, "river", QUERY_TIME).values()}
-    expected = {name: s.at(QUERY_TIME) for name, s in evolving.items()}
-    present = sorted(name for name, s in expected.items() if s is not None)
-    same = sorted(from_sql) == present and all(
-        np.array_equal(from_sql[n].vertices, expected[n].vertices)  # type: ignore[union-attr]
-        and np.array_equal(from_sql[n].cells, expected[n].cells) for n in present)  # type: ignore[union-attr]
-    out(f"   from Python (EvolvingSurface.at): {', '.join(present)}; equal to SQL to the bit: {'yes' if same else 'NO'}")
-    context.figure("structure_at_1.5", [row[0] for row in rows])
-    context.figure("sql_equals_python", same)
+    context.structure_at("river", QUERY_TIME, evolving)
 
     out("3. which unit lies on which")
     for t in (3.0, 4.0):

@@ -22,7 +22,7 @@ from psycopg import sql
 
 from tgsis import pictures
 from tgsis.db.features import create_feature_class, insert_feature
-from tgsis.db.temporal import get_at, surfaces_at
+from tgsis.db.temporal import get_at
 from tgsis.interpolation import InterpolationSetup
 from tgsis.interpolation.interpolate import interpolate
 from tgsis.mesh import Surface
@@ -115,19 +115,7 @@ def run(context: Context) -> None:
     context.figure("interpolation_error_m", worst)
 
     out(f"2. the whole structure at t = {QUERY_TIME:g} {TIME_UNIT}")
-    structure = context.ask("every surface that exists then, from one query", sql.SQL(
-        "SELECT g.geoname AS surface, array_length(s.vertices, 1) AS vertices, array_length(s.triangles, 1) AS triangles "
-        "FROM tgsis.surfaces_at('structure', {}) s JOIN tgsis.geometry g USING (geoid) ORDER BY g.geoname").format(
-            sql.Literal(QUERY_TIME)))
-    from_sql = {surface.name or "": surface for surface in surfaces_at(conn, "structure", QUERY_TIME).values()}
-    from_python = {label: s.at(QUERY_TIME) for label, s in evolving.items()}
-    present = sorted(label for label, s in from_python.items() if s is not None)
-    same = sorted(from_sql) == present and all(
-        np.array_equal(from_sql[label].vertices, from_python[label].vertices)          # type: ignore[union-attr]
-        and np.array_equal(from_sql[label].cells, from_python[label].cells) for label in present)  # type: ignore[union-attr]
-    out(f"   from Python (EvolvingSurface.at): {', '.join(present)}; equal to SQL to the bit: {'yes' if same else 'NO'}")
-    context.figure("structure_at_2.5", [row[0] for row in structure])
-    context.figure("sql_equals_python", same)
+    context.structure_at("structure", QUERY_TIME, evolving)
 
     out(f"3. the throw of each horizon at t = {QUERY_TIME:g} {TIME_UNIT}")
     throws = context.ask("mean depth of the footwall block minus that of the hanging wall",
