@@ -145,3 +145,13 @@ def test_reject_flagged_does_not_count_gocad_atoms(db_dsn: str, tmp_path: Path,
     assert main(["--dsn", db_dsn, "import", str(path), "--class", "faults", "--reject-flagged"]) == 1
     assert "object 'cut': 1 duplicate vertices, 0 degenerate cells" in capsys.readouterr().err
     assert stored(db_dsn) == before
+
+
+def test_other_commands_that_read_files_warn_in_one_line_too(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """tgsis corners reads the first surface of a mixed file: the skipped objects are one line each, not a dump."""
+    from tgsis.cli import main
+
+    assert main(["corners", str(MIXED)]) in (0, 1)
+    err = capsys.readouterr().err
+    assert f"tgsis: warning: {MIXED}:1: skipped the GOCAD SGrid object 'porosity grid'" in err
+    assert "SkippedObjectWarning" not in err and "warnings.warn" not in err

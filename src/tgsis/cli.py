@@ -1416,7 +1416,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, _exit_on_sigterm)
     handler: Handler = args.handler
     try:
-        return handler(args)
+        with warnings.catch_warnings():
+            # objects a reader skipped (any command that reads files): one line each, not a Python warning dump
+            shown = warnings.showwarning
+
+            def one_line(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                         file: Any = None, line: str | None = None) -> None:
+                if issubclass(category, SkippedObjectWarning):
+                    print(f"tgsis: warning: {message}", file=sys.stderr)
+                else:
+                    shown(message, category, filename, lineno, file, line)
+
+            warnings.showwarning = one_line
+            return handler(args)
     except Error as exc:
         if isinstance(exc, NotVersionedError):  # the hint in this interface's words
             exc.hint = ("tgsis versioning enable features, to write features in versions; or work in DEFAULT "
