@@ -226,3 +226,19 @@ def _sqlstate(conn: Conn, statement: str) -> str | None:
         return exc.sqlstate
     conn.rollback()
     return None
+
+
+def test_a_key_type_changed_afterwards_is_refused_before_any_cast(roles: Roles) -> None:
+    """The owner drops the view and gives the storage's key a domain of her own: definer code refuses to cast to it."""
+    carol, alice = roles.connect("carol"), roles.connect("alice")
+    carol.execute("CREATE DOMAIN mykey AS integer CHECK (public.trap('domain'))")
+    carol.execute("DROP VIEW mine")
+    carol.execute("ALTER TABLE mine_ver ALTER COLUMN id TYPE mykey")
+    carol.commit()
+    _log(carol)                                               # the rewrite checked each row, as carol
+    tgsis.create_version(alice, "a1")
+    with pytest.raises(tgsis.InvalidInputError, match="not built into PostgreSQL"):
+        tgsis.lock_objects(alice, "a1", "mine", ["1"])
+    alice.rollback()
+    assert _log(carol) == []                                  # the domain's check never ran, as anyone
+    assert carol.execute("SELECT rolsuper FROM pg_roles WHERE rolname = current_user").fetchone() == (False,)

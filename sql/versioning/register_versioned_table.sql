@@ -85,10 +85,7 @@ BEGIN
             USING ERRCODE = 'TG201', HINT = 'pass another p_shortname';
     END IF;
     -- what tgsis.storage_run relies on when it acts on the storage as tgsis's owner
-    IF (SELECT atttypid FROM pg_attribute WHERE attrelid = v_ver AND attname = p_objectkeyfield) >= 16384 THEN
-        RAISE EXCEPTION 'the object key column % of %.% is not of a type built into PostgreSQL', p_objectkeyfield, v_schema, v_table
-            USING ERRCODE = 'TG100', HINT = 'key the objects by a column of a built-in type (integer, bigint, text, uuid, ...)';
-    END IF;
+    PERFORM tgsis.check_key_type(v_ver::regclass, p_objectkeyfield);
     IF NOT EXISTS (SELECT FROM pg_proc
                     WHERE oid = to_regprocedure(format('%I.%I(boolean, text, text[], integer[], integer[], integer, bigint[])',
                                                        v_schema, v_table || '_ver_run'))

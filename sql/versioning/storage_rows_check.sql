@@ -33,6 +33,7 @@ BEGIN
                                 TG_TABLE_SCHEMA, left(TG_TABLE_NAME, -4));
     END IF;
     IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = TG_ARGV[0]) THEN
+        PERFORM tgsis.check_key_type(TG_RELID, TG_ARGV[1]);
         EXECUTE format('SELECT array_agg(DISTINCT n.%I::text) FROM tgsis_new_rows n', TG_ARGV[1]) INTO v_keys;
         PERFORM tgsis.check_objects_unlocked(TG_ARGV[0], v_keys, v_write.versionid);
     END IF;

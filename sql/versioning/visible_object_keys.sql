@@ -19,6 +19,7 @@ BEGIN
          WHERE t.objectclass = p_objectclass
     LOOP
         v_row := v_t.tbl;
+        PERFORM tgsis.check_key_type(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass, v_t.objectkeyfield);
         -- the keys cast to the column's type, so that the key index serves the lookup;
         -- a key that is no value of that type ('abc' for a bigint key) is a bad argument
         FOREACH v_key IN ARRAY coalesce(p_keys, '{}') LOOP
