@@ -682,7 +682,7 @@ def cmd_at(args: argparse.Namespace) -> int:
     target = formats.format_for(args.file, args.format)  # an unknown format fails before connecting
     with _connect(args) as conn:
         fc = class_of_feature(conn, args.id)
-        surface = get_at(conn, args.id, args.time, convention=args.convention)
+        surface = get_at(conn, args.id, args.time, convention=args.convention, properties=True)
         if surface is None:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))

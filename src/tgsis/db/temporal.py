@@ -476,14 +476,44 @@ def _assemble(geoid: int, ids: npt.NDArray[np.int64], xyz: Sequence[npt.NDArray[
     return Surface(vertices, cells, name=name)
 
 
-def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "left") -> Surface | None:
+#: Property types whose values at t can be interpolated (tgsis.property_at).
+_NUMERIC = frozenset(("smallint", "integer", "bigint", "real", "double precision", "numeric"))
+
+
+def _properties_at(conn: Conn, surface: Surface, feature_id: int, t: float, convention: Convention,
+                   vertex_ids: npt.NDArray[np.int64], triangle_ids: npt.NDArray[np.int64]) -> None:
+    """Attach the class's numeric vertex or cell properties at t (``tgsis.property_at``) to the snapshot."""
+    from tgsis.db.features import class_of_feature
+
+    fc = class_of_feature(conn, feature_id)
+    ids, into = (vertex_ids, surface.vertex_properties) if fc.alignment == "VERTEX" else (
+        triangle_ids, surface.cell_properties)
+    for prop in fc.cell_properties:
+        if prop.type not in _NUMERIC:
+            continue
+        idx, value = _copy_out(conn, sql.SQL(
+            "SELECT idx, coalesce(value, 'NaN') FROM tgsis.property_at({}, {}, {}, {}, {})").format(
+            sql.Literal(fc.name), sql.Literal(feature_id), sql.Literal(prop.name), sql.Literal(float(t)),
+            sql.Literal(convention)), ["int8", "float8"])
+        values = np.full(len(ids), np.nan)
+        if len(ids):
+            where = np.minimum(np.searchsorted(ids, idx), len(ids) - 1)
+            known = ids[where] == idx
+            values[where[known]] = value[known]
+        into[prop.name] = values
+
+
+def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "left",
+           properties: bool = False) -> Surface | None:
     """The surface of a feature at model time ``t``, or None when it does not exist then.
 
     Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``):
     model 3 interpolates node positions linearly inside the topology period
     containing t; model 2 takes the instant the step ``convention`` chooses;
     a static surface is returned whatever t. Vertex order is the stored id
-    order; properties are not included.
+    order. With ``properties``, the class's numeric vertex or cell
+    properties at t come along (``tgsis.property_at``: interpolated as the
+    positions are; NaN where NULL), as :meth:`tgsis.EvolvingSurface.at` gives them.
 
     Raises
     ------
@@ -511,7 +541,11 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
                 "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
                 sql.Literal(feature_id), t_lit, c_lit), ["int8", "int8", "int8", "int8"])
     order = _split(tid, tid, [feature_id])[feature_id]
-    return _assemble(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
+    surface = _assemble(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
+    if properties:
+        with reraise(), conn.transaction():
+            _properties_at(conn, surface, feature_id, t, convention, np.sort(ids), tid[order])
+    return surface
 
 
 def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
