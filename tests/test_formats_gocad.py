@@ -240,11 +240,13 @@ def test_patom_values_and_atom_chains(tmp_path: Path) -> None:
     # a PATOM without values and an ATOM repeat their vertex; ATOM 4 and the forward ATOM 9 repeat PATOM 3
     np.testing.assert_array_equal(points.vertex_properties["a"], [7, 5, 5, 7, 7, np.nan])
     assert points.metadata["gocad_atoms"] == [[0, 3], [2, 1], [3, 1], [4, 3]]
+    assert points.metadata["gocad_patoms"] == [2, 3]
     back = round_trip(points, tmp_path, "p.vs")
     assert back.same_as(points)
-    # only ATOMs whose vertex comes earlier and still matches are written as ATOM lines
+    # only atoms whose vertex comes earlier are written as atoms: in a file with properties as PATOMs,
+    # with values of their own where they differ from the vertex they repeat
     assert [line for line in (tmp_path / "p.vs").read_text().splitlines() if "ATOM" in line] == \
-        ["ATOM 3 2", "ATOM 5 4"]
+        ["PATOM 3 2", "PATOM 4 2 7.0", "ATOM 5 4"]
 
 
 def test_pline_sample() -> None:

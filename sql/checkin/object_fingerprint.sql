@@ -34,6 +34,8 @@ BEGIN
       FROM tgsis.geometry g WHERE g.geoid = ANY (v_ids);
     v_parts := v_parts || ('geometry ' || v_part);
     v_parts := v_parts || ('vrtx ' || tgsis.table_fingerprint('tgsis', 'vrtx', 'geoid', 'vrtxid', v_ids));
+    v_parts := v_parts || ('atom ' || tgsis.table_fingerprint('tgsis', 'atom', 'geoid', 'vrtxid', v_ids));
+    v_parts := v_parts || ('part ' || tgsis.table_fingerprint('tgsis', 'part', 'geoid', 'firstid', v_ids));
     FOR v_table IN SELECT DISTINCT tgsis.simplex_table(geotype) FROM tgsis.geometry
                     WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' ORDER BY 1 LOOP
         v_parts := v_parts || (v_table || ' ' || tgsis.table_fingerprint(
@@ -54,4 +56,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.object_fingerprint(bigint) IS
-    'digest (md5 of per-table row counts and xor of row hashes) of a static feature''s rows as the session''s version sees them: geometry, vertices, simplices, cell properties, feature row, members; NULL when the geometry does not exist';
+    'digest (md5 of per-table row counts and xor of row hashes) of a static feature''s rows as the session''s version sees them: geometry, vertices, simplices, atoms, parts, cell properties, feature row, members; NULL when the geometry does not exist';

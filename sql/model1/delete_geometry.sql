@@ -48,6 +48,8 @@ BEGIN
             PERFORM tgsis.delete_object_rows('tgsis', v_table, 'geoid', v_ids);
         END LOOP;
     END IF;
+    PERFORM tgsis.delete_object_rows('tgsis', 'atom', 'geoid', v_ids);
+    PERFORM tgsis.delete_object_rows('tgsis', 'part', 'geoid', v_ids);
     PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', v_ids);
     FOR v_geo IN SELECT DISTINCT geotype FROM tgsis.geometry WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' LOOP
         PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geo.geotype), 'geoid', v_ids);
@@ -58,4 +60,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.delete_geometry(bigint) IS
-    'delete a geometry, its vertices, simplices (instants and periods of temporal ones), feature row, cell and per-instant properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';
+    'delete a geometry, its vertices, simplices, atoms, parts (instants and periods of temporal ones), feature row, cell and per-instant properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';

@@ -55,8 +55,12 @@ from tgsis.db.features import (
     _SIMPLEX,
     _Storage,
     class_of_feature,
+    copy_extra_rows,
+    extra_rows,
     get_feature_class,
+    restore_extras,
 )
+from tgsis.db.meaning import meaning_of, z_convention
 from tgsis.errors import (
     CheckoutConflictError,
     FileFormatError,
@@ -146,7 +150,23 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
         np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
         vertex_properties=values if fc.alignment == "VERTEX" else None,
         cell_properties=values if fc.alignment == "CELL" else None, name=name)
+    # parts and atoms come with it; z stays in storage's convention (elevation)
+    restore_extras(mesh, _Part(fc.geotype, name, ""), data, geoid, vertex_ids.astype(np.int64),
+                   cell_ids.astype(np.int64), file_convention=False)
     return StoredMesh(mesh, vertex_ids.astype(np.int64), cell_ids.astype(np.int64))
+
+
+def _in_storage_convention(mesh: Mesh) -> Mesh:
+    """The mesh with z as stored (elevation): a copy with z negated when its metadata says Depth.
+
+    A mesh without ``metadata["zpositive"]`` (a check-out's) is in storage's
+    convention already.
+    """
+    if z_convention(mesh.metadata) != "Depth":
+        return mesh
+    flipped = mesh.copy()
+    flipped.vertices[:, 2] = -flipped.vertices[:, 2]
+    return flipped
 
 
 def _checked_class(conn: Conn, feature_class: str | FeatureClass | None, feature_id: int) -> FeatureClass:
@@ -318,6 +338,50 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
+def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written,
+                    storage: _Storage) -> int:
+    """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
+
+    What the edited mesh's metadata does not mention stays as stored; atoms
+    and parts are rewritten only when they changed (few rows). Returns the
+    rows changed.
+    """
+    meaning = meaning_of(edited, "the edited mesh")
+    meta = edited.metadata
+    columns: list[tuple[str, str, Any]] = []
+    if "zpositive" in meta:
+        columns.append(("zpositive", "%s::text", meaning.zpositive))
+    if "gocad_coordinate_system" in meta:
+        columns.append(("crs", "%s::jsonb", meaning.crs_json()))
+    if meaning.color is not None:
+        columns += [(c, "%s::real", v) for c, v in zip(("colorred", "colorgreen", "colorblue"), meaning.color)]
+    if meaning.metadata is not None:
+        columns.append(("metadata", "%s::jsonb", meaning.metadata_json()))
+    changed = 0
+    if columns:
+        names = [sql.Identifier(c) for c, _, _ in columns]
+        holders = [sql.SQL(h) for _, h, _ in columns]
+        values = [v for _, _, v in columns]
+        changed += max(conn.execute(sql.SQL("UPDATE tgsis.geometry SET ({}) = ROW({}) WHERE geoid = %s "
+                                            "AND ROW({}) IS DISTINCT FROM ROW({})").format(
+            sql.SQL(", ").join(names), sql.SQL(", ").join(holders), sql.SQL(", ").join(names),
+            sql.SQL(", ").join(holders)), [*values, geoid, *values]).rowcount, 0)
+    atoms, parts = extra_rows(fc, geoid, edited, meaning, written.vertex_ids, written.cell_ids)
+    stored_atoms = [tuple(int(v) for v in r) for r in conn.execute(
+        "SELECT geoid, vrtxid, refid, patom::int FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()]
+    stored_parts = [tuple(int(v) for v in r) for r in conn.execute(
+        "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)).fetchall()]
+    if sorted(atoms) != stored_atoms:
+        changed += max(conn.execute("DELETE FROM tgsis.atom WHERE geoid = %s", (geoid,)).rowcount, 0)
+        copy_extra_rows(conn, storage, atoms, [])
+        changed += len(atoms)
+    if sorted(parts) != stored_parts:
+        changed += max(conn.execute("DELETE FROM tgsis.part WHERE geoid = %s", (geoid,)).rowcount, 0)
+        copy_extra_rows(conn, storage, [], parts)
+        changed += len(parts)
+    return changed
+
+
 def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, bounds: npt.NDArray[np.float64] | None,
                  name: str | None, feature_values: Mapping[str, Any] | None) -> int:
     """Bring the geometry row (box, counts, name) and the feature row up to date; rows changed (0 when equal)."""
@@ -351,6 +415,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
     updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)
+    updated += _update_meaning(conn, fc, geoid, edited, written, storage)
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
     result = SaveResult(geoid, version, plan.diff, written.deleted, written.inserted, updated,
                         written.property_changes, len(plan.moved_vertices))
@@ -421,7 +486,7 @@ def save_feature(
     ReadOnlyRevisionError, ObjectLockedError, MissingPrivilegeError
         The session may not write the feature in its version.
     """
-    mesh = _mesh_arg(edited)
+    mesh = _in_storage_convention(_mesh_arg(edited))
     with reraise(), conn.transaction():
         fc = _checked_class(conn, feature_class, feature_id)
         conn.execute("SELECT tgsis.feature_write_lock(%s)", (feature_id,))
@@ -755,7 +820,7 @@ def checkin(
         Nothing is written.
     """
     token = checked_out.token
-    mesh = _mesh_arg(edited if edited is not None else checked_out.mesh)
+    mesh = _in_storage_convention(_mesh_arg(edited if edited is not None else checked_out.mesh))
     if on_conflict not in ("raise", "child"):
         raise InvalidInputError(f"on_conflict must be 'raise' or 'child', not {on_conflict!r}")
     with reraise(), conn.transaction():

@@ -29,6 +29,7 @@ from psycopg import sql
 
 from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
+from tgsis.db.meaning import Meaning, meaning_of, part_runs, parts_from_runs, restore_meaning
 from tgsis.errors import (InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError,
                           NotVersionedError, reraise)
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh, mesh_class
@@ -280,11 +281,28 @@ def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
 # --------------------------------------------------------------------------- upload
 
 
+def stores_part_column(fc: FeatureClass) -> bool:
+    """Whether the class keeps the ``part`` cell property in a column of its own (else: in ``tgsis.part``)."""
+    return fc.alignment == "CELL" and any(p.name == "part" for p in fc.cell_properties)
+
+
+def _cell_properties(fc: FeatureClass, mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
+    """The mesh's cell properties but ``part`` when that goes to ``tgsis.part``."""
+    if stores_part_column(fc):
+        return dict(mesh.cell_properties)
+    return {k: v for k, v in mesh.cell_properties.items() if k != "part"}
+
+
 def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
                         what: str = "the mesh") -> dict[str, npt.NDArray[Any]]:
-    """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh)."""
-    stored, other = ((mesh.vertex_properties, mesh.cell_properties) if fc.alignment == "VERTEX"
-                     else (mesh.cell_properties, mesh.vertex_properties))
+    """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh).
+
+    The ``part`` cell property is not one of them unless the class has a
+    ``part`` cell column: it is stored in ``tgsis.part``.
+    """
+    cells = _cell_properties(fc, mesh)
+    stored, other = ((mesh.vertex_properties, cells) if fc.alignment == "VERTEX"
+                     else (cells, mesh.vertex_properties))
     return class_property_arrays(fc, stored, other, "vertex" if fc.alignment == "VERTEX" else mesh.cell_name,
                                  drop_extra, what)
 
@@ -413,13 +431,37 @@ def _member_label(index: int, mesh: Mesh) -> str:
     return f"member {index} ({type(mesh).__name__}{named})"
 
 
-def _new_geometry(conn: Conn, geometry: Geometry, name: str | None, *, collection: int | None = None) -> int:
-    """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid."""
-    bounds = geometry.bounds().ravel().tolist() if geometry.n_vertices else None
+def _stored_bounds(geometry: Geometry, meanings: Sequence[Meaning]) -> list[float] | None:
+    """The box of a mesh or collection in storage's convention (elevation): Depth members' z negated."""
+    members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
+    boxes = []
+    for member, meaning in zip(members, meanings):
+        if member.n_vertices:
+            box = member.bounds()
+            if meaning.depth:
+                box = np.array([[box[0, 0], box[0, 1], -box[1, 2]], [box[1, 0], box[1, 1], -box[0, 2]]])
+            boxes.append(box)
+    if not boxes:
+        return None
+    stacked = np.stack(boxes)
+    return [float(v) for v in np.concatenate([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])]
+
+
+def _new_geometry(conn: Conn, geometry: Geometry, name: str | None, meaning: Meaning,
+                  member_meanings: Sequence[Meaning], *, collection: int | None = None) -> int:
+    """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid.
+
+    ``meaning`` is the geometry's own (z convention, coordinate system,
+    colour, metadata); ``member_meanings`` those of its members (of a mesh:
+    its own), whose z conventions give the stored box.
+    """
+    bounds = _stored_bounds(geometry, member_meanings)
     geoids: list[int] | None = [] if isinstance(geometry, GeometryCollection) else None  # members come next
-    row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s)",
+    row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s, 'STATIC', false, %s::real[], %s, "
+                       "%s::jsonb, %s::jsonb)",
                        (geometry.geotype.value, name, bounds, geometry.n_vertices, geometry.n_cells, geoids,
-                        collection)).fetchone()
+                        collection, meaning.color, meaning.zpositive, meaning.crs_json(),
+                        meaning.metadata_json())).fetchone()
     assert row is not None
     return int(row[0])
 
@@ -440,7 +482,8 @@ def _keys(geoids: Sequence[int], counts: Sequence[int]) -> tuple[npt.NDArray[np.
 
 
 def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
-                 cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], storage: _Storage) -> None:
+                 cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], storage: _Storage,
+                 meanings: Sequence[Meaning]) -> None:
     """COPY the vertices, simplices and cell properties of meshes: one COPY per table, whatever their number.
 
     Parameters
@@ -454,9 +497,16 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         (n_i,) for VERTEX alignment, (m_i,) for CELL.
     storage : _Storage
         Plain or versioned targets.
+    meanings : sequence of Meaning
+        Per mesh: Depth meshes are stored with z negated (elevation); their
+        atoms go to ``tgsis.atom``.
     """
     vertex_geoids, vertex_ids = _keys(geoids, [m.n_vertices for m in meshes])
     xyz = _concat([m.vertices for m in meshes])
+    if any(meaning.depth for meaning in meanings):
+        xyz = xyz.copy()
+        flip = np.repeat([meaning.depth for meaning in meanings], [m.n_vertices for m in meshes])
+        xyz[flip, 2] = -xyz[flip, 2]  # exact: only the sign bit changes
     storage.copy(conn, "tgsis", "vrtx", [("geoid", vertex_geoids, "int8"), ("vrtxid", vertex_ids, "int8"),
                                          ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
     for geotype in dict.fromkeys(m.geotype for m in meshes):  # each simplex table once, in member order
@@ -473,6 +523,60 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         storage.copy(conn, fc.schema, fc.cellprotable, [
             ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
             *((p.name, _concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+    _copy_extras(conn, fc, geoids, meshes, meanings, storage)
+
+
+def extra_rows(fc: FeatureClass, geoid: int, mesh: Mesh, meaning: Meaning,
+               vertex_ids: npt.NDArray[np.int64] | None = None,
+               cell_ids: npt.NDArray[np.int64] | None = None) -> tuple[list[tuple[int, ...]], list[tuple[int, ...]]]:
+    """The ``tgsis.atom`` rows ``(geoid, vrtxid, refid, patom)`` and ``tgsis.part`` rows ``(geoid, firstid, lastid, part)`` of a mesh.
+
+    ``vertex_ids``/``cell_ids`` give the database id of each vertex and cell
+    (default: 0..n-1, as a first upload numbers them); a run of parts never
+    spans a gap in the cell ids.
+    """
+    atoms = [(geoid, int(vertex_ids[a]) if vertex_ids is not None else a,
+              int(vertex_ids[r]) if vertex_ids is not None else r, int(a in meaning.patoms)) for a, r in meaning.atoms]
+    parts: list[tuple[int, ...]] = []
+    if "part" in mesh.cell_properties and not stores_part_column(fc):
+        values = mesh.cell_properties["part"]
+        ids = cell_ids if cell_ids is not None else np.arange(mesh.n_cells, dtype=np.int64)
+        order = np.argsort(ids, kind="stable")
+        ids, values = ids[order], values[order]
+        firsts, _, _ = part_runs(values)
+        if len(firsts):
+            breaks = np.flatnonzero(np.diff(ids) != 1) + 1
+            starts = np.union1d(firsts, breaks).astype(np.int64)
+            ends = np.concatenate([starts[1:] - 1, [len(ids) - 1]]).astype(np.int64)
+            numbers = values[starts].astype(np.int64)
+            parts = [(geoid, int(f), int(last), int(n)) for f, last, n in zip(ids[starts], ids[ends], numbers)]
+    return list(atoms), parts
+
+
+def copy_extra_rows(conn: Conn, storage: _Storage, atoms: Sequence[tuple[int, ...]],
+                    parts: Sequence[tuple[int, ...]]) -> None:
+    """COPY rows of :func:`extra_rows` into ``tgsis.atom`` and ``tgsis.part``."""
+    if atoms:
+        columns = np.asarray(atoms, dtype=np.int64).T
+        storage.copy(conn, "tgsis", "atom", [("geoid", columns[0], "int8"), ("vrtxid", columns[1], "int8"),
+                                             ("refid", columns[2], "int8"), ("patom", columns[3] != 0, "bool")])
+    if parts:
+        columns = np.asarray(parts, dtype=np.int64).T
+        storage.copy(conn, "tgsis", "part", [("geoid", columns[0], "int8"), ("firstid", columns[1], "int8"),
+                                             ("lastid", columns[2], "int8"),
+                                             ("part", columns[3].astype(np.int32), "int4")])
+
+
+def _copy_extras(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
+                 meanings: Sequence[Meaning], storage: _Storage) -> None:
+    """COPY the atoms (``tgsis.atom``) and parts (``tgsis.part``) of freshly uploaded meshes."""
+    atoms: list[tuple[int, ...]] = []
+    parts: list[tuple[int, ...]] = []
+    for geoid, mesh, meaning in zip(geoids, meshes, meanings):
+        more_atoms, more_parts = extra_rows(fc, geoid, mesh, meaning)
+        atoms += more_atoms
+        parts += more_parts
+    copy_extra_rows(conn, storage, atoms, parts)
 
 
 def insert_feature(
@@ -535,21 +639,24 @@ def insert_feature(
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
                                    f"not {mesh.geotype.value} ({type(mesh).__name__})")
     members = mesh.members if isinstance(mesh, GeometryCollection) else (mesh,)
-    cell_values = [_aligned_properties(fc, m, drop_extra_properties,
-                                       _member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh")
-                   for i, m in enumerate(members)]
+    labels = [_member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh"
+              for i, m in enumerate(members)]
+    cell_values = [_aligned_properties(fc, m, drop_extra_properties, label) for m, label in zip(members, labels)]
+    meanings = [meaning_of(m, label) for m, label in zip(members, labels)]
+    own_meaning = meaning_of(mesh) if isinstance(mesh, GeometryCollection) else meanings[0]
     feature_values = _feature_columns(fc, properties)
 
     with reraise(), conn.transaction():
         storage = _Storage.of(conn)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
-        geoid = _new_geometry(conn, mesh, name if name is not None else mesh.name)
+        geoid = _new_geometry(conn, mesh, name if name is not None else mesh.name, own_meaning, meanings)
         if isinstance(mesh, GeometryCollection):
-            member_ids = [_new_geometry(conn, m, m.name, collection=geoid) for m in members]
+            member_ids = [_new_geometry(conn, m, m.name, meaning, [meaning], collection=geoid)
+                          for m, meaning in zip(members, meanings)]
             conn.execute("UPDATE tgsis.geometry SET geoids = %s WHERE geoid = %s", (member_ids, geoid))
         else:
             member_ids = [geoid]
-        _copy_meshes(conn, fc, member_ids, members, cell_values, storage)
+        _copy_meshes(conn, fc, member_ids, members, cell_values, storage, meanings)
         columns = ["_geoid", *feature_values]
         conn.execute(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
@@ -604,29 +711,43 @@ def _positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: 
 
 @dataclass(frozen=True)
 class _Part:
-    """A geometry to download: its geotype, name, and how messages name it."""
+    """A geometry to download: its geotype, name, how messages name it, and what its file meant."""
 
     geotype: Geotype
     name: str | None
     label: str
+    zpositive: str | None = None
+    crs: list[str] | None = None
+    color: tuple[float | None, ...] | None = None
+    metadata: dict[str, Any] | None = None
+
+
+#: the columns of tgsis.geometry that _part_meaning reads, after geotype and name
+MEANING_COLUMNS = "g.zpositive, g.crs, g.colorred, g.colorgreen, g.colorblue, g.metadata"
+
+
+def _part_meaning(row: Sequence[Any]) -> dict[str, Any]:
+    """_Part keyword arguments from the values of :data:`MEANING_COLUMNS`."""
+    return {"zpositive": row[0], "crs": row[1], "color": tuple(row[2:5]) if row[2] is not None else None,
+            "metadata": row[5]}
 
 
 def _collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> dict[int, list[tuple[int, _Part]]]:
     """Members of each collection in ``wanted``, in stored order: ``{collection: [(member geoid, part)]}``."""
     rows = conn.execute(
-        "SELECT c.geoid, m.geoid, g.geotype, g.geoname FROM tgsis.geometry c "
+        f"SELECT c.geoid, m.geoid, g.geotype, g.geoname, {MEANING_COLUMNS} FROM tgsis.geometry c "
         "CROSS JOIN LATERAL unnest(c.geoids) WITH ORDINALITY AS m(geoid, ord) "
         "LEFT JOIN tgsis.geometry g ON g.geoid = m.geoid "
         "WHERE c.geoid = ANY(%s) ORDER BY c.geoid, m.ord", (list(wanted),)).fetchall()
     members: dict[int, list[tuple[int, _Part]]] = {int(g): [] for g in wanted}
-    for cid, mid, geotype, geoname in rows:
+    for cid, mid, geotype, geoname, *meaning in rows:
         where = f"member {len(members[cid])} (geometry {mid}) of feature {cid} of class {fc.name}"
         if geotype is None:
             raise InvalidGeometryError(f"{where} does not exist", hint=f"SELECT * FROM tgsis.check_geometry({cid})")
         if geotype == Geotype.GEOMETRYCOLLECTION.value:
             raise InvalidGeometryError(f"{where} is a GEOMETRYCOLLECTION: collections do not nest",
                                        hint=f"SELECT * FROM tgsis.check_geometry({cid})")
-        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where)))
+        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where, **_part_meaning(meaning))))
     empty = [cid for cid, listed in members.items() if not listed]
     if empty:
         raise InvalidGeometryError(f"feature(s) {empty} of class {fc.name} are collections without members",
@@ -641,6 +762,8 @@ class _Download:
     vertices: list[npt.NDArray[Any]]
     cells: dict[Geotype, list[npt.NDArray[Any]]]
     properties: list[npt.NDArray[Any]]
+    atoms: dict[int, list[tuple[int, int, bool]]] = field(default_factory=dict)
+    parts: dict[int, list[tuple[int, int, int]]] = field(default_factory=dict)
 
 
 def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Download:
@@ -665,7 +788,47 @@ def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Down
         properties = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
             sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc._table(fc.cellprotable),
             id_list), ["int8", "int8", *(SQL_TYPES[p.type] for p in fc.cell_properties)])
-    return _Download(vertices, cells, properties)
+    atoms: dict[int, list[tuple[int, int, bool]]] = {}
+    for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
+            "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(
+            id_list)).fetchall():
+        atoms.setdefault(int(geoid), []).append((int(vrtxid), int(refid), bool(patom)))
+    runs: dict[int, list[tuple[int, int, int]]] = {}
+    for geoid, first, last, number in conn.execute(sql.SQL(
+            "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = ANY({}) ORDER BY geoid, firstid").format(
+            id_list)).fetchall():
+        runs.setdefault(int(geoid), []).append((int(first), int(last), int(number)))
+    return _Download(vertices, cells, properties, atoms, runs)
+
+
+def restore_extras(mesh: Mesh, part: _Part, data: _Download, geoid: int, vertex_ids: npt.NDArray[np.int64],
+                   cell_ids: npt.NDArray[np.int64], *, file_convention: bool = True) -> Mesh:
+    """The mesh with its parts, atoms and (``file_convention``) its file's z convention and metadata back.
+
+    ``vertex_ids``/``cell_ids`` are the database ids of its vertices and cells, ascending.
+    """
+    runs = data.parts.get(geoid)
+    if runs:
+        array = np.asarray(runs, dtype=np.int64)
+        values = parts_from_runs(cell_ids, array[:, 0], array[:, 1], array[:, 2])
+        mesh.cell_properties = {**mesh.cell_properties, "part": values}
+    atoms = data.atoms.get(geoid, [])
+    pairs: list[tuple[int, int]] = []
+    patoms: list[int] = []
+    if atoms:
+        array = np.asarray([(a, r) for a, r, _ in atoms], dtype=np.int64)
+        flags = np.asarray([p for _, _, p in atoms], dtype=bool)
+        found = np.isin(array, vertex_ids).all(axis=1)
+        positions = np.searchsorted(vertex_ids, array[found])
+        pairs = [(int(a), int(r)) for a, r in positions]
+        patoms = [int(a) for (a, _), p in zip(positions, flags[found]) if p]
+    if file_convention:
+        restore_meaning(mesh, part.zpositive, part.crs, part.color, part.metadata, pairs, patoms)
+    elif pairs:
+        mesh.metadata = {**mesh.metadata, "gocad_atoms": [list(p) for p in pairs]}
+        if patoms:
+            mesh.metadata["gocad_patoms"] = patoms
+    return mesh
 
 
 def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> dict[int, Mesh]:
@@ -694,11 +857,11 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
                         f"{parts[geoid].label}: {fc.cellprotable} has {len(prows)} rows for {len(target_ids)} "
                         f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}")
                 values = {p.name: data.properties[2 + i][prows] for i, p in enumerate(fc.cell_properties)}
-            meshes[geoid] = mesh_class(geotype)(
+            meshes[geoid] = restore_extras(mesh_class(geotype)(
                 xyz[vrows], simplices,
                 vertex_properties=values if fc.alignment == "VERTEX" else None,
                 cell_properties=values if fc.alignment == "CELL" else None,
-                name=parts[geoid].name)
+                name=parts[geoid].name), parts[geoid], data, geoid, vertex_ids, cells[1][crows])
     return meshes
 
 
@@ -741,8 +904,8 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
         if fresh:  # one snapshot for the statements below
             conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
         rows = conn.execute(
-            sql.SQL("SELECT f._geoid, g.geoname{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid {} "
-                    "ORDER BY f._geoid").format(
+            sql.SQL("SELECT f._geoid, g.geoname, " + MEANING_COLUMNS + "{} FROM {} f "
+                    "JOIN tgsis.geometry g ON g.geoid = f._geoid {} ORDER BY f._geoid").format(
                 sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
                 fc._table(fc.featuretable),
                 sql.SQL("WHERE f._geoid = ANY({})").format(sql.Literal(list(ids))) if ids is not None
@@ -760,7 +923,8 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
             members = _collection_members(conn, fc, list(dict.fromkeys(wanted)))
             parts = {mid: part for listed in members.values() for mid, part in listed}
         else:
-            parts = {g: _Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}") for g in wanted}
+            parts = {g: _Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}",
+                              **_part_meaning(found[g][2:8])) for g in wanted}
         data = _download(conn, fc, parts)
 
     meshes = _assemble(fc, parts, data)
@@ -774,11 +938,14 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
             for mid, _ in members[geoid]:  # a geometry listed twice comes as two meshes
                 member_meshes.append(meshes[mid].copy() if mid in used else meshes[mid])
                 used.add(mid)
-            geometry = GeometryCollection(member_meshes, name=row[1])
+            own = _part_meaning(row[2:8])
+            collection = GeometryCollection(member_meshes, name=row[1])
+            restore_meaning(collection, None, own["crs"], own["color"], own["metadata"])
+            geometry = collection
         else:
             geometry = meshes[geoid].copy() if geoid in used else meshes[geoid]
             used.add(geoid)
-        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[2:])), geometry))
+        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[8:])), geometry))
     return features
 
 

@@ -24,8 +24,10 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
   use ``ref`` instead (a PATOM's own property values are then lost). ATOMs may
   repeat PATOMs or other ATOMs, also ones further down the file; a cycle is
   an error. Which vertices were ATOMs is kept in
-  ``metadata["gocad_atoms"]`` (pairs ``[atom, ref]`` of vertex indices), so the
-  writer writes them as ATOMs again.
+  ``metadata["gocad_atoms"]`` (pairs ``[atom, ref]`` of vertex indices), and
+  which of them were PATOMs in ``metadata["gocad_patoms"]`` (atom indices), so
+  the writer writes them as ATOMs and PATOMs again (a PATOM with values of its
+  own when they differ from the vertex it repeats).
 * Coordinates are kept exactly as written: ``ZPOSITIVE Depth`` does not flip z;
   it is recorded in ``metadata["zpositive"]``.
 * ``PROPERTIES`` become float64 vertex properties; values equal to the
@@ -792,6 +794,9 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]]) ->
             meta["gocad_property_info"] = info
     if atoms:
         meta["gocad_atoms"] = atoms
+        patoms = [pair[0] for pair, is_p in zip(atoms, rec.atom_is_p) if is_p]
+        if patoms:
+            meta["gocad_patoms"] = patoms
     if rec.ignored:
         meta["gocad_ignored"] = dict(rec.ignored)
     return meta
@@ -1110,13 +1115,21 @@ def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[st
                 columns.append(list(map(repr, values.tolist())))
         texts = list(map(" ".join, zip(*columns)))
         lines = [f"PVRTX {i} {a!r} {b!r} {c!r} {t}\n" for i, a, b, c, t in zip(ids, x, y, z, texts)]
-    for atom, ref in _valid_atoms(mesh):
-        lines[atom] = f"ATOM {atom + 1} {ref + 1}\n"
+    patoms = mesh.metadata.get("gocad_patoms")
+    was_patom = set(patoms) if isinstance(patoms, (list, tuple)) else set()
+    for atom, ref, same in _valid_atoms(mesh):
+        if not properties or (same and atom not in was_patom):
+            lines[atom] = f"ATOM {atom + 1} {ref + 1}\n"
+        elif same:  # a PATOM takes the values of the vertex it repeats
+            lines[atom] = f"PATOM {atom + 1} {ref + 1}\n"
+        else:  # a PATOM with values of its own
+            lines[atom] = f"PATOM {atom + 1} {ref + 1} {texts[atom]}\n"
     return lines
 
 
-def _valid_atoms(mesh: Mesh) -> list[tuple[int, int]]:
-    """The ``metadata["gocad_atoms"]`` pairs that still hold: same position and properties, ref earlier."""
+def _valid_atoms(mesh: Mesh) -> list[tuple[int, int, bool]]:
+    """The ``metadata["gocad_atoms"]`` pairs that still hold (same position, ref earlier), and whether the
+    atom has the same property values as its ref (else it is written as a PATOM with values of its own)."""
     pairs = mesh.metadata.get("gocad_atoms")
     if not isinstance(pairs, (list, tuple)):
         return []
@@ -1128,7 +1141,7 @@ def _valid_atoms(mesh: Mesh) -> list[tuple[int, int]]:
         atom, ref = int(pair[0]), int(pair[1])
         if not 0 <= ref < atom < mesh.n_vertices or not np.array_equal(bits[atom], bits[ref]):
             continue
-        if all(np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f")
-               for v in mesh.vertex_properties.values()):
-            valid.append((atom, ref))
+        same = all(np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f")
+                   for v in mesh.vertex_properties.values())
+        valid.append((atom, ref, same))
     return valid
