@@ -267,6 +267,20 @@ def test_bad_convention_is_refused_and_nothing_is_written(conn: Conn) -> None:
     conn.rollback()
 
 
+def test_check_geometry_reports_broken_atoms_and_parts(conn: Conn) -> None:
+    fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
+    _, fid, _ = _stored_and_exported(conn, fc, DEPTH_TSURF)
+    assert conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (fid,)).fetchall() == []
+    conn.execute("UPDATE tgsis.vrtx SET x = x + 1 WHERE geoid = %s AND vrtxid = 5", (fid,))
+    conn.execute("INSERT INTO tgsis.atom (geoid, vrtxid, refid) VALUES (%s, 3, 99)", (fid,))
+    conn.execute("INSERT INTO tgsis.part (geoid, firstid, lastid, part) VALUES (%s, -5, 0, 2)", (fid,))
+    problems = {r[0]: r[2] for r in conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (fid,))}
+    assert problems["atom refers to a missing vertex"] == "3"
+    assert problems["atom is not at the place of the vertex it repeats"] == "5"
+    assert problems["part ranges overlap"] == "-5"
+    conn.rollback()
+
+
 def test_delete_and_drop_remove_atoms_and_parts(conn: Conn) -> None:
     fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
     _, first, _ = _stored_and_exported(conn, fc, DEPTH_TSURF)
