@@ -116,11 +116,12 @@ SEG 4 5
 END
 """
 
-VECTOR_PROPERTIES = [("porosity", "double precision"), ("slip_vector_0", "double precision"),
-                     ("slip_vector_1", "double precision"), ("slip_vector_2", "double precision")]
+VECTOR_PROPERTIES: list[tuple[str, str] | tuple[str, str, int]] = [("Porosity", "double precision"),
+                                                                   ("Slip_Vector", "double precision", 3)]
 
 
-def _class(conn: Conn, name: str, geotype: str, properties: list[tuple[str, str]] | None = None) -> F.FeatureClass:
+def _class(conn: Conn, name: str, geotype: str,
+           properties: list[tuple[str, str] | tuple[str, str, int]] | None = None) -> F.FeatureClass:
     fc = F.create_feature_class(conn, name, geotype, cell_properties=properties)
     conn.commit()
     return fc
@@ -167,6 +168,12 @@ def test_depth_surface_round_trips_through_the_database(conn: Conn) -> None:
                         (fid,)).fetchall() == [(4, 1, True), (5, 2, True)]
     assert conn.execute("SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid",
                         (fid,)).fetchall() == [(0, 0, 0), (1, 1, 1)]
+    # property names as the file wrote them, quoted columns of the class
+    # and the vector property (ESIZES 3) one array column of 3 components, an (n, 3) array in Python
+    assert conn.execute('SELECT "Porosity", "Slip_Vector" FROM faults_cellpros WHERE _geoid = %s AND _idx = 0',
+                        (fid,)).fetchone() == (0.21, [0.1, 0.2, -0.3])
+    assert {k: v.shape for k, v in back.vertex_properties.items()} == {"Porosity": (6,), "Slip_Vector": (6, 3)}
+    assert F.get_feature_class(conn, "faults").cell_properties[1] == F.Property("Slip_Vector", "double precision", 3)
     # stored z is elevation: depth 1250.75 is z -1250.75, -0.0 is 0.0 (negation only flips the sign bit)
     zs = [r[0] for r in conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s ORDER BY vrtxid", (fid,))]
     assert zs[:2] == [0.0, -1250.75] and not np.signbit(zs[0])
@@ -223,6 +230,23 @@ def test_real_files_round_trip(conn: Conn, relative: str) -> None:
         assert format_gocad(back) == format_gocad(mesh)
 
 
+def test_names_with_capitals_and_keywords_are_columns(conn: Conn) -> None:
+    fc = F.create_feature_class(conn, "wells", "MULTIPOINT", feature_properties=[("Operator", "text")],
+                                cell_properties=[("Order", "double precision"), ("order", "real")])
+    text = ("GOCAD VSet 1\nHEADER {\nname:picks\n}\nPROPERTIES Order order\n"
+            "PVRTX 1 0 0 -5 1 0.5\nPVRTX 2 1 0 -6 2 0.25\nEND\n")
+    [points] = parse_gocad(text)
+    assert list(points.vertex_properties) == ["Order", "order"]
+    fid = F.insert_feature(conn, fc, points, {"Operator": "ACME"})
+    conn.commit()
+    feature = F.fetch_feature(conn, fc, fid)
+    assert feature.properties == {"Operator": "ACME"} and isinstance(feature.mesh, Mesh)
+    _same_model(points, feature.mesh)
+    assert format_gocad(feature.mesh) == format_gocad(points)
+    assert conn.execute('SELECT "Order", "order" FROM wells_cellpros ORDER BY _idx').fetchall() == [(1, 0.5), (2, 0.25)]
+    assert feature.mesh.vertex_properties["order"].dtype == np.float32  # the column's kind
+
+
 def test_colour_and_convention_edited_in_sql_are_exported(conn: Conn) -> None:
     fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
     _, fid, _ = _stored_and_exported(conn, fc, DEPTH_TSURF)
@@ -247,6 +271,28 @@ def test_cli_import_export_gives_the_file_back(conn: Conn, db_dsn: str, tmp_path
     [exported] = read_gocad(tmp_path / "out.ts")
     _same_model(original, exported)
     assert (tmp_path / "out.ts").read_text() == format_gocad(original)
+
+
+def test_vector_properties_of_the_wrong_shape_are_refused(conn: Conn) -> None:
+    fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
+    [mesh] = parse_gocad(DEPTH_TSURF)
+    mesh.vertex_properties["Slip_Vector"] = mesh.vertex_properties["Slip_Vector"][:, :2]
+    with pytest.raises(tgsis.InvalidPropertyError, match="'Slip_Vector' of the mesh has a vector of 2 values per "
+                                                         "element, but feature class faults stores a vector of 3"):
+        F.insert_feature(conn, fc, mesh)
+    mesh.vertex_properties["Slip_Vector"] = mesh.vertex_properties["Slip_Vector"][:, 0]
+    with pytest.raises(tgsis.InvalidPropertyError, match="has one value per element"):
+        F.insert_feature(conn, fc, mesh)
+    assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (0,)
+    for spec, message in ((["v", "float8", 0], "has size 0"), (["v", "float8", 2.5], "has size 2.5"),
+                          (["v", "float8", "3"], "has size \"3\"")):
+        with pytest.raises(psycopg.Error) as caught:
+            conn.execute("SELECT tgsis.register_feature_class('bad', 'SURFACE', '[]', %s::jsonb)",
+                         (json.dumps([spec]),))
+        assert caught.value.sqlstate == "TG103" and message in str(caught.value), str(caught.value)
+        conn.rollback()
+    with pytest.raises(tgsis.InvalidPropertyError, match="only vertex and cell properties may be vectors"):
+        F.create_feature_class(conn, "bad", "SURFACE", feature_properties=[("v", "float8", 3)])
 
 
 def test_bad_convention_is_refused_and_nothing_is_written(conn: Conn) -> None:
@@ -316,7 +362,7 @@ def test_versioned_edit_with_parts_atoms_and_properties(conn: Conn) -> None:
         assert isinstance(edited, Surface)
         _same_model(mesh, edited)
         edited.vertices[3, 2] += 10.0
-        edited.vertex_properties["porosity"][3] = 0.5
+        edited.vertex_properties["Porosity"][3] = 0.5
         edited.metadata["gocad_header"] = [*edited.metadata["gocad_header"], "ivolmap:false"]
         tgsis.save_feature(conn, fc, fid, edited)
         conn.commit()
@@ -334,3 +380,20 @@ def test_versioned_edit_with_parts_atoms_and_properties(conn: Conn) -> None:
     _same_model(edited, merged)
     assert format_gocad(merged) == format_gocad(edited)
     assert "PATOM 6 3 0.33 0.1 0.2 -0.3" in format_gocad(merged).splitlines()
+
+
+def test_checkout_gives_the_file_convention_and_checkin_keeps_it(conn: Conn) -> None:
+    fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
+    mesh, fid, _ = _stored_and_exported(conn, fc, DEPTH_TSURF)
+    checked = tgsis.checkout(conn, fid)
+    _same_model(mesh, checked.mesh)  # depths, ZPOSITIVE Depth, coordinate system, parts, atoms
+    assert format_gocad(checked.mesh) == format_gocad(mesh)
+    checked.mesh.vertices[3, 2] += 10.0
+    result = tgsis.checkin(conn, checked)
+    conn.commit()
+    assert not result.conflict
+    again = F.fetch_feature(conn, fc, fid).mesh
+    assert isinstance(again, Mesh)
+    _same_model(checked.mesh, again)
+    assert conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 3", (fid,)).fetchone() == (-1410.5,)
+    assert conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (fid,)).fetchone() == ("Depth",)

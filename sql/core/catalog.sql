@@ -39,7 +39,7 @@ COMMENT ON COLUMN tgsis.catalog.timeunit IS 'unit of model time for temporal cla
 COMMENT ON COLUMN tgsis.catalog.proalignment IS 'VERTEX: _idx is a vrtxid; CELL: _idx is a pointid/segid/trglid/tetraid';
 COMMENT ON COLUMN tgsis.catalog.srs IS 'spatial reference id (EPSG code; 0 = undefined/local)';
 COMMENT ON COLUMN tgsis.catalog.feature_properties IS 'per-feature properties in column order: [{"name": ..., "type": ...}]';
-COMMENT ON COLUMN tgsis.catalog.cell_properties IS 'per-vertex or per-cell properties in column order: [{"name": ..., "type": ...}]';
+COMMENT ON COLUMN tgsis.catalog.cell_properties IS 'per-vertex or per-cell properties in column order: [{"name": ..., "type": ...}], with "size": k for a vector property (an array column of k values)';
 COMMENT ON COLUMN tgsis.catalog.instant_properties IS 'per-instant feature properties (columns of protablename) in column order: [{"name": ..., "type": ...}]';
 COMMENT ON COLUMN tgsis.catalog.description IS 'free text';
 COMMENT ON COLUMN tgsis.catalog.created_at IS 'when the class was registered';

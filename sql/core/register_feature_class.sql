@@ -136,10 +136,19 @@ BEGIN
            coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
       INTO v_fcols, v_fprops
       FROM tgsis.property_columns(p_feature_properties, false, 'feature');
-    SELECT coalesce(string_agg(format(', %I %s NOT NULL', name, typename), '' ORDER BY ord), ''),
-           coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
+    -- a vector property (size k > 1) is one column holding an array of exactly k values
+    SELECT coalesce(string_agg(CASE WHEN size = 1 THEN format(', %I %s NOT NULL', name, typename)
+                                    ELSE format(', %I %s[] NOT NULL CHECK (array_ndims(%I) = 1 AND array_lower(%I, 1) = 1 '
+                                                'AND cardinality(%I) = %s AND array_position(%I, NULL) IS NULL)',
+                                                name, typename, name, name, name, size, name) END, '' ORDER BY ord), ''),
+           coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename)
+                              || CASE WHEN size > 1 THEN jsonb_build_object('size', size) ELSE '{}' END ORDER BY ord), '[]')
       INTO v_ccols, v_cprops
       FROM tgsis.property_columns(p_cell_properties, true, lower(v_align));
+    IF v_model <> 'STATIC' AND EXISTS (SELECT FROM jsonb_array_elements(v_cprops) p WHERE p ? 'size') THEN
+        RAISE EXCEPTION 'temporal feature class % takes no vector properties', p_name
+            USING ERRCODE = 'TG103', HINT = 'give one scalar property per component';
+    END IF;
     SELECT coalesce(string_agg(format(', %I %s', name, typename), '' ORDER BY ord), ''),
            coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
       INTO v_icols, v_iprops

@@ -44,7 +44,7 @@ from psycopg import sql
 from tgsis.arguments import check_module
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.edits import EditPlan, plan_edit
-from tgsis.db.copy import SQL_TYPES
+from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.db.features import (
     FeatureClass,
     _aligned_properties,
@@ -54,13 +54,15 @@ from tgsis.db.features import (
     _positions,
     _SIMPLEX,
     _Storage,
+    MEANING_COLUMNS,
+    _part_meaning,
     class_of_feature,
     copy_extra_rows,
     extra_rows,
     get_feature_class,
     restore_extras,
 )
-from tgsis.db.meaning import meaning_of, z_convention
+from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.errors import (
     CheckoutConflictError,
     FileFormatError,
@@ -229,11 +231,11 @@ class SaveResult:
 
 
 def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.bool_]:
-    """Elementwise equality in which NaN equals NaN (a NaN property that stays NaN is no change)."""
+    """Per element (row of a vector property) equality in which NaN equals NaN (a NaN that stays NaN is no change)."""
     same: npt.NDArray[np.bool_] = a == b
     if a.dtype.kind == "f":
         same |= np.isnan(a) & np.isnan(b)
-    return same
+    return np.asarray(same.all(axis=1)) if same.ndim == 2 else same
 
 
 def _next_id(conn: Conn, storage: _Storage, table: str, key: str, idfield: str, geoid: int) -> int:
@@ -316,7 +318,8 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
         if len(rewrite):
             storage.copy(conn, fc.schema, fc.cellprotable, [
                 ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"), ("_idx", new_ids[rewrite], "int8"),
-                *((p.name, cell_values[p.name][rewrite], SQL_TYPES[p.type]) for p in fc.cell_properties)])
+                *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size))
+                  for p in fc.cell_properties)])
             inserted += len(rewrite)
 
     deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
@@ -572,7 +575,9 @@ class Checkout:
     properties : dict
         Feature properties at check-out.
     mesh : Mesh
-        A copy of the base mesh to edit (or replace by any edited mesh).
+        A copy of the base mesh to edit (or replace by any edited mesh), in
+        its file's z convention and with its file's metadata (coordinate
+        system, colour, ...); the base is in storage's convention (elevation).
     """
 
     token: CheckoutToken
@@ -733,12 +738,16 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
             row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
             assert row is not None
             base = _stored_mesh(conn, fc, feature_id, name)
+            meaning = conn.execute(f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s",
+                                   (feature_id,)).fetchone()
             _restore_settings(conn, settings)
     token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
                           _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"), frozen)
     log.info("checked out %s feature %d from %s at revision %d%s", fc.name, feature_id, version, revision,
              " (frozen)" if frozen is not None else "")
     checked_out = Checkout(token, base, properties)
+    if meaning is not None:  # the mesh to edit is in its file's convention, with its metadata (the base is as stored)
+        restore_meaning(checked_out.mesh, **_part_meaning(meaning))
     checked_out.index()  # hashed now, so that the check-in hashes only the edited mesh
     return checked_out
 

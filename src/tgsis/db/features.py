@@ -28,7 +28,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
-from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
+from tgsis.db.copy import SQL_TYPES, array_wire, decode_rows, encode_rows, numpy_dtype
 from tgsis.db.meaning import Meaning, meaning_of, part_runs, parts_from_runs, restore_meaning
 from tgsis.errors import (InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError,
                           NotVersionedError, reraise)
@@ -54,7 +54,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 Conn = psycopg.Connection[Any]
-PropertySpec = Mapping[str, str] | Sequence[tuple[str, str]]
+PropertySpec = Mapping[str, str] | Sequence[tuple[str, str] | tuple[str, str, int]]
 
 _SIMPLEX = {
     Geotype.MULTIPOINT: ("point", "pointid"),
@@ -66,10 +66,20 @@ _SIMPLEX = {
 
 @dataclass(frozen=True)
 class Property:
-    """A property of a feature class: column name and SQL type."""
+    """A property of a feature class: column name, SQL type and, for a vector property, its number of components.
+
+    A vertex or cell property of ``size`` k > 1 is one column of arrays of k
+    values; in a mesh it is an (n, k) array.
+    """
 
     name: str
     type: str
+    size: int = 1
+
+    @property
+    def wire(self) -> str:
+        """Its binary COPY wire type (``"float8"``, ``"float8[3]"``)."""
+        return array_wire(SQL_TYPES[self.type], self.size)
 
 
 @dataclass(frozen=True)
@@ -172,7 +182,7 @@ _CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
     def props(value: Any) -> tuple[Property, ...]:
         items = json.loads(value) if isinstance(value, str) else value
-        return tuple(Property(p["name"], p["type"]) for p in items)
+        return tuple(Property(p["name"], p["type"], int(p.get("size", 1))) for p in items)
 
     return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
                         feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
@@ -181,8 +191,8 @@ def _class_from_row(row: Sequence[Any]) -> FeatureClass:
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
-    pairs = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
-    return json.dumps([[name, typ] for name, typ in pairs])
+    items: list[Any] = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
+    return json.dumps([list(item) if isinstance(item, (tuple, list)) else item for item in items])
 
 
 def create_feature_class(
@@ -209,7 +219,10 @@ def create_feature_class(
         Class and feature-table name: lower case, no quoting needed.
     geotype : Geotype or str
     feature_properties, cell_properties : mapping or sequence of (name, type)
-        Property names and SQL types (see ``tgsis.property_types``); order kept.
+        Property names (letter case kept) and SQL types (see
+        ``tgsis.property_types``); order kept. A vertex or cell property may
+        be a vector: ``(name, type, k)`` stores an (n, k) mesh property as
+        one array column of k values.
     alignment : {"VERTEX", "CELL"}
     srs : int
     schema : str
@@ -303,8 +316,16 @@ def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
     cells = _cell_properties(fc, mesh)
     stored, other = ((mesh.vertex_properties, cells) if fc.alignment == "VERTEX"
                      else (cells, mesh.vertex_properties))
-    return class_property_arrays(fc, stored, other, "vertex" if fc.alignment == "VERTEX" else mesh.cell_name,
-                                 drop_extra, what)
+    kind = "vertex" if fc.alignment == "VERTEX" else mesh.cell_name
+    result = class_property_arrays(fc, stored, other, kind, drop_extra, what)
+    for prop in fc.cell_properties:  # (n,) for a scalar property, (n, k) for a vector of k
+        values = result[prop.name]
+        if (values.ndim == 1) != (prop.size == 1) or (values.ndim == 2 and values.shape[1] != prop.size):
+            shape = "one value" if prop.size == 1 else f"a vector of {prop.size} values"
+            got = "one value" if values.ndim == 1 else f"a vector of {values.shape[1]} values"
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} of {what} has {got} per element, "
+                                       f"but feature class {fc.name} stores {shape}")
+    return result
 
 
 def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any]],
@@ -522,7 +543,7 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         prop_geoids, prop_ids = _keys(geoids, counts)
         storage.copy(conn, fc.schema, fc.cellprotable, [
             ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
-            *((p.name, _concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+            *((p.name, _concat([v[p.name] for v in cell_values]), p.wire) for p in fc.cell_properties)])
     _copy_extras(conn, fc, geoids, meshes, meanings, storage)
 
 
@@ -787,7 +808,7 @@ def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Down
     if fc.cell_properties:
         properties = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
             sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc._table(fc.cellprotable),
-            id_list), ["int8", "int8", *(SQL_TYPES[p.type] for p in fc.cell_properties)])
+            id_list), ["int8", "int8", *(p.wire for p in fc.cell_properties)])
     atoms: dict[int, list[tuple[int, int, bool]]] = {}
     for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
             "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(

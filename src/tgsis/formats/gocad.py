@@ -32,9 +32,9 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
   it is recorded in ``metadata["zpositive"]``.
 * ``PROPERTIES`` become float64 vertex properties; values equal to the
   property's ``NO_DATA_VALUES`` entry become NaN; a property with ``ESIZES``
-  k > 1 becomes k properties ``name_0`` .. ``name_{k-1}``. Names that are not
-  valid mesh property names are sanitised (see
-  :func:`~tgsis.formats._common.sanitize_property_name`);
+  k > 1 becomes one (n, k) property (a vector of k components per vertex).
+  Names keep their letter case; names that are not valid mesh property names
+  are sanitised (see :func:`~tgsis.formats._common.sanitize_property_name`);
   ``metadata["property_names"]`` maps every mesh property name to its name in
   the file.
 * When an object has more than one non-empty part (``TFACE``, ``ILINE``,
@@ -394,9 +394,10 @@ class _PropertyLayout:
 
     file_names: list[str]
     sizes: list[int]
-    columns: list[str]  # mesh property names, one per value column
+    columns: list[str]  # the mesh property name of each value column (a vector's k columns share one)
     column_file_names: list[str]
     no_data: list[float]  # one per column (NaN: none)
+    names: list[str]  # mesh property names, one per property
 
     @property
     def n_columns(self) -> int:
@@ -418,12 +419,11 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
                                   f"({' '.join(names)}); each must be at least 1", path=path, line=line + 1)
     columns: list[str] = []
     column_file_names: list[str] = []
+    mesh_names: list[str] = []
     for name, size in zip(names, sizes):
-        base = sanitize_property_name(name, columns)
-        if size == 1:
-            columns.append(base)
-        else:
-            columns.extend(sanitize_property_name(f"{base}_{j}", columns) for j in range(size))
+        base = sanitize_property_name(name, mesh_names)  # a vector (ESIZES k > 1) is one (n, k) property
+        mesh_names.append(base)
+        columns.extend([base] * size)
         column_file_names.extend([name] * size)
     no_data = [math.nan] * len(columns)
     if "NO_DATA_VALUES" in rec.property_lines:
@@ -440,7 +440,7 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
         else:
             raise FileFormatError(f"NO_DATA_VALUES gives {len(values)} values for {len(names)} properties",
                                   path=path, line=line + 1)
-    return _PropertyLayout(list(names), sizes, columns, column_file_names, no_data)
+    return _PropertyLayout(list(names), sizes, columns, column_file_names, no_data, mesh_names)
 
 
 def _fast_table(texts: Sequence[str], dtype: type[np.generic], columns: Sequence[int]) -> npt.NDArray[Any] | None:
@@ -728,13 +728,18 @@ def _parse_cells(rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_
 
 
 def _vertex_properties(values: FloatArray, layout: _PropertyLayout) -> dict[str, FloatArray]:
-    """Property columns with no-data values replaced by NaN."""
-    result: dict[str, FloatArray] = {}
-    for j, name in enumerate(layout.columns):
+    """Properties ((n,), or (n, k) for ESIZES k > 1) with no-data values replaced by NaN."""
+    columns: list[FloatArray] = []
+    for j in range(layout.n_columns):
         column = np.ascontiguousarray(values[:, j])
         if not math.isnan(layout.no_data[j]):
             column[column == layout.no_data[j]] = np.nan
-        result[name] = column
+        columns.append(column)
+    result: dict[str, FloatArray] = {}
+    start = 0
+    for name, size in zip(layout.names, layout.sizes):
+        result[name] = columns[start] if size == 1 else np.stack(columns[start:start + size], axis=1)
+        start += size
     return result
 
 
@@ -779,7 +784,7 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]]) ->
     if rec.class_headers:
         meta["gocad_property_class_headers"] = [list(b) for b in rec.class_headers]
     if layout.columns:
-        meta["property_names"] = dict(zip(layout.columns, layout.column_file_names))
+        meta["property_names"] = dict(zip(layout.names, layout.file_names))
         esizes = {n: s for n, s in zip(layout.file_names, layout.sizes) if s > 1}
         if esizes:
             meta["gocad_esizes"] = esizes
@@ -1025,30 +1030,33 @@ def _written_properties(mesh: Mesh) -> list[_WrittenProperty]:
     esizes = _meta_dict(meta, "gocad_esizes")
     no_data = _meta_dict(meta, "gocad_no_data_values")
 
+    values = dict(property_columns(mesh.vertex_properties, split_vectors=False))
     groups: list[tuple[str, list[str]]] = []
     for column in mesh.vertex_properties:
         name = file_names.get(column, column)
         name = name if isinstance(name, str) and name and not any(c.isspace() for c in name) else column
         size = esizes.get(name, 1)
-        if size > 1 and groups and groups[-1][0] == name and len(groups[-1][1]) < size:
-            groups[-1][1].append(column)
+        if values[column].ndim == 2:  # a vector property: one GOCAD property of ESIZES k
+            groups.append((name, [column]))
+        elif size > 1 and groups and groups[-1][0] == name and len(groups[-1][1]) < size:
+            groups[-1][1].append(column)  # components stored one per mesh property
         else:
             groups.append((name, [column]))
     # a vector property with components missing, or a name used twice, is written column by column
     resolved: list[tuple[str, list[str]]] = []
     for name, columns in groups:
-        if esizes.get(name, 1) not in (1, len(columns)):
+        if values[columns[0]].ndim == 1 and esizes.get(name, 1) not in (1, len(columns)):
             resolved.extend((c, [c]) for c in columns)
         else:
             resolved.append((name, columns))
     result: list[_WrittenProperty] = []
     used: set[str] = set()
-    values = dict(property_columns(mesh.vertex_properties))
     for name, columns in resolved:
         if name in used:
             name = next(c for c in [columns[0], *(f"{columns[0]}_{j}" for j in itertools.count(2))] if c not in used)
         used.add(name)
-        arrays = [values[c] for c in columns]
+        arrays = [component for c in columns
+                  for component in ([values[c]] if values[c].ndim == 1 else list(values[c].T))]
         stored = no_data.get(name)
         result.append(_WrittenProperty(name, arrays, _no_data_value(arrays, stored)))
     return result
