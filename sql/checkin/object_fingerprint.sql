@@ -42,7 +42,7 @@ BEGIN
             'tgsis', v_table, 'geoid', CASE v_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid'
                                                      WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END, v_ids));
     END LOOP;
-    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable, otherprotable FROM tgsis.catalog
                     WHERE geotype = v_geo.geotype AND timemodel = 'STATIC' ORDER BY classname LOOP
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hashtextextended(f::text, 0)), 0) FROM %I.%I f WHERE f._geoid = $1',
                        v_class.schemaname, v_class.featuretable)
@@ -50,6 +50,10 @@ BEGIN
         v_parts := v_parts || (v_class.featuretable || ' ' || v_part);
         v_parts := v_parts || (v_class.cellprotable || ' ' || tgsis.table_fingerprint(
             v_class.schemaname, v_class.cellprotable, '_geoid', '_idx', v_ids));
+        IF v_class.otherprotable IS NOT NULL THEN
+            v_parts := v_parts || (v_class.otherprotable || ' ' || tgsis.table_fingerprint(
+                v_class.schemaname, v_class.otherprotable, '_geoid', '_idx', v_ids));
+        END IF;
     END LOOP;
     RETURN md5(array_to_string(v_parts, '|'));
 END

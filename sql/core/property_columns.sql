@@ -1,9 +1,11 @@
 -- tgsis.property_columns(properties, per_cell, what): validated (name, type, size) of a property list.
 -- Accepts {"name": "type", ...} or [["name", "type"], ...] or [{"name": ..., "type": ...}, ...];
 -- a vertex or cell property may be a vector of k components: ["name", "type", k] or
--- {"name": ..., "type": ..., "size": k} (a file's ESIZES k property: one column, an array of k values).
+-- {"name": ..., "type": ..., "size": k} (a file's ESIZES k property: one column, an array of k values);
+-- a vertex or cell property may name its own alignment, {"name": ..., "type": ..., "alignment": "CELL"}
+-- (alignment is per property: NULL here means the class's).
 CREATE FUNCTION tgsis.property_columns(p_properties jsonb, p_per_cell boolean, p_what text)
-RETURNS TABLE (name text, typename text, ord int, size int)
+RETURNS TABLE (name text, typename text, ord int, size int, alignment text)
 LANGUAGE plpgsql
 STABLE
 AS $$
@@ -14,6 +16,7 @@ DECLARE
     v_type    text;
     v_canon   text;
     v_size    jsonb;
+    v_align   text;
     v_seen    text[] := '{}';
     v_i       int := 0;
 BEGIN
@@ -41,9 +44,16 @@ BEGIN
             v_name := v_item ->> 'name';
             v_type := v_item ->> 'type';
             v_size := v_item -> 'size';
+            v_align := upper(btrim(v_item ->> 'alignment'));
         ELSE
             RAISE EXCEPTION '% property % is %, expected [name, type] or {"name": ..., "type": ...}', p_what, v_i, v_item
                 USING ERRCODE = 'TG103';
+        END IF;
+        IF v_align IS NOT NULL AND (v_align NOT IN ('VERTEX', 'CELL') OR NOT p_per_cell) THEN
+            RAISE EXCEPTION '% property % has alignment %: only vertex and cell properties have one, VERTEX or CELL',
+                    p_what, quote_literal(v_name), quote_literal(v_item ->> 'alignment')
+                USING ERRCODE = 'TG103',
+                      HINT = 'e.g. {"name": "facies", "type": "integer", "alignment": "CELL"} for a value per cell';
         END IF;
         IF v_size IS NOT NULL AND v_size <> 'null'::jsonb
            AND (jsonb_typeof(v_size) <> 'number' OR v_size::numeric NOT BETWEEN 1 AND 1000
@@ -94,10 +104,12 @@ BEGIN
         name := v_name;
         typename := v_canon;
         ord := v_i;
+        alignment := v_align;
+        v_align := NULL;
         RETURN NEXT;
     END LOOP;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.property_columns(jsonb, boolean, text) IS
-    'validate a property list (names of letters in either case, digits and underscores, kept as given; types from tgsis.property_types; sizes of vector vertex/cell properties) and return it as ordered (name, typename, ord, size) rows';
+    'validate a property list (names of letters in either case, digits and underscores, kept as given; types from tgsis.property_types; sizes of vector vertex/cell properties) and return it as ordered (name, typename, ord, size, alignment) rows';

@@ -31,9 +31,12 @@ BEGIN
     -- the feature row: its foreign key is gone once model 1 is versioned, so
     -- delete it explicitly; cell properties of a collection's members are in
     -- its class's table, keyed by member geoid
-    FOR v_class IN SELECT schemaname, featuretable, cellprotable, protablename FROM tgsis.catalog
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable, otherprotable, protablename FROM tgsis.catalog
                     WHERE geotype = v_geo.geotype AND timemodel = v_geo.timemodel LOOP
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', v_ids);
+        IF v_class.otherprotable IS NOT NULL THEN
+            PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.otherprotable, '_geoid', v_ids);
+        END IF;
         IF v_class.protablename IS NOT NULL THEN
             PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.protablename, '_geoid', v_ids);
         END IF;

@@ -76,6 +76,7 @@ from tgsis.db.versions import (
 from tgsis.db.features import (
     Feature,
     FeatureClass,
+    Property,
     create_feature_class,
     delete_feature,
     drop_feature_class,
@@ -225,6 +226,7 @@ __all__ = [
     "compare_meshes",
     # feature classes and features
     "FeatureClass",
+    "Property",
     "Feature",
     "create_feature_class",
     "get_feature_class",

@@ -137,21 +137,20 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
     table = _SIMPLEX[fc.geotype][0]
     simplices = np.stack([_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
         if len(cells) > 2 else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
-    values: dict[str, npt.NDArray[Any]] = {}
-    if fc.cell_properties:
-        pid = data.properties[1]
+    values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
+    for alignment, columns in data.properties.items():  # the class's alignment, and the other one if it has both
+        pid = columns[1]
         porder = np.argsort(pid, kind="stable")
-        targets = vertex_ids if fc.alignment == "VERTEX" else cell_ids
+        targets = vertex_ids if alignment == "VERTEX" else cell_ids
         if not np.array_equal(pid[porder], targets):
-            raise InvalidGeometryError(f"feature {geoid} of class {fc.name}: {fc.cellprotable} has {len(pid)} rows "
-                                       f"that do not match its {len(targets)} "
-                                       f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}",
+            raise InvalidGeometryError(f"feature {geoid} of class {fc.name}: {fc.property_table(alignment)} has "
+                                       f"{len(pid)} rows that do not match its {len(targets)} "
+                                       f"{'vertices' if alignment == 'VERTEX' else 'cells'}",
                                        hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
-        values = {p.name: data.properties[2 + i][porder] for i, p in enumerate(fc.cell_properties)}
+        values[alignment] = {p.name: columns[2 + i][porder] for i, p in enumerate(fc.aligned(alignment))}
     mesh = mesh_class(fc.geotype)(
         np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
-        vertex_properties=values if fc.alignment == "VERTEX" else None,
-        cell_properties=values if fc.alignment == "CELL" else None, name=name)
+        vertex_properties=values["VERTEX"], cell_properties=values["CELL"], name=name)
     # parts and atoms come with it; z stays in storage's convention (elevation)
     restore_extras(mesh, _Part(fc.geotype, name, ""), data, geoid, vertex_ids.astype(np.int64),
                    cell_ids.astype(np.int64), file_convention=False)
@@ -299,9 +298,13 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
         cell_ids[added_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(len(added_c))
 
     # property rows: those of removed elements go, those of new elements come, changed values are replaced
+    # (per alignment: a class may have vertex and cell properties side by side)
     deleted = inserted = changes = 0
-    if fc.cell_properties:
-        if fc.alignment == "VERTEX":
+    for alignment in ("VERTEX", "CELL"):
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if not props or protable is None:
+            continue
+        if alignment == "VERTEX":
             element_map, old_ids, new_ids, removed = plan.vertex_map, stored.vertex_ids, vertex_ids, plan.removed_vertices
             old_values = stored.mesh.vertex_properties
         else:
@@ -309,17 +312,16 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
             old_values = stored.mesh.cell_properties
         kept = np.flatnonzero(element_map >= 0)
         changed = np.zeros(len(kept), dtype=bool)
-        for p in fc.cell_properties:
+        for p in props:
             changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
         rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
-        changes = int(changed.sum())
-        deleted += _delete_parts(conn, fc.schema, fc.cellprotable, "_geoid", geoid, "_idx",
+        changes += int(changed.sum())
+        deleted += _delete_parts(conn, fc.schema, protable, "_geoid", geoid, "_idx",
                                  np.concatenate([old_ids[removed], new_ids[kept[changed]]]))
         if len(rewrite):
-            storage.copy(conn, fc.schema, fc.cellprotable, [
+            storage.copy(conn, fc.schema, protable, [
                 ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"), ("_idx", new_ids[rewrite], "int8"),
-                *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size))
-                  for p in fc.cell_properties)])
+                *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props)])
             inserted += len(rewrite)
 
     deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
@@ -934,10 +936,11 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
     vorder, corder = np.argsort(written.vertex_ids), np.argsort(written.cell_ids)
     rank = np.empty_like(vorder)
     rank[vorder] = np.arange(len(vorder))
-    stored = {k: v[vorder if fc.alignment == "VERTEX" else corder] for k, v in written.cell_values.items()}
+    by_alignment = {a: {p.name for p in fc.aligned(a)} for a in ("VERTEX", "CELL")}
+    stored = {a: {k: v[vorder if a == "VERTEX" else corder] for k, v in written.cell_values.items()
+                  if k in by_alignment[a]} for a in ("VERTEX", "CELL")}
     base_mesh = type(mesh)(mesh.vertices[vorder], rank[mesh.cells[corder]],
-                           vertex_properties=stored if fc.alignment == "VERTEX" else None,
-                           cell_properties=stored if fc.alignment == "CELL" else None, name=name)
+                           vertex_properties=stored["VERTEX"], cell_properties=stored["CELL"], name=name)
     new_token = replace(token, version=version, revision=revision, fingerprint=str(row[0]), base_revision=frozen,
                         checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
     return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),

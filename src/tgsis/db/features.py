@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -54,7 +54,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 Conn = psycopg.Connection[Any]
-PropertySpec = Mapping[str, str] | Sequence[tuple[str, str] | tuple[str, str, int]]
+PropertySpec = Mapping[str, str] | Sequence["tuple[str, str] | tuple[str, str, int] | Property"]
 
 _SIMPLEX = {
     Geotype.MULTIPOINT: ("point", "pointid"),
@@ -69,12 +69,15 @@ class Property:
     """A property of a feature class: column name, SQL type and, for a vector property, its number of components.
 
     A vertex or cell property of ``size`` k > 1 is one column of arrays of k
-    values; in a mesh it is an (n, k) array.
+    values; in a mesh it is an (n, k) array. ``alignment`` (``"VERTEX"`` or
+    ``"CELL"``) is given for a property aligned otherwise than its class
+    (alignment is per property; None: the class's).
     """
 
     name: str
     type: str
     size: int = 1
+    alignment: Literal["VERTEX", "CELL"] | None = None
 
     @property
     def wire(self) -> str:
@@ -110,6 +113,9 @@ class FeatureClass:
         ``protable``).
     protable : str or None
         ``<name>_pros`` of a temporal class.
+    otherprotable : str or None
+        ``<name>_simplexpros`` (a VERTEX class) or ``<name>_vertexpros`` (a
+        CELL class): the properties whose alignment is not ``alignment``.
     """
 
     name: str
@@ -127,6 +133,19 @@ class FeatureClass:
     time_unit: str | None = None
     instant_properties: tuple[Property, ...] = ()
     protable: str | None = None
+    otherprotable: str | None = None
+
+    def alignment_of(self, prop: Property) -> Literal["VERTEX", "CELL"]:
+        """Whether ``prop`` has a value per vertex or per cell."""
+        return prop.alignment or self.alignment
+
+    def aligned(self, alignment: str) -> tuple[Property, ...]:
+        """The vertex (``"VERTEX"``) or cell (``"CELL"``) properties, in column order."""
+        return tuple(p for p in self.cell_properties if self.alignment_of(p) == alignment)
+
+    def property_table(self, alignment: str) -> str | None:
+        """The table of the vertex or cell properties: ``cellprotable`` for the class's alignment, else ``otherprotable``."""
+        return self.cellprotable if alignment == self.alignment else self.otherprotable
 
     @property
     def mesh_class(self) -> type[Mesh]:
@@ -176,23 +195,29 @@ class Feature:
 
 _CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
                     "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
-                    "protablename")
+                    "protablename, otherprotable")
 
 
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
     def props(value: Any) -> tuple[Property, ...]:
         items = json.loads(value) if isinstance(value, str) else value
-        return tuple(Property(p["name"], p["type"], int(p.get("size", 1))) for p in items)
+        return tuple(Property(p["name"], p["type"], int(p.get("size", 1)), p.get("alignment")) for p in items)
 
     return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
                         feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
                         cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
-                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14])
+                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15])
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
     items: list[Any] = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
-    return json.dumps([list(item) if isinstance(item, (tuple, list)) else item for item in items])
+
+    def item_json(item: Any) -> Any:
+        if isinstance(item, Property):
+            return {"name": item.name, "type": item.type, "size": item.size, "alignment": item.alignment}
+        return list(item) if isinstance(item, (tuple, list)) else item
+
+    return json.dumps([item_json(item) for item in items])
 
 
 def create_feature_class(
@@ -222,7 +247,10 @@ def create_feature_class(
         Property names (letter case kept) and SQL types (see
         ``tgsis.property_types``); order kept. A vertex or cell property may
         be a vector: ``(name, type, k)`` stores an (n, k) mesh property as
-        one array column of k values.
+        one array column of k values. A :class:`Property` item may give its
+        own ``alignment`` (``Property("facies", "integer",
+        alignment="CELL")`` in a VERTEX class): a class may have vertex and
+        cell properties side by side.
     alignment : {"VERTEX", "CELL"}
     srs : int
     schema : str
@@ -296,7 +324,7 @@ def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
 
 def stores_part_column(fc: FeatureClass) -> bool:
     """Whether the class keeps the ``part`` cell property in a column of its own (else: in ``tgsis.part``)."""
-    return fc.alignment == "CELL" and any(p.name == "part" for p in fc.cell_properties)
+    return any(p.name == "part" and fc.alignment_of(p) == "CELL" for p in fc.cell_properties)
 
 
 def _cell_properties(fc: FeatureClass, mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
@@ -314,11 +342,19 @@ def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
     ``part`` cell column: it is stored in ``tgsis.part``.
     """
     cells = _cell_properties(fc, mesh)
-    stored, other = ((mesh.vertex_properties, cells) if fc.alignment == "VERTEX"
-                     else (cells, mesh.vertex_properties))
-    kind = "vertex" if fc.alignment == "VERTEX" else mesh.cell_name
-    result = class_property_arrays(fc, stored, other, kind, drop_extra, what)
+    sources = {"VERTEX": mesh.vertex_properties, "CELL": cells}
+    kinds = {"VERTEX": "vertex", "CELL": mesh.cell_name}
+    if fc.otherprotable is None:  # one alignment: the other's properties are extra
+        other_alignment = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
+        result = class_property_arrays(fc, sources[fc.alignment], sources[other_alignment], kinds[fc.alignment],
+                                       drop_extra, what)
+    else:  # vertex and cell properties side by side: each side checked against its own columns
+        result = {}
+        for alignment in ("VERTEX", "CELL"):
+            side = replace(fc, cell_properties=fc.aligned(alignment), alignment=alignment)
+            result.update(class_property_arrays(side, sources[alignment], {}, kinds[alignment], drop_extra, what))
     for prop in fc.cell_properties:  # (n,) for a scalar property, (n, k) for a vector of k
+        kind = kinds[fc.alignment_of(prop)]
         values = result[prop.name]
         if (values.ndim == 1) != (prop.size == 1) or (values.ndim == 2 and values.shape[1] != prop.size):
             shape = "one value" if prop.size == 1 else f"a vector of {prop.size} values"
@@ -538,12 +574,15 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         cells = _concat([meshes[i].cells for i in group])
         storage.copy(conn, "tgsis", table, [("geoid", cell_geoids, "int8"), (key, cell_ids, "int8"),
                                             *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(k))])
-    if fc.cell_properties:
-        counts = [m.n_vertices if fc.alignment == "VERTEX" else m.n_cells for m in meshes]
+    for alignment in ("VERTEX", "CELL"):  # one table per alignment (the class's own: cellprotable)
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if not props or protable is None:
+            continue
+        counts = [m.n_vertices if alignment == "VERTEX" else m.n_cells for m in meshes]
         prop_geoids, prop_ids = _keys(geoids, counts)
-        storage.copy(conn, fc.schema, fc.cellprotable, [
+        storage.copy(conn, fc.schema, protable, [
             ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
-            *((p.name, _concat([v[p.name] for v in cell_values]), p.wire) for p in fc.cell_properties)])
+            *((p.name, _concat([v[p.name] for v in cell_values]), p.wire) for p in props)])
     _copy_extras(conn, fc, geoids, meshes, meanings, storage)
 
 
@@ -782,7 +821,7 @@ class _Download:
 
     vertices: list[npt.NDArray[Any]]
     cells: dict[Geotype, list[npt.NDArray[Any]]]
-    properties: list[npt.NDArray[Any]]
+    properties: dict[str, list[npt.NDArray[Any]]]  # per alignment: _geoid, _idx, one array per property
     atoms: dict[int, list[tuple[int, int, bool]]] = field(default_factory=dict)
     parts: dict[int, list[tuple[int, int, int]]] = field(default_factory=dict)
 
@@ -804,11 +843,13 @@ def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Down
         cells[geotype] = _copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
             sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
             group), ["int8"] * (2 + len(cell_cols)))
-    properties: list[npt.NDArray[Any]] = []
-    if fc.cell_properties:
-        properties = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
-            sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc._table(fc.cellprotable),
-            id_list), ["int8", "int8", *(p.wire for p in fc.cell_properties)])
+    properties: dict[str, list[npt.NDArray[Any]]] = {}
+    for alignment in ("VERTEX", "CELL"):  # one COPY per property table
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if props and protable is not None:
+            properties[alignment] = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
+                sql.SQL(", ").join(sql.Identifier(p.name) for p in props), fc._table(protable), id_list),
+                ["int8", "int8", *(p.wire for p in props)])
     atoms: dict[int, list[tuple[int, int, bool]]] = {}
     for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
             "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(
@@ -857,7 +898,7 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
     wanted = list(parts)
     vg, vid, x, y, z = data.vertices
     vertex_rows = _split(vg, vid, wanted)
-    prop_rows = _split(data.properties[0], data.properties[1], wanted) if data.properties else {}
+    prop_rows = {alignment: _split(columns[0], columns[1], wanted) for alignment, columns in data.properties.items()}
     xyz = np.stack([x, y, z], axis=1)
     meshes: dict[int, Mesh] = {}
     for geotype, cells in data.cells.items():
@@ -869,19 +910,17 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
             vertex_ids = vid[vrows]
             simplices = np.stack([_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]],
                                  axis=1)
-            values: dict[str, npt.NDArray[Any]] = {}
-            if fc.cell_properties:
-                prows = prop_rows[geoid]
-                target_ids = vertex_ids if fc.alignment == "VERTEX" else cells[1][crows]
-                if len(prows) != len(target_ids) or not np.array_equal(data.properties[1][prows], target_ids):
+            values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
+            for alignment, columns in data.properties.items():
+                prows = prop_rows[alignment][geoid]
+                target_ids = vertex_ids if alignment == "VERTEX" else cells[1][crows]
+                if len(prows) != len(target_ids) or not np.array_equal(columns[1][prows], target_ids):
                     raise InvalidPropertyError(
-                        f"{parts[geoid].label}: {fc.cellprotable} has {len(prows)} rows for {len(target_ids)} "
-                        f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}")
-                values = {p.name: data.properties[2 + i][prows] for i, p in enumerate(fc.cell_properties)}
+                        f"{parts[geoid].label}: {fc.property_table(alignment)} has {len(prows)} rows for "
+                        f"{len(target_ids)} {'vertices' if alignment == 'VERTEX' else 'cells'}")
+                values[alignment] = {p.name: columns[2 + i][prows] for i, p in enumerate(fc.aligned(alignment))}
             meshes[geoid] = restore_extras(mesh_class(geotype)(
-                xyz[vrows], simplices,
-                vertex_properties=values if fc.alignment == "VERTEX" else None,
-                cell_properties=values if fc.alignment == "CELL" else None,
+                xyz[vrows], simplices, vertex_properties=values["VERTEX"], cell_properties=values["CELL"],
                 name=parts[geoid].name), parts[geoid], data, geoid, vertex_ids, cells[1][crows])
     return meshes
 
