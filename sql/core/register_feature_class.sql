@@ -41,6 +41,7 @@ DECLARE
     v_ccols     text;
     v_ocols     text;
     v_other     text;
+    v_notnull   text;
     v_fprops    jsonb;
     v_cprops    jsonb;
     v_row       tgsis.catalog;
@@ -138,14 +139,17 @@ BEGIN
            coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
       INTO v_fcols, v_fprops
       FROM tgsis.property_columns(p_feature_properties, false, 'feature');
+    v_notnull := CASE WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN '' ELSE ' NOT NULL' END;
     -- a vector property (size k > 1) is one column holding an array of exactly k values; a
     -- property aligned otherwise than the class (alignment is per property) goes to v_other
     WITH props AS (
         SELECT p.name, p.ord, p.size, nullif(p.alignment, v_align) AS alignment,
-               CASE WHEN p.size = 1 THEN format(', %I %s NOT NULL', p.name, p.typename)
-                    ELSE format(', %I %s[] NOT NULL CHECK (array_ndims(%I) = 1 AND array_lower(%I, 1) = 1 '
+               -- a collection's members may each have some of the class's properties: the rows of a
+               -- member hold NULL in the columns of properties it lacks
+               CASE WHEN p.size = 1 THEN format(', %I %s%s', p.name, p.typename, v_notnull)
+                    ELSE format(', %I %s[]%s CHECK (array_ndims(%I) = 1 AND array_lower(%I, 1) = 1 '
                                 'AND cardinality(%I) = %s AND array_position(%I, NULL) IS NULL)',
-                                p.name, p.typename, p.name, p.name, p.name, p.size, p.name) END AS definition,
+                                p.name, p.typename, v_notnull, p.name, p.name, p.name, p.size, p.name) END AS definition,
                jsonb_build_object('name', p.name, 'type', p.typename) AS item
           FROM tgsis.property_columns(p_cell_properties, true, lower(v_align)) p)
     SELECT coalesce(string_agg(definition, '' ORDER BY ord) FILTER (WHERE alignment IS NULL), ''),

@@ -138,7 +138,7 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
     simplices = np.stack([_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
         if len(cells) > 2 else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
     values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
-    for alignment, columns in data.properties.items():  # the class's alignment, and the other one if it has both
+    for (alignment, _), columns in data.properties.items():  # the class's alignment, and the other one if any
         pid = columns[1]
         porder = np.argsort(pid, kind="stable")
         targets = vertex_ids if alignment == "VERTEX" else cell_ids
@@ -147,7 +147,7 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
                                        f"{len(pid)} rows that do not match its {len(targets)} "
                                        f"{'vertices' if alignment == 'VERTEX' else 'cells'}",
                                        hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
-        values[alignment] = {p.name: columns[2 + i][porder] for i, p in enumerate(fc.aligned(alignment))}
+        values[alignment] = {p.name: columns[2 + i][porder] for i, p in enumerate(fc.aligned(alignment))}  # all of them
     mesh = mesh_class(fc.geotype)(
         np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
         vertex_properties=values["VERTEX"], cell_properties=values["CELL"], name=name)

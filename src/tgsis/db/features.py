@@ -482,6 +482,26 @@ class _Storage:
                  [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
 
 
+#: metadata key of a collection member that has only some of its class's properties: their names
+MEMBER_PROPERTIES_KEY = "tgsis_properties"
+
+
+def _member_class(fc: FeatureClass, member: Mesh) -> FeatureClass:
+    """The class as one member of a collection sees it: the class's properties that the member has."""
+    cells = _cell_properties(fc, member)
+    kept = tuple(p for p in fc.cell_properties
+                 if p.name in (member.vertex_properties if fc.alignment_of(p) == "VERTEX" else cells))
+    return fc if len(kept) == len(fc.cell_properties) else replace(fc, cell_properties=kept)
+
+
+def _with_property_names(meaning: Meaning, fc: FeatureClass, member_class: FeatureClass) -> Meaning:
+    """A member's meaning, with the names of the properties it has when it lacks some of the class's."""
+    if member_class is fc:
+        return meaning
+    return replace(meaning, metadata={**(meaning.metadata or {}),
+                                      MEMBER_PROPERTIES_KEY: [p.name for p in member_class.cell_properties]})
+
+
 def _member_label(index: int, mesh: Mesh) -> str:
     """How messages name member ``index`` of a collection."""
     named = f" {mesh.name!r}" if mesh.name else ""
@@ -578,11 +598,19 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
         if not props or protable is None:
             continue
-        counts = [m.n_vertices if alignment == "VERTEX" else m.n_cells for m in meshes]
-        prop_geoids, prop_ids = _keys(geoids, counts)
-        storage.copy(conn, fc.schema, protable, [
-            ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
-            *((p.name, _concat([v[p.name] for v in cell_values]), p.wire) for p in props)])
+        # collection members may have some of the properties each: one COPY per set of properties
+        groups: dict[tuple[str, ...], list[int]] = {}
+        for i, values in enumerate(cell_values):
+            groups.setdefault(tuple(p.name for p in props if p.name in values), []).append(i)
+        for names, group in groups.items():
+            if not names:
+                continue
+            counts = [meshes[i].n_vertices if alignment == "VERTEX" else meshes[i].n_cells for i in group]
+            prop_geoids, prop_ids = _keys([geoids[i] for i in group], counts)
+            storage.copy(conn, fc.schema, protable, [
+                ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
+                *((p.name, _concat([cell_values[i][p.name] for i in group]), p.wire)
+                  for p in props if p.name in names)])
     _copy_extras(conn, fc, geoids, meshes, meanings, storage)
 
 
@@ -701,8 +729,14 @@ def insert_feature(
     members = mesh.members if isinstance(mesh, GeometryCollection) else (mesh,)
     labels = [_member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh"
               for i, m in enumerate(members)]
-    cell_values = [_aligned_properties(fc, m, drop_extra_properties, label) for m, label in zip(members, labels)]
     meanings = [meaning_of(m, label) for m, label in zip(members, labels)]
+    if isinstance(mesh, GeometryCollection):  # each member has the class's properties it has
+        member_classes = [_member_class(fc, m) for m in members]
+        cell_values = [_aligned_properties(c, m, drop_extra_properties, label)
+                       for c, m, label in zip(member_classes, members, labels)]
+        meanings = [_with_property_names(meaning, fc, c) for meaning, c in zip(meanings, member_classes)]
+    else:
+        cell_values = [_aligned_properties(fc, m, drop_extra_properties, label) for m, label in zip(members, labels)]
     own_meaning = meaning_of(mesh) if isinstance(mesh, GeometryCollection) else meanings[0]
     feature_values = _feature_columns(fc, properties)
 
@@ -780,16 +814,23 @@ class _Part:
     crs: list[str] | None = None
     color: tuple[float | None, ...] | None = None
     metadata: dict[str, Any] | None = None
+    properties: tuple[str, ...] | None = None  # a collection member's properties when it lacks some (None: all)
 
 
 #: the columns of tgsis.geometry that _part_meaning reads, after geotype and name
 MEANING_COLUMNS = "g.zpositive, g.crs, g.colorred, g.colorgreen, g.colorblue, g.metadata"
 
 
-def _part_meaning(row: Sequence[Any]) -> dict[str, Any]:
-    """_Part keyword arguments from the values of :data:`MEANING_COLUMNS`."""
-    return {"zpositive": row[0], "crs": row[1], "color": tuple(row[2:5]) if row[2] is not None else None,
-            "metadata": row[5]}
+def _part_meaning(row: Sequence[Any], member: bool = False) -> dict[str, Any]:
+    """_Part keyword arguments from the values of :data:`MEANING_COLUMNS` (``member``: of a collection member)."""
+    meaning = {"zpositive": row[0], "crs": row[1], "color": tuple(row[2:5]) if row[2] is not None else None,
+               "metadata": row[5]}
+    if member and isinstance(row[5], dict) and MEMBER_PROPERTIES_KEY in row[5]:
+        metadata = dict(row[5])
+        names = metadata.pop(MEMBER_PROPERTIES_KEY)
+        meaning["metadata"] = metadata or None
+        meaning["properties"] = tuple(str(n) for n in names) if isinstance(names, list) else ()
+    return meaning
 
 
 def _collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> dict[int, list[tuple[int, _Part]]]:
@@ -807,7 +848,7 @@ def _collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> 
         if geotype == Geotype.GEOMETRYCOLLECTION.value:
             raise InvalidGeometryError(f"{where} is a GEOMETRYCOLLECTION: collections do not nest",
                                        hint=f"SELECT * FROM tgsis.check_geometry({cid})")
-        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where, **_part_meaning(meaning))))
+        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where, **_part_meaning(meaning, member=True))))
     empty = [cid for cid, listed in members.items() if not listed]
     if empty:
         raise InvalidGeometryError(f"feature(s) {empty} of class {fc.name} are collections without members",
@@ -821,7 +862,9 @@ class _Download:
 
     vertices: list[npt.NDArray[Any]]
     cells: dict[Geotype, list[npt.NDArray[Any]]]
-    properties: dict[str, list[npt.NDArray[Any]]]  # per alignment: _geoid, _idx, one array per property
+    #: per (alignment, property names): _geoid, _idx, one array per property (collection members may
+    #: have some of the class's properties each: one COPY per set)
+    properties: dict[tuple[str, tuple[str, ...]], list[npt.NDArray[Any]]]
     atoms: dict[int, list[tuple[int, int, bool]]] = field(default_factory=dict)
     parts: dict[int, list[tuple[int, int, int]]] = field(default_factory=dict)
 
@@ -843,13 +886,18 @@ def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Down
         cells[geotype] = _copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
             sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
             group), ["int8"] * (2 + len(cell_cols)))
-    properties: dict[str, list[npt.NDArray[Any]]] = {}
-    for alignment in ("VERTEX", "CELL"):  # one COPY per property table
+    properties: dict[tuple[str, tuple[str, ...]], list[npt.NDArray[Any]]] = {}
+    for alignment in ("VERTEX", "CELL"):  # one COPY per property table (and set of properties)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
-        if props and protable is not None:
-            properties[alignment] = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
-                sql.SQL(", ").join(sql.Identifier(p.name) for p in props), fc._table(protable), id_list),
-                ["int8", "int8", *(p.wire for p in props)])
+        if not props or protable is None:
+            continue
+        for names, members in _property_groups(props, parts).items():
+            if names:
+                properties[(alignment, names)] = _copy_out(
+                    conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
+                        sql.SQL(", ").join(sql.Identifier(n) for n in names), fc._table(protable),
+                        sql.Literal(members)),
+                    ["int8", "int8", *(p.wire for p in props if p.name in names)])
     atoms: dict[int, list[tuple[int, int, bool]]] = {}
     for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
             "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(
@@ -861,6 +909,19 @@ def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Down
             id_list)).fetchall():
         runs.setdefault(int(geoid), []).append((int(first), int(last), int(number)))
     return _Download(vertices, cells, properties, atoms, runs)
+
+
+def _names_of(props: Sequence[Property], part: _Part) -> tuple[str, ...]:
+    """The names of ``props`` that a geometry has (all, but for some collection members)."""
+    return tuple(p.name for p in props if part.properties is None or p.name in part.properties)
+
+
+def _property_groups(props: Sequence[Property], parts: Mapping[int, _Part]) -> dict[tuple[str, ...], list[int]]:
+    """The geometries of ``parts`` by the names of ``props`` they have."""
+    groups: dict[tuple[str, ...], list[int]] = {}
+    for geoid, part in parts.items():
+        groups.setdefault(_names_of(props, part), []).append(geoid)
+    return groups
 
 
 def restore_extras(mesh: Mesh, part: _Part, data: _Download, geoid: int, vertex_ids: npt.NDArray[np.int64],
@@ -898,7 +959,11 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
     wanted = list(parts)
     vg, vid, x, y, z = data.vertices
     vertex_rows = _split(vg, vid, wanted)
-    prop_rows = {alignment: _split(columns[0], columns[1], wanted) for alignment, columns in data.properties.items()}
+    prop_rows: dict[int, list[tuple[str, tuple[str, ...], npt.NDArray[np.int64], list[npt.NDArray[Any]]]]] = {}
+    for (alignment, names), columns in data.properties.items():
+        group = [g for g, part in parts.items() if _names_of(fc.aligned(alignment), part) == names]
+        for geoid, rows in _split(columns[0], columns[1], group).items():
+            prop_rows.setdefault(geoid, []).append((alignment, names, rows, columns))
     xyz = np.stack([x, y, z], axis=1)
     meshes: dict[int, Mesh] = {}
     for geotype, cells in data.cells.items():
@@ -911,14 +976,13 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
             simplices = np.stack([_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]],
                                  axis=1)
             values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
-            for alignment, columns in data.properties.items():
-                prows = prop_rows[alignment][geoid]
+            for alignment, names, prows, columns in prop_rows.get(geoid, []):
                 target_ids = vertex_ids if alignment == "VERTEX" else cells[1][crows]
                 if len(prows) != len(target_ids) or not np.array_equal(columns[1][prows], target_ids):
                     raise InvalidPropertyError(
                         f"{parts[geoid].label}: {fc.property_table(alignment)} has {len(prows)} rows for "
                         f"{len(target_ids)} {'vertices' if alignment == 'VERTEX' else 'cells'}")
-                values[alignment] = {p.name: columns[2 + i][prows] for i, p in enumerate(fc.aligned(alignment))}
+                values[alignment] = {name: columns[2 + i][prows] for i, name in enumerate(names)}
             meshes[geoid] = restore_extras(mesh_class(geotype)(
                 xyz[vrows], simplices, vertex_properties=values["VERTEX"], cell_properties=values["CELL"],
                 name=parts[geoid].name), parts[geoid], data, geoid, vertex_ids, cells[1][crows])
