@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PYTEST_ARGS ?=
 
-.PHONY: demo test check extension clean
+.PHONY: demo test check extension clean pictures
 
 # A venv with tgsis (editable), its test tools and the embedded PostgreSQL 18.
 $(VENV)/.installed: pyproject.toml
@@ -18,8 +18,20 @@ $(VENV)/.installed: pyproject.toml
 demo: $(VENV)/.installed
 	$(BIN)/tgsis demo
 
-test: $(VENV)/.installed extension
+# (the embedded server reads the worktree's SQL itself: TGSIS_PG=embedded
+# leaves the system's extension files alone, which a suite on the system
+# server may be reading at the same time)
+test: $(VENV)/.installed $(if $(filter embedded,$(TGSIS_PG)),,extension)
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+# The pictures the README shows, made by the scenarios (tgsis demo NAME) on the local server.
+pictures: $(VENV)/.installed
+	rm -rf build/pictures && mkdir -p build/pictures docs/pictures
+	$(BIN)/tgsis demo saltdome --dir build/pictures
+	$(BIN)/tgsis demo synsed --dir build/pictures
+	$(BIN)/tgsis demo river --dir build/pictures
+	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png \
+	    build/pictures/river_t4.png docs/pictures/
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy

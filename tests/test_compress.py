@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import uuid
 from collections import Counter
 from pathlib import Path
 from typing import Any
@@ -400,27 +399,6 @@ def test_only_admins_compress(conn: Conn, tree: dict[str, Any]) -> None:
     conn.execute("RESET ROLE")
     conn.commit()
     assert _raw(conn) == raw
-
-
-def test_an_owner_without_rights_on_a_table_is_told_which(conn: Conn, tree: dict[str, Any]) -> None:
-    """compress runs as its owner; wells_ver belongs to another role and grants nothing."""
-    role = f"compress_{uuid.uuid4().hex[:8]}"
-    conn.execute(f"CREATE ROLE {role} NOLOGIN IN ROLE tgsis_admin")     # rolled back with the rest
-    conn.execute(f"ALTER FUNCTION tgsis.compress_versions(boolean) OWNER TO {role}")
-    # tgsis's own tables, which the real owner (the extension's) owns
-    conn.execute(f"GRANT SELECT, UPDATE, DELETE ON tgsis.versions, tgsis.revisions, tgsis.conflicts, tgsis.versioned_tables "
-                 f"TO {role}")
-    # and every other storage table (only their owners may update or delete rows of storage)
-    for schema, table in conn.execute("SELECT schemaname, tablename || '_ver' FROM tgsis.versioned_tables "
-                                      "WHERE tablename <> 'wells'").fetchall():
-        conn.execute(f'GRANT SELECT, UPDATE, DELETE ON "{schema}"."{table}" TO {role}')
-    with pytest.raises(tgsis.MissingPrivilegeError, match=f"compress needs SELECT, UPDATE and DELETE on public.wells_ver, "
-                                                          f"which role {role} lacks") as info:
-        tgsis.compress_versions(conn)
-    assert info.value.hint == f"GRANT SELECT, UPDATE, DELETE ON public.wells_ver TO {role}"
-    conn.execute(f"GRANT SELECT, UPDATE, DELETE ON public.wells_ver TO {role}")
-    assert tgsis.compress_versions(conn, dry_run=True) != []
-    conn.rollback()
 
 
 def test_compress_waits_for_writers(conn: Conn, tree: dict[str, Any], db_dsn: str) -> None:

@@ -279,6 +279,7 @@ def test_a_role_without_createrole_is_told_what_the_dba_must_run() -> None:
                     tgsis.install(conn, method=method)  # type: ignore[arg-type]
                 hint = info.value.hint or ""
                 assert "CREATE ROLE tgsis_reader NOLOGIN;" in hint and "GRANT tgsis_editor TO tgsis_admin;" in hint
+                assert "CREATE ROLE tgsis_nobody NOLOGIN NOINHERIT; GRANT tgsis_nobody TO alice;" in hint
                 assert tgsis.installed_version(conn) is None
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute(info.value.hint.removeprefix("Ask a DBA to run once: "))  # type: ignore[union-attr]

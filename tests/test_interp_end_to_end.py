@@ -125,8 +125,8 @@ def test_a_cut_opens_a_crack(conn: Conn) -> None:
 
 def test_set_up_mistakes_name_what_is_wrong() -> None:
     source, (target, corners) = _flat(11, 6), _dome()
-    with pytest.raises(InterpolationSetupError, match="source time must come before"):
-        interpolate(source, target, InterpolationSetup((0, 10, 65, 55), tuple(corners)), 1.0, 0.0)
+    with pytest.raises(InterpolationSetupError, match="two different finite times"):
+        interpolate(source, target, InterpolationSetup((0, 10, 65, 55), tuple(corners)), 1.0, 1.0)
     with pytest.raises(InterpolationSetupError, match="control"):
         interpolate(source, target, InterpolationSetup((0, 10), tuple(corners[:2])), 0.0, 1.0)
 
@@ -157,3 +157,30 @@ def test_an_attached_border_stays_on_its_wall_read_from_the_set_up_file(tmp_path
     # the interior is solved per step (not linear): some interior vertex leaves its straight line
     straight = result.trajectories[0] + 0.4 * (result.trajectories[-1] - result.trajectories[0])
     assert np.abs(result.evolving.at(0.4).vertices - straight).max() > 1e-6  # type: ignore[union-attr]
+
+
+def test_the_source_may_be_the_later_shape() -> None:
+    """The dome (later, more complex) as the source at t = 1, the flat layer as the target at t = 0."""
+    (source, source_corners), target = _dome(), _flat(21, 11)
+    setup = InterpolationSetup(tuple(source_corners), tuple(_flat_corners(21, 11)), steps=5, tolerance=0.05)
+    result = interpolate(source, target, setup, 1.0, 0.0, name="dome backwards")
+    evolving = result.evolving
+    assert (evolving.start, evolving.end) == (0.0, 1.0)
+    at0, at1 = evolving.at(0.0), evolving.at(1.0)
+    assert at0 is not None and at1 is not None
+    assert np.array_equal(at1.vertices, result.source.vertices)              # the source at its own time, t0 = 1
+    assert np.array_equal(at0.vertices, result.target.vertices)              # the compatible target at t1 = 0
+    assert np.abs(at0.vertices[:, 2]).max() <= 0.05                          # flat within the tolerance
+    # the same samples as forwards, read in the other direction
+    forwards = interpolate(source, target, setup, 0.0, 1.0)
+    middle, forwards_middle = evolving.at(0.25), forwards.evolving.at(0.75)
+    assert middle is not None and forwards_middle is not None
+    assert np.allclose(middle.vertices, forwards_middle.vertices, atol=1e-9)
+
+
+def test_the_source_and_target_times_must_differ() -> None:
+    source, (target, corners) = _flat(21, 11), _dome()
+    setup = InterpolationSetup(tuple(_flat_corners(21, 11)), tuple(corners), steps=5, tolerance=0.05)
+    for t0, t1 in ((1.0, 1.0), (float("nan"), 1.0)):
+        with pytest.raises(InterpolationSetupError, match="two different finite times"):
+            interpolate(source, target, setup, t0, t1)

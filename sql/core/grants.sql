@@ -15,7 +15,7 @@ GRANT SELECT ON tgsis.object_locks TO PUBLIC;
 -- helpers they share are theirs alone
 REVOKE ALL ON FUNCTION tgsis.next_working_revision(integer, integer[], integer), tgsis.lock_for_merge(text, text),
                        tgsis.copy_object_state(text, text[], integer[], integer[], integer),
-                       tgsis.update_shared_rows(text, text, text, text[], integer[], integer[], integer)
+                       tgsis.update_shared_rows(tgsis.versioned_tables, text, text, text[], integer[], integer[], integer)
     FROM PUBLIC;
 -- tgsis.catalog, versioned_tables and versioning_dropped are read-only too:
 -- definer code acts on what they name (and EXECUTEs the recorded constraint

@@ -22,12 +22,18 @@ BEGIN
 
     IF cardinality(v_missing) > 0
        AND NOT (SELECT rolsuper OR rolcreaterole FROM pg_catalog.pg_roles WHERE rolname = current_user) THEN
+        -- everything the DBA must run once, tgsis_nobody too (core/nobody_role.sql, versioning/storage_hop.sql)
         RAISE EXCEPTION 'tgsis needs the group roles %, and role % may not create roles',
                 array_to_string(v_missing, ', '), current_user
             USING ERRCODE = 'TG002',
                   DETAIL = 'Roles are shared by all databases of the cluster; creating them needs CREATEROLE.',
-                  HINT = format('Ask a DBA to run once: %s GRANT tgsis_reader TO tgsis_editor; GRANT tgsis_editor TO tgsis_admin;',
-                                (SELECT string_agg(format('CREATE ROLE %I NOLOGIN;', r), ' ') FROM unnest(v_missing) AS r));
+                  HINT = format('Ask a DBA to run once: %s GRANT tgsis_reader TO tgsis_editor; GRANT tgsis_editor TO tgsis_admin;%s',
+                                (SELECT string_agg(format('CREATE ROLE %I NOLOGIN;', r), ' ') FROM unnest(v_missing) AS r),
+                                CASE WHEN NOT EXISTS (SELECT FROM pg_catalog.pg_roles WHERE rolname = 'tgsis_nobody')
+                                     THEN format(' CREATE ROLE tgsis_nobody NOLOGIN NOINHERIT; GRANT tgsis_nobody TO %I;', current_user)
+                                     WHEN NOT pg_catalog.pg_has_role(current_user, 'tgsis_nobody', 'MEMBER')
+                                     THEN format(' GRANT tgsis_nobody TO %I;', current_user)
+                                     ELSE '' END);
     END IF;
 
     FOR v_i IN 1 .. cardinality(v_roles) LOOP

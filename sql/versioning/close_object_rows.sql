@@ -50,16 +50,16 @@ BEGIN
     SELECT * INTO v_write FROM tgsis.write_revision();
     PERFORM tgsis.check_objects_unlocked(v_t.objectclass, p_keys::text[]);
     PERFORM tgsis.object_write_lock(v_t.objectclass, p_keys::text[]);
-    v_where := format('%I = ANY ($1)', p_keyfield)
-               || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
-    EXECUTE format('DELETE FROM %I.%I WHERE %s AND revision = $2', p_schema, p_table || '_ver', v_where)
-      USING p_keys, v_write.revision, v_write.revisions, p_ids;
-    GET DIAGNOSTICS v_deleted = ROW_COUNT;
-    EXECUTE format('UPDATE %I.%I v SET lastrevs = v.lastrevs || $2
-                     WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)',
-                   p_schema, p_table || '_ver', v_where)
-      USING p_keys, v_write.revision, v_write.revisions, p_ids;
-    GET DIAGNOSTICS v_closed = ROW_COUNT;
+    -- as the storage's owner (tgsis.storage_run): $1 keys, $3 the working set, $4 the working revision, $5 ids
+    v_where := format('%I = ANY ($1::bigint[])', p_keyfield)
+               || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($5)', p_idfield) ELSE '' END;
+    SELECT r[1]::bigint INTO v_deleted FROM tgsis.storage_run(v_t, true, format(
+        'DELETE FROM %I.%I WHERE %s AND revision = $4', p_schema, p_table || '_ver', v_where),
+        p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
+    SELECT r[1]::bigint INTO v_closed FROM tgsis.storage_run(v_t, true, format(
+        'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
+          WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)', p_schema, p_table || '_ver', v_where),
+        p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
     RETURN v_deleted + v_closed;
 END
 $$;

@@ -80,41 +80,34 @@ BEGIN
     FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
         v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
         name := format('%s.%s', v_t.schemaname, v_t.tablename);
-        -- the tables of applications need not belong to the owner of this function
-        IF NOT (has_table_privilege(v_ver, 'SELECT')
-                AND (v_dry OR has_table_privilege(v_ver, 'UPDATE') AND has_table_privilege(v_ver, 'DELETE'))) THEN
-            RAISE EXCEPTION 'compress needs SELECT% on %, which role % lacks',
-                    CASE WHEN v_dry THEN '' ELSE ', UPDATE and DELETE' END, v_ver, current_user
-                USING ERRCODE = 'TG002',
-                      DETAIL = 'tgsis.compress_versions runs with the rights of its owner.',
-                      HINT = format('GRANT SELECT, UPDATE, DELETE ON %s TO %I', v_ver, current_user);
-        END IF;
+        -- every statement on storage as its owner (tgsis.storage_run): $1 the kept sets, $2 their
+        -- revisions, $3 the checked revisions, $5 the loose numbers
         IF NOT v_dry THEN
-            EXECUTE format('LOCK TABLE %s IN EXCLUSIVE MODE', v_ver);  -- reads go on, writes wait
+            EXECUTE format('LOCK TABLE %s IN EXCLUSIVE MODE', v_ver);  -- reads go on, writes wait (runs no code of the table's)
         END IF;
 
         what := 'rows';
         IF v_dry THEN
-            EXECUTE v_with || format('SELECT count(*) FROM %s v WHERE NOT %s', v_ver, v_kept)
-               INTO removed USING v_sets, v_seen, v_checked;
+            SELECT r[1]::bigint INTO removed FROM tgsis.storage_run(v_t, false,
+                v_with || format('SELECT ARRAY[count(*)::text] FROM %s v WHERE NOT %s', v_ver, v_kept),
+                v_sets, v_seen, v_checked) AS r;
         ELSE
-            EXECUTE v_with || format('DELETE FROM %s v WHERE NOT %s', v_ver, v_kept) USING v_sets, v_seen, v_checked;
-            GET DIAGNOSTICS removed = ROW_COUNT;
+            SELECT r[1]::bigint INTO removed FROM tgsis.storage_run(v_t, true,
+                v_with || format('DELETE FROM %s v WHERE NOT %s', v_ver, v_kept), v_sets, v_seen, v_checked) AS r;
         END IF;
         IF removed > 0 THEN
             RETURN NEXT;
         END IF;
 
         what := 'lastrevs';
-        EXECUTE v_with || format(
-            'SELECT coalesce(sum((SELECT count(*) FROM unnest(v.lastrevs) AS l(r) WHERE l.r <> ALL ($2))), 0)
-               FROM %s v WHERE %s AND %s', v_ver, v_trim, v_kept)
-           INTO removed USING v_sets, v_seen, v_checked;
+        SELECT r[1]::bigint INTO removed FROM tgsis.storage_run(v_t, false, v_with || format(
+            'SELECT ARRAY[coalesce(sum((SELECT count(*) FROM unnest(v.lastrevs) AS l(r) WHERE l.r <> ALL ($2))), 0)::text]
+               FROM %s v WHERE %s AND %s', v_ver, v_trim, v_kept), v_sets, v_seen, v_checked) AS r;
         IF NOT v_dry AND removed > 0 THEN
-            EXECUTE format(
+            PERFORM FROM tgsis.storage_run(v_t, true, format(
                 'UPDATE %s v SET lastrevs = ARRAY(SELECT l.r FROM unnest(v.lastrevs) WITH ORDINALITY AS l(r, o)
                                                   WHERE l.r = ANY ($2) ORDER BY l.o)
-                  WHERE %s', v_ver, v_trim) USING v_sets, v_seen, v_checked;
+                  WHERE %s', v_ver, v_trim), v_sets, v_seen, v_checked);
         END IF;
         IF removed > 0 THEN
             RETURN NEXT;
@@ -122,10 +115,9 @@ BEGIN
 
         -- loose numbers still on a (remaining) row version stay in the sets
         IF cardinality(v_loose) > 0 THEN
-            EXECUTE v_with || format(
-                'SELECT coalesce(array_agg(DISTINCT u.r), ''{}'') FROM %s v, unnest(v.revision || v.lastrevs) AS u(r)
-                  WHERE u.r = ANY ($4) AND %s', v_ver, v_kept)
-               INTO v_found USING v_sets, v_seen, v_checked, v_loose;
+            SELECT r::integer[] INTO v_found FROM tgsis.storage_run(v_t, false, v_with || format(
+                'SELECT coalesce(array_agg(DISTINCT u.r::text), ''{}'') FROM %s v, unnest(v.revision || v.lastrevs) AS u(r)
+                  WHERE u.r = ANY ($5) AND %s', v_ver, v_kept), v_sets, v_seen, v_checked, NULL, v_loose::bigint[]) AS r;
             v_used := v_used || v_found;
         END IF;
     END LOOP;

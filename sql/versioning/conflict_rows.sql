@@ -17,7 +17,7 @@ BEGIN
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP
         RETURN QUERY EXECUTE format(
             'WITH rows AS (
-                 SELECT s.side, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r, v.revision
+                 SELECT s.side, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r, v.revision
                    FROM %I.%I v, (VALUES (''child'', $2), (''parent'', $3)) AS s(side, revs)
                   WHERE v.%I::text = $1 AND v.revision = ANY (s.revs) AND NOT (v.lastrevs && s.revs))
              SELECT %L::text, a.side, (SELECT jsonb_object_agg(key, a.r -> key) FROM unnest($4::text[]) AS key), a.r

@@ -34,16 +34,16 @@ BEGIN
         -- keys compared in the column's own type, so that its index serves
         SELECT format_type(atttypid, atttypmod) INTO v_keytype FROM pg_catalog.pg_attribute
          WHERE attrelid = v_ver::regclass AND attname = v_t.objectkeyfield;
-        EXECUTE format(
+        -- (every statement on storage as its owner: tgsis.storage_run)
+        SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'DELETE FROM %s v WHERE v.%I = ANY ($1::%s[]) AND v.revision = $4
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
                 AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))',
-            v_ver, v_t.objectkeyfield, v_keytype) USING p_keys, p_from, p_to, p_revision;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
+            v_ver, v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
         -- other versions see these rows too (the siblings of a merged version share
         -- the parent's rows): closed without waiting for one while holding others
-        v_count := tgsis.update_shared_rows(v_ver, 'lastrevs = v.lastrevs || $4', format(
+        v_count := tgsis.update_shared_rows(v_t, 'lastrevs = v.lastrevs || $4', format(
             'v.%I = ANY ($1::%s[]) AND v.revision <> $4
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
                 AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))',
@@ -59,14 +59,13 @@ BEGIN
            AND attname NOT IN ('revision', 'lastrevs');
         SELECT format_type(atttypid, atttypmod) INTO v_keytype FROM pg_catalog.pg_attribute
          WHERE attrelid = v_ver::regclass AND attname = v_t.objectkeyfield;
-        EXECUTE format(
+        SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'INSERT INTO %s (%s, revision)
              SELECT %s, $4 FROM %s v
               WHERE v.%I = ANY ($1::%s[])
                 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
                 AND NOT (v.revision = ANY ($3) AND NOT (v.lastrevs && $3))',
-            v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype) USING p_keys, p_from, p_to, p_revision;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
+            v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
     END LOOP;
     RETURN v_written;

@@ -32,12 +32,13 @@ BEGIN
     END IF;
     SELECT array_agg(revision ORDER BY revision) INTO v_revs FROM tgsis.revisions WHERE versionid = v_id;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY iudorder DESC, schemaname, tablename LOOP
-        EXECUTE format('DELETE FROM %I.%I WHERE revision = ANY ($1)', v_t.schemaname, v_t.tablename || '_ver') USING v_revs;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
+        -- as the storage's owner (tgsis.storage_run)
+        SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
+            'DELETE FROM %I.%I WHERE revision = ANY ($2)', v_t.schemaname, v_t.tablename || '_ver'), p_2 => v_revs) AS r;
         v_removed := v_removed + v_count;
         -- rows of ancestors that the version closed become live again for nobody else: drop its revisions
         -- (rows that sibling versions see too: changed without waiting for one while holding others)
-        PERFORM tgsis.update_shared_rows(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver'),
+        PERFORM tgsis.update_shared_rows(v_t,
                                          'lastrevs = ARRAY(SELECT r FROM unnest(v.lastrevs) AS r WHERE r <> ALL ($2))',
                                          'v.lastrevs && $2', NULL, v_revs, NULL, NULL);
     END LOOP;

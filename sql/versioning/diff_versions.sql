@@ -21,11 +21,11 @@ BEGIN
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
         SELECT string_agg(format('%I', k), ', ' ORDER BY o) INTO v_keys FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o);
         RETURN QUERY EXECUTE format(
-            'WITH a AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
+            'WITH a AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
                           FROM %3$I.%4$I v
                          WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)
                            AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))),
-                  b AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
+                  b AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
                           FROM %3$I.%4$I v
                          WHERE v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
                            AND NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1)))

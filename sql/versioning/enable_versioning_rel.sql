@@ -73,9 +73,12 @@ BEGIN
             USING ERRCODE = 'TG101', DETAIL = 'Versioning adds <table>_ver and <table>_ver_write(), which must fit in 63 bytes.';
     END IF;
     IF to_regclass(format('%I.%I', v_schema, v_ver)) IS NOT NULL
-       OR to_regprocedure(format('%I.%I()', v_schema, v_table || '_ver_write')) IS NOT NULL THEN
-        RAISE EXCEPTION '%.% or %.%() exists already', v_schema, v_ver, v_schema, v_table || '_ver_write'
-            USING ERRCODE = 'TG201', HINT = 'versioning needs these names for the table''s storage and trigger';
+       OR to_regprocedure(format('%I.%I()', v_schema, v_table || '_ver_write')) IS NOT NULL
+       OR EXISTS (SELECT FROM pg_proc WHERE pronamespace = to_regnamespace(quote_ident(v_schema))
+                                        AND proname = v_table || '_ver_run') THEN
+        RAISE EXCEPTION '%.%, %.%() or %.%() exists already', v_schema, v_ver, v_schema, v_table || '_ver_write',
+                v_schema, v_table || '_ver_run'
+            USING ERRCODE = 'TG201', HINT = 'versioning needs these names for the table''s storage, trigger and runner';
     END IF;
     IF p_objectclass IS NULL OR btrim(p_objectclass) = '' OR p_iudorder IS NULL THEN
         RAISE EXCEPTION 'versioning %.% needs an object class and an iudorder', v_schema, v_table USING ERRCODE = 'TG100';
@@ -108,6 +111,16 @@ BEGIN
         RAISE EXCEPTION 'table %.% has no column % to hold the object key', v_schema, v_table,
                 coalesce(quote_literal(p_objectkeyfield), 'NULL')
             USING ERRCODE = 'TG200', DETAIL = format('Its columns: %s.', array_to_string(v_columns, ', '));
+    END IF;
+    -- keys are cast to and from text by tgsis's definer code: with a type of
+    -- its own (a domain's check, a cast) the table's owner would run code there
+    IF (SELECT atttypid FROM pg_attribute WHERE attrelid = v_rel AND attname = p_objectkeyfield) >= 16384 THEN
+        RAISE EXCEPTION 'the object key column % of %.% is of type %, which is not built into PostgreSQL', p_objectkeyfield,
+                v_schema, v_table, (SELECT format_type(atttypid, atttypmod) FROM pg_attribute
+                                     WHERE attrelid = v_rel AND attname = p_objectkeyfield)
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'tgsis''s own functions read and compare object keys as tgsis''s owner; a type of one''s own could run its owner''s code there.',
+                  HINT = 'key the objects by a column of a built-in type (integer, bigint, text, uuid, ...)';
     END IF;
 
     -- views and rules reading the table would read every row version afterwards
@@ -256,6 +269,8 @@ BEGIN
     EXECUTE format('ALTER VIEW %I.%I OWNER TO %I', v_schema, v_table, pg_get_userbyid(v_owner));
     EXECUTE format('ALTER FUNCTION %I.%I() OWNER TO %I', v_schema, v_table || '_ver_write', pg_get_userbyid(v_owner));
     EXECUTE format('REVOKE ALL ON FUNCTION %I.%I() FROM PUBLIC', v_schema, v_table || '_ver_write');
+    -- through which tgsis's definer code acts on the storage, as its owner
+    PERFORM tgsis.create_storage_runner(v_schema, v_table);
 
     -- recorded by tgsis's definer helper, which checks what it records against the catalogs
     RETURN tgsis.register_versioned_table(format('%I.%I', v_schema, v_table)::regclass, p_objectkeyfield, p_objectclass,

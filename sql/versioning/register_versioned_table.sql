@@ -84,6 +84,18 @@ BEGIN
                 quote_literal(coalesce(p_shortname, v_table))
             USING ERRCODE = 'TG201', HINT = 'pass another p_shortname';
     END IF;
+    -- what tgsis.storage_run relies on when it acts on the storage as tgsis's owner
+    IF (SELECT atttypid FROM pg_attribute WHERE attrelid = v_ver AND attname = p_objectkeyfield) >= 16384 THEN
+        RAISE EXCEPTION 'the object key column % of %.% is not of a type built into PostgreSQL', p_objectkeyfield, v_schema, v_table
+            USING ERRCODE = 'TG100', HINT = 'key the objects by a column of a built-in type (integer, bigint, text, uuid, ...)';
+    END IF;
+    IF NOT EXISTS (SELECT FROM pg_proc
+                    WHERE oid = to_regprocedure(format('%I.%I(boolean, text, text[], integer[], integer[], integer, bigint[])',
+                                                       v_schema, v_table || '_ver_run'))
+                      AND prosecdef AND proowner = v_owner) THEN
+        RAISE EXCEPTION '%.% has no runner %.%() of its owner', v_schema, v_table, v_schema, v_table || '_ver_run'
+            USING ERRCODE = 'TG100', HINT = 'tgsis.enable_versioning versions a table and registers it';
+    END IF;
 
     INSERT INTO tgsis.versioned_tables (schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder,
                                         keycolumns, pkeyname, tablecomment, identity_always, enabled_by)

@@ -9,10 +9,11 @@
 -- the UPDATE never waits (a 1 ms lock_timeout undoes it as a whole), and
 -- when a row is taken, its holder is waited for with no row lock held (under
 -- the caller's lock_timeout), then the UPDATE is tried again.
--- p_set and p_where are SQL over the alias v of p_table and the parameters
--- $1 text[], $2 integer[], $3 integer[], $4 integer.
+-- p_set and p_where are SQL over the alias v of the table's storage and the
+-- parameters $1 text[], $2 integer[], $3 integer[], $4 integer; every
+-- statement runs through tgsis.storage_run (as the storage's owner).
 CREATE FUNCTION tgsis.update_shared_rows(
-    p_table text,
+    p_t     tgsis.versioned_tables,
     p_set   text,
     p_where text,
     p_1     text[],
@@ -24,16 +25,18 @@ LANGUAGE plpgsql
 VOLATILE
 AS $$
 DECLARE
+    v_table   text := format('%I.%I', p_t.schemaname, p_t.tablename || '_ver');
     v_count   bigint;
-    v_busy    tid;
+    v_busy    text;
     v_timeout text := current_setting('lock_timeout');
     v_undo    CONSTANT text := 'tgsis: undo the row locks of this block';
 BEGIN
     LOOP
         BEGIN
             PERFORM set_config('lock_timeout', '1ms', true);
-            EXECUTE format('UPDATE %s v SET %s WHERE %s', p_table, p_set, p_where) USING p_1, p_2, p_3, p_4;
-            GET DIAGNOSTICS v_count = ROW_COUNT;
+            SELECT r[1]::bigint INTO v_count
+              FROM tgsis.storage_run(p_t, true, format('UPDATE %s v SET %s WHERE %s', v_table, p_set, p_where),
+                                     p_1, p_2, p_3, p_4) AS r;
             PERFORM set_config('lock_timeout', v_timeout, true);
             RETURN v_count;
         EXCEPTION WHEN lock_not_available THEN
@@ -43,10 +46,11 @@ BEGIN
         -- cannot be locked now (found in a block then undone: none stays locked)
         v_busy := NULL;
         BEGIN
-            EXECUTE format('SELECT v.ctid FROM %1$s v WHERE %2$s EXCEPT
-                            SELECT f.ctid FROM (SELECT v.ctid FROM %1$s v WHERE %2$s FOR UPDATE SKIP LOCKED) f
-                            LIMIT 1', p_table, p_where)
-              INTO v_busy USING p_1, p_2, p_3, p_4;
+            SELECT r[1] INTO v_busy
+              FROM tgsis.storage_run(p_t, false, format(
+                       'SELECT ARRAY[b.ctid::text] FROM (SELECT v.ctid FROM %1$s v WHERE %2$s EXCEPT
+                                SELECT f.ctid FROM (SELECT v.ctid FROM %1$s v WHERE %2$s FOR UPDATE SKIP LOCKED) f
+                                LIMIT 1) b', v_table, p_where), p_1, p_2, p_3, p_4) AS r;
             RAISE EXCEPTION USING MESSAGE = v_undo;
         EXCEPTION WHEN OTHERS THEN
             IF SQLERRM IS DISTINCT FROM v_undo THEN
@@ -56,7 +60,8 @@ BEGIN
         IF v_busy IS NOT NULL THEN
             -- wait for its holder, then let go of the row again
             BEGIN
-                EXECUTE format('SELECT FROM %s v WHERE v.ctid = $1 FOR UPDATE', p_table) USING v_busy;
+                PERFORM FROM tgsis.storage_run(p_t, false, format(
+                    'SELECT ARRAY[]::text[] FROM %s v WHERE v.ctid = ($1[1])::tid FOR UPDATE', v_table), ARRAY[v_busy]);
                 RAISE EXCEPTION USING MESSAGE = v_undo;
             EXCEPTION WHEN OTHERS THEN
                 IF SQLERRM IS DISTINCT FROM v_undo THEN
@@ -68,5 +73,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.update_shared_rows(text, text, text, text[], integer[], integer[], integer) IS
-    'UPDATE p_table v SET p_set WHERE p_where ($1..$4 = p_1..p_4) without ever waiting for a row while holding others, so that it cannot deadlock with writers of other versions that see the same stored rows; returns the rows updated';
+COMMENT ON FUNCTION tgsis.update_shared_rows(tgsis.versioned_tables, text, text, text[], integer[], integer[], integer) IS
+    'UPDATE <table>_ver v SET p_set WHERE p_where ($1..$4 = p_1..p_4) without ever waiting for a row while holding others, so that it cannot deadlock with writers of other versions that see the same stored rows; returns the rows updated';

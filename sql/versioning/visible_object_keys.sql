@@ -2,21 +2,23 @@
 CREATE FUNCTION tgsis.visible_object_keys(p_objectclass text, p_keys text[], p_revisions integer[])
 RETURNS text[]
 LANGUAGE plpgsql
-STABLE
+VOLATILE
 AS $$
 DECLARE
     v_t     record;
     v_found text[] := '{}';
     v_some  text[];
     v_key   text;
+    v_row   tgsis.versioned_tables;
 BEGIN
     FOR v_t IN
-        SELECT t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype
+        SELECT t AS tbl, t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype
           FROM tgsis.versioned_tables t
           JOIN pg_catalog.pg_attribute a
             ON a.attrelid = format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass AND a.attname = t.objectkeyfield
          WHERE t.objectclass = p_objectclass
     LOOP
+        v_row := v_t.tbl;
         -- the keys cast to the column's type, so that the key index serves the lookup;
         -- a key that is no value of that type ('abc' for a bigint key) is a bad argument
         FOREACH v_key IN ARRAY coalesce(p_keys, '{}') LOOP
@@ -30,10 +32,11 @@ BEGIN
                           HINT = format('give keys that are %s values (for features: their ids)', v_t.keytype);
             END;
         END LOOP;
-        EXECUTE format('SELECT coalesce(array_agg(DISTINCT v.%1$I::text), ''{}'') FROM %2$I.%3$I v
-                         WHERE v.%1$I = ANY ($1::%4$s[]) AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-                       v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype)
-           INTO v_some USING p_keys, p_revisions;
+        -- read as the storage's owner from definer code (tgsis.storage_run)
+        SELECT r INTO v_some FROM tgsis.storage_run(v_row, false, format(
+            'SELECT coalesce(array_agg(DISTINCT v.%1$I::text), ''{}'') FROM %2$I.%3$I v
+              WHERE v.%1$I = ANY ($1::%4$s[]) AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+            v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype), p_keys, p_revisions) AS r;
         v_found := v_found || v_some;
     END LOOP;
     RETURN ARRAY(SELECT DISTINCT k FROM unnest(v_found) AS k ORDER BY k);

@@ -17,6 +17,7 @@ import math
 import os
 import signal
 import sys
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
@@ -44,7 +45,8 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, lifespan
-from tgsis.errors import Error, InvalidGeometryError, InvalidInputError, NotFoundError, NotVersionedError
+from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
+                          NotVersionedError, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
 from tgsis.temporal import even_times
 
@@ -306,13 +308,63 @@ def _check_flagged(file: str, meshes: Sequence[Mesh], reports: Sequence[MeshRepo
                                         "to store it as it is")
 
 
-def cmd_import(args: argparse.Namespace) -> int:
+def _import_report(mesh: Mesh, tolerance: float) -> MeshReport:
+    """:meth:`Mesh.report`, less the duplicates that GOCAD ATOMs make on purpose.
+
+    An ATOM (``metadata["gocad_atoms"]``) is a second vertex at the place of
+    another, which is how GOCAD cuts a surface along a line: the two are not a
+    defect. Pairs of vertices that repeat the same vertex through ATOMs are
+    left out; a vertex that merely happens to lie where another does is still
+    flagged.
+    """
+    report = mesh.report(tolerance)
+    pairs = mesh.metadata.get("gocad_atoms")
+    if not len(report.duplicate_vertices) or not isinstance(pairs, (list, tuple)):
+        return report
+    root = np.arange(mesh.n_vertices)
+    for pair in pairs:
+        if (isinstance(pair, (list, tuple)) and len(pair) == 2 and all(isinstance(v, int) for v in pair)
+                and 0 <= pair[0] < mesh.n_vertices and 0 <= pair[1] < mesh.n_vertices):
+            root[pair[0]] = pair[1]
+    for _ in range(max(1, mesh.n_vertices.bit_length() + 1)):  # follow chains of ATOMs (halving each step)
+        root = root[root]
+    duplicates = report.duplicate_vertices
+    kept = root[duplicates[:, 0]] != root[duplicates[:, 1]]
+    return MeshReport(duplicates[kept], report.degenerate_cells)
+
+
+def _read_for_import(args: argparse.Namespace) -> list[Mesh]:
+    """The objects of ``args.file``; objects skipped are one warning line each, or (``--strict``) an error."""
     from tgsis import formats
 
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SkippedObjectWarning)
+        meshes = formats.read(args.file, format=args.format)
+    for warning in caught:
+        if not issubclass(warning.category, SkippedObjectWarning):
+            warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
+    skipped = [w.message for w in caught if isinstance(w.message, SkippedObjectWarning)]
+    if skipped and args.strict:
+        what = "; ".join(f"GOCAD {w.object_type} object{f' {w.name!r}' if w.name else ''} at line {w.line}"
+                         for w in skipped)
+        raise FileFormatError(f"{args.file}: refused, nothing imported: it holds objects tgsis does not read: {what}",
+                              hint="import without --strict to store the objects tgsis reads and skip the others")
+    for message in skipped:
+        print(f"tgsis: warning: {message}", file=sys.stderr)
+    empty = [_object_label(i, mesh) for i, mesh in enumerate(meshes) if mesh.n_vertices == 0]
+    if empty:
+        raise FileFormatError(f"{args.file}: refused, nothing imported: {', '.join(empty)} "
+                              f"{'has' if len(empty) == 1 else 'have'} no vertex",
+                              hint="an object without vertices would be stored as an empty feature; "
+                                   "remove it from the file")
+    return meshes
+
+
+def cmd_import(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
         raise InvalidInputError(f"--tolerance must be a finite number >= 0, got {args.tolerance}")
-    meshes = formats.read(args.file, format=args.format)
-    reports = [mesh.report(args.tolerance) for mesh in meshes]
+    meshes = _read_for_import(args)
+    reports = [_import_report(mesh, args.tolerance) for mesh in meshes]
     if args.reject_flagged:
         _check_flagged(args.file, meshes, reports)
     values = _feature_values(args.set)
@@ -826,9 +878,13 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from tgsis.demo import run_demo
+    from tgsis.scenarios import SCENARIOS, run_scenario
 
-    run_demo(args.dsn, out=_out, folder=args.dir)
+    if args.list:
+        for scenario in SCENARIOS.values():
+            _out(f"{scenario.name}\t{scenario.summary}")
+        return 0
+    run_scenario(args.name, args.dsn, out=_out, folder=args.dir, size=args.size)
     return 0
 
 
@@ -851,8 +907,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-q", "--quiet", action="store_true", help="errors only")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    demo = commands.add_parser("demo", help="run the demo scenario")
+    demo = commands.add_parser("demo", help="run a sample application end to end (default: cfm, the release story)",
+                               epilog="example: tgsis demo saltdome --dir out  (then look at out/*.png, out/saltdome.gif)")
+    demo.add_argument("name", nargs="?", default="cfm", metavar="NAME",
+                      help="the scenario (tgsis demo --list names them; default: cfm)")
+    demo.add_argument("--list", action="store_true", help="list the scenarios and what each shows")
     demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
+    demo.add_argument("--size", choices=("small", "large"), default="small",
+                      help="how much data the scenario makes (default: small, under a minute)")
     demo.set_defaults(handler=cmd_demo)
 
     db = commands.add_parser("db", help="install, upgrade or inspect tgsis in a database")
@@ -910,7 +972,11 @@ def build_parser() -> argparse.ArgumentParser:
     imp.add_argument("--drop-extra-properties", action="store_true",
                      help="ignore properties of the file that the class does not store")
     imp.add_argument("--reject-flagged", action="store_true",
-                     help="refuse the whole file if any object has duplicate vertices or degenerate cells")
+                     help="refuse the whole file if any object has duplicate vertices (other than GOCAD ATOMs) "
+                          "or degenerate cells")
+    imp.add_argument("--strict", action="store_true",
+                     help="refuse the whole file if it holds objects tgsis cannot read (a GOCAD SGrid beside "
+                          "surfaces), instead of skipping them with a warning")
     imp.add_argument("--tolerance", type=float, default=0.0, metavar="T",
                      help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)")
     imp.set_defaults(handler=cmd_import)

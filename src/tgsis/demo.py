@@ -67,10 +67,18 @@ class _Fault:
 
 
 def _cfm_folder() -> Path | None:
-    """The CFM data: ``$TGSIS_DEMO_DATA`` when set, else ``data/cfm`` of the source tree (shipped with it)."""
+    """The CFM data: ``$TGSIS_DEMO_DATA`` when set, else the copy inside the installed package, else the source tree's.
+
+    The wheel holds ``data/cfm`` as ``tgsis/_data/cfm``; a source checkout
+    (an editable install) reads ``data/cfm`` itself.
+    """
     env = os.environ.get("TGSIS_DEMO_DATA")
-    folder = Path(env) if env else Path(__file__).resolve().parents[2] / "data" / "cfm"
-    return folder if all((folder / r).is_dir() for r in RELEASES) else None
+    here = Path(__file__).resolve().parent
+    candidates = [Path(env)] if env else [here / "_data" / "cfm", here.parents[1] / "data" / "cfm"]
+    for folder in candidates:
+        if all((folder / r).is_dir() for r in RELEASES):
+            return folder
+    return None
 
 
 def _synthetic_release(release: int) -> list[_Fault]:
@@ -218,7 +226,9 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
         row = conn.execute("SELECT tgsis.version(), current_setting('server_version')").fetchone()
         assert row is not None
         roles = [r[0] for r in conn.execute(
-            "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' ORDER BY oid").fetchall()]
+            # the group roles users are granted (not tgsis_nobody, which is tgsis's own)
+            "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' AND rolname <> 'tgsis_nobody' "
+            "ORDER BY oid").fetchall()]
         out(f"PostgreSQL {row[1]}, database {DEMO_DATABASE!r} ({target.source})")
         out(f"tgsis {row[0]} (installed as {current.method})")
         out(f"roles: {', '.join(roles)}")

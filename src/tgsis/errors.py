@@ -17,9 +17,10 @@ from __future__ import annotations
 import contextlib
 import re
 from collections.abc import Iterator
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-import psycopg
+if TYPE_CHECKING:  # imported where a database error is translated: the numpy modules raise these classes too
+    import psycopg
 
 __all__ = [
     "Error",
@@ -41,6 +42,7 @@ __all__ = [
     "UnsolvedConflictsError",
     "DatabaseError",
     "LocalServerError",
+    "SkippedObjectWarning",
     "class_for_sqlstate",
     "translate",
     "reraise",
@@ -225,6 +227,38 @@ class LocalServerError(Error):
     code = None
 
 
+class SkippedObjectWarning(UserWarning):
+    """A reader skipped an object of a file that it cannot read (a GOCAD SGrid beside the surfaces it reads).
+
+    A warning, not an :class:`Error`: the other objects of the file were read.
+    Readers take ``skip_unsupported=False`` to raise
+    :class:`FileFormatError` instead; ``tgsis import --strict`` does the same.
+
+    Attributes
+    ----------
+    path : str or None
+        The file.
+    line : int
+        1-based line where the skipped object begins.
+    object_type : str
+        The object's type as the file names it (``SGrid``, ``Model3d`` ...).
+    name : str or None
+        The object's name, when its header gives one.
+    """
+
+    def __init__(self, message: str, *, path: object = None, line: int, object_type: str,
+                 name: str | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.path = None if path is None else str(path)
+        self.line = line
+        self.object_type = object_type
+        self.name = name
+
+    def __str__(self) -> str:
+        return self.message
+
+
 _AREA_FALLBACK: dict[str, type[Error]] = {
     "TG0": Error,
     "TG1": InvalidInputError,
@@ -309,6 +343,8 @@ def reraise() -> Iterator[None]:
     >>> with reraise():                                   # doctest: +SKIP
     ...     conn.execute("select tgsis.goto_version('nope')")
     """
+    import psycopg  # only where a database is used
+
     try:
         yield
     except psycopg.Error as exc:

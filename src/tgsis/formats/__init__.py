@@ -7,8 +7,10 @@ tsurf      ``.ts``               SURFACE, collections of them          :mod:`tgs
 pline      ``.pl``               MULTILINESTRING, collections of them  :mod:`tgsis.formats.gocad`
 vset       ``.vs``               MULTIPOINT, collections of them       :mod:`tgsis.formats.gocad`
 tsolid     ``.so``               MULTITETRA, collections of them       :mod:`tgsis.formats.gocad`
+lightsolid ``.lso``              MULTITETRA (read only)                :mod:`tgsis.formats.gocad`
+gocadgroup ``.gp``               the members of a GOCAD group (read)   :mod:`tgsis.formats.gocad`
 vtu        ``.vtu``              all four, mixed collections           :mod:`tgsis.formats.vtk`
-obj, ply,  ``.obj .ply``         SURFACE                               :mod:`tgsis.formats.trimesh_io`
+obj, ply,  ``.obj .ply``         SURFACE (read: points too)            :mod:`tgsis.formats.trimesh_io`
 off, stl   ``.off .stl``
 =========  ====================  ====================================  ==========================
 
@@ -163,6 +165,17 @@ def _vtu_reader(path: PathLike, **options: Any) -> list[Mesh]:
     return list(read_vtu_collection(path, **options))
 
 
+def _lightsolid_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
+    raise FileFormatError("tgsis reads SKUA LightTSolid files but writes tetrahedra as GOCAD TSolid", path=path,
+                          hint="write a .so file (tsolid)")
+
+
+def _group_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
+    raise FileFormatError("tgsis reads the members of GOCAD group files but does not write groups", path=path,
+                          hint="write the members to a GOCAD file of their type (.ts, .pl, .vs, .so), which holds "
+                               "several objects")
+
+
 def _gocad_collection_writer(collection: GeometryCollection, path: PathLike, **options: Any) -> None:
     write_gocad_many(collection.members, path, **options)
 
@@ -189,6 +202,10 @@ FORMATS: dict[str, FileFormat] = {f.name: f for f in (
                _gocad_collection_writer),
     FileFormat("tsolid", (".so",), (Geotype.MULTITETRA,), read_gocad, write_gocad, "GOCAD TSolid (tetrahedra)",
                _gocad_collection_writer),
+    FileFormat("lightsolid", (".lso",), (Geotype.MULTITETRA,), read_gocad, _lightsolid_writer,
+               "SKUA LightTSolid (tetrahedra; read only)"),
+    FileFormat("gocadgroup", (".gp",), _ALL, read_gocad, _group_writer,
+               "GOCAD HeterogeneousGroup/HomogeneousGroup (read only: its members)"),
     FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView)", write_vtu),
     _trimesh_format("obj", "Wavefront OBJ (text, 8 decimals, no properties)"),
     _trimesh_format("ply", "Stanford PLY (binary, exact, with properties)"),

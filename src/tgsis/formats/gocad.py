@@ -1,16 +1,55 @@
-"""GOCAD ASCII objects: TSurf, PLine, VSet and TSolid, read and written.
+"""GOCAD ASCII objects: TSurf, PLine, VSet and TSolid read and written; SKUA's LightTSolid read.
 
 A GOCAD ASCII file holds one or more objects, each from a ``GOCAD <type> 1``
 line to an ``END`` line:
 
-========  ======  ===============  ==========  ===========
-type      ext.    parts            cells       mesh
-========  ======  ===============  ==========  ===========
-TSurf     ``.ts``  ``TFACE``        ``TRGL``    Surface
-PLine     ``.pl``  ``ILINE``        ``SEG``     LineSet
-VSet      ``.vs``  (none)           (none)      PointSet
-TSolid    ``.so``  ``TVOLUME``      ``TETRA``   TetraMesh
-========  ======  ===============  ==========  ===========
+===========  ========  ====================  ==========  ===========
+type         ext.      parts                 cells       mesh
+===========  ========  ====================  ==========  ===========
+TSurf        ``.ts``   ``TFACE``             ``TRGL``    Surface
+PLine        ``.pl``   ``ILINE``             ``SEG``     LineSet
+VSet         ``.vs``   (none)                (none)      PointSet
+TSolid       ``.so``   ``TVOLUME``           ``TETRA``   TetraMesh
+LightTSolid  ``.lso``  ``# CTETRA`` regions  ``TETRA``   TetraMesh
+===========  ========  ====================  ==========  ===========
+
+Files as GOCAD, SKUA and other tools write them
+-----------------------------------------------
+* Words are cut by :func:`split_words`, GOCAD's rule: ``"quoted text"`` is one
+  word (SKUA writes ``PROPERTIES " default property" def-prop``,
+  ``PROPERTY_KINDS " Real Number"``); the writer quotes such words again
+  (:func:`quote_word`). A quoted ``name:`` in the header loses its quotes.
+* A vertex line may end with a control-node flag (:data:`VERTEX_FLAGS`:
+  ``CNXYZ`` from GOCAD and SKUA on VRTX, PVRTX (after the property values)
+  and ATOM lines; ``XYZ`` from SKUA's LightTSolid). The flag of each vertex is
+  kept in ``metadata["gocad_vertex_flags"]`` (``{flag: [[start, stop], ...]}``,
+  half-open vertex index ranges) and written back.
+* Objects of a type tgsis does not read (SGrid, Voxet, Model3d, Well ...) are
+  skipped with a :class:`~tgsis.errors.SkippedObjectWarning` naming the file,
+  line, type and name; ``skip_unsupported=False`` raises instead, and a file
+  with no object tgsis reads is an error. The members of a group
+  (``GOCAD HeterogeneousGroup`` / ``HomogeneousGroup``, ``BEGIN_MEMBERS`` ...
+  ``END_MEMBERS``, nested or not) are read as objects of their own; the
+  group's own header is not kept.
+* Inside an object, a keyword tgsis does not know is an error naming file,
+  line and keyword: it could be geometry (``VERTEX`` for ``VRTX``) and the
+  mesh would silently be shorter. Known keywords without geometry of the mesh
+  are counted in ``metadata["gocad_ignored"]`` (BSTONE, BORDER, SUBVSET, and
+  the MODEL section of a TSolid or LightTSolid: SURFACE, TFACE, KEYVERTICES,
+  TRGL, MODEL_REGION, which name boundary triangles of the tetrahedra; SKUA's
+  ``BEGIN_..._REGION_INDICATORS`` blocks) or kept as lines in
+  ``metadata["gocad_extra_lines"]`` (GEOLOGICAL_FEATURE, GEOLOGICAL_TYPE,
+  STRATIGRAPHIC_POSITION, CLASSIFICATION, NAME, FIXED, READ_ONLY, REGION).
+* A LightTSolid (SKUA) is VRTX/PVRTX lines, ``SHAREDVRTX``/``SHAREDPVRTX``
+  lines (read as ATOM/PATOM: a vertex at the place of another, with values of
+  its own), then ``TETRA`` lines each followed by ``# CTETRA <region> <flags of
+  the four faces>``: the region becomes the ``part`` of the tetrahedron and
+  its name a part name. The face flags and the MODEL section (the boundary
+  surfaces, which are faces of the tetrahedra) are not kept. A LightTSolid is
+  written back as a TSolid, one TVOLUME per region.
+* Part names (the words after TFACE, ILINE, TVOLUME; a LightTSolid's regions)
+  are kept in ``metadata["gocad_part_names"]``, one per part in part order,
+  and written back.
 
 Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
 ---------------------------------------------------------------------
@@ -43,10 +82,8 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
 * ``HEADER``, the coordinate system, ``PROPERTY_CLASS_HEADER`` blocks and the
   per-property lines (``PROPERTY_CLASSES``, ``PROPERTY_KINDS``,
   ``PROPERTY_SUBCLASSES``, ``PROP_LEGAL_RANGES``, ``UNITS``) are kept in
-  ``metadata`` (keys below) for writing back. ``BSTONE``, ``BORDER`` and other
-  keywords after the geometry has begun are counted in
-  ``metadata["gocad_ignored"]`` and otherwise ignored; unknown lines before it
-  (``GEOLOGICAL_FEATURE`` ...) are kept in ``metadata["gocad_extra_lines"]``.
+  ``metadata`` (keys below) for writing back. Other lines: see above (known
+  keywords are counted or kept, unknown ones are errors).
 
 Writing (:func:`write_gocad`, :func:`write_gocad_many`, :func:`format_gocad`)
 -----------------------------------------------------------------------------
@@ -70,7 +107,8 @@ coordinate system block), ``gocad_extra_lines``,
 ``gocad_property_class_headers`` (list of line lists), ``gocad_esizes``
 ({file name: k} for k > 1), ``gocad_no_data_values`` ({file name: value}),
 ``gocad_property_info`` ({keyword: {file name: text}}), ``gocad_atoms``,
-``gocad_ignored`` ({keyword: count}). All are JSON-compatible.
+``gocad_ignored`` ({keyword: count}), ``gocad_vertex_flags`` ({flag: [[start,
+stop], ...]}), ``gocad_part_names`` (list of str). All are JSON-compatible.
 """
 
 from __future__ import annotations
@@ -80,6 +118,8 @@ import gc
 import io
 import itertools
 import math
+import re
+import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -87,12 +127,15 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
+from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError, SkippedObjectWarning
 from tgsis.formats._common import PathLike, check_mesh, property_columns, read_text, sanitize_property_name, write_text
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 __all__ = [
     "GOCAD_TYPES",
+    "VERTEX_FLAGS",
+    "split_words",
+    "quote_word",
     "read_gocad",
     "read_tsurf",
     "parse_gocad",
@@ -122,6 +165,8 @@ _KINDS: tuple[_Kind, ...] = (
     _Kind("PLine", LineSet, "ILINE", "SEG", "*line*color", ".pl"),
     _Kind("VSet", PointSet, None, None, "*atoms*color", ".vs"),
     _Kind("TSolid", TetraMesh, "TVOLUME", "TETRA", "*solid*color", ".so"),
+    # SKUA's tetrahedral mesh: no part keyword, a "# CTETRA <region> ..." line after each TETRA names its region
+    _Kind("LightTSolid", TetraMesh, None, "TETRA", "*solid*color", ".lso"),
 )
 _KIND_BY_NAME = {kind.name.lower(): kind for kind in _KINDS}
 
@@ -133,6 +178,50 @@ _COLOR_KEYS = ("*solid*color", "*line*color", "*atoms*color")
 _INFO_KEYWORDS = ("PROP_LEGAL_RANGES", "PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES", "UNITS")
 _PROPERTY_KEYWORDS = frozenset(("PROPERTIES", "NO_DATA_VALUES", "ESIZES") + _INFO_KEYWORDS)
 _DEFAULT_NO_DATA = -99999.0
+
+# Lines that describe an object without being geometry: kept as they are in metadata["gocad_extra_lines"] and
+# written back. FIXED (per property) and REGION (a named vertex flag) come with SKUA's LightTSolid, READ_ONLY
+# (per property) with RINGMesh's TSolid.
+_DESCRIPTION_KEYWORDS = frozenset(("GEOLOGICAL_FEATURE", "GEOLOGICAL_TYPE", "STRATIGRAPHIC_POSITION",
+                                   "CLASSIFICATION", "NAME", "FIXED", "READ_ONLY", "REGION"))
+# Lines that repeat what the geometry says (border stones, borders, the model section of a solid naming the
+# boundary triangles of its tetrahedra, subsets of points): counted in metadata["gocad_ignored"], not read.
+_REDUNDANT_KEYWORDS: dict[str, frozenset[str]] = {
+    "TSurf": frozenset(("BSTONE", "BORDER")),
+    "PLine": frozenset(("BSTONE", "BORDER")),
+    "VSet": frozenset(("SUBVSET",)),
+    "TSolid": frozenset(("BSTONE", "BORDER", "MODEL", "SURFACE", "TFACE", "KEYVERTICES", "TRGL", "MODEL_REGION")),
+    "LightTSolid": frozenset(("BSTONE", "BORDER", "MODEL", "SURFACE", "TFACE", "KEYVERTICES", "TRGL",
+                              "MODEL_REGION")),
+}
+# Records of a vertex at the place of another: keyword -> may carry property values of its own.
+_ATOM_KEYWORDS = {"ATOM": False, "PATOM": True,
+                  "SHAREDVRTX": False, "SHAREDPVRTX": True}  # LightTSolid's names for ATOM and PATOM
+
+#: Words that may end a vertex line: a control node (CN) fixed in some of x, y, z. GOCAD and SKUA write
+#: ``CNXYZ`` (TSurf, TSolid); SKUA's LightTSolid writes ``XYZ``. Kept per vertex in
+#: ``metadata["gocad_vertex_flags"]`` and written back.
+VERTEX_FLAGS = frozenset(prefix + axes for prefix in ("CN", "")
+                         for axes in ("X", "Y", "Z", "XY", "XZ", "YZ", "XYZ"))
+
+# A GOCAD word: blank-separated, except that "quoted text" (blanks and all) is one word.
+_WORD_RE = re.compile(r'(?:"[^"]*"|[^\s"]|")+')
+
+
+def split_words(text: str) -> list[str]:
+    """The words of a GOCAD line, as GOCAD's own tokeniser cuts them.
+
+    Words are separated by blanks, except that ``"..."`` is one word, blanks
+    included; the quotes are not part of the word (``PROPERTIES " default
+    property" def-prop`` has the words ``' default property'`` and ``'def-prop'``).
+    A quote left open runs to the end of its word.
+    """
+    return [w.replace('"', "") if '"' in w else w for w in _WORD_RE.findall(text)]
+
+
+def quote_word(word: str) -> str:
+    """``word`` as written in a GOCAD line: quoted when it is empty or holds blanks (see :func:`split_words`)."""
+    return f'"{word}"' if not word or any(c.isspace() for c in word) else word
 
 
 # ---------------------------------------------------------------- reading
@@ -162,37 +251,47 @@ class _Records:
     cell_lines: list[int] = field(default_factory=list)
     cell_texts: list[str] = field(default_factory=list)
     cell_parts: list[int] = field(default_factory=list)
+    # names of the parts, by part number (the words after TFACE/ILINE/TVOLUME; LightTSolid: its regions)
+    part_names: list[str] = field(default_factory=list)
 
 
-def read_gocad(path: PathLike, *, merge_atoms: bool = False) -> list[Mesh]:
+def read_gocad(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: bool = True) -> list[Mesh]:
     """Read every object of a GOCAD ASCII file.
 
     Parameters
     ----------
     path : str or path-like
-        A ``.ts``, ``.pl``, ``.vs`` or ``.so`` file (the extension is not checked:
-        the ``GOCAD <type>`` lines decide).
+        A ``.ts``, ``.pl``, ``.vs``, ``.so`` or ``.lso`` file (the extension is
+        not checked: the ``GOCAD <type>`` lines decide).
     merge_atoms : bool
         Map each ATOM/PATOM onto the vertex it repeats instead of keeping it as a
         vertex of its own.
+    skip_unsupported : bool
+        Skip objects of a type tgsis does not read (SGrid, Voxet, Model3d,
+        Well ...) with a :class:`~tgsis.errors.SkippedObjectWarning` naming
+        each; False raises :class:`~tgsis.errors.FileFormatError` instead. A
+        file with no object tgsis reads is an error either way.
 
     Returns
     -------
     list of Mesh
-        One mesh per ``GOCAD ... END`` object, in file order: Surface for TSurf,
-        LineSet for PLine, PointSet for VSet, TetraMesh for TSolid.
+        One mesh per object read, in file order: Surface for TSurf, LineSet for
+        PLine, PointSet for VSet, TetraMesh for TSolid and LightTSolid. The
+        members of a GOCAD group (``BEGIN_MEMBERS`` ... ``END_MEMBERS``) are
+        read as objects of their own.
 
     Raises
     ------
     FileFormatError
-        The file cannot be read or is not valid GOCAD; the message gives the
-        file and line.
+        The file cannot be read or is not valid GOCAD, has a keyword tgsis
+        does not know inside an object, or (``skip_unsupported=False``) an
+        object tgsis cannot read; the message gives the file and line.
     """
-    return parse_gocad(read_text(path), path=path, merge_atoms=merge_atoms)
+    return parse_gocad(read_text(path), path=path, merge_atoms=merge_atoms, skip_unsupported=skip_unsupported)
 
 
-def read_tsurf(path: PathLike, *, merge_atoms: bool = False) -> Surface:
-    """Read a file that holds exactly one TSurf.
+def read_tsurf(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: bool = True) -> Surface:
+    """Read a file that holds exactly one TSurf (besides objects skipped, see :func:`read_gocad`).
 
     Raises
     ------
@@ -200,7 +299,7 @@ def read_tsurf(path: PathLike, *, merge_atoms: bool = False) -> Surface:
         The file is invalid, or holds more than one object or an object that
         is not a TSurf.
     """
-    meshes = read_gocad(path, merge_atoms=merge_atoms)
+    meshes = read_gocad(path, merge_atoms=merge_atoms, skip_unsupported=skip_unsupported)
     kinds = [m.metadata.get("gocad_kind", type(m).__name__) for m in meshes]
     if len(meshes) != 1 or not isinstance(meshes[0], Surface):
         raise FileFormatError(f"expected exactly one TSurf, found {len(meshes)} objects ({', '.join(kinds)})",
@@ -208,13 +307,14 @@ def read_tsurf(path: PathLike, *, merge_atoms: bool = False) -> Surface:
     return meshes[0]
 
 
-def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = False) -> list[Mesh]:
+def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
+                skip_unsupported: bool = True) -> list[Mesh]:
     """Parse the text of a GOCAD ASCII file; see :func:`read_gocad`.
 
     ``path`` is only used in error messages.
     """
     with _gc_paused():
-        return _parse_lines(text.removeprefix("\ufeff").splitlines(), path, merge_atoms)
+        return _parse_lines(text.removeprefix("\ufeff").splitlines(), path, merge_atoms, skip_unsupported)
 
 
 @contextlib.contextmanager
@@ -234,38 +334,130 @@ def _gc_paused() -> Iterator[None]:
             gc.enable()
 
 
-def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool) -> list[Mesh]:
+@dataclass(frozen=True)
+class _Skipped:
+    """An object of a type tgsis does not read."""
+
+    type_name: str
+    name: str | None
+    start: int  # 0-based index of its GOCAD line
+    end: int  # 0-based index of its END line
+
+    def describe(self) -> str:
+        named = f" {self.name!r}" if self.name else ""
+        return f"GOCAD {self.type_name} object{named} (lines {self.start + 1}-{self.end + 1})"
+
+
+_SUPPORTED = ", ".join(k.name for k in _KINDS)
+
+
+def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
+                 skip_unsupported: bool) -> list[Mesh]:
     meshes: list[Mesh] = []
+    skipped: list[_Skipped] = []
+    groups: list[int] = []  # GOCAD lines of the groups whose members are being read
     i = 0
     while i < len(lines):
         stripped = lines[i].strip()
         if not stripped or stripped.startswith("#"):
             i += 1
             continue
-        kind = _kind_of(stripped, path, i)
-        records, end = _scan_object(lines, i, kind, path)
-        meshes.append(_build_mesh(records, path, merge_atoms))
+        if groups and stripped == "END_MEMBERS":
+            i = _group_end(lines, i, groups.pop(), path) + 1
+            continue
+        type_name = _type_of(stripped, path, i)
+        kind = _KIND_BY_NAME.get(type_name.lower())
+        if kind is not None:
+            records, end = _scan_object(lines, i, kind, path)
+            meshes.append(_build_mesh(records, path, merge_atoms))
+        elif type_name.lower().endswith("group"):  # HeterogeneousGroup, HomogeneousGroup: read the members
+            groups.append(i)
+            end = _group_members(lines, i, type_name, path)
+        else:
+            item = _skip_object(lines, i, type_name, path)
+            if not skip_unsupported:
+                raise FileFormatError(f"unsupported {item.describe()}: tgsis reads {_SUPPORTED}", path=path,
+                                      line=item.start + 1,
+                                      hint="pass skip_unsupported=True to read the other objects of the file")
+            skipped.append(item)
+            end = item.end
         i = end + 1
+    if groups:
+        raise FileFormatError(f"the GOCAD group begun at line {groups[-1] + 1} has no END_MEMBERS (the file ends "
+                              "first)", path=path, line=len(lines))
+    if not meshes and skipped:
+        first = skipped[0]
+        others = "".join(f"; {s.describe()}" for s in skipped[1:])
+        raise FileFormatError(f"unsupported GOCAD object type {first.type_name!r}: the file holds no object tgsis "
+                              f"reads ({first.describe()}{others}; tgsis reads {_SUPPORTED})",
+                              path=path, line=first.start + 1)
     if not meshes:
         raise FileFormatError("no GOCAD object in the file (no 'GOCAD <type> <version>' line)", path=path)
+    for item in skipped:
+        where = f"{path}:{item.start + 1}: " if path is not None else f"line {item.start + 1}: "
+        warnings.warn(SkippedObjectWarning(f"{where}skipped the {item.describe()}: tgsis reads {_SUPPORTED}",
+                                           path=path, line=item.start + 1, object_type=item.type_name,
+                                           name=item.name), stacklevel=4)
     return meshes
 
 
-def _kind_of(line: str, path: PathLike | None, index: int) -> _Kind:
+def _type_of(line: str, path: PathLike | None, index: int) -> str:
     """The object type of a ``GOCAD <type> <version>`` line."""
     words = line.split()
     if words[0] != "GOCAD":
         raise FileFormatError(f"expected a 'GOCAD <type> <version>' line, found {line[:60]!r}",
                               path=path, line=index + 1)
-    supported = ", ".join(k.name for k in _KINDS)
     if len(words) < 2:
-        raise FileFormatError(f"the GOCAD line names no object type (supported: {supported})",
+        raise FileFormatError(f"the GOCAD line names no object type (supported: {_SUPPORTED})",
                               path=path, line=index + 1)
-    kind = _KIND_BY_NAME.get(words[1].lower())
-    if kind is None:
-        raise FileFormatError(f"unsupported GOCAD object type {words[1]!r} (supported: {supported})",
-                              path=path, line=index + 1)
-    return kind
+    return words[1]
+
+
+def _object_end(lines: Sequence[str], start: int, what: str, path: PathLike | None) -> int:
+    """Index of the END line of the object begun at ``lines[start]``; an object cut short is an error."""
+    for i in range(start + 1, len(lines)):
+        stripped = lines[i].strip()
+        if stripped == "END":
+            return i
+        if stripped.startswith("GOCAD ") and not stripped.startswith("GOCAD_"):
+            raise FileFormatError(f"the {what} begun at line {start + 1} has no END before the next GOCAD object",
+                                  path=path, line=i + 1)
+    raise FileFormatError(f"the {what} begun at line {start + 1} has no END (the file ends first)",
+                          path=path, line=len(lines))
+
+
+_NAME_RE = re.compile(r"^\s*name\s*:(.*)$")
+
+
+def _skip_object(lines: Sequence[str], start: int, type_name: str, path: PathLike | None) -> _Skipped:
+    """The unsupported object begun at ``lines[start]``: its type, name and extent."""
+    end = _object_end(lines, start, f"GOCAD {type_name} object", path)
+    name = next((m.group(1).strip() for m in map(_NAME_RE.match, lines[start + 1:end]) if m), None)
+    return _Skipped(type_name, name or None, start, end)
+
+
+def _group_members(lines: Sequence[str], start: int, type_name: str, path: PathLike | None) -> int:
+    """Index of the BEGIN_MEMBERS line of the group begun at ``lines[start]`` (its header is not read)."""
+    for i in range(start + 1, len(lines)):
+        stripped = lines[i].strip()
+        if stripped == "BEGIN_MEMBERS":
+            return i
+        if stripped == "END" or (stripped.startswith("GOCAD ") and not stripped.startswith("GOCAD_")):
+            break
+    raise FileFormatError(f"the GOCAD {type_name} begun at line {start + 1} has no BEGIN_MEMBERS line before its "
+                          "members", path=path, line=start + 1)
+
+
+def _group_end(lines: Sequence[str], end_members: int, start: int, path: PathLike | None) -> int:
+    """Index of the END line that closes a group after its END_MEMBERS line."""
+    for i in range(end_members + 1, len(lines)):
+        stripped = lines[i].strip()
+        if stripped == "END":
+            return i
+        if stripped:
+            break
+    raise FileFormatError(f"the GOCAD group begun at line {start + 1} has no END after its END_MEMBERS",
+                          path=path, line=end_members + 1)
 
 
 def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike | None) -> tuple[_Records, int]:
@@ -278,7 +470,6 @@ def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike |
     part_keyword, cell_keyword = kind.part_keyword, kind.cell_keyword
     part = -1  # cells before any part keyword form a part of their own
     seq = 0
-    geometry_started = False
     cell_prefix = f"{cell_keyword} " if cell_keyword else "\0"
     i = start + 1
     while i < len(lines):
@@ -307,34 +498,34 @@ def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike |
             rec.vertex_is_p.append(keyword == "PVRTX")
             rec.vertex_seq.append(seq)
             seq += 1
-            geometry_started = True
-        elif keyword == "ATOM" or keyword == "PATOM":
+        elif keyword in _ATOM_KEYWORDS:
             rec.atom_lines.append(i)
             rec.atom_texts.append(rest)
-            rec.atom_is_p.append(keyword == "PATOM")
+            rec.atom_is_p.append(_ATOM_KEYWORDS[keyword])
             rec.atom_seq.append(seq)
             seq += 1
-            geometry_started = True
         elif keyword == part_keyword:
             part += 1
-            geometry_started = True
+            rec.part_names.append(" ".join(split_words(rest)))
         elif keyword == "END":
             return rec, i
         else:
-            i = _scan_other(lines, i, keyword, rest, rec, geometry_started, path)
+            i = _scan_other(lines, i, keyword, rest, rec, path)
         i += 1
     raise FileFormatError(f"the {kind.name} begun at line {start + 1} has no END (the file ends first)",
                           path=path, line=len(lines))
 
 
-def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Records, geometry_started: bool,
-                path: PathLike | None) -> int:
-    """Handle a line that is not geometry: blocks, property declarations, unknown keywords.
+def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Records, path: PathLike | None) -> int:
+    """Handle a line that is not geometry: blocks, property declarations, descriptions, known redundant lines.
 
     Returns the index of the last line consumed (the closing line of a block).
+    A keyword tgsis does not know is an error: it could carry geometry, and a
+    file read without it would be silently shorter.
     """
+    kind = rec.kind
     if keyword == "GOCAD":
-        raise FileFormatError(f"the {rec.kind.name} begun at line {rec.start + 1} has no END before the next "
+        raise FileFormatError(f"the {kind.name} begun at line {rec.start + 1} has no END before the next "
                               "GOCAD object", path=path, line=i + 1)
     if keyword == "HEADER":
         return _scan_block(lines, i, "}", rec.header, path, inline_open=True)
@@ -346,14 +537,42 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
         rec.class_headers.append(block)
         return end
     if keyword in _PROPERTY_KEYWORDS:
-        rec.property_lines[keyword] = (i, rest.split())
+        rec.property_lines[keyword] = (i, split_words(rest))
     elif keyword.startswith("#"):
-        pass  # a comment
-    elif not geometry_started:
+        if kind.name == "LightTSolid" and (keyword == "#" and rest.startswith("CTETRA")
+                                           or keyword == "#CTETRA"):
+            _tetra_region(rec, i, split_words(rest if keyword == "#" else "CTETRA " + rest), path)
+        # any other comment: nothing to read
+    elif keyword in _DESCRIPTION_KEYWORDS:
         rec.extra.append(lines[i].strip())  # GEOLOGICAL_FEATURE and the like: written back as they are
+    elif keyword in _REDUNDANT_KEYWORDS[kind.name]:
+        rec.ignored[keyword] = rec.ignored.get(keyword, 0) + 1
+    elif keyword.startswith("BEGIN_") and len(keyword) > 6:  # SKUA's BEGIN_VERTEX_REGION_INDICATORS and the like
+        skipped_lines: list[str] = []
+        end = _scan_block(lines, i, "END_" + keyword[6:], skipped_lines, path)
+        rec.ignored[keyword] = rec.ignored.get(keyword, 0) + 1
+        return end
     else:
-        rec.ignored[keyword] = rec.ignored.get(keyword, 0) + 1  # BSTONE, BORDER, ...
+        known = sorted({"VRTX", "PVRTX", "ATOM", "PATOM", *(k for k in (kind.part_keyword, kind.cell_keyword) if k)})
+        raise FileFormatError(f"unknown keyword {keyword!r} in the {kind.name} begun at line {rec.start + 1}",
+                              path=path, line=i + 1,
+                              hint=f"a {kind.name} holds {', '.join(known)} lines; tgsis refuses a line it does "
+                                   "not know rather than read the file without it")
     return i
+
+
+def _tetra_region(rec: _Records, i: int, words: list[str], path: PathLike | None) -> None:
+    """A LightTSolid's ``# CTETRA <region> <face flags>`` line: the region of the TETRA just before it."""
+    if not rec.cell_lines or len(words) < 2:
+        raise FileFormatError("a '# CTETRA <region> ...' line must follow a TETRA line and name a region",
+                              path=path, line=i + 1)
+    name = words[1]
+    try:
+        part = rec.part_names.index(name)
+    except ValueError:
+        part = len(rec.part_names)
+        rec.part_names.append(name)
+    rec.cell_parts[-1] = part
 
 
 def _scan_block(lines: Sequence[str], start: int, close: str, into: list[str], path: PathLike | None,
@@ -421,7 +640,8 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
     column_file_names: list[str] = []
     mesh_names: list[str] = []
     for name, size in zip(names, sizes):
-        base = sanitize_property_name(name, mesh_names)  # a vector (ESIZES k > 1) is one (n, k) property
+        # a vector (ESIZES k > 1) is one (n, k) property; SKUA quotes names: " default property"
+        base = sanitize_property_name(name.strip() or name, mesh_names)
         mesh_names.append(base)
         columns.extend([base] * size)
         column_file_names.extend([name] * size)
@@ -500,18 +720,37 @@ def _bad_count(lengths: IntArray, allowed: Sequence[int], is_p: Sequence[bool] =
     return None if ok.all() else int(np.flatnonzero(~ok)[0])
 
 
+def _strip_flags(texts: Sequence[str]) -> tuple[Sequence[str], dict[int, str]]:
+    """``texts`` without a trailing control-node flag (:data:`VERTEX_FLAGS`), and the flag of each record that had one."""
+    flags: dict[int, str] = {}
+    stripped = list(texts)
+    for j, text in enumerate(texts):
+        parts = text.rsplit(None, 1)
+        if len(parts) == 2 and parts[1] in VERTEX_FLAGS:
+            stripped[j] = parts[0]
+            flags[j] = parts[1]
+    return (stripped, flags) if flags else (texts, flags)
+
+
 def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
-                          path: PathLike | None) -> tuple[IntArray, FloatArray]:
-    """Ids (k,) and values (k, 3 + columns) of the VRTX/PVRTX records; missing property values are NaN."""
+                          path: PathLike | None) -> tuple[IntArray, FloatArray, dict[int, str]]:
+    """Ids (k,) and values (k, 3 + columns) of the VRTX/PVRTX records (missing property values are NaN), and the
+    control-node flag of each record that ends with one."""
     p = layout.n_columns
-    fast = _fast_table(rec.vertex_texts, np.float64, (4 + p,) if any(rec.vertex_is_p) or not p else (4, 4 + p))
+    widths = (4 + p,) if any(rec.vertex_is_p) or not p else (4, 4 + p)
+    texts: Sequence[str] = rec.vertex_texts
+    fast = _fast_table(texts, np.float64, widths)
+    flags: dict[int, str] = {}
+    if fast is None:  # perhaps flags (VRTX 1 x y z CNXYZ): try again without them
+        texts, flags = _strip_flags(texts)
+        fast = _fast_table(texts, np.float64, widths) if flags else None
     if fast is not None:
         ids = fast[:, 0]
         if np.all(np.isfinite(fast[:, 1:4])) and np.all(ids == np.round(ids)) and np.all(np.abs(ids) < 2**53):
             values = np.full((len(fast), 3 + p), np.nan)
             values[:, : fast.shape[1] - 1] = fast[:, 1:]
-            return ids.astype(np.int64), values
-    tokens = [text.split() for text in rec.vertex_texts]
+            return ids.astype(np.int64), values, flags
+    tokens = [text.split() for text in texts]
     lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
     j = _bad_count(lengths, (4, 4 + p), rec.vertex_is_p, (4 + p,))
     if j is not None:
@@ -536,14 +775,19 @@ def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
         j, col = (int(v) for v in np.argwhere(bad)[0])
         raise FileFormatError(f"VRTX has a non-finite {'xyz'[col]} coordinate {tokens[j][1 + col]!r}",
                               path=path, line=rec.vertex_lines[j] + 1)
-    return ids, values
+    return ids, values, flags
 
 
 def _parse_atom_records(rec: _Records, layout: _PropertyLayout,
-                        path: PathLike | None) -> tuple[IntArray, IntArray, FloatArray]:
-    """Ids (a,), referenced ids (a,) and own property values (a, columns) (NaN rows: inherit) of ATOM/PATOM."""
+                        path: PathLike | None) -> tuple[IntArray, IntArray, FloatArray, dict[int, str]]:
+    """Ids (a,), referenced ids (a,), own property values (a, columns) (NaN rows: inherit) and control-node flags
+    of ATOM/PATOM."""
     p = layout.n_columns
     tokens = [text.split() for text in rec.atom_texts]
+    flags: dict[int, str] = {}
+    for k, words in enumerate(tokens):
+        if len(words) > 2 and words[-1] in VERTEX_FLAGS:
+            flags[k] = words.pop()
     lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
     j = _bad_count(lengths, (2,), rec.atom_is_p, (2, 2 + p))
     if j is not None:
@@ -558,7 +802,7 @@ def _parse_atom_records(rec: _Records, layout: _PropertyLayout,
     if len(with_values):
         rows = [tokens[j][2:] for j in with_values]
         own[with_values] = _float_table(rows, [rec.atom_lines[j] for j in with_values], "PATOM", path)
-    return ids, refs, own
+    return ids, refs, own, flags
 
 
 class _IdIndex:
@@ -591,6 +835,7 @@ class _VertexTable:
     atom_seq: IntArray  # (a,) positions of the ATOM/PATOM records
     ref_seq: IntArray  # (a,) positions of the records they repeat
     root: IntArray  # (r,) for every record, the VRTX/PVRTX it finally repeats (itself for those)
+    flags: dict[int, str]  # record position -> control-node flag (CNXYZ ...)
 
 
 def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh:
@@ -601,20 +846,24 @@ def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh
     if merge_atoms:
         kept = np.ones(len(table.ids), dtype=bool)
         kept[table.atom_seq] = False
-        seq_to_vertex = (np.cumsum(kept) - 1)[table.root]
+        position = np.cumsum(kept) - 1
+        seq_to_vertex = position[table.root]
         values = table.values[kept]
         atoms: list[list[int]] = []
+        flags = {int(position[seq]): flag for seq, flag in table.flags.items() if kept[seq]}
     else:
         seq_to_vertex = np.arange(len(table.ids))
         values = table.values
         atoms = [[int(a), int(r)] for a, r in zip(table.atom_seq, table.ref_seq)]
+        flags = table.flags
     cells, parts = _parse_cells(rec, table.index, seq_to_vertex, merge_atoms, path)
     if cells is None:  # a VSet: one point per vertex
         cells = np.arange(len(values), dtype=np.int64).reshape(-1, 1)
     try:
         return kind.mesh_type(values[:, :3], cells, vertex_properties=_vertex_properties(values[:, 3:], layout),
                               cell_properties={} if parts is None else {"part": parts},
-                              name=_header_value(rec.header, "name"), metadata=_metadata(rec, layout, atoms))
+                              name=_header_name(rec.header),
+                              metadata=_metadata(rec, layout, atoms, flags, len(values)))
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.name} is not a valid mesh: {exc.message}", path=path,
                               line=rec.start + 1) from exc
@@ -622,8 +871,8 @@ def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh
 
 def _vertex_table(rec: _Records, layout: _PropertyLayout, path: PathLike | None) -> _VertexTable:
     """Parse the vertex records, check their ids, and give ATOMs the values of what they repeat."""
-    vertex_ids, vertex_values = _parse_vertex_records(rec, layout, path)
-    atom_ids, atom_refs, atom_own = _parse_atom_records(rec, layout, path)
+    vertex_ids, vertex_values, vertex_flags = _parse_vertex_records(rec, layout, path)
+    atom_ids, atom_refs, atom_own, atom_flags = _parse_atom_records(rec, layout, path)
     n_records = len(rec.vertex_seq) + len(rec.atom_seq)
     vertex_seq = np.asarray(rec.vertex_seq, dtype=np.int64)
     atom_seq = np.asarray(rec.atom_seq, dtype=np.int64)
@@ -648,7 +897,9 @@ def _vertex_table(rec: _Records, layout: _PropertyLayout, path: PathLike | None)
     values[vertex_seq] = vertex_values
     own = np.asarray(~np.isnan(atom_own).all(axis=1), dtype=np.bool_).reshape(len(atom_seq))  # PATOMs with values
     _fill_atoms(values, atom_seq, ref_seq, own, atom_own)
-    return _VertexTable(ids, values, index, atom_seq, ref_seq, root)
+    flags = {rec.vertex_seq[j]: flag for j, flag in vertex_flags.items()}
+    flags.update((rec.atom_seq[j], flag) for j, flag in atom_flags.items())
+    return _VertexTable(ids, values, index, atom_seq, ref_seq, root, flags)
 
 
 def _atom_roots(ids: IntArray, line_of: IntArray, atom_seq: IntArray, ref_seq: IntArray,
@@ -753,6 +1004,14 @@ def _header_value(header: Sequence[str], key: str) -> str | None:
     return value
 
 
+def _header_name(header: Sequence[str]) -> str | None:
+    """The object's name from its header; a name written in quotes (``name: "Fault 1"``) loses them."""
+    value = _header_value(header, "name")
+    if value is not None and len(value) >= 2 and value[0] == value[-1] == '"' and '"' not in value[1:-1]:
+        value = value[1:-1]
+    return value
+
+
 def _parse_color(text: str | None) -> tuple[float, ...] | None:
     """``"0.7 0.2 0.6 1"`` as a tuple of floats, or None when it is not numbers (e.g. ``#ff0000``)."""
     if not text:
@@ -763,7 +1022,8 @@ def _parse_color(text: str | None) -> tuple[float, ...] | None:
         return None
 
 
-def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]]) -> dict[str, Any]:
+def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], flags: Mapping[int, str],
+              n_vertices: int) -> dict[str, Any]:
     """The facts kept for a faithful rewrite (see the module documentation)."""
     meta: dict[str, Any] = {"gocad_kind": rec.kind.name}
     if rec.header:
@@ -802,9 +1062,29 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]]) ->
         patoms = [pair[0] for pair, is_p in zip(atoms, rec.atom_is_p) if is_p]
         if patoms:
             meta["gocad_patoms"] = patoms
+    if flags:
+        meta["gocad_vertex_flags"] = _flag_ranges(flags, n_vertices)
+    if rec.cell_parts:
+        names = [rec.part_names[r] if 0 <= r < len(rec.part_names) else "" for r in np.unique(rec.cell_parts).tolist()]
+        if any(names):
+            meta["gocad_part_names"] = names
     if rec.ignored:
         meta["gocad_ignored"] = dict(rec.ignored)
     return meta
+
+
+def _flag_ranges(flags: Mapping[int, str], n_vertices: int) -> dict[str, list[list[int]]]:
+    """``{flag: [[start, stop], ...]}``: the vertices with each flag as half-open index ranges, in order."""
+    result: dict[str, list[list[int]]] = {}
+    for flag in sorted(set(flags.values())):
+        where = np.asarray(sorted(v for v, f in flags.items() if f == flag and 0 <= v < n_vertices), dtype=np.int64)
+        if len(where) == 0:
+            continue
+        breaks = np.flatnonzero(np.diff(where) != 1) + 1
+        starts = np.concatenate([where[:1], where[breaks]])
+        stops = np.concatenate([where[breaks - 1], where[-1:]]) + 1
+        result[flag] = [[int(a), int(b)] for a, b in zip(starts, stops)]
+    return result
 
 
 def _property_info(rec: _Records, names: Sequence[str]) -> dict[str, dict[str, str]]:
@@ -822,7 +1102,7 @@ def _property_info(rec: _Records, names: Sequence[str]) -> dict[str, dict[str, s
         if len(words) % len(names) or not words:
             continue
         per = len(words) // len(names)
-        info[keyword] = {name: " ".join(words[j * per:(j + 1) * per]) for j, name in enumerate(names)}
+        info[keyword] = {name: " ".join(map(quote_word, words[j * per:(j + 1) * per])) for j, name in enumerate(names)}
     return info
 
 
@@ -899,8 +1179,10 @@ def _object_chunks(mesh: Mesh, path: PathLike | None, drop_cell_properties: bool
         assert kind.cell_keyword is not None
         cell_lines = _cell_lines(kind.cell_keyword, mesh.cells)
         start = 0
-        for cells, end in zip(groups, _vertex_ranges(mesh, groups)):
-            chunks.append(f"{kind.part_keyword}\n")
+        names = _string_list(meta.get("gocad_part_names"))
+        names = names if len(names) == len(groups) else [""] * len(groups)
+        for cells, end, part_name in zip(groups, _vertex_ranges(mesh, groups), names):
+            chunks.append(f"{kind.part_keyword} {part_name}\n" if part_name.strip() else f"{kind.part_keyword}\n")
             chunks.extend(vertex_lines[start:end])
             chunks.extend(cell_lines[c] for c in cells.tolist())
             start = end
@@ -1034,7 +1316,7 @@ def _written_properties(mesh: Mesh) -> list[_WrittenProperty]:
     groups: list[tuple[str, list[str]]] = []
     for column in mesh.vertex_properties:
         name = file_names.get(column, column)
-        name = name if isinstance(name, str) and name and not any(c.isspace() for c in name) else column
+        name = name if isinstance(name, str) and name and name.isprintable() and '"' not in name else column
         size = esizes.get(name, 1)
         if values[column].ndim == 2:  # a vector property: one GOCAD property of ESIZES k
             groups.append((name, [column]))
@@ -1086,7 +1368,7 @@ def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, A
         words = [str(known[n]) if n in known else defaults.get(keyword, n) for n in names]
         return f"{keyword} {' '.join(words)}\n"
 
-    lines = [f"PROPERTIES {' '.join(names)}\n"]
+    lines = [f"PROPERTIES {' '.join(map(quote_word, names))}\n"]
     lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
     lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
     lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
@@ -1094,26 +1376,28 @@ def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, A
     lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
     lines += [line for line in [info_line("UNITS")] if line]
 
-    classes = set(names) | {"X", "Y", "Z"}
+    classes = {n.strip() for n in names} | {"X", "Y", "Z"}
     known_classes = info.get("PROPERTY_CLASSES")
     if isinstance(known_classes, dict):
-        classes |= {str(known_classes[n]) for n in names if n in known_classes}
+        classes |= {" ".join(split_words(str(known_classes[n]))).strip() for n in names if n in known_classes}
     blocks = meta.get("gocad_property_class_headers")
     for block in blocks if isinstance(blocks, list) else []:
         block_lines = _string_list(block)
-        words = block_lines[0].split() if block_lines else []
-        if len(words) >= 2 and words[0] == "PROPERTY_CLASS_HEADER" and words[1] in classes:
+        keyword, _, title = block_lines[0].partition("{")[0].partition(" ") if block_lines else ("", "", "")
+        # the class name runs to the "{" and may hold blanks, unquoted: PROPERTY_CLASS_HEADER default property {
+        if keyword == "PROPERTY_CLASS_HEADER" and " ".join(split_words(title)).strip() in classes:
             lines.extend(line + "\n" for line in block_lines)
     return lines
 
 
 def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[str]:
-    """One VRTX/PVRTX/ATOM line per vertex, in index order, ids 1..n."""
+    """One VRTX/PVRTX/ATOM line per vertex, in index order, ids 1..n, with its control-node flag if it has one."""
     n = mesh.n_vertices
     x, y, z = mesh.vertices.T.tolist() if n else ([], [], [])
     ids = range(1, n + 1)
+    ends = _flag_suffixes(mesh)
     if not properties:
-        lines = [f"VRTX {i} {a!r} {b!r} {c!r}\n" for i, a, b, c in zip(ids, x, y, z)]
+        lines = [f"VRTX {i} {a!r} {b!r} {c!r}{e}\n" for i, a, b, c, e in zip(ids, x, y, z, ends)]
     else:
         columns = []
         for prop in properties:
@@ -1122,17 +1406,35 @@ def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[st
                     values = np.where(np.isnan(values), prop.no_data, values)
                 columns.append(list(map(repr, values.tolist())))
         texts = list(map(" ".join, zip(*columns)))
-        lines = [f"PVRTX {i} {a!r} {b!r} {c!r} {t}\n" for i, a, b, c, t in zip(ids, x, y, z, texts)]
+        lines = [f"PVRTX {i} {a!r} {b!r} {c!r} {t}{e}\n" for i, a, b, c, t, e in zip(ids, x, y, z, texts, ends)]
     patoms = mesh.metadata.get("gocad_patoms")
     was_patom = set(patoms) if isinstance(patoms, (list, tuple)) else set()
     for atom, ref, same in _valid_atoms(mesh):
         if not properties or (same and atom not in was_patom):
-            lines[atom] = f"ATOM {atom + 1} {ref + 1}\n"
+            lines[atom] = f"ATOM {atom + 1} {ref + 1}{ends[atom]}\n"
         elif same:  # a PATOM takes the values of the vertex it repeats
-            lines[atom] = f"PATOM {atom + 1} {ref + 1}\n"
+            lines[atom] = f"PATOM {atom + 1} {ref + 1}{ends[atom]}\n"
         else:  # a PATOM with values of its own
-            lines[atom] = f"PATOM {atom + 1} {ref + 1} {texts[atom]}\n"
+            lines[atom] = f"PATOM {atom + 1} {ref + 1} {texts[atom]}{ends[atom]}\n"
     return lines
+
+
+def _flag_suffixes(mesh: Mesh) -> list[str]:
+    """For each vertex, `` CNXYZ`` (its flag in ``metadata["gocad_vertex_flags"]``) or ``""``.
+
+    Ranges that are not ``[start, stop]`` pairs within the mesh, or flags that
+    are not control-node flags, are left out (metadata may have been edited).
+    """
+    ends = [""] * mesh.n_vertices
+    flags = mesh.metadata.get("gocad_vertex_flags")
+    for flag, ranges in flags.items() if isinstance(flags, dict) else []:
+        if flag not in VERTEX_FLAGS or not isinstance(ranges, (list, tuple)):
+            continue
+        for pair in ranges:
+            if (isinstance(pair, (list, tuple)) and len(pair) == 2 and all(isinstance(v, int) for v in pair)
+                    and 0 <= pair[0] <= pair[1] <= mesh.n_vertices):
+                ends[pair[0]:pair[1]] = [" " + flag] * (pair[1] - pair[0])
+    return ends
 
 
 def _valid_atoms(mesh: Mesh) -> list[tuple[int, int, bool]]:

@@ -35,6 +35,13 @@ and float ones keep float32/float64; colours, normals and texture coordinates
 are properties like any other. OBJ, OFF and STL cannot store properties: the
 writer raises unless ``drop_properties=True``. Names are not stored (meshes
 read have ``name=None``).
+
+A file of points without faces (OBJ ``v`` lines alone, a PLY ``vertex``
+element alone) is read as a :class:`~tgsis.mesh.PointSet` with the PLY vertex
+properties, not as an empty surface (trimesh's ``force="mesh"`` drops the
+points); a PLY file that declares a ``face`` element with no face, as this
+writer writes a surface without triangles, is a Surface without triangles. A
+file without any vertex is an error.
 """
 
 from __future__ import annotations
@@ -47,7 +54,7 @@ import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import (PathLike, check_mesh, property_columns, sanitize_property_name, write_bytes)
-from tgsis.mesh import Surface
+from tgsis.mesh import PointSet, Surface
 
 __all__ = ["TRIMESH_FILE_TYPES", "read_trimesh_file", "write_trimesh_file"]
 
@@ -72,8 +79,9 @@ def _file_type(path: PathLike, file_type: str | None) -> str:
 # ---------------------------------------------------------------- reading
 
 
-def read_trimesh_file(path: PathLike, *, file_type: str | None = None, merge_vertices: bool = False) -> Surface:
-    """Read a triangle surface from an OBJ, PLY, OFF or STL file.
+def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
+                      merge_vertices: bool = False) -> Surface | PointSet:
+    """Read a triangle surface, or points, from an OBJ, PLY, OFF or STL file.
 
     Parameters
     ----------
@@ -87,15 +95,18 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None, merge_ver
 
     Returns
     -------
-    Surface
+    Surface or PointSet
         Vertices (n, 3) and triangles (m, 3) as trimesh read them with
-        ``process=False``; PLY vertex and face properties as properties.
+        ``process=False``; PLY vertex and face properties as properties. A
+        file of points without faces (a PLY ``vertex`` element alone, OBJ
+        ``v`` lines alone) is a PointSet of its vertices, with the PLY vertex
+        properties.
 
     Raises
     ------
     FileFormatError
-        The file cannot be read, trimesh cannot parse it, or it is not a valid
-        surface (e.g. a face that uses one vertex twice).
+        The file cannot be read, trimesh cannot parse it, it holds no vertex,
+        or it is not a valid surface (e.g. a face that uses one vertex twice).
     """
     import trimesh
 
@@ -111,6 +122,9 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None, merge_ver
         raise FileFormatError(f"trimesh cannot read the {kind.upper()} file: {exc}", path=path) from exc
     vertices = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(getattr(loaded, "faces", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(faces) == 0:
+        # force="mesh" gives an empty mesh for a file of points: read them as the points they are
+        return _read_points(path, kind, merge_vertices)
     vertex_properties: dict[str, npt.NDArray[Any]] = {}
     face_properties: dict[str, npt.NDArray[Any]] = {}
     metadata: dict[str, Any] = {}
@@ -128,6 +142,56 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None, merge_ver
                        metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.upper()} file is not a valid surface: {exc.message}", path=path) from exc
+
+
+def _read_points(path: PathLike, kind: str, merge_vertices: bool) -> Surface | PointSet:
+    """The vertices of a file without faces as a PointSet; a file without vertices is an error.
+
+    A PLY file that declares a ``face`` element, with no face, is a Surface
+    without triangles (what tgsis writes for one).
+    """
+    import trimesh
+
+    try:
+        loaded = trimesh.load(str(path), file_type=kind, process=False)
+    except Exception as exc:  # as in read_trimesh_file
+        raise FileFormatError(f"trimesh cannot read the {kind.upper()} file: {exc}", path=path) from exc
+    vertices = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=np.float64).reshape(-1, 3)
+    if len(vertices) == 0:
+        raise FileFormatError(f"the {kind.upper()} file holds no vertex (no triangle and no point)", path=path)
+    properties: dict[str, npt.NDArray[Any]] = {}
+    metadata: dict[str, Any] = {}
+    raw: Any = {}
+    if kind == "ply":
+        raw = (getattr(loaded, "metadata", None) or {}).get("_ply_raw") or {}
+        renamed: dict[str, dict[str, str]] = {}
+        properties = _ply_properties(raw, "vertex", _PLY_COORDINATES, len(vertices), renamed)
+        if renamed:
+            metadata["ply_property_names"] = renamed
+    no_faces = np.empty((0, 3), dtype=np.int64)
+    if merge_vertices:
+        vertices, _, properties = _merge_identical(vertices, no_faces, properties)
+    try:
+        if kind == "ply" and _ply_declares_faces(path):
+            return Surface(vertices, no_faces, vertex_properties=properties, metadata=metadata)
+        return PointSet(vertices, vertex_properties=properties, metadata=metadata)
+    except (InvalidGeometryError, InvalidPropertyError) as exc:
+        raise FileFormatError(f"the {kind.upper()} file's points are not valid: {exc.message}", path=path) from exc
+
+
+def _ply_declares_faces(path: PathLike) -> bool:
+    """Whether the PLY header has an ``element face`` line (trimesh drops an element of 0 faces)."""
+    try:
+        with open(path, "rb") as handle:
+            for raw_line in handle:
+                words = raw_line.split()
+                if words[:1] == [b"end_header"]:
+                    break
+                if words[:2] == [b"element", b"face"]:
+                    return True
+    except OSError as exc:
+        raise FileFormatError(f"cannot read the file: {exc.strerror or exc}", path=path) from exc
+    return False
 
 
 def _ply_properties(raw: Any, element: str, skip: tuple[str, ...], count: int,

@@ -104,7 +104,10 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     setup : InterpolationSetup
         Control vertex pairs, fence and cutting paths, attachments, m, ε.
     t0, t1 : float
-        Times of the source and the target (t0 < t1).
+        Times of the source and the target, in either order: the source may
+        be the later shape (the more complex one, as the source design
+        allows); the evolving surface then runs from the target at t1 to
+        the source at t0, on the source's triangulation.
     name : str, optional
         Name of the evolving surface.
     surfaces : mapping of str to Surface, optional
@@ -121,8 +124,9 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     ParameterizationError, TrajectoryError, ProjectionError
         A numeric failure (refinement not converging, a vertex off its surface).
     """
-    if not (np.isfinite(t0) and np.isfinite(t1) and t0 < t1):
-        raise InterpolationSetupError(f"the source time must come before the target time, got t0={t0}, t1={t1}")
+    if not (np.isfinite(t0) and np.isfinite(t1) and t0 != t1):
+        raise InterpolationSetupError(f"the source and target times must be two different finite times, "
+                                      f"got t0={t0}, t1={t1}")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
 
@@ -176,7 +180,9 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     samples = vertex_trajectories(all_vertices, positions, cells, setup.steps, attachments or None,
                                   controls=list(setup.source_controls))
     lap("trajectories")
-    evolving = evolving_surface(cells, samples, t0, t1, name=name)
+    # samples run from the source (t0) to the target (t1); an evolving surface runs forward in time
+    evolving = (evolving_surface(cells, samples, t0, t1, name=name) if t0 < t1
+                else evolving_surface(cells, samples[::-1].copy(), t1, t0, name=name))
     lap("evolving")
     log.info("interpolated %d vertices, %d triangles, %d patches, m = %d: %s", len(all_vertices), len(cells),
              len(pairing.pairs), setup.steps, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))

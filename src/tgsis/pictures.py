@@ -1,0 +1,274 @@
+"""Pictures of surfaces: PNG scenes and GIF animations, drawn with matplotlib (no display, no database).
+
+What a geologist wants to see rather than read: several surfaces in one scene
+("the structure at t"), axes labelled with their units, equal aspect (with an
+optional vertical exaggeration, said in the title), the time and its unit in
+the title, and colour by displacement from a reference shape (the same
+surface at t0, or in another version) rather than by height.
+
+>>> from tgsis import pictures                          # doctest: +SKIP
+>>> pictures.scene([flat, dome], "dome.png", title="salt dome at t = 1 Myr")
+>>> pictures.animation(frames, "dome.gif", reference=frames[0][1], time_unit="Myr")
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import InvalidInputError
+from tgsis.mesh import Surface
+
+__all__ = ["displacement", "scene", "section", "animation"]
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def displacement(surface: Surface, reference: Surface) -> FloatArray:
+    """Distance of each vertex from the same vertex of ``reference``.
+
+    Parameters
+    ----------
+    surface, reference : Surface
+        The same vertices (count and order: two states of one topology period,
+        or two versions compared vertex by vertex).
+
+    Returns
+    -------
+    (n,) float64
+    """
+    if surface.vertices.shape != reference.vertices.shape:
+        raise InvalidInputError(f"a displacement needs the same vertices: {surface.vertices.shape[0]} against "
+                                f"{reference.vertices.shape[0]} in the reference",
+                                hint="colour by displacement from a state of the same topology period")
+    return np.asarray(np.linalg.norm(surface.vertices - reference.vertices, axis=1), dtype=np.float64)
+
+
+def _axes(figure: Any, bounds: FloatArray, units: Sequence[str], exaggeration: float) -> Any:
+    ax = figure.add_subplot(projection="3d")
+    span = np.maximum(bounds[1] - bounds[0], 1e-9)
+    ax.set_xlim(bounds[0, 0], bounds[1, 0])
+    ax.set_ylim(bounds[0, 1], bounds[1, 1])
+    ax.set_zlim(bounds[0, 2], bounds[1, 2])
+    ax.set_box_aspect((span[0], span[1], span[2] * exaggeration))   # equal aspect, z exaggerated on request
+    for set_label, axis, unit in zip((ax.set_xlabel, ax.set_ylabel, ax.set_zlabel), "xyz", units):
+        set_label(f"{axis} ({unit})" if unit else axis, labelpad=8)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.zaxis.set_major_locator(MaxNLocator(max(2, min(5, int(1 + 6 * span[2] * exaggeration / span.max())))))
+    return ax
+
+
+def _bounds(surfaces: Sequence[Surface]) -> FloatArray:
+    points = np.concatenate([s.vertices for s in surfaces if s.n_vertices])
+    return np.stack([points.min(axis=0), points.max(axis=0)])
+
+
+def _draw(ax: Any, surfaces: Sequence[Surface], colours: Sequence[FloatArray | None], vmax: float) -> Any:
+    """Draw each surface: by its per-vertex values (one shared scale), or else in a colour of its own, named in a legend."""
+    from matplotlib import cm, colors
+    from matplotlib.patches import Patch
+
+    norm = colors.Normalize(vmin=0.0, vmax=vmax if vmax > 0 else 1.0)
+    mappable = cm.ScalarMappable(norm=norm, cmap="viridis")
+    palette = ("0.7", "tab:orange", "tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
+    legend = []
+    for i, (surface, values) in enumerate(zip(surfaces, colours)):
+        if not surface.n_vertices or not len(surface.cells):
+            continue
+        v, tri = surface.vertices, surface.cells
+        tint = palette[i % len(palette)]
+        collection = ax.plot_trisurf(v[:, 0], v[:, 1], v[:, 2], triangles=tri, linewidth=0.1, edgecolor="0.3",
+                                     color=tint, shade=values is None, alpha=1.0)
+        if values is not None:
+            collection.set_array(values[tri].mean(axis=1))   # a face takes the mean of its vertices
+            collection.set_cmap("viridis")
+            collection.set_norm(norm)
+        elif len(surfaces) > 1:
+            legend.append(Patch(color=tint, label=surface.name or f"surface {i + 1}"))
+    if legend:
+        ax.legend(handles=legend, loc="upper left", fontsize="small")
+    return mappable
+
+
+def _title(title: str, exaggeration: float) -> str:
+    return title + (f" (vertical exaggeration ×{exaggeration:g})" if exaggeration != 1.0 else "")
+
+
+def scene(surfaces: Sequence[Surface], path: str | Path, *, title: str,
+          colour: Sequence[FloatArray | None] | None = None, colour_label: str = "displacement (m)",
+          units: Sequence[str] = ("m", "m", "m"), exaggeration: float = 1.0, size: tuple[float, float] = (8.0, 6.0),
+          dpi: int = 100) -> Path:
+    """Write a PNG of several surfaces in one scene.
+
+    Parameters
+    ----------
+    surfaces : sequence of Surface
+    path : str or path-like
+        The ``.png`` written (its folder is created).
+    title : str
+        Put the time and its unit in it ("... at t = 2.5 Myr").
+    colour : sequence of ((n_i,) float64 or None), optional
+        Per surface, a value per vertex (e.g. :func:`displacement`), drawn on
+        one colour scale with a colour bar; None draws that surface in grey.
+    units : three str
+        Units of x, y and z for the axis labels.
+    exaggeration : float
+        Vertical exaggeration (said in the title).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    shown = [s for s in surfaces if s.n_vertices]
+    if not shown:
+        raise InvalidInputError("nothing to draw: every surface is empty")
+    colours = list(colour) if colour is not None else [None] * len(surfaces)
+    if len(colours) != len(surfaces):
+        raise InvalidInputError(f"{len(colours)} colourings for {len(surfaces)} surfaces")
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    figure = plt.figure(figsize=size, dpi=dpi)
+    try:
+        ax = _axes(figure, _bounds(shown), units, exaggeration)
+        vmax = max((float(np.nanmax(c)) for c in colours if c is not None and len(c)), default=0.0)
+        mappable = _draw(ax, surfaces, colours, vmax)
+        if any(c is not None for c in colours):
+            figure.colorbar(mappable, ax=ax, shrink=0.6, pad=0.12, label=colour_label)
+        ax.set_title(_title(title, exaggeration))
+        figure.savefig(target)
+    finally:
+        plt.close(figure)
+    return target
+
+
+def _cut(surface: Surface, y: float) -> FloatArray:
+    """(k, 2, 2) float64: the segments (x, z) where the plane of constant ``y`` cuts the surface's triangles."""
+    v, tri = surface.vertices, surface.cells
+    d = v[tri, 1] - y                                                     # (m, 3) signed distances
+    segments = []
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        crossing = (d[:, i] <= 0) != (d[:, j] <= 0)
+        w = np.where(crossing, d[:, i] / np.where(crossing, d[:, i] - d[:, j], 1.0), np.nan)
+        a, b = v[tri[:, i]], v[tri[:, j]]
+        segments.append(np.where(crossing[:, None], a + w[:, None] * (b - a), np.nan)[:, [0, 2]])
+    points = np.stack(segments, axis=1)                                   # (m, 3 edges, 2): two of them cross
+    keep = np.isfinite(points[:, :, 0]).sum(axis=1) == 2
+    pairs = points[keep][np.isfinite(points[keep][:, :, 0])].reshape(-1, 2, 2)
+    return np.asarray(pairs, dtype=np.float64)
+
+
+def section(surfaces: Sequence[Surface], path: str | Path, *, y: float, title: str,
+            units: Sequence[str] = ("m", "m"), exaggeration: float = 1.0, size: tuple[float, float] = (9.0, 4.0),
+            dpi: int = 100) -> Path:
+    """Write a PNG of a vertical cross-section: where the plane of constant ``y`` cuts each surface, in x and z.
+
+    Parameters
+    ----------
+    surfaces : sequence of Surface
+        Each drawn as the lines where the plane cuts its triangles, in a colour of its own, named in a legend.
+    y : float
+        The section's position.
+    units : two str
+        Units of x and z.
+    exaggeration : float
+        Vertical exaggeration (the aspect ratio of the axes; said in the title).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    palette = ("0.4", "tab:orange", "tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
+    figure, ax = plt.subplots(figsize=size, dpi=dpi)
+    try:
+        drawn = 0
+        for i, surface in enumerate(surfaces):
+            if not surface.n_vertices or not len(surface.cells):
+                continue
+            cut = _cut(surface, y)
+            if len(cut):
+                ax.add_collection(LineCollection(list(cut), colors=palette[i % len(palette)], linewidths=1.5,
+                                                 label=surface.name or f"surface {i + 1}"))
+                drawn += 1
+        if not drawn:
+            raise InvalidInputError(f"the section at y = {y:g} cuts none of the surfaces")
+        ax.autoscale()
+        ax.set_aspect(exaggeration)
+        ax.set_xlabel(f"x ({units[0]})" if units[0] else "x")
+        ax.set_ylabel(f"z ({units[1]})" if units[1] else "z")
+        ax.legend(loc="best", fontsize="small")
+        ax.set_title(_title(f"{title}, section at y = {y:g}{' ' + units[0] if units[0] else ''}", exaggeration))
+        figure.tight_layout()
+        figure.savefig(target)
+    finally:
+        plt.close(figure)
+    return target
+
+
+def animation(frames: Sequence[tuple[float, Sequence[Surface]]], path: str | Path, *, title: str,
+              time_unit: str = "", reference: Sequence[Surface] | None = None,
+              colour_label: str = "displacement (m)", units: Sequence[str] = ("m", "m", "m"),
+              exaggeration: float = 1.0, fps: int = 4, size: tuple[float, float] = (6.4, 4.8),
+              dpi: int = 80) -> Path:
+    """Write a GIF of surfaces through time, the same axes and colour scale in every frame.
+
+    Parameters
+    ----------
+    frames : sequence of (t, surfaces)
+        The scene at each time (the SQL snapshot, for instance).
+    path : str or path-like
+        The ``.gif`` written.
+    title : str
+        Each frame's title is ``"<title> at t = <t> <time_unit>"``.
+    reference : sequence of Surface, optional
+        Colour each surface by its displacement from the reference surface at
+        the same place in the scene (same vertices); default: grey.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import animation as mpl_animation
+    from matplotlib import pyplot as plt
+
+    if not frames:
+        raise InvalidInputError("an animation needs at least one frame")
+    shown = [s for _, scene_surfaces in frames for s in scene_surfaces if s.n_vertices]
+    if not shown:
+        raise InvalidInputError("nothing to draw: every frame is empty")
+    bounds = _bounds(shown)
+
+    def colours(scene_surfaces: Sequence[Surface]) -> list[FloatArray | None]:
+        if reference is None:
+            return [None] * len(scene_surfaces)
+        return [displacement(s, r) if s.n_vertices and s.vertices.shape == r.vertices.shape else None
+                for s, r in zip(scene_surfaces, reference)]
+
+    vmax = max((float(np.nanmax(c)) for _, s in frames for c in colours(s) if c is not None and len(c)), default=0.0)
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    figure = plt.figure(figsize=size, dpi=dpi)
+    try:
+        def draw(i: int) -> list[Any]:
+            figure.clear()
+            ax = _axes(figure, bounds, units, exaggeration)
+            t, scene_surfaces = frames[i]
+            mappable = _draw(ax, scene_surfaces, colours(scene_surfaces), vmax)
+            if reference is not None:
+                figure.colorbar(mappable, ax=ax, shrink=0.6, pad=0.12, label=colour_label)
+            ax.set_title(_title(f"{title} at t = {t:g}{' ' + time_unit if time_unit else ''}", exaggeration))
+            return []
+
+        movie = mpl_animation.FuncAnimation(figure, draw, frames=len(frames), blit=False)
+        movie.save(str(target), writer=mpl_animation.PillowWriter(fps=fps))
+    finally:
+        plt.close(figure)
+    return target

@@ -1,0 +1,151 @@
+"""Scenario ``synsed``: horizons deposited one after another while a normal fault slips.
+
+The specification's second sample application. A normal fault keeps its
+position and slips at a constant rate; horizons A..E are deposited at
+t = 0..4 and each is cut by the fault into two blocks, the hanging wall
+lowered by the throw accumulated since the horizon was laid down (older
+horizons carry more displacement) and every horizon buried as younger ones
+pile up. The model is known at t = 1, 2, 3 and 4 with a growing number of
+horizons. Each horizon is interpolated in each interval between two known
+instants (eight control pairs: the corners of its two blocks) and the
+intervals are chained into one evolving feature over its whole life; the
+fault is one surface constant over [1, 4]. The questions: the whole
+structure at t = 2.5, every surface that exists then, from one SQL query
+(``tgsis.surfaces_at``), equal to the Python snapshots; the throw of each
+horizon then, from SQL.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from psycopg import sql
+
+from tgsis import pictures
+from tgsis.db.features import create_feature_class, insert_feature
+from tgsis.db.temporal import get_at, surfaces_at
+from tgsis.interpolation import InterpolationSetup
+from tgsis.interpolation.interpolate import interpolate
+from tgsis.mesh import Surface
+from tgsis.scenarios._context import Context
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
+
+WIDTH, LENGTH = 4000.0, 2000.0
+FAULT_X = 2000.0      # the fault's trace; the blocks stop GAP/2 short of it (the heave)
+GAP = 200.0
+BURIAL = 100.0        # m of burial per Myr
+THROW_RATE = 60.0     # m of throw per Myr
+TIME_UNIT = "Myr"
+HORIZONS = {"A": 0.0, "B": 1.0, "C": 2.0, "D": 3.0, "E": 4.0}   # name -> deposition time
+KNOWN = (1.0, 2.0, 3.0, 4.0)
+QUERY_TIME = 2.5
+
+
+def _block(nx: int, ny: int, x0: float, x1: float) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    u, v = np.meshgrid(np.linspace(x0, x1, nx), np.linspace(0, LENGTH, ny))
+    idx = np.arange(nx * ny).reshape(ny, nx)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    triangles = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    return np.stack([u.ravel(), v.ravel()], 1), triangles, [0, nx - 1, nx * ny - 1, nx * (ny - 1)]
+
+
+def horizon_at(name: str, t: float, nx: int, ny: int) -> tuple[Surface, list[int]]:
+    """Horizon ``name`` as it lies at ``t`` (its two blocks) and the eight corners of the blocks."""
+    age = t - HORIZONS[name]
+    vertices, triangles, corners, offset = [], [], [], 0
+    for x0, x1, hanging in ((0.0, FAULT_X - GAP / 2, False), (FAULT_X + GAP / 2, WIDTH, True)):
+        xy, tri, block_corners = _block(nx, ny, x0, x1)
+        # buried, lowered on the hanging wall by the throw since deposition, with a roll alike on both sides
+        z = -BURIAL * age - (THROW_RATE * age if hanging else 0.0) + 15.0 * np.cos((xy[:, 0] - FAULT_X) / 700.0)
+        vertices.append(np.column_stack([xy, z]))
+        triangles.append(tri + offset)
+        corners += [c + offset for c in block_corners]
+        offset += len(xy)
+    return Surface(np.concatenate(vertices), np.concatenate(triangles), name=f"horizon {name}"), corners
+
+
+def fault(ny: int) -> Surface:
+    """The fault: a plane dipping towards the hanging wall, across the gap between the blocks."""
+    depth = np.array([50.0, -300.0, -650.0])
+    x = FAULT_X - GAP / 2 + GAP * (50.0 - depth) / 700.0
+    u, v = np.meshgrid(np.arange(3), np.linspace(0, LENGTH, ny))
+    idx = np.arange(3 * ny).reshape(ny, 3)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return Surface(np.stack([x[u.ravel()], v.ravel(), depth[u.ravel()]], 1),
+                   np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="fault F")
+
+
+def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, float]:
+    """The horizon interpolated in each interval between the known instants, chained; and the worst mesh error."""
+    known = [t for t in KNOWN if t >= HORIZONS[name]]
+    if len(known) == 1:                            # deposited at the last instant: known once, it stays
+        shape, _ = horizon_at(name, known[0], nx, ny)
+        return EvolvingSurface([TopologyPeriod([known[0]], shape.cells, shape.vertices[None])], alive=True,
+                               name=shape.name), 0.0
+    periods: list[TopologyPeriod] = []
+    worst = 0.0
+    for t0, t1 in zip(known, known[1:]):
+        (source, source_corners), (target, target_corners) = horizon_at(name, t0, nx, ny), horizon_at(name, t1, nx, ny)
+        setup = InterpolationSetup(tuple(source_corners), tuple(target_corners), steps=3, tolerance=1.0)
+        result = interpolate(source, target, setup, t0, t1, name=source.name)
+        periods += result.evolving.periods
+        worst = max(worst, float(result.error))
+    return EvolvingSurface(periods, alive=True, name=f"horizon {name}"), worst
+
+
+def run(context: Context) -> None:
+    out, conn = context.out, context.conn
+    nx, ny = (24, 16) if context.size == "large" else (7, 5)
+    fc = create_feature_class(conn, "structure", "SURFACE", time_model="EVOLVING", time_unit=TIME_UNIT,
+                              description="a normal fault and the horizons deposited while it slipped")
+    out(f"1. known at t = {', '.join(f'{t:g}' for t in KNOWN)} {TIME_UNIT}: "
+        + "; ".join(f"t = {t:g}: {', '.join(n for n, d in HORIZONS.items() if d <= t)}" for t in KNOWN))
+    evolving, ids, worst = {}, {}, 0.0
+    for name in HORIZONS:
+        surface, error = evolving_horizon(name, nx, ny)
+        worst = max(worst, error)
+        evolving[surface.name or name] = surface
+    f = fault(ny)
+    evolving[f.name or "fault"] = EvolvingSurface([TopologyPeriod([KNOWN[0], KNOWN[-1]], f.cells,
+                                                                  np.stack([f.vertices, f.vertices]))],
+                                                  alive=True, name=f.name)
+    for label, surface in evolving.items():
+        ids[label] = insert_feature(conn, fc, surface)
+    conn.commit()
+    out(f"   each horizon interpolated in each interval (8 control pairs: its blocks' corners) and chained: "
+        + ", ".join(f"{label} {len(s.periods)} period(s)" for label, s in evolving.items())
+        + f"; stored as features {min(ids.values())}..{max(ids.values())} of class structure")
+    context.figure("interpolation_error_m", worst)
+
+    out(f"2. the whole structure at t = {QUERY_TIME:g} {TIME_UNIT}")
+    structure = context.ask("every surface that exists then, from one query", sql.SQL(
+        "SELECT g.geoname AS surface, array_length(s.vertices, 1) AS vertices, array_length(s.triangles, 1) AS triangles "
+        "FROM tgsis.surfaces_at('structure', {}) s JOIN tgsis.geometry g USING (geoid) ORDER BY g.geoname").format(
+            sql.Literal(QUERY_TIME)))
+    from_sql = {surface.name or "": surface for surface in surfaces_at(conn, "structure", QUERY_TIME).values()}
+    from_python = {label: s.at(QUERY_TIME) for label, s in evolving.items()}
+    present = sorted(label for label, s in from_python.items() if s is not None)
+    same = sorted(from_sql) == present and all(
+        np.array_equal(from_sql[label].vertices, from_python[label].vertices)          # type: ignore[union-attr]
+        and np.array_equal(from_sql[label].cells, from_python[label].cells) for label in present)  # type: ignore[union-attr]
+    out(f"   from Python (EvolvingSurface.at): {', '.join(present)}; equal to SQL to the bit: {'yes' if same else 'NO'}")
+    context.figure("structure_at_2.5", [row[0] for row in structure])
+    context.figure("sql_equals_python", same)
+
+    out(f"3. the throw of each horizon at t = {QUERY_TIME:g} {TIME_UNIT}")
+    throws = context.ask("mean depth of the footwall block minus that of the hanging wall",
+                         sql.SQL(
+        "SELECT g.geoname AS horizon, round((avg(v.z) FILTER (WHERE v.x < {fault}) "
+        "- avg(v.z) FILTER (WHERE v.x > {fault}))::numeric, 1) AS throw_m "
+        "FROM tgsis.features_at('structure', {t}) AS f(geoid) JOIN tgsis.geometry g USING (geoid), "
+        "LATERAL tgsis.vertices_at(g.geoid, {t}) v WHERE g.geoname LIKE 'horizon %' "
+        "GROUP BY g.geoname ORDER BY g.geoname").format(fault=sql.Literal(FAULT_X), t=sql.Literal(QUERY_TIME)))
+    context.figure("throws_m", {row[0]: float(row[1]) for row in throws})
+    out("   older horizons carry more displacement: " + " > ".join(f"{row[0].split()[-1]} {row[1]} m" for row in throws))
+
+    out("4. pictures")
+    for t in (1.0, QUERY_TIME, 4.0):
+        scene = [s for s in (get_at(conn, ids[label], t) for label in evolving) if s is not None]
+        png = context.folder / f"synsed_t{t:g}.png".replace(".", "_", 1).replace("_png", ".png")
+        context.wrote(pictures.scene(scene, png, title=f"the structure at t = {t:g} {TIME_UNIT} (SQL snapshots)",
+                                     exaggeration=2.0))
+    out(f"   {', '.join(p.name for p in context.files)}")

@@ -1,0 +1,38 @@
+GOCAD TSurf 1 
+HEADER {
+name: skua fault
+*solid*color: 1 0.5 0.25 1
+}
+GOCAD_ORIGINAL_COORDINATE_SYSTEM
+NAME " Local grid" 
+PROJECTION Unknown
+DATUM Unknown
+AXIS_NAME X Y Z
+AXIS_UNIT m m m
+ZPOSITIVE Depth
+END_ORIGINAL_COORDINATE_SYSTEM
+PROPERTIES " default property"  throw
+PROP_LEGAL_RANGES **none**  **none** **none**  **none** 
+NO_DATA_VALUES -99999 -99999 
+PROPERTY_CLASSES " default property"  throw
+PROPERTY_KINDS " Real Number"  Length
+PROPERTY_SUBCLASSES QUANTITY Float QUANTITY Float
+ESIZES 1  1 
+UNITS unitless m
+PROPERTY_CLASS_HEADER default property {
+name: default property
+}
+PROPERTY_CLASS_HEADER throw {
+kind: Length
+unit: m
+}
+TFACE
+PVRTX 1 100 200 50 0.5 -99999 CNXYZ
+PVRTX 2 110 200 50 1.5 12.5 CNXYZ
+PVRTX 3 100 210 55 2.5 13 CNXYZ
+PVRTX 4 110 210 60 -99999 14 
+TRGL 1 2 3 
+TRGL 2 4 3 
+BSTONE 1 
+BORDER 5 1 2 
+END

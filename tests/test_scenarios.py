@@ -1,0 +1,123 @@
+"""The sample applications run end to end from ``tgsis demo NAME`` (issue 18).
+
+Each scenario runs at its small size against the test server (``--dsn``; it
+makes its own database there), and what it prints, stores and draws is
+checked: the SQL it shows gives the answer it shows when run again, SQL and
+Python snapshots agree, and the pictures, animation and ParaView series are
+real files of their kinds.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import psycopg
+import pytest
+from PIL import Image
+from psycopg.conninfo import make_conninfo
+
+from tgsis.cli import main
+from tgsis.formats.pvd import read_pvd
+
+
+def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo", "--list"]) == 0
+    names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
+    assert names == ["saltdome", "synsed", "river", "interpretations", "cfm"]
+
+
+def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
+    err = capsys.readouterr().err
+    assert "no scenario 'volcano'" in err and "cfm, interpretations, river, saltdome, synsed" in err
+
+
+def _printed_sql(out: str) -> list[tuple[str, str]]:
+    """(statement, answer) pairs the report printed."""
+    lines = out.splitlines()
+    return [(lines[i].strip().rstrip(";"), lines[i + 1].strip().removeprefix("-> "))
+            for i in range(len(lines) - 1) if lines[i].strip().startswith(("SELECT ", "WITH ")) and lines[i + 1].strip().startswith("->")]
+
+
+def _replays(db_dsn: str, scenario: str, out: str, count: int) -> None:
+    """The SQL the report shows runs as printed, in the scenario's database, and gives the answer shown."""
+    asked = _printed_sql(out)
+    assert len(asked) == count
+    with psycopg.connect(make_conninfo(db_dsn, dbname=f"tgsis_demo_{scenario}")) as conn:
+        for statement, answer in asked:
+            values = answer.split(": ", 1)[1]
+            rows = conn.execute(statement).fetchall()  # type: ignore[arg-type]  # the report's own text
+            assert "; ".join(", ".join(str(v) for v in row) for row in rows) == values, statement
+
+
+def test_saltdome(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "salt"
+    assert main(["--dsn", db_dsn, "demo", "saltdome", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("equal to SQL to the bit: yes") == 2
+    assert "flat at t = 0 (231 vertices, a grid), a dome at t = 1 (194 vertices, Delaunay)" in out
+    _replays(db_dsn, "saltdome", out, 2)
+    tops = [float(m) for m in re.findall(r"-> vertices, top_m, lowest_m: \d+, (-?[\d.]+)", out)]
+    assert -2500 < tops[1] < tops[0] < -1000                           # risen more by 2/3 than by 1/2
+    # pictures, animation and series
+    for name in ("saltdome_known_shapes.png", "saltdome_t2_3.png", "saltdome_t1_2.png"):
+        with Image.open(folder / name) as picture:
+            assert picture.format == "PNG" and picture.size == (800, 600)
+    with Image.open(folder / "saltdome.gif") as movie:
+        assert movie.format == "GIF" and movie.n_frames == 11
+    frames = read_pvd(folder / "saltdome.pvd")
+    assert len(frames) == 11 and frames[0][0] == 0.0 and frames[-1][0] == 1.0
+    assert "summary: interpolation_error_m" in out
+
+
+def test_interpretations(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "interp"
+    assert main(["--dsn", db_dsn, "demo", "interpretations", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    # the hand-out rules (versioning.md), worked out by hand for this story
+    rules = "model1.1 0, model2.1 3, model2.2 4, model1.2 2, model3.1 8, model3.2 9"
+    assert f"   revisions by the hand-out rules: {rules}" in out
+    assert f"   revisions tgsis handed out:      {rules}" in out
+    assert "-> model, revision: model3.1, 8" in out                       # the fault appears in model 3.1
+    dilated = re.search(r"-> model, max_dilatancy: (.*)", out)
+    assert dilated is not None and [p.split(", ")[0] for p in dilated.group(1).split("; ")] == ["model2.2", "model3.2"]
+    _replays(db_dsn, "interpretations", out, 2)
+    for label in ("1", "2", "3"):
+        with Image.open(folder / f"interpretations_model{label}.png") as picture:
+            assert picture.format == "PNG"
+
+
+def test_synsed(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "synsed"
+    assert main(["--dsn", db_dsn, "demo", "synsed", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "horizon A 3 period(s), horizon B 3 period(s), horizon C 2 period(s), horizon D 1 period(s)" in out
+    # at t = 2.5: the fault and the horizons deposited by then (D comes at 3), equal in SQL and Python
+    assert "-> surface, vertices, triangles: fault F, 15, 16; horizon A, 70, 96; horizon B, 70, 96; horizon C, 70, 96" in out
+    assert "equal to SQL to the bit: yes" in out
+    # throw = 60 m/Myr since deposition (A at 0, B at 1, C at 2): older horizons carry more
+    assert "-> horizon, throw_m: horizon A, 150.0; horizon B, 90.0; horizon C, 30.0" in out
+    _replays(db_dsn, "synsed", out, 2)
+    for name in ("synsed_t1.png", "synsed_t2_5.png", "synsed_t4.png"):
+        with Image.open(folder / name) as picture:
+            assert picture.format == "PNG"
+
+
+def test_river(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "river"
+    assert main(["--dsn", db_dsn, "demo", "river", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    # the pinch-outs attached to the basement stayed on it at every geometry instant
+    strayed = re.search(r"at most ([0-9.e+-]+) m off it at any instant", out)
+    assert strayed is not None and float(strayed.group(1)) < 1e-9
+    assert "unit 3 8 vertex-intervals" in out                                   # the later shape as the source too
+    assert "-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240" in out
+    assert "equal to SQL to the bit: yes" in out
+    # which unit lies on which: unit 3 reaches unit 1 between t = 3 and 4
+    assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 2" in out
+    assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 1, unit 2" in out
+    _replays(db_dsn, "river", out, 3)
+    for name in ("river_t1_5.png", "river_t3.png", "river_t4.png"):
+        with Image.open(folder / name) as picture:
+            assert picture.format == "PNG"
