@@ -145,6 +145,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         features_at,
         fetch_evolving,
         fetch_series,
+        class_property_periods,
         first_times,
         frames_at,
         get_at,
@@ -237,6 +238,7 @@ _LAZY: dict[str, str] = {
     "features_at": "tgsis.db.temporal",
     "fetch_evolving": "tgsis.db.temporal",
     "fetch_series": "tgsis.db.temporal",
+    "class_property_periods": "tgsis.db.temporal",
     "first_times": "tgsis.db.temporal",
     "frames_at": "tgsis.db.temporal",
     "get_at": "tgsis.db.temporal",
@@ -382,6 +384,7 @@ __all__ = [
     "WrittenSeries",
     "Period",
     "property_periods",
+    "class_property_periods",
     "first_times",
     # errors
     "Error",

@@ -44,10 +44,10 @@ from tgsis.db.features import (
     insert_feature,
     list_feature_classes,
 )
-from tgsis.db.temporal import export_series, get_at, lifespan
+from tgsis.db.temporal import export_series, get_at, instants, lifespan
 from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
                           NotVersionedError, SkippedObjectWarning)
-from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport
+from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
 __all__ = ["main", "build_parser"]
@@ -392,16 +392,123 @@ def cmd_import(args: argparse.Namespace) -> int:
     return 0
 
 
+def _picture_of(conn: Any, ids: Sequence[int], t: float | None, path: str, title: str) -> None:
+    """A PNG of features (at t, or static) in one scene; the first coloured by how far it moved since its start."""
+    from tgsis import pictures
+
+    meshes: list[Surface] = []
+    for fid in ids:
+        mesh = get_at(conn, fid, t) if t is not None else fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
+        if isinstance(mesh, Surface):
+            meshes.append(mesh)
+        elif mesh is not None:
+            raise InvalidInputError(f"feature {fid} is no surface: --png draws surfaces")
+    if not meshes:
+        raise NotFoundError("none of the features exists then: nothing to draw")
+    colour: list[Any] = [None] * len(meshes)
+    span = lifespan(conn, ids[0]) if t is not None else None
+    if span is not None and t is not None:
+        start = get_at(conn, ids[0], span[0])
+        if start is not None and get_at(conn, ids[0], t) is not None and start.vertices.shape == meshes[0].vertices.shape:
+            colour[0] = pictures.displacement(meshes[0], start)      # the same topology period: moved since its start
+    pictures.scene(meshes, path, title=title, colour=colour, colour_label=f"moved since t = {span[0]!r} (m)"
+                   if span is not None else "")
+    _out(f"drew {len(meshes)} surface(s) to {path}")
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     from tgsis import formats
 
     with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
         feature = fetch_feature(conn, fc, args.id)
-    assert feature.mesh is not None
-    formats.write(feature.mesh, args.file, format=args.format)
-    members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
-    _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
+        assert feature.mesh is not None
+        if args.png and not isinstance(feature.mesh, Surface):     # refused before any file is written
+            raise InvalidInputError(f"feature {args.id} is no surface: --png draws surfaces")
+        formats.write(feature.mesh, args.file, format=args.format)
+        members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
+        _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
+        if args.png:
+            _picture_of(conn, [args.id], None, args.png, title=f"feature {args.id} ({fc.name}) {feature.mesh.name or ''}")
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from tgsis.db.versions import diff_versions, list_versions, working_version
+
+    with _connect(args) as conn:
+        fc = class_of_feature(conn, args.id)
+        row = conn.execute(
+            "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
+            "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
+            "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s", (args.id,)).fetchone()
+        assert row is not None
+        feature = fetch_feature(conn, fc, args.id) if fc.time_model == "STATIC" else None
+        values = conn.execute(psycopg_sql.SQL("SELECT * FROM {}.{} WHERE _geoid = %s").format(
+            psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable)), (args.id,))
+        names = [d.name for d in values.description or []]
+        properties = {n: v for n, v in zip(names, values.fetchone() or ()) if not n.startswith("_")}
+        span = lifespan(conn, args.id)
+        steps = instants(conn, args.id) if span is not None else []
+        here = working_version(conn)
+        versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
+                                 ).fetchone() == (True,)
+        differs = []
+        if versioned:
+            for version in list_versions(conn):
+                if version.name != here:
+                    changed = [d for d in diff_versions(conn, here, version.name)
+                               if d.objectclass == "feature" and d.objectkey == str(args.id)]
+                    if changed:
+                        added, removed = sum(d.added for d in changed), sum(d.removed for d in changed)
+                        what = ("only there" if removed == 0 and sum(d.changed for d in changed) == 0 and added
+                                else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
+                                else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
+                        differs.append(f"{version.name} ({what})")
+        conn.rollback()
+    name, geotype, nvrtx, ncell, members, timemodel, alive = row[:7]
+    _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), in version {here}")
+    _out(f"  {nvrtx} vertices, {ncell} cells" + (f", {members} members" if members is not None else ""))
+    if row[7] is not None:
+        _out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
+    if span is None:
+        _out("  static: the same at every time")
+    else:
+        topology = [t for t, starts in steps if starts]
+        _out(f"  exists from t = {span[0]!r} to {span[1]!r}{_unit(fc)}" + (" and after (alive)" if span[2] else "")
+             + f"; {len(steps)} instants, topology (re)defined at {', '.join(repr(t) for t in topology)}")
+    if properties:
+        _out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
+    if fc.instant_properties:
+        _out("  per-instant properties: " + ", ".join(p.name for p in fc.instant_properties))
+    mesh = feature.mesh if feature is not None else None
+    if mesh is not None and not isinstance(mesh, GeometryCollection):
+        if mesh.vertex_properties:
+            _out("  vertex properties: " + ", ".join(mesh.vertex_properties))
+        if mesh.cell_properties:
+            _out("  cell properties: " + ", ".join(mesh.cell_properties))
+    if versioned:
+        _out("  versions where it differs from " + here + ": " + (", ".join(differs) if differs else "none"))
+    return 0
+
+
+def cmd_query(args: argparse.Namespace) -> int:
+    from tgsis.db.temporal import class_property_periods
+
+    if math.isnan(args.value):
+        raise InvalidInputError("VALUE must be a number, got nan", hint="-inf and inf are allowed")
+    with _connect(args) as conn:
+        found = class_property_periods(conn, args.feature_class, args.property, args.op, args.value,
+                                       convention=args.convention)
+    for fid, periods in found.items():
+        if args.first:
+            first = periods[0]
+            _out(f"{fid}\t{first.start!r}" + ("" if first.start_closed else "\t(right after it)"))
+        else:
+            _out(f"{fid}\t" + " ".join(str(p) for p in periods))
+    if not found:
+        print(f"no feature of {args.feature_class} has {args.property} {args.op} {args.value!r} at any time",
+              file=sys.stderr)
     return 0
 
 
@@ -540,6 +647,30 @@ def cmd_corners(args: argparse.Namespace) -> int:
     return 0
 
 
+def _vertex_path(text: str) -> list[int]:
+    try:
+        path = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"a path is vertex indices separated by commas (e.g. 3,7,12), got {text!r}") from None
+    if len(path) < 2 or min(path) < 0:
+        raise argparse.ArgumentTypeError(f"a path has at least two vertex indices >= 0, got {text!r}")
+    return path
+
+
+def cmd_cut(args: argparse.Namespace) -> int:
+    from tgsis import formats
+    from tgsis.interpolation.cutting import cut_along_paths
+
+    target = formats.format_for(args.output, args.format)  # an unknown format fails before any work
+    surface = _read_surface(args.file, "surface")
+    cut = cut_along_paths(surface, args.path, names=[f"--path {','.join(map(str, p))}" for p in args.path])
+    target.write(cut.surface, args.output)
+    _out(f"cut {args.file} along {len(args.path)} path(s): {surface.n_vertices} vertices, {cut.n_copies} copied "
+         f"({cut.surface.n_vertices} now), {surface.n_cells} triangles; wrote {args.output}")
+    return 0
+
+
 # --------------------------------------------------------------------------- time
 
 
@@ -567,9 +698,12 @@ def cmd_at(args: argparse.Namespace) -> int:
         if surface is None:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))
-    target.write(surface, args.file)
-    _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
-         f"{surface.n_cells} triangles, to {args.file}")
+        target.write(surface, args.file)
+        _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
+             f"{surface.n_cells} triangles, to {args.file}")
+        if args.png:
+            _picture_of(conn, [args.id, *args.with_ids], args.time, args.png,
+                        title=f"feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)} (SQL snapshot)")
     return 0
 
 
@@ -601,6 +735,15 @@ def cmd_series(args: argparse.Namespace) -> int:
             raise InvalidInputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from exc
         written = export_series(conn, args.id, folder / f"{stem}.pvd", start=args.start, end=args.end,
                                 steps=args.steps, convention=args.convention)
+    if args.gif:
+        from tgsis import pictures
+
+        shown = [(t, [surface]) for t, surface in written.frames if surface is not None]
+        first = shown[0][1][0] if shown else None
+        same = first is not None and all(s[0].vertices.shape == first.vertices.shape for _, s in shown)
+        pictures.animation(shown, args.gif, title=f"feature {args.id} ({fc.name})", time_unit=fc.time_unit or "",
+                           reference=[first] if same and first is not None else None,
+                           colour_label=f"moved since t = {shown[0][0]!r} (m)" if shown else "")
     for (t, surface), file in zip(written.frames, written.files):
         _out(f"{t!r}\t{file}\t" + (f"{surface.n_vertices} vertices\t{surface.n_cells} triangles" if surface
                                      else "no object (empty grid)"))
@@ -608,6 +751,8 @@ def cmd_series(args: argparse.Namespace) -> int:
     missing = f", {len(written.missing)} without the object" if written.missing else ""
     _out(f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from {times[0]!r} "
          f"to {times[-1]!r}{_unit(fc)}{missing}")
+    if args.gif:
+        _out(f"drew {len(times)} frames to {args.gif}")
     return 0
 
 
@@ -720,11 +865,51 @@ def cmd_version_refresh(args: argparse.Namespace) -> int:
     return 0
 
 
+def _feature_as(conn: Any, fid: int, version: str, revision: int | None) -> Mesh | GeometryCollection | None:
+    """Feature ``fid`` as a version (at a revision) sees it, or None where it does not exist there."""
+    context = V.at_revision(conn, revision, version) if revision is not None else V.in_version(conn, version)
+    with context:
+        try:
+            return fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
+        except NotFoundError:
+            return None
+        finally:
+            conn.rollback()
+
+
+def _draw_differences(conn: Any, args: argparse.Namespace, differences: Sequence[Any],
+                      sides: tuple[tuple[str, int | None], tuple[str, int | None]]) -> None:
+    """One PNG per changed surface feature: the new side coloured by how far each vertex moved, or both sides."""
+    from tgsis import pictures
+
+    folder = Path(args.png)
+    folder.mkdir(parents=True, exist_ok=True)
+    for fid in sorted({int(d.objectkey) for d in differences if d.objectclass == "feature"}):
+        old, new = (_feature_as(conn, fid, version, revision) for version, revision in sides)
+        shown = [m for m in (old, new) if isinstance(m, Surface)]
+        if not shown:
+            continue
+        path = folder / f"diff_{fid}.png"
+        title = f"feature {fid}: {args.a} -> {args.b}"
+        if isinstance(old, Surface) and isinstance(new, Surface) and old.vertices.shape == new.vertices.shape:
+            pictures.scene([new], path, title=title, colour=[pictures.displacement(new, old)],
+                           colour_label=f"moved from {args.a} (m)")
+        else:
+            if isinstance(old, Surface):
+                old.name = f"{old.name or fid} in {args.a}"
+            if isinstance(new, Surface):
+                new.name = f"{new.name or fid} in {args.b}"
+            pictures.scene(shown, path, title=title)
+        _out(f"drew feature {fid} to {path}")
+
+
 def cmd_version_diff(args: argparse.Namespace) -> int:
     a, a_rev = _split_version(args.a)
     b, b_rev = _split_version(args.b)
     with _connect(args) as conn:
         differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
+        if args.png:
+            _draw_differences(conn, args, differences, ((a, a_rev), (b, b_rev)))
     for d in differences:
         _out(f"{d.objectclass}\t{d.objectkey}\t{d.table}\t+{d.added}\t-{d.removed}\t~{d.changed}")
     if not differences:
@@ -986,6 +1171,7 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("file")
     exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     exp.add_argument("--format", help="file format (default: from the extension)")
+    exp.add_argument("--png", metavar="PNG", help="also draw the feature (a surface) to this PNG file")
     exp.set_defaults(handler=cmd_export)
 
     at = commands.add_parser("at", help="write the surface of a feature at model time T to a file")
@@ -995,6 +1181,10 @@ def build_parser() -> argparse.ArgumentParser:
     at.add_argument("--format", help="file format (default: from the extension)")
     at.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                     help="step convention of a surface known at instants (default: left)")
+    at.add_argument("--png", metavar="PNG", help="also draw the surface at T to this PNG file, coloured by how far "
+                                                  "it moved since its first instant")
+    at.add_argument("--with", dest="with_ids", type=_ID, nargs="+", default=[], metavar="ID",
+                    help="with --png: other features drawn at T in the same scene (the structure at T)")
     at.set_defaults(handler=cmd_at)
 
     series = commands.add_parser("series", help="write a feature over model time as a ParaView .pvd time series")
@@ -1008,6 +1198,8 @@ def build_parser() -> argparse.ArgumentParser:
     series.add_argument("--name", help="name of the .pvd file (default: feature_ID)")
     series.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                         help="step convention of a surface known at instants (default: left)")
+    series.add_argument("--gif", metavar="GIF", help="also draw the frames as an animated GIF, coloured by how far "
+                                                     "the surface moved since the first frame")
     series.set_defaults(handler=cmd_series)
 
     co = commands.add_parser("checkout", help="write a feature to a file for editing, recording what it was")
@@ -1057,6 +1249,33 @@ def build_parser() -> argparse.ArgumentParser:
     corners.add_argument("--count", type=_INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
     corners.set_defaults(handler=cmd_corners)
+
+    info = commands.add_parser("info", help="what a feature is: class, counts, box, lifespan and instants, properties, "
+                                            "the versions where it differs", epilog="example: tgsis info 3")
+    info.add_argument("id", type=_ID, help="the feature's id")
+    info.set_defaults(handler=cmd_info)
+
+    query = commands.add_parser(
+        "query", help="the features of a temporal class whose per-instant property satisfies PROPERTY OP VALUE, and when",
+        epilog="example: tgsis query faults throw '>=' 100 --first   (when each fault's throw first reaches 100)")
+    query.add_argument("feature_class", metavar="CLASS", help="an INSTANTS or EVOLVING feature class")
+    query.add_argument("property", metavar="PROPERTY", help="a numeric per-instant property of the class")
+    query.add_argument("op", metavar="OP", choices=("<", "<=", "=", "<>", ">=", ">"), help="one of < <= = <> >= >")
+    query.add_argument("value", metavar="VALUE", type=float, help="the number compared with (-inf, inf allowed)")
+    query.add_argument("--first", action="store_true", help="only when the condition first holds, per feature")
+    query.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
+                       help="step convention of features known at instants (default: left)")
+    query.set_defaults(handler=cmd_query)
+
+    cut = commands.add_parser("cut", help="cut a surface along vertex paths (its edges become borders on both sides)",
+                              epilog="example: tgsis cut horizon.ts horizon_cut.ts --path 12,13,14,15")
+    cut.add_argument("file", metavar="FILE", help="a file holding one surface")
+    cut.add_argument("output", metavar="OUTPUT", help="the cut surface is written here")
+    cut.add_argument("--path", type=_vertex_path, action="append", required=True, metavar="V1,V2,...",
+                     help="a cutting path: vertex indices of FILE along interior edges, only its ends on the border "
+                          "(repeat for several paths)")
+    cut.add_argument("--format", help="format of OUTPUT (default: from its extension)")
+    cut.set_defaults(handler=cmd_cut)
 
     ls = commands.add_parser("ls", help="list features")
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
@@ -1108,6 +1327,8 @@ def build_parser() -> argparse.ArgumentParser:
     ver_diff = ver_commands.add_parser("diff", help="objects whose rows differ between two versions or revisions")
     ver_diff.add_argument("a", metavar="A[@REVISION]")
     ver_diff.add_argument("b", metavar="B[@REVISION]")
+    ver_diff.add_argument("--png", metavar="DIR", help="also draw each changed surface feature to DIR/diff_ID.png, "
+                                                       "coloured by how far its vertices moved from A")
     ver_diff.set_defaults(handler=cmd_version_diff)
 
     ver_valid = ver_commands.add_parser("valid", help="set the period in which a version was believed true")

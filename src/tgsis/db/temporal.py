@@ -822,3 +822,33 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
 
 # Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
 check_module(globals(), __all__)
+
+
+def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: str, op: str, value: float, *,
+                           convention: Convention = "left") -> dict[int, list[Period]]:
+    """For every feature of a class, the periods over which a per-instant property satisfies ``prop op value``.
+
+    One query (``tgsis.class_property_periods``): :func:`property_periods` for
+    each feature of the class. Features for which the condition never holds
+    are left out; ``periods[0].start`` is when the property first satisfies
+    it.
+
+    Parameters
+    ----------
+    conn, feature_class, prop, op, value, convention
+        As :func:`property_periods`.
+
+    Returns
+    -------
+    dict of int to list of Period
+        By feature id, ascending; each list ascending.
+    """
+    with reraise(), conn.transaction():
+        rows = conn.execute(
+            "SELECT geoid, coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
+            "upper_inc(period) FROM tgsis.class_property_periods(%s, %s, %s, %s, %s)",
+            (_class_name(feature_class), prop, op, float(value), check_convention(convention))).fetchall()
+    found: dict[int, list[Period]] = {}
+    for r in rows:
+        found.setdefault(int(r[0]), []).append(Period(float(r[1]), float(r[2]), bool(r[3]), bool(r[4])))
+    return found
