@@ -155,7 +155,7 @@ def test_depth_surface_round_trips_through_the_database(conn: Conn) -> None:
     exported = format_gocad(back)
     for line in ("ZPOSITIVE Depth", 'NAME "UTM 11N depth"', "*solid*color:0.8 0.25 0.1 1", "name:Fault_A depth",
                  "PROPERTIES Porosity Slip_Vector", "ESIZES 1 3", "UNITS fraction m", "PATOM 5 2",
-                 "PATOM 6 3 0.33 0.1 0.2 -0.3", 'PROPERTY_KINDS Porosity "Length"', "GEOLOGICAL_TYPE fault"):
+                 "PATOM 6 3 0.33 0.1 0.2 -0.3", "PROPERTY_KINDS Porosity Length", "GEOLOGICAL_TYPE fault"):
         assert line in exported.splitlines(), line
     assert exported.count("TFACE") == 2
     # what SQL users see: the convention, the block, name and colour in columns, parts and atoms in rows
