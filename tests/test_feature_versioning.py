@@ -27,7 +27,7 @@ def _grid(side: int, z: float = 0.0) -> tgsis.Surface:
 def horizons(conn: Conn) -> F.FeatureClass:
     fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
                                 cell_properties={"porosity": "float8"})
-    assert tgsis.enable_feature_versioning(conn) == 16       # 6 model-1, 3 model-2, 5 model-3 tables + the class's 2
+    assert tgsis.enable_feature_versioning(conn) == 18       # 8 model-1, 3 model-2, 5 model-3 tables + the class's 2
     return fc
 
 
@@ -39,7 +39,8 @@ def _rows(conn: Conn) -> dict[str, int]:
 def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureClass) -> None:
     tables = {(t.table, t.objectkeyfield, t.iudorder) for t in tgsis.versioned_tables(conn)}
     assert tables == {("geometry", "geoid", 0), ("vrtx", "geoid", 1), ("point", "geoid", 2), ("segment", "geoid", 2),
-                      ("trgl", "geoid", 2), ("tetra", "geoid", 2), ("horizons", "_geoid", 3),
+                      ("trgl", "geoid", 2), ("tetra", "geoid", 2), ("atom", "geoid", 2), ("part", "geoid", 2),
+                      ("horizons", "_geoid", 3),
                       ("horizons_cellpros", "_geoid", 4),
                       ("times", "geoid", 1), ("times_vrtx", "geoid", 2), ("times_trgl", "geoid", 2),
                       ("timem", "geoid", 1), ("timet", "geoid", 2), ("node", "geoid", 2), ("d4dtrgl", "geoid", 2),

@@ -198,12 +198,12 @@ def test_tsurf_two_parts_properties_no_data_and_atom() -> None:
     assert surface.cells.tolist() == [[0, 1, 2], [4, 3, 2]]
     assert surface.cell_properties["part"].tolist() == [0, 1]
     props = surface.vertex_properties
-    assert list(props) == ["porosity", "vel_0", "vel_1"]
-    np.testing.assert_array_equal(props["porosity"], [0.25, np.nan, 0.3, 0.1, np.nan])
-    np.testing.assert_array_equal(props["vel_0"], [1500, 1510, 1520, 1530, 1510])
-    np.testing.assert_array_equal(props["vel_1"], [1600, np.nan, 1620, 1630, np.nan])
+    assert list(props) == ["Porosity", "Vel"]  # names as written; Vel (ESIZES 2) is one (n, 2) property
+    np.testing.assert_array_equal(props["Porosity"], [0.25, np.nan, 0.3, 0.1, np.nan])
+    np.testing.assert_array_equal(props["Vel"][:, 0], [1500, 1510, 1520, 1530, 1510])
+    np.testing.assert_array_equal(props["Vel"][:, 1], [1600, np.nan, 1620, 1630, np.nan])
     meta = surface.metadata
-    assert meta["property_names"] == {"porosity": "Porosity", "vel_0": "Vel", "vel_1": "Vel"}
+    assert meta["property_names"] == {"Porosity": "Porosity", "Vel": "Vel"}
     assert meta["gocad_esizes"] == {"Vel": 2}
     assert meta["gocad_no_data_values"] == {"Porosity": -999.0, "Vel": -1.0}
     assert meta["color"] == (1.0, 0.5, 0.0, 1.0)
@@ -240,11 +240,13 @@ def test_patom_values_and_atom_chains(tmp_path: Path) -> None:
     # a PATOM without values and an ATOM repeat their vertex; ATOM 4 and the forward ATOM 9 repeat PATOM 3
     np.testing.assert_array_equal(points.vertex_properties["a"], [7, 5, 5, 7, 7, np.nan])
     assert points.metadata["gocad_atoms"] == [[0, 3], [2, 1], [3, 1], [4, 3]]
+    assert points.metadata["gocad_patoms"] == [2, 3]
     back = round_trip(points, tmp_path, "p.vs")
     assert back.same_as(points)
-    # only ATOMs whose vertex comes earlier and still matches are written as ATOM lines
+    # only atoms whose vertex comes earlier are written as atoms: in a file with properties as PATOMs,
+    # with values of their own where they differ from the vertex they repeat
     assert [line for line in (tmp_path / "p.vs").read_text().splitlines() if "ATOM" in line] == \
-        ["ATOM 3 2", "ATOM 5 4"]
+        ["PATOM 3 2", "PATOM 4 2 7.0", "ATOM 5 4"]
 
 
 def test_pline_sample() -> None:
@@ -372,8 +374,8 @@ def test_written_file_is_plain_gocad(tmp_path: Path) -> None:
 def test_renamed_property_names_are_written_back(tmp_path: Path) -> None:
     text = ("GOCAD VSet 1\nPROPERTIES Rock-Type 2nd type\nPVRTX 1 0 0 0 1 2 3\nEND\n")
     [points] = parse_gocad(text)
-    assert list(points.vertex_properties) == ["rock_type", "p_2nd", "type"]
-    assert points.metadata["property_names"] == {"rock_type": "Rock-Type", "p_2nd": "2nd", "type": "type"}
+    assert list(points.vertex_properties) == ["Rock_Type", "p_2nd", "type"]  # letter case kept
+    assert points.metadata["property_names"] == {"Rock_Type": "Rock-Type", "p_2nd": "2nd", "type": "type"}
     assert "PROPERTIES Rock-Type 2nd type\n" in format_gocad(points)
 
 

@@ -304,8 +304,8 @@ def test_light_tsolid_is_read_as_a_tetrahedral_mesh() -> None:
     assert solid.cell_properties["part"].tolist() == [0, 1, 0]
     assert solid.metadata["gocad_part_names"] == ["R1", "R2"]
     props = solid.vertex_properties
-    assert list(props) == ["wf_structural_resolution_map", "vec_0", "vec_1"]
-    assert props["vec_0"].tolist() == [1, 1, 1, 1, 1, 1, 3] and props["vec_1"][6] == 4
+    assert list(props) == ["wf_structural_resolution_map", "vec"]  # vec (ESIZES 2): one (n, 2) property
+    assert props["vec"][:, 0].tolist() == [1, 1, 1, 1, 1, 1, 3] and props["vec"][6, 1] == 4
     assert np.isnan(props["wf_structural_resolution_map"][4])
     assert solid.metadata["gocad_vertex_flags"] == {"XYZ": [[0, 5]]}
     assert solid.metadata["gocad_extra_lines"] == ["FIXED 0 1", "REGION interpolation_region 0"]

@@ -95,8 +95,8 @@ def test_ply_from_another_writer_with_odd_names(tmp_path: Path) -> None:
     back = read_trimesh_file(tmp_path / "a.ply")
     assert back.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]] and back.cells.tolist() == [[0, 1, 2]]
     assert back.vertex_properties["red"].tolist() == [255, 0, 7]
-    assert back.vertex_properties["intensity"].tolist() == [0.5, 1.5, 2.5]
-    assert back.metadata["ply_property_names"] == {"vertex": {"intensity": "Intensity"}}
+    assert back.vertex_properties["Intensity"].tolist() == [0.5, 1.5, 2.5]  # letter case kept: no renaming
+    assert "ply_property_names" not in back.metadata
 
 
 # ---------------------------------------------------------------- OBJ and OFF: text with fixed decimals

@@ -150,12 +150,12 @@ def test_hand_written_ascii_file() -> None:
     assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.1, 0.2, 3e5]]
     assert mesh.cells.tolist() == [[0, 1, 2, 3], [1, 2, 3, 4]]
     props = mesh.vertex_properties
-    assert list(props) == ["temperature_k", "velocity_0", "velocity_1", "velocity_2"]
-    assert props["temperature_k"].dtype == np.float32
-    assert props["temperature_k"].tolist() == [10.5, 11.5, 12.5, 13.5, 14.5]
+    assert list(props) == ["Temperature_K", "velocity_0", "velocity_1", "velocity_2"]  # letter case kept
+    assert props["Temperature_K"].dtype == np.float32
+    assert props["Temperature_K"].tolist() == [10.5, 11.5, 12.5, 13.5, 14.5]
     assert props["velocity_1"].tolist() == [2, 5, 8, 11, 14]
     assert mesh.cell_properties["rock"].tolist() == [7, -3] and mesh.cell_properties["rock"].dtype == np.int32
-    assert mesh.metadata["vtk_array_names"] == {"point_data": {"temperature_k": "Temperature K"}}
+    assert mesh.metadata["vtk_array_names"] == {"point_data": {"Temperature_K": "Temperature K"}}
 
 
 # ---- files as other VTK writers make them (zlib compression, UInt32 headers, big-endian, base64 appended)

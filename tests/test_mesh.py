@@ -52,10 +52,11 @@ def test_bad_tetrahedra_and_segments_name_their_cell_kind() -> None:
 
 @pytest.mark.parametrize(("props", "message"), [
     ({"porosity": np.ones(3)}, "vertex property 'porosity' has 3 values for 4 vertices"),
-    ({"Porosity": np.ones(4)}, "vertex property name 'Porosity' is not allowed"),
+    ({"Poro sity": np.ones(4)}, "vertex property name 'Poro sity' is not allowed"),
     ({"_idx": np.ones(4)}, "not allowed"),
     ({"label": np.array(["a", "b", "c", "d"])}, "has values of type <U1, not numbers"),
-    ({"vec": np.ones((4, 2))}, r"must be one value per vertex, got shape \(4, 2\)"),
+    ({"vec": np.ones((4, 2, 2))}, r"must be one value or one vector of values per vertex, got shape \(4, 2, 2\)"),
+    ({"vec": np.ones((4, 0))}, r"got shape \(4, 0\)"),
 ])
 def test_bad_vertex_properties(props: dict[str, object], message: str) -> None:
     with pytest.raises(tgsis.InvalidPropertyError, match=message):

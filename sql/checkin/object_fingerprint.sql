@@ -34,13 +34,15 @@ BEGIN
       FROM tgsis.geometry g WHERE g.geoid = ANY (v_ids);
     v_parts := v_parts || ('geometry ' || v_part);
     v_parts := v_parts || ('vrtx ' || tgsis.table_fingerprint('tgsis', 'vrtx', 'geoid', 'vrtxid', v_ids));
+    v_parts := v_parts || ('atom ' || tgsis.table_fingerprint('tgsis', 'atom', 'geoid', 'vrtxid', v_ids));
+    v_parts := v_parts || ('part ' || tgsis.table_fingerprint('tgsis', 'part', 'geoid', 'firstid', v_ids));
     FOR v_table IN SELECT DISTINCT tgsis.simplex_table(geotype) FROM tgsis.geometry
                     WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' ORDER BY 1 LOOP
         v_parts := v_parts || (v_table || ' ' || tgsis.table_fingerprint(
             'tgsis', v_table, 'geoid', CASE v_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid'
                                                      WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END, v_ids));
     END LOOP;
-    FOR v_class IN SELECT schemaname, featuretable, cellprotable FROM tgsis.catalog
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable, otherprotable FROM tgsis.catalog
                     WHERE geotype = v_geo.geotype AND timemodel = 'STATIC' ORDER BY classname LOOP
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(hashtextextended(f::text, 0)), 0) FROM %I.%I f WHERE f._geoid = $1',
                        v_class.schemaname, v_class.featuretable)
@@ -48,10 +50,14 @@ BEGIN
         v_parts := v_parts || (v_class.featuretable || ' ' || v_part);
         v_parts := v_parts || (v_class.cellprotable || ' ' || tgsis.table_fingerprint(
             v_class.schemaname, v_class.cellprotable, '_geoid', '_idx', v_ids));
+        IF v_class.otherprotable IS NOT NULL THEN
+            v_parts := v_parts || (v_class.otherprotable || ' ' || tgsis.table_fingerprint(
+                v_class.schemaname, v_class.otherprotable, '_geoid', '_idx', v_ids));
+        END IF;
     END LOOP;
     RETURN md5(array_to_string(v_parts, '|'));
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.object_fingerprint(bigint) IS
-    'digest (md5 of per-table row counts and xor of row hashes) of a static feature''s rows as the session''s version sees them: geometry, vertices, simplices, cell properties, feature row, members; NULL when the geometry does not exist';
+    'digest (md5 of per-table row counts and xor of row hashes) of a static feature''s rows as the session''s version sees them: geometry, vertices, simplices, atoms, parts, cell properties, feature row, members; NULL when the geometry does not exist';

@@ -9,7 +9,8 @@ DECLARE
 BEGIN
     FOR v_prop IN SELECT * FROM jsonb_array_elements(p_properties) LOOP
         EXECUTE format('COMMENT ON COLUMN %I.%I.%I IS %L', p_schema, p_table, v_prop ->> 'name',
-                       format('%s (%s)', p_what, v_prop ->> 'type'));
+                       format('%s (%s%s)', p_what, v_prop ->> 'type',
+                              CASE WHEN v_prop ? 'size' THEN format('[%s]: a vector of %s components', v_prop ->> 'size', v_prop ->> 'size') ELSE '' END));
     END LOOP;
 END
 $$;

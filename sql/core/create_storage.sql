@@ -29,10 +29,12 @@ BEGIN
 
     -- rights of the group roles on them (the other objects' are in core/grants.sql)
     GRANT SELECT ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
+                    tgsis.atom, tgsis.part,
                     tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
                     tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
         TO tgsis_reader;
     GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
+                                    tgsis.atom, tgsis.part,
                                     tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
                                     tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
         TO tgsis_editor;
@@ -46,4 +48,4 @@ $storage$;
 REVOKE ALL ON FUNCTION tgsis.create_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_storage() IS
-    'create the tables of stored objects (geometry, vrtx, point, segment, trgl, tetra, times*, timem, timet, node, d4dtrgl, d4dvrtx) with their grants unless tgsis.geometry exists; returns whether it created them. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';
+    'create the tables of stored objects (geometry, vrtx, point, segment, trgl, tetra, atom, part, times*, timem, timet, node, d4dtrgl, d4dvrtx) with their grants unless tgsis.geometry exists; returns whether it created them. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';

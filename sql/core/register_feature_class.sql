@@ -39,6 +39,9 @@ DECLARE
     v_iprops    jsonb;
     v_fcols     text;
     v_ccols     text;
+    v_ocols     text;
+    v_other     text;
+    v_notnull   text;
     v_fprops    jsonb;
     v_cprops    jsonb;
     v_row       tgsis.catalog;
@@ -136,10 +139,40 @@ BEGIN
            coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
       INTO v_fcols, v_fprops
       FROM tgsis.property_columns(p_feature_properties, false, 'feature');
-    SELECT coalesce(string_agg(format(', %I %s NOT NULL', name, typename), '' ORDER BY ord), ''),
-           coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
-      INTO v_ccols, v_cprops
-      FROM tgsis.property_columns(p_cell_properties, true, lower(v_align));
+    v_notnull := CASE WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN '' ELSE ' NOT NULL' END;
+    -- a vector property (size k > 1) is one column holding an array of exactly k values; a
+    -- property aligned otherwise than the class (alignment is per property) goes to v_other
+    WITH props AS (
+        SELECT p.name, p.ord, p.size, nullif(p.alignment, v_align) AS alignment,
+               -- a collection's members may each have some of the class's properties: the rows of a
+               -- member hold NULL in the columns of properties it lacks
+               CASE WHEN p.size = 1 THEN format(', %I %s%s', p.name, p.typename, v_notnull)
+                    ELSE format(', %I %s[]%s CHECK (array_ndims(%I) = 1 AND array_lower(%I, 1) = 1 '
+                                'AND cardinality(%I) = %s AND array_position(%I, NULL) IS NULL)',
+                                p.name, p.typename, v_notnull, p.name, p.name, p.name, p.size, p.name) END AS definition,
+               jsonb_build_object('name', p.name, 'type', p.typename) AS item
+          FROM tgsis.property_columns(p_cell_properties, true, lower(v_align)) p)
+    SELECT coalesce(string_agg(definition, '' ORDER BY ord) FILTER (WHERE alignment IS NULL), ''),
+           string_agg(definition, '' ORDER BY ord) FILTER (WHERE alignment IS NOT NULL),
+           coalesce(jsonb_agg(item || CASE WHEN size > 1 THEN jsonb_build_object('size', size) ELSE '{}' END
+                                   || CASE WHEN alignment IS NOT NULL THEN jsonb_build_object('alignment', alignment)
+                                           ELSE '{}' END ORDER BY ord), '[]')
+      INTO v_ccols, v_ocols, v_cprops
+      FROM props;
+    IF v_model <> 'STATIC' AND EXISTS (SELECT FROM jsonb_array_elements(v_cprops) p WHERE p ? 'size' OR p ? 'alignment') THEN
+        RAISE EXCEPTION 'temporal feature class % takes no vector properties nor properties of another alignment', p_name
+            USING ERRCODE = 'TG103', HINT = 'give one scalar property per component, all of the class''s alignment';
+    END IF;
+    IF v_ocols IS NOT NULL THEN
+        v_other := p_name || CASE v_align WHEN 'VERTEX' THEN '_simplexpros' ELSE '_vertexpros' END;
+        IF length(v_other) > 63 THEN
+            RAISE EXCEPTION 'feature class name % is too long for a class with vertex and cell properties', p_name
+                USING ERRCODE = 'TG101', DETAIL = format('Its table %s would have more than 63 characters.', v_other);
+        END IF;
+        IF to_regclass(format('%I.%I', p_schema, v_other)) IS NOT NULL THEN
+            RAISE EXCEPTION 'a table or view named % exists already in schema %', v_other, p_schema USING ERRCODE = 'TG201';
+        END IF;
+    END IF;
     SELECT coalesce(string_agg(format(', %I %s', name, typename), '' ORDER BY ord), ''),
            coalesce(jsonb_agg(jsonb_build_object('name', name, 'type', typename) ORDER BY ord), '[]')
       INTO v_icols, v_iprops
@@ -192,15 +225,40 @@ BEGIN
     EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
                    CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
     PERFORM tgsis.comment_property_columns(p_schema, p_name, v_fprops, 'per-feature property');
-    PERFORM tgsis.comment_property_columns(p_schema, v_cellpros, v_cprops, format('%s property', lower(v_align)));
+    PERFORM tgsis.comment_property_columns(p_schema, v_cellpros,
+                                           (SELECT coalesce(jsonb_agg(p), '[]') FROM jsonb_array_elements(v_cprops) p
+                                             WHERE NOT p ? 'alignment'),
+                                           format('%s property', lower(v_align)));
 
+    IF v_other IS NOT NULL THEN  -- the properties of the other alignment: the same keys, _idx of the other kind
+        EXECUTE format('CREATE TABLE %I.%I (_geoid bigint NOT NULL, _idx bigint NOT NULL%s, PRIMARY KEY (_geoid, _idx))',
+                       p_schema, v_other, v_ocols);
+        EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_other,
+                       format('tgsis feature class %s: %s properties (%s_idx = %s)', p_name,
+                              CASE v_align WHEN 'VERTEX' THEN 'cell' ELSE 'vertex' END,
+                              CASE WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN '_geoid = member geometry, ' ELSE '' END,
+                              CASE WHEN v_align = 'CELL' THEN 'tgsis.vrtx.vrtxid'
+                                   WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN 'simplex id in the member''s point/segment/trgl/tetra'
+                                   ELSE format('tgsis.%s id', tgsis.simplex_table(v_geotype)) END));
+        EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_other,
+                       CASE WHEN v_geotype = 'GEOMETRYCOLLECTION'
+                            THEN 'a member geometry (tgsis.geometry.geoid) of a feature of ' || p_name
+                            ELSE 'the feature (_geoid of ' || p_name || ')' END);
+        EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_other,
+                       CASE v_align WHEN 'CELL' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
+        PERFORM tgsis.comment_property_columns(p_schema, v_other,
+                                               (SELECT jsonb_agg(p) FROM jsonb_array_elements(v_cprops) p WHERE p ? 'alignment'),
+                                               CASE v_align WHEN 'VERTEX' THEN 'cell property' ELSE 'vertex property' END);
+        EXECUTE format('GRANT SELECT ON %I.%I TO tgsis_reader', p_schema, v_other);
+        EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I TO tgsis_editor', p_schema, v_other);
+    END IF;
     EXECUTE format('GRANT SELECT ON %I.%I, %I.%I TO tgsis_reader', p_schema, p_name, p_schema, v_cellpros);
     EXECUTE format('GRANT INSERT, UPDATE, DELETE ON %I.%I, %I.%I TO tgsis_editor', p_schema, p_name, p_schema, v_cellpros);
 
-    INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, viewname, protablename,
-                               timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
+    INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, otherprotable, viewname,
+                               protablename, timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
                                instant_properties, description, created_by)
-    VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
+    VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_other, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
             v_fprops, v_cprops, v_iprops, p_description, v_caller)
     RETURNING * INTO v_row;
     -- once model 1 is versioned, every new class is versioned with it
@@ -213,4 +271,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text) IS
-    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';
+    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';

@@ -66,6 +66,26 @@ BEGIN
             v_table, 'vrtxid' || v_i) USING p_geoid;
     END LOOP;
 
+    -- atoms repeat a vertex at the same place; parts cover simplices that exist
+    RETURN QUERY SELECT 'atom refers to a missing vertex'::text, count(*), min(a.vrtxid)::text
+                   FROM tgsis.atom a
+                  WHERE a.geoid = p_geoid
+                    AND (NOT EXISTS (SELECT FROM tgsis.vrtx v WHERE v.geoid = a.geoid AND v.vrtxid = a.vrtxid)
+                         OR NOT EXISTS (SELECT FROM tgsis.vrtx v WHERE v.geoid = a.geoid AND v.vrtxid = a.refid))
+                 HAVING count(*) > 0;
+    RETURN QUERY SELECT 'atom is not at the place of the vertex it repeats'::text, count(*), min(a.vrtxid)::text
+                   FROM tgsis.atom a
+                   JOIN tgsis.vrtx v ON v.geoid = a.geoid AND v.vrtxid = a.vrtxid
+                   JOIN tgsis.vrtx r ON r.geoid = a.geoid AND r.vrtxid = a.refid
+                  WHERE a.geoid = p_geoid AND (v.x, v.y, v.z) IS DISTINCT FROM (r.x, r.y, r.z)
+                 HAVING count(*) > 0;
+    RETURN QUERY SELECT 'part ranges overlap'::text, count(*), min(p.firstid)::text
+                   FROM tgsis.part p
+                  WHERE p.geoid = p_geoid
+                    AND EXISTS (SELECT FROM tgsis.part q WHERE q.geoid = p.geoid AND q.firstid > p.firstid
+                                                          AND q.firstid <= p.lastid)
+                 HAVING count(*) > 0;
+
     RETURN QUERY
         SELECT 'bounding box or counts out of date (run tgsis.refresh_geometry)'::text, 1::bigint, NULL::text
           FROM (SELECT count(*) AS n,
@@ -77,4 +97,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.check_geometry(bigint) IS
-    'problems of a stored geometry (temporal ones: see tgsis.check_temporal_geometry): non-finite coordinates, simplices pointing at missing vertices, stale bbox/counts, missing, nested or unlisted collection members';
+    'problems of a stored geometry (temporal ones: see tgsis.check_temporal_geometry): non-finite coordinates, simplices pointing at missing vertices, atoms of missing or moved vertices, overlapping part ranges, stale bbox/counts, missing, nested or unlisted collection members';

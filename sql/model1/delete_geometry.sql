@@ -31,9 +31,12 @@ BEGIN
     -- the feature row: its foreign key is gone once model 1 is versioned, so
     -- delete it explicitly; cell properties of a collection's members are in
     -- its class's table, keyed by member geoid
-    FOR v_class IN SELECT schemaname, featuretable, cellprotable, protablename FROM tgsis.catalog
+    FOR v_class IN SELECT schemaname, featuretable, cellprotable, otherprotable, protablename FROM tgsis.catalog
                     WHERE geotype = v_geo.geotype AND timemodel = v_geo.timemodel LOOP
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.cellprotable, '_geoid', v_ids);
+        IF v_class.otherprotable IS NOT NULL THEN
+            PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.otherprotable, '_geoid', v_ids);
+        END IF;
         IF v_class.protablename IS NOT NULL THEN
             PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.protablename, '_geoid', v_ids);
         END IF;
@@ -48,6 +51,8 @@ BEGIN
             PERFORM tgsis.delete_object_rows('tgsis', v_table, 'geoid', v_ids);
         END LOOP;
     END IF;
+    PERFORM tgsis.delete_object_rows('tgsis', 'atom', 'geoid', v_ids);
+    PERFORM tgsis.delete_object_rows('tgsis', 'part', 'geoid', v_ids);
     PERFORM tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', v_ids);
     FOR v_geo IN SELECT DISTINCT geotype FROM tgsis.geometry WHERE geoid = ANY (v_ids) AND geotype <> 'GEOMETRYCOLLECTION' LOOP
         PERFORM tgsis.delete_object_rows('tgsis', tgsis.simplex_table(v_geo.geotype), 'geoid', v_ids);
@@ -58,4 +63,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.delete_geometry(bigint) IS
-    'delete a geometry, its vertices, simplices (instants and periods of temporal ones), feature row, cell and per-instant properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';
+    'delete a geometry, its vertices, simplices, atoms, parts (instants and periods of temporal ones), feature row, cell and per-instant properties, and the members a collection owns (not those it only lists), in the session''s version; refuses (TG202) an owned member; false if it did not exist';

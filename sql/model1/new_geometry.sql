@@ -1,7 +1,10 @@
--- tgsis.new_geometry(geotype, name, bounds, nvrtx, ncell, geoids, collection, timemodel, alive, color): insert a geometry row and return its geoid.
+-- tgsis.new_geometry(geotype, name, bounds, nvrtx, ncell, geoids, collection, timemodel, alive, color, zpositive, crs, metadata): insert a geometry row and return its geoid.
 -- The client's write path calls it before copying vertices and simplices;
 -- bounds is {xmin, ymin, zmin, xmax, ymax, zmax} (NULL: no vertex); a member
 -- stored with its GEOMETRYCOLLECTION names the collection that owns it.
+-- zpositive, crs and metadata record what the file meant (z convention,
+-- coordinate-system block, other format facts): bounds are in elevation
+-- whatever zpositive says, as the vertices are.
 CREATE FUNCTION tgsis.new_geometry(
     p_geotype    text,
     p_name       text,
@@ -12,7 +15,10 @@ CREATE FUNCTION tgsis.new_geometry(
     p_collection bigint   DEFAULT NULL,
     p_timemodel  text     DEFAULT 'STATIC',
     p_alive      boolean  DEFAULT false,
-    p_color      real[]   DEFAULT NULL)
+    p_color      real[]   DEFAULT NULL,
+    p_zpositive  text     DEFAULT NULL,
+    p_crs        jsonb    DEFAULT NULL,
+    p_metadata   jsonb    DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 SET search_path FROM CURRENT
@@ -41,6 +47,18 @@ BEGIN
         RAISE EXCEPTION 'colour of a new geometry must be 3 numbers {red, green, blue} in [0, 1], got %', p_color
             USING ERRCODE = 'TG102';
     END IF;
+    IF p_zpositive IS NOT NULL AND p_zpositive NOT IN ('Elevation', 'Depth') THEN
+        RAISE EXCEPTION 'z convention % of a new geometry is unknown', quote_literal(p_zpositive)
+            USING ERRCODE = 'TG102', HINT = 'p_zpositive => ''Elevation'' (up positive), ''Depth'' (down positive) or NULL';
+    END IF;
+    IF p_crs IS NOT NULL AND jsonb_typeof(p_crs) <> 'array' THEN
+        RAISE EXCEPTION 'coordinate system of a new geometry must be a JSON array of the block''s lines, got %', jsonb_typeof(p_crs)
+            USING ERRCODE = 'TG102', HINT = 'p_crs => ''["NAME Default", "ZPOSITIVE Depth"]'' or NULL';
+    END IF;
+    IF p_metadata IS NOT NULL AND jsonb_typeof(p_metadata) <> 'object' THEN
+        RAISE EXCEPTION 'metadata of a new geometry must be a JSON object, got %', jsonb_typeof(p_metadata)
+            USING ERRCODE = 'TG102', HINT = 'p_metadata => ''{}'' or NULL';
+    END IF;
     IF coalesce(upper(p_timemodel), '') NOT IN ('STATIC', 'INSTANTS', 'EVOLVING')
        OR (upper(p_timemodel) <> 'STATIC' AND upper(p_geotype) <> 'SURFACE') THEN
         RAISE EXCEPTION 'time model % is not one of a % geometry', coalesce(quote_literal(p_timemodel), 'NULL'), upper(p_geotype)
@@ -61,14 +79,15 @@ BEGIN
         END IF;
     END IF;
     INSERT INTO tgsis.geometry (geotype, geoname, geoids, collection, bbox, nvrtx, ncell, timemodel, alive,
-                                colorred, colorgreen, colorblue)
+                                colorred, colorgreen, colorblue, zpositive, crs, metadata)
     VALUES (upper(p_geotype), p_name, p_geoids, p_collection,
             CASE WHEN p_bounds IS NOT NULL THEN cube(p_bounds[1:3], p_bounds[4:6]) END,
-            p_nvrtx, p_ncell, upper(p_timemodel), coalesce(p_alive, false), p_color[1], p_color[2], p_color[3])
+            p_nvrtx, p_ncell, upper(p_timemodel), coalesce(p_alive, false), p_color[1], p_color[2], p_color[3],
+            p_zpositive, p_crs, p_metadata)
     RETURNING geoid INTO v_geoid;
     RETURN v_geoid;
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint, text, boolean, real[]) IS
-    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax}; members of a GEOMETRYCOLLECTION name their owning collection; time model, alive and colour {r, g, b} of temporal surfaces) and return its geoid';
+COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint, text, boolean, real[], text, jsonb, jsonb) IS
+    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax} in elevation; members of a GEOMETRYCOLLECTION name their owning collection; time model, alive, colour {r, g, b}; the file''s z convention, coordinate-system block and other format metadata) and return its geoid';

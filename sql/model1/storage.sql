@@ -30,6 +30,9 @@ BEGIN
         colorred   real   CHECK (colorred BETWEEN 0 AND 1),
         colorgreen real   CHECK (colorgreen BETWEEN 0 AND 1),
         colorblue  real   CHECK (colorblue BETWEEN 0 AND 1),
+        zpositive  text   CHECK (zpositive IN ('Elevation', 'Depth')),
+        crs        jsonb  CHECK (jsonb_typeof(crs) = 'array'),
+        metadata   jsonb  CHECK (jsonb_typeof(metadata) = 'object'),
         created_at timestamptz NOT NULL DEFAULT now(),
         CONSTRAINT geometry_temporal_surfaces CHECK (timemodel = 'STATIC' OR geotype = 'SURFACE'),
         CONSTRAINT geometry_collection_members CHECK ((geotype = 'GEOMETRYCOLLECTION') = (geoids IS NOT NULL)),
@@ -61,6 +64,12 @@ BEGIN
     COMMENT ON COLUMN tgsis.geometry.colorred IS 'display colour, red component in [0, 1] (NULL: none)';
     COMMENT ON COLUMN tgsis.geometry.colorgreen IS 'display colour, green component in [0, 1]';
     COMMENT ON COLUMN tgsis.geometry.colorblue IS 'display colour, blue component in [0, 1]';
+    COMMENT ON COLUMN tgsis.geometry.zpositive IS
+        'z convention of the file the geometry came from: Elevation (up positive) or Depth (down positive); NULL: not stated. Stored z (tgsis.vrtx.z, bbox) is always elevation: the write path negates the z of a Depth geometry, the read path negates it back';
+    COMMENT ON COLUMN tgsis.geometry.crs IS
+        'the coordinate-system block of the file (GOCAD_ORIGINAL_COORDINATE_SYSTEM: NAME, AXIS_NAME, AXIS_UNIT, ZPOSITIVE, ...), its lines in order; NULL: none';
+    COMMENT ON COLUMN tgsis.geometry.metadata IS
+        'other facts the file format kept for a faithful round trip (GOCAD header lines, property names, sizes, kinds, units and classes as written, ...): the mesh metadata without colour, z convention, coordinate system and atoms, which have columns or tables of their own';
     COMMENT ON COLUMN tgsis.geometry.created_at IS 'when the geometry was stored';
 
     -- ---- tgsis.vrtx
@@ -159,10 +168,55 @@ BEGIN
     COMMENT ON COLUMN tgsis.tetra.vrtxid2 IS 'vertex 2 (tgsis.vrtx.vrtxid of the same geoid)';
     COMMENT ON COLUMN tgsis.tetra.vrtxid3 IS 'vertex 3 (tgsis.vrtx.vrtxid of the same geoid)';
     COMMENT ON COLUMN tgsis.tetra.vrtxid4 IS 'vertex 4 (tgsis.vrtx.vrtxid of the same geoid)';
+
+    -- ---- tgsis.atom
+    -- Vertices that repeat another vertex of the same geometry (GOCAD ATOM and
+    -- PATOM: parts of a surface that share a vertex, or a surface cut along a
+    -- line). Few rows per geometry, so a side table rather than a column of
+    -- every tgsis.vrtx row (bulk transfer speed, docs/performance.md). The
+    -- atom's own vertex row keeps its position (equal to the one it repeats)
+    -- and its properties (a PATOM may have values of its own).
+    CREATE TABLE tgsis.atom (
+        geoid  bigint NOT NULL,
+        vrtxid bigint NOT NULL,
+        refid  bigint NOT NULL,
+        patom  boolean NOT NULL DEFAULT false,
+        CONSTRAINT atom_not_itself CHECK (vrtxid <> refid),
+        PRIMARY KEY (geoid, vrtxid)
+    );
+
+    COMMENT ON TABLE tgsis.atom IS
+        'model 1: vertices that repeat another vertex of the same geometry (GOCAD ATOM/PATOM), keyed by (geoid, vrtxid)';
+    COMMENT ON COLUMN tgsis.atom.geoid IS 'geometry (tgsis.geometry.geoid)';
+    COMMENT ON COLUMN tgsis.atom.vrtxid IS 'the repeating vertex (tgsis.vrtx.vrtxid of the same geoid)';
+    COMMENT ON COLUMN tgsis.atom.refid IS 'the vertex it repeats (tgsis.vrtx.vrtxid of the same geoid)';
+    COMMENT ON COLUMN tgsis.atom.patom IS 'the file wrote it as a PATOM (an atom in an object with vertex properties), not an ATOM';
+
+    -- ---- tgsis.part
+    -- Parts of a geometry (GOCAD TFACE, ILINE, TVOLUME) as ranges of simplex
+    -- ids: simplices firstid..lastid belong to part `part`. A file's parts are
+    -- runs of cells, so a few rows describe them; a side table rather than a
+    -- column of every simplex row, for the same reason as tgsis.atom. A
+    -- geometry without rows here has one part.
+    CREATE TABLE tgsis.part (
+        geoid   bigint  NOT NULL,
+        firstid bigint  NOT NULL,
+        lastid  bigint  NOT NULL,
+        part    integer NOT NULL CHECK (part >= 0),
+        CONSTRAINT part_range CHECK (lastid >= firstid),
+        PRIMARY KEY (geoid, firstid)
+    );
+
+    COMMENT ON TABLE tgsis.part IS
+        'model 1: parts of geometries (GOCAD TFACE/ILINE/TVOLUME) as ranges of simplex ids, keyed by (geoid, firstid)';
+    COMMENT ON COLUMN tgsis.part.geoid IS 'geometry (tgsis.geometry.geoid)';
+    COMMENT ON COLUMN tgsis.part.firstid IS 'first simplex id of the range (pointid, segid, trglid or tetraid)';
+    COMMENT ON COLUMN tgsis.part.lastid IS 'last simplex id of the range (inclusive)';
+    COMMENT ON COLUMN tgsis.part.part IS 'part number (0, 1, ... in file order): the cell property part of the mesh';
 END
 $storage$;
 
 REVOKE ALL ON FUNCTION tgsis.create_model1_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_model1_storage() IS
-    'create the model-1 tables (geometry, vrtx, point, segment, trgl, tetra); called once by tgsis.create_storage';
+    'create the model-1 tables (geometry, vrtx, point, segment, trgl, tetra, atom, part); called once by tgsis.create_storage';

@@ -53,7 +53,7 @@ BEGIN
                                                               WHEN 'p' THEN 'a partitioned table' WHEN 'f' THEN 'a foreign table'
                                                               ELSE v_kind::text END);
     END IF;
-    IF v_schema = 'tgsis' AND v_table NOT IN ('geometry', 'vrtx', 'point', 'segment', 'trgl', 'tetra', 'times', 'times_vrtx', 'times_trgl',
+    IF v_schema = 'tgsis' AND v_table NOT IN ('geometry', 'vrtx', 'point', 'segment', 'trgl', 'tetra', 'atom', 'part', 'times', 'times_vrtx', 'times_trgl',
                                               'timem', 'timet', 'node', 'd4dtrgl', 'd4dvrtx') THEN
         RAISE EXCEPTION 'tgsis.% is part of tgsis''s own catalog and cannot be versioned', v_table USING ERRCODE = 'TG100';
     END IF;

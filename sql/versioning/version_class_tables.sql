@@ -16,6 +16,11 @@ BEGIN
         PERFORM tgsis.enable_versioning_rel(format('%I.%I', v_class.schemaname, v_class.cellprotable)::regclass,
                                             '_geoid', 'feature', 4, v_class.schemaname || '.' || v_class.cellprotable);
     END IF;
+    IF v_class.otherprotable IS NOT NULL
+       AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_class.otherprotable) THEN
+        PERFORM tgsis.enable_versioning_rel(format('%I.%I', v_class.schemaname, v_class.otherprotable)::regclass,
+                                            '_geoid', 'feature', 4, v_class.schemaname || '.' || v_class.otherprotable);
+    END IF;
     IF v_class.protablename IS NOT NULL
        AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_class.protablename) THEN
         PERFORM tgsis.enable_versioning_rel(format('%I.%I', v_class.schemaname, v_class.protablename)::regclass,
@@ -25,4 +30,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.version_class_tables(text) IS
-    'version the feature, cell-property and per-instant property tables of a feature class (object class ''feature'', keyed by _geoid); drops <class>_v for the caller to re-create';
+    'version the feature, cell-property (both alignments) and per-instant property tables of a feature class (object class ''feature'', keyed by _geoid); drops <class>_v for the caller to re-create';

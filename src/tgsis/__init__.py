@@ -117,6 +117,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     from tgsis.db.features import (
         Feature,
         FeatureClass,
+        Property,
         create_feature_class,
         delete_feature,
         drop_feature_class,
@@ -213,6 +214,7 @@ _LAZY: dict[str, str] = {
     "working_version": "tgsis.db.versions",
     "Feature": "tgsis.db.features",
     "FeatureClass": "tgsis.db.features",
+    "Property": "tgsis.db.features",
     "create_feature_class": "tgsis.db.features",
     "delete_feature": "tgsis.db.features",
     "drop_feature_class": "tgsis.db.features",
@@ -345,6 +347,7 @@ __all__ = [
     "compare_meshes",
     # feature classes and features
     "FeatureClass",
+    "Property",
     "Feature",
     "create_feature_class",
     "get_feature_class",

@@ -35,6 +35,7 @@ from tgsis import clistate
 from tgsis.db import versions as V
 from tgsis.db.features import (
     FeatureClass,
+    Property,
     class_of_feature,
     create_feature_class,
     drop_feature_class,
@@ -208,16 +209,39 @@ def _pairs(items: Sequence[str] | None, what: str) -> list[tuple[str, str]]:
     return pairs
 
 
+def _cell_properties(items: Sequence[str] | None) -> list[Property]:
+    """``--property NAME:TYPE[:SIZE][:VERTEX|CELL]`` items: a vector of SIZE components, an alignment of its own."""
+    result = []
+    for item in items or []:
+        name, _, rest = item.partition(":")
+        words = rest.split(":") if rest else []
+        if not name or not words or not words[0] or len(words) > 3:
+            raise InvalidInputError(f"--property {item!r} must be NAME:TYPE[:SIZE][:VERTEX|CELL], e.g. porosity:float8, "
+                                    "slip:float8:3 or facies:int:CELL")
+        size, alignment = 1, None
+        for word in words[1:]:
+            if word.upper() in ("VERTEX", "CELL") and alignment is None:
+                alignment = word.upper()
+            elif word.isdigit() and size == 1:
+                size = int(word)
+            else:
+                raise InvalidInputError(f"--property {item!r}: {word!r} is neither a number of components nor "
+                                        "VERTEX or CELL", hint="e.g. --property slip:float8:3:CELL")
+        result.append(Property(name, words[0], size, alignment))  # type: ignore[arg-type]
+    return result
+
+
 def cmd_class_create(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         fc = create_feature_class(
             conn, args.name, args.geotype, feature_properties=_pairs(args.feature_property, "--feature-property"),
-            cell_properties=_pairs(args.property, "--property"), alignment=args.alignment.upper(), srs=args.srs,
+            cell_properties=_cell_properties(args.property), alignment=args.alignment.upper(), srs=args.srs,
             schema=args.schema, description=args.description, time_model=args.time_model, time_unit=args.time_unit,
             instant_properties=_pairs(args.instant_property, "--instant-property"))
     pros = f", {fc.protable}" if fc.protable else ""
+    other = f", {fc.otherprotable}" if fc.otherprotable else ""
     _out(f"created feature class {fc.name} ({fc.geotype.value}{_time_label(fc)}) in schema {fc.schema}: "
-         f"tables {fc.featuretable}, {fc.cellprotable}{pros}, view {fc.viewname}")
+         f"tables {fc.featuretable}, {fc.cellprotable}{other}{pros}, view {fc.viewname}")
     return 0
 
 
@@ -238,7 +262,8 @@ def cmd_class_list(args: argparse.Namespace) -> int:
         classes = list_feature_classes(conn)
     for fc in classes:
         fprops = ", ".join(f"{p.name} {p.type}" for p in fc.feature_properties) or "-"
-        cprops = ", ".join(f"{p.name} {p.type}" for p in fc.cell_properties) or "-"
+        cprops = ", ".join(f"{p.name} {p.type}{f'[{p.size}]' if p.size > 1 else ''}"
+                           f"{f' ({p.alignment.lower()})' if p.alignment else ''}" for p in fc.cell_properties) or "-"
         iprops = ", ".join(f"{p.name} {p.type}" for p in fc.instant_properties) or "-"
         temporal = f"\ttime: {_time_label(fc)[2:]}\tper instant: {iprops}" if fc.time_model != "STATIC" else ""
         _out(f"{fc.name}\t{fc.geotype.value}\tsrs {fc.srs}\t{fc.schema}\tfeature: {fprops}\t"
@@ -1112,8 +1137,10 @@ def build_parser() -> argparse.ArgumentParser:
                             choices=("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION"))
     cls_create.add_argument("--feature-property", action="append", metavar="NAME:TYPE",
                             help="a property of the whole feature (repeatable), e.g. creator:text")
-    cls_create.add_argument("--property", action="append", metavar="NAME:TYPE",
-                            help="a per-vertex (or per-cell) property (repeatable), e.g. porosity:float8")
+    cls_create.add_argument("--property", action="append", metavar="NAME:TYPE[:SIZE][:VERTEX|CELL]",
+                            help="a per-vertex (or per-cell) property (repeatable), e.g. porosity:float8; SIZE: a "
+                                 "vector of SIZE components (slip:float8:3); VERTEX or CELL: an alignment other "
+                                 "than --alignment (facies:int:CELL)")
     cls_create.add_argument("--alignment", default="VERTEX", type=str.upper, choices=("VERTEX", "CELL"))
     cls_create.add_argument("--srs", type=_INT4, default=0, help="spatial reference id (EPSG), 0 = undefined")
     cls_create.add_argument("--schema", default="public")

@@ -11,7 +11,8 @@ Constructing a mesh validates it and raises on what cannot be stored:
   infinite coordinates, a cell index outside ``0..n-1``, a cell that uses one
   vertex twice;
 * :class:`~tgsis.errors.InvalidPropertyError`: a property with the wrong
-  number of values, a non-numeric or multi-dimensional property, a bad name.
+  number of values, a non-numeric property or one of more than two
+  dimensions, a bad name.
 
 What is legal but usually a mistake — duplicate vertices, zero-length,
 zero-area or zero-volume cells — is *flagged* by :meth:`Mesh.report`.
@@ -47,8 +48,9 @@ __all__ = [
     "PROPERTY_NAME_RE",
 ]
 
-#: Property names: what SQL accepts without quoting (lower case, no leading underscore).
-PROPERTY_NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,62}$")
+#: Property names: letters (either case, kept as given: feature-class columns are quoted identifiers),
+#: digits and underscores, starting with a letter, at most 63 characters.
+PROPERTY_NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,62}$")
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -125,14 +127,14 @@ def _as_properties(
         if not isinstance(name, str) or not PROPERTY_NAME_RE.match(name):
             raise InvalidPropertyError(
                 f"{what} property name {name!r} is not allowed",
-                hint="use lower-case letters, digits and underscores, starting with a letter (at most 63)",
+                hint="use letters, digits and underscores, starting with a letter (at most 63)",
             )
         array = np.ascontiguousarray(values)
         if array.dtype.kind not in "biuf":
             raise InvalidPropertyError(f"{what} property {name!r} has values of type {array.dtype}, not numbers")
-        if array.ndim != 1:
-            raise InvalidPropertyError(f"{what} property {name!r} must be one value per {what}, "
-                                       f"got shape {array.shape}")
+        if array.ndim not in (1, 2) or (array.ndim == 2 and array.shape[1] < 1):
+            raise InvalidPropertyError(f"{what} property {name!r} must be one value or one vector of values per "
+                                       f"{what}, got shape {array.shape}")
         if len(array) != count:
             raise InvalidPropertyError(f"{what} property {name!r} has {len(array)} values for {count} {_plural(what)}")
         result[name] = array
@@ -148,9 +150,10 @@ class Mesh:
         Vertex coordinates; stored as float64.
     cells : (m, k) array_like of int
         Vertex indices of each cell, k = :attr:`cell_size`; stored as int64.
-    vertex_properties : mapping of str to (n,) array_like, optional
-        Numeric values per vertex.
-    cell_properties : mapping of str to (m,) array_like, optional
+    vertex_properties : mapping of str to (n,) or (n, k) array_like, optional
+        Numeric values per vertex; (n, k): a vector of k components per vertex
+        (GOCAD ``ESIZES k``).
+    cell_properties : mapping of str to (m,) or (m, k) array_like, optional
         Numeric values per cell.
     name : str, optional
         The object's name (e.g. from a GOCAD header).

@@ -110,7 +110,7 @@ def _as_series(values: Mapping[str, npt.ArrayLike] | None, shape: tuple[int, ...
     result: dict[str, npt.NDArray[np.generic]] = {}
     for name, raw in (values or {}).items():
         if not PROPERTY_NAME_RE.match(name):
-            raise InvalidPropertyError(f"{what} name {name!r} is not allowed (lower case, digits, _; not starting with _)")
+            raise InvalidPropertyError(f"{what} name {name!r} is not allowed (letters, digits, _; starting with a letter)")
         array = np.ascontiguousarray(raw)
         if array.dtype.kind not in "biuf":
             raise InvalidPropertyError(f"{what} {name!r} must be numeric or boolean, got {array.dtype}")

@@ -44,7 +44,7 @@ from psycopg import sql
 from tgsis.arguments import check_module
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.edits import EditPlan, plan_edit
-from tgsis.db.copy import SQL_TYPES
+from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.db.features import (
     FeatureClass,
     _aligned_properties,
@@ -54,9 +54,15 @@ from tgsis.db.features import (
     _positions,
     _SIMPLEX,
     _Storage,
+    MEANING_COLUMNS,
+    _part_meaning,
     class_of_feature,
+    copy_extra_rows,
+    extra_rows,
     get_feature_class,
+    restore_extras,
 )
+from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.errors import (
     CheckoutConflictError,
     FileFormatError,
@@ -131,22 +137,37 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
     table = _SIMPLEX[fc.geotype][0]
     simplices = np.stack([_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
         if len(cells) > 2 else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
-    values: dict[str, npt.NDArray[Any]] = {}
-    if fc.cell_properties:
-        pid = data.properties[1]
+    values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
+    for (alignment, _), columns in data.properties.items():  # the class's alignment, and the other one if any
+        pid = columns[1]
         porder = np.argsort(pid, kind="stable")
-        targets = vertex_ids if fc.alignment == "VERTEX" else cell_ids
+        targets = vertex_ids if alignment == "VERTEX" else cell_ids
         if not np.array_equal(pid[porder], targets):
-            raise InvalidGeometryError(f"feature {geoid} of class {fc.name}: {fc.cellprotable} has {len(pid)} rows "
-                                       f"that do not match its {len(targets)} "
-                                       f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}",
+            raise InvalidGeometryError(f"feature {geoid} of class {fc.name}: {fc.property_table(alignment)} has "
+                                       f"{len(pid)} rows that do not match its {len(targets)} "
+                                       f"{'vertices' if alignment == 'VERTEX' else 'cells'}",
                                        hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
-        values = {p.name: data.properties[2 + i][porder] for i, p in enumerate(fc.cell_properties)}
+        values[alignment] = {p.name: columns[2 + i][porder] for i, p in enumerate(fc.aligned(alignment))}  # all of them
     mesh = mesh_class(fc.geotype)(
         np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
-        vertex_properties=values if fc.alignment == "VERTEX" else None,
-        cell_properties=values if fc.alignment == "CELL" else None, name=name)
+        vertex_properties=values["VERTEX"], cell_properties=values["CELL"], name=name)
+    # parts and atoms come with it; z stays in storage's convention (elevation)
+    restore_extras(mesh, _Part(fc.geotype, name, ""), data, geoid, vertex_ids.astype(np.int64),
+                   cell_ids.astype(np.int64), file_convention=False)
     return StoredMesh(mesh, vertex_ids.astype(np.int64), cell_ids.astype(np.int64))
+
+
+def _in_storage_convention(mesh: Mesh) -> Mesh:
+    """The mesh with z as stored (elevation): a copy with z negated when its metadata says Depth.
+
+    A mesh without ``metadata["zpositive"]`` (a check-out's) is in storage's
+    convention already.
+    """
+    if z_convention(mesh.metadata) != "Depth":
+        return mesh
+    flipped = mesh.copy()
+    flipped.vertices[:, 2] = -flipped.vertices[:, 2]
+    return flipped
 
 
 def _checked_class(conn: Conn, feature_class: str | FeatureClass | None, feature_id: int) -> FeatureClass:
@@ -209,11 +230,11 @@ class SaveResult:
 
 
 def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.bool_]:
-    """Elementwise equality in which NaN equals NaN (a NaN property that stays NaN is no change)."""
+    """Per element (row of a vector property) equality in which NaN equals NaN (a NaN that stays NaN is no change)."""
     same: npt.NDArray[np.bool_] = a == b
     if a.dtype.kind == "f":
         same |= np.isnan(a) & np.isnan(b)
-    return same
+    return np.asarray(same.all(axis=1)) if same.ndim == 2 else same
 
 
 def _next_id(conn: Conn, storage: _Storage, table: str, key: str, idfield: str, geoid: int) -> int:
@@ -277,9 +298,13 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
         cell_ids[added_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(len(added_c))
 
     # property rows: those of removed elements go, those of new elements come, changed values are replaced
+    # (per alignment: a class may have vertex and cell properties side by side)
     deleted = inserted = changes = 0
-    if fc.cell_properties:
-        if fc.alignment == "VERTEX":
+    for alignment in ("VERTEX", "CELL"):
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if not props or protable is None:
+            continue
+        if alignment == "VERTEX":
             element_map, old_ids, new_ids, removed = plan.vertex_map, stored.vertex_ids, vertex_ids, plan.removed_vertices
             old_values = stored.mesh.vertex_properties
         else:
@@ -287,16 +312,16 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
             old_values = stored.mesh.cell_properties
         kept = np.flatnonzero(element_map >= 0)
         changed = np.zeros(len(kept), dtype=bool)
-        for p in fc.cell_properties:
+        for p in props:
             changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
         rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
-        changes = int(changed.sum())
-        deleted += _delete_parts(conn, fc.schema, fc.cellprotable, "_geoid", geoid, "_idx",
+        changes += int(changed.sum())
+        deleted += _delete_parts(conn, fc.schema, protable, "_geoid", geoid, "_idx",
                                  np.concatenate([old_ids[removed], new_ids[kept[changed]]]))
         if len(rewrite):
-            storage.copy(conn, fc.schema, fc.cellprotable, [
+            storage.copy(conn, fc.schema, protable, [
                 ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"), ("_idx", new_ids[rewrite], "int8"),
-                *((p.name, cell_values[p.name][rewrite], SQL_TYPES[p.type]) for p in fc.cell_properties)])
+                *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props)])
             inserted += len(rewrite)
 
     deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
@@ -316,6 +341,50 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
             *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(edited.cell_size))])
         inserted += len(added_c)
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
+
+
+def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written,
+                    storage: _Storage) -> int:
+    """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
+
+    What the edited mesh's metadata does not mention stays as stored; atoms
+    and parts are rewritten only when they changed (few rows). Returns the
+    rows changed.
+    """
+    meaning = meaning_of(edited, "the edited mesh")
+    meta = edited.metadata
+    columns: list[tuple[str, str, Any]] = []
+    if "zpositive" in meta:
+        columns.append(("zpositive", "%s::text", meaning.zpositive))
+    if "gocad_coordinate_system" in meta:
+        columns.append(("crs", "%s::jsonb", meaning.crs_json()))
+    if meaning.color is not None:
+        columns += [(c, "%s::real", v) for c, v in zip(("colorred", "colorgreen", "colorblue"), meaning.color)]
+    if meaning.metadata is not None:
+        columns.append(("metadata", "%s::jsonb", meaning.metadata_json()))
+    changed = 0
+    if columns:
+        names = [sql.Identifier(c) for c, _, _ in columns]
+        holders = [sql.SQL(h) for _, h, _ in columns]
+        values = [v for _, _, v in columns]
+        changed += max(conn.execute(sql.SQL("UPDATE tgsis.geometry SET ({}) = ROW({}) WHERE geoid = %s "
+                                            "AND ROW({}) IS DISTINCT FROM ROW({})").format(
+            sql.SQL(", ").join(names), sql.SQL(", ").join(holders), sql.SQL(", ").join(names),
+            sql.SQL(", ").join(holders)), [*values, geoid, *values]).rowcount, 0)
+    atoms, parts = extra_rows(fc, geoid, edited, meaning, written.vertex_ids, written.cell_ids)
+    stored_atoms = [tuple(int(v) for v in r) for r in conn.execute(
+        "SELECT geoid, vrtxid, refid, patom::int FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()]
+    stored_parts = [tuple(int(v) for v in r) for r in conn.execute(
+        "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)).fetchall()]
+    if sorted(atoms) != stored_atoms:
+        changed += max(conn.execute("DELETE FROM tgsis.atom WHERE geoid = %s", (geoid,)).rowcount, 0)
+        copy_extra_rows(conn, storage, atoms, [])
+        changed += len(atoms)
+    if sorted(parts) != stored_parts:
+        changed += max(conn.execute("DELETE FROM tgsis.part WHERE geoid = %s", (geoid,)).rowcount, 0)
+        copy_extra_rows(conn, storage, [], parts)
+        changed += len(parts)
+    return changed
 
 
 def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, bounds: npt.NDArray[np.float64] | None,
@@ -351,6 +420,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
     updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)
+    updated += _update_meaning(conn, fc, geoid, edited, written, storage)
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
     result = SaveResult(geoid, version, plan.diff, written.deleted, written.inserted, updated,
                         written.property_changes, len(plan.moved_vertices))
@@ -421,7 +491,7 @@ def save_feature(
     ReadOnlyRevisionError, ObjectLockedError, MissingPrivilegeError
         The session may not write the feature in its version.
     """
-    mesh = _mesh_arg(edited)
+    mesh = _in_storage_convention(_mesh_arg(edited))
     with reraise(), conn.transaction():
         fc = _checked_class(conn, feature_class, feature_id)
         conn.execute("SELECT tgsis.feature_write_lock(%s)", (feature_id,))
@@ -507,7 +577,9 @@ class Checkout:
     properties : dict
         Feature properties at check-out.
     mesh : Mesh
-        A copy of the base mesh to edit (or replace by any edited mesh).
+        A copy of the base mesh to edit (or replace by any edited mesh), in
+        its file's z convention and with its file's metadata (coordinate
+        system, colour, ...); the base is in storage's convention (elevation).
     """
 
     token: CheckoutToken
@@ -668,12 +740,16 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
             row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
             assert row is not None
             base = _stored_mesh(conn, fc, feature_id, name)
+            meaning = conn.execute(f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s",
+                                   (feature_id,)).fetchone()
             _restore_settings(conn, settings)
     token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
                           _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"), frozen)
     log.info("checked out %s feature %d from %s at revision %d%s", fc.name, feature_id, version, revision,
              " (frozen)" if frozen is not None else "")
     checked_out = Checkout(token, base, properties)
+    if meaning is not None:  # the mesh to edit is in its file's convention, with its metadata (the base is as stored)
+        restore_meaning(checked_out.mesh, **_part_meaning(meaning))
     checked_out.index()  # hashed now, so that the check-in hashes only the edited mesh
     return checked_out
 
@@ -755,7 +831,7 @@ def checkin(
         Nothing is written.
     """
     token = checked_out.token
-    mesh = _mesh_arg(edited if edited is not None else checked_out.mesh)
+    mesh = _in_storage_convention(_mesh_arg(edited if edited is not None else checked_out.mesh))
     if on_conflict not in ("raise", "child"):
         raise InvalidInputError(f"on_conflict must be 'raise' or 'child', not {on_conflict!r}")
     with reraise(), conn.transaction():
@@ -860,10 +936,11 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
     vorder, corder = np.argsort(written.vertex_ids), np.argsort(written.cell_ids)
     rank = np.empty_like(vorder)
     rank[vorder] = np.arange(len(vorder))
-    stored = {k: v[vorder if fc.alignment == "VERTEX" else corder] for k, v in written.cell_values.items()}
+    by_alignment = {a: {p.name for p in fc.aligned(a)} for a in ("VERTEX", "CELL")}
+    stored = {a: {k: v[vorder if a == "VERTEX" else corder] for k, v in written.cell_values.items()
+                  if k in by_alignment[a]} for a in ("VERTEX", "CELL")}
     base_mesh = type(mesh)(mesh.vertices[vorder], rank[mesh.cells[corder]],
-                           vertex_properties=stored if fc.alignment == "VERTEX" else None,
-                           cell_properties=stored if fc.alignment == "CELL" else None, name=name)
+                           vertex_properties=stored["VERTEX"], cell_properties=stored["CELL"], name=name)
     new_token = replace(token, version=version, revision=revision, fingerprint=str(row[0]), base_revision=frozen,
                         checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
     return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),

@@ -4,6 +4,11 @@ A binary COPY row of fixed-width, non-NULL columns has always the same size:
 an int16 field count, then per field an int32 length and the big-endian
 value. So a whole payload is one numpy structured array (built with vector
 assignments, parsed with ``np.frombuffer``).
+
+A one-dimensional array of k non-NULL elements of a fixed-width type (a
+vector property, ``float8[3]`` here) has a fixed width too: the array header
+(ndim, has-NULL flag, element type, length, lower bound: five int32) and k
+(int32 length, value) pairs. Its values are (n, k) numpy arrays.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ import numpy.typing as npt
 
 from tgsis.errors import DatabaseError, InvalidPropertyError
 
-__all__ = ["PG_TYPES", "SQL_TYPES", "encode_rows", "decode_rows", "numpy_dtype"]
+__all__ = ["PG_TYPES", "SQL_TYPES", "encode_rows", "decode_rows", "numpy_dtype", "array_wire", "wire_shape"]
 
 #: binary wire format of each fixed-width PostgreSQL type
 PG_TYPES: dict[str, str] = {
@@ -28,20 +33,44 @@ SQL_TYPES: dict[str, str] = {
     "real": "float4", "double precision": "float8", "boolean": "bool",
 }
 
+#: element type oids of the array wire types
+_ELEMENT_OIDS: dict[str, int] = {"int2": 21, "int4": 23, "int8": 20, "float4": 700, "float8": 701, "bool": 16}
+
+
+def array_wire(wire: str, size: int) -> str:
+    """The wire type of a one-dimensional array of ``size`` ``wire`` values (``"float8[3]"``); ``wire`` for size 1."""
+    return wire if size == 1 else f"{wire}[{size}]"
+
+
+def wire_shape(wire: str) -> tuple[str, int | None]:
+    """``("float8", 3)`` for ``"float8[3]"``, ``("float8", None)`` for a scalar ``"float8"``."""
+    base, _, rest = wire.partition("[")
+    return (base, int(rest.rstrip("]"))) if rest else (base, None)
+
+
 _SIGNATURE = b"PGCOPY\n\xff\r\n\x00"
 _HEADER = _SIGNATURE + b"\x00\x00\x00\x00" + b"\x00\x00\x00\x00"
 _TRAILER = b"\xff\xff"
 
 
 def numpy_dtype(wire: str) -> np.dtype[Any]:
-    """Native numpy dtype of a wire type (``"float8"`` -> float64)."""
-    return np.dtype(PG_TYPES[wire]).newbyteorder("=")
+    """Native numpy dtype of a wire type's values (``"float8"`` and ``"float8[3]"`` -> float64)."""
+    return np.dtype(PG_TYPES[wire_shape(wire)[0]]).newbyteorder("=")
+
+
+def _field_dtype(wire: str) -> np.dtype[Any]:
+    """The on-wire layout of one value of a wire type (after its int32 length)."""
+    base, size = wire_shape(wire)
+    if size is None:
+        return np.dtype(PG_TYPES[base])
+    return np.dtype([("ndim", ">i4"), ("hasnull", ">i4"), ("elemtype", ">i4"), ("dim", ">i4"), ("lbound", ">i4"),
+                     ("elems", [("len", ">i4"), ("val", PG_TYPES[base])], (size,))])
 
 
 def _row_dtype(types: Sequence[str]) -> np.dtype[Any]:
-    fields: list[tuple[str, str]] = [("count", ">i2")]
+    fields: list[tuple[str, Any]] = [("count", ">i2")]
     for i, wire in enumerate(types):
-        fields += [(f"len{i}", ">i4"), (f"val{i}", PG_TYPES[wire])]
+        fields += [(f"len{i}", ">i4"), (f"val{i}", _field_dtype(wire))]
     return np.dtype(fields)  # packed: no alignment padding, as on the wire
 
 
@@ -66,8 +95,19 @@ def encode_rows(columns: Sequence[tuple[npt.ArrayLike, str]]) -> bytes:
     rows = np.empty(n, dtype=_row_dtype(types))
     rows["count"] = len(types)
     for i, (values, wire) in enumerate(zip(arrays, types)):
-        rows[f"len{i}"] = np.dtype(PG_TYPES[wire]).itemsize
-        rows[f"val{i}"] = values
+        base, size = wire_shape(wire)
+        rows[f"len{i}"] = _field_dtype(wire).itemsize
+        if size is None:
+            rows[f"val{i}"] = values
+            continue
+        if values.shape != (n, size):
+            raise InvalidPropertyError(f"COPY column {i} of {wire} values has shape {values.shape}, not ({n}, {size})")
+        value = rows[f"val{i}"]
+        value["ndim"], value["hasnull"], value["elemtype"] = 1, 0, _ELEMENT_OIDS[base]
+        value["dim"], value["lbound"] = size, 1
+        value["elems"]["len"] = np.dtype(PG_TYPES[base]).itemsize
+        value["elems"]["val"] = values
+        rows[f"val{i}"] = value
     return _HEADER + rows.tobytes() + _TRAILER
 
 
@@ -99,6 +139,17 @@ def decode_rows(data: bytes | bytearray | memoryview, types: Sequence[str]) -> l
         raise DatabaseError(f"binary COPY rows are not {dtype.itemsize} bytes each: NULLs or other column types")
     rows = np.frombuffer(body, dtype=dtype)
     if len(rows) and (np.any(rows["count"] != len(types)) or any(
-            np.any(rows[f"len{i}"] != np.dtype(PG_TYPES[w]).itemsize) for i, w in enumerate(types))):
+            np.any(rows[f"len{i}"] != _field_dtype(w).itemsize) for i, w in enumerate(types))):
         raise DatabaseError("binary COPY rows hold NULLs or columns of other types than expected")
-    return [rows[f"val{i}"].astype(numpy_dtype(w)) for i, w in enumerate(types)]
+    columns = []
+    for i, wire in enumerate(types):
+        base, size = wire_shape(wire)
+        value = rows[f"val{i}"]
+        if size is None:
+            columns.append(value.astype(numpy_dtype(wire)))
+            continue
+        if len(rows) and (np.any(value["ndim"] != 1) or np.any(value["hasnull"] != 0) or np.any(value["dim"] != size)
+                          or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)):
+            raise DatabaseError(f"binary COPY column {i} holds arrays that are not {size} non-NULL values")
+        columns.append(value["elems"]["val"].astype(numpy_dtype(wire)).reshape(len(rows), size))
+    return columns

@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -28,7 +28,8 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
-from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
+from tgsis.db.copy import SQL_TYPES, array_wire, decode_rows, encode_rows, numpy_dtype
+from tgsis.db.meaning import Meaning, meaning_of, part_runs, parts_from_runs, restore_meaning
 from tgsis.errors import (InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError,
                           NotVersionedError, reraise)
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh, mesh_class
@@ -53,7 +54,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 Conn = psycopg.Connection[Any]
-PropertySpec = Mapping[str, str] | Sequence[tuple[str, str]]
+PropertySpec = Mapping[str, str] | Sequence["tuple[str, str] | tuple[str, str, int] | Property"]
 
 _SIMPLEX = {
     Geotype.MULTIPOINT: ("point", "pointid"),
@@ -65,10 +66,23 @@ _SIMPLEX = {
 
 @dataclass(frozen=True)
 class Property:
-    """A property of a feature class: column name and SQL type."""
+    """A property of a feature class: column name, SQL type and, for a vector property, its number of components.
+
+    A vertex or cell property of ``size`` k > 1 is one column of arrays of k
+    values; in a mesh it is an (n, k) array. ``alignment`` (``"VERTEX"`` or
+    ``"CELL"``) is given for a property aligned otherwise than its class
+    (alignment is per property; None: the class's).
+    """
 
     name: str
     type: str
+    size: int = 1
+    alignment: Literal["VERTEX", "CELL"] | None = None
+
+    @property
+    def wire(self) -> str:
+        """Its binary COPY wire type (``"float8"``, ``"float8[3]"``)."""
+        return array_wire(SQL_TYPES[self.type], self.size)
 
 
 @dataclass(frozen=True)
@@ -99,6 +113,9 @@ class FeatureClass:
         ``protable``).
     protable : str or None
         ``<name>_pros`` of a temporal class.
+    otherprotable : str or None
+        ``<name>_simplexpros`` (a VERTEX class) or ``<name>_vertexpros`` (a
+        CELL class): the properties whose alignment is not ``alignment``.
     """
 
     name: str
@@ -116,6 +133,19 @@ class FeatureClass:
     time_unit: str | None = None
     instant_properties: tuple[Property, ...] = ()
     protable: str | None = None
+    otherprotable: str | None = None
+
+    def alignment_of(self, prop: Property) -> Literal["VERTEX", "CELL"]:
+        """Whether ``prop`` has a value per vertex or per cell."""
+        return prop.alignment or self.alignment
+
+    def aligned(self, alignment: str) -> tuple[Property, ...]:
+        """The vertex (``"VERTEX"``) or cell (``"CELL"``) properties, in column order."""
+        return tuple(p for p in self.cell_properties if self.alignment_of(p) == alignment)
+
+    def property_table(self, alignment: str) -> str | None:
+        """The table of the vertex or cell properties: ``cellprotable`` for the class's alignment, else ``otherprotable``."""
+        return self.cellprotable if alignment == self.alignment else self.otherprotable
 
     @property
     def mesh_class(self) -> type[Mesh]:
@@ -165,23 +195,29 @@ class Feature:
 
 _CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
                     "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
-                    "protablename")
+                    "protablename, otherprotable")
 
 
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
     def props(value: Any) -> tuple[Property, ...]:
         items = json.loads(value) if isinstance(value, str) else value
-        return tuple(Property(p["name"], p["type"]) for p in items)
+        return tuple(Property(p["name"], p["type"], int(p.get("size", 1)), p.get("alignment")) for p in items)
 
     return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
                         feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
                         cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
-                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14])
+                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15])
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
-    pairs = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
-    return json.dumps([[name, typ] for name, typ in pairs])
+    items: list[Any] = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
+
+    def item_json(item: Any) -> Any:
+        if isinstance(item, Property):
+            return {"name": item.name, "type": item.type, "size": item.size, "alignment": item.alignment}
+        return list(item) if isinstance(item, (tuple, list)) else item
+
+    return json.dumps([item_json(item) for item in items])
 
 
 def create_feature_class(
@@ -208,7 +244,13 @@ def create_feature_class(
         Class and feature-table name: lower case, no quoting needed.
     geotype : Geotype or str
     feature_properties, cell_properties : mapping or sequence of (name, type)
-        Property names and SQL types (see ``tgsis.property_types``); order kept.
+        Property names (letter case kept) and SQL types (see
+        ``tgsis.property_types``); order kept. A vertex or cell property may
+        be a vector: ``(name, type, k)`` stores an (n, k) mesh property as
+        one array column of k values. A :class:`Property` item may give its
+        own ``alignment`` (``Property("facies", "integer",
+        alignment="CELL")`` in a VERTEX class): a class may have vertex and
+        cell properties side by side.
     alignment : {"VERTEX", "CELL"}
     srs : int
     schema : str
@@ -280,13 +322,46 @@ def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
 # --------------------------------------------------------------------------- upload
 
 
+def stores_part_column(fc: FeatureClass) -> bool:
+    """Whether the class keeps the ``part`` cell property in a column of its own (else: in ``tgsis.part``)."""
+    return any(p.name == "part" and fc.alignment_of(p) == "CELL" for p in fc.cell_properties)
+
+
+def _cell_properties(fc: FeatureClass, mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
+    """The mesh's cell properties but ``part`` when that goes to ``tgsis.part``."""
+    if stores_part_column(fc):
+        return dict(mesh.cell_properties)
+    return {k: v for k, v in mesh.cell_properties.items() if k != "part"}
+
+
 def _aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
                         what: str = "the mesh") -> dict[str, npt.NDArray[Any]]:
-    """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh)."""
-    stored, other = ((mesh.vertex_properties, mesh.cell_properties) if fc.alignment == "VERTEX"
-                     else (mesh.cell_properties, mesh.vertex_properties))
-    return class_property_arrays(fc, stored, other, "vertex" if fc.alignment == "VERTEX" else mesh.cell_name,
-                                 drop_extra, what)
+    """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh).
+
+    The ``part`` cell property is not one of them unless the class has a
+    ``part`` cell column: it is stored in ``tgsis.part``.
+    """
+    cells = _cell_properties(fc, mesh)
+    sources = {"VERTEX": mesh.vertex_properties, "CELL": cells}
+    kinds = {"VERTEX": "vertex", "CELL": mesh.cell_name}
+    if fc.otherprotable is None:  # one alignment: the other's properties are extra
+        other_alignment = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
+        result = class_property_arrays(fc, sources[fc.alignment], sources[other_alignment], kinds[fc.alignment],
+                                       drop_extra, what)
+    else:  # vertex and cell properties side by side: each side checked against its own columns
+        result = {}
+        for alignment in ("VERTEX", "CELL"):
+            side = replace(fc, cell_properties=fc.aligned(alignment), alignment=alignment)
+            result.update(class_property_arrays(side, sources[alignment], {}, kinds[alignment], drop_extra, what))
+    for prop in fc.cell_properties:  # (n,) for a scalar property, (n, k) for a vector of k
+        kind = kinds[fc.alignment_of(prop)]
+        values = result[prop.name]
+        if (values.ndim == 1) != (prop.size == 1) or (values.ndim == 2 and values.shape[1] != prop.size):
+            shape = "one value" if prop.size == 1 else f"a vector of {prop.size} values"
+            got = "one value" if values.ndim == 1 else f"a vector of {values.shape[1]} values"
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} of {what} has {got} per element, "
+                                       f"but feature class {fc.name} stores {shape}")
+    return result
 
 
 def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any]],
@@ -407,19 +482,63 @@ class _Storage:
                  [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
 
 
+#: metadata key of a collection member that has only some of its class's properties: their names
+MEMBER_PROPERTIES_KEY = "tgsis_properties"
+
+
+def _member_class(fc: FeatureClass, member: Mesh) -> FeatureClass:
+    """The class as one member of a collection sees it: the class's properties that the member has."""
+    cells = _cell_properties(fc, member)
+    kept = tuple(p for p in fc.cell_properties
+                 if p.name in (member.vertex_properties if fc.alignment_of(p) == "VERTEX" else cells))
+    return fc if len(kept) == len(fc.cell_properties) else replace(fc, cell_properties=kept)
+
+
+def _with_property_names(meaning: Meaning, fc: FeatureClass, member_class: FeatureClass) -> Meaning:
+    """A member's meaning, with the names of the properties it has when it lacks some of the class's."""
+    if member_class is fc:
+        return meaning
+    return replace(meaning, metadata={**(meaning.metadata or {}),
+                                      MEMBER_PROPERTIES_KEY: [p.name for p in member_class.cell_properties]})
+
+
 def _member_label(index: int, mesh: Mesh) -> str:
     """How messages name member ``index`` of a collection."""
     named = f" {mesh.name!r}" if mesh.name else ""
     return f"member {index} ({type(mesh).__name__}{named})"
 
 
-def _new_geometry(conn: Conn, geometry: Geometry, name: str | None, *, collection: int | None = None) -> int:
-    """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid."""
-    bounds = geometry.bounds().ravel().tolist() if geometry.n_vertices else None
+def _stored_bounds(geometry: Geometry, meanings: Sequence[Meaning]) -> list[float] | None:
+    """The box of a mesh or collection in storage's convention (elevation): Depth members' z negated."""
+    members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
+    boxes = []
+    for member, meaning in zip(members, meanings):
+        if member.n_vertices:
+            box = member.bounds()
+            if meaning.depth:
+                box = np.array([[box[0, 0], box[0, 1], -box[1, 2]], [box[1, 0], box[1, 1], -box[0, 2]]])
+            boxes.append(box)
+    if not boxes:
+        return None
+    stacked = np.stack(boxes)
+    return [float(v) for v in np.concatenate([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])]
+
+
+def _new_geometry(conn: Conn, geometry: Geometry, name: str | None, meaning: Meaning,
+                  member_meanings: Sequence[Meaning], *, collection: int | None = None) -> int:
+    """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid.
+
+    ``meaning`` is the geometry's own (z convention, coordinate system,
+    colour, metadata); ``member_meanings`` those of its members (of a mesh:
+    its own), whose z conventions give the stored box.
+    """
+    bounds = _stored_bounds(geometry, member_meanings)
     geoids: list[int] | None = [] if isinstance(geometry, GeometryCollection) else None  # members come next
-    row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s)",
+    row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s, 'STATIC', false, %s::real[], %s, "
+                       "%s::jsonb, %s::jsonb)",
                        (geometry.geotype.value, name, bounds, geometry.n_vertices, geometry.n_cells, geoids,
-                        collection)).fetchone()
+                        collection, meaning.color, meaning.zpositive, meaning.crs_json(),
+                        meaning.metadata_json())).fetchone()
     assert row is not None
     return int(row[0])
 
@@ -440,7 +559,8 @@ def _keys(geoids: Sequence[int], counts: Sequence[int]) -> tuple[npt.NDArray[np.
 
 
 def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
-                 cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], storage: _Storage) -> None:
+                 cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], storage: _Storage,
+                 meanings: Sequence[Meaning]) -> None:
     """COPY the vertices, simplices and cell properties of meshes: one COPY per table, whatever their number.
 
     Parameters
@@ -454,9 +574,16 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         (n_i,) for VERTEX alignment, (m_i,) for CELL.
     storage : _Storage
         Plain or versioned targets.
+    meanings : sequence of Meaning
+        Per mesh: Depth meshes are stored with z negated (elevation); their
+        atoms go to ``tgsis.atom``.
     """
     vertex_geoids, vertex_ids = _keys(geoids, [m.n_vertices for m in meshes])
     xyz = _concat([m.vertices for m in meshes])
+    if any(meaning.depth for meaning in meanings):
+        xyz = xyz.copy()
+        flip = np.repeat([meaning.depth for meaning in meanings], [m.n_vertices for m in meshes])
+        xyz[flip, 2] = -xyz[flip, 2]  # exact: only the sign bit changes
     storage.copy(conn, "tgsis", "vrtx", [("geoid", vertex_geoids, "int8"), ("vrtxid", vertex_ids, "int8"),
                                          ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
     for geotype in dict.fromkeys(m.geotype for m in meshes):  # each simplex table once, in member order
@@ -467,12 +594,77 @@ def _copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Se
         cells = _concat([meshes[i].cells for i in group])
         storage.copy(conn, "tgsis", table, [("geoid", cell_geoids, "int8"), (key, cell_ids, "int8"),
                                             *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(k))])
-    if fc.cell_properties:
-        counts = [m.n_vertices if fc.alignment == "VERTEX" else m.n_cells for m in meshes]
-        prop_geoids, prop_ids = _keys(geoids, counts)
-        storage.copy(conn, fc.schema, fc.cellprotable, [
-            ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
-            *((p.name, _concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+    for alignment in ("VERTEX", "CELL"):  # one table per alignment (the class's own: cellprotable)
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if not props or protable is None:
+            continue
+        # collection members may have some of the properties each: one COPY per set of properties
+        groups: dict[tuple[str, ...], list[int]] = {}
+        for i, values in enumerate(cell_values):
+            groups.setdefault(tuple(p.name for p in props if p.name in values), []).append(i)
+        for names, group in groups.items():
+            if not names:
+                continue
+            counts = [meshes[i].n_vertices if alignment == "VERTEX" else meshes[i].n_cells for i in group]
+            prop_geoids, prop_ids = _keys([geoids[i] for i in group], counts)
+            storage.copy(conn, fc.schema, protable, [
+                ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
+                *((p.name, _concat([cell_values[i][p.name] for i in group]), p.wire)
+                  for p in props if p.name in names)])
+    _copy_extras(conn, fc, geoids, meshes, meanings, storage)
+
+
+def extra_rows(fc: FeatureClass, geoid: int, mesh: Mesh, meaning: Meaning,
+               vertex_ids: npt.NDArray[np.int64] | None = None,
+               cell_ids: npt.NDArray[np.int64] | None = None) -> tuple[list[tuple[int, ...]], list[tuple[int, ...]]]:
+    """The ``tgsis.atom`` rows ``(geoid, vrtxid, refid, patom)`` and ``tgsis.part`` rows ``(geoid, firstid, lastid, part)`` of a mesh.
+
+    ``vertex_ids``/``cell_ids`` give the database id of each vertex and cell
+    (default: 0..n-1, as a first upload numbers them); a run of parts never
+    spans a gap in the cell ids.
+    """
+    atoms = [(geoid, int(vertex_ids[a]) if vertex_ids is not None else a,
+              int(vertex_ids[r]) if vertex_ids is not None else r, int(a in meaning.patoms)) for a, r in meaning.atoms]
+    parts: list[tuple[int, ...]] = []
+    if "part" in mesh.cell_properties and not stores_part_column(fc):
+        values = mesh.cell_properties["part"]
+        ids = cell_ids if cell_ids is not None else np.arange(mesh.n_cells, dtype=np.int64)
+        order = np.argsort(ids, kind="stable")
+        ids, values = ids[order], values[order]
+        firsts, _, _ = part_runs(values)
+        if len(firsts):
+            breaks = np.flatnonzero(np.diff(ids) != 1) + 1
+            starts = np.union1d(firsts, breaks).astype(np.int64)
+            ends = np.concatenate([starts[1:] - 1, [len(ids) - 1]]).astype(np.int64)
+            numbers = values[starts].astype(np.int64)
+            parts = [(geoid, int(f), int(last), int(n)) for f, last, n in zip(ids[starts], ids[ends], numbers)]
+    return list(atoms), parts
+
+
+def copy_extra_rows(conn: Conn, storage: _Storage, atoms: Sequence[tuple[int, ...]],
+                    parts: Sequence[tuple[int, ...]]) -> None:
+    """COPY rows of :func:`extra_rows` into ``tgsis.atom`` and ``tgsis.part``."""
+    if atoms:
+        columns = np.asarray(atoms, dtype=np.int64).T
+        storage.copy(conn, "tgsis", "atom", [("geoid", columns[0], "int8"), ("vrtxid", columns[1], "int8"),
+                                             ("refid", columns[2], "int8"), ("patom", columns[3] != 0, "bool")])
+    if parts:
+        columns = np.asarray(parts, dtype=np.int64).T
+        storage.copy(conn, "tgsis", "part", [("geoid", columns[0], "int8"), ("firstid", columns[1], "int8"),
+                                             ("lastid", columns[2], "int8"),
+                                             ("part", columns[3].astype(np.int32), "int4")])
+
+
+def _copy_extras(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
+                 meanings: Sequence[Meaning], storage: _Storage) -> None:
+    """COPY the atoms (``tgsis.atom``) and parts (``tgsis.part``) of freshly uploaded meshes."""
+    atoms: list[tuple[int, ...]] = []
+    parts: list[tuple[int, ...]] = []
+    for geoid, mesh, meaning in zip(geoids, meshes, meanings):
+        more_atoms, more_parts = extra_rows(fc, geoid, mesh, meaning)
+        atoms += more_atoms
+        parts += more_parts
+    copy_extra_rows(conn, storage, atoms, parts)
 
 
 def insert_feature(
@@ -535,21 +727,30 @@ def insert_feature(
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
                                    f"not {mesh.geotype.value} ({type(mesh).__name__})")
     members = mesh.members if isinstance(mesh, GeometryCollection) else (mesh,)
-    cell_values = [_aligned_properties(fc, m, drop_extra_properties,
-                                       _member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh")
-                   for i, m in enumerate(members)]
+    labels = [_member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh"
+              for i, m in enumerate(members)]
+    meanings = [meaning_of(m, label) for m, label in zip(members, labels)]
+    if isinstance(mesh, GeometryCollection):  # each member has the class's properties it has
+        member_classes = [_member_class(fc, m) for m in members]
+        cell_values = [_aligned_properties(c, m, drop_extra_properties, label)
+                       for c, m, label in zip(member_classes, members, labels)]
+        meanings = [_with_property_names(meaning, fc, c) for meaning, c in zip(meanings, member_classes)]
+    else:
+        cell_values = [_aligned_properties(fc, m, drop_extra_properties, label) for m, label in zip(members, labels)]
+    own_meaning = meaning_of(mesh) if isinstance(mesh, GeometryCollection) else meanings[0]
     feature_values = _feature_columns(fc, properties)
 
     with reraise(), conn.transaction():
         storage = _Storage.of(conn)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
-        geoid = _new_geometry(conn, mesh, name if name is not None else mesh.name)
+        geoid = _new_geometry(conn, mesh, name if name is not None else mesh.name, own_meaning, meanings)
         if isinstance(mesh, GeometryCollection):
-            member_ids = [_new_geometry(conn, m, m.name, collection=geoid) for m in members]
+            member_ids = [_new_geometry(conn, m, m.name, meaning, [meaning], collection=geoid)
+                          for m, meaning in zip(members, meanings)]
             conn.execute("UPDATE tgsis.geometry SET geoids = %s WHERE geoid = %s", (member_ids, geoid))
         else:
             member_ids = [geoid]
-        _copy_meshes(conn, fc, member_ids, members, cell_values, storage)
+        _copy_meshes(conn, fc, member_ids, members, cell_values, storage, meanings)
         columns = ["_geoid", *feature_values]
         conn.execute(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
@@ -604,29 +805,50 @@ def _positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: 
 
 @dataclass(frozen=True)
 class _Part:
-    """A geometry to download: its geotype, name, and how messages name it."""
+    """A geometry to download: its geotype, name, how messages name it, and what its file meant."""
 
     geotype: Geotype
     name: str | None
     label: str
+    zpositive: str | None = None
+    crs: list[str] | None = None
+    color: tuple[float | None, ...] | None = None
+    metadata: dict[str, Any] | None = None
+    properties: tuple[str, ...] | None = None  # a collection member's properties when it lacks some (None: all)
+
+
+#: the columns of tgsis.geometry that _part_meaning reads, after geotype and name
+MEANING_COLUMNS = "g.zpositive, g.crs, g.colorred, g.colorgreen, g.colorblue, g.metadata"
+
+
+def _part_meaning(row: Sequence[Any], member: bool = False) -> dict[str, Any]:
+    """_Part keyword arguments from the values of :data:`MEANING_COLUMNS` (``member``: of a collection member)."""
+    meaning = {"zpositive": row[0], "crs": row[1], "color": tuple(row[2:5]) if row[2] is not None else None,
+               "metadata": row[5]}
+    if member and isinstance(row[5], dict) and MEMBER_PROPERTIES_KEY in row[5]:
+        metadata = dict(row[5])
+        names = metadata.pop(MEMBER_PROPERTIES_KEY)
+        meaning["metadata"] = metadata or None
+        meaning["properties"] = tuple(str(n) for n in names) if isinstance(names, list) else ()
+    return meaning
 
 
 def _collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> dict[int, list[tuple[int, _Part]]]:
     """Members of each collection in ``wanted``, in stored order: ``{collection: [(member geoid, part)]}``."""
     rows = conn.execute(
-        "SELECT c.geoid, m.geoid, g.geotype, g.geoname FROM tgsis.geometry c "
+        f"SELECT c.geoid, m.geoid, g.geotype, g.geoname, {MEANING_COLUMNS} FROM tgsis.geometry c "
         "CROSS JOIN LATERAL unnest(c.geoids) WITH ORDINALITY AS m(geoid, ord) "
         "LEFT JOIN tgsis.geometry g ON g.geoid = m.geoid "
         "WHERE c.geoid = ANY(%s) ORDER BY c.geoid, m.ord", (list(wanted),)).fetchall()
     members: dict[int, list[tuple[int, _Part]]] = {int(g): [] for g in wanted}
-    for cid, mid, geotype, geoname in rows:
+    for cid, mid, geotype, geoname, *meaning in rows:
         where = f"member {len(members[cid])} (geometry {mid}) of feature {cid} of class {fc.name}"
         if geotype is None:
             raise InvalidGeometryError(f"{where} does not exist", hint=f"SELECT * FROM tgsis.check_geometry({cid})")
         if geotype == Geotype.GEOMETRYCOLLECTION.value:
             raise InvalidGeometryError(f"{where} is a GEOMETRYCOLLECTION: collections do not nest",
                                        hint=f"SELECT * FROM tgsis.check_geometry({cid})")
-        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where)))
+        members[cid].append((int(mid), _Part(Geotype(geotype), geoname, where, **_part_meaning(meaning, member=True))))
     empty = [cid for cid, listed in members.items() if not listed]
     if empty:
         raise InvalidGeometryError(f"feature(s) {empty} of class {fc.name} are collections without members",
@@ -640,7 +862,11 @@ class _Download:
 
     vertices: list[npt.NDArray[Any]]
     cells: dict[Geotype, list[npt.NDArray[Any]]]
-    properties: list[npt.NDArray[Any]]
+    #: per (alignment, property names): _geoid, _idx, one array per property (collection members may
+    #: have some of the class's properties each: one COPY per set)
+    properties: dict[tuple[str, tuple[str, ...]], list[npt.NDArray[Any]]]
+    atoms: dict[int, list[tuple[int, int, bool]]] = field(default_factory=dict)
+    parts: dict[int, list[tuple[int, int, int]]] = field(default_factory=dict)
 
 
 def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Download:
@@ -660,12 +886,72 @@ def _download(conn: Conn, fc: FeatureClass, parts: Mapping[int, _Part]) -> _Down
         cells[geotype] = _copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
             sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
             group), ["int8"] * (2 + len(cell_cols)))
-    properties: list[npt.NDArray[Any]] = []
-    if fc.cell_properties:
-        properties = _copy_out(conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
-            sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc._table(fc.cellprotable),
-            id_list), ["int8", "int8", *(SQL_TYPES[p.type] for p in fc.cell_properties)])
-    return _Download(vertices, cells, properties)
+    properties: dict[tuple[str, tuple[str, ...]], list[npt.NDArray[Any]]] = {}
+    for alignment in ("VERTEX", "CELL"):  # one COPY per property table (and set of properties)
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if not props or protable is None:
+            continue
+        for names, members in _property_groups(props, parts).items():
+            if names:
+                properties[(alignment, names)] = _copy_out(
+                    conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
+                        sql.SQL(", ").join(sql.Identifier(n) for n in names), fc._table(protable),
+                        sql.Literal(members)),
+                    ["int8", "int8", *(p.wire for p in props if p.name in names)])
+    atoms: dict[int, list[tuple[int, int, bool]]] = {}
+    for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
+            "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(
+            id_list)).fetchall():
+        atoms.setdefault(int(geoid), []).append((int(vrtxid), int(refid), bool(patom)))
+    runs: dict[int, list[tuple[int, int, int]]] = {}
+    for geoid, first, last, number in conn.execute(sql.SQL(
+            "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = ANY({}) ORDER BY geoid, firstid").format(
+            id_list)).fetchall():
+        runs.setdefault(int(geoid), []).append((int(first), int(last), int(number)))
+    return _Download(vertices, cells, properties, atoms, runs)
+
+
+def _names_of(props: Sequence[Property], part: _Part) -> tuple[str, ...]:
+    """The names of ``props`` that a geometry has (all, but for some collection members)."""
+    return tuple(p.name for p in props if part.properties is None or p.name in part.properties)
+
+
+def _property_groups(props: Sequence[Property], parts: Mapping[int, _Part]) -> dict[tuple[str, ...], list[int]]:
+    """The geometries of ``parts`` by the names of ``props`` they have."""
+    groups: dict[tuple[str, ...], list[int]] = {}
+    for geoid, part in parts.items():
+        groups.setdefault(_names_of(props, part), []).append(geoid)
+    return groups
+
+
+def restore_extras(mesh: Mesh, part: _Part, data: _Download, geoid: int, vertex_ids: npt.NDArray[np.int64],
+                   cell_ids: npt.NDArray[np.int64], *, file_convention: bool = True) -> Mesh:
+    """The mesh with its parts, atoms and (``file_convention``) its file's z convention and metadata back.
+
+    ``vertex_ids``/``cell_ids`` are the database ids of its vertices and cells, ascending.
+    """
+    runs = data.parts.get(geoid)
+    if runs:
+        array = np.asarray(runs, dtype=np.int64)
+        values = parts_from_runs(cell_ids, array[:, 0], array[:, 1], array[:, 2])
+        mesh.cell_properties = {**mesh.cell_properties, "part": values}
+    atoms = data.atoms.get(geoid, [])
+    pairs: list[tuple[int, int]] = []
+    patoms: list[int] = []
+    if atoms:
+        array = np.asarray([(a, r) for a, r, _ in atoms], dtype=np.int64)
+        flags = np.asarray([p for _, _, p in atoms], dtype=bool)
+        found = np.isin(array, vertex_ids).all(axis=1)
+        positions = np.searchsorted(vertex_ids, array[found])
+        pairs = [(int(a), int(r)) for a, r in positions]
+        patoms = [int(a) for (a, _), p in zip(positions, flags[found]) if p]
+    if file_convention:
+        restore_meaning(mesh, part.zpositive, part.crs, part.color, part.metadata, pairs, patoms)
+    elif pairs:
+        mesh.metadata = {**mesh.metadata, "gocad_atoms": [list(p) for p in pairs]}
+        if patoms:
+            mesh.metadata["gocad_patoms"] = patoms
+    return mesh
 
 
 def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> dict[int, Mesh]:
@@ -673,7 +959,11 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
     wanted = list(parts)
     vg, vid, x, y, z = data.vertices
     vertex_rows = _split(vg, vid, wanted)
-    prop_rows = _split(data.properties[0], data.properties[1], wanted) if data.properties else {}
+    prop_rows: dict[int, list[tuple[str, tuple[str, ...], npt.NDArray[np.int64], list[npt.NDArray[Any]]]]] = {}
+    for (alignment, names), columns in data.properties.items():
+        group = [g for g, part in parts.items() if _names_of(fc.aligned(alignment), part) == names]
+        for geoid, rows in _split(columns[0], columns[1], group).items():
+            prop_rows.setdefault(geoid, []).append((alignment, names, rows, columns))
     xyz = np.stack([x, y, z], axis=1)
     meshes: dict[int, Mesh] = {}
     for geotype, cells in data.cells.items():
@@ -685,20 +975,17 @@ def _assemble(fc: FeatureClass, parts: Mapping[int, _Part], data: _Download) -> 
             vertex_ids = vid[vrows]
             simplices = np.stack([_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]],
                                  axis=1)
-            values: dict[str, npt.NDArray[Any]] = {}
-            if fc.cell_properties:
-                prows = prop_rows[geoid]
-                target_ids = vertex_ids if fc.alignment == "VERTEX" else cells[1][crows]
-                if len(prows) != len(target_ids) or not np.array_equal(data.properties[1][prows], target_ids):
+            values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
+            for alignment, names, prows, columns in prop_rows.get(geoid, []):
+                target_ids = vertex_ids if alignment == "VERTEX" else cells[1][crows]
+                if len(prows) != len(target_ids) or not np.array_equal(columns[1][prows], target_ids):
                     raise InvalidPropertyError(
-                        f"{parts[geoid].label}: {fc.cellprotable} has {len(prows)} rows for {len(target_ids)} "
-                        f"{'vertices' if fc.alignment == 'VERTEX' else 'cells'}")
-                values = {p.name: data.properties[2 + i][prows] for i, p in enumerate(fc.cell_properties)}
-            meshes[geoid] = mesh_class(geotype)(
-                xyz[vrows], simplices,
-                vertex_properties=values if fc.alignment == "VERTEX" else None,
-                cell_properties=values if fc.alignment == "CELL" else None,
-                name=parts[geoid].name)
+                        f"{parts[geoid].label}: {fc.property_table(alignment)} has {len(prows)} rows for "
+                        f"{len(target_ids)} {'vertices' if alignment == 'VERTEX' else 'cells'}")
+                values[alignment] = {name: columns[2 + i][prows] for i, name in enumerate(names)}
+            meshes[geoid] = restore_extras(mesh_class(geotype)(
+                xyz[vrows], simplices, vertex_properties=values["VERTEX"], cell_properties=values["CELL"],
+                name=parts[geoid].name), parts[geoid], data, geoid, vertex_ids, cells[1][crows])
     return meshes
 
 
@@ -741,8 +1028,8 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
         if fresh:  # one snapshot for the statements below
             conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
         rows = conn.execute(
-            sql.SQL("SELECT f._geoid, g.geoname{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid {} "
-                    "ORDER BY f._geoid").format(
+            sql.SQL("SELECT f._geoid, g.geoname, " + MEANING_COLUMNS + "{} FROM {} f "
+                    "JOIN tgsis.geometry g ON g.geoid = f._geoid {} ORDER BY f._geoid").format(
                 sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
                 fc._table(fc.featuretable),
                 sql.SQL("WHERE f._geoid = ANY({})").format(sql.Literal(list(ids))) if ids is not None
@@ -760,7 +1047,8 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
             members = _collection_members(conn, fc, list(dict.fromkeys(wanted)))
             parts = {mid: part for listed in members.values() for mid, part in listed}
         else:
-            parts = {g: _Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}") for g in wanted}
+            parts = {g: _Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}",
+                              **_part_meaning(found[g][2:8])) for g in wanted}
         data = _download(conn, fc, parts)
 
     meshes = _assemble(fc, parts, data)
@@ -774,11 +1062,14 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
             for mid, _ in members[geoid]:  # a geometry listed twice comes as two meshes
                 member_meshes.append(meshes[mid].copy() if mid in used else meshes[mid])
                 used.add(mid)
-            geometry = GeometryCollection(member_meshes, name=row[1])
+            own = _part_meaning(row[2:8])
+            collection = GeometryCollection(member_meshes, name=row[1])
+            restore_meaning(collection, None, own["crs"], own["color"], own["metadata"])
+            geometry = collection
         else:
             geometry = meshes[geoid].copy() if geoid in used else meshes[geoid]
             used.add(geoid)
-        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[2:])), geometry))
+        features.append(Feature(geoid, fc.name, row[1], dict(zip(props, row[8:])), geometry))
     return features
 
 

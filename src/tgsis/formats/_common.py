@@ -28,7 +28,7 @@ __all__ = [
 
 PathLike = str | os.PathLike[str]
 
-_INVALID_CHARS = re.compile(r"[^a-z0-9_]")
+_INVALID_CHARS = re.compile(r"[^A-Za-z0-9_]")
 
 
 def read_bytes(path: PathLike) -> bytes:
@@ -72,9 +72,9 @@ def write_text(path: PathLike, chunks: Iterable[str]) -> None:
 
 
 def sanitize_property_name(name: str, taken: Iterable[str] = ()) -> str:
-    """A valid mesh property name (``^[a-z][a-z0-9_]{0,62}$``) for ``name``.
+    """A valid mesh property name (``^[A-Za-z][A-Za-z0-9_]{0,62}$``) for ``name``.
 
-    Lower-cases, replaces every other character by ``_``, prefixes ``p_`` when
+    Keeps the letter case, replaces every other character by ``_``, prefixes ``p_`` when
     the result does not start with a letter, truncates to 63 characters and
     appends ``_2``, ``_3``, ... when the result is in ``taken``.
 
@@ -91,8 +91,8 @@ def sanitize_property_name(name: str, taken: Iterable[str] = ()) -> str:
         ``name`` itself when it is valid and free.
     """
     used = set(taken)
-    base = _INVALID_CHARS.sub("_", name.lower())
-    if not base or base[0] not in string.ascii_lowercase:
+    base = _INVALID_CHARS.sub("_", name)
+    if not base or base[0] not in string.ascii_letters:
         base = "p_" + base
     base = base[:63]
     candidate, counter = base, 2
@@ -118,7 +118,18 @@ def check_mesh(mesh: object, what: str) -> Mesh:
     return mesh
 
 
-def property_columns(properties: Mapping[str, npt.NDArray[Any]]) -> list[tuple[str, npt.NDArray[Any]]]:
-    """Properties as ``(name, array)`` in insertion order, booleans as uint8 (no file type has bool)."""
-    return [(name, values.astype(np.uint8) if values.dtype.kind == "b" else values)
-            for name, values in properties.items()]
+def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,
+                     split_vectors: bool = True) -> list[tuple[str, npt.NDArray[Any]]]:
+    """Properties as ``(name, array)`` in insertion order, booleans as uint8 (no file type has bool).
+
+    With ``split_vectors`` an (n, k) vector property becomes k columns
+    ``name_0`` .. ``name_{k-1}`` (for formats without vector properties).
+    """
+    result: list[tuple[str, npt.NDArray[Any]]] = []
+    for name, values in properties.items():
+        values = values.astype(np.uint8) if values.dtype.kind == "b" else values
+        if values.ndim == 2 and split_vectors:
+            result.extend((f"{name}_{j}", np.ascontiguousarray(values[:, j])) for j in range(values.shape[1]))
+        else:
+            result.append((name, values))
+    return result

@@ -63,15 +63,17 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
   use ``ref`` instead (a PATOM's own property values are then lost). ATOMs may
   repeat PATOMs or other ATOMs, also ones further down the file; a cycle is
   an error. Which vertices were ATOMs is kept in
-  ``metadata["gocad_atoms"]`` (pairs ``[atom, ref]`` of vertex indices), so the
-  writer writes them as ATOMs again.
+  ``metadata["gocad_atoms"]`` (pairs ``[atom, ref]`` of vertex indices), and
+  which of them were PATOMs in ``metadata["gocad_patoms"]`` (atom indices), so
+  the writer writes them as ATOMs and PATOMs again (a PATOM with values of its
+  own when they differ from the vertex it repeats).
 * Coordinates are kept exactly as written: ``ZPOSITIVE Depth`` does not flip z;
   it is recorded in ``metadata["zpositive"]``.
 * ``PROPERTIES`` become float64 vertex properties; values equal to the
   property's ``NO_DATA_VALUES`` entry become NaN; a property with ``ESIZES``
-  k > 1 becomes k properties ``name_0`` .. ``name_{k-1}``. Names that are not
-  valid mesh property names are sanitised (see
-  :func:`~tgsis.formats._common.sanitize_property_name`);
+  k > 1 becomes one (n, k) property (a vector of k components per vertex).
+  Names keep their letter case; names that are not valid mesh property names
+  are sanitised (see :func:`~tgsis.formats._common.sanitize_property_name`);
   ``metadata["property_names"]`` maps every mesh property name to its name in
   the file.
 * When an object has more than one non-empty part (``TFACE``, ``ILINE``,
@@ -611,9 +613,10 @@ class _PropertyLayout:
 
     file_names: list[str]
     sizes: list[int]
-    columns: list[str]  # mesh property names, one per value column
+    columns: list[str]  # the mesh property name of each value column (a vector's k columns share one)
     column_file_names: list[str]
     no_data: list[float]  # one per column (NaN: none)
+    names: list[str]  # mesh property names, one per property
 
     @property
     def n_columns(self) -> int:
@@ -635,12 +638,12 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
                                   f"({' '.join(names)}); each must be at least 1", path=path, line=line + 1)
     columns: list[str] = []
     column_file_names: list[str] = []
+    mesh_names: list[str] = []
     for name, size in zip(names, sizes):
-        base = sanitize_property_name(name.strip() or name, columns)  # SKUA quotes names: " default property"
-        if size == 1:
-            columns.append(base)
-        else:
-            columns.extend(sanitize_property_name(f"{base}_{j}", columns) for j in range(size))
+        # a vector (ESIZES k > 1) is one (n, k) property; SKUA quotes names: " default property"
+        base = sanitize_property_name(name.strip() or name, mesh_names)
+        mesh_names.append(base)
+        columns.extend([base] * size)
         column_file_names.extend([name] * size)
     no_data = [math.nan] * len(columns)
     if "NO_DATA_VALUES" in rec.property_lines:
@@ -657,7 +660,7 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
         else:
             raise FileFormatError(f"NO_DATA_VALUES gives {len(values)} values for {len(names)} properties",
                                   path=path, line=line + 1)
-    return _PropertyLayout(list(names), sizes, columns, column_file_names, no_data)
+    return _PropertyLayout(list(names), sizes, columns, column_file_names, no_data, mesh_names)
 
 
 def _fast_table(texts: Sequence[str], dtype: type[np.generic], columns: Sequence[int]) -> npt.NDArray[Any] | None:
@@ -976,13 +979,18 @@ def _parse_cells(rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_
 
 
 def _vertex_properties(values: FloatArray, layout: _PropertyLayout) -> dict[str, FloatArray]:
-    """Property columns with no-data values replaced by NaN."""
-    result: dict[str, FloatArray] = {}
-    for j, name in enumerate(layout.columns):
+    """Properties ((n,), or (n, k) for ESIZES k > 1) with no-data values replaced by NaN."""
+    columns: list[FloatArray] = []
+    for j in range(layout.n_columns):
         column = np.ascontiguousarray(values[:, j])
         if not math.isnan(layout.no_data[j]):
             column[column == layout.no_data[j]] = np.nan
-        result[name] = column
+        columns.append(column)
+    result: dict[str, FloatArray] = {}
+    start = 0
+    for name, size in zip(layout.names, layout.sizes):
+        result[name] = columns[start] if size == 1 else np.stack(columns[start:start + size], axis=1)
+        start += size
     return result
 
 
@@ -1036,7 +1044,7 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], fl
     if rec.class_headers:
         meta["gocad_property_class_headers"] = [list(b) for b in rec.class_headers]
     if layout.columns:
-        meta["property_names"] = dict(zip(layout.columns, layout.column_file_names))
+        meta["property_names"] = dict(zip(layout.names, layout.file_names))
         esizes = {n: s for n, s in zip(layout.file_names, layout.sizes) if s > 1}
         if esizes:
             meta["gocad_esizes"] = esizes
@@ -1051,6 +1059,9 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], fl
             meta["gocad_property_info"] = info
     if atoms:
         meta["gocad_atoms"] = atoms
+        patoms = [pair[0] for pair, is_p in zip(atoms, rec.atom_is_p) if is_p]
+        if patoms:
+            meta["gocad_patoms"] = patoms
     if flags:
         meta["gocad_vertex_flags"] = _flag_ranges(flags, n_vertices)
     if rec.cell_parts:
@@ -1301,30 +1312,33 @@ def _written_properties(mesh: Mesh) -> list[_WrittenProperty]:
     esizes = _meta_dict(meta, "gocad_esizes")
     no_data = _meta_dict(meta, "gocad_no_data_values")
 
+    values = dict(property_columns(mesh.vertex_properties, split_vectors=False))
     groups: list[tuple[str, list[str]]] = []
     for column in mesh.vertex_properties:
         name = file_names.get(column, column)
         name = name if isinstance(name, str) and name and name.isprintable() and '"' not in name else column
         size = esizes.get(name, 1)
-        if size > 1 and groups and groups[-1][0] == name and len(groups[-1][1]) < size:
-            groups[-1][1].append(column)
+        if values[column].ndim == 2:  # a vector property: one GOCAD property of ESIZES k
+            groups.append((name, [column]))
+        elif size > 1 and groups and groups[-1][0] == name and len(groups[-1][1]) < size:
+            groups[-1][1].append(column)  # components stored one per mesh property
         else:
             groups.append((name, [column]))
     # a vector property with components missing, or a name used twice, is written column by column
     resolved: list[tuple[str, list[str]]] = []
     for name, columns in groups:
-        if esizes.get(name, 1) not in (1, len(columns)):
+        if values[columns[0]].ndim == 1 and esizes.get(name, 1) not in (1, len(columns)):
             resolved.extend((c, [c]) for c in columns)
         else:
             resolved.append((name, columns))
     result: list[_WrittenProperty] = []
     used: set[str] = set()
-    values = dict(property_columns(mesh.vertex_properties))
     for name, columns in resolved:
         if name in used:
             name = next(c for c in [columns[0], *(f"{columns[0]}_{j}" for j in itertools.count(2))] if c not in used)
         used.add(name)
-        arrays = [values[c] for c in columns]
+        arrays = [component for c in columns
+                  for component in ([values[c]] if values[c].ndim == 1 else list(values[c].T))]
         stored = no_data.get(name)
         result.append(_WrittenProperty(name, arrays, _no_data_value(arrays, stored)))
     return result
@@ -1393,8 +1407,15 @@ def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[st
                 columns.append(list(map(repr, values.tolist())))
         texts = list(map(" ".join, zip(*columns)))
         lines = [f"PVRTX {i} {a!r} {b!r} {c!r} {t}{e}\n" for i, a, b, c, t, e in zip(ids, x, y, z, texts, ends)]
-    for atom, ref in _valid_atoms(mesh):
-        lines[atom] = f"ATOM {atom + 1} {ref + 1}{ends[atom]}\n"
+    patoms = mesh.metadata.get("gocad_patoms")
+    was_patom = set(patoms) if isinstance(patoms, (list, tuple)) else set()
+    for atom, ref, same in _valid_atoms(mesh):
+        if not properties or (same and atom not in was_patom):
+            lines[atom] = f"ATOM {atom + 1} {ref + 1}{ends[atom]}\n"
+        elif same:  # a PATOM takes the values of the vertex it repeats
+            lines[atom] = f"PATOM {atom + 1} {ref + 1}{ends[atom]}\n"
+        else:  # a PATOM with values of its own
+            lines[atom] = f"PATOM {atom + 1} {ref + 1} {texts[atom]}{ends[atom]}\n"
     return lines
 
 
@@ -1416,8 +1437,9 @@ def _flag_suffixes(mesh: Mesh) -> list[str]:
     return ends
 
 
-def _valid_atoms(mesh: Mesh) -> list[tuple[int, int]]:
-    """The ``metadata["gocad_atoms"]`` pairs that still hold: same position and properties, ref earlier."""
+def _valid_atoms(mesh: Mesh) -> list[tuple[int, int, bool]]:
+    """The ``metadata["gocad_atoms"]`` pairs that still hold (same position, ref earlier), and whether the
+    atom has the same property values as its ref (else it is written as a PATOM with values of its own)."""
     pairs = mesh.metadata.get("gocad_atoms")
     if not isinstance(pairs, (list, tuple)):
         return []
@@ -1429,7 +1451,7 @@ def _valid_atoms(mesh: Mesh) -> list[tuple[int, int]]:
         atom, ref = int(pair[0]), int(pair[1])
         if not 0 <= ref < atom < mesh.n_vertices or not np.array_equal(bits[atom], bits[ref]):
             continue
-        if all(np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f")
-               for v in mesh.vertex_properties.values()):
-            valid.append((atom, ref))
+        same = all(np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f")
+                   for v in mesh.vertex_properties.values())
+        valid.append((atom, ref, same))
     return valid

@@ -223,11 +223,11 @@ def _format_grid(source: _Grid, encoding: Encoding) -> bytes:
     n_points, n_cells = len(source.vertices), len(source.types)
     piece = ET.SubElement(grid, "Piece", NumberOfPoints=str(n_points), NumberOfCells=str(n_cells))
     point_data = ET.SubElement(piece, "PointData")
-    for name, values in source.point_data.items():
-        point_data.append(writer.array(name, values))
+    for name, values in source.point_data.items():  # an (n, k) vector property: k components
+        point_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
     cell_data = ET.SubElement(piece, "CellData")
     for name, values in source.cell_data.items():
-        cell_data.append(writer.array(name, values))
+        cell_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
     points = ET.SubElement(piece, "Points")
     points.append(writer.array("Points", source.vertices, components=3))
     cells = ET.SubElement(piece, "Cells")
