@@ -18,10 +18,11 @@ DECLARE
 BEGIN
     IF v_class.timemodel = 'STATIC' THEN
         -- the question's checks (a numeric vertex or cell property, the feature one of the class) for a static class
+        -- (a scalar property of the class's own alignment: the others live in otherprotable, vectors have sizes)
         IF NOT EXISTS (SELECT FROM jsonb_array_elements(v_class.cell_properties) p
-                        WHERE p ->> 'name' = p_property
+                        WHERE p ->> 'name' = p_property AND NOT p ? 'size' AND NOT p ? 'alignment'
                           AND p ->> 'type' IN ('smallint', 'integer', 'bigint', 'real', 'double precision', 'numeric')) THEN
-            RAISE EXCEPTION 'feature class % has no numeric % property %', p_class, lower(v_class.proalignment),
+            RAISE EXCEPTION 'feature class % has no numeric scalar % property %', p_class, lower(v_class.proalignment),
                     coalesce(quote_literal(p_property), 'NULL')
                 USING ERRCODE = 'TG103',
                       HINT = format('its %s properties: %s', lower(v_class.proalignment),

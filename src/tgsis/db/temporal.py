@@ -489,8 +489,8 @@ def _properties_at(conn: Conn, surface: Surface, feature_id: int, t: float, conv
     ids, into = (vertex_ids, surface.vertex_properties) if fc.alignment == "VERTEX" else (
         triangle_ids, surface.cell_properties)
     for prop in fc.cell_properties:
-        if prop.type not in _NUMERIC:
-            continue
+        if prop.type not in _NUMERIC or prop.size != 1 or prop.alignment not in (None, fc.alignment):
+            continue   # booleans, vectors and the other alignment's properties have no interpolated value here
         idx, value = _copy_out(conn, sql.SQL(
             "SELECT idx, coalesce(value, 'NaN') FROM tgsis.property_at({}, {}, {}, {}, {})").format(
             sql.Literal(fc.name), sql.Literal(feature_id), sql.Literal(prop.name), sql.Literal(float(t)),
