@@ -173,6 +173,8 @@ def test_segments_and_points() -> None:
     assert lines.dimension == 1 and lines.n_darts == 6 and lines.check().ok
     assert counts(lines) == [4, 3] and lines.euler_characteristic() == 1
     assert len(lines.border_darts()) == 2  # its two ends
+    ends = lines.border()
+    assert ends.dimension == 0 and ends.alpha.tolist() == [[0, 1]] and sorted(ends.vertex.tolist()) == [0, 3]
     with pytest.raises(tgsis.InvalidGeometryError, match=r"vertex \[1\] is shared by 3 segments"):
         GMap.from_segments(v, [[0, 1], [1, 2], [1, 3]])
     points = GMap.from_points(v)
@@ -334,3 +336,30 @@ def test_plain_import_loads_no_database_layer() -> None:
     code = ("import tgsis.gmaps, sys; assert not any(m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')) "
             "for m in sys.modules)")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_the_documented_example() -> None:
+    """docs/data-models.md's example runs and gives what its comments say."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "data-models.md").read_text(encoding="utf-8")
+    section = text[text.index("## Models 4 and 5"):]
+    block = section[section.index("```python\n") + 10:section.index("```", section.index("```python\n") + 10)]
+    namespace: dict[str, object] = {}
+    checked = 0
+    for line in block.splitlines():
+        code, _, comment = line.partition("  # ")
+        if comment and not code.strip().startswith(("from", "import")) and "=" not in code.split("(")[0]:
+            expected = comment.split(":")[0].strip()
+            assert eval(code.strip(), namespace) == eval(expected), line  # noqa: S307 - our own docs
+            checked += 1
+        else:
+            exec(code, namespace)  # noqa: S102 - our own docs
+    assert checked == 4
+
+
+def test_the_module_example() -> None:
+    import doctest
+
+    import tgsis.gmaps
+
+    result = doctest.testmod(tgsis.gmaps)
+    assert result.attempted >= 4 and result.failed == 0

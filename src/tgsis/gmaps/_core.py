@@ -409,7 +409,8 @@ class GMap:
         alpha_i for i <= n - 2 is restricted to those darts; alpha_{n-1} of a
         border dart turns around its (n-2)-cell (alpha_{n-1}, then alpha_n
         alpha_{n-1} until a free dart). The border of a closed object has no
-        dart.
+        dart; that of a 1-G-map is the free ends of its lines, as a 0-G-map
+        whose darts are all free.
 
         Raises
         ------
@@ -425,6 +426,8 @@ class GMap:
         index = np.full(self.n_darts, -1, dtype=np.int64)
         index[free] = np.arange(len(free))
         rows = [index[self.alpha[i, free]] for i in range(n - 1)]
+        if n == 1:  # the ends of lines: points, each its own free dart
+            return GMap(np.arange(len(free), dtype=np.int64).reshape(1, -1), self.vertex[free], self.points)
         cur = self.alpha[n - 1, free]
         todo = np.flatnonzero(self.alpha[n, cur] != cur)
         for _ in range(self.n_darts + 1):
@@ -541,7 +544,7 @@ class GMap:
         f = len(start)
         # a face's darts under <alpha0, alpha1>: its size is half its dart count
         face_of = self.orbits([0, 1])[0]
-        _, sizes_all = np.unique(face_of, return_counts=True)
+        sizes_all = np.bincount(face_of)
         sizes = sizes_all[face_of[start]] // 2
         offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         indices = np.empty(int(offsets[-1]), dtype=np.int64)
