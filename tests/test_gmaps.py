@@ -363,3 +363,31 @@ def test_the_module_example() -> None:
 
     result = doctest.testmod(tgsis.gmaps)
     assert result.attempted >= 4 and result.failed == 0
+
+
+def test_empty_maps() -> None:
+    g = GMap.from_triangles(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64))
+    assert g.n_darts == 0 and g.check().ok and counts(g) == [0, 0, 0] and g.euler_characteristic() == 0
+    assert g.cell_darts(2).tolist() == [] and g.simplices().shape == (0, 3) and g.border().n_darts == 0
+    assert [a.tolist() for a in g.polygons()] == [[], [0]]
+    kept = GMap.from_triangles(np.eye(3), [])  # vertices without triangles are kept
+    assert kept.n_points == 3 and kept.to_mesh().same_as(Surface(np.eye(3), np.empty((0, 3), dtype=np.int64)))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2 ** 32 - 1), st.floats(0.2, 1.0))
+def test_random_pieces_of_a_tetrahedral_block(seed: int, fraction: float) -> None:
+    """Any subset of a valid tetrahedral mesh, shuffled and with vertex orders permuted, is a valid 3-G-map."""
+    v, t = shapes.block_tetrahedra(3)
+    rng = np.random.default_rng(seed)
+    keep = t[rng.random(len(t)) < fraction]
+    keep = np.take_along_axis(keep, rng.permuted(np.tile(np.arange(4), (len(keep), 1)), axis=1), axis=1)
+    g = GMap.from_tetrahedra(v, keep)
+    assert g.check().ok
+    assert np.array_equal(g.simplices(), keep)
+    faces = np.sort(np.concatenate([np.delete(keep, f, axis=1) for f in range(4)]), axis=1)
+    unique, shared = np.unique(faces, axis=0, return_counts=True)
+    assert g.n_cells(3) == len(keep) and g.n_cells(2) == len(unique)
+    border = g.border()
+    assert border.check().ok and border.n_cells(2) == int((shared == 1).sum())
+    assert border.euler_characteristic() % 2 == 0  # closed surfaces (each component: 2 - 2 genus)

@@ -171,3 +171,8 @@ def test_refused_slices() -> None:
     # a plane through a vertex that no face in the plane holds (the apex of a triangle)
     with pytest.raises(tgsis.InvalidInputError, match="point 2 lies in the plane 1 = 1.0 but on no face in it"):
         slice(GMap.from_triangles(v, [[0, 1, 2]]), 1, 1.0)
+    # an edge in the plane with both its triangles on the same side: which one to take is not defined
+    folded = GMap.from_triangles([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 1, 1]], [[0, 1, 2], [1, 0, 3]])
+    with pytest.raises(tgsis.InvalidInputError, match=r"the face of dart \d+ lies in the plane 1 = 0.0 but does "
+                                                      "not separate a cell above from a cell below"):
+        slice(folded, 1, 0.0)

@@ -362,6 +362,8 @@ class GMap:
     def cell_darts(self, i: int) -> IntArray:
         """The lowest-numbered dart of each i-cell: (n_cells(i),) int64."""
         labels = self.cells(i)
+        if len(labels) == 0:
+            return np.empty(0, dtype=np.int64)
         first = np.full(self.n_cells(i), self.n_darts, dtype=np.int64)
         starts = np.flatnonzero(np.concatenate([[True], labels[1:] > np.maximum.accumulate(labels)[:-1]]))
         first[labels[starts]] = starts  # labels are numbered by first appearance
