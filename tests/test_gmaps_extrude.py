@@ -31,6 +31,10 @@ def test_square_extruded_is_a_cube() -> None:
                                     [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
     border = cube.border()
     assert border.check().ok and counts(border) == [8, 12, 6] and border.euler_characteristic() == 2
+    indices, face_offsets, cell_offsets = cube.polyhedra()  # its one volume: six quads
+    assert cell_offsets.tolist() == [0, 6] and np.diff(face_offsets).tolist() == [4] * 6
+    assert sorted(tuple(sorted(indices[a:b].tolist())) for a, b in zip(face_offsets[:-1], face_offsets[1:])) == [
+        (0, 1, 2, 3), (0, 1, 4, 5), (0, 3, 4, 7), (1, 2, 5, 6), (2, 3, 6, 7), (4, 5, 6, 7)]
     faces, offsets = border.polygons()
     assert np.diff(offsets).tolist() == [4] * 6
     assert sorted(tuple(sorted(faces[a:b].tolist())) for a, b in zip(offsets[:-1], offsets[1:])) == [
@@ -43,6 +47,10 @@ def test_several_intervals() -> None:
     assert column.euler_characteristic() == 1
     # inner layers are sewn: only the bottom, top and side faces are on the border
     assert column.border().n_cells(2) == 2 + 4 * 3
+    _, face_offsets, cell_offsets = column.polyhedra()  # three cubes: the inner faces are listed twice
+    assert cell_offsets.tolist() == [0, 6, 12, 18] and len(face_offsets) == 19
+    with pytest.raises(tgsis.InvalidInputError, match="a 2-G-map has no volumes"):
+        SQUARE.polyhedra()
 
 
 @pytest.mark.parametrize(("shape", "chi"), [

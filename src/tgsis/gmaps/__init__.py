@@ -24,7 +24,7 @@ share their point is then a condition that :meth:`GMap.check` verifies.
 * Builders: :func:`from_simplices` (points, segments, triangles with 6 darts
   each, tetrahedra with 24, any n), :func:`from_polygons` (faces of any
   sizes), :func:`from_mesh`; back to meshes with :meth:`GMap.simplices`,
-  :meth:`GMap.polygons` and :meth:`GMap.to_mesh`.
+  :meth:`GMap.polygons`, :meth:`GMap.polyhedra` and :meth:`GMap.to_mesh`.
 * :meth:`GMap.check`: conditions (i)-(iii), shared points of 0-cells and,
   given a period per dart, the closure of every topology period (model 4),
   with the offending darts (:class:`GMapReport`).

@@ -126,6 +126,17 @@ def orbit_labels(alpha: IntArray, involutions: Sequence[int], *,
     return dense[labels], int(dense[-1]) + 1
 
 
+def _first_darts(labels: IntArray, count: int) -> IntArray:
+    """The lowest dart of each orbit, for labels numbered by first appearance (as orbit_labels numbers them)."""
+    if len(labels) == 0:
+        return np.empty(0, dtype=np.int64)
+    first = np.empty(count, dtype=np.int64)
+    # a new label appears exactly where it exceeds every label before it
+    starts = np.flatnonzero(np.concatenate([[True], labels[1:] > np.maximum.accumulate(labels)[:-1]]))
+    first[labels[starts]] = starts
+    return first
+
+
 @dataclass(frozen=True)
 class GMapReport:
     """What :meth:`GMap.check` found; each mapping holds only violated conditions.
@@ -361,13 +372,7 @@ class GMap:
 
     def cell_darts(self, i: int) -> IntArray:
         """The lowest-numbered dart of each i-cell: (n_cells(i),) int64."""
-        labels = self.cells(i)
-        if len(labels) == 0:
-            return np.empty(0, dtype=np.int64)
-        first = np.full(self.n_cells(i), self.n_darts, dtype=np.int64)
-        starts = np.flatnonzero(np.concatenate([[True], labels[1:] > np.maximum.accumulate(labels)[:-1]]))
-        first[labels[starts]] = starts  # labels are numbered by first appearance
-        return first
+        return _first_darts(self.cells(i), self.n_cells(i))
 
     def incidence(self, i: int, j: int) -> sp.csr_array:
         """Incidence between i-cells and j-cells: (n_cells(i), n_cells(j)) sparse bool, True where they share a dart.
@@ -542,12 +547,14 @@ class GMap:
         """
         if self.dimension < 2:
             raise InvalidInputError(f"a {self.dimension}-G-map has no faces (2-cells)")
-        start = self.cell_darts(2)
+        return self._cycles(self.cell_darts(2))
+
+    def _cycles(self, start: IntArray) -> tuple[IntArray, IntArray]:
+        """The alpha_0 alpha_1 cycle of points from each start dart: flat indices and offsets."""
         f = len(start)
         # a face's darts under <alpha0, alpha1>: its size is half its dart count
         face_of = self.orbits([0, 1])[0]
-        sizes_all = np.bincount(face_of)
-        sizes = sizes_all[face_of[start]] // 2
+        sizes = np.bincount(face_of)[face_of[start]] // 2 if f else np.empty(0, dtype=np.int64)
         offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         indices = np.empty(int(offsets[-1]), dtype=np.int64)
         cur = start.copy()
@@ -557,6 +564,37 @@ class GMap:
             indices[offsets[active] + step] = self.vertex[cur[active]]
             cur[active] = self.alpha[1, self.alpha[0, cur[active]]]
         return indices, offsets
+
+    def polyhedra(self) -> tuple[IntArray, IntArray, IntArray]:
+        """The 3-cells as polyhedra: the faces of each, as polygons.
+
+        Returns
+        -------
+        indices : (s,) int64
+            Point indices of the faces' boundary cycles, face after face.
+        face_offsets : (q + 1,) int64
+            Face j has ``indices[face_offsets[j]:face_offsets[j + 1]]``.
+        cell_offsets : (c + 1,) int64
+            3-cell i (in the order of :meth:`cells` (3)) has faces
+            ``cell_offsets[i]:cell_offsets[i + 1]``, in the order of their
+            lowest darts; a face between two 3-cells is listed in both.
+
+        Raises
+        ------
+        InvalidInputError
+            The map has no 3-cells (n < 3).
+        """
+        if self.dimension < 3:
+            raise InvalidInputError(f"a {self.dimension}-G-map has no volumes (3-cells)")
+        face_of, n_faces = self.orbits([0, 1])  # a face as seen from one 3-cell
+        volume = self.cells(3)
+        first = _first_darts(face_of, n_faces)
+        owner = volume[first]
+        order = np.lexsort((first, owner))
+        indices, face_offsets = self._cycles(first[order])
+        per_cell = np.bincount(owner, minlength=self.n_cells(3))
+        cell_offsets = np.concatenate([[0], np.cumsum(per_cell)]).astype(np.int64)
+        return indices, face_offsets, cell_offsets
 
     def simplices(self) -> IntArray:
         """The n-cells as simplices: (c, n + 1) int64 point indices, cells in the order of :meth:`cells` (n).
