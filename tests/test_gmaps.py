@@ -323,10 +323,11 @@ import sys, types
 pkg = types.ModuleType("tgsis"); pkg.__path__ = [{str(SRC / "tgsis")!r}]; sys.modules["tgsis"] = pkg
 sys.modules["psycopg"] = types.ModuleType("psycopg")
 import tgsis.gmaps
-print(sorted(m for m in sys.modules if m.startswith(("tgsis", "psycopg"))))
+print(sorted(m for m in sys.modules if m.startswith(("tgsis", "psycopg", "scipy"))))
 """
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
     loaded = eval(out)  # noqa: S307 - our own print of a list of names
+    # scipy is imported when an orbit needs it, so that `import tgsis` (and the command line) stays light
     assert loaded == ["psycopg", "tgsis", "tgsis.errors", "tgsis.gmaps", "tgsis.gmaps._build",
                       "tgsis.gmaps._core", "tgsis.gmaps._extrude", "tgsis.mesh"]
 

@@ -8,13 +8,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError
 from tgsis.mesh import PROPERTY_NAME_RE
 
 if TYPE_CHECKING:
+    import scipy.sparse as sp
+
     from tgsis.mesh import Mesh
 
 IntArray = npt.NDArray[np.int64]
@@ -109,6 +109,9 @@ def orbit_labels(alpha: IntArray, involutions: Sequence[int], *,
             break
         labels = new
     if not settled:
+        import scipy.sparse as sp  # imported when needed: `import tgsis` stays light
+        from scipy.sparse.csgraph import connected_components
+
         # contract each current label class and finish on the (much smaller) quotient graph
         roots, inverse = np.unique(labels, return_inverse=True)
         rows = np.concatenate([inverse] * len(maps))
@@ -380,6 +383,8 @@ class GMap:
         For i != j two cells are incident when one is a face of the other
         (they share a dart).
         """
+        import scipy.sparse as sp
+
         a, b = self.cells(i), self.cells(j)
         m = sp.coo_array((np.ones(self.n_darts, dtype=bool), (a, b)), shape=(self.n_cells(i), self.n_cells(j)))
         out = m.tocsr()
@@ -394,6 +399,8 @@ class GMap:
         faces sharing an edge, two edges sharing a vertex); 0-cells are
         adjacent when they bound a common edge.
         """
+        import scipy.sparse as sp
+
         (level,) = self._check_levels([i], "cell dimension")
         if level == 0 and self.dimension == 0:
             return sp.csr_array((self.n_cells(0), self.n_cells(0)), dtype=bool)
