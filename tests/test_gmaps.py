@@ -392,3 +392,14 @@ def test_random_pieces_of_a_tetrahedral_block(seed: int, fraction: float) -> Non
     border = g.border()
     assert border.check().ok and border.n_cells(2) == int((shared == 1).sum())
     assert border.euler_characteristic() % 2 == 0  # closed surfaces (each component: 2 - 2 genus)
+
+
+def test_simplices_of_any_dimension() -> None:
+    """Two 4-simplices sharing a tetrahedron: 120 darts each, alpha4 sewn across the shared facet."""
+    v = np.concatenate([np.zeros((1, 4)), np.eye(4), -np.ones((1, 4))])
+    g = tgsis.gmaps.from_simplices(v, [[0, 1, 2, 3, 4], [1, 2, 0, 3, 5]])
+    assert g.dimension == 4 and g.n_darts == 240 and g.check().ok
+    assert counts(g) == [6, 14, 16, 9, 2] and g.euler_characteristic() == 1
+    assert len(g.border_darts()) == 240 - 2 * 24
+    border = g.border()  # the border of a 4-ball: a 3-sphere of 8 tetrahedra, chi 0
+    assert border.check().ok and border.n_cells(3) == 8 and border.euler_characteristic() == 0
