@@ -389,3 +389,55 @@ def test_simplices_of_any_dimension() -> None:
     assert len(g.border_darts()) == 240 - 2 * 24
     border = g.border()  # the border of a 4-ball: a 3-sphere of 8 tetrahedra, chi 0
     assert border.check().ok and border.n_cells(3) == 8 and border.euler_characteristic() == 0
+
+
+@pytest.mark.parametrize(("shape", "orientable"), [
+    (shapes.octahedron, True),
+    (lambda: shapes.grid(4, 3, wrap_x=True, wrap_y=True), True),
+    (lambda: shapes.grid(3, 2), True),
+    (lambda: shapes.grid(5, 2, wrap_x=True, twist=True), False),
+])
+def test_orientation(shape: object, orientable: bool) -> None:
+    v, t = shape()  # type: ignore[operator]
+    rng = np.random.default_rng(3)
+    flip = rng.random(len(t)) < 0.5
+    t[flip] = t[flip][:, ::-1]  # the input's orientations do not matter
+    g = GMap.from_triangles(v, t)
+    assert g.is_orientable() is orientable
+    if not orientable:
+        with pytest.raises(tgsis.InvalidGMapError, match="the component of dart 0 is not orientable"):
+            g.orientation()
+        return
+    positive = g.orientation()
+    assert positive[0] and flips_everywhere(g, positive)
+    assert positive.reshape(-1, 6).sum(axis=1).tolist() == [3] * len(t)  # half the darts of each triangle
+
+
+def flips_everywhere(g: GMap, positive: np.ndarray) -> bool:  # type: ignore[type-arg]
+    darts = np.arange(g.n_darts)
+    return all(bool(np.all(positive[g.alpha[i, g.alpha[i] != darts]] != positive[g.alpha[i] != darts]))
+               for i in range(g.dimension + 1))
+
+
+def test_orientation_of_solids_and_several_components() -> None:
+    v, t = shapes.cube_tetrahedra()
+    solid = GMap.from_tetrahedra(v, t)
+    assert solid.is_orientable() and flips_everywhere(solid, solid.orientation())
+    one = GMap.from_triangles(*shapes.octahedron())
+    two = GMap(np.concatenate([one.alpha, one.alpha + one.n_darts], axis=1),
+               np.concatenate([one.vertex, one.vertex]), one.points)
+    positive = two.orientation()
+    assert positive[0] and positive[one.n_darts]  # the lowest dart of each component is positive
+    assert flips_everywhere(two, positive)
+    assert extrude_cube_orientable()
+    moebius = GMap.from_triangles(*shapes.grid(5, 2, wrap_x=True, twist=True))
+    both = GMap(np.concatenate([one.alpha, moebius.alpha + one.n_darts], axis=1),
+                np.concatenate([one.vertex, moebius.vertex + one.n_points]), np.concatenate([one.points, moebius.points]))
+    assert not both.is_orientable()
+    with pytest.raises(tgsis.InvalidGMapError, match=f"the component of dart {one.n_darts} is not orientable"):
+        both.orientation()
+
+
+def extrude_cube_orientable() -> bool:
+    from tgsis.gmaps import extrude
+    return extrude(GMap.from_polygons([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2, 3]]), [0, 1, 2]).is_orientable()

@@ -18,8 +18,8 @@ share their point is then a condition that :meth:`GMap.check` verifies.
 * Orbits of any subset of the involutions (:meth:`GMap.orbits`), i-cells
   (:meth:`GMap.cells`: orbits of all involutions but alpha_i, numbered in the
   order of their lowest dart), counts, incidence and adjacency matrices, the
-  border (:meth:`GMap.border`, an (n-1)-G-map), components and the Euler
-  characteristic — vectorised (min-label propagation finished by
+  border (:meth:`GMap.border`, an (n-1)-G-map), components, the Euler
+  characteristic and orientation (:meth:`GMap.orientation`) — vectorised (min-label propagation finished by
   :func:`scipy.sparse.csgraph.connected_components`), no loop over darts.
 * Builders: :func:`from_simplices` (points, segments, triangles with 6 darts
   each, tetrahedra with 24, any n), :func:`from_polygons` (faces of any

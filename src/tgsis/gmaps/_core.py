@@ -369,6 +369,46 @@ class GMap:
         """Connected components: (d,) int64 labels and their count (orbits of all involutions)."""
         return self.orbits(range(self.dimension + 1))
 
+    def _orientation_cover(self) -> tuple[IntArray, IntArray]:
+        """Components of the orientation double cover: dart (x, b) goes by alpha_i to (alpha_i(x), 1 - b).
+
+        Returns the cover's labels of (x, 0) and of (x, 1); a component of the
+        map is orientable exactly when its two copies stay apart.
+        """
+        d = self.n_darts
+        darts = np.arange(d, dtype=np.int64)
+        free = self.alpha == darts
+        # cover dart 2x + b; a free dart stays where it is
+        cover = np.where(free[:, :, None], (2 * darts)[None, :, None] + np.arange(2)[None, None, :],
+                         (2 * self.alpha)[:, :, None] + (1 - np.arange(2))[None, None, :]).reshape(len(self.alpha), 2 * d)
+        labels, _ = orbit_labels(cover, range(len(cover)))
+        return labels[0::2], labels[1::2]
+
+    def is_orientable(self) -> bool:
+        """Whether every connected component can be oriented (a Möbius strip cannot)."""
+        even, odd = self._orientation_cover()
+        return bool(np.all(even != odd))
+
+    def orientation(self) -> npt.NDArray[np.bool_]:
+        """A sign per dart, (d,) bool, flipped by every alpha_i between distinct darts (the SQL ``positive``).
+
+        In each connected component the lowest dart is positive.
+
+        Raises
+        ------
+        InvalidGMapError
+            A component is not orientable (the message names one of its darts).
+        """
+        even, odd = self._orientation_cover()
+        bad = np.flatnonzero(even == odd)
+        if len(bad):
+            raise InvalidGMapError(f"the component of dart {int(bad[0])} is not orientable: no sign per dart "
+                                   "is flipped by every involution", hint="is_orientable() tells beforehand")
+        component, count = self.components()
+        lowest = _first_darts(component, count)
+        # positive: in the same cover component as (lowest dart of its component, 0)
+        return np.asarray(even == even[lowest[component]])
+
     def euler_characteristic(self) -> int:
         """Sum over i of (-1)^i times the number of i-cells."""
         return sum((-1) ** i * self.n_cells(i) for i in range(self.dimension + 1))
