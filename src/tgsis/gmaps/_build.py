@@ -203,18 +203,22 @@ def from_simplices(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
                 detail=f"{_plural(what, len(crowded))} shared by three or more {_plural(name)}")
         # Each dart gets a code 0..n!-1: the order of its facet's global vertices, the same in both
         # simplices of a facet. It depends only on the dart's permutation and on the order of the
-        # simplex's global vertices (one of 2^len(pairs) comparison patterns): a small table.
+        # simplex's global vertices (one of (n + 1)!, read from its pairwise comparisons): a small table.
         pattern = np.zeros(c, dtype=np.int64)
         for bit, (u, w) in enumerate(pairs):
             pattern |= (cells[:, u] < cells[:, w]).astype(np.int64) << bit
-        code_of_order = {p: j for j, p in enumerate(itertools.permutations(range(n)))}
-        table_code = np.zeros((1 << len(pairs), nf), dtype=np.int64)
-        for pat in range(1 << len(pairs)):
-            less = {(u, w): bool(pat >> bit & 1) for bit, (u, w) in enumerate(pairs)}
-            less.update({(w, u): not v for (u, w), v in list(less.items())})
-            for j, p in enumerate(perms.tolist()):
-                ranks = tuple(sum(less[(p[r], p[q])] for r in range(n) if r != q) for q in range(n))
-                table_code[pat, j] = code_of_order.get(ranks, 0)  # inconsistent patterns never occur
+        order_of_pattern = np.zeros(1 << len(pairs), dtype=np.int64)
+        table_code = np.zeros((nf, nf), dtype=np.int64)
+        lut = np.zeros(n ** n, dtype=np.int64)
+        powers = n ** np.arange(n, dtype=np.int64)
+        for j, p in enumerate(itertools.permutations(range(n))):
+            lut[int(np.dot(p, powers))] = j
+        for o, ranks in enumerate(perms):  # ranks[u]: the place of local vertex u among the simplex's vertices
+            order_of_pattern[sum(int(ranks[u] < ranks[w]) << bit for bit, (u, w) in enumerate(pairs))] = o
+            seen = ranks[perms[:, :n]]  # (nf, n): the places of each dart's facet vertices, in dart order
+            within = np.argsort(np.argsort(seen, axis=1), axis=1)
+            table_code[o] = lut[within @ powers]
+        pattern = order_of_pattern[pattern]
         code = table_code[pattern].reshape(d)
         facet_of = (np.arange(c, dtype=np.int64)[:, None] * s + perms[None, :, n]).reshape(d)
         nfac = nf // s  # n!
