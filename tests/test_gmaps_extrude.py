@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import tgsis
 from tgsis.gmaps import GMap, extrude, slice
@@ -184,3 +186,20 @@ def test_refused_slices() -> None:
     with pytest.raises(tgsis.InvalidInputError, match=r"the face of dart \d+ lies in the plane 1 = 0.0 but does "
                                                       "not separate a cell above from a cell below"):
         slice(folded, 1, 0.0)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 5), st.integers(1, 4), st.booleans(),
+       st.lists(st.floats(-1e6, 1e6, allow_nan=False, width=32), min_size=2, max_size=5, unique=True))
+def test_random_extrusions_round_trip(nx: int, ny: int, wrap: bool, raw_values: list[float]) -> None:
+    v, t = shapes.grid(max(nx, 3) if wrap else nx, ny, wrap_x=wrap)
+    g = GMap.from_triangles(v, t)
+    values = np.sort(np.array(raw_values, dtype=np.float64))
+    ex = extrude(g, values)
+    assert ex.check().ok and counts(ex) == product_counts(g, len(values) - 1)
+    for value in values:
+        assert slice(ex, 3, value).same_as(g)
+    for lo, hi in zip(values[:-1], values[1:]):
+        mid = lo + (hi - lo) / 2
+        if lo < mid < hi:
+            assert slice(ex, 3, mid).same_as(g)
