@@ -274,8 +274,9 @@ def test_cell_properties() -> None:
         GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"rock": np.ones(7)}})
     with pytest.raises(tgsis.InvalidPropertyError, match="property level 3 is not a cell dimension"):
         GMap(g.alpha, g.vertex, g.points, cell_properties={3: {"rock": np.ones(8)}})
-    with pytest.raises(tgsis.InvalidPropertyError, match="property name 'Rock' is not allowed"):
-        GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"Rock": np.ones(8)}})
+    with pytest.raises(tgsis.InvalidPropertyError, match="property name '2rock' is not allowed"):
+        GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"2rock": np.ones(8)}})
+    assert GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"Rock": np.ones(8)}}).cell_properties[2]["Rock"].sum() == 8
 
 
 def test_arrays_are_read_only() -> None:

@@ -272,7 +272,7 @@ class GMap:
                 if not isinstance(name, str) or not PROPERTY_NAME_RE.match(name):
                     raise InvalidPropertyError(
                         f"property name {name!r} is not allowed",
-                        hint="use lower-case letters, digits and underscores, starting with a letter (at most 63)")
+                        hint="use letters, digits and underscores, starting with a letter (at most 63)")
                 array = np.ascontiguousarray(values)
                 if array.dtype.kind not in "biuf" or array.ndim != 1:
                     raise InvalidPropertyError(f"property {name!r} of {level}-cells must be a 1-D numeric array, "
