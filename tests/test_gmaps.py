@@ -188,9 +188,10 @@ def test_segments_and_points() -> None:
 
 def test_round_trips() -> None:
     v, t = shapes.octahedron()
-    surface = Surface(v, t, cell_properties={"part": np.arange(8)})
+    surface = Surface(v, t, cell_properties={"part": np.arange(8), "normal": np.arange(24.0).reshape(8, 3)})
     g = from_mesh(surface)
-    assert g.cell_properties == {2: {"part": surface.cell_properties["part"]}}
+    assert list(g.cell_properties) == [2] and list(g.cell_properties[2]) == ["part", "normal"]
+    assert g.cell_properties[2]["normal"].shape == (8, 3)  # vector properties: one row per cell
     back = g.to_mesh()
     assert isinstance(back, Surface) and back.same_as(surface)
     vt, tt = shapes.block_tetrahedra(2)

@@ -125,7 +125,9 @@ def test_bad_values(values: object) -> None:
 ])
 def test_slices_of_an_extrusion_give_it_back(shape: object) -> None:
     g = shape()  # type: ignore[operator]
-    g = GMap(g.alpha, g.vertex, g.points, cell_properties={g.dimension: {"code": np.arange(g.n_cells(g.dimension)) * 10}})
+    c = g.n_cells(g.dimension)
+    g = GMap(g.alpha, g.vertex, g.points,
+             cell_properties={g.dimension: {"code": np.arange(c) * 10, "dip": np.arange(2.0 * c).reshape(c, 2)}})
     values = [0.0, 0.5, 2.0, 3.0]
     ex = extrude(g, values)
     axis = g.embedding_dimension

@@ -207,9 +207,10 @@ class GMap:
         The embedding: the point of each dart (all darts of a 0-cell share it).
     points : (k, m) array_like of float
         Coordinates, m >= n. Points no dart uses are kept.
-    cell_properties : mapping of int to mapping of str to (n_cells(level),) array_like, optional
+    cell_properties : mapping of int to mapping of str to (n_cells(level),) or (n_cells(level), k) array_like, optional
         Numeric properties of the i-cells of a level: ``{level: {name: values}}``,
-        values in the order of :meth:`cells` labels.
+        values (or rows of k values: vector properties) in the order of
+        :meth:`cells` labels.
 
     Raises
     ------
@@ -274,9 +275,10 @@ class GMap:
                         f"property name {name!r} is not allowed",
                         hint="use letters, digits and underscores, starting with a letter (at most 63)")
                 array = np.ascontiguousarray(values)
-                if array.dtype.kind not in "biuf" or array.ndim != 1:
-                    raise InvalidPropertyError(f"property {name!r} of {level}-cells must be a 1-D numeric array, "
-                                               f"got {array.dtype} of shape {array.shape}")
+                if array.dtype.kind not in "biuf" or array.ndim not in (1, 2):
+                    raise InvalidPropertyError(f"property {name!r} of {level}-cells must be a numeric array of "
+                                               f"one value (or one row of values) per cell, got {array.dtype} of "
+                                               f"shape {array.shape}")
                 if len(array) != count:
                     raise InvalidPropertyError(f"property {name!r} has {len(array)} values for "
                                                f"{count} {level}-cells")

@@ -93,7 +93,7 @@ def extrude(g: GMap, values: npt.ArrayLike) -> GMap:
     points = np.concatenate([np.tile(g.points, (k + 1, 1)), np.repeat(vals, kp)[:, None]], axis=1)
     props: Properties = {}
     if n in g.cell_properties:
-        props[big_n] = {name: np.tile(v, k) for name, v in g.cell_properties[n].items()}
+        props[big_n] = {name: np.concatenate([v] * k) for name, v in g.cell_properties[n].items()}
     return GMap(np.stack(rows), vertex, points, cell_properties=props)
 
 
