@@ -25,6 +25,7 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG101', 'invalid_name',     'input',   'a name (feature class, property, version, table) is empty, too long, or would need quoting where that is not allowed'),
     ('TG102', 'invalid_geometry', 'input',   'coordinates are NaN or infinite, or a simplex has out-of-range or repeated vertex indices'),
     ('TG103', 'invalid_property', 'input',   'a property has an unknown name, a type outside the allowed list, or the wrong number of values'),
+    ('TG104', 'invalid_g_map',    'input',   'arrays that are no valid n-G-map (an alpha_i that is not an involution, a fixed point below alpha_n, alpha_i o alpha_j not an involution for i + 2 <= j, a dart whose alpha_i lies in another topology period), or a G-map an operation cannot take; reserved for models 4 and 5'),
     ('TG200', 'not_found',        'catalog', 'a named object (feature class, feature, geometry, table) does not exist'),
     ('TG201', 'already_exists',   'catalog', 'an object with that name or key exists already'),
     ('TG202', 'in_use',           'catalog', 'an object cannot be dropped or changed while others depend on it'),

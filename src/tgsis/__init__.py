@@ -33,6 +33,9 @@ from tgsis.mesh import (
     TetraMesh,
     mesh_class,
 )
+from tgsis.gmaps import GMap, GMapReport
+from tgsis.gmaps import extrude as extrude_gmap
+from tgsis.gmaps import slice as slice_gmap
 from tgsis.errors import (
     AlreadyExistsError,
     ConcurrentChangeError,
@@ -42,6 +45,7 @@ from tgsis.errors import (
     InstallationError,
     InUseError,
     InvalidGeometryError,
+    InvalidGMapError,
     InvalidInputError,
     InvalidNameError,
     InvalidPropertyError,
@@ -345,6 +349,11 @@ __all__ = [
     "MeshDiff",
     "MeshIndex",
     "compare_meshes",
+    # generalized maps, models 4 and 5 (numpy, no database; more in tgsis.gmaps)
+    "GMap",
+    "GMapReport",
+    "extrude_gmap",
+    "slice_gmap",
     # feature classes and features
     "FeatureClass",
     "Property",
@@ -402,6 +411,7 @@ __all__ = [
     "InstallationError",
     "InUseError",
     "InvalidGeometryError",
+    "InvalidGMapError",
     "InvalidInputError",
     "InvalidNameError",
     "InvalidPropertyError",

@@ -30,6 +30,7 @@ __all__ = [
     "InvalidNameError",
     "InvalidGeometryError",
     "InvalidPropertyError",
+    "InvalidGMapError",
     "FileFormatError",
     "NotFoundError",
     "ObjectLockedError",
@@ -122,6 +123,19 @@ class InvalidPropertyError(InvalidInputError):
     """Unknown property, disallowed type, or wrong number of values."""
 
     code = "TG103"
+
+
+class InvalidGMapError(InvalidGeometryError):
+    """Arrays that are no valid n-G-map, or a G-map an operation cannot take.
+
+    An alpha_i that is not an involution, a fixed point below alpha_n, an
+    alpha_i o alpha_j (i + 2 <= j) that is not an involution, darts of one
+    0-cell on different points, a dart whose alpha_i lies in another topology
+    period (model 4), or cells that are not what an operation needs; the
+    message names the darts or cells.
+    """
+
+    code = "TG104"
 
 
 class FileFormatError(InvalidInputError):
