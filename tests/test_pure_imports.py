@@ -14,8 +14,8 @@ import sys
 
 import pytest
 
-PURE = ["tgsis", "tgsis.mesh", "tgsis.compare", "tgsis.edits", "tgsis.temporal", "tgsis.interpolation",
-        "tgsis.formats", "tgsis.errors"]
+PURE = ["tgsis", "tgsis.mesh", "tgsis.compare", "tgsis.edits", "tgsis.temporal", "tgsis.interpolation", "tgsis.gmaps",
+        "tgsis.formats", "tgsis.errors", "tgsis.pictures"]
 
 
 @pytest.mark.parametrize("module", PURE)
