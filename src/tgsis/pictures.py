@@ -51,9 +51,11 @@ def displacement(surface: Surface, reference: Surface) -> FloatArray:
 def _axes(figure: Any, bounds: FloatArray, units: Sequence[str], exaggeration: float) -> Any:
     ax = figure.add_subplot(projection="3d")
     span = np.maximum(bounds[1] - bounds[0], 1e-9)
-    ax.set_xlim(bounds[0, 0], bounds[1, 0])
-    ax.set_ylim(bounds[0, 1], bounds[1, 1])
-    ax.set_zlim(bounds[0, 2], bounds[1, 2])
+    # a flat extent (a horizontal surface) gets a margin: equal limits make no axis
+    pad = np.where(bounds[1] - bounds[0] > 0, 0.0, 0.5 * max(float(span.max()), 1.0) * 1e-3)
+    ax.set_xlim(bounds[0, 0] - pad[0], bounds[1, 0] + pad[0])
+    ax.set_ylim(bounds[0, 1] - pad[1], bounds[1, 1] + pad[1])
+    ax.set_zlim(bounds[0, 2] - pad[2], bounds[1, 2] + pad[2])
     ax.set_box_aspect((span[0], span[1], span[2] * exaggeration))   # equal aspect, z exaggerated on request
     for set_label, axis, unit in zip((ax.set_xlabel, ax.set_ylabel, ax.set_zlabel), "xyz", units):
         set_label(f"{axis} ({unit})" if unit else axis, labelpad=8)
