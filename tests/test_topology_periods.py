@@ -94,3 +94,31 @@ def test_periods_change_in_a_version_only(conn: Conn, stored: tuple[int, Evolvin
         conn.commit()
         _same(conn, fid, _bare(EvolvingSurface(whole.periods[:3])))
     _same(conn, fid, _bare(first))                                             # DEFAULT still has two periods
+
+
+def test_two_sessions_appending_at_once_take_turns(db_dsn: str, stored: tuple[int, EvolvingSurface, EvolvingSurface]) -> None:
+    """The second append waits for the first, then sees the period it added: a clear refusal, never a raw 23505."""
+    import threading
+
+    fid, first, whole = stored
+    with psycopg.connect(db_dsn) as a, psycopg.connect(db_dsn) as b:
+        a.execute("BEGIN")
+        tgsis.append_period(a, "faults", fid, whole.periods[2], drop_extra_properties=True)   # not committed yet
+        outcome: list[BaseException] = []
+
+        def second() -> None:
+            try:
+                tgsis.append_period(b, "faults", fid, whole.periods[2], drop_extra_properties=True)
+            except BaseException as exc:  # noqa: BLE001 - reported to the test
+                outcome.append(exc)
+
+        worker = threading.Thread(target=second)
+        worker.start()
+        worker.join(1.0)
+        assert worker.is_alive()                                   # b waits for a's lock on the feature
+        a.commit()
+        worker.join(30)
+        assert len(outcome) == 1 and isinstance(outcome[0], tgsis.InvalidInputError)
+        assert "starts at -3.0, not at its last geometry instant -1.0" in str(outcome[0])   # a's period is there
+    with psycopg.connect(db_dsn) as check:
+        _same(check, fid, _bare(EvolvingSurface(whole.periods[:3])))

@@ -17,6 +17,8 @@ DECLARE
 BEGIN
     PERFORM tgsis.plain_write_check('tgsis', 'timem');  -- not "in" a version while features are plain
     PERFORM tgsis.temporal_geometry(p_geoid, 'EVOLVING');
+    -- one writer of the feature's periods at a time (tgsis.append_period locks the same row)
+    PERFORM FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
     IF NOT EXISTS (SELECT FROM tgsis.timem WHERE geoid = p_geoid AND timem = p_timem) THEN
         RETURN false;
     END IF;

@@ -396,21 +396,23 @@ def _picture_of(conn: Any, ids: Sequence[int], t: float | None, path: str, title
     """A PNG of features (at t, or static) in one scene; the first coloured by how far it moved since its start."""
     from tgsis import pictures
 
-    meshes: list[Surface] = []
-    for fid in ids:
-        mesh = get_at(conn, fid, t) if t is not None else fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
-        if isinstance(mesh, Surface):
-            meshes.append(mesh)
-        elif mesh is not None:
-            raise InvalidInputError(f"feature {fid} is no surface: --png draws surfaces")
+    shapes = [get_at(conn, fid, t) if t is not None else fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
+              for fid in ids]
+    others = [fid for fid, mesh in zip(ids, shapes) if mesh is not None and not isinstance(mesh, Surface)]
+    if others:
+        raise InvalidInputError(f"feature {others[0]} is no surface: --png draws surfaces")
+    meshes = [mesh for mesh in shapes if isinstance(mesh, Surface)]
     if not meshes:
         raise NotFoundError("none of the features exists then: nothing to draw")
     colour: list[Any] = [None] * len(meshes)
     span = lifespan(conn, ids[0]) if t is not None else None
-    if span is not None and t is not None:
+    first = shapes[0]
+    if span is not None and t is not None and isinstance(first, Surface):
+        # coloured by displacement only within the first topology period: later ones have other vertices
+        changes = [s for s, starts in instants(conn, ids[0]) if starts and span[0] < s <= t]
         start = get_at(conn, ids[0], span[0])
-        if start is not None and get_at(conn, ids[0], t) is not None and start.vertices.shape == meshes[0].vertices.shape:
-            colour[0] = pictures.displacement(meshes[0], start)      # the same topology period: moved since its start
+        if not changes and start is not None and start.vertices.shape == first.vertices.shape:
+            colour[0] = pictures.displacement(first, start)
     pictures.scene(meshes, path, title=title, colour=colour, colour_label=f"moved since t = {span[0]!r} (m)"
                    if span is not None else "")
     _out(f"drew {len(meshes)} surface(s) to {path}")

@@ -408,6 +408,8 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         storage = _Storage.of(conn)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.temporal_geometry(%s, 'EVOLVING')", (feature_id,))
+        # one writer of the feature's periods at a time: a second append waits, then sees the new last instant
+        conn.execute("SELECT FROM tgsis.geometry WHERE geoid = %s FOR UPDATE", (feature_id,))
         if conn.execute(sql.SQL("SELECT FROM {}.{} WHERE _geoid = %s").format(
                 sql.Identifier(fc.schema), sql.Identifier(fc.featuretable)), (feature_id,)).fetchone() is None:
             raise NotFoundError(f"feature {feature_id} is not a feature of class {fc.name}")
