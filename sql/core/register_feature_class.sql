@@ -33,6 +33,8 @@ DECLARE
     v_cellpros  text := p_name || '_cellpros';
     v_view      text := p_name || '_v';
     v_model     text := upper(btrim(p_time_model));
+    v_dm        tgsis.data_models;
+    v_temporal  boolean;
     v_pros      text;
     v_timekey   text;
     v_icols     text;
@@ -59,33 +61,42 @@ BEGIN
                   DETAIL = 'A class name is also a table name: lower-case letters, digits and underscores, '
                            'starting with a letter, at most 54 characters, not an SQL keyword.';
     END IF;
-    IF v_geotype IS NULL OR v_geotype NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+    -- geotypes and time models are the registered data models' (tgsis.data_models)
+    IF v_geotype IS NULL OR NOT EXISTS (SELECT FROM tgsis.data_models m WHERE v_geotype = ANY (m.geotypes)) THEN
         RAISE EXCEPTION 'unknown geotype % for feature class %', coalesce(quote_literal(p_geotype), 'NULL'), p_name
-            USING ERRCODE = 'TG100', HINT = 'MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA or GEOMETRYCOLLECTION';
+            USING ERRCODE = 'TG100',
+                  HINT = tgsis.or_list(ARRAY(SELECT DISTINCT g FROM tgsis.data_models m, unnest(m.geotypes) AS g ORDER BY g));
     END IF;
     IF v_align IS NULL OR v_align NOT IN ('VERTEX', 'CELL') THEN
         RAISE EXCEPTION 'property alignment % of feature class % must be VERTEX or CELL',
                 coalesce(quote_literal(p_proalignment), 'NULL'), p_name
             USING ERRCODE = 'TG100';
     END IF;
-    IF v_model IS NULL OR v_model NOT IN ('STATIC', 'INSTANTS', 'EVOLVING') THEN
-        RAISE EXCEPTION 'time model % of feature class % must be STATIC, INSTANTS or EVOLVING',
-                coalesce(quote_literal(p_time_model), 'NULL'), p_name
+    SELECT * INTO v_dm FROM tgsis.data_models m WHERE m.timemodel = v_model;
+    IF v_model IS NULL OR NOT FOUND THEN
+        RAISE EXCEPTION 'time model % of feature class % must be %', coalesce(quote_literal(p_time_model), 'NULL'), p_name,
+                        tgsis.or_list(ARRAY(SELECT m.timemodel FROM tgsis.data_models m WHERE m.model > 0 ORDER BY m.model))
             USING ERRCODE = 'TG100',
-                  HINT = 'STATIC: model 1; INSTANTS: surfaces known at instants (model 2); EVOLVING: continuously evolving surfaces (model 3)';
+                  HINT = (SELECT string_agg(format('%s: %s (model %s)', m.timemodel, m.name, m.model), '; ' ORDER BY m.model)
+                            FROM tgsis.data_models m WHERE m.model > 0);
     END IF;
-    IF v_model <> 'STATIC' AND v_geotype <> 'SURFACE' THEN
-        RAISE EXCEPTION 'a % feature class holds SURFACE features, not %', v_model, v_geotype
-            USING ERRCODE = 'TG100', HINT = 'temporal classes (time models INSTANTS and EVOLVING) are classes of surfaces';
+    -- a temporal model is one whose class tables have a time key
+    v_temporal := jsonb_array_length(v_dm.timekey) > 0;
+    IF NOT v_geotype = ANY (v_dm.geotypes) THEN
+        RAISE EXCEPTION 'a % feature class holds % features, not %', v_model, tgsis.or_list(v_dm.geotypes), v_geotype
+            USING ERRCODE = 'TG100', HINT = format('time model %s (%s) is for %s', v_model, v_dm.name, tgsis.or_list(v_dm.geotypes));
     END IF;
-    IF v_model = 'STATIC' AND (p_time_unit IS NOT NULL OR coalesce(p_instant_properties, '[]') NOT IN ('[]', '{}')) THEN
+    IF NOT v_temporal AND (p_time_unit IS NOT NULL OR coalesce(p_instant_properties, '[]') NOT IN ('[]', '{}')) THEN
         RAISE EXCEPTION 'static feature class % takes no time unit or per-instant properties', p_name
-            USING ERRCODE = 'TG100', HINT = 'give time_model => ''INSTANTS'' or ''EVOLVING'' for a temporal class';
+            USING ERRCODE = 'TG100',
+                  HINT = format('give time_model => %s for a temporal class',
+                                tgsis.or_list(ARRAY(SELECT quote_literal(m.timemodel) FROM tgsis.data_models m
+                                                     WHERE jsonb_array_length(m.timekey) > 0 ORDER BY m.model)));
     END IF;
-    IF v_model <> 'STATIC' THEN
+    IF v_temporal THEN
         v_pros := p_name || '_pros';
-        v_timekey := CASE v_model WHEN 'INSTANTS' THEN '_times double precision NOT NULL, '
-                                  ELSE '_timem double precision NOT NULL, _timet double precision NOT NULL, ' END;
+        SELECT string_agg(format('%I double precision NOT NULL, ', k ->> 'name'), '' ORDER BY i) INTO v_timekey
+          FROM jsonb_array_elements(v_dm.timekey) WITH ORDINALITY AS e (k, i);
     END IF;
     IF p_srs IS NULL OR p_srs < 0 THEN
         RAISE EXCEPTION 'SRS % of feature class % must be an id >= 0 (0: undefined)', p_srs, p_name USING ERRCODE = 'TG100';
@@ -159,7 +170,7 @@ BEGIN
                                            ELSE '{}' END ORDER BY ord), '[]')
       INTO v_ccols, v_ocols, v_cprops
       FROM props;
-    IF v_model <> 'STATIC' AND EXISTS (SELECT FROM jsonb_array_elements(v_cprops) p WHERE p ? 'size' OR p ? 'alignment') THEN
+    IF v_temporal AND EXISTS (SELECT FROM jsonb_array_elements(v_cprops) p WHERE p ? 'size' OR p ? 'alignment') THEN
         RAISE EXCEPTION 'temporal feature class % takes no vector properties nor properties of another alignment', p_name
             USING ERRCODE = 'TG103', HINT = 'give one scalar property per component, all of the class''s alignment';
     END IF;
@@ -198,8 +209,7 @@ BEGIN
                        p_schema, v_pros, rtrim(v_timekey, ', '), v_icols, rtrim(tgsis.time_key_columns(v_model), ', '));
         EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_pros,
                        format('tgsis feature class %s: per-instant feature properties (%s)', p_name,
-                              CASE v_model WHEN 'INSTANTS' THEN 'one row per feature and instant _times'
-                                           ELSE 'one row per feature and geometry instant (_timem, _timet)' END));
+                              format('one row per feature and %s', rtrim(tgsis.time_key_columns(v_model), ', '))));
         EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_pros, 'the feature (_geoid of ' || p_name || ')');
         PERFORM tgsis.comment_time_key_columns(p_schema, v_pros, v_model);
         PERFORM tgsis.comment_property_columns(p_schema, v_pros, v_iprops, 'per-instant feature property');
