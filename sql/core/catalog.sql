@@ -19,6 +19,7 @@ CREATE TABLE tgsis.catalog (
     description        text,
     created_at         timestamptz NOT NULL DEFAULT now(),
     created_by         name        NOT NULL DEFAULT current_user,
+    celllevel          smallint    CHECK (celllevel >= 0),
     UNIQUE (schemaname, featuretable),
     UNIQUE (schemaname, cellprotable),
     UNIQUE (schemaname, otherprotable)
@@ -48,3 +49,5 @@ COMMENT ON COLUMN tgsis.catalog.instant_properties IS 'per-instant feature prope
 COMMENT ON COLUMN tgsis.catalog.description IS 'free text';
 COMMENT ON COLUMN tgsis.catalog.created_at IS 'when the class was registered';
 COMMENT ON COLUMN tgsis.catalog.created_by IS 'role that registered it';
+COMMENT ON COLUMN tgsis.catalog.celllevel IS
+    'classes of a model with cell levels (tgsis.data_models.cell_levels: G-maps): the dimension i of the cells their properties belong to (_idx = abstract cell id); NULL for the others';

@@ -20,7 +20,8 @@ CREATE FUNCTION tgsis.register_feature_class(
     p_description        text    DEFAULT NULL,
     p_time_model         text    DEFAULT 'STATIC',
     p_instant_properties jsonb   DEFAULT '[]',
-    p_time_unit          text    DEFAULT NULL)
+    p_time_unit          text    DEFAULT NULL,
+    p_cell_level         integer DEFAULT NULL)
 RETURNS tgsis.catalog
 LANGUAGE plpgsql
 VOLATILE
@@ -82,6 +83,18 @@ BEGIN
     END IF;
     -- a temporal model is one whose class tables have a time key
     v_temporal := jsonb_array_length(v_dm.timekey) > 0;
+    -- G-maps: properties belong to the cells of one level (the spec's cell level attach), _idx a cell id
+    IF v_dm.cell_levels THEN
+        IF p_cell_level IS NULL OR p_cell_level < 0 THEN
+            RAISE EXCEPTION 'a % feature class needs the level of the cells its properties belong to, got %', v_model,
+                    coalesce(p_cell_level::text, 'NULL')
+                USING ERRCODE = 'TG100', HINT = 'p_cell_level => 0 (vertices), 1 (edges), 2 (faces), 3 (volumes), ...';
+        END IF;
+        v_align := 'CELL';
+    ELSIF p_cell_level IS NOT NULL THEN
+        RAISE EXCEPTION 'a % feature class attaches properties to vertices or simplices, not to cells of a level', v_model
+            USING ERRCODE = 'TG100', HINT = 'leave p_cell_level out, or register a class of G-maps (p_time_model => ''GMAP'')';
+    END IF;
     IF NOT v_geotype = ANY (v_dm.geotypes) THEN
         RAISE EXCEPTION 'a % feature class holds % features, not %', v_model, tgsis.or_list(v_dm.geotypes), v_geotype
             USING ERRCODE = 'TG100', HINT = format('time model %s (%s) is for %s', v_model, v_dm.name, tgsis.or_list(v_dm.geotypes));
@@ -225,7 +238,8 @@ BEGIN
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_cellpros,
                    format('tgsis feature class %s: %s properties (%s_idx = %s)', p_name, lower(v_align),
                           CASE WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN '_geoid = member geometry, ' ELSE '' END,
-                          CASE WHEN v_align = 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
+                          CASE WHEN v_dm.cell_levels THEN format('abstract cell id of a %s-cell', p_cell_level)
+                               WHEN v_align = 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
                                WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN 'simplex id in the member''s point/segment/trgl/tetra'
                                ELSE format('tgsis.%s id', tgsis.simplex_table(v_geotype)) END));
     EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_cellpros,
@@ -233,7 +247,8 @@ BEGIN
                         THEN 'a member geometry (tgsis.geometry.geoid) of a feature of ' || p_name
                         ELSE 'the feature (_geoid of ' || p_name || ')' END);
     EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
-                   CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
+                   CASE WHEN v_dm.cell_levels THEN format('abstract cell id (acellid) of a %s-cell', p_cell_level)
+                        WHEN v_align = 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
     PERFORM tgsis.comment_property_columns(p_schema, p_name, v_fprops, 'per-feature property');
     PERFORM tgsis.comment_property_columns(p_schema, v_cellpros,
                                            (SELECT coalesce(jsonb_agg(p), '[]') FROM jsonb_array_elements(v_cprops) p
@@ -267,9 +282,9 @@ BEGIN
 
     INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, otherprotable, viewname,
                                protablename, timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
-                               instant_properties, description, created_by)
+                               instant_properties, description, created_by, celllevel)
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_other, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
-            v_fprops, v_cprops, v_iprops, p_description, v_caller)
+            v_fprops, v_cprops, v_iprops, p_description, v_caller, p_cell_level)
     RETURNING * INTO v_row;
     -- once model 1 is versioned, every new class is versioned with it
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
@@ -280,5 +295,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text) IS
+COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text, integer) IS
     'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';

@@ -12,6 +12,7 @@ CREATE TABLE tgsis.data_models (
     timemodel       text     UNIQUE CHECK (timemodel = upper(timemodel)),
     geotypes        text[]   NOT NULL DEFAULT '{}',
     timekey         jsonb    NOT NULL DEFAULT '[]' CHECK (jsonb_typeof(timekey) = 'array'),
+    cell_levels     boolean  NOT NULL DEFAULT false,
     create_function text     NOT NULL,
     extent_function text,
     check_function  text,
@@ -29,6 +30,8 @@ COMMENT ON COLUMN tgsis.data_models.timemodel IS
 COMMENT ON COLUMN tgsis.data_models.geotypes IS 'the geotypes a geometry or feature class of this model may have';
 COMMENT ON COLUMN tgsis.data_models.timekey IS
     'the time-key columns of the class tables of this model, between _geoid and the rest: [{"name": ..., "comment": ...}] in order; type double precision';
+COMMENT ON COLUMN tgsis.data_models.cell_levels IS
+    'whether its feature classes attach properties to the cells of a chosen level (tgsis.catalog.celllevel; G-maps) rather than to vertices or simplices';
 COMMENT ON COLUMN tgsis.data_models.create_function IS 'function (schema tgsis, no arguments) that creates the model''s tables; called by tgsis.create_storage';
 COMMENT ON COLUMN tgsis.data_models.extent_function IS
     'function (schema tgsis, geoid) returning (bbox cube, nvrtx bigint, ncell bigint) of a geometry of this model from its rows; read by tgsis.refresh_geometry';

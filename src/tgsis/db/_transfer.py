@@ -238,3 +238,12 @@ def local_positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], w
         raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
                                    hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
     return positions
+
+
+def insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
+    """The feature row of a new feature: its id and per-feature property values (unknown names refused)."""
+    values = feature_columns(fc, properties)
+    columns = ["_geoid", *values]
+    conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+        fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+        sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])

@@ -74,9 +74,9 @@ class FeatureClass:
         Spatial reference id (0: undefined).
     feature_properties, cell_properties : tuple of Property
         In column order.
-    time_model : {"STATIC", "INSTANTS", "EVOLVING"}
-        Model 1 (static), model 2 (surfaces at instants) or model 3
-        (continuously evolving surfaces).
+    time_model : {"STATIC", "INSTANTS", "EVOLVING", "GMAP"}
+        Model 1 (static), model 2 (surfaces at instants), model 3
+        (continuously evolving surfaces) or model 4 (G-maps in time).
     time_unit : str or None
         Unit of model time of a temporal class.
     instant_properties : tuple of Property
@@ -87,6 +87,9 @@ class FeatureClass:
     otherprotable : str or None
         ``<name>_simplexpros`` (a VERTEX class) or ``<name>_vertexpros`` (a
         CELL class): the properties whose alignment is not ``alignment``.
+    cell_level : int or None
+        A class of G-maps: the dimension of the cells its ``cell_properties``
+        belong to (``_idx`` is an abstract cell id).
     """
 
     name: str
@@ -100,11 +103,12 @@ class FeatureClass:
     cellprotable: str
     viewname: str
     description: str | None = None
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING"] = "STATIC"
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP"] = "STATIC"
     time_unit: str | None = None
     instant_properties: tuple[Property, ...] = ()
     protable: str | None = None
     otherprotable: str | None = None
+    cell_level: int | None = None
 
     def alignment_of(self, prop: Property) -> Literal["VERTEX", "CELL"]:
         """Whether ``prop`` has a value per vertex or per cell."""
@@ -137,7 +141,7 @@ class FeatureClass:
 
 _CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
                     "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
-                    "protablename, otherprotable")
+                    "protablename, otherprotable, celllevel")
 
 
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
@@ -148,7 +152,8 @@ def _class_from_row(row: Sequence[Any]) -> FeatureClass:
     return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
                         feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
                         cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
-                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15])
+                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15],
+                        cell_level=None if row[16] is None else int(row[16]))
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
@@ -173,9 +178,10 @@ def create_feature_class(
     srs: int = 0,
     schema: str = "public",
     description: str | None = None,
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING"] = "STATIC",
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP"] = "STATIC",
     time_unit: str | None = None,
     instant_properties: PropertySpec | None = None,
+    cell_level: int | None = None,
 ) -> FeatureClass:
     """Register a feature class (``tgsis.register_feature_class``).
 
@@ -204,11 +210,16 @@ def create_feature_class(
         ``"INSTANTS"``: surfaces known at instants (model 2,
         :class:`~tgsis.temporal.SurfaceSeries`); ``"EVOLVING"``: continuously
         evolving surfaces (model 3, :class:`~tgsis.temporal.EvolvingSurface`).
-        Temporal classes hold SURFACE features.
+        Temporal classes hold SURFACE features; ``"GMAP"``: n-G-maps in time
+        (model 4, :class:`~tgsis.gmaps.EvolvingGMap`), geotype ``"GMAP"``.
     time_unit : str, optional
         Unit of model time (e.g. ``"Ma"``, ages stored as negative numbers).
     instant_properties : mapping or sequence of (name, type), optional
         Per-instant feature properties of a temporal class (``<name>_pros``).
+    cell_level : int, optional
+        A class of G-maps: the dimension of the cells that ``cell_properties``
+        belong to (0: vertices, 1: edges, 2: faces, 3: volumes); required for
+        ``time_model="GMAP"``, refused otherwise.
 
     Raises
     ------
@@ -219,9 +230,9 @@ def create_feature_class(
     with reraise(), conn.transaction():
         row = conn.execute(
             f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s, "
-            "%s, %s::jsonb, %s)",
+            "%s, %s::jsonb, %s, %s)",
             (name, geotype_value, _spec_json(feature_properties), _spec_json(cell_properties), alignment, srs,
-             schema, description, time_model, _spec_json(instant_properties), time_unit),
+             schema, description, time_model, _spec_json(instant_properties), time_unit, cell_level),
         ).fetchone()
     assert row is not None
     return _class_from_row(row)

@@ -27,7 +27,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
-from tgsis.db import temporal
+from tgsis.db import gmaps, temporal
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
 from tgsis.db._transfer import Storage, aligned_properties, feature_columns
@@ -36,6 +36,7 @@ from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_f
 from tgsis.db.meaning import meaning_of, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
 from tgsis.mesh import Geometry, GeometryCollection, Geotype
+from tgsis.gmaps import EvolvingGMap, GMap
 from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
 __all__ = [
@@ -91,7 +92,7 @@ class Feature:
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
-    mesh: Geometry | SurfaceSeries | EvolvingSurface,
+    mesh: Geometry | SurfaceSeries | EvolvingSurface | GMap | EvolvingGMap,
     properties: Mapping[str, Any] | None = None,
     *,
     name: str | None = None,
@@ -109,7 +110,10 @@ def insert_feature(
         every member has them. For a temporal class a
         :class:`~tgsis.temporal.SurfaceSeries` (INSTANTS) or
         :class:`~tgsis.temporal.EvolvingSurface` (EVOLVING), stored by
-        :func:`tgsis.db.temporal.insert_series` / ``insert_evolving``.
+        :func:`tgsis.db.temporal.insert_series` / ``insert_evolving``. For a
+        class of G-maps a :class:`~tgsis.gmaps.GMap` or
+        :class:`~tgsis.gmaps.EvolvingGMap`, stored by
+        :func:`tgsis.db.gmaps.insert_gmap`.
     properties : mapping, optional
         Per-feature property values; missing ones are NULL.
     name : str, optional
@@ -138,6 +142,8 @@ def insert_feature(
                                           drop_extra_properties=drop_extra_properties)
         return temporal.insert_evolving(conn, fc, mesh, properties, name=name,
                                         drop_extra_properties=drop_extra_properties)
+    if isinstance(mesh, (GMap, EvolvingGMap)):
+        return gmaps.insert_gmap(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties)
     if fc.time_model != "STATIC":
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.time_model} surfaces, not a static "
                                    f"{type(mesh).__name__}",

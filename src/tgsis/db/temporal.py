@@ -33,7 +33,7 @@ from psycopg import sql
 
 from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
-from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, feature_columns,
+from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
                                local_positions, row_keys, rows_by_geoid)
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
@@ -113,14 +113,6 @@ def _insert_instant_properties(conn: Conn, fc: FeatureClass, geoid: int, keys: S
             [[geoid, *k, *r] for k, r in zip(keys, rows)])
 
 
-def _insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
-    values = feature_columns(fc, properties)
-    columns = ["_geoid", *values]
-    conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-        fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
-        sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])
-
-
 # --------------------------------------------------------------------------- model 2
 
 
@@ -195,7 +187,7 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
                                               ("times", series.times, "float8")])
         _copy_instants(conn, fc, geoid, times, series.surfaces, storage, drop_extra_properties)
         _insert_instant_properties(conn, fc, geoid, [(t,) for t in times], instant_rows, ["_times"])
-        _insert_feature_row(conn, fc, geoid, properties)
+        insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d instants", fc.name, geoid, len(times))
     return geoid
 
@@ -372,7 +364,7 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
         _copy_periods(conn, storage, fc, geoid, periods, cell_values, 0, 0)
         keys = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
         _insert_instant_properties(conn, fc, geoid, keys, instant_rows, ["_timem", "_timet"])
-        _insert_feature_row(conn, fc, geoid, properties)
+        insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d topology periods, %d nodes, %d triangles", fc.name, geoid, len(periods),
              sum(n), sum(m))
     return geoid
