@@ -28,7 +28,7 @@ def horizons(conn: Conn) -> F.FeatureClass:
     fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
                                 cell_properties={"porosity": "float8"})
     storage = conn.execute("SELECT count(*) FROM tgsis.model_tables").fetchone()[0]  # type: ignore[index]
-    assert storage == 24                                     # the core's 1, models 1-4: 7, 3, 5, 8
+    assert storage == 29                                     # the core's 1, models 1-5: 7, 3, 5, 8, 5
     assert tgsis.enable_feature_versioning(conn) == storage + 2                          # + the class's 2
     return fc
 
@@ -49,7 +49,9 @@ def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureCla
                       ("d4dvrtx", "geoid", 2),
                       ("gmap", "geoid", 1), ("gmap_timem", "geoid", 1), ("gmap_timet", "geoid", 2), ("gmap_node", "geoid", 2),
                       ("gmap_vertex", "geoid", 2), ("gmap_dart", "geoid", 2), ("gmap_alpha", "geoid", 2),
-                      ("gmap_cell", "geoid", 2)}
+                      ("gmap_cell", "geoid", 2),
+                      ("md_gmap", "geoid", 1), ("md_vertex", "geoid", 2), ("md_dart", "geoid", 2), ("md_alpha", "geoid", 2),
+                      ("md_cell", "geoid", 2)}
     assert {t.objectclass for t in tgsis.versioned_tables(conn)} == {"feature"}
     # a class registered later is versioned as it is created, and its view reads the versioned tables
     F.create_feature_class(conn, "faults", "SURFACE")

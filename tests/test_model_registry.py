@@ -34,7 +34,7 @@ def test_the_registry_is_exactly_the_storage(conn: Conn) -> None:
     assert {"geometry", "vrtx", "trgl", "atom", "part", "times_vrtx", "d4dvrtx"} <= storage
     # the time models of geometry rows and feature classes are the registered ones
     assert [r[0] for r in conn.execute("SELECT timemodel FROM tgsis.data_models ORDER BY model")] == \
-        [None, "STATIC", "INSTANTS", "EVOLVING", "GMAP"]
+        [None, "STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"]
 
 
 def test_every_hook_of_the_registry_exists_with_its_signature(conn: Conn) -> None:

@@ -160,7 +160,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         property_periods,
         surfaces_at,
     )
-    from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
+    from tgsis.db.gmaps import (GMapProblem, fetch_gmap, fetch_md_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap,
+                                md_in_box, md_vertices_in_box)
 
 # The database layer (and psycopg) is imported on first use of one of its
 # names, so that the numpy modules (tgsis.mesh, compare, edits, temporal,
@@ -261,6 +262,9 @@ _LAZY: dict[str, str] = {
     "gmap_cells": "tgsis.db.gmaps",
     "gmap_check": "tgsis.db.gmaps",
     "insert_gmap": "tgsis.db.gmaps",
+    "fetch_md_gmap": "tgsis.db.gmaps",
+    "md_in_box": "tgsis.db.gmaps",
+    "md_vertices_in_box": "tgsis.db.gmaps",
 }
 
 
@@ -370,6 +374,9 @@ __all__ = [
     "gmap_cells",
     "gmap_check",
     "GMapProblem",
+    "fetch_md_gmap",
+    "md_in_box",
+    "md_vertices_in_box",
     # feature classes and features
     "FeatureClass",
     "Property",

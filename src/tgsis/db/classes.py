@@ -76,7 +76,8 @@ class FeatureClass:
         In column order.
     time_model : {"STATIC", "INSTANTS", "EVOLVING", "GMAP"}
         Model 1 (static), model 2 (surfaces at instants), model 3
-        (continuously evolving surfaces) or model 4 (G-maps in time).
+        (continuously evolving surfaces), model 4 (G-maps in time) or model 5
+        (multiply indexed G-maps).
     time_unit : str or None
         Unit of model time of a temporal class.
     instant_properties : tuple of Property
@@ -103,7 +104,7 @@ class FeatureClass:
     cellprotable: str
     viewname: str
     description: str | None = None
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP"] = "STATIC"
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC"
     time_unit: str | None = None
     instant_properties: tuple[Property, ...] = ()
     protable: str | None = None
@@ -178,7 +179,7 @@ def create_feature_class(
     srs: int = 0,
     schema: str = "public",
     description: str | None = None,
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP"] = "STATIC",
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC",
     time_unit: str | None = None,
     instant_properties: PropertySpec | None = None,
     cell_level: int | None = None,
@@ -211,7 +212,9 @@ def create_feature_class(
         :class:`~tgsis.temporal.SurfaceSeries`); ``"EVOLVING"``: continuously
         evolving surfaces (model 3, :class:`~tgsis.temporal.EvolvingSurface`).
         Temporal classes hold SURFACE features; ``"GMAP"``: n-G-maps in time
-        (model 4, :class:`~tgsis.gmaps.EvolvingGMap`), geotype ``"GMAP"``.
+        (model 4, :class:`~tgsis.gmaps.EvolvingGMap`), geotype ``"GMAP"``;
+        ``"MULTIDIM"``: n-G-maps whose extra axes are time, knowledge or scale
+        (model 5, :class:`~tgsis.gmaps.GMap`), geotype ``"GMAP"``.
     time_unit : str, optional
         Unit of model time (e.g. ``"Ma"``, ages stored as negative numbers).
     instant_properties : mapping or sequence of (name, type), optional

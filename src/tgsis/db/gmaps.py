@@ -37,7 +37,8 @@ from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyErr
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
 from tgsis.temporal import check_time
 
-__all__ = ["insert_gmap", "fetch_gmap", "gmap_at", "gmap_cells", "gmap_check", "GMapProblem"]
+__all__ = ["insert_gmap", "fetch_gmap", "fetch_md_gmap", "gmap_at", "gmap_cells", "gmap_check", "md_in_box",
+           "md_vertices_in_box", "GMapProblem"]
 
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
@@ -52,12 +53,17 @@ class GMapProblem:
     darts: tuple[int, ...]
 
 
-def _gmap_class(conn: Conn, feature_class: str | FeatureClass) -> FeatureClass:
+def _gmap_class(conn: Conn, feature_class: str | FeatureClass, model: str = "GMAP") -> FeatureClass:
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
-    if fc.time_model != "GMAP":
-        raise InvalidInputError(f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not G-maps",
-                                hint="create a class with time_model='GMAP' and a cell_level for G-maps")
+    if fc.time_model != model:
+        what = "G-maps in time" if model == "GMAP" else "multiply indexed G-maps"
+        raise InvalidInputError(f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
+                                hint=f"create a class with time_model={model!r} and a cell_level for {what}")
     return fc
+
+
+def _default_axes(m: int) -> tuple[str, ...]:
+    return tuple(["x", "y", "z"][:m] + [f"axis{i + 1}" for i in range(3, m)])
 
 
 def _as_evolving(obj: GMap | EvolvingGMap, fc: FeatureClass) -> EvolvingGMap:
@@ -124,25 +130,28 @@ def _signs(g: GMap) -> npt.NDArray[np.bool_] | None:
 
 def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
                 properties: Mapping[str, Any] | None = None, *, name: str | None = None,
-                drop_extra_properties: bool = False) -> int:
+                drop_extra_properties: bool = False, axes: Sequence[str] | None = None) -> int:
     """Store a G-map (or a G-map evolving in time) as a new feature of a class of G-maps; return its id.
 
     Parameters
     ----------
     conn : psycopg.Connection
     feature_class : str or FeatureClass
-        A class with ``time_model="GMAP"``.
+        A class with ``time_model="GMAP"`` (model 4) or ``"MULTIDIM"`` (model 5).
     obj : GMap or EvolvingGMap
-        A plain :class:`~tgsis.gmaps.GMap` is one period known at t = 0 that
-        lasts for ever (its properties of the class's cell level stored at
-        t = 0). Every period must be a valid G-map, with exactly the class's
-        cell properties (of the class's cell level).
+        Model 4: a plain :class:`~tgsis.gmaps.GMap` is one period known at
+        t = 0 that lasts for ever (its properties of the class's cell level
+        stored at t = 0). Every period must be a valid G-map, with exactly
+        the class's cell properties (of the class's cell level). Model 5: a
+        GMap whose extra axes (time, knowledge, ...) are coordinates.
     properties : mapping, optional
         Per-feature property values.
     name : str, optional
         Geometry name (default: the object's).
     drop_extra_properties : bool
         Ignore cell values the class does not store instead of failing.
+    axes : sequence of str, optional
+        Model 5: the name of each of the m axes (default x, y, z, axis4, ...).
 
     Raises
     ------
@@ -151,7 +160,16 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         darts); nothing is written.
     InvalidPropertyError, InvalidInputError, NotFoundError
     """
-    fc = _gmap_class(conn, feature_class)
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if fc.time_model == "MULTIDIM":
+        if not isinstance(obj, GMap):
+            raise InvalidInputError(f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
+                                    f"(time is one of its axes), not a {type(obj).__name__}",
+                                    hint="tgsis.gmaps.extrude makes an axis of time or knowledge")
+        return _insert_md(conn, fc, obj, properties, name=name, axes=axes, drop_extra=drop_extra_properties)
+    if axes is not None:
+        raise InvalidInputError(f"feature class {fc.name} holds G-maps in time: their axes are x, y, z (axes=None)")
+    fc = _gmap_class(conn, fc)
     evolving = _as_evolving(obj, fc)
     evolving.check(raise_=True)
     values = _class_values(fc, evolving, drop_extra_properties)
@@ -226,6 +244,147 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
                   for prop in fc.cell_properties)])
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
+
+
+def _md_values(fc: FeatureClass, g: GMap, drop_extra: bool) -> dict[str, npt.NDArray[Any]]:
+    """The class's cell property arrays (c,) of a model-5 G-map, checked and cast."""
+    given = dict(g.cell_properties.get(fc.cell_level, {})) if fc.cell_level is not None else {}
+    other = sorted(level for level in g.cell_properties if level != fc.cell_level and g.cell_properties[level])
+    if other and not drop_extra:
+        raise InvalidPropertyError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, the G-map "
+                                   f"has properties of {other}-cells",
+                                   hint="drop the others (drop_extra_properties=True)")
+    period = GMapPeriod([0.0], GMap(g.alpha, g.vertex, g.points), level=fc.cell_level if given else None,
+                        cell_values={k: np.asarray(v)[None] for k, v in given.items()})
+    values = _class_values(fc, EvolvingGMap([period]), drop_extra)[0]
+    return {k: v[0] for k, v in values.items()}
+
+
+def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, Any] | None, *, name: str | None,
+               axes: Sequence[str] | None, drop_extra: bool) -> int:
+    """Store a model-5 G-map: md_gmap, md_vertex, md_dart, md_alpha, md_cell and the class's cell values."""
+    g.check(raise_=True)
+    n, m, d = g.dimension, g.embedding_dimension, g.n_darts
+    names = tuple(axes) if axes is not None else _default_axes(m)
+    if len(names) != m or len(set(names)) != m or not all(isinstance(a, str) and a for a in names):
+        raise InvalidInputError(f"axes must name each of the {m} axes once, got {list(names)!r}")
+    if m > 100:
+        raise InvalidGMapError(f"a multiply indexed G-map has at most 100 axes (the cube type's limit), got {m}")
+    if fc.cell_level is not None and fc.cell_level > n:
+        raise InvalidGMapError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
+                               f"{n}-G-map does not have")
+    values = _md_values(fc, g, drop_extra)
+    level = fc.cell_level
+    cells = g.cells(level) if level is not None else None
+    count = int(cells.max()) + 1 if cells is not None and len(cells) else 0
+    signs = _signs(g)
+    with reraise(), conn.transaction():
+        storage = Storage.of(conn)
+        storage.check("tgsis", "geometry")
+        period = EvolvingGMap([GMapPeriod([0.0], g)])
+        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM')",
+                           (name, _bounds(period), g.n_points, d)).fetchone()
+        assert row is not None
+        geoid = int(row[0])
+        extent = None
+        if g.n_points:
+            low, high = g.points.min(axis=0), g.points.max(axis=0)
+            extent = "(" + ", ".join(repr(float(v)) for v in low) + "),(" + ", ".join(repr(float(v)) for v in high) + ")"
+        # one row: through the versioned view when versioning is on (its trigger writes the working revision)
+        conn.execute("INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
+                     (geoid, n, m, list(names), extent))
+        storage.copy(conn, "tgsis", "md_vertex", [
+            ("geoid", np.full(g.n_points, geoid), "int8"), ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
+            ("coordinate", g.points, f"float8[{m}]")])
+        dart_columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("geoid", np.full(d, geoid), "int8"), ("dartid", np.arange(d, dtype=np.int64), "int8"),
+            ("vrtxid", g.vertex, "int8")]
+        if cells is not None:
+            dart_columns.append(("acellid", cells, "int8"))
+        if signs is not None:
+            dart_columns.append(("positive", signs, "bool"))
+        storage.copy(conn, "tgsis", "md_dart", dart_columns)
+        storage.copy(conn, "tgsis", "md_alpha", [
+            ("geoid", np.full(d * (n + 1), geoid), "int8"),
+            ("level", np.repeat(np.arange(n + 1, dtype=np.int16), d), "int2"),
+            ("dartid", np.tile(np.arange(d, dtype=np.int64), n + 1), "int8"),
+            ("dartid2", g.alpha.reshape(-1), "int8")])
+        if level is not None and count:
+            storage.copy(conn, "tgsis", "md_cell", [
+                ("geoid", np.full(count, geoid), "int8"), ("acellid", np.arange(count, dtype=np.int64), "int8"),
+                ("celllevel", np.full(count, level, dtype=np.int16), "int2")])
+        if fc.cell_properties and count:
+            storage.copy(conn, fc.schema, fc.cellprotable, [
+                ("_geoid", np.full(count, geoid), "int8"), ("_idx", np.arange(count, dtype=np.int64), "int8"),
+                *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties)])
+        insert_feature_row(conn, fc, geoid, properties)
+    return geoid
+
+
+def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> tuple[GMap, tuple[str, ...]]:
+    """A stored multiply indexed G-map (model 5) with its cell values, and the names of its axes.
+
+    Raises
+    ------
+    NotFoundError
+        ``feature_id`` is not a feature of the class.
+    InvalidGMapError
+        Stored rows that do not make a G-map (see ``tgsis.md_check``).
+    """
+    fc = _gmap_class(conn, feature_class, "MULTIDIM")
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():
+        if fresh:
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        head = conn.execute(sql.SQL("SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
+                                    "ON m.geoid = f._geoid WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)),
+                            (feature_id,)).fetchone()
+        if head is None:
+            raise NotFoundError(f"feature class {fc.name} has no multiply indexed G-map feature {feature_id}")
+        n, m, axes = int(head[0]), int(head[1]), tuple(head[2])
+        vertex = _copy_rows(conn, "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {} ORDER BY vrtxid",
+                            feature_id, ["int8", f"float8[{m}]"])
+        dart = _copy_rows(conn, "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {} "
+                                "ORDER BY dartid", feature_id, ["int8", "int8", "int8"])
+        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {} ORDER BY level, dartid",
+                           feature_id, ["int2", "int8", "int8"])
+        values = []
+        if fc.cell_properties:
+            values = copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {} ORDER BY _idx").format(
+                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
+                sql.Literal(feature_id)), ["int8", *(p.wire for p in fc.cell_properties)])
+    images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
+    if any(len(a) != len(dart[0]) for a in images):
+        raise InvalidGMapError(f"G-map {feature_id}: the alpha rows do not cover its {len(dart[0])} darts",
+                               hint=f"SELECT * FROM tgsis.md_check({feature_id})")
+    topology = _period_map(dart[0], dart[1], images, vertex[0], vertex[1].reshape(len(vertex[0]), m), feature_id)
+    if fc.cell_level is None or not values or fc.cell_level > n:
+        return topology, axes
+    labels = topology.cells(fc.cell_level)
+    first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
+    first[labels[::-1]] = dart[2][::-1]
+    cell_values = {p.name: values[1 + j][local_positions(values[0], first, "cell values", feature_id)]
+                   for j, p in enumerate(fc.cell_properties)}
+    return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
+
+
+def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float],
+              high: Sequence[float]) -> list[int]:
+    """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
+    fc = _gmap_class(conn, feature_class, "MULTIDIM")
+    with reraise():
+        rows = conn.execute("SELECT * FROM tgsis.md_in_box(%s, %s, %s, %s)",
+                            (fc.name, list(axes), [float(v) for v in low], [float(v) for v in high])).fetchall()
+    return sorted(int(r[0]) for r in rows)
+
+
+def md_vertices_in_box(conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float],
+                       high: Sequence[float]) -> IntArray:
+    """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
+    with reraise():
+        rows = conn.execute("SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)",
+                            (feature_id, list(axes), [float(v) for v in low], [float(v) for v in high])).fetchall()
+    return np.array([r[0] for r in rows], dtype=np.int64)
 
 
 def _period_map(dartids: IntArray, nodeids: IntArray, alpha: Sequence[IntArray], node_ids: IntArray,
@@ -349,8 +508,16 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values})
 
 
-def gmap_cells(conn: Conn, feature_id: int, level: int, t: float) -> tuple[IntArray, IntArray]:
-    """The ``level``-cells of a feature's G-map at ``t`` from SQL (``tgsis.gmap_cells``).
+def _model_of(conn: Conn, feature_id: int) -> str:
+    with reraise():
+        row = conn.execute("SELECT timemodel FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+    if row is None or row[0] not in ("GMAP", "MULTIDIM"):
+        raise NotFoundError(f"no G-map feature {feature_id}", hint="`tgsis ls` lists the features")
+    return str(row[0])
+
+
+def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) -> tuple[IntArray, IntArray]:
+    """The ``level``-cells of a feature's G-map (at ``t`` for model 4) from SQL (``tgsis.gmap_cells``, ``md_cells``).
 
     Returns
     -------
@@ -361,15 +528,26 @@ def gmap_cells(conn: Conn, feature_id: int, level: int, t: float) -> tuple[IntAr
         darts (:meth:`GMap.cells` of the snapshot). Both empty when the
         feature does not exist at t.
     """
+    params: tuple[Any, ...]
+    if _model_of(conn, feature_id) == "MULTIDIM":
+        if t is not None:
+            raise InvalidInputError(f"feature {feature_id} is a multiply indexed G-map: time is one of its axes (t=None)")
+        query, params = "SELECT dartid, cell FROM tgsis.md_cells(%s, %s)", (feature_id, level)
+    else:
+        if t is None:
+            raise InvalidInputError(f"feature {feature_id} is a G-map in time: give the time t of its cells")
+        query, params = "SELECT dartid, cell FROM tgsis.gmap_cells(%s, %s, %s)", (feature_id, level, check_time(t))
     with reraise(), conn.transaction():
-        rows = conn.execute("SELECT dartid, cell FROM tgsis.gmap_cells(%s, %s, %s)", (feature_id, level, t)).fetchall()
+        rows = conn.execute(query, params).fetchall()
     return np.array([r[0] for r in rows], dtype=np.int64), np.array([r[1] for r in rows], dtype=np.int64)
 
 
 def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
-    """The violated conditions of a stored G-map with their first darts (``tgsis.gmap_check``); empty: valid."""
+    """The violated conditions of a stored G-map with their first darts (``tgsis.gmap_check``, ``md_check``); empty: valid."""
+    function = "md_check" if _model_of(conn, feature_id) == "MULTIDIM" else "gmap_check"
     with reraise():
-        rows = conn.execute("SELECT problem, count, darts FROM tgsis.gmap_check(%s)", (feature_id,)).fetchall()
+        rows = conn.execute(sql.SQL("SELECT problem, count, darts FROM tgsis.{}(%s)").format(sql.Identifier(function)),
+                            (feature_id,)).fetchall()
     return [GMapProblem(str(p), int(c), tuple(int(d) for d in darts)) for p, c, darts in rows]
 
 
