@@ -89,6 +89,18 @@ def test_the_snapshot_in_sql_equals_python_at_random_times(conn: Conn) -> None:
     for t in [-0.5, 0.0, 0.25, 1.0, 1.0 - 1e-12, 1.5, 3.0, 7.0, *rng.uniform(-1, 4, 12)]:
         python, stored, sql = evolving.at(t), fetched.at(t), G.gmap_at(conn, geoid, t)
         assert _same(python, stored) and _same(python, sql), t
+    # the SQL functions psql users call give the same snapshot
+    for t in (0.25, 1.0, 2.5, 9.0):
+        expected = evolving.at(t)
+        assert expected is not None
+        rows = conn.execute("SELECT dartid, nodeid, alpha FROM tgsis.gmap_at(%s, %s)", (geoid, t)).fetchall()
+        first = rows[0][0]
+        assert np.array_equal(np.array([r[2] for r in rows]).T - first, expected.alpha), t
+        points = conn.execute("SELECT nodeid, coordinate FROM tgsis.gmap_points_at(%s, %s)", (geoid, t)).fetchall()
+        first_node = points[0][0]
+        assert np.array_equal(np.array([r[1] for r in rows]) - first_node, expected.vertex)
+        assert np.array_equal(np.array([p[1] for p in points]), expected.points), t
+    assert conn.execute("SELECT count(*) FROM tgsis.gmap_at(%s, -1)", (geoid,)).fetchone() == (0,)
     # at the topology instant the new topology applies
     at_change = G.gmap_at(conn, geoid, 1.0)
     assert at_change is not None and at_change.n_darts == evolving.periods[1].gmap.n_darts

@@ -10,12 +10,13 @@ STABLE
 SET search_path FROM CURRENT
 AS $$
 BEGIN
+    -- one keyed probe of gmap_alpha (geoid, dartid, level) per dart: the same plan whatever the statistics
+    -- say (a join planned on a freshly loaded, not yet analysed table can scan the geometry's rows per dart)
     RETURN QUERY
-    SELECT d.dartid, d.nodeid, d.acellid, array_agg(a.dartid2 ORDER BY a.level)
+    SELECT d.dartid, d.nodeid, d.acellid,
+           ARRAY(SELECT a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = p_geoid AND a.dartid = d.dartid ORDER BY a.level)
       FROM tgsis.gmap_frame(p_geoid, p_t) f
       JOIN tgsis.gmap_dart d ON d.geoid = p_geoid AND d.timem = f.timem
-      JOIN tgsis.gmap_alpha a ON a.geoid = p_geoid AND a.dartid = d.dartid
-     GROUP BY d.dartid, d.nodeid, d.acellid
      ORDER BY d.dartid;
 END
 $$;

@@ -74,7 +74,7 @@ BEGIN
         level   smallint NOT NULL CHECK (level >= 0),
         dartid  bigint   NOT NULL,
         dartid2 bigint   NOT NULL,
-        PRIMARY KEY (geoid, level, dartid)
+        PRIMARY KEY (geoid, dartid, level)
     );
 
     COMMENT ON TABLE tgsis.md_alpha IS 'model 5: the involutions: alpha_level(dartid) = dartid2, one row per dart and level (dartid2 = dartid: free)';

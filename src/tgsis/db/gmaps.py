@@ -470,41 +470,62 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
     return EvolvingGMap(periods, alive=alive, name=name)
 
 
-def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
-    """The G-map of a feature at model time ``t`` from SQL (``tgsis.gmap_at``, ``gmap_points_at``, ``gmap_property_at``).
+def _mix(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], w: float, same: bool) -> npt.NDArray[np.float64]:
+    """a + w (b - a), the formula of the SQL snapshot (``tgsis.gmap_points_at``, ``gmap_property_at``), to the bit."""
+    return a if same else a + w * (b - a)
 
-    Points and the class's numeric cell properties are interpolated between
-    the bracketing geometry instants, as :meth:`EvolvingGMap.at` does; None
-    when the feature does not exist at ``t``.
+
+def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
+    """The G-map of a feature at model time ``t``: the period and weight from SQL (``tgsis.gmap_frame``), its rows by COPY.
+
+    The topology is the period's darts and involutions; points and the
+    class's numeric cell properties are interpolated between the bracketing
+    geometry instants with the SQL snapshot's formula (``tgsis.gmap_points_at``,
+    ``tgsis.gmap_property_at``: equal to the bit), as :meth:`EvolvingGMap.at`
+    does. None when the feature does not exist at ``t``. The rows travel as
+    binary COPY, not as one array per dart (``tgsis.gmap_at`` is the same
+    snapshot for psql).
     """
     t = check_time(t)
-    fc = class_of_feature(conn, feature_id)
-    _gmap_class(conn, fc)
+    fc = _gmap_class(conn, class_of_feature(conn, feature_id))
     with reraise(), conn.transaction():
-        darts = conn.execute("SELECT dartid, nodeid, coalesce(acellid, -1), alpha FROM tgsis.gmap_at(%s, %s)",
-                             (feature_id, t)).fetchall()
-        if not darts:
+        n_row = conn.execute("SELECT dimension, embedding FROM tgsis.gmap WHERE geoid = %s", (feature_id,)).fetchone()
+        frame = conn.execute("SELECT timem, t0, t1, w FROM tgsis.gmap_frame(%s, %s)", (feature_id, t)).fetchone()
+        if n_row is None or frame is None:
             return None
-        points = conn.execute("SELECT nodeid, coordinate FROM tgsis.gmap_points_at(%s, %s)", (feature_id, t)).fetchall()
-        props = {p.name: conn.execute("SELECT acellid, value FROM tgsis.gmap_property_at(%s, %s, %s, %s)",
-                                      (fc.name, feature_id, p.name, t)).fetchall()
-                 for p in fc.cell_properties if p.size == 1}
-    dartids = np.array([r[0] for r in darts], dtype=np.int64)
-    alpha = np.array([r[3] for r in darts], dtype=np.int64).T
-    node_ids = np.array([r[0] for r in points], dtype=np.int64)
-    topology = _period_map(dartids, np.array([r[1] for r in darts], dtype=np.int64), list(alpha), node_ids,
-                           np.array([r[1] for r in points], dtype=np.float64), feature_id)
-    if fc.cell_level is None or not props:
+        n, m = int(n_row[0]), int(n_row[1])
+        timem, t0, t1, w = (float(v) for v in frame)
+        key = [sql.Literal(feature_id), sql.Literal(timem)]
+        dart = copy_out(conn, sql.SQL("SELECT dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart "
+                                      "WHERE geoid = {} AND timem = {} ORDER BY dartid").format(*key),
+                        ["int8", "int8", "int8"])
+        alpha = copy_out(conn, sql.SQL("SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a "
+                                       "JOIN tgsis.gmap_dart d ON d.geoid = a.geoid AND d.dartid = a.dartid "
+                                       "WHERE a.geoid = {} AND d.timem = {} ORDER BY a.level, a.dartid").format(*key),
+                         ["int2", "int8", "int8"])
+        ends = [copy_out(conn, sql.SQL("SELECT nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} AND timem = {} "
+                                       "AND timet = {} ORDER BY nodeid").format(*key, sql.Literal(at)),
+                         ["int8", f"float8[{m}]"]) for at in (t0, t1)]
+        props = [p for p in fc.cell_properties if p.size == 1 and p.type != "boolean"]
+        values = [copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {} AND _timem = {} AND _timet = {} "
+                                         "ORDER BY _idx").format(
+            sql.SQL(", ").join(sql.SQL("{}::float8").format(sql.Identifier(p.name)) for p in props),
+            fc.qualified(fc.cellprotable), *key, sql.Literal(at)), ["int8", *(["float8"] * len(props))])
+                  for at in (t0, t1)] if props and fc.cell_level is not None else []
+    same = t0 == t1
+    if not np.array_equal(ends[0][0], ends[1][0]):
+        raise InvalidGMapError(f"G-map {feature_id}: the nodes at {t0!r} and {t1!r} differ",
+                               hint=f"SELECT * FROM tgsis.check_geometry({feature_id})")
+    points = _mix(ends[0][1].reshape(-1, m), ends[1][1].reshape(-1, m), w, same)
+    images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
+    topology = _period_map(dart[0], dart[1], images, ends[0][0], points, feature_id)
+    if not values or fc.cell_level is None or fc.cell_level > n:
         return topology
     labels = topology.cells(fc.cell_level)
-    acellids = np.array([r[2] for r in darts], dtype=np.int64)
-    first = np.full(int(labels.max()) + 1, -1, dtype=np.int64)
-    first[labels[::-1]] = acellids[::-1]
-    cell_values = {}
-    for name, rows in props.items():
-        ids = np.array([r[0] for r in rows], dtype=np.int64)
-        value = np.array([np.nan if r[1] is None else r[1] for r in rows], dtype=np.float64)
-        cell_values[name] = value[local_positions(ids, first, "cell values", feature_id)]
+    first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
+    first[labels[::-1]] = dart[2][::-1]
+    order = local_positions(values[0][0], first, "cell values", feature_id)
+    cell_values = {p.name: _mix(values[0][1 + j], values[1][1 + j], w, same)[order] for j, p in enumerate(props)}
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values})
 
 
