@@ -106,7 +106,8 @@ def insert_feature(
     feature_class : str or FeatureClass
     mesh : Mesh or GeometryCollection
         Of the class's geotype, with exactly the class's vertex (or cell)
-        properties; for a GEOMETRYCOLLECTION class a GeometryCollection whose
+        properties (a pyvista, meshio or trimesh object is converted by
+        :func:`tgsis.as_mesh`, its point and cell data as properties); for a GEOMETRYCOLLECTION class a GeometryCollection whose
         every member has them. For a temporal class a
         :class:`~tgsis.temporal.SurfaceSeries` (INSTANTS) or
         :class:`~tgsis.temporal.EvolvingSurface` (EVOLVING), stored by
@@ -135,6 +136,10 @@ def insert_feature(
     feature's id is the collection's geoid. One transaction, and one COPY per
     table whatever the number of members.
     """
+    if not isinstance(mesh, (Mesh, GeometryCollection, SurfaceSeries, EvolvingSurface)):
+        from tgsis.convert import as_mesh  # a pyvista, meshio or trimesh object (else: what is accepted)
+
+        mesh = as_mesh(mesh)
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
     if isinstance(mesh, (SurfaceSeries, EvolvingSurface)):
         if isinstance(mesh, SurfaceSeries):

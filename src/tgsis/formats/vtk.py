@@ -12,24 +12,35 @@ One ``Piece`` with
   properties, each in its own dtype (Int8 ... UInt64, Float32, Float64).
   VTK has no boolean or 16-bit float type: bool is written as UInt8 and
   float16 as Float32, and they come back as such;
-* ``FieldData``: the mesh name (String array ``name``, when there is one) and
-  the geotype (String array ``tgsis_geotype``), so that a mesh without cells
-  comes back as the right type.
+* ``FieldData``: the mesh name (``tgsis_name``, when there is one) and the
+  geotype (``tgsis_geotype``), so that a mesh without cells comes back as the
+  right type. They are UInt8 DataArrays of UTF-8 bytes, each string ending
+  in 0, not VTK's String arrays (``<Array type="String">``), which tgsis
+  wrote before: meshio's VTU reader decodes every FieldData array as numbers
+  (``vtu_to_numpy_type[type]``) and refuses the whole file on a String one
+  ("Illegal data type 'String'"), whoever wrote it. tgsis still reads String
+  arrays (``name`` too).
 
-``encoding="binary"`` (the default) puts every DataArray inline as base64 of
-a UInt64 byte count followed by the little-endian values
-(``header_type="UInt64"``, no compression); ``encoding="appended"`` writes the
-same bytes unencoded in one ``AppendedData`` section (``encoding="raw"``),
-smaller and faster for big meshes. Both are standard VTK XML (file version
-1.0) that ParaView and VTK read. The round trip is bit-exact for vertices,
-cells and properties (dtypes included, except bool and float16); the mesh's
-other metadata is not stored.
+Every DataArray is zlib-compressed by default (``compressor=
+"vtkZLibDataCompressor"``: a header of block count, block size (32768), size
+of the last block and the compressed size of each block, then the blocks;
+inline, header and blocks are two base64 streams), as ParaView writes;
+``compression=None`` writes a UInt64 byte count followed by the raw values.
+A grid without points or without cells is not compressed (meshio cannot
+read a compressed array of 0 blocks). ``encoding="binary"`` (the default)
+puts the DataArrays inline as base64 (``header_type="UInt64"``);
+``encoding="appended"`` writes the same bytes unencoded in one
+``AppendedData`` section (``encoding="raw"``), smaller and faster for big
+meshes. Both are standard VTK XML (file version 1.0) that ParaView, VTK,
+pyvista and meshio read. The round trip is bit-exact for vertices, cells and
+properties (dtypes and vector properties included, except bool and float16);
+the mesh's other metadata is not stored.
 
 A :class:`~tgsis.mesh.GeometryCollection` is written as one grid of mixed
 cell types: the members' points one member after the other, their cells
 likewise (connectivity shifted to the member's first point), and in
 ``FieldData`` the geotype ``GEOMETRYCOLLECTION``, ``tgsis_member_geotypes``
-and ``tgsis_member_names`` (String arrays, one string per member; no name is
+and ``tgsis_member_names`` (strings as above, one per member; no name is
 written as the empty string) and ``tgsis_member_sizes`` (Int64, 2 components:
 points and cells of each member). ParaView shows the whole grid. A vertex or
 cell property must be on every member (a VTU array covers all points or all
@@ -42,8 +53,8 @@ Reads what the writer writes and also: ``format="ascii"`` arrays, appended
 data in ``raw`` or ``base64`` encoding, ``header_type`` UInt32 or UInt64, big-
 or little-endian files, and ``vtkZLibDataCompressor`` compression (ParaView's
 default). The file must have one Piece whose cells are all of one type among
-VERTEX, LINE, TRIANGLE and TETRA. A data array with k > 1 components becomes k
-properties ``name_0`` .. ``name_{k-1}``; names that are not valid mesh
+VERTEX, LINE, TRIANGLE and TETRA. A data array with k > 1 components becomes
+an (n, k) vector property, as tgsis writes one; names that are not valid mesh
 property names are sanitised and the file's names are kept in
 ``metadata["vtk_array_names"]`` (``{"point_data": {mesh name: file name},
 "cell_data": {...}}``, only for names that changed).
@@ -88,12 +99,14 @@ _DTYPE_OF: dict[str, str] = {v: k for k, v in _VTK_TYPE_OF.items()}
 _DTYPE_OF["String"] = "u1"  # FieldData strings: null-terminated bytes
 
 Encoding = Literal["binary", "appended"]
+Compression = Literal["zlib"] | None
 
 
 # ---------------------------------------------------------------- writing
 
 
-def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") -> None:
+def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary",
+              compression: Compression = "zlib") -> None:
     """Write a mesh or a collection as a VTK XML UnstructuredGrid file.
 
     Parameters
@@ -105,6 +118,9 @@ def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") 
         The ``.vtu`` file to write (replaced if it exists).
     encoding : {"binary", "appended"}
         Inline base64 DataArrays, or one raw AppendedData section.
+    compression : {"zlib", None}
+        ``"zlib"``: every DataArray compressed by the rules of VTK's
+        ``vtkZLibDataCompressor`` (what ParaView writes); None: uncompressed.
 
     Raises
     ------
@@ -112,7 +128,7 @@ def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") 
         The file cannot be written, or a collection has a property that not
         every member has.
     """
-    write_bytes(path, [format_vtu(mesh, encoding=encoding)])
+    write_bytes(path, [format_vtu(mesh, encoding=encoding, compression=compression)])
 
 
 @dataclass(frozen=True)
@@ -167,14 +183,14 @@ def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"
     return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
 
 
-def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary") -> bytes:
+def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
     """The ``.vtu`` file content for ``mesh`` or a collection; see :func:`write_vtu`."""
-    _check_encoding(encoding)
+    _check_encoding(encoding, compression)
     return _format_grid(_collection_grid(mesh) if isinstance(mesh, GeometryCollection)
-                        else _mesh_grid(check_mesh(mesh, "the VTU writer")), encoding)
+                        else _mesh_grid(check_mesh(mesh, "the VTU writer")), encoding, compression)
 
 
-def format_empty_vtu(*, encoding: Encoding = "binary") -> bytes:
+def format_empty_vtu(*, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
     """The ``.vtu`` file content of a grid of 0 points and 0 cells that names no geotype.
 
     It stands for "no object": :func:`read_vtu_geometry` reads it as None
@@ -184,38 +200,43 @@ def format_empty_vtu(*, encoding: Encoding = "binary") -> bytes:
     ----------
     encoding : {"binary", "appended"}
         As for :func:`write_vtu`.
+    compression : {"zlib", None}
+        As for :func:`write_vtu`.
 
     Returns
     -------
     bytes
         A valid VTK XML UnstructuredGrid file (empty Points and Cells arrays).
     """
-    _check_encoding(encoding)
+    _check_encoding(encoding, compression)
     empty = np.empty(0, dtype=np.int64)
     return _format_grid(_Grid(None, None, np.empty((0, 3)), empty, empty, np.empty(0, dtype=np.uint8), {}, {}),
-                        encoding)
+                        encoding, compression)
 
 
-def _check_encoding(encoding: str) -> None:
+def _check_encoding(encoding: str, compression: str | None = None) -> None:
     if encoding not in ("binary", "appended"):
         raise FileFormatError(f"unknown VTU encoding {encoding!r}: use 'binary' or 'appended'")
+    if compression not in ("zlib", None):
+        raise FileFormatError(f"unknown compression {compression!r}: use 'zlib' or None")
 
 
-def _format_grid(source: _Grid, encoding: Encoding) -> bytes:
+def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) -> bytes:
     """The file content of one grid."""
-    writer = _ArrayWriter(appended=encoding == "appended")
-    root = ET.Element("VTKFile", type="UnstructuredGrid", version="1.0", byte_order="LittleEndian",
-                      header_type="UInt64")
+    # meshio cannot read a compressed empty array (no block): a grid without points or cells is not compressed
+    compressed = compression == "zlib" and len(source.vertices) > 0 and len(source.types) > 0
+    writer = _ArrayWriter(appended=encoding == "appended", compressed=compressed)
+    root = writer.root("UnstructuredGrid")
     grid = ET.SubElement(root, "UnstructuredGrid")
     field_data = ET.SubElement(grid, "FieldData")
     if source.name:
-        field_data.append(_string_array("name", source.name))
+        field_data.append(writer.strings("tgsis_name", source.name))
     if source.geotype is not None:
-        field_data.append(_string_array("tgsis_geotype", source.geotype))
+        field_data.append(writer.strings("tgsis_geotype", source.geotype))
     if source.members is not None:
         members = source.members.members
-        field_data.append(_string_array("tgsis_member_geotypes", *(m.geotype.value for m in members)))
-        field_data.append(_string_array("tgsis_member_names", *(m.name or "" for m in members)))
+        field_data.append(writer.strings("tgsis_member_geotypes", *(m.geotype.value for m in members)))
+        field_data.append(writer.strings("tgsis_member_names", *(m.name or "" for m in members)))
         sizes = writer.array("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members],
                                                             dtype=np.int64), components=2)
         sizes.set("NumberOfTuples", str(len(members)))
@@ -234,38 +255,76 @@ def _format_grid(source: _Grid, encoding: Encoding) -> bytes:
     cells.append(writer.array("connectivity", source.connectivity))
     cells.append(writer.array("offsets", source.offsets))
     cells.append(writer.array("types", source.types))
-    ET.indent(root)
-    text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False))
-    if not writer.appended:
-        return text + b"\n"
-    # raw bytes are not XML: the AppendedData section goes after the serialised tree, by hand
-    head, _, _ = text.rpartition(b"</VTKFile>")
-    return b"".join([head, b'  <AppendedData encoding="raw">\n   _', *writer.blocks,
-                     b"\n  </AppendedData>\n</VTKFile>\n"])
+    return writer.finish(root)
+
+
+#: Bytes per zlib block, as VTK's writers cut them (vtkXMLWriter's default BlockSize).
+ZLIB_BLOCK_SIZE = 32768
 
 
 class _ArrayWriter:
-    """Makes DataArray elements; in appended mode collects their bytes and offsets."""
+    """Makes DataArray elements; in appended mode collects their bytes and offsets; compresses them."""
 
-    def __init__(self, *, appended: bool) -> None:
+    def __init__(self, *, appended: bool, compressed: bool = False) -> None:
         self.appended = appended
+        self.compressed = compressed
         self.blocks: list[bytes] = []
         self.offset = 0
+
+    def root(self, data_type: str) -> ET.Element:
+        """The VTKFile element of a file of ``data_type`` (UnstructuredGrid, PolyData)."""
+        root = ET.Element("VTKFile", type=data_type, version="1.0", byte_order="LittleEndian",
+                          header_type="UInt64")
+        if self.compressed:
+            root.set("compressor", "vtkZLibDataCompressor")
+        return root
+
+    def finish(self, root: ET.Element) -> bytes:
+        """The file content: the XML, and in appended mode the AppendedData section after it."""
+        ET.indent(root)
+        text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False))
+        if not self.appended:
+            return text + b"\n"
+        # raw bytes are not XML: the AppendedData section goes after the serialised tree, by hand
+        head, _, _ = text.rpartition(b"</VTKFile>")
+        return b"".join([head, b'  <AppendedData encoding="raw">\n   _', *self.blocks,
+                         b"\n  </AppendedData>\n</VTKFile>\n"])
 
     def array(self, name: str, values: npt.NDArray[Any], *, components: int = 1) -> ET.Element:
         data = _vtk_values(values)
         element = ET.Element("DataArray", type=_VTK_TYPE_OF[data.dtype.str[1:]], Name=name)
         if components != 1:
             element.set("NumberOfComponents", str(components))
-        payload = np.uint64(data.nbytes).astype("<u8").tobytes() + data.tobytes()
+        raw = data.tobytes()
+        if self.compressed:
+            # vtkZLibDataCompressor: header (block count, block size, size of the last block, compressed
+            # size of each block), then the blocks; inline, header and blocks are two base64 streams
+            chunks = [zlib.compress(raw[i: i + ZLIB_BLOCK_SIZE]) for i in range(0, len(raw), ZLIB_BLOCK_SIZE)]
+            header = np.array([len(chunks), ZLIB_BLOCK_SIZE, len(raw) % ZLIB_BLOCK_SIZE,
+                               *(len(c) for c in chunks)], dtype="<u8").tobytes()
+            parts = [header, b"".join(chunks)]
+        else:
+            parts = [np.uint64(len(raw)).astype("<u8").tobytes() + raw]
         if self.appended:
             element.set("format", "appended")
             element.set("offset", str(self.offset))
+            payload = b"".join(parts)
             self.blocks.append(payload)
             self.offset += len(payload)
         else:
             element.set("format", "binary")
-            element.text = base64.b64encode(payload).decode("ascii")
+            element.text = "".join(base64.b64encode(part).decode("ascii") for part in parts)
+        return element
+
+    def strings(self, name: str, *values: str) -> ET.Element:
+        """A FieldData array of strings, as UInt8 bytes, each string UTF-8 and terminated by 0.
+
+        Not VTK's ``<Array type="String">``: meshio reads every FieldData array
+        as numbers and refuses the whole file for a String one.
+        """
+        data = np.frombuffer(b"".join(v.encode("utf-8") + b"\0" for v in values), dtype=np.uint8)
+        element = self.array(name, data)
+        element.set("NumberOfTuples", str(len(data)))  # FieldData has no Piece to count its tuples (VTK reads 0)
         return element
 
 
@@ -279,10 +338,11 @@ def _vtk_values(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
 
 
 def _string_array(name: str, *values: str) -> ET.Element:
-    """A FieldData string array holding ``values`` (one string each).
+    """A FieldData string array holding ``values`` (one string each), as VTK writes a vtkStringArray.
 
-    As VTK writes a vtkStringArray: an ``<Array>`` (not ``<DataArray>``) element
-    with the bytes as decimal codes, each string terminated by 0.
+    An ``<Array>`` (not ``<DataArray>``) element with the bytes as decimal
+    codes, each string terminated by 0. tgsis no longer writes these (see
+    :meth:`_ArrayWriter.strings`) but reads them; the tests make such files.
     """
     element = ET.Element("Array", type="String", Name=name, NumberOfTuples=str(len(values)), format="ascii")
     element.text = " ".join(str(b) for value in values for b in [*value.encode("utf-8"), 0])
@@ -596,12 +656,11 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
         if components < 1:
             raise FileFormatError(f"DataArray {file_name!r} has NumberOfComponents 0", path=decoder.path)
         values = decoder.array(element, count, components).reshape(count, components)
-        column_names = ([file_name] if components == 1 else [f"{file_name}_{j}" for j in range(components)])
-        for j, column_name in enumerate(column_names):
-            name = sanitize_property_name(column_name, result)
-            if name != column_name:
-                renamed[name] = file_name if components == 1 else column_name
-            result[name] = np.ascontiguousarray(values[:, j])
+        name = sanitize_property_name(file_name, result)
+        if name != file_name:
+            renamed[name] = file_name
+        # k components: a vector property (n, k), as tgsis writes one
+        result[name] = np.ascontiguousarray(values[:, 0] if components == 1 else values)
     if renamed:
         names[key] = renamed
     return result
@@ -618,11 +677,18 @@ def _field_element(grid: ET.Element, name: str) -> ET.Element | None:
     return next((e for e in _field_elements(grid) if e.get("Name") == name), None)
 
 
+def _is_string_field(element: ET.Element) -> bool:
+    """A String array (VTK's, older tgsis files) or a tgsis_ UInt8 array of 0-terminated strings."""
+    name = element.get("Name") or ""
+    return bool(name) and (element.get("type") == "String"
+                           or (name.startswith("tgsis_") and element.get("type") in ("UInt8", "Int8")))
+
+
 def _field_string_lists(grid: ET.Element, decoder: _Decoder) -> dict[str, list[str]]:
-    """Every string of each String array in FieldData."""
+    """Every string of each string array in FieldData (``tgsis_name`` as ``name``)."""
     result: dict[str, list[str]] = {}
     for element in _field_elements(grid):
-        if element.get("type") != "String" or not element.get("Name"):
+        if not _is_string_field(element):
             continue
         try:
             raw = decoder.array(element, None, 1).astype(np.uint8).tobytes()
@@ -632,20 +698,24 @@ def _field_string_lists(grid: ET.Element, decoder: _Decoder) -> dict[str, list[s
         if raw.endswith(b"\0"):
             parts.pop()
         result[str(element.get("Name"))] = [p.decode("utf-8", errors="replace") for p in parts]
+    if "tgsis_name" in result:
+        result["name"] = result["tgsis_name"]
     return result
 
 
 def _field_strings(grid: ET.Element, decoder: _Decoder) -> dict[str, str]:
-    """The first string of each String array in FieldData."""
+    """The first string of each string array in FieldData (``tgsis_name`` as ``name``)."""
     result: dict[str, str] = {}
     for element in _field_elements(grid):
-        if element.get("type") != "String" or not element.get("Name"):
+        if not _is_string_field(element):
             continue
         try:
             raw = decoder.array(element, None, 1).astype(np.uint8).tobytes()
         except FileFormatError:
             continue  # a field we cannot decode is not worth failing the file for
         result[str(element.get("Name"))] = raw.split(b"\0", 1)[0].decode("utf-8", errors="replace")
+    if "tgsis_name" in result:
+        result["name"] = result["tgsis_name"]
     return result
 
 

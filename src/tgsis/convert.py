@@ -1,0 +1,625 @@
+"""Mesh objects of the Python geoscience stack to tgsis meshes and back: pyvista, meshio, trimesh.
+
+No database here, and no hard dependency: pyvista and meshio are optional
+extras (``pip install tgsis[pyvista]`` / ``tgsis[meshio]``) imported only
+when a conversion to them is asked for; an object *from* them is recognised
+through the module that made it (already imported, since the object exists).
+
+>>> import pyvista as pv, tgsis                                   # doctest: +SKIP
+>>> surface = tgsis.as_mesh(pv.Sphere())                          # a tgsis.Surface
+>>> grid = surface.to_pyvista()                                   # a pyvista.PolyData
+>>> m = surface.to_meshio()                                       # a meshio.Mesh
+
+What :func:`as_mesh` takes
+--------------------------
+* a tgsis :class:`~tgsis.mesh.Mesh` or :class:`~tgsis.mesh.GeometryCollection`:
+  returned as it is;
+* a pyvista dataset (``PolyData``, ``UnstructuredGrid``, any other
+  ``pyvista.DataSet`` through ``cast_to_unstructured_grid``) or a bare VTK
+  ``vtkDataSet`` (wrapped by pyvista). Its cells must be all of one kind:
+  vertices (VERTEX, POLY_VERTEX: a :class:`~tgsis.mesh.PointSet`), lines
+  (LINE, POLY_LINE: a :class:`~tgsis.mesh.LineSet`; a polyline becomes its
+  segments, each with the polyline's cell data), TRIANGLE
+  (:class:`~tgsis.mesh.Surface`) or TETRA (:class:`~tgsis.mesh.TetraMesh`).
+  Points without cells are a PointSet. ``point_data`` and ``cell_data``
+  become vertex and cell properties (an (n, k) array: a vector property);
+  ``field_data["name"]`` the name;
+* a ``meshio.Mesh``: its cell blocks must be all of one of the types
+  ``vertex``, ``line``, ``triangle``, ``tetra`` (several blocks of one type
+  are concatenated); ``point_data``, ``cell_data`` (one array per block) as
+  above; 2D points get z = 0;
+* a ``trimesh.Trimesh`` (:meth:`Surface.from_trimesh`, its vertex and face
+  attributes as properties) or a ``trimesh.PointCloud`` (a PointSet).
+
+Array names that are not valid property names (``"gmsh:physical"``,
+``"Elevation value"``) are sanitised as the file readers do (``gmsh_physical``)
+and the original names kept in ``metadata["vtk_array_names"]``
+(``{"point_data": {property: array}, "cell_data": {...}}``), which
+:func:`to_pyvista` and :func:`to_meshio` use to give the arrays their names back.
+
+Everything else raises :class:`~tgsis.errors.InvalidGeometryError` listing
+what is accepted: polygons that are not triangles (``triangulate()`` them
+first), quadratic or other cell types, cells of several kinds in one object,
+an object with neither points nor cells. Arrays that tgsis cannot store (strings,
+the wrong number of values) raise :class:`~tgsis.errors.InvalidPropertyError`
+naming the array; NaN or infinite points :class:`~tgsis.errors.InvalidGeometryError`.
+
+And back
+--------
+:func:`to_pyvista` gives a ``PolyData`` for points, lines and surfaces
+(vertices, 2-point lines, triangles) and an ``UnstructuredGrid`` for
+tetrahedra and for collections (cells of mixed types), with the properties as
+``point_data``/``cell_data`` (bool as uint8) and in ``field_data`` the name
+(``name``), the geotype (``tgsis_geotype``) and, for a collection, its member
+table (``tgsis_member_geotypes``, ``tgsis_member_names``,
+``tgsis_member_sizes``: points and cells per member), so that
+:func:`as_mesh` gives back the same type, empty meshes and collections
+included. :func:`to_meshio` gives one cell block per mesh (per member for a
+collection); meshio has no name or field data every writer accepts, so the
+name, geotype and member table travel in ``mesh.info["tgsis"]`` (in memory:
+a meshio file keeps the points, cells and data).
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Mapping
+from types import ModuleType
+from typing import Any, TypeVar
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import InvalidGeometryError, InvalidPropertyError
+from tgsis.mesh import (PROPERTY_NAME_RE, Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface,
+                        TetraMesh, mesh_class)
+
+__all__ = ["as_mesh", "from_pyvista", "from_meshio", "to_pyvista", "to_meshio", "mesh_from_vtk_cells", "ACCEPTED"]
+
+#: What :func:`as_mesh` accepts, in the words of its error message.
+ACCEPTED = ("a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista PolyData or "
+            "UnstructuredGrid (or another pyvista/VTK dataset), a meshio.Mesh, or a trimesh.Trimesh or PointCloud")
+
+_HINT = ("build one with tgsis.Surface(vertices, triangles) (or PointSet, LineSet, TetraMesh), or convert "
+         "your object to one of these first")
+
+# VTK cell types: the kind of tgsis mesh each belongs to
+_VERTEX, _POLY_VERTEX, _LINE, _POLY_LINE, _TRIANGLE, _TETRA = 1, 2, 3, 4, 5, 10
+_KIND_OF_CELL_TYPE: dict[int, type[Mesh]] = {_VERTEX: PointSet, _POLY_VERTEX: PointSet, _LINE: LineSet,
+                                             _POLY_LINE: LineSet, _TRIANGLE: Surface, _TETRA: TetraMesh}
+_CELL_TYPE_OF: dict[type[Mesh], int] = {PointSet: _VERTEX, LineSet: _LINE, Surface: _TRIANGLE, TetraMesh: _TETRA}
+_VTK_CELL_NAMES = {1: "VERTEX", 2: "POLY_VERTEX", 3: "LINE", 4: "POLY_LINE", 5: "TRIANGLE", 6: "TRIANGLE_STRIP",
+                   7: "POLYGON", 8: "PIXEL", 9: "QUAD", 10: "TETRA", 11: "VOXEL", 12: "HEXAHEDRON", 13: "WEDGE",
+                   14: "PYRAMID", 21: "QUADRATIC_EDGE", 22: "QUADRATIC_TRIANGLE", 23: "QUADRATIC_QUAD",
+                   24: "QUADRATIC_TETRA", 25: "QUADRATIC_HEXAHEDRON", 42: "POLYHEDRON"}
+_MESHIO_TYPE_OF: dict[type[Mesh], str] = {PointSet: "vertex", LineSet: "line", Surface: "triangle",
+                                          TetraMesh: "tetra"}
+_MESH_OF_MESHIO_TYPE = {v: k for k, v in _MESHIO_TYPE_OF.items()}
+_NAMES_KEY = "vtk_array_names"
+_T = TypeVar("_T")
+
+
+# ---------------------------------------------------------------- recognising objects
+
+
+def _loaded(module: str) -> ModuleType | None:
+    """The module if it has been imported (an object of it exists only then), without importing it."""
+    return sys.modules.get(module)
+
+
+def _require(module: str, extra: str) -> ModuleType:
+    """Import an optional dependency, or say which extra installs it."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise InvalidGeometryError(f"this needs the optional package {module}, which is not installed",
+                                   hint=f"pip install 'tgsis[{extra}]' (or pip install {module})") from None
+
+
+def as_mesh(obj: Any) -> Geometry:
+    """A tgsis mesh (or collection) for a mesh object of pyvista, meshio or trimesh.
+
+    Parameters
+    ----------
+    obj : Mesh, GeometryCollection, pyvista.DataSet, vtkDataSet, meshio.Mesh, trimesh.Trimesh or trimesh.PointCloud
+        See the module documentation for what each becomes.
+
+    Returns
+    -------
+    Mesh or GeometryCollection
+        ``obj`` itself when it is one already.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``obj`` is none of these (the message lists what is accepted), or
+        holds what no tgsis mesh can (see the module documentation).
+    InvalidPropertyError
+        A data array tgsis cannot store.
+    """
+    if isinstance(obj, (Mesh, GeometryCollection)):
+        return obj
+    pv = _loaded("pyvista")
+    if pv is not None and isinstance(obj, (pv.DataSet, pv.MultiBlock)):
+        return from_pyvista(obj)
+    vtk = _loaded("vtkmodules.vtkCommonDataModel")
+    if vtk is not None and isinstance(obj, vtk.vtkDataObject):
+        return from_pyvista(obj)
+    meshio = _loaded("meshio")
+    if meshio is not None and isinstance(obj, meshio.Mesh):
+        return from_meshio(obj)
+    trimesh = _loaded("trimesh")
+    if trimesh is not None and isinstance(obj, trimesh.Trimesh):
+        return _labelled("trimesh.Trimesh", lambda: Surface.from_trimesh(obj, strict=True))
+    if trimesh is not None and isinstance(obj, trimesh.PointCloud):
+        return _labelled("trimesh.PointCloud", lambda: PointSet(
+            np.asarray(obj.vertices, dtype=np.float64),
+            vertex_properties=_numeric(getattr(obj, "vertex_attributes", None) or {}, "trimesh.PointCloud",
+                                       "vertex_attributes"),
+            name=(obj.metadata or {}).get("name")))
+    raise InvalidGeometryError(f"cannot store a {_type_name(obj)} as a mesh: tgsis takes {ACCEPTED}", hint=_HINT)
+
+
+def _type_name(obj: Any) -> str:
+    kind = type(obj)
+    module = kind.__module__.split(".")[0]
+    return kind.__qualname__ if module == "builtins" else f"{module}.{kind.__qualname__}"
+
+
+def _labelled(source: str, build: Callable[[], _T]) -> _T:
+    """``build()``, with the name of the source object in front of any mesh or property error."""
+    try:
+        return build()
+    except (InvalidPropertyError, InvalidGeometryError) as exc:
+        if exc.message.startswith(source):
+            raise
+        raise type(exc)(f"{source}: {exc.message}", detail=exc.detail, hint=exc.hint) from None
+
+
+def _numeric(arrays: Mapping[str, Any], source: str, where: str) -> dict[str, npt.NDArray[Any]]:
+    """Arrays as numpy; a non-numeric one raises InvalidPropertyError naming it (lengths: the mesh checks)."""
+    result: dict[str, npt.NDArray[Any]] = {}
+    for name, values in arrays.items():
+        array = np.asarray(values)
+        if array.dtype.kind not in "biuf":
+            raise InvalidPropertyError(
+                f"{source} array {name!r} in {where} holds {array.dtype} values: a tgsis property holds numbers",
+                hint=f"remove it from {where} before converting (del mesh.{where}[{name!r}])")
+        result[str(name)] = array
+    return result
+
+
+def _renamed(arrays: dict[str, npt.NDArray[Any]], names: dict[str, dict[str, str]],
+             key: str) -> dict[str, npt.NDArray[Any]]:
+    """Arrays under valid, distinct property names; ``names[key]`` records {property: original} for renamed ones."""
+    from tgsis.formats._common import sanitize_property_name
+
+    result: dict[str, npt.NDArray[Any]] = {}
+    renamed: dict[str, str] = {}
+    for original, values in arrays.items():
+        name = original if PROPERTY_NAME_RE.match(original) and original not in result else \
+            sanitize_property_name(original, result)
+        if name != original:
+            renamed[name] = original
+        result[name] = values
+    if renamed:
+        names[key] = renamed
+    return result
+
+
+def _strings(values: Any) -> list[str]:
+    """A field array as strings: a string array, or null-terminated UTF-8 bytes in an integer array."""
+    array = np.asarray(values)
+    if array.dtype.kind in "US":
+        return [v.decode("utf-8", "replace") if isinstance(v, bytes) else str(v) for v in array.reshape(-1)]
+    if array.dtype.kind in "iu" and array.size and array.min() >= 0 and array.max() < 256:
+        raw = array.astype(np.uint8).tobytes()
+        parts = raw.split(b"\0")
+        if raw.endswith(b"\0"):
+            parts.pop()
+        return [p.decode("utf-8", "replace") for p in parts]
+    return []
+
+
+def _string_bytes(*values: str) -> npt.NDArray[np.uint8]:
+    """Strings as UTF-8 bytes, each ending in 0 (what :func:`_strings` reads back)."""
+    return np.frombuffer(b"".join(v.encode("utf-8") + b"\0" for v in values), dtype=np.uint8).copy()
+
+
+def _first(values: Any) -> str | None:
+    strings = _strings(values) if values is not None else []
+    return strings[0] if strings else None
+
+
+# ---------------------------------------------------------------- cells of one kind, from VTK's layout
+
+
+def _split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connectivity: npt.NDArray[np.int64],
+                 source: str) -> tuple[type[Mesh], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """The mesh class of cells all of one kind, its (m, k) cells, and the source cell of each.
+
+    POLY_VERTEX and POLY_LINE cells are split into vertices and segments.
+    """
+    present = sorted({int(t) for t in np.unique(types)})
+    unknown = [t for t in present if t not in _KIND_OF_CELL_TYPE]
+    if unknown:
+        listed = ", ".join(f"{_VTK_CELL_NAMES.get(t, 'type')} ({t})" for t in unknown)
+        polygons = any(t in (6, 7, 8, 9) for t in unknown)
+        raise InvalidGeometryError(
+            f"{source} has {listed} cells: tgsis stores vertices, lines, triangles and tetrahedra",
+            detail=f"{int(np.isin(types, unknown).sum())} of {len(types)} cells",
+            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)" if polygons
+            else "convert them to tetrahedra or triangles first (pyvista: mesh.triangulate(); ParaView: the "
+                 "Tetrahedralize filter)")
+    kinds = list(dict.fromkeys(_KIND_OF_CELL_TYPE[t] for t in present))
+    if len(kinds) > 1:
+        listed = ", ".join(f"{_VTK_CELL_NAMES[t]} ({int((types == t).sum())})" for t in present)
+        raise InvalidGeometryError(
+            f"{source} mixes cells of several kinds ({listed}): a tgsis mesh has one kind of cell",
+            hint="extract one kind first (e.g. mesh.extract_cells_by_type(pyvista.CellType.TRIANGLE)), or store "
+                 "the kinds as members of a tgsis.GeometryCollection")
+    kind = kinds[0]
+    k = kind.cell_size
+    sizes = np.diff(offsets)
+    if bool(np.all(sizes == k)):
+        return kind, connectivity.reshape(-1, k), np.arange(len(types), dtype=np.int64)
+    if kind not in (PointSet, LineSet) or (sizes < k).any():
+        bad = int(np.flatnonzero(sizes != k)[0])
+        raise InvalidGeometryError(f"{source} cell {bad} has {int(sizes[bad])} points, not {k}")
+    # POLY_VERTEX / POLY_LINE: n points give n vertices / n - 1 segments, each from its source cell
+    pieces = sizes - (k - 1)
+    source_cell = np.repeat(np.arange(len(types), dtype=np.int64), pieces)
+    first = np.repeat(offsets[:-1], pieces) + (np.arange(int(pieces.sum())) - np.repeat(np.cumsum(pieces) - pieces,
+                                                                                          pieces))
+    cells = np.stack([connectivity[first + j] for j in range(k)], axis=1)
+    return kind, cells.astype(np.int64), source_cell
+
+
+def _mesh_from_cells(kind: type[Mesh], vertices: npt.NDArray[np.float64], cells: npt.NDArray[np.int64],
+                     vertex_properties: dict[str, npt.NDArray[Any]], cell_properties: dict[str, npt.NDArray[Any]],
+                     name: str | None, metadata: dict[str, Any]) -> Mesh:
+    if kind is PointSet and len(cells) == 0 and len(vertices):
+        cells_arg: Any = None  # points without cells: one point each (a point cloud)
+        if cell_properties:
+            cell_properties = {}
+        return PointSet(vertices, cells_arg, vertex_properties=vertex_properties, name=name, metadata=metadata)
+    return kind(vertices, cells, vertex_properties=vertex_properties, cell_properties=cell_properties, name=name,
+                metadata=metadata)
+
+
+def _collection_from_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
+                           connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
+                           cell_data: dict[str, npt.NDArray[Any]], table: tuple[list[str], list[str], Any],
+                           name: str | None, metadata: dict[str, Any], source: str) -> GeometryCollection:
+    """The members of a grid written from a GeometryCollection (its member table in the field data)."""
+    geotypes, names, sizes_raw = table
+    sizes = np.asarray(sizes_raw, dtype=np.int64).reshape(-1, 2)
+    if len(sizes) != len(geotypes) or sizes.min(initial=0) < 0 or int(sizes[:, 0].sum()) != len(vertices) \
+            or int(sizes[:, 1].sum()) != len(types):
+        raise InvalidGeometryError(f"{source}: its tgsis member table does not match its {len(vertices)} points and "
+                                   f"{len(types)} cells")
+    members: list[Mesh] = []
+    first_point = first_cell = 0
+    for i, (geotype, (n_p, n_c)) in enumerate(zip(geotypes, sizes.tolist())):
+        kind = mesh_class(geotype)
+        cells = slice(first_cell, first_cell + n_c)
+        points = slice(first_point, first_point + n_p)
+        if np.any(types[cells] != _CELL_TYPE_OF[kind]):
+            raise InvalidGeometryError(f"{source}: member {i} is a {geotype} but has other cells")
+        start = int(offsets[first_cell])
+        k = kind.cell_size
+        member_cells = (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k)
+        members.append(_labelled(f"{source} member {i}", lambda: kind(
+            vertices[points], member_cells,
+            vertex_properties={key: v[points] for key, v in point_data.items()},
+            cell_properties={key: v[cells] for key, v in cell_data.items()},
+            name=(names[i] if i < len(names) else "") or None)))
+        first_point, first_cell = first_point + n_p, first_cell + n_c
+    return GeometryCollection(members, name=name, metadata=metadata)
+
+
+# ---------------------------------------------------------------- pyvista
+
+
+def from_pyvista(obj: Any) -> Geometry:
+    """A tgsis mesh or collection from a pyvista dataset (or a bare VTK one); see the module documentation.
+
+    Parameters
+    ----------
+    obj : pyvista.DataSet or vtkDataSet
+
+    Raises
+    ------
+    InvalidGeometryError, InvalidPropertyError
+        See :func:`as_mesh`.
+    """
+    pv = _require("pyvista", "pyvista")
+    if not isinstance(obj, pv.DataObject):
+        vtk = _loaded("vtkmodules.vtkCommonDataModel")
+        if vtk is None or not isinstance(obj, vtk.vtkDataObject):
+            raise InvalidGeometryError(f"{_type_name(obj)} is not a pyvista dataset: tgsis takes {ACCEPTED}",
+                                       hint=_HINT)
+        obj = pv.wrap(obj)
+    source = f"pyvista {type(obj).__name__}"
+    if isinstance(obj, pv.MultiBlock):
+        raise InvalidGeometryError(f"{source} of {obj.n_blocks} blocks: tgsis converts one dataset at a time",
+                                   hint="convert each block (tgsis.as_mesh(blocks[i])), or blocks.combine() into one "
+                                        "grid")
+    if not isinstance(obj, pv.DataSet):
+        raise InvalidGeometryError(f"{source} is not a dataset with points and cells: tgsis takes {ACCEPTED}",
+                                   hint=_HINT)
+    grid = obj if isinstance(obj, pv.UnstructuredGrid) else obj.cast_to_unstructured_grid()
+    vertices = np.array(grid.points, dtype=np.float64).reshape(-1, 3)
+    types = np.asarray(grid.celltypes, dtype=np.int64)
+    offsets = np.asarray(grid.cell_offsets if hasattr(type(grid), "cell_offsets") else grid.offset, dtype=np.int64)
+    connectivity = np.asarray(grid.cell_connectivity, dtype=np.int64)
+    fields = {str(k): obj.field_data[k] for k in obj.field_data.keys()}
+    name = _first(fields.get("tgsis_name")) or _first(fields.get("name"))
+    geotype = _first(fields.get("tgsis_geotype"))
+    names: dict[str, dict[str, str]] = {}
+    point_data = _renamed(_numeric({k: obj.point_data[k] for k in obj.point_data.keys()}, source, "point_data"),
+                          names, "point_data")
+    cell_data = _renamed(_numeric({k: obj.cell_data[k] for k in obj.cell_data.keys()}, source, "cell_data"),
+                         names, "cell_data")
+    metadata: dict[str, Any] = {_NAMES_KEY: names} if names else {}
+    if geotype == GeometryCollection.geotype.value:
+        table = (_strings(fields.get("tgsis_member_geotypes", [])), _strings(fields.get("tgsis_member_names", [])),
+                 fields.get("tgsis_member_sizes", np.empty((0, 2))))
+        return _collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+                                      metadata, source)
+    return _labelled(source, lambda: _one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
+                                               geotype, metadata, source))
+
+
+def mesh_from_vtk_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
+                        connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
+                        cell_data: dict[str, npt.NDArray[Any]], *, name: str | None, geotype: str | None,
+                        metadata: dict[str, Any], source: str) -> Mesh:
+    """One tgsis mesh from cells in VTK's layout (types, offsets from 0, connectivity), as for pyvista objects.
+
+    For the VTK file readers (:mod:`tgsis.formats.vtp`, :mod:`tgsis.formats.vtk_legacy`): the same rules
+    as :func:`from_pyvista`. ``geotype``: the type a file written by tgsis names (for a mesh without cells).
+
+    Raises
+    ------
+    InvalidGeometryError, InvalidPropertyError
+        As :func:`as_mesh` (the readers turn them into FileFormatError).
+    """
+    return _one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name, geotype, metadata, source)
+
+
+def _one_mesh(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
+              connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
+              cell_data: dict[str, npt.NDArray[Any]], name: str | None, geotype: str | None,
+              metadata: dict[str, Any], source: str) -> Mesh:
+    if len(types) == 0:
+        if geotype is not None:
+            kind = mesh_class(geotype)  # written by tgsis: an empty mesh keeps its type
+        elif len(vertices):
+            kind = PointSet
+        else:
+            raise InvalidGeometryError(f"{source} is empty (no point, no cell): nothing says what kind of mesh it is",
+                                       hint="give it points (and cells), or build the empty tgsis mesh you mean "
+                                            "(e.g. tgsis.Surface(numpy.empty((0, 3)), numpy.empty((0, 3))))")
+        return _mesh_from_cells(kind, vertices, np.empty((0, kind.cell_size), dtype=np.int64), point_data,
+                                cell_data, name, metadata)
+    kind, cells, source_cell = _split_cells(types, offsets, connectivity, source)
+    if len(source_cell) != len(types):
+        cell_data = {k: v[source_cell] for k, v in cell_data.items()}
+    return _mesh_from_cells(kind, vertices, cells, point_data, cell_data, name, metadata)
+
+
+def _original_names(mesh: Mesh | GeometryCollection, key: str) -> dict[str, str]:
+    names = mesh.metadata.get(_NAMES_KEY)
+    return dict(names.get(key, {})) if isinstance(names, Mapping) else {}
+
+
+def _parts(geometry: Geometry) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.int64],
+                                        npt.NDArray[np.uint8], dict[str, npt.NDArray[Any]],
+                                        dict[str, npt.NDArray[Any]]]:
+    """Points, flat connectivity, offsets (m + 1, from 0), VTK cell types, point data, cell data."""
+    members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
+    first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
+    connectivity = np.concatenate([m.cells.reshape(-1) + start for m, start in zip(members, first_point)])
+    sizes = np.concatenate([np.full(m.n_cells, m.cell_size, dtype=np.int64) for m in members])
+    types = np.concatenate([np.full(m.n_cells, _CELL_TYPE_OF[type(m)], dtype=np.uint8) for m in members])
+    if isinstance(geometry, GeometryCollection):
+        point_data, cell_data = _shared(members, "vertex"), _shared(members, "cell")
+    else:
+        point_data, cell_data = geometry.vertex_properties, geometry.cell_properties
+    vertices = np.concatenate([m.vertices for m in members]) if members else np.empty((0, 3))
+    return (vertices, connectivity.astype(np.int64), np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
+            types, dict(point_data), dict(cell_data))
+
+
+def _shared(members: tuple[Mesh, ...], kind: str) -> dict[str, npt.NDArray[Any]]:
+    """The members' vertex or cell properties, concatenated: one array covers all points (cells) of a grid."""
+    def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
+        return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
+
+    names = dict.fromkeys(name for m in members for name in of(m))
+    for name in names:
+        lacking = [i for i, m in enumerate(members) if name not in of(m)]
+        if lacking:
+            raise InvalidPropertyError(f"{kind} property {name!r} is on some members of the collection but not on "
+                                       f"members {lacking}: one array covers the points or cells of all members",
+                                       hint="give every member the property, or remove it before converting")
+    return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
+
+
+def _named(arrays: Mapping[str, npt.NDArray[Any]], originals: Mapping[str, str]) -> dict[str, npt.NDArray[Any]]:
+    """Properties under the array names they came from; bool as uint8 (VTK has no bool)."""
+    return {originals.get(k, k): (v.astype(np.uint8) if v.dtype.kind == "b" else v) for k, v in arrays.items()}
+
+
+def to_pyvista(geometry: Geometry) -> Any:
+    """The pyvista dataset of a tgsis mesh or collection; see the module documentation.
+
+    Parameters
+    ----------
+    geometry : Mesh or GeometryCollection
+
+    Returns
+    -------
+    pyvista.PolyData or pyvista.UnstructuredGrid
+        PolyData for a PointSet, LineSet or Surface; UnstructuredGrid for a
+        TetraMesh or a collection. Points are float64, exactly the vertices.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``geometry`` is not a tgsis mesh, or pyvista is not installed.
+    """
+    pv = _require("pyvista", "pyvista")
+    if not isinstance(geometry, (Mesh, GeometryCollection)):
+        raise InvalidGeometryError(f"to_pyvista converts tgsis meshes, not {_type_name(geometry)}",
+                                   hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
+    vertices, connectivity, offsets, types, point_data, cell_data = _parts(geometry)
+    kind = type(geometry)
+    if kind in (PointSet, LineSet, Surface):
+        k = geometry.cell_size  # type: ignore[union-attr]
+        cell_array = pv.CellArray.from_regular_cells(connectivity.reshape(-1, k)) if len(types) else pv.CellArray()
+        keyword = {PointSet: "verts", LineSet: "lines", Surface: "faces"}[kind]
+        data = pv.PolyData(vertices.copy(), **{keyword: cell_array})
+        if data.n_cells != len(types):  # an empty cell array: pyvista made a vertex of each point
+            data.verts = pv.CellArray()
+    else:
+        cells = np.insert(connectivity, offsets[:-1], np.diff(offsets)) if len(types) else np.empty(0, np.int64)
+        data = pv.UnstructuredGrid(cells, types, vertices.copy())
+    for key, values in _named(point_data, _original_names(geometry, "point_data")).items():
+        data.point_data[key] = values
+    for key, values in _named(cell_data, _original_names(geometry, "cell_data")).items():
+        data.cell_data[key] = values
+    # strings as UTF-8 bytes ending in 0 (uint8), as in tgsis's .vtu files: pyvista refuses non-ASCII strings
+    if geometry.name:
+        data.field_data["tgsis_name"] = _string_bytes(geometry.name)
+        if geometry.name.isascii():
+            data.field_data["name"] = np.array([geometry.name])
+    data.field_data["tgsis_geotype"] = _string_bytes(geometry.geotype.value)
+    if isinstance(geometry, GeometryCollection):
+        data.field_data["tgsis_member_geotypes"] = _string_bytes(*(m.geotype.value for m in geometry.members))
+        data.field_data["tgsis_member_names"] = _string_bytes(*(m.name or "" for m in geometry.members))
+        data.field_data["tgsis_member_sizes"] = np.array([[m.n_vertices, m.n_cells] for m in geometry.members],
+                                                         dtype=np.int64)
+    return data
+
+
+# ---------------------------------------------------------------- meshio
+
+
+def from_meshio(obj: Any) -> Geometry:
+    """A tgsis mesh or collection from a ``meshio.Mesh``; see the module documentation.
+
+    Parameters
+    ----------
+    obj : meshio.Mesh
+
+    Raises
+    ------
+    InvalidGeometryError, InvalidPropertyError
+        See :func:`as_mesh`.
+    """
+    meshio = _require("meshio", "meshio")
+    if not isinstance(obj, meshio.Mesh):
+        raise InvalidGeometryError(f"{_type_name(obj)} is not a meshio.Mesh: tgsis takes {ACCEPTED}", hint=_HINT)
+    source = "meshio.Mesh"
+    points = np.asarray(obj.points)
+    if points.ndim == 2 and points.shape[1] == 2:
+        points = np.column_stack([points, np.zeros(len(points))])  # meshio's 2D meshes lie in z = 0
+    info = obj.info.get("tgsis", {}) if isinstance(getattr(obj, "info", None), Mapping) else {}
+    fields = {str(k): v for k, v in (obj.field_data or {}).items()}
+    name = info.get("name") or _first(fields.get("tgsis_name"))
+    geotype = info.get("geotype") or _first(fields.get("tgsis_geotype"))
+    blocks = list(obj.cells)
+    unknown = [b.type for b in blocks if b.type not in _MESH_OF_MESHIO_TYPE]
+    if unknown:
+        listed = ", ".join(dict.fromkeys(unknown))
+        polygons = any(t.startswith(("quad", "polygon")) or t in ("triangle6", "triangle7") for t in unknown)
+        raise InvalidGeometryError(f"{source} has {listed} cells: tgsis stores vertex, line, triangle and tetra cells",
+                                   hint="split them into triangles first" if polygons else
+                                        "split them into tetra (or triangle) cells first")
+    names: dict[str, dict[str, str]] = {}
+    point_data = _renamed(_numeric(obj.point_data or {}, source, "point_data"), names, "point_data")
+    cell_data: dict[str, npt.NDArray[Any]] = {}
+    for key, per_block in (obj.cell_data or {}).items():
+        arrays = list(per_block)
+        if len(arrays) != len(blocks):
+            raise InvalidPropertyError(f"{source} cell_data {key!r} has {len(arrays)} arrays for {len(blocks)} cell "
+                                       "blocks", hint="give cell_data one array per cell block")
+        for block, values in zip(blocks, arrays):
+            if len(np.asarray(values)) != len(block.data):
+                raise InvalidPropertyError(f"{source} cell_data {key!r} has {len(np.asarray(values))} values for "
+                                           f"the {len(block.data)} {block.type} cells of its block")
+        cell_data[str(key)] = np.concatenate([np.asarray(v) for v in arrays]) if arrays else np.empty(0)
+    cell_data = _renamed(_numeric(cell_data, source, "cell_data"), names, "cell_data")
+    metadata: dict[str, Any] = {_NAMES_KEY: names} if names else {}
+    kinds = list(dict.fromkeys(_MESH_OF_MESHIO_TYPE[b.type] for b in blocks))
+    connectivity = (np.concatenate([np.asarray(b.data, dtype=np.int64).reshape(-1) for b in blocks]) if blocks
+                    else np.empty(0, np.int64))
+    types = (np.concatenate([np.full(len(b.data), _CELL_TYPE_OF[_MESH_OF_MESHIO_TYPE[b.type]]) for b in blocks])
+             if blocks else np.empty(0, np.int64))
+    sizes = np.concatenate([np.full(len(b.data), _MESH_OF_MESHIO_TYPE[b.type].cell_size) for b in blocks]) \
+        if blocks else np.empty(0, np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    vertices = points.astype(np.float64) if points.dtype.kind in "biuf" else points
+    if geotype == GeometryCollection.geotype.value:
+        if "members" in info:
+            members = info["members"]
+            table = ([m[0] for m in members], [m[1] for m in members], [[m[2], m[3]] for m in members])
+        else:  # a .vtu file tgsis wrote, read by meshio: the member table is in the field data
+            table = (_strings(fields.get("tgsis_member_geotypes", [])), _strings(fields.get("tgsis_member_names", [])),
+                     fields.get("tgsis_member_sizes", np.empty((0, 2))))
+        return _collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+                                      metadata, source)
+    if len(kinds) > 1:
+        listed = ", ".join(f"{b.type} ({len(b.data)})" for b in blocks)
+        raise InvalidGeometryError(f"{source} mixes cell blocks of several kinds ({listed}): a tgsis mesh has one "
+                                   "kind of cell",
+                                   hint="convert one kind at a time: meshio.Mesh(m.points, [m.cells[i]]), or store "
+                                        "the kinds as members of a tgsis.GeometryCollection")
+    if not blocks or not len(types):
+        if kinds:
+            geotype = geotype or kinds[0].geotype.value
+    return _labelled(source, lambda: _one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
+                                               geotype, metadata, source))
+
+
+def to_meshio(geometry: Geometry) -> Any:
+    """The ``meshio.Mesh`` of a tgsis mesh or collection; see the module documentation.
+
+    Parameters
+    ----------
+    geometry : Mesh or GeometryCollection
+
+    Returns
+    -------
+    meshio.Mesh
+        One cell block (one per member of a collection: points of all
+        members, one after the other), properties as ``point_data`` and
+        ``cell_data``; name, geotype and member table in ``info["tgsis"]``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``geometry`` is not a tgsis mesh, or meshio is not installed.
+    """
+    meshio = _require("meshio", "meshio")
+    if not isinstance(geometry, (Mesh, GeometryCollection)):
+        raise InvalidGeometryError(f"to_meshio converts tgsis meshes, not {_type_name(geometry)}",
+                                   hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
+    vertices, connectivity, offsets, types, point_data, cell_data = _parts(geometry)
+    members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
+    first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
+    blocks = [meshio.CellBlock(_MESHIO_TYPE_OF[type(m)], m.cells + start) for m, start in zip(members, first_point)]
+    ends = np.cumsum([m.n_cells for m in members])
+    starts = ends - [m.n_cells for m in members]
+    info: dict[str, Any] = {"geotype": geometry.geotype.value, "name": geometry.name}
+    if isinstance(geometry, GeometryCollection):
+        info["members"] = [(m.geotype.value, m.name or "", m.n_vertices, m.n_cells) for m in members]
+    return meshio.Mesh(
+        vertices.copy(), blocks,
+        point_data=_named(point_data, _original_names(geometry, "point_data")),
+        cell_data={k: [v[s:e] for s, e in zip(starts, ends)]
+                   for k, v in _named(cell_data, _original_names(geometry, "cell_data")).items()},
+        info={"tgsis": info})
