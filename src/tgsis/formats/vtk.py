@@ -302,7 +302,8 @@ class _ArrayWriter:
         if self.compressed:
             # vtkZLibDataCompressor: header (block count, block size, size of the last block, compressed
             # size of each block), then the blocks; inline, header and blocks are two base64 streams
-            chunks = [zlib.compress(raw[i: i + ZLIB_BLOCK_SIZE], ZLIB_LEVEL) for i in range(0, len(raw), ZLIB_BLOCK_SIZE)]
+            chunks = [zlib.compress(raw[i: i + ZLIB_BLOCK_SIZE], ZLIB_LEVEL)
+                      for i in range(0, len(raw), ZLIB_BLOCK_SIZE)]
             header = np.array([len(chunks), ZLIB_BLOCK_SIZE, len(raw) % ZLIB_BLOCK_SIZE,
                                *(len(c) for c in chunks)], dtype="<u8").tobytes()
             parts = [header, b"".join(chunks)]
