@@ -261,7 +261,7 @@ def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) ->
 #: Bytes per zlib block, as VTK's writers cut them (vtkXMLWriter's default BlockSize).
 ZLIB_BLOCK_SIZE = 32768
 #: zlib level: vtkZLibDataCompressor's default; on the San Andreas fault of data/cfm it compresses as well as 6
-#: or 9 in less than half the time of 6 (docs/performance.md)
+#: or 9 in less time than 6 (bench/vtk_files.py, docs/performance.md)
 ZLIB_LEVEL = 5
 
 

@@ -475,6 +475,11 @@ class _Reader:
                 raise self.fail(f"{what}: OFFSETS do not describe the CONNECTIVITY")
             return offsets, connectivity
         flat = self.values("int", second, what).astype(np.int64)  # n cells, each "k i1 .. ik"
+        if first and len(flat) % first == 0 and len(flat) // first >= 2:  # all cells of one size: no loop
+            k = len(flat) // first - 1
+            table = flat.reshape(first, k + 1)
+            if bool(np.all(table[:, 0] == k)):
+                return np.arange(first + 1, dtype=np.int64) * k, np.ascontiguousarray(table[:, 1:]).reshape(-1)
         offsets = np.zeros(first + 1, np.int64)
         keep = np.ones(len(flat), bool)
         position = 0
