@@ -196,7 +196,7 @@ def test_polygons_that_are_not_triangles() -> None:
     with pytest.raises(InvalidGeometryError, match=r"pyvista PolyData has QUAD \(9\) cells") as info:
         tgsis.as_mesh(pv.Plane(i_resolution=2, j_resolution=2))
     assert info.value.hint is not None and "mesh.triangulate()" in info.value.hint
-    assert info.value.detail == "4 of 4 cells"
+    assert info.value.detail == "4 of 4 cells, of 4 points"
     hexagon = pv.PolyData(np.array([[np.cos(a), np.sin(a), 0] for a in np.linspace(0, 2 * np.pi, 7)[:-1]]),
                           faces=[6, 0, 1, 2, 3, 4, 5])
     with pytest.raises(InvalidGeometryError, match=r"POLYGON \(7\) cells"):
@@ -267,6 +267,26 @@ def test_data_arrays_of_the_wrong_length_or_kind() -> None:
             as info:
         tgsis.as_mesh(sphere)
     assert info.value.hint == "remove it from point_data before converting (del mesh.point_data['unit'])"
+
+
+def test_a_pyvista_array_of_the_wrong_length_set_through_vtk() -> None:
+    """pyvista checks the length of an array assigned through it, VTK does not."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+
+    sphere = pv.Sphere(theta_resolution=6, phi_resolution=6)
+    short = numpy_to_vtk(np.arange(5.0))
+    short.SetName("porosity")
+    sphere.GetPointData().AddArray(short)
+    with pytest.raises(InvalidPropertyError, match=f"pyvista PolyData: vertex property 'porosity' has 5 values for "
+                                                   f"{sphere.n_points} vertices"):
+        tgsis.as_mesh(sphere)
+
+
+def test_a_collection_whose_member_table_was_tampered_with() -> None:
+    grid = GeometryCollection([meshes()[2], meshes()[2]]).to_pyvista()
+    grid.field_data["tgsis_member_sizes"] = np.array([[40, 10], [0, 10]])
+    with pytest.raises(InvalidGeometryError, match="its tgsis member table does not match its 24 points and 20 cells"):
+        tgsis.as_mesh(grid)
 
 
 def test_back_conversions_refuse_other_objects() -> None:

@@ -246,9 +246,11 @@ def _split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connec
     if unknown:
         listed = ", ".join(f"{_VTK_CELL_NAMES.get(t, 'type')} ({t})" for t in unknown)
         polygons = any(t in (6, 7, 8, 9) for t in unknown)
+        refused = np.isin(types, unknown)
+        sizes = ", ".join(str(int(v)) for v in np.unique(np.diff(offsets)[refused])[:5])
         raise InvalidGeometryError(
             f"{source} has {listed} cells: tgsis stores vertices, lines, triangles and tetrahedra",
-            detail=f"{int(np.isin(types, unknown).sum())} of {len(types)} cells",
+            detail=f"{int(refused.sum())} of {len(types)} cells, of {sizes} points",
             hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)" if polygons
             else "convert them to tetrahedra or triangles first (pyvista: mesh.triangulate(); ParaView: the "
                  "Tetrahedralize filter)")
@@ -279,11 +281,8 @@ def _split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connec
 def _mesh_from_cells(kind: type[Mesh], vertices: npt.NDArray[np.float64], cells: npt.NDArray[np.int64],
                      vertex_properties: dict[str, npt.NDArray[Any]], cell_properties: dict[str, npt.NDArray[Any]],
                      name: str | None, metadata: dict[str, Any]) -> Mesh:
-    if kind is PointSet and len(cells) == 0 and len(vertices):
-        cells_arg: Any = None  # points without cells: one point each (a point cloud)
-        if cell_properties:
-            cell_properties = {}
-        return PointSet(vertices, cells_arg, vertex_properties=vertex_properties, name=name, metadata=metadata)
+    if kind is PointSet and len(cells) == 0 and len(vertices):  # points without cells: a point cloud, one each
+        return PointSet(vertices, vertex_properties=vertex_properties, name=name, metadata=metadata)
     return kind(vertices, cells, vertex_properties=vertex_properties, cell_properties=cell_properties, name=name,
                 metadata=metadata)
 

@@ -155,13 +155,11 @@ class _Writer:
         if flat.dtype.kind == "b":
             flat = flat.astype(np.uint8)
         if self.ascii:
-            if flat.dtype.kind == "f":
-                words = [repr(v) for v in flat.astype(np.float64).tolist()] if flat.dtype.itemsize == 8 \
-                    else [repr(v) for v in flat.tolist()]
+            if flat.dtype.kind == "f":  # repr: the shortest text that reads back to the same double
+                words = [repr(v) for v in flat.tolist()]
             else:
                 words = [str(v) for v in flat.tolist()]
-            # nan/inf as VTK writes them
-            self.parts.append((" ".join(words).replace("inf", "Infinity") + "\n").encode("ascii"))
+            self.parts.append((" ".join(words) + "\n").encode("ascii"))  # nan, inf: strtod and numpy read them
         else:
             self.parts.append(np.ascontiguousarray(flat, dtype=flat.dtype.newbyteorder(">")).tobytes() + b"\n")
 
@@ -359,8 +357,7 @@ class _Reader:
             words = [t.group() for t in tokens]
             try:
                 if dtype.kind == "f":
-                    return np.array([float(w.replace(b"Infinity", b"inf")) for w in words], dtype=np.float64)\
-                        .astype(dtype.newbyteorder("="))
+                    return np.array([float(w) for w in words], dtype=np.float64).astype(dtype.newbyteorder("="))
                 return np.array([int(w) for w in words], dtype=dtype.newbyteorder("="))
             except (ValueError, OverflowError):
                 raise self.fail(f"{what} has values that are not {type_name}") from None
