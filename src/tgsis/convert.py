@@ -71,11 +71,12 @@ from typing import Any, TypeVar
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._vtk_cells import (CELL_TYPE_OF, collection_from_cells, first, labelled, one_mesh, shared_properties,
+                              string_bytes, strings, vtk_parts)
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
-from tgsis.mesh import (PROPERTY_NAME_RE, Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface,
-                        TetraMesh, mesh_class)
+from tgsis.mesh import PROPERTY_NAME_RE, Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh
 
-__all__ = ["as_mesh", "from_pyvista", "from_meshio", "to_pyvista", "to_meshio", "mesh_from_vtk_cells", "ACCEPTED"]
+__all__ = ["as_mesh", "from_pyvista", "from_meshio", "to_pyvista", "to_meshio", "ACCEPTED"]
 
 #: What :func:`as_mesh` accepts, in the words of its error message.
 ACCEPTED = ("a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista PolyData or "
@@ -84,20 +85,10 @@ ACCEPTED = ("a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection
 _HINT = ("build one with tgsis.Surface(vertices, triangles) (or PointSet, LineSet, TetraMesh), or convert "
          "your object to one of these first")
 
-# VTK cell types: the kind of tgsis mesh each belongs to
-_VERTEX, _POLY_VERTEX, _LINE, _POLY_LINE, _TRIANGLE, _TETRA = 1, 2, 3, 4, 5, 10
-_KIND_OF_CELL_TYPE: dict[int, type[Mesh]] = {_VERTEX: PointSet, _POLY_VERTEX: PointSet, _LINE: LineSet,
-                                             _POLY_LINE: LineSet, _TRIANGLE: Surface, _TETRA: TetraMesh}
-_CELL_TYPE_OF: dict[type[Mesh], int] = {PointSet: _VERTEX, LineSet: _LINE, Surface: _TRIANGLE, TetraMesh: _TETRA}
-_VTK_CELL_NAMES = {1: "VERTEX", 2: "POLY_VERTEX", 3: "LINE", 4: "POLY_LINE", 5: "TRIANGLE", 6: "TRIANGLE_STRIP",
-                   7: "POLYGON", 8: "PIXEL", 9: "QUAD", 10: "TETRA", 11: "VOXEL", 12: "HEXAHEDRON", 13: "WEDGE",
-                   14: "PYRAMID", 21: "QUADRATIC_EDGE", 22: "QUADRATIC_TRIANGLE", 23: "QUADRATIC_QUAD",
-                   24: "QUADRATIC_TETRA", 25: "QUADRATIC_HEXAHEDRON", 42: "POLYHEDRON"}
 _MESHIO_TYPE_OF: dict[type[Mesh], str] = {PointSet: "vertex", LineSet: "line", Surface: "triangle",
                                           TetraMesh: "tetra"}
 _MESH_OF_MESHIO_TYPE = {v: k for k, v in _MESHIO_TYPE_OF.items()}
 _NAMES_KEY = "vtk_array_names"
-_T = TypeVar("_T")
 
 
 # ---------------------------------------------------------------- recognising objects
@@ -151,9 +142,9 @@ def as_mesh(obj: Any) -> Geometry:
         return from_meshio(obj)
     trimesh = _loaded("trimesh")
     if trimesh is not None and isinstance(obj, trimesh.Trimesh):
-        return _labelled("trimesh.Trimesh", lambda: Surface.from_trimesh(obj, strict=True))
+        return labelled("trimesh.Trimesh", lambda: Surface.from_trimesh(obj, strict=True))
     if trimesh is not None and isinstance(obj, trimesh.PointCloud):
-        return _labelled("trimesh.PointCloud", lambda: PointSet(
+        return labelled("trimesh.PointCloud", lambda: PointSet(
             np.asarray(obj.vertices, dtype=np.float64),
             vertex_properties=_numeric(getattr(obj, "vertex_attributes", None) or {}, "trimesh.PointCloud",
                                        "vertex_attributes"),
@@ -165,16 +156,6 @@ def _type_name(obj: Any) -> str:
     kind = type(obj)
     module = kind.__module__.split(".")[0]
     return kind.__qualname__ if module == "builtins" else f"{module}.{kind.__qualname__}"
-
-
-def _labelled(source: str, build: Callable[[], _T]) -> _T:
-    """``build()``, with the name of the source object in front of any mesh or property error."""
-    try:
-        return build()
-    except (InvalidPropertyError, InvalidGeometryError) as exc:
-        if exc.message.startswith(source):
-            raise
-        raise type(exc)(f"{source}: {exc.message}", detail=exc.detail, hint=exc.hint) from None
 
 
 def _numeric(arrays: Mapping[str, Any], source: str, where: str) -> dict[str, npt.NDArray[Any]]:
@@ -208,114 +189,7 @@ def _renamed(arrays: dict[str, npt.NDArray[Any]], names: dict[str, dict[str, str
     return result
 
 
-def _strings(values: Any) -> list[str]:
-    """A field array as strings: a string array, or null-terminated UTF-8 bytes in an integer array."""
-    array = np.asarray(values)
-    if array.dtype.kind in "US":
-        return [v.decode("utf-8", "replace") if isinstance(v, bytes) else str(v) for v in array.reshape(-1)]
-    if array.dtype.kind in "iu" and array.size and array.min() >= 0 and array.max() < 256:
-        raw = array.astype(np.uint8).tobytes()
-        parts = raw.split(b"\0")
-        if raw.endswith(b"\0"):
-            parts.pop()
-        return [p.decode("utf-8", "replace") for p in parts]
-    return []
-
-
-def _string_bytes(*values: str) -> npt.NDArray[np.uint8]:
-    """Strings as UTF-8 bytes, each ending in 0 (what :func:`_strings` reads back)."""
-    return np.frombuffer(b"".join(v.encode("utf-8") + b"\0" for v in values), dtype=np.uint8).copy()
-
-
-def _first(values: Any) -> str | None:
-    strings = _strings(values) if values is not None else []
-    return strings[0] if strings else None
-
-
 # ---------------------------------------------------------------- cells of one kind, from VTK's layout
-
-
-def _split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connectivity: npt.NDArray[np.int64],
-                 source: str) -> tuple[type[Mesh], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """The mesh class of cells all of one kind, its (m, k) cells, and the source cell of each.
-
-    POLY_VERTEX and POLY_LINE cells are split into vertices and segments.
-    """
-    present = sorted({int(t) for t in np.unique(types)})
-    unknown = [t for t in present if t not in _KIND_OF_CELL_TYPE]
-    if unknown:
-        listed = ", ".join(f"{_VTK_CELL_NAMES.get(t, 'type')} ({t})" for t in unknown)
-        polygons = any(t in (6, 7, 8, 9) for t in unknown)
-        refused = np.isin(types, unknown)
-        sizes = ", ".join(str(int(v)) for v in np.unique(np.diff(offsets)[refused])[:5])
-        raise InvalidGeometryError(
-            f"{source} has {listed} cells: tgsis stores vertices, lines, triangles and tetrahedra",
-            detail=f"{int(refused.sum())} of {len(types)} cells, of {sizes} points",
-            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)" if polygons
-            else "convert them to tetrahedra or triangles first (pyvista: mesh.triangulate(); ParaView: the "
-                 "Tetrahedralize filter)")
-    kinds = list(dict.fromkeys(_KIND_OF_CELL_TYPE[t] for t in present))
-    if len(kinds) > 1:
-        listed = ", ".join(f"{_VTK_CELL_NAMES[t]} ({int((types == t).sum())})" for t in present)
-        raise InvalidGeometryError(
-            f"{source} mixes cells of several kinds ({listed}): a tgsis mesh has one kind of cell",
-            hint="extract one kind first (e.g. mesh.extract_cells_by_type(pyvista.CellType.TRIANGLE)), or store "
-                 "the kinds as members of a tgsis.GeometryCollection")
-    kind = kinds[0]
-    k = kind.cell_size
-    sizes = np.diff(offsets)
-    if bool(np.all(sizes == k)):
-        return kind, connectivity.reshape(-1, k), np.arange(len(types), dtype=np.int64)
-    if kind not in (PointSet, LineSet) or (sizes < k).any():
-        bad = int(np.flatnonzero(sizes != k)[0])
-        raise InvalidGeometryError(f"{source} cell {bad} has {int(sizes[bad])} points, not {k}")
-    # POLY_VERTEX / POLY_LINE: n points give n vertices / n - 1 segments, each from its source cell
-    pieces = sizes - (k - 1)
-    source_cell = np.repeat(np.arange(len(types), dtype=np.int64), pieces)
-    first = np.repeat(offsets[:-1], pieces) + (np.arange(int(pieces.sum())) - np.repeat(np.cumsum(pieces) - pieces,
-                                                                                          pieces))
-    cells = np.stack([connectivity[first + j] for j in range(k)], axis=1)
-    return kind, cells.astype(np.int64), source_cell
-
-
-def _mesh_from_cells(kind: type[Mesh], vertices: npt.NDArray[np.float64], cells: npt.NDArray[np.int64],
-                     vertex_properties: dict[str, npt.NDArray[Any]], cell_properties: dict[str, npt.NDArray[Any]],
-                     name: str | None, metadata: dict[str, Any]) -> Mesh:
-    if kind is PointSet and len(cells) == 0 and len(vertices):  # points without cells: a point cloud, one each
-        return PointSet(vertices, vertex_properties=vertex_properties, name=name, metadata=metadata)
-    return kind(vertices, cells, vertex_properties=vertex_properties, cell_properties=cell_properties, name=name,
-                metadata=metadata)
-
-
-def _collection_from_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-                           connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
-                           cell_data: dict[str, npt.NDArray[Any]], table: tuple[list[str], list[str], Any],
-                           name: str | None, metadata: dict[str, Any], source: str) -> GeometryCollection:
-    """The members of a grid written from a GeometryCollection (its member table in the field data)."""
-    geotypes, names, sizes_raw = table
-    sizes = np.asarray(sizes_raw, dtype=np.int64).reshape(-1, 2)
-    if len(sizes) != len(geotypes) or sizes.min(initial=0) < 0 or int(sizes[:, 0].sum()) != len(vertices) \
-            or int(sizes[:, 1].sum()) != len(types):
-        raise InvalidGeometryError(f"{source}: its tgsis member table does not match its {len(vertices)} points and "
-                                   f"{len(types)} cells")
-    members: list[Mesh] = []
-    first_point = first_cell = 0
-    for i, (geotype, (n_p, n_c)) in enumerate(zip(geotypes, sizes.tolist())):
-        kind = mesh_class(geotype)
-        cells = slice(first_cell, first_cell + n_c)
-        points = slice(first_point, first_point + n_p)
-        if np.any(types[cells] != _CELL_TYPE_OF[kind]):
-            raise InvalidGeometryError(f"{source}: member {i} is a {geotype} but has other cells")
-        start = int(offsets[first_cell])
-        k = kind.cell_size
-        member_cells = (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k)
-        members.append(_labelled(f"{source} member {i}", lambda: kind(
-            vertices[points], member_cells,
-            vertex_properties={key: v[points] for key, v in point_data.items()},
-            cell_properties={key: v[cells] for key, v in cell_data.items()},
-            name=(names[i] if i < len(names) else "") or None)))
-        first_point, first_cell = first_point + n_p, first_cell + n_c
-    return GeometryCollection(members, name=name, metadata=metadata)
 
 
 # ---------------------------------------------------------------- pyvista
@@ -354,8 +228,8 @@ def from_pyvista(obj: Any) -> Geometry:
     offsets = np.asarray(grid.cell_offsets if hasattr(type(grid), "cell_offsets") else grid.offset, dtype=np.int64)
     connectivity = np.asarray(grid.cell_connectivity, dtype=np.int64)
     fields = {str(k): obj.field_data[k] for k in obj.field_data.keys()}
-    name = _first(fields.get("tgsis_name")) or _first(fields.get("name"))
-    geotype = _first(fields.get("tgsis_geotype"))
+    name = first(fields.get("tgsis_name")) or first(fields.get("name"))
+    geotype = first(fields.get("tgsis_geotype"))
     names: dict[str, dict[str, str]] = {}
     point_data = _renamed(_numeric({k: obj.point_data[k] for k in obj.point_data.keys()}, source, "point_data"),
                           names, "point_data")
@@ -363,88 +237,17 @@ def from_pyvista(obj: Any) -> Geometry:
                          names, "cell_data")
     metadata: dict[str, Any] = {_NAMES_KEY: names} if names else {}
     if geotype == GeometryCollection.geotype.value:
-        table = (_strings(fields.get("tgsis_member_geotypes", [])), _strings(fields.get("tgsis_member_names", [])),
+        table = (strings(fields.get("tgsis_member_geotypes", [])), strings(fields.get("tgsis_member_names", [])),
                  fields.get("tgsis_member_sizes", np.empty((0, 2))))
-        return _collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+        return collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
                                       metadata, source)
-    return _labelled(source, lambda: _one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
+    return labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
                                                geotype, metadata, source))
-
-
-def mesh_from_vtk_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-                        connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
-                        cell_data: dict[str, npt.NDArray[Any]], *, name: str | None, geotype: str | None,
-                        metadata: dict[str, Any], source: str) -> Mesh:
-    """One tgsis mesh from cells in VTK's layout (types, offsets from 0, connectivity), as for pyvista objects.
-
-    For the VTK file readers (:mod:`tgsis.formats.vtp`, :mod:`tgsis.formats.vtk_legacy`): the same rules
-    as :func:`from_pyvista`. ``geotype``: the type a file written by tgsis names (for a mesh without cells).
-
-    Raises
-    ------
-    InvalidGeometryError, InvalidPropertyError
-        As :func:`as_mesh` (the readers turn them into FileFormatError).
-    """
-    return _one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name, geotype, metadata, source)
-
-
-def _one_mesh(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-              connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
-              cell_data: dict[str, npt.NDArray[Any]], name: str | None, geotype: str | None,
-              metadata: dict[str, Any], source: str) -> Mesh:
-    if len(types) == 0:
-        if geotype is not None:
-            kind = mesh_class(geotype)  # written by tgsis: an empty mesh keeps its type
-        elif len(vertices):
-            kind = PointSet
-        else:
-            raise InvalidGeometryError(f"{source} is empty (no point, no cell): nothing says what kind of mesh it is",
-                                       hint="give it points (and cells), or build the empty tgsis mesh you mean "
-                                            "(e.g. tgsis.Surface(numpy.empty((0, 3)), numpy.empty((0, 3))))")
-        return _mesh_from_cells(kind, vertices, np.empty((0, kind.cell_size), dtype=np.int64), point_data,
-                                cell_data, name, metadata)
-    kind, cells, source_cell = _split_cells(types, offsets, connectivity, source)
-    if len(source_cell) != len(types):
-        cell_data = {k: v[source_cell] for k, v in cell_data.items()}
-    return _mesh_from_cells(kind, vertices, cells, point_data, cell_data, name, metadata)
 
 
 def _original_names(mesh: Mesh | GeometryCollection, key: str) -> dict[str, str]:
     names = mesh.metadata.get(_NAMES_KEY)
     return dict(names.get(key, {})) if isinstance(names, Mapping) else {}
-
-
-def _parts(geometry: Geometry) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.int64],
-                                        npt.NDArray[np.uint8], dict[str, npt.NDArray[Any]],
-                                        dict[str, npt.NDArray[Any]]]:
-    """Points, flat connectivity, offsets (m + 1, from 0), VTK cell types, point data, cell data."""
-    members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
-    first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
-    connectivity = np.concatenate([m.cells.reshape(-1) + start for m, start in zip(members, first_point)])
-    sizes = np.concatenate([np.full(m.n_cells, m.cell_size, dtype=np.int64) for m in members])
-    types = np.concatenate([np.full(m.n_cells, _CELL_TYPE_OF[type(m)], dtype=np.uint8) for m in members])
-    if isinstance(geometry, GeometryCollection):
-        point_data, cell_data = _shared(members, "vertex"), _shared(members, "cell")
-    else:
-        point_data, cell_data = geometry.vertex_properties, geometry.cell_properties
-    vertices = np.concatenate([m.vertices for m in members]) if members else np.empty((0, 3))
-    return (vertices, connectivity.astype(np.int64), np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
-            types, dict(point_data), dict(cell_data))
-
-
-def _shared(members: tuple[Mesh, ...], kind: str) -> dict[str, npt.NDArray[Any]]:
-    """The members' vertex or cell properties, concatenated: one array covers all points (cells) of a grid."""
-    def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
-        return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
-
-    names = dict.fromkeys(name for m in members for name in of(m))
-    for name in names:
-        lacking = [i for i, m in enumerate(members) if name not in of(m)]
-        if lacking:
-            raise InvalidPropertyError(f"{kind} property {name!r} is on some members of the collection but not on "
-                                       f"members {lacking}: one array covers the points or cells of all members",
-                                       hint="give every member the property, or remove it before converting")
-    return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
 
 
 def _named(arrays: Mapping[str, npt.NDArray[Any]], originals: Mapping[str, str]) -> dict[str, npt.NDArray[Any]]:
@@ -474,7 +277,7 @@ def to_pyvista(geometry: Geometry) -> Any:
     if not isinstance(geometry, (Mesh, GeometryCollection)):
         raise InvalidGeometryError(f"to_pyvista converts tgsis meshes, not {_type_name(geometry)}",
                                    hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
-    vertices, connectivity, offsets, types, point_data, cell_data = _parts(geometry)
+    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(geometry)
     kind = type(geometry)
     if kind in (PointSet, LineSet, Surface):
         k = geometry.cell_size  # type: ignore[union-attr]
@@ -492,13 +295,13 @@ def to_pyvista(geometry: Geometry) -> Any:
         data.cell_data[key] = values
     # strings as UTF-8 bytes ending in 0 (uint8), as in tgsis's .vtu files: pyvista refuses non-ASCII strings
     if geometry.name:
-        data.field_data["tgsis_name"] = _string_bytes(geometry.name)
+        data.field_data["tgsis_name"] = string_bytes(geometry.name)
         if geometry.name.isascii():
             data.field_data["name"] = np.array([geometry.name])
-    data.field_data["tgsis_geotype"] = _string_bytes(geometry.geotype.value)
+    data.field_data["tgsis_geotype"] = string_bytes(geometry.geotype.value)
     if isinstance(geometry, GeometryCollection):
-        data.field_data["tgsis_member_geotypes"] = _string_bytes(*(m.geotype.value for m in geometry.members))
-        data.field_data["tgsis_member_names"] = _string_bytes(*(m.name or "" for m in geometry.members))
+        data.field_data["tgsis_member_geotypes"] = string_bytes(*(m.geotype.value for m in geometry.members))
+        data.field_data["tgsis_member_names"] = string_bytes(*(m.name or "" for m in geometry.members))
         data.field_data["tgsis_member_sizes"] = np.array([[m.n_vertices, m.n_cells] for m in geometry.members],
                                                          dtype=np.int64)
     return data
@@ -528,8 +331,8 @@ def from_meshio(obj: Any) -> Geometry:
         points = np.column_stack([points, np.zeros(len(points))])  # meshio's 2D meshes lie in z = 0
     info = obj.info.get("tgsis", {}) if isinstance(getattr(obj, "info", None), Mapping) else {}
     fields = {str(k): v for k, v in (obj.field_data or {}).items()}
-    name = info.get("name") or _first(fields.get("tgsis_name"))
-    geotype = info.get("geotype") or _first(fields.get("tgsis_geotype"))
+    name = info.get("name") or first(fields.get("tgsis_name"))
+    geotype = info.get("geotype") or first(fields.get("tgsis_geotype"))
     blocks = list(obj.cells)
     unknown = [b.type for b in blocks if b.type not in _MESH_OF_MESHIO_TYPE]
     if unknown:
@@ -556,7 +359,7 @@ def from_meshio(obj: Any) -> Geometry:
     kinds = list(dict.fromkeys(_MESH_OF_MESHIO_TYPE[b.type] for b in blocks))
     connectivity = (np.concatenate([np.asarray(b.data, dtype=np.int64).reshape(-1) for b in blocks]) if blocks
                     else np.empty(0, np.int64))
-    types = (np.concatenate([np.full(len(b.data), _CELL_TYPE_OF[_MESH_OF_MESHIO_TYPE[b.type]]) for b in blocks])
+    types = (np.concatenate([np.full(len(b.data), CELL_TYPE_OF[_MESH_OF_MESHIO_TYPE[b.type]]) for b in blocks])
              if blocks else np.empty(0, np.int64))
     sizes = np.concatenate([np.full(len(b.data), _MESH_OF_MESHIO_TYPE[b.type].cell_size) for b in blocks]) \
         if blocks else np.empty(0, np.int64)
@@ -567,9 +370,9 @@ def from_meshio(obj: Any) -> Geometry:
             members = info["members"]
             table = ([m[0] for m in members], [m[1] for m in members], [[m[2], m[3]] for m in members])
         else:  # a .vtu file tgsis wrote, read by meshio: the member table is in the field data
-            table = (_strings(fields.get("tgsis_member_geotypes", [])), _strings(fields.get("tgsis_member_names", [])),
+            table = (strings(fields.get("tgsis_member_geotypes", [])), strings(fields.get("tgsis_member_names", [])),
                      fields.get("tgsis_member_sizes", np.empty((0, 2))))
-        return _collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+        return collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
                                       metadata, source)
     if len(kinds) > 1:
         listed = ", ".join(f"{b.type} ({len(b.data)})" for b in blocks)
@@ -580,7 +383,7 @@ def from_meshio(obj: Any) -> Geometry:
     if not blocks or not len(types):
         if kinds:
             geotype = geotype or kinds[0].geotype.value
-    return _labelled(source, lambda: _one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
+    return labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
                                                geotype, metadata, source))
 
 
@@ -607,7 +410,7 @@ def to_meshio(geometry: Geometry) -> Any:
     if not isinstance(geometry, (Mesh, GeometryCollection)):
         raise InvalidGeometryError(f"to_meshio converts tgsis meshes, not {_type_name(geometry)}",
                                    hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
-    vertices, connectivity, offsets, types, point_data, cell_data = _parts(geometry)
+    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(geometry)
     members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
     first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
     blocks = [meshio.CellBlock(_MESHIO_TYPE_OF[type(m)], m.cells + start) for m, start in zip(members, first_point)]

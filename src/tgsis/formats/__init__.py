@@ -10,7 +10,7 @@ tsolid     ``.so``               MULTITETRA, collections of them       :mod:`tgs
 lightsolid ``.lso``              MULTITETRA (read only)                :mod:`tgsis.formats.gocad`
 gocadgroup ``.gp``               the members of a GOCAD group (read)   :mod:`tgsis.formats.gocad`
 vtu        ``.vtu``              all four, mixed collections           :mod:`tgsis.formats.vtk`
-vtp        ``.vtp``              MULTIPOINT, MULTILINESTRING, SURFACE  :mod:`tgsis.formats.vtp`
+vtp        ``.vtp``              MULTIPOINT, MULTILINESTRING, SURFACE  :mod:`tgsis.formats.vtk`
 vtk        ``.vtk`` (legacy)     all four, mixed collections           :mod:`tgsis.formats.vtk_legacy`
 obj, ply,  ``.obj .ply``         SURFACE (read: points too)            :mod:`tgsis.formats.trimesh_io`
 off, stl   ``.off .stl``
@@ -65,10 +65,9 @@ from tgsis.formats.gocad import (format_gocad, parse_gocad, read_gocad, read_tsu
                                  write_gocad_many)
 from tgsis.formats.pvd import read_pvd, write_pvd
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
-from tgsis.formats.vtk import (format_vtu, parse_vtu, parse_vtu_collection, read_vtu, read_vtu_collection,
-                               write_vtu)
+from tgsis.formats.vtk import (format_vtp, format_vtu, parse_vtp, parse_vtu, parse_vtu_collection, read_vtp,
+                               read_vtu, read_vtu_collection, write_vtp, write_vtu)
 from tgsis.formats.vtk_legacy import format_vtk, parse_vtk, read_vtk, read_vtk_geometry, write_vtk
-from tgsis.formats.vtp import format_vtp, parse_vtp, read_vtp, write_vtp
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh
 
 __all__ = [

@@ -31,7 +31,7 @@ the 5.1 ``OFFSETS``/``CONNECTIVITY`` layout; ``SCALARS``, ``VECTORS``,
 ``PEDIGREE_IDS`` and ``FIELD`` arrays become properties (k components: a
 vector property), string arrays and lookup tables are skipped (a string
 ``name`` field gives the name), ``METADATA`` blocks are skipped. The cells
-must be of one kind, as for ``.vtp`` (:mod:`tgsis.formats.vtp`): polylines
+must be of one kind, as for ``.vtp`` (:mod:`tgsis.formats.vtk`): polylines
 become segments, polygons that are not triangles and triangle strips are
 refused with the hint to triangulate. A file tgsis wrote from a collection
 gives its members (:func:`read_vtk_geometry`).
@@ -48,13 +48,12 @@ from urllib.parse import unquote_to_bytes
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
-from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh
+from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]
-
-_CELL_TYPE_OF: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
 
 # file type names -> numpy dtype (big-endian in binary files); "long" is 8 bytes where VTK files come from (LP64)
 _DTYPE_OF: dict[str, str] = {
@@ -103,43 +102,37 @@ def write_vtk(mesh: Geometry, path: PathLike, *, ascii: bool = False) -> None:
 
 def format_vtk(mesh: Geometry, *, ascii: bool = False) -> bytes:
     """The ``.vtk`` file content of a mesh or a collection; see :func:`write_vtk`."""
-    from tgsis.formats.vtk import _collection_grid, _mesh_grid
-
-    grid = _collection_grid(mesh) if isinstance(mesh, GeometryCollection) \
-        else _mesh_grid(check_mesh(mesh, "the legacy VTK writer"))
+    members = mesh.members if isinstance(mesh, GeometryCollection) else (check_mesh(mesh, "the legacy VTK writer"),)
+    try:
+        vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(mesh)
+    except InvalidPropertyError as exc:  # a collection property that not every member has
+        raise FileFormatError(exc.message, hint=exc.hint) from None
     out = _Writer(ascii)
-    title = (grid.name or "tgsis").replace("\n", " ").replace("\r", " ")[:255]
+    title = (mesh.name or "tgsis").replace("\n", " ").replace("\r", " ")[:255]
     out.text(f"# vtk DataFile Version 5.1\n{title}\n{'ASCII' if ascii else 'BINARY'}\nDATASET UNSTRUCTURED_GRID\n")
     fields: list[tuple[str, npt.NDArray[Any]]] = []
-    if grid.name:
-        fields.append(("tgsis_name", _string_bytes(grid.name)))
-    if grid.geotype is not None:
-        fields.append(("tgsis_geotype", _string_bytes(grid.geotype)))
-    if grid.members is not None:
-        members = grid.members.members
-        fields.append(("tgsis_member_geotypes", _string_bytes(*(m.geotype.value for m in members))))
-        fields.append(("tgsis_member_names", _string_bytes(*(m.name or "" for m in members))))
+    if mesh.name:
+        fields.append(("tgsis_name", string_bytes(mesh.name)))
+    fields.append(("tgsis_geotype", string_bytes(mesh.geotype.value)))
+    if isinstance(mesh, GeometryCollection):
+        fields.append(("tgsis_member_geotypes", string_bytes(*(m.geotype.value for m in members))))
+        fields.append(("tgsis_member_names", string_bytes(*(m.name or "" for m in members))))
         fields.append(("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members], dtype=np.int64)))
     out.field("FieldData", fields)
-    out.text(f"POINTS {len(grid.vertices)} double\n")
-    out.values(grid.vertices)
-    n_cells = len(grid.types)
-    out.text(f"CELLS {n_cells + 1} {len(grid.connectivity)}\nOFFSETS vtktypeint64\n")
-    out.values(np.concatenate([[0], grid.offsets]).astype(np.int64))
+    out.text(f"POINTS {len(vertices)} double\n")
+    out.values(vertices)
+    n_cells = len(types)
+    out.text(f"CELLS {n_cells + 1} {len(connectivity)}\nOFFSETS vtktypeint64\n")
+    out.values(offsets)
     out.text("CONNECTIVITY vtktypeint64\n")
-    out.values(grid.connectivity)
+    out.values(connectivity)
     out.text(f"CELL_TYPES {n_cells}\n")
-    out.values(grid.types.astype(np.int32))
-    for keyword, count, arrays in (("POINT_DATA", len(grid.vertices), grid.point_data),
-                                   ("CELL_DATA", n_cells, grid.cell_data)):
+    out.values(types.astype(np.int32))
+    for keyword, count, arrays in (("POINT_DATA", len(vertices), point_data), ("CELL_DATA", n_cells, cell_data)):
         if arrays:
             out.text(f"{keyword} {count}\n")
             out.field("FieldData", list(arrays.items()))
     return out.content()
-
-
-def _string_bytes(*values: str) -> npt.NDArray[np.uint8]:
-    return np.frombuffer(b"".join(v.encode("utf-8") + b"\0" for v in values), dtype=np.uint8)
 
 
 class _Writer:
@@ -232,8 +225,6 @@ class _Dataset:
 
 def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry:
     """Parse the content of a legacy ``.vtk`` file; see :func:`read_vtk_geometry`."""
-    from tgsis.convert import _collection_from_cells, _first, _strings, mesh_from_vtk_cells
-
     reader = _Reader(data, path)
     dataset = reader.dataset()
     vertices = dataset.points if dataset.points is not None else np.empty((0, 3))
@@ -267,17 +258,17 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
     point_data = _sanitised(dataset.point_data, n_points, names, "point_data", path)
     cell_data = _sanitised(dataset.cell_data, len(types), names, "cell_data", path)
     metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
-    name = _first(dataset.fields.get("tgsis_name")) or _first(dataset.fields.get("name"))
-    geotype = _first(dataset.fields.get("tgsis_geotype"))
+    name = first(dataset.fields.get("tgsis_name")) or first(dataset.fields.get("name"))
+    geotype = first(dataset.fields.get("tgsis_geotype"))
     if connectivity.size and (connectivity.min() < 0 or connectivity.max() >= n_points):
         raise FileFormatError(f"a cell refers to point {int(connectivity.max())}, but the file has {n_points} points",
                               path=path)
     try:
         if geotype == GeometryCollection.geotype.value:
-            table = (_strings(dataset.fields.get("tgsis_member_geotypes", [])),
-                     _strings(dataset.fields.get("tgsis_member_names", [])),
+            table = (strings(dataset.fields.get("tgsis_member_geotypes", [])),
+                     strings(dataset.fields.get("tgsis_member_names", [])),
                      dataset.fields.get("tgsis_member_sizes", np.empty((0, 2))))
-            return _collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+            return collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
                                           metadata, "the file")
         return mesh_from_vtk_cells(vertices, types, offsets, connectivity, point_data, cell_data, name=name,
                                    geotype=geotype, metadata=metadata, source=f"the {dataset.kind}")
@@ -395,11 +386,11 @@ class _Reader:
         return result
 
     def header(self) -> str:
-        first = self.raw_line()
-        if first is None or not first.startswith("# vtk DataFile Version"):
+        line = self.raw_line()
+        if line is None or not line.startswith("# vtk DataFile Version"):
             raise self.fail("not a legacy VTK file (the first line must be '# vtk DataFile Version x.y')",
                             hint="a VTK XML file is .vtu (UnstructuredGrid) or .vtp (PolyData)")
-        version = first.split()[-1]
+        version = line.split()[-1]
         if self.raw_line() is None:
             raise self.fail("the file ends after its first line")
         mode = (self.line() or "").strip().upper()
@@ -544,9 +535,9 @@ class _Reader:
             name = unquote_to_bytes(head[0]).decode("utf-8", "replace")
             components, tuples = self._int(head, 1, name), self._int(head, 2, name)
             if head[3].lower() in ("string", "utf8_string"):
-                strings = self.strings(components * tuples, f"FIELD array {name}")
+                texts = self.strings(components * tuples, f"FIELD array {name}")
                 if keep_strings:
-                    into[name] = np.array(strings)
+                    into[name] = np.array(texts)
                 continue
             values = self.values(head[3], components * tuples, f"FIELD array {name}")
             into[name] = values.reshape(tuples, components) if components > 1 else values
