@@ -83,7 +83,7 @@ def decode_binary(element: ET.Element) -> npt.NDArray[Any]:
 @pytest.mark.parametrize(("index", "cell_type"), [(0, 1), (1, 3), (2, 5), (3, 10)])
 def test_xml_is_well_formed_standard_vtk(index: int, cell_type: int) -> None:
     mesh = meshes()[index]
-    root = ET.fromstring(format_vtu(mesh, compression=None))  # the compressed layout: test_formats_vtk_meshio.py
+    root = ET.fromstring(format_vtu(mesh, compression=None))  # the compressed layout: test_formats_vtk_libraries.py
     assert root.tag == "VTKFile"
     assert root.attrib == {"type": "UnstructuredGrid", "version": "1.0", "byte_order": "LittleEndian",
                            "header_type": "UInt64"}

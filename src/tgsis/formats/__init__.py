@@ -31,7 +31,7 @@ of objects (the members of a collection ``.vtu`` or ``.vtk``).
 (``mesh.save``, ``pyvista.read``) and meshio (``.vtu`` and ``.vtk``: meshio
 reads no ``.vtp``); tgsis writes ``.vtu`` and ``.vtp`` zlib-compressed, as
 ParaView does, and every file it writes is read by meshio and pyvista
-(``tests/test_formats_vtk_meshio.py``).
+(``tests/test_formats_vtk_libraries.py``).
 
 Each module's documentation says what its format keeps and loses. The
 format is chosen from the file extension unless ``format=`` names it (by name

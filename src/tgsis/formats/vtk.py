@@ -1,4 +1,4 @@
-"""VTK XML files, read and written with the standard library and numpy: UnstructuredGrid (``.vtu``), PolyData (``.vtp``).
+"""VTK XML files, read and written with the standard library and numpy: ``.vtu`` and ``.vtp``.
 
 Writing (:func:`write_vtu`)
 ---------------------------
