@@ -179,17 +179,29 @@ def test_meshio_2d_points_and_several_blocks_of_one_type() -> None:
 
 
 def test_anything_else_is_refused_with_what_is_accepted() -> None:
-    for thing in (42, "fault.ts", np.eye(3), {"vertices": np.eye(3)}, pv.MultiBlock([pv.Sphere()])):
+    for thing in (42, "fault.ts", np.eye(3), {"vertices": np.eye(3)}):
         with pytest.raises(InvalidGeometryError) as info:
             tgsis.as_mesh(thing)
-        if not isinstance(thing, pv.MultiBlock):
-            assert "tgsis takes a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista " \
-                   "PolyData or UnstructuredGrid" in str(info.value)
-            assert "meshio.Mesh" in str(info.value) and "trimesh.Trimesh" in str(info.value)
+        assert "tgsis takes a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista " \
+               "PolyData or UnstructuredGrid" in str(info.value)
+        assert "meshio.Mesh" in str(info.value) and "trimesh.Trimesh" in str(info.value)
     with pytest.raises(InvalidGeometryError, match="cannot store a numpy.ndarray as a mesh"):
         tgsis.as_mesh(np.eye(3))
-    with pytest.raises(InvalidGeometryError, match="MultiBlock of 1 blocks: tgsis converts one dataset at a time"):
-        tgsis.as_mesh(pv.MultiBlock([pv.Sphere()]))
+
+
+def test_a_multiblock_is_a_collection_of_its_blocks() -> None:
+    blocks = pv.MultiBlock({"salt": pv.Sphere(theta_resolution=6, phi_resolution=6), "well": pv.Line()})
+    blocks["salt"].field_data["name"] = ["salt dome"]
+    collection = tgsis.as_mesh(blocks)
+    assert isinstance(collection, GeometryCollection)
+    assert [type(m) for m in collection.members] == [Surface, LineSet]
+    assert [m.name for m in collection.members] == ["salt dome", "well"]  # its own name, else the block's key
+    with pytest.raises(InvalidGeometryError, match=r"block 1 \('well'\) is a MultiBlock: .* do not nest"):
+        tgsis.as_mesh(pv.MultiBlock({"a": pv.Sphere(), "well": pv.MultiBlock([pv.Line()])}))
+    with pytest.raises(InvalidGeometryError, match=r"pyvista MultiBlock block 0 \('a'\): pyvista PolyData has QUAD"):
+        tgsis.as_mesh(pv.MultiBlock({"a": pv.Plane()}))
+    with pytest.raises(InvalidGeometryError, match="MultiBlock has no block"):
+        tgsis.as_mesh(pv.MultiBlock())
 
 
 def test_polygons_that_are_not_triangles() -> None:

@@ -24,6 +24,8 @@ What :func:`as_mesh` takes
   Points without cells are a PointSet. ``point_data`` and ``cell_data``
   become vertex and cell properties (an (n, k) array: a vector property);
   ``field_data["name"]`` the name;
+* a pyvista ``MultiBlock``: a :class:`~tgsis.mesh.GeometryCollection`, one
+  member per block (named after its key unless it has a name); no nesting;
 * a ``meshio.Mesh``: its cell blocks must be all of one of the types
   ``vertex``, ``line``, ``triangle``, ``tetra`` (several blocks of one type
   are concatenated); ``point_data``, ``cell_data`` (one array per block) as
@@ -80,7 +82,8 @@ __all__ = ["as_mesh", "from_pyvista", "from_meshio", "to_pyvista", "to_meshio", 
 
 #: What :func:`as_mesh` accepts, in the words of its error message.
 ACCEPTED = ("a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista PolyData or "
-            "UnstructuredGrid (or another pyvista/VTK dataset), a meshio.Mesh, or a trimesh.Trimesh or PointCloud")
+            "UnstructuredGrid (or another pyvista/VTK dataset, or a MultiBlock of them), a meshio.Mesh, or a "
+            "trimesh.Trimesh or PointCloud")
 
 _HINT = ("build one with tgsis.Surface(vertices, triangles) (or PointSet, LineSet, TetraMesh), or convert "
          "your object to one of these first")
@@ -216,9 +219,7 @@ def from_pyvista(obj: Any) -> Geometry:
         obj = pv.wrap(obj)
     source = f"pyvista {type(obj).__name__}"
     if isinstance(obj, pv.MultiBlock):
-        raise InvalidGeometryError(f"{source} of {obj.n_blocks} blocks: tgsis converts one dataset at a time",
-                                   hint="convert each block (tgsis.as_mesh(blocks[i])), or blocks.combine() into one "
-                                        "grid")
+        return _blocks(pv, obj)
     if not isinstance(obj, pv.DataSet):
         raise InvalidGeometryError(f"{source} is not a dataset with points and cells: tgsis takes {ACCEPTED}",
                                    hint=_HINT)
@@ -243,6 +244,29 @@ def from_pyvista(obj: Any) -> Geometry:
                                       metadata, source)
     return labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
                                                geotype, metadata, source))
+
+
+def _blocks(pv: ModuleType, blocks: Any) -> GeometryCollection:
+    """A MultiBlock as a collection: one member per block, named after its key unless it has a name of its own."""
+    members: list[Mesh] = []
+    for i, key in enumerate(blocks.keys()):
+        block = blocks[i]
+        label = f"pyvista MultiBlock block {i} ({key!r})"
+        if block is None or isinstance(block, pv.MultiBlock):
+            raise InvalidGeometryError(f"{label} is {'empty' if block is None else 'a MultiBlock'}: the blocks "
+                                       "become the members of a GeometryCollection, which do not nest",
+                                       hint="remove it, or flatten the blocks first (blocks.flatten())")
+        member = labelled(label, lambda: from_pyvista(block))
+        if isinstance(member, GeometryCollection):
+            raise InvalidGeometryError(f"{label} is itself a collection tgsis wrote: collections do not nest",
+                                       hint="add its members instead")
+        if member.name is None and key:
+            member.name = str(key)
+        members.append(member)
+    if not members:
+        raise InvalidGeometryError("pyvista MultiBlock has no block: nothing to store",
+                                   hint="give it at least one dataset")
+    return GeometryCollection(members)
 
 
 def _original_names(mesh: Mesh | GeometryCollection, key: str) -> dict[str, str]:
