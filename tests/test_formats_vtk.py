@@ -83,7 +83,7 @@ def decode_binary(element: ET.Element) -> npt.NDArray[Any]:
 @pytest.mark.parametrize(("index", "cell_type"), [(0, 1), (1, 3), (2, 5), (3, 10)])
 def test_xml_is_well_formed_standard_vtk(index: int, cell_type: int) -> None:
     mesh = meshes()[index]
-    root = ET.fromstring(format_vtu(mesh))
+    root = ET.fromstring(format_vtu(mesh, compression=None))  # the compressed layout: test_formats_vtk_libraries.py
     assert root.tag == "VTKFile"
     assert root.attrib == {"type": "UnstructuredGrid", "version": "1.0", "byte_order": "LittleEndian",
                            "header_type": "UInt64"}
@@ -105,15 +105,19 @@ def test_xml_is_well_formed_standard_vtk(index: int, cell_type: int) -> None:
 
 
 def test_appended_layout() -> None:
-    data = format_vtu(meshes()[2], encoding="appended")
+    data = format_vtu(meshes()[2], encoding="appended", compression=None)
     head, _, tail = data.partition(b'<AppendedData encoding="raw">')
     root = ET.fromstring(head + b"</VTKFile>")
     offsets = [int(e.get("offset", "-1")) for e in root.iter("DataArray")]
     assert offsets == sorted(offsets) and offsets[0] == 0
     assert all(e.get("format") == "appended" for e in root.iter("DataArray"))
     payload = tail[tail.index(b"_") + 1:]
-    # the first block is the first PointData array: UInt64 byte count, then 30 float64
-    assert int(np.frombuffer(payload[:8], dtype="<u8")[0]) == 30 * 8
+    # the first block is the FieldData name, UTF-8 bytes ending in 0 (UInt8: meshio refuses String arrays);
+    # the next one the first PointData array: UInt64 byte count, then 30 float64
+    name = "surface é".encode() + b"\0"
+    assert int(np.frombuffer(payload[:8], dtype="<u8")[0]) == len(name) and payload[8:8 + len(name)] == name
+    second = int(next(e.get("offset", "-1") for e in root.iter("DataArray") if e.get("Name") == "f64"))
+    assert int(np.frombuffer(payload[second:second + 8], dtype="<u8")[0]) == 30 * 8
     assert tail.endswith(b"</AppendedData>\n</VTKFile>\n")
 
 
@@ -150,10 +154,11 @@ def test_hand_written_ascii_file() -> None:
     assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.1, 0.2, 3e5]]
     assert mesh.cells.tolist() == [[0, 1, 2, 3], [1, 2, 3, 4]]
     props = mesh.vertex_properties
-    assert list(props) == ["Temperature_K", "velocity_0", "velocity_1", "velocity_2"]  # letter case kept
+    assert list(props) == ["Temperature_K", "velocity"]  # letter case kept
     assert props["Temperature_K"].dtype == np.float32
     assert props["Temperature_K"].tolist() == [10.5, 11.5, 12.5, 13.5, 14.5]
-    assert props["velocity_1"].tolist() == [2, 5, 8, 11, 14]
+    assert props["velocity"].shape == (5, 3)  # three components: a vector property, as tgsis writes one
+    assert props["velocity"][:, 1].tolist() == [2, 5, 8, 11, 14]
     assert mesh.cell_properties["rock"].tolist() == [7, -3] and mesh.cell_properties["rock"].dtype == np.int32
     assert mesh.metadata["vtk_array_names"] == {"point_data": {"Temperature_K": "Temperature K"}}
 
@@ -298,7 +303,7 @@ def test_not_xml_gives_the_line(tmp_path: Path) -> None:
 
 
 def test_truncated_binary(tmp_path: Path) -> None:
-    data = format_vtu(meshes()[2])
+    data = format_vtu(meshes()[2], compression=None)
     cut = data.replace(b'format="binary">', b'format="binary">QUFB', 1)  # corrupt the first array
     with pytest.raises(FileFormatError, match="DataArray 'f64'"):
         parse_vtu(cut)

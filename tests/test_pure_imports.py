@@ -19,7 +19,8 @@ import pytest
 
 import tgsis
 
-PURE = ["tgsis", "tgsis.mesh", "tgsis.compare", "tgsis.edits", "tgsis.temporal", "tgsis.interpolation", "tgsis.gmaps",
+PURE = ["tgsis", "tgsis.mesh", "tgsis.convert", "tgsis.compare", "tgsis.edits", "tgsis.temporal",
+        "tgsis.interpolation", "tgsis.gmaps",
         "tgsis.formats", "tgsis.errors", "tgsis.pictures"]
 
 

@@ -33,6 +33,7 @@ from tgsis.mesh import (
     TetraMesh,
     mesh_class,
 )
+from tgsis.convert import as_mesh
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
 from tgsis.gmaps import extrude as extrude_gmap
 from tgsis.gmaps import slice as slice_gmap
@@ -356,6 +357,8 @@ __all__ = [
     "TetraMesh",
     "GeometryCollection",
     "mesh_class",
+    # pyvista / meshio / trimesh objects to tgsis meshes (tgsis.convert; to_pyvista() and to_meshio() back)
+    "as_mesh",
     # mesh comparison (numpy, no database)
     "MeshDiff",
     "MeshIndex",

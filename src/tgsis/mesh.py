@@ -310,6 +310,61 @@ class Mesh:
                           cell_properties={k: v.copy() for k, v in self.cell_properties.items()},
                           name=self.name, metadata=dict(self.metadata))
 
+    # ---- other libraries' mesh objects (tgsis.convert; pyvista and meshio are optional)
+
+    def to_pyvista(self) -> Any:
+        """This mesh as a pyvista ``PolyData`` (points, lines, surfaces) or ``UnstructuredGrid`` (tetrahedra).
+
+        See :func:`tgsis.convert.to_pyvista`; needs pyvista (``pip install 'tgsis[pyvista]'``).
+        """
+        from tgsis.convert import to_pyvista
+
+        return to_pyvista(self)
+
+    def to_meshio(self) -> Any:
+        """This mesh as a ``meshio.Mesh`` of one cell block.
+
+        See :func:`tgsis.convert.to_meshio`; needs meshio (``pip install 'tgsis[meshio]'``).
+        """
+        from tgsis.convert import to_meshio
+
+        return to_meshio(self)
+
+    @classmethod
+    def from_pyvista(cls, obj: Any) -> Mesh:
+        """A mesh of this class from a pyvista dataset; see :func:`tgsis.convert.from_pyvista`.
+
+        Raises
+        ------
+        InvalidGeometryError
+            The dataset is not a mesh of this class (``Surface.from_pyvista`` of
+            lines), or not one tgsis can store.
+        """
+        from tgsis.convert import from_pyvista
+
+        return cls._expect(from_pyvista(obj), "pyvista dataset")
+
+    @classmethod
+    def from_meshio(cls, obj: Any) -> Mesh:
+        """A mesh of this class from a ``meshio.Mesh``; see :func:`tgsis.convert.from_meshio`.
+
+        Raises
+        ------
+        InvalidGeometryError
+            As :meth:`from_pyvista`.
+        """
+        from tgsis.convert import from_meshio
+
+        return cls._expect(from_meshio(obj), "meshio.Mesh")
+
+    @classmethod
+    def _expect(cls, mesh: Mesh | GeometryCollection, what: str) -> Mesh:
+        if not isinstance(mesh, cls):
+            raise InvalidGeometryError(f"the {what} is a {type(mesh).__name__}, not a {cls.__name__}",
+                                       hint=f"tgsis.as_mesh(obj) gives whatever mesh it is; "
+                                            f"{cls.__name__}.from_... only a {cls.__name__}")
+        return mesh
+
     def __repr__(self) -> str:
         props = list(self.vertex_properties) + list(self.cell_properties)
         return (f"{type(self).__name__}(name={self.name!r}, n_vertices={self.n_vertices}, "
@@ -360,9 +415,23 @@ class Surface(Mesh):
         )
 
     @classmethod
-    def from_trimesh(cls, mesh: Any, *, name: str | None = None) -> Surface:
-        """A surface from a :class:`trimesh.Trimesh` (its vertex/face attributes become properties)."""
+    def from_trimesh(cls, mesh: Any, *, name: str | None = None, strict: bool = False) -> Surface:
+        """A surface from a :class:`trimesh.Trimesh` (its vertex/face attributes become properties).
+
+        Parameters
+        ----------
+        mesh : trimesh.Trimesh
+        name : str, optional
+            Default: ``mesh.metadata["name"]``.
+        strict : bool
+            Every attribute must become a property: one that is not numeric,
+            or has the wrong number of values, raises
+            :class:`~tgsis.errors.InvalidPropertyError` (default: it is left
+            out, as trimesh's file loaders add attributes of their own).
+        """
         def numeric(attrs: Mapping[str, Any], count: int) -> dict[str, npt.NDArray[Any]]:
+            if strict:
+                return {k: np.asarray(v) for k, v in attrs.items()}  # the constructor names a bad one
             return {k: np.asarray(v) for k, v in attrs.items()
                     if np.asarray(v).ndim == 1 and len(v) == count and np.asarray(v).dtype.kind in "biuf"}
 
@@ -496,6 +565,18 @@ class GeometryCollection:
     def copy(self) -> GeometryCollection:
         """A deep copy."""
         return GeometryCollection([m.copy() for m in self.members], name=self.name, metadata=dict(self.metadata))
+
+    def to_pyvista(self) -> Any:
+        """The collection as one pyvista ``UnstructuredGrid`` of mixed cells; see :func:`tgsis.convert.to_pyvista`."""
+        from tgsis.convert import to_pyvista
+
+        return to_pyvista(self)
+
+    def to_meshio(self) -> Any:
+        """The collection as a ``meshio.Mesh`` of one cell block per member; see :func:`tgsis.convert.to_meshio`."""
+        from tgsis.convert import to_meshio
+
+        return to_meshio(self)
 
     def __repr__(self) -> str:
         kinds = ", ".join(type(m).__name__ for m in self.members)

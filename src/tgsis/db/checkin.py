@@ -428,6 +428,10 @@ def _new_name(name: str | None, edited: Mesh, stored_name: str | None) -> str | 
 
 def _mesh_arg(edited: Any) -> Mesh:
     if not isinstance(edited, Mesh):
+        from tgsis.convert import as_mesh  # a pyvista, meshio or trimesh object (else: what is accepted)
+
+        edited = as_mesh(edited)
+    if not isinstance(edited, Mesh):
         raise InvalidGeometryError(f"an edited mesh must be a PointSet, LineSet, Surface or TetraMesh, "
                                    f"not {type(edited).__name__}")
     return edited
@@ -457,7 +461,8 @@ def save_feature(
         None: found from the feature id.
     feature_id : int
     edited : Mesh
-        Of the class's geotype, with the class's vertex or cell properties.
+        Of the class's geotype, with the class's vertex or cell properties (or
+        a pyvista, meshio or trimesh object, converted by :func:`tgsis.as_mesh`).
     properties : mapping, optional
         Feature properties to change (others are left as they are).
     name : str, optional
@@ -777,7 +782,8 @@ def checkin(
     checked_out : Checkout
         From :func:`checkout` (or :meth:`Checkout.load`).
     edited : Mesh, optional
-        The edited mesh (default: ``checked_out.mesh``).
+        The edited mesh (default: ``checked_out.mesh``), or a pyvista, meshio
+        or trimesh object (converted by :func:`tgsis.as_mesh`).
     properties : mapping, optional
         Feature properties to change.
     name : str, optional

@@ -35,7 +35,7 @@ from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_f
                               drop_feature_class, get_feature_class, list_feature_classes)
 from tgsis.db.meaning import meaning_of, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
-from tgsis.mesh import Geometry, GeometryCollection, Geotype
+from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh
 from tgsis.gmaps import EvolvingGMap, GMap
 from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
@@ -106,8 +106,10 @@ def insert_feature(
     feature_class : str or FeatureClass
     mesh : Mesh or GeometryCollection
         Of the class's geotype, with exactly the class's vertex (or cell)
-        properties; for a GEOMETRYCOLLECTION class a GeometryCollection whose
-        every member has them. For a temporal class a
+        properties (a pyvista, meshio or trimesh object is converted by
+        :func:`tgsis.as_mesh`, its point and cell data as properties); for
+        a GEOMETRYCOLLECTION class a GeometryCollection whose every member
+        has them. For a temporal class a
         :class:`~tgsis.temporal.SurfaceSeries` (INSTANTS) or
         :class:`~tgsis.temporal.EvolvingSurface` (EVOLVING), stored by
         :func:`tgsis.db.temporal.insert_series` / ``insert_evolving``. For a
@@ -144,6 +146,10 @@ def insert_feature(
                                         drop_extra_properties=drop_extra_properties)
     if isinstance(mesh, (GMap, EvolvingGMap)):
         return gmaps.insert_gmap(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties)
+    if not isinstance(mesh, (Mesh, GeometryCollection)):
+        from tgsis.convert import as_mesh  # a pyvista, meshio or trimesh object (else: what is accepted)
+
+        mesh = as_mesh(mesh)
     if fc.time_model != "STATIC":
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.time_model} surfaces, not a static "
                                    f"{type(mesh).__name__}",

@@ -10,6 +10,8 @@ tsolid     ``.so``               MULTITETRA, collections of them       :mod:`tgs
 lightsolid ``.lso``              MULTITETRA (read only)                :mod:`tgsis.formats.gocad`
 gocadgroup ``.gp``               the members of a GOCAD group (read)   :mod:`tgsis.formats.gocad`
 vtu        ``.vtu``              all four, mixed collections           :mod:`tgsis.formats.vtk`
+vtp        ``.vtp``              MULTIPOINT, MULTILINESTRING, SURFACE  :mod:`tgsis.formats.vtk`
+vtk        ``.vtk`` (legacy)     all four, mixed collections           :mod:`tgsis.formats.vtk_legacy`
 obj, ply,  ``.obj .ply``         SURFACE (read: points too)            :mod:`tgsis.formats.trimesh_io`
 off, stl   ``.off .stl``
 =========  ====================  ====================================  ==========================
@@ -20,10 +22,16 @@ off, stl   ``.off .stl``
 
 A :class:`~tgsis.mesh.GeometryCollection` is written to the formats that
 hold several objects: a GOCAD file takes the members when they are all of
-its type (one object each), a ``.vtu`` file takes members of mixed types
-(one grid of mixed cell types); OBJ, PLY, OFF and STL hold one object and
-refuse collections. Reading gives the list of objects (the members of a
-collection ``.vtu``).
+its type (one object each), a ``.vtu`` or legacy ``.vtk`` file takes
+members of mixed types (one grid of mixed cell types); ``.vtp``, OBJ, PLY,
+OFF and STL hold one object and refuse collections. Reading gives the list
+of objects (the members of a collection ``.vtu`` or ``.vtk``).
+
+``.vtu``, ``.vtp`` and ``.vtk`` are the files of ParaView, pyvista
+(``mesh.save``, ``pyvista.read``) and meshio (``.vtu`` and ``.vtk``: meshio
+reads no ``.vtp``); tgsis writes ``.vtu`` and ``.vtp`` zlib-compressed, as
+ParaView does, and every file it writes is read by meshio and pyvista
+(``tests/test_formats_vtk_libraries.py``).
 
 Each module's documentation says what its format keeps and loses. The
 format is chosen from the file extension unless ``format=`` names it (by name
@@ -57,8 +65,9 @@ from tgsis.formats.gocad import (format_gocad, parse_gocad, read_gocad, read_tsu
                                  write_gocad_many)
 from tgsis.formats.pvd import read_pvd, write_pvd
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
-from tgsis.formats.vtk import (format_vtu, parse_vtu, parse_vtu_collection, read_vtu, read_vtu_collection,
-                               write_vtu)
+from tgsis.formats.vtk import (format_vtp, format_vtu, parse_vtp, parse_vtu, parse_vtu_collection, read_vtp,
+                               read_vtu, read_vtu_collection, write_vtp, write_vtu)
+from tgsis.formats.vtk_legacy import format_vtk, parse_vtk, read_vtk, read_vtk_geometry, write_vtk
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh
 
 __all__ = [
@@ -80,6 +89,15 @@ __all__ = [
     "parse_vtu_collection",
     "write_vtu",
     "format_vtu",
+    "read_vtp",
+    "parse_vtp",
+    "write_vtp",
+    "format_vtp",
+    "read_vtk",
+    "read_vtk_geometry",
+    "parse_vtk",
+    "write_vtk",
+    "format_vtk",
     "read_trimesh_file",
     "write_trimesh_file",
     "read_pvd",
@@ -165,6 +183,15 @@ def _vtu_reader(path: PathLike, **options: Any) -> list[Mesh]:
     return list(read_vtu_collection(path, **options))
 
 
+def _vtk_reader(path: PathLike, **options: Any) -> list[Mesh]:
+    geometry = read_vtk_geometry(path, **options)
+    return list(geometry.members) if isinstance(geometry, GeometryCollection) else [geometry]
+
+
+def _vtp_reader(path: PathLike, **options: Any) -> list[Mesh]:
+    return [read_vtp(path, **options)]
+
+
 def _lightsolid_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
     raise FileFormatError("tgsis reads SKUA LightTSolid files but writes tetrahedra as GOCAD TSolid", path=path,
                           hint="write a .so file (tsolid)")
@@ -206,7 +233,11 @@ FORMATS: dict[str, FileFormat] = {f.name: f for f in (
                "SKUA LightTSolid (tetrahedra; read only)"),
     FileFormat("gocadgroup", (".gp",), _ALL, read_gocad, _group_writer,
                "GOCAD HeterogeneousGroup/HomogeneousGroup (read only: its members)"),
-    FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView)", write_vtu),
+    FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView; zlib)", write_vtu),
+    FileFormat("vtp", (".vtp",), (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE), _vtp_reader,
+               write_vtp, "VTK XML PolyData (ParaView, pyvista; zlib)"),
+    FileFormat("vtk", (".vtk",), _ALL, _vtk_reader, write_vtk, "legacy VTK 5.1 UnstructuredGrid (binary; reads "
+               "POLYDATA too)", write_vtk),
     _trimesh_format("obj", "Wavefront OBJ (text, 8 decimals, no properties)"),
     _trimesh_format("ply", "Stanford PLY (binary, exact, with properties)"),
     _trimesh_format("off", "Object File Format (text, 10 decimals, no properties)"),
@@ -291,7 +322,8 @@ def write(mesh: Geometry, path: PathLike, format: str | None = None, **options: 
         A format name or extension; by default from ``path``.
     **options
         Passed to the format's writer (``drop_cell_properties=True`` for GOCAD,
-        ``encoding="appended"`` for VTU, ``digits=`` / ``drop_properties=True``
+        ``encoding="appended"`` and ``compression=None`` for VTU and VTP,
+        ``ascii=True`` for legacy VTK, ``digits=`` / ``drop_properties=True``
         for OBJ/OFF/STL).
 
     Raises

@@ -1,4 +1,4 @@
-"""VTK XML UnstructuredGrid files (``.vtu``), read and written with the standard library and numpy.
+"""VTK XML files, read and written with the standard library and numpy: ``.vtu`` and ``.vtp``.
 
 Writing (:func:`write_vtu`)
 ---------------------------
@@ -12,24 +12,35 @@ One ``Piece`` with
   properties, each in its own dtype (Int8 ... UInt64, Float32, Float64).
   VTK has no boolean or 16-bit float type: bool is written as UInt8 and
   float16 as Float32, and they come back as such;
-* ``FieldData``: the mesh name (String array ``name``, when there is one) and
-  the geotype (String array ``tgsis_geotype``), so that a mesh without cells
-  comes back as the right type.
+* ``FieldData``: the mesh name (``tgsis_name``, when there is one) and the
+  geotype (``tgsis_geotype``), so that a mesh without cells comes back as the
+  right type. They are UInt8 DataArrays of UTF-8 bytes, each string ending
+  in 0, not VTK's String arrays (``<Array type="String">``), which tgsis
+  wrote before: meshio's VTU reader decodes every FieldData array as numbers
+  (``vtu_to_numpy_type[type]``) and refuses the whole file on a String one
+  ("Illegal data type 'String'"), whoever wrote it. tgsis still reads String
+  arrays (``name`` too).
 
-``encoding="binary"`` (the default) puts every DataArray inline as base64 of
-a UInt64 byte count followed by the little-endian values
-(``header_type="UInt64"``, no compression); ``encoding="appended"`` writes the
-same bytes unencoded in one ``AppendedData`` section (``encoding="raw"``),
-smaller and faster for big meshes. Both are standard VTK XML (file version
-1.0) that ParaView and VTK read. The round trip is bit-exact for vertices,
-cells and properties (dtypes included, except bool and float16); the mesh's
-other metadata is not stored.
+Every DataArray is zlib-compressed by default (``compressor=
+"vtkZLibDataCompressor"``: a header of block count, block size (32768), size
+of the last block and the compressed size of each block, then the blocks;
+inline, header and blocks are two base64 streams), as ParaView writes;
+``compression=None`` writes a UInt64 byte count followed by the raw values.
+A grid without points or without cells is not compressed (meshio cannot
+read a compressed array of 0 blocks). ``encoding="binary"`` (the default)
+puts the DataArrays inline as base64 (``header_type="UInt64"``);
+``encoding="appended"`` writes the same bytes unencoded in one
+``AppendedData`` section (``encoding="raw"``), smaller and faster for big
+meshes. Both are standard VTK XML (file version 1.0) that ParaView, VTK,
+pyvista and meshio read. The round trip is bit-exact for vertices, cells and
+properties (dtypes and vector properties included, except bool and float16);
+the mesh's other metadata is not stored.
 
 A :class:`~tgsis.mesh.GeometryCollection` is written as one grid of mixed
 cell types: the members' points one member after the other, their cells
 likewise (connectivity shifted to the member's first point), and in
 ``FieldData`` the geotype ``GEOMETRYCOLLECTION``, ``tgsis_member_geotypes``
-and ``tgsis_member_names`` (String arrays, one string per member; no name is
+and ``tgsis_member_names`` (strings as above, one per member; no name is
 written as the empty string) and ``tgsis_member_sizes`` (Int64, 2 components:
 points and cells of each member). ParaView shows the whole grid. A vertex or
 cell property must be on every member (a VTU array covers all points or all
@@ -42,8 +53,8 @@ Reads what the writer writes and also: ``format="ascii"`` arrays, appended
 data in ``raw`` or ``base64`` encoding, ``header_type`` UInt32 or UInt64, big-
 or little-endian files, and ``vtkZLibDataCompressor`` compression (ParaView's
 default). The file must have one Piece whose cells are all of one type among
-VERTEX, LINE, TRIANGLE and TETRA. A data array with k > 1 components becomes k
-properties ``name_0`` .. ``name_{k-1}``; names that are not valid mesh
+VERTEX, LINE, TRIANGLE and TETRA. A data array with k > 1 components becomes
+an (n, k) vector property, as tgsis writes one; names that are not valid mesh
 property names are sanitised and the file's names are kept in
 ``metadata["vtk_array_names"]`` (``{"point_data": {mesh name: file name},
 "cell_data": {...}}``, only for names that changed).
@@ -52,6 +63,22 @@ their members (and a file of one mesh as a collection of that mesh);
 :func:`read_vtu_geometry` gives a mesh or a collection as written, and None
 for the typeless empty grid of :func:`format_empty_vtu` (how
 :mod:`tgsis.formats.pvd` writes a time at which an object does not exist).
+
+PolyData (``.vtp``)
+-------------------
+ParaView's and pyvista's file for surfaces, lines and points.
+:func:`write_vtp` writes a PointSet, LineSet or Surface as one ``Piece``:
+``Points`` (Float64), its cells in ``Verts``, ``Lines`` or ``Polys``
+(``connectivity`` and ``offsets``, Int64), the properties in
+``PointData``/``CellData`` and the FieldData as for ``.vtu``, compressed the
+same way. PolyData has no 3D cells: a TetraMesh or a collection goes to
+``.vtu``. :func:`read_vtp` reads whatever VTK writes (the encodings above).
+The cells must be of one kind: vertices (poly-vertices become one vertex
+each), lines (a polyline becomes its segments, each with the polyline's cell
+data), or polygons that are all triangles (others, and triangle strips,
+raise :class:`~tgsis.errors.FileFormatError` with the hint to triangulate).
+``name`` (a VTK String array) or ``tgsis_name`` in FieldData gives the name;
+array names are sanitised as for ``.vtu``.
 """
 
 from __future__ import annotations
@@ -66,12 +93,14 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._vtk_cells import mesh_from_vtk_cells
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
 __all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "read_vtu_collection", "parse_vtu_collection",
-           "read_vtu_geometry", "parse_vtu_geometry", "write_vtu", "format_vtu", "format_empty_vtu"]
+           "read_vtu_geometry", "parse_vtu_geometry", "write_vtu", "format_vtu", "format_empty_vtu",
+           "read_vtp", "parse_vtp", "write_vtp", "format_vtp"]
 
 #: VTK cell type of each mesh class.
 VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
@@ -88,12 +117,14 @@ _DTYPE_OF: dict[str, str] = {v: k for k, v in _VTK_TYPE_OF.items()}
 _DTYPE_OF["String"] = "u1"  # FieldData strings: null-terminated bytes
 
 Encoding = Literal["binary", "appended"]
+Compression = Literal["zlib"] | None
 
 
 # ---------------------------------------------------------------- writing
 
 
-def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") -> None:
+def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary",
+              compression: Compression = "zlib") -> None:
     """Write a mesh or a collection as a VTK XML UnstructuredGrid file.
 
     Parameters
@@ -105,6 +136,9 @@ def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") 
         The ``.vtu`` file to write (replaced if it exists).
     encoding : {"binary", "appended"}
         Inline base64 DataArrays, or one raw AppendedData section.
+    compression : {"zlib", None}
+        ``"zlib"``: every DataArray compressed by the rules of VTK's
+        ``vtkZLibDataCompressor`` (what ParaView writes); None: uncompressed.
 
     Raises
     ------
@@ -112,7 +146,7 @@ def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary") 
         The file cannot be written, or a collection has a property that not
         every member has.
     """
-    write_bytes(path, [format_vtu(mesh, encoding=encoding)])
+    write_bytes(path, [format_vtu(mesh, encoding=encoding, compression=compression)])
 
 
 @dataclass(frozen=True)
@@ -167,14 +201,14 @@ def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"
     return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
 
 
-def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary") -> bytes:
+def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
     """The ``.vtu`` file content for ``mesh`` or a collection; see :func:`write_vtu`."""
-    _check_encoding(encoding)
+    _check_encoding(encoding, compression)
     return _format_grid(_collection_grid(mesh) if isinstance(mesh, GeometryCollection)
-                        else _mesh_grid(check_mesh(mesh, "the VTU writer")), encoding)
+                        else _mesh_grid(check_mesh(mesh, "the VTU writer")), encoding, compression)
 
 
-def format_empty_vtu(*, encoding: Encoding = "binary") -> bytes:
+def format_empty_vtu(*, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
     """The ``.vtu`` file content of a grid of 0 points and 0 cells that names no geotype.
 
     It stands for "no object": :func:`read_vtu_geometry` reads it as None
@@ -184,38 +218,43 @@ def format_empty_vtu(*, encoding: Encoding = "binary") -> bytes:
     ----------
     encoding : {"binary", "appended"}
         As for :func:`write_vtu`.
+    compression : {"zlib", None}
+        As for :func:`write_vtu`.
 
     Returns
     -------
     bytes
         A valid VTK XML UnstructuredGrid file (empty Points and Cells arrays).
     """
-    _check_encoding(encoding)
+    _check_encoding(encoding, compression)
     empty = np.empty(0, dtype=np.int64)
     return _format_grid(_Grid(None, None, np.empty((0, 3)), empty, empty, np.empty(0, dtype=np.uint8), {}, {}),
-                        encoding)
+                        encoding, compression)
 
 
-def _check_encoding(encoding: str) -> None:
+def _check_encoding(encoding: str, compression: str | None = None) -> None:
     if encoding not in ("binary", "appended"):
         raise FileFormatError(f"unknown VTU encoding {encoding!r}: use 'binary' or 'appended'")
+    if compression not in ("zlib", None):
+        raise FileFormatError(f"unknown compression {compression!r}: use 'zlib' or None")
 
 
-def _format_grid(source: _Grid, encoding: Encoding) -> bytes:
+def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) -> bytes:
     """The file content of one grid."""
-    writer = _ArrayWriter(appended=encoding == "appended")
-    root = ET.Element("VTKFile", type="UnstructuredGrid", version="1.0", byte_order="LittleEndian",
-                      header_type="UInt64")
+    # meshio cannot read a compressed empty array (no block): a grid without points or cells is not compressed
+    compressed = compression == "zlib" and len(source.vertices) > 0 and len(source.types) > 0
+    writer = _ArrayWriter(appended=encoding == "appended", compressed=compressed)
+    root = writer.root("UnstructuredGrid")
     grid = ET.SubElement(root, "UnstructuredGrid")
     field_data = ET.SubElement(grid, "FieldData")
     if source.name:
-        field_data.append(_string_array("name", source.name))
+        field_data.append(writer.strings("tgsis_name", source.name))
     if source.geotype is not None:
-        field_data.append(_string_array("tgsis_geotype", source.geotype))
+        field_data.append(writer.strings("tgsis_geotype", source.geotype))
     if source.members is not None:
         members = source.members.members
-        field_data.append(_string_array("tgsis_member_geotypes", *(m.geotype.value for m in members)))
-        field_data.append(_string_array("tgsis_member_names", *(m.name or "" for m in members)))
+        field_data.append(writer.strings("tgsis_member_geotypes", *(m.geotype.value for m in members)))
+        field_data.append(writer.strings("tgsis_member_names", *(m.name or "" for m in members)))
         sizes = writer.array("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members],
                                                             dtype=np.int64), components=2)
         sizes.set("NumberOfTuples", str(len(members)))
@@ -234,38 +273,80 @@ def _format_grid(source: _Grid, encoding: Encoding) -> bytes:
     cells.append(writer.array("connectivity", source.connectivity))
     cells.append(writer.array("offsets", source.offsets))
     cells.append(writer.array("types", source.types))
-    ET.indent(root)
-    text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False))
-    if not writer.appended:
-        return text + b"\n"
-    # raw bytes are not XML: the AppendedData section goes after the serialised tree, by hand
-    head, _, _ = text.rpartition(b"</VTKFile>")
-    return b"".join([head, b'  <AppendedData encoding="raw">\n   _', *writer.blocks,
-                     b"\n  </AppendedData>\n</VTKFile>\n"])
+    return writer.finish(root)
+
+
+#: Bytes per zlib block, as VTK's writers cut them (vtkXMLWriter's default BlockSize).
+ZLIB_BLOCK_SIZE = 32768
+#: zlib level: vtkZLibDataCompressor's default; on the San Andreas fault of data/cfm it compresses as well as 6
+#: or 9 in less time than 6 (bench/vtk_files.py, docs/performance.md)
+ZLIB_LEVEL = 5
 
 
 class _ArrayWriter:
-    """Makes DataArray elements; in appended mode collects their bytes and offsets."""
+    """Makes DataArray elements; in appended mode collects their bytes and offsets; compresses them."""
 
-    def __init__(self, *, appended: bool) -> None:
+    def __init__(self, *, appended: bool, compressed: bool = False) -> None:
         self.appended = appended
+        self.compressed = compressed
         self.blocks: list[bytes] = []
         self.offset = 0
+
+    def root(self, data_type: str) -> ET.Element:
+        """The VTKFile element of a file of ``data_type`` (UnstructuredGrid, PolyData)."""
+        root = ET.Element("VTKFile", type=data_type, version="1.0", byte_order="LittleEndian",
+                          header_type="UInt64")
+        if self.compressed:
+            root.set("compressor", "vtkZLibDataCompressor")
+        return root
+
+    def finish(self, root: ET.Element) -> bytes:
+        """The file content: the XML, and in appended mode the AppendedData section after it."""
+        ET.indent(root)
+        text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False))
+        if not self.appended:
+            return text + b"\n"
+        # raw bytes are not XML: the AppendedData section goes after the serialised tree, by hand
+        head, _, _ = text.rpartition(b"</VTKFile>")
+        return b"".join([head, b'  <AppendedData encoding="raw">\n   _', *self.blocks,
+                         b"\n  </AppendedData>\n</VTKFile>\n"])
 
     def array(self, name: str, values: npt.NDArray[Any], *, components: int = 1) -> ET.Element:
         data = _vtk_values(values)
         element = ET.Element("DataArray", type=_VTK_TYPE_OF[data.dtype.str[1:]], Name=name)
         if components != 1:
             element.set("NumberOfComponents", str(components))
-        payload = np.uint64(data.nbytes).astype("<u8").tobytes() + data.tobytes()
+        raw = data.tobytes()
+        if self.compressed:
+            # vtkZLibDataCompressor: header (block count, block size, size of the last block, compressed
+            # size of each block), then the blocks; inline, header and blocks are two base64 streams
+            chunks = [zlib.compress(raw[i: i + ZLIB_BLOCK_SIZE], ZLIB_LEVEL)
+                      for i in range(0, len(raw), ZLIB_BLOCK_SIZE)]
+            header = np.array([len(chunks), ZLIB_BLOCK_SIZE, len(raw) % ZLIB_BLOCK_SIZE,
+                               *(len(c) for c in chunks)], dtype="<u8").tobytes()
+            parts = [header, b"".join(chunks)]
+        else:
+            parts = [np.uint64(len(raw)).astype("<u8").tobytes() + raw]
         if self.appended:
             element.set("format", "appended")
             element.set("offset", str(self.offset))
+            payload = b"".join(parts)
             self.blocks.append(payload)
             self.offset += len(payload)
         else:
             element.set("format", "binary")
-            element.text = base64.b64encode(payload).decode("ascii")
+            element.text = "".join(base64.b64encode(part).decode("ascii") for part in parts)
+        return element
+
+    def strings(self, name: str, *values: str) -> ET.Element:
+        """A FieldData array of strings, as UInt8 bytes, each string UTF-8 and terminated by 0.
+
+        Not VTK's ``<Array type="String">``: meshio reads every FieldData array
+        as numbers and refuses the whole file for a String one.
+        """
+        data = np.frombuffer(b"".join(v.encode("utf-8") + b"\0" for v in values), dtype=np.uint8)
+        element = self.array(name, data)
+        element.set("NumberOfTuples", str(len(data)))  # FieldData has no Piece to count its tuples (VTK reads 0)
         return element
 
 
@@ -279,10 +360,11 @@ def _vtk_values(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
 
 
 def _string_array(name: str, *values: str) -> ET.Element:
-    """A FieldData string array holding ``values`` (one string each).
+    """A FieldData string array holding ``values`` (one string each), as VTK writes a vtkStringArray.
 
-    As VTK writes a vtkStringArray: an ``<Array>`` (not ``<DataArray>``) element
-    with the bytes as decimal codes, each string terminated by 0.
+    An ``<Array>`` (not ``<DataArray>``) element with the bytes as decimal
+    codes, each string terminated by 0. tgsis no longer writes these (see
+    :meth:`_ArrayWriter.strings`) but reads them; the tests make such files.
     """
     element = ET.Element("Array", type="String", Name=name, NumberOfTuples=str(len(values)), format="ascii")
     element.text = " ".join(str(b) for value in values for b in [*value.encode("utf-8"), 0])
@@ -596,12 +678,11 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
         if components < 1:
             raise FileFormatError(f"DataArray {file_name!r} has NumberOfComponents 0", path=decoder.path)
         values = decoder.array(element, count, components).reshape(count, components)
-        column_names = ([file_name] if components == 1 else [f"{file_name}_{j}" for j in range(components)])
-        for j, column_name in enumerate(column_names):
-            name = sanitize_property_name(column_name, result)
-            if name != column_name:
-                renamed[name] = file_name if components == 1 else column_name
-            result[name] = np.ascontiguousarray(values[:, j])
+        name = sanitize_property_name(file_name, result)
+        if name != file_name:
+            renamed[name] = file_name
+        # k components: a vector property (n, k), as tgsis writes one
+        result[name] = np.ascontiguousarray(values[:, 0] if components == 1 else values)
     if renamed:
         names[key] = renamed
     return result
@@ -618,11 +699,18 @@ def _field_element(grid: ET.Element, name: str) -> ET.Element | None:
     return next((e for e in _field_elements(grid) if e.get("Name") == name), None)
 
 
+def _is_string_field(element: ET.Element) -> bool:
+    """A String array (VTK's, older tgsis files) or a tgsis_ UInt8 array of 0-terminated strings."""
+    name = element.get("Name") or ""
+    return bool(name) and (element.get("type") == "String"
+                           or (name.startswith("tgsis_") and element.get("type") in ("UInt8", "Int8")))
+
+
 def _field_string_lists(grid: ET.Element, decoder: _Decoder) -> dict[str, list[str]]:
-    """Every string of each String array in FieldData."""
+    """Every string of each string array in FieldData (``tgsis_name`` as ``name``)."""
     result: dict[str, list[str]] = {}
     for element in _field_elements(grid):
-        if element.get("type") != "String" or not element.get("Name"):
+        if not _is_string_field(element):
             continue
         try:
             raw = decoder.array(element, None, 1).astype(np.uint8).tobytes()
@@ -632,20 +720,24 @@ def _field_string_lists(grid: ET.Element, decoder: _Decoder) -> dict[str, list[s
         if raw.endswith(b"\0"):
             parts.pop()
         result[str(element.get("Name"))] = [p.decode("utf-8", errors="replace") for p in parts]
+    if "tgsis_name" in result:
+        result["name"] = result["tgsis_name"]
     return result
 
 
 def _field_strings(grid: ET.Element, decoder: _Decoder) -> dict[str, str]:
-    """The first string of each String array in FieldData."""
+    """The first string of each string array in FieldData (``tgsis_name`` as ``name``)."""
     result: dict[str, str] = {}
     for element in _field_elements(grid):
-        if element.get("type") != "String" or not element.get("Name"):
+        if not _is_string_field(element):
             continue
         try:
             raw = decoder.array(element, None, 1).astype(np.uint8).tobytes()
         except FileFormatError:
             continue  # a field we cannot decode is not worth failing the file for
         result[str(element.get("Name"))] = raw.split(b"\0", 1)[0].decode("utf-8", errors="replace")
+    if "tgsis_name" in result:
+        result["name"] = result["tgsis_name"]
     return result
 
 
@@ -777,3 +869,162 @@ class _Decoder:
         n_blocks, block_size, last_size = (int(v) for v in head)
         expected = (n_blocks - 1) * block_size + (last_size or block_size) if n_blocks else 0
         return self._exact(raw, expected, name)
+
+
+# ---------------------------------------------------------------- PolyData (.vtp)
+
+
+_SECTION_OF: dict[type[Mesh], str] = {PointSet: "Verts", LineSet: "Lines", Surface: "Polys"}
+# VTK cell types by section and cell size, for the checks shared with tgsis.convert
+_VERTEX, _POLY_VERTEX, _LINE, _POLY_LINE, _TRIANGLE, _STRIP, _POLYGON = 1, 2, 3, 4, 5, 6, 7
+
+
+def write_vtp(mesh: Mesh, path: PathLike, *, encoding: Encoding = "binary",
+              compression: Compression = "zlib") -> None:
+    """Write a PointSet, LineSet or Surface as a VTK XML PolyData file.
+
+    Parameters
+    ----------
+    mesh : PointSet, LineSet or Surface
+    path : str or path-like
+        The ``.vtp`` file (replaced if it exists).
+    encoding : {"binary", "appended"}
+        Inline base64 DataArrays, or one raw AppendedData section.
+    compression : {"zlib", None}
+        zlib blocks as ``vtkZLibDataCompressor`` writes them, or none.
+
+    Raises
+    ------
+    FileFormatError
+        A TetraMesh (PolyData holds no 3D cells), or an unwritable file.
+    """
+    write_bytes(path, [format_vtp(mesh, encoding=encoding, compression=compression)])
+
+
+def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
+    """The ``.vtp`` file content of ``mesh``; see :func:`write_vtp`."""
+    _check_encoding(encoding, compression)
+    mesh = check_mesh(mesh, "the VTP writer")
+    section = _SECTION_OF.get(type(mesh))
+    if section is None:
+        raise FileFormatError(f"VTK PolyData holds points, lines and surfaces, not a {type(mesh).__name__}",
+                              hint="write tetrahedra to a .vtu file")
+    compressed = compression == "zlib" and mesh.n_vertices > 0 and mesh.n_cells > 0  # meshio: no empty zlib array
+    writer = _ArrayWriter(appended=encoding == "appended", compressed=compressed)
+    root = writer.root("PolyData")
+    poly = ET.SubElement(root, "PolyData")
+    field_data = ET.SubElement(poly, "FieldData")
+    if mesh.name:
+        field_data.append(writer.strings("tgsis_name", mesh.name))
+    field_data.append(writer.strings("tgsis_geotype", mesh.geotype.value))
+    counts = {name: "0" for name in ("NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys")}
+    counts[f"NumberOf{section}"] = str(mesh.n_cells)
+    piece = ET.SubElement(poly, "Piece", {"NumberOfPoints": str(mesh.n_vertices), **counts})
+    point_data = ET.SubElement(piece, "PointData")
+    for name, values in mesh.vertex_properties.items():
+        point_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
+    cell_data = ET.SubElement(piece, "CellData")
+    for name, values in mesh.cell_properties.items():
+        cell_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
+    points = ET.SubElement(piece, "Points")
+    points.append(writer.array("Points", mesh.vertices, components=3))
+    for name in ("Verts", "Lines", "Strips", "Polys"):
+        cells = ET.SubElement(piece, name)
+        if name == section:
+            cells.append(writer.array("connectivity", mesh.cells.reshape(-1)))
+            cells.append(writer.array("offsets", np.arange(1, mesh.n_cells + 1, dtype=np.int64) * mesh.cell_size))
+    return writer.finish(root)
+
+
+def read_vtp(path: PathLike) -> Mesh:
+    """Read a VTK XML PolyData file of one kind of cell.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.vtp`` file.
+
+    Returns
+    -------
+    PointSet, LineSet or Surface
+
+    Raises
+    ------
+    FileFormatError
+        Not a valid ``.vtp``, several Pieces, cells of several kinds,
+        polygons that are not triangles, triangle strips, or data tgsis
+        cannot hold (see the module documentation).
+    """
+    return parse_vtp(read_bytes(path), path=path)
+
+
+def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
+    """Parse the content of a ``.vtp`` file; see :func:`read_vtp`. ``path`` is for messages only."""
+    xml_bytes, appended = _split_appended(data)
+    try:
+        root = ET.fromstring(xml_bytes)
+    except ET.ParseError as exc:
+        raise FileFormatError(f"not well-formed XML: {exc}", path=path, line=exc.position[0]) from None
+    if root.tag != "VTKFile" or root.get("type") != "PolyData":
+        raise FileFormatError(f"not a VTK PolyData file (root <{root.tag} type={root.get('type')!r}>)", path=path,
+                              hint="a .vtu file is read as VTK UnstructuredGrid" if root.get("type") ==
+                              "UnstructuredGrid" else None)
+    decoder = _Decoder.for_root(root, appended, path)
+    poly = root.find("PolyData")
+    pieces = poly.findall("Piece") if poly is not None else []
+    if len(pieces) != 1 or poly is None:
+        raise FileFormatError(f"expected one Piece in the PolyData, found {len(pieces)}", path=path,
+                              hint="merge the pieces into one (pyvista: mesh.combine() or "
+                                   "vtkAppendPolyData) before reading")
+    piece = pieces[0]
+    n_points = _int_attribute(piece, "NumberOfPoints", path)
+    if n_points == 0 and piece.find("Points/DataArray") is None:
+        vertices = np.empty((0, 3))
+    else:
+        points = piece.find("Points/DataArray")
+        if points is None:
+            raise FileFormatError("<Points> has no DataArray", path=path)
+        vertices = decoder.array(points, n_points, 3).astype(np.float64).reshape(n_points, 3)
+    types: list[npt.NDArray[np.int64]] = []
+    sizes: list[npt.NDArray[np.int64]] = []
+    connectivity: list[npt.NDArray[np.int64]] = []
+    # VTK numbers the cells of a PolyData verts, lines, polys, strips: its CellData is in that order
+    for section, count_name in (("Verts", "NumberOfVerts"), ("Lines", "NumberOfLines"), ("Polys", "NumberOfPolys"),
+                                ("Strips", "NumberOfStrips")):
+        count = _int_attribute(piece, count_name, path) if count_name in piece.attrib else 0
+        if count == 0:
+            continue
+        element = piece.find(section)
+        arrays = {a.get("Name"): a for a in element.findall("DataArray")} if element is not None else {}
+        if "connectivity" not in arrays or "offsets" not in arrays:
+            raise FileFormatError(f"<{section}> of {count} cells needs DataArrays connectivity and offsets", path=path)
+        ends = decoder.array(arrays["offsets"], None, 1).astype(np.int64)
+        if len(ends) == count + 1 and ends[0] == 0:
+            ends = ends[1:]
+        if len(ends) != count or np.any(np.diff(ends) < 0) or ends[0] < 0:
+            raise FileFormatError(f"<{section}> offsets do not describe {count} cells", path=path)
+        ids = decoder.array(arrays["connectivity"], int(ends[-1]), 1)
+        if ids.dtype.kind not in "iu":
+            raise FileFormatError(f"<{section}> connectivity must be integers", path=path)
+        size = np.diff(np.concatenate([[0], ends]))
+        kind = {"Verts": np.where(size == 1, _VERTEX, _POLY_VERTEX),
+                "Lines": np.where(size == 2, _LINE, _POLY_LINE),
+                "Polys": np.where(size == 3, _TRIANGLE, _POLYGON),
+                "Strips": np.full(count, _STRIP)}[section]
+        types.append(kind.astype(np.int64))
+        sizes.append(size)
+        connectivity.append(ids.astype(np.int64))
+    all_types = np.concatenate(types) if types else np.empty(0, np.int64)
+    offsets = np.concatenate([[0], np.cumsum(np.concatenate(sizes))]) if sizes else np.zeros(1, np.int64)
+    names: dict[str, dict[str, str]] = {}
+    point_data = _data_arrays(piece.find("PointData"), decoder, n_points, names, "point_data")
+    cell_data = _data_arrays(piece.find("CellData"), decoder, len(all_types), names, "cell_data")
+    fields = _field_strings(poly, decoder)
+    metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
+    try:
+        return mesh_from_vtk_cells(vertices, all_types, offsets.astype(np.int64),
+                                   np.concatenate(connectivity) if connectivity else np.empty(0, np.int64),
+                                   point_data, cell_data, name=fields.get("name"), geotype=fields.get("tgsis_geotype"),
+                                   metadata=metadata, source="the PolyData")
+    except (InvalidGeometryError, InvalidPropertyError) as exc:
+        raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
