@@ -28,6 +28,11 @@ BEGIN
         RAISE EXCEPTION 'feature class % does not exist', coalesce(quote_literal(p_name), 'NULL')
             USING ERRCODE = 'TG200', HINT = 'SELECT classname FROM tgsis.catalog lists the classes';
     END IF;
+    -- its PostGIS view, if tgsis.create_postgis_view made one (sql/postgis/create_postgis_view.sql)
+    IF obj_description(to_regclass(format('%I.%I', v_class.schemaname, v_class.classname || '_postgis')), 'pg_class')
+       LIKE 'tgsis PostGIS view %' THEN
+        EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_class.classname || '_postgis');
+    END IF;
     EXECUTE format('SELECT count(DISTINCT _geoid), array_agg(DISTINCT _geoid) FROM %s',
                    tgsis.storage_table(v_class.schemaname, v_class.featuretable))
        INTO v_count, v_ids;

@@ -254,6 +254,13 @@ _LAZY: dict[str, str] = {
     "lifespan": "tgsis.db.temporal",
     "property_periods": "tgsis.db.temporal",
     "surfaces_at": "tgsis.db.temporal",
+    "create_postgis_view": "tgsis.db.postgis",
+    "enable_postgis": "tgsis.db.postgis",
+    "fetch_ewkb": "tgsis.db.postgis",
+    "insert_wkb_feature": "tgsis.db.postgis",
+    "postgis_enabled": "tgsis.db.postgis",
+    "mesh_from_wkb": "tgsis.postgis",
+    "mesh_to_ewkb": "tgsis.postgis",
 }
 
 
@@ -389,6 +396,14 @@ __all__ = [
     "instants",
     "get_at",
     "surfaces_at",
+    # PostGIS (docs/postgis.md)
+    "create_postgis_view",
+    "enable_postgis",
+    "fetch_ewkb",
+    "insert_wkb_feature",
+    "postgis_enabled",
+    "mesh_from_wkb",
+    "mesh_to_ewkb",
     "features_at",
     "fetch_series",
     "fetch_evolving",
