@@ -15,7 +15,7 @@ import sys
 import pytest
 
 PURE = ["tgsis", "tgsis.mesh", "tgsis.compare", "tgsis.edits", "tgsis.temporal", "tgsis.interpolation", "tgsis.gmaps",
-        "tgsis.formats", "tgsis.errors", "tgsis.pictures"]
+        "tgsis.formats", "tgsis.errors", "tgsis.pictures", "tgsis.postgis"]
 
 
 @pytest.mark.parametrize("module", PURE)

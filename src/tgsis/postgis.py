@@ -91,7 +91,7 @@ class _Reader:
         size = 24 * n
         if self.pos + size > len(self.data):
             raise InvalidGeometryError(f"WKB ends at byte {len(self.data)}, inside {n} points (at byte {self.pos})")
-        out = np.frombuffer(self.data, dtype=np.dtype(np.float64).newbyteorder(self.order), count=3 * n,
+        out = np.frombuffer(self.data, dtype=np.dtype("<f8" if self.order == "<" else ">f8"), count=3 * n,
                             offset=self.pos).reshape(n, 3).astype(np.float64)
         self.pos += size
         return out
@@ -132,6 +132,53 @@ def _read(reader: _Reader, parts: list[tuple[int, npt.NDArray[np.float64]]], dep
         for _ in range(n):
             _read(reader, parts, depth + 1)
     return code
+
+
+def _record_dtype(order: str, sub: int) -> np.dtype[Any]:
+    """The layout of one sub-geometry of the regular multi-geometries tgsis writes (and PostGIS gives)."""
+    f8, u4 = np.dtype(order + "f8"), np.dtype(order + "u4")
+    if sub in (_TRIANGLE, _POLYGON):      # one ring of four corners, the last repeating the first
+        return np.dtype([("order", "u1"), ("type", u4), ("rings", u4), ("n", u4), ("p", f8, (4, 3))])
+    if sub == _LINESTRING:                # two points
+        return np.dtype([("order", "u1"), ("type", u4), ("n", u4), ("p", f8, (2, 3))])
+    return np.dtype([("order", "u1"), ("type", u4), ("p", f8, (1, 3))])
+
+
+def _regular_parts(raw: bytes) -> tuple[int, npt.NDArray[np.float64]] | None:
+    """(kind, points of every part) of a TIN, POLYHEDRALSURFACE, MULTIPOLYGON, MULTILINESTRING or MULTIPOINT whose
+    parts are all triangles, two-point lines or points of the same byte order: read in one step, or None."""
+    reader = _Reader(raw)
+    code, has_z, _ = reader.header()
+    subs = {_TIN: (_TRIANGLE,), _POLYHEDRALSURFACE: (_POLYGON,), _MULTIPOLYGON: (_POLYGON,),
+            _MULTILINESTRING: (_LINESTRING,), _MULTIPOINT: (_POINT,)}.get(code)
+    if subs is None or not has_z:
+        return None
+    (count,) = reader.take("I")
+    if count == 0 or reader.pos >= len(raw):
+        return None
+    order = "<" if raw[reader.pos] == 1 else ">"
+    dtype = _record_dtype(order, subs[0])
+    if len(raw) - reader.pos != count * dtype.itemsize:
+        return None
+    records = np.frombuffer(raw, dtype=dtype, count=count, offset=reader.pos)
+    expected = {"order": 1 if order == "<" else 0, "type": _EWKB_Z | subs[0]}
+    if subs[0] in (_TRIANGLE, _POLYGON):
+        expected |= {"rings": 1, "n": 4}
+    elif subs[0] == _LINESTRING:
+        expected["n"] = 2
+    for field, value in expected.items():
+        if field == "type":   # EWKB (flag) or ISO (1000 + code) z
+            if not np.all((records[field] == value) | (records[field] == 1000 + subs[0])):
+                return None
+        elif not np.all(records[field] == value):
+            return None
+    kind = _POLYGON if subs[0] in (_TRIANGLE, _POLYGON) else subs[0]
+    points = np.ascontiguousarray(records["p"], dtype=np.float64)
+    if kind == _POLYGON:
+        if not np.array_equal(points[:, 0], points[:, 3]):
+            return None
+        points = np.ascontiguousarray(points[:, :3])
+    return kind, points
 
 
 def wkb_srid(data: bytes | bytearray | memoryview | str) -> int | None:
@@ -175,24 +222,31 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
         ``data`` is neither bytes nor hex text.
     """
     raw = _as_bytes(data)
-    reader = _Reader(raw)
-    srid = _Reader(raw).header()[2]
-    parts: list[tuple[int, npt.NDArray[np.float64]]] = []
-    code = _read(reader, parts)
-    if reader.pos != len(raw):
-        raise InvalidGeometryError(f"WKB has {len(raw) - reader.pos} bytes after the geometry")
-    kinds = {kind for kind, _ in parts}
-    if not parts or all(len(p) == 0 for _, p in parts):
-        raise InvalidGeometryError(f"the {_NAMES[code]} is empty", hint="a tgsis object has at least one vertex")
-    if len(kinds) > 1:
-        raise InvalidGeometryError(f"the {_NAMES[code]} mixes " + ", ".join(sorted(_NAMES[k] for k in kinds)),
-                                   hint="store surfaces, lines and points as separate features")
-    kind = kinds.pop()
-    if kind == _POLYGON:   # drop each ring's closing corner
-        rings = [p[:-1] if len(p) > 1 and np.array_equal(p[0], p[-1]) else p for _, p in parts]
+    code, _, srid = _Reader(raw).header()
+    regular = _regular_parts(raw)
+    if regular is not None:    # the usual case (what tgsis and PostGIS write): one step, no loop per cell
+        kind, grouped = regular
+        everything = grouped.reshape(-1, 3)
+        sizes = np.full(len(grouped), grouped.shape[1])
     else:
-        rings = [p for _, p in parts]
-    everything = np.concatenate(rings)
+        reader = _Reader(raw)
+        parts: list[tuple[int, npt.NDArray[np.float64]]] = []
+        _read(reader, parts)
+        if reader.pos != len(raw):
+            raise InvalidGeometryError(f"WKB has {len(raw) - reader.pos} bytes after the geometry")
+        kinds = {kind for kind, _ in parts}
+        if not parts or all(len(p) == 0 for _, p in parts):
+            raise InvalidGeometryError(f"the {_NAMES[code]} is empty", hint="a tgsis object has at least one vertex")
+        if len(kinds) > 1:
+            raise InvalidGeometryError(f"the {_NAMES[code]} mixes " + ", ".join(sorted(_NAMES[k] for k in kinds)),
+                                       hint="store surfaces, lines and points as separate features")
+        kind = kinds.pop()
+        if kind == _POLYGON:   # drop each ring's closing corner
+            rings = [p[:-1] if len(p) > 1 and np.array_equal(p[0], p[-1]) else p for _, p in parts]
+        else:
+            rings = [p for _, p in parts]
+        everything = np.concatenate(rings)
+        sizes = np.array([len(r) for r in rings])
     keys = np.ascontiguousarray(everything).view(np.dtype((np.void, 24))).ravel()
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     order = np.argsort(first, kind="stable")           # vertices by first appearance
@@ -200,24 +254,29 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
     rank[order] = np.arange(len(order))
     index = rank[inverse.ravel()]
     vertices = everything[first[order]]
-    cells: list[list[int]] = []
-    start = 0
-    for ring in rings:
-        ids = index[start:start + len(ring)].tolist()
-        start += len(ring)
-        if kind == _POLYGON:
-            if len(ids) < 3:
-                raise InvalidGeometryError(f"a face of the {_NAMES[code]} has {len(ids)} corners")
-            cells.extend([ids[0], ids[i], ids[i + 1]] for i in range(1, len(ids) - 1))
-        elif kind == _LINESTRING:
-            cells.extend([ids[i], ids[i + 1]] for i in range(len(ids) - 1))
-        else:
-            cells.extend([i] for i in ids)
-    cell_array = np.array(cells, dtype=np.int64)
-    bad = [i for i, c in enumerate(cells) if len(set(c)) < len(c)]
-    if bad:
-        raise InvalidGeometryError(f"cell {bad[0]} of the {_NAMES[code]} repeats a vertex (a degenerate face or "
-                                   "zero-length segment)", hint="ST_RemoveRepeatedPoints(geom), in SQL")
+    if kind == _POLYGON and np.any(sizes < 3):
+        raise InvalidGeometryError(f"a face of the {_NAMES[code]} has {int(sizes[sizes < 3][0])} corners")
+    if np.all(sizes == sizes[0]) and (kind != _POLYGON or sizes[0] == 3) and (kind != _LINESTRING or sizes[0] == 2):
+        cell_array = index.reshape(len(sizes), int(sizes[0])).astype(np.int64)     # triangles, segments or points
+    else:
+        cells: list[list[int]] = []
+        start = 0
+        for size in sizes.tolist():
+            ids = index[start:start + size].tolist()
+            start += size
+            if kind == _POLYGON:   # a fan from the first corner
+                cells.extend([ids[0], ids[i], ids[i + 1]] for i in range(1, len(ids) - 1))
+            elif kind == _LINESTRING:
+                cells.extend([ids[i], ids[i + 1]] for i in range(len(ids) - 1))
+            else:
+                cells.extend([i] for i in ids)
+        cell_array = np.array(cells, dtype=np.int64).reshape(len(cells), -1)
+    if cell_array.shape[1] > 1:
+        ordered = np.sort(cell_array, axis=1)
+        bad = np.flatnonzero(np.any(ordered[:, 1:] == ordered[:, :-1], axis=1))
+        if len(bad):
+            raise InvalidGeometryError(f"cell {int(bad[0])} of the {_NAMES[code]} repeats a vertex (a degenerate face "
+                                       "or zero-length segment)", hint="ST_RemoveRepeatedPoints(geom), in SQL")
     metadata = {"srid": srid} if srid is not None else None
     mesh_type: type[Mesh] = Surface if kind == _POLYGON else LineSet if kind == _LINESTRING else PointSet
     return mesh_type(vertices, cell_array, name=name, metadata=metadata)
@@ -244,7 +303,7 @@ def _boundary_faces(mesh: TetraMesh) -> npt.NDArray[np.int64]:
     a, b, c, o = p[faces[:, 0]], p[faces[:, 1]], p[faces[:, 2]], p[opposite]
     inwards = np.einsum("ij,ij->i", np.cross(b - a, c - a), o - a) > 0
     faces[inwards] = faces[inwards][:, [0, 2, 1]]
-    return faces
+    return np.asarray(faces, dtype=np.int64)
 
 
 def mesh_to_ewkb(mesh: Mesh, srid: int | None = 0) -> bytes:
@@ -277,14 +336,13 @@ def mesh_to_ewkb(mesh: Mesh, srid: int | None = 0) -> bytes:
         code, cells, sub = _MULTIPOINT, mesh.cells, _POINT
     else:
         raise InvalidInputError(f"mesh must be a Surface, TetraMesh, LineSet or PointSet, not {type(mesh).__name__}")
-    out = [_header(code, srid), struct.pack(">I", len(cells))]
-    big = np.dtype(">f8")
-    for cell in cells:
-        corners = p[cell].astype(big).tobytes()
-        if sub in (_TRIANGLE, _POLYGON):
-            out.append(struct.pack(">BIII", 0, _EWKB_Z | sub, 1, 4) + corners + p[cell[0]].astype(big).tobytes())
-        elif sub == _LINESTRING:
-            out.append(struct.pack(">BII", 0, _EWKB_Z | sub, 2) + corners)
-        else:
-            out.append(struct.pack(">BI", 0, _EWKB_Z | sub) + corners)
-    return b"".join(out)
+    records = np.zeros(len(cells), dtype=_record_dtype(">", sub))
+    records["type"] = _EWKB_Z | sub
+    if sub in (_TRIANGLE, _POLYGON):
+        records["rings"], records["n"] = 1, 4
+        records["p"] = p[np.concatenate([cells, cells[:, :1]], axis=1)]   # the ring closes on its first corner
+    else:
+        if sub == _LINESTRING:
+            records["n"] = 2
+        records["p"] = p[cells]
+    return _header(code, srid) + struct.pack(">I", len(cells)) + records.tobytes()

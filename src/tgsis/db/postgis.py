@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 import psycopg
 
+from tgsis.arguments import check_module
 from tgsis.errors import reraise
 from tgsis.postgis import mesh_from_wkb
 
@@ -168,3 +169,7 @@ def insert_wkb_feature(
     mesh = mesh_from_wkb(data, name=name)
     mesh.metadata.pop("srid", None)
     return insert_feature(conn, class_name, mesh, properties)
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)
