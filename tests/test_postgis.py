@@ -336,6 +336,100 @@ def test_postgis_geometries_are_stored_as_features_in_sql(gconn: Conn) -> None:
                     [[0, 1], [1, 2], [3, 4]])
 
 
+def test_python_and_sql_read_a_postgis_geometry_alike(gconn: Conn) -> None:
+    rng = np.random.default_rng(5)
+    surface = _random_surface(rng, 9)
+    cases = [mesh_to_ewkb(surface, 32611).hex(),                                      # regular: one numpy step
+             _one(gconn, "SELECT ST_GeomFromText('POLYHEDRALSURFACE Z (((0 0 0,2 0 0,2 2 0,0 2 0,0 0 0)),"
+                         "((0 0 0,0 2 0,-1 3 1,-2 1 1,-1 -1 1,0 0 0)),((2 0 0,2 2 0,3 1 2,2 0 0)))')"),  # faces of 4, 5, 3
+             _one(gconn, "SELECT 'MULTILINESTRING Z ((0 0 0,1 0 0,1 1 1),(1 1 1,5 5 5))'::geometry"),
+             _one(gconn, "SELECT 'POINT Z (1 2 3)'::geometry"),
+             _one(gconn, "SELECT 'TRIANGLE Z ((0 0 0,1 0 0,0 1 1,0 0 0))'::geometry")]
+    for case in cases:
+        mesh = mesh_from_wkb(case)
+        geotype, vertices, cells = gconn.execute(
+            "SELECT geotype, vertices, cells FROM tgsis.mesh_from_postgis(%s::geometry)", (case,)).fetchone()  # type: ignore[misc]
+        assert mesh.geotype.value == geotype
+        assert np.array_equal(mesh.vertices, np.array(vertices)), geotype
+        assert np.array_equal(mesh.cells, np.array(cells)), geotype
+
+
+def test_reading_a_large_tin_in_sql_takes_linear_time(gconn: Conn) -> None:
+    """Self-joins of the points made tgsis.mesh_from_postgis quadratic: 3,042 triangles took 26 s (measured)."""
+    import time
+
+    n = 80
+    u, v = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    vertices = np.stack([u.ravel(), v.ravel(), np.sin(u.ravel() / 7)], axis=1)
+    idx = np.arange(n * n).reshape(n, n)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    surface = tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+    started = time.perf_counter()
+    cells = _one(gconn, "SELECT array_length(cells, 1) FROM tgsis.mesh_from_postgis(%s::bytea::geometry)",
+                 (mesh_to_ewkb(surface, 0),))
+    assert cells == len(surface.cells) == 12482
+    assert time.perf_counter() - started < 15, "12,482 triangles: linear is about 1 s, quadratic minutes"
+
+
+def test_every_geotype_gets_its_layer_type(gconn: Conn) -> None:
+    classes = {"bodies": ("MULTITETRA", _tetra_block(), "POLYHEDRALSURFACE"),
+               "traces": ("MULTILINESTRING", tgsis.LineSet([[0, 0, 0], [1, 0, 0]], [[0, 1]]), "MULTILINESTRING"),
+               "picks": ("MULTIPOINT", tgsis.PointSet([[5, 5, 5]]), "MULTIPOINT"),
+               "groups": ("GEOMETRYCOLLECTION", tgsis.GeometryCollection([tgsis.PointSet([[5, 5, 5]])]),
+                          "GEOMETRYCOLLECTION")}
+    for name, (geotype, mesh, _) in classes.items():
+        tgsis.create_feature_class(gconn, name, geotype, srs=3857)
+        tgsis.insert_feature(gconn, name, mesh)
+        tgsis.create_postgis_view(gconn, name)
+    found = dict(gconn.execute("SELECT f_table_name, type FROM geometry_columns WHERE srid = 3857 "
+                               "AND coord_dimension = 3").fetchall())
+    assert found == {f"{name}_postgis": kind for name, (_, _, kind) in classes.items()}
+    for name in classes:
+        assert _one(gconn, f"SELECT count(geom) FROM {name}_postgis") == 1
+
+
+def test_a_postgis_feature_stored_in_a_version_stays_there(gconn: Conn) -> None:
+    tgsis.create_feature_class(gconn, "faults", "SURFACE", srs=32611)
+    tgsis.enable_feature_versioning(gconn)
+    tgsis.create_version(gconn, "draft")
+    with tgsis.in_version(gconn, "draft"):
+        fid = _one(gconn, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)")
+        assert _one(gconn, "SELECT ST_NPoints(tgsis.postgis_geometry('faults', %s))", (fid,)) == 4
+    with pytest.raises(tgsis.NotFoundError):          # DEFAULT does not see it
+        _one(gconn, "SELECT tgsis.postgis_geometry('faults', %s)", (fid,))
+
+
+def test_an_upgrade_makes_the_postgis_functions_again(gis: GisServer, tmp_path: Path) -> None:
+    import shutil
+
+    from tgsis.db.sqlsource import find_sql_dir
+
+    def sources_at(version: str, updates: dict[str, str]) -> ExtensionSources:
+        root = tmp_path / f"sql-{version}"
+        shutil.copytree(find_sql_dir(), root, ignore=shutil.ignore_patterns("build"))
+        control = root / "tgsis.control"
+        control.write_text(control.read_text().replace(f"'{tgsis.__version__}'", f"'{version}'"))
+        (root / "updates").mkdir(exist_ok=True)
+        for name, text in updates.items():
+            (root / "updates" / name).write_text(text)
+        return ExtensionSources(root)
+
+    # an upgrade that changes a wrapper's signature: the script drops the old one, install() makes the new
+    script = """\\echo Use "CREATE EXTENSION tgsis" to load this file. \\quit
+DROP FUNCTION IF EXISTS tgsis.postgis_geometry_at(text, bigint, double precision, text);
+INSERT INTO tgsis.installation (version, method) VALUES ('0.1.1', 'sql');
+"""
+    old = sources_at("0.0.9", {})
+    new = sources_at("0.1.1", {"tgsis--0.0.9--0.1.1.sql": script})
+    with gis.database("template0") as dsn, psycopg.connect(dsn, autocommit=True) as conn:
+        conn.execute("CREATE EXTENSION postgis")
+        tgsis.install(conn, method="sql", sources=old)
+        tgsis.enable_postgis(conn)
+        assert tgsis.install(conn, sources=new).action == "upgraded"
+        assert _one(conn, "SELECT to_regprocedure('tgsis.postgis_geometry_at(text, bigint, double precision, text)')"
+                          " IS NOT NULL") is True
+
+
 @pytest.mark.parametrize("geom, error, words", [
     ("'TIN (((0 0,1 0,0 1,0 0)))'::geometry", tgsis.InvalidGeometryError, "not x, y, z"),
     ("'POLYGON Z ((0 0 0,9 0 0,0 9 0,0 0 0),(1 1 0,2 1 0,1 2 0,1 1 0))'::geometry", tgsis.InvalidGeometryError, "holes"),

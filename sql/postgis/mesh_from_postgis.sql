@@ -59,6 +59,7 @@ BEGIN
                 USING ERRCODE = 'TG102', HINT = 'triangulate it first (ST_Tesselate with SFCGAL, or ST_TriangulatePolygon)';
         END IF;
     END IF;
+    -- window functions only (no self-joins of the points, which the planner may nest): linear in the points
     RETURN QUERY EXECUTE format($q$
         WITH p AS (   -- the points in order; part = the face or line, pos = the point in it
             SELECT row_number() OVER () AS ord,
@@ -68,25 +69,27 @@ BEGIN
                    d.path[array_length(d.path, 1)] AS pos,
                    %1$I.st_x(d.geom) AS x, %1$I.st_y(d.geom) AS y, %1$I.st_z(d.geom) AS z
               FROM %1$I.st_dumppoints($1) d
-        ), part AS (  -- a surface's faces are rings: (face, ring, point) or (ring, point); lines (line, point)
-            SELECT p.*, dense_rank() OVER (ORDER BY p.part) - 1 AS pid, count(*) OVER (PARTITION BY p.part) AS n FROM p
-        ), u AS (     -- one vertex per distinct position, numbered by first appearance
-            SELECT x, y, z, row_number() OVER (ORDER BY min(ord)) - 1 AS vid FROM part GROUP BY x, y, z
-        ), pv AS (
-            SELECT part.pid, part.pos, part.n, u.vid FROM part JOIN u USING (x, y, z)
-        ), c AS (
-            SELECT a.pid, a.pos, ARRAY[f.vid, a.vid, b.vid] AS cell       -- faces: fans from the first corner
-              FROM pv a JOIN pv b ON b.pid = a.pid AND b.pos = a.pos + 1 JOIN pv f ON f.pid = a.pid AND f.pos = 1
-             WHERE $2 = 'SURFACE' AND a.pos >= 2 AND b.pos <= a.n - 1
-            UNION ALL
-            SELECT a.pid, a.pos, ARRAY[a.vid, b.vid]                       -- lines: consecutive points
-              FROM pv a JOIN pv b ON b.pid = a.pid AND b.pos = a.pos + 1
-             WHERE $2 = 'MULTILINESTRING'
-            UNION ALL
-            SELECT a.pid, a.pos, ARRAY[a.vid] FROM pv a WHERE $2 = 'MULTIPOINT'
+        ), f AS (     -- the first appearance of each position
+            SELECT p.*, min(p.ord) OVER (PARTITION BY p.x, p.y, p.z) AS firstord FROM p
+        ), v AS (     -- one vertex per distinct position, numbered by first appearance
+            SELECT f.*, dense_rank() OVER (ORDER BY f.firstord) - 1 AS vid,
+                   count(*) OVER (PARTITION BY f.part) AS n
+              FROM f
+        ), w AS (
+            SELECT v.ord, v.pos, v.n, v.vid, v.x, v.y, v.z, v.firstord,
+                   first_value(v.vid) OVER (PARTITION BY v.part ORDER BY v.pos) AS first,
+                   lead(v.vid) OVER (PARTITION BY v.part ORDER BY v.pos) AS next
+              FROM v
         )
-        SELECT $2, (SELECT array_agg(ARRAY[u.x, u.y, u.z] ORDER BY u.vid) FROM u),
-               (SELECT array_agg(c.cell ORDER BY c.pid, c.pos) FROM c)
+        SELECT $2,
+               (SELECT array_agg(ARRAY[w.x, w.y, w.z] ORDER BY w.vid) FROM w WHERE w.ord = w.firstord),
+               (SELECT array_agg(CASE $2 WHEN 'SURFACE' THEN ARRAY[w.first, w.vid, w.next]     -- faces: fans from the first corner
+                                         WHEN 'MULTILINESTRING' THEN ARRAY[w.vid, w.next]      -- lines: consecutive points
+                                         ELSE ARRAY[w.vid] END ORDER BY w.ord)
+                  FROM w
+                 WHERE CASE $2 WHEN 'SURFACE' THEN w.pos BETWEEN 2 AND w.n - 2
+                               WHEN 'MULTILINESTRING' THEN w.next IS NOT NULL
+                               ELSE true END)
         $q$, v_ps)
         USING p_geom, v_kind;
 END
