@@ -567,6 +567,26 @@ def test_readers_read_editors_import_admins_enable(gis: GisServer) -> None:
             assert _one(rita, "SELECT count(*) FROM faults_postgis") == 2 and new > fid
 
 
+def test_a_view_another_role_made_to_look_like_the_layer_is_neither_replaced_nor_dropped(gis: GisServer) -> None:
+    with gis.database() as dsn, psycopg.connect(dsn, autocommit=True) as admin:
+        tgsis.enable_postgis(admin)
+        tgsis.create_feature_class(admin, "wells", "MULTILINESTRING")
+        with login_roles(dsn, {"eve": "tgsis_editor"}) as roles:
+            admin.execute(f"GRANT CREATE ON SCHEMA public TO {roles.name('eve')}")
+            eve = roles.connect("eve")
+            eve.execute("CREATE VIEW wells_postgis AS SELECT 1 AS trap")
+            eve.execute("COMMENT ON VIEW wells_postgis IS 'tgsis PostGIS view of feature class wells: forged'")
+            eve.commit()
+            with pytest.raises(tgsis.AlreadyExistsError, match="not the PostGIS view of class wells"):
+                tgsis.create_postgis_view(admin, "wells")
+            tgsis.drop_feature_class(admin, "wells", force=True)
+            assert _one(admin, "SELECT pg_get_userbyid(relowner) FROM pg_class WHERE oid = 'wells_postgis'::regclass") \
+                == roles.name("eve")
+            eve.execute("DROP VIEW wells_postgis")
+            eve.commit()
+            admin.execute(f"REVOKE CREATE ON SCHEMA public FROM {roles.name('eve')}")
+
+
 # ---------------------------------------------------------------- the name geometry in psql
 
 

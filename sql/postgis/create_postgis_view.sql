@@ -39,7 +39,11 @@ BEGIN
     v_type := CASE v_class.geotype WHEN 'SURFACE' THEN 'TINZ' WHEN 'MULTITETRA' THEN 'POLYHEDRALSURFACEZ'
                                    ELSE v_class.geotype || 'Z' END;
     v_rel := to_regclass(format('%I.%I', v_class.schemaname, v_view));
-    IF v_rel IS NOT NULL AND coalesce(obj_description(v_rel, 'pg_class'), '') NOT LIKE 'tgsis PostGIS view %' THEN
+    -- only a view tgsis made (its owner, its comment) is replaced
+    IF v_rel IS NOT NULL AND NOT (coalesce(obj_description(v_rel, 'pg_class'), '') LIKE 'tgsis PostGIS view %'
+                                  AND (SELECT c.relkind = 'v' AND c.relowner = (SELECT relowner FROM pg_catalog.pg_class
+                                                                               WHERE oid = 'tgsis.catalog'::regclass)
+                                         FROM pg_catalog.pg_class c WHERE c.oid = v_rel)) THEN
         RAISE EXCEPTION 'relation %.% exists and is not the PostGIS view of class %', v_class.schemaname, v_view, p_class
             USING ERRCODE = 'TG201', HINT = format('rename or drop %I.%I, then call tgsis.create_postgis_view(%L) again',
                                                    v_class.schemaname, v_view, p_class);
