@@ -34,6 +34,11 @@ BEGIN
                   HINT = format('a DBA may run: GRANT tgsis_admin TO %I', tgsis.calling_role());
     END IF;
     v_class := tgsis.catalog_row(p_class);
+    IF v_class.geotype NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+        RAISE EXCEPTION 'feature class % holds % features, which have no PostGIS form', p_class, v_class.geotype
+            USING ERRCODE = 'TG100',
+                  HINT = 'PostGIS views exist for classes of MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA and GEOMETRYCOLLECTION';
+    END IF;
     v_ps := tgsis.postgis_schema();
     v_view := v_class.classname || '_postgis';
     v_type := CASE v_class.geotype WHEN 'SURFACE' THEN 'TINZ' WHEN 'MULTITETRA' THEN 'POLYHEDRALSURFACEZ'

@@ -36,6 +36,11 @@ BEGIN
         RAISE EXCEPTION 'geometry % does not exist', coalesce(p_geoid::text, 'NULL')
             USING ERRCODE = 'TG200', HINT = 'SELECT _geoid FROM <class> lists the features of a class';
     END IF;
+    IF v_geo.geotype NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+        RAISE EXCEPTION 'geometry % is a % (data model %), which has no PostGIS form', p_geoid, v_geo.geotype, v_geo.timemodel
+            USING ERRCODE = 'TG100',
+                  HINT = 'PostGIS forms exist for MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA and GEOMETRYCOLLECTION';
+    END IF;
     IF v_geo.timemodel <> 'STATIC' THEN
         RAISE EXCEPTION 'geometry % is a % surface: its shape depends on the time', p_geoid, v_geo.timemodel
             USING ERRCODE = 'TG100', HINT = 'take its shape at a time t: tgsis.postgis_geometry_at(class, geoid, t)';
@@ -113,7 +118,7 @@ BEGIN
           FROM tgsis.point p
           JOIN tgsis.vrtx a ON a.geoid = p_geoid AND a.vrtxid = p.vrtxid1
          WHERE p.geoid = p_geoid;
-    ELSE  -- GEOMETRYCOLLECTION: its members without SRIDs of their own (the collection carries it)
+    ELSE  -- GEOMETRYCOLLECTION (the only geotype left): its members without SRIDs of their own (the collection carries it)
         v_code := 7;
         v_count := 0;
         v_body := '';

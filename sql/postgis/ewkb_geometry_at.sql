@@ -25,7 +25,7 @@ BEGIN
         RAISE EXCEPTION 'geometry % does not exist', coalesce(p_geoid::text, 'NULL')
             USING ERRCODE = 'TG200', HINT = 'SELECT _geoid FROM <class> lists the features of a class';
     END IF;
-    IF v_model = 'STATIC' THEN
+    IF v_model NOT IN ('INSTANTS', 'EVOLVING') THEN   -- static (or no PostGIS form: ewkb_geometry says so)
         RETURN tgsis.ewkb_geometry(p_geoid, p_srid);
     END IF;
     IF p_srid < 0 THEN
