@@ -256,6 +256,20 @@ def test_a_wrong_class_or_feature_is_named(gconn: Conn) -> None:
         tgsis.fetch_ewkb(gconn, "faults", fid + 1000)
 
 
+def test_g_maps_have_no_postgis_form_and_say_so(gconn: Conn) -> None:
+    from tgsis import gmaps
+
+    tgsis.create_feature_class(gconn, "blocks", "GMAP", time_model="GMAP", cell_level=2)
+    square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    period = gmaps.GMapPeriod([0.0, 1.0], square, np.stack([square.points, square.points + [0, 0, 1]]), level=2)
+    fid = tgsis.insert_gmap(gconn, "blocks", gmaps.EvolvingGMap([period]))
+    for query in ("SELECT tgsis.postgis_geometry('blocks', %s)", "SELECT tgsis.postgis_geometry_at('blocks', %s, 0.5)"):
+        with pytest.raises(tgsis.InvalidInputError, match="GMAP .* has no PostGIS form"):
+            _one(gconn, query, (fid,))
+    with pytest.raises(tgsis.InvalidInputError, match="GMAP features, which have no PostGIS form"):
+        tgsis.create_postgis_view(gconn, "blocks")
+
+
 # ---------------------------------------------------------------- the view QGIS lists
 
 
