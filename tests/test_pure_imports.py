@@ -20,8 +20,7 @@ import pytest
 import tgsis
 
 PURE = ["tgsis", "tgsis.mesh", "tgsis.convert", "tgsis.compare", "tgsis.edits", "tgsis.temporal",
-        "tgsis.interpolation", "tgsis.gmaps",
-        "tgsis.formats", "tgsis.errors", "tgsis.pictures"]
+        "tgsis.interpolation", "tgsis.gmaps", "tgsis.formats", "tgsis.errors", "tgsis.pictures", "tgsis.postgis"]
 
 
 @pytest.mark.parametrize("module", PURE)

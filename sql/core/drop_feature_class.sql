@@ -28,6 +28,12 @@ BEGIN
         RAISE EXCEPTION 'feature class % does not exist', coalesce(quote_literal(p_name), 'NULL')
             USING ERRCODE = 'TG200', HINT = 'SELECT classname FROM tgsis.catalog lists the classes';
     END IF;
+    -- its PostGIS view, if tgsis.create_postgis_view made one (sql/postgis/create_postgis_view.sql)
+    IF (SELECT obj_description(c.oid, 'pg_class') LIKE 'tgsis PostGIS view %' AND c.relkind = 'v'
+               AND c.relowner = (SELECT relowner FROM pg_class WHERE oid = 'tgsis.catalog'::regclass)
+          FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_class.schemaname, v_class.classname || '_postgis'))) THEN
+        EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_class.classname || '_postgis');
+    END IF;
     EXECUTE format('SELECT count(DISTINCT _geoid), array_agg(DISTINCT _geoid) FROM %s',
                    tgsis.storage_table(v_class.schemaname, v_class.featuretable))
        INTO v_count, v_ids;

@@ -259,6 +259,10 @@ def install(
                 _create_storage(conn)
             return InstallResult("unchanged", current.method, target, current.version)
         _upgrade(conn, current, sources)
+        # the PostGIS wrappers are made at run time (sql/postgis/enable_postgis.sql): again for the new version
+        if conn.execute("SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL "
+                        "AND to_regprocedure('tgsis.enable_postgis()') IS NOT NULL").fetchone() == (True,):
+            conn.execute("SELECT tgsis.enable_postgis()")
         log.info("upgraded tgsis %s -> %s (%s)", current.version, target, current.method)
         return InstallResult("upgraded", current.method, target, current.version)
 
