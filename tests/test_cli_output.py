@@ -63,13 +63,16 @@ def as_json(data: dict[str, Any], capsys: pytest.CaptureFixture[str], *argv: str
     return json.loads(out, parse_constant=lambda name: pytest.fail(f"not strict JSON: {name}"))
 
 
-def table(data: dict[str, Any], capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[list[str], list[list[str]]]:
+def table(data: dict[str, Any], capsys: pytest.CaptureFixture[str], *argv: str,
+          again: bool = True) -> tuple[list[str], list[list[str]]]:
+    """The header and rows of a command's tab-separated output; ``again``: also run it with --no-header."""
     lines = run(data, capsys, *argv).splitlines()
     header = lines[0].split("\t")
     rows = [line.split("\t") for line in lines[1:] if not line.startswith("wrote ")]  # series' closing line
     assert all(len(row) == len(header) for row in rows), (header, rows)
-    bare = run(data, capsys, *argv, "--no-header").splitlines()
-    assert bare == lines[1:]
+    if again:
+        bare = run(data, capsys, *argv, "--no-header").splitlines()
+        assert bare == lines[1:]
     return header, rows
 
 
@@ -175,3 +178,32 @@ def test_info_query_series(data: dict[str, Any], capsys: pytest.CaptureFixture[s
 def test_db_status(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     doc = as_json(data, capsys, "db", "status")
     assert doc["tgsis"] == tgsis.__version__ and doc["client"] == tgsis.__version__ and "PostgreSQL" in doc["server"]
+
+
+def test_import_and_checkin(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
+    doc = as_json(data, capsys, "--in", "a", "import", str(FLAGGED), "--class", "faults")
+    assert [(f["name"], f["replaced"], f["same_name"]) for f in doc["features"]] == [
+        ("F1", None, [data["ids"][0]]), ("F2", None, [data["ids"][1]])]
+    assert doc["features"][0]["defects"] == {"duplicate_vertices": 1, "degenerate_cells": 1,
+                                             "summary": "1 duplicate vertices, 1 degenerate cells"}
+    header, rows = table(data, capsys, "--in", "a", "import", str(FLAGGED), "--class", "faults", again=False)
+    assert header == ["id", "name", "geotype", "vertices", "cells", "replaced", "defects"]
+    assert [r[1] for r in rows] == ["F1", "F2"]
+    path = data["tmp"] / "f.ts"
+    fid = data["ids"][0]  # (the other one is locked by version a)
+    run(data, capsys, "checkout", str(fid), str(path))
+    mesh = tgsis.formats.read_one(path)
+    mesh.vertices[0, 2] += 1.0
+    tgsis.formats.write(mesh, path)
+    doc = as_json(data, capsys, "checkin", str(path))
+    assert doc["feature_id"] == fid and doc["version"] == "DEFAULT" and doc["conflict"] is False
+    assert doc["vertices"] == {"kept": mesh.n_vertices - 1, "moved": 1, "removed": 0, "added": 0}
+    assert set(doc["rows"]) == {"written", "deleted", "inserted", "updated"} and doc["commands"] == []
+    assert doc["record"] == f"{path}.tgsis-checkout.npz"
+
+
+def test_local_status(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setenv("TGSIS_HOME", str(tmp_path / "home"))
+    assert main(["local", "status", "--json"]) == 3
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["status"] == "not created" and doc["pid"] is None and "dbname=tgsis" in doc["dsn"]

@@ -125,3 +125,27 @@ def test_corners_print_every_digit(tmp_path: Path, capsys: pytest.CaptureFixture
 
     doc = json.loads(capsys.readouterr().out)
     assert [c["vertex"] for c in doc["corners"]] == corners and doc["corners"][0]["xyz"] == stored[corners[0]].tolist()
+
+
+def test_interpolation_and_import_show_progress_on_a_terminal(db_dsn: str, tmp_path: Path) -> None:
+    from tests.test_interp_end_to_end import _dome, _flat, _flat_corners
+    from tgsis.interpolation import InterpolationSetup, interpolate
+
+    source, (target, corners) = _flat(13, 7), _dome()
+    setup = InterpolationSetup(tuple(_flat_corners(13, 7)), tuple(corners), steps=4, tolerance=0.1)
+    calls: list[tuple[int, int]] = []
+    interpolate(source, target, setup, 0.0, 1.0, progress=lambda done, total: calls.append((done, total)))
+    assert [done for done, _ in calls] == list(range(1, len(calls) + 1)) and calls[-1][0] == calls[-1][1] >= 5
+    tgsis.formats.write(source, tmp_path / "flat.ts")
+    tgsis.formats.write(target, tmp_path / "dome.ts")
+    setup.save(tmp_path / "s.json")
+    code, out, terminal = _on_a_terminal(["interpolate", str(tmp_path / "flat.ts"), str(tmp_path / "dome.ts"),
+                                          "--setup", str(tmp_path / "s.json"), "--t0", "0", "--t1", "1"])
+    assert code == 0, terminal
+    assert "interpolating flat" in terminal and f"{calls[-1][0]}/{calls[-1][1]}" in terminal
+    assert "interpolated flat:" in out
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "faults", "SURFACE")
+    code, out, terminal = _on_a_terminal(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults"])
+    assert code == 0, terminal
+    assert "uploading objects" in terminal and "2/2" in terminal

@@ -193,6 +193,13 @@ def cmd_local_stop(args: argparse.Namespace) -> int:
 def cmd_local_status(args: argparse.Namespace) -> int:
     server = _local_server()
     running = server.is_running()
+    if _json(args):
+        cliout.emit_json({"cluster": str(server.root), "binaries": server.binaries.describe(),
+                          "status": "running" if running else "stopped" if server.is_initialized() else "not created",
+                          "pid": server.pid() if running else None,
+                          "started_by": (server.started_by() or "outside tgsis") if running else None,
+                          "dsn": server.dsn("tgsis")})
+        return 0 if running else 3
     _out(f"cluster:  {server.root}")
     _out(f"binaries: {server.binaries.describe()}")
     if running:
@@ -586,8 +593,9 @@ def cmd_info(args: argparse.Namespace) -> int:
                                 else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
                                 else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
                         differs.append(f"{version.name} ({what})")
-                        differing.append({"version": version.name, "what": what.split(" rows")[0] if "rows" in what
-                                          else what, "rows": sum(d.added + d.removed + d.changed for d in changed)})
+                        differing.append({"version": version.name,
+                                          "what": what if what in ("only there", "not there") else "differs",
+                                          "rows": sum(d.added + d.removed + d.changed for d in changed)})
         conn.rollback()
     name, geotype, nvrtx, ncell, members, timemodel, alive = row[:7]
     found = feature.mesh if feature is not None else None
@@ -793,8 +801,8 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
-    with cliout.busy(f"interpolating {name}"):
-        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive)
+    with cliout.progress(f"interpolating {name}", None, "step") as moved:
+        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved)
     _out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
          f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
          f"error to the target {result.error:.3g}")
@@ -1729,8 +1737,8 @@ def build_parser() -> argparse.ArgumentParser:
     _command(local_commands, "start", "start it and keep it running", ["tgsis local start"], cmd_local_start)
     local_stop = _command(local_commands, "stop", "stop it", ["tgsis local stop"], cmd_local_stop)
     local_stop.add_argument("--force", action="store_true", help="stop it even while other tgsis commands use it")
-    _command(local_commands, "status", "where it is and whether it runs (exit 3: stopped)", ["tgsis local status"],
-             cmd_local_status)
+    _command(local_commands, "status", "where it is and whether it runs (exit 3: stopped)",
+             ["tgsis local status", "tgsis local status --json"], cmd_local_status, tabular=False)
     _command(local_commands, "dsn", "print its connection string", ["psql \"$(tgsis local dsn)\""], cmd_local_dsn)
     return parser
 
@@ -1772,8 +1780,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         exc.hint = clihints.to_cli(exc.hint)  # the hint in this interface's words (its flags and commands)
         print(f"tgsis: error: {exc}", file=sys.stderr)
         return 1
-    except BrokenPipeError:  # the reader went away while something else than _out wrote to stdout
-        cliout.out("")       # points stdout at /dev/null, so that the flush at exit does not fail too
+    except BrokenPipeError:  # the reader went away while something other than _out wrote to stdout
+        cliout.drop_stdout()  # stdout to /dev/null, so that the flush at exit does not fail too
         return 0
     except KeyboardInterrupt:
         print("tgsis: interrupted", file=sys.stderr)

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["out", "table", "emit_json", "jsonable", "progress", "busy", "show_time", "show_moment",
-           "stdout_closed", "on_terminal"]
+           "stdout_closed", "drop_stdout", "on_terminal"]
 
 _closed = False
 
@@ -42,7 +42,7 @@ def stdout_closed() -> bool:
     return _closed
 
 
-def _drop_stdout() -> None:
+def drop_stdout() -> None:
     """Point standard output at /dev/null: the reader is gone, later writes (and the flush at exit) go nowhere."""
     global _closed
     _closed = True
@@ -59,7 +59,7 @@ def out(text: str) -> None:
     try:
         print(text, flush=True)
     except BrokenPipeError:
-        _drop_stdout()
+        drop_stdout()
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]], *, header_shown: bool = True) -> None:
@@ -134,17 +134,39 @@ def progress(description: str, total: int | None, unit: str = "it") -> Iterator[
     from tqdm import tqdm
 
     bar = tqdm(total=total, desc=description, unit=unit, file=sys.stderr, leave=False, dynamic_ncols=True)
+    lock = threading.Lock()
 
     def moved(done: int, count: int) -> None:
-        if bar.total != count:
-            bar.total = count
-        bar.n = done
-        bar.refresh()
+        with lock:
+            if bar.total != count:
+                bar.total = count
+            bar.n = done
+            bar.refresh()
 
     try:
-        yield moved
+        with _ticking(bar, lock):  # the time elapsed moves on during one long step too
+            yield moved
     finally:
         bar.close()
+
+
+@contextlib.contextmanager
+def _ticking(bar: Any, lock: threading.Lock) -> Iterator[None]:
+    """Refresh ``bar`` a few times a second while the block runs."""
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.2):
+            with lock:
+                bar.refresh()
+
+    ticker = threading.Thread(target=tick, daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        ticker.join()
 
 
 @contextlib.contextmanager
@@ -156,17 +178,8 @@ def busy(description: str) -> Iterator[None]:
     from tqdm import tqdm
 
     bar = tqdm(total=None, desc=description, file=sys.stderr, leave=False, bar_format="{desc}: {elapsed}")
-    stop = threading.Event()
-
-    def tick() -> None:
-        while not stop.wait(0.2):
-            bar.refresh()
-
-    ticker = threading.Thread(target=tick, daemon=True)
-    ticker.start()
     try:
-        yield
+        with _ticking(bar, threading.Lock()):
+            yield
     finally:
-        stop.set()
-        ticker.join()
         bar.close()
