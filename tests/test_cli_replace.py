@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import time
@@ -63,7 +64,7 @@ def test_replace_keeps_the_id_and_writes_by_difference(faults: str, tmp_path: Pa
     assert main(["--dsn", faults, "import", str(moved), "--class", "faults", "--replace", "--json"]) == 0
     out, err = capsys.readouterr()
     assert "warning" not in err
-    doc = __import__("json").loads(out)
+    doc = json.loads(out)
     assert [(f["id"], f["replaced"]) for f in doc["features"]] == [(fid, fid) for fid, _ in before]
     assert _names(faults) == before
     with psycopg.connect(faults) as conn:
@@ -116,3 +117,18 @@ def test_two_sessions_replacing_one_name_at_once_leave_one_feature(faults: str, 
         results = [run.communicate(timeout=120) for run in runs]
     assert [run.returncode for run in runs] == [0, 0], results
     assert [name for _, name in _names(faults)].count("F9") == 1
+
+
+def test_a_collection_is_replaced_whole(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--dsn", db_dsn, "class", "create", "models", "--geotype", "GEOMETRYCOLLECTION"]) == 0
+    capsys.readouterr()
+    assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "models", "--json"]) == 0
+    first = json.loads(capsys.readouterr().out)["features"][0]["id"]
+    assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "models", "--replace", "--json"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)["features"][0]
+    assert doc["replaced"] == first and doc["id"] != first and "warning" not in err
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT count(*) FROM models").fetchone() == (1,)
+        # the members went with the collection they belonged to
+        assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (3,)

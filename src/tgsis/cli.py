@@ -459,9 +459,10 @@ def cmd_import(args: argparse.Namespace) -> int:
                     fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
             if same and not args.replace:
                 _warn_same_name(fc, collection.name or "", same)
-            members: list[dict[str, Any]] = [{"index": i, "name": mesh.name, "geotype": mesh.geotype.value, "vertices": mesh.n_vertices,
-                        "cells": mesh.n_cells, "cell_name": type(mesh).cell_name, "defects": _report_json(report)}
-                       for i, (mesh, report) in enumerate(zip(meshes, reports))]
+            members: list[dict[str, Any]] = [
+                {"index": i, "name": mesh.name, "geotype": mesh.geotype.value, "vertices": mesh.n_vertices,
+                 "cells": mesh.n_cells, "cell_name": type(mesh).cell_name, "defects": _report_json(report)}
+                for i, (mesh, report) in enumerate(zip(meshes, reports))]
             if _json(args):
                 cliout.emit_json({"file": args.file, "class": fc.name, "features": [{
                     "id": fid, "name": collection.name, "geotype": collection.geotype.value,
