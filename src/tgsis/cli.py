@@ -1335,9 +1335,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from tgsis.scenarios import SCENARIOS, run_scenario
 
     if args.list:
-        for scenario in SCENARIOS.values():
-            _out(f"{scenario.name}\t{scenario.summary}")
+        if _json(args):
+            cliout.emit_json({"scenarios": [{"name": s.name, "summary": s.summary} for s in SCENARIOS.values()]})
+        else:
+            _table(args, ("scenario", "shows"), [(s.name, s.summary) for s in SCENARIOS.values()])
         return 0
+    if _json(args) or args.no_header:
+        raise InvalidInputError("--json and --no-header go with --list", hint="tgsis demo --list --json")
     run_scenario(args.name, args.dsn, out=_out, folder=args.dir, size=args.size)
     return 0
 
@@ -1401,7 +1405,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo = _command(commands, "demo", "run a sample application end to end (default: cfm, the release story)",
                     ["tgsis demo saltdome --dir out   # then look at out/*.png, out/saltdome.gif",
-                     "tgsis demo --list"], cmd_demo)
+                     "tgsis demo --list", "tgsis demo --list --json"], cmd_demo, tabular=True)
     demo.add_argument("name", nargs="?", default="cfm", metavar="NAME",
                       help="the scenario (tgsis demo --list names them; default: cfm)")
     demo.add_argument("--list", action="store_true", help="list the scenarios and what each shows")
