@@ -40,8 +40,8 @@ import numpy.typing as npt
 from scipy.spatial import cKDTree
 
 import tgsis
-from tgsis.compare import (MeshDiff, MeshIndex, _cell_columns, _columns, _coordinate_columns, _diff, _match,
-                           _match_cells, _SortedRows, compare_meshes)
+from tgsis._rows import SortedRows, cell_columns, columns_of, coordinate_columns, match_rows
+from tgsis.compare import MeshDiff, MeshIndex, _diff, _match_cells, compare_meshes
 from timing import timed
 from transfer import grid_surface
 
@@ -123,14 +123,14 @@ def ckdtree_vertex_map(old_vertices: npt.NDArray[np.float64], new_vertices: npt.
 def ckdtree_compare(old: tgsis.Surface, edited: tgsis.Surface, sort_queries: bool = False) -> MeshDiff:
     """The baseline: cKDTree vertex matching, then compare_meshes' own cell matching (old cells hashed here)."""
     vertex_map = ckdtree_vertex_map(old.vertices, edited.vertices, sort_queries)
-    old_cells = _SortedRows.of(_cell_columns(_columns(old.cells), old.n_vertices))
+    old_cells = SortedRows.of(cell_columns(columns_of(old.cells), old.n_vertices))
     return _diff(old, vertex_map, _match_cells(old_cells, old.n_vertices, edited.cells, vertex_map))
 
 
 def hashed_vertex_map(old: tgsis.Surface, edited: tgsis.Surface) -> IntArray:
     """compare_meshes' vertex step alone, from scratch (both sides hashed and sorted)."""
-    old_rows = _SortedRows.of(_coordinate_columns(old.vertices))
-    return _match(old_rows, _SortedRows.of(_coordinate_columns(edited.vertices)))
+    old_rows = SortedRows.of(coordinate_columns(old.vertices))
+    return match_rows(old_rows, SortedRows.of(coordinate_columns(edited.vertices)))
 
 
 def same_diff(x: MeshDiff, y: MeshDiff) -> bool:

@@ -25,7 +25,8 @@ from scipy.sparse import csc_matrix
 from scipy.sparse.linalg import LinearOperator, bicgstab, splu
 from scipy.spatial import Delaunay
 
-from tgsis.interpolation.parameterize import (WeightPattern, _chord_border, _interior_mask, _ordered_border,
+from tgsis.interpolation._arrays import interior_mask as vertices_inside
+from tgsis.interpolation.parameterize import (WeightPattern, _chord_border, _ordered_border,
                                               _split_system, border_loop, compatible_patch, mean_value_data,
                                               sparse_solve)
 from tgsis.interpolation.trajectories import InteriorSteps, vertex_trajectories
@@ -61,7 +62,7 @@ def main() -> None:
     print(f"disk: {len(xyz)} vertices, {len(tri)} triangles")
     loop = clock("border loop", lambda: border_loop(tri, len(xyz)), results)
     border = _ordered_border(loop, controls, len(xyz))
-    interior_mask = _interior_mask(tri, len(xyz))
+    interior_mask = vertices_inside(tri, len(xyz))
     pattern = clock("pattern (CSR structure)", lambda: WeightPattern.of(tri, len(xyz)), results)
     lam = clock("mean value weights", lambda: mean_value_data(xyz, tri, pattern, interior_mask), results)
     interior = np.flatnonzero(interior_mask)

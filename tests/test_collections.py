@@ -15,6 +15,7 @@ import pytest
 import tgsis
 from tgsis import formats
 from tgsis.cli import main
+from tgsis.db import _static
 from tgsis.db import features as F
 from tgsis.errors import reraise
 from tgsis.formats.vtk import parse_vtu, read_vtu_collection
@@ -183,13 +184,13 @@ def test_fetching_many_members_takes_one_copy_per_table(conn: Conn, monkeypatch:
                  for k in (0, 20)]
     ids = [F.insert_feature(conn, fc, c) for c in originals]
     copies: list[str] = []
-    real = F._copy_out
+    real = _static.copy_out
 
     def spy(conn: Conn, query: Any, types: Any) -> list[npt.NDArray[Any]]:
         copies.append(query.as_string(conn))
         return real(conn, query, types)
 
-    monkeypatch.setattr(F, "_copy_out", spy)
+    monkeypatch.setattr(_static, "copy_out", spy)
     got = F.fetch_features(conn, fc, ids[::-1])
     assert [f.id for f in got] == ids[::-1]
     assert all(isinstance(f.mesh, GeometryCollection) and f.mesh.same_as(c) for f, c in zip(got, originals[::-1]))

@@ -27,7 +27,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-import tgsis.compare as C
+import tgsis._rows as R
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.formats.gocad import read_tsurf
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
@@ -293,14 +293,14 @@ def low_entropy_hashes(buckets: int) -> Callable[[list[np.ndarray]], np.ndarray]
     a one-column hash being one-to-one); several columns are compared value by
     value, so their hash may be anything.
     """
-    real = C._row_hashes
+    real = R.row_hashes
 
     def hashes(columns: list[np.ndarray]) -> np.ndarray:
         prefix = (real(columns) >> np.uint64(32)) % np.uint64(buckets)
         low = columns[0] if len(columns) == 1 else real(columns)
         if len(columns) == 1:
-            assert np.all(low <= C._LOW)
-        return (prefix << np.uint64(32)) | (low & C._LOW)
+            assert np.all(low <= R._LOW)
+        return (prefix << np.uint64(32)) | (low & R._LOW)
 
     return hashes
 
@@ -309,14 +309,14 @@ def low_entropy_hashes(buckets: int) -> Callable[[list[np.ndarray]], np.ndarray]
 def crowded_hashes(buckets: int) -> Iterator[list[int]]:
     """Within: the low-entropy hash in use; yields the list of calls of the collision path (_match_crowded)."""
     calls: list[int] = []
-    crowded = C._match_crowded
+    crowded = R._match_crowded
 
     def counting(*args: Any) -> None:
         calls.append(1)
         crowded(*args)
 
-    with mock.patch.object(C, "_row_hashes", low_entropy_hashes(buckets)), \
-            mock.patch.object(C, "_match_crowded", counting):
+    with mock.patch.object(R, "row_hashes", low_entropy_hashes(buckets)), \
+            mock.patch.object(R, "_match_crowded", counting):
         yield calls
 
 

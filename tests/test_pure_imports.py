@@ -1,4 +1,4 @@
-"""The numpy modules load without the database layer (issue 17, part 0).
+"""The numpy modules load without the database layer, and modules share code through private modules (issue 17, part 0).
 
 Found: ``import tgsis.mesh`` loaded psycopg and the whole ``tgsis.db`` layer,
 because the package's ``__init__`` imported it and ``tgsis.errors`` imported
@@ -9,10 +9,15 @@ names of the package still resolve, on first use.
 
 from __future__ import annotations
 
+import ast
 import subprocess
 import sys
+from pathlib import Path
 
+import networkx as nx
 import pytest
+
+import tgsis
 
 PURE = ["tgsis", "tgsis.mesh", "tgsis.compare", "tgsis.edits", "tgsis.temporal", "tgsis.interpolation", "tgsis.gmaps",
         "tgsis.formats", "tgsis.errors", "tgsis.pictures"]
@@ -36,3 +41,44 @@ def test_the_database_names_load_on_first_use() -> None:
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "module 'tgsis' has no attribute 'no_such_name'"
+
+
+def _imports(path: Path) -> list[tuple[str, list[str], bool]]:
+    """(module, names, at top level) of every ``from tgsis... import`` of a file."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    top = {id(node) for node in tree.body}
+    return [(node.module, [a.name for a in node.names], id(node) in top)
+            for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("tgsis")]
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(SOURCE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+SOURCE = Path(tgsis.__file__).parent
+
+
+def test_no_module_takes_a_private_name_of_another_public_module() -> None:
+    # what several modules share lives in a private module (_name.py) under a public name
+    found = [f"{_module_name(path)} imports {names} from {module}"
+             for path in sorted(SOURCE.rglob("*.py"))
+             for module, imported, _ in _imports(path)
+             if not module.rsplit(".", 1)[-1].startswith("_")
+             for names in [[n for n in imported if n.startswith("_") and not n.startswith("__")]] if names]
+    assert found == []
+
+
+def test_the_database_modules_import_each_other_without_a_cycle() -> None:
+    # lazy imports inside functions count too: they hide a cycle, they do not remove it
+    graph = nx.DiGraph()
+    for path in sorted((SOURCE / "db").glob("*.py")):
+        name = _module_name(path)
+        graph.add_node(name)
+        for module, names, _ in _imports(path):
+            targets = [f"tgsis.db.{n}" for n in names if (SOURCE / "db" / f"{n}.py").exists()] if module == "tgsis.db" \
+                else [module] if module.startswith("tgsis.db.") else []
+            graph.add_edges_from((name, target) for target in targets if target != name)
+    assert list(nx.simple_cycles(graph)) == []
+    assert graph.has_edge("tgsis.db.features", "tgsis.db.temporal")       # model 1 hands temporal surfaces on
+    assert not nx.has_path(graph, "tgsis.db.temporal", "tgsis.db.features")

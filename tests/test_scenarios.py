@@ -26,7 +26,7 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["scenario", "saltdome", "synsed", "river", "interpretations", "cfm"]  # under the header line
+    assert names == ["scenario", "saltdome", "synsed", "river", "interpretations", "knowledge", "cfm"]  # header first
     assert main(["demo", "--list", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)["scenarios"]
     assert [s["name"] for s in listed] == names[1:] and all(s["summary"] for s in listed)
@@ -37,7 +37,7 @@ def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, interpretations, river, saltdome, synsed" in err
+    assert "no scenario 'volcano'" in err and "cfm, interpretations, knowledge, river, saltdome, synsed" in err
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
@@ -128,3 +128,22 @@ def test_river(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     for name in ("river_t1_5.png", "river_t3.png", "river_t4.png"):
         with Image.open(folder / name) as picture:
             assert picture.format == "PNG"
+
+
+def test_knowledge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "knowledge"
+    assert main(["--dsn", db_dsn, "demo", "knowledge", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    # the box over x, y and knowledge finds the anticline's history, not the one 5 km east
+    assert "-> feature, horizon: 1, top anticline" in out
+    crest = re.search(r"each campaign found the crest deeper: (.*) m", out)
+    assert crest is not None
+    depths = [float(v) for v in crest.group(1).split(" > ")]
+    assert len(depths) == 4 and depths == sorted(depths, reverse=True)
+    assert "Euler characteristic 1 (a disk times an interval: 1; Python says 1)" in out
+    assert out.count("the picked points: yes") == 4
+    _replays(db_dsn, "knowledge", out, 3)
+    with Image.open(folder / "knowledge_interpretations.png") as picture:
+        assert picture.format == "PNG"
+    frames = read_pvd(folder / "knowledge.pvd")
+    assert [t for t, _ in frames] == [2019.0, 2021.0, 2023.0, 2025.0]

@@ -3,14 +3,13 @@
 CREATE TABLE tgsis.catalog (
     classname          text        PRIMARY KEY,
     schemaname         text        NOT NULL,
-    geotype            text        NOT NULL CHECK (geotype IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE',
-                                                               'MULTITETRA', 'GEOMETRYCOLLECTION')),
+    geotype            text        NOT NULL,
     featuretable       text        NOT NULL,
     cellprotable       text        NOT NULL,
     otherprotable      text,
     viewname           text        NOT NULL,
     protablename       text,
-    timemodel          text        NOT NULL DEFAULT 'STATIC' CHECK (timemodel IN ('STATIC', 'INSTANTS', 'EVOLVING')),
+    timemodel          text        NOT NULL DEFAULT 'STATIC' REFERENCES tgsis.data_models (timemodel),
     timeunit           text,
     proalignment       text        NOT NULL CHECK (proalignment IN ('VERTEX', 'CELL')),
     srs                integer     NOT NULL CHECK (srs >= 0),
@@ -20,11 +19,12 @@ CREATE TABLE tgsis.catalog (
     description        text,
     created_at         timestamptz NOT NULL DEFAULT now(),
     created_by         name        NOT NULL DEFAULT current_user,
+    celllevel          smallint    CHECK (celllevel >= 0),
     UNIQUE (schemaname, featuretable),
     UNIQUE (schemaname, cellprotable),
-    UNIQUE (schemaname, otherprotable),
-    CONSTRAINT catalog_temporal_classes CHECK ((timemodel = 'STATIC') = (protablename IS NULL)
-                                               AND (timemodel = 'STATIC' OR geotype = 'SURFACE'))
+    UNIQUE (schemaname, otherprotable)
+    -- (which geotypes and per-instant tables a time model has is the registry's,
+    -- tgsis.data_models, checked by tgsis.register_feature_class, the only writer)
 );
 
 COMMENT ON TABLE tgsis.catalog IS 'feature classes: where their features and properties are stored and how';
@@ -49,3 +49,5 @@ COMMENT ON COLUMN tgsis.catalog.instant_properties IS 'per-instant feature prope
 COMMENT ON COLUMN tgsis.catalog.description IS 'free text';
 COMMENT ON COLUMN tgsis.catalog.created_at IS 'when the class was registered';
 COMMENT ON COLUMN tgsis.catalog.created_by IS 'role that registered it';
+COMMENT ON COLUMN tgsis.catalog.celllevel IS
+    'classes of a model with cell levels (tgsis.data_models.cell_levels: G-maps): the dimension i of the cells their properties belong to (_idx = abstract cell id); NULL for the others';

@@ -1,4 +1,4 @@
--- tgsis.create_storage(): create the tables that hold the stored objects (models 1, 2 and 3) unless they exist.
+-- tgsis.create_storage(): create the tables of every registered data model (tgsis.data_models) that do not exist yet.
 -- Why a function and not CREATE TABLE statements in the script: on the
 -- extension route everything the script creates is an extension member, which
 -- pg_dump does not dump and which the CREATE EXTENSION of a restore creates
@@ -11,41 +11,48 @@
 -- them (docs/install.md, "Backup and restore"). The plain-SQL route calls it
 -- from the script (core/storage.sql), so both routes leave the same objects.
 -- The search path is the script's (tgsis, cube's schema): the tables use cube.
+-- A model whose tables are all there is skipped, so the function also serves an
+-- upgrade that registers a new model: its tables are created and granted, and
+-- the geotype/time-model check of tgsis.geometry follows the registry.
 CREATE FUNCTION tgsis.create_storage()
 RETURNS boolean
 LANGUAGE plpgsql
 VOLATILE
 SET search_path FROM CURRENT
 AS $storage$
+DECLARE
+    v_model   record;
+    v_created boolean := false;
+    v_core    boolean := to_regclass('tgsis.geometry') IS NULL;
 BEGIN
-    -- a view tgsis.geometry (feature versioning on) counts as existing storage
-    IF to_regclass('tgsis.geometry') IS NOT NULL THEN
-        RETURN false;
+    FOR v_model IN SELECT m.model, m.create_function FROM tgsis.data_models m ORDER BY m.model LOOP
+        -- a versioned table's name is its view: it counts as existing storage
+        CONTINUE WHEN NOT EXISTS (SELECT FROM tgsis.model_tables t
+                                   WHERE t.model = v_model.model AND to_regclass(format('tgsis.%I', t.tablename)) IS NULL);
+        IF EXISTS (SELECT FROM tgsis.model_tables t
+                    WHERE t.model = v_model.model AND to_regclass(format('tgsis.%I', t.tablename)) IS NOT NULL) THEN
+            RAISE EXCEPTION 'some tables of data model % exist and others do not', v_model.model
+                USING ERRCODE = 'TG001',
+                      DETAIL = (SELECT string_agg(format('tgsis.%I: %s', t.tablename,
+                                                         CASE WHEN to_regclass(format('tgsis.%I', t.tablename)) IS NULL
+                                                              THEN 'missing' ELSE 'exists' END), ', ' ORDER BY t.tablename)
+                                  FROM tgsis.model_tables t WHERE t.model = v_model.model),
+                      HINT = 'restore the missing tables from a backup, or drop the others, then run SELECT tgsis.create_storage()';
+        END IF;
+        EXECUTE format('SELECT tgsis.%I()', v_model.create_function);
+        PERFORM tgsis.grant_model_tables(v_model.model);
+        v_created := true;
+    END LOOP;
+    IF v_created AND NOT v_core THEN
+        -- a model added to existing storage: its geotypes become legal in tgsis.geometry
+        EXECUTE format('ALTER TABLE %s DROP CONSTRAINT geometry_kind, ADD CONSTRAINT geometry_kind CHECK (%s)',
+                       tgsis.storage_table('tgsis', 'geometry'), tgsis.geometry_kind_check());
     END IF;
-
-    PERFORM tgsis.create_model1_storage();   -- model1/storage.sql
-    PERFORM tgsis.create_model2_storage();   -- model2/storage.sql
-    PERFORM tgsis.create_model3_storage();   -- model3/storage.sql
-
-    -- rights of the group roles on them (the other objects' are in core/grants.sql)
-    GRANT SELECT ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
-                    tgsis.atom, tgsis.part,
-                    tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
-                    tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
-        TO tgsis_reader;
-    GRANT INSERT, UPDATE, DELETE ON tgsis.geometry, tgsis.vrtx, tgsis.point, tgsis.segment, tgsis.trgl, tgsis.tetra,
-                                    tgsis.atom, tgsis.part,
-                                    tgsis.times, tgsis.times_vrtx, tgsis.times_trgl,
-                                    tgsis.timem, tgsis.timet, tgsis.node, tgsis.d4dtrgl, tgsis.d4dvrtx
-        TO tgsis_editor;
-    GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq TO tgsis_editor;
-    -- class tables of feature classes refer to their geometry rows
-    GRANT REFERENCES ON tgsis.geometry TO tgsis_admin;
-    RETURN true;
+    RETURN v_created;
 END
 $storage$;
 
 REVOKE ALL ON FUNCTION tgsis.create_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_storage() IS
-    'create the tables of stored objects (geometry, vrtx, point, segment, trgl, tetra, atom, part, times*, timem, timet, node, d4dtrgl, d4dvrtx) with their grants unless tgsis.geometry exists; returns whether it created them. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';
+    'create the tables of every registered data model (tgsis.data_models, tgsis.model_tables) that are missing, with their grants; returns whether it created any. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';

@@ -45,7 +45,7 @@ BEGIN
         PERFORM tgsis.delete_stored_geometries(v_all);
     END IF;
     EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_class.viewname);
-    FOREACH v_table IN ARRAY array_remove(ARRAY[v_class.protablename, v_class.otherprotable, v_class.cellprotable, v_class.featuretable], NULL) LOOP
+    FOR v_table IN SELECT t.tablename FROM tgsis.class_tables t WHERE t.classname = p_name ORDER BY t.position DESC LOOP
         IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table) THEN
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
             EXECUTE format('DROP FUNCTION %I.%I()', v_class.schemaname, v_table || '_ver_write');

@@ -2,6 +2,10 @@
 -- theirs from tgsis.register_feature_class.
 GRANT USAGE ON SCHEMA tgsis TO tgsis_reader;
 GRANT SELECT ON tgsis.error_codes, tgsis.installation, tgsis.property_types, tgsis.catalog TO tgsis_reader;
+GRANT SELECT ON tgsis.class_tables TO tgsis_reader;
+-- the registry of data models says only what tgsis is made of: anyone may read
+-- it (the write path of every role consults it); only tgsis's owner writes it
+GRANT SELECT ON tgsis.data_models, tgsis.model_tables TO PUBLIC;
 -- (the storage tables get theirs from tgsis.create_storage)
 -- versioning: readers see the version tree; editors create, save and delete
 -- versions (per-version owner rights are enforced by the functions)

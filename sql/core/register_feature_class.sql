@@ -20,7 +20,8 @@ CREATE FUNCTION tgsis.register_feature_class(
     p_description        text    DEFAULT NULL,
     p_time_model         text    DEFAULT 'STATIC',
     p_instant_properties jsonb   DEFAULT '[]',
-    p_time_unit          text    DEFAULT NULL)
+    p_time_unit          text    DEFAULT NULL,
+    p_cell_level         integer DEFAULT NULL)
 RETURNS tgsis.catalog
 LANGUAGE plpgsql
 VOLATILE
@@ -33,6 +34,8 @@ DECLARE
     v_cellpros  text := p_name || '_cellpros';
     v_view      text := p_name || '_v';
     v_model     text := upper(btrim(p_time_model));
+    v_dm        tgsis.data_models;
+    v_temporal  boolean;
     v_pros      text;
     v_timekey   text;
     v_icols     text;
@@ -59,33 +62,54 @@ BEGIN
                   DETAIL = 'A class name is also a table name: lower-case letters, digits and underscores, '
                            'starting with a letter, at most 54 characters, not an SQL keyword.';
     END IF;
-    IF v_geotype IS NULL OR v_geotype NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+    -- geotypes and time models are the registered data models' (tgsis.data_models)
+    IF v_geotype IS NULL OR NOT EXISTS (SELECT FROM tgsis.data_models m WHERE v_geotype = ANY (m.geotypes)) THEN
         RAISE EXCEPTION 'unknown geotype % for feature class %', coalesce(quote_literal(p_geotype), 'NULL'), p_name
-            USING ERRCODE = 'TG100', HINT = 'MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA or GEOMETRYCOLLECTION';
+            USING ERRCODE = 'TG100',
+                  HINT = tgsis.or_list(ARRAY(SELECT DISTINCT g FROM tgsis.data_models m, unnest(m.geotypes) AS g ORDER BY g));
     END IF;
     IF v_align IS NULL OR v_align NOT IN ('VERTEX', 'CELL') THEN
         RAISE EXCEPTION 'property alignment % of feature class % must be VERTEX or CELL',
                 coalesce(quote_literal(p_proalignment), 'NULL'), p_name
             USING ERRCODE = 'TG100';
     END IF;
-    IF v_model IS NULL OR v_model NOT IN ('STATIC', 'INSTANTS', 'EVOLVING') THEN
-        RAISE EXCEPTION 'time model % of feature class % must be STATIC, INSTANTS or EVOLVING',
-                coalesce(quote_literal(p_time_model), 'NULL'), p_name
+    SELECT * INTO v_dm FROM tgsis.data_models m WHERE m.timemodel = v_model;
+    IF v_model IS NULL OR NOT FOUND THEN
+        RAISE EXCEPTION 'time model % of feature class % must be %', coalesce(quote_literal(p_time_model), 'NULL'), p_name,
+                        tgsis.or_list(ARRAY(SELECT m.timemodel FROM tgsis.data_models m WHERE m.model > 0 ORDER BY m.model))
             USING ERRCODE = 'TG100',
-                  HINT = 'STATIC: model 1; INSTANTS: surfaces known at instants (model 2); EVOLVING: continuously evolving surfaces (model 3)';
+                  HINT = (SELECT string_agg(format('%s: %s (model %s)', m.timemodel, m.name, m.model), '; ' ORDER BY m.model)
+                            FROM tgsis.data_models m WHERE m.model > 0);
     END IF;
-    IF v_model <> 'STATIC' AND v_geotype <> 'SURFACE' THEN
-        RAISE EXCEPTION 'a % feature class holds SURFACE features, not %', v_model, v_geotype
-            USING ERRCODE = 'TG100', HINT = 'temporal classes (time models INSTANTS and EVOLVING) are classes of surfaces';
+    -- a temporal model is one whose class tables have a time key
+    v_temporal := jsonb_array_length(v_dm.timekey) > 0;
+    -- G-maps: properties belong to the cells of one level (the spec's cell level attach), _idx a cell id
+    IF v_dm.cell_levels THEN
+        IF p_cell_level IS NULL OR p_cell_level < 0 THEN
+            RAISE EXCEPTION 'a % feature class needs the level of the cells its properties belong to, got %', v_model,
+                    coalesce(p_cell_level::text, 'NULL')
+                USING ERRCODE = 'TG100', HINT = 'p_cell_level => 0 (vertices), 1 (edges), 2 (faces), 3 (volumes), ...';
+        END IF;
+        v_align := 'CELL';
+    ELSIF p_cell_level IS NOT NULL THEN
+        RAISE EXCEPTION 'a % feature class attaches properties to vertices or simplices, not to cells of a level', v_model
+            USING ERRCODE = 'TG100', HINT = 'leave p_cell_level out, or register a class of G-maps (p_time_model => ''GMAP'')';
     END IF;
-    IF v_model = 'STATIC' AND (p_time_unit IS NOT NULL OR coalesce(p_instant_properties, '[]') NOT IN ('[]', '{}')) THEN
+    IF NOT v_geotype = ANY (v_dm.geotypes) THEN
+        RAISE EXCEPTION 'a % feature class holds % features, not %', v_model, tgsis.or_list(v_dm.geotypes), v_geotype
+            USING ERRCODE = 'TG100', HINT = format('time model %s (%s) is for %s', v_model, v_dm.name, tgsis.or_list(v_dm.geotypes));
+    END IF;
+    IF NOT v_temporal AND (p_time_unit IS NOT NULL OR coalesce(p_instant_properties, '[]') NOT IN ('[]', '{}')) THEN
         RAISE EXCEPTION 'static feature class % takes no time unit or per-instant properties', p_name
-            USING ERRCODE = 'TG100', HINT = 'give time_model => ''INSTANTS'' or ''EVOLVING'' for a temporal class';
+            USING ERRCODE = 'TG100',
+                  HINT = format('give time_model => %s for a temporal class',
+                                tgsis.or_list(ARRAY(SELECT quote_literal(m.timemodel) FROM tgsis.data_models m
+                                                     WHERE jsonb_array_length(m.timekey) > 0 ORDER BY m.model)));
     END IF;
-    IF v_model <> 'STATIC' THEN
+    IF v_temporal THEN
         v_pros := p_name || '_pros';
-        v_timekey := CASE v_model WHEN 'INSTANTS' THEN '_times double precision NOT NULL, '
-                                  ELSE '_timem double precision NOT NULL, _timet double precision NOT NULL, ' END;
+        SELECT string_agg(format('%I double precision NOT NULL, ', k ->> 'name'), '' ORDER BY i) INTO v_timekey
+          FROM jsonb_array_elements(v_dm.timekey) WITH ORDINALITY AS e (k, i);
     END IF;
     IF p_srs IS NULL OR p_srs < 0 THEN
         RAISE EXCEPTION 'SRS % of feature class % must be an id >= 0 (0: undefined)', p_srs, p_name USING ERRCODE = 'TG100';
@@ -159,7 +183,7 @@ BEGIN
                                            ELSE '{}' END ORDER BY ord), '[]')
       INTO v_ccols, v_ocols, v_cprops
       FROM props;
-    IF v_model <> 'STATIC' AND EXISTS (SELECT FROM jsonb_array_elements(v_cprops) p WHERE p ? 'size' OR p ? 'alignment') THEN
+    IF v_temporal AND EXISTS (SELECT FROM jsonb_array_elements(v_cprops) p WHERE p ? 'size' OR p ? 'alignment') THEN
         RAISE EXCEPTION 'temporal feature class % takes no vector properties nor properties of another alignment', p_name
             USING ERRCODE = 'TG103', HINT = 'give one scalar property per component, all of the class''s alignment';
     END IF;
@@ -198,8 +222,7 @@ BEGIN
                        p_schema, v_pros, rtrim(v_timekey, ', '), v_icols, rtrim(tgsis.time_key_columns(v_model), ', '));
         EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_pros,
                        format('tgsis feature class %s: per-instant feature properties (%s)', p_name,
-                              CASE v_model WHEN 'INSTANTS' THEN 'one row per feature and instant _times'
-                                           ELSE 'one row per feature and geometry instant (_timem, _timet)' END));
+                              format('one row per feature and %s', rtrim(tgsis.time_key_columns(v_model), ', '))));
         EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_pros, 'the feature (_geoid of ' || p_name || ')');
         PERFORM tgsis.comment_time_key_columns(p_schema, v_pros, v_model);
         PERFORM tgsis.comment_property_columns(p_schema, v_pros, v_iprops, 'per-instant feature property');
@@ -215,7 +238,8 @@ BEGIN
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', p_schema, v_cellpros,
                    format('tgsis feature class %s: %s properties (%s_idx = %s)', p_name, lower(v_align),
                           CASE WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN '_geoid = member geometry, ' ELSE '' END,
-                          CASE WHEN v_align = 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
+                          CASE WHEN v_dm.cell_levels THEN format('abstract cell id of a %s-cell', p_cell_level)
+                               WHEN v_align = 'VERTEX' THEN 'tgsis.vrtx.vrtxid'
                                WHEN v_geotype = 'GEOMETRYCOLLECTION' THEN 'simplex id in the member''s point/segment/trgl/tetra'
                                ELSE format('tgsis.%s id', tgsis.simplex_table(v_geotype)) END));
     EXECUTE format('COMMENT ON COLUMN %I.%I._geoid IS %L', p_schema, v_cellpros,
@@ -223,7 +247,8 @@ BEGIN
                         THEN 'a member geometry (tgsis.geometry.geoid) of a feature of ' || p_name
                         ELSE 'the feature (_geoid of ' || p_name || ')' END);
     EXECUTE format('COMMENT ON COLUMN %I.%I._idx IS %L', p_schema, v_cellpros,
-                   CASE v_align WHEN 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
+                   CASE WHEN v_dm.cell_levels THEN format('abstract cell id (acellid) of a %s-cell', p_cell_level)
+                        WHEN v_align = 'VERTEX' THEN 'vertex id (vrtxid)' ELSE 'simplex id' END);
     PERFORM tgsis.comment_property_columns(p_schema, p_name, v_fprops, 'per-feature property');
     PERFORM tgsis.comment_property_columns(p_schema, v_cellpros,
                                            (SELECT coalesce(jsonb_agg(p), '[]') FROM jsonb_array_elements(v_cprops) p
@@ -257,9 +282,9 @@ BEGIN
 
     INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, otherprotable, viewname,
                                protablename, timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
-                               instant_properties, description, created_by)
+                               instant_properties, description, created_by, celllevel)
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_other, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
-            v_fprops, v_cprops, v_iprops, p_description, v_caller)
+            v_fprops, v_cprops, v_iprops, p_description, v_caller, p_cell_level)
     RETURNING * INTO v_row;
     -- once model 1 is versioned, every new class is versioned with it
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
@@ -270,5 +295,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text) IS
+COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text, integer) IS
     'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';

@@ -1,4 +1,4 @@
--- tgsis.create_model2_storage(): create the tables of model 2 (surfaces at instants: instants, vertices and triangles per instant).
+-- tgsis.create_model2_storage(): create the tables of model 2 (surfaces at instants: instants, vertices and triangles per instant) and register them.
 -- Called by tgsis.create_storage (core/create_storage.sql says why the tables
 -- are created by a function after CREATE EXTENSION, not by the script).
 -- The search path is the script's (tgsis, cube's schema).
@@ -73,3 +73,15 @@ REVOKE ALL ON FUNCTION tgsis.create_model2_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_model2_storage() IS
     'create the model-2 tables (times, times_vrtx, times_trgl); called once by tgsis.create_storage';
+
+-- the registry rows of model 2 (geometry/data_models.sql says why)
+INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, create_function, extent_function, check_function,
+                               description)
+VALUES (2, 'surfaces at instants', 'INSTANTS', '{SURFACE}',
+        '[{"name": "_times", "comment": "instant (model time) the values belong to: one of tgsis.times of the feature"}]',
+        'create_model2_storage', 'instants_extent', 'check_temporal_geometry',
+        'surfaces known at instants t0 < t1 < ..., constant in between (a shape per instant)');
+INSERT INTO tgsis.model_tables (tablename, model, iudorder, description) VALUES
+    ('times',      2, 1, 'an instant at which a surface is known'),
+    ('times_vrtx', 2, 2, 'a vertex of a surface at one of its instants'),
+    ('times_trgl', 2, 2, 'a triangle of a surface at one of its instants');

@@ -1,4 +1,4 @@
--- tgsis.create_model3_storage(): create the tables of model 3 (continuously evolving surfaces: topology and geometry instants, nodes, 4D triangles and vertices).
+-- tgsis.create_model3_storage(): create the tables of model 3 (continuously evolving surfaces: topology and geometry instants, nodes, 4D triangles and vertices) and register them.
 -- Called by tgsis.create_storage (core/create_storage.sql says why the tables
 -- are created by a function after CREATE EXTENSION, not by the script).
 -- The search path is the script's (tgsis, cube's schema).
@@ -108,3 +108,18 @@ REVOKE ALL ON FUNCTION tgsis.create_model3_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_model3_storage() IS
     'create the model-3 tables (timem, timet, node, d4dtrgl, d4dvrtx); called once by tgsis.create_storage';
+
+-- the registry rows of model 3 (geometry/data_models.sql says why)
+INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, create_function, extent_function, check_function,
+                               description)
+VALUES (3, 'continuously evolving surfaces', 'EVOLVING', '{SURFACE}',
+        '[{"name": "_timem", "comment": "topology period (its start, tgsis.timem) the values belong to"},
+          {"name": "_timet", "comment": "geometry instant (tgsis.timet of the period) the values belong to; values are linear in between"}]',
+        'create_model3_storage', 'evolving_extent', 'check_temporal_geometry',
+        'surfaces whose nodes move linearly between geometry instants, with topology periods');
+INSERT INTO tgsis.model_tables (tablename, model, iudorder, description) VALUES
+    ('timem',   3, 1, 'a topology instant (start of a topology period) of an evolving surface'),
+    ('timet',   3, 2, 'a geometry instant of a topology period'),
+    ('node',    3, 2, 'a node (vertex of the topology) of a topology period'),
+    ('d4dtrgl', 3, 2, 'a triangle of a topology period'),
+    ('d4dvrtx', 3, 2, 'the position of a node at a geometry instant of its period');

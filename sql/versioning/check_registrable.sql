@@ -21,8 +21,7 @@ BEGIN
     END IF;
     IF p_owner = v_tgsis_owner
        AND (p_schema = 'tgsis'
-            OR EXISTS (SELECT FROM tgsis.catalog c
-                        WHERE c.schemaname = p_schema AND p_table IN (c.featuretable, c.cellprotable, c.otherprotable, c.protablename))) THEN
+            OR EXISTS (SELECT FROM tgsis.class_tables c WHERE c.schemaname = p_schema AND c.tablename = p_table)) THEN
         RETURN;
     END IF;
     RAISE EXCEPTION 'role % does not own %.%, and tgsis did not create it', tgsis.calling_role(), p_schema, p_table

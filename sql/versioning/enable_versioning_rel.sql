@@ -53,8 +53,8 @@ BEGIN
                                                               WHEN 'p' THEN 'a partitioned table' WHEN 'f' THEN 'a foreign table'
                                                               ELSE v_kind::text END);
     END IF;
-    IF v_schema = 'tgsis' AND v_table NOT IN ('geometry', 'vrtx', 'point', 'segment', 'trgl', 'tetra', 'atom', 'part', 'times', 'times_vrtx', 'times_trgl',
-                                              'timem', 'timet', 'node', 'd4dtrgl', 'd4dvrtx') THEN
+    -- in tgsis's schema only the registered storage of the data models
+    IF v_schema = 'tgsis' AND NOT EXISTS (SELECT FROM tgsis.model_tables WHERE tablename = v_table) THEN
         RAISE EXCEPTION 'tgsis.% is part of tgsis''s own catalog and cannot be versioned', v_table USING ERRCODE = 'TG100';
     END IF;
     IF NOT pg_has_role(current_user, v_owner, 'USAGE') THEN

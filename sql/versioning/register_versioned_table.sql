@@ -51,8 +51,8 @@ BEGIN
         RAISE EXCEPTION 'table %.% is versioned already', v_schema, v_table USING ERRCODE = 'TG201';
     END IF;
     v_tgsis := v_owner = (SELECT relowner FROM pg_class WHERE oid = 'tgsis.versioned_tables'::regclass)
-               AND (v_schema = 'tgsis' OR EXISTS (SELECT FROM tgsis.catalog c WHERE c.schemaname = v_schema
-                                                     AND v_table IN (c.featuretable, c.cellprotable, c.otherprotable, c.protablename)));
+               AND (v_schema = 'tgsis' OR EXISTS (SELECT FROM tgsis.class_tables c
+                                                   WHERE c.schemaname = v_schema AND c.tablename = v_table));
     IF p_objectclass = 'feature' AND NOT v_tgsis THEN
         RAISE EXCEPTION 'object class ''feature'' holds model 1 and the feature classes, not %.%', v_schema, v_table
             USING ERRCODE = 'TG100',

@@ -33,7 +33,7 @@ from tgsis.mesh import (
     TetraMesh,
     mesh_class,
 )
-from tgsis.gmaps import GMap, GMapReport
+from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
 from tgsis.gmaps import extrude as extrude_gmap
 from tgsis.gmaps import slice as slice_gmap
 from tgsis.errors import (
@@ -160,6 +160,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         property_periods,
         surfaces_at,
     )
+    from tgsis.db.gmaps import (GMapProblem, fetch_gmap, fetch_md_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap,
+                                md_in_box, md_vertices_in_box)
 
 # The database layer (and psycopg) is imported on first use of one of its
 # names, so that the numpy modules (tgsis.mesh, compare, edits, temporal,
@@ -254,6 +256,15 @@ _LAZY: dict[str, str] = {
     "lifespan": "tgsis.db.temporal",
     "property_periods": "tgsis.db.temporal",
     "surfaces_at": "tgsis.db.temporal",
+    "GMapProblem": "tgsis.db.gmaps",
+    "fetch_gmap": "tgsis.db.gmaps",
+    "gmap_at": "tgsis.db.gmaps",
+    "gmap_cells": "tgsis.db.gmaps",
+    "gmap_check": "tgsis.db.gmaps",
+    "insert_gmap": "tgsis.db.gmaps",
+    "fetch_md_gmap": "tgsis.db.gmaps",
+    "md_in_box": "tgsis.db.gmaps",
+    "md_vertices_in_box": "tgsis.db.gmaps",
 }
 
 
@@ -352,8 +363,20 @@ __all__ = [
     # generalized maps, models 4 and 5 (numpy, no database; more in tgsis.gmaps)
     "GMap",
     "GMapReport",
+    "GMapPeriod",
+    "EvolvingGMap",
     "extrude_gmap",
     "slice_gmap",
+    # G-maps in the database (model 4)
+    "insert_gmap",
+    "fetch_gmap",
+    "gmap_at",
+    "gmap_cells",
+    "gmap_check",
+    "GMapProblem",
+    "fetch_md_gmap",
+    "md_in_box",
+    "md_vertices_in_box",
     # feature classes and features
     "FeatureClass",
     "Property",

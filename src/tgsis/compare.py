@@ -30,12 +30,12 @@ match. ``scipy.spatial.cKDTree`` is used only for a non-zero tolerance.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._rows import SortedRows, cell_columns, columns_of, coordinate_columns, match_rows, unmatched
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.mesh import Mesh
 
@@ -43,174 +43,6 @@ __all__ = ["MeshDiff", "MeshIndex", "compare_meshes"]
 
 IntArray = npt.NDArray[np.int64]
 U64Array = npt.NDArray[np.uint64]
-
-# odd 64-bit constants of splitmix64 / murmur3's finaliser: good avalanche, wrap-around arithmetic
-_MULTIPLIERS = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
-
-
-def _mix(h: U64Array) -> U64Array:
-    """splitmix64's finaliser, in place on a fresh array."""
-    h ^= h >> np.uint64(30)
-    h *= _MULTIPLIERS[1]
-    h ^= h >> np.uint64(27)
-    h *= _MULTIPLIERS[2]
-    h ^= h >> np.uint64(31)
-    return h
-
-
-def _row_hashes(columns: list[U64Array]) -> U64Array:
-    """A 64-bit hash of each row of k equal-length uint64 columns."""
-    h = np.full(len(columns[0]), _MULTIPLIERS[0], dtype=np.uint64)
-    for column in columns:
-        h ^= column
-        h = _mix(h)
-    return h
-
-
-def _coordinate_columns(vertices: npt.NDArray[np.float64]) -> list[U64Array]:
-    """The bits of the x, y and z coordinates, with ``-0.0`` made ``0.0`` (equal numbers, equal bits)."""
-    return [(np.ascontiguousarray(vertices[:, j], dtype=np.float64) + 0.0).view(np.uint64)  # -0.0 + 0.0 == +0.0
-            for j in range(3)]
-
-
-# Sorting (hash << 32 | row index) with np.sort is 2.5-3.4 times as fast as
-# np.argsort of the hashes (measured: docs/performance.md): the order comes
-# out of the low bits. Rows whose 32-bit hash prefixes collide are paired
-# exactly by _match_crowded.
-_INDEX_BITS = np.uint64(32)
-_LOW = np.uint64((1 << 32) - 1)
-
-
-@dataclass(frozen=True)
-class _SortedRows:
-    """Rows (as k uint64 columns) in the order of their hashes, so that many comparisons can reuse them."""
-
-    columns: list[U64Array]
-    order: IntArray
-    sorted_hashes: U64Array
-    sorted_columns: list[U64Array]
-
-    @classmethod
-    def of(cls, columns: list[U64Array]) -> _SortedRows:
-        hashes = _row_hashes(columns)
-        n = len(hashes)
-        if n <= int(_LOW):
-            keys = (hashes & ~_LOW) | np.arange(n, dtype=np.uint64)
-            keys.sort()
-            order = (keys & _LOW).view(np.int64)
-            prefixes = keys >> _INDEX_BITS
-        else:  # beyond 2**32 rows the index does not fit in the low bits
-            order = np.argsort(hashes)
-            prefixes = hashes[order] >> _INDEX_BITS
-        # one column: the hash is a bijection of it (xor and splitmix's steps are invertible), so the
-        # sorted full hashes verify a match exactly; several columns are compared value by value
-        sorted_columns = [hashes[order]] if len(columns) == 1 else [c[order] for c in columns]
-        return cls(columns, order, prefixes, sorted_columns)
-
-    def __len__(self) -> int:
-        return len(self.order)
-
-    @cached_property
-    def unique_hash(self) -> npt.NDArray[np.bool_]:
-        """Per sorted position: whether no other row has the same hash prefix (kept: an index is reused)."""
-        s = self.sorted_hashes
-        alone = np.ones(len(s), dtype=bool)
-        if len(s) > 1:
-            same = s[1:] == s[:-1]
-            alone[1:] &= ~same
-            alone[:-1] &= ~same
-        return alone
-
-
-def _match(old: _SortedRows, new: _SortedRows) -> IntArray:
-    """For each row of ``new``, the index of the equal row of ``old`` (one-to-one), or -1.
-
-    Equal rows are paired in index order when either side repeats a row (not
-    a normal mesh) or different rows share a hash prefix (a collision).
-    """
-    result = np.full(len(new), -1, dtype=np.int64)
-    if len(old) == 0 or len(new) == 0:
-        return result
-    pos = np.searchsorted(old.sorted_hashes, new.sorted_hashes)  # queries in sorted order: a merge
-    np.minimum(pos, len(old) - 1, out=pos)
-    same_hash = old.sorted_hashes[pos] == new.sorted_hashes
-    simple = same_hash & old.unique_hash[pos] & new.unique_hash
-    at = pos[simple]  # both sides read in hash order: sequential memory access
-    exact = np.ones(len(at), dtype=bool)
-    for old_column, new_column in zip(old.sorted_columns, new.sorted_columns):
-        exact &= old_column[at] == new_column[simple]
-    result[new.order[simple][exact]] = old.order[at[exact]]
-    crowded = same_hash & ~simple  # a hash shared by several rows of one side: pair exactly, in index order
-    if crowded.any():
-        _match_crowded(old, new, np.unique(new.sorted_hashes[crowded]), result)
-    return result
-
-
-def _match_crowded(old: _SortedRows, new: _SortedRows, hashes: U64Array, result: IntArray) -> None:
-    """Pair the rows whose hash prefix is one of ``hashes`` by exact value (rare: collisions, repeated rows)."""
-    def rows_with(side: _SortedRows) -> IntArray:
-        lo = np.searchsorted(side.sorted_hashes, hashes, side="left")
-        hi = np.searchsorted(side.sorted_hashes, hashes, side="right")
-        return np.sort(np.concatenate([side.order[a:b] for a, b in zip(lo.tolist(), hi.tolist())]))
-
-    def row(side: _SortedRows, i: int) -> tuple[int, ...]:
-        return tuple(int(c[i]) for c in side.columns)
-
-    waiting: dict[tuple[int, ...], list[int]] = {}
-    for i in rows_with(old).tolist():
-        waiting.setdefault(row(old, i), []).append(i)
-    for taken in waiting.values():
-        taken.reverse()  # pop() from the end hands out the lowest index first
-    for j in rows_with(new).tolist():
-        queue = waiting.get(row(new, j))
-        if queue:
-            result[j] = queue.pop()
-
-
-def _permutation_parity(columns: list[IntArray]) -> npt.NDArray[np.uint64]:
-    """0 for cells whose vertex order is an even permutation of the ascending order, 1 for odd (inversions)."""
-    odd = np.zeros(len(columns[0]), dtype=bool)
-    for i, first in enumerate(columns):
-        for second in columns[i + 1:]:
-            odd ^= first > second
-    return odd.view(np.uint8).astype(np.uint64)
-
-
-def _columns(cells: IntArray) -> list[IntArray]:
-    """The k columns of an (m, k) cell array, each contiguous."""
-    return [np.ascontiguousarray(cells[:, i]) for i in range(cells.shape[1])]
-
-
-def _cell_columns(columns: list[IntArray], n_vertices: int) -> list[U64Array]:
-    """Oriented cells, given as their k columns of vertex ids, as rows: sorted ids and the parity of the order.
-
-    When k ids of ``n_vertices`` and the parity bit fit in 64 bits (a
-    surface of up to 2M vertices) they are packed into one exact key.
-    """
-    k = len(columns)
-    if k == 1:
-        return [columns[0].astype(np.uint64)]
-    bits = max(1, (max(n_vertices, 1) - 1).bit_length())
-    ids = [c.view(np.uint64) for c in columns]  # ids >= 0: the same order as int64
-    if k == 2:
-        ordered = [np.minimum(ids[0], ids[1]), np.maximum(ids[0], ids[1])]
-    elif k == 3:  # a sorting network on contiguous columns (3x faster than np.sort along rows)
-        a, b, c = ids
-        low, high = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-        ordered = [low, a + b + c - low - high, high]  # ids < 2**63: no overflow
-    else:
-        sorted_cells = np.sort(np.stack(ids, axis=1), axis=1)
-        ordered = [np.ascontiguousarray(sorted_cells[:, i]) for i in range(k)]
-    parity = _permutation_parity(columns)
-    if k * bits + 1 > 64:
-        return [*ordered, parity]
-    key = ordered[0].copy()
-    for column in ordered[1:]:
-        key <<= np.uint64(bits)
-        key |= column
-    key <<= np.uint64(1)
-    key |= parity
-    return [key]
 
 
 class MeshIndex:
@@ -228,8 +60,8 @@ class MeshIndex:
 
     def __init__(self, mesh: Mesh) -> None:
         self.mesh = mesh
-        self._vertices = _SortedRows.of(_coordinate_columns(mesh.vertices))
-        self._cells = _SortedRows.of(_cell_columns(_columns(mesh.cells), mesh.n_vertices))
+        self._vertices = SortedRows.of(coordinate_columns(mesh.vertices))
+        self._cells = SortedRows.of(cell_columns(columns_of(mesh.cells), mesh.n_vertices))
         for rows in (self._vertices, self._cells):
             rows.unique_hash  # computed once here, not by the first comparison
         self._tree: Any = None
@@ -389,14 +221,14 @@ def compare_meshes(old: Mesh | MeshIndex, edited: Mesh, tolerance: float = 0.0) 
         raise InvalidInputError(f"tolerance must be a finite number >= 0, got {tolerance}")
     index = old if isinstance(old, MeshIndex) else MeshIndex(old)
 
-    vertex_map = _match(index._vertices, _SortedRows.of(_coordinate_columns(edited.vertices)))
+    vertex_map = match_rows(index._vertices, SortedRows.of(coordinate_columns(edited.vertices)))
     if tolerance > 0:
         _tolerance_matches(index, edited, vertex_map, tolerance)
 
     return _diff(old_mesh, vertex_map, _match_cells(index._cells, old_mesh.n_vertices, edited.cells, vertex_map))
 
 
-def _match_cells(old_cells: _SortedRows, n_old_vertices: int, cells: IntArray, vertex_map: IntArray) -> IntArray:
+def _match_cells(old_cells: SortedRows, n_old_vertices: int, cells: IntArray, vertex_map: IntArray) -> IntArray:
     """Per edited cell, the index of the same oriented old cell (one-to-one), or -1, given the vertex map.
 
     Edited cells on surviving vertices are renamed to old vertex indices and
@@ -405,16 +237,16 @@ def _match_cells(old_cells: _SortedRows, n_old_vertices: int, cells: IntArray, v
     cell_map = np.full(len(cells), -1, dtype=np.int64)
     if len(cells) == 0 or len(old_cells) == 0:
         return cell_map
-    renamed = [vertex_map[column] for column in _columns(cells)]
+    renamed = [vertex_map[column] for column in columns_of(cells)]
     unmatched = renamed[0].copy()  # negative where any vertex of the cell is unmatched (-1): or of the sign bits
     for column in renamed[1:]:
         unmatched |= column
     candidates = np.flatnonzero(unmatched >= 0)
     if len(candidates) == len(cells):
-        return _match(old_cells, _SortedRows.of(_cell_columns(renamed, n_old_vertices)))
+        return match_rows(old_cells, SortedRows.of(cell_columns(renamed, n_old_vertices)))
     if len(candidates):
         renamed = [column[candidates] for column in renamed]
-        cell_map[candidates] = _match(old_cells, _SortedRows.of(_cell_columns(renamed, n_old_vertices)))
+        cell_map[candidates] = match_rows(old_cells, SortedRows.of(cell_columns(renamed, n_old_vertices)))
     return cell_map
 
 
@@ -423,15 +255,10 @@ def _diff(old_mesh: Mesh, vertex_map: IntArray, cell_map: IntArray) -> MeshDiff:
     return MeshDiff(
         vertex_map=vertex_map,
         cell_map=cell_map,
-        removed_vertices=_unmatched(old_mesh.n_vertices, vertex_map),
-        removed_cells=_unmatched(old_mesh.n_cells, cell_map),
+        removed_vertices=unmatched(old_mesh.n_vertices, vertex_map),
+        removed_cells=unmatched(old_mesh.n_cells, cell_map),
         n_old_vertices=old_mesh.n_vertices,
         n_old_cells=old_mesh.n_cells,
     )
 
 
-def _unmatched(count: int, mapping: IntArray) -> IntArray:
-    """Indices in ``range(count)`` that ``mapping`` does not hit, ascending."""
-    hit = np.zeros(count, dtype=bool)
-    hit[mapping[mapping >= 0]] = True
-    return np.flatnonzero(~hit).astype(np.int64)

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.compare import IndexMaps, MeshDiff, MeshIndex, _cell_columns, _columns, _match, _SortedRows, _unmatched
+from tgsis._rows import SortedRows, cell_columns, columns_of, match_rows, unmatched
+from tgsis.compare import IndexMaps, MeshDiff, MeshIndex
 from tgsis.mesh import Mesh
 
 __all__ = ["EditPlan", "plan_edit"]
@@ -80,7 +81,7 @@ def _one_missing_keys(cells: IntArray, mapped: IntArray, sentinel: int) -> tuple
     vertex = cells[rows, position]
     keyed = mapped[rows].copy()
     keyed[np.arange(len(rows)), position] = sentinel
-    return rows.astype(np.int64), vertex.astype(np.int64), _cell_columns(_columns(keyed), sentinel + 1)
+    return rows.astype(np.int64), vertex.astype(np.int64), cell_columns(columns_of(keyed), sentinel + 1)
 
 
 def _pair_moves(old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_map: IntArray,
@@ -97,7 +98,7 @@ def _pair_moves(old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_
     new_rows, new_vertex, new_keys = _one_missing_keys(new_cells, new_mapped, sentinel)
     if len(old_rows) == 0 or len(new_rows) == 0:
         return 0
-    hit = _match(_SortedRows.of(old_keys), _SortedRows.of(new_keys))
+    hit = match_rows(SortedRows.of(old_keys), SortedRows.of(new_keys))
     # votes: (new vertex, old vertex) per matched cell; a pair holds when it is each side's only candidate
     # and covers all the one-missing cells of both vertices
     matched = hit >= 0
@@ -150,9 +151,9 @@ def plan_edit(old: Mesh | MeshIndex, edited: Mesh, diff: MeshDiff) -> EditPlan:
         renamed = vertex_map[new_cells]
         survives = np.flatnonzero(renamed.min(axis=1) >= 0)
         if len(survives):
-            hit = _match(_SortedRows.of(_cell_columns(_columns(old_cells), old_mesh.n_vertices)),
-                         _SortedRows.of(_cell_columns(_columns(renamed[survives]), old_mesh.n_vertices)))
+            hit = match_rows(SortedRows.of(cell_columns(columns_of(old_cells), old_mesh.n_vertices)),
+                         SortedRows.of(cell_columns(columns_of(renamed[survives]), old_mesh.n_vertices)))
             found = hit >= 0
             cell_map[diff.added_cells[survives[found]]] = diff.removed_cells[hit[found]]
-    return EditPlan(diff, vertex_map, moved, cell_map, _unmatched(old_mesh.n_vertices, vertex_map),
-                    _unmatched(old_mesh.n_cells, cell_map), edited.bounds() if edited.n_vertices else None)
+    return EditPlan(diff, vertex_map, moved, cell_map, unmatched(old_mesh.n_vertices, vertex_map),
+                    unmatched(old_mesh.n_cells, cell_map), edited.bounds() if edited.n_vertices else None)

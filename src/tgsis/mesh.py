@@ -57,13 +57,14 @@ IntArray = npt.NDArray[np.int64]
 
 
 class Geotype(str, enum.Enum):
-    """Geometry types of model 1."""
+    """Geometry types: model 1's meshes and collections, and GMAP (a G-map of model 4, :mod:`tgsis.gmaps`)."""
 
     MULTIPOINT = "MULTIPOINT"
     MULTILINESTRING = "MULTILINESTRING"
     SURFACE = "SURFACE"
     MULTITETRA = "MULTITETRA"
     GEOMETRYCOLLECTION = "GEOMETRYCOLLECTION"
+    GMAP = "GMAP"
 
 
 @dataclass(frozen=True)

@@ -45,11 +45,12 @@ from typing import Literal, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError
+from tgsis._series import as_series, as_times
+from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.formats._common import PathLike
 from tgsis.formats.pvd import write_pvd
 from tgsis.formats.vtk import Encoding
-from tgsis.mesh import PROPERTY_NAME_RE, Surface
+from tgsis.mesh import Surface
 
 __all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color", "TemporalSurface",
            "SurfaceFrame", "WrittenSeries", "own_instants", "even_times", "series_frames", "write_frames_pvd",
@@ -81,20 +82,6 @@ def check_time(t: float) -> float:
     return value
 
 
-def _as_times(times: npt.ArrayLike, what: str) -> FloatArray:
-    """(k,) float64 instants, finite and strictly increasing, at least one."""
-    array = np.ascontiguousarray(times, dtype=np.float64)
-    if array.ndim != 1 or len(array) == 0:
-        raise InvalidInputError(f"{what} must be a non-empty list of instants, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise InvalidInputError(f"{what} must be finite numbers, got {array[~np.isfinite(array)][0]!r}")
-    steps = np.diff(array)
-    if np.any(steps <= 0):
-        bad = int(np.argmax(steps <= 0))
-        raise InvalidInputError(f"{what} must be strictly increasing: {array[bad]!r} then {array[bad + 1]!r}")
-    return array
-
-
 def _as_color(color: Sequence[float] | None) -> Color | None:
     if color is None:
         return None
@@ -102,22 +89,6 @@ def _as_color(color: Sequence[float] | None) -> Color | None:
     if len(values) != 3 or not all(0.0 <= c <= 1.0 for c in values):
         raise InvalidInputError(f"colour must be (red, green, blue) in [0, 1], got {color!r}")
     return (values[0], values[1], values[2])
-
-
-def _as_series(values: Mapping[str, npt.ArrayLike] | None, shape: tuple[int, ...],
-               what: str) -> dict[str, npt.NDArray[np.generic]]:
-    """Numeric arrays of exactly ``shape`` under valid property names."""
-    result: dict[str, npt.NDArray[np.generic]] = {}
-    for name, raw in (values or {}).items():
-        if not PROPERTY_NAME_RE.match(name):
-            raise InvalidPropertyError(f"{what} name {name!r} is not allowed (letters, digits, _; starting with a letter)")
-        array = np.ascontiguousarray(raw)
-        if array.dtype.kind not in "biuf":
-            raise InvalidPropertyError(f"{what} {name!r} must be numeric or boolean, got {array.dtype}")
-        if array.shape != shape:
-            raise InvalidPropertyError(f"{what} {name!r} must have shape {shape}, got {array.shape}")
-        result[name] = array
-    return result
 
 
 # --------------------------------------------------------------------------- model 2
@@ -149,12 +120,12 @@ class SurfaceSeries:
     def __init__(self, times: npt.ArrayLike, surfaces: Sequence[Surface], *,
                  properties: Mapping[str, npt.ArrayLike] | None = None, alive: bool = False,
                  name: str | None = None, color: Sequence[float] | None = None) -> None:
-        self.times = _as_times(times, "instants of a surface series")
+        self.times = as_times(times, "instants of a surface series")
         self.surfaces = tuple(surfaces)
         if len(self.surfaces) != len(self.times) or not all(isinstance(s, Surface) for s in self.surfaces):
             raise InvalidInputError(f"a surface series needs one Surface per instant: {len(self.times)} instants, "
                                     f"{len(self.surfaces)} surfaces")
-        self.properties = _as_series(properties, (len(self.times),), "per-instant property")
+        self.properties = as_series(properties, (len(self.times),), "per-instant property")
         self.alive = bool(alive)
         self.name = name
         self.color = _as_color(color)
@@ -230,7 +201,7 @@ class TopologyPeriod:
                  vertex_properties: Mapping[str, npt.ArrayLike] | None = None,
                  cell_properties: Mapping[str, npt.ArrayLike] | None = None,
                  properties: Mapping[str, npt.ArrayLike] | None = None) -> None:
-        times_array = _as_times(times, "geometry instants of a topology period")
+        times_array = as_times(times, "geometry instants of a topology period")
         xyz = np.ascontiguousarray(positions, dtype=np.float64)
         if xyz.ndim != 3 or xyz.shape[0] != len(times_array) or xyz.shape[2] != 3:
             raise InvalidGeometryError(f"node positions must have shape (g, n, 3) with g = {len(times_array)} "
@@ -242,9 +213,9 @@ class TopologyPeriod:
         object.__setattr__(self, "times", times_array)
         object.__setattr__(self, "triangles", first.cells)
         object.__setattr__(self, "positions", xyz)
-        object.__setattr__(self, "vertex_properties", _as_series(vertex_properties, (g, n), "vertex property"))
-        object.__setattr__(self, "cell_properties", _as_series(cell_properties, (g, m), "triangle property"))
-        object.__setattr__(self, "properties", _as_series(properties, (g,), "per-instant property"))
+        object.__setattr__(self, "vertex_properties", as_series(vertex_properties, (g, n), "vertex property"))
+        object.__setattr__(self, "cell_properties", as_series(cell_properties, (g, m), "triangle property"))
+        object.__setattr__(self, "properties", as_series(properties, (g,), "per-instant property"))
 
     @property
     def start(self) -> float:
@@ -284,6 +255,41 @@ class Frame:
     j0: int
     j1: int
     w: float
+
+
+def frame_at(starts: FloatArray, period_times: Sequence[FloatArray], alive: bool, t: float) -> Frame | None:
+    """Where ``t`` falls in an object with topology periods (models 3 and 4), or None when it does not exist then.
+
+    Parameters
+    ----------
+    starts : (k,) float64
+        Where each period starts, ascending.
+    period_times : sequence of (g_i,) float64
+        The geometry instants of each period; ``period_times[i][0] == starts[i]``.
+    alive : bool
+        Whether the object exists after its last geometry instant (in its last state).
+    t : float
+
+    Notes
+    -----
+    The period is the last one starting at or before ``t`` (at a topology
+    change the new topology applies); nothing before the first start, nor
+    after the last geometry instant unless alive. The same rules as the SQL
+    snapshots (``tgsis.evolving_frame``, ``tgsis.gmap_frame``).
+    """
+    t = check_time(t)
+    if t < starts[0]:
+        return None
+    index = int(np.searchsorted(starts, t, side="right")) - 1
+    times = period_times[index]
+    if t > times[-1]:
+        last = len(times) - 1
+        return Frame(index, last, last, 0.0) if alive or index < len(period_times) - 1 else None
+    j1 = int(np.searchsorted(times, t, side="left"))
+    if times[j1] == t:
+        return Frame(index, j1, j1, 0.0)
+    j0 = j1 - 1
+    return Frame(index, j0, j1, float((t - times[j0]) / (times[j1] - times[j0])))
 
 
 class EvolvingSurface:
@@ -403,19 +409,7 @@ class EvolvingSurface:
 
     def frame(self, t: float) -> Frame | None:
         """The period and bracketing geometry instants at ``t``, or None when the surface does not exist then."""
-        t = check_time(t)
-        if t < self._starts[0]:
-            return None
-        index = int(np.searchsorted(self._starts, t, side="right")) - 1
-        times = self.periods[index].times
-        if t > times[-1]:
-            last = len(times) - 1
-            return Frame(index, last, last, 0.0) if self.alive or index < len(self.periods) - 1 else None
-        j1 = int(np.searchsorted(times, t, side="left"))
-        if times[j1] == t:
-            return Frame(index, j1, j1, 0.0)
-        j0 = j1 - 1
-        return Frame(index, j0, j1, float((t - times[j0]) / (times[j1] - times[j0])))
+        return frame_at(self._starts, [p.times for p in self.periods], self.alive, t)
 
     def at(self, t: float) -> Surface | None:
         """The surface at ``t`` with its vertex/cell properties interpolated, or None when it does not exist."""
@@ -520,7 +514,7 @@ def series_frames(obj: TemporalSurface, times: npt.ArrayLike | None = None,
     InvalidInputError
     """
     check_convention(convention)
-    samples = own_instants(obj) if times is None else _as_times(times, "sample times")
+    samples = own_instants(obj) if times is None else as_times(times, "sample times")
     if isinstance(obj, SurfaceSeries):
         return [(t, obj.at(t, convention)) for t in samples.tolist()]
     return [(t, obj.at(t)) for t in samples.tolist()]

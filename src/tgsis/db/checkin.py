@@ -45,23 +45,10 @@ from tgsis.arguments import check_module
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.edits import EditPlan, plan_edit
 from tgsis.db.copy import SQL_TYPES, array_wire
-from tgsis.db.features import (
-    FeatureClass,
-    _aligned_properties,
-    _download,
-    _feature_columns,
-    _Part,
-    _positions,
-    _SIMPLEX,
-    _Storage,
-    MEANING_COLUMNS,
-    _part_meaning,
-    class_of_feature,
-    copy_extra_rows,
-    extra_rows,
-    get_feature_class,
-    restore_extras,
-)
+from tgsis.db._static import (MEANING_COLUMNS, SIMPLEX, Part, copy_extra_rows, download, extra_rows, part_meaning,
+                              restore_extras)
+from tgsis.db._transfer import Storage, aligned_properties, feature_columns, local_positions
+from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.errors import (
     CheckoutConflictError,
@@ -119,7 +106,7 @@ def _feature_row(conn: Conn, fc: FeatureClass, geoid: int) -> tuple[str | None, 
         sql.SQL("SELECT g.geoname, g.geotype{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
                 "WHERE f._geoid = %s").format(
             sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
-            fc._table(fc.featuretable)), (geoid,)).fetchone()
+            fc.qualified(fc.featuretable)), (geoid,)).fetchone()
     if row is None:
         raise NotFoundError(f"feature class {fc.name} has no feature {geoid}")
     return row[0], row[1], dict(zip(props, row[2:]))
@@ -127,15 +114,15 @@ def _feature_row(conn: Conn, fc: FeatureClass, geoid: int) -> tuple[str | None, 
 
 def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> StoredMesh:
     """Download one static, non-collection geometry with its row ids (three COPYs)."""
-    data = _download(conn, fc, {geoid: _Part(fc.geotype, name, f"feature {geoid} of class {fc.name}")})
+    data = download(conn, fc, {geoid: Part(fc.geotype, name, f"feature {geoid} of class {fc.name}")})
     _, vid, x, y, z = data.vertices
     vorder = np.argsort(vid, kind="stable")
     vertex_ids = vid[vorder]
     cells = data.cells[fc.geotype]
     corder = np.argsort(cells[1], kind="stable")
     cell_ids = cells[1][corder]
-    table = _SIMPLEX[fc.geotype][0]
-    simplices = np.stack([_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
+    table = SIMPLEX[fc.geotype][0]
+    simplices = np.stack([local_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
         if len(cells) > 2 else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
     values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
     for (alignment, _), columns in data.properties.items():  # the class's alignment, and the other one if any
@@ -152,7 +139,7 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
         np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
         vertex_properties=values["VERTEX"], cell_properties=values["CELL"], name=name)
     # parts and atoms come with it; z stays in storage's convention (elevation)
-    restore_extras(mesh, _Part(fc.geotype, name, ""), data, geoid, vertex_ids.astype(np.int64),
+    restore_extras(mesh, Part(fc.geotype, name, ""), data, geoid, vertex_ids.astype(np.int64),
                    cell_ids.astype(np.int64), file_convention=False)
     return StoredMesh(mesh, vertex_ids.astype(np.int64), cell_ids.astype(np.int64))
 
@@ -237,7 +224,7 @@ def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.boo
     return np.asarray(same.all(axis=1)) if same.ndim == 2 else same
 
 
-def _next_id(conn: Conn, storage: _Storage, table: str, key: str, idfield: str, geoid: int) -> int:
+def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, geoid: int) -> int:
     """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
     target = table + "_ver" if ("tgsis", table) in storage.versioned else table
     row = conn.execute(sql.SQL("SELECT max({}) FROM tgsis.{} WHERE {} = %s").format(
@@ -245,7 +232,7 @@ def _next_id(conn: Conn, storage: _Storage, table: str, key: str, idfield: str, 
     return 0 if row is None or row[0] is None else int(row[0]) + 1
 
 
-def _next_property_id(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: int) -> int:
+def _next_property_id(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int) -> int:
     target = fc.cellprotable + "_ver" if (fc.schema, fc.cellprotable) in storage.versioned else fc.cellprotable
     row = conn.execute(sql.SQL("SELECT max(_idx) FROM {}.{} WHERE _geoid = %s").format(
         sql.Identifier(fc.schema), sql.Identifier(target)), (geoid,)).fetchone()
@@ -273,13 +260,13 @@ class _Written:
 
 
 def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: Mesh, plan: EditPlan,
-                cell_values: Mapping[str, npt.NDArray[Any]], storage: _Storage) -> _Written:
+                cell_values: Mapping[str, npt.NDArray[Any]], storage: Storage) -> _Written:
     """Write the difference ``stored`` -> ``edited`` of one geometry in the session's version (caller's transaction).
 
     Moved vertices are rewritten under their old id (delete + insert: on a
     versioned table that is closing the old row version and adding one).
     """
-    table, idfield = _SIMPLEX[fc.geotype]
+    table, idfield = SIMPLEX[fc.geotype]
     if storage.versioned and ("tgsis", "vrtx") in storage.versioned:
         conn.execute("SELECT tgsis.check_objects_unlocked(objectclass, ARRAY[%s]) FROM tgsis.versioned_tables "
                      "WHERE schemaname = 'tgsis' AND tablename = 'vrtx'", (str(geoid),))
@@ -344,7 +331,7 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
 
 
 def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written,
-                    storage: _Storage) -> int:
+                    storage: Storage) -> int:
     """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
 
     What the edited mesh's metadata does not mention stays as stored; atoms
@@ -400,7 +387,7 @@ def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, bounds:
     if feature_values:
         columns = list(feature_values)
         changed += conn.execute(sql.SQL("UPDATE {} SET {} WHERE _geoid = %s AND ({}) IS DISTINCT FROM ({})").format(
-            fc._table(fc.featuretable),
+            fc.qualified(fc.featuretable),
             sql.SQL(", ").join(sql.SQL("{} = %s").format(sql.Identifier(c)) for c in columns),
             sql.SQL(", ").join(sql.Identifier(c) for c in columns),
             sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
@@ -414,9 +401,9 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     if edited.geotype != fc.geotype:
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
                                    f"not {edited.geotype.value} ({type(edited).__name__})")
-    cell_values = _aligned_properties(fc, edited, drop_extra, "the edited mesh")
-    feature_values = _feature_columns(fc, properties)
-    storage = _Storage.of(conn)
+    cell_values = aligned_properties(fc, edited, drop_extra, "the edited mesh")
+    feature_values = feature_columns(fc, properties)
+    storage = Storage.of(conn)
     storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
     updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)
@@ -749,7 +736,7 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
              " (frozen)" if frozen is not None else "")
     checked_out = Checkout(token, base, properties)
     if meaning is not None:  # the mesh to edit is in its file's convention, with its metadata (the base is as stored)
-        restore_meaning(checked_out.mesh, **_part_meaning(meaning))
+        restore_meaning(checked_out.mesh, **part_meaning(meaning))
     checked_out.index()  # hashed now, so that the check-in hashes only the edited mesh
     return checked_out
 

@@ -33,8 +33,9 @@ from psycopg import sql
 
 from tgsis.arguments import check_module
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
-from tgsis.db.features import (FeatureClass, _aligned_properties, class_property_arrays, _concat, _copy_out, _feature_columns, _keys,
-                               _positions, _split, _Storage, get_feature_class)
+from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
+                               local_positions, row_keys, rows_by_geoid)
+from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.formats._common import PathLike
 from tgsis.formats.vtk import Encoding
@@ -107,17 +108,9 @@ def _insert_instant_properties(conn: Conn, fc: FeatureClass, geoid: int, keys: S
     with conn.cursor() as cur:
         cur.executemany(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-                fc._table(fc.protable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+                fc.qualified(fc.protable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
                 sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
             [[geoid, *k, *r] for k, r in zip(keys, rows)])
-
-
-def _insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
-    values = _feature_columns(fc, properties)
-    columns = ["_geoid", *values]
-    conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-        fc._table(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
-        sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])
 
 
 # --------------------------------------------------------------------------- model 2
@@ -125,20 +118,20 @@ def _insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Ma
 
 def _local_ids(counts: Sequence[int]) -> npt.NDArray[np.int64]:
     """Ids 0..counts[i]-1 for each of the consecutive groups."""
-    return _keys([0] * len(counts), counts)[1]
+    return row_keys([0] * len(counts), counts)[1]
 
 
 def _copy_instants(conn: Conn, fc: FeatureClass, geoid: int, times: Sequence[float], surfaces: Sequence[Surface],
-                   storage: _Storage, drop_extra: bool) -> None:
+                   storage: Storage, drop_extra: bool) -> None:
     """COPY the vertices, triangles and cell properties of surfaces at instants of geometry ``geoid``."""
-    cell_values = [_aligned_properties(fc, s, drop_extra, f"the surface at instant {t!r}") for t, s in zip(times, surfaces)]
+    cell_values = [aligned_properties(fc, s, drop_extra, f"the surface at instant {t!r}") for t, s in zip(times, surfaces)]
     n = [s.n_vertices for s in surfaces]
     m = [s.n_cells for s in surfaces]
     vertex_ids, triangle_ids = _local_ids(n), _local_ids(m)
     geoids_v = np.full(sum(n), geoid, dtype=np.int64)
     geoids_t = np.full(sum(m), geoid, dtype=np.int64)
-    xyz = _concat([s.vertices for s in surfaces])
-    tri = _concat([s.cells for s in surfaces])
+    xyz = concat([s.vertices for s in surfaces])
+    tri = concat([s.cells for s in surfaces])
     storage.copy(conn, "tgsis", "times_vrtx", [
         ("geoid", geoids_v, "int8"), ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
         ("vrtxid", vertex_ids, "int8"), ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
@@ -151,7 +144,7 @@ def _copy_instants(conn: Conn, fc: FeatureClass, geoid: int, times: Sequence[flo
         storage.copy(conn, fc.schema, fc.cellprotable, [
             ("_geoid", np.full(sum(counts), geoid, dtype=np.int64), "int8"),
             ("_times", np.repeat(np.asarray(times, dtype=np.float64), counts), "float8"), ("_idx", idx, "int8"),
-            *((p.name, _concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+            *((p.name, concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
 
 
 def insert_series(conn: Conn, feature_class: str | FeatureClass, series: SurfaceSeries,
@@ -183,18 +176,18 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
     times = series.times.tolist()
     instant_rows = _instant_rows(fc, series.properties, len(times))
     with reraise(), conn.transaction():
-        storage = _Storage.of(conn)
+        storage = Storage.of(conn)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
             conn, "INSTANTS", name if name is not None else series.name,
-            _bounds(_concat([s.vertices for s in series.surfaces])),
+            _bounds(concat([s.vertices for s in series.surfaces])),
             sum(s.n_vertices for s in series.surfaces), sum(s.n_cells for s in series.surfaces), series.alive,
             series.color)
         storage.copy(conn, "tgsis", "times", [("geoid", np.full(len(times), geoid, dtype=np.int64), "int8"),
                                               ("times", series.times, "float8")])
         _copy_instants(conn, fc, geoid, times, series.surfaces, storage, drop_extra_properties)
         _insert_instant_properties(conn, fc, geoid, [(t,) for t in times], instant_rows, ["_times"])
-        _insert_feature_row(conn, fc, geoid, properties)
+        insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d instants", fc.name, geoid, len(times))
     return geoid
 
@@ -221,7 +214,7 @@ def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
     rows = _instant_rows(fc, {k: np.asarray([v]) for k, v in (properties or {}).items()}, 1)
     bounds = _bounds(surface.vertices)
     with reraise(), conn.transaction():
-        storage = _Storage.of(conn)
+        storage = Storage.of(conn)
         storage.check("tgsis", "times")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.add_instant(%s, %s)", (feature_id, float(t)))
         _copy_instants(conn, fc, feature_id, [float(t)], [surface], storage, drop_extra_properties)
@@ -244,7 +237,7 @@ def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
         InUseError for the feature's only instant (delete the feature instead).
     """
     with reraise(), conn.transaction():
-        _Storage.of(conn).check("tgsis", "times")  # not "in" a version while the feature tables are plain
+        Storage.of(conn).check("tgsis", "times")  # not "in" a version while the feature tables are plain
         row = conn.execute("SELECT tgsis.delete_instant(%s, %s)", (feature_id, float(t))).fetchone()
     return bool(row and row[0])
 
@@ -273,7 +266,7 @@ def _period_columns(fc: FeatureClass, surface: EvolvingSurface,
             for i, p in enumerate(surface.periods)]
 
 
-def _copy_periods(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: int, periods: Sequence[TopologyPeriod],
+def _copy_periods(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int, periods: Sequence[TopologyPeriod],
                   cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], first_node: int, first_triangle: int) -> None:
     """COPY the rows of model-3 topology periods (instants, nodes, triangles, 4D vertices, vertex or cell properties).
 
@@ -294,23 +287,23 @@ def _copy_periods(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: int, p
                                           ("timem", np.asarray(starts, dtype=np.float64), "float8")])
     storage.copy(conn, "tgsis", "timet", [("geoid", full(sum(g)), "int8"),
                                           ("timem", np.repeat(starts, g).astype(np.float64), "float8"),
-                                          ("timet", _concat([p.times for p in periods]), "float8")])
+                                          ("timet", concat([p.times for p in periods]), "float8")])
     storage.copy(conn, "tgsis", "node", [("geoid", full(sum(n)), "int8"),
                                          ("timem", np.repeat(starts, n).astype(np.float64), "float8"),
                                          ("nodeid", first_node + np.arange(sum(n), dtype=np.int64), "int8")])
-    triangles = _concat([p.triangles + off for p, off in zip(periods, node_offsets.tolist())])
+    triangles = concat([p.triangles + off for p, off in zip(periods, node_offsets.tolist())])
     storage.copy(conn, "tgsis", "d4dtrgl", [("geoid", full(sum(m)), "int8"),
                                             ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
                                             ("trglid", first_triangle + np.arange(sum(m), dtype=np.int64), "int8"),
                                             *((f"nodeid{j + 1}", triangles[:, j], "int8") for j in range(3))])
     # per period and geometry instant, every node: g_i * n_i rows
     samples = [gi * ni for gi, ni in zip(g, n)]
-    xyz = _concat([p.positions.reshape(-1, 3) for p in periods])
+    xyz = concat([p.positions.reshape(-1, 3) for p in periods])
     storage.copy(conn, "tgsis", "d4dvrtx", [
         ("geoid", full(sum(samples)), "int8"),
         ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
-        ("timet", _concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
-        ("nodeid", _concat([np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
+        ("timet", concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
+        ("nodeid", concat([np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
                             for p, off in zip(periods, node_offsets.tolist())]), "int8"),
         ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
     if fc.cell_properties:
@@ -320,10 +313,10 @@ def _copy_periods(conn: Conn, storage: _Storage, fc: FeatureClass, geoid: int, p
         storage.copy(conn, fc.schema, fc.cellprotable, [
             ("_geoid", full(sum(rows)), "int8"),
             ("_timem", np.repeat(starts, rows).astype(np.float64), "float8"),
-            ("_timet", _concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
-            ("_idx", _concat([np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
+            ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
+            ("_idx", concat([np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
                               for p, c, off in zip(periods, per, offsets.tolist())]), "int8"),
-            *((prop.name, _concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
+            *((prop.name, concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
               for prop in fc.cell_properties)])
 
 
@@ -362,16 +355,16 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
     m = [p.n_triangles for p in periods]
     instant_rows = [row for p in periods for row in _instant_rows(fc, dict(p.properties), len(p.times))]
     with reraise(), conn.transaction():
-        storage = _Storage.of(conn)
+        storage = Storage.of(conn)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
             conn, "EVOLVING", name if name is not None else surface.name,
-            _bounds(_concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
+            _bounds(concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
             surface.color)
         _copy_periods(conn, storage, fc, geoid, periods, cell_values, 0, 0)
         keys = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
         _insert_instant_properties(conn, fc, geoid, keys, instant_rows, ["_timem", "_timet"])
-        _insert_feature_row(conn, fc, geoid, properties)
+        insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d topology periods, %d nodes, %d triangles", fc.name, geoid, len(periods),
              sum(n), sum(m))
     return geoid
@@ -405,7 +398,7 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     cell_values = _period_columns(fc, EvolvingSurface([period]), drop_extra_properties)
     instant_rows = _instant_rows(fc, dict(period.properties), len(period.times))
     with reraise(), conn.transaction():
-        storage = _Storage.of(conn)
+        storage = Storage.of(conn)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.temporal_geometry(%s, 'EVOLVING')", (feature_id,))
         # one writer of the feature's periods at a time: a second append waits, then sees the new last instant
@@ -470,10 +463,10 @@ def _without_jit(conn: Conn) -> Iterator[None]:
 def _assemble(geoid: int, ids: npt.NDArray[np.int64], xyz: Sequence[npt.NDArray[np.float64]],
               triangles: Sequence[npt.NDArray[np.int64]], name: str | None) -> Surface:
     """A Surface from vertex rows (ids in any order) and triangle rows pointing at those ids."""
-    order = _split(ids, ids, [geoid])[geoid]  # no sort when the rows come in id order
+    order = rows_by_geoid(ids, ids, [geoid])[geoid]  # no sort when the rows come in id order
     sorted_ids = ids[order]
     vertices = np.stack([xyz[0][order], xyz[1][order], xyz[2][order]], axis=1)
-    cells = np.stack([_positions(sorted_ids, t, "triangles", geoid) for t in triangles], axis=1) if len(triangles[0]) \
+    cells = np.stack([local_positions(sorted_ids, t, "triangles", geoid) for t in triangles], axis=1) if len(triangles[0]) \
         else np.empty((0, 3), dtype=np.int64)
     return Surface(vertices, cells, name=name)
 
@@ -485,15 +478,13 @@ _NUMERIC = frozenset(("smallint", "integer", "bigint", "real", "double precision
 def _properties_at(conn: Conn, surface: Surface, feature_id: int, t: float, convention: Convention,
                    vertex_ids: npt.NDArray[np.int64], triangle_ids: npt.NDArray[np.int64]) -> None:
     """Attach the class's numeric vertex or cell properties at t (``tgsis.property_at``) to the snapshot."""
-    from tgsis.db.features import class_of_feature
-
     fc = class_of_feature(conn, feature_id)
     ids, into = (vertex_ids, surface.vertex_properties) if fc.alignment == "VERTEX" else (
         triangle_ids, surface.cell_properties)
     for prop in fc.cell_properties:
         if prop.type not in _NUMERIC or prop.size != 1 or prop.alignment not in (None, fc.alignment):
             continue   # booleans, vectors and the other alignment's properties have no interpolated value here
-        idx, value = _copy_out(conn, sql.SQL(
+        idx, value = copy_out(conn, sql.SQL(
             "SELECT idx, coalesce(value, 'NaN') FROM tgsis.property_at({}, {}, {}, {}, {})").format(
             sql.Literal(fc.name), sql.Literal(feature_id), sql.Literal(prop.name), sql.Literal(float(t)),
             sql.Literal(convention)), ["int8", "float8"])
@@ -535,14 +526,14 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
         if not row[0]:
             return None
         with _without_jit(conn):
-            ids, x, y, z = _copy_out(conn, sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
+            ids, x, y, z = copy_out(conn, sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
                 sql.Literal(feature_id), t_lit, c_lit), ["int8", "float8", "float8", "float8"])
             # ordered by trglid here, not by the server: a sort of every triangle there (on disk
             # past work_mem) where the rows mostly come in stored order already
-            tid, a, b, c = _copy_out(conn, sql.SQL(
+            tid, a, b, c = copy_out(conn, sql.SQL(
                 "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
                 sql.Literal(feature_id), t_lit, c_lit), ["int8", "int8", "int8", "int8"])
-    order = _split(tid, tid, [feature_id])[feature_id]
+    order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
     surface = _assemble(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
     if properties:
         with reraise(), conn.transaction():
@@ -576,16 +567,16 @@ def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
         names = dict(conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)",
                                   (alive,)).fetchall())
         wanted = sql.Literal(alive)
-        vg, vid, x, y, z = _copy_out(conn, sql.SQL(
+        vg, vid, x, y, z = copy_out(conn, sql.SQL(
             "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
             "LATERAL tgsis.vertices_at(f.geoid, {}, {}) v").format(wanted, t_lit, c_lit),
             ["int8", "int8", "float8", "float8", "float8"])
-        tg, tid, a, b, c = _copy_out(conn, sql.SQL(
+        tg, tid, a, b, c = copy_out(conn, sql.SQL(
             "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
             "LATERAL tgsis.triangles_at(f.geoid, {}, {}) c").format(wanted, t_lit, c_lit),
             ["int8", "int8", "int8", "int8", "int8"])
-    vertex_rows = _split(vg, vid, alive) if alive else {}
-    triangle_rows = _split(tg, tid, alive) if alive else {}
+    vertex_rows = rows_by_geoid(vg, vid, alive) if alive else {}
+    triangle_rows = rows_by_geoid(tg, tid, alive) if alive else {}
     result: dict[int, Surface] = {}
     for geoid in alive:
         v, tr = vertex_rows[geoid], triangle_rows[geoid]
@@ -601,7 +592,7 @@ def _ordered_copy(conn: Conn, table: sql.Composable, columns: Sequence[str], typ
                   key: str = "geoid") -> list[npt.NDArray[Any]]:
     """Binary COPY of ``columns`` of one geometry's rows, ordered by those columns' leading keys."""
     names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
-    return _copy_out(conn, sql.SQL("SELECT {} FROM {} WHERE {} = {} ORDER BY {}").format(
+    return copy_out(conn, sql.SQL("SELECT {} FROM {} WHERE {} = {} ORDER BY {}").format(
         names, table, sql.Identifier(key), sql.Literal(geoid), names), types)
 
 
@@ -615,7 +606,7 @@ def _instant_values(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[str
         return {}
     rows = conn.execute(sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
         sql.SQL(", ").join(sql.Identifier(k) for k in keys),
-        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.instant_properties), fc._table(fc.protable)),
+        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.instant_properties), fc.qualified(fc.protable)),
         (geoid,)).fetchall()
     return {tuple(float(v) for v in r[:len(keys)]): list(r[len(keys):]) for r in rows}
 
@@ -661,7 +652,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
                                          ["float8", "int8", "float8", "float8", "float8"], feature_id)
         tt, tid, a, b, c = _ordered_copy(conn, _tgsis("times_trgl"), ["times", "trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
                                          ["float8", "int8", "int8", "int8", "int8"], feature_id)
-        props = _ordered_copy(conn, fc._table(fc.cellprotable), ["_times", "_idx", *names],
+        props = _ordered_copy(conn, fc.qualified(fc.cellprotable), ["_times", "_idx", *names],
                               ["float8", "int8", *types], feature_id, "_geoid") if names else []
         values = _instant_values(conn, fc, feature_id, ["_times"])
     surfaces = []
@@ -704,7 +695,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
                                        ["float8", "int8", "int8", "int8", "int8"], feature_id)
         vm, vt, nid, x, y, z = _ordered_copy(conn, _tgsis("d4dvrtx"), ["timem", "timet", "nodeid", "x", "y", "z"],
                                              ["float8", "float8", "int8", "float8", "float8", "float8"], feature_id)
-        props = _ordered_copy(conn, fc._table(fc.cellprotable), ["_timem", "_timet", "_idx", *names],
+        props = _ordered_copy(conn, fc.qualified(fc.cellprotable), ["_timem", "_timet", "_idx", *names],
                               ["float8", "float8", "int8", *types], feature_id, "_geoid") if names else []
         values = _instant_values(conn, fc, feature_id, ["_timem", "_timet"])
     periods = []
@@ -717,7 +708,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
                                        hint=f"SELECT * FROM tgsis.check_geometry({feature_id})")
         xyz = np.stack([x[rows], y[rows], z[rows]], axis=1).reshape(len(times), len(nodes), 3)
         cells = np.flatnonzero(cm == start)
-        triangles = np.stack([_positions(nodes, k[cells], "triangles", feature_id) for k in (a, b, c)], axis=1)
+        triangles = np.stack([local_positions(nodes, k[cells], "triangles", feature_id) for k in (a, b, c)], axis=1)
         per_cell: dict[str, npt.NDArray[Any]] = {}
         if names:
             p = np.flatnonzero(props[0] == start)
@@ -942,7 +933,7 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
         sql.Literal(_class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
         sql.Literal(float(value)), sql.Literal(check_convention(convention)))
     with reraise(), conn.transaction():
-        idx, t = _copy_out(conn, query, ["int8", "float8"])
+        idx, t = copy_out(conn, query, ["int8", "float8"])
     return idx, t
 
 

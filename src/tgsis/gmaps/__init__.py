@@ -32,6 +32,9 @@ share their point is then a condition that :meth:`GMap.check` verifies.
   axis) and :func:`slice` (the (n-1)-G-map at a value of one axis).
 * Properties of i-cells: ``GMap.cell_properties[level][name]``, one value per
   cell of that level.
+* Model 4 in time: :class:`EvolvingGMap`, topology periods (:class:`GMapPeriod`)
+  of fixed darts whose points and cell values move linearly between geometry
+  instants; :meth:`EvolvingGMap.at` gives the G-map at t.
 
 No database here, and nothing of :mod:`tgsis.db` is imported.
 
@@ -50,6 +53,7 @@ True
 from tgsis.gmaps._build import from_mesh, from_polygons, from_simplices
 from tgsis.gmaps._core import GMap, GMapReport, orbit_labels
 from tgsis.gmaps._extrude import extrude, slice
+from tgsis.gmaps._time import EvolvingGMap, GMapPeriod
 
-__all__ = ["GMap", "GMapReport", "from_simplices", "from_polygons", "from_mesh", "orbit_labels", "extrude",
-           "slice"]
+__all__ = ["GMap", "GMapReport", "GMapPeriod", "EvolvingGMap", "from_simplices", "from_polygons", "from_mesh",
+           "orbit_labels", "extrude", "slice"]

@@ -6,7 +6,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import InvalidGMapError, InvalidInputError
-from tgsis.gmaps._core import GMap, IntArray, Properties, _named
+from tgsis.gmaps._core import GMap, IntArray, Properties
 
 
 def extrude(g: GMap, values: npt.ArrayLike) -> GMap:

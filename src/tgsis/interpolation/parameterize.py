@@ -30,7 +30,8 @@ from scipy.sparse import csc_matrix, csr_matrix, identity
 from scipy.sparse.linalg import splu
 
 from tgsis.errors import InvalidInputError
-from tgsis.interpolation.projection import ClosestPoints, _as_points, closest_points
+from tgsis.interpolation._arrays import as_points, as_triangles, interior_mask
+from tgsis.interpolation.projection import ClosestPoints, closest_points
 
 __all__ = ["ParameterizationError", "WeightPattern", "mean_value_weights", "border_loop", "polygon_corners",
            "Parameterization", "mean_value_embedding", "parameterize_patch", "PointLocator", "locate_points", "CompatiblePatch",
@@ -49,21 +50,6 @@ class ParameterizationError(InvalidInputError):
     compatible mesh that cannot be built (points outside the target's parameter domain, refinement that does
     not reach the tolerance)."""
 
-
-def _as_vertices(vertices: npt.ArrayLike, what: str = "vertices") -> FloatArray:
-    return _as_points(vertices, what, ParameterizationError)
-
-
-def _as_triangles(triangles: npt.ArrayLike, n: int, what: str = "triangles") -> IntArray:
-    tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
-        raise ParameterizationError(f"{what} must have shape (m, 3) with m >= 1, got {tri.shape}")
-    if tri.min() < 0 or tri.max() >= n:
-        raise ParameterizationError(f"{what} use a vertex index outside 0..{n - 1}")
-    repeated = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
-    if np.any(repeated):
-        raise ParameterizationError(f"triangle {int(np.argmax(repeated))} uses one vertex twice")
-    return tri
 
 
 # --------------------------------------------------------------------------- weights
@@ -96,7 +82,7 @@ class WeightPattern:
     @classmethod
     def of(cls, triangles: npt.ArrayLike, n: int) -> WeightPattern:
         """The pattern of ``triangles`` (m, 3) over ``n`` vertices."""
-        tri = _as_triangles(triangles, n)
+        tri = as_triangles(triangles, n, "triangles", ParameterizationError)
         keys = tri[:, _ROW] * n + tri[:, _COL]
         unique, inverse = np.unique(keys.ravel(), return_inverse=True)
         rows = unique // n
@@ -178,8 +164,8 @@ def mean_value_weights(vertices: npt.ArrayLike, triangles: npt.ArrayLike) -> csr
     ------
     ParameterizationError
     """
-    xyz = _as_vertices(vertices)
-    tri = _as_triangles(triangles, len(xyz))
+    xyz = as_points(vertices, "vertices", ParameterizationError)
+    tri = as_triangles(triangles, len(xyz), "triangles", ParameterizationError)
     pattern = WeightPattern.of(tri, len(xyz))
     return pattern.matrix(mean_value_data(xyz, tri, pattern))
 
@@ -251,7 +237,7 @@ def border_loop(triangles: npt.ArrayLike, n: int | None = None) -> IntArray:
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     count = int(tri.max()) + 1 if n is None else n
-    tri = _as_triangles(tri, count)
+    tri = as_triangles(tri, count, "triangles", ParameterizationError)
     a, b = _directed_edges(tri, count)
     keys = a * count + b
     reverse = b * count + a
@@ -408,9 +394,9 @@ def mean_value_embedding(vertices: npt.ArrayLike, triangles: npt.ArrayLike, fixe
     ------
     ParameterizationError
     """
-    xyz = _as_vertices(vertices)
+    xyz = as_points(vertices, "vertices", ParameterizationError)
     n = len(xyz)
-    tri = _as_triangles(triangles, n)
+    tri = as_triangles(triangles, n, "triangles", ParameterizationError)
     where = np.ascontiguousarray(fixed, dtype=np.int64).ravel()
     given = np.asarray(values, dtype=np.float64)
     if given.shape[:1] != where.shape or given.ndim not in (1, 2) or not np.all(np.isfinite(given)):
@@ -459,9 +445,9 @@ def parameterize_patch(vertices: npt.ArrayLike, triangles: npt.ArrayLike, contro
         Not a disk, unused vertices, bad control vertices, degenerate
         triangles, a singular system.
     """
-    xyz = _as_vertices(vertices)
+    xyz = as_points(vertices, "vertices", ParameterizationError)
     n = len(xyz)
-    tri = _as_triangles(triangles, n)
+    tri = as_triangles(triangles, n, "triangles", ParameterizationError)
     used = np.zeros(n, dtype=bool)
     used[tri.ravel()] = True
     if not np.all(used):
@@ -520,7 +506,7 @@ class PointLocator:
         self.uv = np.ascontiguousarray(uv, dtype=np.float64)
         if self.uv.ndim != 2 or self.uv.shape[1] != 2 or not np.all(np.isfinite(self.uv)):
             raise ParameterizationError(f"parameter points must be finite with shape (n, 2), got {self.uv.shape}")
-        self.triangles = _as_triangles(triangles, len(self.uv))
+        self.triangles = as_triangles(triangles, len(self.uv), "triangles", ParameterizationError)
         self.corners = self.uv[self.triangles]  # (m, 3, 2)
         lo, hi = self.corners.min(axis=1), self.corners.max(axis=1)
         extent = float(np.max(hi.max(axis=0) - lo.min(axis=0)))
@@ -621,18 +607,6 @@ def locate_points(points: npt.ArrayLike, uv: npt.ArrayLike, triangles: npt.Array
 # --------------------------------------------------------------------------- compatible meshes
 
 
-def _interior_mask(triangles: IntArray, n: int) -> npt.NDArray[np.bool_]:
-    """True for vertices not on the border (edges used by one triangle)."""
-    a = triangles.ravel()
-    b = triangles[:, [1, 2, 0]].ravel()
-    low, high = np.minimum(a, b), np.maximum(a, b)
-    keys, counts = np.unique(low * n + high, return_counts=True)
-    single = keys[counts == 1]
-    mask = np.ones(n, dtype=bool)
-    mask[single // n] = False
-    mask[single % n] = False
-    return mask
-
 
 def mesh_error(a_vertices: npt.ArrayLike, a_triangles: npt.ArrayLike, b_vertices: npt.ArrayLike,
                b_triangles: npt.ArrayLike) -> float:
@@ -644,10 +618,12 @@ def mesh_error(a_vertices: npt.ArrayLike, a_triangles: npt.ArrayLike, b_vertices
     a_vertices, b_vertices : (n, 3) array_like of float
     a_triangles, b_triangles : (m, 3) array_like of int
     """
-    ax, bx = _as_vertices(a_vertices), _as_vertices(b_vertices)
-    at, bt = _as_triangles(a_triangles, len(ax)), _as_triangles(b_triangles, len(bx))
-    d_ab = closest_points(ax[_interior_mask(at, len(ax))], bx, bt).distances
-    d_ba = closest_points(bx[_interior_mask(bt, len(bx))], ax, at).distances
+    ax = as_points(a_vertices, "vertices", ParameterizationError)
+    bx = as_points(b_vertices, "vertices", ParameterizationError)
+    at = as_triangles(a_triangles, len(ax), "triangles", ParameterizationError)
+    bt = as_triangles(b_triangles, len(bx), "triangles", ParameterizationError)
+    d_ab = closest_points(ax[interior_mask(at, len(ax))], bx, bt).distances
+    d_ba = closest_points(bx[interior_mask(bt, len(bx))], ax, at).distances
     return float(max(d_ab.max(initial=0.0), d_ba.max(initial=0.0)))
 
 
@@ -841,10 +817,10 @@ def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.Array
         raise ParameterizationError(f"tolerance must be positive, got {tolerance!r}")
     if split not in ("auto", "centroid"):
         raise ParameterizationError(f"split must be 'auto' or 'centroid', got {split!r}")
-    sx = _as_vertices(source_vertices, "source vertices")
-    tx = _as_vertices(target_vertices, "target vertices")
-    st = _as_triangles(source_triangles, len(sx), "source triangles")
-    tt = _as_triangles(target_triangles, len(tx), "target triangles")
+    sx = as_points(source_vertices, "source vertices", ParameterizationError)
+    tx = as_points(target_vertices, "target vertices", ParameterizationError)
+    st = as_triangles(source_triangles, len(sx), "source triangles", ParameterizationError)
+    tt = as_triangles(target_triangles, len(tx), "target triangles", ParameterizationError)
     sc = np.ascontiguousarray(source_controls, dtype=np.int64).ravel()
     tc = np.ascontiguousarray(target_controls, dtype=np.int64).ravel()
     if len(sc) != len(tc):
@@ -852,11 +828,11 @@ def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.Array
     gs = parameterize_patch(sx, st, sc)
     gt = parameterize_patch(tx, tt, tc)
     locator = PointLocator(gt.uv, tt)
-    target_index = np.flatnonzero(_interior_mask(tt, len(tx)))
+    target_index = np.flatnonzero(interior_mask(tt, len(tx)))
     target_interior = tx[target_index]
     xyz, uv, tri = sx, gs.uv, st
     positions = _map_to_target(uv, locator, tx)
-    is_interior = _interior_mask(st, len(sx))
+    is_interior = interior_mask(st, len(sx))
     rounds = 0
     while True:
         to_source = closest_points(target_interior, positions, tri)

@@ -26,6 +26,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from tgsis.errors import InvalidInputError
+from tgsis.interpolation._arrays import as_points
 
 __all__ = ["ProjectionError", "ClosestPoints", "closest_points", "ControllingSurface", "IntersectionCurve",
            "intersection_curve"]
@@ -47,18 +48,9 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return result
 
 
-def _as_points(points: npt.ArrayLike, what: str, error: type[InvalidInputError] = ProjectionError) -> FloatArray:
-    """(n, 3) finite float64 points; ``error`` otherwise."""
-    array = np.ascontiguousarray(points, dtype=np.float64)
-    if array.ndim != 2 or array.shape[1] != 3:
-        raise error(f"{what} must have shape (n, 3), got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise error(f"{what} must be finite")
-    return array
-
 
 def _as_mesh(vertices: npt.ArrayLike, triangles: npt.ArrayLike, what: str) -> tuple[FloatArray, IntArray]:
-    xyz = _as_points(vertices, f"vertices of {what}")
+    xyz = as_points(vertices, f"vertices of {what}", ProjectionError)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
         raise ProjectionError(f"triangles of {what} must have shape (m, 3) with m >= 1, got {tri.shape}")
@@ -263,7 +255,7 @@ def closest_points(points: npt.ArrayLike, vertices: npt.ArrayLike, triangles: np
     ProjectionError
         Wrong shapes, non-finite values, indices out of range.
     """
-    query = _as_points(points, "query points")
+    query = as_points(points, "query points", ProjectionError)
     xyz, tri = _as_mesh(vertices, triangles, "the mesh")
     if len(query) == 0:
         return ClosestPoints(np.empty((0, 3)), np.empty(0), np.empty(0, dtype=np.int64))
@@ -304,7 +296,7 @@ class ControllingSurface:
 
     def closest(self, points: npt.ArrayLike) -> ClosestPoints:
         """Closest points on the surface; see :func:`closest_points`."""
-        query = _as_points(points, "query points")
+        query = as_points(points, "query points", ProjectionError)
         if self._search is None:
             self._search = _triangle_search(self.vertices, self.triangles)
         if len(query) == 0:
@@ -505,7 +497,7 @@ class IntersectionCurve:
 
     def closest(self, points: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Closest points on the curve (p, 3) and their distances (p,)."""
-        query = _as_points(points, "query points")
+        query = as_points(points, "query points", ProjectionError)
         if len(query) == 0:
             return np.empty((0, 3)), np.empty(0)
         best, dist, _ = self._search.query(query)

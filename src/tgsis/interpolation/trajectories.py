@@ -31,11 +31,10 @@ from scipy.sparse import csc_matrix, csr_matrix
 from scipy.sparse.linalg import splu
 
 from tgsis.errors import InvalidInputError
+from tgsis.interpolation._arrays import as_points, as_triangles, interior_mask
 from tgsis.interpolation.parameterize import (
     WeightPattern,
-    _as_triangles,
-    _as_vertices,
-    _interior_mask,
+    ParameterizationError,
     mean_value_data,
 )
 from tgsis.interpolation.projection import ControllingSurface, IntersectionCurve
@@ -120,7 +119,8 @@ def border_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, vertices: 
         surfaces that do not cross.
     """
     m = _check_steps(steps)
-    start, end = _as_vertices(source, "source positions"), _as_vertices(target, "target positions")
+    start = as_points(source, "source positions", ParameterizationError)
+    end = as_points(target, "target positions", ParameterizationError)
     if start.shape != end.shape:
         raise TrajectoryError(f"source and target positions differ in shape: {start.shape} and {end.shape}")
     which = np.ascontiguousarray(vertices, dtype=np.int64).ravel()
@@ -283,13 +283,14 @@ def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles:
     TrajectoryError, ParameterizationError
     """
     m = _check_steps(steps)
-    first, last = _as_vertices(source, "source positions"), _as_vertices(target, "target positions")
+    first = as_points(source, "source positions", ParameterizationError)
+    last = as_points(target, "target positions", ParameterizationError)
     if first.shape != last.shape:
         raise TrajectoryError(f"source and target must be compatible (same vertices): {len(first)} and "
                               f"{len(last)} vertices")
     n = len(first)
-    tri = _as_triangles(triangles, n)
-    interior = _interior_mask(tri, n)
+    tri = as_triangles(triangles, n, "triangles", ParameterizationError)
+    interior = interior_mask(tri, n)
     if controls is not None and attachments:
         allowed = set(np.ascontiguousarray(controls, dtype=np.int64).ravel().tolist())
         for vertex, surfaces in attachments.items():

@@ -48,6 +48,12 @@ def _interpretations(context: Context) -> None:
     run(context)
 
 
+def _knowledge(context: Context) -> None:
+    from tgsis.scenarios.knowledge import run
+
+    run(context)
+
+
 def _cfm(context: Context) -> None:
     raise AssertionError("cfm runs through tgsis.demo.run_demo")  # pragma: no cover - dispatched below
 
@@ -61,6 +67,8 @@ SCENARIOS: dict[str, Scenario] = {
                       "which unit lies on which at t = 3 and 4", _river),
     "interpretations": Scenario("interpretations", "one horizon, several models in versions and named revisions: "
                                 "where the fault first appears, where dilatancy passes a threshold", _interpretations),
+    "knowledge": Scenario("knowledge", "a horizon's interpretations as one object over a knowledge axis (model 5): "
+                          "box queries over x, y and knowledge, slices back to each interpretation", _knowledge),
     "cfm": Scenario("cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)",
                     _cfm),
 }

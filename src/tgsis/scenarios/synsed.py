@@ -109,7 +109,7 @@ def run(context: Context) -> None:
     for label, surface in evolving.items():
         ids[label] = insert_feature(conn, fc, surface)
     conn.commit()
-    out(f"   each horizon interpolated in each interval (8 control pairs: its blocks' corners) and chained: "
+    out("   each horizon interpolated in each interval (8 control pairs: its blocks' corners) and chained: "
         + ", ".join(f"{label} {len(s.periods)} period(s)" for label, s in evolving.items())
         + f"; stored as features {min(ids.values())}..{max(ids.values())} of class structure")
     context.figure("interpolation_error_m", worst)

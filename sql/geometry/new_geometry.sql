@@ -28,9 +28,12 @@ DECLARE
     v_owner text;
 BEGIN
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
-    IF coalesce(upper(p_geotype), '') NOT IN ('MULTIPOINT', 'MULTILINESTRING', 'SURFACE', 'MULTITETRA', 'GEOMETRYCOLLECTION') THEN
+    -- geotypes and time models are the registered data models' (tgsis.data_models)
+    IF NOT EXISTS (SELECT FROM tgsis.data_models m WHERE upper(p_geotype) = ANY (m.geotypes)) THEN
         RAISE EXCEPTION 'geotype % of a new geometry is unknown', coalesce(quote_literal(p_geotype), 'NULL')
-            USING ERRCODE = 'TG102', HINT = 'p_geotype => MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA or GEOMETRYCOLLECTION';
+            USING ERRCODE = 'TG102',
+                  HINT = 'p_geotype => ' || tgsis.or_list(ARRAY(SELECT DISTINCT g FROM tgsis.data_models m, unnest(m.geotypes) AS g
+                                                                 ORDER BY g));
     END IF;
     IF p_nvrtx IS NULL OR p_nvrtx < 0 OR p_ncell IS NULL OR p_ncell < 0 THEN
         RAISE EXCEPTION 'vertex and cell counts of a new geometry must be numbers >= 0, got p_nvrtx => % and p_ncell => %',
@@ -59,10 +62,11 @@ BEGIN
         RAISE EXCEPTION 'metadata of a new geometry must be a JSON object, got %', jsonb_typeof(p_metadata)
             USING ERRCODE = 'TG102', HINT = 'p_metadata => ''{}'' or NULL';
     END IF;
-    IF coalesce(upper(p_timemodel), '') NOT IN ('STATIC', 'INSTANTS', 'EVOLVING')
-       OR (upper(p_timemodel) <> 'STATIC' AND upper(p_geotype) <> 'SURFACE') THEN
+    IF NOT EXISTS (SELECT FROM tgsis.data_models m WHERE m.timemodel = upper(p_timemodel) AND upper(p_geotype) = ANY (m.geotypes)) THEN
         RAISE EXCEPTION 'time model % is not one of a % geometry', coalesce(quote_literal(p_timemodel), 'NULL'), upper(p_geotype)
-            USING ERRCODE = 'TG102', HINT = 'STATIC for every geotype; INSTANTS or EVOLVING for SURFACE';
+            USING ERRCODE = 'TG102',
+                  HINT = (SELECT string_agg(format('%s for %s', m.timemodel, tgsis.or_list(m.geotypes)), '; ' ORDER BY m.model)
+                            FROM tgsis.data_models m WHERE m.model > 0);
     END IF;
     IF p_collection IS NOT NULL THEN
         IF upper(p_geotype) = 'GEOMETRYCOLLECTION' THEN

@@ -8,12 +8,12 @@ AS $$
 DECLARE
     v_table text;
 BEGIN
-    FOREACH v_table IN ARRAY ARRAY['vrtx', 'point', 'segment', 'trgl', 'tetra', 'atom', 'part', 'times_trgl', 'times_vrtx', 'times',
-                                 'd4dvrtx', 'd4dtrgl', 'node', 'timet', 'timem', 'geometry'] LOOP
+    -- every registered storage table, tgsis.geometry last
+    FOR v_table IN SELECT tablename FROM tgsis.model_tables ORDER BY model = 0, iudorder DESC, tablename LOOP
         EXECUTE format('DELETE FROM %s WHERE geoid = ANY ($1)', tgsis.storage_table('tgsis', v_table)) USING p_geoids;
     END LOOP;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.delete_stored_geometries(bigint[]) IS
-    'physically delete geometries (vertices, simplices, atoms, parts, instants and periods of temporal ones, geometry rows) from the storage of all versions; used when a feature class is dropped';
+    'physically delete geometries from every registered storage table (tgsis.model_tables) of all versions, tgsis.geometry last; used when a feature class is dropped';

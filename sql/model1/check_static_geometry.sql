@@ -1,6 +1,8 @@
--- tgsis.check_geometry(geoid): what is wrong with a stored geometry (no rows: nothing).
--- The client validates before writing; this checks rows written by other means.
-CREATE FUNCTION tgsis.check_geometry(p_geoid bigint)
+-- tgsis.check_static_geometry(geoid): what is wrong with a stored static (model-1) geometry (no rows: nothing).
+-- Model 1's check function in the registry (tgsis.data_models), read by
+-- tgsis.check_geometry: rows written by other means than the client's write
+-- path may point at missing vertices or leave the bbox stale.
+CREATE FUNCTION tgsis.check_static_geometry(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, example text)
 LANGUAGE plpgsql
 STABLE
@@ -12,39 +14,7 @@ DECLARE
     v_k     int;
     v_i     int;
 BEGIN
-    SELECT geotype, geoids, nvrtx, ncell, bbox, timemodel INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
-    IF NOT FOUND THEN
-        RAISE EXCEPTION 'geometry % does not exist', p_geoid USING ERRCODE = 'TG200';
-    END IF;
-    IF v_geo.timemodel <> 'STATIC' THEN
-        RETURN QUERY SELECT * FROM tgsis.check_temporal_geometry(p_geoid);
-        RETURN;
-    END IF;
-    IF v_geo.geotype = 'GEOMETRYCOLLECTION' THEN
-        RETURN QUERY SELECT 'member geometry does not exist'::text, count(*), min(m)::text
-                       FROM unnest(v_geo.geoids) AS m
-                      WHERE NOT EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = m)
-                     HAVING count(*) > 0;
-        RETURN QUERY SELECT 'member is a GEOMETRYCOLLECTION (collections do not nest)'::text, count(*), min(g.geoid)::text
-                       FROM tgsis.geometry g
-                      WHERE g.geoid = ANY (v_geo.geoids) AND g.geotype = 'GEOMETRYCOLLECTION'
-                     HAVING count(*) > 0;
-        RETURN QUERY SELECT 'owned member not listed in geoids'::text, count(*), min(g.geoid)::text
-                       FROM tgsis.geometry g
-                      WHERE g.collection = p_geoid AND NOT g.geoid = ANY (v_geo.geoids)
-                     HAVING count(*) > 0;
-        RETURN QUERY
-            SELECT 'bounding box or counts out of date (run tgsis.refresh_geometry)'::text, 1::bigint, NULL::text
-              FROM (SELECT coalesce(sum(g.nvrtx), 0) AS n, coalesce(sum(g.ncell), 0) AS m,
-                           CASE WHEN count(g.bbox) > 0 THEN
-                               cube(ARRAY[min(cube_ll_coord(g.bbox, 1)), min(cube_ll_coord(g.bbox, 2)), min(cube_ll_coord(g.bbox, 3))],
-                                    ARRAY[max(cube_ur_coord(g.bbox, 1)), max(cube_ur_coord(g.bbox, 2)), max(cube_ur_coord(g.bbox, 3))])
-                           END AS bbox
-                      FROM tgsis.geometry g WHERE g.geoid = ANY (v_geo.geoids)) AS u
-             WHERE u.n <> v_geo.nvrtx OR u.m <> v_geo.ncell OR u.bbox IS DISTINCT FROM v_geo.bbox;
-        RETURN;
-    END IF;
-
+    SELECT geotype, nvrtx, bbox INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid;
     RETURN QUERY SELECT 'vertex with a NaN or infinite coordinate'::text, count(*), min(vrtxid)::text
                    FROM tgsis.vrtx
                   WHERE geoid = p_geoid
@@ -96,5 +66,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.check_geometry(bigint) IS
-    'problems of a stored geometry (temporal ones: see tgsis.check_temporal_geometry): non-finite coordinates, simplices pointing at missing vertices, atoms of missing or moved vertices, overlapping part ranges, stale bbox/counts, missing, nested or unlisted collection members';
+COMMENT ON FUNCTION tgsis.check_static_geometry(bigint) IS
+    'problems of a stored static geometry: non-finite coordinates, simplices pointing at missing vertices, atoms of missing or moved vertices, overlapping part ranges, stale bbox/counts; model 1''s check function (tgsis.data_models)';

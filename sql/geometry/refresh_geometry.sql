@@ -14,6 +14,7 @@ DECLARE
     v_bbox    cube;
     v_nvrtx   bigint;
     v_ncell   bigint;
+    v_hook    text;
 BEGIN
     SELECT g.geotype, g.timemodel INTO v_geotype, v_model FROM tgsis.geometry g WHERE g.geoid = p_geoid FOR UPDATE;
     IF NOT FOUND THEN
@@ -30,25 +31,11 @@ BEGIN
           INTO v_bbox, v_nvrtx, v_ncell
           FROM tgsis.geometry m
          WHERE m.geoid = ANY ((SELECT c.geoids FROM tgsis.geometry c WHERE c.geoid = p_geoid)::bigint[]);
-    ELSIF v_model = 'INSTANTS' THEN
-        SELECT count(*) INTO v_ncell FROM tgsis.times_trgl c WHERE c.geoid = p_geoid;
-        SELECT count(*),
-               CASE WHEN count(*) > 0 THEN cube(ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]) END
-          INTO v_nvrtx, v_bbox
-          FROM tgsis.times_vrtx v WHERE v.geoid = p_geoid;
-    ELSIF v_model = 'EVOLVING' THEN
-        SELECT count(*) INTO v_ncell FROM tgsis.d4dtrgl c WHERE c.geoid = p_geoid;
-        SELECT count(*) INTO v_nvrtx FROM tgsis.node n WHERE n.geoid = p_geoid;
-        SELECT CASE WHEN count(*) > 0 THEN cube(ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]) END
-          INTO v_bbox
-          FROM tgsis.d4dvrtx v WHERE v.geoid = p_geoid;
     ELSE
-        EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', tgsis.simplex_table(v_geotype))
-           INTO v_ncell USING p_geoid;
-        SELECT count(*),
-               CASE WHEN count(*) > 0 THEN cube(ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]) END
-          INTO v_nvrtx, v_bbox
-          FROM tgsis.vrtx v WHERE v.geoid = p_geoid;
+        -- the geometry's data model computes them from its own tables (tgsis.data_models.extent_function)
+        SELECT m.extent_function INTO v_hook FROM tgsis.data_models m WHERE m.timemodel = v_model;
+        EXECUTE format('SELECT e.bbox, e.nvrtx, e.ncell FROM tgsis.%I($1) e', v_hook)
+           INTO v_bbox, v_nvrtx, v_ncell USING p_geoid;
     END IF;
     UPDATE tgsis.geometry g SET bbox = v_bbox, nvrtx = v_nvrtx, ncell = v_ncell WHERE g.geoid = p_geoid;
     RETURN QUERY SELECT p_geoid, v_bbox, v_nvrtx, v_ncell;
@@ -56,4 +43,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.refresh_geometry(bigint) IS
-    'recompute bbox, nvrtx and ncell of a geometry from its vertex and simplex rows (after edits with plain SQL); temporal geometries: over all instants (model 2: vertex and triangle rows; model 3: nodes and triangles, bbox of every node position); returns them';
+    'recompute bbox, nvrtx and ncell of a geometry from its rows (after edits with plain SQL): a collection from its members, the others by their data model''s extent function (tgsis.data_models); returns them';

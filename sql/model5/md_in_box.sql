@@ -1,0 +1,31 @@
+-- tgsis.md_in_box(class, axes, low, high): the multiply indexed G-map features of a class whose extent meets a box over some of their axes.
+-- E.g. the interpretations of a horizon that reach x in [0, 100] at knowledge
+-- level 2: p_axes => '{x,knowledge}'. One GiST index scan (md_gmap_extent_idx)
+-- per set of axes among the class's features (features may name their axes
+-- differently; those lacking an asked axis are not in the box).
+CREATE FUNCTION tgsis.md_in_box(p_class text, p_axes text[], p_low double precision[], p_high double precision[])
+RETURNS SETOF bigint
+LANGUAGE plpgsql
+STABLE
+AS $$
+DECLARE
+    v_class tgsis.catalog := tgsis.catalog_row(p_class);
+    v_axes  text[];
+BEGIN
+    IF v_class.timemodel IS DISTINCT FROM 'MULTIDIM' THEN
+        RAISE EXCEPTION 'feature class % holds % features, not multiply indexed G-maps', p_class, v_class.timemodel
+            USING ERRCODE = 'TG100', HINT = 'tgsis.geometries_in_box finds features of the other models by their 3D box';
+    END IF;
+    PERFORM tgsis.md_query_box(ARRAY[]::text[] || p_axes, p_axes, p_low, p_high);  -- a malformed box is an error even for an empty class
+    FOR v_axes IN EXECUTE format('SELECT DISTINCT m.axes FROM %I.%I f JOIN tgsis.md_gmap m ON m.geoid = f._geoid',
+                                 v_class.schemaname, v_class.featuretable) LOOP
+        RETURN QUERY EXECUTE format(
+            'SELECT f._geoid FROM %I.%I f JOIN tgsis.md_gmap m ON m.geoid = f._geoid
+              WHERE m.axes = $1 AND m.extent && tgsis.md_query_box($1, $2, $3, $4) ORDER BY f._geoid',
+            v_class.schemaname, v_class.featuretable) USING v_axes, p_axes, p_low, p_high;
+    END LOOP;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.md_in_box(text, text[], double precision[], double precision[]) IS
+    'model 5: ids of the features of a class of multiply indexed G-maps whose extent meets a box over some of their axes (unbounded on the others), by GiST index';

@@ -1,0 +1,27 @@
+-- tgsis.md_vertices_in_box(geoid, axes, low, high): the points of a multiply indexed G-map inside a box over some of its axes.
+-- E.g. the part of a horizon's interpretations between knowledge 1 and 2
+-- over an x-y window. The points are GiST-indexed as cubes
+-- (md_vertex_point_idx); the box is unbounded on the axes not given.
+CREATE FUNCTION tgsis.md_vertices_in_box(p_geoid bigint, p_axes text[], p_low double precision[], p_high double precision[])
+RETURNS TABLE (vrtxid bigint, coordinate double precision[])
+LANGUAGE plpgsql
+STABLE
+SET search_path FROM CURRENT
+AS $$
+DECLARE
+    v_box cube;
+BEGIN
+    SELECT tgsis.md_query_box(g.axes, p_axes, p_low, p_high) INTO v_box FROM tgsis.md_gmap g WHERE g.geoid = p_geoid;
+    IF NOT FOUND THEN
+        RAISE EXCEPTION 'geometry % is not a stored multiply indexed G-map', p_geoid
+            USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.md_gmap lists them';
+    END IF;
+    RETURN QUERY
+    SELECT v.vrtxid, v.coordinate FROM tgsis.md_vertex v
+     WHERE cube(v.coordinate) <@ v_box AND v.geoid = p_geoid
+     ORDER BY v.vrtxid;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.md_vertices_in_box(bigint, text[], double precision[], double precision[]) IS
+    'model 5: the points (vrtxid, coordinate) of a multiply indexed G-map inside a box over some of its axes (unbounded on the others), by GiST index';

@@ -1,0 +1,249 @@
+"""The write and read plumbing every data model's database module shares.
+
+Binary COPY in and out (:mod:`tgsis.db.copy` builds and parses the rows),
+where bulk rows go (:class:`Storage`: a table, or a versioned table's
+``_ver`` storage in the session's working revision), the (geoid, local id)
+key columns of many geometries at once, and the class's property arrays of
+a mesh checked against its columns. Private to ``tgsis.db``: the models'
+modules (``features``, ``temporal``, ``checkin``) import it; users do not.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.db.classes import FeatureClass, stores_part_column
+from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
+from tgsis.errors import InvalidGeometryError, InvalidPropertyError, NotVersionedError
+from tgsis.mesh import Mesh
+
+log = logging.getLogger("tgsis.db.features")
+
+Conn = psycopg.Connection[Any]
+
+
+def stored_cell_properties(fc: FeatureClass, mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
+    """The mesh's cell properties but ``part`` when that goes to ``tgsis.part``."""
+    if stores_part_column(fc):
+        return dict(mesh.cell_properties)
+    return {k: v for k, v in mesh.cell_properties.items() if k != "part"}
+
+
+def aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
+                        what: str = "the mesh") -> dict[str, npt.NDArray[Any]]:
+    """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh).
+
+    The ``part`` cell property is not one of them unless the class has a
+    ``part`` cell column: it is stored in ``tgsis.part``.
+    """
+    cells = stored_cell_properties(fc, mesh)
+    sources = {"VERTEX": mesh.vertex_properties, "CELL": cells}
+    kinds = {"VERTEX": "vertex", "CELL": mesh.cell_name}
+    if fc.otherprotable is None:  # one alignment: the other's properties are extra
+        other_alignment = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
+        result = class_property_arrays(fc, sources[fc.alignment], sources[other_alignment], kinds[fc.alignment],
+                                       drop_extra, what)
+    else:  # vertex and cell properties side by side: each side checked against its own columns
+        result = {}
+        for alignment in ("VERTEX", "CELL"):
+            side = replace(fc, cell_properties=fc.aligned(alignment), alignment=alignment)
+            result.update(class_property_arrays(side, sources[alignment], {}, kinds[alignment], drop_extra, what))
+    for prop in fc.cell_properties:  # (n,) for a scalar property, (n, k) for a vector of k
+        kind = kinds[fc.alignment_of(prop)]
+        values = result[prop.name]
+        if (values.ndim == 1) != (prop.size == 1) or (values.ndim == 2 and values.shape[1] != prop.size):
+            shape = "one value" if prop.size == 1 else f"a vector of {prop.size} values"
+            got = "one value" if values.ndim == 1 else f"a vector of {values.shape[1]} values"
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} of {what} has {got} per element, "
+                                       f"but feature class {fc.name} stores {shape}")
+    return result
+
+
+def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any]],
+                          other: Mapping[str, npt.NDArray[Any]], kind: str, drop_extra: bool,
+                          what: str) -> dict[str, npt.NDArray[Any]]:
+    """The class's vertex/cell property arrays (any shape) out of ``stored``, checked and cast to the column types.
+
+    ``other`` holds the properties of the other alignment (never stored);
+    ``kind`` and ``what`` name them and their owner in messages.
+    """
+    wanted = {p.name: p for p in fc.cell_properties}
+    missing = sorted(set(wanted) - set(stored))
+    if missing:
+        raise InvalidPropertyError(f"feature class {fc.name} needs {kind} properties {missing}, which {what} lacks")
+    extra = sorted(set(stored) - set(wanted)) + sorted(other)
+    if extra and not drop_extra:
+        raise InvalidPropertyError(
+            f"feature class {fc.name} has no column for properties {extra} of {what}",
+            hint=f"it stores {fc.alignment.lower()} properties {sorted(wanted) or 'none'}; "
+                 "drop the others (drop_extra_properties=True) or register them in the class",
+        )
+    if extra:
+        log.warning("not stored by feature class %s: properties %s of %s", fc.name, extra, what)
+    result: dict[str, npt.NDArray[Any]] = {}
+    for prop in fc.cell_properties:
+        values = stored[prop.name]
+        target = numpy_dtype(SQL_TYPES[prop.type])
+        cast = values.astype(target)
+        if target.kind in "iub" and not np.array_equal(cast, values):
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} has values that are not {prop.type} "
+                                       f"in {what}")
+        result[prop.name] = cast
+    return result
+
+
+def feature_columns(fc: FeatureClass, properties: Mapping[str, Any] | None) -> dict[str, Any]:
+    known = {p.name for p in fc.feature_properties}
+    values = dict(properties or {})
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise InvalidPropertyError(f"feature class {fc.name} has no feature properties {unknown}",
+                                   hint=f"its feature properties: {sorted(known) or 'none'}")
+    return {k: (json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in values.items()}
+
+
+def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: bytes) -> None:
+    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
+        table, sql.SQL(", ").join(sql.Identifier(c) for c in columns))
+    with conn.cursor().copy(statement) as copy:
+        copy.write(payload)
+
+
+@dataclass(frozen=True)
+class Storage:
+    """Where bulk rows go: the tables themselves, or for versioned tables their
+    ``_ver`` storage with the session's working revision (no trigger per row).
+
+    ``version`` and ``viewing`` are the session's working version and viewing
+    revision when it is *not* in DEFAULT's working revision (else ``None``):
+    then a write to a plain table is refused (:meth:`check`), since it would
+    land in DEFAULT.
+    """
+
+    versioned: frozenset[tuple[str, str]]
+    revision: int | None
+    version: str | None = None
+    viewing: int | None = None
+
+    @classmethod
+    def of(cls, conn: Conn) -> Storage:
+        versioned = frozenset((r[0], r[1]) for r in conn.execute(
+            "SELECT schemaname, tablename FROM tgsis.versioned_tables").fetchall())
+        session = conn.execute(
+            "SELECT tgsis.get_working_version(), tgsis.get_viewing_revision(), "
+            "(SELECT workingrevision FROM tgsis.versions WHERE name = tgsis.get_working_version())").fetchone()
+        assert session is not None
+        version, viewing, working = session
+        elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
+        if not versioned:
+            return cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None)
+        row = conn.execute("SELECT revision FROM tgsis.write_revision()").fetchone()  # TG301 when read-only
+        assert row is not None
+        return cls(versioned, int(row[0]), version if elsewhere else None, viewing if elsewhere else None)
+
+    def check(self, schema: str, table: str) -> None:
+        """Refuse a write to a plain ``schema.table`` while the session is not in DEFAULT's working revision.
+
+        Raises
+        ------
+        NotVersionedError
+            The write would land in DEFAULT (nothing is written).
+        """
+        if self.version is None or (schema, table) in self.versioned:
+            return
+        if self.version != "DEFAULT":
+            raise NotVersionedError(
+                f"table {schema}.{table} is not versioned: a write in version {self.version!r} would change DEFAULT, "
+                "which every version reads",
+                detail=f"the connection works in version {self.version!r}, but feature versioning is off, so the "
+                       "feature tables hold one state for all versions; nothing was written",
+                hint="tgsis.enable_feature_versioning(conn) to write features in versions, or write in DEFAULT "
+                     "(tgsis.goto_version(conn, 'DEFAULT'), or outside tgsis.in_version)")
+        raise NotVersionedError(
+            f"table {schema}.{table} is not versioned: DEFAULT viewed at revision {self.viewing} cannot be written",
+            detail="the connection looks at an older revision; the table holds only the current state; "
+                   "nothing was written",
+            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state")
+
+    def copy(self, conn: Conn, schema: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> None:
+        """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision."""
+        self.check(schema, table)
+        count = len(np.asarray(columns[0][1])) if columns else 0
+        if (schema, table) in self.versioned:
+            assert self.revision is not None
+            table += "_ver"
+            columns = [*columns, ("revision", np.full(count, self.revision, dtype=np.int32), "int4")]
+        copy_in(conn, sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table)),
+                 [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
+
+
+def concat(arrays: Sequence[npt.NDArray[Any]]) -> npt.NDArray[Any]:
+    """The arrays one after the other (no copy for one array)."""
+    return arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
+
+
+def row_keys(geoids: Sequence[int], counts: Sequence[int]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """(geoid, local id) columns for ``counts[i]`` rows of each ``geoids[i]``: ids 0..counts[i]-1."""
+    total = int(sum(counts))
+    if len(counts) == 1:
+        return np.full(total, geoids[0], dtype=np.int64), np.arange(total, dtype=np.int64)
+    starts = np.cumsum([0, *counts[:-1]])
+    return (np.repeat(np.asarray(geoids, dtype=np.int64), counts),
+            np.arange(total, dtype=np.int64) - np.repeat(starts, counts).astype(np.int64))
+
+
+def copy_out(conn: Conn, query: sql.Composable, types: Sequence[str]) -> list[npt.NDArray[Any]]:
+    statement = sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(query)
+    with conn.cursor().copy(statement) as copy:
+        data = b"".join(bytes(chunk) for chunk in copy)
+    return decode_rows(data, types)
+
+
+def rows_by_geoid(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],
+           wanted: Sequence[int]) -> dict[int, npt.NDArray[np.int64]]:
+    """Row positions of each wanted geoid, ordered by the local id."""
+    def ascending(values: npt.NDArray[np.int64]) -> bool:
+        return bool(np.all(values[1:] >= values[:-1]))
+
+    if len(wanted) == 1:  # the common case: skip the two-key sort
+        order = np.arange(len(ids)) if ascending(ids) else np.argsort(ids, kind="stable")
+        return {wanted[0]: order}
+    order = np.lexsort((ids, geoids))
+    sorted_geoids = geoids[order]
+    starts = np.searchsorted(sorted_geoids, wanted, side="left")
+    ends = np.searchsorted(sorted_geoids, wanted, side="right")
+    return {g: order[s:e] for g, s, e in zip(wanted, starts.tolist(), ends.tolist())}
+
+
+def local_positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: str,
+                    geoid: int) -> npt.NDArray[np.int64]:
+    """Indices of ``lookup`` values in the sorted ``ids`` (vertex ids to mesh indices)."""
+    if len(ids) and ids[-1] - ids[0] == len(ids) - 1:
+        positions = lookup - ids[0] if ids[0] else lookup  # ids k..k+n-1 (unique): index = id - k
+        if len(lookup) and (positions.min() < 0 or positions.max() >= len(ids)):
+            raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
+                                       hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+        return positions
+    positions = np.searchsorted(ids, lookup)
+    if len(lookup) and (np.any(positions >= len(ids)) or np.any(ids[np.minimum(positions, len(ids) - 1)] != lookup)):
+        raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
+                                   hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+    return positions
+
+
+def insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
+    """The feature row of a new feature: its id and per-feature property values (unknown names refused)."""
+    values = feature_columns(fc, properties)
+    columns = ["_geoid", *values]
+    conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+        fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+        sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])

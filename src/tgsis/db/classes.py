@@ -1,0 +1,301 @@
+"""Feature classes: register, look up, list and drop them (``tgsis.catalog``).
+
+Every data model's features belong to a feature class; the model-specific
+write and read paths (:mod:`tgsis.db.features` for model 1,
+:mod:`tgsis.db.temporal` for models 2 and 3) take a :class:`FeatureClass`.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import psycopg
+from psycopg import sql
+
+from tgsis.arguments import check_module
+from tgsis.db.copy import SQL_TYPES, array_wire
+from tgsis.errors import NotFoundError, reraise
+from tgsis.mesh import Geotype, Mesh, mesh_class
+
+__all__ = [
+    "Property",
+    "FeatureClass",
+    "create_feature_class",
+    "get_feature_class",
+    "list_feature_classes",
+    "drop_feature_class",
+    "class_of_feature",
+    "stores_part_column",
+]
+
+Conn = psycopg.Connection[Any]
+PropertySpec = Mapping[str, str] | Sequence["tuple[str, str] | tuple[str, str, int] | Property"]
+
+
+@dataclass(frozen=True)
+class Property:
+    """A property of a feature class: column name, SQL type and, for a vector property, its number of components.
+
+    A vertex or cell property of ``size`` k > 1 is one column of arrays of k
+    values; in a mesh it is an (n, k) array. ``alignment`` (``"VERTEX"`` or
+    ``"CELL"``) is given for a property aligned otherwise than its class
+    (alignment is per property; None: the class's).
+    """
+
+    name: str
+    type: str
+    size: int = 1
+    alignment: Literal["VERTEX", "CELL"] | None = None
+
+    @property
+    def wire(self) -> str:
+        """Its binary COPY wire type (``"float8"``, ``"float8[3]"``)."""
+        return array_wire(SQL_TYPES[self.type], self.size)
+
+
+@dataclass(frozen=True)
+class FeatureClass:
+    """A row of ``tgsis.catalog``.
+
+    Attributes
+    ----------
+    name : str
+        Class name (= feature table name).
+    schema : str
+        Schema of its tables.
+    geotype : Geotype
+        Geotype of its features.
+    alignment : {"VERTEX", "CELL"}
+        Whether ``cell_properties`` are per vertex or per simplex.
+    srs : int
+        Spatial reference id (0: undefined).
+    feature_properties, cell_properties : tuple of Property
+        In column order.
+    time_model : {"STATIC", "INSTANTS", "EVOLVING", "GMAP"}
+        Model 1 (static), model 2 (surfaces at instants), model 3
+        (continuously evolving surfaces), model 4 (G-maps in time) or model 5
+        (multiply indexed G-maps).
+    time_unit : str or None
+        Unit of model time of a temporal class.
+    instant_properties : tuple of Property
+        Per-instant feature properties of a temporal class (columns of
+        ``protable``).
+    protable : str or None
+        ``<name>_pros`` of a temporal class.
+    otherprotable : str or None
+        ``<name>_simplexpros`` (a VERTEX class) or ``<name>_vertexpros`` (a
+        CELL class): the properties whose alignment is not ``alignment``.
+    cell_level : int or None
+        A class of G-maps: the dimension of the cells its ``cell_properties``
+        belong to (``_idx`` is an abstract cell id).
+    """
+
+    name: str
+    schema: str
+    geotype: Geotype
+    alignment: Literal["VERTEX", "CELL"]
+    srs: int
+    feature_properties: tuple[Property, ...]
+    cell_properties: tuple[Property, ...]
+    featuretable: str
+    cellprotable: str
+    viewname: str
+    description: str | None = None
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC"
+    time_unit: str | None = None
+    instant_properties: tuple[Property, ...] = ()
+    protable: str | None = None
+    otherprotable: str | None = None
+    cell_level: int | None = None
+
+    def alignment_of(self, prop: Property) -> Literal["VERTEX", "CELL"]:
+        """Whether ``prop`` has a value per vertex or per cell."""
+        return prop.alignment or self.alignment
+
+    def aligned(self, alignment: str) -> tuple[Property, ...]:
+        """The vertex (``"VERTEX"``) or cell (``"CELL"``) properties, in column order."""
+        return tuple(p for p in self.cell_properties if self.alignment_of(p) == alignment)
+
+    def property_table(self, alignment: str) -> str | None:
+        """The table of the vertex or cell properties: ``cellprotable`` for the class's alignment, else ``otherprotable``."""
+        return self.cellprotable if alignment == self.alignment else self.otherprotable
+
+    @property
+    def mesh_class(self) -> type[Mesh]:
+        """The mesh type of the features.
+
+        Raises
+        ------
+        InvalidGeometryError
+            For a GEOMETRYCOLLECTION class: its features are
+            :class:`~tgsis.mesh.GeometryCollection` objects of meshes of any type.
+        """
+        return mesh_class(self.geotype)
+
+    def qualified(self, name: str) -> sql.Composed:
+        """``schema.name`` of one of the class's tables, quoted for SQL."""
+        return sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(name))
+
+
+_CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
+                    "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
+                    "protablename, otherprotable, celllevel")
+
+
+def _class_from_row(row: Sequence[Any]) -> FeatureClass:
+    def props(value: Any) -> tuple[Property, ...]:
+        items = json.loads(value) if isinstance(value, str) else value
+        return tuple(Property(p["name"], p["type"], int(p.get("size", 1)), p.get("alignment")) for p in items)
+
+    return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
+                        feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
+                        cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
+                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15],
+                        cell_level=None if row[16] is None else int(row[16]))
+
+
+def _spec_json(spec: PropertySpec | None) -> str:
+    items: list[Any] = list(spec.items()) if isinstance(spec, Mapping) else list(spec or [])
+
+    def item_json(item: Any) -> Any:
+        if isinstance(item, Property):
+            return {"name": item.name, "type": item.type, "size": item.size, "alignment": item.alignment}
+        return list(item) if isinstance(item, (tuple, list)) else item
+
+    return json.dumps([item_json(item) for item in items])
+
+
+def create_feature_class(
+    conn: Conn,
+    name: str,
+    geotype: Geotype | str,
+    *,
+    feature_properties: PropertySpec | None = None,
+    cell_properties: PropertySpec | None = None,
+    alignment: Literal["VERTEX", "CELL"] = "VERTEX",
+    srs: int = 0,
+    schema: str = "public",
+    description: str | None = None,
+    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC",
+    time_unit: str | None = None,
+    instant_properties: PropertySpec | None = None,
+    cell_level: int | None = None,
+) -> FeatureClass:
+    """Register a feature class (``tgsis.register_feature_class``).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    name : str
+        Class and feature-table name: lower case, no quoting needed.
+    geotype : Geotype or str
+    feature_properties, cell_properties : mapping or sequence of (name, type)
+        Property names (letter case kept) and SQL types (see
+        ``tgsis.property_types``); order kept. A vertex or cell property may
+        be a vector: ``(name, type, k)`` stores an (n, k) mesh property as
+        one array column of k values. A :class:`Property` item may give its
+        own ``alignment`` (``Property("facies", "integer",
+        alignment="CELL")`` in a VERTEX class): a class may have vertex and
+        cell properties side by side.
+    alignment : {"VERTEX", "CELL"}
+    srs : int
+    schema : str
+        Existing schema for the class's tables (not ``tgsis`` nor a system
+        schema). The tables belong to tgsis's owner; the caller must be a
+        ``tgsis_admin`` with ``CREATE`` on the schema (docs/security.md).
+    description : str, optional
+    time_model : {"STATIC", "INSTANTS", "EVOLVING"}
+        ``"INSTANTS"``: surfaces known at instants (model 2,
+        :class:`~tgsis.temporal.SurfaceSeries`); ``"EVOLVING"``: continuously
+        evolving surfaces (model 3, :class:`~tgsis.temporal.EvolvingSurface`).
+        Temporal classes hold SURFACE features; ``"GMAP"``: n-G-maps in time
+        (model 4, :class:`~tgsis.gmaps.EvolvingGMap`), geotype ``"GMAP"``;
+        ``"MULTIDIM"``: n-G-maps whose extra axes are time, knowledge or scale
+        (model 5, :class:`~tgsis.gmaps.GMap`), geotype ``"GMAP"``.
+    time_unit : str, optional
+        Unit of model time (e.g. ``"Ma"``, ages stored as negative numbers).
+    instant_properties : mapping or sequence of (name, type), optional
+        Per-instant feature properties of a temporal class (``<name>_pros``).
+    cell_level : int, optional
+        A class of G-maps: the dimension of the cells that ``cell_properties``
+        belong to (0: vertices, 1: edges, 2: faces, 3: volumes); required for
+        ``time_model="GMAP"``, refused otherwise.
+
+    Raises
+    ------
+    InvalidNameError, InvalidPropertyError, InvalidInputError, AlreadyExistsError, NotFoundError,
+    MissingPrivilegeError
+    """
+    geotype_value = geotype.value if isinstance(geotype, Geotype) else str(geotype)
+    with reraise(), conn.transaction():
+        row = conn.execute(
+            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s, "
+            "%s, %s::jsonb, %s, %s)",
+            (name, geotype_value, _spec_json(feature_properties), _spec_json(cell_properties), alignment, srs,
+             schema, description, time_model, _spec_json(instant_properties), time_unit, cell_level),
+        ).fetchone()
+    assert row is not None
+    return _class_from_row(row)
+
+
+def get_feature_class(conn: Conn, name: str) -> FeatureClass:
+    """The class called ``name``.
+
+    Raises
+    ------
+    NotFoundError
+        No such class.
+    """
+    with reraise():
+        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.catalog WHERE classname = %s", (name,)).fetchone()
+    if row is None:
+        raise NotFoundError(f"feature class {name!r} does not exist", hint="`tgsis class list` shows the classes")
+    return _class_from_row(row)
+
+
+def list_feature_classes(conn: Conn) -> list[FeatureClass]:
+    """All feature classes, by name."""
+    with reraise():
+        rows = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.catalog ORDER BY classname").fetchall()
+    return [_class_from_row(r) for r in rows]
+
+
+def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
+    """Drop a class; with ``force`` also its features. Returns the number of features deleted.
+
+    Raises
+    ------
+    NotFoundError, InUseError, MissingPrivilegeError (the caller is no ``tgsis_admin``)
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT tgsis.drop_feature_class(%s, %s)", (name, force)).fetchone()
+    return int(row[0]) if row else 0
+
+
+def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
+    """The feature class that holds feature ``feature_id``.
+
+    Raises
+    ------
+    NotFoundError
+        No class has a feature with that id.
+    """
+    for fc in list_feature_classes(conn):
+        with reraise():
+            row = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)),
+                               (feature_id,)).fetchone()
+        if row is not None:
+            return fc
+    raise NotFoundError(f"no feature class has a feature {feature_id}", hint="`tgsis ls` lists the features")
+
+
+def stores_part_column(fc: FeatureClass) -> bool:
+    """Whether the class keeps the ``part`` cell property in a column of its own (else: in ``tgsis.part``)."""
+    return any(p.name == "part" and fc.alignment_of(p) == "CELL" for p in fc.cell_properties)
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -1,0 +1,555 @@
+"""Model 4 in the database: n-G-maps in R^m evolving in valid time, stored and fetched by binary COPY.
+
+A feature of a class of G-maps (``time_model="GMAP"``) is one
+``tgsis.geometry`` row (geotype and time model ``GMAP``) with its dimensions
+in ``tgsis.gmap``, its topology periods in ``tgsis.gmap_timem``, their
+geometry instants in ``tgsis.gmap_timet``, the points of each period in
+``tgsis.gmap_node`` and their positions at each instant in
+``tgsis.gmap_vertex``, the darts in ``tgsis.gmap_dart``, the involutions in
+``tgsis.gmap_alpha`` and the cells of the class's property level in
+``tgsis.gmap_cell``; property values are rows ``(_geoid, _timem, _timet,
+_idx = acellid)`` of the class's ``<name>_cellpros``. Ids of darts, nodes and
+cells are unique within the geometry, numbered on through the periods.
+
+Every write is one transaction, one COPY per table; a map that breaks a
+condition of an n-G-map is refused with the offending darts named and
+nothing written. Snapshots at t come from SQL (``tgsis.gmap_at``,
+``tgsis.gmap_points_at``, ``tgsis.gmap_property_at``), equal to
+:meth:`tgsis.gmaps.EvolvingGMap.at` of the fetched object.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.arguments import check_module
+from tgsis.db._transfer import Storage, concat, copy_out, insert_feature_row, local_positions
+from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
+from tgsis.db.copy import SQL_TYPES, numpy_dtype
+from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
+from tgsis.temporal import check_time
+
+__all__ = ["insert_gmap", "fetch_gmap", "fetch_md_gmap", "gmap_at", "gmap_cells", "gmap_check", "md_in_box",
+           "md_vertices_in_box", "GMapProblem"]
+
+Conn = psycopg.Connection[Any]
+IntArray = npt.NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class GMapProblem:
+    """A violated condition of a stored G-map (``tgsis.gmap_check``): what, how many darts, the first of them."""
+
+    problem: str
+    count: int
+    darts: tuple[int, ...]
+
+
+def _gmap_class(conn: Conn, feature_class: str | FeatureClass, model: str = "GMAP") -> FeatureClass:
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if fc.time_model != model:
+        what = "G-maps in time" if model == "GMAP" else "multiply indexed G-maps"
+        raise InvalidInputError(f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
+                                hint=f"create a class with time_model={model!r} and a cell_level for {what}")
+    return fc
+
+
+def _default_axes(m: int) -> tuple[str, ...]:
+    return tuple(["x", "y", "z"][:m] + [f"axis{i + 1}" for i in range(3, m)])
+
+
+def _as_evolving(obj: GMap | EvolvingGMap, fc: FeatureClass) -> EvolvingGMap:
+    """A plain G-map is one period known at t = 0 that lasts (alive), with its properties of the class's level."""
+    if isinstance(obj, EvolvingGMap):
+        return obj
+    if isinstance(obj, GMap):
+        values = {k: np.asarray(v)[None] for k, v in obj.cell_properties.get(fc.cell_level, {}).items()} \
+            if fc.cell_level is not None else {}
+        return EvolvingGMap([GMapPeriod([0.0], obj, level=fc.cell_level if values else None, cell_values=values)],
+                            alive=True, name=None)
+    raise InvalidInputError(f"a G-map feature is a tgsis.gmaps.GMap or EvolvingGMap, got {type(obj).__name__}")
+
+
+def _class_values(fc: FeatureClass, obj: EvolvingGMap, drop_extra: bool) -> list[dict[str, npt.NDArray[Any]]]:
+    """Per period, the class's cell property arrays (g, c), checked and cast to the column types."""
+    wanted = {p.name: p for p in fc.cell_properties}
+    if obj.level is not None and obj.level != fc.cell_level:
+        raise InvalidPropertyError(f"the G-map's cell values belong to {obj.level}-cells, feature class {fc.name} "
+                                   f"stores values of {fc.cell_level}-cells")
+    if fc.cell_level is not None and fc.cell_level > obj.dimension:
+        raise InvalidGMapError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
+                               f"{obj.dimension}-G-map does not have")
+    out = []
+    for i, period in enumerate(obj.periods):
+        given = dict(period.cell_values)
+        missing = sorted(set(wanted) - set(given))
+        if missing:
+            raise InvalidPropertyError(f"feature class {fc.name} needs cell properties {missing}, which period {i} "
+                                       "of the G-map lacks")
+        extra = sorted(set(given) - set(wanted))
+        if extra and not drop_extra:
+            raise InvalidPropertyError(f"feature class {fc.name} has no column for cell properties {extra} of period {i}",
+                                       hint="drop the others (drop_extra_properties=True) or register them in the class")
+        values: dict[str, npt.NDArray[Any]] = {}
+        for name, prop in wanted.items():
+            target = numpy_dtype(SQL_TYPES[prop.type])
+            cast = given[name].astype(target)
+            if target.kind in "iub" and not np.array_equal(cast, given[name]):
+                raise InvalidPropertyError(f"cell property {name!r} has values that are not {prop.type} in period {i}")
+            values[name] = cast
+        out.append(values)
+    return out
+
+
+def _bounds(obj: EvolvingGMap) -> list[float] | None:
+    """The box of the first three coordinates of every position (0 for missing ones), as tgsis.gmap_extent."""
+    boxes = []
+    for period in obj.periods:
+        xyz = period.positions.reshape(-1, period.positions.shape[2])[:, :3]
+        if len(xyz):
+            if xyz.shape[1] < 3:
+                xyz = np.hstack([xyz, np.zeros((len(xyz), 3 - xyz.shape[1]))])
+            boxes.append(np.stack([xyz.min(axis=0), xyz.max(axis=0)]))
+    if not boxes:
+        return None
+    stacked = np.stack(boxes)
+    return [float(v) for v in np.concatenate([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])]
+
+
+def _signs(g: GMap) -> npt.NDArray[np.bool_] | None:
+    return g.orientation() if g.is_orientable() else None
+
+
+def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
+                properties: Mapping[str, Any] | None = None, *, name: str | None = None,
+                drop_extra_properties: bool = False, axes: Sequence[str] | None = None) -> int:
+    """Store a G-map (or a G-map evolving in time) as a new feature of a class of G-maps; return its id.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+        A class with ``time_model="GMAP"`` (model 4) or ``"MULTIDIM"`` (model 5).
+    obj : GMap or EvolvingGMap
+        Model 4: a plain :class:`~tgsis.gmaps.GMap` is one period known at
+        t = 0 that lasts for ever (its properties of the class's cell level
+        stored at t = 0). Every period must be a valid G-map, with exactly
+        the class's cell properties (of the class's cell level). Model 5: a
+        GMap whose extra axes (time, knowledge, ...) are coordinates.
+    properties : mapping, optional
+        Per-feature property values.
+    name : str, optional
+        Geometry name (default: the object's).
+    drop_extra_properties : bool
+        Ignore cell values the class does not store instead of failing.
+    axes : sequence of str, optional
+        Model 5: the name of each of the m axes (default x, y, z, axis4, ...).
+
+    Raises
+    ------
+    InvalidGMapError
+        A period breaks a condition of an n-G-map (the message names the
+        darts); nothing is written.
+    InvalidPropertyError, InvalidInputError, NotFoundError
+    """
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if fc.time_model == "MULTIDIM":
+        if not isinstance(obj, GMap):
+            raise InvalidInputError(f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
+                                    f"(time is one of its axes), not a {type(obj).__name__}",
+                                    hint="tgsis.gmaps.extrude makes an axis of time or knowledge")
+        return _insert_md(conn, fc, obj, properties, name=name, axes=axes, drop_extra=drop_extra_properties)
+    if axes is not None:
+        raise InvalidInputError(f"feature class {fc.name} holds G-maps in time: their axes are x, y, z (axes=None)")
+    fc = _gmap_class(conn, fc)
+    evolving = _as_evolving(obj, fc)
+    evolving.check(raise_=True)
+    values = _class_values(fc, evolving, drop_extra_properties)
+    periods = evolving.periods
+    n, m = evolving.dimension, evolving.embedding_dimension
+    darts = [p.gmap.n_darts for p in periods]
+    nodes = [len(p.gmap.points) for p in periods]
+    dart0 = np.cumsum([0, *darts[:-1]]).astype(np.int64)
+    node0 = np.cumsum([0, *nodes[:-1]]).astype(np.int64)
+    level = fc.cell_level
+    cells = [p.gmap.cells(level) if level is not None and level <= n else None for p in periods]
+    counts = [int(c.max()) + 1 if c is not None and len(c) else 0 for c in cells]
+    total_cells: int = sum(counts)
+    cell0 = np.cumsum([0, *counts[:-1]]).astype(np.int64)
+    signs = [_signs(p.gmap) for p in periods]
+    with reraise(), conn.transaction():
+        storage = Storage.of(conn)
+        storage.check("tgsis", "geometry")
+        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s)",
+                           (name if name is not None else evolving.name, _bounds(evolving), sum(nodes), sum(darts),
+                            evolving.alive)).fetchone()
+        assert row is not None
+        geoid = int(row[0])
+        storage.copy(conn, "tgsis", "gmap", [("geoid", np.array([geoid]), "int8"), ("dimension", np.array([n], np.int16), "int2"),
+                                             ("embedding", np.array([m], np.int16), "int2")])
+        starts = np.array([p.start for p in periods])
+        storage.copy(conn, "tgsis", "gmap_timem", [("geoid", np.full(len(periods), geoid), "int8"),
+                                                   ("timem", starts, "float8")])
+        instants = [len(p.times) for p in periods]
+        storage.copy(conn, "tgsis", "gmap_timet", [
+            ("geoid", np.full(sum(instants), geoid), "int8"), ("timem", np.repeat(starts, instants), "float8"),
+            ("timet", concat([p.times for p in periods]), "float8")])
+        storage.copy(conn, "tgsis", "gmap_node", [
+            ("geoid", np.full(sum(nodes), geoid), "int8"), ("timem", np.repeat(starts, nodes), "float8"),
+            ("nodeid", np.arange(sum(nodes), dtype=np.int64), "int8")])
+        rows = [len(p.times) * k for p, k in zip(periods, nodes)]
+        storage.copy(conn, "tgsis", "gmap_vertex", [
+            ("geoid", np.full(sum(rows), geoid), "int8"), ("timem", np.repeat(starts, rows), "float8"),
+            ("timet", concat([np.repeat(p.times, k) for p, k in zip(periods, nodes)]), "float8"),
+            ("nodeid", concat([np.tile(np.arange(k, dtype=np.int64) + o, len(p.times))
+                               for p, k, o in zip(periods, nodes, node0)]), "int8"),
+            ("coordinate", concat([p.positions.reshape(-1, m) for p in periods]), f"float8[{m}]")])
+        acell = concat([c + o for c, o in zip(cells, cell0)]) if level is not None and level <= n else None
+        dart_columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("geoid", np.full(sum(darts), geoid), "int8"), ("dartid", np.arange(sum(darts), dtype=np.int64), "int8"),
+            ("timem", np.repeat(starts, darts), "float8"),
+            ("nodeid", concat([p.gmap.vertex + o for p, o in zip(periods, node0)]), "int8")]
+        if acell is not None:
+            dart_columns.append(("acellid", acell, "int8"))
+        if all(s is not None for s in signs):
+            dart_columns.append(("positive", concat([s for s in signs if s is not None]), "bool"))
+        storage.copy(conn, "tgsis", "gmap_dart", dart_columns)
+        storage.copy(conn, "tgsis", "gmap_alpha", [
+            ("geoid", np.full(sum(darts) * (n + 1), geoid), "int8"),
+            ("level", np.repeat(np.arange(n + 1, dtype=np.int16), sum(darts)), "int2"),
+            ("dartid", np.tile(np.arange(sum(darts), dtype=np.int64), n + 1), "int8"),
+            ("dartid2", concat([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)]) for i in range(n + 1)]),
+             "int8")])
+        if level is not None and total_cells:
+            storage.copy(conn, "tgsis", "gmap_cell", [
+                ("geoid", np.full(sum(counts), geoid), "int8"), ("acellid", np.arange(sum(counts), dtype=np.int64), "int8"),
+                ("timem", np.repeat(starts, counts), "float8"),
+                ("celllevel", np.full(sum(counts), level, dtype=np.int16), "int2")])
+        if fc.cell_properties and total_cells:
+            per = [len(p.times) * c for p, c in zip(periods, counts)]
+            storage.copy(conn, fc.schema, fc.cellprotable, [
+                ("_geoid", np.full(sum(per), geoid), "int8"), ("_timem", np.repeat(starts, per), "float8"),
+                ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, counts)]), "float8"),
+                ("_idx", concat([np.tile(np.arange(c, dtype=np.int64) + o, len(p.times))
+                                 for p, c, o in zip(periods, counts, cell0)]), "int8"),
+                *((prop.name, concat([v[prop.name].reshape(-1) for v in values]), SQL_TYPES[prop.type])
+                  for prop in fc.cell_properties)])
+        insert_feature_row(conn, fc, geoid, properties)
+    return geoid
+
+
+def _md_values(fc: FeatureClass, g: GMap, drop_extra: bool) -> dict[str, npt.NDArray[Any]]:
+    """The class's cell property arrays (c,) of a model-5 G-map, checked and cast."""
+    given = dict(g.cell_properties.get(fc.cell_level, {})) if fc.cell_level is not None else {}
+    other = sorted(level for level in g.cell_properties if level != fc.cell_level and g.cell_properties[level])
+    if other and not drop_extra:
+        raise InvalidPropertyError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, the G-map "
+                                   f"has properties of {other}-cells",
+                                   hint="drop the others (drop_extra_properties=True)")
+    period = GMapPeriod([0.0], GMap(g.alpha, g.vertex, g.points), level=fc.cell_level if given else None,
+                        cell_values={k: np.asarray(v)[None] for k, v in given.items()})
+    values = _class_values(fc, EvolvingGMap([period]), drop_extra)[0]
+    return {k: v[0] for k, v in values.items()}
+
+
+def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, Any] | None, *, name: str | None,
+               axes: Sequence[str] | None, drop_extra: bool) -> int:
+    """Store a model-5 G-map: md_gmap, md_vertex, md_dart, md_alpha, md_cell and the class's cell values."""
+    g.check(raise_=True)
+    n, m, d = g.dimension, g.embedding_dimension, g.n_darts
+    names = tuple(axes) if axes is not None else _default_axes(m)
+    if len(names) != m or len(set(names)) != m or not all(isinstance(a, str) and a for a in names):
+        raise InvalidInputError(f"axes must name each of the {m} axes once, got {list(names)!r}")
+    if m > 100:
+        raise InvalidGMapError(f"a multiply indexed G-map has at most 100 axes (the cube type's limit), got {m}")
+    if fc.cell_level is not None and fc.cell_level > n:
+        raise InvalidGMapError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
+                               f"{n}-G-map does not have")
+    values = _md_values(fc, g, drop_extra)
+    level = fc.cell_level
+    cells = g.cells(level) if level is not None else None
+    count = int(cells.max()) + 1 if cells is not None and len(cells) else 0
+    signs = _signs(g)
+    with reraise(), conn.transaction():
+        storage = Storage.of(conn)
+        storage.check("tgsis", "geometry")
+        period = EvolvingGMap([GMapPeriod([0.0], g)])
+        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM')",
+                           (name, _bounds(period), g.n_points, d)).fetchone()
+        assert row is not None
+        geoid = int(row[0])
+        extent = None
+        if g.n_points:
+            low, high = g.points.min(axis=0), g.points.max(axis=0)
+            extent = "(" + ", ".join(repr(float(v)) for v in low) + "),(" + ", ".join(repr(float(v)) for v in high) + ")"
+        # one row: through the versioned view when versioning is on (its trigger writes the working revision)
+        conn.execute("INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
+                     (geoid, n, m, list(names), extent))
+        storage.copy(conn, "tgsis", "md_vertex", [
+            ("geoid", np.full(g.n_points, geoid), "int8"), ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
+            ("coordinate", g.points, f"float8[{m}]")])
+        dart_columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("geoid", np.full(d, geoid), "int8"), ("dartid", np.arange(d, dtype=np.int64), "int8"),
+            ("vrtxid", g.vertex, "int8")]
+        if cells is not None:
+            dart_columns.append(("acellid", cells, "int8"))
+        if signs is not None:
+            dart_columns.append(("positive", signs, "bool"))
+        storage.copy(conn, "tgsis", "md_dart", dart_columns)
+        storage.copy(conn, "tgsis", "md_alpha", [
+            ("geoid", np.full(d * (n + 1), geoid), "int8"),
+            ("level", np.repeat(np.arange(n + 1, dtype=np.int16), d), "int2"),
+            ("dartid", np.tile(np.arange(d, dtype=np.int64), n + 1), "int8"),
+            ("dartid2", g.alpha.reshape(-1), "int8")])
+        if level is not None and count:
+            storage.copy(conn, "tgsis", "md_cell", [
+                ("geoid", np.full(count, geoid), "int8"), ("acellid", np.arange(count, dtype=np.int64), "int8"),
+                ("celllevel", np.full(count, level, dtype=np.int16), "int2")])
+        if fc.cell_properties and count:
+            storage.copy(conn, fc.schema, fc.cellprotable, [
+                ("_geoid", np.full(count, geoid), "int8"), ("_idx", np.arange(count, dtype=np.int64), "int8"),
+                *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties)])
+        insert_feature_row(conn, fc, geoid, properties)
+    return geoid
+
+
+def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> tuple[GMap, tuple[str, ...]]:
+    """A stored multiply indexed G-map (model 5) with its cell values, and the names of its axes.
+
+    Raises
+    ------
+    NotFoundError
+        ``feature_id`` is not a feature of the class.
+    InvalidGMapError
+        Stored rows that do not make a G-map (see ``tgsis.md_check``).
+    """
+    fc = _gmap_class(conn, feature_class, "MULTIDIM")
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():
+        if fresh:
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        head = conn.execute(sql.SQL("SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
+                                    "ON m.geoid = f._geoid WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)),
+                            (feature_id,)).fetchone()
+        if head is None:
+            raise NotFoundError(f"feature class {fc.name} has no multiply indexed G-map feature {feature_id}")
+        n, m, axes = int(head[0]), int(head[1]), tuple(head[2])
+        vertex = _copy_rows(conn, "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {} ORDER BY vrtxid",
+                            feature_id, ["int8", f"float8[{m}]"])
+        dart = _copy_rows(conn, "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {} "
+                                "ORDER BY dartid", feature_id, ["int8", "int8", "int8"])
+        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {} ORDER BY level, dartid",
+                           feature_id, ["int2", "int8", "int8"])
+        values = []
+        if fc.cell_properties:
+            values = copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {} ORDER BY _idx").format(
+                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
+                sql.Literal(feature_id)), ["int8", *(p.wire for p in fc.cell_properties)])
+    images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
+    if any(len(a) != len(dart[0]) for a in images):
+        raise InvalidGMapError(f"G-map {feature_id}: the alpha rows do not cover its {len(dart[0])} darts",
+                               hint=f"SELECT * FROM tgsis.md_check({feature_id})")
+    topology = _period_map(dart[0], dart[1], images, vertex[0], vertex[1].reshape(len(vertex[0]), m), feature_id)
+    if fc.cell_level is None or not values or fc.cell_level > n:
+        return topology, axes
+    labels = topology.cells(fc.cell_level)
+    first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
+    first[labels[::-1]] = dart[2][::-1]
+    cell_values = {p.name: values[1 + j][local_positions(values[0], first, "cell values", feature_id)]
+                   for j, p in enumerate(fc.cell_properties)}
+    return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
+
+
+def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float],
+              high: Sequence[float]) -> list[int]:
+    """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
+    fc = _gmap_class(conn, feature_class, "MULTIDIM")
+    with reraise():
+        rows = conn.execute("SELECT * FROM tgsis.md_in_box(%s, %s, %s, %s)",
+                            (fc.name, list(axes), [float(v) for v in low], [float(v) for v in high])).fetchall()
+    return sorted(int(r[0]) for r in rows)
+
+
+def md_vertices_in_box(conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float],
+                       high: Sequence[float]) -> IntArray:
+    """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
+    with reraise():
+        rows = conn.execute("SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)",
+                            (feature_id, list(axes), [float(v) for v in low], [float(v) for v in high])).fetchall()
+    return np.array([r[0] for r in rows], dtype=np.int64)
+
+
+def _period_map(dartids: IntArray, nodeids: IntArray, alpha: Sequence[IntArray], node_ids: IntArray,
+                points: npt.NDArray[np.float64], geoid: int) -> GMap:
+    """A period's G-map from its dart rows (sorted by dartid) and its nodes (sorted by nodeid)."""
+    local = np.stack([local_positions(dartids, a, "alpha rows", geoid) for a in alpha])
+    vertex = local_positions(node_ids, nodeids, "darts", geoid)
+    return GMap(local, vertex, points)
+
+
+def _copy_rows(conn: Conn, query: str, geoid: int, types: Sequence[str]) -> list[npt.NDArray[Any]]:
+    return copy_out(conn, sql.SQL(query).format(sql.Literal(geoid)), types)
+
+
+def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingGMap:
+    """A stored G-map feature with its periods, positions and cell values (one COPY per table).
+
+    Raises
+    ------
+    NotFoundError
+        ``feature_id`` is not a feature of the class.
+    InvalidGMapError
+        Stored rows that do not make a G-map (see ``tgsis.gmap_check``).
+    """
+    fc = _gmap_class(conn, feature_class)
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():
+        if fresh:  # one snapshot for the statements below
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        head = conn.execute(sql.SQL("SELECT g.geoname, g.alive, m.dimension, m.embedding FROM {} f "
+                                    "JOIN tgsis.geometry g ON g.geoid = f._geoid JOIN tgsis.gmap m ON m.geoid = f._geoid "
+                                    "WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)).fetchone()
+        if head is None:
+            raise NotFoundError(f"feature class {fc.name} has no G-map feature {feature_id}")
+        name, alive, n, m = head[0], bool(head[1]), int(head[2]), int(head[3])
+        times = _copy_rows(conn, "SELECT timem, timet FROM tgsis.gmap_timet WHERE geoid = {} ORDER BY timem, timet",
+                           feature_id, ["float8", "float8"])
+        nodes = _copy_rows(conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {} ORDER BY timem, nodeid",
+                           feature_id, ["float8", "int8"])
+        vertex = _copy_rows(conn, "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} "
+                                  "ORDER BY timem, timet, nodeid", feature_id, ["float8", "float8", "int8", f"float8[{m}]"])
+        dart = _copy_rows(conn, "SELECT d.timem, d.dartid, d.nodeid, coalesce(d.acellid, -1) FROM tgsis.gmap_dart d "
+                                "WHERE d.geoid = {} ORDER BY d.dartid", feature_id, ["float8", "int8", "int8", "int8"])
+        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {} "
+                                 "ORDER BY level, dartid", feature_id, ["int2", "int8", "int8"])
+        values = []
+        if fc.cell_properties:
+            values = copy_out(conn, sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {} "
+                                            "ORDER BY _timem, _timet, _idx").format(
+                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
+                sql.Literal(feature_id)), ["float8", "float8", "int8", *(p.wire for p in fc.cell_properties)])
+    periods = []
+    for start in np.unique(times[0]):
+        instants = times[1][times[0] == start]
+        in_nodes = nodes[1][nodes[0] == start]
+        in_darts = dart[0] == start
+        dartids, nodeids, acellids = dart[1][in_darts], dart[2][in_darts], dart[3][in_darts]
+        images = []
+        for i in range(n + 1):
+            rows = (alpha[0] == i) & np.isin(alpha[1], dartids)
+            if int(rows.sum()) != len(dartids):
+                raise InvalidGMapError(f"G-map {feature_id}: period {start!r} has {int(rows.sum())} alpha_{i} rows for "
+                                       f"{len(dartids)} darts", hint=f"SELECT * FROM tgsis.gmap_check({feature_id})")
+            images.append(alpha[2][rows])
+        at = vertex[0] == start
+        positions = vertex[3][at].reshape(len(instants), len(in_nodes), m)
+        topology = _period_map(dartids, nodeids, images, in_nodes, positions[0], feature_id)
+        period_values: dict[str, npt.NDArray[Any]] = {}
+        if fc.cell_level is not None and values and fc.cell_level <= n:
+            labels = topology.cells(fc.cell_level)
+            first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
+            first[labels[::-1]] = acellids[::-1]          # the acellid of each cell (its darts share it)
+            here = values[0] == start
+            for j, prop in enumerate(fc.cell_properties):
+                column = values[3 + j][here].reshape(len(instants), -1)
+                ids = values[2][here].reshape(len(instants), -1)[0]
+                period_values[prop.name] = column[:, local_positions(ids, first, "cell values", feature_id)]
+        periods.append(GMapPeriod(instants, topology, positions, level=fc.cell_level if period_values else None,
+                                  cell_values=period_values))
+    if not periods:
+        raise InvalidGMapError(f"G-map {feature_id} has no topology period",
+                               hint=f"SELECT * FROM tgsis.gmap_check({feature_id})")
+    return EvolvingGMap(periods, alive=alive, name=name)
+
+
+def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
+    """The G-map of a feature at model time ``t`` from SQL (``tgsis.gmap_at``, ``gmap_points_at``, ``gmap_property_at``).
+
+    Points and the class's numeric cell properties are interpolated between
+    the bracketing geometry instants, as :meth:`EvolvingGMap.at` does; None
+    when the feature does not exist at ``t``.
+    """
+    t = check_time(t)
+    fc = class_of_feature(conn, feature_id)
+    _gmap_class(conn, fc)
+    with reraise(), conn.transaction():
+        darts = conn.execute("SELECT dartid, nodeid, coalesce(acellid, -1), alpha FROM tgsis.gmap_at(%s, %s)",
+                             (feature_id, t)).fetchall()
+        if not darts:
+            return None
+        points = conn.execute("SELECT nodeid, coordinate FROM tgsis.gmap_points_at(%s, %s)", (feature_id, t)).fetchall()
+        props = {p.name: conn.execute("SELECT acellid, value FROM tgsis.gmap_property_at(%s, %s, %s, %s)",
+                                      (fc.name, feature_id, p.name, t)).fetchall()
+                 for p in fc.cell_properties if p.size == 1}
+    dartids = np.array([r[0] for r in darts], dtype=np.int64)
+    alpha = np.array([r[3] for r in darts], dtype=np.int64).T
+    node_ids = np.array([r[0] for r in points], dtype=np.int64)
+    topology = _period_map(dartids, np.array([r[1] for r in darts], dtype=np.int64), list(alpha), node_ids,
+                           np.array([r[1] for r in points], dtype=np.float64), feature_id)
+    if fc.cell_level is None or not props:
+        return topology
+    labels = topology.cells(fc.cell_level)
+    acellids = np.array([r[2] for r in darts], dtype=np.int64)
+    first = np.full(int(labels.max()) + 1, -1, dtype=np.int64)
+    first[labels[::-1]] = acellids[::-1]
+    cell_values = {}
+    for name, rows in props.items():
+        ids = np.array([r[0] for r in rows], dtype=np.int64)
+        value = np.array([np.nan if r[1] is None else r[1] for r in rows], dtype=np.float64)
+        cell_values[name] = value[local_positions(ids, first, "cell values", feature_id)]
+    return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values})
+
+
+def _model_of(conn: Conn, feature_id: int) -> str:
+    with reraise():
+        row = conn.execute("SELECT timemodel FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+    if row is None or row[0] not in ("GMAP", "MULTIDIM"):
+        raise NotFoundError(f"no G-map feature {feature_id}", hint="`tgsis ls` lists the features")
+    return str(row[0])
+
+
+def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) -> tuple[IntArray, IntArray]:
+    """The ``level``-cells of a feature's G-map (at ``t`` for model 4) from SQL (``tgsis.gmap_cells``, ``md_cells``).
+
+    Returns
+    -------
+    dartids : (d,) int64
+        The darts of the period containing t, ascending.
+    cells : (d,) int64
+        The cell of each, numbered 0.. in the order of the cells' least
+        darts (:meth:`GMap.cells` of the snapshot). Both empty when the
+        feature does not exist at t.
+    """
+    params: tuple[Any, ...]
+    if _model_of(conn, feature_id) == "MULTIDIM":
+        if t is not None:
+            raise InvalidInputError(f"feature {feature_id} is a multiply indexed G-map: time is one of its axes (t=None)")
+        query, params = "SELECT dartid, cell FROM tgsis.md_cells(%s, %s)", (feature_id, level)
+    else:
+        if t is None:
+            raise InvalidInputError(f"feature {feature_id} is a G-map in time: give the time t of its cells")
+        query, params = "SELECT dartid, cell FROM tgsis.gmap_cells(%s, %s, %s)", (feature_id, level, check_time(t))
+    with reraise(), conn.transaction():
+        rows = conn.execute(query, params).fetchall()
+    return np.array([r[0] for r in rows], dtype=np.int64), np.array([r[1] for r in rows], dtype=np.int64)
+
+
+def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
+    """The violated conditions of a stored G-map with their first darts (``tgsis.gmap_check``, ``md_check``); empty: valid."""
+    function = "md_check" if _model_of(conn, feature_id) == "MULTIDIM" else "gmap_check"
+    with reraise():
+        rows = conn.execute(sql.SQL("SELECT problem, count, darts FROM tgsis.{}(%s)").format(sql.Identifier(function)),
+                            (feature_id,)).fetchall()
+    return [GMapProblem(str(p), int(c), tuple(int(d) for d in darts)) for p, c, darts in rows]
+
+
+# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
+check_module(globals(), __all__)

@@ -1,0 +1,131 @@
+"""Model 5 in the database: G-maps whose extra axes are knowledge or time, stored, checked and queried by box (issue 17, part 3)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tgsis import gmaps
+from tgsis.db import features as F
+from tgsis.db import gmaps as G
+from tgsis.errors import reraise
+
+from .gmaps_shapes import grid
+
+Conn = psycopg.Connection[Any]
+
+
+def _class(conn: Conn, level: int = 3) -> F.FeatureClass:
+    return F.create_feature_class(conn, "knowledge", "GMAP", time_model="MULTIDIM", cell_level=level,
+                                  cell_properties={"confidence": "float8"})
+
+
+def _interpretations() -> tuple[gmaps.GMap, list[np.ndarray], gmaps.GMap]:
+    """A horizon on a 5 x 4 grid and three interpretations of its depth, extruded along a knowledge axis.
+
+    Layer l of the extrusion holds interpretation l's points with knowledge l:
+    the (2+1)-G-map is the horizon's history of knowledge, one prism volume
+    per triangle and interval.
+    """
+    vertices, triangles = grid(5, 4)
+    horizon = gmaps.GMap.from_triangles(vertices, triangles)
+    depths = [vertices[:, 0] * 0.0 - 100.0, -100.0 - 5.0 * vertices[:, 0], -110.0 - 5.0 * vertices[:, 0] + vertices[:, 1]]
+    layers = [np.column_stack([vertices[:, :2], z]) for z in depths]
+    extruded = gmaps.extrude(horizon, [0.0, 1.0, 2.0])
+    points = np.vstack([np.column_stack([layer, np.full(len(layer), float(k))]) for k, layer in enumerate(layers)])
+    volumes = extruded.n_cells(3)
+    history = gmaps.GMap(extruded.alpha, extruded.vertex, points,
+                         cell_properties={3: {"confidence": np.linspace(0.2, 0.9, volumes)}})
+    return horizon, layers, history
+
+
+def test_the_history_of_a_horizon_is_stored_fetched_and_sliced_back(conn: Conn) -> None:
+    fc = _class(conn)
+    horizon, layers, history = _interpretations()
+    geoid = G.insert_gmap(conn, fc, history, name="H1 knowledge", axes=["x", "y", "z", "knowledge"])
+    back, axes = G.fetch_md_gmap(conn, fc, geoid)
+    assert axes == ("x", "y", "z", "knowledge") and back.same_as(history)
+    assert G.gmap_check(conn, geoid) == []
+    assert conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (geoid,)).fetchall() == []
+    # the slice at a knowledge value gives that interpretation back, cell for cell
+    for k, layer in enumerate(layers):
+        section = gmaps.slice(back, 3, float(k))
+        assert section.n_darts == horizon.n_darts and [section.n_cells(i) for i in range(3)] == \
+            [horizon.n_cells(i) for i in range(3)]
+        assert np.array_equal(np.sort(section.points[:, :3], axis=0), np.sort(layer, axis=0))
+    for level in range(4):
+        _, cells = G.gmap_cells(conn, geoid, level)
+        assert np.array_equal(cells, history.cells(level)), level
+
+
+def test_box_queries_over_any_axes_use_the_indexes(conn: Conn) -> None:
+    fc = _class(conn)
+    _, layers, history = _interpretations()
+    geoid = G.insert_gmap(conn, fc, history, axes=["x", "y", "z", "knowledge"])
+    far = G.insert_gmap(conn, fc, gmaps.GMap(history.alpha, history.vertex, history.points + [1000, 0, 0, 0],
+                                             cell_properties=history.cell_properties),
+                        axes=["x", "y", "z", "knowledge"])
+    conn.commit()
+    assert G.md_in_box(conn, fc, ["x", "knowledge"], [0, 1.5], [2, 2]) == [geoid]
+    assert G.md_in_box(conn, fc, ["x"], [999, ], [2000]) == [far]
+    assert G.md_in_box(conn, fc, ["knowledge"], [3], [4]) == []
+    assert G.md_in_box(conn, fc, ["age"], [0], [1]) == []                     # no feature has that axis
+    # the points of the last interpretation deeper than -115 (x, y, knowledge and z at once)
+    ids = G.md_vertices_in_box(conn, geoid, ["z", "knowledge"], [-1e9, 1.5], [-115, 2])
+    expected = np.flatnonzero((history.points[:, 3] >= 1.5) & (history.points[:, 2] <= -115))
+    assert np.array_equal(ids, expected) and len(ids) > 0
+    with conn.transaction():
+        conn.execute("SET LOCAL enable_seqscan = off")
+        plan = "\n".join(r[0] for r in conn.execute(
+            "EXPLAIN SELECT f._geoid FROM knowledge f JOIN tgsis.md_gmap m ON m.geoid = f._geoid "
+            "WHERE m.extent && tgsis.md_query_box(m.axes, '{x}', '{0}', '{1}')").fetchall())
+        points = "\n".join(r[0] for r in conn.execute(
+            "EXPLAIN SELECT * FROM tgsis.md_vertex v WHERE cube(v.coordinate) <@ "
+            "tgsis.md_query_box('{x,y,z,knowledge}', '{knowledge}', '{1}', '{2}') AND v.geoid = 1").fetchall())
+    assert "md_vertex_point_idx" in points, points
+    assert "Seq Scan on md_gmap" not in plan or "md_gmap_extent_idx" in plan
+
+
+def test_a_malformed_box_is_refused(conn: Conn) -> None:
+    fc = _class(conn)
+    with pytest.raises(tgsis.InvalidInputError, match="low <= high"):
+        G.md_in_box(conn, fc, ["x"], [2], [1])
+    conn.rollback()
+    with pytest.raises(tgsis.InvalidInputError, match="one low and one high value per axis"):
+        G.md_in_box(conn, fc, ["x", "y"], [0], [1])
+    conn.rollback()
+    with pytest.raises(tgsis.InvalidInputError, match="name each of the 4 axes once"):
+        G.insert_gmap(conn, fc, _interpretations()[2], axes=["x", "x", "z", "k"])
+
+
+def test_a_broken_stored_map_is_reported_naming_its_darts(conn: Conn) -> None:
+    fc = _class(conn)
+    geoid = F.insert_feature(conn, fc, _interpretations()[2])
+    conn.execute("UPDATE tgsis.md_alpha SET dartid2 = dartid WHERE geoid = %s AND level = 0 AND dartid = 4", (geoid,))
+    problems = {p.problem: p.darts for p in G.gmap_check(conn, geoid)}
+    assert 4 in problems["dart free in alpha_0 (only alpha_3 may have fixed points)"]
+    assert "alpha_0 is not an involution" in problems
+
+
+def test_model_5_is_versioned_with_the_features(conn: Conn) -> None:
+    fc = _class(conn)
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "reinterpreted")
+    with tgsis.in_version(conn, "reinterpreted"):
+        geoid = G.insert_gmap(conn, fc, _interpretations()[2], axes=["x", "y", "z", "knowledge"])
+        conn.commit()
+        assert G.fetch_md_gmap(conn, fc, geoid)[0].same_as(_interpretations()[2])
+        assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == [geoid]
+        conn.commit()
+    assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == []              # DEFAULT has none yet
+    conn.commit()
+    tgsis.merge_version(conn, "reinterpreted")
+    conn.commit()
+    assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == [geoid]
+    with pytest.raises(tgsis.InvalidInputError, match="time is one of its axes"), reraise():
+        G.gmap_cells(conn, geoid, 1, 0.5)
