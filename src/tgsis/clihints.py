@@ -93,8 +93,10 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"SELECT _geoid FROM \S+ lists them", "tgsis ls --class CLASS lists them"),
     (r"SELECT tgsis\.delete_geometry\(([^)]*)\) deletes the (feature|collection with its members)",
      lambda m: f"{IN_PSQL}SELECT tgsis.delete_geometry({m[1]}) deletes the {m[2]}"),
-    (r"give time_model => 'INSTANTS' or 'EVOLVING' for a temporal class",
-     "give --time-model INSTANTS or EVOLVING for a temporal class"),
+    (r"give time_model => (.+?) for a temporal class", lambda m: f"give --time-model {m[1]} for a temporal class"),
+    (r"^(p_cell_level => .*|leave p_cell_level out, or register a class of G-maps \(p_time_model => 'GMAP'\))",
+     lambda m: f"{IN_PSQL}{m[1]}"),  # classes of G-maps have no command
+    (r"then run (SELECT tgsis\.create_storage\(\))", lambda m: f"then run, {IN_PSQL}{m[1]}"),
     (r"p_geotype => ", "--geotype "),
     (r"uninstall with cascade \(tgsis db uninstall --cascade\)", "repeat with --cascade"),
     (r"or install with method='sql'", "or install with --method sql"),
