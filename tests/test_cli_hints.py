@@ -102,7 +102,9 @@ def _sample(text: str) -> str:
 
 def _written_hints() -> list[tuple[str, str]]:
     found = []
-    for path in sorted((ROOT / "sql").rglob("*.sql")):
+    sources = [line.strip() for line in (ROOT / "sql" / "sources.txt").read_text().splitlines()
+               if line.strip() and not line.startswith("#")]  # the sources, not a built script beside them
+    for path in (ROOT / "sql" / name for name in sources):
         text = path.read_text()
         for m in re.finditer(r"HINT\s*=\s*(?:format\(\s*)?'((?:[^']|'')*)'((?:\s*'(?:[^']|'')*')*)", text):
             literal = (m[1] + "".join(re.findall(r"'((?:[^']|'')*)'", m[2]))).replace("''", "'")
