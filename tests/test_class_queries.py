@@ -14,6 +14,7 @@ import psycopg
 import pytest
 
 import tgsis
+import tgsis.cliout
 from tests.temporal_data import evolving, series
 from tgsis.cli import main
 
@@ -56,11 +57,13 @@ def test_the_command_prints_each_feature_and_when(db_dsn: str, faults: dict[int,
     with psycopg.connect(db_dsn) as conn:
         expected = tgsis.class_property_periods(conn, "faults", "throw", ">=", 50.0)
     assert main(["--dsn", db_dsn, "query", "faults", "throw", ">=", "50"]) == 0
-    lines = capsys.readouterr().out.splitlines()
+    header, *lines = capsys.readouterr().out.splitlines()
+    assert header == "id\tperiods"
     assert lines == [f"{fid}\t" + " ".join(str(p) for p in periods) for fid, periods in expected.items()]
     assert main(["--dsn", db_dsn, "query", "faults", "throw", ">=", "50", "--first"]) == 0
-    firsts = capsys.readouterr().out.splitlines()
-    assert [line.split("\t")[:2] for line in firsts] == [[str(fid), repr(p[0].start)] for fid, p in expected.items()]
+    firsts = capsys.readouterr().out.splitlines()[1:]  # under the header line; times rounded for people
+    assert [line.split("\t")[:2] for line in firsts] == [[str(fid), tgsis.cliout.show_time(p[0].start)]
+                                                         for fid, p in expected.items()]
     assert main(["--dsn", db_dsn, "query", "faults", "throw", ">", "1000"]) == 0
     assert "no feature of faults has throw > 1000.0 at any time" in capsys.readouterr().err
 

@@ -140,7 +140,8 @@ def test_class_create_list_drop(db_dsn: str, capsys: pytest.CaptureFixture[str])
     assert "created feature class faults (SURFACE)" in capsys.readouterr().out
     assert main(["--dsn", db_dsn, "class", "list"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("faults\tSURFACE\tsrs 26911\tpublic\tfeature: release text\tvertex: azi double precision")
+    assert out.startswith("class\tgeotype\tsrs\tschema\ttime\tfeature properties\tproperties\tper-instant properties\n"
+                          "faults\tSURFACE\t26911\tpublic\tstatic\trelease text\tvertex: azi double precision")
     assert main(["--dsn", db_dsn, "class", "create", "Bad", "--geotype", "SURFACE"]) == 1
     assert "feature class name 'Bad' is not allowed" in capsys.readouterr().err
     assert main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--property", "porosity"]) == 1
@@ -158,10 +159,10 @@ def test_import_ls_export_a_real_gocad_fault(db_dsn: str, tmp_path: Path, capsys
                  "--feature-property", "release:text", "--property", "azi:float8", "--property", "dip:float8"]) == 0
     capsys.readouterr()
     assert main(["--dsn", db_dsn, "import", str(source), "--class", "faults", "--set", "release=CFM5"]) == 0
-    fid, name, *_ = capsys.readouterr().out.split("\t")
+    fid, name, *_ = capsys.readouterr().out.splitlines()[1].split("\t")
     assert name == "CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5"
     assert main(["--dsn", db_dsn, "ls"]) == 0
-    assert capsys.readouterr().out.startswith(f"{fid}\tfaults\t{name}\tSURFACE\t")
+    assert capsys.readouterr().out.splitlines()[1].startswith(f"{fid}\tfaults\t{name}\tSURFACE\t")
     out = tmp_path / "back.ts"
     assert main(["--dsn", db_dsn, "export", fid, str(out)]) == 0
     original, back = formats.read_one(source), formats.read_one(out)
@@ -219,7 +220,7 @@ def test_reject_flagged_refuses_the_whole_file(db_dsn: str, capsys: pytest.Captu
 
     # without the flag the file goes in, with the flags reported
     assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--tolerance", "1e-3"]) == 0
-    lines = [line.split("\t") for line in capsys.readouterr().out.splitlines()]
+    lines = [line.split("\t") for line in capsys.readouterr().out.splitlines()[1:]]
     assert [(line[1], line[-1]) for line in lines] == [
         ("F1", "1 duplicate vertices, 1 degenerate cells"), ("F2", "0 duplicate vertices, 1 degenerate cells")]
     assert _stored(db_dsn) == (2, 10, 6, 2, 0)

@@ -33,7 +33,7 @@ def test_a_fault_reinterpreted_in_a_version(db_dsn: str, capsys: pytest.CaptureF
     assert "newly versioned" in _run(db_dsn, capsys, "versioning", "enable", "features")
     out = _run(db_dsn, capsys, "import", str(cfm(RELEASE_5)), "--class", "faults", "--set", "release=5.3",
                "--drop-extra-properties")
-    fid = out.split("\t")[0]
+    fid = out.splitlines()[1].split("\t")[0]
     assert _run(db_dsn, capsys, "version", "create", "cfm6") == \
         "created version cfm6 (parent DEFAULT), working revision 2\n"
     assert "now work in version cfm6 (working revision 2)" in _run(db_dsn, capsys, "version", "goto", "cfm6")
@@ -42,17 +42,19 @@ def test_a_fault_reinterpreted_in_a_version(db_dsn: str, capsys: pytest.CaptureF
     _run(db_dsn, capsys, "import", str(cfm(RELEASE_6)), "--class", "faults", "--set", "release=6.1",
          "--drop-extra-properties")
     assert _run(db_dsn, capsys, "version", "current") == "cfm6\tworking revision 2\t(from tgsis version goto)\n"
-    assert len(_run(db_dsn, capsys, "ls").splitlines()) == 2
-    assert len(_run(db_dsn, capsys, "--in", "DEFAULT", "ls").splitlines()) == 1
+    assert len(_run(db_dsn, capsys, "ls").splitlines()) == 1 + 2  # the header line and two features
+    assert len(_run(db_dsn, capsys, "--in", "DEFAULT", "ls").splitlines()) == 1 + 1
     saved = _run(db_dsn, capsys, "version", "save", "imported")
     assert saved == "saved revision 2 of cfm6 as imported; new working revision 3\n"
     tree = _run(db_dsn, capsys, "version", "tree")
     assert tree == "DEFAULT: revisions 0, 1; working 1\n    cfm6 from DEFAULT@0: revisions 2 (imported), 3; working 3\n"
     listing = _run(db_dsn, capsys, "version", "list")
-    assert listing.startswith("  DEFAULT\tparent -") and "\n* cfm6\tparent DEFAULT\tinitrevision 0\tworking 3" in listing
+    assert listing.startswith("current\tversion\tparent\tinitrevision\tworking\towner\tcreated\tdescription\n"
+                              "\tDEFAULT\t-\t-\t1\t")
+    assert "\n*\tcfm6\tDEFAULT\t0\t3\t" in listing
     # looking at a revision is read-only
     assert "look at revision 0 of version cfm6" in _run(db_dsn, capsys, "version", "goto", "cfm6@0")
-    assert len(_run(db_dsn, capsys, "ls").splitlines()) == 1
+    assert len(_run(db_dsn, capsys, "ls").splitlines()) == 1 + 1
     err = _run(db_dsn, capsys, "import", str(cfm(RELEASE_6)), "--class", "faults", "--drop-extra-properties", code=1)
     assert "viewed at revision 0, which cannot be changed" in err
     # back to DEFAULT; deleting the version removes its rows
@@ -61,7 +63,7 @@ def test_a_fault_reinterpreted_in_a_version(db_dsn: str, capsys: pytest.CaptureF
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT release FROM faults").fetchall() == [("5.3",)]
         assert conn.execute("SELECT count(DISTINCT geoid) FROM tgsis.vrtx_ver").fetchone() == (1,)
-    assert _run(db_dsn, capsys, "ls").startswith(f"{fid}\tfaults\t")
+    assert _run(db_dsn, capsys, "ls", "--no-header").startswith(f"{fid}\tfaults\t")
 
 
 def test_errors(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
@@ -82,7 +84,7 @@ def test_versioning_a_table_from_the_command_line(db_dsn: str, capsys: pytest.Ca
     assert "public.wells is versioned (object class well, key id, storage wells_ver)" in _run(
         db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
     assert _run(db_dsn, capsys, "versioning", "list") == \
-        "public.wells\twell\tkey id\torder 0\tshort wells\trow key (id)\n"
+        "table\tclass\tkey\torder\tshortname\trow key\npublic.wells\twell\tid\t0\twells\tid\n"
     assert "DEFAULT's rows kept, 0 row version(s) removed" in _run(db_dsn, capsys, "versioning", "disable", "wells")
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT relkind FROM pg_class WHERE relname = 'wells'").fetchone() == ("r",)
@@ -105,7 +107,9 @@ def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
         conn.execute("UPDATE wells SET depth = 22 WHERE id = 2")
     out = _run(db_dsn, capsys, "version", "conflicts", "a", "--rows")
     assert out.splitlines() == [
-        "well\t1\tunsolved\tboth changed: wells\ta: wells\tparent: wells",
+        "class\tkey\tsolution\tboth changed\tchanged in a\tchanged in parent",
+        "\ttable\tside\trow key (JSON)\trow (JSON)",
+        "well\t1\tunsolved\twells\twells\twells",
         '\twells\tchild\t{"id": 1}\t{"id": 1, "depth": 12}',
         '\twells\tparent\t{"id": 1}\t{"id": 1, "depth": 11}']
     assert _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child") == "well 1 in a: child\n"
@@ -118,10 +122,11 @@ def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str])
         conn.execute("SELECT tgsis.goto_version('a')")
         conn.execute("UPDATE wells SET depth = 12 WHERE id = 1")
         conn.execute("INSERT INTO wells VALUES (3, 30)")
-    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == "well\t1\twells\t+0\t-0\t~1\nwell\t3\twells\t+1\t-0\t~0\n"
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ("class\tkey\ttable\tadded\tremoved\tchanged\n"
+                                                                   "well\t1\twells\t+0\t-0\t~1\nwell\t3\twells\t+1\t-0\t~0\n")
     assert _run(db_dsn, capsys, "version", "merge", "a") == "merged a into its parent: 3 row(s) written\n"
     assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ""   # "hold the same rows" goes to stderr
-    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT@0", "DEFAULT").count("\n") == 2
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT@0", "DEFAULT").count("\n") == 1 + 2
     assert "refreshed a from its parent: 0 row(s) written" in _run(db_dsn, capsys, "version", "refresh", "a")
     assert "version removed" in _run(db_dsn, capsys, "version", "merge", "a", "--remove")
 
@@ -133,13 +138,15 @@ def test_locks_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[
     with psycopg.connect(db_dsn) as conn:
         me = conn.execute("SELECT current_user").fetchone()[0]  # type: ignore[index]
     assert [line.split("\t")[:5] for line in _run(db_dsn, capsys, "version", "locks").splitlines()] == [
+        ["class", "key", "version", "role", "kind"],
         ["well", "1", "a", me, "version"], ["well", "2", "a", me, "version"]]
     assert _run(db_dsn, capsys, "version", "locks", "b") == ""
     err = _run(db_dsn, capsys, "--in", "b", "version", "lock", "b", "well", "2", code=1)
     assert "locked by version a" in err
     assert "has no object 9" in _run(db_dsn, capsys, "version", "lock", "b", "well", "9", code=1)
     assert _run(db_dsn, capsys, "version", "unlock", "a", "well", "1") == "released 1 lock(s) of a\n"
-    assert [line.split("\t")[:3] for line in _run(db_dsn, capsys, "version", "locks").splitlines()] == [["well", "2", "a"]]
+    assert [line.split("\t")[:3] for line in _run(db_dsn, capsys, "version", "locks", "--no-header").splitlines()] \
+        == [["well", "2", "a"]]
     assert _run(db_dsn, capsys, "version", "unlock", "a") == "released 1 lock(s) of a\n"
     assert _run(db_dsn, capsys, "version", "locks") == ""
 
@@ -148,16 +155,17 @@ def test_rights_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture
     _run(db_dsn, capsys, "version", "create", "a")
     assert _run(db_dsn, capsys, "version", "grant", "a", "write", "tgsis_editor") == "granted write on a to tgsis_editor\n"
     assert _run(db_dsn, capsys, "version", "grant", "a", "merge", "public") == "granted merge on a to public\n"
-    listing = _run(db_dsn, capsys, "version", "privileges", "a").splitlines()
+    listing = _run(db_dsn, capsys, "version", "privileges", "a", "--no-header").splitlines()
     assert [line.split("\t")[1:3] for line in listing[1:]] == [["public", "merge"], ["tgsis_editor", "write"]]
     assert listing[0].endswith("\towner (every right)")
-    assert "granted by" in listing[1]
+    assert len(listing[1].split("\t")) == 4  # and who granted it
     _run(db_dsn, capsys, "version", "revoke", "a", "all", "public")
-    assert len(_run(db_dsn, capsys, "version", "privileges", "a").splitlines()) == 2
+    assert len(_run(db_dsn, capsys, "version", "privileges", "a").splitlines()) == 1 + 2
     assert _run(db_dsn, capsys, "version", "owner", "a", "tgsis_admin") == "version a is owned by tgsis_admin\n"
-    assert _run(db_dsn, capsys, "version", "privileges", "a").startswith("a\ttgsis_admin\towner")
+    assert _run(db_dsn, capsys, "version", "privileges", "a").startswith("version\trole\tright\tgranted by\n"
+                                                                         "a\ttgsis_admin\towner")
     assert "role 'nobody' does not exist" in _run(db_dsn, capsys, "version", "grant", "a", "write", "nobody", code=1)
     assert "version 'zz' does not exist" in _run(db_dsn, capsys, "version", "privileges", "zz", code=1)
     # DEFAULT's grants come with the installation
-    assert [line.split("\t")[1:3] for line in _run(db_dsn, capsys, "version", "privileges", "DEFAULT").splitlines()[1:]] \
+    assert [line.split("\t")[1:3] for line in _run(db_dsn, capsys, "version", "privileges", "DEFAULT").splitlines()[2:]] \
         == [["tgsis_editor", "write"], ["tgsis_editor", "create"]]

@@ -265,7 +265,7 @@ def test_cli_import_export_gives_the_file_back(conn: Conn, db_dsn: str, tmp_path
     source = tmp_path / "fault.ts"
     source.write_text(DEPTH_TSURF)
     assert main(["--dsn", db_dsn, "import", str(source), "--class", "faults"]) == 0
-    fid = int(capsys.readouterr().out.split()[0])
+    fid = int(capsys.readouterr().out.splitlines()[1].split()[0])
     assert main(["--dsn", db_dsn, "export", str(fid), str(tmp_path / "out.ts")]) == 0
     [original] = read_gocad(source)
     [exported] = read_gocad(tmp_path / "out.ts")

@@ -9,6 +9,8 @@ real files of their kinds.
 
 from __future__ import annotations
 
+import json
+
 import re
 from pathlib import Path
 
@@ -24,7 +26,12 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["saltdome", "synsed", "river", "interpretations", "knowledge", "cfm"]
+    assert names == ["scenario", "saltdome", "synsed", "river", "interpretations", "knowledge", "cfm"]  # header first
+    assert main(["demo", "--list", "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)["scenarios"]
+    assert [s["name"] for s in listed] == names[1:] and all(s["summary"] for s in listed)
+    assert main(["demo", "--json"]) == 1
+    assert "--json and --no-header go with --list" in capsys.readouterr().err
 
 
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:

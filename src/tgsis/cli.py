@@ -31,7 +31,7 @@ import tgsis
 from tgsis.db.connect import connect, release_local_server, resolve_target
 from tgsis.db.install import install, installed_version, uninstall
 from tgsis.db.local import LocalServer, find_binaries
-from tgsis import clistate
+from tgsis import clihints, clistate, cliout
 from tgsis.db import versions as V
 from tgsis.db.features import (
     FeatureClass,
@@ -56,7 +56,17 @@ Handler = Callable[[argparse.Namespace], int]
 
 
 def _out(text: str) -> None:
-    print(text, flush=True)
+    cliout.out(text)
+
+
+def _json(args: argparse.Namespace) -> bool:
+    """Whether the command prints one JSON document (``--json``) instead of lines for people."""
+    return bool(getattr(args, "json", False))
+
+
+def _table(args: argparse.Namespace, header: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
+    """Tab-separated rows under a header line (``--no-header`` leaves it out)."""
+    cliout.table(header, rows, header_shown=not getattr(args, "no_header", False))
 
 
 def _integer(low: int, high: int) -> Callable[[str], int]:
@@ -104,6 +114,11 @@ def cmd_db_status(args: argparse.Namespace) -> int:
         current = installed_version(conn)
         server = conn.execute("SELECT version()").fetchone()
         db = conn.info.dbname
+    if _json(args):
+        cliout.emit_json({"database": db, "source": target.source, "server": server[0] if server else None,
+                          "tgsis": current.version if current else None,
+                          "method": current.method if current else None, "client": tgsis.__version__})
+        return 0
     _out(f"database: {db} (from {target.source})")
     _out(f"server:   {server[0] if server else '?'}")
     _out(f"tgsis:    {f'{current.version} ({current.method})' if current else 'not installed'}")
@@ -178,6 +193,13 @@ def cmd_local_stop(args: argparse.Namespace) -> int:
 def cmd_local_status(args: argparse.Namespace) -> int:
     server = _local_server()
     running = server.is_running()
+    if _json(args):
+        cliout.emit_json({"cluster": str(server.root), "binaries": server.binaries.describe(),
+                          "status": "running" if running else "stopped" if server.is_initialized() else "not created",
+                          "pid": server.pid() if running else None,
+                          "started_by": (server.started_by() or "outside tgsis") if running else None,
+                          "dsn": server.dsn("tgsis")})
+        return 0 if running else 3
     _out(f"cluster:  {server.root}")
     _out(f"binaries: {server.binaries.describe()}")
     if running:
@@ -260,14 +282,28 @@ def _time_label(fc: FeatureClass) -> str:
 def cmd_class_list(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         classes = list_feature_classes(conn)
+    if _json(args):
+        cliout.emit_json({"classes": [{
+            "name": fc.name, "geotype": fc.geotype.value, "srs": fc.srs, "schema": fc.schema,
+            "alignment": fc.alignment, "time_model": fc.time_model, "time_unit": fc.time_unit,
+            "description": fc.description,
+            "feature_properties": [{"name": p.name, "type": p.type} for p in fc.feature_properties],
+            "properties": [{"name": p.name, "type": p.type, "size": p.size, "alignment": p.alignment or fc.alignment}
+                           for p in fc.cell_properties],
+            "instant_properties": [{"name": p.name, "type": p.type} for p in fc.instant_properties]}
+            for fc in classes]})
+        return 0
+    rows = []
     for fc in classes:
         fprops = ", ".join(f"{p.name} {p.type}" for p in fc.feature_properties) or "-"
         cprops = ", ".join(f"{p.name} {p.type}{f'[{p.size}]' if p.size > 1 else ''}"
                            f"{f' ({p.alignment.lower()})' if p.alignment else ''}" for p in fc.cell_properties) or "-"
         iprops = ", ".join(f"{p.name} {p.type}" for p in fc.instant_properties) or "-"
-        temporal = f"\ttime: {_time_label(fc)[2:]}\tper instant: {iprops}" if fc.time_model != "STATIC" else ""
-        _out(f"{fc.name}\t{fc.geotype.value}\tsrs {fc.srs}\t{fc.schema}\tfeature: {fprops}\t"
-             f"{fc.alignment.lower()}: {cprops}{temporal}")
+        rows.append((fc.name, fc.geotype.value, fc.srs, fc.schema, fc.time_model.lower()
+                     + (f" in {fc.time_unit}" if fc.time_unit else ""), fprops, f"{fc.alignment.lower()}: {cprops}",
+                     iprops if fc.time_model != "STATIC" else "-"))
+    _table(args, ("class", "geotype", "srs", "schema", "time", "feature properties", "properties",
+                  "per-instant properties"), rows)
     if not classes:
         print("no feature classes", file=sys.stderr)
     return 0
@@ -360,7 +396,47 @@ def _read_for_import(args: argparse.Namespace) -> list[Mesh]:
     return meshes
 
 
+def _features_named(conn: Any, fc: FeatureClass, name: str) -> list[int]:
+    """The features of class ``fc`` named ``name`` (as the session's version sees them), after taking the name's lock.
+
+    The lock (a transaction-level advisory lock on class and name) makes two
+    imports of one name take turns: the second sees the first's feature once
+    it is committed, so that it warns, or replaces it with ``--replace``,
+    instead of both adding a feature of that name.
+    """
+    conn.execute("SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))",
+                 (f"tgsis import: {fc.schema}.{fc.featuretable}: {name}",))
+    return [int(r[0]) for r in conn.execute(
+        psycopg_sql.SQL("SELECT g.geoid FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
+                        "WHERE g.geoname = %s ORDER BY g.geoid").format(
+            psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable)), (name,)).fetchall()]
+
+
+def _replaced_one(fc: FeatureClass, name: str, same: Sequence[int]) -> int | None:
+    """The feature ``--replace`` replaces: the one of that name, none, or an error when there are several."""
+    if len(same) > 1:
+        raise InvalidInputError(f"--replace: class {fc.name} has {len(same)} features named {name!r} "
+                                f"({', '.join(map(str, same))}): which one to replace is not clear",
+                                hint=f"tgsis ls --class {fc.name} lists them; import with --name to store it under "
+                                     "another name")
+    return same[0] if same else None
+
+
+def _warn_same_name(fc: FeatureClass, name: str, same: Sequence[int]) -> None:
+    ids = ", ".join(map(str, same))
+    print(f"tgsis: warning: class {fc.name} already has a feature named {name!r} ({'id' if len(same) == 1 else 'ids'} "
+          f"{ids}): this import adds another one; --replace replaces it", file=sys.stderr)
+
+
+def _report_json(report: MeshReport) -> dict[str, Any]:
+    return {"duplicate_vertices": len(report.duplicate_vertices), "degenerate_cells": len(report.degenerate_cells),
+            "summary": report.summary()}
+
+
 def cmd_import(args: argparse.Namespace) -> int:
+    from tgsis.db.checkin import save_feature
+    from tgsis.db.features import delete_feature
+
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
         raise InvalidInputError(f"--tolerance must be a finite number >= 0, got {args.tolerance}")
     meshes = _read_for_import(args)
@@ -369,26 +445,74 @@ def cmd_import(args: argparse.Namespace) -> int:
         _check_flagged(args.file, meshes, reports)
     values = _feature_values(args.set)
     stem = Path(args.file).stem
+    header = ("id", "name", "geotype", "vertices", "cells", "replaced", "defects")
     with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class)
         if fc.geotype is Geotype.GEOMETRYCOLLECTION:  # the whole file is one feature
             collection = GeometryCollection(meshes, name=args.name or stem)
-            fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
-            _out(f"{fid}\t{collection.name}\t{collection.geotype.value}\t{len(collection)} members\t"
-                 f"{collection.n_vertices} vertices\t{collection.n_cells} cells")
-            for i, (mesh, report) in enumerate(zip(meshes, reports)):
-                _out(f"\tmember {i}\t{mesh.name or ''}\t{mesh.n_vertices} vertices\t"
-                     f"{mesh.n_cells} {type(mesh).cell_name}s\t{report.summary()}")
+            with conn.transaction():
+                same = _features_named(conn, fc, collection.name or "")
+                old = _replaced_one(fc, collection.name or "", same) if args.replace else None
+                with cliout.busy(f"uploading {collection.n_vertices} vertices"):
+                    if old is not None:
+                        delete_feature(conn, fc, old)
+                    fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
+            if same and not args.replace:
+                _warn_same_name(fc, collection.name or "", same)
+            members: list[dict[str, Any]] = [
+                {"index": i, "name": mesh.name, "geotype": mesh.geotype.value, "vertices": mesh.n_vertices,
+                 "cells": mesh.n_cells, "cell_name": type(mesh).cell_name, "defects": _report_json(report)}
+                for i, (mesh, report) in enumerate(zip(meshes, reports))]
+            if _json(args):
+                cliout.emit_json({"file": args.file, "class": fc.name, "features": [{
+                    "id": fid, "name": collection.name, "geotype": collection.geotype.value,
+                    "vertices": collection.n_vertices, "cells": collection.n_cells, "replaced": old,
+                    "same_name": [] if args.replace else same, "members": members}]})
+                return 0
+            _table(args, header, [(fid, collection.name, collection.geotype.value, collection.n_vertices,
+                                   collection.n_cells, old if old is not None else "", f"{len(collection)} members")])
+            for m in members:  # under the collection's line, one per member
+                _out(f"\tmember {m['index']}\t{m['name'] or ''}\t{m['geotype']}\t{m['vertices']}\t{m['cells']}\t"
+                     f"\t{m['defects']['summary']}")
             return 0
         if args.name and len(meshes) > 1:
             raise InvalidInputError(f"{args.file} holds {len(meshes)} objects: --name names only one",
                                     hint="import into a GEOMETRYCOLLECTION class to store them as one feature")
-        with conn.transaction():  # all objects of the file, or none
-            ids = [insert_feature(conn, fc, mesh, values, name=args.name or mesh.name or stem,
-                                  drop_extra_properties=args.drop_extra_properties) for mesh in meshes]
-    for fid, mesh, report in zip(ids, meshes, reports):
-        _out(f"{fid}\t{args.name or mesh.name or stem}\t{mesh.n_vertices} vertices\t"
-             f"{mesh.n_cells} {type(mesh).cell_name}s\t{report.summary()}")
+        names = [args.name or mesh.name or stem for mesh in meshes]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice and args.replace:
+            raise InvalidInputError(f"--replace: {args.file} holds several objects named {twice[0]!r}, so which one "
+                                    "replaces the stored feature is not clear", hint="import without --replace")
+        ids: list[int] = []
+        replaced: list[int | None] = []
+        warned: list[tuple[str, list[int]]] = []
+        with conn.transaction(), cliout.progress("uploading objects", len(meshes), "object") as moved:
+            for i, (mesh, name) in enumerate(zip(meshes, names)):  # all objects of the file, or none
+                same = _features_named(conn, fc, name)
+                old = _replaced_one(fc, name, same) if args.replace else None
+                if old is not None:
+                    save_feature(conn, fc, old, mesh, values or None, name=name,
+                                 drop_extra_properties=args.drop_extra_properties)
+                    ids.append(old)
+                else:
+                    ids.append(insert_feature(conn, fc, mesh, values, name=name,
+                                              drop_extra_properties=args.drop_extra_properties))
+                    if same:
+                        warned.append((name, same))
+                replaced.append(old)
+                moved(i + 1, len(meshes))
+    for name, same in warned:
+        _warn_same_name(fc, name, same)
+    if _json(args):
+        cliout.emit_json({"file": args.file, "class": fc.name, "features": [{
+            "id": fid, "name": name, "geotype": mesh.geotype.value, "vertices": mesh.n_vertices, "cells": mesh.n_cells,
+            "cell_name": type(mesh).cell_name, "defects": _report_json(report), "replaced": old,
+            "same_name": next((same for n, same in warned if n == name), [])}
+            for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)]})
+        return 0
+    _table(args, header, [(fid, name, mesh.geotype.value, mesh.n_vertices, mesh.n_cells,
+                           old if old is not None else "", report.summary())
+                          for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)])
     return 0
 
 
@@ -423,11 +547,13 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
-        feature = fetch_feature(conn, fc, args.id)
+        with cliout.busy(f"downloading feature {args.id}"):
+            feature = fetch_feature(conn, fc, args.id)
         assert feature.mesh is not None
         if args.png and not isinstance(feature.mesh, Surface):     # refused before any file is written
             raise InvalidInputError(f"feature {args.id} is no surface: --png draws surfaces")
-        formats.write(feature.mesh, args.file, format=args.format)
+        with cliout.busy(f"writing {args.file}"):
+            formats.write(feature.mesh, args.file, format=args.format)
         members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
         _out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
         if args.png:
@@ -456,6 +582,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
                                  ).fetchone() == (True,)
         differs = []
+        differing: list[dict[str, Any]] = []
         if versioned:
             for version in list_versions(conn):
                 if version.name != here:
@@ -467,8 +594,26 @@ def cmd_info(args: argparse.Namespace) -> int:
                                 else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
                                 else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
                         differs.append(f"{version.name} ({what})")
+                        differing.append({"version": version.name,
+                                          "what": what if what in ("only there", "not there") else "differs",
+                                          "rows": sum(d.added + d.removed + d.changed for d in changed)})
         conn.rollback()
     name, geotype, nvrtx, ncell, members, timemodel, alive = row[:7]
+    found = feature.mesh if feature is not None else None
+    mesh = found if isinstance(found, Mesh) else None
+    plain = mesh is not None
+    if _json(args):
+        cliout.emit_json({
+            "id": args.id, "name": name, "class": fc.name, "geotype": geotype, "time_model": fc.time_model,
+            "time_unit": fc.time_unit, "version": here, "vertices": nvrtx, "cells": ncell, "members": members,
+            "box": None if row[7] is None else {axis: [row[7 + 2 * i], row[8 + 2 * i]] for i, axis in enumerate("xyz")},
+            "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
+            "instants": [{"t": t, "topology": starts} for t, starts in steps],
+            "properties": properties, "instant_properties": [p.name for p in fc.instant_properties],
+            "vertex_properties": list(mesh.vertex_properties) if plain and mesh is not None else [],
+            "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
+            "versioned": versioned, "differs_in": differing if versioned else None})
+        return 0
     _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), in version {here}")
     _out(f"  {nvrtx} vertices, {ncell} cells" + (f", {members} members" if members is not None else ""))
     if row[7] is not None:
@@ -477,14 +622,14 @@ def cmd_info(args: argparse.Namespace) -> int:
         _out("  static: the same at every time")
     else:
         topology = [t for t, starts in steps if starts]
-        _out(f"  exists from t = {span[0]!r} to {span[1]!r}{_unit(fc)}" + (" and after (alive)" if span[2] else "")
-             + f"; {len(steps)} instants, topology (re)defined at {', '.join(repr(t) for t in topology)}")
+        _out(f"  exists from t = {cliout.show_time(span[0])} to {cliout.show_time(span[1])}{_unit(fc)}"
+             + (" and after (alive)" if span[2] else "")
+             + f"; {len(steps)} instants, topology (re)defined at {', '.join(cliout.show_time(t) for t in topology)}")
     if properties:
         _out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
     if fc.instant_properties:
         _out("  per-instant properties: " + ", ".join(p.name for p in fc.instant_properties))
-    mesh = feature.mesh if feature is not None else None
-    if mesh is not None and not isinstance(mesh, GeometryCollection):
+    if plain and mesh is not None:
         if mesh.vertex_properties:
             _out("  vertex properties: " + ", ".join(mesh.vertex_properties))
         if mesh.cell_properties:
@@ -502,12 +647,20 @@ def cmd_query(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         found = class_property_periods(conn, args.feature_class, args.property, args.op, args.value,
                                        convention=args.convention)
-    for fid, periods in found.items():
-        if args.first:
-            first = periods[0]
-            _out(f"{fid}\t{first.start!r}" + ("" if first.start_closed else "\t(right after it)"))
-        else:
-            _out(f"{fid}\t" + " ".join(str(p) for p in periods))
+    if _json(args):
+        cliout.emit_json({"class": args.feature_class, "property": args.property, "op": args.op, "value": args.value,
+                          "convention": args.convention, "features": [
+                              {"id": fid, "first": {"t": periods[0].start, "right_after": not periods[0].start_closed},
+                               "periods": [{"start": p.start, "end": p.end, "start_closed": p.start_closed,
+                                            "end_closed": p.end_closed} for p in periods]}
+                              for fid, periods in found.items()]})
+        return 0
+    if args.first:
+        _table(args, ("id", "first", "when"), [
+            (fid, cliout.show_time(periods[0].start), "" if periods[0].start_closed else "(right after it)")
+            for fid, periods in found.items()])
+    else:
+        _table(args, ("id", "periods"), [(fid, " ".join(str(p) for p in periods)) for fid, periods in found.items()])
     if not found:
         print(f"no feature of {args.feature_class} has {args.property} {args.op} {args.value!r} at any time",
               file=sys.stderr)
@@ -523,9 +676,14 @@ def cmd_ls(args: argparse.Namespace) -> int:
                 psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
                                 "FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
                     psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
-    for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows:
-        members = f"\t{nmembers} members" if nmembers is not None else ""
-        _out(f"{geoid}\t{cls}\t{name or ''}\t{geotype}\t{nvrtx} vertices\t{ncell} cells{members}")
+    if _json(args):
+        cliout.emit_json({"features": [{"id": geoid, "class": cls, "name": name, "geotype": geotype, "vertices": nvrtx,
+                                        "cells": ncell, "members": nmembers}
+                                       for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows]})
+        return 0
+    _table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members"),
+           [(geoid, cls, name or "", geotype, nvrtx, ncell, "" if nmembers is None else nmembers)
+            for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows])
     if not rows:
         print("no features", file=sys.stderr)
     return 0
@@ -543,7 +701,7 @@ def cmd_checkout(args: argparse.Namespace) -> int:
     from tgsis import formats
     from tgsis.db.checkin import checkout
 
-    with _connect(args) as conn:
+    with _connect(args) as conn, cliout.busy(f"downloading feature {args.id}"):
         co = checkout(conn, args.id, args.feature_class)
     formats.write(co.mesh, args.file, format=args.format)
     written = formats.read_one(args.file, format=args.format)
@@ -571,37 +729,51 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     edited = formats.read_one(args.file, format=args.format)
     if args.png and not isinstance(edited, Surface):             # refused before anything is checked in
         raise InvalidInputError(f"{args.file} holds a {type(edited).__name__}: --png draws surfaces")
-    with connect(args.dsn) as conn:  # the check-out's version, whatever version commands work in now
+    with connect(args.dsn) as conn, cliout.busy("checking in"):  # the check-out's version, whatever version commands work in now
         result = checkin(conn, co, edited, _feature_values(args.set) or None, name=args.name,
                          tolerance=args.tolerance, on_conflict=args.on_conflict, child_version=args.child_version,
                          keep=not args.no_keep, drop_extra_properties=args.drop_extra_properties)
     save = result.save
+    if result.checkout is not None and not result.conflict:  # before anything is printed (a reader may go away)
+        result.checkout.save(side)
     counts = save.diff.counts()
-    _out(f"checked in feature {save.feature_id} into version {save.version}"
-         + (" (a new child version: the feature had changed since check-out)" if result.conflict else ""))
-    _out(f"  vertices: {counts['vertices_kept']} kept, {save.vertices_moved} moved, "
-         f"{counts['vertices_removed'] - save.vertices_moved} removed, {counts['vertices_added'] - save.vertices_moved} "
-         f"added; {type(edited).cell_name}s: {counts['cells_kept']} kept by definition, "
-         f"{counts['cells_removed']} removed, {counts['cells_added']} added")
-    _out(f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
-         f"{save.rows_updated} updated)")
+    moved = save.vertices_moved
+    commands = ([f"tgsis version conflicts {save.version} --rows",
+                 f"tgsis version resolve {save.version} feature {save.feature_id} parent|child|manual",
+                 f"tgsis version merge {save.version} --remove"] if result.conflict else [])
     if args.png and isinstance(edited, Surface):
         from scipy.spatial import cKDTree
 
         from tgsis import pictures
 
         # how far each vertex lies from the checked-out shape: 0 for the ones kept
-        moved = cKDTree(co.mesh.vertices).query(edited.vertices)[0]
-        moved[save.diff.vertex_map >= 0] = 0.0
-        pictures.scene([edited], args.png, colour=[moved], colour_label="moved from the check-out (m)",
+        distance = cKDTree(co.mesh.vertices).query(edited.vertices)[0]
+        distance[save.diff.vertex_map >= 0] = 0.0
+        pictures.scene([edited], args.png, colour=[distance], colour_label="moved from the check-out (m)",
                        title=f"feature {save.feature_id} checked in to {save.version}")
+    if _json(args):
+        cliout.emit_json({
+            "feature_id": save.feature_id, "version": save.version, "conflict": result.conflict,
+            "vertices": {"kept": counts["vertices_kept"], "moved": moved,
+                         "removed": counts["vertices_removed"] - moved, "added": counts["vertices_added"] - moved},
+            "cells": {"kept": counts["cells_kept"], "removed": counts["cells_removed"], "added": counts["cells_added"]},
+            "rows": {"written": save.rows_written, "deleted": save.rows_deleted, "inserted": save.rows_inserted,
+                     "updated": save.rows_updated},
+            "record": str(side) if result.checkout is not None and not result.conflict else None,
+            "png": args.png, "commands": commands})
+        return 0
+    _out(f"checked in feature {save.feature_id} into version {save.version}"
+         + (" (a new child version: the feature had changed since check-out)" if result.conflict else ""))
+    _out(f"  vertices: {counts['vertices_kept']} kept, {moved} moved, "
+         f"{counts['vertices_removed'] - moved} removed, {counts['vertices_added'] - moved} "
+         f"added; {type(edited).cell_name}s: {counts['cells_kept']} kept by definition, "
+         f"{counts['cells_removed']} removed, {counts['cells_added']} added")
+    _out(f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
+         f"{save.rows_updated} updated)")
+    if args.png:
         _out(f"  drew the edit to {args.png}")
-    if result.checkout is not None and not result.conflict:
-        result.checkout.save(side)
-    elif result.conflict:
-        _out(f"  both edits meet as a conflict of {save.version}: tgsis version conflicts {save.version} --rows; "
-             f"tgsis version resolve {save.version} feature {save.feature_id} parent|child|manual; "
-             f"tgsis version merge {save.version} --remove")
+    if commands:
+        _out(f"  both edits meet as a conflict of {save.version}: " + "; ".join(commands))
     return 0
 
 
@@ -630,7 +802,8 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
-    result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive)
+    with cliout.progress(f"interpolating {name}", None, "step") as moved:
+        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved)
     _out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
          f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
          f"error to the target {result.error:.3g}")
@@ -640,7 +813,7 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
         paths = write_previews(result.evolving, times, args.preview, stem=Path(args.source).stem)
         _out(f"  {len(paths)} previews in {args.preview}")
     if args.feature_class:
-        with _connect(args) as conn:
+        with _connect(args) as conn, cliout.busy(f"uploading {name}"):
             fid = insert_feature(conn, args.feature_class, result.evolving)
         _out(f"stored as feature {fid} of class {args.feature_class} from t = {args.t0:g} to {args.t1:g}")
     return 0
@@ -655,10 +828,14 @@ def cmd_corners(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--min-angle must be from 0 to 180 degrees, got {args.min_angle}")
     surface = _read_surface(args.file, "surface")
     corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
+    if _json(args):
+        cliout.emit_json({"file": args.file, "corners": [{"vertex": v, "xyz": surface.vertices[v].tolist()}
+                                                         for v in corners.tolist()]})
+        return 0
     _out(json.dumps(corners.tolist()))
     for vertex in corners.tolist():
-        x, y, z = surface.vertices[vertex]
-        print(f"vertex {vertex}: {x:.6g} {y:.6g} {z:.6g}", file=sys.stderr)
+        x, y, z = surface.vertices[vertex].tolist()  # every digit: repr of the float (6 digits are ~10 m in UTM)
+        print(f"vertex {vertex}: {x!r} {y!r} {z!r}", file=sys.stderr)
     return 0
 
 
@@ -748,8 +925,9 @@ def cmd_series(args: argparse.Namespace) -> int:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InvalidInputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from exc
-        written = export_series(conn, args.id, folder / f"{stem}.pvd", start=args.start, end=args.end,
-                                steps=args.steps, convention=args.convention)
+        with cliout.progress("writing frames", args.steps, "frame") as moved:
+            written = export_series(conn, args.id, folder / f"{stem}.pvd", start=args.start, end=args.end,
+                                    steps=args.steps, convention=args.convention, progress=moved)
     if args.gif:
         from tgsis import pictures
 
@@ -759,13 +937,21 @@ def cmd_series(args: argparse.Namespace) -> int:
         pictures.animation(shown, args.gif, title=f"feature {args.id} ({fc.name})", time_unit=fc.time_unit or "",
                            reference=[first] if same and first is not None else None,
                            colour_label=f"moved since t = {shown[0][0]!r} (m)" if shown else "")
-    for (t, surface), file in zip(written.frames, written.files):
-        _out(f"{t!r}\t{file}\t" + (f"{surface.n_vertices} vertices\t{surface.n_cells} triangles" if surface
-                                     else "no object (empty grid)"))
     times = [t for t, _ in written.frames]
+    if _json(args):
+        cliout.emit_json({"pvd": str(written.pvd), "feature_id": args.id, "class": fc.name, "time_unit": fc.time_unit,
+                          "frames": [{"t": t, "file": str(file), "vertices": surface.n_vertices if surface else None,
+                                      "triangles": surface.n_cells if surface else None}
+                                     for (t, surface), file in zip(written.frames, written.files)],
+                          "missing": len(written.missing), "gif": args.gif})
+        return 0
+    _table(args, ("t", "file", "vertices", "triangles"), [
+        (cliout.show_time(t), file, *((surface.n_vertices, surface.n_cells) if surface
+                                      else ("no object (empty grid)", "")))
+        for (t, surface), file in zip(written.frames, written.files)])
     missing = f", {len(written.missing)} without the object" if written.missing else ""
-    _out(f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from {times[0]!r} "
-         f"to {times[-1]!r}{_unit(fc)}{missing}")
+    _out(f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from "
+         f"{cliout.show_time(times[0])} to {cliout.show_time(times[-1])}{_unit(fc)}{missing}")
     if args.gif:
         _out(f"drew {len(times)} frames to {args.gif}")
     return 0
@@ -785,16 +971,31 @@ def cmd_version_list(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         versions = V.list_versions(conn)
         current = V.working_version(conn)
-    for v in versions:
-        mark = "*" if v.name == current else " "
-        _out(f"{mark} {v.name}\tparent {v.parent or '-'}\tinitrevision {v.initrevision if v.initrevision is not None else '-'}"
-             f"\tworking {v.workingrevision}\towner {v.owner}\t{v.created_at:%Y-%m-%d %H:%M}\t{v.description or ''}")
+    if _json(args):
+        cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
+        return 0
+    _table(args, ("current", "version", "parent", "initrevision", "working", "owner", "created", "description"), [
+        ("*" if v.name == current else "", v.name, v.parent or "-",
+         v.initrevision if v.initrevision is not None else "-", v.workingrevision, v.owner,
+         cliout.show_moment(v.created_at), v.description or "") for v in versions])
     return 0
+
+
+def _version_json(v: V.Version, current: str | None) -> dict[str, Any]:
+    return {"name": v.name, "parent": v.parent, "depth": v.depth, "initrevision": v.initrevision,
+            "working_revision": v.workingrevision, "revisions": list(v.revisions),
+            "saved": [{"name": n, "revision": r} for n, r in sorted(v.saved.items(), key=lambda item: item[1])],
+            "owner": v.owner, "created_at": v.created_at, "description": v.description, "current": v.name == current}
 
 
 def cmd_version_tree(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
-        _out(V.format_tree(V.list_versions(conn)))
+        versions = V.list_versions(conn)
+        current = V.working_version(conn)
+    if _json(args):  # depth-first order: each version after its parent
+        cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
+        return 0
+    _out(V.format_tree(versions))
     return 0
 
 
@@ -819,6 +1020,10 @@ def cmd_version_current(args: argparse.Namespace) -> int:
         name, working, viewing = V.working_version(conn), V.working_revision(conn), V.viewing_revision(conn)
     source = ("--in" if args.in_version else "$TGSIS_VERSION" if os.environ.get("TGSIS_VERSION")
               else "tgsis version goto" if clistate.remembered_version(_target_key(args)) else "default")
+    if _json(args):
+        cliout.emit_json({"version": name, "working_revision": working, "viewing_revision": viewing,
+                          "read_only": viewing is not None, "source": source})
+        return 0
     looking = f"\tviewing revision {viewing} (read-only)" if viewing is not None else ""
     _out(f"{name}\tworking revision {working}{looking}\t(from {source})")
     return 0
@@ -846,10 +1051,22 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         conflicts = V.find_conflicts(conn, args.name)
         details = {(c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
                    for c in conflicts} if args.rows else {}
+    if _json(args):
+        cliout.emit_json({"version": args.name, "conflicts": [{
+            "objectclass": c.objectclass, "objectkey": c.objectkey, "solution": c.solution,
+            "both_changed": list(c.conflicttype), "child_tables": list(c.childtables),
+            "parent_tables": list(c.parenttables),
+            **({"rows": [{"table": table, "side": side, "key": key, "row": row}
+                         for table, side, key, row in details.get((c.objectclass, c.objectkey), [])]}
+               if args.rows else {})} for c in conflicts]})
+        return 0
+    if conflicts and not getattr(args, "no_header", False):
+        _out("class\tkey\tsolution\tboth changed\tchanged in " + args.name + "\tchanged in parent"
+             + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if args.rows else ""))
     for c in conflicts:
         both = ", ".join(c.conflicttype) or "different tables"
-        _out(f"{c.objectclass}\t{c.objectkey}\t{c.solution}\tboth changed: {both}\t"
-             f"{args.name}: {', '.join(c.childtables)}\tparent: {', '.join(c.parenttables)}")
+        _out(f"{c.objectclass}\t{c.objectkey}\t{c.solution}\t{both}\t"
+             f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}")
         for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
             _out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
     if not conflicts:
@@ -865,7 +1082,7 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
 
 
 def cmd_version_merge(args: argparse.Namespace) -> int:
-    with _connect(args) as conn:
+    with _connect(args) as conn, cliout.busy(f"merging {args.name}"):
         written = V.merge_version(conn, args.name, remove=args.remove)
     _out(f"merged {args.name} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
     if args.remove and clistate.remembered_version(_target_key(args)) == args.name:
@@ -925,8 +1142,14 @@ def cmd_version_diff(args: argparse.Namespace) -> int:
         differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
         if args.png:
             _draw_differences(conn, args, differences, ((a, a_rev), (b, b_rev)))
-    for d in differences:
-        _out(f"{d.objectclass}\t{d.objectkey}\t{d.table}\t+{d.added}\t-{d.removed}\t~{d.changed}")
+    if _json(args):
+        cliout.emit_json({"a": args.a, "b": args.b, "differences": [
+            {"objectclass": d.objectclass, "objectkey": d.objectkey, "table": d.table, "added": d.added,
+             "removed": d.removed, "changed": d.changed} for d in differences]})
+        return 0
+    _table(args, ("class", "key", "table", "added", "removed", "changed"),
+           [(d.objectclass, d.objectkey, d.table, f"+{d.added}", f"-{d.removed}", f"~{d.changed}")
+            for d in differences])
     if not differences:
         print(f"{args.a} and {args.b} hold the same rows", file=sys.stderr)
     return 0
@@ -952,11 +1175,19 @@ def cmd_version_chain(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         if args.at:
             believed = V.version_believed_at(conn, _moment(args.at), args.root)
-            _out(believed if believed is not None else "-")
+            if _json(args):
+                cliout.emit_json({"at": _moment(args.at), "root": args.root, "version": believed})
+            else:
+                _out(believed if believed is not None else "-")
             return 0 if believed is not None else 3
         chain = V.version_chain(conn, args.root)
-    for name, start, end in chain:
-        _out(f"{name}\t{start.isoformat()}\t{end.isoformat() if end else 'still believed'}")
+    if _json(args):
+        cliout.emit_json({"root": args.root, "chain": [{"version": name, "valid_from": start, "valid_to": end}
+                                                       for name, start, end in chain]})
+        return 0
+    _table(args, ("version", "believed from", "believed to"),
+           [(name, cliout.show_moment(start), cliout.show_moment(end) if end else "still believed")
+            for name, start, end in chain])
     return 0
 
 
@@ -978,9 +1209,14 @@ def cmd_version_unlock(args: argparse.Namespace) -> int:
 def cmd_version_locks(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         locks = V.object_locks(conn, args.name)
-    for lk in locks:
-        _out(f"{lk.objectclass}\t{lk.objectkey}\t{lk.version}\t{lk.locked_by}\t"
-             f"{'exclusive' if lk.exclusive else 'version'}\t{lk.locked_at.isoformat()}")
+    if _json(args):
+        cliout.emit_json({"locks": [{"objectclass": lk.objectclass, "objectkey": lk.objectkey, "version": lk.version,
+                                     "role": lk.locked_by, "exclusive": lk.exclusive, "since": lk.locked_at}
+                                    for lk in locks]})
+        return 0
+    _table(args, ("class", "key", "version", "role", "kind", "since"),
+           [(lk.objectclass, lk.objectkey, lk.version, lk.locked_by, "exclusive" if lk.exclusive else "version",
+             cliout.show_moment(lk.locked_at)) for lk in locks])
     if not locks:
         print("no object locks" + (f" in {args.name}" if args.name else ""), file=sys.stderr)
     return 0
@@ -1007,10 +1243,16 @@ def cmd_version_privileges(args: argparse.Namespace) -> int:
         grants = V.version_privileges(conn, args.name)
     if args.name is not None and not owners:
         raise NotFoundError(f"version {args.name!r} does not exist")
+    if _json(args):
+        cliout.emit_json({"versions": [{"name": name, "owner": owner, "grants": [
+            {"role": g.grantee, "privilege": g.privilege, "granted_by": g.granted_by, "granted_at": g.granted_at}
+            for g in grants if g.version == name]} for name, owner in owners.items()]})
+        return 0
+    rows: list[tuple[str, ...]] = []
     for name, owner in owners.items():
-        _out(f"{name}\t{owner}\towner (every right)")
-        for g in (g for g in grants if g.version == name):
-            _out(f"{name}\t{g.grantee}\t{g.privilege}\tgranted by {g.granted_by}")
+        rows.append((name, owner, "owner (every right)"))
+        rows += [(name, g.grantee, g.privilege, g.granted_by) for g in grants if g.version == name]
+    _table(args, ("version", "role", "right", "granted by"), rows)
     return 0
 
 
@@ -1021,10 +1263,17 @@ def cmd_version_compress(args: argparse.Namespace) -> int:
         report = V.compress_versions(conn, dry_run=args.dry_run)
         gone = looked_at is not None and not args.dry_run and conn.execute(
             "SELECT NOT EXISTS (SELECT FROM tgsis.revisions WHERE revision = %s)", (looked_at,)).fetchone() == (True,)
-    for item in report:
-        _out(f"{item.what}\t{item.name}\t{item.removed}")
     totals = {what: sum(i.removed for i in report if i.what == what)
               for what in ("rows", "lastrevs", "revisions", "set entries")}
+    if _json(args):
+        if gone:
+            clistate.remember_version(_target_key(args), None)
+        cliout.emit_json({"dry_run": args.dry_run, "removed": [{"what": i.what, "name": i.name, "removed": i.removed}
+                                                               for i in report],
+                          "totals": totals, "forgotten": remembered if gone else None})
+        return 0
+    if report:
+        _table(args, ("what", "name", "removed"), [(item.what, item.name, item.removed) for item in report])
     summary = (f"{totals['rows']} row version(s), {totals['lastrevs']} lastrevs entr(ies), "
                f"{totals['revisions']} revision(s), {totals['set entries']} revision set entr(ies)")
     if args.dry_run:
@@ -1066,9 +1315,14 @@ def cmd_versioning_disable(args: argparse.Namespace) -> int:
 def cmd_versioning_list(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         tables = V.versioned_tables(conn)
-    for t in tables:
-        _out(f"{t.schema}.{t.table}\t{t.objectclass}\tkey {t.objectkeyfield}\torder {t.iudorder}\t"
-             f"short {t.shortname}\trow key ({', '.join(t.keycolumns)})")
+    if _json(args):
+        cliout.emit_json({"tables": [{"schema": t.schema, "table": t.table, "objectclass": t.objectclass,
+                                      "key": t.objectkeyfield, "order": t.iudorder, "shortname": t.shortname,
+                                      "row_key": list(t.keycolumns)} for t in tables]})
+        return 0
+    _table(args, ("table", "class", "key", "order", "shortname", "row key"),
+           [(f"{t.schema}.{t.table}", t.objectclass, t.objectkeyfield, t.iudorder, t.shortname,
+             ", ".join(t.keycolumns)) for t in tables])
     if not tables:
         print("no versioned tables", file=sys.stderr)
     return 0
@@ -1081,9 +1335,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from tgsis.scenarios import SCENARIOS, run_scenario
 
     if args.list:
-        for scenario in SCENARIOS.values():
-            _out(f"{scenario.name}\t{scenario.summary}")
+        if _json(args):
+            cliout.emit_json({"scenarios": [{"name": s.name, "summary": s.summary} for s in SCENARIOS.values()]})
+        else:
+            _table(args, ("scenario", "shows"), [(s.name, s.summary) for s in SCENARIOS.values()])
         return 0
+    if _json(args) or args.no_header:
+        raise InvalidInputError("--json and --no-header go with --list", hint="tgsis demo --list --json")
     run_scenario(args.name, args.dsn, out=_out, folder=args.dir, size=args.size)
     return 0
 
@@ -1091,13 +1349,51 @@ def cmd_demo(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------- parser
 
 
+
+
+def _output_options(json_only: bool = False) -> argparse.ArgumentParser:
+    """``--json`` (and, for tables, ``--no-header``): the options of every command that lists or reports."""
+    parent = argparse.ArgumentParser(add_help=False)
+    parent.add_argument("--json", action="store_true",
+                        help="print one JSON document (its keys: docs/cli.md) instead of lines for people")
+    if not json_only:
+        parent.add_argument("--no-header", action="store_true", help="leave out the header line of the table")
+    return parent
+
+
+def _command(commands: Any, name: str, help: str, examples: Sequence[str], handler: Handler | None = None,
+             tabular: bool | None = None) -> argparse.ArgumentParser:
+    """A sub-command with its help, its examples (shown by ``--help``), and ``--json`` when it lists or reports.
+
+    ``tabular``: None, no output options; False, ``--json``; True, ``--json`` and ``--no-header``.
+    """
+    parents = [] if tabular is None else [_output_options(json_only=not tabular)]
+    parser: argparse.ArgumentParser = commands.add_parser(
+        name, help=help, description=help, parents=parents, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=("example:\n" if len(examples) == 1 else "examples:\n") + "\n".join(f"  {e}" for e in examples))
+    if handler is not None:
+        parser.set_defaults(handler=handler)
+    return parser
+
+
+_GEOTYPES = ("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``tgsis`` command."""
+    """The argument parser of the ``tgsis`` command.
+
+    Every argument has a help text and every command examples (``--help``
+    shows them; tests/test_cli_help.py walks the tree and fails on one without).
+    """
     parser = argparse.ArgumentParser(
         prog="tgsis",
         description="tgsis: spatio-temporal geoscience information system on PostgreSQL",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n  tgsis demo\n  tgsis --dsn 'host=db.example.org dbname=geo' ls --class faults\n"
+               "  tgsis --in cfm6 version current --json\nsee docs/cli.md",
     )
-    parser.add_argument("--version", action="version", version=f"tgsis {tgsis.__version__}")
+    parser.add_argument("--version", action="version", version=f"tgsis {tgsis.__version__}",
+                        help="print the client's version and exit")
     parser.add_argument("--dsn", help="libpq connection string (default: $TGSIS_DSN, PG* variables, "
                                       "else the local server tgsis runs itself)")
     parser.add_argument("--in", dest="in_version", metavar="VERSION[@REVISION]",
@@ -1107,70 +1403,81 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-q", "--quiet", action="store_true", help="errors only")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    demo = commands.add_parser("demo", help="run a sample application end to end (default: cfm, the release story)",
-                               epilog="example: tgsis demo saltdome --dir out  (then look at out/*.png, out/saltdome.gif)")
+    demo = _command(commands, "demo", "run a sample application end to end (default: cfm, the release story)",
+                    ["tgsis demo saltdome --dir out   # then look at out/*.png, out/saltdome.gif",
+                     "tgsis demo --list", "tgsis demo --list --json"], cmd_demo, tabular=True)
     demo.add_argument("name", nargs="?", default="cfm", metavar="NAME",
                       help="the scenario (tgsis demo --list names them; default: cfm)")
     demo.add_argument("--list", action="store_true", help="list the scenarios and what each shows")
     demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
     demo.add_argument("--size", choices=("small", "large"), default="small",
                       help="how much data the scenario makes (default: small, under a minute)")
-    demo.set_defaults(handler=cmd_demo)
 
-    db = commands.add_parser("db", help="install, upgrade or inspect tgsis in a database")
+    db = _command(commands, "db", "install, upgrade or inspect tgsis in a database",
+                  ["tgsis --dsn 'host=db.example.org dbname=geo' db install"])
     db_commands = db.add_subparsers(dest="db_command", metavar="ACTION", required=True)
-    db_install = db_commands.add_parser("install", help="install or upgrade tgsis (a no-op when up to date)")
+    db_install = _command(db_commands, "install", "install or upgrade tgsis (a no-op when up to date)",
+                          ["tgsis db install", "tgsis db install --method sql   # managed PostgreSQL"], cmd_db_install)
     db_install.add_argument("--method", choices=("auto", "extension", "sql"), default="auto",
                             help="extension: CREATE EXTENSION (needs the files on the server); "
                                  "sql: run the script from the client; auto: extension when available")
-    db_install.set_defaults(handler=cmd_db_install)
-    db_uninstall = db_commands.add_parser("uninstall", help="remove tgsis and all its data from the database")
+    db_uninstall = _command(db_commands, "uninstall", "remove tgsis and all its data from the database",
+                            ["tgsis db uninstall --yes"], cmd_db_uninstall)
     db_uninstall.add_argument("--yes", action="store_true", help="really do it")
     db_uninstall.add_argument("--cascade", action="store_true", help="also drop objects that depend on tgsis")
-    db_uninstall.set_defaults(handler=cmd_db_uninstall)
-    db_status = db_commands.add_parser("status", help="server and tgsis versions")
-    db_status.set_defaults(handler=cmd_db_status)
+    _command(db_commands, "status", "server and tgsis versions", ["tgsis db status", "tgsis db status --json"],
+             cmd_db_status, tabular=False)
 
-    cls = commands.add_parser("class", help="feature classes: create, list, drop")
+    cls = _command(commands, "class", "feature classes: create, list, drop", ["tgsis class list"])
     cls_commands = cls.add_subparsers(dest="class_command", metavar="ACTION", required=True)
-    cls_create = cls_commands.add_parser("create", help="register a feature class")
-    cls_create.add_argument("name")
-    cls_create.add_argument("--geotype", required=True, type=str.upper,
-                            choices=("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION"))
+    cls_create = _command(cls_commands, "create", "register a feature class",
+                          ["tgsis class create faults --geotype SURFACE --srs 32611 --feature-property release:text",
+                           "tgsis class create moving --geotype SURFACE --time-model EVOLVING --time-unit Ma "
+                           "--instant-property throw:float8"], cmd_class_create)
+    cls_create.add_argument("name", help="the class's name (letters, digits, underscores)")
+    cls_create.add_argument("--geotype", required=True, type=str.upper, choices=_GEOTYPES,
+                            help="what its features are: " + ", ".join(_GEOTYPES))
     cls_create.add_argument("--feature-property", action="append", metavar="NAME:TYPE",
                             help="a property of the whole feature (repeatable), e.g. creator:text")
     cls_create.add_argument("--property", action="append", metavar="NAME:TYPE[:SIZE][:VERTEX|CELL]",
                             help="a per-vertex (or per-cell) property (repeatable), e.g. porosity:float8; SIZE: a "
                                  "vector of SIZE components (slip:float8:3); VERTEX or CELL: an alignment other "
                                  "than --alignment (facies:int:CELL)")
-    cls_create.add_argument("--alignment", default="VERTEX", type=str.upper, choices=("VERTEX", "CELL"))
+    cls_create.add_argument("--alignment", default="VERTEX", type=str.upper, choices=("VERTEX", "CELL"),
+                            help="where --property values are unless they say otherwise (default: VERTEX)")
     cls_create.add_argument("--srs", type=_INT4, default=0, help="spatial reference id (EPSG), 0 = undefined")
-    cls_create.add_argument("--schema", default="public")
-    cls_create.add_argument("--description")
+    cls_create.add_argument("--schema", default="public", help="schema of the class's tables (default: public)")
+    cls_create.add_argument("--description", help="what the class holds, for people")
     cls_create.add_argument("--time-model", default="STATIC", type=str.upper, choices=("STATIC", "INSTANTS", "EVOLVING"),
                             help="STATIC (model 1), INSTANTS: surfaces at instants (model 2), "
                                  "EVOLVING: continuously evolving surfaces (model 3)")
     cls_create.add_argument("--time-unit", help="unit of model time of a temporal class, e.g. Ma")
     cls_create.add_argument("--instant-property", action="append", metavar="NAME:TYPE",
                             help="per-instant feature property of a temporal class (repeatable)")
-    cls_create.set_defaults(handler=cmd_class_create)
-    cls_list = cls_commands.add_parser("list", help="list the feature classes")
-    cls_list.set_defaults(handler=cmd_class_list)
-    cls_drop = cls_commands.add_parser("drop", help="drop a feature class (refused while it has features)")
-    cls_drop.add_argument("name")
+    _command(cls_commands, "list", "list the feature classes", ["tgsis class list", "tgsis class list --json"],
+             cmd_class_list, tabular=True)
+    cls_drop = _command(cls_commands, "drop", "drop a feature class (refused while it has features)",
+                        ["tgsis class drop faults", "tgsis class drop faults --force   # with its features"],
+                        cmd_class_drop)
+    cls_drop.add_argument("name", help="the class to drop")
     cls_drop.add_argument("--force", action="store_true", help="also delete its features and their geometries")
-    cls_drop.set_defaults(handler=cmd_class_drop)
 
-    imp = commands.add_parser("import", help="store the objects of a geometry file as features of a class "
-                                             "(as one feature in a GEOMETRYCOLLECTION class)")
-    imp.add_argument("file")
-    imp.add_argument("--class", dest="feature_class", required=True)
+    imp = _command(commands, "import", "store the objects of a geometry file as features of a class "
+                                       "(as one feature in a GEOMETRYCOLLECTION class)",
+                   ["tgsis import Garlock.ts --class faults --set release=6.1 --drop-extra-properties",
+                    "tgsis import Garlock.ts --class faults --replace   # a new version of the same fault",
+                    "tgsis import model.vtu --class models --json"], cmd_import, tabular=True)
+    imp.add_argument("file", help="the geometry file (.ts, .pl, .vs, .so, .lso, .gp, .vtu, .obj, .ply, .off, .stl)")
+    imp.add_argument("--class", dest="feature_class", required=True, help="the feature class to store them in")
     imp.add_argument("--name", help="feature name (default: the name in the file, else the file name; "
                                     "for a GEOMETRYCOLLECTION class the file name)")
     imp.add_argument("--format", help="file format (default: from the extension)")
     imp.add_argument("--set", action="append", metavar="NAME=VALUE", help="a feature property value (repeatable)")
     imp.add_argument("--drop-extra-properties", action="store_true",
                      help="ignore properties of the file that the class does not store")
+    imp.add_argument("--replace", action="store_true",
+                     help="replace the feature of the same name in the class (written by difference, keeping its "
+                          "id; in a version, a change of that version) instead of adding a second one")
     imp.add_argument("--reject-flagged", action="store_true",
                      help="refuse the whole file if any object has duplicate vertices (other than GOCAD ATOMs) "
                           "or degenerate cells")
@@ -1179,20 +1486,20 @@ def build_parser() -> argparse.ArgumentParser:
                           "surfaces), instead of skipping them with a warning")
     imp.add_argument("--tolerance", type=float, default=0.0, metavar="T",
                      help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)")
-    imp.set_defaults(handler=cmd_import)
 
-    exp = commands.add_parser("export", help="write a feature to a geometry file")
-    exp.add_argument("id", type=_ID)
-    exp.add_argument("file")
+    exp = _command(commands, "export", "write a feature to a geometry file",
+                   ["tgsis export 3 garlock.ts", "tgsis export 3 garlock.vtu --png garlock.png"], cmd_export)
+    exp.add_argument("id", type=_ID, help="the feature's id (tgsis ls lists them)")
+    exp.add_argument("file", help="the file to write; its extension gives the format")
     exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     exp.add_argument("--format", help="file format (default: from the extension)")
     exp.add_argument("--png", metavar="PNG", help="also draw the feature (a surface) to this PNG file")
-    exp.set_defaults(handler=cmd_export)
 
-    at = commands.add_parser("at", help="write the surface of a feature at model time T to a file")
-    at.add_argument("id", type=_ID)
+    at = _command(commands, "at", "write the surface of a feature at model time T to a file",
+                  ["tgsis at 12 -7.5 fault_7.5Ma.ts", "tgsis at 13 1.5 horizon.vtu --convention right"], cmd_at)
+    at.add_argument("id", type=_ID, help="the feature's id")
     at.add_argument("time", type=float, metavar="T", help="model time (in the class's unit)")
-    at.add_argument("file")
+    at.add_argument("file", help="the file to write; its extension gives the format")
     at.add_argument("--format", help="file format (default: from the extension)")
     at.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                     help="step convention of a surface known at instants (default: left)")
@@ -1200,10 +1507,11 @@ def build_parser() -> argparse.ArgumentParser:
                                                   "it moved since its first instant")
     at.add_argument("--with", dest="with_ids", type=_ID, nargs="+", default=[], metavar="ID",
                     help="with --png: other features drawn at T in the same scene (the structure at T)")
-    at.set_defaults(handler=cmd_at)
 
-    series = commands.add_parser("series", help="write a feature over model time as a ParaView .pvd time series")
-    series.add_argument("id", type=_ID)
+    series = _command(commands, "series", "write a feature over model time as a ParaView .pvd time series",
+                      ["tgsis series 12 out --from -10 --to 0 --steps 101", "tgsis series 12 out --name fault_history",
+                       "tgsis series 12 out --json"], cmd_series, tabular=True)
+    series.add_argument("id", type=_ID, help="the feature's id")
     series.add_argument("dir", metavar="DIR", help="folder of the .pvd and its frames (created if missing)")
     series.add_argument("--from", dest="start", type=float, metavar="T0", help="first time")
     series.add_argument("--to", dest="end", type=float, metavar="T1", help="last time")
@@ -1215,17 +1523,19 @@ def build_parser() -> argparse.ArgumentParser:
                         help="step convention of a surface known at instants (default: left)")
     series.add_argument("--gif", metavar="GIF", help="also draw the frames as an animated GIF, coloured by how far "
                                                      "the surface moved since the first frame")
-    series.set_defaults(handler=cmd_series)
 
-    co = commands.add_parser("checkout", help="write a feature to a file for editing, recording what it was")
-    co.add_argument("id", type=_ID)
+    co = _command(commands, "checkout", "write a feature to a file for editing, recording what it was",
+                  ["tgsis checkout 42 fault.ts   # edit fault.ts in any tool, then: tgsis checkin fault.ts"],
+                  cmd_checkout)
+    co.add_argument("id", type=_ID, help="the feature's id")
     co.add_argument("file", help="the file to edit (.ts, .vtk, .vtu, ...); the record goes to FILE.tgsis-checkout.npz")
     co.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")
     co.add_argument("--format", help="file format (default: from the extension)")
-    co.set_defaults(handler=cmd_checkout)
 
-    ci = commands.add_parser("checkin", help="write an edited file back by difference, unless the feature changed "
-                                             "since check-out")
+    ci = _command(commands, "checkin", "write an edited file back by difference, unless the feature changed "
+                                       "since check-out",
+                  ["tgsis checkin fault.ts", "tgsis checkin fault.ts --tolerance 0.01 --on-conflict child --json"],
+                  cmd_checkin, tabular=False)
     ci.add_argument("file", help="a file written by tgsis checkout, edited")
     ci.add_argument("--format", help="file format (default: from the extension)")
     ci.add_argument("--tolerance", type=float, default=0.0, metavar="T",
@@ -1244,10 +1554,11 @@ def build_parser() -> argparse.ArgumentParser:
                          "file can be edited and checked in again)")
     ci.add_argument("--png", metavar="PNG", help="also draw the edited surface, coloured by how far each vertex lies "
                                                   "from the checked-out shape (0 for the kept ones)")
-    ci.set_defaults(handler=cmd_checkin)
 
-    interp = commands.add_parser("interpolate", help="the surface evolving from SOURCE (at T0) to TARGET (at T1): "
-                                                     "morphological interpolation, stored as a model-3 feature")
+    interp = _command(commands, "interpolate", "the surface evolving from SOURCE (at T0) to TARGET (at T1): "
+                                               "morphological interpolation, stored as a model-3 feature",
+                      ["tgsis interpolate flat.ts dome.ts --setup dome.json --t0 0 --t1 1 --class salt --preview out"],
+                      cmd_interpolate)
     interp.add_argument("source", help="surface file at T0")
     interp.add_argument("target", help="surface file at T1")
     interp.add_argument("--setup", required=True, help="JSON set-up: control vertices, fences, cuts, attachments, "
@@ -1261,22 +1572,24 @@ def build_parser() -> argparse.ArgumentParser:
                         help="the surface goes on existing after its last instant, in its last shape")
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
     interp.add_argument("--frames", type=_INT4, default=5, help="number of preview instants (default 5)")
-    interp.set_defaults(handler=cmd_interpolate)
 
-    corners = commands.add_parser("corners", help="propose control vertices: the sharp corners of a surface's border")
-    corners.add_argument("file")
+    corners = _command(commands, "corners", "propose control vertices: the sharp corners of a surface's border",
+                       ["tgsis corners horizon.ts --count 4", "tgsis corners horizon.ts --json"], cmd_corners,
+                       tabular=False)
+    corners.add_argument("file", help="a file holding one surface")
     corners.add_argument("--count", type=_INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
-    corners.set_defaults(handler=cmd_corners)
 
-    info = commands.add_parser("info", help="what a feature is: class, counts, box, lifespan and instants, properties, "
-                                            "the versions where it differs", epilog="example: tgsis info 3")
+    info = _command(commands, "info", "what a feature is: class, counts, box, lifespan and instants, properties, "
+                                      "the versions where it differs", ["tgsis info 3", "tgsis info 3 --json"],
+                    cmd_info, tabular=False)
     info.add_argument("id", type=_ID, help="the feature's id")
-    info.set_defaults(handler=cmd_info)
 
-    query = commands.add_parser(
-        "query", help="the features of a temporal class whose per-instant property satisfies PROPERTY OP VALUE, and when",
-        epilog="example: tgsis query faults throw '>=' 100 --first   (when each fault's throw first reaches 100)")
+    query = _command(
+        commands, "query", "the features of a temporal class whose per-instant property satisfies PROPERTY OP VALUE, "
+                           "and when",
+        ["tgsis query faults throw '>=' 100 --first   # when each fault's throw first reaches 100",
+         "tgsis query faults throw '<' 5 --json"], cmd_query, tabular=True)
     query.add_argument("feature_class", metavar="CLASS", help="an INSTANTS or EVOLVING feature class")
     query.add_argument("property", metavar="PROPERTY", help="a numeric per-instant property of the class")
     query.add_argument("op", metavar="OP", choices=("<", "<=", "=", "<>", ">=", ">"), help="one of < <= = <> >= >")
@@ -1284,144 +1597,154 @@ def build_parser() -> argparse.ArgumentParser:
     query.add_argument("--first", action="store_true", help="only when the condition first holds, per feature")
     query.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                        help="step convention of features known at instants (default: left)")
-    query.set_defaults(handler=cmd_query)
 
-    cut = commands.add_parser("cut", help="cut a surface along vertex paths (its edges become borders on both sides)",
-                              epilog="example: tgsis cut horizon.ts horizon_cut.ts --path 12,13,14,15")
+    cut = _command(commands, "cut", "cut a surface along vertex paths (its edges become borders on both sides)",
+                   ["tgsis cut horizon.ts horizon_cut.ts --path 12,13,14,15"], cmd_cut)
     cut.add_argument("file", metavar="FILE", help="a file holding one surface")
     cut.add_argument("output", metavar="OUTPUT", help="the cut surface is written here")
     cut.add_argument("--path", type=_vertex_path, action="append", required=True, metavar="V1,V2,...",
                      help="a cutting path: vertex indices of FILE along interior edges, only its ends on the border "
                           "(repeat for several paths)")
     cut.add_argument("--format", help="format of OUTPUT (default: from its extension)")
-    cut.set_defaults(handler=cmd_cut)
 
-    ls = commands.add_parser("ls", help="list features")
+    ls = _command(commands, "ls", "list features", ["tgsis ls", "tgsis ls --class faults --json",
+                                                    "tgsis --in cfm6 ls --no-header | cut -f1"], cmd_ls, tabular=True)
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
-    ls.set_defaults(handler=cmd_ls)
 
-    ver = commands.add_parser("version", help="versions (long transactions): create, goto, save, merge, lock, grant, ...")
+    ver = _command(commands, "version", "versions (long transactions): create, goto, save, merge, lock, grant, ...",
+                   ["tgsis version create cfm6 && tgsis version goto cfm6"])
     ver_commands = ver.add_subparsers(dest="version_command", metavar="ACTION", required=True)
-    ver_create = ver_commands.add_parser("create", help="create a child version")
-    ver_create.add_argument("name")
+    ver_create = _command(ver_commands, "create", "create a child version",
+                          ["tgsis version create cfm6 --description 'release 6.1'"], cmd_version_create)
+    ver_create.add_argument("name", help="the new version's name")
     ver_create.add_argument("--parent", default="DEFAULT", help="parent version (default: DEFAULT)")
-    ver_create.add_argument("--description")
-    ver_create.set_defaults(handler=cmd_version_create)
-    ver_list = ver_commands.add_parser("list", help="list the versions (* marks the one commands work in)")
-    ver_list.set_defaults(handler=cmd_version_list)
-    ver_tree = ver_commands.add_parser("tree", help="print the version tree with revisions")
-    ver_tree.set_defaults(handler=cmd_version_tree)
-    ver_goto = ver_commands.add_parser("goto", help="work in a version from now on (remembered per database)")
+    ver_create.add_argument("--description", help="what the version is for, for people")
+    _command(ver_commands, "list", "list the versions (* marks the one commands work in)",
+             ["tgsis version list", "tgsis version list --json"], cmd_version_list, tabular=True)
+    _command(ver_commands, "tree", "print the version tree with revisions",
+             ["tgsis version tree", "tgsis version tree --json"], cmd_version_tree, tabular=False)
+    ver_goto = _command(ver_commands, "goto", "work in a version from now on (remembered per database)",
+                        ["tgsis version goto cfm6", "tgsis version goto cfm6@2   # look at revision 2, read-only",
+                         "tgsis version goto DEFAULT"], cmd_version_goto)
     ver_goto.add_argument("name", metavar="VERSION[@REVISION]",
                           help="a version, or a revision of its history to look at read-only")
-    ver_goto.set_defaults(handler=cmd_version_goto)
-    ver_current = ver_commands.add_parser("current", help="the version commands work in, and its working revision")
-    ver_current.set_defaults(handler=cmd_version_current)
-    ver_save = ver_commands.add_parser("save", help="freeze the working revision under a name, start a new one")
-    ver_save.add_argument("name")
-    ver_save.set_defaults(handler=cmd_version_save)
-    ver_delete = ver_commands.add_parser("delete", help="delete a version without children, with its changes")
-    ver_delete.add_argument("name")
-    ver_delete.set_defaults(handler=cmd_version_delete)
+    _command(ver_commands, "current", "the version commands work in, and its working revision",
+             ["tgsis version current", "tgsis version current --json"], cmd_version_current, tabular=False)
+    ver_save = _command(ver_commands, "save", "freeze the working revision under a name, start a new one",
+                        ["tgsis version save imported"], cmd_version_save)
+    ver_save.add_argument("name", help="the name of the saved revision")
+    ver_delete = _command(ver_commands, "delete", "delete a version without children, with its changes",
+                          ["tgsis version delete cfm6"], cmd_version_delete)
+    ver_delete.add_argument("name", help="the version to delete")
 
-    ver_conflicts = ver_commands.add_parser("conflicts", help="objects changed both in a version and in its parent")
-    ver_conflicts.add_argument("name")
+    ver_conflicts = _command(ver_commands, "conflicts", "objects changed both in a version and in its parent",
+                             ["tgsis version conflicts cfm6", "tgsis version conflicts cfm6 --rows --json"],
+                             cmd_version_conflicts, tabular=True)
+    ver_conflicts.add_argument("name", help="the child version (its parent is the other side)")
     ver_conflicts.add_argument("--rows", action="store_true", help="also print the rows that differ, per side")
-    ver_conflicts.set_defaults(handler=cmd_version_conflicts)
-    ver_resolve = ver_commands.add_parser("resolve", help="record how a conflicting object is merged")
-    ver_resolve.add_argument("name")
-    ver_resolve.add_argument("objectclass")
-    ver_resolve.add_argument("objectkey")
-    ver_resolve.add_argument("solution", type=str.lower, choices=("parent", "child", "manual", "unsolved"))
-    ver_resolve.set_defaults(handler=cmd_version_resolve)
+    ver_resolve = _command(ver_commands, "resolve", "record how a conflicting object is merged",
+                           ["tgsis version resolve cfm6 feature 42 child"], cmd_version_resolve)
+    ver_resolve.add_argument("name", help="the child version")
+    ver_resolve.add_argument("objectclass", metavar="CLASS", help="object class ('feature' for features)")
+    ver_resolve.add_argument("objectkey", metavar="KEY", help="object key (for features: the id)")
+    ver_resolve.add_argument("solution", type=str.lower, choices=("parent", "child", "manual", "unsolved"),
+                             help="which side the merge keeps: parent, child, manual (the rows as the child has them "
+                                  "after your edit), or unsolved (undecided again)")
 
-    ver_merge = ver_commands.add_parser("merge", help="apply a version's changes to its parent (one transaction)")
-    ver_merge.add_argument("name")
+    ver_merge = _command(ver_commands, "merge", "apply a version's changes to its parent (one transaction)",
+                         ["tgsis version merge cfm6 --remove"], cmd_version_merge)
+    ver_merge.add_argument("name", help="the version to merge into its parent")
     ver_merge.add_argument("--remove", action="store_true", help="delete the version after merging it")
-    ver_merge.set_defaults(handler=cmd_version_merge)
-    ver_refresh = ver_commands.add_parser("refresh", help="bring the parent's changes into a version")
-    ver_refresh.add_argument("name")
-    ver_refresh.set_defaults(handler=cmd_version_refresh)
+    ver_refresh = _command(ver_commands, "refresh", "bring the parent's changes into a version",
+                           ["tgsis version refresh cfm6"], cmd_version_refresh)
+    ver_refresh.add_argument("name", help="the version to refresh")
 
-    ver_diff = ver_commands.add_parser("diff", help="objects whose rows differ between two versions or revisions")
-    ver_diff.add_argument("a", metavar="A[@REVISION]")
-    ver_diff.add_argument("b", metavar="B[@REVISION]")
+    ver_diff = _command(ver_commands, "diff", "objects whose rows differ between two versions or revisions",
+                        ["tgsis version diff DEFAULT cfm6", "tgsis version diff cfm6@2 cfm6 --json",
+                         "tgsis version diff DEFAULT cfm6 --png out"], cmd_version_diff, tabular=True)
+    ver_diff.add_argument("a", metavar="A[@REVISION]", help="the version (or revision) compared from")
+    ver_diff.add_argument("b", metavar="B[@REVISION]", help="the version (or revision) compared to")
     ver_diff.add_argument("--png", metavar="DIR", help="also draw each changed surface feature to DIR/diff_ID.png, "
                                                        "coloured by how far its vertices moved from A")
-    ver_diff.set_defaults(handler=cmd_version_diff)
 
-    ver_valid = ver_commands.add_parser("valid", help="set the period in which a version was believed true")
-    ver_valid.add_argument("name")
+    ver_valid = _command(ver_commands, "valid", "set the period in which a version was believed true",
+                         ["tgsis version valid cfm5 2020-01-01 2023-06-30", "tgsis version valid cfm6 2023-06-30"],
+                         cmd_version_valid)
+    ver_valid.add_argument("name", help="the version")
     ver_valid.add_argument("valid_from", metavar="FROM", help="ISO date or time")
     ver_valid.add_argument("valid_to", metavar="TO", nargs="?", help="ISO date or time (omitted: still believed)")
-    ver_valid.set_defaults(handler=cmd_version_valid)
-    ver_chain = ver_commands.add_parser("chain", help="the chain of believed versions, or the one believed --at a time")
-    ver_chain.add_argument("--root", default="DEFAULT")
+    ver_chain = _command(ver_commands, "chain", "the chain of believed versions, or the one believed --at a time",
+                         ["tgsis version chain", "tgsis version chain --at 2024-01-01 --json"], cmd_version_chain,
+                         tabular=True)
+    ver_chain.add_argument("--root", default="DEFAULT", help="the version the chain starts from (default: DEFAULT)")
     ver_chain.add_argument("--at", help="ISO date or time: print the version believed then (exit 3: none)")
-    ver_chain.set_defaults(handler=cmd_version_chain)
 
-    ver_compress = ver_commands.add_parser(
-        "compress", help="remove revisions and row versions no version, named revision or child can reach")
+    ver_compress = _command(
+        ver_commands, "compress", "remove revisions and row versions no version, named revision or child can reach",
+        ["tgsis version compress --dry-run", "tgsis version compress --json"], cmd_version_compress, tabular=True)
     ver_compress.add_argument("--dry-run", action="store_true", help="only report what would be removed")
-    ver_compress.set_defaults(handler=cmd_version_compress)
 
-    ver_lock = ver_commands.add_parser("lock", help="lock objects for a version: no other version may change them")
-    ver_lock.add_argument("name")
-    ver_lock.add_argument("objectclass", help="object class ('feature' for features)")
+    ver_lock = _command(ver_commands, "lock", "lock objects for a version: no other version may change them",
+                        ["tgsis version lock cfm6 feature 3 4 --exclusive"], cmd_version_lock)
+    ver_lock.add_argument("name", help="the version that holds the locks")
+    ver_lock.add_argument("objectclass", metavar="CLASS", help="object class ('feature' for features)")
     ver_lock.add_argument("keys", nargs="+", metavar="KEY", help="object keys (feature ids)")
     ver_lock.add_argument("--exclusive", action="store_true", help="also keep other roles from changing them in the version")
-    ver_lock.set_defaults(handler=cmd_version_lock)
-    ver_unlock = ver_commands.add_parser("unlock", help="release a version's object locks (all, of a class, or some keys)")
-    ver_unlock.add_argument("name")
-    ver_unlock.add_argument("objectclass", nargs="?")
-    ver_unlock.add_argument("keys", nargs="*", metavar="KEY")
-    ver_unlock.set_defaults(handler=cmd_version_unlock)
-    ver_locks = ver_commands.add_parser("locks", help="list object locks (of one version, or all)")
-    ver_locks.add_argument("name", nargs="?")
-    ver_locks.set_defaults(handler=cmd_version_locks)
+    ver_unlock = _command(ver_commands, "unlock", "release a version's object locks (all, of a class, or some keys)",
+                          ["tgsis version unlock cfm6", "tgsis version unlock cfm6 feature 3"], cmd_version_unlock)
+    ver_unlock.add_argument("name", help="the version that holds the locks")
+    ver_unlock.add_argument("objectclass", metavar="CLASS", nargs="?", help="only the locks of this object class")
+    ver_unlock.add_argument("keys", nargs="*", metavar="KEY", help="only the locks of these keys")
+    ver_locks = _command(ver_commands, "locks", "list object locks (of one version, or all)",
+                         ["tgsis version locks", "tgsis version locks cfm6 --json"], cmd_version_locks, tabular=True)
+    ver_locks.add_argument("name", nargs="?", help="only the locks of this version")
 
     privileges = ("write", "create", "merge", "delete", "all")
     for verb in ("grant", "revoke"):
-        ver_grant = ver_commands.add_parser(verb, help=f"{verb} a right on a version (owner or tgsis_admin only)")
-        ver_grant.add_argument("name")
-        ver_grant.add_argument("privilege", type=str.lower, choices=privileges)
+        ver_grant = _command(ver_commands, verb, f"{verb} a right on a version (owner or tgsis_admin only)",
+                             [f"tgsis version {verb} cfm6 write {'ana' if verb == 'grant' else 'public'}"],
+                             cmd_version_grant)
+        ver_grant.add_argument("name", help="the version")
+        ver_grant.add_argument("privilege", metavar="RIGHT", type=str.lower, choices=privileges,
+                               help="one of " + ", ".join(privileges))
         ver_grant.add_argument("role", help="a role, or public")
-        ver_grant.set_defaults(handler=cmd_version_grant, revoke=verb == "revoke")
-    ver_owner = ver_commands.add_parser("owner", help="hand a version to another role")
-    ver_owner.add_argument("name")
-    ver_owner.add_argument("role")
-    ver_owner.set_defaults(handler=cmd_version_owner)
-    ver_privileges = ver_commands.add_parser("privileges", help="owners and granted rights (of one version, or all)")
-    ver_privileges.add_argument("name", nargs="?")
-    ver_privileges.set_defaults(handler=cmd_version_privileges)
+        ver_grant.set_defaults(revoke=verb == "revoke")
+    ver_owner = _command(ver_commands, "owner", "hand a version to another role", ["tgsis version owner cfm6 ana"],
+                         cmd_version_owner)
+    ver_owner.add_argument("name", help="the version")
+    ver_owner.add_argument("role", help="its new owner")
+    ver_privileges = _command(ver_commands, "privileges", "owners and granted rights (of one version, or all)",
+                              ["tgsis version privileges", "tgsis version privileges cfm6 --json"],
+                              cmd_version_privileges, tabular=True)
+    ver_privileges.add_argument("name", nargs="?", help="only this version")
 
-    vt = commands.add_parser("versioning", help="turn versioning of tables on or off")
+    vt = _command(commands, "versioning", "turn versioning of tables on or off", ["tgsis versioning enable features"])
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)
-    vt_enable = vt_commands.add_parser("enable", help="version a table (or 'features': model 1 and all feature classes)")
+    vt_enable = _command(vt_commands, "enable", "version a table (or 'features': model 1 and all feature classes)",
+                         ["tgsis versioning enable features", "tgsis versioning enable wells --key id --class well"],
+                         cmd_versioning_enable)
     vt_enable.add_argument("table", help="name or schema.name, or 'features'")
     vt_enable.add_argument("--key", help="column holding the object key")
     vt_enable.add_argument("--class", dest="object_class", help="object class")
     vt_enable.add_argument("--order", type=_INT4, default=0, help="iudorder within the object class (default 0)")
     vt_enable.add_argument("--shortname", help="name in conflict reports (default: the table name)")
-    vt_enable.set_defaults(handler=cmd_versioning_enable)
-    vt_disable = vt_commands.add_parser("disable", help="make a versioned table plain again with DEFAULT's rows")
+    vt_disable = _command(vt_commands, "disable", "make a versioned table plain again with DEFAULT's rows",
+                          ["tgsis versioning disable wells", "tgsis versioning disable features --force"],
+                          cmd_versioning_disable)
     vt_disable.add_argument("table", help="name or schema.name, or 'features'")
     vt_disable.add_argument("--force", action="store_true", help="even if versions other than DEFAULT changed it")
-    vt_disable.set_defaults(handler=cmd_versioning_disable)
-    vt_list = vt_commands.add_parser("list", help="list the versioned tables")
-    vt_list.set_defaults(handler=cmd_versioning_list)
+    _command(vt_commands, "list", "list the versioned tables", ["tgsis versioning list", "tgsis versioning list --json"],
+             cmd_versioning_list, tabular=True)
 
-    local = commands.add_parser("local", help="the local PostgreSQL server tgsis runs by itself")
+    local = _command(commands, "local", "the local PostgreSQL server tgsis runs by itself",
+                     ["tgsis local start && psql \"$(tgsis local dsn)\""])
     local_commands = local.add_subparsers(dest="local_command", metavar="ACTION", required=True)
-    local_start = local_commands.add_parser("start", help="start it and keep it running")
-    local_start.set_defaults(handler=cmd_local_start)
-    local_stop = local_commands.add_parser("stop", help="stop it")
+    _command(local_commands, "start", "start it and keep it running", ["tgsis local start"], cmd_local_start)
+    local_stop = _command(local_commands, "stop", "stop it", ["tgsis local stop"], cmd_local_stop)
     local_stop.add_argument("--force", action="store_true", help="stop it even while other tgsis commands use it")
-    local_stop.set_defaults(handler=cmd_local_stop)
-    local_status = local_commands.add_parser("status", help="where it is and whether it runs (exit 3: stopped)")
-    local_status.set_defaults(handler=cmd_local_status)
-    local_dsn = local_commands.add_parser("dsn", help="print its connection string")
-    local_dsn.set_defaults(handler=cmd_local_dsn)
+    _command(local_commands, "status", "where it is and whether it runs (exit 3: stopped)",
+             ["tgsis local status", "tgsis local status --json"], cmd_local_status, tabular=False)
+    _command(local_commands, "dsn", "print its connection string", ["psql \"$(tgsis local dsn)\""], cmd_local_dsn)
     return parser
 
 
@@ -1459,11 +1782,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.showwarning = one_line
             return handler(args)
     except Error as exc:
-        if isinstance(exc, NotVersionedError):  # the hint in this interface's words
-            exc.hint = ("tgsis versioning enable features, to write features in versions; or work in DEFAULT "
-                        "(--in DEFAULT, or tgsis version goto DEFAULT)")
+        exc.hint = clihints.to_cli(exc.hint)  # the hint in this interface's words (its flags and commands)
         print(f"tgsis: error: {exc}", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # the reader went away while something other than _out wrote to stdout
+        cliout.drop_stdout()  # stdout to /dev/null, so that the flush at exit does not fail too
+        return 0
     except KeyboardInterrupt:
         print("tgsis: interrupted", file=sys.stderr)
         return 130

@@ -22,7 +22,7 @@ versioned (as for model 1). Snapshots at t are computed in SQL by
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -747,8 +747,11 @@ def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
 
 
 def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
-              convention: Convention = "left") -> list[SurfaceFrame]:
+              convention: Convention = "left",
+              progress: Callable[[int, int], None] | None = None) -> list[SurfaceFrame]:
     """The surface of a feature at each of ``times`` by the SQL snapshot (:func:`get_at`), all from one snapshot.
+
+    ``progress(done, total)``, when given, is called after each frame.
 
     Returns
     -------
@@ -766,12 +769,18 @@ def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
     with reraise(), conn.transaction():
         if fresh:  # every frame from the same state of the database
             conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
-        return [(t, get_at(conn, feature_id, t, convention=convention)) for t in samples]
+        frames = []
+        for t in samples:
+            frames.append((t, get_at(conn, feature_id, t, convention=convention)))
+            if progress is not None:
+                progress(len(frames), len(samples))
+        return frames
 
 
 def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float | None = None,
                   end: float | None = None, steps: int | None = None, convention: Convention = "left",
-                  encoding: Encoding = "binary") -> WrittenSeries:
+                  encoding: Encoding = "binary",
+                  progress: Callable[[int, int], None] | None = None) -> WrittenSeries:
     """Write a feature's surface over time as a ParaView ``.pvd`` time series, one ``.vtu`` per time.
 
     Each frame is the SQL snapshot (:func:`get_at`, the same float operations
@@ -795,6 +804,8 @@ def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float |
         Step convention of a model-2 feature.
     encoding : {"binary", "appended"}
         Of the ``.vtu`` files.
+    progress : callable, optional
+        ``progress(done, total)``, called after each frame is computed.
 
     Returns
     -------
@@ -823,7 +834,8 @@ def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float |
             raise InvalidInputError(f"feature {feature_id} is static: it has no instants of its own to sample",
                                     hint="give start, end and steps")
         times = np.asarray(own, dtype=np.float64)
-    return write_frames_pvd(frames_at(conn, feature_id, times, convention=convention), path, encoding=encoding)
+    return write_frames_pvd(frames_at(conn, feature_id, times, convention=convention, progress=progress), path,
+                            encoding=encoding)
 
 
 # --------------------------------------------------------------------------- temporal questions

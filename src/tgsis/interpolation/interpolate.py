@@ -153,7 +153,8 @@ def _carried_properties(source: Surface, target: Surface, all_vertices: FloatArr
 
 def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0: float, t1: float, *,
                 name: str | None = None,
-                surfaces: Mapping[str, Surface] | None = None, alive: bool = False) -> Interpolation:
+                surfaces: Mapping[str, Surface] | None = None, alive: bool = False,
+                progress: Callable[[int, int], None] | None = None) -> Interpolation:
     """The surface evolving from ``source`` at ``t0`` to ``target`` at ``t1`` under the set-up's constraints.
 
     Parameters
@@ -172,6 +173,10 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         The controlling surfaces by name (default: read from the set-up's files).
     alive : bool
         Whether the evolving surface exists after its last instant (keeping its last shape).
+    progress : callable, optional
+        ``progress(done, total)`` after each step: cutting, partition, each
+        pair of compatible patches, trajectories, the evolving surface (the
+        total is known once the partition is).
 
     Vertex properties that both meshes carry travel with the vertices: each
     goes linearly from the source's value to the target's value where its
@@ -194,12 +199,20 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
                                       f"got t0={t0}, t1={t1}")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
+    steps = [0, 5]  # done, total (cut, partition, one per pair of patches, trajectories, evolving)
+
+    def step() -> None:
+        steps[0] += 1
+        if progress is not None:
+            progress(steps[0], steps[1])
 
     def lap(stage: str) -> None:
         nonlocal clock
         now = time.perf_counter()
         timings[stage] = now - clock
         clock = now
+        if stage != "compatible":  # counted per pair of patches
+            step()
 
     # 1. cutting: copies are appended, so the set-up's vertex indices keep their meaning
     if setup.cuts:
@@ -210,6 +223,7 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     pairing = partition_pair(source, target, list(setup.source_controls), list(setup.target_controls),
                              [list(p) for p in setup.source_fences], [list(p) for p in setup.target_fences],
                              source_fence_names=list(setup.fence_names) if setup.fence_names else None)
+    steps[1] = 4 + len(pairing.pairs)
     lap("partition")
     # 4. compatible patches, stitched along the fences they share
     n = source.n_vertices
@@ -233,6 +247,7 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         positions[s_ids[~known]] = result.target_positions[: len(s_ids)][~known]
         positions = np.concatenate([positions, result.target_positions[len(s_ids):]])
         triangles.append(to_global[result.triangles])
+        step()
     lap("compatible")
     all_vertices = np.concatenate([source.vertices, *extra_vertices])
     cells = np.concatenate(triangles)

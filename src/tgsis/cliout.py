@@ -1,0 +1,185 @@
+"""What the ``tgsis`` command prints: tables with headers, ``--json`` documents, progress, broken pipes.
+
+Kept apart from :mod:`tgsis.cli` so that every command prints the same way:
+
+* :func:`out` writes one line to standard output. When the reader of a pipe
+  goes away (``tgsis ls | head -1``), the rest of the output is dropped
+  silently and the command *goes on* to its end: a check-in piped into
+  ``head`` still updates its check-out record, and exits 0.
+* :func:`table` prints rows as tab-separated values under a header line (or,
+  with ``--json``, gives them to the command's JSON document instead).
+* :func:`emit_json` prints one JSON document: strict JSON (no ``NaN``),
+  non-finite numbers as the strings ``"Infinity"``, ``"-Infinity"``,
+  ``"NaN"``, times as ISO 8601 with every digit.
+* :func:`progress` shows a tqdm bar on standard error when it is a
+  terminal, and nothing otherwise.
+* :func:`show_time` and :func:`show_moment` round model times and wall-clock
+  times for people (``--json`` keeps them exact).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+import json
+import math
+import os
+import sys
+import threading
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = ["out", "table", "emit_json", "jsonable", "progress", "busy", "show_time", "show_moment",
+           "stdout_closed", "drop_stdout", "on_terminal"]
+
+_closed = False
+
+
+def stdout_closed() -> bool:
+    """Whether the reader of standard output went away (the rest of the output was dropped)."""
+    return _closed
+
+
+def drop_stdout() -> None:
+    """Point standard output at /dev/null: the reader is gone, later writes (and the flush at exit) go nowhere."""
+    global _closed
+    _closed = True
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+
+
+def out(text: str) -> None:
+    """Print one line to standard output, flushed; nothing once its reader went away."""
+    if _closed:
+        return
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        drop_stdout()
+
+
+def table(header: Sequence[str], rows: Sequence[Sequence[Any]], *, header_shown: bool = True) -> None:
+    """Rows as tab-separated lines under a header line of the column names (no line at all for no rows)."""
+    if header_shown and rows:
+        out("\t".join(header))
+    for row in rows:
+        out("\t".join("" if v is None else str(v) for v in row))
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` as plain JSON values: numpy scalars and arrays, datetimes, paths, tuples, non-finite floats."""
+    if isinstance(value, Mapping):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return jsonable(value.item())
+    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
+        return value
+    if isinstance(value, float):
+        if math.isfinite(value):
+            return value
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, (datetime.datetime, datetime.date, datetime.time)):
+        return value.isoformat()
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    return str(value)
+
+
+def emit_json(document: Mapping[str, Any]) -> None:
+    """Print one JSON document (strict JSON: ``allow_nan=False``) on standard output."""
+    out(json.dumps(jsonable(document), allow_nan=False, ensure_ascii=False))
+
+
+def show_time(t: float) -> str:
+    """A model time for people: 12 significant digits (``-1.9``, not ``-1.9000000000000001``)."""
+    if not math.isfinite(t):
+        return repr(t)
+    text = f"{t:.12g}"
+    return text if ("e" in text or "." in text) else f"{text}.0"
+
+
+def show_moment(moment: datetime.datetime | None) -> str:
+    """A wall-clock time for people: to the second, with its UTC offset."""
+    if moment is None:
+        return ""
+    return moment.replace(microsecond=0).isoformat(sep=" ")
+
+
+def on_terminal() -> bool:
+    """Whether standard error is a terminal (progress is shown only then)."""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+@contextlib.contextmanager
+def progress(description: str, total: int | None, unit: str = "it") -> Iterator[Callable[[int, int], None]]:
+    """A callback ``(done, total)`` that moves a progress bar on standard error, when it is a terminal.
+
+    Not on a terminal, the callback does nothing and nothing is printed. The
+    bar is removed when the work ends.
+    """
+    if not on_terminal():
+        yield lambda done, count: None
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, desc=description, unit=unit, file=sys.stderr, leave=False, dynamic_ncols=True)
+    lock = threading.Lock()
+
+    def moved(done: int, count: int) -> None:
+        with lock:
+            if bar.total != count:
+                bar.total = count
+            bar.n = done
+            bar.refresh()
+
+    try:
+        with _ticking(bar, lock):  # the time elapsed moves on during one long step too
+            yield moved
+    finally:
+        bar.close()
+
+
+@contextlib.contextmanager
+def _ticking(bar: Any, lock: threading.Lock) -> Iterator[None]:
+    """Refresh ``bar`` a few times a second while the block runs."""
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.2):
+            with lock:
+                bar.refresh()
+
+    ticker = threading.Thread(target=tick, daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        ticker.join()
+
+
+@contextlib.contextmanager
+def busy(description: str) -> Iterator[None]:
+    """A spinner with the time elapsed on standard error while one long step runs (terminal only)."""
+    if not on_terminal():
+        yield
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(total=None, desc=description, file=sys.stderr, leave=False, bar_format="{desc}: {elapsed}")
+    try:
+        with _ticking(bar, threading.Lock()):
+            yield
+    finally:
+        bar.close()
