@@ -121,10 +121,11 @@ def _written_hints() -> list[tuple[str, str]]:
 
 #: Hints of code the command line never reaches (Python-only or SQL-only entry points), with why.
 NOT_FROM_THE_CLI = {
-    "src/tgsis/gmaps": "G-maps have no command",
-    "src/tgsis/db/gmaps.py": "G-maps (models 4 and 5) have no command: the command never stores or reads one",
-    "sql/model4": "G-maps in time: no command calls these functions",
-    "sql/model5": "multiply indexed G-maps: no command calls these functions",
+    "src/tgsis/gmaps": "tgsis.gmaps's constructors and builders of Python arrays (the commands read files)",
+    "sql/postgis": "PostGIS functions are SQL only: no command calls them",
+    "src/tgsis/postgis.py": "WKB of Python objects: no command",
+    "src/tgsis/db/postgis.py": "PostGIS from Python: no command",
+    "src/tgsis/convert.py": "pyvista, meshio and trimesh objects of Python programs (the commands read files)",
     "src/tgsis/interpolation": "set-up mistakes say the set-up file's terms; surfaces= is the Python entry point",
     "src/tgsis/pictures.py": "colour= of tgsis.pictures, not reachable with wrong values from the command",
     "src/tgsis/temporal.py": "numpy-side checks; the command checks --from/--to/--steps first, with its flags",

@@ -94,8 +94,21 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"SELECT tgsis\.delete_geometry\(([^)]*)\) deletes the (feature|collection with its members)",
      lambda m: f"{IN_PSQL}SELECT tgsis.delete_geometry({m[1]}) deletes the {m[2]}"),
     (r"give time_model => (.+?) for a temporal class", lambda m: f"give --time-model {m[1]} for a temporal class"),
-    (r"^(p_cell_level => .*|leave p_cell_level out, or register a class of G-maps \(p_time_model => 'GMAP'\))",
-     lambda m: f"{IN_PSQL}{m[1]}"),  # classes of G-maps have no command
+    (r"^p_cell_level => ", "--cell-level "),
+    (r"leave p_cell_level out, or register a class of G-maps \(p_time_model => 'GMAP'\)",
+     "leave --cell-level out, or create a class of G-maps (--time-model GMAP or MULTIDIM)"),
+    # --- G-maps (models 4 and 5)
+    (r"SELECT geoid FROM tgsis\.(?:gmap|md_gmap) lists (?:the stored G-maps|them)", "tgsis ls lists the features"),
+    (r"p_level => 0 \.\. (\S+)", lambda m: f"LEVEL is 0 .. {m[1]}"),
+    (r"create a class with time_model=(\S+) and a cell_level for",
+     lambda m: f"create a class with tgsis class create NAME --geotype GMAP --time-model {m[1].strip(chr(39))} "
+               "--cell-level LEVEL for"),
+    (r"tgsis\.gmaps\.extrude makes an axis", "tgsis extrude makes an axis"),
+    (r"SELECT \* FROM tgsis\.(?:gmap_check|md_check)\(([^)]*)\)", lambda m: f"tgsis gmap check {m[1]}"),
+    (r"write a slice of it \(tgsis\.gmaps\.slice\)", "write a slice of it (tgsis slice ID --axis AXIS --value V "
+                                                          "--output FILE)"),
+    # (SQL-only questions of models 4 and 5: no command asks them)
+    (r"^(tgsis\.property_at gives .*|p_axes => .*|tgsis\.geometries_in_box finds .*)", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"then run (SELECT tgsis\.create_storage\(\))", lambda m: f"then run, {IN_PSQL}{m[1]}"),
     (r"p_geotype => ", "--geotype "),
     (r"uninstall with cascade \(tgsis db uninstall --cascade\)", "repeat with --cascade"),
@@ -122,7 +135,11 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"pass format= with one of ", "give --format with one of "),
     (r"use tgsis\.formats\.read_pvd or write_pvd", "tgsis series writes a .pvd"),
     (r"use tgsis\.formats\.read to get all of them", "tgsis import stores all of them"),
-    (r"tgsis\.formats\.read or read_vtu_collection reads the members", "tgsis import reads the members"),
+    (r"tgsis\.formats\.read or read_vt\w+ reads the members", "tgsis import reads the members"),
+    (r"extract one kind first \(e\.g\. mesh\.extract_cells_by_type\([^)]*\)\), or store the kinds as members of a "
+     r"tgsis\.GeometryCollection", "split the file by cell kind first (ParaView: Extract Cells By Type), one file each"),
+    (r"give it points \(and cells\), or build the empty tgsis mesh you mean \(e\.g\. .*\)\)$",
+     "give a file with points (and cells)"),
     (r"pass drop_extra_properties=True", "give --drop-extra-properties"),
     (r"drop_extra_properties=True", "--drop-extra-properties"),
     (r"pass skip_unsupported=True to read the other objects of the file",

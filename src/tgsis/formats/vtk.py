@@ -87,8 +87,9 @@ import base64
 import math
 import xml.etree.ElementTree as ET
 import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, overload
+from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -98,9 +99,12 @@ from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyE
 from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
+if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)
+    from tgsis.gmaps import GMap
+
 __all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "read_vtu_collection", "parse_vtu_collection",
            "read_vtu_geometry", "parse_vtu_geometry", "write_vtu", "format_vtu", "format_empty_vtu",
-           "read_vtp", "parse_vtp", "write_vtp", "format_vtp"]
+           "read_vtp", "parse_vtp", "write_vtp", "format_vtp", "write_gmap_vtu", "format_gmap_vtu"]
 
 #: VTK cell type of each mesh class.
 VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
@@ -162,6 +166,9 @@ class _Grid:
     point_data: dict[str, npt.NDArray[Any]]
     cell_data: dict[str, npt.NDArray[Any]]
     members: GeometryCollection | None = None
+    #: polyhedra (VTK_POLYHEDRON): per cell [number of faces, (points of the face, its point ids)...], and the end of each
+    faces: npt.NDArray[np.int64] | None = None
+    faceoffsets: npt.NDArray[np.int64] | None = None
 
 
 def _mesh_grid(mesh: Mesh) -> _Grid:
@@ -273,6 +280,9 @@ def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) ->
     cells.append(writer.array("connectivity", source.connectivity))
     cells.append(writer.array("offsets", source.offsets))
     cells.append(writer.array("types", source.types))
+    if source.faces is not None and source.faceoffsets is not None:
+        cells.append(writer.array("faces", source.faces))
+        cells.append(writer.array("faceoffsets", source.faceoffsets))
     return writer.finish(root)
 
 
@@ -1028,3 +1038,90 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
                                    metadata=metadata, source="the PolyData")
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
+
+
+# --------------------------------------------------------------------------- G-maps (models 4 and 5) for ParaView
+
+#: VTK cell types the top cells of an n-G-map are written as.
+VTK_LINE, VTK_TRIANGLE, VTK_POLYGON, VTK_POLYHEDRON = 3, 5, 7, 42
+
+
+def _gmap_grid(g: GMap, name: str | None, axes: Sequence[str] | None) -> _Grid:
+    """The Piece of a G-map: its points (the first three axes, 0 for missing ones; the others as point data), its
+    top cells as lines (n = 1), polygons (n = 2: triangles as VTK triangles) or polyhedra (n = 3), its top cells'
+    properties as cell data."""
+    n, m = g.dimension, g.embedding_dimension
+    if n not in (1, 2, 3):
+        raise FileFormatError(f"a {n}-G-map has no VTK cells (ParaView shows lines, polygons and polyhedra)",
+                              hint="write a slice of it (tgsis.gmaps.slice) down to 3 dimensions")
+    names = list(axes) if axes is not None else [("x", "y", "z")[i] if i < 3 else f"axis{i + 1}" for i in range(m)]
+    if len(names) != m:
+        raise FileFormatError(f"axes name {len(names)} axes of a G-map in R^{m}")
+    xyz = np.zeros((g.n_points, 3))
+    xyz[:, :min(m, 3)] = g.points[:, :3]
+    point_data = {names[i]: np.ascontiguousarray(g.points[:, i]) for i in range(3, m)}
+    faces = faceoffsets = None
+    if n == 1:
+        first = g.cell_darts(1)
+        connectivity = np.stack([g.vertex[first], g.vertex[g.alpha[0, first]]], axis=1).reshape(-1)
+        offsets = np.arange(2, len(connectivity) + 1, 2, dtype=np.int64)
+        types = np.full(len(first), VTK_LINE, dtype=np.uint8)
+    elif n == 2:
+        connectivity, bounds = g.polygons()
+        offsets = bounds[1:].astype(np.int64)
+        types = np.where(np.diff(bounds) == 3, VTK_TRIANGLE, VTK_POLYGON).astype(np.uint8)
+    else:
+        indices, face_bounds, cell_bounds = g.polyhedra()
+        sizes = np.diff(face_bounds)
+        cell_points, cell_ends, stream, stream_ends = [], [], [], []
+        for c in range(len(cell_bounds) - 1):  # per volume: its distinct points and its face stream
+            f0, f1 = int(cell_bounds[c]), int(cell_bounds[c + 1])
+            ids = indices[face_bounds[f0]:face_bounds[f1]]
+            cell_points.append(np.unique(ids))
+            cell_ends.append(len(cell_points[-1]))
+            parts = [np.array([f1 - f0])]
+            for f in range(f0, f1):
+                parts += [np.array([sizes[f]]), indices[face_bounds[f]:face_bounds[f + 1]]]
+            stream.append(np.concatenate(parts))
+            stream_ends.append(len(stream[-1]))
+        connectivity = np.concatenate(cell_points) if cell_points else np.zeros(0, dtype=np.int64)
+        offsets = np.cumsum(cell_ends).astype(np.int64)
+        faces = np.concatenate(stream).astype(np.int64) if stream else np.zeros(0, dtype=np.int64)
+        faceoffsets = np.cumsum(stream_ends).astype(np.int64)
+        types = np.full(len(cell_ends), VTK_POLYHEDRON, dtype=np.uint8)
+    cell_data = {k: np.asarray(v) for k, v in g.cell_properties.get(n, {}).items()}
+    return _Grid(name, "GMAP", xyz, connectivity.astype(np.int64), offsets, types, point_data, cell_data,
+                 faces=faces, faceoffsets=faceoffsets)
+
+
+def format_gmap_vtu(g: GMap, *, name: str | None = None, axes: Sequence[str] | None = None,
+                    encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
+    """The ``.vtu`` text of an n-G-map's top cells for ParaView (see :func:`write_gmap_vtu`)."""
+    _check_encoding(encoding, compression)
+    return _format_grid(_gmap_grid(g, name, axes), encoding, compression)
+
+
+def write_gmap_vtu(g: GMap, path: PathLike, *, name: str | None = None, axes: Sequence[str] | None = None,
+                   encoding: Encoding = "binary", compression: Compression = "zlib") -> None:
+    """Write an n-G-map (n = 1, 2, 3) as a VTK unstructured grid: lines, polygons or polyhedra, for ParaView.
+
+    Parameters
+    ----------
+    g : tgsis.gmaps.GMap
+        Its top cells (1-cells, 2-cells or 3-cells) become VTK cells in the
+        order of ``g.cells(n)``; their properties (``g.cell_properties[n]``)
+        become cell data. Points in R^m: the first three coordinates are the
+        points (0 for missing ones), the others point data named after ``axes``.
+    path : str or path-like
+    name : str, optional
+        Stored as the file's ``tgsis_name``.
+    axes : sequence of str, optional
+        The name of each of the m axes (default x, y, z, axis4, ...).
+
+    Raises
+    ------
+    FileFormatError
+        n = 0 or n > 3 (no VTK cell), or axes that do not name the m axes.
+    """
+    write_bytes(path, [format_gmap_vtu(g, name=name, axes=axes, encoding=encoding, compression=compression)])
+
