@@ -261,3 +261,25 @@ def test_a_reader_reads_checks_and_cuts_but_cannot_store(db_dsn: str) -> None:
             G.gmap_check(nora, geoid)
     with psycopg.connect(db_dsn) as admin:
         assert admin.execute("SELECT count(*) FROM tgsis.gmap").fetchone() == (1,)
+
+
+def test_two_versions_moving_one_point_conflict_and_the_merge_takes_a_side(conn: Conn) -> None:
+    fc = _class(conn)
+    geoid = F.insert_feature(conn, fc, _evolving())
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "other")
+    move = "UPDATE tgsis.gmap_vertex SET coordinate = %s::float8[] WHERE geoid = %s AND timet = 3 AND nodeid = 4"
+    conn.execute(move, ([7, 7, 7], geoid))
+    conn.commit()
+    with tgsis.in_version(conn, "other"):
+        conn.execute(move, ([8, 8, 8], geoid))
+        conn.commit()
+    conn.commit()
+    conflicts = tgsis.find_conflicts(conn, "other")
+    assert [(c.objectclass, c.objectkey) for c in conflicts] == [("feature", str(geoid))]
+    tgsis.resolve_conflict(conn, "other", "feature", str(geoid), "child")
+    tgsis.merge_version(conn, "other")
+    conn.commit()
+    merged = G.gmap_at(conn, geoid, 3.0)
+    assert merged is not None and merged.points[0].tolist() == [8.0, 8.0, 8.0]
