@@ -28,7 +28,7 @@ def horizons(conn: Conn) -> F.FeatureClass:
     fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
                                 cell_properties={"porosity": "float8"})
     storage = conn.execute("SELECT count(*) FROM tgsis.model_tables").fetchone()[0]  # type: ignore[index]
-    assert storage == 29                                     # the core's 1, models 1-5: 7, 3, 5, 8, 5
+    assert storage == 31                                     # the core's 3, models 1-5: 7, 3, 5, 8, 5
     assert tgsis.enable_feature_versioning(conn) == storage + 2                          # + the class's 2
     return fc
 
@@ -40,7 +40,7 @@ def _rows(conn: Conn) -> dict[str, int]:
 
 def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureClass) -> None:
     tables = {(t.table, t.objectkeyfield, t.iudorder) for t in tgsis.versioned_tables(conn)}
-    assert tables == {("geometry", "geoid", 0), ("vrtx", "geoid", 1), ("point", "geoid", 2), ("segment", "geoid", 2),
+    assert tables == {("geometry", "geoid", 0), ("model_object", "geoid", 1), ("model", "modelid", 0), ("vrtx", "geoid", 1), ("point", "geoid", 2), ("segment", "geoid", 2),
                       ("trgl", "geoid", 2), ("tetra", "geoid", 2), ("atom", "geoid", 2), ("part", "geoid", 2),
                       ("horizons", "_geoid", 3),
                       ("horizons_cellpros", "_geoid", 4),
@@ -52,7 +52,8 @@ def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureCla
                       ("gmap_cell", "geoid", 2),
                       ("md_gmap", "geoid", 1), ("md_vertex", "geoid", 2), ("md_dart", "geoid", 2), ("md_alpha", "geoid", 2),
                       ("md_cell", "geoid", 2)}
-    assert {t.objectclass for t in tgsis.versioned_tables(conn)} == {"feature"}
+    assert {t.objectclass for t in tgsis.versioned_tables(conn)} == {"feature", "model"}
+    assert [t.table for t in tgsis.versioned_tables(conn) if t.objectclass == "model"] == ["model"]
     # a class registered later is versioned as it is created, and its view reads the versioned tables
     F.create_feature_class(conn, "faults", "SURFACE")
     assert {t.table for t in tgsis.versioned_tables(conn)} >= {"faults", "faults_cellpros"}

@@ -149,7 +149,8 @@ def test_a_new_data_model_is_registered_and_every_core_function_serves_it(conn: 
 
 def test_a_table_added_to_a_model_is_deleted_with_its_geometries_in_every_version(conn: Conn) -> None:
     conn.execute("CREATE TABLE tgsis.extra_rows (geoid bigint NOT NULL, k bigint NOT NULL, PRIMARY KEY (geoid, k))")
-    conn.execute("INSERT INTO tgsis.model_tables VALUES ('extra_rows', 1, 2, 'SURFACE', 'a test side table')")
+    conn.execute("INSERT INTO tgsis.model_tables (tablename, model, iudorder, geotype, description) "
+                 "VALUES ('extra_rows', 1, 2, 'SURFACE', 'a test side table')")
     fc = F.create_feature_class(conn, "tops", "SURFACE")
     surface = tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
     first = F.insert_feature(conn, fc, surface, name="a")

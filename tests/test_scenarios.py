@@ -26,7 +26,7 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["scenario", "saltdome", "synsed", "river", "interpretations", "knowledge", "cfm"]  # header first
+    assert names == ["scenario", "saltdome", "synsed", "river", "interpretations", "mine", "knowledge", "cfm"]  # header first
     assert main(["demo", "--list", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)["scenarios"]
     assert [s["name"] for s in listed] == names[1:] and all(s["summary"] for s in listed)
@@ -37,7 +37,7 @@ def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, interpretations, knowledge, river, saltdome, synsed" in err
+    assert "no scenario 'volcano'" in err and "cfm, interpretations, knowledge, mine, river, saltdome, synsed" in err
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
@@ -147,3 +147,22 @@ def test_knowledge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[st
         assert picture.format == "PNG"
     frames = read_pvd(folder / "knowledge.pvd")
     assert [t for t, _ in frames] == [2019.0, 2021.0, 2023.0, 2025.0]
+
+
+def test_mine(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "mine"
+    assert main(["--dsn", db_dsn, "demo", "mine", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "survey_2021 (child of survey_2019), believed 2021-05-01 .. 2023-06-01" in out
+    assert "survey_2023 (child of survey_2021), believed 2023-06-01 .. still" in out
+    # on 2022-01-15 the 2021 model was believed: 14 holes, the ore top and F1 (F2 came in 2023)
+    assert "-> version, objects, boreholes, surfaces: survey_2021, 16, 14, F1, ore top" in out
+    assert "-> models: geotechnical model, resource model" in out                   # F1 is in both
+    stored = re.search(r"-> version, stored, seen: survey_2019, (\d+), (\d+); survey_2021, (\d+), (\d+); "
+                       r"survey_2023, (\d+), (\d+)", out)
+    assert stored is not None
+    first, seen_first, second, seen_second, third, seen_third = (int(v) for v in stored.groups())
+    assert first == seen_first and second < seen_second / 2 and third < seen_third / 2   # unchanged rows not stored again
+    _replays(db_dsn, "mine", out, 5)
+    with Image.open(folder / "mine_ore_top.png") as picture:
+        assert picture.format == "PNG"

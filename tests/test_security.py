@@ -196,7 +196,7 @@ def test_the_feature_object_class_is_tgsis_s(roles: Roles, db_dsn: str) -> None:
     before = _state(db_dsn)
     error = _refused(lambda: tgsis.enable_versioning(carol, "mine", "id", "feature"))
     assert isinstance(error, tgsis.InvalidInputError) and error.sqlstate == "TG100"
-    assert "object class 'feature' holds model 1 and the feature classes, not public.mine" in str(error)
+    assert "object class 'feature' holds tgsis's stored objects and the feature classes, not public.mine" in str(error)
     assert "an object class of its own" in (error.hint or "")
     carol.rollback()
     assert _state(db_dsn) == before

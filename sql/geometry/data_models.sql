@@ -44,7 +44,12 @@ CREATE TABLE tgsis.model_tables (
     model       smallint NOT NULL REFERENCES tgsis.data_models,
     iudorder    smallint NOT NULL CHECK (iudorder >= 0),
     geotype     text,
-    description text     NOT NULL
+    objectclass text     NOT NULL DEFAULT 'feature',
+    keycolumn   text     NOT NULL DEFAULT 'geoid',
+    geoidcolumn text     DEFAULT 'geoid',
+    description text     NOT NULL,
+    -- rows deleted with their geometry are the geometry's: versioned by its id, in object class feature
+    CONSTRAINT model_tables_per_geometry CHECK (geoidcolumn IS NULL OR (objectclass = 'feature' AND geoidcolumn = keycolumn))
 );
 
 COMMENT ON TABLE tgsis.model_tables IS
@@ -54,11 +59,18 @@ COMMENT ON COLUMN tgsis.model_tables.model IS 'the data model (tgsis.data_models
 COMMENT ON COLUMN tgsis.model_tables.iudorder IS
     'order of the table among the feature tables when versioned (tgsis.versioned_tables.iudorder): referenced rows first, deleted last';
 COMMENT ON COLUMN tgsis.model_tables.geotype IS 'only geometries of this geotype have rows here (e.g. trgl: SURFACE); NULL: every geometry of the model';
+COMMENT ON COLUMN tgsis.model_tables.objectclass IS
+    'the object class the table is versioned in (tgsis.versioned_tables.objectclass): feature for the rows of geometries, model for the sets of objects';
+COMMENT ON COLUMN tgsis.model_tables.keycolumn IS 'the object key it is versioned by (geoid for the rows of geometries)';
+COMMENT ON COLUMN tgsis.model_tables.geoidcolumn IS
+    'the column holding geometry ids: the rows of a deleted geometry go with it (NULL: the table is not per geometry)';
 COMMENT ON COLUMN tgsis.model_tables.description IS 'what a row is';
 
 -- the geometry core: one tgsis.geometry row per stored object of every model
 INSERT INTO tgsis.data_models (model, name, timemodel, create_function, description)
 VALUES (0, 'geometry core', NULL, 'create_geometry_storage',
         'the geometry rows every model shares (tgsis.geometry: geotype, time model, bbox, counts, meaning)');
-INSERT INTO tgsis.model_tables (tablename, model, iudorder, description)
-VALUES ('geometry', 0, 0, 'one row per stored geometry (the feature id), of every model');
+INSERT INTO tgsis.model_tables (tablename, model, iudorder, objectclass, keycolumn, geoidcolumn, description) VALUES
+    ('geometry',     0, 0, 'feature', 'geoid', 'geoid', 'one row per stored geometry (the feature id), of every model'),
+    ('model_object', 0, 1, 'feature', 'geoid', 'geoid', 'a geometry''s membership of a model (a set of objects)'),
+    ('model',        0, 0, 'model', 'modelid', NULL, 'a model: a named set of objects (tgsis.model_object)');

@@ -9,7 +9,8 @@ DECLARE
     v_table text;
 BEGIN
     -- every registered storage table, tgsis.geometry last
-    FOR v_table IN SELECT tablename FROM tgsis.model_tables ORDER BY model = 0, iudorder DESC, tablename LOOP
+    FOR v_table IN SELECT tablename FROM tgsis.model_tables WHERE geoidcolumn IS NOT NULL
+                    ORDER BY model = 0, iudorder DESC, tablename LOOP
         EXECUTE format('DELETE FROM %s WHERE geoid = ANY ($1)', tgsis.storage_table('tgsis', v_table)) USING p_geoids;
     END LOOP;
 END

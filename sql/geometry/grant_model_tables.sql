@@ -16,7 +16,7 @@ BEGIN
         EXECUTE format('GRANT INSERT, UPDATE, DELETE ON tgsis.%I TO tgsis_editor', v_table);
     END LOOP;
     IF p_model = 0 THEN
-        GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq TO tgsis_editor;
+        GRANT USAGE ON SEQUENCE tgsis.geometry_geoid_seq, tgsis.model_modelid_seq TO tgsis_editor;
         -- class tables of feature classes refer to their geometry rows
         GRANT REFERENCES ON tgsis.geometry TO tgsis_admin;
     END IF;

@@ -12,11 +12,12 @@ BEGIN
     RETURN QUERY
     SELECT t.tablename
       FROM tgsis.model_tables t
-     WHERE t.model = 0
+     WHERE t.geoidcolumn IS NOT NULL
+       AND (t.model = 0
         OR EXISTS (SELECT FROM tgsis.geometry g JOIN tgsis.data_models m ON m.timemodel = g.timemodel
                     WHERE g.geoid = ANY (p_geoids) AND m.model = t.model
-                      AND (t.geotype IS NULL OR t.geotype = g.geotype))
-     ORDER BY t.model = 0, t.iudorder DESC, t.tablename;
+                      AND (t.geotype IS NULL OR t.geotype = g.geotype)))
+     ORDER BY t.model = 0, t.tablename = 'geometry', t.iudorder DESC, t.tablename;
 END
 $$;
 

@@ -15,7 +15,9 @@ BEGIN
         EXECUTE format('DROP VIEW IF EXISTS %I.%I', (SELECT schemaname FROM tgsis.catalog WHERE classname = v_class),
                        (SELECT viewname FROM tgsis.catalog WHERE classname = v_class));
     END LOOP;
-    FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = 'feature' ORDER BY iudorder DESC, tablename LOOP
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables
+                WHERE objectclass = 'feature' OR (schemaname = 'tgsis' AND tablename IN (SELECT tablename FROM tgsis.model_tables))
+                ORDER BY iudorder DESC, tablename LOOP
         v_removed := v_removed + tgsis.disable_versioning_rel(format('%I.%I', v_t.schemaname, v_t.tablename)::regclass, p_force);
     END LOOP;
     FOR v_class IN SELECT classname FROM tgsis.catalog ORDER BY classname LOOP

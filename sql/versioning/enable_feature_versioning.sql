@@ -12,23 +12,29 @@ AS $$
 DECLARE
     v_table text;
     v_order integer;
+    v_objectclass text;
+    v_key   text;
     v_class text;
     v_count integer;
 BEGIN
-    SELECT count(*) INTO v_count FROM tgsis.versioned_tables WHERE objectclass = 'feature';
+    SELECT count(*) INTO v_count FROM tgsis.versioned_tables
+     WHERE objectclass = 'feature' OR (schemaname = 'tgsis' AND tablename IN (SELECT tablename FROM tgsis.model_tables));
     FOR v_class IN SELECT classname FROM tgsis.catalog ORDER BY classname LOOP
         PERFORM tgsis.version_class_tables(v_class);
     END LOOP;
     -- the storage of every data model (tgsis.model_tables), referenced rows first
-    FOR v_table, v_order IN SELECT tablename, iudorder FROM tgsis.model_tables ORDER BY model, iudorder, tablename LOOP
+    FOR v_table, v_order, v_objectclass, v_key IN
+        SELECT tablename, iudorder, objectclass, keycolumn FROM tgsis.model_tables ORDER BY model, iudorder, tablename LOOP
         IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = v_table) THEN
-            PERFORM tgsis.enable_versioning_rel(format('tgsis.%I', v_table)::regclass, 'geoid', 'feature', v_order);
+            PERFORM tgsis.enable_versioning_rel(format('tgsis.%I', v_table)::regclass, v_key, v_objectclass, v_order);
         END IF;
     END LOOP;
     FOR v_class IN SELECT classname FROM tgsis.catalog ORDER BY classname LOOP
         PERFORM tgsis.create_class_view(v_class);
     END LOOP;
-    RETURN (SELECT count(*) FROM tgsis.versioned_tables WHERE objectclass = 'feature') - v_count;
+    RETURN (SELECT count(*) FROM tgsis.versioned_tables
+             WHERE objectclass = 'feature' OR (schemaname = 'tgsis' AND tablename IN (SELECT tablename FROM tgsis.model_tables)))
+           - v_count;
 END
 $$;
 

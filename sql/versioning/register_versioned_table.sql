@@ -23,6 +23,7 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
+    v_expected text;
     v_schema text;
     v_table  text;
     v_kind   "char";
@@ -53,12 +54,19 @@ BEGIN
     v_tgsis := v_owner = (SELECT relowner FROM pg_class WHERE oid = 'tgsis.versioned_tables'::regclass)
                AND (v_schema = 'tgsis' OR EXISTS (SELECT FROM tgsis.class_tables c
                                                    WHERE c.schemaname = v_schema AND c.tablename = v_table));
-    IF p_objectclass = 'feature' AND NOT v_tgsis THEN
-        RAISE EXCEPTION 'object class ''feature'' holds model 1 and the feature classes, not %.%', v_schema, v_table
+    -- tgsis's storage is versioned in the object class its registry row names (tgsis.model_tables),
+    -- feature-class tables with the features; those classes are tgsis's alone
+    v_expected := CASE WHEN NOT v_tgsis THEN NULL
+                       WHEN v_schema = 'tgsis' THEN (SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_table)
+                       ELSE 'feature' END;
+    IF v_expected IS NULL AND (p_objectclass = 'feature' OR EXISTS (SELECT FROM tgsis.model_tables t
+                                                                     WHERE t.objectclass = p_objectclass)) THEN
+        RAISE EXCEPTION 'object class ''%'' holds tgsis''s stored objects and the feature classes, not %.%', p_objectclass,
+                v_schema, v_table
             USING ERRCODE = 'TG100',
                   HINT = 'give the table an object class of its own (tgsis.enable_feature_versioning versions the features)';
-    ELSIF p_objectclass <> 'feature' AND v_tgsis THEN
-        RAISE EXCEPTION '%.% is versioned with the features, in object class ''feature''', v_schema, v_table
+    ELSIF v_expected IS NOT NULL AND p_objectclass <> v_expected THEN
+        RAISE EXCEPTION '%.% is versioned with the features, in object class ''%''', v_schema, v_table, v_expected
             USING ERRCODE = 'TG100', HINT = 'tgsis.enable_feature_versioning versions it';
     END IF;
     -- the row key: the storage's primary key without revision

@@ -161,6 +161,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         property_periods,
         surfaces_at,
     )
+    from tgsis.db.modelsets import Model, ModelObject, add_to_model, create_model, list_models, model_objects, \
+        remove_from_model
     from tgsis.db.gmaps import (GMapProblem, fetch_gmap, fetch_md_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap,
                                 md_in_box, md_vertices_in_box)
 
@@ -271,6 +273,13 @@ _LAZY: dict[str, str] = {
     "gmap_check": "tgsis.db.gmaps",
     "insert_gmap": "tgsis.db.gmaps",
     "fetch_md_gmap": "tgsis.db.gmaps",
+    "Model": "tgsis.db.modelsets",
+    "ModelObject": "tgsis.db.modelsets",
+    "create_model": "tgsis.db.modelsets",
+    "add_to_model": "tgsis.db.modelsets",
+    "remove_from_model": "tgsis.db.modelsets",
+    "model_objects": "tgsis.db.modelsets",
+    "list_models": "tgsis.db.modelsets",
     "md_in_box": "tgsis.db.gmaps",
     "md_vertices_in_box": "tgsis.db.gmaps",
 }
@@ -386,6 +395,14 @@ __all__ = [
     "GMapProblem",
     "fetch_md_gmap",
     "md_in_box",
+    # models as sets of objects
+    "Model",
+    "ModelObject",
+    "create_model",
+    "add_to_model",
+    "remove_from_model",
+    "model_objects",
+    "list_models",
     "md_vertices_in_box",
     # feature classes and features
     "FeatureClass",

@@ -48,6 +48,12 @@ def _interpretations(context: Context) -> None:
     run(context)
 
 
+def _mine(context: Context) -> None:
+    from tgsis.scenarios.mine import run
+
+    run(context)
+
+
 def _knowledge(context: Context) -> None:
     from tgsis.scenarios.knowledge import run
 
@@ -67,6 +73,9 @@ SCENARIOS: dict[str, Scenario] = {
                       "which unit lies on which at t = 3 and 4", _river),
     "interpretations": Scenario("interpretations", "one horizon, several models in versions and named revisions: "
                                 "where the fault first appears, where dilatancy passes a threshold", _interpretations),
+    "mine": Scenario("mine", "a resource model revised after each survey: a chain of versions with validity periods, "
+                     "models as sets of objects; which model was believed on a date, what changed, rows stored",
+                     _mine),
     "knowledge": Scenario("knowledge", "a horizon's interpretations as one object over a knowledge axis (model 5): "
                           "box queries over x, y and knowledge, slices back to each interpretation", _knowledge),
     "cfm": Scenario("cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)",
