@@ -30,8 +30,12 @@ pictures: $(VENV)/.installed
 	$(BIN)/tgsis demo saltdome --dir build/pictures
 	$(BIN)/tgsis demo synsed --dir build/pictures
 	$(BIN)/tgsis demo river --dir build/pictures
+	$(BIN)/tgsis demo interpretations --dir build/pictures
+	$(BIN)/tgsis demo mine --dir build/pictures
+	$(BIN)/tgsis demo knowledge --dir build/pictures
 	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png \
-	    build/pictures/river_t4.png docs/pictures/
+	    build/pictures/river_t4.png build/pictures/interpretations_model3.png build/pictures/mine_ore_top.png \
+	    build/pictures/knowledge_interpretations.png docs/pictures/
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy

@@ -164,5 +164,12 @@ def test_mine(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     first, seen_first, second, seen_second, third, seen_third = (int(v) for v in stored.groups())
     assert first == seen_first and second < seen_second / 2 and third < seen_third / 2   # unchanged rows not stored again
     _replays(db_dsn, "mine", out, 5)
+    # believed on a date: in each period and on its bounds ([from, to): a survey's day belongs to the new model)
+    with psycopg.connect(make_conninfo(db_dsn, dbname="tgsis_demo_mine")) as conn:
+        for day, expected in (("2019-02-28 23:59:59+00", None), ("2019-03-01 00:00:00+00", "survey_2019"),
+                              ("2020-07-01 12:00:00+00", "survey_2019"), ("2021-04-30 23:59:59.999+00", "survey_2019"),
+                              ("2021-05-01 00:00:00+00", "survey_2021"), ("2023-05-31 23:59:59+00", "survey_2021"),
+                              ("2023-06-01 00:00:00+00", "survey_2023"), ("2031-01-01 00:00:00+00", "survey_2023")):
+            assert conn.execute("SELECT tgsis.version_believed_at(%s::timestamptz)", (day,)).fetchone() == (expected,), day
     with Image.open(folder / "mine_ore_top.png") as picture:
         assert picture.format == "PNG"

@@ -46,7 +46,7 @@ from tgsis.db.features import (
 )
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
 from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
-                          NotVersionedError, SkippedObjectWarning)
+                          SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 

@@ -66,15 +66,15 @@ from __future__ import annotations
 
 import importlib
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from types import ModuleType
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._vtk_cells import (CELL_TYPE_OF, collection_from_cells, first, labelled, one_mesh, shared_properties,
-                              string_bytes, strings, vtk_parts)
+from tgsis._vtk_cells import (CELL_TYPE_OF, collection_from_cells, first, labelled, one_mesh, string_bytes, strings,
+                              vtk_parts)
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
 from tgsis.mesh import PROPERTY_NAME_RE, Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh
 
