@@ -123,6 +123,7 @@ def _written_hints() -> list[tuple[str, str]]:
 NOT_FROM_THE_CLI = {
     "src/tgsis/gmaps": "tgsis.gmaps's constructors and builders of Python arrays (the commands read files)",
     "sql/postgis": "PostGIS functions are SQL only: no command calls them",
+    "sql/modelsets": "models as sets of objects are SQL and Python only: no command",
     "src/tgsis/postgis.py": "WKB of Python objects: no command",
     "src/tgsis/db/postgis.py": "PostGIS from Python: no command",
     "src/tgsis/convert.py": "pyvista, meshio and trimesh objects of Python programs (the commands read files)",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -289,3 +290,36 @@ def test_class_create_temporal(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
     assert "holds SURFACE features" in capsys.readouterr().err
     assert main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--instant-property", "a:float8"]) == 1
     assert "static feature class x takes no time unit or per-instant properties" in capsys.readouterr().err
+
+
+def test_import_at_adds_model_2_instants_from_files(db_dsn: str, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """`tgsis import FILE --class C --at T [--feature ID]`: a new feature known from T, then more instants."""
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "tops", "SURFACE", time_model="INSTANTS", time_unit="Ma")
+    flat = Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]], name="top A")
+    formats.write(flat, tmp_path / "a0.ts")
+    formats.write(Surface(flat.vertices + [0, 0, -5], flat.cells, name="top A"), tmp_path / "a1.ts")
+    dsn = ["--dsn", db_dsn]
+    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "tops", "--at", "-10", "--json"]) == 0
+    stored = json.loads(capsys.readouterr().out)
+    assert stored["instants"] == [-10.0]
+    fid = str(stored["id"])
+    assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "tops", "--at", "-5", "--feature", fid]) == 0
+    assert "its instants: -10.0, -5.0" in capsys.readouterr().out
+    with psycopg.connect(db_dsn) as conn:
+        assert [t for t, _ in tgsis.instants(conn, int(fid))] == [-10.0, -5.0]
+        at = tgsis.get_at(conn, int(fid), -7.0)
+        assert at is not None and np.array_equal(at.vertices, flat.vertices)      # the step keeps t = -10's shape
+    # refused, in the command's terms, with nothing stored
+    assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "tops"]) == 1
+    assert "give --at T" in capsys.readouterr().err
+    assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "tops", "--at", "-5", "--feature", fid]) == 1
+    assert "-5" in capsys.readouterr().err                                       # that instant exists already
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "still", "SURFACE")
+    assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "still", "--at", "1"]) == 1
+    assert "take a class of surfaces at instants (INSTANTS)" in capsys.readouterr().err
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT count(*) FROM tops").fetchone() == (1,)
+        assert conn.execute("SELECT count(*) FROM still").fetchone() == (0,)

@@ -433,6 +433,48 @@ def _report_json(report: MeshReport) -> dict[str, Any]:
             "summary": report.summary()}
 
 
+def _import_instant(args: argparse.Namespace, conn: psycopg.Connection[Any], fc: FeatureClass, meshes: list[Mesh],
+                    values: dict[str, Any]) -> int:
+    """``tgsis import FILE --class C --at T [--feature ID]``: a surface of a model-2 class at model time T."""
+    from tgsis.db.temporal import add_instant, instants
+    from tgsis.temporal import SurfaceSeries
+
+    if fc.time_model != "INSTANTS":
+        raise InvalidInputError(f"--at and --feature take a class of surfaces at instants (INSTANTS); {fc.name} is "
+                                f"{fc.time_model}", hint="tgsis interpolate --class CLASS builds evolving surfaces")
+    if args.at is None:
+        raise InvalidInputError(f"feature class {fc.name} holds surfaces at instants: give --at T, the model time of "
+                                "the file's surface")
+    if not math.isfinite(args.at):
+        raise InvalidInputError(f"--at must be a finite model time, got {args.at!r}")
+    if args.replace:
+        raise InvalidInputError("--replace does not go with --at: the instant is new (tgsis import --at T --feature ID "
+                                "adds it)")
+    if len(meshes) != 1 or not isinstance(meshes[0], Surface):
+        raise InvalidInputError(f"{args.file} holds {len(meshes)} object(s) ({', '.join(type(m).__name__ for m in meshes)}): "
+                                "an instant is one surface", hint="write the surface of that instant to a file of its own")
+    surface = meshes[0]
+    if args.feature is not None:
+        if values:
+            raise InvalidInputError("--set does not go with --feature: the feature's properties stay")
+        with conn.transaction():
+            add_instant(conn, fc, args.feature, args.at, surface, drop_extra_properties=args.drop_extra_properties)
+        fid, known = args.feature, [t for t, _ in instants(conn, args.feature)]
+    else:
+        name = args.name or surface.name or Path(args.file).stem
+        series = SurfaceSeries([args.at], [surface], alive=True, name=name)
+        with conn.transaction():
+            fid = insert_feature(conn, fc, series, values, name=name, drop_extra_properties=args.drop_extra_properties)
+        known = [args.at]
+    if _json(args):
+        cliout.emit_json({"file": args.file, "class": fc.name, "id": fid, "at": args.at, "instants": known,
+                          "vertices": surface.n_vertices, "cells": surface.n_cells})
+    else:
+        _out(f"stored feature {fid} ({fc.name}) at t = {cliout.show_time(args.at)}{_unit(fc)}: {surface.n_vertices} "
+             f"vertices, {surface.n_cells} triangles; its instants: {', '.join(cliout.show_time(t) for t in known)}")
+    return 0
+
+
 def cmd_import(args: argparse.Namespace) -> int:
     from tgsis.db.checkin import save_feature
     from tgsis.db.features import delete_feature
@@ -448,6 +490,8 @@ def cmd_import(args: argparse.Namespace) -> int:
     header = ("id", "name", "geotype", "vertices", "cells", "replaced", "defects")
     with _connect(args) as conn:
         fc = get_feature_class(conn, args.feature_class)
+        if args.at is not None or args.feature is not None or fc.time_model == "INSTANTS":
+            return _import_instant(args, conn, fc, meshes, values)
         if fc.geotype is Geotype.GEOMETRYCOLLECTION:  # the whole file is one feature
             collection = GeometryCollection(meshes, name=args.name or stem)
             with conn.transaction():
@@ -1639,7 +1683,9 @@ def build_parser() -> argparse.ArgumentParser:
                                        "(as one feature in a GEOMETRYCOLLECTION class)",
                    ["tgsis import Garlock.ts --class faults --set release=6.1 --drop-extra-properties",
                     "tgsis import Garlock.ts --class faults --replace   # a new version of the same fault",
-                    "tgsis import model.vtu --class models --json"], cmd_import, tabular=True)
+                    "tgsis import model.vtu --class models --json",
+                    "tgsis import top_2024.ts --class horizons --at 2024 --feature 7   # a model-2 instant"],
+                   cmd_import, tabular=True)
     imp.add_argument("file", help="the geometry file (.ts, .pl, .vs, .so, .lso, .gp, .vtu, .obj, .ply, .off, .stl)")
     imp.add_argument("--class", dest="feature_class", required=True, help="the feature class to store them in")
     imp.add_argument("--name", help="feature name (default: the name in the file, else the file name; "
@@ -1659,6 +1705,11 @@ def build_parser() -> argparse.ArgumentParser:
                           "surfaces), instead of skipping them with a warning")
     imp.add_argument("--tolerance", type=float, default=0.0, metavar="T",
                      help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)")
+    imp.add_argument("--at", type=float, metavar="T",
+                     help="a class of surfaces at instants (INSTANTS): the surface is the shape at model time T, of a "
+                          "new feature (known from T on) or, with --feature, of an existing one")
+    imp.add_argument("--feature", type=_ID, metavar="ID",
+                     help="with --at: add the instant T to this feature instead of storing a new one")
 
     exp = _command(commands, "export", "write a feature to a geometry file",
                    ["tgsis export 3 garlock.ts", "tgsis export 3 garlock.vtu --png garlock.png"], cmd_export)

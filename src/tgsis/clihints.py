@@ -118,7 +118,8 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"tgsis\.get_at\(conn, id, t\) gives the surface at model time t", "tgsis at ID T FILE writes the surface at "
                                                                         "model time T"),
     (r"give a tgsis\.SurfaceSeries \(INSTANTS\) or tgsis\.EvolvingSurface \(EVOLVING\)",
-     "store surfaces over time with tgsis interpolate --class CLASS (EVOLVING)"),
+     "import it at a model time with --at T (INSTANTS), or build surfaces over time with tgsis interpolate --class "
+     "CLASS (EVOLVING)"),
     (r"(?:tgsis\.)?features_at lists the features of any class that exist at t",
      "tgsis ls lists the features of every class"),
     (r"(SELECT \* FROM tgsis\.check_geometry\([^)]*\))", lambda m: f"{IN_PSQL}{m[1]}"),
