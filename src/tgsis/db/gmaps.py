@@ -499,10 +499,15 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
         dart = copy_out(conn, sql.SQL("SELECT dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart "
                                       "WHERE geoid = {} AND timem = {} ORDER BY dartid").format(*key),
                         ["int8", "int8", "int8"])
-        alpha = copy_out(conn, sql.SQL("SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a "
-                                       "JOIN tgsis.gmap_dart d ON d.geoid = a.geoid AND d.dartid = a.dartid "
-                                       "WHERE a.geoid = {} AND d.timem = {} ORDER BY a.level, a.dartid").format(*key),
+        # the involutions of the period's darts: one range of the key (geoid, dartid, level), whatever the planner's
+        # statistics say (a join planned on freshly loaded tables ran for minutes), then only the period's darts
+        low, high = (int(dart[0].min()), int(dart[0].max())) if len(dart[0]) else (0, -1)
+        span = [sql.Literal(low), sql.Literal(high)]
+        alpha = copy_out(conn, sql.SQL("SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = {} "
+                                       "AND a.dartid BETWEEN {} AND {} ORDER BY a.level, a.dartid").format(key[0], *span),
                          ["int2", "int8", "int8"])
+        keep = np.isin(alpha[1], dart[0])
+        alpha = [column[keep] for column in alpha]
         ends = [copy_out(conn, sql.SQL("SELECT nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} AND timem = {} "
                                        "AND timet = {} ORDER BY nodeid").format(*key, sql.Literal(at)),
                          ["int8", f"float8[{m}]"]) for at in (t0, t1)]
