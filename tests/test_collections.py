@@ -176,7 +176,7 @@ def test_round_trip_with_every_member_type(conn: Conn, alignment: str) -> None:
     assert got.properties == {"note": "mixed", "age": None}
 
 
-def test_fetching_many_members_takes_one_copy_per_table(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_fetching_many_members_takes_one_query_per_table(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> None:
     fc = _rocks(conn)
     originals = [GeometryCollection([_with_props(_surface(3 + i % 3, z=i, name=f"s{i}"), "VERTEX") if i % 2 else
                                      _with_props(LineSet(rng.random((i + 2, 3)), [[j, j + 1] for j in range(i + 1)]),
@@ -184,13 +184,13 @@ def test_fetching_many_members_takes_one_copy_per_table(conn: Conn, monkeypatch:
                  for k in (0, 20)]
     ids = [F.insert_feature(conn, fc, c) for c in originals]
     copies: list[str] = []
-    real = _static.copy_out
+    real = _static.columns_out
 
-    def spy(conn: Conn, query: Any, types: Any) -> list[npt.NDArray[Any]]:
-        copies.append(query.as_string(conn))
-        return real(conn, query, types)
+    def spy(conn: Conn, source: Any, key: str, columns: Any, geoids: Any) -> list[npt.NDArray[Any]]:
+        copies.append(source.as_string(conn))
+        return real(conn, source, key, columns, geoids)
 
-    monkeypatch.setattr(_static, "copy_out", spy)
+    monkeypatch.setattr(_static, "columns_out", spy)
     got = F.fetch_features(conn, fc, ids[::-1])
     assert [f.id for f in got] == ids[::-1]
     assert all(isinstance(f.mesh, GeometryCollection) and f.mesh.same_as(c) for f, c in zip(got, originals[::-1]))

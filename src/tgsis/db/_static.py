@@ -16,7 +16,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.db._transfer import Storage, concat, copy_out, local_positions, row_keys, rows_by_geoid, stored_cell_properties
+from tgsis.db._transfer import Storage, columns_out, concat, local_positions, row_keys, rows_by_geoid, stored_cell_properties
 from tgsis.db.classes import FeatureClass, Property, stores_part_column
 from tgsis.db.meaning import Meaning, part_runs, parts_from_runs, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
@@ -258,7 +258,7 @@ def collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> d
 
 @dataclass
 class Download:
-    """What the COPYs of :func:`download` returned (columns as numpy arrays)."""
+    """What the queries of :func:`download` returned (columns as numpy arrays)."""
 
     vertices: list[npt.NDArray[Any]]
     cells: dict[Geotype, list[npt.NDArray[Any]]]
@@ -270,22 +270,22 @@ class Download:
 
 
 def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Download:
-    """COPY the vertices, simplices and cell properties of the geometries ``parts``.
+    """Download the vertices, simplices and cell properties of the geometries ``parts``.
 
-    One COPY for the vertices, one per geotype for the simplices, one for the
-    properties: a bounded number whatever the number of geometries.
+    One query for the vertices, one per geotype for the simplices, one per
+    property table: a bounded number whatever the number of geometries, each
+    giving a geometry's column as one binary value (:func:`columns_out`).
     """
     id_list = sql.Literal(list(parts))
-    vertices = copy_out(conn, sql.SQL("SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = ANY({})").format(
-        id_list), ["int8", "int8", "float8", "float8", "float8"])
+    vertices = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
+                           [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], list(parts))
     cells: dict[Geotype, list[npt.NDArray[Any]]] = {}
     for geotype in dict.fromkeys(part.geotype for part in parts.values()):
         table, key = SIMPLEX[geotype]
         cell_cols = [f"vrtxid{i + 1}" for i in range(mesh_class(geotype).cell_size)]
-        group = sql.Literal([g for g, part in parts.items() if part.geotype == geotype])
-        cells[geotype] = copy_out(conn, sql.SQL("SELECT geoid, {}, {} FROM tgsis.{} WHERE geoid = ANY({})").format(
-            sql.Identifier(key), sql.SQL(", ").join(sql.Identifier(c) for c in cell_cols), sql.Identifier(table),
-            group), ["int8"] * (2 + len(cell_cols)))
+        group = [g for g, part in parts.items() if part.geotype == geotype]
+        cells[geotype] = columns_out(conn, sql.SQL("tgsis.{}").format(sql.Identifier(table)), "geoid",
+                                     [(c, "int8") for c in (key, *cell_cols)], group)
     properties: dict[tuple[str, tuple[str, ...]], list[npt.NDArray[Any]]] = {}
     for alignment in ("VERTEX", "CELL"):  # one COPY per property table (and set of properties)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
@@ -293,11 +293,9 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
             continue
         for names, members in property_groups(props, parts).items():
             if names:
-                properties[(alignment, names)] = copy_out(
-                    conn, sql.SQL("SELECT _geoid, _idx, {} FROM {} WHERE _geoid = ANY({})").format(
-                        sql.SQL(", ").join(sql.Identifier(n) for n in names), fc.qualified(protable),
-                        sql.Literal(members)),
-                    ["int8", "int8", *(p.wire for p in props if p.name in names)])
+                properties[(alignment, names)] = columns_out(
+                    conn, fc.qualified(protable), "_geoid",
+                    [("_idx", "int8"), *((p.name, p.wire) for p in props if p.name in names)], members)
     atoms: dict[int, list[tuple[int, int, bool]]] = {}
     for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
             "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(

@@ -22,8 +22,8 @@ import psycopg
 from psycopg import sql
 
 from tgsis.db.classes import FeatureClass, stores_part_column
-from tgsis.db.copy import SQL_TYPES, decode_rows, encode_rows, numpy_dtype
-from tgsis.errors import InvalidGeometryError, InvalidPropertyError, NotVersionedError
+from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_rows, numpy_dtype, wire_shape
+from tgsis.errors import DatabaseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
 from tgsis.mesh import Mesh
 
 log = logging.getLogger("tgsis.db.features")
@@ -206,6 +206,84 @@ def copy_out(conn: Conn, query: sql.Composable, types: Sequence[str]) -> list[np
     with conn.cursor().copy(statement) as copy:
         data = b"".join(bytes(chunk) for chunk in copy)
     return decode_rows(data, types)
+
+
+#: the function that gives a value of each wire type in its binary COPY form
+SEND_FUNCTIONS = {"int2": "int2send", "int4": "int4send", "int8": "int8send", "float4": "float4send",
+                  "float8": "float8send", "bool": "boolsend"}
+
+
+def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],
+                geoids: Sequence[int]) -> list[npt.NDArray[Any]]:
+    """The rows of ``source`` whose ``key`` is one of ``geoids``, as columns: ``[key, *columns]``.
+
+    The rows stay rows in storage, but do not travel one by one: the server
+    packs each row's values in their binary send forms
+    (``int8send(vrtxid) || float8send(x) || ...``) and aggregates a
+    geometry's rows into one ``bytea`` (``string_agg``); the client decodes
+    a few large values with one numpy structured array instead of a COPY
+    message per row (issue 20; docs/performance.md compares the ways
+    measured). Rows come in no particular order, as from :func:`copy_out`.
+
+    Parameters
+    ----------
+    source : Composable
+        A table or view (the versioned views read the session's revision).
+    key : str
+        The geoid column.
+    columns : sequence of (name, wire type)
+        Fixed-width columns; a row with a NULL (the concatenation is NULL
+        and the aggregate skips it) is reported, not dropped.
+    geoids : sequence of int
+        The geometries wanted.
+
+    Returns
+    -------
+    list of ndarray
+        (n,) int64 geoids, then one (n,) or (n, k) array per column.
+
+    Raises
+    ------
+    DatabaseError
+        A row holds a NULL or a value of another size (message names the
+        columns and the table).
+    """
+    sends = []
+    for name, wire in columns:
+        base, size = wire_shape(wire)
+        send = "array_send" if size is not None else SEND_FUNCTIONS[base]
+        sends.append(sql.SQL("{}({})").format(sql.Identifier(send), sql.Identifier(name)))
+    query = sql.SQL("SELECT {key}, count(*), string_agg({row}, ''::bytea) FROM {source} "
+                    "WHERE {key} = ANY({geoids}) GROUP BY {key}").format(
+        key=sql.Identifier(key), row=sql.SQL(" || ").join(sends), source=source, geoids=sql.Literal(list(geoids)))
+    with conn.cursor(binary=True) as cursor:
+        groups = cursor.execute(query).fetchall()
+    counts = [int(g[1]) for g in groups]
+    what = f"columns {', '.join(name for name, _ in columns)} of {source.as_string(conn)}"
+    try:
+        values = decode_packed(b"".join(g[2] or b"" for g in groups), [wire for _, wire in columns], sum(counts),
+                               what)
+    except DatabaseError as exc:  # the rare path: find the row to name
+        raise _bad_row(conn, source, key, columns, geoids) or exc from None
+    return [np.repeat(np.asarray([g[0] for g in groups], dtype=np.int64), counts), *values]
+
+
+def _bad_row(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],
+             geoids: Sequence[int]) -> DatabaseError | None:
+    """The error naming a row of :func:`columns_out` that holds a NULL or a vector of another length."""
+    for name, wire in columns:
+        size = wire_shape(wire)[1]
+        bad = sql.SQL("{} IS NULL").format(sql.Identifier(name)) if size is None else sql.SQL(
+            "{} IS NULL OR array_ndims({}) IS DISTINCT FROM 1 OR cardinality({}) <> {} OR array_position({}, NULL) "
+            "IS NOT NULL").format(*(sql.Identifier(name),) * 3, size, sql.Identifier(name))
+        row = conn.execute(sql.SQL("SELECT {}, {} FROM {} WHERE {} = ANY({}) AND ({}) LIMIT 1").format(
+            sql.Identifier(key), sql.Identifier(columns[0][0]), source, sql.Identifier(key),
+            sql.Literal(list(geoids)), bad)).fetchone()
+        if row is not None:
+            return DatabaseError(f"column {name} of {source.as_string(conn)} is NULL or not {wire} in the row "
+                                 f"{key} = {row[0]}, {columns[0][0]} = {row[1]}",
+                                 hint=f"SELECT * FROM tgsis.check_geometry({row[0]})")
+    return None
 
 
 def rows_by_geoid(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],

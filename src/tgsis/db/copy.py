@@ -21,7 +21,8 @@ import numpy.typing as npt
 
 from tgsis.errors import DatabaseError, InvalidPropertyError
 
-__all__ = ["PG_TYPES", "SQL_TYPES", "encode_rows", "decode_rows", "numpy_dtype", "array_wire", "wire_shape"]
+__all__ = ["PG_TYPES", "SQL_TYPES", "encode_rows", "decode_rows", "decode_packed", "numpy_dtype", "array_wire",
+           "wire_shape"]
 
 #: binary wire format of each fixed-width PostgreSQL type
 PG_TYPES: dict[str, str] = {
@@ -152,4 +153,56 @@ def decode_rows(data: bytes | bytearray | memoryview, types: Sequence[str]) -> l
                           or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)):
             raise DatabaseError(f"binary COPY column {i} holds arrays that are not {size} non-NULL values")
         columns.append(value["elems"]["val"].astype(numpy_dtype(wire)).reshape(len(rows), size))
+    return columns
+
+
+def decode_packed(data: bytes | bytearray | memoryview, types: Sequence[str], count: int,
+                  what: str) -> list[npt.NDArray[Any]]:
+    """Columns from ``count`` rows sent as their values' binary send forms, one row after the other.
+
+    What ``string_agg(int8send(vrtxid) || float8send(x) || ..., '')`` gives:
+    each value in the wire format of a binary COPY field, without the
+    field's length word and without the row's field count. Vector values
+    (``"float8[3]"``) are whole one-dimensional arrays, checked as
+    :func:`decode_rows` checks them.
+
+    Parameters
+    ----------
+    data : bytes
+        The packed rows.
+    types : sequence of str
+        Wire type of each column (:data:`PG_TYPES`, or ``"float8[3]"``).
+    count : int
+        How many rows the server aggregated: a row with a NULL (which the
+        aggregate skips) or a value of another size shows as a length that
+        does not match.
+    what : str
+        Names the columns in messages.
+
+    Returns
+    -------
+    list of ndarray
+        One (count,) or (count, k) array per column, native byte order.
+
+    Raises
+    ------
+    DatabaseError
+        The bytes are not ``count`` rows of non-NULL values of ``types``.
+    """
+    dtype = np.dtype([(f"val{i}", _field_dtype(wire)) for i, wire in enumerate(types)])
+    if len(data) != count * dtype.itemsize:
+        raise DatabaseError(f"{what}: {len(data)} bytes for {count} rows of {dtype.itemsize}: "
+                            "NULLs or values of other sizes")
+    rows = np.frombuffer(data, dtype=dtype)
+    columns = []
+    for i, wire in enumerate(types):
+        base, size = wire_shape(wire)
+        value = rows[f"val{i}"]
+        if size is None:
+            columns.append(value.astype(numpy_dtype(wire)))
+            continue
+        if count and (np.any(value["ndim"] != 1) or np.any(value["hasnull"] != 0) or np.any(value["dim"] != size)
+                      or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)):
+            raise DatabaseError(f"{what}: column {i + 1} holds arrays that are not {size} non-NULL values")
+        columns.append(value["elems"]["val"].astype(numpy_dtype(wire)).reshape(count, size))
     return columns
