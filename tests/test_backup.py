@@ -29,6 +29,7 @@ from psycopg import sql
 
 import tgsis
 from tests.catalog import describe_tgsis_objects
+from tests.gmaps_shapes import block_tetrahedra
 from tests.roles import Roles, login_roles
 from tests.synthetic import flat_grid
 from tests.temporal_data import evolving, series
@@ -135,6 +136,16 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
            for i in range(4)}
     ids["moving"] = tgsis.insert_feature(conn, "moving", evolving(rng, [0.0, 2.0], with_properties=True))
     ids["stepped"] = tgsis.insert_feature(conn, "stepped", series(rng, [0.0, 1.0], with_properties=True))
+    # G-maps: model 4 (a block of tetrahedra with a porosity per volume) and model 5 (the block with a knowledge axis)
+    tgsis.create_feature_class(conn, "blocks", "GMAP", time_model="GMAP", cell_level=3,
+                               cell_properties=[("porosity", "double precision")])
+    tgsis.create_feature_class(conn, "knowledge", "GMAP", time_model="MULTIDIM", cell_level=3)
+    solid = tgsis.GMap.from_tetrahedra(*block_tetrahedra(1))
+    ids["block"] = tgsis.insert_feature(conn, "blocks", tgsis.GMap(
+        solid.alpha, solid.vertex, solid.points, cell_properties={3: {"porosity": rng.random(solid.n_cells(3))}}))
+    ids["history"] = tgsis.insert_gmap(conn, "knowledge", tgsis.GMap(
+        solid.alpha, solid.vertex, np.column_stack([solid.points, np.arange(solid.n_points) % 2])),
+        axes=["x", "y", "z", "knowledge"])
     conn.execute("CREATE TABLE wells (id integer GENERATED ALWAYS AS IDENTITY PRIMARY KEY, name text NOT NULL, "
                  "depth double precision)")
     conn.execute("COMMENT ON TABLE wells IS 'boreholes'")
@@ -153,6 +164,8 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
         conn.execute("UPDATE faults SET release = 'edit' WHERE _geoid = %s", (ids["f1"],))
         conn.execute("UPDATE tgsis.d4dvrtx SET z = z + 10 WHERE geoid = %s AND timem = 0", (ids["moving"],))
         conn.execute("UPDATE wells SET depth = 1250 WHERE name = 'W-1'")
+        conn.execute("UPDATE tgsis.gmap_vertex SET coordinate[3] = coordinate[3] + 2 WHERE geoid = %s AND nodeid = 0",
+                     (ids["block"],))
         conn.commit()
         tgsis.save_revision(conn, "first_pick")
         ids["new in edit"] = tgsis.insert_feature(conn, "faults", flat_grid(2, 9.0), {"release": "edit"})
@@ -205,8 +218,16 @@ def _fetch(conn: Conn, version: str, ids: dict[str, int]) -> dict[str, Any]:
     seen: dict[str, Any] = {}
     with tgsis.in_version(conn, version):
         for key, fid in sorted(ids.items()):
-            klass = "moving" if key == "moving" else "stepped" if key == "stepped" else "faults"
-            if klass == "faults":
+            klass = key if key in ("moving", "stepped") else "faults"
+            if key == "block":
+                g = tgsis.fetch_gmap(conn, "blocks", fid).at(0.0)
+                assert g is not None
+                seen[key] = (g.alpha.tolist(), g.points.tolist(), g.cell_properties[3]["porosity"].tolist(),
+                             tgsis.gmap_check(conn, fid))
+            elif key == "history":
+                h, axes = tgsis.fetch_md_gmap(conn, "knowledge", fid)
+                seen[key] = (h.alpha.tolist(), h.points.tolist(), axes, tgsis.gmap_check(conn, fid))
+            elif klass == "faults":
                 try:
                     feature = tgsis.fetch_feature(conn, klass, fid)
                 except tgsis.NotFoundError:

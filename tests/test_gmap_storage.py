@@ -143,6 +143,18 @@ def _problems(conn: Conn, geoid: int) -> dict[str, tuple[int, ...]]:
     return {p.problem: p.darts for p in G.gmap_check(conn, geoid)}
 
 
+def test_a_fetch_reads_rows_of_any_shape_and_names_the_check_when_they_are_no_g_map(conn: Conn) -> None:
+    fc, geoid = _stored_map(conn)
+    stored = G.fetch_gmap(conn, fc, geoid)
+    # a row above the dimension: not one row per dart and level any more, the periods are still read right
+    conn.execute("INSERT INTO tgsis.gmap_alpha (geoid, level, dartid, dartid2) VALUES (%s, 3, 0, 0)", (geoid,))
+    assert all(_same(G.fetch_gmap(conn, fc, geoid).at(t), stored.at(t)) for t in (0.5, 2.5))
+    conn.execute("DELETE FROM tgsis.gmap_alpha WHERE geoid = %s AND level = 1 AND dartid = 0", (geoid,))
+    with pytest.raises(tgsis.InvalidGMapError, match=r"period 0\.0 has 11 alpha_1 rows for 12 darts") as caught:
+        G.fetch_gmap(conn, fc, geoid)
+    assert f"tgsis.gmap_check({geoid})" in str(caught.value.hint)
+
+
 def test_the_sql_check_names_a_non_involution(conn: Conn) -> None:
     _, geoid = _stored_map(conn)
     conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = 5 WHERE geoid = %s AND level = 0 AND dartid = 0", (geoid,))
@@ -283,3 +295,15 @@ def test_two_versions_moving_one_point_conflict_and_the_merge_takes_a_side(conn:
     conn.commit()
     merged = G.gmap_at(conn, geoid, 3.0)
     assert merged is not None and merged.points[0].tolist() == [8.0, 8.0, 8.0]
+
+
+def test_features_at_t_follow_the_g_maps_life(conn: Conn) -> None:
+    fc = _class(conn)
+    rising = F.insert_feature(conn, fc, _evolving())                       # from t = 0, alive
+    ended = F.insert_feature(conn, fc, gmaps.EvolvingGMap(_evolving().periods[:1], alive=False))   # t in [0, 1]
+    lasting = F.insert_feature(conn, fc, _faces(gmaps.GMap.from_triangles(*icosahedron())))     # t = 0 on, alive
+    assert tgsis.features_at(conn, fc, -1.0) == []
+    assert tgsis.features_at(conn, fc, 0.5) == [rising, ended, lasting]
+    assert tgsis.features_at(conn, fc, 7.0) == [rising, lasting]
+    assert conn.execute("SELECT tgsis.exists_at(%s, 1.5), tgsis.exists_at(%s, 1.5)", (rising, ended)).fetchone() \
+        == (True, False)

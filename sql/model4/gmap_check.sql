@@ -2,8 +2,9 @@
 -- The conditions every G-map model shares (tgsis.gmap_conditions: (i)-(iii),
 -- one point per 0-cell, rows that refer to darts), and model 4's own: every
 -- involution keeps a dart in its topology period (the closure of the
--- partition D0..Dk), darts of nodes and periods that exist. darts lists the
--- first offending darts (at most 20), count all of them.
+-- partition D0..Dk, checked by tgsis.gmap_conditions), darts of nodes and
+-- periods that exist. darts lists the first offending darts (at most 20),
+-- count all of them.
 CREATE FUNCTION tgsis.gmap_check(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, darts bigint[])
 LANGUAGE plpgsql
@@ -18,28 +19,23 @@ BEGIN
         RAISE EXCEPTION 'geometry % is not a stored G-map', p_geoid
             USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.gmap lists the stored G-maps';
     END IF;
-    RETURN QUERY SELECT * FROM tgsis.gmap_conditions(p_geoid, v_n, 'tgsis.gmap_dart', 'tgsis.gmap_alpha', 'nodeid');
-    -- the partition into periods, the shared nodes of 0-cells, nodes of the dart's period
+    RETURN QUERY SELECT * FROM tgsis.gmap_conditions(p_geoid, v_n, 'tgsis.gmap_dart', 'tgsis.gmap_alpha', 'nodeid', 'timem');
+    -- the darts' nodes and periods exist: one scan of the darts for both
     RETURN QUERY
-        SELECT format('alpha_%s sends a dart into another topology period', a.level), count(*),
-               (array_agg(a.dartid ORDER BY a.dartid))[1:20]
-          FROM tgsis.gmap_alpha a
-          JOIN tgsis.gmap_dart d ON d.geoid = a.geoid AND d.dartid = a.dartid
-          JOIN tgsis.gmap_dart e ON e.geoid = a.geoid AND e.dartid = a.dartid2
-         WHERE a.geoid = p_geoid AND d.timem <> e.timem
-         GROUP BY a.level ORDER BY a.level;
-    RETURN QUERY
-        SELECT 'dart of a node missing from its topology period'::text, count(*), (array_agg(d.dartid ORDER BY d.dartid))[1:20]
-          FROM tgsis.gmap_dart d
-         WHERE d.geoid = p_geoid
-           AND NOT EXISTS (SELECT FROM tgsis.gmap_node n WHERE n.geoid = p_geoid AND n.timem = d.timem AND n.nodeid = d.nodeid)
-        HAVING count(*) > 0;
-    RETURN QUERY
-        SELECT 'dart of a topology period that does not exist'::text, count(*), (array_agg(d.dartid ORDER BY d.dartid))[1:20]
-          FROM tgsis.gmap_dart d
-         WHERE d.geoid = p_geoid
-           AND NOT EXISTS (SELECT FROM tgsis.gmap_timem m WHERE m.geoid = p_geoid AND m.timem = d.timem)
-        HAVING count(*) > 0;
+        SELECT v.problem, v.count, v.darts
+          FROM (SELECT count(*) FILTER (WHERE n.nodeid IS NULL) AS nodes,
+                       (array_agg(d.dartid ORDER BY d.dartid) FILTER (WHERE n.nodeid IS NULL))[1:20] AS node_darts,
+                       count(*) FILTER (WHERE m.timem IS NULL) AS periods,
+                       (array_agg(d.dartid ORDER BY d.dartid) FILTER (WHERE m.timem IS NULL))[1:20] AS period_darts
+                  FROM tgsis.gmap_dart d
+                  LEFT JOIN tgsis.gmap_node n ON n.geoid = d.geoid AND n.timem = d.timem AND n.nodeid = d.nodeid
+                  LEFT JOIN tgsis.gmap_timem m ON m.geoid = d.geoid AND m.timem = d.timem
+                 WHERE d.geoid = p_geoid) AS s
+         CROSS JOIN LATERAL (VALUES (1, 'dart of a node missing from its topology period', s.nodes, s.node_darts),
+                                    (2, 'dart of a topology period that does not exist', s.periods, s.period_darts))
+                    AS v (i, problem, count, darts)
+         WHERE v.count > 0
+         ORDER BY v.i;
 END
 $$;
 

@@ -1,4 +1,9 @@
 -- tgsis.exists_at(geoid, t, convention): whether a geometry exists at model time t (static ones always do).
+-- Every data model's rule: static geometries (model 1) and model 5's, whose
+-- time, if any, is an axis of their space, always; model 2 at its instants
+-- (the convention says which instant holds between two); models 3 and 4
+-- from their first geometry instant to their last, for ever after if alive
+-- (their frames at t). Listed after the models' frames (sources.txt).
 CREATE FUNCTION tgsis.exists_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
 RETURNS boolean
 LANGUAGE sql
@@ -7,7 +12,9 @@ PARALLEL SAFE
 AS $$
     SELECT CASE g.timemodel
                WHEN 'STATIC' THEN true
+               WHEN 'MULTIDIM' THEN true
                WHEN 'INSTANTS' THEN tgsis.instant_at(p_geoid, p_t, p_convention) IS NOT NULL
+               WHEN 'GMAP' THEN EXISTS (SELECT FROM tgsis.gmap_frame(p_geoid, p_t))
                ELSE EXISTS (SELECT FROM tgsis.evolving_frame(p_geoid, p_t))
            END
       FROM tgsis.geometry g
@@ -16,4 +23,4 @@ AS $$
 $$;
 
 COMMENT ON FUNCTION tgsis.exists_at(bigint, double precision, text) IS
-    'whether a geometry exists at model time t: static always; temporal ones from their first instant to their last (for ever after if alive); NULL if there is no such geometry';
+    'whether a geometry exists at model time t: static ones and model 5''s always; temporal ones (models 2, 3, 4) from their first instant to their last (for ever after if alive); NULL if there is no such geometry';

@@ -128,6 +128,19 @@ def _signs(g: GMap) -> npt.NDArray[np.bool_] | None:
     return g.orientation() if g.is_orientable() else None
 
 
+def _alpha_columns(geoid: int, images: IntArray) -> list[tuple[str, npt.ArrayLike, str]]:
+    """The rows of ``gmap_alpha`` / ``md_alpha`` for involutions ``images`` ((n + 1, d) int64), in key order.
+
+    Written dart by dart, level by level (the order of the key (geoid, dartid, level)), so that the table holds
+    them in the order ``tgsis.gmap_check`` reads them (``tgsis.gmap_alpha_array``) and ``fetch_gmap`` asks for.
+    """
+    levels, darts = images.shape
+    return [("geoid", np.full(levels * darts, geoid), "int8"),
+            ("level", np.tile(np.arange(levels, dtype=np.int16), darts), "int2"),
+            ("dartid", np.repeat(np.arange(darts, dtype=np.int64), levels), "int8"),
+            ("dartid2", np.ascontiguousarray(images.T).reshape(-1), "int8")]
+
+
 def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
                 properties: Mapping[str, Any] | None = None, *, name: str | None = None,
                 drop_extra_properties: bool = False, axes: Sequence[str] | None = None) -> int:
@@ -222,12 +235,8 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         if all(s is not None for s in signs):
             dart_columns.append(("positive", concat([s for s in signs if s is not None]), "bool"))
         storage.copy(conn, "tgsis", "gmap_dart", dart_columns)
-        storage.copy(conn, "tgsis", "gmap_alpha", [
-            ("geoid", np.full(sum(darts) * (n + 1), geoid), "int8"),
-            ("level", np.repeat(np.arange(n + 1, dtype=np.int16), sum(darts)), "int2"),
-            ("dartid", np.tile(np.arange(sum(darts), dtype=np.int64), n + 1), "int8"),
-            ("dartid2", concat([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)]) for i in range(n + 1)]),
-             "int8")])
+        images = np.stack([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)]) for i in range(n + 1)])
+        storage.copy(conn, "tgsis", "gmap_alpha", _alpha_columns(geoid, images))
         if level is not None and total_cells:
             storage.copy(conn, "tgsis", "gmap_cell", [
                 ("geoid", np.full(sum(counts), geoid), "int8"), ("acellid", np.arange(sum(counts), dtype=np.int64), "int8"),
@@ -304,11 +313,7 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
         if signs is not None:
             dart_columns.append(("positive", signs, "bool"))
         storage.copy(conn, "tgsis", "md_dart", dart_columns)
-        storage.copy(conn, "tgsis", "md_alpha", [
-            ("geoid", np.full(d * (n + 1), geoid), "int8"),
-            ("level", np.repeat(np.arange(n + 1, dtype=np.int16), d), "int2"),
-            ("dartid", np.tile(np.arange(d, dtype=np.int64), n + 1), "int8"),
-            ("dartid2", g.alpha.reshape(-1), "int8")])
+        storage.copy(conn, "tgsis", "md_alpha", _alpha_columns(geoid, g.alpha))
         if level is not None and count:
             storage.copy(conn, "tgsis", "md_cell", [
                 ("geoid", np.full(count, geoid), "int8"), ("acellid", np.arange(count, dtype=np.int64), "int8"),
@@ -346,8 +351,8 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
                             feature_id, ["int8", f"float8[{m}]"])
         dart = _copy_rows(conn, "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {} "
                                 "ORDER BY dartid", feature_id, ["int8", "int8", "int8"])
-        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {} ORDER BY level, dartid",
-                           feature_id, ["int2", "int8", "int8"])
+        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {} "
+                                 "ORDER BY dartid, level", feature_id, ["int2", "int8", "int8"])
         values = []
         if fc.cell_properties:
             values = copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {} ORDER BY _idx").format(
@@ -399,6 +404,32 @@ def _copy_rows(conn: Conn, query: str, geoid: int, types: Sequence[str]) -> list
     return copy_out(conn, sql.SQL(query).format(sql.Literal(geoid)), types)
 
 
+def _key_ordered_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int) -> IntArray | None:
+    """The involutions ((n + 1, d) int64) of alpha rows (level, dartid, dartid2 in key order) with one row per dart and level.
+
+    ``None`` when the rows are not exactly that (then each period's rows are picked out one by one).
+    """
+    levels, darts = n + 1, len(dartids)
+    if len(alpha[1]) != levels * darts or not np.array_equal(alpha[1], np.repeat(dartids, levels)) \
+            or not np.array_equal(alpha[0], np.tile(np.arange(levels, dtype=alpha[0].dtype), darts)):
+        return None
+    images: IntArray = alpha[2].reshape(darts, levels).T
+    return images
+
+
+def _period_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int, start: float,
+                   feature_id: int) -> list[IntArray]:
+    """The involutions of one period's darts (sorted ``dartids``) from alpha rows of any shape, or an error."""
+    images = []
+    for i in range(n + 1):
+        rows = (alpha[0] == i) & np.isin(alpha[1], dartids)
+        if int(rows.sum()) != len(dartids):
+            raise InvalidGMapError(f"G-map {feature_id}: period {float(start)!r} has {int(rows.sum())} alpha_{i} rows for "
+                                   f"{len(dartids)} darts", hint=f"SELECT * FROM tgsis.gmap_check({feature_id})")
+        images.append(alpha[2][rows])
+    return images
+
+
 def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingGMap:
     """A stored G-map feature with its periods, positions and cell values (one COPY per table).
 
@@ -429,26 +460,21 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         dart = _copy_rows(conn, "SELECT d.timem, d.dartid, d.nodeid, coalesce(d.acellid, -1) FROM tgsis.gmap_dart d "
                                 "WHERE d.geoid = {} ORDER BY d.dartid", feature_id, ["float8", "int8", "int8", "int8"])
         alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {} "
-                                 "ORDER BY level, dartid", feature_id, ["int2", "int8", "int8"])
+                                 "ORDER BY dartid, level", feature_id, ["int2", "int8", "int8"])
         values = []
         if fc.cell_properties:
             values = copy_out(conn, sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {} "
                                             "ORDER BY _timem, _timet, _idx").format(
                 sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
                 sql.Literal(feature_id)), ["float8", "float8", "int8", *(p.wire for p in fc.cell_properties)])
+    aligned = _key_ordered_images(alpha, dart[1], n)
     periods = []
     for start in np.unique(times[0]):
         instants = times[1][times[0] == start]
         in_nodes = nodes[1][nodes[0] == start]
         in_darts = dart[0] == start
         dartids, nodeids, acellids = dart[1][in_darts], dart[2][in_darts], dart[3][in_darts]
-        images = []
-        for i in range(n + 1):
-            rows = (alpha[0] == i) & np.isin(alpha[1], dartids)
-            if int(rows.sum()) != len(dartids):
-                raise InvalidGMapError(f"G-map {feature_id}: period {start!r} has {int(rows.sum())} alpha_{i} rows for "
-                                       f"{len(dartids)} darts", hint=f"SELECT * FROM tgsis.gmap_check({feature_id})")
-            images.append(alpha[2][rows])
+        images = list(aligned[:, in_darts]) if aligned is not None else _period_images(alpha, dartids, n, start, feature_id)
         at = vertex[0] == start
         positions = vertex[3][at].reshape(len(instants), len(in_nodes), m)
         topology = _period_map(dartids, nodeids, images, in_nodes, positions[0], feature_id)
@@ -504,7 +530,7 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
         low, high = (int(dart[0].min()), int(dart[0].max())) if len(dart[0]) else (0, -1)
         span = [sql.Literal(low), sql.Literal(high)]
         alpha = copy_out(conn, sql.SQL("SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = {} "
-                                       "AND a.dartid BETWEEN {} AND {} ORDER BY a.level, a.dartid").format(key[0], *span),
+                                       "AND a.dartid BETWEEN {} AND {} ORDER BY a.dartid, a.level").format(key[0], *span),
                          ["int2", "int8", "int8"])
         keep = np.isin(alpha[1], dart[0])
         alpha = [column[keep] for column in alpha]

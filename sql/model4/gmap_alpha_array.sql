@@ -1,0 +1,50 @@
+-- tgsis.gmap_alpha_array(geoid, n, darts, alpha): the involutions of a stored G-map as one array of dart offsets, or NULL.
+-- What makes tgsis.gmap_conditions fast. With the darts numbered densely
+-- lo..hi (as tgsis.insert_gmap numbers them) and exactly one alpha row per
+-- dart and level 0..n, the rows in key order (dartid, level) are an array
+-- where the dart d has the offset b = (d - lo) * (n + 1) and element
+-- b + l + 1 is the offset of alpha_l(d): a check is then a few array
+-- subscripts per dart in one pass instead of a keyed join per condition
+-- and level. ARRAY(SELECT ... ORDER BY) keeps the query's order (an
+-- aggregate's input order is not promised); the key's order is the table's
+-- when the rows were written in it, as tgsis.insert_gmap writes them.
+-- NULL when the rows are not like that (missing, extra or dangling rows,
+-- levels outside 0..n, holes in the numbering, more than 2^27 elements: an
+-- array stays far below PostgreSQL's 1 GB per value): only the row-by-row
+-- check (tgsis.gmap_conditions_by_rows) can then say what is wrong. A row
+-- that does not fit is marked -1 in the same scan; N * (n + 1) elements
+-- none of them -1 prove the shape, as the primary key (geoid, dartid,
+-- level) allows one row per dart and level.
+-- The tables are given as regclass (quoted by their output): no caller text
+-- reaches the SQL unquoted.
+CREATE FUNCTION tgsis.gmap_alpha_array(p_geoid bigint, p_n integer, p_dart regclass, p_alpha regclass)
+RETURNS integer[]
+LANGUAGE plpgsql
+STABLE
+SET search_path FROM CURRENT
+AS $$
+DECLARE
+    v_lo    bigint;
+    v_hi    bigint;
+    v_darts bigint;
+    v_array integer[];
+BEGIN
+    EXECUTE format('SELECT min(dartid), max(dartid), count(*) FROM %s WHERE geoid = $1', p_dart)
+       INTO v_lo, v_hi, v_darts USING p_geoid;
+    IF v_darts = 0 OR v_hi - v_lo + 1 <> v_darts OR v_darts * (p_n + 1) > 134217728 THEN
+        RETURN NULL;
+    END IF;
+    EXECUTE format(
+        'SELECT ARRAY(SELECT CASE WHEN level BETWEEN 0 AND $4 AND dartid BETWEEN $2 AND $3 AND dartid2 BETWEEN $2 AND $3
+                                  THEN ((dartid2 - $2) * ($4 + 1))::integer ELSE -1 END
+                        FROM %s WHERE geoid = $1 ORDER BY dartid, level)', p_alpha)
+       INTO v_array USING p_geoid, v_lo, v_hi, p_n;
+    IF cardinality(v_array) <> v_darts * (p_n + 1) OR array_position(v_array, -1) IS NOT NULL THEN
+        RETURN NULL;
+    END IF;
+    RETURN v_array;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.gmap_alpha_array(bigint, integer, regclass, regclass) IS
+    'the involutions of a stored G-map as dart offsets (dart d at b = (d - lo) * (n + 1); element b + l + 1: the offset of alpha_l(d)), NULL unless there is exactly one alpha row per dart and level 0..n over densely numbered darts; what makes tgsis.gmap_conditions one pass';
