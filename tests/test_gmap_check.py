@@ -16,6 +16,7 @@ import numpy as np
 import psycopg
 import pytest
 
+import tgsis
 from tgsis import gmaps
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
@@ -166,3 +167,19 @@ def test_a_valid_map_is_read_as_an_array_and_passes(conn: Conn) -> None:
         assert _read_as_array(conn, geoid, n, tables)
         assert G.gmap_check(conn, geoid) == []
         conn.rollback()
+
+
+def test_a_break_in_a_version_is_seen_there_alike_and_not_in_default(conn: Conn) -> None:
+    geoid, n, tables = _stored(conn, "GMAP")
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "edit")
+    with tgsis.in_version(conn, "edit"):
+        conn.execute(SAME_SHAPE["non-involution"].format(alpha="tgsis.gmap_alpha"), {"g": geoid})
+        conn.commit()
+        assert _read_as_array(conn, geoid, n, tables)       # through the versioned view
+        fast, rows = _both(conn, geoid, n, tables)
+        assert fast == rows and "alpha_0 is not an involution" in [p for p, _, _ in fast]
+        conn.commit()
+    conn.commit()
+    assert G.gmap_check(conn, geoid) == []

@@ -347,17 +347,17 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         if head is None:
             raise NotFoundError(f"feature class {fc.name} has no multiply indexed G-map feature {feature_id}")
         n, m, axes = int(head[0]), int(head[1]), tuple(head[2])
-        vertex = _copy_rows(conn, "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {} ORDER BY vrtxid",
-                            feature_id, ["int8", f"float8[{m}]"])
-        dart = _copy_rows(conn, "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {} "
-                                "ORDER BY dartid", feature_id, ["int8", "int8", "int8"])
-        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {} "
-                                 "ORDER BY dartid, level", feature_id, ["int2", "int8", "int8"])
+        vertex = _copy_rows(conn, "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
+                            feature_id, ["int8", f"float8[{m}]"], [0])
+        dart = _copy_rows(conn, "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {}",
+                          feature_id, ["int8", "int8", "int8"], [0])
+        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {}",
+                           feature_id, ["int2", "int8", "int8"], [1, 0])
         values = []
         if fc.cell_properties:
-            values = copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {} ORDER BY _idx").format(
+            values = _in_order(copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {}").format(
                 sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
-                sql.Literal(feature_id)), ["int8", *(p.wire for p in fc.cell_properties)])
+                sql.Literal(feature_id)), ["int8", *(p.wire for p in fc.cell_properties)]), [0])
     images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
     if any(len(a) != len(dart[0]) for a in images):
         raise InvalidGMapError(f"G-map {feature_id}: the alpha rows do not cover its {len(dart[0])} darts",
@@ -365,9 +365,7 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     topology = _period_map(dart[0], dart[1], images, vertex[0], vertex[1].reshape(len(vertex[0]), m), feature_id)
     if fc.cell_level is None or not values or fc.cell_level > n:
         return topology, axes
-    labels = topology.cells(fc.cell_level)
-    first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
-    first[labels[::-1]] = dart[2][::-1]
+    first = _cell_ids(topology, fc.cell_level, dart[2])
     cell_values = {p.name: values[1 + j][local_positions(values[0], first, "cell values", feature_id)]
                    for j, p in enumerate(fc.cell_properties)}
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
@@ -400,8 +398,40 @@ def _period_map(dartids: IntArray, nodeids: IntArray, alpha: Sequence[IntArray],
     return GMap(local, vertex, points)
 
 
-def _copy_rows(conn: Conn, query: str, geoid: int, types: Sequence[str]) -> list[npt.NDArray[Any]]:
-    return copy_out(conn, sql.SQL(query).format(sql.Literal(geoid)), types)
+def _cell_ids(topology: GMap, level: int, acellids: IntArray) -> IntArray:
+    """The stored cell id (``acellid``) of each of the G-map's ``level``-cells, in ``topology.cells(level)`` order.
+
+    The darts of one cell share its id; ``acellids`` : (n_darts,) int64 are the darts' ids.
+    """
+    labels = topology.cells(level)
+    ids = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
+    ids[labels[::-1]] = acellids[::-1]          # reversed: the last write wins, so the first dart's id
+    return ids
+
+
+def _copy_rows(conn: Conn, query: str, geoid: int, types: Sequence[str],
+               order: Sequence[int]) -> list[npt.NDArray[Any]]:
+    """The rows of ``query`` (``{}``: the geoid) as columns, sorted by the columns at the positions ``order``."""
+    return _in_order(copy_out(conn, sql.SQL(query).format(sql.Literal(geoid)), types), order)
+
+
+def _in_order(columns: list[npt.NDArray[Any]], order: Sequence[int]) -> list[npt.NDArray[Any]]:
+    """The rows sorted by the columns at the positions ``order`` (most significant first).
+
+    The server is never asked to sort: on tables just loaded (no statistics yet) its plan sorted 18M rows on
+    disk; the rows come in the order they were written, usually the key's, and then only the check runs here.
+    """
+    keys = [columns[i] for i in order]
+    if len(keys[0]) < 2:
+        return columns
+    later, tied = np.zeros(len(keys[0]) - 1, dtype=bool), np.ones(len(keys[0]) - 1, dtype=bool)
+    for key in keys:
+        later |= tied & (key[1:] > key[:-1])
+        tied &= key[1:] == key[:-1]
+    if bool(np.all(later | tied)):
+        return columns
+    rows = np.lexsort(tuple(reversed(keys)))
+    return [column[rows] for column in columns]
 
 
 def _key_ordered_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int) -> IntArray | None:
@@ -451,22 +481,21 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         if head is None:
             raise NotFoundError(f"feature class {fc.name} has no G-map feature {feature_id}")
         name, alive, n, m = head[0], bool(head[1]), int(head[2]), int(head[3])
-        times = _copy_rows(conn, "SELECT timem, timet FROM tgsis.gmap_timet WHERE geoid = {} ORDER BY timem, timet",
-                           feature_id, ["float8", "float8"])
-        nodes = _copy_rows(conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {} ORDER BY timem, nodeid",
-                           feature_id, ["float8", "int8"])
-        vertex = _copy_rows(conn, "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} "
-                                  "ORDER BY timem, timet, nodeid", feature_id, ["float8", "float8", "int8", f"float8[{m}]"])
-        dart = _copy_rows(conn, "SELECT d.timem, d.dartid, d.nodeid, coalesce(d.acellid, -1) FROM tgsis.gmap_dart d "
-                                "WHERE d.geoid = {} ORDER BY d.dartid", feature_id, ["float8", "int8", "int8", "int8"])
-        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {} "
-                                 "ORDER BY dartid, level", feature_id, ["int2", "int8", "int8"])
+        times = _copy_rows(conn, "SELECT timem, timet FROM tgsis.gmap_timet WHERE geoid = {}",
+                           feature_id, ["float8", "float8"], [0, 1])
+        nodes = _copy_rows(conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {}",
+                           feature_id, ["float8", "int8"], [0, 1])
+        vertex = _copy_rows(conn, "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {}",
+                            feature_id, ["float8", "float8", "int8", f"float8[{m}]"], [0, 1, 2])
+        dart = _copy_rows(conn, "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",
+                          feature_id, ["float8", "int8", "int8", "int8"], [1])
+        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {}",
+                           feature_id, ["int2", "int8", "int8"], [1, 0])
         values = []
         if fc.cell_properties:
-            values = copy_out(conn, sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {} "
-                                            "ORDER BY _timem, _timet, _idx").format(
+            values = _in_order(copy_out(conn, sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {}").format(
                 sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
-                sql.Literal(feature_id)), ["float8", "float8", "int8", *(p.wire for p in fc.cell_properties)])
+                sql.Literal(feature_id)), ["float8", "float8", "int8", *(p.wire for p in fc.cell_properties)]), [0, 1, 2])
     aligned = _key_ordered_images(alpha, dart[1], n)
     periods = []
     for start in np.unique(times[0]):
@@ -480,9 +509,7 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         topology = _period_map(dartids, nodeids, images, in_nodes, positions[0], feature_id)
         period_values: dict[str, npt.NDArray[Any]] = {}
         if fc.cell_level is not None and values and fc.cell_level <= n:
-            labels = topology.cells(fc.cell_level)
-            first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
-            first[labels[::-1]] = acellids[::-1]          # the acellid of each cell (its darts share it)
+            first = _cell_ids(topology, fc.cell_level, acellids)
             here = values[0] == start
             for j, prop in enumerate(fc.cell_properties):
                 column = values[3 + j][here].reshape(len(instants), -1)
@@ -552,9 +579,7 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     topology = _period_map(dart[0], dart[1], images, ends[0][0], points, feature_id)
     if not values or fc.cell_level is None or fc.cell_level > n:
         return topology
-    labels = topology.cells(fc.cell_level)
-    first = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
-    first[labels[::-1]] = dart[2][::-1]
+    first = _cell_ids(topology, fc.cell_level, dart[2])
     order = local_positions(values[0][0], first, "cell values", feature_id)
     cell_values = {p.name: _mix(values[0][1 + j], values[1][1 + j], w, same)[order] for j, p in enumerate(props)}
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values})
