@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PYTEST_ARGS ?=
 
-.PHONY: demo test check extension clean pictures
+.PHONY: demo test check extension installcheck clean pictures
 
 # A venv with tgsis (editable), its test tools and the embedded PostgreSQL 18.
 $(VENV)/.installed: pyproject.toml
@@ -53,6 +53,12 @@ extension:
 	else \
 	    echo "note: no pg_config on PATH: the extension is not built for a system PostgreSQL"; \
 	fi
+
+# The pg_regress tests of sql/test against the installed extension on a running
+# server (PGHOST, PGPORT, PGUSER: a superuser), as a DBA or packager checks an
+# install: make extension (or sudo make -C sql install) first.
+installcheck:
+	$(MAKE) --no-print-directory -C sql installcheck
 
 clean:
 	$(MAKE) -C sql clean
