@@ -6,7 +6,15 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PYTEST_ARGS ?=
 
-.PHONY: demo test check extension installcheck clean pictures
+.PHONY: all install demo test check extension installcheck clean pictures
+
+# A bare `make` builds the extension scripts and `make install` installs them
+# (PGXS, the PostgreSQL of pg_config): what `pgxn install tgsis` runs (META.json).
+all:
+	$(MAKE) --no-print-directory -C sql
+
+install:
+	$(MAKE) --no-print-directory -C sql install
 
 # A venv with tgsis (editable), its test tools and the embedded PostgreSQL 18.
 $(VENV)/.installed: pyproject.toml
