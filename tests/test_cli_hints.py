@@ -15,7 +15,6 @@ from pathlib import Path
 import psycopg
 import pytest
 
-import tgsis
 from tests.shared_data import cfm
 from tgsis.cli import main
 from tgsis.clihints import foreign_terms, to_cli

@@ -27,21 +27,34 @@ def _pg_config(pg: TestServer) -> str:
         return str(pg.local.binaries.tool("pg_config"))
     found = shutil.which("pg_config")
     if found is None:
-        pytest.fail("no pg_config for the server of TGSIS_TEST_DSN on PATH: make installcheck needs its PGXS",
-                    pytrace=False)
+        pytest.fail(
+            "no pg_config for the server of TGSIS_TEST_DSN on PATH: make installcheck needs its PGXS", pytrace=False
+        )
     return found
 
 
-def _installcheck(pg: TestServer, dbname: str, *, inputdir: str = "test", outputdir: Path,
-                  regress: str | None = None) -> subprocess.CompletedProcess[str]:
+def _installcheck(
+    pg: TestServer, dbname: str, *, inputdir: str = "test", outputdir: Path, regress: str | None = None
+) -> subprocess.CompletedProcess[str]:
     """``make -C sql installcheck`` against the session's server, in database ``dbname`` (dropped after)."""
     params = conninfo_to_dict(pg.admin_dsn)
-    env = dict(os.environ, PGHOST=str(params.get("host", "")), PGPORT=str(params.get("port", "5432")),
-               PGUSER=str(params.get("user", "postgres")))
+    env = dict(
+        os.environ,
+        PGHOST=str(params.get("host", "")),
+        PGPORT=str(params.get("port", "5432")),
+        PGUSER=str(params.get("user", "postgres")),
+    )
     if params.get("password"):
         env["PGPASSWORD"] = str(params["password"])
-    args = ["make", "--no-print-directory", "-C", str(SQL_DIR), "installcheck", f"PG_CONFIG={_pg_config(pg)}",
-            f"REGRESS_OPTS=--inputdir={inputdir} --outputdir={outputdir} --dbname={dbname}"]
+    args = [
+        "make",
+        "--no-print-directory",
+        "-C",
+        str(SQL_DIR),
+        "installcheck",
+        f"PG_CONFIG={_pg_config(pg)}",
+        f"REGRESS_OPTS=--inputdir={inputdir} --outputdir={outputdir} --dbname={dbname}",
+    ]
     if regress is not None:
         args.append(f"REGRESS={regress}")
     try:
@@ -70,7 +83,8 @@ def test_a_wrong_expectation_fails_installcheck(pg: TestServer, tmp_path: Path) 
     (inputs / "expected").mkdir()
     (inputs / "sql" / "wrong.sql").write_text("SELECT 1 AS one;\n")
     (inputs / "expected" / "wrong.out").write_text("SELECT 1 AS one;\n one \n-----\n   2\n(1 row)\n\n")
-    result = _installcheck(pg, f"tgsis_installcheck_wrong_{os.getpid()}", inputdir=str(inputs),
-                           outputdir=tmp_path / "out", regress="wrong")
+    result = _installcheck(
+        pg, f"tgsis_installcheck_wrong_{os.getpid()}", inputdir=str(inputs), outputdir=tmp_path / "out", regress="wrong"
+    )
     assert result.returncode != 0
     assert "wrong" in result.stdout and (tmp_path / "out" / "regression.diffs").read_text().count("-   2") == 1

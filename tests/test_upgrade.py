@@ -52,12 +52,20 @@ SELECT tgsis.save_revision('survey2');
 def _objects(conn: psycopg.Connection[Any]) -> dict[str, list[tuple[str, ...]]]:
     """The tgsis catalog, the class's tables in public, and what belongs to the extension."""
     objects = describe_tgsis_objects(conn)
-    objects.update({f"public {kind}": rows for kind, rows in describe_tgsis_objects(conn, schema="public").items()
-                    if kind in ("relation", "column", "constraint", "index", "view", "trigger")})
+    objects.update(
+        {
+            f"public {kind}": rows
+            for kind, rows in describe_tgsis_objects(conn, schema="public").items()
+            if kind in ("relation", "column", "constraint", "index", "view", "trigger")
+        }
+    )
     objects["extension member"] = sorted(
-        (str(r[0]),) for r in conn.execute(
+        (str(r[0]),)
+        for r in conn.execute(
             "SELECT pg_describe_object(classid, objid, objsubid) FROM pg_depend "
-            "WHERE deptype = 'e' AND refobjid = (SELECT oid FROM pg_extension WHERE extname = 'tgsis')").fetchall())
+            "WHERE deptype = 'e' AND refobjid = (SELECT oid FROM pg_extension WHERE extname = 'tgsis')"
+        ).fetchall()
+    )
     return objects
 
 
@@ -99,8 +107,9 @@ def _upgrade_route(method: str, pg: TestServer) -> None:
 
 
 @pytest.mark.parametrize("method", ["extension", "sql"])
-def test_upgraded_database_equals_a_fresh_install(method: str, pg: TestServer, make_database: MakeDb,
-                                                   tmp_path: Path) -> None:
+def test_upgraded_database_equals_a_fresh_install(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
     _upgrade_route(method, pg)
     upgraded, fresh = make_database(), make_database()
     with psycopg.connect(upgraded) as conn:
@@ -126,18 +135,23 @@ def test_upgraded_database_equals_a_fresh_install(method: str, pg: TestServer, m
         conn.commit()
         want = _objects(conn)
     assert got["function"] and got["relation"] and got["public relation"], "the comparison must see the objects"
-    differences = [f"{kind}: only in the {where}: {row}"
-                   for kind in want
-                   for where, rows in (("upgraded database", set(got[kind]) - set(want[kind])),
-                                       ("fresh install", set(want[kind]) - set(got[kind])))
-                   for row in sorted(rows)]
+    differences = [
+        f"{kind}: only in the {where}: {row}"
+        for kind in want
+        for where, rows in (
+            ("upgraded database", set(got[kind]) - set(want[kind])),
+            ("fresh install", set(want[kind]) - set(got[kind])),
+        )
+        for row in sorted(rows)
+    ]
     assert differences == [], "\n".join(differences)
     assert got == want
 
 
 @pytest.mark.parametrize("method", ["extension", "sql"])
-def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(method: str, pg: TestServer,
-                                                                  make_database: MakeDb, tmp_path: Path) -> None:
+def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
     _upgrade_route(method, pg)
     with psycopg.connect(make_database()) as conn:
         tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
@@ -153,8 +167,11 @@ def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(method: str, p
             changed = tgsis.fetch_feature(conn, "horizon", geoid)
         assert changed.mesh.vertices[2].tolist() == [0, 1, -5] and changed.properties["unit"] == "Jurassic"
         # written after: a new feature in the version, a change saved, the old revision still there
-        mesh = tgsis.Surface(np.array([[0, 0, 1], [2, 0, 1], [0, 2, 1]], float), np.array([[0, 1, 2]]),
-                             vertex_properties={"depth": [1.0, 2.0, 3.0]})
+        mesh = tgsis.Surface(
+            np.array([[0, 0, 1], [2, 0, 1], [0, 2, 1]], float),
+            np.array([[0, 1, 2]]),
+            vertex_properties={"depth": [1.0, 2.0, 3.0]},
+        )
         with tgsis.in_version(conn, "survey2"):
             new = tgsis.insert_feature(conn, "horizon", mesh, properties={"unit": "Cretaceous"})
         conn.commit()
@@ -174,25 +191,33 @@ def test_every_changed_file_is_in_the_upgrade() -> None:
     upgrade = ExtensionSources.default().upgrade(OLD)
     assert upgrade.unhandled == [], (
         "changed since 0.1.0 and not replaceable: include them (-- @include FILE) or write their ALTERs and mark them "
-        "(-- @handled FILE) in sql/upgrade/tgsis--0.1.0--0.2.0.sql (docs/developing.md, 'An upgrade script')")
+        "(-- @handled FILE) in sql/upgrade/tgsis--0.1.0--0.2.0.sql (docs/developing.md, 'An upgrade script')"
+    )
 
 
 def test_shape_changes_are_dropped_before_the_new_definitions() -> None:
-    old = {"a.sql": "CREATE FUNCTION tgsis.f(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n"
-                    "CREATE FUNCTION tgsis.g(p_x int DEFAULT 1) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n"
-                    "CREATE FUNCTION tgsis.gone() RETURNS int LANGUAGE sql AS $$ SELECT 1; $$;\n"
-                    "CREATE VIEW tgsis.v AS SELECT 1 AS a;\n",
-           "t.sql": "CREATE TABLE tgsis.t (a int);\n"}
-    new = {"a.sql": "CREATE FUNCTION tgsis.f(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 2 $$;\n"
-                    "CREATE FUNCTION tgsis.g(p_x int DEFAULT 1, p_y text = 'a;b') RETURNS bigint\n"
-                    "LANGUAGE sql AS $$ SELECT 1 $$;\n"
-                    "CREATE VIEW tgsis.v AS SELECT 1 AS a, 2 AS b;\n"
-                    "COMMENT ON VIEW tgsis.v IS 'x';\n",
-           "t.sql": "CREATE TABLE tgsis.t (a int, b int);\n"}
+    old = {
+        "a.sql": "CREATE FUNCTION tgsis.f(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        "CREATE FUNCTION tgsis.g(p_x int DEFAULT 1) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        "CREATE FUNCTION tgsis.gone() RETURNS int LANGUAGE sql AS $$ SELECT 1; $$;\n"
+        "CREATE VIEW tgsis.v AS SELECT 1 AS a;\n",
+        "t.sql": "CREATE TABLE tgsis.t (a int);\n",
+    }
+    new = {
+        "a.sql": "CREATE FUNCTION tgsis.f(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 2 $$;\n"
+        "CREATE FUNCTION tgsis.g(p_x int DEFAULT 1, p_y text = 'a;b') RETURNS bigint\n"
+        "LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        "CREATE VIEW tgsis.v AS SELECT 1 AS a, 2 AS b;\n"
+        "COMMENT ON VIEW tgsis.v IS 'x';\n",
+        "t.sql": "CREATE TABLE tgsis.t (a int, b int);\n",
+    }
     upgrade = _upgrade.Upgrade(old, new, "-- @sources\n")
     drops = [line for line in upgrade.generated().splitlines() if line.startswith("DROP")]
-    assert drops == ["DROP VIEW IF EXISTS tgsis.v;", "DROP FUNCTION IF EXISTS tgsis.g(p_x int);",
-                     "DROP FUNCTION IF EXISTS tgsis.gone();"]
+    assert drops == [
+        "DROP VIEW IF EXISTS tgsis.v;",
+        "DROP FUNCTION IF EXISTS tgsis.g(p_x int);",
+        "DROP FUNCTION IF EXISTS tgsis.gone();",
+    ]
     assert "CREATE OR REPLACE FUNCTION tgsis.f(p_x int)" in upgrade.generated()
     assert upgrade.unhandled == ["t.sql"]
     assert "NOT HANDLED" in upgrade.script("--")

@@ -47,8 +47,25 @@ _DIRECTIVE = re.compile(r"^--\s*@(include|handled|sources)\b\s*(\S*)", re.MULTIL
 _DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)?\$")
 # words that end a function's header (arguments and RETURNS clause)
 _OPTION_WORDS = {
-    "LANGUAGE", "AS", "IMMUTABLE", "STABLE", "VOLATILE", "SET", "SECURITY", "STRICT", "CALLED",
-    "PARALLEL", "COST", "ROWS", "LEAKPROOF", "NOT", "SUPPORT", "WINDOW", "TRANSFORM", "BEGIN", "RETURN",
+    "LANGUAGE",
+    "AS",
+    "IMMUTABLE",
+    "STABLE",
+    "VOLATILE",
+    "SET",
+    "SECURITY",
+    "STRICT",
+    "CALLED",
+    "PARALLEL",
+    "COST",
+    "ROWS",
+    "LEAKPROOF",
+    "NOT",
+    "SUPPORT",
+    "WINDOW",
+    "TRANSFORM",
+    "BEGIN",
+    "RETURN",
     "EXTERNAL",
 }
 _REPLACEABLE = re.compile(
@@ -84,15 +101,16 @@ class Statement:
     @property
     def name(self) -> str:
         """Qualified name of a function or view (``tgsis.version``)."""
-        match = re.match(r"CREATE\s+(?:OR\s+REPLACE\s+)?(?:FUNCTION|PROCEDURE|VIEW)\s+([\w.\"]+)",
-                         self.code, re.IGNORECASE)
+        match = re.match(
+            r"CREATE\s+(?:OR\s+REPLACE\s+)?(?:FUNCTION|PROCEDURE|VIEW)\s+([\w.\"]+)", self.code, re.IGNORECASE
+        )
         return match.group(1) if match else ""
 
     def header(self) -> str:
         """A function's arguments and RETURNS clause, whitespace collapsed: its shape."""
         start = self.code.index("(", len(re.match(r"[^(]*", self.code).group(0)))  # type: ignore[union-attr]
         end = _matching_paren(self.code, start)
-        rest = self.code[end + 1:]
+        rest = self.code[end + 1 :]
         words = []
         depth = 0
         for token in re.finditer(r"\(|\)|'[^']*'|\"[^\"]*\"|[^\s()]+", rest):
@@ -102,14 +120,14 @@ class Statement:
             depth += word == "("
             depth -= word == ")"
             words.append(word)
-        return _collapse(self.code[start:end + 1]) + " " + _collapse(" ".join(words))
+        return _collapse(self.code[start : end + 1]) + " " + _collapse(" ".join(words))
 
     def signature(self) -> str:
         """``name(arguments without defaults)``, as DROP FUNCTION takes it."""
         start = self.code.index("(", len(re.match(r"[^(]*", self.code).group(0)))  # type: ignore[union-attr]
         end = _matching_paren(self.code, start)
         args = []
-        for arg in _split_top(self.code[start + 1:end], ","):
+        for arg in _split_top(self.code[start + 1 : end], ","):
             arg = re.split(r"\s+DEFAULT\s+|\s*=\s*", _strip_comments(arg), maxsplit=1, flags=re.IGNORECASE)[0]
             if arg.strip():
                 args.append(_collapse(arg))
@@ -184,7 +202,9 @@ def split_statements(text: str) -> list[Statement]:
                 i += 2 if text.startswith("''", i) else 1
         elif c == '"':
             i = text.index('"', i + 1)
-        elif c == "$" and (m := _DOLLAR.match(text, i)) and not (i > 0 and (text[i - 1].isalnum() or text[i - 1] == "_")):
+        elif (
+            c == "$" and (m := _DOLLAR.match(text, i)) and not (i > 0 and (text[i - 1].isalnum() or text[i - 1] == "_"))
+        ):
             i = text.index(m.group(0), m.end()) + len(m.group(0)) - 1
         elif c == ";":
             _add(statements, text[begin:i])
@@ -203,8 +223,11 @@ def _add(statements: list[Statement], text: str) -> None:
 def split_script(script: str) -> dict[str, str]:
     """A built install script back as ``{source file: its text}``, in order."""
     marks = list(FILE_MARKER.finditer(script))
-    return {m.group(1): script[m.end() + 1: marks[k + 1].start() if k + 1 < len(marks) else len(script)].rstrip("\n") + "\n"
-            for k, m in enumerate(marks)}
+    return {
+        m.group(1): script[m.end() + 1 : marks[k + 1].start() if k + 1 < len(marks) else len(script)].rstrip("\n")
+        + "\n"
+        for k, m in enumerate(marks)
+    }
 
 
 def _replaceable(text: str) -> bool:
@@ -286,7 +309,9 @@ class Upgrade:
                 name = directive.group(2)
                 if name in self.new_files:
                     # the file's functions, views, comments and grants; its tables are the hand part's
-                    kept = [st.or_replace() + ";" for st in split_statements(self.new_files[name]) if st.kind != "state"]
+                    kept = [
+                        st.or_replace() + ";" for st in split_statements(self.new_files[name]) if st.kind != "state"
+                    ]
                     out.append(line + "".join(kept) + ("\n" if kept else ""))
                 else:
                     out.append(line)
@@ -298,8 +323,11 @@ class Upgrade:
         if not placed:
             out.append(self.generated())
         if unhandled := self.unhandled:
-            out.append("\n-- NOT HANDLED (changed files that are not replaceable; see docs/developing.md): "
-                       + ", ".join(unhandled) + "\n")
+            out.append(
+                "\n-- NOT HANDLED (changed files that are not replaceable; see docs/developing.md): "
+                + ", ".join(unhandled)
+                + "\n"
+            )
         return "".join(out)
 
 
@@ -336,9 +364,11 @@ def main(argv: list[str]) -> int:
 
 def header_for(old: str, new: str) -> str:
     """First lines of an assembled upgrade script."""
-    return (f"-- tgsis {old} -> {new}: assembled from sql/upgrade/tgsis--{old}--{new}.sql and the "
-            f"sources of {new} (src/tgsis/db/_upgrade.py), do not edit\n"
-            '\\echo Use "ALTER EXTENSION tgsis UPDATE" to load this file. \\quit\n')
+    return (
+        f"-- tgsis {old} -> {new}: assembled from sql/upgrade/tgsis--{old}--{new}.sql and the "
+        f"sources of {new} (src/tgsis/db/_upgrade.py), do not edit\n"
+        '\\echo Use "ALTER EXTENSION tgsis UPDATE" to load this file. \\quit\n'
+    )
 
 
 if __name__ == "__main__":
