@@ -143,6 +143,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         checkout,
         save_feature,
     )
+    from tgsis.db.adapters import Box, register_types
     from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
     from tgsis.db.temporal import (
         add_instant,
@@ -278,6 +279,8 @@ _LAZY: dict[str, str] = {
     "Model": "tgsis.db.modelsets",
     "ModelObject": "tgsis.db.modelsets",
     "create_model": "tgsis.db.modelsets",
+    "register_types": "tgsis.db.adapters",
+    "Box": "tgsis.db.adapters",
     "add_to_model": "tgsis.db.modelsets",
     "remove_from_model": "tgsis.db.modelsets",
     "model_objects": "tgsis.db.modelsets",
@@ -402,6 +405,8 @@ __all__ = [
     "Model",
     "ModelObject",
     "create_model",
+    "register_types",
+    "Box",
     "add_to_model",
     "remove_from_model",
     "model_objects",
