@@ -11,6 +11,8 @@ and the plain-SQL upgrade of ``tgsis.install``.
 from __future__ import annotations
 
 import re
+import subprocess
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -21,6 +23,8 @@ import pytest
 
 import tgsis
 from tests.catalog import describe_tgsis_objects
+from tests.roles import login_roles
+from tests.test_backup import _bindir_of
 from tgsis.db import _upgrade
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.testing import TestServer
@@ -67,6 +71,15 @@ def _objects(conn: psycopg.Connection[Any]) -> dict[str, list[tuple[str, ...]]]:
         ).fetchall()
     )
     return objects
+
+
+def _differences(got: dict[str, list[tuple[str, ...]]], want: dict[str, list[tuple[str, ...]]]) -> list[str]:
+    return [
+        f"{kind}: only in the {where}: {row}"
+        for kind in want
+        for where, rows in (("first", set(got[kind]) - set(want[kind])), ("second", set(want[kind]) - set(got[kind])))
+        for row in sorted(rows)
+    ]
 
 
 def _frozen(tmp_path: Path, version: str) -> ExtensionSources:
@@ -223,3 +236,110 @@ def test_shape_changes_are_dropped_before_the_new_definitions() -> None:
     assert "NOT HANDLED" in upgrade.script("--")
     handled = _upgrade.Upgrade(old, new, "ALTER TABLE tgsis.t ADD b int;\n-- @handled t.sql\n")
     assert handled.unhandled == []
+
+
+def test_only_new_grants_and_those_of_dropped_objects_run_again() -> None:
+    grants = "GRANT SELECT ON tgsis.t TO tgsis_reader;\nREVOKE ALL ON FUNCTION tgsis.g(int) FROM PUBLIC;\n"
+    old = {"a.sql": "CREATE FUNCTION tgsis.g(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n" + grants}
+    new = {
+        "a.sql": "CREATE FUNCTION tgsis.g(p_x int) RETURNS bigint LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        + grants
+        + "GRANT SELECT ON tgsis.u TO tgsis_reader;\n"
+    }
+    generated = _upgrade.Upgrade(old, new, "").generated()
+    assert "DROP FUNCTION IF EXISTS tgsis.g(p_x int);" in generated
+    assert "REVOKE ALL ON FUNCTION tgsis.g(int) FROM PUBLIC" in generated, "g was dropped: its rights are made again"
+    assert "GRANT SELECT ON tgsis.u TO tgsis_reader" in generated, "a new grant"
+    assert "GRANT SELECT ON tgsis.t TO tgsis_reader" not in generated, "unchanged: its ACL is kept as it is"
+
+
+def _old_database(method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path) -> str:
+    _upgrade_route(method, pg)
+    dsn = make_database()
+    with psycopg.connect(dsn) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute(_USE)
+    return dsn
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_an_editor_cannot_upgrade_and_nothing_changes(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    dsn = _old_database(method, pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        before = _objects(conn)
+    with login_roles(dsn, {"eve": "tgsis_editor"}) as roles, roles.connect("eve") as eve:
+        if method == "extension":
+            # (PostgreSQL runs the script as eve, who may not create in schema tgsis)
+            with pytest.raises(psycopg.errors.InsufficientPrivilege):
+                eve.execute("ALTER EXTENSION tgsis UPDATE")
+        else:
+            with pytest.raises(tgsis.MissingPrivilegeError, match="permission denied for schema tgsis"):
+                tgsis.install(eve)
+        eve.rollback()
+    with psycopg.connect(dsn) as conn:
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (OLD,)
+        assert _objects(conn) == before
+
+
+def test_two_sessions_upgrading_at_once_upgrade_once(pg: TestServer, make_database: MakeDb, tmp_path: Path) -> None:
+    dsn = _old_database("sql", pg, make_database, tmp_path)
+    results: list[str] = []
+    errors: list[BaseException] = []
+    barrier = threading.Barrier(2)
+
+    def worker() -> None:
+        try:
+            with psycopg.connect(dsn) as conn:
+                barrier.wait()
+                results.append(tgsis.install(conn).action)
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=worker) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert sorted(results) == ["unchanged", "upgraded"]
+    with psycopg.connect(dsn) as conn:
+        rows = conn.execute("SELECT version FROM tgsis.installation ORDER BY version").fetchall()
+        assert rows == [(OLD,), (tgsis.__version__,)]
+
+
+def test_an_upgraded_database_dumps_and_restores_whole(pg: TestServer, make_database: MakeDb, tmp_path: Path) -> None:
+    """The storage tables the upgrade made are no extension members: pg_dump keeps them and their rows."""
+    dsn = _old_database("extension", pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        # a DBA's own grants on tgsis objects: the upgrade must not make them "initial" (pg_dump would drop them)
+        conn.execute("GRANT EXECUTE ON FUNCTION tgsis.version() TO tgsis_nobody")
+        conn.execute("GRANT SELECT ON tgsis.catalog TO tgsis_nobody")
+        conn.commit()
+        conn.execute("ALTER EXTENSION tgsis UPDATE")
+        conn.commit()
+        with tgsis.in_version(conn, "survey2"):
+            tgsis.create_model(conn, "resource", [1])
+        conn.commit()
+        want = _objects(conn), _state(conn)
+    bindir = _bindir_of(pg)
+    dump = tmp_path / "upgraded.dump"
+    done = subprocess.run(
+        [str(bindir / "pg_dump"), "--format=custom", f"--file={dump}", dsn], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    restored = make_database()
+    done = subprocess.run(
+        [str(bindir / "pg_restore"), "--exit-on-error", "-d", restored, str(dump)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    with psycopg.connect(restored) as conn:
+        got = _objects(conn)
+        assert _differences(got, want[0]) == [], "\n".join(_differences(got, want[0]))
+        assert _state(conn) == want[1]
+        with tgsis.in_version(conn, "survey2"):
+            assert [o.id for o in tgsis.model_objects(conn, "resource")] == [1]

@@ -77,7 +77,11 @@ BEGIN
         'the objects of each model: one row per object and model it belongs to (versioned with the object, deleted with it)';
     COMMENT ON COLUMN tgsis.model_object.geoid IS 'the object (tgsis.geometry.geoid: a feature)';
     COMMENT ON COLUMN tgsis.model_object.modelid IS 'the model (tgsis.model.modelid)';
-    PERFORM tgsis.grant_model_tables(0::smallint);
+    -- their rights (tgsis.grant_model_tables(0) would grant tgsis.geometry's again: a GRANT here
+    -- records an object's whole ACL as its initial privileges, which pg_dump leaves out)
+    GRANT SELECT ON tgsis.model, tgsis.model_object TO tgsis_reader;
+    GRANT INSERT, UPDATE, DELETE ON tgsis.model, tgsis.model_object TO tgsis_editor;
+    GRANT USAGE ON SEQUENCE tgsis.model_modelid_seq TO tgsis_editor;
 
     -- the tables of models 4 and 5, granted; the geometry check follows the registry
     PERFORM tgsis.create_storage();

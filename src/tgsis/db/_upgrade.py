@@ -15,7 +15,8 @@ An upgrade script is not written whole by hand. It is built from
   view whose definition changed, ``DROP FUNCTION`` of every old function
   whose signature (arguments, defaults, result) changed or that is gone, then
   every *replaceable* source file of the new version in ``sources.txt``
-  order. A file is replaceable when it holds only functions, procedures,
+  order (their ``GRANT``/``REVOKE`` statements only when new or about an
+  object dropped here: :meth:`Upgrade.generated` says why). A file is replaceable when it holds only functions, procedures,
   views, comments, grants and ``ALTER FUNCTION``: re-running it over the old
   objects gives the new ones.
 
@@ -230,6 +231,10 @@ def split_script(script: str) -> dict[str, str]:
     }
 
 
+def _is_grant(statement: Statement) -> bool:
+    return re.match(r"(GRANT|REVOKE)\b", statement.code, re.IGNORECASE) is not None
+
+
 def _replaceable(text: str) -> bool:
     statements = split_statements(text)
     return bool(statements) and all(s.kind != "state" for s in statements)
@@ -288,10 +293,24 @@ class Upgrade:
         for s in old:
             if s.kind == "function" and (s.name, s.header()) not in new_headers:
                 lines.append(f"DROP FUNCTION IF EXISTS {s.signature()};")
+        # A GRANT or REVOKE run inside ALTER EXTENSION makes the object's whole
+        # ACL, grants a DBA added since included, its "initial privileges",
+        # which pg_dump then leaves out: only new ones, and those of objects
+        # dropped above, run again.
+        old_grants = {_collapse(s.code) for s in old if _is_grant(s)}
+        dropped = [line.split(" IF EXISTS ", 1)[1].split("(")[0].rstrip(";") for line in lines[1:]]
+        mentions = re.compile("|".join(rf"\b{re.escape(n)}\b" for n in dropped)) if dropped else None
+
+        def wanted(statement: Statement) -> bool:
+            if not _is_grant(statement) or _collapse(statement.code) not in old_grants:
+                return True
+            return mentions is not None and mentions.search(statement.code) is not None
+
         parts = ["\n".join(lines) + "\n"]
         for name, text in self.new_files.items():
             if _replaceable(text):
-                parts.append(f"\n-- ==== {name} ====\n{_file_text(text)}")
+                kept = "".join(s.or_replace() + ";" for s in split_statements(text) if wanted(s))
+                parts.append(f"\n-- ==== {name} ====\n{kept}\n")
         return "".join(parts)
 
     def script(self, header: str) -> str:
