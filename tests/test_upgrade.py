@@ -343,3 +343,35 @@ def test_an_upgraded_database_dumps_and_restores_whole(pg: TestServer, make_data
         assert _state(conn) == want[1]
         with tgsis.in_version(conn, "survey2"):
             assert [o.id for o in tgsis.model_objects(conn, "resource")] == [1]
+
+
+def test_a_function_beside_a_table_flows_and_a_changed_trigger_is_flagged() -> None:
+    old = {
+        "r.sql": "CREATE FUNCTION tgsis.trg() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN RETURN NEW; END $$;\n"
+        "CREATE TRIGGER t BEFORE INSERT ON tgsis.x FOR EACH ROW EXECUTE FUNCTION tgsis.trg();\n"
+    }
+    body_only = {"r.sql": old["r.sql"].replace("RETURN NEW;", "RETURN NULL;")}
+    upgrade = _upgrade.Upgrade(old, body_only, "")
+    assert upgrade.unhandled == []
+    assert "CREATE OR REPLACE FUNCTION tgsis.trg()" in upgrade.generated() and "RETURN NULL" in upgrade.generated()
+    assert "CREATE TRIGGER" not in upgrade.generated()
+    trigger = {"r.sql": old["r.sql"].replace("BEFORE INSERT", "BEFORE INSERT OR UPDATE")}
+    assert _upgrade.Upgrade(old, trigger, "").unhandled == ["r.sql"]
+
+
+def test_rows_upserts_the_shipped_rows(conn: psycopg.Connection[Any]) -> None:
+    conn.execute("CREATE TABLE public.codes (code text PRIMARY KEY, name text, note text)")
+    conn.execute("INSERT INTO public.codes VALUES ('A', 'old a', 'x'), ('B', 'b', 'y')")
+    new = {
+        "c.sql": "CREATE TABLE public.codes (code text PRIMARY KEY, name text, note text);\n"
+        "INSERT INTO public.codes (code, name, note) VALUES ('A', 'a', 'x'), ('C', 'c; new', 'z');\n"
+    }
+    script = _upgrade.Upgrade({}, new, "-- @rows c.sql\n").script("--")
+    conn.execute(script.split("-- ---- generated")[0])  # type: ignore[arg-type]
+    assert conn.execute("SELECT * FROM public.codes ORDER BY code").fetchall() == [
+        ("A", "a", "x"),
+        ("B", "b", "y"),
+        ("C", "c; new", "z"),
+    ]
+    with pytest.raises(ValueError, match="@rows takes INSERT INTO table"):
+        _upgrade.Upgrade({}, {"d.sql": "INSERT INTO t VALUES (1);\n"}, "-- @rows d.sql\n").script("--")

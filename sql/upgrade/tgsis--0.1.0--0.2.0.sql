@@ -1,8 +1,8 @@
 -- tgsis 0.1.0 -> 0.2.0: the hand-written part of the upgrade script.
--- The build (src/tgsis/db/_upgrade.py) puts the functions and views of 0.2.0
--- at the @sources line, after dropping those whose shape changed; this file
--- does what re-running them cannot: new catalog tables and their rows, changed
--- constraints, new storage tables (docs/developing.md, "An upgrade script").
+-- The build (src/tgsis/db/_upgrade.py) puts the functions, views and comments
+-- of 0.2.0 at the @sources line, after dropping those whose shape changed; this
+-- file does what re-running them cannot: new catalog tables and their rows,
+-- changed constraints, new storage tables (docs/developing.md, "An upgrade script").
 -- tests/test_upgrade.py checks that the result equals a fresh 0.2.0.
 
 -- ---- before the functions: the registry of data models (new in 0.2.0) and its rows
@@ -20,8 +20,11 @@ ALTER TABLE tgsis.catalog
     DROP CONSTRAINT catalog_temporal_classes,
     ADD FOREIGN KEY (timemodel) REFERENCES tgsis.data_models (timemodel),
     ADD COLUMN celllevel smallint CHECK (celllevel >= 0);
--- (its comments, the new one too, follow from the file)
 -- @handled core/catalog.sql
+
+-- ---- the rows tgsis ships: error codes and property types added on main flow in from the files
+-- @rows core/error_codes.sql
+-- @rows core/property_types.sql
 
 -- @sources
 

@@ -9,22 +9,25 @@ An upgrade script is not written whole by hand. It is built from
   cannot simply re-run: new and changed tables, types, rows. It may
   ``-- @include FILE`` a source file of the new version (copied in, with
   ``CREATE FUNCTION``/``CREATE VIEW`` made ``CREATE OR REPLACE``), say
-  ``-- @handled FILE`` of a changed file it deals with otherwise, and put
-  ``-- @sources`` where the generated part goes (at the end when absent);
+  ``-- @rows FILE`` to upsert the shipped rows of a file (its ``INSERT``
+  statements, on their first column), say ``-- @handled FILE`` of a file
+  whose changed tables it alters by hand, and put ``-- @sources`` where the
+  generated part goes (at the end when absent);
 * the generated part, from the current sources: ``DROP VIEW`` of every old
   view whose definition changed, ``DROP FUNCTION`` of every old function
   whose signature (arguments, defaults, result) changed or that is gone, then
-  every *replaceable* source file of the new version in ``sources.txt``
-  order (their ``GRANT``/``REVOKE`` statements only when new or about an
-  object dropped here: :meth:`Upgrade.generated` says why). A file is replaceable when it holds only functions, procedures,
-  views, comments, grants and ``ALTER FUNCTION``: re-running it over the old
-  objects gives the new ones.
+  every function, procedure, view, comment and ``ALTER FUNCTION`` of the new
+  version, in ``sources.txt`` order, as ``CREATE OR REPLACE`` (and its
+  ``GRANT``/``REVOKE`` statements when new or about an object dropped here:
+  :meth:`Upgrade.generated` says why). Re-running them over the old objects
+  gives the new ones.
 
-So a function or view changed after the hand part was written flows into the
-upgrade without an edit; a changed or new file that is not replaceable must
-be included or marked handled in the hand part (:attr:`Upgrade.unhandled`
-lists those, and ``tests/test_upgrade.py`` fails on them). docs/developing.md,
-"An upgrade script", is the rule.
+So a function, view or comment changed after the hand part was written flows
+into the upgrade without an edit; a file whose *other* statements (tables,
+rows, triggers, ``DO`` blocks) changed, or that is new or gone with such
+statements, must be included, upserted or marked handled in the hand part
+(:attr:`Upgrade.unhandled` lists those, and ``tests/test_upgrade.py`` fails
+on them). docs/developing.md, "An upgrade script", is the rule.
 
 This module imports nothing of tgsis: ``sql/Makefile`` runs it as a script
 (``python3 - SQL_DIR OLD NEW < _upgrade.py``: run from stdin, so that
@@ -38,13 +41,13 @@ from __future__ import annotations
 
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = ["Statement", "Upgrade", "split_statements", "split_script", "assemble", "main"]
 
 FILE_MARKER = re.compile(r"^-- ==== (\S+) ====$", re.MULTILINE)
-_DIRECTIVE = re.compile(r"^--\s*@(include|handled|sources)\b\s*(\S*)", re.MULTILINE)
+_DIRECTIVE = re.compile(r"^--\s*@(include|handled|rows|sources)\b\s*(\S*)", re.MULTILINE)
 _DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)?\$")
 # words that end a function's header (arguments and RETURNS clause)
 _OPTION_WORDS = {
@@ -235,14 +238,24 @@ def _is_grant(statement: Statement) -> bool:
     return re.match(r"(GRANT|REVOKE)\b", statement.code, re.IGNORECASE) is not None
 
 
-def _replaceable(text: str) -> bool:
-    statements = split_statements(text)
-    return bool(statements) and all(s.kind != "state" for s in statements)
-
-
 def _file_text(text: str) -> str:
     """A source file with CREATE FUNCTION/VIEW made CREATE OR REPLACE (statements end with ``;``)."""
     return "".join(s.or_replace() + ";" for s in split_statements(text)) + "\n"
+
+
+def _state(text: str | None) -> list[str]:
+    """The statements of a file that re-running cannot apply (tables, rows, ...), whitespace collapsed."""
+    return [] if text is None else [_collapse(s.code) for s in split_statements(text) if s.kind == "state"]
+
+
+def _upsert(statement: Statement) -> str:
+    """An ``INSERT INTO t (key, a, ...) VALUES ...`` of shipped rows as an upsert on its first column."""
+    match = re.match(r"INSERT\s+INTO\s+(\S+)\s*\(([^)]*)\)", statement.code, re.IGNORECASE)
+    if match is None or re.search(r"\bON\s+CONFLICT\b", statement.code, re.IGNORECASE):
+        raise ValueError(f"@rows takes INSERT INTO table (key, columns...) without ON CONFLICT: {statement.code[:80]}")
+    key, *rest = [c.strip() for c in match.group(2).split(",")]
+    update = ", ".join(f"{c} = EXCLUDED.{c}" for c in rest)
+    return statement.code + f"\nON CONFLICT ({key}) DO " + (f"UPDATE SET {update}" if rest else "NOTHING")
 
 
 @dataclass
@@ -260,28 +273,24 @@ class Upgrade:
     old_files: dict[str, str]
     new_files: dict[str, str]
     hand: str
-    drops: list[str] = field(default_factory=list)
 
-    def _directives(self, kind: str) -> set[str]:
-        return {m.group(2) for m in _DIRECTIVE.finditer(self.hand) if m.group(1) == kind}
+    def _directives(self, *kinds: str) -> set[str]:
+        return {m.group(2) for m in _DIRECTIVE.finditer(self.hand) if m.group(1) in kinds}
 
     @property
     def unhandled(self) -> list[str]:
-        """Changed, new or removed files that are not replaceable and that the hand part does not deal with."""
-        dealt = self._directives("include") | self._directives("handled")
+        """Files whose tables, rows or other state statements changed (or that are new or gone) and that
+        the hand part neither includes nor marks handled."""
+        dealt = self._directives("include", "handled", "rows")
         names = list(self.new_files) + [f for f in self.old_files if f not in self.new_files]
-        out = []
-        for name in names:
-            old, new = self.old_files.get(name), self.new_files.get(name)
-            if old == new or name in dealt:
-                continue
-            if (new is None or _replaceable(new)) and (old is None or _replaceable(old)):
-                continue
-            out.append(name)
-        return out
+        return [
+            name
+            for name in names
+            if name not in dealt and _state(self.old_files.get(name)) != _state(self.new_files.get(name))
+        ]
 
     def generated(self) -> str:
-        """DROPs of changed views and functions, then the replaceable files of the new version."""
+        """DROPs of changed views and functions, then the functions, views, comments and grants of the new version."""
         old = [s for text in self.old_files.values() for s in split_statements(text)]
         new = [s for text in self.new_files.values() for s in split_statements(text)]
         new_views = {_collapse(s.or_replace()) for s in new if s.kind == "view"}
@@ -302,14 +311,16 @@ class Upgrade:
         mentions = re.compile("|".join(rf"\b{re.escape(n)}\b" for n in dropped)) if dropped else None
 
         def wanted(statement: Statement) -> bool:
+            if statement.kind == "state":
+                return False
             if not _is_grant(statement) or _collapse(statement.code) not in old_grants:
                 return True
             return mentions is not None and mentions.search(statement.code) is not None
 
         parts = ["\n".join(lines) + "\n"]
         for name, text in self.new_files.items():
-            if _replaceable(text):
-                kept = "".join(s.or_replace() + ";" for s in split_statements(text) if wanted(s))
+            kept = "".join(s.or_replace() + ";" for s in split_statements(text) if wanted(s))
+            if kept:
                 parts.append(f"\n-- ==== {name} ====\n{kept}\n")
         return "".join(parts)
 
@@ -319,22 +330,19 @@ class Upgrade:
         placed = False
         for line in self.hand.splitlines(keepends=True):
             directive = _DIRECTIVE.match(line)
-            if directive and directive.group(1) == "include":
-                name = directive.group(2)
-                if name not in self.new_files:
-                    raise ValueError(f"@include {name}: not a source file of the new version")
+            kind, name = (directive.group(1), directive.group(2)) if directive else ("", "")
+            if kind in ("include", "rows") and name not in self.new_files:
+                raise ValueError(f"@{kind} {name}: not a source file of the new version")
+            if kind == "include":
                 out.append(f"-- ==== {name} (included) ====\n{_file_text(self.new_files[name])}")
-            elif directive and directive.group(1) == "handled":
-                name = directive.group(2)
-                if name in self.new_files:
-                    # the file's functions, views, comments and grants; its tables are the hand part's
-                    kept = [
-                        st.or_replace() + ";" for st in split_statements(self.new_files[name]) if st.kind != "state"
-                    ]
-                    out.append(line + "".join(kept) + ("\n" if kept else ""))
-                else:
-                    out.append(line)
-            elif directive and directive.group(1) == "sources":
+            elif kind == "rows":
+                rows = [
+                    _upsert(st)
+                    for st in split_statements(self.new_files[name])
+                    if re.match(r"INSERT\b", st.code, re.IGNORECASE)
+                ]
+                out.append(f"-- ==== {name} (its rows) ====\n" + "".join(r + ";\n" for r in rows))
+            elif kind == "sources":
                 out.append(self.generated())
                 placed = True
             else:
@@ -343,9 +351,8 @@ class Upgrade:
             out.append(self.generated())
         if unhandled := self.unhandled:
             out.append(
-                "\n-- NOT HANDLED (changed files that are not replaceable; see docs/developing.md): "
-                + ", ".join(unhandled)
-                + "\n"
+                "\n-- NOT HANDLED (changed tables or rows that no hand-written line deals with; "
+                "docs/developing.md): " + ", ".join(unhandled) + "\n"
             )
         return "".join(out)
 
