@@ -12,8 +12,6 @@ tgsis uses, to show what index maintenance alone costs.
 from __future__ import annotations
 
 import argparse
-import time
-from collections.abc import Callable
 
 import numpy as np
 import psycopg

@@ -79,7 +79,7 @@ def reference_compare(old_vertices: Sequence[Sequence[float]], old_cells: Sequen
         free_old = [i for i in range(len(old_v)) if i not in taken]
         pairs = sorted((d, i, j) for j in range(len(new_v)) if vertex_map[j] < 0
                        for i in free_old if (d := distance(new_v[j], old_v[i])) <= tolerance)
-        for d, i, j in pairs:
+        for _d, i, j in pairs:
             if vertex_map[j] < 0 and i not in taken:
                 vertex_map[j] = i
                 taken.add(i)

@@ -15,7 +15,6 @@ from pathlib import Path
 import psycopg
 import pytest
 
-import tgsis
 from tests.shared_data import cfm
 from tgsis.cli import main
 from tgsis.clihints import foreign_terms, to_cli
@@ -132,6 +131,7 @@ NOT_FROM_THE_CLI = {
     "src/tgsis/temporal.py": "numpy-side checks; the command checks --from/--to/--steps first, with its flags",
     "src/tgsis/mesh.py": "Python constructors",
     "src/tgsis/formats/pvd.py": "write_pvd of Python objects",
+    "src/tgsis/db/adapters.py": "psycopg adapters for Python programs (tgsis.register_types): no command",
 }
 
 

@@ -24,7 +24,7 @@ from tgsis.temporal import EvolvingSurface
 from .test_interp_parameterize import dome, grid
 
 
-def sheet(u: np.ndarray, v: np.ndarray, point: "np.ufunc | object") -> tuple[np.ndarray, np.ndarray]:
+def sheet(u: np.ndarray, v: np.ndarray, point: np.ufunc | object) -> tuple[np.ndarray, np.ndarray]:
     """A triangulated parametric sheet: vertices point(U, V) over the grid u x v."""
     uu, vv = np.meshgrid(u, v)
     vertices = np.asarray(point(uu.ravel(), vv.ravel()))  # type: ignore[operator]

@@ -182,7 +182,7 @@ def test_a_runner_made_security_invoker_runs_as_nobody_and_changes_nothing(roles
 def test_no_one_calls_a_runner_but_tgsis(roles: Roles, db_dsn: str) -> None:
     """Not its owner directly, and not another owner's runner altered to call it (it would run as tgsis_nobody)."""
     carol, dave, alice = roles.connect("carol"), roles.connect("dave"), roles.connect("alice")
-    refused = _sqlstate(carol, f"SELECT * FROM mine_ver_run(true, 'UPDATE public.mine_ver SET v = 666', "
+    refused = _sqlstate(carol, "SELECT * FROM mine_ver_run(true, 'UPDATE public.mine_ver SET v = 666', "
                                "NULL, NULL, NULL, NULL, NULL)")
     assert refused == "TG002"
     dave.execute("CREATE TABLE his (id int PRIMARY KEY, v int)")
@@ -190,7 +190,7 @@ def test_no_one_calls_a_runner_but_tgsis(roles: Roles, db_dsn: str) -> None:
     dave.commit()
     tgsis.enable_versioning(dave, "his", "id", "his")
     # dave's runner, rewritten to call carol's with a statement of his, run as whoever calls it
-    dave.execute(f"""CREATE OR REPLACE FUNCTION his_ver_run(p_dml boolean, p_sql text, p_1 text[], p_2 integer[],
+    dave.execute("""CREATE OR REPLACE FUNCTION his_ver_run(p_dml boolean, p_sql text, p_1 text[], p_2 integer[],
                         p_3 integer[], p_4 integer, p_5 bigint[]) RETURNS SETOF text[] LANGUAGE sql SECURITY INVOKER
                      AS $$ SELECT * FROM public.mine_ver_run(true, 'UPDATE public.mine_ver SET v = 666',
                                                              NULL, NULL, NULL, NULL, NULL) $$""")

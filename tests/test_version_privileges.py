@@ -183,7 +183,7 @@ def test_readers_read_and_nobody_bypasses_the_functions(roles: Roles, db_dsn: st
     # the tables behind the functions are read-only to editors
     for statement in (f"UPDATE tgsis.versions SET owner = '{roles.name('bob')}' WHERE name = 'a1'",
                       "INSERT INTO tgsis.version_privileges (versionid, grantee, privilege, granted_by) "
-                      f"SELECT versionid, 'public', 'write', 'x' FROM tgsis.versions WHERE name = 'a1'",
+                      "SELECT versionid, 'public', 'write', 'x' FROM tgsis.versions WHERE name = 'a1'",
                       "DELETE FROM tgsis.revisions",
                       "SELECT tgsis.next_working_revision(1)",
                       "SELECT tgsis.copy_object_state('well', '{1}', '{0}', '{0}', 0)"):

@@ -100,6 +100,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         has_version_privilege,
         in_version,
         list_versions,
+        version_graph,
         lock_objects,
         merge_version,
         object_locks,
@@ -142,6 +143,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         checkout,
         save_feature,
     )
+    from tgsis.db.adapters import Box, register_types
     from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
     from tgsis.db.temporal import (
         add_instant,
@@ -203,6 +205,7 @@ _LAZY: dict[str, str] = {
     "has_version_privilege": "tgsis.db.versions",
     "in_version": "tgsis.db.versions",
     "list_versions": "tgsis.db.versions",
+    "version_graph": "tgsis.db.versions",
     "lock_objects": "tgsis.db.versions",
     "merge_version": "tgsis.db.versions",
     "object_locks": "tgsis.db.versions",
@@ -276,6 +279,8 @@ _LAZY: dict[str, str] = {
     "Model": "tgsis.db.modelsets",
     "ModelObject": "tgsis.db.modelsets",
     "create_model": "tgsis.db.modelsets",
+    "register_types": "tgsis.db.adapters",
+    "Box": "tgsis.db.adapters",
     "add_to_model": "tgsis.db.modelsets",
     "remove_from_model": "tgsis.db.modelsets",
     "model_objects": "tgsis.db.modelsets",
@@ -333,6 +338,7 @@ __all__ = [
     "viewing_revision",
     "revisions",
     "list_versions",
+    "version_graph",
     "in_version",
     "at_revision",
     "enable_versioning",
@@ -399,6 +405,8 @@ __all__ = [
     "Model",
     "ModelObject",
     "create_model",
+    "register_types",
+    "Box",
     "add_to_model",
     "remove_from_model",
     "model_objects",

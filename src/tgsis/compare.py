@@ -63,7 +63,7 @@ class MeshIndex:
         self._vertices = SortedRows.of(coordinate_columns(mesh.vertices))
         self._cells = SortedRows.of(cell_columns(columns_of(mesh.cells), mesh.n_vertices))
         for rows in (self._vertices, self._cells):
-            rows.unique_hash  # computed once here, not by the first comparison
+            rows.unique_hash  # noqa: B018 - computed once here, not by the first comparison
         self._tree: Any = None
 
     def tree(self) -> Any:

@@ -1,5 +1,9 @@
 """Pictures of surfaces: PNG scenes and GIF animations, drawn with matplotlib (no display, no database).
 
+matplotlib is the optional extra ``pictures`` (``pip install 'tgsis[pictures]'``),
+imported when a picture is drawn: without it, :func:`scene`, :func:`section`
+and :func:`animation` raise :class:`~tgsis.errors.InstallationError` naming it.
+
 What a geologist wants to see rather than read: several surfaces in one scene
 ("the structure at t"), axes labelled with their units, equal aspect (with an
 optional vertical exaggeration, said in the title), the time and its unit in
@@ -20,6 +24,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._optional import require
 from tgsis.errors import InvalidInputError
 from tgsis.mesh import Surface
 
@@ -122,6 +127,7 @@ def scene(surfaces: Sequence[Surface], path: str | Path, *, title: str,
     exaggeration : float
         Vertical exaggeration (said in the title).
     """
+    require("matplotlib", "tgsis.pictures")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -181,6 +187,7 @@ def section(surfaces: Sequence[Surface], path: str | Path, *, y: float, title: s
     exaggeration : float
         Vertical exaggeration (the aspect ratio of the axes; said in the title).
     """
+    require("matplotlib", "tgsis.pictures")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -235,6 +242,7 @@ def animation(frames: Sequence[tuple[float, Sequence[Surface]]], path: str | Pat
         Colour each surface by its displacement from the reference surface at
         the same place in the scene (same vertices); default: grey.
     """
+    require("matplotlib", "tgsis.pictures")
     import matplotlib
 
     matplotlib.use("Agg")

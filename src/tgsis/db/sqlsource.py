@@ -3,8 +3,9 @@
 ``sql/Makefile`` (PGXS) and this module build the same script from the same
 files: ``sources.txt`` gives the order, ``tgsis.control`` the version, and
 ``@TGSIS_VERSION@`` in the sources is replaced by it. Upgrade scripts are
-``updates/tgsis--FROM--TO.sql``, installed by PGXS and applied by
-:func:`tgsis.install` on the plain-SQL route.
+``updates/tgsis--FROM--TO.sql`` (frozen) or assembled from
+``upgrade/tgsis--FROM--TO.sql`` (:mod:`tgsis.db._upgrade`), installed by PGXS
+and applied by :func:`tgsis.install` on the plain-SQL route.
 
 The sources are found, in this order, in ``$TGSIS_SQL_DIR``, inside the
 installed package (``tgsis/_sql``, put there by the wheel build) or in the
@@ -20,6 +21,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
+from tgsis.db._upgrade import Upgrade, assemble, header_for
 from tgsis.errors import InstallationError
 
 __all__ = ["ExtensionSources", "find_sql_dir", "parse_version", "EXTENSION"]
@@ -32,6 +34,7 @@ _CONTROL_VERSION_RE = re.compile(r"^default_version\s*=\s*'([^']+)'", re.MULTILI
 _CONTROL_REQUIRES_RE = re.compile(r"^requires\s*=\s*'([^']*)'", re.MULTILINE)
 _UPDATE_RE = re.compile(rf"^{EXTENSION}--([0-9][0-9.]*)--([0-9][0-9.]*)\.sql$")
 _VERSION_RE = re.compile(r"^[0-9]+(\.[0-9]+)*$")
+_GUARD_RE = re.compile(r'^\\echo Use "[^"]*" to load this file\. \\quit\s*$')
 
 
 def parse_version(version: str) -> tuple[int, ...]:
@@ -136,15 +139,46 @@ class ExtensionSources:
 
     @cached_property
     def updates(self) -> dict[tuple[str, str], Path]:
-        """Upgrade scripts by ``(from_version, to_version)``."""
+        """Upgrade scripts by ``(from_version, to_version)``.
+
+        ``updates/tgsis--A--B.sql`` are complete scripts (frozen when B was
+        released); ``upgrade/tgsis--A--B.sql`` with B this version are the
+        hand-written parts of the scripts :meth:`update_script` assembles
+        (:mod:`tgsis.db._upgrade`).
+        """
         found: dict[tuple[str, str], Path] = {}
-        folder = self.root / "updates"
-        if folder.is_dir():
-            for path in sorted(folder.iterdir()):
-                match = _UPDATE_RE.match(path.name)
-                if match:
-                    found[(match.group(1), match.group(2))] = path
+        for folder in (self.root / "updates", self.root / "upgrade"):
+            if folder.is_dir():
+                for path in sorted(folder.iterdir()):
+                    match = _UPDATE_RE.match(path.name)
+                    if match and (folder.name == "updates" or match.group(2) == self.version):
+                        found[(match.group(1), match.group(2))] = path
         return found
+
+    @cached_property
+    def frozen_scripts(self) -> dict[str, Path]:
+        """Install scripts of released versions, ``upgrade/tgsis--A.sql``, by version (the upgrade tests install them)."""
+        folder = self.root / "upgrade"
+        if not folder.is_dir():
+            return {}
+        return {m.group(1): path for path in sorted(folder.iterdir())
+                if (m := re.match(rf"^{EXTENSION}--([0-9][0-9.]*)\.sql$", path.name)) and m.group(1) != self.version}
+
+    def source_texts(self) -> dict[str, str]:
+        """``{file: text}`` of the sources in install order, ``@TGSIS_VERSION@`` replaced."""
+        return {name: (self.root / name).read_text(encoding="utf-8").replace(VERSION_TOKEN, self.version)
+                for name in self.files}
+
+    def upgrade(self, from_version: str) -> Upgrade:
+        """The assembled upgrade from ``from_version`` to this version (its parts, :attr:`~tgsis.db._upgrade.Upgrade.unhandled`)."""
+        return assemble(self.root, from_version, self.version, self.source_texts())
+
+    def update_script(self, path: Path) -> str:
+        """The text of an upgrade script of :attr:`updates` as PostgreSQL's extension folder holds it."""
+        match = _UPDATE_RE.match(path.name)
+        if path.parent.name == "upgrade" and match:
+            return self.upgrade(match.group(1)).script(header_for(match.group(1), match.group(2)))
+        return path.read_text(encoding="utf-8")
 
     def upgrade_path(self, from_version: str, to_version: str) -> list[Path]:
         """Shortest chain of upgrade scripts from one version to another.
@@ -181,8 +215,8 @@ class ExtensionSources:
 
     def upgrade_sql(self, path: Path) -> str:
         """An upgrade script as a driver can execute it (psql guard removed)."""
-        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
-        return "".join(line for line in lines if line.strip() != PSQL_GUARD)
+        lines = self.update_script(path).splitlines(keepends=True)
+        return "".join(line for line in lines if not _GUARD_RE.match(line))
 
     def write_extension_dir(self, prefix: Path) -> Path:
         """Write control file and scripts as PostgreSQL expects them in ``prefix/extension``.
@@ -199,6 +233,8 @@ class ExtensionSources:
         target.mkdir(parents=True, exist_ok=True)
         files = {f"{EXTENSION}.control": self.control, f"{EXTENSION}--{self.version}.sql": self.script()}
         for path in self.updates.values():
+            files[path.name] = self.update_script(path)
+        for path in self.frozen_scripts.values():
             files[path.name] = path.read_text(encoding="utf-8")
         for name, text in files.items():
             destination = target / name

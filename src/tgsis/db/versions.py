@@ -22,6 +22,7 @@ from typing import Any
 
 import psycopg
 
+from tgsis._optional import require
 from tgsis.arguments import check_module
 from tgsis.errors import reraise
 
@@ -39,6 +40,7 @@ __all__ = [
     "revisions",
     "list_versions",
     "format_tree",
+    "version_graph",
     "in_version",
     "at_revision",
     "enable_versioning",
@@ -242,6 +244,35 @@ def format_tree(versions: Sequence[Version]) -> str:
         base = "" if v.initrevision is None else f" from {v.parent}@{v.initrevision}"
         lines.append(f"{'    ' * v.depth}{v.name}{base}: revisions {revs}; working {v.workingrevision}")
     return "\n".join(lines)
+
+
+def version_graph(conn: Conn) -> Any:
+    """The version tree as a :class:`networkx.DiGraph`, for graph questions and drawings.
+
+    Needs networkx, the optional extra ``graph`` (``pip install 'tgsis[graph]'``).
+
+    Returns
+    -------
+    networkx.DiGraph
+        A node per version name, with the attribute ``version`` (its
+        :class:`Version`) and, for convenience, ``owner``, ``revisions`` and
+        ``created_at``; an edge from each parent to each child, with
+        ``initrevision``: the parent's revision the child started from.
+        ``networkx.ancestors(g, name)`` is the line of descent up to DEFAULT,
+        ``networkx.descendants(g, name)`` what a merge of ``name`` concerns.
+
+    Raises
+    ------
+    InstallationError
+        If networkx is not installed.
+    """
+    nx = require("networkx", "tgsis.version_graph")
+    graph = nx.DiGraph()
+    for v in list_versions(conn):
+        graph.add_node(v.name, version=v, owner=v.owner, revisions=v.revisions, created_at=v.created_at)
+        if v.parent is not None:
+            graph.add_edge(v.parent, v.name, initrevision=v.initrevision)
+    return graph
 
 
 @contextlib.contextmanager

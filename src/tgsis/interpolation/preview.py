@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tgsis._optional import require
 from tgsis.temporal import EvolvingSurface
 
 __all__ = ["write_previews"]
@@ -30,6 +31,7 @@ def write_previews(evolving: EvolvingSurface, times: Sequence[float], folder: st
     max_triangles : int
         Larger meshes are drawn with an even subset of their triangles (a preview, not a rendering).
     """
+    require("matplotlib", "tgsis interpolate --preview (tgsis.interpolation.preview)")
     import matplotlib
 
     matplotlib.use("Agg")

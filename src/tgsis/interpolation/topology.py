@@ -612,7 +612,7 @@ class MeshTopology:
         indptr = np.concatenate([[0], np.cumsum(degree)]).astype(np.int64)
         neighbours = np.empty(int(indptr[-1]), dtype=np.int64)
         neighbours[indptr[center] + rank] = after
-        last = np.flatnonzero((nxt < 0))  # last wedge of an open ring: add its b
+        last = np.flatnonzero(nxt < 0)  # last wedge of an open ring: add its b
         neighbours[indptr[center[last]] + rank[last] + 1] = before[last]
         triangle_indptr = np.concatenate([[0], np.cumsum(wedges)]).astype(np.int64)
         triangles = np.empty(3 * m, dtype=np.int64)

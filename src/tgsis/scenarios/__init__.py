@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from tgsis._optional import require
 from tgsis.errors import InvalidInputError
 from tgsis.scenarios._context import Context, Scenario, ScenarioResult, Size, open_context
 
@@ -117,6 +118,8 @@ def run_scenario(name: str, dsn: str | None = None, *, out: Callable[[str], None
         target = Path(folder) if folder is not None else None
         run_demo(dsn, out=out, folder=target)
         return ScenarioResult(name, [], {})
+    # every scenario draws pictures: say so before it makes its database, not after
+    require("matplotlib", f"tgsis demo {name} (its pictures)")
     with open_context(name, dsn, out=out, folder=folder, size=size) as context:
         scenario.run(context)
         out(f"summary: {context.summary_line()}")

@@ -102,7 +102,7 @@ def run(context: Context) -> None:
     out("3. pictures and the series")
     known = context.folder / "saltdome_known_shapes.png"
     context.wrote(pictures.scene([layer, dome], known, title=f"salt: flat at t = 0 and the dome at t = 1 {TIME_UNIT}"))
-    for label, t, surface in snapshots:
+    for label, _t, surface in snapshots:
         png = context.folder / f"saltdome_t{label.replace('/', '_')}.png"
         context.wrote(pictures.scene([surface], png, colour=[pictures.displacement(surface, start)],
                                      colour_label="moved since t = 0 (m)",

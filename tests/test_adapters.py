@@ -1,0 +1,96 @@
+"""tgsis.register_types: cubes as numpy (2, d) arrays, model-time intervals as ranges of floats."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+from psycopg.types.multirange import Multirange
+from psycopg.types.range import Range
+
+import tgsis
+from tgsis.db.adapters import parse_cube
+
+
+def _surface(x0: float) -> tgsis.Surface:
+    return tgsis.Surface(
+        np.array([[x0, 3.7e6, -5000.0], [x0 + 10.5, 3.7e6 + 1, -4000.25], [x0, 3.7e6 + 2, -4500]]),
+        np.array([[0, 1, 2]]),
+    )
+
+
+def test_without_registration_a_box_is_text(conn: psycopg.Connection[Any]) -> None:
+    tgsis.create_feature_class(conn, "rocks", "SURFACE")
+    geoid = tgsis.insert_feature(conn, "rocks", _surface(326126.29688))
+    (text,) = conn.execute("SELECT bbox FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()  # type: ignore[misc]
+    assert isinstance(text, str) and text.startswith("(326126.29688")
+
+
+def test_boxes_come_back_as_2_by_3_arrays(conn: psycopg.Connection[Any]) -> None:
+    tgsis.create_feature_class(conn, "rocks", "SURFACE")
+    surfaces = [_surface(326126.29688), _surface(-1.5e-7)]
+    ids = [tgsis.insert_feature(conn, "rocks", s) for s in surfaces]
+    tgsis.register_types(conn)
+    for geoid, surface in zip(ids, surfaces):
+        (box,) = conn.execute("SELECT bbox FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()  # type: ignore[misc]
+        assert isinstance(box, np.ndarray) and box.dtype == np.float64 and box.shape == (2, 3)
+        want = np.stack([surface.vertices.min(axis=0), surface.vertices.max(axis=0)])
+        np.testing.assert_array_equal(box, want)  # every digit: cube prints float8 exactly
+    (boxes,) = conn.execute("SELECT array_agg(bbox ORDER BY geoid) FROM tgsis.geometry").fetchone()  # type: ignore[misc]
+    assert len(boxes) == 2 and all(b.shape == (2, 3) for b in boxes)
+    (point,) = conn.execute("SELECT cube(ARRAY[1, 2, 3]::float8[])").fetchone()  # type: ignore[misc]
+    np.testing.assert_array_equal(point, [[1, 2, 3], [1, 2, 3]])
+    (null,) = conn.execute("SELECT NULL::cube").fetchone()  # type: ignore[misc]
+    assert null is None
+
+
+def test_a_box_goes_in_as_a_cube(conn: psycopg.Connection[Any]) -> None:
+    tgsis.register_types(conn)
+    box = tgsis.Box.of([[0, 0, 0], [1, 2, 3.25]])
+    row = conn.execute(
+        "SELECT %s::cube @> cube(ARRAY[0.5, 1, 3]::float8[]), cube_dim(%s), %s", (box, box, box)
+    ).fetchone()
+    assert row is not None and row[0] is True and row[1] == 3
+    np.testing.assert_array_equal(row[2], box)
+    with pytest.raises(ValueError, match=r"a box is \(2, d\)"):
+        tgsis.Box.of(np.zeros((3, 3)))
+
+
+def test_time_intervals_come_back_as_ranges_of_floats(conn: psycopg.Connection[Any]) -> None:
+    tgsis.register_types(conn)
+    rng = conn.execute("SELECT tgsis.timerange(1.5, 2, '[)')").fetchone()[0]  # type: ignore[index]
+    assert isinstance(rng, Range) and (rng.lower, rng.upper, rng.bounds) == (1.5, 2.0, "[)")
+    assert isinstance(rng.lower, float)
+    forever = conn.execute("SELECT tgsis.timerange(3, NULL, '[)')").fetchone()[0]  # type: ignore[index]
+    assert forever.lower == 3.0 and forever.upper is None and forever.upper_inf
+    merged = conn.execute(
+        "SELECT range_agg(r) FROM (VALUES (tgsis.timerange(1, 2, '[)')), "
+        "(tgsis.timerange(2, 3, '[]')), (tgsis.timerange(5, 6, '()'))) v(r)"
+    ).fetchone()[0]  # type: ignore[index]
+    assert isinstance(merged, Multirange)
+    assert [(r.lower, r.upper, r.bounds) for r in merged] == [(1.0, 3.0, "[]"), (5.0, 6.0, "()")]
+    # and back in as a parameter
+    assert conn.execute("SELECT %s::tgsis.timerange @> 1.75::float8", (rng,)).fetchone() == (True,)
+
+
+def test_registration_is_per_connection(conn: psycopg.Connection[Any], db_dsn: str) -> None:
+    tgsis.register_types(conn)
+    with psycopg.connect(db_dsn) as other:
+        assert isinstance(other.execute("SELECT cube(1)").fetchone()[0], str)  # type: ignore[index]
+    cursor = conn.cursor()
+    assert isinstance(cursor.execute("SELECT cube(1)").fetchone()[0], np.ndarray)  # type: ignore[index]
+
+
+def test_register_types_refuses_a_database_without_tgsis(make_database: Any) -> None:
+    with psycopg.connect(make_database()) as bare:
+        with pytest.raises(tgsis.InstallationError, match="tgsis is not installed in this database") as info:
+            tgsis.register_types(bare)
+        assert "tgsis db install" in (info.value.hint or "")
+
+
+@pytest.mark.parametrize("text", ["", "()", "(1, 2),(3)", "(1,2),(3,4),(5,6)", "box"])
+def test_a_bad_cube_text_is_refused(text: str) -> None:
+    with pytest.raises(ValueError, match="not a cube"):
+        parse_cube(text)

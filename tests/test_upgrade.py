@@ -1,0 +1,377 @@
+"""Upgrades from the last release: a database of 0.1.0 updated to this version equals a fresh install and keeps its data.
+
+0.1.0 is frozen in ``sql/upgrade/tgsis--0.1.0.sql`` (its built install
+script); the upgrade script is assembled from ``sql/upgrade/tgsis--0.1.0--0.2.0.sql``
+and the current sources (``tgsis.db._upgrade``). Both routes: ``ALTER
+EXTENSION tgsis UPDATE`` (the server's extension files: the embedded
+PostgreSQL 18 reads this checkout's, PostgreSQL 15 those of ``make extension``)
+and the plain-SQL upgrade of ``tgsis.install``.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tests.catalog import describe_tgsis_objects
+from tests.roles import login_roles
+from tests.test_backup import _bindir_of
+from tgsis.db import _upgrade
+from tgsis.db.sqlsource import ExtensionSources
+from tgsis.testing import TestServer
+
+OLD = "0.1.0"
+SQL_DIR = Path(__file__).resolve().parents[1] / "sql"
+MakeDb = Callable[..., str]
+
+# what a user of 0.1.0 did, in SQL both versions understand: a feature class,
+# a surface, feature versioning, a version with its own change, a saved revision
+_USE = """
+SELECT tgsis.register_feature_class('horizon', 'SURFACE', '[{"name": "unit", "type": "text"}]',
+                                    '[{"name": "depth", "type": "double precision"}]');
+WITH g AS (SELECT tgsis.new_geometry('SURFACE', 'top', ARRAY[0, 0, 0, 1, 1, 0]::float8[], 3, 1) AS geoid),
+     v AS (INSERT INTO tgsis.vrtx SELECT geoid, i, i % 2, i / 2, 0 FROM g, generate_series(0, 2) i),
+     t AS (INSERT INTO tgsis.trgl SELECT geoid, 0, 0, 1, 2 FROM g),
+     p AS (INSERT INTO public.horizon_cellpros SELECT geoid, i, 10 * i FROM g, generate_series(0, 2) i)
+INSERT INTO public.horizon (_geoid, unit) SELECT geoid, 'Triassic' FROM g;
+SELECT tgsis.enable_feature_versioning();
+SELECT tgsis.create_version('survey2', 'DEFAULT', 'the second survey');
+SELECT tgsis.goto_version('survey2', true);
+UPDATE tgsis.vrtx SET z = -5 WHERE vrtxid = 2;
+UPDATE public.horizon SET unit = 'Jurassic';
+UPDATE public.horizon_cellpros SET depth = 25 WHERE _idx = 2;
+SELECT tgsis.save_revision('survey2');
+"""
+
+
+def _objects(conn: psycopg.Connection[Any]) -> dict[str, list[tuple[str, ...]]]:
+    """The tgsis catalog, the class's tables in public, and what belongs to the extension."""
+    objects = describe_tgsis_objects(conn)
+    objects.update(
+        {
+            f"public {kind}": rows
+            for kind, rows in describe_tgsis_objects(conn, schema="public").items()
+            if kind in ("relation", "column", "constraint", "index", "view", "trigger")
+        }
+    )
+    objects["extension member"] = sorted(
+        (str(r[0]),)
+        for r in conn.execute(
+            "SELECT pg_describe_object(classid, objid, objsubid) FROM pg_depend "
+            "WHERE deptype = 'e' AND refobjid = (SELECT oid FROM pg_extension WHERE extname = 'tgsis')"
+        ).fetchall()
+    )
+    return objects
+
+
+def _differences(got: dict[str, list[tuple[str, ...]]], want: dict[str, list[tuple[str, ...]]]) -> list[str]:
+    return [
+        f"{kind}: only in the {where}: {row}"
+        for kind in want
+        for where, rows in (("first", set(got[kind]) - set(want[kind])), ("second", set(want[kind]) - set(got[kind])))
+        for row in sorted(rows)
+    ]
+
+
+def _frozen(tmp_path: Path, version: str) -> ExtensionSources:
+    """The sources of a released version, split back out of its frozen install script."""
+    root = tmp_path / f"sql-{version}"
+    root.mkdir()
+    files = _upgrade.split_script((SQL_DIR / "upgrade" / f"tgsis--{version}.sql").read_text(encoding="utf-8"))
+    for name, text in files.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(text, encoding="utf-8")
+    (root / "sources.txt").write_text("\n".join(files) + "\n", encoding="utf-8")
+    control = (SQL_DIR / "tgsis.control").read_text(encoding="utf-8")
+    control = re.sub(r"^default_version = '[^']*'", f"default_version = '{version}'", control, flags=re.MULTILINE)
+    (root / "tgsis.control").write_text(control, encoding="utf-8")
+    return ExtensionSources(root)
+
+
+def _state(conn: psycopg.Connection[Any]) -> dict[str, list[tuple[Any, ...]]]:
+    """The user's data and versions, as rows."""
+    queries = {
+        "versions": "SELECT * FROM tgsis.versions ORDER BY versionid",
+        "revisions": "SELECT * FROM tgsis.revisions ORDER BY 1, 2",
+        "catalog": "SELECT classname, schemaname, geotype, timemodel, featuretable FROM tgsis.catalog",
+        "default vrtx": "SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx ORDER BY 1, 2",
+        "default horizon": "SELECT _geoid, unit FROM public.horizon ORDER BY 1",
+    }
+    state = {name: conn.execute(q).fetchall() for name, q in queries.items()}
+    conn.execute("SELECT tgsis.goto_version('survey2', true)")
+    state["survey2 vrtx"] = conn.execute(queries["default vrtx"]).fetchall()
+    state["survey2 horizon"] = conn.execute(queries["default horizon"]).fetchall()
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    return state
+
+
+def _upgrade_route(method: str, pg: TestServer) -> None:
+    if method == "extension" and pg.extension_files is not None:
+        pytest.fail(pg.extension_files, pytrace=False)
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_upgraded_database_equals_a_fresh_install(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    _upgrade_route(method, pg)
+    upgraded, fresh = make_database(), make_database()
+    with psycopg.connect(upgraded) as conn:
+        assert tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD)).version == OLD  # type: ignore[arg-type]
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (OLD,)
+        conn.execute(_USE)
+        conn.commit()
+        before = _state(conn)
+        conn.commit()
+        if method == "extension":
+            conn.execute("ALTER EXTENSION tgsis UPDATE")  # what a DBA runs in psql: the script alone is enough
+        else:
+            assert tgsis.install(conn).action == "upgraded"
+        conn.commit()
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (tgsis.__version__,)
+        assert tgsis.installed_version(conn) == tgsis.InstalledVersion(tgsis.__version__, method)  # type: ignore[arg-type]
+        assert tgsis.install(conn).action == "unchanged"
+        assert _state(conn) == before, "the data and versions of 0.1.0 are kept"
+        got = _objects(conn)
+    with psycopg.connect(fresh) as conn:
+        tgsis.install(conn, method=method)  # type: ignore[arg-type]
+        conn.execute(_USE)
+        conn.commit()
+        want = _objects(conn)
+    assert got["function"] and got["relation"] and got["public relation"], "the comparison must see the objects"
+    differences = [
+        f"{kind}: only in the {where}: {row}"
+        for kind in want
+        for where, rows in (
+            ("upgraded database", set(got[kind]) - set(want[kind])),
+            ("fresh install", set(want[kind]) - set(got[kind])),
+        )
+        for row in sorted(rows)
+    ]
+    assert differences == [], "\n".join(differences)
+    assert got == want
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    _upgrade_route(method, pg)
+    with psycopg.connect(make_database()) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute(_USE)
+        conn.commit()
+        tgsis.install(conn)
+        conn.commit()
+        (geoid,) = conn.execute("SELECT _geoid FROM public.horizon").fetchone()  # type: ignore[misc]
+        old = tgsis.fetch_feature(conn, "horizon", geoid)
+        assert old.mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+        assert old.properties["unit"] == "Triassic"
+        with tgsis.in_version(conn, "survey2"):
+            changed = tgsis.fetch_feature(conn, "horizon", geoid)
+        assert changed.mesh.vertices[2].tolist() == [0, 1, -5] and changed.properties["unit"] == "Jurassic"
+        # written after: a new feature in the version, a change saved, the old revision still there
+        mesh = tgsis.Surface(
+            np.array([[0, 0, 1], [2, 0, 1], [0, 2, 1]], float),
+            np.array([[0, 1, 2]]),
+            vertex_properties={"depth": [1.0, 2.0, 3.0]},
+        )
+        with tgsis.in_version(conn, "survey2"):
+            new = tgsis.insert_feature(conn, "horizon", mesh, properties={"unit": "Cretaceous"})
+        conn.commit()
+        assert conn.execute("SELECT tgsis.save_revision('survey2')").fetchone()[0] > 0  # type: ignore[index]
+        with tgsis.in_version(conn, "survey2"):
+            assert tgsis.fetch_feature(conn, "horizon", new).properties["unit"] == "Cretaceous"
+        assert conn.execute("SELECT count(*) FROM public.horizon").fetchone() == (1,), "DEFAULT does not see it"
+        # the models new in 0.2.0 work in the upgraded database
+        assert conn.execute("SELECT count(*) FROM tgsis.data_models").fetchone() == (6,)
+        with tgsis.in_version(conn, "survey2"):
+            tgsis.create_model(conn, "resource", [geoid, new])
+            assert sorted(o.id for o in tgsis.model_objects(conn, "resource")) == sorted([geoid, new])
+
+
+def test_every_changed_file_is_in_the_upgrade() -> None:
+    """A changed or new source file that re-running cannot apply (a table, rows) is dealt with by hand."""
+    upgrade = ExtensionSources.default().upgrade(OLD)
+    assert upgrade.unhandled == [], (
+        "changed since 0.1.0 and not replaceable: include them (-- @include FILE) or write their ALTERs and mark them "
+        "(-- @handled FILE) in sql/upgrade/tgsis--0.1.0--0.2.0.sql (docs/developing.md, 'An upgrade script')"
+    )
+
+
+def test_shape_changes_are_dropped_before_the_new_definitions() -> None:
+    old = {
+        "a.sql": "CREATE FUNCTION tgsis.f(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        "CREATE FUNCTION tgsis.g(p_x int DEFAULT 1) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        "CREATE FUNCTION tgsis.gone() RETURNS int LANGUAGE sql AS $$ SELECT 1; $$;\n"
+        "CREATE VIEW tgsis.v AS SELECT 1 AS a;\n",
+        "t.sql": "CREATE TABLE tgsis.t (a int);\n",
+    }
+    new = {
+        "a.sql": "CREATE FUNCTION tgsis.f(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 2 $$;\n"
+        "CREATE FUNCTION tgsis.g(p_x int DEFAULT 1, p_y text = 'a;b') RETURNS bigint\n"
+        "LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        "CREATE VIEW tgsis.v AS SELECT 1 AS a, 2 AS b;\n"
+        "COMMENT ON VIEW tgsis.v IS 'x';\n",
+        "t.sql": "CREATE TABLE tgsis.t (a int, b int);\n",
+    }
+    upgrade = _upgrade.Upgrade(old, new, "-- @sources\n")
+    drops = [line for line in upgrade.generated().splitlines() if line.startswith("DROP")]
+    assert drops == [
+        "DROP VIEW IF EXISTS tgsis.v;",
+        "DROP FUNCTION IF EXISTS tgsis.g(p_x int);",
+        "DROP FUNCTION IF EXISTS tgsis.gone();",
+    ]
+    assert "CREATE OR REPLACE FUNCTION tgsis.f(p_x int)" in upgrade.generated()
+    assert upgrade.unhandled == ["t.sql"]
+    assert "NOT HANDLED" in upgrade.script("--")
+    handled = _upgrade.Upgrade(old, new, "ALTER TABLE tgsis.t ADD b int;\n-- @handled t.sql\n")
+    assert handled.unhandled == []
+
+
+def test_only_new_grants_and_those_of_dropped_objects_run_again() -> None:
+    grants = "GRANT SELECT ON tgsis.t TO tgsis_reader;\nREVOKE ALL ON FUNCTION tgsis.g(int) FROM PUBLIC;\n"
+    old = {"a.sql": "CREATE FUNCTION tgsis.g(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n" + grants}
+    new = {
+        "a.sql": "CREATE FUNCTION tgsis.g(p_x int) RETURNS bigint LANGUAGE sql AS $$ SELECT 1 $$;\n"
+        + grants
+        + "GRANT SELECT ON tgsis.u TO tgsis_reader;\n"
+    }
+    generated = _upgrade.Upgrade(old, new, "").generated()
+    assert "DROP FUNCTION IF EXISTS tgsis.g(p_x int);" in generated
+    assert "REVOKE ALL ON FUNCTION tgsis.g(int) FROM PUBLIC" in generated, "g was dropped: its rights are made again"
+    assert "GRANT SELECT ON tgsis.u TO tgsis_reader" in generated, "a new grant"
+    assert "GRANT SELECT ON tgsis.t TO tgsis_reader" not in generated, "unchanged: its ACL is kept as it is"
+
+
+def _old_database(method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path) -> str:
+    _upgrade_route(method, pg)
+    dsn = make_database()
+    with psycopg.connect(dsn) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute(_USE)
+    return dsn
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_an_editor_cannot_upgrade_and_nothing_changes(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    dsn = _old_database(method, pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        before = _objects(conn)
+    with login_roles(dsn, {"eve": "tgsis_editor"}) as roles, roles.connect("eve") as eve:
+        if method == "extension":
+            # (PostgreSQL runs the script as eve, who may not create in schema tgsis)
+            with pytest.raises(psycopg.errors.InsufficientPrivilege):
+                eve.execute("ALTER EXTENSION tgsis UPDATE")
+        else:
+            with pytest.raises(tgsis.MissingPrivilegeError, match="permission denied for schema tgsis"):
+                tgsis.install(eve)
+        eve.rollback()
+    with psycopg.connect(dsn) as conn:
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (OLD,)
+        assert _objects(conn) == before
+
+
+def test_two_sessions_upgrading_at_once_upgrade_once(pg: TestServer, make_database: MakeDb, tmp_path: Path) -> None:
+    dsn = _old_database("sql", pg, make_database, tmp_path)
+    results: list[str] = []
+    errors: list[BaseException] = []
+    barrier = threading.Barrier(2)
+
+    def worker() -> None:
+        try:
+            with psycopg.connect(dsn) as conn:
+                barrier.wait()
+                results.append(tgsis.install(conn).action)
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=worker) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert sorted(results) == ["unchanged", "upgraded"]
+    with psycopg.connect(dsn) as conn:
+        rows = conn.execute("SELECT version FROM tgsis.installation ORDER BY version").fetchall()
+        assert rows == [(OLD,), (tgsis.__version__,)]
+
+
+def test_an_upgraded_database_dumps_and_restores_whole(pg: TestServer, make_database: MakeDb, tmp_path: Path) -> None:
+    """The storage tables the upgrade made are no extension members: pg_dump keeps them and their rows."""
+    dsn = _old_database("extension", pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        # a DBA's own grants on tgsis objects: the upgrade must not make them "initial" (pg_dump would drop them)
+        conn.execute("GRANT EXECUTE ON FUNCTION tgsis.version() TO tgsis_nobody")
+        conn.execute("GRANT SELECT ON tgsis.catalog TO tgsis_nobody")
+        conn.commit()
+        conn.execute("ALTER EXTENSION tgsis UPDATE")
+        conn.commit()
+        with tgsis.in_version(conn, "survey2"):
+            tgsis.create_model(conn, "resource", [1])
+        conn.commit()
+        want = _objects(conn), _state(conn)
+    bindir = _bindir_of(pg)
+    dump = tmp_path / "upgraded.dump"
+    done = subprocess.run(
+        [str(bindir / "pg_dump"), "--format=custom", f"--file={dump}", dsn], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    restored = make_database()
+    done = subprocess.run(
+        [str(bindir / "pg_restore"), "--exit-on-error", "-d", restored, str(dump)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    with psycopg.connect(restored) as conn:
+        got = _objects(conn)
+        assert _differences(got, want[0]) == [], "\n".join(_differences(got, want[0]))
+        assert _state(conn) == want[1]
+        with tgsis.in_version(conn, "survey2"):
+            assert [o.id for o in tgsis.model_objects(conn, "resource")] == [1]
+
+
+def test_a_function_beside_a_table_flows_and_a_changed_trigger_is_flagged() -> None:
+    old = {
+        "r.sql": "CREATE FUNCTION tgsis.trg() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN RETURN NEW; END $$;\n"
+        "CREATE TRIGGER t BEFORE INSERT ON tgsis.x FOR EACH ROW EXECUTE FUNCTION tgsis.trg();\n"
+    }
+    body_only = {"r.sql": old["r.sql"].replace("RETURN NEW;", "RETURN NULL;")}
+    upgrade = _upgrade.Upgrade(old, body_only, "")
+    assert upgrade.unhandled == []
+    assert "CREATE OR REPLACE FUNCTION tgsis.trg()" in upgrade.generated() and "RETURN NULL" in upgrade.generated()
+    assert "CREATE TRIGGER" not in upgrade.generated()
+    trigger = {"r.sql": old["r.sql"].replace("BEFORE INSERT", "BEFORE INSERT OR UPDATE")}
+    assert _upgrade.Upgrade(old, trigger, "").unhandled == ["r.sql"]
+
+
+def test_rows_upserts_the_shipped_rows(conn: psycopg.Connection[Any]) -> None:
+    conn.execute("CREATE TABLE public.codes (code text PRIMARY KEY, name text, note text)")
+    conn.execute("INSERT INTO public.codes VALUES ('A', 'old a', 'x'), ('B', 'b', 'y')")
+    new = {
+        "c.sql": "CREATE TABLE public.codes (code text PRIMARY KEY, name text, note text);\n"
+        "INSERT INTO public.codes (code, name, note) VALUES ('A', 'a', 'x'), ('C', 'c; new', 'z');\n"
+    }
+    script = _upgrade.Upgrade({}, new, "-- @rows c.sql\n").script("--")
+    conn.execute(script.split("-- ---- generated")[0])  # type: ignore[arg-type]
+    assert conn.execute("SELECT * FROM public.codes ORDER BY code").fetchall() == [
+        ("A", "a", "x"),
+        ("B", "b", "y"),
+        ("C", "c; new", "z"),
+    ]
+    with pytest.raises(ValueError, match="@rows takes INSERT INTO table"):
+        _upgrade.Upgrade({}, {"d.sql": "INSERT INTO t VALUES (1);\n"}, "-- @rows d.sql\n").script("--")
