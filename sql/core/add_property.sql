@@ -102,7 +102,7 @@ BEGIN
         BEGIN
             EXECUTE format('SELECT %L::%s', p_default, v_prop.typename) INTO v_value;
         EXCEPTION WHEN data_exception THEN
-            RAISE EXCEPTION 'default % of property % is not a %', quote_literal(p_default), quote_literal(v_prop.name),
+            RAISE EXCEPTION 'default % of property % is not a valid %', quote_literal(p_default), quote_literal(v_prop.name),
                     v_prop.typename
                 USING ERRCODE = 'TG103', DETAIL = SQLERRM, HINT = format('give a value PostgreSQL reads as %s', v_prop.typename);
         END;
