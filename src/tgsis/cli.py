@@ -232,14 +232,14 @@ def _pairs(items: Sequence[str] | None, what: str) -> list[tuple[str, str]]:
     return pairs
 
 
-def _cell_properties(items: Sequence[str] | None) -> list[Property]:
+def _cell_properties(items: Sequence[str] | None, flag: str = "--property") -> list[Property]:
     """``--property NAME:TYPE[:SIZE][:VERTEX|CELL]`` items: a vector of SIZE components, an alignment of its own."""
     result = []
     for item in items or []:
         name, _, rest = item.partition(":")
         words = rest.split(":") if rest else []
         if not name or not words or not words[0] or len(words) > 3:
-            raise InvalidInputError(f"--property {item!r} must be NAME:TYPE[:SIZE][:VERTEX|CELL], e.g. porosity:float8, "
+            raise InvalidInputError(f"{flag} {item!r} must be NAME:TYPE[:SIZE][:VERTEX|CELL], e.g. porosity:float8, "
                                     "slip:float8:3 or facies:int:CELL")
         size, alignment = 1, None
         for word in words[1:]:
@@ -248,8 +248,8 @@ def _cell_properties(items: Sequence[str] | None) -> list[Property]:
             elif word.isdigit() and size == 1:
                 size = int(word)
             else:
-                raise InvalidInputError(f"--property {item!r}: {word!r} is neither a number of components nor "
-                                        "VERTEX or CELL", hint="e.g. --property slip:float8:3:CELL")
+                raise InvalidInputError(f"{flag} {item!r}: {word!r} is neither a number of components nor "
+                                        "VERTEX or CELL", hint=f"e.g. {flag} slip:float8:3:CELL")
         result.append(Property(name, words[0], size, alignment))  # type: ignore[arg-type]
     return result
 
@@ -349,7 +349,7 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
         adds.extend(("feature", pair, default) for pair in _pairs([spec], "--add-feature-property"))
     for item in args.add_property or []:
         spec, default = _with_default(item)
-        adds.extend(("cell", prop, default) for prop in _cell_properties([spec]))
+        adds.extend(("cell", prop, default) for prop in _cell_properties([spec], "--add-property"))
     for item in args.add_instant_property or []:
         spec, default = _with_default(item)
         adds.extend(("instant", pair, default) for pair in _pairs([spec], "--add-instant-property"))
