@@ -180,10 +180,11 @@ def test_every_version_keeps_its_values(conn: Conn) -> None:
     assert fetched.mesh is not None and fetched.mesh.vertex_properties["permeability"][0] == 7.0
 
 
-def test_checkout_and_checkin_see_a_new_property(conn: Conn, tmp_path: Any) -> None:
+def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
     _, fid = _horizons(conn, versioned=True)
     tgsis.create_version(conn, "edit")
     conn.commit()
+    before = tgsis.checkout(conn, fid)   # of the old columns
     tgsis.add_property(conn, "horizons", ("k", "float8"), default=1)
     tgsis.add_property(conn, "horizons", ("basin", "text"), kind="feature")
     conn.commit()
@@ -195,11 +196,19 @@ def test_checkout_and_checkin_see_a_new_property(conn: Conn, tmp_path: Any) -> N
         tgsis.checkin(conn, out, edited, {"basin": "Paris"})
         conn.commit()
         mine = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
+    conn.commit()   # (the version set back at the end of in_version, for good)
     assert mine.properties["basin"] == "Paris" and mine.mesh is not None
     assert np.all(mine.mesh.vertex_properties["k"] == 5)
     default = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
     assert default.properties["basin"] is None and default.mesh is not None
     assert np.all(default.mesh.vertex_properties["k"] == 1)
+    # a check-out of the old columns is of another state of the feature: its check-in is refused, nothing written
+    with pytest.raises(tgsis.CheckoutConflictError, match=f"feature {fid} was changed in version 'DEFAULT'"):
+        tgsis.checkin(conn, before, before.mesh)
+    conn.rollback()
+    unchanged = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
+    assert unchanged.properties == default.properties and unchanged.mesh is not None
+    assert unchanged.mesh.same_as(default.mesh)
 
 
 def test_temporal_class_gets_per_instant_and_vertex_properties(conn: Conn) -> None:
