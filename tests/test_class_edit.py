@@ -211,6 +211,32 @@ def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
     assert unchanged.mesh.same_as(default.mesh)
 
 
+def test_a_property_of_the_other_alignment_and_the_rights_on_the_views(db_dsn: str) -> None:
+    with login_roles(db_dsn, {"viewer": "tgsis_nobody"}) as roles, psycopg.connect(db_dsn) as conn:
+        fc = F.create_feature_class(conn, "horizons", "SURFACE", cell_properties=[
+            ("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")])
+        fid = F.insert_feature(conn, fc, _with_facies(_grid(3)))
+        tgsis.enable_feature_versioning(conn)
+        conn.execute(f"GRANT SELECT ON horizons_v, horizons_simplexpros TO {roles.name('viewer')}")
+        conn.commit()
+        fc = tgsis.add_property(conn, "horizons", tgsis.Property("rank", "smallint", alignment="CELL"), default=2)
+        assert fc.cell_properties[-1] == tgsis.Property("rank", "smallint", alignment="CELL")
+        assert _comment(conn, "horizons_simplexpros", "rank") == "cell property (smallint)"
+        feature = F.fetch_feature(conn, fc, fid)
+        assert feature.mesh is not None and feature.mesh.cell_properties["rank"].tolist() == [2] * 8
+        assert feature.mesh.vertex_properties.keys() == {"porosity"}
+        # the rights granted on the class's views are kept
+        for view in ("horizons_v", "horizons_simplexpros"):
+            assert conn.execute("SELECT has_table_privilege(%s, %s, 'SELECT')",
+                                (roles.name("viewer"), view)).fetchone() == (True,), view
+        conn.rollback()
+
+
+def _with_facies(mesh: tgsis.Surface) -> tgsis.Surface:
+    mesh.cell_properties = {"facies": np.arange(len(mesh.cells), dtype=np.int32)}
+    return mesh
+
+
 def test_temporal_class_gets_per_instant_and_vertex_properties(conn: Conn) -> None:
     tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", time_unit="Ma",
                                instant_properties={"throw": "float8"})

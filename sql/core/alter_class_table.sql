@@ -8,8 +8,9 @@
 -- refreshes and check-ins read the storage's columns when they run. The
 -- columns of p_properties are commented (comment_property_columns) before the
 -- views are made, which copy the comments. The
--- class view <class>_v (and the PostGIS view <class>_postgis, if
--- tgsis.create_postgis_view made one) are made again over the new columns.
+-- class view <class>_v (with the rights granted on it) and the PostGIS view
+-- <class>_postgis, if tgsis.create_postgis_view made one, are made again over
+-- the new columns.
 -- Views of others over the class's tables would read a column that changed:
 -- they are refused (TG202), nothing changed. Runs as the owner of the
 -- class's tables (tgsis's): called by add_property, rename_property and
@@ -29,7 +30,12 @@ DECLARE
     v_comment text;
     v_detail  text;
     v_alter   text;
+    v_class_grants aclitem[];
+    v_acl     record;
 BEGIN
+    -- the class view is made again by tgsis.create_class_view; the rights granted on it since are kept
+    SELECT c.relacl INTO v_class_grants FROM pg_class c
+     WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_class.viewname));
     BEGIN
         EXECUTE format('DROP VIEW IF EXISTS %I.%I', v_schema, p_class.viewname);
         SELECT * INTO v_t FROM tgsis.versioned_tables t WHERE t.schemaname = v_schema AND t.tablename = p_table;
@@ -57,6 +63,13 @@ BEGIN
                   HINT = 'drop the views that read the class''s tables, change the class, then create them again';
     END;
     PERFORM tgsis.create_class_view(p_class.classname);
+    FOR v_acl IN
+        SELECT a.privilege_type, a.grantee FROM aclexplode(v_class_grants) AS a
+         WHERE a.grantee <> (SELECT c.relowner FROM pg_class c WHERE c.oid = format('%I.%I', v_schema, p_class.viewname)::regclass)
+    LOOP
+        EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, v_schema, p_class.viewname,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+    END LOOP;
     -- a PostGIS view tgsis made (as tgsis.drop_feature_class recognises it) lists the feature table's columns
     IF (SELECT obj_description(c.oid, 'pg_class') LIKE 'tgsis PostGIS view %' AND c.relkind = 'v'
                AND c.relowner = (SELECT relowner FROM pg_class WHERE oid = 'tgsis.catalog'::regclass)
