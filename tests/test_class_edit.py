@@ -178,6 +178,13 @@ def test_every_version_keeps_its_values(conn: Conn) -> None:
                         (fid,)).fetchone() == (9.0, 7.0)
     fetched = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
     assert fetched.mesh is not None and fetched.mesh.vertex_properties["permeability"][0] == 7.0
+    # feature versioning switched off: the plain tables keep the edited columns with DEFAULT's values
+    tgsis.disable_feature_versioning(conn, force=True)
+    conn.commit()
+    plain = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
+    assert plain.properties == {"creator": "carl", "basin": "Aquitaine"} and plain.mesh is not None
+    assert plain.mesh.vertex_properties["permeability"][0] == 7.0
+    assert conn.execute("SELECT count(*) FROM horizons_cellpros").fetchone() == (16,)
 
 
 def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
