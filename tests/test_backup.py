@@ -11,7 +11,9 @@ tree, revisions, conflicts, locks, rights, catalog, every table's rows, every
 sequence's next value, the objects and their rights and comments. Then goto,
 fetch, check-out/check-in, new features and revisions, versioning new tables,
 and merge work in the restored database, and no geoid or revision is handed
-out again.
+out again. Classes edited while versioned (a property added, one renamed:
+tgsis.add_property, rename_property) keep every version's values and are
+written through their rebuilt views after the restore.
 """
 
 from __future__ import annotations
@@ -198,6 +200,18 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
         co = tgsis.checkout(conn, ids["f2"])
         tgsis.checkin(conn, co, _lifted(co.mesh, 1, 3.0))
     conn.commit()
+    # classes edited while versioned (tgsis class alter): a new column in every version's rows, one renamed
+    tgsis.add_property(conn, "faults", ("basin", "text"), kind="feature", default="Paris")
+    tgsis.add_property(conn, "stepped", ("k", "real"), default=1.5)
+    tgsis.rename_property(conn, "moving", "note_code", "note", kind="instant")
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE faults SET basin = 'edit basin' WHERE _geoid = %s", (ids["new in edit"],))
+        conn.execute("UPDATE stepped_cellpros SET k = 3 WHERE _geoid = %s AND _idx = 0", (ids["stepped"],))
+    conn.commit()
+    # the new column changed the rows of f1 on both sides: its solution is given again (docs/versioning.md)
+    assert {c.objectkey: c.solution for c in tgsis.find_conflicts(conn, "edit")}[str(ids["f1"])] == "unsolved"
+    tgsis.resolve_conflict(conn, "edit", "feature", ids["f1"], "child")
+    conn.commit()
     return ids
 
 
@@ -305,6 +319,21 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
             ann.execute("UPDATE wells SET depth = 1 WHERE name = 'W-1'")
         assert refused.value.sqlstate == "TG002"
         ann.rollback()
+    # the edited classes: written through their rebuilt views in a version, edited again
+    with tgsis.in_version(conn, "edit"):
+        assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["new in edit"],)).fetchone() == \
+            ("edit basin",)
+        conn.execute("UPDATE faults SET basin = 'after restore' WHERE _geoid = %s", (ids["new in edit"],))
+        conn.execute("UPDATE moving_pros SET note = 7 WHERE _geoid = %s", (ids["moving"],))
+        conn.commit()
+        assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["new in edit"],)).fetchone() == \
+            ("after restore",)
+        assert conn.execute("SELECT DISTINCT note FROM moving_pros WHERE _geoid = %s", (ids["moving"],)).fetchall() == \
+            [(7,)]
+        assert conn.execute("SELECT DISTINCT k FROM stepped_cellpros WHERE _geoid = %s ORDER BY 1",
+                            (ids["stepped"],)).fetchall() == [(1.5,), (3.0,)]
+    conn.rollback()
+    assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["f2"],)).fetchone() == ("Paris",)
     # the unsolved conflict is still there; solved, the merge goes through and DEFAULT sees edit's state
     unsolved = [c for c in tgsis.find_conflicts(conn, "edit") if c.solution == "unsolved"]
     assert [c.objectkey for c in unsolved] == [str(ids["f0"])]
@@ -314,6 +343,11 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
         in_edit = _surface(tgsis.fetch_feature(conn, "faults", ids["f0"]).mesh).vertices
     np.testing.assert_array_equal(_surface(tgsis.fetch_feature(conn, "faults", ids["f0"]).mesh).vertices, in_edit)
     assert conn.execute("SELECT depth FROM wells WHERE name = 'W-1'").fetchone() == (1300,)
+    assert conn.execute("SELECT _geoid, basin FROM faults WHERE _geoid IN (%s, %s) ORDER BY 1",
+                        (ids["f1"], ids["new in edit"])).fetchall() == [(ids["f1"], "Paris"),
+                                                                        (ids["new in edit"], "after restore")]
+    assert [p.name for p in tgsis.add_property(conn, "faults", ("crew", "text"), kind="feature").feature_properties] \
+        == ["release", "basin", "crew"]
     conn.rollback()
 
 

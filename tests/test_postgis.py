@@ -293,6 +293,12 @@ def test_the_class_view_is_a_postgis_layer_and_follows_versions(gconn: Conn) -> 
         gconn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (a,))
         assert _one(gconn, "SELECT ST_ZMax(geom) FROM faults_postgis WHERE _geoid = %s", (a,)) == 1.0
     assert _one(gconn, "SELECT ST_ZMax(geom) FROM faults_postgis WHERE _geoid = %s", (a,)) == 0.0
+    # an edit of the class re-creates the layer with the new columns
+    tgsis.add_property(gconn, "faults", ("basin", "text"), kind="feature", default="Mojave")
+    tgsis.rename_property(gconn, "faults", "release", "release_ma")
+    assert gconn.execute("SELECT _geoid, release_ma, basin, ST_ZMax(geom) FROM faults_postgis ORDER BY _geoid"
+                         ).fetchall() == [(a, "5.3", "Mojave", 0.0), (b, "6.1", "Mojave", 10.0)]
+    assert "tgsis PostGIS view" in _one(gconn, "SELECT obj_description('faults_postgis'::regclass)")
     # created again (e.g. after a class change) it replaces itself; a foreign relation of that name is kept
     tgsis.create_postgis_view(gconn, "faults")
     tgsis.create_feature_class(gconn, "wells", "MULTILINESTRING")

@@ -9,6 +9,11 @@
 -- The calling role must be a tgsis_admin with CREATE on the target schema; the
 -- system schemas and tgsis's own are refused, and so are schemas of other
 -- owners than tgsis's or a superuser (they could replace the class's tables).
+-- Versioning is not chosen per class (docs/versioning.md, "Versioning per
+-- class"): every class's geometries share the storage tables that feature
+-- versioning versions, so a class follows tgsis.enable_feature_versioning;
+-- p_versioned => false is refused, and p_versioned => true while feature
+-- versioning is off.
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -21,7 +26,8 @@ CREATE FUNCTION tgsis.register_feature_class(
     p_time_model         text    DEFAULT 'STATIC',
     p_instant_properties jsonb   DEFAULT '[]',
     p_time_unit          text    DEFAULT NULL,
-    p_cell_level         integer DEFAULT NULL)
+    p_cell_level         integer DEFAULT NULL,
+    p_versioned          boolean DEFAULT NULL)
 RETURNS tgsis.catalog
 LANGUAGE plpgsql
 VOLATILE
@@ -55,6 +61,20 @@ BEGIN
         RAISE EXCEPTION 'role % may not register feature classes', v_caller
             USING ERRCODE = 'TG002', DETAIL = 'Registering feature classes is for members of tgsis_admin.',
                   HINT = format('a DBA may run: GRANT tgsis_admin TO %I', v_caller);
+    END IF;
+    IF NOT p_versioned THEN
+        RAISE EXCEPTION 'feature class % cannot be left out of feature versioning', coalesce(quote_literal(p_name), 'NULL')
+            USING ERRCODE = 'TG300',
+                  DETAIL = 'The geometries of every class share tgsis.geometry and the vertex and simplex tables, which '
+                           'feature versioning versions as one object class: a class whose own tables stayed plain would '
+                           'show, in a version, features whose geometry that version does not see.',
+                  HINT = 'leave p_versioned out: the class is versioned when feature versioning is on; keep the features '
+                         'of a class nobody edits in versions in DEFAULT';
+    ELSIF p_versioned AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
+        RAISE EXCEPTION 'feature class % cannot be versioned on its own: feature versioning is off', coalesce(quote_literal(p_name), 'NULL')
+            USING ERRCODE = 'TG300',
+                  DETAIL = 'Every class is versioned with the geometries of every data model, or none.',
+                  HINT = 'SELECT tgsis.enable_feature_versioning() versions model 1 and every feature class';
     END IF;
     IF p_name IS NULL OR p_name !~ '^[a-z][a-z0-9_]*$' OR quote_ident(p_name) <> p_name OR length(v_cellpros) > 63 THEN
         RAISE EXCEPTION 'feature class name % is not allowed', coalesce(quote_literal(p_name), 'NULL')
@@ -295,5 +315,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text, integer) IS
-    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog';
+COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text, integer, boolean) IS
+    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog; versioned with every class when feature versioning is on (p_versioned => false is refused: versioning is not per class)';

@@ -30,7 +30,6 @@ DECLARE
     v_pkey      text;
     v_keys      text[];
     v_columns   text[];
-    v_writable  text[];
     v_dependent text;
     v_identity  text[];
     v_skip      text;
@@ -38,7 +37,6 @@ DECLARE
     v_name      text;
     v_comment   text := obj_description(p_table, 'pg_class');
     v_con       record;
-    v_col       record;
     v_acl       record;
 BEGIN
     SELECT n.nspname, c.relname, c.relkind, c.relowner INTO v_schema, v_table, v_kind, v_owner
@@ -100,8 +98,7 @@ BEGIN
         RAISE EXCEPTION 'table %.% has no primary key', v_schema, v_table
             USING ERRCODE = 'TG100', HINT = 'versioning tells the rows of a table apart by its primary key: add one first';
     END IF;
-    SELECT array_agg(attname::text ORDER BY attnum), array_agg(attname::text ORDER BY attnum) FILTER (WHERE attgenerated = '')
-      INTO v_columns, v_writable
+    SELECT array_agg(attname::text ORDER BY attnum) INTO v_columns
       FROM pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
     IF v_columns && ARRAY['revision', 'lastrevs', 'revclosed'] THEN
         RAISE EXCEPTION 'table %.% has a column named revision, lastrevs or revclosed, which versioning needs', v_schema, v_table
@@ -233,42 +230,9 @@ BEGIN
                    v_schema, v_ver, v_skip, p_objectclass, p_objectkeyfield);
 
     -- the view in the table's place, with its defaults, comments, grants and owner
-    EXECUTE tgsis.versioned_view_source(v_schema, v_table, v_columns);
-    FOR v_col IN
-        SELECT a.attname,
-               CASE WHEN a.attidentity <> '' THEN format('nextval(%L::regclass)', pg_get_serial_sequence(v_rel::text, a.attname))
-                    ELSE pg_get_expr(d.adbin, d.adrelid) END AS expr,
-               col_description(v_rel, a.attnum) AS note
-          FROM pg_attribute a LEFT JOIN pg_attrdef d ON d.adrelid = a.attrelid AND d.adnum = a.attnum
-         WHERE a.attrelid = v_rel AND a.attnum > 0 AND NOT a.attisdropped AND a.attname::text = ANY (v_columns)
-    LOOP
-        IF v_col.expr IS NOT NULL AND v_col.attname::text = ANY (v_writable) THEN
-            -- a deparsed default from the catalog: SQL text, not a value to quote
-            EXECUTE format('ALTER VIEW %I.%I ALTER COLUMN %I SET DEFAULT %s', v_schema, v_table, v_col.attname, v_col.expr);
-        END IF;
-        IF v_col.note IS NOT NULL THEN
-            EXECUTE format('COMMENT ON COLUMN %I.%I.%I IS %L', v_schema, v_table, v_col.attname, v_col.note);
-        END IF;
-    END LOOP;
-    EXECUTE format('COMMENT ON VIEW %I.%I IS %L', v_schema, v_table,
-                   coalesce(v_comment || ' ', '')
-                   || format('(versioned by tgsis: rows of the session''s version; storage %s)', v_ver));
-    FOR v_acl IN
-        SELECT a.privilege_type, a.grantee FROM aclexplode(v_relacl) AS a WHERE a.grantee <> v_owner
-    LOOP
-        EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, v_schema, v_table,
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
-    END LOOP;
-    EXECUTE tgsis.versioning_trigger_source(v_schema, v_table, v_keys, v_writable, v_pkey, p_objectclass, p_objectkeyfield);
-    EXECUTE format('COMMENT ON FUNCTION %I.%I() IS %L', v_schema, v_table || '_ver_write',
-                   format('tgsis versioning: INSTEAD OF trigger routing writes on %s.%s into %s', v_schema, v_table, v_ver));
-    EXECUTE format('CREATE TRIGGER %I INSTEAD OF INSERT OR UPDATE OR DELETE ON %I.%I FOR EACH ROW EXECUTE FUNCTION %I.%I()',
-                   'tgsis_versioning', v_schema, v_table, v_schema, v_table || '_ver_write');
-    EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON %I.%I '
-                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', v_schema, v_table);
-    EXECUTE format('ALTER VIEW %I.%I OWNER TO %I', v_schema, v_table, pg_get_userbyid(v_owner));
-    EXECUTE format('ALTER FUNCTION %I.%I() OWNER TO %I', v_schema, v_table || '_ver_write', pg_get_userbyid(v_owner));
-    EXECUTE format('REVOKE ALL ON FUNCTION %I.%I() FROM PUBLIC', v_schema, v_table || '_ver_write');
+    PERFORM tgsis.create_versioned_view(v_schema, v_table, v_keys, v_pkey, p_objectclass, p_objectkeyfield, v_relacl,
+                                        coalesce(v_comment || ' ', '')
+                                        || format('(versioned by tgsis: rows of the session''s version; storage %s)', v_ver));
     -- through which tgsis's definer code acts on the storage, as its owner
     PERFORM tgsis.create_storage_runner(v_schema, v_table);
 

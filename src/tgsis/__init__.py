@@ -134,6 +134,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         insert_feature,
         list_feature_classes,
     )
+    from tgsis.db.classes import add_property, drop_property, rename_property
     from tgsis.db.checkin import (
         CheckinResult,
         Checkout,
@@ -230,6 +231,9 @@ _LAZY: dict[str, str] = {
     "create_feature_class": "tgsis.db.features",
     "delete_feature": "tgsis.db.features",
     "drop_feature_class": "tgsis.db.features",
+    "add_property": "tgsis.db.classes",
+    "rename_property": "tgsis.db.classes",
+    "drop_property": "tgsis.db.classes",
     "features_in_box": "tgsis.db.features",
     "fetch_feature": "tgsis.db.features",
     "fetch_features": "tgsis.db.features",
@@ -420,6 +424,9 @@ __all__ = [
     "get_feature_class",
     "list_feature_classes",
     "drop_feature_class",
+    "add_property",
+    "rename_property",
+    "drop_property",
     "insert_feature",
     "fetch_feature",
     "fetch_features",

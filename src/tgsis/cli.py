@@ -33,6 +33,7 @@ from tgsis.db.install import install, installed_version, uninstall
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis import clihints, clistate, cliout
 from tgsis.db import versions as V
+from tgsis.db.classes import PropertyKind, add_property, drop_property, rename_property
 from tgsis.db.features import (
     FeatureClass,
     Property,
@@ -231,14 +232,14 @@ def _pairs(items: Sequence[str] | None, what: str) -> list[tuple[str, str]]:
     return pairs
 
 
-def _cell_properties(items: Sequence[str] | None) -> list[Property]:
+def _cell_properties(items: Sequence[str] | None, flag: str = "--property") -> list[Property]:
     """``--property NAME:TYPE[:SIZE][:VERTEX|CELL]`` items: a vector of SIZE components, an alignment of its own."""
     result = []
     for item in items or []:
         name, _, rest = item.partition(":")
         words = rest.split(":") if rest else []
         if not name or not words or not words[0] or len(words) > 3:
-            raise InvalidInputError(f"--property {item!r} must be NAME:TYPE[:SIZE][:VERTEX|CELL], e.g. porosity:float8, "
+            raise InvalidInputError(f"{flag} {item!r} must be NAME:TYPE[:SIZE][:VERTEX|CELL], e.g. porosity:float8, "
                                     "slip:float8:3 or facies:int:CELL")
         size, alignment = 1, None
         for word in words[1:]:
@@ -247,8 +248,8 @@ def _cell_properties(items: Sequence[str] | None) -> list[Property]:
             elif word.isdigit() and size == 1:
                 size = int(word)
             else:
-                raise InvalidInputError(f"--property {item!r}: {word!r} is neither a number of components nor "
-                                        "VERTEX or CELL", hint="e.g. --property slip:float8:3:CELL")
+                raise InvalidInputError(f"{flag} {item!r}: {word!r} is neither a number of components nor "
+                                        "VERTEX or CELL", hint=f"e.g. {flag} slip:float8:3:CELL")
         result.append(Property(name, words[0], size, alignment))  # type: ignore[arg-type]
     return result
 
@@ -313,6 +314,81 @@ def cmd_class_drop(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         deleted = drop_feature_class(conn, args.name, force=args.force)
     _out(f"dropped feature class {args.name}" + (f" and its {deleted} feature(s)" if deleted else ""))
+    return 0
+
+
+def _with_default(item: str) -> tuple[str, str | None]:
+    """``NAME:TYPE...=VALUE``: the property part and the default value (None without ``=``)."""
+    spec, sep, value = item.partition("=")
+    return spec, (value if sep else None)
+
+
+def _property_ref(text: str) -> tuple[str, PropertyKind | None]:
+    """``NAME`` or ``KIND:NAME`` (feature, cell, instant: which property when a class has two of that name)."""
+    kind, sep, name = text.partition(":")
+    if not sep:
+        return text, None
+    if kind not in ("feature", "cell", "instant") or not name:
+        raise InvalidInputError(f"property {text!r} must be NAME or KIND:NAME with KIND feature, cell or instant")
+    return name, kind  # type: ignore[return-value]
+
+
+def _properties_json(fc: FeatureClass) -> dict[str, Any]:
+    return {"feature_properties": [{"name": p.name, "type": p.type} for p in fc.feature_properties],
+            "properties": [{"name": p.name, "type": p.type, "size": p.size, "alignment": p.alignment or fc.alignment}
+                           for p in fc.cell_properties],
+            "instant_properties": [{"name": p.name, "type": p.type} for p in fc.instant_properties]}
+
+
+def cmd_class_alter(args: argparse.Namespace) -> int:
+    drops = [_property_ref(name) for name in args.drop_property or []]
+    renames = [(*_property_ref(old), new) for old, new in args.rename_property or []]
+    adds: list[tuple[PropertyKind, Property | tuple[str, str], str | None]] = []
+    for item in args.add_feature_property or []:
+        spec, default = _with_default(item)
+        adds.extend(("feature", pair, default) for pair in _pairs([spec], "--add-feature-property"))
+    for item in args.add_property or []:
+        spec, default = _with_default(item)
+        adds.extend(("cell", prop, default) for prop in _cell_properties([spec], "--add-property"))
+    for item in args.add_instant_property or []:
+        spec, default = _with_default(item)
+        adds.extend(("instant", pair, default) for pair in _pairs([spec], "--add-instant-property"))
+    if not (drops or renames or adds):
+        raise InvalidInputError("tgsis class alter needs a change",
+                                hint="give --add-property, --add-feature-property, --add-instant-property, "
+                                     "--rename-property or --drop-property")
+    changes: list[dict[str, Any]] = []
+    with _connect(args) as conn, conn.transaction():   # every change or none
+        fc = get_feature_class(conn, args.name)
+        for name, kind in drops:
+            fc = drop_property(conn, args.name, name, kind=kind, force=args.force)
+            changes.append({"op": "drop", "property": name, "kind": kind})
+        for old, kind, new in renames:
+            fc = rename_property(conn, args.name, old, new, kind=kind)
+            changes.append({"op": "rename", "property": old, "kind": kind, "to": new})
+        for kind, prop, default in adds:
+            fc = add_property(conn, args.name, prop, kind=kind, default=default)
+            name = prop.name if isinstance(prop, Property) else prop[0]
+            changes.append({"op": "add", "property": name, "kind": kind, "default": default})
+    if _json(args):
+        cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
+        return 0
+    for change in changes:
+        what = f"{change['kind']} property " if change["kind"] else "property "
+        if change["op"] == "drop":
+            _out(f"dropped {what}{change['property']}")
+        elif change["op"] == "rename":
+            _out(f"renamed {what}{change['property']} to {change['to']}")
+        else:
+            _out(f"added {what}{change['property']}"
+                 + (f" (stored rows: {change['default']})" if change["default"] is not None else ""))
+    cprops = ", ".join(f"{p.name} {p.type}{f'[{p.size}]' if p.size > 1 else ''}"
+                       f"{f' ({p.alignment.lower()})' if p.alignment else ''}" for p in fc.cell_properties) or "-"
+    _out(f"feature class {fc.name}: feature properties "
+         f"{', '.join(f'{p.name} {p.type}' for p in fc.feature_properties) or '-'}; "
+         f"{fc.alignment.lower()} properties {cprops}"
+         + (f"; per-instant properties {', '.join(f'{p.name} {p.type}' for p in fc.instant_properties) or '-'}"
+            if fc.time_model != "STATIC" else ""))
     return 0
 
 
@@ -1638,7 +1714,7 @@ def build_parser() -> argparse.ArgumentParser:
     _command(db_commands, "status", "server and tgsis versions", ["tgsis db status", "tgsis db status --json"],
              cmd_db_status, tabular=False)
 
-    cls = _command(commands, "class", "feature classes: create, list, drop", ["tgsis class list"])
+    cls = _command(commands, "class", "feature classes: create, list, alter, drop", ["tgsis class list"])
     cls_commands = cls.add_subparsers(dest="class_command", metavar="ACTION", required=True)
     cls_create = _command(cls_commands, "create", "register a feature class",
                           ["tgsis class create faults --geotype SURFACE --srs 32611 --feature-property release:text",
@@ -1673,6 +1749,31 @@ def build_parser() -> argparse.ArgumentParser:
                             help="per-instant feature property of a temporal class (repeatable)")
     _command(cls_commands, "list", "list the feature classes", ["tgsis class list", "tgsis class list --json"],
              cmd_class_list, tabular=True)
+    cls_alter = _command(cls_commands, "alter", "add, rename or drop properties of a feature class, in every version",
+                         ["tgsis class alter horizons --add-property permeability:float8=0 --add-feature-property "
+                          "author:text",
+                          "tgsis class alter horizons --rename-property porosity phi --drop-property author",
+                          "tgsis class alter horizons --drop-property phi --force   # deletes its values"],
+                         cmd_class_alter, tabular=False)
+    cls_alter.add_argument("name", help="the class to change")
+    cls_alter.add_argument("--add-property", action="append", metavar="NAME:TYPE[:SIZE][:VERTEX|CELL][=VALUE]",
+                           help="a new per-vertex (or per-cell) property (repeatable), as for tgsis class create "
+                                "--property; VALUE: what the stored vertices (cells) get, needed when the class "
+                                "has features")
+    cls_alter.add_argument("--add-feature-property", action="append", metavar="NAME:TYPE[=VALUE]",
+                           help="a new property of the whole feature (repeatable); stored features get VALUE, "
+                                "else none (NULL)")
+    cls_alter.add_argument("--add-instant-property", action="append", metavar="NAME:TYPE[=VALUE]",
+                           help="a new per-instant property of a temporal class (repeatable); stored instants get "
+                                "VALUE, else none (NULL)")
+    cls_alter.add_argument("--rename-property", action="append", nargs=2, metavar=("OLD", "NEW"),
+                           help="rename a property, keeping its values (repeatable); write KIND:OLD (feature, cell, "
+                                "instant) when the class has two properties called OLD")
+    cls_alter.add_argument("--drop-property", action="append", metavar="NAME",
+                           help="drop a property (repeatable; KIND:NAME as for --rename-property); refused while "
+                                "stored values would be lost, unless --force")
+    cls_alter.add_argument("--force", action="store_true",
+                           help="drop properties even if that deletes their stored values")
     cls_drop = _command(cls_commands, "drop", "drop a feature class (refused while it has features)",
                         ["tgsis class drop faults", "tgsis class drop faults --force   # with its features"],
                         cmd_class_drop)

@@ -124,6 +124,14 @@ _RULES: list[tuple[str, Replacement]] = [
      "tgsis ls lists the features of every class"),
     (r"(SELECT \* FROM tgsis\.check_geometry\([^)]*\))", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"tgsis\.drop_feature_class removes it", "tgsis class drop NAME removes it"),
+    # --- editing a class (tgsis class alter)
+    (r"SELECT feature_properties, cell_properties, instant_properties FROM tgsis\.catalog WHERE classname = '[^']*'",
+     "tgsis class list shows the properties of the classes"),
+    (r"say which: p_kind => 'feature', 'cell' or 'instant'", "say which: feature:NAME, cell:NAME or instant:NAME"),
+    (r"add a feature property \(p_kind => 'feature'\) instead", "add a feature property (--add-feature-property) "
+                                                                "instead"),
+    (r"drop it with p_force => true to delete its values", "repeat with --force to delete its values"),
+    (r"give p_default, e\.g\. '0'", "give the value stored rows get: --add-property NAME:TYPE=VALUE"),
     (r"compare its members one by one: (SELECT geoids FROM tgsis\.geometry WHERE .*)",
      lambda m: f"compare its members one by one ({IN_PSQL}{m[1]})"),
     (r"(?<!in psql: )(tgsis\.delete_instant removes it first)", lambda m: f"{IN_PSQL}{m[1]}"),

@@ -1,4 +1,4 @@
-"""Feature classes: register, look up, list and drop them (``tgsis.catalog``).
+"""Feature classes: register, look up, list, edit and drop them (``tgsis.catalog``).
 
 Every data model's features belong to a feature class; the model-specific
 write and read paths (:mod:`tgsis.db.features` for model 1,
@@ -27,12 +27,17 @@ __all__ = [
     "get_feature_class",
     "list_feature_classes",
     "drop_feature_class",
+    "add_property",
+    "rename_property",
+    "drop_property",
     "class_of_feature",
     "stores_part_column",
 ]
 
 Conn = psycopg.Connection[Any]
 PropertySpec = Mapping[str, str] | Sequence["tuple[str, str] | tuple[str, str, int] | Property"]
+#: Which list of a class a property is in: per feature, per vertex or cell, per feature and instant.
+PropertyKind = Literal["feature", "cell", "instant"]
 
 
 @dataclass(frozen=True)
@@ -183,6 +188,7 @@ def create_feature_class(
     time_unit: str | None = None,
     instant_properties: PropertySpec | None = None,
     cell_level: int | None = None,
+    versioned: bool | None = None,
 ) -> FeatureClass:
     """Register a feature class (``tgsis.register_feature_class``).
 
@@ -223,19 +229,26 @@ def create_feature_class(
         A class of G-maps: the dimension of the cells that ``cell_properties``
         belong to (0: vertices, 1: edges, 2: faces, 3: volumes); required for
         ``time_model="GMAP"``, refused otherwise.
+    versioned : bool, optional
+        Leave it out: a class is versioned when feature versioning is on
+        (:func:`~tgsis.enable_feature_versioning`), with every other class.
+        ``False`` is refused (:class:`~tgsis.errors.VersioningError`): the
+        classes' geometries share storage tables, which are versioned for
+        all or none (docs/versioning.md, "Versioning per class"); ``True``
+        is refused while feature versioning is off.
 
     Raises
     ------
     InvalidNameError, InvalidPropertyError, InvalidInputError, AlreadyExistsError, NotFoundError,
-    MissingPrivilegeError
+    MissingPrivilegeError, VersioningError (``versioned``)
     """
     geotype_value = geotype.value if isinstance(geotype, Geotype) else str(geotype)
     with reraise(), conn.transaction():
         row = conn.execute(
             f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s, "
-            "%s, %s::jsonb, %s, %s)",
+            "%s, %s::jsonb, %s, %s, %s)",
             (name, geotype_value, _spec_json(feature_properties), _spec_json(cell_properties), alignment, srs,
-             schema, description, time_model, _spec_json(instant_properties), time_unit, cell_level),
+             schema, description, time_model, _spec_json(instant_properties), time_unit, cell_level, versioned),
         ).fetchone()
     assert row is not None
     return _class_from_row(row)
@@ -273,6 +286,97 @@ def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
     with reraise(), conn.transaction():
         row = conn.execute("SELECT tgsis.drop_feature_class(%s, %s)", (name, force)).fetchone()
     return int(row[0]) if row else 0
+
+
+def _default_text(value: object) -> str | None:
+    """A default value as the text PostgreSQL reads (``true``/``false`` for booleans)."""
+    if value is None:
+        return None
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
+def add_property(conn: Conn, feature_class: str, prop: Property | tuple[str, str] | tuple[str, str, int], *,
+                 kind: PropertyKind = "cell", default: object = None) -> FeatureClass:
+    """Give a class one more property, in every version (``tgsis.add_property``).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str
+        The class's name.
+    prop : Property or (name, type) or (name, type, k)
+        As :func:`create_feature_class` takes them; a vertex or cell
+        property may be a vector of k components, and a :class:`Property`
+        may give an ``alignment`` other than the class's if the class has a
+        table for that alignment.
+    kind : {"feature", "cell", "instant"}
+        A value per feature, per vertex or cell (the default), or per feature
+        and instant (temporal classes).
+    default : optional
+        The value every stored row gets (each component of a vector);
+        required for a vertex or cell property of a class that has stored
+        rows (they may not be NULL); feature and per-instant properties of
+        stored rows are NULL without one. New rows give their own values.
+
+    Returns
+    -------
+    FeatureClass
+        The class as it is now (fetch and save its features with this one).
+
+    Raises
+    ------
+    NotFoundError, InvalidNameError, InvalidPropertyError, AlreadyExistsError, InvalidInputError, InUseError,
+    MissingPrivilegeError (the caller is no ``tgsis_admin``)
+    """
+    if isinstance(prop, Property):
+        item: Any = {"name": prop.name, "type": prop.type, "size": prop.size, "alignment": prop.alignment}
+    else:
+        item = list(prop)
+    with reraise(), conn.transaction():
+        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.add_property(%s, %s, %s::jsonb, %s)",
+                           (feature_class, kind, json.dumps(item), _default_text(default))).fetchone()
+    assert row is not None
+    return _class_from_row(row)
+
+
+def rename_property(conn: Conn, feature_class: str, name: str, new_name: str, *,
+                    kind: PropertyKind | None = None) -> FeatureClass:
+    """Rename a property of a class, in every version, keeping its values (``tgsis.rename_property``).
+
+    ``kind`` (``"feature"``, ``"cell"``, ``"instant"``) says which property
+    is meant when the class has more than one of that name. Returns the
+    class as it is now.
+
+    Raises
+    ------
+    NotFoundError, InvalidNameError, InvalidPropertyError, AlreadyExistsError, InUseError, MissingPrivilegeError
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.rename_property(%s, %s, %s, %s)",
+                           (feature_class, name, new_name, kind)).fetchone()
+    assert row is not None
+    return _class_from_row(row)
+
+
+def drop_property(conn: Conn, feature_class: str, name: str, *, kind: PropertyKind | None = None,
+                  force: bool = False) -> FeatureClass:
+    """Drop a property of a class, in every version (``tgsis.drop_property``).
+
+    Refused (:class:`~tgsis.errors.InUseError`) while a stored row of any
+    version holds a value of it, unless ``force``. ``kind`` as for
+    :func:`rename_property`. Returns the class as it is now.
+
+    Raises
+    ------
+    NotFoundError, InvalidNameError, InvalidPropertyError, InUseError, MissingPrivilegeError
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.drop_property(%s, %s, %s, %s)",
+                           (feature_class, name, kind, force)).fetchone()
+    assert row is not None
+    return _class_from_row(row)
 
 
 def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
