@@ -12,7 +12,7 @@ PYTEST_ARGS ?=
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet --editable '.[test,embedded]'
+	$(BIN)/python -m pip install --quiet --editable '.[test,embedded,view]'
 	touch $@
 
 demo: $(VENV)/.installed
