@@ -1,7 +1,7 @@
 """The browser view: a 1M-vertex, 2M-triangle surface from navigation to the scene drawn, in headless Chromium.
 
 The surface is stored (model 1, one vertex property), the view is served in
-this process (uvicorn in a thread, as ``tgsis view``), and the distribution's
+a process of its own (``tgsis view --port 0``), and the distribution's
 Chromium (``/usr/bin/chromium``, WebGL on SwiftShader: no GPU) opens
 ``/scene?ids=ID``; the time runs from ``page.goto`` to the page saying it has
 drawn the frame (``document.body.dataset.frame``), medians of ``--repeat``
@@ -17,35 +17,34 @@ from __future__ import annotations
 
 import argparse
 import json
-import socket
+import os
+import re
+import signal
 import statistics
-import threading
+import subprocess
+import sys
 import time
 import urllib.request
 
 import psycopg
-import uvicorn
 from playwright.sync_api import sync_playwright
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
-from tgsis.view.app import ViewConfig, create_app
 from transfer import grid_surface
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]
 
 
-def serve(conninfo: str) -> tuple[uvicorn.Server, threading.Thread, str]:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.listen(64)
-    server = uvicorn.Server(uvicorn.Config(create_app(ViewConfig(conninfo, False, "bench")), log_level="warning"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.02)
-    return server, thread, f"http://127.0.0.1:{sock.getsockname()[1]}"
+def serve(conninfo: str) -> tuple[subprocess.Popen[str], str]:
+    """``tgsis view`` in a process of its own, as a user runs it; its base URL."""
+    process = subprocess.Popen([sys.executable, "-m", "tgsis.cli", "--dsn", conninfo, "view", "--port", "0"],
+                               stdout=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    assert process.stdout is not None
+    found = re.search(r"(http://127\.0\.0\.1:\d+)/classes", process.stdout.readline())
+    assert found, "tgsis view did not start"
+    return process, found.group(1)
 
 
 def main() -> None:
@@ -75,7 +74,7 @@ def main() -> None:
                 tgsis.fetch_feature(conn, "grid", fid)
                 fetches.append(time.perf_counter() - start)
                 conn.rollback()
-        server, thread, url = serve(dsn)
+        server, url = serve(dsn)
         try:
             gets = []
             for _ in range(args.repeat):
@@ -84,6 +83,7 @@ def main() -> None:
                     body = response.read()
                 gets.append(time.perf_counter() - start)
             loads = []
+            phases: list[dict[str, float]] = []
             with sync_playwright() as playwright:
                 browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
                 print(f"browser: Chromium {browser.version} (headless, SwiftShader)")
@@ -96,11 +96,12 @@ def main() -> None:
                     loads.append(time.perf_counter() - start)
                     state, status = page.evaluate("document.body.dataset.state"), page.text_content("#status")
                     assert state == "ready", status
+                    phases.append(json.loads(page.evaluate("document.body.dataset.timings")))
                     page.close()
                 browser.close()
         finally:
-            server.should_exit = True
-            thread.join(30)
+            server.send_signal(signal.SIGTERM)
+            server.wait(30)
     finally:
         local.destroy()
 
@@ -111,6 +112,8 @@ def main() -> None:
     print(f"GET /api/mesh: {', '.join(f'{t:.2f}' for t in gets)} s, {len(body) / 1e6:.1f} MB binary "
           f"(as JSON lists: {as_json / 1e6:.1f} MB)")
     print(f"navigation to the scene drawn: {', '.join(f'{t:.2f}' for t in loads)} s ({status})")
+    for name in ("start", "download", "build", "draw"):
+        print(f"  in the page, {name}: {', '.join(f'{p[name] / 1000:.2f}' for p in phases)} s")
     print(f"view_load_s: {statistics.median(loads):.2f}")
     print(f"view_endpoint_s: {statistics.median(gets):.2f}")
     print(f"view_fetch_feature_s: {statistics.median(fetches):.2f}")

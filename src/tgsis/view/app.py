@@ -49,8 +49,9 @@ from tgsis.db.features import fetch_feature
 from tgsis.db.temporal import get_at
 from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError,
                           reraise)
-from tgsis.mesh import Surface
+from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, drawable, pack, vertex_flags
+from tgsis.view.surfaces import StoredSurface, stored_surface
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE"]
 
@@ -158,14 +159,23 @@ class View:
         self.templates.env.globals["quote"] = lambda text: urllib.parse.quote(str(text), safe="")
 
     @contextlib.contextmanager
-    def session(self, request: Request, version: str | None = None) -> Iterator[Conn]:
-        """A connection inside one transaction, in ``version`` (else the browser's choice, else DEFAULT)."""
+    def session(self, request: Request, version: str | None = None, *, snapshot: str | None = None
+                ) -> Iterator[Conn]:
+        """A connection inside one transaction, in ``version`` (else the browser's choice, else DEFAULT).
+
+        The transaction is REPEATABLE READ: every query of a page sees one
+        state of the database; ``snapshot`` (of ``pg_export_snapshot()``)
+        makes it see the state another session sees.
+        """
         chosen = version if version is not None else self.chosen(request)
         with reraise(), psycopg.connect(self.config.conninfo) as conn:
             if not self.config.writable:
                 conn.execute("SET default_transaction_read_only = on")
                 conn.commit()
             with conn.transaction():
+                conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+                if snapshot is not None:
+                    conn.execute(sql.SQL("SET TRANSACTION SNAPSHOT {}").format(sql.Literal(snapshot)))
                 if chosen:
                     name, revision = split_version(chosen)
                     if revision is None:
@@ -173,6 +183,14 @@ class View:
                     else:
                         V.goto_revision(conn, name, revision, local=True)
                 yield conn
+
+    @contextlib.contextmanager
+    def beside(self, conn: Conn, request: Request, version: str | None = None) -> Iterator[Conn]:
+        """A second connection that sees what ``conn`` sees (its snapshot, the same version): for queries side by side."""
+        row = conn.execute("SELECT pg_export_snapshot()").fetchone()
+        assert row is not None
+        with self.session(request, version, snapshot=str(row[0])) as other:
+            yield other
 
     def chosen(self, request: Request) -> str | None:
         """The browser's version (its cookie), else the server's default."""
@@ -275,11 +293,14 @@ def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None,
     return t, first, last
 
 
-def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None) -> tuple[Drawable | None, float | None]:
+def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
+             color: str | None = None) -> tuple[Drawable | None, float | None]:
     """What to draw of a feature at t (None when it does not exist then) and the t used."""
     if fc.time_model not in _DRAWN_TIME_MODELS:
         raise _bad(f"feature {feature_id} is a G-map ({fc.time_model}): the browser view draws models 1-3")
     if fc.time_model == "STATIC":
+        if fc.geotype is Geotype.SURFACE:  # the view's own download: the stored rows, no more
+            return stored_surface(conn, fc, feature_id, color).drawable, None
         feature = fetch_feature(conn, fc, feature_id)
         assert feature.mesh is not None
         return drawable(feature.mesh), None
@@ -406,8 +427,14 @@ def scene_page(request: Request) -> Response:
         raise _bad(f"colour {color!r} is neither 'height' nor a numeric vertex property of every feature shown "
                    f"({', '.join(properties) or 'none'})")
     units = {classes[r.feature_class].time_unit for r in rows if r.first is not None} - {None}
+    temporal = [r.id for r in rows if r.first is not None]
+
+    def first_url(feature_id: int) -> str:
+        params = {"t": repr(when) if feature_id in temporal else None, "color": None if color == "height" else color}
+        return f"/api/mesh/{feature_id}?" + urllib.parse.urlencode({k: v for k, v in params.items() if v is not None})
+
     config = {"ids": ids, "t": when, "first": first, "last": last, "color": color, "exaggeration": exaggeration,
-              "temporal": [r.id for r in rows if r.first is not None]}
+              "temporal": temporal, "urls": {str(i): first_url(i) for i in ids}}
     return view.page(request, "scene.html", rows=rows, config=config, properties=properties, color=color,
                      unit=", ".join(sorted(u for u in units if u)), version=version, title="scene")
 
@@ -426,7 +453,7 @@ def compare_page(request: Request) -> Response:
         versions = V.list_versions(conn)
     with view.session(request, a) as conn:
         fc = feature_class_of(conn, feature_id)
-        if fc.time_model != "STATIC" or fc.geotype.value != "SURFACE":
+        if fc.time_model != "STATIC" or fc.geotype is not Geotype.SURFACE:
             raise _bad(f"feature {feature_id} is not a static surface: versions compare static surfaces")
         row = list_features(conn, fc, ids=[feature_id])[0]
         (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
@@ -472,9 +499,15 @@ def _mesh_body(request: Request) -> bytes:
     t = _number(request.query_params.get("t"), "time t")
     color = request.query_params.get("color") or None
     color = None if color == "height" else color
-    with view.session(request, request.query_params.get("v")) as conn:
+    version = request.query_params.get("v")
+    mesh: Drawable | None
+    with view.session(request, version) as conn:
         fc = feature_class_of(conn, feature_id)
-        mesh, when = _mesh_of(conn, fc, feature_id, t)
+        if fc.time_model == "STATIC" and fc.geotype is Geotype.SURFACE:
+            with view.beside(conn, request, version) as other:
+                mesh, when = stored_surface(conn, fc, feature_id, color, beside=other).drawable, None
+        else:
+            mesh, when = _mesh_of(conn, fc, feature_id, t, color)
         name = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
     return _body({"id": feature_id, "class": fc.name, "name": name[0] if name else None, "t": when}, mesh, color)
 
@@ -489,26 +522,12 @@ def mesh_header_endpoint(request: Request) -> Response:
     return Response(body[4:4 + n].rstrip(), media_type="application/json")
 
 
-def _stored_ids(conn: Conn, feature_id: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """Stored vertex and triangle ids of a surface in the session's version, ascending (the mesh's order)."""
-    vertices = conn.execute("SELECT coalesce(array_agg(vrtxid ORDER BY vrtxid), '{}') FROM tgsis.vrtx "
-                            "WHERE geoid = %s", (feature_id,)).fetchone()
-    triangles = conn.execute("SELECT coalesce(array_agg(trglid ORDER BY trglid), '{}') FROM tgsis.trgl "
-                             "WHERE geoid = %s", (feature_id,)).fetchone()
-    assert vertices is not None and triangles is not None
-    return np.asarray(vertices[0], dtype=np.int64), np.asarray(triangles[0], dtype=np.int64)
-
-
-def _surface_in(view: View, request: Request, version: str, feature_id: int
-                ) -> tuple[Surface, npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def _surface_in(view: View, request: Request, version: str, feature_id: int) -> StoredSurface:
     with view.session(request, version) as conn:
         fc = feature_class_of(conn, feature_id)
-        if fc.time_model != "STATIC" or fc.geotype.value != "SURFACE":
+        if fc.time_model != "STATIC" or fc.geotype is not Geotype.SURFACE:
             raise _bad(f"feature {feature_id} is not a static surface: versions compare static surfaces")
-        mesh = fetch_feature(conn, fc, feature_id).mesh
-        assert isinstance(mesh, Surface)
-        vids, tids = _stored_ids(conn, feature_id)
-    return mesh, vids, tids
+        return stored_surface(conn, fc, feature_id)
 
 
 def _positions(ids: npt.NDArray[np.int64], wanted: npt.ArrayLike) -> npt.NDArray[np.int64]:
@@ -529,19 +548,20 @@ def compare_endpoint(request: Request) -> Response:
     if side not in ("a", "b"):
         raise _bad(f"side {side!r} must be 'a' or 'b'")
     (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
-    mesh_a, vids_a, tids_a = _surface_in(view, request, a, feature_id)
-    mesh_b, vids_b, tids_b = _surface_in(view, request, b, feature_id)
+    stored_a, stored_b = _surface_in(view, request, a, feature_id), _surface_in(view, request, b, feature_id)
+    mesh_a, vids_a, tids_a = stored_a.drawable, stored_a.vertex_ids, stored_a.triangle_ids
+    mesh_b, vids_b, tids_b = stored_b.drawable, stored_b.vertex_ids, stored_b.triangle_ids
     with view.session(request) as conn:
         changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
     if side == "a":
         removed_cells = _positions(tids_a, changes.cells_removed)
         flags = vertex_flags(len(mesh_a.vertices), [(1, _positions(vids_a, changes.vertices_removed)),
-                                                    (1, mesh_a.cells[removed_cells].ravel())])
+                                                    (1, mesh_a.indices[removed_cells].ravel())])
         mesh, extra = mesh_a, {"changed": flags}
     else:
         added_cells = _positions(tids_b, changes.cells_added)
         flags = vertex_flags(len(mesh_b.vertices), [(1, _positions(vids_b, changes.vertices_added)),
-                                                    (1, mesh_b.cells[added_cells].ravel())])
+                                                    (1, mesh_b.indices[added_cells].ravel())])
         displacement = np.full(len(mesh_b.vertices), np.nan)
         at = np.searchsorted(vids_a, vids_b)
         at = np.minimum(at, max(len(vids_a) - 1, 0))
@@ -549,7 +569,7 @@ def compare_endpoint(request: Request) -> Response:
         displacement[same] = np.linalg.norm(mesh_b.vertices[same] - mesh_a.vertices[at[same]], axis=1)
         mesh, extra = mesh_b, {"changed": flags, "displacement": displacement}
     header = {"id": feature_id, "side": side, "version": a if side == "a" else b, "changes": changes.counts()}
-    return _binary(_body(header, drawable(mesh), None, extra))
+    return _binary(_body(header, mesh, None, extra))
 
 
 def conflict_endpoint(request: Request) -> Response:
@@ -566,7 +586,8 @@ def conflict_endpoint(request: Request) -> Response:
         raise NotFoundError(f"no version {name!r} with a parent", hint="the versions page lists them")
     parent, base = known[name].parent, known[name].initrevision
     assert parent is not None
-    mesh, vids, tids = _surface_in(view, request, name, feature_id)
+    stored = _surface_in(view, request, name, feature_id)
+    mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
     with view.session(request) as conn:
         child = compare_versions(conn, feature_id, parent, name, old_revision=base)
         theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
@@ -574,10 +595,10 @@ def conflict_endpoint(request: Request) -> Response:
     for flag, changes in ((1, child), (2, theirs)):
         cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
         marks += [(flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
-                  (flag, mesh.cells[cells].ravel())]
+                  (flag, mesh.indices[cells].ravel())]
     header = {"id": feature_id, "version": name, "parent": parent, "base": base,
               "child_changes": child.counts(), "parent_changes": theirs.counts()}
-    return _binary(_body(header, drawable(mesh), None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
+    return _binary(_body(header, mesh, None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
 
 
 # --------------------------------------------------------------------------- errors

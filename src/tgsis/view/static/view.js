@@ -17,12 +17,19 @@ function setState(state, text) {
   if (box && text !== undefined) box.textContent = text;
 }
 
-function drawn() {
+// after a render: wait for the GPU (one pixel read back), then count the frame
+function drawn(viewer) {
+  if (viewer) {
+    const gl = viewer.renderer.getContext();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+  }
   document.body.dataset.frame = String(Number(document.body.dataset.frame || "0") + 1);
 }
 
 export async function fetchMesh(url) {
-  const response = await fetch(url);
+  const early = window.tgsisEarly && window.tgsisEarly.get(url);   // asked for by the page before this module ran
+  if (early) window.tgsisEarly.delete(url);
+  const response = await (early || fetch(url));
   if (!response.ok) {
     let message = response.statusText;
     try { message = (await response.json()).error; } catch (e) { /* not JSON */ }
@@ -123,7 +130,7 @@ function dispose(object) {
 class Viewer {
   constructor(canvas, split = false) {
     this.canvas = canvas;
-    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(1);
     this.renderer.setSize(canvas.width, canvas.height, false);
     this.split = split;
@@ -209,32 +216,43 @@ export function sceneView(config) {
   let serial = 0;
   let t = config.t;
   let colour = config.color;
+  // ms: when the page's code started (from navigation), and of the last frame: download, build, draw
+  const timings = { start: performance.now() };
 
   function paint() {
     const meshes = [...loaded.values()].filter((m) => m.header.kind !== "none");
     const values = new Map(meshes.map((m) => [m.header.id, colour === "height" ? heights(m) : m.arrays.values]));
     const span = range(values.values());
+    const built = performance.now();
     for (const mesh of meshes) {
       viewer.replace(0, mesh.header.id, object3d(mesh, colours(values.get(mesh.header.id), span), sceneOrigin));
     }
+    timings.build = performance.now() - built;
     for (const mesh of loaded.values()) if (mesh.header.kind === "none") viewer.replace(0, mesh.header.id, null);
     if (!viewer.fitted) viewer.fit();
+    const rendering = performance.now();
     viewer.setExaggeration(Number(document.getElementById("exaggeration").value));
+    timings.render = performance.now() - rendering;
     const absent = [...loaded.values()].filter((m) => m.header.kind === "none").map((m) => m.header.id);
     setState("ready", (t !== null ? `t = ${t}: ` : "") + count(meshes) +
              (absent.length ? ` (not there at t: ${absent.join(", ")})` : "") +
              (colour === "height" ? "" : `; colour: ${colour}`) + `; range ${span[0].toPrecision(6)} to ${span[1].toPrecision(6)}`);
-    drawn();
+    const rendered = performance.now();
+    drawn(viewer);
+    timings.draw = performance.now() - rendered + timings.render;
+    document.body.dataset.timings = JSON.stringify(timings);
   }
 
-  async function load(ids) {
+  async function load(ids, first = false) {
     const mine = ++serial;
     setState("loading", "loading…");
     try {
-      const meshes = await Promise.all(ids.map((id) => fetchMesh(
+      const asked = performance.now();
+      const meshes = await Promise.all(ids.map((id) => fetchMesh(first ? config.urls[String(id)] :
         `/api/mesh/${id}?` + query({ t: config.temporal.includes(id) ? t : null,
                                      color: colour === "height" ? null : colour }))));
       if (mine !== serial) return;    // a later request replaced this one
+      timings.download = performance.now() - asked;
       for (const mesh of meshes) {
         loaded.set(mesh.header.id, mesh);
         if (sceneOrigin === null && mesh.header.kind !== "none") sceneOrigin = mesh.header.origin;
@@ -268,7 +286,7 @@ export function sceneView(config) {
       timer = setTimeout(() => load(config.temporal), 60);
     });
   }
-  load(config.ids);
+  load(config.ids, true);
 }
 
 // Two versions of a surface: b coloured by displacement from a, or a and b side by side.
@@ -294,7 +312,7 @@ export function compareView(config) {
     setState("ready", `${count(meshes)}; vertices highlighted: ${changed.join(" and ")}` +
              (maxShift === null ? "" : `; largest displacement ${maxShift.toPrecision(6)}`));
     document.body.dataset.highlighted = changed.join(",");
-    drawn();
+    drawn(viewer);
   }).catch((error) => setState("error", String(error.message || error)));
 }
 
@@ -311,7 +329,7 @@ export function conflictView(config) {
       const tally = [0, 0, 0, 0];
       for (const m of meshes) for (const f of m.arrays.changed) tally[f] += 1;
       document.body.dataset.flags = tally.join(",");
+      drawn(viewer);
       setState("ready", `${count(meshes)}; changed here ${tally[1]}, in the parent ${tally[2]}, on both sides ${tally[3]} vertices`);
-      drawn();
     }).catch((error) => setState("error", String(error.message || error)));
 }
