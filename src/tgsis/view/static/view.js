@@ -171,13 +171,36 @@ class Viewer {
     if (box.isEmpty()) return;
     const size = box.getSize(new THREE.Vector3()).length() || 1;
     const centre = box.getCenter(new THREE.Vector3());
+    const [px, py] = this.facing();
     this.controls.target.copy(centre);
-    this.camera.position.set(centre.x + 0.6 * size, centre.y - 1.0 * size, centre.z + 0.7 * size);
+    this.camera.position.set(centre.x + 1.1 * px * size, centre.y + 1.1 * py * size, centre.z + 0.6 * size);
     this.camera.near = size / 1000;
     this.camera.far = size * 100;
     this.camera.updateProjectionMatrix();
     this.controls.update();
     this.fitted = true;
+  }
+
+  // the horizontal direction to look from: across the objects' longest horizontal extent (from its south side)
+  facing() {
+    let n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    for (const { group } of this.scenes) {
+      for (const object of group.children) {
+        const p = object.geometry.getAttribute("position").array;
+        const step = Math.max(1, Math.floor(p.length / 3 / 20000));
+        for (let i = 0; i < p.length / 3; i += step) {
+          const x = p[3 * i] + object.position.x, y = p[3 * i + 1] + object.position.y;
+          n += 1; sx += x; sy += y; sxx += x * x; syy += y * y; sxy += x * y;
+        }
+      }
+    }
+    if (n < 2) return [0.5, -0.85];
+    const cxx = sxx / n - (sx / n) ** 2, cyy = syy / n - (sy / n) ** 2, cxy = sxy / n - (sx / n) * (sy / n);
+    const angle = 0.5 * Math.atan2(2 * cxy, cxx - cyy);       // of the principal axis
+    let [qx, qy] = [-Math.sin(angle), Math.cos(angle)];       // across it
+    if (qy > 0) { qx = -qx; qy = -qy; }
+    // a little to the side, so that a flat surface is not seen edge on
+    return [qx * 0.94 + qy * 0.34, qy * 0.94 - qx * 0.34];
   }
 
   render() {
