@@ -56,12 +56,14 @@ def test_the_classes_page_lists_the_classes_and_features_the_database_holds(view
     response = page.goto(f"{url}/classes")
     assert response.status == 200
     assert page.locator("#classes tbody tr").evaluate_all("rows => rows.map(r => r.dataset.class)") == [
-        "blocks", "horizons", "moving", "secret"]
+        "blocks", "horizons", "layers", "moving", "secret"]
     assert page.locator("#classes tr[data-class=horizons] td.count").text_content() == "3"
     assert page.locator("#classes tr[data-class=moving]").text_content().count("EVOLVING") == 1
     assert "porosity:double precision (vertex)" in page.locator("#classes tr[data-class=horizons]").text_content()
     ids = [int(i) for i in page.locator("#features tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)")]
-    assert sorted(ids) == sorted([data.top, data.base, data.quoted, data.block, data.moving, data.hidden])
+    assert sorted(ids) == sorted([data.top, data.base, data.quoted, data.block, data.moving, data.layers,
+                                  data.hidden])
+    assert page.locator("#classes tr[data-class=layers]").text_content().count("INSTANTS") == 1
     # a name with quotes and markup is shown as text, not markup
     assert page.locator(f"#features tr[data-id='{data.quoted}'] td.name").text_content() == QUOTED_NAME
     assert "-10 to 0" in page.locator(f"#features tr[data-id='{data.moving}']").text_content()
@@ -114,6 +116,22 @@ def test_the_time_slider_shows_the_sql_snapshot_at_each_time(view: tuple[str, Vi
     assert page.text_content("#status").startswith("t = 0: ")
     assert "t=0" in page.url
     assert changed_fraction(at_start, canvas_pixels(page)) > 0.01
+
+
+def test_the_time_slider_over_surfaces_at_instants(view: tuple[str, ViewData, str], page: Any) -> None:
+    # model 2: the step convention takes the instant at or before t; a static feature stays in the scene
+    url, data, _ = view
+    page.goto(f"{url}/scene?ids={data.layers},{data.base}&t=-5")
+    wait_drawn(page)
+    assert page.text_content("#status").startswith(f"t = -5: {100 + 400} vertices")
+    flat = canvas_pixels(page)
+    page.locator("#time").fill("-3")
+    wait_drawn(page, 2)
+    assert page.text_content("#status").startswith("t = -3: ")
+    assert changed_fraction(flat, canvas_pixels(page)) < 0.001      # still the instant -5
+    page.locator("#time").fill("-1")
+    wait_drawn(page, 3)
+    assert changed_fraction(flat, canvas_pixels(page)) > 0.01       # the dome
 
 
 def test_the_version_tree_and_choosing_the_version(view: tuple[str, ViewData, str], page: Any) -> None:
@@ -192,3 +210,17 @@ def test_bad_urls_get_an_error_page_with_the_message(view: tuple[str, ViewData, 
         assert message in response.json()["error"]
     else:
         assert message in page.text_content("#error-message")
+
+
+def test_a_long_class_lists_its_first_features_and_says_so(view: tuple[str, ViewData, str], page: Any,
+                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    import tgsis.view.app
+
+    url, data, _ = view
+    monkeypatch.setattr(tgsis.view.app, "LISTED", 2)
+    page.goto(f"{url}/classes?class=horizons")
+    ids = [int(i) for i in page.locator("#features tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)")]
+    assert ids == sorted([data.top, data.base, data.quoted])[:2]
+    assert "horizons" in page.text_content("#truncated")
+    page.goto(f"{url}/classes?class=blocks")
+    assert page.locator("#truncated").count() == 0

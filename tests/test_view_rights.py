@@ -83,6 +83,17 @@ def test_transactions_are_read_only_unless_writable(database: tuple[str, ViewDat
         assert conn.execute("SELECT unit FROM horizons WHERE _geoid = %s", (data.quoted,)).fetchone() == ("C",)
 
 
+def test_the_version_shown_until_the_browser_chooses_one(database: tuple[str, ViewData]) -> None:
+    # tgsis --in edit view: the server's default; a browser's choice (its cookie) wins
+    dsn, data = database
+    with running_view(dsn, default_version="edit") as url:
+        status, body, _ = get(f"{url}/classes")
+        assert status == 200 and b"In version <b>edit</b>" in body
+        request = urllib.request.Request(f"{url}/classes", headers={"Cookie": "tgsis_version=DEFAULT"})
+        with urllib.request.urlopen(request, timeout=30) as response:
+            assert b"In version <b>DEFAULT</b>" in response.read()
+
+
 def test_a_request_for_another_host_is_refused(database: tuple[str, ViewData]) -> None:
     dsn, _ = database
     with running_view(dsn) as url:

@@ -43,6 +43,7 @@ class ViewData:
     quoted: int
     block: int
     moving: int
+    layers: int
     hidden: int
 
 
@@ -54,7 +55,7 @@ def _bumpy(side: int, z: float, name: str) -> tgsis.Surface:
 
 
 def fill_view_database(dsn: str) -> ViewData:
-    """Classes of models 1 (surfaces, tetrahedra) and 3, a class tgsis_reader may not read, versions and a conflict."""
+    """Classes of models 1 (surfaces, tetrahedra), 2 and 3, a class tgsis_reader may not read, versions and a conflict."""
     with psycopg.connect(dsn) as conn:
         tgsis.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"unit": "text"},
                                    cell_properties={"porosity": "float8"}, description="layer tops")
@@ -71,6 +72,10 @@ def fill_view_database(dsn: str) -> ViewData:
         end = start.vertices + np.array([0.0, 0.0, 8.0]) * (start.vertices[:, [0]] / 11.0)
         moving = tgsis.insert_feature(conn, "moving", tgsis.EvolvingSurface(
             [tgsis.TopologyPeriod([-10.0, 0.0], start.triangles, [start.vertices, end])], name="tilting"))
+        tgsis.create_feature_class(conn, "layers", "SURFACE", time_model="INSTANTS", time_unit="Ma")
+        flat, dome = flat_grid(10, 20.0), flat_grid(10, 20.0)
+        dome.vertices[:, 2] += 6 - ((dome.vertices[:, :2] - 4.5) ** 2).sum(axis=1) / 7
+        layers = tgsis.insert_feature(conn, "layers", tgsis.SurfaceSeries([-5.0, -1.0], [flat, dome], name="salt"))
         tgsis.create_feature_class(conn, "secret", "SURFACE")
         hidden = tgsis.insert_feature(conn, "secret", flat_grid(3, 5.0))
         conn.execute("REVOKE SELECT ON public.secret FROM tgsis_reader")
@@ -83,7 +88,7 @@ def fill_view_database(dsn: str) -> ViewData:
             conn.commit()
         conn.execute("UPDATE tgsis.vrtx SET z = z - 2 WHERE geoid = %s AND x > 15", (top,))
         conn.commit()
-    return ViewData(top, base, quoted, block, moving, hidden)
+    return ViewData(top, base, quoted, block, moving, layers, hidden)
 
 
 @contextmanager

@@ -62,6 +62,8 @@ HERE = Path(__file__).parent
 VERSION_COOKIE = "tgsis_version"
 _BIGINT = 2**63 - 1
 _DRAWN_TIME_MODELS = ("STATIC", "INSTANTS", "EVOLVING")
+#: features listed per class on the classes page (more: filter by name or box)
+LISTED = 500
 
 
 @dataclass(frozen=True)
@@ -241,8 +243,8 @@ class FeatureRow:
 
 
 def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
-                  ids: Sequence[int] | None = None) -> list[FeatureRow]:
-    """The features of a class (name: a part of the name, any case; box: meeting the bounding box)."""
+                  ids: Sequence[int] | None = None, limit: int | None = None) -> list[FeatureRow]:
+    """The features of a class (name: a part of the name, any case; box: meeting the bounding box), by id."""
     props = [p.name for p in fc.feature_properties]
     conditions = [sql.SQL("true")]
     params: list[Any] = []
@@ -262,9 +264,10 @@ def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box:
         "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
         "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid) "
         "                    WHERE g.timemodel IN ('INSTANTS', 'EVOLVING')) i ON true "
-        "WHERE {} ORDER BY g.geoid").format(
+        "WHERE {} ORDER BY g.geoid {}").format(
         sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
-        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions))
+        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
+        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""))
     rows = conn.execute(query, params).fetchall()
     return [FeatureRow(int(r[0]), fc.name, r[1], r[2], r[3], r[4], r[5],
                        None if r[7] is None else float(r[7]), None if r[8] is None else float(r[8]),
@@ -356,6 +359,7 @@ def classes_page(request: Request) -> Response:
             raise NotFoundError(f"no feature class {wanted!r}", hint="the classes page lists them")
         counts: dict[str, int | None] = {}
         features: list[FeatureRow] = []
+        truncated: list[str] = []
         for fc, readable in classes:
             if not readable:
                 counts[fc.name] = None
@@ -363,9 +367,13 @@ def classes_page(request: Request) -> Response:
             row = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(fc.qualified(fc.featuretable))).fetchone()
             counts[fc.name] = int(row[0]) if row else 0
             if wanted is None or wanted == fc.name:
-                features += list_features(conn, fc, name=name, box=box)
+                found = list_features(conn, fc, name=name, box=box, limit=LISTED + 1)
+                if len(found) > LISTED:
+                    truncated.append(fc.name)
+                features += found[:LISTED]
         version = V.working_version(conn)
     return view.page(request, "classes.html", classes=classes, counts=counts, features=features, wanted=wanted,
+                     truncated=truncated, listed=LISTED,
                      name=name or "", bbox=request.query_params.get("bbox") or "", version=version)
 
 
