@@ -80,6 +80,7 @@ def test_a_scene_draws_a_surface_and_a_property_colours_it(view: tuple[str, View
     page.goto(f"{url}/scene?ids={data.top}")
     wait_drawn(page)
     assert page.text_content("#status").startswith("400 vertices, 722 cells")
+    assert page.get_attribute("#compare-link", "href") == f"/compare?id={data.top}&a=DEFAULT&b=DEFAULT"
     by_height = canvas_pixels(page)
     assert drawn_fraction(by_height) > 0.05
     page.select_option("#color", "porosity")

@@ -443,15 +443,17 @@ def scene_page(request: Request) -> Response:
 
     config = {"ids": ids, "t": when, "first": first, "last": last, "color": color, "exaggeration": exaggeration,
               "temporal": temporal, "urls": {str(i): first_url(i) for i in ids}}
+    comparable = len(rows) == 1 and rows[0].time_model == "STATIC" and rows[0].geotype == "SURFACE"
     return view.page(request, "scene.html", rows=rows, config=config, properties=properties, color=color,
+                     comparable=comparable,
                      unit=", ".join(sorted(u for u in units if u)), version=version, title="scene")
 
 
 def compare_page(request: Request) -> Response:
     view: View = request.app.state.view
     feature_id = _feature_id(request.query_params.get("id") or "")
-    a = request.query_params.get("a") or ""
-    b = request.query_params.get("b") or ""
+    a = request.query_params.get("a") or "DEFAULT"
+    b = request.query_params.get("b") or view.chosen(request) or "DEFAULT"
     mode = request.query_params.get("mode") or "displacement"
     if mode not in ("side", "displacement"):
         raise _bad(f"mode {mode!r} must be 'side' or 'displacement'")
