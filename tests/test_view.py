@@ -135,6 +135,19 @@ def test_the_time_slider_over_surfaces_at_instants(view: tuple[str, ViewData, st
     assert changed_fraction(flat, canvas_pixels(page)) > 0.01       # the dome
 
 
+def test_a_scene_of_features_with_different_lives(view: tuple[str, ViewData, str], page: Any) -> None:
+    # the slider spans both lives; a feature is left out where it does not exist
+    url, data, _ = view
+    page.goto(f"{url}/scene?ids={data.moving},{data.layers}&t=-8")
+    wait_drawn(page)
+    assert page.get_attribute("#time", "min") == "-10.0" and page.get_attribute("#time", "max") == "0.0"
+    assert page.text_content("#status").startswith("t = -8: 144 vertices")
+    assert f"not there at t: {data.layers}" in page.text_content("#status")
+    page.locator("#time").fill("-2")
+    wait_drawn(page, 2)
+    assert page.text_content("#status").startswith(f"t = -2: {144 + 100} vertices")
+
+
 def test_the_version_tree_and_choosing_the_version(view: tuple[str, ViewData, str], page: Any) -> None:
     url, data, _ = view
     page.goto(f"{url}/versions")
@@ -199,7 +212,7 @@ def test_the_conflicts_of_a_version_on_the_mesh(view: tuple[str, ViewData, str],
     ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a static surface"),
     ("/conflicts?version=DEFAULT", 400, "no parent"),
     ("/conflicts?version=%27x", 404, "no version"),
-    ("/api/mesh/{moving}?t=-11", 400, "outside the life"),
+    ("/api/mesh/{moving}?t=nan", 400, "not a finite number"),
     ("/api/mesh/abc", 400, "is not a feature id"),
 ])
 def test_bad_urls_get_an_error_page_with_the_message(view: tuple[str, ViewData, str], page: Any, path: str,

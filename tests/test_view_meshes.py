@@ -99,6 +99,11 @@ def test_the_endpoint_sends_the_sql_snapshot_at_t(view: tuple[str, ViewData, str
             assert shape is not None and header["t"] == t
             np.testing.assert_allclose(arrays["positions"].reshape(-1, 3) + np.asarray(header["origin"]),
                                        shape.vertices, atol=1e-5)
+    # outside its life (a scene's slider spans every feature's): an empty body, not an error
+    status, body, _ = get(f"{url}/api/mesh/{data.moving}?t=-11")
+    header, arrays = unpack(body)
+    assert status == 200 and header["kind"] == "none" and arrays == {}
+    assert get(f"{url}/api/mesh/{data.moving}")[0] == 200   # no t: its last instant
 
 
 def test_the_endpoint_in_a_version_sends_what_that_version_holds(view: tuple[str, ViewData, str]) -> None:

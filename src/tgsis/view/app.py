@@ -307,9 +307,10 @@ def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
         feature = fetch_feature(conn, fc, feature_id)
         assert feature.mesh is not None
         return drawable(feature.mesh), None
-    row = list_features(conn, fc, ids=[feature_id])[0]
-    when, _, _ = _time_of([row], t)
-    assert when is not None
+    # any finite t (a scene's slider spans the lives of all its features): outside this one's life, nothing
+    when = t if t is not None else list_features(conn, fc, ids=[feature_id])[0].last
+    if when is None:
+        return None, None
     surface = get_at(conn, feature_id, when, properties=True)
     return (None if surface is None else drawable(surface)), when
 
