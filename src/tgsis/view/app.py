@@ -296,11 +296,16 @@ def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None,
     return t, first, last
 
 
+def _check_drawn(fc: FeatureClass, feature_id: int) -> None:
+    if fc.time_model not in _DRAWN_TIME_MODELS or fc.geotype is Geotype.GMAP:
+        raise _bad(f"feature {feature_id} is a G-map (class {fc.name}, {fc.time_model}): the browser view draws "
+                   "the meshes of models 1 to 3")
+
+
 def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
              color: str | None = None) -> tuple[Drawable | None, float | None]:
     """What to draw of a feature at t (None when it does not exist then) and the t used."""
-    if fc.time_model not in _DRAWN_TIME_MODELS:
-        raise _bad(f"feature {feature_id} is a G-map ({fc.time_model}): the browser view draws models 1-3")
+    _check_drawn(fc, feature_id)
     if fc.time_model == "STATIC":
         if fc.geotype is Geotype.SURFACE:  # the view's own download: the stored rows, no more
             return stored_surface(conn, fc, feature_id, color).drawable, None
@@ -411,8 +416,7 @@ def _scene_rows(conn: Conn, ids: Sequence[int]) -> list[FeatureRow]:
     rows = []
     for feature_id in ids:
         fc = feature_class_of(conn, feature_id)
-        if fc.time_model not in _DRAWN_TIME_MODELS:
-            raise _bad(f"feature {feature_id} is a G-map ({fc.time_model}): the browser view draws models 1-3")
+        _check_drawn(fc, feature_id)
         rows += list_features(conn, fc, ids=[feature_id])
     return rows
 
