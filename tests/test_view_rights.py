@@ -94,6 +94,21 @@ def test_the_version_shown_until_the_browser_chooses_one(database: tuple[str, Vi
             assert b"In version <b>DEFAULT</b>" in response.read()
 
 
+def test_a_chosen_version_deleted_since_leaves_a_way_back(database: tuple[str, ViewData]) -> None:
+    # the browser's cookie names a version that does not exist (any more): every page says so, and offers DEFAULT
+    dsn, _ = database
+    with running_view(dsn) as url, chromium() as browser:
+        context = browser.new_context()
+        context.add_cookies([{"name": "tgsis_version", "value": "gone'", "url": url}])
+        page = context.new_page()
+        assert page.goto(f"{url}/classes").status == 404
+        assert "gone''" in page.text_content("#error-message")
+        page.click("#back-to-default")
+        assert page.url.endswith("/versions") and page.text_content("#current") == "DEFAULT"
+        assert page.goto(f"{url}/classes").status == 200
+        context.close()
+
+
 def test_a_request_for_another_host_is_refused(database: tuple[str, ViewData]) -> None:
     dsn, _ = database
     with running_view(dsn) as url:
