@@ -159,6 +159,8 @@ class View:
         self.config = config
         self.templates = Jinja2Templates(directory=str(HERE / "templates"))
         self.templates.env.globals["quote"] = lambda text: urllib.parse.quote(str(text), safe="")
+        # a coordinate for people: metres to the decimetre at UTM scale, small values to 6 digits
+        self.templates.env.globals["coord"] = lambda v: f"{v:.1f}" if abs(v) >= 1000 else f"{v:.6g}"
 
     @contextlib.contextmanager
     def session(self, request: Request, version: str | None = None, *, snapshot: str | None = None

@@ -121,6 +121,28 @@ function object3d(mesh, colour, sceneOrigin) {
   return object;
 }
 
+// the flagged vertices as large dots drawn over everything, so that a few changed vertices of a big mesh show
+function markers(mesh, flags, colourOf, sceneOrigin) {
+  const p = mesh.arrays.positions;
+  const picked = [];
+  for (let i = 0; i < flags.length; i++) if (flags[i] > 0) picked.push(i);
+  if (!picked.length) return null;
+  const positions = new Float32Array(picked.length * 3), colour = new Float32Array(picked.length * 3);
+  picked.forEach((v, k) => {
+    positions.set(p.subarray(3 * v, 3 * v + 3), 3 * k);
+    colour.set(colourOf(flags[v]), 3 * k);
+  });
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
+  geometry.setAttribute("color", new THREE.BufferAttribute(colour, 3));
+  const dots = new THREE.Points(geometry, new THREE.PointsMaterial(
+    { vertexColors: true, size: 5, sizeAttenuation: false, depthTest: false }));
+  dots.renderOrder = 1;
+  const o = mesh.header.origin;
+  dots.position.set(o[0] - sceneOrigin[0], o[1] - sceneOrigin[1], o[2] - sceneOrigin[2]);
+  return dots;
+}
+
 function dispose(object) {
   object.geometry.dispose();
   object.material.dispose();
@@ -322,11 +344,14 @@ export function compareView(config) {
     const origin = meshes[0].header.origin;
     if (side) {
       const span = range(meshes.map(heights));
-      meshes.forEach((m, i) => viewer.replace(i, m.header.side,
-        object3d(m, colours(heights(m), span, m.arrays.changed), origin)));
+      meshes.forEach((m, i) => {
+        viewer.replace(i, m.header.side, object3d(m, colours(heights(m), span, m.arrays.changed), origin));
+        viewer.replace(i, m.header.side + ":marks", markers(m, m.arrays.changed, () => HIGHLIGHT, origin));
+      });
     } else {
       const m = meshes[0];
       viewer.replace(0, "b", object3d(m, colours(m.arrays.displacement, range([m.arrays.displacement]), m.arrays.changed), origin));
+      viewer.replace(0, "b:marks", markers(m, m.arrays.changed, () => HIGHLIGHT, origin));
     }
     viewer.fit();
     viewer.render();
@@ -346,7 +371,10 @@ export function conflictView(config) {
   Promise.all(config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))))
     .then((meshes) => {
       const origin = meshes[0].header.origin;
-      for (const m of meshes) viewer.replace(0, m.header.id, object3d(m, flagColours(m.arrays.changed), origin));
+      for (const m of meshes) {
+        viewer.replace(0, m.header.id, object3d(m, flagColours(m.arrays.changed), origin));
+        viewer.replace(0, `${m.header.id}:marks`, markers(m, m.arrays.changed, (f) => FLAG_COLOURS[f], origin));
+      }
       viewer.fit();
       viewer.render();
       const tally = [0, 0, 0, 0];
