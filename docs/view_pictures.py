@@ -54,7 +54,7 @@ def main() -> None:
             shots = {
                 "view_scene.png": f"/scene?ids={','.join(faults)}",
                 "view_time.png": f"/scene?ids={history[0]}&t=-1&exaggeration=2",
-                "view_compare.png": f"/compare?id={faults[0]}&a=DEFAULT&b=cfm6.1&mode=displacement",
+                "view_compare.png": f"/compare?id={faults[0]}&a=DEFAULT&b=cfm6.1&mode=displacement&marks=0",
             }
             for name, path in shots.items():
                 page.goto(url + path)

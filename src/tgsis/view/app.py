@@ -475,7 +475,7 @@ def compare_page(request: Request) -> Response:
         row = list_features(conn, fc, ids=[feature_id])[0]
         (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
         changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
-    config = {"id": feature_id, "a": a, "b": b, "mode": mode}
+    config = {"id": feature_id, "a": a, "b": b, "mode": mode, "marks": request.query_params.get("marks") != "0"}
     return view.page(request, "compare.html", row=row, config=config, changes=changes.counts(), a=a, b=b, mode=mode,
                      versions=versions, title="compare")
 

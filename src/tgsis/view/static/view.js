@@ -349,12 +349,21 @@ export function compareView(config) {
         viewer.replace(i, m.header.side + ":marks", markers(m, m.arrays.changed, () => HIGHLIGHT, origin));
       });
     } else {
+      // the displacement of each vertex from the one of the same stored id; red: no such vertex in a
       const m = meshes[0];
-      viewer.replace(0, "b", object3d(m, colours(m.arrays.displacement, range([m.arrays.displacement]), m.arrays.changed), origin));
+      viewer.replace(0, "b", object3d(m, colours(m.arrays.displacement, range([m.arrays.displacement])), origin));
       viewer.replace(0, "b:marks", markers(m, m.arrays.changed, () => HIGHLIGHT, origin));
     }
+    const marks = document.getElementById("marks");
+    const showMarks = () => {
+      for (const { group } of viewer.scenes) {
+        for (const o of group.children) if (String(o.userData.key).endsWith(":marks")) o.visible = marks.checked;
+      }
+      viewer.render();
+    };
+    marks.addEventListener("change", showMarks);
     viewer.fit();
-    viewer.render();
+    showMarks();
     const changed = meshes.map((m) => m.arrays.changed.reduce((n, f) => n + (f > 0 ? 1 : 0), 0));
     const maxShift = side ? null : range([meshes[0].arrays.displacement])[1];
     setState("ready", `${count(meshes)}; vertices highlighted: ${changed.join(" and ")}` +
