@@ -179,7 +179,10 @@ def test_two_versions_compared_side_by_side_and_by_displacement(view: tuple[str,
     wait_drawn(page)
     assert int(page.locator("#changes td[data-key=vertices_added]").text_content()) > 0
     assert int(page.evaluate("document.body.dataset.highlighted")) > 0
-    assert changed_fraction(same, canvas_pixels(page)) > 0.01
+    marked = canvas_pixels(page)
+    assert changed_fraction(same, marked) > 0.01
+    page.uncheck("#marks")                                  # the dots off: the displacement colours alone
+    assert changed_fraction(marked, canvas_pixels(page)) > 0.001
     page.goto(f"{url}/compare?id={data.top}&a=DEFAULT&b=edit&mode=side")
     wait_drawn(page)
     left, right = (int(n) for n in page.evaluate("document.body.dataset.highlighted").split(","))
