@@ -20,7 +20,7 @@ install:
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet --editable '.[test,embedded]'
+	$(BIN)/python -m pip install --quiet --editable '.[test,embedded,view]'
 	touch $@
 
 demo: $(VENV)/.installed
@@ -41,9 +41,12 @@ pictures: $(VENV)/.installed
 	$(BIN)/tgsis demo interpretations --dir build/pictures
 	$(BIN)/tgsis demo mine --dir build/pictures
 	$(BIN)/tgsis demo knowledge --dir build/pictures
+	$(BIN)/tgsis demo --dir build/pictures
+	$(BIN)/python docs/view_pictures.py --dir build/pictures   # tgsis view of the demo in headless Chromium
 	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png \
 	    build/pictures/river_t4.png build/pictures/interpretations_model3.png build/pictures/mine_ore_top.png \
-	    build/pictures/knowledge_interpretations.png docs/pictures/
+	    build/pictures/knowledge_interpretations.png build/pictures/view_scene.png build/pictures/view_time.png \
+	    build/pictures/view_compare.png docs/pictures/
 
 # Files ruff's formatter keeps (ruff format FILE): new files join when written, the
 # rest once the open branches are merged (docs/developing.md, "Lint and format").

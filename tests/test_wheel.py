@@ -53,3 +53,19 @@ def test_the_installed_demo_reads_the_real_faults(wheel: Path, tmp_path: Path) -
     assert Path(module).is_relative_to(site), f"imported {module}, not the wheel's tgsis"
     assert Path(folder) == site / "tgsis" / "_data" / "cfm"
     assert source.startswith("SCEC Community Fault Model"), source
+
+
+def test_the_wheel_holds_the_browser_view_and_three_js_with_its_licence(wheel: Path) -> None:
+    # issue 21: the view serves its pages and three.js from the package; no network at run time
+    names = set(zipfile.ZipFile(wheel).namelist())
+    view = "tgsis/view/"
+    for name in ("templates/base.html", "templates/scene.html", "static/view.js", "static/view.css",
+                 "static/three/three.module.js", "static/three/three.core.js", "static/three/OrbitControls.js",
+                 "static/three/LICENSE", "static/three/README.md"):
+        assert view + name in names, f"the wheel has no {view + name}"
+    from tgsis.view import THREE_VERSION
+
+    core = zipfile.ZipFile(wheel).read(view + "static/three/three.core.js").decode()
+    assert f"REVISION = '{THREE_VERSION.split('.')[1]}'" in core
+    assert THREE_VERSION in zipfile.ZipFile(wheel).read(view + "static/three/README.md").decode()
+    assert "MIT License" in zipfile.ZipFile(wheel).read(view + "static/three/LICENSE").decode()

@@ -1632,6 +1632,42 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    from psycopg.conninfo import conninfo_to_dict, make_conninfo
+
+    from tgsis.db.connect import local_dsn
+
+    try:
+        from tgsis.view import serve
+        import starlette, uvicorn, jinja2  # noqa: F401  (the extra's libraries, checked before anything starts)
+    except ImportError as exc:
+        raise Error(f"tgsis view needs the optional extra 'view' ({exc.name} is not installed)",
+                    hint="pip install 'tgsis[view]'") from exc
+    target = resolve_target(args.dsn)
+    if target.dsn is None:
+        conninfo = local_dsn(args.db or "tgsis")
+    else:
+        conninfo = make_conninfo(target.dsn, dbname=args.db) if args.db else target.dsn
+    with connect(conninfo) as conn:
+        if installed_version(conn) is None:
+            raise NotFoundError(f"tgsis is not installed in database {conn.info.dbname}",
+                                hint="tgsis db install, or --db NAME for another database of the server "
+                                     "(the demo's: --db tgsis_demo)")
+        if args.in_version:
+            name, revision = _split_version(args.in_version)
+            if revision is None:
+                V.goto_version(conn, name, local=True)
+            else:
+                V.goto_revision(conn, name, revision, local=True)
+        database = conn.info.dbname
+    shown = conninfo_to_dict(conninfo).get("dbname") or database
+    serve(conninfo, host=args.host, port=args.port, writable=args.writable, database=str(shown),
+          open_browser=args.open, default_version=args.in_version,
+          on_listening=lambda url: _out(f"tgsis view of database {shown} "
+                                        f"({'writable' if args.writable else 'read-only'}) at {url} (Ctrl-C stops it)"))
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -1698,6 +1734,20 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
     demo.add_argument("--size", choices=("small", "large"), default="small",
                       help="how much data the scenario makes (default: small, under a minute)")
+
+    view = _command(commands, "view", "look at the database in a browser: classes, features, versions, "
+                                      "surfaces in 3D through time, versions compared (the extra tgsis[view])",
+                    ["tgsis view --open", "tgsis view --db tgsis_demo   # after tgsis demo",
+                     "tgsis --dsn 'host=db.example.org dbname=geo' view --port 8080"], cmd_view)
+    view.add_argument("--port", type=_integer(0, 65535), default=8765,
+                      help="TCP port to listen on (default: 8765; 0: any free port)")
+    view.add_argument("--host", default="127.0.0.1",
+                      help="address to listen on (default: 127.0.0.1, this machine only)")
+    view.add_argument("--db", metavar="NAME",
+                      help="another database of the same server (e.g. tgsis_demo, the demo's)")
+    view.add_argument("--open", action="store_true", help="open the system's web browser on the first page")
+    view.add_argument("--writable", action="store_true",
+                      help="leave transactions writable (default: every transaction is read-only)")
 
     db = _command(commands, "db", "install, upgrade or inspect tgsis in a database",
                   ["tgsis --dsn 'host=db.example.org dbname=geo' db install"])

@@ -278,5 +278,7 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
     if target.dsn is None:
         out("the local server stops when this command ends; to look around: `tgsis local start`, "
             f"`psql \"$(tgsis local dsn)\"`, then `\\c {DEMO_DATABASE}`")
+        out(f"in a browser: `tgsis view --db {DEMO_DATABASE} --open` (the extra tgsis[view])")
     else:
         out(f"dsn: {conninfo}")
+        out("in a browser: `tgsis --dsn DSN view --open`, DSN the one above (the extra tgsis[view])")

@@ -1,0 +1,684 @@
+"""The browser view's web application (``tgsis view``): pages and binary mesh endpoints.
+
+A Starlette application served by uvicorn on 127.0.0.1. Every request opens
+its own connection with the user's conninfo (so it sees exactly what the
+user's role may read) in one transaction, read-only unless the server was
+started writable (``default_transaction_read_only``), in the version or
+revision the browser chose (a cookie, or ``v=`` on an endpoint), set for that
+transaction only (``goto_version(..., local => true)``). SQL is composed with
+psycopg parameters and :mod:`psycopg.sql` only.
+
+Pages: ``/classes`` (feature classes and their features, filtered by class,
+name and box), ``/versions`` (the tree, revisions, validity; choosing the
+version), ``/scene?ids=...`` (the 3D view, a time slider for temporal
+features), ``/compare?id=&a=&b=`` (two versions or revisions of a feature),
+``/conflicts?version=`` (a version's conflicts on the mesh). Endpoints:
+``/api/mesh/{id}`` and ``/api/compare/{id}`` (bodies of
+:func:`tgsis.view.meshes.pack`), ``/api/mesh/{id}/header`` (its header only).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import urllib.parse
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
+from starlette.requests import Request
+from starlette.responses import JSONResponse, RedirectResponse, Response
+from starlette.routing import Mount, Route
+from starlette.staticfiles import StaticFiles
+from starlette.templating import Jinja2Templates
+
+from tgsis.db import versions as V
+from tgsis.db.classes import FeatureClass, list_feature_classes
+from tgsis.db.compare import compare_versions
+from tgsis.db.features import fetch_feature
+from tgsis.db.temporal import get_at
+from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError,
+                          reraise)
+from tgsis.mesh import Geotype
+from tgsis.view.meshes import Drawable, drawable, pack, vertex_flags
+from tgsis.view.surfaces import StoredSurface, stored_surface
+
+__all__ = ["ViewConfig", "create_app", "VERSION_COOKIE"]
+
+Conn = psycopg.Connection[Any]
+
+HERE = Path(__file__).parent
+#: the cookie that holds the browser's chosen version (``NAME`` or ``NAME@REVISION``)
+VERSION_COOKIE = "tgsis_version"
+_BIGINT = 2**63 - 1
+_DRAWN_TIME_MODELS = ("STATIC", "INSTANTS", "EVOLVING")
+#: features listed per class on the classes page (more: filter by name or box)
+LISTED = 500
+
+
+@dataclass(frozen=True)
+class ViewConfig:
+    """How the view connects.
+
+    Attributes
+    ----------
+    conninfo : str
+        libpq conninfo of the user's database (their own role).
+    writable : bool
+        False: every transaction is read-only (``default_transaction_read_only``).
+    database : str
+        Shown in the pages' title bar.
+    default_version : str or None
+        ``VERSION`` or ``VERSION@REVISION`` of a browser that chose none (None: DEFAULT).
+    """
+
+    conninfo: str
+    writable: bool = False
+    database: str = ""
+    default_version: str | None = None
+
+
+# --------------------------------------------------------------------------- input
+
+
+def _bad(message: str) -> InvalidInputError:
+    return InvalidInputError(message)
+
+
+def _feature_id(text: str, what: str = "feature id") -> int:
+    if not (text.isascii() and text.lstrip("-").isdigit()) or not -_BIGINT - 1 <= int(text) <= _BIGINT:
+        raise _bad(f"{what} {text!r} is not a feature id (an integer)")
+    return int(text)
+
+
+def _ids(request: Request) -> list[int]:
+    raw = [part for value in request.query_params.getlist("ids") for part in value.split(",") if part.strip()]
+    if not raw:
+        raise _bad("no feature chosen: give ids=ID (repeatable, or ids=1,2,3)")
+    ids = list(dict.fromkeys(_feature_id(p.strip()) for p in raw))
+    if len(ids) > 50:
+        raise _bad(f"{len(ids)} features: a scene holds at most 50")
+    return ids
+
+
+def _number(text: str | None, what: str) -> float | None:
+    if text is None or text == "":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise _bad(f"{what} {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise _bad(f"{what} {text!r} is not a finite number")
+    return value
+
+
+def _box(text: str | None) -> list[float] | None:
+    """``bbox=xmin,ymin,zmin,xmax,ymax,zmax``."""
+    if not text:
+        return None
+    parts = text.split(",")
+    if len(parts) != 6:
+        raise _bad(f"bbox {text!r} must be xmin,ymin,zmin,xmax,ymax,zmax")
+    values = [_number(p.strip(), "bbox value") for p in parts]
+    box = [v for v in values if v is not None]
+    if len(box) != 6 or any(box[i] > box[i + 3] for i in range(3)):
+        raise _bad(f"bbox {text!r} must be xmin,ymin,zmin,xmax,ymax,zmax with each min <= max")
+    return box
+
+
+def split_version(text: str) -> tuple[str, int | None]:
+    """``NAME`` or ``NAME@REVISION`` (an InvalidInputError naming the text otherwise)."""
+    name, sep, revision = text.partition("@")
+    if not name:
+        raise _bad(f"version {text!r} has no name")
+    if not sep:
+        return name, None
+    if not (revision.isascii() and revision.isdigit()) or int(revision) > 2**31 - 1:
+        raise _bad(f"version {text!r} is not VERSION or VERSION@REVISION")
+    return name, int(revision)
+
+
+# --------------------------------------------------------------------------- database
+
+
+class View:
+    """The application's state: its configuration and templates; one connection per request."""
+
+    def __init__(self, config: ViewConfig) -> None:
+        self.config = config
+        self.templates = Jinja2Templates(directory=str(HERE / "templates"))
+        self.templates.env.globals["quote"] = lambda text: urllib.parse.quote(str(text), safe="")
+        # a coordinate for people: metres to the decimetre at UTM scale, small values to 6 digits
+        self.templates.env.globals["coord"] = lambda v: f"{v:.1f}" if abs(v) >= 1000 else f"{v:.6g}"
+
+    @contextlib.contextmanager
+    def session(self, request: Request, version: str | None = None, *, snapshot: str | None = None
+                ) -> Iterator[Conn]:
+        """A connection inside one transaction, in ``version`` (else the browser's choice, else DEFAULT).
+
+        The transaction is REPEATABLE READ: every query of a page sees one
+        state of the database; ``snapshot`` (of ``pg_export_snapshot()``)
+        makes it see the state another session sees.
+        """
+        chosen = version if version is not None else self.chosen(request)
+        with reraise(), psycopg.connect(self.config.conninfo) as conn:
+            if not self.config.writable:
+                conn.execute("SET default_transaction_read_only = on")
+                conn.commit()
+            with conn.transaction():
+                conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+                if snapshot is not None:
+                    conn.execute(sql.SQL("SET TRANSACTION SNAPSHOT {}").format(sql.Literal(snapshot)))
+                if chosen:
+                    name, revision = split_version(chosen)
+                    if revision is None:
+                        V.goto_version(conn, name, local=True)
+                    else:
+                        V.goto_revision(conn, name, revision, local=True)
+                yield conn
+
+    @contextlib.contextmanager
+    def beside(self, conn: Conn, request: Request, version: str | None = None) -> Iterator[Conn]:
+        """A second connection that sees what ``conn`` sees (its snapshot, the same version): for queries side by side."""
+        row = conn.execute("SELECT pg_export_snapshot()").fetchone()
+        assert row is not None
+        with self.session(request, version, snapshot=str(row[0])) as other:
+            yield other
+
+    def chosen(self, request: Request) -> str | None:
+        """The browser's version (its cookie), else the server's default."""
+        return request.cookies.get(VERSION_COOKIE) or self.config.default_version
+
+    def page(self, request: Request, template: str, status_code: int = 200, **context: Any) -> Response:
+        return self.templates.TemplateResponse(request, template, {
+            "database": self.config.database, "writable": self.config.writable,
+            "chosen_version": self.chosen(request) or "DEFAULT", "title": None, **context}, status_code=status_code)
+
+
+def readable_classes(conn: Conn) -> list[tuple[FeatureClass, bool]]:
+    """Every feature class with whether the role may read its feature table."""
+    result = []
+    for fc in list_feature_classes(conn):
+        row = conn.execute("SELECT has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT')",
+                           (fc.schema, fc.featuretable)).fetchone()
+        result.append((fc, bool(row and row[0])))
+    return result
+
+
+def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
+    """The class holding ``feature_id`` among the classes the role may read (NotFoundError otherwise)."""
+    for fc, readable in readable_classes(conn):
+        if readable and conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(
+                fc.qualified(fc.featuretable)), (feature_id,)).fetchone() is not None:
+            return fc
+    raise NotFoundError(f"no feature {feature_id} that this role can read in this version",
+                        hint="the classes page lists the features")
+
+
+@dataclass(frozen=True)
+class FeatureRow:
+    """A feature as the pages list it."""
+
+    id: int
+    feature_class: str
+    name: str | None
+    geotype: str
+    vertices: int | None
+    cells: int | None
+    time_model: str
+    first: float | None
+    last: float | None
+    alive: bool | None
+    properties: dict[str, Any]
+    box: list[float] | None
+
+
+def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
+                  ids: Sequence[int] | None = None, limit: int | None = None) -> list[FeatureRow]:
+    """The features of a class (name: a part of the name, any case; box: meeting the bounding box), by id."""
+    props = [p.name for p in fc.feature_properties]
+    conditions = [sql.SQL("true")]
+    params: list[Any] = []
+    if name:
+        conditions.append(sql.SQL("strpos(lower(g.geoname), lower(%s)) > 0"))
+        params.append(name)
+    if box is not None:
+        conditions.append(sql.SQL("g.geoid IN (SELECT b FROM tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) b)"))
+        params += list(box)
+    if ids is not None:
+        conditions.append(sql.SQL("g.geoid = ANY(%s)"))
+        params.append(list(ids))
+    query = sql.SQL(
+        "SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, g.timemodel, g.alive, i.first, i.last, "
+        "cube_ll_coord(g.bbox, 1), cube_ll_coord(g.bbox, 2), cube_ll_coord(g.bbox, 3), "
+        "cube_ur_coord(g.bbox, 1), cube_ur_coord(g.bbox, 2), cube_ur_coord(g.bbox, 3){} "
+        "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
+        "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid) "
+        "                    WHERE g.timemodel IN ('INSTANTS', 'EVOLVING')) i ON true "
+        "WHERE {} ORDER BY g.geoid {}").format(
+        sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
+        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
+        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""))
+    rows = conn.execute(query, params).fetchall()
+    return [FeatureRow(int(r[0]), fc.name, r[1], r[2], r[3], r[4], r[5],
+                       None if r[7] is None else float(r[7]), None if r[8] is None else float(r[8]),
+                       None if r[7] is None else bool(r[6]), dict(zip(props, r[15:])),
+                       None if r[9] is None else [float(v) for v in r[9:15]])
+            for r in rows]
+
+
+def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:
+    numeric = ("float4", "float8", "int2", "int4", "int8", "real", "double precision", "integer", "smallint",
+               "bigint", "numeric")
+    return [p.name for p in fc.aligned("VERTEX") if p.size == 1 and p.type in numeric]
+
+
+def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None, float | None, float | None]:
+    """(t, first, last) for a scene: t checked against the temporal features' lives (default: the last instant)."""
+    lives = [(r.first, r.last) for r in rows if r.first is not None and r.last is not None]
+    if not lives:
+        return None, None, None
+    first = min(a for a, _ in lives if a is not None)
+    last = max(b for _, b in lives if b is not None)
+    if t is None:
+        return last, first, last
+    if not first <= t <= last:
+        raise _bad(f"t = {t!r} is outside the life of the features shown: from {first!r} to {last!r}")
+    return t, first, last
+
+
+def _check_drawn(fc: FeatureClass, feature_id: int) -> None:
+    if fc.time_model not in _DRAWN_TIME_MODELS or fc.geotype is Geotype.GMAP:
+        raise _bad(f"feature {feature_id} is a G-map (class {fc.name}, {fc.time_model}): the browser view draws "
+                   "the meshes of models 1 to 3")
+
+
+def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
+             color: str | None = None) -> tuple[Drawable | None, float | None]:
+    """What to draw of a feature at t (None when it does not exist then) and the t used."""
+    _check_drawn(fc, feature_id)
+    if fc.time_model == "STATIC":
+        if fc.geotype is Geotype.SURFACE:  # the view's own download: the stored rows, no more
+            return stored_surface(conn, fc, feature_id, color).drawable, None
+        feature = fetch_feature(conn, fc, feature_id)
+        assert feature.mesh is not None
+        return drawable(feature.mesh), None
+    # any finite t (a scene's slider spans the lives of all its features): outside this one's life, nothing
+    when = t if t is not None else list_features(conn, fc, ids=[feature_id])[0].last
+    if when is None:
+        return None, None
+    surface = get_at(conn, feature_id, when, properties=True)
+    return (None if surface is None else drawable(surface)), when
+
+
+def _origin(vertices: npt.NDArray[np.float64]) -> list[float]:
+    if len(vertices) == 0:
+        return [0.0, 0.0, 0.0]
+    return [float(v) for v in (vertices.min(axis=0) + vertices.max(axis=0)) / 2]
+
+
+def _body(header: Mapping[str, Any], mesh: Drawable | None, color: str | None,
+          extra: Mapping[str, npt.NDArray[Any]] | None = None) -> bytes:
+    arrays: dict[str, npt.NDArray[Any]] = {}
+    if mesh is None:
+        return pack({**header, "kind": "none", "origin": [0.0, 0.0, 0.0], "n_vertices": 0, "n_cells": 0,
+                     "properties": []}, {})
+    origin = _origin(mesh.vertices)
+    arrays["positions"] = mesh.vertices - np.asarray(origin)
+    arrays["indices"] = mesh.indices
+    if color:
+        if color not in mesh.vertex_values:
+            raise _bad(f"feature {header.get('id')} has no numeric vertex property {color!r}: it has "
+                       f"{', '.join(sorted(mesh.vertex_values)) or 'none'}")
+        arrays["values"] = mesh.vertex_values[color]
+    arrays.update(extra or {})
+    return pack({**header, "kind": mesh.kind, "origin": origin, "n_vertices": int(len(mesh.vertices)),
+                 "n_cells": int(len(mesh.indices)), "color": color, "properties": sorted(mesh.vertex_values)},
+                arrays)
+
+
+def _binary(body: bytes) -> Response:
+    return Response(body, media_type="application/octet-stream", headers={"Cache-Control": "no-store"})
+
+
+# --------------------------------------------------------------------------- pages
+
+
+def classes_page(request: Request) -> Response:
+    view: View = request.app.state.view
+    wanted = request.query_params.get("class") or None
+    name = request.query_params.get("name") or None
+    box = _box(request.query_params.get("bbox"))
+    with view.session(request) as conn:
+        classes = readable_classes(conn)
+        known = {fc.name for fc, _ in classes}
+        if wanted is not None and wanted not in known:
+            raise NotFoundError(f"no feature class {wanted!r}", hint="the classes page lists them")
+        counts: dict[str, int | None] = {}
+        features: list[FeatureRow] = []
+        truncated: list[str] = []
+        for fc, readable in classes:
+            if not readable:
+                counts[fc.name] = None
+                continue
+            row = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(fc.qualified(fc.featuretable))).fetchone()
+            counts[fc.name] = int(row[0]) if row else 0
+            if wanted is None or wanted == fc.name:
+                found = list_features(conn, fc, name=name, box=box, limit=LISTED + 1)
+                if len(found) > LISTED:
+                    truncated.append(fc.name)
+                features += found[:LISTED]
+        version = V.working_version(conn)
+    return view.page(request, "classes.html", classes=classes, counts=counts, features=features, wanted=wanted,
+                     truncated=truncated, listed=LISTED,
+                     name=name or "", bbox=request.query_params.get("bbox") or "", version=version)
+
+
+def versions_page(request: Request) -> Response:
+    view: View = request.app.state.view
+    with view.session(request) as conn:
+        versions = V.list_versions(conn)
+        validity = {r[0]: (r[1], r[2]) for r in conn.execute(
+            "SELECT name, valid_from, valid_to FROM tgsis.versions").fetchall()}
+        current, viewing = V.working_version(conn), V.viewing_revision(conn)
+        versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
+                                 ).fetchone() == (True,)
+    return view.page(request, "versions.html", versions=versions, validity=validity, current=current,
+                     viewing=viewing, versioned=versioned)
+
+
+async def choose_version(request: Request) -> Response:
+    """POST ``version=NAME`` or ``NAME@REVISION``: the browser's version from now on (a cookie), once it is checked."""
+    view: View = request.app.state.view
+    form = urllib.parse.parse_qs((await request.body()).decode("utf-8", "replace"))
+    chosen = (form.get("version") or [""])[0] or "DEFAULT"
+
+    def check() -> None:
+        with view.session(request, chosen):
+            pass
+
+    await run_in_threadpool(check)  # an unknown version or revision: the error page, the cookie unchanged
+    response = RedirectResponse("/versions", status_code=303)
+    response.set_cookie(VERSION_COOKIE, chosen, samesite="strict", httponly=True)
+    return response
+
+
+def _scene_rows(conn: Conn, ids: Sequence[int]) -> list[FeatureRow]:
+    rows = []
+    for feature_id in ids:
+        fc = feature_class_of(conn, feature_id)
+        _check_drawn(fc, feature_id)
+        rows += list_features(conn, fc, ids=[feature_id])
+    return rows
+
+
+def scene_page(request: Request) -> Response:
+    view: View = request.app.state.view
+    ids = _ids(request)
+    t = _number(request.query_params.get("t"), "time t")
+    color = request.query_params.get("color") or "height"
+    exaggeration = _number(request.query_params.get("exaggeration"), "vertical exaggeration") or 1.0
+    if not 0.01 <= exaggeration <= 1000:
+        raise _bad(f"vertical exaggeration {exaggeration!r} must be from 0.01 to 1000")
+    with view.session(request) as conn:
+        rows = _scene_rows(conn, ids)
+        classes = {fc.name: fc for fc, _ in readable_classes(conn)}
+        when, first, last = _time_of(rows, t)
+        properties = sorted(set.intersection(*(set(_scalar_vertex_properties(classes[r.feature_class]))
+                                               for r in rows)))
+        version = V.working_version(conn)
+    if color != "height" and color not in properties:
+        raise _bad(f"colour {color!r} is neither 'height' nor a numeric vertex property of every feature shown "
+                   f"({', '.join(properties) or 'none'})")
+    units = {classes[r.feature_class].time_unit for r in rows if r.first is not None} - {None}
+    temporal = [r.id for r in rows if r.first is not None]
+
+    def first_url(feature_id: int) -> str:
+        params = {"t": repr(when) if feature_id in temporal else None, "color": None if color == "height" else color}
+        return f"/api/mesh/{feature_id}?" + urllib.parse.urlencode({k: v for k, v in params.items() if v is not None})
+
+    config = {"ids": ids, "t": when, "first": first, "last": last, "color": color, "exaggeration": exaggeration,
+              "temporal": temporal, "urls": {str(i): first_url(i) for i in ids}}
+    comparable = len(rows) == 1 and rows[0].time_model == "STATIC" and rows[0].geotype == "SURFACE"
+    return view.page(request, "scene.html", rows=rows, config=config, properties=properties, color=color,
+                     comparable=comparable,
+                     unit=", ".join(sorted(u for u in units if u)), version=version, title="scene")
+
+
+def compare_page(request: Request) -> Response:
+    view: View = request.app.state.view
+    feature_id = _feature_id(request.query_params.get("id") or "")
+    a = request.query_params.get("a") or "DEFAULT"
+    b = request.query_params.get("b") or view.chosen(request) or "DEFAULT"
+    mode = request.query_params.get("mode") or "displacement"
+    if mode not in ("side", "displacement"):
+        raise _bad(f"mode {mode!r} must be 'side' or 'displacement'")
+    for text in (a, b):
+        split_version(text)
+    with view.session(request) as conn:
+        versions = V.list_versions(conn)
+    with view.session(request, a) as conn:
+        fc = feature_class_of(conn, feature_id)
+        if fc.time_model != "STATIC" or fc.geotype is not Geotype.SURFACE:
+            raise _bad(f"feature {feature_id} is not a static surface: versions compare static surfaces")
+        row = list_features(conn, fc, ids=[feature_id])[0]
+        (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
+        changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
+    config = {"id": feature_id, "a": a, "b": b, "mode": mode, "marks": request.query_params.get("marks") != "0"}
+    return view.page(request, "compare.html", row=row, config=config, changes=changes.counts(), a=a, b=b, mode=mode,
+                     versions=versions, title="compare")
+
+
+def conflicts_page(request: Request) -> Response:
+    view: View = request.app.state.view
+    version = request.query_params.get("version") or ""
+    name, revision = split_version(version)
+    if revision is not None:
+        raise _bad(f"conflicts belong to a version, not to a revision: {version!r}")
+    with view.session(request) as conn:
+        known = {v.name: v for v in V.list_versions(conn)}
+        if name not in known:
+            raise NotFoundError(f"no version {name!r}", hint="the versions page lists them")
+        if known[name].parent is None:
+            raise _bad("DEFAULT has no parent: it has no conflicts")
+        rows = conn.execute(
+            "SELECT c.objectclass, c.objectkey, c.conflicttype, c.childtables, c.parenttables, "
+            "       coalesce(k.solution, 'unsolved') "
+            "FROM tgsis.current_conflicts(tgsis.version_id(%s)) c "
+            "LEFT JOIN tgsis.conflicts k ON k.versionid = tgsis.version_id(%s) AND k.objectclass = c.objectclass "
+            "      AND k.objectkey = c.objectkey AND k.childmark = c.childmark AND k.parentmark = c.parentmark "
+            "ORDER BY 1, 2", (name, name)).fetchall()
+    conflicts = [{"objectclass": r[0], "objectkey": r[1], "both": list(r[2]), "child": list(r[3]),
+                  "parent": list(r[4]), "solution": r[5]} for r in rows]
+    shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
+    config = {"version": name, "ids": shown}
+    return view.page(request, "conflicts.html", version=known[name], conflicts=conflicts, config=config,
+                     title="conflicts")
+
+
+# --------------------------------------------------------------------------- binary endpoints
+
+
+def _mesh_body(request: Request) -> bytes:
+    view: View = request.app.state.view
+    feature_id = _feature_id(request.path_params["id"])
+    t = _number(request.query_params.get("t"), "time t")
+    color = request.query_params.get("color") or None
+    color = None if color == "height" else color
+    version = request.query_params.get("v")
+    mesh: Drawable | None
+    with view.session(request, version) as conn:
+        fc = feature_class_of(conn, feature_id)
+        if fc.time_model == "STATIC" and fc.geotype is Geotype.SURFACE:
+            with view.beside(conn, request, version) as other:
+                mesh, when = stored_surface(conn, fc, feature_id, color, beside=other).drawable, None
+        else:
+            mesh, when = _mesh_of(conn, fc, feature_id, t, color)
+        name = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+    return _body({"id": feature_id, "class": fc.name, "name": name[0] if name else None, "t": when}, mesh, color)
+
+
+def mesh_endpoint(request: Request) -> Response:
+    return _binary(_mesh_body(request))
+
+
+def mesh_header_endpoint(request: Request) -> Response:
+    body = _mesh_body(request)
+    n = int(np.frombuffer(body[:4], dtype="<u4")[0])
+    return Response(body[4:4 + n].rstrip(), media_type="application/json")
+
+
+def _surface_in(view: View, request: Request, version: str, feature_id: int) -> StoredSurface:
+    with view.session(request, version) as conn:
+        fc = feature_class_of(conn, feature_id)
+        if fc.time_model != "STATIC" or fc.geotype is not Geotype.SURFACE:
+            raise _bad(f"feature {feature_id} is not a static surface: versions compare static surfaces")
+        return stored_surface(conn, fc, feature_id)
+
+
+def _positions(ids: npt.NDArray[np.int64], wanted: npt.ArrayLike) -> npt.NDArray[np.int64]:
+    """Indices in ``ids`` (ascending) of the ``wanted`` ids that are there."""
+    w = np.asarray(wanted, dtype=np.int64)
+    at = np.searchsorted(ids, w)
+    ok = (at < len(ids)) & (ids[np.minimum(at, len(ids) - 1)] == w) if len(ids) else np.zeros(len(w), dtype=bool)
+    found: npt.NDArray[np.int64] = at[ok].astype(np.int64)
+    return found
+
+
+def compare_endpoint(request: Request) -> Response:
+    """One side of a comparison: the mesh in version a or b, changed vertices flagged, b's displacement from a."""
+    view: View = request.app.state.view
+    feature_id = _feature_id(request.path_params["id"])
+    a, b = request.query_params.get("a") or "", request.query_params.get("b") or ""
+    side = request.query_params.get("side") or "b"
+    if side not in ("a", "b"):
+        raise _bad(f"side {side!r} must be 'a' or 'b'")
+    (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
+    stored_a, stored_b = _surface_in(view, request, a, feature_id), _surface_in(view, request, b, feature_id)
+    mesh_a, vids_a, tids_a = stored_a.drawable, stored_a.vertex_ids, stored_a.triangle_ids
+    mesh_b, vids_b, tids_b = stored_b.drawable, stored_b.vertex_ids, stored_b.triangle_ids
+    with view.session(request) as conn:
+        changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
+    if side == "a":
+        removed_cells = _positions(tids_a, changes.cells_removed)
+        flags = vertex_flags(len(mesh_a.vertices), [(1, _positions(vids_a, changes.vertices_removed)),
+                                                    (1, mesh_a.indices[removed_cells].ravel())])
+        mesh, extra = mesh_a, {"changed": flags}
+    else:
+        added_cells = _positions(tids_b, changes.cells_added)
+        flags = vertex_flags(len(mesh_b.vertices), [(1, _positions(vids_b, changes.vertices_added)),
+                                                    (1, mesh_b.indices[added_cells].ravel())])
+        displacement = np.full(len(mesh_b.vertices), np.nan)
+        at = np.searchsorted(vids_a, vids_b)
+        at = np.minimum(at, max(len(vids_a) - 1, 0))
+        same = (vids_a[at] == vids_b) if len(vids_a) else np.zeros(len(vids_b), dtype=bool)
+        displacement[same] = np.linalg.norm(mesh_b.vertices[same] - mesh_a.vertices[at[same]], axis=1)
+        mesh, extra = mesh_b, {"changed": flags, "displacement": displacement}
+    header = {"id": feature_id, "side": side, "version": a if side == "a" else b, "changes": changes.counts()}
+    return _binary(_body(header, mesh, None, extra))
+
+
+def conflict_endpoint(request: Request) -> Response:
+    """A conflicting feature as the version sees it: vertices the version changed (1), the parent changed (2), both (3)."""
+    view: View = request.app.state.view
+    feature_id = _feature_id(request.path_params["id"])
+    version = request.query_params.get("version") or ""
+    name, revision = split_version(version)
+    if revision is not None:
+        raise _bad(f"conflicts belong to a version, not to a revision: {version!r}")
+    with view.session(request) as conn:
+        known = {v.name: v for v in V.list_versions(conn)}
+    if name not in known or known[name].parent is None:
+        raise NotFoundError(f"no version {name!r} with a parent", hint="the versions page lists them")
+    parent, base = known[name].parent, known[name].initrevision
+    assert parent is not None
+    stored = _surface_in(view, request, name, feature_id)
+    mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
+    with view.session(request) as conn:
+        child = compare_versions(conn, feature_id, parent, name, old_revision=base)
+        theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
+    marks = []
+    for flag, changes in ((1, child), (2, theirs)):
+        cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
+        marks += [(flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
+                  (flag, mesh.indices[cells].ravel())]
+    header = {"id": feature_id, "version": name, "parent": parent, "base": base,
+              "child_changes": child.counts(), "parent_changes": theirs.counts()}
+    return _binary(_body(header, mesh, None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
+
+
+# --------------------------------------------------------------------------- errors
+
+
+_STATUS = ((NotFoundError, 404), (MissingPrivilegeError, 403), (ReadOnlyRevisionError, 403))
+
+
+def _status_of(exc: Error) -> int:
+    for cls, status in _STATUS:
+        if isinstance(exc, cls):
+            return status
+    if exc.sqlstate == "25006":  # read_only_sql_transaction: the view was not started --writable
+        return 403
+    return 400 if not (exc.sqlstate or "").startswith(("08", "53", "57", "58", "XX")) else 500
+
+
+async def error_page(request: Request, exc: Exception) -> Response:
+    """An error page (or, for the endpoints, a JSON error) with the status and the message."""
+    view: View = request.app.state.view
+    if isinstance(exc, Error):
+        status, message, hint = _status_of(exc), str(exc).splitlines()[0], exc.hint
+    elif isinstance(exc, HTTPException):
+        status, message, hint = exc.status_code, str(exc.detail), None
+    else:
+        raise exc
+    if request.url.path.startswith("/api/"):
+        return JSONResponse({"error": message, "hint": hint, "status": status}, status_code=status)
+    return view.page(request, "error.html", status_code=status, status=status, message=message, hint=hint,
+                     title="error")
+
+
+def home(request: Request) -> Response:
+    return RedirectResponse("/classes", status_code=307)
+
+
+def create_app(config: ViewConfig, *, hosts: Sequence[str] = ("127.0.0.1", "localhost")) -> Starlette:
+    """The view's application for one database (serve it with uvicorn, as :func:`tgsis.view.serve` does).
+
+    Parameters
+    ----------
+    config : ViewConfig
+    hosts : sequence of str
+        The ``Host`` headers answered (others get 400: a page of another
+        site cannot reach the view through a name of its own).
+    """
+    app = Starlette(
+        routes=[
+            Route("/", home),
+            Route("/classes", classes_page),
+            Route("/versions", versions_page),
+            Route("/session", choose_version, methods=["POST"]),
+            Route("/scene", scene_page),
+            Route("/compare", compare_page),
+            Route("/conflicts", conflicts_page),
+            Route("/api/mesh/{id}", mesh_endpoint),
+            Route("/api/mesh/{id}/header", mesh_header_endpoint),
+            Route("/api/compare/{id}", compare_endpoint),
+            Route("/api/conflict/{id}", conflict_endpoint),
+            Mount("/static", StaticFiles(directory=str(HERE / "static")), name="static"),
+        ],
+        middleware=[Middleware(TrustedHostMiddleware, allowed_hosts=list(hosts))],
+        exception_handlers={Error: error_page, HTTPException: error_page},
+    )
+    app.state.view = View(config)
+    return app

@@ -1,0 +1,178 @@
+"""What the browser view draws, as binary typed arrays (no database).
+
+A mesh travels to the browser as one ``application/octet-stream`` body:
+
+- 4 bytes: ``n``, the length of the JSON header (uint32, little-endian);
+- ``n`` bytes: the header, UTF-8 JSON, padded with spaces so that the arrays
+  start on a multiple of 4 bytes;
+- the arrays the header lists in ``arrays`` (``{"name", "type", "count"}``,
+  ``type`` ``float32`` or ``uint32``), one after the other, little-endian.
+
+Positions are float32 offsets from ``origin`` (float64 in the header): a
+UTM coordinate (millions of metres) in float32 would keep 0.25 m, an offset
+from the middle of the box keeps millimetres. ``kind`` says what the
+indices are: ``triangles`` (3 per cell), ``lines`` (2) or ``points`` (none).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from typing import Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.mesh import Geometry, GeometryCollection, Mesh, Surface, TetraMesh, LineSet
+
+__all__ = ["Drawable", "drawable", "tetra_boundary", "pack", "unpack", "vertex_flags"]
+
+Kind = Literal["triangles", "lines", "points"]
+
+#: the faces of a tetrahedron (a, b, c, d), each as three of its corners
+_TETRA_FACES = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
+class Drawable:
+    """A mesh as the browser draws it.
+
+    Attributes
+    ----------
+    kind : {"triangles", "lines", "points"}
+    vertices : (n, 3) float64
+    indices : (m, k) int64
+        k = 3 (triangles), 2 (lines) or 0 (points).
+    vertex_values : dict of str to (n,) float64
+        The numeric scalar vertex properties (a vector's first component is left out).
+    cell_rows : (m,) int64
+        For each drawn cell, the index of the stored cell it comes from (a
+        tetrahedron's boundary faces point at their tetrahedron).
+    """
+
+    def __init__(self, kind: Kind, vertices: npt.NDArray[np.float64], indices: npt.NDArray[np.int64],
+                 vertex_values: Mapping[str, npt.NDArray[np.float64]], cell_rows: npt.NDArray[np.int64]) -> None:
+        self.kind = kind
+        self.vertices = vertices
+        self.indices = indices
+        self.vertex_values = dict(vertex_values)
+        self.cell_rows = cell_rows
+
+
+def tetra_boundary(tetrahedra: npt.ArrayLike) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """The faces of a tetrahedral mesh that belong to one tetrahedron only (its boundary).
+
+    Parameters
+    ----------
+    tetrahedra : (m, 4) array_like of int
+
+    Returns
+    -------
+    faces : (f, 3) int64
+        Vertex indices, oriented outwards for positively oriented tetrahedra.
+    owner : (f,) int64
+        The tetrahedron of each face.
+    """
+    tets = np.asarray(tetrahedra, dtype=np.int64).reshape(-1, 4)
+    faces = tets[:, _TETRA_FACES].reshape(-1, 3)
+    owner = np.repeat(np.arange(len(tets), dtype=np.int64), 4)
+    if len(faces) == 0:
+        return faces, owner
+    _, inverse, counts = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True)
+    once = counts[inverse.ravel()] == 1
+    return faces[once], owner[once]
+
+
+def _scalars(mesh: Mesh) -> dict[str, npt.NDArray[np.float64]]:
+    values = {}
+    for name, array in mesh.vertex_properties.items():
+        a = np.asarray(array)
+        if a.ndim == 1 and np.issubdtype(a.dtype, np.number):
+            values[name] = a.astype(np.float64)
+    return values
+
+
+def _one(mesh: Mesh) -> Drawable:
+    if isinstance(mesh, Surface):
+        return Drawable("triangles", mesh.vertices, mesh.cells, _scalars(mesh), np.arange(len(mesh.cells)))
+    if isinstance(mesh, TetraMesh):
+        faces, owner = tetra_boundary(mesh.cells)
+        return Drawable("triangles", mesh.vertices, faces, _scalars(mesh), owner)
+    if isinstance(mesh, LineSet):
+        return Drawable("lines", mesh.vertices, mesh.cells, _scalars(mesh), np.arange(len(mesh.cells)))
+    return Drawable("points", mesh.vertices, np.empty((0, 0), dtype=np.int64), _scalars(mesh),
+                    np.empty(0, dtype=np.int64))
+
+
+def drawable(geometry: Geometry) -> Drawable:
+    """What to draw of a mesh or a collection.
+
+    A collection's members of the highest kind present (triangles, then
+    lines, then points) are drawn as one mesh; the vertex properties kept are
+    those every such member has.
+    """
+    if not isinstance(geometry, GeometryCollection):
+        return _one(geometry)
+    parts = [_one(m) for m in geometry]
+    for kind in ("triangles", "lines", "points"):
+        chosen = [p for p in parts if p.kind == kind]
+        if chosen:
+            break
+    offsets = np.cumsum([0] + [len(p.vertices) for p in chosen])
+    k = chosen[0].indices.shape[1] if chosen[0].indices.ndim == 2 else 0
+    names = set.intersection(*(set(p.vertex_values) for p in chosen))
+    cells = np.concatenate([p.cell_rows for p in chosen]) if chosen else np.empty(0, dtype=np.int64)
+    return Drawable(
+        chosen[0].kind, np.concatenate([p.vertices for p in chosen]).reshape(-1, 3),
+        np.concatenate([p.indices + o for p, o in zip(chosen, offsets)]).reshape(-1, k),
+        {n: np.concatenate([p.vertex_values[n] for p in chosen]) for n in sorted(names)}, cells)
+
+
+def vertex_flags(n_vertices: int, marked: Sequence[tuple[int, npt.ArrayLike]]) -> npt.NDArray[np.float32]:
+    """A value per vertex: the sum of the flags of the groups it belongs to (0 for none).
+
+    Parameters
+    ----------
+    n_vertices : int
+    marked : sequence of (flag, (k,) int array_like)
+        Vertex indices carrying ``flag`` (1, 2, 4, ...).
+    """
+    flags = np.zeros(n_vertices, dtype=np.int64)
+    for flag, indices in marked:
+        idx = np.unique(np.asarray(indices, dtype=np.int64))
+        flags[idx] |= flag
+    return flags.astype(np.float32)
+
+
+def pack(header: Mapping[str, Any], arrays: Mapping[str, npt.NDArray[Any]]) -> bytes:
+    """One body: the header (with the list of arrays added) then the arrays, float32 or uint32 little-endian.
+
+    Parameters
+    ----------
+    header : mapping
+        JSON-serialisable facts (``kind``, ``origin``, counts, ...).
+    arrays : mapping of str to array
+        Float arrays are sent as float32, integer ones as uint32 (flattened).
+    """
+    wire = []
+    listed = []
+    for name, array in arrays.items():
+        a = np.asarray(array)
+        out = a.astype("<u4") if np.issubdtype(a.dtype, np.integer) else a.astype("<f4")
+        wire.append(np.ascontiguousarray(out).ravel())
+        listed.append({"name": name, "type": "uint32" if out.dtype.kind == "u" else "float32", "count": int(out.size)})
+    text = json.dumps({**header, "arrays": listed}, allow_nan=False).encode()
+    text += b" " * (-len(text) % 4)
+    return b"".join([np.uint32(len(text)).astype("<u4").tobytes(), text, *(w.tobytes() for w in wire)])
+
+
+def unpack(body: bytes) -> tuple[dict[str, Any], dict[str, npt.NDArray[Any]]]:
+    """The header and arrays of a body made by :func:`pack` (what the browser's code reads)."""
+    n = int(np.frombuffer(body[:4], dtype="<u4")[0])
+    header = json.loads(body[4:4 + n])
+    arrays = {}
+    offset = 4 + n
+    for item in header["arrays"]:
+        dtype = np.dtype("<u4" if item["type"] == "uint32" else "<f4")
+        arrays[item["name"]] = np.frombuffer(body, dtype=dtype, count=item["count"], offset=offset)
+        offset += item["count"] * 4
+    return header, arrays

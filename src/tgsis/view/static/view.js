@@ -1,0 +1,395 @@
+// The 3D views of the tgsis browser view (three.js, shipped beside this file).
+//
+// Meshes come from /api/... as one binary body (tgsis/view/meshes.py): a uint32
+// header length, a JSON header, then little-endian float32/uint32 arrays that
+// become three.js buffers without a copy. After each new frame is drawn,
+// document.body.dataset.frame is incremented and dataset.state is "ready"
+// (the browser tests wait for it); an error shows in #status and sets
+// dataset.state to "error".
+import * as THREE from "three";
+import { OrbitControls } from "/static/three/OrbitControls.js";
+
+const statusBox = () => document.getElementById("status");
+
+function setState(state, text) {
+  document.body.dataset.state = state;
+  const box = statusBox();
+  if (box && text !== undefined) box.textContent = text;
+}
+
+// after a render: wait for the GPU (one pixel read back), then count the frame
+function drawn(viewer) {
+  if (viewer) {
+    const gl = viewer.renderer.getContext();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+  }
+  document.body.dataset.frame = String(Number(document.body.dataset.frame || "0") + 1);
+}
+
+export async function fetchMesh(url) {
+  const early = window.tgsisEarly && window.tgsisEarly.get(url);   // asked for by the page before this module ran
+  if (early) window.tgsisEarly.delete(url);
+  const response = await (early || fetch(url));
+  if (!response.ok) {
+    let message = response.statusText;
+    try { message = (await response.json()).error; } catch (e) { /* not JSON */ }
+    throw new Error(`${response.status}: ${message}`);
+  }
+  const buffer = await response.arrayBuffer();
+  const n = new DataView(buffer).getUint32(0, true);
+  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, n)));
+  const arrays = {};
+  let offset = 4 + n;
+  for (const item of header.arrays) {
+    arrays[item.name] = item.type === "uint32" ? new Uint32Array(buffer, offset, item.count)
+                                               : new Float32Array(buffer, offset, item.count);
+    offset += 4 * item.count;
+  }
+  return { header, arrays };
+}
+
+// viridis, five stops
+const STOPS = [[0.267, 0.005, 0.329], [0.229, 0.322, 0.546], [0.128, 0.567, 0.551], [0.369, 0.789, 0.383],
+               [0.993, 0.906, 0.144]];
+const HIGHLIGHT = [0.9, 0.1, 0.1];
+const FLAG_COLOURS = { 0: [0.75, 0.75, 0.75], 1: [1.0, 0.55, 0.0], 2: [0.15, 0.4, 1.0], 3: [0.85, 0.0, 0.85] };
+
+function ramp(u, out, i) {
+  const x = Math.min(Math.max(u, 0), 1) * (STOPS.length - 1);
+  const k = Math.min(Math.floor(x), STOPS.length - 2);
+  const f = x - k;
+  for (let c = 0; c < 3; c++) out[3 * i + c] = STOPS[k][c] * (1 - f) + STOPS[k + 1][c] * f;
+}
+
+function range(valueArrays) {
+  let lo = Infinity, hi = -Infinity;
+  for (const values of valueArrays) {
+    for (let i = 0; i < values.length; i++) {
+      const v = values[i];
+      if (Number.isFinite(v)) { if (v < lo) lo = v; if (v > hi) hi = v; }
+    }
+  }
+  if (!Number.isFinite(lo)) return [0, 1];
+  return hi > lo ? [lo, hi] : [lo - 0.5, lo + 0.5];
+}
+
+function heights(mesh) {
+  const p = mesh.arrays.positions, z0 = mesh.header.origin[2];
+  const values = new Float64Array(p.length / 3);
+  for (let i = 0; i < values.length; i++) values[i] = p[3 * i + 2] + z0;
+  return values;
+}
+
+// colours: (n,) values on the [lo, hi] ramp; NaN or a set flag in `changed` in red
+function colours(values, [lo, hi], changed) {
+  const out = new Float32Array(values.length * 3);
+  for (let i = 0; i < values.length; i++) {
+    if ((changed && changed[i] > 0) || !Number.isFinite(values[i])) {
+      out.set(HIGHLIGHT, 3 * i);
+    } else {
+      ramp((values[i] - lo) / (hi - lo), out, i);
+    }
+  }
+  return out;
+}
+
+function flagColours(flags) {
+  const out = new Float32Array(flags.length * 3);
+  for (let i = 0; i < flags.length; i++) out.set(FLAG_COLOURS[flags[i]] || HIGHLIGHT, 3 * i);
+  return out;
+}
+
+function object3d(mesh, colour, sceneOrigin) {
+  const { header, arrays } = mesh;
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute("position", new THREE.BufferAttribute(arrays.positions, 3));
+  geometry.setAttribute("color", new THREE.BufferAttribute(colour, 3));
+  let object;
+  if (header.kind === "triangles") {
+    geometry.setIndex(new THREE.BufferAttribute(arrays.indices, 1));
+    geometry.computeVertexNormals();
+    object = new THREE.Mesh(geometry, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+  } else if (header.kind === "lines") {
+    geometry.setIndex(new THREE.BufferAttribute(arrays.indices, 1));
+    object = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ vertexColors: true }));
+  } else {
+    object = new THREE.Points(geometry, new THREE.PointsMaterial({ vertexColors: true, size: 3, sizeAttenuation: false }));
+  }
+  object.position.set(header.origin[0] - sceneOrigin[0], header.origin[1] - sceneOrigin[1],
+                      header.origin[2] - sceneOrigin[2]);
+  object.userData.header = header;
+  return object;
+}
+
+// the flagged vertices as large dots drawn over everything, so that a few changed vertices of a big mesh show
+function markers(mesh, flags, colourOf, sceneOrigin) {
+  const p = mesh.arrays.positions;
+  const picked = [];
+  for (let i = 0; i < flags.length; i++) if (flags[i] > 0) picked.push(i);
+  if (!picked.length) return null;
+  const positions = new Float32Array(picked.length * 3), colour = new Float32Array(picked.length * 3);
+  picked.forEach((v, k) => {
+    positions.set(p.subarray(3 * v, 3 * v + 3), 3 * k);
+    colour.set(colourOf(flags[v]), 3 * k);
+  });
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
+  geometry.setAttribute("color", new THREE.BufferAttribute(colour, 3));
+  const dots = new THREE.Points(geometry, new THREE.PointsMaterial(
+    { vertexColors: true, size: 5, sizeAttenuation: false, depthTest: false }));
+  dots.renderOrder = 1;
+  const o = mesh.header.origin;
+  dots.position.set(o[0] - sceneOrigin[0], o[1] - sceneOrigin[1], o[2] - sceneOrigin[2]);
+  return dots;
+}
+
+function dispose(object) {
+  object.geometry.dispose();
+  object.material.dispose();
+}
+
+// One canvas, one camera (z up) and orbit controls; one scene, or two side by side (split).
+class Viewer {
+  constructor(canvas, split = false) {
+    this.canvas = canvas;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(1);
+    this.renderer.setSize(canvas.width, canvas.height, false);
+    this.split = split;
+    this.scenes = (split ? [0, 1] : [0]).map(() => {
+      const scene = new THREE.Scene();
+      scene.background = new THREE.Color(0xf4f4f0);
+      scene.add(new THREE.AmbientLight(0xffffff, 1.2));
+      const light = new THREE.DirectionalLight(0xffffff, 1.8);
+      light.position.set(0.3, -0.5, 1);
+      scene.add(light);
+      const group = new THREE.Group();
+      scene.add(group);
+      return { scene, group };
+    });
+    const aspect = (split ? canvas.width / 2 : canvas.width) / canvas.height;
+    this.camera = new THREE.PerspectiveCamera(40, aspect, 1, 1e7);
+    this.camera.up.set(0, 0, 1);
+    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.addEventListener("change", () => this.render());
+    this.fitted = false;
+  }
+
+  setExaggeration(factor) {
+    for (const { group } of this.scenes) group.scale.set(1, 1, factor);
+    this.render();
+  }
+
+  replace(index, key, object) {
+    const { group } = this.scenes[index];
+    const old = group.children.find((o) => o.userData.key === key);
+    if (old) { group.remove(old); dispose(old); }
+    if (object) { object.userData.key = key; group.add(object); }
+  }
+
+  fit() {
+    const box = new THREE.Box3();
+    for (const { group } of this.scenes) box.expandByObject(group);
+    if (box.isEmpty()) return;
+    const size = box.getSize(new THREE.Vector3()).length() || 1;
+    const centre = box.getCenter(new THREE.Vector3());
+    const [px, py] = this.facing();
+    this.controls.target.copy(centre);
+    this.camera.position.set(centre.x + 1.1 * px * size, centre.y + 1.1 * py * size, centre.z + 0.6 * size);
+    this.camera.near = size / 1000;
+    this.camera.far = size * 100;
+    this.camera.updateProjectionMatrix();
+    this.controls.update();
+    this.fitted = true;
+  }
+
+  // the horizontal direction to look from: across the objects' longest horizontal extent (from its south side)
+  facing() {
+    let n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    for (const { group } of this.scenes) {
+      for (const object of group.children) {
+        const p = object.geometry.getAttribute("position").array;
+        const step = Math.max(1, Math.floor(p.length / 3 / 20000));
+        for (let i = 0; i < p.length / 3; i += step) {
+          const x = p[3 * i] + object.position.x, y = p[3 * i + 1] + object.position.y;
+          n += 1; sx += x; sy += y; sxx += x * x; syy += y * y; sxy += x * y;
+        }
+      }
+    }
+    if (n < 2) return [0.5, -0.85];
+    const cxx = sxx / n - (sx / n) ** 2, cyy = syy / n - (sy / n) ** 2, cxy = sxy / n - (sx / n) * (sy / n);
+    const angle = 0.5 * Math.atan2(2 * cxy, cxx - cyy);       // of the principal axis
+    let [qx, qy] = [-Math.sin(angle), Math.cos(angle)];       // across it
+    if (qy > 0) { qx = -qx; qy = -qy; }
+    // a little to the side, so that a flat surface is not seen edge on
+    return [qx * 0.94 + qy * 0.34, qy * 0.94 - qx * 0.34];
+  }
+
+  render() {
+    const w = this.canvas.width, h = this.canvas.height;
+    if (!this.split) {
+      this.renderer.setViewport(0, 0, w, h);
+      this.renderer.render(this.scenes[0].scene, this.camera);
+      return;
+    }
+    this.renderer.setScissorTest(true);
+    this.scenes.forEach(({ scene }, i) => {
+      this.renderer.setViewport(i * w / 2, 0, w / 2, h);
+      this.renderer.setScissor(i * w / 2, 0, w / 2, h);
+      this.renderer.render(scene, this.camera);
+    });
+    this.renderer.setScissorTest(false);
+  }
+}
+
+function query(params) {
+  const q = new URLSearchParams();
+  for (const [k, v] of Object.entries(params)) if (v !== null && v !== undefined && v !== "") q.set(k, v);
+  return q.toString();
+}
+
+function count(meshes) {
+  return meshes.reduce((n, m) => n + m.header.n_vertices, 0) + " vertices, " +
+         meshes.reduce((n, m) => n + m.header.n_cells, 0) + " cells";
+}
+
+// The scene of one or several features: colour by height or a property, vertical exaggeration, time slider.
+export function sceneView(config) {
+  const viewer = new Viewer(document.getElementById("scene"));
+  const loaded = new Map();          // id -> mesh
+  let sceneOrigin = null;
+  let serial = 0;
+  let t = config.t;
+  let colour = config.color;
+  // ms: when the page's code started (from navigation), and of the last frame: download, build, draw
+  const timings = { start: performance.now() };
+
+  function paint() {
+    const meshes = [...loaded.values()].filter((m) => m.header.kind !== "none");
+    const values = new Map(meshes.map((m) => [m.header.id, colour === "height" ? heights(m) : m.arrays.values]));
+    const span = range(values.values());
+    const built = performance.now();
+    for (const mesh of meshes) {
+      viewer.replace(0, mesh.header.id, object3d(mesh, colours(values.get(mesh.header.id), span), sceneOrigin));
+    }
+    timings.build = performance.now() - built;
+    for (const mesh of loaded.values()) if (mesh.header.kind === "none") viewer.replace(0, mesh.header.id, null);
+    if (!viewer.fitted) viewer.fit();
+    const rendering = performance.now();
+    viewer.setExaggeration(Number(document.getElementById("exaggeration").value));
+    timings.render = performance.now() - rendering;
+    const absent = [...loaded.values()].filter((m) => m.header.kind === "none").map((m) => m.header.id);
+    setState("ready", (t !== null ? `t = ${t}: ` : "") + count(meshes) +
+             (absent.length ? ` (not there at t: ${absent.join(", ")})` : "") +
+             (colour === "height" ? "" : `; colour: ${colour}`) + `; range ${span[0].toPrecision(6)} to ${span[1].toPrecision(6)}`);
+    const rendered = performance.now();
+    drawn(viewer);
+    timings.draw = performance.now() - rendered + timings.render;
+    document.body.dataset.timings = JSON.stringify(timings);
+  }
+
+  async function load(ids, first = false) {
+    const mine = ++serial;
+    setState("loading", "loading…");
+    try {
+      const asked = performance.now();
+      const meshes = await Promise.all(ids.map((id) => fetchMesh(first ? config.urls[String(id)] :
+        `/api/mesh/${id}?` + query({ t: config.temporal.includes(id) ? t : null,
+                                     color: colour === "height" ? null : colour }))));
+      if (mine !== serial) return;    // a later request replaced this one
+      timings.download = performance.now() - asked;
+      for (const mesh of meshes) {
+        loaded.set(mesh.header.id, mesh);
+        if (sceneOrigin === null && mesh.header.kind !== "none") sceneOrigin = mesh.header.origin;
+      }
+      if (sceneOrigin === null) sceneOrigin = [0, 0, 0];
+      paint();
+    } catch (error) {
+      if (mine === serial) setState("error", String(error.message || error));
+    }
+  }
+
+  const exaggeration = document.getElementById("exaggeration");
+  exaggeration.addEventListener("input", () => {
+    document.getElementById("exaggeration-value").textContent = exaggeration.value;
+    viewer.setExaggeration(Number(exaggeration.value));
+  });
+  document.getElementById("color").addEventListener("change", (event) => {
+    colour = event.target.value;
+    load(config.ids);
+  });
+  const slider = document.getElementById("time");
+  if (slider) {
+    let timer = null;
+    slider.addEventListener("input", () => {
+      t = Number(slider.value);
+      document.getElementById("time-value").textContent = String(t);
+      const url = new URL(window.location.href);
+      url.searchParams.set("t", String(t));
+      window.history.replaceState(null, "", url);
+      clearTimeout(timer);
+      timer = setTimeout(() => load(config.temporal), 60);
+    });
+  }
+  load(config.ids, true);
+}
+
+// Two versions of a surface: b coloured by displacement from a, or a and b side by side.
+export function compareView(config) {
+  const side = config.mode === "side";
+  const viewer = new Viewer(document.getElementById("scene"), side);
+  const url = (which) => `/api/compare/${config.id}?` + query({ a: config.a, b: config.b, side: which });
+  setState("loading", "loading…");
+  Promise.all((side ? ["a", "b"] : ["b"]).map((which) => fetchMesh(url(which)))).then((meshes) => {
+    const origin = meshes[0].header.origin;
+    if (side) {
+      const span = range(meshes.map(heights));
+      meshes.forEach((m, i) => {
+        viewer.replace(i, m.header.side, object3d(m, colours(heights(m), span, m.arrays.changed), origin));
+        viewer.replace(i, m.header.side + ":marks", markers(m, m.arrays.changed, () => HIGHLIGHT, origin));
+      });
+    } else {
+      // the displacement of each vertex from the one of the same stored id; red: no such vertex in a
+      const m = meshes[0];
+      viewer.replace(0, "b", object3d(m, colours(m.arrays.displacement, range([m.arrays.displacement])), origin));
+      viewer.replace(0, "b:marks", markers(m, m.arrays.changed, () => HIGHLIGHT, origin));
+    }
+    const marks = document.getElementById("marks");
+    const showMarks = () => {
+      for (const { group } of viewer.scenes) {
+        for (const o of group.children) if (String(o.userData.key).endsWith(":marks")) o.visible = marks.checked;
+      }
+      viewer.render();
+    };
+    marks.addEventListener("change", showMarks);
+    viewer.fit();
+    showMarks();
+    const changed = meshes.map((m) => m.arrays.changed.reduce((n, f) => n + (f > 0 ? 1 : 0), 0));
+    const maxShift = side ? null : range([meshes[0].arrays.displacement])[1];
+    setState("ready", `${count(meshes)}; vertices highlighted: ${changed.join(" and ")}` +
+             (maxShift === null ? "" : `; largest displacement ${maxShift.toPrecision(6)}`));
+    document.body.dataset.highlighted = changed.join(",");
+    drawn(viewer);
+  }).catch((error) => setState("error", String(error.message || error)));
+}
+
+// A version's conflicting features, coloured by who changed each vertex since the version's base.
+export function conflictView(config) {
+  const viewer = new Viewer(document.getElementById("scene"));
+  setState("loading", "loading…");
+  Promise.all(config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))))
+    .then((meshes) => {
+      const origin = meshes[0].header.origin;
+      for (const m of meshes) {
+        viewer.replace(0, m.header.id, object3d(m, flagColours(m.arrays.changed), origin));
+        viewer.replace(0, `${m.header.id}:marks`, markers(m, m.arrays.changed, (f) => FLAG_COLOURS[f], origin));
+      }
+      viewer.fit();
+      viewer.render();
+      const tally = [0, 0, 0, 0];
+      for (const m of meshes) for (const f of m.arrays.changed) tally[f] += 1;
+      document.body.dataset.flags = tally.join(",");
+      drawn(viewer);
+      setState("ready", `${count(meshes)}; changed here ${tally[1]}, in the parent ${tally[2]}, on both sides ${tally[3]} vertices`);
+    }).catch((error) => setState("error", String(error.message || error)));
+}

@@ -1,0 +1,104 @@
+"""A static surface's rows straight into what the browser draws: the view's download of model 1 surfaces.
+
+:func:`tgsis.fetch_feature` builds a validated :class:`~tgsis.Surface` with
+every vertex and cell property, its parts and atoms and its file's z
+convention: what a client that edits and writes back needs. The view only
+draws: it takes the stored vertices and triangles (``tgsis.vrtx``,
+``tgsis.trgl`` as the session's version sees them, two packed queries of
+:func:`tgsis.db._transfer.columns_out`), and one vertex property only when
+the page colours by it, with the stored ids for the comparisons. On a
+1M-vertex surface that is about a third of the time of ``fetch_feature``
+(bench/view_load.py).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.db._transfer import columns_out, local_positions
+from tgsis.db.classes import FeatureClass
+from tgsis.errors import InvalidInputError, reraise
+from tgsis.view.meshes import Drawable
+
+__all__ = ["StoredSurface", "stored_surface"]
+
+Conn = psycopg.Connection[Any]
+
+
+@dataclass(frozen=True)
+class StoredSurface:
+    """A static surface as stored, in ascending id order.
+
+    Attributes
+    ----------
+    drawable : Drawable
+        Triangles; ``vertex_values`` holds the property asked for, if any.
+    vertex_ids, triangle_ids : (n,) and (m,) int64
+        Stored ids of the vertices and triangles (``vrtxid``, ``trglid``), ascending.
+    """
+
+    drawable: Drawable
+    vertex_ids: npt.NDArray[np.int64]
+    triangle_ids: npt.NDArray[np.int64]
+
+
+def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *,
+                   beside: Conn | None = None) -> StoredSurface:
+    """The stored vertices and triangles of a static surface (and the vertex property ``prop``).
+
+    ``beside``: a second connection that sees what ``conn`` sees (the same
+    snapshot and version): the triangles come through it while the vertices
+    come through ``conn``, the two queries running side by side on the server.
+
+    Raises
+    ------
+    InvalidInputError
+        ``prop`` is not a numeric scalar vertex property of the class.
+    InvalidGeometryError
+        Triangles that name vertices the geometry does not have.
+    """
+    def triangles(on: Conn) -> list[npt.NDArray[Any]]:
+        with reraise():
+            return columns_out(on, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), ("vrtxid1", "int8"),
+                                                                     ("vrtxid2", "int8"), ("vrtxid3", "int8")],
+                               [feature_id])
+
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        later = pool.submit(triangles, beside) if beside is not None else None
+        with reraise():
+            _, vid, x, y, z = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
+                                          [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+                                          [feature_id])
+        _, tid, a, b, c = later.result() if later is not None else triangles(conn)
+    vorder, torder = np.argsort(vid, kind="stable"), np.argsort(tid, kind="stable")
+    vertex_ids, triangle_ids = vid[vorder], tid[torder]
+    vertices = np.empty((len(vid), 3))
+    vertices[:, 0], vertices[:, 1], vertices[:, 2] = x[vorder], y[vorder], z[vorder]
+    corners = np.stack([a[torder], b[torder], c[torder]], axis=1)
+    indices = local_positions(vertex_ids, corners.ravel(), "tgsis.trgl rows", feature_id).reshape(-1, 3)
+    values: dict[str, npt.NDArray[np.float64]] = {}
+    if prop is not None:
+        values[prop] = _vertex_property(conn, fc, feature_id, prop, vertex_ids)
+    return StoredSurface(Drawable("triangles", vertices, indices.astype(np.int64), values,
+                                  np.arange(len(indices), dtype=np.int64)), vertex_ids, triangle_ids)
+
+
+def _vertex_property(conn: Conn, fc: FeatureClass, feature_id: int, prop: str,
+                     vertex_ids: npt.NDArray[np.int64]) -> npt.NDArray[np.float64]:
+    found = [p for p in fc.aligned("VERTEX") if p.name == prop and p.size == 1]
+    table = fc.property_table("VERTEX")
+    if not found or table is None:
+        raise InvalidInputError(f"feature {feature_id} has no numeric vertex property {prop!r}")
+    with reraise():
+        _, idx, column = columns_out(conn, fc.qualified(table), "_geoid", [("_idx", "int8"), (prop, found[0].wire)],
+                                     [feature_id])
+    values = np.full(len(vertex_ids), np.nan)
+    values[local_positions(vertex_ids, idx, f"{table} rows", feature_id)] = column.astype(np.float64)
+    return values
