@@ -18,7 +18,7 @@ import pytest
 from tgsis.testing import TestServer
 
 from tests.view_helpers import (QUOTED_NAME, ViewData, canvas_pixels, changed_fraction, chromium, drawn_fraction,
-                                fill_view_database, get, running_view, wait_drawn)
+                                fill_view_database, running_view, wait_drawn)
 
 
 @pytest.fixture(scope="module")

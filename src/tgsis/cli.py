@@ -1639,7 +1639,10 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     try:
         from tgsis.view import serve
-        import starlette, uvicorn, jinja2  # noqa: F401  (the extra's libraries, checked before anything starts)
+        # the extra's libraries, checked before anything starts
+        import jinja2  # noqa: F401
+        import starlette  # noqa: F401
+        import uvicorn  # noqa: F401
     except ImportError as exc:
         raise Error(f"tgsis view needs the optional extra 'view' ({exc.name} is not installed)",
                     hint="pip install 'tgsis[view]'") from exc
