@@ -53,8 +53,8 @@ def payloads(g: gmaps.GMap, porosity: np.ndarray) -> dict[str, tuple[bytes, list
     rows = {
         "dart": [(one[:d], "int8"), (np.arange(d), "int8"), (zero[:d], "float8"), (g.vertex, "int8"), (cells, "int8"),
                  (g.orientation(), "bool")],
-        "alpha": [(one[:d * (n + 1)], "int8"), (np.repeat(np.arange(n + 1, dtype=np.int16), d), "int2"),
-                  (np.tile(np.arange(d), n + 1), "int8"), (g.alpha.reshape(-1), "int8")],
+        "alpha": [(one[:d * (n + 1)], "int8"), (np.tile(np.arange(n + 1, dtype=np.int16), d), "int2"),   # key order
+                  (np.repeat(np.arange(d), n + 1), "int8"), (np.ascontiguousarray(g.alpha.T).reshape(-1), "int8")],
         "vertex": [(one[:k], "int8"), (zero[:k], "float8"), (zero[:k], "float8"), (np.arange(k), "int8"),
                    (g.points, "float8[3]")],
         "cell": [(one[:c], "int8"), (np.arange(c), "int8"), (zero[:c], "float8"), (np.full(c, 2, np.int16), "int2")],
@@ -97,22 +97,29 @@ def main() -> None:
             conn.execute(f"CREATE TABLE raw_{name} ({columns}, PRIMARY KEY ({key}))")
         conn.commit()
 
+        def raw_empty() -> None:
+            conn.execute("TRUNCATE " + ", ".join(f"raw_{name}" for name in raw))
+            conn.commit()
+
         def raw_copy() -> None:
             for name, (payload, _) in raw.items():
-                conn.execute(f"TRUNCATE raw_{name}")
                 with conn.cursor().copy(f"COPY raw_{name} FROM STDIN (FORMAT binary)") as copy:
                     copy.write(payload)
             conn.commit()
 
-        def store() -> None:
+        def empty() -> None:
+            # as the raw tables: the previous copy deleted, then the tables emptied (no dead rows, untimed)
             conn.execute("SELECT tgsis.delete_stored_geometries(array_agg(_geoid)) FROM faces")
-            conn.execute("TRUNCATE faces, faces_cellpros")
+            conn.execute("TRUNCATE faces, faces_cellpros, tgsis.gmap, tgsis.gmap_timem, tgsis.gmap_timet, "
+                         "tgsis.gmap_node, tgsis.gmap_vertex, tgsis.gmap_dart, tgsis.gmap_alpha, tgsis.gmap_cell")
             conn.commit()
+
+        def store() -> None:
             F.insert_feature(conn, "faces", surface)
             conn.commit()
 
-        raw_up = timed(raw_copy, args.repeat)
-        up = timed(store, args.repeat)
+        raw_up = timed(raw_copy, args.repeat, raw_empty)
+        up = timed(store, args.repeat, empty)
         geoid = int(conn.execute("SELECT _geoid FROM faces").fetchone()[0])  # type: ignore[index]
         conn.commit()
 

@@ -14,10 +14,12 @@ import tgsis
 from tgsis.db.local import LocalServer, find_binaries
 
 
-def timed(action: Callable[[], object], repeat: int) -> float:
-    """Median wall time of ``action`` over ``repeat`` runs, in seconds."""
+def timed(action: Callable[[], object], repeat: int, setup: Callable[[], object] | None = None) -> float:
+    """Median wall time of ``action`` over ``repeat`` runs, in seconds (``setup`` runs untimed before each)."""
     samples = []
     for _ in range(repeat):
+        if setup is not None:
+            setup()
         start = time.perf_counter()
         action()
         samples.append(time.perf_counter() - start)

@@ -9,7 +9,7 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.db.copy import decode_rows, encode_rows
+from tgsis.db.copy import decode_rows, encode_chunks, encode_rows
 
 TYPES = ["int2", "int4", "int8", "float4", "float8", "bool"]
 
@@ -60,3 +60,18 @@ def test_nulls_are_refused_not_misread(tx: psycopg.Connection[Any]) -> None:
 def test_unequal_columns_are_refused() -> None:
     with pytest.raises(tgsis.InvalidPropertyError, match="different lengths: 2, 3"):
         encode_rows([(np.zeros(2), "float8"), (np.zeros(3), "float8")])
+
+
+def test_a_payload_in_pieces_is_the_payload_and_each_piece_holds_whole_rows() -> None:
+    columns = [(np.arange(10, dtype=np.int64), "int8"), (np.linspace(0, 1, 30).reshape(10, 3), "float8[3]"),
+               (np.arange(10) % 2 == 0, "bool")]
+    whole = encode_rows(columns)
+    pieces = list(encode_chunks(columns, 4))
+    assert len(pieces) == 3 and b"".join(pieces) == whole
+    header, trailer = 19, 2                                   # PGCOPY signature, flags, extension; the -1 trailer
+    row = (len(whole) - header - trailer) // 10
+    assert [len(p) for p in pieces] == [header + 4 * row, 4 * row, 2 * row + trailer]
+    assert decode_rows(whole, ["int8", "float8[3]", "bool"])[0].tolist() == list(range(10))
+    assert list(encode_chunks([(np.empty(0, dtype=np.int64), "int8")], 4)) == [encode_rows([(np.empty(0, np.int64), "int8")])]
+    with pytest.raises(tgsis.InvalidPropertyError, match="different lengths"):
+        next(encode_chunks([(np.arange(3), "int8"), (np.arange(4), "int8")], 2))

@@ -12,6 +12,7 @@ import tgsis
 from tgsis import gmaps
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
+from tgsis.db.classes import class_of_feature
 from tgsis.errors import reraise
 
 from .gmaps_shapes import block_tetrahedra, grid, icosahedron
@@ -307,3 +308,18 @@ def test_features_at_t_follow_the_g_maps_life(conn: Conn) -> None:
     assert tgsis.features_at(conn, fc, 7.0) == [rising, lasting]
     assert conn.execute("SELECT tgsis.exists_at(%s, 1.5), tgsis.exists_at(%s, 1.5)", (rising, ended)).fetchone() \
         == (True, False)
+
+
+def test_a_reader_denied_one_class_still_finds_a_feature_of_another(db_dsn: str) -> None:
+    with psycopg.connect(db_dsn) as admin:
+        F.create_feature_class(admin, "aaa_secret", "GMAP", time_model="GMAP", cell_level=2)   # listed first
+        fc = _class(admin)
+        geoid = F.insert_feature(admin, fc, _evolving())
+        admin.execute("REVOKE SELECT ON aaa_secret FROM tgsis_reader")
+        admin.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
+        rita = roles.connect("rita")
+        assert class_of_feature(rita, geoid).name == "blocks"
+        assert G.gmap_at(rita, geoid, 2.0) is not None                   # finds its class as gmap_at does
+        with pytest.raises(tgsis.NotFoundError, match=r"among those this role may read \(1 it may not\)"):
+            class_of_feature(rita, geoid + 1000)

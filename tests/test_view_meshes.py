@@ -114,20 +114,3 @@ def test_the_endpoint_in_a_version_sends_what_that_version_holds(view: tuple[str
     # edit lifted the west by 3; DEFAULT then lowered the east by 2, which edit (based before it) does not see
     assert np.unique(np.round(z[1] - z[0], 3)).tolist() == [0, 2, 3]
     assert get(f"{url}/api/mesh/{data.top}?v=nope")[0] == 404
-
-
-def test_a_gmap_is_refused_with_its_reason(db_dsn: str) -> None:
-    # models 4 and 5 are not drawn yet: an error naming the feature and its class, not a broken scene
-    from tgsis import gmaps
-
-    from tests.gmaps_shapes import octahedron
-
-    with psycopg.connect(db_dsn) as conn:
-        tgsis.create_feature_class(conn, "cells", "GMAP", time_model="GMAP", cell_level=2)
-        gid = tgsis.insert_feature(conn, "cells", gmaps.GMap.from_triangles(*octahedron()))
-        conn.commit()
-    with running_view(db_dsn) as url:
-        for path in (f"/scene?ids={gid}", f"/api/mesh/{gid}"):
-            status, body, _ = get(url + path)
-            assert status == 400 and f"feature {gid} is a G-map (class cells".encode() in body
-        assert b'data-class="cells"' in get(f"{url}/classes")[1]

@@ -10,9 +10,10 @@ modules (``features``, ``temporal``, ``checkin``) import it; users do not.
 
 from __future__ import annotations
 
+import concurrent.futures
 import json
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -22,13 +23,15 @@ import psycopg
 from psycopg import sql
 
 from tgsis.db.classes import FeatureClass, stores_part_column
-from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_rows, numpy_dtype, wire_shape
+from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_chunks, encode_rows, numpy_dtype, wire_shape
 from tgsis.errors import DatabaseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
 from tgsis.mesh import Mesh
 
 log = logging.getLogger("tgsis.db.features")
 
 Conn = psycopg.Connection[Any]
+#: columns of a COPY: (name, values, wire type)
+Columns = Sequence[tuple[str, npt.ArrayLike, str]]
 
 
 def stored_cell_properties(fc: FeatureClass, mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
@@ -111,10 +114,13 @@ def feature_columns(fc: FeatureClass, properties: Mapping[str, Any] | None) -> d
     return {k: (json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in values.items()}
 
 
-def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: bytes) -> None:
-    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
+def _copy_statement(table: sql.Composable, columns: Sequence[str]) -> sql.Composed:
+    return sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
         table, sql.SQL(", ").join(sql.Identifier(c) for c in columns))
-    with conn.cursor().copy(statement) as copy:
+
+
+def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: bytes) -> None:
+    with conn.cursor().copy(_copy_statement(table, columns)) as copy:
         copy.write(payload)
 
 
@@ -176,14 +182,52 @@ class Storage:
 
     def copy(self, conn: Conn, schema: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> None:
         """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision."""
+        copy_in(conn, *self._prepared(schema, table, columns))
+
+    def copy_all(self, conn: Conn, tables: Sequence[tuple[str, str, Callable[[], Columns]]]) -> None:
+        """COPY several tables in turn, the client's work overlapping the server's.
+
+        ``tables``: ``(schema, table, columns)`` where ``columns()`` gives the
+        ``(name, values, wire type)`` columns. The callables start at once and
+        run one after the other in order, in one worker thread (a later one
+        may use what an earlier one computed); a second thread encodes the
+        rows in pieces (:func:`tgsis.db.copy.encode_chunks`), one piece ahead
+        of the one the server is taking. numpy and the socket wait release
+        the GIL: a 6M-dart G-map's orientation is computed while its 18M
+        alpha rows go in (bench/gmaps_db.py). An exception of a callable or of
+        the encoding is raised here; the caller's transaction then holds
+        nothing of it.
+        """
+        with concurrent.futures.ThreadPoolExecutor(1) as makers, concurrent.futures.ThreadPoolExecutor(1) as coders:
+            made = [makers.submit(columns) for _, _, columns in tables]
+            try:
+                for (schema, table, _), future in zip(tables, made):
+                    target, columns = self._target(schema, table, future.result())
+                    chunks = encode_chunks([(values, wire) for _, values, wire in columns])
+                    ahead = coders.submit(next, chunks, None)
+                    with conn.cursor().copy(_copy_statement(target, [name for name, _, _ in columns])) as copy:
+                        while (piece := ahead.result()) is not None:
+                            ahead = coders.submit(next, chunks, None)
+                            copy.write(piece)
+            finally:
+                for future in made:
+                    future.cancel()
+
+    def _target(self, schema: str, table: str, columns: Columns) -> tuple[sql.Composable, Columns]:
+        """Where ``columns`` go: the table, or its ``_ver`` storage with the revision column added."""
         self.check(schema, table)
         count = len(np.asarray(columns[0][1])) if columns else 0
         if (schema, table) in self.versioned:
             assert self.revision is not None
             table += "_ver"
             columns = [*columns, ("revision", np.full(count, self.revision, dtype=np.int32), "int4")]
-        copy_in(conn, sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table)),
-                 [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
+        return sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table)), columns
+
+    def _prepared(self, schema: str, table: str, columns: Columns) -> tuple[sql.Composable, list[str], bytes]:
+        """Where ``columns`` go, their names and their payload."""
+        target, columns = self._target(schema, table, columns)
+        return (target, [name for name, _, _ in columns],
+                encode_rows([(values, wire) for _, values, wire in columns]))
 
 
 def concat(arrays: Sequence[npt.NDArray[Any]]) -> npt.NDArray[Any]:

@@ -387,13 +387,24 @@ def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
     NotFoundError
         No class has a feature with that id.
     """
-    for fc in list_feature_classes(conn):
-        with reraise():
+    classes = list_feature_classes(conn)
+    with reraise():
+        # only the classes the role may read are looked into (a class it may not read would end the search
+        # with a permission error, though the feature may be in a later one)
+        readable = {r[0] for r in conn.execute(
+            "SELECT classname FROM tgsis.catalog WHERE has_table_privilege(format('%I.%I', schemaname, featuretable), "
+            "'SELECT')").fetchall()}
+        for fc in classes:
+            if fc.name not in readable:
+                continue
             row = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)),
                                (feature_id,)).fetchone()
-        if row is not None:
-            return fc
-    raise NotFoundError(f"no feature class has a feature {feature_id}", hint="`tgsis ls` lists the features")
+            if row is not None:
+                return fc
+    hidden = len(classes) - len(readable & {fc.name for fc in classes})
+    raise NotFoundError(f"no feature class has a feature {feature_id}"
+                        + (f" among those this role may read ({hidden} it may not)" if hidden else ""),
+                        hint="`tgsis ls` lists the features")
 
 
 def stores_part_column(fc: FeatureClass) -> bool:

@@ -13,7 +13,7 @@ vector property, ``float8[3]`` here) has a fixed width too: the array header
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -88,28 +88,51 @@ def encode_rows(columns: Sequence[tuple[npt.ArrayLike, str]]) -> bytes:
     bytes
         Ready for ``COPY ... FROM STDIN (FORMAT binary)``.
     """
+    return b"".join(encode_chunks(columns, None))
+
+
+def encode_chunks(columns: Sequence[tuple[npt.ArrayLike, str]], rows_per_chunk: int | None = 1 << 20) -> Iterator[bytes]:
+    """The binary COPY payload of :func:`encode_rows` in pieces of at most ``rows_per_chunk`` rows, made as asked for.
+
+    The first piece starts with the header, the last ends with the trailer
+    (a table of no rows: one piece). ``None``: one piece. Written one after
+    the other into one COPY, the pieces are :func:`encode_rows`'s payload;
+    made while the previous one travels, the encoding overlaps the server's
+    work (:meth:`tgsis.db._transfer.Storage.copy_all`).
+    """
     arrays = [np.asarray(values) for values, _ in columns]
     n = len(arrays[0]) if arrays else 0
     if any(len(a) != n for a in arrays):
         raise InvalidPropertyError("COPY columns have different lengths: " + ", ".join(str(len(a)) for a in arrays))
     types = [wire for _, wire in columns]
-    rows = np.empty(n, dtype=_row_dtype(types))
+    for i, (values, wire) in enumerate(zip(arrays, types)):
+        size = wire_shape(wire)[1]
+        if size is not None and values.shape != (n, size):
+            raise InvalidPropertyError(f"COPY column {i} of {wire} values has shape {values.shape}, not ({n}, {size})")
+    step = max(n, 1) if rows_per_chunk is None else rows_per_chunk
+    starts = list(range(0, n, step)) or [0]
+    for k, start in enumerate(starts):
+        piece = _encoded(arrays, types, start, min(start + step, n))
+        yield (_HEADER if k == 0 else b"") + piece + (_TRAILER if k == len(starts) - 1 else b"")
+
+
+def _encoded(arrays: Sequence[npt.NDArray[Any]], types: Sequence[str], start: int, stop: int) -> bytes:
+    """Rows start..stop of the columns in binary COPY form (no header, no trailer)."""
+    rows = np.empty(stop - start, dtype=_row_dtype(types))
     rows["count"] = len(types)
     for i, (values, wire) in enumerate(zip(arrays, types)):
         base, size = wire_shape(wire)
         rows[f"len{i}"] = _field_dtype(wire).itemsize
         if size is None:
-            rows[f"val{i}"] = values
+            rows[f"val{i}"] = values[start:stop]
             continue
-        if values.shape != (n, size):
-            raise InvalidPropertyError(f"COPY column {i} of {wire} values has shape {values.shape}, not ({n}, {size})")
         value = rows[f"val{i}"]
         value["ndim"], value["hasnull"], value["elemtype"] = 1, 0, _ELEMENT_OIDS[base]
         value["dim"], value["lbound"] = size, 1
         value["elems"]["len"] = np.dtype(PG_TYPES[base]).itemsize
-        value["elems"]["val"] = values
+        value["elems"]["val"] = values[start:stop]
         rows[f"val{i}"] = value
-    return _HEADER + rows.tobytes() + _TRAILER
+    return rows.tobytes()
 
 
 def decode_rows(data: bytes | bytearray | memoryview, types: Sequence[str]) -> list[npt.NDArray[Any]]:

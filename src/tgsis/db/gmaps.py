@@ -20,7 +20,7 @@ nothing written. Snapshots at t come from SQL (``tgsis.gmap_at``,
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,7 +30,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
-from tgsis.db._transfer import Storage, concat, copy_out, insert_feature_row, local_positions
+from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
@@ -192,12 +192,70 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
     nodes = [len(p.gmap.points) for p in periods]
     dart0 = np.cumsum([0, *darts[:-1]]).astype(np.int64)
     node0 = np.cumsum([0, *nodes[:-1]]).astype(np.int64)
-    level = fc.cell_level
-    cells = [p.gmap.cells(level) if level is not None and level <= n else None for p in periods]
-    counts = [int(c.max()) + 1 if c is not None and len(c) else 0 for c in cells]
-    total_cells: int = sum(counts)
-    cell0 = np.cumsum([0, *counts[:-1]]).astype(np.int64)
-    signs = [_signs(p.gmap) for p in periods]
+    level = fc.cell_level if fc.cell_level is not None and fc.cell_level <= n else None
+    starts = np.array([p.start for p in periods])
+    instants = [len(p.times) for p in periods]
+    rows = [len(p.times) * k for p, k in zip(periods, nodes)]
+    cells: dict[str, Any] = {}    # the cells of the property level, made by the dart rows' callable, used after
+
+    def gmap_rows() -> Columns:
+        return [("geoid", np.array([geoid]), "int8"), ("dimension", np.array([n], np.int16), "int2"),
+                ("embedding", np.array([m], np.int16), "int2")]
+
+    def timem_rows() -> Columns:
+        return [("geoid", np.full(len(periods), geoid), "int8"), ("timem", starts, "float8")]
+
+    def timet_rows() -> Columns:
+        return [("geoid", np.full(sum(instants), geoid), "int8"), ("timem", np.repeat(starts, instants), "float8"),
+                ("timet", concat([p.times for p in periods]), "float8")]
+
+    def alpha_rows() -> Columns:
+        return _alpha_columns(geoid, np.stack([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)])
+                                               for i in range(n + 1)]))
+
+    def dart_rows() -> Columns:
+        # the orientation and the cells (orbits over every dart) are made here, while the alpha rows go in
+        labels = [p.gmap.cells(level) for p in periods] if level is not None else []
+        cells["counts"] = [int(c.max()) + 1 if len(c) else 0 for c in labels]
+        cells["first"] = np.cumsum([0, *cells["counts"][:-1]]).astype(np.int64)
+        signs = [_signs(p.gmap) for p in periods]
+        columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("geoid", np.full(sum(darts), geoid), "int8"), ("dartid", np.arange(sum(darts), dtype=np.int64), "int8"),
+            ("timem", np.repeat(starts, darts), "float8"),
+            ("nodeid", concat([p.gmap.vertex + o for p, o in zip(periods, node0)]), "int8")]
+        if level is not None:
+            columns.append(("acellid", concat([c + o for c, o in zip(labels, cells["first"])]), "int8"))
+        if all(s is not None for s in signs):
+            columns.append(("positive", concat([s for s in signs if s is not None]), "bool"))
+        return columns
+
+    def node_rows() -> Columns:
+        return [("geoid", np.full(sum(nodes), geoid), "int8"), ("timem", np.repeat(starts, nodes), "float8"),
+                ("nodeid", np.arange(sum(nodes), dtype=np.int64), "int8")]
+
+    def vertex_rows() -> Columns:
+        return [("geoid", np.full(sum(rows), geoid), "int8"), ("timem", np.repeat(starts, rows), "float8"),
+                ("timet", concat([np.repeat(p.times, k) for p, k in zip(periods, nodes)]), "float8"),
+                ("nodeid", concat([np.tile(np.arange(k, dtype=np.int64) + o, len(p.times))
+                                   for p, k, o in zip(periods, nodes, node0)]), "int8"),
+                ("coordinate", concat([p.positions.reshape(-1, m) for p in periods]), f"float8[{m}]")]
+
+    def cell_rows() -> Columns:
+        counts = cells["counts"]
+        return [("geoid", np.full(sum(counts), geoid), "int8"), ("acellid", np.arange(sum(counts), dtype=np.int64), "int8"),
+                ("timem", np.repeat(starts, counts), "float8"),
+                ("celllevel", np.full(sum(counts), level, dtype=np.int16), "int2")]
+
+    def value_rows() -> Columns:
+        counts = cells["counts"]
+        per = [len(p.times) * c for p, c in zip(periods, counts)]
+        return [("_geoid", np.full(sum(per), geoid), "int8"), ("_timem", np.repeat(starts, per), "float8"),
+                ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, counts)]), "float8"),
+                ("_idx", concat([np.tile(np.arange(c, dtype=np.int64) + o, len(p.times))
+                                 for p, c, o in zip(periods, counts, cells["first"])]), "int8"),
+                *((prop.name, concat([v[prop.name].reshape(-1) for v in values]), SQL_TYPES[prop.type])
+                  for prop in fc.cell_properties)]
+
     with reraise(), conn.transaction():
         storage = Storage.of(conn)
         storage.check("tgsis", "geometry")
@@ -206,51 +264,17 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
                             evolving.alive)).fetchone()
         assert row is not None
         geoid = int(row[0])
-        storage.copy(conn, "tgsis", "gmap", [("geoid", np.array([geoid]), "int8"), ("dimension", np.array([n], np.int16), "int2"),
-                                             ("embedding", np.array([m], np.int16), "int2")])
-        starts = np.array([p.start for p in periods])
-        storage.copy(conn, "tgsis", "gmap_timem", [("geoid", np.full(len(periods), geoid), "int8"),
-                                                   ("timem", starts, "float8")])
-        instants = [len(p.times) for p in periods]
-        storage.copy(conn, "tgsis", "gmap_timet", [
-            ("geoid", np.full(sum(instants), geoid), "int8"), ("timem", np.repeat(starts, instants), "float8"),
-            ("timet", concat([p.times for p in periods]), "float8")])
-        storage.copy(conn, "tgsis", "gmap_node", [
-            ("geoid", np.full(sum(nodes), geoid), "int8"), ("timem", np.repeat(starts, nodes), "float8"),
-            ("nodeid", np.arange(sum(nodes), dtype=np.int64), "int8")])
-        rows = [len(p.times) * k for p, k in zip(periods, nodes)]
-        storage.copy(conn, "tgsis", "gmap_vertex", [
-            ("geoid", np.full(sum(rows), geoid), "int8"), ("timem", np.repeat(starts, rows), "float8"),
-            ("timet", concat([np.repeat(p.times, k) for p, k in zip(periods, nodes)]), "float8"),
-            ("nodeid", concat([np.tile(np.arange(k, dtype=np.int64) + o, len(p.times))
-                               for p, k, o in zip(periods, nodes, node0)]), "int8"),
-            ("coordinate", concat([p.positions.reshape(-1, m) for p in periods]), f"float8[{m}]")])
-        acell = concat([c + o for c, o in zip(cells, cell0)]) if level is not None and level <= n else None
-        dart_columns: list[tuple[str, npt.ArrayLike, str]] = [
-            ("geoid", np.full(sum(darts), geoid), "int8"), ("dartid", np.arange(sum(darts), dtype=np.int64), "int8"),
-            ("timem", np.repeat(starts, darts), "float8"),
-            ("nodeid", concat([p.gmap.vertex + o for p, o in zip(periods, node0)]), "int8")]
-        if acell is not None:
-            dart_columns.append(("acellid", acell, "int8"))
-        if all(s is not None for s in signs):
-            dart_columns.append(("positive", concat([s for s in signs if s is not None]), "bool"))
-        storage.copy(conn, "tgsis", "gmap_dart", dart_columns)
-        images = np.stack([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)]) for i in range(n + 1)])
-        storage.copy(conn, "tgsis", "gmap_alpha", _alpha_columns(geoid, images))
-        if level is not None and total_cells:
-            storage.copy(conn, "tgsis", "gmap_cell", [
-                ("geoid", np.full(sum(counts), geoid), "int8"), ("acellid", np.arange(sum(counts), dtype=np.int64), "int8"),
-                ("timem", np.repeat(starts, counts), "float8"),
-                ("celllevel", np.full(sum(counts), level, dtype=np.int16), "int2")])
-        if fc.cell_properties and total_cells:
-            per = [len(p.times) * c for p, c in zip(periods, counts)]
-            storage.copy(conn, fc.schema, fc.cellprotable, [
-                ("_geoid", np.full(sum(per), geoid), "int8"), ("_timem", np.repeat(starts, per), "float8"),
-                ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, counts)]), "float8"),
-                ("_idx", concat([np.tile(np.arange(c, dtype=np.int64) + o, len(p.times))
-                                 for p, c, o in zip(periods, counts, cell0)]), "int8"),
-                *((prop.name, concat([v[prop.name].reshape(-1) for v in values]), SQL_TYPES[prop.type])
-                  for prop in fc.cell_properties)])
+        # the largest table first: its rows need nothing but the involutions, and while the server takes them
+        # the darts' orientation and cells are computed (Storage.copy_all)
+        tables: list[tuple[str, str, Callable[[], Columns]]] = [
+            ("tgsis", "gmap", gmap_rows), ("tgsis", "gmap_timem", timem_rows), ("tgsis", "gmap_timet", timet_rows),
+            ("tgsis", "gmap_alpha", alpha_rows), ("tgsis", "gmap_dart", dart_rows), ("tgsis", "gmap_node", node_rows),
+            ("tgsis", "gmap_vertex", vertex_rows)]
+        if level is not None:
+            tables.append(("tgsis", "gmap_cell", cell_rows))
+            if fc.cell_properties:
+                tables.append((fc.schema, fc.cellprotable, value_rows))
+        storage.copy_all(conn, tables)
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
 

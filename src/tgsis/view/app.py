@@ -46,11 +46,12 @@ from tgsis.db import versions as V
 from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
 from tgsis.db.features import fetch_feature
+from tgsis.db.gmaps import fetch_md_gmap, gmap_at
 from tgsis.db.temporal import get_at
 from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError,
                           reraise)
 from tgsis.mesh import Geotype
-from tgsis.view.meshes import Drawable, drawable, pack, vertex_flags
+from tgsis.view.meshes import Drawable, drawable, gmap_drawable, pack, vertex_flags
 from tgsis.view.surfaces import StoredSurface, stored_surface
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE"]
@@ -61,7 +62,7 @@ HERE = Path(__file__).parent
 #: the cookie that holds the browser's chosen version (``NAME`` or ``NAME@REVISION``)
 VERSION_COOKIE = "tgsis_version"
 _BIGINT = 2**63 - 1
-_DRAWN_TIME_MODELS = ("STATIC", "INSTANTS", "EVOLVING")
+_DRAWN_TIME_MODELS = ("STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM")
 #: features listed per class on the classes page (more: filter by name or box)
 LISTED = 500
 
@@ -264,8 +265,11 @@ def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box:
         "cube_ll_coord(g.bbox, 1), cube_ll_coord(g.bbox, 2), cube_ll_coord(g.bbox, 3), "
         "cube_ur_coord(g.bbox, 1), cube_ur_coord(g.bbox, 2), cube_ur_coord(g.bbox, 3){} "
         "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-        "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid) "
-        "                    WHERE g.timemodel IN ('INSTANTS', 'EVOLVING')) i ON true "
+        "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last "
+        "                     FROM (SELECT t FROM tgsis.geometry_instants(g.geoid) "
+        "                            WHERE g.timemodel IN ('INSTANTS', 'EVOLVING') "
+        "                           UNION ALL SELECT timet FROM tgsis.gmap_timet "
+        "                            WHERE geoid = g.geoid AND g.timemodel = 'GMAP') AS lives (t)) i ON true "
         "WHERE {} ORDER BY g.geoid {}").format(
         sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
         fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
@@ -284,6 +288,14 @@ def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:
     return [p.name for p in fc.aligned("VERTEX") if p.size == 1 and p.type in numeric]
 
 
+def _colours(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]:
+    """What a feature can be coloured by besides height: numeric vertex properties; a model-5 map's axes beyond z."""
+    if fc.time_model == "MULTIDIM":
+        row = conn.execute("SELECT axes FROM tgsis.md_gmap WHERE geoid = %s", (feature_id,)).fetchone()
+        return list(row[0][3:]) if row is not None else []
+    return _scalar_vertex_properties(fc)
+
+
 def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None, float | None, float | None]:
     """(t, first, last) for a scene: t checked against the temporal features' lives (default: the last instant)."""
     lives = [(r.first, r.last) for r in rows if r.first is not None and r.last is not None]
@@ -299,15 +311,18 @@ def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None,
 
 
 def _check_drawn(fc: FeatureClass, feature_id: int) -> None:
-    if fc.time_model not in _DRAWN_TIME_MODELS or fc.geotype is Geotype.GMAP:
-        raise _bad(f"feature {feature_id} is a G-map (class {fc.name}, {fc.time_model}): the browser view draws "
-                   "the meshes of models 1 to 3")
+    if fc.time_model not in _DRAWN_TIME_MODELS:
+        raise _bad(f"feature {feature_id} (class {fc.name}) has the time model {fc.time_model}, which the browser "
+                   f"view does not draw: it draws {', '.join(_DRAWN_TIME_MODELS)}")
 
 
 def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
              color: str | None = None) -> tuple[Drawable | None, float | None]:
     """What to draw of a feature at t (None when it does not exist then) and the t used."""
     _check_drawn(fc, feature_id)
+    if fc.time_model == "MULTIDIM":  # model 5: time, if any, is an axis of the map (colour by the axes beyond z)
+        history, axes = fetch_md_gmap(conn, fc, feature_id)
+        return gmap_drawable(history, axes), None
     if fc.time_model == "STATIC":
         if fc.geotype is Geotype.SURFACE:  # the view's own download: the stored rows, no more
             return stored_surface(conn, fc, feature_id, color).drawable, None
@@ -318,6 +333,9 @@ def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
     when = t if t is not None else list_features(conn, fc, ids=[feature_id])[0].last
     if when is None:
         return None, None
+    if fc.time_model == "GMAP":  # model 4: the SQL snapshot at t (tgsis.gmap_at)
+        snapshot = gmap_at(conn, feature_id, when)
+        return (None if snapshot is None else gmap_drawable(snapshot)), when
     surface = get_at(conn, feature_id, when, properties=True)
     return (None if surface is None else drawable(surface)), when
 
@@ -435,8 +453,7 @@ def scene_page(request: Request) -> Response:
         rows = _scene_rows(conn, ids)
         classes = {fc.name: fc for fc, _ in readable_classes(conn)}
         when, first, last = _time_of(rows, t)
-        properties = sorted(set.intersection(*(set(_scalar_vertex_properties(classes[r.feature_class]))
-                                               for r in rows)))
+        properties = sorted(set.intersection(*(set(_colours(conn, classes[r.feature_class], r.id)) for r in rows)))
         version = V.working_version(conn)
     if color != "height" and color not in properties:
         raise _bad(f"colour {color!r} is neither 'height' nor a numeric vertex property of every feature shown "

@@ -23,9 +23,11 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from tgsis.errors import InvalidInputError
+from tgsis.gmaps import GMap
 from tgsis.mesh import Geometry, GeometryCollection, Mesh, Surface, TetraMesh, LineSet
 
-__all__ = ["Drawable", "drawable", "tetra_boundary", "pack", "unpack", "vertex_flags"]
+__all__ = ["Drawable", "drawable", "gmap_drawable", "fan_triangles", "tetra_boundary", "pack", "unpack", "vertex_flags"]
 
 Kind = Literal["triangles", "lines", "points"]
 
@@ -125,6 +127,62 @@ def drawable(geometry: Geometry) -> Drawable:
         chosen[0].kind, np.concatenate([p.vertices for p in chosen]).reshape(-1, 3),
         np.concatenate([p.indices + o for p, o in zip(chosen, offsets)]).reshape(-1, k),
         {n: np.concatenate([p.vertex_values[n] for p in chosen]) for n in sorted(names)}, cells)
+
+
+def fan_triangles(indices: npt.ArrayLike, offsets: npt.ArrayLike) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Polygons cut into triangles around their first corner.
+
+    Parameters
+    ----------
+    indices : (s,) array_like of int
+        The polygons' corners, polygon after polygon (as :meth:`tgsis.GMap.polygons` gives them).
+    offsets : (f + 1,) array_like of int
+        Polygon j has ``indices[offsets[j]:offsets[j + 1]]``; polygons of fewer than 3 corners give no triangle.
+
+    Returns
+    -------
+    triangles : (t, 3) int64
+    polygon : (t,) int64
+        The polygon each triangle comes from.
+    """
+    idx, off = np.asarray(indices, dtype=np.int64), np.asarray(offsets, dtype=np.int64)
+    counts = np.maximum(np.diff(off) - 2, 0)
+    polygon = np.repeat(np.arange(len(counts), dtype=np.int64), counts)
+    # the k-th triangle of a polygon: its corners 0, k + 1, k + 2
+    k = np.arange(int(counts.sum()), dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
+    start = off[:-1][polygon]
+    return np.stack([idx[start], idx[start + k + 1], idx[start + k + 2]], axis=1), polygon
+
+
+def gmap_drawable(g: GMap, axes: Sequence[str] = ("x", "y", "z")) -> Drawable:
+    """What to draw of a G-map: its faces (n = 2), the faces of its border (n = 3), edges (n = 1) or points.
+
+    Positions are the first three coordinates of the embedding (R^m, m >= 3
+    padded with zeros below); the coordinates beyond (a model-5 map's
+    knowledge or time axes, named by ``axes``) become vertex values to colour
+    by. ``cell_rows`` are the faces (2-cells of the map, or of its border).
+
+    Raises
+    ------
+    InvalidInputError
+        A map of dimension n > 3 (its faces are not a surface in space).
+    """
+    n, m = g.dimension, g.embedding_dimension
+    if n > 3:
+        raise InvalidInputError(f"a {n}-G-map is not drawn: the browser view draws G-maps of dimension 0 to 3")
+    vertices = np.zeros((g.n_points, 3))
+    vertices[:, :min(m, 3)] = g.points[:, :3]
+    values = {(axes[i] if i < len(axes) else f"axis {i + 1}"): g.points[:, i].astype(np.float64) for i in range(3, m)}
+    surface = g.border() if n == 3 else g
+    if n >= 2:
+        triangles, face = fan_triangles(*surface.polygons()) if surface.n_darts else (
+            np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64))
+        return Drawable("triangles", vertices, triangles, values, face)
+    if n == 1:
+        first = g.cell_darts(1)
+        edges = np.stack([g.vertex[first], g.vertex[g.alpha[0, first]]], axis=1)
+        return Drawable("lines", vertices, edges, values, np.arange(len(edges), dtype=np.int64))
+    return Drawable("points", vertices, np.empty((0, 0), dtype=np.int64), values, np.empty(0, dtype=np.int64))
 
 
 def vertex_flags(n_vertices: int, marked: Sequence[tuple[int, npt.ArrayLike]]) -> npt.NDArray[np.float32]:
