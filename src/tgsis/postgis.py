@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._polygons import fan_triangles
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
@@ -258,15 +259,15 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
         raise InvalidGeometryError(f"a face of the {_NAMES[code]} has {int(sizes[sizes < 3][0])} corners")
     if np.all(sizes == sizes[0]) and (kind != _POLYGON or sizes[0] == 3) and (kind != _LINESTRING or sizes[0] == 2):
         cell_array = index.reshape(len(sizes), int(sizes[0])).astype(np.int64)     # triangles, segments or points
+    elif kind == _POLYGON:   # a fan from the first corner of each face
+        cell_array = fan_triangles(index, np.concatenate([[0], np.cumsum(sizes)]))[0]
     else:
         cells: list[list[int]] = []
         start = 0
         for size in sizes.tolist():
             ids = index[start:start + size].tolist()
             start += size
-            if kind == _POLYGON:   # a fan from the first corner
-                cells.extend([ids[0], ids[i], ids[i + 1]] for i in range(1, len(ids) - 1))
-            elif kind == _LINESTRING:
+            if kind == _LINESTRING:
                 cells.extend([ids[i], ids[i + 1]] for i in range(len(ids) - 1))
             else:
                 cells.extend([i] for i in ids)

@@ -124,7 +124,7 @@ class EvolvingGMap:
             if a.times[-1] != b.times[0]:
                 raise InvalidInputError(
                     f"G-map period {i} must end where period {i + 1} starts: its last geometry instant is "
-                    f"{a.times[-1]!r}, period {i + 1} starts at {b.times[0]!r}",
+                    f"{float(a.times[-1])!r}, period {i + 1} starts at {float(b.times[0])!r}",
                     hint="a sudden change is a change over a very short period")
         for i, p in enumerate(self.periods):
             if (p.gmap.dimension, p.gmap.embedding_dimension) != (first.gmap.dimension, first.gmap.embedding_dimension):

@@ -23,11 +23,12 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._polygons import fan_triangles
 from tgsis.errors import InvalidInputError
 from tgsis.gmaps import GMap
 from tgsis.mesh import Geometry, GeometryCollection, Mesh, Surface, TetraMesh, LineSet
 
-__all__ = ["Drawable", "drawable", "gmap_drawable", "fan_triangles", "tetra_boundary", "pack", "unpack", "vertex_flags"]
+__all__ = ["Drawable", "drawable", "gmap_drawable", "tetra_boundary", "pack", "unpack", "vertex_flags"]
 
 Kind = Literal["triangles", "lines", "points"]
 
@@ -127,31 +128,6 @@ def drawable(geometry: Geometry) -> Drawable:
         chosen[0].kind, np.concatenate([p.vertices for p in chosen]).reshape(-1, 3),
         np.concatenate([p.indices + o for p, o in zip(chosen, offsets)]).reshape(-1, k),
         {n: np.concatenate([p.vertex_values[n] for p in chosen]) for n in sorted(names)}, cells)
-
-
-def fan_triangles(indices: npt.ArrayLike, offsets: npt.ArrayLike) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """Polygons cut into triangles around their first corner.
-
-    Parameters
-    ----------
-    indices : (s,) array_like of int
-        The polygons' corners, polygon after polygon (as :meth:`tgsis.GMap.polygons` gives them).
-    offsets : (f + 1,) array_like of int
-        Polygon j has ``indices[offsets[j]:offsets[j + 1]]``; polygons of fewer than 3 corners give no triangle.
-
-    Returns
-    -------
-    triangles : (t, 3) int64
-    polygon : (t,) int64
-        The polygon each triangle comes from.
-    """
-    idx, off = np.asarray(indices, dtype=np.int64), np.asarray(offsets, dtype=np.int64)
-    counts = np.maximum(np.diff(off) - 2, 0)
-    polygon = np.repeat(np.arange(len(counts), dtype=np.int64), counts)
-    # the k-th triangle of a polygon: its corners 0, k + 1, k + 2
-    k = np.arange(int(counts.sum()), dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
-    start = off[:-1][polygon]
-    return np.stack([idx[start], idx[start + k + 1], idx[start + k + 2]], axis=1), polygon
 
 
 def gmap_drawable(g: GMap, axes: Sequence[str] = ("x", "y", "z")) -> Drawable:
