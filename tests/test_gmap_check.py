@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from psycopg import sql
 import pytest
 
 import tgsis
@@ -50,8 +51,9 @@ def _stored(conn: Conn, model: str) -> tuple[int, int, tuple[str, str, str, str 
 
 
 def _read_as_array(conn: Conn, geoid: int, n: int, tables: tuple[str, str, str, str | None]) -> bool:
-    row = conn.execute("SELECT tgsis.gmap_alpha_array(%s, %s, %s::regclass, %s::regclass) IS NOT NULL",
-                       (geoid, n, tables[0], tables[1])).fetchone()
+    row = conn.execute(sql.SQL("SELECT tgsis.gmap_alpha_array(%s, %s, %s::regclass, min(dartid), max(dartid), count(*)) IS NOT NULL "
+                               "FROM {} WHERE geoid = %s").format(sql.Identifier(*tables[0].split("."))),
+                       (geoid, n, tables[1], geoid)).fetchone()
     assert row is not None
     return bool(row[0])
 

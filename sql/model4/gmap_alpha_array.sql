@@ -1,4 +1,4 @@
--- tgsis.gmap_alpha_array(geoid, n, darts, alpha): the involutions of a stored G-map as one array of dart offsets, or NULL.
+-- tgsis.gmap_alpha_array(geoid, n, alpha, lo, hi, darts): the involutions of a stored G-map as one array of dart offsets, or NULL.
 -- What makes tgsis.gmap_conditions fast. With the darts numbered densely
 -- lo..hi (as tgsis.insert_gmap numbers them) and exactly one alpha row per
 -- dart and level 0..n, the rows in key order (dartid, level) are an array
@@ -15,12 +15,14 @@
 -- that does not fit is marked -1 in the same scan; N * (n + 1) elements
 -- none of them -1 prove the shape, as the primary key (geoid, dartid,
 -- level) allows one row per dart and level.
+-- The darts' numbering (lo, hi, how many) comes from the caller
+-- (tgsis.gmap_conditions reads it once for this function and the pass).
 -- The tables are given as regclass (quoted by their output): no caller text
 -- reaches the SQL unquoted.
 -- enable_sort off: the rows in key order come from the primary key, never
 -- from a sort; on tables just loaded (no statistics yet: a few thousand rows
 -- guessed for millions) the planner otherwise sorts them on disk, 4x slower.
-CREATE FUNCTION tgsis.gmap_alpha_array(p_geoid bigint, p_n integer, p_dart regclass, p_alpha regclass)
+CREATE FUNCTION tgsis.gmap_alpha_array(p_geoid bigint, p_n integer, p_alpha regclass, p_lo bigint, p_hi bigint, p_darts bigint)
 RETURNS integer[]
 LANGUAGE plpgsql
 STABLE
@@ -28,27 +30,22 @@ SET search_path FROM CURRENT
 SET enable_sort = off
 AS $$
 DECLARE
-    v_lo    bigint;
-    v_hi    bigint;
-    v_darts bigint;
     v_array integer[];
 BEGIN
-    EXECUTE format('SELECT min(dartid), max(dartid), count(*) FROM %s WHERE geoid = $1', p_dart)
-       INTO v_lo, v_hi, v_darts USING p_geoid;
-    IF v_darts = 0 OR v_hi - v_lo + 1 <> v_darts OR v_darts * (p_n + 1) > 134217728 THEN
+    IF coalesce(p_darts, 0) = 0 OR p_hi - p_lo + 1 <> p_darts OR p_darts * (p_n + 1) > 134217728 THEN
         RETURN NULL;
     END IF;
     EXECUTE format(
         'SELECT ARRAY(SELECT CASE WHEN level BETWEEN 0 AND $4 AND dartid BETWEEN $2 AND $3 AND dartid2 BETWEEN $2 AND $3
                                   THEN ((dartid2 - $2) * ($4 + 1))::integer ELSE -1 END
                         FROM %s WHERE geoid = $1 ORDER BY dartid, level)', p_alpha)
-       INTO v_array USING p_geoid, v_lo, v_hi, p_n;
-    IF cardinality(v_array) <> v_darts * (p_n + 1) OR array_position(v_array, -1) IS NOT NULL THEN
+       INTO v_array USING p_geoid, p_lo, p_hi, p_n;
+    IF cardinality(v_array) <> p_darts * (p_n + 1) OR array_position(v_array, -1) IS NOT NULL THEN
         RETURN NULL;
     END IF;
     RETURN v_array;
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.gmap_alpha_array(bigint, integer, regclass, regclass) IS
-    'the involutions of a stored G-map as dart offsets (dart d at b = (d - lo) * (n + 1); element b + l + 1: the offset of alpha_l(d)), NULL unless there is exactly one alpha row per dart and level 0..n over densely numbered darts; what makes tgsis.gmap_conditions one pass';
+COMMENT ON FUNCTION tgsis.gmap_alpha_array(bigint, integer, regclass, bigint, bigint, bigint) IS
+    'the involutions of a stored G-map as dart offsets (dart d at b = (d - lo) * (n + 1); element b + l + 1: the offset of alpha_l(d)), NULL unless there is exactly one alpha row per dart and level 0..n over the darts lo..hi (darts of them, numbered densely); what makes tgsis.gmap_conditions one pass';

@@ -22,12 +22,22 @@ STABLE
 SET search_path FROM CURRENT
 AS $$
 DECLARE
-    v_alpha integer[] := tgsis.gmap_alpha_array(p_geoid, p_n, p_dart, p_alpha);
+    v_lo      bigint;
+    v_hi      bigint;
+    v_darts   bigint;
+    v_several boolean;
+    v_alpha   integer[];
 BEGIN
+    -- one scan of the darts for what both paths need: their numbering and
+    -- whether they lie in more than one period
+    EXECUTE format('SELECT min(dartid), max(dartid), count(*), %s FROM %s WHERE geoid = $1',
+                   CASE WHEN p_period IS NULL THEN 'false' ELSE format('min(%1$I) < max(%1$I)', p_period) END, p_dart)
+       INTO v_lo, v_hi, v_darts, v_several USING p_geoid;
+    v_alpha := tgsis.gmap_alpha_array(p_geoid, p_n, p_alpha, v_lo, v_hi, v_darts);
     IF v_alpha IS NULL THEN
         RETURN QUERY SELECT * FROM tgsis.gmap_conditions_by_rows(p_geoid, p_n, p_dart, p_alpha, p_point, p_period);
     ELSE
-        RETURN QUERY SELECT * FROM tgsis.gmap_conditions_by_arrays(p_geoid, p_n, p_dart, p_point, p_period, v_alpha);
+        RETURN QUERY SELECT * FROM tgsis.gmap_conditions_by_arrays(p_geoid, p_n, p_dart, p_point, p_period, v_alpha, v_lo, v_several);
     END IF;
 END
 $$;

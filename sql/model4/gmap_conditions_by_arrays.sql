@@ -9,6 +9,9 @@
 -- tests compare the two). What holds by construction of the array (one row
 -- per dart and level, images that are darts) is not checked again; with
 -- one period only, no alpha_i can leave it.
+-- The darts' facts come from the caller (tgsis.gmap_conditions reads them
+-- once for both functions): p_lo the first dart id, p_several whether the
+-- darts lie in more than one period.
 -- The table is given as regclass, the columns by name (%I), the labels as
 -- literals (%L), the offsets are integers: no caller text reaches the SQL
 -- unquoted.
@@ -16,7 +19,7 @@
 -- from a sort; on tables just loaded (no statistics yet: a few thousand rows
 -- guessed for millions) the planner otherwise sorts them on disk, 4x slower.
 CREATE FUNCTION tgsis.gmap_conditions_by_arrays(p_geoid bigint, p_n integer, p_dart regclass, p_point text, p_period text,
-                                                p_alpha integer[])
+                                                p_alpha integer[], p_lo bigint, p_several boolean)
 RETURNS TABLE (problem text, count bigint, darts bigint[])
 LANGUAGE plpgsql
 STABLE
@@ -25,11 +28,10 @@ SET enable_sort = off
 AS $$
 DECLARE
     v_stride  integer := p_n + 1;
-    v_size    integer := cardinality(p_alpha) / (p_n + 1);
-    v_lo      bigint;
     v_points  bigint[];
     v_periods double precision[];
-    v_several boolean := false;
+    v_several boolean := p_several AND p_period IS NOT NULL;
+    v_columns text;
     v_labels  text[] := '{}';
     v_tests   text[] := '{}';
     v_flags   text;
@@ -40,40 +42,47 @@ DECLARE
     v_i       integer;
     v_j       integer;
 BEGIN
-    EXECUTE format('SELECT min(dartid), %s FROM %s WHERE geoid = $1',
-                   CASE WHEN p_period IS NULL THEN 'false' ELSE format('min(%1$I) < max(%1$I)', p_period) END, p_dart)
-       INTO v_lo, v_several USING p_geoid;
     EXECUTE format('SELECT ARRAY(SELECT %I::bigint FROM %s WHERE geoid = $1 ORDER BY dartid)', p_point, p_dart)
        INTO v_points USING p_geoid;
     IF v_several THEN
         EXECUTE format('SELECT ARRAY(SELECT %I::double precision FROM %s WHERE geoid = $1 ORDER BY dartid)', p_period, p_dart)
            INTO v_periods USING p_geoid;
     END IF;
-    -- the conditions in tgsis.gmap_conditions_by_rows' order; b is the
-    -- dart's offset, $1[b + l + 1] the offset of its alpha_l, b / stride + 1
-    -- its place in the point and period arrays
+    -- each dart's images, point and period, read once per dart (the tests
+    -- below name them: a_l is the offset of alpha_l of the dart at offset b,
+    -- pt and pr its point and period); OFFSET 0 keeps the subquery so that
+    -- every test reuses them instead of subscripting the arrays again
+    v_columns := 'b';
+    FOR v_i IN 0 .. p_n LOOP
+        v_columns := v_columns || format(', $1[b + %s] AS a%s', v_i + 1, v_i);
+    END LOOP;
+    v_columns := v_columns || format(', $2[b / %s + 1] AS pt', v_stride);
+    IF v_several THEN
+        v_columns := v_columns || format(', $3[b / %s + 1] AS pr', v_stride);
+    END IF;
+    -- the conditions in tgsis.gmap_conditions_by_rows' order
     FOR v_i IN 0 .. p_n LOOP                                          -- (i)
         v_labels := v_labels || format('alpha_%s is not an involution', v_i);
-        v_tests := v_tests || format('$1[$1[b + %1$s] + %1$s] <> b', v_i + 1);
+        v_tests := v_tests || format('$1[a%s + %s] <> b', v_i, v_i + 1);
     END LOOP;
     FOR v_i IN 0 .. p_n - 1 LOOP                                      -- (ii)
         v_labels := v_labels || format('dart free in alpha_%s (only alpha_%s may have fixed points)', v_i, p_n);
-        v_tests := v_tests || format('$1[b + %s] = b', v_i + 1);
+        v_tests := v_tests || format('a%s = b', v_i);
     END LOOP;
-    FOR v_i IN 0 .. p_n - 2 LOOP                                      -- (iii)
+    FOR v_i IN 0 .. p_n - 2 LOOP                                      -- (iii): alpha_i(alpha_j(alpha_i(a_j))) = b
         FOR v_j IN v_i + 2 .. p_n LOOP
             v_labels := v_labels || format('alpha_%s o alpha_%s is not an involution', v_i, v_j);
-            v_tests := v_tests || format('$1[$1[$1[$1[b + %2$s] + %1$s] + %2$s] + %1$s] <> b', v_i + 1, v_j + 1);
+            v_tests := v_tests || format('$1[$1[$1[a%2$s + %3$s] + %4$s] + %3$s] <> b', v_i, v_j, v_i + 1, v_j + 1);
         END LOOP;
     END LOOP;
     FOR v_i IN 1 .. p_n LOOP                                          -- one point per 0-cell
         v_labels := v_labels || format('alpha_%s joins darts of different points (a 0-cell has one point)', v_i);
-        v_tests := v_tests || format('$2[$1[b + %1$s] / %2$s + 1] <> $2[b / %2$s + 1]', v_i + 1, v_stride);
+        v_tests := v_tests || format('$2[a%s / %s + 1] <> pt', v_i, v_stride);
     END LOOP;
     IF v_several THEN                                                 -- the periods' closure
         FOR v_i IN 0 .. p_n LOOP
             v_labels := v_labels || format('alpha_%s sends a dart into another topology period', v_i);
-            v_tests := v_tests || format('$3[$1[b + %1$s] / %2$s + 1] <> $3[b / %2$s + 1]', v_i + 1, v_stride);
+            v_tests := v_tests || format('$3[a%s / %s + 1] <> pr', v_i, v_stride);
         END LOOP;
     END IF;
     SELECT string_agg(format('%s AS c%s', t.test, t.i), ', ' ORDER BY t.i),
@@ -86,22 +95,23 @@ BEGIN
     -- one pass over every dart's offset (streamed: a set-returning function
     -- in the select list is not stored first) keeps those failing a test;
     -- a valid map ends here
-    EXECUTE format('SELECT array_agg(b) FROM (SELECT generate_series(0, $5 - %s, %s) AS b) AS offsets WHERE %s',
-                   v_stride, v_stride, v_any)
-       INTO v_failing USING p_alpha, v_points, v_periods, v_lo, cardinality(p_alpha);
+    EXECUTE format('SELECT array_agg(b) FROM (SELECT %s FROM (SELECT generate_series(0, $4 - %s, %s) AS b) AS o OFFSET 0) AS d
+                     WHERE %s',
+                   v_columns, v_stride, v_stride, v_any)
+       INTO v_failing USING p_alpha, v_points, v_periods, cardinality(p_alpha);
     IF v_failing IS NULL THEN
         RETURN;
     END IF;
     -- the failing darts only: which tests each fails, counted per test
     RETURN QUERY EXECUTE format(
         'SELECT v.problem, v.count, (SELECT array_agg(x / %s + $4 ORDER BY x) FROM unnest(v.darts) AS x)
-           FROM (SELECT %s FROM (SELECT b, %s FROM unnest($5) AS b) AS failing) AS s
+           FROM (SELECT %s FROM (SELECT b, %s FROM (SELECT %s FROM unnest($5) AS b OFFSET 0) AS d) AS failing) AS s
           CROSS JOIN LATERAL (VALUES %s) AS v (i, problem, count, darts)
           WHERE v.count > 0
-          ORDER BY v.i', v_stride, v_aggs, v_flags, v_rows)
-        USING p_alpha, v_points, v_periods, v_lo, v_failing;
+          ORDER BY v.i', v_stride, v_aggs, v_flags, v_columns, v_rows)
+        USING p_alpha, v_points, v_periods, p_lo, v_failing;
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.gmap_conditions_by_arrays(bigint, integer, regclass, text, text, integer[]) IS
+COMMENT ON FUNCTION tgsis.gmap_conditions_by_arrays(bigint, integer, regclass, text, text, integer[], bigint, boolean) IS
     'tgsis.gmap_conditions in one pass over the darts read as an array (tgsis.gmap_alpha_array); the same problems, in the same order and words, as tgsis.gmap_conditions_by_rows';
