@@ -185,3 +185,19 @@ def test_a_break_in_a_version_is_seen_there_alike_and_not_in_default(conn: Conn)
         conn.commit()
     conn.commit()
     assert G.gmap_check(conn, geoid) == []
+
+
+@pytest.mark.parametrize("args", [
+    (1, 2, "pg_catalog.pg_class", "pg_catalog.pg_class", "relname", None),    # tables of no G-map
+    (1, 2, "tgsis.gmap_dart", "tgsis.gmap_alpha", "no_such_column", None),    # a point column the darts lack
+    (1, -1, "tgsis.gmap_dart", "tgsis.gmap_alpha", "nodeid", None),           # no dimension
+    (1, 2, None, "tgsis.gmap_alpha", "nodeid", None),
+])
+def test_arguments_that_name_no_g_map_get_our_error(conn: Conn, args: tuple[Any, ...]) -> None:
+    """gmap_conditions is callable by anyone: wrong tables or columns get TG100 with a hint, not a missing column."""
+    with pytest.raises(tgsis.InvalidInputError) as caught:
+        with tgsis.errors.reraise():
+            conn.execute("SELECT * FROM tgsis.gmap_conditions(%s, %s, %s, %s, %s, %s)", args)
+    assert caught.value.sqlstate == "TG100"
+    assert "gmap_check" in (caught.value.hint or "")
+    conn.rollback()

@@ -27,7 +27,27 @@ DECLARE
     v_darts   bigint;
     v_several boolean;
     v_alpha   integer[];
+    v_missing text;
 BEGIN
+    -- the function is callable by anyone: arguments that name no G-map's
+    -- darts and involutions get an error of ours, not a missing column deep
+    -- inside a generated query
+    IF p_geoid IS NULL OR p_n IS NULL OR p_n < 0 OR p_dart IS NULL OR p_alpha IS NULL OR p_point IS NULL THEN
+        RAISE EXCEPTION 'tgsis.gmap_conditions needs a geoid, a dimension n >= 0, the darts'' and involutions'' tables and the point column'
+            USING ERRCODE = 'TG100', DETAIL = format('geoid %s, n %s, darts %s, alpha %s, point %s', p_geoid, p_n, p_dart, p_alpha, p_point),
+                  HINT = 'tgsis.gmap_check(geoid) (model 4) and tgsis.md_check(geoid) (model 5) check a stored G-map';
+    END IF;
+    SELECT string_agg(format('%s.%s', c.rel, c.col), ', ') INTO v_missing
+      FROM (SELECT p_dart AS rel, unnest(ARRAY['geoid', 'dartid', p_point] || CASE WHEN p_period IS NULL THEN '{}'::text[] ELSE ARRAY[p_period] END) AS col
+            UNION ALL
+            SELECT p_alpha, unnest(ARRAY['geoid', 'level', 'dartid', 'dartid2'])) AS c
+     WHERE NOT EXISTS (SELECT FROM pg_catalog.pg_attribute a
+                        WHERE a.attrelid = c.rel AND a.attname = c.col AND a.attnum > 0 AND NOT a.attisdropped);
+    IF v_missing IS NOT NULL THEN
+        RAISE EXCEPTION 'tgsis.gmap_conditions: % and % are not the darts and involutions of a G-map model', p_dart, p_alpha
+            USING ERRCODE = 'TG100', DETAIL = format('missing columns: %s', v_missing),
+                  HINT = 'tgsis.gmap_check(geoid) (model 4) and tgsis.md_check(geoid) (model 5) check a stored G-map';
+    END IF;
     -- one scan of the darts for what both paths need: their numbering and
     -- whether they lie in more than one period
     EXECUTE format('SELECT min(dartid), max(dartid), count(*), %s FROM %s WHERE geoid = $1',
