@@ -132,6 +132,7 @@ NOT_FROM_THE_CLI = {
     "src/tgsis/mesh.py": "Python constructors",
     "src/tgsis/formats/pvd.py": "write_pvd of Python objects",
     "src/tgsis/db/adapters.py": "psycopg adapters for Python programs (tgsis.register_types): no command",
+    "sql/model4/gmap_conditions.sql": "an SQL building block of gmap_check and md_check, which the command calls with valid arguments",
 }
 
 
