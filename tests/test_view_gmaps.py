@@ -19,18 +19,10 @@ import pytest
 import tgsis
 from tgsis import gmaps
 from tgsis.testing import TestServer
-from tgsis._polygons import fan_triangles
 from tgsis.view.meshes import gmap_drawable, unpack
 
 from tests.gmaps_shapes import block_tetrahedra, octahedron
 from tests.view_helpers import canvas_pixels, changed_fraction, chromium, drawn_fraction, get, running_view, wait_drawn
-
-
-def test_polygons_are_cut_into_fans() -> None:
-    # a quad, a triangle, a segment (no triangle) and a pentagon
-    triangles, polygon = fan_triangles([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13], [0, 4, 7, 9, 14])
-    assert triangles.tolist() == [[0, 1, 2], [0, 2, 3], [4, 5, 6], [9, 10, 11], [9, 11, 12], [9, 12, 13]]
-    assert polygon.tolist() == [0, 0, 1, 3, 3, 3]
 
 
 def test_a_surface_draws_its_faces_and_a_solid_its_border() -> None:

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._polygons import fan_triangles
+from tgsis._polygons import fan_triangles, polyline_segments
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
@@ -261,17 +261,8 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
         cell_array = index.reshape(len(sizes), int(sizes[0])).astype(np.int64)     # triangles, segments or points
     elif kind == _POLYGON:   # a fan from the first corner of each face
         cell_array = fan_triangles(index, np.concatenate([[0], np.cumsum(sizes)]))[0]
-    else:
-        cells: list[list[int]] = []
-        start = 0
-        for size in sizes.tolist():
-            ids = index[start:start + size].tolist()
-            start += size
-            if kind == _LINESTRING:
-                cells.extend([ids[i], ids[i + 1]] for i in range(len(ids) - 1))
-            else:
-                cells.extend([i] for i in ids)
-        cell_array = np.array(cells, dtype=np.int64).reshape(len(cells), -1)
+    else:    # polylines of different lengths (points always have one corner each: the first case)
+        cell_array = polyline_segments(index, np.concatenate([[0], np.cumsum(sizes)]))
     if cell_array.shape[1] > 1:
         ordered = np.sort(cell_array, axis=1)
         bad = np.flatnonzero(np.any(ordered[:, 1:] == ordered[:, :-1], axis=1))
