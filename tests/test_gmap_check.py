@@ -137,6 +137,11 @@ OTHER_SHAPE = {
     "missing alpha row": ("DELETE FROM {alpha} WHERE geoid = %(g)s AND level = 1 AND dartid = 5", "dart has no alpha_1 row"),
     "row above the dimension": ("INSERT INTO {alpha} (geoid, level, dartid, dartid2) VALUES (%(g)s, 4, 0, 0)",
                                 "alpha_4 row above the dimension 3"),
+    # as many rows as the shape wants, but one in the wrong place: only the levels' and darts' ranges show it
+    "row moved above the dimension": ("UPDATE {alpha} SET level = 4 WHERE geoid = %(g)s AND level = 1 AND dartid = 5",
+                                      "dart has no alpha_1 row"),
+    "row moved to a missing dart": ("UPDATE {alpha} SET dartid = 100000 WHERE geoid = %(g)s AND level = 1 AND dartid = 5",
+                                    "dart has no alpha_1 row"),
     "dangling image": ("UPDATE {alpha} SET dartid2 = 100000 WHERE geoid = %(g)s AND level = 2 AND dartid = 9",
                        "alpha_2 row of a missing dart or to a missing dart"),
     # darts renumbered consistently, with a hole: a valid map that only the keyed joins can read

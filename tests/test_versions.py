@@ -133,6 +133,57 @@ def test_context_managers_restore_the_previous_state(conn: Conn) -> None:
     assert tgsis.working_version(conn) == "b"
 
 
+def _wells(conn: Conn) -> None:
+    conn.execute("CREATE TABLE wells (id integer PRIMARY KEY, depth double precision)")
+    conn.execute("INSERT INTO wells VALUES (1, 1000)")
+    conn.commit()
+    tgsis.enable_versioning(conn, "wells", "id", "well")
+    tgsis.create_version(conn, "edit")
+
+
+def _depths(conn: Conn, version: str) -> float:
+    with tgsis.in_version(conn, version):
+        row = conn.execute("SELECT depth FROM wells WHERE id = 1").fetchone()
+    assert row is not None
+    return float(row[0])
+
+
+def test_a_rollback_after_the_block_cannot_bring_its_version_back(conn: Conn) -> None:
+    """The block committed midway and left a transaction open: a later rollback used to undo the restored version."""
+    _wells(conn)
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
+        conn.commit()
+        conn.execute("UPDATE wells SET depth = 1200 WHERE id = 1")
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE   # the block's transaction ended with it
+    conn.rollback()
+    assert tgsis.working_version(conn) == "DEFAULT"
+    conn.execute("UPDATE wells SET depth = 900 WHERE id = 1")   # lands in DEFAULT, not in edit
+    conn.commit()
+    assert (_depths(conn, "DEFAULT"), _depths(conn, "edit")) == (900, 1200)
+
+
+def test_a_block_that_raises_keeps_nothing_of_its_own_transaction(conn: Conn) -> None:
+    _wells(conn)
+    with pytest.raises(ZeroDivisionError), tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
+        raise ZeroDivisionError   # Python's error, the transaction itself still fine
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    assert tgsis.working_version(conn) == "DEFAULT"
+    assert (_depths(conn, "DEFAULT"), _depths(conn, "edit")) == (1000, 1000)
+
+
+def test_inside_the_callers_transaction_a_rollback_undoes_the_block_whole(conn: Conn) -> None:
+    _wells(conn)
+    conn.execute("SELECT 1")   # the caller's transaction
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS   # still the caller's
+    conn.rollback()
+    assert tgsis.working_version(conn) == "DEFAULT"
+    assert _depths(conn, "edit") == 1000
+
+
 def test_unknown_version_everywhere(conn: Conn) -> None:
     for call in (lambda: tgsis.goto_version(conn, "nope"),
                  lambda: tgsis.create_version(conn, "x", "nope"),

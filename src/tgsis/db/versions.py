@@ -281,22 +281,41 @@ def _restoring_settings(conn: Conn, local: bool) -> Iterator[None]:
         with conn.transaction():  # SET LOCAL values vanish when this transaction ends
             yield
         return
+    # A transaction the block begins is the block's, as in conn.transaction():
+    # left open at its end, the settings put back inside it would be undone
+    # by the caller's later rollback, and the next writes would land in the
+    # block's version.
+    began = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE and not conn.autocommit
     with reraise():
         row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
                            ).fetchone()
     assert row is not None
+    restore = ("SELECT set_config('tgsis.version', coalesce(%s, ''), %s), "
+               "set_config('tgsis.revision', coalesce(%s, ''), %s)", (row[0], local, row[1], local))
     try:
         yield
-    finally:
-        if conn.info.transaction_status == psycopg.pq.TransactionStatus.INERROR:
-            conn.rollback()  # the block failed; nothing of it can be kept, but the settings can be put back
-        _run_committed(conn, "SELECT set_config('tgsis.version', coalesce(%s, ''), %s), "
-                             "set_config('tgsis.revision', coalesce(%s, ''), %s)", (row[0], local, row[1], local))
+    except BaseException:
+        if began or conn.info.transaction_status == psycopg.pq.TransactionStatus.INERROR:
+            conn.rollback()  # the block failed; nothing of it is kept, but the settings can be put back
+        _run_committed(conn, *restore)
+        raise
+    if conn.info.transaction_status == psycopg.pq.TransactionStatus.INERROR:
+        conn.rollback()  # an error caught inside the block: its transaction cannot be kept either
+    _run_committed(conn, *restore)
+    if began and conn.info.transaction_status != psycopg.pq.TransactionStatus.IDLE:
+        conn.commit()
 
 
 @contextlib.contextmanager
 def in_version(conn: Conn, name: str, *, local: bool = False) -> Iterator[Conn]:
     """Work in version ``name`` inside the block; the previous version is restored after it.
+
+    A transaction the block begins (the connection idle when it is entered)
+    ends with it, as in ``conn.transaction()``: committed when the block ends
+    normally, rolled back when it raises; otherwise a later rollback would
+    undo the restored version too, and the next writes would land in
+    ``name``. Entered inside the caller's transaction, the block leaves it
+    open: a rollback then undoes the version change with the rest.
 
     Parameters
     ----------
@@ -316,7 +335,10 @@ def in_version(conn: Conn, name: str, *, local: bool = False) -> Iterator[Conn]:
 
 @contextlib.contextmanager
 def at_revision(conn: Conn, revision: int, version: str | None = None, *, local: bool = False) -> Iterator[Conn]:
-    """Look at ``revision`` of ``version`` (default: the working version) inside the block, read-only."""
+    """Look at ``revision`` of ``version`` (default: the working version) inside the block, read-only.
+
+    The transaction the block begins ends with it, as for :func:`in_version`.
+    """
     with _restoring_settings(conn, local):
         goto_revision(conn, version if version is not None else working_version(conn), revision, local=local)
         yield conn
