@@ -141,7 +141,7 @@ def _wells(conn: Conn) -> None:
     tgsis.create_version(conn, "edit")
 
 
-def _depths(conn: Conn, version: str) -> float:
+def _depth(conn: Conn, version: str) -> float:
     with tgsis.in_version(conn, version):
         row = conn.execute("SELECT depth FROM wells WHERE id = 1").fetchone()
     assert row is not None
@@ -160,7 +160,7 @@ def test_a_rollback_after_the_block_cannot_bring_its_version_back(conn: Conn) ->
     assert tgsis.working_version(conn) == "DEFAULT"
     conn.execute("UPDATE wells SET depth = 900 WHERE id = 1")   # lands in DEFAULT, not in edit
     conn.commit()
-    assert (_depths(conn, "DEFAULT"), _depths(conn, "edit")) == (900, 1200)
+    assert (_depth(conn, "DEFAULT"), _depth(conn, "edit")) == (900, 1200)
 
 
 def test_a_block_that_raises_keeps_nothing_of_its_own_transaction(conn: Conn) -> None:
@@ -170,7 +170,18 @@ def test_a_block_that_raises_keeps_nothing_of_its_own_transaction(conn: Conn) ->
         raise ZeroDivisionError   # Python's error, the transaction itself still fine
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     assert tgsis.working_version(conn) == "DEFAULT"
-    assert (_depths(conn, "DEFAULT"), _depths(conn, "edit")) == (1000, 1000)
+    assert (_depth(conn, "DEFAULT"), _depth(conn, "edit")) == (1000, 1000)
+
+
+def test_an_error_caught_inside_the_block_drops_its_transaction_and_restores_the_version(conn: Conn) -> None:
+    _wells(conn)
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
+        with pytest.raises(psycopg.errors.DivisionByZero):
+            conn.execute("SELECT 1 / 0")
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    assert tgsis.working_version(conn) == "DEFAULT"
+    assert _depth(conn, "edit") == 1000   # the failed transaction's write is not kept
 
 
 def test_inside_the_callers_transaction_a_rollback_undoes_the_block_whole(conn: Conn) -> None:
@@ -181,7 +192,7 @@ def test_inside_the_callers_transaction_a_rollback_undoes_the_block_whole(conn: 
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS   # still the caller's
     conn.rollback()
     assert tgsis.working_version(conn) == "DEFAULT"
-    assert _depths(conn, "edit") == 1000
+    assert _depth(conn, "edit") == 1000
 
 
 def test_unknown_version_everywhere(conn: Conn) -> None:

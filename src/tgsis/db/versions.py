@@ -312,7 +312,9 @@ def in_version(conn: Conn, name: str, *, local: bool = False) -> Iterator[Conn]:
 
     A transaction the block begins (the connection idle when it is entered)
     ends with it, as in ``conn.transaction()``: committed when the block ends
-    normally, rolled back when it raises; otherwise a later rollback would
+    normally, rolled back when it raises or when an error caught inside it
+    left the transaction failed (nothing of it can be kept then; the
+    version is put back all the same); otherwise a later rollback would
     undo the restored version too, and the next writes would land in
     ``name``. Entered inside the caller's transaction, the block leaves it
     open: a rollback then undoes the version change with the rest.
