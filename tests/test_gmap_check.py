@@ -58,6 +58,17 @@ def _read_as_array(conn: Conn, geoid: int, n: int, tables: tuple[str, str, str, 
     return bool(row[0])
 
 
+def _holds(conn: Conn, geoid: int, n: int, tables: tuple[str, str, str, str | None]) -> bool:
+    """What the one-statement proof (tgsis.gmap_conditions_hold) says, with the darts' numbering as gmap_conditions reads it."""
+    period = sql.SQL("min({0}) < max({0})").format(sql.Identifier(tables[3])) if tables[3] else sql.SQL("false")
+    row = conn.execute(sql.SQL("SELECT tgsis.gmap_conditions_hold(%s, %s, %s::regclass, %s::regclass, %s, %s, "
+                               "min(dartid), max(dartid), count(*), {}) FROM {} WHERE geoid = %s")
+                       .format(period, sql.Identifier(*tables[0].split("."))),
+                       (geoid, n, *tables, geoid)).fetchone()
+    assert row is not None
+    return bool(row[0])
+
+
 def _both(conn: Conn, geoid: int, n: int, tables: tuple[str, str, str, str | None]) -> tuple[Rows, Rows]:
     """What tgsis.gmap_conditions answers (its array path when the rows allow it) and what the keyed joins answer."""
     args = (geoid, n, *tables)
@@ -88,11 +99,29 @@ SAME_SHAPE = {
 def test_a_break_that_keeps_the_rows_shape_is_reported_alike_by_both_paths(conn: Conn, model: str, breakage: str) -> None:
     geoid, n, tables = _stored(conn, model)
     assert _both(conn, geoid, n, tables) == ([], [])
+    assert _holds(conn, geoid, n, tables)
     conn.execute(SAME_SHAPE[breakage].format(alpha=tables[1], dart=tables[0], point=tables[2]), {"g": geoid})
     assert _read_as_array(conn, geoid, n, tables)
+    assert not _holds(conn, geoid, n, tables)
     fast, rows = _both(conn, geoid, n, tables)
     assert rows, "the break went unnoticed"
     assert fast == rows
+
+
+@pytest.mark.parametrize("model", ["GMAP", "MULTIDIM"])
+def test_a_break_of_composition_alone_is_caught_by_the_commuting_test(conn: Conn, model: str) -> None:
+    """One pair of darts sewn by alpha_3 made free: every involution still one, points alike, only compositions broken.
+
+    The proof tests alpha_i alpha_j = alpha_j alpha_i instead of (alpha_i alpha_j)^2 = id; this break is seen by that
+    test alone.
+    """
+    geoid, n, tables = _stored(conn, model)
+    conn.execute(sql.SQL("UPDATE {0} SET dartid2 = dartid WHERE geoid = %(g)s AND level = 3 AND dartid IN "
+                         "(SELECT unnest(ARRAY[p.dartid, p.dartid2]) FROM (SELECT dartid, dartid2 FROM {0} WHERE geoid = %(g)s "
+                         "AND level = 3 AND dartid2 <> dartid ORDER BY dartid LIMIT 1) AS p)").format(sql.Identifier(*tables[1].split("."))), {"g": geoid})
+    problems = [p for p, _, _ in _both(conn, geoid, n, tables)[1]]
+    assert problems and all(" o alpha_3 is not an involution" in p for p in problems), problems
+    assert not _holds(conn, geoid, n, tables)
 
 
 def test_darts_sent_into_another_period_are_reported_alike(conn: Conn) -> None:
@@ -103,6 +132,7 @@ def test_darts_sent_into_another_period_are_reported_alike(conn: Conn) -> None:
     conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = CASE dartid WHEN %(a)s THEN %(b)s ELSE %(a)s END "
                  "WHERE geoid = %(g)s AND level = 3 AND dartid IN (%(a)s, %(b)s)", {"a": low[0], "b": low[0] - 1, "g": geoid})
     assert _read_as_array(conn, geoid, n, tables)
+    assert not _holds(conn, geoid, n, tables)
     fast, rows = _both(conn, geoid, n, tables)
     assert ("alpha_3 sends a dart into another topology period", 2, [low[0] - 1, low[0]]) in fast
     assert fast == rows
@@ -117,6 +147,7 @@ def test_many_random_breaks_are_reported_alike(conn: Conn) -> None:
         conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = %s WHERE geoid = %s AND level = %s AND dartid = %s",
                      (int(image), geoid, int(level), int(dart)))
     assert _read_as_array(conn, geoid, n, tables)
+    assert not _holds(conn, geoid, n, tables)
     fast, rows = _both(conn, geoid, n, tables)
     assert len(rows) > 5 and any(count > 20 for _, count, _ in rows)   # the first 20 darts are listed, all counted
     assert fast == rows
@@ -125,6 +156,7 @@ def test_many_random_breaks_are_reported_alike(conn: Conn) -> None:
 def test_rows_in_another_physical_order_read_the_same(conn: Conn) -> None:
     geoid, n, tables = _stored(conn, "GMAP")
     conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = dartid2 + 0 WHERE geoid = %s AND level IN (0, 2)", (geoid,))
+    assert _holds(conn, geoid, n, tables)   # the rows are read in key order, not the heap's
     conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = dartid2 + 1 WHERE geoid = %s AND level = 0 AND dartid = 3", (geoid,))
     fast, rows = _both(conn, geoid, n, tables)
     assert fast == rows and [p for p, _, _ in fast] == ["alpha_0 is not an involution",
@@ -140,8 +172,13 @@ OTHER_SHAPE = {
     # as many rows as the shape wants, but one in the wrong place: only the levels' and darts' ranges show it
     "row moved above the dimension": ("UPDATE {alpha} SET level = 4 WHERE geoid = %(g)s AND level = 1 AND dartid = 5",
                                       "dart has no alpha_1 row"),
+    # the same with the rows' key order kept: the array would read as before
+    "last row moved above the dimension": ("UPDATE {alpha} SET level = 4 WHERE geoid = %(g)s AND level = 3 AND dartid = 5",
+                                           "dart has no alpha_3 row"),
     "row moved to a missing dart": ("UPDATE {alpha} SET dartid = 100000 WHERE geoid = %(g)s AND level = 1 AND dartid = 5",
                                     "dart has no alpha_1 row"),
+    "last row moved to a missing dart": ("UPDATE {alpha} SET dartid = dartid + 1 WHERE geoid = %(g)s AND level = 3 AND dartid = "
+                                         "(SELECT max(dartid) FROM {alpha} WHERE geoid = %(g)s)", "dart has no alpha_3 row"),
     "dangling image": ("UPDATE {alpha} SET dartid2 = 100000 WHERE geoid = %(g)s AND level = 2 AND dartid = 9",
                        "alpha_2 row of a missing dart or to a missing dart"),
     # darts renumbered consistently, with a hole: a valid map that only the keyed joins can read
@@ -159,6 +196,7 @@ def test_a_break_of_the_rows_shape_is_reported_by_the_keyed_joins(conn: Conn, mo
     for statement in statements.split("; "):
         conn.execute(statement.format(alpha=tables[1], dart=tables[0]), {"g": geoid})
     assert not _read_as_array(conn, geoid, n, tables)
+    assert not _holds(conn, geoid, n, tables)
     fast, rows = _both(conn, geoid, n, tables)
     assert fast == rows
     if problem is None:
@@ -172,8 +210,68 @@ def test_a_valid_map_is_read_as_an_array_and_passes(conn: Conn) -> None:
     for model in ("GMAP", "MULTIDIM"):
         geoid, n, tables = _stored(conn, model)
         assert _read_as_array(conn, geoid, n, tables)
+        assert _holds(conn, geoid, n, tables)
         assert G.gmap_check(conn, geoid) == []
         conn.rollback()
+
+
+def test_a_level_outside_the_range_is_not_taken_for_a_missing_one(conn: Conn) -> None:
+    """A dart's alpha_0 row as level -1 (a table without tgsis's level check): counts and key order match, the proof fails."""
+    geoid, n, _ = _stored(conn, "GMAP")
+    conn.execute("CREATE TEMP TABLE alpha AS SELECT * FROM tgsis.gmap_alpha WHERE geoid = %s", (geoid,))
+    conn.execute("ALTER TABLE alpha ADD PRIMARY KEY (geoid, dartid, level)")
+    conn.execute("UPDATE alpha SET level = -1 WHERE level = 0 AND dartid = 5")
+    tables = ("tgsis.gmap_dart", "pg_temp.alpha", "nodeid", "timem")
+    assert not _holds(conn, geoid, n, tables)
+    fast, rows = _both(conn, geoid, n, tables)
+    assert fast == rows and "dart has no alpha_0 row" in [p for p, _, _ in fast]
+
+
+# What the darts point at exists: proved from the numbering of nodes and points, or named by a join.
+EXISTENCE = {
+    "node deleted": ("GMAP", "DELETE FROM tgsis.gmap_node WHERE geoid = %(g)s AND nodeid = "
+                             "(SELECT nodeid FROM tgsis.gmap_dart WHERE geoid = %(g)s AND dartid = 7)",
+                     "dart of a node missing from its topology period"),
+    "node moved to the other period": ("GMAP", "UPDATE tgsis.gmap_node SET timem = 1 WHERE geoid = %(g)s AND timem = 0 AND nodeid = "
+                                               "(SELECT nodeid FROM tgsis.gmap_dart WHERE geoid = %(g)s AND dartid = 7)",
+                                       "dart of a node missing from its topology period"),
+    "dart of a node beyond the others": ("GMAP", "UPDATE tgsis.gmap_dart SET nodeid = 100000 WHERE geoid = %(g)s AND dartid = 7",
+                                         "dart of a node missing from its topology period"),
+    "period deleted": ("GMAP", "DELETE FROM tgsis.gmap_timem WHERE geoid = %(g)s AND timem = 1",
+                       "dart of a topology period that does not exist"),
+    "point deleted": ("MULTIDIM", "DELETE FROM tgsis.md_vertex WHERE geoid = %(g)s AND vrtxid = "
+                                  "(SELECT vrtxid FROM tgsis.md_dart WHERE geoid = %(g)s AND dartid = 7)",
+                      "dart of a point that does not exist"),
+    "dart of a point beyond the others": ("MULTIDIM", "UPDATE tgsis.md_dart SET vrtxid = 100000 WHERE geoid = %(g)s AND dartid = 7",
+                                          "dart of a point that does not exist"),
+    # valid, but numbered with a hole: the proof by numbering fails, the join finds nothing
+    "nodes renumbered with a hole": ("GMAP", "UPDATE tgsis.gmap_node SET nodeid = nodeid + 100000 WHERE geoid = %(g)s AND nodeid >= 3; "
+                                             "UPDATE tgsis.gmap_dart SET nodeid = nodeid + 100000 WHERE geoid = %(g)s AND nodeid >= 3; "
+                                             "UPDATE tgsis.gmap_vertex SET nodeid = nodeid + 100000 WHERE geoid = %(g)s AND nodeid >= 3",
+                                     None),
+    "points renumbered with a hole": ("MULTIDIM", "UPDATE tgsis.md_vertex SET vrtxid = vrtxid + 100000 WHERE geoid = %(g)s AND vrtxid >= 3; "
+                                                  "UPDATE tgsis.md_dart SET vrtxid = vrtxid + 100000 WHERE geoid = %(g)s AND vrtxid >= 3",
+                                      None),
+}
+
+
+@pytest.mark.parametrize("breakage", list(EXISTENCE))
+def test_darts_of_missing_nodes_points_or_periods_are_named(conn: Conn, breakage: str) -> None:
+    model, statements, problem = EXISTENCE[breakage]
+    geoid, _, _ = _stored(conn, model)
+    for statement in statements.split("; "):
+        conn.execute(statement, {"g": geoid})
+    problems = {p.problem: p for p in G.gmap_check(conn, geoid)}
+    if problem is None:
+        assert problems == {}
+        return
+    assert problem in problems
+    if breakage != "period deleted":
+        assert 7 in problems[problem].darts
+    else:
+        low = conn.execute("SELECT min(dartid), count(*) FROM tgsis.gmap_dart WHERE geoid = %s AND timem = 1",
+                           (geoid,)).fetchone()
+        assert low is not None and problems[problem].count == low[1] and problems[problem].darts[0] == low[0]
 
 
 def test_a_break_in_a_version_is_seen_there_alike_and_not_in_default(conn: Conn) -> None:

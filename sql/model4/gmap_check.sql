@@ -12,7 +12,12 @@ STABLE
 SET search_path FROM CURRENT
 AS $$
 DECLARE
-    v_n smallint;
+    v_n     smallint;
+    v_first double precision;
+    v_last  double precision;
+    v_lo    bigint;
+    v_hi    bigint;
+    v_dense boolean;
 BEGIN
     SELECT g.dimension INTO v_n FROM tgsis.gmap g WHERE g.geoid = p_geoid;
     IF NOT FOUND THEN
@@ -20,17 +25,44 @@ BEGIN
             USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.gmap lists the stored G-maps';
     END IF;
     RETURN QUERY SELECT * FROM tgsis.gmap_conditions(p_geoid, v_n, 'tgsis.gmap_dart', 'tgsis.gmap_alpha', 'nodeid', 'timem');
-    -- the darts' nodes and periods exist: one scan of the darts for both
+    -- the darts' nodes and periods exist. Proved without a join when, in
+    -- each period the darts lie in, the period exists and its nodes are
+    -- numbered densely (the key makes them unique in a period) over a range
+    -- that holds the darts' nodes, as tgsis.insert_gmap numbers them: an
+    -- aggregate over the darts (grouped by period only when they lie in
+    -- several) and one over the nodes.
+    SELECT min(g.timem), max(g.timem), min(g.nodeid), max(g.nodeid) INTO v_first, v_last, v_lo, v_hi
+      FROM tgsis.gmap_dart g WHERE g.geoid = p_geoid;
+    IF v_first IS NULL THEN
+        RETURN;   -- no darts
+    END IF;
+    IF v_first = v_last THEN
+        v_dense := (SELECT coalesce(count(*) = max(g.nodeid) - min(g.nodeid) + 1 AND min(g.nodeid) <= v_lo AND max(g.nodeid) >= v_hi, false)
+                      FROM tgsis.gmap_node g WHERE g.geoid = p_geoid AND g.timem = v_first)
+                   AND EXISTS (SELECT FROM tgsis.gmap_timem m WHERE m.geoid = p_geoid AND m.timem = v_first);
+    ELSE
+        v_dense := (SELECT bool_and(coalesce(m.timem IS NOT NULL AND n.nodes = n.hi - n.lo + 1 AND d.lo >= n.lo AND d.hi <= n.hi, false))
+                      FROM (SELECT g.timem, min(g.nodeid) AS lo, max(g.nodeid) AS hi
+                              FROM tgsis.gmap_dart g WHERE g.geoid = p_geoid GROUP BY g.timem) AS d
+                      LEFT JOIN (SELECT g.timem, count(*) AS nodes, min(g.nodeid) AS lo, max(g.nodeid) AS hi
+                                   FROM tgsis.gmap_node g WHERE g.geoid = p_geoid GROUP BY g.timem) AS n ON n.timem = d.timem
+                      LEFT JOIN tgsis.gmap_timem m ON m.geoid = p_geoid AND m.timem = d.timem);
+    END IF;
+    IF v_dense THEN
+        RETURN;
+    END IF;
+    -- otherwise the darts that fail, by keyed joins (only those are kept and sorted)
     RETURN QUERY
         SELECT v.problem, v.count, v.darts
-          FROM (SELECT count(*) FILTER (WHERE n.nodeid IS NULL) AS nodes,
-                       (array_agg(d.dartid ORDER BY d.dartid) FILTER (WHERE n.nodeid IS NULL))[1:20] AS node_darts,
-                       count(*) FILTER (WHERE m.timem IS NULL) AS periods,
-                       (array_agg(d.dartid ORDER BY d.dartid) FILTER (WHERE m.timem IS NULL))[1:20] AS period_darts
-                  FROM tgsis.gmap_dart d
-                  LEFT JOIN tgsis.gmap_node n ON n.geoid = d.geoid AND n.timem = d.timem AND n.nodeid = d.nodeid
-                  LEFT JOIN tgsis.gmap_timem m ON m.geoid = d.geoid AND m.timem = d.timem
-                 WHERE d.geoid = p_geoid) AS s
+          FROM (SELECT count(*) FILTER (WHERE f.no_node) AS nodes,
+                       (array_agg(f.dartid ORDER BY f.dartid) FILTER (WHERE f.no_node))[1:20] AS node_darts,
+                       count(*) FILTER (WHERE f.no_period) AS periods,
+                       (array_agg(f.dartid ORDER BY f.dartid) FILTER (WHERE f.no_period))[1:20] AS period_darts
+                  FROM (SELECT d.dartid, n.nodeid IS NULL AS no_node, m.timem IS NULL AS no_period
+                          FROM tgsis.gmap_dart d
+                          LEFT JOIN tgsis.gmap_node n ON n.geoid = d.geoid AND n.timem = d.timem AND n.nodeid = d.nodeid
+                          LEFT JOIN tgsis.gmap_timem m ON m.geoid = d.geoid AND m.timem = d.timem
+                         WHERE d.geoid = p_geoid AND (n.nodeid IS NULL OR m.timem IS NULL)) AS f) AS s
          CROSS JOIN LATERAL (VALUES (1, 'dart of a node missing from its topology period', s.nodes, s.node_darts),
                                     (2, 'dart of a topology period that does not exist', s.periods, s.period_darts))
                     AS v (i, problem, count, darts)

@@ -9,8 +9,10 @@
 -- with a period column, every alpha_i keeps a dart in its period (the
 -- closure of the partition D0..Dk). darts lists the first offending darts
 -- (at most 20), count all of them.
--- Two ways to the same answer: rows that read as arrays (the normal case,
--- as tgsis.insert_gmap writes them) are checked in one pass over the darts
+-- A valid map (the normal case) is proved valid in one statement
+-- (tgsis.gmap_conditions_hold) and nothing more is done. Otherwise two ways
+-- to the same answer say what is wrong: rows that read as arrays (as
+-- tgsis.insert_gmap writes them) are checked in one pass over the darts
 -- (tgsis.gmap_conditions_by_arrays); any other shape by keyed joins
 -- (tgsis.gmap_conditions_by_rows), which also say what makes the rows
 -- unreadable as arrays.
@@ -53,6 +55,10 @@ BEGIN
     EXECUTE format('SELECT min(dartid), max(dartid), count(*), %s FROM %s WHERE geoid = $1',
                    CASE WHEN p_period IS NULL THEN 'false' ELSE format('min(%1$I) < max(%1$I)', p_period) END, p_dart)
        INTO v_lo, v_hi, v_darts, v_several USING p_geoid;
+    -- a valid map ends here; the paths below say what is wrong
+    IF tgsis.gmap_conditions_hold(p_geoid, p_n, p_dart, p_alpha, p_point, p_period, v_lo, v_hi, v_darts, v_several) THEN
+        RETURN;
+    END IF;
     v_alpha := tgsis.gmap_alpha_array(p_geoid, p_n, p_alpha, v_lo, v_hi, v_darts);
     IF v_alpha IS NULL THEN
         RETURN QUERY SELECT * FROM tgsis.gmap_conditions_by_rows(p_geoid, p_n, p_dart, p_alpha, p_point, p_period);
@@ -63,4 +69,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.gmap_conditions(bigint, integer, regclass, regclass, text, text) IS
-    'the conditions of an n-G-map over stored dart and alpha rows (missing or dangling alpha rows, (i) involutions, (ii) no fixed point below alpha_n, (iii) alpha_i o alpha_j involutions for i + 2 <= j, one point per 0-cell, with a period column the periods'' closure) with the first offending darts; in one pass over arrays when the rows allow it (tgsis.gmap_alpha_array), by keyed joins otherwise; shared by tgsis.gmap_check (model 4) and tgsis.md_check (model 5)';
+    'the conditions of an n-G-map over stored dart and alpha rows (missing or dangling alpha rows, (i) involutions, (ii) no fixed point below alpha_n, (iii) alpha_i o alpha_j involutions for i + 2 <= j, one point per 0-cell, with a period column the periods'' closure) with the first offending darts; a valid map proved so in one statement (tgsis.gmap_conditions_hold), an invalid one searched in one pass over arrays when the rows allow it (tgsis.gmap_alpha_array), by keyed joins otherwise; shared by tgsis.gmap_check (model 4) and tgsis.md_check (model 5)';

@@ -1,0 +1,111 @@
+-- tgsis.gmap_conditions_hold(geoid, n, darts, alpha, point, period, lo, hi, count, several): whether a stored G-map meets every condition, in one statement.
+-- What makes tgsis.gmap_conditions fast on a valid map: it only has to say
+-- "nothing is wrong", and saying which darts are wrong (tgsis.gmap_conditions_by_arrays,
+-- _by_rows) is left to the maps where something is. One statement reads
+-- the involutions as one array of dart offsets (rows in key order, as in
+-- tgsis.gmap_alpha_array) and the darts' points (and periods) as arrays,
+-- then looks for a dart failing a condition and stops at the first.
+-- Why it is one statement: arrays held in PL/pgSQL variables are expanded
+-- (one Datum per element: 144 MB for 18M offsets, seconds to build and
+-- caches missed); arrays that stay values of the statement are read flat.
+-- Why each test is the cheapest equivalent: the conditions are checked
+-- together, and when every alpha_i is an involution (i), alpha_i o alpha_j
+-- is one (iii) exactly when alpha_i and alpha_j commute on every dart:
+-- (ai aj)^2 = id <=> ai aj = (ai aj)^-1 = aj ai. So (iii) is tested as
+-- alpha_j(alpha_i(d)) = alpha_i(alpha_j(d)), two array reads instead of
+-- three; a dart may then fail the other form but not this one (or the
+-- reverse) only where (i) fails too, and then the map is not valid either
+-- way. Every test must come out true: out-of-range reads (NULL) fail it.
+-- The shape of the rows is proved as tgsis.gmap_alpha_array proves it, but
+-- cheaper: the darts are lo..hi (count of them, from the caller), every
+-- alpha row's dart lies there (the ends of the key), every level is 0..n,
+-- and there are count * (n + 1) rows (the key allows one per dart and
+-- level): the rows in key order are then exactly the array's elements. A
+-- row of another level or an image outside lo..hi becomes NULL and fails.
+-- false says only "not proved valid": the caller then runs the exact path.
+-- The tables are given as regclass (quoted by their output), the columns
+-- by name (%I), the offsets are integers: no caller text reaches the SQL
+-- unquoted.
+-- enable_sort off: the rows in key order come from the primary key, never
+-- from a sort (tables just loaded have no statistics; the planner would
+-- sort 18M rows on disk).
+CREATE FUNCTION tgsis.gmap_conditions_hold(p_geoid bigint, p_n integer, p_dart regclass, p_alpha regclass, p_point text,
+                                           p_period text, p_lo bigint, p_hi bigint, p_darts bigint, p_several boolean)
+RETURNS boolean
+LANGUAGE plpgsql
+STABLE
+SET search_path FROM CURRENT
+SET enable_sort = off
+AS $$
+DECLARE
+    v_stride  integer := p_n + 1;
+    v_several boolean := p_several AND p_period IS NOT NULL;
+    v_columns text;
+    v_arrays  text;
+    v_tests   text[] := '{}';
+    v_holds   boolean;
+    v_i       integer;
+    v_j       integer;
+BEGIN
+    IF coalesce(p_darts, 0) = 0 OR p_hi - p_lo + 1 <> p_darts OR p_darts * v_stride > 134217728 THEN
+        RETURN false;
+    END IF;
+    -- every alpha row's dart is one of lo..hi (the key's ends: no scan)
+    EXECUTE format('SELECT min(dartid) >= $2 AND max(dartid) <= $3 FROM %s WHERE geoid = $1', p_alpha)
+       INTO v_holds USING p_geoid, p_lo, p_hi;
+    IF v_holds IS NOT TRUE THEN
+        RETURN false;
+    END IF;
+    -- the arrays: s.a the images as dart offsets (a row of a level outside
+    -- 0..n or an image outside lo..hi: NULL), s.p the darts' points, s.r
+    -- their periods, in dart order
+    v_arrays := format('ARRAY(SELECT CASE WHEN level BETWEEN 0 AND $2 AND dartid2 BETWEEN $3 AND $4
+                                          THEN ((dartid2 - $3) * %s)::integer END
+                                FROM %s WHERE geoid = $1 ORDER BY dartid, level) AS a, '
+                       'ARRAY(SELECT %I::bigint FROM %s WHERE geoid = $1 ORDER BY dartid) AS p',
+                       v_stride, p_alpha, p_point, p_dart);
+    IF v_several THEN
+        v_arrays := v_arrays || format(', ARRAY(SELECT %I::double precision FROM %s WHERE geoid = $1 ORDER BY dartid) AS r',
+                                       p_period, p_dart);
+    END IF;
+    -- each dart's images, point and period, read once (b: the dart's offset;
+    -- a_l: the offset of alpha_l of it; pt, pr: its point and period)
+    v_columns := 'b';
+    FOR v_i IN 0 .. p_n LOOP
+        v_columns := v_columns || format(', s.a[b + %s] AS a%s', v_i + 1, v_i);
+    END LOOP;
+    v_columns := v_columns || format(', s.p[b / %s + 1] AS pt', v_stride);
+    IF v_several THEN
+        v_columns := v_columns || format(', s.r[b / %s + 1] AS pr', v_stride);
+    END IF;
+    FOR v_i IN 0 .. p_n LOOP                                          -- (i)
+        v_tests := v_tests || format('s.a[a%s + %s] = b', v_i, v_i + 1);
+    END LOOP;
+    FOR v_i IN 0 .. p_n - 1 LOOP                                      -- (ii)
+        v_tests := v_tests || format('a%s <> b', v_i);
+    END LOOP;
+    FOR v_i IN 0 .. p_n - 2 LOOP                                      -- (iii), given (i): alpha_i and alpha_j commute
+        FOR v_j IN v_i + 2 .. p_n LOOP
+            v_tests := v_tests || format('s.a[a%s + %s] = s.a[a%s + %s]', v_i, v_j + 1, v_j, v_i + 1);
+        END LOOP;
+    END LOOP;
+    FOR v_i IN 1 .. p_n LOOP                                          -- one point per 0-cell
+        v_tests := v_tests || format('s.p[a%s / %s + 1] = pt', v_i, v_stride);
+    END LOOP;
+    IF v_several THEN                                                 -- the periods' closure
+        FOR v_i IN 0 .. p_n LOOP
+            v_tests := v_tests || format('s.r[a%s / %s + 1] = pr', v_i, v_stride);
+        END LOOP;
+    END IF;
+    EXECUTE format('SELECT cardinality(s.a) = $5
+                           AND NOT EXISTS (SELECT FROM (SELECT %s FROM generate_series(0, $5 - %s, %s) AS b OFFSET 0) AS d
+                                            WHERE (%s) IS NOT TRUE)
+                      FROM (SELECT %s OFFSET 0) AS s',
+                   v_columns, v_stride, v_stride, array_to_string(v_tests, ' AND '), v_arrays)
+       INTO v_holds USING p_geoid, p_n, p_lo, p_hi, (p_darts * v_stride)::integer;
+    RETURN coalesce(v_holds, false);
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.gmap_conditions_hold(bigint, integer, regclass, regclass, text, text, bigint, bigint, bigint, boolean) IS
+    'true when a stored G-map meets every condition of tgsis.gmap_conditions (rows of one alpha per dart and level, (i), (ii), (iii), one point per 0-cell, the periods'' closure), proved in one statement over the rows read as flat arrays; false: not proved (tgsis.gmap_conditions then says what is wrong)';
