@@ -48,8 +48,8 @@ def grid(nx: int, ny: int, *, wrap_x: bool = False, wrap_y: bool = False,
         j = j % rows if wrap_y else j
         return i * rows + j
 
-    i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-    i, j = i.ravel(), j.ravel()
+    i2, j2 = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+    i, j = i2.ravel(), j2.ravel()
     a, b, c, d = vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)
     t = np.concatenate([np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)]).astype(np.int64)
     return v, t

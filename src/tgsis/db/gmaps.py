@@ -308,9 +308,39 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
                                f"{n}-G-map does not have")
     values = _md_values(fc, g, drop_extra)
     level = fc.cell_level
-    cells = g.cells(level) if level is not None else None
-    count = int(cells.max()) + 1 if cells is not None and len(cells) else 0
-    signs = _signs(g)
+    cells: list[npt.NDArray[np.int64]] = []   # the darts' cells of the property level, once dart_rows made them
+
+    def vertex_rows() -> Columns:
+        return [("geoid", np.full(g.n_points, geoid), "int8"), ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
+                ("coordinate", g.points, f"float8[{m}]")]
+
+    def alpha_rows() -> Columns:
+        return _alpha_columns(geoid, g.alpha)
+
+    def dart_rows() -> Columns:
+        columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("geoid", np.full(d, geoid), "int8"), ("dartid", np.arange(d, dtype=np.int64), "int8"), ("vrtxid", g.vertex, "int8")]
+        if level is not None:
+            cells.append(g.cells(level))
+            columns.append(("acellid", cells[0], "int8"))
+        signs = _signs(g)
+        if signs is not None:
+            columns.append(("positive", signs, "bool"))
+        return columns
+
+    def cell_count() -> int:
+        return int(cells[0].max()) + 1 if len(cells[0]) else 0
+
+    def cell_rows() -> Columns:
+        count = cell_count()
+        return [("geoid", np.full(count, geoid), "int8"), ("acellid", np.arange(count, dtype=np.int64), "int8"),
+                ("celllevel", np.full(count, level, dtype=np.int16), "int2")]
+
+    def value_rows() -> Columns:
+        count = cell_count()
+        return [("_geoid", np.full(count, geoid), "int8"), ("_idx", np.arange(count, dtype=np.int64), "int8"),
+                *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties)]
+
     with reraise(), conn.transaction():
         storage = Storage.of(conn)
         storage.check("tgsis", "geometry")
@@ -326,26 +356,14 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
         # one row: through the versioned view when versioning is on (its trigger writes the working revision)
         conn.execute("INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
                      (geoid, n, m, list(names), extent))
-        storage.copy(conn, "tgsis", "md_vertex", [
-            ("geoid", np.full(g.n_points, geoid), "int8"), ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
-            ("coordinate", g.points, f"float8[{m}]")])
-        dart_columns: list[tuple[str, npt.ArrayLike, str]] = [
-            ("geoid", np.full(d, geoid), "int8"), ("dartid", np.arange(d, dtype=np.int64), "int8"),
-            ("vrtxid", g.vertex, "int8")]
-        if cells is not None:
-            dart_columns.append(("acellid", cells, "int8"))
-        if signs is not None:
-            dart_columns.append(("positive", signs, "bool"))
-        storage.copy(conn, "tgsis", "md_dart", dart_columns)
-        storage.copy(conn, "tgsis", "md_alpha", _alpha_columns(geoid, g.alpha))
-        if level is not None and count:
-            storage.copy(conn, "tgsis", "md_cell", [
-                ("geoid", np.full(count, geoid), "int8"), ("acellid", np.arange(count, dtype=np.int64), "int8"),
-                ("celllevel", np.full(count, level, dtype=np.int16), "int2")])
-        if fc.cell_properties and count:
-            storage.copy(conn, fc.schema, fc.cellprotable, [
-                ("_geoid", np.full(count, geoid), "int8"), ("_idx", np.arange(count, dtype=np.int64), "int8"),
-                *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties)])
+        # as insert_gmap: the involutions first, the darts' cells and orientation computed while they go in
+        tables: list[tuple[str, str, Callable[[], Columns]]] = [
+            ("tgsis", "md_alpha", alpha_rows), ("tgsis", "md_vertex", vertex_rows), ("tgsis", "md_dart", dart_rows)]
+        if level is not None:
+            tables.append(("tgsis", "md_cell", cell_rows))
+            if fc.cell_properties:
+                tables.append((fc.schema, fc.cellprotable, value_rows))
+        storage.copy_all(conn, tables)
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
 

@@ -1046,6 +1046,55 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
 VTK_LINE, VTK_TRIANGLE, VTK_POLYGON, VTK_POLYHEDRON = 3, 5, 7, 42
 
 
+def _polyhedron_streams(indices: np.ndarray, face_bounds: np.ndarray,
+                        cell_bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """VTK's arrays for polyhedra, vectorised over all cells.
+
+    Parameters
+    ----------
+    indices : (k,) int
+        The point ids of every face's corners, face after face.
+    face_bounds : (f + 1,) int
+        Face i's corners are ``indices[face_bounds[i]:face_bounds[i + 1]]``.
+    cell_bounds : (c + 1,) int
+        Cell j's faces are ``cell_bounds[j]:cell_bounds[j + 1]``.
+
+    Returns
+    -------
+    connectivity : (p,) int64
+        Each cell's distinct points, ascending, cell after cell.
+    offsets : (c,) int64
+        End of each cell's points in ``connectivity``.
+    faces : (c + f + k,) int64
+        Each cell's face stream: its number of faces, then per face its
+        number of corners and the corners.
+    faceoffsets : (c,) int64
+        End of each cell's stream in ``faces``.
+    """
+    indices = np.asarray(indices, dtype=np.int64)
+    face_bounds = np.asarray(face_bounds, dtype=np.int64)
+    cell_bounds = np.asarray(cell_bounds, dtype=np.int64)
+    n_cells, n_faces = len(cell_bounds) - 1, len(face_bounds) - 1
+    sizes = np.diff(face_bounds)
+    faces_per_cell = np.diff(cell_bounds)
+    cell_of_face = np.repeat(np.arange(n_cells, dtype=np.int64), faces_per_cell)
+    cell_of_corner = np.repeat(cell_of_face, sizes)
+    # distinct (cell, point) pairs, sorted by cell then point
+    span = int(indices.max()) + 1 if len(indices) else 1
+    pairs = np.unique(cell_of_corner * span + indices)
+    connectivity = pairs % span
+    offsets = np.cumsum(np.bincount(pairs // span, minlength=n_cells)).astype(np.int64)
+    # the stream: before face i come the headers of cells 0..cell(i), the headers of faces 0..i-1 and their corners
+    face_header = cell_of_face + 1 + np.arange(n_faces, dtype=np.int64) + face_bounds[:-1]
+    cell_header = np.arange(n_cells, dtype=np.int64) + cell_bounds[:-1] + face_bounds[cell_bounds[:-1]]
+    faces = np.empty(n_cells + n_faces + len(indices), dtype=np.int64)
+    faces[cell_header] = faces_per_cell
+    faces[face_header] = sizes
+    faces[np.repeat(face_header + 1 - face_bounds[:-1], sizes) + np.arange(len(indices), dtype=np.int64)] = indices
+    faceoffsets = cell_header + 1 + faces_per_cell + (face_bounds[cell_bounds[1:]] - face_bounds[cell_bounds[:-1]])
+    return connectivity, offsets, faces, faceoffsets.astype(np.int64)
+
+
 def _gmap_grid(g: GMap, name: str | None, axes: Sequence[str] | None) -> _Grid:
     """The Piece of a G-map: its points (the first three axes, 0 for missing ones; the others as point data), its
     top cells as lines (n = 1), polygons (n = 2: triangles as VTK triangles) or polyhedra (n = 3), its top cells'
@@ -1072,23 +1121,8 @@ def _gmap_grid(g: GMap, name: str | None, axes: Sequence[str] | None) -> _Grid:
         types = np.where(np.diff(bounds) == 3, VTK_TRIANGLE, VTK_POLYGON).astype(np.uint8)
     else:
         indices, face_bounds, cell_bounds = g.polyhedra()
-        sizes = np.diff(face_bounds)
-        cell_points, cell_ends, stream, stream_ends = [], [], [], []
-        for c in range(len(cell_bounds) - 1):  # per volume: its distinct points and its face stream
-            f0, f1 = int(cell_bounds[c]), int(cell_bounds[c + 1])
-            ids = indices[face_bounds[f0]:face_bounds[f1]]
-            cell_points.append(np.unique(ids))
-            cell_ends.append(len(cell_points[-1]))
-            parts = [np.array([f1 - f0])]
-            for f in range(f0, f1):
-                parts += [np.array([sizes[f]]), indices[face_bounds[f]:face_bounds[f + 1]]]
-            stream.append(np.concatenate(parts))
-            stream_ends.append(len(stream[-1]))
-        connectivity = np.concatenate(cell_points) if cell_points else np.zeros(0, dtype=np.int64)
-        offsets = np.cumsum(cell_ends).astype(np.int64)
-        faces = np.concatenate(stream).astype(np.int64) if stream else np.zeros(0, dtype=np.int64)
-        faceoffsets = np.cumsum(stream_ends).astype(np.int64)
-        types = np.full(len(cell_ends), VTK_POLYHEDRON, dtype=np.uint8)
+        connectivity, offsets, faces, faceoffsets = _polyhedron_streams(indices, face_bounds, cell_bounds)
+        types = np.full(len(offsets), VTK_POLYHEDRON, dtype=np.uint8)
     cell_data = {k: np.asarray(v) for k, v in g.cell_properties.get(n, {}).items()}
     return _Grid(name, "GMAP", xyz, connectivity.astype(np.int64), offsets, types, point_data, cell_data,
                  faces=faces, faceoffsets=faceoffsets)
