@@ -32,15 +32,13 @@ DECLARE
     v_periods double precision[];
     v_several boolean := p_several AND p_period IS NOT NULL;
     v_columns text;
-    v_labels  text[] := '{}';
-    v_tests   text[] := '{}';
+    v_labels  text[];
+    v_tests   text[];
     v_flags   text;
     v_any     text;
     v_aggs    text;
     v_failing integer[];
     v_rows    text;
-    v_i       integer;
-    v_j       integer;
 BEGIN
     EXECUTE format('SELECT ARRAY(SELECT %I::bigint FROM %s WHERE geoid = $1 ORDER BY dartid)', p_point, p_dart)
        INTO v_points USING p_geoid;
@@ -48,45 +46,13 @@ BEGIN
         EXECUTE format('SELECT ARRAY(SELECT %I::double precision FROM %s WHERE geoid = $1 ORDER BY dartid)', p_period, p_dart)
            INTO v_periods USING p_geoid;
     END IF;
-    -- each dart's images, point and period, read once per dart (the tests
-    -- below name them: a_l is the offset of alpha_l of the dart at offset b,
-    -- pt and pr its point and period); OFFSET 0 keeps the subquery so that
-    -- every test reuses them instead of subscripting the arrays again
-    v_columns := 'b';
-    FOR v_i IN 0 .. p_n LOOP
-        v_columns := v_columns || format(', $1[b + %s] AS a%s', v_i + 1, v_i);
-    END LOOP;
-    v_columns := v_columns || format(', $2[b / %s + 1] AS pt', v_stride);
-    IF v_several THEN
-        v_columns := v_columns || format(', $3[b / %s + 1] AS pr', v_stride);
-    END IF;
-    -- the conditions in tgsis.gmap_conditions_by_rows' order
-    FOR v_i IN 0 .. p_n LOOP                                          -- (i)
-        v_labels := v_labels || format('alpha_%s is not an involution', v_i);
-        v_tests := v_tests || format('$1[a%s + %s] <> b', v_i, v_i + 1);
-    END LOOP;
-    FOR v_i IN 0 .. p_n - 1 LOOP                                      -- (ii)
-        v_labels := v_labels || format('dart free in alpha_%s (only alpha_%s may have fixed points)', v_i, p_n);
-        v_tests := v_tests || format('a%s = b', v_i);
-    END LOOP;
-    FOR v_i IN 0 .. p_n - 2 LOOP                                      -- (iii): alpha_i(alpha_j(alpha_i(a_j))) = b
-        FOR v_j IN v_i + 2 .. p_n LOOP
-            v_labels := v_labels || format('alpha_%s o alpha_%s is not an involution', v_i, v_j);
-            v_tests := v_tests || format('$1[$1[$1[a%2$s + %3$s] + %4$s] + %3$s] <> b', v_i, v_j, v_i + 1, v_j + 1);
-        END LOOP;
-    END LOOP;
-    FOR v_i IN 1 .. p_n LOOP                                          -- one point per 0-cell
-        v_labels := v_labels || format('alpha_%s joins darts of different points (a 0-cell has one point)', v_i);
-        v_tests := v_tests || format('$2[a%s / %s + 1] <> pt', v_i, v_stride);
-    END LOOP;
-    IF v_several THEN                                                 -- the periods' closure
-        FOR v_i IN 0 .. p_n LOOP
-            v_labels := v_labels || format('alpha_%s sends a dart into another topology period', v_i);
-            v_tests := v_tests || format('$3[a%s / %s + 1] <> pr', v_i, v_stride);
-        END LOOP;
-    END IF;
-    SELECT string_agg(format('%s AS c%s', t.test, t.i), ', ' ORDER BY t.i),
-           string_agg(format('(%s)', t.test), ' OR ' ORDER BY t.i),
+    -- each dart's images, point and period, read once per dart in a
+    -- subquery (OFFSET 0 keeps it) that every test reuses; the tests in
+    -- tgsis.gmap_conditions_by_rows' order, each failing where it does not hold
+    SELECT t.columns, t.tests, t.labels INTO v_columns, v_tests, v_labels
+      FROM tgsis.gmap_dart_tests(p_n, v_several, '$1', '$2', '$3', true) AS t;
+    SELECT string_agg(format('(%s) IS NOT TRUE AS c%s', t.test, t.i), ', ' ORDER BY t.i),
+           format('(%s) IS NOT TRUE', string_agg(format('(%s)', t.test), ' AND ' ORDER BY t.i)),
            string_agg(format('count(*) FILTER (WHERE c%1$s) AS n%1$s, (array_agg(b ORDER BY b) FILTER (WHERE c%1$s))[1:20] AS d%1$s',
                              t.i), ', ' ORDER BY t.i),
            string_agg(format('(%1$s, %2$L, s.n%1$s, s.d%1$s)', t.i, v_labels[t.i]), ', ' ORDER BY t.i)

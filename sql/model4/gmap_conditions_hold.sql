@@ -42,10 +42,8 @@ DECLARE
     v_several boolean := p_several AND p_period IS NOT NULL;
     v_columns text;
     v_arrays  text;
-    v_tests   text[] := '{}';
+    v_tests   text[];
     v_holds   boolean;
-    v_i       integer;
-    v_j       integer;
 BEGIN
     IF coalesce(p_darts, 0) = 0 OR p_hi - p_lo + 1 <> p_darts OR p_darts * v_stride > 134217728 THEN
         RETURN false;
@@ -68,35 +66,7 @@ BEGIN
         v_arrays := v_arrays || format(', ARRAY(SELECT %I::double precision FROM %s WHERE geoid = $1 ORDER BY dartid) AS r',
                                        p_period, p_dart);
     END IF;
-    -- each dart's images, point and period, read once (b: the dart's offset;
-    -- a_l: the offset of alpha_l of it; pt, pr: its point and period)
-    v_columns := 'b';
-    FOR v_i IN 0 .. p_n LOOP
-        v_columns := v_columns || format(', s.a[b + %s] AS a%s', v_i + 1, v_i);
-    END LOOP;
-    v_columns := v_columns || format(', s.p[b / %s + 1] AS pt', v_stride);
-    IF v_several THEN
-        v_columns := v_columns || format(', s.r[b / %s + 1] AS pr', v_stride);
-    END IF;
-    FOR v_i IN 0 .. p_n LOOP                                          -- (i)
-        v_tests := v_tests || format('s.a[a%s + %s] = b', v_i, v_i + 1);
-    END LOOP;
-    FOR v_i IN 0 .. p_n - 1 LOOP                                      -- (ii)
-        v_tests := v_tests || format('a%s <> b', v_i);
-    END LOOP;
-    FOR v_i IN 0 .. p_n - 2 LOOP                                      -- (iii), given (i): alpha_i and alpha_j commute
-        FOR v_j IN v_i + 2 .. p_n LOOP
-            v_tests := v_tests || format('s.a[a%s + %s] = s.a[a%s + %s]', v_i, v_j + 1, v_j, v_i + 1);
-        END LOOP;
-    END LOOP;
-    FOR v_i IN 1 .. p_n LOOP                                          -- one point per 0-cell
-        v_tests := v_tests || format('s.p[a%s / %s + 1] = pt', v_i, v_stride);
-    END LOOP;
-    IF v_several THEN                                                 -- the periods' closure
-        FOR v_i IN 0 .. p_n LOOP
-            v_tests := v_tests || format('s.r[a%s / %s + 1] = pr', v_i, v_stride);
-        END LOOP;
-    END IF;
+    SELECT t.columns, t.tests INTO v_columns, v_tests FROM tgsis.gmap_dart_tests(p_n, v_several, 's.a', 's.p', 's.r', false) AS t;
     EXECUTE format('SELECT cardinality(s.a) = $5
                            AND NOT EXISTS (SELECT FROM (SELECT %s FROM generate_series(0, $5 - %s, %s) AS b OFFSET 0) AS d
                                             WHERE (%s) IS NOT TRUE)
