@@ -43,7 +43,7 @@ Snapshot = dict[str, Any]
 
 # what the comparison reads besides the versioned tables: the catalog relations of docs/data-models.md
 CATALOG = ["installation", "catalog", "versions", "revisions", "version_privileges", "object_locks", "conflicts",
-           "versioned_tables", "versioning_dropped"]
+           "versioned_tables", "versioning_dropped", "unversioned_features"]
 
 
 def _bindir_of(pg: TestServer) -> Path:
@@ -154,6 +154,9 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
     conn.execute("INSERT INTO wells (name, depth) VALUES ('W-1', 1000), ('W-2', 1200), ('W-3', 800)")
     conn.execute(sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON wells TO {}").format(
         sql.Identifier(roles.name("ann"))))
+    # a class without versioning (registered before feature versioning: its key to tgsis.geometry is dropped then)
+    tgsis.create_feature_class(conn, "surveys", "SURFACE", feature_properties={"release": "text"}, versioned=False)
+    ids["survey"] = tgsis.insert_feature(conn, "surveys", flat_grid(3, 7.0), {"release": "s1"})
     conn.commit()
     tgsis.enable_versioning(conn, "wells", "id", "well")
     tgsis.enable_feature_versioning(conn)
@@ -181,6 +184,7 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
     conn.execute("UPDATE tgsis.vrtx SET z = z - 5 WHERE geoid = %s AND vrtxid = 4", (ids["f0"],))
     conn.execute("UPDATE faults SET release = 'default' WHERE _geoid = %s", (ids["f1"],))
     conn.execute("INSERT INTO wells (name, depth) VALUES ('W-4', 300)")
+    conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = 0", (ids["survey"],))  # in place
     conn.commit()
     tgsis.save_revision(conn, "default_after_edits")
     assert len(tgsis.find_conflicts(conn, "edit")) == 2
@@ -232,7 +236,7 @@ def _fetch(conn: Conn, version: str, ids: dict[str, int]) -> dict[str, Any]:
     seen: dict[str, Any] = {}
     with tgsis.in_version(conn, version):
         for key, fid in sorted(ids.items()):
-            klass = key if key in ("moving", "stepped") else "faults"
+            klass = {"moving": "moving", "stepped": "stepped", "survey": "surveys"}.get(key, "faults")
             if key == "block":
                 g = tgsis.fetch_gmap(conn, "blocks", fid).at(0.0)
                 assert g is not None
@@ -241,7 +245,7 @@ def _fetch(conn: Conn, version: str, ids: dict[str, int]) -> dict[str, Any]:
             elif key == "history":
                 h, axes = tgsis.fetch_md_gmap(conn, "knowledge", fid)
                 seen[key] = (h.alpha.tolist(), h.points.tolist(), axes, tgsis.gmap_check(conn, fid))
-            elif klass == "faults":
+            elif klass in ("faults", "surveys"):
                 try:
                     feature = tgsis.fetch_feature(conn, klass, fid)
                 except tgsis.NotFoundError:
@@ -304,6 +308,16 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
         tgsis.save_revision(conn, "after_restore")
         revision = tgsis.working_revision(conn)
     assert revision > max_revision, "a restored database handed out an existing revision again"
+    # the class without versioning: one state every version sees, written in DEFAULT only
+    with tgsis.in_version(conn, "edit"), pytest.raises(tgsis.NotVersionedError, match="class surveys"):
+        tgsis.save_feature(conn, "surveys", ids["survey"], _lifted(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh,
+                                                                    1, 2.0))
+    lifted = _lifted(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh, 1, 2.0)
+    tgsis.save_feature(conn, "surveys", ids["survey"], lifted)
+    conn.commit()
+    with tgsis.in_version(conn, "deep"):
+        np.testing.assert_array_equal(_surface(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh).vertices,
+                                      lifted.vertices)
     # versioning new tables: a feature class created now is versioned as created; a plain table too
     tgsis.create_feature_class(conn, "late", "MULTIPOINT")
     assert ("public", "late") in {(t.schema, t.table) for t in tgsis.versioned_tables(conn)}

@@ -395,19 +395,16 @@ def test_a_writer_during_an_edit_loses_nothing(db_dsn: str) -> None:
         editor.close()
 
 
-def test_versioning_is_not_chosen_per_class(conn: Conn) -> None:
+def test_a_class_cannot_be_versioned_while_feature_versioning_is_off(conn: Conn) -> None:
     with pytest.raises(tgsis.VersioningError, match="feature class 'wells' cannot be versioned on its own: feature "
                                                     "versioning is off"):
         F.create_feature_class(conn, "wells", "MULTILINESTRING", versioned=True)
     conn.rollback()
-    tgsis.enable_feature_versioning(conn)
-    conn.commit()
-    with pytest.raises(tgsis.VersioningError, match="feature class 'wells' cannot be left out of feature versioning") \
-            as caught:
-        F.create_feature_class(conn, "wells", "MULTILINESTRING", versioned=False)
-    assert "share tgsis.geometry" in str(caught.value.detail)
-    conn.rollback()
     assert conn.execute("SELECT count(*) FROM tgsis.catalog").fetchone() == (0,)
     assert conn.execute("SELECT to_regclass('wells')").fetchone() == (None,)
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
     fc = F.create_feature_class(conn, "wells", "MULTILINESTRING", versioned=True)
+    assert fc.versioned
     assert {t.table for t in tgsis.versioned_tables(conn)} >= {fc.featuretable, fc.cellprotable}
+    # (classes without versioning: tests/test_unversioned_classes.py)

@@ -20,6 +20,7 @@ CREATE TABLE tgsis.catalog (
     created_at         timestamptz NOT NULL DEFAULT now(),
     created_by         name        NOT NULL DEFAULT current_user,
     celllevel          smallint    CHECK (celllevel >= 0),
+    versioned          boolean     NOT NULL DEFAULT true,
     UNIQUE (schemaname, featuretable),
     UNIQUE (schemaname, cellprotable),
     UNIQUE (schemaname, otherprotable)
@@ -51,3 +52,5 @@ COMMENT ON COLUMN tgsis.catalog.created_at IS 'when the class was registered';
 COMMENT ON COLUMN tgsis.catalog.created_by IS 'role that registered it';
 COMMENT ON COLUMN tgsis.catalog.celllevel IS
     'classes of a model with cell levels (tgsis.data_models.cell_levels: G-maps): the dimension i of the cells their properties belong to (_idx = abstract cell id); NULL for the others';
+COMMENT ON COLUMN tgsis.catalog.versioned IS
+    'true: the class is versioned with every class while feature versioning is on (tgsis.enable_feature_versioning); false: registered without versioning: its tables stay plain, its features'' rows in the shared storage are of no version (tgsis.unversioned_features), one state that every version sees, written in DEFAULT only';

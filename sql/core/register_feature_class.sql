@@ -9,11 +9,13 @@
 -- The calling role must be a tgsis_admin with CREATE on the target schema; the
 -- system schemas and tgsis's own are refused, and so are schemas of other
 -- owners than tgsis's or a superuser (they could replace the class's tables).
--- Versioning is not chosen per class (docs/versioning.md, "Versioning per
--- class"): every class's geometries share the storage tables that feature
--- versioning versions, so a class follows tgsis.enable_feature_versioning;
--- p_versioned => false is refused, and p_versioned => true while feature
--- versioning is off.
+-- Versioning is chosen per class (docs/versioning.md, "Versioning per
+-- class"): by default (p_versioned NULL or true) a class is versioned with
+-- every class while feature versioning is on (p_versioned => true while it
+-- is off is refused); p_versioned => false registers a class without
+-- versioning, before or after tgsis.enable_feature_versioning: its tables
+-- stay plain and its features' rows in the storage every class shares are
+-- rows of no version (tgsis.unversioned_features).
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -62,19 +64,12 @@ BEGIN
             USING ERRCODE = 'TG002', DETAIL = 'Registering feature classes is for members of tgsis_admin.',
                   HINT = format('a DBA may run: GRANT tgsis_admin TO %I', v_caller);
     END IF;
-    IF NOT p_versioned THEN
-        RAISE EXCEPTION 'feature class % cannot be left out of feature versioning', coalesce(quote_literal(p_name), 'NULL')
-            USING ERRCODE = 'TG300',
-                  DETAIL = 'The geometries of every class share tgsis.geometry and the vertex and simplex tables, which '
-                           'feature versioning versions as one object class: a class whose own tables stayed plain would '
-                           'show, in a version, features whose geometry that version does not see.',
-                  HINT = 'leave p_versioned out: the class is versioned when feature versioning is on; keep the features '
-                         'of a class nobody edits in versions in DEFAULT';
-    ELSIF p_versioned AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
+    IF p_versioned AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
         RAISE EXCEPTION 'feature class % cannot be versioned on its own: feature versioning is off', coalesce(quote_literal(p_name), 'NULL')
             USING ERRCODE = 'TG300',
-                  DETAIL = 'Every class is versioned with the geometries of every data model, or none.',
-                  HINT = 'SELECT tgsis.enable_feature_versioning() versions model 1 and every feature class';
+                  DETAIL = 'Classes are versioned with the geometries of every data model, or none.',
+                  HINT = 'SELECT tgsis.enable_feature_versioning() versions model 1 and every feature class not registered '
+                         'with p_versioned => false';
     END IF;
     IF p_name IS NULL OR p_name !~ '^[a-z][a-z0-9_]*$' OR quote_ident(p_name) <> p_name OR length(v_cellpros) > 63 THEN
         RAISE EXCEPTION 'feature class name % is not allowed', coalesce(quote_literal(p_name), 'NULL')
@@ -302,12 +297,12 @@ BEGIN
 
     INSERT INTO tgsis.catalog (classname, schemaname, geotype, featuretable, cellprotable, otherprotable, viewname,
                                protablename, timemodel, timeunit, proalignment, srs, feature_properties, cell_properties,
-                               instant_properties, description, created_by, celllevel)
+                               instant_properties, description, created_by, celllevel, versioned)
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_other, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
-            v_fprops, v_cprops, v_iprops, p_description, v_caller, p_cell_level)
+            v_fprops, v_cprops, v_iprops, p_description, v_caller, p_cell_level, coalesce(p_versioned, true))
     RETURNING * INTO v_row;
-    -- once model 1 is versioned, every new class is versioned with it
-    IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
+    -- once model 1 is versioned, every new class is versioned with it, unless registered without versioning
+    IF v_row.versioned AND EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
         PERFORM tgsis.version_class_tables(p_name);
     END IF;
     PERFORM tgsis.create_class_view(p_name);
@@ -316,4 +311,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text, integer, boolean) IS
-    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog; versioned with every class when feature versioning is on (p_versioned => false is refused: versioning is not per class)';
+    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog; versioned with every class when feature versioning is on, unless p_versioned => false (its features are then of no version: one state every version sees, written in DEFAULT)';

@@ -28,6 +28,9 @@ BEGIN
     -- members first, the collection last (its row is what owns them)
     SELECT coalesce(array_agg(geoid ORDER BY geoid), '{}') || p_geoid INTO v_ids
       FROM tgsis.geometry WHERE collection = p_geoid;
+    IF EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = p_geoid) THEN
+        PERFORM tgsis.unversioned_revision(ARRAY[p_geoid]);  -- of a class without versioning: in DEFAULT only (TG305)
+    END IF;
     -- the feature row: its foreign key is gone once model 1 is versioned, so
     -- delete it explicitly; cell properties of a collection's members are in
     -- its class's table, keyed by member geoid
@@ -40,6 +43,7 @@ BEGIN
     FOR v_table IN SELECT * FROM tgsis.model_tables_of(v_ids) LOOP
         PERFORM tgsis.delete_object_rows('tgsis', v_table, 'geoid', v_ids);
     END LOOP;
+    PERFORM tgsis.forget_unversioned(v_ids);  -- a feature of no version leaves no record behind
     RETURN true;
 END
 $$;

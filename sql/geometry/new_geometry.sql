@@ -4,7 +4,10 @@
 -- stored with its GEOMETRYCOLLECTION names the collection that owns it.
 -- zpositive, crs and metadata record what the file meant (z convention,
 -- coordinate-system block, other format facts): bounds are in elevation
--- whatever zpositive says, as the vertices are.
+-- whatever zpositive says, as the vertices are. p_class names the feature
+-- class the geometry is stored for: a class registered without versioning
+-- gets a geoid of no version (tgsis.claim_unversioned_geoid), and so do the
+-- members of a collection that has one.
 CREATE FUNCTION tgsis.new_geometry(
     p_geotype    text,
     p_name       text,
@@ -18,7 +21,8 @@ CREATE FUNCTION tgsis.new_geometry(
     p_color      real[]   DEFAULT NULL,
     p_zpositive  text     DEFAULT NULL,
     p_crs        jsonb    DEFAULT NULL,
-    p_metadata   jsonb    DEFAULT NULL)
+    p_metadata   jsonb    DEFAULT NULL,
+    p_class      text     DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 SET search_path FROM CURRENT
@@ -26,6 +30,7 @@ AS $$
 DECLARE
     v_geoid bigint;
     v_owner text;
+    v_none  text;  -- the class without versioning the geometry belongs to, if any
 BEGIN
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
     -- geotypes and time models are the registered data models' (tgsis.data_models)
@@ -82,9 +87,23 @@ BEGIN
                 USING ERRCODE = 'TG102';
         END IF;
     END IF;
-    INSERT INTO tgsis.geometry (geotype, geoname, geoids, collection, bbox, nvrtx, ncell, timemodel, alive,
+    -- a feature of a class without versioning (or a member of one) takes a geoid of no version
+    IF p_class IS NOT NULL AND NOT EXISTS (SELECT FROM tgsis.catalog c WHERE c.classname = p_class) THEN
+        RAISE EXCEPTION 'feature class % of a new geometry does not exist', quote_literal(p_class)
+            USING ERRCODE = 'TG200', HINT = 'SELECT classname FROM tgsis.catalog lists the classes';
+    END IF;
+    SELECT u.classname INTO v_none FROM tgsis.unversioned_features u WHERE u.geoid = p_collection;
+    IF v_none IS NULL THEN
+        SELECT c.classname INTO v_none FROM tgsis.catalog c WHERE c.classname = p_class AND NOT c.versioned;
+    END IF;
+    IF v_none IS NOT NULL THEN
+        v_geoid := tgsis.claim_unversioned_geoid(v_none);
+    ELSE
+        v_geoid := nextval('tgsis.geometry_geoid_seq');
+    END IF;
+    INSERT INTO tgsis.geometry (geoid, geotype, geoname, geoids, collection, bbox, nvrtx, ncell, timemodel, alive,
                                 colorred, colorgreen, colorblue, zpositive, crs, metadata)
-    VALUES (upper(p_geotype), p_name, p_geoids, p_collection,
+    VALUES (v_geoid, upper(p_geotype), p_name, p_geoids, p_collection,
             CASE WHEN p_bounds IS NOT NULL THEN cube(p_bounds[1:3], p_bounds[4:6]) END,
             p_nvrtx, p_ncell, upper(p_timemodel), coalesce(p_alive, false), p_color[1], p_color[2], p_color[3],
             p_zpositive, p_crs, p_metadata)
@@ -93,5 +112,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint, text, boolean, real[], text, jsonb, jsonb) IS
-    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax} in elevation; members of a GEOMETRYCOLLECTION name their owning collection; time model, alive, colour {r, g, b}; the file''s z convention, coordinate-system block and other format metadata) and return its geoid';
+COMMENT ON FUNCTION tgsis.new_geometry(text, text, double precision[], bigint, bigint, bigint[], bigint, text, boolean, real[], text, jsonb, jsonb, text) IS
+    'insert a tgsis.geometry row (bounding box from {xmin, ymin, zmin, xmax, ymax, zmax} in elevation; members of a GEOMETRYCOLLECTION name their owning collection; time model, alive, colour {r, g, b}; the file''s z convention, coordinate-system block and other format metadata; the feature class it is stored for, whose features may be of no version) and return its geoid';

@@ -59,7 +59,7 @@ BEGIN
             USING ERRCODE = 'TG102', HINT = 'ST_RemoveRepeatedPoints(geom) removes repeated points';
     END IF;
 
-    v_geoid := tgsis.new_geometry(v_class.geotype, p_name, NULL, 0, 0);
+    v_geoid := tgsis.new_geometry(v_class.geotype, p_name, NULL, 0, 0, p_class => v_class.classname);
     INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)
     SELECT v_geoid, i - 1, v_mesh.vertices[i][1], v_mesh.vertices[i][2], v_mesh.vertices[i][3]
       FROM generate_subscripts(v_mesh.vertices, 1) i;

@@ -19,8 +19,20 @@ ALTER TABLE tgsis.catalog
     DROP CONSTRAINT catalog_timemodel_check,
     DROP CONSTRAINT catalog_temporal_classes,
     ADD FOREIGN KEY (timemodel) REFERENCES tgsis.data_models (timemodel),
-    ADD COLUMN celllevel smallint CHECK (celllevel >= 0);
+    ADD COLUMN celllevel smallint CHECK (celllevel >= 0),
+    ADD COLUMN versioned boolean NOT NULL DEFAULT true;
 -- @handled core/catalog.sql
+
+-- ---- the features of classes registered without versioning (new in 0.2.0), dumped with the catalog
+-- @include versioning/unversioned_features.sql
+DO $dump$
+BEGIN
+    IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
+        PERFORM pg_catalog.pg_extension_config_dump('tgsis.unversioned_features'::regclass, '');
+    END IF;
+END
+$dump$;
+-- @handled core/config_dump.sql
 
 -- ---- the rows tgsis ships: error codes and property types added on main flow in from the files
 -- @rows core/error_codes.sql
@@ -36,6 +48,7 @@ DECLARE
     v_extension oid;   -- NULL on the plain-SQL route
     v_members   text[];
     v_object    record;
+    v_t         tgsis.versioned_tables;
 BEGIN
     v_extension := (SELECT oid FROM pg_catalog.pg_extension WHERE extname = 'tgsis');
     v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
@@ -93,6 +106,13 @@ BEGIN
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature') THEN
         PERFORM tgsis.enable_feature_versioning();
     END IF;
+    -- the write triggers of object class 'feature', generated anew: they tell rows of features of no version
+    -- (tgsis.unversioned_features) from versioned ones
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables t WHERE t.objectclass = 'feature' ORDER BY t.schemaname, t.tablename LOOP
+        EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its trigger
+        PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
+                                                v_t.objectclass, v_t.objectkeyfield);
+    END LOOP;
 
     -- What this block made (storage tables, their versioned views and runners, class views made
     -- again) is made at run time in a fresh install: inside ALTER EXTENSION it became an extension

@@ -9,7 +9,9 @@
 -- objects' write locks are taken exclusively first: no write through the
 -- view is in flight on them (it would re-create a closed row), later ones
 -- find them changed. Rows written in the working revision go, older visible
--- rows get the working revision appended to lastrevs. Returns rows affected.
+-- rows get the working revision appended to lastrevs; rows of features of
+-- classes without versioning (tgsis.unversioned_features, revision 0) go,
+-- in DEFAULT's working revision only. Returns rows affected.
 CREATE FUNCTION tgsis.close_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
                                         p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
 RETURNS bigint
@@ -24,6 +26,8 @@ DECLARE
     v_deleted bigint;
     v_closed  bigint;
     v_where   text;
+    v_none    bigint[];
+    v_gone    bigint := 0;
 BEGIN
     PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
     SELECT * INTO v_t FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
@@ -53,6 +57,17 @@ BEGIN
     -- as the storage's owner (tgsis.storage_run): $1 keys, $3 the working set, $4 the working revision, $5 ids
     v_where := format('%I = ANY ($1::bigint[])', p_keyfield)
                || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($5)', p_idfield) ELSE '' END;
+    -- features of classes without versioning: their rows (revision 0) go for good, in DEFAULT's working revision only
+    IF v_t.objectclass = 'feature' THEN
+        v_none := ARRAY(SELECT u.geoid FROM tgsis.unversioned_features u WHERE u.geoid = ANY (p_keys));
+    END IF;
+    IF cardinality(v_none) > 0 THEN
+        PERFORM tgsis.unversioned_revision(v_none);  -- TG305
+        SELECT r[1]::bigint INTO v_gone FROM tgsis.storage_run(v_t, true, format(
+            'DELETE FROM %I.%I WHERE %s AND revision = 0', p_schema, p_table || '_ver', v_where),
+            v_none::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
+        p_keys := ARRAY(SELECT k FROM unnest(p_keys) AS k WHERE k <> ALL (v_none));
+    END IF;
     SELECT r[1]::bigint INTO v_deleted FROM tgsis.storage_run(v_t, true, format(
         'DELETE FROM %I.%I WHERE %s AND revision = $4', p_schema, p_table || '_ver', v_where),
         p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
@@ -60,7 +75,7 @@ BEGIN
         'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
           WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)', p_schema, p_table || '_ver', v_where),
         p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
-    RETURN v_deleted + v_closed;
+    RETURN v_gone + v_deleted + v_closed;
 END
 $$;
 

@@ -59,17 +59,10 @@ BEGIN
         EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, p_schema, p_table,
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
     END LOOP;
-    EXECUTE tgsis.versioning_trigger_source(p_schema, p_table, p_keys, v_writable, p_pkey, p_objectclass, p_keyfield);
-    EXECUTE format('COMMENT ON FUNCTION %I.%I() IS %L', p_schema, p_table || '_ver_write',
-                   format('tgsis versioning: INSTEAD OF trigger routing writes on %s.%s into %s', p_schema, p_table,
-                          p_table || '_ver'));
-    EXECUTE format('CREATE TRIGGER %I INSTEAD OF INSERT OR UPDATE OR DELETE ON %I.%I FOR EACH ROW EXECUTE FUNCTION %I.%I()',
-                   'tgsis_versioning', p_schema, p_table, p_schema, p_table || '_ver_write');
+    PERFORM tgsis.create_versioning_trigger(p_schema, p_table, p_keys, p_pkey, p_objectclass, p_keyfield);
     EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON %I.%I '
                    'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', p_schema, p_table);
     EXECUTE format('ALTER VIEW %I.%I OWNER TO %I', p_schema, p_table, pg_get_userbyid(v_owner));
-    EXECUTE format('ALTER FUNCTION %I.%I() OWNER TO %I', p_schema, p_table || '_ver_write', pg_get_userbyid(v_owner));
-    EXECUTE format('REVOKE ALL ON FUNCTION %I.%I() FROM PUBLIC', p_schema, p_table || '_ver_write');
 END
 $$;
 

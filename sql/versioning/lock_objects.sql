@@ -13,6 +13,7 @@ DECLARE
     v_id      integer := tgsis.version_id(p_version);
     v_role    name := tgsis.calling_role();
     v_missing text[];
+    v_none    text[];
     v_taken   integer;
 BEGIN
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'lock objects in');
@@ -24,6 +25,20 @@ BEGIN
       FROM unnest(p_keys) AS k
      WHERE k <> ALL (tgsis.visible_object_keys(p_objectclass, p_keys,
                                                (SELECT workingset FROM tgsis.versions WHERE versionid = v_id)));
+    -- features of classes without versioning are written in DEFAULT only: a lock of another version would
+    -- only keep DEFAULT from writing them
+    IF p_objectclass = 'feature' AND v_id <> 0 THEN
+        SELECT array_agg(u.geoid::text ORDER BY u.geoid) INTO v_none
+          FROM tgsis.unversioned_features u
+         WHERE u.geoid = ANY (ARRAY(SELECT k::bigint FROM unnest(p_keys) AS k WHERE k ~ '^-?[0-9]{1,18}$'));
+        IF v_none IS NOT NULL THEN
+            RAISE EXCEPTION 'features % are of classes without versioning: version % cannot lock them',
+                    array_to_string(v_none, ', '), quote_literal(p_version)
+                USING ERRCODE = 'TG305',
+                      DETAIL = 'They hold one state, which every version sees and only DEFAULT writes.',
+                      HINT = 'lock them in DEFAULT, or leave them out';
+        END IF;
+    END IF;
     IF v_missing IS NOT NULL THEN
         RAISE EXCEPTION 'version % has no object % of class %', quote_literal(p_version), array_to_string(v_missing, ', '),
                 quote_literal(p_objectclass)

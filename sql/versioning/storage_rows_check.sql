@@ -5,6 +5,8 @@
 -- are read from the statement's transition table, once per statement (a
 -- row trigger would double the upload); a wrong one fails the statement,
 -- naming how many rows and which revision they had to carry.
+-- Rows of features of classes without versioning (tgsis.unversioned_features)
+-- carry revision 0 instead, and only in DEFAULT's working revision.
 -- Trigger arguments: object class, object key column.
 CREATE FUNCTION tgsis.storage_rows_check()
 RETURNS trigger
@@ -18,17 +20,36 @@ DECLARE
     v_bad   bigint;
     v_first text;
     v_keys  text[];
+    v_none  bigint[];
 BEGIN
     SELECT * INTO v_write FROM tgsis.write_revision();  -- TG002, TG301
-    SELECT count(*), min(n.revision::text) INTO v_bad, v_first
-      FROM tgsis_new_rows n
-     WHERE n.revision IS DISTINCT FROM v_write.revision OR n.lastrevs IS DISTINCT FROM '{}'::integer[];
+    -- features of classes without versioning: their rows carry revision 0 (tgsis.unversioned_revision says when)
+    IF TG_ARGV[0] = 'feature' AND EXISTS (SELECT FROM tgsis.unversioned_features) THEN
+        -- (the distinct keys of the statement against the registry, not a probe per row)
+        EXECUTE format('SELECT array_agg(u.geoid) FROM tgsis.unversioned_features u '
+                       'WHERE u.geoid IN (SELECT n.%I FROM tgsis_new_rows n)', TG_ARGV[1])
+           INTO v_none;
+    END IF;
+    IF v_none IS NOT NULL THEN
+        PERFORM tgsis.unversioned_revision(v_none);  -- TG305 outside DEFAULT's working revision
+        EXECUTE format('SELECT count(*), min(n.revision::text) FROM tgsis_new_rows n '
+                       'WHERE n.revision IS DISTINCT FROM CASE WHEN n.%I = ANY ($2) THEN 0 ELSE $1 END '
+                       'OR n.lastrevs IS DISTINCT FROM ''{}''::integer[]', TG_ARGV[1])
+           INTO v_bad, v_first USING v_write.revision, v_none;
+    ELSE
+        SELECT count(*), min(n.revision::text) INTO v_bad, v_first
+          FROM tgsis_new_rows n
+         WHERE n.revision IS DISTINCT FROM v_write.revision OR n.lastrevs IS DISTINCT FROM '{}'::integer[];
+    END IF;
     IF v_bad > 0 THEN
         RAISE EXCEPTION '% row(s) written into %.% are not live rows of revision %, the working revision of version %',
                 v_bad, TG_TABLE_SCHEMA, TG_TABLE_NAME, v_write.revision, quote_literal(tgsis.get_working_version())
             USING ERRCODE = 'TG002',
-                  DETAIL = format('Rows written directly into storage must have revision = %s and lastrevs = ''{}'' (one had revision %s).',
-                                  v_write.revision, coalesce(v_first, 'NULL')),
+                  DETAIL = format('Rows written directly into storage must have revision = %s and lastrevs = ''{}'' (one had revision %s)%s.',
+                                  v_write.revision, coalesce(v_first, 'NULL'),
+                                  CASE WHEN v_none IS NOT NULL THEN format('; rows of features of classes without versioning '
+                                       '(geoids %s) revision = 0', array_to_string(v_none[1:5], ', ')
+                                       || CASE WHEN cardinality(v_none) > 5 THEN ', ...' ELSE '' END) ELSE '' END),
                   HINT = format('write through the view %I.%I, or label the rows with SELECT revision FROM tgsis.write_revision()',
                                 TG_TABLE_SCHEMA, left(TG_TABLE_NAME, -4));
     END IF;

@@ -53,7 +53,19 @@ DECLARE
     v_same     text;
     v_dup      text;
     v_stale    text;
+    v_none     text := '';
 BEGIN
+    -- features of classes without versioning (tgsis.unversioned_features) are
+    -- rows of no version: written with revision 0, which every revision set
+    -- holds, so that the code below changes them in place and deletes them for
+    -- good; one index probe per row, on the tables of object class 'feature'
+    -- (keyed by geoid) only
+    IF p_class = 'feature' THEN
+        v_none := $none$
+    IF EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_keys::bigint[])) THEN
+        v_w := tgsis.unversioned_revision(v_keys::bigint[]);  -- 0, or TG305 outside DEFAULT's working revision
+    END IF;$none$;
+    END IF;
     SELECT string_agg(format('%I', c), ', ' ORDER BY o),
            string_agg(format('NEW.%I', c), ', ' ORDER BY o),
            string_agg(format('%I = NEW.%I', c, c), ', ' ORDER BY o),
@@ -118,7 +130,7 @@ BEGIN
         v_keys := ARRAY[OLD.%15$I::text];
     ELSE
         v_keys := ARRAY[OLD.%15$I::text, NEW.%15$I::text];
-    END IF;
+    END IF;%20$s
     -- object locks: one index probe per row; the check names the holders
     IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = ANY (v_keys)) THEN
         PERFORM tgsis.check_objects_unlocked(%14$L, v_keys);
@@ -187,7 +199,7 @@ $body$$fn$,
         p_schema, p_table || '_ver_write', p_table, v_ver, v_cols, v_new_key, v_new, v_assign, v_visible, v_dup,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
-        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale);
+        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_none);
 END
 $gen$;
 

@@ -260,11 +260,13 @@ def cmd_class_create(args: argparse.Namespace) -> int:
             conn, args.name, args.geotype, feature_properties=_pairs(args.feature_property, "--feature-property"),
             cell_properties=_cell_properties(args.property), alignment=args.alignment.upper(), srs=args.srs,
             schema=args.schema, description=args.description, time_model=args.time_model, time_unit=args.time_unit,
-            instant_properties=_pairs(args.instant_property, "--instant-property"), cell_level=args.cell_level)
+            instant_properties=_pairs(args.instant_property, "--instant-property"), cell_level=args.cell_level,
+            versioned=False if args.no_versioning else None)
     pros = f", {fc.protable}" if fc.protable else ""
     other = f", {fc.otherprotable}" if fc.otherprotable else ""
     _out(f"created feature class {fc.name} ({fc.geotype.value}{_time_label(fc)}) in schema {fc.schema}: "
-         f"tables {fc.featuretable}, {fc.cellprotable}{other}{pros}, view {fc.viewname}")
+         f"tables {fc.featuretable}, {fc.cellprotable}{other}{pros}, view {fc.viewname}"
+         + ("" if fc.versioned else "; without versioning: one state in every version, written in DEFAULT"))
     return 0
 
 
@@ -287,7 +289,7 @@ def cmd_class_list(args: argparse.Namespace) -> int:
         cliout.emit_json({"classes": [{
             "name": fc.name, "geotype": fc.geotype.value, "srs": fc.srs, "schema": fc.schema,
             "alignment": fc.alignment, "time_model": fc.time_model, "time_unit": fc.time_unit,
-            "description": fc.description,
+            "description": fc.description, "versioned": fc.versioned,
             "feature_properties": [{"name": p.name, "type": p.type} for p in fc.feature_properties],
             "properties": [{"name": p.name, "type": p.type, "size": p.size, "alignment": p.alignment or fc.alignment}
                            for p in fc.cell_properties],
@@ -699,8 +701,8 @@ def cmd_info(args: argparse.Namespace) -> int:
         span = lifespan(conn, args.id)
         steps = instants(conn, args.id) if span is not None else []
         here = working_version(conn)
-        versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
-                                 ).fetchone() == (True,)
+        versioned = fc.versioned and conn.execute(
+            "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone() == (True,)
         differs = []
         differing: list[dict[str, Any]] = []
         if versioned:
@@ -756,6 +758,8 @@ def cmd_info(args: argparse.Namespace) -> int:
             _out("  cell properties: " + ", ".join(mesh.cell_properties))
     if versioned:
         _out("  versions where it differs from " + here + ": " + (", ".join(differs) if differs else "none"))
+    elif not fc.versioned:
+        _out(f"  class {fc.name} is not versioned: every version sees this state")
     return 0
 
 
@@ -1800,6 +1804,9 @@ def build_parser() -> argparse.ArgumentParser:
     cls_create.add_argument("--time-unit", help="unit of model time of a temporal class, e.g. Ma")
     cls_create.add_argument("--instant-property", action="append", metavar="NAME:TYPE",
                             help="per-instant feature property of a temporal class (repeatable)")
+    cls_create.add_argument("--no-versioning", action="store_true",
+                            help="a class without versioning: its features hold one state that every version sees, "
+                                 "written in DEFAULT only (docs/versioning.md, \"Versioning per class\")")
     _command(cls_commands, "list", "list the feature classes", ["tgsis class list", "tgsis class list --json"],
              cmd_class_list, tabular=True)
     cls_alter = _command(cls_commands, "alter", "add, rename or drop properties of a feature class, in every version",

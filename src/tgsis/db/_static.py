@@ -76,20 +76,24 @@ def stored_bounds(geometry: Geometry, meanings: Sequence[Meaning]) -> list[float
 
 
 def new_static_geometry(conn: Conn, geometry: Geometry, name: str | None, meaning: Meaning,
-                  member_meanings: Sequence[Meaning], *, collection: int | None = None) -> int:
+                  member_meanings: Sequence[Meaning], *, collection: int | None = None,
+                  feature_class: str | None = None) -> int:
     """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid.
 
     ``meaning`` is the geometry's own (z convention, coordinate system,
     colour, metadata); ``member_meanings`` those of its members (of a mesh:
-    its own), whose z conventions give the stored box.
+    its own), whose z conventions give the stored box. ``feature_class``
+    names the class the geometry is stored for: one registered without
+    versioning gives it a geoid of no version (members inherit their
+    collection's).
     """
     bounds = stored_bounds(geometry, member_meanings)
     geoids: list[int] | None = [] if isinstance(geometry, GeometryCollection) else None  # members come next
     row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s, 'STATIC', false, %s::real[], %s, "
-                       "%s::jsonb, %s::jsonb)",
+                       "%s::jsonb, %s::jsonb, %s)",
                        (geometry.geotype.value, name, bounds, geometry.n_vertices, geometry.n_cells, geoids,
                         collection, meaning.color, meaning.zpositive, meaning.crs_json(),
-                        meaning.metadata_json())).fetchone()
+                        meaning.metadata_json(), feature_class)).fetchone()
     assert row is not None
     return int(row[0])
 

@@ -141,7 +141,19 @@ class Storage:
     viewing: int | None = None
 
     @classmethod
-    def of(cls, conn: Conn) -> Storage:
+    def of(cls, conn: Conn, fc: FeatureClass | None = None) -> Storage:
+        """The targets of the session's writes; of the features of ``fc`` when given.
+
+        A class registered without versioning (``fc.versioned`` false) has
+        features of no version: their rows in versioned storage carry
+        revision 0 (``tgsis.unversioned_features``), and they are written
+        in DEFAULT's working revision only.
+
+        Raises
+        ------
+        NotVersionedError
+            ``fc`` has no versioning and the session is elsewhere (nothing is written).
+        """
         versioned = frozenset((r[0], r[1]) for r in conn.execute(
             "SELECT schemaname, tablename FROM tgsis.versioned_tables").fetchall())
         session = conn.execute(
@@ -150,11 +162,39 @@ class Storage:
         assert session is not None
         version, viewing, working = session
         elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
+        storage = cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None)
+        unversioned = fc is not None and not fc.versioned
+        if unversioned:
+            assert fc is not None
+            storage.check_unversioned(fc)
         if not versioned:
-            return cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None)
+            return storage
         row = conn.execute("SELECT revision FROM tgsis.write_revision()").fetchone()  # TG301 when read-only
         assert row is not None
-        return cls(versioned, int(row[0]), version if elsewhere else None, viewing if elsewhere else None)
+        return replace(storage, revision=0 if unversioned else int(row[0]))
+
+    def check_unversioned(self, fc: FeatureClass) -> None:
+        """Refuse a write of the features of ``fc``, a class without versioning, outside DEFAULT's working revision.
+
+        Raises
+        ------
+        NotVersionedError
+            Nothing is written.
+        """
+        if self.version is None:
+            return
+        if self.version != "DEFAULT":
+            raise NotVersionedError(
+                f"features of class {fc.name} are not versioned: a write in version {self.version!r} would change "
+                "them in every version",
+                detail=f"the connection works in version {self.version!r}, but class {fc.name} was registered "
+                       "without versioning: its features hold one state, which every version reads; nothing was written",
+                hint="write them in DEFAULT (tgsis.goto_version(conn, 'DEFAULT'), or outside tgsis.in_version)")
+        raise NotVersionedError(
+            f"features of class {fc.name} are not versioned: DEFAULT viewed at revision {self.viewing} cannot write them",
+            detail=f"the connection looks at an older revision; class {fc.name} holds only the current state of its "
+                   "features; nothing was written",
+            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state")
 
     def check(self, schema: str, table: str) -> None:
         """Refuse a write to a plain ``schema.table`` while the session is not in DEFAULT's working revision.

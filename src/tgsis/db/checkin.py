@@ -403,7 +403,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
                                    f"not {edited.geotype.value} ({type(edited).__name__})")
     cell_values = aligned_properties(fc, edited, drop_extra, "the edited mesh")
     feature_values = feature_columns(fc, properties)
-    storage = Storage.of(conn)
+    storage = Storage.of(conn, fc)
     storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)
     updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)

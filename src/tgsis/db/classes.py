@@ -96,6 +96,10 @@ class FeatureClass:
     cell_level : int or None
         A class of G-maps: the dimension of the cells its ``cell_properties``
         belong to (``_idx`` is an abstract cell id).
+    versioned : bool
+        ``True``: versioned with every class while feature versioning is on;
+        ``False``: registered without versioning: its features hold one
+        state, which every version sees, written in DEFAULT only.
     """
 
     name: str
@@ -115,6 +119,7 @@ class FeatureClass:
     protable: str | None = None
     otherprotable: str | None = None
     cell_level: int | None = None
+    versioned: bool = True
 
     def alignment_of(self, prop: Property) -> Literal["VERTEX", "CELL"]:
         """Whether ``prop`` has a value per vertex or per cell."""
@@ -147,7 +152,7 @@ class FeatureClass:
 
 _CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
                     "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
-                    "protablename, otherprotable, celllevel")
+                    "protablename, otherprotable, celllevel, versioned")
 
 
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
@@ -159,7 +164,7 @@ def _class_from_row(row: Sequence[Any]) -> FeatureClass:
                         feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
                         cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
                         time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15],
-                        cell_level=None if row[16] is None else int(row[16]))
+                        cell_level=None if row[16] is None else int(row[16]), versioned=bool(row[17]))
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
@@ -230,12 +235,15 @@ def create_feature_class(
         belong to (0: vertices, 1: edges, 2: faces, 3: volumes); required for
         ``time_model="GMAP"``, refused otherwise.
     versioned : bool, optional
-        Leave it out: a class is versioned when feature versioning is on
-        (:func:`~tgsis.enable_feature_versioning`), with every other class.
-        ``False`` is refused (:class:`~tgsis.errors.VersioningError`): the
-        classes' geometries share storage tables, which are versioned for
-        all or none (docs/versioning.md, "Versioning per class"); ``True``
-        is refused while feature versioning is off.
+        Leave it out (or ``True``): the class is versioned when feature
+        versioning is on (:func:`~tgsis.enable_feature_versioning`), with
+        every other class; ``True`` is refused while it is off
+        (:class:`~tgsis.errors.VersioningError`). ``False``: a class without
+        versioning, before or after feature versioning is enabled: its
+        tables stay plain, its features hold one state that every version
+        and revision sees, and they are written in DEFAULT only
+        (:class:`~tgsis.errors.NotVersionedError` elsewhere;
+        docs/versioning.md, "Versioning per class").
 
     Raises
     ------

@@ -172,9 +172,10 @@ def insert_feature(
     feature_values = feature_columns(fc, properties)
 
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
-        geoid = new_static_geometry(conn, mesh, name if name is not None else mesh.name, own_meaning, meanings)
+        geoid = new_static_geometry(conn, mesh, name if name is not None else mesh.name, own_meaning, meanings,
+                                    feature_class=fc.name)
         if isinstance(mesh, GeometryCollection):
             member_ids = [new_static_geometry(conn, m, m.name, meaning, [meaning], collection=geoid)
                           for m, meaning in zip(members, meanings)]
@@ -316,7 +317,7 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
                               (feature_id,)).fetchone()
         if exists is None:
             return False
-        Storage.of(conn).check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
+        Storage.of(conn, fc).check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,))
     return True
 

@@ -257,11 +257,12 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
                   for prop in fc.cell_properties)]
 
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")
-        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s)",
+        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s, "
+                           "p_class => %s)",
                            (name if name is not None else evolving.name, _bounds(evolving), sum(nodes), sum(darts),
-                            evolving.alive)).fetchone()
+                            evolving.alive, fc.name)).fetchone()
         assert row is not None
         geoid = int(row[0])
         # the largest table first: its rows need nothing but the involutions, and while the server takes them
@@ -342,11 +343,11 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
                 *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties)]
 
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")
         period = EvolvingGMap([GMapPeriod([0.0], g)])
-        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM')",
-                           (name, _bounds(period), g.n_points, d)).fetchone()
+        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM', p_class => %s)",
+                           (name, _bounds(period), g.n_points, d, fc.name)).fetchone()
         assert row is not None
         geoid = int(row[0])
         extent = None

@@ -80,10 +80,12 @@ def _bounds(points: npt.NDArray[np.float64]) -> list[float] | None:
     return None if len(flat) == 0 else [*flat.min(axis=0).tolist(), *flat.max(axis=0).tolist()]
 
 
-def _new_temporal_geometry(conn: Conn, model: str, name: str | None, bounds: list[float] | None, nvrtx: int,
+def _new_temporal_geometry(conn: Conn, fc: FeatureClass, name: str | None, bounds: list[float] | None, nvrtx: int,
                            ncell: int, alive: bool, color: Sequence[float] | None) -> int:
-    row = conn.execute("SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[])",
-                       (name, bounds, nvrtx, ncell, model, alive, list(color) if color else None)).fetchone()
+    row = conn.execute("SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[], "
+                       "p_class => %s)",
+                       (name, bounds, nvrtx, ncell, fc.time_model, alive, list(color) if color else None,
+                        fc.name)).fetchone()
     assert row is not None
     return int(row[0])
 
@@ -176,10 +178,10 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
     times = series.times.tolist()
     instant_rows = _instant_rows(fc, series.properties, len(times))
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
-            conn, "INSTANTS", name if name is not None else series.name,
+            conn, fc, name if name is not None else series.name,
             _bounds(concat([s.vertices for s in series.surfaces])),
             sum(s.n_vertices for s in series.surfaces), sum(s.n_cells for s in series.surfaces), series.alive,
             series.color)
@@ -214,7 +216,7 @@ def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
     rows = _instant_rows(fc, {k: np.asarray([v]) for k, v in (properties or {}).items()}, 1)
     bounds = _bounds(surface.vertices)
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "times")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.add_instant(%s, %s)", (feature_id, float(t)))
         _copy_instants(conn, fc, feature_id, [float(t)], [surface], storage, drop_extra_properties)
@@ -355,10 +357,10 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
     m = [p.n_triangles for p in periods]
     instant_rows = [row for p in periods for row in _instant_rows(fc, dict(p.properties), len(p.times))]
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
-            conn, "EVOLVING", name if name is not None else surface.name,
+            conn, fc, name if name is not None else surface.name,
             _bounds(concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
             surface.color)
         _copy_periods(conn, storage, fc, geoid, periods, cell_values, 0, 0)
@@ -398,7 +400,7 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     cell_values = _period_columns(fc, EvolvingSurface([period]), drop_extra_properties)
     instant_rows = _instant_rows(fc, dict(period.properties), len(period.times))
     with reraise(), conn.transaction():
-        storage = Storage.of(conn)
+        storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         conn.execute("SELECT tgsis.temporal_geometry(%s, 'EVOLVING')", (feature_id,))
         # one writer of the feature's periods at a time: a second append waits, then sees the new last instant
