@@ -53,18 +53,30 @@ DECLARE
     v_same     text;
     v_dup      text;
     v_stale    text;
-    v_none     text := '';
+    v_probe    text;
+    v_declare  text := '';
 BEGIN
+    v_probe := format($probe$-- object locks: one index probe per row; the check names the holders
+    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %1$L AND l.objectkey = ANY (v_keys)) THEN
+        PERFORM tgsis.check_objects_unlocked(%1$L, v_keys);
+    END IF;$probe$, p_class);
     -- features of classes without versioning (tgsis.unversioned_features) are
     -- rows of no version: written with revision 0, which every revision set
     -- holds, so that the code below changes them in place and deletes them for
-    -- good; one index probe per row, on the tables of object class 'feature'
-    -- (keyed by geoid) only
+    -- good; on the tables of object class 'feature' (keyed by geoid) only, in
+    -- the same query as the lock probe (one statement per row, not two)
     IF p_class = 'feature' THEN
-        v_none := $none$
-    IF EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_keys::bigint[])) THEN
+        v_probe := format($probe$-- object locks and features of no version: two index probes per row in one query
+    SELECT EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %1$L AND l.objectkey = ANY (v_keys)),
+           EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_keys::bigint[]))
+      INTO v_locked, v_none;
+    IF v_none THEN
         v_w := tgsis.unversioned_revision(v_keys::bigint[]);  -- 0, or TG305 outside DEFAULT's working revision
-    END IF;$none$;
+    END IF;
+    IF v_locked THEN
+        PERFORM tgsis.check_objects_unlocked(%1$L, v_keys);  -- names the holders
+    END IF;$probe$, p_class);
+        v_declare := E'\n    v_locked boolean;\n    v_none   boolean;';
     END IF;
     SELECT string_agg(format('%I', c), ', ' ORDER BY o),
            string_agg(format('NEW.%I', c), ', ' ORDER BY o),
@@ -120,7 +132,7 @@ DECLARE
     v_w    integer;
     v_set  integer[];
     v_keys text[];
-    v_cur  record;
+    v_cur  record;%21$s
 BEGIN
     -- the write right on the session's version (checked for every row), its working revision and set
     SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
@@ -130,11 +142,8 @@ BEGIN
         v_keys := ARRAY[OLD.%15$I::text];
     ELSE
         v_keys := ARRAY[OLD.%15$I::text, NEW.%15$I::text];
-    END IF;%20$s
-    -- object locks: one index probe per row; the check names the holders
-    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %14$L AND l.objectkey = ANY (v_keys)) THEN
-        PERFORM tgsis.check_objects_unlocked(%14$L, v_keys);
     END IF;
+    %20$s
     -- no bulk writer of the object in flight (they take it exclusively)
     PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[1], v_vid));
     IF cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN
@@ -199,7 +208,7 @@ $body$$fn$,
         p_schema, p_table || '_ver_write', p_table, v_ver, v_cols, v_new_key, v_new, v_assign, v_visible, v_dup,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
-        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_none);
+        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare);
 END
 $gen$;
 
