@@ -25,7 +25,7 @@ BEGIN
     END IF;
     IF v_class.versioned THEN
         RAISE EXCEPTION 'feature class % is versioned: its features take geoids of their own', p_class
-            USING ERRCODE = 'TG300', HINT = 'only classes registered with p_versioned => false have features of no version';
+            USING ERRCODE = 'TG300', HINT = 'only classes registered without versioning have features of no version';
     END IF;
     IF NOT has_table_privilege(tgsis.calling_role(), format('%I.%I', v_class.schemaname, v_class.featuretable), 'INSERT') THEN
         RAISE EXCEPTION 'role % may not add features to class %', quote_ident(tgsis.calling_role()), p_class

@@ -189,7 +189,7 @@ class Storage:
                 "them in every version",
                 detail=f"the connection works in version {self.version!r}, but class {fc.name} was registered "
                        "without versioning: its features hold one state, which every version reads; nothing was written",
-                hint="write them in DEFAULT (tgsis.goto_version(conn, 'DEFAULT'), or outside tgsis.in_version)")
+                hint="tgsis.goto_version(conn, 'DEFAULT') to write them")
         raise NotVersionedError(
             f"features of class {fc.name} are not versioned: DEFAULT viewed at revision {self.viewing} cannot write them",
             detail=f"the connection looks at an older revision; class {fc.name} holds only the current state of its "
