@@ -8,6 +8,7 @@ A pg_dump and restore of them is part of tests/test_backup.py's scenario.
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import numpy as np
@@ -18,6 +19,7 @@ import tgsis
 from tests.gmaps_shapes import block_tetrahedra
 from tests.roles import login_roles
 from tests.temporal_data import evolving, series
+from tgsis.cli import main
 
 Conn = psycopg.Connection[Any]
 
@@ -314,3 +316,24 @@ def test_temporal_and_gmap_classes_without_versioning(conn: Conn) -> None:
     with tgsis.in_version(conn, "v1"):
         assert [float(t) for t, _ in tgsis.instants(conn, stepped)] == [0.0, 2.0]
     assert conn.execute("SELECT count(*) FROM tgsis.times_ver WHERE geoid = %s", (stepped,)).fetchone() == (2,)
+
+
+def test_the_command_line_creates_lists_and_describes_a_class_without_versioning(
+        db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.enable_feature_versioning(conn)
+        conn.commit()
+    assert main(["--dsn", db_dsn, "class", "create", "wells", "--geotype", "SURFACE", "--no-versioning"]) == 0
+    assert "without versioning: one state in every version, written in DEFAULT" in capsys.readouterr().out
+    assert main(["--dsn", db_dsn, "class", "list", "--json"]) == 0
+    assert [c["versioned"] for c in json.loads(capsys.readouterr().out)["classes"]] == [False]
+    with psycopg.connect(db_dsn) as conn:
+        well = tgsis.insert_feature(conn, "wells", _grid(2), drop_extra_properties=True)
+        tgsis.create_version(conn, "v1")
+        conn.commit()
+    assert main(["--dsn", db_dsn, "info", str(well)]) == 0
+    out = capsys.readouterr().out
+    assert "class wells is not versioned: every version sees this state" in out
+    assert "versions where it differs" not in out
+    assert main(["--dsn", db_dsn, "info", str(well), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["versioned"] is False
