@@ -1,0 +1,211 @@
+"""Merges, refreshes and conflict checks of a 1,000-row edit at 2M and 20M rows (issue 20, target 3).
+
+For each size a versioned table of objects of 10,000 rows is loaded in a
+database of its own on one server. Then, three times: a child version
+edits 1,000 rows of one object through the view while DEFAULT edits 1,000
+rows of another, and we time ``find_conflicts`` of the child (both sides'
+changes), its ``refresh_version`` (DEFAULT's edit into the child) and its
+``merge_version`` (the child's edit into DEFAULT), each in its own
+transaction. Medians of the three rounds.
+
+Baselines in the same process: the small size against the large one (the
+issue's bound: the large one at most 2x the small one, and at most 0.3 s),
+and ``tgsis.changed_objects`` alone, the question each of them asks every
+versioned table (which objects have row versions written or closed in these
+revisions), against the same question asked through two indexes made for
+the run (a btree on ``revision``, a GIN on the ``lastrevs`` of closed rows):
+what an index-driven answer would give. With ``--upload-cost``, what each
+such index costs the upload of a 1M-vertex, 2M-triangle surface into
+versioned storage (``insert_feature``, rolled back; the indexes on
+``geometry``, ``vrtx`` and ``trgl``, the variants alternating).
+
+    python bench/merges.py [--small 2000000] [--large 20000000] [--rounds 3] [--upload-cost]    # TGSIS_PG=system|embedded
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+import psycopg
+
+import tgsis
+from tgsis.db.local import LocalServer, find_binaries
+
+Conn = psycopg.Connection[Any]
+OBJECT_ROWS = 10_000
+EDIT_ROWS = 1_000
+
+
+def load(conn: Conn, rows: int) -> float:
+    """The table of ``rows`` rows (objects of 10,000), versioned; seconds taken."""
+    start = time.perf_counter()
+    conn.execute("CREATE TABLE parts (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))")
+    conn.execute("INSERT INTO parts SELECT i / %s, i %% %s, random(), random(), random() "
+                 "FROM generate_series(0, %s - 1) i", (OBJECT_ROWS, OBJECT_ROWS, rows))
+    conn.commit()
+    tgsis.enable_versioning(conn, "parts", "objid", "part")
+    conn.commit()
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE parts_ver")
+    conn.autocommit = False
+    return time.perf_counter() - start
+
+
+def timed(conn: Conn, action: Any) -> float:
+    start = time.perf_counter()
+    action()
+    conn.commit()
+    return time.perf_counter() - start
+
+
+def one_round(conn: Conn, n: int, objects: int) -> dict[str, float]:
+    """A child and DEFAULT each edit 1,000 rows of an object; time the conflict check, refresh and merge."""
+    name = f"edit{n}"
+    tgsis.create_version(conn, name)
+    conn.commit()
+    with tgsis.in_version(conn, name):
+        conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s AND k < %s", (2 * n % objects, EDIT_ROWS))
+    conn.execute("UPDATE parts SET y = y + 1 WHERE objid = %s AND k < %s", ((2 * n + 1) % objects, EDIT_ROWS))
+    conn.commit()
+    figures = {"find_conflicts": timed(conn, lambda: tgsis.find_conflicts(conn, name)),
+               "refresh": timed(conn, lambda: tgsis.refresh_version(conn, name))}
+    with tgsis.in_version(conn, name):
+        conn.execute("UPDATE parts SET z = z + 1 WHERE objid = %s AND k < %s", (2 * n % objects, EDIT_ROWS))
+    figures["merge"] = timed(conn, lambda: tgsis.merge_version(conn, name, remove=True))
+    return figures
+
+
+def changed_objects_s(conn: Conn, objects: int) -> tuple[float, float]:
+    """tgsis.changed_objects of a child's 1,000-row edit as it is, and through two indexes (rolled back)."""
+    tgsis.create_version(conn, "probe")
+    with tgsis.in_version(conn, "probe"):
+        conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s AND k < %s", (objects - 1, EDIT_ROWS))
+    own = conn.execute("SELECT tgsis.own_working_revisions(versionid) FROM tgsis.versions WHERE name = 'probe'"
+                       ).fetchone()
+    assert own is not None
+    query = ("SELECT count(*) FROM parts_ver v WHERE v.revision = ANY (%s::int[]) OR "
+             "(v.revclosed AND v.lastrevs && %s::int[])")
+
+    def best(statement: str, params: tuple[Any, ...]) -> float:
+        samples = []
+        for _ in range(5):
+            start = time.perf_counter()
+            conn.execute(statement, params).fetchall()
+            samples.append(time.perf_counter() - start)
+        return statistics.median(samples)
+
+    as_is = best("SELECT * FROM tgsis.changed_objects(%s::int[])", (own[0],))
+    conn.execute("CREATE INDEX ON parts_ver (revision)")
+    conn.execute("CREATE INDEX ON parts_ver USING gin (lastrevs) WHERE revclosed")
+    conn.execute("ANALYZE parts_ver")
+    indexed = best(query, (own[0], own[0]))
+    conn.rollback()
+    return as_is, indexed
+
+
+#: the indexes an index-driven answer needs, by kind, as made on a table's storage {t}
+INDEXES = {"btree on revision": "CREATE INDEX ON {t} (revision)",
+           "brin on revision": "CREATE INDEX ON {t} USING brin (revision)",
+           "gin on closed lastrevs": "CREATE INDEX ON {t} USING gin (lastrevs) WHERE revclosed"}
+
+
+def grid(side: int) -> tgsis.Surface:
+    u, v = np.meshgrid(np.arange(side, dtype=float), np.arange(side, dtype=float))
+    vertices = np.stack([u.ravel(), v.ravel(), np.zeros(side * side)], axis=1)
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+
+
+def upload_cost(server: LocalServer, rounds: int) -> dict[str, float]:
+    """Median upload of a 1M-vertex surface into versioned storage with no extra index, then with each kind."""
+    tables = ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver")
+    with psycopg.connect(server.dsn(), autocommit=True) as admin:
+        admin.execute("CREATE DATABASE upload")
+    samples: dict[str, list[float]] = {"none": [], **{kind: [] for kind in INDEXES}}
+    surface = grid(1000)
+    with psycopg.connect(server.dsn("upload")) as conn:
+        tgsis.install(conn, method="sql")
+        tgsis.enable_feature_versioning(conn)
+        tgsis.create_feature_class(conn, "surfaces", "SURFACE")
+        conn.commit()
+        existing = "SELECT array_agg(indexrelid::regclass::text ORDER BY 1) FROM pg_index WHERE indrelid = ANY (%s::regclass[])"
+        before = conn.execute(existing, (list(tables),)).fetchone()
+        for _ in range(rounds):
+            for kind in samples:
+                for table in tables if kind != "none" else ():
+                    conn.execute(INDEXES[kind].format(t=table))
+                conn.commit()
+                conn.autocommit = True
+                for table in tables:
+                    conn.execute(f"VACUUM {table}")  # the rolled-back rows of the last round
+                conn.autocommit = False
+                start = time.perf_counter()
+                tgsis.insert_feature(conn, "surfaces", surface)
+                samples[kind].append(time.perf_counter() - start)
+                conn.rollback()
+                now = conn.execute(existing, (list(tables),)).fetchone()
+                assert before is not None and now is not None
+                for name in set(now[0]) - set(before[0]):  # the kind's indexes go again
+                    conn.execute(f"DROP INDEX {name}")
+                conn.commit()
+    return {kind: statistics.median(values) for kind, values in samples.items()}
+
+
+def measure(server: LocalServer, rows: int, rounds: int, label: str) -> dict[str, float]:
+    database = f"{label}_{rows}"
+    with psycopg.connect(server.dsn(), autocommit=True) as admin:
+        admin.execute(f"CREATE DATABASE {database}")
+    with psycopg.connect(server.dsn(database)) as conn:
+        tgsis.install(conn, method="sql")  # this checkout's SQL
+        loaded = load(conn, rows)
+        size = conn.execute("SELECT pg_total_relation_size('parts_ver')").fetchone()
+        assert size is not None
+        samples = [one_round(conn, n, rows // OBJECT_ROWS) for n in range(rounds)]
+        figures = {key: statistics.median(s[key] for s in samples) for key in samples[0]}
+        figures["changed_objects"], figures["changed_objects_indexed"] = changed_objects_s(conn, rows // OBJECT_ROWS)
+    print(f"{rows:>11,} rows: loaded and versioned in {loaded:.0f} s; storage {size[0] / 1e6:.0f} MB")
+    for key, value in figures.items():
+        print(f"    {key:24s} {value * 1000:9.1f} ms")
+    return figures
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--small", type=int, default=2_000_000)
+    parser.add_argument("--large", type=int, default=20_000_000)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--upload-cost", action="store_true", help="also time a 1M-vertex upload with each index")
+    args = parser.parse_args()
+
+    binaries = find_binaries()
+    print(f"server: {binaries.describe()} (throwaway cluster, fsync off); a child's and DEFAULT's "
+          f"{EDIT_ROWS}-row edits, medians of {args.rounds} rounds")
+    server = LocalServer.throwaway(binaries)
+    try:
+        small = measure(server, args.small, args.rounds, "small")
+        large = measure(server, args.large, args.rounds, "large")
+        uploads = upload_cost(server, args.rounds) if args.upload_cost else {}
+    finally:
+        server.destroy()
+
+    for kind, seconds in uploads.items():
+        print(f"upload of 1M vertices, {kind:24s} {seconds:6.2f} s")
+
+    for key in ("find_conflicts", "refresh", "merge"):
+        print(f"{key}_large_s: {large[key]:.3f}")
+        print(f"{key}_large_vs_small: {large[key] / small[key]:.2f}")
+    print(f"changed_objects_large_s: {large['changed_objects']:.3f}")
+    print(f"changed_objects_large_vs_small: {large['changed_objects'] / small['changed_objects']:.2f}")
+    print(f"changed_objects_indexed_large_s: {large['changed_objects_indexed']:.4f}")
+    print(f"changed_objects_indexed_vs_as_is_large: {large['changed_objects_indexed'] / large['changed_objects']:.4f}")
+    for kind in INDEXES if uploads else ():
+        print(f"upload_with_{kind.replace(' ', '_')}_vs_none: {uploads[kind] / uploads['none']:.3f}")
+
+
+if __name__ == "__main__":
+    main()
