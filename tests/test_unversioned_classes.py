@@ -337,3 +337,27 @@ def test_the_command_line_creates_lists_and_describes_a_class_without_versioning
     assert "versions where it differs" not in out
     assert main(["--dsn", db_dsn, "info", str(well), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["versioned"] is False
+
+
+def test_bad_classes_are_refused_and_nothing_is_claimed(conn: Conn) -> None:
+    _classes(conn)
+    claimed = "SELECT count(*), (SELECT last_value FROM tgsis.geometry_geoid_seq) FROM tgsis.unversioned_features"
+    before = conn.execute(claimed).fetchone()
+    for call, sqlstate, message in (
+            ("SELECT tgsis.new_geometry('SURFACE', 'w', NULL, 0, 0, p_class => 'nope')", "TG200",
+             "feature class 'nope' of a new geometry does not exist"),
+            ("SELECT tgsis.claim_unversioned_geoid('nope')", "TG200", "feature class 'nope' does not exist"),
+            ("SELECT tgsis.claim_unversioned_geoid(NULL)", "TG200", "feature class NULL does not exist"),
+            ("SELECT tgsis.claim_unversioned_geoid('horizons')", "TG300",
+             "feature class horizons is versioned: its features take geoids of their own")):
+        with pytest.raises(psycopg.Error, match=message) as caught:
+            conn.execute(call)
+        assert caught.value.sqlstate == sqlstate
+        conn.rollback()
+    assert conn.execute(claimed).fetchone() == before
+    # a geometry stored for a versioned class is versioned, as one stored for no class
+    geoid = conn.execute("SELECT tgsis.new_geometry('SURFACE', 'h', NULL, 0, 0, p_class => 'horizons')").fetchone()
+    assert geoid is not None
+    assert conn.execute("SELECT revision FROM tgsis.geometry_ver WHERE geoid = %s", geoid).fetchone() == \
+        (tgsis.working_revision(conn),)
+    assert conn.execute(claimed).fetchone()[0] == 0  # type: ignore[index]

@@ -34,4 +34,4 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG302', 'unsolved_conflicts', 'versioning', 'a merge or refresh while objects changed on both sides have no recorded solution'),
     ('TG303', 'object_locked',    'versioning', 'a write (or merge) would change an object another version, or another role, holds a lock on'),
     ('TG304', 'checkout_conflict', 'versioning', 'a check-in of an object that another writer changed (or deleted) since it was checked out'),
-    ('TG305', 'not_versioned',    'versioning', 'a write in a version other than DEFAULT (or at an older revision) to tables that are not versioned: it would land in DEFAULT');
+    ('TG305', 'not_versioned',    'versioning', 'a write in a version other than DEFAULT (or at an older revision) to tables that are not versioned, or to features of a class without versioning: it would land in DEFAULT, which every version sees');

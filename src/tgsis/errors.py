@@ -205,9 +205,11 @@ class CheckoutConflictError(VersioningError):
 
 
 class NotVersionedError(VersioningError):
-    """A write in a version other than DEFAULT (or at an older revision) to tables that are not versioned.
+    """A write in a version other than DEFAULT (or at an older revision) to what is not versioned.
 
-    Such a write would land in DEFAULT, the one state plain tables hold.
+    Plain tables while feature versioning is off, or the features of a class
+    registered without versioning: such a write would land in DEFAULT, the
+    one state they hold, which every version sees.
     """
 
     code = "TG305"
