@@ -10,16 +10,21 @@ transaction. Medians of the three rounds.
 
 Baselines in the same process: the small size against the large one (the
 issue's bound: the large one at most 2x the small one, and at most 0.3 s),
-and ``tgsis.changed_objects`` alone, the question each of them asks every
-versioned table (which objects have row versions written or closed in these
-revisions), against the same question asked through two indexes made for
-the run (a btree on ``revision``, a GIN on the ``lastrevs`` of closed rows):
-what an index-driven answer would give. With ``--upload-cost``, what each
-such index costs the upload of a 1M-vertex, 2M-triangle surface into
-versioned storage (``insert_feature``, rolled back; the indexes on
-``geometry``, ``vrtx`` and ``trgl``, the variants alternating).
+and ``tgsis.changed_objects`` alone, the question each of them asks (which
+objects have row versions written or closed in these revisions), answered
+from the notes of ``tgsis.revision_objects``, against the same question
+asked of the storage by a scan (what it cost before the notes). With
+``--upload-cost``, what the notes cost the upload of a 1M-vertex,
+2M-triangle surface into versioned storage (``insert_feature``, rolled
+back; the storage trigger ``tgsis_storage_changes`` of ``geometry``,
+``vrtx`` and ``trgl`` enabled, then disabled, alternating). With
+``--view-write``, what the note probe costs a write through a view: a
+10,000-row update of one object in a child (each row closed and written
+anew, rolled back), the view's trigger as generated against the same
+trigger without the probe, alternating.
 
-    python bench/merges.py [--small 2000000] [--large 20000000] [--rounds 3] [--upload-cost]    # TGSIS_PG=system|embedded
+    python bench/merges.py [--small 2000000] [--large 20000000] [--rounds 3] [--upload-cost] [--view-write]
+    # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
@@ -80,37 +85,30 @@ def one_round(conn: Conn, n: int, objects: int) -> dict[str, float]:
 
 
 def changed_objects_s(conn: Conn, objects: int) -> tuple[float, float]:
-    """tgsis.changed_objects of a child's 1,000-row edit as it is, and through two indexes (rolled back)."""
+    """tgsis.changed_objects of a child's 1,000-row edit (from the notes), and the same question as a scan (rolled back)."""
     tgsis.create_version(conn, "probe")
     with tgsis.in_version(conn, "probe"):
         conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s AND k < %s", (objects - 1, EDIT_ROWS))
     own = conn.execute("SELECT tgsis.own_working_revisions(versionid) FROM tgsis.versions WHERE name = 'probe'"
                        ).fetchone()
     assert own is not None
-    query = ("SELECT count(*) FROM parts_ver v WHERE v.revision = ANY (%s::int[]) OR "
-             "(v.revclosed AND v.lastrevs && %s::int[])")
+    scan = ("SELECT v.objid, count(*) FROM parts_ver v WHERE v.revision = ANY (%s::int[]) OR v.lastrevs && %s::int[] "
+            "GROUP BY 1")
 
-    def best(statement: str, params: tuple[Any, ...]) -> float:
-        samples = []
+    def best(statement: str, params: tuple[Any, ...]) -> tuple[float, list[Any]]:
+        samples: list[float] = []
+        rows: list[Any] = []
         for _ in range(5):
             start = time.perf_counter()
-            conn.execute(statement, params).fetchall()
+            rows = conn.execute(statement, params).fetchall()
             samples.append(time.perf_counter() - start)
-        return statistics.median(samples)
+        return statistics.median(samples), rows
 
-    as_is = best("SELECT * FROM tgsis.changed_objects(%s::int[])", (own[0],))
-    conn.execute("CREATE INDEX ON parts_ver (revision)")
-    conn.execute("CREATE INDEX ON parts_ver USING gin (lastrevs) WHERE revclosed")
-    conn.execute("ANALYZE parts_ver")
-    indexed = best(query, (own[0], own[0]))
+    noted, found = best("SELECT objectkey FROM tgsis.changed_objects(%s::int[])", (own[0],))
+    scanned, counted = best(scan, (own[0], own[0]))
+    assert [k for (k,) in found] == [str(k) for k, _ in counted] == [str(objects - 1)], (found, counted)
     conn.rollback()
-    return as_is, indexed
-
-
-#: the indexes an index-driven answer needs, by kind, as made on a table's storage {t}
-INDEXES = {"btree on revision": "CREATE INDEX ON {t} (revision)",
-           "brin on revision": "CREATE INDEX ON {t} USING brin (revision)",
-           "gin on closed lastrevs": "CREATE INDEX ON {t} USING gin (lastrevs) WHERE revclosed"}
+    return noted, scanned
 
 
 def grid(side: int) -> tgsis.Surface:
@@ -121,38 +119,78 @@ def grid(side: int) -> tgsis.Surface:
     return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
 
 
+NOTE_TABLES = ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver")
+
+
 def upload_cost(server: LocalServer, rounds: int) -> dict[str, float]:
-    """Median upload of a 1M-vertex surface into versioned storage with no extra index, then with each kind."""
-    tables = ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver")
+    """Median upload of a 1M-vertex surface into versioned storage with the note trigger, and with it disabled."""
     with psycopg.connect(server.dsn(), autocommit=True) as admin:
         admin.execute("CREATE DATABASE upload")
-    samples: dict[str, list[float]] = {"none": [], **{kind: [] for kind in INDEXES}}
+    samples: dict[str, list[float]] = {"noted": [], "not noted": []}
     surface = grid(1000)
     with psycopg.connect(server.dsn("upload")) as conn:
         tgsis.install(conn, method="sql")
         tgsis.enable_feature_versioning(conn)
         tgsis.create_feature_class(conn, "surfaces", "SURFACE")
+        tgsis.create_version(conn, "upload")  # a working revision of its own (DEFAULT's first is 0, never noted)
         conn.commit()
-        existing = "SELECT array_agg(indexrelid::regclass::text ORDER BY 1) FROM pg_index WHERE indrelid = ANY (%s::regclass[])"
-        before = conn.execute(existing, (list(tables),)).fetchone()
         for _ in range(rounds):
             for kind in samples:
-                for table in tables if kind != "none" else ():
-                    conn.execute(INDEXES[kind].format(t=table))
+                for table in NOTE_TABLES:
+                    conn.execute(f"ALTER TABLE {table} {'ENABLE' if kind == 'noted' else 'DISABLE'} "
+                                 "TRIGGER tgsis_storage_changes")
                 conn.commit()
                 conn.autocommit = True
-                for table in tables:
+                for table in NOTE_TABLES:
                     conn.execute(f"VACUUM {table}")  # the rolled-back rows of the last round
                 conn.autocommit = False
-                start = time.perf_counter()
-                tgsis.insert_feature(conn, "surfaces", surface)
-                samples[kind].append(time.perf_counter() - start)
-                conn.rollback()
-                now = conn.execute(existing, (list(tables),)).fetchone()
-                assert before is not None and now is not None
-                for name in set(now[0]) - set(before[0]):  # the kind's indexes go again
-                    conn.execute(f"DROP INDEX {name}")
+                with tgsis.in_version(conn, "upload"):
+                    start = time.perf_counter()
+                    tgsis.insert_feature(conn, "surfaces", surface)
+                    samples[kind].append(time.perf_counter() - start)
+                    notes = conn.execute("SELECT count(*) FROM tgsis.revision_objects "
+                                         "WHERE tablename IN ('vrtx', 'trgl')").fetchone()  # (COPY; geometry: a view)
+                    assert notes == ((2,) if kind == "noted" else (0,)), notes
+                    conn.rollback()
+        for table in NOTE_TABLES:
+            conn.execute(f"ALTER TABLE {table} ENABLE TRIGGER tgsis_storage_changes")
+        conn.commit()
+    return {kind: statistics.median(values) for kind, values in samples.items()}
+
+
+def view_write_cost(server: LocalServer, rounds: int) -> dict[str, float]:
+    """A 10,000-row update of one object through the view in a child: the trigger as generated, and without the note probe."""
+    with psycopg.connect(server.dsn(), autocommit=True) as admin:
+        admin.execute("CREATE DATABASE viewwrite")
+    samples: dict[str, list[float]] = {"with probe": [], "without probe": []}
+    with psycopg.connect(server.dsn("viewwrite")) as conn:
+        tgsis.install(conn, method="sql")
+        load(conn, 3 * OBJECT_ROWS)
+        tgsis.create_version(conn, "child")
+        conn.commit()
+        row = conn.execute("SELECT pg_get_functiondef('public.parts_ver_write()'::regprocedure)").fetchone()
+        assert row is not None
+        source: str = row[0]
+        # the same trigger with the note's half of the probe query, and its call, taken out
+        call, probe = "IF v_w <> 0 AND NOT (v_noted", "EXISTS (SELECT FROM tgsis.revision_objects o"
+        assert call in source and probe in source, "the generated trigger has no note probe"
+        without = source.replace(call, "IF false AND NOT (v_noted")
+        without = (without[:without.index(probe)] + "true\n      "
+                   + without[without.index("INTO v_locked, v_noted;"):])
+        for _ in range(rounds):
+            for kind, definition in (("with probe", source), ("without probe", without)):
+                conn.execute(definition)
                 conn.commit()
+                conn.autocommit = True
+                conn.execute("VACUUM parts_ver, tgsis.revision_objects")  # the rolled-back rows of the last run
+                conn.autocommit = False
+                with tgsis.in_version(conn, "child"):
+                    start = time.perf_counter()
+                    conn.execute("UPDATE parts SET x = x + 1 WHERE objid = 1")
+                    samples[kind].append(time.perf_counter() - start)
+                    conn.rollback()
+        conn.execute(source)
+        conn.commit()
     return {kind: statistics.median(values) for kind, values in samples.items()}
 
 
@@ -167,7 +205,7 @@ def measure(server: LocalServer, rows: int, rounds: int, label: str) -> dict[str
         assert size is not None
         samples = [one_round(conn, n, rows // OBJECT_ROWS) for n in range(rounds)]
         figures = {key: statistics.median(s[key] for s in samples) for key in samples[0]}
-        figures["changed_objects"], figures["changed_objects_indexed"] = changed_objects_s(conn, rows // OBJECT_ROWS)
+        figures["changed_objects"], figures["changed_objects_scan"] = changed_objects_s(conn, rows // OBJECT_ROWS)
     print(f"{rows:>11,} rows: loaded and versioned in {loaded:.0f} s; storage {size[0] / 1e6:.0f} MB")
     for key, value in figures.items():
         print(f"    {key:24s} {value * 1000:9.1f} ms")
@@ -179,7 +217,8 @@ def main() -> None:
     parser.add_argument("--small", type=int, default=2_000_000)
     parser.add_argument("--large", type=int, default=20_000_000)
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--upload-cost", action="store_true", help="also time a 1M-vertex upload with each index")
+    parser.add_argument("--upload-cost", action="store_true", help="also time a 1M-vertex upload with and without notes")
+    parser.add_argument("--view-write", action="store_true", help="also time a view write with and without the note probe")
     args = parser.parse_args()
 
     binaries = find_binaries()
@@ -190,21 +229,26 @@ def main() -> None:
         small = measure(server, args.small, args.rounds, "small")
         large = measure(server, args.large, args.rounds, "large")
         uploads = upload_cost(server, args.rounds) if args.upload_cost else {}
+        view_writes = view_write_cost(server, max(args.rounds, 5)) if args.view_write else {}
     finally:
         server.destroy()
 
     for kind, seconds in uploads.items():
-        print(f"upload of 1M vertices, {kind:24s} {seconds:6.2f} s")
+        print(f"upload of 1M vertices, {kind:12s} {seconds:6.2f} s")
+    for kind, seconds in view_writes.items():
+        print(f"10,000-row view write, {kind:14s} {seconds * 1000:7.1f} ms")
 
     for key in ("find_conflicts", "refresh", "merge"):
         print(f"{key}_large_s: {large[key]:.3f}")
         print(f"{key}_large_vs_small: {large[key] / small[key]:.2f}")
-    print(f"changed_objects_large_s: {large['changed_objects']:.3f}")
+    print(f"changed_objects_large_s: {large['changed_objects']:.4f}")
     print(f"changed_objects_large_vs_small: {large['changed_objects'] / small['changed_objects']:.2f}")
-    print(f"changed_objects_indexed_large_s: {large['changed_objects_indexed']:.4f}")
-    print(f"changed_objects_indexed_vs_as_is_large: {large['changed_objects_indexed'] / large['changed_objects']:.4f}")
-    for kind in INDEXES if uploads else ():
-        print(f"upload_with_{kind.replace(' ', '_')}_vs_none: {uploads[kind] / uploads['none']:.3f}")
+    print(f"changed_objects_scan_large_s: {large['changed_objects_scan']:.3f}")
+    print(f"changed_objects_vs_scan_large: {large['changed_objects'] / large['changed_objects_scan']:.4f}")
+    if uploads:
+        print(f"upload_noted_vs_not_noted: {uploads['noted'] / uploads['not noted']:.3f}")
+    if view_writes:
+        print(f"view_write_with_probe_vs_without: {view_writes['with probe'] / view_writes['without probe']:.3f}")
 
 
 if __name__ == "__main__":

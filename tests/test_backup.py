@@ -43,7 +43,7 @@ Snapshot = dict[str, Any]
 
 # what the comparison reads besides the versioned tables: the catalog relations of docs/data-models.md
 CATALOG = ["installation", "catalog", "versions", "revisions", "version_privileges", "object_locks", "conflicts",
-           "versioned_tables", "versioning_dropped", "unversioned_features"]
+           "versioned_tables", "versioning_dropped", "unversioned_features", "revision_objects"]
 
 
 def _bindir_of(pg: TestServer) -> Path:

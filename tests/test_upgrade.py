@@ -53,6 +53,10 @@ SELECT tgsis.save_revision('survey2');
 """
 
 
+# the objects noted as changed per revision and table (tgsis.revision_objects), new in 0.2.0
+_NOTES = "SELECT DISTINCT revision, schemaname, tablename, objectkey FROM tgsis.revision_objects ORDER BY 1, 2, 3, 4"
+
+
 def _objects(conn: psycopg.Connection[Any]) -> dict[str, list[tuple[str, ...]]]:
     """The tgsis catalog, the class's tables in public, and what belongs to the extension."""
     objects = describe_tgsis_objects(conn)
@@ -142,11 +146,14 @@ def test_upgraded_database_equals_a_fresh_install(
         assert tgsis.install(conn).action == "unchanged"
         assert _state(conn) == before, "the data and versions of 0.1.0 are kept"
         got = _objects(conn)
+        got_notes = conn.execute(_NOTES).fetchall()
     with psycopg.connect(fresh) as conn:
         tgsis.install(conn, method=method)  # type: ignore[arg-type]
         conn.execute(_USE)
         conn.commit()
         want = _objects(conn)
+        want_notes = conn.execute(_NOTES).fetchall()
+    assert got_notes == want_notes and want_notes, "the upgrade notes what the writes of a fresh install note"
     assert got["function"] and got["relation"] and got["public relation"], "the comparison must see the objects"
     differences = [
         f"{kind}: only in the {where}: {row}"
@@ -197,6 +204,12 @@ def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(
         with tgsis.in_version(conn, "survey2"):
             tgsis.create_model(conn, "resource", [geoid, new])
             assert sorted(o.id for o in tgsis.model_objects(conn, "resource")) == sorted([geoid, new])
+        conn.commit()
+        # the changes made under 0.1.0 were noted by the upgrade (tgsis.revision_objects): the merge copies them
+        tgsis.merge_version(conn, "survey2")
+        merged = tgsis.fetch_feature(conn, "horizon", geoid)
+        assert merged.mesh.vertices[2].tolist() == [0, 1, -5] and merged.properties["unit"] == "Jurassic"
+        assert tgsis.fetch_feature(conn, "horizon", new).properties["unit"] == "Cretaceous"
 
 
 def test_every_changed_file_is_in_the_upgrade() -> None:

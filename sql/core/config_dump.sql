@@ -15,6 +15,7 @@ BEGIN
         FOREACH v_name IN ARRAY ARRAY['tgsis.installation', 'tgsis.catalog', 'tgsis.versions', 'tgsis.revisions',
                                       'tgsis.version_privileges', 'tgsis.object_locks', 'tgsis.conflicts',
                                       'tgsis.versioned_tables', 'tgsis.versioning_dropped', 'tgsis.unversioned_features',
+                                      'tgsis.revision_objects',
                                       'tgsis.revision_seq', 'tgsis.versions_versionid_seq',
                                       'tgsis.versioning_dropped_id_seq'] LOOP
             PERFORM pg_catalog.pg_extension_config_dump(v_name::regclass, '');

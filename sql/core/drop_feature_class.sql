@@ -59,6 +59,7 @@ BEGIN
                            v_class.schemaname, v_table || '_ver_run');
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_ver');
             DELETE FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table;
+            DELETE FROM tgsis.revision_objects WHERE schemaname = v_class.schemaname AND tablename = v_table;
             DELETE FROM tgsis.versioning_dropped WHERE schemaname = v_class.schemaname AND tablename = v_table;
         ELSE
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table);

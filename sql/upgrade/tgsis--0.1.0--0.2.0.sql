@@ -32,6 +32,16 @@ BEGIN
     END IF;
 END
 $dump$;
+-- ---- the notes of which objects changed in which revision (new in 0.2.0), dumped with the catalog;
+-- filled from the storage after the functions, below
+-- @include versioning/revision_objects.sql
+DO $dump$
+BEGIN
+    IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
+        PERFORM pg_catalog.pg_extension_config_dump('tgsis.revision_objects'::regclass, '');
+    END IF;
+END
+$dump$;
 -- @handled core/config_dump.sql
 
 -- ---- the rows tgsis ships: error codes and property types added on main flow in from the files
@@ -106,12 +116,30 @@ BEGIN
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature') THEN
         PERFORM tgsis.enable_feature_versioning();
     END IF;
-    -- the write triggers of object class 'feature', generated anew: they tell rows of features of no version
-    -- (tgsis.unversioned_features) from versioned ones
-    FOR v_t IN SELECT * FROM tgsis.versioned_tables t WHERE t.objectclass = 'feature' ORDER BY t.schemaname, t.tablename LOOP
+    -- every versioned table (the feature storage versioned just now has them already):
+    -- * the write triggers of the views, generated anew: they note the objects they change
+    --   (tgsis.revision_objects), and those of object class 'feature' tell rows of features of no
+    --   version (tgsis.unversioned_features) from versioned ones;
+    -- * the storage's trigger that notes direct inserts;
+    -- * the notes of what its rows say changed in each revision (revision 0 is never noted)
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
+        CONTINUE WHEN EXISTS (SELECT FROM pg_catalog.pg_trigger g
+                               WHERE g.tgname = 'tgsis_storage_changes'
+                                 AND g.tgrelid = format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass);
         EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its trigger
         PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
                                                 v_t.objectclass, v_t.objectkeyfield);
+        PERFORM tgsis.create_change_trigger(v_t.schemaname, v_t.tablename, v_t.objectkeyfield);
+        -- (read as the storage's owner, like all of tgsis's reads of storage: tgsis.storage_run)
+        PERFORM tgsis.check_key_type(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass, v_t.objectkeyfield);
+        INSERT INTO tgsis.revision_objects (revision, schemaname, tablename, objectkey)
+        SELECT r[1]::integer, v_t.schemaname, v_t.tablename, r[2]
+          FROM tgsis.storage_run(v_t, false, format(
+                   'SELECT ARRAY[c.r::text, c.k::text]
+                      FROM (SELECT v.revision, v.%1$I FROM %2$I.%3$I v
+                            UNION
+                            SELECT l.r, v.%1$I FROM %2$I.%3$I v, unnest(v.lastrevs) AS l(r) WHERE v.revclosed) AS c(r, k)
+                     WHERE c.r <> 0', v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver')) AS r;
     END LOOP;
 
     -- What this block made (storage tables, their versioned views and runners, class views made

@@ -1,17 +1,34 @@
 -- tgsis.changed_objects(revisions): objects with rows written or closed in any of the given revisions, per table.
--- One scan of each versioned table's storage.
+-- The candidates are the objects noted in tgsis.revision_objects for those
+-- revisions; their rows are read by key (the storage's primary key or its
+-- object index) and tested as a scan would test them, so what comes back,
+-- and the marks, do not depend on how many notes there are. Tables with no
+-- note are not read at all: the cost follows the change, not the database.
+-- Revision 0 is never noted: asked about it, each table is scanned.
 CREATE FUNCTION tgsis.changed_objects(p_revisions integer[])
 RETURNS TABLE (objectclass text, objectkey text, shortname text, mark text)
 LANGUAGE plpgsql
 VOLATILE
 AS $$
 DECLARE
-    v_t tgsis.versioned_tables;
+    v_t       tgsis.versioned_tables;
+    v_scan    boolean := 0 = ANY (p_revisions);
+    v_keys    text[];
+    v_where   text;
 BEGIN
     IF cardinality(p_revisions) = 0 THEN
         RETURN;
     END IF;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
+        v_where := 'v.revision = ANY ($2) OR v.lastrevs && $2';
+        IF NOT v_scan THEN
+            v_keys := ARRAY(SELECT DISTINCT o.objectkey FROM tgsis.revision_objects o
+                             WHERE o.revision = ANY (p_revisions) AND o.schemaname = v_t.schemaname
+                               AND o.tablename = v_t.tablename);
+            CONTINUE WHEN cardinality(v_keys) = 0;
+            -- keys compared in the column's own type, so that its index serves
+            v_where := format('v.%I = ANY ($1::%s[]) AND (%s)', v_t.objectkeyfield, tgsis.object_key_type(v_t), v_where);
+        END IF;
         -- mark: a fingerprint of the object's changed row versions, so that
         -- any later write to them (even in the same revision) shows; the row
         -- as record_out writes it (v::text would call a cast the row type's
@@ -19,14 +36,14 @@ BEGIN
         RETURN QUERY SELECT v_t.objectclass, r[1], v_t.shortname, r[2] FROM tgsis.storage_run(v_t, false, format(
             'SELECT ARRAY[v.%I::text, md5(string_agg(pg_catalog.record_out(v.*)::text, ''|'' ORDER BY %s, v.revision))]
                FROM %I.%I v
-              WHERE v.revision = ANY ($2) OR v.lastrevs && $2
+              WHERE %s
               GROUP BY v.%I',
             v_t.objectkeyfield,
             (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)),
-            v_t.schemaname, v_t.tablename || '_ver', v_t.objectkeyfield), p_2 => p_revisions) AS r;
+            v_t.schemaname, v_t.tablename || '_ver', v_where, v_t.objectkeyfield), p_1 => v_keys, p_2 => p_revisions) AS r;
     END LOOP;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.changed_objects(integer[]) IS
-    'per versioned table, the objects (class, key as text) with row versions written or closed in the given revisions, and a fingerprint (md5) of those row versions';
+    'per versioned table, the objects (class, key as text) with row versions written or closed in the given revisions, and a fingerprint (md5) of those row versions; reads the rows of the objects noted in tgsis.revision_objects';

@@ -9,7 +9,8 @@
 -- objects' write locks are taken exclusively first: no write through the
 -- view is in flight on them (it would re-create a closed row), later ones
 -- find them changed. Rows written in the working revision go, older visible
--- rows get the working revision appended to lastrevs; rows of features of
+-- rows get the working revision appended to lastrevs (the objects noted in
+-- tgsis.revision_objects); rows of features of
 -- classes without versioning (tgsis.unversioned_features, revision 0) go,
 -- in DEFAULT's working revision only. Returns rows affected.
 CREATE FUNCTION tgsis.close_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
@@ -75,6 +76,9 @@ BEGIN
         'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
           WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)', p_schema, p_table || '_ver', v_where),
         p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
+    IF v_closed > 0 THEN
+        PERFORM tgsis.note_changed_objects(p_schema, p_table, v_write.revision, p_keys::text[]);  -- tgsis.revision_objects
+    END IF;
     RETURN v_gone + v_deleted + v_closed;
 END
 $$;

@@ -142,6 +142,8 @@ BEGIN
     END IF;
 
     DELETE FROM tgsis.revisions r WHERE r.revision <> ALL (v_keep);
+    -- the notes of changed objects go with their revisions: nothing asks about those any more
+    DELETE FROM tgsis.revision_objects o WHERE o.revision <> ALL (v_keep);
     IF cardinality(v_unused) > 0 THEN
         UPDATE tgsis.versions v
            SET workingset = ARRAY(SELECT u.r FROM unnest(v.workingset) WITH ORDINALITY AS u(r, o)

@@ -4,6 +4,7 @@
 -- the rows visible in from_set but not in to_set are copied with revision.
 -- Rows visible in both are left alone: unchanged rows are never copied.
 -- The common step of merge (child's state into the parent) and refresh.
+-- The objects are noted as changed in revision (tgsis.revision_objects).
 -- Returns the rows written (closed, deleted and copied).
 CREATE FUNCTION tgsis.copy_object_state(
     p_objectclass text,
@@ -31,9 +32,7 @@ BEGIN
     -- copies made first would look like rows to close
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder DESC, shortname LOOP
         v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
-        -- keys compared in the column's own type, so that its index serves
-        SELECT format_type(atttypid, atttypmod) INTO v_keytype FROM pg_catalog.pg_attribute
-         WHERE attrelid = v_ver::regclass AND attname = v_t.objectkeyfield;
+        v_keytype := tgsis.object_key_type(v_t);  -- keys compared in the column's own type, so that its index serves
         -- (every statement on storage as its owner: tgsis.storage_run)
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'DELETE FROM %s v WHERE v.%I = ANY ($1::%s[]) AND v.revision = $4
@@ -49,6 +48,10 @@ BEGIN
                 AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))',
             v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision);
         v_written := v_written + v_count;
+        IF v_count > 0 THEN
+            -- closed in p_revision: noted for the next merge or conflict check (tgsis.revision_objects)
+            PERFORM tgsis.note_changed_objects(v_t.schemaname, v_t.tablename, p_revision, p_keys);
+        END IF;
     END LOOP;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP
         v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
@@ -57,8 +60,7 @@ BEGIN
           FROM pg_catalog.pg_attribute
          WHERE attrelid = v_ver::regclass AND attnum > 0 AND NOT attisdropped AND attgenerated = ''
            AND attname NOT IN ('revision', 'lastrevs');
-        SELECT format_type(atttypid, atttypmod) INTO v_keytype FROM pg_catalog.pg_attribute
-         WHERE attrelid = v_ver::regclass AND attname = v_t.objectkeyfield;
+        v_keytype := tgsis.object_key_type(v_t);
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'INSERT INTO %s (%s, revision)
              SELECT %s, $4 FROM %s v
@@ -67,6 +69,10 @@ BEGIN
                 AND NOT (v.revision = ANY ($3) AND NOT (v.lastrevs && $3))',
             v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
+        IF v_count > 0 THEN
+            -- (the storage's statement trigger notes them too, unless this runs inside a trigger)
+            PERFORM tgsis.note_changed_objects(v_t.schemaname, v_t.tablename, p_revision, p_keys);
+        END IF;
     END LOOP;
     RETURN v_written;
 END

@@ -11,6 +11,8 @@ DECLARE
     v_children text;
     v_revs     integer[];
     v_t        tgsis.versioned_tables;
+    v_keys     text[];
+    v_objects  text;
     v_count    bigint;
     v_removed  bigint := 0;
 BEGIN
@@ -32,16 +34,23 @@ BEGIN
     END IF;
     SELECT array_agg(revision ORDER BY revision) INTO v_revs FROM tgsis.revisions WHERE versionid = v_id;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY iudorder DESC, schemaname, tablename LOOP
+        -- only the objects noted as changed in its revisions have rows to go or to reopen (tgsis.revision_objects)
+        v_keys := ARRAY(SELECT DISTINCT o.objectkey FROM tgsis.revision_objects o
+                         WHERE o.revision = ANY (v_revs) AND o.schemaname = v_t.schemaname AND o.tablename = v_t.tablename);
+        CONTINUE WHEN cardinality(v_keys) = 0;
+        v_objects := format('v.%I = ANY ($1::%s[])', v_t.objectkeyfield, tgsis.object_key_type(v_t));
         -- as the storage's owner (tgsis.storage_run)
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
-            'DELETE FROM %I.%I WHERE revision = ANY ($2)', v_t.schemaname, v_t.tablename || '_ver'), p_2 => v_revs) AS r;
+            'DELETE FROM %I.%I v WHERE %s AND v.revision = ANY ($2)', v_t.schemaname, v_t.tablename || '_ver', v_objects),
+            v_keys, v_revs) AS r;
         v_removed := v_removed + v_count;
         -- rows of ancestors that the version closed become live again for nobody else: drop its revisions
         -- (rows that sibling versions see too: changed without waiting for one while holding others)
         PERFORM tgsis.update_shared_rows(v_t,
                                          'lastrevs = ARRAY(SELECT r FROM unnest(v.lastrevs) AS r WHERE r <> ALL ($2))',
-                                         'v.lastrevs && $2', NULL, v_revs, NULL, NULL);
+                                         v_objects || ' AND v.lastrevs && $2', v_keys, v_revs, NULL, NULL);
     END LOOP;
+    DELETE FROM tgsis.revision_objects WHERE revision = ANY (v_revs);
     DELETE FROM tgsis.versions WHERE versionid = v_id;  -- its revisions go with it
     IF tgsis.get_working_version() = p_name THEN
         PERFORM set_config('tgsis.version', '', false);

@@ -60,6 +60,7 @@ BEGIN
     GET DIAGNOSTICS v_removed = ROW_COUNT;
     EXECUTE format('DROP TRIGGER tgsis_storage_write ON %I.%I', v_t.schemaname, v_ver);
     EXECUTE format('DROP TRIGGER tgsis_storage_rows ON %I.%I', v_t.schemaname, v_ver);
+    EXECUTE format('DROP TRIGGER tgsis_storage_changes ON %I.%I', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_t.schemaname, v_ver, v_ver || '_pkey');
     EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN revclosed, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I RENAME TO %I', v_t.schemaname, v_ver, v_t.tablename);

@@ -228,6 +228,8 @@ BEGIN
     EXECUTE format('CREATE TRIGGER tgsis_storage_rows AFTER INSERT ON %I.%I REFERENCING NEW TABLE AS tgsis_new_rows '
                    'FOR EACH STATEMENT WHEN (%s) EXECUTE FUNCTION tgsis.storage_rows_check(%L, %L)',
                    v_schema, v_ver, v_skip, p_objectclass, p_objectkeyfield);
+    -- and every direct insert notes the objects it wrote (tgsis.revision_objects), the owners' too
+    PERFORM tgsis.create_change_trigger(v_schema, v_table, p_objectkeyfield);
 
     -- the view in the table's place, with its defaults, comments, grants and owner
     PERFORM tgsis.create_versioned_view(v_schema, v_table, v_keys, v_pkey, p_objectclass, p_objectkeyfield, v_relacl,

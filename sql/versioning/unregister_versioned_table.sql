@@ -2,7 +2,8 @@
 -- Runs as tgsis's owner because only tgsis's definer code writes
 -- tgsis.versioned_tables; it removes a row only when the system catalogs say
 -- it is no longer true (<table> is a plain table again and <table>_ver is
--- gone), so a call can only remove stale rows.
+-- gone), so a call can only remove stale rows. The notes of its changed
+-- objects (tgsis.revision_objects) go with it.
 CREATE FUNCTION tgsis.unregister_versioned_table(p_schema text, p_table text)
 RETURNS boolean
 LANGUAGE plpgsql
@@ -18,6 +19,7 @@ BEGIN
         RAISE EXCEPTION '%.% is still versioned (or gone): its registration stays', p_schema, p_table
             USING ERRCODE = 'TG202', HINT = 'tgsis.disable_versioning makes a versioned table plain and forgets it';
     END IF;
+    DELETE FROM tgsis.revision_objects WHERE schemaname = p_schema AND tablename = p_table;
     DELETE FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
     RETURN FOUND;
 END

@@ -53,30 +53,50 @@ DECLARE
     v_same     text;
     v_dup      text;
     v_stale    text;
+    v_noted_sql text;
     v_probe    text;
     v_declare  text := '';
 BEGIN
-    v_probe := format($probe$-- object locks: one index probe per row; the check names the holders
-    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %1$L AND l.objectkey = ANY (v_keys)) THEN
+    -- the probe of every row, one query: the object locks (tgsis.object_locks) and
+    -- whether the object is noted as changed in the working revision
+    -- (tgsis.revision_objects: what merges and conflict checks read); the check
+    -- names lock holders, the note is written once per object and revision
+    -- (never for revision 0: tgsis.revision_objects says why). One plain index
+    -- probe for the key the row had; a new key (rare) is noted without one.
+    v_noted_sql := format($noted$EXISTS (SELECT FROM tgsis.revision_objects o
+                    WHERE o.revision = v_w AND o.schemaname = %L AND o.tablename = %L AND o.objectkey = v_keys[1])$noted$,
+                          p_schema, p_table);
+    v_probe := format($probe$-- object locks, and the note of the change: index probes in one query
+    SELECT EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %1$L AND l.objectkey = ANY (v_keys)),
+           %2$s
+      INTO v_locked, v_noted;
+    IF v_locked THEN
         PERFORM tgsis.check_objects_unlocked(%1$L, v_keys);
-    END IF;$probe$, p_class);
+    END IF;
+    IF v_w <> 0 AND NOT (v_noted AND (cardinality(v_keys) = 1 OR v_keys[2] = v_keys[1])) THEN
+        PERFORM tgsis.record_changed_objects(%3$L, %4$L, v_keys);
+    END IF;$probe$, p_class, v_noted_sql, p_schema, p_table);
     -- features of classes without versioning (tgsis.unversioned_features) are
     -- rows of no version: written with revision 0, which every revision set
     -- holds, so that the code below changes them in place and deletes them for
-    -- good; on the tables of object class 'feature' (keyed by geoid) only, in
-    -- the same query as the lock probe (one statement per row, not two)
+    -- good (and notes nothing); on the tables of object class 'feature' (keyed
+    -- by geoid) only, in the same query
     IF p_class = 'feature' THEN
-        v_probe := format($probe$-- object locks and features of no version: two index probes per row in one query
+        v_probe := format($probe$-- object locks, features of no version and the note of the change: index probes in one query
     SELECT EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %1$L AND l.objectkey = ANY (v_keys)),
-           EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_keys::bigint[]))
-      INTO v_locked, v_none;
+           EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_keys::bigint[])),
+           %2$s
+      INTO v_locked, v_none, v_noted;
     IF v_none THEN
         v_w := tgsis.unversioned_revision(v_keys::bigint[]);  -- 0, or TG305 outside DEFAULT's working revision
     END IF;
     IF v_locked THEN
         PERFORM tgsis.check_objects_unlocked(%1$L, v_keys);  -- names the holders
-    END IF;$probe$, p_class);
-        v_declare := E'\n    v_locked boolean;\n    v_none   boolean;';
+    END IF;
+    IF NOT v_none AND v_w <> 0 AND NOT (v_noted AND (cardinality(v_keys) = 1 OR v_keys[2] = v_keys[1])) THEN
+        PERFORM tgsis.record_changed_objects(%3$L, %4$L, v_keys);
+    END IF;$probe$, p_class, v_noted_sql, p_schema, p_table);
+        v_declare := E'\n    v_none   boolean;';
     END IF;
     SELECT string_agg(format('%I', c), ', ' ORDER BY o),
            string_agg(format('NEW.%I', c), ', ' ORDER BY o),
@@ -132,7 +152,9 @@ DECLARE
     v_w    integer;
     v_set  integer[];
     v_keys text[];
-    v_cur  record;%21$s
+    v_cur  record;
+    v_locked boolean;
+    v_noted  boolean;%21$s
 BEGIN
     -- the write right on the session's version (checked for every row), its working revision and set
     SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
