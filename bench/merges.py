@@ -21,9 +21,13 @@ back; the storage trigger ``tgsis_storage_changes`` of ``geometry``,
 ``--view-write``, what the note probe costs a write through a view: a
 10,000-row update of one object in a child (each row closed and written
 anew, rolled back), the view's trigger as generated against the same
-trigger without the probe, alternating.
+trigger without the probe, alternating. With ``--partitions N``, each size
+again with the table hash-partitioned by object in N partitions, against the
+plain table (the step of docs/scaling.md measurable on one node). At every
+size, also one object's 10,000 rows read through the view in a child, and
+rewritten (rolled back).
 
-    python bench/merges.py [--small 2000000] [--large 20000000] [--rounds 3] [--upload-cost] [--view-write]
+    python bench/merges.py [--small 2000000] [--large 20000000] [--rounds 3] [--upload-cost] [--view-write] [--partitions 8]
     # TGSIS_PG=system|embedded
 """
 
@@ -45,10 +49,13 @@ OBJECT_ROWS = 10_000
 EDIT_ROWS = 1_000
 
 
-def load(conn: Conn, rows: int) -> float:
-    """The table of ``rows`` rows (objects of 10,000), versioned; seconds taken."""
+def load(conn: Conn, rows: int, partitions: int = 0) -> float:
+    """The table of ``rows`` rows (objects of 10,000), hash-partitioned by object when asked, versioned; seconds taken."""
     start = time.perf_counter()
-    conn.execute("CREATE TABLE parts (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))")
+    conn.execute("CREATE TABLE parts (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))"
+                 + (" PARTITION BY HASH (objid)" if partitions else ""))
+    for r in range(partitions):
+        conn.execute(f"CREATE TABLE parts_{r} PARTITION OF parts FOR VALUES WITH (MODULUS {partitions}, REMAINDER {r})")
     conn.execute("INSERT INTO parts SELECT i / %s, i %% %s, random(), random(), random() "
                  "FROM generate_series(0, %s - 1) i", (OBJECT_ROWS, OBJECT_ROWS, rows))
     conn.commit()
@@ -58,6 +65,27 @@ def load(conn: Conn, rows: int) -> float:
     conn.execute("VACUUM ANALYZE parts_ver")
     conn.autocommit = False
     return time.perf_counter() - start
+
+
+def one_object_s(conn: Conn, objects: int) -> tuple[float, float]:
+    """Reading one object's 10,000 rows through the view in a child, and rewriting them (rolled back): medians of 5."""
+    tgsis.create_version(conn, "single")
+    conn.commit()
+    reads, writes = [], []
+    with tgsis.in_version(conn, "single"):
+        for n in range(5):
+            objid = (7 * n + 3) % objects
+            start = time.perf_counter()
+            row = conn.execute("SELECT count(*), sum(x) FROM parts WHERE objid = %s", (objid,)).fetchone()
+            reads.append(time.perf_counter() - start)
+            assert row is not None and row[0] == OBJECT_ROWS
+            start = time.perf_counter()
+            conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s", (objid,))
+            writes.append(time.perf_counter() - start)
+            conn.rollback()
+    tgsis.delete_version(conn, "single")
+    conn.commit()
+    return statistics.median(reads), statistics.median(writes)
 
 
 def timed(conn: Conn, action: Any) -> float:
@@ -194,19 +222,21 @@ def view_write_cost(server: LocalServer, rounds: int) -> dict[str, float]:
     return {kind: statistics.median(values) for kind, values in samples.items()}
 
 
-def measure(server: LocalServer, rows: int, rounds: int, label: str) -> dict[str, float]:
-    database = f"{label}_{rows}"
+def measure(server: LocalServer, rows: int, rounds: int, label: str, partitions: int = 0) -> dict[str, float]:
+    database = f"{label}_{rows}_{partitions}"
     with psycopg.connect(server.dsn(), autocommit=True) as admin:
         admin.execute(f"CREATE DATABASE {database}")
     with psycopg.connect(server.dsn(database)) as conn:
         tgsis.install(conn, method="sql")  # this checkout's SQL
-        loaded = load(conn, rows)
-        size = conn.execute("SELECT pg_total_relation_size('parts_ver')").fetchone()
+        loaded = load(conn, rows, partitions)
+        size = conn.execute("SELECT coalesce(sum(pg_total_relation_size(relid)), pg_total_relation_size('parts_ver')) FROM pg_partition_tree('parts_ver')").fetchone()
         assert size is not None
         samples = [one_round(conn, n, rows // OBJECT_ROWS) for n in range(rounds)]
         figures = {key: statistics.median(s[key] for s in samples) for key in samples[0]}
         figures["changed_objects"], figures["changed_objects_scan"] = changed_objects_s(conn, rows // OBJECT_ROWS)
-    print(f"{rows:>11,} rows: loaded and versioned in {loaded:.0f} s; storage {size[0] / 1e6:.0f} MB")
+        figures["read_one_object"], figures["write_one_object"] = one_object_s(conn, rows // OBJECT_ROWS)
+    print(f"{rows:>11,} rows{f' in {partitions} hash partitions' if partitions else ''}: loaded and versioned in "
+          f"{loaded:.0f} s; storage {float(size[0]) / 1e6:.0f} MB")
     for key, value in figures.items():
         print(f"    {key:24s} {value * 1000:9.1f} ms")
     return figures
@@ -219,6 +249,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--upload-cost", action="store_true", help="also time a 1M-vertex upload with and without notes")
     parser.add_argument("--view-write", action="store_true", help="also time a view write with and without the note probe")
+    parser.add_argument("--partitions", type=int, default=0,
+                        help="also measure each size with the table hash-partitioned by object in this many partitions")
     args = parser.parse_args()
 
     binaries = find_binaries()
@@ -228,6 +260,8 @@ def main() -> None:
     try:
         small = measure(server, args.small, args.rounds, "small")
         large = measure(server, args.large, args.rounds, "large")
+        partitioned = {size: measure(server, rows, args.rounds, size, args.partitions)
+                       for size, rows in (("small", args.small), ("large", args.large))} if args.partitions else {}
         uploads = upload_cost(server, args.rounds) if args.upload_cost else {}
         view_writes = view_write_cost(server, max(args.rounds, 5)) if args.view_write else {}
     finally:
@@ -245,6 +279,9 @@ def main() -> None:
     print(f"changed_objects_large_vs_small: {large['changed_objects'] / small['changed_objects']:.2f}")
     print(f"changed_objects_scan_large_s: {large['changed_objects_scan']:.3f}")
     print(f"changed_objects_vs_scan_large: {large['changed_objects'] / large['changed_objects_scan']:.4f}")
+    for size, plain in (("small", small), ("large", large)) if partitioned else ():
+        for key, value in partitioned[size].items():
+            print(f"partitioned_vs_plain_{key}_{size}: {value / plain[key]:.3f}")
     if uploads:
         print(f"upload_noted_vs_not_noted: {uploads['noted'] / uploads['not noted']:.3f}")
     if view_writes:

@@ -240,7 +240,10 @@ def test_foreign_keys_between_versioned_tables_are_dropped_and_restored(conn: Co
 @pytest.mark.parametrize(("setup", "call", "error", "message"), [
     ("CREATE TABLE t (a int)", ("t", "a"), tgsis.InvalidInputError, "has no primary key"),
     ("CREATE TABLE t (a int PRIMARY KEY); CREATE VIEW tv AS SELECT * FROM t", ("tv", "a"), tgsis.InvalidInputError,
-     "is not an ordinary table"),
+     "is not a table: only ordinary and partitioned tables can be versioned"),
+    ("CREATE TABLE t (a int PRIMARY KEY) PARTITION BY HASH (a); "
+     "CREATE TABLE t0 PARTITION OF t FOR VALUES WITH (MODULUS 1, REMAINDER 0); GRANT INSERT ON t0 TO tgsis_editor",
+     ("t", "a"), tgsis.InvalidInputError, r"partitions of public\.t grant rights to other roles: public\.t0 \(tgsis_editor\)"),
     ("CREATE TABLE t (a int PRIMARY KEY); CREATE VIEW tv AS SELECT * FROM t", ("t", "a"), tgsis.InUseError,
      "views depend on public.t: public.tv"),
     ("CREATE TABLE t (a int PRIMARY KEY, revision int)", ("t", "a"), tgsis.InvalidInputError, "column named revision"),

@@ -44,12 +44,28 @@ BEGIN
     IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_schema AND tablename = v_table) THEN
         RAISE EXCEPTION 'table %.% is versioned already', v_schema, v_table USING ERRCODE = 'TG201';
     END IF;
-    IF v_kind <> 'r' THEN
-        RAISE EXCEPTION '%.% is not an ordinary table: only ordinary tables can be versioned', v_schema, v_table
+    IF v_kind NOT IN ('r', 'p') THEN
+        RAISE EXCEPTION '%.% is not a table: only ordinary and partitioned tables can be versioned', v_schema, v_table
             USING ERRCODE = 'TG100',
                   DETAIL = format('Its kind is %s.', CASE v_kind WHEN 'v' THEN 'a view' WHEN 'm' THEN 'a materialized view'
-                                                              WHEN 'p' THEN 'a partitioned table' WHEN 'f' THEN 'a foreign table'
-                                                              ELSE v_kind::text END);
+                                                              WHEN 'f' THEN 'a foreign table' ELSE v_kind::text END);
+    END IF;
+    -- a partitioned table: the storage's statement triggers (rights, labels, notes of changed objects) are
+    -- the parent's and do not run for rows written into a partition by its name, so nobody but the owner
+    -- may reach a partition (its rights are its own, not the parent's)
+    IF v_kind = 'p' THEN
+        SELECT string_agg(DISTINCT format('%s (%s)', p.relid::regclass,
+                                          CASE WHEN a.grantee = 0 THEN 'PUBLIC' ELSE pg_get_userbyid(a.grantee) END), ', ')
+          INTO v_dependent
+          FROM pg_partition_tree(v_rel) p JOIN pg_class c ON c.oid = p.relid,
+               LATERAL aclexplode(c.relacl) a
+         WHERE p.relid <> v_rel AND a.grantee <> c.relowner;
+        IF v_dependent IS NOT NULL THEN
+            RAISE EXCEPTION 'partitions of %.% grant rights to other roles: %', v_schema, v_table, v_dependent
+                USING ERRCODE = 'TG100',
+                      DETAIL = 'Rows written into a partition by its name skip the checks versioning attaches to the table.',
+                      HINT = 'revoke them (REVOKE ALL ON <partition> FROM <role>); grant on the table instead, versioning keeps those';
+        END IF;
     END IF;
     -- in tgsis's schema only the registered storage of the data models
     IF v_schema = 'tgsis' AND NOT EXISTS (SELECT FROM tgsis.model_tables WHERE tablename = v_table) THEN

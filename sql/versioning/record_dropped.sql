@@ -23,7 +23,7 @@ DECLARE
 BEGIN
     SELECT n.nspname, c.relname, c.relkind, c.relowner INTO v_schema, v_name, v_kind, v_owner
       FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace WHERE c.oid = p_table;
-    IF v_kind IS DISTINCT FROM 'r'
+    IF v_kind IS NULL OR v_kind NOT IN ('r', 'p')
        OR EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_schema AND tablename = v_name) THEN
         RAISE EXCEPTION 'constraints are recorded only for a plain table about to be versioned, not %',
                 coalesce(p_table::text, 'NULL')

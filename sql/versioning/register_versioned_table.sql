@@ -37,7 +37,7 @@ BEGIN
       FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace WHERE c.oid = p_view;
     SELECT c.oid INTO v_ver
       FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace
-     WHERE n.nspname = v_schema AND c.relname = v_table || '_ver' AND c.relkind = 'r' AND c.relowner = v_owner;
+     WHERE n.nspname = v_schema AND c.relname = v_table || '_ver' AND c.relkind IN ('r', 'p') AND c.relowner = v_owner;
     IF v_kind IS DISTINCT FROM 'v' OR v_ver IS NULL
        OR NOT EXISTS (SELECT FROM pg_trigger tr JOIN pg_proc p ON p.oid = tr.tgfoid
                        WHERE tr.tgrelid = p_view AND tr.tgname = 'tgsis_versioning'

@@ -14,7 +14,7 @@ AS $$
 DECLARE
     v_rel regclass := to_regclass(format('%I.%I', p_schema, p_table));
 BEGIN
-    IF v_rel IS NULL OR (SELECT relkind FROM pg_class WHERE oid = v_rel) <> 'r'
+    IF v_rel IS NULL OR (SELECT relkind FROM pg_class WHERE oid = v_rel) NOT IN ('r', 'p')
        OR to_regclass(format('%I.%I', p_schema, p_table || '_ver')) IS NOT NULL THEN
         RAISE EXCEPTION '%.% is still versioned (or gone): its registration stays', p_schema, p_table
             USING ERRCODE = 'TG202', HINT = 'tgsis.disable_versioning makes a versioned table plain and forgets it';

@@ -27,7 +27,7 @@ AS $$
 DECLARE
     v_table   text := format('%I.%I', p_t.schemaname, p_t.tablename || '_ver');
     v_count   bigint;
-    v_busy    text;
+    v_busy    text[];
     v_timeout text := current_setting('lock_timeout');
     v_undo    CONSTANT text := 'tgsis: undo the row locks of this block';
 BEGIN
@@ -46,10 +46,13 @@ BEGIN
         -- cannot be locked now (found in a block then undone: none stays locked)
         v_busy := NULL;
         BEGIN
-            SELECT r[1] INTO v_busy
+            -- (a row's place is (tableoid, ctid): partitioned storage is many tables)
+            SELECT r INTO v_busy
               FROM tgsis.storage_run(p_t, false, format(
-                       'SELECT ARRAY[b.ctid::text] FROM (SELECT v.ctid FROM %1$s v WHERE %2$s EXCEPT
-                                SELECT f.ctid FROM (SELECT v.ctid FROM %1$s v WHERE %2$s FOR UPDATE SKIP LOCKED) f
+                       'SELECT ARRAY[b.tableoid::text, b.ctid::text]
+                          FROM (SELECT v.tableoid, v.ctid FROM %1$s v WHERE %2$s EXCEPT
+                                SELECT f.tableoid, f.ctid FROM (SELECT v.tableoid, v.ctid FROM %1$s v WHERE %2$s
+                                                                 FOR UPDATE SKIP LOCKED) f
                                 LIMIT 1) b', v_table, p_where), p_1, p_2, p_3, p_4) AS r;
             RAISE EXCEPTION USING MESSAGE = v_undo;
         EXCEPTION WHEN OTHERS THEN
@@ -61,7 +64,8 @@ BEGIN
             -- wait for its holder, then let go of the row again
             BEGIN
                 PERFORM FROM tgsis.storage_run(p_t, false, format(
-                    'SELECT ARRAY[]::text[] FROM %s v WHERE v.ctid = ($1[1])::tid FOR UPDATE', v_table), ARRAY[v_busy]);
+                    'SELECT ARRAY[]::text[] FROM %s v WHERE v.tableoid = ($1[1])::oid AND v.ctid = ($1[2])::tid FOR UPDATE',
+                    v_table), v_busy);
                 RAISE EXCEPTION USING MESSAGE = v_undo;
             EXCEPTION WHEN OTHERS THEN
                 IF SQLERRM IS DISTINCT FROM v_undo THEN

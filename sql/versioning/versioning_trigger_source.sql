@@ -111,7 +111,9 @@ BEGIN
       INTO v_old_key, v_new_key, v_key_list
       FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
     -- the row version of the old key that is current now, locked: its place and revision, and its values
-    v_current := format('SELECT v.ctid AS tgsis_ctid_, v.revision AS tgsis_revision_, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
+    -- (its place is (tableoid, ctid): a ctid alone names a row only within one table, and partitioned
+    -- storage is many tables)
+    v_current := format('SELECT v.tableoid AS tgsis_table_, v.ctid AS tgsis_ctid_, v.revision AS tgsis_revision_, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
                         (SELECT string_agg(format('v.%I', c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),
                         v_ver, v_old_key, v_visible);
     -- the error a plain table would raise, so applications that catch 23505 keep working
@@ -202,17 +204,17 @@ BEGIN
             IF FOUND THEN%10$s
             END IF;
             IF v_cur.tgsis_revision_ = v_w THEN
-                DELETE FROM %4$s v WHERE v.ctid = v_cur.tgsis_ctid_;
+                DELETE FROM %4$s v WHERE v.tableoid = v_cur.tgsis_table_ AND v.ctid = v_cur.tgsis_ctid_;
             ELSE
-                UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.ctid = v_cur.tgsis_ctid_;
+                UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.tableoid = v_cur.tgsis_table_ AND v.ctid = v_cur.tgsis_ctid_;
             END IF;
             INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
             IF NOT FOUND THEN%10$s
             END IF;
         ELSIF v_cur.tgsis_revision_ = v_w THEN
-            UPDATE %4$s v SET %8$s WHERE v.ctid = v_cur.tgsis_ctid_;
+            UPDATE %4$s v SET %8$s WHERE v.tableoid = v_cur.tgsis_table_ AND v.ctid = v_cur.tgsis_ctid_;
         ELSE
-            UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.ctid = v_cur.tgsis_ctid_;
+            UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.tableoid = v_cur.tgsis_table_ AND v.ctid = v_cur.tgsis_ctid_;
             INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
             IF NOT FOUND THEN%19$s
             END IF;
@@ -220,9 +222,9 @@ BEGIN
         RETURN NEW;
     END IF;
     IF v_cur.tgsis_revision_ = v_w THEN
-        DELETE FROM %4$s v WHERE v.ctid = v_cur.tgsis_ctid_;
+        DELETE FROM %4$s v WHERE v.tableoid = v_cur.tgsis_table_ AND v.ctid = v_cur.tgsis_ctid_;
     ELSE
-        UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.ctid = v_cur.tgsis_ctid_;
+        UPDATE %4$s v SET lastrevs = v.lastrevs || v_w WHERE v.tableoid = v_cur.tgsis_table_ AND v.ctid = v_cur.tgsis_ctid_;
     END IF;
     RETURN OLD;
 END
