@@ -154,11 +154,20 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
     conn.execute("INSERT INTO wells (name, depth) VALUES ('W-1', 1000), ('W-2', 1200), ('W-3', 800)")
     conn.execute(sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON wells TO {}").format(
         sql.Identifier(roles.name("ann"))))
+    # a partitioned table, versioned: its storage stays partitioned through the dump
+    conn.execute("CREATE TABLE logs (well integer, at double precision, gamma double precision, PRIMARY KEY (well, at)) "
+                 "PARTITION BY HASH (well)")
+    for r in range(2):
+        conn.execute(sql.SQL("CREATE TABLE {} PARTITION OF logs FOR VALUES WITH (MODULUS 2, REMAINDER {})").format(
+            sql.Identifier(f"logs_{r}"), sql.Literal(r)))
+    conn.execute("INSERT INTO logs SELECT w, d, 10 * w + d FROM generate_series(1, 3) w, generate_series(0, 4) d")
+    conn.execute(sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON logs TO {}").format(sql.Identifier(roles.name("ann"))))
     # a class without versioning (registered before feature versioning: its key to tgsis.geometry is dropped then)
     tgsis.create_feature_class(conn, "surveys", "SURFACE", feature_properties={"release": "text"}, versioned=False)
     ids["survey"] = tgsis.insert_feature(conn, "surveys", flat_grid(3, 7.0), {"release": "s1"})
     conn.commit()
     tgsis.enable_versioning(conn, "wells", "id", "well")
+    tgsis.enable_versioning(conn, "logs", "well", "log")
     tgsis.enable_feature_versioning(conn)
 
     tgsis.create_version(conn, "edit", description="reinterpretation")
@@ -169,6 +178,7 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
         conn.execute("UPDATE faults SET release = 'edit' WHERE _geoid = %s", (ids["f1"],))
         conn.execute("UPDATE tgsis.d4dvrtx SET z = z + 10 WHERE geoid = %s AND timem = 0", (ids["moving"],))
         conn.execute("UPDATE wells SET depth = 1250 WHERE name = 'W-1'")
+        conn.execute("UPDATE logs SET gamma = gamma + 1 WHERE well = 1")
         conn.execute("UPDATE tgsis.gmap_vertex SET coordinate[3] = coordinate[3] + 2 WHERE geoid = %s AND nodeid = 0",
                      (ids["block"],))
         conn.commit()
@@ -328,6 +338,7 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
     with psycopg.connect(psycopg.conninfo.make_conninfo(dsn, user=roles.name("ann"))) as ann:
         with tgsis.in_version(ann, "edit"):
             ann.execute("UPDATE wells SET depth = 1300 WHERE name = 'W-1'")
+            ann.execute("UPDATE logs SET gamma = 0 WHERE well = 2 AND at = 0")
             ann.commit()
         with tgsis.in_version(ann, "other"), pytest.raises(psycopg.Error) as refused:
             ann.execute("UPDATE wells SET depth = 1 WHERE name = 'W-1'")
@@ -357,6 +368,9 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
         in_edit = _surface(tgsis.fetch_feature(conn, "faults", ids["f0"]).mesh).vertices
     np.testing.assert_array_equal(_surface(tgsis.fetch_feature(conn, "faults", ids["f0"]).mesh).vertices, in_edit)
     assert conn.execute("SELECT depth FROM wells WHERE name = 'W-1'").fetchone() == (1300,)
+    assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'logs_ver'::regclass").fetchone() == ("p",)
+    assert conn.execute("SELECT well, at, gamma FROM logs WHERE at = 0 ORDER BY 1").fetchall() == \
+        [(1, 0.0, 11.0), (2, 0.0, 0.0), (3, 0.0, 30.0)], "the merge brought edit's changes of the partitioned table"
     assert conn.execute("SELECT _geoid, basin FROM faults WHERE _geoid IN (%s, %s) ORDER BY 1",
                         (ids["f1"], ids["new in edit"])).fetchall() == [(ids["f1"], "Paris"),
                                                                         (ids["new in edit"], "after restore")]

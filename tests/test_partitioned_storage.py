@@ -17,6 +17,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.roles import login_roles
 from tests.sessions import Background, wait_until_blocked
 
 Conn = psycopg.Connection[Any]
@@ -140,3 +141,37 @@ def test_a_merge_waits_for_a_writer_holding_a_row_it_closes_in_a_partition(table
         holder.close()
     assert [v for _, _, v in _seen(conn, "part", "DEFAULT")[:5]] == [7] * 5
     assert [v for _, k, v in _seen(conn, "part", "b")[:5]] == [8, 102, 103, 104, 105]
+
+
+def test_an_editor_writes_through_the_view_and_the_parent_never_a_partition(tables: Conn, db_dsn: str) -> None:
+    """The storage's checks and notes are the parent's: an editor reaches the rows through them only."""
+    conn = tables
+    conn.execute("GRANT SELECT, INSERT, UPDATE, DELETE ON part TO tgsis_editor")
+    conn.execute("GRANT SELECT, INSERT ON part_ver TO tgsis_editor")
+    conn.commit()
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as roles:
+        conn.execute("SELECT tgsis.grant_version('a', 'write', %s)", (roles.name("ed"),))
+        conn.commit()
+        ed = roles.connect("ed")
+        tgsis.goto_version(ed, "a")
+        ed.execute("UPDATE part SET val = 1 WHERE objid = 2")
+        (working,) = ed.execute("SELECT revision FROM tgsis.write_revision()").fetchone()  # type: ignore[misc]
+        with ed.cursor().copy("COPY part_ver (objid, k, val, revision) FROM STDIN") as copy:
+            copy.write_row((40, 1, 1, working))
+        ed.commit()
+        with pytest.raises(psycopg.Error) as wrong:   # the parent's check: a row of another revision
+            with ed.cursor().copy("COPY part_ver (objid, k, val, revision) FROM STDIN") as copy:
+                copy.write_row((41, 1, 1, 0))
+        assert wrong.value.sqlstate == "TG002"
+        ed.rollback()
+        partition = conn.execute("SELECT p.relid::regclass::text FROM pg_partition_tree('part_ver') p "
+                                 "WHERE p.isleaf LIMIT 1").fetchone()
+        assert partition is not None
+        with pytest.raises(psycopg.errors.InsufficientPrivilege):
+            ed.execute(sql.SQL("INSERT INTO {} (objid, k, val, revision) VALUES (42, 1, 1, %s)").format(
+                sql.Identifier(partition[0])), (working,))
+        ed.rollback()
+    changed = {k for (k,) in conn.execute("SELECT objectkey FROM tgsis.changed_objects(%s::int[])", ([working],))}
+    assert changed == {"2", "40"}
+    assert [(o, v) for o, _, v in _seen(conn, "part", "a") if o in (2, 40)] == [(2, 1)] * 5 + [(40, 1)]
+    assert conn.execute("SELECT count(*) FROM part_ver WHERE objid IN (41, 42)").fetchone() == (0,)

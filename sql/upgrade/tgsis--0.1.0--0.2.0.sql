@@ -23,21 +23,15 @@ ALTER TABLE tgsis.catalog
     ADD COLUMN versioned boolean NOT NULL DEFAULT true;
 -- @handled core/catalog.sql
 
--- ---- the features of classes registered without versioning (new in 0.2.0), dumped with the catalog
+-- ---- new catalog tables of 0.2.0, dumped with the catalog: the features of classes registered without
+-- versioning, and the notes of which objects changed in which revision (filled from the storage after
+-- the functions, below)
 -- @include versioning/unversioned_features.sql
-DO $dump$
-BEGIN
-    IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
-        PERFORM pg_catalog.pg_extension_config_dump('tgsis.unversioned_features'::regclass, '');
-    END IF;
-END
-$dump$;
--- ---- the notes of which objects changed in which revision (new in 0.2.0), dumped with the catalog;
--- filled from the storage after the functions, below
 -- @include versioning/revision_objects.sql
 DO $dump$
 BEGIN
     IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
+        PERFORM pg_catalog.pg_extension_config_dump('tgsis.unversioned_features'::regclass, '');
         PERFORM pg_catalog.pg_extension_config_dump('tgsis.revision_objects'::regclass, '');
     END IF;
 END
