@@ -8,13 +8,15 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
+from psycopg import sql
 
 import tgsis
-from tgsis.db import _static
+from tgsis.db import _static, _transfer
 from tgsis.db import features as F
 from tgsis.db.copy import decode_packed
 from tgsis.errors import DatabaseError
 from tgsis.mesh import Surface
+from tgsis.view.surfaces import drawable_surface, stored_surface
 
 Conn = psycopg.Connection[Any]
 
@@ -124,3 +126,83 @@ def test_one_query_per_table_and_versions_read_their_own_rows(conn: Conn, horizo
         assert F.fetch_feature(conn, horizons, geoid).mesh.same_as(moved)
         assert sorted(sources) == sorted(['"public"."horizon_cellpros"', "tgsis.vrtx", 'tgsis."trgl"']), sources
     assert F.fetch_feature(conn, horizons, geoid).mesh.same_as(mesh)  # DEFAULT does not see the edit
+
+
+def _oriented(triangles: np.ndarray) -> np.ndarray:
+    """Triangles as a sorted list, each turned to start at its smallest corner (orientation kept)."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    turned = np.stack([np.roll(row, -int(np.argmin(row))) for row in t]) if len(t) else t
+    return turned[np.lexsort(turned.T[::-1])]
+
+
+def test_corners_travel_packed_one_value_a_triangle(conn: Conn, horizons: F.FeatureClass,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    mesh = _surface(6)
+    geoid = F.insert_feature(conn, horizons, mesh)
+    queries: list[str] = []
+    real = _transfer.columns_out
+
+    def spy(*args: Any) -> list[np.ndarray]:
+        queries.append("columns")
+        return real(*args)
+
+    monkeypatch.setattr(_transfer, "columns_out", spy)
+    got = _transfer.corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", ["vrtxid1", "vrtxid2", "vrtxid3"], geoid)
+    assert queries == []  # the packed path, no fallback
+    assert got.dtype == np.int64 and np.array_equal(_oriented(got), _oriented(mesh.cells))
+    # the largest ids that fit in 21 bits, in every position, keep their bits
+    top = 2**21 - 1
+    conn.execute("UPDATE tgsis.trgl SET vrtxid1 = %s, vrtxid2 = %s, vrtxid3 = %s WHERE geoid = %s AND trglid = 0",
+                 (top, top - 1, top - 2, geoid))
+    got = _transfer.corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", ["vrtxid1", "vrtxid2", "vrtxid3"], geoid)
+    assert queries == [] and [top, top - 1, top - 2] in got.tolist()
+
+
+@pytest.mark.parametrize("corner", [2**21, 2**40, -1])
+def test_corners_out_of_the_packed_range_come_as_columns(conn: Conn, horizons: F.FeatureClass, corner: int) -> None:
+    mesh = _surface(4)
+    geoid = F.insert_feature(conn, horizons, mesh)
+    # a psql user numbers one vertex out of the 21 bits (or below 0): its triangles must not mix their bits
+    conn.execute("UPDATE tgsis.vrtx SET vrtxid = %s WHERE geoid = %s AND vrtxid = 5", (corner, geoid))
+    for column in ("vrtxid1", "vrtxid2", "vrtxid3"):
+        conn.execute(f"UPDATE tgsis.trgl SET {column} = %s WHERE geoid = %s AND {column} = 5", (corner, geoid))
+    expected = np.where(mesh.cells == 5, corner, mesh.cells)
+    got = _transfer.corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", ["vrtxid1", "vrtxid2", "vrtxid3"], geoid)
+    assert np.array_equal(_oriented(got), _oriented(expected))
+    # the scene: vertices in id order (vertex 5 moved to the end, or the start), triangles as positions in it
+    ids = np.where(np.arange(mesh.n_vertices) == 5, corner, np.arange(mesh.n_vertices))
+    order = np.argsort(ids)
+    position = np.empty(mesh.n_vertices, dtype=np.int64)
+    position[order] = np.arange(mesh.n_vertices)
+    drawn = drawable_surface(conn, horizons, geoid)
+    assert _bits_equal(drawn.vertices, mesh.vertices[order])
+    assert np.array_equal(_oriented(drawn.indices), _oriented(position[mesh.cells]))
+
+
+def test_a_null_corner_written_by_psql_is_reported_naming_the_row(conn: Conn, horizons: F.FeatureClass) -> None:
+    geoid = F.insert_feature(conn, horizons, _surface(3))
+    conn.execute("ALTER TABLE tgsis.trgl ALTER COLUMN vrtxid2 DROP NOT NULL")  # as the table's owner may
+    conn.execute("UPDATE tgsis.trgl SET vrtxid2 = NULL WHERE geoid = %s AND trglid = 3", (geoid,))
+    with pytest.raises(DatabaseError, match=r"column vrtxid2 of tgsis.trgl.* row geoid = \d+"):
+        _transfer.corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", ["vrtxid1", "vrtxid2", "vrtxid3"], geoid)
+    conn.rollback()
+
+
+def test_the_scene_draws_what_is_stored_in_the_session_version(conn: Conn, horizons: F.FeatureClass) -> None:
+    mesh = _surface(5)
+    geoid = F.insert_feature(conn, horizons, mesh)
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "edit")
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (geoid,))
+        conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 0", (geoid,))
+        drawn = drawable_surface(conn, horizons, geoid, "porosity")
+        stored = stored_surface(conn, horizons, geoid, "porosity")
+    assert _bits_equal(drawn.vertices, stored.drawable.vertices)
+    assert np.array_equal(drawn.vertices[:, 2], mesh.vertices[:, 2] + 1)
+    assert np.array_equal(_oriented(drawn.indices), _oriented(mesh.cells[1:]))
+    assert np.array_equal(_oriented(drawn.indices), _oriented(stored.drawable.indices))
+    assert _bits_equal(drawn.vertex_values["porosity"], mesh.vertex_properties["porosity"])
+    base = drawable_surface(conn, horizons, geoid)  # DEFAULT sees neither change
+    assert _bits_equal(base.vertices, mesh.vertices) and np.array_equal(_oriented(base.indices), _oriented(mesh.cells))

@@ -337,11 +337,17 @@ def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[
         base, size = wire_shape(wire)
         send = "array_send" if size is not None else SEND_FUNCTIONS[base]
         sends.append(sql.SQL("{}({})").format(sql.Identifier(send), sql.Identifier(name)))
-    query = sql.SQL("SELECT {key}, count(*), string_agg({row}, ''::bytea) FROM {source} "
-                    "WHERE {key} = ANY({geoids}) GROUP BY {key}").format(
-        key=sql.Identifier(key), row=sql.SQL(" || ").join(sends), source=source, geoids=sql.Literal(list(geoids)))
+    row = sql.SQL(" || ").join(sends)
+    if len(geoids) == 1:  # one aggregate, no grouping: a group's state of tens of MB is not hashed or sorted
+        query = sql.SQL("SELECT {geoid}::int8, count(*), string_agg({row}, ''::bytea) FROM {source} "
+                        "WHERE {key} = {geoid}").format(
+            key=sql.Identifier(key), row=row, source=source, geoid=sql.Literal(int(geoids[0])))
+    else:
+        query = sql.SQL("SELECT {key}, count(*), string_agg({row}, ''::bytea) FROM {source} "
+                        "WHERE {key} = ANY({geoids}) GROUP BY {key}").format(
+            key=sql.Identifier(key), row=row, source=source, geoids=sql.Literal(list(geoids)))
     with conn.cursor(binary=True) as cursor:
-        groups = cursor.execute(query).fetchall()
+        groups = [g for g in cursor.execute(query).fetchall() if g[1]]
     counts = [int(g[1]) for g in groups]
     what = f"columns {', '.join(name for name, _ in columns)} of {source.as_string(conn)}"
     try:
@@ -350,6 +356,58 @@ def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[
     except DatabaseError as exc:  # the rare path: find the row to name
         raise _bad_row(conn, source, key, columns, geoids) or exc from None
     return [np.repeat(np.asarray([g[0] for g in groups], dtype=np.int64), counts), *values]
+
+
+def corners_out(conn: Conn, source: sql.Composable, key: str, corners: Sequence[str],
+                geoid: int) -> npt.NDArray[np.int64]:
+    """The corner ids of one geometry's cells (rows of ``source``), in no order and without the cells' ids.
+
+    For a mesh that is drawn, not written back (the browser view): when a
+    row's k corner ids all lie in 0 .. 2**(63 // k) - 1 (vertex ids are
+    local to a geometry, so that is the usual case: 2,097,151 for
+    triangles), they travel packed in one ``int8`` (``a << 42 | b << 21 |
+    c``): one value for the server to send per row instead of k + 1 (a
+    third less server time for 2M triangles; docs/performance.md). A row
+    out of that range or with a NULL sends nothing, which the count shows:
+    the corners then come as columns (:func:`columns_out`, which names a
+    NULL).
+
+    Parameters
+    ----------
+    source : Composable
+        A table or view of cells (a versioned view reads the session's revision).
+    key : str
+        The geoid column.
+    corners : sequence of str
+        The k >= 2 integer corner columns.
+    geoid : int
+        The geometry.
+
+    Returns
+    -------
+    (m, k) int64
+        The corner ids, one row per cell.
+    """
+    k = len(corners)
+    bits = 63 // k
+    packed = sql.SQL(" | ").join(
+        sql.SQL("({}::int8 << {})").format(sql.Identifier(c), sql.Literal(bits * (k - 1 - i))) if i < k - 1
+        else sql.SQL("{}::int8").format(sql.Identifier(c)) for i, c in enumerate(corners))
+    # every corner in 0 .. 2**bits - 1 exactly when their bitwise or is (a negative id sets the sign bit)
+    in_range = sql.SQL("({}) BETWEEN 0 AND {}").format(
+        sql.SQL(" | ").join(sql.SQL("{}::int8").format(sql.Identifier(c)) for c in corners), sql.Literal((1 << bits) - 1))
+    query = sql.SQL("SELECT count(*), string_agg(CASE WHEN {in_range} THEN int8send({packed}) END, ''::bytea) "
+                    "FROM {source} WHERE {key} = {geoid}").format(
+        in_range=in_range, packed=packed, source=source, key=sql.Identifier(key), geoid=sql.Literal(geoid))
+    with conn.cursor(binary=True) as cursor:
+        row = cursor.execute(query).fetchone()
+    assert row is not None
+    count, data = int(row[0]), row[1] or b""
+    if len(data) != 8 * count:  # a corner out of range, or a NULL: as columns, which names a NULL
+        return np.stack(columns_out(conn, source, key, [(c, "int8") for c in corners], [geoid])[1:], axis=1)
+    values = np.frombuffer(data, dtype=">i8").astype(np.int64)
+    mask = (1 << bits) - 1
+    return np.stack([(values >> (bits * (k - 1 - i))) & mask for i in range(k)], axis=1)
 
 
 def _bad_row(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],

@@ -52,7 +52,7 @@ from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFo
                           reraise)
 from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, drawable, gmap_drawable, pack, vertex_flags
-from tgsis.view.surfaces import StoredSurface, stored_surface
+from tgsis.view.surfaces import StoredSurface, drawable_surface, stored_surface
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE"]
 
@@ -325,7 +325,7 @@ def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
         return gmap_drawable(history, axes), None
     if fc.time_model == "STATIC":
         if fc.geotype is Geotype.SURFACE:  # the view's own download: the stored rows, no more
-            return stored_surface(conn, fc, feature_id, color).drawable, None
+            return drawable_surface(conn, fc, feature_id, color), None
         feature = fetch_feature(conn, fc, feature_id)
         assert feature.mesh is not None
         return drawable(feature.mesh), None
@@ -539,7 +539,7 @@ def _mesh_body(request: Request) -> bytes:
         fc = feature_class_of(conn, feature_id)
         if fc.time_model == "STATIC" and fc.geotype is Geotype.SURFACE:
             with view.beside(conn, request, version) as other:
-                mesh, when = stored_surface(conn, fc, feature_id, color, beside=other).drawable, None
+                mesh, when = drawable_surface(conn, fc, feature_id, color, beside=other), None
         else:
             mesh, when = _mesh_of(conn, fc, feature_id, t, color)
         name = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()

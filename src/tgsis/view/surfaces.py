@@ -6,28 +6,31 @@ convention: what a client that edits and writes back needs. The view only
 draws: it takes the stored vertices and triangles (``tgsis.vrtx``,
 ``tgsis.trgl`` as the session's version sees them, two packed queries of
 :func:`tgsis.db._transfer.columns_out`), and one vertex property only when
-the page colours by it, with the stored ids for the comparisons. On a
-1M-vertex surface that is about a third of the time of ``fetch_feature``
-(bench/view_load.py).
+the page colours by it: with the stored ids for the comparisons
+(:func:`stored_surface`), or for the scene without the triangles' ids, their
+corners packed one value a triangle (:func:`drawable_surface`). The scene's
+download of a 1M-vertex surface is a fraction of the time of
+``fetch_feature`` (bench/view_load.py).
 """
 
 from __future__ import annotations
 
 import concurrent.futures
 from dataclasses import dataclass
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.db._transfer import columns_out, local_positions
+from tgsis.db._transfer import columns_out, corners_out, local_positions
 from tgsis.db.classes import FeatureClass
 from tgsis.errors import InvalidInputError, reraise
 from tgsis.view.meshes import Drawable
 
-__all__ = ["StoredSurface", "stored_surface"]
+__all__ = ["StoredSurface", "drawable_surface", "stored_surface"]
 
 Conn = psycopg.Connection[Any]
 
@@ -51,7 +54,7 @@ class StoredSurface:
 
 def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *,
                    beside: Conn | None = None) -> StoredSurface:
-    """The stored vertices and triangles of a static surface (and the vertex property ``prop``).
+    """The stored vertices and triangles of a static surface (and the vertex property ``prop``), with their ids.
 
     ``beside``: a second connection that sees what ``conn`` sees (the same
     snapshot and version): the triangles come through it while the vertices
@@ -66,28 +69,69 @@ def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | No
     """
     def triangles(on: Conn) -> list[npt.NDArray[Any]]:
         with reraise():
-            return columns_out(on, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), ("vrtxid1", "int8"),
-                                                                     ("vrtxid2", "int8"), ("vrtxid3", "int8")],
-                               [feature_id])
+            return columns_out(on, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), *_CORNERS], [feature_id])
 
+    vertex_ids, vertices, (_, tid, a, b, c) = _side_by_side(conn, feature_id, triangles, beside)
+    torder = np.argsort(tid, kind="stable")
+    corners = np.stack([a[torder], b[torder], c[torder]], axis=1)
+    drawable = _drawable(conn, fc, feature_id, prop, vertex_ids, vertices, corners)
+    return StoredSurface(drawable, vertex_ids, tid[torder])
+
+
+def drawable_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *,
+                     beside: Conn | None = None) -> Drawable:
+    """What the scene draws of a static surface: :func:`stored_surface` without the triangles' ids or order.
+
+    The triangles' corners travel packed (:func:`tgsis.db._transfer.corners_out`,
+    one value per triangle instead of four), and are not sorted: a third of
+    the server's and the client's work for a surface of millions of
+    triangles (bench/view_load.py).
+
+    Raises
+    ------
+    InvalidInputError
+        ``prop`` is not a numeric scalar vertex property of the class.
+    InvalidGeometryError
+        Triangles that name vertices the geometry does not have.
+    """
+    def triangles(on: Conn) -> npt.NDArray[np.int64]:
+        with reraise():
+            return corners_out(on, sql.SQL("tgsis.trgl"), "geoid", [name for name, _ in _CORNERS], feature_id)
+
+    vertex_ids, vertices, corners = _side_by_side(conn, feature_id, triangles, beside)
+    return _drawable(conn, fc, feature_id, prop, vertex_ids, vertices, corners)
+
+
+_CORNERS = [("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")]
+_T = TypeVar("_T")
+
+
+def _side_by_side(conn: Conn, feature_id: int, triangles: Callable[[Conn], _T],
+                  beside: Conn | None) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], _T]:
+    """The vertices (ids ascending, (n, 3) coordinates) through ``conn`` and ``triangles(beside)`` at the same time."""
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
         later = pool.submit(triangles, beside) if beside is not None else None
         with reraise():
             _, vid, x, y, z = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
                                           [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
                                           [feature_id])
-        _, tid, a, b, c = later.result() if later is not None else triangles(conn)
-    vorder, torder = np.argsort(vid, kind="stable"), np.argsort(tid, kind="stable")
-    vertex_ids, triangle_ids = vid[vorder], tid[torder]
+        cells = later.result() if later is not None else triangles(conn)
     vertices = np.empty((len(vid), 3))
+    if np.all(vid[1:] > vid[:-1]):  # the rows came in id order (as stored by one upload): nothing to sort
+        vertices[:, 0], vertices[:, 1], vertices[:, 2] = x, y, z
+        return vid, vertices, cells
+    vorder = np.argsort(vid, kind="stable")
     vertices[:, 0], vertices[:, 1], vertices[:, 2] = x[vorder], y[vorder], z[vorder]
-    corners = np.stack([a[torder], b[torder], c[torder]], axis=1)
+    return vid[vorder], vertices, cells
+
+
+def _drawable(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None, vertex_ids: npt.NDArray[np.int64],
+              vertices: npt.NDArray[np.float64], corners: npt.NDArray[np.int64]) -> Drawable:
     indices = local_positions(vertex_ids, corners.ravel(), "tgsis.trgl rows", feature_id).reshape(-1, 3)
     values: dict[str, npt.NDArray[np.float64]] = {}
     if prop is not None:
         values[prop] = _vertex_property(conn, fc, feature_id, prop, vertex_ids)
-    return StoredSurface(Drawable("triangles", vertices, indices.astype(np.int64), values,
-                                  np.arange(len(indices), dtype=np.int64)), vertex_ids, triangle_ids)
+    return Drawable("triangles", vertices, indices.astype(np.int64), values, np.arange(len(indices), dtype=np.int64))
 
 
 def _vertex_property(conn: Conn, fc: FeatureClass, feature_id: int, prop: str,

@@ -171,7 +171,10 @@ class Viewer {
     this.camera = new THREE.PerspectiveCamera(40, aspect, 1, 1e7);
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, canvas);
-    this.controls.addEventListener("change", () => this.render());
+    // the user's orbit, pan and zoom redraw; fit() moves the camera without drawing (its callers draw once,
+    // after everything is set: each frame of 2M triangles is about a second on a software renderer)
+    this.fitting = false;
+    this.controls.addEventListener("change", () => { if (!this.fitting) this.render(); });
     this.fitted = false;
   }
 
@@ -199,7 +202,8 @@ class Viewer {
     this.camera.near = size / 1000;
     this.camera.far = size * 100;
     this.camera.updateProjectionMatrix();
-    this.controls.update();
+    this.fitting = true;
+    try { this.controls.update(); } finally { this.fitting = false; }
     this.fitted = true;
   }
 
