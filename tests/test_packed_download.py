@@ -206,3 +206,21 @@ def test_the_scene_draws_what_is_stored_in_the_session_version(conn: Conn, horiz
     assert _bits_equal(drawn.vertex_values["porosity"], mesh.vertex_properties["porosity"])
     base = drawable_surface(conn, horizons, geoid)  # DEFAULT sees neither change
     assert _bits_equal(base.vertices, mesh.vertices) and np.array_equal(_oriented(base.indices), _oriented(mesh.cells))
+
+
+def test_several_geometries_at_once_each_read_its_own_rows(conn: Conn, horizons: F.FeatureClass) -> None:
+    first, second = _surface(4), _surface(6)
+    a, b = F.insert_feature(conn, horizons, first), F.insert_feature(conn, horizons, second)
+    # one aggregate per geometry (not one group per geometry): rows interleaved by a psql user read right
+    conn.execute("CREATE TEMP TABLE keep AS SELECT * FROM tgsis.vrtx WHERE geoid IN (%s, %s) ORDER BY vrtxid, geoid",
+                 (a, b))
+    conn.execute("DELETE FROM tgsis.vrtx WHERE geoid IN (%s, %s)", (a, b))
+    conn.execute("INSERT INTO tgsis.vrtx SELECT * FROM keep")
+    got = F.fetch_features(conn, horizons, [b, a, b])
+    assert [f.id for f in got] == [b, a, b]
+    assert got[0].mesh.same_as(second) and got[1].mesh.same_as(first) and got[2].mesh.same_as(second)
+    conn.execute("ALTER TABLE horizon_cellpros ALTER COLUMN porosity DROP NOT NULL")  # as the table's owner may
+    conn.execute("UPDATE horizon_cellpros SET porosity = NULL WHERE _geoid = %s AND _idx = 7", (b,))
+    with pytest.raises(DatabaseError, match=rf"column porosity of .*horizon_cellpros.* row _geoid = {b}, _idx = 7"):
+        F.fetch_features(conn, horizons, [a, b])
+    conn.rollback()

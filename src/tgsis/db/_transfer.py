@@ -342,10 +342,11 @@ def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[
         query = sql.SQL("SELECT {geoid}::int8, count(*), string_agg({row}, ''::bytea) FROM {source} "
                         "WHERE {key} = {geoid}").format(
             key=sql.Identifier(key), row=row, source=source, geoid=sql.Literal(int(geoids[0])))
-    else:
-        query = sql.SQL("SELECT {key}, count(*), string_agg({row}, ''::bytea) FROM {source} "
-                        "WHERE {key} = ANY({geoids}) GROUP BY {key}").format(
-            key=sql.Identifier(key), row=row, source=source, geoids=sql.Literal(list(geoids)))
+    else:  # one such aggregate per geometry, one after the other: memory for one geometry's values at a time
+        query = sql.SQL("SELECT g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
+                        "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({row}, ''::bytea) AS v "
+                        "FROM {source} WHERE {key} = g.k) a").format(
+            key=sql.Identifier(key), row=row, source=source, geoids=sql.Literal([int(g) for g in geoids]))
     with conn.cursor(binary=True) as cursor:
         groups = [g for g in cursor.execute(query).fetchall() if g[1]]
     counts = [int(g[1]) for g in groups]
