@@ -83,9 +83,9 @@ def drawable_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | 
     """What the scene draws of a static surface: :func:`stored_surface` without the triangles' ids or order.
 
     The triangles' corners travel packed (:func:`tgsis.db._transfer.corners_out`,
-    one value per triangle instead of four), and are not sorted: a third of
-    the server's and the client's work for a surface of millions of
-    triangles (bench/view_load.py).
+    one value per triangle instead of four: about a third less server time
+    for the triangles of a large surface) and are not sorted by id on the
+    client (docs/performance.md, "The browser view").
 
     Raises
     ------
