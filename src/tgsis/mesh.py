@@ -212,8 +212,11 @@ class Mesh:
                 detail=f"{int(outside.any(axis=1).sum())} {_plural(what)} have out-of-range vertex indices",
             )
         if k > 1:
-            ordered = np.sort(array, axis=1)
-            repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
+            # every pair of corners compared: k(k - 1)/2 passes, cheaper than sorting each row for k <= 4
+            repeated = np.zeros(len(array), dtype=bool)
+            for i in range(k):
+                for j in range(i + 1, k):
+                    repeated |= array[:, i] == array[:, j]
             if repeated.any():
                 row = int(np.flatnonzero(repeated)[0])
                 raise InvalidGeometryError(
