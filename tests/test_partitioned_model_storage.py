@@ -1,9 +1,9 @@
 """Check-in, merge and conflicts on tgsis's own model tables hash-partitioned by geoid (issue 20, docs/scaling.md).
 
 tgsis creates its model tables as ordinary tables after CREATE EXTENSION
-(tgsis.create_storage), so a DBA may partition them before storing data:
-docs/scaling.md gives the statements, which :func:`partition_model_storage`
-runs here. Every test of tests/test_checkin.py and tests/test_checkin_child.py
+(tgsis.create_storage), so they can be partitioned before data is stored:
+``tgsis.partition_model_storage`` (docs/scaling.md), run here on each test's
+database before the test connects. Every test of tests/test_checkin.py and tests/test_checkin_child.py
 (save by difference, check-out / check-in, concurrent check-ins, conflicts
 into a child version, merges, bad input) runs again in this module on
 databases whose model-1 tables are partitioned in 4, with feature versioning
@@ -37,39 +37,11 @@ globals().update({name: test for module in (test_checkin, test_checkin_child)
 __all__ = ["faults", "horizons"]
 
 
-def partition_model_storage(conn: Conn, model: int, partitions: int) -> list[str]:
-    """What docs/scaling.md tells a DBA to run before storing data: each table of ``model`` hash-partitioned by geoid.
-
-    Each table is replaced by a partitioned table of the same definition
-    (``LIKE ... INCLUDING ALL``: columns, defaults, checks, keys, comments)
-    with ``partitions`` partitions, and the group roles' rights are granted
-    again (``tgsis.grant_model_tables``). One transaction.
-    """
-    tables = [r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE model = %s ORDER BY tablename",
-                                         (model,)).fetchall()]
-    with conn.transaction():
-        for table in tables:
-            plain = sql.Identifier("tgsis", f"{table}_plain")
-            conn.execute(sql.SQL("ALTER TABLE {} RENAME TO {}").format(sql.Identifier("tgsis", table),
-                                                                      sql.Identifier(f"{table}_plain")))
-            conn.execute(sql.SQL("ALTER INDEX {} RENAME TO {}").format(sql.Identifier("tgsis", f"{table}_pkey"),
-                                                                      sql.Identifier(f"{table}_plain_pkey")))
-            conn.execute(sql.SQL("CREATE TABLE {} (LIKE {} INCLUDING ALL) PARTITION BY HASH (geoid)").format(
-                sql.Identifier("tgsis", table), plain))
-            for r in range(partitions):
-                conn.execute(sql.SQL("CREATE TABLE {} PARTITION OF {} FOR VALUES WITH (MODULUS {}, REMAINDER {})").format(
-                    sql.Identifier("tgsis", f"{table}_p{r}"), sql.Identifier("tgsis", table), sql.Literal(partitions),
-                    sql.Literal(r)))
-            conn.execute(sql.SQL("DROP TABLE {}").format(plain))
-        conn.execute("SELECT tgsis.grant_model_tables(%s::smallint)", (model,))
-    return tables
-
-
 @pytest.fixture(autouse=True)
 def partitioned(db_dsn: str) -> list[str]:
     """The test's database with the model-1 tables partitioned, before the test's own connection opens."""
     with psycopg.connect(db_dsn) as conn:
-        return partition_model_storage(conn, 1, PARTITIONS)
+        return tgsis.partition_model_storage(conn, 1, PARTITIONS)
 
 
 def _grid(side: int) -> tgsis.Surface:
@@ -152,3 +124,74 @@ def test_dump_and_restore_keep_the_partitioned_model_storage(pg: TestServer, db_
         tgsis.merge_version(restored, "edit")
         restored.commit()
         assert tgsis.fetch_feature(restored, horizons.name, geoid).mesh.same_as(edited)
+
+
+def _definition(conn: Conn, table: str) -> list[Any]:
+    """What partitioning must keep of a model table: columns, constraints, index names and shapes, comments, owner, rights."""
+    rel = f"tgsis.{table}"
+    return [
+        conn.execute("SELECT array_agg((a.attname, format_type(a.atttypid, a.atttypmod), a.attnotnull, "
+                     "pg_get_expr(d.adbin, d.adrelid), col_description(a.attrelid, a.attnum)) ORDER BY a.attnum)::text "
+                     "FROM pg_attribute a LEFT JOIN pg_attrdef d ON d.adrelid = a.attrelid AND d.adnum = a.attnum "
+                     "WHERE a.attrelid = %s::regclass AND a.attnum > 0 AND NOT a.attisdropped", (rel,)).fetchone(),
+        conn.execute("SELECT array_agg((conname, contype, pg_get_constraintdef(oid)) ORDER BY conname)::text "
+                     "FROM pg_constraint WHERE conrelid = %s::regclass", (rel,)).fetchone(),
+        conn.execute("SELECT array_agg((c.relname, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2)) "
+                     "ORDER BY c.relname)::text FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid "
+                     "WHERE i.indrelid = %s::regclass", (rel,)).fetchone(),
+        conn.execute("SELECT obj_description(c.oid, 'pg_class'), c.relowner::regrole::text, "
+                     "(SELECT array_agg(a::text ORDER BY a::text) FROM unnest(c.relacl) a) "
+                     "FROM pg_class c WHERE c.oid = %s::regclass", (rel,)).fetchone(),
+    ]
+
+
+def test_partitioning_keeps_every_definition_of_every_model(make_database: Any, template_db: str) -> None:
+    with psycopg.connect(make_database(template_db)) as plain:
+        tables = {m: [r[0] for r in plain.execute("SELECT tablename FROM tgsis.model_tables WHERE model = %s",
+                                                   (m,)).fetchall()] for m in range(1, 6)}
+        before = {t: _definition(plain, t) for ts in tables.values() for t in ts}
+    with psycopg.connect(make_database(template_db)) as conn:
+        for model in range(1, 6):
+            assert sorted(tgsis.partition_model_storage(conn, model, 3)) == sorted(tables[model])
+        for table, definition in before.items():
+            assert _definition(conn, table) == definition, table
+            parts = conn.execute("SELECT c.relname, obj_description(c.oid, 'pg_class'), c.relacl FROM pg_inherits i "
+                                 "JOIN pg_class c ON c.oid = i.inhrelid WHERE i.inhparent = %s::regclass "
+                                 "ORDER BY 1", (f"tgsis.{table}",)).fetchall()
+            assert [p[0] for p in parts] == [f"{table}_p{r}" for r in range(3)]
+            assert all(p[1] and p[2] is None for p in parts)  # commented; no rights of their own
+
+
+@pytest.mark.parametrize("model, partitions, error, message", [
+    (1, 1, tgsis.InvalidInputError, "number of partitions 1 is out of range"),
+    (1, 5000, tgsis.InvalidInputError, "number of partitions 5000 is out of range"),
+    (0, 4, tgsis.InvalidInputError, "the core tables"),
+    (9, 4, tgsis.NotFoundError, "data model 9 does not exist"),
+    (1, 4, tgsis.InUseError, r"tgsis\.\w+ is not a plain table"),  # partitioned already by the fixture
+])
+def test_bad_calls_are_refused(conn: Conn, model: int, partitions: int, error: type[Exception], message: str) -> None:
+    with pytest.raises(error, match=message):
+        tgsis.partition_model_storage(conn, model, partitions)
+
+
+def test_storage_with_rows_or_versioning_is_refused_and_left_as_it_was(conn: Conn, horizons: Any) -> None:
+    geoid = tgsis.insert_feature(conn, horizons, _grid(3))  # model 1 (partitioned by the fixture) holds rows
+    conn.commit()
+    tables = [r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE model = 2").fetchall()]
+    conn.execute("INSERT INTO tgsis.times (geoid, times) SELECT %s, 0.0", (geoid,))  # a row in one model-2 table
+    before = {t: _definition(conn, t) for t in tables}
+    with pytest.raises(tgsis.InUseError, match=r"tgsis\.times holds rows") as caught:
+        tgsis.partition_model_storage(conn, 2, 4)
+    assert "before storing data" in (caught.value.hint or "")
+    conn.rollback()
+    assert {t: _definition(conn, t) for t in tables} == before  # none of the model's tables changed
+    tgsis.enable_feature_versioning(conn)
+    with pytest.raises(tgsis.InUseError, match="is not a plain table"):
+        tgsis.partition_model_storage(conn, 2, 4)
+
+
+def test_only_the_owner_partitions(db_dsn: str) -> None:
+    with login_roles(db_dsn, {"admin": "tgsis_admin"}) as roles:
+        admin = roles.connect("admin")
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.partition_model_storage(admin, 2, 4)

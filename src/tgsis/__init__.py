@@ -73,6 +73,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         find_binaries,
         install,
         installed_version,
+        partition_model_storage,
         uninstall,
     )
     from tgsis.db.versions import (
@@ -181,6 +182,7 @@ _LAZY: dict[str, str] = {
     "find_binaries": "tgsis.db",
     "install": "tgsis.db",
     "installed_version": "tgsis.db",
+    "partition_model_storage": "tgsis.db",
     "uninstall": "tgsis.db",
     "Compressed": "tgsis.db.versions",
     "Conflict": "tgsis.db.versions",
@@ -323,6 +325,7 @@ __all__ = [
     "connect",
     "install",
     "installed_version",
+    "partition_model_storage",
     "uninstall",
     "InstallResult",
     "InstalledVersion",

@@ -26,7 +26,7 @@ from psycopg import sql
 from tgsis.db.sqlsource import EXTENSION, ExtensionSources, parse_version
 from tgsis.errors import InstallationError, InUseError, reraise
 
-__all__ = ["InstallResult", "InstalledVersion", "install", "installed_version", "uninstall"]
+__all__ = ["InstallResult", "InstalledVersion", "install", "installed_version", "partition_model_storage", "uninstall"]
 
 log = logging.getLogger(__name__)
 
@@ -365,3 +365,43 @@ def uninstall(conn: psycopg.Connection[Any], *, cascade: bool = False) -> Instal
                 )
             _drop_tgsis(conn, current.method)  # nothing else depends on tgsis: for real
     return current
+
+
+def partition_model_storage(conn: psycopg.Connection[Any], model: int, partitions: int) -> list[str]:
+    """Hash-partition the storage tables of a data model by geoid (``tgsis.partition_model_storage``).
+
+    For a database that will outgrow plain tables (docs/scaling.md): run it
+    once after :func:`install`, before storing data of that model and before
+    :func:`tgsis.enable_feature_versioning`. The tables keep their
+    definitions, index names, comments, owner and the group roles' rights.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        Connection of the tables' owner (the role that installed tgsis) or a superuser.
+    model : int
+        The data model, 1 to 5 (``tgsis.data_models``); the core tables stay plain.
+    partitions : int
+        2 to 1024.
+
+    Returns
+    -------
+    list of str
+        The tables partitioned (names in schema ``tgsis``).
+
+    Raises
+    ------
+    InvalidInputError
+        ``partitions`` out of range, or model 0.
+    NotFoundError
+        No such data model.
+    InUseError
+        A table holds rows, is versioned or is partitioned already (nothing is changed).
+    MissingPrivilegeError
+        The role may not run it or does not own the tables.
+    """
+    with reraise(), conn.transaction():
+        row = conn.execute("SELECT tgsis.partition_model_storage(%s::smallint, %s::integer)",
+                           (model, partitions)).fetchone()
+    assert row is not None
+    return list(row[0])

@@ -1,0 +1,119 @@
+-- tgsis.partition_model_storage(model, partitions): hash-partition the empty storage tables of a data model by geoid.
+-- For a database that will outgrow plain tables (docs/scaling.md): each
+-- table of the model (tgsis.model_tables) is replaced by a table of the
+-- same definition (LIKE ... INCLUDING ALL: columns, defaults, checks, keys,
+-- indexes and their names, comments, owner, the group roles' rights)
+-- partitioned by HASH (geoid) in p_partitions partitions. Every key of the
+-- model tables starts with geoid, so the keys (and the (keys..., revision)
+-- of versioned storage) contain the partition key. Only before data is
+-- stored and before feature versioning: the tables are locked, checked to
+-- be plain, empty and keyed by geoid first, and then swapped, all in the
+-- caller's transaction, so that a refusal changes nothing and no row can be
+-- written between the check and the swap. The core tables (model 0:
+-- tgsis.geometry and the model sets, with identities and foreign keys) stay
+-- plain. The partitions grant nothing of their own, as enable_versioning
+-- requires. Run it as the tables' owner (the role that installed tgsis) or
+-- a superuser; PUBLIC may not.
+CREATE FUNCTION tgsis.partition_model_storage(p_model smallint, p_partitions integer)
+RETURNS text[]
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_tables  text[];
+    v_table   text;
+    v_rel     regclass;
+    v_kind    "char";
+    v_owner   name;
+    v_comment text;
+    v_index   record;
+    v_names   text[];
+    v_defs    text[];
+    v_rows    boolean;
+    v_new     regclass;
+    v_r       integer;
+BEGIN
+    IF p_partitions IS NULL OR p_partitions NOT BETWEEN 2 AND 1024 THEN
+        RAISE EXCEPTION 'number of partitions % is out of range', coalesce(p_partitions::text, 'NULL')
+            USING ERRCODE = 'TG100', HINT = 'give 2 to 1024 partitions';
+    END IF;
+    IF p_model = 0 THEN
+        RAISE EXCEPTION 'the core tables (data model 0) are not partitioned'
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'tgsis.geometry hands out the geometry ids and is referenced by foreign keys',
+                  HINT = 'partition the tables of data models 1 to 5: SELECT model, tablename FROM tgsis.model_tables';
+    END IF;
+    SELECT array_agg(t.tablename ORDER BY t.tablename) INTO v_tables FROM tgsis.model_tables t WHERE t.model = p_model;
+    IF v_tables IS NULL THEN
+        RAISE EXCEPTION 'data model % does not exist', coalesce(p_model::text, 'NULL')
+            USING ERRCODE = 'TG200', HINT = 'the data models are in tgsis.data_models';
+    END IF;
+
+    -- every table first: locked, then checked; nothing is changed before all pass
+    FOREACH v_table IN ARRAY v_tables LOOP
+        v_rel := to_regclass(format('tgsis.%I', v_table));
+        SELECT c.relkind INTO v_kind FROM pg_class c WHERE c.oid = v_rel;
+        IF v_rel IS NULL OR v_kind <> 'r' THEN
+            RAISE EXCEPTION 'tgsis.% is not a plain table', v_table
+                USING ERRCODE = 'TG202',
+                      DETAIL = CASE v_kind WHEN 'p' THEN 'it is partitioned already'
+                                           WHEN 'v' THEN 'feature versioning made it a view of tgsis.' || v_table || '_ver'
+                                           ELSE 'it is missing' END,
+                      HINT = 'partition the model tables once, before storing data and before tgsis.enable_feature_versioning()';
+        END IF;
+        EXECUTE format('LOCK TABLE tgsis.%I IN ACCESS EXCLUSIVE MODE', v_table);
+        IF NOT EXISTS (SELECT FROM pg_constraint k JOIN pg_attribute a ON a.attrelid = k.conrelid AND a.attnum = k.conkey[1]
+                        WHERE k.conrelid = v_rel AND k.contype = 'p' AND a.attname = 'geoid') THEN
+            RAISE EXCEPTION 'tgsis.% is not keyed by geoid first', v_table
+                USING ERRCODE = 'TG202', HINT = 'only tables whose primary key starts with geoid can be partitioned by it';
+        END IF;
+        EXECUTE format('SELECT EXISTS (SELECT FROM tgsis.%I)', v_table) INTO STRICT v_rows;
+        IF v_rows THEN
+            RAISE EXCEPTION 'tgsis.% holds rows', v_table
+                USING ERRCODE = 'TG202',
+                      DETAIL = 'its rows would have to be moved; partitioning is for storage that is still empty',
+                      HINT = 'partition the model tables before storing data (a dump restored into a partitioned database keeps its rows)';
+        END IF;
+    END LOOP;
+
+    FOREACH v_table IN ARRAY v_tables LOOP
+        v_rel := format('tgsis.%I', v_table)::regclass;
+        SELECT c.relowner::regrole::name, obj_description(c.oid, 'pg_class') INTO v_owner, v_comment
+          FROM pg_class c WHERE c.oid = v_rel;
+        -- the indexes' names, by what each indexes (the text after USING), for the new table's indexes to take
+        SELECT array_agg(c.relname::text ORDER BY c.relname), array_agg(split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2) ORDER BY c.relname)
+          INTO v_names, v_defs
+          FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_rel;
+        EXECUTE format('ALTER TABLE tgsis.%I RENAME TO %I', v_table, 'tgsis_old_' || v_table);
+        EXECUTE format('CREATE TABLE tgsis.%I (LIKE tgsis.%I INCLUDING ALL) PARTITION BY HASH (geoid)',
+                       v_table, 'tgsis_old_' || v_table);
+        EXECUTE format('DROP TABLE tgsis.%I', 'tgsis_old_' || v_table);
+        v_new := format('tgsis.%I', v_table)::regclass;
+        FOR v_index IN SELECT i.indexrelid::regclass AS idx, c.relname::text AS name,
+                              v_names[array_position(v_defs, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2))] AS old
+                         FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_new LOOP
+            IF v_index.old IS NOT NULL AND v_index.old <> v_index.name THEN
+                EXECUTE format('ALTER INDEX %s RENAME TO %I', v_index.idx, v_index.old);  -- a key's constraint too
+            END IF;
+        END LOOP;
+        EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_table, v_owner);
+        EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_table, v_comment);
+        FOR v_r IN 0 .. p_partitions - 1 LOOP
+            EXECUTE format('CREATE TABLE tgsis.%I PARTITION OF tgsis.%I FOR VALUES WITH (MODULUS %s, REMAINDER %s)',
+                           v_table || '_p' || v_r, v_table, p_partitions, v_r);
+            EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_table || '_p' || v_r, v_owner);
+            EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_table || '_p' || v_r,
+                           format('partition %s of %s of tgsis.%s (hash of geoid; tgsis.partition_model_storage)',
+                                  v_r + 1, p_partitions, v_table));
+        END LOOP;
+    END LOOP;
+    PERFORM tgsis.grant_model_tables(p_model);
+    RETURN v_tables;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.partition_model_storage(smallint, integer) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.partition_model_storage(smallint, integer) IS
+    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions, keeping their definitions, index names, comments, owner and rights; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
