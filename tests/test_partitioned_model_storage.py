@@ -23,6 +23,7 @@ from psycopg import sql
 import tgsis
 from tests import test_checkin, test_checkin_child
 from tests.roles import login_roles
+from tests.sessions import Background, wait_until_blocked
 from tests.test_backup import _bindir_of, _restored
 from tests.test_checkin import horizons
 from tests.test_checkin_child import faults
@@ -195,3 +196,37 @@ def test_only_the_owner_partitions(db_dsn: str) -> None:
         admin = roles.connect("admin")
         with pytest.raises(tgsis.MissingPrivilegeError):
             tgsis.partition_model_storage(admin, 2, 4)
+
+
+def test_a_table_other_objects_use_is_refused_naming_them(conn: Conn) -> None:
+    conn.execute("CREATE VIEW public.moments AS SELECT geoid, times FROM tgsis.times")
+    conn.commit()
+    with pytest.raises(tgsis.InUseError, match=r"tgsis\.times is used by other objects") as caught:
+        tgsis.partition_model_storage(conn, 2, 4)
+    assert caught.value.detail == "used by: view public.moments"
+    conn.rollback()
+    kinds = conn.execute("SELECT array_agg(DISTINCT c.relkind) FROM tgsis.model_tables t "
+                         "JOIN pg_class c ON c.oid = to_regclass('tgsis.' || t.tablename) WHERE t.model = 2").fetchone()
+    assert kinds == (["r"],)  # nothing partitioned
+    conn.execute("DROP VIEW public.moments")
+    conn.commit()
+    assert "times" in tgsis.partition_model_storage(conn, 2, 4)
+
+
+@pytest.mark.parametrize("writer_commits", [True, False])
+def test_a_writer_in_flight_is_waited_for(db_dsn: str, conn: Conn, writer_commits: bool) -> None:
+    writer = psycopg.connect(db_dsn)
+    try:
+        writer.execute("INSERT INTO tgsis.times (geoid, times) VALUES (1, 0.0)")  # not committed yet
+        call = Background(db_dsn, "partition", lambda c: tgsis.partition_model_storage(c, 2, 4))
+        wait_until_blocked(conn, call.pid, writer.info.backend_pid)
+        writer.commit() if writer_commits else writer.rollback()
+        if writer_commits:  # the row it waited for is there: refused, nothing changed
+            with pytest.raises(tgsis.InUseError, match=r"tgsis\.times holds rows"):
+                call.finish()
+            assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("r",)
+        else:
+            assert "times" in call.finish()
+            assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("p",)
+    finally:
+        writer.close()

@@ -7,7 +7,8 @@
 -- model tables starts with geoid, so the keys (and the (keys..., revision)
 -- of versioned storage) contain the partition key. Only before data is
 -- stored and before feature versioning: the tables are locked, checked to
--- be plain, empty and keyed by geoid first, and then swapped, all in the
+-- be plain, empty, keyed by geoid first and used by no view, foreign key or
+-- function body, and then swapped, all in the
 -- caller's transaction, so that a refusal changes nothing and no row can be
 -- written between the check and the swap. The core tables (model 0:
 -- tgsis.geometry and the model sets, with identities and foreign keys) stay
@@ -52,6 +53,10 @@ BEGIN
 
     -- every table first: locked, then checked; nothing is changed before all pass
     FOREACH v_table IN ARRAY v_tables LOOP
+        IF to_regclass(format('tgsis.%I', v_table)) IS NOT NULL THEN
+            -- first the lock (it waits for writers, and for a concurrent call, whose tables the name then gives)
+            EXECUTE format('LOCK TABLE tgsis.%I IN ACCESS EXCLUSIVE MODE', v_table);
+        END IF;
         v_rel := to_regclass(format('tgsis.%I', v_table));
         SELECT c.relkind INTO v_kind FROM pg_class c WHERE c.oid = v_rel;
         IF v_rel IS NULL OR v_kind <> 'r' THEN
@@ -62,7 +67,22 @@ BEGIN
                                            ELSE 'it is missing' END,
                       HINT = 'partition the model tables once, before storing data and before tgsis.enable_feature_versioning()';
         END IF;
-        EXECUTE format('LOCK TABLE tgsis.%I IN ACCESS EXCLUSIVE MODE', v_table);
+        -- what refers to the table (views, foreign keys, SQL-standard function bodies) would block the swap
+        SELECT string_agg(DISTINCT CASE WHEN d.classid = 'pg_rewrite'::regclass
+                                        THEN (SELECT 'view ' || r.ev_class::regclass::text FROM pg_rewrite r WHERE r.oid = d.objid)
+                                        ELSE pg_describe_object(d.classid, d.objid, 0) END, ', ') INTO v_comment
+          FROM pg_depend d
+         WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_rel AND d.deptype = 'n'
+           AND NOT (d.classid = 'pg_constraint'::regclass        -- the table's own checks name its columns
+                    AND EXISTS (SELECT FROM pg_constraint c WHERE c.oid = d.objid AND c.conrelid = v_rel))
+           AND NOT (d.classid = 'pg_trigger'::regclass
+                    AND EXISTS (SELECT FROM pg_trigger t WHERE t.oid = d.objid AND t.tgrelid = v_rel))
+           AND d.classid <> 'pg_attrdef'::regclass;
+        IF v_comment IS NOT NULL THEN
+            RAISE EXCEPTION 'tgsis.% is used by other objects', v_table
+                USING ERRCODE = 'TG202', DETAIL = 'used by: ' || v_comment,
+                      HINT = 'drop them, partition the model tables, then create them again';
+        END IF;
         IF NOT EXISTS (SELECT FROM pg_constraint k JOIN pg_attribute a ON a.attrelid = k.conrelid AND a.attnum = k.conkey[1]
                         WHERE k.conrelid = v_rel AND k.contype = 'p' AND a.attname = 'geoid') THEN
             RAISE EXCEPTION 'tgsis.% is not keyed by geoid first', v_table
