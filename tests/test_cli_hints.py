@@ -133,6 +133,7 @@ NOT_FROM_THE_CLI = {
     "src/tgsis/formats/pvd.py": "write_pvd of Python objects",
     "src/tgsis/db/adapters.py": "psycopg adapters for Python programs (tgsis.register_types): no command",
     "sql/model4/gmap_conditions.sql": "an SQL building block of gmap_check and md_check, which the command calls with valid arguments",
+    "sql/geometry/partition_model_storage.sql": "a DBA's set-up step, SQL and Python only (docs/scaling.md): no command",
 }
 
 
