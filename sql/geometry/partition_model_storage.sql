@@ -28,6 +28,7 @@ DECLARE
     v_kind    "char";
     v_owner   name;
     v_comment text;
+    v_users   text;
     v_index   record;
     v_names   text[];
     v_defs    text[];
@@ -70,7 +71,7 @@ BEGIN
         -- what refers to the table (views, foreign keys, SQL-standard function bodies) would block the swap
         SELECT string_agg(DISTINCT CASE WHEN d.classid = 'pg_rewrite'::regclass
                                         THEN (SELECT 'view ' || r.ev_class::regclass::text FROM pg_rewrite r WHERE r.oid = d.objid)
-                                        ELSE pg_describe_object(d.classid, d.objid, 0) END, ', ') INTO v_comment
+                                        ELSE pg_describe_object(d.classid, d.objid, 0) END, ', ') INTO v_users
           FROM pg_depend d
          WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_rel AND d.deptype = 'n'
            AND NOT (d.classid = 'pg_constraint'::regclass        -- the table's own checks name its columns
@@ -78,9 +79,9 @@ BEGIN
            AND NOT (d.classid = 'pg_trigger'::regclass
                     AND EXISTS (SELECT FROM pg_trigger t WHERE t.oid = d.objid AND t.tgrelid = v_rel))
            AND d.classid <> 'pg_attrdef'::regclass;
-        IF v_comment IS NOT NULL THEN
+        IF v_users IS NOT NULL THEN
             RAISE EXCEPTION 'tgsis.% is used by other objects', v_table
-                USING ERRCODE = 'TG202', DETAIL = 'used by: ' || v_comment,
+                USING ERRCODE = 'TG202', DETAIL = 'used by: ' || v_users,
                       HINT = 'drop them, partition the model tables, then create them again';
         END IF;
         IF NOT EXISTS (SELECT FROM pg_constraint k JOIN pg_attribute a ON a.attrelid = k.conrelid AND a.attnum = k.conkey[1]
