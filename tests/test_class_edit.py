@@ -122,8 +122,17 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     tgsis.drop_property(conn, "horizons", "note")
     if versioned:  # the versioned views and their triggers are the ones tgsis made, over the storage's columns
         for table in ("horizons", "horizons_cellpros"):
-            assert conn.execute("SELECT count(*) FROM pg_trigger WHERE tgrelid = %s::regclass AND NOT tgisinternal",
-                                (table,)).fetchone() == (2,)
+            triggers = conn.execute("SELECT array_agg(tgname::text ORDER BY tgname) FROM pg_trigger "
+                                    "WHERE tgrelid = %s::regclass AND NOT tgisinternal", (table,)).fetchone()
+            assert triggers == (["tgsis_versioning", "tgsis_versioning_flush", "tgsis_versioning_rights"],)
+            # the queue of set-based updates was made anew with the table: one new and one old value per column
+            written = conn.execute("SELECT count(*) FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 "
+                                   "AND NOT attisdropped AND attgenerated = '' "
+                                   "AND attname NOT IN ('revision', 'lastrevs', 'revclosed')",
+                                   (f"{table}_ver",)).fetchone()
+            queued = conn.execute("SELECT count(*) FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 "
+                                  "AND NOT attisdropped", (f"{table}_ver_queue",)).fetchone()
+            assert written is not None and queued == (1 + 2 * written[0],)
 
 
 def test_every_version_keeps_its_values(conn: Conn) -> None:

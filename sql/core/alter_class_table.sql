@@ -49,6 +49,7 @@ BEGIN
             SELECT c.relacl, obj_description(c.oid, 'pg_class') INTO v_grants, v_comment FROM pg_class c WHERE c.oid = v_view;
             EXECUTE format('DROP VIEW %s', v_view);   -- (its triggers with it)
             EXECUTE format('DROP FUNCTION %I.%I()', v_schema, p_table || '_ver_write');
+            EXECUTE format('DROP TABLE %I.%I', v_schema, p_table || '_ver_queue');
             FOREACH v_alter IN ARRAY p_alters LOOP
                 EXECUTE format('ALTER TABLE %I.%I %s', v_schema, p_table || '_ver', v_alter);
             END LOOP;

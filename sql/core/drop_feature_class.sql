@@ -55,6 +55,7 @@ BEGIN
         IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table) THEN
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
             EXECUTE format('DROP FUNCTION %I.%I()', v_class.schemaname, v_table || '_ver_write');
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_ver_queue');
             EXECUTE format('DROP FUNCTION IF EXISTS %I.%I(boolean, text, text[], integer[], integer[], integer, bigint[])',
                            v_class.schemaname, v_table || '_ver_run');
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_ver');

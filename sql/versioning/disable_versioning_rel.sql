@@ -53,6 +53,7 @@ BEGIN
     END LOOP;
     EXECUTE format('DROP VIEW %I.%I', v_t.schemaname, v_t.tablename);
     EXECUTE format('DROP FUNCTION %I.%I()', v_t.schemaname, v_t.tablename || '_ver_write');
+    EXECUTE format('DROP TABLE %I.%I', v_t.schemaname, v_t.tablename || '_ver_queue');
     EXECUTE format('DROP FUNCTION IF EXISTS %I.%I(boolean, text, text[], integer[], integer[], integer, bigint[])',
                    v_t.schemaname, v_t.tablename || '_ver_run');
     EXECUTE format('DELETE FROM %I.%I v WHERE NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1))', v_t.schemaname, v_ver)

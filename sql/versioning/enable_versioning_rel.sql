@@ -84,15 +84,18 @@ BEGIN
     v_ver := v_table || '_ver';
     IF octet_length(v_table || '_ver_write') > 63 THEN
         RAISE EXCEPTION 'table name % is too long to be versioned', quote_literal(v_table)
-            USING ERRCODE = 'TG101', DETAIL = 'Versioning adds <table>_ver and <table>_ver_write(), which must fit in 63 bytes.';
+            USING ERRCODE = 'TG101',
+                  DETAIL = 'Versioning adds <table>_ver, <table>_ver_queue and <table>_ver_write(), which must fit in 63 bytes.';
     END IF;
     IF to_regclass(format('%I.%I', v_schema, v_ver)) IS NOT NULL
+       OR to_regclass(format('%I.%I', v_schema, v_table || '_ver_queue')) IS NOT NULL
        OR to_regprocedure(format('%I.%I()', v_schema, v_table || '_ver_write')) IS NOT NULL
        OR EXISTS (SELECT FROM pg_proc WHERE pronamespace = to_regnamespace(quote_ident(v_schema))
                                         AND proname = v_table || '_ver_run') THEN
-        RAISE EXCEPTION '%.%, %.%() or %.%() exists already', v_schema, v_ver, v_schema, v_table || '_ver_write',
-                v_schema, v_table || '_ver_run'
-            USING ERRCODE = 'TG201', HINT = 'versioning needs these names for the table''s storage, trigger and runner';
+        RAISE EXCEPTION '%.%, %.%, %.%() or %.%() exists already', v_schema, v_ver, v_schema, v_table || '_ver_queue',
+                v_schema, v_table || '_ver_write', v_schema, v_table || '_ver_run'
+            USING ERRCODE = 'TG201',
+                  HINT = 'versioning needs these names for the table''s storage, write queue, trigger and runner';
     END IF;
     IF p_objectclass IS NULL OR btrim(p_objectclass) = '' OR p_iudorder IS NULL THEN
         RAISE EXCEPTION 'versioning %.% needs an object class and an iudorder', v_schema, v_table USING ERRCODE = 'TG100';

@@ -26,8 +26,31 @@
 --     deletes, which take it exclusively) never decide from a state a view
 --     write is changing.
 -- Rights: tgsis.write_revision checks the calling role's write right on the
--- session's version for every row (the version is a setting that a function
--- called by the statement could change between rows) and share-locks it.
+-- session's version for every row written here (the version is a setting
+-- that a function called by the statement could change between rows) and
+-- share-locks it.
+--
+-- Set-based updates. An UPDATE that keeps a row's key (rewriting an object's
+-- values, the common bulk edit) is not written row by row: the row trigger
+-- only queues the row's old and new values in <table>_ver_queue, and the
+-- same function, fired AFTER the statement, writes all of them with a few
+-- set-based statements (a versioned write per row costs some ten statements:
+-- 35x the plain table's update, against about 7x this way; docs/performance.md).
+-- The flush does what the row path does, for all the queued rows at once:
+-- the write right on the session's version (tgsis.write_revision), features
+-- of no version, object locks, the notes of changed objects, the objects'
+-- write locks shared, then the visible row versions locked FOR UPDATE and
+-- compared with the values the statement read (40001 when one changed), then
+-- closed and written anew, or changed in place. A row deleted by a
+-- transaction that committed after the statement read it cannot be left out
+-- of the statement's row count any more, as the row path does: it fails with
+-- 40001 too (the retry finds no row). The queue is the table owner's alone
+-- (a queue that the writing role could fill would let a role allowed to
+-- change one column write any); its rows of a statement are those of the
+-- trigger depth the statement's triggers run at (pg_trigger_depth), so that
+-- a statement run by a trigger during another's flush keeps its own rows;
+-- the queue is empty outside a statement, so nothing in it is ever
+-- committed.
 CREATE FUNCTION tgsis.versioning_trigger_source(
     p_schema    text,
     p_table     text,
@@ -56,6 +79,17 @@ DECLARE
     v_noted_sql text;
     v_probe    text;
     v_declare  text := '';
+    v_queue    text := format('%I.%I', p_schema, p_table || '_ver_queue');
+    v_pos      integer[];    -- the position in p_columns of each key column
+    v_keypos   integer;      -- ... and of the object key column
+    v_enqueue  text := '';
+    v_flush    text := '';
+    v_qcols    text;         -- the queue's columns: depth, n<i> the new values, o<i> the old ones
+    v_qvals    text;
+    v_qjoin    text;
+    v_qkey     text;
+    v_qold     text;
+    v_wrow     text;
 BEGIN
     -- the probe of every row, one query: the object locks (tgsis.object_locks) and
     -- whether the object is noted as changed in the working revision
@@ -139,6 +173,156 @@ BEGIN
         (SELECT string_agg(format('OLD.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         p_schema, p_table, p_table, p_schema);
 
+    -- the set-based path of key-keeping updates, when every key column is a writable one
+    SELECT array_agg(array_position(p_columns, k) ORDER BY o) INTO v_pos FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
+    v_keypos := array_position(p_columns, p_keyfield);
+    IF array_position(v_pos, NULL) IS NULL AND v_keypos IS NOT NULL THEN
+        SELECT 'tgsis_depth, ' || string_agg(format('n%s', o), ', ' ORDER BY o) || ', '
+                               || string_agg(format('o%s', o), ', ' ORDER BY o),
+               'pg_catalog.pg_trigger_depth(), ' || string_agg(format('NEW.%I', c), ', ' ORDER BY o) || ', '
+                                                 || string_agg(format('OLD.%I', c), ', ' ORDER BY o),
+               format('pg_catalog.record_image_eq(ROW(%s), ROW(%s))', string_agg(format('v.%I', c), ', ' ORDER BY o),
+                      string_agg(format('q.o%s', o), ', ' ORDER BY o))
+          INTO v_qcols, v_qvals, v_qold
+          FROM unnest(p_columns) WITH ORDINALITY AS u(c, o);
+        SELECT string_agg(format('v.%I = q.n%s', k, v_pos[o]), ' AND ' ORDER BY o),
+               format('concat_ws(%L, %s)', ', ', string_agg(format('q.n%s::text', v_pos[o]), ', ' ORDER BY o))
+          INTO v_qjoin, v_qkey
+          FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
+        -- the revision a queued row is written with: 0 for features of no version (p_class 'feature' only)
+        v_wrow := CASE WHEN p_class = 'feature'
+                       THEN format('CASE WHEN q.n%s::text = ANY (v_unversioned) THEN 0 ELSE v_w END', v_keypos)
+                       ELSE 'v_w' END;
+        v_enqueue := format($enq$
+    IF TG_OP = 'UPDATE' AND pg_catalog.record_image_eq(ROW(%1$s), ROW(%2$s)) THEN
+        -- the key stays: queued, written with the statement's other rows when it ends (the flush above)
+        INSERT INTO %3$s (%4$s) VALUES (%5$s);
+        RETURN NEW;
+    END IF;$enq$,
+            (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
+            (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
+            v_queue, v_qcols, v_qvals);
+        v_flush := format($flush$
+    IF TG_LEVEL = 'STATEMENT' THEN
+        -- the end of an UPDATE: write the rows it queued (%1$s), all at once
+        SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT q.n%3$s::text ORDER BY q.n%3$s::text)
+          INTO v_count, v_distinct, v_keys
+          FROM %1$s q WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth();
+        IF v_count = 0 THEN
+            RETURN NULL;
+        END IF;
+        IF v_distinct <> v_count THEN
+            RAISE EXCEPTION 'one statement changed a row of %%.%% twice', %4$L, %5$L
+                USING ERRCODE = 'cardinality_violation',
+                      HINT = 'change each row of a versioned view once in a statement';
+        END IF;
+        SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
+        %6$s
+        IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %7$L AND l.objectkey = ANY (v_keys)) THEN
+            PERFORM tgsis.check_objects_unlocked(%7$L, v_keys);  -- names the holders
+        END IF;
+        IF v_w <> 0 THEN
+            PERFORM tgsis.record_changed_objects(%4$L, %5$L, %8$s);
+        END IF;
+        -- no bulk writer of the objects in flight (they take these locks exclusively); in key order
+        PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
+           FROM pg_catalog.unnest(v_keys) AS k;
+        -- the visible row versions, locked, and compared with what the statement read; a row closed by a
+        -- transaction that committed meanwhile drops out of the join (the re-check after the wait): once
+        -- more with a new snapshot, which sees the row version that replaced it
+        FOR v_pass IN 1 .. 2 LOOP
+            SELECT count(*), (array_agg(x.k) FILTER (WHERE NOT x.same))[1] INTO v_found, v_key
+              FROM (SELECT %9$s AS k, %10$s AS same
+                      FROM %1$s q JOIN %11$s v ON %12$s AND %13$s
+                     WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth()
+                       FOR UPDATE OF v) AS x;
+            EXIT WHEN v_found = v_count;
+        END LOOP;
+        IF v_found <> v_count THEN
+            SELECT %9$s INTO v_key FROM %1$s q
+             WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth()
+               AND NOT EXISTS (SELECT FROM %11$s v WHERE %12$s AND %13$s)
+             LIMIT 1;
+            RAISE EXCEPTION 'could not serialize access due to concurrent delete of row %%=(%%) of %%.%% in version %%',
+                    %14$L, v_key, %4$L, %5$L, tgsis.get_working_version()
+                USING ERRCODE = 'serialization_failure',
+                      DETAIL = 'A transaction that committed after this statement read the row deleted it or changed its key.',
+                      HINT = 'Retry the transaction.',
+                      TABLE = %5$L, SCHEMA = %4$L;
+        END IF;
+        IF v_key IS NOT NULL THEN
+            RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
+                    %14$L, v_key, %4$L, %5$L, tgsis.get_working_version()
+                USING ERRCODE = 'serialization_failure',
+                      DETAIL = 'A transaction that committed after this statement read the row changed or replaced it; '
+                               'writing values computed from the old row would undo that change.',
+                      HINT = 'Retry the transaction.',
+                      TABLE = %5$L, SCHEMA = %4$L;
+        END IF;
+        -- row versions of the working revision: changed in place (first: the rows written anew below are of it too)
+        UPDATE %11$s v SET %19$s
+          FROM %1$s q
+         WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth() AND %12$s AND %13$s AND v.revision = %15$s;
+        -- row versions of older revisions: closed in the working one, and written anew in it
+        WITH closed AS (
+            UPDATE %11$s v SET lastrevs = v.lastrevs || %15$s
+              FROM %1$s q
+             WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth() AND %12$s AND %13$s AND v.revision <> %15$s
+            RETURNING %16$s, %15$s AS tgsis_revision_),
+        written AS (
+            INSERT INTO %11$s (%17$s, revision) SELECT %17$s, tgsis_revision_ FROM closed
+                ON CONFLICT ON CONSTRAINT %18$I DO NOTHING
+            RETURNING 1)
+        SELECT (SELECT count(*) FROM closed), (SELECT count(*) FROM written) INTO v_closed, v_written;
+        IF v_written <> v_closed THEN
+            RAISE EXCEPTION 'could not serialize access due to concurrent update of rows of %%.%% in version %%',
+                    %4$L, %5$L, tgsis.get_working_version()
+                USING ERRCODE = 'serialization_failure',
+                      DETAIL = 'A row version of the working revision was written for a key by a transaction that committed meanwhile.',
+                      HINT = 'Retry the transaction.',
+                      TABLE = %5$L, SCHEMA = %4$L;
+        END IF;
+        DELETE FROM %1$s q WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth();
+        RETURN NULL;
+    END IF;$flush$,
+            v_queue,                                                                           -- 1
+            (SELECT string_agg(format('q.n%s', p), ', ' ORDER BY o) FROM unnest(v_pos) WITH ORDINALITY AS u(p, o)),  -- 2
+            v_keypos, p_schema, p_table,                                                       -- 3, 4, 5
+            CASE WHEN p_class = 'feature' THEN
+                $none$-- features of no version among them: written with revision 0, only from DEFAULT's working revision
+        v_unversioned := ARRAY(SELECT k FROM pg_catalog.unnest(v_keys) AS k
+                                WHERE EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = k::bigint));
+        IF cardinality(v_unversioned) > 0 THEN
+            PERFORM tgsis.unversioned_revision(v_unversioned::bigint[]);  -- TG305 outside DEFAULT's working revision
+        END IF;$none$
+            ELSE '' END,                                                                       -- 6
+            p_class,                                                                           -- 7
+            CASE WHEN p_class = 'feature' THEN 'ARRAY(SELECT k FROM pg_catalog.unnest(v_keys) AS k WHERE NOT (k = ANY (v_unversioned)))'
+                 ELSE 'v_keys' END,                                                            -- 8
+            v_qkey, v_qold, v_ver, v_qjoin, v_visible,                                        -- 9 .. 13
+            '(' || v_key_list || ')',                                                          -- 14
+            v_wrow,                                                                            -- 15
+            (SELECT string_agg(format('q.n%s AS %I', o, c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 16
+            v_cols,                                                                            -- 17
+            p_table || '_ver_pkey',                                                            -- 18
+            (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)));  -- 19
+        v_declare := v_declare || E'
+    v_count    bigint;
+    v_distinct bigint;
+    v_found    bigint;'
+                               || E'
+    v_closed   bigint;
+    v_written  bigint;
+    v_key      text;
+    v_pass     integer;';
+        IF p_class = 'feature' THEN
+            v_declare := v_declare || E'\n    v_unversioned text[];';
+        END IF;
+    ELSE
+        -- a key column that is not written (a generated one): every row goes the row path
+        v_flush := E'\n    IF TG_LEVEL = ''STATEMENT'' THEN\n        RETURN NULL;\n    END IF;';
+    END IF;
+
     RETURN format($fn$
 CREATE FUNCTION %1$I.%2$I()
 RETURNS trigger
@@ -157,7 +341,7 @@ DECLARE
     v_cur  record;
     v_locked boolean;
     v_noted  boolean;%21$s
-BEGIN
+BEGIN%22$s%23$s
     -- the write right on the session's version (checked for every row), its working revision and set
     SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
     IF TG_OP = 'INSERT' THEN
@@ -232,7 +416,8 @@ $body$$fn$,
         p_schema, p_table || '_ver_write', p_table, v_ver, v_cols, v_new_key, v_new, v_assign, v_visible, v_dup,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
-        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare);
+        v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare,
+        v_flush, v_enqueue);
 END
 $gen$;
 
