@@ -176,27 +176,27 @@ def test_round_trip_with_every_member_type(conn: Conn, alignment: str) -> None:
     assert got.properties == {"note": "mixed", "age": None}
 
 
-def test_fetching_many_members_takes_one_query_per_table(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_fetching_many_members_takes_one_query_for_all_tables(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> None:
     fc = _rocks(conn)
     originals = [GeometryCollection([_with_props(_surface(3 + i % 3, z=i, name=f"s{i}"), "VERTEX") if i % 2 else
                                      _with_props(LineSet(rng.random((i + 2, 3)), [[j, j + 1] for j in range(i + 1)]),
                                                  "VERTEX") for i in range(k, k + 20)], name=f"c{k}")
                  for k in (0, 20)]
     ids = [F.insert_feature(conn, fc, c) for c in originals]
-    copies: list[str] = []
-    real = _static.columns_out
+    queries: list[list[str]] = []
+    real = _static.columns_out_all
 
-    def spy(conn: Conn, source: Any, key: str, columns: Any, geoids: Any) -> list[npt.NDArray[Any]]:
-        copies.append(source.as_string(conn))
-        return real(conn, source, key, columns, geoids)
+    def spy(conn: Conn, requests: Any) -> list[list[npt.NDArray[Any]]]:
+        queries.append([request.source.as_string(conn) for request in requests])
+        return real(conn, requests)
 
-    monkeypatch.setattr(_static, "columns_out", spy)
+    monkeypatch.setattr(_static, "columns_out_all", spy)
     got = F.fetch_features(conn, fc, ids[::-1])
     assert [f.id for f in got] == ids[::-1]
     assert all(isinstance(f.mesh, GeometryCollection) and f.mesh.same_as(c) for f, c in zip(got, originals[::-1]))
-    # 40 members of 2 geotypes: vertices, segments, triangles, properties
-    assert len(copies) == 4, copies
-    assert sum("tgsis.vrtx" in q for q in copies) == 1 and sum("rocks_cellpros" in q for q in copies) == 1
+    # 40 members of 2 geotypes, one query: vertices, segments, triangles, properties (a part each)
+    assert len(queries) == 1 and len(queries[0]) == 4, queries
+    assert sum("tgsis.vrtx" in q for q in queries[0]) == 1 and sum("rocks_cellpros" in q for q in queries[0]) == 1
 
 
 def test_box_query_and_class_view(conn: Conn) -> None:

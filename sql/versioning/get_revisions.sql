@@ -1,11 +1,15 @@
 -- tgsis.get_revisions(viewing): the session's viewing revision set (true) or working revision set (false).
 -- Versioned views call it once per query (as a scalar subquery), so it is
 -- one indexed lookup. SECURITY DEFINER: roles that may read a versioned view
--- need not read the version tables themselves.
+-- need not read the version tables themselves. PARALLEL SAFE (it only reads
+-- tables and settings, which parallel workers share): a view query may then
+-- run in parallel workers, as a download's tables side by side do
+-- (tgsis.db._transfer.columns_out_all).
 CREATE FUNCTION tgsis.get_revisions(p_viewing boolean DEFAULT true)
 RETURNS integer[]
 LANGUAGE plpgsql
 STABLE
+PARALLEL SAFE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$

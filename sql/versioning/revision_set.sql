@@ -3,10 +3,13 @@
 -- its history sees what its version saw while it was working (stored when it
 -- was frozen). The history is the working set plus the version's own older
 -- revisions (merge and refresh move a version's base, not its past).
+-- PARALLEL SAFE: it only reads tables (tgsis.get_revisions calls it in
+-- parallel workers).
 CREATE FUNCTION tgsis.revision_set(p_versionid integer, p_revision integer)
 RETURNS integer[]
 LANGUAGE plpgsql
 STABLE
+PARALLEL SAFE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$

@@ -35,7 +35,7 @@
 -- only queues the row's old and new values in <table>_ver_queue, and the
 -- same function, fired AFTER the statement, writes all of them with a few
 -- set-based statements (a versioned write per row costs some ten statements:
--- 35x the plain table's update, against about 7x this way; docs/performance.md).
+-- 26-40x the plain table's update, against 6-7x this way; docs/performance.md).
 -- The flush does what the row path does, for all the queued rows at once:
 -- the write right on the session's version (tgsis.write_revision), features
 -- of no version, object locks, the notes of changed objects, the objects'

@@ -16,7 +16,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.db._transfer import Storage, columns_out, concat, local_positions, row_keys, rows_by_geoid, stored_cell_properties
+from tgsis.db._transfer import Packed, Storage, columns_out_all, concat, local_positions, row_keys, rows_by_geoid, stored_cell_properties
 from tgsis.db.classes import FeatureClass, Property, stores_part_column
 from tgsis.db.meaning import Meaning, part_runs, parts_from_runs, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
@@ -276,30 +276,35 @@ class Download:
 def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Download:
     """Download the vertices, simplices and cell properties of the geometries ``parts``.
 
-    One query for the vertices, one per geotype for the simplices, one per
-    property table: a bounded number whatever the number of geometries, each
-    giving a geometry's column as one binary value (:func:`columns_out`).
+    One query (:func:`columns_out_all`): the vertices, the simplices of each
+    geotype and each property table are its parts, each giving a geometry's
+    column as one binary value, which the server may compute side by side;
+    a bounded number of parts whatever the number of geometries.
     """
     id_list = sql.Literal(list(parts))
-    vertices = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
-                           [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], list(parts))
-    cells: dict[Geotype, list[npt.NDArray[Any]]] = {}
-    for geotype in dict.fromkeys(part.geotype for part in parts.values()):
+    requests = [Packed(sql.SQL("tgsis.vrtx"), "geoid",
+                       [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], list(parts))]
+    geotypes = list(dict.fromkeys(part.geotype for part in parts.values()))
+    for geotype in geotypes:
         table, key = SIMPLEX[geotype]
         cell_cols = [f"vrtxid{i + 1}" for i in range(mesh_class(geotype).cell_size)]
         group = [g for g, part in parts.items() if part.geotype == geotype]
-        cells[geotype] = columns_out(conn, sql.SQL("tgsis.{}").format(sql.Identifier(table)), "geoid",
-                                     [(c, "int8") for c in (key, *cell_cols)], group)
-    properties: dict[tuple[str, tuple[str, ...]], list[npt.NDArray[Any]]] = {}
-    for alignment in ("VERTEX", "CELL"):  # one COPY per property table (and set of properties)
+        requests.append(Packed(sql.SQL("tgsis.{}").format(sql.Identifier(table)), "geoid",
+                               [(c, "int8") for c in (key, *cell_cols)], group))
+    property_keys: list[tuple[str, tuple[str, ...]]] = []
+    for alignment in ("VERTEX", "CELL"):  # one part per property table (and set of properties)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
         if not props or protable is None:
             continue
         for names, members in property_groups(props, parts).items():
             if names:
-                properties[(alignment, names)] = columns_out(
-                    conn, fc.qualified(protable), "_geoid",
-                    [("_idx", "int8"), *((p.name, p.wire) for p in props if p.name in names)], members)
+                property_keys.append((alignment, names))
+                requests.append(Packed(fc.qualified(protable), "_geoid",
+                                       [("_idx", "int8"), *((p.name, p.wire) for p in props if p.name in names)],
+                                       members))
+    vertices, *rest = columns_out_all(conn, requests)
+    cells = dict(zip(geotypes, rest[:len(geotypes)], strict=True))
+    properties = dict(zip(property_keys, rest[len(geotypes):], strict=True))
     atoms: dict[int, list[tuple[int, int, bool]]] = {}
     for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
             "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(

@@ -297,9 +297,43 @@ SEND_FUNCTIONS = {"int2": "int2send", "int4": "int4send", "int8": "int8send", "f
                   "float8": "float8send", "bool": "boolsend"}
 
 
-def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],
-                geoids: Sequence[int]) -> list[npt.NDArray[Any]]:
-    """The rows of ``source`` whose ``key`` is one of ``geoids``, as columns: ``[key, *columns]``.
+@dataclass(frozen=True)
+class Packed:
+    """One request of :func:`columns_out_all`: the rows of ``source`` whose ``key`` is one of ``geoids``.
+
+    ``source`` is a table or view (the versioned views read the session's
+    revision), ``key`` its geoid column, ``columns`` its fixed-width columns
+    as (name, wire type).
+    """
+
+    source: sql.Composable
+    key: str
+    columns: Sequence[tuple[str, str]]
+    geoids: Sequence[int]
+
+    def query(self, part: int) -> sql.Composed:
+        """The rows ``(part, geoid, count, packed rows)``: one per geometry that has rows here."""
+        sends = []
+        for name, wire in self.columns:
+            base, size = wire_shape(wire)
+            send = "array_send" if size is not None else SEND_FUNCTIONS[base]
+            sends.append(sql.SQL("{}({})").format(sql.Identifier(send), sql.Identifier(name)))
+        row = sql.SQL(" || ").join(sends)
+        if len(self.geoids) == 1:  # one aggregate, no grouping: a group's state of tens of MB is not hashed or sorted
+            return sql.SQL("SELECT {part}::int4, {geoid}::int8, count(*), string_agg({row}, ''::bytea) FROM {source} "
+                           "WHERE {key} = {geoid}").format(
+                part=sql.Literal(part), key=sql.Identifier(self.key), row=row, source=self.source,
+                geoid=sql.Literal(int(self.geoids[0])))
+        # one such aggregate per geometry, one after the other: memory for one geometry's values at a time
+        return sql.SQL("SELECT {part}::int4, g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
+                       "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({row}, ''::bytea) AS v "
+                       "FROM {source} WHERE {key} = g.k) a").format(
+            part=sql.Literal(part), key=sql.Identifier(self.key), row=row, source=self.source,
+            geoids=sql.Literal([int(g) for g in self.geoids]))
+
+
+def columns_out_all(conn: Conn, requests: Sequence[Packed]) -> list[list[npt.NDArray[Any]]]:
+    """The rows of several :class:`Packed` requests, as columns: ``[key, *columns]`` for each.
 
     The rows stay rows in storage, but do not travel one by one: the server
     packs each row's values in their binary send forms
@@ -307,56 +341,61 @@ def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[
     geometry's rows into one ``bytea`` (``string_agg``); the client decodes
     a few large values with one numpy structured array instead of a COPY
     message per row (issue 20; docs/performance.md compares the ways
-    measured). Rows come in no particular order, as from :func:`copy_out`.
+    measured). The requests go as one query, their aggregates joined by
+    ``UNION ALL``: for a large geometry the planner runs them side by side
+    in parallel workers (a Parallel Append of the tables' aggregates, when
+    the server has workers to give), one geometry's vertices, cells and
+    properties in the time of the largest instead of their sum; small ones
+    stay one plain plan. Rows come in no particular order, as from
+    :func:`copy_out`.
 
     Parameters
     ----------
-    source : Composable
-        A table or view (the versioned views read the session's revision).
-    key : str
-        The geoid column.
-    columns : sequence of (name, wire type)
-        Fixed-width columns; a row with a NULL (the concatenation is NULL
-        and the aggregate skips it) is reported, not dropped.
-    geoids : sequence of int
-        The geometries wanted.
+    requests : sequence of Packed
+        The tables and geometries. A row with a NULL (the concatenation is
+        NULL and the aggregate skips it) is reported, not dropped.
 
     Returns
     -------
-    list of ndarray
-        (n,) int64 geoids, then one (n,) or (n, k) array per column.
+    list of list of ndarray
+        For each request: (n,) int64 geoids, then one (n,) or (n, k) array per column.
 
     Raises
     ------
     DatabaseError
         A row holds a NULL or a value of another size (message names the
-        columns and the table).
+        columns, the table and the row).
     """
-    sends = []
-    for name, wire in columns:
-        base, size = wire_shape(wire)
-        send = "array_send" if size is not None else SEND_FUNCTIONS[base]
-        sends.append(sql.SQL("{}({})").format(sql.Identifier(send), sql.Identifier(name)))
-    row = sql.SQL(" || ").join(sends)
-    if len(geoids) == 1:  # one aggregate, no grouping: a group's state of tens of MB is not hashed or sorted
-        query = sql.SQL("SELECT {geoid}::int8, count(*), string_agg({row}, ''::bytea) FROM {source} "
-                        "WHERE {key} = {geoid}").format(
-            key=sql.Identifier(key), row=row, source=source, geoid=sql.Literal(int(geoids[0])))
-    else:  # one such aggregate per geometry, one after the other: memory for one geometry's values at a time
-        query = sql.SQL("SELECT g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
-                        "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({row}, ''::bytea) AS v "
-                        "FROM {source} WHERE {key} = g.k) a").format(
-            key=sql.Identifier(key), row=row, source=source, geoids=sql.Literal([int(g) for g in geoids]))
+    if not requests:
+        return []
+    query = sql.SQL(" UNION ALL ").join(request.query(part) for part, request in enumerate(requests))
+    groups: list[list[tuple[int, int, bytes]]] = [[] for _ in requests]
     with conn.cursor(binary=True) as cursor:
-        groups = [g for g in cursor.execute(query).fetchall() if g[1]]
-    counts = [int(g[1]) for g in groups]
-    what = f"columns {', '.join(name for name, _ in columns)} of {source.as_string(conn)}"
+        for part, geoid, count, data in cursor.execute(query).fetchall():
+            if count:
+                groups[part].append((int(geoid), int(count), data or b""))
+    return [_decode_groups(conn, request, found) for request, found in zip(requests, groups, strict=True)]
+
+
+def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],
+                geoids: Sequence[int]) -> list[npt.NDArray[Any]]:
+    """The rows of ``source`` whose ``key`` is one of ``geoids``, as columns: ``[key, *columns]``.
+
+    One :class:`Packed` request of :func:`columns_out_all` (its parameters and errors).
+    """
+    return columns_out_all(conn, [Packed(source, key, columns, geoids)])[0]
+
+
+def _decode_groups(conn: Conn, request: Packed, groups: Sequence[tuple[int, int, bytes]]) -> list[npt.NDArray[Any]]:
+    """The columns of ``request`` from its geometries' ``(geoid, count, packed rows)``."""
+    counts = [count for _, count, _ in groups]
+    what = f"columns {', '.join(name for name, _ in request.columns)} of {request.source.as_string(conn)}"
     try:
-        values = decode_packed(b"".join(g[2] or b"" for g in groups), [wire for _, wire in columns], sum(counts),
-                               what)
+        values = decode_packed(b"".join(data for _, _, data in groups), [wire for _, wire in request.columns],
+                               sum(counts), what)
     except DatabaseError as exc:  # the rare path: find the row to name
-        raise _bad_row(conn, source, key, columns, geoids) or exc from None
-    return [np.repeat(np.asarray([g[0] for g in groups], dtype=np.int64), counts), *values]
+        raise _bad_row(conn, request.source, request.key, request.columns, request.geoids) or exc from None
+    return [np.repeat(np.asarray([geoid for geoid, _, _ in groups], dtype=np.int64), counts), *values]
 
 
 def corners_out(conn: Conn, source: sql.Composable, key: str, corners: Sequence[str],

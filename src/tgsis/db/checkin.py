@@ -113,7 +113,7 @@ def _feature_row(conn: Conn, fc: FeatureClass, geoid: int) -> tuple[str | None, 
 
 
 def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> StoredMesh:
-    """Download one static, non-collection geometry with its row ids (one query per table)."""
+    """Download one static, non-collection geometry with its row ids (one query for its tables: :func:`tgsis.db._static.download`)."""
     data = download(conn, fc, {geoid: Part(fc.geotype, name, f"feature {geoid} of class {fc.name}")})
     _, vid, x, y, z = data.vertices
     vorder = np.argsort(vid, kind="stable")
