@@ -190,6 +190,16 @@ def main() -> None:
             figures["update_own_e2e"] = paired(
                 lambda: rolled_back(conn, "UPDATE parts SET x = x + 1 WHERE objid = %s", (obj,)),
                 lambda: rolled_back(conn, "UPDATE plain SET x = x + 1 WHERE objid = %s", (obj,)), args.repeat)
+
+            # an application's loop: 2,000 one-row UPDATEs in one transaction (each statement's rows are
+            # found through the queue's index, not among what the statements before it deleted)
+            def one_by_one(table: str) -> None:
+                for k in range(2000):
+                    conn.execute(f"UPDATE {table} SET x = x + 1 WHERE objid = %s AND k = %s", (obj, k))  # noqa: S608
+                conn.rollback()
+
+            figures["update_2000_statements"] = paired(lambda: one_by_one("parts"), lambda: one_by_one("plain"),
+                                                       args.repeat)
             merge_s, merge_rows, changed = time_merge(conn, args.objects, args.rows)
     finally:
         server.destroy()

@@ -198,17 +198,25 @@ def test_only_the_owner_partitions(db_dsn: str) -> None:
             tgsis.partition_model_storage(admin, 2, 4)
 
 
-def test_a_table_other_objects_use_is_refused_naming_them(conn: Conn) -> None:
-    conn.execute("CREATE VIEW public.moments AS SELECT geoid, times FROM tgsis.times")
+@pytest.mark.parametrize(("create", "user", "drop"), [
+    ("CREATE VIEW public.moments AS SELECT geoid, times FROM tgsis.times", "view public.moments",
+     "DROP VIEW public.moments"),
+    # a user's table whose rows point at instants: the swap would leave its key pointing at the old table
+    ("CREATE TABLE public.picks (geoid bigint, times double precision, note text, "
+     "CONSTRAINT picks_instant FOREIGN KEY (geoid, times) REFERENCES tgsis.times)",
+     "constraint picks_instant on table public.picks", "DROP TABLE public.picks"),
+], ids=["view", "foreign-key"])
+def test_a_table_other_objects_use_is_refused_naming_them(conn: Conn, create: str, user: str, drop: str) -> None:
+    conn.execute(create)
     conn.commit()
     with pytest.raises(tgsis.InUseError, match=r"tgsis\.times is used by other objects") as caught:
         tgsis.partition_model_storage(conn, 2, 4)
-    assert caught.value.detail == "used by: view public.moments"
+    assert caught.value.detail == f"used by: {user}"
     conn.rollback()
     kinds = conn.execute("SELECT array_agg(DISTINCT c.relkind) FROM tgsis.model_tables t "
                          "JOIN pg_class c ON c.oid = to_regclass('tgsis.' || t.tablename) WHERE t.model = 2").fetchone()
     assert kinds == (["r"],)  # nothing partitioned
-    conn.execute("DROP VIEW public.moments")
+    conn.execute(drop)
     conn.commit()
     assert "times" in tgsis.partition_model_storage(conn, 2, 4)
 

@@ -105,6 +105,44 @@ def test_a_bulk_update_writes_what_a_plain_table_holds(items: Conn, place: str) 
         assert [r[2] for r in _rows(items, "items")] == [r * 10 for r in range(1, ROWS + 1)]
 
 
+def test_many_statements_of_one_do_block_each_write_their_own_rows(items: Conn) -> None:
+    """The statements of one DO block share their start and depth: the generation (tgsis.queue_<depth>)
+    tells their rows apart, the same row changed by each of them, and a row changed twice in a loop."""
+    body = "; ".join(statement.format(t=table) for statement in STATEMENTS for table in ("items", "twin"))
+    loop = (
+        "FOR i IN 1 .. 30 LOOP UPDATE items SET val = val + i WHERE id = 1 + i % 7; "
+        "UPDATE twin SET val = val + i WHERE id = 1 + i % 7; END LOOP"
+    )
+    with tgsis.in_version(items, "child"):
+        items.execute(f"DO $$ BEGIN {body}; {loop}; END $$")
+        assert _queued(items) == 0
+        items.commit()
+    assert _rows(items, "items", "child") == _rows(items, "twin")
+
+
+def test_a_role_changing_the_generation_in_its_own_update_harms_no_other_transaction(items: Conn, db_dsn: str) -> None:
+    """A function the statement calls moves tgsis.queue_1 at its fifth row: the rows queued before stay
+    unwritten in the queue, carrying that transaction; another transaction's updates neither see nor write
+    them."""
+    items.execute(
+        "CREATE FUNCTION bump(v int) RETURNS int LANGUAGE sql VOLATILE AS "
+        "$$ SELECT CASE WHEN v = 51 THEN set_config('tgsis.queue_1', '7', true)::int * 0 + v ELSE v END $$"
+    )
+    items.commit()
+    with tgsis.in_version(items, "child"):
+        items.execute("UPDATE items SET val = bump(val + 1) WHERE id <= 9")
+        items.commit()
+    left = _queued(items)
+    assert left > 0  # its own rows of other generations, left unwritten (its own statement's loss)
+    before = _rows(items, "items", "child")
+    with psycopg.connect(db_dsn) as other:
+        with tgsis.in_version(other, "child"):
+            assert other.execute("UPDATE items SET val = val WHERE id <= 9").rowcount == 9
+            other.commit()
+        assert _queued(other) == left  # the other transaction's flush read none of them
+    assert _rows(items, "items", "child") == before  # and wrote none of their values
+
+
 def test_row_count_and_returning_are_those_of_the_statement(items: Conn) -> None:
     cur = items.execute("UPDATE items SET val = val * 2 WHERE id BETWEEN 3 AND 7 RETURNING id, val")
     assert cur.rowcount == 5
@@ -123,10 +161,12 @@ def test_key_changes_and_key_keeping_rows_in_one_statement(items: Conn) -> None:
     assert items.execute("SELECT count(*) FROM items_ver WHERE id = 1 AND revclosed").fetchone() == (1,)
 
 
-def test_a_row_changed_twice_by_one_statement_is_refused_and_nothing_written(items: Conn) -> None:
+@pytest.mark.parametrize("pairs", ["(2, 1), (2, 2), (3, 3)", "(2, 1), (2, 2)"], ids=["queued-twice", "first-row-again"])
+def test_a_row_changed_twice_by_one_statement_is_refused_and_nothing_written(items: Conn, pairs: str) -> None:
+    """Twice in the queue, or the statement's first row (written by the row path) queued again."""
     before = _storage(items)
     with pytest.raises(psycopg.errors.CardinalityViolation, match="one statement changed a row of public.items twice"):
-        items.execute("UPDATE items SET val = x.v FROM (VALUES (2, 1), (2, 2), (3, 3)) x(id, v) WHERE items.id = x.id")
+        items.execute(f"UPDATE items SET val = x.v FROM (VALUES {pairs}) x(id, v) WHERE items.id = x.id")
     items.rollback()
     assert _storage(items) == before
     assert _queued(items) == 0
@@ -195,7 +235,8 @@ def test_the_queue_is_the_owners_alone(items: Conn, db_dsn: str) -> None:
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
             clerk.execute("UPDATE items SET note = 'x' WHERE id = 1")
         clerk.rollback()
-        for table, values in (("items_ver_queue", "(1, 1, 'k1', 0)"), ("other_ver_queue", "(1, 1, 0)")):
+        mine = "pg_current_xact_id(), statement_timestamp(), 1, 0"  # rows the clerk's own statement would look for
+        for table, values in (("items_ver_queue", f"({mine}, 1, 'k1', 0)"), ("other_ver_queue", f"({mine}, 1, 0)")):
             for statement in (
                 f"INSERT INTO {table} VALUES {values}",
                 f"SELECT * FROM {table}",  # noqa: S608
@@ -230,9 +271,20 @@ def test_queue_columns_keep_the_storage_types(items: Conn) -> None:
         ("tags", "text[]"),
         ("note", "text"),
     ]
-    assert [c[0] for c in columns] == ["tgsis_depth"] + [f"n{i}" for i in range(1, 7)] + [f"o{i}" for i in range(1, 7)]
-    assert [c[1] for c in columns[1:7]] == [t for _, t in storage] == [c[1] for c in columns[7:]]
-    assert columns[2][2] == '"C"' and columns[8][2] == '"C"'
+    tags = ["tgsis_xact", "tgsis_statement", "tgsis_depth", "tgsis_generation"]
+    assert [c[0] for c in columns] == tags + [f"n{i}" for i in range(1, 7)] + [f"o{i}" for i in range(1, 7)]
+    assert [c[1] for c in columns[4:10]] == [t for _, t in storage] == [c[1] for c in columns[10:]]
+    assert columns[5][2] == '"C"' and columns[11][2] == '"C"'
+    # a statement's rows are found by the index, not by a scan of what earlier statements deleted
+    index = items.execute(
+        "SELECT pg_get_indexdef(i.indexrelid), obj_description(i.indexrelid, 'pg_class') FROM pg_index i "
+        "WHERE i.indrelid = 'items_ver_queue'::regclass"
+    ).fetchall()
+    assert (
+        len(index) == 1
+        and "(tgsis_xact, tgsis_statement, tgsis_depth, tgsis_generation)" in index[0][0]
+        and index[0][1]
+    )
     comment = items.execute("SELECT obj_description('items_ver_queue'::regclass, 'pg_class')").fetchone()
     assert comment is not None and "empty outside a statement" in comment[0]
 

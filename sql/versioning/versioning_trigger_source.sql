@@ -31,8 +31,10 @@
 -- share-locks it.
 --
 -- Set-based updates. An UPDATE that keeps a row's key (rewriting an object's
--- values, the common bulk edit) is not written row by row: the row trigger
--- only queues the row's old and new values in <table>_ver_queue, and the
+-- values, the common bulk edit) is not written row by row: the statement's
+-- first row goes the row path (a one-row UPDATE costs what it did: the
+-- flush's statements cost more for one row), and for the others the row
+-- trigger only queues the row's old and new values in <table>_ver_queue, and the
 -- same function, fired AFTER the statement, writes all of them with a few
 -- set-based statements (a versioned write per row costs some ten statements:
 -- 26-40x the plain table's update, against 6-7x this way; docs/performance.md).
@@ -41,16 +43,24 @@
 -- of no version, object locks, the notes of changed objects, the objects'
 -- write locks shared, then the visible row versions locked FOR UPDATE and
 -- compared with the values the statement read (40001 when one changed), then
--- closed and written anew, or changed in place. A row deleted by a
+-- closed and written anew, or changed in place. A queued row deleted by a
 -- transaction that committed after the statement read it cannot be left out
 -- of the statement's row count any more, as the row path does: it fails with
 -- 40001 too (the retry finds no row). The queue is the table owner's alone
 -- (a queue that the writing role could fill would let a role allowed to
 -- change one column write any); its rows of a statement are those of the
--- trigger depth the statement's triggers run at (pg_trigger_depth), so that
--- a statement run by a trigger during another's flush keeps its own rows;
--- the queue is empty outside a statement, so nothing in it is ever
--- committed.
+-- transaction, the statement's start (statement_timestamp), the trigger
+-- depth the statement's triggers run at (pg_trigger_depth, so that a
+-- statement run by a trigger during another's flush keeps its own rows) and
+-- the generation of that depth (the setting tgsis.queue_<depth>, which each
+-- flush counts up, so that the statements of one DO block differ too): the
+-- queue's index then skips what earlier statements queued and deleted. The
+-- queue is empty outside a statement, so nothing in it is ever committed. A
+-- role that changes tgsis.queue_<depth> in the middle of its own UPDATE
+-- (from a function the statement calls) leaves part of its rows unwritten
+-- in the queue; they carry its transaction, which no other transaction's
+-- flush reads, and are written, if ever, only by its own statements, over
+-- rows still equal to the values it read.
 CREATE FUNCTION tgsis.versioning_trigger_source(
     p_schema    text,
     p_table     text,
@@ -177,9 +187,11 @@ BEGIN
     SELECT array_agg(array_position(p_columns, k) ORDER BY o) INTO v_pos FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
     v_keypos := array_position(p_columns, p_keyfield);
     IF array_position(v_pos, NULL) IS NULL AND v_keypos IS NOT NULL THEN
-        SELECT 'tgsis_depth, ' || string_agg(format('n%s', o), ', ' ORDER BY o) || ', '
+        SELECT 'tgsis_xact, tgsis_statement, tgsis_depth, tgsis_generation, '
+                               || string_agg(format('n%s', o), ', ' ORDER BY o) || ', '
                                || string_agg(format('o%s', o), ', ' ORDER BY o),
-               'pg_catalog.pg_trigger_depth(), ' || string_agg(format('NEW.%I', c), ', ' ORDER BY o) || ', '
+               'pg_catalog.pg_current_xact_id(), pg_catalog.statement_timestamp(), pg_catalog.pg_trigger_depth(), v_gen, '
+                                                 || string_agg(format('NEW.%I', c), ', ' ORDER BY o) || ', '
                                                  || string_agg(format('OLD.%I', c), ', ' ORDER BY o),
                format('pg_catalog.record_image_eq(ROW(%s), ROW(%s))', string_agg(format('v.%I', c), ', ' ORDER BY o),
                       string_agg(format('q.o%s', o), ', ' ORDER BY o))
@@ -195,21 +207,47 @@ BEGIN
                        ELSE 'v_w' END;
         v_enqueue := format($enq$
     IF TG_OP = 'UPDATE' AND pg_catalog.record_image_eq(ROW(%1$s), ROW(%2$s)) THEN
-        -- the key stays: queued, written with the statement's other rows when it ends (the flush above)
-        INSERT INTO %3$s (%4$s) VALUES (%5$s);
-        RETURN NEW;
+        -- the key stays: the statement's first row goes the row path below (a one-row UPDATE costs what
+        -- it did), the others are queued, written with the statement's other rows when it ends (the
+        -- flush above); tgsis.queue_first_<depth> says "<generation>:<key>" of the first row
+        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || pg_catalog.pg_trigger_depth(), true), ''),
+                          '0')::bigint;
+        IF pg_catalog.split_part(pg_catalog.current_setting('tgsis.queue_first_' || pg_catalog.pg_trigger_depth(), true),
+                                 ':', 1) = v_gen::text THEN
+            INSERT INTO %3$s (%4$s) VALUES (%5$s);
+            RETURN NEW;
+        END IF;
+        PERFORM pg_catalog.set_config('tgsis.queue_first_' || pg_catalog.pg_trigger_depth(),
+                                      v_gen || ':' || %6$s, true);
     END IF;$enq$,
             (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
             (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
-            v_queue, v_qcols, v_qvals);
+            v_queue, v_qcols, v_qvals,
+            format('concat_ws(%L, %s)', ', ', (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o)
+                                                 FROM unnest(p_keys) WITH ORDINALITY AS u(k, o))));
         v_flush := format($flush$
     IF TG_LEVEL = 'STATEMENT' THEN
-        -- the end of an UPDATE: write the rows it queued (%1$s), all at once
+        -- the end of an UPDATE: write the rows it queued (%1$s), all at once; its rows are those of
+        -- this transaction, statement and trigger depth (found by the queue's index)
+        v_xact := pg_catalog.pg_current_xact_id();
+        v_stmt := pg_catalog.statement_timestamp();
+        v_depth := pg_catalog.pg_trigger_depth();
+        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || v_depth, true), ''), '0')::bigint;
         SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT q.n%3$s::text ORDER BY q.n%3$s::text)
           INTO v_count, v_distinct, v_keys
-          FROM %1$s q WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth();
+          FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
+        -- the next statement of this depth queues under the next generation (its first row: the row path)
+        PERFORM pg_catalog.set_config('tgsis.queue_' || v_depth, (v_gen + 1)::text, true);
         IF v_count = 0 THEN
             RETURN NULL;
+        END IF;
+        -- the first row, written by the row path, queued again: the same row twice
+        v_first := pg_catalog.current_setting('tgsis.queue_first_' || v_depth, true);
+        IF pg_catalog.split_part(v_first, ':', 1) = v_gen::text AND EXISTS (
+                SELECT FROM %1$s q
+                 WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth
+                   AND q.tgsis_generation = v_gen AND %9$s = pg_catalog.substr(v_first, pg_catalog.strpos(v_first, ':') + 1)) THEN
+            v_distinct := v_distinct - 1;
         END IF;
         IF v_distinct <> v_count THEN
             RAISE EXCEPTION 'one statement changed a row of %%.%% twice', %4$L, %5$L
@@ -234,13 +272,13 @@ BEGIN
             SELECT count(*), (array_agg(x.k) FILTER (WHERE NOT x.same))[1] INTO v_found, v_key
               FROM (SELECT %9$s AS k, %10$s AS same
                       FROM %1$s q JOIN %11$s v ON %12$s AND %13$s
-                     WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth()
+                     WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen
                        FOR UPDATE OF v) AS x;
             EXIT WHEN v_found = v_count;
         END LOOP;
         IF v_found <> v_count THEN
             SELECT %9$s INTO v_key FROM %1$s q
-             WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth()
+             WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen
                AND NOT EXISTS (SELECT FROM %11$s v WHERE %12$s AND %13$s)
              LIMIT 1;
             RAISE EXCEPTION 'could not serialize access due to concurrent delete of row %%=(%%) of %%.%% in version %%',
@@ -262,12 +300,12 @@ BEGIN
         -- row versions of the working revision: changed in place (first: the rows written anew below are of it too)
         UPDATE %11$s v SET %19$s
           FROM %1$s q
-         WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth() AND %12$s AND %13$s AND v.revision = %15$s;
+         WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision = %15$s;
         -- row versions of older revisions: closed in the working one, and written anew in it
         WITH closed AS (
             UPDATE %11$s v SET lastrevs = v.lastrevs || %15$s
               FROM %1$s q
-             WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth() AND %12$s AND %13$s AND v.revision <> %15$s
+             WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision <> %15$s
             RETURNING %16$s, %15$s AS tgsis_revision_),
         written AS (
             INSERT INTO %11$s (%17$s, revision) SELECT %17$s, tgsis_revision_ FROM closed
@@ -282,7 +320,7 @@ BEGIN
                       HINT = 'Retry the transaction.',
                       TABLE = %5$L, SCHEMA = %4$L;
         END IF;
-        DELETE FROM %1$s q WHERE q.tgsis_depth = pg_catalog.pg_trigger_depth();
+        DELETE FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
         RETURN NULL;
     END IF;$flush$,
             v_queue,                                                                           -- 1
@@ -307,7 +345,11 @@ BEGIN
             p_table || '_ver_pkey',                                                            -- 18
             (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)));  -- 19
         v_declare := v_declare || E'
+    v_xact     xid8;
+    v_stmt     timestamptz;
+    v_depth    integer;
     v_count    bigint;
+    v_first    text;
     v_distinct bigint;
     v_found    bigint;'
                                || E'
@@ -315,6 +357,7 @@ BEGIN
     v_written  bigint;
     v_key      text;
     v_pass     integer;';
+        v_declare := v_declare || E'\n    v_gen      bigint;';
         IF p_class = 'feature' THEN
             v_declare := v_declare || E'\n    v_unversioned text[];';
         END IF;
