@@ -1,8 +1,9 @@
 """UPDATEs through versioned views that keep their rows' keys, written set-based when the statement ends.
 
-The row trigger only queues such a row's new and old values in
-``<table>_ver_queue``; the same function, fired after the statement, writes
-them all (docs/versioning.md, "Writing through the views"). What it writes
+The row trigger writes the statement's first row by the row path and only
+queues the others' new and old values in ``<table>_ver_queue``; the same
+function, fired after the statement, writes them all (docs/versioning.md,
+"How an UPDATE is written"). What it writes
 must be what the row path writes, in every place a row can live (a row of an
 older revision closed and written anew, one of the working revision changed
 in place, in DEFAULT and in a child), with the same checks (rights, object
