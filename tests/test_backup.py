@@ -339,6 +339,8 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
         with tgsis.in_version(ann, "edit"):
             ann.execute("UPDATE wells SET depth = 1300 WHERE name = 'W-1'")
             ann.execute("UPDATE logs SET gamma = 0 WHERE well = 2 AND at = 0")
+            # several rows: all but the first go through the restored queue (owner-only, its index), for ann
+            assert ann.execute("UPDATE logs SET gamma = gamma + 100 WHERE well = 3").rowcount == 5
             ann.commit()
         with tgsis.in_version(ann, "other"), pytest.raises(psycopg.Error) as refused:
             ann.execute("UPDATE wells SET depth = 1 WHERE name = 'W-1'")
@@ -370,7 +372,8 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
     assert conn.execute("SELECT depth FROM wells WHERE name = 'W-1'").fetchone() == (1300,)
     assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'logs_ver'::regclass").fetchone() == ("p",)
     assert conn.execute("SELECT well, at, gamma FROM logs WHERE at = 0 ORDER BY 1").fetchall() == \
-        [(1, 0.0, 11.0), (2, 0.0, 0.0), (3, 0.0, 30.0)], "the merge brought edit's changes of the partitioned table"
+        [(1, 0.0, 11.0), (2, 0.0, 0.0), (3, 0.0, 130.0)], "the merge brought edit's changes of the partitioned table"
+    assert conn.execute("SELECT sum(gamma) FROM logs WHERE well = 3").fetchone() == (660.0,)
     assert conn.execute("SELECT _geoid, basin FROM faults WHERE _geoid IN (%s, %s) ORDER BY 1",
                         (ids["f1"], ids["new in edit"])).fetchall() == [(ids["f1"], "Paris"),
                                                                         (ids["new in edit"], "after restore")]
