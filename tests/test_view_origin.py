@@ -168,15 +168,18 @@ def test_a_view_on_an_ipv6_address_answers_its_own_pages(
 
 
 class _AttackPage(http.server.BaseHTTPRequestHandler):
-    """Serves one page whose form posts itself to the view (the target set on the server)."""
+    """Serves ``/``, a page whose form posts itself to the view, and ``/frame``, the view's versions page in a frame."""
 
     def do_GET(self) -> None:  # noqa: N802 (the name http.server calls)
         target = self.server.target  # type: ignore[attr-defined]
-        body = (
-            f"<!doctype html><html><body><form id=f method=post action='{target}/session'>"
-            "<input type=hidden name=version value=edit></form>"
-            "<script>document.getElementById('f').submit()</script></body></html>"
-        ).encode()
+        if self.path == "/frame":  # clickjacking: the view's own button under a decoy, in a frame
+            body = f"<!doctype html><html><body><iframe id=v src='{target}/versions'></iframe></body></html>".encode()
+        else:
+            body = (
+                f"<!doctype html><html><body><form id=f method=post action='{target}/session'>"
+                "<input type=hidden name=version value=edit></form>"
+                "<script>document.getElementById('f').submit()</script></body></html>"
+            ).encode()
         self.send_response(200)
         self.send_header("Content-Type", "text/html; charset=utf-8")
         self.send_header("Content-Length", str(len(body)))
@@ -226,6 +229,25 @@ def test_a_form_of_another_origin_cannot_move_the_browser_to_another_version(
         assert page.text_content("#current") == "edit"
         page.goto(f"{url}/versions")
         assert page.text_content("#current") == "edit"
+        context.close()
+
+
+def test_a_page_of_another_site_cannot_frame_the_view(view: tuple[str, ViewData]) -> None:
+    # the view's own form inside a frame would carry the view's Origin: the view refuses to be framed
+    url, _ = view
+    status, _, response = _send(url, "GET", "/versions", {})
+    assert status == 200
+    assert response.getheader("X-Frame-Options") == "DENY"
+    assert "frame-ancestors 'none'" in (response.getheader("Content-Security-Policy") or "")
+    with _attacker(url) as port, chromium() as browser:
+        context = browser.new_context()
+        page = context.new_page()
+        with page.expect_response(f"{url}/versions") as framed:
+            page.goto(f"http://127.0.0.1:{port}/frame")
+        assert framed.value.status == 200  # served, and not shown
+        page.wait_for_timeout(500)
+        frame = page.frame_locator("#v")
+        assert frame.locator("#versions").count() == 0, "the view's page is shown inside another site's page"
         context.close()
 
 

@@ -34,14 +34,14 @@ from psycopg import sql
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
-from starlette.datastructures import Headers
+from starlette.datastructures import Headers, MutableHeaders
 from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import JSONResponse, PlainTextResponse, RedirectResponse, Response
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 from starlette.templating import Jinja2Templates
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from tgsis.db import versions as V
 from tgsis.db.classes import FeatureClass, list_feature_classes
@@ -640,6 +640,9 @@ def conflict_endpoint(request: Request) -> Response:
 
 #: the methods a page of another site may make a browser send without harm: they change nothing
 SAFE_METHODS = frozenset({"GET", "HEAD"})
+#: on every response: no page of another site shows the view in a frame (its own buttons under a decoy
+#: would send the view's own Origin: clickjacking)
+UNFRAMED = {"X-Frame-Options": "DENY", "Content-Security-Policy": "frame-ancestors 'none'"}
 
 
 def _origin_of(url: str) -> tuple[str, str, int] | None:
@@ -678,7 +681,10 @@ class RequestGuard:
       ``Host`` it was sent to, port). A foreign, opaque (``null``) or
       malformed origin, or neither header, gets 403 with a message saying
       why; browsers send ``Origin`` on every POST, so only scripts
-      (curl) lack it, and they can send it.
+      (curl) lack it, and they can send it;
+    - every response forbids framing (``X-Frame-Options: DENY``,
+      ``frame-ancestors 'none'``): the view's own buttons in a frame of
+      another site's page, under a decoy, would pass the origin check.
 
     Parameters
     ----------
@@ -696,10 +702,16 @@ class RequestGuard:
             await self.app(scope, receive, send)
             return
         refusal = self.refusal(scope)
+
+        async def send_unframed(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                MutableHeaders(scope=message).update(UNFRAMED)
+            await send(message)
+
         if refusal is not None:
-            await refusal(scope, receive, send)
+            await refusal(scope, receive, send_unframed)
             return
-        await self.app(scope, receive, send)
+        await self.app(scope, receive, send_unframed)
 
     def refusal(self, scope: Scope) -> Response | None:
         """The response refusing this request, or None to let it through."""
