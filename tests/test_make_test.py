@@ -240,7 +240,7 @@ def _fake_venv(folder: Path, record: Path, fail_when: str = "") -> None:
     (folder / "bin").mkdir(parents=True)
     _script(
         folder / "bin" / "python",
-        f'echo "$TGSIS_PG|$PWD|$*" >> {shlex.quote(str(record))}\n'
+        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")" >> {shlex.quote(str(record))}\n'
         f'[ "$TGSIS_PG" = {shlex.quote(fail_when) or "__never__"} ] && exit 3\nexit 0\n',
     )
 
@@ -276,11 +276,14 @@ def _run_suites(tmp_path: Path, fail_when: str = "", **env: str) -> tuple[int, s
 def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_path: Path) -> None:
     status, out, runs = _run_suites(tmp_path)
     assert status == 0, out
-    by_server = {server: (folder, args) for server, folder, args in runs}
+    by_server = {server: (folder, args) for server, folder, args, _ in runs}
+    beside = {server: set(listing.split()) for server, _, _, listing in runs}
     assert set(by_server) == {"system", "embedded"}
     assert by_server["system"] == (str(ROOT), "-m pytest -p no:cacheprovider -k x y")
     copy = Path(by_server["embedded"][0])
     assert copy.name == "tgsis" and copy != ROOT and by_server["embedded"][1] == by_server["system"][1]
+    # nothing beside the copy but the logs of this run (no ../shared, no other checkout)
+    assert beside["embedded"] <= {"tgsis", "venv.log", "system.log", "embedded.log"}, beside["embedded"]
     assert not copy.exists(), "the copy is removed afterwards"
     assert "done: the suite passed on both PostgreSQL versions" in out
 
@@ -296,4 +299,4 @@ def test_a_failing_suite_fails_the_command(tmp_path: Path, failing: str) -> None
 def test_one_server_chosen_runs_one_suite_here(tmp_path: Path) -> None:
     status, out, runs = _run_suites(tmp_path, TGSIS_PG="embedded")
     assert status == 0, out
-    assert runs == [["embedded", str(ROOT), "-m pytest -k x y"]]
+    assert [run[:3] for run in runs] == [["embedded", str(ROOT), "-m pytest -k x y"]]
