@@ -17,7 +17,9 @@ install:
 	$(MAKE) --no-print-directory -C sql install
 
 # A venv with tgsis (editable), its test tools and the embedded PostgreSQL 18.
+# (Debian ships venv's ensurepip apart: python3-venv, installed when missing, saying so)
 $(VENV)/.installed: pyproject.toml
+	@$(PYTHON) -c 'import ensurepip' 2>/dev/null || tools/setup-machine python3-venv
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet --editable '.[test,embedded,view]'

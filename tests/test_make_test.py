@@ -152,7 +152,7 @@ def _setup(
 def test_setup_does_nothing_and_says_so_when_everything_is_installed(tmp_path: Path) -> None:
     status, out, calls = _setup(tmp_path, installed=PACKAGES)
     assert status == 0 and calls == []
-    assert out == f"make test: the system packages the tests need are installed ({' '.join(PACKAGES)})\n"
+    assert out == f"make: the system packages tgsis needs are installed ({' '.join(PACKAGES)})\n"
 
 
 def test_setup_installs_what_is_missing_saying_so_first(tmp_path: Path) -> None:
@@ -176,10 +176,10 @@ def test_setup_installs_what_is_missing_saying_so_first(tmp_path: Path) -> None:
     assert done.returncode == 0
     lines = [line for line in out_file.read_text().splitlines() if not line.startswith("dpkg-query")]
     missing = "postgresql-15 postgresql-server-dev-15 postgresql-15-postgis-3 chromium"
-    assert lines[0] == f"make test: installing the system packages the tests need that are missing here: {missing}"
+    assert lines[0] == f"make: installing the system packages tgsis needs that are missing here: {missing}"
     assert lines.index("apt-get update -qq") > 0
     assert f"apt-get install -y -qq --no-install-recommends {missing}" in lines
-    assert lines[-1] == f"make test: installed: {missing}"
+    assert lines[-1] == f"make: installed: {missing}"
 
 
 def test_setup_as_a_user_goes_through_sudo(tmp_path: Path) -> None:
@@ -230,6 +230,31 @@ def test_setup_on_another_system_says_what_to_install_by_hand(tmp_path: Path) ->
 def test_setup_refuses_an_unknown_argument(tmp_path: Path) -> None:
     status, out, calls = _setup(tmp_path, "--yes", installed=[])
     assert status == 2 and "usage" in out and calls == []
+    (tmp_path / "more").mkdir()
+    status, out, calls = _setup(tmp_path / "more", "postgresql-16", installed=[])
+    assert status == 2 and "postgresql-15" in out and calls == []
+
+
+def test_the_venv_asks_for_python3_venv_alone(tmp_path: Path) -> None:
+    # `make demo` on a fresh Debian: python3 -m venv needs ensurepip, which Debian ships in python3-venv
+    status, out, calls = _setup(tmp_path, "python3-venv", installed=[], uid=0)
+    assert status == 0, out
+    assert calls == ["apt-get update -qq", "apt-get install -y -qq --no-install-recommends python3-venv"]
+    assert "missing here: python3-venv\n" in out
+    (tmp_path / "again").mkdir()
+    status, out, calls = _setup(tmp_path / "again", "python3-venv", installed=["python3-venv"])
+    assert status == 0 and calls == [] and out == "make: the system packages tgsis needs are installed (python3-venv)\n"
+    recipe = subprocess.run(
+        ["make", "-n", "-B", "--no-print-directory", ".venv/.installed"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "MAKEFLAGS": ""},
+    ).stdout
+    first, second = recipe.splitlines()[:2]
+    assert "import ensurepip" in first and "tools/setup-machine python3-venv" in first
+    assert second.endswith("-m venv .venv")
 
 
 # --------------------------------------------------------------------------- tools/test-suites, faked
