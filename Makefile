@@ -1,5 +1,5 @@
 # Developer entry points. The README's quickstart uses `make demo` and `make test`;
-# .ci/run is `make test` and nothing else (tests/test_release.py checks).
+# .ci/run is `make test` and nothing else (tests/test_make_test.py checks).
 
 PYTHON ?= python3
 VENV   ?= .venv
@@ -40,7 +40,7 @@ demo: $(VENV)/.installed
 test:
 	@tools/setup-machine
 	@$(MAKE) --no-print-directory $(VENV)/.installed check
-	tools/test-suites $(PYTEST_ARGS)
+	VENV=$(VENV) tools/test-suites $(PYTEST_ARGS)
 
 # The system packages `make test` needs, installed when missing (as root or with sudo).
 setup:
