@@ -1,12 +1,12 @@
 # Developer entry points. The README's quickstart uses `make demo` and `make test`;
-# .ci/run calls `make test` once per PostgreSQL version (TGSIS_PG=system|embedded).
+# .ci/run is `make test` and nothing else (tests/test_make_test.py checks).
 
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 PYTEST_ARGS ?=
 
-.PHONY: all install demo test check extension installcheck clean pictures
+.PHONY: all install demo test setup check extension installcheck clean pictures
 
 # A bare `make` builds the extension scripts and `make install` installs them
 # (PGXS, the PostgreSQL of pg_config): what `pgxn install tgsis` runs (META.json).
@@ -17,7 +17,9 @@ install:
 	$(MAKE) --no-print-directory -C sql install
 
 # A venv with tgsis (editable), its test tools and the embedded PostgreSQL 18.
+# (Debian ships venv's ensurepip apart: python3-venv, installed when missing, saying so)
 $(VENV)/.installed: pyproject.toml
+	@$(PYTHON) -c 'import ensurepip' 2>/dev/null || tools/setup-machine python3-venv
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet --editable '.[test,embedded,view]'
@@ -26,11 +28,23 @@ $(VENV)/.installed: pyproject.toml
 demo: $(VENV)/.installed
 	$(BIN)/tgsis demo
 
-# (the embedded server reads the worktree's SQL itself: TGSIS_PG=embedded
-# leaves the system's extension files alone, which a suite on the system
-# server may be reading at the same time)
-test: $(VENV)/.installed $(if $(filter embedded,$(TGSIS_PG)),,extension)
-	$(BIN)/python -m pytest $(PYTEST_ARGS)
+# The whole test suite, as CI runs it, on a fresh Debian/Ubuntu machine: the
+# system packages it needs, installed when missing (tools/setup-machine says
+# which before it does), the venv, the type check and lint, then the suite on
+# the system's PostgreSQL 15 and on the embedded 18 (in a copy of the
+# repository with nothing beside it) side by side (tools/test-suites);
+# TGSIS_PG=embedded|system (or TGSIS_TEST_DSN): that server only.
+# Nothing is written outside the checkout and temporary folders but the system
+# packages: the throwaway clusters of PostgreSQL 15 read this checkout's
+# extension files from a private copy of its share folder (docs/testing.md).
+test:
+	@tools/setup-machine
+	@$(MAKE) --no-print-directory $(VENV)/.installed check
+	VENV=$(VENV) tools/test-suites $(PYTEST_ARGS)
+
+# The system packages `make test` needs, installed when missing (as root or with sudo).
+setup:
+	@tools/setup-machine
 
 # The pictures the README shows, made by the scenarios (tgsis demo NAME) on the local server.
 pictures: $(VENV)/.installed
@@ -52,7 +66,7 @@ pictures: $(VENV)/.installed
 # rest once the open branches are merged (docs/developing.md, "Lint and format").
 RUFF_FORMATTED = src/tgsis/db/_upgrade.py tests/test_upgrade.py tests/test_installcheck.py tests/test_release.py \
                  src/tgsis/_optional.py tests/test_optional_extras.py src/tgsis/db/adapters.py tests/test_adapters.py tests/test_docker.py \
-                 tests/test_view_set_based_writes.py
+                 tests/test_view_set_based_writes.py tests/test_view_origin.py tests/test_make_test.py
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy
@@ -60,7 +74,8 @@ check: $(VENV)/.installed
 	$(BIN)/ruff format --check $(RUFF_FORMATTED)
 
 # Build the extension script; install it into the system PostgreSQL (PGXS) when
-# this user may write there, so that CREATE EXTENSION tgsis works on it too.
+# this user may write there, so that CREATE EXTENSION tgsis works on it too
+# (`make test` does not need it: its clusters read this checkout's files).
 extension:
 	@if command -v pg_config >/dev/null 2>&1; then \
 	    $(MAKE) --no-print-directory -C sql; \

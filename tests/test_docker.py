@@ -111,7 +111,7 @@ def test_postgis_is_pinned_to_the_version_the_suite_runs_against() -> None:
         check=False,
     )
     assert installed.returncode == 0, (
-        f"PostGIS for PostgreSQL 15 is not installed here (.ci/run installs it): {installed.stderr}"
+        f"PostGIS for PostgreSQL 15 is not installed here (make test installs it: tools/setup-machine): {installed.stderr}"
     )
     assert installed.stdout.split() == [args["POSTGIS_VERSION"], args["POSTGIS_SCRIPTS_VERSION"]]
 

@@ -77,13 +77,12 @@ def image_server() -> Iterator[LocalServer]:
     if not (sharedir / "extension" / "postgis.control").exists():
         pytest.fail(f"PostGIS is not installed for {binaries.describe()} (as in the Docker image): "
                     "apt-get install postgresql-15-postgis-3", pytrace=False)
-    sources = ExtensionSources.default()
-    installed = sharedir / "extension" / f"tgsis--{sources.version}.sql"
-    if not installed.exists() or installed.read_text(encoding="utf-8") != sources.script():
-        pytest.fail(f"{installed} is not this checkout's SQL: run `make extension` (as the image's build does)",
-                    pytrace=False)
-    server = LocalServer.throwaway(binaries)
+    server = LocalServer.throwaway(binaries)   # this checkout's extension files in a share folder of its own
     try:
+        sources = ExtensionSources.default()
+        assert server.binaries.sharedir is not None
+        installed = server.binaries.sharedir / "extension" / f"tgsis--{sources.version}.sql"
+        assert installed.read_text(encoding="utf-8") == sources.script(), f"{installed} is not this checkout's SQL"
         yield server
     finally:
         server.destroy()

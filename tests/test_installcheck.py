@@ -2,8 +2,9 @@
 
 What a DBA or packager runs after ``make install`` (docs/install.md): the
 server's own pg_regress, through the server's own PGXS, on the installed
-extension files. Here against the suite's server, on both PostgreSQL 15 (files
-of ``make extension``) and the embedded 18 (this checkout's files).
+extension files. Here against the suite's server, on both PostgreSQL 15 and the
+embedded 18, whose throwaway clusters both read this checkout's files (15: a
+private copy of its share folder, ``tgsis.db.local.with_private_share``).
 """
 
 from __future__ import annotations

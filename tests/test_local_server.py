@@ -152,3 +152,45 @@ def test_unreachable_cluster_folder_is_explained(home: Path) -> None:
         _check_reachable(private / "pg", nobody, "the cluster folder")
     assert f"{private} is not searchable by nobody" in (info.value.detail or "")
     _check_reachable(home / "pg", nobody, "the cluster folder")  # 0755 all the way: fine
+
+
+def _files(folder: Path) -> dict[str, tuple[int, int]]:
+    """Every entry of ``folder``: (size, mtime in ns), symlinks as themselves."""
+    return {p.name: (p.lstat().st_size, p.lstat().st_mtime_ns) for p in folder.iterdir()}
+
+
+def test_a_throwaway_cluster_before_postgresql_18_serves_this_checkouts_extension_without_writing_the_systems() -> None:
+    # issue 36: `make test` installed the checkout's files into the system's share folder (PostgreSQL 15 has
+    # no extension_control_path); the throwaway cluster now runs on a private copy of the installation
+    from tgsis.db.sqlsource import ExtensionSources
+
+    system = find_binaries("system")
+    assert system.major < 18, "this machine's system PostgreSQL is 18+: its clusters use extension_control_path"
+    assert system.sharedir is not None
+    extension_dir = system.sharedir / "extension"
+    before = _files(extension_dir)
+    sources = ExtensionSources.default()
+    server = LocalServer.throwaway(system)
+    try:
+        assert server.binaries.share is not None and server.binaries.share.is_relative_to(server.root)
+        assert server.binaries.sharedir == server.binaries.share
+        assert "extension files in" in server.binaries.describe()
+        server.ensure_database("ext")
+        with psycopg.connect(server.dsn("ext"), autocommit=True) as conn:
+            shared = conn.execute("SELECT setting FROM pg_config WHERE name = 'SHAREDIR'").fetchone()
+            assert shared is not None and Path(shared[0]).resolve() == server.binaries.share.resolve()
+            versions = {r[0] for r in conn.execute(
+                "SELECT version FROM pg_available_extension_versions WHERE name = 'tgsis'").fetchall()}
+            assert sources.version in versions
+            # the system's other extensions are still there (PostGIS, contrib)
+            system_controls = {p.name.removesuffix(".control") for p in extension_dir.glob("*.control")} - {"tgsis"}
+            available = {r[0] for r in conn.execute("SELECT name FROM pg_available_extensions").fetchall()}
+            assert system_controls <= available
+            conn.execute("CREATE EXTENSION tgsis CASCADE")
+            assert conn.execute("SELECT tgsis.version()").fetchone() == (sources.version,)
+        written = server.binaries.share / "extension" / f"tgsis--{sources.version}.sql"
+        assert written.read_text(encoding="utf-8") == sources.script()
+    finally:
+        server.destroy()
+    assert not server.root.exists()
+    assert _files(extension_dir) == before, "the system's extension folder was written"

@@ -75,7 +75,7 @@ class GisServer:
         assert sharedir is not None
         installed = sharedir / "extension" / f"tgsis--{ExtensionSources.default().version}.sql"
         if not installed.exists() or installed.read_text(encoding="utf-8") != ExtensionSources.default().script():
-            return f"{installed} is not this checkout's SQL: run `make extension`"
+            return f"{installed} is not this checkout's SQL (the throwaway cluster's own share folder)"
         return None
 
 

@@ -4,7 +4,8 @@
 script); the upgrade script is assembled from ``sql/upgrade/tgsis--0.1.0--0.2.0.sql``
 and the current sources (``tgsis.db._upgrade``). Both routes: ``ALTER
 EXTENSION tgsis UPDATE`` (the server's extension files: the embedded
-PostgreSQL 18 reads this checkout's, PostgreSQL 15 those of ``make extension``)
+PostgreSQL 18 reads this checkout's, PostgreSQL 15 those of the private copy of its share
+folder the throwaway cluster runs on, this checkout's too)
 and the plain-SQL upgrade of ``tgsis.install``.
 """
 

@@ -162,7 +162,8 @@ def test_the_version_tree_and_choosing_the_version(view: tuple[str, ViewData, st
     page.goto(f"{url}/classes")
     assert "In version edit" in page.text_content("main")
     # an unknown revision is refused with an error page, and the choice stays
-    response = page.request.post(f"{url}/session", form={"version": "edit@9999"})
+    # (page.request sends no Origin of its own: it is given the view's, as the page's own form sends it)
+    response = page.request.post(f"{url}/session", form={"version": "edit@9999"}, headers={"Origin": url})
     assert response.status == 404 and "9999" in response.text()
     page.goto(f"{url}/versions")
     assert page.text_content("#current") == "edit"

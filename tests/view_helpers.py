@@ -92,11 +92,15 @@ def fill_view_database(dsn: str) -> ViewData:
 
 
 @contextmanager
-def running_view(conninfo: str, *, writable: bool = False, default_version: str | None = None) -> Iterator[str]:
-    """The view of ``conninfo`` served by uvicorn in a thread on a free port of 127.0.0.1; yields its base URL."""
-    app = create_app(ViewConfig(conninfo, writable, "test", default_version))
-    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    sock.bind(("127.0.0.1", 0))
+def running_view(conninfo: str, *, writable: bool = False, default_version: str | None = None,
+                 host: str = "127.0.0.1") -> Iterator[str]:
+    """The view of ``conninfo`` served by uvicorn in a thread on a free port of ``host``; yields its base URL.
+
+    It answers the host names ``tgsis view --host HOST`` answers.
+    """
+    app = create_app(ViewConfig(conninfo, writable, "test", default_version), hosts=["127.0.0.1", "localhost", host])
+    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
+    sock.bind((host, 0))
     sock.listen(64)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
@@ -106,7 +110,7 @@ def running_view(conninfo: str, *, writable: bool = False, default_version: str 
         assert thread.is_alive() and time.monotonic() < deadline, "the view did not start"
         time.sleep(0.02)
     try:
-        yield f"http://127.0.0.1:{sock.getsockname()[1]}"
+        yield f"http://{f'[{host}]' if ':' in host else host}:{sock.getsockname()[1]}"
     finally:
         server.should_exit = True
         thread.join(20)

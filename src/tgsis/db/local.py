@@ -12,7 +12,10 @@ When no DSN is given, tgsis runs its own cluster:
   trust authentication, superuser ``postgres``;
 * the extension files in ``<root>/extension`` (PostgreSQL 18 finds them
   through ``extension_control_path``; older servers use the plain-SQL
-  install).
+  install). A throwaway cluster of an older PostgreSQL runs on a private
+  copy of its installation (:func:`with_private_share`) whose share folder
+  holds this checkout's extension files beside the system's: CREATE
+  EXTENSION tgsis works there without writing into the system's folder.
 
 Two kinds of cluster:
 
@@ -60,7 +63,7 @@ from psycopg.conninfo import make_conninfo
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.errors import LocalServerError
 
-__all__ = ["PgBinaries", "LocalServer", "Lease", "find_binaries", "default_home"]
+__all__ = ["PgBinaries", "LocalServer", "Lease", "find_binaries", "default_home", "with_private_share"]
 
 log = logging.getLogger(__name__)
 
@@ -86,6 +89,8 @@ class PgBinaries:
 
     bindir: Path
     flavor: Flavor
+    #: the share folder of a private copy (:func:`with_private_share`), else None: pg_config's
+    share: Path | None = None
 
     def tool(self, name: str) -> Path:
         """Path of one program of :attr:`bindir`."""
@@ -114,7 +119,9 @@ class PgBinaries:
 
     @cached_property
     def sharedir(self) -> Path | None:
-        """``pg_config --sharedir`` of this installation, if it has a pg_config."""
+        """The share folder the server reads: ``pg_config --sharedir``, or a private copy's (None: no pg_config)."""
+        if self.share is not None:
+            return self.share
         pg_config = self.tool("pg_config")
         if not pg_config.exists():
             return None
@@ -123,7 +130,8 @@ class PgBinaries:
 
     def describe(self) -> str:
         """One line for logs and test reports."""
-        return f"PostgreSQL {self.version} ({self.flavor}, {self.bindir})"
+        own = f", extension files in {self.share / 'extension'}" if self.share is not None else ""
+        return f"PostgreSQL {self.version} ({self.flavor}, {self.bindir}{own})"
 
 
 def _usable_bindir(path: Path) -> bool:
@@ -198,6 +206,84 @@ def find_binaries(selection: str | None = None) -> PgBinaries:
             f"TGSIS_PG={choice!r} is neither 'auto', 'embedded', 'system' nor a folder with initdb, pg_ctl and postgres"
         )
     return PgBinaries(path, "custom")
+
+
+#: the programs a private copy holds as copies: PostgreSQL finds its share folder from its own
+#: executable with symlinks resolved (initdb and pg_ctl run the postgres beside them)
+_COPIED_PROGRAMS = ("postgres", "initdb", "pg_ctl")
+
+
+def with_private_share(binaries: PgBinaries, prefix: Path, sources: ExtensionSources | None = None) -> PgBinaries:
+    """A private copy of an installation before PostgreSQL 18 whose share folder holds this checkout's tgsis files.
+
+    PostgreSQL before 18 reads extension files only from its share folder
+    (no ``extension_control_path``), which it locates relative to its own
+    executable. So, under ``prefix``, the installation's layout is rebuilt:
+    ``postgres``, ``initdb`` and ``pg_ctl`` copied, the other programs, the
+    share folder's entries, the library and locale folders linked, and an
+    ``extension`` folder linking every file of the system's except tgsis's,
+    plus this checkout's control file and scripts. The system's folders
+    are only read (installing tgsis there needs root and would replace what
+    another user installed).
+
+    Parameters
+    ----------
+    binaries : PgBinaries
+        An installation with ``pg_config`` in its bin folder.
+    prefix : Path
+        An empty folder (the throwaway cluster's), removed with it.
+    sources : ExtensionSources, optional
+        Default: this checkout's.
+
+    Returns
+    -------
+    PgBinaries
+        The copy's programs, ``share`` set to its share folder.
+    """
+    pg_config = binaries.tool("pg_config")
+    out = subprocess.run([str(pg_config), "--bindir", "--sharedir", "--pkglibdir", "--localedir"],
+                         capture_output=True, text=True, check=False)
+    lines = out.stdout.splitlines()
+    if out.returncode != 0 or len(lines) != 4:
+        raise LocalServerError(f"cannot read the folders of {binaries.describe()} from {pg_config}",
+                               detail=(out.stdout + out.stderr).strip())
+    bindir, sharedir, pkglibdir, localedir = (Path(line.strip()) for line in lines)
+    common = Path(os.path.commonpath([bindir, sharedir]))
+
+    def mirrored(path: Path) -> Path:
+        return prefix / path.relative_to(common)
+
+    def folder(path: Path) -> Path:
+        path.mkdir(parents=True, exist_ok=True)
+        for made in [path, *path.parents]:
+            if made == prefix.parent:
+                break
+            made.chmod(0o755)  # the server may run as another OS user (postgres, as root)
+        return path
+
+    new_bin, new_share = folder(mirrored(bindir)), folder(mirrored(sharedir))
+    for program in sorted(binaries.bindir.iterdir()):
+        if program.name in _COPIED_PROGRAMS:
+            shutil.copy2(program, new_bin / program.name)
+        else:
+            (new_bin / program.name).symlink_to(program.resolve())
+    for path in (pkglibdir, localedir):
+        if path.is_dir() and path.is_relative_to(common) and not mirrored(path).exists():
+            folder(mirrored(path).parent)
+            mirrored(path).symlink_to(path)
+    for entry in sorted(sharedir.iterdir()):
+        if entry.name != "extension":
+            (new_share / entry.name).symlink_to(entry)
+    extension = folder(new_share / "extension")
+    if (sharedir / "extension").is_dir():
+        for entry in sorted((sharedir / "extension").iterdir()):
+            if entry.name != "tgsis.control" and not entry.name.startswith("tgsis--"):
+                (extension / entry.name).symlink_to(entry)
+    (sources or ExtensionSources.default()).write_extension_dir(new_share)
+    for written in extension.iterdir():
+        if not written.is_symlink():
+            written.chmod(0o644)
+    return PgBinaries(new_bin, binaries.flavor, share=new_share)
 
 
 # --------------------------------------------------------------------------- OS user
@@ -315,11 +401,23 @@ class LocalServer:
     def throwaway(cls, binaries: PgBinaries | None = None) -> LocalServer:
         """A started cluster in a temporary folder, removed with the server.
 
+        Before PostgreSQL 18 it runs on a private copy of the installation
+        whose share folder holds this checkout's extension files
+        (:func:`with_private_share`): CREATE EXTENSION tgsis gives this
+        checkout's SQL, and the system's extension folder is left alone.
+
         The server is stopped and its folder removed by :meth:`destroy`, or by
         the watcher process when this process ends without calling it.
         """
         binaries = binaries or find_binaries()
         root = Path(tempfile.mkdtemp(prefix="tgsis-pg-"))
+        try:
+            if not binaries.has_extension_control_path and binaries.share is None \
+                    and binaries.tool("pg_config").is_file():
+                binaries = with_private_share(binaries, root / "pg")
+        except BaseException:
+            shutil.rmtree(root, ignore_errors=True)
+            raise
         server = cls(root, binaries, durable=False)
         try:
             server.initdb()

@@ -34,13 +34,15 @@ from psycopg import sql
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
+from starlette.datastructures import Headers, MutableHeaders
 from starlette.middleware import Middleware
-from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
-from starlette.responses import JSONResponse, RedirectResponse, Response
+from starlette.responses import JSONResponse, PlainTextResponse, RedirectResponse, Response
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 from starlette.templating import Jinja2Templates
+from starlette.websockets import WebSocketClose
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from tgsis.db import versions as V
 from tgsis.db.classes import FeatureClass, list_feature_classes
@@ -54,7 +56,7 @@ from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, drawable, gmap_drawable, pack, vertex_flags
 from tgsis.view.surfaces import StoredSurface, drawable_surface, stored_surface
 
-__all__ = ["ViewConfig", "create_app", "VERSION_COOKIE"]
+__all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
 
 Conn = psycopg.Connection[Any]
 
@@ -635,6 +637,123 @@ def conflict_endpoint(request: Request) -> Response:
     return _binary(_body(header, mesh, None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
 
 
+# --------------------------------------------------------------------------- request guard
+
+#: the methods a page of another site may make a browser send without harm: they change nothing
+SAFE_METHODS = frozenset({"GET", "HEAD"})
+#: on every response: no page of another site shows the view in a frame (its own buttons under a decoy
+#: would send the view's own Origin: clickjacking)
+UNFRAMED = {"X-Frame-Options": "DENY", "Content-Security-Policy": "frame-ancestors 'none'"}
+
+
+def _origin_of(url: str) -> tuple[str, str, int] | None:
+    """``(scheme, host, port)`` of an absolute http(s) URL or origin (default port filled in), None if it is not one."""
+    try:
+        parts = urllib.parse.urlsplit(url.strip())
+        port = parts.port
+    except ValueError:
+        return None
+    if parts.scheme.lower() not in ("http", "https") or not parts.hostname:
+        return None
+    scheme = parts.scheme.lower()
+    return scheme, parts.hostname.lower(), port if port is not None else (443 if scheme == "https" else 80)
+
+
+def _shown(origin: tuple[str, str, int]) -> str:
+    scheme, host, port = origin
+    host = f"[{host}]" if ":" in host else host
+    default = 443 if scheme == "https" else 80
+    return f"{scheme}://{host}" + ("" if port == default else f":{port}")
+
+
+class RequestGuard:
+    """Refuses the requests a page of another site can make a browser send to the view.
+
+    Wraps the whole application (every route, present and future), before
+    routing:
+
+    - a ``Host`` header that is not one of ``hosts`` gets 400: a page of an
+      attacker's site whose name resolves to this machine (DNS rebinding)
+      reaches the socket, not the view;
+    - a request whose method is not GET or HEAD (the only ones that change
+      something: ``POST /session`` chooses the browser's version) must come
+      from the view's own pages: its ``Origin`` (or, when a browser sends
+      none, its ``Referer``) must be the view's own origin (scheme, the
+      ``Host`` it was sent to, port). A foreign, opaque (``null``) or
+      malformed origin, or neither header, gets 403 with a message saying
+      why; browsers send ``Origin`` on every POST, so only scripts
+      (curl) lack it, and they can send it. A websocket (none today) is
+      checked the same way, and closed with 1008 when refused;
+    - every response forbids framing (``X-Frame-Options: DENY``,
+      ``frame-ancestors 'none'``): the view's own buttons in a frame of
+      another site's page, under a decoy, would pass the origin check.
+
+    Parameters
+    ----------
+    app : ASGI application
+    hosts : sequence of str
+        The host names (or addresses) the view answers to.
+    """
+
+    def __init__(self, app: ASGIApp, hosts: Sequence[str]) -> None:
+        self.app = app
+        self.hosts = frozenset(h.strip("[]").lower() for h in hosts)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        refusal = self.refusal(scope)
+        if scope["type"] == "websocket":  # none today; a future one is checked like a POST (browsers send its Origin)
+            if refusal is not None:
+                await WebSocketClose(code=1008, reason=f"refused: {refusal.status_code}")(scope, receive, send)
+            else:
+                await self.app(scope, receive, send)
+            return
+
+        async def send_unframed(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                MutableHeaders(scope=message).update(UNFRAMED)
+            await send(message)
+
+        if refusal is not None:
+            await refusal(scope, receive, send_unframed)
+            return
+        await self.app(scope, receive, send_unframed)
+
+    def refusal(self, scope: Scope) -> Response | None:
+        """The response refusing this request, or None to let it through."""
+        headers = Headers(scope=scope)
+        scheme = "https" if scope.get("scheme") in ("https", "wss") else "http"
+        host = headers.get("host", "")
+        own = _origin_of(f"{scheme}://{host}") if host and "/" not in host and "@" not in host else None
+        if own is None or own[1] not in self.hosts:
+            return PlainTextResponse(
+                f"400 Bad Request: tgsis view answers requests for {', '.join(sorted(self.hosts))}, "
+                f"not for the host {host[:200]!r} (a page of another site reaching this machine under a "
+                "name of its own gets nothing; start the view with --host NAME to answer to NAME)",
+                status_code=400)
+        method = str(scope.get("method", "GET")).upper() if scope["type"] == "http" else "WEBSOCKET"
+        if scope["type"] == "http" and method in SAFE_METHODS:
+            return None
+        origin, referer = headers.get("origin"), headers.get("referer")
+        if origin is not None:
+            source, said = _origin_of(origin), f"comes from {origin[:200]}"
+        elif referer is not None:
+            source = _origin_of(referer)
+            said = f"comes from a page of {_shown(source) if source else repr(referer[:200])}"
+        else:
+            source, said = None, "names neither Origin nor Referer"
+        if source == own:
+            return None
+        here = _shown(own)
+        return PlainTextResponse(
+            f"403 Forbidden: tgsis view refused {method} {scope.get('path', '')}: the request {said}; "
+            f"the view accepts changes (the version a browser works in) only from its own pages ({here}). "
+            f"Open {here}/versions and choose the version there (a script: send the header 'Origin: {here}').",
+            status_code=403)
+
+
 # --------------------------------------------------------------------------- errors
 
 
@@ -676,8 +795,10 @@ def create_app(config: ViewConfig, *, hosts: Sequence[str] = ("127.0.0.1", "loca
     ----------
     config : ViewConfig
     hosts : sequence of str
-        The ``Host`` headers answered (others get 400: a page of another
-        site cannot reach the view through a name of its own).
+        The ``Host`` names answered (others get 400: a page of another
+        site cannot reach the view through a name of its own); every
+        request but GET and HEAD must come from the view's own origin
+        (:class:`RequestGuard`).
     """
     app = Starlette(
         routes=[
@@ -694,7 +815,7 @@ def create_app(config: ViewConfig, *, hosts: Sequence[str] = ("127.0.0.1", "loca
             Route("/api/conflict/{id}", conflict_endpoint),
             Mount("/static", StaticFiles(directory=str(HERE / "static")), name="static"),
         ],
-        middleware=[Middleware(TrustedHostMiddleware, allowed_hosts=list(hosts))],
+        middleware=[Middleware(RequestGuard, hosts=list(hosts))],
         exception_handlers={Error: error_page, HTTPException: error_page},
     )
     app.state.view = View(config)
