@@ -25,7 +25,11 @@ $(VENV)/.installed: pyproject.toml
 	$(BIN)/python -m pip install --quiet --editable '.[test,embedded,view]'
 	touch $@
 
+# (run as root, the local server runs as the OS user postgres, TGSIS_PG_OS_USER or not at all:
+# on a fresh Debian that user comes with the package postgresql-common, installed when missing, saying so)
 demo: $(VENV)/.installed
+	@if [ "$$(id -u)" -eq 0 ] && [ -z "$${TGSIS_PG_OS_USER:-}" ] && ! id postgres >/dev/null 2>&1; then \
+	    tools/setup-machine postgresql-common; fi
 	$(BIN)/tgsis demo
 
 # The whole test suite, as CI runs it, on a fresh Debian/Ubuntu machine: the

@@ -257,6 +257,26 @@ def test_the_venv_asks_for_python3_venv_alone(tmp_path: Path) -> None:
     assert second.endswith("-m venv .venv")
 
 
+def test_the_demo_as_root_asks_for_the_os_user_of_the_local_server(tmp_path: Path) -> None:
+    # `make demo` as root on a fresh Debian: the local server runs as the OS user postgres (never as
+    # root), which the small package postgresql-common makes
+    status, out, calls = _setup(tmp_path, "postgresql-common", installed=[], uid=0)
+    assert status == 0, out
+    assert calls == ["apt-get update -qq", "apt-get install -y -qq --no-install-recommends postgresql-common"]
+    recipe = subprocess.run(
+        ["make", "-n", "--no-print-directory", "demo"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "MAKEFLAGS": ""},
+    ).stdout
+    step = recipe[: recipe.index("postgresql-common")].rsplit("if ", 1)[1]
+    assert 'id -u)" -eq 0' in step and "TGSIS_PG_OS_USER" in step and "id postgres" in step
+    # the step comes before the demo itself
+    assert recipe.index("postgresql-common") < recipe.index("tgsis demo")
+
+
 # --------------------------------------------------------------------------- tools/test-suites, faked
 
 
