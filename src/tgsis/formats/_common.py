@@ -24,6 +24,7 @@ __all__ = [
     "sanitize_property_name",
     "sanitize_property_names",
     "check_mesh",
+    "quoted",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -133,3 +134,19 @@ def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,
         else:
             result.append((name, values))
     return result
+
+
+#: The most characters of a bad word an error message quotes.
+QUOTE_LIMIT = 80
+
+
+def quoted(word: str | bytes, limit: int = QUOTE_LIMIT) -> str:
+    """``repr`` of a word from a file for an error message, cut to ``limit`` characters with its length.
+
+    A file can hold a word of any length (a 100 MB number); quoting it whole
+    would make a message as long as the file.
+    """
+    text = word.decode("latin-1") if isinstance(word, bytes) else word
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text):,} characters)"
