@@ -36,7 +36,7 @@ import re
 import struct
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -229,8 +229,10 @@ def parse_obj(data: bytes, path: PathLike) -> ParsedSurface:
 
 def _obj_index(word: bytes, defined: int, lines: _Lines) -> int:
     """The 0-based vertex of an OBJ corner ``v``, ``v/t``, ``v//n`` or ``v/t/n``."""
-    text = word.split(b"/", 1)[0]
-    value = _int(text, lines, "an OBJ vertex index")
+    parts = word.split(b"/")
+    if len(parts) > 1 and (len(parts) > 3 or not parts[-1] or (len(parts) == 2 and not parts[1])):
+        raise lines.fail(f"an OBJ face corner is v, v/vt, v//vn or v/vt/vn, not {quoted(word)}")
+    value = _int(parts[0], lines, "an OBJ vertex index")
     if value == 0:
         raise lines.fail("an OBJ face uses vertex index 0: OBJ indices start at 1 (negative ones count back from "
                          "the last vertex)")
@@ -311,7 +313,9 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
 _PLY_DTYPES = {b"char": "i1", b"int8": "i1", b"uchar": "u1", b"uint8": "u1", b"short": "i2", b"int16": "i2",
                b"ushort": "u2", b"uint16": "u2", b"int": "i4", b"int32": "i4", b"uint": "u4", b"uint32": "u4",
                b"float": "f4", b"float32": "f4", b"double": "f8", b"float64": "f8"}
-_PLY_FORMATS = {b"ascii": "", b"binary_little_endian": "<", b"binary_big_endian": ">"}
+_ByteOrder = Literal["<", ">"]
+_PLY_FORMATS: dict[bytes, Literal["", "<", ">"]] = {b"ascii": "", b"binary_little_endian": "<",
+                                                     b"binary_big_endian": ">"}
 _PLY_FACE_INDICES = (b"vertex_indices", b"vertex_index")
 
 
@@ -393,7 +397,7 @@ def _ply_row_line(order: str, body_line: int, elements: dict[str, _PlyElement], 
     return None  # pragma: no cover
 
 
-def _ply_header(data: bytes, path: PathLike) -> tuple[str, dict[str, _PlyElement], int, int]:
+def _ply_header(data: bytes, path: PathLike) -> tuple[Literal["", "<", ">"], dict[str, _PlyElement], int, int]:
     """The byte order ("" for ASCII), the elements in file order, the offset of the body and its first line."""
     end = data.find(b"end_header")
     if not data.startswith(b"ply") or end < 0:
@@ -405,7 +409,7 @@ def _ply_header(data: bytes, path: PathLike) -> tuple[str, dict[str, _PlyElement
             raise FileFormatError("the PLY header's end_header line is not followed by a line end", path=path)
         stop = len(data) - 1
     lines = _Lines(data[: stop + 1], path)
-    order: str | None = None
+    order: Literal["", "<", ">"] | None = None
     elements: dict[str, _PlyElement] = {}
     current: _PlyElement | None = None
     for line in lines:
@@ -530,7 +534,7 @@ def _ply_value(word: bytes, dtype: np.dtype[Any], lines: _Lines, element: str, n
     return value
 
 
-def _ply_binary(data: bytes, body: int, order: str, elements: dict[str, _PlyElement],
+def _ply_binary(data: bytes, body: int, order: _ByteOrder, elements: dict[str, _PlyElement],
                 path: PathLike) -> dict[str, dict[str, Any]]:
     """Columns of each element of a binary PLY body, which must be exactly as long as the header says."""
     pos = body
@@ -544,7 +548,7 @@ def _ply_binary(data: bytes, body: int, order: str, elements: dict[str, _PlyElem
     return tables
 
 
-def _ply_binary_element(data: bytes, pos: int, order: str, element: _PlyElement,
+def _ply_binary_element(data: bytes, pos: int, order: _ByteOrder, element: _PlyElement,
                         path: PathLike) -> tuple[dict[str, Any], int]:
     def short(done: int) -> FileFormatError:
         return FileFormatError(f"the binary PLY file ends inside {element.name} {done} of the {element.count} its "
@@ -565,7 +569,7 @@ def _ply_binary_element(data: bytes, pos: int, order: str, element: _PlyElement,
             if pos + before + count_dtype.itemsize > len(data):
                 raise short(0)
             sizes = [int(np.frombuffer(data, count_dtype.newbyteorder(order), 1, pos + before)[0])]
-        fields: list[tuple[str, Any]] = []
+        fields: list[tuple[Any, ...]] = []
         for j, p in enumerate(props):
             if p.count_dtype is None:
                 fields.append((f"f{j}", p.dtype.newbyteorder(order)))

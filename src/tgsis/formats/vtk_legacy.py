@@ -50,7 +50,7 @@ import numpy.typing as npt
 
 from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
+from tgsis.formats._common import PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]
@@ -221,6 +221,7 @@ class _Dataset:
     fields: dict[str, Any] = field(default_factory=dict)
     point_data: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     cell_data: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
+    lines: dict[str, int] = field(default_factory=dict)  # the line of each section's keyword (POINTS, cells, ...)
 
 
 def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry:
@@ -253,7 +254,8 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
         n_cells = len(offsets) - 1
         types = dataset.cell_types if dataset.cell_types is not None else np.empty(0, np.int64)
         if len(types) != n_cells:
-            raise FileFormatError(f"CELL_TYPES gives {len(types)} types for {n_cells} cells", path=path)
+            raise FileFormatError(f"CELL_TYPES gives {len(types)} types for {n_cells} cells", path=path,
+                                  line=dataset.lines.get("CELL_TYPES", dataset.lines.get("cells")))
     names: dict[str, dict[str, str]] = {}
     point_data = _sanitised(dataset.point_data, n_points, names, "point_data", path)
     cell_data = _sanitised(dataset.cell_data, len(types), names, "cell_data", path)
@@ -261,8 +263,11 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
     name = first(dataset.fields.get("tgsis_name")) or first(dataset.fields.get("name"))
     geotype = first(dataset.fields.get("tgsis_geotype"))
     if connectivity.size and (connectivity.min() < 0 or connectivity.max() >= n_points):
-        raise FileFormatError(f"a cell refers to point {int(connectivity.max())}, but the file has {n_points} points",
-                              path=path)
+        bad = int(connectivity.min()) if connectivity.min() < 0 else int(connectivity.max())
+        cells_line = max((line for key, line in dataset.lines.items() if key in _CELL_SECTIONS.values()),
+                         default=None)
+        raise FileFormatError(f"a cell refers to point {bad}, but the file has {n_points} points (0..{n_points - 1})",
+                              path=path, line=cells_line)
     try:
         if geotype == GeometryCollection.geotype.value:
             table = (strings(dataset.fields.get("tgsis_member_geotypes", [])),
@@ -412,9 +417,13 @@ class _Reader:
                                  "mesh.cast_to_unstructured_grid().save('x.vtk'))")
         attributes: dict[str, npt.NDArray[Any]] | None = None
         count = 0
+        empty_data: tuple[str, int] | None = None  # a POINT_DATA/CELL_DATA line no array has followed yet
         while (text := self.line()) is not None:
             words = text.split()
             keyword = words[0].upper()
+            result.lines[_CELL_SECTIONS.get(keyword, keyword)] = self.line_number
+            if keyword in _ATTRIBUTE_KEYWORDS and keyword != "METADATA":
+                empty_data = None
             if keyword == "FIELD" and attributes is None:
                 self._field(words, result.fields, None, keep_strings=True)
             elif keyword == "POINTS":
@@ -426,6 +435,9 @@ class _Reader:
             elif keyword == "CELL_TYPES":
                 result.cell_types = self.values("int", self._int(words, 1, "CELL_TYPES"), "CELL_TYPES").astype(np.int64)
             elif keyword in ("POINT_DATA", "CELL_DATA"):
+                if empty_data is not None:
+                    raise self._no_arrays(*empty_data)
+                empty_data = (keyword, self.line_number)
                 count = self._int(words, 1, keyword)
                 attributes = result.point_data if keyword == "POINT_DATA" else result.cell_data
             elif keyword == "METADATA":
@@ -433,8 +445,19 @@ class _Reader:
             elif keyword in _ATTRIBUTE_KEYWORDS and attributes is not None:
                 self._attribute(words, attributes, count)
             else:
-                raise self.fail(f"unexpected section {words[0]!r} in a legacy VTK {result.kind} file")
+                raise self.fail(f"unexpected section {quoted(words[0])} in a legacy VTK {result.kind} file")
+        # a legacy VTK file has no end mark: a file cut between two sections is found by what it lacks
+        if empty_data is not None:
+            raise self._no_arrays(*empty_data)
+        if result.points is None:
+            raise self.fail("the file has no POINTS section (is it cut short?)")
+        if result.kind == "UNSTRUCTURED_GRID" and len(result.points) and "cells" not in result.cells:
+            raise self.fail(f"the file has {len(result.points)} POINTS but no CELLS section (is it cut short?)")
         return result
+
+    def _no_arrays(self, keyword: str, line: int) -> FileFormatError:
+        return FileFormatError(f"{keyword} is followed by no data array (is the file cut short?)", path=self.path,
+                               line=line)
 
     def _int(self, words: list[str], index: int, what: str) -> int:
         try:
