@@ -8,6 +8,11 @@ returns fewer or more elements than the file declares, without an error, fails t
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import textwrap
+
 from pathlib import Path
 
 import numpy as np
@@ -446,3 +451,82 @@ def test_gocad_ids_out_of_order_read_exactly(tmp_path: Path) -> None:
     [surface] = read_gocad(path)
     assert surface.vertices[surface.cells].tolist() == [[[0, 0, 0], [1, 0, 0], [0, 1, 0]],
                                                         [[1, 0, 0], [1, 1, 0], [0, 1, 0]]]
+
+
+# ---------------------------------------------------------------- issue 36, point 13: bounded messages and memory
+
+
+def test_a_long_bad_word_is_quoted_short(tmp_path: Path) -> None:
+    """A 500,000-character number (under the line limit) is named by its start and its length, not echoed."""
+    word = "1x" * 250_000
+    path = tmp_path / "s.ts"
+    path.write_text(f"GOCAD TSurf 1\nHEADER {{\nname: s\n}}\nTFACE\nVRTX 1 {word} 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\n"
+                    "TRGL 1 2 3\nEND\n")
+    with pytest.raises(FileFormatError) as info:
+        read_gocad(path)
+    assert len(str(info.value)) < 400 and "500,000 characters" in str(info.value) and info.value.line == 6
+    for extension, text in ((".obj", f"v 0 0 {word}\n"), (".off", f"OFF\n1 0 0\n0 0 {word}\n"),
+                            (".ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                     f"property float z\nend_header\n0 0 {word}\n")):
+        path = tmp_path / f"s{extension}"
+        path.write_text(text)
+        with pytest.raises(FileFormatError) as info:
+            read_trimesh_file(path)
+        assert len(str(info.value)) < 400 and "500,000 characters" in str(info.value), extension
+
+
+HUGE = 100 * 1024 * 1024  # bytes of the one long line
+_CHILD = textwrap.dedent("""
+    import resource, sys
+    limit = 3 << 30  # the machine is shared: a reader that wants gigabytes gets a MemoryError, not the machine
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    from tgsis import formats
+    from tgsis.errors import FileFormatError
+    try:
+        formats.read(sys.argv[1])
+        outcome = "read -1 0"
+    except FileFormatError as exc:
+        outcome = f"error {exc.line} {len(str(exc))}"
+    except MemoryError:
+        outcome = "memory -1 0"
+    print(outcome, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+""")
+
+
+def _huge_files() -> list[tuple[str, str, bytes, bytes, int]]:
+    """(label, extension, text before the long line, the repeated words, line number of the long line)."""
+    return [
+        ("obj_face", ".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf ", b"1 2 3 ", 4),
+        ("off_face", ".off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n%d " % (HUGE // 2), b"0 1 2 ", 6),
+        ("ply_face", ".ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                             b"property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n"
+                             b"0 0 0\n1 0 0\n0 1 0\n%d " % (HUGE // 2), b"0 1 2 ", 13),
+        ("stl_vertex", ".stl", b"solid s\nfacet normal 0 0 1\nouter loop\nvertex ", b"1 ", 4),
+        ("tsurf_vrtx_values", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 1 ", b"1 ", 6),
+        ("tsurf_vrtx_number", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 1 0 0 ", b"7", 6),
+        ("tsurf_properties", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nPROPERTIES ", b"p ", 5),
+    ]
+
+
+@pytest.mark.parametrize(("label", "extension", "head", "words", "line"),
+                         [pytest.param(*case, id=case[0]) for case in _huge_files()])
+def test_a_100_mb_line_is_refused_in_bounded_memory(label: str, extension: str, head: bytes, words: bytes, line: int,
+                                                    tmp_path: Path) -> None:
+    """A 100 MB line is refused with its number and a short message; the reading process stays under 1 GB
+    (measured: peak RSS of a child process; trimesh took 5.5 GB on a 100 MB OBJ face line)."""
+    path = tmp_path / f"huge{extension}"
+    with open(path, "wb") as handle:
+        handle.write(head + words * (HUGE // len(words)) + b"\nEND\n")
+    try:
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+        result = subprocess.run([sys.executable, "-c", _CHILD, str(path)], capture_output=True, text=True,
+                                timeout=600, env=env)
+    finally:
+        path.unlink()
+    assert result.returncode == 0, result.stderr[-2000:]
+    outcome, error_line, message_length, peak_kib = result.stdout.split()
+    assert outcome == "error", result.stdout
+    assert int(error_line) == line
+    assert int(message_length) < 1000
+    print(f"{label}: peak RSS {int(peak_kib) // 1024} MiB")
+    assert int(peak_kib) < 1024 * 1024, f"peak RSS {int(peak_kib) // 1024} MiB"

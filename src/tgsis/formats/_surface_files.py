@@ -42,13 +42,9 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import FileFormatError
-from tgsis.formats._common import PathLike, quoted, sanitize_property_name
+from tgsis.formats._common import MAX_LINE_BYTES, PathLike, quoted, sanitize_property_name
 
 __all__ = ["MAX_LINE_BYTES", "ParsedSurface", "parse_obj", "parse_off", "parse_ply", "parse_stl"]
-
-#: The longest text line read (1 MiB): enough for a polygon of 100,000 corners or a vertex with thousands of
-#: properties; a longer line is refused with its number before it is split into words.
-MAX_LINE_BYTES = 1 << 20
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

@@ -287,7 +287,7 @@ def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str,
     renamed: dict[str, str] = {}
     for original, values in arrays.items():
         if len(values) != count:
-            raise FileFormatError(f"{key} array {original!r} has {len(values)} tuples, the dataset {count}", path=path)
+            raise FileFormatError(f"{key} array {quoted(original)} has {len(values)} tuples, the dataset {count}", path=path)
         name = sanitize_property_name(original, result)
         if name != original:
             renamed[name] = original
@@ -338,7 +338,7 @@ class _Reader:
         """``count`` values of a file type, ASCII words or big-endian binary."""
         code = _DTYPE_OF.get(type_name.lower())
         if code is None:
-            raise self.fail(f"{what} has data type {type_name!r}, which tgsis does not read")
+            raise self.fail(f"{what} has data type {quoted(type_name)}, which tgsis does not read")
         if code == "bit":
             raise self.fail(f"{what} is a bit array, which tgsis does not read",
                             hint="store it as unsigned_char (0/1)")
@@ -400,7 +400,7 @@ class _Reader:
             raise self.fail("the file ends after its first line")
         mode = (self.line() or "").strip().upper()
         if mode not in ("ASCII", "BINARY"):
-            raise self.fail(f"the third line must be ASCII or BINARY, not {mode!r}")
+            raise self.fail(f"the third line must be ASCII or BINARY, not {quoted(mode)}")
         self.binary = mode == "BINARY"
         return version
 
@@ -409,7 +409,7 @@ class _Reader:
         modern = version.startswith("5")
         words = (self.line() or "").split()
         if len(words) != 2 or words[0].upper() != "DATASET":
-            raise self.fail(f"expected 'DATASET type', got {' '.join(words)!r}")
+            raise self.fail(f"expected 'DATASET type', got {quoted(' '.join(words))}")
         result = _Dataset(kind=words[1].upper())
         if result.kind not in ("POLYDATA", "UNSTRUCTURED_GRID"):
             raise self.fail(f"DATASET {result.kind} is not read by tgsis: it reads POLYDATA and UNSTRUCTURED_GRID",
@@ -463,7 +463,7 @@ class _Reader:
         try:
             value = int(words[index])
         except (IndexError, ValueError):
-            raise self.fail(f"{what} needs a count, got {' '.join(words)!r}") from None
+            raise self.fail(f"{what} needs a count, got {quoted(' '.join(words))}") from None
         if value < 0:
             raise self.fail(f"{what} count is negative")
         return value
@@ -477,7 +477,7 @@ class _Reader:
             for expected, n in (("OFFSETS", first), ("CONNECTIVITY", second)):
                 head = (self.line() or "").split()
                 if len(head) != 2 or head[0].upper() != expected:
-                    raise self.fail(f"{what}: expected '{expected} type', got {' '.join(head)!r}")
+                    raise self.fail(f"{what}: expected '{expected} type', got {quoted(' '.join(head))}")
                 arrays[expected] = self.values(head[1], n, f"{what} {expected}").astype(np.int64)
             offsets, connectivity = arrays["OFFSETS"], arrays["CONNECTIVITY"]
             if len(offsets) == 0:
@@ -554,7 +554,7 @@ class _Reader:
                 self._skip_metadata()
                 head = (self.line() or "").split()
             if len(head) != 4:
-                raise self.fail(f"a FIELD array needs 'name components tuples type', got {' '.join(head)!r}")
+                raise self.fail(f"a FIELD array needs 'name components tuples type', got {quoted(' '.join(head))}")
             name = unquote_to_bytes(head[0]).decode("utf-8", "replace")
             components, tuples = self._int(head, 1, name), self._int(head, 2, name)
             if head[3].lower() in ("string", "utf8_string"):
