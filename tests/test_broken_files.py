@@ -530,3 +530,27 @@ def test_a_100_mb_line_is_refused_in_bounded_memory(label: str, extension: str, 
     assert int(message_length) < 1000
     print(f"{label}: peak RSS {int(peak_kib) // 1024} MiB")
     assert int(peak_kib) < 1024 * 1024, f"peak RSS {int(peak_kib) // 1024} MiB"
+
+
+def test_the_fast_and_the_line_by_line_readings_agree(monkeypatch: pytest.MonkeyPatch) -> None:
+    """OBJ, OFF and ASCII PLY are read in C when the file is plain, line by line otherwise (which names
+    the bad line): both give the same surface."""
+    from tgsis.formats import _surface_files as sf
+
+    quads = (b"v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nv 2 2 0\r\nvt 0 0\r\nvn 0 0 1\r\n"
+             b"f 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 4//1 3//1 5//1 1//1\r\n")
+    obj_cases = [_text_obj(BASE), quads, _text_obj(BASE).replace(b"\n", b"\r\n")]
+    for data in obj_cases:
+        fast, slow = sf._obj_fast(data), sf._obj_slow(data, "x.obj")
+        assert fast is not None
+        assert np.array_equal(fast.vertices, slow.vertices) and np.array_equal(fast.triangles, slow.triangles)
+    off = _text_off(BASE)
+    fast = sf.parse_off(off, "x.off")
+    slow = sf.parse_off(off.replace(b"\n", b" # comment\n", 3), "x.off")  # a comment: line by line
+    assert np.array_equal(fast.vertices, slow.vertices) and np.array_equal(fast.triangles, slow.triangles)
+    ply = _ascii_ply(BASE)
+    fast = sf.parse_ply(ply, "x.ply")
+    monkeypatch.setattr(sf, "_ply_ascii_fast", lambda *args: None)
+    slow = sf.parse_ply(ply, "x.ply")
+    assert np.array_equal(fast.vertices, slow.vertices) and np.array_equal(fast.triangles, slow.triangles)
+    assert np.array_equal(fast.vertices, BASE.vertices) and np.array_equal(fast.triangles, BASE.cells)

@@ -32,8 +32,10 @@ most 80 characters of a bad word (:func:`quoted`).
 
 from __future__ import annotations
 
+import io
 import re
 import struct
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -136,8 +138,20 @@ def _int(word: bytes, lines: _Lines, what: str) -> int:
         raise lines.fail(f"{what} is not an integer: {quoted(word)}") from None
 
 
-def _fan(polygons: list[list[int]]) -> tuple[IntArray, IntArray]:
-    """Triangles (m, 3) of a fan over each polygon, and the polygon of each triangle (m,)."""
+def _fan(polygons: list[list[int]] | IntArray) -> tuple[IntArray, IntArray]:
+    """Triangles (m, 3) of a fan over each polygon, and the polygon of each triangle (m,).
+
+    ``polygons`` is a list of corner lists, or a (p, k) array of polygons of k corners.
+    """
+    if isinstance(polygons, np.ndarray):
+        p, k = polygons.shape
+        if k == 3:
+            return polygons.astype(np.int64), np.arange(p, dtype=np.int64)
+        fans = np.empty((p, k - 2, 3), dtype=np.int64)
+        fans[:, :, 0] = polygons[:, :1]
+        fans[:, :, 1] = polygons[:, 1:-1]
+        fans[:, :, 2] = polygons[:, 2:]
+        return fans.reshape(-1, 3), np.repeat(np.arange(p, dtype=np.int64), k - 2)
     triangles: list[tuple[int, int, int]] = []
     owner: list[int] = []
     for k, corners in enumerate(polygons):
@@ -146,6 +160,36 @@ def _fan(polygons: list[list[int]]) -> tuple[IntArray, IntArray]:
             triangles.append((first, corners[j], corners[j + 1]))
             owner.append(k)
     return (np.array(triangles, dtype=np.int64).reshape(-1, 3), np.array(owner, dtype=np.int64))
+
+
+def _table(lines: list[bytes], dtype: type[np.generic]) -> npt.NDArray[Any] | None:
+    """``lines`` of equally many numbers parsed at once in C, or None when they are not such a table.
+
+    None sends the caller to its line-by-line reading, which names the bad line. numpy reads no
+    ``1_000``, ``0x10`` or ``1.0`` as an integer; NaN and infinities are left to the caller.
+    """
+    if not lines:
+        return None
+    try:
+        with warnings.catch_warnings():  # "input contained no data": blank lines only, refused below
+            warnings.simplefilter("ignore", UserWarning)
+            table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=dtype, ndmin=2, comments=None,
+                               encoding="latin-1")
+    except (ValueError, OverflowError):
+        return None
+    return table if table.shape[0] == len(lines) else None  # loadtxt skips blank lines
+
+
+def _fast_lines(data: bytes, start: int = 0) -> list[bytes] | None:
+    """The lines with data of ``data[start:]`` for a fast reading, or None when a line is blank-only CR-ended
+    Mac text, too long, or has a comment (then the line-by-line reading, with its line numbers, is used)."""
+    body = data[start:]
+    if b"#" in body or (b"\r" in body and b"\n" not in body):
+        return None
+    lines = body.split(b"\n")
+    if lines and max(map(len, lines)) > MAX_LINE_BYTES:
+        return None
+    return [line for line in lines if line.strip()]
 
 
 def _vertex_array(rows: list[list[float]]) -> FloatArray:
@@ -160,8 +204,53 @@ _OBJ_FREE_FORM = {b"cstype", b"deg", b"bmat", b"step", b"curv", b"curv2", b"surf
                   b"scrv", b"sp", b"end", b"con", b"ctech", b"stech"}
 
 
+_OBJ_CORNERS = re.compile(rb"(?:[ \t\r\n]*\d+(?:/\d+(?:/\d+)?|//\d+)?)*[ \t\r\n]*")
+
+
 def parse_obj(data: bytes, path: PathLike) -> ParsedSurface:
     """The vertices and faces of an OBJ file (see the module docstring for what is checked)."""
+    fast = _obj_fast(data)
+    return fast if fast is not None else _obj_slow(data, path)
+
+
+def _obj_fast(data: bytes) -> ParsedSurface | None:
+    """An OBJ file of ``v`` and ``f`` lines (and skipped ones) read in C; None when in doubt."""
+    if b"\\" in data or (b"\r" in data and b"\n" not in data):
+        return None
+    lines = data.split(b"\n")
+    if lines and max(map(len, lines)) > MAX_LINE_BYTES:
+        return None
+    v_lines = [line[2:] for line in lines if line[:2] == b"v "]
+    f_lines = [line[2:] for line in lines if line[:2] == b"f "]
+    if len(v_lines) + len(f_lines) < len(lines):
+        for line in lines:
+            if line[:2] in (b"v ", b"f "):
+                continue
+            words = line.split(None, 1)
+            if words and words[0][:1] != b"#" and words[0] not in _OBJ_SKIPPED:
+                return None
+    if not v_lines:
+        return None
+    vertices = _table(v_lines, np.float64)
+    if vertices is None or vertices.shape[1] not in (3, 4, 6) or not np.all(np.isfinite(vertices)):
+        return None
+    n = len(vertices)
+    triangles = np.empty((0, 3), dtype=np.int64)
+    if f_lines:
+        block = b"\n".join(f_lines)
+        if b"/" in block:
+            if _OBJ_CORNERS.fullmatch(block) is None:
+                return None
+            f_lines = re.sub(rb"/[^\s]*", b"", block).split(b"\n")
+        faces = _table(f_lines, np.int64)  # no "-": negative (relative) indices are read line by line
+        if faces is None or faces.shape[1] < 3 or faces.min() < 1 or faces.max() > n:
+            return None
+        triangles, _ = _fan(faces - 1)
+    return ParsedSurface(vertices[:, :3].copy(), triangles, bool(f_lines))
+
+
+def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
+    """An OBJ file read line by line: any keyword, continued lines, relative indices; errors name the line."""
     lines = _Lines(data, path)
     vertices: list[list[float]] = []
     polygons: list[list[int]] = []
@@ -268,6 +357,9 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
     if n_vertices > len(data) // 5 or n_faces > len(data) // 7:  # "0 0 0" and "3 0 1 2" are the shortest lines
         raise lines.fail(f"the OFF header declares {n_vertices:,} vertices and {n_faces:,} faces, more than "
                          f"a file of {len(data):,} bytes can hold")
+    fast = _off_fast(data, lines.pos, n_vertices, n_faces, widths)
+    if fast is not None:
+        return fast
     vertices: list[list[float]] = []
     for k in range(n_vertices):
         words = lines.words()
@@ -302,6 +394,26 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
                          f"declares: {quoted(b' '.join(words))}")
     triangles, _ = _fan(polygons)
     return ParsedSurface(_vertex_array(vertices), triangles, n_faces > 0)
+
+
+def _off_fast(data: bytes, start: int, n_vertices: int, n_faces: int, widths: set[int]) -> ParsedSurface | None:
+    """The body of an OFF file without comments, faces of one size, read in C; None when in doubt."""
+    rows = _fast_lines(data, start)
+    if rows is None or len(rows) != n_vertices + n_faces or n_vertices == 0:
+        return None
+    vertices = _table(rows[:n_vertices], np.float64)
+    if vertices is None or vertices.shape[1] not in widths or not np.all(np.isfinite(vertices)):
+        return None
+    triangles = np.empty((0, 3), dtype=np.int64)
+    if n_faces:
+        faces = _table(rows[n_vertices:], np.int64)
+        if faces is None or faces.shape[1] < 4 or np.any(faces[:, 0] != faces.shape[1] - 1):
+            return None  # a colour, faces of several sizes: line by line
+        corners = faces[:, 1:]
+        if corners.min() < 0 or corners.max() >= n_vertices:
+            return None
+        triangles, _ = _fan(corners)
+    return ParsedSurface(vertices[:, :3].copy(), triangles, n_faces > 0)
 
 
 # ---------------------------------------------------------------- PLY
@@ -365,9 +477,15 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
     triangles = np.empty((0, 3), dtype=np.int64)
     face_properties: dict[str, npt.NDArray[Any]] = {}
     if face_element is not None and index_name is not None:
-        polygons: list[Any] = tables["face"][index_name]
+        polygons: Any = tables["face"][index_name]
         n = len(vertices)
-        for k, corners in enumerate(polygons):
+        if isinstance(polygons, np.ndarray):  # (faces, k): all of one size
+            polygons = polygons.astype(np.int64)
+            bad = (polygons < 0) | (polygons >= n)
+            if (len(polygons) and polygons.shape[1] < 3) or bad.any():
+                k = int(np.flatnonzero(bad.any(axis=1))[0]) if bad.any() else 0
+                polygons = list(polygons[k:k + 1])  # the loop below names the fault
+        for k, corners in enumerate(polygons if isinstance(polygons, list) else ()):
             if len(corners) < 3:
                 raise FileFormatError(f"PLY face {k} has {len(corners)} corners, at least 3 are needed", path=path,
                                       line=_ply_row_line(order, body_line, elements, "face", k))
@@ -375,7 +493,8 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
                 bad_index = int(corners[(corners < 0) | (corners >= n)][0])
                 raise FileFormatError(f"PLY face {k} uses vertex {bad_index}, outside 0..{n - 1}", path=path,
                                       line=_ply_row_line(order, body_line, elements, "face", k))
-        triangles, owner = _fan([[int(c) for c in corners] for corners in polygons])
+        triangles, owner = _fan(polygons if isinstance(polygons, np.ndarray) else
+                                [[int(c) for c in corners] for corners in polygons])
         face_properties = {name: values[owner] for name, values in
                            _ply_scalars(tables["face"], "face", (index_name,), renamed).items()}
     return ParsedSurface(vertices, triangles, face_element is not None, vertex_properties, face_properties, renamed)
@@ -468,6 +587,9 @@ def _ply_property(words: list[bytes], element: _PlyElement, lines: _Lines) -> _P
 def _ply_ascii(data: bytes, body: int, body_line: int, elements: dict[str, _PlyElement],
                path: PathLike) -> dict[str, dict[str, Any]]:
     """Columns of each element of an ASCII PLY body: one row a line, exactly as many rows as declared."""
+    fast = _ply_ascii_fast(data, body, elements)
+    if fast is not None:
+        return fast
     lines = _Lines(data, path, body, body_line)
     tables: dict[str, dict[str, Any]] = {}
     for element in elements.values():
@@ -511,6 +633,41 @@ def _ply_ascii(data: bytes, body: int, body_line: int, elements: dict[str, _PlyE
     if words is not None:
         raise lines.fail(f"the PLY file has data after the elements its header declares: "
                          f"{quoted(b' '.join(words))}")
+    return tables
+
+
+def _ply_ascii_fast(data: bytes, body: int, elements: dict[str, _PlyElement]) -> dict[str, dict[str, Any]] | None:
+    """An ASCII PLY body read in C: elements of scalars, or of one list of one length; None when in doubt."""
+    rows = _fast_lines(data, body)
+    if rows is None or len(rows) != sum(e.count for e in elements.values()):
+        return None
+    tables: dict[str, dict[str, Any]] = {}
+    start = 0
+    for element in elements.values():
+        part, start = rows[start: start + element.count], start + element.count
+        props = element.properties
+        if not element.count:
+            return None
+        if all(p.count_dtype is None for p in props):
+            table = _table(part, np.float64)
+            if table is None or table.shape[1] != len(props):
+                return None
+            columns: dict[str, Any] = {}
+            for j, p in enumerate(props):
+                values = table[:, j]
+                if p.dtype.kind in "iu":
+                    info = np.iinfo(p.dtype)
+                    if np.any(values != np.round(values)) or values.min() < info.min or values.max() > info.max:
+                        return None
+                columns[p.name] = values.astype(p.dtype)
+            tables[element.name] = columns
+        elif len(props) == 1 and props[0].dtype.kind in "iu":
+            table = _table(part, np.int64)
+            if table is None or np.any(table[:, 0] != table.shape[1] - 1):
+                return None
+            tables[element.name] = {props[0].name: table[:, 1:]}
+        else:
+            return None
     return tables
 
 
@@ -583,7 +740,7 @@ def _ply_binary_element(data: bytes, pos: int, order: _ByteOrder, element: _PlyE
                     if p.count_dtype is None:
                         result[p.name] = table[f"f{j}"].astype(p.dtype)
                     elif sizes[0] > 0:
-                        result[p.name] = list(table[f"f{j}"].astype(p.dtype))
+                        result[p.name] = table[f"f{j}"].astype(p.dtype).reshape(element.count, sizes[0])
                     else:
                         result[p.name] = [np.empty(0, dtype=p.dtype)] * element.count
                 return result, end
@@ -617,7 +774,7 @@ def _ply_scalars(columns: dict[str, Any], element: str, skip: tuple[str, ...],
     """The scalar properties of an element (lists are skipped): integers as int64, floats as they are."""
     result: dict[str, npt.NDArray[Any]] = {}
     for file_name, values in columns.items():
-        if file_name in skip or not isinstance(values, np.ndarray):
+        if file_name in skip or not isinstance(values, np.ndarray) or values.ndim != 1:
             continue
         name = sanitize_property_name(file_name, result)
         if name != file_name:
