@@ -514,7 +514,7 @@ def _ply_row_line(order: str, body_line: int, elements: dict[str, _PlyElement], 
 
 def _ply_header(data: bytes, path: PathLike) -> tuple[Literal["", "<", ">"], dict[str, _PlyElement], int, int]:
     """The byte order ("" for ASCII), the elements in file order, the offset of the body and its first line."""
-    end = data.find(b"end_header")
+    end = data.find(b"\nend_header") + 1 or -1
     if not data.startswith(b"ply") or end < 0:
         raise FileFormatError("not a PLY file: it must begin with 'ply' and have an 'end_header' line", path=path,
                               line=1)
