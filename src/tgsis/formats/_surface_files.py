@@ -665,6 +665,9 @@ def _ply_ascii_fast(data: bytes, body: int, elements: dict[str, _PlyElement]) ->
             table = _table(part, np.int64)
             if table is None or np.any(table[:, 0] != table.shape[1] - 1):
                 return None
+            info = np.iinfo(props[0].dtype)
+            if table.shape[1] > 1 and (table[:, 1:].min() < info.min or table[:, 1:].max() > info.max):
+                return None  # a value its type cannot hold: line by line, which names it
             tables[element.name] = {props[0].name: table[:, 1:]}
         else:
             return None
