@@ -505,6 +505,10 @@ def _huge_files() -> list[tuple[str, str, bytes, bytes, int]]:
         ("tsurf_vrtx_values", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 1 ", b"1 ", 6),
         ("tsurf_vrtx_number", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 1 0 0 ", b"7", 6),
         ("tsurf_properties", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nPROPERTIES ", b"p ", 5),
+        ("vtk_keyword_line", ".vtk", b"# vtk DataFile Version 5.1\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                                     b"FIELD FieldData 1 ", b"x ", 5),
+        ("vtk_points_left_over", ".vtk", b"# vtk DataFile Version 5.1\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                                         b"POINTS 1 double\n", b"0 ", 6),
     ]
 
 

@@ -50,7 +50,7 @@ import numpy.typing as npt
 
 from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
+from tgsis.formats._common import MAX_LINE_BYTES, PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]
@@ -316,6 +316,10 @@ class _Reader:
             return None
         end = self.data.find(b"\n", self.pos)
         end = len(self.data) if end < 0 else end
+        if end - self.pos > MAX_LINE_BYTES:  # a keyword line (values are read word by word, not by line)
+            self.line_number += 1
+            raise self.fail(f"line {self.line_number} is {end - self.pos:,} bytes long; a legacy VTK keyword line "
+                            f"is at most {MAX_LINE_BYTES:,} bytes long here")
         text = self.data[self.pos: end].rstrip(b"\r").decode("latin-1")
         self.pos = end + 1
         self.line_number += 1
