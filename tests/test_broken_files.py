@@ -370,6 +370,9 @@ def _index_mutations() -> list[tuple[str, str, bytes]]:
     last_face = obj.splitlines()[-1]
     for bad in (b"0", f"{NV + 1}".encode(), f"-{NV + 1}".encode(), b"1.5", b"", b"1/", b"x"):
         cases.append((f"obj_index_{bad!r}", ".obj", obj.replace(last_face, last_face.rsplit(b" ", 1)[0] + b" " + bad)))
+    for extra in (b"l 1 2\n", b"curv 0 1 1 2\n", b"vertex 1 2 3\n", b"f 1 2 3 \\\n", b"v 1 2\n", b"v 1 2 3 4 5\n",
+                  b"f 1/ 2/ 3/\n", b"f 1///1 2 3\n", b"f 1 2 3 # fine\nf 1 2 -99\n"):
+        cases.append((f"obj_extra_{extra[:8]!r}", ".obj", obj + extra))
     off = _text_off(BASE)
     for bad in (b"-1", f"{NV}".encode(), b"2.0"):
         cases.append((f"off_index_{bad!r}", ".off", off.rstrip(b"\n").rsplit(b" ", 1)[0] + b" " + bad + b"\n"))

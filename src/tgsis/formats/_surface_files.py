@@ -290,8 +290,7 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
                 polygon_lines.append(-lines.number)  # checked with the faces, then forgotten
                 polygons.append(corners)
         elif keyword == b"l":
-            raise lines.fail("OBJ polylines (l) are not read: tgsis reads OBJ vertices and faces as a surface",
-                             )
+            raise lines.fail("OBJ polylines (l) are not read: tgsis reads OBJ vertices and faces as a surface")
         elif keyword in _OBJ_FREE_FORM:
             raise lines.fail(f"OBJ free-form geometry ({keyword.decode('latin-1')}) is not read: tgsis reads "
                              "OBJ vertices and faces")
@@ -792,7 +791,8 @@ def _ply_scalars(columns: dict[str, Any], element: str, skip: tuple[str, ...],
 def parse_stl(data: bytes, path: PathLike) -> ParsedSurface:
     """The corners of an STL file's triangles: three vertices per triangle, in file order (float32 precision)."""
     declared = struct.unpack_from("<I", data, 80)[0] if len(data) >= 84 else None
-    if declared is not None and len(data) == 84 + 50 * declared:
+    text = data.lstrip().startswith(b"solid") and b"\x00" not in data  # binary data has NULs (the attributes)
+    if not text and declared is not None and len(data) == 84 + 50 * declared:
         table = np.frombuffer(data, np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)),
                                               ("attribute", "<u2")]), declared, 84)
         vertices = table["corners"].reshape(-1, 3).astype(np.float64)
@@ -801,7 +801,7 @@ def parse_stl(data: bytes, path: PathLike) -> ParsedSurface:
             raise FileFormatError(f"STL triangle {int(np.argwhere(bad)[0][0]) // 3} has a non-finite coordinate",
                                   path=path)
         return ParsedSurface(vertices, np.arange(3 * declared, dtype=np.int64).reshape(-1, 3), True)
-    if not data.lstrip().startswith(b"solid") or b"\x00" in data:
+    if not text:
         if declared is None:
             raise FileFormatError(f"the file is not STL: {len(data)} bytes, shorter than a binary STL header (84)",
                                   path=path)
