@@ -180,6 +180,18 @@ def _table(lines: list[bytes], dtype: type[np.generic]) -> npt.NDArray[Any] | No
     return table if table.shape[0] == len(lines) else None  # loadtxt skips blank lines
 
 
+def _table_of(lines: list[bytes], dtype: np.dtype[Any]) -> npt.NDArray[Any] | None:
+    """Like :func:`_table`, rows of a structured ``dtype`` (one type per column: integers stay exact)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=dtype, ndmin=1, comments=None,
+                               encoding="latin-1")
+    except (ValueError, OverflowError):
+        return None
+    return table if table.shape[0] == len(lines) else None
+
+
 def _fast_lines(data: bytes, start: int = 0) -> list[bytes] | None:
     """The lines with data of ``data[start:]`` for a fast reading, or None when a line is blank-only CR-ended
     Mac text, too long, or has a comment (then the line-by-line reading, with its line numbers, is used)."""
@@ -648,15 +660,17 @@ def _ply_ascii_fast(data: bytes, body: int, elements: dict[str, _PlyElement]) ->
         if not element.count:
             return None
         if all(p.count_dtype is None for p in props):
-            table = _table(part, np.float64)
-            if table is None or table.shape[1] != len(props):
+            # integers read as integers (a "1.0" for an int property goes line by line, which refuses it)
+            record = _table_of(part, np.dtype([(f"c{j}", np.int64 if p.dtype.kind in "iu" else np.float64)
+                                               for j, p in enumerate(props)]))
+            if record is None:
                 return None
             columns: dict[str, Any] = {}
             for j, p in enumerate(props):
-                values = table[:, j]
+                values = record[f"c{j}"]
                 if p.dtype.kind in "iu":
                     info = np.iinfo(p.dtype)
-                    if np.any(values != np.round(values)) or values.min() < info.min or values.max() > info.max:
+                    if values.min() < info.min or values.max() > info.max:
                         return None
                 columns[p.name] = values.astype(p.dtype)
             tables[element.name] = columns
