@@ -155,3 +155,25 @@ def test_other_commands_that_read_files_warn_in_one_line_too(tmp_path: Path, cap
     err = capsys.readouterr().err
     assert f"tgsis: warning: {MIXED}:1: skipped the GOCAD SGrid object 'porosity grid'" in err
     assert "SkippedObjectWarning" not in err and "warnings.warn" not in err
+
+
+def test_a_broken_surface_file_is_refused_naming_file_and_line(db_dsn: str, tmp_path: Path,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """A truncated OFF (9 of its 18 faces) and an OBJ with index 0 are refused whole (issue 36, point 7):
+    trimesh read the first with 9 faces and the second with another vertex, and the import said nothing."""
+    create(db_dsn, "surfaces", "SURFACE")
+    off = tmp_path / "cut.off"
+    vertices = [f"{i % 4} {i // 4} {0.1 * i}" for i in range(16)]
+    faces = [f"3 {a} {a + 1} {a + 4}" for a in (0, 1, 2, 4, 5, 6, 8, 9, 10)]
+    faces += [f"3 {a + 1} {a + 5} {a + 4}" for a in (0, 1, 2, 4, 5, 6, 8, 9, 10)]
+    off.write_text("\n".join(["OFF", "16 18 0", *vertices, *faces[:9]]) + "\n")
+    obj = tmp_path / "zero.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")
+    before = stored(db_dsn)
+    capsys.readouterr()
+    for path, message in ((off, f"{off}:27: the OFF file ends after 9 of the 18 faces its header declares"),
+                          (obj, f"{obj}:4: an OBJ face uses vertex index 0")):
+        assert main(["--dsn", db_dsn, "import", str(path), "--class", "surfaces"]) == 1
+        err = capsys.readouterr().err
+        assert err.startswith(f"tgsis: error: {message}"), err
+    assert stored(db_dsn) == before

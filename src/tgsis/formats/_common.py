@@ -24,6 +24,9 @@ __all__ = [
     "sanitize_property_name",
     "sanitize_property_names",
     "check_mesh",
+    "quoted",
+    "MAX_LINE_BYTES",
+    "check_line_lengths",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -133,3 +136,34 @@ def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,
         else:
             result.append((name, values))
     return result
+
+
+#: The longest line of a text format read (1 MiB): enough for a polygon of 100,000 corners or a vertex with
+#: thousands of property values. A longer line is refused with its number before it is split into words, so
+#: a 100 MB line costs no more memory than the file (split, it would take gigabytes).
+MAX_LINE_BYTES = 1 << 20
+
+#: The most characters of a bad word an error message quotes.
+QUOTE_LIMIT = 80
+
+
+def quoted(word: str | bytes | None, limit: int = QUOTE_LIMIT) -> str:
+    """``repr`` of a word from a file for an error message, cut to ``limit`` characters with its length.
+
+    A file can hold a word of any length (a 100 MB number); quoting it whole
+    would make a message as long as the file.
+    """
+    if word is None:
+        return "None"
+    text = word.decode("latin-1") if isinstance(word, bytes) else word
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text):,} characters)"
+
+
+def check_line_lengths(lines: list[str], path: PathLike | None) -> None:
+    """Refuse the first of ``lines`` longer than :data:`MAX_LINE_BYTES` characters, naming its number."""
+    if lines and max(map(len, lines)) > MAX_LINE_BYTES:
+        number = next(i for i, line in enumerate(lines) if len(line) > MAX_LINE_BYTES)
+        raise FileFormatError(f"line {number + 1} is {len(lines[number]):,} characters long; tgsis reads lines of "
+                              f"at most {MAX_LINE_BYTES:,}", path=path, line=number + 1)

@@ -128,7 +128,8 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError, SkippedObjectWarning
-from tgsis.formats._common import PathLike, check_mesh, property_columns, read_text, sanitize_property_name, write_text
+from tgsis.formats._common import (PathLike, check_line_lengths, check_mesh, property_columns, quoted, read_text,
+                                   sanitize_property_name, write_text)
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 __all__ = [
@@ -313,8 +314,10 @@ def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = 
 
     ``path`` is only used in error messages.
     """
+    lines = text.removeprefix("\ufeff").splitlines()
+    check_line_lengths(lines, path)  # before a 100 MB line of values is split into millions of words
     with _gc_paused():
-        return _parse_lines(text.removeprefix("\ufeff").splitlines(), path, merge_atoms, skip_unsupported)
+        return _parse_lines(lines, path, merge_atoms, skip_unsupported)
 
 
 @contextlib.contextmanager
@@ -388,7 +391,7 @@ def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
     if not meshes and skipped:
         first = skipped[0]
         others = "".join(f"; {s.describe()}" for s in skipped[1:])
-        raise FileFormatError(f"unsupported GOCAD object type {first.type_name!r}: the file holds no object tgsis "
+        raise FileFormatError(f"unsupported GOCAD object type {quoted(first.type_name)}: the file holds no object tgsis "
                               f"reads ({first.describe()}{others}; tgsis reads {_SUPPORTED})",
                               path=path, line=first.start + 1)
     if not meshes:
@@ -554,7 +557,7 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
         return end
     else:
         known = sorted({"VRTX", "PVRTX", "ATOM", "PATOM", *(k for k in (kind.part_keyword, kind.cell_keyword) if k)})
-        raise FileFormatError(f"unknown keyword {keyword!r} in the {kind.name} begun at line {rec.start + 1}",
+        raise FileFormatError(f"unknown keyword {quoted(keyword)} in the {kind.name} begun at line {rec.start + 1}",
                               path=path, line=i + 1,
                               hint=f"a {kind.name} holds {', '.join(known)} lines; tgsis refuses a line it does "
                                    "not know rather than read the file without it")
@@ -604,7 +607,7 @@ def _scan_block(lines: Sequence[str], start: int, close: str, into: list[str], p
             break
         into.append(stripped)
         i += 1
-    raise FileFormatError(f"{opening.split()[0]} block is not closed by {close!r}", path=path, line=start + 1)
+    raise FileFormatError(f"{opening.split()[0]} block is not closed by {quoted(close)}", path=path, line=start + 1)
 
 
 @dataclass(frozen=True)
@@ -632,7 +635,7 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
         try:
             sizes = [int(w) for w in words]
         except ValueError:
-            raise FileFormatError(f"ESIZES must be integers, got {' '.join(words)!r}", path=path, line=line + 1) from None
+            raise FileFormatError(f"ESIZES must be integers, got {quoted(' '.join(words))}", path=path, line=line + 1) from None
         if len(sizes) != len(names) or min(sizes, default=1) < 1:
             raise FileFormatError(f"ESIZES gives {len(sizes)} sizes for {len(names)} properties "
                                   f"({' '.join(names)}); each must be at least 1", path=path, line=line + 1)
@@ -651,7 +654,7 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
         try:
             values = [float(w) for w in words]
         except ValueError:
-            raise FileFormatError(f"NO_DATA_VALUES must be numbers, got {' '.join(words)!r}",
+            raise FileFormatError(f"NO_DATA_VALUES must be numbers, got {quoted(' '.join(words))}",
                                   path=path, line=line + 1) from None
         if len(values) == len(names):
             no_data = [v for v, size in zip(values, sizes) for _ in range(size)]
@@ -691,7 +694,7 @@ def _float_table(rows: list[list[str]], line_of: Sequence[int], keyword: str, pa
             try:
                 float(word)
             except ValueError:
-                raise FileFormatError(f"{keyword} has a non-numeric value {word!r}", path=path, line=line + 1) from None
+                raise FileFormatError(f"{keyword} has a non-numeric value {quoted(word)}", path=path, line=line + 1) from None
     raise AssertionError("unreachable: numpy rejected a table that float() accepts")  # pragma: no cover
 
 
@@ -706,7 +709,7 @@ def _int_column(words: list[str], line_of: Sequence[int], keyword: str, what: st
         try:
             int(word)
         except ValueError:
-            raise FileFormatError(f"{keyword} has a {what} that is not an integer: {word!r}",
+            raise FileFormatError(f"{keyword} has a {what} that is not an integer: {quoted(word)}",
                                   path=path, line=line + 1) from None
     raise FileFormatError(f"{keyword} has a {what} that is too large", path=path)  # pragma: no cover
 
@@ -773,7 +776,7 @@ def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
     bad = ~np.isfinite(values[:, :3])
     if bad.any():
         j, col = (int(v) for v in np.argwhere(bad)[0])
-        raise FileFormatError(f"VRTX has a non-finite {'xyz'[col]} coordinate {tokens[j][1 + col]!r}",
+        raise FileFormatError(f"VRTX has a non-finite {'xyz'[col]} coordinate {quoted(tokens[j][1 + col])}",
                               path=path, line=rec.vertex_lines[j] + 1)
     return ids, values, flags
 

@@ -60,7 +60,7 @@ from pathlib import Path, PurePosixPath
 from typing import TypeAlias
 
 from tgsis.errors import FileFormatError
-from tgsis.formats._common import PathLike, read_bytes, write_bytes
+from tgsis.formats._common import PathLike, quoted, read_bytes, write_bytes
 from tgsis.formats.vtk import Encoding, format_empty_vtu, format_vtu, read_vtu_geometry
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
@@ -261,23 +261,23 @@ def _entry(index: int, element: ET.Element, pvd: Path) -> tuple[float, str, int,
     try:
         time = float(text)
     except ValueError:
-        raise FileFormatError(f"{what} has timestep {text!r}, not a number", path=pvd) from None
+        raise FileFormatError(f"{what} has timestep {quoted(text)}, not a number", path=pvd) from None
     if not math.isfinite(time):
-        raise FileFormatError(f"{what} has timestep {text!r}, not a finite number", path=pvd)
+        raise FileFormatError(f"{what} has timestep {quoted(text)}, not a finite number", path=pvd)
     part_text = element.get("part", "0").strip() or "0"
     try:
         part = int(part_text)
     except ValueError:
-        raise FileFormatError(f"{what} has part {part_text!r}, not an integer", path=pvd) from None
+        raise FileFormatError(f"{what} has part {quoted(part_text)}, not an integer", path=pvd) from None
     name = element.get("file")
     if not name:
         raise FileFormatError(f"{what} has no file attribute", path=pvd)
     file = pvd.parent / name
     if file.suffix.lower() != ".vtu":
-        raise FileFormatError(f"{what} refers to {name!r}, not a .vtu file: tgsis reads VTK UnstructuredGrid "
+        raise FileFormatError(f"{what} refers to {quoted(name)}, not a .vtu file: tgsis reads VTK UnstructuredGrid "
                               "(.vtu) datasets only", path=pvd)
     if not file.is_file():
-        raise FileFormatError(f"{what} refers to {name!r}, which does not exist ({file})", path=pvd)
+        raise FileFormatError(f"{what} refers to {quoted(name)}, which does not exist ({file})", path=pvd)
     return time, element.get("group", ""), part, file
 
 

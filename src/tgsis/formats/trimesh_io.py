@@ -1,20 +1,20 @@
-"""Triangle surfaces in OBJ, PLY, OFF and STL, read through trimesh.
+"""Triangle surfaces in OBJ, PLY, OFF and STL: strict readers of tgsis, writers of trimesh (PLY: of tgsis).
 
-What each format keeps (found by reading the readers and writers of trimesh 5.2
-and checked by ``tests/test_formats_trimesh.py``):
+What each format keeps (checked by ``tests/test_formats_trimesh.py``):
 
 =======  ==============  =====================  ==================  ==============================
 format   vertex order    coordinates            properties          written by
 =======  ==============  =====================  ==================  ==============================
 PLY      kept            bit-exact (float64)    vertex and face     tgsis (binary little-endian)
 OBJ      kept [1]_       8 decimals [2]_        none                trimesh
-OFF      kept            10 decimals [2]_       none                trimesh
+OFF      kept [1]_       10 decimals [2]_       none                trimesh
 STL      not kept [3]_   float32                none                trimesh (binary)
 =======  ==============  =====================  ==================  ==============================
 
-.. [1] trimesh's OBJ reader drops vertices that no face uses (even with
-   ``process=False``); the others keep their order. Faces with texture or
-   normal indices (``f 1/1/1 ...``) may be re-indexed by trimesh.
+.. [1] Every vertex, also those no face uses (trimesh's OBJ reader dropped
+   them). Polygons with more than three corners are split into a fan of
+   triangles; texture coordinates, normals, colours, groups and materials are
+   not read.
 .. [2] Fixed-point text: a coordinate comes back within 0.5e-8 (OBJ) or 0.5e-10
    (OFF) of what was written, plus one rounding of the double; big UTM
    coordinates keep 15-16 significant digits, not 17. ``digits=`` asks for more
@@ -23,6 +23,14 @@ STL      not kept [3]_   float32                none                trimesh (bin
    vertices (corner order of each face) rounded to float32;
    ``merge_vertices=True`` joins corners with identical coordinates, in order
    of first use.
+
+Files are read by :mod:`tgsis.formats._surface_files`, not by trimesh, whose
+readers return broken files without a word (a truncated OFF kept the faces
+before the cut, OBJ index 0 became the last vertex, PLY
+``binary_middle_endian`` was read as little-endian): a file cut short, with
+more or fewer elements than it declares, a bad index, a NaN or infinite
+coordinate or a line over 1 MiB raises :class:`~tgsis.errors.FileFormatError`
+naming the file and the line.
 
 PLY is written here rather than by trimesh because trimesh's PLY writer stores
 coordinates as float32 (about 0.25 m of error on UTM northings) and 64-bit
@@ -37,15 +45,16 @@ writer raises unless ``drop_properties=True``. Names are not stored (meshes
 read have ``name=None``).
 
 A file of points without faces (OBJ ``v`` lines alone, a PLY ``vertex``
-element alone) is read as a :class:`~tgsis.mesh.PointSet` with the PLY vertex
-properties, not as an empty surface (trimesh's ``force="mesh"`` drops the
-points); a PLY file that declares a ``face`` element with no face, as this
+element alone, an OFF file of 0 faces) is read as a
+:class:`~tgsis.mesh.PointSet` with the PLY vertex properties, not as an empty
+surface; a PLY file that declares a ``face`` element with no face, as this
 writer writes a surface without triangles, is a Surface without triangles. A
 file without any vertex is an error.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -53,7 +62,8 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import (PathLike, check_mesh, property_columns, sanitize_property_name, write_bytes)
+from tgsis.formats._common import PathLike, check_mesh, property_columns, read_bytes, write_bytes
+from tgsis.formats._surface_files import ParsedSurface, parse_obj, parse_off, parse_ply, parse_stl
 from tgsis.mesh import PointSet, Surface
 
 __all__ = ["TRIMESH_FILE_TYPES", "read_trimesh_file", "write_trimesh_file"]
@@ -83,6 +93,11 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
                       merge_vertices: bool = False) -> Surface | PointSet:
     """Read a triangle surface, or points, from an OBJ, PLY, OFF or STL file.
 
+    The file is read by the strict readers of :mod:`tgsis.formats._surface_files`
+    (not trimesh's, which read broken files without a word): every vertex and
+    face the file declares, or :class:`FileFormatError` naming the file and
+    the line.
+
     Parameters
     ----------
     path : str or path-like
@@ -96,126 +111,42 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
     Returns
     -------
     Surface or PointSet
-        Vertices (n, 3) and triangles (m, 3) as trimesh read them with
-        ``process=False``; PLY vertex and face properties as properties. A
-        file of points without faces (a PLY ``vertex`` element alone, OBJ
-        ``v`` lines alone) is a PointSet of its vertices, with the PLY vertex
-        properties.
+        Vertices (n, 3) in file order, every one of them (also those no face
+        uses), and triangles (m, 3) (polygons split into fans); PLY vertex and
+        face properties as properties. A file of points without faces (a PLY
+        ``vertex`` element alone, OBJ ``v`` lines alone, an OFF file of 0 faces)
+        is a PointSet of its vertices, with the PLY vertex properties; a PLY
+        file that declares a ``face`` element of 0 faces is a Surface without
+        triangles.
 
     Raises
     ------
     FileFormatError
-        The file cannot be read, trimesh cannot parse it, it holds no vertex,
-        or it is not a valid surface (e.g. a face that uses one vertex twice).
+        The file cannot be read, is cut short, holds more or fewer elements
+        than it declares, a bad index or number, no vertex, or is not a valid
+        surface (e.g. a face that uses one vertex twice).
     """
-    import trimesh
-
     kind = _file_type(path, file_type)
-    try:
-        with open(path, "rb"):
-            pass
-    except OSError as exc:
-        raise FileFormatError(f"cannot read the file: {exc.strerror or exc}", path=path) from exc
-    try:
-        loaded = trimesh.load(str(path), file_type=kind, process=False, force="mesh")
-    except Exception as exc:  # trimesh raises anything from ValueError to KeyError on bad files
-        raise FileFormatError(f"trimesh cannot read the {kind.upper()} file: {exc}", path=path) from exc
-    vertices = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=np.float64).reshape(-1, 3)
-    faces = np.asarray(getattr(loaded, "faces", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
-    if len(faces) == 0:
-        # force="mesh" gives an empty mesh for a file of points: read them as the points they are
-        return _read_points(path, kind, merge_vertices)
-    vertex_properties: dict[str, npt.NDArray[Any]] = {}
-    face_properties: dict[str, npt.NDArray[Any]] = {}
-    metadata: dict[str, Any] = {}
-    if kind == "ply":
-        raw = (getattr(loaded, "metadata", None) or {}).get("_ply_raw") or {}
-        renamed: dict[str, dict[str, str]] = {}
-        vertex_properties = _ply_properties(raw, "vertex", _PLY_COORDINATES, len(vertices), renamed)
-        face_properties = _ply_properties(raw, "face", _PLY_FACE_INDICES, len(faces), renamed)
-        if renamed:
-            metadata["ply_property_names"] = renamed
+    data = read_bytes(path)
+    parsed = _PARSERS[kind](data, path)
+    vertices, faces = parsed.vertices, parsed.triangles
+    vertex_properties, face_properties = parsed.vertex_properties, parsed.face_properties
+    metadata: dict[str, Any] = {"ply_property_names": parsed.renamed} if parsed.renamed else {}
+    if len(vertices) == 0:
+        raise FileFormatError(f"the {kind.upper()} file holds no vertex (no triangle and no point)", path=path)
     if merge_vertices:
         vertices, faces, vertex_properties = _merge_identical(vertices, faces, vertex_properties)
     try:
+        if len(faces) == 0 and not (kind == "ply" and parsed.has_faces):
+            return PointSet(vertices, vertex_properties=vertex_properties, metadata=metadata)
         return Surface(vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties,
                        metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.upper()} file is not a valid surface: {exc.message}", path=path) from exc
 
 
-def _read_points(path: PathLike, kind: str, merge_vertices: bool) -> Surface | PointSet:
-    """The vertices of a file without faces as a PointSet; a file without vertices is an error.
-
-    A PLY file that declares a ``face`` element, with no face, is a Surface
-    without triangles (what tgsis writes for one).
-    """
-    import trimesh
-
-    try:
-        loaded = trimesh.load(str(path), file_type=kind, process=False)
-    except Exception as exc:  # as in read_trimesh_file
-        raise FileFormatError(f"trimesh cannot read the {kind.upper()} file: {exc}", path=path) from exc
-    vertices = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=np.float64).reshape(-1, 3)
-    if len(vertices) == 0:
-        raise FileFormatError(f"the {kind.upper()} file holds no vertex (no triangle and no point)", path=path)
-    properties: dict[str, npt.NDArray[Any]] = {}
-    metadata: dict[str, Any] = {}
-    raw: Any = {}
-    if kind == "ply":
-        raw = (getattr(loaded, "metadata", None) or {}).get("_ply_raw") or {}
-        renamed: dict[str, dict[str, str]] = {}
-        properties = _ply_properties(raw, "vertex", _PLY_COORDINATES, len(vertices), renamed)
-        if renamed:
-            metadata["ply_property_names"] = renamed
-    no_faces = np.empty((0, 3), dtype=np.int64)
-    if merge_vertices:
-        vertices, _, properties = _merge_identical(vertices, no_faces, properties)
-    try:
-        if kind == "ply" and _ply_declares_faces(path):
-            return Surface(vertices, no_faces, vertex_properties=properties, metadata=metadata)
-        return PointSet(vertices, vertex_properties=properties, metadata=metadata)
-    except (InvalidGeometryError, InvalidPropertyError) as exc:
-        raise FileFormatError(f"the {kind.upper()} file's points are not valid: {exc.message}", path=path) from exc
-
-
-def _ply_declares_faces(path: PathLike) -> bool:
-    """Whether the PLY header has an ``element face`` line (trimesh drops an element of 0 faces)."""
-    try:
-        with open(path, "rb") as handle:
-            for raw_line in handle:
-                words = raw_line.split()
-                if words[:1] == [b"end_header"]:
-                    break
-                if words[:2] == [b"element", b"face"]:
-                    return True
-    except OSError as exc:
-        raise FileFormatError(f"cannot read the file: {exc.strerror or exc}", path=path) from exc
-    return False
-
-
-def _ply_properties(raw: Any, element: str, skip: tuple[str, ...], count: int,
-                    renamed: dict[str, dict[str, str]]) -> dict[str, npt.NDArray[Any]]:
-    """1-D numeric PLY properties of ``element`` with ``count`` values (others, e.g. lists, are skipped)."""
-    data = raw.get(element, {}).get("data") if isinstance(raw, dict) else None
-    if isinstance(data, dict):
-        fields = list(data.items())
-    elif isinstance(data, np.ndarray) and data.dtype.names:
-        fields = [(name, data[name]) for name in data.dtype.names]
-    else:
-        return {}
-    result: dict[str, npt.NDArray[Any]] = {}
-    for file_name, values in fields:
-        values = np.asarray(values)
-        if values.ndim == 2 and values.shape[1] == 1:  # trimesh's ASCII PLY reader gives (n, 1) columns
-            values = values[:, 0]
-        if file_name in skip or values.ndim != 1 or len(values) != count or values.dtype.kind not in "biuf":
-            continue
-        name = sanitize_property_name(str(file_name), result)
-        if name != file_name:
-            renamed.setdefault(element, {})[name] = str(file_name)
-        result[name] = values.astype(np.int64) if values.dtype.kind in "iu" else np.ascontiguousarray(values)
-    return result
+_PARSERS: dict[str, Callable[[bytes, PathLike], ParsedSurface]] = {
+    "obj": parse_obj, "off": parse_off, "ply": parse_ply, "stl": parse_stl}
 
 
 def _merge_identical(vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64],

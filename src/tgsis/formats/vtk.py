@@ -96,7 +96,7 @@ import numpy.typing as npt
 
 from tgsis._vtk_cells import mesh_from_vtk_cells
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
+from tgsis.formats._common import PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
 if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)
@@ -627,7 +627,7 @@ def _int_attribute(element: ET.Element, name: str, path: PathLike | None) -> int
     except ValueError:
         value = -1
     if value < 0:
-        raise FileFormatError(f"<{element.tag}> needs a non-negative integer {name}, got {text!r}", path=path)
+        raise FileFormatError(f"<{element.tag}> needs a non-negative integer {name}, got {quoted(text)}", path=path)
     return value
 
 
@@ -782,7 +782,7 @@ class _Decoder:
         type_name = element.get("type", "")
         name = element.get("Name", "?")
         if type_name not in _DTYPE_OF:
-            raise FileFormatError(f"DataArray {name!r} has unsupported type {type_name!r}", path=self.path)
+            raise FileFormatError(f"DataArray {quoted(name)} has unsupported type {quoted(type_name)}", path=self.path)
         dtype = np.dtype(self.byte_order + _DTYPE_OF[type_name])
         fmt = element.get("format", "ascii")
         if fmt == "ascii":
@@ -797,10 +797,10 @@ class _Decoder:
                    else self._from_raw(self.appended, offset, name))
             values = np.frombuffer(raw[: len(raw) - len(raw) % dtype.itemsize], dtype=dtype)
         else:
-            raise FileFormatError(f"DataArray {name!r} has unknown format {fmt!r}", path=self.path)
+            raise FileFormatError(f"DataArray {quoted(name)} has unknown format {quoted(fmt)}", path=self.path)
         values = values.astype(dtype.newbyteorder("="))
         if count is not None and len(values) != count * components:
-            raise FileFormatError(f"DataArray {name!r} has {len(values)} values, expected {count} x {components}",
+            raise FileFormatError(f"DataArray {quoted(name)} has {len(values)} values, expected {count} x {components}",
                                   path=self.path)
         return values
 
@@ -811,7 +811,7 @@ class _Decoder:
                 return np.array([float(w) for w in words], dtype=dtype)
             return np.array([int(w) for w in words], dtype=dtype)
         except (ValueError, OverflowError):
-            raise FileFormatError(f"DataArray {element.get('Name', '?')!r} has values that are not "
+            raise FileFormatError(f"DataArray {quoted(element.get('Name', '?'))} has values that are not "
                                   f"{dtype.name}", path=self.path) from None
 
     def _from_raw(self, data: bytes, offset: int, name: str) -> bytes:
@@ -853,16 +853,16 @@ class _Decoder:
         try:
             return base64.b64decode(chunk, validate=True)
         except ValueError:
-            raise FileFormatError(f"DataArray {name!r} is not valid base64", path=self.path) from None
+            raise FileFormatError(f"DataArray {quoted(name)} is not valid base64", path=self.path) from None
 
     def _header_values(self, raw: bytes, count: int, name: str) -> npt.NDArray[np.uint64]:
         if len(raw) != count * self.header.itemsize:
-            raise FileFormatError(f"DataArray {name!r} is truncated (incomplete block header)", path=self.path)
+            raise FileFormatError(f"DataArray {quoted(name)} is truncated (incomplete block header)", path=self.path)
         return np.frombuffer(raw, dtype=self.header).astype(np.uint64)
 
     def _exact(self, raw: bytes, size: int, name: str) -> bytes:
         if len(raw) != size:
-            raise FileFormatError(f"DataArray {name!r} is truncated: {len(raw)} of {size} bytes", path=self.path)
+            raise FileFormatError(f"DataArray {quoted(name)} is truncated: {len(raw)} of {size} bytes", path=self.path)
         return raw
 
     def _inflate(self, body: bytes, head: npt.NDArray[np.uint64], sizes: npt.NDArray[np.uint64], name: str) -> bytes:
@@ -873,7 +873,7 @@ class _Decoder:
             try:
                 parts.append(zlib.decompress(body[position: position + size]))
             except zlib.error:
-                raise FileFormatError(f"DataArray {name!r} has a corrupt zlib block", path=self.path) from None
+                raise FileFormatError(f"DataArray {quoted(name)} has a corrupt zlib block", path=self.path) from None
             position += size
         raw = b"".join(parts)
         n_blocks, block_size, last_size = (int(v) for v in head)

@@ -50,7 +50,7 @@ import numpy.typing as npt
 
 from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, read_bytes, sanitize_property_name, write_bytes
+from tgsis.formats._common import MAX_LINE_BYTES, PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]
@@ -221,6 +221,7 @@ class _Dataset:
     fields: dict[str, Any] = field(default_factory=dict)
     point_data: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     cell_data: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
+    lines: dict[str, int] = field(default_factory=dict)  # the line of each section's keyword (POINTS, cells, ...)
 
 
 def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry:
@@ -253,7 +254,8 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
         n_cells = len(offsets) - 1
         types = dataset.cell_types if dataset.cell_types is not None else np.empty(0, np.int64)
         if len(types) != n_cells:
-            raise FileFormatError(f"CELL_TYPES gives {len(types)} types for {n_cells} cells", path=path)
+            raise FileFormatError(f"CELL_TYPES gives {len(types)} types for {n_cells} cells", path=path,
+                                  line=dataset.lines.get("CELL_TYPES", dataset.lines.get("cells")))
     names: dict[str, dict[str, str]] = {}
     point_data = _sanitised(dataset.point_data, n_points, names, "point_data", path)
     cell_data = _sanitised(dataset.cell_data, len(types), names, "cell_data", path)
@@ -261,8 +263,11 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
     name = first(dataset.fields.get("tgsis_name")) or first(dataset.fields.get("name"))
     geotype = first(dataset.fields.get("tgsis_geotype"))
     if connectivity.size and (connectivity.min() < 0 or connectivity.max() >= n_points):
-        raise FileFormatError(f"a cell refers to point {int(connectivity.max())}, but the file has {n_points} points",
-                              path=path)
+        bad = int(connectivity.min()) if connectivity.min() < 0 else int(connectivity.max())
+        cells_line = max((line for key, line in dataset.lines.items() if key in _CELL_SECTIONS.values()),
+                         default=None)
+        raise FileFormatError(f"a cell refers to point {bad}, but the file has {n_points} points (0..{n_points - 1})",
+                              path=path, line=cells_line)
     try:
         if geotype == GeometryCollection.geotype.value:
             table = (strings(dataset.fields.get("tgsis_member_geotypes", [])),
@@ -282,7 +287,7 @@ def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str,
     renamed: dict[str, str] = {}
     for original, values in arrays.items():
         if len(values) != count:
-            raise FileFormatError(f"{key} array {original!r} has {len(values)} tuples, the dataset {count}", path=path)
+            raise FileFormatError(f"{key} array {quoted(original)} has {len(values)} tuples, the dataset {count}", path=path)
         name = sanitize_property_name(original, result)
         if name != original:
             renamed[name] = original
@@ -311,6 +316,10 @@ class _Reader:
             return None
         end = self.data.find(b"\n", self.pos)
         end = len(self.data) if end < 0 else end
+        if end - self.pos > MAX_LINE_BYTES:  # a keyword line (values are read word by word, not by line)
+            self.line_number += 1
+            raise self.fail(f"line {self.line_number} is {end - self.pos:,} bytes long; a legacy VTK keyword line "
+                            f"is at most {MAX_LINE_BYTES:,} bytes long here")
         text = self.data[self.pos: end].rstrip(b"\r").decode("latin-1")
         self.pos = end + 1
         self.line_number += 1
@@ -333,7 +342,7 @@ class _Reader:
         """``count`` values of a file type, ASCII words or big-endian binary."""
         code = _DTYPE_OF.get(type_name.lower())
         if code is None:
-            raise self.fail(f"{what} has data type {type_name!r}, which tgsis does not read")
+            raise self.fail(f"{what} has data type {quoted(type_name)}, which tgsis does not read")
         if code == "bit":
             raise self.fail(f"{what} is a bit array, which tgsis does not read",
                             hint="store it as unsigned_char (0/1)")
@@ -395,7 +404,7 @@ class _Reader:
             raise self.fail("the file ends after its first line")
         mode = (self.line() or "").strip().upper()
         if mode not in ("ASCII", "BINARY"):
-            raise self.fail(f"the third line must be ASCII or BINARY, not {mode!r}")
+            raise self.fail(f"the third line must be ASCII or BINARY, not {quoted(mode)}")
         self.binary = mode == "BINARY"
         return version
 
@@ -404,7 +413,7 @@ class _Reader:
         modern = version.startswith("5")
         words = (self.line() or "").split()
         if len(words) != 2 or words[0].upper() != "DATASET":
-            raise self.fail(f"expected 'DATASET type', got {' '.join(words)!r}")
+            raise self.fail(f"expected 'DATASET type', got {quoted(' '.join(words))}")
         result = _Dataset(kind=words[1].upper())
         if result.kind not in ("POLYDATA", "UNSTRUCTURED_GRID"):
             raise self.fail(f"DATASET {result.kind} is not read by tgsis: it reads POLYDATA and UNSTRUCTURED_GRID",
@@ -412,9 +421,13 @@ class _Reader:
                                  "mesh.cast_to_unstructured_grid().save('x.vtk'))")
         attributes: dict[str, npt.NDArray[Any]] | None = None
         count = 0
+        empty_data: tuple[str, int] | None = None  # a POINT_DATA/CELL_DATA line no array has followed yet
         while (text := self.line()) is not None:
             words = text.split()
             keyword = words[0].upper()
+            result.lines[_CELL_SECTIONS.get(keyword, keyword)] = self.line_number
+            if keyword in _ATTRIBUTE_KEYWORDS and keyword != "METADATA":
+                empty_data = None
             if keyword == "FIELD" and attributes is None:
                 self._field(words, result.fields, None, keep_strings=True)
             elif keyword == "POINTS":
@@ -426,6 +439,9 @@ class _Reader:
             elif keyword == "CELL_TYPES":
                 result.cell_types = self.values("int", self._int(words, 1, "CELL_TYPES"), "CELL_TYPES").astype(np.int64)
             elif keyword in ("POINT_DATA", "CELL_DATA"):
+                if empty_data is not None:
+                    raise self._no_arrays(*empty_data)
+                empty_data = (keyword, self.line_number)
                 count = self._int(words, 1, keyword)
                 attributes = result.point_data if keyword == "POINT_DATA" else result.cell_data
             elif keyword == "METADATA":
@@ -433,14 +449,25 @@ class _Reader:
             elif keyword in _ATTRIBUTE_KEYWORDS and attributes is not None:
                 self._attribute(words, attributes, count)
             else:
-                raise self.fail(f"unexpected section {words[0]!r} in a legacy VTK {result.kind} file")
+                raise self.fail(f"unexpected section {quoted(words[0])} in a legacy VTK {result.kind} file")
+        # a legacy VTK file has no end mark: a file cut between two sections is found by what it lacks
+        if empty_data is not None:
+            raise self._no_arrays(*empty_data)
+        if result.points is None:
+            raise self.fail("the file has no POINTS section (is it cut short?)")
+        if result.kind == "UNSTRUCTURED_GRID" and len(result.points) and "cells" not in result.cells:
+            raise self.fail(f"the file has {len(result.points)} POINTS but no CELLS section (is it cut short?)")
         return result
+
+    def _no_arrays(self, keyword: str, line: int) -> FileFormatError:
+        return FileFormatError(f"{keyword} is followed by no data array (is the file cut short?)", path=self.path,
+                               line=line)
 
     def _int(self, words: list[str], index: int, what: str) -> int:
         try:
             value = int(words[index])
         except (IndexError, ValueError):
-            raise self.fail(f"{what} needs a count, got {' '.join(words)!r}") from None
+            raise self.fail(f"{what} needs a count, got {quoted(' '.join(words))}") from None
         if value < 0:
             raise self.fail(f"{what} count is negative")
         return value
@@ -454,7 +481,7 @@ class _Reader:
             for expected, n in (("OFFSETS", first), ("CONNECTIVITY", second)):
                 head = (self.line() or "").split()
                 if len(head) != 2 or head[0].upper() != expected:
-                    raise self.fail(f"{what}: expected '{expected} type', got {' '.join(head)!r}")
+                    raise self.fail(f"{what}: expected '{expected} type', got {quoted(' '.join(head))}")
                 arrays[expected] = self.values(head[1], n, f"{what} {expected}").astype(np.int64)
             offsets, connectivity = arrays["OFFSETS"], arrays["CONNECTIVITY"]
             if len(offsets) == 0:
@@ -531,7 +558,7 @@ class _Reader:
                 self._skip_metadata()
                 head = (self.line() or "").split()
             if len(head) != 4:
-                raise self.fail(f"a FIELD array needs 'name components tuples type', got {' '.join(head)!r}")
+                raise self.fail(f"a FIELD array needs 'name components tuples type', got {quoted(' '.join(head))}")
             name = unquote_to_bytes(head[0]).decode("utf-8", "replace")
             components, tuples = self._int(head, 1, name), self._int(head, 2, name)
             if head[3].lower() in ("string", "utf8_string"):
