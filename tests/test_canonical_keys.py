@@ -55,3 +55,176 @@ def test_a_date_key_edited_under_sql_dmy_is_the_locked_object_and_survives_the_m
     rows = conn.execute("SELECT d::text, v FROM tgsis.rows_at(NULL::days, 'DEFAULT') ORDER BY d").fetchall()
     conn.rollback()
     assert rows == [("2024-01-02", 1), ("2024-02-01", 20)]
+
+
+# ---- the canonical text of each key type, under every setting --------------------------------------------
+
+DATESTYLES = [f"{style}, {order}" for style in ("ISO", "SQL", "Postgres", "German") for order in ("MDY", "DMY", "YMD")]
+TIMEZONES = ["UTC", "America/Los_Angeles", "+14", "Asia/Kathmandu"]
+FLOAT_DIGITS = ["-15", "0", "1", "3"]
+INTERVALSTYLES = ["postgres", "postgres_verbose", "sql_standard", "iso_8601"]
+
+# type -> (literal, its canonical text); literals are ISO or plain, which every setting reads alike
+CANONICAL: dict[str, list[tuple[str, str]]] = {
+    "date": [("2024-01-02", "2024-01-02"), ("0044-03-15 BC", "0044-03-15 BC"), ("10000-12-31", "10000-12-31"),
+             ("infinity", "infinity"), ("-infinity", "-infinity")],
+    "timestamp": [("2024-01-02 03:04:05.25", "2024-01-02 03:04:05.25"), ("2024-01-02", "2024-01-02 00:00:00"),
+                  ("2024-01-02 03:04:05.000001", "2024-01-02 03:04:05.000001"),
+                  ("0044-03-15 12:00 BC", "0044-03-15 12:00:00 BC"), ("infinity", "infinity")],
+    "timestamptz": [("2024-01-02 03:04:05.123456+05:45", "2024-01-01 21:19:05.123456+00"),
+                    ("2024-07-01 00:00:00-07", "2024-07-01 07:00:00+00"), ("2024-01-02 00:00:00+00", "2024-01-02 00:00:00+00"),
+                    ("0044-03-15 12:00+00 BC", "0044-03-15 12:00:00+00 BC"), ("-infinity", "-infinity")],
+    "float8": [("0.1", "0.1"), ("-0", "0"), ("0", "0"), ("1e300", "1e+300"), ("0.30000000000000004", "0.30000000000000004"),
+               ("NaN", "NaN"), ("-Infinity", "-Infinity"), ("123456789.125", "123456789.125")],
+    "float4": [("0.1", "0.1"), ("-0", "0"), ("3.4028235e38", "3.4028235e+38"), ("16777217", "1.6777216e+07")],
+    "numeric": [("1.0", "1"), ("1.00", "1"), ("123.4500", "123.45"), ("-0.000", "0"), ("NaN", "NaN"), ("1e-20", "0.00000000000000000001")],
+    "interval": [("1 mon", "30 days"), ("30 days", "30 days"), ("720 hours", "30 days"), ("-1 day +2 hours", "-22:00:00"),
+                 ("25 hours", "1 day 01:00:00"), ("1 day 1 hour", "1 day 01:00:00"), ("-3 days -05:00:00", "-3 days -05:00:00"),
+                 ("-3 days +05:00:00", "-2 days -19:00:00"), ("1.5 seconds", "00:00:01.5"), ("1 year", "360 days")],
+    "bytea": [("\\x00ff", "\\x00ff"), ("", "\\x")],
+    "time": [("12:34:56.5", "12:34:56.5"), ("00:00", "00:00:00")],
+    "timetz": [("12:34:56+05:45", "12:34:56+05:45"), ("23:00-07", "23:00:00-07")],
+    "text": [("abc", "abc"), ("2024-01-02", "2024-01-02")],
+    "uuid": [("A0EEBC99-9C0B-4EF8-BB6D-6BB9BD380A11", "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11")],
+    "bigint": [("-42", "-42")],
+    "character(4)": [("ab", "ab")],
+}
+
+
+def _settings(i: int) -> dict[str, str]:
+    """The i-th combination: every DateStyle with every TimeZone, float digits and IntervalStyle in turn."""
+    return {"DateStyle": DATESTYLES[i % 12], "TimeZone": TIMEZONES[(i // 12) % 4], "extra_float_digits": FLOAT_DIGITS[i % 4],
+            "IntervalStyle": INTERVALSTYLES[(i // 3) % 4], "bytea_output": ("hex", "escape")[i % 2]}
+
+
+def test_every_key_type_has_one_text_under_every_setting_and_reads_back(conn: Conn) -> None:
+    pairs = [(t, lit, canon) for t, values in CANONICAL.items() for lit, canon in values]
+    for i in range(48):   # 12 DateStyles x 4 TimeZones, with the other settings in turn
+        for name, value in _settings(i).items():
+            conn.execute("SELECT pg_catalog.set_config(%s, %s, false)", (name, value))
+        for t, lit, canon in pairs:
+            expr = f"tgsis.object_key_sql({t!r}::regtype, 'x.k')"
+            sql = conn.execute(f"SELECT {expr}").fetchone()[0]  # type: ignore[index]
+            text, back = conn.execute(
+                f"SELECT {sql}, ({sql})::{t} IS NOT DISTINCT FROM x.k"
+                f"  FROM (SELECT %s::{t} AS k) AS x".replace("{sql}", sql), (lit,)).fetchone()  # type: ignore[misc]
+            assert (text, back) == (canon, True), (t, lit, _settings(i))
+            # the text reads back as the same value (the storage's lookups cast it back to the key's type)
+            assert conn.execute(f"SELECT %s::{t} = %s::{t}", (canon, lit)).fetchone()[0] in (True, None), (t, lit)
+    conn.rollback()
+
+
+@pytest.mark.parametrize("type_", ["integer[]", "int4range", "jsonb", "money", "tsvector"])
+def test_a_key_type_without_a_canonical_text_is_refused_by_name(conn: Conn, type_: str) -> None:
+    conn.execute(f"CREATE TABLE odd (k {type_} PRIMARY KEY, v integer)")
+    conn.commit()
+    with pytest.raises(tgsis.InvalidInputError, match=rf"object key column k of .*odd is of type {type_.replace('[', '.').replace(']', '.')}, "
+                                                      r"which has no text independent of the session's settings"):
+        tgsis.enable_versioning(conn, "odd", "k", "odd")
+    conn.rollback()
+    assert conn.execute("SELECT to_regclass('odd_ver') IS NULL AND to_regclass('odd') IS NOT NULL").fetchone()[0]
+    conn.rollback()
+
+
+def test_a_key_column_of_a_nondeterministic_collation_is_refused(conn: Conn) -> None:
+    try:
+        conn.execute("CREATE COLLATION nocase (provider = icu, locale = 'und-u-ks-level2', deterministic = false)")
+    except psycopg.errors.FeatureNotSupported:
+        pytest.skip("this server is built without ICU: no nondeterministic collation to key by")
+    conn.execute("CREATE TABLE names (k text COLLATE nocase PRIMARY KEY, v integer)")
+    conn.commit()
+    with pytest.raises(tgsis.InvalidInputError, match="nondeterministic collation nocase"):
+        tgsis.enable_versioning(conn, "names", "k", "name")
+    conn.rollback()
+
+
+# ---- two sessions of different settings on the same objects ---------------------------------------------
+
+A = {"DateStyle": "ISO, MDY", "TimeZone": "UTC", "extra_float_digits": "1", "IntervalStyle": "postgres", "bytea_output": "hex"}
+B = {"DateStyle": "SQL, DMY", "TimeZone": "Asia/Kathmandu", "extra_float_digits": "-15", "IntervalStyle": "sql_standard",
+     "bytea_output": "escape"}
+C = {"DateStyle": "German, YMD", "TimeZone": "America/Los_Angeles", "extra_float_digits": "0", "IntervalStyle": "iso_8601",
+     "bytea_output": "hex"}
+
+# type -> three keys (ISO or plain literals) whose text differs with the session's settings where the type's does
+KEYS: dict[str, tuple[str, str, str]] = {
+    "date": ("2024-01-02", "2024-02-01", "2024-03-04"),
+    "timestamptz": ("2024-01-02 03:04:05.5+00", "2024-02-01 00:00:00+05:45", "2024-07-01 12:00:00-07"),
+    "timestamp": ("2024-01-02 03:04:05", "2024-02-01 00:00:00.125", "2024-03-04 23:59:59"),
+    "float8": ("0.1", "0.30000000000000004", "1e300"),
+    "float4": ("0.1", "3.4028235e38", "-2.5"),
+    "numeric": ("1.50", "2", "0.000001"),
+    "interval": ("1 mon", "P1DT2H", "-1 days -00:00:01"),
+    "time": ("12:34:56.5", "00:00:01", "23:59:59"),
+    "timetz": ("12:34:56+05:45", "00:00:01-07", "23:59:59+00"),
+    "text": ("a", "b b", "2024-01-02"),
+    "uuid": ("a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11", "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a12",
+             "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a13"),
+    "bytea": ("\\x00", "\\x0102", "\\xff"),
+}
+
+
+def _key_as_shown(conn: Conn, version: str, n: int) -> str:
+    """Object n's key as the session shows it (its own DateStyle, TimeZone, ...): what a user copies."""
+    with tgsis.in_version(conn, version, local=True):
+        text = conn.execute("SELECT k::text FROM t WHERE n = %s", (n,)).fetchone()[0]  # type: ignore[index]
+    conn.rollback()
+    return str(text)
+
+
+def _canonical(conn: Conn, type_: str, literal: str) -> str:
+    sql = conn.execute("SELECT tgsis.object_key_sql(%s::regtype, 'x.k')", (type_,)).fetchone()[0]  # type: ignore[index]
+    return str(conn.execute(f"SELECT {sql} FROM (SELECT %s::{type_} AS k) AS x", (literal,)).fetchone()[0])  # type: ignore[index]
+
+
+@pytest.mark.parametrize("type_", sorted(KEYS))
+def test_sessions_of_other_settings_see_one_object(conn: Conn, db_dsn: str, type_: str) -> None:
+    """A locks in v1, B (other settings) is stopped by the lock in v2, edits the others set-based; A's change of
+    object 2 in DEFAULT conflicts with B's; A resolves it by the key A sees; C merges v2: every edit is there."""
+    k1, k2, k3 = KEYS[type_]
+    conn.execute(f"CREATE TABLE t (k {type_} PRIMARY KEY, n integer NOT NULL, v integer NOT NULL)")
+    conn.execute("INSERT INTO t VALUES (%s, 1, 0), (%s, 2, 0), (%s, 3, 0)", (k1, k2, k3))
+    conn.commit()
+    tgsis.enable_versioning(conn, "t", "k", "thing")
+    tgsis.create_version(conn, "v1")
+    tgsis.create_version(conn, "v2")
+    canon = {n: _canonical(conn, type_, k) for n, k in ((1, k1), (2, k2), (3, k3))}
+    conn.rollback()
+    a, b, c = (_session(db_dsn, **s) for s in (A, B, C))
+    try:
+        assert tgsis.lock_objects(a, "v1", "thing", [_key_as_shown(a, "v1", 1)]) == 1
+        assert [lk.objectkey for lk in tgsis.object_locks(conn)] == [canon[1]]
+        conn.rollback()
+        # B's write of object 1, by the key as B shows it, meets A's lock: row path and set-based path
+        shown = _key_as_shown(b, "v2", 1)
+        for statement in (f"UPDATE t SET v = 10 WHERE k = %s::{type_}", "UPDATE t SET v = 10"):
+            with pytest.raises(tgsis.ObjectLockedError, match=f"thing.*locked by another version"):
+                _write(b, "v2", statement, (shown,) if "%s" in statement else None)
+            b.rollback()
+        with pytest.raises(tgsis.ObjectLockedError):
+            tgsis.lock_objects(b, "v2", "thing", [shown])
+        b.rollback()
+        # B edits objects 2 and 3 in one statement (its first row the row path, the other one queued)
+        _write(b, "v2", "UPDATE t SET v = v + 100 WHERE n <> 1")
+        # A changes object 2 in DEFAULT: a conflict with B's change
+        _write(a, "DEFAULT", "UPDATE t SET v = v + 1000 WHERE n = 2")
+        conflicts = tgsis.find_conflicts(c, "v2")
+        assert [(x.objectclass, x.objectkey) for x in conflicts] == [("thing", canon[2])]
+        # (B's own text of a float key is rounded: extra_float_digits -15 shows another number)
+        rows = tgsis.conflict_rows(b, "v2", "thing", _key_as_shown(a if type_.startswith("float") else b, "v2", 2))
+        assert sorted(r[1] for r in rows) == ["child", "parent"]
+        # the diff of v2 against DEFAULT names objects 2 and 3 by their canonical keys
+        assert sorted(d.objectkey for d in tgsis.diff_versions(c, "DEFAULT", "v2")) == sorted([canon[2], canon[3]])
+        # A resolves it by the key as A shows it; C (other settings again) merges
+        assert tgsis.resolve_conflict(a, "v2", "thing", _key_as_shown(a, "v2", 2), "child").objectkey == canon[2]
+        tgsis.merge_version(c, "v2")
+        c.commit()
+    finally:
+        for s in (a, b, c):
+            s.close()
+    rows = conn.execute("SELECT n, v FROM tgsis.rows_at(NULL::t, 'DEFAULT') ORDER BY n").fetchall()
+    assert rows == [(1, 0), (2, 100), (3, 100)]
+    # every note and lock names the objects by their canonical text
+    noted = {r[0] for r in conn.execute("SELECT objectkey FROM tgsis.revision_objects WHERE tablename = 't'")}
+    assert noted and noted <= set(canon.values())
+    conn.rollback()
