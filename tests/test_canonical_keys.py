@@ -10,13 +10,16 @@ settings working on one object must see one object.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 import psycopg
 import pytest
 
 import tgsis
+from tests.test_upgrade import OLD, MakeDb, _frozen, _upgrade_route
 from tgsis.errors import reraise
+from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
 
@@ -229,3 +232,52 @@ def test_sessions_of_other_settings_see_one_object(conn: Conn, db_dsn: str, type
     noted = {r[0] for r in conn.execute("SELECT objectkey FROM tgsis.revision_objects WHERE tablename = 't'")}
     assert noted and noted <= set(canon.values())
     conn.rollback()
+
+
+# ---- keys stored before: made canonical by the upgrade -----------------------------------------------------
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """0.1.0 stored a lock and a conflict of a timestamptz-keyed table in Kathmandu time; after the upgrade a
+    session in UTC is stopped by the lock, finds the conflict and merges the edit."""
+    _upgrade_route(method, pg)
+    dsn = make_database()
+    with psycopg.connect(dsn) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute("SET TimeZone = 'Asia/Kathmandu'")
+        conn.execute("CREATE TABLE t (k timestamptz PRIMARY KEY, v integer NOT NULL)")
+        conn.execute("INSERT INTO t VALUES ('2024-01-02 03:04:05+00', 0), ('2024-02-01 00:00:00+00', 0)")
+        conn.execute("SELECT tgsis.enable_versioning('t', 'k', 'thing')")
+        conn.execute("SELECT tgsis.create_version('v1'), tgsis.create_version('v2')")
+        conn.execute("SELECT tgsis.lock_objects('v1', 'thing', ARRAY['2024-01-02 08:49:05+05:45'])")
+        conn.execute("SELECT tgsis.goto_version('v2', true)")
+        conn.execute("UPDATE t SET v = 20 WHERE k = '2024-02-01 00:00:00+00'")
+        conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+        conn.execute("UPDATE t SET v = 10 WHERE k = '2024-02-01 00:00:00+00'")
+        conn.execute("SELECT tgsis.find_conflicts('v2')")
+        conn.commit()
+        assert conn.execute("SELECT objectkey FROM tgsis.object_locks UNION ALL SELECT objectkey FROM tgsis.conflicts"
+                            ).fetchall() == [("2024-01-02 08:49:05+05:45",), ("2024-02-01 05:45:00+05:45",)]
+    with psycopg.connect(dsn) as conn:   # the DBA's session: the server's TimeZone
+        if method == "extension":
+            conn.execute("ALTER EXTENSION tgsis UPDATE")
+        else:
+            assert tgsis.install(conn).action == "upgraded"
+        conn.commit()
+        assert conn.execute("SELECT objectkey FROM tgsis.object_locks UNION ALL SELECT objectkey FROM tgsis.conflicts"
+                            ).fetchall() == [("2024-01-02 03:04:05+00",), ("2024-02-01 00:00:00+00",)]
+        assert conn.execute("SELECT DISTINCT objectkey FROM tgsis.revision_objects WHERE tablename = 't'"
+                            ).fetchall() == [("2024-02-01 00:00:00+00",)]
+    utc = _session(dsn, TimeZone="UTC", DateStyle="SQL, DMY")
+    try:
+        with pytest.raises(tgsis.ObjectLockedError, match=re.escape("2024-01-02 03:04:05+00 (locked by version v1")):
+            _write(utc, "v2", "UPDATE t SET v = 30 WHERE k = '2024-01-02 03:04:05+00'")
+        utc.rollback()
+        assert [(c.objectkey, c.solution) for c in tgsis.find_conflicts(utc, "v2")] == [("2024-02-01 00:00:00+00", "unsolved")]
+        tgsis.resolve_conflict(utc, "v2", "thing", "01/02/2024 00:00:00+00", "child")   # DMY: 1 February
+        tgsis.merge_version(utc, "v2")
+        assert utc.execute("SELECT v FROM tgsis.rows_at(NULL::t, 'DEFAULT') ORDER BY k").fetchall() == [(0,), (20,)]
+    finally:
+        utc.close()
