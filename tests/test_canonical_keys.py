@@ -167,6 +167,23 @@ KEYS: dict[str, tuple[str, str, str]] = {
     "bytea": ("\\x00", "\\x0102", "\\xff"),
 }
 
+# ... and their canonical text
+CANON_KEYS: dict[str, tuple[str, str, str]] = {
+    "date": ("2024-01-02", "2024-02-01", "2024-03-04"),
+    "timestamptz": ("2024-01-02 03:04:05.5+00", "2024-01-31 18:15:00+00", "2024-07-01 19:00:00+00"),
+    "timestamp": ("2024-01-02 03:04:05", "2024-02-01 00:00:00.125", "2024-03-04 23:59:59"),
+    "float8": ("0.1", "0.30000000000000004", "1e+300"),
+    "float4": ("0.1", "3.4028235e+38", "-2.5"),
+    "numeric": ("1.5", "2", "0.000001"),
+    "interval": ("30 days", "1 day 02:00:00", "-1 days -00:00:01"),
+    "time": ("12:34:56.5", "00:00:01", "23:59:59"),
+    "timetz": ("12:34:56+05:45", "00:00:01-07", "23:59:59+00"),
+    "text": ("a", "b b", "2024-01-02"),
+    "uuid": ("a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11", "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a12",
+             "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a13"),
+    "bytea": ("\\x00", "\\x0102", "\\xff"),
+}
+
 
 def _key_as_shown(conn: Conn, version: str, n: int) -> str:
     """Object n's key as the session shows it (its own DateStyle, TimeZone, ...): what a user copies."""
@@ -192,8 +209,7 @@ def test_sessions_of_other_settings_see_one_object(conn: Conn, db_dsn: str, type
     tgsis.enable_versioning(conn, "t", "k", "thing")
     tgsis.create_version(conn, "v1")
     tgsis.create_version(conn, "v2")
-    canon = {n: _canonical(conn, type_, k) for n, k in ((1, k1), (2, k2), (3, k3))}
-    conn.rollback()
+    canon = dict(zip((1, 2, 3), CANON_KEYS[type_], strict=True))
     a, b, c = (_session(db_dsn, **s) for s in (A, B, C))
     try:
         assert tgsis.lock_objects(a, "v1", "thing", [_key_as_shown(a, "v1", 1)]) == 1
@@ -281,3 +297,64 @@ def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
         assert utc.execute("SELECT v FROM tgsis.rows_at(NULL::t, 'DEFAULT') ORDER BY k").fetchall() == [(0,), (20,)]
     finally:
         utc.close()
+
+
+def test_keys_passed_from_python_name_the_object_whatever_the_settings(conn: Conn, db_dsn: str) -> None:
+    """The client sends dates, times, Decimal, floats, timedelta and bytes as text every setting reads alike."""
+    import datetime as dt
+    import decimal
+
+    tables = {
+        "interval": [dt.timedelta(days=-1, seconds=3600), dt.timedelta(days=30), dt.timedelta(microseconds=5)],
+        "bytea": [b"\x00\xff", b"", b"abc"],
+        "timestamptz": [dt.datetime(2024, 1, 2, 3, 4, 5, 250000, tzinfo=dt.timezone(dt.timedelta(hours=5, minutes=45)))],
+        "date": [dt.date(2024, 1, 2)],
+        "numeric": [decimal.Decimal("1.50"), decimal.Decimal("1E+2")],
+        "float8": [0.1, 1e300],
+        "time": [dt.time(12, 34, 56, 500000)],
+    }
+    for type_, keys in tables.items():
+        name = f"k_{type_}"
+        conn.execute(f"CREATE TABLE {name} (k {type_} PRIMARY KEY)")
+        for k in keys:
+            conn.execute(f"INSERT INTO {name} VALUES (%s)", (k,))
+        conn.commit()
+        tgsis.enable_versioning(conn, name, "k", name)
+    tgsis.create_version(conn, "v1")
+    b = _session(db_dsn, **B)
+    try:
+        for type_, keys in tables.items():
+            name = f"k_{type_}"
+            assert tgsis.lock_objects(b, "v1", name, keys) == len(keys), type_   # every key names an object of v1
+            canon = {_canonical(conn, type_, str(r[0])) for r in conn.execute(f"SELECT k::text FROM {name}_ver")}
+            conn.rollback()
+            locked = {lk.objectkey for lk in tgsis.object_locks(conn) if lk.objectclass == name}
+            conn.rollback()
+            assert locked == canon, type_
+            assert tgsis.unlock_objects(b, "v1", name, keys) == len(keys), type_
+    finally:
+        b.close()
+
+
+def test_rows_written_into_storage_under_sql_dmy_are_noted_by_their_canonical_key(conn: Conn, db_dsn: str) -> None:
+    """A direct insert into storage (as the client's uploads write) is noted by the storage's statement trigger."""
+    conn.execute("CREATE TABLE days (d date PRIMARY KEY, v integer NOT NULL)")
+    conn.commit()
+    tgsis.enable_versioning(conn, "days", "d", "day")
+    tgsis.create_version(conn, "v1")
+    dmy = _session(db_dsn, DateStyle="SQL, DMY")
+    try:
+        with tgsis.in_version(dmy, "v1", local=True):
+            dmy.execute("INSERT INTO days_ver (d, v, revision) "
+                        "SELECT '03/01/2024', 1, revision FROM tgsis.write_revision()")   # DMY: 3 January
+            dmy.execute("INSERT INTO days_ver (d, v, revision) "
+                        "SELECT d, 2, revision FROM tgsis.write_revision(), (VALUES (DATE '2024-05-06'), (DATE '2024-06-05')) AS x(d)")
+        dmy.commit()
+        tgsis.merge_version(dmy, "v1")
+    finally:
+        dmy.close()
+    assert conn.execute("SELECT DISTINCT objectkey FROM tgsis.revision_objects ORDER BY 1").fetchall() == [
+        ("2024-01-03",), ("2024-05-06",), ("2024-06-05",)]
+    assert conn.execute("SELECT d::text, v FROM tgsis.rows_at(NULL::days, 'DEFAULT') ORDER BY d").fetchall() == [
+        ("2024-01-03", 1), ("2024-05-06", 2), ("2024-06-05", 2)]
+    conn.rollback()

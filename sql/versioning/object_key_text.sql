@@ -23,8 +23,8 @@ PARALLEL SAFE
 AS $$
     SELECT CASE WHEN NOT pg_catalog.isfinite(p_key) THEN pg_catalog.textin(pg_catalog.timestamp_out(p_key))
                 ELSE pg_catalog.to_char(p_key, 'YYYY-MM-DD HH24:MI:SS')
-                     || pg_catalog.rtrim(pg_catalog.rtrim(pg_catalog.to_char(p_key, '.US'), '0'), '.')
-                     || CASE WHEN pg_catalog.to_char(p_key, 'BC') = 'BC' THEN ' BC' ELSE '' END END
+                     OPERATOR(pg_catalog.||) pg_catalog.rtrim(pg_catalog.rtrim(pg_catalog.to_char(p_key, '.US'), '0'), '.')
+                     OPERATOR(pg_catalog.||) CASE WHEN pg_catalog.to_char(p_key, 'BC') OPERATOR(pg_catalog.=) 'BC' THEN ' BC' ELSE '' END END
 $$;
 
 CREATE FUNCTION tgsis.object_key_text(p_key timestamptz)
@@ -35,9 +35,10 @@ PARALLEL SAFE
 AS $$
     SELECT CASE WHEN NOT pg_catalog.isfinite(p_key) THEN pg_catalog.textin(pg_catalog.timestamptz_out(p_key))
                 ELSE pg_catalog.to_char(pg_catalog.timezone('UTC', p_key), 'YYYY-MM-DD HH24:MI:SS')
-                     || pg_catalog.rtrim(pg_catalog.rtrim(pg_catalog.to_char(pg_catalog.timezone('UTC', p_key), '.US'), '0'), '.')
-                     || '+00'
-                     || CASE WHEN pg_catalog.to_char(pg_catalog.timezone('UTC', p_key), 'BC') = 'BC' THEN ' BC' ELSE '' END END
+                     OPERATOR(pg_catalog.||) pg_catalog.rtrim(pg_catalog.rtrim(pg_catalog.to_char(pg_catalog.timezone('UTC', p_key), '.US'), '0'), '.')
+                     OPERATOR(pg_catalog.||) '+00'
+                     OPERATOR(pg_catalog.||) CASE WHEN pg_catalog.to_char(pg_catalog.timezone('UTC', p_key), 'BC') OPERATOR(pg_catalog.=) 'BC'
+                                             THEN ' BC' ELSE '' END END
 $$;
 
 CREATE FUNCTION tgsis.object_key_text(p_key date)
@@ -48,7 +49,8 @@ PARALLEL SAFE
 AS $$
     SELECT CASE WHEN NOT pg_catalog.isfinite(p_key) THEN pg_catalog.textin(pg_catalog.date_out(p_key))
                 ELSE pg_catalog.to_char(p_key::timestamp, 'YYYY-MM-DD')
-                     || CASE WHEN pg_catalog.to_char(p_key::timestamp, 'BC') = 'BC' THEN ' BC' ELSE '' END END
+                     OPERATOR(pg_catalog.||) CASE WHEN pg_catalog.to_char(p_key::timestamp, 'BC') OPERATOR(pg_catalog.=) 'BC'
+                                             THEN ' BC' ELSE '' END END
 $$;
 
 CREATE FUNCTION tgsis.object_key_text(p_key float8)
@@ -58,7 +60,7 @@ IMMUTABLE
 PARALLEL SAFE
 SET extra_float_digits = 1
 AS $$
-    SELECT CASE WHEN p_key OPERATOR(pg_catalog.=) 0::float8 THEN '0' ELSE pg_catalog.textin(pg_catalog.float8out(p_key)) END
+    SELECT CASE WHEN p_key OPERATOR(pg_catalog.=) 0::pg_catalog.float8 THEN '0' ELSE pg_catalog.textin(pg_catalog.float8out(p_key)) END
 $$;
 
 CREATE FUNCTION tgsis.object_key_text(p_key float4)
@@ -68,7 +70,7 @@ IMMUTABLE
 PARALLEL SAFE
 SET extra_float_digits = 1
 AS $$
-    SELECT CASE WHEN p_key OPERATOR(pg_catalog.=) 0::float4 THEN '0' ELSE pg_catalog.textin(pg_catalog.float4out(p_key)) END
+    SELECT CASE WHEN p_key OPERATOR(pg_catalog.=) 0::pg_catalog.float4 THEN '0' ELSE pg_catalog.textin(pg_catalog.float4out(p_key)) END
 $$;
 
 CREATE FUNCTION tgsis.object_key_text(p_key numeric)
