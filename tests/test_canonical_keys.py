@@ -358,3 +358,28 @@ def test_rows_written_into_storage_under_sql_dmy_are_noted_by_their_canonical_ke
     assert conn.execute("SELECT d::text, v FROM tgsis.rows_at(NULL::days, 'DEFAULT') ORDER BY d").fetchall() == [
         ("2024-01-03", 1), ("2024-05-06", 2), ("2024-06-05", 2)]
     conn.rollback()
+
+
+def test_a_fingerprint_is_the_same_in_sessions_of_other_settings(conn: Conn, db_dsn: str) -> None:
+    """Check-out in one session, check-in in another (PGTZ, PGDATESTYLE of another shell): one fingerprint."""
+    import datetime as dt
+
+    import numpy as np
+
+    from tgsis.db import features as F
+
+    fc = F.create_feature_class(conn, "beds", "SURFACE", feature_properties={"surveyed": "timestamptz", "dated": "date"},
+                                cell_properties={"porosity": "float8"})
+    mesh = tgsis.Surface(np.array([[0, 0, 0.1], [1, 0, 0.30000000000000004], [0, 1, 1e-300]]), np.array([[0, 1, 2]]),
+                         vertex_properties={"porosity": [0.1, 0.2, 0.30000000000000004]})
+    fid = F.insert_feature(conn, fc, mesh, {"surveyed": dt.datetime(2024, 1, 2, 3, 4, 5, tzinfo=dt.timezone.utc),
+                                            "dated": dt.date(2024, 1, 2)})
+    conn.commit()
+    prints = set()
+    for settings in (A, B, C):
+        s = _session(db_dsn, **settings)
+        try:
+            prints.add(s.execute("SELECT tgsis.object_fingerprint(%s)", (fid,)).fetchone()[0])  # type: ignore[index]
+        finally:
+            s.close()
+    assert len(prints) == 1
