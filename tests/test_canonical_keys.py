@@ -383,3 +383,21 @@ def test_a_fingerprint_is_the_same_in_sessions_of_other_settings(conn: Conn, db_
         finally:
             s.close()
     assert len(prints) == 1
+
+
+def test_a_key_two_tables_of_a_class_read_differently_is_refused(conn: Conn) -> None:
+    """A class keyed by a date in one table and by text in another: '2024-1-2' would be two objects."""
+    conn.execute("CREATE TABLE a (k date PRIMARY KEY)")
+    conn.execute("CREATE TABLE b (k text PRIMARY KEY)")
+    conn.execute("INSERT INTO a VALUES ('2024-01-02')")
+    conn.execute("INSERT INTO b VALUES ('2024-01-02')")
+    conn.commit()
+    tgsis.enable_versioning(conn, "a", "k", "mix")
+    tgsis.enable_versioning(conn, "b", "k", "mix")
+    with pytest.raises(tgsis.InvalidInputError, match="object key '2024-1-2' of class 'mix' names different objects"):
+        tgsis.lock_objects(conn, "DEFAULT", "mix", ["2024-1-2"])
+    conn.rollback()
+    assert tgsis.lock_objects(conn, "DEFAULT", "mix", ["2024-01-02"]) == 1   # read alike by both
+    with pytest.raises(tgsis.InvalidInputError, match="object key 'abc' of class 'mix' is not a date"):
+        tgsis.lock_objects(conn, "DEFAULT", "mix", ["abc"])
+    conn.rollback()
