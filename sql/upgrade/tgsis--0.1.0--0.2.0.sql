@@ -158,7 +158,7 @@ $upgrade$;
 
 -- ---- issue36-keys: object keys stored as text under other sessions' settings, made canonical
 -- Tables keyed by a type whose text depends on the session (date, timestamp(tz), float, numeric,
--- interval, bytea, reg*: tgsis.object_key_sql) get their write triggers generated anew (they name
+-- interval, bytea, reg*: tgsis.object_key_kind) get their write triggers generated anew (they name
 -- objects by tgsis.object_key_text now), and the keys their notes, locks and conflicts hold are read
 -- back in the key's type with this session's settings and written as canonical text: ISO text
 -- (what the default DateStyle wrote) reads the same under any setting; text another DateStyle wrote
@@ -181,8 +181,15 @@ BEGIN
         v_type := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
                     WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass
                       AND a.attname = v_t.objectkeyfield AND NOT a.attisdropped);
-        -- keys whose cast to text depends on no setting, or of types refused from now on (check_key_type names them)
-        CONTINUE WHEN tgsis.object_key_sql(v_type, 'k') IS NULL OR tgsis.object_key_sql(v_type, 'k') = 'k::text';
+        -- keys of a type enable_versioning refuses from now on: named as before, and said so
+        IF tgsis.object_key_kind(v_type) IS NULL THEN
+            RAISE WARNING 'the object key column % of %.% is of type %, which has no text independent of the session''s settings',
+                    quote_ident(v_t.objectkeyfield), quote_ident(v_t.schemaname), quote_ident(v_t.tablename), format_type(v_type, NULL)
+                USING DETAIL = 'Its objects are named by the type''s text as before; enable_versioning refuses such keys now.',
+                      HINT = 'disable its versioning and key it by a column of a scalar type (docs/versioning.md, "Object keys")';
+            CONTINUE;
+        END IF;
+        CONTINUE WHEN tgsis.object_key_kind(v_type) = 'cast';   -- text of no setting: nothing to rewrite
         EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its triggers
         EXECUTE format('DROP TABLE IF EXISTS %I.%I', v_t.schemaname, v_t.tablename || '_ver_queue');
         PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,

@@ -139,7 +139,7 @@ BEGIN
                   HINT = 'key the objects by a column of a built-in type (integer, bigint, text, uuid, ...)';
     END IF;
     -- ... and compared as text, one text per key in every session (types without one refused, named)
-    PERFORM tgsis.check_key_type(v_rel, p_objectkeyfield);
+    PERFORM tgsis.check_key_canonical(v_rel, p_objectkeyfield);
 
     -- views and rules reading the table would read every row version afterwards
     SELECT string_agg(DISTINCT r.ev_class::regclass::text, ', ') INTO v_dependent

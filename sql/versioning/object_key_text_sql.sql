@@ -1,7 +1,8 @@
 -- tgsis.object_key_text_sql(table, alias): the SQL expression of the canonical text of a versioned table's object key, for a row alias.
 -- Dynamic SQL on storage (diffs, notes of changed objects, conflicts) names
 -- objects by this text (tgsis.object_key_sql says why the column's cast to
--- text will not do); TG100 for a key column tgsis cannot name canonically.
+-- text will not do); TG100 for a key type not built into PostgreSQL
+-- (tgsis.check_key_type).
 CREATE FUNCTION tgsis.object_key_text_sql(p_t tgsis.versioned_tables, p_alias text)
 RETURNS text
 LANGUAGE plpgsql
