@@ -189,6 +189,14 @@ BEGIN
                       HINT = 'disable its versioning and key it by a column of a scalar type (docs/versioning.md, "Object keys")';
             CONTINUE;
         END IF;
+        IF EXISTS (SELECT FROM pg_catalog.pg_attribute a JOIN pg_catalog.pg_collation c ON c.oid = a.attcollation
+                    WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass
+                      AND a.attname = v_t.objectkeyfield AND NOT c.collisdeterministic) THEN
+            RAISE WARNING 'the object key column % of %.% has a nondeterministic collation', quote_ident(v_t.objectkeyfield),
+                    quote_ident(v_t.schemaname), quote_ident(v_t.tablename)
+                USING DETAIL = 'Keys its equality holds equal are named by different texts; enable_versioning refuses such keys now.',
+                      HINT = 'disable its versioning and give the column a deterministic collation (docs/versioning.md, "Object keys")';
+        END IF;
         CONTINUE WHEN tgsis.object_key_kind(v_type) = 'cast';   -- text of no setting: nothing to rewrite
         EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its triggers
         EXECUTE format('DROP TABLE IF EXISTS %I.%I', v_t.schemaname, v_t.tablename || '_ver_queue');
