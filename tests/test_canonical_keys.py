@@ -118,7 +118,7 @@ def test_every_key_type_has_one_text_under_every_setting_and_reads_back(conn: Co
     conn.rollback()
 
 
-@pytest.mark.parametrize("type_", ["integer[]", "int4range", "jsonb", "money", "tsvector"])
+@pytest.mark.parametrize("type_", ["integer[]", "int4range", "jsonb", "money", "tsvector", "regclass"])
 def test_a_key_type_without_a_canonical_text_is_refused_by_name(conn: Conn, type_: str) -> None:
     conn.execute(f"CREATE TABLE odd (k {type_} PRIMARY KEY, v integer)")
     conn.commit()

@@ -158,7 +158,7 @@ $upgrade$;
 
 -- ---- issue36-keys: object keys stored as text under other sessions' settings, made canonical
 -- Tables keyed by a type whose text depends on the session (date, timestamp(tz), float, numeric,
--- interval, bytea, reg*: tgsis.object_key_kind) get their write triggers generated anew (they name
+-- interval, bytea: tgsis.object_key_kind) get their write triggers generated anew (they name
 -- objects by tgsis.object_key_text now), and the keys their notes, locks and conflicts hold are read
 -- back in the key's type with this session's settings and written as canonical text: ISO text
 -- (what the default DateStyle wrote) reads the same under any setting; text another DateStyle wrote

@@ -1,10 +1,11 @@
 -- tgsis.object_key_kind(type): how an object key of a type becomes canonical text, or NULL when it cannot.
 -- 'cast': the type's cast to text depends on no setting (integers, text,
 -- uuid, time, ...); 'function': tgsis.object_key_text writes it (date,
--- timestamp(tz), floats, numeric, interval, bytea); 'oid': a reg* type,
--- named by its oid; NULL: arrays, ranges, json, money (lc_monetary),
--- tsvector and every other type, whose text may depend on the session or
--- differ for equal values.
+-- timestamp(tz), floats, numeric, interval, bytea); NULL: arrays, ranges,
+-- json, money (lc_monetary), tsvector, the reg* types (their text follows
+-- search_path and renames, and text reads back as a name, never as an oid)
+-- and every other type, whose text may depend on the session or differ for
+-- equal values.
 CREATE FUNCTION tgsis.object_key_kind(p_type oid)
 RETURNS text
 LANGUAGE sql
@@ -20,12 +21,8 @@ AS $$
         WHEN p_type IN (1082, 1114, 1184, 700, 701, 1700, 1186, 17)
             -- date, timestamp, timestamptz, float4, float8, numeric, interval, bytea
             THEN 'function'
-        WHEN p_type IN (2205, 24, 2206, 4096, 4089, 3734, 3769, 2203, 2204, 2202, 4191)
-            -- regclass, regproc, regtype, regrole, regnamespace, regconfig, regdictionary, regoper, regoperator,
-            -- regprocedure, regcollation
-            THEN 'oid'
         END
 $$;
 
 COMMENT ON FUNCTION tgsis.object_key_kind(oid) IS
-    'how an object key of type p_type gets its canonical text: cast (its cast to text), function (tgsis.object_key_text), oid (reg* types), NULL (no canonical text: refused as object key)';
+    'how an object key of type p_type gets its canonical text: cast (its cast to text), function (tgsis.object_key_text), NULL (no canonical text: refused as object key)';

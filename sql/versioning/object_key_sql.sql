@@ -2,9 +2,8 @@
 -- For the code that versioning generates (the views' write triggers, dynamic
 -- SQL on storage): for types whose cast to text depends on no setting it is
 -- the cast itself (the generated code of integer and text keys stays what
--- it was), for the others a call of tgsis.object_key_text, for reg* types
--- the oid (their text follows search_path and renames). Types with no
--- canonical text (arrays, ranges, json, money, ...: tgsis.object_key_kind
+-- it was), for the others a call of tgsis.object_key_text. Types with no
+-- canonical text (arrays, ranges, json, money, reg*, ...: tgsis.object_key_kind
 -- is NULL) are refused as object keys by enable_versioning
 -- (tgsis.check_key_canonical); for a table keyed by one from an older
 -- release the expression is the cast, as it was then. p_expr must be a
@@ -17,7 +16,6 @@ PARALLEL SAFE
 AS $$
     SELECT CASE tgsis.object_key_kind(p_type)
         WHEN 'function' THEN 'tgsis.object_key_text(' || p_expr || ')'
-        WHEN 'oid' THEN p_expr || '::pg_catalog.oid::pg_catalog.text'
         ELSE p_expr || '::text'
         END
 $$;
