@@ -6,10 +6,18 @@
 -- a value shows, whatever the row order. Read through the tables' names,
 -- i.e. through the versioned views when versioning is on: it is the state
 -- the session sees. Check-out keeps it; check-in compares it (no lost update).
+-- Values hashed as text (timestamps, dates, the geometry row) are written
+-- with fixed settings: a check-out in one session and a check-in in another
+-- (another TimeZone, DateStyle or extra_float_digits) compare the same text.
 CREATE FUNCTION tgsis.object_fingerprint(p_geoid bigint)
 RETURNS text
 LANGUAGE plpgsql
 STABLE
+SET DateStyle = 'ISO, YMD'
+SET TimeZone = 'UTC'
+SET IntervalStyle = 'postgres'
+SET extra_float_digits = 1
+SET bytea_output = 'hex'
 AS $$
 DECLARE
     v_geo     record;

@@ -8,10 +8,18 @@
 -- every row counted (a row leaving the object changes the count) and a
 -- changed id changes the seeds of the row's other columns.
 -- Read through the table's name: through the versioned view when versioning is on.
+-- Values hashed as text (timestamps, dates, the geometry row) are written
+-- with fixed settings: a check-out in one session and a check-in in another
+-- (another TimeZone, DateStyle or extra_float_digits) compare the same text.
 CREATE FUNCTION tgsis.table_fingerprint(p_schema text, p_table text, p_keyfield text, p_idfield text, p_keys bigint[])
 RETURNS text
 LANGUAGE plpgsql
 STABLE
+SET DateStyle = 'ISO, YMD'
+SET TimeZone = 'UTC'
+SET IntervalStyle = 'postgres'
+SET extra_float_digits = 1
+SET bytea_output = 'hex'
 AS $$
 DECLARE
     v_hash   text;

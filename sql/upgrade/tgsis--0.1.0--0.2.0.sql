@@ -156,6 +156,108 @@ BEGIN
 END
 $upgrade$;
 
+-- ---- issue36-keys: object keys stored as text under other sessions' settings, made canonical
+-- Tables keyed by a type whose text depends on the session (date, timestamp(tz), float, numeric,
+-- interval, bytea: tgsis.object_key_kind) get their write triggers generated anew (they name
+-- objects by tgsis.object_key_text now), and the keys their notes, locks and conflicts hold are read
+-- back in the key's type with this session's settings and written as canonical text: ISO text
+-- (what the default DateStyle wrote) reads the same under any setting; text another DateStyle wrote
+-- is read as this session's DateStyle reads it (a warning says how many keys were rewritten). A lock
+-- or conflict whose canonical key is held already (the same object under two texts) goes.
+DO $keys$
+DECLARE
+    v_extension oid := (SELECT oid FROM pg_catalog.pg_extension WHERE extname = 'tgsis');
+    v_members   text[];
+    v_object    record;
+    v_t         tgsis.versioned_tables;
+    v_type      oid;
+    v_old       record;
+    v_new       text;
+    v_changed   bigint;
+BEGIN
+    v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
+                        WHERE d.deptype = 'e' AND d.refobjid = v_extension);
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
+        v_type := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
+                    WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass
+                      AND a.attname = v_t.objectkeyfield AND NOT a.attisdropped);
+        -- keys of a type enable_versioning refuses from now on: named as before, and said so
+        IF tgsis.object_key_kind(v_type) IS NULL THEN
+            RAISE WARNING 'the object key column % of %.% is of type %, which has no text independent of the session''s settings',
+                    quote_ident(v_t.objectkeyfield), quote_ident(v_t.schemaname), quote_ident(v_t.tablename), format_type(v_type, NULL)
+                USING DETAIL = 'Its objects are named by the type''s text as before; enable_versioning refuses such keys now.',
+                      HINT = 'disable its versioning and key it by a column of a scalar type (docs/versioning.md, "Object keys")';
+            CONTINUE;
+        END IF;
+        IF EXISTS (SELECT FROM pg_catalog.pg_attribute a JOIN pg_catalog.pg_collation c ON c.oid = a.attcollation
+                    WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass
+                      AND a.attname = v_t.objectkeyfield AND NOT c.collisdeterministic) THEN
+            RAISE WARNING 'the object key column % of %.% has a nondeterministic collation', quote_ident(v_t.objectkeyfield),
+                    quote_ident(v_t.schemaname), quote_ident(v_t.tablename)
+                USING DETAIL = 'Keys its equality holds equal are named by different texts; enable_versioning refuses such keys now.',
+                      HINT = 'disable its versioning and give the column a deterministic collation (docs/versioning.md, "Object keys")';
+        END IF;
+        CONTINUE WHEN tgsis.object_key_kind(v_type) = 'cast';   -- text of no setting: nothing to rewrite
+        EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its triggers
+        EXECUTE format('DROP TABLE IF EXISTS %I.%I', v_t.schemaname, v_t.tablename || '_ver_queue');
+        PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
+                                                v_t.objectclass, v_t.objectkeyfield);
+        v_changed := 0;
+        FOR v_old IN
+            SELECT 'revision_objects' AS tbl, o.objectkey AS k, NULL::integer AS versionid FROM tgsis.revision_objects o
+             WHERE o.schemaname = v_t.schemaname AND o.tablename = v_t.tablename
+            UNION SELECT 'object_locks', l.objectkey, l.versionid FROM tgsis.object_locks l WHERE l.objectclass = v_t.objectclass
+            UNION SELECT 'conflicts', c.objectkey, c.versionid FROM tgsis.conflicts c WHERE c.objectclass = v_t.objectclass
+        LOOP
+            BEGIN
+                EXECUTE format('SELECT %s FROM (SELECT $1::%s AS k) AS s', tgsis.object_key_sql(v_type, 's.k'), v_type::regtype)
+                   INTO v_new USING v_old.k;
+            EXCEPTION WHEN data_exception THEN
+                RAISE WARNING 'key % of %.% in tgsis.% is no %: left as it is', quote_literal(v_old.k), v_t.schemaname,
+                        v_t.tablename, v_old.tbl, format_type(v_type, NULL);
+                CONTINUE;
+            END;
+            CONTINUE WHEN v_new = v_old.k;
+            v_changed := v_changed + 1;
+            IF v_old.tbl = 'revision_objects' THEN
+                UPDATE tgsis.revision_objects SET objectkey = v_new
+                 WHERE schemaname = v_t.schemaname AND tablename = v_t.tablename AND objectkey = v_old.k;
+            ELSIF v_old.tbl = 'object_locks' THEN
+                IF EXISTS (SELECT FROM tgsis.object_locks WHERE objectclass = v_t.objectclass AND objectkey = v_new) THEN
+                    DELETE FROM tgsis.object_locks WHERE objectclass = v_t.objectclass AND objectkey = v_old.k;
+                ELSE
+                    UPDATE tgsis.object_locks SET objectkey = v_new WHERE objectclass = v_t.objectclass AND objectkey = v_old.k;
+                END IF;
+            ELSIF EXISTS (SELECT FROM tgsis.conflicts WHERE versionid = v_old.versionid AND objectclass = v_t.objectclass
+                                                        AND objectkey = v_new) THEN
+                DELETE FROM tgsis.conflicts WHERE versionid = v_old.versionid AND objectclass = v_t.objectclass AND objectkey = v_old.k;
+            ELSE
+                UPDATE tgsis.conflicts SET objectkey = v_new
+                 WHERE versionid = v_old.versionid AND objectclass = v_t.objectclass AND objectkey = v_old.k;
+            END IF;
+        END LOOP;
+        IF v_changed > 0 THEN
+            RAISE WARNING '% object keys of %.% rewritten as canonical text (read with DateStyle %, TimeZone %)', v_changed,
+                    v_t.schemaname, v_t.tablename, current_setting('DateStyle'), current_setting('TimeZone');
+        END IF;
+    END LOOP;
+    -- the write triggers and queues made here are made at run time in a fresh install: not extension members
+    FOR v_object IN
+        SELECT o.type, o.identity
+          FROM pg_catalog.pg_depend d, LATERAL pg_catalog.pg_identify_object(d.classid, d.objid, d.objsubid) o
+         WHERE d.deptype = 'e' AND d.refobjid = v_extension
+           AND (d.classid::oid::text || ':' || d.objid::text) <> ALL (v_members)
+         ORDER BY CASE WHEN o.type IN ('table', 'view', 'sequence') THEN 0 WHEN o.type = 'type' THEN 1 ELSE 2 END,
+                  o.identity LIKE '%[]'
+    LOOP
+        IF EXISTS (SELECT FROM pg_catalog.pg_depend d, LATERAL pg_catalog.pg_identify_object(d.classid, d.objid, d.objsubid) o
+                    WHERE d.deptype = 'e' AND d.refobjid = v_extension AND o.type = v_object.type AND o.identity = v_object.identity) THEN
+            EXECUTE format('ALTER EXTENSION tgsis DROP %s %s', v_object.type, v_object.identity);
+        END IF;
+    END LOOP;
+END
+$keys$;
+
 -- ---- the installation record
 -- @handled core/installation.sql
 INSERT INTO tgsis.installation (version, method)

@@ -5,10 +5,21 @@
 -- and the marks, do not depend on how many notes there are. Tables with no
 -- note are not read at all: the cost follows the change, not the database.
 -- Revision 0 is never noted: asked about it, each table is scanned.
+-- Keys are their canonical text (tgsis.object_key_sql), and the marks are
+-- computed with fixed settings: tgsis.conflicts keeps them, and a session
+-- of other settings (DateStyle, TimeZone, ...) must compute the same mark
+-- for the same rows, or find_conflicts would take a solved conflict for a
+-- changed one.
 CREATE FUNCTION tgsis.changed_objects(p_revisions integer[])
 RETURNS TABLE (objectclass text, objectkey text, shortname text, mark text)
 LANGUAGE plpgsql
 VOLATILE
+SET DateStyle = 'ISO, YMD'
+SET TimeZone = 'UTC'
+SET IntervalStyle = 'postgres'
+SET extra_float_digits = 1
+SET bytea_output = 'hex'
+SET lc_monetary = 'C'
 AS $$
 DECLARE
     v_t       tgsis.versioned_tables;
@@ -34,11 +45,11 @@ BEGIN
         -- as record_out writes it (v::text would call a cast the row type's
         -- owner may have created); read as the storage's owner from definer code
         RETURN QUERY SELECT v_t.objectclass, r[1], v_t.shortname, r[2] FROM tgsis.storage_run(v_t, false, format(
-            'SELECT ARRAY[v.%I::text, md5(string_agg(pg_catalog.record_out(v.*)::text, ''|'' ORDER BY %s, v.revision))]
+            'SELECT ARRAY[%s, md5(string_agg(pg_catalog.record_out(v.*)::text, ''|'' ORDER BY %s, v.revision))]
                FROM %I.%I v
               WHERE %s
               GROUP BY v.%I',
-            v_t.objectkeyfield,
+            tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text
             (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)),
             v_t.schemaname, v_t.tablename || '_ver', v_where, v_t.objectkeyfield), p_1 => v_keys, p_2 => p_revisions) AS r;
     END LOOP;

@@ -3,6 +3,10 @@
 -- changed (same row key, other values). Rows both sides see as the same row
 -- version are skipped without reading them twice; rows that are different
 -- row versions with equal values (e.g. copied by a merge) are not differences.
+-- Objects are named by their keys' canonical text (tgsis.object_key_sql);
+-- rows are compared as jsonb with floats written exactly, whatever the
+-- session's extra_float_digits (with 0 or less, values differing in the
+-- last digits would compare equal).
 CREATE FUNCTION tgsis.diff_versions(
     p_a          text,
     p_b          text,
@@ -11,6 +15,7 @@ CREATE FUNCTION tgsis.diff_versions(
 RETURNS TABLE (objectclass text, objectkey text, shortname text, added bigint, removed bigint, changed bigint)
 LANGUAGE plpgsql
 STABLE
+SET extra_float_digits = 1
 AS $$
 DECLARE
     v_a    integer[] := tgsis.revision_set(tgsis.version_id(p_a), p_a_revision);
@@ -21,11 +26,11 @@ BEGIN
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
         SELECT string_agg(format('%I', k), ', ' ORDER BY o) INTO v_keys FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o);
         RETURN QUERY EXECUTE format(
-            'WITH a AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
+            'WITH a AS (SELECT %1$s, %7$s AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
                           FROM %3$I.%4$I v
                          WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)
                            AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))),
-                  b AS (SELECT %1$s, v.%2$I::text AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
+                  b AS (SELECT %1$s, %7$s AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
                           FROM %3$I.%4$I v
                          WHERE v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
                            AND NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1)))
@@ -35,7 +40,8 @@ BEGIN
                FROM a FULL JOIN b USING (%1$s)
               WHERE a.r IS DISTINCT FROM b.r
               GROUP BY 2 ORDER BY 2',
-            v_keys, v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.objectclass, v_t.shortname)
+            v_keys, v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.objectclass, v_t.shortname,
+            tgsis.object_key_text_sql(v_t, 'v'))
           USING v_a, v_b;
     END LOOP;
 END

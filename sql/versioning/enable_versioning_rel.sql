@@ -138,6 +138,8 @@ BEGIN
                   DETAIL = 'tgsis''s own functions read and compare object keys as tgsis''s owner; a type of one''s own could run its owner''s code there.',
                   HINT = 'key the objects by a column of a built-in type (integer, bigint, text, uuid, ...)';
     END IF;
+    -- ... and compared as text, one text per key in every session (types without one refused, named)
+    PERFORM tgsis.check_key_canonical(v_rel, p_objectkeyfield);
 
     -- views and rules reading the table would read every row version afterwards
     SELECT string_agg(DISTINCT r.ev_class::regclass::text, ', ') INTO v_dependent

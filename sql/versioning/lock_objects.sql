@@ -1,7 +1,10 @@
 -- tgsis.lock_objects(version, objectclass, keys, exclusive): lock objects for a version so that no other version can change them; returns the locks taken.
 -- Needs the write right on the version; the objects must exist in it.
 -- Taking a lock the version holds already changes nothing (or makes it
--- exclusive for the caller); a lock held elsewhere fails with TG303.
+-- exclusive for the caller); a lock held elsewhere fails with TG303. Keys
+-- are read in the key column's type with the session's settings and locked
+-- by their canonical text (tgsis.canonical_object_keys), the text every
+-- writer of the object names it by.
 CREATE FUNCTION tgsis.lock_objects(p_version text, p_objectclass text, p_keys text[], p_exclusive boolean DEFAULT false)
 RETURNS integer
 LANGUAGE plpgsql
@@ -21,6 +24,7 @@ BEGIN
     IF p_keys IS NULL OR cardinality(p_keys) = 0 OR array_position(p_keys, NULL) IS NOT NULL THEN
         RAISE EXCEPTION 'no object keys to lock' USING ERRCODE = 'TG100', HINT = 'pass a non-empty array of keys without NULLs';
     END IF;
+    p_keys := tgsis.canonical_object_keys(p_objectclass, p_keys);
     SELECT array_agg(k ORDER BY k) INTO v_missing
       FROM unnest(p_keys) AS k
      WHERE k <> ALL (tgsis.visible_object_keys(p_objectclass, p_keys,

@@ -27,14 +27,16 @@ DECLARE
     v_revision integer;
     v_key      text;
     v_mixed    boolean;
+    v_type     oid;        -- the key's type: keys are noted as their canonical text (tgsis.object_key_sql)
 BEGIN
     -- keys are cast to text here, as tgsis's owner: only a built-in type's cast (TG100 otherwise)
     PERFORM tgsis.check_key_type(TG_RELID, TG_ARGV[0]);
+    v_type := (SELECT a.atttypid FROM pg_catalog.pg_attribute a WHERE a.attrelid = TG_RELID AND a.attname = TG_ARGV[0]);
     EXECUTE format(
         'WITH f AS (SELECT n.revision, n.%1$I AS k FROM tgsis_new_rows n LIMIT 1)
-         SELECT f.revision, f.k::text,
+         SELECT f.revision, %2$s,
                 EXISTS (SELECT FROM tgsis_new_rows n WHERE n.revision <> f.revision OR n.%1$I <> f.k OR n.revclosed)
-           FROM f', TG_ARGV[0])
+           FROM f', TG_ARGV[0], tgsis.object_key_sql(v_type, 'f.k'))
        INTO v_revision, v_key, v_mixed;
     IF v_revision IS NULL THEN
         RETURN NULL;  -- no row
@@ -45,14 +47,14 @@ BEGIN
     -- several revisions or objects, or closed rows: each pair once (keys grouped in their own type, cast once)
     EXECUTE format(
         'INSERT INTO tgsis.revision_objects (revision, schemaname, tablename, objectkey)
-         SELECT d.revision, $1, $2, d.k::text
+         SELECT d.revision, $1, $2, %2$s
            FROM (SELECT n.revision, n.%1$I AS k FROM tgsis_new_rows n WHERE n.revision <> 0 GROUP BY 1, 2
                  UNION
                  SELECT l.r, n.%1$I FROM tgsis_new_rows n, pg_catalog.unnest(n.lastrevs) AS l(r)
                   WHERE n.revclosed AND l.r <> 0) AS d
           WHERE NOT EXISTS (SELECT FROM tgsis.revision_objects o
                              WHERE o.revision = d.revision AND o.schemaname = $1 AND o.tablename = $2
-                               AND o.objectkey = d.k::text)', TG_ARGV[0])
+                               AND o.objectkey = %2$s)', TG_ARGV[0], tgsis.object_key_sql(v_type, 'd.k'))
         USING TG_TABLE_SCHEMA, v_table;
     RETURN NULL;
 END

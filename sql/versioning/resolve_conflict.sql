@@ -2,7 +2,10 @@
 -- parent: keep the parent's object; child: take the version's; manual: the
 -- version already holds the merged object (write it there first). The
 -- solution holds for the current state of both sides (find_conflicts sets
--- it back to unsolved when either changes the object again).
+-- it back to unsolved when either changes the object again). The key is
+-- read in the key column's type with the session's settings
+-- (tgsis.canonical_object_keys): '02/01/2024' under DateStyle DMY names the
+-- conflict of 2024-01-02.
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
@@ -13,6 +16,7 @@ AS $$
 DECLARE
     v_id  integer := tgsis.version_id(p_version);
     v_row tgsis.conflicts;
+    v_key text := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
 BEGIN
     IF p_solution IS NULL OR lower(p_solution) NOT IN ('parent', 'child', 'manual', 'unsolved') THEN
         RAISE EXCEPTION 'solution % is not parent, child, manual or unsolved', coalesce(quote_literal(p_solution), 'NULL')
@@ -25,7 +29,7 @@ BEGIN
        SET solution = lower(p_solution),
            solved_at = CASE WHEN lower(p_solution) <> 'unsolved' THEN now() END,
            solved_by = CASE WHEN lower(p_solution) <> 'unsolved' THEN tgsis.calling_role() END
-     WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = p_objectkey
+     WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key
     RETURNING * INTO v_row;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'object % of class % is not in conflict in version %', quote_literal(p_objectkey),

@@ -55,7 +55,11 @@ BEGIN
     END IF;
     IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = TG_ARGV[0]) THEN
         PERFORM tgsis.check_key_type(TG_RELID, TG_ARGV[1]);
-        EXECUTE format('SELECT array_agg(DISTINCT n.%I::text) FROM tgsis_new_rows n', TG_ARGV[1]) INTO v_keys;
+        -- the keys' canonical text (tgsis.object_key_sql), as the locks hold them
+        EXECUTE format('SELECT array_agg(DISTINCT %s) FROM tgsis_new_rows n',
+                       tgsis.object_key_sql((SELECT a.atttypid FROM pg_catalog.pg_attribute a
+                                              WHERE a.attrelid = TG_RELID AND a.attname = TG_ARGV[1]),
+                                            format('n.%I', TG_ARGV[1]))) INTO v_keys;
         PERFORM tgsis.check_objects_unlocked(TG_ARGV[0], v_keys, v_write.versionid);
     END IF;
     RETURN NULL;

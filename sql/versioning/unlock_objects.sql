@@ -1,6 +1,7 @@
 -- tgsis.unlock_objects(version, objectclass, keys): release a version's locks (all of them, of a class, or of some keys); returns the locks released.
 -- Needs the write right on the version; another role's exclusive lock only
--- its owner or a tgsis_admin may release.
+-- its owner or a tgsis_admin may release. With a class, keys are read as
+-- tgsis.lock_objects reads them (tgsis.canonical_object_keys).
 CREATE FUNCTION tgsis.unlock_objects(p_version text, p_objectclass text DEFAULT NULL, p_keys text[] DEFAULT NULL)
 RETURNS integer
 LANGUAGE plpgsql
@@ -17,6 +18,7 @@ BEGIN
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'unlock objects in');
     IF p_objectclass IS NOT NULL THEN
         PERFORM tgsis.check_object_class(p_objectclass);
+        p_keys := tgsis.canonical_object_keys(p_objectclass, p_keys);
     END IF;
     IF NOT tgsis.is_version_owner(v_id, v_role) THEN
         SELECT string_agg(format('%s %s (%s)', objectclass, objectkey, quote_ident(locked_by)), ', ') INTO v_others

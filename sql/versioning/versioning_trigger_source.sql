@@ -71,7 +71,7 @@ CREATE FUNCTION tgsis.versioning_trigger_source(
     p_keyfield  text)
 RETURNS text
 LANGUAGE plpgsql
-IMMUTABLE
+STABLE
 AS $gen$
 DECLARE
     v_ver      text := format('%I.%I', p_schema, p_table || '_ver');
@@ -100,7 +100,11 @@ DECLARE
     v_qkey     text;
     v_qold     text;
     v_wrow     text;
+    v_keytype  oid;          -- the object key column's type: keys as text are its canonical text (tgsis.object_key_sql)
 BEGIN
+    PERFORM tgsis.check_key_type(v_ver::regclass, p_keyfield);
+    v_keytype := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
+                   WHERE a.attrelid = v_ver::regclass AND a.attname = p_keyfield AND NOT a.attisdropped);
     -- the probe of every row, one query: the object locks (tgsis.object_locks) and
     -- whether the object is noted as changed in the working revision
     -- (tgsis.revision_objects: what merges and conflict checks read); the check
@@ -233,7 +237,7 @@ BEGIN
         v_stmt := pg_catalog.statement_timestamp();
         v_depth := pg_catalog.pg_trigger_depth();
         v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || v_depth, true), ''), '0')::bigint;
-        SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT q.n%3$s::text ORDER BY q.n%3$s::text)
+        SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT %20$s ORDER BY %20$s)
           INTO v_count, v_distinct, v_keys
           FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
         -- the next statement of this depth queues under the next generation (its first row: the row path)
@@ -343,7 +347,8 @@ BEGIN
             (SELECT string_agg(format('q.n%s AS %I', o, c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 16
             v_cols,                                                                            -- 17
             p_table || '_ver_pkey',                                                            -- 18
-            (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)));  -- 19
+            (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 19
+            tgsis.object_key_sql(v_keytype, format('q.n%s', v_keypos)));                      -- 20
         v_declare := v_declare || E'
     v_xact     xid8;
     v_stmt     timestamptz;
@@ -388,11 +393,11 @@ BEGIN%22$s%23$s
     -- the write right on the session's version (checked for every row), its working revision and set
     SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
     IF TG_OP = 'INSERT' THEN
-        v_keys := ARRAY[NEW.%15$I::text];
+        v_keys := ARRAY[%24$s];
     ELSIF TG_OP = 'DELETE' THEN
-        v_keys := ARRAY[OLD.%15$I::text];
+        v_keys := ARRAY[%25$s];
     ELSE
-        v_keys := ARRAY[OLD.%15$I::text, NEW.%15$I::text];
+        v_keys := ARRAY[%25$s, %24$s];
     END IF;
     %20$s
     -- no bulk writer of the object in flight (they take it exclusively)
@@ -460,7 +465,8 @@ $body$$fn$,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare,
-        v_flush, v_enqueue);
+        v_flush, v_enqueue,
+        tgsis.object_key_sql(v_keytype, format('NEW.%I', p_keyfield)), tgsis.object_key_sql(v_keytype, format('OLD.%I', p_keyfield)));
 END
 $gen$;
 

@@ -12,7 +12,8 @@ DECLARE
     v_row   tgsis.versioned_tables;
 BEGIN
     FOR v_t IN
-        SELECT t AS tbl, t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype
+        SELECT t AS tbl, t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype,
+               a.atttypid AS keytypid
           FROM tgsis.versioned_tables t
           JOIN pg_catalog.pg_attribute a
             ON a.attrelid = format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass AND a.attname = t.objectkeyfield
@@ -35,9 +36,10 @@ BEGIN
         END LOOP;
         -- read as the storage's owner from definer code (tgsis.storage_run)
         SELECT r INTO v_some FROM tgsis.storage_run(v_row, false, format(
-            'SELECT coalesce(array_agg(DISTINCT v.%1$I::text), ''{}'') FROM %2$I.%3$I v
+            'SELECT coalesce(array_agg(DISTINCT %5$s), ''{}'') FROM %2$I.%3$I v
               WHERE v.%1$I = ANY ($1::%4$s[]) AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-            v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype), p_keys, p_revisions) AS r;
+            v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype,
+            tgsis.object_key_sql(v_t.keytypid, format('v.%I', v_t.objectkeyfield))), p_keys, p_revisions) AS r;
         v_found := v_found || v_some;
     END LOOP;
     RETURN ARRAY(SELECT DISTINCT k FROM unnest(v_found) AS k ORDER BY k);

@@ -17,7 +17,7 @@ import contextlib
 import json
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import datetime, timedelta
 from typing import Any
 
 import psycopg
@@ -449,6 +449,22 @@ def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
     return [_conflict(r) for r in rows]
 
 
+def _key_text(key: object) -> str:
+    """An object key as text the key column's type reads alike under every session setting.
+
+    The server reads it in the key column's type with the session's settings and
+    names the object by its canonical text (``tgsis.canonical_object_keys``); Python's
+    ``str`` of dates, times, numbers and UUIDs is ISO or plain decimal already. An
+    interval goes as ISO 8601 (``str(timedelta)`` has a comma PostgreSQL does not
+    read), bytes as hex (``\\x...``).
+    """
+    if isinstance(key, timedelta):
+        return f"P{key.days}DT{key.seconds}.{key.microseconds:06d}S"
+    if isinstance(key, (bytes, bytearray, memoryview)):
+        return "\\x" + bytes(key).hex()
+    return str(key)
+
+
 def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: object, solution: str) -> Conflict:
     """Record how a conflicting object is merged: ``parent``, ``child``, ``manual`` (or back to ``unsolved``).
 
@@ -461,7 +477,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
     """
     with reraise(), conn.transaction():
         row = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
-                           (version, objectclass, str(objectkey), solution)).fetchone()
+                           (version, objectclass, _key_text(objectkey), solution)).fetchone()
     assert row is not None
     return _conflict(row)
 
@@ -471,7 +487,7 @@ def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object)
     with reraise():
         return [(r[0], r[1], r[2], r[3]) for r in conn.execute(
             "SELECT shortname, side, rowkey, row FROM tgsis.conflict_rows(%s, %s, %s)",
-            (version, objectclass, str(objectkey))).fetchall()]
+            (version, objectclass, _key_text(objectkey))).fetchall()]
 
 
 def merge_version(conn: Conn, version: str, *, remove: bool = False) -> int:
@@ -648,14 +664,14 @@ def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[obje
     MissingPrivilegeError, NotFoundError
     """
     return int(_run_committed(conn, "SELECT tgsis.lock_objects(%s, %s, %s, %s)",
-                              (version, objectclass, [str(k) for k in keys], exclusive)))
+                              (version, objectclass, [_key_text(k) for k in keys], exclusive)))
 
 
 def unlock_objects(conn: Conn, version: str, objectclass: str | None = None,
                    keys: Sequence[object] | None = None) -> int:
     """Release ``version``'s locks (all, those of a class, or of some keys); return how many."""
     return int(_run_committed(conn, "SELECT tgsis.unlock_objects(%s, %s, %s)",
-                              (version, objectclass, None if keys is None else [str(k) for k in keys])))
+                              (version, objectclass, None if keys is None else [_key_text(k) for k in keys])))
 
 
 def object_locks(conn: Conn, version: str | None = None) -> list[ObjectLock]:
