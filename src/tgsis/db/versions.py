@@ -14,6 +14,7 @@ made by :func:`goto_version` is undone if that transaction rolls back.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
@@ -596,8 +597,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
                        "based are lost (rows added, removed or changed; the values among them).",
                 hint="pass discard_other=True to record it all the same, or write the merged object into the "
                      "version and record manual (tgsis.conflict_rows shows both sides' rows)")
-    return Conflict(*(getattr(conflict, f) for f in ("objectclass", "objectkey", "conflicttype", "childtables",
-                                                       "parenttables", "solution")), discarded=discards)
+    return dataclasses.replace(conflict, discarded=discards)
 
 
 def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object) -> list[tuple[str, str, Any, Any]]:
