@@ -232,3 +232,26 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn, story: dict[str, int],
         assert conn.execute("SELECT solution, solved_by FROM tgsis.conflicts").fetchone() == \
             ("parent", roles.name("editor"))
         conn.rollback()
+
+
+def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str, int]) -> None:
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(d.message_primary or ""))
+    a = story["A"]
+    conn.execute("SELECT tgsis.resolve_conflict('edit', 'feature', %s, 'child')", (str(a),))
+    assert notices == [f"feature {a} of version 'edit' (solution child) recorded: the parent's edits discarded: "
+                       "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values); "
+                       "trgl: 1 removed (3 values); vrtx: 3 changed (3 values)"]
+    notices.clear()
+    conn.execute("SELECT tgsis.resolve_conflict('edit', 'feature', %s, 'unsolved')", (str(a),))
+    assert notices == []
+    conn.execute("SELECT tgsis.resolve_conflict('edit', 'feature', %s, 'parent')", (str(a),))
+    conn.commit()
+    notices.clear()
+    conn.execute("SELECT tgsis.merge_version('edit')")
+    assert notices == [f"feature {a} of version 'edit' (solution parent) merged: the version's edits discarded: "
+                       "public.domes_cellpros: 1 added, 1 changed (2 values); trgl: 1 added, 1 removed (6 values); "
+                       "vrtx: 1 added, 4 changed (7 values)"]
+    conn.commit()
+    # merged: the version's edits of A are gone from both sides, B's are in the parent
+    assert _vertices(conn, "DEFAULT", a) == _vertices(conn, "edit", a)

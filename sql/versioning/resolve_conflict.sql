@@ -2,7 +2,8 @@
 -- parent: keep the parent's object; child: take the version's; manual: the
 -- version already holds the merged object (write it there first). The
 -- solution holds for the current state of both sides (find_conflicts sets
--- it back to unsolved when either changes the object again).
+-- it back to unsolved when either changes the object again). A NOTICE says
+-- what the solution discards of the other side's edits (tgsis.conflict_discards).
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
@@ -32,6 +33,8 @@ BEGIN
                 quote_literal(p_objectclass), quote_literal(p_version)
             USING ERRCODE = 'TG200', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the conflicts', p_version);
     END IF;
+    -- a solution takes one side's whole object: say what of the other side's edits it throws away
+    PERFORM tgsis.notice_discards(p_version, 'recorded', p_objectclass, p_objectkey);
     RETURN v_row;
 END
 $$;
