@@ -217,21 +217,45 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn, story: dict[str, int],
         reader = roles.connect("reader")
         assert _counts(reader, "child") == sorted((*r, a, "parent") for r in LOST_BY_CHILD)
         reader.rollback()
-        out, _ = _run(reader_dsn, capsys, "version", "conflicts", "edit")
-        assert "child discards" in out
+        out, _ = _run(reader_dsn, capsys, "version", "conflicts", "edit", "--no-header")
+        assert out.split("\t")[6] == ("vrtx: 3 changed (3 values); trgl: 1 removed (3 values); "
+                                       "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values)")
+        # without the right to read some of the object's rows: the conflicts, and no counts (never made up)
+        conn.execute("REVOKE SELECT ON domes_cellpros_ver FROM tgsis_reader")
+        conn.commit()
+        out, err = _run(reader_dsn, capsys, "version", "conflicts", "edit", "--no-header")
+        assert out.rstrip("\n").split("\t")[:3] == ["feature", a, "unsolved"] and out.rstrip("\n").endswith("\t?\t?")
+        assert "what each solution discards is not shown: permission denied" in err
         _, err = _run(reader_dsn, capsys, "version", "resolve", "edit", "feature", a, "child", "--discard-other",
                       code=1)
         assert "may not resolve conflicts of version 'edit'" in err
         # an editor granted write on the version is refused without the flag, then resolves with it
         tgsis.grant_version(conn, "edit", "write", roles.name("editor"))
         conn.commit()
+        # (the editor, a reader too, may not read the property rows: without the flag nothing can be checked)
         _, err = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", code=1)
-        assert "--discard-other" in err
+        assert "cannot tell what solving feature" in err and "permission denied" in err and "--discard-other" in err
+        assert conn.execute("SELECT solution FROM tgsis.conflicts").fetchall() == []
+        conn.rollback()
+        out, _ = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", "--discard-other")
+        assert out == f"feature {a} in edit: parent\n  what it discarded of the other side's edits is not shown: " \
+                      "this role may not read the object's rows\n"
+        conn.execute("GRANT SELECT ON domes_cellpros_ver TO tgsis_reader")
+        conn.commit()
+        _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "unsolved")
+        _, err = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", code=1)
+        assert "--discard-other" in err and "vrtx: 1 added, 4 changed (7 values)" in err
         out, _ = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", "--discard-other")
         assert "discarded the version's edits" in out
         assert conn.execute("SELECT solution, solved_by FROM tgsis.conflicts").fetchone() == \
             ("parent", roles.name("editor"))
-        conn.rollback()
+        # a merger that may not read the property rows merges all the same, and is told the counts are not shown
+        tgsis.grant_version(conn, "DEFAULT", "merge", roles.name("editor"))
+        conn.execute("REVOKE SELECT ON domes_cellpros_ver FROM tgsis_reader")
+        conn.commit()
+        out, _ = _run(editor_dsn, capsys, "version", "merge", "edit")
+        assert out.startswith("merged edit into its parent: ") and "is not shown" in out
+        assert _vertices(conn, "DEFAULT", int(a)) == _vertices(conn, "edit", int(a))
 
 
 def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str, int]) -> None:

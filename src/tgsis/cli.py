@@ -46,8 +46,8 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
-from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
-                          SkippedObjectWarning)
+from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, MissingPrivilegeError,
+                          NotFoundError, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
@@ -1180,18 +1180,26 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         conflicts = V.find_conflicts(conn, args.name)
         details = {(c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
                    for c in conflicts} if args.rows else {}
-        # what each solution would throw away of the other side's edits (until merges are three-way)
-        lost: dict[tuple[str, str, str], list[V.Discard]] = {}
-        for d in V.conflict_discards(conn, args.name) if conflicts else []:
-            lost.setdefault((d.objectclass, d.objectkey, d.solution), []).append(d)
+        # what each solution would throw away of the other side's edits (until merges are three-way), read with
+        # this role's rights: one that may not read some of the objects' rows still gets the list, without it
+        lost: dict[tuple[str, str, str], list[V.Discard]] | None = None
+        try:
+            with conn.transaction():
+                discards = V.conflict_discards(conn, args.name) if conflicts else []
+            lost = {}
+            for d in discards:
+                lost.setdefault((d.objectclass, d.objectkey, d.solution), []).append(d)
+        except MissingPrivilegeError as exc:
+            print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
+            lost = None
     if _json(args):
         cliout.emit_json({"version": args.name, "conflicts": [{
             "objectclass": c.objectclass, "objectkey": c.objectkey, "solution": c.solution,
             "both_changed": list(c.conflicttype), "child_tables": list(c.childtables),
             "parent_tables": list(c.parenttables),
-            "discards": {solution: {"edits_of": other, "tables": _discards_json(
-                             lost.get((c.objectclass, c.objectkey, solution), []))}
-                         for solution, other in (("child", "parent"), ("parent", "child"))},
+            "discards": None if lost is None else {
+                solution: {"edits_of": other, "tables": _discards_json(lost.get(key + (solution,), []))}
+                for key in [(c.objectclass, c.objectkey)] for solution, other in (("child", "parent"), ("parent", "child"))},
             **({"rows": [{"table": table, "side": side, "key": key, "row": row}
                          for table, side, key, row in details.get((c.objectclass, c.objectkey), [])]}
                if args.rows else {})} for c in conflicts]})
@@ -1202,7 +1210,8 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
              + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if args.rows else ""))
     for c in conflicts:
         both = ", ".join(c.conflicttype) or "different tables"
-        said = ["; ".join(d.summary() for d in lost.get((c.objectclass, c.objectkey, solution), [])) or "nothing"
+        said = ["?" if lost is None else
+                "; ".join(d.summary() for d in lost.get((c.objectclass, c.objectkey, solution), [])) or "nothing"
                 for solution in ("child", "parent")]
         _out(f"{c.objectclass}\t{c.objectkey}\t{c.solution}\t{both}\t"
              f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}\t{said[0]}\t{said[1]}")
@@ -1218,12 +1227,27 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
         c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution,
                                discard_other=args.discard_other)
     _out(f"{c.objectclass} {c.objectkey} in {args.name}: {c.solution}")
-    if c.discarded:
+    if c.discarded is None:
+        _out("  what it discarded of the other side's edits is not shown: this role may not read the object's rows")
+    elif c.discarded:
         _out(f"  discarded {V.describe_discards(c.discarded)}")
     return 0
 
 
-def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]]) -> None:
+def _recorded_discards(conn: Any, version: str) -> dict[tuple[str, str], tuple[str, list[V.Discard]]] | None:
+    """What the recorded solutions discard, or None when this role may not read some of the objects' rows."""
+    try:
+        with conn.transaction():
+            return V.recorded_discards(conn, version)
+    except MissingPrivilegeError:
+        return None
+
+
+def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | None) -> None:
+    if lost is None:
+        _out("  what the solutions discarded of the other side's edits is not shown: this role may not read "
+             "some of the objects' rows")
+        return
     for (objectclass, objectkey), (solution, discards) in lost.items():
         _out(f"  {objectclass} {objectkey} ({solution}): discarded {V.describe_discards(discards)}")
 
@@ -1231,7 +1255,7 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]]) -> 
 def cmd_version_merge(args: argparse.Namespace) -> int:
     with _connect(args) as conn, cliout.busy(f"merging {args.name}"), conn.transaction():
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
-        lost = V.recorded_discards(conn, args.name)
+        lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
     _out(f"merged {args.name} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
     _say_discarded(lost)
@@ -1242,7 +1266,7 @@ def cmd_version_merge(args: argparse.Namespace) -> int:
 
 def cmd_version_refresh(args: argparse.Namespace) -> int:
     with _connect(args) as conn, conn.transaction():
-        lost = V.recorded_discards(conn, args.name)
+        lost = _recorded_discards(conn, args.name)
         written = V.refresh_version(conn, args.name)
     _out(f"refreshed {args.name} from its parent: {written} row(s) written")
     _say_discarded(lost)

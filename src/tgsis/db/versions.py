@@ -25,7 +25,7 @@ import psycopg
 
 from tgsis._optional import require
 from tgsis.arguments import check_module
-from tgsis.errors import VersioningError, reraise
+from tgsis.errors import MissingPrivilegeError, VersioningError, reraise
 
 __all__ = [
     "Version",
@@ -485,9 +485,10 @@ class Conflict:
     childtables, parenttables : tuple of str
         Tables each side changed.
     solution : {"unsolved", "parent", "child", "manual"}
-    discarded : tuple of Discard
+    discarded : tuple of Discard or None
         Set by :func:`resolve_conflict`: what the recorded solution throws away
-        of the other side's edits, per table (empty: nothing, or unsolved).
+        of the other side's edits, per table (empty: nothing, or unsolved;
+        None: not counted, the caller may not read some of the object's rows).
     """
 
     objectclass: str
@@ -496,7 +497,7 @@ class Conflict:
     childtables: tuple[str, ...]
     parenttables: tuple[str, ...]
     solution: str
-    discarded: tuple[Discard, ...] = field(default=(), compare=False)
+    discarded: tuple[Discard, ...] | None = field(default=(), compare=False)
 
 
 _CONFLICT_COLUMNS = "objectclass, objectkey, conflicttype, childtables, parenttables, solution"
@@ -580,6 +581,8 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
         Unknown solution.
     VersioningError
         ``discard_other=False`` and the solution loses the other side's edits (the message counts them).
+    MissingPrivilegeError
+        ``discard_other=False`` and the caller may not read the object's rows, so what it loses cannot be counted.
     """
     with reraise(), conn.transaction():
         row = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
@@ -587,8 +590,20 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
         assert row is not None
         conflict = _conflict(row)
         lost_by = _lost_by(conflict.solution)
-        discards = tuple(d for d in conflict_discards(conn, version, conflict.objectclass, conflict.objectkey)
-                         if d.solution == lost_by) if lost_by else ()
+        discards: tuple[Discard, ...] | None = ()
+        try:
+            with conn.transaction():   # read with the caller's rights: a role may resolve what it may not read
+                discards = tuple(d for d in conflict_discards(conn, version, conflict.objectclass, conflict.objectkey)
+                                 if d.solution == lost_by) if lost_by else ()
+        except MissingPrivilegeError as exc:
+            if not discard_other and conflict.solution in ("child", "parent"):
+                raise MissingPrivilegeError(
+                    f"cannot tell what solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                    f"{conflict.solution} discards of the other side's edits: {exc.message}",
+                    sqlstate=exc.sqlstate,
+                    hint="pass discard_other=True to record it all the same, or write the merged object into the "
+                         "version and record manual (tgsis.conflict_rows shows both sides' rows)") from exc
+            discards = None
         if discards and not discard_other and conflict.solution in ("child", "parent"):
             raise VersioningError(
                 f"solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
