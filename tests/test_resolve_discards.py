@@ -9,6 +9,7 @@ solution that loses edits unless ``--discard-other`` is given.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -279,3 +280,41 @@ def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str
     conn.commit()
     # merged: the version's edits of A are gone from both sides, B's are in the parent
     assert _vertices(conn, "DEFAULT", a) == _vertices(conn, "edit", a)
+
+
+def test_refresh_says_what_its_solutions_discard_and_json(db_dsn: str, conn: Conn, story: dict[str, int],
+                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    a = story["A"]
+    doc, _ = _run(db_dsn, capsys, "version", "conflicts", "edit", "--json")
+    [conflict] = json.loads(doc)["conflicts"]
+    assert conflict["discards"]["parent"]["edits_of"] == "child"
+    assert sorted((t["table"], t["rows_added"], t["rows_removed"], t["rows_changed"], t["values_changed"])
+                  for t in conflict["discards"]["parent"]["tables"]) == sorted(LOST_BY_PARENT)
+    assert conflict["discards"]["child"]["tables"][0]["what"] == "a vertex of a static geometry"
+    tgsis.resolve_conflict(conn, "edit", "feature", a, "parent")
+    conn.commit()
+    out, _ = _run(db_dsn, capsys, "version", "refresh", "edit")
+    assert f"feature {a} (parent): discarded the version's edits: vrtx: 1 added, 4 changed (7 values)" in out
+    assert _vertices(conn, "edit", a) == _vertices(conn, "DEFAULT", a)     # what it said is what went
+    out, _ = _run(db_dsn, capsys, "version", "conflicts", "edit")
+    assert out == ""
+
+
+def test_bad_arguments(conn: Conn, story: dict[str, int]) -> None:
+    with pytest.raises(tgsis.NotFoundError, match="version 'nope' does not exist"):
+        tgsis.conflict_discards(conn, "nope")
+    conn.rollback()
+    with pytest.raises(tgsis.InvalidInputError, match="DEFAULT has no parent"):
+        tgsis.conflict_discards(conn, "DEFAULT")
+    conn.rollback()
+    with pytest.raises(tgsis.NotFoundError, match="object class 'features' does not exist"):
+        tgsis.conflict_discards(conn, "edit", "features")
+    conn.rollback()
+    assert tgsis.conflict_discards(conn, "edit", "feature", story["B"]) == []       # no conflict: nothing
+    with pytest.raises(tgsis.NotFoundError, match="not in conflict"):
+        tgsis.resolve_conflict(conn, "edit", "feature", story["B"], "child", discard_other=False)
+    conn.rollback()
+    with pytest.raises(tgsis.VersioningError, match="would discard the version's edits: vrtx: 1 added"):
+        tgsis.resolve_conflict(conn, "edit", "feature", story["A"], "parent", discard_other=False)
+    conn.rollback()
+    assert conn.execute("SELECT count(*) FROM tgsis.conflicts WHERE solution <> 'unsolved'").fetchone() == (0,)
