@@ -9,8 +9,10 @@
 -- (dropped), removed (brought back) and changed (reverted or overwritten),
 -- and the column values among them (added or removed rows count all their
 -- values). Only tables with something discarded are listed. The objects'
--- rows are read by key with the caller's rights (tgsis.storage_run); row
--- versions the base and both sides see alike are left out at once.
+-- rows are read by key with the caller's rights (tgsis.storage_run), only in
+-- tables either side noted a change in since the base (tgsis.revision_objects,
+-- which tgsis.changed_objects reads too); row versions the base and both
+-- sides see alike are left out before they are compared.
 CREATE FUNCTION tgsis.conflict_discards(p_version text, p_objectclass text DEFAULT NULL, p_objectkey text DEFAULT NULL)
 RETURNS TABLE (objectclass text, objectkey text, solution text, discarded text, shortname text, tablename text,
                description text, rows_added bigint, rows_removed bigint, rows_changed bigint, values_changed bigint)
@@ -21,6 +23,7 @@ DECLARE
     v_version tgsis.versions;
     v_parent  integer[];
     v_base    integer[];
+    v_changed integer[];
     v_t       tgsis.versioned_tables;
     v_class   text;
     v_keys    text[];
@@ -37,6 +40,9 @@ BEGIN
     SELECT workingset INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
     v_base := ARRAY(SELECT r FROM unnest(v_version.workingset) AS r
                     EXCEPT SELECT r FROM unnest(tgsis.own_working_revisions(v_version.versionid)) AS r ORDER BY 1);
+    -- the revisions either side changed something in since the base (never revision 0, which the base holds)
+    v_changed := ARRAY(SELECT r FROM unnest(v_version.workingset || v_parent) AS r
+                       EXCEPT SELECT r FROM unnest(v_base) AS r ORDER BY 1);
     FOR v_class, v_keys IN
         SELECT c.objectclass, array_agg(c.objectkey ORDER BY c.objectkey)
           FROM tgsis.current_conflicts(v_version.versionid) AS c
@@ -44,6 +50,11 @@ BEGIN
          GROUP BY 1 ORDER BY 1
     LOOP
         FOR v_t IN SELECT t.* FROM tgsis.versioned_tables t WHERE t.objectclass = v_class ORDER BY t.iudorder, t.shortname LOOP
+            -- a table neither side wrote in since the base (tgsis.revision_objects) has nothing to lose (any
+            -- object's note will do: a key's text is not compared, so no session setting can hide one)
+            CONTINUE WHEN NOT EXISTS (SELECT FROM tgsis.revision_objects o
+                                       WHERE o.revision = ANY (v_changed) AND o.schemaname = v_t.schemaname
+                                         AND o.tablename = v_t.tablename);
             SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) INTO v_rowkey
               FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o);
             v_desc := coalesce(
@@ -67,7 +78,11 @@ BEGIN
                             v.revision = ANY ($3) AND NOT (v.lastrevs && $3) AS in_child,
                             v.revision = ANY ($5::integer[]) AND NOT (v.lastrevs && $5::integer[]) AS in_parent
                        FROM %3$I.%4$I v
-                      WHERE v.%1$I = ANY ($1::%5$s[])),
+                      WHERE v.%1$I = ANY ($1::%5$s[])
+                        -- not a row version all three see (a base row neither side closed): rows of the object
+                        -- that nobody changed cost a test, not a jsonb
+                        AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $3)
+                                 AND NOT (v.lastrevs && $5::integer[]))),
                  keyed AS (
                      SELECT obj, (array_agg(r) FILTER (WHERE in_base))[1] AS b,
                             (array_agg(r) FILTER (WHERE in_child))[1] AS c,
