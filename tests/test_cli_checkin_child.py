@@ -79,7 +79,14 @@ def test_the_conflict_goes_through_the_merge(db_dsn: str, fault: int, tmp_path: 
         _edit_file(merged, {ANN: 5.0})
         assert main([*cli, "checkin", str(merged)]) == 0
         assert "into version bob_fix" in capsys.readouterr().out
-    assert main([*cli, "version", "resolve", "bob_fix", "feature", str(fault), solution]) == 0
+    if solution != "manual":  # taking one side's object throws the other's edit away: said, and asked for by name
+        assert main([*cli, "version", "resolve", "bob_fix", "feature", str(fault), solution]) == 1
+        err = capsys.readouterr().err
+        assert "--discard-other" in err and "vrtx: 1 changed (1 value)" in err
+        assert main([*cli, "version", "resolve", "bob_fix", "feature", str(fault), solution, "--discard-other"]) == 0
+        assert "discarded the " in capsys.readouterr().out
+    else:
+        assert main([*cli, "version", "resolve", "bob_fix", "feature", str(fault), solution]) == 0
     assert main([*cli, "version", "merge", "bob_fix", "--remove"]) == 0
     assert "version removed" in capsys.readouterr().out
     expected = {"parent": (5.0, original[BOB, 2]), "child": (original[ANN, 2], -5.0), "manual": (5.0, -5.0)}

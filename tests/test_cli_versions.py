@@ -107,12 +107,17 @@ def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
         conn.execute("UPDATE wells SET depth = 22 WHERE id = 2")
     out = _run(db_dsn, capsys, "version", "conflicts", "a", "--rows")
     assert out.splitlines() == [
-        "class\tkey\tsolution\tboth changed\tchanged in a\tchanged in parent",
+        "class\tkey\tsolution\tboth changed\tchanged in a\tchanged in parent"
+        "\tchild discards (the parent's edits)\tparent discards (the version's edits)",
         "\ttable\tside\trow key (JSON)\trow (JSON)",
-        "well\t1\tunsolved\twells\twells\twells",
+        "well\t1\tunsolved\twells\twells\twells\twells: 1 changed (1 value)\twells: 1 changed (1 value)",
         '\twells\tchild\t{"id": 1}\t{"id": 1, "depth": 12}',
         '\twells\tparent\t{"id": 1}\t{"id": 1, "depth": 11}']
-    assert _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child") == "well 1 in a: child\n"
+    # child throws the parent's depth away: asked for by name
+    err = _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child", code=1)
+    assert "would discard the parent's edits: wells: 1 changed (1 value)" in err and "--discard-other" in err
+    assert _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child", "--discard-other") == \
+        "well 1 in a: child\n  discarded the parent's edits: wells: 1 changed (1 value)\n"
     assert "not in conflict" in _run(db_dsn, capsys, "version", "resolve", "a", "well", "2", "child", code=1)
 
 

@@ -4,7 +4,9 @@
 -- version did not change are not touched. The parent's working revision is
 -- then frozen and a new one started. Without p_remove the version goes on
 -- from the merged state (its base moves to that revision); with it, the
--- version is deleted. Refused (TG302) while a conflict is unsolved.
+-- version is deleted. Refused (TG302) while a conflict is unsolved. A NOTICE
+-- per solved conflict says what of the other side's edits its solution
+-- discards (tgsis.notice_discards).
 CREATE FUNCTION tgsis.merge_version(p_version text, p_remove boolean DEFAULT false)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -30,6 +32,8 @@ BEGIN
     END IF;
     v_child := tgsis.lock_for_merge(p_version, 'merge');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
+    -- what the solutions throw away of the other side's edits, said before it is gone
+    PERFORM tgsis.notice_discards(p_version, 'merged');
 
     v_own := tgsis.own_working_revisions(v_child.versionid);
     FOR v_class IN

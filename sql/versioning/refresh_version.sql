@@ -3,8 +3,8 @@
 -- frozen): objects only the parent changed now look as in the parent, objects
 -- only the version changed keep the version's state, and each conflicting
 -- object follows its solution ('parent' takes the parent's object, 'child'
--- and 'manual' keep the version's). Refused (TG302) while a conflict is
--- unsolved.
+-- and 'manual' keep the version's; a NOTICE says what each discards).
+-- Refused (TG302) while a conflict is unsolved.
 CREATE FUNCTION tgsis.refresh_version(p_version text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -24,6 +24,7 @@ BEGIN
     PERFORM tgsis.require_version_privilege(tgsis.version_id(p_version), 'write', 'refresh');
     v_child := tgsis.lock_for_merge(p_version, 'refresh');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
+    PERFORM tgsis.notice_discards(p_version, 'refreshed');  -- what the solutions throw away, said before it is gone
 
     -- the parent's working revision becomes the new base; the version sees
     -- the parent's set up to it, its own revisions, and a new working one

@@ -5,7 +5,8 @@
 -- it back to unsolved when either changes the object again). The key is
 -- read in the key column's type with the session's settings
 -- (tgsis.canonical_object_keys): '02/01/2024' under DateStyle DMY names the
--- conflict of 2024-01-02.
+-- conflict of 2024-01-02. A NOTICE says what the solution discards of the
+-- other side's edits (tgsis.conflict_discards).
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
@@ -36,6 +37,8 @@ BEGIN
                 quote_literal(p_objectclass), quote_literal(p_version)
             USING ERRCODE = 'TG200', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the conflicts', p_version);
     END IF;
+    -- a solution takes one side's whole object: say what of the other side's edits it throws away
+    PERFORM tgsis.notice_discards(p_version, 'recorded', p_objectclass, p_objectkey);
     RETURN v_row;
 END
 $$;

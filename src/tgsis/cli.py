@@ -46,8 +46,8 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
-from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
-                          SkippedObjectWarning)
+from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, MissingPrivilegeError,
+                          NotFoundError, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
@@ -1170,27 +1170,51 @@ def cmd_version_delete(args: argparse.Namespace) -> int:
     return 0
 
 
+def _discards_json(discards: Sequence[V.Discard]) -> list[dict[str, Any]]:
+    return [{"table": d.shortname, "what": d.description, "rows_added": d.rows_added, "rows_removed": d.rows_removed,
+             "rows_changed": d.rows_changed, "values_changed": d.values_changed} for d in discards]
+
+
 def cmd_version_conflicts(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         conflicts = V.find_conflicts(conn, args.name)
         details = {(c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
                    for c in conflicts} if args.rows else {}
+        # what each solution would throw away of the other side's edits (until merges are three-way), read with
+        # this role's rights: one that may not read some of the objects' rows still gets the list, without it
+        lost: dict[tuple[str, str, str], list[V.Discard]] | None = None
+        try:
+            with conn.transaction():
+                discards = V.conflict_discards(conn, args.name) if conflicts else []
+            lost = {}
+            for d in discards:
+                lost.setdefault((d.objectclass, d.objectkey, d.solution), []).append(d)
+        except MissingPrivilegeError as exc:
+            print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
+            lost = None
     if _json(args):
         cliout.emit_json({"version": args.name, "conflicts": [{
             "objectclass": c.objectclass, "objectkey": c.objectkey, "solution": c.solution,
             "both_changed": list(c.conflicttype), "child_tables": list(c.childtables),
             "parent_tables": list(c.parenttables),
+            "discards": None if lost is None else {
+                solution: {"edits_of": other, "tables": _discards_json(lost.get(key + (solution,), []))}
+                for key in [(c.objectclass, c.objectkey)] for solution, other in (("child", "parent"), ("parent", "child"))},
             **({"rows": [{"table": table, "side": side, "key": key, "row": row}
                          for table, side, key, row in details.get((c.objectclass, c.objectkey), [])]}
                if args.rows else {})} for c in conflicts]})
         return 0
     if conflicts and not getattr(args, "no_header", False):
         _out("class\tkey\tsolution\tboth changed\tchanged in " + args.name + "\tchanged in parent"
+             + "\tchild discards (the parent's edits)\tparent discards (the version's edits)"
              + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if args.rows else ""))
     for c in conflicts:
         both = ", ".join(c.conflicttype) or "different tables"
+        said = ["?" if lost is None else
+                "; ".join(d.summary() for d in lost.get((c.objectclass, c.objectkey, solution), [])) or "nothing"
+                for solution in ("child", "parent")]
         _out(f"{c.objectclass}\t{c.objectkey}\t{c.solution}\t{both}\t"
-             f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}")
+             f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}\t{said[0]}\t{said[1]}")
         for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
             _out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
     if not conflicts:
@@ -1200,24 +1224,52 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
 
 def cmd_version_resolve(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
-        c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution)
+        c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution,
+                               discard_other=args.discard_other)
     _out(f"{c.objectclass} {c.objectkey} in {args.name}: {c.solution}")
+    if c.discarded is None:
+        _out("  what it discarded of the other side's edits is not shown: this role may not read the object's rows")
+    elif c.discarded:
+        _out(f"  discarded {V.describe_discards(c.discarded)}")
     return 0
 
 
+def _recorded_discards(conn: Any, version: str) -> dict[tuple[str, str], tuple[str, list[V.Discard]]] | None:
+    """What the recorded solutions discard, or None when this role may not read some of the objects' rows."""
+    try:
+        with conn.transaction():
+            return V.recorded_discards(conn, version)
+    except MissingPrivilegeError:
+        return None
+
+
+def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | None) -> None:
+    if lost is None:
+        _out("  what the solutions discarded of the other side's edits is not shown: this role may not read "
+             "some of the objects' rows")
+        return
+    for (objectclass, objectkey), (solution, discards) in lost.items():
+        _out(f"  {objectclass} {objectkey} ({solution}): discarded {V.describe_discards(discards)}")
+
+
 def cmd_version_merge(args: argparse.Namespace) -> int:
-    with _connect(args) as conn, cliout.busy(f"merging {args.name}"):
+    with _connect(args) as conn, cliout.busy(f"merging {args.name}"), conn.transaction():
+        # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
+        lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
     _out(f"merged {args.name} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
+    _say_discarded(lost)
     if args.remove and clistate.remembered_version(_target_key(args)) == args.name:
         clistate.remember_version(_target_key(args), None)
     return 0
 
 
 def cmd_version_refresh(args: argparse.Namespace) -> int:
-    with _connect(args) as conn:
+    with _connect(args) as conn, conn.transaction():
+        lost = _recorded_discards(conn, args.name)
         written = V.refresh_version(conn, args.name)
     _out(f"refreshed {args.name} from its parent: {written} row(s) written")
+    _say_discarded(lost)
     return 0
 
 
@@ -2028,13 +2080,18 @@ def build_parser() -> argparse.ArgumentParser:
     ver_conflicts.add_argument("name", help="the child version (its parent is the other side)")
     ver_conflicts.add_argument("--rows", action="store_true", help="also print the rows that differ, per side")
     ver_resolve = _command(ver_commands, "resolve", "record how a conflicting object is merged",
-                           ["tgsis version resolve cfm6 feature 42 child"], cmd_version_resolve)
+                           ["tgsis version resolve cfm6 feature 42 child",
+                            "tgsis version resolve cfm6 feature 42 child --discard-other"], cmd_version_resolve)
     ver_resolve.add_argument("name", help="the child version")
     ver_resolve.add_argument("objectclass", metavar="CLASS", help="object class ('feature' for features)")
     ver_resolve.add_argument("objectkey", metavar="KEY", help="object key (for features: the id)")
     ver_resolve.add_argument("solution", type=str.lower, choices=("parent", "child", "manual", "unsolved"),
                              help="which side the merge keeps: parent, child, manual (the rows as the child has them "
                                   "after your edit), or unsolved (undecided again)")
+    ver_resolve.add_argument("--discard-other", action="store_true",
+                             help="record child or parent even though it throws away the other side's edits of the "
+                                  "object since the version was based (without it such a solution is refused, "
+                                  "with the counts; tgsis version conflicts shows them)")
 
     ver_merge = _command(ver_commands, "merge", "apply a version's changes to its parent (one transaction)",
                          ["tgsis version merge cfm6 --remove"], cmd_version_merge)

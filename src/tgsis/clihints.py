@@ -35,6 +35,10 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"record a solution for each: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
      lambda m: f"record a solution for each: tgsis version resolve {_unquote(m[1])} CLASS KEY parent|child|manual "
                f"(tgsis version conflicts {_unquote(m[1])} lists them)"),
+    (r"pass discard_other=True to record it all the same, or write the merged object into the version and record "
+     r"manual \(tgsis\.conflict_rows shows both sides' rows\)",
+     "add --discard-other to record it all the same, or write the merged object into the version and record manual "
+     "(tgsis version conflicts VERSION --rows shows both sides' rows)"),
     (r"SELECT \* FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\) lists the conflicts",
      lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the conflicts"),
     (r"SELECT tgsis\.goto_version\('DEFAULT'\); SELECT name FROM tgsis\.versions lists the versions",

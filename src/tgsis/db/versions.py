@@ -14,9 +14,10 @@ made by :func:`goto_version` is undone if that transaction rolls back.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from typing import Any
 
@@ -24,7 +25,7 @@ import psycopg
 
 from tgsis._optional import require
 from tgsis.arguments import check_module
-from tgsis.errors import reraise
+from tgsis.errors import MissingPrivilegeError, VersioningError, reraise
 
 __all__ = [
     "Version",
@@ -49,9 +50,13 @@ __all__ = [
     "enable_feature_versioning",
     "disable_feature_versioning",
     "Conflict",
+    "Discard",
     "find_conflicts",
     "resolve_conflict",
     "conflict_rows",
+    "conflict_discards",
+    "describe_discards",
+    "recorded_discards",
     "merge_version",
     "refresh_version",
     "Difference",
@@ -410,6 +415,64 @@ def disable_feature_versioning(conn: Conn, *, force: bool = False) -> int:
 
 
 @dataclass(frozen=True)
+class Discard:
+    """What one solution of a conflict throws away of one table of the object (a row of ``tgsis.conflict_discards``).
+
+    Until merges are three-way a solution takes one side's whole object:
+    ``child`` (and ``manual``) loses the parent's edits since the version's
+    base, ``parent`` the version's. An edit is a row whose state differs from
+    the base's; it is lost when the kept side's row differs from it (an edit
+    both sides made alike is kept).
+
+    Attributes
+    ----------
+    objectclass, objectkey : str
+        The conflicting object.
+    solution : {"child", "parent"}
+        The solution (``manual`` keeps the version's object: it loses what ``child`` loses).
+    discarded : {"parent", "child"}
+        Whose edits are lost: the other side's.
+    shortname, tablename : str
+        The table (its short name in conflict reports, and ``schema.table``).
+    description : str
+        What a row of it is (``"a vertex of a static geometry"``), from the registries.
+    rows_added, rows_removed, rows_changed : int
+        Rows the other side added (dropped), removed (brought back), changed (reverted or overwritten).
+    values_changed : int
+        Column values among those rows (every value of an added or removed row).
+    """
+
+    objectclass: str
+    objectkey: str
+    solution: str
+    discarded: str
+    shortname: str
+    tablename: str
+    description: str
+    rows_added: int
+    rows_removed: int
+    rows_changed: int
+    values_changed: int
+
+    def summary(self) -> str:
+        """``"vrtx: 1 added, 4 changed (7 values)"``: the counts that are not zero."""
+        counts = [f"{n} {what}" for n, what in ((self.rows_added, "added"), (self.rows_removed, "removed"),
+                                                 (self.rows_changed, "changed")) if n]
+        return f"{self.shortname}: {', '.join(counts)} ({self.values_changed} value{'s' * (self.values_changed != 1)})"
+
+
+def _side_words(discarded: str) -> str:
+    return "the parent's edits" if discarded == "parent" else "the version's edits"
+
+
+def describe_discards(discards: Sequence[Discard]) -> str:
+    """One line: whose edits are lost and, per table, how many rows and values (``""`` for none)."""
+    if not discards:
+        return ""
+    return f"{_side_words(discards[0].discarded)}: " + "; ".join(d.summary() for d in discards)
+
+
+@dataclass(frozen=True)
 class Conflict:
     """An object changed both in a version and in its parent (a row of ``tgsis.conflicts``).
 
@@ -422,6 +485,10 @@ class Conflict:
     childtables, parenttables : tuple of str
         Tables each side changed.
     solution : {"unsolved", "parent", "child", "manual"}
+    discarded : tuple of Discard or None
+        Set by :func:`resolve_conflict`: what the recorded solution throws away
+        of the other side's edits, per table (empty: nothing, or unsolved;
+        None: not counted, the caller may not read some of the object's rows).
     """
 
     objectclass: str
@@ -430,6 +497,7 @@ class Conflict:
     childtables: tuple[str, ...]
     parenttables: tuple[str, ...]
     solution: str
+    discarded: tuple[Discard, ...] | None = field(default=(), compare=False)
 
 
 _CONFLICT_COLUMNS = "objectclass, objectkey, conflicttype, childtables, parenttables, solution"
@@ -465,8 +533,61 @@ def _key_text(key: object) -> str:
     return str(key)
 
 
-def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: object, solution: str) -> Conflict:
+def conflict_discards(conn: Conn, version: str, objectclass: str | None = None,
+                      objectkey: object | None = None) -> list[Discard]:
+    """What each solution of ``version``'s conflicts would throw away of the other side's edits.
+
+    Per conflicting object (all of them, those of one class, or one object),
+    solution (``child``, ``parent``) and table with something lost; computed
+    now, with the caller's rights. See :class:`Discard`.
+    """
+    with reraise():
+        rows = conn.execute(
+            "SELECT objectclass, objectkey, solution, discarded, shortname, tablename, description,"
+            "       rows_added, rows_removed, rows_changed, values_changed"
+            "  FROM tgsis.conflict_discards(%s, %s, %s)",
+            (version, objectclass, None if objectkey is None else _key_text(objectkey))).fetchall()
+    return [Discard(*r[:7], *(int(n) for n in r[7:])) for r in rows]
+
+
+def _lost_by(solution: str) -> str | None:
+    """The row of ``tgsis.conflict_discards`` a recorded solution stands for (manual keeps the version's object)."""
+    return {"child": "child", "manual": "child", "parent": "parent"}.get(solution)
+
+
+def recorded_discards(conn: Conn, version: str) -> dict[tuple[str, str], tuple[str, list[Discard]]]:
+    """What the solutions recorded now for ``version`` throw away, as a merge or refresh would apply them.
+
+    Returns ``{(objectclass, objectkey): (solution, discards)}`` for the solved
+    conflicts that lose something. Call it in the merge's transaction to
+    report what that merge discarded.
+    """
+    solutions = {(c.objectclass, c.objectkey): c.solution for c in find_conflicts(conn, version)}
+    lost: dict[tuple[str, str], tuple[str, list[Discard]]] = {}
+    if not any(_lost_by(s) for s in solutions.values()):
+        return lost
+    for d in conflict_discards(conn, version):
+        solution = solutions.get((d.objectclass, d.objectkey), "unsolved")
+        if _lost_by(solution) == d.solution:
+            lost.setdefault((d.objectclass, d.objectkey), (solution, []))[1].append(d)
+    return lost
+
+
+def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *,
+                     discard_other: bool = True) -> Conflict:
     """Record how a conflicting object is merged: ``parent``, ``child``, ``manual`` (or back to ``unsolved``).
+
+    Parameters
+    ----------
+    discard_other : bool
+        With ``False``, a ``child`` or ``parent`` solution that would throw away
+        edits of the other side (:func:`conflict_discards`) is refused and
+        nothing is recorded. The check and the record are one transaction.
+
+    Returns
+    -------
+    Conflict
+        The recorded row; ``discarded`` says what the solution throws away.
 
     Raises
     ------
@@ -474,12 +595,40 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
         The object is not in conflict in that version.
     InvalidInputError
         Unknown solution.
+    VersioningError
+        ``discard_other=False`` and the solution loses the other side's edits (the message counts them).
+    MissingPrivilegeError
+        ``discard_other=False`` and the caller may not read the object's rows, so what it loses cannot be counted.
     """
     with reraise(), conn.transaction():
         row = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
                            (version, objectclass, _key_text(objectkey), solution)).fetchone()
-    assert row is not None
-    return _conflict(row)
+        assert row is not None
+        conflict = _conflict(row)
+        lost_by = _lost_by(conflict.solution)
+        discards: tuple[Discard, ...] | None = ()
+        try:
+            with conn.transaction():   # read with the caller's rights: a role may resolve what it may not read
+                discards = tuple(d for d in conflict_discards(conn, version, conflict.objectclass, conflict.objectkey)
+                                 if d.solution == lost_by) if lost_by else ()
+        except MissingPrivilegeError as exc:
+            if not discard_other and conflict.solution in ("child", "parent"):
+                raise MissingPrivilegeError(
+                    f"cannot tell what solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                    f"{conflict.solution} discards of the other side's edits: {exc.message}",
+                    sqlstate=exc.sqlstate,
+                    hint="pass discard_other=True to record it all the same, or write the merged object into the "
+                         "version and record manual (tgsis.conflict_rows shows both sides' rows)") from exc
+            discards = None
+        if discards and not discard_other and conflict.solution in ("child", "parent"):
+            raise VersioningError(
+                f"solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                f"{conflict.solution} would discard {describe_discards(discards)}",
+                detail="A solution takes one side's whole object: the other side's edits since the version was "
+                       "based are lost (rows added, removed or changed; the values among them).",
+                hint="pass discard_other=True to record it all the same, or write the merged object into the "
+                     "version and record manual (tgsis.conflict_rows shows both sides' rows)")
+    return dataclasses.replace(conflict, discarded=discards)
 
 
 def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object) -> list[tuple[str, str, Any, Any]]:
