@@ -135,7 +135,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         insert_feature,
         list_feature_classes,
     )
-    from tgsis.db.classes import add_property, drop_property, rename_property
+    from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
     from tgsis.db.checkin import (
         CheckinResult,
         Checkout,
@@ -236,6 +236,7 @@ _LAZY: dict[str, str] = {
     "add_property": "tgsis.db.classes",
     "rename_property": "tgsis.db.classes",
     "drop_property": "tgsis.db.classes",
+    "fill_property_rows": "tgsis.db.classes",
     "features_in_box": "tgsis.db.features",
     "fetch_feature": "tgsis.db.features",
     "fetch_features": "tgsis.db.features",
@@ -430,6 +431,7 @@ __all__ = [
     "add_property",
     "rename_property",
     "drop_property",
+    "fill_property_rows",
     "insert_feature",
     "fetch_feature",
     "fetch_features",
