@@ -1,6 +1,6 @@
 -- tgsis.fill_property_rows(class, values): give the stored features of a class that have no vertex or cell property rows one row per vertex or cell, in every version.
 -- The repair for a class left unreadable ("... has 0 rows for N vertices")
--- by a vertex or cell property added, before tgsis 0.2.0's fix, to a class
+-- by a vertex or cell property added by an earlier tgsis (0.2.0 and before) to a class
 -- registered without one: the property is in the catalog and the table, but
 -- the features stored before have no rows. p_values names a value for
 -- every vertex or cell property of each table concerned ({"porosity": 0.2};
@@ -91,4 +91,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.fill_property_rows(text, jsonb) IS
-    'repair a class whose stored features have no vertex or cell property rows (a property added to a class registered without one, before 0.2.0): each vertex or cell of them gets a row with the values of p_values ({"property": value}), in every version; tgsis_admin members; returns per property table the geometries and rows given';
+    'repair a class whose stored features have no vertex or cell property rows (a property added to a class registered without one, by tgsis 0.2.0 and before): each vertex or cell of them gets a row with the values of p_values ({"property": value}), in every version; tgsis_admin members; returns per property table the geometries and rows given';

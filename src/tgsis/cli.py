@@ -1879,7 +1879,7 @@ def build_parser() -> argparse.ArgumentParser:
                            help="drop properties even if that deletes their stored values")
     cls_alter.add_argument("--fill-property", action="append", metavar="NAME=VALUE",
                            help="repair: give the stored features that have no rows for the vertex or cell "
-                                "properties (a property added by tgsis before 0.2.0 to a class without one) a row "
+                                "properties (a property added by tgsis 0.2.0 or earlier to a class without one) a row "
                                 "per vertex or cell holding VALUE, in every version (repeatable: one per property "
                                 "of that table); runs before the other changes")
     cls_drop = _command(cls_commands, "drop", "drop a feature class (refused while it has features)",

@@ -353,7 +353,7 @@ def fill_property_rows(conn: Conn, feature_class: str, values: Mapping[str, obje
     """Give stored features that have no vertex or cell property rows a row per vertex or cell (``tgsis.fill_property_rows``).
 
     The repair of a class whose features cannot be read ("... has 0 rows for
-    N vertices"): a vertex or cell property added, before tgsis 0.2.0, to a
+    N vertices"): a vertex or cell property added by tgsis 0.2.0 or earlier to a
     class registered without one gave the features stored then no rows.
     Each vertex or cell of those features (in every version and revision)
     gets a row holding ``values``; features that have rows keep them.
