@@ -382,7 +382,10 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     model : int
         The data model, 1 to 5 (``tgsis.data_models``); the core tables stay plain.
     partitions : int
-        2 to 1024.
+        2 to 1024, and no more than the server's lock table holds
+        (``max_locks_per_transaction`` x (``max_connections`` +
+        ``max_prepared_transactions``) locks, about 4 per partition of each
+        table; docs/scaling.md): on a default server 221 for model 1.
 
     Returns
     -------
@@ -392,7 +395,7 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     Raises
     ------
     InvalidInputError
-        ``partitions`` out of range, or model 0.
+        ``partitions`` out of range (also: more than the lock table holds; the hint gives the most), or model 0.
     NotFoundError
         No such data model.
     InUseError
