@@ -114,6 +114,48 @@ def feature_columns(fc: FeatureClass, properties: Mapping[str, Any] | None) -> d
     return {k: (json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in values.items()}
 
 
+def check_feature_values(conn: Conn, fc: FeatureClass, values: Mapping[str, Any]) -> None:
+    """Refuse, naming the property, a text value that is no value of its feature property's type.
+
+    PostgreSQL reads text such as the command line's ``--feature-property
+    n=abc`` as the column's type when the row is written, and a bad one came
+    back as a raw ``22P02`` (or ``22007``, ``22003``) naming no property. The
+    values are cast first, all in one statement within a savepoint; only if
+    that fails is each one cast alone to find which.
+
+    Raises
+    ------
+    InvalidPropertyError
+        The first value that is not one of its type (the server's words in ``detail``).
+    """
+    types = {p.name: p.type for p in fc.feature_properties}
+    texts = [(name, value, types[name]) for name, value in values.items()
+             if isinstance(value, str) and types.get(name) not in (None, "text", "character varying", "varchar")]
+    if not texts:
+        return
+
+    def cast(items: Sequence[tuple[str, str, str]]) -> None:
+        with conn.transaction():
+            conn.execute(sql.SQL("SELECT {}").format(sql.SQL(", ").join(
+                sql.SQL("CAST({} AS {})").format(sql.Placeholder(), sql.SQL(kind)) for _, _, kind in items)),
+                [value for _, value, _ in items])
+
+    try:
+        cast(texts)
+    except psycopg.DataError:
+        for item in texts:
+            try:
+                cast([item])
+            except psycopg.DataError as exc:
+                name, value, kind = item
+                shown = repr(value) if len(value) <= 100 else f"{value[:100]!r}... ({len(value)} characters)"
+                raise InvalidPropertyError(
+                    f"value {shown} of feature property {name!r} of class {fc.name} is not a valid {kind}",
+                    detail=(exc.diag.message_primary or "")[:500],
+                    hint=f"give a value PostgreSQL reads as {kind}") from None
+        raise
+
+
 def _copy_statement(table: sql.Composable, columns: Sequence[str]) -> sql.Composed:
     return sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
         table, sql.SQL(", ").join(sql.Identifier(c) for c in columns))
@@ -503,6 +545,7 @@ def local_positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], w
 def insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
     """The feature row of a new feature: its id and per-feature property values (unknown names refused)."""
     values = feature_columns(fc, properties)
+    check_feature_values(conn, fc, values)
     columns = ["_geoid", *values]
     conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
         fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
