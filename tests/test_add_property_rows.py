@@ -140,6 +140,19 @@ def test_cell_rows_in_a_child_version(conn: Conn) -> None:
     _storage_matches_geometry(conn, source="tgsis.trgl")
 
 
+def test_a_class_without_versioning(conn: Conn) -> None:
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_feature_class(conn, "c2", "SURFACE", versioned=False)
+    fid = F.insert_feature(conn, "c2", _grid(3))
+    conn.commit()
+    conn.execute("UPDATE tgsis.vrtx SET z = 4 WHERE geoid = %s AND vrtxid = 0", (fid,))   # a closed row version
+    conn.commit()
+    tgsis.add_property(conn, "c2", ("porosity", "float8"), default=0.5)
+    conn.commit()
+    assert _values(conn, fid, "porosity") == [0.5] * 9
+    assert conn.execute("SELECT count(*) FROM c2_cellpros").fetchone() == (9,)
+
+
 def _members() -> list[Any]:
     lines = LineSet([[10, 0, 0], [11, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
     points = PointSet([[20, 20, 20], [21, 20, 20]], name="samples")

@@ -7,7 +7,10 @@
 -- every revision sees a property row exactly where it sees the vertex or
 -- cell (a vertex moved in a child version has a row version per position,
 -- so has its property); the storage's statement trigger notes the objects
--- in tgsis.revision_objects, as for any direct write. p_columns get the SQL
+-- in tgsis.revision_objects, as for any direct write. A class registered
+-- without versioning keeps plain tables while the model's are versioned:
+-- its features are written in DEFAULT only, whose live rows (not closed)
+-- are their one state, and those are what its rows stand for. p_columns get the SQL
 -- expressions p_values (literals made by the caller with %L and a cast);
 -- the other columns their defaults. Only models whose vertex and cell
 -- properties are keyed by vertex or simplex id alone (no time key, no cell
@@ -29,6 +32,7 @@ DECLARE
     v_sources  text[];
     v_source   text;
     v_selects  text[] := '{}';
+    v_source_versioned boolean;
 BEGIN
     features := 0;
     rows := 0;
@@ -51,16 +55,18 @@ BEGIN
         IF NOT EXISTS (SELECT FROM tgsis.model_tables m WHERE m.tablename = v_source AND m.model = v_dm.model) THEN
             RAISE EXCEPTION 'model % has no table tgsis.%', v_dm.model, v_source USING ERRCODE = 'TG103';
         END IF;
-        IF v_versioned <> EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_source) THEN
-            RAISE EXCEPTION 'table %.% and tgsis.% are not both versioned', p_class.schemaname, p_table, v_source
+        v_source_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_source);
+        IF v_versioned AND NOT v_source_versioned THEN
+            RAISE EXCEPTION 'table %.% is versioned and tgsis.% is not', p_class.schemaname, p_table, v_source
                 USING ERRCODE = 'TG103', HINT = 'SELECT tgsis.enable_feature_versioning() versions them all';
         END IF;
-        v_selects := v_selects || format('SELECT s.geoid, s.%I%s FROM %s s WHERE s.geoid = ANY($1)',
+        v_selects := v_selects || format('SELECT s.geoid, s.%I%s FROM %s s WHERE s.geoid = ANY($1)%s',
                                          CASE v_source WHEN 'vrtx' THEN 'vrtxid' WHEN 'point' THEN 'pointid'
                                                        WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid'
                                                        ELSE 'tetraid' END,
                                          CASE WHEN v_versioned THEN ', s.revision, s.lastrevs' ELSE '' END,
-                                         tgsis.storage_table('tgsis', v_source));
+                                         tgsis.storage_table('tgsis', v_source),
+                                         CASE WHEN v_source_versioned AND NOT v_versioned THEN ' AND NOT s.revclosed' ELSE '' END);
     END LOOP;
     EXECUTE format('WITH made AS (INSERT INTO %s (_geoid, _idx%s%s) SELECT r.* %s FROM (%s) AS r RETURNING _geoid, _idx)
                     SELECT count(DISTINCT _geoid), count(DISTINCT (_geoid, _idx)) FROM made',
