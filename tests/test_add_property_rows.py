@@ -17,6 +17,7 @@ import pytest
 
 import tgsis
 from tests.roles import login_roles
+from tests.sessions import Background, connect, wait_until_blocked
 from tgsis.cli import main
 from tgsis.db import features as F
 from tgsis.mesh import GeometryCollection, LineSet, PointSet, Surface, TetraMesh
@@ -151,6 +152,39 @@ def test_a_class_without_versioning(conn: Conn) -> None:
     conn.commit()
     assert _values(conn, fid, "porosity") == [0.5] * 9
     assert conn.execute("SELECT count(*) FROM c2_cellpros").fetchone() == (9,)
+
+
+@pytest.mark.parametrize("versioned", [False, True], ids=["plain", "versioned"])
+def test_uploads_at_the_same_time(db_dsn: str, versioned: bool) -> None:
+    with psycopg.connect(db_dsn) as conn:
+        first, _ = _bare(conn, versioned=versioned)
+        # 1. an upload in flight: the change waits for it, then gives its feature rows too
+        writer = connect(db_dsn, "writer")
+        early = F.insert_feature(writer, "c2", _grid(2, 3.0))
+        edit = Background(db_dsn, "editor", lambda c: tgsis.add_property(c, "c2", ("porosity", "float8"), default=1))
+        wait_until_blocked(conn, edit.pid, writer.info.backend_pid)
+        writer.commit()
+        edit.finish()
+        assert _values(conn, early, "porosity") == [1.0] * 4
+        conn.rollback()
+        # 2. an upload that read the class before a change in flight, and writes after it: refused, nothing stored
+        F.create_feature_class(conn, "c3", "SURFACE")
+        conn.commit()
+        stale = F.get_feature_class(conn, "c3")
+        conn.rollback()
+        editor = connect(db_dsn, "editor")
+        editor.execute("SELECT tgsis.add_property('c3', 'cell', '[\"k\", \"float8\"]', '2')")
+        late = Background(db_dsn, "writer", lambda c: F.insert_feature(c, stale, _grid(2)))
+        wait_until_blocked(conn, late.pid, editor.info.backend_pid)
+        editor.commit()
+        with pytest.raises(tgsis.InUseError, match="feature class c3 gained vertex or cell properties while the "
+                                                   "feature was written: nothing of it was stored"):
+            late.finish()
+        assert conn.execute("SELECT count(*) FROM c3").fetchone() == (0,)
+        assert conn.execute("SELECT count(*) FROM tgsis.geometry WHERE geoid NOT IN (%s, %s)",
+                            (first, early)).fetchone() == (1,)   # the second feature of _bare only
+        writer.close()
+        editor.close()
 
 
 def _members() -> list[Any]:

@@ -24,7 +24,7 @@ from psycopg import sql
 
 from tgsis.db.classes import FeatureClass, stores_part_column
 from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_chunks, encode_rows, numpy_dtype, wire_shape
-from tgsis.errors import DatabaseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
+from tgsis.errors import DatabaseError, InUseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
 from tgsis.mesh import Mesh
 
 log = logging.getLogger("tgsis.db.features")
@@ -154,6 +154,30 @@ def check_feature_values(conn: Conn, fc: FeatureClass, values: Mapping[str, Any]
                     detail=(exc.diag.message_primary or "")[:500],
                     hint=f"give a value PostgreSQL reads as {kind}") from None
         raise
+
+
+def check_class_unchanged(conn: Conn, fc: FeatureClass) -> None:
+    """After a feature's rows are written: refuse if vertex or cell properties were added meanwhile to a table it wrote none to.
+
+    An upload writes rows to a vertex or cell property table only for the
+    properties its :class:`FeatureClass` lists. ``tgsis.add_property`` gives
+    every stored feature its rows and locks the feature table until it
+    commits, so an upload whose feature row waited for it reads the new
+    catalog here: with a property the upload wrote no rows for, the feature
+    would be unreadable ("... has 0 rows for N vertices"), so it is refused
+    and nothing of it is stored. Only classes with no property of an
+    alignment pay the query (elsewhere the new column's NOT NULL refuses the
+    stale rows itself).
+    """
+    other = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
+    if fc.aligned(fc.alignment) and (fc.otherprotable is None or fc.aligned(other)):
+        return
+    row = conn.execute("SELECT jsonb_array_length(cell_properties) FROM tgsis.catalog WHERE classname = %s",
+                       (fc.name,)).fetchone()
+    if row is not None and int(row[0]) != len(fc.cell_properties):
+        raise InUseError(f"feature class {fc.name} gained vertex or cell properties while the feature was written: "
+                         "nothing of it was stored",
+                         hint="read the class again (tgsis.get_feature_class) and give the new properties' values")
 
 
 def _copy_statement(table: sql.Composable, columns: Sequence[str]) -> sql.Composed:
@@ -550,3 +574,4 @@ def insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Map
     conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
         fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
         sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])
+    check_class_unchanged(conn, fc)

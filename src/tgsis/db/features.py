@@ -30,7 +30,7 @@ from tgsis.arguments import check_module, checked_ids
 from tgsis.db import gmaps, temporal
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
-from tgsis.db._transfer import Storage, aligned_properties, check_feature_values, feature_columns
+from tgsis.db._transfer import Storage, aligned_properties, check_class_unchanged, check_feature_values, feature_columns
 from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_feature_class,
                               drop_feature_class, get_feature_class, list_feature_classes)
 from tgsis.db.meaning import meaning_of, restore_meaning
@@ -190,6 +190,7 @@ def insert_feature(
                 fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
                 sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
             [geoid, *feature_values.values()])
+        check_class_unchanged(conn, fc)   # a property added meanwhile: this feature has no rows for it
     log.info("stored %s feature %d: %d vertices, %d cells%s", fc.name, geoid, mesh.n_vertices, mesh.n_cells,
              f" in {len(members)} members" if isinstance(mesh, GeometryCollection) else "")
     return geoid
