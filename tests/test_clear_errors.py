@@ -115,3 +115,18 @@ def test_a_model5_axis_no_gmap_has(conn: Conn) -> None:
     conn.rollback()
     # an axis some features lack is no error: they are not in the box
     assert G.md_in_box(conn, fc, ["knowledge"], [1.5], [2]) == [geoid]
+
+
+@pytest.mark.parametrize(("query", "sqlstate", "message"), [
+    ("SELECT tgsis.partition_model_storage(1::smallint, 99999999999)", "TG100",
+     "number of partitions 99999999999 is out of range"),
+    ("SELECT tgsis.partition_model_storage(99999999999, 4)", "TG200", "data model 99999999999 does not exist"),
+    ("SELECT tgsis.partition_model_storage(40000, 4)", "TG200", "data model 40000 does not exist"),
+])
+def test_partition_numbers_in_sql(conn: Conn, query: str, sqlstate: str, message: str) -> None:
+    with pytest.raises(psycopg.Error) as caught:
+        conn.execute(query)  # type: ignore[arg-type]  # the test's own literals
+    assert caught.value.sqlstate == sqlstate and message in str(caught.value.diag.message_primary)
+    conn.rollback()
+    # written without casts, a good call works
+    assert "vrtx" in conn.execute("SELECT tgsis.partition_model_storage(1, 2)").fetchone()[0]  # type: ignore[index]
