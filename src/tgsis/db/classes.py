@@ -30,6 +30,7 @@ __all__ = [
     "add_property",
     "rename_property",
     "drop_property",
+    "fill_property_rows",
     "class_of_feature",
     "stores_part_column",
 ]
