@@ -38,8 +38,8 @@ def test_alter_adds_renames_and_drops(db_dsn: str, versioned: bool, capsys: pyte
                  "--add-feature-property", "author:text=ann", "--rename-property", "azi", "azimuth"]) == 0
     out = capsys.readouterr().out
     assert out.splitlines() == [
-        "renamed property azi to azimuth", "added feature property author (stored rows: ann)",
-        "added cell property dip (stored rows: 45)",
+        "renamed property azi to azimuth", "added feature property author: ann stored in 1 feature(s)",
+        "added cell property dip: 45 stored in 3 vertex row(s) of 1 feature(s)",
         "feature class faults: feature properties release text, author text; vertex properties azimuth double "
         "precision, dip double precision"]
     with psycopg.connect(db_dsn) as conn:

@@ -73,7 +73,10 @@ def test_box_queries_over_any_axes_use_the_indexes(conn: Conn) -> None:
     assert G.md_in_box(conn, fc, ["x", "knowledge"], [0, 1.5], [2, 2]) == [geoid]
     assert G.md_in_box(conn, fc, ["x"], [999, ], [2000]) == [far]
     assert G.md_in_box(conn, fc, ["knowledge"], [3], [4]) == []
-    assert G.md_in_box(conn, fc, ["age"], [0], [1]) == []                     # no feature has that axis
+    with pytest.raises(tgsis.InvalidInputError, match="no feature of class knowledge has an axis 'age'") as caught:
+        G.md_in_box(conn, fc, ["age"], [0], [1])                               # no feature has that axis
+    assert caught.value.detail == "Their axes: knowledge, x, y, z."
+    conn.rollback()
     # the points of the last interpretation deeper than -115 (x, y, knowledge and z at once)
     ids = G.md_vertices_in_box(conn, geoid, ["z", "knowledge"], [-1e9, 1.5], [-115, 2])
     expected = np.flatnonzero((history.points[:, 3] >= 1.5) & (history.points[:, 2] <= -115))

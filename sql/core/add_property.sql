@@ -10,6 +10,15 @@
 -- may not (they travel as numpy arrays), so a class with rows needs a
 -- default for them; a vector property gets it in each component. New rows
 -- give their own values, as at registration (the default is not kept).
+-- A class registered without vertex or cell properties of that alignment has
+-- no rows in the table yet: every stored feature (and collection member
+-- that has all the class's properties) gets one per vertex or cell holding
+-- the default, in every version and revision (tgsis.insert_property_rows),
+-- or the change is refused with nothing done (no default; a model keyed by
+-- time or cell level; a table whose other properties lack those rows too,
+-- which tgsis.fill_property_rows repairs first). The feature table is locked
+-- against writers meanwhile, so an upload in flight is counted or waits.
+-- A NOTICE says how many features and rows got the default.
 -- Runs as tgsis's owner (SECURITY DEFINER), who owns the class's tables, for
 -- members of tgsis_admin, like register_feature_class.
 CREATE FUNCTION tgsis.add_property(p_class text, p_kind text, p_property jsonb, p_default text DEFAULT NULL)
@@ -30,6 +39,10 @@ DECLARE
     v_notnull  boolean;
     v_value    text;
     v_rows     boolean;
+    v_missing  bigint[] := '{}';
+    v_made     record;
+    v_geoms    bigint;
+    v_count    bigint;
     v_what     text;
     v_row      tgsis.catalog;
 BEGIN
@@ -108,6 +121,28 @@ BEGIN
         END;
     END IF;
     EXECUTE format('SELECT EXISTS (SELECT FROM %s)', tgsis.storage_table(v_class.schemaname, v_table)) INTO v_rows;
+    IF p_kind = 'cell' THEN
+        -- uploads in flight write the feature table first: they finish before this looks, or wait for the change
+        EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', tgsis.storage_table(v_class.schemaname, v_class.featuretable));
+        v_missing := tgsis.property_rows_missing(v_class, v_table);
+    END IF;
+    IF cardinality(v_missing) > 0 THEN
+        IF p_default IS NULL THEN
+            RAISE EXCEPTION 'feature class % has % stored geometries without rows in %, which need a value of the new % property %',
+                    p_class, cardinality(v_missing), v_table, lower(coalesce(v_align, '')), quote_literal(v_prop.name)
+                USING ERRCODE = 'TG103',
+                      DETAIL = 'The class had no vertex or cell property of that alignment: its features have no rows in that table yet, and each vertex or cell gets one with the default.',
+                      HINT = 'give p_default, e.g. ''0''';
+        END IF;
+        IF EXISTS (SELECT FROM jsonb_array_elements(v_class.cell_properties) p
+                    WHERE coalesce(p ->> 'alignment', v_class.proalignment) = coalesce(v_align, v_class.proalignment)) THEN
+            RAISE EXCEPTION 'feature class % has % stored geometries without rows in %, though it has % properties already',
+                    p_class, cardinality(v_missing), v_table, lower(coalesce(v_align, v_class.proalignment))
+                USING ERRCODE = 'TG103',
+                      DETAIL = 'Their features cannot be read until each vertex or cell has a row with a value of every property of that table.',
+                      HINT = format('give them rows first: SELECT * FROM tgsis.fill_property_rows(%L, ''{"property": value}'')', p_class);
+        END IF;
+    END IF;
     IF v_notnull AND p_default IS NULL AND v_rows THEN
         RAISE EXCEPTION 'feature class % has stored rows in %, which need a value of the new % property %', p_class,
                 v_table, lower(coalesce(v_align, '')), quote_literal(v_prop.name)
@@ -128,6 +163,17 @@ BEGIN
                                 v_prop.name)
                     ELSE '' END),
         format('ALTER COLUMN %I DROP DEFAULT', v_prop.name)], jsonb_build_array(v_item), v_what);
+    IF cardinality(v_missing) > 0 THEN
+        SELECT * INTO v_made FROM tgsis.insert_property_rows(v_class, v_table, v_missing, ARRAY[v_prop.name], ARRAY[
+            CASE WHEN v_prop.size > 1 THEN format('array_fill(%L::%s, ARRAY[%s])', p_default, v_prop.typename, v_prop.size)
+                 ELSE format('%L::%s', p_default, v_prop.typename) END]);
+    END IF;
+    IF p_default IS NOT NULL THEN
+        EXECUTE format('SELECT count(DISTINCT _geoid), count(*) FROM %I.%I', v_class.schemaname, v_table)
+           INTO v_geoms, v_count;
+        RAISE NOTICE 'new % % of feature class %: % in % row(s) of % stored geometries (as this version reads them; every version''s rows got it)',
+            v_what, v_prop.name, p_class, p_default, v_count, v_geoms;
+    END IF;
     UPDATE tgsis.catalog c SET feature_properties = CASE WHEN p_kind = 'feature' THEN c.feature_properties || v_item
                                                          ELSE c.feature_properties END,
                                cell_properties = CASE WHEN p_kind = 'cell' THEN c.cell_properties || v_item

@@ -15,6 +15,17 @@
 -- plain. The partitions grant nothing of their own, as enable_versioning
 -- requires. Run it as the tables' owner (the role that installed tgsis) or
 -- a superuser; PUBLIC may not.
+-- Every partition made holds locks until the transaction ends (its table,
+-- row type, indexes and their constraints, TOAST table and index), and
+-- PostgreSQL's shared lock table is sized for max_locks_per_transaction x
+-- (max_connections + max_prepared_transactions) locks of all sessions: a
+-- call needing more failed half-way with 53200 out of shared memory (model 1
+-- in 512 partitions on a default server). The locks a call needs are
+-- estimated from the model's tables before anything is done: per partition
+-- of each table 2 + 2 per index + 3 for TOAST, plus 30 per table (measured:
+-- the estimate is at or above the locks held on PostgreSQL 15 and 18), and a
+-- call needing more than that documented size is refused (TG100) with the
+-- largest number of partitions the server takes, nothing changed.
 CREATE FUNCTION tgsis.partition_model_storage(p_model smallint, p_partitions integer)
 RETURNS text[]
 LANGUAGE plpgsql
@@ -35,6 +46,9 @@ DECLARE
     v_rows    boolean;
     v_new     regclass;
     v_r       integer;
+    v_cost    bigint;
+    v_fixed   bigint;
+    v_room    bigint;
 BEGIN
     IF p_partitions IS NULL OR p_partitions NOT BETWEEN 2 AND 1024 THEN
         RAISE EXCEPTION 'number of partitions % is out of range', coalesce(p_partitions::text, 'NULL')
@@ -50,6 +64,25 @@ BEGIN
     IF v_tables IS NULL THEN
         RAISE EXCEPTION 'data model % does not exist', coalesce(p_model::text, 'NULL')
             USING ERRCODE = 'TG200', HINT = 'the data models are in tgsis.data_models';
+    END IF;
+
+    -- the locks the call will hold at its end, against the lock table's documented size
+    SELECT sum(2 + 2 * (SELECT count(*) FROM pg_index i WHERE i.indrelid = c.oid)
+               + CASE WHEN c.reltoastrelid <> 0 THEN 3 ELSE 0 END), 30 * count(*)
+      INTO v_cost, v_fixed
+      FROM unnest(v_tables) AS t(tablename) JOIN pg_class c ON c.oid = to_regclass(format('tgsis.%I', t.tablename));
+    v_room := current_setting('max_locks_per_transaction')::bigint
+              * (current_setting('max_connections')::bigint + current_setting('max_prepared_transactions')::bigint);
+    IF p_partitions * v_cost + v_fixed > v_room THEN
+        RAISE EXCEPTION 'data model % in % partitions needs about % locks in one transaction, more than this server''s lock table holds (%)',
+                p_model, p_partitions, p_partitions * v_cost + v_fixed, v_room
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('Each partition of the %s tables of model %s holds %s locks until the transaction ends (its table, row type, indexes, TOAST), %s in all; '
+                                  'PostgreSQL''s shared lock table holds max_locks_per_transaction (%s) x (max_connections (%s) + max_prepared_transactions (%s)) = %s locks of all sessions.',
+                                  cardinality(v_tables), p_model, v_cost, v_fixed, current_setting('max_locks_per_transaction'),
+                                  current_setting('max_connections'), current_setting('max_prepared_transactions'), v_room),
+                  HINT = format('give at most %s partitions, or raise max_locks_per_transaction (a server restart) for more',
+                                greatest((v_room - v_fixed) / v_cost, 0));
     END IF;
 
     -- every table first: locked, then checked; nothing is changed before all pass
@@ -137,4 +170,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.partition_model_storage(smallint, integer) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.partition_model_storage(smallint, integer) IS
-    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions, keeping their definitions, index names, comments, owner and rights; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
+    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner and rights; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';

@@ -1,7 +1,9 @@
 -- tgsis.md_vertices_in_box(geoid, axes, low, high): the points of a multiply indexed G-map inside a box over some of its axes.
 -- E.g. the part of a horizon's interpretations between knowledge 1 and 2
 -- over an x-y window. The points are GiST-indexed as cubes
--- (md_vertex_point_idx); the box is unbounded on the axes not given.
+-- (md_vertex_point_idx); the box is unbounded on the axes not given. An
+-- axis the G-map does not have is refused (TG100, naming it and the G-map's
+-- axes) rather than answered with no point.
 CREATE FUNCTION tgsis.md_vertices_in_box(p_geoid bigint, p_axes text[], p_low double precision[], p_high double precision[])
 RETURNS TABLE (vrtxid bigint, coordinate double precision[])
 LANGUAGE plpgsql
@@ -9,12 +11,19 @@ STABLE
 SET search_path FROM CURRENT
 AS $$
 DECLARE
-    v_box cube;
+    v_box  cube;
+    v_axes text[];
 BEGIN
-    SELECT tgsis.md_query_box(g.axes, p_axes, p_low, p_high) INTO v_box FROM tgsis.md_gmap g WHERE g.geoid = p_geoid;
+    SELECT tgsis.md_query_box(g.axes, p_axes, p_low, p_high), g.axes INTO v_box, v_axes FROM tgsis.md_gmap g WHERE g.geoid = p_geoid;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % is not a stored multiply indexed G-map', p_geoid
             USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.md_gmap lists them';
+    END IF;
+    IF v_box IS NULL THEN   -- the box is well formed (md_query_box checked it): an axis is not the G-map's
+        RAISE EXCEPTION 'multiply indexed G-map % has no axis %', p_geoid,
+                quote_literal(left((SELECT a FROM unnest(p_axes) a WHERE a <> ALL (v_axes) LIMIT 1), 100))
+            USING ERRCODE = 'TG100', DETAIL = format('Its axes: %s.', array_to_string(v_axes, ', ')),
+                  HINT = 'p_axes names some of the G-map''s axes (SELECT axes FROM tgsis.md_gmap WHERE geoid = ...)';
     END IF;
     RETURN QUERY
     SELECT v.vrtxid, v.coordinate FROM tgsis.md_vertex v

@@ -15,6 +15,9 @@ BEGIN
     IF NOT FOUND THEN
         RAISE EXCEPTION 'geometry % does not exist', p_geoid USING ERRCODE = 'TG200';
     END IF;
+    IF v_geo.timemodel NOT IN ('INSTANTS', 'EVOLVING') THEN   -- the other models' rows are checked by their own hooks
+        PERFORM tgsis.no_model_rule(v_geo.timemodel, 'tgsis.check_temporal_geometry', '{INSTANTS,EVOLVING}');
+    END IF;
     IF v_geo.timemodel = 'INSTANTS' THEN
         RETURN QUERY SELECT 'vertex or triangle at an instant not in tgsis.times'::text, count(*), min(r.times)::text
                        FROM (SELECT v.times FROM tgsis.times_vrtx v WHERE v.geoid = p_geoid

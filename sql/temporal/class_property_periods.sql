@@ -18,6 +18,9 @@ BEGIN
         RAISE EXCEPTION 'feature class % is static: its properties do not change in time', p_class
             USING ERRCODE = 'TG100', HINT = 'ask this of an INSTANTS or EVOLVING class';
     END IF;
+    IF v_class.timemodel NOT IN ('INSTANTS', 'EVOLVING') THEN   -- property_periods's rules
+        PERFORM tgsis.no_model_rule(v_class.timemodel, 'tgsis.class_property_periods', '{INSTANTS,EVOLVING}');
+    END IF;
     EXECUTE format('SELECT min(_geoid) FROM %I.%I', v_class.schemaname, v_class.featuretable) INTO v_first;
     IF v_first IS NULL THEN
         RETURN;   -- no feature: nothing holds (and nothing to check the question against)

@@ -18,6 +18,9 @@ DECLARE
     v_class tgsis.catalog := tgsis.checked_question(p_class, p_geoid, p_property, true, p_op, p_value, p_convention);
     v_first text;
 BEGIN
+    IF v_class.timemodel NOT IN ('INSTANTS', 'EVOLVING') THEN
+        PERFORM tgsis.no_model_rule(v_class.timemodel, 'tgsis.first_time', '{INSTANTS,EVOLVING}');
+    END IF;
     IF v_class.timemodel = 'INSTANTS' THEN
         v_first := format($q$
             SELECT c._idx, min(lower(i.period))

@@ -34,6 +34,9 @@ BEGIN
                                     p_property, v_class.schemaname, v_class.cellprotable) USING p_geoid;
         RETURN;
     END IF;
+    IF v_class.timemodel NOT IN ('INSTANTS', 'EVOLVING') THEN
+        PERFORM tgsis.no_model_rule(v_class.timemodel, 'tgsis.property_at', '{STATIC,INSTANTS,EVOLVING}');
+    END IF;
     PERFORM tgsis.checked_question(p_class, p_geoid, p_property, true, '=', 0, p_convention);
     PERFORM tgsis.checked_time(p_t);
     IF v_class.timemodel = 'INSTANTS' THEN

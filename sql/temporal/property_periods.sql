@@ -21,6 +21,9 @@ DECLARE
     v_class tgsis.catalog := tgsis.checked_question(p_class, p_geoid, p_property, false, p_op, p_value, p_convention);
     v_pieces text;
 BEGIN
+    IF v_class.timemodel NOT IN ('INSTANTS', 'EVOLVING') THEN
+        PERFORM tgsis.no_model_rule(v_class.timemodel, 'tgsis.property_periods', '{INSTANTS,EVOLVING}');
+    END IF;
     IF v_class.timemodel = 'INSTANTS' THEN
         v_pieces := format($q$
             SELECT i.period AS r

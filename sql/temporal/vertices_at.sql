@@ -43,6 +43,11 @@ AS $$
      WHERE v.geoid = p_geoid
        AND EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = p_geoid AND g.timemodel = 'STATIC')
        AND tgsis.checked_convention(p_convention) IS NOT NULL
+    UNION ALL   -- another model is refused (TG203), not answered empty
+    SELECT NULL, NULL, NULL, NULL
+      FROM tgsis.geometry g
+     WHERE g.geoid = p_geoid AND g.timemodel NOT IN ('STATIC', 'INSTANTS', 'EVOLVING')
+       AND tgsis.no_model_rule(g.timemodel, 'tgsis.vertices_at', '{STATIC,INSTANTS,EVOLVING}')
 $$;
 
 COMMENT ON FUNCTION tgsis.vertices_at(bigint, double precision, text) IS

@@ -45,6 +45,7 @@ from tgsis.errors import (
     FileFormatError,
     InstallationError,
     InUseError,
+    UnknownDataModelError,
     InvalidGeometryError,
     InvalidGMapError,
     InvalidInputError,
@@ -137,7 +138,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         insert_feature,
         list_feature_classes,
     )
-    from tgsis.db.classes import add_property, drop_property, rename_property
+    from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
     from tgsis.db.checkin import (
         CheckinResult,
         Checkout,
@@ -240,6 +241,7 @@ _LAZY: dict[str, str] = {
     "add_property": "tgsis.db.classes",
     "rename_property": "tgsis.db.classes",
     "drop_property": "tgsis.db.classes",
+    "fill_property_rows": "tgsis.db.classes",
     "features_in_box": "tgsis.db.features",
     "fetch_feature": "tgsis.db.features",
     "fetch_features": "tgsis.db.features",
@@ -436,6 +438,7 @@ __all__ = [
     "add_property",
     "rename_property",
     "drop_property",
+    "fill_property_rows",
     "insert_feature",
     "fetch_feature",
     "fetch_features",
@@ -492,6 +495,7 @@ __all__ = [
     "SkippedObjectWarning",
     "InstallationError",
     "InUseError",
+    "UnknownDataModelError",
     "InvalidGeometryError",
     "InvalidGMapError",
     "InvalidInputError",

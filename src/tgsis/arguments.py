@@ -32,7 +32,7 @@ from typing import Any
 
 from tgsis.errors import InvalidInputError
 
-__all__ = ["check_module", "checked", "INT4_PARAMETERS"]
+__all__ = ["check_module", "checked", "checked_ids", "no_nul", "INT4_PARAMETERS"]
 
 #: Parameters whose SQL counterpart is ``integer`` (4 bytes) rather than ``bigint``.
 INT4_PARAMETERS = frozenset({"revision", "a_revision", "b_revision", "iudorder", "srs"})
@@ -84,6 +84,35 @@ def _check_text(name: str, value: Any) -> None:
         for index, item in enumerate(value):
             if isinstance(item, str) and "\x00" in item:
                 raise _nul(f"{name}[{index}]", item)
+
+
+def no_nul(name: str, value: str | None) -> str | None:
+    """``value`` unchanged, or :class:`InvalidInputError` naming ``name`` if it holds a NUL byte.
+
+    For text that reaches PostgreSQL without being a parameter of a public
+    function, e.g. the name a mesh read from a file carries.
+    """
+    if value is not None and "\x00" in value:
+        raise _nul(name, value)
+    return value
+
+
+def checked_ids(name: str, values: Iterable[Any]) -> list[int]:
+    """Object ids of a sequence: integers (not bool, not 1.5) in the range of ``bigint``, else :class:`InvalidInputError`.
+
+    ``int(1.5)`` is 1: an id that is no integer is refused rather than
+    taken for another object.
+    """
+    ids: list[int] = []
+    for index, value in enumerate(values):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise InvalidInputError(f"{name}[{index}] must be an integer id, not {type(value).__name__} "
+                                    f"{repr(value)[:100]}")
+        if not _INT8[0] <= int(value) <= _INT8[1]:
+            raise InvalidInputError(f"{name}[{index}] = {str(int(value))[:100]} is out of range: it must be from "
+                                    f"{_INT8[0]} to {_INT8[1]}")
+        ids.append(int(value))
+    return ids
 
 
 def _check(name: str, kinds: frozenset[str], value: Any) -> None:

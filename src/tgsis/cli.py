@@ -33,7 +33,7 @@ from tgsis.db.install import install, installed_version, uninstall
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis import clihints, clistate, cliout
 from tgsis.db import versions as V
-from tgsis.db.classes import PropertyKind, add_property, drop_property, rename_property
+from tgsis.db.classes import PropertyKind, add_property, drop_property, fill_property_rows, rename_property
 from tgsis.db.features import (
     FeatureClass,
     Property,
@@ -342,7 +342,35 @@ def _properties_json(fc: FeatureClass) -> dict[str, Any]:
             "instant_properties": [{"name": p.name, "type": p.type} for p in fc.instant_properties]}
 
 
+def _stored_count(conn: psycopg.Connection[Any], fc: FeatureClass, kind: str, prop: Property | tuple[str, str],
+                  ) -> tuple[int, int, str]:
+    """How many rows the working version reads with a new property: (rows, geometries, what a row is)."""
+    if kind == "feature":
+        table, what = fc.featuretable, "feature"
+    elif kind == "instant":
+        table, what = fc.protable or fc.featuretable, "instant row"
+    else:
+        alignment = prop.alignment if isinstance(prop, Property) and prop.alignment else fc.alignment
+        table, what = fc.property_table(alignment) or fc.cellprotable, f"{alignment.lower()} row"
+    row = conn.execute(psycopg_sql.SQL("SELECT count(*), count(DISTINCT _geoid) FROM {}").format(
+        fc.qualified(table))).fetchone()
+    assert row is not None
+    return int(row[0]), int(row[1]), what
+
+
+def _value_pairs(items: Sequence[str] | None, flag: str) -> dict[str, str]:
+    """``NAME=VALUE`` items (repeatable flag)."""
+    values: dict[str, str] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise InvalidInputError(f"{flag} {item[:200]!r} must be NAME=VALUE", hint=f"e.g. {flag} porosity=0.2")
+        values[name] = value
+    return values
+
+
 def cmd_class_alter(args: argparse.Namespace) -> int:
+    fills = _value_pairs(args.fill_property, "--fill-property")
     drops = [_property_ref(name) for name in args.drop_property or []]
     renames = [(*_property_ref(old), new) for old, new in args.rename_property or []]
     adds: list[tuple[PropertyKind, Property | tuple[str, str], str | None]] = []
@@ -355,13 +383,16 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
     for item in args.add_instant_property or []:
         spec, default = _with_default(item)
         adds.extend(("instant", pair, default) for pair in _pairs([spec], "--add-instant-property"))
-    if not (drops or renames or adds):
+    if not (fills or drops or renames or adds):
         raise InvalidInputError("tgsis class alter needs a change",
                                 hint="give --add-property, --add-feature-property, --add-instant-property, "
-                                     "--rename-property or --drop-property")
+                                     "--rename-property, --drop-property or --fill-property")
     changes: list[dict[str, Any]] = []
     with _connect(args) as conn, conn.transaction():   # every change or none
         fc = get_feature_class(conn, args.name)
+        if fills:
+            for table, (geometries, rows) in fill_property_rows(conn, args.name, fills).items():
+                changes.append({"op": "fill", "table": table, "geometries": geometries, "rows": rows, "values": fills})
         for name, kind in drops:
             fc = drop_property(conn, args.name, name, kind=kind, force=args.force)
             changes.append({"op": "drop", "property": name, "kind": kind})
@@ -371,19 +402,30 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
         for kind, prop, default in adds:
             fc = add_property(conn, args.name, prop, kind=kind, default=default)
             name = prop.name if isinstance(prop, Property) else prop[0]
-            changes.append({"op": "add", "property": name, "kind": kind, "default": default})
+            rows, geometries, what = _stored_count(conn, fc, kind, prop)
+            changes.append({"op": "add", "property": name, "kind": kind, "default": default,
+                            "stored_rows": rows if default is not None else 0,
+                            "stored_geometries": geometries if default is not None else 0, "row": what})
     if _json(args):
         cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
         return 0
+    members = fc.geotype is Geotype.GEOMETRYCOLLECTION
     for change in changes:
-        what = f"{change['kind']} property " if change["kind"] else "property "
-        if change["op"] == "drop":
+        what = f"{change['kind']} property " if change.get("kind") else "property "
+        if change["op"] == "fill":
+            _out(f"filled {change['table']}: {change['rows']} row(s) of {change['geometries']} "
+                 f"{'member(s)' if members else 'feature(s)'} that had none, in every version")
+        elif change["op"] == "drop":
             _out(f"dropped {what}{change['property']}")
         elif change["op"] == "rename":
             _out(f"renamed {what}{change['property']} to {change['to']}")
+        elif change["default"] is None:
+            _out(f"added {what}{change['property']}")
+        elif change["kind"] == "feature":
+            _out(f"added {what}{change['property']}: {change['default']} stored in {change['stored_rows']} feature(s)")
         else:
-            _out(f"added {what}{change['property']}"
-                 + (f" (stored rows: {change['default']})" if change["default"] is not None else ""))
+            _out(f"added {what}{change['property']}: {change['default']} stored in {change['stored_rows']} "
+                 f"{change['row']}(s) of {change['stored_geometries']} {'member(s)' if members else 'feature(s)'}")
     cprops = ", ".join(f"{p.name} {p.type}{f'[{p.size}]' if p.size > 1 else ''}"
                        f"{f' ({p.alignment.lower()})' if p.alignment else ''}" for p in fc.cell_properties) or "-"
     _out(f"feature class {fc.name}: feature properties "
@@ -1865,7 +1907,8 @@ def build_parser() -> argparse.ArgumentParser:
                          ["tgsis class alter horizons --add-property permeability:float8=0 --add-feature-property "
                           "author:text",
                           "tgsis class alter horizons --rename-property porosity phi --drop-property author",
-                          "tgsis class alter horizons --drop-property phi --force   # deletes its values"],
+                          "tgsis class alter horizons --drop-property phi --force   # deletes its values",
+                          "tgsis class alter horizons --fill-property porosity=0.2   # features without rows get them"],
                          cmd_class_alter, tabular=False)
     cls_alter.add_argument("name", help="the class to change")
     cls_alter.add_argument("--add-property", action="append", metavar="NAME:TYPE[:SIZE][:VERTEX|CELL][=VALUE]",
@@ -1886,6 +1929,11 @@ def build_parser() -> argparse.ArgumentParser:
                                 "stored values would be lost, unless --force")
     cls_alter.add_argument("--force", action="store_true",
                            help="drop properties even if that deletes their stored values")
+    cls_alter.add_argument("--fill-property", action="append", metavar="NAME=VALUE",
+                           help="repair: give the stored features that have no rows for the vertex or cell "
+                                "properties (a property added by tgsis 0.2.0 or earlier to a class without one) a row "
+                                "per vertex or cell holding VALUE, in every version (repeatable: one per property "
+                                "of that table); runs before the other changes")
     cls_drop = _command(cls_commands, "drop", "drop a feature class (refused while it has features)",
                         ["tgsis class drop faults", "tgsis class drop faults --force   # with its features"],
                         cmd_class_drop)

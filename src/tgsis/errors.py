@@ -38,6 +38,7 @@ __all__ = [
     "NotVersionedError",
     "AlreadyExistsError",
     "InUseError",
+    "UnknownDataModelError",
     "VersioningError",
     "ReadOnlyRevisionError",
     "UnsolvedConflictsError",
@@ -172,6 +173,12 @@ class InUseError(Error):
     """An object cannot be dropped or changed while others depend on it."""
 
     code = "TG202"
+
+
+class UnknownDataModelError(Error):
+    """A geometry or feature class of a data model that a function has no rule for, or that tgsis.data_models does not register."""
+
+    code = "TG203"
 
 
 class VersioningError(Error):

@@ -16,6 +16,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import no_nul
 from tgsis.db._transfer import Packed, Storage, columns_out_all, concat, local_positions, row_keys, rows_by_geoid, stored_cell_properties
 from tgsis.db.classes import FeatureClass, Property, stores_part_column
 from tgsis.db.meaning import Meaning, part_runs, parts_from_runs, restore_meaning
@@ -91,7 +92,7 @@ def new_static_geometry(conn: Conn, geometry: Geometry, name: str | None, meanin
     geoids: list[int] | None = [] if isinstance(geometry, GeometryCollection) else None  # members come next
     row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s, 'STATIC', false, %s::real[], %s, "
                        "%s::jsonb, %s::jsonb, %s)",
-                       (geometry.geotype.value, name, bounds, geometry.n_vertices, geometry.n_cells, geoids,
+                       (geometry.geotype.value, no_nul("geometry name", name), bounds, geometry.n_vertices, geometry.n_cells, geoids,
                         collection, meaning.color, meaning.zpositive, meaning.crs_json(),
                         meaning.metadata_json(), feature_class)).fetchone()
     assert row is not None

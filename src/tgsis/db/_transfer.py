@@ -24,7 +24,7 @@ from psycopg import sql
 
 from tgsis.db.classes import FeatureClass, stores_part_column
 from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_chunks, encode_rows, numpy_dtype, wire_shape
-from tgsis.errors import DatabaseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
+from tgsis.errors import DatabaseError, InUseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
 from tgsis.mesh import Mesh
 
 log = logging.getLogger("tgsis.db.features")
@@ -112,6 +112,72 @@ def feature_columns(fc: FeatureClass, properties: Mapping[str, Any] | None) -> d
         raise InvalidPropertyError(f"feature class {fc.name} has no feature properties {unknown}",
                                    hint=f"its feature properties: {sorted(known) or 'none'}")
     return {k: (json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in values.items()}
+
+
+def check_feature_values(conn: Conn, fc: FeatureClass, values: Mapping[str, Any]) -> None:
+    """Refuse, naming the property, a text value that is no value of its feature property's type.
+
+    PostgreSQL reads text such as the command line's ``--feature-property
+    n=abc`` as the column's type when the row is written, and a bad one came
+    back as a raw ``22P02`` (or ``22007``, ``22003``) naming no property. The
+    values are cast first, all in one statement within a savepoint; only if
+    that fails is each one cast alone to find which.
+
+    Raises
+    ------
+    InvalidPropertyError
+        The first value that is not one of its type (the server's words in ``detail``).
+    """
+    types = {p.name: p.type for p in fc.feature_properties}
+    texts = [(name, value, types[name]) for name, value in values.items()
+             if isinstance(value, str) and types.get(name) not in (None, "text", "character varying", "varchar")]
+    if not texts:
+        return
+
+    def cast(items: Sequence[tuple[str, str, str]]) -> None:
+        with conn.transaction():
+            conn.execute(sql.SQL("SELECT {}").format(sql.SQL(", ").join(
+                sql.SQL("CAST({} AS {})").format(sql.Placeholder(), sql.SQL(kind)) for _, _, kind in items)),
+                [value for _, value, _ in items])
+
+    try:
+        cast(texts)
+    except psycopg.DataError:
+        for item in texts:
+            try:
+                cast([item])
+            except psycopg.DataError as exc:
+                name, value, kind = item
+                shown = repr(value) if len(value) <= 100 else f"{value[:100]!r}... ({len(value)} characters)"
+                raise InvalidPropertyError(
+                    f"value {shown} of feature property {name!r} of class {fc.name} is not a valid {kind}",
+                    detail=(exc.diag.message_primary or "")[:500],
+                    hint=f"give a value PostgreSQL reads as {kind}") from None
+        raise
+
+
+def check_class_unchanged(conn: Conn, fc: FeatureClass) -> None:
+    """After a feature's rows are written: refuse if vertex or cell properties were added meanwhile to a table it wrote none to.
+
+    An upload writes rows to a vertex or cell property table only for the
+    properties its :class:`FeatureClass` lists. ``tgsis.add_property`` gives
+    every stored feature its rows and locks the feature table until it
+    commits, so an upload whose feature row waited for it reads the new
+    catalog here: with a property the upload wrote no rows for, the feature
+    would be unreadable ("... has 0 rows for N vertices"), so it is refused
+    and nothing of it is stored. Only classes with no property of an
+    alignment pay the query (elsewhere the new column's NOT NULL refuses the
+    stale rows itself).
+    """
+    other = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
+    if fc.aligned(fc.alignment) and (fc.otherprotable is None or fc.aligned(other)):
+        return
+    row = conn.execute("SELECT jsonb_array_length(cell_properties) FROM tgsis.catalog WHERE classname = %s",
+                       (fc.name,)).fetchone()
+    if row is not None and int(row[0]) != len(fc.cell_properties):
+        raise InUseError(f"feature class {fc.name} gained vertex or cell properties while the feature was written: "
+                         "nothing of it was stored",
+                         hint="read the class again (tgsis.get_feature_class) and give the new properties' values")
 
 
 def _copy_statement(table: sql.Composable, columns: Sequence[str]) -> sql.Composed:
@@ -503,7 +569,9 @@ def local_positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], w
 def insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Mapping[str, Any] | None) -> None:
     """The feature row of a new feature: its id and per-feature property values (unknown names refused)."""
     values = feature_columns(fc, properties)
+    check_feature_values(conn, fc, values)
     columns = ["_geoid", *values]
     conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
         fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
         sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])
+    check_class_unchanged(conn, fc)

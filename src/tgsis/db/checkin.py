@@ -47,7 +47,7 @@ from tgsis.edits import EditPlan, plan_edit
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.db._static import (MEANING_COLUMNS, SIMPLEX, Part, copy_extra_rows, download, extra_rows, part_meaning,
                               restore_extras)
-from tgsis.db._transfer import Storage, aligned_properties, feature_columns, local_positions
+from tgsis.db._transfer import Storage, aligned_properties, check_feature_values, feature_columns, local_positions
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.errors import (
@@ -403,6 +403,7 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
                                    f"not {edited.geotype.value} ({type(edited).__name__})")
     cell_values = aligned_properties(fc, edited, drop_extra, "the edited mesh")
     feature_values = feature_columns(fc, properties)
+    check_feature_values(conn, fc, feature_values)
     storage = Storage.of(conn, fc)
     storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
     written = _write_diff(conn, fc, geoid, stored, edited, plan, cell_values, storage)

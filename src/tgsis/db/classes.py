@@ -30,6 +30,7 @@ __all__ = [
     "add_property",
     "rename_property",
     "drop_property",
+    "fill_property_rows",
     "class_of_feature",
     "stores_part_column",
 ]
@@ -347,6 +348,40 @@ def add_property(conn: Conn, feature_class: str, prop: Property | tuple[str, str
                            (feature_class, kind, json.dumps(item), _default_text(default))).fetchone()
     assert row is not None
     return _class_from_row(row)
+
+
+def fill_property_rows(conn: Conn, feature_class: str, values: Mapping[str, object]) -> dict[str, tuple[int, int]]:
+    """Give stored features that have no vertex or cell property rows a row per vertex or cell (``tgsis.fill_property_rows``).
+
+    The repair of a class whose features cannot be read ("... has 0 rows for
+    N vertices"): a vertex or cell property added by tgsis 0.2.0 or earlier to a
+    class registered without one gave the features stored then no rows.
+    Each vertex or cell of those features (in every version and revision)
+    gets a row holding ``values``; features that have rows keep them.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str
+        The class's name.
+    values : mapping of str to str, int, float or bool
+        A value for every vertex or cell property of each table whose
+        features lack rows (a vector property gets it in each component).
+
+    Returns
+    -------
+    dict of str to (int, int)
+        Per property table of the class: the geometries (features, or
+        collection members) and the rows (vertices or cells) given rows.
+
+    Raises
+    ------
+    NotFoundError, InvalidPropertyError, MissingPrivilegeError (the caller is no ``tgsis_admin``)
+    """
+    with reraise(), conn.transaction():
+        rows = conn.execute("SELECT tablename, features, rows FROM tgsis.fill_property_rows(%s, %s::jsonb)",
+                            (feature_class, json.dumps(dict(values)))).fetchall()
+    return {str(table): (int(features), int(count)) for table, features, count in rows}
 
 
 def rename_property(conn: Conn, feature_class: str, name: str, new_name: str, *,

@@ -26,11 +26,11 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import check_module, checked_ids
 from tgsis.db import gmaps, temporal
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
-from tgsis.db._transfer import Storage, aligned_properties, feature_columns
+from tgsis.db._transfer import Storage, aligned_properties, check_class_unchanged, check_feature_values, feature_columns
 from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_feature_class,
                               drop_feature_class, get_feature_class, list_feature_classes)
 from tgsis.db.meaning import meaning_of, restore_meaning
@@ -172,6 +172,7 @@ def insert_feature(
     feature_values = feature_columns(fc, properties)
 
     with reraise(), conn.transaction():
+        check_feature_values(conn, fc, feature_values)
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = new_static_geometry(conn, mesh, name if name is not None else mesh.name, own_meaning, meanings,
@@ -189,6 +190,7 @@ def insert_feature(
                 fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
                 sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
             [geoid, *feature_values.values()])
+        check_class_unchanged(conn, fc)   # a property added meanwhile: this feature has no rows for it
     log.info("stored %s feature %d: %d vertices, %d cells%s", fc.name, geoid, mesh.n_vertices, mesh.n_cells,
              f" in {len(members)} members" if isinstance(mesh, GeometryCollection) else "")
     return geoid
@@ -222,6 +224,7 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
         Stored rows that do not make a valid mesh (written by other means:
         see ``tgsis.check_geometry``).
     """
+    ids = checked_ids("ids", ids) if ids is not None else None   # 1.5 is no id (int() would make it 1)
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
     if fc.time_model != "STATIC":
         raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): its features have a shape "
@@ -241,7 +244,7 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
                 else sql.SQL("")),
         ).fetchall()
         found = {int(r[0]): r for r in rows}
-        wanted = [int(i) for i in ids] if ids is not None else sorted(found)
+        wanted = list(ids) if ids is not None else sorted(found)
         missing = [i for i in wanted if i not in found]
         if missing:
             raise NotFoundError(f"feature class {fc.name} has no feature(s) {missing}")

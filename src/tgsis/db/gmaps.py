@@ -29,7 +29,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import check_module, no_nul
 from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
@@ -261,7 +261,7 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         storage.check("tgsis", "geometry")
         row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s, "
                            "p_class => %s)",
-                           (name if name is not None else evolving.name, _bounds(evolving), sum(nodes), sum(darts),
+                           (no_nul("geometry name", name if name is not None else evolving.name), _bounds(evolving), sum(nodes), sum(darts),
                             evolving.alive, fc.name)).fetchone()
         assert row is not None
         geoid = int(row[0])
@@ -347,7 +347,7 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
         storage.check("tgsis", "geometry")
         period = EvolvingGMap([GMapPeriod([0.0], g)])
         row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM', p_class => %s)",
-                           (name, _bounds(period), g.n_points, d, fc.name)).fetchone()
+                           (no_nul("geometry name", name), _bounds(period), g.n_points, d, fc.name)).fetchone()
         assert row is not None
         geoid = int(row[0])
         extent = None

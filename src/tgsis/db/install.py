@@ -17,6 +17,7 @@ failure leaves the database as it was.
 from __future__ import annotations
 
 import logging
+import numbers
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -24,7 +25,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.db.sqlsource import EXTENSION, ExtensionSources, parse_version
-from tgsis.errors import InstallationError, InUseError, reraise
+from tgsis.errors import InstallationError, InUseError, InvalidInputError, reraise
 
 __all__ = ["InstallResult", "InstalledVersion", "install", "installed_version", "partition_model_storage", "uninstall"]
 
@@ -382,7 +383,10 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     model : int
         The data model, 1 to 5 (``tgsis.data_models``); the core tables stay plain.
     partitions : int
-        2 to 1024.
+        2 to 1024, and no more than the server's lock table holds
+        (``max_locks_per_transaction`` x (``max_connections`` +
+        ``max_prepared_transactions``) locks, about 4 per partition of each
+        table; docs/scaling.md): on a default server 221 for model 1.
 
     Returns
     -------
@@ -392,7 +396,7 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     Raises
     ------
     InvalidInputError
-        ``partitions`` out of range, or model 0.
+        ``partitions`` out of range (also: more than the lock table holds; the hint gives the most), or model 0.
     NotFoundError
         No such data model.
     InUseError
@@ -400,6 +404,14 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     MissingPrivilegeError
         The role may not run it or does not own the tables.
     """
+    # the SQL parameters are smallint and integer: a larger number would come back as a raw 22003
+    for name, value, high, hint in (("model", model, 2**15 - 1, "SELECT model FROM tgsis.data_models lists them"),
+                                    ("partitions", partitions, 2**31 - 1, "give 2 to 1024 partitions")):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise InvalidInputError(f"{name} must be an integer, not {type(value).__name__} {repr(value)[:100]}",
+                                    hint=hint)
+        if not -high - 1 <= int(value) <= high:
+            raise InvalidInputError(f"{name} = {str(int(value))[:100]} is out of range", hint=hint)
     with reraise(), conn.transaction():
         row = conn.execute("SELECT tgsis.partition_model_storage(%s::smallint, %s::integer)",
                            (model, partitions)).fetchone()

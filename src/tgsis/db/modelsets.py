@@ -14,7 +14,7 @@ from typing import Any
 
 import psycopg
 
-from tgsis.arguments import check_module
+from tgsis.arguments import check_module, checked_ids
 from tgsis.errors import reraise
 
 __all__ = ["Model", "ModelObject", "create_model", "add_to_model", "remove_from_model", "model_objects", "list_models"]
@@ -42,7 +42,7 @@ class ModelObject:
 
 
 def _ids(objects: Sequence[int]) -> list[int]:
-    return [int(o) for o in objects]
+    return checked_ids("objects", objects)
 
 
 def create_model(conn: Conn, name: str, objects: Sequence[int] = (), *, description: str | None = None) -> int:

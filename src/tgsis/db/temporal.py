@@ -31,7 +31,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import check_module, no_nul
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
                                local_positions, row_keys, rows_by_geoid)
@@ -84,7 +84,7 @@ def _new_temporal_geometry(conn: Conn, fc: FeatureClass, name: str | None, bound
                            ncell: int, alive: bool, color: Sequence[float] | None) -> int:
     row = conn.execute("SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[], "
                        "p_class => %s)",
-                       (name, bounds, nvrtx, ncell, fc.time_model, alive, list(color) if color else None,
+                       (no_nul("geometry name", name), bounds, nvrtx, ncell, fc.time_model, alive, list(color) if color else None,
                         fc.name)).fetchone()
     assert row is not None
     return int(row[0])

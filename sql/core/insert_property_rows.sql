@@ -1,0 +1,83 @@
+-- tgsis.insert_property_rows(class, table, geoids, columns, values): give geometries without property rows one row per vertex or cell, in every version.
+-- The rows are made from the geometries' own rows in the model's storage:
+-- one per vertex (tgsis.vrtx) for a table of vertex properties, one per
+-- simplex (tgsis.point, segment, trgl, tetra) for one of cell properties.
+-- When the class is versioned, each row copies the revision and lastrevs of
+-- the vertex or simplex row version it stands for, so that every version and
+-- every revision sees a property row exactly where it sees the vertex or
+-- cell (a vertex moved in a child version has a row version per position,
+-- so has its property); the storage's statement trigger notes the objects
+-- in tgsis.revision_objects, as for any direct write. A class registered
+-- without versioning keeps plain tables while the model's are versioned:
+-- its features are written in DEFAULT only, whose live rows (not closed)
+-- are their one state, and those are what its rows stand for. p_columns get the SQL
+-- expressions p_values (literals made by the caller with %L and a cast);
+-- the other columns their defaults. Only models whose vertex and cell
+-- properties are keyed by vertex or simplex id alone (no time key, no cell
+-- levels: static objects) are handled; others are refused (TG103), nothing
+-- written. Returns the geometries and the rows (vertices or cells, not row
+-- versions) given. Runs as its callers (tgsis's owner).
+CREATE FUNCTION tgsis.insert_property_rows(p_class tgsis.catalog, p_table text, p_geoids bigint[], p_columns text[],
+                                           p_values text[], OUT features bigint, OUT rows bigint)
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_dm       tgsis.data_models;
+    v_align    text := CASE WHEN p_table = p_class.cellprotable THEN p_class.proalignment
+                            WHEN p_class.proalignment = 'VERTEX' THEN 'CELL' ELSE 'VERTEX' END;
+    v_versioned boolean := EXISTS (SELECT FROM tgsis.versioned_tables t
+                                    WHERE t.schemaname = p_class.schemaname AND t.tablename = p_table);
+    v_sources  text[];
+    v_source   text;
+    v_selects  text[] := '{}';
+    v_source_versioned boolean;
+BEGIN
+    features := 0;
+    rows := 0;
+    IF cardinality(p_geoids) = 0 THEN
+        RETURN;
+    END IF;
+    SELECT * INTO v_dm FROM tgsis.data_models d WHERE d.timemodel = p_class.timemodel;
+    IF NOT FOUND OR v_dm.timekey <> '[]' OR v_dm.cell_levels THEN
+        RAISE EXCEPTION 'feature class % has % stored geometries without rows in %, and tgsis cannot make them for model %',
+                p_class.classname, cardinality(p_geoids), p_table, coalesce(v_dm.model::text || ' (' || v_dm.name || ')',
+                                                                           quote_literal(p_class.timemodel))
+            USING ERRCODE = 'TG103',
+                  DETAIL = 'Its vertex or cell property rows are keyed by time or by cell level as well; a class registered without such properties stores none.',
+                  HINT = 'register a new class with the property and copy the features into it';
+    END IF;
+    v_sources := CASE WHEN v_align = 'VERTEX' THEN ARRAY['vrtx']
+                      WHEN p_class.geotype = 'GEOMETRYCOLLECTION' THEN ARRAY['point', 'segment', 'trgl', 'tetra']
+                      ELSE ARRAY[tgsis.simplex_table(p_class.geotype)] END;
+    FOREACH v_source IN ARRAY v_sources LOOP
+        IF NOT EXISTS (SELECT FROM tgsis.model_tables m WHERE m.tablename = v_source AND m.model = v_dm.model) THEN
+            RAISE EXCEPTION 'model % has no table tgsis.%', v_dm.model, v_source USING ERRCODE = 'TG103';
+        END IF;
+        v_source_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_source);
+        IF v_versioned AND NOT v_source_versioned THEN
+            RAISE EXCEPTION 'table %.% is versioned and tgsis.% is not', p_class.schemaname, p_table, v_source
+                USING ERRCODE = 'TG103', HINT = 'SELECT tgsis.enable_feature_versioning() versions them all';
+        END IF;
+        v_selects := v_selects || format('SELECT s.geoid, s.%I%s FROM %s s WHERE s.geoid = ANY($1)%s',
+                                         CASE v_source WHEN 'vrtx' THEN 'vrtxid' WHEN 'point' THEN 'pointid'
+                                                       WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid'
+                                                       ELSE 'tetraid' END,
+                                         CASE WHEN v_versioned THEN ', s.revision, s.lastrevs' ELSE '' END,
+                                         tgsis.storage_table('tgsis', v_source),
+                                         CASE WHEN v_source_versioned AND NOT v_versioned THEN ' AND NOT s.revclosed' ELSE '' END);
+    END LOOP;
+    EXECUTE format('WITH made AS (INSERT INTO %s (_geoid, _idx%s%s) SELECT r.* %s FROM (%s) AS r RETURNING _geoid, _idx)
+                    SELECT count(DISTINCT _geoid), count(DISTINCT (_geoid, _idx)) FROM made',
+                   tgsis.storage_table(p_class.schemaname, p_table),
+                   CASE WHEN v_versioned THEN ', revision, lastrevs' ELSE '' END,
+                   (SELECT string_agg(format(', %I', c), '') FROM unnest(p_columns) AS c),
+                   (SELECT string_agg(', ' || v, '') FROM unnest(p_values) AS v),
+                   array_to_string(v_selects, ' UNION ALL '))
+       INTO features, rows USING p_geoids;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.insert_property_rows(tgsis.catalog, text, bigint[], text[], text[]) IS
+    'insert one row per vertex or cell of the given geometries into a vertex or cell property table of a static class (copying the revision and lastrevs of each vertex or simplex row version when versioned), the columns given set to the SQL expressions given; returns the geometries and rows given; TG103 for models keyed by time or cell level';
