@@ -1,0 +1,112 @@
+-- tgsis 0.2.0 -> 0.3.0: the hand-written part of the upgrade script.
+-- 0.2.0 is frozen (sql/upgrade/tgsis--0.2.0.sql, the install script of commit e012a4a). The build
+-- (src/tgsis/db/_upgrade.py) puts the functions, views and comments of 0.3.0 at the @sources line,
+-- after dropping those whose shape changed; this file does what re-running them cannot: changed
+-- tables, new catalog tables and their rows, triggers, what the storage needs
+-- (docs/developing.md, "An upgrade script"). tests/test_upgrade.py checks that a database of every
+-- released version upgraded by it equals a fresh 0.3.0.
+--
+-- Layout: each change is one block starting with a line `-- ---- <what>`; blocks that must run before
+-- the functions come before `-- @sources`, those that need the new functions go into the DO block
+-- after it (one per change, marked the same way) or after it. The installation record comes last.
+
+-- ---- tgsis.catalog: classes without versioning (issue 18)
+ALTER TABLE tgsis.catalog ADD COLUMN versioned boolean NOT NULL DEFAULT true;
+-- @handled core/catalog.sql
+
+-- ---- tgsis.installation: the fingerprint of the install script each row's version was built from
+ALTER TABLE tgsis.installation ADD COLUMN fingerprint text;
+COMMENT ON COLUMN tgsis.installation.fingerprint IS
+    'sha256 (first 16 hex digits) of the install script of that version as built (tgsis.install and tgsis db status compare it with the client''s); NULL for versions before 0.3.0';
+-- @handled core/installation.sql
+
+-- ---- new catalog tables, dumped with the catalog: the features of classes registered without
+-- versioning, and the notes of which objects changed in which revision (filled from the storage after
+-- the functions, below)
+-- @include versioning/unversioned_features.sql
+-- @include versioning/revision_objects.sql
+DO $dump$
+BEGIN
+    IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
+        PERFORM pg_catalog.pg_extension_config_dump('tgsis.unversioned_features'::regclass, '');
+        PERFORM pg_catalog.pg_extension_config_dump('tgsis.revision_objects'::regclass, '');
+    END IF;
+END
+$dump$;
+-- @handled core/config_dump.sql
+
+-- ---- the rows tgsis ships: error codes and property types added since flow in from the files
+-- @rows core/error_codes.sql
+-- @rows core/property_types.sql
+
+-- @sources
+
+-- ---- after the functions: what versioned tables need (the storage tables are no extension members:
+-- core/create_storage.sql says why)
+DO $upgrade$
+DECLARE
+    v_extension oid;   -- NULL on the plain-SQL route
+    v_members   text[];
+    v_object    record;
+    v_t         tgsis.versioned_tables;
+BEGIN
+    v_extension := (SELECT oid FROM pg_catalog.pg_extension WHERE extname = 'tgsis');
+    v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
+                        WHERE d.deptype = 'e' AND d.refobjid = v_extension);
+
+    -- ---- revision notes, features of no version, set-based view updates
+    -- every versioned table:
+    -- * the write triggers of the views, generated anew: they note the objects they change
+    --   (tgsis.revision_objects), and those of object class 'feature' tell rows of features of no
+    --   version (tgsis.unversioned_features) from versioned ones;
+    -- * the statement's queue of rows and its flush trigger (tgsis.create_versioning_queue);
+    -- * the storage's trigger that notes direct inserts;
+    -- * the notes of what its rows say changed in each revision (revision 0 is never noted)
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
+        CONTINUE WHEN EXISTS (SELECT FROM pg_catalog.pg_trigger g
+                               WHERE g.tgname = 'tgsis_storage_changes'
+                                 AND g.tgrelid = format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass);
+        EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its trigger
+        PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
+                                                v_t.objectclass, v_t.objectkeyfield);
+        PERFORM tgsis.create_change_trigger(v_t.schemaname, v_t.tablename, v_t.objectkeyfield);
+        -- (read as the storage's owner, like all of tgsis's reads of storage: tgsis.storage_run)
+        PERFORM tgsis.check_key_type(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass, v_t.objectkeyfield);
+        INSERT INTO tgsis.revision_objects (revision, schemaname, tablename, objectkey)
+        SELECT r[1]::integer, v_t.schemaname, v_t.tablename, r[2]
+          FROM tgsis.storage_run(v_t, false, format(
+                   'SELECT ARRAY[c.r::text, c.k::text]
+                      FROM (SELECT v.revision, v.%1$I FROM %2$I.%3$I v
+                            UNION
+                            SELECT l.r, v.%1$I FROM %2$I.%3$I v, unnest(v.lastrevs) AS l(r) WHERE v.revclosed) AS c(r, k)
+                     WHERE c.r <> 0', v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver')) AS r;
+    END LOOP;
+
+    -- ---- (blocks of later changes that need the new functions go here)
+
+    -- What this block made (storage tables, their versioned views and runners, class views made
+    -- again) is made at run time in a fresh install: inside ALTER EXTENSION it became an extension
+    -- member, which pg_dump leaves out and DROP EXTENSION drops. It leaves the extension again.
+    FOR v_object IN
+        SELECT o.type, o.identity
+          FROM pg_catalog.pg_depend d, LATERAL pg_catalog.pg_identify_object(d.classid, d.objid, d.objsubid) o
+         WHERE d.deptype = 'e' AND d.refobjid = v_extension
+           AND (d.classid::oid::text || ':' || d.objid::text) <> ALL (v_members)
+         ORDER BY CASE WHEN o.type IN ('table', 'view', 'sequence') THEN 0 WHEN o.type = 'type' THEN 1 ELSE 2 END,
+                  o.identity LIKE '%[]'
+    LOOP
+        -- a relation takes its row type along on recent servers: skip what went with an earlier one
+        IF EXISTS (SELECT FROM pg_catalog.pg_depend d, LATERAL pg_catalog.pg_identify_object(d.classid, d.objid, d.objsubid) o
+                    WHERE d.deptype = 'e' AND d.refobjid = v_extension AND o.type = v_object.type AND o.identity = v_object.identity) THEN
+            EXECUTE format('ALTER EXTENSION tgsis DROP %s %s', v_object.type, v_object.identity);
+        END IF;
+    END LOOP;
+END
+$upgrade$;
+
+-- ---- the installation record
+INSERT INTO tgsis.installation (version, method, fingerprint)
+VALUES ('@TGSIS_VERSION@',
+        CASE WHEN EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis')
+             THEN 'extension' ELSE 'sql' END,
+        '@TGSIS_FINGERPRINT@');
