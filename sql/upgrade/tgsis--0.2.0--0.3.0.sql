@@ -20,6 +20,11 @@ COMMENT ON COLUMN tgsis.installation.fingerprint IS
     'sha256 (first 16 hex digits) of the install script of that version as built (tgsis.install and tgsis db status compare it with the client''s); NULL for versions before 0.3.0';
 -- @handled core/installation.sql
 
+-- ---- core/roles.sql: its DO block runs at install only (creating missing roles); its hint changed
+-- @handled core/roles.sql
+-- ---- versioning/storage_hop.sql: its DO block (the owner's membership of tgsis_nobody) runs at install only
+-- @handled versioning/storage_hop.sql
+
 -- ---- new catalog tables, dumped with the catalog: the features of classes registered without
 -- versioning, and the notes of which objects changed in which revision (filled from the storage after
 -- the functions, below)
