@@ -70,17 +70,26 @@ def test_every_frozen_script_is_the_build_of_its_release_commit(tmp_path: Path) 
         sql = tree / "sql"
         control = (sql / "tgsis.control").read_text(encoding="utf-8")
         assert f"default_version = '{version}'" in control, f"{commit} is not version {version}"
-        names = [n for n in (line.split("#", 1)[0].strip() for line in (sql / "sources.txt").read_text().splitlines()) if n]
-        built = "-- tgsis {v}: built from sql/sources.txt, do not edit\n{g}\n".format(v=version, g=PSQL_GUARD) + "".join(
+        names = [
+            n for n in (line.split("#", 1)[0].strip() for line in (sql / "sources.txt").read_text().splitlines()) if n
+        ]
+        built = f"-- tgsis {version}: built from sql/sources.txt, do not edit\n{PSQL_GUARD}\n" + "".join(
             f"\n-- ==== {n} ====\n" + (sql / n).read_text(encoding="utf-8") for n in names
         ).replace("@TGSIS_VERSION@", version)
         frozen = (ROOT / "sql" / "upgrade" / f"tgsis--{version}.sql").read_text(encoding="utf-8")
         assert frozen == built, f"sql/upgrade/tgsis--{version}.sql is not the build of {commit}"
-        tagged = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"v{version}^{{commit}}"],
-                                capture_output=True, text=True, check=False)
+        tagged = subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"v{version}^{{commit}}"],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
         if tagged.returncode == 0:  # a clone without tags has none; where the tag is, it names the commit
-            assert tagged.stdout.startswith(subprocess.run(["git", "-C", str(ROOT), "rev-parse", commit],
-                                                           capture_output=True, text=True, check=True).stdout.strip())
+            assert tagged.stdout.startswith(
+                subprocess.run(
+                    ["git", "-C", str(ROOT), "rev-parse", commit], capture_output=True, text=True, check=True
+                ).stdout.strip()
+            )
 
 
 def test_the_frozen_upgrades_no_longer_follow_the_sources() -> None:

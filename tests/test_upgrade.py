@@ -61,7 +61,7 @@ SELECT tgsis.save_revision('survey2');
 """
 
 
-# the objects noted as changed per revision and table (tgsis.revision_objects), new in 0.2.0
+# the objects noted as changed per revision and table (tgsis.revision_objects), new in 0.3.0
 _NOTES = "SELECT DISTINCT revision, schemaname, tablename, objectkey FROM tgsis.revision_objects ORDER BY 1, 2, 3, 4"
 
 
@@ -154,8 +154,9 @@ def test_upgraded_database_equals_a_fresh_install(
         assert tgsis.installed_version(conn) == tgsis.InstalledVersion(tgsis.__version__, method)  # type: ignore[arg-type]
         assert tgsis.install(conn).action == "unchanged"
         assert _state(conn) == before, f"the data and versions of {old} are kept"
-        fingerprint = conn.execute("SELECT fingerprint FROM tgsis.installation WHERE version = %s",
-                                   (tgsis.__version__,)).fetchone()
+        fingerprint = conn.execute(
+            "SELECT fingerprint FROM tgsis.installation WHERE version = %s", (tgsis.__version__,)
+        ).fetchone()
         assert fingerprint == (ExtensionSources.default().fingerprint,), "the upgrade records the build it gives"
         got = _objects(conn)
         got_notes = conn.execute(_NOTES).fetchall()

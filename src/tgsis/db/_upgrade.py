@@ -409,7 +409,9 @@ def assemble(sql_dir: Path, old: str, new: str, new_files: dict[str, str]) -> Up
         The new version's source files in install order, ``@TGSIS_VERSION@`` replaced.
     """
     frozen = (sql_dir / "upgrade" / f"tgsis--{old}.sql").read_text(encoding="utf-8")
-    hand = (sql_dir / "upgrade" / f"tgsis--{old}--{new}.sql").read_text(encoding="utf-8").replace("@TGSIS_VERSION@", new)
+    hand = (
+        (sql_dir / "upgrade" / f"tgsis--{old}--{new}.sql").read_text(encoding="utf-8").replace("@TGSIS_VERSION@", new)
+    )
     return Upgrade(split_script(frozen), new_files, hand, fingerprint(install_text(new, new_files)))
 
 

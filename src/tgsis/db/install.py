@@ -456,6 +456,7 @@ def install(
     sources = sources or ExtensionSources.default()
     target = sources.version
     steps: list[str] = []
+    result: tuple[str, Literal["extension", "sql"], str | None]
     with reraise(), conn.transaction():
         conn.execute(_LOCK_SQL)
         current = installed_version(conn)
