@@ -302,7 +302,10 @@ def test_an_editor_cannot_upgrade_and_nothing_changes(
             with pytest.raises(psycopg.errors.InsufficientPrivilege):
                 eve.execute("ALTER EXTENSION tgsis UPDATE")
         else:
-            with pytest.raises(tgsis.MissingPrivilegeError, match="permission denied for schema tgsis"):
+            # (the first statement of the upgrade that needs the owner's rights says which: a table, the schema)
+            with pytest.raises(
+                tgsis.MissingPrivilegeError, match="permission denied for schema tgsis|must be owner of"
+            ):
                 tgsis.install(eve)
         eve.rollback()
     with psycopg.connect(dsn) as conn:

@@ -186,6 +186,10 @@ def _fingerprint(conn: psycopg.Connection[Any], version: str) -> str | None:
 
 def _missing_storage(conn: psycopg.Connection[Any]) -> tuple[str, ...]:
     """The storage tables of the registry that do not exist (all of them after a bare CREATE EXTENSION)."""
+    row = conn.execute("SELECT to_regclass('tgsis.model_tables') IS NULL, to_regclass('tgsis.geometry') IS NULL").fetchone()
+    assert row is not None
+    if row[0]:  # 0.1.0 had no registry of data models: its storage is there when tgsis.geometry is
+        return ("tgsis.geometry",) if row[1] else ()
     rows = conn.execute(
         "SELECT 'tgsis.' || quote_ident(t.tablename) FROM tgsis.model_tables t "
         "WHERE to_regclass(format('tgsis.%I', t.tablename)) IS NULL ORDER BY t.model, t.iudorder, t.tablename"
