@@ -44,6 +44,8 @@ $dump$;
 -- @rows core/error_codes.sql
 -- @rows core/property_types.sql
 
+-- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
+
 -- @sources
 
 -- ---- after the functions: what versioned tables need (the storage tables are no extension members:
@@ -109,7 +111,9 @@ BEGIN
 END
 $upgrade$;
 
--- ---- the installation record
+-- ---- (blocks of later changes that run after the functions, outside the DO block, go here)
+
+-- ---- the installation record (last)
 INSERT INTO tgsis.installation (version, method, fingerprint)
 VALUES ('@TGSIS_VERSION@',
         CASE WHEN EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis')
