@@ -441,6 +441,13 @@ def test_a_database_of_the_released_0_2_0_is_upgraded_by_db_install_then_import_
     with psycopg.connect(dsn) as conn:
         tgsis.install(conn, method=method, sources=_frozen(tmp_path, "0.2.0"))  # type: ignore[arg-type]
         conn.execute(_USE)
+    off = tmp_path / "tri.off"
+    off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", encoding="utf-8")
+    # before the upgrade, a command that works on features says what to run instead of failing on the way
+    assert main(["--dsn", dsn, "import", str(off), "--class", "horizon"]) == 1
+    err = capsys.readouterr().err
+    assert f"database {psycopg.conninfo.conninfo_to_dict(dsn)['dbname']} has tgsis 0.2.0" in err
+    assert f"run `tgsis db install` (0.2.0 -> {tgsis.__version__})" in err
     assert main(["--dsn", dsn, "db", "status"]) == 1, "status says the database needs the upgrade"
     status = capsys.readouterr().out
     assert "tgsis:    0.2.0" in status and f"client:   {tgsis.__version__}" in status
@@ -450,8 +457,6 @@ def test_a_database_of_the_released_0_2_0_is_upgraded_by_db_install_then_import_
     assert f"upgraded tgsis 0.2.0 -> {tgsis.__version__} ({method})" in out and "nothing to do" not in out
     assert main(["--dsn", dsn, "db", "status"]) == 0
     assert "up to date" in capsys.readouterr().out
-    off = tmp_path / "tri.off"
-    off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", encoding="utf-8")
     assert main(["--dsn", dsn, "class", "create", "faults", "--geotype", "SURFACE"]) == 0
     assert main(["--dsn", dsn, "import", str(off), "--class", "faults"]) == 0
     fid = capsys.readouterr().out.splitlines()[-1].split("\t")[0]

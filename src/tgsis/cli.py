@@ -46,8 +46,9 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
-from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, NotFoundError,
-                          SkippedObjectWarning)
+from tgsis.db.sqlsource import ExtensionSources
+from tgsis.errors import (Error, FileFormatError, InstallationError, InvalidGeometryError, InvalidInputError,
+                          NotFoundError, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
@@ -172,10 +173,25 @@ def _split_version(text: str) -> tuple[str, int | None]:
     return name, int(revision)
 
 
+def _require_this_build(conn: psycopg.Connection[Any]) -> None:
+    """Refuse to work on a database whose tgsis is another version (or, when recorded, another build) than this
+    client's, naming both and the command that fixes it, before the command meets a missing function or column."""
+    current = installed_version(conn)
+    if current is None:
+        return  # the command says what it misses (tgsis db install)
+    sources = ExtensionSources.default()
+    if current.version == sources.version and current.fingerprint in (None, sources.fingerprint):
+        return  # (no fingerprint: a role that may not read tgsis.installation; db status tells)
+    status = installation_status(conn, sources=sources)
+    if not status.ok and status.state != "storage missing":
+        raise InstallationError(status.problem or status.state, hint=status.fix)
+
+
 @contextlib.contextmanager
 def _connect(args: argparse.Namespace) -> Iterator[psycopg.Connection[Any]]:
     """A connection working in the chosen version, or looking at VERSION@REVISION (DEFAULT when none is chosen)."""
     with connect(args.dsn) as conn:
+        _require_this_build(conn)
         chosen = _chosen_version(args)
         if chosen is not None:
             name, revision = _split_version(chosen)
@@ -874,6 +890,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     if args.png and not isinstance(edited, Surface):             # refused before anything is checked in
         raise InvalidInputError(f"{args.file} holds a {type(edited).__name__}: --png draws surfaces")
     with connect(args.dsn) as conn, cliout.busy("checking in"):  # the check-out's version, whatever version commands work in now
+        _require_this_build(conn)
         result = checkin(conn, co, edited, _feature_values(args.set) or None, name=args.name,
                          tolerance=args.tolerance, on_conflict=args.on_conflict, child_version=args.child_version,
                          keep=not args.no_keep, drop_extra_properties=args.drop_extra_properties)
