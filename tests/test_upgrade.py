@@ -1,12 +1,15 @@
-"""Upgrades from the last release: a database of 0.1.0 updated to this version equals a fresh install and keeps its data.
+"""Upgrades from every release: a database of each released version (sql/upgrade/releases.txt) updated to
+this version equals a fresh install and keeps its data.
 
-0.1.0 is frozen in ``sql/upgrade/tgsis--0.1.0.sql`` (its built install
-script); the upgrade script is assembled from ``sql/upgrade/tgsis--0.1.0--0.2.0.sql``
-and the current sources (``tgsis.db._upgrade``). Both routes: ``ALTER
-EXTENSION tgsis UPDATE`` (the server's extension files: the embedded
-PostgreSQL 18 reads this checkout's, PostgreSQL 15 those of the private copy of its share
-folder the throwaway cluster runs on, this checkout's too)
-and the plain-SQL upgrade of ``tgsis.install``.
+Each release is frozen in ``sql/upgrade/tgsis--X.sql`` (the built install
+script of its commit); the upgrades between releases are frozen in
+``sql/updates``, and the one from the last release is assembled from
+``sql/upgrade/tgsis--LAST--THIS.sql`` and the current sources
+(``tgsis.db._upgrade``). Both routes: ``ALTER EXTENSION tgsis UPDATE`` (the
+server's extension files: the embedded PostgreSQL 18 reads this checkout's,
+PostgreSQL 15 those of the private copy of its share folder the throwaway
+cluster runs on, this checkout's too) and the plain-SQL upgrade of
+``tgsis.install``.
 """
 
 from __future__ import annotations
@@ -30,8 +33,13 @@ from tgsis.db import _upgrade
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.testing import TestServer
 
-OLD = "0.1.0"
 SQL_DIR = Path(__file__).resolve().parents[1] / "sql"
+RELEASES = [
+    line.split()[0]
+    for line in (SQL_DIR / "upgrade" / "releases.txt").read_text(encoding="utf-8").splitlines()
+    if line.strip() and not line.startswith("#")
+]
+OLD = RELEASES[-1]  # the last release: the upgrade in the making starts there
 MakeDb = Callable[..., str]
 
 # what a user of 0.1.0 did, in SQL both versions understand: a feature class,
@@ -54,7 +62,7 @@ SELECT tgsis.save_revision('survey2');
 """
 
 
-# the objects noted as changed per revision and table (tgsis.revision_objects), new in 0.2.0
+# the objects noted as changed per revision and table (tgsis.revision_objects), new in 0.3.0
 _NOTES = "SELECT DISTINCT revision, schemaname, tablename, objectkey FROM tgsis.revision_objects ORDER BY 1, 2, 3, 4"
 
 
@@ -124,15 +132,16 @@ def _upgrade_route(method: str, pg: TestServer) -> None:
         pytest.fail(pg.extension_files, pytrace=False)
 
 
+@pytest.mark.parametrize("old", RELEASES)
 @pytest.mark.parametrize("method", ["extension", "sql"])
 def test_upgraded_database_equals_a_fresh_install(
-    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+    method: str, old: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
 ) -> None:
     _upgrade_route(method, pg)
     upgraded, fresh = make_database(), make_database()
     with psycopg.connect(upgraded) as conn:
-        assert tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD)).version == OLD  # type: ignore[arg-type]
-        assert conn.execute("SELECT tgsis.version()").fetchone() == (OLD,)
+        assert tgsis.install(conn, method=method, sources=_frozen(tmp_path, old)).version == old  # type: ignore[arg-type]
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (old,)
         conn.execute(_USE)
         conn.commit()
         before = _state(conn)
@@ -145,7 +154,11 @@ def test_upgraded_database_equals_a_fresh_install(
         assert conn.execute("SELECT tgsis.version()").fetchone() == (tgsis.__version__,)
         assert tgsis.installed_version(conn) == tgsis.InstalledVersion(tgsis.__version__, method)  # type: ignore[arg-type]
         assert tgsis.install(conn).action == "unchanged"
-        assert _state(conn) == before, "the data and versions of 0.1.0 are kept"
+        assert _state(conn) == before, f"the data and versions of {old} are kept"
+        fingerprint = conn.execute(
+            "SELECT fingerprint FROM tgsis.installation WHERE version = %s", (tgsis.__version__,)
+        ).fetchone()
+        assert fingerprint == (ExtensionSources.default().fingerprint,), "the upgrade records the build it gives"
         got = _objects(conn)
         got_notes = conn.execute(_NOTES).fetchall()
     with psycopg.connect(fresh) as conn:
@@ -169,13 +182,14 @@ def test_upgraded_database_equals_a_fresh_install(
     assert got == want
 
 
+@pytest.mark.parametrize("old", RELEASES)
 @pytest.mark.parametrize("method", ["extension", "sql"])
-def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(
-    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+def test_data_of_a_release_is_readable_and_writable_after_the_upgrade(
+    method: str, old: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
 ) -> None:
     _upgrade_route(method, pg)
     with psycopg.connect(make_database()) as conn:
-        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, old))  # type: ignore[arg-type]
         conn.execute(_USE)
         conn.commit()
         tgsis.install(conn)
@@ -206,7 +220,7 @@ def test_data_of_0_1_0_is_readable_and_writable_after_the_upgrade(
             tgsis.create_model(conn, "resource", [geoid, new])
             assert sorted(o.id for o in tgsis.model_objects(conn, "resource")) == sorted([geoid, new])
         conn.commit()
-        # the changes made under 0.1.0 were noted by the upgrade (tgsis.revision_objects): the merge copies them
+        # the changes made under the old version were noted by the upgrade (tgsis.revision_objects): the merge copies them
         tgsis.merge_version(conn, "survey2")
         merged = tgsis.fetch_feature(conn, "horizon", geoid)
         assert merged.mesh.vertices[2].tolist() == [0, 1, -5] and merged.properties["unit"] == "Jurassic"
@@ -217,8 +231,8 @@ def test_every_changed_file_is_in_the_upgrade() -> None:
     """A changed or new source file that re-running cannot apply (a table, rows) is dealt with by hand."""
     upgrade = ExtensionSources.default().upgrade(OLD)
     assert upgrade.unhandled == [], (
-        "changed since 0.1.0 and not replaceable: include them (-- @include FILE) or write their ALTERs and mark them "
-        "(-- @handled FILE) in sql/upgrade/tgsis--0.1.0--0.2.0.sql (docs/developing.md, 'An upgrade script')"
+        f"changed since {OLD} and not replaceable: include them (-- @include FILE) or write their ALTERs and mark them "
+        f"(-- @handled FILE) in sql/upgrade/tgsis--{OLD}--{tgsis.__version__}.sql (docs/developing.md, 'An upgrade script')"
     )
 
 
@@ -289,7 +303,10 @@ def test_an_editor_cannot_upgrade_and_nothing_changes(
             with pytest.raises(psycopg.errors.InsufficientPrivilege):
                 eve.execute("ALTER EXTENSION tgsis UPDATE")
         else:
-            with pytest.raises(tgsis.MissingPrivilegeError, match="permission denied for schema tgsis"):
+            # (the first statement of the upgrade that needs the owner's rights says which: a table, the schema)
+            with pytest.raises(
+                tgsis.MissingPrivilegeError, match="permission denied for schema tgsis|must be owner of"
+            ):
                 tgsis.install(eve)
         eve.rollback()
     with psycopg.connect(dsn) as conn:
@@ -389,3 +406,61 @@ def test_rows_upserts_the_shipped_rows(conn: psycopg.Connection[Any]) -> None:
     ]
     with pytest.raises(ValueError, match="@rows takes INSERT INTO table"):
         _upgrade.Upgrade({}, {"d.sql": "INSERT INTO t VALUES (1);\n"}, "-- @rows d.sql\n").script("--")
+
+
+def test_the_frozen_upgrade_between_releases_gives_the_later_release(
+    pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """sql/updates/tgsis--0.1.0--0.2.0.sql (frozen) makes a 0.1.0 database what a fresh 0.2.0 is."""
+    _upgrade_route("extension", pg)
+    upgraded, fresh = make_database(), make_database()
+    with psycopg.connect(upgraded) as conn:
+        tgsis.install(conn, method="extension", sources=_frozen(tmp_path, "0.1.0"))
+        conn.execute(_USE)
+        conn.execute("ALTER EXTENSION tgsis UPDATE TO '0.2.0'")
+        conn.commit()
+        assert conn.execute("SELECT tgsis.version()").fetchone() == ("0.2.0",)
+        got = _objects(conn)
+    with psycopg.connect(fresh) as conn:
+        tgsis.install(conn, method="extension", sources=_frozen(tmp_path, "0.2.0"))
+        conn.execute(_USE)
+        conn.commit()
+        want = _objects(conn)
+    assert _differences(got, want) == [], "\n".join(_differences(got, want))
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_a_database_of_the_released_0_2_0_is_upgraded_by_db_install_then_import_and_checkout_work(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 36, point 10: `tgsis db install` said "nothing to do" to a database of 0.2.0, and import and checkout
+    then failed. The release's own install script made the database here."""
+    from tgsis.cli import main
+
+    _upgrade_route(method, pg)
+    dsn = make_database()
+    with psycopg.connect(dsn) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, "0.2.0"))  # type: ignore[arg-type]
+        conn.execute(_USE)
+    off = tmp_path / "tri.off"
+    off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", encoding="utf-8")
+    # before the upgrade, a command that works on features says what to run instead of failing on the way
+    assert main(["--dsn", dsn, "import", str(off), "--class", "horizon"]) == 1
+    err = capsys.readouterr().err
+    assert f"database {psycopg.conninfo.conninfo_to_dict(dsn)['dbname']} has tgsis 0.2.0" in err
+    assert f"run `tgsis db install` (0.2.0 -> {tgsis.__version__})" in err
+    assert main(["--dsn", dsn, "db", "status"]) == 1, "status says the database needs the upgrade"
+    status = capsys.readouterr().out
+    assert "tgsis:    0.2.0" in status and f"client:   {tgsis.__version__}" in status
+    assert f"upgrade: run `tgsis db install` (0.2.0 -> {tgsis.__version__})" in status
+    assert main(["--dsn", dsn, "db", "install"]) == 0
+    out = capsys.readouterr().out
+    assert f"upgraded tgsis 0.2.0 -> {tgsis.__version__} ({method})" in out and "nothing to do" not in out
+    assert main(["--dsn", dsn, "db", "status"]) == 0
+    assert "up to date" in capsys.readouterr().out
+    assert main(["--dsn", dsn, "class", "create", "faults", "--geotype", "SURFACE"]) == 0
+    assert main(["--dsn", dsn, "import", str(off), "--class", "faults"]) == 0
+    fid = capsys.readouterr().out.splitlines()[-1].split("\t")[0]
+    checked_out = tmp_path / "out.off"
+    assert main(["--dsn", dsn, "checkout", fid, str(checked_out)]) == 0, capsys.readouterr().err
+    assert checked_out.read_text(encoding="utf-8").split()[:4] == ["OFF", "3", "1", "0"]

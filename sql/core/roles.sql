@@ -27,8 +27,10 @@ BEGIN
                 array_to_string(v_missing, ', '), current_user
             USING ERRCODE = 'TG002',
                   DETAIL = 'Roles are shared by all databases of the cluster; creating them needs CREATEROLE.',
-                  HINT = format('Ask a DBA to run once: %s GRANT tgsis_reader TO tgsis_editor; GRANT tgsis_editor TO tgsis_admin;%s',
+                  -- (and tgsis_admin to the installer: tgsis's owner registers classes and versions features)
+                  HINT = format('Ask a DBA to run once: %s GRANT tgsis_reader TO tgsis_editor; GRANT tgsis_editor TO tgsis_admin; GRANT tgsis_admin TO %I;%s',
                                 (SELECT string_agg(format('CREATE ROLE %I NOLOGIN;', r), ' ') FROM unnest(v_missing) AS r),
+                                current_user,
                                 CASE WHEN NOT EXISTS (SELECT FROM pg_catalog.pg_roles WHERE rolname = 'tgsis_nobody')
                                      THEN format(' CREATE ROLE tgsis_nobody NOLOGIN NOINHERIT; GRANT tgsis_nobody TO %I;', current_user)
                                      WHEN NOT pg_catalog.pg_has_role(current_user, 'tgsis_nobody', 'MEMBER')

@@ -14,6 +14,7 @@ DECLARE
     v_class record;
     v_table text;
 BEGIN
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
     PERFORM tgsis.feature_write_lock(p_geoid);  -- a check-in deciding from this object's state finishes first
     SELECT geotype, collection, timemodel INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;

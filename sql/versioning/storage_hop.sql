@@ -33,9 +33,16 @@ REVOKE ALL ON FUNCTION tgsis.storage_hop(text, text, boolean, text, text[], inte
 GRANT EXECUTE ON FUNCTION tgsis.storage_hop(text, text, boolean, text, text[], integer[], integer[], integer, bigint[])
     TO CURRENT_USER;
 DO $do$
+DECLARE
+    v_may_set boolean := pg_catalog.pg_has_role(current_user, 'tgsis_nobody', 'MEMBER');
 BEGIN
-    -- giving a function to a role needs membership in it (or being a superuser)
-    IF NOT pg_catalog.pg_has_role(current_user, 'tgsis_nobody', 'MEMBER') THEN
+    -- giving a function to a role needs the right to SET ROLE to it (or being a superuser). From
+    -- PostgreSQL 16 a role that created tgsis_nobody (CREATEROLE) is a member with ADMIN OPTION but
+    -- without SET: MEMBER is true and the ALTER below would fail (PostgreSQL 15 knows no 'SET' here).
+    IF v_may_set AND current_setting('server_version_num')::integer >= 160000 THEN
+        v_may_set := pg_catalog.pg_has_role(current_user, 'tgsis_nobody', 'SET');
+    END IF;
+    IF NOT v_may_set THEN
         BEGIN
             GRANT tgsis_nobody TO CURRENT_USER;
         EXCEPTION WHEN insufficient_privilege THEN

@@ -29,7 +29,7 @@ from psycopg import sql as psycopg_sql
 
 import tgsis
 from tgsis.db.connect import connect, release_local_server, resolve_target
-from tgsis.db.install import install, installed_version, uninstall
+from tgsis.db.install import install, installation_status, installed_version, uninstall
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis import clihints, clistate, cliout
 from tgsis.db import versions as V
@@ -46,8 +46,9 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
-from tgsis.errors import (Error, FileFormatError, InvalidGeometryError, InvalidInputError, MissingPrivilegeError,
-                          NotFoundError, SkippedObjectWarning)
+from tgsis.db.sqlsource import ExtensionSources
+from tgsis.errors import (Error, FileFormatError, InstallationError, InvalidGeometryError, InvalidInputError,
+                          MissingPrivilegeError, NotFoundError, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
@@ -91,11 +92,17 @@ def cmd_db_install(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         result = install(conn, method=args.method)
     if result.action == "unchanged":
-        _out(f"tgsis {result.version} is already installed ({result.method}): nothing to do")
+        _out(f"tgsis {result.version} is already installed ({result.method})"
+             + (": nothing to do" if not result.steps else ""))
     elif result.action == "upgraded":
         _out(f"upgraded tgsis {result.previous_version} -> {result.version} ({result.method})")
     else:
         _out(f"installed tgsis {result.version} ({result.method})")
+    for step in result.steps:
+        _out(f"  {step}")
+    for statement in result.still_needed:
+        _out(f"still needed: a DBA runs `{statement}` (tgsis's owner registers classes and versions features "
+             "as a member of tgsis_admin)")
     return 0
 
 
@@ -112,19 +119,33 @@ def cmd_db_uninstall(args: argparse.Namespace) -> int:
 def cmd_db_status(args: argparse.Namespace) -> int:
     target = resolve_target(args.dsn)
     with connect(args.dsn) as conn:
-        current = installed_version(conn)
+        status = installation_status(conn)
         server = conn.execute("SELECT version()").fetchone()
         db = conn.info.dbname
+    current = status.installed
     if _json(args):
         cliout.emit_json({"database": db, "source": target.source, "server": server[0] if server else None,
                           "tgsis": current.version if current else None,
-                          "method": current.method if current else None, "client": tgsis.__version__})
-        return 0
+                          "method": current.method if current else None,
+                          "fingerprint": current.fingerprint if current else None,
+                          "client": status.client_version, "client_fingerprint": status.client_fingerprint,
+                          "missing_storage": list(status.missing_storage), "state": status.state,
+                          "problem": status.problem, "fix": status.fix})
+        return 0 if status.ok else 1
     _out(f"database: {db} (from {target.source})")
     _out(f"server:   {server[0] if server else '?'}")
-    _out(f"tgsis:    {f'{current.version} ({current.method})' if current else 'not installed'}")
-    _out(f"client:   {tgsis.__version__}")
-    return 0
+    installed = (f"{current.version} ({current.method}, fingerprint {current.fingerprint or 'none recorded'})"
+                 if current else "not installed")
+    _out(f"tgsis:    {installed}")
+    _out(f"client:   {status.client_version} (fingerprint {status.client_fingerprint})")
+    if status.missing_storage:
+        _out(f"storage:  missing {len(status.missing_storage)} table(s): {', '.join(status.missing_storage)}")
+    if status.ok:
+        _out("state:    up to date")
+    else:
+        _out(f"state:    {status.state}: {status.problem}")
+        _out(f"{'upgrade' if status.state == 'upgrade' else 'fix'}: {status.fix}")
+    return 0 if status.ok else 1
 
 
 # --------------------------------------------------------------------------- working version
@@ -152,10 +173,25 @@ def _split_version(text: str) -> tuple[str, int | None]:
     return name, int(revision)
 
 
+def _require_this_build(conn: psycopg.Connection[Any]) -> None:
+    """Refuse to work on a database whose tgsis is another version (or, when recorded, another build) than this
+    client's, naming both and the command that fixes it, before the command meets a missing function or column."""
+    current = installed_version(conn)
+    if current is None:
+        return  # the command says what it misses (tgsis db install)
+    sources = ExtensionSources.default()
+    if current.version == sources.version and current.fingerprint in (None, sources.fingerprint):
+        return  # (no fingerprint: a role that may not read tgsis.installation; db status tells)
+    status = installation_status(conn, sources=sources)
+    if not status.ok and status.state != "storage missing":
+        raise InstallationError(status.problem or status.state, hint=status.fix)
+
+
 @contextlib.contextmanager
 def _connect(args: argparse.Namespace) -> Iterator[psycopg.Connection[Any]]:
     """A connection working in the chosen version, or looking at VERSION@REVISION (DEFAULT when none is chosen)."""
     with connect(args.dsn) as conn:
+        _require_this_build(conn)
         chosen = _chosen_version(args)
         if chosen is not None:
             name, revision = _split_version(chosen)
@@ -896,6 +932,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     if args.png and not isinstance(edited, Surface):             # refused before anything is checked in
         raise InvalidInputError(f"{args.file} holds a {type(edited).__name__}: --png draws surfaces")
     with connect(args.dsn) as conn, cliout.busy("checking in"):  # the check-out's version, whatever version commands work in now
+        _require_this_build(conn)
         result = checkin(conn, co, edited, _feature_values(args.set) or None, name=args.name,
                          tolerance=args.tolerance, on_conflict=args.on_conflict, child_version=args.child_version,
                          keep=not args.no_keep, drop_extra_properties=args.drop_extra_properties)
@@ -1862,8 +1899,8 @@ def build_parser() -> argparse.ArgumentParser:
                             ["tgsis db uninstall --yes"], cmd_db_uninstall)
     db_uninstall.add_argument("--yes", action="store_true", help="really do it")
     db_uninstall.add_argument("--cascade", action="store_true", help="also drop objects that depend on tgsis")
-    _command(db_commands, "status", "server and tgsis versions", ["tgsis db status", "tgsis db status --json"],
-             cmd_db_status, tabular=False)
+    _command(db_commands, "status", "the database's tgsis against this client's (exit 1 unless up to date)",
+             ["tgsis db status", "tgsis db status --json"], cmd_db_status, tabular=False)
 
     cls = _command(commands, "class", "feature classes: create, list, alter, drop", ["tgsis class list"])
     cls_commands = cls.add_subparsers(dest="class_command", metavar="ACTION", required=True)

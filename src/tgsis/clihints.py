@@ -114,6 +114,8 @@ _RULES: list[tuple[str, Replacement]] = [
     # (SQL-only questions of models 4 and 5: no command asks them)
     (r"^(tgsis\.property_at gives .*|p_axes => .*|tgsis\.geometries_in_box finds .*)", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"then run (SELECT tgsis\.create_storage\(\))", lambda m: f"then run, {IN_PSQL}{m[1]}"),
+    (r"As tgsis's owner run SELECT tgsis\.create_storage\(\); \(or tgsis db install, which does it\)\.",
+     "Run tgsis db install as tgsis's owner: it creates the storage tables."),
     (r"p_geotype => ", "--geotype "),
     (r"uninstall with cascade \(tgsis db uninstall --cascade\)", "repeat with --cascade"),
     (r"or install with method='sql'", "or install with --method sql"),

@@ -350,11 +350,25 @@ def translate(exc: psycopg.Error) -> Error:
     diag = exc.diag
     sqlstate = exc.sqlstate
     message = diag.message_primary or str(exc).strip()
-    err = class_for_sqlstate(sqlstate)(
-        message, sqlstate=sqlstate, detail=diag.message_detail, hint=diag.message_hint
-    )
+    if sqlstate == "42P01" and _MISSING_TGSIS_RELATION.match(message):
+        # a tgsis table that is not there: storage never created (a bare CREATE EXTENSION) or
+        # objects of another version than the client's
+        err: Error = InstallationError(
+            message + " (the tgsis objects of this database are incomplete or not this client's version)",
+            sqlstate=sqlstate,
+            detail=diag.message_detail,
+            hint="`tgsis db status` says what is missing and `tgsis db install` adds it "
+            "(in psql: SELECT tgsis.create_storage(); creates the storage tables)",
+        )
+    else:
+        err = class_for_sqlstate(sqlstate)(
+            message, sqlstate=sqlstate, detail=diag.message_detail, hint=diag.message_hint
+        )
     err.__cause__ = exc
     return err
+
+
+_MISSING_TGSIS_RELATION = re.compile(r'^relation "tgsis\.[^"]+" does not exist$')
 
 
 @contextlib.contextmanager

@@ -1,4 +1,4 @@
--- make installcheck: ALTER EXTENSION tgsis UPDATE from 0.1.0 (frozen in sql/upgrade) to this version.
+-- make installcheck: ALTER EXTENSION tgsis UPDATE from the last release, 0.2.0 (frozen in sql/upgrade; its commit in sql/upgrade/releases.txt) to this version.
 \set regress_db :DBNAME
 -- tests/test_upgrade.py compares the whole catalog with a fresh install; this checks the route a DBA takes.
 \set VERBOSITY terse
@@ -6,7 +6,7 @@ SET client_min_messages = warning;
 CREATE DATABASE tgsis_installcheck_upgrade;
 \c tgsis_installcheck_upgrade
 SET client_min_messages = warning;
-CREATE EXTENSION tgsis VERSION '0.1.0' CASCADE;
+CREATE EXTENSION tgsis VERSION '0.2.0' CASCADE;
 SELECT tgsis.create_storage() AS created;
 SELECT (tgsis.register_feature_class('fault', 'SURFACE')).classname;
 SELECT tgsis.new_geometry('SURFACE', 'f1', ARRAY[0, 0, 0, 1, 1, 0]::float8[], 0, 0) AS geoid \gset

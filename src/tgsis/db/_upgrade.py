@@ -39,12 +39,27 @@ routes run the same text.
 
 from __future__ import annotations
 
+import hashlib
 import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Statement", "Upgrade", "split_statements", "split_script", "assemble", "main"]
+__all__ = [
+    "Statement",
+    "Upgrade",
+    "split_statements",
+    "split_script",
+    "assemble",
+    "main",
+    "install_text",
+    "fingerprint",
+    "FINGERPRINT_TOKEN",
+]
+
+# replaced in a built script (install or upgrade) by the fingerprint of the install script
+FINGERPRINT_TOKEN = "@TGSIS_FINGERPRINT@"
+INSTALL_GUARD = '\\echo Use "CREATE EXTENSION tgsis" to load this file. \\quit'
 
 FILE_MARKER = re.compile(r"^-- ==== (\S+) ====$", re.MULTILINE)
 _DIRECTIVE = re.compile(r"^--\s*@(include|handled|rows|sources)\b\s*(\S*)", re.MULTILINE)
@@ -258,6 +273,25 @@ def _upsert(statement: Statement) -> str:
     return statement.code + f"\nON CONFLICT ({key}) DO " + (f"UPDATE SET {update}" if rest else "NOTHING")
 
 
+def install_text(version: str, files: dict[str, str]) -> str:
+    """The install script ``tgsis--VERSION.sql`` of ``files`` (``{file: text}``, ``@TGSIS_VERSION@`` replaced)
+    as ``sql/Makefile`` writes it before the fingerprint goes in: its header, then each file after a
+    ``-- ==== file ====`` line."""
+    header = f"-- tgsis {version}: built from sql/sources.txt, do not edit\n{INSTALL_GUARD}\n"
+    return header + "".join(f"\n-- ==== {name} ====\n{text}" for name, text in files.items())
+
+
+def fingerprint(script: str) -> str:
+    """The fingerprint of an install script as :func:`install_text` gives it: the first 16 hex digits
+    of its sha256 (what ``sql/Makefile`` computes with ``hashlib`` too).
+
+    It is recorded in ``tgsis.installation.fingerprint`` by the install script and by every upgrade
+    script to that version, so that a database built from other sources of the same version (a
+    development version between two commits) is told apart from this client's.
+    """
+    return hashlib.sha256(script.encode("utf-8")).hexdigest()[:16]
+
+
 @dataclass
 class Upgrade:
     """An upgrade script being assembled.
@@ -268,11 +302,15 @@ class Upgrade:
         Source files of the old and the new version, ``{file: text}`` in install order.
     hand : str
         The hand-written part.
+    fingerprint : str
+        The fingerprint of the new version's install script (:func:`fingerprint`), put where the
+        hand part says ``@TGSIS_FINGERPRINT@``.
     """
 
     old_files: dict[str, str]
     new_files: dict[str, str]
     hand: str
+    fingerprint: str = ""
 
     def _directives(self, *kinds: str) -> set[str]:
         return {m.group(2) for m in _DIRECTIVE.finditer(self.hand) if m.group(1) in kinds}
@@ -354,7 +392,8 @@ class Upgrade:
                 "\n-- NOT HANDLED (changed tables or rows that no hand-written line deals with; "
                 "docs/developing.md): " + ", ".join(unhandled) + "\n"
             )
-        return "".join(out)
+        script = "".join(out)
+        return script.replace(FINGERPRINT_TOKEN, self.fingerprint) if self.fingerprint else script
 
 
 def assemble(sql_dir: Path, old: str, new: str, new_files: dict[str, str]) -> Upgrade:
@@ -370,8 +409,10 @@ def assemble(sql_dir: Path, old: str, new: str, new_files: dict[str, str]) -> Up
         The new version's source files in install order, ``@TGSIS_VERSION@`` replaced.
     """
     frozen = (sql_dir / "upgrade" / f"tgsis--{old}.sql").read_text(encoding="utf-8")
-    hand = (sql_dir / "upgrade" / f"tgsis--{old}--{new}.sql").read_text(encoding="utf-8")
-    return Upgrade(split_script(frozen), new_files, hand)
+    hand = (
+        (sql_dir / "upgrade" / f"tgsis--{old}--{new}.sql").read_text(encoding="utf-8").replace("@TGSIS_VERSION@", new)
+    )
+    return Upgrade(split_script(frozen), new_files, hand, fingerprint(install_text(new, new_files)))
 
 
 def main(argv: list[str]) -> int:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import psycopg
@@ -27,7 +27,16 @@ from psycopg import sql
 from tgsis.db.sqlsource import EXTENSION, ExtensionSources, parse_version
 from tgsis.errors import InstallationError, InUseError, InvalidInputError, reraise
 
-__all__ = ["InstallResult", "InstalledVersion", "install", "installed_version", "partition_model_storage", "uninstall"]
+__all__ = [
+    "InstallResult",
+    "InstalledVersion",
+    "InstallationStatus",
+    "install",
+    "installation_status",
+    "installed_version",
+    "partition_model_storage",
+    "uninstall",
+]
 
 log = logging.getLogger(__name__)
 
@@ -47,10 +56,17 @@ class InstalledVersion:
         The tgsis version of the installed objects.
     method : {"extension", "sql"}
         How it was installed.
+    fingerprint : str or None
+        The fingerprint of the install script the objects were built from
+        (``tgsis.installation.fingerprint``; :attr:`ExtensionSources.fingerprint`
+        of the client that installed or upgraded them), ``None`` for versions
+        before 0.3.0 or when the role may not read ``tgsis.installation``. Not
+        compared by ``==``.
     """
 
     version: str
     method: Literal["extension", "sql"]
+    fingerprint: str | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)
@@ -67,12 +83,58 @@ class InstallResult:
         Version installed now.
     previous_version : str or None
         Version before an upgrade (or the same version when unchanged).
+    steps : tuple of str
+        What the call did, one sentence each, in order (``tgsis db install``
+        prints them): roles and extensions created, the extension or script
+        installed, the upgrade run, storage created, a grant made; empty when
+        it did nothing. Not compared by ``==``.
+    still_needed : tuple of str
+        Statements a DBA must still run for the installing role (``GRANT
+        tgsis_admin TO owner;`` when the installer may not grant it itself).
+        Not compared by ``==``.
     """
 
     action: Literal["installed", "upgraded", "unchanged"]
     method: Literal["extension", "sql"]
     version: str
     previous_version: str | None = None
+    steps: tuple[str, ...] = field(default=(), compare=False)
+    still_needed: tuple[str, ...] = field(default=(), compare=False)
+
+
+@dataclass(frozen=True)
+class InstallationStatus:
+    """The tgsis installation of a database compared with this client (:func:`installation_status`).
+
+    Attributes
+    ----------
+    installed : InstalledVersion or None
+        What the database holds (``None``: tgsis is not installed).
+    client_version, client_fingerprint : str
+        This client's version and the fingerprint of its install script.
+    missing_storage : tuple of str
+        Storage tables (``tgsis.model_tables``) that do not exist: a bare
+        ``CREATE EXTENSION tgsis`` leaves all of them missing.
+    state : {"not installed", "up to date", "upgrade", "client older", "other build", "storage missing"}
+        ``up to date`` when this client can work with the database.
+    problem : str or None
+        What is wrong, in a sentence naming both sides; ``None`` when up to date.
+    fix : str or None
+        The command that fixes it.
+    """
+
+    installed: InstalledVersion | None
+    client_version: str
+    client_fingerprint: str
+    missing_storage: tuple[str, ...]
+    state: Literal["not installed", "up to date", "upgrade", "client older", "other build", "storage missing"]
+    problem: str | None
+    fix: str | None
+
+    @property
+    def ok(self) -> bool:
+        """Whether this client can work with the database as it is."""
+        return self.state == "up to date"
 
 
 def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
@@ -88,7 +150,7 @@ def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
             "SELECT extversion FROM pg_catalog.pg_extension WHERE extname = %s", (EXTENSION,)
         ).fetchone()
         if row is not None:
-            return InstalledVersion(str(row[0]), "extension")
+            return InstalledVersion(str(row[0]), "extension", _fingerprint(conn, str(row[0])))
         row = conn.execute(
             "SELECT to_regnamespace('tgsis') IS NOT NULL, to_regclass('tgsis.installation') IS NOT NULL"
         ).fetchone()
@@ -104,7 +166,108 @@ def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
         versions = [str(r[0]) for r in conn.execute("SELECT version FROM tgsis.installation").fetchall()]
     if not versions:
         raise InstallationError("tgsis.installation is empty: the tgsis schema was tampered with")
-    return InstalledVersion(max(versions, key=parse_version), "sql")
+    version = max(versions, key=parse_version)
+    return InstalledVersion(version, "sql", _fingerprint(conn, version))
+
+
+def _fingerprint(conn: psycopg.Connection[Any], version: str) -> str | None:
+    """``tgsis.installation.fingerprint`` of ``version`` (``None`` before 0.3.0, or when the role may not read it)."""
+    row = conn.execute(
+        "SELECT to_regclass('tgsis.installation') IS NOT NULL "
+        "AND has_table_privilege('tgsis.installation', 'SELECT')"
+    ).fetchone()
+    if row is None or not row[0]:
+        return None
+    # to_jsonb: the column is missing in databases of 0.1.0 and 0.2.0
+    row = conn.execute(
+        "SELECT to_jsonb(i) ->> 'fingerprint' FROM tgsis.installation i WHERE i.version = %s", (version,)
+    ).fetchone()
+    return None if row is None or row[0] is None else str(row[0])
+
+
+def _missing_storage(conn: psycopg.Connection[Any]) -> tuple[str, ...]:
+    """The storage tables of the registry that do not exist (all of them after a bare CREATE EXTENSION)."""
+    row = conn.execute("SELECT to_regclass('tgsis.model_tables') IS NULL, to_regclass('tgsis.geometry') IS NULL").fetchone()
+    assert row is not None
+    if row[0]:  # 0.1.0 had no registry of data models: its storage is there when tgsis.geometry is
+        return ("tgsis.geometry",) if row[1] else ()
+    rows = conn.execute(
+        "SELECT 'tgsis.' || quote_ident(t.tablename) FROM tgsis.model_tables t "
+        "WHERE to_regclass(format('tgsis.%I', t.tablename)) IS NULL ORDER BY t.model, t.iudorder, t.tablename"
+    ).fetchall()
+    return tuple(str(r[0]) for r in rows)
+
+
+def _fingerprint_mismatch(installed: InstalledVersion, sources: ExtensionSources, dbname: str) -> tuple[str, str]:
+    """The problem and the fix of a database of this version built from other sources than the client's."""
+    recorded = installed.fingerprint or "none recorded"
+    problem = (
+        f"database {dbname} has tgsis {installed.version} built from other SQL sources than this client's "
+        f"{sources.version} (database: fingerprint {recorded}; client: fingerprint {sources.fingerprint})"
+    )
+    fix = (
+        f"{installed.version} is a development version and there is no upgrade between two of its builds: use the "
+        "client of the commit that installed the database, or install this client's tgsis into a new database "
+        "(`tgsis db install`) and move the data there (`tgsis export` / `tgsis import`); released versions "
+        "upgrade with `tgsis db install` (docs/install.md, 'Upgrading')"
+    )
+    return problem, fix
+
+
+def installation_status(
+    conn: psycopg.Connection[Any], *, sources: ExtensionSources | None = None
+) -> InstallationStatus:
+    """Compare the tgsis installed in the connected database with this client's SQL.
+
+    The version and the fingerprint of the install script (what the objects
+    were built from) are compared, and the storage tables checked: a
+    database of an older release needs ``tgsis db install`` (an upgrade), a
+    newer one a newer client, a database of the same development version
+    built at another commit cannot be upgraded in place, and a bare ``CREATE
+    EXTENSION tgsis`` lacks its storage tables.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        Connection to the database (any role that may read ``tgsis.installation``).
+    sources : ExtensionSources, optional
+        The client's SQL; by default the sources shipped with this client.
+
+    Returns
+    -------
+    InstallationStatus
+    """
+    sources = sources or ExtensionSources.default()
+    current = installed_version(conn)
+    dbname = conn.info.dbname
+
+    def status(state: Any, problem: str | None = None, fix: str | None = None,
+               missing: tuple[str, ...] = ()) -> InstallationStatus:
+        return InstallationStatus(current, sources.version, sources.fingerprint, missing, state, problem, fix)
+
+    if current is None:
+        return status("not installed", f"tgsis is not installed in database {dbname}", "tgsis db install")
+    with reraise():
+        missing = _missing_storage(conn)
+    if parse_version(current.version) > parse_version(sources.version):
+        return status("client older", f"database {dbname} has tgsis {current.version}, newer than this client's "
+                      f"{sources.version}", "this client is older than the database: upgrade the client "
+                      "(pip install --upgrade tgsis)", missing)
+    if current.version != sources.version:
+        statement = (f"ALTER EXTENSION tgsis UPDATE TO '{sources.version}'; SELECT tgsis.create_storage();"
+                     if current.method == "extension" else "")
+        return status("upgrade", f"database {dbname} has tgsis {current.version}, this client {sources.version}",
+                      f"run `tgsis db install` ({current.version} -> {sources.version})"
+                      + (f", or in psql: {statement}" if statement else ""), missing)
+    if current.fingerprint != sources.fingerprint:
+        return status("other build", *_fingerprint_mismatch(current, sources, dbname), missing=missing)
+    if missing:
+        return status("storage missing",
+                      f"database {dbname} has tgsis {current.version} without its storage tables "
+                      f"({len(missing)} missing: {', '.join(missing[:4])}{', ...' if len(missing) > 4 else ''}); "
+                      "CREATE EXTENSION alone does not create them",
+                      "run `tgsis db install`, or in psql: SELECT tgsis.create_storage();", missing)
+    return status("up to date")
 
 
 def _extension_available(conn: psycopg.Connection[Any], version: str) -> bool:
@@ -121,24 +284,24 @@ def _create_extension(conn: psycopg.Connection[Any], version: str) -> None:
             sql.Identifier(EXTENSION), sql.Literal(version)
         )
     )
-    _create_storage(conn)
 
 
-def _create_storage(conn: psycopg.Connection[Any]) -> None:
-    """Create the tables of stored objects after ``CREATE EXTENSION``, unless they exist.
+def _create_storage(conn: psycopg.Connection[Any]) -> bool:
+    """Create the tables of stored objects after ``CREATE EXTENSION``, unless they exist; whether it created any.
 
     They are left out of the extension script so that they are no extension
     members: pg_dump dumps them whole (``sql/core/create_storage.sql`` says
     why). Also completes a database where someone ran ``CREATE EXTENSION
     tgsis`` by hand.
     """
-    row = conn.execute("SELECT to_regclass('tgsis.geometry') IS NULL").fetchone()
-    if row is not None and row[0]:
-        conn.execute("SELECT tgsis.create_storage()")
+    if not _missing_storage(conn):
+        return False
+    row = conn.execute("SELECT tgsis.create_storage()").fetchone()
+    return bool(row and row[0])
 
 
 def _install_fresh(
-    conn: psycopg.Connection[Any], sources: ExtensionSources, method: Method
+    conn: psycopg.Connection[Any], sources: ExtensionSources, method: Method, steps: list[str]
 ) -> Literal["extension", "sql"]:
     available = _extension_available(conn, sources.version)
     if method == "extension" and not available:
@@ -150,13 +313,19 @@ def _install_fresh(
         try:
             with conn.transaction():
                 _create_extension(conn, sources.version)
+                steps.append(f"created the extension tgsis {sources.version} "
+                             f"(CREATE EXTENSION tgsis VERSION '{sources.version}' CASCADE)")
+                if _create_storage(conn):
+                    steps.append("created the storage tables (SELECT tgsis.create_storage())")
             return "extension"
         except psycopg.errors.InsufficientPrivilege as exc:
             if method == "extension":
                 raise
             log.warning("CREATE EXTENSION tgsis refused (%s); installing with plain SQL", exc.diag.message_primary)
+            steps.append(f"CREATE EXTENSION tgsis was refused ({exc.diag.message_primary}): installed with plain SQL")
     _prepare_plain_sql(conn, sources)
     conn.execute(sources.script(psql_guard=False).encode("utf-8"))
+    steps.append(f"ran the install script of tgsis {sources.version} (plain SQL: schema tgsis with its storage tables)")
     return "sql"
 
 
@@ -180,7 +349,7 @@ def _prepare_plain_sql(conn: psycopg.Connection[Any], sources: ExtensionSources)
 
 
 def _upgrade(
-    conn: psycopg.Connection[Any], current: InstalledVersion, sources: ExtensionSources
+    conn: psycopg.Connection[Any], current: InstalledVersion, sources: ExtensionSources, steps: list[str]
 ) -> None:
     if current.method == "extension":
         if not _extension_available(conn, sources.version):
@@ -194,12 +363,55 @@ def _upgrade(
                 sql.Identifier(EXTENSION), sql.Literal(sources.version)
             )
         )
-        _create_storage(conn)
+        steps.append(f"upgraded tgsis {current.version} -> {sources.version} "
+                     f"(ALTER EXTENSION tgsis UPDATE TO '{sources.version}')")
+        if _create_storage(conn):
+            steps.append("created the storage tables (SELECT tgsis.create_storage())")
         return
     _prepare_plain_sql(conn, sources)
-    for path in sources.upgrade_path(current.version, sources.version):
+    chain = sources.upgrade_path(current.version, sources.version)
+    for path in chain:
         log.info("applying %s", path.name)
         conn.execute(sources.upgrade_sql(path).encode("utf-8"))
+    steps.append(f"upgraded tgsis {current.version} -> {sources.version} (plain SQL: "
+                 + ", ".join(path.name for path in chain) + ")")
+
+
+_TGSIS_ROLES = ("tgsis_reader", "tgsis_editor", "tgsis_admin", "tgsis_nobody")
+
+
+def _existing(conn: psycopg.Connection[Any]) -> tuple[set[str], set[str]]:
+    """The tgsis roles and the extensions that exist (to say what an install created)."""
+    roles = {str(r[0]) for r in conn.execute("SELECT rolname FROM pg_catalog.pg_roles WHERE rolname = ANY(%s)",
+                                             (list(_TGSIS_ROLES),)).fetchall()}
+    extensions = {str(r[0]) for r in conn.execute("SELECT extname FROM pg_catalog.pg_extension").fetchall()}
+    return roles, extensions
+
+
+def _make_owner_admin(conn: psycopg.Connection[Any], steps: list[str]) -> tuple[str, ...]:
+    """Make tgsis's owner (the installing role) a member of tgsis_admin, or say which GRANT a DBA must run.
+
+    The owner registers feature classes and versions features, which tgsis allows members of
+    tgsis_admin (superusers are). A role that created the tgsis roles, or that holds ADMIN OPTION
+    on tgsis_admin, may grant it to itself; otherwise the statement is returned.
+    """
+    row = conn.execute(
+        "SELECT current_user, pg_has_role(current_user, 'tgsis_admin', 'MEMBER'), "
+        "(SELECT n.nspowner = r.oid FROM pg_catalog.pg_namespace n, pg_catalog.pg_roles r "
+        "  WHERE n.nspname = 'tgsis' AND r.rolname = current_user), "
+        "format('GRANT tgsis_admin TO %I', current_user)"
+    ).fetchone()
+    assert row is not None
+    user, member, owner, grant = str(row[0]), bool(row[1]), bool(row[2]), str(row[3])
+    if member or not owner:
+        return ()
+    try:
+        with conn.transaction():
+            conn.execute(grant.encode("utf-8"))  # the role's name quoted by format('%I')
+    except psycopg.errors.InsufficientPrivilege:
+        return (grant + ";",)
+    steps.append(f"granted tgsis_admin to {user}, tgsis's owner (it registers classes and versions features)")
+    return ()
 
 
 def install(
@@ -210,10 +422,15 @@ def install(
 ) -> InstallResult:
     """Install or upgrade tgsis in the connected database.
 
-    A second call with the same version is a no-op; a call with a newer client
-    upgrades; a database newer than the client is refused. Everything runs in
-    one transaction (a savepoint if the connection is already in one: the
-    caller then commits).
+    A second call with the same build is a no-op (it creates the storage
+    tables a bare ``CREATE EXTENSION tgsis`` left out); a call with a newer
+    client upgrades; a database newer than the client, or of the same
+    development version built from other sources (another fingerprint), is
+    refused. Everything runs in one transaction (a savepoint if the
+    connection is already in one: the caller then commits). The installing
+    role becomes tgsis's owner and a member of ``tgsis_admin`` when it may
+    grant that to itself (:attr:`InstallResult.still_needed` says the
+    ``GRANT`` otherwise).
 
     Parameters
     ----------
@@ -233,9 +450,9 @@ def install(
     Raises
     ------
     InstallationError
-        Unknown method, newer version in the database, no upgrade path, a
-        foreign ``tgsis`` schema, or missing extension files for
-        ``method="extension"``.
+        Unknown method, newer version in the database, another build of the
+        same version, no upgrade path, a foreign ``tgsis`` schema, or missing
+        extension files for ``method="extension"``.
     MissingPrivilegeError
         The ``tgsis_*`` roles are missing and the role may not create them.
     """
@@ -243,29 +460,48 @@ def install(
         raise InstallationError(f"unknown install method {method!r}: use 'auto', 'extension' or 'sql'")
     sources = sources or ExtensionSources.default()
     target = sources.version
+    steps: list[str] = []
+    result: tuple[str, Literal["extension", "sql"], str | None]
     with reraise(), conn.transaction():
         conn.execute(_LOCK_SQL)
         current = installed_version(conn)
+        roles_before, extensions_before = _existing(conn)
         if current is None:
-            done = _install_fresh(conn, sources, method)
+            done = _install_fresh(conn, sources, method, steps)
             log.info("installed tgsis %s (%s)", target, done)
-            return InstallResult("installed", done, target)
-        if parse_version(current.version) > parse_version(target):
-            raise InstallationError(
-                f"the database has tgsis {current.version}, newer than this client's {target}",
-                hint="upgrade the tgsis Python package",
-            )
-        if current.version == target:
-            if current.method == "extension":
-                _create_storage(conn)
-            return InstallResult("unchanged", current.method, target, current.version)
-        _upgrade(conn, current, sources)
-        # the PostGIS wrappers are made at run time (sql/postgis/enable_postgis.sql): again for the new version
-        if conn.execute("SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL "
-                        "AND to_regprocedure('tgsis.enable_postgis()') IS NOT NULL").fetchone() == (True,):
-            conn.execute("SELECT tgsis.enable_postgis()")
-        log.info("upgraded tgsis %s -> %s (%s)", current.version, target, current.method)
-        return InstallResult("upgraded", current.method, target, current.version)
+            result = ("installed", done, None)
+        else:
+            if parse_version(current.version) > parse_version(target):
+                raise InstallationError(
+                    f"the database has tgsis {current.version}, newer than this client's {target}",
+                    hint="this client is older than the database: upgrade the client "
+                         "(pip install --upgrade tgsis)",
+                )
+            if current.version == target:
+                if current.fingerprint != sources.fingerprint:
+                    problem, fix = _fingerprint_mismatch(current, sources, conn.info.dbname)
+                    raise InstallationError(problem, hint=fix)
+                if _create_storage(conn):
+                    steps.append("created the storage tables the extension was created without "
+                                 "(SELECT tgsis.create_storage())")
+                result = ("unchanged", current.method, current.version)
+            else:
+                _upgrade(conn, current, sources, steps)
+                # the PostGIS wrappers are made at run time (sql/postgis/enable_postgis.sql): again for the new version
+                if conn.execute("SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL "
+                                "AND to_regprocedure('tgsis.enable_postgis()') IS NOT NULL").fetchone() == (True,):
+                    conn.execute("SELECT tgsis.enable_postgis()")
+                    steps.append("made the PostGIS functions again (SELECT tgsis.enable_postgis())")
+                log.info("upgraded tgsis %s -> %s (%s)", current.version, target, current.method)
+                result = ("upgraded", current.method, current.version)
+        roles_after, extensions_after = _existing(conn)
+        if created := sorted(roles_after - roles_before, key=_TGSIS_ROLES.index):
+            steps.insert(0, "created the roles " + ", ".join(created))
+        if required := sorted((extensions_after - extensions_before) - {EXTENSION}):
+            steps.insert(0, "created the extension(s) tgsis needs: " + ", ".join(required))
+        still_needed = _make_owner_admin(conn, steps)
+    action, route, previous = result
+    return InstallResult(action, route, target, previous, tuple(steps), still_needed)  # type: ignore[arg-type]
 
 
 # Objects outside schema tgsis that a cascading drop of tgsis could take with

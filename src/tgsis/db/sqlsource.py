@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
-from tgsis.db._upgrade import Upgrade, assemble, header_for
+from tgsis.db._upgrade import FINGERPRINT_TOKEN, Upgrade, assemble, fingerprint, header_for, install_text
 from tgsis.errors import InstallationError
 
 __all__ = ["ExtensionSources", "find_sql_dir", "parse_version", "EXTENSION"]
@@ -128,14 +128,21 @@ class ExtensionSources:
             Keep the ``\\echo ... \\quit`` line that stops psql from running
             the file by hand. ``False`` gives the SQL a driver can execute.
         """
-        header = [f"-- tgsis {self.version}: built from sql/sources.txt, do not edit"]
-        if psql_guard:
-            header.append(PSQL_GUARD)
-        parts = ["\n".join(header) + "\n"]
-        for name in self.files:
-            parts.append(f"\n-- ==== {name} ====\n")
-            parts.append((self.root / name).read_text(encoding="utf-8"))
-        return "".join(parts).replace(VERSION_TOKEN, self.version)
+        script = self._unfingerprinted.replace(FINGERPRINT_TOKEN, self.fingerprint)
+        return script if psql_guard else script.replace(PSQL_GUARD + "\n", "", 1)
+
+    @cached_property
+    def _unfingerprinted(self) -> str:
+        return install_text(self.version, self.source_texts())
+
+    @cached_property
+    def fingerprint(self) -> str:
+        """The fingerprint of this version's install script as built (``tgsis.installation.fingerprint``).
+
+        Two builds of one version from different sources (a development version at two commits) have
+        different fingerprints: :func:`tgsis.install` and ``tgsis db status`` compare it.
+        """
+        return fingerprint(self._unfingerprinted)
 
     @cached_property
     def updates(self) -> dict[tuple[str, str], Path]:

@@ -1,29 +1,31 @@
--- tgsis 0.1.0 -> 0.2.0: the hand-written part of the upgrade script.
--- The build (src/tgsis/db/_upgrade.py) puts the functions, views and comments
--- of 0.2.0 at the @sources line, after dropping those whose shape changed; this
--- file does what re-running them cannot: new catalog tables and their rows,
--- changed constraints, new storage tables (docs/developing.md, "An upgrade script").
--- tests/test_upgrade.py checks that the result equals a fresh 0.2.0.
+-- tgsis 0.2.0 -> 0.3.0: the hand-written part of the upgrade script.
+-- 0.2.0 is frozen (sql/upgrade/tgsis--0.2.0.sql, the install script of commit e012a4a). The build
+-- (src/tgsis/db/_upgrade.py) puts the functions, views and comments of 0.3.0 at the @sources line,
+-- after dropping those whose shape changed; this file does what re-running them cannot: changed
+-- tables, new catalog tables and their rows, triggers, what the storage needs
+-- (docs/developing.md, "An upgrade script"). tests/test_upgrade.py checks that a database of every
+-- released version upgraded by it equals a fresh 0.3.0.
+--
+-- Layout: each change is one block starting with a line `-- ---- <what>`; blocks that must run before
+-- the functions come before `-- @sources`, those that need the new functions go into the DO block
+-- after it (one per change, marked the same way) or after it. The installation record comes last.
 
--- ---- before the functions: the registry of data models (new in 0.2.0) and its rows
--- @include geometry/data_models.sql
--- @include model1/storage.sql
--- @include model2/storage.sql
--- @include model3/storage.sql
--- @include model4/storage.sql
--- @include model5/storage.sql
-
--- ---- tgsis.catalog: the geotypes and time models of a class are the registry's; G-map classes have a cell level
-ALTER TABLE tgsis.catalog
-    DROP CONSTRAINT catalog_geotype_check,
-    DROP CONSTRAINT catalog_timemodel_check,
-    DROP CONSTRAINT catalog_temporal_classes,
-    ADD FOREIGN KEY (timemodel) REFERENCES tgsis.data_models (timemodel),
-    ADD COLUMN celllevel smallint CHECK (celllevel >= 0),
-    ADD COLUMN versioned boolean NOT NULL DEFAULT true;
+-- ---- tgsis.catalog: classes without versioning (issue 18)
+ALTER TABLE tgsis.catalog ADD COLUMN versioned boolean NOT NULL DEFAULT true;
 -- @handled core/catalog.sql
 
--- ---- new catalog tables of 0.2.0, dumped with the catalog: the features of classes registered without
+-- ---- tgsis.installation: the fingerprint of the install script each row's version was built from
+ALTER TABLE tgsis.installation ADD COLUMN fingerprint text;
+COMMENT ON COLUMN tgsis.installation.fingerprint IS
+    'sha256 (first 16 hex digits) of the install script of that version as built (tgsis.install and tgsis db status compare it with the client''s); NULL for versions before 0.3.0';
+-- @handled core/installation.sql
+
+-- ---- core/roles.sql: its DO block runs at install only (creating missing roles); its hint changed
+-- @handled core/roles.sql
+-- ---- versioning/storage_hop.sql: its DO block (the owner's membership of tgsis_nobody) runs at install only
+-- @handled versioning/storage_hop.sql
+
+-- ---- new catalog tables, dumped with the catalog: the features of classes registered without
 -- versioning, and the notes of which objects changed in which revision (filled from the storage after
 -- the functions, below)
 -- @include versioning/unversioned_features.sql
@@ -38,17 +40,18 @@ END
 $dump$;
 -- @handled core/config_dump.sql
 
--- ---- the rows tgsis ships: error codes and property types added on main flow in from the files
+-- ---- the rows tgsis ships: error codes and property types added since flow in from the files
 -- @rows core/error_codes.sql
 -- @rows core/property_types.sql
 
+-- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
+
 -- @sources
 
--- ---- after the functions: the storage tables (no extension members: core/create_storage.sql says why)
+-- ---- after the functions: what versioned tables need (the storage tables are no extension members:
+-- core/create_storage.sql says why)
 DO $upgrade$
 DECLARE
-    v_geometry  text;
-    v_table     text;
     v_extension oid;   -- NULL on the plain-SQL route
     v_members   text[];
     v_object    record;
@@ -57,63 +60,13 @@ BEGIN
     v_extension := (SELECT oid FROM pg_catalog.pg_extension WHERE extname = 'tgsis');
     v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
                         WHERE d.deptype = 'e' AND d.refobjid = v_extension);
-    IF to_regclass('tgsis.geometry') IS NULL THEN
-        -- an extension whose storage was never created: tgsis.install / tgsis.create_storage() makes it whole
-        RETURN;
-    END IF;
-    -- tgsis.geometry (its storage table once feature versioning is on): the registry's geotype/time-model check
-    v_geometry := tgsis.storage_table('tgsis', 'geometry');
-    EXECUTE format('ALTER TABLE %s DROP CONSTRAINT geometry_geotype_check, DROP CONSTRAINT geometry_timemodel_check, '
-                   'DROP CONSTRAINT geometry_temporal_surfaces, ADD CONSTRAINT geometry_kind CHECK (%s)',
-                   v_geometry, tgsis.geometry_kind_check());
-    -- the new comments, on the table and on its versioned view when there is one
-    FOREACH v_table IN ARRAY ARRAY(SELECT DISTINCT unnest(ARRAY[v_geometry, 'tgsis.geometry'])) LOOP
-        EXECUTE format('COMMENT ON COLUMN %s.geotype IS %L', v_table,
-            'MULTIPOINT, MULTILINESTRING, SURFACE, MULTITETRA or GEOMETRYCOLLECTION (the geotypes of its time model: tgsis.data_models.geotypes)');
-        EXECUTE format('COMMENT ON COLUMN %s.timemodel IS %L', v_table,
-            'its data model (tgsis.data_models.timemodel): STATIC (model 1: tgsis.vrtx and simplices), INSTANTS (model 2: a surface at instants, tgsis.times*) or EVOLVING (model 3: tgsis.timem, timet, node, d4dtrgl, d4dvrtx)');
-    END LOOP;
 
-    -- the sets of objects (new tables of the geometry core, as tgsis.create_geometry_storage makes them)
-    CREATE TABLE tgsis.model (
-        modelid     bigint GENERATED BY DEFAULT AS IDENTITY PRIMARY KEY,
-        name        text   NOT NULL CHECK (name <> ''),
-        description text,
-        created_at  timestamptz NOT NULL DEFAULT now()
-    );
-    CREATE TABLE tgsis.model_object (
-        geoid   bigint NOT NULL,
-        modelid bigint NOT NULL,
-        PRIMARY KEY (geoid, modelid)
-    );
-    CREATE INDEX model_object_model_idx ON tgsis.model_object (modelid);
-    COMMENT ON SEQUENCE tgsis.model_modelid_seq IS 'model ids (identity of tgsis.model)';
-    COMMENT ON TABLE tgsis.model IS 'models: named sets of objects (their members are in tgsis.model_object), versioned as object class model';
-    COMMENT ON COLUMN tgsis.model.modelid IS 'model id';
-    COMMENT ON COLUMN tgsis.model.name IS 'the model''s name (unique in each version: tgsis.create_model checks)';
-    COMMENT ON COLUMN tgsis.model.description IS 'what the model is, for people';
-    COMMENT ON COLUMN tgsis.model.created_at IS 'when the model was created';
-    COMMENT ON TABLE tgsis.model_object IS
-        'the objects of each model: one row per object and model it belongs to (versioned with the object, deleted with it)';
-    COMMENT ON COLUMN tgsis.model_object.geoid IS 'the object (tgsis.geometry.geoid: a feature)';
-    COMMENT ON COLUMN tgsis.model_object.modelid IS 'the model (tgsis.model.modelid)';
-    -- their rights (tgsis.grant_model_tables(0) would grant tgsis.geometry's again: a GRANT here
-    -- records an object's whole ACL as its initial privileges, which pg_dump leaves out)
-    GRANT SELECT ON tgsis.model, tgsis.model_object TO tgsis_reader;
-    GRANT INSERT, UPDATE, DELETE ON tgsis.model, tgsis.model_object TO tgsis_editor;
-    GRANT USAGE ON SEQUENCE tgsis.model_modelid_seq TO tgsis_editor;
-
-    -- the tables of models 4 and 5, granted; the geometry check follows the registry
-    PERFORM tgsis.create_storage();
-
-    -- feature versioning on: the new tables are versioned like the others
-    IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature') THEN
-        PERFORM tgsis.enable_feature_versioning();
-    END IF;
-    -- every versioned table (the feature storage versioned just now has them already):
+    -- ---- revision notes, features of no version, set-based view updates
+    -- every versioned table:
     -- * the write triggers of the views, generated anew: they note the objects they change
     --   (tgsis.revision_objects), and those of object class 'feature' tell rows of features of no
     --   version (tgsis.unversioned_features) from versioned ones;
+    -- * the statement's queue of rows and its flush trigger (tgsis.create_versioning_queue);
     -- * the storage's trigger that notes direct inserts;
     -- * the notes of what its rows say changed in each revision (revision 0 is never noted)
     FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
@@ -136,6 +89,8 @@ BEGIN
                      WHERE c.r <> 0', v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver')) AS r;
     END LOOP;
 
+    -- ---- (blocks of later changes that need the new functions go here)
+
     -- What this block made (storage tables, their versioned views and runners, class views made
     -- again) is made at run time in a fresh install: inside ALTER EXTENSION it became an extension
     -- member, which pg_dump leaves out and DROP EXTENSION drops. It leaves the extension again.
@@ -155,6 +110,8 @@ BEGIN
     END LOOP;
 END
 $upgrade$;
+
+-- ---- (blocks of later changes that run after the functions, outside the DO block, go here)
 
 -- ---- issue36-keys: object keys stored as text under other sessions' settings, made canonical
 -- Tables keyed by a type whose text depends on the session (date, timestamp(tz), float, numeric,
@@ -258,9 +215,9 @@ BEGIN
 END
 $keys$;
 
--- ---- the installation record
--- @handled core/installation.sql
-INSERT INTO tgsis.installation (version, method)
-VALUES ('0.2.0',
+-- ---- the installation record (last)
+INSERT INTO tgsis.installation (version, method, fingerprint)
+VALUES ('@TGSIS_VERSION@',
         CASE WHEN EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis')
-             THEN 'extension' ELSE 'sql' END);
+             THEN 'extension' ELSE 'sql' END,
+        '@TGSIS_FINGERPRINT@');
