@@ -100,7 +100,24 @@ DECLARE
     v_qkey     text;
     v_qold     text;
     v_wrow     text;
+    v_mark     text := '';   -- the row path's record of the first row of a generation
+    -- the session's settings a write depends on (version, revision, role): the rows of one generation
+    -- are read and written with the same
+    v_session  CONSTANT text := $s$pg_catalog.format('%s/%s/%s', pg_catalog.quote_nullable(coalesce(nullif(pg_catalog.current_setting('tgsis.version', true), ''), 'DEFAULT')), pg_catalog.quote_nullable(nullif(pg_catalog.btrim(pg_catalog.current_setting('tgsis.revision', true)), '')), pg_catalog.current_setting('role'))$s$;
+    v_moved_rows  text;
+    v_moved_flush text;
+    v_dup_insert  text;
 BEGIN
+    v_moved_rows := format($m$RAISE EXCEPTION 'the session''s version changed between the rows of an UPDATE of the versioned view %%', %L
+                    USING ERRCODE = 'TG306',
+                          DETAIL = 'Rows of the statement were written in one version (or revision, or role) and the next would be written in another; a function the statement calls changed tgsis.version, tgsis.revision or the role.',
+                          HINT = 'Change the version (goto_version, SET tgsis.version) between statements, not from inside one.';$m$,
+                           format('%I.%I', p_schema, p_table));
+    v_moved_flush := format($m$RAISE EXCEPTION 'the session''s version changed during an UPDATE of the versioned view %%', %L
+                    USING ERRCODE = 'TG306',
+                          DETAIL = 'Its rows were read in one version (or revision, or role) and would be written in another; a function the statement calls changed tgsis.version, tgsis.revision or the role, or saved a revision.',
+                          HINT = 'Change the version (goto_version, SET tgsis.version) between statements, not from inside one.';$m$,
+                           format('%I.%I', p_schema, p_table));
     -- the probe of every row, one query: the object locks (tgsis.object_locks) and
     -- whether the object is noted as changed in the working revision
     -- (tgsis.revision_objects: what merges and conflict checks read); the check
@@ -170,6 +187,24 @@ BEGIN
         'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) already exists in version %s.',
         (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         p_pkey, p_table, p_schema);
+    -- an INSERT of a key that is there: the trigger cannot tell whether the statement said ON CONFLICT DO
+    -- NOTHING (PostgreSQL ignores the clause on a view with INSTEAD OF triggers, and a view has no unique
+    -- index to infer a target from), so that it never skips a row a plain INSERT would refuse: refused by
+    -- name when the client's query text has the clause, else the table's duplicate as before
+    v_dup_insert := format($dup$
+            IF pg_catalog.current_query() ~* '\mon\s+conflict\M' THEN
+                RAISE EXCEPTION 'INSERT ... ON CONFLICT is not supported on the versioned view %%', %L
+                    USING ERRCODE = 'TG306',
+                          DETAIL = format(%L, concat_ws(', ', %s), tgsis.get_working_version()),
+                          HINT = %L,
+                          TABLE = %L, SCHEMA = %L;
+            END IF;$dup$,
+        format('%I.%I', p_schema, p_table),
+        'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) is there in version %s; the view cannot skip or update it as ON CONFLICT would, so the statement is refused and nothing is written.',
+        (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
+        format('Insert the rows whose key is not there (INSERT INTO %1$s SELECT ... WHERE NOT EXISTS (SELECT FROM %1$s WHERE (%2$s) = (...))) and UPDATE the others.',
+               format('%I.%I', p_schema, p_table), v_key_list),
+        p_table, p_schema) || v_dup;
     -- what PostgreSQL raises when a repeatable-read transaction meets a concurrent update: clients retry it
     v_stale := format($stale$
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
@@ -187,10 +222,10 @@ BEGIN
     SELECT array_agg(array_position(p_columns, k) ORDER BY o) INTO v_pos FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
     v_keypos := array_position(p_columns, p_keyfield);
     IF array_position(v_pos, NULL) IS NULL AND v_keypos IS NOT NULL THEN
-        SELECT 'tgsis_xact, tgsis_statement, tgsis_depth, tgsis_generation, '
+        SELECT 'tgsis_xact, tgsis_generation, '
                                || string_agg(format('n%s', o), ', ' ORDER BY o) || ', '
                                || string_agg(format('o%s', o), ', ' ORDER BY o),
-               'pg_catalog.pg_current_xact_id(), pg_catalog.statement_timestamp(), pg_catalog.pg_trigger_depth(), v_gen, '
+               'pg_catalog.pg_current_xact_id(), v_gen, '
                                                  || string_agg(format('NEW.%I', c), ', ' ORDER BY o) || ', '
                                                  || string_agg(format('OLD.%I', c), ', ' ORDER BY o),
                format('pg_catalog.record_image_eq(ROW(%s), ROW(%s))', string_agg(format('v.%I', c), ', ' ORDER BY o),
@@ -207,54 +242,71 @@ BEGIN
                        ELSE 'v_w' END;
         v_enqueue := format($enq$
     IF TG_OP = 'UPDATE' AND pg_catalog.record_image_eq(ROW(%1$s), ROW(%2$s)) THEN
-        -- the key stays: the statement's first row goes the row path below (a one-row UPDATE costs what
-        -- it did), the others are queued, written with the statement's other rows when it ends (the
-        -- flush above); tgsis.queue_first_<depth> says "<generation>:<key>" of the first row
-        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || pg_catalog.pg_trigger_depth(), true), ''),
-                          '0')::bigint;
-        IF pg_catalog.split_part(pg_catalog.current_setting('tgsis.queue_first_' || pg_catalog.pg_trigger_depth(), true),
+        -- the key stays: the first row since the view's last flush goes the row path below (a one-row
+        -- UPDATE costs what it did), the others are queued under the view's generation and written when
+        -- the statement ends (the flush above); tgsis.queue_first_<view> says "<generation>:<key>" of
+        -- that first row, tgsis.queue_session_<view> the session's version settings it was written with
+        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || TG_RELID, true), ''), '0')::bigint;
+        IF pg_catalog.split_part(pg_catalog.current_setting('tgsis.queue_first_' || TG_RELID, true),
                                  ':', 1) = v_gen::text THEN
+            IF pg_catalog.current_setting('tgsis.queue_session_' || TG_RELID, true) IS DISTINCT FROM %7$s THEN
+                %8$s
+            END IF;
             INSERT INTO %3$s (%4$s) VALUES (%5$s);
             RETURN NEW;
         END IF;
-        PERFORM pg_catalog.set_config('tgsis.queue_first_' || pg_catalog.pg_trigger_depth(),
-                                      v_gen || ':' || %6$s, true);
+        v_first := v_gen || ':' || %6$s;
     END IF;$enq$,
             (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
             (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
             v_queue, v_qcols, v_qvals,
             format('concat_ws(%L, %s)', ', ', (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o)
-                                                 FROM unnest(p_keys) WITH ORDINALITY AS u(k, o))));
+                                                 FROM unnest(p_keys) WITH ORDINALITY AS u(k, o))),
+            v_session, v_moved_rows);
         v_flush := format($flush$
     IF TG_LEVEL = 'STATEMENT' THEN
-        -- the end of an UPDATE: write the rows it queued (%1$s), all at once; its rows are those of
-        -- this transaction, statement and trigger depth (found by the queue's index)
-        v_xact := pg_catalog.pg_current_xact_id();
-        v_stmt := pg_catalog.statement_timestamp();
-        v_depth := pg_catalog.pg_trigger_depth();
-        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || v_depth, true), ''), '0')::bigint;
+        -- the end of an UPDATE of the view (of the last of its UPDATEs in one query: PostgreSQL fires one
+        -- statement trigger per query and table): write every row queued for the view since its last
+        -- flush in this transaction (%1$s, the view's generation), all at once. Those are this query's
+        -- rows, and those of an UPDATE of the view still running around it (a function or trigger ran
+        -- this query from inside it): written now, they are what that UPDATE would have written so far.
+        v_xact := pg_catalog.pg_current_xact_id_if_assigned();
+        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || TG_RELID, true), ''), '0')::bigint;
+        -- first: an UPDATE of the view that the writes below run (a trigger of the storage) queues
+        -- under the next generation, its first row the row path
+        PERFORM pg_catalog.set_config('tgsis.queue_' || TG_RELID, (v_gen + 1)::text, true);
+        IF v_xact IS NULL THEN
+            RETURN NULL;  -- nothing written, nothing queued
+        END IF;
         SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT q.n%3$s::text ORDER BY q.n%3$s::text)
           INTO v_count, v_distinct, v_keys
-          FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
-        -- the next statement of this depth queues under the next generation (its first row: the row path)
-        PERFORM pg_catalog.set_config('tgsis.queue_' || v_depth, (v_gen + 1)::text, true);
+          FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen;
         IF v_count = 0 THEN
             RETURN NULL;
         END IF;
         -- the first row, written by the row path, queued again: the same row twice
-        v_first := pg_catalog.current_setting('tgsis.queue_first_' || v_depth, true);
+        v_first := pg_catalog.current_setting('tgsis.queue_first_' || TG_RELID, true);
         IF pg_catalog.split_part(v_first, ':', 1) = v_gen::text AND EXISTS (
                 SELECT FROM %1$s q
-                 WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth
-                   AND q.tgsis_generation = v_gen AND %9$s = pg_catalog.substr(v_first, pg_catalog.strpos(v_first, ':') + 1)) THEN
+                 WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
+                   AND %9$s = pg_catalog.substr(v_first, pg_catalog.strpos(v_first, ':') + 1)) THEN
             v_distinct := v_distinct - 1;
         END IF;
         IF v_distinct <> v_count THEN
             RAISE EXCEPTION 'one statement changed a row of %%.%% twice', %4$L, %5$L
                 USING ERRCODE = 'cardinality_violation',
+                      DETAIL = 'Counted together: the UPDATEs of the view in one query (writable CTEs), and those run by '
+                               'functions or triggers while an UPDATE of the view was running.',
                       HINT = 'change each row of a versioned view once in a statement';
         END IF;
+        -- the session's version, revision and role must be those the rows were read in
+        IF pg_catalog.current_setting('tgsis.queue_session_' || TG_RELID, true) IS DISTINCT FROM %20$s THEN
+            %21$s
+        END IF;
         SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
+        IF pg_catalog.current_setting('tgsis.queue_revision_' || TG_RELID, true) IS DISTINCT FROM v_vid || ':' || v_w THEN
+            %21$s
+        END IF;
         %6$s
         IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %7$L AND l.objectkey = ANY (v_keys)) THEN
             PERFORM tgsis.check_objects_unlocked(%7$L, v_keys);  -- names the holders
@@ -262,9 +314,16 @@ BEGIN
         IF v_w <> 0 THEN
             PERFORM tgsis.record_changed_objects(%4$L, %5$L, %8$s);
         END IF;
-        -- no bulk writer of the objects in flight (they take these locks exclusively); in key order
-        PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
-           FROM pg_catalog.unnest(v_keys) AS k;
+        -- no bulk writer of the objects in flight: their write locks shared (bulk writers take them
+        -- exclusively), in key order; for more objects than tgsis.object_lock_limit() (the shared lock
+        -- table holds max_locks_per_transaction locks per connection), the class's lock in the version,
+        -- exclusively: every bulk writer of the class holds it shared (tgsis.object_write_lock)
+        IF cardinality(v_keys) > tgsis.object_lock_limit() THEN
+            PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%7$L, v_vid));
+        ELSE
+            PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
+               FROM pg_catalog.unnest(v_keys) AS k;
+        END IF;
         -- the visible row versions, locked, and compared with what the statement read; a row closed by a
         -- transaction that committed meanwhile drops out of the join (the re-check after the wait): once
         -- more with a new snapshot, which sees the row version that replaced it
@@ -272,13 +331,13 @@ BEGIN
             SELECT count(*), (array_agg(x.k) FILTER (WHERE NOT x.same))[1] INTO v_found, v_key
               FROM (SELECT %9$s AS k, %10$s AS same
                       FROM %1$s q JOIN %11$s v ON %12$s AND %13$s
-                     WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen
+                     WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
                        FOR UPDATE OF v) AS x;
             EXIT WHEN v_found = v_count;
         END LOOP;
         IF v_found <> v_count THEN
             SELECT %9$s INTO v_key FROM %1$s q
-             WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen
+             WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
                AND NOT EXISTS (SELECT FROM %11$s v WHERE %12$s AND %13$s)
              LIMIT 1;
             RAISE EXCEPTION 'could not serialize access due to concurrent delete of row %%=(%%) of %%.%% in version %%',
@@ -300,12 +359,12 @@ BEGIN
         -- row versions of the working revision: changed in place (first: the rows written anew below are of it too)
         UPDATE %11$s v SET %19$s
           FROM %1$s q
-         WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision = %15$s;
+         WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision = %15$s;
         -- row versions of older revisions: closed in the working one, and written anew in it
         WITH closed AS (
             UPDATE %11$s v SET lastrevs = v.lastrevs || %15$s
               FROM %1$s q
-             WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision <> %15$s
+             WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision <> %15$s
             RETURNING %16$s, %15$s AS tgsis_revision_),
         written AS (
             INSERT INTO %11$s (%17$s, revision) SELECT %17$s, tgsis_revision_ FROM closed
@@ -320,7 +379,7 @@ BEGIN
                       HINT = 'Retry the transaction.',
                       TABLE = %5$L, SCHEMA = %4$L;
         END IF;
-        DELETE FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
+        DELETE FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen;
         RETURN NULL;
     END IF;$flush$,
             v_queue,                                                                           -- 1
@@ -343,11 +402,10 @@ BEGIN
             (SELECT string_agg(format('q.n%s AS %I', o, c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 16
             v_cols,                                                                            -- 17
             p_table || '_ver_pkey',                                                            -- 18
-            (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)));  -- 19
+            (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 19
+            v_session, v_moved_flush);                                                         -- 20, 21
         v_declare := v_declare || E'
     v_xact     xid8;
-    v_stmt     timestamptz;
-    v_depth    integer;
     v_count    bigint;
     v_first    text;
     v_distinct bigint;
@@ -358,6 +416,13 @@ BEGIN
     v_key      text;
     v_pass     integer;';
         v_declare := v_declare || E'\n    v_gen      bigint;';
+        v_mark := format($mark$
+    IF v_first IS NOT NULL THEN
+        -- the first row of the view's generation: the rows queued after it are read with the same settings
+        PERFORM pg_catalog.set_config('tgsis.queue_first_' || TG_RELID, v_first, true),
+                pg_catalog.set_config('tgsis.queue_session_' || TG_RELID, %s, true),
+                pg_catalog.set_config('tgsis.queue_revision_' || TG_RELID, v_vid || ':' || v_w, true);
+    END IF;$mark$, v_session);
         IF p_class = 'feature' THEN
             v_declare := v_declare || E'\n    v_unversioned text[];';
         END IF;
@@ -386,7 +451,7 @@ DECLARE
     v_noted  boolean;%21$s
 BEGIN%22$s%23$s
     -- the write right on the session's version (checked for every row), its working revision and set
-    SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
+    SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;%24$s
     IF TG_OP = 'INSERT' THEN
         v_keys := ARRAY[NEW.%15$I::text];
     ELSIF TG_OP = 'DELETE' THEN
@@ -404,11 +469,11 @@ BEGIN%22$s%23$s
     IF TG_OP = 'INSERT' THEN
         -- a visible row of the key: wait for a transaction closing it; if it stays, a duplicate
         PERFORM FROM %4$s v WHERE %6$s AND %9$s FOR SHARE;
-        IF FOUND THEN%10$s
+        IF FOUND THEN%25$s
         END IF;
         -- waits for a concurrent insert of the same key in this revision
         INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
-        IF NOT FOUND THEN%10$s
+        IF NOT FOUND THEN%25$s
         END IF;
         RETURN NEW;
     END IF;
@@ -460,7 +525,7 @@ $body$$fn$,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare,
-        v_flush, v_enqueue);
+        v_flush, v_enqueue, v_mark, v_dup_insert);
 END
 $gen$;
 
