@@ -283,11 +283,7 @@ def test_queue_columns_keep_the_storage_types(items: Conn) -> None:
         "SELECT pg_get_indexdef(i.indexrelid), obj_description(i.indexrelid, 'pg_class') FROM pg_index i "
         "WHERE i.indrelid = 'items_ver_queue'::regclass"
     ).fetchall()
-    assert (
-        len(index) == 1
-        and "(tgsis_xact, tgsis_generation)" in index[0][0]
-        and index[0][1]
-    )
+    assert len(index) == 1 and "(tgsis_xact, tgsis_generation)" in index[0][0] and index[0][1]
     comment = items.execute("SELECT obj_description('items_ver_queue'::regclass, 'pg_class')").fetchone()
     assert comment is not None and "empty outside a statement" in comment[0]
 

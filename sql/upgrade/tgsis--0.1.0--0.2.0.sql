@@ -136,6 +136,22 @@ BEGIN
                      WHERE c.r <> 0', v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver')) AS r;
     END LOOP;
 
+    -- ---- issue36-queue: the views' write triggers and queues of the per-view generation
+    -- A queue of the old shape (keyed by statement start and trigger depth) goes with its trigger
+    -- function, and both are made anew: the generated code keys the queue by (transaction, the view's
+    -- generation), refuses a version change inside an UPDATE and ON CONFLICT meeting a row (TG306), and
+    -- escalates a large flush's object locks. (The queues are empty outside a statement.)
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
+        CONTINUE WHEN NOT EXISTS (
+            SELECT FROM pg_catalog.pg_attribute a
+             WHERE a.attrelid = to_regclass(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver_queue'))
+               AND a.attname = 'tgsis_depth' AND NOT a.attisdropped);
+        EXECUTE format('DROP FUNCTION %I.%I() CASCADE', v_t.schemaname, v_t.tablename || '_ver_write');  -- and its triggers
+        EXECUTE format('DROP TABLE %I.%I', v_t.schemaname, v_t.tablename || '_ver_queue');
+        PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
+                                                v_t.objectclass, v_t.objectkeyfield);
+    END LOOP;
+
     -- What this block made (storage tables, their versioned views and runners, class views made
     -- again) is made at run time in a fresh install: inside ALTER EXTENSION it became an extension
     -- member, which pg_dump leaves out and DROP EXTENSION drops. It leaves the extension again.

@@ -48,19 +48,47 @@
 -- of the statement's row count any more, as the row path does: it fails with
 -- 40001 too (the retry finds no row). The queue is the table owner's alone
 -- (a queue that the writing role could fill would let a role allowed to
--- change one column write any); its rows of a statement are those of the
--- transaction, the statement's start (statement_timestamp), the trigger
--- depth the statement's triggers run at (pg_trigger_depth, so that a
--- statement run by a trigger during another's flush keeps its own rows) and
--- the generation of that depth (the setting tgsis.queue_<depth>, which each
--- flush counts up, so that the statements of one DO block differ too): the
--- queue's index then skips what earlier statements queued and deleted. The
--- queue is empty outside a statement, so nothing in it is ever committed. A
--- role that changes tgsis.queue_<depth> in the middle of its own UPDATE
--- (from a function the statement calls) leaves part of its rows unwritten
--- in the queue; they carry its transaction, which no other transaction's
--- flush reads, and are written, if ever, only by its own statements, over
--- rows still equal to the values it read.
+-- change one column write any).
+--
+-- Which rows a flush writes. PostgreSQL fires the statement trigger once
+-- per query and table, after the last of the query's UPDATEs of the view
+-- (a writable CTE may hold several), and once at the end of each query run
+-- inside another (by a function of its SET list, a trigger, a DO block).
+-- So each view has its own generation, the setting tgsis.queue_<view oid>:
+-- rows are queued under it with the transaction, and a flush counts it up
+-- first, then writes every row of its transaction and generation (the
+-- queue's index finds them, skipping what earlier flushes deleted): its
+-- query's rows, and those an UPDATE of the view running around that query
+-- queued so far (they are written a little early; that UPDATE goes on
+-- under the next generation, its next row by the row path). No queued row
+-- can outlive its statement: the statement's own flush comes after its
+-- last row. The queue rows and the settings roll back together (a
+-- savepoint, an error caught in PL/pgSQL). The first row of a generation
+-- (the row path) records its key (tgsis.queue_first_<view oid>), the
+-- session's version, revision and role (tgsis.queue_session_<view oid>)
+-- and the version and working revision it was written in
+-- (tgsis.queue_revision_<view oid>): a row queued under other settings, or
+-- a flush under another revision, is refused (TG306: a function of the
+-- statement moved the session to another version or saved a revision; the
+-- rows would be read in one version and written in another). Two rows of
+-- one key in a generation are 21000 (also when one came from an UPDATE run
+-- inside the other). A role that changes tgsis.queue_<view oid> itself in
+-- the middle of its own UPDATE leaves part of its rows unwritten in the
+-- queue; they carry its transaction, which no other transaction's flush
+-- reads.
+--
+-- INSERT ... ON CONFLICT: PostgreSQL runs the INSTEAD OF trigger without
+-- telling it the clause (and a view has no index to infer a target from,
+-- so a clause with a target is refused before the trigger runs). A plain
+-- INSERT of a key that is there is the table's 23505; when the client's
+-- query text has ON CONFLICT, TG306 names the clause instead. Either way
+-- the statement fails and nothing is written; no row is ever skipped.
+--
+-- Object locks of a flush: one shared lock per object up to
+-- tgsis.object_lock_limit() objects, else the class's lock in the version
+-- exclusively (tgsis.object_class_lock_key, which every bulk writer holds
+-- shared): the shared lock table cannot hold a lock per row of a large
+-- UPDATE.
 CREATE FUNCTION tgsis.versioning_trigger_source(
     p_schema    text,
     p_table     text,
