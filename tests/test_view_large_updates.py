@@ -21,14 +21,19 @@ from tests.sessions import Background, connect, wait_until_blocked
 Conn = psycopg.Connection[Any]
 
 
-@pytest.fixture
-def items(conn: Conn) -> Conn:
+def _items(conn: Conn, rows: int) -> Conn:
+    """items keyed by id, one object per row (the object key is the key), versioned, and a child version."""
     conn.execute("CREATE TABLE items (id int PRIMARY KEY, val int NOT NULL)")
-    conn.execute("INSERT INTO items SELECT g, g FROM generate_series(1, 50000) g")
+    conn.execute("INSERT INTO items SELECT g, g FROM generate_series(1, %s) g", (rows,))
     tgsis.enable_versioning(conn, "items", "id", "item")
     tgsis.create_version(conn, "child")
     conn.commit()
     return conn
+
+
+@pytest.fixture
+def items(conn: Conn) -> Conn:
+    return _items(conn, 5000)
 
 
 def _limit(conn: Conn) -> int:
@@ -58,8 +63,9 @@ def _holds_class_lock(conn: Conn, version: str, mode: str) -> bool:
     return bool(row[0])
 
 
-@pytest.mark.parametrize("version", ["DEFAULT", "child"])
-def test_an_update_of_50000_rows_through_a_view_succeeds(items: Conn, version: str) -> None:
+def test_an_update_of_50000_rows_through_a_view_succeeds(conn: Conn) -> None:
+    """53200 out of shared memory with a lock per object (one per row here)."""
+    items, version = _items(conn, 50000), "child"
     with tgsis.in_version(items, version):
         items.commit()
         assert items.execute("UPDATE items SET val = val + 1").rowcount == 50000
@@ -76,14 +82,55 @@ def test_up_to_the_limit_the_objects_are_locked_one_by_one(items: Conn) -> None:
     limit = _limit(items)
     items.commit()
     # the first row goes the row path (its object's lock), the others are queued and flushed
-    items.execute("UPDATE items SET val = -val WHERE id <= %s", (limit + 1,))
-    assert _advisory(items) == (limit + 1, 0)
+    items.execute("UPDATE items SET val = -val WHERE id <= %s", (limit,))
+    assert _advisory(items) == (limit, 0)
     assert not _holds_class_lock(items, "DEFAULT", "ExclusiveLock")
     items.rollback()
-    items.execute("UPDATE items SET val = -val WHERE id <= %s", (limit + 2,))
+    items.execute("UPDATE items SET val = -val WHERE id <= %s", (limit + 1,))
     assert _advisory(items) == (1, 1)  # the first row's object; then the class's lock in the version
     assert _holds_class_lock(items, "DEFAULT", "ExclusiveLock")
     items.rollback()
+
+
+def test_the_objects_a_transaction_locked_are_counted_across_statements(items: Conn) -> None:
+    """One-row statements in a loop: the objects' locks up to the limit, then the class's lock; the same object
+    again counts once; another version counts afresh."""
+    limit = _limit(items)
+    items.commit()
+    items.execute("DO $$ BEGIN FOR i IN 1 .. %s LOOP UPDATE items SET val = val + 1 WHERE id = 1; END LOOP; END $$"
+                  % (limit * 3))
+    assert _advisory(items) == (1, 0)
+    items.execute("DO $$ BEGIN FOR i IN 2 .. %s LOOP UPDATE items SET val = val + 1 WHERE id = i; END LOOP; END $$"
+                  % limit)
+    assert _advisory(items) == (limit, 0)
+    items.execute("UPDATE items SET val = val + 1 WHERE id = 5000")
+    assert _advisory(items) == (limit, 1)
+    with tgsis.in_version(items, "child", local=True):
+        items.execute("UPDATE items SET val = val + 1 WHERE id = 5000")
+    assert _advisory(items) == (limit + 1, 1)
+    items.rollback()
+
+
+def test_an_insert_of_10000_rows_through_a_view_succeeds(items: Conn) -> None:
+    """Inserts go the row path: 53200 with a lock per object; its locks escalate as the flush's."""
+    assert items.execute("INSERT INTO items SELECT g, g FROM generate_series(100001, 110000) g").rowcount == 10000
+    assert _advisory(items)[0] <= _limit(items)
+    assert _holds_class_lock(items, "DEFAULT", "ExclusiveLock")
+    items.commit()
+    assert items.execute("SELECT count(*) FROM items").fetchone() == (15000,)
+
+
+@pytest.mark.parametrize(
+    "statement",
+    ["DELETE FROM items WHERE id <= 1000", "UPDATE items SET id = id + 100000 WHERE id <= 1000"],
+    ids=["delete", "key-change"],
+)
+def test_row_by_row_writes_escalate_too(items: Conn, statement: str) -> None:
+    """Deletes and key changes go the row path: its locks escalate as the flush's."""
+    assert items.execute(statement).rowcount == 1000
+    assert _advisory(items)[0] <= _limit(items)
+    assert _holds_class_lock(items, "DEFAULT", "ExclusiveLock")
+    items.commit()
 
 
 def test_a_bulk_writer_holds_the_class_lock_shared(items: Conn) -> None:

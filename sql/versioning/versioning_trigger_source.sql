@@ -84,11 +84,13 @@
 -- query text has ON CONFLICT, TG306 names the clause instead. Either way
 -- the statement fails and nothing is written; no row is ever skipped.
 --
--- Object locks of a flush: one shared lock per object up to
--- tgsis.object_lock_limit() objects, else the class's lock in the version
--- exclusively (tgsis.object_class_lock_key, which every bulk writer holds
--- shared): the shared lock table cannot hold a lock per row of a large
--- UPDATE.
+-- Object locks: a transaction holds one shared lock per object it writes
+-- through the view, up to tgsis.object_lock_limit() objects in a version
+-- (counted in tgsis.object_locks_<view oid> by the row path and the flush;
+-- the same object as the row before counts once), and beyond that the
+-- class's lock in the version exclusively (tgsis.object_class_lock_key,
+-- which every bulk writer holds shared): the shared lock table cannot hold
+-- a lock per row of a large statement (53200).
 CREATE FUNCTION tgsis.versioning_trigger_source(
     p_schema    text,
     p_table     text,
@@ -343,14 +345,23 @@ BEGIN
             PERFORM tgsis.record_changed_objects(%4$L, %5$L, %8$s);
         END IF;
         -- no bulk writer of the objects in flight: their write locks shared (bulk writers take them
-        -- exclusively), in key order; for more objects than tgsis.object_lock_limit() (the shared lock
-        -- table holds max_locks_per_transaction locks per connection), the class's lock in the version,
-        -- exclusively: every bulk writer of the class holds it shared (tgsis.object_write_lock)
-        IF cardinality(v_keys) > tgsis.object_lock_limit() THEN
-            PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%7$L, v_vid));
-        ELSE
-            PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
-               FROM pg_catalog.unnest(v_keys) AS k;
+        -- exclusively), in key order; beyond tgsis.object_lock_limit() objects locked through the view
+        -- in the transaction and version (the shared lock table holds max_locks_per_transaction locks
+        -- per connection), the class's lock in the version, exclusively: every bulk writer of the class
+        -- holds it shared (tgsis.object_write_lock). Counted as by the row path below.
+        v_held := coalesce(pg_catalog.current_setting('tgsis.object_locks_' || TG_RELID, true), '');
+        IF v_held <> v_vid || ':*' THEN
+            v_n := CASE WHEN pg_catalog.split_part(v_held, ':', 1) = v_vid::text
+                        THEN pg_catalog.split_part(v_held, ':', 2)::integer ELSE 0 END;
+            IF v_n + cardinality(v_keys) > tgsis.object_lock_limit() THEN
+                PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%7$L, v_vid));
+                PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID, v_vid || ':*', true);
+            ELSE
+                PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
+                   FROM pg_catalog.unnest(v_keys) AS k;
+                PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID,
+                                              v_vid || ':' || (v_n + cardinality(v_keys)) || ':', true);
+            END IF;
         END IF;
         -- the visible row versions, locked, and compared with what the statement read; a row closed by a
         -- transaction that committed meanwhile drops out of the join (the re-check after the wait): once
@@ -476,7 +487,10 @@ DECLARE
     v_keys text[];
     v_cur  record;
     v_locked boolean;
-    v_noted  boolean;%21$s
+    v_noted  boolean;
+    v_held   text;
+    v_n      integer;
+    v_new    integer;%21$s
 BEGIN%22$s%23$s
     -- the write right on the session's version (checked for every row), its working revision and set
     SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;%24$s
@@ -488,10 +502,30 @@ BEGIN%22$s%23$s
         v_keys := ARRAY[OLD.%15$I::text, NEW.%15$I::text];
     END IF;
     %20$s
-    -- no bulk writer of the object in flight (they take it exclusively)
-    PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[1], v_vid));
-    IF cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN
-        PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[2], v_vid));
+    -- no bulk writer of the object in flight (they take its write lock exclusively): its lock shared; once
+    -- the transaction locked tgsis.object_lock_limit() objects through the view in the version, the class's
+    -- lock in the version exclusively instead (bulk writers hold it shared), which covers all the others
+    -- (tgsis.object_locks_<view oid> counts: "<version id>:<objects>:<last object>", or "<version id>:*")
+    v_held := coalesce(pg_catalog.current_setting('tgsis.object_locks_' || TG_RELID, true), '');
+    IF v_held <> v_vid || ':*' THEN
+        v_n := CASE WHEN pg_catalog.split_part(v_held, ':', 1) = v_vid::text
+                    THEN pg_catalog.split_part(v_held, ':', 2)::integer ELSE 0 END;
+        v_new := CASE WHEN cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN 2
+                      WHEN v_held = v_vid || ':' || v_n || ':' || v_keys[1] THEN 0  -- the last row's object
+                      ELSE 1 END;
+        IF v_n + v_new > tgsis.object_lock_limit() THEN
+            PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%14$L, v_vid));
+            PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID, v_vid || ':*', true);
+        ELSE
+            PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[1], v_vid));
+            IF v_new = 2 THEN
+                PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[2], v_vid));
+            END IF;
+            IF v_new > 0 THEN
+                PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID,
+                                              v_vid || ':' || (v_n + v_new) || ':' || v_keys[cardinality(v_keys)], true);
+            END IF;
+        END IF;
     END IF;
 
     IF TG_OP = 'INSERT' THEN
