@@ -72,7 +72,11 @@
 -- statement moved the session to another version or saved a revision; the
 -- rows would be read in one version and written in another). Two rows of
 -- one key in a generation are 21000 (also when one came from an UPDATE run
--- inside the other). A role that changes tgsis.queue_<view oid> itself in
+-- inside the other). A row the statement read that this transaction changed
+-- since (a function or trigger the statement ran), found by the row path or
+-- the flush, is 27000 as on a plain table, not 40001 (a retry would meet it
+-- again); a change made inside a subtransaction of that function (an
+-- EXCEPTION block) has another xid and remains 40001. A role that changes tgsis.queue_<view oid> itself in
 -- the middle of its own UPDATE leaves part of its rows unwritten in the
 -- queue; they carry its transaction, which no other transaction's flush
 -- reads.
@@ -137,6 +141,7 @@ DECLARE
     v_moved_rows  text;
     v_moved_flush text;
     v_dup_insert  text;
+    v_self        text;
 BEGIN
     v_moved_rows := format($m$RAISE EXCEPTION 'the session''s version changed between the rows of an UPDATE of the versioned view %%', %L
                     USING ERRCODE = 'TG306',
@@ -204,7 +209,7 @@ BEGIN
     -- the row version of the old key that is current now, locked: its place and revision, and its values
     -- (its place is (tableoid, ctid): a ctid alone names a row only within one table, and partitioned
     -- storage is many tables)
-    v_current := format('SELECT v.tableoid AS tgsis_table_, v.ctid AS tgsis_ctid_, v.revision AS tgsis_revision_, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
+    v_current := format('SELECT v.tableoid AS tgsis_table_, v.ctid AS tgsis_ctid_, v.revision AS tgsis_revision_, v.xmin AS tgsis_xmin_, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
                         (SELECT string_agg(format('v.%I', c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),
                         v_ver, v_old_key, v_visible);
     -- the error a plain table would raise, so applications that catch 23505 keep working
@@ -235,6 +240,17 @@ BEGIN
         format('Insert the rows whose key is not there (INSERT INTO %1$s SELECT ... WHERE NOT EXISTS (SELECT FROM %1$s WHERE (%2$s) = (...))) and UPDATE the others.',
                format('%I.%I', p_schema, p_table), v_key_list),
         p_table, p_schema) || v_dup;
+    -- a row the statement read changed since by this transaction: by a function or trigger the statement
+    -- ran (or by another UPDATE of the view in the same query): what PostgreSQL raises for a plain table
+    -- (its re-check finds the row changed by a later command of the transaction), not 40001, which a
+    -- retry would only meet again; %s: the expression of the key's text
+    v_self := format($self$RAISE EXCEPTION 'a row %%%%=(%%%%) of %%%%.%%%% to be updated was already changed by an operation the current statement triggered', %L, %%s, %L, %L
+                USING ERRCODE = 'triggered_data_change_violation',
+                      DETAIL = 'A function or trigger the statement ran changed the row after the statement read it.',
+                      HINT = 'Change each row of a versioned view once: not both in a statement and in a function or trigger it runs.',
+                      TABLE = %L, SCHEMA = %L;$self$,
+        '(' || replace(v_key_list, '%', '%%') || ')', replace(p_schema, '%', '%%'), replace(p_table, '%', '%%'),
+        replace(p_table, '%', '%%'), replace(p_schema, '%', '%%'));
     -- what PostgreSQL raises when a repeatable-read transaction meets a concurrent update: clients retry it
     v_stale := format($stale$
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
@@ -367,8 +383,10 @@ BEGIN
         -- transaction that committed meanwhile drops out of the join (the re-check after the wait): once
         -- more with a new snapshot, which sees the row version that replaced it
         FOR v_pass IN 1 .. 2 LOOP
-            SELECT count(*), (array_agg(x.k) FILTER (WHERE NOT x.same))[1] INTO v_found, v_key
-              FROM (SELECT %9$s AS k, %10$s AS same
+            SELECT count(*), (array_agg(x.k ORDER BY NOT x.mine) FILTER (WHERE NOT x.same))[1],
+                   coalesce(bool_or(x.mine AND NOT x.same), false)
+              INTO v_found, v_key, v_mine
+              FROM (SELECT %9$s AS k, %10$s AS same, v.xmin = pg_catalog.xid(v_xact) AS mine
                       FROM %1$s q JOIN %11$s v ON %12$s AND %13$s
                      WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
                        FOR UPDATE OF v) AS x;
@@ -385,6 +403,9 @@ BEGIN
                       DETAIL = 'A transaction that committed after this statement read the row deleted it or changed its key.',
                       HINT = 'Retry the transaction.',
                       TABLE = %5$L, SCHEMA = %4$L;
+        END IF;
+        IF v_mine THEN
+            %22$s
         END IF;
         IF v_key IS NOT NULL THEN
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
@@ -442,7 +463,8 @@ BEGIN
             v_cols,                                                                            -- 17
             p_table || '_ver_pkey',                                                            -- 18
             (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 19
-            v_session, v_moved_flush);                                                         -- 20, 21
+            v_session, v_moved_flush,                                                          -- 20, 21
+            format(v_self, 'v_key'));                                                          -- 22
         v_declare := v_declare || E'
     v_xact     xid8;
     v_count    bigint;
@@ -452,6 +474,7 @@ BEGIN
                                || E'
     v_closed   bigint;
     v_written  bigint;
+    v_mine     boolean;
     v_key      text;
     v_pass     integer;';
         v_declare := v_declare || E'\n    v_gen      bigint;';
@@ -548,7 +571,10 @@ BEGIN%22$s%23$s
             RETURN NULL;  -- deleted meanwhile: nothing to change, as on a plain table
         END IF;
     END IF;
-    IF NOT (%18$s) THEN%19$s
+    IF NOT (%18$s) THEN
+        IF v_cur.tgsis_xmin_ = pg_catalog.xid(pg_catalog.pg_current_xact_id()) THEN
+            %26$s
+        END IF;%19$s
     END IF;
 
     IF TG_OP = 'UPDATE' THEN
@@ -587,7 +613,9 @@ $body$$fn$,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare,
-        v_flush, v_enqueue, v_mark, v_dup_insert);
+        v_flush, v_enqueue, v_mark, v_dup_insert,
+        format(v_self, format('concat_ws(%L, %s)', ', ', (SELECT string_agg(format('OLD.%I::text', k), ', ' ORDER BY o)
+                                                          FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)))));
 END
 $gen$;
 
