@@ -194,3 +194,22 @@ def test_a_large_view_update_waits_for_a_bulk_writer(items: Conn, db_dsn: str, o
         observer.close()
     expected = {"commit": -5, "rollback": 6}[outcome]
     assert items.execute("SELECT val FROM items WHERE id = 5").fetchone() == (expected,)
+
+
+def test_a_session_claiming_the_class_lock_in_its_settings_still_takes_it(items: Conn, db_dsn: str) -> None:
+    """The count of locked objects is a setting the session can change itself: saying it holds the class's lock
+    skips nothing, so that a bulk writer still waits for its view writes."""
+    version = items.execute("SELECT tgsis.version_id('DEFAULT')").fetchone()
+    assert version is not None
+    items.execute("SELECT set_config('tgsis.object_locks_' || 'items'::regclass::oid, %s, true)", (f"{version[0]}:*",))
+    assert items.execute("INSERT INTO items VALUES (100000, 1)").rowcount == 1
+    assert _holds_class_lock(items, "DEFAULT", "ExclusiveLock")
+    observer = connect(db_dsn, "observer", autocommit=True)
+    try:
+        b = Background(db_dsn, "bulk-writer", lambda c: c.execute(
+            "SELECT tgsis.object_write_lock('item', ARRAY['100000'])").fetchone())
+        wait_until_blocked(observer, b.pid, items.info.backend_pid)
+        items.commit()
+        b.finish()
+    finally:
+        observer.close()

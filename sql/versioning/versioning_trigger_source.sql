@@ -366,7 +366,9 @@ BEGIN
         -- per connection), the class's lock in the version, exclusively: every bulk writer of the class
         -- holds it shared (tgsis.object_write_lock). Counted as by the row path below.
         v_held := coalesce(pg_catalog.current_setting('tgsis.object_locks_' || TG_RELID, true), '');
-        IF v_held <> v_vid || ':*' THEN
+        IF v_held = v_vid || ':*' THEN
+            PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%7$L, v_vid));  -- held: taken again
+        ELSE
             v_n := CASE WHEN pg_catalog.split_part(v_held, ':', 1) = v_vid::text
                         THEN pg_catalog.split_part(v_held, ':', 2)::integer ELSE 0 END;
             IF v_n + cardinality(v_keys) > tgsis.object_lock_limit() THEN
@@ -530,7 +532,11 @@ BEGIN%22$s%23$s
     -- lock in the version exclusively instead (bulk writers hold it shared), which covers all the others
     -- (tgsis.object_locks_<view oid> counts: "<version id>:<objects>:<last object>", or "<version id>:*")
     v_held := coalesce(pg_catalog.current_setting('tgsis.object_locks_' || TG_RELID, true), '');
-    IF v_held <> v_vid || ':*' THEN
+    IF v_held = v_vid || ':*' THEN
+        -- held already (taken again: a lookup in this session's lock table, and the setting, which the
+        -- session could change itself, is never trusted to skip a lock)
+        PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%14$L, v_vid));
+    ELSE
         v_n := CASE WHEN pg_catalog.split_part(v_held, ':', 1) = v_vid::text
                     THEN pg_catalog.split_part(v_held, ':', 2)::integer ELSE 0 END;
         v_new := CASE WHEN cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN 2
