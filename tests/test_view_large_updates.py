@@ -97,11 +97,9 @@ def test_the_objects_a_transaction_locked_are_counted_across_statements(items: C
     again counts once; another version counts afresh."""
     limit = _limit(items)
     items.commit()
-    items.execute("DO $$ BEGIN FOR i IN 1 .. %s LOOP UPDATE items SET val = val + 1 WHERE id = 1; END LOOP; END $$"
-                  % (limit * 3))
+    items.execute(f"DO $$ BEGIN FOR i IN 1 .. {limit * 3} LOOP UPDATE items SET val = val + 1 WHERE id = 1; END LOOP; END $$")
     assert _advisory(items) == (1, 0)
-    items.execute("DO $$ BEGIN FOR i IN 2 .. %s LOOP UPDATE items SET val = val + 1 WHERE id = i; END LOOP; END $$"
-                  % limit)
+    items.execute(f"DO $$ BEGIN FOR i IN 2 .. {limit} LOOP UPDATE items SET val = val + 1 WHERE id = i; END LOOP; END $$")
     assert _advisory(items) == (limit, 0)
     items.execute("UPDATE items SET val = val + 1 WHERE id = 5000")
     assert _advisory(items) == (limit, 1)
