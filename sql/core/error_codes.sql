@@ -35,4 +35,5 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG302', 'unsolved_conflicts', 'versioning', 'a merge or refresh while objects changed on both sides have no recorded solution'),
     ('TG303', 'object_locked',    'versioning', 'a write (or merge) would change an object another version, or another role, holds a lock on'),
     ('TG304', 'checkout_conflict', 'versioning', 'a check-in of an object that another writer changed (or deleted) since it was checked out'),
-    ('TG305', 'not_versioned',    'versioning', 'a write in a version other than DEFAULT (or at an older revision) to tables that are not versioned, or to features of a class without versioning: it would land in DEFAULT, which every version sees');
+    ('TG305', 'not_versioned',    'versioning', 'a write in a version other than DEFAULT (or at an older revision) to tables that are not versioned, or to features of a class without versioning: it would land in DEFAULT, which every version sees'),
+    ('TG306', 'unsupported_view_statement', 'versioning', 'a statement through a versioned view that the view cannot write as a plain table would: an INSERT whose conflict clause (DO NOTHING, DO UPDATE) meets a row that is there, or a change of the session''s version, revision or role inside an UPDATE of the view');

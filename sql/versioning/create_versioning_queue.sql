@@ -3,12 +3,14 @@
 -- queues each row's new and old values there, and <table>_ver_write(),
 -- fired after the statement, writes them all at once
 -- (tgsis.versioning_trigger_source says how). The queue holds rows only
--- while a statement runs, so it is UNLOGGED. A statement's rows are found
--- through an index on (transaction, statement start, trigger depth,
--- generation): the rows earlier statements of a long transaction queued and
--- deleted stay in the table as dead rows until it ends, and a scan of the
--- whole queue would visit all of them (a transaction of n one-row UPDATEs,
--- from the client or from a loop in one DO block, would cost n^2).
+-- while a statement runs, so it is UNLOGGED. The rows a flush writes are
+-- those of its transaction and of the view's generation (the setting
+-- tgsis.queue_<view oid>, which each flush of the view counts up), found
+-- through an index on the two: the rows earlier statements of a long
+-- transaction queued and deleted stay in the table as dead rows until it
+-- ends, and a scan of the whole queue would visit all of them (a
+-- transaction of n small UPDATEs, from the client or from a loop in one DO
+-- block, would cost n^2).
 -- Its columns keep the types,
 -- typmods and collations of the storage's (the comparison with the stored
 -- row is of binary images: record_image_eq). It is the storage owner's
@@ -40,11 +42,10 @@ BEGIN
       JOIN pg_attribute a ON a.attrelid = v_ver AND a.attname = u.name AND NOT a.attisdropped
       LEFT JOIN pg_collation co ON co.oid = a.attcollation
       LEFT JOIN pg_namespace cn ON cn.oid = co.collnamespace;
-    EXECUTE format('CREATE UNLOGGED TABLE %I.%I (tgsis_xact xid8 NOT NULL, tgsis_statement timestamptz NOT NULL, '
-                   'tgsis_depth integer NOT NULL, tgsis_generation bigint NOT NULL, %s)', p_schema, v_queue, v_columns);
+    EXECUTE format('CREATE UNLOGGED TABLE %I.%I (tgsis_xact xid8 NOT NULL, tgsis_generation bigint NOT NULL, %s)',
+                   p_schema, v_queue, v_columns);
     -- named by PostgreSQL (unique, within the length of a name)
-    EXECUTE format('CREATE INDEX ON %I.%I (tgsis_xact, tgsis_statement, tgsis_depth, tgsis_generation)',
-                   p_schema, v_queue);
+    EXECUTE format('CREATE INDEX ON %I.%I (tgsis_xact, tgsis_generation)', p_schema, v_queue);
     EXECUTE format('ALTER TABLE %I.%I OWNER TO %I', p_schema, v_queue,
                    (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_ver));
     -- rights that default privileges gave: taken back
@@ -60,16 +61,12 @@ BEGIN
                           p_schema, p_table, p_table || '_ver'));
     EXECUTE format('COMMENT ON COLUMN %I.%I.tgsis_xact IS %L', p_schema, v_queue,
                    'pg_current_xact_id() of the transaction that queued the row');
-    EXECUTE format('COMMENT ON COLUMN %I.%I.tgsis_statement IS %L', p_schema, v_queue,
-                   'statement_timestamp() of the statement that queued the row');
-    EXECUTE format('COMMENT ON COLUMN %I.%I.tgsis_depth IS %L', p_schema, v_queue,
-                   'pg_trigger_depth() of the statement that queued the row');
     EXECUTE format('COMMENT ON COLUMN %I.%I.tgsis_generation IS %L', p_schema, v_queue,
-                   'how many statements of that depth the transaction had written before (setting tgsis.queue_<depth>)');
+                   'how many times the transaction had flushed the view''s queue before (setting tgsis.queue_<view oid>): the next flush of the view writes the rows of its generation');
     EXECUTE format('COMMENT ON INDEX %s IS %L',
                    (SELECT i.indexrelid::regclass::text FROM pg_index i
                      WHERE i.indrelid = format('%I.%I', p_schema, v_queue)::regclass),
-                   'tgsis versioning: the rows of one statement, without visiting those earlier statements of the transaction deleted');
+                   'tgsis versioning: the rows of one flush, without visiting those earlier flushes of the transaction deleted');
     FOR v_i IN 1 .. cardinality(p_columns) LOOP
         EXECUTE format('COMMENT ON COLUMN %I.%I.%I IS %L', p_schema, v_queue, 'n' || v_i,
                        format('the new value of %s', p_columns[v_i]));

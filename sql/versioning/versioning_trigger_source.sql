@@ -48,19 +48,53 @@
 -- of the statement's row count any more, as the row path does: it fails with
 -- 40001 too (the retry finds no row). The queue is the table owner's alone
 -- (a queue that the writing role could fill would let a role allowed to
--- change one column write any); its rows of a statement are those of the
--- transaction, the statement's start (statement_timestamp), the trigger
--- depth the statement's triggers run at (pg_trigger_depth, so that a
--- statement run by a trigger during another's flush keeps its own rows) and
--- the generation of that depth (the setting tgsis.queue_<depth>, which each
--- flush counts up, so that the statements of one DO block differ too): the
--- queue's index then skips what earlier statements queued and deleted. The
--- queue is empty outside a statement, so nothing in it is ever committed. A
--- role that changes tgsis.queue_<depth> in the middle of its own UPDATE
--- (from a function the statement calls) leaves part of its rows unwritten
--- in the queue; they carry its transaction, which no other transaction's
--- flush reads, and are written, if ever, only by its own statements, over
--- rows still equal to the values it read.
+-- change one column write any).
+--
+-- Which rows a flush writes. PostgreSQL fires the statement trigger once
+-- per query and table, after the last of the query's UPDATEs of the view
+-- (a writable CTE may hold several), and once at the end of each query run
+-- inside another (by a function of its SET list, a trigger, a DO block).
+-- So each view has its own generation, the setting tgsis.queue_<view oid>:
+-- rows are queued under it with the transaction, and a flush counts it up
+-- first, then writes every row of its transaction and generation (the
+-- queue's index finds them, skipping what earlier flushes deleted): its
+-- query's rows, and those an UPDATE of the view running around that query
+-- queued so far (they are written a little early; that UPDATE goes on
+-- under the next generation, its next row by the row path). No queued row
+-- can outlive its statement: the statement's own flush comes after its
+-- last row. The queue rows and the settings roll back together (a
+-- savepoint, an error caught in PL/pgSQL). The first row of a generation
+-- (the row path) records its key (tgsis.queue_first_<view oid>), the
+-- session's version, revision and role (tgsis.queue_session_<view oid>)
+-- and the version and working revision it was written in
+-- (tgsis.queue_revision_<view oid>): a row queued under other settings, or
+-- a flush under another revision, is refused (TG306: a function of the
+-- statement moved the session to another version or saved a revision; the
+-- rows would be read in one version and written in another). Two rows of
+-- one key in a generation are 21000 (also when one came from an UPDATE run
+-- inside the other). A row the statement read that this transaction changed
+-- since (a function or trigger the statement ran), found by the row path or
+-- the flush, is 27000 as on a plain table, not 40001 (a retry would meet it
+-- again); a change made inside a subtransaction of that function (an
+-- EXCEPTION block) has another xid and remains 40001. A role that changes tgsis.queue_<view oid> itself in
+-- the middle of its own UPDATE leaves part of its rows unwritten in the
+-- queue; they carry its transaction, which no other transaction's flush
+-- reads.
+--
+-- INSERT ... ON CONFLICT: PostgreSQL runs the INSTEAD OF trigger without
+-- telling it the clause (and a view has no index to infer a target from,
+-- so a clause with a target is refused before the trigger runs). A plain
+-- INSERT of a key that is there is the table's 23505; when the client's
+-- query text has ON CONFLICT, TG306 names the clause instead. Either way
+-- the statement fails and nothing is written; no row is ever skipped.
+--
+-- Object locks: a transaction holds one shared lock per object it writes
+-- through the view, up to tgsis.object_lock_limit() objects in a version
+-- (counted in tgsis.object_locks_<view oid> by the row path and the flush;
+-- the same object as the row before counts once), and beyond that the
+-- class's lock in the version exclusively (tgsis.object_class_lock_key,
+-- which every bulk writer holds shared): the shared lock table cannot hold
+-- a lock per row of a large statement (53200).
 CREATE FUNCTION tgsis.versioning_trigger_source(
     p_schema    text,
     p_table     text,
@@ -100,11 +134,29 @@ DECLARE
     v_qkey     text;
     v_qold     text;
     v_wrow     text;
-    v_keytype  oid;          -- the object key column's type: keys as text are its canonical text (tgsis.object_key_sql)
+    v_mark     text := '';   -- the row path's record of the first row of a generation
+    -- the session's settings a write depends on (version, revision, role): the rows of one generation
+    -- are read and written with the same
+    v_session  CONSTANT text := $s$pg_catalog.format('%s/%s/%s', pg_catalog.quote_nullable(coalesce(nullif(pg_catalog.current_setting('tgsis.version', true), ''), 'DEFAULT')), pg_catalog.quote_nullable(nullif(pg_catalog.btrim(pg_catalog.current_setting('tgsis.revision', true)), '')), pg_catalog.current_setting('role'))$s$;
+    v_moved_rows  text;
+    v_moved_flush text;
+    v_dup_insert  text;
+    v_self        text;
+    v_keytype     oid;       -- the object key column's type: keys as text are its canonical text (tgsis.object_key_sql)
 BEGIN
     PERFORM tgsis.check_key_type(v_ver::regclass, p_keyfield);
     v_keytype := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
                    WHERE a.attrelid = v_ver::regclass AND a.attname = p_keyfield AND NOT a.attisdropped);
+    v_moved_rows := format($m$RAISE EXCEPTION 'the session''s version changed between the rows of an UPDATE of the versioned view %%', %L
+                    USING ERRCODE = 'TG306',
+                          DETAIL = 'Rows of the statement were written in one version (or revision, or role) and the next would be written in another; a function the statement calls changed tgsis.version, tgsis.revision or the role.',
+                          HINT = 'Change the version (goto_version, SET tgsis.version) between statements, not from inside one.';$m$,
+                           format('%I.%I', p_schema, p_table));
+    v_moved_flush := format($m$RAISE EXCEPTION 'the session''s version changed during an UPDATE of the versioned view %%', %L
+                    USING ERRCODE = 'TG306',
+                          DETAIL = 'Its rows were read in one version (or revision, or role) and would be written in another; a function the statement calls changed tgsis.version, tgsis.revision or the role, or saved a revision.',
+                          HINT = 'Change the version (goto_version, SET tgsis.version) between statements, not from inside one.';$m$,
+                           format('%I.%I', p_schema, p_table));
     -- the probe of every row, one query: the object locks (tgsis.object_locks) and
     -- whether the object is noted as changed in the working revision
     -- (tgsis.revision_objects: what merges and conflict checks read); the check
@@ -161,7 +213,7 @@ BEGIN
     -- the row version of the old key that is current now, locked: its place and revision, and its values
     -- (its place is (tableoid, ctid): a ctid alone names a row only within one table, and partitioned
     -- storage is many tables)
-    v_current := format('SELECT v.tableoid AS tgsis_table_, v.ctid AS tgsis_ctid_, v.revision AS tgsis_revision_, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
+    v_current := format('SELECT v.tableoid AS tgsis_table_, v.ctid AS tgsis_ctid_, v.revision AS tgsis_revision_, v.xmin AS tgsis_xmin_, %s INTO v_cur FROM %s v WHERE %s AND %s FOR UPDATE',
                         (SELECT string_agg(format('v.%I', c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),
                         v_ver, v_old_key, v_visible);
     -- the error a plain table would raise, so applications that catch 23505 keep working
@@ -174,6 +226,35 @@ BEGIN
         'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) already exists in version %s.',
         (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         p_pkey, p_table, p_schema);
+    -- an INSERT of a key that is there: the trigger cannot tell whether the statement said ON CONFLICT DO
+    -- NOTHING (PostgreSQL ignores the clause on a view with INSTEAD OF triggers, and a view has no unique
+    -- index to infer a target from), so that it never skips a row a plain INSERT would refuse: refused by
+    -- name when the client's query text has the clause, else the table's duplicate as before
+    v_dup_insert := format($dup$
+            IF pg_catalog.current_query() ~* '\mon\s+conflict\M' THEN
+                RAISE EXCEPTION 'INSERT ... ON CONFLICT is not supported on the versioned view %%', %L
+                    USING ERRCODE = 'TG306',
+                          DETAIL = format(%L, concat_ws(', ', %s), tgsis.get_working_version()),
+                          HINT = %L,
+                          TABLE = %L, SCHEMA = %L;
+            END IF;$dup$,
+        format('%I.%I', p_schema, p_table),
+        'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) is there in version %s; the view cannot skip or update it as ON CONFLICT would, so the statement is refused and nothing is written.',
+        (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
+        format('Insert the rows whose key is not there (INSERT INTO %1$s SELECT ... WHERE NOT EXISTS (SELECT FROM %1$s WHERE (%2$s) = (...))) and UPDATE the others.',
+               format('%I.%I', p_schema, p_table), v_key_list),
+        p_table, p_schema) || v_dup;
+    -- a row the statement read changed since by this transaction: by a function or trigger the statement
+    -- ran (or by another UPDATE of the view in the same query): what PostgreSQL raises for a plain table
+    -- (its re-check finds the row changed by a later command of the transaction), not 40001, which a
+    -- retry would only meet again; %s: the expression of the key's text
+    v_self := format($self$RAISE EXCEPTION 'a row %%%%=(%%%%) of %%%%.%%%% to be updated was already changed by an operation the current statement triggered', %L, %%s, %L, %L
+                USING ERRCODE = 'triggered_data_change_violation',
+                      DETAIL = 'A function or trigger the statement ran changed the row after the statement read it.',
+                      HINT = 'Change each row of a versioned view once: not both in a statement and in a function or trigger it runs.',
+                      TABLE = %L, SCHEMA = %L;$self$,
+        '(' || replace(v_key_list, '%', '%%') || ')', replace(p_schema, '%', '%%'), replace(p_table, '%', '%%'),
+        replace(p_table, '%', '%%'), replace(p_schema, '%', '%%'));
     -- what PostgreSQL raises when a repeatable-read transaction meets a concurrent update: clients retry it
     v_stale := format($stale$
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
@@ -191,10 +272,10 @@ BEGIN
     SELECT array_agg(array_position(p_columns, k) ORDER BY o) INTO v_pos FROM unnest(p_keys) WITH ORDINALITY AS u(k, o);
     v_keypos := array_position(p_columns, p_keyfield);
     IF array_position(v_pos, NULL) IS NULL AND v_keypos IS NOT NULL THEN
-        SELECT 'tgsis_xact, tgsis_statement, tgsis_depth, tgsis_generation, '
+        SELECT 'tgsis_xact, tgsis_generation, '
                                || string_agg(format('n%s', o), ', ' ORDER BY o) || ', '
                                || string_agg(format('o%s', o), ', ' ORDER BY o),
-               'pg_catalog.pg_current_xact_id(), pg_catalog.statement_timestamp(), pg_catalog.pg_trigger_depth(), v_gen, '
+               'pg_catalog.pg_current_xact_id(), v_gen, '
                                                  || string_agg(format('NEW.%I', c), ', ' ORDER BY o) || ', '
                                                  || string_agg(format('OLD.%I', c), ', ' ORDER BY o),
                format('pg_catalog.record_image_eq(ROW(%s), ROW(%s))', string_agg(format('v.%I', c), ', ' ORDER BY o),
@@ -211,54 +292,71 @@ BEGIN
                        ELSE 'v_w' END;
         v_enqueue := format($enq$
     IF TG_OP = 'UPDATE' AND pg_catalog.record_image_eq(ROW(%1$s), ROW(%2$s)) THEN
-        -- the key stays: the statement's first row goes the row path below (a one-row UPDATE costs what
-        -- it did), the others are queued, written with the statement's other rows when it ends (the
-        -- flush above); tgsis.queue_first_<depth> says "<generation>:<key>" of the first row
-        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || pg_catalog.pg_trigger_depth(), true), ''),
-                          '0')::bigint;
-        IF pg_catalog.split_part(pg_catalog.current_setting('tgsis.queue_first_' || pg_catalog.pg_trigger_depth(), true),
+        -- the key stays: the first row since the view's last flush goes the row path below (a one-row
+        -- UPDATE costs what it did), the others are queued under the view's generation and written when
+        -- the statement ends (the flush above); tgsis.queue_first_<view> says "<generation>:<key>" of
+        -- that first row, tgsis.queue_session_<view> the session's version settings it was written with
+        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || TG_RELID, true), ''), '0')::bigint;
+        IF pg_catalog.split_part(pg_catalog.current_setting('tgsis.queue_first_' || TG_RELID, true),
                                  ':', 1) = v_gen::text THEN
+            IF pg_catalog.current_setting('tgsis.queue_session_' || TG_RELID, true) IS DISTINCT FROM %7$s THEN
+                %8$s
+            END IF;
             INSERT INTO %3$s (%4$s) VALUES (%5$s);
             RETURN NEW;
         END IF;
-        PERFORM pg_catalog.set_config('tgsis.queue_first_' || pg_catalog.pg_trigger_depth(),
-                                      v_gen || ':' || %6$s, true);
+        v_first := v_gen || ':' || %6$s;
     END IF;$enq$,
             (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
             (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
             v_queue, v_qcols, v_qvals,
             format('concat_ws(%L, %s)', ', ', (SELECT string_agg(format('NEW.%I::text', k), ', ' ORDER BY o)
-                                                 FROM unnest(p_keys) WITH ORDINALITY AS u(k, o))));
+                                                 FROM unnest(p_keys) WITH ORDINALITY AS u(k, o))),
+            v_session, v_moved_rows);
         v_flush := format($flush$
     IF TG_LEVEL = 'STATEMENT' THEN
-        -- the end of an UPDATE: write the rows it queued (%1$s), all at once; its rows are those of
-        -- this transaction, statement and trigger depth (found by the queue's index)
-        v_xact := pg_catalog.pg_current_xact_id();
-        v_stmt := pg_catalog.statement_timestamp();
-        v_depth := pg_catalog.pg_trigger_depth();
-        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || v_depth, true), ''), '0')::bigint;
-        SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT %20$s ORDER BY %20$s)
+        -- the end of an UPDATE of the view (of the last of its UPDATEs in one query: PostgreSQL fires one
+        -- statement trigger per query and table): write every row queued for the view since its last
+        -- flush in this transaction (%1$s, the view's generation), all at once. Those are this query's
+        -- rows, and those of an UPDATE of the view still running around it (a function or trigger ran
+        -- this query from inside it): written now, they are what that UPDATE would have written so far.
+        v_xact := pg_catalog.pg_current_xact_id_if_assigned();
+        v_gen := coalesce(nullif(pg_catalog.current_setting('tgsis.queue_' || TG_RELID, true), ''), '0')::bigint;
+        -- first: an UPDATE of the view that the writes below run (a trigger of the storage) queues
+        -- under the next generation, its first row the row path
+        PERFORM pg_catalog.set_config('tgsis.queue_' || TG_RELID, (v_gen + 1)::text, true);
+        IF v_xact IS NULL THEN
+            RETURN NULL;  -- nothing written, nothing queued
+        END IF;
+        SELECT count(*), count(DISTINCT ROW(%2$s)), array_agg(DISTINCT %23$s ORDER BY %23$s)
           INTO v_count, v_distinct, v_keys
-          FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
-        -- the next statement of this depth queues under the next generation (its first row: the row path)
-        PERFORM pg_catalog.set_config('tgsis.queue_' || v_depth, (v_gen + 1)::text, true);
+          FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen;
         IF v_count = 0 THEN
             RETURN NULL;
         END IF;
         -- the first row, written by the row path, queued again: the same row twice
-        v_first := pg_catalog.current_setting('tgsis.queue_first_' || v_depth, true);
+        v_first := pg_catalog.current_setting('tgsis.queue_first_' || TG_RELID, true);
         IF pg_catalog.split_part(v_first, ':', 1) = v_gen::text AND EXISTS (
                 SELECT FROM %1$s q
-                 WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth
-                   AND q.tgsis_generation = v_gen AND %9$s = pg_catalog.substr(v_first, pg_catalog.strpos(v_first, ':') + 1)) THEN
+                 WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
+                   AND %9$s = pg_catalog.substr(v_first, pg_catalog.strpos(v_first, ':') + 1)) THEN
             v_distinct := v_distinct - 1;
         END IF;
         IF v_distinct <> v_count THEN
             RAISE EXCEPTION 'one statement changed a row of %%.%% twice', %4$L, %5$L
                 USING ERRCODE = 'cardinality_violation',
+                      DETAIL = 'Counted together: the UPDATEs of the view in one query (writable CTEs), and those run by '
+                               'functions or triggers while an UPDATE of the view was running.',
                       HINT = 'change each row of a versioned view once in a statement';
         END IF;
+        -- the session's version, revision and role must be those the rows were read in
+        IF pg_catalog.current_setting('tgsis.queue_session_' || TG_RELID, true) IS DISTINCT FROM %20$s THEN
+            %21$s
+        END IF;
         SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
+        IF pg_catalog.current_setting('tgsis.queue_revision_' || TG_RELID, true) IS DISTINCT FROM v_vid || ':' || v_w THEN
+            %21$s
+        END IF;
         %6$s
         IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = %7$L AND l.objectkey = ANY (v_keys)) THEN
             PERFORM tgsis.check_objects_unlocked(%7$L, v_keys);  -- names the holders
@@ -266,23 +364,43 @@ BEGIN
         IF v_w <> 0 THEN
             PERFORM tgsis.record_changed_objects(%4$L, %5$L, %8$s);
         END IF;
-        -- no bulk writer of the objects in flight (they take these locks exclusively); in key order
-        PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
-           FROM pg_catalog.unnest(v_keys) AS k;
+        -- no bulk writer of the objects in flight: their write locks shared (bulk writers take them
+        -- exclusively), in key order; beyond tgsis.object_lock_limit() objects locked through the view
+        -- in the transaction and version (the shared lock table holds max_locks_per_transaction locks
+        -- per connection), the class's lock in the version, exclusively: every bulk writer of the class
+        -- holds it shared (tgsis.object_write_lock). Counted as by the row path below.
+        v_held := coalesce(pg_catalog.current_setting('tgsis.object_locks_' || TG_RELID, true), '');
+        IF v_held = v_vid || ':*' THEN
+            PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%7$L, v_vid));  -- held: taken again
+        ELSE
+            v_n := CASE WHEN pg_catalog.split_part(v_held, ':', 1) = v_vid::text
+                        THEN pg_catalog.split_part(v_held, ':', 2)::integer ELSE 0 END;
+            IF v_n + cardinality(v_keys) > tgsis.object_lock_limit() THEN
+                PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%7$L, v_vid));
+                PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID, v_vid || ':*', true);
+            ELSE
+                PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%7$L, k, v_vid))
+                   FROM pg_catalog.unnest(v_keys) AS k;
+                PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID,
+                                              v_vid || ':' || (v_n + cardinality(v_keys)) || ':', true);
+            END IF;
+        END IF;
         -- the visible row versions, locked, and compared with what the statement read; a row closed by a
         -- transaction that committed meanwhile drops out of the join (the re-check after the wait): once
         -- more with a new snapshot, which sees the row version that replaced it
         FOR v_pass IN 1 .. 2 LOOP
-            SELECT count(*), (array_agg(x.k) FILTER (WHERE NOT x.same))[1] INTO v_found, v_key
-              FROM (SELECT %9$s AS k, %10$s AS same
+            SELECT count(*), (array_agg(x.k ORDER BY NOT x.mine) FILTER (WHERE NOT x.same))[1],
+                   coalesce(bool_or(x.mine AND NOT x.same), false)
+              INTO v_found, v_key, v_mine
+              FROM (SELECT %9$s AS k, %10$s AS same, v.xmin = pg_catalog.xid(v_xact) AS mine
                       FROM %1$s q JOIN %11$s v ON %12$s AND %13$s
-                     WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen
+                     WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
                        FOR UPDATE OF v) AS x;
             EXIT WHEN v_found = v_count;
         END LOOP;
         IF v_found <> v_count THEN
             SELECT %9$s INTO v_key FROM %1$s q
-             WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen
+             WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen
                AND NOT EXISTS (SELECT FROM %11$s v WHERE %12$s AND %13$s)
              LIMIT 1;
             RAISE EXCEPTION 'could not serialize access due to concurrent delete of row %%=(%%) of %%.%% in version %%',
@@ -291,6 +409,9 @@ BEGIN
                       DETAIL = 'A transaction that committed after this statement read the row deleted it or changed its key.',
                       HINT = 'Retry the transaction.',
                       TABLE = %5$L, SCHEMA = %4$L;
+        END IF;
+        IF v_mine THEN
+            %22$s
         END IF;
         IF v_key IS NOT NULL THEN
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
@@ -304,12 +425,12 @@ BEGIN
         -- row versions of the working revision: changed in place (first: the rows written anew below are of it too)
         UPDATE %11$s v SET %19$s
           FROM %1$s q
-         WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision = %15$s;
+         WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision = %15$s;
         -- row versions of older revisions: closed in the working one, and written anew in it
         WITH closed AS (
             UPDATE %11$s v SET lastrevs = v.lastrevs || %15$s
               FROM %1$s q
-             WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision <> %15$s
+             WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen AND %12$s AND %13$s AND v.revision <> %15$s
             RETURNING %16$s, %15$s AS tgsis_revision_),
         written AS (
             INSERT INTO %11$s (%17$s, revision) SELECT %17$s, tgsis_revision_ FROM closed
@@ -324,7 +445,7 @@ BEGIN
                       HINT = 'Retry the transaction.',
                       TABLE = %5$L, SCHEMA = %4$L;
         END IF;
-        DELETE FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_statement = v_stmt AND q.tgsis_depth = v_depth AND q.tgsis_generation = v_gen;
+        DELETE FROM %1$s q WHERE q.tgsis_xact = v_xact AND q.tgsis_generation = v_gen;
         RETURN NULL;
     END IF;$flush$,
             v_queue,                                                                           -- 1
@@ -348,11 +469,11 @@ BEGIN
             v_cols,                                                                            -- 17
             p_table || '_ver_pkey',                                                            -- 18
             (SELECT string_agg(format('%I = q.n%s', c, o), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),  -- 19
-            tgsis.object_key_sql(v_keytype, format('q.n%s', v_keypos)));                      -- 20
+            v_session, v_moved_flush,                                                          -- 20, 21
+            format(v_self, 'v_key'),                                                           -- 22
+            tgsis.object_key_sql(v_keytype, format('q.n%s', v_keypos)));                      -- 23
         v_declare := v_declare || E'
     v_xact     xid8;
-    v_stmt     timestamptz;
-    v_depth    integer;
     v_count    bigint;
     v_first    text;
     v_distinct bigint;
@@ -360,9 +481,17 @@ BEGIN
                                || E'
     v_closed   bigint;
     v_written  bigint;
+    v_mine     boolean;
     v_key      text;
     v_pass     integer;';
         v_declare := v_declare || E'\n    v_gen      bigint;';
+        v_mark := format($mark$
+    IF v_first IS NOT NULL THEN
+        -- the first row of the view's generation: the rows queued after it are read with the same settings
+        PERFORM pg_catalog.set_config('tgsis.queue_first_' || TG_RELID, v_first, true),
+                pg_catalog.set_config('tgsis.queue_session_' || TG_RELID, %s, true),
+                pg_catalog.set_config('tgsis.queue_revision_' || TG_RELID, v_vid || ':' || v_w, true);
+    END IF;$mark$, v_session);
         IF p_class = 'feature' THEN
             v_declare := v_declare || E'\n    v_unversioned text[];';
         END IF;
@@ -388,32 +517,59 @@ DECLARE
     v_keys text[];
     v_cur  record;
     v_locked boolean;
-    v_noted  boolean;%21$s
+    v_noted  boolean;
+    v_held   text;
+    v_n      integer;
+    v_new    integer;%21$s
 BEGIN%22$s%23$s
     -- the write right on the session's version (checked for every row), its working revision and set
-    SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;
+    SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;%24$s
     IF TG_OP = 'INSERT' THEN
-        v_keys := ARRAY[%24$s];
+        v_keys := ARRAY[%27$s];
     ELSIF TG_OP = 'DELETE' THEN
-        v_keys := ARRAY[%25$s];
+        v_keys := ARRAY[%28$s];
     ELSE
-        v_keys := ARRAY[%25$s, %24$s];
+        v_keys := ARRAY[%28$s, %27$s];
     END IF;
     %20$s
-    -- no bulk writer of the object in flight (they take it exclusively)
-    PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[1], v_vid));
-    IF cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN
-        PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[2], v_vid));
+    -- no bulk writer of the object in flight (they take its write lock exclusively): its lock shared; once
+    -- the transaction locked tgsis.object_lock_limit() objects through the view in the version, the class's
+    -- lock in the version exclusively instead (bulk writers hold it shared), which covers all the others
+    -- (tgsis.object_locks_<view oid> counts: "<version id>:<objects>:<last object>", or "<version id>:*")
+    v_held := coalesce(pg_catalog.current_setting('tgsis.object_locks_' || TG_RELID, true), '');
+    IF v_held = v_vid || ':*' THEN
+        -- held already (taken again: a lookup in this session's lock table, and the setting, which the
+        -- session could change itself, is never trusted to skip a lock)
+        PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%14$L, v_vid));
+    ELSE
+        v_n := CASE WHEN pg_catalog.split_part(v_held, ':', 1) = v_vid::text
+                    THEN pg_catalog.split_part(v_held, ':', 2)::integer ELSE 0 END;
+        v_new := CASE WHEN cardinality(v_keys) = 2 AND v_keys[2] IS DISTINCT FROM v_keys[1] THEN 2
+                      WHEN v_held = v_vid || ':' || v_n || ':' || v_keys[1] THEN 0  -- the last row's object
+                      ELSE 1 END;
+        IF v_n + v_new > tgsis.object_lock_limit() THEN
+            PERFORM pg_catalog.pg_advisory_xact_lock(tgsis.object_class_lock_key(%14$L, v_vid));
+            PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID, v_vid || ':*', true);
+        ELSE
+            PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[1], v_vid));
+            IF v_new = 2 THEN
+                PERFORM pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_lock_key(%14$L, v_keys[2], v_vid));
+            END IF;
+            IF v_new > 0 THEN
+                PERFORM pg_catalog.set_config('tgsis.object_locks_' || TG_RELID,
+                                              v_vid || ':' || (v_n + v_new) || ':' || v_keys[cardinality(v_keys)], true);
+            END IF;
+        END IF;
     END IF;
 
     IF TG_OP = 'INSERT' THEN
         -- a visible row of the key: wait for a transaction closing it; if it stays, a duplicate
         PERFORM FROM %4$s v WHERE %6$s AND %9$s FOR SHARE;
-        IF FOUND THEN%10$s
+        IF FOUND THEN%25$s
         END IF;
         -- waits for a concurrent insert of the same key in this revision
         INSERT INTO %4$s (%5$s, revision) VALUES (%7$s, v_w) ON CONFLICT ON CONSTRAINT %16$I DO NOTHING;
-        IF NOT FOUND THEN%10$s
+        IF NOT FOUND THEN%25$s
         END IF;
         RETURN NEW;
     END IF;
@@ -426,7 +582,10 @@ BEGIN%22$s%23$s
             RETURN NULL;  -- deleted meanwhile: nothing to change, as on a plain table
         END IF;
     END IF;
-    IF NOT (%18$s) THEN%19$s
+    IF NOT (%18$s) THEN
+        IF v_cur.tgsis_xmin_ = pg_catalog.xid(pg_catalog.pg_current_xact_id()) THEN
+            %26$s
+        END IF;%19$s
     END IF;
 
     IF TG_OP = 'UPDATE' THEN
@@ -465,7 +624,9 @@ $body$$fn$,
         (SELECT string_agg(format('NEW.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         (SELECT string_agg(format('OLD.%I', k), ', ' ORDER BY o) FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)),
         v_old_key, p_class, p_keyfield, p_table || '_ver_pkey', v_current, v_same, v_stale, v_probe, v_declare,
-        v_flush, v_enqueue,
+        v_flush, v_enqueue, v_mark, v_dup_insert,
+        format(v_self, format('concat_ws(%L, %s)', ', ', (SELECT string_agg(format('OLD.%I::text', k), ', ' ORDER BY o)
+                                                          FROM unnest(p_keys) WITH ORDINALITY AS u(k, o)))),
         tgsis.object_key_sql(v_keytype, format('NEW.%I', p_keyfield)), tgsis.object_key_sql(v_keytype, format('OLD.%I', p_keyfield)));
 END
 $gen$;

@@ -36,6 +36,7 @@ __all__ = [
     "ObjectLockedError",
     "CheckoutConflictError",
     "NotVersionedError",
+    "UnsupportedViewStatementError",
     "AlreadyExistsError",
     "InUseError",
     "UnknownDataModelError",
@@ -220,6 +221,17 @@ class NotVersionedError(VersioningError):
     """
 
     code = "TG305"
+
+
+class UnsupportedViewStatementError(VersioningError):
+    """A statement a versioned view cannot write as a plain table would; refused before anything is written.
+
+    ``INSERT ... ON CONFLICT`` meeting a row that is there (the view cannot
+    skip or update it), or a change of the session's version, revision or
+    role by a function an ``UPDATE`` of the view calls.
+    """
+
+    code = "TG306"
 
 
 class DatabaseError(Error):
