@@ -130,6 +130,7 @@ BEGIN
         END LOOP;
     END LOOP;
     PERFORM tgsis.grant_model_tables(p_model);
+    PERFORM tgsis.protect_model_tables(p_model);  -- LIKE ... INCLUDING ALL copies no policies
     RETURN v_tables;
 END
 $$;
@@ -137,4 +138,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.partition_model_storage(smallint, integer) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.partition_model_storage(smallint, integer) IS
-    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions, keeping their definitions, index names, comments, owner and rights; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
+    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions, keeping their definitions, index names, comments, owner, rights and per-class row-level security; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
