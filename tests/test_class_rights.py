@@ -27,6 +27,7 @@ from tgsis.db import features as F
 from tgsis.db._transfer import Storage
 from tests.roles import Roles, login_roles
 from tests.synthetic import flat_grid
+from tests.temporal_data import evolving, series
 
 Conn = psycopg.Connection[Any]
 
@@ -34,10 +35,17 @@ ROLES = {"reader": "tgsis_reader", "editor": "tgsis_editor", "admin": "tgsis_adm
 
 
 class World:
-    """The login roles, the superuser's connection and the two features."""
+    """The login roles, the superuser's connection and the features: alpha's (allowed) and beta's (revoked)."""
 
-    def __init__(self, roles: Roles, su: Conn, alpha: int, beta: int) -> None:
+    def __init__(self, roles: Roles, su: Conn, alpha: int, beta: int, temporal: dict[str, int]) -> None:
         self.roles, self.su, self.alpha, self.beta = roles, su, alpha, beta
+        #: features of temporal classes: alpha_steps (allowed), beta_steps and beta_moves (revoked)
+        self.temporal = temporal
+
+    @property
+    def revoked(self) -> list[int]:
+        """Every feature of a revoked class (models 1, 2 and 3)."""
+        return [self.beta, self.temporal["beta_steps"], self.temporal["beta_moves"]]
 
 
 def _geoid_tables(conn: Conn) -> list[tuple[str, str]]:
@@ -76,24 +84,37 @@ def world(request: pytest.FixtureRequest, db_dsn: str) -> Iterator[World]:
         F.create_feature_class(su, "beta", "SURFACE")
         alpha = F.insert_feature(su, "alpha", flat_grid(5, 1.0))
         beta = F.insert_feature(su, "beta", flat_grid(5, 2.0))
+        # models 2 and 3: a surface at instants and an evolving one
+        rng = np.random.default_rng(36)
+        temporal = {}
+        for name, model in (("alpha_steps", "INSTANTS"), ("beta_steps", "INSTANTS"), ("beta_moves", "EVOLVING")):
+            tgsis.create_feature_class(su, name, "SURFACE", time_model=model, time_unit="Ma")
+            shape = series(rng, [0.0, 1.0, 2.0]) if model == "INSTANTS" else evolving(rng, [0.0, 1.0])
+            temporal[name] = F.insert_feature(su, name, shape)
         if request.param == "versioned":
             tgsis.enable_feature_versioning(su)
-        for table in ("beta", "beta_cellpros"):
+        for (table,) in su.execute("SELECT tablename FROM tgsis.class_tables WHERE classname LIKE 'beta%'").fetchall():
             su.execute(f"REVOKE ALL ON {table} FROM tgsis_reader, tgsis_editor, tgsis_admin, PUBLIC")
         # a role of no tgsis group, granted reading of alpha and of the model tables only
         outsider = roles.name("outsider")
         su.execute(f"GRANT USAGE ON SCHEMA tgsis TO {outsider}")
-        su.execute(f"GRANT SELECT ON alpha, alpha_cellpros, tgsis.catalog, tgsis.versions, tgsis.revisions TO {outsider}")
+        su.execute(f"GRANT SELECT ON tgsis.catalog, tgsis.versions, tgsis.revisions, tgsis.versioned_tables TO {outsider}")
+        for (table,) in su.execute("SELECT tablename FROM tgsis.class_tables WHERE classname LIKE 'alpha%'").fetchall():
+            su.execute(f"GRANT SELECT ON {table} TO {outsider}")
         for table, _ in _geoid_tables(su):
             su.execute(f"GRANT SELECT ON tgsis.{table} TO {outsider}")
-        yield World(roles, su, alpha, beta)
+        yield World(roles, su, alpha, beta, temporal)
 
 
 @pytest.mark.parametrize("who", list(ROLES))
 def test_no_role_reads_a_revoked_class_through_any_model_table(world: World, who: str) -> None:
     conn = world.roles.connect(who)
+    stored = {table: sum(_count(world.su, table, g) for g in world.revoked) for table, _ in _geoid_tables(world.su)}
+    assert {"vrtx", "trgl", "times", "node", "d4dvrtx", "d4dtrgl"} <= {t for t, n in stored.items() if n > 0}
     for table, _ in _geoid_tables(conn):
-        assert _count(conn, table, world.beta) == 0, table
+        for geoid in world.revoked:
+            assert _count(conn, table, geoid) == 0, (table, geoid)
+    assert _count(conn, "geometry", world.temporal["alpha_steps"]) == 1
     assert _count(conn, "vrtx", world.alpha) == 25
     assert _count(conn, "trgl", world.alpha) == 32
     assert _count(conn, "geometry", world.alpha) == 1
@@ -220,3 +241,41 @@ def test_merge_of_changes_to_a_revoked_class_is_refused(world: World) -> None:
     world.su.execute(f"GRANT UPDATE ON beta TO {world.roles.name('admin')}")
     tgsis.merge_version(admin, "work")
     assert world.su.execute("SELECT min(z) FROM tgsis.vrtx WHERE geoid = %s", (world.beta,)).fetchone() == (7.0,)
+
+
+@pytest.mark.parametrize("who", ["reader", "outsider"])
+def test_tgsis_functions_return_nothing_of_a_revoked_class(world: World, who: str) -> None:
+    """Snapshots at t, shapes in time, versioned rows: nothing of beta's features, all of alpha's."""
+    conn = world.roles.connect(who)
+    for geoid in world.revoked:
+        for function in ("vertices_at", "triangles_at"):
+            row = conn.execute(f"SELECT count(*) FROM tgsis.{function}(%s, 0.5)", (geoid,)).fetchone()
+            assert row == (0,), (function, geoid)
+    assert conn.execute("SELECT count(*) > 0 FROM tgsis.vertices_at(%s, 0.5)",
+                        (world.temporal["alpha_steps"],)).fetchone() == (True,)
+    conn.rollback()
+    # the class tables themselves: refused as before
+    assert _sqlstate(conn, "SELECT * FROM tgsis.features_at('beta_steps', 0.5)") == "42501"
+    if who == "reader" and world.su.execute("SELECT count(*) > 0 FROM tgsis.versioned_tables").fetchone() == (True,):
+        rows = conn.execute("SELECT count(*) FILTER (WHERE geoid = %s), count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, "
+                            "'DEFAULT')", (world.beta,)).fetchone()
+        assert rows is not None and rows[0] == 0 and rows[1] > 0
+        conn.rollback()
+
+
+def test_version_diffs_and_conflict_rows_hide_a_revoked_class(world: World) -> None:
+    if world.su.execute("SELECT count(*) = 0 FROM tgsis.versioned_tables").fetchone() == (True,):
+        pytest.skip("versions need feature versioning (the plain case is the other parameter)")
+    tgsis.create_version(world.su, "work")
+    with tgsis.in_version(world.su, "work"):
+        world.su.execute("UPDATE tgsis.vrtx SET z = z + 5 WHERE geoid IN (%s, %s)", (world.alpha, world.beta))
+    world.su.execute("UPDATE tgsis.vrtx SET z = z - 5 WHERE geoid IN (%s, %s)", (world.alpha, world.beta))
+    reader = world.roles.connect("reader")
+    diff = reader.execute("SELECT objectkey, shortname, changed FROM tgsis.diff_versions('DEFAULT', 'work') "
+                          "WHERE shortname = 'vrtx'").fetchall()
+    assert [d[0] for d in diff] == [str(world.alpha)]
+    reader.rollback()
+    rows = reader.execute("SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.beta),)).fetchone()
+    assert rows == (0,)
+    rows = reader.execute("SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.alpha),)).fetchone()
+    assert rows is not None and rows[0] > 0
