@@ -78,6 +78,8 @@ BEGIN
                     AND EXISTS (SELECT FROM pg_constraint c WHERE c.oid = d.objid AND c.conrelid = v_rel))
            AND NOT (d.classid = 'pg_trigger'::regclass
                     AND EXISTS (SELECT FROM pg_trigger t WHERE t.oid = d.objid AND t.tgrelid = v_rel))
+           AND NOT (d.classid = 'pg_policy'::regclass            -- its own policies (made again after the swap)
+                    AND EXISTS (SELECT FROM pg_policy p WHERE p.oid = d.objid AND p.polrelid = v_rel))
            AND d.classid <> 'pg_attrdef'::regclass;
         IF v_users IS NOT NULL THEN
             RAISE EXCEPTION 'tgsis.% is used by other objects', v_table
