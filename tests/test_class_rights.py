@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
+from psycopg.conninfo import make_conninfo
 
 import tgsis
 from tgsis.db import features as F
@@ -279,3 +280,23 @@ def test_version_diffs_and_conflict_rows_hide_a_revoked_class(world: World) -> N
     assert rows == (0,)
     rows = reader.execute("SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.alpha),)).fetchone()
     assert rows is not None and rows[0] > 0
+
+
+def test_pg_dump_and_restore_keep_the_class_rights(world: World, pg: Any, db_dsn: str, tmp_path: Any) -> None:
+    """The storage tables are no extension members: their policies go into the dump and come back."""
+    from tests.test_backup import _bindir_of, _restored
+
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn:
+        reader = psycopg.connect(make_conninfo(dsn, user=world.roles.name("reader")))
+        try:
+            for geoid in world.revoked:
+                assert _count(reader, "vrtx", geoid) + _count(reader, "times", geoid) + _count(reader, "node", geoid) == 0
+            assert _count(reader, "vrtx", world.alpha) == 25
+            editor = psycopg.connect(make_conninfo(dsn, user=world.roles.name("editor")))
+            try:
+                assert _sqlstate(editor, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
+                                 (world.beta,)) == "42501"
+            finally:
+                editor.close()
+        finally:
+            reader.close()
