@@ -300,3 +300,20 @@ def test_pg_dump_and_restore_keep_the_class_rights(world: World, pg: Any, db_dsn
                 editor.close()
         finally:
             reader.close()
+
+
+def test_every_model_table_and_partitioned_storage_carry_the_policies(conn: Conn) -> None:
+    """Every model table with rows per geoid (the registry's), also after partition_model_storage swaps them."""
+    def protected() -> dict[str, int]:
+        return {r[0]: r[1] for r in conn.execute(
+            "SELECT c.relname, count(p.polname) FILTER (WHERE p.polname LIKE 'tgsis_class_%%') "
+            "  FROM tgsis.model_tables t JOIN pg_class c ON c.relname = t.tablename "
+            "   AND c.relnamespace = 'tgsis'::regnamespace AND c.relrowsecurity "
+            "  LEFT JOIN pg_policy p ON p.polrelid = c.oid "
+            " WHERE t.geoidcolumn IS NOT NULL GROUP BY c.relname").fetchall()}
+
+    expected = [r[0] for r in conn.execute(
+        "SELECT tablename FROM tgsis.model_tables WHERE geoidcolumn IS NOT NULL ORDER BY 1").fetchall()]
+    assert protected() == {t: 4 for t in expected}
+    conn.execute("SELECT tgsis.partition_model_storage(1::smallint, 4)")
+    assert protected() == {t: 4 for t in expected}
