@@ -24,9 +24,11 @@ import pytest
 from psycopg.conninfo import make_conninfo
 
 import tgsis
+from tgsis import gmaps
 from tgsis.db import features as F
 from tgsis.db._transfer import Storage
 from tests.roles import Roles, login_roles
+from tests.gmaps_shapes import icosahedron
 from tests.synthetic import flat_grid
 from tests.temporal_data import evolving, series
 
@@ -40,13 +42,13 @@ class World:
 
     def __init__(self, roles: Roles, su: Conn, alpha: int, beta: int, temporal: dict[str, int]) -> None:
         self.roles, self.su, self.alpha, self.beta = roles, su, alpha, beta
-        #: features of temporal classes: alpha_steps (allowed), beta_steps and beta_moves (revoked)
+        #: features of models 2 to 4: alpha_steps (allowed), beta_steps, beta_moves and beta_gmap (revoked)
         self.temporal = temporal
 
     @property
     def revoked(self) -> list[int]:
-        """Every feature of a revoked class (models 1, 2 and 3)."""
-        return [self.beta, self.temporal["beta_steps"], self.temporal["beta_moves"]]
+        """Every feature of a revoked class (models 1 to 4)."""
+        return [self.beta, self.temporal["beta_steps"], self.temporal["beta_moves"], self.temporal["beta_gmap"]]
 
 
 def _geoid_tables(conn: Conn) -> list[tuple[str, str]]:
@@ -92,6 +94,9 @@ def world(request: pytest.FixtureRequest, db_dsn: str) -> Iterator[World]:
             tgsis.create_feature_class(su, name, "SURFACE", time_model=model, time_unit="Ma")
             shape = series(rng, [0.0, 1.0, 2.0]) if model == "INSTANTS" else evolving(rng, [0.0, 1.0])
             temporal[name] = F.insert_feature(su, name, shape)
+        # model 4: a G-map
+        F.create_feature_class(su, "beta_gmap", "GMAP", time_model="GMAP", cell_level=2)
+        temporal["beta_gmap"] = F.insert_feature(su, "beta_gmap", gmaps.GMap.from_triangles(*icosahedron()))
         if request.param == "versioned":
             tgsis.enable_feature_versioning(su)
         for (table,) in su.execute("SELECT tablename FROM tgsis.class_tables WHERE classname LIKE 'beta%'").fetchall():
@@ -111,7 +116,7 @@ def world(request: pytest.FixtureRequest, db_dsn: str) -> Iterator[World]:
 def test_no_role_reads_a_revoked_class_through_any_model_table(world: World, who: str) -> None:
     conn = world.roles.connect(who)
     stored = {table: sum(_count(world.su, table, g) for g in world.revoked) for table, _ in _geoid_tables(world.su)}
-    assert {"vrtx", "trgl", "times", "node", "d4dvrtx", "d4dtrgl"} <= {t for t, n in stored.items() if n > 0}
+    assert {"vrtx", "trgl", "times", "node", "d4dvrtx", "d4dtrgl", "gmap"} <= {t for t, n in stored.items() if n > 0}
     for table, _ in _geoid_tables(conn):
         for geoid in world.revoked:
             assert _count(conn, table, geoid) == 0, (table, geoid)
