@@ -139,8 +139,17 @@ BEGIN
     -- ---- issue36-rls: per-class rights at the model tables (docs/security.md)
     -- the storage's row-level security keyed by the classes' rights (a fresh install's create_storage does it);
     -- the versioned views of the model tables filter by them as security barriers (tgsis.create_versioned_view);
-    -- their write triggers were generated anew above, with the class check
+    -- their write triggers, generated anew where they lack the class check (tgsis.check_class_write)
     PERFORM tgsis.protect_model_tables(m.model) FROM tgsis.data_models m ORDER BY m.model;
+    FOR v_t IN SELECT v.* FROM tgsis.versioned_tables v JOIN tgsis.model_tables t ON v.schemaname = 'tgsis' AND t.tablename = v.tablename
+                WHERE t.geoidcolumn IS NOT NULL ORDER BY v.tablename LOOP
+        CONTINUE WHEN EXISTS (SELECT FROM pg_catalog.pg_proc p
+                               WHERE p.oid = to_regprocedure(format('tgsis.%I()', v_t.tablename || '_ver_write'))
+                                 AND p.prosrc LIKE '%check_class_write%');
+        EXECUTE format('DROP FUNCTION tgsis.%I() CASCADE', v_t.tablename || '_ver_write');  -- and its triggers
+        PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
+                                                v_t.objectclass, v_t.objectkeyfield);
+    END LOOP;
     FOR v_object IN
         SELECT t.tablename, t.geoidcolumn,
                ARRAY(SELECT a.attname::text FROM pg_catalog.pg_attribute a
