@@ -41,6 +41,7 @@ BEGIN
         END IF;
         EXECUTE format('SELECT tgsis.%I()', v_model.create_function);
         PERFORM tgsis.grant_model_tables(v_model.model);
+        PERFORM tgsis.protect_model_tables(v_model.model);  -- per-class rights at the model tables
         v_created := true;
     END LOOP;
     IF v_created AND NOT v_core THEN

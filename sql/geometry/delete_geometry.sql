@@ -34,9 +34,12 @@ BEGIN
     END IF;
     -- the feature row: its foreign key is gone once model 1 is versioned, so
     -- delete it explicitly; cell properties of a collection's members are in
-    -- its class's table, keyed by member geoid
+    -- its class's table, keyed by member geoid. Only the tables of the
+    -- feature's own class (tgsis.class_of_geoid): those of the other classes
+    -- hold nothing of it, and per-class rights may keep the caller from them.
     FOR v_class IN SELECT t.schemaname, t.tablename, t.kind FROM tgsis.class_tables t JOIN tgsis.catalog c USING (classname)
-                    WHERE c.geotype = v_geo.geotype AND c.timemodel = v_geo.timemodel ORDER BY t.classname, t.position DESC LOOP
+                    WHERE c.geotype = v_geo.geotype AND c.timemodel = v_geo.timemodel
+                      AND c.classname = tgsis.class_of_geoid(p_geoid) ORDER BY t.classname, t.position DESC LOOP
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.tablename, '_geoid',
                                          CASE v_class.kind WHEN 'feature' THEN ARRAY[p_geoid] ELSE v_ids END);
     END LOOP;

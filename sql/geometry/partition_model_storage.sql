@@ -112,6 +112,8 @@ BEGIN
                     AND EXISTS (SELECT FROM pg_constraint c WHERE c.oid = d.objid AND c.conrelid = v_rel))
            AND NOT (d.classid = 'pg_trigger'::regclass
                     AND EXISTS (SELECT FROM pg_trigger t WHERE t.oid = d.objid AND t.tgrelid = v_rel))
+           AND NOT (d.classid = 'pg_policy'::regclass            -- its own policies (made again after the swap)
+                    AND EXISTS (SELECT FROM pg_policy p WHERE p.oid = d.objid AND p.polrelid = v_rel))
            AND d.classid <> 'pg_attrdef'::regclass;
         IF v_users IS NOT NULL THEN
             RAISE EXCEPTION 'tgsis.% is used by other objects', v_table
@@ -164,6 +166,7 @@ BEGIN
         END LOOP;
     END LOOP;
     PERFORM tgsis.grant_model_tables(p_model);
+    PERFORM tgsis.protect_model_tables(p_model);  -- LIKE ... INCLUDING ALL copies no policies
     RETURN v_tables;
 END
 $$;
@@ -171,4 +174,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.partition_model_storage(smallint, integer) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.partition_model_storage(smallint, integer) IS
-    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner and rights; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
+    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner, rights and per-class row-level security; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';

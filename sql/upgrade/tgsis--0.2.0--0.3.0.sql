@@ -91,6 +91,40 @@ BEGIN
 
     -- ---- (blocks of later changes that need the new functions go here)
 
+    -- ---- issue36-rls: per-class rights at the model tables (docs/security.md)
+    -- the storage's row-level security keyed by the classes' rights (a fresh install's create_storage does it);
+    -- the versioned views of the model tables filter by them as security barriers (tgsis.create_versioned_view);
+    -- their write triggers, generated anew where they lack the class check (tgsis.check_class_write)
+    PERFORM tgsis.protect_model_tables(m.model) FROM tgsis.data_models m ORDER BY m.model;
+    FOR v_t IN SELECT v.* FROM tgsis.versioned_tables v JOIN tgsis.model_tables t ON v.schemaname = 'tgsis' AND t.tablename = v.tablename
+                WHERE t.geoidcolumn IS NOT NULL ORDER BY v.tablename LOOP
+        CONTINUE WHEN EXISTS (SELECT FROM pg_catalog.pg_proc p
+                               WHERE p.oid = to_regprocedure(format('tgsis.%I()', v_t.tablename || '_ver_write'))
+                                 AND p.prosrc LIKE '%check_class_write%');
+        EXECUTE format('DROP FUNCTION tgsis.%I() CASCADE', v_t.tablename || '_ver_write');  -- and its triggers
+        PERFORM tgsis.create_versioning_trigger(v_t.schemaname, v_t.tablename, v_t.keycolumns, v_t.pkeyname,
+                                                v_t.objectclass, v_t.objectkeyfield);
+    END LOOP;
+    FOR v_object IN
+        SELECT t.tablename, t.geoidcolumn,
+               ARRAY(SELECT a.attname::text FROM pg_catalog.pg_attribute a
+                      WHERE a.attrelid = format('tgsis.%I', t.tablename || '_ver')::regclass AND a.attnum > 0
+                        AND NOT a.attisdropped AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed')
+                      ORDER BY a.attnum) AS columns
+          FROM tgsis.model_tables t JOIN tgsis.versioned_tables v ON v.schemaname = 'tgsis' AND v.tablename = t.tablename
+         WHERE t.geoidcolumn IS NOT NULL ORDER BY t.tablename
+    LOOP
+        -- (the views of tables versioned just now filter already)
+        CONTINUE WHEN pg_catalog.pg_get_viewdef(format('tgsis.%I', v_object.tablename)::regclass) LIKE '%class_denied_geoids%';
+        IF v_extension IS NOT NULL THEN  -- an extension replaces only its members: one for now (it leaves below)
+            EXECUTE format('ALTER EXTENSION tgsis ADD VIEW tgsis.%I', v_object.tablename);
+        END IF;
+        EXECUTE regexp_replace(tgsis.versioned_view_source('tgsis', v_object.tablename, v_object.columns),
+                               '^CREATE VIEW', 'CREATE OR REPLACE VIEW')
+                || format(' AND v.%I NOT IN (SELECT tgsis.class_denied_geoids(%L))', v_object.geoidcolumn, 'SELECT');
+        EXECUTE format('ALTER VIEW tgsis.%I SET (security_barrier = true)', v_object.tablename);
+    END LOOP;
+
     -- What this block made (storage tables, their versioned views and runners, class views made
     -- again) is made at run time in a fresh install: inside ALTER EXTENSION it became an extension
     -- member, which pg_dump leaves out and DROP EXTENSION drops. It leaves the extension again.

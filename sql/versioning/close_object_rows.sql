@@ -4,7 +4,8 @@
 -- set-based delete of the client runs here, for the calling role, after the
 -- checks a write through the view makes: the table is one tgsis versions
 -- (tgsis.versioned_tables, which only tgsis writes), the role may DELETE
--- from its view, holds the write right on its session's version
+-- from its view (and, on the model tables every class shares, change the
+-- features' classes: tgsis.check_class_write), holds the write right on its session's version
 -- (tgsis.write_revision) and no other version locked the objects. The
 -- objects' write locks are taken exclusively first: no write through the
 -- view is in flight on them (it would re-create a closed row), later ones
@@ -51,6 +52,11 @@ BEGIN
         RAISE EXCEPTION 'role % may not delete from %.%', quote_ident(tgsis.calling_role()), quote_ident(p_schema),
                 quote_ident(p_table)
             USING ERRCODE = 'TG002', HINT = 'its owner can GRANT DELETE on it';
+    END IF;
+    -- a model table every feature class shares: the right on each feature's class (42501; a part of a
+    -- feature's rows changes it: UPDATE; all its rows go with the feature: UPDATE or DELETE)
+    IF p_schema = 'tgsis' AND EXISTS (SELECT FROM tgsis.model_tables t WHERE t.tablename = p_table AND t.geoidcolumn = p_keyfield) THEN
+        PERFORM tgsis.check_class_write(p_keys, CASE WHEN p_idfield IS NULL THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
     END IF;
     SELECT * INTO v_write FROM tgsis.write_revision();
     PERFORM tgsis.check_objects_unlocked(v_t.objectclass, p_keys::text[]);

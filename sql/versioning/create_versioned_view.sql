@@ -30,12 +30,24 @@ DECLARE
     v_writable text[];
     v_col      record;
     v_acl      record;
+    v_geoid    text;
 BEGIN
     SELECT array_agg(attname::text ORDER BY attnum), array_agg(attname::text ORDER BY attnum) FILTER (WHERE attgenerated = '')
       INTO v_columns, v_writable
       FROM pg_attribute WHERE attrelid = v_ver AND attnum > 0 AND NOT attisdropped
        AND attname NOT IN ('revision', 'lastrevs', 'revclosed');
-    EXECUTE tgsis.versioned_view_source(p_schema, p_table, v_columns);
+    -- a model table every feature class shares (tgsis.model_tables): the view reads its storage as the
+    -- owner, whom row-level security spares, so it filters by the reader's class rights itself, the
+    -- filter the storage's policies apply (tgsis.protect_model_tables), as a security barrier (no
+    -- function of the reader's query sees a row first). The view's source ends with its WHERE clause.
+    SELECT t.geoidcolumn INTO v_geoid FROM tgsis.model_tables t
+     WHERE p_schema = 'tgsis' AND t.tablename = p_table AND t.geoidcolumn IS NOT NULL;
+    EXECUTE tgsis.versioned_view_source(p_schema, p_table, v_columns)
+            || CASE WHEN v_geoid IS NOT NULL
+                    THEN format(' AND v.%I NOT IN (SELECT tgsis.class_denied_geoids(%L))', v_geoid, 'SELECT') ELSE '' END;
+    IF v_geoid IS NOT NULL THEN
+        EXECUTE format('ALTER VIEW %I.%I SET (security_barrier = true)', p_schema, p_table);
+    END IF;
     FOR v_col IN
         SELECT a.attname,
                CASE WHEN a.attidentity <> '' THEN format('nextval(%L::regclass)', pg_get_serial_sequence(v_ver::text, a.attname))

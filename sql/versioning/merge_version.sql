@@ -46,6 +46,11 @@ BEGIN
     LOOP
         -- an object another version locked stays as it is in the parent too
         PERFORM tgsis.check_objects_unlocked(v_class.objectclass, v_class.keys, v_child.versionid, false);
+        -- the merge writes the objects' rows in the shared model tables: the merger needs the right to
+        -- change the class of each feature (tgsis.check_class_write; 42501, nothing merged)
+        IF v_class.objectclass = 'feature' THEN
+            PERFORM tgsis.check_class_write(v_class.keys::bigint[], 'UPDATE');
+        END IF;
         v_written := v_written + tgsis.copy_object_state(v_class.objectclass, v_class.keys, v_child.workingset,
                                                          v_parent.workingset, v_parent.workingrevision);
     END LOOP;

@@ -143,7 +143,13 @@ DECLARE
     v_dup_insert  text;
     v_self        text;
     v_keytype     oid;       -- the object key column's type: keys as text are its canonical text (tgsis.object_key_sql)
+    v_classes     boolean;   -- a model table (rows per geoid of every class): per-class rights are checked
 BEGIN
+    -- the shared model tables hold the rows of every feature class: the trigger, which writes them as
+    -- the table's owner, checks the calling role's rights on the class of each object it writes
+    -- (tgsis.check_class_write; docs/security.md, "Per-class rights at the model tables")
+    v_classes := p_schema = 'tgsis' AND p_class = 'feature'
+                 AND EXISTS (SELECT FROM tgsis.model_tables t WHERE t.tablename = p_table AND t.geoidcolumn = p_keyfield);
     PERFORM tgsis.check_key_type(v_ver::regclass, p_keyfield);
     v_keytype := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
                    WHERE a.attrelid = v_ver::regclass AND a.attname = p_keyfield AND NOT a.attisdropped);
@@ -197,6 +203,11 @@ BEGIN
         PERFORM tgsis.record_changed_objects(%3$L, %4$L, v_keys);
     END IF;$probe$, p_class, v_noted_sql, p_schema, p_table);
         v_declare := E'\n    v_none   boolean;';
+    END IF;
+    IF v_classes THEN
+        v_probe := $check$-- the class's rights (a model table every class shares)
+    PERFORM tgsis.check_class_write(v_keys::bigint[], CASE TG_OP WHEN 'DELETE' THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
+    $check$ || v_probe;
     END IF;
     SELECT string_agg(format('%I', c), ', ' ORDER BY o),
            string_agg(format('NEW.%I', c), ', ' ORDER BY o),
@@ -458,7 +469,10 @@ BEGIN
         IF cardinality(v_unversioned) > 0 THEN
             PERFORM tgsis.unversioned_revision(v_unversioned::bigint[]);  -- TG305 outside DEFAULT's working revision
         END IF;$none$
-            ELSE '' END,                                                                       -- 6
+            ELSE '' END
+            || CASE WHEN v_classes THEN $check$
+        PERFORM tgsis.check_class_write(v_keys::bigint[], 'UPDATE');  -- the class's rights (a model table)$check$
+               ELSE '' END,                                                                    -- 6
             p_class,                                                                           -- 7
             CASE WHEN p_class = 'feature' THEN 'ARRAY(SELECT k FROM pg_catalog.unnest(v_keys) AS k WHERE NOT (k = ANY (v_unversioned)))'
                  ELSE 'v_keys' END,                                                            -- 8

@@ -11,9 +11,11 @@ modules (``features``, ``temporal``, ``checkin``) import it; users do not.
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
+import itertools
 import json
 import logging
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -186,8 +188,39 @@ def _copy_statement(table: sql.Composable, columns: Sequence[str]) -> sql.Compos
 
 
 def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: bytes) -> None:
-    with conn.cursor().copy(_copy_statement(table, columns)) as copy:
+    with staged(conn, table, columns) as target, conn.cursor().copy(_copy_statement(target, columns)) as copy:
         copy.write(payload)
+
+
+@contextlib.contextmanager
+def staged(conn: Conn, table: sql.Composable, columns: Sequence[str]) -> Iterator[sql.Composable]:
+    """Where a COPY into ``table`` goes: the table, or a temporary table moved into it when the COPY ends.
+
+    PostgreSQL refuses ``COPY FROM`` into a table whose row-level security
+    applies to the role ("COPY FROM not supported with row-level security"):
+    the model tables every feature class shares keep the rows of classes a role
+    may not change from it that way (``tgsis.protect_model_tables``). For such
+    a role the rows go into a temporary table of the same columns first, then
+    into the table with one ``INSERT ... SELECT``, whose policies check every
+    row (docs/security.md, "Per-class rights at the model tables"). Owners and
+    superusers, whom row security spares, COPY straight in.
+    """
+    guarded = conn.execute(sql.SQL("SELECT row_security_active({}::regclass)").format(
+        sql.Literal(table.as_string(conn)))).fetchone()
+    if not guarded or not guarded[0]:
+        yield table
+        return
+    names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
+    stage = sql.Identifier(f"tgsis_stage_{next(_STAGES)}")
+    conn.execute(sql.SQL("CREATE TEMPORARY TABLE {} ON COMMIT DROP AS SELECT {} FROM {} WITH NO DATA").format(
+        stage, names, table))
+    yield stage
+    conn.execute(sql.SQL("INSERT INTO {} ({}) SELECT {} FROM {}").format(table, names, names, stage))
+    conn.execute(sql.SQL("DROP TABLE {}").format(stage))
+
+
+#: numbers of the temporary tables of :func:`staged` (unique in the session)
+_STAGES = itertools.count()
 
 
 @dataclass(frozen=True)
@@ -311,7 +344,8 @@ class Storage:
                     target, columns = self._target(schema, table, future.result())
                     chunks = encode_chunks([(values, wire) for _, values, wire in columns])
                     ahead = coders.submit(next, chunks, None)
-                    with conn.cursor().copy(_copy_statement(target, [name for name, _, _ in columns])) as copy:
+                    names = [name for name, _, _ in columns]
+                    with staged(conn, target, names) as into, conn.cursor().copy(_copy_statement(into, names)) as copy:
                         while (piece := ahead.result()) is not None:
                             ahead = coders.submit(next, chunks, None)
                             copy.write(piece)
