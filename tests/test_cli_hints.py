@@ -88,6 +88,8 @@ def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
     assert foreign_terms("SELECT tgsis.resolve_conflict('v', class, key, 'parent')") != []
     assert foreign_terms("tgsis version resolve v feature 3 child; tgsis checkin --on-conflict child") == []
     assert foreign_terms("a DBA may run: in psql: GRANT tgsis_admin TO ana") == []
+    assert foreign_terms("e.g. --fill-property porosity=0.2") == []  # a flag's NAME=VALUE is the command's syntax
+    assert foreign_terms("pass porosity=0.2") == ["porosity="]
 
 
 # --------------------------------------------------------------------------- every hint written
@@ -96,7 +98,7 @@ def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
 def _sample(text: str) -> str:
     """A hint template with sample values for its placeholders (format's %s/%L/%I, f-string fields)."""
     text = re.sub(r"%[sIL]", lambda m: "'v'" if m[0] == "%L" else "v", text)
-    return re.sub(r"\{[^{}]*\}", "v", text)
+    return re.sub(r"\{[^{}]*\}", lambda m: "--v" if "flag" in m[0] else "v", text)  # {flag}: a --flag
 
 
 def _written_hints() -> list[tuple[str, str]]:
@@ -134,6 +136,12 @@ NOT_FROM_THE_CLI = {
     "src/tgsis/db/adapters.py": "psycopg adapters for Python programs (tgsis.register_types): no command",
     "sql/model4/gmap_conditions.sql": "an SQL building block of gmap_check and md_check, which the command calls with valid arguments",
     "sql/geometry/partition_model_storage.sql": "a DBA's set-up step, SQL and Python only (docs/scaling.md): no command",
+    "sql/geometry/no_model_rule.sql": "a data model the registry lacks: only SQL and Python callers can name one "
+                                      "(the commands work on stored features, whose models are registered)",
+    "sql/geometry/class_denied_geoids.sql": "the privilege argument of an internal check tgsis's own code calls",
+    "sql/geometry/check_class_write.sql": "the privilege argument of an internal check tgsis's own code calls",
+    "sql/versioning/conflict_discards.sql": "a key without its class: the command always gives both",
+    "sql/model5/md_vertices_in_box.sql": "box queries of multiply indexed G-maps are SQL and Python only: no command",
 }
 
 

@@ -141,11 +141,19 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"compare its members one by one: (SELECT geoids FROM tgsis\.geometry WHERE .*)",
      lambda m: f"compare its members one by one ({IN_PSQL}{m[1]})"),
     (r"(?<!in psql: )(tgsis\.delete_instant removes it first)", lambda m: f"{IN_PSQL}{m[1]}"),
+    (r"give them rows first: SELECT \* FROM tgsis\.fill_property_rows\('((?:[^']|'')*)', '[^']*'\)",
+     lambda m: f"give them rows first: tgsis class alter {_unquote(m[1])} --fill-property NAME=VALUE"),
+    (r"SELECT tgsis\.enable_feature_versioning\(\) versions them all", "tgsis versioning enable features versions them all"),
+    (r"read the class again \(tgsis\.get_feature_class\) and give the new properties' values",
+     "run the command again: it reads the class anew (tgsis class list shows its properties)"),
     # --- only the SQL functions take these (the command line reads them from the file)
     (r"^(p_(?:zpositive|crs|metadata) => .*)", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"^(SELECT tgsis\.object_fingerprint\(geoid\) at check-out gives the fingerprint)",
      lambda m: f"{IN_PSQL}{m[1]}"),
     (r"in SQL, (quote names with capitals)", lambda m: f"{IN_PSQL}{m[1]}"),
+    # --- a statement of the user's own that changes the version from inside an UPDATE of a view (SQL only)
+    (r"^Change the version \(goto_version, SET tgsis\.version\) between statements, not from inside one\.",
+     lambda m: f"{IN_PSQL}{m[0]}"),
     # --- files
     (r"pass format= with one of ", "give --format with one of "),
     (r"use tgsis\.formats\.read_pvd or write_pvd", "tgsis series writes a .pvd"),
@@ -208,6 +216,7 @@ def _api_names() -> frozenset[str]:
 _KEYWORD = re.compile(r"(?<![\w-])([a-z_][a-z0-9_]*)\s*=(?![=>])\s*(?=[\w'\"{(\[-])")
 _SQL = re.compile(r"=>|\bSELECT\b|\bFROM\s+tgsis\.\w+", re.IGNORECASE)
 _CALL = re.compile(r"\btgsis\.([A-Za-z_]\w*)")
+_FLAG_VALUE = re.compile(r"(--[a-z][\w-]*\s+)[A-Za-z_]\w*=")
 
 
 def foreign_terms(text: str | None) -> list[str]:
@@ -218,6 +227,8 @@ def foreign_terms(text: str | None) -> list[str]:
     if not text:
         return []
     text = text.split(IN_PSQL, 1)[0]
+    # NAME=VALUE given to a flag (--fill-property porosity=0.2) is the command's own syntax, no keyword argument
+    text = _FLAG_VALUE.sub(r"\1", text)
     found = [m[0] for m in _KEYWORD.finditer(text)]
     found += [m[0] for m in _SQL.finditer(text)]
     found += [m[0] for m in _CALL.finditer(text) if m[1].lower() in _api_names()]
