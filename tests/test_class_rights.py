@@ -134,9 +134,8 @@ def test_no_role_reads_a_revoked_class_through_any_model_table(world: World, who
     assert _count(world.su, "vrtx", world.beta) == 25
 
 
+@pytest.mark.parametrize("world", ["versioned"], indirect=True)  # versions need feature versioning
 def test_a_child_version_hides_the_class_too(world: World) -> None:
-    if not world.su.execute("SELECT count(*) > 0 FROM tgsis.versioned_tables").fetchone()[0]:  # type: ignore[index]
-        pytest.skip("versions of features need feature versioning (the plain case is the other parameter)")
     editor = world.roles.connect("editor")
     tgsis.create_version(editor, "e1")
     tgsis.goto_version(editor, "e1")
@@ -228,9 +227,8 @@ def test_upload_into_a_revoked_class_is_refused(world: World) -> None:
     assert _rows(world.su, world.beta) == before
 
 
+@pytest.mark.parametrize("world", ["versioned"], indirect=True)  # versions need feature versioning
 def test_merge_of_changes_to_a_revoked_class_is_refused(world: World) -> None:
-    if world.su.execute("SELECT count(*) = 0 FROM tgsis.versioned_tables").fetchone() == (True,):
-        pytest.skip("merges need feature versioning (the plain case is the other parameter)")
     # a version in which the superuser moved beta's vertices
     tgsis.create_version(world.su, "work")
     with tgsis.in_version(world.su, "work"):
@@ -269,9 +267,8 @@ def test_tgsis_functions_return_nothing_of_a_revoked_class(world: World, who: st
         conn.rollback()
 
 
+@pytest.mark.parametrize("world", ["versioned"], indirect=True)  # versions need feature versioning
 def test_version_diffs_and_conflict_rows_hide_a_revoked_class(world: World) -> None:
-    if world.su.execute("SELECT count(*) = 0 FROM tgsis.versioned_tables").fetchone() == (True,):
-        pytest.skip("versions need feature versioning (the plain case is the other parameter)")
     tgsis.create_version(world.su, "work")
     with tgsis.in_version(world.su, "work"):
         world.su.execute("UPDATE tgsis.vrtx SET z = z + 5 WHERE geoid IN (%s, %s)", (world.alpha, world.beta))
