@@ -319,3 +319,11 @@ def test_every_model_table_and_partitioned_storage_carry_the_policies(conn: Conn
     assert protected() == {t: 4 for t in expected}
     conn.execute("SELECT tgsis.partition_model_storage(1::smallint, 4)")
     assert protected() == {t: 4 for t in expected}
+
+
+@pytest.mark.parametrize("call", ["tgsis.class_denied_geoids('DROP')", "tgsis.class_denied_geoids(NULL)",
+                                  "tgsis.check_class_write(ARRAY[1]::bigint[], 'SELECT')"])
+def test_a_privilege_the_checks_do_not_know_is_refused(conn: Conn, call: str) -> None:
+    with pytest.raises(psycopg.Error) as caught:
+        conn.execute(f"SELECT {call}")
+    assert caught.value.sqlstate == "TG100" and "privilege" in str(caught.value)

@@ -28,7 +28,7 @@ DECLARE
 BEGIN
     IF p_privilege IS NULL OR p_privilege NOT IN ('UPDATE', 'UPDATE, DELETE') THEN
         RAISE EXCEPTION 'privilege % is not one writes of model rows are checked for', coalesce(quote_literal(p_privilege), 'NULL')
-            USING ERRCODE = 'TG001', HINT = 'p_privilege => ''UPDATE'' or ''UPDATE, DELETE''';
+            USING ERRCODE = 'TG100', HINT = 'p_privilege => ''UPDATE'' or ''UPDATE, DELETE''';
     END IF;
     FOR v_class IN
         SELECT c.classname, coalesce(to_regclass(format('%I.%I', c.schemaname, c.featuretable || '_ver')), t.rel) AS storage

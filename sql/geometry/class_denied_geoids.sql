@@ -37,7 +37,7 @@ DECLARE
 BEGIN
     IF p_privilege IS NULL OR p_privilege NOT IN ('SELECT', 'UPDATE', 'UPDATE, DELETE') THEN
         RAISE EXCEPTION 'privilege % is not one per-class rights are checked for', coalesce(quote_literal(p_privilege), 'NULL')
-            USING ERRCODE = 'TG001', HINT = 'p_privilege => ''SELECT'', ''UPDATE'' or ''UPDATE, DELETE''';
+            USING ERRCODE = 'TG100', HINT = 'p_privilege => ''SELECT'', ''UPDATE'' or ''UPDATE, DELETE''';
     END IF;
     -- the storage of the feature table of each class the role may not read/write (the table, or <table>_ver)
     SELECT string_agg(format('SELECT f._geoid FROM %s f', coalesce(to_regclass(format('%I.%I', c.schemaname, c.featuretable || '_ver')),
