@@ -157,8 +157,9 @@ def test_writers_cannot_change_a_revoked_class(world: World, who: str) -> None:
         cursor = conn.execute(statement, (world.beta,))
         assert cursor.rowcount == 0, statement   # rows it may not read are not there for it
         conn.commit()
-    # every row, not only the filtered ones
-    conn.execute("UPDATE tgsis.vrtx SET z = z + 0")
+    # every row, not only the filtered ones: it changes those it may, and nothing of beta
+    visible = world.su.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid <> %s", (world.beta,)).fetchone()
+    assert conn.execute("UPDATE tgsis.vrtx SET z = z + 100").rowcount == visible[0] > 0  # type: ignore[index]
     conn.commit()
     assert _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
                      (world.beta,)) == "42501"
@@ -327,3 +328,17 @@ def test_a_privilege_the_checks_do_not_know_is_refused(conn: Conn, call: str) ->
     with pytest.raises(psycopg.Error) as caught:
         conn.execute(f"SELECT {call}")
     assert caught.value.sqlstate == "TG100" and "privilege" in str(caught.value)
+
+
+@pytest.mark.parametrize("world", ["plain"], indirect=True)  # a versioned class's <table>_ver is its storage
+def test_a_table_named_like_a_class_storage_does_not_hide_the_class(world: World) -> None:
+    """Where a class's rows are stored is read from what its table is, not from a relation's name: an
+    empty beta_ver made beside the plain table beta (by any role that may create tables in public) does not
+    stand for beta's features."""
+    world.su.execute("CREATE TABLE public.beta_ver (_geoid bigint)")
+    world.su.execute("GRANT ALL ON public.beta_ver TO PUBLIC")
+    for who in ROLES:
+        conn = world.roles.connect(who)
+        assert _count(conn, "vrtx", world.beta) == 0, who
+        assert _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
+                         (world.beta,)) == "42501", who

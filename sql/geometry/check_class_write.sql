@@ -31,7 +31,7 @@ BEGIN
             USING ERRCODE = 'TG100', HINT = 'p_privilege => ''UPDATE'' or ''UPDATE, DELETE''';
     END IF;
     FOR v_class IN
-        SELECT c.classname, coalesce(to_regclass(format('%I.%I', c.schemaname, c.featuretable || '_ver')), t.rel) AS storage
+        SELECT c.classname, tgsis.class_storage(t.rel) AS storage
           FROM tgsis.catalog c
          CROSS JOIN LATERAL (SELECT to_regclass(format('%I.%I', c.schemaname, c.featuretable)) AS rel) t
          WHERE t.rel IS NOT NULL AND NOT pg_catalog.has_table_privilege(v_role, t.rel, p_privilege)
@@ -39,7 +39,7 @@ BEGIN
     LOOP
         IF v_ids IS NULL THEN  -- the geoids and the collections owning them, once
             EXECUTE format('SELECT array_agg(DISTINCT g.collection) FROM %s g WHERE g.geoid = ANY ($1) AND g.collection IS NOT NULL',
-                           coalesce(to_regclass('tgsis.geometry_ver'), to_regclass('tgsis.geometry')))
+                           tgsis.class_storage('tgsis.geometry'))
                INTO v_ids USING p_geoids;
             v_ids := p_geoids || coalesce(v_ids, '{}');
         END IF;

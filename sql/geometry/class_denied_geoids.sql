@@ -27,21 +27,19 @@ LANGUAGE plpgsql
 STABLE
 PARALLEL SAFE
 SECURITY DEFINER
-ROWS 10
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_role     name := tgsis.calling_role();
     v_sources  text;
-    v_geometry regclass := coalesce(to_regclass('tgsis.geometry_ver'), to_regclass('tgsis.geometry'));
+    v_geometry regclass := tgsis.class_storage('tgsis.geometry');
 BEGIN
     IF p_privilege IS NULL OR p_privilege NOT IN ('SELECT', 'UPDATE', 'UPDATE, DELETE') THEN
         RAISE EXCEPTION 'privilege % is not one per-class rights are checked for', coalesce(quote_literal(p_privilege), 'NULL')
             USING ERRCODE = 'TG100', HINT = 'p_privilege => ''SELECT'', ''UPDATE'' or ''UPDATE, DELETE''';
     END IF;
     -- the storage of the feature table of each class the role may not read/write (the table, or <table>_ver)
-    SELECT string_agg(format('SELECT f._geoid FROM %s f', coalesce(to_regclass(format('%I.%I', c.schemaname, c.featuretable || '_ver')),
-                                                                t.rel)), ' UNION ALL ')
+    SELECT string_agg(format('SELECT f._geoid FROM %s f', tgsis.class_storage(t.rel)), ' UNION ALL ')
       INTO v_sources
       FROM tgsis.catalog c
      CROSS JOIN LATERAL (SELECT to_regclass(format('%I.%I', c.schemaname, c.featuretable)) AS rel) t

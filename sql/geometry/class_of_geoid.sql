@@ -12,15 +12,14 @@ AS $$
 DECLARE
     v_class    record;
     v_found    boolean;
-    v_geometry regclass := coalesce(to_regclass('tgsis.geometry_ver'), to_regclass('tgsis.geometry'));
+    v_geometry regclass := tgsis.class_storage('tgsis.geometry');
     v_ids      bigint[];
 BEGIN
     EXECUTE format('SELECT array_agg(DISTINCT g.collection) FROM %s g WHERE g.geoid = $1 AND g.collection IS NOT NULL', v_geometry)
        INTO v_ids USING p_geoid;
     v_ids := array_prepend(p_geoid, coalesce(v_ids, '{}'));
     FOR v_class IN
-        SELECT c.classname, coalesce(to_regclass(format('%I.%I', c.schemaname, c.featuretable || '_ver')),
-                                     to_regclass(format('%I.%I', c.schemaname, c.featuretable))) AS rel
+        SELECT c.classname, tgsis.class_storage(to_regclass(format('%I.%I', c.schemaname, c.featuretable))) AS rel
           FROM tgsis.catalog c ORDER BY c.classname
     LOOP
         CONTINUE WHEN v_class.rel IS NULL;
