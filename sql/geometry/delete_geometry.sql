@@ -13,6 +13,7 @@ DECLARE
     v_ids   bigint[];
     v_class record;
     v_table text;
+    v_own   text;   -- the feature's class (tgsis.class_of_geoid)
 BEGIN
     PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
@@ -37,9 +38,10 @@ BEGIN
     -- its class's table, keyed by member geoid. Only the tables of the
     -- feature's own class (tgsis.class_of_geoid): those of the other classes
     -- hold nothing of it, and per-class rights may keep the caller from them.
+    v_own := tgsis.class_of_geoid(p_geoid);  -- once: it reads every class's feature table
     FOR v_class IN SELECT t.schemaname, t.tablename, t.kind FROM tgsis.class_tables t JOIN tgsis.catalog c USING (classname)
                     WHERE c.geotype = v_geo.geotype AND c.timemodel = v_geo.timemodel
-                      AND c.classname = tgsis.class_of_geoid(p_geoid) ORDER BY t.classname, t.position DESC LOOP
+                      AND c.classname = v_own ORDER BY t.classname, t.position DESC LOOP
         PERFORM tgsis.delete_object_rows(v_class.schemaname, v_class.tablename, '_geoid',
                                          CASE v_class.kind WHEN 'feature' THEN ARRAY[p_geoid] ELSE v_ids END);
     END LOOP;

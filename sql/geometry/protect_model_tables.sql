@@ -7,8 +7,10 @@
 -- whose table it lacks the right (tgsis.class_denied_geoids): SELECT to read
 -- them, UPDATE to insert or change them, UPDATE or DELETE to delete them.
 -- The policies sit on the storage: the table while it is plain, <table>_ver
--- once versioned (a rename keeps them), read through the versioned view,
--- which is security_invoker for these tables (tgsis.create_versioned_view).
+-- once versioned (a rename keeps them). They guard the roles' own statements
+-- on the storage; the versioned views read it as their owner, whom they
+-- spare, and filter by the same set themselves as security barriers
+-- (tgsis.create_versioned_view).
 -- Owners (tgsis's owner, whose definer code checks rights itself with
 -- tgsis.check_class_write) and superusers are not subject to them. Idempotent:
 -- run again after storage is swapped (tgsis.partition_model_storage) and by

@@ -38,7 +38,7 @@ BEGIN
             USING ERRCODE = 'TG200', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the conflicts', p_version);
     END IF;
     -- a solution takes one side's whole object: say what of the other side's edits it throws away
-    PERFORM tgsis.notice_discards(p_version, 'recorded', p_objectclass, p_objectkey);
+    PERFORM tgsis.notice_discards(p_version, 'recorded', p_objectclass, v_key);  -- the key as the conflicts name it
     RETURN v_row;
 END
 $$;
