@@ -561,3 +561,19 @@ def test_the_fast_and_the_line_by_line_readings_agree(monkeypatch: pytest.Monkey
     slow = sf.parse_ply(ply, "x.ply")
     assert np.array_equal(fast.vertices, slow.vertices) and np.array_equal(fast.triangles, slow.triangles)
     assert np.array_equal(fast.vertices, BASE.vertices) and np.array_equal(fast.triangles, BASE.cells)
+
+
+def test_an_obj_face_block_the_fast_reader_declines_is_read_without_backtracking(tmp_path: Path) -> None:
+    """Face lines with slashes and a trailing comment make the fast OBJ reader give up and read line by line;
+    its check of the corners once backtracked exponentially in the number of lines (3 lines never ended).
+    Run in a child process so that a regression fails (after 120 s) instead of hanging the suite."""
+    path = tmp_path / "commented.obj"
+    corners = "123/45/67 891/23/45 678/90/12"  # runs of several digits: the old check could split them
+    path.write_text("".join(f"v {i} {i % 7} {i % 3}\n" for i in range(1, 1001))
+                    + "\n".join([f"f {corners}"] * 40) + " # the last face\n")
+    code = ("import sys\nfrom tgsis.formats.trimesh_io import read_trimesh_file\n"
+            "try:\n    m = read_trimesh_file(sys.argv[1])\n    print(m.n_vertices, m.n_cells)\n"
+            "except Exception as e:\n    print(type(e).__name__, e)\n")
+    done = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120,
+                          check=True)
+    assert done.stdout.split()[:2] == ["1000", "40"] or done.stdout.startswith("FileFormatError"), done.stdout

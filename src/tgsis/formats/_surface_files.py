@@ -216,7 +216,10 @@ _OBJ_FREE_FORM = {b"cstype", b"deg", b"bmat", b"step", b"curv", b"curv2", b"surf
                   b"scrv", b"sp", b"end", b"con", b"ctech", b"stech"}
 
 
-_OBJ_CORNERS = re.compile(rb"(?:[ \t\r\n]*\d+(?:/\d+(?:/\d+)?|//\d+)?)*[ \t\r\n]*")
+# corners v, v/t, v/t/n or v//n, each followed by white space or the end: one way to match any text, so a
+# failing match costs linear time (with the white space optional, a run of digits could be split between
+# corners in exponentially many ways before the match gave up)
+_OBJ_CORNERS = re.compile(rb"[ \t\r\n]*(?:\d+(?:/\d+(?:/\d+)?|//\d+)?(?:[ \t\r\n]+|\Z))*")
 
 
 def parse_obj(data: bytes, path: PathLike) -> ParsedSurface:
