@@ -171,6 +171,18 @@ def test_installation_status_of_an_up_to_date_database(conn: psycopg.Connection[
     assert status.missing_storage == ()
 
 
+def test_a_role_that_may_not_read_the_installation_record_is_not_told_of_another_build(
+        conn: psycopg.Connection[Any]) -> None:
+    """Only tgsis_reader's members may read tgsis.installation: for another role the fingerprint is unknown,
+    which is no mismatch (it was reported as "other build", exit 1)."""
+    conn.execute("CREATE ROLE nobody_in_particular")
+    conn.execute("GRANT USAGE ON SCHEMA tgsis TO nobody_in_particular")
+    conn.execute("SET ROLE nobody_in_particular")
+    status = tgsis.installation_status(conn)
+    assert status.installed is not None and status.installed.fingerprint is None
+    assert status.state != "other build" and status.ok, status
+
+
 def test_a_non_superuser_owner_is_made_admin_or_told_the_grant() -> None:
     """The owner registers classes and versions features, which tgsis allows tgsis_admin's members: an install
     by a role that may grant it to itself does; one that may not names the GRANT a DBA must run."""

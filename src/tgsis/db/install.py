@@ -259,7 +259,8 @@ def installation_status(
         return status("upgrade", f"database {dbname} has tgsis {current.version}, this client {sources.version}",
                       f"run `tgsis db install` ({current.version} -> {sources.version})"
                       + (f", or in psql: {statement}" if statement else ""), missing)
-    if current.fingerprint != sources.fingerprint:
+    # (a fingerprint this role may not read is unknown, not another build: db status shows it as such)
+    if current.fingerprint is not None and current.fingerprint != sources.fingerprint:
         return status("other build", *_fingerprint_mismatch(current, sources, dbname), missing=missing)
     if missing:
         return status("storage missing",
@@ -478,7 +479,7 @@ def install(
                          "(pip install --upgrade tgsis)",
                 )
             if current.version == target:
-                if current.fingerprint != sources.fingerprint:
+                if current.fingerprint is not None and current.fingerprint != sources.fingerprint:
                     problem, fix = _fingerprint_mismatch(current, sources, conn.info.dbname)
                     raise InstallationError(problem, hint=fix)
                 if _create_storage(conn):
