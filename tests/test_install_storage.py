@@ -172,7 +172,8 @@ def test_installation_status_of_an_up_to_date_database(conn: psycopg.Connection[
 
 
 def test_a_role_that_may_not_read_the_installation_record_is_not_told_of_another_build(
-        conn: psycopg.Connection[Any]) -> None:
+    conn: psycopg.Connection[Any],
+) -> None:
     """Only tgsis_reader's members may read tgsis.installation: for another role the fingerprint is unknown,
     which is no mismatch (it was reported as "other build", exit 1)."""
     conn.execute("CREATE ROLE nobody_in_particular")
