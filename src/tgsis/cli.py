@@ -134,8 +134,9 @@ def cmd_db_status(args: argparse.Namespace) -> int:
         return 0 if status.ok else 1
     _out(f"database: {db} (from {target.source})")
     _out(f"server:   {server[0] if server else '?'}")
-    installed = (f"{current.version} ({current.method}, fingerprint {current.fingerprint or 'none recorded'})"
-                 if current else "not installed")
+    fingerprint = ("unknown: this role may not read tgsis.installation" if current and current.fingerprint is None
+                   else (current.fingerprint if current else None) or "none recorded")
+    installed = f"{current.version} ({current.method}, fingerprint {fingerprint})" if current else "not installed"
     _out(f"tgsis:    {installed}")
     _out(f"client:   {status.client_version} (fingerprint {status.client_fingerprint})")
     if status.missing_storage:

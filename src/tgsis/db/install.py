@@ -59,9 +59,9 @@ class InstalledVersion:
     fingerprint : str or None
         The fingerprint of the install script the objects were built from
         (``tgsis.installation.fingerprint``; :attr:`ExtensionSources.fingerprint`
-        of the client that installed or upgraded them), ``None`` for versions
-        before 0.3.0 or when the role may not read ``tgsis.installation``. Not
-        compared by ``==``.
+        of the client that installed or upgraded them); ``""`` when none is
+        recorded (versions before 0.3.0), ``None`` when the role may not read
+        ``tgsis.installation`` (unknown). Not compared by ``==``.
     """
 
     version: str
@@ -171,7 +171,8 @@ def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
 
 
 def _fingerprint(conn: psycopg.Connection[Any], version: str) -> str | None:
-    """``tgsis.installation.fingerprint`` of ``version`` (``None`` before 0.3.0, or when the role may not read it)."""
+    """``tgsis.installation.fingerprint`` of ``version``: ``""`` when none is recorded (before 0.3.0, or a build of
+    0.3.0 older than the column), ``None`` when the role may not read it (unknown: no mismatch)."""
     row = conn.execute(
         "SELECT to_regclass('tgsis.installation') IS NOT NULL "
         "AND has_table_privilege('tgsis.installation', 'SELECT')"
@@ -182,7 +183,7 @@ def _fingerprint(conn: psycopg.Connection[Any], version: str) -> str | None:
     row = conn.execute(
         "SELECT to_jsonb(i) ->> 'fingerprint' FROM tgsis.installation i WHERE i.version = %s", (version,)
     ).fetchone()
-    return None if row is None or row[0] is None else str(row[0])
+    return "" if row is None or row[0] is None else str(row[0])
 
 
 def _missing_storage(conn: psycopg.Connection[Any]) -> tuple[str, ...]:
