@@ -342,3 +342,53 @@ def test_a_table_named_like_a_class_storage_does_not_hide_the_class(world: World
         assert _count(conn, "vrtx", world.beta) == 0, who
         assert _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
                          (world.beta,)) == "42501", who
+
+
+def test_a_geometry_is_not_slipped_into_a_revoked_class_s_collection(world: World) -> None:
+    """A row of tgsis.geometry whose collection is a feature of beta is beta's (its member): a role that may
+    not change beta may not make one, by INSERT or by UPDATE of its own rows (one row: the row path of a
+    versioned view; several: its set-based flush), and the rows stay its own."""
+    editor = world.roles.connect("editor")
+    assert _sqlstate(editor, "INSERT INTO tgsis.geometry (geotype, collection) VALUES ('MULTIPOINT', %s)",
+                     (world.beta,)) == "42501"
+    mine = [editor.execute("INSERT INTO tgsis.geometry (geotype) VALUES ('MULTIPOINT') RETURNING geoid").fetchone()[0]  # type: ignore[index]
+            for _ in range(3)]
+    editor.commit()
+    for chosen in (mine[:1], mine):
+        assert _sqlstate(editor, "UPDATE tgsis.geometry SET collection = %s WHERE geoid = ANY (%s)",
+                         (world.beta, chosen)) == "42501", chosen
+    # the rows after the first (a versioned view writes them in its flush), the first one harmless
+    for first in mine:
+        assert _sqlstate(editor, "UPDATE tgsis.geometry SET collection = CASE WHEN geoid = %s THEN NULL ELSE %s END "
+                                 "WHERE geoid = ANY (%s)", (first, world.beta, mine)) == "42501", first
+    members = world.su.execute("SELECT count(*) FROM tgsis.geometry WHERE collection = %s", (world.beta,)).fetchone()
+    assert members == (0,)
+    # its own collection, of a class it may change, takes them
+    own = F.insert_feature(editor, "alpha", flat_grid(2, 1.0))
+    editor.execute("UPDATE tgsis.geometry SET collection = %s WHERE geoid = ANY (%s)", (own, mine))
+    editor.commit()
+    assert world.su.execute("SELECT count(*) FROM tgsis.geometry WHERE collection = %s", (own,)).fetchone() == (3,)
+
+
+def test_a_lesser_role_s_definer_function_reads_with_its_own_class_rights(world: World) -> None:
+    """A SECURITY DEFINER function runs with its owner's rights, whoever calls it: one that the editor
+    (no right on beta) wrote, called by the admin (every right on beta), sees none of beta's rows, by the
+    model tables or their versioned views; the admin's own statements see them all."""
+    editor_name, admin_name = world.roles.name("editor"), world.roles.name("admin")
+    world.su.execute(f"CREATE SCHEMA lesser AUTHORIZATION {editor_name}")
+    world.su.execute(f"GRANT USAGE ON SCHEMA lesser TO {admin_name}")
+    world.su.execute(f"GRANT ALL ON beta, beta_cellpros TO {admin_name}")
+    editor = world.roles.connect("editor")
+    editor.execute("CREATE FUNCTION lesser.peek(g bigint, t text) RETURNS bigint LANGUAGE plpgsql SECURITY DEFINER "
+                   "SET search_path = pg_catalog AS $$ DECLARE n bigint; "
+                   "BEGIN EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', t) INTO n USING g; "
+                   "RETURN n; END $$")
+    editor.execute(f"GRANT EXECUTE ON FUNCTION lesser.peek(bigint, text) TO {admin_name}")
+    editor.commit()
+    admin = world.roles.connect("admin")
+    for table in ("vrtx", "trgl", "geometry"):
+        assert admin.execute(f"SELECT count(*) > 0 FROM tgsis.{table} WHERE geoid = %s",
+                             (world.beta,)).fetchone() == (True,), table
+        assert admin.execute("SELECT lesser.peek(%s, %s)", (world.beta, table)).fetchone() == (0,), table
+        assert admin.execute("SELECT lesser.peek(%s, %s) > 0", (world.alpha, table)).fetchone() == (True,), table
+    admin.rollback()

@@ -1,4 +1,4 @@
--- tgsis.class_denied_geoids(privilege): the geometries of the feature classes whose table the calling role lacks a right on.
+-- tgsis.class_denied_geoids(privilege, role): the geometries of the feature classes whose table the calling role (or the role given) lacks a right on.
 -- Per-class rights (docs/security.md) must hold at the model tables too: the
 -- vertices, cells and rows of every model that a class's features own live in
 -- tables every class shares (tgsis.geometry, tgsis.vrtx, tgsis.trgl, ...),
@@ -16,12 +16,19 @@
 -- after one has_table_privilege per class. SECURITY DEFINER: it reads the
 -- feature tables of the classes the caller may not read (their geoids only),
 -- as tgsis's owner, who owns them; which rights count is the calling role's
--- (tgsis.calling_role(), the same inside definer functions). p_privilege is
+-- (tgsis.calling_role(), the same inside definer functions) and p_role's:
+-- a class is denied when either lacks the right. The policies and the
+-- versioned views pass current_user, the role their statement runs as: in a
+-- SECURITY DEFINER function of another role (say a lesser one that an admin
+-- calls) that is the function's owner, whose rights must bound what the
+-- function reads, as PostgreSQL's own privileges do. A role may pass any
+-- role: it only adds classes to the caller's own set, whose tables the
+-- caller may read anyway (so no geoid is learnt that was hidden). p_privilege is
 -- what has_table_privilege takes: 'SELECT' (reading), 'UPDATE' (changing a
 -- feature's geometry), 'UPDATE, DELETE' (deleting its rows: either right).
 -- Plain PL/pgSQL on purpose: it is created before the tables it reads
 -- (tgsis.create_storage creates the policies naming it).
-CREATE FUNCTION tgsis.class_denied_geoids(p_privilege text)
+CREATE FUNCTION tgsis.class_denied_geoids(p_privilege text, p_role name DEFAULT NULL)
 RETURNS SETOF bigint
 LANGUAGE plpgsql
 STABLE
@@ -44,7 +51,8 @@ BEGIN
       FROM tgsis.catalog c
      CROSS JOIN LATERAL (SELECT to_regclass(format('%I.%I', c.schemaname, c.featuretable)) AS rel) t
      WHERE t.rel IS NOT NULL
-       AND NOT pg_catalog.has_table_privilege(v_role, t.rel, p_privilege);
+       AND (NOT pg_catalog.has_table_privilege(v_role, t.rel, p_privilege)
+            OR (p_role IS NOT NULL AND p_role <> v_role AND NOT pg_catalog.has_table_privilege(p_role, t.rel, p_privilege)));
     IF v_sources IS NULL THEN
         RETURN;
     END IF;
@@ -55,5 +63,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.class_denied_geoids(text) IS
-    'the geoids of the features (and the collection members they own) of the feature classes on whose feature table the calling role lacks p_privilege (SELECT, UPDATE, or UPDATE, DELETE: either); what the row-level security policies of the model tables and tgsis.check_class_write keep from the role';
+COMMENT ON FUNCTION tgsis.class_denied_geoids(text, name) IS
+    'the geoids of the features (and the collection members they own) of the feature classes on whose feature table the calling role, or p_role (the policies and views pass current_user), lacks p_privilege (SELECT, UPDATE, or UPDATE, DELETE: either); what the row-level security policies of the model tables and the versioned views keep from the role';

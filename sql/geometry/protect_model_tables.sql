@@ -25,22 +25,29 @@ DECLARE
     v_t     record;
     v_rel   regclass;
     v_check text;
+    v_owner text;
 BEGIN
     FOR v_t IN SELECT t.tablename, t.geoidcolumn FROM tgsis.model_tables t
                 WHERE t.model = p_model AND t.geoidcolumn IS NOT NULL ORDER BY t.tablename LOOP
         v_rel := coalesce(to_regclass(format('tgsis.%I', v_t.tablename || '_ver')), to_regclass(format('tgsis.%I', v_t.tablename)));
         CONTINUE WHEN v_rel IS NULL;
-        v_check := format('%I NOT IN (SELECT tgsis.class_denied_geoids(%%L))', v_t.geoidcolumn);
+        -- a row a collection owns (tgsis.geometry.collection) is that collection's class's: it may be
+        -- made or moved there only by a role that may change that class
+        v_owner := CASE WHEN EXISTS (SELECT FROM pg_catalog.pg_attribute a WHERE a.attrelid = v_rel AND a.attname = 'collection'
+                                                                           AND NOT a.attisdropped)
+                        THEN format(' AND (collection IS NULL OR %s)', tgsis.class_rights_filter('collection', 'UPDATE')) ELSE '' END;
         EXECUTE format('ALTER TABLE %s ENABLE ROW LEVEL SECURITY', v_rel);
         EXECUTE format('DROP POLICY IF EXISTS tgsis_class_read ON %s', v_rel);
         EXECUTE format('DROP POLICY IF EXISTS tgsis_class_insert ON %s', v_rel);
         EXECUTE format('DROP POLICY IF EXISTS tgsis_class_update ON %s', v_rel);
         EXECUTE format('DROP POLICY IF EXISTS tgsis_class_delete ON %s', v_rel);
-        EXECUTE format('CREATE POLICY tgsis_class_read ON %s FOR SELECT USING (%s)', v_rel, format(v_check, 'SELECT'));
-        EXECUTE format('CREATE POLICY tgsis_class_insert ON %s FOR INSERT WITH CHECK (%s)', v_rel, format(v_check, 'UPDATE'));
-        EXECUTE format('CREATE POLICY tgsis_class_update ON %s FOR UPDATE USING (%s) WITH CHECK (%s)', v_rel,
-                       format(v_check, 'UPDATE'), format(v_check, 'UPDATE'));
-        EXECUTE format('CREATE POLICY tgsis_class_delete ON %s FOR DELETE USING (%s)', v_rel, format(v_check, 'UPDATE, DELETE'));
+        EXECUTE format('CREATE POLICY tgsis_class_read ON %s FOR SELECT USING (%s)', v_rel, tgsis.class_rights_filter(v_t.geoidcolumn, 'SELECT'));
+        v_check := tgsis.class_rights_filter(v_t.geoidcolumn, 'UPDATE');
+        EXECUTE format('CREATE POLICY tgsis_class_insert ON %s FOR INSERT WITH CHECK (%s%s)', v_rel, v_check, v_owner);
+        EXECUTE format('CREATE POLICY tgsis_class_update ON %s FOR UPDATE USING (%s) WITH CHECK (%s%s)', v_rel,
+                       v_check, v_check, v_owner);
+        EXECUTE format('CREATE POLICY tgsis_class_delete ON %s FOR DELETE USING (%s)', v_rel,
+                       tgsis.class_rights_filter(v_t.geoidcolumn, 'UPDATE, DELETE'));
         EXECUTE format('COMMENT ON POLICY tgsis_class_read ON %s IS %L', v_rel,
                        'per-class rights: rows of features of classes the role may not SELECT are not seen (tgsis.class_denied_geoids)');
         EXECUTE format('COMMENT ON POLICY tgsis_class_insert ON %s IS %L', v_rel,

@@ -46,6 +46,7 @@ $dump$;
 
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
+
 -- @sources
 
 -- ---- after the functions: what versioned tables need (the storage tables are no extension members:
@@ -121,7 +122,7 @@ BEGIN
         END IF;
         EXECUTE regexp_replace(tgsis.versioned_view_source('tgsis', v_object.tablename, v_object.columns),
                                '^CREATE VIEW', 'CREATE OR REPLACE VIEW')
-                || format(' AND v.%I NOT IN (SELECT tgsis.class_denied_geoids(%L))', v_object.geoidcolumn, 'SELECT');
+                || ' AND ' || tgsis.class_rights_filter(v_object.geoidcolumn, 'SELECT', 'v');
         EXECUTE format('ALTER VIEW tgsis.%I SET (security_barrier = true)', v_object.tablename);
     END LOOP;
 

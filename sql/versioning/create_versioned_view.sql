@@ -44,7 +44,7 @@ BEGIN
      WHERE p_schema = 'tgsis' AND t.tablename = p_table AND t.geoidcolumn IS NOT NULL;
     EXECUTE tgsis.versioned_view_source(p_schema, p_table, v_columns)
             || CASE WHEN v_geoid IS NOT NULL
-                    THEN format(' AND v.%I NOT IN (SELECT tgsis.class_denied_geoids(%L))', v_geoid, 'SELECT') ELSE '' END;
+                    THEN ' AND ' || tgsis.class_rights_filter(v_geoid, 'SELECT', 'v') ELSE '' END;
     IF v_geoid IS NOT NULL THEN
         EXECUTE format('ALTER VIEW %I.%I SET (security_barrier = true)', p_schema, p_table);
     END IF;

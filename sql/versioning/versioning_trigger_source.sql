@@ -144,12 +144,15 @@ DECLARE
     v_self        text;
     v_keytype     oid;       -- the object key column's type: keys as text are its canonical text (tgsis.object_key_sql)
     v_classes     boolean;   -- a model table (rows per geoid of every class): per-class rights are checked
+    v_collpos     integer;   -- ... whose rows name the collection owning them (tgsis.geometry.collection): its position
 BEGIN
     -- the shared model tables hold the rows of every feature class: the trigger, which writes them as
     -- the table's owner, checks the calling role's rights on the class of each object it writes
     -- (tgsis.check_class_write; docs/security.md, "Per-class rights at the model tables")
     v_classes := p_schema = 'tgsis' AND p_class = 'feature'
                  AND EXISTS (SELECT FROM tgsis.model_tables t WHERE t.tablename = p_table AND t.geoidcolumn = p_keyfield);
+    -- a row that names the collection owning it is that collection's class's: the collection is checked too
+    v_collpos := CASE WHEN v_classes THEN array_position(p_columns, 'collection') END;
     PERFORM tgsis.check_key_type(v_ver::regclass, p_keyfield);
     v_keytype := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
                    WHERE a.attrelid = v_ver::regclass AND a.attname = p_keyfield AND NOT a.attisdropped);
@@ -205,9 +208,13 @@ BEGIN
         v_declare := E'\n    v_none   boolean;';
     END IF;
     IF v_classes THEN
-        v_probe := $check$-- the class's rights (a model table every class shares)
-    PERFORM tgsis.check_class_write(v_keys::bigint[], CASE TG_OP WHEN 'DELETE' THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
-    $check$ || v_probe;
+        v_probe := format($check$-- the class's rights (a model table every class shares)
+    IF TG_OP = 'DELETE' THEN
+        PERFORM tgsis.check_class_write(v_keys::bigint[], 'UPDATE, DELETE');
+    ELSE
+        PERFORM tgsis.check_class_write(v_keys::bigint[]%s, 'UPDATE');
+    END IF;
+    $check$, CASE WHEN v_collpos IS NOT NULL THEN format(' || NEW.%I::bigint', p_columns[v_collpos]) ELSE '' END) || v_probe;
     END IF;
     SELECT string_agg(format('%I', c), ', ' ORDER BY o),
            string_agg(format('NEW.%I', c), ', ' ORDER BY o),
@@ -470,8 +477,12 @@ BEGIN
             PERFORM tgsis.unversioned_revision(v_unversioned::bigint[]);  -- TG305 outside DEFAULT's working revision
         END IF;$none$
             ELSE '' END
-            || CASE WHEN v_classes THEN $check$
-        PERFORM tgsis.check_class_write(v_keys::bigint[], 'UPDATE');  -- the class's rights (a model table)$check$
+            || CASE WHEN v_classes THEN format($check$
+        PERFORM tgsis.check_class_write(v_keys::bigint[]%s, 'UPDATE');  -- the class's rights (a model table)$check$,
+                   CASE WHEN v_collpos IS NOT NULL  -- and of the collections the rows now name
+                        THEN format(' || ARRAY(SELECT DISTINCT q.n%s::bigint FROM %s q WHERE q.tgsis_xact = v_xact '
+                                    'AND q.tgsis_generation = v_gen AND q.n%s IS NOT NULL)', v_collpos, v_queue, v_collpos)
+                        ELSE '' END)
                ELSE '' END,                                                                    -- 6
             p_class,                                                                           -- 7
             CASE WHEN p_class = 'feature' THEN 'ARRAY(SELECT k FROM pg_catalog.unnest(v_keys) AS k WHERE NOT (k = ANY (v_unversioned)))'
