@@ -71,8 +71,18 @@ def test_time_intervals_come_back_as_ranges_of_floats(conn: psycopg.Connection[A
     ).fetchone()[0]  # type: ignore[index]
     assert isinstance(merged, Multirange)
     assert [(r.lower, r.upper, r.bounds) for r in merged] == [(1.0, 3.0, "[]"), (5.0, 6.0, "()")]
-    # and back in as a parameter
+    # and back in as a parameter; PostgreSQL's range operators and functions on them as on any range
     assert conn.execute("SELECT %s::tgsis.timerange @> 1.75::float8", (rng,)).fetchone() == (True,)
+    assert conn.execute("SELECT 1.75::float8 <@ %s::tgsis.timerange, lower(%s::tgsis.timerange), "
+                        "isempty(tgsis.timerange(1, 1)), upper_inf(tgsis.timerange(1, NULL))",
+                        (rng, rng)).fetchone() == (True, 1.5, True, True)
+    meet = conn.execute("SELECT tgsis.timerange(1, 2) * tgsis.timerange(1.5, 4)").fetchone()[0]  # type: ignore[index]
+    assert (meet.lower, meet.upper) == (1.5, 2.0)
+    # a range with a NaN bound sent as a parameter is refused by name
+    with pytest.raises(psycopg.Error, match="NaN is no bound") as caught:
+        conn.execute("SELECT %s::tgsis.timerange", (Range(1.0, float("nan")),))
+    assert caught.value.sqlstate == "TG100"
+    conn.rollback()
 
 
 def test_registration_is_per_connection(conn: psycopg.Connection[Any], db_dsn: str) -> None:

@@ -112,6 +112,15 @@ SQL_CASES = [
      "p_t0, p_t1 = 2 and 1 are no period"),
     ("NaN topology period", "SELECT tgsis.evolving_satisfied(0, 'NaN', 0, 1, 1, 2, false, '<', 1.5)", "TG100",
      "p_timem, p_next_timem = 0 and NaN are no period"),
+    # a period made by hand: tgsis.timerange refuses NaN bounds by name (PostgreSQL's range type took
+    # '[1,NaN)' as everything from 1 on, and refused ('NaN', 1) with a raw 22000 about bound order)
+    ("NaN lower bound of a period", "SELECT tgsis.timerange('NaN', 1)", "TG100", "NaN is no bound of a period"),
+    ("NaN upper bound of a period", "SELECT tgsis.timerange(1, 'NaN', '[]')", "TG100", "NaN is no bound of a period"),
+    ("NaN bound of a period literal", "SELECT '[1,NaN)'::tgsis.timerange", "TG100", "NaN is no bound of a period"),
+    ("NaN bound of a period cast", "SELECT tgsis.modeltime_range('-Infinity', 'NaN')::tgsis.timerange", "TG100",
+     "NaN is no bound of a period"),
+    ("reversed period", "SELECT tgsis.timerange(2, 1)", "TG100", "lower bound 2 of a period of model time is after"),
+    ("unknown bounds of a period", "SELECT tgsis.timerange(1, 2, '[[')", "TG100", "bounds '[[' of a period"),
 ]
 
 

@@ -19,10 +19,10 @@ AS $$
                 WHEN p_t = 'NaN'
                 THEN tgsis.invalid_period('p_timem, p_t', p_timem, p_t)
            ELSE (tgsis.timemultirange(CASE WHEN tgsis.satisfies(p_a, p_op, p_v)
-                                      THEN tgsis.timerange(p_t, CASE WHEN p_t_next IS NULL AND p_hold THEN NULL ELSE p_t END, '[]')
+                                      THEN tgsis.modeltime_range(p_t, CASE WHEN p_t_next IS NULL AND p_hold THEN NULL ELSE p_t END, '[]')
                                       ELSE 'empty' END)
             + tgsis.linear_satisfied(p_t, p_t_next, p_a, p_b, p_op, p_v))
-           * tgsis.timemultirange(tgsis.timerange(p_timem, p_next_timem, '[)')) END
+           * tgsis.timemultirange(tgsis.modeltime_range(p_timem, p_next_timem, '[)')) END
 $$;
 
 COMMENT ON FUNCTION tgsis.evolving_satisfied(double precision, double precision, double precision, double precision, double precision, double precision, boolean, text, double precision) IS

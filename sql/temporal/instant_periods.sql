@@ -11,9 +11,9 @@ PARALLEL SAFE
 AS $$
     SELECT s.times,
            CASE WHEN tgsis.checked_convention(p_convention) = 'left'
-                THEN tgsis.timerange(s.times, CASE WHEN s.next IS NOT NULL THEN s.next WHEN NOT g.alive THEN s.times END,
+                THEN tgsis.modeltime_range(s.times, CASE WHEN s.next IS NOT NULL THEN s.next WHEN NOT g.alive THEN s.times END,
                                      CASE WHEN s.next IS NULL AND NOT g.alive THEN '[]' ELSE '[)' END)
-                ELSE tgsis.timerange(coalesce(s.prev, s.times), CASE WHEN s.next IS NOT NULL OR NOT g.alive THEN s.times END,
+                ELSE tgsis.modeltime_range(coalesce(s.prev, s.times), CASE WHEN s.next IS NOT NULL OR NOT g.alive THEN s.times END,
                                      CASE WHEN s.prev IS NULL THEN '[]' ELSE '(]' END)
            END
       FROM (SELECT i.times, lag(i.times) OVER w AS prev, lead(i.times) OVER w AS next

@@ -21,18 +21,18 @@ AS $$
                WHEN least(p_a, p_b) < p_v AND p_v < greatest(p_a, p_b)
                    THEN tgsis.timemultirange(
                             CASE WHEN tgsis.satisfies(sign(p_a - p_v), p_op, 0)
-                                 THEN tgsis.timerange(p_t0, tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v), '()')
+                                 THEN tgsis.modeltime_range(p_t0, tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v), '()')
                                  ELSE 'empty' END,
                             CASE WHEN tgsis.satisfies(0, p_op, 0)
-                                 THEN tgsis.timerange(tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v),
+                                 THEN tgsis.modeltime_range(tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v),
                                                       tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v), '[]')
                                  ELSE 'empty' END,
                             CASE WHEN tgsis.satisfies(sign(p_b - p_v), p_op, 0)
-                                 THEN tgsis.timerange(tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v), p_t1, '()')
+                                 THEN tgsis.modeltime_range(tgsis.crossing_time(p_t0, p_t1, p_a, p_b, p_v), p_t1, '()')
                                  ELSE 'empty' END)
-                        * tgsis.timemultirange(tgsis.timerange(p_t0, p_t1, '()'))
+                        * tgsis.timemultirange(tgsis.modeltime_range(p_t0, p_t1, '()'))
                WHEN tgsis.satisfies(sign(sign(p_a - p_v) + sign(p_b - p_v)), p_op, 0)
-                   THEN tgsis.timemultirange(tgsis.timerange(p_t0, p_t1, '()'))
+                   THEN tgsis.timemultirange(tgsis.modeltime_range(p_t0, p_t1, '()'))
                ELSE tgsis.timemultirange()
            END
 $$;

@@ -41,7 +41,7 @@ BEGIN
                    unnest(tgsis.evolving_satisfied(s.timem, s.next_timem, s.timet, s.t_next, s.a, s.b, s.hold, $2, $3)) x(r)
             $q$, p_property, v_class.schemaname, v_class.protablename);
     END IF;
-    RETURN QUERY EXECUTE format('SELECT u.r FROM (SELECT range_agg(p.r) AS m FROM (%s) p) a, unnest(a.m) u(r) ORDER BY 1',
+    RETURN QUERY EXECUTE format('SELECT u.r::tgsis.timerange FROM (SELECT range_agg(p.r) AS m FROM (%s) p) a, unnest(a.m) u(r) ORDER BY 1',
                                 v_pieces)
         USING p_geoid, p_op, p_value, p_convention;
 END

@@ -46,6 +46,11 @@ $dump$;
 
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
+-- ---- issue36-timerange: tgsis.timerange becomes a domain refusing NaN bounds over the range type
+-- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one; the functions over the
+-- old range type go with it and are made again by the generated part below.
+DROP TYPE tgsis.timerange CASCADE;
+-- @include temporal/timerange.sql
 
 -- @sources
 

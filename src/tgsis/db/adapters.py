@@ -114,11 +114,12 @@ def register_types(conn: psycopg.Connection[Any] | psycopg.Cursor[Any]) -> None:
     connection = conn if isinstance(conn, psycopg.Connection) else conn.connection
     with reraise():
         row = connection.execute(_CUBE_OID).fetchone()
-        timerange = RangeInfo.fetch(connection, "tgsis.timerange")
+        # tgsis.timerange is a domain (refusing NaN bounds) over this range type, and reaches the client as it
+        timerange = RangeInfo.fetch(connection, "tgsis.modeltime_range")
         timemultirange = MultirangeInfo.fetch(connection, "tgsis.timemultirange")
     if row is None or timerange is None or timemultirange is None:
         raise InstallationError(
-            "tgsis is not installed in this database: no cube or tgsis.timerange type",
+            "tgsis is not installed in this database: no cube or tgsis.modeltime_range type",
             hint="install it first (tgsis db install, or tgsis.install(conn))",
         )
     with reraise():
