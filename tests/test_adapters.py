@@ -73,9 +73,11 @@ def test_time_intervals_come_back_as_ranges_of_floats(conn: psycopg.Connection[A
     assert [(r.lower, r.upper, r.bounds) for r in merged] == [(1.0, 3.0, "[]"), (5.0, 6.0, "()")]
     # and back in as a parameter; PostgreSQL's range operators and functions on them as on any range
     assert conn.execute("SELECT %s::tgsis.timerange @> 1.75::float8", (rng,)).fetchone() == (True,)
-    assert conn.execute("SELECT 1.75::float8 <@ %s::tgsis.timerange, lower(%s::tgsis.timerange), "
-                        "isempty(tgsis.timerange(1, 1)), upper_inf(tgsis.timerange(1, NULL))",
-                        (rng, rng)).fetchone() == (True, 1.5, True, True)
+    assert conn.execute(
+        "SELECT 1.75::float8 <@ %s::tgsis.timerange, lower(%s::tgsis.timerange), "
+        "isempty(tgsis.timerange(1, 1)), upper_inf(tgsis.timerange(1, NULL))",
+        (rng, rng),
+    ).fetchone() == (True, 1.5, True, True)
     meet = conn.execute("SELECT tgsis.timerange(1, 2) * tgsis.timerange(1.5, 4)").fetchone()[0]  # type: ignore[index]
     assert (meet.lower, meet.upper) == (1.5, 2.0)
     # a range with a NaN bound sent as a parameter is refused by name

@@ -392,3 +392,37 @@ def test_a_lesser_role_s_definer_function_reads_with_its_own_class_rights(world:
         assert admin.execute("SELECT lesser.peek(%s, %s)", (world.beta, table)).fetchone() == (0,), table
         assert admin.execute("SELECT lesser.peek(%s, %s) > 0", (world.alpha, table)).fetchone() == (True,), table
     admin.rollback()
+
+
+@pytest.mark.parametrize("who", ["reader", "editor", "admin", "outsider"])
+def test_deleting_a_revoked_class_s_feature_is_refused_or_finds_nothing(world: World, who: str) -> None:
+    """Neither the client's delete_feature nor SQL's tgsis.delete_geometry removes a row of beta's features for
+    a role without UPDATE or DELETE on beta: refused, or not there for it; every row stays."""
+    classes = {world.beta: "beta", **{geoid: name for name, geoid in world.temporal.items() if name.startswith("beta")}}
+    before = {g: _rows(world.su, g) for g in classes}
+    conn = world.roles.connect(who)
+    for geoid, classname in classes.items():
+        try:
+            assert not F.delete_feature(conn, classname, geoid)
+        except tgsis.Error:
+            conn.rollback()
+        try:  # not there for it (false), or refused
+            assert conn.execute("SELECT tgsis.delete_geometry(%s)", (geoid,)).fetchone() == (False,), geoid
+            conn.commit()
+        except psycopg.errors.InsufficientPrivilege:
+            conn.rollback()
+    assert {g: _rows(world.su, g) for g in classes} == before
+
+
+def test_deleting_a_feature_the_role_may_read_but_not_change_is_refused(world: World) -> None:
+    """With SELECT on beta (it sees the feature) and neither UPDATE nor DELETE, its deletion is refused by name,
+    by the client and by SQL, and nothing of it goes. (Before, on plain tables, delete_feature answered True and
+    tgsis.delete_geometry false, deleting nothing: row-level security hid the rows from its locking read.)"""
+    editor = world.roles.connect("editor")
+    world.su.execute(f"GRANT SELECT ON beta, beta_cellpros TO {world.roles.name('editor')}")
+    before = _rows(world.su, world.beta)
+    with pytest.raises(tgsis.Error, match="beta"):
+        F.delete_feature(editor, "beta", world.beta)
+    editor.rollback()
+    assert _sqlstate(editor, "SELECT tgsis.delete_geometry(%s)", (world.beta,)) == "42501"
+    assert _rows(world.su, world.beta) == before

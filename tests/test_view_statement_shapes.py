@@ -287,3 +287,56 @@ def test_a_nested_update_of_a_row_the_statement_also_changes_is_refused(shapes: 
     shapes.rollback()
     assert _storage(shapes) == before
     assert _queued(shapes) == 0
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        "length(set_config('tgsis.revision', '0', true))",  # view an older revision from inside the statement
+        "length(set_config('role', 'tgsis_admin', true))",  # act as another role from inside the statement
+        "tgsis.save_revision('mid-statement')",  # freeze the working revision the rows are being written in
+    ],
+    ids=["revision", "role", "save-revision"],
+)
+@pytest.mark.parametrize("where", ["between-rows", "after-the-last-row"])
+def test_a_revision_or_role_change_inside_an_update_is_refused(shapes: Conn, change: str, where: str) -> None:
+    """As a version change: a function of the statement that changes the session's revision or role, or saves
+    the working revision, makes the rows read in one and written in another; refused, nothing written."""
+    shapes.execute(
+        f"CREATE FUNCTION swap(i int) RETURNS int LANGUAGE sql VOLATILE AS "
+        f"$$ SELECT CASE WHEN i = 5 THEN ({change}) * 0 + i ELSE i END $$"
+    )
+    shapes.commit()
+    before = _storage(shapes)
+    statement = (
+        "UPDATE a SET val = swap(id) * 7 WHERE id <= 10"
+        if where == "between-rows"
+        else "WITH x AS (UPDATE a SET val = 0 WHERE id <= 10 RETURNING id) "
+        "UPDATE pb SET val = swap(pb.id) FROM x WHERE pb.id = x.id"
+    )
+    with pytest.raises(psycopg.Error) as caught:
+        shapes.execute(statement)
+    assert caught.value.sqlstate == "TG306", caught.value.diag.message_primary
+    assert "public.a" in str(caught.value)
+    shapes.rollback()
+    assert _storage(shapes) == before
+    assert _queued(shapes) == 0
+
+
+def test_on_conflict_inside_a_function_is_an_error_never_a_loss(shapes: Conn) -> None:
+    """INSERT ... ON CONFLICT DO NOTHING meeting an existing row, run by a function: the top-level query text
+    does not say ON CONFLICT, so TG306 cannot name it (docs/versioning.md); the duplicate is still an error
+    (23505), and nothing is written."""
+    shapes.execute(
+        "CREATE FUNCTION add_some() RETURNS int LANGUAGE plpgsql AS $$ DECLARE n int; BEGIN "
+        "INSERT INTO b SELECT g, g, 'oc' FROM generate_series(28, 33) g ON CONFLICT DO NOTHING; "
+        "GET DIAGNOSTICS n = ROW_COUNT; RETURN n; END $$"
+    )
+    shapes.commit()
+    before = _storage(shapes)
+    with pytest.raises(psycopg.Error) as caught:
+        shapes.execute("SELECT add_some()")
+    assert caught.value.sqlstate in ("TG306", "23505"), caught.value.diag.message_primary
+    shapes.rollback()
+    assert _storage(shapes) == before
+    assert _queued(shapes) == 0

@@ -18,6 +18,9 @@ BEGIN
     PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
     PERFORM tgsis.feature_write_lock(p_geoid);  -- a check-in deciding from this object's state finishes first
+    -- a feature of a class the role may neither UPDATE nor DELETE: refused by name (42501), not "not there"
+    -- (row-level security keeps its rows from the locking read below, so it would answer false)
+    PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE, DELETE');
     SELECT geotype, collection, timemodel INTO v_geo FROM tgsis.geometry WHERE geoid = p_geoid FOR UPDATE;
     IF NOT FOUND THEN
         RETURN false;

@@ -321,8 +321,8 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
         if exists is None:
             return False
         Storage.of(conn, fc).check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
-        conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,))
-    return True
+        deleted = conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,)).fetchone()
+    return bool(deleted is not None and deleted[0])
 
 
 # Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
