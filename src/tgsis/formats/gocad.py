@@ -254,6 +254,8 @@ class _Records:
     cell_parts: list[int] = field(default_factory=list)
     # names of the parts, by part number (the words after TFACE/ILINE/TVOLUME; LightTSolid: its regions)
     part_names: list[str] = field(default_factory=list)
+    # PROPERTY_CN blocks: (property name, its line, the CNP vertex ids as written, their lines)
+    control_nodes: list[tuple[str, int, list[str], list[int]]] = field(default_factory=list)
 
 
 def read_gocad(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: bool = True) -> list[Mesh]:
@@ -539,6 +541,8 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
         end = _scan_block(lines, i, "}", block, path, inline_open=True, keep_close=True)
         rec.class_headers.append(block)
         return end
+    if keyword == "PROPERTY_CN":
+        return _scan_control_nodes(lines, i, rest, rec, path)
     if keyword in _PROPERTY_KEYWORDS:
         rec.property_lines[keyword] = (i, split_words(rest))
     elif keyword.startswith("#"):
@@ -562,6 +566,55 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
                               hint=f"a {kind.name} holds {', '.join(known)} lines; tgsis refuses a line it does "
                                    "not know rather than read the file without it")
     return i
+
+
+def _scan_control_nodes(lines: Sequence[str], start: int, rest: str, rec: _Records, path: PathLike | None) -> int:
+    """A ``PROPERTY_CN <property>`` block: ``CNP <vertex id>`` lines up to ``END_PROPERTY_CN``; its last line.
+
+    GOCAD writes one such block per property that has control nodes (the
+    vertices whose value of that property is fixed, as SCEC CFM faults carry
+    them). The ids are checked and turned into vertex indices with the vertices.
+    """
+    name = " ".join(split_words(rest))
+    ids: list[str] = []
+    id_lines: list[int] = []
+    for i in range(start + 1, len(lines)):
+        words = lines[i].split()
+        if not words or words[0].startswith("#"):
+            continue
+        if words[0] == "END_PROPERTY_CN":
+            rec.control_nodes.append((name, start, ids, id_lines))
+            return i
+        if words[0] == "CNP" and len(words) == 2:
+            ids.append(words[1])
+            id_lines.append(i)
+            continue
+        if words[0] in ("END", "GOCAD"):
+            break
+        raise FileFormatError(f"unknown keyword {quoted(words[0])} in the PROPERTY_CN block begun at line "
+                              f"{start + 1}", path=path, line=i + 1,
+                              hint="a PROPERTY_CN block holds 'CNP <vertex id>' lines and ends with END_PROPERTY_CN")
+    raise FileFormatError("PROPERTY_CN block is not closed by 'END_PROPERTY_CN'", path=path, line=start + 1)
+
+
+def _control_nodes(rec: _Records, layout: _PropertyLayout, index: _IdIndex, seq_to_vertex: IntArray,
+                   path: PathLike | None) -> dict[str, list[int]]:
+    """``{property file name: vertex indices}`` of the PROPERTY_CN blocks, in file order."""
+    result: dict[str, list[int]] = {}
+    for name, line, words, id_lines in rec.control_nodes:
+        if name not in layout.file_names:
+            declared = " ".join(map(quote_word, layout.file_names)) or "none"
+            raise FileFormatError(f"PROPERTY_CN names the property {quoted(name)}, which PROPERTIES does not declare "
+                                  f"(it declares {declared})", path=path, line=line + 1)
+        ids = _int_column(words, id_lines, "CNP", "vertex id", path)
+        seq, found = index.find(ids)
+        if not found.all():
+            j = int(np.flatnonzero(~found)[0])
+            raise FileFormatError(f"CNP refers to vertex {ids[j]}, which is not defined", path=path,
+                                  line=id_lines[j] + 1)
+        vertices = result.setdefault(name, [])
+        vertices.extend(v for v in dict.fromkeys(seq_to_vertex[seq].tolist()) if v not in vertices)
+    return result
 
 
 def _tetra_region(rec: _Records, i: int, words: list[str], path: PathLike | None) -> None:
@@ -862,11 +915,14 @@ def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh
     cells, parts = _parse_cells(rec, table.index, seq_to_vertex, merge_atoms, path)
     if cells is None:  # a VSet: one point per vertex
         cells = np.arange(len(values), dtype=np.int64).reshape(-1, 1)
+    metadata = _metadata(rec, layout, atoms, flags, len(values))
+    control_nodes = _control_nodes(rec, layout, table.index, seq_to_vertex, path)
+    if control_nodes:
+        metadata["gocad_property_control_nodes"] = control_nodes
     try:
         return kind.mesh_type(values[:, :3], cells, vertex_properties=_vertex_properties(values[:, 3:], layout),
                               cell_properties={} if parts is None else {"part": parts},
-                              name=_header_name(rec.header),
-                              metadata=_metadata(rec, layout, atoms, flags, len(values)))
+                              name=_header_name(rec.header), metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.name} is not a valid mesh: {exc.message}", path=path,
                               line=rec.start + 1) from exc
@@ -1176,17 +1232,21 @@ def _object_chunks(mesh: Mesh, path: PathLike | None, drop_cell_properties: bool
     properties = _written_properties(mesh)
     chunks.extend(_property_lines(properties, meta))
     vertex_lines = _vertex_lines(mesh, properties)
+    control_nodes = _control_node_lines(mesh, properties)
     if kind.part_keyword is None:
         chunks.extend(vertex_lines)
+        chunks.extend(control_nodes)
     else:
         assert kind.cell_keyword is not None
         cell_lines = _cell_lines(kind.cell_keyword, mesh.cells)
         start = 0
         names = _string_list(meta.get("gocad_part_names"))
         names = names if len(names) == len(groups) else [""] * len(groups)
-        for cells, end, part_name in zip(groups, _vertex_ranges(mesh, groups), names):
+        for j, (cells, end, part_name) in enumerate(zip(groups, _vertex_ranges(mesh, groups), names)):
             chunks.append(f"{kind.part_keyword} {part_name}\n" if part_name.strip() else f"{kind.part_keyword}\n")
             chunks.extend(vertex_lines[start:end])
+            if j == len(groups) - 1:  # after every vertex, before the cells, where GOCAD writes them
+                chunks.extend(control_nodes)
             chunks.extend(cell_lines[c] for c in cells.tolist())
             start = end
     chunks.append("END\n")
@@ -1419,6 +1479,26 @@ def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[st
             lines[atom] = f"PATOM {atom + 1} {ref + 1}{ends[atom]}\n"
         else:  # a PATOM with values of its own
             lines[atom] = f"PATOM {atom + 1} {ref + 1} {texts[atom]}{ends[atom]}\n"
+    return lines
+
+
+def _control_node_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[str]:
+    """The ``PROPERTY_CN`` blocks of ``metadata["gocad_property_control_nodes"]`` for the properties written.
+
+    Blocks of properties no longer written, and vertex indices outside the
+    mesh (metadata edited by hand), are left out.
+    """
+    nodes = _meta_dict(mesh.metadata, "gocad_property_control_nodes")
+    written = {p.name for p in properties}
+    lines: list[str] = []
+    for name, vertices in nodes.items():
+        if name not in written or not isinstance(vertices, (list, tuple)):
+            continue
+        valid = [v for v in vertices if isinstance(v, int) and not isinstance(v, bool) and 0 <= v < mesh.n_vertices]
+        if valid:
+            lines.append(f"PROPERTY_CN {quote_word(name)}\n")
+            lines.extend(f"CNP {v + 1}\n" for v in valid)
+            lines.append("END_PROPERTY_CN\n")
     return lines
 
 
