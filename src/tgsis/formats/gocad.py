@@ -1113,9 +1113,11 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], fl
                 no_data[column_name] = value
         if no_data:
             meta["gocad_no_data_values"] = no_data
-        info = _property_info(rec, layout.file_names)
+        info, whole = _property_info(rec, layout.file_names)
         if info:
             meta["gocad_property_info"] = info
+        if whole:
+            meta["gocad_property_lines"] = whole
     if atoms:
         meta["gocad_atoms"] = atoms
         patoms = [pair[0] for pair, is_p in zip(atoms, rec.atom_is_p) if is_p]
@@ -1146,23 +1148,46 @@ def _flag_ranges(flags: Mapping[int, str], n_vertices: int) -> dict[str, list[li
     return result
 
 
-def _property_info(rec: _Records, names: Sequence[str]) -> dict[str, dict[str, str]]:
-    """Per-property words of PROPERTY_CLASSES, UNITS, ...: ``{keyword: {file name: words}}``.
+def _property_info(rec: _Records, names: Sequence[str]) -> tuple[dict[str, dict[str, str]], dict[str, Any]]:
+    """Per-property words of PROPERTY_CLASSES, UNITS, ...: ``{keyword: {file name: words}}``, and the lines that
+    cannot be cut per property: ``{keyword: {"properties": [file names], "words": text}}``.
 
-    Each keyword has the same number of words per property (1 for classes, 2
-    for ``QUANTITY Float`` subclasses or ``**none** **none**`` ranges); a line
-    whose word count does not divide evenly cannot be split and is dropped.
+    Most keywords have the same number of words per property (1 for classes,
+    2 for ``**none** **none**`` ranges). PROPERTY_SUBCLASSES does not: each
+    subclass starts with a word in capitals, ``QUANTITY Float`` (2 words) or
+    SKUA's ``LINEARFUNCTION Float 1 0`` (4). A line that cannot be cut into
+    one piece per property is kept whole and written back while the file's
+    properties are written unchanged.
     """
     info: dict[str, dict[str, str]] = {}
+    whole: dict[str, Any] = {}
     for keyword in _INFO_KEYWORDS:
         if keyword not in rec.property_lines or not names:
             continue
         words = rec.property_lines[keyword][1]
-        if len(words) % len(names) or not words:
+        pieces = _subclass_pieces(words, len(names)) if keyword == "PROPERTY_SUBCLASSES" else None
+        if keyword != "PROPERTY_SUBCLASSES" and words and len(words) % len(names) == 0:
+            per = len(words) // len(names)
+            pieces = [words[j * per:(j + 1) * per] for j in range(len(names))]
+        if pieces is None:
+            if words:
+                whole[keyword] = {"properties": list(names), "words": " ".join(map(quote_word, words))}
             continue
-        per = len(words) // len(names)
-        info[keyword] = {name: " ".join(map(quote_word, words[j * per:(j + 1) * per])) for j, name in enumerate(names)}
-    return info
+        info[keyword] = {name: " ".join(map(quote_word, piece)) for name, piece in zip(names, pieces)}
+    return info, whole
+
+
+def _subclass_pieces(words: Sequence[str], n: int) -> list[list[str]] | None:
+    """PROPERTY_SUBCLASSES words cut into ``n`` subclasses, each from a word in capitals; None if they are not n."""
+    pieces: list[list[str]] = []
+    for word in words:
+        if word.isalpha() and word.isupper():
+            pieces.append([word])
+        elif pieces:
+            pieces[-1].append(word)
+        else:
+            return None
+    return pieces if len(pieces) == n else None
 
 
 # ---------------------------------------------------------------- writing
@@ -1417,40 +1442,62 @@ def _no_data_value(columns: Sequence[npt.NDArray[Any]], stored: object) -> float
 
 def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, Any]) -> list[str]:
     """PROPERTIES and its companion lines, then the PROPERTY_CLASS_HEADER blocks that still apply."""
-    if not properties:
-        return []
     names = [p.name for p in properties]
     info = _meta_dict(meta, "gocad_property_info")
+    raw = _meta_dict(meta, "gocad_property_lines")
     defaults = {"PROP_LEGAL_RANGES": "**none** **none**", "PROPERTY_KINDS": "unknown",
                 "PROPERTY_SUBCLASSES": "QUANTITY Float", "UNITS": "none"}
 
     def info_line(keyword: str) -> str | None:
         known = info.get(keyword)
-        if not isinstance(known, dict):
-            return None
-        words = [str(known[n]) if n in known else defaults.get(keyword, n) for n in names]
-        return f"{keyword} {' '.join(words)}\n"
+        if isinstance(known, dict):
+            words = [str(known[n]) if n in known else defaults.get(keyword, n) for n in names]
+            return f"{keyword} {' '.join(words)}\n"
+        line = raw.get(keyword)  # a line not cut per property: written as it was while the properties are the same
+        if isinstance(line, dict) and line.get("properties") == names and isinstance(line.get("words"), str):
+            return f"{keyword} {line['words']}\n"
+        return None
 
-    lines = [f"PROPERTIES {' '.join(map(quote_word, names))}\n"]
-    lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
-    lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
-    lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
-              if line]
-    lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
-    lines += [line for line in [info_line("UNITS")] if line]
-
-    classes = {n.strip() for n in names} | {"X", "Y", "Z"}
-    known_classes = info.get("PROPERTY_CLASSES")
-    if isinstance(known_classes, dict):
-        classes |= {" ".join(split_words(str(known_classes[n]))).strip() for n in names if n in known_classes}
+    lines: list[str] = []
+    if properties:
+        lines.append(f"PROPERTIES {' '.join(map(quote_word, names))}\n")
+        lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
+        lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
+        lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
+                  if line]
+        lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
+        lines += [line for line in [info_line("UNITS")] if line]
+    gone = _classes_left_out(names, meta, info)
     blocks = meta.get("gocad_property_class_headers")
     for block in blocks if isinstance(blocks, list) else []:
         block_lines = _string_list(block)
         keyword, _, title = block_lines[0].partition("{")[0].partition(" ") if block_lines else ("", "", "")
         # the class name runs to the "{" and may hold blanks, unquoted: PROPERTY_CLASS_HEADER default property {
-        if keyword == "PROPERTY_CLASS_HEADER" and " ".join(split_words(title)).strip() in classes:
+        if keyword == "PROPERTY_CLASS_HEADER" and " ".join(split_words(title)).strip() not in gone:
             lines.extend(line + "\n" for line in block_lines)
     return lines
+
+
+def _classes_left_out(names: Sequence[str], meta: Mapping[str, Any], info: Mapping[str, Any]) -> set[str]:
+    """The classes (and names) of the properties the file had that are not written: their class headers go too.
+
+    Every other PROPERTY_CLASS_HEADER block is written back: X, Y and Z (kind,
+    unit, clip range of the geometry, also on objects without properties),
+    and classes of no property (``vector3d``).
+    """
+    classes = info.get("PROPERTY_CLASSES")
+    classes = classes if isinstance(classes, dict) else {}
+
+    def class_names(name: str) -> set[str]:
+        found = {name.strip()}
+        if name in classes:
+            found.add(" ".join(split_words(str(classes[name]))).strip())
+        return found
+
+    read = _meta_dict(meta, "property_names").values()
+    before = set().union(*(class_names(n) for n in read if isinstance(n, str)))
+    kept = set().union(*(class_names(n) for n in names)) | {"X", "Y", "Z"}
+    return before - kept
 
 
 def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[str]:
