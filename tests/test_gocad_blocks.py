@@ -85,8 +85,9 @@ def test_property_cn_blocks_of_a_real_scec_fault_are_read_and_written_back() -> 
 
 def test_property_cn_survives_the_database(conn: Conn) -> None:
     [fault] = formats.read(cfm(PALM_SPRINGS))
-    fc = F.create_feature_class(conn, "faults", "SURFACE",
-                                cell_properties=[(n, "double precision") for n in ("M", "XERR", "YERR", "ZERR")])
+    fc = F.create_feature_class(
+        conn, "faults", "SURFACE", cell_properties=[(n, "double precision") for n in ("M", "XERR", "YERR", "ZERR")]
+    )
     back = _fetched(conn, fc, fault)
     assert format_gocad(back) == format_gocad(fault)
     assert back.metadata["gocad_property_control_nodes"] == fault.metadata["gocad_property_control_nodes"]
@@ -147,7 +148,8 @@ def test_class_headers_of_a_surface_without_properties_are_written_back() -> Non
     written = format_gocad(horizon)
     assert _blocks(written, "PROPERTY_CLASS_HEADER", "}") == [
         ["PROPERTY_CLASS_HEADER X {", "kind: X", "unit: m", "}"],
-        ["PROPERTY_CLASS_HEADER Z {", "kind: Depth", "unit: m", "is_z: on", "}"]]
+        ["PROPERTY_CLASS_HEADER Z {", "kind: Depth", "unit: m", "is_z: on", "}"],
+    ]
     # a real CFM fault without properties (PROPERTY_CLASS_HEADER Z with its clip range)
     [pitas] = formats.read(cfm("formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts"))
     assert pitas.vertex_properties == {}
@@ -158,15 +160,20 @@ def test_class_headers_survive_the_database_when_the_class_keeps_no_property(con
     fc = F.create_feature_class(conn, "faults", "SURFACE")
     conn.commit()
     [fault] = formats.read(cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts"))
-    original = _blocks(cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts").read_text(),
-                       "PROPERTY_CLASS_HEADER", "}")
-    assert [b[0] for b in original] == ["PROPERTY_CLASS_HEADER Z {", "PROPERTY_CLASS_HEADER azimuth {",
-                                        "PROPERTY_CLASS_HEADER dip {"]
+    original = _blocks(
+        cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts").read_text(), "PROPERTY_CLASS_HEADER", "}"
+    )
+    assert [b[0] for b in original] == [
+        "PROPERTY_CLASS_HEADER Z {",
+        "PROPERTY_CLASS_HEADER azimuth {",
+        "PROPERTY_CLASS_HEADER dip {",
+    ]
     back = _fetched(conn, fc, fault, drop_extra_properties=True)  # azi and dip are not columns of the class
     # Z stays (kind, clip range of the geometry); the headers of the properties left behind go with them
     assert _blocks(format_gocad(back), "PROPERTY_CLASS_HEADER", "}") == original[:1]
-    with_properties = F.create_feature_class(conn, "faults2", "SURFACE", cell_properties=[
-        ("azi", "double precision"), ("dip", "double precision")])
+    with_properties = F.create_feature_class(
+        conn, "faults2", "SURFACE", cell_properties=[("azi", "double precision"), ("dip", "double precision")]
+    )
     conn.commit()
     back = _fetched(conn, with_properties, fault)
     assert format_gocad(back) == format_gocad(fault)
@@ -174,13 +181,21 @@ def test_class_headers_survive_the_database_when_the_class_keeps_no_property(con
 
 
 def test_a_class_header_of_no_property_is_kept_beside_properties() -> None:
-    text = (DATA / "skua_properties.ts").read_text().replace(
-        "PROPERTY_CLASS_HEADER throw {", "PROPERTY_CLASS_HEADER vector3d {\nkind: Length\nunit: m\n}\n"
-                                         "PROPERTY_CLASS_HEADER throw {")
+    text = (
+        (DATA / "skua_properties.ts")
+        .read_text()
+        .replace(
+            "PROPERTY_CLASS_HEADER throw {",
+            "PROPERTY_CLASS_HEADER vector3d {\nkind: Length\nunit: m\n}\nPROPERTY_CLASS_HEADER throw {",
+        )
+    )
     [surface] = parse_gocad(text)
     heads = [b[0] for b in _blocks(format_gocad(surface), "PROPERTY_CLASS_HEADER", "}")]
-    assert heads == ["PROPERTY_CLASS_HEADER default property {", "PROPERTY_CLASS_HEADER vector3d {",
-                     "PROPERTY_CLASS_HEADER throw {"]
+    assert heads == [
+        "PROPERTY_CLASS_HEADER default property {",
+        "PROPERTY_CLASS_HEADER vector3d {",
+        "PROPERTY_CLASS_HEADER throw {",
+    ]
 
 
 _SKUA_LINEAR = """GOCAD TSurf 1
@@ -211,9 +226,11 @@ END
 def test_linearfunction_subclasses_are_kept(conn: Conn) -> None:
     [surface] = parse_gocad(_SKUA_LINEAR)
     info = surface.metadata["gocad_property_info"]
-    assert info["PROPERTY_SUBCLASSES"] == {"thickness": "LINEARFUNCTION Float 1 0",
-                                           " default property": "QUANTITY Float",
-                                           "age": "LINEARFUNCTION Double 0.5 -3"}
+    assert info["PROPERTY_SUBCLASSES"] == {
+        "thickness": "LINEARFUNCTION Float 1 0",
+        " default property": "QUANTITY Float",
+        "age": "LINEARFUNCTION Double 0.5 -3",
+    }
     assert info["PROP_LEGAL_RANGES"]["age"] == "0 100"
     line = "PROPERTY_SUBCLASSES LINEARFUNCTION Float 1 0 QUANTITY Float LINEARFUNCTION Double 0.5 -3"
     assert line in format_gocad(surface).splitlines()
@@ -221,8 +238,16 @@ def test_linearfunction_subclasses_are_kept(conn: Conn) -> None:
     del surface.vertex_properties["thickness"]
     assert "PROPERTY_SUBCLASSES QUANTITY Float LINEARFUNCTION Double 0.5 -3" in format_gocad(surface).splitlines()
     [surface] = parse_gocad(_SKUA_LINEAR)
-    fc = F.create_feature_class(conn, "skua", "SURFACE", cell_properties=[
-        ("thickness", "double precision"), ("default_property", "double precision"), ("age", "double precision")])
+    fc = F.create_feature_class(
+        conn,
+        "skua",
+        "SURFACE",
+        cell_properties=[
+            ("thickness", "double precision"),
+            ("default_property", "double precision"),
+            ("age", "double precision"),
+        ],
+    )
     back = _fetched(conn, fc, surface)
     assert format_gocad(back) == format_gocad(surface)
     assert line in format_gocad(back).splitlines()
@@ -288,8 +313,9 @@ def test_ml_files_are_not_written(tmp_path: Path) -> None:
     assert not (tmp_path / "out.ml").exists()
 
 
-def test_cli_imports_an_ml_file_and_strict_refuses_it(db_dsn: str, tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_imports_an_ml_file_and_strict_refuses_it(
+    db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["--dsn", db_dsn, "class", "create", "model", "--geotype", "SURFACE"]) == 0
     capsys.readouterr()
     path = str(DATA / "two_surfaces.ml")
@@ -302,8 +328,9 @@ def test_cli_imports_an_ml_file_and_strict_refuses_it(db_dsn: str, tmp_path: Pat
     err = capsys.readouterr().err
     assert "warning" in err and "REGION 'Lower'" in err
     with psycopg.connect(db_dsn) as conn:
-        rows = conn.execute("SELECT g.geoname, g.metadata FROM model m JOIN tgsis.geometry g ON g.geoid = m._geoid "
-                            "ORDER BY g.geoid").fetchall()
+        rows = conn.execute(
+            "SELECT g.geoname, g.metadata FROM model m JOIN tgsis.geometry g ON g.geoid = m._geoid ORDER BY g.geoid"
+        ).fetchall()
     assert [r[0] for r in rows] == ["horizon", "box side"]
     meta = rows[1][1] if isinstance(rows[1][1], dict) else json.loads(rows[1][1])
     assert meta["gocad_model"]["tfaces"] == [[2, "boundary"], [3, "boundary"]]
@@ -314,4 +341,5 @@ def test_cli_imports_an_ml_file_and_strict_refuses_it(db_dsn: str, tmp_path: Pat
     assert main(["--dsn", db_dsn, "export", str(side_id[0]), str(out)]) == 0
     [back] = formats.read(out)
     assert back.cell_properties["part"].tolist() == [0, 1] and np.array_equal(
-        back.vertices, formats.read(DATA / "two_surfaces.ml")[1].vertices)
+        back.vertices, formats.read(DATA / "two_surfaces.ml")[1].vertices
+    )

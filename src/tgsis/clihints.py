@@ -165,6 +165,7 @@ _RULES: list[tuple[str, Replacement]] = [
      "give a file with points (and cells)"),
     (r"pass drop_extra_properties=True", "give --drop-extra-properties"),
     (r"drop_extra_properties=True", "--drop-extra-properties"),
+    (r"read it as a file of GOCAD objects with format='tsurf'", "import it with --format tsurf (a file of GOCAD objects)"),
     (r"pass skip_unsupported=True to read the other objects of the file",
      "import without --strict to store the other objects of the file"),
     (r", or pass drop_properties=True", ""),

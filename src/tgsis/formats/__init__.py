@@ -9,6 +9,7 @@ vset       ``.vs``               MULTIPOINT, collections of them       :mod:`tgs
 tsolid     ``.so``               MULTITETRA, collections of them       :mod:`tgsis.formats.gocad`
 lightsolid ``.lso``              MULTITETRA (read only)                :mod:`tgsis.formats.gocad`
 gocadgroup ``.gp``               the members of a GOCAD group (read)   :mod:`tgsis.formats.gocad`
+gocadmodel ``.ml``               the TSurfs of a GOCAD model (read)    :mod:`tgsis.formats.gocad`
 vtu        ``.vtu``              all four, mixed collections           :mod:`tgsis.formats.vtk`
 vtp        ``.vtp``              MULTIPOINT, MULTILINESTRING, SURFACE  :mod:`tgsis.formats.vtk`
 vtk        ``.vtk`` (legacy)     all four, mixed collections           :mod:`tgsis.formats.vtk_legacy`
@@ -61,8 +62,8 @@ from typing import Any
 
 from tgsis.errors import FileFormatError
 from tgsis.formats._common import PathLike, check_mesh
-from tgsis.formats.gocad import (format_gocad, parse_gocad, read_gocad, read_tsurf, write_gocad,
-                                 write_gocad_many)
+from tgsis.formats.gocad import (format_gocad, parse_gocad, parse_gocad_model, read_gocad, read_gocad_model,
+                                 read_tsurf, write_gocad, write_gocad_many)
 from tgsis.formats.pvd import read_pvd, write_pvd
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
 from tgsis.formats.vtk import (format_vtp, format_vtu, parse_vtp, parse_vtu, parse_vtu_collection, read_vtp,
@@ -80,6 +81,8 @@ __all__ = [
     "read_gocad",
     "read_tsurf",
     "parse_gocad",
+    "read_gocad_model",
+    "parse_gocad_model",
     "write_gocad",
     "write_gocad_many",
     "format_gocad",
@@ -203,6 +206,12 @@ def _group_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
                                "several objects")
 
 
+def _model_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
+    raise FileFormatError("tgsis reads the surfaces of GOCAD model files (.ml) but does not write GOCAD models",
+                          path=path, hint="write the surfaces to a GOCAD TSurf file (.ts), which holds several "
+                                          "objects")
+
+
 def _gocad_collection_writer(collection: GeometryCollection, path: PathLike, **options: Any) -> None:
     write_gocad_many(collection.members, path, **options)
 
@@ -233,6 +242,8 @@ FORMATS: dict[str, FileFormat] = {f.name: f for f in (
                "SKUA LightTSolid (tetrahedra; read only)"),
     FileFormat("gocadgroup", (".gp",), _ALL, read_gocad, _group_writer,
                "GOCAD HeterogeneousGroup/HomogeneousGroup (read only: its members)"),
+    FileFormat("gocadmodel", (".ml",), (Geotype.SURFACE,), read_gocad_model, _model_writer,
+               "GOCAD Model3d (read only: the TSurfs of the model, with their TFACEs)", _model_writer),
     FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView; zlib)", write_vtu),
     FileFormat("vtp", (".vtp",), (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE), _vtp_reader,
                write_vtp, "VTK XML PolyData (ParaView, pyvista; zlib)"),

@@ -140,6 +140,8 @@ __all__ = [
     "read_gocad",
     "read_tsurf",
     "parse_gocad",
+    "read_gocad_model",
+    "parse_gocad_model",
     "write_gocad",
     "write_gocad_many",
     "format_gocad",
@@ -310,6 +312,202 @@ def read_tsurf(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: b
     return meshes[0]
 
 
+def read_gocad_model(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: bool = True) -> list[Mesh]:
+    """Read the surfaces of a GOCAD model file (``.ml``: a ``Model3d`` and the TSurfs it is built of).
+
+    A ``.ml`` file begins with a ``GOCAD Model3d`` object: its ``TSURF``
+    lines name the model's surfaces, its ``TFACE <id> <type> <surface>``
+    lines (each followed by three key vertices) the pieces of them, one per
+    ``TFACE`` part of the TSurf in order, with their type (``boundary``,
+    ``fault``, ``top`` ...); ``REGION``, ``LAYER``, ``FAULT_BLOCK`` and
+    ``SURFACE`` groups name volumes bounded by the TFACEs and groups of them.
+    The TSurfs follow in the same file (``name_in_model_list`` in their header).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.ml`` file.
+    merge_atoms, skip_unsupported : bool
+        As for :func:`read_gocad`; ``skip_unsupported=False`` also raises for
+        the model's regions, layers and groups (see below).
+
+    Returns
+    -------
+    list of Mesh
+        The objects of the file (a Surface per TSurf, in file order), as
+        :func:`read_gocad` reads them, each TSurf of the model with
+        ``metadata["gocad_model"] = {"name": <model>, "tfaces": [[id, type],
+        ...]}`` (its TFACEs in part order).
+
+    Warns
+    -----
+    SkippedObjectWarning
+        Naming each REGION (but ``Universe``, the outside), LAYER,
+        FAULT_BLOCK and SURFACE group of the model: tgsis stores the surfaces,
+        not the volumes they bound nor their groups.
+
+    Raises
+    ------
+    FileFormatError
+        No Model3d in the file; the model names a TSURF the file does not
+        hold (a model whose surfaces are in separate ``.ts`` files: import
+        those); a TSurf has another number of TFACEs than the model gives it;
+        a line of the model tgsis does not know; anything
+        :func:`read_gocad` refuses.
+    """
+    return parse_gocad_model(read_text(path), path=path, merge_atoms=merge_atoms, skip_unsupported=skip_unsupported)
+
+
+def parse_gocad_model(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
+                      skip_unsupported: bool = True) -> list[Mesh]:
+    """Parse the text of a GOCAD model file; see :func:`read_gocad_model`."""
+    lines = text.removeprefix("\ufeff").splitlines()
+    check_line_lengths(lines, path)
+    models: list[_Model] = []
+    part_counts: list[int] = []
+    with _gc_paused():
+        meshes = _parse_lines(lines, path, merge_atoms, skip_unsupported, models, part_counts)
+    if not models:
+        raise FileFormatError("the file holds no GOCAD Model3d, which a .ml file (a GOCAD model) begins with",
+                              path=path, hint="read it as a file of GOCAD objects with format='tsurf'")
+    for model in models:
+        _attach_model(model, meshes, part_counts, path, skip_unsupported)
+    return meshes
+
+
+@dataclass
+class _Model:
+    """What a GOCAD Model3d object says: its surfaces and their TFACEs, and what tgsis does not store."""
+
+    name: str | None
+    start: int  # 0-based index of its GOCAD line
+    end: int = -1  # 0-based index of its END line
+    surfaces: list[str] = field(default_factory=list)
+    # (id, type, surface name, 0-based line)
+    tfaces: list[tuple[int, str, str, int]] = field(default_factory=list)
+    # REGION, LAYER, FAULT_BLOCK and SURFACE groups: (keyword, name)
+    groups: list[tuple[str, str]] = field(default_factory=list)
+
+
+# Model3d lines that open a list of ids ending with 0: REGION <id> <name>, the others <name>
+_MODEL_GROUPS = ("REGION", "LAYER", "FAULT_BLOCK", "SURFACE")
+
+
+def _scan_model(lines: Sequence[str], start: int, path: PathLike | None) -> _Model:
+    """The Model3d object begun at ``lines[start]``."""
+    model = _Model(None, start)
+    header: list[str] = []
+    i = start + 1
+    while i < len(lines):
+        words = lines[i].split(None, 1)
+        if not words or words[0].startswith("#"):
+            i += 1
+            continue
+        keyword, rest = words[0], words[1] if len(words) > 1 else ""
+        if keyword == "END":
+            model.name = _header_name(header)
+            model.end = i
+            return model
+        if keyword == "HEADER":
+            i = _scan_block(lines, i, "}", header, path, inline_open=True)
+        elif keyword == "GOCAD_ORIGINAL_COORDINATE_SYSTEM":
+            i = _scan_block(lines, i, "END_ORIGINAL_COORDINATE_SYSTEM", [], path)
+        elif keyword == "TSURF":
+            model.surfaces.append(" ".join(split_words(rest)))
+        elif keyword == "TFACE":
+            i = _model_tface(lines, i, split_words(rest), model, path)
+        elif keyword in _MODEL_GROUPS:
+            i = _model_group(lines, i, keyword, split_words(rest), model, path)
+        elif keyword in _DESCRIPTION_KEYWORDS:
+            pass  # GEOLOGICAL_FEATURE and the like of the model as a whole
+        elif keyword == "GOCAD":
+            raise FileFormatError(f"the Model3d begun at line {start + 1} has no END before the next GOCAD object",
+                                  path=path, line=i + 1)
+        else:
+            raise FileFormatError(f"unknown keyword {quoted(keyword)} in the Model3d begun at line {start + 1}",
+                                  path=path, line=i + 1,
+                                  hint="a Model3d holds TSURF, TFACE, " + ", ".join(_MODEL_GROUPS) + " lines; tgsis "
+                                       "refuses a line it does not know rather than read the model without it")
+        i += 1
+    raise FileFormatError(f"the Model3d begun at line {start + 1} has no END (the file ends first)", path=path,
+                          line=len(lines))
+
+
+def _model_tface(lines: Sequence[str], i: int, words: list[str], model: _Model, path: PathLike | None) -> int:
+    """``TFACE <id> <type> <surface>`` and its three key vertex lines; the index of the last of them."""
+    if len(words) < 3 or not words[0].lstrip("+-").isdigit():
+        raise FileFormatError("a Model3d TFACE line is 'TFACE <id> <type> <surface name>'", path=path, line=i + 1)
+    for k in range(1, 4):  # the key vertices: three points that say which part of the surface this TFACE is
+        row = lines[i + k].split() if i + k < len(lines) else []
+        try:
+            ok = len(row) == 3 and all(math.isfinite(float(w)) for w in row)
+        except ValueError:
+            ok = False
+        if not ok:
+            raise FileFormatError(f"TFACE {words[0]} of the Model3d needs three key vertices ('x y z' lines) after it",
+                                  path=path, line=i + k + 1)
+    model.tfaces.append((int(words[0]), words[1], " ".join(words[2:]), i))
+    return i + 3
+
+
+def _model_group(lines: Sequence[str], i: int, keyword: str, words: list[str], model: _Model,
+                 path: PathLike | None) -> int:
+    """A REGION, LAYER, FAULT_BLOCK or SURFACE group: its name, then ids up to a 0; the index of its last line."""
+    named = words[1:] if keyword == "REGION" else words
+    model.groups.append((keyword, " ".join(named)))
+    for j in range(i + 1, len(lines)):
+        for word in lines[j].split():
+            try:
+                value = int(word)
+            except ValueError:
+                raise FileFormatError(f"the {keyword} begun at line {i + 1} lists ids up to a 0, found "
+                                      f"{quoted(word)}", path=path, line=j + 1) from None
+            if value == 0:
+                return j
+    raise FileFormatError(f"the {keyword} begun at line {i + 1} has no closing 0 (the file ends first)", path=path,
+                          line=i + 1)
+
+
+def _attach_model(model: _Model, meshes: Sequence[Mesh], part_counts: Sequence[int], path: PathLike | None,
+                  skip_unsupported: bool) -> None:
+    """Give each TSurf of the model its TFACEs; refuse what does not match; warn about what is not stored."""
+    label = f"the GOCAD Model3d {quoted(model.name)}" if model.name else "the GOCAD Model3d"
+    by_name: dict[str, tuple[Mesh, int]] = {}
+    for mesh, count in zip(meshes, part_counts):
+        if isinstance(mesh, Surface):
+            header = _string_list(mesh.metadata.get("gocad_header"))
+            by_name.setdefault(_header_value(header, "name_in_model_list") or mesh.name or "", (mesh, count))
+    missing = [name for name in model.surfaces if name not in by_name]
+    if missing:
+        raise FileFormatError(f"{label} names TSURF {', '.join(map(quoted, missing))}, which this file does not hold",
+                              path=path, line=model.start + 1,
+                              hint="a model whose surfaces are kept in files of their own: import the .ts files of "
+                                   "the model")
+    for number, _, surface, line in model.tfaces:
+        if surface not in model.surfaces:
+            raise FileFormatError(f"TFACE {number} of {label} is on the surface {quoted(surface)}, which no TSURF line "
+                                  "of the model names", path=path, line=line + 1)
+    for name in model.surfaces:
+        mesh, count = by_name[name]
+        tfaces = [[number, kind] for number, kind, surface, _ in model.tfaces if surface == name]
+        if len(tfaces) != count:
+            raise FileFormatError(f"{label} gives the TSurf {quoted(name)} {len(tfaces)} TFACEs, the TSurf has {count}",
+                                  path=path, line=model.start + 1)
+        mesh.metadata["gocad_model"] = {"name": model.name, "tfaces": tfaces}
+    lost = [f"{keyword} {quoted(name)}" for keyword, name in model.groups
+            if not (keyword == "REGION" and name == "Universe")]  # Universe: the outside of the model, nothing in it
+    if not lost:
+        return
+    what = (f"{', '.join(lost)} of {label} (line {model.start + 1}): tgsis stores the surfaces of a model (its TSurfs "
+            "and their TFACEs), not the volumes they bound nor groups of them")
+    if not skip_unsupported:
+        raise FileFormatError(f"not stored: {what}", path=path, line=model.start + 1,
+                              hint="pass skip_unsupported=True to read the other objects of the file")
+    where = f"{path}:{model.start + 1}: " if path is not None else f"line {model.start + 1}: "
+    warnings.warn(SkippedObjectWarning(f"{where}skipped {what}", path=path, line=model.start + 1,
+                                       object_type="Model3d", name=model.name, skipped=tuple(lost)), stacklevel=4)
+
+
 def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
                 skip_unsupported: bool = True) -> list[Mesh]:
     """Parse the text of a GOCAD ASCII file; see :func:`read_gocad`.
@@ -356,8 +554,10 @@ class _Skipped:
 _SUPPORTED = ", ".join(k.name for k in _KINDS)
 
 
-def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
-                 skip_unsupported: bool) -> list[Mesh]:
+def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool, skip_unsupported: bool,
+                 models: list[_Model] | None = None, part_counts: list[int] | None = None) -> list[Mesh]:
+    """The meshes of a file's objects. ``models``: read Model3d objects into it (else they are skipped);
+    ``part_counts``: the number of part keywords (TFACE ...) of each mesh read."""
     meshes: list[Mesh] = []
     skipped: list[_Skipped] = []
     groups: list[int] = []  # GOCAD lines of the groups whose members are being read
@@ -375,6 +575,12 @@ def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
         if kind is not None:
             records, end = _scan_object(lines, i, kind, path)
             meshes.append(_build_mesh(records, path, merge_atoms))
+            if part_counts is not None:
+                part_counts.append(len(records.part_names))
+        elif models is not None and type_name == "Model3d":
+            model = _scan_model(lines, i, path)
+            models.append(model)
+            end = model.end
         elif type_name.lower().endswith("group"):  # HeterogeneousGroup, HomogeneousGroup: read the members
             groups.append(i)
             end = _group_members(lines, i, type_name, path)
@@ -390,13 +596,15 @@ def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
     if groups:
         raise FileFormatError(f"the GOCAD group begun at line {groups[-1] + 1} has no END_MEMBERS (the file ends "
                               "first)", path=path, line=len(lines))
-    if not meshes and skipped:
+    if models:  # the caller checks the model against the objects
+        pass
+    elif not meshes and skipped:
         first = skipped[0]
         others = "".join(f"; {s.describe()}" for s in skipped[1:])
         raise FileFormatError(f"unsupported GOCAD object type {quoted(first.type_name)}: the file holds no object tgsis "
                               f"reads ({first.describe()}{others}; tgsis reads {_SUPPORTED})",
                               path=path, line=first.start + 1)
-    if not meshes:
+    elif not meshes:
         raise FileFormatError("no GOCAD object in the file (no 'GOCAD <type> <version>' line)", path=path)
     for item in skipped:
         where = f"{path}:{item.start + 1}: " if path is not None else f"line {item.start + 1}: "
