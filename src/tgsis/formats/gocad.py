@@ -82,8 +82,23 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
 * ``HEADER``, the coordinate system, ``PROPERTY_CLASS_HEADER`` blocks and the
   per-property lines (``PROPERTY_CLASSES``, ``PROPERTY_KINDS``,
   ``PROPERTY_SUBCLASSES``, ``PROP_LEGAL_RANGES``, ``UNITS``) are kept in
-  ``metadata`` (keys below) for writing back. Other lines: see above (known
-  keywords are counted or kept, unknown ones are errors).
+  ``metadata`` (keys below) for writing back. Each subclass begins with a
+  word in capitals (``QUANTITY Float``, SKUA's ``LINEARFUNCTION Float 1 0``:
+  the values are read as written); a per-property line that cannot be cut
+  into one piece per property is kept whole (``gocad_property_lines``).
+  Other lines: see above (known keywords are counted or kept, unknown ones
+  are errors).
+* ``PROPERTY_CN <property>`` blocks of ``CNP <vertex id>`` lines, up to
+  ``END_PROPERTY_CN`` (the control nodes of a property, as SCEC CFM faults
+  carry them), are kept as vertex indices in
+  ``metadata["gocad_property_control_nodes"]`` (``{file name: [index, ...]}``);
+  an id that is not defined, or a property ``PROPERTIES`` does not declare,
+  is an error.
+* A GOCAD model file (``.ml``, :func:`read_gocad_model`): the ``Model3d``
+  object names the model's TSurfs and their TFACEs; each TSurf gets
+  ``metadata["gocad_model"]``, and what tgsis does not store (regions,
+  layers, groups) is named in a warning. :func:`read_gocad` skips a Model3d
+  like any object it does not read.
 
 Writing (:func:`write_gocad`, :func:`write_gocad_many`, :func:`format_gocad`)
 -----------------------------------------------------------------------------
@@ -96,7 +111,11 @@ parts are interleaved comes back with its cells grouped by part, and part values
 come back renumbered 0, 1, ...). GOCAD has no other cell properties: the writer
 raises :class:`~tgsis.errors.FileFormatError` naming them unless
 ``drop_cell_properties=True``. Vertex properties come back as float64, whatever
-their dtype; NaN is written as the property's no-data value.
+their dtype; NaN is written as the property's no-data value. Every
+``PROPERTY_CLASS_HEADER`` block read is written back (on objects without
+properties too: the kind, unit and clip range of X, Y and Z), but those of
+properties the file had and the mesh no longer has; ``PROPERTY_CN`` blocks
+come after the vertices, before the cells, for the properties written.
 
 Metadata keys
 -------------
@@ -108,7 +127,11 @@ coordinate system block), ``gocad_extra_lines``,
 ({file name: k} for k > 1), ``gocad_no_data_values`` ({file name: value}),
 ``gocad_property_info`` ({keyword: {file name: text}}), ``gocad_atoms``,
 ``gocad_ignored`` ({keyword: count}), ``gocad_vertex_flags`` ({flag: [[start,
-stop], ...]}), ``gocad_part_names`` (list of str). All are JSON-compatible.
+stop], ...]}), ``gocad_part_names`` (list of str),
+``gocad_property_control_nodes`` ({file name: [vertex index, ...]}),
+``gocad_property_lines`` ({keyword: {"properties": [file names], "words":
+text}}), ``gocad_model`` ({"name": model name, "tfaces": [[id, type], ...]}).
+All are JSON-compatible.
 """
 
 from __future__ import annotations

@@ -44,8 +44,14 @@ and ``tgsis_member_names`` (strings as above, one per member; no name is
 written as the empty string) and ``tgsis_member_sizes`` (Int64, 2 components:
 points and cells of each member). ParaView shows the whole grid. A vertex or
 cell property must be on every member (a VTU array covers all points or all
-cells); members with different dtypes of one property come back with the
-common dtype (numpy promotion).
+cells), but ``part``: members without parts get ``part`` -1 (``NO_PART``)
+and are read back without it; members with different dtypes of one property
+come back with the common dtype (numpy promotion).
+
+Array names read from a VTK file that are no mesh property names (``rock
+type``) are sanitised on reading and kept in ``metadata["vtk_array_names"]``
+(below); writing gives the arrays those names back (XML attributes hold
+blanks), unless two arrays would get one name.
 
 Reading (:func:`read_vtu`)
 --------------------------

@@ -13,7 +13,12 @@ property: k components), and in
 the dataset's ``FIELD FieldData`` ``tgsis_name``, ``tgsis_geotype`` and for a
 collection its member table (``tgsis_member_geotypes``,
 ``tgsis_member_names``: UTF-8 bytes ending in 0; ``tgsis_member_sizes``),
-as in ``.vtu``. The title line is the mesh name (or ``tgsis``).
+as in ``.vtu``. The title line is the mesh name (or ``tgsis``). Array
+names are one word: the names of the file a mesh was read from
+(``metadata["vtk_array_names"]``) are written back encoded as VTK's writer
+encodes them (``rock%20type``: :func:`encode_name`), which the readers
+decode; a collection's ``part`` is -1 on members without parts, as in
+``.vtu``.
 
 Values are exact; types are kept for float32, float64, int64 and uint64.
 VTK's legacy reader and meshio's 5.1 reader agree on no smaller integer type
