@@ -143,7 +143,8 @@ def test_property_cn_ids_are_file_ids_and_bad_blocks_are_refused() -> None:
 
 
 def test_class_headers_of_a_surface_without_properties_are_written_back() -> None:
-    [horizon, _] = formats.read(DATA / "two_surfaces.ml")
+    with pytest.warns(SkippedObjectWarning, match="REGION 'Upper'"):
+        [horizon, _] = formats.read(DATA / "two_surfaces.ml")
     assert horizon.vertex_properties == {}
     written = format_gocad(horizon)
     assert _blocks(written, "PROPERTY_CLASS_HEADER", "}") == [
@@ -303,10 +304,18 @@ def test_an_ml_file_that_names_surfaces_it_does_not_hold_is_refused(tmp_path: Pa
     (tmp_path / "bad.ml").write_text(text.replace("LAYER Cover", "FAULT_BLOK Cover"))
     with pytest.raises(FileFormatError, match="unknown keyword 'FAULT_BLOK' in the Model3d"):
         formats.read(tmp_path / "bad.ml")
+    (tmp_path / "keys.ml").write_text(text.replace("  10 0 0 \n", "  10 0 \n"))
+    with pytest.raises(FileFormatError, match="TFACE 2 of the Model3d needs three key vertices") as bad:
+        formats.read(tmp_path / "keys.ml")
+    assert bad.value.line == 19
+    (tmp_path / "open.ml").write_text(text.replace("  -1  +2  +3 \n  0\n", "  -1  +2  +3 \n  x\n"))
+    with pytest.raises(FileFormatError, match="the REGION begun at line 29 lists ids up to a 0, found 'x'"):
+        formats.read(tmp_path / "open.ml")
 
 
 def test_ml_files_are_not_written(tmp_path: Path) -> None:
-    horizon, _ = formats.read(DATA / "two_surfaces.ml")
+    with pytest.warns(SkippedObjectWarning):
+        horizon, _ = formats.read(DATA / "two_surfaces.ml")
     with pytest.raises(FileFormatError, match="does not write GOCAD models") as refused:
         formats.write(horizon, tmp_path / "out.ml")
     assert ".ts" in (refused.value.hint or "")
@@ -340,6 +349,6 @@ def test_cli_imports_an_ml_file_and_strict_refuses_it(
     assert side_id is not None
     assert main(["--dsn", db_dsn, "export", str(side_id[0]), str(out)]) == 0
     [back] = formats.read(out)
-    assert back.cell_properties["part"].tolist() == [0, 1] and np.array_equal(
-        back.vertices, formats.read(DATA / "two_surfaces.ml")[1].vertices
-    )
+    with pytest.warns(SkippedObjectWarning):
+        side = formats.read(DATA / "two_surfaces.ml")[1]
+    assert back.cell_properties["part"].tolist() == [0, 1] and np.array_equal(back.vertices, side.vertices)
