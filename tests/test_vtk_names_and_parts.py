@@ -92,6 +92,48 @@ def test_legacy_names_are_percent_encoded_as_vtk_does(tmp_path: Path) -> None:
     assert again.metadata["vtk_array_names"]["cell_data"] == {"bad_name": 'bad"name'}
 
 
+def test_gocad_property_names_with_blanks_go_to_vtk_files_as_they_were(tmp_path: Path) -> None:
+    [fault] = formats.read(Path(__file__).parent / "data" / "gocad" / "skua_properties.ts")
+    assert set(fault.vertex_properties) == {"default_property", "throw"}
+    assert fault.metadata["property_names"]["default_property"] == " default property"
+    formats.write(fault, tmp_path / "fault.vtu")
+    assert sorted(pv.read(tmp_path / "fault.vtu").point_data) == [" default property", "throw"]
+    formats.write(fault, tmp_path / "fault.vtk")
+    assert b"\n%20default%20property 1 " in (tmp_path / "fault.vtk").read_bytes()
+    assert formats.read_one(tmp_path / "fault.vtk").same_as(fault)
+
+
+def test_names_survive_the_database(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    _pyvista_file_with_blanks(tmp_path / "in.vtu")
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "class",
+                "create",
+                "rocks",
+                "--geotype",
+                "SURFACE",
+                "--property",
+                "rock_type:float8",
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(["--dsn", db_dsn, "import", str(tmp_path / "in.vtu"), "--class", "rocks", "--drop-extra-properties"]) == 0
+    )
+    with psycopg.connect(db_dsn) as conn:
+        row = conn.execute("SELECT _geoid FROM rocks").fetchone()
+    assert row is not None
+    capsys.readouterr()
+    for target in ("out.vtu", "out.vtk"):
+        assert main(["--dsn", db_dsn, "export", str(row[0]), str(tmp_path / target)]) == 0, capsys.readouterr().err
+        back = pv.read(tmp_path / target)
+        assert list(back.point_data) == ["rock type"]  # the cell data: no column of the class
+
+
 def test_two_names_that_would_clash_keep_the_mesh_names(tmp_path: Path) -> None:
     surface = Surface(
         np.eye(3),

@@ -249,8 +249,10 @@ def file_array_names(geometry: Geometry, key: str) -> dict[str, str]:
     """``{mesh property name: name in the file read}`` from ``metadata["vtk_array_names"][key]``.
 
     ``key`` is ``"point_data"`` or ``"cell_data"``. A collection's own table
-    comes first, then its members'. Entries that are not two strings are
-    left out (metadata may have been edited).
+    comes first, then its members'. For point data, the names of a GOCAD file
+    (``metadata["property_names"]``, ``" default property"``) come after them.
+    Entries that are not two strings are left out (metadata may have been
+    edited).
     """
     sources: list[Geometry] = [geometry, *geometry.members] if isinstance(geometry, GeometryCollection) \
         else [geometry]
@@ -260,6 +262,11 @@ def file_array_names(geometry: Geometry, key: str) -> dict[str, str]:
         names = table.get(key) if isinstance(table, dict) else None
         for name, file_name in names.items() if isinstance(names, dict) else ():
             if isinstance(name, str) and isinstance(file_name, str) and file_name and name not in result:
+                result[name] = file_name
+    for source in sources if key == "point_data" else ():
+        gocad = source.metadata.get("property_names") if isinstance(source.metadata, dict) else None
+        for name, file_name in gocad.items() if isinstance(gocad, dict) else ():
+            if isinstance(name, str) and isinstance(file_name, str) and file_name.strip() and name not in result:
                 result[name] = file_name
     return result
 

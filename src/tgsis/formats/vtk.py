@@ -709,7 +709,7 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
         if components < 1:
             raise FileFormatError(f"DataArray {file_name!r} has NumberOfComponents 0", path=decoder.path)
         values = decoder.array(element, count, components).reshape(count, components)
-        name = sanitize_property_name(file_name, result)
+        name = sanitize_property_name(file_name.strip() or file_name, result)  # as GOCAD names: " default property"
         if name != file_name:
             renamed[name] = file_name
         # k components: a vector property (n, k), as tgsis writes one

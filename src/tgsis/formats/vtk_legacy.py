@@ -304,7 +304,7 @@ def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str,
     for original, values in arrays.items():
         if len(values) != count:
             raise FileFormatError(f"{key} array {quoted(original)} has {len(values)} tuples, the dataset {count}", path=path)
-        name = sanitize_property_name(original, result)
+        name = sanitize_property_name(original.strip() or original, result)  # as GOCAD names: " default property"
         if name != original:
             renamed[name] = original
         result[name] = values
