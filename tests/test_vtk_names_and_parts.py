@@ -22,6 +22,8 @@ import pyvista as pv
 
 from tgsis import formats
 from tgsis.cli import main
+from tgsis.clihints import to_cli
+from tgsis.errors import FileFormatError
 from tgsis.mesh import GeometryCollection, Mesh, Surface
 
 # two faults in one GOCAD file: the first of two TFACEs, the second of one
@@ -158,6 +160,15 @@ def test_a_collection_with_parts_on_some_members_is_written_to_vtk_files(tmp_pat
         assert back[0].cell_properties["part"].tolist() == [0, 1]
         assert "part" not in back[1].cell_properties
         assert back[0].same_as(split) and back[1].same_as(plain)
+
+
+def test_a_property_on_some_members_only_has_a_hint_the_command_line_can_follow(tmp_path: Path) -> None:
+    split, plain = formats.parse_gocad(TWO_FAULTS)
+    split.vertex_properties["slip"] = np.zeros(split.n_vertices)
+    with pytest.raises(FileFormatError, match="vertex property 'slip' is on some members") as refused:
+        formats.write(GeometryCollection([split, plain]), tmp_path / "faults.vtu")
+    hint = to_cli(refused.value.hint) or ""
+    assert ".ts" in hint and "remove it" not in hint
 
 
 def test_cli_exports_a_gocad_model_with_parts_to_vtu(
