@@ -28,7 +28,7 @@ from tgsis.cli import main
 from tgsis.db import features as F
 from tgsis.errors import FileFormatError, SkippedObjectWarning
 from tgsis.formats.gocad import format_gocad, parse_gocad
-from tgsis.mesh import Mesh, Surface
+from tgsis.mesh import GeometryCollection, Mesh, Surface
 
 from .shared_data import cfm
 
@@ -319,7 +319,18 @@ def test_ml_files_are_not_written(tmp_path: Path) -> None:
     with pytest.raises(FileFormatError, match="does not write GOCAD models") as refused:
         formats.write(horizon, tmp_path / "out.ml")
     assert ".ts" in (refused.value.hint or "")
+    with pytest.raises(FileFormatError, match="does not write GOCAD models"):
+        formats.write(GeometryCollection([horizon]), tmp_path / "out.ml")
     assert not (tmp_path / "out.ml").exists()
+    # hints name the formats that write: not .ml (nor .lso, .gp)
+    lines = formats.parse_gocad((DATA / "two_lines.pl").read_text())[0]
+    with pytest.raises(FileFormatError) as wrong:
+        formats.write(lines, tmp_path / "lines.ml")
+    assert ".pl" in (wrong.value.hint or "") and ".ml" not in (wrong.value.hint or "")
+    with pytest.raises(FileFormatError) as one:
+        formats.write(GeometryCollection([horizon]), tmp_path / "x.obj")
+    assert ".ts" in (one.value.hint or "") and ".ml" not in (one.value.hint or "")
+    assert ".gp" not in (one.value.hint or "")
 
 
 def test_cli_imports_an_ml_file_and_strict_refuses_it(

@@ -154,7 +154,8 @@ class FileFormat:
             return
         mesh = check_mesh(mesh, f"the {self.name} writer")
         if mesh.geotype not in self.geotypes:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values() if mesh.geotype in f.geotypes]
+            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
+                    if mesh.geotype in f.geotypes and f.writer not in _READ_ONLY]
             raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
                                   f"{mesh.geotype.value} ({type(mesh).__name__})", path=path,
                                   hint=f"formats for {mesh.geotype.value}: {', '.join(fits)}")
@@ -164,7 +165,8 @@ class FileFormat:
         """Raise FileFormatError unless this format holds all the members of ``collection``."""
         what = f"a GEOMETRYCOLLECTION of {len(collection)} members"
         if self.collection_writer is None:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values() if f.collection_writer]
+            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
+                    if f.collection_writer and f.writer not in _READ_ONLY]
             raise FileFormatError(f"{self.name} files hold one object, not {what}", path=path,
                                   hint=f"formats for collections: {', '.join(fits)}")
         types = list(dict.fromkeys(collection.geotypes))
@@ -176,7 +178,7 @@ class FileFormat:
         wrong = [t for t in types if t not in self.geotypes]
         if wrong:
             fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
-                    if f.collection_writer and all(t in f.geotypes for t in types)]
+                    if f.collection_writer and f.writer not in _READ_ONLY and all(t in f.geotypes for t in types)]
             raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
                                   f"{', '.join(t.value for t in wrong)} ({what})", path=path,
                                   hint=f"formats for this collection: {', '.join(fits)}")
@@ -210,6 +212,10 @@ def _model_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
     raise FileFormatError("tgsis reads the surfaces of GOCAD model files (.ml) but does not write GOCAD models",
                           path=path, hint="write the surfaces to a GOCAD TSurf file (.ts), which holds several "
                                           "objects")
+
+
+#: The writers of formats tgsis reads only: they refuse, so hints do not offer them.
+_READ_ONLY = (_lightsolid_writer, _group_writer, _model_writer)
 
 
 def _gocad_collection_writer(collection: GeometryCollection, path: PathLike, **options: Any) -> None:
