@@ -458,7 +458,7 @@ def test_registry_picks_gocad_by_extension(tmp_path: Path) -> None:
 
 def test_registry_errors(tmp_path: Path) -> None:
     with pytest.raises(FileFormatError, match=r"unknown file extension '\.xyz': known extensions are .ts, .pl, "
-                                              r".vs, .so, .lso, .gp, .vtu, .vtp, .vtk, .obj, .ply, .off, .stl"):
+                                              r".vs, .so, .lso, .gp, .ml, .vtu, .vtp, .vtk, .obj, .ply, .off, .stl"):
         formats.read(tmp_path / "a.xyz")
     with pytest.raises(FileFormatError, match="unknown format 'dxf'"):
         formats.format_for(tmp_path / "a.ts", "dxf")
@@ -471,5 +471,5 @@ def test_registry_errors(tmp_path: Path) -> None:
     write_gocad_many([lines, lines], both)
     with pytest.raises(FileFormatError, match="expected one mesh, the file holds 2"):
         formats.read_one(both)
-    assert set(formats.FORMATS) == {"tsurf", "pline", "vset", "tsolid", "lightsolid", "gocadgroup", "vtu", "vtp",
-                                    "vtk", "obj", "ply", "off", "stl"}
+    assert set(formats.FORMATS) == {"tsurf", "pline", "vset", "tsolid", "lightsolid", "gocadgroup", "gocadmodel",
+                                    "vtu", "vtp", "vtk", "obj", "ply", "off", "stl"}

@@ -22,7 +22,11 @@ from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Su
 
 __all__ = ["KIND_OF_CELL_TYPE", "CELL_TYPE_OF", "VTK_CELL_NAMES", "labelled", "strings", "string_bytes", "first",
            "split_cells", "mesh_from_cells", "collection_from_cells", "mesh_from_vtk_cells", "one_mesh", "vtk_parts",
-           "shared_properties"]
+           "shared_properties", "NO_PART", "file_array_names", "named_as_read", "without_no_part"]
+
+#: The ``part`` of the cells of a collection member that has no parts, where other members have them: one VTK
+#: cell array covers the cells of every member. Read back, a member whose cells all have it has no ``part``.
+NO_PART = -1
 
 _T = TypeVar("_T")
 
@@ -146,13 +150,22 @@ def collection_from_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[
         start = int(offsets[first_cell])
         k = kind.cell_size
         member_cells = (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k)
+        member_cell_data = without_no_part({key: v[cells] for key, v in cell_data.items()})
         members.append(labelled(f"{source} member {i}", lambda: kind(
             vertices[points], member_cells,
             vertex_properties={key: v[points] for key, v in point_data.items()},
-            cell_properties={key: v[cells] for key, v in cell_data.items()},
+            cell_properties=member_cell_data,
             name=(names[i] if i < len(names) else "") or None)))
         first_point, first_cell = first_point + n_p, first_cell + n_c
     return GeometryCollection(members, name=name, metadata=metadata)
+
+
+def without_no_part(cell_data: dict[str, npt.NDArray[Any]]) -> dict[str, npt.NDArray[Any]]:
+    """A member's cell data without ``part`` when all its cells have :data:`NO_PART` (it had no parts)."""
+    part = cell_data.get("part")
+    if part is not None and part.ndim == 1 and len(part) and np.all(part == NO_PART):
+        return {key: values for key, values in cell_data.items() if key != "part"}
+    return cell_data
 
 
 def mesh_from_vtk_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
@@ -212,15 +225,62 @@ def vtk_parts(geometry: Geometry) -> tuple[npt.NDArray[np.float64], npt.NDArray[
 
 
 def shared_properties(members: tuple[Mesh, ...], kind: str) -> dict[str, npt.NDArray[Any]]:
-    """The members' vertex or cell properties, concatenated: one array covers all points (cells) of a grid."""
+    """The members' vertex or cell properties, concatenated: one array covers all points (cells) of a grid.
+
+    The ``part`` cell property of members that have parts (a GOCAD file of
+    faults, some of several TFACEs) is :data:`NO_PART` on the cells of the
+    members without it; any other property must be on every member.
+    """
     def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
         return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
 
     names = dict.fromkeys(name for m in members for name in of(m))
     for name in names:
         lacking = [i for i, m in enumerate(members) if name not in of(m)]
-        if lacking:
+        if lacking and not (kind == "cell" and name == "part"):
             raise InvalidPropertyError(f"{kind} property {name!r} is on some members of the collection but not on "
                                        f"members {lacking}: one array covers the points or cells of all members",
                                        hint="give every member the property, or remove it before converting")
-    return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
+    return {name: np.concatenate([of(m)[name] if name in of(m) else np.full(m.n_cells, NO_PART, dtype=np.int64)
+                                  for m in members]) for name in names}
+
+
+def file_array_names(geometry: Geometry, key: str) -> dict[str, str]:
+    """``{mesh property name: name in the file read}`` from ``metadata["vtk_array_names"][key]``.
+
+    ``key`` is ``"point_data"`` or ``"cell_data"``. A collection's own table
+    comes first, then its members'. For point data, the names of a GOCAD file
+    (``metadata["property_names"]``, ``" default property"``) come after them.
+    Entries that are not two strings are left out (metadata may have been
+    edited).
+    """
+    sources: list[Geometry] = [geometry, *geometry.members] if isinstance(geometry, GeometryCollection) \
+        else [geometry]
+    result: dict[str, str] = {}
+    for source in sources:
+        table = source.metadata.get("vtk_array_names") if isinstance(source.metadata, dict) else None
+        names = table.get(key) if isinstance(table, dict) else None
+        for name, file_name in names.items() if isinstance(names, dict) else ():
+            if isinstance(name, str) and isinstance(file_name, str) and file_name and name not in result:
+                result[name] = file_name
+    for source in sources if key == "point_data" else ():
+        gocad = source.metadata.get("property_names") if isinstance(source.metadata, dict) else None
+        for name, file_name in gocad.items() if isinstance(gocad, dict) else ():
+            if isinstance(name, str) and isinstance(file_name, str) and file_name.strip() and name not in result:
+                result[name] = file_name
+    return result
+
+
+def named_as_read(arrays: dict[str, npt.NDArray[Any]], names: dict[str, str],
+                  allowed: Callable[[str], bool]) -> dict[str, npt.NDArray[Any]]:
+    """``arrays`` under the names of the file they were read from (``names``), where the format allows the name
+    and no two arrays would get one name (those keep their mesh names)."""
+    final = {name: names[name] if name in names and allowed(names[name]) else name for name in arrays}
+    for _ in range(len(final) + 1):
+        taken = list(final.values())
+        clashing = [name for name, target in final.items() if target != name and taken.count(target) > 1]
+        if not clashing:
+            break
+        for name in clashing:
+            final[name] = name
+    return {final[name]: values for name, values in arrays.items()}

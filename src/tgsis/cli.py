@@ -539,7 +539,7 @@ def _read_for_import(args: argparse.Namespace) -> list[Mesh]:
     skipped = [w.message for w in caught if isinstance(w.message, SkippedObjectWarning)]
     if skipped and args.strict:
         what = "; ".join(f"GOCAD {w.object_type} object{f' {w.name!r}' if w.name else ''} at line {w.line}"
-                         for w in skipped)
+                         + (f" (its {', '.join(w.skipped)})" if w.skipped else "") for w in skipped)
         raise FileFormatError(f"{args.file}: refused, nothing imported: it holds objects tgsis does not read: {what}",
                               hint="import without --strict to store the objects tgsis reads and skip the others")
     for message in skipped:
@@ -1985,7 +1985,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "tgsis import model.vtu --class models --json",
                     "tgsis import top_2024.ts --class horizons --at 2024 --feature 7   # a model-2 instant"],
                    cmd_import, tabular=True)
-    imp.add_argument("file", help="the geometry file (.ts, .pl, .vs, .so, .lso, .gp, .vtu, .obj, .ply, .off, .stl)")
+    imp.add_argument("file", help="the geometry file (.ts, .pl, .vs, .so, .lso, .gp, .ml, .vtu, .obj, .ply, .off, "
+                                       ".stl)")
     imp.add_argument("--class", dest="feature_class", required=True, help="the feature class to store them in")
     imp.add_argument("--name", help="feature name (default: the name in the file, else the file name; "
                                     "for a GEOMETRYCOLLECTION class the file name)")

@@ -165,10 +165,14 @@ _RULES: list[tuple[str, Replacement]] = [
      "give a file with points (and cells)"),
     (r"pass drop_extra_properties=True", "give --drop-extra-properties"),
     (r"drop_extra_properties=True", "--drop-extra-properties"),
+    (r"read it as a file of GOCAD objects with format='tsurf'", "import it with --format tsurf (a file of GOCAD objects)"),
     (r"pass skip_unsupported=True to read the other objects of the file",
      "import without --strict to store the other objects of the file"),
     (r", or pass drop_properties=True", ""),
     (r"pass drop_cell_properties=True to write the mesh without them", "write it to a .vtu file, which keeps them"),
+    (r"give every member the property, or remove it before (?:writing|converting)",
+     "export to a GOCAD file of the members' type (.ts, .pl, .vs, .so), where each object keeps its own properties, "
+     "or import the objects into a class that is no GEOMETRYCOLLECTION (one feature each)"),
     # --- time
     (r"give start, end and steps", "give --from, --to and --steps"),
     (r"the condition is \"value op v\", e\.g\. op => '>=' for values of at least v",

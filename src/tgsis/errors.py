@@ -279,16 +279,20 @@ class SkippedObjectWarning(UserWarning):
         The object's type as the file names it (``SGrid``, ``Model3d`` ...).
     name : str or None
         The object's name, when its header gives one.
+    skipped : tuple of str
+        When only some of the object was not read (the regions of a GOCAD
+        ``Model3d`` whose surfaces were read): what, e.g. ``("REGION 'Upper'",)``.
     """
 
     def __init__(self, message: str, *, path: object = None, line: int, object_type: str,
-                 name: str | None = None) -> None:
+                 name: str | None = None, skipped: tuple[str, ...] = ()) -> None:
         super().__init__(message)
         self.message = message
         self.path = None if path is None else str(path)
         self.line = line
         self.object_type = object_type
         self.name = name
+        self.skipped = skipped
 
     def __str__(self) -> str:
         return self.message

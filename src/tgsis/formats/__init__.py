@@ -9,6 +9,7 @@ vset       ``.vs``               MULTIPOINT, collections of them       :mod:`tgs
 tsolid     ``.so``               MULTITETRA, collections of them       :mod:`tgsis.formats.gocad`
 lightsolid ``.lso``              MULTITETRA (read only)                :mod:`tgsis.formats.gocad`
 gocadgroup ``.gp``               the members of a GOCAD group (read)   :mod:`tgsis.formats.gocad`
+gocadmodel ``.ml``               the TSurfs of a GOCAD model (read)    :mod:`tgsis.formats.gocad`
 vtu        ``.vtu``              all four, mixed collections           :mod:`tgsis.formats.vtk`
 vtp        ``.vtp``              MULTIPOINT, MULTILINESTRING, SURFACE  :mod:`tgsis.formats.vtk`
 vtk        ``.vtk`` (legacy)     all four, mixed collections           :mod:`tgsis.formats.vtk_legacy`
@@ -61,8 +62,8 @@ from typing import Any
 
 from tgsis.errors import FileFormatError
 from tgsis.formats._common import PathLike, check_mesh
-from tgsis.formats.gocad import (format_gocad, parse_gocad, read_gocad, read_tsurf, write_gocad,
-                                 write_gocad_many)
+from tgsis.formats.gocad import (format_gocad, parse_gocad, parse_gocad_model, read_gocad, read_gocad_model,
+                                 read_tsurf, write_gocad, write_gocad_many)
 from tgsis.formats.pvd import read_pvd, write_pvd
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
 from tgsis.formats.vtk import (format_vtp, format_vtu, parse_vtp, parse_vtu, parse_vtu_collection, read_vtp,
@@ -80,6 +81,8 @@ __all__ = [
     "read_gocad",
     "read_tsurf",
     "parse_gocad",
+    "read_gocad_model",
+    "parse_gocad_model",
     "write_gocad",
     "write_gocad_many",
     "format_gocad",
@@ -151,7 +154,8 @@ class FileFormat:
             return
         mesh = check_mesh(mesh, f"the {self.name} writer")
         if mesh.geotype not in self.geotypes:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values() if mesh.geotype in f.geotypes]
+            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
+                    if mesh.geotype in f.geotypes and f.writer not in _READ_ONLY]
             raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
                                   f"{mesh.geotype.value} ({type(mesh).__name__})", path=path,
                                   hint=f"formats for {mesh.geotype.value}: {', '.join(fits)}")
@@ -161,7 +165,8 @@ class FileFormat:
         """Raise FileFormatError unless this format holds all the members of ``collection``."""
         what = f"a GEOMETRYCOLLECTION of {len(collection)} members"
         if self.collection_writer is None:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values() if f.collection_writer]
+            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
+                    if f.collection_writer and f.writer not in _READ_ONLY]
             raise FileFormatError(f"{self.name} files hold one object, not {what}", path=path,
                                   hint=f"formats for collections: {', '.join(fits)}")
         types = list(dict.fromkeys(collection.geotypes))
@@ -173,7 +178,7 @@ class FileFormat:
         wrong = [t for t in types if t not in self.geotypes]
         if wrong:
             fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
-                    if f.collection_writer and all(t in f.geotypes for t in types)]
+                    if f.collection_writer and f.writer not in _READ_ONLY and all(t in f.geotypes for t in types)]
             raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
                                   f"{', '.join(t.value for t in wrong)} ({what})", path=path,
                                   hint=f"formats for this collection: {', '.join(fits)}")
@@ -201,6 +206,16 @@ def _group_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
     raise FileFormatError("tgsis reads the members of GOCAD group files but does not write groups", path=path,
                           hint="write the members to a GOCAD file of their type (.ts, .pl, .vs, .so), which holds "
                                "several objects")
+
+
+def _model_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
+    raise FileFormatError("tgsis reads the surfaces of GOCAD model files (.ml) but does not write GOCAD models",
+                          path=path, hint="write the surfaces to a GOCAD TSurf file (.ts), which holds several "
+                                          "objects")
+
+
+#: The writers of formats tgsis reads only: they refuse, so hints do not offer them.
+_READ_ONLY = (_lightsolid_writer, _group_writer, _model_writer)
 
 
 def _gocad_collection_writer(collection: GeometryCollection, path: PathLike, **options: Any) -> None:
@@ -233,6 +248,8 @@ FORMATS: dict[str, FileFormat] = {f.name: f for f in (
                "SKUA LightTSolid (tetrahedra; read only)"),
     FileFormat("gocadgroup", (".gp",), _ALL, read_gocad, _group_writer,
                "GOCAD HeterogeneousGroup/HomogeneousGroup (read only: its members)"),
+    FileFormat("gocadmodel", (".ml",), (Geotype.SURFACE,), read_gocad_model, _model_writer,
+               "GOCAD Model3d (read only: the TSurfs of the model, with their TFACEs)", _model_writer),
     FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView; zlib)", write_vtu),
     FileFormat("vtp", (".vtp",), (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE), _vtp_reader,
                write_vtp, "VTK XML PolyData (ParaView, pyvista; zlib)"),

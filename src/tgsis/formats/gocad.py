@@ -82,8 +82,23 @@ Reading (:func:`read_gocad`, :func:`read_tsurf`, :func:`parse_gocad`)
 * ``HEADER``, the coordinate system, ``PROPERTY_CLASS_HEADER`` blocks and the
   per-property lines (``PROPERTY_CLASSES``, ``PROPERTY_KINDS``,
   ``PROPERTY_SUBCLASSES``, ``PROP_LEGAL_RANGES``, ``UNITS``) are kept in
-  ``metadata`` (keys below) for writing back. Other lines: see above (known
-  keywords are counted or kept, unknown ones are errors).
+  ``metadata`` (keys below) for writing back. Each subclass begins with a
+  word in capitals (``QUANTITY Float``, SKUA's ``LINEARFUNCTION Float 1 0``:
+  the values are read as written); a per-property line that cannot be cut
+  into one piece per property is kept whole (``gocad_property_lines``).
+  Other lines: see above (known keywords are counted or kept, unknown ones
+  are errors).
+* ``PROPERTY_CN <property>`` blocks of ``CNP <vertex id>`` lines, up to
+  ``END_PROPERTY_CN`` (the control nodes of a property, as SCEC CFM faults
+  carry them), are kept as vertex indices in
+  ``metadata["gocad_property_control_nodes"]`` (``{file name: [index, ...]}``);
+  an id that is not defined, or a property ``PROPERTIES`` does not declare,
+  is an error.
+* A GOCAD model file (``.ml``, :func:`read_gocad_model`): the ``Model3d``
+  object names the model's TSurfs and their TFACEs; each TSurf gets
+  ``metadata["gocad_model"]``, and what tgsis does not store (regions,
+  layers, groups) is named in a warning. :func:`read_gocad` skips a Model3d
+  like any object it does not read.
 
 Writing (:func:`write_gocad`, :func:`write_gocad_many`, :func:`format_gocad`)
 -----------------------------------------------------------------------------
@@ -96,7 +111,11 @@ parts are interleaved comes back with its cells grouped by part, and part values
 come back renumbered 0, 1, ...). GOCAD has no other cell properties: the writer
 raises :class:`~tgsis.errors.FileFormatError` naming them unless
 ``drop_cell_properties=True``. Vertex properties come back as float64, whatever
-their dtype; NaN is written as the property's no-data value.
+their dtype; NaN is written as the property's no-data value. Every
+``PROPERTY_CLASS_HEADER`` block read is written back (on objects without
+properties too: the kind, unit and clip range of X, Y and Z), but those of
+properties the file had and the mesh no longer has; ``PROPERTY_CN`` blocks
+come after the vertices, before the cells, for the properties written.
 
 Metadata keys
 -------------
@@ -108,7 +127,11 @@ coordinate system block), ``gocad_extra_lines``,
 ({file name: k} for k > 1), ``gocad_no_data_values`` ({file name: value}),
 ``gocad_property_info`` ({keyword: {file name: text}}), ``gocad_atoms``,
 ``gocad_ignored`` ({keyword: count}), ``gocad_vertex_flags`` ({flag: [[start,
-stop], ...]}), ``gocad_part_names`` (list of str). All are JSON-compatible.
+stop], ...]}), ``gocad_part_names`` (list of str),
+``gocad_property_control_nodes`` ({file name: [vertex index, ...]}),
+``gocad_property_lines`` ({keyword: {"properties": [file names], "words":
+text}}), ``gocad_model`` ({"name": model name, "tfaces": [[id, type], ...]}).
+All are JSON-compatible.
 """
 
 from __future__ import annotations
@@ -140,6 +163,8 @@ __all__ = [
     "read_gocad",
     "read_tsurf",
     "parse_gocad",
+    "read_gocad_model",
+    "parse_gocad_model",
     "write_gocad",
     "write_gocad_many",
     "format_gocad",
@@ -254,6 +279,8 @@ class _Records:
     cell_parts: list[int] = field(default_factory=list)
     # names of the parts, by part number (the words after TFACE/ILINE/TVOLUME; LightTSolid: its regions)
     part_names: list[str] = field(default_factory=list)
+    # PROPERTY_CN blocks: (property name, its line, the CNP vertex ids as written, their lines)
+    control_nodes: list[tuple[str, int, list[str], list[int]]] = field(default_factory=list)
 
 
 def read_gocad(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: bool = True) -> list[Mesh]:
@@ -308,6 +335,202 @@ def read_tsurf(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: b
     return meshes[0]
 
 
+def read_gocad_model(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: bool = True) -> list[Mesh]:
+    """Read the surfaces of a GOCAD model file (``.ml``: a ``Model3d`` and the TSurfs it is built of).
+
+    A ``.ml`` file begins with a ``GOCAD Model3d`` object: its ``TSURF``
+    lines name the model's surfaces, its ``TFACE <id> <type> <surface>``
+    lines (each followed by three key vertices) the pieces of them, one per
+    ``TFACE`` part of the TSurf in order, with their type (``boundary``,
+    ``fault``, ``top`` ...); ``REGION``, ``LAYER``, ``FAULT_BLOCK`` and
+    ``SURFACE`` groups name volumes bounded by the TFACEs and groups of them.
+    The TSurfs follow in the same file (``name_in_model_list`` in their header).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.ml`` file.
+    merge_atoms, skip_unsupported : bool
+        As for :func:`read_gocad`; ``skip_unsupported=False`` also raises for
+        the model's regions, layers and groups (see below).
+
+    Returns
+    -------
+    list of Mesh
+        The objects of the file (a Surface per TSurf, in file order), as
+        :func:`read_gocad` reads them, each TSurf of the model with
+        ``metadata["gocad_model"] = {"name": <model>, "tfaces": [[id, type],
+        ...]}`` (its TFACEs in part order).
+
+    Warns
+    -----
+    SkippedObjectWarning
+        Naming each REGION (but ``Universe``, the outside), LAYER,
+        FAULT_BLOCK and SURFACE group of the model: tgsis stores the surfaces,
+        not the volumes they bound nor their groups.
+
+    Raises
+    ------
+    FileFormatError
+        No Model3d in the file; the model names a TSURF the file does not
+        hold (a model whose surfaces are in separate ``.ts`` files: import
+        those); a TSurf has another number of TFACEs than the model gives it;
+        a line of the model tgsis does not know; anything
+        :func:`read_gocad` refuses.
+    """
+    return parse_gocad_model(read_text(path), path=path, merge_atoms=merge_atoms, skip_unsupported=skip_unsupported)
+
+
+def parse_gocad_model(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
+                      skip_unsupported: bool = True) -> list[Mesh]:
+    """Parse the text of a GOCAD model file; see :func:`read_gocad_model`."""
+    lines = text.removeprefix("\ufeff").splitlines()
+    check_line_lengths(lines, path)
+    models: list[_Model] = []
+    part_counts: list[int] = []
+    with _gc_paused():
+        meshes = _parse_lines(lines, path, merge_atoms, skip_unsupported, models, part_counts)
+    if not models:
+        raise FileFormatError("the file holds no GOCAD Model3d, which a .ml file (a GOCAD model) begins with",
+                              path=path, hint="read it as a file of GOCAD objects with format='tsurf'")
+    for model in models:
+        _attach_model(model, meshes, part_counts, path, skip_unsupported)
+    return meshes
+
+
+@dataclass
+class _Model:
+    """What a GOCAD Model3d object says: its surfaces and their TFACEs, and what tgsis does not store."""
+
+    name: str | None
+    start: int  # 0-based index of its GOCAD line
+    end: int = -1  # 0-based index of its END line
+    surfaces: list[str] = field(default_factory=list)
+    # (id, type, surface name, 0-based line)
+    tfaces: list[tuple[int, str, str, int]] = field(default_factory=list)
+    # REGION, LAYER, FAULT_BLOCK and SURFACE groups: (keyword, name)
+    groups: list[tuple[str, str]] = field(default_factory=list)
+
+
+# Model3d lines that open a list of ids ending with 0: REGION <id> <name>, the others <name>
+_MODEL_GROUPS = ("REGION", "LAYER", "FAULT_BLOCK", "SURFACE")
+
+
+def _scan_model(lines: Sequence[str], start: int, path: PathLike | None) -> _Model:
+    """The Model3d object begun at ``lines[start]``."""
+    model = _Model(None, start)
+    header: list[str] = []
+    i = start + 1
+    while i < len(lines):
+        words = lines[i].split(None, 1)
+        if not words or words[0].startswith("#"):
+            i += 1
+            continue
+        keyword, rest = words[0], words[1] if len(words) > 1 else ""
+        if keyword == "END":
+            model.name = _header_name(header)
+            model.end = i
+            return model
+        if keyword == "HEADER":
+            i = _scan_block(lines, i, "}", header, path, inline_open=True)
+        elif keyword == "GOCAD_ORIGINAL_COORDINATE_SYSTEM":
+            i = _scan_block(lines, i, "END_ORIGINAL_COORDINATE_SYSTEM", [], path)
+        elif keyword == "TSURF":
+            model.surfaces.append(" ".join(split_words(rest)))
+        elif keyword == "TFACE":
+            i = _model_tface(lines, i, split_words(rest), model, path)
+        elif keyword in _MODEL_GROUPS:
+            i = _model_group(lines, i, keyword, split_words(rest), model, path)
+        elif keyword in _DESCRIPTION_KEYWORDS:
+            pass  # GEOLOGICAL_FEATURE and the like of the model as a whole
+        elif keyword == "GOCAD":
+            raise FileFormatError(f"the Model3d begun at line {start + 1} has no END before the next GOCAD object",
+                                  path=path, line=i + 1)
+        else:
+            raise FileFormatError(f"unknown keyword {quoted(keyword)} in the Model3d begun at line {start + 1}",
+                                  path=path, line=i + 1,
+                                  hint="a Model3d holds TSURF, TFACE, " + ", ".join(_MODEL_GROUPS) + " lines; tgsis "
+                                       "refuses a line it does not know rather than read the model without it")
+        i += 1
+    raise FileFormatError(f"the Model3d begun at line {start + 1} has no END (the file ends first)", path=path,
+                          line=len(lines))
+
+
+def _model_tface(lines: Sequence[str], i: int, words: list[str], model: _Model, path: PathLike | None) -> int:
+    """``TFACE <id> <type> <surface>`` and its three key vertex lines; the index of the last of them."""
+    if len(words) < 3 or not words[0].lstrip("+-").isdigit():
+        raise FileFormatError("a Model3d TFACE line is 'TFACE <id> <type> <surface name>'", path=path, line=i + 1)
+    for k in range(1, 4):  # the key vertices: three points that say which part of the surface this TFACE is
+        row = lines[i + k].split() if i + k < len(lines) else []
+        try:
+            ok = len(row) == 3 and all(math.isfinite(float(w)) for w in row)
+        except ValueError:
+            ok = False
+        if not ok:
+            raise FileFormatError(f"TFACE {words[0]} of the Model3d needs three key vertices ('x y z' lines) after it",
+                                  path=path, line=i + k + 1)
+    model.tfaces.append((int(words[0]), words[1], " ".join(words[2:]), i))
+    return i + 3
+
+
+def _model_group(lines: Sequence[str], i: int, keyword: str, words: list[str], model: _Model,
+                 path: PathLike | None) -> int:
+    """A REGION, LAYER, FAULT_BLOCK or SURFACE group: its name, then ids up to a 0; the index of its last line."""
+    named = words[1:] if keyword == "REGION" else words
+    model.groups.append((keyword, " ".join(named)))
+    for j in range(i + 1, len(lines)):
+        for word in lines[j].split():
+            try:
+                value = int(word)
+            except ValueError:
+                raise FileFormatError(f"the {keyword} begun at line {i + 1} lists ids up to a 0, found "
+                                      f"{quoted(word)}", path=path, line=j + 1) from None
+            if value == 0:
+                return j
+    raise FileFormatError(f"the {keyword} begun at line {i + 1} has no closing 0 (the file ends first)", path=path,
+                          line=i + 1)
+
+
+def _attach_model(model: _Model, meshes: Sequence[Mesh], part_counts: Sequence[int], path: PathLike | None,
+                  skip_unsupported: bool) -> None:
+    """Give each TSurf of the model its TFACEs; refuse what does not match; warn about what is not stored."""
+    label = f"the GOCAD Model3d {quoted(model.name)}" if model.name else "the GOCAD Model3d"
+    by_name: dict[str, tuple[Mesh, int]] = {}
+    for mesh, count in zip(meshes, part_counts):
+        if isinstance(mesh, Surface):
+            header = _string_list(mesh.metadata.get("gocad_header"))
+            by_name.setdefault(_header_value(header, "name_in_model_list") or mesh.name or "", (mesh, count))
+    missing = [name for name in model.surfaces if name not in by_name]
+    if missing:
+        raise FileFormatError(f"{label} names TSURF {', '.join(map(quoted, missing))}, which this file does not hold",
+                              path=path, line=model.start + 1,
+                              hint="a model whose surfaces are kept in files of their own: import the .ts files of "
+                                   "the model")
+    for number, _, surface, line in model.tfaces:
+        if surface not in model.surfaces:
+            raise FileFormatError(f"TFACE {number} of {label} is on the surface {quoted(surface)}, which no TSURF line "
+                                  "of the model names", path=path, line=line + 1)
+    for name in model.surfaces:
+        mesh, count = by_name[name]
+        tfaces = [[number, kind] for number, kind, surface, _ in model.tfaces if surface == name]
+        if len(tfaces) != count:
+            raise FileFormatError(f"{label} gives the TSurf {quoted(name)} {len(tfaces)} TFACEs, the TSurf has {count}",
+                                  path=path, line=model.start + 1)
+        mesh.metadata["gocad_model"] = {"name": model.name, "tfaces": tfaces}
+    lost = [f"{keyword} {quoted(name)}" for keyword, name in model.groups
+            if not (keyword == "REGION" and name == "Universe")]  # Universe: the outside of the model, nothing in it
+    if not lost:
+        return
+    what = (f"{', '.join(lost)} of {label} (line {model.start + 1}): tgsis stores the surfaces of a model (its TSurfs "
+            "and their TFACEs), not the volumes they bound nor groups of them")
+    if not skip_unsupported:
+        raise FileFormatError(f"not stored: {what}", path=path, line=model.start + 1,
+                              hint="pass skip_unsupported=True to read the other objects of the file")
+    where = f"{path}:{model.start + 1}: " if path is not None else f"line {model.start + 1}: "
+    warnings.warn(SkippedObjectWarning(f"{where}skipped {what}", path=path, line=model.start + 1,
+                                       object_type="Model3d", name=model.name, skipped=tuple(lost)), stacklevel=4)
+
+
 def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
                 skip_unsupported: bool = True) -> list[Mesh]:
     """Parse the text of a GOCAD ASCII file; see :func:`read_gocad`.
@@ -354,8 +577,10 @@ class _Skipped:
 _SUPPORTED = ", ".join(k.name for k in _KINDS)
 
 
-def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
-                 skip_unsupported: bool) -> list[Mesh]:
+def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool, skip_unsupported: bool,
+                 models: list[_Model] | None = None, part_counts: list[int] | None = None) -> list[Mesh]:
+    """The meshes of a file's objects. ``models``: read Model3d objects into it (else they are skipped);
+    ``part_counts``: the number of part keywords (TFACE ...) of each mesh read."""
     meshes: list[Mesh] = []
     skipped: list[_Skipped] = []
     groups: list[int] = []  # GOCAD lines of the groups whose members are being read
@@ -373,6 +598,12 @@ def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
         if kind is not None:
             records, end = _scan_object(lines, i, kind, path)
             meshes.append(_build_mesh(records, path, merge_atoms))
+            if part_counts is not None:
+                part_counts.append(len(records.part_names))
+        elif models is not None and type_name == "Model3d":
+            model = _scan_model(lines, i, path)
+            models.append(model)
+            end = model.end
         elif type_name.lower().endswith("group"):  # HeterogeneousGroup, HomogeneousGroup: read the members
             groups.append(i)
             end = _group_members(lines, i, type_name, path)
@@ -388,13 +619,15 @@ def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
     if groups:
         raise FileFormatError(f"the GOCAD group begun at line {groups[-1] + 1} has no END_MEMBERS (the file ends "
                               "first)", path=path, line=len(lines))
-    if not meshes and skipped:
+    if models:  # the caller checks the model against the objects
+        pass
+    elif not meshes and skipped:
         first = skipped[0]
         others = "".join(f"; {s.describe()}" for s in skipped[1:])
         raise FileFormatError(f"unsupported GOCAD object type {quoted(first.type_name)}: the file holds no object tgsis "
                               f"reads ({first.describe()}{others}; tgsis reads {_SUPPORTED})",
                               path=path, line=first.start + 1)
-    if not meshes:
+    elif not meshes:
         raise FileFormatError("no GOCAD object in the file (no 'GOCAD <type> <version>' line)", path=path)
     for item in skipped:
         where = f"{path}:{item.start + 1}: " if path is not None else f"line {item.start + 1}: "
@@ -539,6 +772,8 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
         end = _scan_block(lines, i, "}", block, path, inline_open=True, keep_close=True)
         rec.class_headers.append(block)
         return end
+    if keyword == "PROPERTY_CN":
+        return _scan_control_nodes(lines, i, rest, rec, path)
     if keyword in _PROPERTY_KEYWORDS:
         rec.property_lines[keyword] = (i, split_words(rest))
     elif keyword.startswith("#"):
@@ -562,6 +797,55 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
                               hint=f"a {kind.name} holds {', '.join(known)} lines; tgsis refuses a line it does "
                                    "not know rather than read the file without it")
     return i
+
+
+def _scan_control_nodes(lines: Sequence[str], start: int, rest: str, rec: _Records, path: PathLike | None) -> int:
+    """A ``PROPERTY_CN <property>`` block: ``CNP <vertex id>`` lines up to ``END_PROPERTY_CN``; its last line.
+
+    GOCAD writes one such block per property that has control nodes (the
+    vertices whose value of that property is fixed, as SCEC CFM faults carry
+    them). The ids are checked and turned into vertex indices with the vertices.
+    """
+    name = " ".join(split_words(rest))
+    ids: list[str] = []
+    id_lines: list[int] = []
+    for i in range(start + 1, len(lines)):
+        words = lines[i].split()
+        if not words or words[0].startswith("#"):
+            continue
+        if words[0] == "END_PROPERTY_CN":
+            rec.control_nodes.append((name, start, ids, id_lines))
+            return i
+        if words[0] == "CNP" and len(words) == 2:
+            ids.append(words[1])
+            id_lines.append(i)
+            continue
+        if words[0] in ("END", "GOCAD"):
+            break
+        raise FileFormatError(f"unknown keyword {quoted(words[0])} in the PROPERTY_CN block begun at line "
+                              f"{start + 1}", path=path, line=i + 1,
+                              hint="a PROPERTY_CN block holds 'CNP <vertex id>' lines and ends with END_PROPERTY_CN")
+    raise FileFormatError("PROPERTY_CN block is not closed by 'END_PROPERTY_CN'", path=path, line=start + 1)
+
+
+def _control_nodes(rec: _Records, layout: _PropertyLayout, index: _IdIndex, seq_to_vertex: IntArray,
+                   path: PathLike | None) -> dict[str, list[int]]:
+    """``{property file name: vertex indices}`` of the PROPERTY_CN blocks, in file order."""
+    result: dict[str, list[int]] = {}
+    for name, line, words, id_lines in rec.control_nodes:
+        if name not in layout.file_names:
+            declared = " ".join(map(quote_word, layout.file_names)) or "none"
+            raise FileFormatError(f"PROPERTY_CN names the property {quoted(name)}, which PROPERTIES does not declare "
+                                  f"(it declares {declared})", path=path, line=line + 1)
+        ids = _int_column(words, id_lines, "CNP", "vertex id", path)
+        seq, found = index.find(ids)
+        if not found.all():
+            j = int(np.flatnonzero(~found)[0])
+            raise FileFormatError(f"CNP refers to vertex {ids[j]}, which is not defined", path=path,
+                                  line=id_lines[j] + 1)
+        vertices = result.setdefault(name, [])
+        vertices.extend(v for v in dict.fromkeys(seq_to_vertex[seq].tolist()) if v not in vertices)
+    return result
 
 
 def _tetra_region(rec: _Records, i: int, words: list[str], path: PathLike | None) -> None:
@@ -862,11 +1146,14 @@ def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh
     cells, parts = _parse_cells(rec, table.index, seq_to_vertex, merge_atoms, path)
     if cells is None:  # a VSet: one point per vertex
         cells = np.arange(len(values), dtype=np.int64).reshape(-1, 1)
+    metadata = _metadata(rec, layout, atoms, flags, len(values))
+    control_nodes = _control_nodes(rec, layout, table.index, seq_to_vertex, path)
+    if control_nodes:
+        metadata["gocad_property_control_nodes"] = control_nodes
     try:
         return kind.mesh_type(values[:, :3], cells, vertex_properties=_vertex_properties(values[:, 3:], layout),
                               cell_properties={} if parts is None else {"part": parts},
-                              name=_header_name(rec.header),
-                              metadata=_metadata(rec, layout, atoms, flags, len(values)))
+                              name=_header_name(rec.header), metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.name} is not a valid mesh: {exc.message}", path=path,
                               line=rec.start + 1) from exc
@@ -1057,9 +1344,11 @@ def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], fl
                 no_data[column_name] = value
         if no_data:
             meta["gocad_no_data_values"] = no_data
-        info = _property_info(rec, layout.file_names)
+        info, whole = _property_info(rec, layout.file_names)
         if info:
             meta["gocad_property_info"] = info
+        if whole:
+            meta["gocad_property_lines"] = whole
     if atoms:
         meta["gocad_atoms"] = atoms
         patoms = [pair[0] for pair, is_p in zip(atoms, rec.atom_is_p) if is_p]
@@ -1090,23 +1379,46 @@ def _flag_ranges(flags: Mapping[int, str], n_vertices: int) -> dict[str, list[li
     return result
 
 
-def _property_info(rec: _Records, names: Sequence[str]) -> dict[str, dict[str, str]]:
-    """Per-property words of PROPERTY_CLASSES, UNITS, ...: ``{keyword: {file name: words}}``.
+def _property_info(rec: _Records, names: Sequence[str]) -> tuple[dict[str, dict[str, str]], dict[str, Any]]:
+    """Per-property words of PROPERTY_CLASSES, UNITS, ...: ``{keyword: {file name: words}}``, and the lines that
+    cannot be cut per property: ``{keyword: {"properties": [file names], "words": text}}``.
 
-    Each keyword has the same number of words per property (1 for classes, 2
-    for ``QUANTITY Float`` subclasses or ``**none** **none**`` ranges); a line
-    whose word count does not divide evenly cannot be split and is dropped.
+    Most keywords have the same number of words per property (1 for classes,
+    2 for ``**none** **none**`` ranges). PROPERTY_SUBCLASSES does not: each
+    subclass starts with a word in capitals, ``QUANTITY Float`` (2 words) or
+    SKUA's ``LINEARFUNCTION Float 1 0`` (4). A line that cannot be cut into
+    one piece per property is kept whole and written back while the file's
+    properties are written unchanged.
     """
     info: dict[str, dict[str, str]] = {}
+    whole: dict[str, Any] = {}
     for keyword in _INFO_KEYWORDS:
         if keyword not in rec.property_lines or not names:
             continue
         words = rec.property_lines[keyword][1]
-        if len(words) % len(names) or not words:
+        pieces = _subclass_pieces(words, len(names)) if keyword == "PROPERTY_SUBCLASSES" else None
+        if keyword != "PROPERTY_SUBCLASSES" and words and len(words) % len(names) == 0:
+            per = len(words) // len(names)
+            pieces = [words[j * per:(j + 1) * per] for j in range(len(names))]
+        if pieces is None:
+            if words:
+                whole[keyword] = {"properties": list(names), "words": " ".join(map(quote_word, words))}
             continue
-        per = len(words) // len(names)
-        info[keyword] = {name: " ".join(map(quote_word, words[j * per:(j + 1) * per])) for j, name in enumerate(names)}
-    return info
+        info[keyword] = {name: " ".join(map(quote_word, piece)) for name, piece in zip(names, pieces)}
+    return info, whole
+
+
+def _subclass_pieces(words: Sequence[str], n: int) -> list[list[str]] | None:
+    """PROPERTY_SUBCLASSES words cut into ``n`` subclasses, each from a word in capitals; None if they are not n."""
+    pieces: list[list[str]] = []
+    for word in words:
+        if word.isalpha() and word.isupper():
+            pieces.append([word])
+        elif pieces:
+            pieces[-1].append(word)
+        else:
+            return None
+    return pieces if len(pieces) == n else None
 
 
 # ---------------------------------------------------------------- writing
@@ -1176,17 +1488,21 @@ def _object_chunks(mesh: Mesh, path: PathLike | None, drop_cell_properties: bool
     properties = _written_properties(mesh)
     chunks.extend(_property_lines(properties, meta))
     vertex_lines = _vertex_lines(mesh, properties)
+    control_nodes = _control_node_lines(mesh, properties)
     if kind.part_keyword is None:
         chunks.extend(vertex_lines)
+        chunks.extend(control_nodes)
     else:
         assert kind.cell_keyword is not None
         cell_lines = _cell_lines(kind.cell_keyword, mesh.cells)
         start = 0
         names = _string_list(meta.get("gocad_part_names"))
         names = names if len(names) == len(groups) else [""] * len(groups)
-        for cells, end, part_name in zip(groups, _vertex_ranges(mesh, groups), names):
+        for j, (cells, end, part_name) in enumerate(zip(groups, _vertex_ranges(mesh, groups), names)):
             chunks.append(f"{kind.part_keyword} {part_name}\n" if part_name.strip() else f"{kind.part_keyword}\n")
             chunks.extend(vertex_lines[start:end])
+            if j == len(groups) - 1:  # after every vertex, before the cells, where GOCAD writes them
+                chunks.extend(control_nodes)
             chunks.extend(cell_lines[c] for c in cells.tolist())
             start = end
     chunks.append("END\n")
@@ -1357,40 +1673,62 @@ def _no_data_value(columns: Sequence[npt.NDArray[Any]], stored: object) -> float
 
 def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, Any]) -> list[str]:
     """PROPERTIES and its companion lines, then the PROPERTY_CLASS_HEADER blocks that still apply."""
-    if not properties:
-        return []
     names = [p.name for p in properties]
     info = _meta_dict(meta, "gocad_property_info")
+    raw = _meta_dict(meta, "gocad_property_lines")
     defaults = {"PROP_LEGAL_RANGES": "**none** **none**", "PROPERTY_KINDS": "unknown",
                 "PROPERTY_SUBCLASSES": "QUANTITY Float", "UNITS": "none"}
 
     def info_line(keyword: str) -> str | None:
         known = info.get(keyword)
-        if not isinstance(known, dict):
-            return None
-        words = [str(known[n]) if n in known else defaults.get(keyword, n) for n in names]
-        return f"{keyword} {' '.join(words)}\n"
+        if isinstance(known, dict):
+            words = [str(known[n]) if n in known else defaults.get(keyword, n) for n in names]
+            return f"{keyword} {' '.join(words)}\n"
+        line = raw.get(keyword)  # a line not cut per property: written as it was while the properties are the same
+        if isinstance(line, dict) and line.get("properties") == names and isinstance(line.get("words"), str):
+            return f"{keyword} {line['words']}\n"
+        return None
 
-    lines = [f"PROPERTIES {' '.join(map(quote_word, names))}\n"]
-    lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
-    lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
-    lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
-              if line]
-    lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
-    lines += [line for line in [info_line("UNITS")] if line]
-
-    classes = {n.strip() for n in names} | {"X", "Y", "Z"}
-    known_classes = info.get("PROPERTY_CLASSES")
-    if isinstance(known_classes, dict):
-        classes |= {" ".join(split_words(str(known_classes[n]))).strip() for n in names if n in known_classes}
+    lines: list[str] = []
+    if properties:
+        lines.append(f"PROPERTIES {' '.join(map(quote_word, names))}\n")
+        lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
+        lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
+        lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
+                  if line]
+        lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
+        lines += [line for line in [info_line("UNITS")] if line]
+    gone = _classes_left_out(names, meta, info)
     blocks = meta.get("gocad_property_class_headers")
     for block in blocks if isinstance(blocks, list) else []:
         block_lines = _string_list(block)
         keyword, _, title = block_lines[0].partition("{")[0].partition(" ") if block_lines else ("", "", "")
         # the class name runs to the "{" and may hold blanks, unquoted: PROPERTY_CLASS_HEADER default property {
-        if keyword == "PROPERTY_CLASS_HEADER" and " ".join(split_words(title)).strip() in classes:
+        if keyword == "PROPERTY_CLASS_HEADER" and " ".join(split_words(title)).strip() not in gone:
             lines.extend(line + "\n" for line in block_lines)
     return lines
+
+
+def _classes_left_out(names: Sequence[str], meta: Mapping[str, Any], info: Mapping[str, Any]) -> set[str]:
+    """The classes (and names) of the properties the file had that are not written: their class headers go too.
+
+    Every other PROPERTY_CLASS_HEADER block is written back: X, Y and Z (kind,
+    unit, clip range of the geometry, also on objects without properties),
+    and classes of no property (``vector3d``).
+    """
+    classes = info.get("PROPERTY_CLASSES")
+    classes = classes if isinstance(classes, dict) else {}
+
+    def class_names(name: str) -> set[str]:
+        found = {name.strip()}
+        if name in classes:
+            found.add(" ".join(split_words(str(classes[name]))).strip())
+        return found
+
+    read = _meta_dict(meta, "property_names").values()
+    before = set().union(*(class_names(n) for n in read if isinstance(n, str)))
+    kept = set().union(*(class_names(n) for n in names)) | {"X", "Y", "Z"}
+    return before - kept
 
 
 def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[str]:
@@ -1419,6 +1757,26 @@ def _vertex_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[st
             lines[atom] = f"PATOM {atom + 1} {ref + 1}{ends[atom]}\n"
         else:  # a PATOM with values of its own
             lines[atom] = f"PATOM {atom + 1} {ref + 1} {texts[atom]}{ends[atom]}\n"
+    return lines
+
+
+def _control_node_lines(mesh: Mesh, properties: Sequence[_WrittenProperty]) -> list[str]:
+    """The ``PROPERTY_CN`` blocks of ``metadata["gocad_property_control_nodes"]`` for the properties written.
+
+    Blocks of properties no longer written, and vertex indices outside the
+    mesh (metadata edited by hand), are left out.
+    """
+    nodes = _meta_dict(mesh.metadata, "gocad_property_control_nodes")
+    written = {p.name for p in properties}
+    lines: list[str] = []
+    for name, vertices in nodes.items():
+        if name not in written or not isinstance(vertices, (list, tuple)):
+            continue
+        valid = [v for v in vertices if isinstance(v, int) and not isinstance(v, bool) and 0 <= v < mesh.n_vertices]
+        if valid:
+            lines.append(f"PROPERTY_CN {quote_word(name)}\n")
+            lines.extend(f"CNP {v + 1}\n" for v in valid)
+            lines.append("END_PROPERTY_CN\n")
     return lines
 
 

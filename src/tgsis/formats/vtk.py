@@ -44,8 +44,14 @@ and ``tgsis_member_names`` (strings as above, one per member; no name is
 written as the empty string) and ``tgsis_member_sizes`` (Int64, 2 components:
 points and cells of each member). ParaView shows the whole grid. A vertex or
 cell property must be on every member (a VTU array covers all points or all
-cells); members with different dtypes of one property come back with the
-common dtype (numpy promotion).
+cells), but ``part``: members without parts get ``part`` -1 (``NO_PART``)
+and are read back without it; members with different dtypes of one property
+come back with the common dtype (numpy promotion).
+
+Array names read from a VTK file that are no mesh property names (``rock
+type``) are sanitised on reading and kept in ``metadata["vtk_array_names"]``
+(below); writing gives the arrays those names back (XML attributes hold
+blanks), unless two arrays would get one name.
 
 Reading (:func:`read_vtu`)
 --------------------------
@@ -94,7 +100,7 @@ from typing import TYPE_CHECKING, Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._vtk_cells import mesh_from_vtk_cells
+from tgsis._vtk_cells import file_array_names, mesh_from_vtk_cells, named_as_read, shared_properties, without_no_part
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
@@ -173,10 +179,23 @@ class _Grid:
 
 def _mesh_grid(mesh: Mesh) -> _Grid:
     k = mesh.cell_size
+    point_data, cell_data = _as_read(mesh, mesh.vertex_properties, mesh.cell_properties)
     return _Grid(mesh.name, mesh.geotype.value, mesh.vertices, mesh.cells.reshape(-1),
                  np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k,
                  np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8),
-                 mesh.vertex_properties, mesh.cell_properties)
+                 point_data, cell_data)
+
+
+def _xml_name(name: str) -> bool:
+    """Whether a DataArray may be named ``name``: any printable text (blanks too; XML escapes quotes)."""
+    return name.isprintable()
+
+
+def _as_read(geometry: Geometry, point_data: dict[str, npt.NDArray[Any]],
+             cell_data: dict[str, npt.NDArray[Any]]) -> tuple[dict[str, npt.NDArray[Any]], dict[str, npt.NDArray[Any]]]:
+    """Point and cell data under the names of the VTK file they were read from (``metadata["vtk_array_names"]``)."""
+    return (named_as_read(point_data, file_array_names(geometry, "point_data"), _xml_name),
+            named_as_read(cell_data, file_array_names(geometry, "cell_data"), _xml_name))
 
 
 def _collection_grid(collection: GeometryCollection) -> _Grid:
@@ -187,25 +206,27 @@ def _collection_grid(collection: GeometryCollection) -> _Grid:
     sizes = np.concatenate([np.full(m.n_cells, m.cell_size, dtype=np.int64) for m in members])
     types = np.concatenate([np.full(m.n_cells, VTK_CELL_TYPES[mesh_class(m.geotype)], dtype=np.uint8)
                             for m in members])
+    point_data, cell_data = _as_read(collection, _shared_properties(members, "vertex"),
+                                     _shared_properties(members, "cell"))
     return _Grid(collection.name, collection.geotype.value, np.concatenate([m.vertices for m in members]),
-                 connectivity.astype(np.int64), np.cumsum(sizes).astype(np.int64), types,
-                 _shared_properties(members, "vertex"), _shared_properties(members, "cell"), collection)
+                 connectivity.astype(np.int64), np.cumsum(sizes).astype(np.int64), types, point_data, cell_data,
+                 collection)
 
 
 def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"]) -> dict[str, npt.NDArray[Any]]:
-    """The members' ``kind`` properties concatenated; each must be on every member."""
+    """The members' ``kind`` properties concatenated; each must be on every member, but ``part``, which is
+    :data:`~tgsis._vtk_cells.NO_PART` on the cells of members without parts."""
     def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
         return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
 
-    names = dict.fromkeys(name for m in members for name in of(m))
-    for name in names:
+    for name in dict.fromkeys(name for m in members for name in of(m)):
         lacking = [i for i, m in enumerate(members) if name not in of(m)]
-        if lacking:
+        if lacking and not (kind == "cell" and name == "part"):
             raise FileFormatError(
                 f"{kind} property {name!r} is on some members of the collection but not on members {lacking}: "
                 f"a VTU grid holds one value per {'point' if kind == 'vertex' else 'cell'} of all members",
                 hint="give every member the property, or remove it before writing")
-    return {name: np.concatenate([of(m)[name] for m in members]) for name in names}
+    return shared_properties(members, kind)
 
 
 def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
@@ -568,7 +589,7 @@ def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices
             members.append(mesh_type(
                 vertices[points], (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k),
                 vertex_properties={key: values[points] for key, values in point_data.items()},
-                cell_properties={key: values[cells] for key, values in cell_data.items()},
+                cell_properties=without_no_part({key: values[cells] for key, values in cell_data.items()}),
                 name=(names[i] if i < len(names) else "") or None))
         except (InvalidGeometryError, InvalidPropertyError) as exc:
             raise FileFormatError(f"member {i} is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
@@ -688,7 +709,7 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
         if components < 1:
             raise FileFormatError(f"DataArray {file_name!r} has NumberOfComponents 0", path=decoder.path)
         values = decoder.array(element, count, components).reshape(count, components)
-        name = sanitize_property_name(file_name, result)
+        name = sanitize_property_name(file_name.strip() or file_name, result)  # as GOCAD names: " default property"
         if name != file_name:
             renamed[name] = file_name
         # k components: a vector property (n, k), as tgsis writes one
@@ -930,11 +951,12 @@ def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compre
     counts = {name: "0" for name in ("NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys")}
     counts[f"NumberOf{section}"] = str(mesh.n_cells)
     piece = ET.SubElement(poly, "Piece", {"NumberOfPoints": str(mesh.n_vertices), **counts})
+    point_arrays, cell_arrays = _as_read(mesh, mesh.vertex_properties, mesh.cell_properties)
     point_data = ET.SubElement(piece, "PointData")
-    for name, values in mesh.vertex_properties.items():
+    for name, values in point_arrays.items():
         point_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
     cell_data = ET.SubElement(piece, "CellData")
-    for name, values in mesh.cell_properties.items():
+    for name, values in cell_arrays.items():
         cell_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
     points = ET.SubElement(piece, "Points")
     points.append(writer.array("Points", mesh.vertices, components=3))

@@ -13,7 +13,12 @@ property: k components), and in
 the dataset's ``FIELD FieldData`` ``tgsis_name``, ``tgsis_geotype`` and for a
 collection its member table (``tgsis_member_geotypes``,
 ``tgsis_member_names``: UTF-8 bytes ending in 0; ``tgsis_member_sizes``),
-as in ``.vtu``. The title line is the mesh name (or ``tgsis``).
+as in ``.vtu``. The title line is the mesh name (or ``tgsis``). Array
+names are one word: the names of the file a mesh was read from
+(``metadata["vtk_array_names"]``) are written back encoded as VTK's writer
+encodes them (``rock%20type``: :func:`encode_name`), which the readers
+decode; a collection's ``part`` is -1 on members without parts, as in
+``.vtu``.
 
 Values are exact; types are kept for float32, float64, int64 and uint64.
 VTK's legacy reader and meshio's 5.1 reader agree on no smaller integer type
@@ -48,7 +53,8 @@ from urllib.parse import unquote_to_bytes
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
+from tgsis._vtk_cells import (collection_from_cells, file_array_names, first, mesh_from_vtk_cells, named_as_read,
+                              string_bytes, strings, vtk_parts)
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import MAX_LINE_BYTES, PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
@@ -128,11 +134,21 @@ def format_vtk(mesh: Geometry, *, ascii: bool = False) -> bytes:
     out.values(connectivity)
     out.text(f"CELL_TYPES {n_cells}\n")
     out.values(types.astype(np.int32))
+    # the names of the file the arrays were read from (metadata["vtk_array_names"]), %-encoded by field()
+    point_data = named_as_read(point_data, file_array_names(mesh, "point_data"), bool)
+    cell_data = named_as_read(cell_data, file_array_names(mesh, "cell_data"), bool)
     for keyword, count, arrays in (("POINT_DATA", len(vertices), point_data), ("CELL_DATA", n_cells, cell_data)):
         if arrays:
             out.text(f"{keyword} {count}\n")
             out.field("FieldData", list(arrays.items()))
     return out.content()
+
+
+def encode_name(name: str) -> str:
+    """An array name as one word of a legacy file, encoded as VTK's writer does: ``%XX`` for each byte (UTF-8) that
+    is a blank, a control character, not ASCII, ``"`` or ``%`` (``rock type`` -> ``rock%20type``). VTK's reader
+    and tgsis's decode it."""
+    return "".join(chr(b) if 0x20 < b < 0x7F and b not in (0x22, 0x25) else f"%{b:02X}" for b in name.encode("utf-8"))
 
 
 class _Writer:
@@ -166,7 +182,7 @@ class _Writer:
                 values = values.astype(np.float32)
             components = values.shape[1] if values.ndim == 2 else 1
             type_name, code = _TYPE_NAME_OF[values.dtype.str[1:]]
-            self.text(f"{key} {components} {len(values)} {type_name}\n")
+            self.text(f"{encode_name(key)} {components} {len(values)} {type_name}\n")
             self.values(values.astype(code))
 
     def content(self) -> bytes:
@@ -288,7 +304,7 @@ def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str,
     for original, values in arrays.items():
         if len(values) != count:
             raise FileFormatError(f"{key} array {quoted(original)} has {len(values)} tuples, the dataset {count}", path=path)
-        name = sanitize_property_name(original, result)
+        name = sanitize_property_name(original.strip() or original, result)  # as GOCAD names: " default property"
         if name != original:
             renamed[name] = original
         result[name] = values
