@@ -1094,6 +1094,7 @@ def cmd_at(args: argparse.Namespace) -> int:
         if surface is None:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))
+        _with_z_convention(conn, args.id, surface)
         target.write(surface, args.file)
         _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
              f"{surface.n_cells} triangles, to {args.file}")
@@ -1101,6 +1102,19 @@ def cmd_at(args: argparse.Namespace) -> int:
             _picture_of(conn, [args.id, *args.with_ids], args.time, args.png,
                         title=f"feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)} (SQL snapshot)")
     return 0
+
+
+def _with_z_convention(conn: Any, feature_id: int, surface: Surface) -> None:
+    """The snapshot (stored z: elevation) in the z convention its feature was stored with, as an export gives it.
+
+    GOCAD then writes ``ZPOSITIVE`` as the imported file had it; the formats
+    without a z convention write elevation whatever it is (tgsis._zpositive).
+    """
+    from tgsis.db.meaning import restore_meaning
+
+    row = conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+    if row is not None and row[0] is not None:
+        restore_meaning(surface, row[0], None, None, None)
 
 
 def _series_name(name: str) -> str:

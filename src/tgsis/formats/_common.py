@@ -7,13 +7,14 @@ import re
 import string
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.errors import FileFormatError
-from tgsis.mesh import PROPERTY_NAME_RE, Mesh
+from tgsis import _zpositive
+from tgsis.errors import FileFormatError, InvalidGeometryError
+from tgsis.mesh import PROPERTY_NAME_RE, Geometry, Mesh
 
 __all__ = [
     "PathLike",
@@ -27,9 +28,13 @@ __all__ = [
     "quoted",
     "MAX_LINE_BYTES",
     "check_line_lengths",
+    "in_elevation",
+    "restore_convention",
 ]
 
 PathLike = str | os.PathLike[str]
+
+_G = TypeVar("_G", bound=Geometry)
 
 _INVALID_CHARS = re.compile(r"[^A-Za-z0-9_]")
 
@@ -119,6 +124,41 @@ def check_mesh(mesh: object, what: str) -> Mesh:
     if not isinstance(mesh, Mesh):
         raise FileFormatError(f"{what} can only write tgsis meshes, got {type(mesh).__name__}")
     return mesh
+
+
+def in_elevation(geometry: _G, path: PathLike | None = None) -> tuple[_G, list[str | None]]:
+    """What a format without a z convention gets: ``geometry`` with z up, and the convention of each mesh (member).
+
+    A mesh whose ``metadata["zpositive"]`` says ``Depth`` is written with z
+    negated (elevation): every viewer draws +z up, and a file that says
+    nothing is read as elevation (see :mod:`tgsis._zpositive`).
+
+    Raises
+    ------
+    FileFormatError
+        A ``metadata["zpositive"]`` that is neither Elevation nor Depth.
+    """
+    try:
+        return _zpositive.elevation(geometry), _zpositive.conventions(geometry)
+    except InvalidGeometryError as exc:
+        raise FileFormatError(exc.message, path=path, hint=exc.hint) from None
+
+
+def restore_convention(geometry: Geometry, recorded: list[str] | str | None, path: PathLike | None,
+                       where: str) -> None:
+    """Give a mesh read in elevation the z convention its file recorded (one per member of a collection).
+
+    Raises
+    ------
+    FileFormatError
+        A recorded value other than Elevation, Depth or nothing; ``where`` names its place in the file.
+    """
+    values = [recorded] if recorded is None or isinstance(recorded, str) else recorded
+    try:
+        checked = [_zpositive.recorded_convention(v, where) for v in values]
+    except InvalidGeometryError as exc:
+        raise FileFormatError(exc.message, path=path) from None
+    _zpositive.restore(geometry, checked)
 
 
 def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,

@@ -66,6 +66,8 @@ class ParsedSurface:
     vertex_properties: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     face_properties: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     renamed: dict[str, dict[str, str]] = field(default_factory=dict)
+    #: the z convention a PLY comment ``tgsis zpositive`` records (tgsis writes z up, see tgsis._zpositive)
+    zpositive: str | None = None
 
 
 # ---------------------------------------------------------------- lines
@@ -511,7 +513,18 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
                                 [[int(c) for c in corners] for corners in polygons])
         face_properties = {name: values[owner] for name, values in
                            _ply_scalars(tables["face"], "face", (index_name,), renamed).items()}
-    return ParsedSurface(vertices, triangles, face_element is not None, vertex_properties, face_properties, renamed)
+    return ParsedSurface(vertices, triangles, face_element is not None, vertex_properties, face_properties, renamed,
+                         _ply_recorded_zpositive(data[:body]))
+
+
+def _ply_recorded_zpositive(header: bytes) -> str | None:
+    """The word after ``comment tgsis zpositive`` in a PLY header (tgsis's record of a z convention), or None."""
+    found = None
+    for line in header.split(b"\n"):
+        words = line.split()
+        if words[:3] == [b"comment", b"tgsis", b"zpositive"]:
+            found = words[3].decode("latin-1") if len(words) > 3 else ""
+    return found
 
 
 def _ply_row_line(order: str, body_line: int, elements: dict[str, _PlyElement], name: str, row: int) -> int | None:

@@ -62,7 +62,8 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, property_columns, read_bytes, write_bytes
+from tgsis.formats._common import (PathLike, check_mesh, in_elevation, property_columns, read_bytes,
+                                   restore_convention, write_bytes)
 from tgsis.formats._surface_files import ParsedSurface, parse_obj, parse_off, parse_ply, parse_stl
 from tgsis.mesh import PointSet, Surface
 
@@ -136,13 +137,17 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
         raise FileFormatError(f"the {kind.upper()} file holds no vertex (no triangle and no point)", path=path)
     if merge_vertices:
         vertices, faces, vertex_properties = _merge_identical(vertices, faces, vertex_properties)
+    mesh: Surface | PointSet
     try:
         if len(faces) == 0 and not (kind == "ply" and parsed.has_faces):
-            return PointSet(vertices, vertex_properties=vertex_properties, metadata=metadata)
-        return Surface(vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties,
-                       metadata=metadata)
+            mesh = PointSet(vertices, vertex_properties=vertex_properties, metadata=metadata)
+        else:
+            mesh = Surface(vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties,
+                           metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.upper()} file is not a valid surface: {exc.message}", path=path) from exc
+    restore_convention(mesh, parsed.zpositive, path, "the PLY comment 'tgsis zpositive'")
+    return mesh
 
 
 _PARSERS: dict[str, Callable[[bytes, PathLike], ParsedSurface]] = {
@@ -195,10 +200,13 @@ def write_trimesh_file(surface: Surface, path: PathLike, *, file_type: str | Non
     mesh = check_mesh(surface, f"the {kind.upper()} writer")
     if not isinstance(mesh, Surface):
         raise FileFormatError(f"{kind.upper()} stores triangle surfaces, not a {type(mesh).__name__}", path=path)
+    up, (zpositive,) = in_elevation(mesh, path)  # no z convention in these formats: z up
+    assert isinstance(up, Surface)
+    mesh = up
     if digits is not None and kind not in ("obj", "off"):
         raise FileFormatError(f"digits= applies to OBJ and OFF text, not to binary {kind.upper()}", path=path)
     if kind == "ply":
-        data = _ply_bytes(mesh, path)
+        data = _ply_bytes(mesh, path, zpositive)
     else:
         lost = [*mesh.vertex_properties, *mesh.cell_properties]
         if lost and not drop_properties:
@@ -242,12 +250,16 @@ def _ply_type(name: str, values: npt.NDArray[Any], path: PathLike) -> tuple[str,
     return _PLY_TYPES[values.dtype.str[1:]], values
 
 
-def _ply_bytes(surface: Surface, path: PathLike) -> bytes:
-    """A binary little-endian PLY with double coordinates, int indices and typed properties."""
+def _ply_bytes(surface: Surface, path: PathLike, zpositive: str | None = None) -> bytes:
+    """A binary little-endian PLY with double coordinates, int indices and typed properties.
+
+    ``zpositive``: the z convention of the mesh ``surface`` (in elevation) came from, recorded in a comment.
+    """
     n, m = surface.n_vertices, surface.n_cells
     if n > np.iinfo(np.int32).max:
         raise FileFormatError(f"PLY face indices are 32-bit: {n} vertices are too many", path=path)
-    header = ["ply", "format binary_little_endian 1.0", "comment tgsis", f"element vertex {n}",
+    recorded = [f"comment tgsis zpositive {zpositive} (z is written up positive, as elevation)"] if zpositive else []
+    header = ["ply", "format binary_little_endian 1.0", "comment tgsis", *recorded, f"element vertex {n}",
               *(f"property double {c}" for c in _PLY_COORDINATES)]
     vertex_fields: list[tuple[str, npt.NDArray[Any]]] = [(c, surface.vertices[:, j])
                                                          for j, c in enumerate(_PLY_COORDINATES)]
