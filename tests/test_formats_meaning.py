@@ -239,3 +239,316 @@ def test_import_at_stores_a_depth_surface_as_elevation_and_at_exports_it_so(
     assert main(["--dsn", db_dsn, "at", str(fid), "1", str(out)]) == 0
     [snapshot] = formats.read(out)
     assert snapshot.metadata.get("zpositive") == "Depth" and np.array_equal(snapshot.vertices[:, 2], DEPTHS)
+
+
+# ---------------------------------------------------------------- OBJ: vertices, groups, polygons
+
+# A closed octahedron as modelling tools write one: texture coordinates that differ between the faces that share a
+# vertex (UV seams), normals, two objects with groups, vertices listed in an order of their own.
+SEAMED_OBJ = """# octahedron with UV seams
+mtllib rock.mtl
+o upper
+v 0 0 1
+v 1 0 0
+v 0 1 0
+v -1 0 0
+v 0 -1 0
+v 0 0 -1
+vt 0 0
+vt 1 0
+vt 0 1
+vt 1 1
+vt 0.5 0.5
+vn 0 0 1
+g upper north
+usemtl stone
+s 1
+f 1/1/1 2/2/1 3/3/1
+f 1/4/1 3/5/1 4/1/1
+g upper south
+f 1/2/1 4/3/1 5/4/1
+f 1/5/1 5/1/1 2/2/1
+o lower
+f 6/1 3/2 2/3
+f 6/4 4/5 3/1
+f 6/2 5/3 4/4
+g
+f 6/5 2/1 5/2
+"""
+
+
+def read_obj(tmp_path: Path, text: str, name: str = "in.obj") -> Surface:
+    path = tmp_path / name
+    path.write_text(text)
+    [mesh] = formats.read(path)
+    assert isinstance(mesh, Surface)
+    return mesh
+
+
+def border_edges(surface: Surface) -> int:
+    edges = np.sort(surface.cells[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int((counts == 1).sum())
+
+
+def test_an_obj_with_texture_coordinates_keeps_its_geometric_vertices_closed(tmp_path: Path) -> None:
+    mesh = read_obj(tmp_path, SEAMED_OBJ)
+    assert mesh.n_vertices == 6 and mesh.n_cells == 8
+    assert border_edges(mesh) == 0  # closed: not cut along the UV seams
+    assert mesh.vertices.tolist() == [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    assert mesh.cells[0].tolist() == [0, 1, 2] and mesh.cells[-1].tolist() == [5, 1, 4]
+
+
+def test_obj_groups_become_parts_with_their_names(tmp_path: Path) -> None:
+    mesh = read_obj(tmp_path, SEAMED_OBJ)
+    assert mesh.cell_properties["part"].tolist() == [0, 0, 1, 1, 2, 2, 2, 3]
+    assert mesh.metadata["part_names"] == ["upper north", "upper south", "lower", "default"]
+    # written back: a g line where the part changes, and read again the same
+    out = tmp_path / "out.obj"
+    formats.write(mesh, out)
+    again = read_obj(tmp_path, out.read_text(), "again.obj")
+    assert again.vertices.tolist() == mesh.vertices.tolist() and again.cells.tolist() == mesh.cells.tolist()
+    assert again.cell_properties["part"].tolist() == mesh.cell_properties["part"].tolist()
+    assert again.metadata["part_names"] == mesh.metadata["part_names"]
+    # and to GOCAD: one TFACE per group, named
+    ts = tmp_path / "out.ts"
+    formats.write(mesh, ts)
+    assert [line for line in ts.read_text().splitlines() if line.startswith("TFACE")] == [
+        "TFACE upper north",
+        "TFACE upper south",
+        "TFACE lower",
+        "TFACE default",
+    ]
+
+
+def test_obj_groups_are_kept_by_the_line_by_line_reader_too(tmp_path: Path) -> None:
+    # a negative (relative) index and a comment send the file to the line-by-line reader
+    text = SEAMED_OBJ.replace("f 6/5 2/1 5/2", "f -1/5 2/1 5/2  # the last face")
+    mesh = read_obj(tmp_path, text)
+    assert mesh.cell_properties["part"].tolist() == [0, 0, 1, 1, 2, 2, 2, 3]
+    assert mesh.metadata["part_names"] == ["upper north", "upper south", "lower", "default"]
+    assert border_edges(mesh) == 0
+
+
+def test_an_obj_of_one_group_has_no_part_property_but_its_name(tmp_path: Path) -> None:
+    mesh = read_obj(tmp_path, "g fault A\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert "part" not in mesh.cell_properties and mesh.metadata["part_names"] == ["fault A"]
+
+
+def test_the_vertex_order_of_an_obj_is_kept(tmp_path: Path) -> None:
+    rng = np.random.default_rng(7)
+    points = rng.normal(size=(40, 3)).round(6)
+    order = rng.permutation(40)
+    lines = [f"v {x} {y} {z}" for x, y, z in points[order]]
+    faces = [
+        f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}"
+        for a, b, c in rng.integers(0, 40, (30, 3))
+        if len({a, b, c}) == 3
+    ]
+    mesh = read_obj(tmp_path, "\n".join(lines + [f"vt {u} 0" for u in range(40)] + faces) + "\n")
+    assert np.array_equal(mesh.vertices, points[order])
+
+
+QUADS = """v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 2 0 0
+v 2 1 0
+f 1 2 3 4
+f 2 5 6 3
+"""
+
+
+def test_planar_convex_quads_are_split_with_a_warning_in_obj_off_ply_vtp_and_vtk(tmp_path: Path) -> None:
+    pv = pytest.importorskip("pyvista")
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], dtype=np.float64)
+    quads = pv.PolyData(points, faces=np.array([4, 0, 1, 2, 3, 4, 1, 4, 5, 2]))
+    quads.cell_data["rock"] = np.array([7, 9])
+    (tmp_path / "q.obj").write_text(QUADS)
+    (tmp_path / "q.off").write_text(
+        "OFF\n6 2 0\n" + "\n".join(" ".join(map(str, p)) for p in points.tolist()) + "\n4 0 1 2 3\n4 1 4 5 2\n"
+    )
+    (tmp_path / "q.ply").write_text(
+        ply(
+            [
+                "element vertex 6",
+                "property float x",
+                "property float y",
+                "property float z",
+                "element face 2",
+                "property list uchar int vertex_indices",
+                "property uchar rock",
+            ],
+            [" ".join(map(str, p)) for p in points.tolist()] + ["4 0 1 2 3 7", "4 1 4 5 2 9"],
+        )
+    )
+    quads.save(tmp_path / "q.vtp")
+    quads.save(tmp_path / "q.vtk")
+    for ext in ("obj", "off", "ply", "vtp", "vtk"):
+        with pytest.warns(tgsis.PolygonsSplitWarning, match="2 faces|2 polygons") as caught:
+            [mesh] = formats.read(tmp_path / f"q.{ext}")
+        assert caught[0].message.count == 2  # type: ignore[union-attr]
+        assert isinstance(mesh, Surface) and mesh.n_cells == 4, ext
+        assert mesh.cells.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]], ext
+        assert mesh.metadata["polygons_split"] == 2
+        assert np.isclose(mesh.cell_measures().sum(), 2.0), ext  # the quads' area: no shape changed
+        if ext in ("ply", "vtp", "vtk"):
+            assert mesh.cell_properties["rock"].tolist() == [7, 7, 9, 9], ext
+
+
+@pytest.mark.parametrize(("corner", "reason"), [("2 1 0.25", "is not planar"), ("1.2 0.5 0", "is not convex")])
+def test_a_non_planar_or_non_convex_polygon_is_refused_in_every_format_naming_it(
+    tmp_path: Path, corner: str, reason: str
+) -> None:
+    pv = pytest.importorskip("pyvista")
+    text = QUADS.replace("v 2 1 0\n", f"v {corner}\n")
+    (tmp_path / "q.obj").write_text(text)
+    points = np.array([[float(v) for v in line.split()[1:]] for line in text.splitlines() if line.startswith("v ")])
+    (tmp_path / "q.off").write_text(
+        "OFF\n6 2 0\n" + "\n".join(" ".join(map(repr, p)) for p in points.tolist()) + "\n4 0 1 2 3\n4 1 4 5 2\n"
+    )
+    quads = pv.PolyData(points, faces=np.array([4, 0, 1, 2, 3, 4, 1, 4, 5, 2]))
+    quads.save(tmp_path / "q.ply", binary=False)
+    quads.save(tmp_path / "q.vtp")
+    quads.save(tmp_path / "q.vtk")
+    for ext, where in (
+        ("obj", ":8: OBJ face 1"),
+        ("off", ":10: OFF face 1"),
+        ("ply", "PLY face 1"),
+        ("vtp", "PolyData cell 1"),
+        ("vtk", "POLYDATA cell 1"),
+    ):
+        with pytest.raises(FileFormatError, match=f"{where} has 4 .*{reason}") as caught:
+            formats.read(tmp_path / f"q.{ext}")
+        assert caught.value.hint is not None and "triangulate" in caught.value.hint.lower(), ext
+
+
+def test_a_star_polygon_is_refused(tmp_path: Path) -> None:
+    angles = np.arange(5) * 2 * np.pi / 5
+    lines = [f"v {float(np.cos(a))!r} {float(np.sin(a))!r} 0" for a in angles] + ["f 1 3 5 2 4"]
+    (tmp_path / "star.obj").write_text("\n".join(lines) + "\n")
+    with pytest.raises(FileFormatError, match="OBJ face 0 has 5 corners and is not convex"):
+        formats.read(tmp_path / "star.obj")
+
+
+def test_cli_import_of_quads_says_they_were_split(
+    db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "q.obj").write_text(QUADS)
+    assert main(["--dsn", db_dsn, "class", "create", "plates", "--geotype", "SURFACE"]) == 0
+    capsys.readouterr()
+    assert main(["--dsn", db_dsn, "import", str(tmp_path / "q.obj"), "--class", "plates"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith(f"tgsis: warning: {tmp_path / 'q.obj'}: 2 faces of more than 3 corners were split")
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT ncell, metadata->>'polygons_split' FROM tgsis.geometry").fetchone() == (4, "2")
+
+
+# ---------------------------------------------------------------- PLY triangle strips
+
+
+def ply(header: list[str], body: list[str]) -> str:
+    return "\n".join(["ply", "format ascii 1.0", *header, "end_header", *body]) + "\n"
+
+
+GRID = [f"{x} {y} 0" for y in range(2) for x in range(4)]  # 0 1 2 3 / 4 5 6 7
+
+
+def test_a_ply_of_triangle_strips_is_a_surface(tmp_path: Path) -> None:
+    # one strip row 0-1 of the grid, a restart, then the same strip with a degenerate join
+    text = ply(
+        [
+            "element vertex 8",
+            "property float x",
+            "property float y",
+            "property float z",
+            "element tristrips 1",
+            "property list int int vertex_indices",
+        ],
+        [*GRID, "14 4 0 5 1 6 2 -1 6 2 7 3 3 3 3"],
+    )
+    path = tmp_path / "strips.ply"
+    path.write_text(text)
+    [mesh] = formats.read(path)
+    assert isinstance(mesh, Surface)
+    assert mesh.cells.tolist() == [
+        [4, 0, 5],
+        [5, 0, 1],
+        [5, 1, 6],
+        [6, 1, 2],  # alternate triangles turned
+        [6, 2, 7],
+        [7, 2, 3],
+    ]  # restarted; 3 3 3 dropped
+    normals = np.cross(*(mesh.vertices[mesh.cells[:, j]] - mesh.vertices[mesh.cells[:, 0]] for j in (1, 2)))
+    assert np.all(normals[:, 2] > 0)  # all facing one way (up)
+    assert border_edges(mesh) == 8
+
+
+def test_binary_big_endian_strips_and_faces_together(tmp_path: Path) -> None:
+    header = (
+        b"ply\nformat binary_big_endian 1.0\nelement vertex 8\nproperty double x\nproperty double y\n"
+        b"property double z\nelement face 1\nproperty list uchar int vertex_indices\nelement tristrips 1\n"
+        b"property list int int vertex_indices\nend_header\n"
+    )
+    vertices = np.array([[float(v) for v in p.split()] for p in GRID], dtype=">f8").tobytes()
+    face = np.array([3], dtype=">u1").tobytes() + np.array([0, 1, 4], dtype=">i4").tobytes()
+    strip = np.array([6], dtype=">i4").tobytes() + np.array([5, 1, 6, 2, 7, 3], dtype=">i4").tobytes()
+    path = tmp_path / "both.ply"
+    path.write_bytes(header + vertices + face + strip)
+    [mesh] = formats.read(path)
+    assert mesh.cells.tolist() == [[0, 1, 4], [5, 1, 6], [6, 1, 2], [6, 2, 7], [7, 2, 3]]
+
+
+def test_a_strip_index_outside_the_vertices_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "bad.ply"
+    path.write_text(
+        ply(
+            [
+                "element vertex 8",
+                "property float x",
+                "property float y",
+                "property float z",
+                "element tristrips 1",
+                "property list int int vertex_indices",
+            ],
+            [*GRID, "4 4 0 5 8"],
+        )
+    )
+    with pytest.raises(FileFormatError, match=r"bad.ply:18: PLY tristrips 0 uses vertex 8, outside 0..7"):
+        formats.read(path)
+
+
+def test_an_element_of_cells_tgsis_does_not_know_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "polys.ply"
+    path.write_text(
+        ply(
+            [
+                "element vertex 8",
+                "property float x",
+                "property float y",
+                "property float z",
+                "element polygon 1",
+                "property list uchar int vertex_indices",
+            ],
+            [*GRID, "3 0 1 4"],
+        )
+    )
+    with pytest.raises(FileFormatError, match="PLY element 'polygon' lists vertices .* would be lost"):
+        formats.read(path)
+    # a scanner's range grid (one vertex or none per grid cell) holds no cells: the points are read
+    path.write_text(
+        ply(
+            [
+                "element vertex 8",
+                "property float x",
+                "property float y",
+                "property float z",
+                "element range_grid 2",
+                "property list uchar int vertex_indices",
+            ],
+            [*GRID, "1 0", "0"],
+        )
+    )
+    [points] = formats.read(path)
+    assert isinstance(points, PointSet) and points.n_vertices == 8

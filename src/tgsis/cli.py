@@ -48,7 +48,7 @@ from tgsis.db.features import (
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.errors import (Error, FileFormatError, InstallationError, InvalidGeometryError, InvalidInputError,
-                          MissingPrivilegeError, NotFoundError, SkippedObjectWarning)
+                          MissingPrivilegeError, NotFoundError, PolygonsSplitWarning, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
@@ -532,9 +532,12 @@ def _read_for_import(args: argparse.Namespace) -> list[Mesh]:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SkippedObjectWarning)
+        warnings.simplefilter("always", PolygonsSplitWarning)
         meshes = formats.read(args.file, format=args.format)
     for warning in caught:
-        if not issubclass(warning.category, SkippedObjectWarning):
+        if issubclass(warning.category, PolygonsSplitWarning):
+            print(f"tgsis: warning: {warning.message}", file=sys.stderr)
+        elif not issubclass(warning.category, SkippedObjectWarning):
             warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
     skipped = [w.message for w in caught if isinstance(w.message, SkippedObjectWarning)]
     if skipped and args.strict:

@@ -30,6 +30,7 @@ __all__ = [
     "check_line_lengths",
     "in_elevation",
     "restore_convention",
+    "split_vtk_polygons",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -207,3 +208,55 @@ def check_line_lengths(lines: list[str], path: PathLike | None) -> None:
         number = next(i for i, line in enumerate(lines) if len(line) > MAX_LINE_BYTES)
         raise FileFormatError(f"line {number + 1} is {len(lines[number]):,} characters long; tgsis reads lines of "
                               f"at most {MAX_LINE_BYTES:,}", path=path, line=number + 1)
+
+
+#: VTK cell types of polygons whose points go round them: TRIANGLE, POLYGON, QUAD.
+_VTK_TRIANGLE, _VTK_POLYGON, _VTK_QUAD = 5, 7, 9
+
+
+def split_vtk_polygons(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
+                       connectivity: npt.NDArray[np.int64], cell_data: dict[str, npt.NDArray[Any]],
+                       metadata: dict[str, Any], path: PathLike | None, element: str,
+                       ) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64],
+                                  dict[str, npt.NDArray[Any]]]:
+    """The cells of a VTK file with its POLYGON and QUAD cells split as the OBJ, OFF and PLY readers split faces.
+
+    When every cell is a TRIANGLE, POLYGON or QUAD and at least one is not a
+    triangle, each planar convex polygon becomes a fan of triangles with its
+    cell data (:func:`tgsis._polygons.split_convex_polygons`), counted in
+    ``metadata["polygons_split"]`` with a :class:`~tgsis.errors.PolygonsSplitWarning`;
+    other cells are left as they are (the mesh rules refuse them by name).
+
+    Raises
+    ------
+    FileFormatError
+        A polygon that is not planar or not convex, named by its cell number.
+    """
+    import warnings
+
+    from tgsis._polygons import PolygonError, split_convex_polygons
+    from tgsis.errors import PolygonsSplitWarning
+
+    codes = np.asarray(types)
+    polygonal = np.isin(codes, (_VTK_TRIANGLE, _VTK_POLYGON, _VTK_QUAD))
+    if not len(codes) or not polygonal.all() or np.all(codes == _VTK_TRIANGLE):
+        return types, offsets, connectivity, cell_data
+    sizes = np.diff(offsets)
+    if sizes.min() < 3 or np.any((codes == _VTK_QUAD) & (sizes != 4)):
+        return types, offsets, connectivity, cell_data  # the mesh rules name the cell
+    if connectivity.size and (connectivity.min() < 0 or connectivity.max() >= len(vertices)):
+        return types, offsets, connectivity, cell_data  # the reader's checks name the point
+    try:
+        triangles, owner, split = split_convex_polygons(vertices, connectivity, offsets)
+    except PolygonError as exc:
+        raise FileFormatError(
+            f"{element} {exc.polygon} has {int(sizes[exc.polygon])} points and {exc.reason}: tgsis splits a polygon "
+            "of more than 3 points into triangles only when it is planar and convex (the triangles then have its "
+            "shape)", path=path,
+            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)") from None
+    metadata["polygons_split"] = split
+    warnings.warn(PolygonsSplitWarning(f"{path or 'the file'}: {split:,} polygons of more than 3 points were split "
+                                       "into triangles (each planar and convex: the triangles have its shape)",
+                                       path=path, count=split), stacklevel=3)
+    return (np.full(len(triangles), _VTK_TRIANGLE, dtype=np.int64), np.arange(len(triangles) + 1, dtype=np.int64) * 3,
+            triangles.reshape(-1), {name: values[owner] for name, values in cell_data.items()})

@@ -54,6 +54,7 @@ file without any vertex is an error.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -61,7 +62,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
+from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError, PolygonsSplitWarning
 from tgsis.formats._common import (PathLike, check_mesh, in_elevation, property_columns, read_bytes,
                                    restore_convention, write_bytes)
 from tgsis.formats._surface_files import ParsedSurface, parse_obj, parse_off, parse_ply, parse_stl
@@ -135,6 +136,15 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
     metadata: dict[str, Any] = {"ply_property_names": parsed.renamed} if parsed.renamed else {}
     if len(vertices) == 0:
         raise FileFormatError(f"the {kind.upper()} file holds no vertex (no triangle and no point)", path=path)
+    if parsed.parts is not None:
+        face_properties = {**face_properties, "part": parsed.parts}
+    if parsed.part_names:
+        metadata["part_names"] = parsed.part_names
+    if parsed.polygons_split:
+        metadata["polygons_split"] = parsed.polygons_split
+        warnings.warn(PolygonsSplitWarning(
+            f"{path}: {parsed.polygons_split:,} faces of more than 3 corners were split into triangles (each planar "
+            "and convex: the triangles have its shape)", path=path, count=parsed.polygons_split), stacklevel=2)
     if merge_vertices:
         vertices, faces, vertex_properties = _merge_identical(vertices, faces, vertex_properties)
     mesh: Surface | PointSet
@@ -208,12 +218,46 @@ def write_trimesh_file(surface: Surface, path: PathLike, *, file_type: str | Non
     if kind == "ply":
         data = _ply_bytes(mesh, path, zpositive)
     else:
-        lost = [*mesh.vertex_properties, *mesh.cell_properties]
+        lost = [*mesh.vertex_properties, *(k for k in mesh.cell_properties if not (kind == "obj" and k == "part"))]
         if lost and not drop_properties:
             raise FileFormatError(f"{kind.upper()} cannot store the properties {', '.join(lost)}", path=path,
                                   hint="write PLY or VTU to keep them, or pass drop_properties=True")
         data = _trimesh_bytes(mesh, kind, digits)
+        if kind == "obj" and "part" in mesh.cell_properties:
+            data = _obj_with_groups(data, mesh, path)
     write_bytes(path, [data])
+
+
+def _obj_with_groups(data: bytes, surface: Surface, path: PathLike) -> bytes:
+    """trimesh's OBJ text with a ``g`` line wherever the part of the faces changes (cell order kept).
+
+    Each part is named by ``metadata["part_names"]`` (or ``gocad_part_names``) in
+    part order, else ``part_<number>``; reading gives the parts back.
+    """
+    parts = np.asarray(surface.cell_properties["part"])
+    if parts.dtype.kind not in "iu" and not (parts.dtype.kind == "f" and np.all(parts == np.round(parts))):
+        raise FileFormatError(f"cell property 'part' must hold whole part numbers, not {parts.dtype}", path=path)
+    distinct = np.unique(parts).tolist()
+    listed = surface.metadata.get("part_names") or surface.metadata.get("gocad_part_names")
+    names = [str(v) for v in listed] if isinstance(listed, list) and len(listed) == len(distinct) else []
+    label = {p: " ".join((names[j] if names and names[j].strip() else f"part_{int(p)}").split())
+             for j, p in enumerate(distinct)}
+    if len(set(label.values())) != len(label):
+        label = {p: f"part_{int(p)}" for p in distinct}  # names that would merge parts
+    lines = data.decode("utf-8").split("\n")
+    face = 0
+    out: list[str] = []
+    current = None
+    for line in lines:
+        if line.startswith("f "):
+            if parts[face] != current:
+                current = parts[face]
+                out.append(f"g {label[current]}")
+            face += 1
+        out.append(line)
+    if face != len(parts):  # pragma: no cover - trimesh writes one f line per face
+        raise FileFormatError("the OBJ writer wrote another number of faces than the surface has", path=path)
+    return "\n".join(out).encode("utf-8")
 
 
 def _trimesh_bytes(surface: Surface, kind: str, digits: int | None) -> bytes:

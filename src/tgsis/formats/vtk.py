@@ -94,11 +94,11 @@ from typing import TYPE_CHECKING, Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
+from tgsis import _zpositive
 from tgsis._vtk_cells import mesh_from_vtk_cells
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis import _zpositive
 from tgsis.formats._common import (PathLike, check_mesh, in_elevation, quoted, read_bytes, restore_convention,
-                                   sanitize_property_name, write_bytes)
+                                   sanitize_property_name, split_vtk_polygons, write_bytes)
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
 if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)
@@ -1055,10 +1055,12 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
     cell_data = _data_arrays(piece.find("CellData"), decoder, len(all_types), names, "cell_data")
     fields = _field_strings(poly, decoder)
     metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
+    all_types, cell_offsets, cell_points, cell_data = split_vtk_polygons(
+        vertices, all_types, offsets.astype(np.int64),
+        np.concatenate(connectivity) if connectivity else np.empty(0, np.int64), cell_data, metadata, path,
+        "PolyData cell")
     try:
-        mesh = mesh_from_vtk_cells(vertices, all_types, offsets.astype(np.int64),
-                                   np.concatenate(connectivity) if connectivity else np.empty(0, np.int64),
-                                   point_data, cell_data, name=fields.get("name"), geotype=fields.get("tgsis_geotype"),
+        mesh = mesh_from_vtk_cells(vertices, all_types, cell_offsets, cell_points, point_data, cell_data, name=fields.get("name"), geotype=fields.get("tgsis_geotype"),
                                    metadata=metadata, source="the PolyData")
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc

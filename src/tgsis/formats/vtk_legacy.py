@@ -52,7 +52,7 @@ from tgsis import _zpositive
 from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import (MAX_LINE_BYTES, PathLike, check_mesh, in_elevation, quoted, read_bytes,
-                                   restore_convention, sanitize_property_name, write_bytes)
+                                   restore_convention, sanitize_property_name, split_vtk_polygons, write_bytes)
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]
@@ -275,6 +275,9 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
                          default=None)
         raise FileFormatError(f"a cell refers to point {bad}, but the file has {n_points} points (0..{n_points - 1})",
                               path=path, line=cells_line)
+    if geotype != GeometryCollection.geotype.value:
+        types, offsets, connectivity, cell_data = split_vtk_polygons(vertices, types, offsets, connectivity, cell_data,
+                                                                     metadata, path, f"{dataset.kind} cell")
     geometry: Geometry
     try:
         if geotype == GeometryCollection.geotype.value:
