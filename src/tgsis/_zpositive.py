@@ -8,7 +8,7 @@ PLY, OBJ, OFF, STL, pyvista, meshio and trimesh have no z convention: every
 viewer draws +z up. So what goes to them is in elevation, always
 (:func:`elevation`), and the convention, when the format has a place for
 tgsis's own facts (VTK field data, a PLY comment, meshio's ``info``), is
-recorded beside it (:data:`FIELD`, :data:`MEMBER_FIELD`) so that tgsis reading
+recorded beside it (:data:`ZPOSITIVE_FIELD`, :data:`MEMBER_ZPOSITIVE_FIELD`) so that tgsis reading
 the file gives the mesh back as it was (:func:`restore`), depth coordinates
 and all. Negating a double only flips its sign bit: both ways are bit-exact.
 
@@ -26,8 +26,8 @@ from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = [
     "CONVENTIONS",
-    "FIELD",
-    "MEMBER_FIELD",
+    "ZPOSITIVE_FIELD",
+    "MEMBER_ZPOSITIVE_FIELD",
     "z_convention",
     "conventions",
     "elevation",
@@ -38,9 +38,9 @@ __all__ = [
 #: The z conventions, as GOCAD spells them (``ZPOSITIVE Elevation`` / ``ZPOSITIVE Depth``).
 CONVENTIONS = ("Elevation", "Depth")
 #: The field-data name that records the convention of a mesh written in elevation (VTK files, pyvista).
-FIELD = "tgsis_zpositive"
+ZPOSITIVE_FIELD = "tgsis_zpositive"
 #: The same for the members of a collection: one string per member, "" for none.
-MEMBER_FIELD = "tgsis_member_zpositive"
+MEMBER_ZPOSITIVE_FIELD = "tgsis_member_zpositive"
 
 _G = TypeVar("_G", bound=Geometry)
 
@@ -96,7 +96,7 @@ def elevation(geometry: _G) -> _G:
 
 
 def recorded_convention(value: str | None, where: str) -> str | None:
-    """A convention as a file recorded it (:data:`FIELD`), checked: None, ``Elevation`` or ``Depth``.
+    """A convention as a file recorded it (:data:`ZPOSITIVE_FIELD`), checked: None, ``Elevation`` or ``Depth``.
 
     Raises
     ------

@@ -73,7 +73,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tgsis import _zpositive
+from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD, conventions, elevation, recorded_convention, restore
 from tgsis._vtk_cells import (CELL_TYPE_OF, collection_from_cells, first, labelled, one_mesh, string_bytes, strings,
                               vtk_parts)
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
@@ -254,14 +254,14 @@ def from_pyvista(obj: Any) -> Geometry:
 def _restore_convention(geometry: Geometry, fields: Mapping[str, Any], source: str) -> None:
     """The z convention that field data tgsis wrote records (the points' z is up), given back to the mesh(es)."""
     if isinstance(geometry, GeometryCollection):
-        where, recorded = _zpositive.MEMBER_FIELD, strings(fields.get(_zpositive.MEMBER_FIELD, []))
-        if _zpositive.MEMBER_FIELD in fields and len(recorded) != len(geometry):
+        where, recorded = MEMBER_ZPOSITIVE_FIELD, strings(fields.get(MEMBER_ZPOSITIVE_FIELD, []))
+        if MEMBER_ZPOSITIVE_FIELD in fields and len(recorded) != len(geometry):
             raise InvalidGeometryError(f"{source} field_data {where!r} has {len(recorded)} values for "
                                        f"{len(geometry)} members")
         values: list[str | None] = list(recorded)
     else:
-        where, values = _zpositive.FIELD, [first(fields.get(_zpositive.FIELD))]
-    _zpositive.restore(geometry, [_zpositive.recorded_convention(v, f"{source} field_data {where!r}")
+        where, values = ZPOSITIVE_FIELD, [first(fields.get(ZPOSITIVE_FIELD))]
+    restore(geometry, [recorded_convention(v, f"{source} field_data {where!r}")
                                   for v in values])
 
 
@@ -320,8 +320,8 @@ def to_pyvista(geometry: Geometry) -> Any:
     if not isinstance(geometry, (Mesh, GeometryCollection)):
         raise InvalidGeometryError(f"to_pyvista converts tgsis meshes, not {_type_name(geometry)}",
                                    hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
-    recorded = _zpositive.conventions(geometry)
-    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(_zpositive.elevation(geometry))
+    recorded = conventions(geometry)
+    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(elevation(geometry))
     kind = type(geometry)
     if kind in (PointSet, LineSet, Surface):
         k = geometry.cell_size  # type: ignore[union-attr]
@@ -349,9 +349,9 @@ def to_pyvista(geometry: Geometry) -> Any:
         data.field_data["tgsis_member_sizes"] = np.array([[m.n_vertices, m.n_cells] for m in geometry.members],
                                                          dtype=np.int64)
         if any(recorded):
-            data.field_data[_zpositive.MEMBER_FIELD] = string_bytes(*(z or "" for z in recorded))
+            data.field_data[MEMBER_ZPOSITIVE_FIELD] = string_bytes(*(z or "" for z in recorded))
     elif recorded[0] is not None:
-        data.field_data[_zpositive.FIELD] = string_bytes(recorded[0])
+        data.field_data[ZPOSITIVE_FIELD] = string_bytes(recorded[0])
     return data
 
 
@@ -441,13 +441,13 @@ def from_meshio(obj: Any) -> Geometry:
 
 def _recorded_fields(info: Mapping[str, Any], fields: Mapping[str, Any]) -> dict[str, Any]:
     """The z convention a meshio.Mesh records: in ``info["tgsis"]`` (to_meshio) or the field data (a tgsis file)."""
-    result = {k: v for k, v in fields.items() if k in (_zpositive.FIELD, _zpositive.MEMBER_FIELD)}
+    result = {k: v for k, v in fields.items() if k in (ZPOSITIVE_FIELD, MEMBER_ZPOSITIVE_FIELD)}
     if "zpositive" in info:
         value = info["zpositive"]
         if isinstance(value, (list, tuple)):
-            result[_zpositive.MEMBER_FIELD] = np.array([v or "" for v in value])
+            result[MEMBER_ZPOSITIVE_FIELD] = np.array([v or "" for v in value])
         else:
-            result[_zpositive.FIELD] = np.array([value or ""])
+            result[ZPOSITIVE_FIELD] = np.array([value or ""])
     return result
 
 
@@ -474,8 +474,8 @@ def to_meshio(geometry: Geometry) -> Any:
     if not isinstance(geometry, (Mesh, GeometryCollection)):
         raise InvalidGeometryError(f"to_meshio converts tgsis meshes, not {_type_name(geometry)}",
                                    hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
-    recorded = _zpositive.conventions(geometry)
-    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(_zpositive.elevation(geometry))
+    recorded = conventions(geometry)
+    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(elevation(geometry))
     members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
     first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
     blocks = [meshio.CellBlock(_MESHIO_TYPE_OF[type(m)], m.cells + start) for m, start in zip(members, first_point)]

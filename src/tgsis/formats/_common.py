@@ -12,7 +12,7 @@ from typing import Any, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from tgsis import _zpositive
+from tgsis._zpositive import conventions, elevation, recorded_convention, restore
 from tgsis.errors import FileFormatError, InvalidGeometryError
 from tgsis.mesh import PROPERTY_NAME_RE, Geometry, Mesh
 
@@ -140,7 +140,7 @@ def in_elevation(geometry: _G, path: PathLike | None = None) -> tuple[_G, list[s
         A ``metadata["zpositive"]`` that is neither Elevation nor Depth.
     """
     try:
-        return _zpositive.elevation(geometry), _zpositive.conventions(geometry)
+        return elevation(geometry), conventions(geometry)
     except InvalidGeometryError as exc:
         raise FileFormatError(exc.message, path=path, hint=exc.hint) from None
 
@@ -156,10 +156,10 @@ def restore_convention(geometry: Geometry, recorded: list[str] | str | None, pat
     """
     values = [recorded] if recorded is None or isinstance(recorded, str) else recorded
     try:
-        checked = [_zpositive.recorded_convention(v, where) for v in values]
+        checked = [recorded_convention(v, where) for v in values]
     except InvalidGeometryError as exc:
         raise FileFormatError(exc.message, path=path) from None
-    _zpositive.restore(geometry, checked)
+    restore(geometry, checked)
 
 
 def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,

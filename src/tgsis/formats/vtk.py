@@ -94,7 +94,7 @@ from typing import TYPE_CHECKING, Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from tgsis import _zpositive
+from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis._vtk_cells import mesh_from_vtk_cells
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import (PathLike, check_mesh, in_elevation, quoted, read_bytes, restore_convention,
@@ -275,9 +275,9 @@ def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) ->
         sizes.set("NumberOfTuples", str(len(members)))
         field_data.append(sizes)
         if any(source.zpositive):
-            field_data.append(writer.strings(_zpositive.MEMBER_FIELD, *(z or "" for z in source.zpositive)))
+            field_data.append(writer.strings(MEMBER_ZPOSITIVE_FIELD, *(z or "" for z in source.zpositive)))
     elif source.zpositive and source.zpositive[0]:
-        field_data.append(writer.strings(_zpositive.FIELD, source.zpositive[0]))
+        field_data.append(writer.strings(ZPOSITIVE_FIELD, source.zpositive[0]))
     n_points, n_cells = len(source.vertices), len(source.types)
     piece = ET.SubElement(grid, "Piece", NumberOfPoints=str(n_points), NumberOfCells=str(n_cells))
     point_data = ET.SubElement(piece, "PointData")
@@ -541,7 +541,7 @@ def _parse(data: bytes, path: PathLike | None, *, absent_as_none: bool = False) 
                          name=fields.get("name"), metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the grid is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
-    restore_convention(mesh, fields.get(_zpositive.FIELD), path, f"FieldData {_zpositive.FIELD}")
+    restore_convention(mesh, fields.get(ZPOSITIVE_FIELD), path, f"FieldData {ZPOSITIVE_FIELD}")
     return mesh
 
 
@@ -588,12 +588,12 @@ def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices
             raise FileFormatError(f"member {i} is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
         first_point, first_cell = first_point + n_p, first_cell + n_c
     collection = GeometryCollection(members, name=name, metadata={"vtk_array_names": arrays} if arrays else None)
-    recorded = strings.get(_zpositive.MEMBER_FIELD)
+    recorded = strings.get(MEMBER_ZPOSITIVE_FIELD)
     if recorded is not None:
         if len(recorded) != len(members):
-            raise FileFormatError(f"FieldData {_zpositive.MEMBER_FIELD} has {len(recorded)} values for "
+            raise FileFormatError(f"FieldData {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for "
                                   f"{len(members)} members", path=path)
-        restore_convention(collection, recorded, path, f"FieldData {_zpositive.MEMBER_FIELD}")
+        restore_convention(collection, recorded, path, f"FieldData {MEMBER_ZPOSITIVE_FIELD}")
     return collection
 
 
@@ -950,7 +950,7 @@ def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compre
         field_data.append(writer.strings("tgsis_name", mesh.name))
     field_data.append(writer.strings("tgsis_geotype", mesh.geotype.value))
     if zpositive is not None:
-        field_data.append(writer.strings(_zpositive.FIELD, zpositive))
+        field_data.append(writer.strings(ZPOSITIVE_FIELD, zpositive))
     counts = {name: "0" for name in ("NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys")}
     counts[f"NumberOf{section}"] = str(mesh.n_cells)
     piece = ET.SubElement(poly, "Piece", {"NumberOfPoints": str(mesh.n_vertices), **counts})
@@ -1064,7 +1064,7 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
                                    metadata=metadata, source="the PolyData")
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
-    restore_convention(mesh, fields.get(_zpositive.FIELD), path, f"FieldData {_zpositive.FIELD}")
+    restore_convention(mesh, fields.get(ZPOSITIVE_FIELD), path, f"FieldData {ZPOSITIVE_FIELD}")
     return mesh
 
 

@@ -48,7 +48,7 @@ from urllib.parse import unquote_to_bytes
 import numpy as np
 import numpy.typing as npt
 
-from tgsis import _zpositive
+from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis._vtk_cells import collection_from_cells, first, mesh_from_vtk_cells, string_bytes, strings, vtk_parts
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import (MAX_LINE_BYTES, PathLike, check_mesh, in_elevation, quoted, read_bytes,
@@ -122,9 +122,9 @@ def format_vtk(mesh: Geometry, *, ascii: bool = False) -> bytes:
         fields.append(("tgsis_member_names", string_bytes(*(m.name or "" for m in members))))
         fields.append(("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members], dtype=np.int64)))
         if any(zpositive):
-            fields.append((_zpositive.MEMBER_FIELD, string_bytes(*(z or "" for z in zpositive))))
+            fields.append((MEMBER_ZPOSITIVE_FIELD, string_bytes(*(z or "" for z in zpositive))))
     elif zpositive[0] is not None:
-        fields.append((_zpositive.FIELD, string_bytes(zpositive[0])))
+        fields.append((ZPOSITIVE_FIELD, string_bytes(zpositive[0])))
     out.field("FieldData", fields)
     out.text(f"POINTS {len(vertices)} double\n")
     out.values(vertices)
@@ -298,14 +298,14 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
 def _restore_recorded(geometry: Geometry, fields: dict[str, Any], path: PathLike | None) -> None:
     """The z convention the FieldData records (the file's z is up), given back to the mesh or each member."""
     if isinstance(geometry, GeometryCollection):
-        if _zpositive.MEMBER_FIELD in fields:
-            recorded = strings(fields[_zpositive.MEMBER_FIELD])
+        if MEMBER_ZPOSITIVE_FIELD in fields:
+            recorded = strings(fields[MEMBER_ZPOSITIVE_FIELD])
             if len(recorded) != len(geometry):
-                raise FileFormatError(f"FIELD array {_zpositive.MEMBER_FIELD} has {len(recorded)} values for "
+                raise FileFormatError(f"FIELD array {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for "
                                       f"{len(geometry)} members", path=path)
-            restore_convention(geometry, list(recorded), path, f"FIELD array {_zpositive.MEMBER_FIELD}")
-    elif _zpositive.FIELD in fields:
-        restore_convention(geometry, first(fields[_zpositive.FIELD]), path, f"FIELD array {_zpositive.FIELD}")
+            restore_convention(geometry, list(recorded), path, f"FIELD array {MEMBER_ZPOSITIVE_FIELD}")
+    elif ZPOSITIVE_FIELD in fields:
+        restore_convention(geometry, first(fields[ZPOSITIVE_FIELD]), path, f"FIELD array {ZPOSITIVE_FIELD}")
 
 
 def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str, dict[str, str]], key: str,
