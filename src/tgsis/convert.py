@@ -60,6 +60,12 @@ included. :func:`to_meshio` gives one cell block per mesh (per member for a
 collection); meshio has no name or field data every writer accepts, so the
 name, geotype and member table travel in ``mesh.info["tgsis"]`` (in memory:
 a meshio file keeps the points, cells and data).
+
+pyvista, meshio and trimesh have no z convention: a mesh whose
+``metadata["zpositive"]`` says ``Depth`` is given in elevation (z negated),
+and the convention is recorded in ``field_data["tgsis_zpositive"]``
+(``tgsis_member_zpositive`` per member) or ``info["tgsis"]["zpositive"]``,
+from which :func:`as_mesh` gives the depth mesh back.
 """
 
 from __future__ import annotations

@@ -14,17 +14,23 @@ little-endian. These readers check what the file declares instead:
   read so far); 0 and indices outside the vertices are errors; a face with fewer
   than 3 corners is an error; vertices no face uses are kept; ``l`` (polyline)
   elements and free-form geometry are refused rather than dropped; ``vt``,
-  ``vn``, groups and materials are skipped.
+  ``vn`` and materials are skipped (a corner ``v/vt/vn`` is vertex ``v``: no
+  cut along UV seams). Groups (``g``, else ``o``) become parts
+  (:attr:`ParsedSurface.parts`, named by :attr:`ParsedSurface.part_names`).
 * **PLY**: ``ascii``, ``binary_little_endian`` and ``binary_big_endian`` only;
   every element's declared count is read, an ASCII line holds exactly its
   element's values, binary data is exactly as long as the header says.
+  Triangle strips (a ``tristrips`` element, ``-1`` restarts) are read as
+  triangles; any other element listing vertices is an error, not dropped.
 * **STL**: binary when the file is exactly ``84 + 50 n`` bytes for the ``n``
   triangles its header declares, else ASCII, where every facet has its
   ``outer loop``, three ``vertex`` lines, ``endloop`` and ``endfacet`` and the
   solid its ``endsolid``.
 
-Faces with more than three corners are split into a fan of triangles (as trimesh
-does); NaN and infinite coordinates are errors. A text line longer than
+Faces with more than three corners are split into a fan of triangles when
+they are planar and convex, and refused naming the face otherwise
+(:func:`_triangles`, the rule of every format: docs/meshes.md); NaN and
+infinite coordinates are errors. A text line longer than
 :data:`MAX_LINE_BYTES` is refused before it is split into words, so a 100 MB
 line costs no more memory than the file itself, and error messages quote at
 most 80 characters of a bad word (:func:`quoted`).

@@ -12,9 +12,13 @@ STL      not kept [3]_   float32                none                trimesh (bin
 =======  ==============  =====================  ==================  ==============================
 
 .. [1] Every vertex, also those no face uses (trimesh's OBJ reader dropped
-   them). Polygons with more than three corners are split into a fan of
-   triangles; texture coordinates, normals, colours, groups and materials are
-   not read.
+   them), one per ``v`` line whatever the texture coordinates of its corners.
+   Planar convex polygons of more than three corners are split into a fan of
+   triangles (:class:`~tgsis.errors.PolygonsSplitWarning`,
+   ``metadata["polygons_split"]``), other polygons refused; texture
+   coordinates, normals, colours and materials are not read. OBJ groups
+   become the ``part`` cell property and ``metadata["part_names"]``, and the
+   OBJ writer writes the parts back as ``g`` lines.
 .. [2] Fixed-point text: a coordinate comes back within 0.5e-8 (OBJ) or 0.5e-10
    (OFF) of what was written, plus one rounding of the double; big UTM
    coordinates keep 15-16 significant digits, not 17. ``digits=`` asks for more
@@ -40,8 +44,11 @@ its own PLY type; int64/uint64 properties are written as ``int``/``uint`` when
 their values fit (else :class:`~tgsis.errors.FileFormatError`), bool as
 ``uchar``, float16 as ``float``. On reading, integer PLY properties become int64
 and float ones keep float32/float64; colours, normals and texture coordinates
-are properties like any other. OBJ, OFF and STL cannot store properties: the
-writer raises unless ``drop_properties=True``. Names are not stored (meshes
+are properties like any other. OBJ, OFF and STL cannot store properties (OBJ
+but ``part``, as groups): the writer raises unless ``drop_properties=True``.
+None of these formats has a z convention: a mesh whose ``metadata["zpositive"]``
+says ``Depth`` is written in elevation (z negated); PLY records the convention
+in a ``comment tgsis zpositive`` line, which the reader gives back. Names are not stored (meshes
 read have ``name=None``).
 
 A file of points without faces (OBJ ``v`` lines alone, a PLY ``vertex``

@@ -36,6 +36,12 @@ pyvista and meshio read. The round trip is bit-exact for vertices, cells and
 properties (dtypes and vector properties included, except bool and float16);
 the mesh's other metadata is not stored.
 
+VTK has no z convention: a mesh whose ``metadata["zpositive"]`` says
+``Depth`` is written with z negated (elevation, as ParaView draws it), and
+the FieldData string ``tgsis_zpositive`` (a collection's members:
+``tgsis_member_zpositive``) records the convention, which the readers give
+back (depth coordinates and ``metadata["zpositive"]``).
+
 A :class:`~tgsis.mesh.GeometryCollection` is written as one grid of mixed
 cell types: the members' points one member after the other, their cells
 likewise (connectivity shifted to the member's first point), and in
@@ -75,8 +81,9 @@ same way. PolyData has no 3D cells: a TetraMesh or a collection goes to
 ``.vtu``. :func:`read_vtp` reads whatever VTK writes (the encodings above).
 The cells must be of one kind: vertices (poly-vertices become one vertex
 each), lines (a polyline becomes its segments, each with the polyline's cell
-data), or polygons that are all triangles (others, and triangle strips,
-raise :class:`~tgsis.errors.FileFormatError` with the hint to triangulate).
+data), or polygons: triangles, and planar convex polygons and quads split
+into triangles (others, and triangle strips, raise
+:class:`~tgsis.errors.FileFormatError` with the hint to triangulate).
 ``name`` (a VTK String array) or ``tgsis_name`` in FieldData gives the name;
 array names are sanitised as for ``.vtu``.
 """
