@@ -552,3 +552,45 @@ def test_an_element_of_cells_tgsis_does_not_know_is_refused(tmp_path: Path) -> N
     )
     [points] = formats.read(path)
     assert isinstance(points, PointSet) and points.n_vertices == 8
+
+
+def test_a_picture_of_a_depth_surface_draws_it_below_the_ground(
+    depth_file: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("matplotlib")
+    from mpl_toolkits.mplot3d import Axes3D
+
+    from tgsis import pictures
+
+    drawn: list[np.ndarray] = []
+    original = Axes3D.plot_trisurf
+
+    def spy(self: Axes3D, *args: object, **kwargs: object) -> object:
+        drawn.append(np.asarray(args[2], dtype=np.float64))
+        return original(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Axes3D, "plot_trisurf", spy)
+    pictures.scene([depth_surface(depth_file)], tmp_path / "deep.png", title="deep")
+    assert [z.tolist() for z in drawn] == [(-DEPTHS).tolist()]
+
+
+def test_the_browser_view_draws_a_depth_line_set_z_up(db_dsn: str, tmp_path: Path) -> None:
+    from tgsis.view import app
+
+    with psycopg.connect(db_dsn, autocommit=True) as conn:
+        tgsis.create_feature_class(conn, "wells", "MULTILINESTRING")
+        wells = LineSet([[0, 0, 10.0], [0, 0, 900.0]], [[0, 1]], metadata={"zpositive": "Depth"})
+        fid = tgsis.insert_feature(conn, "wells", wells)
+        captured: list[np.ndarray] = []
+        real = app.drawable
+
+        def spy(mesh: object) -> object:
+            captured.append(np.asarray(mesh.vertices))  # type: ignore[attr-defined]
+            return real(mesh)  # type: ignore[arg-type]
+
+        original, app.drawable = app.drawable, spy  # type: ignore[assignment]
+        try:
+            app._mesh_of(conn, tgsis.get_feature_class(conn, "wells"), fid, None, None)
+        finally:
+            app.drawable = original  # type: ignore[assignment]
+    assert [v[:, 2].tolist() for v in captured] == [[-10.0, -900.0]]
