@@ -168,6 +168,36 @@ def test_a_recorded_convention_that_is_neither_is_refused_on_read(depth_file: Pa
         formats.read(out)
 
 
+def test_a_time_series_of_depth_surfaces_goes_to_paraview_in_elevation(depth_file: Path, tmp_path: Path) -> None:
+    mesh = depth_surface(depth_file)
+    formats.write_pvd([(0.0, mesh), (1.0, None)], tmp_path / "series.pvd")
+    pv = pytest.importorskip("pyvista")
+    first_frame = sorted(tmp_path.glob("series*/*.vtu")) or sorted(tmp_path.glob("*.vtu"))
+    assert np.array_equal(pv.read(first_frame[0]).points[:, 2], -DEPTHS)
+    [(t0, back), (t1, gone)] = formats.read_pvd(tmp_path / "series.pvd")
+    assert back is not None and back.same_as(mesh) and back.metadata["zpositive"] == "Depth" and gone is None
+
+
+def test_hostile_records_of_the_convention_are_refused(depth_file: Path, tmp_path: Path) -> None:
+    mesh = depth_surface(depth_file)
+    ply_path = tmp_path / "deep.ply"
+    formats.write(mesh, ply_path)
+    data = ply_path.read_bytes()
+    ply_path.write_bytes(data.replace(b"comment tgsis zpositive Depth", b"comment tgsis zpositive Down!"))
+    with pytest.raises(FileFormatError, match="PLY comment 'tgsis zpositive' is 'Down!'"):
+        formats.read(ply_path)
+    vtu = tmp_path / "model.vtu"
+    formats.write(GeometryCollection([mesh, PointSet([[0, 0, 1.0]])]), vtu, compression=None)
+    text = vtu.read_bytes()
+    assert b"tgsis_member_zpositive" in text
+    pv = pytest.importorskip("pyvista")
+    grid = pv.read(vtu)
+    grid.field_data["tgsis_member_zpositive"] = np.frombuffer(b"Depth\0", dtype=np.uint8)  # one value, two members
+    grid.save(tmp_path / "short.vtu")
+    with pytest.raises(FileFormatError, match="tgsis_member_zpositive has 1 values for 2 members"):
+        formats.read(tmp_path / "short.vtu")
+
+
 # ---------------------------------------------------------------- through the database
 
 
@@ -235,6 +265,19 @@ def test_import_at_stores_a_depth_surface_as_elevation_and_at_exports_it_so(
         out = tmp_path / f"at.{ext}"
         assert main(["--dsn", db_dsn, "at", str(fid), "1", str(out)]) == 0
         assert np.array_equal(z_as_others_read_it(out), -DEPTHS)
+    # a second instant into the same feature (tgsis.add_instant) is stored as elevation too
+    assert (
+        main(["--dsn", db_dsn, "import", str(depth_file), "--class", "horizons", "--at", "2", "--feature", str(fid)])
+        == 0
+    )
+    with psycopg.connect(db_dsn) as conn:
+        later = [
+            r[0]
+            for r in conn.execute(
+                "SELECT z FROM tgsis.times_vrtx WHERE geoid = %s AND times = 2 ORDER BY vrtxid", (fid,)
+            ).fetchall()
+        ]
+    assert later == (-DEPTHS).tolist()
     out = tmp_path / "at.ts"
     assert main(["--dsn", db_dsn, "at", str(fid), "1", str(out)]) == 0
     [snapshot] = formats.read(out)
@@ -516,6 +559,28 @@ def test_a_strip_index_outside_the_vertices_is_refused(tmp_path: Path) -> None:
         )
     )
     with pytest.raises(FileFormatError, match=r"bad.ply:18: PLY tristrips 0 uses vertex 8, outside 0..7"):
+        formats.read(path)
+
+
+def test_strips_and_faces_with_different_properties_are_refused(tmp_path: Path) -> None:
+    path = tmp_path / "mixed.ply"
+    path.write_text(
+        ply(
+            [
+                "element vertex 8",
+                "property float x",
+                "property float y",
+                "property float z",
+                "element face 1",
+                "property list uchar int vertex_indices",
+                "property uchar rock",
+                "element tristrips 1",
+                "property list int int vertex_indices",
+            ],
+            [*GRID, "3 0 1 4 7", "4 5 1 6 2"],
+        )
+    )
+    with pytest.raises(FileFormatError, match=r"face and tristrips elements have different properties \(\['rock'\]"):
         formats.read(path)
 
 
