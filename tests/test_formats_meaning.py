@@ -659,3 +659,26 @@ def test_the_browser_view_draws_a_depth_line_set_z_up(db_dsn: str, tmp_path: Pat
         finally:
             app.drawable = original  # type: ignore[assignment]
     assert [v[:, 2].tolist() for v in captured] == [[-10.0, -900.0]]
+
+
+def test_interpolation_of_depth_surfaces_is_in_elevation(tmp_path: Path) -> None:
+    """A source in depth and a target in elevation (two files, two conventions) morph as the shapes they are."""
+    from tgsis.interpolation import InterpolationSetup
+    from tgsis.interpolation.interpolate import interpolate
+
+    u, v = np.meshgrid(np.linspace(0, 4, 9), np.linspace(0, 2, 5))
+    xy = np.column_stack([u.ravel(), v.ravel()])
+    cells = []
+    for j in range(4):
+        for i in range(8):
+            a = j * 9 + i
+            cells += [[a, a + 1, a + 10], [a, a + 10, a + 9]]
+    elevations = -1000.0 - 50.0 * np.sin(xy[:, 0])  # a curved horizon about 1 km deep
+    target = Surface(np.column_stack([xy, elevations]), cells, metadata={"zpositive": "Elevation"})
+    source = Surface(np.column_stack([xy, -elevations]), cells, metadata={"zpositive": "Depth"})  # the same shape
+    corners = (0, 8, 44, 36)
+    result = interpolate(source, target, InterpolationSetup(corners, corners, steps=3, tolerance=0.01), 0.0, 1.0)
+    for t in (0.0, 0.5, 1.0):
+        shape = result.evolving.at(t)
+        assert shape is not None
+        assert np.allclose(shape.vertices[:, 2], elevations, atol=1e-6), t  # identity: the horizon all along
