@@ -682,3 +682,24 @@ def test_interpolation_of_depth_surfaces_is_in_elevation(tmp_path: Path) -> None
         shape = result.evolving.at(t)
         assert shape is not None
         assert np.allclose(shape.vertices[:, 2], elevations, atol=1e-6), t  # identity: the horizon all along
+
+
+def test_obj_groups_are_stored_as_parts_and_exported(db_dsn: str, tmp_path: Path) -> None:
+    source = tmp_path / "rock.obj"
+    source.write_text(SEAMED_OBJ)
+    assert main(["--dsn", db_dsn, "class", "create", "bodies", "--geotype", "SURFACE"]) == 0
+    assert main(["--dsn", db_dsn, "import", str(source), "--class", "bodies"]) == 0
+    with psycopg.connect(db_dsn) as conn:
+        [(fid,)] = conn.execute("SELECT geoid FROM tgsis.geometry").fetchall()
+        runs = conn.execute(
+            "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (fid,)
+        ).fetchall()
+    assert [r[2] for r in runs] == [0, 1, 2, 3]
+    for ext in ("obj", "ts"):
+        out = tmp_path / f"out.{ext}"
+        assert main(["--dsn", db_dsn, "export", str(fid), str(out)]) == 0
+        [back] = formats.read(out)
+        assert back.cell_properties["part"].tolist() == [0, 0, 1, 1, 2, 2, 2, 3], ext
+        names = back.metadata.get("part_names") or back.metadata.get("gocad_part_names")
+        assert names == ["upper north", "upper south", "lower", "default"], ext
+        assert border_edges(back) == 0  # type: ignore[arg-type]
