@@ -165,6 +165,8 @@ def _triangles(vertices: FloatArray, polygons: list[list[int]] | IntArray, path:
     """
     if isinstance(polygons, np.ndarray):
         p, k = polygons.shape
+        if k == 3:  # triangles: nothing to split
+            return polygons.astype(np.int64), np.arange(p, dtype=np.int64), 0
         indices, offsets = polygons.reshape(-1).astype(np.int64), np.arange(p + 1, dtype=np.int64) * k
     else:
         sizes = np.fromiter((len(c) for c in polygons), dtype=np.int64, count=len(polygons))
