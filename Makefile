@@ -71,7 +71,8 @@ pictures: $(VENV)/.installed
 RUFF_FORMATTED = src/tgsis/db/_upgrade.py tests/test_upgrade.py tests/test_install_storage.py tests/test_installcheck.py tests/test_release.py \
                  src/tgsis/_optional.py tests/test_optional_extras.py src/tgsis/db/adapters.py tests/test_adapters.py tests/test_docker.py \
                  tests/test_view_set_based_writes.py tests/test_view_origin.py tests/test_make_test.py \
-                 tests/test_gocad_blocks.py tests/test_vtk_names_and_parts.py
+                 tests/test_gocad_blocks.py tests/test_vtk_names_and_parts.py \
+                 src/tgsis/_zpositive.py tests/test_formats_meaning.py
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy

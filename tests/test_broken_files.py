@@ -545,7 +545,7 @@ def test_the_fast_and_the_line_by_line_readings_agree(monkeypatch: pytest.Monkey
     from tgsis.formats import _surface_files as sf
 
     quads = (b"v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nv 2 2 0\r\nvt 0 0\r\nvn 0 0 1\r\n"
-             b"f 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 4//1 3//1 5//1 1//1\r\n")
+             b"f 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 1//1 2//1 5//1 4//1\r\n")
     obj_cases = [_text_obj(BASE), quads, _text_obj(BASE).replace(b"\n", b"\r\n")]
     for data in obj_cases:
         fast, slow = sf._obj_fast(data), sf._obj_slow(data, "x.obj")

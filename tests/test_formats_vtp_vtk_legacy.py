@@ -162,8 +162,10 @@ def test_a_legacy_collection_keeps_its_members() -> None:
 
 
 def test_vtp_files_tgsis_refuses(tmp_path: Path) -> None:
-    pv.Plane(i_resolution=2, j_resolution=1).save(tmp_path / "quads.vtp")
-    with pytest.raises(FileFormatError, match=r"quads.vtp: the PolyData has POLYGON \(7\) cells") as info:
+    warped = pv.Plane(i_resolution=2, j_resolution=1)
+    warped.points[1, 2] = 0.25  # quads that are not planar: no one surface to split them into (issue 37)
+    warped.save(tmp_path / "quads.vtp")
+    with pytest.raises(FileFormatError, match=r"quads.vtp: PolyData cell 0 has 4 points and is not planar") as info:
         formats.read(tmp_path / "quads.vtp")
     assert info.value.hint is not None and "triangulate" in info.value.hint
     pv.Sphere(theta_resolution=6, phi_resolution=6).strip().save(tmp_path / "strips.vtp")
@@ -219,15 +221,18 @@ def test_legacy_files_tgsis_refuses(tmp_path: Path) -> None:
     with pytest.raises(FileFormatError, match="a cell refers to point 9, but the file has 5 points"):
         parse_vtk(outside.encode())
     quads = "# vtk DataFile Version 2.0\nq\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\nPOLYGONS 1 5\n4 0 1 2 3\n"
-    with pytest.raises(FileFormatError, match=r"POLYGON \(7\) cells"):
-        parse_vtk(quads.encode())
+    with pytest.raises(FileFormatError, match=r"POLYDATA cell 0 has 4 points and is not convex"):
+        parse_vtk(quads.replace("1 1 0 0 1 0", "0.2 0.2 0 0 1 0").encode())  # a dart (a planar one is split)
     mixed = ("# vtk DataFile Version 2.0\nq\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 1\n"
              "CELLS 2 7\n3 0 1 2\n2 2 3\nCELL_TYPES 2\n5\n3\n")
     with pytest.raises(FileFormatError, match="mixes cells of several kinds"):
         parse_vtk(mixed.encode())
     hexahedra = mixed.replace("CELLS 2 7\n3 0 1 2\n2 2 3\nCELL_TYPES 2\n5\n3\n", "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n9\n")
-    with pytest.raises(FileFormatError, match=r"QUAD \(9\) cells"):
+    with pytest.raises(FileFormatError, match=r"UNSTRUCTURED_GRID cell 0 has 4 points and is not planar"):
         parse_vtk(hexahedra.encode())
+    with pytest.raises(FileFormatError, match=r"HEXAHEDRON \(12\) cells"):
+        parse_vtk(hexahedra.replace("CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n9", "CELLS 1 9\n8 0 1 2 3 0 1 2 3\n"
+                                    "CELL_TYPES 1\n12").encode())
     with pytest.raises(FileFormatError, match="CELL_TYPES gives 1 types for 2 cells"):
         parse_vtk(mixed.replace("CELL_TYPES 2\n5\n3\n", "CELL_TYPES 1\n5\n").encode())
     bits = quads.replace("POLYGONS 1 5\n4 0 1 2 3\n", "POINT_DATA 4\nSCALARS b bit\nLOOKUP_TABLE default\n0 1 0 1\n")

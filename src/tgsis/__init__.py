@@ -60,6 +60,7 @@ from tgsis.errors import (
     CheckoutConflictError,
     ReadOnlyRevisionError,
     SkippedObjectWarning,
+    PolygonsSplitWarning,
     UnsolvedConflictsError,
     VersioningError,
 )
@@ -500,6 +501,7 @@ __all__ = [
     "DatabaseError",
     "FileFormatError",
     "SkippedObjectWarning",
+    "PolygonsSplitWarning",
     "InstallationError",
     "InUseError",
     "UnknownDataModelError",

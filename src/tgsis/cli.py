@@ -48,7 +48,7 @@ from tgsis.db.features import (
 from tgsis.db.temporal import export_series, get_at, instants, lifespan
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.errors import (Error, FileFormatError, InstallationError, InvalidGeometryError, InvalidInputError,
-                          MissingPrivilegeError, NotFoundError, SkippedObjectWarning)
+                          MissingPrivilegeError, NotFoundError, PolygonsSplitWarning, SkippedObjectWarning)
 from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
 from tgsis.temporal import even_times
 
@@ -532,9 +532,12 @@ def _read_for_import(args: argparse.Namespace) -> list[Mesh]:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SkippedObjectWarning)
+        warnings.simplefilter("always", PolygonsSplitWarning)
         meshes = formats.read(args.file, format=args.format)
     for warning in caught:
-        if not issubclass(warning.category, SkippedObjectWarning):
+        if issubclass(warning.category, PolygonsSplitWarning):
+            print(f"tgsis: warning: {warning.message}", file=sys.stderr)
+        elif not issubclass(warning.category, SkippedObjectWarning):
             warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
     skipped = [w.message for w in caught if isinstance(w.message, SkippedObjectWarning)]
     if skipped and args.strict:
@@ -1094,6 +1097,7 @@ def cmd_at(args: argparse.Namespace) -> int:
         if surface is None:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))
+        _with_z_convention(conn, args.id, surface)
         target.write(surface, args.file)
         _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
              f"{surface.n_cells} triangles, to {args.file}")
@@ -1101,6 +1105,19 @@ def cmd_at(args: argparse.Namespace) -> int:
             _picture_of(conn, [args.id, *args.with_ids], args.time, args.png,
                         title=f"feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)} (SQL snapshot)")
     return 0
+
+
+def _with_z_convention(conn: Any, feature_id: int, surface: Surface) -> None:
+    """The snapshot (stored z: elevation) in the z convention its feature was stored with, as an export gives it.
+
+    GOCAD then writes ``ZPOSITIVE`` as the imported file had it; the formats
+    without a z convention write elevation whatever it is (tgsis._zpositive).
+    """
+    from tgsis.db.meaning import restore_meaning
+
+    row = conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+    if row is not None and row[0] is not None:
+        restore_meaning(surface, row[0], None, None, None)
 
 
 def _series_name(name: str) -> str:

@@ -60,6 +60,12 @@ included. :func:`to_meshio` gives one cell block per mesh (per member for a
 collection); meshio has no name or field data every writer accepts, so the
 name, geotype and member table travel in ``mesh.info["tgsis"]`` (in memory:
 a meshio file keeps the points, cells and data).
+
+pyvista, meshio and trimesh have no z convention: a mesh whose
+``metadata["zpositive"]`` says ``Depth`` is given in elevation (z negated),
+and the convention is recorded in ``field_data["tgsis_zpositive"]``
+(``tgsis_member_zpositive`` per member) or ``info["tgsis"]["zpositive"]``,
+from which :func:`as_mesh` gives the depth mesh back.
 """
 
 from __future__ import annotations
@@ -73,6 +79,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD, conventions, elevation, recorded_convention, restore
 from tgsis._vtk_cells import (CELL_TYPE_OF, collection_from_cells, first, labelled, one_mesh, string_bytes, strings,
                               vtk_parts)
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
@@ -237,13 +244,31 @@ def from_pyvista(obj: Any) -> Geometry:
     cell_data = _renamed(_numeric({k: obj.cell_data[k] for k in obj.cell_data.keys()}, source, "cell_data"),
                          names, "cell_data")
     metadata: dict[str, Any] = {_NAMES_KEY: names} if names else {}
+    geometry: Geometry
     if geotype == GeometryCollection.geotype.value:
         table = (strings(fields.get("tgsis_member_geotypes", [])), strings(fields.get("tgsis_member_names", [])),
                  fields.get("tgsis_member_sizes", np.empty((0, 2))))
-        return collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
-                                      metadata, source)
-    return labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
-                                               geotype, metadata, source))
+        geometry = collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+                                          metadata, source)
+    else:
+        geometry = labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data,
+                                                       name, geotype, metadata, source))
+    _restore_convention(geometry, fields, source)
+    return geometry
+
+
+def _restore_convention(geometry: Geometry, fields: Mapping[str, Any], source: str) -> None:
+    """The z convention that field data tgsis wrote records (the points' z is up), given back to the mesh(es)."""
+    if isinstance(geometry, GeometryCollection):
+        where, recorded = MEMBER_ZPOSITIVE_FIELD, strings(fields.get(MEMBER_ZPOSITIVE_FIELD, []))
+        if MEMBER_ZPOSITIVE_FIELD in fields and len(recorded) != len(geometry):
+            raise InvalidGeometryError(f"{source} field_data {where!r} has {len(recorded)} values for "
+                                       f"{len(geometry)} members")
+        values: list[str | None] = list(recorded)
+    else:
+        where, values = ZPOSITIVE_FIELD, [first(fields.get(ZPOSITIVE_FIELD))]
+    restore(geometry, [recorded_convention(v, f"{source} field_data {where!r}")
+                                  for v in values])
 
 
 def _blocks(pv: ModuleType, blocks: Any) -> GeometryCollection:
@@ -301,7 +326,8 @@ def to_pyvista(geometry: Geometry) -> Any:
     if not isinstance(geometry, (Mesh, GeometryCollection)):
         raise InvalidGeometryError(f"to_pyvista converts tgsis meshes, not {_type_name(geometry)}",
                                    hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
-    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(geometry)
+    recorded = conventions(geometry)
+    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(elevation(geometry))
     kind = type(geometry)
     if kind in (PointSet, LineSet, Surface):
         k = geometry.cell_size  # type: ignore[union-attr]
@@ -328,6 +354,10 @@ def to_pyvista(geometry: Geometry) -> Any:
         data.field_data["tgsis_member_names"] = string_bytes(*(m.name or "" for m in geometry.members))
         data.field_data["tgsis_member_sizes"] = np.array([[m.n_vertices, m.n_cells] for m in geometry.members],
                                                          dtype=np.int64)
+        if any(recorded):
+            data.field_data[MEMBER_ZPOSITIVE_FIELD] = string_bytes(*(z or "" for z in recorded))
+    elif recorded[0] is not None:
+        data.field_data[ZPOSITIVE_FIELD] = string_bytes(recorded[0])
     return data
 
 
@@ -396,8 +426,10 @@ def from_meshio(obj: Any) -> Geometry:
         else:  # a .vtu file tgsis wrote, read by meshio: the member table is in the field data
             table = (strings(fields.get("tgsis_member_geotypes", [])), strings(fields.get("tgsis_member_names", [])),
                      fields.get("tgsis_member_sizes", np.empty((0, 2))))
-        return collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
-                                      metadata, source)
+        collection = collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
+                                           metadata, source)
+        _restore_convention(collection, _recorded_fields(info, fields), source)
+        return collection
     if len(kinds) > 1:
         listed = ", ".join(f"{b.type} ({len(b.data)})" for b in blocks)
         raise InvalidGeometryError(f"{source} mixes cell blocks of several kinds ({listed}): a tgsis mesh has one "
@@ -407,8 +439,22 @@ def from_meshio(obj: Any) -> Geometry:
     if not blocks or not len(types):
         if kinds:
             geotype = geotype or kinds[0].geotype.value
-    return labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
+    mesh = labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
                                                geotype, metadata, source))
+    _restore_convention(mesh, _recorded_fields(info, fields), source)
+    return mesh
+
+
+def _recorded_fields(info: Mapping[str, Any], fields: Mapping[str, Any]) -> dict[str, Any]:
+    """The z convention a meshio.Mesh records: in ``info["tgsis"]`` (to_meshio) or the field data (a tgsis file)."""
+    result = {k: v for k, v in fields.items() if k in (ZPOSITIVE_FIELD, MEMBER_ZPOSITIVE_FIELD)}
+    if "zpositive" in info:
+        value = info["zpositive"]
+        if isinstance(value, (list, tuple)):
+            result[MEMBER_ZPOSITIVE_FIELD] = np.array([v or "" for v in value])
+        else:
+            result[ZPOSITIVE_FIELD] = np.array([value or ""])
+    return result
 
 
 def to_meshio(geometry: Geometry) -> Any:
@@ -434,7 +480,8 @@ def to_meshio(geometry: Geometry) -> Any:
     if not isinstance(geometry, (Mesh, GeometryCollection)):
         raise InvalidGeometryError(f"to_meshio converts tgsis meshes, not {_type_name(geometry)}",
                                    hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
-    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(geometry)
+    recorded = conventions(geometry)
+    vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(elevation(geometry))
     members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
     first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
     blocks = [meshio.CellBlock(_MESHIO_TYPE_OF[type(m)], m.cells + start) for m, start in zip(members, first_point)]
@@ -443,6 +490,10 @@ def to_meshio(geometry: Geometry) -> Any:
     info: dict[str, Any] = {"geotype": geometry.geotype.value, "name": geometry.name}
     if isinstance(geometry, GeometryCollection):
         info["members"] = [(m.geotype.value, m.name or "", m.n_vertices, m.n_cells) for m in members]
+        if any(recorded):
+            info["zpositive"] = recorded
+    elif recorded[0] is not None:
+        info["zpositive"] = recorded[0]
     return meshio.Mesh(
         vertices.copy(), blocks,
         point_data=_named(point_data, _original_names(geometry, "point_data")),

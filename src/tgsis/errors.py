@@ -46,6 +46,7 @@ __all__ = [
     "DatabaseError",
     "LocalServerError",
     "SkippedObjectWarning",
+    "PolygonsSplitWarning",
     "class_for_sqlstate",
     "translate",
     "reraise",
@@ -293,6 +294,32 @@ class SkippedObjectWarning(UserWarning):
         self.object_type = object_type
         self.name = name
         self.skipped = skipped
+
+    def __str__(self) -> str:
+        return self.message
+
+
+class PolygonsSplitWarning(UserWarning):
+    """A reader split faces of more than three corners into triangles (planar convex ones: no shape changed).
+
+    A file's quads and polygons become triangles of a :class:`~tgsis.mesh.Surface`
+    (``metadata["polygons_split"]`` counts them; each triangle keeps its face's
+    properties). Faces that are not planar or not convex are refused with
+    :class:`FileFormatError` instead.
+
+    Attributes
+    ----------
+    path : str or None
+        The file.
+    count : int
+        How many faces were split.
+    """
+
+    def __init__(self, message: str, *, path: object = None, count: int) -> None:
+        super().__init__(message)
+        self.message = message
+        self.path = None if path is None else str(path)
+        self.count = count
 
     def __str__(self) -> str:
         return self.message

@@ -407,11 +407,17 @@ class Surface(Mesh):
         return self.cells
 
     def to_trimesh(self) -> Any:
-        """A :class:`trimesh.Trimesh` with the same vertices, faces and properties (not processed)."""
+        """A :class:`trimesh.Trimesh` with the same vertices, faces and properties (not processed).
+
+        trimesh has no z convention: a surface whose ``metadata["zpositive"]``
+        says ``Depth`` is given with z negated (elevation, up positive).
+        """
         import trimesh
 
+        from tgsis._zpositive import elevation
+
         return trimesh.Trimesh(
-            vertices=self.vertices.copy(), faces=self.cells.copy(), process=False, validate=False,
+            vertices=elevation(self).vertices.copy(), faces=self.cells.copy(), process=False, validate=False,
             vertex_attributes={k: v.copy() for k, v in self.vertex_properties.items()},
             face_attributes={k: v.copy() for k, v in self.cell_properties.items()},
             metadata={"name": self.name} if self.name else {},

@@ -133,6 +133,9 @@ def scene(surfaces: Sequence[Surface], path: str | Path, *, title: str,
     matplotlib.use("Agg")
     from matplotlib import pyplot as plt
 
+    from tgsis._zpositive import elevation
+
+    surfaces = [elevation(s) for s in surfaces]  # a picture has no z convention: z up (a Depth mesh negated)
     shown = [s for s in surfaces if s.n_vertices]
     if not shown:
         raise InvalidInputError("nothing to draw: every surface is empty")

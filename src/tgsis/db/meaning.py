@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._zpositive import z_convention
 from tgsis.errors import InvalidGeometryError
 from tgsis.mesh import GeometryCollection, Mesh
 
@@ -45,23 +46,6 @@ IntArray = npt.NDArray[np.int64]
 
 #: metadata keys that have columns or tables of their own
 _OWN_PLACE = ("zpositive", "gocad_coordinate_system", "gocad_atoms", "gocad_patoms", "color")
-
-
-def z_convention(metadata: Mapping[str, Any]) -> str | None:
-    """``"Elevation"``, ``"Depth"`` or None from ``metadata["zpositive"]`` (any letter case).
-
-    Raises
-    ------
-    InvalidGeometryError
-        Any other value.
-    """
-    value = metadata.get("zpositive")
-    if value is None:
-        return None
-    if isinstance(value, str) and value.strip().lower() in ("elevation", "depth"):
-        return value.strip().capitalize()
-    raise InvalidGeometryError(f"metadata['zpositive'] is {value!r}: the z convention is 'Elevation' or 'Depth'",
-                               hint="set mesh.metadata['zpositive'] to 'Elevation', 'Depth' or leave it out")
 
 
 def _float32_exact(value: float) -> bool:

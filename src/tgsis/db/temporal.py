@@ -31,6 +31,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import check_module, no_nul
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
@@ -81,13 +82,28 @@ def _bounds(points: npt.NDArray[np.float64]) -> list[float] | None:
 
 
 def _new_temporal_geometry(conn: Conn, fc: FeatureClass, name: str | None, bounds: list[float] | None, nvrtx: int,
-                           ncell: int, alive: bool, color: Sequence[float] | None) -> int:
+                           ncell: int, alive: bool, color: Sequence[float] | None, zpositive: str | None = None) -> int:
     row = conn.execute("SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[], "
-                       "p_class => %s)",
+                       "p_zpositive => %s, p_class => %s)",
                        (no_nul("geometry name", name), bounds, nvrtx, ncell, fc.time_model, alive, list(color) if color else None,
-                        fc.name)).fetchone()
+                        zpositive, fc.name)).fetchone()
     assert row is not None
     return int(row[0])
+
+
+def _in_elevation(surfaces: Sequence[Surface]) -> tuple[list[Surface], str | None]:
+    """The surfaces as stored, z up (a ``Depth`` one negated), and the z convention they all name (None: not one).
+
+    Stored z is elevation whatever a surface's file said (tgsis.db.meaning); the
+    convention is recorded so that a snapshot written to GOCAD says it again.
+
+    Raises
+    ------
+    InvalidGeometryError
+        A ``metadata["zpositive"]`` other than Elevation or Depth.
+    """
+    named = {z_convention(s.metadata) for s in surfaces}
+    return [elevation(s) for s in surfaces], (named.pop() if len(named) == 1 else None)
 
 
 def _instant_rows(fc: FeatureClass, values: Mapping[str, npt.NDArray[Any]], count: int) -> list[list[Any]]:
@@ -177,17 +193,18 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
     fc = _temporal_class(conn, feature_class, "INSTANTS")
     times = series.times.tolist()
     instant_rows = _instant_rows(fc, series.properties, len(times))
+    surfaces, zpositive = _in_elevation(series.surfaces)
     with reraise(), conn.transaction():
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
             conn, fc, name if name is not None else series.name,
-            _bounds(concat([s.vertices for s in series.surfaces])),
-            sum(s.n_vertices for s in series.surfaces), sum(s.n_cells for s in series.surfaces), series.alive,
-            series.color)
+            _bounds(concat([s.vertices for s in surfaces])),
+            sum(s.n_vertices for s in surfaces), sum(s.n_cells for s in surfaces), series.alive,
+            series.color, zpositive)
         storage.copy(conn, "tgsis", "times", [("geoid", np.full(len(times), geoid, dtype=np.int64), "int8"),
                                               ("times", series.times, "float8")])
-        _copy_instants(conn, fc, geoid, times, series.surfaces, storage, drop_extra_properties)
+        _copy_instants(conn, fc, geoid, times, surfaces, storage, drop_extra_properties)
         _insert_instant_properties(conn, fc, geoid, [(t,) for t in times], instant_rows, ["_times"])
         insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d instants", fc.name, geoid, len(times))
@@ -214,6 +231,7 @@ def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
     """
     fc = _temporal_class(conn, feature_class, "INSTANTS")
     rows = _instant_rows(fc, {k: np.asarray([v]) for k, v in (properties or {}).items()}, 1)
+    [surface], _ = _in_elevation([surface])  # stored z is elevation
     bounds = _bounds(surface.vertices)
     with reraise(), conn.transaction():
         storage = Storage.of(conn, fc)

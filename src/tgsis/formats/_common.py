@@ -7,13 +7,14 @@ import re
 import string
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.errors import FileFormatError
-from tgsis.mesh import PROPERTY_NAME_RE, Mesh
+from tgsis._zpositive import conventions, elevation, recorded_convention, restore
+from tgsis.errors import FileFormatError, InvalidGeometryError
+from tgsis.mesh import PROPERTY_NAME_RE, Geometry, Mesh
 
 __all__ = [
     "PathLike",
@@ -27,9 +28,14 @@ __all__ = [
     "quoted",
     "MAX_LINE_BYTES",
     "check_line_lengths",
+    "in_elevation",
+    "restore_convention",
+    "split_vtk_polygons",
 ]
 
 PathLike = str | os.PathLike[str]
+
+_G = TypeVar("_G", bound=Geometry)
 
 _INVALID_CHARS = re.compile(r"[^A-Za-z0-9_]")
 
@@ -121,6 +127,41 @@ def check_mesh(mesh: object, what: str) -> Mesh:
     return mesh
 
 
+def in_elevation(geometry: _G, path: PathLike | None = None) -> tuple[_G, list[str | None]]:
+    """What a format without a z convention gets: ``geometry`` with z up, and the convention of each mesh (member).
+
+    A mesh whose ``metadata["zpositive"]`` says ``Depth`` is written with z
+    negated (elevation): every viewer draws +z up, and a file that says
+    nothing is read as elevation (see :mod:`tgsis._zpositive`).
+
+    Raises
+    ------
+    FileFormatError
+        A ``metadata["zpositive"]`` that is neither Elevation nor Depth.
+    """
+    try:
+        return elevation(geometry), conventions(geometry)
+    except InvalidGeometryError as exc:
+        raise FileFormatError(exc.message, path=path, hint=exc.hint) from None
+
+
+def restore_convention(geometry: Geometry, recorded: list[str] | str | None, path: PathLike | None,
+                       where: str) -> None:
+    """Give a mesh read in elevation the z convention its file recorded (one per member of a collection).
+
+    Raises
+    ------
+    FileFormatError
+        A recorded value other than Elevation, Depth or nothing; ``where`` names its place in the file.
+    """
+    values = [recorded] if recorded is None or isinstance(recorded, str) else recorded
+    try:
+        checked = [recorded_convention(v, where) for v in values]
+    except InvalidGeometryError as exc:
+        raise FileFormatError(exc.message, path=path) from None
+    restore(geometry, checked)
+
+
 def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,
                      split_vectors: bool = True) -> list[tuple[str, npt.NDArray[Any]]]:
     """Properties as ``(name, array)`` in insertion order, booleans as uint8 (no file type has bool).
@@ -167,3 +208,55 @@ def check_line_lengths(lines: list[str], path: PathLike | None) -> None:
         number = next(i for i, line in enumerate(lines) if len(line) > MAX_LINE_BYTES)
         raise FileFormatError(f"line {number + 1} is {len(lines[number]):,} characters long; tgsis reads lines of "
                               f"at most {MAX_LINE_BYTES:,}", path=path, line=number + 1)
+
+
+#: VTK cell types of polygons whose points go round them: TRIANGLE, POLYGON, QUAD.
+_VTK_TRIANGLE, _VTK_POLYGON, _VTK_QUAD = 5, 7, 9
+
+
+def split_vtk_polygons(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
+                       connectivity: npt.NDArray[np.int64], cell_data: dict[str, npt.NDArray[Any]],
+                       metadata: dict[str, Any], path: PathLike | None, element: str,
+                       ) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64],
+                                  dict[str, npt.NDArray[Any]]]:
+    """The cells of a VTK file with its POLYGON and QUAD cells split as the OBJ, OFF and PLY readers split faces.
+
+    When every cell is a TRIANGLE, POLYGON or QUAD and at least one is not a
+    triangle, each planar convex polygon becomes a fan of triangles with its
+    cell data (:func:`tgsis._polygons.split_convex_polygons`), counted in
+    ``metadata["polygons_split"]`` with a :class:`~tgsis.errors.PolygonsSplitWarning`;
+    other cells are left as they are (the mesh rules refuse them by name).
+
+    Raises
+    ------
+    FileFormatError
+        A polygon that is not planar or not convex, named by its cell number.
+    """
+    import warnings
+
+    from tgsis._polygons import PolygonError, split_convex_polygons
+    from tgsis.errors import PolygonsSplitWarning
+
+    codes = np.asarray(types)
+    polygonal = np.isin(codes, (_VTK_TRIANGLE, _VTK_POLYGON, _VTK_QUAD))
+    if not len(codes) or not polygonal.all() or np.all(codes == _VTK_TRIANGLE):
+        return types, offsets, connectivity, cell_data
+    sizes = np.diff(offsets)
+    if sizes.min() < 3 or np.any((codes == _VTK_QUAD) & (sizes != 4)):
+        return types, offsets, connectivity, cell_data  # the mesh rules name the cell
+    if connectivity.size and (connectivity.min() < 0 or connectivity.max() >= len(vertices)):
+        return types, offsets, connectivity, cell_data  # the reader's checks name the point
+    try:
+        triangles, owner, split = split_convex_polygons(vertices, connectivity, offsets)
+    except PolygonError as exc:
+        raise FileFormatError(
+            f"{element} {exc.polygon} has {int(sizes[exc.polygon])} points and {exc.reason}: tgsis splits a polygon "
+            "of more than 3 points into triangles only when it is planar and convex (the triangles then have its "
+            "shape)", path=path,
+            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)") from None
+    metadata["polygons_split"] = split
+    warnings.warn(PolygonsSplitWarning(f"{path or 'the file'}: {split:,} polygons of more than 3 points were split "
+                                       "into triangles (each planar and convex: the triangles have its shape)",
+                                       path=path, count=split), stacklevel=3)
+    return (np.full(len(triangles), _VTK_TRIANGLE, dtype=np.int64), np.arange(len(triangles) + 1, dtype=np.int64) * 3,
+            triangles.reshape(-1), {name: values[owner] for name, values in cell_data.items()})

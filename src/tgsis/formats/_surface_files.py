@@ -14,17 +14,23 @@ little-endian. These readers check what the file declares instead:
   read so far); 0 and indices outside the vertices are errors; a face with fewer
   than 3 corners is an error; vertices no face uses are kept; ``l`` (polyline)
   elements and free-form geometry are refused rather than dropped; ``vt``,
-  ``vn``, groups and materials are skipped.
+  ``vn`` and materials are skipped (a corner ``v/vt/vn`` is vertex ``v``: no
+  cut along UV seams). Groups (``g``, else ``o``) become parts
+  (:attr:`ParsedSurface.parts`, named by :attr:`ParsedSurface.part_names`).
 * **PLY**: ``ascii``, ``binary_little_endian`` and ``binary_big_endian`` only;
   every element's declared count is read, an ASCII line holds exactly its
   element's values, binary data is exactly as long as the header says.
+  Triangle strips (a ``tristrips`` element, ``-1`` restarts) are read as
+  triangles; any other element listing vertices is an error, not dropped.
 * **STL**: binary when the file is exactly ``84 + 50 n`` bytes for the ``n``
   triangles its header declares, else ASCII, where every facet has its
   ``outer loop``, three ``vertex`` lines, ``endloop`` and ``endfacet`` and the
   solid its ``endsolid``.
 
-Faces with more than three corners are split into a fan of triangles (as trimesh
-does); NaN and infinite coordinates are errors. A text line longer than
+Faces with more than three corners are split into a fan of triangles when
+they are planar and convex, and refused naming the face otherwise
+(:func:`_triangles`, the rule of every format: docs/meshes.md); NaN and
+infinite coordinates are errors. A text line longer than
 :data:`MAX_LINE_BYTES` is refused before it is split into words, so a 100 MB
 line costs no more memory than the file itself, and error messages quote at
 most 80 characters of a bad word (:func:`quoted`).
@@ -33,16 +39,18 @@ most 80 characters of a bad word (:func:`quoted`).
 from __future__ import annotations
 
 import io
+import itertools
 import re
 import struct
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._polygons import PolygonError, split_convex_polygons
 from tgsis.errors import FileFormatError
 from tgsis.formats._common import MAX_LINE_BYTES, PathLike, quoted, sanitize_property_name
 
@@ -66,6 +74,13 @@ class ParsedSurface:
     vertex_properties: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     face_properties: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     renamed: dict[str, dict[str, str]] = field(default_factory=dict)
+    #: the z convention a PLY comment ``tgsis zpositive`` records (tgsis writes z up, see tgsis._zpositive)
+    zpositive: str | None = None
+    #: the part of each triangle (OBJ groups ``g``/``o``) when there is more than one, and the names of the parts
+    parts: IntArray | None = None
+    part_names: list[str] = field(default_factory=list)
+    #: how many polygons of more than three corners were split into triangles
+    polygons_split: int = 0
 
 
 # ---------------------------------------------------------------- lines
@@ -138,28 +153,36 @@ def _int(word: bytes, lines: _Lines, what: str) -> int:
         raise lines.fail(f"{what} is not an integer: {quoted(word)}") from None
 
 
-def _fan(polygons: list[list[int]] | IntArray) -> tuple[IntArray, IntArray]:
-    """Triangles (m, 3) of a fan over each polygon, and the polygon of each triangle (m,).
+def _triangles(vertices: FloatArray, polygons: list[list[int]] | IntArray, path: PathLike, element: str,
+               line_of: Callable[[int], int | None] | None = None) -> tuple[IntArray, IntArray, int]:
+    """Triangles (m, 3) of the faces, the face of each triangle (m,) and how many faces were split.
 
-    ``polygons`` is a list of corner lists, or a (p, k) array of polygons of k corners.
+    The one rule for polygons of every format tgsis reads (OBJ, OFF, PLY, .vtp,
+    legacy .vtk): a planar convex polygon is split into a fan of triangles,
+    which changes no shape; any other is refused, naming the face
+    (:func:`tgsis._polygons.split_convex_polygons`). ``polygons`` is a list of
+    corner lists, or a (p, k) array of polygons of k corners (valid indices).
     """
     if isinstance(polygons, np.ndarray):
         p, k = polygons.shape
-        if k == 3:
-            return polygons.astype(np.int64), np.arange(p, dtype=np.int64)
-        fans = np.empty((p, k - 2, 3), dtype=np.int64)
-        fans[:, :, 0] = polygons[:, :1]
-        fans[:, :, 1] = polygons[:, 1:-1]
-        fans[:, :, 2] = polygons[:, 2:]
-        return fans.reshape(-1, 3), np.repeat(np.arange(p, dtype=np.int64), k - 2)
-    triangles: list[tuple[int, int, int]] = []
-    owner: list[int] = []
-    for k, corners in enumerate(polygons):
-        first = corners[0]
-        for j in range(1, len(corners) - 1):
-            triangles.append((first, corners[j], corners[j + 1]))
-            owner.append(k)
-    return (np.array(triangles, dtype=np.int64).reshape(-1, 3), np.array(owner, dtype=np.int64))
+        if k == 3:  # triangles: nothing to split
+            return polygons.astype(np.int64), np.arange(p, dtype=np.int64), 0
+        indices, offsets = polygons.reshape(-1).astype(np.int64), np.arange(p + 1, dtype=np.int64) * k
+    else:
+        sizes = np.fromiter((len(c) for c in polygons), dtype=np.int64, count=len(polygons))
+        indices = np.fromiter(itertools.chain.from_iterable(polygons), dtype=np.int64, count=int(sizes.sum()))
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    try:
+        return split_convex_polygons(vertices, indices, offsets)
+    except PolygonError as exc:
+        corners = int(offsets[exc.polygon + 1] - offsets[exc.polygon])
+        raise FileFormatError(
+            f"{element} {exc.polygon} has {corners} corners and {exc.reason}: tgsis splits a face of more than 3 "
+            "corners into triangles only when it is planar and convex (the triangles then have its shape)",
+            path=path, line=line_of(exc.polygon) if line_of is not None else None,
+            hint="triangulate the faces in the tool that wrote the file (Blender: Face > Triangulate Faces; "
+                 "MeshLab: Filters > Remeshing > Turn into a Pure-Triangular mesh; pyvista: mesh.triangulate())"
+        ) from None
 
 
 def _table(lines: list[bytes], dtype: type[np.generic]) -> npt.NDArray[Any] | None:
@@ -250,18 +273,51 @@ def _obj_fast(data: bytes) -> ParsedSurface | None:
     if vertices is None or vertices.shape[1] not in (3, 4, 6) or not np.all(np.isfinite(vertices)):
         return None
     n = len(vertices)
-    triangles = np.empty((0, 3), dtype=np.int64)
+    parsed = ParsedSurface(vertices[:, :3].copy(), np.empty((0, 3), dtype=np.int64), bool(f_lines))
     if f_lines:
         block = b"\n".join(f_lines)
-        if b"/" in block:
+        if b"/" in block:  # v/vt/vn: the vertex is v, whatever its texture coordinate (no cut along UV seams)
             if _OBJ_CORNERS.fullmatch(block) is None:
                 return None
             f_lines = re.sub(rb"/[^\s]*", b"", block).split(b"\n")
         faces = _table(f_lines, np.int64)  # no "-": negative (relative) indices are read line by line
         if faces is None or faces.shape[1] < 3 or faces.min() < 1 or faces.max() > n:
             return None
-        triangles, _ = _fan(faces - 1)
-    return ParsedSurface(vertices[:, :3].copy(), triangles, bool(f_lines))
+        try:
+            parsed.triangles, owner, parsed.polygons_split = _triangles(parsed.vertices, faces - 1, "", "OBJ face")
+        except FileFormatError:
+            return None  # line by line, which names the face's line
+        groups = [(i, line) for i, line in enumerate(lines) if line[:1] in (b"g", b"o") and line[1:2].isspace()
+                  or line.rstrip() in (b"g", b"o")]
+        if groups:
+            face_at = np.flatnonzero(np.fromiter((line[:2] == b"f " for line in lines), dtype=bool, count=len(lines)))
+            mark = np.searchsorted(np.array([i for i, _ in groups]), face_at) - 1
+            labels = [None if j < 0 else _obj_group(groups[j][1]) for j in mark.tolist()]
+            _set_parts(parsed, labels, owner)
+    return parsed
+
+
+def _obj_group(line: bytes) -> str:
+    """The part name an OBJ ``g`` or ``o`` line gives the faces after it: its names ("default": a ``g`` alone)."""
+    cut = line.find(b"#")
+    words = (line if cut < 0 else line[:cut]).split()
+    text = b" ".join(words[1:])
+    try:
+        name = text.decode("utf-8")
+    except UnicodeDecodeError:
+        name = text.decode("latin-1")
+    return name if name or words[:1] != [b"g"] else "default"
+
+
+def _set_parts(parsed: ParsedSurface, labels: list[str | None], owner: IntArray) -> None:
+    """Parts of an OBJ's faces by group (``labels``: one per face, None before any group), numbered by first use."""
+    numbers: dict[str | None, int] = {}
+    part_of_face = np.fromiter((numbers.setdefault(label, len(numbers)) for label in labels), dtype=np.int64,
+                               count=len(labels))
+    if any(label is not None for label in numbers):
+        parsed.part_names = [label or "" for label in numbers]
+    if len(numbers) > 1:
+        parsed.parts = part_of_face[owner]
 
 
 def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
@@ -270,6 +326,8 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
     vertices: list[list[float]] = []
     polygons: list[list[int]] = []
     polygon_lines: list[int] = []
+    polygon_groups: list[str | None] = []
+    group: str | None = None
     has_faces = False
     pending = b""
     for raw in lines:
@@ -299,11 +357,15 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
                     raise lines.fail(f"an OBJ face has {len(corners)} corners, at least 3 are needed")
                 polygons.append(corners)
                 polygon_lines.append(lines.number)
+                polygon_groups.append(group)
             elif not corners:
                 raise lines.fail("an OBJ point element (p) names no vertex")
             else:
                 polygon_lines.append(-lines.number)  # checked with the faces, then forgotten
                 polygons.append(corners)
+                polygon_groups.append(group)
+        elif keyword in (b"g", b"o"):
+            group = _obj_group(line)
         elif keyword == b"l":
             raise lines.fail("OBJ polylines (l) are not read: tgsis reads OBJ vertices and faces as a surface")
         elif keyword in _OBJ_FREE_FORM:
@@ -315,15 +377,23 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
         raise lines.fail("the OBJ file ends with a continued line (a '\\' at the end of its last line)")
     n = len(vertices)
     faces: list[list[int]] = []
-    for corners, number in zip(polygons, polygon_lines):
+    face_lines: list[int] = []
+    labels: list[str | None] = []
+    for corners, number, label in zip(polygons, polygon_lines, polygon_groups):
         for index in corners:
             if index >= n:
                 raise lines.fail(f"an OBJ {'face' if number > 0 else 'point'} uses vertex {index + 1}, the file "
                                  f"has {n} vertices", line=abs(number))
         if number > 0:
             faces.append(corners)
-    triangles, _ = _fan(faces)
-    return ParsedSurface(_vertex_array(vertices), triangles, has_faces)
+            face_lines.append(number)
+            labels.append(label)
+    parsed = ParsedSurface(_vertex_array(vertices), np.empty((0, 3), dtype=np.int64), has_faces)
+    parsed.triangles, owner, parsed.polygons_split = _triangles(parsed.vertices, faces, path, "OBJ face",
+                                                                face_lines.__getitem__)
+    if any(label is not None for label in labels):
+        _set_parts(parsed, labels, owner)
+    return parsed
 
 
 def _obj_index(word: bytes, defined: int, lines: _Lines) -> int:
@@ -386,6 +456,7 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
         vertices.append(_floats(words[:3], lines, f"OFF vertex {k}"))
         _floats(words[3:], lines, f"OFF vertex {k}")
     polygons: list[list[int]] = []
+    face_lines: list[int] = []
     for k in range(n_faces):
         words = lines.words()
         if words is None:
@@ -402,12 +473,15 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
             raise lines.fail(f"OFF face {k} uses vertex {bad[0]}, outside 0..{n_vertices - 1}")
         _floats(words[1 + size:], lines, f"the colour of OFF face {k}")
         polygons.append(corners)
+        face_lines.append(lines.number)
     words = lines.words()
     if words is not None:
         raise lines.fail(f"the OFF file has data after the {n_vertices} vertices and {n_faces} faces its header "
                          f"declares: {quoted(b' '.join(words))}")
-    triangles, _ = _fan(polygons)
-    return ParsedSurface(_vertex_array(vertices), triangles, n_faces > 0)
+    parsed = ParsedSurface(_vertex_array(vertices), np.empty((0, 3), dtype=np.int64), n_faces > 0)
+    parsed.triangles, _, parsed.polygons_split = _triangles(parsed.vertices, polygons, path, "OFF face",
+                                                            face_lines.__getitem__)
+    return parsed
 
 
 def _off_fast(data: bytes, start: int, n_vertices: int, n_faces: int, widths: set[int]) -> ParsedSurface | None:
@@ -426,7 +500,11 @@ def _off_fast(data: bytes, start: int, n_vertices: int, n_faces: int, widths: se
         corners = faces[:, 1:]
         if corners.min() < 0 or corners.max() >= n_vertices:
             return None
-        triangles, _ = _fan(corners)
+        try:
+            triangles, _, split = _triangles(vertices[:, :3], corners, "", "OFF face")
+        except FileFormatError:
+            return None  # line by line, which names the face's line
+        return ParsedSurface(vertices[:, :3].copy(), triangles, True, polygons_split=split)
     return ParsedSurface(vertices[:, :3].copy(), triangles, n_faces > 0)
 
 
@@ -470,11 +548,17 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
     face_element = elements.get("face")
     index_name = None
     if face_element is not None:
-        lists = [p.name for p in face_element.properties if p.count_dtype is not None]
-        index_name = next((p.decode() for p in _PLY_FACE_INDICES if p.decode() in lists), None)
+        index_name = _ply_index_list(face_element)
         if index_name is None:
             raise FileFormatError("the PLY face element has no vertex_indices list", path=path,
                                   line=face_element.line)
+    strip_element = elements.get("tristrips")
+    strip_index = None
+    if strip_element is not None:
+        strip_index = _ply_index_list(strip_element)
+        if strip_index is None:
+            raise FileFormatError("the PLY tristrips element has no vertex_indices list", path=path,
+                                  line=strip_element.line)
     if order == "":
         tables = _ply_ascii(data, body, body_line, elements, path)
     else:
@@ -507,11 +591,108 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
                 bad_index = int(corners[(corners < 0) | (corners >= n)][0])
                 raise FileFormatError(f"PLY face {k} uses vertex {bad_index}, outside 0..{n - 1}", path=path,
                                       line=_ply_row_line(order, body_line, elements, "face", k))
-        triangles, owner = _fan(polygons if isinstance(polygons, np.ndarray) else
-                                [[int(c) for c in corners] for corners in polygons])
+        triangles, owner, split = _triangles(
+            vertices, polygons if isinstance(polygons, np.ndarray) else
+            [[int(c) for c in corners] for corners in polygons], path, "PLY face",
+            lambda k: _ply_row_line(order, body_line, elements, "face", k))
         face_properties = {name: values[owner] for name, values in
                            _ply_scalars(tables["face"], "face", (index_name,), renamed).items()}
-    return ParsedSurface(vertices, triangles, face_element is not None, vertex_properties, face_properties, renamed)
+    else:
+        split = 0
+    if strip_element is not None and strip_index is not None:
+        strips, strip_of = _strip_triangles(tables["tristrips"][strip_index], len(vertices), path,
+                                            lambda k: _ply_row_line(order, body_line, elements, "tristrips", k))
+        strip_properties = {name: values[strip_of] for name, values in
+                            _ply_scalars(tables["tristrips"], "tristrips", (strip_index,), renamed).items()}
+        if face_element is not None and set(strip_properties) != set(face_properties):
+            raise FileFormatError(f"the PLY face and tristrips elements have different properties "
+                                  f"({sorted(face_properties)} and {sorted(strip_properties)}): the triangles of "
+                                  "both become one surface, with one value of each property per triangle", path=path)
+        triangles = np.concatenate([triangles, strips])
+        face_properties = {name: np.concatenate([face_properties[name], values]) if name in face_properties
+                           else values for name, values in strip_properties.items()}
+    _refuse_unknown_faces(elements, tables, path)
+    return ParsedSurface(vertices, triangles, face_element is not None or strip_element is not None,
+                         vertex_properties, face_properties, renamed, _ply_recorded_zpositive(data[:body]),
+                         polygons_split=split)
+
+
+def _ply_index_list(element: _PlyElement) -> str | None:
+    """The name of an element's list of vertex indices (``vertex_indices`` or ``vertex_index``), or None."""
+    lists = [p.name for p in element.properties if p.count_dtype is not None]
+    return next((p.decode() for p in _PLY_FACE_INDICES if p.decode() in lists), None)
+
+
+def _strip_triangles(strips: Any, n: int, path: PathLike,
+                     line_of: Callable[[int], int | None]) -> tuple[IntArray, IntArray]:
+    """The triangles of PLY triangle strips (-1 restarts a strip) and the strip of each.
+
+    In a strip a b c d e ... the triangles are (a, b, c), (c, b, d), (c, d, e),
+    ...: every second one is turned so that all face the same way as the
+    first of its run. Degenerate triangles (a vertex twice), which writers use
+    to join strips, are dropped.
+    """
+    rows = list(strips)
+    triangles: list[IntArray] = []
+    owners: list[IntArray] = []
+    for k, row in enumerate(rows):
+        values = np.asarray(row, dtype=np.int64)
+        bad = (values < -1) | (values >= n)
+        if bad.any():
+            raise FileFormatError(f"PLY tristrips {k} uses vertex {int(values[bad][0])}, outside 0..{n - 1} "
+                                  "(-1 restarts a strip)", path=path, line=line_of(k))
+        if len(values) < 3:
+            continue
+        at = np.arange(len(values), dtype=np.int64)
+        restart = values == -1
+        run_start = np.maximum.accumulate(np.where(restart, at + 1, 0))      # first index of the run of each entry
+        first = at[:-2]
+        whole = ~(restart[:-2] | restart[1:-1] | restart[2:])               # three entries of one run
+        first = first[whole]
+        a, b, c = values[first], values[first + 1], values[first + 2]
+        odd = (first - run_start[first]) % 2 == 1
+        tri = np.stack([np.where(odd, b, a), np.where(odd, a, b), c], axis=1)  # odd: (c, b, d) from b c d
+        keep = (a != b) & (b != c) & (a != c)
+        triangles.append(tri[keep])
+        owners.append(np.full(int(keep.sum()), k, dtype=np.int64))
+    if not triangles:
+        return np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64)
+    return np.concatenate(triangles), np.concatenate(owners)
+
+
+def _refuse_unknown_faces(elements: dict[str, _PlyElement], tables: dict[str, dict[str, Any]],
+                          path: PathLike) -> None:
+    """An element other than vertex, face and tristrips that lists vertices (faces, strips, lines) is an error.
+
+    Left out, its cells would be lost without a word (a file of triangle strips read as a point set).
+    Lists of at most one vertex (a scanner's ``range_grid``) hold no cells and are skipped.
+    """
+    for element in elements.values():
+        if element.name in ("vertex", "face", "tristrips"):
+            continue
+        name = _ply_index_list(element)
+        if name is None:
+            continue
+        lists = tables[element.name][name]
+        longest = (lists.shape[1] if lists.ndim == 2 else 0) if isinstance(lists, np.ndarray) \
+            else max((len(v) for v in lists), default=0)
+        if longest >= 2:
+            raise FileFormatError(
+                f"the PLY element {quoted(element.name)} lists vertices ({name}, up to {longest} per row): tgsis "
+                "reads polygons from a 'face' element and triangle strips from 'tristrips', and does not know what "
+                f"{quoted(element.name)} holds, so its cells would be lost", path=path, line=element.line,
+                hint="rename the element to 'face' (polygons) or 'tristrips' (strips, -1 restarts) if it is one, "
+                     "or convert the file to triangles in the tool that wrote it")
+
+
+def _ply_recorded_zpositive(header: bytes) -> str | None:
+    """The word after ``comment tgsis zpositive`` in a PLY header (tgsis's record of a z convention), or None."""
+    found = None
+    for line in header.split(b"\n"):
+        words = line.split()
+        if words[:3] == [b"comment", b"tgsis", b"zpositive"]:
+            found = words[3].decode("latin-1") if len(words) > 3 else ""
+    return found
 
 
 def _ply_row_line(order: str, body_line: int, elements: dict[str, _PlyElement], name: str, row: int) -> int | None:

@@ -1496,7 +1496,8 @@ def _object_chunks(mesh: Mesh, path: PathLike | None, drop_cell_properties: bool
         assert kind.cell_keyword is not None
         cell_lines = _cell_lines(kind.cell_keyword, mesh.cells)
         start = 0
-        names = _string_list(meta.get("gocad_part_names"))
+        # part names as GOCAD read them, else as another format's reader did (OBJ groups: tgsis.formats.trimesh_io)
+        names = _string_list(meta.get("gocad_part_names")) or _string_list(meta.get("part_names"))
         names = names if len(names) == len(groups) else [""] * len(groups)
         for j, (cells, end, part_name) in enumerate(zip(groups, _vertex_ranges(mesh, groups), names)):
             chunks.append(f"{kind.part_keyword} {part_name}\n" if part_name.strip() else f"{kind.part_keyword}\n")

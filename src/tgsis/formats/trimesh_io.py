@@ -12,9 +12,13 @@ STL      not kept [3]_   float32                none                trimesh (bin
 =======  ==============  =====================  ==================  ==============================
 
 .. [1] Every vertex, also those no face uses (trimesh's OBJ reader dropped
-   them). Polygons with more than three corners are split into a fan of
-   triangles; texture coordinates, normals, colours, groups and materials are
-   not read.
+   them), one per ``v`` line whatever the texture coordinates of its corners.
+   Planar convex polygons of more than three corners are split into a fan of
+   triangles (:class:`~tgsis.errors.PolygonsSplitWarning`,
+   ``metadata["polygons_split"]``), other polygons refused; texture
+   coordinates, normals, colours and materials are not read. OBJ groups
+   become the ``part`` cell property and ``metadata["part_names"]``, and the
+   OBJ writer writes the parts back as ``g`` lines.
 .. [2] Fixed-point text: a coordinate comes back within 0.5e-8 (OBJ) or 0.5e-10
    (OFF) of what was written, plus one rounding of the double; big UTM
    coordinates keep 15-16 significant digits, not 17. ``digits=`` asks for more
@@ -40,8 +44,11 @@ its own PLY type; int64/uint64 properties are written as ``int``/``uint`` when
 their values fit (else :class:`~tgsis.errors.FileFormatError`), bool as
 ``uchar``, float16 as ``float``. On reading, integer PLY properties become int64
 and float ones keep float32/float64; colours, normals and texture coordinates
-are properties like any other. OBJ, OFF and STL cannot store properties: the
-writer raises unless ``drop_properties=True``. Names are not stored (meshes
+are properties like any other. OBJ, OFF and STL cannot store properties (OBJ
+but ``part``, as groups): the writer raises unless ``drop_properties=True``.
+None of these formats has a z convention: a mesh whose ``metadata["zpositive"]``
+says ``Depth`` is written in elevation (z negated); PLY records the convention
+in a ``comment tgsis zpositive`` line, which the reader gives back. Names are not stored (meshes
 read have ``name=None``).
 
 A file of points without faces (OBJ ``v`` lines alone, a PLY ``vertex``
@@ -54,6 +61,7 @@ file without any vertex is an error.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -61,8 +69,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, property_columns, read_bytes, write_bytes
+from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError, PolygonsSplitWarning
+from tgsis.formats._common import (PathLike, check_mesh, in_elevation, property_columns, read_bytes,
+                                   restore_convention, write_bytes)
 from tgsis.formats._surface_files import ParsedSurface, parse_obj, parse_off, parse_ply, parse_stl
 from tgsis.mesh import PointSet, Surface
 
@@ -134,15 +143,28 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
     metadata: dict[str, Any] = {"ply_property_names": parsed.renamed} if parsed.renamed else {}
     if len(vertices) == 0:
         raise FileFormatError(f"the {kind.upper()} file holds no vertex (no triangle and no point)", path=path)
+    if parsed.parts is not None:
+        face_properties = {**face_properties, "part": parsed.parts}
+    if parsed.part_names:
+        metadata["part_names"] = parsed.part_names
+    if parsed.polygons_split:
+        metadata["polygons_split"] = parsed.polygons_split
+        warnings.warn(PolygonsSplitWarning(
+            f"{path}: {parsed.polygons_split:,} faces of more than 3 corners were split into triangles (each planar "
+            "and convex: the triangles have its shape)", path=path, count=parsed.polygons_split), stacklevel=2)
     if merge_vertices:
         vertices, faces, vertex_properties = _merge_identical(vertices, faces, vertex_properties)
+    mesh: Surface | PointSet
     try:
         if len(faces) == 0 and not (kind == "ply" and parsed.has_faces):
-            return PointSet(vertices, vertex_properties=vertex_properties, metadata=metadata)
-        return Surface(vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties,
-                       metadata=metadata)
+            mesh = PointSet(vertices, vertex_properties=vertex_properties, metadata=metadata)
+        else:
+            mesh = Surface(vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties,
+                           metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.upper()} file is not a valid surface: {exc.message}", path=path) from exc
+    restore_convention(mesh, parsed.zpositive, path, "the PLY comment 'tgsis zpositive'")
+    return mesh
 
 
 _PARSERS: dict[str, Callable[[bytes, PathLike], ParsedSurface]] = {
@@ -195,17 +217,54 @@ def write_trimesh_file(surface: Surface, path: PathLike, *, file_type: str | Non
     mesh = check_mesh(surface, f"the {kind.upper()} writer")
     if not isinstance(mesh, Surface):
         raise FileFormatError(f"{kind.upper()} stores triangle surfaces, not a {type(mesh).__name__}", path=path)
+    up, (zpositive,) = in_elevation(mesh, path)  # no z convention in these formats: z up
+    assert isinstance(up, Surface)
+    mesh = up
     if digits is not None and kind not in ("obj", "off"):
         raise FileFormatError(f"digits= applies to OBJ and OFF text, not to binary {kind.upper()}", path=path)
     if kind == "ply":
-        data = _ply_bytes(mesh, path)
+        data = _ply_bytes(mesh, path, zpositive)
     else:
-        lost = [*mesh.vertex_properties, *mesh.cell_properties]
+        lost = [*mesh.vertex_properties, *(k for k in mesh.cell_properties if not (kind == "obj" and k == "part"))]
         if lost and not drop_properties:
             raise FileFormatError(f"{kind.upper()} cannot store the properties {', '.join(lost)}", path=path,
                                   hint="write PLY or VTU to keep them, or pass drop_properties=True")
         data = _trimesh_bytes(mesh, kind, digits)
+        if kind == "obj" and "part" in mesh.cell_properties:
+            data = _obj_with_groups(data, mesh, path)
     write_bytes(path, [data])
+
+
+def _obj_with_groups(data: bytes, surface: Surface, path: PathLike) -> bytes:
+    """trimesh's OBJ text with a ``g`` line wherever the part of the faces changes (cell order kept).
+
+    Each part is named by ``metadata["part_names"]`` (or ``gocad_part_names``) in
+    part order, else ``part_<number>``; reading gives the parts back.
+    """
+    parts = np.asarray(surface.cell_properties["part"])
+    if parts.dtype.kind not in "iu" and not (parts.dtype.kind == "f" and np.all(parts == np.round(parts))):
+        raise FileFormatError(f"cell property 'part' must hold whole part numbers, not {parts.dtype}", path=path)
+    distinct = np.unique(parts).tolist()
+    listed = surface.metadata.get("part_names") or surface.metadata.get("gocad_part_names")
+    names = [str(v) for v in listed] if isinstance(listed, list) and len(listed) == len(distinct) else []
+    label = {p: " ".join((names[j] if names and names[j].strip() else f"part_{int(p)}").split())
+             for j, p in enumerate(distinct)}
+    if len(set(label.values())) != len(label):
+        label = {p: f"part_{int(p)}" for p in distinct}  # names that would merge parts
+    lines = data.decode("utf-8").split("\n")
+    face = 0
+    out: list[str] = []
+    current = None
+    for line in lines:
+        if line.startswith("f "):
+            if parts[face] != current:
+                current = parts[face]
+                out.append(f"g {label[current]}")
+            face += 1
+        out.append(line)
+    if face != len(parts):  # pragma: no cover - trimesh writes one f line per face
+        raise FileFormatError("the OBJ writer wrote another number of faces than the surface has", path=path)
+    return "\n".join(out).encode("utf-8")
 
 
 def _trimesh_bytes(surface: Surface, kind: str, digits: int | None) -> bytes:
@@ -242,12 +301,16 @@ def _ply_type(name: str, values: npt.NDArray[Any], path: PathLike) -> tuple[str,
     return _PLY_TYPES[values.dtype.str[1:]], values
 
 
-def _ply_bytes(surface: Surface, path: PathLike) -> bytes:
-    """A binary little-endian PLY with double coordinates, int indices and typed properties."""
+def _ply_bytes(surface: Surface, path: PathLike, zpositive: str | None = None) -> bytes:
+    """A binary little-endian PLY with double coordinates, int indices and typed properties.
+
+    ``zpositive``: the z convention of the mesh ``surface`` (in elevation) came from, recorded in a comment.
+    """
     n, m = surface.n_vertices, surface.n_cells
     if n > np.iinfo(np.int32).max:
         raise FileFormatError(f"PLY face indices are 32-bit: {n} vertices are too many", path=path)
-    header = ["ply", "format binary_little_endian 1.0", "comment tgsis", f"element vertex {n}",
+    recorded = [f"comment tgsis zpositive {zpositive} (z is written up positive, as elevation)"] if zpositive else []
+    header = ["ply", "format binary_little_endian 1.0", "comment tgsis", *recorded, f"element vertex {n}",
               *(f"property double {c}" for c in _PLY_COORDINATES)]
     vertex_fields: list[tuple[str, npt.NDArray[Any]]] = [(c, surface.vertices[:, j])
                                                          for j, c in enumerate(_PLY_COORDINATES)]

@@ -36,6 +36,12 @@ pyvista and meshio read. The round trip is bit-exact for vertices, cells and
 properties (dtypes and vector properties included, except bool and float16);
 the mesh's other metadata is not stored.
 
+VTK has no z convention: a mesh whose ``metadata["zpositive"]`` says
+``Depth`` is written with z negated (elevation, as ParaView draws it), and
+the FieldData string ``tgsis_zpositive`` (a collection's members:
+``tgsis_member_zpositive``) records the convention, which the readers give
+back (depth coordinates and ``metadata["zpositive"]``).
+
 A :class:`~tgsis.mesh.GeometryCollection` is written as one grid of mixed
 cell types: the members' points one member after the other, their cells
 likewise (connectivity shifted to the member's first point), and in
@@ -81,8 +87,9 @@ same way. PolyData has no 3D cells: a TetraMesh or a collection goes to
 ``.vtu``. :func:`read_vtp` reads whatever VTK writes (the encodings above).
 The cells must be of one kind: vertices (poly-vertices become one vertex
 each), lines (a polyline becomes its segments, each with the polyline's cell
-data), or polygons that are all triangles (others, and triangle strips,
-raise :class:`~tgsis.errors.FileFormatError` with the hint to triangulate).
+data), or polygons: triangles, and planar convex polygons and quads split
+into triangles (others, and triangle strips, raise
+:class:`~tgsis.errors.FileFormatError` with the hint to triangulate).
 ``name`` (a VTK String array) or ``tgsis_name`` in FieldData gives the name;
 array names are sanitised as for ``.vtu``.
 """
@@ -101,8 +108,10 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis._vtk_cells import file_array_names, mesh_from_vtk_cells, named_as_read, shared_properties, without_no_part
+from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
+from tgsis.formats._common import (PathLike, check_mesh, in_elevation, quoted, read_bytes, restore_convention,
+                                   sanitize_property_name, split_vtk_polygons, write_bytes)
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
 if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)
@@ -172,6 +181,8 @@ class _Grid:
     point_data: dict[str, npt.NDArray[Any]]
     cell_data: dict[str, npt.NDArray[Any]]
     members: GeometryCollection | None = None
+    #: the z convention of the mesh (one), or of each member, that the file records (z is written up positive)
+    zpositive: tuple[str | None, ...] = ()
     #: polyhedra (VTK_POLYHEDRON): per cell [number of faces, (points of the face, its point ids)...], and the end of each
     faces: npt.NDArray[np.int64] | None = None
     faceoffsets: npt.NDArray[np.int64] | None = None
@@ -179,11 +190,12 @@ class _Grid:
 
 def _mesh_grid(mesh: Mesh) -> _Grid:
     k = mesh.cell_size
+    up, zpositive = in_elevation(mesh)
     point_data, cell_data = _as_read(mesh, mesh.vertex_properties, mesh.cell_properties)
-    return _Grid(mesh.name, mesh.geotype.value, mesh.vertices, mesh.cells.reshape(-1),
+    return _Grid(mesh.name, mesh.geotype.value, up.vertices, mesh.cells.reshape(-1),
                  np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k,
                  np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8),
-                 point_data, cell_data)
+                 point_data, cell_data, zpositive=tuple(zpositive))
 
 
 def _xml_name(name: str) -> bool:
@@ -199,8 +211,10 @@ def _as_read(geometry: Geometry, point_data: dict[str, npt.NDArray[Any]],
 
 
 def _collection_grid(collection: GeometryCollection) -> _Grid:
-    """One grid of mixed cell types: the members' points and cells one member after the other."""
-    members = collection.members
+    """One grid of mixed cell types: the members' points and cells one member after the other (z up)."""
+    up, zpositive = in_elevation(collection)
+    assert isinstance(up, GeometryCollection)
+    members = up.members
     first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
     connectivity = np.concatenate([m.cells.reshape(-1) + start for m, start in zip(members, first_point)])
     sizes = np.concatenate([np.full(m.n_cells, m.cell_size, dtype=np.int64) for m in members])
@@ -210,7 +224,7 @@ def _collection_grid(collection: GeometryCollection) -> _Grid:
                                      _shared_properties(members, "cell"))
     return _Grid(collection.name, collection.geotype.value, np.concatenate([m.vertices for m in members]),
                  connectivity.astype(np.int64), np.cumsum(sizes).astype(np.int64), types, point_data, cell_data,
-                 collection)
+                 collection, zpositive=tuple(zpositive))
 
 
 def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"]) -> dict[str, npt.NDArray[Any]]:
@@ -287,6 +301,10 @@ def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) ->
                                                             dtype=np.int64), components=2)
         sizes.set("NumberOfTuples", str(len(members)))
         field_data.append(sizes)
+        if any(source.zpositive):
+            field_data.append(writer.strings(MEMBER_ZPOSITIVE_FIELD, *(z or "" for z in source.zpositive)))
+    elif source.zpositive and source.zpositive[0]:
+        field_data.append(writer.strings(ZPOSITIVE_FIELD, source.zpositive[0]))
     n_points, n_cells = len(source.vertices), len(source.types)
     piece = ET.SubElement(grid, "Piece", NumberOfPoints=str(n_points), NumberOfCells=str(n_cells))
     point_data = ET.SubElement(piece, "PointData")
@@ -545,11 +563,13 @@ def _parse(data: bytes, path: PathLike | None, *, absent_as_none: bool = False) 
     cell_properties = _data_arrays(piece.find("CellData"), decoder, n_cells, names, "cell_data")
     metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
     try:
-        return mesh_type(vertices.reshape(n_points, 3), cells.reshape(n_cells, mesh_type.cell_size),
+        mesh = mesh_type(vertices.reshape(n_points, 3), cells.reshape(n_cells, mesh_type.cell_size),
                          vertex_properties=vertex_properties, cell_properties=cell_properties,
                          name=fields.get("name"), metadata=metadata)
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the grid is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
+    restore_convention(mesh, fields.get(ZPOSITIVE_FIELD), path, f"FieldData {ZPOSITIVE_FIELD}")
+    return mesh
 
 
 def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices: npt.NDArray[np.float64],
@@ -594,7 +614,14 @@ def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices
         except (InvalidGeometryError, InvalidPropertyError) as exc:
             raise FileFormatError(f"member {i} is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
         first_point, first_cell = first_point + n_p, first_cell + n_c
-    return GeometryCollection(members, name=name, metadata={"vtk_array_names": arrays} if arrays else None)
+    collection = GeometryCollection(members, name=name, metadata={"vtk_array_names": arrays} if arrays else None)
+    recorded = strings.get(MEMBER_ZPOSITIVE_FIELD)
+    if recorded is not None:
+        if len(recorded) != len(members):
+            raise FileFormatError(f"FieldData {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for "
+                                  f"{len(members)} members", path=path)
+        restore_convention(collection, recorded, path, f"FieldData {MEMBER_ZPOSITIVE_FIELD}")
+    return collection
 
 
 def _mixed_cells(piece: ET.Element, decoder: _Decoder,
@@ -941,6 +968,7 @@ def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compre
         raise FileFormatError(f"VTK PolyData holds points, lines and surfaces, not a {type(mesh).__name__}",
                               hint="write tetrahedra to a .vtu file")
     compressed = compression == "zlib" and mesh.n_vertices > 0 and mesh.n_cells > 0  # meshio: no empty zlib array
+    up, (zpositive,) = in_elevation(mesh)
     writer = _ArrayWriter(appended=encoding == "appended", compressed=compressed)
     root = writer.root("PolyData")
     poly = ET.SubElement(root, "PolyData")
@@ -948,6 +976,8 @@ def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compre
     if mesh.name:
         field_data.append(writer.strings("tgsis_name", mesh.name))
     field_data.append(writer.strings("tgsis_geotype", mesh.geotype.value))
+    if zpositive is not None:
+        field_data.append(writer.strings(ZPOSITIVE_FIELD, zpositive))
     counts = {name: "0" for name in ("NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys")}
     counts[f"NumberOf{section}"] = str(mesh.n_cells)
     piece = ET.SubElement(poly, "Piece", {"NumberOfPoints": str(mesh.n_vertices), **counts})
@@ -959,7 +989,7 @@ def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compre
     for name, values in cell_arrays.items():
         cell_data.append(writer.array(name, values, components=values.shape[1] if values.ndim == 2 else 1))
     points = ET.SubElement(piece, "Points")
-    points.append(writer.array("Points", mesh.vertices, components=3))
+    points.append(writer.array("Points", up.vertices, components=3))
     for name in ("Verts", "Lines", "Strips", "Polys"):
         cells = ET.SubElement(piece, name)
         if name == section:
@@ -1053,13 +1083,17 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
     cell_data = _data_arrays(piece.find("CellData"), decoder, len(all_types), names, "cell_data")
     fields = _field_strings(poly, decoder)
     metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
+    all_types, cell_offsets, cell_points, cell_data = split_vtk_polygons(
+        vertices, all_types, offsets.astype(np.int64),
+        np.concatenate(connectivity) if connectivity else np.empty(0, np.int64), cell_data, metadata, path,
+        "PolyData cell")
     try:
-        return mesh_from_vtk_cells(vertices, all_types, offsets.astype(np.int64),
-                                   np.concatenate(connectivity) if connectivity else np.empty(0, np.int64),
-                                   point_data, cell_data, name=fields.get("name"), geotype=fields.get("tgsis_geotype"),
+        mesh = mesh_from_vtk_cells(vertices, all_types, cell_offsets, cell_points, point_data, cell_data, name=fields.get("name"), geotype=fields.get("tgsis_geotype"),
                                    metadata=metadata, source="the PolyData")
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
+    restore_convention(mesh, fields.get(ZPOSITIVE_FIELD), path, f"FieldData {ZPOSITIVE_FIELD}")
+    return mesh
 
 
 # --------------------------------------------------------------------------- G-maps (models 4 and 5) for ParaView

@@ -55,8 +55,10 @@ import numpy.typing as npt
 
 from tgsis._vtk_cells import (collection_from_cells, file_array_names, first, mesh_from_vtk_cells, named_as_read,
                               string_bytes, strings, vtk_parts)
+from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import MAX_LINE_BYTES, PathLike, check_mesh, quoted, read_bytes, sanitize_property_name, write_bytes
+from tgsis.formats._common import (MAX_LINE_BYTES, PathLike, check_mesh, in_elevation, quoted, read_bytes,
+                                   restore_convention, sanitize_property_name, split_vtk_polygons, write_bytes)
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]
@@ -109,8 +111,9 @@ def write_vtk(mesh: Geometry, path: PathLike, *, ascii: bool = False) -> None:
 def format_vtk(mesh: Geometry, *, ascii: bool = False) -> bytes:
     """The ``.vtk`` file content of a mesh or a collection; see :func:`write_vtk`."""
     members = mesh.members if isinstance(mesh, GeometryCollection) else (check_mesh(mesh, "the legacy VTK writer"),)
+    up, zpositive = in_elevation(mesh)  # no z convention in VTK: z up, the convention in the field data
     try:
-        vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(mesh)
+        vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(up)
     except InvalidPropertyError as exc:  # a collection property that not every member has
         raise FileFormatError(exc.message, hint=exc.hint) from None
     out = _Writer(ascii)
@@ -124,6 +127,10 @@ def format_vtk(mesh: Geometry, *, ascii: bool = False) -> bytes:
         fields.append(("tgsis_member_geotypes", string_bytes(*(m.geotype.value for m in members))))
         fields.append(("tgsis_member_names", string_bytes(*(m.name or "" for m in members))))
         fields.append(("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members], dtype=np.int64)))
+        if any(zpositive):
+            fields.append((MEMBER_ZPOSITIVE_FIELD, string_bytes(*(z or "" for z in zpositive))))
+    elif zpositive[0] is not None:
+        fields.append((ZPOSITIVE_FIELD, string_bytes(zpositive[0])))
     out.field("FieldData", fields)
     out.text(f"POINTS {len(vertices)} double\n")
     out.values(vertices)
@@ -284,17 +291,37 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
                          default=None)
         raise FileFormatError(f"a cell refers to point {bad}, but the file has {n_points} points (0..{n_points - 1})",
                               path=path, line=cells_line)
+    if geotype != GeometryCollection.geotype.value:
+        types, offsets, connectivity, cell_data = split_vtk_polygons(vertices, types, offsets, connectivity, cell_data,
+                                                                     metadata, path, f"{dataset.kind} cell")
+    geometry: Geometry
     try:
         if geotype == GeometryCollection.geotype.value:
             table = (strings(dataset.fields.get("tgsis_member_geotypes", [])),
                      strings(dataset.fields.get("tgsis_member_names", [])),
                      dataset.fields.get("tgsis_member_sizes", np.empty((0, 2))))
-            return collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
-                                          metadata, "the file")
-        return mesh_from_vtk_cells(vertices, types, offsets, connectivity, point_data, cell_data, name=name,
-                                   geotype=geotype, metadata=metadata, source=f"the {dataset.kind}")
+            geometry = collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table,
+                                             name, metadata, "the file")
+        else:
+            geometry = mesh_from_vtk_cells(vertices, types, offsets, connectivity, point_data, cell_data, name=name,
+                                           geotype=geotype, metadata=metadata, source=f"the {dataset.kind}")
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
+    _restore_recorded(geometry, dataset.fields, path)
+    return geometry
+
+
+def _restore_recorded(geometry: Geometry, fields: dict[str, Any], path: PathLike | None) -> None:
+    """The z convention the FieldData records (the file's z is up), given back to the mesh or each member."""
+    if isinstance(geometry, GeometryCollection):
+        if MEMBER_ZPOSITIVE_FIELD in fields:
+            recorded = strings(fields[MEMBER_ZPOSITIVE_FIELD])
+            if len(recorded) != len(geometry):
+                raise FileFormatError(f"FIELD array {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for "
+                                      f"{len(geometry)} members", path=path)
+            restore_convention(geometry, list(recorded), path, f"FIELD array {MEMBER_ZPOSITIVE_FIELD}")
+    elif ZPOSITIVE_FIELD in fields:
+        restore_convention(geometry, first(fields[ZPOSITIVE_FIELD]), path, f"FIELD array {ZPOSITIVE_FIELD}")
 
 
 def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str, dict[str, str]], key: str,

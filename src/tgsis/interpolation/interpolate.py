@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._zpositive import elevation
 from tgsis.interpolation.cutting import cut_along_paths
 from tgsis.interpolation.errors import InterpolationSetupError
 from tgsis.interpolation.parameterize import compatible_patch
@@ -91,7 +92,7 @@ def _controlling_surfaces(setup: InterpolationSetup,
             return mesh
     surfaces = {}
     for name, path in setup.controlling_surfaces.items():
-        mesh = loader(path)
+        mesh = elevation(loader(path))  # z up, as the source and target are
         surfaces[name] = ControllingSurface(mesh.vertices, mesh.cells, name=name)
     return surfaces
 
@@ -197,6 +198,9 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     if not (np.isfinite(t0) and np.isfinite(t1) and t0 != t1):
         raise InterpolationSetupError(f"the source and target times must be two different finite times, "
                                       f"got t0={t0}, t1={t1}")
+    # z up, as stored: a ZPOSITIVE Depth mesh (a GOCAD file, a fetched feature) negated, so that meshes of two
+    # conventions morph into each other and the evolving surface is stored as the shape it is (not mirrored)
+    source, target = elevation(source), elevation(target)
     timings: dict[str, float] = {}
     clock = time.perf_counter()
     steps = [0, 5]  # done, total (cut, partition, one per pair of patches, trajectories, evolving)

@@ -44,6 +44,7 @@ from starlette.templating import Jinja2Templates
 from starlette.websockets import WebSocketClose
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from tgsis._zpositive import elevation
 from tgsis.db import versions as V
 from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
@@ -330,7 +331,7 @@ def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
             return drawable_surface(conn, fc, feature_id, color), None
         feature = fetch_feature(conn, fc, feature_id)
         assert feature.mesh is not None
-        return drawable(feature.mesh), None
+        return drawable(elevation(feature.mesh)), None  # the view draws z up: a Depth mesh's z negated
     # any finite t (a scene's slider spans the lives of all its features): outside this one's life, nothing
     when = t if t is not None else list_features(conn, fc, ids=[feature_id])[0].last
     if when is None:
