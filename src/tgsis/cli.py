@@ -614,12 +614,16 @@ def _import_instant(args: argparse.Namespace, conn: psycopg.Connection[Any], fc:
     if args.feature is not None:
         if values:
             raise InvalidInputError("--set does not go with --feature: the feature's properties stay")
+        if args.alive:
+            raise InvalidInputError("--alive does not go with --feature: the feature keeps whether it is alive "
+                                    "(set when it was stored)")
         with conn.transaction():
             add_instant(conn, fc, args.feature, args.at, surface, drop_extra_properties=args.drop_extra_properties)
         fid, known = args.feature, [t for t, _ in instants(conn, args.feature)]
     else:
         name = args.name or surface.name or Path(args.file).stem
-        series = SurfaceSeries([args.at], [surface], alive=True, name=name)
+        # not alive unless --alive, as SurfaceSeries from Python: a surface known at T is not claimed after T
+        series = SurfaceSeries([args.at], [surface], alive=args.alive, name=name)
         with conn.transaction():
             fid = insert_feature(conn, fc, series, values, name=name, drop_extra_properties=args.drop_extra_properties)
         known = [args.at]
@@ -649,6 +653,8 @@ def cmd_import(args: argparse.Namespace) -> int:
         fc = get_feature_class(conn, args.feature_class)
         if args.at is not None or args.feature is not None or fc.time_model == "INSTANTS":
             return _import_instant(args, conn, fc, meshes, values)
+        if args.alive:
+            raise InvalidInputError("--alive goes with --at T: a static feature exists at every time")
         if fc.geotype is Geotype.GEOMETRYCOLLECTION:  # the whole file is one feature
             collection = GeometryCollection(meshes, name=args.name or stem)
             with conn.transaction():
@@ -1087,16 +1093,25 @@ def cmd_at(args: argparse.Namespace) -> int:
     if (args.format or Path(args.file).suffix).lower().lstrip(".") == "pvd":
         raise InvalidInputError(f"{args.file}: tgsis at writes one surface; a .pvd is a time series",
                                 hint="tgsis series writes a .pvd")
-    target = formats.format_for(args.file, args.format)  # an unknown format fails before connecting
+    # the file says when the snapshot is: {t} in its name, or a folder's file feature_ID_tT.FORMAT
+    file = args.file.replace("{t}", repr(args.time))
+    if Path(file).is_dir():
+        if not args.format:
+            raise InvalidInputError(f"{args.file} is a folder: give --format (e.g. --format vtu) for the file "
+                                    f"feature_{args.id}_t{args.time!r}.FORMAT written in it")
+        file = str(Path(file) / f"feature_{args.id}_t{args.time!r}.{args.format.lower().lstrip('.')}")
+    target = formats.format_for(file, args.format)  # an unknown format fails before connecting
     with _connect(args) as conn:
         fc = class_of_feature(conn, args.id)
         surface = get_at(conn, args.id, args.time, convention=args.convention, properties=True)
         if surface is None:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))
-        target.write(surface, args.file)
+        # and its name, which GOCAD writes in its header and VTK in its field data (and a legacy file's title)
+        surface.name = f"{surface.name or f'feature {args.id}'} at t = {args.time!r}{_unit(fc)}"
+        target.write(surface, file)
         _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
-             f"{surface.n_cells} triangles, to {args.file}")
+             f"{surface.n_cells} triangles, to {file}")
         if args.png:
             _picture_of(conn, [args.id, *args.with_ids], args.time, args.png,
                         title=f"feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)} (SQL snapshot)")
@@ -1167,7 +1182,7 @@ def cmd_series(args: argparse.Namespace) -> int:
 def cmd_version_create(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         revision = V.create_version(conn, args.name, args.parent, description=args.description)
-    _out(f"created version {args.name} (parent {args.parent}), working revision {revision}")
+    _out(f"created version {V.show_name(args.name)} (parent {V.show_name(args.parent)}), working revision {revision}")
     return 0
 
 
@@ -1213,9 +1228,9 @@ def cmd_version_goto(args: argparse.Namespace) -> int:
             V.goto_revision(conn, name, revision)
     clistate.remember_version(_target_key(args), args.name)
     if revision is None:
-        _out(f"commands on this database now work in version {name} (working revision {working})")
+        _out(f"commands on this database now work in version {V.show_name(name)} (working revision {working})")
     else:
-        _out(f"commands on this database now look at revision {revision} of version {name} (read-only)")
+        _out(f"commands on this database now look at revision {revision} of version {V.show_name(name)} (read-only)")
     return 0
 
 
@@ -1237,7 +1252,7 @@ def cmd_version_save(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         saved = V.save_revision(conn, args.name)
         version, working = V.working_version(conn), V.working_revision(conn)
-    _out(f"saved revision {saved} of {version} as {args.name}; new working revision {working}")
+    _out(f"saved revision {saved} of {V.show_name(version)} as {V.show_name(args.name)}; new working revision {working}")
     return 0
 
 
@@ -1246,7 +1261,7 @@ def cmd_version_delete(args: argparse.Namespace) -> int:
         removed = V.delete_version(conn, args.name)
     if clistate.remembered_version(_target_key(args)) == args.name:
         clistate.remember_version(_target_key(args), None)
-    _out(f"deleted version {args.name} and {removed} row version(s)")
+    _out(f"deleted version {V.show_name(args.name)} and {removed} row version(s)")
     return 0
 
 
@@ -1298,7 +1313,7 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
             _out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
     if not conflicts:
-        print(f"version {args.name} has no conflicts with its parent", file=sys.stderr)
+        print(f"version {V.show_name(args.name)} has no conflicts with its parent", file=sys.stderr)
     return 0
 
 
@@ -1306,7 +1321,7 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution,
                                discard_other=args.discard_other)
-    _out(f"{c.objectclass} {c.objectkey} in {args.name}: {c.solution}")
+    _out(f"{c.objectclass} {c.objectkey} in {V.show_name(args.name)}: {c.solution}")
     if c.discarded is None:
         _out("  what it discarded of the other side's edits is not shown: this role may not read the object's rows")
     elif c.discarded:
@@ -1333,11 +1348,11 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | No
 
 
 def cmd_version_merge(args: argparse.Namespace) -> int:
-    with _connect(args) as conn, cliout.busy(f"merging {args.name}"), conn.transaction():
+    with _connect(args) as conn, cliout.busy(f"merging {V.show_name(args.name)}"), conn.transaction():
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
         lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
-    _out(f"merged {args.name} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
+    _out(f"merged {V.show_name(args.name)} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
     _say_discarded(lost)
     if args.remove and clistate.remembered_version(_target_key(args)) == args.name:
         clistate.remember_version(_target_key(args), None)
@@ -1348,7 +1363,7 @@ def cmd_version_refresh(args: argparse.Namespace) -> int:
     with _connect(args) as conn, conn.transaction():
         lost = _recorded_discards(conn, args.name)
         written = V.refresh_version(conn, args.name)
-    _out(f"refreshed {args.name} from its parent: {written} row(s) written")
+    _out(f"refreshed {V.show_name(args.name)} from its parent: {written} row(s) written")
     _say_discarded(lost)
     return 0
 
@@ -2009,6 +2024,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "new feature (known from T on) or, with --feature, of an existing one")
     imp.add_argument("--feature", type=_ID, metavar="ID",
                      help="with --at: add the instant T to this feature instead of storing a new one")
+    imp.add_argument("--alive", action="store_true",
+                     help="with --at, for a new feature: it still exists after its last instant (keeps its last shape; "
+                          "default: it exists only from its first to its last instant, as from Python)")
 
     exp = _command(commands, "export", "write a feature to a geometry file",
                    ["tgsis export 3 garlock.ts", "tgsis export 3 garlock.vtu --png garlock.png"], cmd_export)
@@ -2022,7 +2040,8 @@ def build_parser() -> argparse.ArgumentParser:
                   ["tgsis at 12 -7.5 fault_7.5Ma.ts", "tgsis at 13 1.5 horizon.vtu --convention right"], cmd_at)
     at.add_argument("id", type=_ID, help="the feature's id")
     at.add_argument("time", type=float, metavar="T", help="model time (in the class's unit)")
-    at.add_argument("file", help="the file to write; its extension gives the format")
+    at.add_argument("file", help="the file to write; its extension gives the format; {t} in it is replaced by T; "
+                    "a folder gets feature_ID_tT.FORMAT (with --format)")
     at.add_argument("--format", help="file format (default: from the extension)")
     at.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                     help="step convention of a surface known at instants (default: left)")

@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
@@ -41,6 +42,7 @@ __all__ = [
     "revisions",
     "list_versions",
     "format_tree",
+    "show_name",
     "version_graph",
     "in_version",
     "at_revision",
@@ -234,6 +236,15 @@ def list_versions(conn: Conn) -> list[Version]:
                     dict(json.loads(r[6]) if isinstance(r[6], str) else r[6]), r[7], r[8], r[9]) for r in rows]
 
 
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]*")
+
+
+def show_name(name: str) -> str:
+    """A version or revision name as output shows it: as it is when it is plain (letters, digits, ``_ . + -``),
+    else quoted as an SQL literal (``'first pick'``, a quote doubled), so a name with blanks reads as one name."""
+    return name if _PLAIN_NAME.fullmatch(name) else "'" + name.replace("'", "''") + "'"
+
+
 def format_tree(versions: Sequence[Version]) -> str:
     """The version tree as indented text, one line per version with its revisions.
 
@@ -245,9 +256,9 @@ def format_tree(versions: Sequence[Version]) -> str:
     lines = []
     for v in versions:
         saved = {rev: name for name, rev in v.saved.items()}
-        revs = ", ".join(f"{r} ({saved[r]})" if r in saved else str(r) for r in v.revisions)
-        base = "" if v.initrevision is None else f" from {v.parent}@{v.initrevision}"
-        lines.append(f"{'    ' * v.depth}{v.name}{base}: revisions {revs}; working {v.workingrevision}")
+        revs = ", ".join(f"{r} ({show_name(saved[r])})" if r in saved else str(r) for r in v.revisions)
+        base = "" if v.initrevision is None else f" from {show_name(v.parent or '')}@{v.initrevision}"
+        lines.append(f"{'    ' * v.depth}{show_name(v.name)}{base}: revisions {revs}; working {v.workingrevision}")
     return "\n".join(lines)
 
 
