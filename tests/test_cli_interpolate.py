@@ -43,6 +43,23 @@ def test_interpolate_from_files_into_a_class(db_dsn: str, tmp_path: Path, capsys
     assert end is not None and np.abs(end.vertices[:, 2]).max() > 0.5      # the dome at t1
 
 
+def test_interpolate_split_chooses_the_refinement(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`--split centroid` is the design's refinement (more vertices here than the default edge bisection)."""
+    source, (target, corners) = _flat(13, 7), _dome()
+    formats.write(source, tmp_path / "flat.ts")
+    formats.write(target, tmp_path / "dome.ts")
+    InterpolationSetup(tuple(_flat_corners(13, 7)), tuple(corners), steps=2, tolerance=0.05).save(tmp_path / "s.json")
+    argv = ["interpolate", str(tmp_path / "flat.ts"), str(tmp_path / "dome.ts"), "--setup", str(tmp_path / "s.json"),
+            "--t0", "0", "--t1", "1"]
+    assert main(argv) == 0
+    assert "interpolated flat: 99 vertices" in capsys.readouterr().out
+    assert main([*argv, "--split", "centroid"]) == 0
+    assert "interpolated flat: 103 vertices" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main([*argv, "--split", "middle"])
+    assert "--split" in capsys.readouterr().err
+
+
 def test_interpolate_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     formats.write(_flat(5, 4), tmp_path / "flat.ts")
     formats.write(tgsis.LineSet([[0, 0, 0], [1, 0, 0]], [[0, 1]]), tmp_path / "line.pl")

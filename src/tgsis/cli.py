@@ -1013,7 +1013,8 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
     with cliout.progress(f"interpolating {name}", None, "step") as moved:
-        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved)
+        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved,
+                             split=args.split)
     _out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
          f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
          f"error to the target {result.error:.3g}")
@@ -2110,6 +2111,10 @@ def build_parser() -> argparse.ArgumentParser:
     interp.add_argument("--class", dest="feature_class", help="EVOLVING feature class to store it in "
                                                                "(without: computed and previewed only)")
     interp.add_argument("--name", help="feature name (default: the source's)")
+    interp.add_argument("--split", choices=("auto", "centroid"), default="auto",
+                        help="how the compatible meshes are refined: centroid is the design's rule (split the "
+                             "triangle at its centroid), auto (default) bisects its longest interior edge instead, "
+                             "which converges where centroid splits stall")
     interp.add_argument("--alive", action="store_true",
                         help="the surface goes on existing after its last instant, in its last shape")
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
