@@ -15,6 +15,7 @@ import json
 import logging
 import math
 import os
+import re
 import signal
 import sys
 import warnings
@@ -406,6 +407,12 @@ def _value_pairs(items: Sequence[str] | None, flag: str) -> dict[str, str]:
     return values
 
 
+def _shown_value(value: str, typename: str) -> str:
+    """A default as output shows it: a number as it is, any other value quoted as an SQL literal."""
+    numeric = re.match(r"(small|big)?int|integer|float|double|real|numeric|decimal", typename.strip().lower())
+    return value if numeric else "'" + value.replace("'", "''") + "'"
+
+
 def cmd_class_alter(args: argparse.Namespace) -> int:
     fills = _value_pairs(args.fill_property, "--fill-property")
     drops = [_property_ref(name) for name in args.drop_property or []]
@@ -438,11 +445,16 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             changes.append({"op": "rename", "property": old, "kind": kind, "to": new})
         for kind, prop, default in adds:
             fc = add_property(conn, args.name, prop, kind=kind, default=default)
-            name = prop.name if isinstance(prop, Property) else prop[0]
+            name, typename = (prop.name, prop.type) if isinstance(prop, Property) else prop
             rows, geometries, what = _stored_count(conn, fc, kind, prop)
-            changes.append({"op": "add", "property": name, "kind": kind, "default": default,
+            changes.append({"op": "add", "property": name, "kind": kind, "default": default, "type": typename,
                             "stored_rows": rows if default is not None else 0,
                             "stored_geometries": geometries if default is not None else 0, "row": what})
+        # the rows were counted as the session's version reads them; add_property gave every version's rows the default
+        version = V.working_version(conn)
+        others = conn.execute("SELECT count(*) > 1 FROM tgsis.versions").fetchone()
+        in_versions = (f" as version {V.show_name(version)} reads them; every version's rows got it"
+                       if others and others[0] else "")
     if _json(args):
         cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
         return 0
@@ -458,11 +470,16 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             _out(f"renamed {what}{change['property']} to {change['to']}")
         elif change["default"] is None:
             _out(f"added {what}{change['property']}")
-        elif change["kind"] == "feature":
-            _out(f"added {what}{change['property']}: {change['default']} stored in {change['stored_rows']} feature(s)")
         else:
-            _out(f"added {what}{change['property']}: {change['default']} stored in {change['stored_rows']} "
-                 f"{change['row']}(s) of {change['stored_geometries']} {'member(s)' if members else 'feature(s)'}")
+            default = _shown_value(change["default"], change["type"])
+            if change["stored_rows"] == 0 and not in_versions:
+                got = f"no stored rows, none got the default {default} (it is not kept: new rows give their own values)"
+            elif change["kind"] == "feature":
+                got = f"{change['stored_rows']} feature(s) got the default {default}{in_versions}"
+            else:
+                got = (f"{change['stored_rows']} {change['row']}(s) of {change['stored_geometries']} "
+                       f"{'member(s)' if members else 'feature(s)'} got the default {default}{in_versions}")
+            _out(f"added {what}{change['property']}: {got}")
     cprops = ", ".join(f"{p.name} {p.type}{f'[{p.size}]' if p.size > 1 else ''}"
                        f"{f' ({p.alignment.lower()})' if p.alignment else ''}" for p in fc.cell_properties) or "-"
     _out(f"feature class {fc.name}: feature properties "
