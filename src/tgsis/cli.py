@@ -902,13 +902,19 @@ def cmd_ls(args: argparse.Namespace) -> int:
                 psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
                                 "FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
                     psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
+    # a G-map's geometry row counts its darts where other geometries count cells (tgsis gmap cells counts its cells)
+    def darts(geotype: str, ncell: int) -> tuple[int | None, int | None]:
+        return (None, ncell) if geotype == "GMAP" else (ncell, None)
+
     if _json(args):
         cliout.emit_json({"features": [{"id": geoid, "class": cls, "name": name, "geotype": geotype, "vertices": nvrtx,
-                                        "cells": ncell, "members": nmembers}
+                                        "cells": darts(geotype, ncell)[0], "members": nmembers,
+                                        "darts": darts(geotype, ncell)[1]}
                                        for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows]})
         return 0
-    _table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members"),
-           [(geoid, cls, name or "", geotype, nvrtx, ncell, "" if nmembers is None else nmembers)
+    _table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts"),
+           [(geoid, cls, name or "", geotype, nvrtx, *("" if n is None else n for n in darts(geotype, ncell)[:1]),
+             "" if nmembers is None else nmembers, *("" if n is None else n for n in darts(geotype, ncell)[1:]))
             for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows])
     if not rows:
         print("no features", file=sys.stderr)
