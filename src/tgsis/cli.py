@@ -785,6 +785,36 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sizes_in_time(conn: psycopg.Connection[Any], time_model: str, geoid: int) -> str | None:
+    """How many vertices and cells one shape of a surface in time has (model 2: per instant, model 3: per topology
+    period), where tgsis.geometry adds up the rows of every instant or period; None for other models."""
+    if time_model == "INSTANTS":
+        counts = conn.execute(
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_vrtx WHERE geoid = %s"
+            "        GROUP BY times) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_trgl WHERE geoid = %s"
+            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)",
+            (geoid, geoid, geoid)).fetchone()
+        each, unit = "per instant", "instants"
+    elif time_model == "EVOLVING":
+        counts = conn.execute(
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.node WHERE geoid = %s"
+            "        GROUP BY timem) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.d4dtrgl WHERE geoid = %s"
+            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)",
+            (geoid, geoid, geoid)).fetchone()
+        each, unit = "per topology period", "periods"
+    else:
+        return None
+    if counts is None or not counts[0]:
+        return None
+    vertices, cells, k = list(counts[0]), list(counts[1] or [0]), int(counts[2])
+    if min(vertices) == max(vertices) and min(cells) == max(cells):
+        return f"{vertices[0]} vertices, {cells[0]} cells " + (
+            f"at each of its {k} {unit}" if unit == "instants" else f"in each of its {k} {unit}")
+    return f"{min(vertices)} to {max(vertices)} vertices, {min(cells)} to {max(cells)} cells {each} ({k} {unit})"
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     from tgsis.db.versions import diff_versions, list_versions, working_version
 
@@ -802,6 +832,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         properties = {n: v for n, v in zip(names, values.fetchone() or ()) if not n.startswith("_")}
         span = lifespan(conn, args.id)
         steps = instants(conn, args.id) if span is not None else []
+        sizes = _sizes_in_time(conn, fc.time_model, args.id)
         here = working_version(conn)
         versioned = fc.versioned and conn.execute(
             "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone() == (True,)
@@ -839,7 +870,7 @@ def cmd_info(args: argparse.Namespace) -> int:
             "versioned": versioned, "differs_in": differing if versioned else None})
         return 0
     _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), in version {here}")
-    _out(f"  {nvrtx} vertices, {ncell} cells" + (f", {members} members" if members is not None else ""))
+    _out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
     if row[7] is not None:
         _out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
     if span is None:
