@@ -1020,7 +1020,8 @@ def cmd_checkin(args: argparse.Namespace) -> int:
             "feature_id": save.feature_id, "version": save.version, "conflict": result.conflict,
             "vertices": {"kept": counts["vertices_kept"], "moved": moved,
                          "removed": counts["vertices_removed"] - moved, "added": counts["vertices_added"] - moved},
-            "cells": {"kept": counts["cells_kept"], "removed": counts["cells_removed"], "added": counts["cells_added"]},
+            "cells": {"kept": counts["cells_kept"] + save.cells_on_moved, "removed": save.cells_removed,
+                      "added": save.cells_added, "on_moved_vertices": save.cells_on_moved},
             "rows": {"written": save.rows_written, "deleted": save.rows_deleted, "inserted": save.rows_inserted,
                      "updated": save.rows_updated},
             "record": str(side) if result.checkout is not None and not result.conflict else None,
@@ -1030,8 +1031,9 @@ def cmd_checkin(args: argparse.Namespace) -> int:
          + (" (a new child version: the feature had changed since check-out)" if result.conflict else ""))
     _out(f"  vertices: {counts['vertices_kept']} kept, {moved} moved, "
          f"{counts['vertices_removed'] - moved} removed, {counts['vertices_added'] - moved} "
-         f"added; {type(edited).cell_name}s: {counts['cells_kept']} kept by definition, "
-         f"{counts['cells_removed']} removed, {counts['cells_added']} added")
+         f"added; {type(edited).cell_name}s: {counts['cells_kept'] + save.cells_on_moved} kept"
+         + (f" ({save.cells_on_moved} of them on moved vertices)" if save.cells_on_moved else "")
+         + f", {save.cells_removed} removed, {save.cells_added} added")  # by content, as they are stored
     _out(f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
          f"{save.rows_updated} updated)")
     if args.png:
