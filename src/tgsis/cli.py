@@ -1082,7 +1082,11 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     if args.feature_class:
         with _connect(args) as conn, cliout.busy(f"uploading {name}"):
             fid = insert_feature(conn, args.feature_class, result.evolving)
-        _out(f"stored as feature {fid} of class {args.feature_class} from t = {args.t0:g} to {args.t1:g}")
+            unit = _unit(get_feature_class(conn, args.feature_class))
+        # as the user gave the times (the source may be the later shape), then the span in time order
+        _out(f"stored as feature {fid} of class {args.feature_class}: the source ({name}) at t = {args.t0:g}{unit}, "
+             f"the target at t = {args.t1:g}{unit}; it exists from t = {min(args.t0, args.t1):g} to "
+             f"{max(args.t0, args.t1):g}{unit}" + (" and after (alive)" if args.alive else ""))
     return 0
 
 
