@@ -16,6 +16,7 @@ import logging
 import math
 import os
 import re
+import shlex
 import signal
 import sys
 import warnings
@@ -973,7 +974,7 @@ def cmd_checkout(args: argparse.Namespace) -> int:
                                 "would see every vertex as moved", hint="use .ts (GOCAD) or .vtu (VTK)")
     side = co.save(_checkout_file(args.file))
     _out(f"checked out feature {co.token.feature_id} ({co.token.feature_class}, {co.mesh.n_vertices} vertices, "
-         f"{co.mesh.n_cells} {type(co.mesh).cell_name}s) of version {co.token.version} at revision "
+         f"{co.mesh.n_cells} {type(co.mesh).cell_name}s) of version {V.show_name(co.token.version)} at revision "
          f"{co.token.revision} to {args.file} (check-out record: {side})")
     return 0
 
@@ -1002,9 +1003,10 @@ def cmd_checkin(args: argparse.Namespace) -> int:
         result.checkout.save(side)
     counts = save.diff.counts()
     moved = save.vertices_moved
-    commands = ([f"tgsis version conflicts {save.version} --rows",
-                 f"tgsis version resolve {save.version} feature {save.feature_id} parent|child|manual",
-                 f"tgsis version merge {save.version} --remove"] if result.conflict else [])
+    child = shlex.quote(save.version)  # the commands are pasted into a shell: a free-text name stays one argument
+    commands = ([f"tgsis version conflicts {child} --rows",
+                 f"tgsis version resolve {child} feature {save.feature_id} parent|child|manual",
+                 f"tgsis version merge {child} --remove"] if result.conflict else [])
     if args.png and isinstance(edited, Surface):
         from scipy.spatial import cKDTree
 
@@ -1027,7 +1029,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
             "record": str(side) if result.checkout is not None and not result.conflict else None,
             "png": args.png, "commands": commands})
         return 0
-    _out(f"checked in feature {save.feature_id} into version {save.version}"
+    _out(f"checked in feature {save.feature_id} into version {V.show_name(save.version)}"
          + (" (a new child version: the feature had changed since check-out)" if result.conflict else ""))
     _out(f"  vertices: {counts['vertices_kept']} kept, {moved} moved, "
          f"{counts['vertices_removed'] - moved} removed, {counts['vertices_added'] - moved} "
@@ -1039,7 +1041,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     if args.png:
         _out(f"  drew the edit to {args.png}")
     if commands:
-        _out(f"  both edits meet as a conflict of {save.version}: " + "; ".join(commands))
+        _out(f"  both edits meet as a conflict of {V.show_name(save.version)}: " + "; ".join(commands))
     return 0
 
 

@@ -625,7 +625,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
         except MissingPrivilegeError as exc:
             if not discard_other and conflict.solution in ("child", "parent"):
                 raise MissingPrivilegeError(
-                    f"cannot tell what solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                    f"cannot tell what solving {conflict.objectclass} {conflict.objectkey} of version {show_name(version)} with "
                     f"{conflict.solution} discards of the other side's edits: {exc.message}",
                     sqlstate=exc.sqlstate,
                     hint="pass discard_other=True to record it all the same, or write the merged object into the "
@@ -633,7 +633,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
             discards = None
         if discards and not discard_other and conflict.solution in ("child", "parent"):
             raise VersioningError(
-                f"solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                f"solving {conflict.objectclass} {conflict.objectkey} of version {show_name(version)} with "
                 f"{conflict.solution} would discard {describe_discards(discards)}",
                 detail="A solution takes one side's whole object: the other side's edits since the version was "
                        "based are lost (rows added, removed or changed; the values among them).",
