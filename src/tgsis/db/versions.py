@@ -158,6 +158,8 @@ def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, descriptio
     ----------
     conn : psycopg.Connection
     name : str
+        Free text, as the design's: 1 to 63 printable characters, no blank
+        at either end, no ``@`` (the command line's VERSION@REVISION).
     parent : str
     description : str, optional
     base : int, optional
@@ -187,8 +189,15 @@ def delete_version(conn: Conn, name: str) -> int:
 def save_revision(conn: Conn, name: str) -> int:
     """Freeze the working revision of the session's version under ``name``; return its number.
 
+    ``name`` is free text, as the design's ``revisionname``: 1 to 63
+    printable characters (``"first pick"``), no blank at either end.
+
     Raises
     ------
+    InvalidNameError
+        An empty, too long or unprintable name (TG101).
+    AlreadyExistsError
+        The version has a revision of that name.
     ReadOnlyRevisionError
         The session views an older revision.
     """
