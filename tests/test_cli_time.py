@@ -375,3 +375,10 @@ def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(db_ds
     assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "tops", "--at", "-5", "--feature",
                  str(plain), "--alive"]) == 1
     assert "--alive does not go with --feature" in capsys.readouterr().err
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "still", "SURFACE")
+    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "still", "--alive"]) == 1
+    assert "--alive goes with --at T" in capsys.readouterr().err
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT count(*) FROM still").fetchone() == (0,)
+        assert conn.execute("SELECT count(*) FROM tops").fetchone() == (3,)     # two from the CLI, one from Python
