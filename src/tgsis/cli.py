@@ -849,7 +849,7 @@ def cmd_info(args: argparse.Namespace) -> int:
                         what = ("only there" if removed == 0 and sum(d.changed for d in changed) == 0 and added
                                 else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
                                 else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
-                        differs.append(f"{version.name} ({what})")
+                        differs.append(f"{V.show_name(version.name)} ({what})")
                         differing.append({"version": version.name,
                                           "what": what if what in ("only there", "not there") else "differs",
                                           "rows": sum(d.added + d.removed + d.changed for d in changed)})
@@ -870,7 +870,8 @@ def cmd_info(args: argparse.Namespace) -> int:
             "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
             "versioned": versioned, "differs_in": differing if versioned else None})
         return 0
-    _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), in version {here}")
+    _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), "
+         f"in version {V.show_name(here)}")
     _out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
     if row[7] is not None:
         _out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
@@ -891,7 +892,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         if mesh.cell_properties:
             _out("  cell properties: " + ", ".join(mesh.cell_properties))
     if versioned:
-        _out("  versions where it differs from " + here + ": " + (", ".join(differs) if differs else "none"))
+        _out("  versions where it differs from " + V.show_name(here) + ": " + (", ".join(differs) if differs else "none"))
     elif not fc.versioned:
         _out(f"  class {fc.name} is not versioned: every version sees this state")
     return 0
@@ -1501,7 +1502,8 @@ def _moment(text: str) -> datetime.datetime:
 def cmd_version_valid(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         V.set_version_validity(conn, args.name, _moment(args.valid_from), _moment(args.valid_to) if args.valid_to else None)
-    _out(f"version {args.name} believed from {args.valid_from}" + (f" to {args.valid_to}" if args.valid_to else " on"))
+    _out(f"version {V.show_name(args.name)} believed from {args.valid_from}"
+         + (f" to {args.valid_to}" if args.valid_to else " on"))
     return 0
 
 
@@ -1567,7 +1569,7 @@ def cmd_version_grant(args: argparse.Namespace) -> int:
 def cmd_version_owner(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         V.set_version_owner(conn, args.name, args.role)
-    _out(f"version {args.name} is owned by {args.role}")
+    _out(f"version {V.show_name(args.name)} is owned by {args.role}")
     return 0
 
 
