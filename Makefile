@@ -65,6 +65,7 @@ pictures: $(VENV)/.installed
 	    build/pictures/river_t4.png build/pictures/interpretations_model3.png build/pictures/mine_ore_top.png \
 	    build/pictures/knowledge_interpretations.png build/pictures/view_scene.png build/pictures/view_time.png \
 	    build/pictures/view_compare.png docs/pictures/
+	cp build/pictures/cfm_release_6.1_over_5.3.png docs/pictures/
 
 # Files ruff's formatter keeps (ruff format FILE): new files join when written, the
 # rest once the open branches are merged (docs/developing.md, "Lint and format").

@@ -321,8 +321,8 @@ def test_cli_says_what_was_stored(db_dsn: str, capsys: pytest.CaptureFixture[str
     assert main(["--dsn", db_dsn, "class", "alter", "c2", "--add-property", "porosity:float8=0.2",
                  "--add-feature-property", "basin:text=Paris"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[:2] == ["added feature property basin: Paris stored in 2 feature(s)",
-                       "added cell property porosity: 0.2 stored in 25 vertex row(s) of 2 feature(s)"]
+    assert out[:2] == ["added feature property basin: 2 feature(s) got the default 'Paris'",
+                       "added cell property porosity: 25 vertex row(s) of 2 feature(s) got the default 0.2"]
     assert main(["--dsn", db_dsn, "class", "alter", "c2", "--add-property", "k:float8:cell=1", "--json"]) == 1
     assert "has no table for cell properties" in capsys.readouterr().err
 

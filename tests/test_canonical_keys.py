@@ -218,7 +218,7 @@ def test_sessions_of_other_settings_see_one_object(conn: Conn, db_dsn: str, type
         # B's write of object 1, by the key as B shows it, meets A's lock: row path and set-based path
         shown = _key_as_shown(b, "v2", 1)
         for statement in (f"UPDATE t SET v = 10 WHERE k = %s::{type_}", "UPDATE t SET v = 10"):
-            with pytest.raises(tgsis.ObjectLockedError, match=re.escape(f"{canon[1]} (locked by version v1")):
+            with pytest.raises(tgsis.ObjectLockedError, match=re.escape(f"{canon[1]} (locked by version 'v1'")):
                 _write(b, "v2", statement, (shown,) if "%s" in statement else None)
             b.rollback()
         with pytest.raises(tgsis.ObjectLockedError):
@@ -303,7 +303,7 @@ def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
         conn.commit()
     utc = _session(dsn, TimeZone="UTC", DateStyle="SQL, DMY")
     try:
-        with pytest.raises(tgsis.ObjectLockedError, match=re.escape("2024-01-02 03:04:05+00 (locked by version v1")):
+        with pytest.raises(tgsis.ObjectLockedError, match=re.escape("2024-01-02 03:04:05+00 (locked by version 'v1'")):
             _write(utc, "v2", "UPDATE t SET v = 30 WHERE k = '2024-01-02 03:04:05+00'")
         utc.rollback()
         assert [(c.objectkey, c.solution) for c in tgsis.find_conflicts(utc, "v2")] == [("2024-02-01 00:00:00+00", "unsolved")]

@@ -111,6 +111,11 @@ def test_demo_runs_the_release_story(tmp_path: Path) -> None:
         assert lines[lost + 1].startswith("   ann checks in first; bob's check-in is refused: feature 3 was changed in "
                                           "version 'DEFAULT' since it was checked out")
         assert lines[lost + 2].startswith("   with on_conflict='child' bob's edit goes into new version bob_edit")
+        # the picture of release 6.1 over 5.3, coloured by how far 6.1 lies from 5.3, as the other scenarios draw
+        png = tmp_path / "demo" / "cfm_release_6.1_over_5.3.png"
+        drawn = next(line for line in lines if "release 6.1 over 5.3, coloured by its distance from 5.3" in line)
+        assert drawn.endswith(f"m), drawn to {png}") and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert png.stat().st_size > 20_000
         frames = read_pvd(tmp_path / "demo" / "fault_history.pvd")
         assert [t for t, _ in frames] == np.linspace(-2.0, 0.0, 21).tolist()
         assert all(isinstance(g, tgsis.Surface) and g.n_vertices == 716 for _, g in frames)
@@ -132,6 +137,7 @@ def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> N
         assert "5. fault history (model 3): north_fault slipping 500 m at depth" in result.stdout
         assert "   at -1.0 Ma (SQL snapshot): 360 vertices, the deepest 250 m from where it is today" in result.stdout
         assert (tmp_path / "out" / "fault_history.pvd").is_file()
+        assert (tmp_path / "out" / "cfm_release_6.1_over_5.3.png").read_bytes()[:4] == b"\x89PNG"
 
 
 # --------------------------------------------------------------------------- classes and features

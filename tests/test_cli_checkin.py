@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,8 @@ def test_checkout_edit_checkin_twice(db_dsn: str, fault: int, tmp_path: Path, ca
     out = capsys.readouterr().out
     assert f"checked in feature {fault} into version DEFAULT" in out
     assert "143 kept, 1 moved, 0 removed, 0 added" in out
+    # the triangles around the moved vertex are the same triangles (compared by content, as they are stored)
+    assert "triangles: 242 kept (6 of them on moved vertices), 0 removed, 0 added" in out
     stored = _stored(db_dsn, fault)
     assert stored.vertices[13, 2] == 9.0 and np.array_equal(np.delete(stored.vertices, 13, 0),
                                                             np.delete(_surface().vertices, 13, 0))
@@ -107,3 +110,25 @@ def test_checkin_errors(db_dsn: str, fault: int, tmp_path: Path, capsys: pytest.
     path.write_text("GOCAD TSurf 1\nHEADER {\nname:broken\n}\nTFACE\nVRTX 1 0 0\nEND\n")
     assert main(["--dsn", db_dsn, "checkin", str(path)]) == 1
     assert "tgsis: error:" in capsys.readouterr().err
+
+
+def test_checkin_counts_triangles_by_content(db_dsn: str, fault: int, tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    """Moved vertices keep their triangles; a triangle really cut out is one removed, in the text and in --json."""
+    path = tmp_path / "fault.ts"
+    assert main(["--dsn", db_dsn, "checkout", str(fault), str(path)]) == 0
+    mesh = formats.read_one(path)
+    mesh.vertices[[13, 20], 2] = [9.0, -9.0]
+    cells = np.delete(mesh.cells, 100, axis=0)  # a triangle of neither moved vertex
+    assert not np.isin(mesh.cells[100], [13, 20]).any()
+    on_moved = int(np.isin(cells, [13, 20]).any(axis=1).sum())
+    assert on_moved == 12
+    formats.write(tgsis.Surface(mesh.vertices, cells, name=mesh.name, metadata=mesh.metadata,
+                                vertex_properties=mesh.vertex_properties), path)
+    capsys.readouterr()
+    assert main(["--dsn", db_dsn, "checkin", str(path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["vertices"] == {"kept": 142, "moved": 2, "removed": 0, "added": 0}
+    assert doc["cells"] == {"kept": 241, "removed": 1, "added": 0, "on_moved_vertices": 12}
+    stored = _stored(db_dsn, fault)
+    assert stored.n_cells == 241 and stored.vertices[20, 2] == -9.0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -111,3 +112,32 @@ def test_a_record_that_cannot_take_the_child_path(db_dsn: str, fault: int, tmp_p
     assert "check out again" in err and "Traceback" not in err
     with psycopg.connect(db_dsn) as conn:
         assert [v.name for v in tgsis.list_versions(conn)] == ["DEFAULT"]
+
+
+def test_a_child_version_named_in_free_text_gets_commands_that_run(db_dsn: str, fault: int, tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """A version name with blanks and a quote (free text, as the design's): the commands printed after the conflict
+    are quoted for the shell, so that pasting them runs them on that version."""
+    import shlex
+
+    cli = ["--dsn", db_dsn]
+    ann, bob = tmp_path / "ann.ts", tmp_path / "bob.vtu"
+    assert main([*cli, "checkout", str(fault), str(bob)]) == 0
+    assert main([*cli, "checkout", str(fault), str(ann)]) == 0
+    _edit_file(ann, {ANN: 5.0})
+    assert main([*cli, "checkin", str(ann)]) == 0
+    _edit_file(bob, {BOB: -5.0})
+    capsys.readouterr()
+    assert main([*cli, "checkin", str(bob), "--on-conflict", "child", "--child-version", "Bob's fix; 2024",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["version"] == "Bob's fix; 2024" and doc["conflict"]
+    conflicts, resolve, merge = (shlex.split(c) for c in doc["commands"])
+    assert conflicts == ["tgsis", "version", "conflicts", "Bob's fix; 2024", "--rows"]
+    assert main([*cli, *conflicts[1:]]) == 0
+    assert f"feature\t{fault}\t" in capsys.readouterr().out
+    assert resolve[:6] == ["tgsis", "version", "resolve", "Bob's fix; 2024", "feature", str(fault)]
+    assert main([*cli, *resolve[1:6], "child", "--discard-other"]) == 0
+    assert f"feature {fault} in 'Bob''s fix; 2024': child" in capsys.readouterr().out
+    assert main([*cli, *merge[1:]]) == 0
+    assert "merged 'Bob''s fix; 2024' into its parent" in capsys.readouterr().out

@@ -38,8 +38,8 @@ def test_alter_adds_renames_and_drops(db_dsn: str, versioned: bool, capsys: pyte
                  "--add-feature-property", "author:text=ann", "--rename-property", "azi", "azimuth"]) == 0
     out = capsys.readouterr().out
     assert out.splitlines() == [
-        "renamed property azi to azimuth", "added feature property author: ann stored in 1 feature(s)",
-        "added cell property dip: 45 stored in 3 vertex row(s) of 1 feature(s)",
+        "renamed property azi to azimuth", "added feature property author: 1 feature(s) got the default 'ann'",
+        "added cell property dip: 3 vertex row(s) of 1 feature(s) got the default 45",
         "feature class faults: feature properties release text, author text; vertex properties azimuth double "
         "precision, dip double precision"]
     with psycopg.connect(db_dsn) as conn:
@@ -96,3 +96,29 @@ def test_documented_example_runs(db_dsn: str, tmp_path: Path, capsys: pytest.Cap
     out = capsys.readouterr().out
     assert out.splitlines()[-1] == "feature class horizons: feature properties -; vertex properties permeability " \
                                    "double precision"
+
+
+def test_alter_says_how_many_rows_got_the_default(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """What was stored, truthfully: how many rows got the default (none in an empty class, where the default is
+    not kept), counted as the session's version reads them, and that the other versions' rows got it too."""
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "empty", "SURFACE", cell_properties={"azi": "float8"})
+    assert main(["--dsn", db_dsn, "class", "alter", "empty", "--add-property", "porosity:float8=0.2",
+                 "--add-feature-property", "basin:text=Paris Basin"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[:2] == ["added feature property basin: no stored rows, none got the default 'Paris Basin' (it is "
+                       "not kept: new rows give their own values)",
+                       "added cell property porosity: no stored rows, none got the default 0.2 (it is not kept: "
+                       "new rows give their own values)"]
+    fid = _faults(db_dsn, versioned=True)
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_version(conn, "v1")
+        with tgsis.in_version(conn, "v1"):
+            tgsis.delete_feature(conn, "faults", fid)
+    assert main(["--dsn", db_dsn, "--in", "v1", "class", "alter", "faults", "--add-property", "dip:float8=45"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == (
+        "added cell property dip: 0 vertex row(s) of 0 feature(s) got the default 45 as version v1 reads them; "
+        "every version's rows got it")
+    with psycopg.connect(db_dsn) as conn:
+        feature = tgsis.fetch_feature(conn, "faults", fid)  # in DEFAULT, the feature's rows got it too
+    assert feature.mesh is not None and feature.mesh.vertex_properties["dip"].tolist() == [45, 45, 45]

@@ -96,3 +96,20 @@ def test_bad_arguments_are_refused_in_the_commands_terms(db_dsn: str, files: dic
     assert code == 1 and "--values '0,x' must be numbers" in err
     code, _, err = _run(capsys, *dsn, "class", "create", "nolevel", "--geotype", "GMAP", "--time-model", "GMAP")
     assert code == 1 and "needs the level of the cells" in err and "--cell-level 0 (vertices)" in err
+
+
+def test_ls_names_a_gmaps_darts_as_darts(db_dsn: str, files: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    """`ls` of a G-map: its 1152 darts in the darts column, not as 1152 cells (it has 48 volumes)."""
+    dsn = ["--dsn", db_dsn]
+    assert _run(capsys, *dsn, "class", "create", "blocks", "--geotype", "GMAP", "--time-model", "GMAP",
+                "--cell-level", "3", "--property", "facies:int")[0] == 0
+    code, out, _ = _run(capsys, *dsn, "gmap", "import", str(files["block"]), "--class", "blocks", "--json")
+    geoid = json.loads(out)["id"]
+    code, out, _ = _run(capsys, *dsn, "ls")
+    assert code == 0
+    header, row = (line.split("\t") for line in out.splitlines())
+    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts"]
+    assert row[0] == str(geoid) and row[3] == "GMAP" and row[5] == "" and row[7] == "1152"
+    code, out, _ = _run(capsys, *dsn, "ls", "--json")
+    [feature] = json.loads(out)["features"]
+    assert feature["cells"] is None and feature["darts"] == 1152

@@ -7,7 +7,7 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.temporal_data import evolving
+from tests.temporal_data import evolving, series
 from tgsis.cli import main
 from tgsis.mesh import Surface
 
@@ -61,3 +61,25 @@ def test_info_of_an_evolving_surface_in_a_version(db_dsn: str, stored: dict[str,
 def test_info_of_an_unknown_feature(db_dsn: str, stored: dict[str, int], capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", db_dsn, "info", "999999"]) == 1
     assert "999999" in capsys.readouterr().err
+
+
+def test_info_of_surfaces_in_time_counts_per_instant_not_summed(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """Model 2 stores each instant's vertices; model 3 each topology period's nodes: info says how many one shape has,
+    not the rows of every instant or period added up."""
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "tops", "SURFACE", time_model="INSTANTS", time_unit="Ma")
+        tgsis.create_feature_class(conn, "faults", "SURFACE", time_model="EVOLVING", time_unit="Ma")
+        flat = Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]])
+        same = tgsis.insert_feature(conn, "tops", tgsis.SurfaceSeries([0.0, 1.0, 2.0], [flat, flat, flat]))
+        growing = tgsis.insert_feature(conn, "tops", series(np.random.default_rng(1), [0.0, 1.0, 2.0]),
+                                       drop_extra_properties=True)
+        moving = tgsis.insert_feature(conn, "faults", evolving(np.random.default_rng(3), [-10.0, -4.0]),
+                                      drop_extra_properties=True)
+        conn.commit()
+    assert main(["--dsn", db_dsn, "info", str(same)]) == 0
+    assert capsys.readouterr().out.splitlines()[1] == "  4 vertices, 2 cells at each of its 3 instants"
+    assert main(["--dsn", db_dsn, "info", str(growing)]) == 0      # grids of 3x3, 4x4 and 5x5 vertices
+    assert capsys.readouterr().out.splitlines()[1] == "  9 to 25 vertices, 8 to 32 cells per instant (3 instants)"
+    assert main(["--dsn", db_dsn, "info", str(moving)]) == 0       # 5x5 then 6x6 nodes
+    assert capsys.readouterr().out.splitlines()[1] == \
+        "  25 to 36 vertices, 32 to 50 cells per topology period (2 periods)"

@@ -35,12 +35,48 @@ def test_interpolate_from_files_into_a_class(db_dsn: str, tmp_path: Path, capsys
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "interpolated flat:" in out and "m = 4" in out and "3 previews in" in out
-    assert "stored as feature 1 of class domes from t = -5 to 0" in out
+    assert "stored as feature 1 of class domes: the source (flat) at t = -5 Ma, the target at t = 0 Ma; it exists " \
+           "from t = -5 to 0 Ma" in out
     pngs = sorted((tmp_path / "png").glob("*.png"))
     assert len(pngs) == 3 and all(p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in pngs)
     with psycopg.connect(db_dsn) as conn:
         end = tgsis.get_at(conn, 1, 0.0)
     assert end is not None and np.abs(end.vertices[:, 2]).max() > 0.5      # the dome at t1
+
+
+def test_interpolate_split_chooses_the_refinement(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`--split centroid` is the design's refinement (more vertices here than the default edge bisection)."""
+    source, (target, corners) = _flat(13, 7), _dome()
+    formats.write(source, tmp_path / "flat.ts")
+    formats.write(target, tmp_path / "dome.ts")
+    InterpolationSetup(tuple(_flat_corners(13, 7)), tuple(corners), steps=2, tolerance=0.05).save(tmp_path / "s.json")
+    argv = ["interpolate", str(tmp_path / "flat.ts"), str(tmp_path / "dome.ts"), "--setup", str(tmp_path / "s.json"),
+            "--t0", "0", "--t1", "1"]
+    assert main(argv) == 0
+    assert "interpolated flat: 99 vertices" in capsys.readouterr().out
+    assert main([*argv, "--split", "centroid"]) == 0
+    assert "interpolated flat: 103 vertices" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main([*argv, "--split", "middle"])
+    assert "--split" in capsys.readouterr().err
+
+
+def test_a_backward_interpolation_says_when_the_feature_exists(db_dsn: str, tmp_path: Path,
+                                                               capsys: pytest.CaptureFixture[str]) -> None:
+    """--t0 1 --t1 0 (the source is the later shape): said as given, and the span it exists in, earlier time first."""
+    source, (target, corners) = _flat(13, 7), _dome()
+    formats.write(source, tmp_path / "flat.ts")
+    formats.write(target, tmp_path / "dome.ts")
+    InterpolationSetup(tuple(_flat_corners(13, 7)), tuple(corners), steps=2, tolerance=0.1).save(tmp_path / "s.json")
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "domes", "SURFACE", time_model="EVOLVING", time_unit="Ma")
+    assert main(["--dsn", db_dsn, "interpolate", str(tmp_path / "flat.ts"), str(tmp_path / "dome.ts"),
+                 "--setup", str(tmp_path / "s.json"), "--t0", "1", "--t1", "0", "--class", "domes"]) == 0
+    out = capsys.readouterr().out
+    assert ("stored as feature 1 of class domes: the source (flat) at t = 1 Ma, the target at t = 0 Ma; it exists "
+            "from t = 0 to 1 Ma") in out
+    with psycopg.connect(db_dsn) as conn:
+        assert tgsis.lifespan(conn, 1)[:2] == (0.0, 1.0)
 
 
 def test_interpolate_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

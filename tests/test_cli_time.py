@@ -80,6 +80,32 @@ def test_at_writes_the_evolving_surface_at_t(db_dsn: str, stored: tuple[dict[str
     same_surface(formats.read_one(tmp_path / "fault.data", format="ply"), fault.at(-1.0))  # type: ignore[arg-type]
 
 
+def test_at_records_the_time_in_the_file(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+                                         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A snapshot says when it is: its name in the file (GOCAD header, VTK field data and title) and, with {t} in
+    FILE or a folder as FILE, its file name."""
+    ids, fault, _ = stored
+    fid = ids["fault"]
+    assert main(["--dsn", db_dsn, "at", str(fid), "-7.25", str(tmp_path / "fault_{t}.ts")]) == 0
+    written = tmp_path / "fault_-7.25.ts"
+    assert f"to {written}" in capsys.readouterr().out
+    back = formats.read_one(written)
+    assert back.name is not None and back.name.endswith(" at t = -7.25 Ma")
+    assert "name:" in written.read_text() and "at t = -7.25 Ma" in written.read_text()
+    for ext in ("vtu", "vtp", "vtk"):
+        assert main(["--dsn", db_dsn, "at", str(fid), "-2", str(tmp_path / f"f.{ext}")]) == 0
+        name = formats.read_one(tmp_path / f"f.{ext}").name
+        assert name is not None and name.endswith(" at t = -2.0 Ma"), (ext, name)
+    folder = tmp_path / "snapshots"
+    folder.mkdir()
+    assert main(["--dsn", db_dsn, "at", str(fid), "-1", str(folder), "--format", "ply"]) == 0
+    assert sorted(p.name for p in folder.iterdir()) == [f"feature_{fid}_t-1.0.ply"]
+    same_surface(formats.read_one(folder / f"feature_{fid}_t-1.0.ply"), fault.at(-1.0))  # type: ignore[arg-type]
+    capsys.readouterr()
+    assert main(["--dsn", db_dsn, "at", str(fid), "-1", str(folder)]) == 1
+    assert "a folder: give --format" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(("t", "convention", "index"), [
     (0.0, "left", 0), (0.0, "right", 0), (0.5, "left", 0), (0.5, "right", 1), (1.0, "left", 1), (1.0, "right", 1),
     (2.0, "left", 1), (2.0, "right", 2), (2.5, "left", 2), (99.0, "right", 2)])
@@ -323,3 +349,36 @@ def test_import_at_adds_model_2_instants_from_files(db_dsn: str, tmp_path: Path,
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT count(*) FROM tops").fetchone() == (1,)
         assert conn.execute("SELECT count(*) FROM still").fetchone() == (0,)
+
+
+def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(db_dsn: str, tmp_path: Path,
+                                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    """One default for `alive`: a surface known at T is not claimed to exist after its last instant, from the command
+    line as from Python (SurfaceSeries(alive=False)); `--alive` says it does."""
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "tops", "SURFACE", time_model="INSTANTS", time_unit="Ma")
+    flat = Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]], name="top A")
+    formats.write(flat, tmp_path / "a0.ts")
+    dsn = ["--dsn", db_dsn]
+    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "tops", "--at", "-10", "--json"]) == 0
+    plain = json.loads(capsys.readouterr().out)["id"]
+    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "tops", "--at", "-10", "--alive", "--json"]) == 0
+    alive = json.loads(capsys.readouterr().out)["id"]
+    with psycopg.connect(db_dsn) as conn:
+        python = tgsis.insert_feature(conn, "tops", tgsis.SurfaceSeries([-10.0], [flat]), name="from python")
+        rows = dict(conn.execute("SELECT geoid, alive FROM tgsis.geometry WHERE geoid = ANY (%s)",
+                                 ([plain, alive, python],)).fetchall())
+        assert rows == {plain: False, alive: True, python: False}
+        assert tgsis.get_at(conn, plain, 0.0) is None
+        at = tgsis.get_at(conn, alive, 0.0)
+        assert at is not None and np.array_equal(at.vertices, flat.vertices)
+    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "tops", "--at", "-5", "--feature",
+                 str(plain), "--alive"]) == 1
+    assert "--alive does not go with --feature" in capsys.readouterr().err
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_feature_class(conn, "still", "SURFACE")
+    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "still", "--alive"]) == 1
+    assert "--alive goes with --at T" in capsys.readouterr().err
+    with psycopg.connect(db_dsn) as conn:
+        assert conn.execute("SELECT count(*) FROM still").fetchone() == (0,)
+        assert conn.execute("SELECT count(*) FROM tops").fetchone() == (3,)     # two from the CLI, one from Python

@@ -70,7 +70,10 @@ def test_errors(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert "version 'nope' does not exist" in _run(db_dsn, capsys, "version", "goto", "nope", code=1)
     assert "version 'nope' does not exist" in _run(db_dsn, capsys, "--in", "nope", "ls", code=1)
     assert "is not VERSION or VERSION@REVISION" in _run(db_dsn, capsys, "--in", "a@b", "ls", code=1)
-    assert "version name 'bad name' is not allowed" in _run(db_dsn, capsys, "version", "create", "bad name", code=1)
+    assert "version name 'bad\tname' is not allowed" not in _run(db_dsn, capsys, "version", "create", "bad\tname", code=1)
+    assert "version name 'bad<U+0009>name' is not allowed" in _run(db_dsn, capsys, "version", "create", "bad\tname",
+                                                                    code=1)
+    assert "version name 'a@1' is not allowed: it holds @" in _run(db_dsn, capsys, "version", "create", "a@1", code=1)
     assert "needs --key and --class" in _run(db_dsn, capsys, "versioning", "enable", "wells", code=1)
     _run(db_dsn, capsys, "version", "create", "a")
     _run(db_dsn, capsys, "version", "create", "b", "--parent", "a")
@@ -147,7 +150,7 @@ def test_locks_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[
         ["well", "1", "a", me, "version"], ["well", "2", "a", me, "version"]]
     assert _run(db_dsn, capsys, "version", "locks", "b") == ""
     err = _run(db_dsn, capsys, "--in", "b", "version", "lock", "b", "well", "2", code=1)
-    assert "locked by version a" in err
+    assert "locked by version 'a'" in err
     assert "has no object 9" in _run(db_dsn, capsys, "version", "lock", "b", "well", "9", code=1)
     assert _run(db_dsn, capsys, "version", "unlock", "a", "well", "1") == "released 1 lock(s) of a\n"
     assert [line.split("\t")[:3] for line in _run(db_dsn, capsys, "version", "locks", "--no-header").splitlines()] \
@@ -174,3 +177,20 @@ def test_rights_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture
     # DEFAULT's grants come with the installation
     assert [line.split("\t")[1:3] for line in _run(db_dsn, capsys, "version", "privileges", "DEFAULT").splitlines()[2:]] \
         == [["tgsis_editor", "write"], ["tgsis_editor", "create"]]
+
+
+def test_names_with_blanks_and_quotes_are_shown_quoted(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """Free-text names (the design's, docs/versioning.md's 'first pick') print as one name: quoted unless plain."""
+    assert _run(db_dsn, capsys, "version", "create", "survey 2024") == \
+        "created version 'survey 2024' (parent DEFAULT), working revision 2\n"
+    assert "now work in version 'survey 2024' (working revision 2)" in _run(db_dsn, capsys, "version", "goto",
+                                                                            "survey 2024")
+    assert _run(db_dsn, capsys, "version", "save", "first pick") == \
+        "saved revision 2 of 'survey 2024' as 'first pick'; new working revision 3\n"
+    assert _run(db_dsn, capsys, "version", "save", "Bob's pick") == \
+        "saved revision 3 of 'survey 2024' as 'Bob''s pick'; new working revision 4\n"
+    assert "'survey 2024' from DEFAULT@0: revisions 2 ('first pick'), 3 ('Bob''s pick'), 4; working 4" in \
+        _run(db_dsn, capsys, "version", "tree")
+    assert "look at revision 2 of version 'survey 2024'" in _run(db_dsn, capsys, "version", "goto", "survey 2024@2")
+    _run(db_dsn, capsys, "version", "goto", "DEFAULT")
+    assert "deleted version 'survey 2024'" in _run(db_dsn, capsys, "version", "delete", "survey 2024")

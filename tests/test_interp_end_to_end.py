@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 import tgsis
-from tgsis.interpolation import InterpolationSetup, InterpolationSetupError, mesh_error
+from tgsis.interpolation import InterpolationSetup, InterpolationSetupError, ParameterizationError, mesh_error
 from tgsis.interpolation.interpolate import average_shape, interpolate
 from tgsis.interpolation.setup import CutPath
 
@@ -207,3 +207,20 @@ def test_vertex_properties_travel_with_the_vertices() -> None:
     # and backwards in time, the values run the other way
     back = interpolate(source, target, setup, 1.0, 0.0).evolving.periods[0]
     assert np.allclose(back.vertex_properties["age"], period.vertex_properties["age"][::-1])
+
+
+def test_interpolate_takes_the_designs_centroid_refinement() -> None:
+    """split="centroid" (the design's rule) reaches compatible_patch: 4 more vertices at ε = 0.05, and at ε = 0.02
+    it stalls where the default edge bisection converges; an unknown rule is refused before any work."""
+    source, (target, corners) = _flat(13, 7), _dome()
+    loose = InterpolationSetup(tuple(_flat_corners(13, 7)), tuple(corners), steps=2, tolerance=0.05)
+    auto = interpolate(source, target, loose, 0.0, 1.0)
+    centroid = interpolate(source, target, loose, 0.0, 1.0, split="centroid")
+    assert (auto.source.n_vertices, centroid.source.n_vertices) == (99, 103)
+    assert centroid.error <= 0.05
+    tight = InterpolationSetup(tuple(_flat_corners(13, 7)), tuple(corners), steps=2, tolerance=0.02)
+    assert interpolate(source, target, tight, 0.0, 1.0, split="auto").error <= 0.02
+    with pytest.raises(ParameterizationError, match="after 30 refinement rounds"):
+        interpolate(source, target, tight, 0.0, 1.0, split="centroid")
+    with pytest.raises(InterpolationSetupError, match="split 'middle' is not one of 'auto', 'centroid'"):
+        interpolate(source, target, tight, 0.0, 1.0, split="middle")

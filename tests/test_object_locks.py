@@ -49,7 +49,7 @@ def test_a_locked_object_changes_only_in_its_version(tree: Conn) -> None:
                                ("v3", "UPDATE wells SET id = 10 WHERE id = 1"),  # a child of v1 is another version too
                                ("v2", "INSERT INTO wells VALUES (1, 'again', 0)")):
         before = _depths(tree, version)
-        with pytest.raises(tgsis.ObjectLockedError, match=r"object of class 'well' locked .*: 1 \(locked by version v1"):
+        with pytest.raises(tgsis.ObjectLockedError, match=r"object of class 'well' locked .*: 1 \(locked by version 'v1'"):
             _write(tree, version, statement)
         tree.rollback()
         assert _depths(tree, version) == before, statement
@@ -65,7 +65,7 @@ def test_a_locked_object_changes_only_in_its_version(tree: Conn) -> None:
 
 def test_locking_is_all_or_nothing(tree: Conn) -> None:
     tgsis.lock_objects(tree, "v1", "well", [2])
-    with pytest.raises(tgsis.ObjectLockedError, match="locked by version v1"):
+    with pytest.raises(tgsis.ObjectLockedError, match="locked by version 'v1'"):
         tgsis.lock_objects(tree, "v2", "well", [1, 2, 3])
     tree.rollback()
     assert [lk.objectkey for lk in tgsis.object_locks(tree)] == ["2"]      # 1 and 3 were not taken either
@@ -96,7 +96,7 @@ def test_a_merge_leaves_objects_locked_elsewhere_alone(tree: Conn) -> None:
     _write(tree, "v2", "UPDATE wells SET depth = 44 WHERE id = 4")
     tgsis.lock_objects(tree, "v1", "well", [3])                            # after v2 changed it
     tree.commit()
-    with pytest.raises(tgsis.ObjectLockedError, match="3 \\(locked by version v1"):
+    with pytest.raises(tgsis.ObjectLockedError, match="3 \\(locked by version 'v1'"):
         tgsis.merge_version(tree, "v2")
     tree.rollback()
     assert _depths(tree, "DEFAULT") == {1: 10, 2: 20, 3: 30, 4: 40}       # the whole merge was refused
@@ -123,7 +123,7 @@ def test_exclusive_locks_stop_other_roles_in_the_same_version(tree: Conn, db_dsn
         tgsis.grant_version(alice, "a1", "write", roles.name("bob"))
         tgsis.lock_objects(alice, "a1", "well", [1], exclusive=True)
         tgsis.lock_objects(bob, "a1", "well", [2])
-        with pytest.raises(tgsis.ObjectLockedError, match=f"1 \\(locked by version a1, {roles.name('alice')}, exclusive\\)"):
+        with pytest.raises(tgsis.ObjectLockedError, match=f"1 \\(locked by version 'a1', {roles.name('alice')}, exclusive\\)"):
             _write(bob, "a1", "UPDATE wells SET depth = 0 WHERE id = 1")
         bob.rollback()
         _write(bob, "a1", "UPDATE wells SET depth = 2 WHERE id = 2")

@@ -8,6 +8,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tgsis.db.versions import format_tree, show_name
 
 Conn = psycopg.Connection[Any]
 
@@ -211,13 +212,48 @@ def test_unknown_version_everywhere(conn: Conn) -> None:
     assert _tree(conn) == {"DEFAULT": (None, None, 0, [0])}
 
 
-@pytest.mark.parametrize("name", ["", " a", "a b", "x" * 64, "-a", "a;drop", "a@1", None])
+@pytest.mark.parametrize("name", ["", " a", "a ", "x" * 64, "a\tb", "a\nb", "a\x7fb", "a\x85b", "a\u00a0b",
+                                  "a\u200bb", "a\u202eb", "\ufeffa", "a@1", None])
 def test_bad_version_names_are_refused_and_nothing_is_written(conn: Conn, name: Any) -> None:
-    with pytest.raises(tgsis.InvalidNameError, match="version name"):
+    with pytest.raises(tgsis.InvalidNameError, match="version name") as err:
         tgsis.create_version(conn, name)
+    assert "\n" not in err.value.message and len(err.value.message) < 200  # the name is shown bounded, escaped
     conn.rollback()
     assert _tree(conn) == {"DEFAULT": (None, None, 0, [0])}
     assert conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone() == (1, False)
+
+
+# the design's names are free text (revisionname varchar(50)); docs/versioning.md saves 'first pick'
+FREE_NAMES = ["first pick", "x" * 63, "-a", "a;drop", "it's \"quoted\"", "Robert'); DROP TABLE x;--", "été 2024 (v2)",
+              "断层 模型", "%s %I %L"]
+
+
+@pytest.mark.parametrize("name", FREE_NAMES)
+def test_free_text_revision_and_version_names(conn: Conn, name: str) -> None:
+    tgsis.create_version(conn, name)
+    tgsis.goto_version(conn, name)
+    assert tgsis.working_version(conn) == name
+    saved = tgsis.save_revision(conn, name)
+    tgsis.save_revision(conn, name[:50] + "@2")  # @ is fine in a revision name
+    [v] = [v for v in tgsis.list_versions(conn) if v.name == name]
+    assert v.saved == {name: saved, name[:50] + "@2": saved + 1}
+    tgsis.goto_revision(conn, name, saved)
+    tgsis.goto_version(conn, "DEFAULT")
+    assert show_name(name) in format_tree(tgsis.list_versions(conn))
+    tgsis.delete_version(conn, name)
+
+
+def test_bad_revision_names_are_refused_naming_the_name_bounded(conn: Conn) -> None:
+    tgsis.create_version(conn, "a")
+    tgsis.goto_version(conn, "a")
+    before = _tree(conn)
+    with pytest.raises(tgsis.InvalidNameError, match=r"revision name 'x{60}'\.\.\. is not allowed: it has 5000 char"):
+        tgsis.save_revision(conn, "x" * 5000)
+    conn.rollback()
+    with pytest.raises(tgsis.InvalidNameError, match=r"revision name 'first<U\+000A>pick' is not allowed: character 6"):
+        tgsis.save_revision(conn, "first\npick")
+    conn.rollback()
+    assert _tree(conn) == before
 
 
 def test_duplicate_names(conn: Conn) -> None:

@@ -18,7 +18,7 @@ BEGIN
       FROM (SELECT DISTINCT o FROM unnest(p_objects) o) u
      WHERE NOT EXISTS (SELECT FROM tgsis.geometry g WHERE g.geoid = u.o AND g.collection IS NULL);
     IF v_missing IS NOT NULL THEN
-        RAISE EXCEPTION 'objects % are not stored features in version %', v_missing, tgsis.get_working_version()
+        RAISE EXCEPTION 'objects % are not stored features in version %', v_missing, quote_literal(tgsis.get_working_version())
             USING ERRCODE = 'TG200', HINT = 'SELECT geoid FROM tgsis.geometry lists the stored geometries';
     END IF;
     RETURN ARRAY(SELECT DISTINCT o FROM unnest(p_objects) o ORDER BY o);

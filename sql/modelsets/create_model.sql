@@ -23,7 +23,7 @@ BEGIN
     v_objects := tgsis.checked_objects(p_objects);
     PERFORM pg_advisory_xact_lock(hashtextextended('tgsis.model ' || p_name, 0));
     IF EXISTS (SELECT FROM tgsis.model m WHERE m.name = p_name) THEN
-        RAISE EXCEPTION 'model % exists already in version %', quote_literal(p_name), tgsis.get_working_version()
+        RAISE EXCEPTION 'model % exists already in version %', quote_literal(p_name), quote_literal(tgsis.get_working_version())
             USING ERRCODE = 'TG201', HINT = 'choose another name, or add objects to it (tgsis.add_to_model)';
     END IF;
     INSERT INTO tgsis.model (name, description) VALUES (p_name, p_description) RETURNING modelid INTO v_id;

@@ -14,7 +14,7 @@ BEGIN
     SELECT m.modelid INTO v_id FROM tgsis.model m WHERE m.name = p_name;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'model % does not exist in version %', coalesce(quote_literal(p_name), 'NULL'),
-                        tgsis.get_working_version()
+                        quote_literal(tgsis.get_working_version())
             USING ERRCODE = 'TG200', HINT = 'SELECT name FROM tgsis.model lists the models';
     END IF;
     RETURN v_id;

@@ -16,7 +16,7 @@ DECLARE
     v_held   text;
     v_count  integer;
 BEGIN
-    SELECT string_agg(format('%s (locked by version %s, %s%s)', l.objectkey, v.name, quote_ident(l.locked_by),
+    SELECT string_agg(format('%s (locked by version %L, %s%s)', l.objectkey, v.name, quote_ident(l.locked_by),
                              CASE WHEN l.exclusive THEN ', exclusive' ELSE '' END), '; ' ORDER BY l.objectkey),
            count(*)
       INTO v_held, v_count
@@ -27,7 +27,7 @@ BEGIN
         RAISE EXCEPTION '% of class % locked by another version or role: %',
                 CASE WHEN v_count = 1 THEN 'object' ELSE v_count || ' objects' END, quote_literal(p_objectclass), v_held
             USING ERRCODE = 'TG303',
-                  DETAIL = format('Writes from version %s cannot change them while the lock is held.',
+                  DETAIL = format('Writes from version %L cannot change them while the lock is held.',
                                   (SELECT name FROM tgsis.versions WHERE versionid = v_writer)),
                   HINT = 'the holder releases them with SELECT tgsis.unlock_objects(version, objectclass, keys); SELECT * FROM tgsis.object_locks lists locks';
     END IF;

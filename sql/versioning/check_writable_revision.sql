@@ -17,9 +17,9 @@ BEGIN
     RAISE EXCEPTION 'version % is viewed at revision %, which cannot be changed', quote_literal(p_version), v_viewing
         USING ERRCODE = 'TG301',
               DETAIL = CASE WHEN v_saved IS NOT NULL
-                            THEN format('Revision %s was saved as %L and is frozen; only the working revision %s of %s can change.',
+                            THEN format('Revision %s was saved as %L and is frozen; only the working revision %s of %L can change.',
                                         v_viewing, v_saved, p_working, p_version)
-                            ELSE format('Only the working revision %s of %s can change.', p_working, p_version) END,
+                            ELSE format('Only the working revision %s of %L can change.', p_working, p_version) END,
               HINT = format('SELECT tgsis.goto_version(%L) to work in its working revision', p_version);
 END
 $$;

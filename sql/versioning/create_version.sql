@@ -63,7 +63,7 @@ BEGIN
         IF NOT FOUND THEN
             RAISE EXCEPTION 'revision % is not a frozen revision of version % since its base', p_base, quote_literal(p_parent)
                 USING ERRCODE = 'TG200',
-                      DETAIL = format('A child can be based on the working revision of %s or on one of its own frozen '
+                      DETAIL = format('A child can be based on the working revision of %L or on one of its own frozen '
                                       'revisions since it was last merged or refreshed; revision %s %s.', p_parent, p_base,
                                       CASE WHEN NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = p_base)
                                            THEN 'does not exist (never handed out, or removed by compress_versions or delete_version)'

@@ -26,7 +26,7 @@ BEGIN
     IF v_set IS NULL THEN
         RAISE EXCEPTION 'revision % is not in the history of version %', p_revision, quote_literal(v_version.name)
             USING ERRCODE = 'TG200',
-                  DETAIL = format('Version %s can look at revisions %s.', v_version.name,
+                  DETAIL = format('Version %L can look at revisions %s.', v_version.name,
                                   (SELECT string_agg(h.revision::text, ', ' ORDER BY h.revision) FROM tgsis.revisions h
                                     WHERE h.revision = ANY (v_version.workingset) OR h.versionid = p_versionid)),
                   HINT = 'a version sees its own revisions and its ancestors'' revisions up to the moment it was based on them';

@@ -15,6 +15,8 @@ import json
 import logging
 import math
 import os
+import re
+import shlex
 import signal
 import sys
 import warnings
@@ -406,6 +408,12 @@ def _value_pairs(items: Sequence[str] | None, flag: str) -> dict[str, str]:
     return values
 
 
+def _shown_value(value: str, typename: str) -> str:
+    """A default as output shows it: a number as it is, any other value quoted as an SQL literal."""
+    numeric = re.match(r"(small|big)?int|integer|float|double|real|numeric|decimal", typename.strip().lower())
+    return value if numeric else "'" + value.replace("'", "''") + "'"
+
+
 def cmd_class_alter(args: argparse.Namespace) -> int:
     fills = _value_pairs(args.fill_property, "--fill-property")
     drops = [_property_ref(name) for name in args.drop_property or []]
@@ -438,11 +446,16 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             changes.append({"op": "rename", "property": old, "kind": kind, "to": new})
         for kind, prop, default in adds:
             fc = add_property(conn, args.name, prop, kind=kind, default=default)
-            name = prop.name if isinstance(prop, Property) else prop[0]
+            name, typename = (prop.name, prop.type) if isinstance(prop, Property) else prop
             rows, geometries, what = _stored_count(conn, fc, kind, prop)
-            changes.append({"op": "add", "property": name, "kind": kind, "default": default,
+            changes.append({"op": "add", "property": name, "kind": kind, "default": default, "type": typename,
                             "stored_rows": rows if default is not None else 0,
                             "stored_geometries": geometries if default is not None else 0, "row": what})
+        # the rows were counted as the session's version reads them; add_property gave every version's rows the default
+        version = V.working_version(conn)
+        others = conn.execute("SELECT count(*) > 1 FROM tgsis.versions").fetchone()
+        in_versions = (f" as version {V.show_name(version)} reads them; every version's rows got it"
+                       if others and others[0] else "")
     if _json(args):
         cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
         return 0
@@ -458,11 +471,16 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             _out(f"renamed {what}{change['property']} to {change['to']}")
         elif change["default"] is None:
             _out(f"added {what}{change['property']}")
-        elif change["kind"] == "feature":
-            _out(f"added {what}{change['property']}: {change['default']} stored in {change['stored_rows']} feature(s)")
         else:
-            _out(f"added {what}{change['property']}: {change['default']} stored in {change['stored_rows']} "
-                 f"{change['row']}(s) of {change['stored_geometries']} {'member(s)' if members else 'feature(s)'}")
+            default = _shown_value(change["default"], change["type"])
+            if change["stored_rows"] == 0 and not in_versions:
+                got = f"no stored rows, none got the default {default} (it is not kept: new rows give their own values)"
+            elif change["kind"] == "feature":
+                got = f"{change['stored_rows']} feature(s) got the default {default}{in_versions}"
+            else:
+                got = (f"{change['stored_rows']} {change['row']}(s) of {change['stored_geometries']} "
+                       f"{'member(s)' if members else 'feature(s)'} got the default {default}{in_versions}")
+            _out(f"added {what}{change['property']}: {got}")
     cprops = ", ".join(f"{p.name} {p.type}{f'[{p.size}]' if p.size > 1 else ''}"
                        f"{f' ({p.alignment.lower()})' if p.alignment else ''}" for p in fc.cell_properties) or "-"
     _out(f"feature class {fc.name}: feature properties "
@@ -617,12 +635,16 @@ def _import_instant(args: argparse.Namespace, conn: psycopg.Connection[Any], fc:
     if args.feature is not None:
         if values:
             raise InvalidInputError("--set does not go with --feature: the feature's properties stay")
+        if args.alive:
+            raise InvalidInputError("--alive does not go with --feature: the feature keeps whether it is alive "
+                                    "(set when it was stored)")
         with conn.transaction():
             add_instant(conn, fc, args.feature, args.at, surface, drop_extra_properties=args.drop_extra_properties)
         fid, known = args.feature, [t for t, _ in instants(conn, args.feature)]
     else:
         name = args.name or surface.name or Path(args.file).stem
-        series = SurfaceSeries([args.at], [surface], alive=True, name=name)
+        # not alive unless --alive, as SurfaceSeries from Python: a surface known at T is not claimed after T
+        series = SurfaceSeries([args.at], [surface], alive=args.alive, name=name)
         with conn.transaction():
             fid = insert_feature(conn, fc, series, values, name=name, drop_extra_properties=args.drop_extra_properties)
         known = [args.at]
@@ -652,6 +674,8 @@ def cmd_import(args: argparse.Namespace) -> int:
         fc = get_feature_class(conn, args.feature_class)
         if args.at is not None or args.feature is not None or fc.time_model == "INSTANTS":
             return _import_instant(args, conn, fc, meshes, values)
+        if args.alive:
+            raise InvalidInputError("--alive goes with --at T: a static feature exists at every time")
         if fc.geotype is Geotype.GEOMETRYCOLLECTION:  # the whole file is one feature
             collection = GeometryCollection(meshes, name=args.name or stem)
             with conn.transaction():
@@ -765,6 +789,36 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sizes_in_time(conn: psycopg.Connection[Any], time_model: str, geoid: int) -> str | None:
+    """How many vertices and cells one shape of a surface in time has (model 2: per instant, model 3: per topology
+    period), where tgsis.geometry adds up the rows of every instant or period; None for other models."""
+    if time_model == "INSTANTS":
+        counts = conn.execute(
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_vrtx WHERE geoid = %s"
+            "        GROUP BY times) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_trgl WHERE geoid = %s"
+            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)",
+            (geoid, geoid, geoid)).fetchone()
+        each, unit = "per instant", "instants"
+    elif time_model == "EVOLVING":
+        counts = conn.execute(
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.node WHERE geoid = %s"
+            "        GROUP BY timem) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.d4dtrgl WHERE geoid = %s"
+            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)",
+            (geoid, geoid, geoid)).fetchone()
+        each, unit = "per topology period", "periods"
+    else:
+        return None
+    if counts is None or not counts[0]:
+        return None
+    vertices, cells, k = list(counts[0]), list(counts[1] or [0]), int(counts[2])
+    if min(vertices) == max(vertices) and min(cells) == max(cells):
+        return f"{vertices[0]} vertices, {cells[0]} cells " + (
+            f"at each of its {k} {unit}" if unit == "instants" else f"in each of its {k} {unit}")
+    return f"{min(vertices)} to {max(vertices)} vertices, {min(cells)} to {max(cells)} cells {each} ({k} {unit})"
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     from tgsis.db.versions import diff_versions, list_versions, working_version
 
@@ -782,6 +836,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         properties = {n: v for n, v in zip(names, values.fetchone() or ()) if not n.startswith("_")}
         span = lifespan(conn, args.id)
         steps = instants(conn, args.id) if span is not None else []
+        sizes = _sizes_in_time(conn, fc.time_model, args.id)
         here = working_version(conn)
         versioned = fc.versioned and conn.execute(
             "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone() == (True,)
@@ -797,7 +852,7 @@ def cmd_info(args: argparse.Namespace) -> int:
                         what = ("only there" if removed == 0 and sum(d.changed for d in changed) == 0 and added
                                 else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
                                 else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
-                        differs.append(f"{version.name} ({what})")
+                        differs.append(f"{V.show_name(version.name)} ({what})")
                         differing.append({"version": version.name,
                                           "what": what if what in ("only there", "not there") else "differs",
                                           "rows": sum(d.added + d.removed + d.changed for d in changed)})
@@ -818,8 +873,9 @@ def cmd_info(args: argparse.Namespace) -> int:
             "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
             "versioned": versioned, "differs_in": differing if versioned else None})
         return 0
-    _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), in version {here}")
-    _out(f"  {nvrtx} vertices, {ncell} cells" + (f", {members} members" if members is not None else ""))
+    _out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{_time_label(fc)}), "
+         f"in version {V.show_name(here)}")
+    _out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
     if row[7] is not None:
         _out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
     if span is None:
@@ -839,7 +895,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         if mesh.cell_properties:
             _out("  cell properties: " + ", ".join(mesh.cell_properties))
     if versioned:
-        _out("  versions where it differs from " + here + ": " + (", ".join(differs) if differs else "none"))
+        _out("  versions where it differs from " + V.show_name(here) + ": " + (", ".join(differs) if differs else "none"))
     elif not fc.versioned:
         _out(f"  class {fc.name} is not versioned: every version sees this state")
     return 0
@@ -882,13 +938,19 @@ def cmd_ls(args: argparse.Namespace) -> int:
                 psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
                                 "FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
                     psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
+    # a G-map's geometry row counts its darts where other geometries count cells (tgsis gmap cells counts its cells)
+    def darts(geotype: str, ncell: int) -> tuple[int | None, int | None]:
+        return (None, ncell) if geotype == "GMAP" else (ncell, None)
+
     if _json(args):
         cliout.emit_json({"features": [{"id": geoid, "class": cls, "name": name, "geotype": geotype, "vertices": nvrtx,
-                                        "cells": ncell, "members": nmembers}
+                                        "cells": darts(geotype, ncell)[0], "members": nmembers,
+                                        "darts": darts(geotype, ncell)[1]}
                                        for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows]})
         return 0
-    _table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members"),
-           [(geoid, cls, name or "", geotype, nvrtx, ncell, "" if nmembers is None else nmembers)
+    _table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts"),
+           [(geoid, cls, name or "", geotype, nvrtx, *("" if n is None else n for n in darts(geotype, ncell)[:1]),
+             "" if nmembers is None else nmembers, *("" if n is None else n for n in darts(geotype, ncell)[1:]))
             for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows])
     if not rows:
         print("no features", file=sys.stderr)
@@ -916,7 +978,7 @@ def cmd_checkout(args: argparse.Namespace) -> int:
                                 "would see every vertex as moved", hint="use .ts (GOCAD) or .vtu (VTK)")
     side = co.save(_checkout_file(args.file))
     _out(f"checked out feature {co.token.feature_id} ({co.token.feature_class}, {co.mesh.n_vertices} vertices, "
-         f"{co.mesh.n_cells} {type(co.mesh).cell_name}s) of version {co.token.version} at revision "
+         f"{co.mesh.n_cells} {type(co.mesh).cell_name}s) of version {V.show_name(co.token.version)} at revision "
          f"{co.token.revision} to {args.file} (check-out record: {side})")
     return 0
 
@@ -945,9 +1007,10 @@ def cmd_checkin(args: argparse.Namespace) -> int:
         result.checkout.save(side)
     counts = save.diff.counts()
     moved = save.vertices_moved
-    commands = ([f"tgsis version conflicts {save.version} --rows",
-                 f"tgsis version resolve {save.version} feature {save.feature_id} parent|child|manual",
-                 f"tgsis version merge {save.version} --remove"] if result.conflict else [])
+    child = shlex.quote(save.version)  # the commands are pasted into a shell: a free-text name stays one argument
+    commands = ([f"tgsis version conflicts {child} --rows",
+                 f"tgsis version resolve {child} feature {save.feature_id} parent|child|manual",
+                 f"tgsis version merge {child} --remove"] if result.conflict else [])
     if args.png and isinstance(edited, Surface):
         from scipy.spatial import cKDTree
 
@@ -963,24 +1026,26 @@ def cmd_checkin(args: argparse.Namespace) -> int:
             "feature_id": save.feature_id, "version": save.version, "conflict": result.conflict,
             "vertices": {"kept": counts["vertices_kept"], "moved": moved,
                          "removed": counts["vertices_removed"] - moved, "added": counts["vertices_added"] - moved},
-            "cells": {"kept": counts["cells_kept"], "removed": counts["cells_removed"], "added": counts["cells_added"]},
+            "cells": {"kept": counts["cells_kept"] + save.cells_on_moved, "removed": save.cells_removed,
+                      "added": save.cells_added, "on_moved_vertices": save.cells_on_moved},
             "rows": {"written": save.rows_written, "deleted": save.rows_deleted, "inserted": save.rows_inserted,
                      "updated": save.rows_updated},
             "record": str(side) if result.checkout is not None and not result.conflict else None,
             "png": args.png, "commands": commands})
         return 0
-    _out(f"checked in feature {save.feature_id} into version {save.version}"
+    _out(f"checked in feature {save.feature_id} into version {V.show_name(save.version)}"
          + (" (a new child version: the feature had changed since check-out)" if result.conflict else ""))
     _out(f"  vertices: {counts['vertices_kept']} kept, {moved} moved, "
          f"{counts['vertices_removed'] - moved} removed, {counts['vertices_added'] - moved} "
-         f"added; {type(edited).cell_name}s: {counts['cells_kept']} kept by definition, "
-         f"{counts['cells_removed']} removed, {counts['cells_added']} added")
+         f"added; {type(edited).cell_name}s: {counts['cells_kept'] + save.cells_on_moved} kept"
+         + (f" ({save.cells_on_moved} of them on moved vertices)" if save.cells_on_moved else "")
+         + f", {save.cells_removed} removed, {save.cells_added} added")  # by content, as they are stored
     _out(f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
          f"{save.rows_updated} updated)")
     if args.png:
         _out(f"  drew the edit to {args.png}")
     if commands:
-        _out(f"  both edits meet as a conflict of {save.version}: " + "; ".join(commands))
+        _out(f"  both edits meet as a conflict of {V.show_name(save.version)}: " + "; ".join(commands))
     return 0
 
 
@@ -1010,7 +1075,8 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
     with cliout.progress(f"interpolating {name}", None, "step") as moved:
-        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved)
+        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved,
+                             split=args.split)
     _out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
          f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
          f"error to the target {result.error:.3g}")
@@ -1022,7 +1088,11 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     if args.feature_class:
         with _connect(args) as conn, cliout.busy(f"uploading {name}"):
             fid = insert_feature(conn, args.feature_class, result.evolving)
-        _out(f"stored as feature {fid} of class {args.feature_class} from t = {args.t0:g} to {args.t1:g}")
+            unit = _unit(get_feature_class(conn, args.feature_class))
+        # as the user gave the times (the source may be the later shape), then the span in time order
+        _out(f"stored as feature {fid} of class {args.feature_class}: the source ({name}) at t = {args.t0:g}{unit}, "
+             f"the target at t = {args.t1:g}{unit}; it exists from t = {min(args.t0, args.t1):g} to "
+             f"{max(args.t0, args.t1):g}{unit}" + (" and after (alive)" if args.alive else ""))
     return 0
 
 
@@ -1090,7 +1160,14 @@ def cmd_at(args: argparse.Namespace) -> int:
     if (args.format or Path(args.file).suffix).lower().lstrip(".") == "pvd":
         raise InvalidInputError(f"{args.file}: tgsis at writes one surface; a .pvd is a time series",
                                 hint="tgsis series writes a .pvd")
-    target = formats.format_for(args.file, args.format)  # an unknown format fails before connecting
+    # the file says when the snapshot is: {t} in its name, or a folder's file feature_ID_tT.FORMAT
+    file = args.file.replace("{t}", repr(args.time))
+    if Path(file).is_dir():
+        if not args.format:
+            raise InvalidInputError(f"{args.file} is a folder: give --format (e.g. --format vtu) for the file "
+                                    f"feature_{args.id}_t{args.time!r}.FORMAT written in it")
+        file = str(Path(file) / f"feature_{args.id}_t{args.time!r}.{args.format.lower().lstrip('.')}")
+    target = formats.format_for(file, args.format)  # an unknown format fails before connecting
     with _connect(args) as conn:
         fc = class_of_feature(conn, args.id)
         surface = get_at(conn, args.id, args.time, convention=args.convention, properties=True)
@@ -1098,9 +1175,11 @@ def cmd_at(args: argparse.Namespace) -> int:
             raise NotFoundError(f"feature {args.id} ({fc.name}) does not exist at t = {args.time!r}{_unit(fc)}",
                                 hint=_life(lifespan(conn, args.id), fc))
         _with_z_convention(conn, args.id, surface)
-        target.write(surface, args.file)
+        # and its name, which GOCAD writes in its header and VTK in its field data (and a legacy file's title)
+        surface.name = f"{surface.name or f'feature {args.id}'} at t = {args.time!r}{_unit(fc)}"
+        target.write(surface, file)
         _out(f"wrote feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)}: {surface.n_vertices} vertices, "
-             f"{surface.n_cells} triangles, to {args.file}")
+             f"{surface.n_cells} triangles, to {file}")
         if args.png:
             _picture_of(conn, [args.id, *args.with_ids], args.time, args.png,
                         title=f"feature {args.id} ({fc.name}) at t = {args.time!r}{_unit(fc)} (SQL snapshot)")
@@ -1184,7 +1263,7 @@ def cmd_series(args: argparse.Namespace) -> int:
 def cmd_version_create(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         revision = V.create_version(conn, args.name, args.parent, description=args.description)
-    _out(f"created version {args.name} (parent {args.parent}), working revision {revision}")
+    _out(f"created version {V.show_name(args.name)} (parent {V.show_name(args.parent)}), working revision {revision}")
     return 0
 
 
@@ -1230,9 +1309,9 @@ def cmd_version_goto(args: argparse.Namespace) -> int:
             V.goto_revision(conn, name, revision)
     clistate.remember_version(_target_key(args), args.name)
     if revision is None:
-        _out(f"commands on this database now work in version {name} (working revision {working})")
+        _out(f"commands on this database now work in version {V.show_name(name)} (working revision {working})")
     else:
-        _out(f"commands on this database now look at revision {revision} of version {name} (read-only)")
+        _out(f"commands on this database now look at revision {revision} of version {V.show_name(name)} (read-only)")
     return 0
 
 
@@ -1254,7 +1333,7 @@ def cmd_version_save(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         saved = V.save_revision(conn, args.name)
         version, working = V.working_version(conn), V.working_revision(conn)
-    _out(f"saved revision {saved} of {version} as {args.name}; new working revision {working}")
+    _out(f"saved revision {saved} of {V.show_name(version)} as {V.show_name(args.name)}; new working revision {working}")
     return 0
 
 
@@ -1263,7 +1342,7 @@ def cmd_version_delete(args: argparse.Namespace) -> int:
         removed = V.delete_version(conn, args.name)
     if clistate.remembered_version(_target_key(args)) == args.name:
         clistate.remember_version(_target_key(args), None)
-    _out(f"deleted version {args.name} and {removed} row version(s)")
+    _out(f"deleted version {V.show_name(args.name)} and {removed} row version(s)")
     return 0
 
 
@@ -1315,7 +1394,7 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
             _out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
     if not conflicts:
-        print(f"version {args.name} has no conflicts with its parent", file=sys.stderr)
+        print(f"version {V.show_name(args.name)} has no conflicts with its parent", file=sys.stderr)
     return 0
 
 
@@ -1323,7 +1402,7 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution,
                                discard_other=args.discard_other)
-    _out(f"{c.objectclass} {c.objectkey} in {args.name}: {c.solution}")
+    _out(f"{c.objectclass} {c.objectkey} in {V.show_name(args.name)}: {c.solution}")
     if c.discarded is None:
         _out("  what it discarded of the other side's edits is not shown: this role may not read the object's rows")
     elif c.discarded:
@@ -1350,11 +1429,11 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | No
 
 
 def cmd_version_merge(args: argparse.Namespace) -> int:
-    with _connect(args) as conn, cliout.busy(f"merging {args.name}"), conn.transaction():
+    with _connect(args) as conn, cliout.busy(f"merging {V.show_name(args.name)}"), conn.transaction():
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
         lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
-    _out(f"merged {args.name} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
+    _out(f"merged {V.show_name(args.name)} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
     _say_discarded(lost)
     if args.remove and clistate.remembered_version(_target_key(args)) == args.name:
         clistate.remember_version(_target_key(args), None)
@@ -1365,7 +1444,7 @@ def cmd_version_refresh(args: argparse.Namespace) -> int:
     with _connect(args) as conn, conn.transaction():
         lost = _recorded_discards(conn, args.name)
         written = V.refresh_version(conn, args.name)
-    _out(f"refreshed {args.name} from its parent: {written} row(s) written")
+    _out(f"refreshed {V.show_name(args.name)} from its parent: {written} row(s) written")
     _say_discarded(lost)
     return 0
 
@@ -1440,7 +1519,8 @@ def _moment(text: str) -> datetime.datetime:
 def cmd_version_valid(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         V.set_version_validity(conn, args.name, _moment(args.valid_from), _moment(args.valid_to) if args.valid_to else None)
-    _out(f"version {args.name} believed from {args.valid_from}" + (f" to {args.valid_to}" if args.valid_to else " on"))
+    _out(f"version {V.show_name(args.name)} believed from {args.valid_from}"
+         + (f" to {args.valid_to}" if args.valid_to else " on"))
     return 0
 
 
@@ -1506,7 +1586,7 @@ def cmd_version_grant(args: argparse.Namespace) -> int:
 def cmd_version_owner(args: argparse.Namespace) -> int:
     with _connect(args) as conn:
         V.set_version_owner(conn, args.name, args.role)
-    _out(f"version {args.name} is owned by {args.role}")
+    _out(f"version {V.show_name(args.name)} is owned by {args.role}")
     return 0
 
 
@@ -2027,6 +2107,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "new feature (known from T on) or, with --feature, of an existing one")
     imp.add_argument("--feature", type=_ID, metavar="ID",
                      help="with --at: add the instant T to this feature instead of storing a new one")
+    imp.add_argument("--alive", action="store_true",
+                     help="with --at, for a new feature: it still exists after its last instant (keeps its last shape; "
+                          "default: it exists only from its first to its last instant, as from Python)")
 
     exp = _command(commands, "export", "write a feature to a geometry file",
                    ["tgsis export 3 garlock.ts", "tgsis export 3 garlock.vtu --png garlock.png"], cmd_export)
@@ -2040,7 +2123,8 @@ def build_parser() -> argparse.ArgumentParser:
                   ["tgsis at 12 -7.5 fault_7.5Ma.ts", "tgsis at 13 1.5 horizon.vtu --convention right"], cmd_at)
     at.add_argument("id", type=_ID, help="the feature's id")
     at.add_argument("time", type=float, metavar="T", help="model time (in the class's unit)")
-    at.add_argument("file", help="the file to write; its extension gives the format")
+    at.add_argument("file", help="the file to write; its extension gives the format; {t} in it is replaced by T; "
+                    "a folder gets feature_ID_tT.FORMAT (with --format)")
     at.add_argument("--format", help="file format (default: from the extension)")
     at.add_argument("--convention", type=str.lower, choices=("left", "right"), default="left",
                     help="step convention of a surface known at instants (default: left)")
@@ -2109,6 +2193,10 @@ def build_parser() -> argparse.ArgumentParser:
     interp.add_argument("--class", dest="feature_class", help="EVOLVING feature class to store it in "
                                                                "(without: computed and previewed only)")
     interp.add_argument("--name", help="feature name (default: the source's)")
+    interp.add_argument("--split", choices=("auto", "centroid"), default="auto",
+                        help="how the compatible meshes are refined: centroid is the design's rule (split the "
+                             "triangle at its centroid), auto (default) bisects its longest interior edge instead, "
+                             "which converges where centroid splits stall")
     interp.add_argument("--alive", action="store_true",
                         help="the surface goes on existing after its last instant, in its last shape")
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")

@@ -13,7 +13,8 @@ Two releases of a fault model, the way a geomodelling team lives them:
    was only re-exported writes a handful of rows), and that state saved as a
    revision;
 5. what DEFAULT and the version each see, how many rows the version stored,
-   and the version tree;
+   and the version tree; a picture of release 6.1 over 5.3, 6.1 coloured by
+   its distance from 5.3 (``cfm_release_6.1_over_5.3.png`` in the folder);
 6. a fault through geological time (model 3): the first fault of release 5.3
    as it is today and, 2 Ma ago, displaced along strike by a synthetic slip
    growing with depth to 500 m; its shape at -1 Ma computed in SQL, and the
@@ -134,6 +135,11 @@ def _releases_seen(conn: psycopg.Connection[Any]) -> dict[str, str]:
             for f in F.fetch_features(conn, "faults")}
 
 
+def _meshes_seen(conn: psycopg.Connection[Any]) -> dict[str, Mesh]:
+    """Per fault name, the mesh the session's version sees."""
+    return {f.name or str(f.id): f.mesh for f in F.fetch_features(conn, "faults") if isinstance(f.mesh, Mesh)}
+
+
 def _fault_history(fault: _Fault) -> tuple[EvolvingSurface, int]:
     """The fault over HISTORY: displaced along strike 2 Ma ago (SLIP at depth, none at the top), as it is today.
 
@@ -170,6 +176,39 @@ def _store_history(conn: psycopg.Connection[Any], fault: _Fault, folder: Path) -
             "(open it in ParaView)"]
 
 
+def _draw_releases(old: dict[str, Mesh], new: dict[str, Mesh], folder: Path) -> list[str]:
+    """Release 6.1 over 5.3 of the fault that changed most: 6.1 coloured by how far each of its vertices lies from 5.3.
+
+    The releases are different meshes (other vertices, other counts), so the
+    colour is each 6.1 vertex's distance to the 5.3 surface (exact closest
+    point), not a vertex-to-vertex displacement. (The faults lie up to 250 km
+    apart: one scene of all three would show none of them.)
+    """
+    from importlib.util import find_spec
+
+    from tgsis.interpolation.projection import closest_points
+
+    png = folder / "cfm_release_6.1_over_5.3.png"
+    if find_spec("matplotlib") is None:
+        return ["   no picture of release 6.1 over 5.3: it needs matplotlib (pip install 'tgsis[pictures]')"]
+    from tgsis import pictures
+
+    moved = {name: closest_points(mesh.vertices, before.vertices, before.triangles).distances
+             for name, mesh in new.items() if isinstance(mesh, Surface)
+             for before in [old.get(name)] if isinstance(before, Surface)}
+    if not moved:
+        return ["   no picture of release 6.1 over 5.3: no fault is in both releases"]
+    name = max(sorted(moved), key=lambda n: float(moved[n].max()))
+    after = new[name]
+    assert isinstance(after, Surface)
+    # 6.1 alone: 5.3 lies within metres of it and, drawn too, would hide it
+    pictures.scene([Surface(after.vertices, after.triangles, name="release 6.1")], png,
+                   title=f"{name}\nrelease 6.1 over 5.3", colour=[moved[name]],
+                   colour_label="distance of 6.1 from 5.3 (m)", exaggeration=3.0)
+    return [f"   {name}: release 6.1 over 5.3, coloured by its distance from 5.3 (up to {moved[name].max():.0f} m), "
+            f"drawn to {png}"]
+
+
 def _no_lost_update(conninfo: str, fid: int) -> list[str]:
     """Step 6: two modellers check the same fault out of DEFAULT; the second check-in cannot overwrite the first."""
     with psycopg.connect(conninfo) as ann, psycopg.connect(conninfo) as bob:
@@ -191,7 +230,8 @@ def _no_lost_update(conninfo: str, fid: int) -> list[str]:
             f"({kept.save.rows_written} rows); DEFAULT keeps ann's"]
 
 
-def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, folder: str | Path | None = None) -> None:
+def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print,
+             folder: str | Path | None = None) -> list[Path]:
     """Run the demo against the server of ``dsn`` (``None``: the local server), in a database of its own.
 
     Parameters
@@ -202,8 +242,14 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
     out : callable
         Receives each line of the report.
     folder : str or path-like, optional
-        Where the demo writes its files (the fault history as ``.pvd``);
-        created if missing. Default: a new temporary folder.
+        Where the demo writes its files (the fault history as ``.pvd``, the
+        picture of release 6.1 over 5.3); created if missing. Default: a new
+        temporary folder.
+
+    Returns
+    -------
+    list of Path
+        The files written in the folder.
     """
     target = resolve_target(dsn)
     conninfo = _demo_conninfo(dsn)
@@ -253,6 +299,7 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
                               f"(a full upload: {2 * fault.mesh.n_vertices + fault.mesh.n_cells})")
             saved = V.save_revision(conn, "release-6.1")
             seen_in_version = _releases_seen(conn)
+            meshes_in_version = _meshes_seen(conn)
         out(f"3. version cfm6.1: release 6.1 checked in over {len(new)} fault(s) by difference "
             f"(vertices within {TOLERANCE * 100:.0f} cm are the same), saved as revision {saved}; "
             f"rows stored for it: {_stored_rows(conn) - rows_before}")
@@ -270,6 +317,8 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
             files.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InvalidInputError(f"cannot create the folder {files}: {exc.strerror or exc}") from exc
+        for line in _draw_releases(_meshes_seen(conn), meshes_in_version, files):
+            out(line)
         for line in _store_history(conn, old[0], files):
             out(line)
         conn.commit()  # the two modellers below work in sessions of their own
@@ -282,3 +331,4 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print, fold
     else:
         out(f"dsn: {conninfo}")
         out("in a browser: `tgsis --dsn DSN view --open`, DSN the one above (the extra tgsis[view])")
+    return [p for p in (files / "cfm_release_6.1_over_5.3.png", files / "fault_history.pvd") if p.is_file()]

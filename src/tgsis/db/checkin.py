@@ -199,6 +199,12 @@ class SaveResult:
     vertices_moved : int
         Removed-and-added vertex pairs written as one vertex moved
         (:mod:`tgsis.edits`): its row rewritten, its cells kept.
+    cells_removed, cells_added : int
+        Cells deleted and written anew, compared by content: a cell of moved
+        vertices is the same cell (kept, as it is stored), unlike in ``diff``,
+        which compares by position and sees it removed and added.
+    cells_on_moved : int
+        Kept cells with a moved vertex (``diff`` counts them removed and added).
     """
 
     feature_id: int
@@ -209,6 +215,9 @@ class SaveResult:
     rows_updated: int
     property_rows_changed: int
     vertices_moved: int = 0
+    cells_removed: int = 0
+    cells_added: int = 0
+    cells_on_moved: int = 0
 
     @property
     def rows_written(self) -> int:
@@ -411,7 +420,8 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     updated += _update_meaning(conn, fc, geoid, edited, written, storage)
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
     result = SaveResult(geoid, version, plan.diff, written.deleted, written.inserted, updated,
-                        written.property_changes, len(plan.moved_vertices))
+                        written.property_changes, len(plan.moved_vertices), len(plan.removed_cells),
+                        len(plan.added_cells), len(plan.diff.added_cells) - len(plan.added_cells))
     log.info("saved %s feature %d in %s by difference: %s, %d vertices moved; %d rows written", fc.name, geoid,
              version, plan.diff, result.vertices_moved, result.rows_written)
     return result, written

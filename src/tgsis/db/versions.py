@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
@@ -41,6 +42,7 @@ __all__ = [
     "revisions",
     "list_versions",
     "format_tree",
+    "show_name",
     "version_graph",
     "in_version",
     "at_revision",
@@ -156,6 +158,8 @@ def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, descriptio
     ----------
     conn : psycopg.Connection
     name : str
+        Free text, as the design's: 1 to 63 printable characters, no blank
+        at either end, no ``@`` (the command line's VERSION@REVISION).
     parent : str
     description : str, optional
     base : int, optional
@@ -185,8 +189,15 @@ def delete_version(conn: Conn, name: str) -> int:
 def save_revision(conn: Conn, name: str) -> int:
     """Freeze the working revision of the session's version under ``name``; return its number.
 
+    ``name`` is free text, as the design's ``revisionname``: 1 to 63
+    printable characters (``"first pick"``), no blank at either end.
+
     Raises
     ------
+    InvalidNameError
+        An empty, too long or unprintable name (TG101).
+    AlreadyExistsError
+        The version has a revision of that name.
     ReadOnlyRevisionError
         The session views an older revision.
     """
@@ -234,6 +245,15 @@ def list_versions(conn: Conn) -> list[Version]:
                     dict(json.loads(r[6]) if isinstance(r[6], str) else r[6]), r[7], r[8], r[9]) for r in rows]
 
 
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]*")
+
+
+def show_name(name: str) -> str:
+    """A version or revision name as output shows it: as it is when it is plain (letters, digits, ``_ . + -``),
+    else quoted as an SQL literal (``'first pick'``, a quote doubled), so a name with blanks reads as one name."""
+    return name if _PLAIN_NAME.fullmatch(name) else "'" + name.replace("'", "''") + "'"
+
+
 def format_tree(versions: Sequence[Version]) -> str:
     """The version tree as indented text, one line per version with its revisions.
 
@@ -245,9 +265,9 @@ def format_tree(versions: Sequence[Version]) -> str:
     lines = []
     for v in versions:
         saved = {rev: name for name, rev in v.saved.items()}
-        revs = ", ".join(f"{r} ({saved[r]})" if r in saved else str(r) for r in v.revisions)
-        base = "" if v.initrevision is None else f" from {v.parent}@{v.initrevision}"
-        lines.append(f"{'    ' * v.depth}{v.name}{base}: revisions {revs}; working {v.workingrevision}")
+        revs = ", ".join(f"{r} ({show_name(saved[r])})" if r in saved else str(r) for r in v.revisions)
+        base = "" if v.initrevision is None else f" from {show_name(v.parent or '')}@{v.initrevision}"
+        lines.append(f"{'    ' * v.depth}{show_name(v.name)}{base}: revisions {revs}; working {v.workingrevision}")
     return "\n".join(lines)
 
 
@@ -614,7 +634,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
         except MissingPrivilegeError as exc:
             if not discard_other and conflict.solution in ("child", "parent"):
                 raise MissingPrivilegeError(
-                    f"cannot tell what solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                    f"cannot tell what solving {conflict.objectclass} {conflict.objectkey} of version {show_name(version)} with "
                     f"{conflict.solution} discards of the other side's edits: {exc.message}",
                     sqlstate=exc.sqlstate,
                     hint="pass discard_other=True to record it all the same, or write the merged object into the "
@@ -622,7 +642,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
             discards = None
         if discards and not discard_other and conflict.solution in ("child", "parent"):
             raise VersioningError(
-                f"solving {conflict.objectclass} {conflict.objectkey} of version {version} with "
+                f"solving {conflict.objectclass} {conflict.objectkey} of version {show_name(version)} with "
                 f"{conflict.solution} would discard {describe_discards(discards)}",
                 detail="A solution takes one side's whole object: the other side's edits since the version was "
                        "based are lost (rows added, removed or changed; the values among them).",

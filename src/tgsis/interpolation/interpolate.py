@@ -155,7 +155,7 @@ def _carried_properties(source: Surface, target: Surface, all_vertices: FloatArr
 def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0: float, t1: float, *,
                 name: str | None = None,
                 surfaces: Mapping[str, Surface] | None = None, alive: bool = False,
-                progress: Callable[[int, int], None] | None = None) -> Interpolation:
+                progress: Callable[[int, int], None] | None = None, split: str = "auto") -> Interpolation:
     """The surface evolving from ``source`` at ``t0`` to ``target`` at ``t1`` under the set-up's constraints.
 
     Parameters
@@ -178,6 +178,12 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         ``progress(done, total)`` after each step: cutting, partition, each
         pair of compatible patches, trajectories, the evolving surface (the
         total is known once the partition is).
+    split : {"auto", "centroid"}
+        How the compatible meshes are refined (:func:`compatible_patch`):
+        ``"centroid"`` is the design's rule (the source triangle holding the
+        closest point of a far target vertex is split at its centroid);
+        ``"auto"`` (default) bisects its longest edge when that edge is
+        interior, which converges where centroid splits stall.
 
     Vertex properties that both meshes carry travel with the vertices: each
     goes linearly from the source's value to the target's value where its
@@ -195,6 +201,8 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     ParameterizationError, TrajectoryError, ProjectionError
         A numeric failure (refinement not converging, a vertex off its surface).
     """
+    if split not in ("auto", "centroid"):
+        raise InterpolationSetupError(f"split {split!r} is not one of 'auto', 'centroid'")
     if not (np.isfinite(t0) and np.isfinite(t1) and t0 != t1):
         raise InterpolationSetupError(f"the source and target times must be two different finite times, "
                                       f"got t0={t0}, t1={t1}")
@@ -241,7 +249,7 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         t_patch = pairing.target.patches[pair.target]
         s_xyz, s_tri, s_ids, s_ctl = _patch_arrays(source, s_patch)
         t_xyz, t_tri, _, t_ctl = _patch_arrays(target, t_patch)
-        result = compatible_patch(s_xyz, s_tri, s_ctl, t_xyz, t_tri, t_ctl, tolerance)
+        result = compatible_patch(s_xyz, s_tri, s_ctl, t_xyz, t_tri, t_ctl, tolerance, split=split)
         error = max(error, result.error)
         added = len(result.source_vertices) - len(s_ids)
         first_new = n + sum(len(v) for v in extra_vertices)

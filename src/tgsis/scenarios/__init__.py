@@ -116,8 +116,7 @@ def run_scenario(name: str, dsn: str | None = None, *, out: Callable[[str], None
         from tgsis.demo import run_demo
 
         target = Path(folder) if folder is not None else None
-        run_demo(dsn, out=out, folder=target)
-        return ScenarioResult(name, [], {})
+        return ScenarioResult(name, run_demo(dsn, out=out, folder=target), {})
     # every scenario draws pictures: say so before it makes its database, not after
     require("matplotlib", f"tgsis demo {name} (its pictures)")
     with open_context(name, dsn, out=out, folder=folder, size=size) as context:
