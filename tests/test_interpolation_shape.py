@@ -433,3 +433,32 @@ def test_a_closed_part_without_border_keeps_its_straight_paths() -> None:
     s = np.arange(5) / 4
     assert np.abs(paths[:, n:] - (vertices[n:] + s[:, None, None] * (target[n:] - vertices[n:]))).max() < 1e-12
     assert np.abs(paths[:, :n] - dome.vertices).max() < 1e-9
+
+
+def test_a_dome_split_by_a_fence_stays_the_dome_either_way_in_time() -> None:
+    """Two patches stitched along a fence across the dome's top (fence vertices are interior to the whole mesh,
+    solved with the rest), both west and east sides attached to walls, the later time given first."""
+    side = 21
+    dome = dome_grid(side)
+    middle = side // 2
+    controls = (0, middle, side - 1, side * side - 1, side * (side - 1) + middle, side * (side - 1))
+    fence = tuple(middle + side * j for j in range(side))
+    west = [j * side for j in range(1, side - 1)]
+    east = [j * side + side - 1 for j in range(1, side - 1)]
+    east_wall = tgsis.Surface(wall_x0().vertices + [1000.0, 0, 0], wall_x0().cells, name="east wall")
+    setup = InterpolationSetup(
+        controls,
+        controls,
+        source_fences=(fence,),
+        target_fences=(fence,),
+        controlling_surfaces={"west": "west", "east": "east"},
+        attachments=tuple(Attachment(v, ("west",)) for v in west) + tuple(Attachment(v, ("east",)) for v in east),
+        steps=6,
+        tolerance=1.0,
+    )
+    result = interpolate(dome, dome, setup, 2.0, 1.0, surfaces={"west": wall_x0(), "east": east_wall})
+    assert np.abs(result.target.vertices - dome.vertices).max() < 1e-9  # the compatible target is the dome
+    for t in np.linspace(1.0, 2.0, 11):
+        shape = result.evolving.at(float(t))
+        assert shape is not None
+        assert np.abs(shape.vertices - dome.vertices).max() < 1e-9, f"the dome moved at t = {t}"
