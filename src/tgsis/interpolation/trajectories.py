@@ -222,8 +222,16 @@ class InteriorSteps:
     interior, border : ndarray of int64
         The interior vertices (the rows of :meth:`solve`'s result) and the
         border vertices (the columns of its input), ascending.
+    solved : ndarray of int64
+        Positions in ``interior`` of the vertices the solve moves (those
+        whose part of the mesh reaches the border).
+    matrix : (r, r) scipy.sparse.csc_matrix
+        I - Λ̄ on the solved vertices, r = len(solved).
+    to_border : (r, b) scipy.sparse.csr_matrix
+        Λ̄ from the solved vertices to the border vertices.
     factorizations : int
-        Sparse factorisations done: one, at construction.
+        Sparse factorisations done: one, at construction (none when no
+        interior vertex reaches the border).
 
     Raises
     ------
