@@ -462,3 +462,27 @@ def test_a_dome_split_by_a_fence_stays_the_dome_either_way_in_time() -> None:
         shape = result.evolving.at(float(t))
         assert shape is not None
         assert np.abs(shape.vertices - dome.vertices).max() < 1e-9, f"the dome moved at t = {t}"
+
+
+def test_a_lifted_dome_moves_rigidly_through_interpolate() -> None:
+    """The dome and a copy 120 m higher and 40 m north (parallel to the west wall, so the attached west side stays on
+    it): every instant is the dome moved by the same fraction of the shift."""
+    side = 21
+    dome = dome_grid(side)
+    shift = np.array([0.0, 40.0, 120.0])
+    lifted = tgsis.Surface(dome.vertices + shift, dome.cells, name="lifted")
+    corners = (0, side - 1, side * side - 1, side * (side - 1))
+    west = [j * side for j in range(1, side - 1)]
+    setup = InterpolationSetup(
+        corners,
+        corners,
+        controlling_surfaces={"west": "west"},
+        attachments=tuple(Attachment(v, ("west",)) for v in west),
+        steps=5,
+        tolerance=1.0,
+    )
+    result = interpolate(dome, lifted, setup, 0.0, 1.0, surfaces={"west": wall_x0()})
+    for t in np.linspace(0.0, 1.0, 9):
+        shape = result.evolving.at(float(t))
+        assert shape is not None
+        assert np.abs(shape.vertices - (dome.vertices + t * shift)).max() < 1e-9, f"not rigid at t = {t}"
