@@ -73,7 +73,8 @@ RUFF_FORMATTED = src/tgsis/db/_upgrade.py tests/test_upgrade.py tests/test_insta
                  src/tgsis/_optional.py tests/test_optional_extras.py src/tgsis/db/adapters.py tests/test_adapters.py tests/test_docker.py \
                  tests/test_view_set_based_writes.py tests/test_view_origin.py tests/test_make_test.py \
                  tests/test_gocad_blocks.py tests/test_vtk_names_and_parts.py \
-                 src/tgsis/_zpositive.py tests/test_formats_meaning.py
+                 src/tgsis/_zpositive.py tests/test_formats_meaning.py \
+                 tests/test_interpolation_shape.py
 
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy

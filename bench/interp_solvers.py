@@ -5,12 +5,13 @@ compatible target):
 
 * the mean-value parameterisation: weights, assembly, and the two solves with
   several SuperLU set-ups;
-* the interior solves of m = 10 trajectory samples (8 intermediate steps):
-  a fresh SuperLU factorisation per step (what tgsis does), the same with the
-  column ordering of the first step reused, and BiCGSTAB warm-started from the
-  previous step and preconditioned by one factorisation at s = 1/2 (GMRES
-  the same way took twice as many preconditioner solves), step by step
-  interleaved so that a busy machine slows all three alike.
+* the interior solves of m = 10 trajectory samples: tgsis's one
+  factorisation of I - Λ̄_II (the mean of the two meshes' mean value weights)
+  for all steps, each step a triangular solve pair, against the source
+  design's rule, which needs a fresh factorisation per step (its weights
+  change with time; what tgsis did before issue 37), interleaved so that a
+  busy machine slows both alike; and SuperLU's solve of the 30 right-hand
+  sides at once against three at a time.
 
 Run: ``python bench/interp_solvers.py [n]`` (default n = 100000).
 """
@@ -22,7 +23,7 @@ import time
 
 import numpy as np
 from scipy.sparse import csc_matrix
-from scipy.sparse.linalg import LinearOperator, bicgstab, splu
+from scipy.sparse.linalg import splu
 from scipy.spatial import Delaunay
 
 from tgsis.interpolation._arrays import interior_mask as vertices_inside
@@ -90,57 +91,39 @@ def main() -> None:
     c, s = np.cos(twist), np.sin(twist)
     target = np.c_[c * xyz[:, 0] - s * xyz[:, 1], s * xyz[:, 0] + c * xyz[:, 1], 0.5 * (1 - r2)]
     steps = 10
-    system = clock("trajectory set-up (pattern, both weight sets)",
+    weights = np.arange(steps) / (steps - 1)
+    system = clock("trajectory set-up: both weight sets, I - mean weights, one factorisation (tgsis)",
                    lambda: InteriorSteps(xyz, target, tri, interior_mask), results)
-    bpos = [xyz[system.border] + (j / (steps - 1)) * (target[system.border] - xyz[system.border])
-            for j in range(steps)]
+    first, last = xyz[system.border], target[system.border]
+    # the border's straight paths, bent off them in between as a controlling surface would
+    bend = 0.01 * np.sin(np.pi * weights)[:, None, None] * np.sin(3 * np.arctan2(first[:, 1], first[:, 0]))[None, :, None]
+    bpos = first[None] + weights[:, None, None] * (last - first)[None] + bend
+    lam_first = mean_value_data(xyz, tri, pattern, interior_mask)
+    lam_last = mean_value_data(target, tri, pattern, interior_mask)
 
-    plain = InteriorSteps(xyz, target, tri, interior_mask)  # never solved through .solve: not reordered
-    # the three ways step by step, interleaved, so that a busy machine slows them alike
-    fresh_time = reuse_time = krylov_time = 0.0
-    mid, _ = plain.matrix(0.5)
-    start = time.perf_counter()
-    mid_lu = splu(mid, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    krylov_time += time.perf_counter() - start
-    q = mid.shape[0]
-    precond = LinearOperator((q, q), matvec=mid_lu.solve)
-    previous = xyz[system.interior].copy()
-    iterations = 0
-    worst_reuse = worst_krylov = 0.0
-    for j in range(1, steps - 1):
-        s = j / (steps - 1)
+    def design_step(j: int) -> np.ndarray:
+        """The source design's rule: convex combinations with weights interpolated in time, a factorisation each."""
+        mat, rhs_b = _split_system(pattern.matrix(lam_first + weights[j] * (lam_last - lam_first)), interior,
+                                   system.border)
+        return sparse_solve(mat, rhs_b @ bpos[j])
+
+    ours_time = design_time = 0.0
+    for j in range(steps):  # interleaved, step by step; the design's first and last steps are its given shapes
         start = time.perf_counter()
-        mat, rhs_b = plain.matrix(s)
-        exact = sparse_solve(mat, rhs_b @ bpos[j])
-        fresh_time += time.perf_counter() - start
-
-        start = time.perf_counter()
-        got = system.solve(s, bpos[j])  # what tgsis does: the first step orders, the others reuse it
-        reuse_time += time.perf_counter() - start
-        worst_reuse = max(worst_reuse, float(np.abs(got - exact).max()))
-
-        start = time.perf_counter()
-        mat, rhs_b = plain.matrix(s)
-        rhs_j = rhs_b @ bpos[j]
-        x = np.empty_like(rhs_j)
-        for k in range(3):
-            count = [0]
-
-            def tick(_: object, count: list[int] = count) -> None:
-                count[0] += 1
-
-            x[:, k], info = bicgstab(mat, rhs_j[:, k], x0=previous[:, k], M=precond, rtol=1e-12, atol=0.0,
-                                     callback=tick)
-            assert info == 0, info
-            iterations += count[0]
-        previous = x
-        krylov_time += time.perf_counter() - start
-        worst_krylov = max(worst_krylov, float(np.abs(x - exact).max()))
-    results[f"m={steps}: SuperLU ordered afresh (MMD_AT_PLUS_A, diagonal pivots) every step"] = fresh_time
-    results[f"m={steps}: SuperLU, ordering of the first step reused (tgsis)"] = reuse_time
-    results[f"m={steps}: BiCGSTAB rtol 1e-12, warm start, preconditioned by one SuperLU at s=1/2"] = krylov_time
-    print(f"BiCGSTAB: {iterations} iterations over {steps - 2} steps x 3 coordinates; largest difference from "
-          f"fresh SuperLU {worst_krylov:.1e} (ordering reused: {worst_reuse:.1e})")
+        system.solve(weights[j:j + 1], bpos[j:j + 1])
+        ours_time += time.perf_counter() - start
+        if 0 < j < steps - 1:
+            start = time.perf_counter()
+            design_step(j)
+            design_time += time.perf_counter() - start
+    results[f"m={steps}: every step from the one factorisation (tgsis), solves only"] = ours_time
+    results[f"m={steps}: the design's rule, a fresh SuperLU (MMD_AT_PLUS_A) per intermediate step"] = design_time
+    lu = system._lu
+    assert lu is not None
+    columns = np.asfortranarray(np.random.default_rng(0).random((len(system.solved), 3 * steps)))
+    clock(f"SuperLU solve of {3 * steps} right-hand sides at once", lambda: lu.solve(columns), results)
+    clock(f"SuperLU solves of {3 * steps} right-hand sides three at a time (tgsis)",
+          lambda: [lu.solve(np.asfortranarray(columns[:, k:k + 3])) for k in range(0, 3 * steps, 3)], results)
 
     # end to end: the trajectories call (interior solved) and a compatible patch onto a 20k-vertex dome
     clock(f"vertex_trajectories(), m={steps}, interior solved", lambda: vertex_trajectories(

@@ -154,9 +154,10 @@ def test_an_attached_border_stays_on_its_wall_read_from_the_set_up_file(tmp_path
     setup = InterpolationSetup.load(tmp_path / "setup.json")              # the wall is read from beside the file
     result = interpolate(source, target, setup, 0.0, 1.0)
     assert np.abs(result.trajectories[:, west, 0]).max() <= 1e-9          # on the wall at every sample
-    # the interior is solved per step (not linear): some interior vertex leaves its straight line
+    # the wall is a plane holding the attached vertices' straight paths: nothing moves them off those, so the
+    # solved interior goes straight too (the design's convex combinations bent it away from them, issue 37)
     straight = result.trajectories[0] + 0.4 * (result.trajectories[-1] - result.trajectories[0])
-    assert np.abs(result.evolving.at(0.4).vertices - straight).max() > 1e-6  # type: ignore[union-attr]
+    assert np.abs(result.evolving.at(0.4).vertices - straight).max() <= 1e-9  # type: ignore[union-attr]
 
 
 def test_the_source_may_be_the_later_shape() -> None:

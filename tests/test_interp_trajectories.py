@@ -10,10 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tgsis.interpolation.parameterize import compatible_patch, mean_value_weights
+from tgsis.interpolation.parameterize import compatible_patch
 from tgsis.interpolation.projection import ControllingSurface, IntersectionCurve, ProjectionError
 from tgsis.interpolation.trajectories import (
-    InteriorSteps,
     TrajectoryError,
     border_trajectories,
     evolving_surface,
@@ -60,36 +59,6 @@ def test_linear_trajectories_without_attachments() -> None:
     assert np.array_equal(paths[0], source) and np.array_equal(paths[-1], target)
     assert np.allclose(paths[2], (source + target) / 2, atol=1e-15)
     assert np.array_equal(vertex_trajectories(source, target, triangles, 2), np.stack([source, target]))
-
-
-def test_interior_steps_are_convex_combinations_with_interpolated_weights() -> None:
-    source, triangles, _ = grid(9)
-    target = lifted(source)
-    m = 6
-    paths = vertex_trajectories(source, target, triangles, m, interior_method="solve")
-    assert np.array_equal(paths[0], source) and np.array_equal(paths[-1], target)
-    first, last = mean_value_weights(source, triangles), mean_value_weights(target, triangles)
-    border = np.r_[0:9, 72:81, 9:72:9, 17:72:9]
-    interior = np.setdiff1d(np.arange(81), border)
-    for j in range(1, m - 1):
-        s = j / (m - 1)
-        weights = first + s * (last - first)
-        assert np.abs((weights @ paths[j])[interior] - paths[j][interior]).max() < 1e-12
-        # border linear, interior not (the weights interpolate, the positions do not)
-        assert np.abs(paths[j][border] - (source + s * (target - source))[border]).max() < 1e-15
-    assert np.abs(paths[2] - (source + 0.4 * (target - source))).max() > 1e-3
-
-
-def test_the_pattern_is_built_once_and_only_values_change() -> None:
-    source, triangles, _ = grid(6)
-    target = lifted(source)
-    interior = np.ones(36, dtype=bool)
-    interior[[0, 1, 2, 3, 4, 5, 30, 31, 32, 33, 34, 35, 6, 12, 18, 24, 11, 17, 23, 29]] = False
-    system = InteriorSteps(source, target, triangles, interior)
-    a0, _ = system.matrix(0.0)
-    a1, _ = system.matrix(1.0)
-    assert np.array_equal(a0.indices, a1.indices) and np.array_equal(a0.indptr, a1.indptr)
-    assert not np.allclose(a0.data, a1.data)
 
 
 def test_attached_to_one_surface_stays_on_it() -> None:

@@ -11,7 +11,8 @@ graph algorithm is needed), no database:
   length border, mean value interior), point location in parameter meshes,
   compatible meshes refined to a tolerance;
 * :mod:`.trajectories`: vertex trajectories (linear, projected onto
-  controlling surfaces, interior by interpolated mean value weights) and the
+  controlling surfaces, interior solved from its differential coordinates
+  interpolated in time, one factorisation for all steps) and the
   model-3 :class:`~tgsis.temporal.EvolvingSurface` they make;
 * :mod:`.projection`: closest points on triangle meshes, controlling
   surfaces and their intersection curves.

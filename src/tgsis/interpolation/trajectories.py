@@ -8,15 +8,21 @@ Pure numpy/scipy; see the spec (``shared/spec/interpolation.md``, step 4,
   projected onto that surface, attached to two onto their intersection curve
   (the first and last samples are the given positions, which must lie on the
   surface or curve).
-* Interior vertices: at every intermediate step t = 2..m-1 each is the convex
-  combination of its neighbours with λ^t = λ^1 + s (λ^m - λ^1), s = (t-1)/(m-1),
-  where λ^1 and λ^m are the mean value weights of the first and last mesh; the
-  border at step t comes from the border trajectories; one sparse solve per
-  step. The matrix of every step has the same sparsity pattern, built once;
-  each step only fills its values and factorises afresh (SuperLU, the
-  ``MMD_AT_PLUS_A`` column ordering found at the first step and reused),
-  which measured faster than a warm-started BiCGSTAB preconditioned by one
-  factorisation (``bench/interp_solvers.py``).
+* Interior vertices (solved when anything is attached): their differential
+  coordinates δ = (I - Λ̄) x, the offsets of each vertex from the mean-value
+  combination of its neighbours, go linearly in time from the first mesh's
+  to the last's, and the border trajectories are the constraints. Λ̄ is the
+  mean of the first and last mesh's mean value weights, so one matrix
+  I - Λ̄_II serves every step: it is factorised once (SuperLU,
+  ``MMD_AT_PLUS_A``) and each step is a pair of triangular solves. Both
+  known shapes come out of the solve, an identity or a rigid translation is
+  exact at every step, and the interior leaves its straight path by at
+  most what the border is moved off its straight path (discrete maximum
+  principle: the weights are positive and sum to 1). The source design's
+  rule, a convex combination of the neighbours with weights interpolated in
+  time (its Eq. 4.34-4.36), is not used: a convex combination cannot hold a
+  non-planar vertex, so it flattened every curved surface between the known
+  instants (docs/interpolation.md).
 * :func:`evolving_surface` turns the trajectories into a
   :class:`tgsis.temporal.EvolvingSurface` with m evenly spaced instants.
 """
@@ -27,8 +33,9 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import csc_matrix, csr_matrix
-from scipy.sparse.linalg import splu
+from scipy.sparse import csc_matrix, csr_matrix, identity
+from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import SuperLU, splu
 
 from tgsis.errors import InvalidInputError
 from tgsis.interpolation._arrays import as_points, as_triangles, interior_mask
@@ -62,12 +69,30 @@ def _check_steps(steps: int) -> int:
     return int(steps)
 
 
-def _linear(start: FloatArray, end: FloatArray, steps: int) -> FloatArray:
-    """(steps, p, 3): w_j = v + (j-1)/(m-1) (u - v), exactly v and u at the ends."""
-    s = np.arange(steps, dtype=np.float64) / (steps - 1)
-    result: FloatArray = start[None] + s[:, None, None] * (end - start)[None]
-    result[0], result[-1] = start, end
+def _weights(steps: int) -> FloatArray:
+    """(steps,): the step weights s_j = j / (m - 1), 0 and 1 exactly at the ends."""
+    return np.arange(steps, dtype=np.float64) / (steps - 1)
+
+
+def _lerp(start: FloatArray, end: FloatArray, s: FloatArray) -> FloatArray:
+    """(k, p, 3): v + s (u - v) for every weight s of ``s`` (k,), written from the nearer end.
+
+    From v while s <= 1/2 and as u - (1 - s) (u - v) after, so that s = 0
+    gives v and s = 1 gives u bit for bit (no end is reset afterwards), the
+    same difference u - v moves every vertex (a translation stays rigid to
+    rounding), and swapping v and u with s and 1 - s gives the same numbers.
+    """
+    delta = end - start
+    early = s <= 0.5
+    result = np.empty((len(s), *start.shape), dtype=np.float64)
+    result[early] = start[None] + s[early, None, None] * delta[None]
+    result[~early] = end[None] - (1.0 - s[~early])[:, None, None] * delta[None]
     return result
+
+
+def _linear(start: FloatArray, end: FloatArray, steps: int) -> FloatArray:
+    """(steps, p, 3): w_j = v + (j-1)/(m-1) (u - v), v and u exactly at the ends (see :func:`_lerp`)."""
+    return _lerp(start, end, _weights(steps))
 
 
 def _constraint(surfaces: Sequence[ControllingSurface]) -> tuple[
@@ -157,10 +182,32 @@ def border_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, vertices: 
 
 
 class InteriorSteps:
-    """The interior solve of every trajectory step, with the sparsity pattern built once.
+    """The interior solve of every trajectory step: one matrix and one factorisation for the topology.
 
-    At weight s the interior positions x_I solve (I - Λ_II(s)) x_I = Λ_IB(s) x_B
-    with Λ(s) = Λ^1 + s (Λ^m - Λ^1).
+    With Λ̄ = (Λ^1 + Λ^m) / 2, the mean of the first and last mesh's mean
+    value weights (positive, rows summing to 1), the differential
+    coordinates of a shape x are δ = (I - Λ̄) x on the interior rows. At
+    weight s the interior positions x_I solve
+
+        (I - Λ̄_II) x_I = (1 - s) δ^1_I + s δ^m_I + Λ̄_IB x_B(s),
+
+    the border positions x_B(s) given. Written around the straight paths
+    ℓ(s) = x^1 + s (x^m - x^1) (which satisfy it with ℓ_B on the border),
+    this is x_I = ℓ_I(s) + c_I with
+
+        (I - Λ̄_II) c_I = Λ̄_IB (x_B(s) - ℓ_B(s)):
+
+    the interior leaves its straight path only as far as the border was
+    moved off its own (by the controlling surfaces), each coordinate of c_I
+    a convex combination of the border's, so never farther. Solving this
+    form keeps rounding at the size of the border's departure: exact
+    (bit for bit) where the border follows its straight paths, as at the
+    two ends. The weights are symmetric in time: swapping the first and
+    last mesh gives the same trajectories, reversed.
+
+    Interior vertices of a part of the mesh that reaches no border vertex
+    (a closed component) have nothing to follow but their straight paths,
+    and keep them.
 
     Parameters
     ----------
@@ -170,76 +217,90 @@ class InteriorSteps:
     interior : (n,) ndarray of bool
         True for interior vertices.
 
+    Attributes
+    ----------
+    interior, border : ndarray of int64
+        The interior vertices (the rows of :meth:`solve`'s result) and the
+        border vertices (the columns of its input), ascending.
+    solved : ndarray of int64
+        Positions in ``interior`` of the vertices the solve moves (those
+        whose part of the mesh reaches the border).
+    matrix : (r, r) scipy.sparse.csc_matrix
+        I - Λ̄ on the solved vertices, r = len(solved).
+    to_border : (r, b) scipy.sparse.csr_matrix
+        Λ̄ from the solved vertices to the border vertices.
+    factorizations : int
+        Sparse factorisations done: one, at construction (none when no
+        interior vertex reaches the border).
+
     Raises
     ------
     ParameterizationError
         Degenerate triangles at interior vertices in either mesh.
+    TrajectoryError
+        The matrix cannot be factorised.
     """
 
     def __init__(self, first: FloatArray, last: FloatArray, triangles: IntArray, interior: BoolArray) -> None:
         n = len(first)
         pattern = WeightPattern.of(triangles, n)
-        self.lam_first = mean_value_data(first, triangles, pattern, interior)
-        self.lam_last = mean_value_data(last, triangles, pattern, interior)
+        lam = 0.5 * (mean_value_data(first, triangles, pattern, interior)
+                     + mean_value_data(last, triangles, pattern, interior))
         self.interior = np.flatnonzero(interior).astype(np.int64)
         self.border = np.flatnonzero(~interior).astype(np.int64)
+        self._first, self._last = first[self.interior], last[self.interior]
+        self._border_first, self._border_last = first[self.border], last[self.border]
         local = np.full(n, -1, dtype=np.int64)
         local[self.interior] = np.arange(len(self.interior))
         local[self.border] = np.arange(len(self.border))
         row_in = interior[pattern.rows]
         col_in = interior[pattern.indices]
-        q = len(self.interior)
-        # A = I - Λ_II: the diagonal, then the interior-interior non-zeros
-        self.ii = np.flatnonzero(row_in & col_in)
-        self.a_rows = np.concatenate([np.arange(q), local[pattern.rows[self.ii]]])
-        self.a_cols = np.concatenate([np.arange(q), local[pattern.indices[self.ii]]])
-        self.q = q
-        self.permutation: IntArray | None = None  # symmetric ordering, found by the first solve
-        self._structure(np.arange(q))
-        # right-hand side Λ_IB x_B
-        self.ib = np.flatnonzero(row_in & ~col_in)
-        self.b_rows = local[pattern.rows[self.ib]]
-        self.b_cols = local[pattern.indices[self.ib]]
+        q, b = len(self.interior), len(self.border)
+        ii = np.flatnonzero(row_in & col_in)
+        ib = np.flatnonzero(row_in & ~col_in)
+        coupling = csr_matrix((lam[ii], (local[pattern.rows[ii]], local[pattern.indices[ii]])), shape=(q, q))
+        self.to_border = csr_matrix((lam[ib], (local[pattern.rows[ib]], local[pattern.indices[ib]])), shape=(q, b))
+        # interior vertices of a component with no border neighbour: the system is singular there
+        _, component = connected_components(coupling, directed=False)
+        reached = np.zeros(int(component.max(initial=-1)) + 1, dtype=bool)
+        reached[component[np.diff(self.to_border.indptr) > 0]] = True
+        self.solved = np.flatnonzero(reached[component]).astype(np.int64)
+        system = identity(q, format="csr") - coupling
+        if len(self.solved) < q:
+            system = system[self.solved][:, self.solved]
+            self.to_border = self.to_border[self.solved]
+        self.matrix = csc_matrix(system)
+        self.factorizations = 0
+        self._lu: SuperLU | None = None
+        if len(self.solved):
+            try:
+                self._lu = splu(self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                options={"SymmetricMode": True})
+            except RuntimeError as exc:
+                raise TrajectoryError(f"the interior system of the trajectories cannot be solved: {exc}") from exc
+            self.factorizations = 1
 
-    def _structure(self, permutation: IntArray) -> None:
-        """CSC structure of P A P^T (row/column i of it is row/column ``permutation[i]`` of A), found once."""
-        inverse = np.empty_like(permutation)
-        inverse[permutation] = np.arange(len(permutation))
-        order = csc_matrix((np.arange(1, len(self.a_rows) + 1, dtype=np.float64),
-                            (inverse[self.a_rows], inverse[self.a_cols])), shape=(self.q, self.q))
-        self.a_order = order.data.astype(np.int64) - 1
-        self.a_indices, self.a_indptr = order.indices, order.indptr
+    def solve(self, weights: npt.ArrayLike, border_positions: npt.ArrayLike) -> FloatArray:
+        """(k, q, 3) interior positions at the step weights (k,), given the border's (k, b, 3).
 
-    def matrix(self, s: float) -> tuple[csc_matrix, csr_matrix]:
-        """A = I - Λ_II(s) (q, q), symmetrically permuted once :meth:`solve` has ordered it, and Λ_IB(s) (q, b)."""
-        lam = self.lam_first + s * (self.lam_last - self.lam_first)
-        values = np.concatenate([np.ones(self.q), -lam[self.ii]])[self.a_order]
-        a = csc_matrix((values, self.a_indices, self.a_indptr), shape=(self.q, self.q))
-        b = csr_matrix((lam[self.ib], (self.b_rows, self.b_cols)), shape=(self.q, len(self.border)))
-        return a, b
-
-    def solve(self, s: float, border_positions: FloatArray) -> FloatArray:
-        """(q, 3) interior positions at weight s, given the border's (b, 3) (in ``self.border`` order).
-
-        Every step factorises afresh (SuperLU, diagonal pivots); the first
-        orders the columns (``MMD_AT_PLUS_A``) and the later ones reuse that
-        symmetric permutation, the pattern being the same (28 % faster at
-        100k vertices than ordering every step, see ``bench/interp_solvers.py``).
+        The border positions are in ``self.border`` order; the result is in
+        ``self.interior`` order. Each step is one triangular solve pair for
+        its three coordinates with the factorisation made at construction
+        (SuperLU solves many right-hand sides at once 2-4 times slower per
+        column than three at a time, at 100k vertices).
         """
-        a, b = self.matrix(s)
-        rhs = b @ border_positions
-        try:
-            if self.permutation is None:
-                lu = splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-                self.permutation = np.argsort(lu.perm_c).astype(np.int64)
-                self._structure(self.permutation)
-                result: FloatArray = lu.solve(rhs)
-                return result
-            lu = splu(a, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-        except RuntimeError as exc:
-            raise TrajectoryError(f"the interior system at step weight {s:g} cannot be solved: {exc}") from exc
-        result = np.empty_like(rhs)
-        result[self.permutation] = lu.solve(rhs[self.permutation])
+        s = np.ascontiguousarray(weights, dtype=np.float64).ravel()
+        placed = np.ascontiguousarray(border_positions, dtype=np.float64)
+        if placed.shape != (len(s), len(self.border), 3):
+            raise TrajectoryError(f"border positions must have shape {(len(s), len(self.border), 3)}, "
+                                  f"got {placed.shape}")
+        result = _lerp(self._first, self._last, s)
+        if self._lu is None:
+            return result
+        straight = _lerp(self._border_first, self._border_last, s)
+        for j in range(len(s)):
+            departure = placed[j] - straight[j]                         # (b, 3): off the straight paths
+            result[j, self.solved] += self._lu.solve(np.asfortranarray(self.to_border @ departure))
         return result
 
 
@@ -268,10 +329,12 @@ def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles:
     tolerance : float, optional
         See :func:`border_trajectories`.
     interior_method : {"auto", "solve", "linear"}
-        ``"solve"``: interior vertices from the interpolated mean value
-        weights at every intermediate step; ``"linear"``: linear
-        trajectories; ``"auto"`` (the spec's rule): linear when there is no
-        attachment at all, else solved.
+        ``"solve"``: interior vertices solved at every step from their
+        differential coordinates, interpolated linearly in time, with the
+        border trajectories as constraints (see :class:`InteriorSteps`);
+        ``"linear"``: linear trajectories; ``"auto"`` (the spec's rule):
+        linear when there is no attachment at all, else solved. Without
+        attachments both give the same trajectories, bit for bit.
 
     Returns
     -------
@@ -296,17 +359,17 @@ def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles:
         for vertex, surfaces in attachments.items():
             if len(surfaces) == 2 and int(vertex) not in allowed:
                 raise TrajectoryError(f"vertex {vertex} is attached to two surfaces but is not a control vertex")
-    solve = interior_method == "solve" or (interior_method == "auto" and bool(attachments))
     if interior_method not in ("auto", "solve", "linear"):
         raise TrajectoryError(f"interior must be 'auto', 'solve' or 'linear', got {interior_method!r}")
+    solve = interior_method == "solve" or (interior_method == "auto" and bool(attachments))
     result = _linear(first, last, m)
     border = np.flatnonzero(~interior)
     if attachments:
         result[:, border] = border_trajectories(first, last, border, m, attachments, tolerance=tolerance)
-    if solve and m > 2 and np.any(interior):
+    if solve and np.any(interior):
+        # every step, the two ends included, comes out of the one factorisation
         system = InteriorSteps(first, last, tri, interior)
-        for j in range(1, m - 1):
-            result[j, system.interior] = system.solve(j / (m - 1), result[j, system.border])
+        result[:, system.interior] = system.solve(_weights(m), result[:, system.border])
     return result
 
 
