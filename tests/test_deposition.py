@@ -215,3 +215,27 @@ def test_the_deposition_api_is_public() -> None:
     names = ["deposit", "Deposition", "drape", "keep_above", "Stacking", "Contact"]
     assert [n for n in names if n not in tgsis.__all__] == []
     assert tgsis.deposit is deposit and tgsis.keep_above is keep_above
+
+
+def test_keep_above_adds_instants_where_a_vertex_would_dip_between_two() -> None:
+    """A vertex sliding across a ridge is on it at both instants but would cut through it on the straight way."""
+    ridge = grid(41, lambda x, y: 100.0 * np.sin(np.pi * x / SIDE))
+    base = grid(3, x0=0.0, x1=10.0)
+    west, east = base.vertices.copy(), base.vertices.copy()
+    east[:, 0] += SIDE - 10.0
+    west[:, 2], east[:, 2] = -1.0, -1.0
+    younger = _evolving([0.0, 1.0], [west, east], base, "sliding")
+    stacking = keep_above(younger, [ridge], between=0.01)
+    assert 0.0 < stacking.residual <= 0.01 or stacking.residual <= 0.0
+    assert len(stacking.surface.periods[0].times) > 8
+    worst = -np.inf
+    for t in np.linspace(0.0, 1.0, 101):
+        shape = stacking.surface.at(float(t))
+        assert shape is not None
+        floor, _ = heights_below(shape.vertices, [ridge])
+        worst = max(worst, float((floor - shape.vertices[:, 2]).max()))
+    assert worst <= 0.02                                                   # not 100 m through the ridge
+    unrefined = keep_above(younger, [ridge], max_halvings=0)
+    assert unrefined.residual > 50.0 and len(unrefined.surface.periods[0].times) == 2
+    with pytest.raises(InvalidInputError, match="between instants"):
+        keep_above(younger, [ridge], between=-1.0)

@@ -57,23 +57,41 @@ def _xy(points: npt.ArrayLike) -> FloatArray:
     return np.ascontiguousarray(array[:, :2])
 
 
-def _surface_heights(surface: Surface, xy: FloatArray) -> FloatArray:
-    """(p,) height of ``surface`` straight above or below each point, NaN where its (x, y) projection does not reach."""
-    # the projection of a steep triangle is a sliver: leave it out rather than divide by its area
-    corners = surface.vertices[surface.cells][:, :, :2]
-    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    area = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    extent = float(np.ptp(surface.vertices[:, :2], axis=0).max()) if surface.n_vertices else 0.0
-    keep = area > 1e-12 * max(extent, 1.0) ** 2
-    heights = np.full(len(xy), np.nan)
-    if not keep.any() or len(xy) == 0:
+class _HeightField:
+    """A surface's height over (x, y): its triangles located once, then any number of points."""
+
+    def __init__(self, surface: Surface) -> None:
+        # the projection of a steep triangle is a sliver: leave it out rather than divide by its area
+        corners = surface.vertices[surface.cells][:, :, :2]
+        e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+        area = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        extent = float(np.ptp(surface.vertices[:, :2], axis=0).max()) if surface.n_vertices else 0.0
+        self.z = surface.vertices[:, 2]
+        self.triangles = surface.cells[area > 1e-12 * max(extent, 1.0) ** 2]
+        self.locator = PointLocator(surface.vertices[:, :2], self.triangles) if len(self.triangles) else None
+
+    def heights(self, xy: FloatArray) -> FloatArray:
+        """(p,) height straight above or below each point, NaN where the surface's projection does not reach."""
+        heights = np.full(len(xy), np.nan)
+        if self.locator is None or len(xy) == 0:
+            return heights
+        triangle, bary, _ = self.locator.locate(xy)
+        found = triangle >= 0
+        heights[found] = (bary[found] * self.z[self.triangles[triangle[found]]]).sum(axis=1)
         return heights
-    triangles = surface.cells[keep]
-    triangle, bary, _ = PointLocator(surface.vertices[:, :2], triangles).locate(xy)
-    found = triangle >= 0
-    z = surface.vertices[:, 2][triangles[triangle[found]]]           # (q, 3)
-    heights[found] = (bary[found] * z).sum(axis=1)
-    return heights
+
+
+def _highest(xy: FloatArray, fields: Sequence[_HeightField | None]) -> tuple[FloatArray, IntArray]:
+    best = np.full(len(xy), -np.inf)
+    which = np.full(len(xy), -1, dtype=np.int64)
+    for index, field in enumerate(fields):
+        if field is None:
+            continue
+        z = field.heights(xy)
+        higher = np.isfinite(z) & (z > best)
+        best[higher] = z[higher]
+        which[higher] = index
+    return np.where(which >= 0, best, np.nan), which
 
 
 def heights_below(points: npt.ArrayLike, surfaces: Sequence[Surface | None]) -> tuple[FloatArray, IntArray]:
@@ -95,17 +113,7 @@ def heights_below(points: npt.ArrayLike, surfaces: Sequence[Surface | None]) -> 
     which : (p,) ndarray of int64
         Index in ``surfaces`` of that surface; -1 where none reaches.
     """
-    xy = _xy(points)
-    best = np.full(len(xy), -np.inf)
-    which = np.full(len(xy), -1, dtype=np.int64)
-    for index, surface in enumerate(surfaces):
-        if surface is None:
-            continue
-        z = _surface_heights(surface, xy)
-        higher = np.isfinite(z) & (z > best)
-        best[higher] = z[higher]
-        which[higher] = index
-    return np.where(which >= 0, best, np.nan), which
+    return _highest(_xy(points), [None if s is None else _HeightField(s) for s in surfaces])
 
 
 def drape(top: Surface, older: Sequence[Surface], *, name: str | None = None) -> Surface:
@@ -300,10 +308,16 @@ class Stacking:
         The younger surface, never below an older one at any of its geometry instants.
     contacts : tuple of Contact
         One per topology period of ``surface``.
+    residual : float
+        The most a vertex of ``surface`` lies below an older surface at a
+        quarter, half or three quarters of the way between two consecutive
+        geometry instants (≤ 0: never; at most the ``between`` asked for
+        unless the refinement stopped at its limit).
     """
 
     surface: EvolvingSurface
     contacts: tuple[Contact, ...]
+    residual: float
 
     @property
     def max_raise(self) -> float:
@@ -328,43 +342,105 @@ def _older_times(older: Sequence[EvolvingSurface | Surface]) -> FloatArray:
     return np.unique(np.concatenate(times)) if times else np.zeros(0)
 
 
-def _resampled(period: TopologyPeriod, extra: FloatArray) -> TopologyPeriod:
-    """The period with geometry instants added strictly inside it; its shapes do not change (linear in time)."""
-    inside = extra[(extra > period.times[0]) & (extra < period.times[-1])]
-    times = np.union1d(period.times, inside)
-    if len(times) == len(period.times):
-        return period
-    j1 = np.searchsorted(period.times, times, side="left")
-    j1 = np.minimum(j1, len(period.times) - 1)
-    exact = period.times[j1] == times
-    j0 = np.where(exact, j1, j1 - 1)
-    span = np.where(exact, 1.0, period.times[j1] - period.times[np.maximum(j0, 0)])
-    w = np.where(exact, 0.0, (times - period.times[np.maximum(j0, 0)]) / span)
+class _Samples:
+    """A topology period's geometry instants as growable float arrays: times, positions, per-instant values."""
 
-    def mix(values: npt.NDArray[np.generic]) -> FloatArray:
-        a, b = values[j0].astype(np.float64), values[j1].astype(np.float64)
-        shape = (len(times),) + (1,) * (a.ndim - 1)
-        return np.asarray(a + w.reshape(shape) * (b - a), dtype=np.float64)
+    def __init__(self, period: TopologyPeriod) -> None:
+        self.times = period.times.copy()
+        self.positions = period.positions.copy()
+        self.series = {("vertex", k): np.asarray(v, dtype=np.float64) for k, v in period.vertex_properties.items()}
+        self.series.update({("cell", k): np.asarray(v, dtype=np.float64) for k, v in period.cell_properties.items()})
+        self.series.update({("feature", k): np.asarray(v, dtype=np.float64) for k, v in period.properties.items()})
 
-    return TopologyPeriod(times, period.triangles, mix(period.positions),
-                          vertex_properties={k: mix(v) for k, v in period.vertex_properties.items()},
-                          cell_properties={k: mix(v) for k, v in period.cell_properties.items()},
-                          properties={k: mix(v) for k, v in period.properties.items()})
+    def insert(self, times: FloatArray) -> FloatArray:
+        """Add instants strictly inside the period, linear between the two around each; return those added."""
+        new = np.setdiff1d(times[(times > self.times[0]) & (times < self.times[-1])], self.times)
+        if len(new) == 0:
+            return new
+        j1 = np.searchsorted(self.times, new)
+        j0 = j1 - 1
+        w = (new - self.times[j0]) / (self.times[j1] - self.times[j0])
+
+        def mix(values: FloatArray) -> FloatArray:
+            shape = (len(new),) + (1,) * (values.ndim - 1)
+            return np.asarray(values[j0] + w.reshape(shape) * (values[j1] - values[j0]), dtype=np.float64)
+
+        order = np.argsort(np.concatenate([self.times, new]), kind="stable")
+        self.times = np.concatenate([self.times, new])[order]
+        self.positions = np.concatenate([self.positions, mix(self.positions)])[order]
+        self.series = {k: np.concatenate([v, mix(v)])[order] for k, v in self.series.items()}
+        return new
+
+    def period(self, triangles: IntArray) -> TopologyPeriod:
+        def kind(name: str) -> dict[str, FloatArray]:
+            return {k: v for (what, k), v in self.series.items() if what == name}
+
+        return TopologyPeriod(self.times, triangles, self.positions, vertex_properties=kind("vertex"),
+                              cell_properties=kind("cell"), properties=kind("feature"))
+
+
+class _Floors:
+    """The older surfaces' height fields at any time: a constant surface's built once, an evolving one's per time."""
+
+    def __init__(self, older: Sequence[EvolvingSurface | Surface]) -> None:
+        self.older = list(older)
+        self.constant = {i: _HeightField(s) for i, s in enumerate(self.older) if isinstance(s, Surface)}
+        self.cache: dict[float, list[_HeightField | None]] = {}
+
+    def _fields(self, t: float) -> list[_HeightField | None]:
+        fields = self.cache.get(t)
+        if fields is None:
+            fields = []
+            for i, s in enumerate(self.older):
+                shape = None if isinstance(s, Surface) else s.at(t)
+                fields.append(self.constant[i] if i in self.constant else None if shape is None
+                              else _HeightField(shape))
+            if len(self.cache) > 64:
+                self.cache.clear()
+            self.cache[t] = fields
+        return fields
+
+    def at(self, points: FloatArray, t: float) -> tuple[FloatArray, IntArray]:
+        """(n,) height of the highest older surface under each point at ``t``, and its index (-1: none)."""
+        return _highest(np.ascontiguousarray(points[:, :2]), self._fields(t))
+
+    def highest_dip(self, shapes: FloatArray, times: FloatArray) -> FloatArray:
+        """(k,) how far the lowest vertex of each of the k shapes (k, n, 3) at ``times`` lies below the older surfaces.
+
+        The constant older surfaces take all the points at once; each evolving one is taken at each time.
+        """
+        k, n = shapes.shape[:2]
+        best = np.full((k, n), -np.inf)
+        flat = np.ascontiguousarray(shapes[..., :2].reshape(-1, 2))
+        for field in self.constant.values():
+            z = field.heights(flat).reshape(k, n)
+            best = np.where(np.isfinite(z) & (z > best), z, best)
+        for j, t in enumerate(times):
+            for field in self._fields(float(t)):
+                if field is not None and all(field is not c for c in self.constant.values()):
+                    z = field.heights(np.ascontiguousarray(shapes[j, :, :2]))
+                    best[j] = np.where(np.isfinite(z) & (z > best[j]), z, best[j])
+        reached = np.isfinite(best)
+        return np.where(reached, best - shapes[..., 2], -np.inf).max(axis=1, initial=-np.inf)
 
 
 def keep_above(younger: EvolvingSurface, older: Sequence[EvolvingSurface | Surface], *,
-               tolerance: float = 1e-6) -> Stacking:
+               tolerance: float = 1e-6, between: float | None = None, max_halvings: int = 10) -> Stacking:
     """Keep a younger surface from passing below older ones: put it on them where it would, and say where.
 
     At every geometry instant of the younger surface, each vertex that lies
-    below the highest older surface straight beneath it (by more than
-    nothing) is raised onto that surface. The geometry instants of the older
-    surfaces inside each of the younger's periods are added to it first (its
-    shapes do not change: they are linear in time between instants), so the
-    rule holds at every instant where either surface has a shape. Between
-    instants the vertices and the older surfaces move linearly, so a
-    residual crossing there is of second order in the step (add steps to
-    the interpolation to shrink it).
+    below the highest older surface straight beneath it is raised onto that
+    surface. The geometry instants of the older surfaces inside each of the
+    younger's periods are added to it first (its shapes do not change: they
+    are linear in time between instants), so the rule holds exactly at
+    every instant where either surface has a shape. Between instants the
+    vertices move on straight lines while the older surface under them
+    curves, so a vertex can dip below it there; wherever it would by more
+    than ``between`` a quarter, half or three quarters of the way between
+    two instants, the halfway instant is added (and raised), and so on, at
+    most ``max_halvings`` times. (Sampled, so not a proof: a dip narrower
+    than a quarter of the finest interval can remain; ``residual`` says what
+    the samples found.)
 
     Parameters
     ----------
@@ -377,46 +453,80 @@ def keep_above(younger: EvolvingSurface, older: Sequence[EvolvingSurface | Surfa
     tolerance : float
         A vertex this close to an older surface (after raising) lies on it:
         part of the contact.
+    between : float, optional
+        Largest dip allowed between two instants (at the samples); default 1e-6
+        times the younger surface's largest horizontal extent.
+    max_halvings : int
+        How many times an interval between instants may be halved.
 
     Returns
     -------
     Stacking
-        The younger surface raised where it had to be, and one
-        :class:`Contact` per topology period: the erosion/onlap contact.
-        Consecutive periods that shared their shape at their common instant
-        still do (the same rule is applied to the same shape).
+        The younger surface raised where it had to be, one :class:`Contact`
+        per topology period (the erosion/onlap contact), and the residual
+        dip between instants. Consecutive periods that shared their shape at
+        their common instant still do (the same rule applied to the same shape).
 
     Raises
     ------
     InvalidInputError
-        A negative or non-finite tolerance.
+        A negative or non-finite tolerance or ``between``, a negative ``max_halvings``.
     """
     if not (np.isfinite(tolerance) and tolerance >= 0):
         raise InvalidInputError(f"the contact tolerance must be a finite length >= 0, got {tolerance!r}")
+    if between is None:
+        extent = max(float(np.ptp(p.positions[..., :2].reshape(-1, 2), axis=0).max()) for p in younger.periods)
+        between = 1e-6 * max(extent, 1.0)
+    if not (np.isfinite(between) and between >= 0):
+        raise InvalidInputError(f"the dip allowed between instants must be a finite length >= 0, got {between!r}")
+    if not (isinstance(max_halvings, int) and max_halvings >= 0):
+        raise InvalidInputError(f"max_halvings must be an integer >= 0, got {max_halvings!r}")
     extra = _older_times(older)
+    floors = _Floors(older)
     periods: list[TopologyPeriod] = []
     contacts: list[Contact] = []
+    residual = -np.inf
     for index, period in enumerate(younger.periods):
-        sampled = _resampled(period, extra)
-        positions = sampled.positions.copy()
-        g, n = positions.shape[:2]
+        samples = _Samples(period)
+        samples.insert(extra)
+        raised_at: dict[float, FloatArray] = {}
+
+        def raise_instants(times: FloatArray, samples: _Samples = samples,
+                           raised_at: dict[float, FloatArray] = raised_at) -> None:
+            for t in times:
+                j = int(np.searchsorted(samples.times, t))
+                floor, which = floors.at(samples.positions[j], float(t))
+                below = np.zeros(len(floor), dtype=bool)
+                below[which >= 0] = samples.positions[j, which >= 0, 2] < floor[which >= 0]
+                lift = np.zeros(len(floor))
+                lift[below] = floor[below] - samples.positions[j, below, 2]
+                samples.positions[j, below, 2] = floor[below]
+                raised_at[float(t)] = lift
+
+        raise_instants(samples.times)
+        dip = -np.inf
+        for halving in range(max_halvings + 1):
+            # the dip at a quarter, half and three quarters of each interval: a steep older surface (a
+            # pinch-out) can hide one near an end from the middle alone
+            dips = np.full(len(samples.times) - 1, -np.inf)
+            for w in (0.25, 0.5, 0.75):
+                times = samples.times[:-1] + w * np.diff(samples.times)
+                shapes = samples.positions[:-1] + w * (samples.positions[1:] - samples.positions[:-1])
+                dips = np.maximum(dips, floors.highest_dip(shapes, times))
+            dip = float(dips.max(initial=-np.inf))
+            if dip <= between or halving == max_halvings:
+                break
+            bad = dips > between
+            raise_instants(samples.insert(((samples.times[:-1] + samples.times[1:]) / 2)[bad]))
+        residual = max(residual, dip)
+        g, n = samples.positions.shape[:2]
         lies_on = np.full((g, n), -1, dtype=np.int64)
-        raised = np.zeros((g, n))
-        for j, t in enumerate(sampled.times):
-            shapes = [s.at(float(t)) if isinstance(s, EvolvingSurface) else s for s in older]
-            floor, which = heights_below(positions[j], shapes)
-            under = which >= 0
-            below = np.zeros(n, dtype=bool)
-            below[under] = positions[j, under, 2] < floor[under]
-            raised[j, below] = floor[below] - positions[j, below, 2]
-            positions[j, below, 2] = floor[below]
-            touching = np.zeros(n, dtype=bool)
-            touching[under] = positions[j, under, 2] - floor[under] <= tolerance
+        raised = np.stack([raised_at[float(t)] for t in samples.times])
+        for j, t in enumerate(samples.times):
+            floor, which = floors.at(samples.positions[j], float(t))
+            touching = (which >= 0) & (samples.positions[j, :, 2] - np.where(which >= 0, floor, 0.0) <= tolerance)
             lies_on[j, touching] = which[touching]
-        periods.append(TopologyPeriod(sampled.times, sampled.triangles, positions,
-                                      vertex_properties=dict(sampled.vertex_properties),
-                                      cell_properties=dict(sampled.cell_properties),
-                                      properties=dict(sampled.properties)))
-        contacts.append(Contact(index, sampled.times.copy(), lies_on, raised))
+        periods.append(samples.period(period.triangles))
+        contacts.append(Contact(index, samples.times.copy(), lies_on, raised))
     surface = EvolvingSurface(periods, alive=younger.alive, name=younger.name, color=younger.color)
-    return Stacking(surface, tuple(contacts))
+    return Stacking(surface, tuple(contacts), float(residual))
