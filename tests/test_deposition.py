@@ -47,9 +47,9 @@ def test_heights_below_takes_the_highest_surface_and_says_which() -> None:
     low, high = grid(5, lambda x, y: 0.1 * x), grid(5, lambda x, y: 0.1 * x + 10.0, 0.0, 500.0)
     points = np.array([[100.0, 100.0], [700.0, 300.0], [1500.0, 10.0]])
     z, which = heights_below(points, [low, None, high])
-    assert z[0] == pytest.approx(20.0) and which[0] == 2         # both reach it: the higher one
-    assert z[1] == pytest.approx(70.0) and which[1] == 0         # only the lower one reaches it
-    assert np.isnan(z[2]) and which[2] == -1                     # none does
+    assert z[0] == pytest.approx(20.0) and which[0] == 2  # both reach it: the higher one
+    assert z[1] == pytest.approx(70.0) and which[1] == 0  # only the lower one reaches it
+    assert np.isnan(z[2]) and which[2] == -1  # none does
 
 
 def test_heights_below_skips_a_vertical_triangle() -> None:
@@ -87,27 +87,27 @@ def test_a_deposited_unit_starts_on_the_curved_surface_beneath_and_thickens() ->
     result = deposit(top, beneath, setup, 1.0, 2.0, alive=True)
     unit = result.evolving
     assert (unit.start, unit.end, unit.name, unit.alive) == (1.0, 2.0, "unit", True)
-    assert unit.at(0.5) is None                                       # nothing before its deposition
+    assert unit.at(0.5) is None  # nothing before its deposition
     first = unit.at(1.0)
     assert first is not None
     under, which = heights_below(first.vertices, [beneath])
     assert (which == 0).all()
-    np.testing.assert_allclose(first.vertices[:, 2], under, atol=1e-9)     # on the surface beneath, exactly
-    assert result.settled < 1e-6                                          # the compatible target was on it already
+    np.testing.assert_allclose(first.vertices[:, 2], under, atol=1e-9)  # on the surface beneath, exactly
+    assert result.settled < 1e-6  # the compatible target was on it already
     last = unit.at(2.0)
     assert last is not None
-    np.testing.assert_array_equal(last.vertices, top.vertices)            # its top at t2
+    np.testing.assert_array_equal(last.vertices, top.vertices)  # its top at t2
     means = []
     for t in np.linspace(1.0, 2.0, 21):
         shape = unit.at(float(t))
         assert shape is not None
         floor, _ = heights_below(shape.vertices, [beneath])
         thickness = shape.vertices[:, 2] - floor
-        assert thickness.min() > -1.0, t                                  # within the floor's chord error
+        assert thickness.min() > -1.0, t  # within the floor's chord error
         means.append(float(thickness.mean()))
     assert means[0] == pytest.approx(0.0, abs=1e-9)
-    assert all(b > a for a, b in zip(means, means[1:]))                   # it thickens
-    assert means[10] == pytest.approx(means[-1] / 2, rel=0.05)            # linearly
+    assert all(b > a for a, b in zip(means, means[1:]))  # it thickens
+    assert means[10] == pytest.approx(means[-1] / 2, rel=0.05)  # linearly
     assert result.interpolation.target.n_vertices == first.n_vertices
 
 
@@ -121,7 +121,7 @@ def test_a_unit_deposited_on_several_older_surfaces_starts_on_the_highest() -> N
     assert first is not None
     floor, which = heights_below(first.vertices, [basement, older])
     np.testing.assert_allclose(first.vertices[:, 2], floor, atol=1e-9)
-    assert set(which.tolist()) == {0, 1}                                  # partly on each
+    assert set(which.tolist()) == {0, 1}  # partly on each
     with pytest.raises(InvalidInputError, match="target controls must be the source controls"):
         deposit(top, [basement], InterpolationSetup(corners(11), (1, 9, 119, 111)), 0.0, 3.0)
 
@@ -139,12 +139,12 @@ def _evolving(times: list[float], shapes: list[np.ndarray], surface: Surface, na
 
 def test_keep_above_raises_what_dips_below_and_reports_the_contact() -> None:
     base = grid(11)
-    older = EvolvingSurface.constant(grid(21, lambda x, y: 0.01 * x), 0.0, 2.0, name="older")   # other vertices
+    older = EvolvingSurface.constant(grid(21, lambda x, y: 0.01 * x), 0.0, 2.0, name="older")  # other vertices
     start = base.vertices.copy()
     start[:, 2] = 0.01 * start[:, 0] + 5.0
     end = start.copy()
     east = base.vertices[:, 0] > 500
-    end[east, 2] -= 20.0                                                  # 15 m below the older surface at t = 2
+    end[east, 2] -= 20.0  # 15 m below the older surface at t = 2
     younger = _evolving([0.0, 2.0], [start, end], base, "younger")
     stacking = keep_above(younger, [older])
     (contact,) = stacking.contacts
@@ -157,7 +157,7 @@ def test_keep_above_raises_what_dips_below_and_reports_the_contact() -> None:
     kept = stacking.surface.at(2.0)
     assert kept is not None
     np.testing.assert_allclose(kept.vertices[east, 2], 0.01 * kept.vertices[east, 0])
-    np.testing.assert_array_equal(kept.vertices[~east], end[~east])       # where it was above: untouched
+    np.testing.assert_array_equal(kept.vertices[~east], end[~east])  # where it was above: untouched
     assert stacking.surface.name == "younger"
     # the input is not changed
     np.testing.assert_array_equal(younger.periods[0].positions[1], end)
@@ -196,8 +196,10 @@ def test_keep_above_keeps_consecutive_periods_sharing_their_shape() -> None:
     base = grid(7)
     a, b, c = base.vertices.copy(), base.vertices.copy(), base.vertices.copy()
     a[:, 2], b[:, 2], c[:, 2] = 10.0, -5.0 + 0.01 * b[:, 0], 10.0
-    younger = EvolvingSurface.chain([_evolving([0.0, 1.0], [a, b], base, "u"), _evolving([1.0, 2.0], [b, c], base, "u")])
-    stacking = keep_above(younger, [grid(4)])                             # a constant Surface: z = 0
+    younger = EvolvingSurface.chain(
+        [_evolving([0.0, 1.0], [a, b], base, "u"), _evolving([1.0, 2.0], [b, c], base, "u")]
+    )
+    stacking = keep_above(younger, [grid(4)])  # a constant Surface: z = 0
     first, second = stacking.surface.periods
     np.testing.assert_array_equal(first.positions[-1], second.positions[0])
     assert (first.positions[-1][:, 2] >= 0).all() and stacking.max_raise == pytest.approx(5.0)
@@ -234,7 +236,7 @@ def test_keep_above_adds_instants_where_a_vertex_would_dip_between_two() -> None
         assert shape is not None
         floor, _ = heights_below(shape.vertices, [ridge])
         worst = max(worst, float((floor - shape.vertices[:, 2]).max()))
-    assert worst <= 0.02                                                   # not 100 m through the ridge
+    assert worst <= 0.02  # not 100 m through the ridge
     unrefined = keep_above(younger, [ridge], max_halvings=0)
     assert unrefined.residual > 50.0 and len(unrefined.surface.periods[0].times) == 2
     with pytest.raises(InvalidInputError, match="between instants"):

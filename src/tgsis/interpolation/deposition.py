@@ -416,12 +416,13 @@ class _Floors:
             z = field.heights(flat).reshape(k, n)
             best = np.where(np.isfinite(z) & (z > best), z, best)
         for j, t in enumerate(times):
-            for field in self._fields(float(t)):
-                if field is not None and all(field is not c for c in self.constant.values()):
-                    z = field.heights(np.ascontiguousarray(shapes[j, :, :2]))
+            for i, moving in enumerate(self._fields(float(t))):
+                if moving is not None and i not in self.constant:
+                    z = moving.heights(np.ascontiguousarray(shapes[j, :, :2]))
                     best[j] = np.where(np.isfinite(z) & (z > best[j]), z, best[j])
         reached = np.isfinite(best)
-        return np.where(reached, best - shapes[..., 2], -np.inf).max(axis=1, initial=-np.inf)
+        dips: FloatArray = np.where(reached, best - shapes[..., 2], -np.inf).max(axis=1, initial=-np.inf)
+        return dips
 
 
 def keep_above(younger: EvolvingSurface, older: Sequence[EvolvingSurface | Surface], *,

@@ -32,6 +32,8 @@ t = 3 and at t = 4.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from psycopg import sql
 
@@ -134,24 +136,23 @@ def _off_basement(trajectories: np.ndarray, glued: list[int]) -> float:
 
 def evolving_unit(unit: str, floor: Surface, older: list[EvolvingSurface], nx: int,
                   ny: int) -> tuple[EvolvingSurface, int, float]:
-    """The unit grown from the surfaces beneath, interpolated per interval and chained; vertices attached, how far they strayed."""
+    """The unit grown from the surfaces beneath, interpolated per interval and chained; vertices attached, how far they strayed.
+
+    Each period starts with the very vertices the one before ends with (its
+    compatible target, not a fresh grid of the same top), so that the
+    stored periods share their geometry at every boundary instant.
+    """
     known = sorted(UNITS[unit])
     corners = (0, nx - 1, nx * ny - 1, nx * (ny - 1))
     edges = [j * nx for j in range(ny)] + [j * nx + nx - 1 for j in range(ny)]
     parts: list[EvolvingSurface] = []
     attached, strayed = 0, 0.0
-    grown = deposition(unit)
-    if grown is not None:                  # the design: its top at the end the source, the surface beneath the target
-        start, end = grown
-        top = unit_top(unit, end, nx, ny)
-        beneath = [s for s in (o.at(start) for o in older) if s is not None]
-        glued = sorted(set(_on_basement(top, edges)) & set(_on_basement(drape(top, beneath), edges)) - set(corners))
-        attached += len(glued)
-        result = deposit(top, beneath, _setup(glued, corners), start, end, name=unit, surfaces={"basement": floor})
-        parts.append(result.evolving)
-        strayed = max(strayed, _off_basement(result.interpolation.trajectories, glued))
     for t0, t1 in zip(known, known[1:]):
         earlier, later = unit_top(unit, t0, nx, ny), unit_top(unit, t1, nx, ny)
+        if parts:                          # the shape the period before ends with: the two share it at t0
+            before = parts[-1].at(t0)
+            assert before is not None
+            earlier = Surface(before.vertices, before.cells, name=unit)
         backwards = unit == "unit 3" and (t0, t1) == (3.0, 4.0)      # the later, larger shape as the source
         source, target, ts, tt = (later, earlier, t1, t0) if backwards else (earlier, later, t0, t1)
         # edge vertices on the basement in both shapes slide along it
@@ -160,6 +161,18 @@ def evolving_unit(unit: str, floor: Surface, older: list[EvolvingSurface], nx: i
         result = interpolate(source, target, _setup(glued, corners), ts, tt, name=unit, surfaces={"basement": floor})
         parts.append(result.evolving)
         strayed = max(strayed, _off_basement(result.trajectories, glued))
+    grown = deposition(unit)
+    if grown is not None:                  # the design: its top at the end the source, the surface beneath the target
+        start, end = grown
+        # the top as the next period starts (its vertices, so that the two periods share their shape at `end`)
+        top = parts[0].at(end) if parts else unit_top(unit, end, nx, ny)
+        assert top is not None
+        beneath = [s for s in (o.at(start) for o in older) if s is not None]
+        glued = sorted(set(_on_basement(top, edges)) & set(_on_basement(drape(top, beneath), edges)) - set(corners))
+        attached += len(glued)
+        laid = deposit(top, beneath, _setup(glued, corners), start, end, name=unit, surfaces={"basement": floor})
+        parts.insert(0, laid.evolving)
+        strayed = max(strayed, _off_basement(laid.interpolation.trajectories, glued))
     return EvolvingSurface.chain(parts, alive=True, name=unit), attached, strayed
 
 
@@ -168,7 +181,9 @@ def _lies_on(t: float) -> sql.Composed:
 
     The surface under a point is found by its triangle there (barycentric
     coordinates) and the height interpolated in it; older means stored
-    before (the units were deposited in the order they were stored).
+    before (the units were deposited in the order they were stored). A
+    triangle's box is grown by 1e-6 m: a vertex on the model's border that
+    rounding put 1e-13 m outside the older surface's border still lies on it.
     """
     return sql.SQL(
         "WITH f AS (SELECT g.geoid, g.geoname AS surface FROM tgsis.features_at('river', {t}) AS f(geoid) "
@@ -182,8 +197,8 @@ def _lies_on(t: float) -> sql.Composed:
         "((k.by - k.cy) * (p.x - k.cx) + (k.cx - k.bx) * (p.y - k.cy)) / d AS l1, "
         "((k.cy - k.ay) * (p.x - k.cx) + (k.ax - k.cx) * (p.y - k.cy)) / d AS l2, k.az, k.bz, k.cz "
         "FROM v p JOIN k ON k.geoid < p.geoid "
-        "AND p.x BETWEEN least(k.ax, k.bx, k.cx) AND greatest(k.ax, k.bx, k.cx) "
-        "AND p.y BETWEEN least(k.ay, k.by, k.cy) AND greatest(k.ay, k.by, k.cy), "
+        "AND p.x BETWEEN least(k.ax, k.bx, k.cx) - 1e-6 AND greatest(k.ax, k.bx, k.cx) + 1e-6 "
+        "AND p.y BETWEEN least(k.ay, k.by, k.cy) - 1e-6 AND greatest(k.ay, k.by, k.cy) + 1e-6, "
         "LATERAL (SELECT (k.by - k.cy) * (k.ax - k.cx) + (k.cx - k.bx) * (k.ay - k.cy) AS d) dd), "
         "h AS (SELECT surface, vrtxid, z, under, l1 * az + l2 * bz + (1 - l1 - l2) * cz AS under_z FROM w "
         "WHERE l1 >= -1e-9 AND l2 >= -1e-9 AND l1 + l2 <= 1 + 1e-9), "
@@ -200,15 +215,17 @@ def run(context: Context) -> None:
     fc = create_feature_class(conn, "river", "SURFACE", time_model="EVOLVING", time_unit=TIME_UNIT,
                               description="a fixed basement and the tops of three units deposited and eroded on it")
     out(f"1. known at t = {', '.join(f'{t:g}' for t in TIMES)} {TIME_UNIT}: "
-        + "; ".join(f"{u} from t = {min(k):g}" for u, k in UNITS.items()) + "; unit 1 partly eroded by t = 2")
+        + "; ".join(f"{u} known from t = {min(k):g}" for u, k in UNITS.items()) + "; unit 1 partly eroded by t = 2")
     evolving = {"basement": EvolvingSurface.constant(floor, TIMES[0], TIMES[-1], alive=True)}
-    glued, strayed, contacts = {}, 0.0, {}
+    glued: dict[str, int] = {}
+    onlap: dict[str, dict[str, Any]] = {}
+    strayed = 0.0
     for unit in UNITS:                     # oldest first: each grows from, and is kept above, those before it
         grown, glued[unit], off = evolving_unit(unit, floor, list(evolving.values()), nx, ny)
         strayed = max(strayed, off)
         stacking = keep_above(grown, list(evolving.values()))
         names = list(evolving)
-        contacts[unit] = {"raised_m": round(stacking.max_raise, 3), "vertex_instants": stacking.clamped,
+        onlap[unit] = {"raised_m": round(stacking.max_raise, 3), "vertex_instants": stacking.clamped,
                           "on": [names[i] for i in stacking.lies_on()]}
         evolving[unit] = stacking.surface
     ids = {name: insert_feature(conn, fc, surface) for name, surface in evolving.items()}
@@ -219,14 +236,15 @@ def run(context: Context) -> None:
         + "the target) and thickens")
     out("   each unit interpolated per interval, its pinch-out edges attached to the basement ("
         + ", ".join(f"{u} {n} vertex-intervals" for u, n in glued.items())
-        + f"; at most {strayed:.1e} m off it at any instant), unit 3 from its later shape between t = 3 and 4; "
+        + f"; at most {strayed:.1e} m off it at any instant of the interpolation), "
+        + "unit 3 from its later shape between t = 3 and 4; "
         + f"chained and stored as features {min(ids.values())}..{max(ids.values())} of class river")
     out("   no top below an older one; the erosion/onlap contact (where a top lies on an older one): "
         + "; ".join(f"{u} on {', '.join(c['on'])}, raised {c['vertex_instants']} vertex-instants by at most "
-                    f"{c['raised_m']:g} m" for u, c in contacts.items()))
+                    f"{c['raised_m']:g} m" for u, c in onlap.items()))
     context.figure("attached", glued)
     context.figure("pinch_out_off_basement_m", strayed)
-    context.figure("onlap_contact", contacts)
+    context.figure("onlap_contact", onlap)
 
     for label, t in zip("ab", QUERY_TIMES):
         out(f"2{label}. the structure at t = {t:g} {TIME_UNIT}")

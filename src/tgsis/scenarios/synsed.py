@@ -95,22 +95,30 @@ def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, floa
     """The horizon grown from the one beneath, then interpolated between the known instants, chained; the worst error."""
     parts: list[EvolvingSurface] = []
     worst = 0.0
-    grown = deposition(name)
-    if grown is not None:                          # the design: its top at the end the source, the surface beneath the target
-        beneath_name, start, end = grown
-        (top, top_corners), (beneath, beneath_corners) = (horizon_at(name, end, nx, ny),
-                                                          horizon_at(beneath_name, start, nx, ny))
-        setup = InterpolationSetup(tuple(top_corners), tuple(beneath_corners), steps=3, tolerance=1.0)
-        result = deposit(top, beneath, setup, start, end, name=top.name)
-        parts.append(result.evolving)
-        worst = max(worst, float(result.interpolation.error))
     known = [t for t in KNOWN if t >= HORIZONS[name]]
     for t0, t1 in zip(known, known[1:]):
         (source, source_corners), (target, target_corners) = horizon_at(name, t0, nx, ny), horizon_at(name, t1, nx, ny)
+        if parts:                                  # the shape the period before ends with: the two share it at t0
+            before = parts[-1].at(t0)
+            assert before is not None
+            source = Surface(before.vertices, before.cells, name=source.name)
         setup = InterpolationSetup(tuple(source_corners), tuple(target_corners), steps=3, tolerance=1.0)
         result = interpolate(source, target, setup, t0, t1, name=source.name)
         parts.append(result.evolving)
         worst = max(worst, float(result.error))
+    grown = deposition(name)
+    if grown is not None:                          # the design: its top at the end the source, the surface beneath the target
+        beneath_name, start, end = grown
+        top, top_corners = horizon_at(name, end, nx, ny)
+        if parts:                                  # the top as the next period starts: the two share their shape at `end`
+            first = parts[0].at(end)
+            assert first is not None
+            top = Surface(first.vertices, first.cells, name=top.name)
+        beneath, beneath_corners = horizon_at(beneath_name, start, nx, ny)
+        setup = InterpolationSetup(tuple(top_corners), tuple(beneath_corners), steps=3, tolerance=1.0)
+        laid = deposit(top, beneath, setup, start, end, name=top.name)
+        parts.insert(0, laid.evolving)
+        worst = max(worst, float(laid.interpolation.error))
     return EvolvingSurface.chain(parts, alive=True, name=f"horizon {name}"), worst
 
 
