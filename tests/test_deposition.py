@@ -241,3 +241,27 @@ def test_keep_above_adds_instants_where_a_vertex_would_dip_between_two() -> None
     assert unrefined.residual > 50.0 and len(unrefined.surface.periods[0].times) == 2
     with pytest.raises(InvalidInputError, match="between instants"):
         keep_above(younger, [ridge], between=-1.0)
+
+
+def test_keep_above_carries_the_properties_through_the_instants_it_adds() -> None:
+    base = grid(4)
+    low, high = base.vertices.copy(), base.vertices.copy()
+    low[:, 2], high[:, 2] = 1.0, 1.0
+    older = _evolving([0.0, 1.0, 2.0], [low - [0, 0, 5], low + [0, 0, 5], low - [0, 0, 5]], base, "older")
+    younger = EvolvingSurface(
+        [
+            TopologyPeriod(
+                [0.0, 2.0],
+                base.cells,
+                np.stack([low, high]),
+                vertex_properties={"porosity": np.stack([np.full(16, 0.1), np.full(16, 0.3)])},
+                properties={"age": [10, 12]},
+            )
+        ]
+    )
+    stacking = keep_above(younger, [older])
+    period = stacking.surface.periods[0]
+    assert period.times.tolist() == [0.0, 1.0, 2.0]
+    np.testing.assert_allclose(period.vertex_properties["porosity"][1], 0.2)
+    np.testing.assert_allclose(period.properties["age"], [10.0, 11.0, 12.0])
+    np.testing.assert_allclose(period.positions[1][:, 2], 6.0)  # raised onto the older surface at t = 1
