@@ -60,15 +60,30 @@ def _xy(points: npt.ArrayLike) -> FloatArray:
 class _HeightField:
     """A surface's height over (x, y): its triangles located once, then any number of points."""
 
-    def __init__(self, surface: Surface) -> None:
+    def __init__(self, vertices: FloatArray, cells: IntArray) -> None:
         # the projection of a steep triangle is a sliver: leave it out rather than divide by its area
-        corners = surface.vertices[surface.cells][:, :, :2]
+        corners = vertices[cells][:, :, :2]
         e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
         area = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-        extent = float(np.ptp(surface.vertices[:, :2], axis=0).max()) if surface.n_vertices else 0.0
-        self.z = surface.vertices[:, 2]
-        self.triangles = surface.cells[area > 1e-12 * max(extent, 1.0) ** 2]
-        self.locator = PointLocator(surface.vertices[:, :2], self.triangles) if len(self.triangles) else None
+        extent = float(np.ptp(vertices[:, :2], axis=0).max()) if len(vertices) else 0.0
+        self.z = vertices[:, 2]
+        self.triangles = cells[area > 1e-12 * max(extent, 1.0) ** 2]
+        self.locator = PointLocator(vertices[:, :2], self.triangles) if len(self.triangles) else None
+
+    @classmethod
+    def of(cls, surface: Surface) -> _HeightField:
+        return cls(surface.vertices, surface.cells)
+
+    @classmethod
+    def at(cls, evolving: EvolvingSurface, t: float) -> _HeightField | None:
+        """The evolving surface's height field at ``t`` (None when it does not exist then), as ``at(t)`` shapes it."""
+        frame = evolving.frame(t)
+        if frame is None:
+            return None
+        period = evolving.periods[frame.period]
+        a = period.positions[frame.j0]
+        xyz = a if frame.j0 == frame.j1 else a + frame.w * (period.positions[frame.j1] - a)
+        return cls(xyz, period.triangles)
 
     def heights(self, xy: FloatArray) -> FloatArray:
         """(p,) height straight above or below each point, NaN where the surface's projection does not reach."""
@@ -113,7 +128,7 @@ def heights_below(points: npt.ArrayLike, surfaces: Sequence[Surface | None]) -> 
     which : (p,) ndarray of int64
         Index in ``surfaces`` of that surface; -1 where none reaches.
     """
-    return _highest(_xy(points), [None if s is None else _HeightField(s) for s in surfaces])
+    return _highest(_xy(points), [None if s is None else _HeightField.of(s) for s in surfaces])
 
 
 def drape(top: Surface, older: Sequence[Surface], *, name: str | None = None) -> Surface:
@@ -384,7 +399,7 @@ class _Floors:
 
     def __init__(self, older: Sequence[EvolvingSurface | Surface]) -> None:
         self.older = list(older)
-        self.constant = {i: _HeightField(s) for i, s in enumerate(self.older) if isinstance(s, Surface)}
+        self.constant = {i: _HeightField.of(s) for i, s in enumerate(self.older) if isinstance(s, Surface)}
         self.cache: dict[float, list[_HeightField | None]] = {}
 
     def _fields(self, t: float) -> list[_HeightField | None]:
@@ -392,10 +407,8 @@ class _Floors:
         if fields is None:
             fields = []
             for i, s in enumerate(self.older):
-                shape = None if isinstance(s, Surface) else s.at(t)
-                fields.append(self.constant[i] if i in self.constant else None if shape is None
-                              else _HeightField(shape))
-            if len(self.cache) > 64:
+                fields.append(self.constant[i] if isinstance(s, Surface) else _HeightField.at(s, t))
+            if len(self.cache) > 512:
                 self.cache.clear()
             self.cache[t] = fields
         return fields
@@ -505,21 +518,26 @@ def keep_above(younger: EvolvingSurface, older: Sequence[EvolvingSurface | Surfa
                 raised_at[float(t)] = lift
 
         raise_instants(samples.times)
-        dip = -np.inf
+        # the dip at a quarter, half and three quarters of each interval (a steep older surface, a pinch-out,
+        # can hide one near an end from the middle alone); only the halves of an interval just split are
+        # looked at again: the others did not change
+        dips: dict[float, float] = {}
+        check = samples.times[:-1]
         for halving in range(max_halvings + 1):
-            # the dip at a quarter, half and three quarters of each interval: a steep older surface (a
-            # pinch-out) can hide one near an end from the middle alone
-            dips = np.full(len(samples.times) - 1, -np.inf)
+            rows = np.flatnonzero(np.isin(samples.times[:-1], check))
+            t0, t1 = samples.times[rows], samples.times[rows + 1]
+            p0, p1 = samples.positions[rows], samples.positions[rows + 1]
+            found = np.full(len(rows), -np.inf)
             for w in (0.25, 0.5, 0.75):
-                times = samples.times[:-1] + w * np.diff(samples.times)
-                shapes = samples.positions[:-1] + w * (samples.positions[1:] - samples.positions[:-1])
-                dips = np.maximum(dips, floors.highest_dip(shapes, times))
-            dip = float(dips.max(initial=-np.inf))
-            if dip <= between or halving == max_halvings:
+                found = np.maximum(found, floors.highest_dip(p0 + w * (p1 - p0), t0 + w * (t1 - t0)))
+            dips.update(zip(t0.tolist(), found.tolist()))
+            bad = found > between
+            if not bad.any() or halving == max_halvings:
                 break
-            bad = dips > between
-            raise_instants(samples.insert(((samples.times[:-1] + samples.times[1:]) / 2)[bad]))
-        residual = max(residual, dip)
+            added = samples.insert((t0[bad] + t1[bad]) / 2)
+            raise_instants(added)
+            check = np.concatenate([t0[bad], added])
+        residual = max(residual, max(dips.values(), default=-np.inf))
         g, n = samples.positions.shape[:2]
         lies_on = np.full((g, n), -1, dtype=np.int64)
         raised = np.stack([raised_at[float(t)] for t in samples.times])
