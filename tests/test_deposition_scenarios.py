@@ -202,6 +202,7 @@ def test_the_contacts_are_reported(scenarios: dict[str, Any]) -> None:
     assert set(contact) == {"unit 1", "unit 2", "unit 3"}
     assert contact["unit 1"]["on"] == ["basement"]  # its pinch-outs
     assert "basement" in contact["unit 3"]["on"]  # its eastern pinch-out
+    assert 0.0 <= figures["dip_between_instants_m"] <= 0.01
     for unit, found in contact.items():
         assert found["raised_m"] >= 0 and found["vertex_instants"] >= 0
         assert (

@@ -219,11 +219,12 @@ def run(context: Context) -> None:
     evolving = {"basement": EvolvingSurface.constant(floor, TIMES[0], TIMES[-1], alive=True)}
     glued: dict[str, int] = {}
     onlap: dict[str, dict[str, Any]] = {}
-    strayed = 0.0
+    strayed, dip = 0.0, -np.inf
     for unit in UNITS:                     # oldest first: each grows from, and is kept above, those before it
         grown, glued[unit], off = evolving_unit(unit, floor, list(evolving.values()), nx, ny)
         strayed = max(strayed, off)
         stacking = keep_above(grown, list(evolving.values()))
+        dip = max(dip, stacking.residual)
         names = list(evolving)
         onlap[unit] = {"raised_m": round(stacking.max_raise, 3), "vertex_instants": stacking.clamped,
                           "on": [names[i] for i in stacking.lies_on()]}
@@ -241,10 +242,12 @@ def run(context: Context) -> None:
         + f"chained and stored as features {min(ids.values())}..{max(ids.values())} of class river")
     out("   no top below an older one; the erosion/onlap contact (where a top lies on an older one): "
         + "; ".join(f"{u} on {', '.join(c['on'])}, raised {c['vertex_instants']} vertex-instants by at most "
-                    f"{c['raised_m']:g} m" for u, c in onlap.items()))
+                    f"{c['raised_m']:g} m" for u, c in onlap.items())
+        + f"; between instants (sampled at 1/4, 1/2, 3/4 of each) at most {max(dip, 0.0):.2g} m below")
     context.figure("attached", glued)
     context.figure("pinch_out_off_basement_m", strayed)
     context.figure("onlap_contact", onlap)
+    context.figure("dip_between_instants_m", max(dip, 0.0))
 
     for label, t in zip("ab", QUERY_TIMES):
         out(f"2{label}. the structure at t = {t:g} {TIME_UNIT}")
