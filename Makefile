@@ -70,9 +70,9 @@ pictures: $(VENV)/.installed
 # rest once the open branches are merged (docs/developing.md, "Lint and format").
 RUFF_FORMATTED = src/tgsis/db/_upgrade.py tests/test_upgrade.py tests/test_install_storage.py tests/test_installcheck.py tests/test_release.py \
                  src/tgsis/_optional.py tests/test_optional_extras.py src/tgsis/db/adapters.py tests/test_adapters.py tests/test_docker.py \
-                 tests/test_view_set_based_writes.py tests/test_view_origin.py tests/test_make_test.py \
-                 tests/test_deposition.py tests/test_deposition_scenarios.py
+                 tests/test_view_set_based_writes.py tests/test_view_origin.py tests/test_make_test.py
 
+RUFF_FORMATTED += tests/test_deposition.py tests/test_deposition_scenarios.py
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy
 	$(BIN)/ruff check src tests bench
