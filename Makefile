@@ -76,6 +76,7 @@ RUFF_FORMATTED = src/tgsis/db/_upgrade.py tests/test_upgrade.py tests/test_insta
                  src/tgsis/_zpositive.py tests/test_formats_meaning.py \
                  tests/test_interpolation_shape.py
 
+RUFF_FORMATTED += tests/test_deposition.py tests/test_deposition_scenarios.py
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy
 	$(BIN)/ruff check src tests bench

@@ -99,12 +99,16 @@ def test_synsed(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str])
     folder = tmp_path / "synsed"
     assert main(["--dsn", db_dsn, "demo", "synsed", "--dir", str(folder)]) == 0
     out = capsys.readouterr().out
-    assert "horizon A 3 period(s), horizon B 3 period(s), horizon C 2 period(s), horizon D 1 period(s)" in out
-    # at t = 2.5: the fault and the horizons deposited by then (D comes at 3), equal in SQL and Python
-    assert "-> surface, vertices, triangles: fault F, 15, 16; horizon A, 70, 96; horizon B, 70, 96; horizon C, 70, 96" in out
+    # C, D and E each grow from the horizon beneath during the interval before they are first known
+    assert ("horizon A 3 period(s), horizon B 3 period(s), horizon C 3 period(s), horizon D 2 period(s), "
+            "horizon E 1 period(s)") in out
+    assert "C grows from B over [1, 2], D grows from C over [2, 3], E grows from D over [3, 4]" in out
+    # at t = 2.5: the fault and the horizons deposited by then (D is being deposited), equal in SQL and Python
+    assert ("-> surface, vertices, triangles: fault F, 15, 16; horizon A, 70, 96; horizon B, 70, 96; "
+            "horizon C, 70, 96; horizon D, 70, 96") in out
     assert "equal to SQL to the bit: yes" in out
     # throw = 60 m/Myr since deposition (A at 0, B at 1, C at 2): older horizons carry more
-    assert "-> horizon, throw_m: horizon A, 150.0; horizon B, 90.0; horizon C, 30.0" in out
+    assert "-> horizon, throw_m: horizon A, 150.0; horizon B, 90.0; horizon C, 30.0; horizon D, 0.0" in out
     _replays(db_dsn, "synsed", out, 2)
     for name in ("synsed_t1.png", "synsed_t2_5.png", "synsed_t4.png"):
         with Image.open(folder / name) as picture:
@@ -118,14 +122,17 @@ def test_river(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     # the pinch-outs attached to the basement stayed on it at every geometry instant
     strayed = re.search(r"at most ([0-9.e+-]+) m off it at any instant", out)
     assert strayed is not None and float(strayed.group(1)) < 1e-9
-    assert "unit 3 8 vertex-intervals" in out                                   # the later shape as the source too
-    assert "-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240" in out
+    assert "unit 3 12 vertex-intervals" in out                                  # the later shape as the source too
+    assert "unit 2 deposited over [0, 1], unit 3 deposited over [2, 3]" in out
+    assert "-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240\n" in out
+    assert ("-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240; "
+            "unit 3, 150, 240") in out                                             # unit 3 growing at t = 2.5
     assert "equal to SQL to the bit: yes" in out
     # which unit lies on which: unit 3 reaches unit 1 between t = 3 and 4
     assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 2" in out
     assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 1, unit 2" in out
-    _replays(db_dsn, "river", out, 3)
-    for name in ("river_t1_5.png", "river_t3.png", "river_t4.png"):
+    _replays(db_dsn, "river", out, 4)
+    for name in ("river_t1_5.png", "river_t2_5.png", "river_t3.png", "river_t4.png"):
         with Image.open(folder / name) as picture:
             assert picture.format == "PNG"
 

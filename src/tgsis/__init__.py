@@ -174,6 +174,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.modelsets import Model, ModelObject, add_to_model, create_model, list_models, model_objects, \
         remove_from_model
+    from tgsis.interpolation.deposition import Contact, Deposition, Stacking, deposit, drape, keep_above
     from tgsis.db.gmaps import (GMapProblem, fetch_gmap, fetch_md_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap,
                                 md_in_box, md_vertices_in_box)
 
@@ -305,6 +306,13 @@ _LAZY: dict[str, str] = {
     "list_models": "tgsis.db.modelsets",
     "md_in_box": "tgsis.db.gmaps",
     "md_vertices_in_box": "tgsis.db.gmaps",
+    # numpy, no database, but with the interpolation's scipy: loaded on first use too
+    "Contact": "tgsis.interpolation.deposition",
+    "Deposition": "tgsis.interpolation.deposition",
+    "Stacking": "tgsis.interpolation.deposition",
+    "deposit": "tgsis.interpolation.deposition",
+    "drape": "tgsis.interpolation.deposition",
+    "keep_above": "tgsis.interpolation.deposition",
 }
 
 
@@ -435,6 +443,13 @@ __all__ = [
     "model_objects",
     "list_models",
     "md_vertices_in_box",
+    # deposition: a unit growing from the surface beneath, younger tops kept above older ones (numpy, no database)
+    "deposit",
+    "Deposition",
+    "drape",
+    "keep_above",
+    "Stacking",
+    "Contact",
     # feature classes and features
     "FeatureClass",
     "Property",

@@ -14,6 +14,9 @@ graph algorithm is needed), no database:
   controlling surfaces, interior solved from its differential coordinates
   interpolated in time, one factorisation for all steps) and the
   model-3 :class:`~tgsis.temporal.EvolvingSurface` they make;
+* :mod:`.deposition`: a unit deposited during an interval, growing from
+  the surface beneath it (:func:`deposit`, :func:`drape`), and younger tops
+  kept above older ones with their contact reported (:func:`keep_above`);
 * :mod:`.projection`: closest points on triangle meshes, controlling
   surfaces and their intersection curves.
 
@@ -54,6 +57,15 @@ from tgsis.interpolation.topology import (
 )
 from tgsis.interpolation.setup import Attachment, CutPath, InterpolationSetup
 from tgsis.interpolation.interpolate import Interpolation, average_shape, interpolate
+from tgsis.interpolation.deposition import (
+    Contact,
+    Deposition,
+    Stacking,
+    deposit,
+    drape,
+    heights_below,
+    keep_above,
+)
 from tgsis.interpolation.parameterize import (
     CompatiblePatch,
     Parameterization,
@@ -117,6 +129,14 @@ __all__ = [
     "interpolate",
     "Interpolation",
     "average_shape",
+    # deposition: a unit growing from the surface beneath, younger tops above older ones
+    "deposit",
+    "Deposition",
+    "drape",
+    "heights_below",
+    "keep_above",
+    "Stacking",
+    "Contact",
     # set-up file and corner proposals
     "InterpolationSetup",
     "CutPath",

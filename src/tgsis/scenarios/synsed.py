@@ -1,7 +1,7 @@
 """Scenario ``synsed``: horizons deposited one after another while a normal fault slips.
 
 The specification's second sample application. A normal fault keeps its
-position and slips at a constant rate; horizons A..E are deposited at
+position and slips at a constant rate; horizons A..E are laid down by
 t = 0..4 and each is cut by the fault into two blocks, the hanging wall
 lowered by the throw accumulated since the horizon was laid down (older
 horizons carry more displacement) and every horizon buried as younger ones
@@ -9,10 +9,17 @@ pile up. The model is known at t = 1, 2, 3 and 4 with a growing number of
 horizons. Each horizon is interpolated in each interval between two known
 instants (eight control pairs: the corners of its two blocks) and the
 intervals are chained into one evolving feature over its whole life; the
-fault is one surface constant over [1, 4]. The questions: the whole
-structure at t = 2.5, every surface that exists then, from one SQL query
-(``tgsis.surfaces_at``), equal to the Python snapshots; the throw of each
-horizon then, from SQL.
+fault is one surface constant over [1, 4].
+
+A horizon that first appears at a known instant was deposited during the
+interval before it: as the source design does, it is interpolated from its
+own top at the interval's end (the source) to the horizon beneath at the
+interval's start (the target), so it starts as the surface it lies on and
+grows (:func:`tgsis.deposit`); and no horizon passes below an older one
+(:func:`tgsis.keep_above`, the contacts reported). The questions: the whole
+structure at t = 2.5, every surface that exists then (D is being
+deposited), from one SQL query (``tgsis.surfaces_at``), equal to the Python
+snapshots; the throw of each horizon then, from SQL.
 """
 
 from __future__ import annotations
@@ -24,10 +31,11 @@ from tgsis import pictures
 from tgsis.db.features import create_feature_class, insert_feature
 from tgsis.db.temporal import get_at
 from tgsis.interpolation import InterpolationSetup
+from tgsis.interpolation.deposition import deposit, keep_above
 from tgsis.interpolation.interpolate import interpolate
 from tgsis.mesh import Surface
 from tgsis.scenarios._context import Context
-from tgsis.temporal import EvolvingSurface, TopologyPeriod
+from tgsis.temporal import EvolvingSurface
 
 WIDTH, LENGTH = 4000.0, 2000.0
 FAULT_X = 2000.0      # the fault's trace; the blocks stop GAP/2 short of it (the heave)
@@ -35,7 +43,7 @@ GAP = 200.0
 BURIAL = 100.0        # m of burial per Myr
 THROW_RATE = 60.0     # m of throw per Myr
 TIME_UNIT = "Myr"
-HORIZONS = {"A": 0.0, "B": 1.0, "C": 2.0, "D": 3.0, "E": 4.0}   # name -> deposition time
+HORIZONS = {"A": 0.0, "B": 1.0, "C": 2.0, "D": 3.0, "E": 4.0}   # name -> time its top is laid down (oldest first)
 KNOWN = (1.0, 2.0, 3.0, 4.0)
 QUERY_TIME = 2.5
 
@@ -74,21 +82,43 @@ def fault(ny: int) -> Surface:
                    np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="fault F")
 
 
+def deposition(name: str) -> tuple[str, float, float] | None:
+    """(horizon beneath, start, end) of the interval during which ``name`` was deposited; None if known from the first instant."""
+    laid = HORIZONS[name]
+    if laid <= KNOWN[0]:
+        return None
+    names = list(HORIZONS)
+    return names[names.index(name) - 1], max(t for t in KNOWN if t < laid), min(t for t in KNOWN if t >= laid)
+
+
 def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, float]:
-    """The horizon interpolated in each interval between the known instants, chained; and the worst mesh error."""
-    known = [t for t in KNOWN if t >= HORIZONS[name]]
-    if len(known) == 1:                            # deposited at the last instant: known once, it stays
-        shape, _ = horizon_at(name, known[0], nx, ny)
-        return EvolvingSurface([TopologyPeriod([known[0]], shape.cells, shape.vertices[None])], alive=True,
-                               name=shape.name), 0.0
+    """The horizon grown from the one beneath, then interpolated between the known instants, chained; the worst error."""
     parts: list[EvolvingSurface] = []
     worst = 0.0
+    known = [t for t in KNOWN if t >= HORIZONS[name]]
     for t0, t1 in zip(known, known[1:]):
         (source, source_corners), (target, target_corners) = horizon_at(name, t0, nx, ny), horizon_at(name, t1, nx, ny)
+        if parts:                                  # the shape the period before ends with: the two share it at t0
+            before = parts[-1].at(t0)
+            assert before is not None
+            source = Surface(before.vertices, before.cells, name=source.name)
         setup = InterpolationSetup(tuple(source_corners), tuple(target_corners), steps=3, tolerance=1.0)
         result = interpolate(source, target, setup, t0, t1, name=source.name)
         parts.append(result.evolving)
         worst = max(worst, float(result.error))
+    grown = deposition(name)
+    if grown is not None:                          # the design: its top at the end the source, the surface beneath the target
+        beneath_name, start, end = grown
+        top, top_corners = horizon_at(name, end, nx, ny)
+        if parts:                                  # the top as the next period starts: the two share their shape at `end`
+            first = parts[0].at(end)
+            assert first is not None
+            top = Surface(first.vertices, first.cells, name=top.name)
+        beneath, beneath_corners = horizon_at(beneath_name, start, nx, ny)
+        setup = InterpolationSetup(tuple(top_corners), tuple(beneath_corners), steps=3, tolerance=1.0)
+        laid = deposit(top, beneath, setup, start, end, name=top.name)
+        parts.insert(0, laid.evolving)
+        worst = max(worst, float(laid.interpolation.error))
     return EvolvingSurface.chain(parts, alive=True, name=f"horizon {name}"), worst
 
 
@@ -99,11 +129,14 @@ def run(context: Context) -> None:
                               description="a normal fault and the horizons deposited while it slipped")
     out(f"1. known at t = {', '.join(f'{t:g}' for t in KNOWN)} {TIME_UNIT}: "
         + "; ".join(f"t = {t:g}: {', '.join(n for n, d in HORIZONS.items() if d <= t)}" for t in KNOWN))
-    evolving, ids, worst = {}, {}, 0.0
-    for name in HORIZONS:
+    evolving: dict[str, EvolvingSurface] = {}
+    ids, worst, raised = {}, 0.0, {}
+    for name in HORIZONS:                          # oldest first: each kept above those before it
         surface, error = evolving_horizon(name, nx, ny)
         worst = max(worst, error)
-        evolving[surface.name or name] = surface
+        stacking = keep_above(surface, list(evolving.values()))
+        evolving[surface.name or name] = stacking.surface
+        raised[surface.name or name] = stacking.max_raise
     f = fault(ny)
     evolving[f.name or "fault"] = EvolvingSurface.constant(f, KNOWN[0], KNOWN[-1], alive=True)
     for label, surface in evolving.items():
@@ -112,7 +145,12 @@ def run(context: Context) -> None:
     out("   each horizon interpolated in each interval (8 control pairs: its blocks' corners) and chained: "
         + ", ".join(f"{label} {len(s.periods)} period(s)" for label, s in evolving.items())
         + f"; stored as features {min(ids.values())}..{max(ids.values())} of class structure")
+    out("   " + ", ".join(f"{name} grows from {grown[0]} over [{grown[1]:g}, {grown[2]:g}]"
+                          for name in HORIZONS for grown in [deposition(name)] if grown is not None)
+        + " (its top at the end the source, the horizon beneath at the start the target); "
+        + f"no horizon below an older one: raised at most {max(raised.values()):.3g} m onto one")
     context.figure("interpolation_error_m", worst)
+    context.figure("raised_m", raised)
 
     out(f"2. the whole structure at t = {QUERY_TIME:g} {TIME_UNIT}")
     context.structure_at("structure", QUERY_TIME, evolving)
