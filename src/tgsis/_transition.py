@@ -1,0 +1,87 @@
+"""Sudden changes at topology instants as short linear transitions (models 3 and 4), on numpy arrays.
+
+The design: at a topology instant the object is duplicated into a
+pre-object (old topology) and a post-object (new topology) that share their
+geometry, and "a sudden change is a linear change over a very short
+period". So a sudden change becomes: the post-object starts at the topology
+instant t0 in the pre-object's geometry, and reaches its own first shape at
+t0 + duration, linearly. Where the post-object starts (its nodes on the
+pre-object):
+
+* when both have as many nodes and the same cells, node i is node i (the
+  same topology: the change is a motion);
+* otherwise each node of the post-object starts at the closest point of the
+  pre-object's shape (its triangles for a surface, its points for a G-map).
+
+No database here: :func:`tgsis.temporal.sudden_change` and
+:func:`tgsis.gmaps.sudden_gmap_change` use these helpers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+from scipy.spatial import cKDTree
+
+from tgsis.errors import InvalidInputError
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: Nearest triangle centroids tried per point (the closest point found lies on the surface whatever it is).
+_CANDIDATES = 16
+
+
+def transition_times(times: FloatArray, duration: float, label: str) -> FloatArray:
+    """``times`` with ``times[0] + duration`` inserted after the first: the transition's end.
+
+    Raises
+    ------
+    InvalidInputError
+        A duration that is not finite and > 0, or that does not end before
+        the period's second geometry instant (named by ``label``).
+    """
+    value = float(duration)
+    if not math.isfinite(value) or value <= 0:
+        raise InvalidInputError(f"the duration of a sudden change must be a finite time > 0, got {duration!r}")
+    end = float(times[0]) + value
+    if end <= float(times[0]) or (len(times) > 1 and end >= float(times[1])):
+        raise InvalidInputError(
+            f"a sudden change of {value!r} at the start of {label} (t = {float(times[0])!r}) must end before its "
+            f"second geometry instant {float(times[1]) if len(times) > 1 else float('nan')!r}",
+            hint="a sudden change is a change over a very short period: give a shorter duration")
+    return np.concatenate([times[:1], [end], times[1:]]).astype(np.float64)
+
+
+def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: FloatArray) -> FloatArray:
+    """(k, 3) points of the triangle mesh (vertices (n, 3), triangles (m, 3)) close to each of ``points`` (k, 3).
+
+    Each is the closest point among the triangles whose centroids are the
+    nearest few to the point: always a point of the surface, the closest
+    one unless a large triangle's centroid lies farther than the others'.
+    """
+    if len(triangles) == 0:
+        return vertices[cKDTree(vertices).query(points)[1]] if len(vertices) else points.copy()
+    from trimesh.triangles import closest_point
+
+    corners = vertices[triangles]
+    k = min(_CANDIDATES, len(triangles))
+    _, candidates = cKDTree(corners.mean(axis=1)).query(points, k=k)
+    candidates = np.asarray(candidates).reshape(len(points), k)
+    repeated = np.repeat(points, k, axis=0)
+    found = np.asarray(closest_point(corners[candidates.reshape(-1)], repeated)).reshape(len(points), k, 3)
+    distances = np.linalg.norm(found - points[:, None, :], axis=2)
+    return found[np.arange(len(points)), np.argmin(distances, axis=1)]
+
+
+def closest_points(points: FloatArray, queries: FloatArray) -> FloatArray:
+    """(k, m) the nearest of ``points`` (n, m) to each of ``queries`` (k, m)."""
+    return points[cKDTree(points).query(queries)[1]]
+
+
+def prepend_first(values: npt.NDArray[np.generic], first: npt.NDArray[np.generic] | None = None) -> npt.NDArray[np.generic]:
+    """(g + 1, ...) ``values`` (g, ...) with ``first`` (default: ``values[0]``) put before them."""
+    head = values[:1] if first is None else np.asarray(first, dtype=values.dtype)[None]
+    return np.concatenate([head, values])
