@@ -11,7 +11,8 @@ pre-object):
 * when both have as many nodes and the same cells, node i is node i (the
   same topology: the change is a motion);
 * otherwise each node of the post-object starts at the closest point of the
-  pre-object's shape (its triangles for a surface, its points for a G-map).
+  pre-object's shape (its triangles for a surface, its edges for a G-map)
+  after the post-object's offset as a whole is taken out (:func:`start_on`).
 
 No database here: :func:`tgsis.temporal.sudden_change` and
 :func:`tgsis.gmaps.sudden_gmap_change` use these helpers.
@@ -20,6 +21,7 @@ No database here: :func:`tgsis.temporal.sudden_change` and
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -76,9 +78,45 @@ def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: Floa
     return found[np.arange(len(points)), np.argmin(distances, axis=1)]
 
 
-def closest_points(points: FloatArray, queries: FloatArray) -> FloatArray:
-    """(k, m) the nearest of ``points`` (n, m) to each of ``queries`` (k, m)."""
-    return points[cKDTree(points).query(queries)[1]]
+def closest_on_segments(points: FloatArray, segments: IntArray, queries: FloatArray) -> FloatArray:
+    """(k, m) points of the segments (s, 2) between ``points`` (n, m) close to each of ``queries`` (k, m).
+
+    As :func:`closest_on_triangles`: the closest among the segments whose
+    midpoints are the nearest few; with no segment, the nearest point.
+    """
+    if len(segments) == 0:
+        return points[cKDTree(points).query(queries)[1]]
+    a, b = points[segments[:, 0]], points[segments[:, 1]]
+    k = min(_CANDIDATES, len(segments))
+    _, candidates = cKDTree((a + b) / 2).query(queries, k=k)
+    candidates = np.asarray(candidates).reshape(len(queries), k)
+    ca, cb = a[candidates], b[candidates]                                  # (k_q, k, m)
+    ab = cb - ca
+    length = np.einsum("ijk,ijk->ij", ab, ab)
+    s = np.where(length > 0, np.einsum("ijk,ijk->ij", queries[:, None, :] - ca, ab) / np.where(length > 0, length, 1), 0)
+    found = ca + np.clip(s, 0, 1)[..., None] * ab
+    distances = np.linalg.norm(found - queries[:, None, :], axis=2)
+    return found[np.arange(len(queries)), np.argmin(distances, axis=1)]
+
+
+def start_on(before: Callable[[FloatArray], FloatArray], after: FloatArray, rounds: int = 20) -> FloatArray:
+    """Where the nodes ``after`` (k, m) start on the shape before: ``before(q)`` gives points of it close to q.
+
+    The shape after may be moved as a whole (a sudden offset): the offset is
+    estimated first (the mean of ``q - before(q)``, refined a few times, a
+    translation-only iterative closest point), then each node starts at the
+    point of the shape before closest to it minus the offset. A rigid
+    offset is undone exactly; otherwise each node starts at a nearby point
+    of the shape before.
+    """
+    offset = np.zeros(after.shape[1])
+    for _ in range(rounds):
+        moved = after - offset
+        step = np.mean(moved - before(moved), axis=0)
+        offset = offset + step
+        if float(np.linalg.norm(step)) <= 1e-12 * (1.0 + float(np.abs(after).max(initial=0.0))):
+            break
+    return before(after - offset)
 
 
 def prepend_first(values: npt.NDArray[np.generic], first: npt.NDArray[np.generic] | None = None) -> npt.NDArray[np.generic]:

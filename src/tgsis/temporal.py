@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis._series import as_series, as_times
-from tgsis._transition import closest_on_triangles, prepend_first, transition_times
+from tgsis._transition import closest_on_triangles, prepend_first, start_on, transition_times
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.formats._common import PathLike
 from tgsis.formats.pvd import write_pvd
@@ -258,7 +258,8 @@ def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
     linearly into its first shape, now at t0 + ``duration``. Its nodes start:
     at the nodes of ``before`` when it has as many and the same triangles
     (a motion); otherwise each at the closest point of ``before``'s
-    triangles. Vertex, cell and per-instant properties keep their first
+    triangles once the new shape's offset as a whole is taken out (a rigid
+    offset is undone exactly: ``tgsis._transition.start_on``). Vertex, cell and per-instant properties keep their first
     values over the transition.
 
     Parameters
@@ -286,7 +287,8 @@ def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
     if before.n_vertices == period.n_nodes and np.array_equal(before.cells, period.triangles):
         start = before.vertices.astype(np.float64)
     else:
-        start = closest_on_triangles(before.vertices.astype(np.float64), before.cells, period.positions[0])
+        corners = before.vertices.astype(np.float64)
+        start = start_on(lambda q: closest_on_triangles(corners, before.cells, q), period.positions[0])
     return TopologyPeriod(times, period.triangles, prepend_first(period.positions, start),
                           vertex_properties={k: prepend_first(v) for k, v in period.vertex_properties.items()},
                           cell_properties={k: prepend_first(v) for k, v in period.cell_properties.items()},

@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis._series import as_series, as_times
-from tgsis._transition import closest_points, prepend_first, transition_times
+from tgsis._transition import closest_on_segments, prepend_first, start_on, transition_times
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError
 from tgsis.gmaps._core import GMap
 from tgsis.temporal import Frame, frame_at
@@ -102,8 +102,9 @@ def sudden_gmap_change(before: GMap, period: GMapPeriod, duration: float, *, lab
     The design's sudden change (see :func:`tgsis.temporal.sudden_change`)
     for a G-map: the post-object's points start at the pre-object's points
     with the same index when both G-maps have as many points and the same
-    involutions and vertex map (a motion); otherwise each at the nearest
-    point of ``before``. Cell values keep their first values over the
+    involutions and vertex map (a motion); otherwise each at the closest
+    point of ``before``'s edges once the new shape's offset as a whole is
+    taken out (the edges are what the continuity check measures against). Cell values keep their first values over the
     transition.
 
     Raises
@@ -119,8 +120,10 @@ def sudden_gmap_change(before: GMap, period: GMapPeriod, duration: float, *, lab
     same = (len(before.points) == len(period.gmap.points) and len(before.alpha) == len(period.gmap.alpha)
             and all(np.array_equal(a, b) for a, b in zip(before.alpha, period.gmap.alpha))
             and np.array_equal(before.vertex, period.gmap.vertex))
-    start = before.points.astype(np.float64) if same else closest_points(before.points.astype(np.float64),
-                                                                          period.positions[0])
+    points = before.points.astype(np.float64)
+    edges = np.stack([before.vertex, before.vertex[before.alpha[0]]], axis=1) if before.n_darts else \
+        np.empty((0, 2), dtype=np.int64)
+    start = points if same else start_on(lambda q: closest_on_segments(points, edges, q), period.positions[0])
     return GMapPeriod(times, period.gmap, prepend_first(period.positions, start), level=period.level,
                       cell_values={k: prepend_first(v) for k, v in period.cell_values.items()})
 
