@@ -65,7 +65,7 @@ def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: Floa
     one unless a large triangle's centroid lies farther than the others'.
     """
     if len(triangles) == 0:
-        return vertices[cKDTree(vertices).query(points)[1]] if len(vertices) else points.copy()
+        return np.asarray(vertices[cKDTree(vertices).query(points)[1]] if len(vertices) else points.copy(), dtype=np.float64)
     from trimesh.triangles import closest_point
 
     corners = vertices[triangles]
@@ -73,9 +73,10 @@ def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: Floa
     _, candidates = cKDTree(corners.mean(axis=1)).query(points, k=k)
     candidates = np.asarray(candidates).reshape(len(points), k)
     repeated = np.repeat(points, k, axis=0)
-    found = np.asarray(closest_point(corners[candidates.reshape(-1)], repeated)).reshape(len(points), k, 3)
+    found = np.asarray(closest_point(corners[candidates.reshape(-1)], repeated),  # type: ignore[no-untyped-call]
+                       dtype=np.float64).reshape(len(points), k, 3)
     distances = np.linalg.norm(found - points[:, None, :], axis=2)
-    return found[np.arange(len(points)), np.argmin(distances, axis=1)]
+    return np.asarray(found[np.arange(len(points)), np.argmin(distances, axis=1)], dtype=np.float64)
 
 
 def closest_on_segments(points: FloatArray, segments: IntArray, queries: FloatArray) -> FloatArray:
@@ -85,7 +86,7 @@ def closest_on_segments(points: FloatArray, segments: IntArray, queries: FloatAr
     midpoints are the nearest few; with no segment, the nearest point.
     """
     if len(segments) == 0:
-        return points[cKDTree(points).query(queries)[1]]
+        return np.asarray(points[cKDTree(points).query(queries)[1]], dtype=np.float64)
     a, b = points[segments[:, 0]], points[segments[:, 1]]
     k = min(_CANDIDATES, len(segments))
     _, candidates = cKDTree((a + b) / 2).query(queries, k=k)
@@ -96,7 +97,7 @@ def closest_on_segments(points: FloatArray, segments: IntArray, queries: FloatAr
     s = np.where(length > 0, np.einsum("ijk,ijk->ij", queries[:, None, :] - ca, ab) / np.where(length > 0, length, 1), 0)
     found = ca + np.clip(s, 0, 1)[..., None] * ab
     distances = np.linalg.norm(found - queries[:, None, :], axis=2)
-    return found[np.arange(len(queries)), np.argmin(distances, axis=1)]
+    return np.asarray(found[np.arange(len(queries)), np.argmin(distances, axis=1)], dtype=np.float64)
 
 
 def start_on(before: Callable[[FloatArray], FloatArray], after: FloatArray, rounds: int = 20) -> FloatArray:

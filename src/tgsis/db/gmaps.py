@@ -383,8 +383,6 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
             if fc.cell_properties:
                 tables.append((fc.schema, fc.cellprotable, value_rows))
         storage.copy_all(conn, tables)
-        if len(periods) > 1:
-            check_continuity(conn, geoid, tolerance)
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
 
