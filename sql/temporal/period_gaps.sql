@@ -38,6 +38,7 @@ DECLARE
     v_order  record;
     v_side1  record;
     v_side2  record;
+    v_m      integer;
 BEGIN
     SELECT g.timemodel INTO v_model FROM tgsis.geometry g WHERE g.geoid = p_geoid;
     IF NOT FOUND THEN
@@ -48,6 +49,7 @@ BEGIN
         PERFORM tgsis.no_model_rule(v_model, 'tgsis.period_gaps', '{EVOLVING,GMAP}');
     END IF;
     v_tol := tgsis.gap_tolerance(p_geoid, p_tolerance);
+    SELECT g.embedding INTO v_m FROM tgsis.gmap g WHERE v_model = 'GMAP' AND g.geoid = p_geoid;
     FOR v_pair IN
         SELECT p.timem AS post, p.prev AS pre
           FROM (SELECT m.timem, lag(m.timem) OVER (ORDER BY m.timem) AS prev
@@ -79,22 +81,33 @@ BEGIN
         -- as many nodes: node i of one is node i of the other
         v_order := NULL;
         IF v_npre = v_npost THEN
+            -- the two shapes as arrays in node order, zipped by unnest: one pass, no join to plan badly
             IF v_model = 'EVOLVING' THEN
                 SELECT d.dist, d.nodeid INTO v_order
-                  FROM (SELECT b.nodeid, sqrt((a.x - b.x) ^ 2 + (a.y - b.y) ^ 2 + (a.z - b.z) ^ 2) AS dist
-                          FROM (SELECT v.x, v.y, v.z, row_number() OVER (ORDER BY v.nodeid) AS i FROM tgsis.d4dvrtx v
-                                 WHERE v.geoid = p_geoid AND v.timem = v_pair.pre AND v.timet = v_pre) a
-                          JOIN (SELECT v.nodeid, v.x, v.y, v.z, row_number() OVER (ORDER BY v.nodeid) AS i FROM tgsis.d4dvrtx v
-                                 WHERE v.geoid = p_geoid AND v.timem = v_pair.post AND v.timet = v_pair.post) b ON b.i = a.i) d
+                  FROM (SELECT z.nodeid, sqrt((z.ax - z.bx) ^ 2 + (z.ay - z.by_) ^ 2 + (z.az - z.bz) ^ 2) AS dist
+                          FROM (SELECT array_agg(v.x ORDER BY v.nodeid) AS x, array_agg(v.y ORDER BY v.nodeid) AS y,
+                                       array_agg(v.z ORDER BY v.nodeid) AS z
+                                  FROM tgsis.d4dvrtx v WHERE v.geoid = p_geoid AND v.timem = v_pair.pre AND v.timet = v_pre) a,
+                               (SELECT array_agg(v.nodeid ORDER BY v.nodeid) AS id, array_agg(v.x ORDER BY v.nodeid) AS x,
+                                       array_agg(v.y ORDER BY v.nodeid) AS y, array_agg(v.z ORDER BY v.nodeid) AS z
+                                  FROM tgsis.d4dvrtx v WHERE v.geoid = p_geoid AND v.timem = v_pair.post AND v.timet = v_pair.post) b,
+                               unnest(a.x, a.y, a.z, b.x, b.y, b.z, b.id) AS z(ax, ay, az, bx, by_, bz, nodeid)) d
                  ORDER BY d.dist DESC, d.nodeid
                  LIMIT 1;
             ELSE
+                -- m coordinates per point: both flattened alike, zipped, summed per point
                 SELECT d.dist, d.nodeid INTO v_order
-                  FROM (SELECT b.nodeid, tgsis.point_segment_distance(b.coordinate, a.coordinate, a.coordinate) AS dist
-                          FROM (SELECT v.coordinate, row_number() OVER (ORDER BY v.nodeid) AS i FROM tgsis.gmap_vertex v
-                                 WHERE v.geoid = p_geoid AND v.timem = v_pair.pre AND v.timet = v_pre) a
-                          JOIN (SELECT v.nodeid, v.coordinate, row_number() OVER (ORDER BY v.nodeid) AS i FROM tgsis.gmap_vertex v
-                                 WHERE v.geoid = p_geoid AND v.timem = v_pair.post AND v.timet = v_pair.post) b ON b.i = a.i) d
+                  FROM (SELECT b.id[(z.k - 1) / v_m + 1] AS nodeid, sqrt(sum((z.ac - z.bc) ^ 2)) AS dist
+                          FROM (SELECT array_agg(v.coordinate ORDER BY v.nodeid) AS c
+                                  FROM tgsis.gmap_vertex v
+                                 WHERE v.geoid = p_geoid AND v.timem = v_pair.pre AND v.timet = v_pre
+                                   AND cardinality(v.coordinate) = v_m) a,
+                               (SELECT array_agg(v.nodeid ORDER BY v.nodeid) AS id, array_agg(v.coordinate ORDER BY v.nodeid) AS c
+                                  FROM tgsis.gmap_vertex v
+                                 WHERE v.geoid = p_geoid AND v.timem = v_pair.post AND v.timet = v_pair.post
+                                   AND cardinality(v.coordinate) = v_m) b,
+                               unnest(a.c, b.c) WITH ORDINALITY AS z(ac, bc, k)
+                         GROUP BY 1) d
                  ORDER BY d.dist DESC, d.nodeid
                  LIMIT 1;
             END IF;
