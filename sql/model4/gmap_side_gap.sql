@@ -16,6 +16,7 @@ RETURNS TABLE (gap double precision, nodeid bigint, exact boolean)
 LANGUAGE plpgsql
 STABLE
 SET search_path FROM CURRENT
+SET enable_nestloop = off  -- rows just written have no statistics: a nested loop over the grid costs n x cells
 AS $$
 #variable_conflict use_column
 DECLARE
