@@ -187,6 +187,9 @@ def test_check_geometry_finds_rows_edited_wrongly(tx: Conn, faults: tgsis.Featur
     assert problems(tx, fid) == {
         "node without a position at a geometry instant of its period",
         "topology period does not end where the next one starts",
+        # period 0 now ends at an earlier shape, which the next period does not start in
+        "shape jumps at a topology instant: the period's first shape lies farther than the tolerance from the last "
+        "shape before it (tgsis.period_gaps)",
         "position of a node or at an instant its period does not have",
         "triangle refers to a missing node of its period",
         "node position with a NaN or infinite coordinate",

@@ -65,7 +65,8 @@ def view(pg: TestServer, template_db: str) -> Iterator[tuple[str, GMapData, str]
             cube = gmaps.GMap.from_tetrahedra(*block_tetrahedra(1))
             moving = tgsis.insert_feature(conn, "blocks", gmaps.EvolvingGMap([
                 gmaps.GMapPeriod([0.0, 1.0], block, np.stack([block.points, block.points * [3, 1, 2]])),
-                gmaps.GMapPeriod([1.0], cube, (cube.points * 4)[None])], name="growing block"))
+                gmaps.GMapPeriod([1.0], cube, (cube.points * 4)[None])], name="growing block"),
+                tolerance=100.0)   # a jump at t = 1, allowed: the viewer shows it
             surface = gmaps.GMap.from_triangles(*octahedron())
             history = tgsis.insert_gmap(conn, "knowledge", gmaps.GMap(
                 surface.alpha, surface.vertex, np.column_stack([surface.points, np.arange(6) / 5])),

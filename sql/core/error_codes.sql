@@ -30,6 +30,7 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG201', 'already_exists',   'catalog', 'an object with that name or key exists already'),
     ('TG202', 'in_use',           'catalog', 'an object cannot be dropped or changed while others depend on it'),
     ('TG203', 'unknown_data_model', 'catalog', 'a geometry or feature class of a data model that a function has no rule for, or that tgsis.data_models does not register'),
+    ('TG204', 'discontinuous_periods', 'catalog', 'a topology period of an evolving surface or G-map (models 3, 4) whose first shape lies farther than the tolerance from the last shape of the period before: a snapshot would jump there'),
     ('TG300', 'versioning',       'versioning', 'a versioning error that fits no narrower code'),
     ('TG301', 'read_only_revision', 'versioning', 'a write while the session views an older revision, or into a frozen (saved) revision'),
     ('TG302', 'unsolved_conflicts', 'versioning', 'a merge or refresh while objects changed on both sides have no recorded solution'),

@@ -2,7 +2,8 @@
 -- Model 4's check function in the registry (tgsis.data_models): the
 -- conditions of tgsis.gmap_check (first offending dart as the example), the
 -- positions of every node at every geometry instant of its period with m
--- coordinates, and the bbox and counts.
+-- coordinates, shapes that jump at a topology instant, and the bbox and
+-- counts.
 CREATE FUNCTION tgsis.check_gmap_geometry(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, example text)
 LANGUAGE plpgsql
@@ -34,6 +35,12 @@ BEGIN
                                                             AND v.timet = t.timet AND v.nodeid = n.nodeid)
         HAVING count(*) > 0;
     RETURN QUERY
+        SELECT 'shape jumps at a topology instant: the period''s first shape lies farther than the tolerance from the last shape before it (tgsis.period_gaps)'::text,
+               count(*), (array_agg(format('period from %s: %s apart at %s', g.timem, g.gap, g.place) ORDER BY g.timem))[1]
+          FROM tgsis.period_gaps(p_geoid) g
+         WHERE g.gap > g.tolerance
+        HAVING count(*) > 0;
+    RETURN QUERY
         SELECT 'bounding box or counts out of date (run tgsis.refresh_geometry)'::text, 1::bigint, NULL::text
           FROM tgsis.geometry g, tgsis.gmap_extent(p_geoid) e
          WHERE g.geoid = p_geoid
@@ -42,4 +49,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.check_gmap_geometry(bigint) IS
-    'problems of a stored G-map geometry: those of tgsis.gmap_check, points without m finite coordinates, nodes missing a position at an instant of their period, stale bbox/counts; model 4''s check function (tgsis.data_models)';
+    'problems of a stored G-map geometry: those of tgsis.gmap_check, points without m finite coordinates, nodes missing a position at an instant of their period, shapes that jump at a topology instant (tgsis.period_gaps), stale bbox/counts; model 4''s check function (tgsis.data_models)';

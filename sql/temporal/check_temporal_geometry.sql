@@ -2,7 +2,8 @@
 -- The client writes consistent rows; this checks rows edited with plain SQL,
 -- which the snapshot would otherwise silently misread (a node without a
 -- position at an instant drops out of the snapshot, a gap between periods
--- makes the surface vanish there).
+-- makes the surface vanish there, a period starting away from the end of
+-- the one before makes it jump).
 CREATE FUNCTION tgsis.check_temporal_geometry(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, example text)
 LANGUAGE plpgsql
@@ -54,6 +55,11 @@ BEGIN
                                FROM tgsis.timem m WHERE m.geoid = p_geoid) p
                       WHERE p.next IS NOT NULL AND p.last IS DISTINCT FROM p.next
                      HAVING count(*) > 0;
+        RETURN QUERY SELECT 'shape jumps at a topology instant: the period''s first shape lies farther than the tolerance from the last shape before it (tgsis.period_gaps)'::text,
+                            count(*), (array_agg(format('period from %s: %s apart at %s', g.timem, g.gap, g.place) ORDER BY g.timem))[1]
+                       FROM tgsis.period_gaps(p_geoid) g
+                      WHERE g.gap > g.tolerance
+                     HAVING count(*) > 0;
         RETURN QUERY SELECT 'node without a position at a geometry instant of its period'::text, count(*),
                             min(format('nodeid %s at %s', n.nodeid, t.timet))
                        FROM tgsis.node n
@@ -100,4 +106,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.check_temporal_geometry(bigint) IS
-    'problems of the rows of a model-2 or model-3 geometry: orphan instants, triangles pointing at missing vertices or nodes, nodes missing a position at an instant, periods that do not follow each other, non-finite coordinates, stale bbox/counts';
+    'problems of the rows of a model-2 or model-3 geometry: orphan instants, triangles pointing at missing vertices or nodes, nodes missing a position at an instant, periods that do not follow each other, shapes that jump at a topology instant, non-finite coordinates, stale bbox/counts';

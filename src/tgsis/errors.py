@@ -40,6 +40,7 @@ __all__ = [
     "AlreadyExistsError",
     "InUseError",
     "UnknownDataModelError",
+    "DiscontinuousPeriodsError",
     "VersioningError",
     "ReadOnlyRevisionError",
     "UnsolvedConflictsError",
@@ -181,6 +182,18 @@ class UnknownDataModelError(Error):
     """A geometry or feature class of a data model that a function has no rule for, or that tgsis.data_models does not register."""
 
     code = "TG203"
+
+
+class DiscontinuousPeriodsError(Error, ValueError):
+    """A topology period whose first shape lies farther than the tolerance from the last shape of the one before.
+
+    Models 3 and 4: at a topology instant the shape before and the shape
+    after must be the same (the design's pre- and post-object share their
+    geometry). The message names the period, the largest gap and the node
+    (or dart) where it is; nothing is written.
+    """
+
+    code = "TG204"
 
 
 class VersioningError(Error):

@@ -46,6 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis._series import as_series, as_times
+from tgsis._transition import closest_on_triangles, prepend_first, start_on, transition_times
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.formats._common import PathLike
 from tgsis.formats.pvd import write_pvd
@@ -54,7 +55,7 @@ from tgsis.mesh import Surface
 
 __all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color", "TemporalSurface",
            "SurfaceFrame", "WrittenSeries", "own_instants", "even_times", "series_frames", "write_frames_pvd",
-           "write_series_pvd", "Period"]
+           "write_series_pvd", "Period", "sudden_change"]
 
 #: Step convention of model 2 queries.
 Convention = Literal["left", "right"]
@@ -247,6 +248,53 @@ class TopologyPeriod:
                        cell_properties={k: mix(v[j0], v[j1]) for k, v in self.cell_properties.items()})
 
 
+def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
+                  label: str = "the period") -> TopologyPeriod:
+    """``period`` starting in the shape ``before`` and reaching its own first shape ``duration`` later, linearly.
+
+    The design's sudden change at a topology instant t0: the post-object
+    (``period``, new topology) starts at t0 sharing the pre-object's
+    geometry (``before``, the last shape of the period before) and changes
+    linearly into its first shape, now at t0 + ``duration``. Its nodes start:
+    at the nodes of ``before`` when it has as many and the same triangles
+    (a motion); otherwise each at the closest point of ``before``'s
+    triangles once the new shape's offset as a whole is taken out (a rigid
+    offset is undone exactly: ``tgsis._transition.start_on``). Vertex, cell and per-instant properties keep their first
+    values over the transition.
+
+    Parameters
+    ----------
+    before : Surface
+        The pre-object's shape at t0.
+    period : TopologyPeriod
+        Starting at t0; its second geometry instant (if any) after t0 + duration.
+    duration : float
+        Finite, > 0.
+    label : str
+        How messages name the period.
+
+    Returns
+    -------
+    TopologyPeriod
+        With g + 1 geometry instants.
+
+    Raises
+    ------
+    InvalidInputError
+        A bad duration, or one that does not end before the second instant.
+    """
+    times = transition_times(period.times, duration, label)
+    if before.n_vertices == period.n_nodes and np.array_equal(before.cells, period.triangles):
+        start = before.vertices.astype(np.float64)
+    else:
+        corners = before.vertices.astype(np.float64)
+        start = start_on(lambda q: closest_on_triangles(corners, before.cells, q), period.positions[0])
+    return TopologyPeriod(times, period.triangles, prepend_first(period.positions, start),
+                          vertex_properties={k: prepend_first(v) for k, v in period.vertex_properties.items()},
+                          cell_properties={k: prepend_first(v) for k, v in period.cell_properties.items()},
+                          properties={k: prepend_first(v) for k, v in period.properties.items()})
+
+
 @dataclass(frozen=True)
 class Frame:
     """Where a time falls in an :class:`EvolvingSurface`: period index, bracketing instants j0 <= j1, weight."""
@@ -376,6 +424,22 @@ class EvolvingSurface:
                                         hint="chain parts that follow each other: each starts where the one before ends")
         return cls([p for part in parts for p in part.periods], alive=parts[-1].alive if alive is None else alive,
                    name=name if name is not None else parts[0].name, color=parts[0].color)
+
+    def with_sudden_changes(self, duration: float) -> EvolvingSurface:
+        """The same surface with every topology change made a short linear transition (:func:`sudden_change`).
+
+        Each period after the first starts in the last shape of the one
+        before and reaches its own first shape ``duration`` later; so a
+        snapshot never jumps (the continuity rule of docs/time.md, "Topology
+        changes"). ``tgsis.insert_feature(..., sudden_change=duration)`` stores this.
+        """
+        periods = [self.periods[0]]
+        for i, period in enumerate(self.periods[1:], start=1):
+            previous = self.periods[i - 1]
+            last = len(previous.times) - 1
+            periods.append(sudden_change(previous.shape_at(last, last, 0.0), period, duration,
+                                         label=f"topology period {i}"))
+        return EvolvingSurface(periods, alive=self.alive, name=self.name, color=self.color)
 
     @property
     def start(self) -> float:

@@ -97,6 +97,8 @@ def insert_feature(
     *,
     name: str | None = None,
     drop_extra_properties: bool = False,
+    tolerance: float | None = None,
+    sudden_change: float | None = None,
 ) -> int:
     """Store a mesh (or a collection of meshes, or a temporal surface) as a new feature; return its id (geoid).
 
@@ -123,9 +125,19 @@ def insert_feature(
         their own names.
     drop_extra_properties : bool
         Ignore mesh properties the class does not store instead of failing.
+    tolerance : float, optional
+        An EvolvingSurface or EvolvingGMap: the largest gap allowed between
+        the last shape of a topology period and the first shape of the next
+        (default: the setting ``tgsis.period_tolerance``, else 1e-6 of the
+        object's extent; docs/time.md, "Topology changes").
+    sudden_change : float, optional
+        An EvolvingSurface or EvolvingGMap: store every topology change as a
+        short linear transition of this duration (the design's sudden change).
 
     Raises
     ------
+    DiscontinuousPeriodsError
+        A topology period starts away from where the one before ends.
     NotFoundError, InvalidGeometryError, InvalidPropertyError
         Nothing is written.
 
@@ -138,14 +150,20 @@ def insert_feature(
     table whatever the number of members.
     """
     fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    if (tolerance is not None or sudden_change is not None) and not isinstance(mesh, (EvolvingSurface, EvolvingGMap)):
+        raise InvalidInputError(f"tolerance and sudden_change apply to the topology changes of an EvolvingSurface or "
+                                f"EvolvingGMap, not to a {type(mesh).__name__}")
     if isinstance(mesh, (SurfaceSeries, EvolvingSurface)):
         if isinstance(mesh, SurfaceSeries):
             return temporal.insert_series(conn, fc, mesh, properties, name=name,
                                           drop_extra_properties=drop_extra_properties)
         return temporal.insert_evolving(conn, fc, mesh, properties, name=name,
-                                        drop_extra_properties=drop_extra_properties)
+                                        drop_extra_properties=drop_extra_properties, tolerance=tolerance,
+                                        sudden_change=sudden_change)
     if isinstance(mesh, (GMap, EvolvingGMap)):
-        return gmaps.insert_gmap(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties)
+        return gmaps.insert_gmap(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties,
+                                 tolerance=tolerance, sudden_change=sudden_change)
+
     if not isinstance(mesh, (Mesh, GeometryCollection)):
         from tgsis.convert import as_mesh  # a pyvista, meshio or trimesh object (else: what is accepted)
 

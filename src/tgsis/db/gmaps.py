@@ -31,6 +31,7 @@ from psycopg import sql
 
 from tgsis.arguments import check_module, no_nul
 from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
+from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
@@ -143,7 +144,8 @@ def _alpha_columns(geoid: int, images: IntArray) -> list[tuple[str, npt.ArrayLik
 
 def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
                 properties: Mapping[str, Any] | None = None, *, name: str | None = None,
-                drop_extra_properties: bool = False, axes: Sequence[str] | None = None) -> int:
+                drop_extra_properties: bool = False, axes: Sequence[str] | None = None,
+                tolerance: float | None = None, sudden_change: float | None = None) -> int:
     """Store a G-map (or a G-map evolving in time) as a new feature of a class of G-maps; return its id.
 
     Parameters
@@ -165,9 +167,20 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         Ignore cell values the class does not store instead of failing.
     axes : sequence of str, optional
         Model 5: the name of each of the m axes (default x, y, z, axis4, ...).
+    tolerance : float, optional
+        Model 4: the largest gap allowed between the last shape of a period
+        and the first shape of the next (default: the setting
+        ``tgsis.period_tolerance``, else 1e-6 of the G-map's extent; docs/time.md,
+        "Topology changes").
+    sudden_change : float, optional
+        Model 4: store every topology change as a short linear transition of
+        this duration (:meth:`EvolvingGMap.with_sudden_changes`).
 
     Raises
     ------
+    DiscontinuousPeriodsError
+        Model 4: a period starts farther than the tolerance from where the
+        one before ends (the message names the period, the gap and a dart).
     InvalidGMapError
         A period breaks a condition of an n-G-map (the message names the
         darts); nothing is written.
@@ -183,7 +196,10 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
     if axes is not None:
         raise InvalidInputError(f"feature class {fc.name} holds G-maps in time: their axes are x, y, z (axes=None)")
     fc = _gmap_class(conn, fc)
+    tolerance = checked_tolerance(tolerance)
     evolving = _as_evolving(obj, fc)
+    if sudden_change is not None:
+        evolving = evolving.with_sudden_changes(sudden_change)
     evolving.check(raise_=True)
     values = _class_values(fc, evolving, drop_extra_properties)
     periods = evolving.periods
@@ -276,6 +292,8 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
             if fc.cell_properties:
                 tables.append((fc.schema, fc.cellprotable, value_rows))
         storage.copy_all(conn, tables)
+        if len(periods) > 1:
+            check_continuity(conn, geoid, tolerance)
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
 

@@ -36,13 +36,14 @@ from tgsis.arguments import check_module, no_nul
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
                                local_positions, row_keys, rows_by_geoid)
+from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.formats._common import PathLike
 from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Geotype, Surface
 from tgsis.temporal import (Convention, EvolvingSurface, Period, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
-                            check_convention, check_time, even_times, write_frames_pvd)
+                            check_convention, check_time, even_times, sudden_change as sudden, write_frames_pvd)
 
 __all__ = [
     "insert_series",
@@ -342,7 +343,8 @@ def _copy_periods(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int, pe
 
 def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: EvolvingSurface,
                     properties: Mapping[str, Any] | None = None, *, name: str | None = None,
-                    drop_extra_properties: bool = False) -> int:
+                    drop_extra_properties: bool = False, tolerance: float | None = None,
+                    sudden_change: float | None = None) -> int:
     """Store an evolving surface as a new feature of an EVOLVING class; return its id.
 
     Nodes and triangles are numbered on through the periods (period 0 has
@@ -362,13 +364,29 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
         Per-feature property values.
     name : str, optional
         Geometry name (default ``surface.name``).
+    tolerance : float, optional
+        The largest gap allowed between the last shape of a period and the
+        first shape of the next (model units; default: the setting
+        ``tgsis.period_tolerance``, else 1e-6 of the surface's extent).
+        docs/time.md, "Topology changes", says how the gap is measured.
+    sudden_change : float, optional
+        Store every topology change as the design's sudden change: each
+        period after the first starts in the last shape of the one before
+        and reaches its own first shape this much later, linearly
+        (:meth:`EvolvingSurface.with_sudden_changes`).
 
     Raises
     ------
+    DiscontinuousPeriodsError
+        A period starts farther than the tolerance from where the one before
+        ends (the message names the period, the gap and the node).
     NotFoundError, InvalidInputError, InvalidPropertyError
         Nothing is written.
     """
     fc = _temporal_class(conn, feature_class, "EVOLVING")
+    tolerance = checked_tolerance(tolerance)
+    if sudden_change is not None:
+        surface = surface.with_sudden_changes(sudden_change)
     cell_values = _period_columns(fc, surface, drop_extra_properties)
     periods = surface.periods
     n = [p.n_nodes for p in periods]
@@ -384,6 +402,8 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
         _copy_periods(conn, storage, fc, geoid, periods, cell_values, 0, 0)
         keys = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
         _insert_instant_properties(conn, fc, geoid, keys, instant_rows, ["_timem", "_timet"])
+        if len(periods) > 1:
+            check_continuity(conn, geoid, tolerance)
         insert_feature_row(conn, fc, geoid, properties)
     log.info("stored %s feature %d: %d topology periods, %d nodes, %d triangles", fc.name, geoid, len(periods),
              sum(n), sum(m))
@@ -391,7 +411,8 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
 
 
 def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int, period: TopologyPeriod, *,
-                  drop_extra_properties: bool = False) -> None:
+                  drop_extra_properties: bool = False, tolerance: float | None = None,
+                  sudden_change: float | None = None) -> None:
     """Append a topology period to an evolving feature, after its last one (one transaction).
 
     The new period must start at the feature's last geometry instant (periods
@@ -408,15 +429,23 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         With the class's vertex (or cell) and per-instant properties.
     drop_extra_properties : bool
         Ignore properties the class does not store instead of failing.
+    tolerance : float, optional
+        The largest gap allowed between the feature's last shape and the new
+        period's first (as for :func:`insert_evolving`).
+    sudden_change : float, optional
+        The new period starts in the feature's last shape and reaches its
+        own first shape this much later, linearly (:func:`tgsis.temporal.sudden_change`).
 
     Raises
     ------
+    DiscontinuousPeriodsError
+        The new period starts farther than the tolerance from the feature's
+        last shape (the message names the gap and the node).
     NotFoundError, InvalidInputError, InvalidPropertyError
         Nothing is written.
     """
     fc = _temporal_class(conn, feature_class, "EVOLVING")
-    cell_values = _period_columns(fc, EvolvingSurface([period]), drop_extra_properties)
-    instant_rows = _instant_rows(fc, dict(period.properties), len(period.times))
+    tolerance = checked_tolerance(tolerance)
     with reraise(), conn.transaction():
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
@@ -435,10 +464,17 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
             raise InvalidInputError(
                 f"the new topology period of feature {feature_id} starts at {period.start!r}, not at its last geometry "
                 f"instant {row[0]!r}", hint="periods follow each other: start the new one where the last one ends")
+        if sudden_change is not None:
+            last = get_at(conn, feature_id, period.start)
+            assert last is not None  # the feature has a shape at its last geometry instant
+            period = sudden(last, period, sudden_change, label=f"the new topology period of feature {feature_id}")
+        cell_values = _period_columns(fc, EvolvingSurface([period]), drop_extra_properties)
+        instant_rows = _instant_rows(fc, dict(period.properties), len(period.times))
         _copy_periods(conn, storage, fc, feature_id, [period], cell_values, int(row[1]), int(row[2]))
         _insert_instant_properties(conn, fc, feature_id, [(period.start, float(t)) for t in period.times.tolist()],
                                    instant_rows, ["_timem", "_timet"])
         conn.execute("SELECT tgsis.refresh_geometry(%s)", (feature_id,))
+        check_continuity(conn, feature_id, tolerance, period.start)
 
 
 def delete_period(conn: Conn, feature_id: int, start: float) -> bool:

@@ -53,7 +53,7 @@ True
 from tgsis.gmaps._build import from_mesh, from_polygons, from_simplices
 from tgsis.gmaps._core import GMap, GMapReport, orbit_labels
 from tgsis.gmaps._extrude import extrude, slice
-from tgsis.gmaps._time import EvolvingGMap, GMapPeriod
+from tgsis.gmaps._time import EvolvingGMap, GMapPeriod, sudden_gmap_change
 
-__all__ = ["GMap", "GMapReport", "GMapPeriod", "EvolvingGMap", "from_simplices", "from_polygons", "from_mesh",
+__all__ = ["GMap", "GMapReport", "GMapPeriod", "EvolvingGMap", "sudden_gmap_change", "from_simplices", "from_polygons", "from_mesh",
            "orbit_labels", "extrude", "slice"]

@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis._series import as_series, as_times
+from tgsis._transition import closest_on_segments, prepend_first, start_on, transition_times
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError
 from tgsis.gmaps._core import GMap
 from tgsis.temporal import Frame, frame_at
@@ -95,6 +96,38 @@ class GMapPeriod:
                     cell_properties={self.level: values} if self.level is not None and values else None)
 
 
+def sudden_gmap_change(before: GMap, period: GMapPeriod, duration: float, *, label: str = "the period") -> GMapPeriod:
+    """``period`` starting in the shape ``before`` and reaching its own first shape ``duration`` later, linearly.
+
+    The design's sudden change (see :func:`tgsis.temporal.sudden_change`)
+    for a G-map: the post-object's points start at the pre-object's points
+    with the same index when both G-maps have as many points and the same
+    involutions and vertex map (a motion); otherwise each at the closest
+    point of ``before``'s edges once the new shape's offset as a whole is
+    taken out (the edges are what the continuity check measures against). Cell values keep their first values over the
+    transition.
+
+    Raises
+    ------
+    InvalidInputError
+        A bad duration, one that does not end before the second instant, or
+        a G-map of another embedding dimension.
+    """
+    if before.embedding_dimension != period.gmap.embedding_dimension:
+        raise InvalidInputError(f"{label} is in R^{period.gmap.embedding_dimension}, the shape before it in "
+                                f"R^{before.embedding_dimension}")
+    times = transition_times(period.times, duration, label)
+    same = (len(before.points) == len(period.gmap.points) and len(before.alpha) == len(period.gmap.alpha)
+            and all(np.array_equal(a, b) for a, b in zip(before.alpha, period.gmap.alpha))
+            and np.array_equal(before.vertex, period.gmap.vertex))
+    points = before.points.astype(np.float64)
+    edges = np.stack([before.vertex, before.vertex[before.alpha[0]]], axis=1) if before.n_darts else \
+        np.empty((0, 2), dtype=np.int64)
+    start = points if same else start_on(lambda q: closest_on_segments(points, edges, q), period.positions[0])
+    return GMapPeriod(times, period.gmap, prepend_first(period.positions, start), level=period.level,
+                      cell_values={k: prepend_first(v) for k, v in period.cell_values.items()})
+
+
 class EvolvingGMap:
     """An n-G-map evolving in valid time, with topology changes at period starts (model 4).
 
@@ -153,6 +186,19 @@ class EvolvingGMap:
         values = {k: np.stack([v, v]) for k, v in gmap.cell_properties.get(chosen, {}).items()} \
             if chosen is not None else {}
         return cls([GMapPeriod([start, end], gmap, level=chosen, cell_values=values)], alive=alive, name=name)
+
+    def with_sudden_changes(self, duration: float) -> EvolvingGMap:
+        """The same G-map with every topology change made a short linear transition (:func:`sudden_gmap_change`).
+
+        ``tgsis.insert_feature(..., sudden_change=duration)`` stores this.
+        """
+        periods = [self.periods[0]]
+        for i, period in enumerate(self.periods[1:], start=1):
+            previous = self.periods[i - 1]
+            last = len(previous.times) - 1
+            periods.append(sudden_gmap_change(previous.shape_at(last, last, 0.0), period, duration,
+                                              label=f"G-map period {i}"))
+        return EvolvingGMap(periods, alive=self.alive, name=self.name)
 
     @property
     def dimension(self) -> int:

@@ -1,32 +1,40 @@
-"""Scenario ``interpretations``: one horizon, several models, in versions and named revisions.
+"""Scenario ``interpretations``: one horizon, several models, in versions and revisions, in the design's order.
 
 The specification's fourth sample application, after the source design's
-walk-through. Each model is a named revision (``tgsis.save_revision``):
+walk-through (its section 7.3), step by step in the design's order so that
+the revision numbers are the design's own:
 
-- model 1.1, the horizon from seismic picks, in DEFAULT;
-- ``version1``: an alternative interpretation, model 2.1, and its restored
-  (unfolded) state, model 2.2;
-- model 1.2 in DEFAULT: the restored state of model 1.1;
-- drill-hole picks added in DEFAULT;
-- ``version2``, from DEFAULT after the drill holes: a thrust fault cuts the
-  horizon into two blocks (a topology change), model 3.1, and its restored
-  state, model 3.2.
+1. DEFAULT, revision 0: model 1, the horizon from seismic picks;
+2. ``version1`` from DEFAULT (based on revision 0; DEFAULT then works in 1,
+   ``version1`` in 2): model 2, an alternative interpretation, in revision 2;
+3. DEFAULT, revision 1: the restored (unfolded) model 1, saved as a named
+   revision (``tgsis.save_revision``: revision 1 is frozen, DEFAULT works in 3);
+4. DEFAULT, revision 3: drill-hole picks added;
+5. ``version2`` from DEFAULT (based on revision 3; DEFAULT then works in 4,
+   ``version2`` in 5): model 3, where a thrust fault cuts the horizon into
+   two blocks (a topology change), in revision 5.
+
+So DEFAULT holds {0, 1, 3, 4}, version1 (based on 0) {2}, version2 (based
+on 3) {5} -- the design's figure; the report prints its numbers beside the
+ones tgsis handed out. Each model is a named set of objects (the design's
+model table: ``tgsis.create_model``), whose objects have a type (their
+feature class: horizons, restored, faults, picks).
 
 A restored state is a feature of its own (``<horizon> restored``) with the
 same vertices as the horizon it restores, carrying per vertex the
 **dilatancy**: the relative change of the area of the vertex's one-ring (its
 triangles) from the model to its restored state, ``|A_restored - A| / A``.
 Restoring here flattens the horizon onto its mean depth, so a tighter fold
-gives a larger dilatancy. Revision numbers follow the hand-out rules of the
-specification (versioning.md: a new version takes its parent's working
-revision as its base, the parent a new revision, then the child; a save
-freezes the working revision and starts the next); the report prints them
-next to the rules' numbers. The cross-version questions, in SQL over every
-named revision: in which model does the fault appear first, and in which
-models is the dilatancy above a threshold.
+gives a larger dilatancy. The cross-version questions, in SQL over every
+revision of every version (``tgsis.rows_at``): in which model does the fault
+first appear (the design's question: the first model, by revision, with an
+object of type fault), and in which models is the dilatancy above a
+threshold.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from psycopg import sql
@@ -34,6 +42,7 @@ from psycopg import sql
 from tgsis import pictures
 from tgsis.db.checkin import save_feature
 from tgsis.db.features import create_feature_class, insert_feature
+from tgsis.db.modelsets import create_model
 from tgsis.db.versions import create_version, enable_feature_versioning, in_version, save_revision
 from tgsis.mesh import PointSet, Surface
 from tgsis.scenarios._context import Context
@@ -98,6 +107,23 @@ def drill_holes() -> PointSet:
                     name="drill-hole picks")
 
 
+#: The design's figure (section 7.3): each version's base revision and the revisions it holds.
+DESIGN = {"DEFAULT": (None, [0, 1, 3, 4]), "version1": (0, [2]), "version2": (3, [5])}
+
+
+def revisions_of(conn: Any) -> dict[str, tuple[int | None, list[int]]]:
+    """Each version's base revision and the revisions it holds, as tgsis handed them out."""
+    rows = conn.execute("SELECT v.name, v.initrevision, array_agg(r.revision ORDER BY r.revision) "
+                        "FROM tgsis.versions v JOIN tgsis.revisions r USING (versionid) "
+                        "GROUP BY v.name, v.initrevision").fetchall()
+    return {name: (base, list(revisions)) for name, base, revisions in rows}
+
+
+def _figure_line(revisions: dict[str, tuple[int | None, list[int]]]) -> str:
+    return "; ".join(f"{name}{'' if base is None else f' based on {base}'} {{{', '.join(map(str, held))}}}"
+                     for name, (base, held) in ((n, revisions.get(n, (None, []))) for n in DESIGN))
+
+
 def run(context: Context) -> None:
     out, conn = context.out, context.conn
     n = 41 if context.size == "large" else 13
@@ -108,74 +134,78 @@ def run(context: Context) -> None:
     create_feature_class(conn, "picks", "MULTIPOINT")
     enable_feature_versioning(conn)
     conn.commit()
-    expected = {}   # model -> revision, by the hand-out rules (versioning.md)
-    got = {}
 
-    def save(model: str) -> None:
-        got[model] = save_revision(conn, model)
-        conn.commit()
-
-    # DEFAULT starts with {0}; model 1.1 is written in revision 0 and saved: DEFAULT works in 1
-    model_11 = horizon(400.0, n)
-    h = insert_feature(conn, "horizons", model_11)
-    save("model1.1")
-    expected["model1.1"] = 0
-    out(f"1. model 1.1 (seismic picks): feature {h} in DEFAULT, saved as revision {got['model1.1']}")
-    # version1: base = DEFAULT's working revision 1; DEFAULT gets 2, version1 gets 3
+    # 1. DEFAULT {0}: model 1 from seismic picks, in revision 0
+    model_1 = horizon(400.0, n)
+    h = insert_feature(conn, "horizons", model_1)
+    create_model(conn, "model 1", [h], description="interpretation of seismic picks")
+    conn.commit()
+    out(f"1. DEFAULT, revision 0: model 1 (seismic picks): horizon, feature {h}")
+    # 2. version1 from DEFAULT: based on 0; DEFAULT gets 1, version1 gets 2
     create_version(conn, "version1", description="an alternative interpretation")
     with in_version(conn, "version1"):
-        model_21 = horizon(1200.0, n)
-        save_feature(conn, "horizons", h, model_21)
-        save("model2.1")                                             # revision 3; version1 works in 4
-        r21 = insert_feature(conn, "restored", restored(model_21))
-        save("model2.2")                                             # revision 4; version1 works in 5
-    expected.update({"model2.1": 3, "model2.2": 4})
-    out(f"2. version1: model 2.1 saved as revision {got['model2.1']}, its restored state (feature {r21}) "
-        f"as model 2.2, revision {got['model2.2']}")
-    # back in DEFAULT (working revision 2): the restored model 1.1
-    r11 = insert_feature(conn, "restored", restored(model_11))
-    save("model1.2")                                                 # revision 2; DEFAULT works in 6
-    expected["model1.2"] = 2
-    picks = insert_feature(conn, "picks", drill_holes())
+        model_2 = horizon(1200.0, n)
+        save_feature(conn, "horizons", h, model_2)
+        r2 = insert_feature(conn, "restored", restored(model_2))
+        create_model(conn, "model 2", [h, r2], description="alternative interpretation, with its restored state")
+        conn.commit()
+    out(f"2. version1 (based on revision 0), revision 2: model 2, an alternative interpretation, with its restored "
+        f"state (feature {r2})")
+    # 3. DEFAULT, revision 1: the restored model 1, saved as a named revision; DEFAULT works in 3
+    r1 = insert_feature(conn, "restored", restored(model_1))
+    create_model(conn, "model 1 restored", [r1], description="restored (unfolded) model 1")
     conn.commit()
-    out(f"3. DEFAULT: model 1.2, the restored model 1.1 (feature {r11}), saved as revision {got['model1.2']}; "
-        f"drill-hole picks added (feature {picks}) in revision 6")
-    # version2 from DEFAULT: base 6; DEFAULT gets 7, version2 gets 8
+    saved = save_revision(conn, "restored_model_1")
+    conn.commit()
+    out(f"3. DEFAULT, revision {saved}: the restored model 1 (feature {r1}), saved as the named revision "
+        f"'restored_model_1'")
+    # 4. DEFAULT, revision 3: drill-hole picks
+    picks = insert_feature(conn, "picks", drill_holes())
+    create_model(conn, "drill holes", [h, picks], description="model 1 with the drill-hole picks")
+    conn.commit()
+    out(f"4. DEFAULT, revision 3: drill-hole picks (feature {picks})")
+    # 5. version2 from DEFAULT: based on 3; DEFAULT gets 4, version2 gets 5
     create_version(conn, "version2", description="the drill holes show a thrust")
     with in_version(conn, "version2"):
-        model_31 = horizon(800.0, n, blocks=True)
-        save_feature(conn, "horizons", h, model_31)
+        model_3 = horizon(800.0, n, blocks=True)
+        save_feature(conn, "horizons", h, model_3)
         t = insert_feature(conn, "faults", fault(n))
-        save("model3.1")                                             # revision 8
-        r31 = insert_feature(conn, "restored", restored(model_31))
-        save("model3.2")                                             # revision 9
-    expected.update({"model3.1": 8, "model3.2": 9})
-    out(f"4. version2: a thrust (feature {t}) cuts the horizon into two blocks ({model_31.n_vertices} vertices), "
-        f"model 3.1 saved as revision {got['model3.1']}; restored (feature {r31}) as model 3.2, revision {got['model3.2']}")
-    out("   revisions by the hand-out rules: " + ", ".join(f"{m} {r}" for m, r in expected.items()))
-    out("   revisions tgsis handed out:      " + ", ".join(f"{m} {got[m]}" for m in expected))
-    context.figure("revisions_as_the_rules_say", got == expected)
+        r3 = insert_feature(conn, "restored", restored(model_3))
+        create_model(conn, "model 3", [h, t, r3, picks], description="the horizon cut by a thrust into two blocks")
+        conn.commit()
+    out(f"5. version2 (based on revision 3), revision 5: model 3, a thrust (feature {t}) cuts the horizon into two "
+        f"blocks ({model_3.n_vertices} vertices); restored (feature {r3})")
+    got = revisions_of(conn)
+    out("   revisions in the design (7.3): " + _figure_line(DESIGN))
+    out("   revisions tgsis handed out:   " + _figure_line(got))
+    context.figure("revisions_as_the_design", all(got.get(name) == (base, list(held))
+                                                   for name, (base, held) in DESIGN.items()))
 
-    # the cross-version questions: every named revision is a model
-    first = context.ask("in which model does the fault appear first?", sql.SQL(
-        "SELECT r.name AS model, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) "
-        "WHERE r.name IS NOT NULL AND EXISTS (SELECT FROM tgsis.rows_at(NULL::public.faults, v.name, r.revision)) "
-        "ORDER BY r.revision LIMIT 1"))
+    # the cross-version questions, over every revision of every version
+    first = context.ask("in which model does the fault first appear?", sql.SQL(
+        "SELECT m.name AS model, v.name AS version, r.revision "
+        "FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid), "
+        "LATERAL tgsis.rows_at(NULL::tgsis.model, v.name, r.revision) m "
+        "WHERE EXISTS (SELECT FROM tgsis.rows_at(NULL::tgsis.model_object, v.name, r.revision) mo "
+        "JOIN tgsis.rows_at(NULL::public.faults, v.name, r.revision) f ON f._geoid = mo.geoid "
+        "WHERE mo.modelid = m.modelid) "
+        "ORDER BY r.revision, m.name LIMIT 1"))
     context.figure("fault_first_in", first[0][0] if first else None)
     above = context.ask(f"in which models is the dilatancy above {THRESHOLD}?", sql.SQL(
-        "SELECT r.name AS model, round(max(p.dilatancy)::numeric, 3) AS max_dilatancy "
-        "FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid), "
-        "LATERAL tgsis.rows_at(NULL::public.restored_cellpros, v.name, r.revision) p "
-        "WHERE r.name IS NOT NULL GROUP BY r.name, r.revision HAVING max(p.dilatancy) > {} ORDER BY r.revision").format(
+        "SELECT m.name AS model, v.name AS version, round(max(p.dilatancy)::numeric, 3) AS max_dilatancy "
+        "FROM tgsis.versions v, LATERAL tgsis.rows_at(NULL::tgsis.model, v.name) m "
+        "JOIN tgsis.rows_at(NULL::tgsis.model_object, v.name) mo ON mo.modelid = m.modelid "
+        "JOIN tgsis.rows_at(NULL::public.restored_cellpros, v.name) p ON p._geoid = mo.geoid "
+        "GROUP BY m.name, v.name HAVING max(p.dilatancy) > {} ORDER BY v.name, m.name").format(
             sql.Literal(THRESHOLD)))
     context.figure("dilatancy_above_in", [row[0] for row in above])
 
     out("5. pictures")
-    for label, model, restored_state in (("1", model_11, restored(model_11)), ("2", model_21, restored(model_21)),
-                                         ("3", model_31, restored(model_31))):
+    for label, model, restored_state in (("1", model_1, restored(model_1)), ("2", model_2, restored(model_2)),
+                                         ("3", model_3, restored(model_3))):
         surfaces: list[Surface] = [model, restored_state] + ([fault(n)] if label == "3" else [])
         colours = [None, restored_state.vertex_properties["dilatancy"]] + ([None] if label == "3" else [])
         context.wrote(pictures.scene(surfaces, context.folder / f"interpretations_model{label}.png",
                                      colour=colours, colour_label="dilatancy (relative ring-area change)",
-                                     title=f"model {label}.1 and its restored state {label}.2"))
+                                     title=f"model {label} and its restored state"))
     out(f"   {', '.join(p.name for p in context.files)}")
