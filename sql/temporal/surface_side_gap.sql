@@ -3,8 +3,8 @@
 -- for every node of the "from" shape, its distance to the nearest triangle
 -- of the "to" shape; returns the largest and its node. Candidates come from a
 -- uniform grid (cell = the larger of the tolerance and the mean extent of a
--- triangle): every triangle whose box, grown by the tolerance, meets a node's cell is a
--- candidate, so a distance up to the tolerance is exact. Nodes farther (a jump) are measured
+-- triangle): every triangle whose box, grown by the tolerance, meets a node's cell and holds
+-- the node is a candidate, so a distance up to the tolerance is exact. Nodes farther (a jump) are measured
 -- against every triangle, at most 2,000,000 node-triangle pairs; beyond,
 -- the first of them only, and exact is false (the gap is then at least the
 -- value returned). Non-finite positions are left out (tgsis.check_temporal_geometry
@@ -80,6 +80,11 @@ BEGIN
         SELECT p.nodeid, min(tgsis.point_triangle_distance(p.x, p.y, p.z, g.xa, g.ya, g.za, g.xb, g.yb, g.zb, g.xc, g.yc, g.zc)) AS d
           FROM tgsis.d4dvrtx p
           LEFT JOIN grid g ON g.i = floor(p.x / v_cell) AND g.j = floor(p.y / v_cell) AND g.k = floor(p.z / v_cell)
+               -- and the node in the triangle's box grown by the tolerance: a triangle outside it is farther than
+               -- the tolerance, so the exact distance (a PL/pgSQL call) is computed for the few that hold the node
+               AND p.x BETWEEN least(g.xa, g.xb, g.xc) - p_tolerance AND greatest(g.xa, g.xb, g.xc) + p_tolerance
+               AND p.y BETWEEN least(g.ya, g.yb, g.yc) - p_tolerance AND greatest(g.ya, g.yb, g.yc) + p_tolerance
+               AND p.z BETWEEN least(g.za, g.zb, g.zc) - p_tolerance AND greatest(g.za, g.zb, g.zc) + p_tolerance
          WHERE p.geoid = p_geoid AND p.timem = p_from_timem AND p.timet = p_from_timet
            AND p.x NOT IN ('NaN', 'Infinity', '-Infinity') AND p.y NOT IN ('NaN', 'Infinity', '-Infinity') AND p.z NOT IN ('NaN', 'Infinity', '-Infinity')
          GROUP BY p.nodeid)
