@@ -1,0 +1,180 @@
+"""``tgsis info`` and ``tgsis ls``: what features there are and what each is."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+import psycopg
+from psycopg import sql as psycopg_sql
+
+from tgsis import cliout
+from tgsis.cli._arguments import FEATURE_ID, add_command
+from tgsis.cli._connection import connection
+from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._render import time_model_suffix, time_unit_suffix
+from tgsis.db import versions as V
+from tgsis.db.features import (
+    class_of_feature,
+    fetch_feature,
+    get_feature_class,
+    list_feature_classes,
+)
+from tgsis.db.temporal import instants, lifespan
+from tgsis.mesh import Mesh
+
+
+def _sizes_in_time(conn: psycopg.Connection[Any], time_model: str, geoid: int) -> str | None:
+    """How many vertices and cells one shape of a surface in time has (model 2: per instant, model 3: per topology
+    period), where tgsis.geometry adds up the rows of every instant or period; None for other models."""
+    if time_model == "INSTANTS":
+        counts = conn.execute(
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_vrtx WHERE geoid = %s"
+            "        GROUP BY times) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_trgl WHERE geoid = %s"
+            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)",
+            (geoid, geoid, geoid)).fetchone()
+        each, unit = "per instant", "instants"
+    elif time_model == "EVOLVING":
+        counts = conn.execute(
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.node WHERE geoid = %s"
+            "        GROUP BY timem) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.d4dtrgl WHERE geoid = %s"
+            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)",
+            (geoid, geoid, geoid)).fetchone()
+        each, unit = "per topology period", "periods"
+    else:
+        return None
+    if counts is None or not counts[0]:
+        return None
+    vertices, cells, k = list(counts[0]), list(counts[1] or [0]), int(counts[2])
+    if min(vertices) == max(vertices) and min(cells) == max(cells):
+        return f"{vertices[0]} vertices, {cells[0]} cells " + (
+            f"at each of its {k} {unit}" if unit == "instants" else f"in each of its {k} {unit}")
+    return f"{min(vertices)} to {max(vertices)} vertices, {min(cells)} to {max(cells)} cells {each} ({k} {unit})"
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from tgsis.db.versions import diff_versions, list_versions, working_version
+
+    with connection(args) as conn:
+        fc = class_of_feature(conn, args.id)
+        row = conn.execute(
+            "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
+            "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
+            "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s", (args.id,)).fetchone()
+        assert row is not None
+        feature = fetch_feature(conn, fc, args.id) if fc.time_model == "STATIC" else None
+        values = conn.execute(psycopg_sql.SQL("SELECT * FROM {}.{} WHERE _geoid = %s").format(
+            psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable)), (args.id,))
+        names = [d.name for d in values.description or []]
+        properties = {n: v for n, v in zip(names, values.fetchone() or ()) if not n.startswith("_")}
+        span = lifespan(conn, args.id)
+        steps = instants(conn, args.id) if span is not None else []
+        sizes = _sizes_in_time(conn, fc.time_model, args.id)
+        here = working_version(conn)
+        versioned = fc.versioned and conn.execute(
+            "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone() == (True,)
+        differs = []
+        differing: list[dict[str, Any]] = []
+        if versioned:
+            for version in list_versions(conn):
+                if version.name != here:
+                    changed = [d for d in diff_versions(conn, here, version.name)
+                               if d.objectclass == "feature" and d.objectkey == str(args.id)]
+                    if changed:
+                        added, removed = sum(d.added for d in changed), sum(d.removed for d in changed)
+                        what = ("only there" if removed == 0 and sum(d.changed for d in changed) == 0 and added
+                                else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
+                                else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
+                        differs.append(f"{V.show_name(version.name)} ({what})")
+                        differing.append({"version": version.name,
+                                          "what": what if what in ("only there", "not there") else "differs",
+                                          "rows": sum(d.added + d.removed + d.changed for d in changed)})
+        conn.rollback()
+    name, geotype, nvrtx, ncell, members, timemodel, alive = row[:7]
+    found = feature.mesh if feature is not None else None
+    mesh = found if isinstance(found, Mesh) else None
+    plain = mesh is not None
+    if wants_json(args):
+        cliout.emit_json({
+            "id": args.id, "name": name, "class": fc.name, "geotype": geotype, "time_model": fc.time_model,
+            "time_unit": fc.time_unit, "version": here, "vertices": nvrtx, "cells": ncell, "members": members,
+            "box": None if row[7] is None else {axis: [row[7 + 2 * i], row[8 + 2 * i]] for i, axis in enumerate("xyz")},
+            "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
+            "instants": [{"t": t, "topology": starts} for t, starts in steps],
+            "properties": properties, "instant_properties": [p.name for p in fc.instant_properties],
+            "vertex_properties": list(mesh.vertex_properties) if plain and mesh is not None else [],
+            "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
+            "versioned": versioned, "differs_in": differing if versioned else None})
+        return 0
+    out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{time_model_suffix(fc)}), "
+         f"in version {V.show_name(here)}")
+    out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
+    if row[7] is not None:
+        out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
+    if span is None:
+        out("  static: the same at every time")
+    else:
+        topology = [t for t, starts in steps if starts]
+        out(f"  exists from t = {cliout.show_time(span[0])} to {cliout.show_time(span[1])}{time_unit_suffix(fc)}"
+             + (" and after (alive)" if span[2] else "")
+             + f"; {len(steps)} instants, topology (re)defined at {', '.join(cliout.show_time(t) for t in topology)}")
+    if properties:
+        out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
+    if fc.instant_properties:
+        out("  per-instant properties: " + ", ".join(p.name for p in fc.instant_properties))
+    if plain and mesh is not None:
+        if mesh.vertex_properties:
+            out("  vertex properties: " + ", ".join(mesh.vertex_properties))
+        if mesh.cell_properties:
+            out("  cell properties: " + ", ".join(mesh.cell_properties))
+    if versioned:
+        out("  versions where it differs from " + V.show_name(here) + ": " + (", ".join(differs) if differs else "none"))
+    elif not fc.versioned:
+        out(f"  class {fc.name} is not versioned: every version sees this state")
+    return 0
+
+
+def cmd_ls(args: argparse.Namespace) -> int:
+    with connection(args) as conn:
+        classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
+        rows = []
+        for fc in classes:
+            rows += [(fc.name, *r) for r in conn.execute(
+                psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
+                                "FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
+                    psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
+    # a G-map's geometry row counts its darts where other geometries count cells (tgsis gmap cells counts its cells)
+    def darts(geotype: str, ncell: int) -> tuple[int | None, int | None]:
+        return (None, ncell) if geotype == "GMAP" else (ncell, None)
+
+    if wants_json(args):
+        cliout.emit_json({"features": [{"id": geoid, "class": cls, "name": name, "geotype": geotype, "vertices": nvrtx,
+                                        "cells": darts(geotype, ncell)[0], "members": nmembers,
+                                        "darts": darts(geotype, ncell)[1]}
+                                       for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows]})
+        return 0
+    print_table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts"),
+           [(geoid, cls, name or "", geotype, nvrtx, *("" if n is None else n for n in darts(geotype, ncell)[:1]),
+             "" if nmembers is None else nmembers, *("" if n is None else n for n in darts(geotype, ncell)[1:]))
+            for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows])
+    if not rows:
+        print("no features", file=sys.stderr)
+    return 0
+
+
+def add_info_parser(commands: Any) -> None:
+    """``tgsis info``."""
+    info = add_command(commands, "info", "what a feature is: class, counts, box, lifespan and instants, properties, "
+                                      "the versions where it differs", ["tgsis info 3", "tgsis info 3 --json"],
+                    cmd_info, tabular=False)
+    info.add_argument("id", type=FEATURE_ID, help="the feature's id")
+
+
+def add_ls_parser(commands: Any) -> None:
+    """``tgsis ls``."""
+    ls = add_command(commands, "ls", "list features", ["tgsis ls", "tgsis ls --class faults --json",
+                                                    "tgsis --in cfm6 ls --no-header | cut -f1"], cmd_ls, tabular=True)
+    ls.add_argument("--class", dest="feature_class", help="only this feature class")
