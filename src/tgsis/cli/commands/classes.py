@@ -9,7 +9,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import psycopg
-from psycopg import sql as psycopg_sql
 
 from tgsis import cliout
 from tgsis.cli._arguments import GEOTYPES, INT4, add_command
@@ -26,6 +25,7 @@ from tgsis.db.features import (
     get_feature_class,
     list_feature_classes,
 )
+from tgsis.db.inspect import other_versions_exist, stored_rows
 from tgsis.errors import (
     InvalidInputError,
 )
@@ -152,10 +152,8 @@ def _stored_count(conn: psycopg.Connection[Any], fc: FeatureClass, kind: str, pr
     else:
         alignment = prop.alignment if isinstance(prop, Property) and prop.alignment else fc.alignment
         table, what = fc.property_table(alignment) or fc.cellprotable, f"{alignment.lower()} row"
-    row = conn.execute(psycopg_sql.SQL("SELECT count(*), count(DISTINCT _geoid) FROM {}").format(
-        fc.qualified(table))).fetchone()
-    assert row is not None
-    return int(row[0]), int(row[1]), what
+    rows, geometries = stored_rows(conn, fc, table)
+    return rows, geometries, what
 
 
 def _value_pairs(items: Sequence[str] | None, flag: str) -> dict[str, str]:
@@ -214,9 +212,8 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
                             "stored_geometries": geometries if default is not None else 0, "row": what})
         # the rows were counted as the session's version reads them; add_property gave every version's rows the default
         version = V.working_version(conn)
-        others = conn.execute("SELECT count(*) > 1 FROM tgsis.versions").fetchone()
         in_versions = (f" as version {V.show_name(version)} reads them; every version's rows got it"
-                       if others and others[0] else "")
+                       if other_versions_exist(conn) else "")
     if wants_json(args):
         cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
         return 0

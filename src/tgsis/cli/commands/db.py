@@ -9,6 +9,7 @@ from tgsis import cliout
 from tgsis.cli._arguments import add_command
 from tgsis.cli._output import out, wants_json
 from tgsis.db.connect import connect, resolve_target
+from tgsis.db.inspect import server_version
 from tgsis.db.install import install, installation_status, uninstall
 from tgsis.errors import (
     Error,
@@ -49,11 +50,11 @@ def cmd_db_status(args: argparse.Namespace) -> int:
     target = resolve_target(args.dsn)
     with connect(args.dsn) as conn:
         status = installation_status(conn)
-        server = conn.execute("SELECT version()").fetchone()
+        server = server_version(conn)
         db = conn.info.dbname
     current = status.installed
     if wants_json(args):
-        cliout.emit_json({"database": db, "source": target.source, "server": server[0] if server else None,
+        cliout.emit_json({"database": db, "source": target.source, "server": server,
                           "tgsis": current.version if current else None,
                           "method": current.method if current else None,
                           "fingerprint": current.fingerprint if current else None,
@@ -62,7 +63,7 @@ def cmd_db_status(args: argparse.Namespace) -> int:
                           "problem": status.problem, "fix": status.fix})
         return 0 if status.ok else 1
     out(f"database: {db} (from {target.source})")
-    out(f"server:   {server[0] if server else '?'}")
+    out(f"server:   {server or '?'}")
     fingerprint = ("unknown: this role may not read tgsis.installation" if current and current.fingerprint is None
                    else (current.fingerprint if current else None) or "none recorded")
     installed = f"{current.version} ({current.method}, fingerprint {fingerprint})" if current else "not installed"

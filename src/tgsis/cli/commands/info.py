@@ -7,7 +7,6 @@ import sys
 from typing import Any
 
 import psycopg
-from psycopg import sql as psycopg_sql
 
 from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command
@@ -21,6 +20,7 @@ from tgsis.db.features import (
     get_feature_class,
     list_feature_classes,
 )
+from tgsis.db.inspect import feature_property_values, feature_rows, features_versioned, geometry_summary, shape_sizes
 from tgsis.db.temporal import instants, lifespan
 from tgsis.mesh import Mesh
 
@@ -28,27 +28,11 @@ from tgsis.mesh import Mesh
 def _sizes_in_time(conn: psycopg.Connection[Any], time_model: str, geoid: int) -> str | None:
     """How many vertices and cells one shape of a surface in time has (model 2: per instant, model 3: per topology
     period), where tgsis.geometry adds up the rows of every instant or period; None for other models."""
-    if time_model == "INSTANTS":
-        counts = conn.execute(
-            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_vrtx WHERE geoid = %s"
-            "        GROUP BY times) AS v(t, n)),"
-            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_trgl WHERE geoid = %s"
-            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)",
-            (geoid, geoid, geoid)).fetchone()
-        each, unit = "per instant", "instants"
-    elif time_model == "EVOLVING":
-        counts = conn.execute(
-            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.node WHERE geoid = %s"
-            "        GROUP BY timem) AS v(t, n)),"
-            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.d4dtrgl WHERE geoid = %s"
-            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)",
-            (geoid, geoid, geoid)).fetchone()
-        each, unit = "per topology period", "periods"
-    else:
+    sizes = shape_sizes(conn, time_model, geoid)
+    if sizes is None:
         return None
-    if counts is None or not counts[0]:
-        return None
-    vertices, cells, k = list(counts[0]), list(counts[1] or [0]), int(counts[2])
+    each, unit = ("per instant", "instants") if time_model == "INSTANTS" else ("per topology period", "periods")
+    vertices, cells, k = list(sizes.vertices), list(sizes.cells), sizes.count
     if min(vertices) == max(vertices) and min(cells) == max(cells):
         return f"{vertices[0]} vertices, {cells[0]} cells " + (
             f"at each of its {k} {unit}" if unit == "instants" else f"in each of its {k} {unit}")
@@ -60,22 +44,14 @@ def cmd_info(args: argparse.Namespace) -> int:
 
     with connection(args) as conn:
         fc = class_of_feature(conn, args.id)
-        row = conn.execute(
-            "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
-            "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
-            "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s", (args.id,)).fetchone()
-        assert row is not None
+        summary = geometry_summary(conn, args.id)
         feature = fetch_feature(conn, fc, args.id) if fc.time_model == "STATIC" else None
-        values = conn.execute(psycopg_sql.SQL("SELECT * FROM {}.{} WHERE _geoid = %s").format(
-            psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable)), (args.id,))
-        names = [d.name for d in values.description or []]
-        properties = {n: v for n, v in zip(names, values.fetchone() or ()) if not n.startswith("_")}
+        properties = feature_property_values(conn, fc, args.id)
         span = lifespan(conn, args.id)
         steps = instants(conn, args.id) if span is not None else []
         sizes = _sizes_in_time(conn, fc.time_model, args.id)
         here = working_version(conn)
-        versioned = fc.versioned and conn.execute(
-            "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone() == (True,)
+        versioned = fc.versioned and features_versioned(conn)
         differs = []
         differing: list[dict[str, Any]] = []
         if versioned:
@@ -93,7 +69,9 @@ def cmd_info(args: argparse.Namespace) -> int:
                                           "what": what if what in ("only there", "not there") else "differs",
                                           "rows": sum(d.added + d.removed + d.changed for d in changed)})
         conn.rollback()
-    name, geotype, nvrtx, ncell, members, timemodel, alive = row[:7]
+    name, geotype, nvrtx, ncell, members = (summary.name, summary.geotype, summary.n_vertices, summary.n_cells,
+                                            summary.members)
+    box = summary.box
     found = feature.mesh if feature is not None else None
     mesh = found if isinstance(found, Mesh) else None
     plain = mesh is not None
@@ -101,7 +79,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         cliout.emit_json({
             "id": args.id, "name": name, "class": fc.name, "geotype": geotype, "time_model": fc.time_model,
             "time_unit": fc.time_unit, "version": here, "vertices": nvrtx, "cells": ncell, "members": members,
-            "box": None if row[7] is None else {axis: [row[7 + 2 * i], row[8 + 2 * i]] for i, axis in enumerate("xyz")},
+            "box": None if box[0] is None else {axis: [box[2 * i], box[2 * i + 1]] for i, axis in enumerate("xyz")},
             "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
             "instants": [{"t": t, "topology": starts} for t, starts in steps],
             "properties": properties, "instant_properties": [p.name for p in fc.instant_properties],
@@ -112,8 +90,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{time_model_suffix(fc)}), "
          f"in version {V.show_name(here)}")
     out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
-    if row[7] is not None:
-        out("  box: " + ", ".join(f"{axis} [{row[7 + 2 * i]!r}, {row[8 + 2 * i]!r}]" for i, axis in enumerate("xyz")))
+    if box[0] is not None:
+        out("  box: " + ", ".join(f"{axis} [{box[2 * i]!r}, {box[2 * i + 1]!r}]" for i, axis in enumerate("xyz")))
     if span is None:
         out("  static: the same at every time")
     else:
@@ -142,10 +120,7 @@ def cmd_ls(args: argparse.Namespace) -> int:
         classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
         rows = []
         for fc in classes:
-            rows += [(fc.name, *r) for r in conn.execute(
-                psycopg_sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
-                                "FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
-                    psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable))).fetchall()]
+            rows += [(fc.name, *r) for r in feature_rows(conn, fc)]
     # a G-map's geometry row counts its darts where other geometries count cells (tgsis gmap cells counts its cells)
     def darts(geotype: str, ncell: int) -> tuple[int | None, int | None]:
         return (None, ncell) if geotype == "GMAP" else (ncell, None)

@@ -106,11 +106,12 @@ def _with_z_convention(conn: Any, feature_id: int, surface: Surface) -> None:
     GOCAD then writes ``ZPOSITIVE`` as the imported file had it; the formats
     without a z convention write elevation whatever it is (tgsis._zpositive).
     """
+    from tgsis.db.inspect import stored_zpositive
     from tgsis.db.meaning import restore_meaning
 
-    row = conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
-    if row is not None and row[0] is not None:
-        restore_meaning(surface, row[0], None, None, None)
+    zpositive = stored_zpositive(conn, feature_id)
+    if zpositive is not None:
+        restore_meaning(surface, zpositive, None, None, None)
 
 
 def _series_name(name: str) -> str:

@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 import psycopg
-from psycopg import sql as psycopg_sql
 
 from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, feature_values
@@ -26,6 +25,7 @@ from tgsis.db.features import (
     get_feature_class,
     insert_feature,
 )
+from tgsis.db.inspect import features_named, lock_feature_name
 from tgsis.db.temporal import instants
 from tgsis.errors import (
     FileFormatError,
@@ -117,12 +117,8 @@ def _features_named(conn: Any, fc: FeatureClass, name: str) -> list[int]:
     it is committed, so that it warns, or replaces it with ``--replace``,
     instead of both adding a feature of that name.
     """
-    conn.execute("SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))",
-                 (f"tgsis import: {fc.schema}.{fc.featuretable}: {name}",))
-    return [int(r[0]) for r in conn.execute(
-        psycopg_sql.SQL("SELECT g.geoid FROM {}.{} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-                        "WHERE g.geoname = %s ORDER BY g.geoid").format(
-            psycopg_sql.Identifier(fc.schema), psycopg_sql.Identifier(fc.featuretable)), (name,)).fetchall()]
+    lock_feature_name(conn, fc, name, "tgsis import")
+    return features_named(conn, fc, name)
 
 
 def _replaced_one(fc: FeatureClass, name: str, same: Sequence[int]) -> int | None:

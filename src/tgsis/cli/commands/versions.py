@@ -21,6 +21,7 @@ from tgsis.db.features import (
     class_of_feature,
     fetch_feature,
 )
+from tgsis.db.inspect import revision_exists
 from tgsis.errors import (
     InvalidInputError,
     MissingPrivilegeError,
@@ -385,8 +386,7 @@ def cmd_version_compress(args: argparse.Namespace) -> int:
     looked_at = split_version(remembered)[1] if remembered else None
     with connect(args.dsn) as conn:
         report = V.compress_versions(conn, dry_run=args.dry_run)
-        gone = looked_at is not None and not args.dry_run and conn.execute(
-            "SELECT NOT EXISTS (SELECT FROM tgsis.revisions WHERE revision = %s)", (looked_at,)).fetchone() == (True,)
+        gone = looked_at is not None and not args.dry_run and not revision_exists(conn, looked_at)
     totals = {what: sum(i.removed for i in report if i.what == what)
               for what in ("rows", "lastrevs", "revisions", "set entries")}
     if wants_json(args):

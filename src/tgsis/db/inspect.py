@@ -1,0 +1,201 @@
+"""What the ``tgsis`` command reads about stored things: a feature's summary row and properties, the features of a
+class, counts, the z convention, whether versions or revisions exist.
+
+The command line holds no SQL (docs/developing.md, "Add a command"): every
+question it asks the database is a function here, or in the module of its
+topic. The reads see the session's working version, as the command's other
+reads do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import psycopg
+from psycopg import sql
+
+from tgsis.arguments import check_module
+from tgsis.errors import NotFoundError, reraise
+
+if TYPE_CHECKING:
+    from tgsis.db.features import FeatureClass
+
+Conn = psycopg.Connection[Any]
+
+__all__ = [
+    "GeometrySummary",
+    "ShapeSizes",
+    "features_named",
+    "feature_property_values",
+    "feature_rows",
+    "features_versioned",
+    "geometry_summary",
+    "lock_feature_name",
+    "other_versions_exist",
+    "revision_exists",
+    "server_version",
+    "shape_sizes",
+    "stored_rows",
+    "stored_zpositive",
+]
+
+
+def _named(fc: FeatureClass) -> sql.Composable:
+    """The feature table of class ``fc``, quoted."""
+    return sql.SQL("{}.{}").format(sql.Identifier(fc.schema), sql.Identifier(fc.featuretable))
+
+
+def server_version(conn: Conn) -> str | None:
+    """The server's ``version()`` string."""
+    with reraise():
+        row = conn.execute("SELECT version()").fetchone()
+    return str(row[0]) if row else None
+
+
+def stored_rows(conn: Conn, fc: FeatureClass, table: str) -> tuple[int, int]:
+    """How many rows table ``table`` of class ``fc`` holds as the working version reads them, and of how many
+    geometries: ``(rows, geometries)``."""
+    with reraise():
+        row = conn.execute(sql.SQL("SELECT count(*), count(DISTINCT _geoid) FROM {}").format(
+            fc.qualified(table))).fetchone()
+    assert row is not None
+    return int(row[0]), int(row[1])
+
+
+def other_versions_exist(conn: Conn) -> bool:
+    """Whether the database has versions other than DEFAULT."""
+    with reraise():
+        row = conn.execute("SELECT count(*) > 1 FROM tgsis.versions").fetchone()
+    return bool(row and row[0])
+
+
+def revision_exists(conn: Conn, revision: int) -> bool:
+    """Whether revision number ``revision`` is still recorded (``tgsis version compress`` removes revisions)."""
+    with reraise():
+        row = conn.execute("SELECT EXISTS (SELECT FROM tgsis.revisions WHERE revision = %s)", (revision,)).fetchone()
+    return row == (True,)
+
+
+def features_versioned(conn: Conn) -> bool:
+    """Whether the feature tables are versioned (``tgsis versioning enable features`` was run)."""
+    with reraise():
+        row = conn.execute(
+            "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone()
+    return row == (True,)
+
+
+def lock_feature_name(conn: Conn, fc: FeatureClass, name: str, purpose: str) -> None:
+    """Take the transaction-level advisory lock on class ``fc`` and feature name ``name`` for ``purpose``.
+
+    Two writers of one name that take it take turns: the second sees the
+    first's feature once it is committed (``tgsis import`` warns, or replaces
+    it with ``--replace``, instead of both adding a feature of that name).
+    """
+    with reraise():
+        conn.execute("SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))",
+                     (f"{purpose}: {fc.schema}.{fc.featuretable}: {name}",))
+
+
+def features_named(conn: Conn, fc: FeatureClass, name: str) -> list[int]:
+    """The ids of the features of class ``fc`` named ``name`` (as the working version sees them), in order."""
+    with reraise():
+        rows = conn.execute(
+            sql.SQL("SELECT g.geoid FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
+                    "WHERE g.geoname = %s ORDER BY g.geoid").format(_named(fc)), (name,)).fetchall()
+    return [int(r[0]) for r in rows]
+
+
+def feature_rows(conn: Conn, fc: FeatureClass) -> list[tuple[int, str | None, str, int, int, int | None]]:
+    """The features of class ``fc``, by id: ``(id, name, geotype, vertices, cells, members)`` each (``members``:
+    the number of member geometries of a collection, else None; a G-map's ``cells`` counts its darts)."""
+    with reraise():
+        rows = conn.execute(
+            sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
+                    "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
+                _named(fc))).fetchall()
+    return [tuple(r) for r in rows]
+
+
+@dataclass(frozen=True)
+class GeometrySummary:
+    """What ``tgsis.geometry`` records of one feature: name, type, counts, time model, and its box.
+
+    ``box``: ``(xmin, xmax, ymin, ymax, zmin, zmax)``, None members when it has none.
+    """
+
+    name: str | None
+    geotype: str
+    n_vertices: int
+    n_cells: int
+    members: int | None
+    time_model: str | None
+    alive: bool | None
+    box: tuple[float | None, float | None, float | None, float | None, float | None, float | None]
+
+
+def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
+    """The :class:`GeometrySummary` of feature ``geoid``; :class:`NotFoundError` when there is none."""
+    with reraise():
+        row = conn.execute(
+            "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
+            "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
+            "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s",
+            (geoid,)).fetchone()
+    if row is None:
+        raise NotFoundError(f"feature {geoid} does not exist")
+    return GeometrySummary(row[0], row[1], row[2], row[3], row[4], row[5], row[6], tuple(row[7:13]))
+
+
+def feature_property_values(conn: Conn, fc: FeatureClass, geoid: int) -> dict[str, Any]:
+    """The feature properties of feature ``geoid`` of class ``fc``, by name, in the table's column order."""
+    with reraise():
+        cur = conn.execute(sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(_named(fc)), (geoid,))
+        names = [d.name for d in cur.description or []]
+        row = cur.fetchone()
+    return {n: v for n, v in zip(names, row or ()) if not n.startswith("_")}
+
+
+@dataclass(frozen=True)
+class ShapeSizes:
+    """The sizes of the shapes of a surface in time: ``vertices[i]``, ``cells[i]`` of shape i in time order
+    (model 2: per instant; model 3: per topology period), and how many instants or periods it has."""
+
+    vertices: Sequence[int]
+    cells: Sequence[int]
+    count: int
+
+
+def shape_sizes(conn: Conn, time_model: str, geoid: int) -> ShapeSizes | None:
+    """How many vertices and cells each shape of feature ``geoid`` has, where ``tgsis.geometry`` adds up the rows
+    of every instant or period; None for time models other than INSTANTS and EVOLVING, or with no shape."""
+    if time_model == "INSTANTS":
+        query = (
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_vrtx WHERE geoid = %s"
+            "        GROUP BY times) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_trgl WHERE geoid = %s"
+            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)")
+    elif time_model == "EVOLVING":
+        query = (
+            "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.node WHERE geoid = %s"
+            "        GROUP BY timem) AS v(t, n)),"
+            "       (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.d4dtrgl WHERE geoid = %s"
+            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)")
+    else:
+        return None
+    with reraise():
+        counts = conn.execute(query, (geoid, geoid, geoid)).fetchone()
+    if counts is None or not counts[0]:
+        return None
+    return ShapeSizes([int(n) for n in counts[0]], [int(n) for n in counts[1] or [0]], int(counts[2]))
+
+
+def stored_zpositive(conn: Conn, geoid: int) -> str | None:
+    """The z convention (``ZPOSITIVE``) the file of feature ``geoid`` had, as stored; None when none was kept."""
+    with reraise():
+        row = conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()
+    return None if row is None or row[0] is None else str(row[0])
+
+
+check_module(globals(), __all__)
