@@ -80,10 +80,11 @@ def test_ls(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     doc = as_json(data, capsys, "ls")
     assert [f["id"] for f in doc["features"]] == [*data["ids"], data["moving"]]
     assert doc["features"][0] == {"id": data["ids"][0], "class": "faults", "name": "F1", "geotype": "SURFACE",
-                                  "vertices": 6, "cells": 4, "members": None, "darts": None}
+                                  "vertices": 6, "cells": 4, "members": None, "darts": None,
+                                  "properties": {"release": "5.3"}}
     header, rows = table(data, capsys, "ls")
-    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts"]
-    assert rows[0] == [str(data["ids"][0]), "faults", "F1", "SURFACE", "6", "4", "", ""]
+    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"]
+    assert rows[0] == [str(data["ids"][0]), "faults", "F1", "SURFACE", "6", "4", "", "", "release=5.3"]
 
 
 def test_class_list(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:

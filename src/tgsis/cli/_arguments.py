@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -61,3 +62,31 @@ def feature_values(items: Sequence[str] | None) -> dict[str, str]:
             raise InvalidInputError(f"--set {item!r} must be NAME=VALUE")
         values[name] = value
     return values
+
+
+def box(text: str) -> list[float]:
+    """An argparse type: ``XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX``, each min at most its max, else a usage error."""
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 6 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"{text!r} is not six numbers XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")
+    if any(values[i] > values[i + 3] for i in range(3)):
+        raise argparse.ArgumentTypeError(f"{text!r}: each minimum must be at most its maximum "
+                                         "(XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX)")
+    return values
+
+
+def property_filters(items: Sequence[str] | None) -> dict[str, str]:
+    """``--property NAME=VALUE`` items of a filter, by name (one value per name)."""
+    values: dict[str, str] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise InvalidInputError(f"--property {item!r} must be NAME=VALUE", hint="e.g. --property release=6.1")
+        if name in values and values[name] != value:
+            raise InvalidInputError(f"--property {name} is given twice, as {values[name]!r} and {value!r}")
+        values[name] = value
+    return values
+

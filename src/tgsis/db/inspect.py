@@ -9,7 +9,7 @@ reads do.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -25,13 +25,14 @@ if TYPE_CHECKING:
 Conn = psycopg.Connection[Any]
 
 __all__ = [
+    "FeatureRow",
     "GeometrySummary",
     "ShapeSizes",
     "features_named",
     "feature_property_values",
-    "feature_rows",
     "features_versioned",
     "geometry_summary",
+    "list_features",
     "lock_feature_name",
     "other_versions_exist",
     "revision_exists",
@@ -105,17 +106,6 @@ def features_named(conn: Conn, fc: FeatureClass, name: str) -> list[int]:
             sql.SQL("SELECT g.geoid FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
                     "WHERE g.geoname = %s ORDER BY g.geoid").format(_named(fc)), (name,)).fetchall()
     return [int(r[0]) for r in rows]
-
-
-def feature_rows(conn: Conn, fc: FeatureClass) -> list[tuple[int, str | None, str, int, int, int | None]]:
-    """The features of class ``fc``, by id: ``(id, name, geotype, vertices, cells, members)`` each (``members``:
-    the number of member geometries of a collection, else None; a G-map's ``cells`` counts its darts)."""
-    with reraise():
-        rows = conn.execute(
-            sql.SQL("SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, cardinality(g.geoids) "
-                    "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY g.geoid").format(
-                _named(fc))).fetchall()
-    return [tuple(r) for r in rows]
 
 
 @dataclass(frozen=True)
@@ -196,6 +186,81 @@ def stored_zpositive(conn: Conn, geoid: int) -> str | None:
     with reraise():
         row = conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()
     return None if row is None or row[0] is None else str(row[0])
+
+
+@dataclass(frozen=True)
+class FeatureRow:
+    """A feature as the pages list it."""
+
+    id: int
+    feature_class: str
+    name: str | None
+    geotype: str
+    vertices: int | None
+    cells: int | None
+    time_model: str
+    first: float | None
+    last: float | None
+    alive: bool | None
+    properties: dict[str, Any]
+    box: list[float] | None
+    members: int | None = None  # of a collection; None for other geometries
+
+
+def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
+                  ids: Sequence[int] | None = None, properties: Mapping[str, str] | None = None,
+                  limit: int | None = None) -> list[FeatureRow]:
+    """The features of class ``fc`` as the working version sees them, by id, with their feature properties.
+
+    Parameters
+    ----------
+    name : a part of the name, in any case
+    box : ``(xmin, ymin, zmin, xmax, ymax, zmax)``: features whose bounding box meets it
+    ids : only these features
+    properties : feature property name -> value: features whose property equals the value (the text is read as
+        the property's type; a value of another type fails with :class:`InvalidInputError`)
+    limit : at most this many
+    """
+    props = [p.name for p in fc.feature_properties]
+    conditions: list[sql.Composable] = [sql.SQL("true")]
+    params: list[Any] = []
+    if name:
+        conditions.append(sql.SQL("strpos(lower(g.geoname), lower(%s)) > 0"))
+        params.append(name)
+    if box is not None:
+        conditions.append(sql.SQL("g.geoid IN (SELECT b FROM tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) b)"))
+        params += list(box)
+    if ids is not None:
+        conditions.append(sql.SQL("g.geoid = ANY(%s)"))
+        params.append(list(ids))
+    for prop, value in (properties or {}).items():
+        if prop not in props:
+            raise NotFoundError(f"class {fc.name} has no feature property {prop!r}",
+                                hint=f"its feature properties: {', '.join(props) or 'none'}")
+        # the value is an untyped literal: PostgreSQL reads it as the column's type (22P02 when it is not one)
+        conditions.append(sql.SQL("f.{} = %s").format(sql.Identifier(prop)))
+        params.append(value)
+    query = sql.SQL(
+        "SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, g.timemodel, g.alive, i.first, i.last, "
+        "cube_ll_coord(g.bbox, 1), cube_ll_coord(g.bbox, 2), cube_ll_coord(g.bbox, 3), "
+        "cube_ur_coord(g.bbox, 1), cube_ur_coord(g.bbox, 2), cube_ur_coord(g.bbox, 3), cardinality(g.geoids){} "
+        "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
+        "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last "
+        "                     FROM (SELECT t FROM tgsis.geometry_instants(g.geoid) "
+        "                            WHERE g.timemodel IN ('INSTANTS', 'EVOLVING') "
+        "                           UNION ALL SELECT timet FROM tgsis.gmap_timet "
+        "                            WHERE geoid = g.geoid AND g.timemodel = 'GMAP') AS lives (t)) i ON true "
+        "WHERE {} ORDER BY g.geoid {}").format(
+        sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
+        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
+        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""))
+    with reraise():
+        rows = conn.execute(query, params).fetchall()
+    return [FeatureRow(int(r[0]), fc.name, r[1], r[2], r[3], r[4], r[5],
+                       None if r[7] is None else float(r[7]), None if r[8] is None else float(r[8]),
+                       None if r[7] is None else bool(r[6]), dict(zip(props, r[16:])),
+                       None if r[9] is None else [float(v) for v in r[9:15]], r[15])
+            for r in rows]
 
 
 check_module(globals(), __all__)

@@ -50,6 +50,7 @@ from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
 from tgsis.db.features import fetch_feature
 from tgsis.db.gmaps import fetch_md_gmap, gmap_at
+from tgsis.db.inspect import FeatureRow, list_features
 from tgsis.db.temporal import get_at
 from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError,
                           reraise)
@@ -228,61 +229,6 @@ def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
             return fc
     raise NotFoundError(f"no feature {feature_id} that this role can read in this version",
                         hint="the classes page lists the features")
-
-
-@dataclass(frozen=True)
-class FeatureRow:
-    """A feature as the pages list it."""
-
-    id: int
-    feature_class: str
-    name: str | None
-    geotype: str
-    vertices: int | None
-    cells: int | None
-    time_model: str
-    first: float | None
-    last: float | None
-    alive: bool | None
-    properties: dict[str, Any]
-    box: list[float] | None
-
-
-def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
-                  ids: Sequence[int] | None = None, limit: int | None = None) -> list[FeatureRow]:
-    """The features of a class (name: a part of the name, any case; box: meeting the bounding box), by id."""
-    props = [p.name for p in fc.feature_properties]
-    conditions = [sql.SQL("true")]
-    params: list[Any] = []
-    if name:
-        conditions.append(sql.SQL("strpos(lower(g.geoname), lower(%s)) > 0"))
-        params.append(name)
-    if box is not None:
-        conditions.append(sql.SQL("g.geoid IN (SELECT b FROM tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) b)"))
-        params += list(box)
-    if ids is not None:
-        conditions.append(sql.SQL("g.geoid = ANY(%s)"))
-        params.append(list(ids))
-    query = sql.SQL(
-        "SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, g.timemodel, g.alive, i.first, i.last, "
-        "cube_ll_coord(g.bbox, 1), cube_ll_coord(g.bbox, 2), cube_ll_coord(g.bbox, 3), "
-        "cube_ur_coord(g.bbox, 1), cube_ur_coord(g.bbox, 2), cube_ur_coord(g.bbox, 3){} "
-        "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-        "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last "
-        "                     FROM (SELECT t FROM tgsis.geometry_instants(g.geoid) "
-        "                            WHERE g.timemodel IN ('INSTANTS', 'EVOLVING') "
-        "                           UNION ALL SELECT timet FROM tgsis.gmap_timet "
-        "                            WHERE geoid = g.geoid AND g.timemodel = 'GMAP') AS lives (t)) i ON true "
-        "WHERE {} ORDER BY g.geoid {}").format(
-        sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
-        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
-        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""))
-    rows = conn.execute(query, params).fetchall()
-    return [FeatureRow(int(r[0]), fc.name, r[1], r[2], r[3], r[4], r[5],
-                       None if r[7] is None else float(r[7]), None if r[8] is None else float(r[8]),
-                       None if r[7] is None else bool(r[6]), dict(zip(props, r[15:])),
-                       None if r[9] is None else [float(v) for v in r[9:15]])
-            for r in rows]
 
 
 def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:

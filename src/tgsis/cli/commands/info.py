@@ -9,7 +9,7 @@ from typing import Any
 import psycopg
 
 from tgsis import cliout
-from tgsis.cli._arguments import FEATURE_ID, add_command
+from tgsis.cli._arguments import FEATURE_ID, add_command, box, property_filters
 from tgsis.cli._connection import connection
 from tgsis.cli._output import out, print_table, wants_json
 from tgsis.cli._render import time_model_suffix, time_unit_suffix
@@ -20,8 +20,15 @@ from tgsis.db.features import (
     get_feature_class,
     list_feature_classes,
 )
-from tgsis.db.inspect import feature_property_values, feature_rows, features_versioned, geometry_summary, shape_sizes
+from tgsis.db.inspect import (
+    feature_property_values,
+    features_versioned,
+    geometry_summary,
+    list_features,
+    shape_sizes,
+)
 from tgsis.db.temporal import instants, lifespan
+from tgsis.errors import InvalidInputError
 from tgsis.mesh import Mesh
 
 
@@ -115,26 +122,39 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _shown_properties(properties: dict[str, Any]) -> str:
+    """``release=6.1 slip=2.0``: a feature's properties in one table cell (a NULL as nothing after ``=``)."""
+    return " ".join(f"{k}={'' if v is None else v}" for k, v in properties.items())
+
+
 def cmd_ls(args: argparse.Namespace) -> int:
+    wanted = property_filters(args.property)
+    if wanted and not args.feature_class:
+        raise InvalidInputError("--property needs --class: feature properties belong to a class",
+                                hint="tgsis class list names the classes and their properties")
     with connection(args) as conn:
         classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
         rows = []
         for fc in classes:
-            rows += [(fc.name, *r) for r in feature_rows(conn, fc)]
+            rows += list_features(conn, fc, name=args.name, box=args.box, properties=wanted)
+
     # a G-map's geometry row counts its darts where other geometries count cells (tgsis gmap cells counts its cells)
-    def darts(geotype: str, ncell: int) -> tuple[int | None, int | None]:
+    def darts(geotype: str, ncell: int | None) -> tuple[int | None, int | None]:
         return (None, ncell) if geotype == "GMAP" else (ncell, None)
 
     if wants_json(args):
-        cliout.emit_json({"features": [{"id": geoid, "class": cls, "name": name, "geotype": geotype, "vertices": nvrtx,
-                                        "cells": darts(geotype, ncell)[0], "members": nmembers,
-                                        "darts": darts(geotype, ncell)[1]}
-                                       for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows]})
+        cliout.emit_json({"features": [{"id": r.id, "class": r.feature_class, "name": r.name, "geotype": r.geotype,
+                                        "vertices": r.vertices, "cells": darts(r.geotype, r.cells)[0],
+                                        "members": r.members, "darts": darts(r.geotype, r.cells)[1],
+                                        "properties": r.properties}
+                                       for r in rows]})
         return 0
-    print_table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts"),
-           [(geoid, cls, name or "", geotype, nvrtx, *("" if n is None else n for n in darts(geotype, ncell)[:1]),
-             "" if nmembers is None else nmembers, *("" if n is None else n for n in darts(geotype, ncell)[1:]))
-            for cls, geoid, name, geotype, nvrtx, ncell, nmembers in rows])
+    print_table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"),
+                [(r.id, r.feature_class, r.name or "", r.geotype, r.vertices,
+                  *("" if n is None else n for n in darts(r.geotype, r.cells)[:1]),
+                  "" if r.members is None else r.members,
+                  *("" if n is None else n for n in darts(r.geotype, r.cells)[1:]), _shown_properties(r.properties))
+                 for r in rows])
     if not rows:
         print("no features", file=sys.stderr)
     return 0
@@ -151,5 +171,13 @@ def add_info_parser(commands: Any) -> None:
 def add_ls_parser(commands: Any) -> None:
     """``tgsis ls``."""
     ls = add_command(commands, "ls", "list features", ["tgsis ls", "tgsis ls --class faults --json",
+                                                    "tgsis ls --class faults --property release=6.1 --name garlock",
+                                                    "tgsis ls --box 0,0,-5000,10000,10000,0",
                                                     "tgsis --in cfm6 ls --no-header | cut -f1"], cmd_ls, tabular=True)
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
+    ls.add_argument("--name", help="only features whose name contains NAME, in any case")
+    ls.add_argument("--box", type=box, metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
+                    help="only features whose bounding box meets this box (write --box=-1,... when XMIN is negative)")
+    ls.add_argument("--property", action="append", metavar="NAME=VALUE",
+                    help="only features whose feature property NAME equals VALUE, read as the property's type "
+                         "(repeatable; with --class)")
