@@ -128,7 +128,12 @@ def test_version_conflicts_and_diff(data: dict[str, Any], capsys: pytest.Capture
     diff = as_json(data, capsys, "version", "diff", "DEFAULT", "a")
     assert diff["a"] == "DEFAULT" and {"objectclass": "feature", "objectkey": fid, "table": "vrtx", "added": 0,
                                        "removed": 0, "changed": 1} in diff["differences"]
+    assert {"objectclass": "feature", "objectkey": fid, "difference": "changed", "tables": ["vrtx"], "added": 0,
+            "removed": 0, "changed": 1} in diff["objects"]
     header, rows = table(data, capsys, "version", "diff", "DEFAULT", "a")
+    assert header == ["class", "key", "difference", "tables", "added", "removed", "changed"]
+    assert ["feature", fid, "changed", "vrtx", "+0", "-0", "~1"] in rows
+    header, rows = table(data, capsys, "version", "diff", "DEFAULT", "a", "--tables")
     assert header == ["class", "key", "table", "added", "removed", "changed"] and ["feature", fid, "vrtx", "+0", "-0",
                                                                                    "~1"] in rows
 

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from tgsis.cli._output import out
 from tgsis.db.features import FeatureClass, class_of_feature, fetch_feature
 from tgsis.db.temporal import get_at, instants, lifespan
+from tgsis.db.versions import Difference
 from tgsis.errors import InvalidInputError, NotFoundError
 from tgsis.mesh import Surface
 
@@ -48,3 +50,45 @@ def picture_of(conn: Any, ids: Sequence[int], t: float | None, path: str, title:
     pictures.scene(meshes, path, title=title, colour=colour, colour_label=f"moved since t = {span[0]!r} (m)"
                    if span is not None else "")
     out(f"drew {len(meshes)} surface(s) to {path}")
+
+
+@dataclass
+class ObjectDifference:
+    """What differs of one object between two versions: ``difference`` is ``only in A``, ``only in B`` or
+    ``changed``; the rows added, removed and changed summed over its ``tables``."""
+
+    objectclass: str
+    objectkey: str
+    difference: str
+    tables: list[str]
+    added: int
+    removed: int
+    changed: int
+
+
+def summarize_differences(differences: Sequence[Difference], a: str, b: str) -> list[ObjectDifference]:
+    """One :class:`ObjectDifference` per object of ``differences`` (rows per object and table, A to B).
+
+    An object is only in A when every row of it that differs is gone in B and
+    none was added or changed (its rows all removed: deleted in B, or added in
+    A after B was based); only in B the other way round. A feature is only on
+    one side when its ``geometry`` row is, so that a feature that merely lost
+    some rows (vertices of a property table) counts as changed.
+    """
+    grouped: dict[tuple[str, str], list[Difference]] = {}
+    for d in differences:
+        grouped.setdefault((d.objectclass, d.objectkey), []).append(d)
+    result = []
+    for (objectclass, objectkey), rows in grouped.items():
+        added, removed, changed = (sum(getattr(d, n) for d in rows) for n in ("added", "removed", "changed"))
+        tables = [d.table for d in rows]
+        whole = objectclass != "feature" or "geometry" in tables
+        if whole and changed == 0 and added == 0 and removed > 0:
+            what = f"only in {a}"
+        elif whole and changed == 0 and removed == 0 and added > 0:
+            what = f"only in {b}"
+        else:
+            what = "changed"
+        result.append(ObjectDifference(objectclass, objectkey, what, tables, added, removed, changed))
+    return result
+

@@ -15,6 +15,7 @@ from tgsis import cliout, clistate
 from tgsis.cli._arguments import INT4, add_command
 from tgsis.cli._connection import connection, split_version, target_key
 from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._render import summarize_differences
 from tgsis.db import versions as V
 from tgsis.db.connect import connect
 from tgsis.db.features import (
@@ -259,23 +260,47 @@ def _draw_differences(conn: Any, args: argparse.Namespace, differences: Sequence
         out(f"drew feature {fid} to {path}")
 
 
+def _object_order(key: tuple[str, str]) -> tuple[str, int, int, str]:
+    """Objects by class, then numeric keys (feature ids) by number before other keys by text."""
+    objectclass, objectkey = key
+    return (objectclass, 0, int(objectkey), "") if objectkey.isascii() and objectkey.isdigit() else \
+        (objectclass, 1, 0, objectkey)
+
+
 def cmd_version_diff(args: argparse.Namespace) -> int:
     a, a_rev = split_version(args.a)
     b, b_rev = split_version(args.b)
     with connection(args) as conn:
-        differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
+        with cliout.busy(f"comparing {args.a} and {args.b}"):
+            differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
         if args.png:
             _draw_differences(conn, args, differences, ((a, a_rev), (b, b_rev)))
+    objects = summarize_differences(differences, args.a, args.b)
+    objects.sort(key=lambda o: _object_order((o.objectclass, o.objectkey)))
     if wants_json(args):
-        cliout.emit_json({"a": args.a, "b": args.b, "differences": [
+        cliout.emit_json({"a": args.a, "b": args.b, "objects": [
+            {"objectclass": o.objectclass, "objectkey": o.objectkey, "difference": o.difference,
+             "tables": list(o.tables), "added": o.added, "removed": o.removed, "changed": o.changed}
+            for o in objects], "differences": [
             {"objectclass": d.objectclass, "objectkey": d.objectkey, "table": d.table, "added": d.added,
              "removed": d.removed, "changed": d.changed} for d in differences]})
         return 0
-    print_table(args, ("class", "key", "table", "added", "removed", "changed"),
-           [(d.objectclass, d.objectkey, d.table, f"+{d.added}", f"-{d.removed}", f"~{d.changed}")
-            for d in differences])
+    if args.tables:
+        print_table(args, ("class", "key", "table", "added", "removed", "changed"),
+                    [(d.objectclass, d.objectkey, d.table, f"+{d.added}", f"-{d.removed}", f"~{d.changed}")
+                     for d in differences])
+    else:
+        print_table(args, ("class", "key", "difference", "tables", "added", "removed", "changed"),
+                    [(o.objectclass, o.objectkey, o.difference, ",".join(o.tables), f"+{o.added}", f"-{o.removed}",
+                      f"~{o.changed}") for o in objects])
     if not differences:
         print(f"{args.a} and {args.b} hold the same rows", file=sys.stderr)
+    elif not args.tables:
+        counts = {what: sum(o.difference == what for o in objects)
+                  for what in (f"only in {args.a}", f"only in {args.b}", "changed")}
+        print(f"{len(objects)} object{'s' if len(objects) != 1 else ''} differ"
+              f"{'s' if len(objects) == 1 else ''}: " + ", ".join(f"{n} {what}" for what, n in counts.items() if n),
+              file=sys.stderr)
     return 0
 
 
@@ -509,9 +534,13 @@ def add_version_parser(commands: Any) -> None:
 
     ver_diff = add_command(ver_commands, "diff", "objects whose rows differ between two versions or revisions",
                         ["tgsis version diff DEFAULT cfm6", "tgsis version diff cfm6@2 cfm6 --json",
+                         "tgsis version diff DEFAULT cfm6 --tables",
                          "tgsis version diff DEFAULT cfm6 --png out"], cmd_version_diff, tabular=True)
     ver_diff.add_argument("a", metavar="A[@REVISION]", help="the version (or revision) compared from")
     ver_diff.add_argument("b", metavar="B[@REVISION]", help="the version (or revision) compared to")
+    ver_diff.add_argument("--tables", action="store_true",
+                          help="one line per object and table, with its rows added, removed and changed (default: "
+                               "one line per object saying whether it is only in A, only in B, or changed)")
     ver_diff.add_argument("--png", metavar="DIR", help="also draw each changed surface feature to DIR/diff_ID.png, "
                                                        "coloured by how far its vertices moved from A")
 
