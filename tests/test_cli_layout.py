@@ -49,3 +49,17 @@ def test_no_sql_in_the_command_line() -> None:
                     re.search(r"\bSELECT\b.*\bFROM\b|\bINSERT INTO\b|\bUPDATE\b \w+ \bSET\b|\bDELETE FROM\b", node.value):
                 found.append(f"{path.name}:{node.lineno}: SQL text {node.value[:40]!r}")
     assert found == []
+
+
+def test_the_browser_view_reads_storage_through_tgsis_db() -> None:
+    """tgsis.view asks tgsis.db for what it shows: no query and no table name of its own (transaction settings
+    aside), so that a change of storage is made in the database layer only."""
+    import tgsis.view
+
+    found = []
+    for path in sorted(Path(tgsis.view.__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and \
+                    re.search(r"\bFROM\b|\btgsis\.\w+\(|\bINSERT\b|\bUPDATE\b|\bDELETE\b|^tgsis\.\w+$", node.value):
+                found.append(f"{path.name}:{node.lineno}: {node.value[:50]!r}")
+    assert found == []

@@ -13,10 +13,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
+from tgsis.db._transfer import columns_out, corners_out
 from tgsis.errors import NotFoundError, reraise
 
 if TYPE_CHECKING:
@@ -25,6 +28,17 @@ if TYPE_CHECKING:
 Conn = psycopg.Connection[Any]
 
 __all__ = [
+    "static_triangle_corners",
+    "static_triangle_rows",
+    "static_vertex_property_rows",
+    "static_vertex_rows",
+    "may_read_features",
+    "class_has_feature",
+    "count_features",
+    "feature_name",
+    "md_gmap_axes",
+    "version_validity",
+    "conflicts_with_solutions",
     "FeatureRow",
     "GeometrySummary",
     "ShapeSizes",
@@ -261,6 +275,107 @@ def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box:
                        None if r[7] is None else bool(r[6]), dict(zip(props, r[16:])),
                        None if r[9] is None else [float(v) for v in r[9:15]], r[15])
             for r in rows]
+
+
+def may_read_features(conn: Conn, fc: FeatureClass) -> bool:
+    """Whether the session's role may read the feature table of class ``fc``."""
+    with reraise():
+        row = conn.execute("SELECT has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT')",
+                           (fc.schema, fc.featuretable)).fetchone()
+    return bool(row and row[0])
+
+
+def class_has_feature(conn: Conn, fc: FeatureClass, geoid: int) -> bool:
+    """Whether class ``fc`` holds feature ``geoid`` as the working version sees it."""
+    with reraise():
+        row = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(_named(fc)), (geoid,)).fetchone()
+    return row is not None
+
+
+def count_features(conn: Conn, fc: FeatureClass) -> int:
+    """How many features class ``fc`` holds as the working version sees them."""
+    with reraise():
+        row = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(_named(fc))).fetchone()
+    return int(row[0]) if row else 0
+
+
+def feature_name(conn: Conn, geoid: int) -> str | None:
+    """The name of feature ``geoid`` (None: no name, or no such feature)."""
+    with reraise():
+        row = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()
+    return None if row is None else row[0]
+
+
+def md_gmap_axes(conn: Conn, geoid: int) -> list[str] | None:
+    """The names of the axes of the multiply indexed G-map ``geoid`` (model 5), None when there is none."""
+    with reraise():
+        row = conn.execute("SELECT axes FROM tgsis.md_gmap WHERE geoid = %s", (geoid,)).fetchone()
+    return None if row is None else list(row[0])
+
+
+def version_validity(conn: Conn) -> dict[str, tuple[Any, Any]]:
+    """Each version's period of belief, by name: ``(valid_from, valid_to)`` (None where unset)."""
+    with reraise():
+        rows = conn.execute("SELECT name, valid_from, valid_to FROM tgsis.versions").fetchall()
+    return {r[0]: (r[1], r[2]) for r in rows}
+
+
+def conflicts_with_solutions(conn: Conn, version: str) -> list[dict[str, Any]]:
+    """The conflicts of ``version`` with its parent, each with the tables changed on both sides, in the child, in
+    the parent, and the recorded solution (``unsolved`` when none): ``{"objectclass", "objectkey", "both",
+    "child", "parent", "solution"}``, by class and key."""
+    with reraise():
+        rows = conn.execute(
+            "SELECT c.objectclass, c.objectkey, c.conflicttype, c.childtables, c.parenttables, "
+            "       coalesce(k.solution, 'unsolved') "
+            "FROM tgsis.current_conflicts(tgsis.version_id(%s)) c "
+            "LEFT JOIN tgsis.conflicts k ON k.versionid = tgsis.version_id(%s) AND k.objectclass = c.objectclass "
+            "      AND k.objectkey = c.objectkey AND k.childmark = c.childmark AND k.parentmark = c.parentmark "
+            "ORDER BY 1, 2", (version, version)).fetchall()
+    return [{"objectclass": r[0], "objectkey": r[1], "both": list(r[2]), "child": list(r[3]),
+             "parent": list(r[4]), "solution": r[5]} for r in rows]
+
+
+# --------------------------------------------------------------------------- model 1 rows, packed (the browser view)
+
+_CORNERS = [("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")]
+
+
+def static_vertex_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64],
+                                                        npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The stored vertices of static feature ``geoid`` as the working version sees them, in no set order:
+    ``(vrtxid, x, y, z)``, (n,) arrays each, through one packed query (:func:`tgsis.db._transfer.columns_out`)."""
+    with reraise():
+        _, vid, x, y, z = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
+                                      [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+                                      [geoid])
+    return vid, x, y, z
+
+
+def static_triangle_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64],
+                                                          npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """The stored triangles of static feature ``geoid``, in no set order: ``(trglid, vrtxid1, vrtxid2, vrtxid3)``."""
+    with reraise():
+        _, tid, a, b, c = columns_out(conn, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), *_CORNERS], [geoid])
+    return tid, a, b, c
+
+
+def static_triangle_corners(conn: Conn, geoid: int) -> npt.NDArray[np.int64]:
+    """The corners of the stored triangles of static feature ``geoid``, (m, 3) vertex ids, in no set order; packed
+    one value a triangle on the wire (:func:`tgsis.db._transfer.corners_out`), about a third less server time."""
+    with reraise():
+        return corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", [name for name, _ in _CORNERS], geoid)
+
+
+def static_vertex_property_rows(conn: Conn, fc: FeatureClass, geoid: int, prop: str, wire: str
+                                ) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
+    """The stored values of vertex property ``prop`` (sent as ``wire``) of feature ``geoid``: ``(_idx, values)``."""
+    table = fc.property_table("VERTEX")
+    if table is None:
+        raise NotFoundError(f"class {fc.name} has no vertex properties")
+    with reraise():
+        _, idx, column = columns_out(conn, fc.qualified(table), "_geoid", [("_idx", "int8"), (prop, wire)], [geoid])
+    return idx, column
 
 
 check_module(globals(), __all__)
