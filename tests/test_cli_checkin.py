@@ -132,3 +132,24 @@ def test_checkin_counts_triangles_by_content(db_dsn: str, fault: int, tmp_path: 
     assert doc["cells"] == {"kept": 241, "removed": 1, "added": 0, "on_moved_vertices": 12}
     stored = _stored(db_dsn, fault)
     assert stored.n_cells == 241 and stored.vertices[20, 2] == -9.0
+
+
+def test_checkout_of_a_feature_missing_from_the_version_names_the_version(
+        db_dsn: str, fault: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 38: "no feature class has a feature 7" left users looking for a typo; the feature was deleted in
+    (or never made it to) the version they work in, and the message now says which version."""
+    with psycopg.connect(db_dsn) as conn:
+        tgsis.create_version(conn, "cfm6")
+        with tgsis.in_version(conn, "cfm6"):
+            tgsis.delete_feature(conn, "faults", fault)
+            only_here = tgsis.insert_feature(conn, "faults", _surface())
+        conn.commit()
+    capsys.readouterr()
+    for where, fid, extra in ((["--in", "cfm6"], fault, []), (["--in", "cfm6"], fault, ["--class", "faults"]),
+                              ([], only_here, [])):
+        file = tmp_path / f"f{fid}_{len(extra)}.ts"
+        assert main(["--dsn", db_dsn, *where, "checkout", str(fid), str(file), *extra]) == 1
+        err = capsys.readouterr().err
+        version = "cfm6" if where else "DEFAULT"
+        assert f"feature {fid}" in err and f"in version {version}" in err, err
+        assert not file.exists()

@@ -108,7 +108,7 @@ def test_ls_names_a_gmaps_darts_as_darts(db_dsn: str, files: dict[str, Path], ca
     code, out, _ = _run(capsys, *dsn, "ls")
     assert code == 0
     header, row = (line.split("\t") for line in out.splitlines())
-    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts"]
+    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"]
     assert row[0] == str(geoid) and row[3] == "GMAP" and row[5] == "" and row[7] == "1152"
     code, out, _ = _run(capsys, *dsn, "ls", "--json")
     [feature] = json.loads(out)["features"]

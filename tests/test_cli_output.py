@@ -80,10 +80,11 @@ def test_ls(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     doc = as_json(data, capsys, "ls")
     assert [f["id"] for f in doc["features"]] == [*data["ids"], data["moving"]]
     assert doc["features"][0] == {"id": data["ids"][0], "class": "faults", "name": "F1", "geotype": "SURFACE",
-                                  "vertices": 6, "cells": 4, "members": None, "darts": None}
+                                  "vertices": 6, "cells": 4, "members": None, "darts": None,
+                                  "properties": {"release": "5.3"}}
     header, rows = table(data, capsys, "ls")
-    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts"]
-    assert rows[0] == [str(data["ids"][0]), "faults", "F1", "SURFACE", "6", "4", "", ""]
+    assert header == ["id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"]
+    assert rows[0] == [str(data["ids"][0]), "faults", "F1", "SURFACE", "6", "4", "", "", "release=5.3"]
 
 
 def test_class_list(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
@@ -127,7 +128,12 @@ def test_version_conflicts_and_diff(data: dict[str, Any], capsys: pytest.Capture
     diff = as_json(data, capsys, "version", "diff", "DEFAULT", "a")
     assert diff["a"] == "DEFAULT" and {"objectclass": "feature", "objectkey": fid, "table": "vrtx", "added": 0,
                                        "removed": 0, "changed": 1} in diff["differences"]
+    assert {"objectclass": "feature", "objectkey": fid, "difference": "changed", "tables": ["vrtx"], "added": 0,
+            "removed": 0, "changed": 1} in diff["objects"]
     header, rows = table(data, capsys, "version", "diff", "DEFAULT", "a")
+    assert header == ["class", "key", "difference", "tables", "added", "removed", "changed"]
+    assert ["feature", fid, "changed", "vrtx", "+0", "-0", "~1"] in rows
+    header, rows = table(data, capsys, "version", "diff", "DEFAULT", "a", "--tables")
     assert header == ["class", "key", "table", "added", "removed", "changed"] and ["feature", fid, "vrtx", "+0", "-0",
                                                                                    "~1"] in rows
 

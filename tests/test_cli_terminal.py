@@ -56,7 +56,7 @@ def test_a_checkin_piped_into_head_exits_0_and_keeps_its_record(db_dsn: str, tmp
             tgsis.insert_feature(conn, "faults", tgsis.formats.read(FLAGGED)[1])
     shell = subprocess.run(f"set -o pipefail; '{TGSIS}' --dsn '{db_dsn}' ls | head -1", shell=True,
                            executable="/bin/bash", env=env, capture_output=True, text=True, check=False)
-    assert shell.returncode == 0 and shell.stdout == "id\tclass\tname\tgeotype\tvertices\tcells\tmembers\tdarts\n"
+    assert shell.returncode == 0 and shell.stdout == "id\tclass\tname\tgeotype\tvertices\tcells\tmembers\tdarts\tproperties\n"
     assert shell.stderr == ""
 
 

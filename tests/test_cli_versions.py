@@ -130,7 +130,10 @@ def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str])
         conn.execute("SELECT tgsis.goto_version('a')")
         conn.execute("UPDATE wells SET depth = 12 WHERE id = 1")
         conn.execute("INSERT INTO wells VALUES (3, 30)")
-    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ("class\tkey\ttable\tadded\tremoved\tchanged\n"
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == (
+        "class\tkey\tdifference\ttables\tadded\tremoved\tchanged\n"
+        "well\t1\tchanged\twells\t+0\t-0\t~1\nwell\t3\tonly in a\twells\t+1\t-0\t~0\n")
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a", "--tables") == ("class\tkey\ttable\tadded\tremoved\tchanged\n"
                                                                    "well\t1\twells\t+0\t-0\t~1\nwell\t3\twells\t+1\t-0\t~0\n")
     assert _run(db_dsn, capsys, "version", "merge", "a") == "merged a into its parent: 3 row(s) written\n"
     assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ""   # "hold the same rows" goes to stderr

@@ -491,7 +491,7 @@ def test_cli_import_export_round_trip(db_dsn: str, tmp_path: Path, capsys: pytes
     assert (name, geotype, count) == ("horizons", "GEOMETRYCOLLECTION", "2 members")
     assert [line.split("\t")[1:3] for line in member_lines] == [["member 0", "upper"], ["member 1", "lower"]]
     assert run("ls", "--class", "blocks", "--no-header") == 0
-    assert capsys.readouterr().out == f"{fid}\tblocks\thorizons\tGEOMETRYCOLLECTION\t32\t36\t2\t\n"
+    assert capsys.readouterr().out == f"{fid}\tblocks\thorizons\tGEOMETRYCOLLECTION\t32\t36\t2\t\t\n"  # no properties
 
     assert run("export", fid, str(tmp_path / "back.ts")) == 0
     assert "in 2 members" in capsys.readouterr().out

@@ -156,7 +156,7 @@ def test_the_wheel_stage_builds_a_wheel_with_the_command(tmp_path: Path) -> None
     (wheel,) = (tmp_path / "dist").glob("tgsis-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
     assert (
-        "tgsis/cli.py" in names
+        "tgsis/cli/__init__.py" in names
         and "tgsis/_sql/tgsis.control" in names
         and "tgsis/_sql/upgrade/tgsis--0.1.0.sql" in names
     )

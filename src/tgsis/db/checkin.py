@@ -50,6 +50,7 @@ from tgsis.db._static import (MEANING_COLUMNS, SIMPLEX, Part, copy_extra_rows, d
 from tgsis.db._transfer import Storage, aligned_properties, check_feature_values, feature_columns, local_positions
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
+from tgsis.db.versions import show_name
 from tgsis.errors import (
     CheckoutConflictError,
     FileFormatError,
@@ -728,8 +729,12 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
         with conn.transaction():  # bad input is refused before anything is frozen
             if fresh:  # the freeze waits for open writers: later statements must see their commits
                 conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
-            fc = _checked_class(conn, feature_class, feature_id)
-            _feature_row(conn, fc, feature_id)
+            try:
+                fc = _checked_class(conn, feature_class, feature_id)
+                _feature_row(conn, fc, feature_id)
+            except NotFoundError as exc:  # deleted in, or never brought to, the version worked in: say which
+                raise NotFoundError(f"{exc.message} in version {show_name(_working_state(conn)[0])}",
+                                    detail=exc.detail, hint=exc.hint) from exc
             frozen = _freeze(conn)
         with conn.transaction():
             if fresh:  # one snapshot for the fingerprint and the rows

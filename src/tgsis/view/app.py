@@ -50,6 +50,8 @@ from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
 from tgsis.db.features import fetch_feature
 from tgsis.db.gmaps import fetch_md_gmap, gmap_at
+from tgsis.db.inspect import (FeatureRow, class_has_feature, conflicts_with_solutions, count_features, feature_name,
+                              features_versioned, list_features, may_read_features, md_gmap_axes, version_validity)
 from tgsis.db.temporal import get_at
 from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError,
                           reraise)
@@ -214,75 +216,17 @@ def readable_classes(conn: Conn) -> list[tuple[FeatureClass, bool]]:
     """Every feature class with whether the role may read its feature table."""
     result = []
     for fc in list_feature_classes(conn):
-        row = conn.execute("SELECT has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT')",
-                           (fc.schema, fc.featuretable)).fetchone()
-        result.append((fc, bool(row and row[0])))
+        result.append((fc, may_read_features(conn, fc)))
     return result
 
 
 def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
     """The class holding ``feature_id`` among the classes the role may read (NotFoundError otherwise)."""
     for fc, readable in readable_classes(conn):
-        if readable and conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(
-                fc.qualified(fc.featuretable)), (feature_id,)).fetchone() is not None:
+        if readable and class_has_feature(conn, fc, feature_id):
             return fc
     raise NotFoundError(f"no feature {feature_id} that this role can read in this version",
                         hint="the classes page lists the features")
-
-
-@dataclass(frozen=True)
-class FeatureRow:
-    """A feature as the pages list it."""
-
-    id: int
-    feature_class: str
-    name: str | None
-    geotype: str
-    vertices: int | None
-    cells: int | None
-    time_model: str
-    first: float | None
-    last: float | None
-    alive: bool | None
-    properties: dict[str, Any]
-    box: list[float] | None
-
-
-def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
-                  ids: Sequence[int] | None = None, limit: int | None = None) -> list[FeatureRow]:
-    """The features of a class (name: a part of the name, any case; box: meeting the bounding box), by id."""
-    props = [p.name for p in fc.feature_properties]
-    conditions = [sql.SQL("true")]
-    params: list[Any] = []
-    if name:
-        conditions.append(sql.SQL("strpos(lower(g.geoname), lower(%s)) > 0"))
-        params.append(name)
-    if box is not None:
-        conditions.append(sql.SQL("g.geoid IN (SELECT b FROM tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) b)"))
-        params += list(box)
-    if ids is not None:
-        conditions.append(sql.SQL("g.geoid = ANY(%s)"))
-        params.append(list(ids))
-    query = sql.SQL(
-        "SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, g.timemodel, g.alive, i.first, i.last, "
-        "cube_ll_coord(g.bbox, 1), cube_ll_coord(g.bbox, 2), cube_ll_coord(g.bbox, 3), "
-        "cube_ur_coord(g.bbox, 1), cube_ur_coord(g.bbox, 2), cube_ur_coord(g.bbox, 3){} "
-        "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-        "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last "
-        "                     FROM (SELECT t FROM tgsis.geometry_instants(g.geoid) "
-        "                            WHERE g.timemodel IN ('INSTANTS', 'EVOLVING') "
-        "                           UNION ALL SELECT timet FROM tgsis.gmap_timet "
-        "                            WHERE geoid = g.geoid AND g.timemodel = 'GMAP') AS lives (t)) i ON true "
-        "WHERE {} ORDER BY g.geoid {}").format(
-        sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
-        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
-        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""))
-    rows = conn.execute(query, params).fetchall()
-    return [FeatureRow(int(r[0]), fc.name, r[1], r[2], r[3], r[4], r[5],
-                       None if r[7] is None else float(r[7]), None if r[8] is None else float(r[8]),
-                       None if r[7] is None else bool(r[6]), dict(zip(props, r[15:])),
-                       None if r[9] is None else [float(v) for v in r[9:15]])
-            for r in rows]
 
 
 def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:
@@ -294,8 +238,8 @@ def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:
 def _colours(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]:
     """What a feature can be coloured by besides height: numeric vertex properties; a model-5 map's axes beyond z."""
     if fc.time_model == "MULTIDIM":
-        row = conn.execute("SELECT axes FROM tgsis.md_gmap WHERE geoid = %s", (feature_id,)).fetchone()
-        return list(row[0][3:]) if row is not None else []
+        axes = md_gmap_axes(conn, feature_id)
+        return axes[3:] if axes is not None else []
     return _scalar_vertex_properties(fc)
 
 
@@ -393,8 +337,7 @@ def classes_page(request: Request) -> Response:
             if not readable:
                 counts[fc.name] = None
                 continue
-            row = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(fc.qualified(fc.featuretable))).fetchone()
-            counts[fc.name] = int(row[0]) if row else 0
+            counts[fc.name] = count_features(conn, fc)
             if wanted is None or wanted == fc.name:
                 found = list_features(conn, fc, name=name, box=box, limit=LISTED + 1)
                 if len(found) > LISTED:
@@ -410,11 +353,9 @@ def versions_page(request: Request) -> Response:
     view: View = request.app.state.view
     with view.session(request) as conn:
         versions = V.list_versions(conn)
-        validity = {r[0]: (r[1], r[2]) for r in conn.execute(
-            "SELECT name, valid_from, valid_to FROM tgsis.versions").fetchall()}
+        validity = version_validity(conn)
         current, viewing = V.working_version(conn), V.viewing_revision(conn)
-        versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
-                                 ).fetchone() == (True,)
+        versioned = features_versioned(conn)
     return view.page(request, "versions.html", versions=versions, validity=validity, current=current,
                      viewing=viewing, versioned=versioned)
 
@@ -512,15 +453,7 @@ def conflicts_page(request: Request) -> Response:
             raise NotFoundError(f"no version {name!r}", hint="the versions page lists them")
         if known[name].parent is None:
             raise _bad("DEFAULT has no parent: it has no conflicts")
-        rows = conn.execute(
-            "SELECT c.objectclass, c.objectkey, c.conflicttype, c.childtables, c.parenttables, "
-            "       coalesce(k.solution, 'unsolved') "
-            "FROM tgsis.current_conflicts(tgsis.version_id(%s)) c "
-            "LEFT JOIN tgsis.conflicts k ON k.versionid = tgsis.version_id(%s) AND k.objectclass = c.objectclass "
-            "      AND k.objectkey = c.objectkey AND k.childmark = c.childmark AND k.parentmark = c.parentmark "
-            "ORDER BY 1, 2", (name, name)).fetchall()
-    conflicts = [{"objectclass": r[0], "objectkey": r[1], "both": list(r[2]), "child": list(r[3]),
-                  "parent": list(r[4]), "solution": r[5]} for r in rows]
+        conflicts = conflicts_with_solutions(conn, name)
     shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
     config = {"version": name, "ids": shown}
     return view.page(request, "conflicts.html", version=known[name], conflicts=conflicts, config=config,
@@ -545,8 +478,8 @@ def _mesh_body(request: Request) -> bytes:
                 mesh, when = drawable_surface(conn, fc, feature_id, color, beside=other), None
         else:
             mesh, when = _mesh_of(conn, fc, feature_id, t, color)
-        name = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
-    return _body({"id": feature_id, "class": fc.name, "name": name[0] if name else None, "t": when}, mesh, color)
+        name = feature_name(conn, feature_id)
+    return _body({"id": feature_id, "class": fc.name, "name": name, "t": when}, mesh, color)
 
 
 def mesh_endpoint(request: Request) -> Response:

@@ -5,7 +5,7 @@ every vertex and cell property, its parts and atoms and its file's z
 convention: what a client that edits and writes back needs. The view only
 draws: it takes the stored vertices and triangles (``tgsis.vrtx``,
 ``tgsis.trgl`` as the session's version sees them, two packed queries of
-:func:`tgsis.db._transfer.columns_out`), and one vertex property only when
+:mod:`tgsis.db.inspect`), and one vertex property only when
 the page colours by it: with the stored ids for the comparisons
 (:func:`stored_surface`), or for the scene without the triangles' ids, their
 corners packed one value a triangle (:func:`drawable_surface`). The scene's
@@ -23,11 +23,12 @@ from typing import Any, TypeVar
 import numpy as np
 import numpy.typing as npt
 import psycopg
-from psycopg import sql
 
-from tgsis.db._transfer import columns_out, corners_out, local_positions
+from tgsis.db._transfer import local_positions
+from tgsis.db.inspect import (static_triangle_corners, static_triangle_rows, static_vertex_property_rows,
+                              static_vertex_rows)
 from tgsis.db.classes import FeatureClass
-from tgsis.errors import InvalidInputError, reraise
+from tgsis.errors import InvalidInputError
 from tgsis.view.meshes import Drawable
 
 __all__ = ["StoredSurface", "drawable_surface", "stored_surface"]
@@ -67,11 +68,10 @@ def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | No
     InvalidGeometryError
         Triangles that name vertices the geometry does not have.
     """
-    def triangles(on: Conn) -> list[npt.NDArray[Any]]:
-        with reraise():
-            return columns_out(on, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), *_CORNERS], [feature_id])
+    def triangles(on: Conn) -> tuple[npt.NDArray[np.int64], ...]:
+        return static_triangle_rows(on, feature_id)
 
-    vertex_ids, vertices, (_, tid, a, b, c) = _side_by_side(conn, feature_id, triangles, beside)
+    vertex_ids, vertices, (tid, a, b, c) = _side_by_side(conn, feature_id, triangles, beside)
     torder = np.argsort(tid, kind="stable")
     corners = np.stack([a[torder], b[torder], c[torder]], axis=1)
     drawable = _drawable(conn, fc, feature_id, prop, vertex_ids, vertices, corners)
@@ -95,14 +95,12 @@ def drawable_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | 
         Triangles that name vertices the geometry does not have.
     """
     def triangles(on: Conn) -> npt.NDArray[np.int64]:
-        with reraise():
-            return corners_out(on, sql.SQL("tgsis.trgl"), "geoid", [name for name, _ in _CORNERS], feature_id)
+        return static_triangle_corners(on, feature_id)
 
     vertex_ids, vertices, corners = _side_by_side(conn, feature_id, triangles, beside)
     return _drawable(conn, fc, feature_id, prop, vertex_ids, vertices, corners)
 
 
-_CORNERS = [("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")]
 _T = TypeVar("_T")
 
 
@@ -111,10 +109,7 @@ def _side_by_side(conn: Conn, feature_id: int, triangles: Callable[[Conn], _T],
     """The vertices (ids ascending, (n, 3) coordinates) through ``conn`` and ``triangles(beside)`` at the same time."""
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
         later = pool.submit(triangles, beside) if beside is not None else None
-        with reraise():
-            _, vid, x, y, z = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
-                                          [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-                                          [feature_id])
+        vid, x, y, z = static_vertex_rows(conn, feature_id)
         cells = later.result() if later is not None else triangles(conn)
     vertices = np.empty((len(vid), 3))
     if np.all(vid[1:] > vid[:-1]):  # the rows came in id order (as stored by one upload): nothing to sort
@@ -140,9 +135,7 @@ def _vertex_property(conn: Conn, fc: FeatureClass, feature_id: int, prop: str,
     table = fc.property_table("VERTEX")
     if not found or table is None:
         raise InvalidInputError(f"feature {feature_id} has no numeric vertex property {prop!r}")
-    with reraise():
-        _, idx, column = columns_out(conn, fc.qualified(table), "_geoid", [("_idx", "int8"), (prop, found[0].wire)],
-                                     [feature_id])
+    idx, column = static_vertex_property_rows(conn, fc, feature_id, prop, found[0].wire)
     values = np.full(len(vertex_ids), np.nan)
     values[local_positions(vertex_ids, idx, f"{table} rows", feature_id)] = column.astype(np.float64)
     return values
