@@ -20,7 +20,8 @@ import pytest
 import tgsis
 
 PURE = ["tgsis", "tgsis.mesh", "tgsis.convert", "tgsis.compare", "tgsis.edits", "tgsis.temporal",
-        "tgsis.interpolation", "tgsis.gmaps", "tgsis.formats", "tgsis.errors", "tgsis.pictures", "tgsis.postgis"]
+        "tgsis.interpolation", "tgsis.gmaps", "tgsis.formats", "tgsis.errors", "tgsis.pictures", "tgsis.postgis",
+        "tgsis.datamodels"]
 
 
 @pytest.mark.parametrize("module", PURE)

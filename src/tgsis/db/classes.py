@@ -16,6 +16,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
+from tgsis.datamodels import TimeModel
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import NotFoundError, reraise
 from tgsis.mesh import Geotype, Mesh, mesh_class
@@ -114,7 +115,7 @@ class FeatureClass:
     cellprotable: str
     viewname: str
     description: str | None = None
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC"
+    time_model: TimeModel = "STATIC"
     time_unit: str | None = None
     instant_properties: tuple[Property, ...] = ()
     protable: str | None = None
@@ -190,7 +191,7 @@ def create_feature_class(
     srs: int = 0,
     schema: str = "public",
     description: str | None = None,
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC",
+    time_model: TimeModel = "STATIC",
     time_unit: str | None = None,
     instant_properties: PropertySpec | None = None,
     cell_level: int | None = None,
