@@ -81,8 +81,8 @@ class FeatureClass:
         Spatial reference id (0: undefined).
     feature_properties, cell_properties : tuple of Property
         In column order.
-    time_model : {"STATIC", "INSTANTS", "EVOLVING", "GMAP"}
-        Model 1 (static), model 2 (surfaces at instants), model 3
+    time_model : str
+        The time model of a registered data model (:func:`tgsis.data_models`): model 1 (static), model 2 (surfaces at instants), model 3
         (continuously evolving surfaces), model 4 (G-maps in time) or model 5
         (multiply indexed G-maps).
     time_unit : str or None
@@ -220,7 +220,8 @@ def create_feature_class(
         schema). The tables belong to tgsis's owner; the caller must be a
         ``tgsis_admin`` with ``CREATE`` on the schema (docs/security.md).
     description : str, optional
-    time_model : {"STATIC", "INSTANTS", "EVOLVING"}
+    time_model : str
+        The time model of a registered data model (:func:`tgsis.data_models`; ``"STATIC"``: model 1).
         ``"INSTANTS"``: surfaces known at instants (model 2,
         :class:`~tgsis.temporal.SurfaceSeries`); ``"EVOLVING"``: continuously
         evolving surfaces (model 3, :class:`~tgsis.temporal.EvolvingSurface`).
