@@ -82,7 +82,8 @@ class FeatureClass:
     feature_properties, cell_properties : tuple of Property
         In column order.
     time_model : str
-        The time model of a registered data model (:func:`tgsis.data_models`): model 1 (static), model 2 (surfaces at instants), model 3
+        The time model of a registered data model (:func:`tgsis.data_models`):
+        model 1 (static), model 2 (surfaces at instants), model 3
         (continuously evolving surfaces), model 4 (G-maps in time) or model 5
         (multiply indexed G-maps).
     time_unit : str or None
