@@ -10,6 +10,8 @@ rows + one Python module) and drives a feature of it through the public API.
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, get_args
@@ -45,10 +47,16 @@ def test_the_time_model_type_names_the_registered_models() -> None:
 
 
 def test_every_shipped_model_has_its_database_functions() -> None:
-    import tgsis.db.features  # noqa: F401  # loads the database modules of the shipped models
-    for model in tgsis.data_models():
-        storage = datamodels.storage_of(model)
-        assert callable(storage.insert) and callable(storage.fetch), model
+    # in a fresh interpreter: no module lists the database modules, each entry names its own, loaded on first use
+    program = ("import sys, tgsis.datamodels as d; assert 'tgsis.db' not in sys.modules\n"
+               "for m in d.data_models():\n"
+               "    s = d.storage_of(m); assert callable(s.insert) and callable(s.fetch), m\n"
+               "    assert s.insert.__module__ == m.module, (m, s.insert.__module__)\n"
+               "print(sorted(n for n in sys.modules if n.startswith('tgsis.db.') and n in "
+               "{'tgsis.db.features', 'tgsis.db.temporal', 'tgsis.db.gmaps'}))")
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "['tgsis.db.features', 'tgsis.db.gmaps', 'tgsis.db.temporal']"
 
 
 def test_a_clashing_entry_is_refused() -> None:
@@ -113,7 +121,8 @@ def model9(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> Iterator[datamodels.D
     conn.execute(TEST_MODEL)  # type: ignore[arg-type]  # a test's own literal
     assert conn.execute("SELECT tgsis.create_storage()").fetchone() == (True,)
     conn.commit()
-    import tgsis.db.features  # noqa: F401  # the shipped models' functions, before the registry is copied
+    for shipped in datamodels.data_models():   # their functions loaded before the registry is copied
+        datamodels.storage_of(shipped)
     monkeypatch.setattr(datamodels, "_MODELS", dict(datamodels._MODELS))   # thrown away after the test
     monkeypatch.setattr(datamodels, "_STORAGE", dict(datamodels._STORAGE))
     model = datamodels.register_data_model(datamodels.DataModel(9, "test points in steps", "STEPS", ("MULTIPOINT",),

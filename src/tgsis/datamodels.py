@@ -11,7 +11,8 @@ models.
 This module is pure: it imports neither psycopg nor :mod:`tgsis.db`. The
 database functions that store and read a model's objects are attached by the
 database module of the model (:func:`register_storage`, called when that
-module is imported), so that the numpy side can name the models without
+module is imported; the entry names the module, which :func:`storage_of`
+imports on first use), so that the numpy side can name the models without
 loading the database layer. Deleting, versioning and merging need no
 function of a model: SQL does them for every model from
 ``tgsis.model_tables``.
@@ -22,6 +23,7 @@ rows of ``tgsis.data_models`` of a fresh database.
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol, get_args
@@ -72,6 +74,10 @@ class DataModel:
         The Python objects a feature of the model is stored from (a subclass
         counts): :func:`tgsis.insert_feature` gives an object of one of them
         to this model's :attr:`Storage.insert`.
+    module : str or None
+        The database module that attaches the model's :class:`Storage`
+        (:func:`register_storage`); :func:`storage_of` imports it on first
+        use, so no module lists the models' database modules.
     """
 
     number: int
@@ -79,6 +85,7 @@ class DataModel:
     time_model: str
     geotypes: tuple[str, ...]
     types: tuple[type, ...] = field(default=())
+    module: str | None = None
 
     def stores(self, obj: object) -> bool:
         """Whether ``obj`` is an object this model stores."""
@@ -176,6 +183,8 @@ def storage_of(model: DataModel) -> Storage:
     InvalidInputError
         Its database module has not attached them.
     """
+    if model.time_model not in _STORAGE and model.module is not None:
+        importlib.import_module(model.module)  # it registers its functions when imported
     try:
         return _STORAGE[model.time_model]
     except KeyError:
@@ -186,11 +195,13 @@ def storage_of(model: DataModel) -> Storage:
 
 STATIC = register_data_model(DataModel(1, "static 3D objects", "STATIC",
                                        ("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION"),
-                                       (Mesh, GeometryCollection)))
-INSTANTS = register_data_model(DataModel(2, "surfaces at instants", "INSTANTS", ("SURFACE",), (SurfaceSeries,)))
+                                       (Mesh, GeometryCollection), "tgsis.db.features"))
+INSTANTS = register_data_model(DataModel(2, "surfaces at instants", "INSTANTS", ("SURFACE",), (SurfaceSeries,),
+                                         "tgsis.db.temporal"))
 EVOLVING = register_data_model(DataModel(3, "continuously evolving surfaces", "EVOLVING", ("SURFACE",),
-                                         (EvolvingSurface,)))
-GMAPS_IN_TIME = register_data_model(DataModel(4, "generalized maps in time", "GMAP", ("GMAP",), (EvolvingGMap, GMap)))
-MULTIDIM = register_data_model(DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,)))
+                                         (EvolvingSurface,), "tgsis.db.temporal"))
+GMAPS_IN_TIME = register_data_model(DataModel(4, "generalized maps in time", "GMAP", ("GMAP",), (EvolvingGMap, GMap),
+                                              "tgsis.db.gmaps"))
+MULTIDIM = register_data_model(DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,), "tgsis.db.gmaps"))
 
 assert set(get_args(TimeModel)) == {m.time_model for m in data_models()}, "TimeModel names the shipped models"

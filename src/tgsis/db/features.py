@@ -28,7 +28,6 @@ from psycopg import sql
 
 from tgsis import datamodels
 from tgsis.arguments import check_module, checked_ids
-from tgsis.db import gmaps, temporal  # noqa: F401  # they attach models 2 to 5's functions to the registry
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
 from tgsis.db._transfer import Storage, aligned_properties, check_class_unchanged, check_feature_values, feature_columns
