@@ -40,6 +40,9 @@ def test_the_python_registry_is_the_sql_registry(conn: Conn) -> None:
 
 def test_the_time_model_type_names_the_registered_models() -> None:
     assert list(get_args(datamodels.TimeModel)) == [m.time_model for m in tgsis.data_models()]
+    assert set(get_args(datamodels.StoredObject)) == {t for m in tgsis.data_models() for t in m.types}
+    from tgsis.db import features
+    assert features.insert_feature.__annotations__["mesh"] in ("StoredObject", datamodels.StoredObject)
     from tgsis.db import classes
     for function in (classes.create_feature_class,):
         assert function.__annotations__["time_model"] in ("TimeModel", datamodels.TimeModel)

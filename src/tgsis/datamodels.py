@@ -33,8 +33,12 @@ from tgsis.gmaps import EvolvingGMap, GMap
 from tgsis.mesh import GeometryCollection, Mesh
 from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
-__all__ = ["DataModel", "Storage", "TimeModel", "data_models", "data_model", "model_storing",
+__all__ = ["DataModel", "Storage", "StoredObject", "TimeModel", "data_models", "data_model", "model_storing",
            "register_data_model", "register_storage", "storage_of"]
+
+#: The objects the shipped data models store (their :attr:`DataModel.types`), for type checkers; a test keeps
+#: it equal to the registry.
+StoredObject = Mesh | GeometryCollection | SurfaceSeries | EvolvingSurface | EvolvingGMap | GMap
 
 #: The time models of the shipped data models (``tgsis.data_models.timemodel``), for type checkers;
 #: a test keeps it equal to the registry. A model added later is named by a plain ``str``.
@@ -205,3 +209,4 @@ GMAPS_IN_TIME = register_data_model(DataModel(4, "generalized maps in time", "GM
 MULTIDIM = register_data_model(DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,), "tgsis.db.gmaps"))
 
 assert set(get_args(TimeModel)) == {m.time_model for m in data_models()}, "TimeModel names the shipped models"
+assert set(get_args(StoredObject)) == {t for m in data_models() for t in m.types}, "StoredObject: the shipped types"

@@ -27,6 +27,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis.datamodels import StoredObject
 from tgsis.arguments import check_module, checked_ids
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
@@ -36,8 +37,6 @@ from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_f
 from tgsis.db.meaning import meaning_of, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
 from tgsis.mesh import Geometry, GeometryCollection, Geotype
-from tgsis.gmaps import EvolvingGMap, GMap
-from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
 __all__ = [
     "Property",
@@ -93,7 +92,7 @@ class Feature:
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
-    mesh: Geometry | SurfaceSeries | EvolvingSurface | GMap | EvolvingGMap,
+    mesh: StoredObject,
     properties: Mapping[str, Any] | None = None,
     *,
     name: str | None = None,
