@@ -80,6 +80,42 @@ def test_an_object_no_model_stores_is_still_converted_or_refused(conn: Conn) -> 
                                                                                    [[0, 1, 2]])]))
 
 
+def test_fetch_object_reads_a_feature_of_every_shipped_model_as_it_was_stored(conn: Conn) -> None:
+    from tgsis import gmaps
+    from tests.temporal_data import evolving, series
+    rng = np.random.default_rng(38)
+    surface = tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="tri")
+    square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    lifted = gmaps.GMap.from_triangles([[0, 0, 0, 0.5], [1, 0, 0, 0.5], [1, 1, 0, 0.5]], [[0, 1, 2]])
+    stored: dict[str, object] = {
+        "STATIC": surface,
+        "INSTANTS": series(rng, [0.0, 1.0, 2.0]),
+        "EVOLVING": evolving(rng, [0.0, 2.0]),
+        "GMAP": square,
+        "MULTIDIM": lifted,
+    }
+    assert set(stored) == {m.time_model for m in tgsis.data_models()}
+    for time_model, obj in stored.items():
+        geotype = "GMAP" if isinstance(obj, gmaps.GMap) else "SURFACE"
+        fc = tgsis.create_feature_class(conn, time_model.lower(), geotype, time_model=time_model,  # type: ignore[arg-type]
+                                        cell_level=2 if geotype == "GMAP" else None)
+        fid = tgsis.insert_feature(conn, fc, obj)  # type: ignore[arg-type]
+        back = tgsis.fetch_object(conn, fc.name, fid)
+        if time_model == "STATIC":
+            assert isinstance(back, tgsis.Surface)
+            np.testing.assert_array_equal(back.vertices, surface.vertices)
+        elif time_model == "INSTANTS":
+            assert isinstance(back, tgsis.SurfaceSeries) and back.times.tolist() == [0.0, 1.0, 2.0]
+        elif time_model == "EVOLVING":
+            assert isinstance(back, tgsis.EvolvingSurface) and [p.times[0] for p in back.periods] == [0.0, 2.0]
+        elif time_model == "GMAP":   # a plain G-map is one period of model 4
+            assert isinstance(back, tgsis.EvolvingGMap) and back.at(0.0).same_as(square)  # type: ignore[union-attr]
+        else:
+            assert isinstance(back, tgsis.GMap) and back.same_as(lifted)
+        with pytest.raises(NotFoundError):
+            tgsis.fetch_object(conn, fc, fid + 1000)
+
+
 # ---- a throwaway model 9: the SQL of tests/test_model_registry.py and this "module" -------------------------
 
 @dataclass
