@@ -32,9 +32,9 @@ def test_the_registry_is_exactly_the_storage(conn: Conn) -> None:
                                                         AND d.deptype = 'e')""")}
     assert storage == _registered(conn)
     assert {"geometry", "vrtx", "trgl", "atom", "part", "times_vrtx", "d4dvrtx"} <= storage
-    # the time models of geometry rows and feature classes are the registered ones
+    # the time models of geometry rows and feature classes are the registered ones (Python's registry: tgsis.datamodels)
     assert [r[0] for r in conn.execute("SELECT timemodel FROM tgsis.data_models ORDER BY model")] == \
-        [None, "STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"]
+        [None, *(m.time_model for m in tgsis.data_models())]
 
 
 def test_every_hook_of_the_registry_exists_with_its_signature(conn: Conn) -> None:

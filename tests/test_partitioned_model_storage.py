@@ -146,13 +146,16 @@ def _definition(conn: Conn, table: str) -> list[Any]:
     ]
 
 
+_MODELS = [m.number for m in tgsis.data_models()]
+
+
 def test_partitioning_keeps_every_definition_of_every_model(make_database: Any, template_db: str) -> None:
     with psycopg.connect(make_database(template_db)) as plain:
         tables = {m: [r[0] for r in plain.execute("SELECT tablename FROM tgsis.model_tables WHERE model = %s",
-                                                   (m,)).fetchall()] for m in range(1, 6)}
+                                                   (m,)).fetchall()] for m in _MODELS}
         before = {t: _definition(plain, t) for ts in tables.values() for t in ts}
     with psycopg.connect(make_database(template_db)) as conn:
-        for model in range(1, 6):
+        for model in _MODELS:
             assert sorted(tgsis.partition_model_storage(conn, model, 3)) == sorted(tables[model])
         for table, definition in before.items():
             assert _definition(conn, table) == definition, table

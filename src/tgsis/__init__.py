@@ -37,6 +37,7 @@ from tgsis.convert import as_mesh
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
 from tgsis.gmaps import extrude as extrude_gmap
 from tgsis.gmaps import slice as slice_gmap
+from tgsis.datamodels import DataModel, TimeModel, data_models
 from tgsis.errors import (
     AlreadyExistsError,
     ConcurrentChangeError,
@@ -139,6 +140,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         features_in_box,
         fetch_feature,
         fetch_features,
+        fetch_object,
         get_feature_class,
         insert_feature,
         list_feature_classes,
@@ -253,6 +255,7 @@ _LAZY: dict[str, str] = {
     "features_in_box": "tgsis.db.features",
     "fetch_feature": "tgsis.db.features",
     "fetch_features": "tgsis.db.features",
+    "fetch_object": "tgsis.db.features",
     "get_feature_class": "tgsis.db.features",
     "insert_feature": "tgsis.db.features",
     "list_feature_classes": "tgsis.db.features",
@@ -424,6 +427,10 @@ __all__ = [
     "EvolvingGMap",
     "extrude_gmap",
     "slice_gmap",
+    # the data models (tgsis.data_models)
+    "DataModel",
+    "TimeModel",
+    "data_models",
     # G-maps in the database (model 4)
     "insert_gmap",
     "fetch_gmap",
@@ -466,6 +473,7 @@ __all__ = [
     "insert_feature",
     "fetch_feature",
     "fetch_features",
+    "fetch_object",
     "features_in_box",
     "delete_feature",
     # saving by difference, check-out and check-in

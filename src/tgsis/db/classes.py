@@ -16,6 +16,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import check_module
+from tgsis.datamodels import TimeModel
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import NotFoundError, reraise
 from tgsis.mesh import Geotype, Mesh, mesh_class
@@ -80,8 +81,9 @@ class FeatureClass:
         Spatial reference id (0: undefined).
     feature_properties, cell_properties : tuple of Property
         In column order.
-    time_model : {"STATIC", "INSTANTS", "EVOLVING", "GMAP"}
-        Model 1 (static), model 2 (surfaces at instants), model 3
+    time_model : str
+        The time model of a registered data model (:func:`tgsis.data_models`):
+        model 1 (static), model 2 (surfaces at instants), model 3
         (continuously evolving surfaces), model 4 (G-maps in time) or model 5
         (multiply indexed G-maps).
     time_unit : str or None
@@ -114,7 +116,7 @@ class FeatureClass:
     cellprotable: str
     viewname: str
     description: str | None = None
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC"
+    time_model: TimeModel = "STATIC"
     time_unit: str | None = None
     instant_properties: tuple[Property, ...] = ()
     protable: str | None = None
@@ -190,7 +192,7 @@ def create_feature_class(
     srs: int = 0,
     schema: str = "public",
     description: str | None = None,
-    time_model: Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"] = "STATIC",
+    time_model: TimeModel = "STATIC",
     time_unit: str | None = None,
     instant_properties: PropertySpec | None = None,
     cell_level: int | None = None,
@@ -219,7 +221,8 @@ def create_feature_class(
         schema). The tables belong to tgsis's owner; the caller must be a
         ``tgsis_admin`` with ``CREATE`` on the schema (docs/security.md).
     description : str, optional
-    time_model : {"STATIC", "INSTANTS", "EVOLVING"}
+    time_model : str
+        The time model of a registered data model (:func:`tgsis.data_models`; ``"STATIC"``: model 1).
         ``"INSTANTS"``: surfaces known at instants (model 2,
         :class:`~tgsis.temporal.SurfaceSeries`); ``"EVOLVING"``: continuously
         evolving surfaces (model 3, :class:`~tgsis.temporal.EvolvingSurface`).

@@ -26,8 +26,11 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis import datamodels
+from tgsis.datamodels import StoredObject
+from tgsis.gmaps import EvolvingGMap
+from tgsis.temporal import EvolvingSurface
 from tgsis.arguments import check_module, checked_ids
-from tgsis.db import gmaps, temporal
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
 from tgsis.db._transfer import Storage, aligned_properties, check_class_unchanged, check_feature_values, feature_columns
@@ -35,9 +38,7 @@ from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_f
                               drop_feature_class, get_feature_class, list_feature_classes)
 from tgsis.db.meaning import meaning_of, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
-from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh
-from tgsis.gmaps import EvolvingGMap, GMap
-from tgsis.temporal import EvolvingSurface, SurfaceSeries
+from tgsis.mesh import Geometry, GeometryCollection, Geotype
 
 __all__ = [
     "Property",
@@ -50,6 +51,7 @@ __all__ = [
     "insert_feature",
     "fetch_feature",
     "fetch_features",
+    "fetch_object",
     "features_in_box",
     "class_of_feature",
     "delete_feature",
@@ -92,7 +94,7 @@ class Feature:
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
-    mesh: Geometry | SurfaceSeries | EvolvingSurface | GMap | EvolvingGMap,
+    mesh: StoredObject,
     properties: Mapping[str, Any] | None = None,
     *,
     name: str | None = None,
@@ -153,21 +155,22 @@ def insert_feature(
     if (tolerance is not None or sudden_change is not None) and not isinstance(mesh, (EvolvingSurface, EvolvingGMap)):
         raise InvalidInputError(f"tolerance and sudden_change apply to the topology changes of an EvolvingSurface or "
                                 f"EvolvingGMap, not to a {type(mesh).__name__}")
-    if isinstance(mesh, (SurfaceSeries, EvolvingSurface)):
-        if isinstance(mesh, SurfaceSeries):
-            return temporal.insert_series(conn, fc, mesh, properties, name=name,
-                                          drop_extra_properties=drop_extra_properties)
-        return temporal.insert_evolving(conn, fc, mesh, properties, name=name,
-                                        drop_extra_properties=drop_extra_properties, tolerance=tolerance,
-                                        sudden_change=sudden_change)
-    if isinstance(mesh, (GMap, EvolvingGMap)):
-        return gmaps.insert_gmap(conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties,
-                                 tolerance=tolerance, sudden_change=sudden_change)
-
-    if not isinstance(mesh, (Mesh, GeometryCollection)):
+    # the topology-change options go only to the models that take them (3 and 4: checked just above)
+    options = {} if tolerance is None and sudden_change is None else {"tolerance": tolerance,
+                                                                      "sudden_change": sudden_change}
+    model = datamodels.model_storing(mesh, fc.time_model)   # the class's model if it stores the object's type
+    if model is None:
         from tgsis.convert import as_mesh  # a pyvista, meshio or trimesh object (else: what is accepted)
 
         mesh = as_mesh(mesh)
+        model = datamodels.data_model("STATIC")
+    return datamodels.storage_of(model).insert(conn, fc, mesh, properties, name=name,
+                                               drop_extra_properties=drop_extra_properties, **options)
+
+
+def _insert_static(conn: Conn, fc: FeatureClass, mesh: Geometry, properties: Mapping[str, Any] | None = None, *,
+                   name: str | None = None, drop_extra_properties: bool = False) -> int:
+    """Model 1's insert (:func:`insert_feature` of a Mesh or GeometryCollection)."""
     if fc.time_model != "STATIC":
         raise InvalidGeometryError(f"feature class {fc.name} holds {fc.time_model} surfaces, not a static "
                                    f"{type(mesh).__name__}",
@@ -304,6 +307,41 @@ def fetch_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     return fetch_features(conn, feature_class, [feature_id])[0]
 
 
+def fetch_object(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> Any:
+    """The object a feature of any data model stores, read by the model of its class (:mod:`tgsis.datamodels`).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    feature_class : str or FeatureClass
+    feature_id : int
+
+    Returns
+    -------
+    Mesh, GeometryCollection, SurfaceSeries, EvolvingSurface, EvolvingGMap, GMap, ...
+        What :func:`insert_feature` stored: model 1 as :func:`fetch_feature`'s
+        ``mesh``, model 2 as :func:`~tgsis.db.temporal.fetch_series`, model 3
+        as :func:`~tgsis.db.temporal.fetch_evolving`, model 4 as
+        :func:`~tgsis.db.gmaps.fetch_gmap`, model 5 the G-map of
+        :func:`~tgsis.db.gmaps.fetch_md_gmap` (without its axis names); a model
+        added later as its module's fetch function returns.
+
+    Raises
+    ------
+    NotFoundError
+        ``feature_id`` is not a feature of the class.
+    InvalidInputError
+        No Python module registered the class's data model.
+    """
+    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    return datamodels.storage_of(datamodels.data_model(fc.time_model)).fetch(conn, fc, feature_id)
+
+
+def _fetch_static(conn: Conn, fc: FeatureClass, feature_id: int) -> Geometry | None:
+    """Model 1's fetch: the feature's mesh or collection."""
+    return fetch_feature(conn, fc, feature_id).mesh
+
+
 def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.ArrayLike) -> list[int]:
     """Ids of the class's features whose bounding box meets ``bounds`` (GiST index scan).
 
@@ -342,6 +380,8 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
         deleted = conn.execute("SELECT tgsis.delete_geometry(%s)", (feature_id,)).fetchone()
     return bool(deleted is not None and deleted[0])
 
+
+datamodels.register_storage("STATIC", insert=_insert_static, fetch=_fetch_static)
 
 # Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
 check_module(globals(), __all__)

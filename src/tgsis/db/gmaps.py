@@ -29,6 +29,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis import datamodels
 from tgsis.arguments import check_module, no_nul
 from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
 from tgsis.db._continuity import check_continuity, checked_tolerance
@@ -691,3 +692,13 @@ def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
 
 # Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
 check_module(globals(), __all__)
+
+
+def _fetch_md(conn: Conn, fc: FeatureClass, feature_id: int) -> GMap:
+    """Model 5's fetch for :func:`tgsis.fetch_object`: the G-map of :func:`fetch_md_gmap`."""
+    return fetch_md_gmap(conn, fc, feature_id)[0]
+
+
+# models 4 and 5 in the registry of data models: insert_feature and fetch_object come here
+datamodels.register_storage("GMAP", insert=insert_gmap, fetch=fetch_gmap)
+datamodels.register_storage("MULTIDIM", insert=insert_gmap, fetch=_fetch_md)

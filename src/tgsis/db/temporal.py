@@ -31,6 +31,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis import datamodels
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import check_module, no_nul
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
@@ -1025,3 +1026,8 @@ def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: 
     for r in rows:
         found.setdefault(int(r[0]), []).append(Period(float(r[1]), float(r[2]), bool(r[3]), bool(r[4])))
     return found
+
+
+# models 2 and 3 in the registry of data models: insert_feature and fetch_object come here
+datamodels.register_storage("INSTANTS", insert=insert_series, fetch=fetch_series)
+datamodels.register_storage("EVOLVING", insert=insert_evolving, fetch=fetch_evolving)
