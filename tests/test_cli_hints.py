@@ -126,6 +126,7 @@ NOT_FROM_THE_CLI = {
     "sql/postgis": "PostGIS functions are SQL only: no command calls them",
     "sql/modelsets": "models as sets of objects are SQL and Python only: no command",
     "src/tgsis/postgis.py": "WKB of Python objects: no command",
+    "src/tgsis/datamodels.py": "the registration of data models, a Python API for who adds a model: no command calls it",
     "src/tgsis/db/postgis.py": "PostGIS from Python: no command",
     "src/tgsis/convert.py": "pyvista, meshio and trimesh objects of Python programs (the commands read files)",
     "src/tgsis/interpolation": "set-up mistakes say the set-up file's terms; surfaces= is the Python entry point",

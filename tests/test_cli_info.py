@@ -82,4 +82,4 @@ def test_info_of_surfaces_in_time_counts_per_instant_not_summed(db_dsn: str, cap
     assert capsys.readouterr().out.splitlines()[1] == "  9 to 25 vertices, 8 to 32 cells per instant (3 instants)"
     assert main(["--dsn", db_dsn, "info", str(moving)]) == 0       # 5x5 then 6x6 nodes
     assert capsys.readouterr().out.splitlines()[1] == \
-        "  25 to 36 vertices, 32 to 50 cells per topology period (2 periods)"
+        "  25 to 81 vertices, 32 to 128 cells per topology period (2 periods)"

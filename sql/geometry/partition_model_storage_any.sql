@@ -12,7 +12,7 @@ AS $$
 BEGIN
     IF p_model IS NULL OR p_model NOT BETWEEN 0 AND 32767 THEN
         RAISE EXCEPTION 'data model % does not exist', coalesce(p_model::text, 'NULL')
-            USING ERRCODE = 'TG200', HINT = 'the data models are in tgsis.data_models';
+            USING ERRCODE = 'TG200', HINT = 'in psql: SELECT model, name FROM tgsis.data_models lists the data models';
     END IF;
     IF p_partitions IS NULL OR p_partitions NOT BETWEEN 2 AND 1024 THEN
         RAISE EXCEPTION 'number of partitions % is out of range', coalesce(p_partitions::text, 'NULL')
