@@ -33,6 +33,28 @@ def test_a_pure_module_imports_neither_psycopg_nor_the_database_layer(module: st
     assert done.stdout.strip() == "", f"import {module} loaded {done.stdout.strip()}"
 
 
+# A source tree that is not installed: the package metadata is not found (as with PYTHONPATH=src).
+NOT_INSTALLED = ("import importlib.metadata as m; real = m.version; "
+                 "m.version = lambda n: (_ for _ in ()).throw(m.PackageNotFoundError(n)) if n == 'tgsis' else real(n); ")
+
+
+@pytest.mark.parametrize("module", PURE)
+def test_a_pure_module_of_a_source_tree_imports_neither_psycopg_nor_the_database_layer(module: str) -> None:
+    # issue 38: the version fallback of tgsis/__init__.py read sql/tgsis.control through tgsis.db (and psycopg)
+    program = (NOT_INSTALLED + f"import sys, {module}; "
+               "print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')))))")
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "", f"import {module} loaded {done.stdout.strip()}"
+
+
+def test_the_version_of_a_source_tree_is_the_extensions() -> None:
+    program = NOT_INSTALLED + "import tgsis; print(tgsis.__version__); print('__version__' in dir(tgsis))"
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == [tgsis.__version__, "True"]
+
+
 def test_the_database_names_load_on_first_use() -> None:
     program = ("import sys, tgsis; assert 'tgsis.db' not in sys.modules; "
                "f = tgsis.insert_feature; assert 'tgsis.db.features' in sys.modules; "

@@ -41,7 +41,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.edits import EditPlan, plan_edit
 from tgsis.db.copy import SQL_TYPES, array_wire
@@ -449,6 +449,7 @@ def _mesh_arg(edited: Any) -> Mesh:
     return edited
 
 
+@checked
 def save_feature(
     conn: Conn,
     feature_class: str | FeatureClass | None,
@@ -690,6 +691,7 @@ def _freeze(conn: Conn) -> int | None:
     return None if row is None or row[0] is None else int(row[0])
 
 
+@checked
 def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | None = None) -> Checkout:
     """Check a feature out of the session's version for editing.
 
@@ -770,6 +772,7 @@ def _unique_version_name(conn: Conn, wanted: str) -> str:
     return name
 
 
+@checked
 def checkin(
     conn: Conn,
     checked_out: Checkout,
@@ -955,6 +958,3 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
     return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),
                     properties)
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -30,7 +30,7 @@ from tgsis import datamodels
 from tgsis.datamodels import StoredObject
 from tgsis.gmaps import EvolvingGMap
 from tgsis.temporal import EvolvingSurface
-from tgsis.arguments import check_module, checked_ids
+from tgsis.arguments import checked, checked_ids
 from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
                               member_class, member_label, new_static_geometry, part_meaning, with_property_names)
 from tgsis.db._transfer import Storage, aligned_properties, check_class_unchanged, check_feature_values, feature_columns
@@ -91,6 +91,7 @@ class Feature:
     mesh: Geometry | None = None
 
 
+@checked
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
@@ -217,6 +218,7 @@ def _insert_static(conn: Conn, fc: FeatureClass, mesh: Geometry, properties: Map
     return geoid
 
 
+@checked
 def fetch_features(conn: Conn, feature_class: str | FeatureClass,
                    ids: Sequence[int] | None = None) -> list[Feature]:
     """Fetch features with their meshes and properties (three COPYs for all of them).
@@ -302,11 +304,13 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
     return features
 
 
+@checked
 def fetch_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> Feature:
     """One feature with its mesh and properties (see :func:`fetch_features`)."""
     return fetch_features(conn, feature_class, [feature_id])[0]
 
 
+@checked
 def fetch_object(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> Any:
     """The object a feature of any data model stores, read by the model of its class (:mod:`tgsis.datamodels`).
 
@@ -342,6 +346,7 @@ def _fetch_static(conn: Conn, fc: FeatureClass, feature_id: int) -> Geometry | N
     return fetch_feature(conn, fc, feature_id).mesh
 
 
+@checked
 def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.ArrayLike) -> list[int]:
     """Ids of the class's features whose bounding box meets ``bounds`` (GiST index scan).
 
@@ -364,6 +369,7 @@ def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.A
     return [int(r[0]) for r in rows]
 
 
+@checked
 def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> bool:
     """Delete a feature with its geometry and properties; ``False`` if it was not there.
 
@@ -382,6 +388,3 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
 
 
 datamodels.register_storage("STATIC", insert=_insert_static, fetch=_fetch_static)
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

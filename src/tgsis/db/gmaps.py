@@ -30,7 +30,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
-from tgsis.arguments import check_module, no_nul
+from tgsis.arguments import checked, no_nul
 from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
 from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
@@ -143,6 +143,7 @@ def _alpha_columns(geoid: int, images: IntArray) -> list[tuple[str, npt.ArrayLik
             ("dartid2", np.ascontiguousarray(images.T).reshape(-1), "int8")]
 
 
+@checked
 def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
                 properties: Mapping[str, Any] | None = None, *, name: str | None = None,
                 drop_extra_properties: bool = False, axes: Sequence[str] | None = None,
@@ -388,6 +389,7 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
     return geoid
 
 
+@checked
 def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> tuple[GMap, tuple[str, ...]]:
     """A stored multiply indexed G-map (model 5) with its cell values, and the names of its axes.
 
@@ -433,6 +435,7 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
 
 
+@checked
 def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float],
               high: Sequence[float]) -> list[int]:
     """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
@@ -443,6 +446,7 @@ def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str]
     return sorted(int(r[0]) for r in rows)
 
 
+@checked
 def md_vertices_in_box(conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float],
                        high: Sequence[float]) -> IntArray:
     """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
@@ -522,6 +526,7 @@ def _period_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int,
     return images
 
 
+@checked
 def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingGMap:
     """A stored G-map feature with its periods, positions and cell values (one COPY per table).
 
@@ -590,6 +595,7 @@ def _mix(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], w: float, same:
     return a if same else a + w * (b - a)
 
 
+@checked
 def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     """The G-map of a feature at model time ``t``: the period and weight from SQL (``tgsis.gmap_frame``), its rows by COPY.
 
@@ -655,6 +661,7 @@ def _model_of(conn: Conn, feature_id: int) -> str:
     return str(row[0])
 
 
+@checked
 def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) -> tuple[IntArray, IntArray]:
     """The ``level``-cells of a feature's G-map (at ``t`` for model 4) from SQL (``tgsis.gmap_cells``, ``md_cells``).
 
@@ -681,6 +688,7 @@ def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) 
     return np.array([r[0] for r in rows], dtype=np.int64), np.array([r[1] for r in rows], dtype=np.int64)
 
 
+@checked
 def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
     """The violated conditions of a stored G-map with their first darts (``tgsis.gmap_check``, ``md_check``); empty: valid."""
     function = "md_check" if _model_of(conn, feature_id) == "MULTIDIM" else "gmap_check"
@@ -689,9 +697,6 @@ def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
                             (feature_id,)).fetchall()
     return [GMapProblem(str(p), int(c), tuple(int(d) for d in darts)) for p, c, darts in rows]
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)
 
 
 def _fetch_md(conn: Conn, fc: FeatureClass, feature_id: int) -> GMap:
