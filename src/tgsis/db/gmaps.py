@@ -30,6 +30,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
 from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
 from tgsis.db._continuity import check_continuity, checked_tolerance
@@ -37,7 +38,6 @@ from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
-from tgsis.temporal import check_time
 
 __all__ = ["insert_gmap", "fetch_gmap", "fetch_md_gmap", "gmap_at", "gmap_cells", "gmap_check", "md_in_box",
            "md_vertices_in_box", "GMapProblem"]

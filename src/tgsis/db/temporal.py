@@ -32,6 +32,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis._series import check_time
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import checked, no_nul
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
@@ -45,6 +46,18 @@ from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Geotype, Surface
 from tgsis.temporal import (Convention, EvolvingSurface, Period, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
                             check_convention, check_time, even_times, sudden_change as sudden, write_frames_pvd)
+from tgsis.temporal import (
+    Convention,
+    EvolvingSurface,
+    Period,
+    SurfaceFrame,
+    SurfaceSeries,
+    TopologyPeriod,
+    WrittenSeries,
+    check_convention,
+    even_times,
+    write_frames_pvd,
+)
 
 __all__ = [
     "insert_series",
