@@ -77,7 +77,7 @@ def _routes() -> list[tuple[str, set[str]]]:
         if isinstance(route, Route):
             routes.append((route.path.replace("{id}", "1"), set(route.methods or ())))
         elif isinstance(route, Mount):
-            routes.append((route.path + "/three/LICENSE", {"GET", "HEAD"}))
+            routes.append((route.path + "/vendor/three/LICENSE", {"GET", "HEAD"}))
         else:  # pragma: no cover - a new kind of route must be added here
             raise AssertionError(f"unknown route {route!r}")
     return routes

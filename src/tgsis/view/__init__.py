@@ -2,7 +2,7 @@
 
 A local web server (Starlette on uvicorn, bound to 127.0.0.1) that shows the
 feature classes and features, the version tree, surfaces in 3D at any time
-(three.js, shipped in ``static/three`` with its licence: no network at run
+(three.js, shipped in ``static/vendor/three`` with its licence: no network at run
 time), two versions of a surface compared and a version's conflicts; see
 docs/view.md. It connects with the user's own role and is read-only unless
 started writable.
@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 __all__ = ["THREE_VERSION", "create_app", "serve", "ViewConfig"]
 
-#: the three.js release shipped in static/three (from the npm package ``three``)
+#: the three.js release shipped in static/vendor/three (from the npm package ``three``)
 THREE_VERSION = "0.187.0"
 
 
