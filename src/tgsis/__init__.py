@@ -235,11 +235,6 @@ def _lazy_table() -> dict[str, str]:
     return table
 
 
-def _lazy_module(name: str) -> str | None:
-    """The module a public name of ``tgsis`` is imported from on first use, None for an eager or unknown one."""
-    return _lazy_table().get(name) if name not in globals() else None
-
-
 def _source_tree_version() -> str:
     """The version of a source tree that is not installed: the extension's (sql/tgsis.control)."""
     from tgsis.db.sqlsource import ExtensionSources

@@ -32,9 +32,18 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
-from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
 from tgsis.db._continuity import check_continuity, checked_tolerance
-from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
+from tgsis.db._transfer import (
+    Columns,
+    Storage,
+    concat,
+    copy_out,
+    insert_feature_row,
+    local_positions,
+    read_only_snapshot,
+    resolve_class,
+)
+from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
@@ -56,7 +65,7 @@ class GMapProblem:
 
 
 def _gmap_class(conn: Conn, feature_class: str | FeatureClass, model: str = "GMAP") -> FeatureClass:
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model != model:
         what = "G-maps in time" if model == "GMAP" else "multiply indexed G-maps"
         raise InvalidInputError(f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
@@ -188,7 +197,7 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         darts); nothing is written.
     InvalidPropertyError, InvalidInputError, NotFoundError
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model == "MULTIDIM":
         if not isinstance(obj, GMap):
             raise InvalidInputError(f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
@@ -401,10 +410,7 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         Stored rows that do not make a G-map (see ``tgsis.md_check``).
     """
     fc = _gmap_class(conn, feature_class, "MULTIDIM")
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         head = conn.execute(sql.SQL("SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
                                     "ON m.geoid = f._geoid WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)),
                             (feature_id,)).fetchone()
@@ -538,10 +544,7 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         Stored rows that do not make a G-map (see ``tgsis.gmap_check``).
     """
     fc = _gmap_class(conn, feature_class)
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:  # one snapshot for the statements below
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         head = conn.execute(sql.SQL("SELECT g.geoname, g.alive, m.dimension, m.embedding FROM {} f "
                                     "JOIN tgsis.geometry g ON g.geoid = f._geoid JOIN tgsis.gmap m ON m.geoid = f._geoid "
                                     "WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)).fetchone()

@@ -32,20 +32,29 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
-from tgsis._series import check_time
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import checked, no_nul
-from tgsis.db.copy import SQL_TYPES, numpy_dtype
-from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
-                               local_positions, row_keys, rows_by_geoid)
 from tgsis.db._continuity import check_continuity, checked_tolerance
-from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
+from tgsis.db._transfer import (
+    Storage,
+    aligned_properties,
+    class_name,
+    class_property_arrays,
+    concat,
+    copy_out,
+    insert_feature_row,
+    local_positions,
+    read_only_snapshot,
+    resolve_class,
+    row_keys,
+    rows_by_geoid,
+)
+from tgsis.db.classes import FeatureClass, class_of_feature
+from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.formats._common import PathLike
 from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Geotype, Surface
-from tgsis.temporal import (Convention, EvolvingSurface, Period, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
-                            check_convention, check_time, even_times, sudden_change as sudden, write_frames_pvd)
 from tgsis.temporal import (
     Convention,
     EvolvingSurface,
@@ -55,9 +64,11 @@ from tgsis.temporal import (
     TopologyPeriod,
     WrittenSeries,
     check_convention,
+    check_time,
     even_times,
     write_frames_pvd,
 )
+from tgsis.temporal import sudden_change as sudden
 
 __all__ = [
     "insert_series",
@@ -86,7 +97,7 @@ Conn = psycopg.Connection[Any]
 
 
 def _temporal_class(conn: Conn, feature_class: str | FeatureClass, model: str) -> FeatureClass:
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model != model:
         raise InvalidInputError(f"feature class {fc.name} has time model {fc.time_model}, not {model}",
                                 hint="SurfaceSeries go to INSTANTS classes, EvolvingSurface to EVOLVING classes")
@@ -626,7 +637,7 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
 def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
                 convention: Convention = "left") -> list[int]:
     """Ids of the features of a class that exist at ``t`` (``tgsis.features_at``), ascending."""
-    name = feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
+    name = class_name(feature_class)
     with reraise(), conn.transaction():
         rows = conn.execute("SELECT * FROM tgsis.features_at(%s, %s, %s)",
                             (name, check_time(t), check_convention(convention))).fetchall()
@@ -640,7 +651,7 @@ def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
 
     One COPY for the vertices and one for the triangles of all features.
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.geotype != Geotype.SURFACE:
         raise InvalidInputError(f"feature class {fc.name} holds {fc.geotype.value} features, not surfaces",
                                 hint="features_at lists the features of any class that exist at t")
@@ -852,10 +863,7 @@ def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
     """
     check_convention(convention)
     samples = [check_time(t) for t in np.atleast_1d(np.asarray(times, dtype=np.float64)).tolist()]
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:  # every frame from the same state of the database
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         frames = []
         for t in samples:
             frames.append((t, get_at(conn, feature_id, t, convention=convention)))
@@ -929,10 +937,6 @@ def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float |
 # --------------------------------------------------------------------------- temporal questions
 
 
-def _class_name(feature_class: str | FeatureClass) -> str:
-    return feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
-
-
 @checked
 def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str,
                      value: float, *, convention: Convention = "left") -> list[Period]:
@@ -981,7 +985,7 @@ def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: 
         rows = conn.execute(
             "SELECT coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.property_periods(%s, %s, %s, %s, %s, %s)",
-            (_class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention))).fetchall()
+            (class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention))).fetchall()
     return [Period(float(r[0]), float(r[1]), bool(r[2]), bool(r[3])) for r in rows]
 
 
@@ -1020,7 +1024,7 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
         As :func:`property_periods`.
     """
     query = sql.SQL("SELECT idx, t FROM tgsis.first_time({}, {}, {}, {}, {}, {})").format(
-        sql.Literal(_class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
+        sql.Literal(class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
         sql.Literal(float(value)), sql.Literal(check_convention(convention)))
     with reraise(), conn.transaction():
         idx, t = copy_out(conn, query, ["int8", "float8"])
@@ -1052,7 +1056,7 @@ def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: 
         rows = conn.execute(
             "SELECT geoid, coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.class_property_periods(%s, %s, %s, %s, %s)",
-            (_class_name(feature_class), prop, op, float(value), check_convention(convention))).fetchall()
+            (class_name(feature_class), prop, op, float(value), check_convention(convention))).fetchall()
     found: dict[int, list[Period]] = {}
     for r in rows:
         found.setdefault(int(r[0]), []).append(Period(float(r[1]), float(r[2]), bool(r[3]), bool(r[4])))

@@ -26,6 +26,7 @@ import psycopg
 
 from tgsis._optional import require
 from tgsis.arguments import checked
+from tgsis.db._settings import read_version_settings, restore_statement
 from tgsis.errors import MissingPrivilegeError, VersioningError, reraise
 
 __all__ = [
@@ -323,11 +324,7 @@ def _restoring_settings(conn: Conn, local: bool) -> Iterator[None]:
     # block's version.
     began = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE and not conn.autocommit
     with reraise():
-        row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
-                           ).fetchone()
-    assert row is not None
-    restore = ("SELECT set_config('tgsis.version', coalesce(%s, ''), %s), "
-               "set_config('tgsis.revision', coalesce(%s, ''), %s)", (row[0], local, row[1], local))
+        restore = restore_statement(read_version_settings(conn), local=local)
     try:
         yield
     except BaseException:

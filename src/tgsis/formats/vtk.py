@@ -408,18 +408,6 @@ def _vtk_values(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
     return np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("<"))
 
 
-def _string_array(name: str, *values: str) -> ET.Element:
-    """A FieldData string array holding ``values`` (one string each), as VTK writes a vtkStringArray.
-
-    An ``<Array>`` (not ``<DataArray>``) element with the bytes as decimal
-    codes, each string terminated by 0. tgsis no longer writes these (see
-    :meth:`_ArrayWriter.strings`) but reads them; the tests make such files.
-    """
-    element = ET.Element("Array", type="String", Name=name, NumberOfTuples=str(len(values)), format="ascii")
-    element.text = " ".join(str(b) for value in values for b in [*value.encode("utf-8"), 0])
-    return element
-
-
 # ---------------------------------------------------------------- reading
 
 
