@@ -18,9 +18,8 @@ import sys
 import psycopg
 
 import tgsis
-from tgsis.testing import TestServer
-
 from tests.view_helpers import get
+from tgsis.testing import TestServer
 
 
 def _tgsis(*args: str) -> subprocess.Popen[str]:

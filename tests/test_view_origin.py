@@ -30,10 +30,9 @@ from typing import Any
 import pytest
 from starlette.routing import Mount, Route
 
+from tests.view_helpers import CHROMIUM, CHROMIUM_ARGS, ViewData, chromium, fill_view_database, running_view
 from tgsis.testing import TestServer
 from tgsis.view.app import VERSION_COOKIE, RequestGuard, ViewConfig, create_app
-
-from tests.view_helpers import CHROMIUM, CHROMIUM_ARGS, ViewData, chromium, fill_view_database, running_view
 
 UNSAFE = ("POST", "PUT", "PATCH", "DELETE")
 

@@ -24,7 +24,39 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
-from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
+from tgsis.convert import as_mesh
+from tgsis.datamodels import DataModel, TimeModel, data_models
+from tgsis.errors import (
+    AlreadyExistsError,
+    CheckoutConflictError,
+    ConcurrentChangeError,
+    DatabaseError,
+    DiscontinuousPeriodsError,
+    Error,
+    FileFormatError,
+    InstallationError,
+    InUseError,
+    InvalidGeometryError,
+    InvalidGMapError,
+    InvalidInputError,
+    InvalidNameError,
+    InvalidPropertyError,
+    LocalServerError,
+    MissingPrivilegeError,
+    NotFoundError,
+    NotVersionedError,
+    ObjectLockedError,
+    PolygonsSplitWarning,
+    ReadOnlyRevisionError,
+    SkippedObjectWarning,
+    UnknownDataModelError,
+    UnsolvedConflictsError,
+    UnsupportedViewStatementError,
+    VersioningError,
+)
+from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
+from tgsis.gmaps import extrude as extrude_gmap
+from tgsis.gmaps import slice as slice_gmap
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -36,46 +68,13 @@ from tgsis.mesh import (
     TetraMesh,
     mesh_class,
 )
-from tgsis.convert import as_mesh
-from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
-from tgsis.gmaps import extrude as extrude_gmap
-from tgsis.gmaps import slice as slice_gmap
-from tgsis.datamodels import DataModel, TimeModel, data_models
-from tgsis.errors import (
-    AlreadyExistsError,
-    ConcurrentChangeError,
-    DatabaseError,
-    Error,
-    FileFormatError,
-    InstallationError,
-    InUseError,
-    UnknownDataModelError,
-    DiscontinuousPeriodsError,
-    InvalidGeometryError,
-    InvalidGMapError,
-    InvalidInputError,
-    InvalidNameError,
-    InvalidPropertyError,
-    LocalServerError,
-    MissingPrivilegeError,
-    NotFoundError,
-    NotVersionedError,
-    UnsupportedViewStatementError,
-    ObjectLockedError,
-    CheckoutConflictError,
-    ReadOnlyRevisionError,
-    SkippedObjectWarning,
-    PolygonsSplitWarning,
-    UnsolvedConflictsError,
-    VersioningError,
-)
-
+from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
 
 if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads on first use (below)
     from tgsis.db import (
         ExtensionSources,
-        InstalledVersion,
         InstallationStatus,
+        InstalledVersion,
         InstallResult,
         LocalServer,
         connect,
@@ -86,6 +85,72 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         partition_model_storage,
         uninstall,
     )
+    from tgsis.db.adapters import Box, register_types
+    from tgsis.db.checkin import (
+        CheckinResult,
+        Checkout,
+        CheckoutToken,
+        SaveResult,
+        checkin,
+        checkout,
+        save_feature,
+    )
+    from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
+    from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
+    from tgsis.db.features import (
+        Feature,
+        FeatureClass,
+        Property,
+        create_feature_class,
+        delete_feature,
+        drop_feature_class,
+        features_in_box,
+        fetch_feature,
+        fetch_features,
+        fetch_object,
+        get_feature_class,
+        insert_feature,
+        list_feature_classes,
+    )
+    from tgsis.db.gmaps import (
+        GMapProblem,
+        fetch_gmap,
+        fetch_md_gmap,
+        gmap_at,
+        gmap_cells,
+        gmap_check,
+        insert_gmap,
+        md_in_box,
+        md_vertices_in_box,
+    )
+    from tgsis.db.modelsets import (
+        Model,
+        ModelObject,
+        add_to_model,
+        create_model,
+        list_models,
+        model_objects,
+        remove_from_model,
+    )
+    from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
+    from tgsis.db.temporal import (
+        add_instant,
+        append_period,
+        class_property_periods,
+        delete_instant,
+        delete_period,
+        export_series,
+        features_at,
+        fetch_evolving,
+        fetch_series,
+        first_times,
+        frames_at,
+        get_at,
+        instants,
+        lifespan,
+        property_periods,
+        surfaces_at,
+    )
     from tgsis.db.versions import (
         Compressed,
         Conflict,
@@ -93,8 +158,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         Discard,
         ObjectLock,
         Version,
-        VersionGrant,
         VersionedTable,
+        VersionGrant,
         at_revision,
         compress_versions,
         conflict_discards,
@@ -113,7 +178,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         has_version_privilege,
         in_version,
         list_versions,
-        version_graph,
         lock_objects,
         merge_version,
         object_locks,
@@ -127,64 +191,15 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         unlock_objects,
         version_believed_at,
         version_chain,
+        version_graph,
         version_privileges,
         versioned_tables,
         viewing_revision,
         working_revision,
         working_version,
     )
-    from tgsis.db.features import (
-        Feature,
-        FeatureClass,
-        Property,
-        create_feature_class,
-        delete_feature,
-        drop_feature_class,
-        features_in_box,
-        fetch_feature,
-        fetch_features,
-        fetch_object,
-        get_feature_class,
-        insert_feature,
-        list_feature_classes,
-    )
-    from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
-    from tgsis.db.checkin import (
-        CheckinResult,
-        Checkout,
-        CheckoutToken,
-        SaveResult,
-        checkin,
-        checkout,
-        save_feature,
-    )
-    from tgsis.db.adapters import Box, register_types
-    from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
-    from tgsis.db.temporal import (
-        add_instant,
-        append_period,
-        delete_instant,
-        delete_period,
-        export_series,
-        features_at,
-        fetch_evolving,
-        fetch_series,
-        class_property_periods,
-        first_times,
-        frames_at,
-        get_at,
-        instants,
-        lifespan,
-        property_periods,
-        surfaces_at,
-    )
-    from tgsis.db.modelsets import Model, ModelObject, add_to_model, create_model, list_models, model_objects, \
-        remove_from_model
-    from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
-    from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
     from tgsis.interpolation.deposition import Contact, Deposition, Stacking, deposit, drape, keep_above
-    from tgsis.db.gmaps import (GMapProblem, fetch_gmap, fetch_md_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap,
-                                md_in_box, md_vertices_in_box)
+    from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
 
 # The database layer (and psycopg) is imported on first use of one of its
 # names, so that the numpy modules (tgsis.mesh, compare, edits, temporal,

@@ -110,8 +110,17 @@ import numpy.typing as npt
 from tgsis._vtk_cells import file_array_names, mesh_from_vtk_cells, named_as_read, shared_properties, without_no_part
 from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import (PathLike, check_mesh, in_elevation, quoted, read_bytes, restore_convention,
-                                   sanitize_property_name, split_vtk_polygons, write_bytes)
+from tgsis.formats._common import (
+    PathLike,
+    check_mesh,
+    in_elevation,
+    quoted,
+    read_bytes,
+    restore_convention,
+    sanitize_property_name,
+    split_vtk_polygons,
+    write_bytes,
+)
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
 if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)

@@ -44,7 +44,8 @@ def create_app(conninfo: str, *, writable: bool = False, database: str = "") -> 
         Name shown in the pages.
     """
     try:
-        from tgsis.view.app import ViewConfig, create_app as make
+        from tgsis.view.app import ViewConfig
+        from tgsis.view.app import create_app as make
     except ImportError as exc:  # pragma: no cover - the extra is installed in the tests
         raise _missing(exc) from exc
     return make(ViewConfig(conninfo, writable, database))
@@ -75,7 +76,8 @@ def serve(conninfo: str, *, host: str = "127.0.0.1", port: int = 8765, writable:
         import uvicorn
     except ImportError as exc:  # pragma: no cover
         raise _missing(exc) from exc
-    from tgsis.view.app import ViewConfig, create_app as make
+    from tgsis.view.app import ViewConfig
+    from tgsis.view.app import create_app as make
 
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     sock = socket.socket(family, socket.SOCK_STREAM)
