@@ -240,7 +240,53 @@ class TopologyPeriod:
                        cell_properties={k: mix(v[j0], v[j1]) for k, v in self.cell_properties.items()})
 
 
+def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
+                  label: str = "the period") -> TopologyPeriod:
+    """``period`` starting in the shape ``before`` and reaching its own first shape ``duration`` later, linearly.
+
+    The design's sudden change at a topology instant t0: the post-object
+    (``period``, new topology) starts at t0 sharing the pre-object's
+    geometry (``before``, the last shape of the period before) and changes
+    linearly into its first shape, now at t0 + ``duration``. Its nodes start:
+    at the nodes of ``before`` when it has as many and the same triangles
+    (a motion); otherwise each at the closest point of ``before``'s
+    triangles once the new shape's offset as a whole is taken out (a rigid
     offset is undone exactly: ``tgsis._transition.start_on``). Vertex, cell and per-instant properties keep their first
+    values over the transition.
+
+    Parameters
+    ----------
+    before : Surface
+        The pre-object's shape at t0.
+    period : TopologyPeriod
+        Starting at t0; its second geometry instant (if any) after t0 + duration.
+    duration : float
+        Finite, > 0.
+    label : str
+        How messages name the period.
+
+    Returns
+    -------
+    TopologyPeriod
+        With g + 1 geometry instants.
+
+    Raises
+    ------
+    InvalidInputError
+        A bad duration, or one that does not end before the second instant.
+    """
+    times = transition_times(period.times, duration, label)
+    if before.n_vertices == period.n_nodes and np.array_equal(before.cells, period.triangles):
+        start = before.vertices.astype(np.float64)
+    else:
+        corners = before.vertices.astype(np.float64)
+        start = start_on(lambda q: closest_on_triangles(corners, before.cells, q), period.positions[0])
+    return TopologyPeriod(times, period.triangles, prepend_first(period.positions, start),
+                          vertex_properties={k: prepend_first(v) for k, v in period.vertex_properties.items()},
+                          cell_properties={k: prepend_first(v) for k, v in period.cell_properties.items()},
+                          properties={k: prepend_first(v) for k, v in period.properties.items()})
+
+
 class EvolvingSurface:
     """A surface evolving continuously, with topology changes at period starts (model 3).
 

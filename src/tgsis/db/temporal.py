@@ -32,6 +32,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis._series import check_time
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import checked, no_nul
 from tgsis.db._continuity import check_continuity, checked_tolerance
@@ -64,7 +65,6 @@ from tgsis.temporal import (
     TopologyPeriod,
     WrittenSeries,
     check_convention,
-    check_time,
     even_times,
     write_frames_pvd,
 )
