@@ -360,7 +360,7 @@ def fetch_object(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
     InvalidInputError
         No Python module registered the class's data model.
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     return datamodels.storage_of(datamodels.data_model(fc.time_model)).fetch(conn, fc, feature_id)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -20,10 +20,8 @@ from psycopg import sql
 
 from tgsis.arguments import checked
 from tgsis.db._transfer import columns_out, corners_out
+from tgsis.db.classes import FeatureClass  # at run time: @checked reads the hints
 from tgsis.errors import NotFoundError, reraise
-
-if TYPE_CHECKING:
-    from tgsis.db.features import FeatureClass
 
 Conn = psycopg.Connection[Any]
 
