@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PYTEST_ARGS ?=
 
-.PHONY: all install demo test setup check extension installcheck clean pictures
+.PHONY: all install demo test setup check format extension installcheck clean pictures
 
 # A bare `make` builds the extension scripts and `make install` installs them
 # (PGXS, the PostgreSQL of pg_config): what `pgxn install tgsis` runs (META.json).
@@ -81,6 +81,10 @@ check: $(VENV)/.installed
 	$(BIN)/python -m mypy
 	$(BIN)/ruff check src tests bench
 	$(BIN)/ruff format --check $(RUFF_FORMATTED)
+
+# What pre-commit's ruff-format hook runs (.pre-commit-config.yaml): format the files that are kept formatted.
+format: $(VENV)/.installed
+	$(BIN)/ruff format $(RUFF_FORMATTED)
 
 # Build the extension script; install it into the system PostgreSQL (PGXS) when
 # this user may write there, so that CREATE EXTENSION tgsis works on it too

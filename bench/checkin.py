@@ -31,10 +31,10 @@ from typing import Any
 
 import numpy as np
 import psycopg
-
-import tgsis
 from timing import bench_database
 from transfer import grid_surface
+
+import tgsis
 
 Conn = psycopg.Connection[Any]
 

@@ -22,13 +22,13 @@ from typing import Any
 import numpy as np
 import psycopg
 from psycopg.conninfo import make_conninfo
-
-import tgsis
-from tgsis.db import features as F
-from tgsis.db.local import LocalServer, find_binaries
 from timing import timed
 from transfer import grid_surface
+
+import tgsis
 from tests.synthetic import flat_grid
+from tgsis.db import features as F
+from tgsis.db.local import LocalServer, find_binaries
 
 Conn = psycopg.Connection[Any]
 

@@ -38,12 +38,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from scipy.spatial import cKDTree
+from timing import timed
+from transfer import grid_surface
 
 import tgsis
 from tgsis._rows import SortedRows, cell_columns, columns_of, coordinate_columns, match_rows
 from tgsis.compare import MeshDiff, MeshIndex, _diff, _match_cells, compare_meshes
-from timing import timed
-from transfer import grid_surface
 
 IntArray = npt.NDArray[np.int64]
 

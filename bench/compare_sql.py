@@ -27,11 +27,11 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from timing import bench_database, paired
+from transfer import grid_surface
 
 import tgsis
 from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
-from timing import bench_database, paired
-from transfer import grid_surface
 
 Conn = psycopg.Connection[Any]
 

@@ -32,9 +32,9 @@ import numpy as np
 import numpy.typing as npt
 import scipy
 import trimesh
+from timing import timed
 
 from tgsis.gmaps import GMap, extrude, orbit_labels, slice
-from timing import timed
 
 IntArray = npt.NDArray[np.int64]
 

@@ -26,6 +26,8 @@ import argparse
 
 import numpy as np
 import psycopg
+from gmaps import block_tetrahedra, grid_triangles
+from timing import paired, timed
 
 import tgsis
 from tgsis import gmaps
@@ -33,9 +35,6 @@ from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.db.copy import decode_rows, encode_rows
 from tgsis.db.local import LocalServer, find_binaries
-
-from gmaps import block_tetrahedra, grid_triangles
-from timing import paired, timed
 
 RAW = {  # the rows insert_gmap writes for a one-period, one-instant map, as plain keyed tables
     "dart": ("geoid int8, dartid int8, timem float8, nodeid int8, acellid int8, positive bool", "geoid, dartid"),

@@ -27,9 +27,16 @@ from scipy.sparse.linalg import splu
 from scipy.spatial import Delaunay
 
 from tgsis.interpolation._arrays import interior_mask as vertices_inside
-from tgsis.interpolation.parameterize import (WeightPattern, _chord_border, _ordered_border,
-                                              _split_system, border_loop, compatible_patch, mean_value_data,
-                                              sparse_solve)
+from tgsis.interpolation.parameterize import (
+    WeightPattern,
+    _chord_border,
+    _ordered_border,
+    _split_system,
+    border_loop,
+    compatible_patch,
+    mean_value_data,
+    sparse_solve,
+)
 from tgsis.interpolation.trajectories import InteriorSteps, vertex_trajectories
 
 

@@ -15,8 +15,16 @@ import numpy as np
 import numpy.typing as npt
 from timing import timed
 
-from tgsis.interpolation import (MeshTopology, border_loops, check_disk, cut_along_paths, one_rings, partition_pair,
-                                 partition_surface, shortest_edge_path)
+from tgsis.interpolation import (
+    MeshTopology,
+    border_loops,
+    check_disk,
+    cut_along_paths,
+    one_rings,
+    partition_pair,
+    partition_surface,
+    shortest_edge_path,
+)
 from tgsis.mesh import Surface
 
 SIDE = 317

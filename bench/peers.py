@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from timing import paired
+from transfer import grid_surface
 
 import tgsis
 from tgsis.db import checkin as C
@@ -40,8 +42,6 @@ from tgsis.db import features as F
 from tgsis.db.copy import encode_rows
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
-from timing import paired
-from transfer import grid_surface
 
 
 def sizes(conn: psycopg.Connection[Any], tables: list[str]) -> dict[str, tuple[int, int]]:

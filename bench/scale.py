@@ -37,12 +37,12 @@ from typing import Any
 
 import numpy as np
 import psycopg
-
-import tgsis
 from checkin import one_percent_edit, vacuum_analyze
 from snapshot import evolving_grid
-from tgsis.db.local import LocalServer, find_binaries
 from transfer import grid_surface
+
+import tgsis
+from tgsis.db.local import LocalServer, find_binaries
 
 Conn = psycopg.Connection[Any]
 OPERATIONS = ("upload", "fetch", "box", "snapshot", "checkin", "merge", "full_scan")

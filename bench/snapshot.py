@@ -33,11 +33,11 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from timing import bench_database, paired
+from transfer import grid_surface
 
 import tgsis
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
-from timing import bench_database, paired
-from transfer import grid_surface
 
 Conn = psycopg.Connection[Any]
 

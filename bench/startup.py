@@ -14,10 +14,10 @@ import uuid
 
 import psycopg
 from psycopg import sql
+from timing import timed
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
-from timing import timed
 
 REPEAT = 10
 

@@ -19,11 +19,11 @@ import uuid
 
 import psycopg
 from psycopg.conninfo import conninfo_to_dict, make_conninfo
+from timing import bench_database, paired
+from transfer import grid_surface
 
 import tgsis
 from tgsis.db import features as F
-from timing import bench_database, paired
-from transfer import grid_surface
 
 STORAGE = ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", "public.horizon_ver", "public.horizon_cellpros_ver")
 

@@ -22,10 +22,10 @@ import statistics
 from typing import Any
 
 import psycopg
+from timing import timed
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
-from timing import timed
 
 Conn = psycopg.Connection[Any]
 _names = itertools.count()

@@ -16,12 +16,12 @@ import argparse
 import numpy as np
 import psycopg
 from psycopg import sql
+from timing import timed
 
 import tgsis
 from tgsis.db import features as F
 from tgsis.db.copy import decode_rows, encode_rows
 from tgsis.db.local import LocalServer, find_binaries
-from timing import timed
 
 
 def grid_surface(side: int) -> tgsis.Surface:

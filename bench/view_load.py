@@ -28,10 +28,10 @@ import urllib.request
 
 import psycopg
 from playwright.sync_api import sync_playwright
+from transfer import grid_surface
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
-from transfer import grid_surface
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]

@@ -18,9 +18,9 @@ import zlib
 from pathlib import Path
 
 import pyvista as pv
+from timing import timed
 
 from tgsis import formats
-from timing import timed
 
 FAULT = Path(__file__).resolve().parents[1] / "data/cfm/formats/SAFS-SAFZ-MULT-San_Andreas_fault_Fuis-ALT6_500m.ts"
 

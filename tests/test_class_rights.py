@@ -24,13 +24,13 @@ import pytest
 from psycopg.conninfo import make_conninfo
 
 import tgsis
+from tests.gmaps_shapes import icosahedron
+from tests.roles import Roles, login_roles
+from tests.synthetic import flat_grid
+from tests.temporal_data import evolving, series
 from tgsis import gmaps
 from tgsis.db import features as F
 from tgsis.db._transfer import Storage
-from tests.roles import Roles, login_roles
-from tests.gmaps_shapes import icosahedron
-from tests.synthetic import flat_grid
-from tests.temporal_data import evolving, series
 
 Conn = psycopg.Connection[Any]
 

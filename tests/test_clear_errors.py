@@ -20,9 +20,9 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.test_gmap_multidim import _class, _interpretations
 from tgsis.db import gmaps as G
 from tgsis.db import modelsets as M
-from tests.test_gmap_multidim import _class, _interpretations
 
 Conn = psycopg.Connection[Any]
 

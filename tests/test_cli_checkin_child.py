@@ -10,9 +10,9 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.test_cli_checkin import _surface
 from tgsis import formats
 from tgsis.cli import main
-from tests.test_cli_checkin import _surface
 
 ANN, BOB = 1, 100          # the vertex each moves
 

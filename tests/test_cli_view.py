@@ -18,9 +18,8 @@ import sys
 import psycopg
 
 import tgsis
-from tgsis.testing import TestServer
-
 from tests.view_helpers import get
+from tgsis.testing import TestServer
 
 
 def _tgsis(*args: str) -> subprocess.Popen[str]:
@@ -40,8 +39,8 @@ def test_view_serves_the_database_and_stops_on_sigterm(db_dsn: str) -> None:
         assert found, line + (process.stderr.read() if process.poll() is not None and process.stderr else "")
         status, body, _ = get(found.group(1))
         assert status == 200 and b'data-class="faults"' in body
-        status, body, _ = get(found.group(1).replace("/classes", "/static/three/three.module.js"))
-        assert status == 200 and b"REVISION" in get(found.group(1).replace("/classes", "/static/three/three.core.js"))[1]
+        status, body, _ = get(found.group(1).replace("/classes", "/static/vendor/three/three.module.js"))
+        assert status == 200 and b"REVISION" in get(found.group(1).replace("/classes", "/static/vendor/three/three.core.js"))[1]
     finally:
         process.send_signal(signal.SIGTERM)
         process.wait(30)

@@ -23,10 +23,10 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.test_model_registry import TEST_MODEL
 from tgsis import datamodels
 from tgsis.db.classes import FeatureClass
 from tgsis.errors import InvalidInputError, NotFoundError
-from tests.test_model_registry import TEST_MODEL
 
 Conn = psycopg.Connection[Any]
 
@@ -81,8 +81,8 @@ def test_an_object_no_model_stores_is_still_converted_or_refused(conn: Conn) -> 
 
 
 def test_fetch_object_reads_a_feature_of_every_shipped_model_as_it_was_stored(conn: Conn) -> None:
-    from tgsis import gmaps
     from tests.temporal_data import evolving, series
+    from tgsis import gmaps
     rng = np.random.default_rng(38)
     surface = tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="tri")
     square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])

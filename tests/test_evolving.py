@@ -9,8 +9,8 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.temporal import EvolvingSurface, TopologyPeriod
 from tests.temporal_data import evolving, grid
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
 STARTS = [-10.0, -6.5, -2.0]

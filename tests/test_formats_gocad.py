@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.shared_data import CFM, cfm
 from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import format_gocad, parse_gocad, read_gocad, read_tsurf, write_gocad, write_gocad_many
-from tests.shared_data import CFM, cfm
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 DATA = Path(__file__).resolve().parent / "data" / "gocad"

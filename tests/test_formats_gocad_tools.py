@@ -18,12 +18,20 @@ import numpy as np
 import pytest
 
 import tgsis
+from tests.shared_data import cfm
 from tgsis import formats
 from tgsis.errors import FileFormatError, SkippedObjectWarning
-from tgsis.formats.gocad import (VERTEX_FLAGS, format_gocad, parse_gocad, quote_word, read_gocad, read_tsurf,
-                                 split_words, write_gocad)
+from tgsis.formats.gocad import (
+    VERTEX_FLAGS,
+    format_gocad,
+    parse_gocad,
+    quote_word,
+    read_gocad,
+    read_tsurf,
+    split_words,
+    write_gocad,
+)
 from tgsis.mesh import LineSet, PointSet, Surface, TetraMesh
-from tests.shared_data import cfm
 
 DATA = Path(__file__).resolve().parent / "data" / "gocad"
 

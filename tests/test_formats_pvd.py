@@ -10,13 +10,13 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tests.shared_data import cfm
 from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import read_tsurf
 from tgsis.formats.pvd import Frame, read_pvd, write_pvd
 from tgsis.formats.vtk import format_empty_vtu, parse_vtu_geometry, read_vtu, write_vtu
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, PointSet, Surface, TetraMesh
-from tests.shared_data import cfm
 
 DATA = Path(__file__).resolve().parent / "data"
 

@@ -10,14 +10,12 @@ import numpy.typing as npt
 import pytest
 import trimesh
 
+from tests.shared_data import cfm
 from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import read_tsurf
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
-from tests.shared_data import cfm
 from tgsis.mesh import LineSet, Surface
-
-
 
 
 @pytest.fixture

@@ -12,11 +12,11 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
+from tests.shared_data import cfm
 from tgsis import formats
 from tgsis.errors import FileFormatError
 from tgsis.formats.gocad import read_tsurf
 from tgsis.formats.vtk import format_vtu, parse_vtu, read_vtu, write_vtu
-from tests.shared_data import cfm
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 DATA = Path(__file__).resolve().parent / "data"

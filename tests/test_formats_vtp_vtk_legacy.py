@@ -15,8 +15,8 @@ import pyvista as pv
 
 from tgsis import formats
 from tgsis.errors import FileFormatError
-from tgsis.formats.vtk_legacy import format_vtk, parse_vtk, parse_vtk_geometry
 from tgsis.formats.vtk import format_vtp, parse_vtp
+from tgsis.formats.vtk_legacy import format_vtk, parse_vtk, parse_vtk_geometry
 from tgsis.mesh import GeometryCollection, LineSet, PointSet, Surface, TetraMesh
 
 

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 import psycopg
-from psycopg import sql
 import pytest
+from psycopg import sql
 
 import tgsis
 from tgsis import gmaps

@@ -12,11 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tgsis
+from tests import gmaps_shapes as shapes
 from tgsis.gmaps import GMap, from_mesh, from_polygons, orbit_labels
 from tgsis.mesh import LineSet, PointSet, Surface, TetraMesh
-
-from tests import gmaps_shapes as shapes
-
 
 
 def counts(g: GMap) -> list[int]:

@@ -7,9 +7,8 @@ import numpy.typing as npt
 import pytest
 
 import tgsis
-from tgsis.gmaps import GMap
-
 from tests import gmaps_shapes as shapes
+from tgsis.gmaps import GMap
 
 IntArray = npt.NDArray[np.int64]
 

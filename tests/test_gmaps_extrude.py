@@ -8,9 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tgsis.gmaps import GMap, extrude, slice
-
 from tests import gmaps_shapes as shapes
+from tgsis.gmaps import GMap, extrude, slice
 
 
 def counts(g: GMap) -> list[int]:

@@ -40,6 +40,11 @@ def _state(conn: Conn) -> list[Any]:
         "SELECT count(*) FROM tgsis.vrtx")]
 
 
+def _period() -> tgsis.TopologyPeriod:
+    surface = _surface()
+    return tgsis.TopologyPeriod(np.array([0.0, 1.0]), surface.triangles, np.stack([surface.vertices, surface.vertices]))
+
+
 @pytest.fixture
 def db(conn: Conn) -> Conn:
     tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties={"release": "text"})
@@ -84,6 +89,15 @@ PYTHON_CASES: list[tuple[str, Callable[[Conn], Any], str]] = [
     ("time id huge", lambda c: tgsis.get_at(c, 10**20, 1.0), "feature_id = 100000000000000000000"),
     ("question property", lambda c: T.property_periods(c, "moving", 1, NUL, "<", 1.0), "prop contains a NUL byte"),
     ("snapshot class", lambda c: T.surfaces_at(c, NUL, 1.0), "feature_class contains a NUL byte"),
+    # these three were not in their module's __all__, so the module-end wrapping missed them (issue 38)
+    ("append period id huge", lambda c: T.append_period(c, "moving", 10**20, _period()),
+     "feature_id = 100000000000000000000 is out of range"),
+    ("delete period id huge", lambda c: T.delete_period(c, 10**20, 0.0), "feature_id = 100000000000000000000"),
+    ("delete period start text", lambda c: T.delete_period(c, 1, "abc"), "start must be a number, not str"),  # type: ignore[arg-type]
+    ("class question property", lambda c: T.class_property_periods(c, "moving", NUL, "<", 1.0),
+     "prop contains a NUL byte"),
+    ("class question value text", lambda c: T.class_property_periods(c, "moving", "p", "<", "abc"),  # type: ignore[arg-type]
+     "value must be a number, not str"),
     ("steps", lambda c: T.export_series(c, 1, "/nonexistent/s.pvd", start=0.0, end=1.0, steps=10**11),
      "steps 100000000000 is too many: at most 100000"),
 ]

@@ -6,8 +6,16 @@ import numpy as np
 import pytest
 
 from tests.interp_meshes import delaunay_disk, grid, vid
-from tgsis.interpolation import (CutResult, InterpolationSetupError, border_edges, border_loops,
-                                 check_disk, cut_along_paths, interior_vertices, shortest_edge_path)
+from tgsis.interpolation import (
+    CutResult,
+    InterpolationSetupError,
+    border_edges,
+    border_loops,
+    check_disk,
+    cut_along_paths,
+    interior_vertices,
+    shortest_edge_path,
+)
 from tgsis.mesh import Surface
 
 NX, NY = 7, 6

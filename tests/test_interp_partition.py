@@ -6,9 +6,18 @@ import numpy as np
 import pytest
 
 from tests.interp_meshes import annulus, grid, shuffled, signed_area, vid
-from tgsis.interpolation import (InterpolationSetupError, MeshTopology, Partition, check_disk, pair_patches,
-                                 partition_pair, partition_surface, shortest_edge_path, validate_control_vertices,
-                                 validate_fence_paths)
+from tgsis.interpolation import (
+    InterpolationSetupError,
+    MeshTopology,
+    Partition,
+    check_disk,
+    pair_patches,
+    partition_pair,
+    partition_surface,
+    shortest_edge_path,
+    validate_control_vertices,
+    validate_fence_paths,
+)
 from tgsis.mesh import Surface
 
 NX, NY = 9, 7

@@ -6,11 +6,33 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tests.interp_meshes import (annulus, brute_border, brute_edges, delaunay_disk, grid, grid_triangles, mobius,
-                           shuffled, signed_area, torus, vid)
+from tests.interp_meshes import (
+    annulus,
+    brute_border,
+    brute_edges,
+    delaunay_disk,
+    grid,
+    grid_triangles,
+    mobius,
+    shuffled,
+    signed_area,
+    torus,
+    vid,
+)
 from tgsis.errors import InvalidInputError
-from tgsis.interpolation import (InterpolationSetupError, MeshTopology, border_edges, border_loops, border_vertices,
-                                 check_disk, interior_vertices, mesh_edges, one_ring, one_rings, shortest_edge_path)
+from tgsis.interpolation import (
+    InterpolationSetupError,
+    MeshTopology,
+    border_edges,
+    border_loops,
+    border_vertices,
+    check_disk,
+    interior_vertices,
+    mesh_edges,
+    one_ring,
+    one_rings,
+    shortest_edge_path,
+)
 from tgsis.mesh import Surface
 
 

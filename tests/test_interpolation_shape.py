@@ -23,8 +23,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tgsis.interpolation import Attachment, InterpolationSetup, interpolate, mean_value_weights
-from tgsis.interpolation import trajectories
+from tgsis.interpolation import Attachment, InterpolationSetup, interpolate, mean_value_weights, trajectories
 from tgsis.interpolation._arrays import interior_mask
 from tgsis.interpolation.projection import ControllingSurface
 from tgsis.interpolation.trajectories import vertex_trajectories

@@ -33,6 +33,28 @@ def test_a_pure_module_imports_neither_psycopg_nor_the_database_layer(module: st
     assert done.stdout.strip() == "", f"import {module} loaded {done.stdout.strip()}"
 
 
+# A source tree that is not installed: the package metadata is not found (as with PYTHONPATH=src).
+NOT_INSTALLED = ("import importlib.metadata as m; real = m.version; "
+                 "m.version = lambda n: (_ for _ in ()).throw(m.PackageNotFoundError(n)) if n == 'tgsis' else real(n); ")
+
+
+@pytest.mark.parametrize("module", PURE)
+def test_a_pure_module_of_a_source_tree_imports_neither_psycopg_nor_the_database_layer(module: str) -> None:
+    # issue 38: the version fallback of tgsis/__init__.py read sql/tgsis.control through tgsis.db (and psycopg)
+    program = (NOT_INSTALLED + f"import sys, {module}; "
+               "print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')))))")
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "", f"import {module} loaded {done.stdout.strip()}"
+
+
+def test_the_version_of_a_source_tree_is_the_extensions() -> None:
+    program = NOT_INSTALLED + "import tgsis; print(tgsis.__version__); print('__version__' in dir(tgsis))"
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == [tgsis.__version__, "True"]
+
+
 def test_the_database_names_load_on_first_use() -> None:
     program = ("import sys, tgsis; assert 'tgsis.db' not in sys.modules; "
                "f = tgsis.insert_feature; assert 'tgsis.db.features' in sys.modules; "
@@ -70,16 +92,50 @@ def test_no_module_takes_a_private_name_of_another_public_module() -> None:
     assert found == []
 
 
-def test_the_database_modules_import_each_other_without_a_cycle() -> None:
-    # lazy imports inside functions count too: they hide a cycle, they do not remove it
+def _all_imports(path: Path) -> list[str]:
+    """Every module of tgsis a file imports: at top level, inside functions or for type checkers alone."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    found: list[str] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("tgsis"):
+            module = node.module or ""
+            # `from tgsis.db import features` names a module; `from tgsis.db import connect`, a name of one
+            found += [f"{module}.{a.name}" if f"{module}.{a.name}" in MODULES else module for a in node.names]
+        elif isinstance(node, ast.Import):
+            found += [a.name for a in node.names if a.name.startswith("tgsis")]
+    return found
+
+
+MODULES = {_module_name(path): path for path in sorted(SOURCE.rglob("*.py"))}
+
+
+def _import_graph() -> nx.DiGraph:
     graph = nx.DiGraph()
-    for path in sorted((SOURCE / "db").glob("*.py")):
-        name = _module_name(path)
+    for name, path in MODULES.items():
         graph.add_node(name)
-        for module, names, _ in _imports(path):
-            targets = [f"tgsis.db.{n}" for n in names if (SOURCE / "db" / f"{n}.py").exists()] if module == "tgsis.db" \
-                else [module] if module.startswith("tgsis.db.") else []
-            graph.add_edges_from((name, target) for target in targets if target != name)
+        graph.add_edges_from((name, target) for target in _all_imports(path) if target != name and target in MODULES)
+    return graph
+
+
+# Cycles not broken yet, each named by its modules: a new cycle, or a longer one, fails. The meshes'
+# methods to_pyvista/to_meshio/from_pyvista/from_meshio/to_trimesh call tgsis.convert and
+# tgsis._zpositive, which take the mesh classes: breaking it means conversions working on arrays
+# below tgsis.mesh (issue 38, part 4: left for a later step).
+KNOWN_CYCLES = {frozenset({"tgsis.mesh", "tgsis.convert", "tgsis._zpositive", "tgsis._vtk_cells", "tgsis.formats._common"})}
+
+
+def test_the_modules_of_tgsis_import_each_other_without_a_cycle() -> None:
+    # lazy imports inside functions and imports for type checkers count too: they hide a cycle, they do
+    # not remove it (issue 38 found mesh <-> convert, formats.vtk -> gmaps -> temporal -> formats.pvd -> ...,
+    # gmaps._core <-> gmaps._build)
+    graph = _import_graph()
+    assert len(graph) > 60 and graph.has_edge("tgsis.convert", "tgsis.mesh")
+    cycles = {frozenset(c) for c in nx.strongly_connected_components(graph) if len(c) > 1}
+    assert sorted(sorted(c) for c in cycles - KNOWN_CYCLES) == []
+
+
+def test_the_database_modules_import_each_other_without_a_cycle() -> None:
+    graph = _import_graph().subgraph([name for name in MODULES if name.startswith("tgsis.db")])
     assert list(nx.simple_cycles(graph)) == []
     assert graph.has_edge("tgsis.db.features", "tgsis.db.classes")        # the graph sees the imports
     # model 1 hands other models' objects on through the registry (tgsis.datamodels), not by importing their modules

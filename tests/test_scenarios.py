@@ -10,7 +10,6 @@ real files of their kinds.
 from __future__ import annotations
 
 import json
-
 import re
 from pathlib import Path
 

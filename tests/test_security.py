@@ -22,10 +22,10 @@ from psycopg import sql
 from psycopg.conninfo import conninfo_to_dict, make_conninfo
 
 import tgsis
-from tgsis.db import features as F
-from tgsis.errors import reraise
 from tests.roles import Roles, login_roles
 from tests.synthetic import flat_grid
+from tgsis.db import features as F
+from tgsis.errors import reraise
 
 Conn = psycopg.Connection[Any]
 

@@ -9,8 +9,8 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.temporal import SurfaceSeries
 from tests.temporal_data import grid, series
+from tgsis.temporal import SurfaceSeries
 
 Conn = psycopg.Connection[Any]
 TIMES = [-100.0, -66.0, -23.0, -5.0]

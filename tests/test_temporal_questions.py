@@ -21,8 +21,8 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.temporal import EvolvingSurface, TopologyPeriod
 from tests.temporal_data import evolving, grid, series
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
 OPS = ["<", "<=", ">", ">=", "=", "<>"]

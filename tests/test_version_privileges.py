@@ -13,10 +13,10 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.db import features as F
-from tgsis.errors import reraise
 from tests.roles import Roles, login_roles
 from tests.synthetic import flat_grid
+from tgsis.db import features as F
+from tgsis.errors import reraise
 
 Conn = psycopg.Connection[Any]
 

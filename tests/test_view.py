@@ -15,10 +15,18 @@ from typing import Any
 
 import pytest
 
+from tests.view_helpers import (
+    QUOTED_NAME,
+    ViewData,
+    canvas_pixels,
+    changed_fraction,
+    chromium,
+    drawn_fraction,
+    fill_view_database,
+    running_view,
+    wait_drawn,
+)
 from tgsis.testing import TestServer
-
-from tests.view_helpers import (QUOTED_NAME, ViewData, canvas_pixels, changed_fraction, chromium, drawn_fraction,
-                                fill_view_database, running_view, wait_drawn)
 
 
 @pytest.fixture(scope="module")

@@ -17,12 +17,11 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.gmaps_shapes import block_tetrahedra, octahedron
+from tests.view_helpers import canvas_pixels, changed_fraction, chromium, drawn_fraction, get, running_view, wait_drawn
 from tgsis import gmaps
 from tgsis.testing import TestServer
 from tgsis.view.meshes import gmap_drawable, unpack
-
-from tests.gmaps_shapes import block_tetrahedra, octahedron
-from tests.view_helpers import canvas_pixels, changed_fraction, chromium, drawn_fraction, get, running_view, wait_drawn
 
 
 def test_a_surface_draws_its_faces_and_a_solid_its_border() -> None:

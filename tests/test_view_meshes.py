@@ -16,10 +16,9 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.view_helpers import ViewData, fill_view_database, get, running_view
 from tgsis.testing import TestServer
 from tgsis.view.meshes import drawable, pack, tetra_boundary, unpack, vertex_flags
-
-from tests.view_helpers import ViewData, fill_view_database, get, running_view
 
 
 def test_a_body_holds_its_header_and_little_endian_arrays() -> None:

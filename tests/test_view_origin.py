@@ -30,10 +30,9 @@ from typing import Any
 import pytest
 from starlette.routing import Mount, Route
 
+from tests.view_helpers import CHROMIUM, CHROMIUM_ARGS, ViewData, chromium, fill_view_database, running_view
 from tgsis.testing import TestServer
 from tgsis.view.app import VERSION_COOKIE, RequestGuard, ViewConfig, create_app
-
-from tests.view_helpers import CHROMIUM, CHROMIUM_ARGS, ViewData, chromium, fill_view_database, running_view
 
 UNSAFE = ("POST", "PUT", "PATCH", "DELETE")
 
@@ -77,7 +76,7 @@ def _routes() -> list[tuple[str, set[str]]]:
         if isinstance(route, Route):
             routes.append((route.path.replace("{id}", "1"), set(route.methods or ())))
         elif isinstance(route, Mount):
-            routes.append((route.path + "/three/LICENSE", {"GET", "HEAD"}))
+            routes.append((route.path + "/vendor/three/LICENSE", {"GET", "HEAD"}))
         else:  # pragma: no cover - a new kind of route must be added here
             raise AssertionError(f"unknown route {route!r}")
     return routes

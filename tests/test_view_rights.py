@@ -20,12 +20,11 @@ import pytest
 from psycopg.conninfo import make_conninfo
 from starlette.requests import Request
 
+from tests.roles import login_roles
+from tests.view_helpers import ViewData, chromium, fill_view_database, get, running_view
 from tgsis.errors import Error
 from tgsis.testing import TestServer
 from tgsis.view.app import View, ViewConfig
-
-from tests.roles import login_roles
-from tests.view_helpers import ViewData, chromium, fill_view_database, get, running_view
 
 
 @pytest.fixture(scope="module")

@@ -24,9 +24,8 @@ import uvicorn
 from PIL import Image
 
 import tgsis
-from tgsis.view.app import ViewConfig, create_app
-
 from tests.synthetic import flat_grid
+from tgsis.view.app import ViewConfig, create_app
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]

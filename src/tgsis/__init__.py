@@ -14,14 +14,49 @@ reached from Python through this package.
 
 from __future__ import annotations
 
+import ast
+import functools
 import importlib
 import logging
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _package_version
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
-from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
+from tgsis.convert import as_mesh
+from tgsis.datamodels import DataModel, TimeModel, data_models
+from tgsis.errors import (
+    AlreadyExistsError,
+    CheckoutConflictError,
+    ConcurrentChangeError,
+    DatabaseError,
+    DiscontinuousPeriodsError,
+    Error,
+    FileFormatError,
+    InstallationError,
+    InUseError,
+    InvalidGeometryError,
+    InvalidGMapError,
+    InvalidInputError,
+    InvalidNameError,
+    InvalidPropertyError,
+    LocalServerError,
+    MissingPrivilegeError,
+    NotFoundError,
+    NotVersionedError,
+    ObjectLockedError,
+    PolygonsSplitWarning,
+    ReadOnlyRevisionError,
+    SkippedObjectWarning,
+    UnknownDataModelError,
+    UnsolvedConflictsError,
+    UnsupportedViewStatementError,
+    VersioningError,
+)
+from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
+from tgsis.gmaps import extrude as extrude_gmap
+from tgsis.gmaps import slice as slice_gmap
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -33,46 +68,13 @@ from tgsis.mesh import (
     TetraMesh,
     mesh_class,
 )
-from tgsis.convert import as_mesh
-from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
-from tgsis.gmaps import extrude as extrude_gmap
-from tgsis.gmaps import slice as slice_gmap
-from tgsis.datamodels import DataModel, TimeModel, data_models
-from tgsis.errors import (
-    AlreadyExistsError,
-    ConcurrentChangeError,
-    DatabaseError,
-    Error,
-    FileFormatError,
-    InstallationError,
-    InUseError,
-    UnknownDataModelError,
-    DiscontinuousPeriodsError,
-    InvalidGeometryError,
-    InvalidGMapError,
-    InvalidInputError,
-    InvalidNameError,
-    InvalidPropertyError,
-    LocalServerError,
-    MissingPrivilegeError,
-    NotFoundError,
-    NotVersionedError,
-    UnsupportedViewStatementError,
-    ObjectLockedError,
-    CheckoutConflictError,
-    ReadOnlyRevisionError,
-    SkippedObjectWarning,
-    PolygonsSplitWarning,
-    UnsolvedConflictsError,
-    VersioningError,
-)
-
+from tgsis.temporal import EvolvingSurface, Period, SurfaceSeries, TopologyPeriod, WrittenSeries, write_series_pvd
 
 if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads on first use (below)
     from tgsis.db import (
         ExtensionSources,
-        InstalledVersion,
         InstallationStatus,
+        InstalledVersion,
         InstallResult,
         LocalServer,
         connect,
@@ -83,6 +85,72 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         partition_model_storage,
         uninstall,
     )
+    from tgsis.db.adapters import Box, register_types
+    from tgsis.db.checkin import (
+        CheckinResult,
+        Checkout,
+        CheckoutToken,
+        SaveResult,
+        checkin,
+        checkout,
+        save_feature,
+    )
+    from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
+    from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
+    from tgsis.db.features import (
+        Feature,
+        FeatureClass,
+        Property,
+        create_feature_class,
+        delete_feature,
+        drop_feature_class,
+        features_in_box,
+        fetch_feature,
+        fetch_features,
+        fetch_object,
+        get_feature_class,
+        insert_feature,
+        list_feature_classes,
+    )
+    from tgsis.db.gmaps import (
+        GMapProblem,
+        fetch_gmap,
+        fetch_md_gmap,
+        gmap_at,
+        gmap_cells,
+        gmap_check,
+        insert_gmap,
+        md_in_box,
+        md_vertices_in_box,
+    )
+    from tgsis.db.modelsets import (
+        Model,
+        ModelObject,
+        add_to_model,
+        create_model,
+        list_models,
+        model_objects,
+        remove_from_model,
+    )
+    from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
+    from tgsis.db.temporal import (
+        add_instant,
+        append_period,
+        class_property_periods,
+        delete_instant,
+        delete_period,
+        export_series,
+        features_at,
+        fetch_evolving,
+        fetch_series,
+        first_times,
+        frames_at,
+        get_at,
+        instants,
+        lifespan,
+        property_periods,
+        surfaces_at,
+    )
     from tgsis.db.versions import (
         Compressed,
         Conflict,
@@ -90,8 +158,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         Discard,
         ObjectLock,
         Version,
-        VersionGrant,
         VersionedTable,
+        VersionGrant,
         at_revision,
         compress_versions,
         conflict_discards,
@@ -110,7 +178,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         has_version_privilege,
         in_version,
         list_versions,
-        version_graph,
         lock_objects,
         merge_version,
         object_locks,
@@ -124,222 +191,95 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         unlock_objects,
         version_believed_at,
         version_chain,
+        version_graph,
         version_privileges,
         versioned_tables,
         viewing_revision,
         working_revision,
         working_version,
     )
-    from tgsis.db.features import (
-        Feature,
-        FeatureClass,
-        Property,
-        create_feature_class,
-        delete_feature,
-        drop_feature_class,
-        features_in_box,
-        fetch_feature,
-        fetch_features,
-        fetch_object,
-        get_feature_class,
-        insert_feature,
-        list_feature_classes,
-    )
-    from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
-    from tgsis.db.checkin import (
-        CheckinResult,
-        Checkout,
-        CheckoutToken,
-        SaveResult,
-        checkin,
-        checkout,
-        save_feature,
-    )
-    from tgsis.db.adapters import Box, register_types
-    from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
-    from tgsis.db.temporal import (
-        add_instant,
-        append_period,
-        delete_instant,
-        delete_period,
-        export_series,
-        features_at,
-        fetch_evolving,
-        fetch_series,
-        class_property_periods,
-        first_times,
-        frames_at,
-        get_at,
-        instants,
-        lifespan,
-        property_periods,
-        surfaces_at,
-    )
-    from tgsis.db.modelsets import Model, ModelObject, add_to_model, create_model, list_models, model_objects, \
-        remove_from_model
     from tgsis.interpolation.deposition import Contact, Deposition, Stacking, deposit, drape, keep_above
-    from tgsis.db.gmaps import (GMapProblem, fetch_gmap, fetch_md_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap,
-                                md_in_box, md_vertices_in_box)
+    from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
 
 # The database layer (and psycopg) is imported on first use of one of its
 # names, so that the numpy modules (tgsis.mesh, compare, edits, temporal,
-# interpolation, formats) load without it (tests/test_pure_imports.py).
-_LAZY: dict[str, str] = {
-    "ExtensionSources": "tgsis.db",
-    "InstalledVersion": "tgsis.db",
-    "InstallResult": "tgsis.db",
-    "LocalServer": "tgsis.db",
-    "connect": "tgsis.db",
-    "find_binaries": "tgsis.db",
-    "install": "tgsis.db",
-    "installation_status": "tgsis.db",
-    "InstallationStatus": "tgsis.db",
-    "installed_version": "tgsis.db",
-    "partition_model_storage": "tgsis.db",
-    "uninstall": "tgsis.db",
-    "Compressed": "tgsis.db.versions",
-    "Conflict": "tgsis.db.versions",
-    "Difference": "tgsis.db.versions",
-    "Discard": "tgsis.db.versions",
-    "ObjectLock": "tgsis.db.versions",
-    "Version": "tgsis.db.versions",
-    "VersionGrant": "tgsis.db.versions",
-    "VersionedTable": "tgsis.db.versions",
-    "at_revision": "tgsis.db.versions",
-    "compress_versions": "tgsis.db.versions",
-    "conflict_discards": "tgsis.db.versions",
-    "conflict_rows": "tgsis.db.versions",
-    "create_version": "tgsis.db.versions",
-    "delete_version": "tgsis.db.versions",
-    "diff_versions": "tgsis.db.versions",
-    "disable_feature_versioning": "tgsis.db.versions",
-    "disable_versioning": "tgsis.db.versions",
-    "enable_feature_versioning": "tgsis.db.versions",
-    "enable_versioning": "tgsis.db.versions",
-    "find_conflicts": "tgsis.db.versions",
-    "goto_revision": "tgsis.db.versions",
-    "goto_version": "tgsis.db.versions",
-    "grant_version": "tgsis.db.versions",
-    "has_version_privilege": "tgsis.db.versions",
-    "in_version": "tgsis.db.versions",
-    "list_versions": "tgsis.db.versions",
-    "version_graph": "tgsis.db.versions",
-    "lock_objects": "tgsis.db.versions",
-    "merge_version": "tgsis.db.versions",
-    "object_locks": "tgsis.db.versions",
-    "refresh_version": "tgsis.db.versions",
-    "resolve_conflict": "tgsis.db.versions",
-    "revisions": "tgsis.db.versions",
-    "revoke_version": "tgsis.db.versions",
-    "save_revision": "tgsis.db.versions",
-    "set_version_owner": "tgsis.db.versions",
-    "set_version_validity": "tgsis.db.versions",
-    "unlock_objects": "tgsis.db.versions",
-    "version_believed_at": "tgsis.db.versions",
-    "version_chain": "tgsis.db.versions",
-    "version_privileges": "tgsis.db.versions",
-    "versioned_tables": "tgsis.db.versions",
-    "viewing_revision": "tgsis.db.versions",
-    "working_revision": "tgsis.db.versions",
-    "working_version": "tgsis.db.versions",
-    "Feature": "tgsis.db.features",
-    "FeatureClass": "tgsis.db.features",
-    "Property": "tgsis.db.features",
-    "create_feature_class": "tgsis.db.features",
-    "delete_feature": "tgsis.db.features",
-    "drop_feature_class": "tgsis.db.features",
-    "add_property": "tgsis.db.classes",
-    "rename_property": "tgsis.db.classes",
-    "drop_property": "tgsis.db.classes",
-    "fill_property_rows": "tgsis.db.classes",
-    "features_in_box": "tgsis.db.features",
-    "fetch_feature": "tgsis.db.features",
-    "fetch_features": "tgsis.db.features",
-    "fetch_object": "tgsis.db.features",
-    "get_feature_class": "tgsis.db.features",
-    "insert_feature": "tgsis.db.features",
-    "list_feature_classes": "tgsis.db.features",
-    "CheckinResult": "tgsis.db.checkin",
-    "Checkout": "tgsis.db.checkin",
-    "CheckoutToken": "tgsis.db.checkin",
-    "SaveResult": "tgsis.db.checkin",
-    "checkin": "tgsis.db.checkin",
-    "checkout": "tgsis.db.checkin",
-    "save_feature": "tgsis.db.checkin",
-    "GeometryChanges": "tgsis.db.compare",
-    "compare_stored": "tgsis.db.compare",
-    "compare_versions": "tgsis.db.compare",
-    "add_instant": "tgsis.db.temporal",
-    "append_period": "tgsis.db.temporal",
-    "delete_instant": "tgsis.db.temporal",
-    "delete_period": "tgsis.db.temporal",
-    "export_series": "tgsis.db.temporal",
-    "features_at": "tgsis.db.temporal",
-    "fetch_evolving": "tgsis.db.temporal",
-    "fetch_series": "tgsis.db.temporal",
-    "class_property_periods": "tgsis.db.temporal",
-    "first_times": "tgsis.db.temporal",
-    "frames_at": "tgsis.db.temporal",
-    "get_at": "tgsis.db.temporal",
-    "instants": "tgsis.db.temporal",
-    "lifespan": "tgsis.db.temporal",
-    "property_periods": "tgsis.db.temporal",
-    "surfaces_at": "tgsis.db.temporal",
-    "create_postgis_view": "tgsis.db.postgis",
-    "enable_postgis": "tgsis.db.postgis",
-    "fetch_ewkb": "tgsis.db.postgis",
-    "insert_wkb_feature": "tgsis.db.postgis",
-    "postgis_enabled": "tgsis.db.postgis",
-    "mesh_from_wkb": "tgsis.postgis",
-    "mesh_to_ewkb": "tgsis.postgis",
-    "GMapProblem": "tgsis.db.gmaps",
-    "fetch_gmap": "tgsis.db.gmaps",
-    "gmap_at": "tgsis.db.gmaps",
-    "gmap_cells": "tgsis.db.gmaps",
-    "gmap_check": "tgsis.db.gmaps",
-    "insert_gmap": "tgsis.db.gmaps",
-    "fetch_md_gmap": "tgsis.db.gmaps",
-    "Model": "tgsis.db.modelsets",
-    "ModelObject": "tgsis.db.modelsets",
-    "create_model": "tgsis.db.modelsets",
-    "register_types": "tgsis.db.adapters",
-    "Box": "tgsis.db.adapters",
-    "add_to_model": "tgsis.db.modelsets",
-    "remove_from_model": "tgsis.db.modelsets",
-    "model_objects": "tgsis.db.modelsets",
-    "list_models": "tgsis.db.modelsets",
-    "md_in_box": "tgsis.db.gmaps",
-    "md_vertices_in_box": "tgsis.db.gmaps",
+# interpolation, formats) load without it (tests/test_pure_imports.py). Which
+# module a name of __all__ comes from is read from the ``__all__`` of these
+# modules (without importing them): a name added there and to __all__ below
+# (and to the TYPE_CHECKING block above, tests/test_public_api.py) needs no
+# other list. The first module that lists a name gives it.
+_LAZY_MODULES = (
+    "tgsis.db",
+    "tgsis.db.versions",
+    "tgsis.db.features",
+    "tgsis.db.classes",
+    "tgsis.db.checkin",
+    "tgsis.db.adapters",
+    "tgsis.db.compare",
+    "tgsis.db.temporal",
+    "tgsis.db.postgis",
+    "tgsis.postgis",
+    "tgsis.db.gmaps",
+    "tgsis.db.modelsets",
     # numpy, no database, but with the interpolation's scipy: loaded on first use too
-    "Contact": "tgsis.interpolation.deposition",
-    "Deposition": "tgsis.interpolation.deposition",
-    "Stacking": "tgsis.interpolation.deposition",
-    "deposit": "tgsis.interpolation.deposition",
-    "drape": "tgsis.interpolation.deposition",
-    "keep_above": "tgsis.interpolation.deposition",
-}
+    "tgsis.interpolation.deposition",
+)
+
+
+def _module_all(module: str) -> list[str]:
+    """The ``__all__`` of a module of this package, read from its source (a literal list) without importing it."""
+    relative = Path(*module.split(".")[1:])
+    for path in (_HERE / relative.with_suffix(".py"), _HERE / relative / "__init__.py"):
+        if path.is_file():
+            for node in ast.parse(path.read_text(encoding="utf-8"), str(path)).body:
+                if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__"
+                                                        for t in node.targets):
+                    return list(ast.literal_eval(node.value))
+    return list(importlib.import_module(module).__all__)  # no source beside it (compiled only): import it
+
+
+@functools.cache
+def _lazy_table() -> dict[str, str]:
+    """Public name -> the module it is imported from on first use."""
+    public = set(__all__)
+    table: dict[str, str] = {}
+    for module in _LAZY_MODULES:
+        for name in _module_all(module):
+            if name in public:
+                table.setdefault(name, module)
+    return table
+
+
+def _source_tree_version() -> str:
+    """The version of a source tree that is not installed: the extension's (sql/tgsis.control)."""
+    from tgsis.db.sqlsource import ExtensionSources
+
+    return ExtensionSources.default().version
 
 
 def __getattr__(name: str) -> Any:
     """The database layer's public names, imported when first asked for (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'tgsis' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
+    if name == "__version__":  # only when not installed (else set below): it reads the extension's sources
+        value: Any = _source_tree_version()
+    else:
+        module = _lazy_table().get(name) if name in __all__ else None
+        if module is None:
+            raise AttributeError(f"module 'tgsis' has no attribute {name!r}")
+        value = getattr(importlib.import_module(module), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(__all__))
 
+
+_HERE = Path(__file__).parent
 
 try:
     __version__ = _package_version("tgsis")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    from tgsis.db.sqlsource import ExtensionSources as _Sources
-
-    __version__ = _Sources.default().version
+except PackageNotFoundError:  # a source tree that is not installed: on first use (the database layer reads it)
+    pass
 
 logging.getLogger("tgsis").addHandler(logging.NullHandler())
 

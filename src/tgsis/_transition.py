@@ -22,12 +22,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial import cKDTree
 
 from tgsis.errors import InvalidInputError
+
+
+def _kd_tree(points: npt.NDArray[np.float64]) -> Any:
+    """A scipy k-d tree of ``points``; scipy is imported here, when a transition needs it, so that importing
+    tgsis.temporal or tgsis.gmaps stays light (tests/test_gmaps.py)."""
+    from scipy.spatial import cKDTree
+
+    return cKDTree(points)
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -65,12 +73,12 @@ def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: Floa
     one unless a large triangle's centroid lies farther than the others'.
     """
     if len(triangles) == 0:
-        return np.asarray(vertices[cKDTree(vertices).query(points)[1]] if len(vertices) else points.copy(), dtype=np.float64)
+        return np.asarray(vertices[_kd_tree(vertices).query(points)[1]] if len(vertices) else points.copy(), dtype=np.float64)
     from trimesh.triangles import closest_point
 
     corners = vertices[triangles]
     k = min(_CANDIDATES, len(triangles))
-    _, candidates = cKDTree(corners.mean(axis=1)).query(points, k=k)
+    _, candidates = _kd_tree(corners.mean(axis=1)).query(points, k=k)
     candidates = np.asarray(candidates).reshape(len(points), k)
     repeated = np.repeat(points, k, axis=0)
     found = np.asarray(closest_point(corners[candidates.reshape(-1)], repeated),  # type: ignore[no-untyped-call]
@@ -86,10 +94,10 @@ def closest_on_segments(points: FloatArray, segments: IntArray, queries: FloatAr
     midpoints are the nearest few; with no segment, the nearest point.
     """
     if len(segments) == 0:
-        return np.asarray(points[cKDTree(points).query(queries)[1]], dtype=np.float64)
+        return np.asarray(points[_kd_tree(points).query(queries)[1]], dtype=np.float64)
     a, b = points[segments[:, 0]], points[segments[:, 1]]
     k = min(_CANDIDATES, len(segments))
-    _, candidates = cKDTree((a + b) / 2).query(queries, k=k)
+    _, candidates = _kd_tree((a + b) / 2).query(queries, k=k)
     candidates = np.asarray(candidates).reshape(len(queries), k)
     ca, cb = a[candidates], b[candidates]                                  # (k_q, k, m)
     ab = cb - ca

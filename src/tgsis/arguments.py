@@ -4,8 +4,8 @@ Without them a wrong argument came back as a raw PostgreSQL error that names
 no argument: ``22P02`` (``"abc"`` for an integer), ``42883`` (an integer too
 large for the SQL parameter, so that psycopg sends a ``bigint`` or ``numeric``
 and no function matches), or psycopg's own "PostgreSQL text fields cannot
-contain NUL (0x00) bytes" with no SQLSTATE at all. :func:`check_module` wraps
-the public functions of a module so that such arguments raise
+contain NUL (0x00) bytes" with no SQLSTATE at all. :func:`checked`, the decorator of
+every public database function (tests/test_public_api.py), makes such arguments raise
 :class:`~tgsis.errors.InvalidInputError` naming the parameter, from the type
 hints of the function:
 
@@ -28,11 +28,11 @@ import numbers
 import types
 import typing
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeVar, cast
 
 from tgsis.errors import InvalidInputError
 
-__all__ = ["check_module", "checked", "checked_ids", "no_nul", "INT4_PARAMETERS"]
+__all__ = ["checked", "checked_ids", "no_nul", "INT4_PARAMETERS"]
 
 #: Parameters whose SQL counterpart is ``integer`` (4 bytes) rather than ``bigint``.
 INT4_PARAMETERS = frozenset({"revision", "a_revision", "b_revision", "iudorder", "srs"})
@@ -132,8 +132,15 @@ def _check(name: str, kinds: frozenset[str], value: Any) -> None:
             raise InvalidInputError(f"{name} must be a number, not {type(value).__name__} {value!r}")
 
 
-def checked(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Wrap ``func`` so that its arguments are checked from its type hints first (see the module)."""
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def checked(func: _F) -> _F:
+    """Wrap ``func`` so that its arguments are checked from its type hints first (see the module).
+
+    The wrapper has the signature of ``func`` for type checkers too (a decorator typed
+    ``Callable[..., Any]`` would turn every public function into ``Any`` for users' mypy).
+    """
     try:
         hints = typing.get_type_hints(func)
     except Exception:  # noqa: BLE001 - a hint that cannot be resolved: nothing to check by
@@ -141,7 +148,8 @@ def checked(func: Callable[..., Any]) -> Callable[..., Any]:
     signature = inspect.signature(func)
     plan = {name: _kinds(hints[name]) for name in signature.parameters if name in hints and name != "conn"}
     plan = {name: kinds for name, kinds in plan.items() if kinds & {"str", "int", "float", "seq", "map"}}
-    if not plan:
+    if not plan:  # nothing to check (only a connection, booleans, objects): marked all the same
+        func.__tgsis_checked__ = True  # type: ignore[attr-defined]
         return func
 
     @functools.wraps(func)
@@ -157,12 +165,4 @@ def checked(func: Callable[..., Any]) -> Callable[..., Any]:
         return func(*args, **kwargs)
 
     wrapper.__tgsis_checked__ = True  # type: ignore[attr-defined]
-    return wrapper
-
-
-def check_module(namespace: dict[str, Any], names: Iterable[str]) -> None:
-    """Replace the functions ``names`` of a module's ``namespace`` (its ``globals()``) by checked wrappers."""
-    for name in names:
-        func = namespace.get(name)
-        if inspect.isfunction(func) and not getattr(func, "__tgsis_checked__", False):
-            namespace[name] = checked(func)
+    return cast(_F, wrapper)

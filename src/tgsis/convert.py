@@ -79,9 +79,24 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD, conventions, elevation, recorded_convention, restore
-from tgsis._vtk_cells import (CELL_TYPE_OF, collection_from_cells, first, labelled, one_mesh, string_bytes, strings,
-                              vtk_parts)
+from tgsis._vtk_cells import (
+    CELL_TYPE_OF,
+    collection_from_cells,
+    first,
+    labelled,
+    one_mesh,
+    string_bytes,
+    strings,
+    vtk_parts,
+)
+from tgsis._zpositive import (
+    MEMBER_ZPOSITIVE_FIELD,
+    ZPOSITIVE_FIELD,
+    conventions,
+    elevation,
+    recorded_convention,
+    restore,
+)
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
 from tgsis.mesh import PROPERTY_NAME_RE, Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh
 

@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any, ClassVar
 
 if TYPE_CHECKING:  # imported where a database error is translated: the numpy modules raise these classes too
-    import psycopg
+    import psycopg  # noqa: TID251 - types of translate()'s parameter only
 
 __all__ = [
     "Error",
@@ -436,7 +436,7 @@ def reraise() -> Iterator[None]:
     >>> with reraise():                                   # doctest: +SKIP
     ...     conn.execute("select tgsis.goto_version('nope')")
     """
-    import psycopg  # only where a database is used
+    import psycopg  # noqa: TID251 - only where a database is used (reraise wraps database calls)
 
     try:
         yield

@@ -45,7 +45,7 @@ from typing import Literal, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._series import as_series, as_times
+from tgsis._series import Frame, as_series, as_times, check_time, frame_at
 from tgsis._transition import closest_on_triangles, prepend_first, start_on, transition_times
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.formats._common import PathLike
@@ -73,14 +73,6 @@ def check_convention(convention: str) -> Convention:
     if convention == "right":
         return "right"
     raise InvalidInputError(f"step convention {convention!r} must be 'left' or 'right'")
-
-
-def check_time(t: float) -> float:
-    """``t`` as a float; :class:`~tgsis.errors.InvalidInputError` for NaN (infinities mean before/after all)."""
-    value = float(t)
-    if np.isnan(value):
-        raise InvalidInputError("model time NaN is not a time")
-    return value
 
 
 def _as_color(color: Sequence[float] | None) -> Color | None:
@@ -293,51 +285,6 @@ def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
                           vertex_properties={k: prepend_first(v) for k, v in period.vertex_properties.items()},
                           cell_properties={k: prepend_first(v) for k, v in period.cell_properties.items()},
                           properties={k: prepend_first(v) for k, v in period.properties.items()})
-
-
-@dataclass(frozen=True)
-class Frame:
-    """Where a time falls in an :class:`EvolvingSurface`: period index, bracketing instants j0 <= j1, weight."""
-
-    period: int
-    j0: int
-    j1: int
-    w: float
-
-
-def frame_at(starts: FloatArray, period_times: Sequence[FloatArray], alive: bool, t: float) -> Frame | None:
-    """Where ``t`` falls in an object with topology periods (models 3 and 4), or None when it does not exist then.
-
-    Parameters
-    ----------
-    starts : (k,) float64
-        Where each period starts, ascending.
-    period_times : sequence of (g_i,) float64
-        The geometry instants of each period; ``period_times[i][0] == starts[i]``.
-    alive : bool
-        Whether the object exists after its last geometry instant (in its last state).
-    t : float
-
-    Notes
-    -----
-    The period is the last one starting at or before ``t`` (at a topology
-    change the new topology applies); nothing before the first start, nor
-    after the last geometry instant unless alive. The same rules as the SQL
-    snapshots (``tgsis.evolving_frame``, ``tgsis.gmap_frame``).
-    """
-    t = check_time(t)
-    if t < starts[0]:
-        return None
-    index = int(np.searchsorted(starts, t, side="right")) - 1
-    times = period_times[index]
-    if t > times[-1]:
-        last = len(times) - 1
-        return Frame(index, last, last, 0.0) if alive or index < len(period_times) - 1 else None
-    j1 = int(np.searchsorted(times, t, side="left"))
-    if times[j1] == t:
-        return Frame(index, j1, j1, 0.0)
-    j0 = j1 - 1
-    return Frame(index, j0, j1, float((t - times[j0]) / (times[j1] - times[j0])))
 
 
 class EvolvingSurface:

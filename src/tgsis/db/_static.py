@@ -17,7 +17,16 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import no_nul
-from tgsis.db._transfer import Packed, Storage, columns_out_all, concat, local_positions, row_keys, rows_by_geoid, stored_cell_properties
+from tgsis.db._transfer import (
+    Packed,
+    Storage,
+    columns_out_all,
+    concat,
+    local_positions,
+    row_keys,
+    rows_by_geoid,
+    stored_cell_properties,
+)
 from tgsis.db.classes import FeatureClass, Property, stores_part_column
 from tgsis.db.meaning import Meaning, part_runs, parts_from_runs, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError

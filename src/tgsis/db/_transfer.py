@@ -16,7 +16,7 @@ import itertools
 import json
 import logging
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.db.classes import FeatureClass, stores_part_column
+from tgsis.db.classes import FeatureClass, get_feature_class, stores_part_column
 from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_chunks, encode_rows, numpy_dtype, wire_shape
 from tgsis.errors import DatabaseError, InUseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
 from tgsis.mesh import Mesh
@@ -32,6 +32,31 @@ from tgsis.mesh import Mesh
 log = logging.getLogger("tgsis.db.features")
 
 Conn = psycopg.Connection[Any]
+
+
+def resolve_class(conn: Conn, feature_class: str | FeatureClass) -> FeatureClass:
+    """The class itself when given one, else the class of that name (:func:`~tgsis.db.classes.get_feature_class`)."""
+    return feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+
+
+def class_name(feature_class: str | FeatureClass) -> str:
+    """The name of a class given by name or as a :class:`FeatureClass` (no query)."""
+    return feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
+
+
+@contextlib.contextmanager
+def read_only_snapshot(conn: Conn) -> Iterator[None]:
+    """A transaction in which every statement sees the same state of the database.
+
+    Outside a transaction, a new one that is ``REPEATABLE READ READ ONLY``;
+    inside the caller's transaction, a savepoint of it (its isolation level is
+    the caller's to choose, and it may write).
+    """
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with conn.transaction():
+        if fresh:
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        yield
 #: columns of a COPY: (name, values, wire type)
 Columns = Sequence[tuple[str, npt.ArrayLike, str]]
 
@@ -238,6 +263,8 @@ class Storage:
     revision: int | None
     version: str | None = None
     viewing: int | None = None
+    #: the relation storing each versioned table's rows, quoted, as SQL's ``tgsis.storage_table`` names it
+    stored_in: Mapping[tuple[str, str], str] = field(default_factory=dict)
 
     @classmethod
     def of(cls, conn: Conn, fc: FeatureClass | None = None) -> Storage:
@@ -253,15 +280,17 @@ class Storage:
         NotVersionedError
             ``fc`` has no versioning and the session is elsewhere (nothing is written).
         """
-        versioned = frozenset((r[0], r[1]) for r in conn.execute(
-            "SELECT schemaname, tablename FROM tgsis.versioned_tables").fetchall())
+        stored_in = {(r[0], r[1]): str(r[2]) for r in conn.execute(
+            "SELECT schemaname, tablename, tgsis.storage_table(schemaname, tablename) FROM tgsis.versioned_tables"
+        ).fetchall()}
+        versioned = frozenset(stored_in)
         session = conn.execute(
             "SELECT tgsis.get_working_version(), tgsis.get_viewing_revision(), "
             "(SELECT workingrevision FROM tgsis.versions WHERE name = tgsis.get_working_version())").fetchone()
         assert session is not None
         version, viewing, working = session
         elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
-        storage = cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None)
+        storage = cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None, stored_in)
         unversioned = fc is not None and not fc.versioned
         if unversioned:
             assert fc is not None
@@ -353,15 +382,20 @@ class Storage:
                 for future in made:
                     future.cancel()
 
+    def table(self, schema: str, table: str) -> sql.Composable:
+        """The relation that stores the rows of ``schema.table``: itself, or its versioned storage
+        (``tgsis.storage_table``, read with the set of versioned tables)."""
+        stored = self.stored_in.get((schema, table))
+        return sql.Identifier(schema, table) if stored is None else sql.SQL(stored)  # quoted by format('%I.%I')
+
     def _target(self, schema: str, table: str, columns: Columns) -> tuple[sql.Composable, Columns]:
-        """Where ``columns`` go: the table, or its ``_ver`` storage with the revision column added."""
+        """Where ``columns`` go: the table, or its versioned storage with the revision column added."""
         self.check(schema, table)
         count = len(np.asarray(columns[0][1])) if columns else 0
         if (schema, table) in self.versioned:
             assert self.revision is not None
-            table += "_ver"
             columns = [*columns, ("revision", np.full(count, self.revision, dtype=np.int32), "int4")]
-        return sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table)), columns
+        return self.table(schema, table), columns
 
     def _prepared(self, schema: str, table: str, columns: Columns) -> tuple[sql.Composable, list[str], bytes]:
         """Where ``columns`` go, their names and their payload."""

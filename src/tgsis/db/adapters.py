@@ -33,6 +33,7 @@ from psycopg.types import TypeInfo
 from psycopg.types.multirange import MultirangeInfo, register_multirange
 from psycopg.types.range import RangeInfo, register_range
 
+from tgsis.arguments import checked
 from tgsis.errors import InstallationError, reraise
 
 __all__ = ["register_types", "Box", "CubeLoader", "CubeDumper", "parse_cube"]
@@ -98,6 +99,7 @@ class CubeDumper(Dumper):
         return ("(" + ", ".join(map(repr, low.tolist())) + "),(" + ", ".join(map(repr, high.tolist())) + ")").encode()
 
 
+@checked
 def register_types(conn: psycopg.Connection[Any] | psycopg.Cursor[Any]) -> None:
     """Make ``conn`` load cubes as numpy ``(2, d)`` arrays and ``tgsis.timerange`` as ranges of floats.
 

@@ -41,16 +41,32 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
-from tgsis.edits import EditPlan, plan_edit
+from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._static import (
+    MEANING_COLUMNS,
+    SIMPLEX,
+    Part,
+    copy_extra_rows,
+    download,
+    extra_rows,
+    part_meaning,
+    restore_extras,
+)
+from tgsis.db._transfer import (
+    Storage,
+    aligned_properties,
+    check_feature_values,
+    feature_columns,
+    local_positions,
+    resolve_class,
+)
+from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES, array_wire
-from tgsis.db._static import (MEANING_COLUMNS, SIMPLEX, Part, copy_extra_rows, download, extra_rows, part_meaning,
-                              restore_extras)
-from tgsis.db._transfer import Storage, aligned_properties, check_feature_values, feature_columns, local_positions
-from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
 from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.db.versions import show_name
+from tgsis.edits import EditPlan, plan_edit
 from tgsis.errors import (
     CheckoutConflictError,
     FileFormatError,
@@ -160,9 +176,7 @@ def _in_storage_convention(mesh: Mesh) -> Mesh:
 
 def _checked_class(conn: Conn, feature_class: str | FeatureClass | None, feature_id: int) -> FeatureClass:
     """The feature's class, refusing the kinds of features saving by difference does not handle."""
-    fc = (feature_class if isinstance(feature_class, FeatureClass)
-          else get_feature_class(conn, feature_class) if feature_class is not None
-          else class_of_feature(conn, feature_id))
+    fc = resolve_class(conn, feature_class) if feature_class is not None else class_of_feature(conn, feature_id)
     if fc.time_model != "STATIC":
         raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): check-out and saving by "
                                 "difference are for static (model-1) features",
@@ -236,16 +250,8 @@ def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.boo
 
 def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, geoid: int) -> int:
     """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
-    target = table + "_ver" if ("tgsis", table) in storage.versioned else table
-    row = conn.execute(sql.SQL("SELECT max({}) FROM tgsis.{} WHERE {} = %s").format(
-        sql.Identifier(idfield), sql.Identifier(target), sql.Identifier(key)), (geoid,)).fetchone()
-    return 0 if row is None or row[0] is None else int(row[0]) + 1
-
-
-def _next_property_id(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int) -> int:
-    target = fc.cellprotable + "_ver" if (fc.schema, fc.cellprotable) in storage.versioned else fc.cellprotable
-    row = conn.execute(sql.SQL("SELECT max(_idx) FROM {}.{} WHERE _geoid = %s").format(
-        sql.Identifier(fc.schema), sql.Identifier(target)), (geoid,)).fetchone()
+    row = conn.execute(sql.SQL("SELECT max({}) FROM {} WHERE {} = %s").format(
+        sql.Identifier(idfield), storage.table("tgsis", table), sql.Identifier(key)), (geoid,)).fetchone()
     return 0 if row is None or row[0] is None else int(row[0]) + 1
 
 
@@ -449,6 +455,7 @@ def _mesh_arg(edited: Any) -> Mesh:
     return edited
 
 
+@checked
 def save_feature(
     conn: Conn,
     feature_class: str | FeatureClass | None,
@@ -671,25 +678,13 @@ def _working_state(conn: Conn) -> tuple[str, int]:
     return str(row[0]), int(row[1])
 
 
-def _session_settings(conn: Conn) -> tuple[str | None, str | None]:
-    row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
-                       ).fetchone()
-    assert row is not None
-    return row[0], row[1]
-
-
-def _restore_settings(conn: Conn, settings: tuple[str | None, str | None]) -> None:
-    """Back to the caller's version and revision for the rest of an enclosing transaction."""
-    conn.execute("SELECT set_config('tgsis.version', coalesce(%s, ''), true), "
-                 "set_config('tgsis.revision', coalesce(%s, ''), true)", settings)
-
-
 def _freeze(conn: Conn) -> int | None:
     """``tgsis.checkout_revision()``: the frozen revision holding the session's state, or None (nothing frozen)."""
     row = conn.execute("SELECT tgsis.checkout_revision()").fetchone()
     return None if row is None or row[0] is None else int(row[0])
 
 
+@checked
 def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | None = None) -> Checkout:
     """Check a feature out of the session's version for editing.
 
@@ -739,7 +734,7 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
         with conn.transaction():
             if fresh:  # one snapshot for the fingerprint and the rows
                 conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
-            settings = _session_settings(conn)
+            settings = read_version_settings(conn)
             version, revision = _working_state(conn)
             if frozen is not None:  # a frozen revision's state never changes: no lock is needed to read it
                 conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, frozen))
@@ -750,7 +745,7 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
             base = _stored_mesh(conn, fc, feature_id, name)
             meaning = conn.execute(f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s",
                                    (feature_id,)).fetchone()
-            _restore_settings(conn, settings)
+            restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
     token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
                           _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"), frozen)
     log.info("checked out %s feature %d from %s at revision %d%s", fc.name, feature_id, version, revision,
@@ -770,6 +765,7 @@ def _unique_version_name(conn: Conn, wanted: str) -> str:
     return name
 
 
+@checked
 def checkin(
     conn: Conn,
     checked_out: Checkout,
@@ -852,7 +848,7 @@ def checkin(
         if database is None or database[0] != token.database:
             raise InvalidInputError(f"feature {token.feature_id} was checked out of database {token.database!r}, "
                                     f"not {database[0] if database else None!r}")
-        settings = _session_settings(conn)
+        settings = read_version_settings(conn)
         conn.execute("SELECT tgsis.goto_version(%s, true)", (token.version,))
         fc = _checked_class(conn, token.feature_class, token.feature_id)
         with ThreadPoolExecutor(max_workers=1) as pool:  # numpy compares while the server fingerprints
@@ -874,7 +870,7 @@ def checkin(
             result, written = _checkin_into_child(conn, fc, checked_out, mesh, plan, properties, name,
                                                   child_version, drop_extra_properties, str(conflict))
         kept = _kept_checkout(conn, fc, token, mesh, written) if keep else None
-        _restore_settings(conn, settings)
+        restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
     return CheckinResult(result, conflict is not None, kept)
 
 
@@ -955,6 +951,3 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
     return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),
                     properties)
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -15,7 +15,7 @@ from typing import Any, Literal
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
 from tgsis.datamodels import TimeModel
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import NotFoundError, reraise
@@ -181,6 +181,7 @@ def _spec_json(spec: PropertySpec | None) -> str:
     return json.dumps([item_json(item) for item in items])
 
 
+@checked
 def create_feature_class(
     conn: Conn,
     name: str,
@@ -266,6 +267,7 @@ def create_feature_class(
     return _class_from_row(row)
 
 
+@checked
 def get_feature_class(conn: Conn, name: str) -> FeatureClass:
     """The class called ``name``.
 
@@ -281,6 +283,7 @@ def get_feature_class(conn: Conn, name: str) -> FeatureClass:
     return _class_from_row(row)
 
 
+@checked
 def list_feature_classes(conn: Conn) -> list[FeatureClass]:
     """All feature classes, by name."""
     with reraise():
@@ -288,6 +291,7 @@ def list_feature_classes(conn: Conn) -> list[FeatureClass]:
     return [_class_from_row(r) for r in rows]
 
 
+@checked
 def drop_feature_class(conn: Conn, name: str, *, force: bool = False) -> int:
     """Drop a class; with ``force`` also its features. Returns the number of features deleted.
 
@@ -309,6 +313,7 @@ def _default_text(value: object) -> str | None:
     return str(value)
 
 
+@checked
 def add_property(conn: Conn, feature_class: str, prop: Property | tuple[str, str] | tuple[str, str, int], *,
                  kind: PropertyKind = "cell", default: object = None) -> FeatureClass:
     """Give a class one more property, in every version (``tgsis.add_property``).
@@ -353,6 +358,7 @@ def add_property(conn: Conn, feature_class: str, prop: Property | tuple[str, str
     return _class_from_row(row)
 
 
+@checked
 def fill_property_rows(conn: Conn, feature_class: str, values: Mapping[str, object]) -> dict[str, tuple[int, int]]:
     """Give stored features that have no vertex or cell property rows a row per vertex or cell (``tgsis.fill_property_rows``).
 
@@ -387,6 +393,7 @@ def fill_property_rows(conn: Conn, feature_class: str, values: Mapping[str, obje
     return {str(table): (int(features), int(count)) for table, features, count in rows}
 
 
+@checked
 def rename_property(conn: Conn, feature_class: str, name: str, new_name: str, *,
                     kind: PropertyKind | None = None) -> FeatureClass:
     """Rename a property of a class, in every version, keeping its values (``tgsis.rename_property``).
@@ -406,6 +413,7 @@ def rename_property(conn: Conn, feature_class: str, name: str, new_name: str, *,
     return _class_from_row(row)
 
 
+@checked
 def drop_property(conn: Conn, feature_class: str, name: str, *, kind: PropertyKind | None = None,
                   force: bool = False) -> FeatureClass:
     """Drop a property of a class, in every version (``tgsis.drop_property``).
@@ -425,6 +433,7 @@ def drop_property(conn: Conn, feature_class: str, name: str, *, kind: PropertyKi
     return _class_from_row(row)
 
 
+@checked
 def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
     """The feature class that holds feature ``feature_id``.
 
@@ -457,6 +466,3 @@ def stores_part_column(fc: FeatureClass) -> bool:
     """Whether the class keeps the ``part`` cell property in a column of its own (else: in ``tgsis.part``)."""
     return any(p.name == "part" and fc.alignment_of(p) == "CELL" for p in fc.cell_properties)
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -22,7 +22,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
 from tgsis.db.copy import decode_rows
 from tgsis.errors import reraise
 
@@ -115,6 +115,7 @@ def _with_pairs(conn: Conn, changes: sql.Composable) -> GeometryChanges:
                            vertex_pairs, cell_pairs)
 
 
+@checked
 def compare_stored(conn: Conn, old_id: int, new_id: int, *, pairs: bool = False) -> GeometryChanges:
     """Compare two stored geometries (as the session's version sees them).
 
@@ -145,6 +146,7 @@ def compare_stored(conn: Conn, old_id: int, new_id: int, *, pairs: bool = False)
     return _summary(conn, "SELECT * FROM tgsis.compare_geometries(%s, %s)", (old_id, new_id))
 
 
+@checked
 def compare_versions(conn: Conn, geoid: int, old_version: str, new_version: str, *,
                      old_revision: int | None = None, new_revision: int | None = None,
                      pairs: bool = False) -> GeometryChanges:
@@ -183,6 +185,3 @@ def compare_versions(conn: Conn, geoid: int, old_version: str, new_version: str,
     return _summary(conn, "SELECT * FROM tgsis.compare_geometry_versions(%s, %s, %s, %s, %s)",
                     (geoid, old_version, new_version, old_revision, new_revision))
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -22,6 +22,7 @@ from typing import Any, Literal
 import psycopg
 from psycopg.rows import TupleRow
 
+from tgsis.arguments import checked
 from tgsis.db.install import install
 from tgsis.db.local import Lease, LocalServer
 from tgsis.errors import reraise
@@ -98,6 +99,7 @@ def release_local_server() -> None:
         _installed = False
 
 
+@checked
 def connect(
     dsn: str | None = None, *, autocommit: bool = False, **kwargs: Any
 ) -> psycopg.Connection[TupleRow]:

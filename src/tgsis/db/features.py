@@ -27,18 +27,44 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis.arguments import checked, checked_ids
 from tgsis.datamodels import StoredObject
-from tgsis.gmaps import EvolvingGMap
-from tgsis.temporal import EvolvingSurface
-from tgsis.arguments import check_module, checked_ids
-from tgsis.db._static import (MEANING_COLUMNS, Part, assemble_meshes, collection_members, copy_meshes, download,
-                              member_class, member_label, new_static_geometry, part_meaning, with_property_names)
-from tgsis.db._transfer import Storage, aligned_properties, check_class_unchanged, check_feature_values, feature_columns
-from tgsis.db.classes import (FeatureClass, Property, class_of_feature, create_feature_class,
-                              drop_feature_class, get_feature_class, list_feature_classes)
+from tgsis.db._static import (
+    MEANING_COLUMNS,
+    Part,
+    assemble_meshes,
+    collection_members,
+    copy_meshes,
+    download,
+    member_class,
+    member_label,
+    new_static_geometry,
+    part_meaning,
+    with_property_names,
+)
+from tgsis.db._transfer import (
+    Storage,
+    aligned_properties,
+    check_class_unchanged,
+    check_feature_values,
+    feature_columns,
+    read_only_snapshot,
+    resolve_class,
+)
+from tgsis.db.classes import (
+    FeatureClass,
+    Property,
+    class_of_feature,
+    create_feature_class,
+    drop_feature_class,
+    get_feature_class,
+    list_feature_classes,
+)
 from tgsis.db.meaning import meaning_of, restore_meaning
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
+from tgsis.gmaps import EvolvingGMap
 from tgsis.mesh import Geometry, GeometryCollection, Geotype
+from tgsis.temporal import EvolvingSurface
 
 __all__ = [
     "Property",
@@ -91,6 +117,7 @@ class Feature:
     mesh: Geometry | None = None
 
 
+@checked
 def insert_feature(
     conn: Conn,
     feature_class: str | FeatureClass,
@@ -151,7 +178,7 @@ def insert_feature(
     feature's id is the collection's geoid. One transaction, and one COPY per
     table whatever the number of members.
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if (tolerance is not None or sudden_change is not None) and not isinstance(mesh, (EvolvingSurface, EvolvingGMap)):
         raise InvalidInputError(f"tolerance and sudden_change apply to the topology changes of an EvolvingSurface or "
                                 f"EvolvingGMap, not to a {type(mesh).__name__}")
@@ -217,6 +244,7 @@ def _insert_static(conn: Conn, fc: FeatureClass, mesh: Geometry, properties: Map
     return geoid
 
 
+@checked
 def fetch_features(conn: Conn, feature_class: str | FeatureClass,
                    ids: Sequence[int] | None = None) -> list[Feature]:
     """Fetch features with their meshes and properties (three COPYs for all of them).
@@ -246,16 +274,13 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
         see ``tgsis.check_geometry``).
     """
     ids = checked_ids("ids", ids) if ids is not None else None   # 1.5 is no id (int() would make it 1)
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model != "STATIC":
         raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): its features have a shape "
                                 "at each time", hint="tgsis.get_at(conn, id, t) gives the surface at model time t")
     props = [p.name for p in fc.feature_properties]
     is_collection = fc.geotype is Geotype.GEOMETRYCOLLECTION
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:  # one snapshot for the statements below
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         rows = conn.execute(
             sql.SQL("SELECT f._geoid, g.geoname, " + MEANING_COLUMNS + "{} FROM {} f "
                     "JOIN tgsis.geometry g ON g.geoid = f._geoid {} ORDER BY f._geoid").format(
@@ -302,11 +327,13 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
     return features
 
 
+@checked
 def fetch_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> Feature:
     """One feature with its mesh and properties (see :func:`fetch_features`)."""
     return fetch_features(conn, feature_class, [feature_id])[0]
 
 
+@checked
 def fetch_object(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> Any:
     """The object a feature of any data model stores, read by the model of its class (:mod:`tgsis.datamodels`).
 
@@ -333,7 +360,7 @@ def fetch_object(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
     InvalidInputError
         No Python module registered the class's data model.
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     return datamodels.storage_of(datamodels.data_model(fc.time_model)).fetch(conn, fc, feature_id)
 
 
@@ -342,6 +369,7 @@ def _fetch_static(conn: Conn, fc: FeatureClass, feature_id: int) -> Geometry | N
     return fetch_feature(conn, fc, feature_id).mesh
 
 
+@checked
 def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.ArrayLike) -> list[int]:
     """Ids of the class's features whose bounding box meets ``bounds`` (GiST index scan).
 
@@ -355,7 +383,7 @@ def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.A
     box = np.asarray(bounds, dtype=np.float64)
     if box.shape != (2, 3) or not np.all(np.isfinite(box)):
         raise InvalidGeometryError(f"a box is [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {box.tolist()}")
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     with reraise():
         rows = conn.execute(
             sql.SQL("SELECT f._geoid FROM {} f JOIN tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) AS b(geoid) "
@@ -364,13 +392,14 @@ def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.A
     return [int(r[0]) for r in rows]
 
 
+@checked
 def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> bool:
     """Delete a feature with its geometry and properties; ``False`` if it was not there.
 
     A collection goes with the members it owns (the ones stored with it), not
     with geometries it only lists.
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     with reraise(), conn.transaction():
         exists = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)),
                               (feature_id,)).fetchone()
@@ -382,6 +411,3 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
 
 
 datamodels.register_storage("STATIC", insert=_insert_static, fetch=_fetch_static)
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -30,14 +30,23 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
-from tgsis.arguments import check_module, no_nul
-from tgsis.db._transfer import Columns, Storage, concat, copy_out, insert_feature_row, local_positions
+from tgsis._series import check_time
+from tgsis.arguments import checked, no_nul
 from tgsis.db._continuity import check_continuity, checked_tolerance
-from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
+from tgsis.db._transfer import (
+    Columns,
+    Storage,
+    concat,
+    copy_out,
+    insert_feature_row,
+    local_positions,
+    read_only_snapshot,
+    resolve_class,
+)
+from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
-from tgsis.temporal import check_time
 
 __all__ = ["insert_gmap", "fetch_gmap", "fetch_md_gmap", "gmap_at", "gmap_cells", "gmap_check", "md_in_box",
            "md_vertices_in_box", "GMapProblem"]
@@ -56,7 +65,7 @@ class GMapProblem:
 
 
 def _gmap_class(conn: Conn, feature_class: str | FeatureClass, model: str = "GMAP") -> FeatureClass:
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model != model:
         what = "G-maps in time" if model == "GMAP" else "multiply indexed G-maps"
         raise InvalidInputError(f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
@@ -143,6 +152,7 @@ def _alpha_columns(geoid: int, images: IntArray) -> list[tuple[str, npt.ArrayLik
             ("dartid2", np.ascontiguousarray(images.T).reshape(-1), "int8")]
 
 
+@checked
 def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
                 properties: Mapping[str, Any] | None = None, *, name: str | None = None,
                 drop_extra_properties: bool = False, axes: Sequence[str] | None = None,
@@ -187,7 +197,7 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         darts); nothing is written.
     InvalidPropertyError, InvalidInputError, NotFoundError
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model == "MULTIDIM":
         if not isinstance(obj, GMap):
             raise InvalidInputError(f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
@@ -388,6 +398,7 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
     return geoid
 
 
+@checked
 def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> tuple[GMap, tuple[str, ...]]:
     """A stored multiply indexed G-map (model 5) with its cell values, and the names of its axes.
 
@@ -399,10 +410,7 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         Stored rows that do not make a G-map (see ``tgsis.md_check``).
     """
     fc = _gmap_class(conn, feature_class, "MULTIDIM")
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         head = conn.execute(sql.SQL("SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
                                     "ON m.geoid = f._geoid WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)),
                             (feature_id,)).fetchone()
@@ -433,6 +441,7 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
 
 
+@checked
 def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float],
               high: Sequence[float]) -> list[int]:
     """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
@@ -443,6 +452,7 @@ def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str]
     return sorted(int(r[0]) for r in rows)
 
 
+@checked
 def md_vertices_in_box(conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float],
                        high: Sequence[float]) -> IntArray:
     """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
@@ -522,6 +532,7 @@ def _period_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int,
     return images
 
 
+@checked
 def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingGMap:
     """A stored G-map feature with its periods, positions and cell values (one COPY per table).
 
@@ -533,10 +544,7 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         Stored rows that do not make a G-map (see ``tgsis.gmap_check``).
     """
     fc = _gmap_class(conn, feature_class)
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:  # one snapshot for the statements below
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         head = conn.execute(sql.SQL("SELECT g.geoname, g.alive, m.dimension, m.embedding FROM {} f "
                                     "JOIN tgsis.geometry g ON g.geoid = f._geoid JOIN tgsis.gmap m ON m.geoid = f._geoid "
                                     "WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)).fetchone()
@@ -590,6 +598,7 @@ def _mix(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], w: float, same:
     return a if same else a + w * (b - a)
 
 
+@checked
 def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     """The G-map of a feature at model time ``t``: the period and weight from SQL (``tgsis.gmap_frame``), its rows by COPY.
 
@@ -655,6 +664,7 @@ def _model_of(conn: Conn, feature_id: int) -> str:
     return str(row[0])
 
 
+@checked
 def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) -> tuple[IntArray, IntArray]:
     """The ``level``-cells of a feature's G-map (at ``t`` for model 4) from SQL (``tgsis.gmap_cells``, ``md_cells``).
 
@@ -681,6 +691,7 @@ def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) 
     return np.array([r[0] for r in rows], dtype=np.int64), np.array([r[1] for r in rows], dtype=np.int64)
 
 
+@checked
 def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
     """The violated conditions of a stored G-map with their first darts (``tgsis.gmap_check``, ``md_check``); empty: valid."""
     function = "md_check" if _model_of(conn, feature_id) == "MULTIDIM" else "gmap_check"
@@ -689,9 +700,6 @@ def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
                             (feature_id,)).fetchall()
     return [GMapProblem(str(p), int(c), tuple(int(d) for d in darts)) for p, c, darts in rows]
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)
 
 
 def _fetch_md(conn: Conn, fc: FeatureClass, feature_id: int) -> GMap:

@@ -11,19 +11,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
 from tgsis.db._transfer import columns_out, corners_out
+from tgsis.db.classes import FeatureClass  # at run time: @checked reads the hints
 from tgsis.errors import NotFoundError, reraise
-
-if TYPE_CHECKING:
-    from tgsis.db.features import FeatureClass
 
 Conn = psycopg.Connection[Any]
 
@@ -62,6 +60,7 @@ def _named(fc: FeatureClass) -> sql.Composable:
     return sql.SQL("{}.{}").format(sql.Identifier(fc.schema), sql.Identifier(fc.featuretable))
 
 
+@checked
 def server_version(conn: Conn) -> str | None:
     """The server's ``version()`` string."""
     with reraise():
@@ -69,6 +68,7 @@ def server_version(conn: Conn) -> str | None:
     return str(row[0]) if row else None
 
 
+@checked
 def stored_rows(conn: Conn, fc: FeatureClass, table: str) -> tuple[int, int]:
     """How many rows table ``table`` of class ``fc`` holds as the working version reads them, and of how many
     geometries: ``(rows, geometries)``."""
@@ -79,6 +79,7 @@ def stored_rows(conn: Conn, fc: FeatureClass, table: str) -> tuple[int, int]:
     return int(row[0]), int(row[1])
 
 
+@checked
 def other_versions_exist(conn: Conn) -> bool:
     """Whether the database has versions other than DEFAULT."""
     with reraise():
@@ -86,6 +87,7 @@ def other_versions_exist(conn: Conn) -> bool:
     return bool(row and row[0])
 
 
+@checked
 def revision_exists(conn: Conn, revision: int) -> bool:
     """Whether revision number ``revision`` is still recorded (``tgsis version compress`` removes revisions)."""
     with reraise():
@@ -93,6 +95,7 @@ def revision_exists(conn: Conn, revision: int) -> bool:
     return row == (True,)
 
 
+@checked
 def features_versioned(conn: Conn) -> bool:
     """Whether the feature tables are versioned (``tgsis versioning enable features`` was run)."""
     with reraise():
@@ -101,6 +104,7 @@ def features_versioned(conn: Conn) -> bool:
     return row == (True,)
 
 
+@checked
 def lock_feature_name(conn: Conn, fc: FeatureClass, name: str, purpose: str) -> None:
     """Take the transaction-level advisory lock on class ``fc`` and feature name ``name`` for ``purpose``.
 
@@ -113,6 +117,7 @@ def lock_feature_name(conn: Conn, fc: FeatureClass, name: str, purpose: str) -> 
                      (f"{purpose}: {fc.schema}.{fc.featuretable}: {name}",))
 
 
+@checked
 def features_named(conn: Conn, fc: FeatureClass, name: str) -> list[int]:
     """The ids of the features of class ``fc`` named ``name`` (as the working version sees them), in order."""
     with reraise():
@@ -139,6 +144,7 @@ class GeometrySummary:
     box: tuple[float | None, float | None, float | None, float | None, float | None, float | None]
 
 
+@checked
 def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
     """The :class:`GeometrySummary` of feature ``geoid``; :class:`NotFoundError` when there is none."""
     with reraise():
@@ -152,6 +158,7 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
     return GeometrySummary(row[0], row[1], row[2], row[3], row[4], row[5], row[6], tuple(row[7:13]))
 
 
+@checked
 def feature_property_values(conn: Conn, fc: FeatureClass, geoid: int) -> dict[str, Any]:
     """The feature properties of feature ``geoid`` of class ``fc``, by name, in the table's column order."""
     with reraise():
@@ -171,6 +178,7 @@ class ShapeSizes:
     count: int
 
 
+@checked
 def shape_sizes(conn: Conn, time_model: str, geoid: int) -> ShapeSizes | None:
     """How many vertices and cells each shape of feature ``geoid`` has, where ``tgsis.geometry`` adds up the rows
     of every instant or period; None for time models other than INSTANTS and EVOLVING, or with no shape."""
@@ -195,6 +203,7 @@ def shape_sizes(conn: Conn, time_model: str, geoid: int) -> ShapeSizes | None:
     return ShapeSizes([int(n) for n in counts[0]], [int(n) for n in counts[1] or [0]], int(counts[2]))
 
 
+@checked
 def stored_zpositive(conn: Conn, geoid: int) -> str | None:
     """The z convention (``ZPOSITIVE``) the file of feature ``geoid`` had, as stored; None when none was kept."""
     with reraise():
@@ -221,6 +230,7 @@ class FeatureRow:
     members: int | None = None  # of a collection; None for other geometries
 
 
+@checked
 def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
                   ids: Sequence[int] | None = None, properties: Mapping[str, str] | None = None,
                   limit: int | None = None) -> list[FeatureRow]:
@@ -277,6 +287,7 @@ def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box:
             for r in rows]
 
 
+@checked
 def may_read_features(conn: Conn, fc: FeatureClass) -> bool:
     """Whether the session's role may read the feature table of class ``fc``."""
     with reraise():
@@ -285,6 +296,7 @@ def may_read_features(conn: Conn, fc: FeatureClass) -> bool:
     return bool(row and row[0])
 
 
+@checked
 def class_has_feature(conn: Conn, fc: FeatureClass, geoid: int) -> bool:
     """Whether class ``fc`` holds feature ``geoid`` as the working version sees it."""
     with reraise():
@@ -292,6 +304,7 @@ def class_has_feature(conn: Conn, fc: FeatureClass, geoid: int) -> bool:
     return row is not None
 
 
+@checked
 def count_features(conn: Conn, fc: FeatureClass) -> int:
     """How many features class ``fc`` holds as the working version sees them."""
     with reraise():
@@ -299,6 +312,7 @@ def count_features(conn: Conn, fc: FeatureClass) -> int:
     return int(row[0]) if row else 0
 
 
+@checked
 def feature_name(conn: Conn, geoid: int) -> str | None:
     """The name of feature ``geoid`` (None: no name, or no such feature)."""
     with reraise():
@@ -306,6 +320,7 @@ def feature_name(conn: Conn, geoid: int) -> str | None:
     return None if row is None else row[0]
 
 
+@checked
 def md_gmap_axes(conn: Conn, geoid: int) -> list[str] | None:
     """The names of the axes of the multiply indexed G-map ``geoid`` (model 5), None when there is none."""
     with reraise():
@@ -313,6 +328,7 @@ def md_gmap_axes(conn: Conn, geoid: int) -> list[str] | None:
     return None if row is None else list(row[0])
 
 
+@checked
 def version_validity(conn: Conn) -> dict[str, tuple[Any, Any]]:
     """Each version's period of belief, by name: ``(valid_from, valid_to)`` (None where unset)."""
     with reraise():
@@ -320,6 +336,7 @@ def version_validity(conn: Conn) -> dict[str, tuple[Any, Any]]:
     return {r[0]: (r[1], r[2]) for r in rows}
 
 
+@checked
 def conflicts_with_solutions(conn: Conn, version: str) -> list[dict[str, Any]]:
     """The conflicts of ``version`` with its parent, each with the tables changed on both sides, in the child, in
     the parent, and the recorded solution (``unsolved`` when none): ``{"objectclass", "objectkey", "both",
@@ -341,6 +358,7 @@ def conflicts_with_solutions(conn: Conn, version: str) -> list[dict[str, Any]]:
 _CORNERS = [("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")]
 
 
+@checked
 def static_vertex_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64],
                                                         npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """The stored vertices of static feature ``geoid`` as the working version sees them, in no set order:
@@ -352,6 +370,7 @@ def static_vertex_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], n
     return vid, x, y, z
 
 
+@checked
 def static_triangle_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64],
                                                           npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """The stored triangles of static feature ``geoid``, in no set order: ``(trglid, vrtxid1, vrtxid2, vrtxid3)``."""
@@ -360,6 +379,7 @@ def static_triangle_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64],
     return tid, a, b, c
 
 
+@checked
 def static_triangle_corners(conn: Conn, geoid: int) -> npt.NDArray[np.int64]:
     """The corners of the stored triangles of static feature ``geoid``, (m, 3) vertex ids, in no set order; packed
     one value a triangle on the wire (:func:`tgsis.db._transfer.corners_out`), about a third less server time."""
@@ -367,6 +387,7 @@ def static_triangle_corners(conn: Conn, geoid: int) -> npt.NDArray[np.int64]:
         return corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", [name for name, _ in _CORNERS], geoid)
 
 
+@checked
 def static_vertex_property_rows(conn: Conn, fc: FeatureClass, geoid: int, prop: str, wire: str
                                 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
     """The stored values of vertex property ``prop`` (sent as ``wire``) of feature ``geoid``: ``(_idx, values)``."""
@@ -378,4 +399,3 @@ def static_vertex_property_rows(conn: Conn, fc: FeatureClass, geoid: int, prop: 
     return idx, column
 
 
-check_module(globals(), __all__)

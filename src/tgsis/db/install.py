@@ -24,6 +24,7 @@ from typing import Any, Literal
 import psycopg
 from psycopg import sql
 
+from tgsis.arguments import checked
 from tgsis.db.sqlsource import EXTENSION, ExtensionSources, parse_version
 from tgsis.errors import InstallationError, InUseError, InvalidInputError, reraise
 
@@ -137,6 +138,7 @@ class InstallationStatus:
         return self.state == "up to date"
 
 
+@checked
 def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
     """Return the tgsis version installed in the connected database, or ``None``.
 
@@ -215,6 +217,7 @@ def _fingerprint_mismatch(installed: InstalledVersion, sources: ExtensionSources
     return problem, fix
 
 
+@checked
 def installation_status(
     conn: psycopg.Connection[Any], *, sources: ExtensionSources | None = None
 ) -> InstallationStatus:
@@ -416,6 +419,7 @@ def _make_owner_admin(conn: psycopg.Connection[Any], steps: list[str]) -> tuple[
     return ()
 
 
+@checked
 def install(
     conn: psycopg.Connection[Any],
     *,
@@ -557,6 +561,7 @@ def _drop_tgsis(conn: psycopg.Connection[Any], method: str) -> None:
     conn.execute(sql.SQL("DROP SCHEMA {} CASCADE").format(sql.Identifier("tgsis")))
 
 
+@checked
 def uninstall(conn: psycopg.Connection[Any], *, cascade: bool = False) -> InstalledVersion | None:
     """Remove tgsis and its data from the connected database (the cluster-wide roles stay).
 
@@ -606,6 +611,7 @@ def uninstall(conn: psycopg.Connection[Any], *, cascade: bool = False) -> Instal
     return current
 
 
+@checked
 def partition_model_storage(conn: psycopg.Connection[Any], model: int, partitions: int) -> list[str]:
     """Hash-partition the storage tables of a data model by geoid (``tgsis.partition_model_storage``).
 

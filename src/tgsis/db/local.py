@@ -60,6 +60,7 @@ import psycopg
 from psycopg import sql
 from psycopg.conninfo import make_conninfo
 
+from tgsis.arguments import checked
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.errors import LocalServerError
 
@@ -165,6 +166,7 @@ def _system_bindir() -> Path | None:
     return None
 
 
+@checked
 def find_binaries(selection: str | None = None) -> PgBinaries:
     """Find the PostgreSQL server programs to run.
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import psycopg
 
-from tgsis.arguments import check_module, checked_ids
+from tgsis.arguments import checked, checked_ids
 from tgsis.errors import reraise
 
 __all__ = ["Model", "ModelObject", "create_model", "add_to_model", "remove_from_model", "model_objects", "list_models"]
@@ -45,6 +45,7 @@ def _ids(objects: Sequence[int]) -> list[int]:
     return checked_ids("objects", objects)
 
 
+@checked
 def create_model(conn: Conn, name: str, objects: Sequence[int] = (), *, description: str | None = None) -> int:
     """Create a model (unique by name in the session's version) holding these stored objects; return its id.
 
@@ -58,6 +59,7 @@ def create_model(conn: Conn, name: str, objects: Sequence[int] = (), *, descript
     return int(row[0])
 
 
+@checked
 def add_to_model(conn: Conn, name: str, objects: Sequence[int]) -> int:
     """Put stored objects into model ``name`` (members stay); return how many were added."""
     with reraise(), conn.transaction():
@@ -66,6 +68,7 @@ def add_to_model(conn: Conn, name: str, objects: Sequence[int]) -> int:
     return int(row[0])
 
 
+@checked
 def remove_from_model(conn: Conn, name: str, objects: Sequence[int]) -> int:
     """Take objects out of model ``name`` (the objects stay); return how many left it."""
     with reraise(), conn.transaction():
@@ -74,6 +77,7 @@ def remove_from_model(conn: Conn, name: str, objects: Sequence[int]) -> int:
     return int(row[0])
 
 
+@checked
 def model_objects(conn: Conn, name: str) -> list[ModelObject]:
     """The objects of model ``name`` in the session's version, by id."""
     with reraise():
@@ -81,6 +85,7 @@ def model_objects(conn: Conn, name: str) -> list[ModelObject]:
     return [ModelObject(int(r[0]), r[1], r[2]) for r in rows]
 
 
+@checked
 def list_models(conn: Conn) -> list[Model]:
     """The models of the session's version, by name."""
     with reraise():
@@ -88,6 +93,3 @@ def list_models(conn: Conn) -> list[Model]:
                             "WHERE o.modelid = m.modelid) FROM tgsis.model m ORDER BY m.name").fetchall()
     return [Model(int(r[0]), r[1], r[2], int(r[3])) for r in rows]
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -13,13 +13,14 @@ from typing import Any, Literal
 
 import psycopg
 
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
 from tgsis.errors import reraise
 from tgsis.postgis import mesh_from_wkb
 
 __all__ = ["create_postgis_view", "enable_postgis", "fetch_ewkb", "insert_wkb_feature", "postgis_enabled"]
 
 
+@checked
 def postgis_enabled(conn: psycopg.Connection[Any]) -> bool:
     """Whether :func:`enable_postgis` has created tgsis's PostGIS functions in this database."""
     with reraise():
@@ -28,6 +29,7 @@ def postgis_enabled(conn: psycopg.Connection[Any]) -> bool:
     return bool(row and row[0])
 
 
+@checked
 def enable_postgis(conn: psycopg.Connection[Any]) -> str:
     """Create ``tgsis.postgis_geometry`` and ``tgsis.postgis_geometry_at`` (they return PostGIS geometries).
 
@@ -58,6 +60,7 @@ def enable_postgis(conn: psycopg.Connection[Any]) -> str:
     return str(row[0])
 
 
+@checked
 def create_postgis_view(conn: psycopg.Connection[Any], class_name: str) -> str:
     """(Re)create the view ``<class>_postgis``: the class's features with a PostGIS ``geom`` column.
 
@@ -96,6 +99,7 @@ def create_postgis_view(conn: psycopg.Connection[Any], class_name: str) -> str:
     return str(row[0])
 
 
+@checked
 def fetch_ewkb(
     conn: psycopg.Connection[Any],
     class_name: str,
@@ -144,6 +148,7 @@ def fetch_ewkb(
     return None if row[0] is None else bytes(row[0])
 
 
+@checked
 def insert_wkb_feature(
     conn: psycopg.Connection[Any],
     class_name: str,
@@ -170,6 +175,3 @@ def insert_wkb_feature(
     mesh.metadata.pop("srid", None)
     return insert_feature(conn, class_name, mesh, properties)
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

@@ -32,25 +32,51 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis._series import check_time
 from tgsis._zpositive import elevation, z_convention
-from tgsis.arguments import check_module, no_nul
-from tgsis.db.copy import SQL_TYPES, numpy_dtype
-from tgsis.db._transfer import (Storage, aligned_properties, class_property_arrays, concat, copy_out, insert_feature_row,
-                               local_positions, row_keys, rows_by_geoid)
+from tgsis.arguments import checked, no_nul
 from tgsis.db._continuity import check_continuity, checked_tolerance
-from tgsis.db.classes import FeatureClass, class_of_feature, get_feature_class
+from tgsis.db._transfer import (
+    Storage,
+    aligned_properties,
+    class_name,
+    class_property_arrays,
+    concat,
+    copy_out,
+    insert_feature_row,
+    local_positions,
+    read_only_snapshot,
+    resolve_class,
+    row_keys,
+    rows_by_geoid,
+)
+from tgsis.db.classes import FeatureClass, class_of_feature
+from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGeometryError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.formats._common import PathLike
 from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Geotype, Surface
-from tgsis.temporal import (Convention, EvolvingSurface, Period, SurfaceFrame, SurfaceSeries, TopologyPeriod, WrittenSeries,
-                            check_convention, check_time, even_times, sudden_change as sudden, write_frames_pvd)
+from tgsis.temporal import (
+    Convention,
+    EvolvingSurface,
+    Period,
+    SurfaceFrame,
+    SurfaceSeries,
+    TopologyPeriod,
+    WrittenSeries,
+    check_convention,
+    even_times,
+    write_frames_pvd,
+)
+from tgsis.temporal import sudden_change as sudden
 
 __all__ = [
     "insert_series",
     "insert_evolving",
     "add_instant",
     "delete_instant",
+    "append_period",
+    "delete_period",
     "instants",
     "get_at",
     "surfaces_at",
@@ -61,6 +87,7 @@ __all__ = [
     "frames_at",
     "export_series",
     "property_periods",
+    "class_property_periods",
     "first_times",
 ]
 
@@ -70,7 +97,7 @@ Conn = psycopg.Connection[Any]
 
 
 def _temporal_class(conn: Conn, feature_class: str | FeatureClass, model: str) -> FeatureClass:
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.time_model != model:
         raise InvalidInputError(f"feature class {fc.name} has time model {fc.time_model}, not {model}",
                                 hint="SurfaceSeries go to INSTANTS classes, EvolvingSurface to EVOLVING classes")
@@ -167,6 +194,7 @@ def _copy_instants(conn: Conn, fc: FeatureClass, geoid: int, times: Sequence[flo
             *((p.name, concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
 
 
+@checked
 def insert_series(conn: Conn, feature_class: str | FeatureClass, series: SurfaceSeries,
                   properties: Mapping[str, Any] | None = None, *, name: str | None = None,
                   drop_extra_properties: bool = False) -> int:
@@ -213,6 +241,7 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
     return geoid
 
 
+@checked
 def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, t: float, surface: Surface,
                 properties: Mapping[str, Any] | None = None, *, drop_extra_properties: bool = False) -> None:
     """Store the surface of feature ``feature_id`` at a new instant ``t`` (model 2).
@@ -250,6 +279,7 @@ def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
             (surface.n_vertices, surface.n_cells, bounds, bounds, bounds, bounds, bounds, feature_id))
 
 
+@checked
 def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
     """Delete instant ``t`` of a model-2 feature with its surface and properties; False if it had none.
 
@@ -264,6 +294,7 @@ def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
     return bool(row and row[0])
 
 
+@checked
 def instants(conn: Conn, feature_id: int) -> list[tuple[float, bool]]:
     """The instants of a temporal feature, ascending, with whether its topology is (re)defined there.
 
@@ -342,6 +373,7 @@ def _copy_periods(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int, pe
               for prop in fc.cell_properties)])
 
 
+@checked
 def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: EvolvingSurface,
                     properties: Mapping[str, Any] | None = None, *, name: str | None = None,
                     drop_extra_properties: bool = False, tolerance: float | None = None,
@@ -411,6 +443,7 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
     return geoid
 
 
+@checked
 def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int, period: TopologyPeriod, *,
                   drop_extra_properties: bool = False, tolerance: float | None = None,
                   sudden_change: float | None = None) -> None:
@@ -478,6 +511,7 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         check_continuity(conn, feature_id, tolerance, period.start)
 
 
+@checked
 def delete_period(conn: Conn, feature_id: int, start: float) -> bool:
     """Remove the first or last topology period of an evolving feature (``tgsis.delete_period``).
 
@@ -553,6 +587,7 @@ def _properties_at(conn: Conn, surface: Surface, feature_id: int, t: float, conv
         into[prop.name] = values
 
 
+@checked
 def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "left",
            properties: bool = False) -> Surface | None:
     """The surface of a feature at model time ``t``, or None when it does not exist then.
@@ -598,23 +633,25 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
     return surface
 
 
+@checked
 def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
                 convention: Convention = "left") -> list[int]:
     """Ids of the features of a class that exist at ``t`` (``tgsis.features_at``), ascending."""
-    name = feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
+    name = class_name(feature_class)
     with reraise(), conn.transaction():
         rows = conn.execute("SELECT * FROM tgsis.features_at(%s, %s, %s)",
                             (name, check_time(t), check_convention(convention))).fetchall()
     return [int(r[0]) for r in rows]
 
 
+@checked
 def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
                 convention: Convention = "left") -> dict[int, Surface]:
     """Every feature of a SURFACE class that exists at ``t`` with its surface then, by id.
 
     One COPY for the vertices and one for the triangles of all features.
     """
-    fc = feature_class if isinstance(feature_class, FeatureClass) else get_feature_class(conn, feature_class)
+    fc = resolve_class(conn, feature_class)
     if fc.geotype != Geotype.SURFACE:
         raise InvalidInputError(f"feature class {fc.name} holds {fc.geotype.value} features, not surfaces",
                                 hint="features_at lists the features of any class that exist at t")
@@ -687,6 +724,7 @@ def _cell_columns(fc: FeatureClass) -> tuple[list[str], list[str]]:
     return [p.name for p in fc.cell_properties], [SQL_TYPES[p.type] for p in fc.cell_properties]
 
 
+@checked
 def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> SurfaceSeries:
     """A model-2 feature as a :class:`~tgsis.temporal.SurfaceSeries`, with its cell and per-instant properties.
 
@@ -726,6 +764,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
                          alive=bool(row[1]), name=row[0], color=None if row[2] is None else row[2:5])
 
 
+@checked
 def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingSurface:
     """A model-3 feature as an :class:`~tgsis.temporal.EvolvingSurface`, with its cell and per-instant properties.
 
@@ -782,6 +821,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
 # --------------------------------------------------------------------------- time series export
 
 
+@checked
 def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
     """First and last instant of a temporal feature, and whether it is alive after the last one.
 
@@ -803,6 +843,7 @@ def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
     return float(row[2]), float(row[3]), bool(row[1])
 
 
+@checked
 def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
               convention: Convention = "left",
               progress: Callable[[int, int], None] | None = None) -> list[SurfaceFrame]:
@@ -822,10 +863,7 @@ def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
     """
     check_convention(convention)
     samples = [check_time(t) for t in np.atleast_1d(np.asarray(times, dtype=np.float64)).tolist()]
-    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
-    with reraise(), conn.transaction():
-        if fresh:  # every frame from the same state of the database
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+    with reraise(), read_only_snapshot(conn):
         frames = []
         for t in samples:
             frames.append((t, get_at(conn, feature_id, t, convention=convention)))
@@ -834,6 +872,7 @@ def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
         return frames
 
 
+@checked
 def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float | None = None,
                   end: float | None = None, steps: int | None = None, convention: Convention = "left",
                   encoding: Encoding = "binary",
@@ -898,10 +937,7 @@ def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float |
 # --------------------------------------------------------------------------- temporal questions
 
 
-def _class_name(feature_class: str | FeatureClass) -> str:
-    return feature_class.name if isinstance(feature_class, FeatureClass) else feature_class
-
-
+@checked
 def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str,
                      value: float, *, convention: Convention = "left") -> list[Period]:
     """The maximal periods over which a per-instant property of a feature satisfies ``prop op value``.
@@ -949,10 +985,11 @@ def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: 
         rows = conn.execute(
             "SELECT coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.property_periods(%s, %s, %s, %s, %s, %s)",
-            (_class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention))).fetchall()
+            (class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention))).fetchall()
     return [Period(float(r[0]), float(r[1]), bool(r[2]), bool(r[3])) for r in rows]
 
 
+@checked
 def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str, value: float, *,
                 convention: Convention = "left") -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """For each vertex/node or cell of a feature, the first time its property satisfies ``prop op value``.
@@ -987,17 +1024,15 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
         As :func:`property_periods`.
     """
     query = sql.SQL("SELECT idx, t FROM tgsis.first_time({}, {}, {}, {}, {}, {})").format(
-        sql.Literal(_class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
+        sql.Literal(class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
         sql.Literal(float(value)), sql.Literal(check_convention(convention)))
     with reraise(), conn.transaction():
         idx, t = copy_out(conn, query, ["int8", "float8"])
     return idx, t
 
 
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)
 
-
+@checked
 def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: str, op: str, value: float, *,
                            convention: Convention = "left") -> dict[int, list[Period]]:
     """For every feature of a class, the periods over which a per-instant property satisfies ``prop op value``.
@@ -1021,7 +1056,7 @@ def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: 
         rows = conn.execute(
             "SELECT geoid, coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.class_property_periods(%s, %s, %s, %s, %s)",
-            (_class_name(feature_class), prop, op, float(value), check_convention(convention))).fetchall()
+            (class_name(feature_class), prop, op, float(value), check_convention(convention))).fetchall()
     found: dict[int, list[Period]] = {}
     for r in rows:
         found.setdefault(int(r[0]), []).append(Period(float(r[1]), float(r[2]), bool(r[3]), bool(r[4])))

@@ -25,7 +25,8 @@ from typing import Any
 import psycopg
 
 from tgsis._optional import require
-from tgsis.arguments import check_module
+from tgsis.arguments import checked
+from tgsis.db._settings import read_version_settings, restore_statement
 from tgsis.errors import MissingPrivilegeError, VersioningError, reraise
 
 __all__ = [
@@ -150,6 +151,7 @@ def _run_committed(conn: Conn, query: str, params: Sequence[Any] = ()) -> Any:
 # --------------------------------------------------------------------------- versions and revisions
 
 
+@checked
 def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, description: str | None = None,
                    base: int | None = None) -> int:
     """Create a child version of ``parent``; return the child's working revision.
@@ -176,6 +178,7 @@ def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, descriptio
     return int(_run_committed(conn, "SELECT tgsis.create_version(%s, %s, %s, %s)", (name, parent, description, base)))
 
 
+@checked
 def delete_version(conn: Conn, name: str) -> int:
     """Delete a version without children, its revisions and row versions; return the rows removed.
 
@@ -186,6 +189,7 @@ def delete_version(conn: Conn, name: str) -> int:
     return int(_run_committed(conn, "SELECT tgsis.delete_version(%s)", (name,)))
 
 
+@checked
 def save_revision(conn: Conn, name: str) -> int:
     """Freeze the working revision of the session's version under ``name``; return its number.
 
@@ -204,37 +208,44 @@ def save_revision(conn: Conn, name: str) -> int:
     return int(_run_committed(conn, "SELECT tgsis.save_revision(%s)", (name,)))
 
 
+@checked
 def goto_version(conn: Conn, name: str, *, local: bool = False) -> None:
     """Work in version ``name`` (``local``: only until the current transaction ends)."""
     _run_committed(conn, "SELECT tgsis.goto_version(%s, %s)", (name, local))
 
 
+@checked
 def goto_revision(conn: Conn, version: str, revision: int, *, local: bool = False) -> None:
     """Look at ``revision`` of ``version``'s history, read-only, until :func:`goto_version`."""
     _run_committed(conn, "SELECT tgsis.goto_revision(%s, %s, %s)", (version, revision, local))
 
 
+@checked
 def working_version(conn: Conn) -> str:
     """Name of the session's working version."""
     return str(_scalar(conn, "SELECT tgsis.get_working_version()"))
 
 
+@checked
 def working_revision(conn: Conn) -> int:
     """Working revision of the session's working version."""
     return int(_scalar(conn, "SELECT tgsis.get_working_revision()"))
 
 
+@checked
 def viewing_revision(conn: Conn) -> int | None:
     """The older revision the session looks at, or None."""
     value = _scalar(conn, "SELECT tgsis.get_viewing_revision()")
     return None if value is None else int(value)
 
 
+@checked
 def revisions(conn: Conn, viewing: bool = True) -> list[int]:
     """The session's viewing (``True``) or working (``False``) revision set, ascending."""
     return [int(r) for r in _scalar(conn, "SELECT tgsis.get_revisions(%s)", (viewing,))]
 
 
+@checked
 def list_versions(conn: Conn) -> list[Version]:
     """All versions, depth-first from DEFAULT."""
     with reraise():
@@ -271,6 +282,7 @@ def format_tree(versions: Sequence[Version]) -> str:
     return "\n".join(lines)
 
 
+@checked
 def version_graph(conn: Conn) -> Any:
     """The version tree as a :class:`networkx.DiGraph`, for graph questions and drawings.
 
@@ -312,11 +324,7 @@ def _restoring_settings(conn: Conn, local: bool) -> Iterator[None]:
     # block's version.
     began = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE and not conn.autocommit
     with reraise():
-        row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
-                           ).fetchone()
-    assert row is not None
-    restore = ("SELECT set_config('tgsis.version', coalesce(%s, ''), %s), "
-               "set_config('tgsis.revision', coalesce(%s, ''), %s)", (row[0], local, row[1], local))
+        restore = restore_statement(read_version_settings(conn), local=local)
     try:
         yield
     except BaseException:
@@ -331,6 +339,7 @@ def _restoring_settings(conn: Conn, local: bool) -> Iterator[None]:
         conn.commit()
 
 
+@checked
 @contextlib.contextmanager
 def in_version(conn: Conn, name: str, *, local: bool = False) -> Iterator[Conn]:
     """Work in version ``name`` inside the block; the previous version is restored after it.
@@ -360,6 +369,7 @@ def in_version(conn: Conn, name: str, *, local: bool = False) -> Iterator[Conn]:
         yield conn
 
 
+@checked
 @contextlib.contextmanager
 def at_revision(conn: Conn, revision: int, version: str | None = None, *, local: bool = False) -> Iterator[Conn]:
     """Look at ``revision`` of ``version`` (default: the working version) inside the block, read-only.
@@ -381,6 +391,7 @@ def _table_from_row(row: Sequence[Any]) -> VersionedTable:
 _TABLE_COLUMNS = "schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder, keycolumns"
 
 
+@checked
 def enable_versioning(conn: Conn, table: str, objectkeyfield: str, objectclass: str, iudorder: int = 0,
                       shortname: str | None = None) -> VersionedTable:
     """Version a table in place (``tgsis.enable_versioning``); applications keep using its name.
@@ -405,12 +416,14 @@ def enable_versioning(conn: Conn, table: str, objectkeyfield: str, objectclass: 
     return _table_from_row(row)
 
 
+@checked
 def disable_versioning(conn: Conn, table: str, *, force: bool = False) -> int:
     """Make a versioned table plain again with DEFAULT's rows; return the row versions removed."""
     with reraise(), conn.transaction():
         return int(_scalar(conn, "SELECT tgsis.disable_versioning(%s, %s)", (table, force)))
 
 
+@checked
 def versioned_tables(conn: Conn) -> list[VersionedTable]:
     """The versioned tables, by object class and iudorder."""
     with reraise():
@@ -419,12 +432,14 @@ def versioned_tables(conn: Conn) -> list[VersionedTable]:
     return [_table_from_row(r) for r in rows]
 
 
+@checked
 def enable_feature_versioning(conn: Conn) -> int:
     """Version model 1 and all feature classes as object class ``feature``; return the tables newly versioned."""
     with reraise(), conn.transaction():
         return int(_scalar(conn, "SELECT tgsis.enable_feature_versioning()"))
 
 
+@checked
 def disable_feature_versioning(conn: Conn, *, force: bool = False) -> int:
     """Undo :func:`enable_feature_versioning`, keeping DEFAULT's rows; return the row versions removed."""
     with reraise(), conn.transaction():
@@ -527,6 +542,7 @@ def _conflict(row: Sequence[Any]) -> Conflict:
     return Conflict(row[0], row[1], tuple(row[2]), tuple(row[3]), tuple(row[4]), row[5])
 
 
+@checked
 def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
     """(Re)compute the objects changed both in ``version`` and in its parent since its base.
 
@@ -553,6 +569,7 @@ def _key_text(key: object) -> str:
     return str(key)
 
 
+@checked
 def conflict_discards(conn: Conn, version: str, objectclass: str | None = None,
                       objectkey: object | None = None) -> list[Discard]:
     """What each solution of ``version``'s conflicts would throw away of the other side's edits.
@@ -575,6 +592,7 @@ def _lost_by(solution: str) -> str | None:
     return {"child": "child", "manual": "child", "parent": "parent"}.get(solution)
 
 
+@checked
 def recorded_discards(conn: Conn, version: str) -> dict[tuple[str, str], tuple[str, list[Discard]]]:
     """What the solutions recorded now for ``version`` throw away, as a merge or refresh would apply them.
 
@@ -593,6 +611,7 @@ def recorded_discards(conn: Conn, version: str) -> dict[tuple[str, str], tuple[s
     return lost
 
 
+@checked
 def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *,
                      discard_other: bool = True) -> Conflict:
     """Record how a conflicting object is merged: ``parent``, ``child``, ``manual`` (or back to ``unsolved``).
@@ -651,6 +670,7 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
     return dataclasses.replace(conflict, discarded=discards)
 
 
+@checked
 def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object) -> list[tuple[str, str, Any, Any]]:
     """Rows of an object that differ between ``version`` (side ``child``) and its parent: (table, side, key, row)."""
     with reraise():
@@ -659,6 +679,7 @@ def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object)
             (version, objectclass, _key_text(objectkey))).fetchall()]
 
 
+@checked
 def merge_version(conn: Conn, version: str, *, remove: bool = False) -> int:
     """Apply ``version``'s changes to its parent in one transaction; return the rows written.
 
@@ -673,6 +694,7 @@ def merge_version(conn: Conn, version: str, *, remove: bool = False) -> int:
         return int(_scalar(conn, "SELECT tgsis.merge_version(%s, %s)", (version, remove)))
 
 
+@checked
 def refresh_version(conn: Conn, version: str) -> int:
     """Bring the parent's changes since ``version``'s base into it; return the rows written.
 
@@ -697,6 +719,7 @@ class Difference:
     changed: int
 
 
+@checked
 def diff_versions(conn: Conn, a: str, b: str, *, a_revision: int | None = None,
                   b_revision: int | None = None) -> list[Difference]:
     """Objects whose rows differ between two versions (or revisions of them), per table.
@@ -713,12 +736,14 @@ def diff_versions(conn: Conn, a: str, b: str, *, a_revision: int | None = None,
 # --------------------------------------------------------------------------- valid time
 
 
+@checked
 def set_version_validity(conn: Conn, version: str, valid_from: datetime | None,
                          valid_to: datetime | None = None) -> None:
     """Set the period ``[valid_from, valid_to)`` in which ``version`` was believed true (``valid_to`` None: still)."""
     _run_committed(conn, "SELECT tgsis.set_version_validity(%s, %s, %s)", (version, valid_from, valid_to))
 
 
+@checked
 def version_chain(conn: Conn, root: str = "DEFAULT") -> list[tuple[str, datetime, datetime | None]]:
     """The versions with a validity period at or below ``root``, oldest first: (name, valid_from, valid_to).
 
@@ -732,6 +757,7 @@ def version_chain(conn: Conn, root: str = "DEFAULT") -> list[tuple[str, datetime
     return [(r[0], r[1], r[2]) for r in rows]
 
 
+@checked
 def version_believed_at(conn: Conn, at: datetime, root: str = "DEFAULT") -> str | None:
     """The version of the chain below ``root`` believed true at ``at``, or None."""
     value = _scalar(conn, "SELECT tgsis.version_believed_at(%s, %s)", (at, root))
@@ -754,6 +780,7 @@ class VersionGrant:
     granted_at: datetime
 
 
+@checked
 def grant_version(conn: Conn, version: str, privilege: str, role: str) -> None:
     """Give ``role`` (or ``"public"``) a right on ``version``: ``write``, ``create``, ``merge``, ``delete`` or ``all``.
 
@@ -768,21 +795,25 @@ def grant_version(conn: Conn, version: str, privilege: str, role: str) -> None:
     _run_committed(conn, "SELECT tgsis.grant_version(%s, %s, %s)", (version, privilege, role))
 
 
+@checked
 def revoke_version(conn: Conn, version: str, privilege: str, role: str) -> None:
     """Take back a right granted with :func:`grant_version` (``all``: every one)."""
     _run_committed(conn, "SELECT tgsis.revoke_version(%s, %s, %s)", (version, privilege, role))
 
 
+@checked
 def set_version_owner(conn: Conn, version: str, role: str) -> None:
     """Make ``role`` the owner of ``version`` (owner or ``tgsis_admin`` only)."""
     _run_committed(conn, "SELECT tgsis.set_version_owner(%s, %s)", (version, role))
 
 
+@checked
 def has_version_privilege(conn: Conn, version: str, privilege: str, role: str | None = None) -> bool:
     """Whether ``role`` (default: the session's role) holds ``privilege`` on ``version``."""
     return bool(_scalar(conn, "SELECT tgsis.has_version_privilege(%s, %s, %s)", (version, privilege, role)))
 
 
+@checked
 def version_privileges(conn: Conn, version: str | None = None) -> list[VersionGrant]:
     """The grants on ``version`` (default: on every version), by version, grantee and right."""
     with reraise():
@@ -810,6 +841,7 @@ class ObjectLock:
     locked_at: datetime
 
 
+@checked
 def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[object], *,
                  exclusive: bool = False) -> int:
     """Lock objects for ``version``: writes to them from any other version fail until unlocked.
@@ -836,6 +868,7 @@ def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[obje
                               (version, objectclass, [_key_text(k) for k in keys], exclusive)))
 
 
+@checked
 def unlock_objects(conn: Conn, version: str, objectclass: str | None = None,
                    keys: Sequence[object] | None = None) -> int:
     """Release ``version``'s locks (all, those of a class, or of some keys); return how many."""
@@ -843,6 +876,7 @@ def unlock_objects(conn: Conn, version: str, objectclass: str | None = None,
                               (version, objectclass, None if keys is None else [_key_text(k) for k in keys])))
 
 
+@checked
 def object_locks(conn: Conn, version: str | None = None) -> list[ObjectLock]:
     """The object locks ``version`` holds (default: every lock), by class and key."""
     with reraise():
@@ -879,6 +913,7 @@ class Compressed:
     removed: int
 
 
+@checked
 def compress_versions(conn: Conn, *, dry_run: bool = False) -> list[Compressed]:
     """Remove the revisions, and the row versions, that no version, named revision or child can reach any more.
 
@@ -914,6 +949,3 @@ def compress_versions(conn: Conn, *, dry_run: bool = False) -> list[Compressed]:
         rows = conn.execute("SELECT what, name, removed FROM tgsis.compress_versions(%s)", (dry_run,)).fetchall()
     return [Compressed(r[0], r[1], int(r[2])) for r in rows]
 
-
-# Wrong arguments get an error naming them rather than a raw PostgreSQL one (tgsis.arguments).
-check_module(globals(), __all__)

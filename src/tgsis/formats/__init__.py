@@ -54,7 +54,6 @@ on a ``.pvd`` point to those functions.
 from __future__ import annotations
 
 import os
-
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -62,12 +61,30 @@ from typing import Any
 
 from tgsis.errors import FileFormatError
 from tgsis.formats._common import PathLike, check_mesh
-from tgsis.formats.gocad import (format_gocad, parse_gocad, parse_gocad_model, read_gocad, read_gocad_model,
-                                 read_tsurf, write_gocad, write_gocad_many)
+from tgsis.formats.gocad import (
+    format_gocad,
+    parse_gocad,
+    parse_gocad_model,
+    read_gocad,
+    read_gocad_model,
+    read_tsurf,
+    write_gocad,
+    write_gocad_many,
+)
 from tgsis.formats.pvd import read_pvd, write_pvd
 from tgsis.formats.trimesh_io import read_trimesh_file, write_trimesh_file
-from tgsis.formats.vtk import (format_vtp, format_vtu, parse_vtp, parse_vtu, parse_vtu_collection, read_vtp,
-                               read_vtu, read_vtu_collection, write_vtp, write_vtu)
+from tgsis.formats.vtk import (
+    format_vtp,
+    format_vtu,
+    parse_vtp,
+    parse_vtu,
+    parse_vtu_collection,
+    read_vtp,
+    read_vtu,
+    read_vtu_collection,
+    write_vtp,
+    write_vtu,
+)
 from tgsis.formats.vtk_legacy import format_vtk, parse_vtk, read_vtk, read_vtk_geometry, write_vtk
 from tgsis.mesh import Geometry, GeometryCollection, Geotype, Mesh
 

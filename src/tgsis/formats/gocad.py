@@ -151,8 +151,16 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError, SkippedObjectWarning
-from tgsis.formats._common import (PathLike, check_line_lengths, check_mesh, property_columns, quoted, read_text,
-                                   sanitize_property_name, write_text)
+from tgsis.formats._common import (
+    PathLike,
+    check_line_lengths,
+    check_mesh,
+    property_columns,
+    quoted,
+    read_text,
+    sanitize_property_name,
+    write_text,
+)
 from tgsis.mesh import LineSet, Mesh, PointSet, Surface, TetraMesh
 
 __all__ = [

@@ -70,8 +70,15 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError, PolygonsSplitWarning
-from tgsis.formats._common import (PathLike, check_mesh, in_elevation, property_columns, read_bytes,
-                                   restore_convention, write_bytes)
+from tgsis.formats._common import (
+    PathLike,
+    check_mesh,
+    in_elevation,
+    property_columns,
+    read_bytes,
+    restore_convention,
+    write_bytes,
+)
 from tgsis.formats._surface_files import ParsedSurface, parse_obj, parse_off, parse_ply, parse_stl
 from tgsis.mesh import PointSet, Surface
 

@@ -110,8 +110,17 @@ import numpy.typing as npt
 from tgsis._vtk_cells import file_array_names, mesh_from_vtk_cells, named_as_read, shared_properties, without_no_part
 from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import (PathLike, check_mesh, in_elevation, quoted, read_bytes, restore_convention,
-                                   sanitize_property_name, split_vtk_polygons, write_bytes)
+from tgsis.formats._common import (
+    PathLike,
+    check_mesh,
+    in_elevation,
+    quoted,
+    read_bytes,
+    restore_convention,
+    sanitize_property_name,
+    split_vtk_polygons,
+    write_bytes,
+)
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
 if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)
@@ -406,18 +415,6 @@ def _vtk_values(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
     elif values.dtype.kind == "f" and values.dtype.itemsize < 4:
         values = values.astype(np.float32)
     return np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("<"))
-
-
-def _string_array(name: str, *values: str) -> ET.Element:
-    """A FieldData string array holding ``values`` (one string each), as VTK writes a vtkStringArray.
-
-    An ``<Array>`` (not ``<DataArray>``) element with the bytes as decimal
-    codes, each string terminated by 0. tgsis no longer writes these (see
-    :meth:`_ArrayWriter.strings`) but reads them; the tests make such files.
-    """
-    element = ET.Element("Array", type="String", Name=name, NumberOfTuples=str(len(values)), format="ascii")
-    element.text = " ".join(str(b) for value in values for b in [*value.encode("utf-8"), 0])
-    return element
 
 
 # ---------------------------------------------------------------- reading

@@ -53,12 +53,30 @@ from urllib.parse import unquote_to_bytes
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._vtk_cells import (collection_from_cells, file_array_names, first, mesh_from_vtk_cells, named_as_read,
-                              string_bytes, strings, vtk_parts)
+from tgsis._vtk_cells import (
+    collection_from_cells,
+    file_array_names,
+    first,
+    mesh_from_vtk_cells,
+    named_as_read,
+    string_bytes,
+    strings,
+    vtk_parts,
+)
 from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
-from tgsis.formats._common import (MAX_LINE_BYTES, PathLike, check_mesh, in_elevation, quoted, read_bytes,
-                                   restore_convention, sanitize_property_name, split_vtk_polygons, write_bytes)
+from tgsis.formats._common import (
+    MAX_LINE_BYTES,
+    PathLike,
+    check_mesh,
+    in_elevation,
+    quoted,
+    read_bytes,
+    restore_convention,
+    sanitize_property_name,
+    split_vtk_polygons,
+    write_bytes,
+)
 from tgsis.mesh import Geometry, GeometryCollection, Mesh
 
 __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "write_vtk", "format_vtk"]

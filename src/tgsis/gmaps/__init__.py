@@ -50,8 +50,7 @@ Examples
 True
 """
 
-from tgsis.gmaps._build import from_mesh, from_polygons, from_simplices
-from tgsis.gmaps._core import GMap, GMapReport, orbit_labels
+from tgsis.gmaps._core import GMap, GMapReport, from_mesh, from_polygons, from_simplices, orbit_labels
 from tgsis.gmaps._extrude import extrude, slice
 from tgsis.gmaps._time import EvolvingGMap, GMapPeriod, sudden_gmap_change
 

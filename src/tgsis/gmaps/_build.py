@@ -1,19 +1,35 @@
-"""Builders: n-G-maps from simplices (points, segments, triangles, tetrahedra, any n) and from polygons."""
+"""Builders: n-G-maps from simplices (points, segments, triangles, tetrahedra, any n) and from polygons.
+
+They return the parts of a map (:class:`Parts`); :mod:`tgsis.gmaps._core` makes the
+:class:`~tgsis.gmaps.GMap` of them, so that this module does not import the class that calls it.
+"""
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import InvalidGeometryError, InvalidGMapError
-from tgsis.gmaps._core import GMap, IntArray, _as_points
+from tgsis.gmaps._arrays import FloatArray, IntArray
+from tgsis.gmaps._arrays import as_points as _as_points
 
 if TYPE_CHECKING:
     from tgsis.mesh import Mesh
+
+
+
+class Parts(NamedTuple):
+    """What a builder makes: the arguments of :class:`~tgsis.gmaps.GMap` (its module builds the map from them)."""
+
+    alpha: IntArray
+    vertex: IntArray
+    points: FloatArray
+    cell_properties: dict[int, Mapping[str, npt.ArrayLike]] | None
+
 
 _CELL_NAMES = {1: "point", 2: "segment", 3: "triangle", 4: "tetrahedron"}
 _FACET_NAMES = {1: "vertex", 2: "edge", 3: "face"}
@@ -112,41 +128,10 @@ def _level_properties(props: Mapping[str, npt.ArrayLike] | None,
     return {level: props} if props else None
 
 
-def from_simplices(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
+def simplices_parts(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
                    cell_properties: Mapping[str, npt.ArrayLike] | None = None,
-                   size: int | None = None) -> GMap:
-    """The n-G-map of a simplicial mesh: (n + 1)! darts per simplex, alpha_n sewn across shared facets.
-
-    Dart ``t * (n + 1)! + j`` is the flag of simplex ``t`` given by the j-th
-    permutation ``p`` (lexicographic order) of its local vertices: vertex
-    ``p[0]``, edge ``{p[0], p[1]}``, ..., facet ``{p[0] .. p[n - 1]}``. For
-    i < n, alpha_i swaps ``p[i]`` and ``p[i + 1]``; alpha_n goes to the other
-    simplex with the same facet, to the flag with the same global vertices.
-    Orientations need not agree (non-orientable objects are fine).
-
-    Parameters
-    ----------
-    vertices : (k, m) array_like of float
-        Points; every one is kept, used or not.
-    simplices : (c, n + 1) array_like of int
-        Vertex indices of each simplex.
-    cell_properties : mapping of str to (c,) array_like, optional
-        Properties of the simplices: the map's n-cells, in input order.
-    size : int, optional
-        Required number of vertices per simplex (n + 1), for the error message.
-
-    Returns
-    -------
-    GMap
-        alpha (n + 1, c (n + 1)!); n-cell t is simplex t.
-
-    Raises
-    ------
-    InvalidGeometryError
-        Bad shapes, indices out of range, a simplex using a vertex twice, or
-        a facet (the edge of triangles, the face of tetrahedra) shared by
-        three or more simplices: not a quasi-manifold (the message names it).
-    """
+                   size: int | None = None) -> Parts:
+    """The parts of :func:`tgsis.gmaps.from_simplices` (see it): darts, involutions, embedding."""
     points = _vertices(vertices)
     raw = np.asarray(simplices)
     if size is not None and (raw.ndim != 2 or raw.shape[1] != size) and raw.size:
@@ -229,39 +214,12 @@ def from_simplices(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
         sewn = np.flatnonzero(other >= 0)
         top[sewn] = table[other[sewn] * nfac + code[sewn]]
     vertex = np.repeat(cells, nf // s, axis=1).reshape(d)  # perms[:, 0] is 0, 0, ..., 1, 1, ...
-    return GMap(alpha, vertex, points, cell_properties=_level_properties(cell_properties, n))
+    return Parts(alpha, vertex, points, _level_properties(cell_properties, n))
 
 
-def from_polygons(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: npt.ArrayLike | None = None, *,
-                  cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
-    """The 2-G-map of polygonal faces of any sizes: 2 darts per polygon side, alpha_2 across shared edges.
-
-    Parameters
-    ----------
-    vertices : (k, m) array_like of float
-        Points, m >= 2.
-    polygons : (f, s) array_like of int, or (q,) with ``offsets``
-        Vertex cycles: one row per polygon of s >= 3 corners (quads: s = 4),
-        or all polygons' corners one after another.
-    offsets : (f + 1,) array_like of int, optional
-        With a flat ``polygons``: polygon j is ``polygons[offsets[j]:offsets[j + 1]]``;
-        ``offsets[0] == 0``, ``offsets[-1] == q``.
-    cell_properties : mapping of str to (f,) array_like, optional
-        Properties of the polygons (the 2-cells, in input order).
-
-    Returns
-    -------
-    GMap
-        Darts ``2 c`` and ``2 c + 1`` are the side from corner c to the next
-        one, at corner c and at the next corner; :meth:`GMap.polygons` gives
-        the input back.
-
-    Raises
-    ------
-    InvalidGeometryError
-        Bad shapes or offsets, a polygon with fewer than 3 corners or using a
-        vertex twice, an edge shared by three or more polygons (named).
-    """
+def polygons_parts(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: npt.ArrayLike | None = None, *,
+                  cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> Parts:
+    """The parts of :func:`tgsis.gmaps.from_polygons` (see it): darts, involutions, embedding."""
     points = _vertices(vertices)
     k = len(points)
     if offsets is None:
@@ -325,25 +283,14 @@ def from_polygons(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: npt
     alpha2[low[sewn]] = low[partner[sewn]]
     alpha2[high[sewn]] = high[partner[sewn]]
     vertex = np.stack([a, b], axis=1).ravel()
-    return GMap(np.stack([alpha0, alpha1, alpha2]), vertex, points,
-                cell_properties=_level_properties(cell_properties, 2))
+    return Parts(np.stack([alpha0, alpha1, alpha2]), vertex, points, _level_properties(cell_properties, 2))
 
 
-def from_mesh(mesh: Mesh) -> GMap:
-    """The G-map of a model-1 mesh: PointSet (0), LineSet (1), Surface (2), TetraMesh (3).
-
-    The mesh's cell properties become properties of the map's n-cells (in
-    the mesh's cell order); vertex properties are not carried (a vertex may
-    be several 0-cells, at a non-manifold point).
-
-    Raises
-    ------
-    InvalidGeometryError
-        A GeometryCollection, or a mesh that is not a quasi-manifold.
-    """
+def mesh_parts(mesh: Mesh) -> Parts:
+    """The parts of :func:`tgsis.gmaps.from_mesh` (see it): darts, involutions, embedding."""
     from tgsis.mesh import Mesh as _Mesh
 
     if not isinstance(mesh, _Mesh) or type(mesh) is _Mesh:
         raise InvalidGeometryError(f"from_mesh takes a PointSet, LineSet, Surface or TetraMesh, "
                                    f"got {type(mesh).__name__}", hint="convert each member of a collection")
-    return from_simplices(mesh.vertices, mesh.cells, cell_properties=mesh.cell_properties, size=mesh.cell_size)
+    return simplices_parts(mesh.vertices, mesh.cells, cell_properties=mesh.cell_properties, size=mesh.cell_size)

@@ -10,6 +10,9 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError
+from tgsis.gmaps._arrays import FloatArray, IntArray
+from tgsis.gmaps._arrays import as_points as _as_points
+from tgsis.gmaps._build import Parts, mesh_parts, polygons_parts, simplices_parts
 from tgsis.mesh import PROPERTY_NAME_RE
 
 if TYPE_CHECKING:
@@ -17,8 +20,6 @@ if TYPE_CHECKING:
 
     from tgsis.mesh import Mesh
 
-IntArray = npt.NDArray[np.int64]
-FloatArray = npt.NDArray[np.float64]
 Properties = dict[int, dict[str, npt.NDArray[Any]]]
 
 #: Rounds of label propagation before the rest of an orbit computation goes to scipy.
@@ -41,21 +42,6 @@ def _as_int_array(values: npt.ArrayLike, what: str, ndim: int) -> IntArray:
     if raw.ndim != ndim:
         raise InvalidGMapError(f"{what} must be a {ndim}-D array, got shape {raw.shape}")
     return np.ascontiguousarray(raw, dtype=np.int64)
-
-
-def _as_points(points: npt.ArrayLike, what: str = "points", one: str = "point") -> FloatArray:
-    try:
-        array = np.ascontiguousarray(points, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidGMapError(f"{what} are not numbers: {exc}") from None
-    if array.ndim != 2:
-        raise InvalidGMapError(f"{what} must be a (k, m) array, got shape {array.shape}")
-    bad = ~np.isfinite(array)
-    if bad.any():
-        row, col = (int(v) for v in np.argwhere(bad)[0])
-        raise InvalidGMapError(f"{one} {row} has a non-finite coordinate {col} ({array[row, col]})",
-                               detail=f"{int(bad.any(axis=1).sum())} {what} have NaN or infinite coordinates")
-    return array
 
 
 def orbit_labels(alpha: IntArray, involutions: Sequence[int], *,
@@ -698,14 +684,12 @@ class GMap:
     def from_simplices(cls, vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
                        cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
         """See :func:`tgsis.gmaps.from_simplices`."""
-        from tgsis.gmaps._build import from_simplices
         return from_simplices(vertices, simplices, cell_properties=cell_properties)
 
     @classmethod
     def from_points(cls, vertices: npt.ArrayLike, points: npt.ArrayLike | None = None, *,
                     cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
         """A 0-G-map: one free dart per point (``points`` (c,) or (c, 1) indices; default every vertex)."""
-        from tgsis.gmaps._build import from_simplices
         pts = np.arange(len(np.asarray(vertices))) if points is None else np.asarray(points)
         return from_simplices(vertices, pts.reshape(-1, 1), cell_properties=cell_properties)
 
@@ -713,21 +697,18 @@ class GMap:
     def from_segments(cls, vertices: npt.ArrayLike, segments: npt.ArrayLike, *,
                       cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
         """A 1-G-map of segments (c, 2): 2 darts per segment, alpha_1 sewn where two segments share a vertex."""
-        from tgsis.gmaps._build import from_simplices
         return from_simplices(vertices, segments, cell_properties=cell_properties, size=2)
 
     @classmethod
     def from_triangles(cls, vertices: npt.ArrayLike, triangles: npt.ArrayLike, *,
                        cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
         """A 2-G-map of triangles (c, 3): 6 darts per triangle, alpha_2 sewn across shared edges."""
-        from tgsis.gmaps._build import from_simplices
         return from_simplices(vertices, triangles, cell_properties=cell_properties, size=3)
 
     @classmethod
     def from_tetrahedra(cls, vertices: npt.ArrayLike, tetrahedra: npt.ArrayLike, *,
                         cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
         """A 3-G-map of tetrahedra (c, 4): 24 darts per tetrahedron, alpha_3 sewn across shared faces."""
-        from tgsis.gmaps._build import from_simplices
         return from_simplices(vertices, tetrahedra, cell_properties=cell_properties, size=4)
 
     @classmethod
@@ -735,11 +716,99 @@ class GMap:
                       offsets: npt.ArrayLike | None = None, *,
                       cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
         """See :func:`tgsis.gmaps.from_polygons`."""
-        from tgsis.gmaps._build import from_polygons
         return from_polygons(vertices, polygons, offsets, cell_properties=cell_properties)
 
     @classmethod
     def from_mesh(cls, mesh: Mesh) -> GMap:
         """See :func:`tgsis.gmaps.from_mesh`."""
-        from tgsis.gmaps._build import from_mesh
         return from_mesh(mesh)
+
+
+def _assembled(parts: Parts) -> GMap:
+    return GMap(parts.alpha, parts.vertex, parts.points, cell_properties=parts.cell_properties)
+
+
+def from_simplices(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
+                   cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+                   size: int | None = None) -> GMap:
+    """The n-G-map of a simplicial mesh: (n + 1)! darts per simplex, alpha_n sewn across shared facets.
+
+    Dart ``t * (n + 1)! + j`` is the flag of simplex ``t`` given by the j-th
+    permutation ``p`` (lexicographic order) of its local vertices: vertex
+    ``p[0]``, edge ``{p[0], p[1]}``, ..., facet ``{p[0] .. p[n - 1]}``. For
+    i < n, alpha_i swaps ``p[i]`` and ``p[i + 1]``; alpha_n goes to the other
+    simplex with the same facet, to the flag with the same global vertices.
+    Orientations need not agree (non-orientable objects are fine).
+
+    Parameters
+    ----------
+    vertices : (k, m) array_like of float
+        Points; every one is kept, used or not.
+    simplices : (c, n + 1) array_like of int
+        Vertex indices of each simplex.
+    cell_properties : mapping of str to (c,) array_like, optional
+        Properties of the simplices: the map's n-cells, in input order.
+    size : int, optional
+        Required number of vertices per simplex (n + 1), for the error message.
+
+    Returns
+    -------
+    GMap
+        alpha (n + 1, c (n + 1)!); n-cell t is simplex t.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Bad shapes, indices out of range, a simplex using a vertex twice, or
+        a facet (the edge of triangles, the face of tetrahedra) shared by
+        three or more simplices: not a quasi-manifold (the message names it).
+    """
+    return _assembled(simplices_parts(vertices, simplices, cell_properties=cell_properties, size=size))
+
+
+def from_polygons(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: npt.ArrayLike | None = None, *,
+                  cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    """The 2-G-map of polygonal faces of any sizes: 2 darts per polygon side, alpha_2 across shared edges.
+
+    Parameters
+    ----------
+    vertices : (k, m) array_like of float
+        Points, m >= 2.
+    polygons : (f, s) array_like of int, or (q,) with ``offsets``
+        Vertex cycles: one row per polygon of s >= 3 corners (quads: s = 4),
+        or all polygons' corners one after another.
+    offsets : (f + 1,) array_like of int, optional
+        With a flat ``polygons``: polygon j is ``polygons[offsets[j]:offsets[j + 1]]``;
+        ``offsets[0] == 0``, ``offsets[-1] == q``.
+    cell_properties : mapping of str to (f,) array_like, optional
+        Properties of the polygons (the 2-cells, in input order).
+
+    Returns
+    -------
+    GMap
+        Darts ``2 c`` and ``2 c + 1`` are the side from corner c to the next
+        one, at corner c and at the next corner; :meth:`GMap.polygons` gives
+        the input back.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Bad shapes or offsets, a polygon with fewer than 3 corners or using a
+        vertex twice, an edge shared by three or more polygons (named).
+    """
+    return _assembled(polygons_parts(vertices, polygons, offsets, cell_properties=cell_properties))
+
+
+def from_mesh(mesh: Mesh) -> GMap:
+    """The G-map of a model-1 mesh: PointSet (0), LineSet (1), Surface (2), TetraMesh (3).
+
+    The mesh's cell properties become properties of the map's n-cells (in
+    the mesh's cell order); vertex properties are not carried (a vertex may
+    be several 0-cells, at a non-manifold point).
+
+    Raises
+    ------
+    InvalidGeometryError
+        A GeometryCollection, or a mesh that is not a quasi-manifold.
+    """
+    return _assembled(mesh_parts(mesh))

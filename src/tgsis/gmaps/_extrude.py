@@ -6,7 +6,8 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import InvalidGMapError, InvalidInputError
-from tgsis.gmaps._core import GMap, IntArray, Properties
+from tgsis.gmaps._arrays import IntArray
+from tgsis.gmaps._core import GMap, Properties
 
 
 def extrude(g: GMap, values: npt.ArrayLike) -> GMap:

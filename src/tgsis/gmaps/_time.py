@@ -17,11 +17,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._series import as_series, as_times
+from tgsis._series import Frame, as_series, as_times, frame_at
 from tgsis._transition import closest_on_segments, prepend_first, start_on, transition_times
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError
 from tgsis.gmaps._core import GMap
-from tgsis.temporal import Frame, frame_at
 
 FloatArray = npt.NDArray[np.float64]
 

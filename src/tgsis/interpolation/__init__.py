@@ -31,32 +31,6 @@ from __future__ import annotations
 from tgsis.interpolation.constraints import validate_control_vertices, validate_fence_paths
 from tgsis.interpolation.corners import border_turns, propose_corners
 from tgsis.interpolation.cutting import CutEnds, CutResult, cut_along_paths
-from tgsis.interpolation.errors import InterpolationSetupError
-from tgsis.interpolation.partition import (
-    Partition,
-    PartitionPairing,
-    Patch,
-    PatchPair,
-    pair_patches,
-    partition_pair,
-    partition_surface,
-)
-from tgsis.interpolation.topology import (
-    DiskCheck,
-    MeshTopology,
-    OneRings,
-    border_edges,
-    border_loops,
-    border_vertices,
-    check_disk,
-    interior_vertices,
-    mesh_edges,
-    one_ring,
-    one_rings,
-    shortest_edge_path,
-)
-from tgsis.interpolation.setup import Attachment, CutPath, InterpolationSetup
-from tgsis.interpolation.interpolate import Interpolation, average_shape, interpolate
 from tgsis.interpolation.deposition import (
     Contact,
     Deposition,
@@ -66,6 +40,8 @@ from tgsis.interpolation.deposition import (
     heights_below,
     keep_above,
 )
+from tgsis.interpolation.errors import InterpolationSetupError
+from tgsis.interpolation.interpolate import Interpolation, average_shape, interpolate
 from tgsis.interpolation.parameterize import (
     CompatiblePatch,
     Parameterization,
@@ -79,6 +55,15 @@ from tgsis.interpolation.parameterize import (
     parameterize_patch,
     polygon_corners,
 )
+from tgsis.interpolation.partition import (
+    Partition,
+    PartitionPairing,
+    Patch,
+    PatchPair,
+    pair_patches,
+    partition_pair,
+    partition_surface,
+)
 from tgsis.interpolation.projection import (
     ClosestPoints,
     ControllingSurface,
@@ -86,6 +71,21 @@ from tgsis.interpolation.projection import (
     ProjectionError,
     closest_points,
     intersection_curve,
+)
+from tgsis.interpolation.setup import Attachment, CutPath, InterpolationSetup
+from tgsis.interpolation.topology import (
+    DiskCheck,
+    MeshTopology,
+    OneRings,
+    border_edges,
+    border_loops,
+    border_vertices,
+    check_disk,
+    interior_vertices,
+    mesh_edges,
+    one_ring,
+    one_rings,
+    shortest_edge_path,
 )
 from tgsis.interpolation.trajectories import (
     Attachments,

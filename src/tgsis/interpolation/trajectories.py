@@ -40,8 +40,8 @@ from scipy.sparse.linalg import SuperLU, splu
 from tgsis.errors import InvalidInputError
 from tgsis.interpolation._arrays import as_points, as_triangles, interior_mask
 from tgsis.interpolation.parameterize import (
-    WeightPattern,
     ParameterizationError,
+    WeightPattern,
     mean_value_data,
 )
 from tgsis.interpolation.projection import ControllingSurface, IntersectionCurve

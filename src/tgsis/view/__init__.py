@@ -2,7 +2,7 @@
 
 A local web server (Starlette on uvicorn, bound to 127.0.0.1) that shows the
 feature classes and features, the version tree, surfaces in 3D at any time
-(three.js, shipped in ``static/three`` with its licence: no network at run
+(three.js, shipped in ``static/vendor/three`` with its licence: no network at run
 time), two versions of a surface compared and a version's conflicts; see
 docs/view.md. It connects with the user's own role and is read-only unless
 started writable.
@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 __all__ = ["THREE_VERSION", "create_app", "serve", "ViewConfig"]
 
-#: the three.js release shipped in static/three (from the npm package ``three``)
+#: the three.js release shipped in static/vendor/three (from the npm package ``three``)
 THREE_VERSION = "0.187.0"
 
 
@@ -44,7 +44,8 @@ def create_app(conninfo: str, *, writable: bool = False, database: str = "") -> 
         Name shown in the pages.
     """
     try:
-        from tgsis.view.app import ViewConfig, create_app as make
+        from tgsis.view.app import ViewConfig
+        from tgsis.view.app import create_app as make
     except ImportError as exc:  # pragma: no cover - the extra is installed in the tests
         raise _missing(exc) from exc
     return make(ViewConfig(conninfo, writable, database))
@@ -75,7 +76,8 @@ def serve(conninfo: str, *, host: str = "127.0.0.1", port: int = 8765, writable:
         import uvicorn
     except ImportError as exc:  # pragma: no cover
         raise _missing(exc) from exc
-    from tgsis.view.app import ViewConfig, create_app as make
+    from tgsis.view.app import ViewConfig
+    from tgsis.view.app import create_app as make
 
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     sock = socket.socket(family, socket.SOCK_STREAM)

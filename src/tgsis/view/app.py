@@ -33,16 +33,16 @@ import psycopg
 from psycopg import sql
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
-from starlette.exceptions import HTTPException
 from starlette.datastructures import Headers, MutableHeaders
+from starlette.exceptions import HTTPException
 from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import JSONResponse, PlainTextResponse, RedirectResponse, Response
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 from starlette.templating import Jinja2Templates
-from starlette.websockets import WebSocketClose
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+from starlette.websockets import WebSocketClose
 
 from tgsis._zpositive import elevation
 from tgsis.db import versions as V
@@ -50,11 +50,20 @@ from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
 from tgsis.db.features import fetch_feature
 from tgsis.db.gmaps import fetch_md_gmap, gmap_at
-from tgsis.db.inspect import (FeatureRow, class_has_feature, conflicts_with_solutions, count_features, feature_name,
-                              features_versioned, list_features, may_read_features, md_gmap_axes, version_validity)
+from tgsis.db.inspect import (
+    FeatureRow,
+    class_has_feature,
+    conflicts_with_solutions,
+    count_features,
+    feature_name,
+    features_versioned,
+    list_features,
+    may_read_features,
+    md_gmap_axes,
+    version_validity,
+)
 from tgsis.db.temporal import get_at
-from tgsis.errors import (Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError,
-                          reraise)
+from tgsis.errors import Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError, reraise
 from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, drawable, gmap_drawable, pack, vertex_flags
 from tgsis.view.surfaces import StoredSurface, drawable_surface, stored_surface

@@ -26,7 +26,7 @@ import numpy.typing as npt
 from tgsis._polygons import fan_triangles
 from tgsis.errors import InvalidInputError
 from tgsis.gmaps import GMap
-from tgsis.mesh import Geometry, GeometryCollection, Mesh, Surface, TetraMesh, LineSet
+from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, Surface, TetraMesh
 
 __all__ = ["Drawable", "drawable", "gmap_drawable", "tetra_boundary", "pack", "unpack", "vertex_flags"]
 

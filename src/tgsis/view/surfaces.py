@@ -16,8 +16,8 @@ download of a 1M-vertex surface is a fraction of the time of
 from __future__ import annotations
 
 import concurrent.futures
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
@@ -25,9 +25,13 @@ import numpy.typing as npt
 import psycopg
 
 from tgsis.db._transfer import local_positions
-from tgsis.db.inspect import (static_triangle_corners, static_triangle_rows, static_vertex_property_rows,
-                              static_vertex_rows)
 from tgsis.db.classes import FeatureClass
+from tgsis.db.inspect import (
+    static_triangle_corners,
+    static_triangle_rows,
+    static_vertex_property_rows,
+    static_vertex_rows,
+)
 from tgsis.errors import InvalidInputError
 from tgsis.view.meshes import Drawable
 

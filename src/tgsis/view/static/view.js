@@ -7,7 +7,7 @@
 // (the browser tests wait for it); an error shows in #status and sets
 // dataset.state to "error".
 import * as THREE from "three";
-import { OrbitControls } from "/static/three/OrbitControls.js";
+import { OrbitControls } from "/static/vendor/three/OrbitControls.js";
 
 const statusBox = () => document.getElementById("status");
 
