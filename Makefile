@@ -67,22 +67,15 @@ pictures: $(VENV)/.installed
 	    build/pictures/view_compare.png docs/pictures/
 	cp build/pictures/cfm_release_6.1_over_5.3.png docs/pictures/
 
-# Files ruff's formatter keeps (ruff format FILE): new files join when written, the
-# rest once the open branches are merged (docs/developing.md, "Lint and format").
-RUFF_FORMATTED = src/tgsis/db/_upgrade.py tests/test_upgrade.py tests/test_install_storage.py tests/test_installcheck.py tests/test_release.py \
-                 src/tgsis/_optional.py tests/test_optional_extras.py src/tgsis/db/adapters.py tests/test_adapters.py tests/test_docker.py \
-                 tests/test_view_set_based_writes.py tests/test_view_origin.py tests/test_make_test.py \
-                 tests/test_gocad_blocks.py tests/test_vtk_names_and_parts.py \
-                 src/tgsis/_zpositive.py tests/test_formats_meaning.py \
-                 tests/test_interpolation_shape.py
+# what ruff format keeps formatted: the whole tree of Python code (docs/developing.md, "Lint and format")
+RUFF_FORMATTED = src tests bench
 
-RUFF_FORMATTED += tests/test_deposition.py tests/test_deposition_scenarios.py
 check: $(VENV)/.installed
 	$(BIN)/python -m mypy
 	$(BIN)/ruff check src tests bench
 	$(BIN)/ruff format --check $(RUFF_FORMATTED)
 
-# What pre-commit's ruff-format hook runs (.pre-commit-config.yaml): format the files that are kept formatted.
+# What pre-commit's ruff-format hook runs (.pre-commit-config.yaml): format the tree.
 format: $(VENV)/.installed
 	$(BIN)/ruff format $(RUFF_FORMATTED)
 

@@ -39,13 +39,15 @@ import tgsis
 Conn = psycopg.Connection[Any]
 
 
-def shuffled(vertices: np.ndarray, cells: np.ndarray, porosity: np.ndarray, rng: np.random.Generator,
-             name: str | None) -> tgsis.Surface:
+def shuffled(
+    vertices: np.ndarray, cells: np.ndarray, porosity: np.ndarray, rng: np.random.Generator, name: str | None
+) -> tgsis.Surface:
     vperm, cperm = rng.permutation(len(vertices)), rng.permutation(len(cells))
     rank = np.empty_like(vperm)
     rank[vperm] = np.arange(len(vperm))
-    return tgsis.Surface(vertices[vperm], rank[cells[cperm]], vertex_properties={"porosity": porosity[vperm]},
-                         name=name)
+    return tgsis.Surface(
+        vertices[vperm], rank[cells[cperm]], vertex_properties={"porosity": porosity[vperm]}, name=name
+    )
 
 
 def one_percent_edit(mesh: tgsis.Mesh, seed: int) -> tgsis.Surface:
@@ -77,13 +79,14 @@ def mixed_edit(mesh: tgsis.Mesh, seed: int) -> tgsis.Surface:
     a, b, c = cells[split, 0], cells[split, 1], cells[split, 2]
     keep = np.ones(len(cells), dtype=bool)
     keep[split] = False
-    cells = np.concatenate([cells[keep], np.stack([a, b, new_ids], 1), np.stack([b, c, new_ids], 1),
-                            np.stack([c, a, new_ids], 1)])
+    cells = np.concatenate(
+        [cells[keep], np.stack([a, b, new_ids], 1), np.stack([b, c, new_ids], 1), np.stack([c, a, new_ids], 1)]
+    )
     vertices = np.concatenate([vertices, centre])
     porosity = np.concatenate([porosity, np.full(len(split), 0.5)])
     used = np.zeros(len(vertices), dtype=bool)
     used[cells] = True
-    used[: n][~removed] = True  # isolated survivors stay (none on a grid)
+    used[:n][~removed] = True  # isolated survivors stay (none on a grid)
     renumber = np.cumsum(used) - 1
     return shuffled(vertices[used], renumber[cells], porosity[used], rng, mesh.name)
 
@@ -98,8 +101,9 @@ def vacuum_analyze(conn: Conn) -> None:
 
 
 def tuples_written(conn: Conn) -> int:
-    row = conn.execute("SELECT coalesce(sum(n_tup_ins + n_tup_upd + n_tup_del), 0) FROM pg_stat_xact_user_tables"
-                       ).fetchone()
+    row = conn.execute(
+        "SELECT coalesce(sum(n_tup_ins + n_tup_upd + n_tup_del), 0) FROM pg_stat_xact_user_tables"
+    ).fetchone()
     return int(row[0]) if row else 0
 
 
@@ -151,15 +155,19 @@ def main() -> None:
                 checkins.append(elapsed)
                 fractions.append(result.save.rows_written / mesh_rows)
                 counted_fractions.append(counted / mesh_rows)
-                print(f"  {label} run {k}: upload {uploads[-1]:.2f} s, checkout {checkout_s:.2f} s, "
-                      f"check-in {elapsed:.2f} s; {result.save.vertices_moved} vertices moved, "
-                      f"{result.save.rows_written} rows written ({counted} counted by the server)")
+                print(
+                    f"  {label} run {k}: upload {uploads[-1]:.2f} s, checkout {checkout_s:.2f} s, "
+                    f"check-in {elapsed:.2f} s; {result.save.vertices_moved} vertices moved, "
+                    f"{result.save.rows_written} rows written ({counted} counted by the server)"
+                )
                 tgsis.delete_feature(conn, fc, fid)
                 conn.commit()
             upload, checkin = statistics.median(uploads), statistics.median(checkins)
-            print(f"{label}: full upload {upload:.2f} s, 1 % edit check-in {checkin:.2f} s "
-                  f"({checkin / upload:.3f} of the upload); rows written {100 * max(fractions):.2f} % of the mesh's "
-                  f"(server count {100 * max(counted_fractions):.2f} %)")
+            print(
+                f"{label}: full upload {upload:.2f} s, 1 % edit check-in {checkin:.2f} s "
+                f"({checkin / upload:.3f} of the upload); rows written {100 * max(fractions):.2f} % of the mesh's "
+                f"(server count {100 * max(counted_fractions):.2f} %)"
+            )
             figures[f"{label}_upload_s"] = upload
             figures[f"{label}_checkin_s"] = checkin
             figures[f"{label}_checkin_vs_upload"] = checkin / upload
@@ -169,9 +177,11 @@ def main() -> None:
             conn.commit()
             co = tgsis.checkout(conn, fid)
             elapsed, result, counted = timed_checkin(conn, co, mixed_edit(base, 7))
-            print(f"{label} mixed edit (1 % moved, 1 % removed, 1 % of the triangles split): check-in "
-                  f"{elapsed:.2f} s, {result.save.diff}, {result.save.vertices_moved} moved; "
-                  f"{counted} rows written ({100 * counted / mesh_rows:.2f} %)")
+            print(
+                f"{label} mixed edit (1 % moved, 1 % removed, 1 % of the triangles split): check-in "
+                f"{elapsed:.2f} s, {result.save.diff}, {result.save.vertices_moved} moved; "
+                f"{counted} rows written ({100 * counted / mesh_rows:.2f} %)"
+            )
             figures[f"{label}_mixed_checkin_s"] = elapsed
             figures[f"{label}_mixed_rows_fraction"] = counted / mesh_rows
             tgsis.delete_feature(conn, fc, fid)

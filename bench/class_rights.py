@@ -40,7 +40,8 @@ def _views(su: Conn, filtered: bool) -> None:
         "  WHERE a.attrelid = format('tgsis.%I', t.tablename || '_ver')::regclass AND a.attnum > 0 AND NOT a.attisdropped"
         "    AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed') ORDER BY a.attnum) "
         "FROM tgsis.model_tables t JOIN tgsis.versioned_tables v ON v.schemaname = 'tgsis' AND v.tablename = t.tablename "
-        "WHERE t.geoidcolumn IS NOT NULL").fetchall()
+        "WHERE t.geoidcolumn IS NOT NULL"
+    ).fetchall()
     for table, geoid, columns in rows:
         source = su.execute("SELECT tgsis.versioned_view_source('tgsis', %s, %s)", (table, columns)).fetchone()
         assert source is not None
@@ -92,8 +93,9 @@ def main() -> None:
         def box() -> None:
             for i in range(20):
                 F.features_in_box(editor, "small", [[0, 0, i], [2, 2, i + 5]])
-                editor.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s AND x < 100 AND y < 100",
-                               (stored[-1],)).fetchone()
+                editor.execute(
+                    "SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s AND x < 100 AND y < 100", (stored[-1],)
+                ).fetchone()
             editor.commit()
 
         def drop() -> None:

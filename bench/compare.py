@@ -58,7 +58,7 @@ def edited_grid(old: tgsis.Surface, side: int, fraction: float, seed: int = 7) -
     quads = (side - 1) ** 2
     count = int(round(fraction * n))
     chosen = rng.permutation(n)
-    moved, removed = chosen[:count], chosen[count:2 * count]
+    moved, removed = chosen[:count], chosen[count : 2 * count]
 
     vertices = old.vertices.copy()
     vertices[moved, 2] += 1.0
@@ -69,14 +69,18 @@ def edited_grid(old: tgsis.Surface, side: int, fraction: float, seed: int = 7) -
     c = old.cells[quads:, 2]
     intact = alive[a] & alive[b] & alive[c] & alive[d]
     candidates = rng.permutation(np.flatnonzero(intact))
-    fanned, flipped = np.sort(candidates[:count]), np.sort(candidates[count:2 * count])
+    fanned, flipped = np.sort(candidates[:count]), np.sort(candidates[count : 2 * count])
     redrawn = np.zeros(quads, dtype=bool)
     redrawn[fanned] = redrawn[flipped] = True
 
     centres = old.vertices[[a[fanned], b[fanned], c[fanned], d[fanned]]].mean(axis=0)
     e = n + np.arange(len(fanned))
-    kept_cells = np.concatenate([old.cells[:quads][alive[a] & alive[b] & alive[d] & ~redrawn],
-                                 old.cells[quads:][alive[a] & alive[d] & alive[c] & ~redrawn]])
+    kept_cells = np.concatenate(
+        [
+            old.cells[:quads][alive[a] & alive[b] & alive[d] & ~redrawn],
+            old.cells[quads:][alive[a] & alive[d] & alive[c] & ~redrawn],
+        ]
+    )
     fa, fb, fc, fd = a[fanned], b[fanned], c[fanned], d[fanned]
     fans = np.concatenate([np.stack(t, axis=1) for t in ((fa, fb, e), (fb, fd, e), (fd, fc, e), (fc, fa, e))])
     la, lb, lc, ld = a[flipped], b[flipped], c[flipped], d[flipped]
@@ -92,12 +96,18 @@ def edited_grid(old: tgsis.Surface, side: int, fraction: float, seed: int = 7) -
     position = np.empty(len(order), dtype=np.int64)
     position[order] = np.arange(len(order))
     edited = tgsis.Surface(all_vertices[order], position[all_cells[rng.permutation(len(all_cells))]], name="edited")
-    return edited, {"moved": len(moved), "removed": len(removed), "added": len(fanned), "fanned_quads": len(fanned),
-                    "flipped_quads": len(flipped)}
+    return edited, {
+        "moved": len(moved),
+        "removed": len(removed),
+        "added": len(fanned),
+        "fanned_quads": len(fanned),
+        "flipped_quads": len(flipped),
+    }
 
 
-def ckdtree_vertex_map(old_vertices: npt.NDArray[np.float64], new_vertices: npt.NDArray[np.float64],
-                       sort_queries: bool = False) -> IntArray:
+def ckdtree_vertex_map(
+    old_vertices: npt.NDArray[np.float64], new_vertices: npt.NDArray[np.float64], sort_queries: bool = False
+) -> IntArray:
     """Per edited vertex, the old vertex with exactly its coordinates, or -1: cKDTree build + query + verification.
 
     A normal old mesh (no coincident vertices) is assumed: one candidate per
@@ -134,8 +144,10 @@ def hashed_vertex_map(old: tgsis.Surface, edited: tgsis.Surface) -> IntArray:
 
 
 def same_diff(x: MeshDiff, y: MeshDiff) -> bool:
-    return all(np.array_equal(getattr(x, f), getattr(y, f))
-               for f in ("vertex_map", "cell_map", "removed_vertices", "removed_cells"))
+    return all(
+        np.array_equal(getattr(x, f), getattr(y, f))
+        for f in ("vertex_map", "cell_map", "removed_vertices", "removed_cells")
+    )
 
 
 def compare_figures(side: int = 1000, repeat: int = 3, fraction: float = 0.01) -> dict[str, Any]:
@@ -143,9 +155,11 @@ def compare_figures(side: int = 1000, repeat: int = 3, fraction: float = 0.01) -
     old = grid_surface(side)
     old = tgsis.Surface(old.vertices, old.cells, name="old")  # geometry only
     edited, edit = edited_grid(old, side, fraction)
-    print(f"old surface: {old.n_vertices} vertices, {old.n_cells} triangles; edited: {edited.n_vertices} vertices, "
-          f"{edited.n_cells} triangles ({edit['moved']} moved, {edit['removed']} removed, {edit['added']} added "
-          f"in fans, {edit['flipped_quads']} quad diagonals flipped, order shuffled)")
+    print(
+        f"old surface: {old.n_vertices} vertices, {old.n_cells} triangles; edited: {edited.n_vertices} vertices, "
+        f"{edited.n_cells} triangles ({edit['moved']} moved, {edit['removed']} removed, {edit['added']} added "
+        f"in fans, {edit['flipped_quads']} quad diagonals flipped, order shuffled)"
+    )
 
     diff = compare_meshes(old, edited)
     counts = diff.counts()
@@ -167,20 +181,30 @@ def compare_figures(side: int = 1000, repeat: int = 3, fraction: float = 0.01) -
     t_vertices_ckdtree = timed(lambda: ckdtree_vertex_map(old.vertices, edited.vertices), repeat)
     t_vertices_ckdtree_sorted = timed(lambda: ckdtree_vertex_map(old.vertices, edited.vertices, True), repeat)
 
-    print(f"machine: {platform.machine()}, {platform.python_implementation()} {platform.python_version()}, "
-          f"numpy {np.__version__}; medians of {repeat}")
+    print(
+        f"machine: {platform.machine()}, {platform.python_implementation()} {platform.python_version()}, "
+        f"numpy {np.__version__}; medians of {repeat}"
+    )
     print(f"compare_meshes(old, edited), from scratch:      {t_compare:6.3f} s")
     print(f"  MeshIndex(old) alone:                         {t_index_build:6.3f} s")
     print(f"compare_meshes(index, edited), index prepared:  {t_from_index:6.3f} s")
-    print(f"baseline: cKDTree vertices + same cell step:    {t_baseline:6.3f} s  "
-          f"(compare is {t_baseline / t_compare:.2f}x faster; from the index {t_baseline / t_from_index:.2f}x)")
-    print(f"  with queries sorted first (stronger):         {t_baseline_sorted:6.3f} s  "
-          f"(compare is {t_baseline_sorted / t_compare:.2f}x faster)")
+    print(
+        f"baseline: cKDTree vertices + same cell step:    {t_baseline:6.3f} s  "
+        f"(compare is {t_baseline / t_compare:.2f}x faster; from the index {t_baseline / t_from_index:.2f}x)"
+    )
+    print(
+        f"  with queries sorted first (stronger):         {t_baseline_sorted:6.3f} s  "
+        f"(compare is {t_baseline_sorted / t_compare:.2f}x faster)"
+    )
     print(f"vertex matching alone, hashed + sorted:          {t_vertices:6.3f} s")
-    print(f"vertex matching alone, cKDTree build + query:    {t_vertices_ckdtree:6.3f} s  "
-          f"({t_vertices_ckdtree / t_vertices:.2f}x the hashed one)")
-    print(f"  with queries sorted first:                     {t_vertices_ckdtree_sorted:6.3f} s  "
-          f"({t_vertices_ckdtree_sorted / t_vertices:.2f}x)")
+    print(
+        f"vertex matching alone, cKDTree build + query:    {t_vertices_ckdtree:6.3f} s  "
+        f"({t_vertices_ckdtree / t_vertices:.2f}x the hashed one)"
+    )
+    print(
+        f"  with queries sorted first:                     {t_vertices_ckdtree_sorted:6.3f} s  "
+        f"({t_vertices_ckdtree_sorted / t_vertices:.2f}x)"
+    )
     return {
         "compare_s": round(t_compare, 3),
         "compare_from_index_s": round(t_from_index, 3),

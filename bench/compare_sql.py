@@ -51,12 +51,13 @@ def edited(surface: tgsis.Surface, rng: np.random.Generator) -> tgsis.Surface:
 
 def same(got: GeometryChanges, diff: tgsis.MeshDiff) -> bool:
     """The SQL answer equals compare_meshes' (stored ids are mesh indices after a fresh upload)."""
-    return (got.counts() == diff.counts()
-            and np.array_equal(got.vertices_removed, diff.removed_vertices)
-            and np.array_equal(got.vertices_added, diff.added_vertices)
-            and np.array_equal(got.cells_removed, diff.removed_cells)
-            and np.array_equal(got.cells_added, diff.added_cells))
-
+    return (
+        got.counts() == diff.counts()
+        and np.array_equal(got.vertices_removed, diff.removed_vertices)
+        and np.array_equal(got.vertices_added, diff.added_vertices)
+        and np.array_equal(got.cells_removed, diff.removed_cells)
+        and np.array_equal(got.cells_added, diff.added_cells)
+    )
 
 
 def main() -> None:
@@ -92,12 +93,17 @@ def main() -> None:
             def run() -> None:
                 action()
                 conn.commit()
+
             return run
 
-        summary_s, pairs_s, python_s = paired([committed(lambda: compare_stored(conn, a, b)),
-                                               committed(lambda: compare_stored(conn, a, b, pairs=True)),
-                                               committed(lambda: tgsis.compare_meshes(fetch(a), fetch(b)))],
-                                              args.repeat)
+        summary_s, pairs_s, python_s = paired(
+            [
+                committed(lambda: compare_stored(conn, a, b)),
+                committed(lambda: compare_stored(conn, a, b, pairs=True)),
+                committed(lambda: tgsis.compare_meshes(fetch(a), fetch(b))),
+            ],
+            args.repeat,
+        )
 
         tgsis.enable_feature_versioning(conn)
         tgsis.create_version(conn, "edit")

@@ -85,8 +85,10 @@ def run(repeat: int) -> dict[str, float]:
     """Build the meshes, check the answers, time everything; print and return the figures."""
     vs, ts = grid_triangles(1000, 500)
     vt, tt = block_tetrahedra(26)
-    print(f"machine: {platform.machine()}, {platform.python_implementation()} {platform.python_version()}, "
-          f"numpy {np.__version__}, scipy {scipy.__version__}, trimesh {trimesh.__version__}")
+    print(
+        f"machine: {platform.machine()}, {platform.python_implementation()} {platform.python_version()}, "
+        f"numpy {np.__version__}, scipy {scipy.__version__}, trimesh {trimesh.__version__}"
+    )
     print(f"surface: {len(vs)} vertices, {len(ts)} triangles; solid: {len(vt)} vertices, {len(tt)} tetrahedra")
 
     surface = GMap.from_triangles(vs, ts)
@@ -97,8 +99,10 @@ def run(repeat: int) -> dict[str, float]:
     assert surface_counts == [1001 * 501, 1000 * 501 + 1001 * 500 + 500_000, 1_000_000]
     assert surface_counts[0] - surface_counts[1] + surface_counts[2] == 1
     assert solid_counts[0] - solid_counts[1] + solid_counts[2] - solid_counts[3] == 1
-    print(f"2-G-map: {surface.n_darts} darts, cells {surface_counts}; 3-G-map: {solid.n_darts} darts, "
-          f"cells {solid_counts}")
+    print(
+        f"2-G-map: {surface.n_darts} darts, cells {surface_counts}; 3-G-map: {solid.n_darts} darts, "
+        f"cells {solid_counts}"
+    )
 
     t_build_s = timed(lambda: GMap.from_triangles(vs, ts), repeat)
     t_cells_s = timed(lambda: all_cells(surface), repeat)
@@ -120,20 +124,26 @@ def run(repeat: int) -> dict[str, float]:
 
     print(f"from_triangles, 1M triangles ({surface.n_darts} darts):   {t_build_s:6.3f} s")
     print(f"  i-cells, all three dimensions:                {t_cells_s:6.3f} s")
-    print(f"  i-cells by connected_components alone:        {t_cells_s_scipy:6.3f} s  "
-          f"({t_cells_s / t_cells_s_scipy:.2f}x)")
+    print(
+        f"  i-cells by connected_components alone:        {t_cells_s_scipy:6.3f} s  "
+        f"({t_cells_s / t_cells_s_scipy:.2f}x)"
+    )
     print(f"  check():                                       {t_check_s:6.3f} s")
-    print(f"  baseline: trimesh face_adjacency (fresh mesh): {t_trimesh:6.3f} s  "
-          f"(build {t_build_s / t_trimesh:.2f}x)")
-    print(f"  baseline: half-edge twins by sorting:          {t_halfedge:6.3f} s  "
-          f"(build {t_build_s / t_halfedge:.2f}x)")
+    print(f"  baseline: trimesh face_adjacency (fresh mesh): {t_trimesh:6.3f} s  (build {t_build_s / t_trimesh:.2f}x)")
+    print(
+        f"  baseline: half-edge twins by sorting:          {t_halfedge:6.3f} s  (build {t_build_s / t_halfedge:.2f}x)"
+    )
     print(f"from_tetrahedra, {len(tt)} tetrahedra ({solid.n_darts} darts): {t_build_t:6.3f} s")
     print(f"  i-cells, all four dimensions:                 {t_cells_t:6.3f} s")
-    print(f"  i-cells by connected_components alone:        {t_cells_t_scipy:6.3f} s  "
-          f"({t_cells_t / t_cells_t_scipy:.2f}x)")
+    print(
+        f"  i-cells by connected_components alone:        {t_cells_t_scipy:6.3f} s  "
+        f"({t_cells_t / t_cells_t_scipy:.2f}x)"
+    )
     print(f"  check():                                       {t_check_t:6.3f} s")
-    print(f"extrude {len(piece.cell_darts(2))} triangles over 3 intervals ({column.n_darts} darts): "
-          f"{t_extrude:6.3f} s; slice between layers: {t_slice:6.3f} s")
+    print(
+        f"extrude {len(piece.cell_darts(2))} triangles over 3 intervals ({column.n_darts} darts): "
+        f"{t_extrude:6.3f} s; slice between layers: {t_slice:6.3f} s"
+    )
     return {
         "triangles_build_s": round(t_build_s, 3),
         "triangles_cells_s": round(t_cells_s, 3),

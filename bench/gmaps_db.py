@@ -39,7 +39,10 @@ from tgsis.db.local import LocalServer, find_binaries
 RAW = {  # the rows insert_gmap writes for a one-period, one-instant map, as plain keyed tables
     "dart": ("geoid int8, dartid int8, timem float8, nodeid int8, acellid int8, positive bool", "geoid, dartid"),
     "alpha": ("geoid int8, level int2, dartid int8, dartid2 int8", "geoid, dartid, level"),
-    "vertex": ("geoid int8, timem float8, timet float8, nodeid int8, coordinate float8[]", "geoid, timem, timet, nodeid"),
+    "vertex": (
+        "geoid int8, timem float8, timet float8, nodeid int8, coordinate float8[]",
+        "geoid, timem, timet, nodeid",
+    ),
     "cell": ("geoid int8, acellid int8, timem float8, celllevel int2", "geoid, acellid"),
     "prop": ("geoid int8, timem float8, timet float8, idx int8, porosity float8", "geoid, timem, timet, idx"),
 }
@@ -52,15 +55,35 @@ def payloads(g: gmaps.GMap, porosity: np.ndarray) -> dict[str, tuple[bytes, list
     one = np.ones(max(d * (n + 1), k), dtype=np.int64)
     zero = np.zeros(max(d, k, c))
     rows = {
-        "dart": [(one[:d], "int8"), (np.arange(d), "int8"), (zero[:d], "float8"), (g.vertex, "int8"), (cells, "int8"),
-                 (g.orientation(), "bool")],
-        "alpha": [(one[:d * (n + 1)], "int8"), (np.tile(np.arange(n + 1, dtype=np.int16), d), "int2"),   # key order
-                  (np.repeat(np.arange(d), n + 1), "int8"), (np.ascontiguousarray(g.alpha.T).reshape(-1), "int8")],
-        "vertex": [(one[:k], "int8"), (zero[:k], "float8"), (zero[:k], "float8"), (np.arange(k), "int8"),
-                   (g.points, "float8[3]")],
+        "dart": [
+            (one[:d], "int8"),
+            (np.arange(d), "int8"),
+            (zero[:d], "float8"),
+            (g.vertex, "int8"),
+            (cells, "int8"),
+            (g.orientation(), "bool"),
+        ],
+        "alpha": [
+            (one[: d * (n + 1)], "int8"),
+            (np.tile(np.arange(n + 1, dtype=np.int16), d), "int2"),  # key order
+            (np.repeat(np.arange(d), n + 1), "int8"),
+            (np.ascontiguousarray(g.alpha.T).reshape(-1), "int8"),
+        ],
+        "vertex": [
+            (one[:k], "int8"),
+            (zero[:k], "float8"),
+            (zero[:k], "float8"),
+            (np.arange(k), "int8"),
+            (g.points, "float8[3]"),
+        ],
         "cell": [(one[:c], "int8"), (np.arange(c), "int8"), (zero[:c], "float8"), (np.full(c, 2, np.int16), "int2")],
-        "prop": [(one[:c], "int8"), (zero[:c], "float8"), (zero[:c], "float8"), (np.arange(c), "int8"),
-                 (porosity, "float8")],
+        "prop": [
+            (one[:c], "int8"),
+            (zero[:c], "float8"),
+            (zero[:c], "float8"),
+            (np.arange(c), "int8"),
+            (porosity, "float8"),
+        ],
     }
     return {name: (encode_rows(columns), [w for _, w in columns]) for name, columns in rows.items()}
 
@@ -81,8 +104,10 @@ def main() -> None:
     moving = gmaps.EvolvingGMap([gmaps.GMapPeriod([0.0, 1.0], solid, np.stack([solid.points, solid.points * 1.5]))])
     raw = payloads(surface, porosity)
     rows = surface.n_darts * (surface.dimension + 2) + surface.n_points + 2 * surface.n_cells(2)
-    print(f"surface: {surface.n_darts} darts, {surface.n_points} points, {surface.n_cells(2)} faces ({rows} rows); "
-          f"solid: {solid.n_darts} darts, {len(tt)} tetrahedra")
+    print(
+        f"surface: {surface.n_darts} darts, {surface.n_points} points, {surface.n_cells(2)} faces ({rows} rows); "
+        f"solid: {solid.n_darts} darts, {len(tt)} tetrahedra"
+    )
     binaries = find_binaries()
     print(f"server: {binaries.describe()} (throwaway cluster, fsync off)")
     server = LocalServer.throwaway(binaries)
@@ -91,8 +116,9 @@ def main() -> None:
         admin.execute("CREATE DATABASE bench")
         conn = psycopg.connect(server.dsn("bench"))
         tgsis.install(conn, method="sql")  # this checkout's SQL
-        F.create_feature_class(conn, "faces", "GMAP", time_model="GMAP", cell_level=2,
-                               cell_properties={"porosity": "float8"})
+        F.create_feature_class(
+            conn, "faces", "GMAP", time_model="GMAP", cell_level=2, cell_properties={"porosity": "float8"}
+        )
         F.create_feature_class(conn, "solids", "GMAP", time_model="GMAP", cell_level=3)
         for name, (columns, key) in RAW.items():
             conn.execute(f"CREATE TABLE raw_{name} ({columns}, PRIMARY KEY ({key}))")
@@ -111,8 +137,10 @@ def main() -> None:
         def empty() -> None:
             # as the raw tables: the previous copy deleted, then the tables emptied (no dead rows, untimed)
             conn.execute("SELECT tgsis.delete_stored_geometries(array_agg(_geoid)) FROM faces")
-            conn.execute("TRUNCATE faces, faces_cellpros, tgsis.gmap, tgsis.gmap_timem, tgsis.gmap_timet, "
-                         "tgsis.gmap_node, tgsis.gmap_vertex, tgsis.gmap_dart, tgsis.gmap_alpha, tgsis.gmap_cell")
+            conn.execute(
+                "TRUNCATE faces, faces_cellpros, tgsis.gmap, tgsis.gmap_timem, tgsis.gmap_timet, "
+                "tgsis.gmap_node, tgsis.gmap_vertex, tgsis.gmap_dart, tgsis.gmap_alpha, tgsis.gmap_cell"
+            )
             conn.commit()
 
         def store() -> None:
@@ -149,8 +177,11 @@ def main() -> None:
         def ordered_read() -> None:
             # the floor of any check that reads the involutions in key order: the 18M alpha rows as one array
             conn.execute("SET LOCAL enable_sort = off")
-            conn.execute("SELECT cardinality(ARRAY(SELECT dartid2 FROM tgsis.gmap_alpha WHERE geoid = %s "
-                         "ORDER BY dartid, level))", (geoid,))
+            conn.execute(
+                "SELECT cardinality(ARRAY(SELECT dartid2 FROM tgsis.gmap_alpha WHERE geoid = %s "
+                "ORDER BY dartid, level))",
+                (geoid,),
+            )
             conn.commit()
 
         t_read, t_check = paired([ordered_read, check], args.repeat)

@@ -82,7 +82,10 @@ def main() -> None:
         "SuperLU default (COLAMD)": {},
         "SuperLU MMD_AT_PLUS_A, partial pivoting": {"permc_spec": "MMD_AT_PLUS_A"},
         "SuperLU MMD_AT_PLUS_A, diagonal pivots, symmetric mode": {
-            "permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.0, "options": {"SymmetricMode": True}},
+            "permc_spec": "MMD_AT_PLUS_A",
+            "diag_pivot_thresh": 0.0,
+            "options": {"SymmetricMode": True},
+        },
     }
     reference = None
     if len(xyz) > 30_000:  # row pivoting spoils the ordering: 15 s at 20k vertices already
@@ -99,25 +102,31 @@ def main() -> None:
     target = np.c_[c * xyz[:, 0] - s * xyz[:, 1], s * xyz[:, 0] + c * xyz[:, 1], 0.5 * (1 - r2)]
     steps = 10
     weights = np.arange(steps) / (steps - 1)
-    system = clock("trajectory set-up: both weight sets, I - mean weights, one factorisation (tgsis)",
-                   lambda: InteriorSteps(xyz, target, tri, interior_mask), results)
+    system = clock(
+        "trajectory set-up: both weight sets, I - mean weights, one factorisation (tgsis)",
+        lambda: InteriorSteps(xyz, target, tri, interior_mask),
+        results,
+    )
     first, last = xyz[system.border], target[system.border]
     # the border's straight paths, bent off them in between as a controlling surface would
-    bend = 0.01 * np.sin(np.pi * weights)[:, None, None] * np.sin(3 * np.arctan2(first[:, 1], first[:, 0]))[None, :, None]
+    bend = (
+        0.01 * np.sin(np.pi * weights)[:, None, None] * np.sin(3 * np.arctan2(first[:, 1], first[:, 0]))[None, :, None]
+    )
     bpos = first[None] + weights[:, None, None] * (last - first)[None] + bend
     lam_first = mean_value_data(xyz, tri, pattern, interior_mask)
     lam_last = mean_value_data(target, tri, pattern, interior_mask)
 
     def design_step(j: int) -> np.ndarray:
         """The source design's rule: convex combinations with weights interpolated in time, a factorisation each."""
-        mat, rhs_b = _split_system(pattern.matrix(lam_first + weights[j] * (lam_last - lam_first)), interior,
-                                   system.border)
+        mat, rhs_b = _split_system(
+            pattern.matrix(lam_first + weights[j] * (lam_last - lam_first)), interior, system.border
+        )
         return sparse_solve(mat, rhs_b @ bpos[j])
 
     ours_time = design_time = 0.0
     for j in range(steps):  # interleaved, step by step; the design's first and last steps are its given shapes
         start = time.perf_counter()
-        system.solve(weights[j:j + 1], bpos[j:j + 1])
+        system.solve(weights[j : j + 1], bpos[j : j + 1])
         ours_time += time.perf_counter() - start
         if 0 < j < steps - 1:
             start = time.perf_counter()
@@ -129,19 +138,29 @@ def main() -> None:
     assert lu is not None
     columns = np.asfortranarray(np.random.default_rng(0).random((len(system.solved), 3 * steps)))
     clock(f"SuperLU solve of {3 * steps} right-hand sides at once", lambda: lu.solve(columns), results)
-    clock(f"SuperLU solves of {3 * steps} right-hand sides three at a time (tgsis)",
-          lambda: [lu.solve(np.asfortranarray(columns[:, k:k + 3])) for k in range(0, 3 * steps, 3)], results)
+    clock(
+        f"SuperLU solves of {3 * steps} right-hand sides three at a time (tgsis)",
+        lambda: [lu.solve(np.asfortranarray(columns[:, k : k + 3])) for k in range(0, 3 * steps, 3)],
+        results,
+    )
 
     # end to end: the trajectories call (interior solved) and a compatible patch onto a 20k-vertex dome
-    clock(f"vertex_trajectories(), m={steps}, interior solved", lambda: vertex_trajectories(
-        xyz, target, tri, steps, interior_method="solve"), results)
+    clock(
+        f"vertex_trajectories(), m={steps}, interior solved",
+        lambda: vertex_trajectories(xyz, target, tri, steps, interior_method="solve"),
+        results,
+    )
     dome_xyz, dome_tri, dome_controls = disk(20_000, seed=1)
     dome_xyz[:, 2] = 0.5 * (1 - (dome_xyz[:, :2] ** 2).sum(axis=1))
-    patch = clock(f"compatible_patch() of the {len(xyz)}-vertex disk onto a 20k dome, tolerance 2e-4",
-                  lambda: compatible_patch(xyz, tri, controls, dome_xyz, dome_tri, dome_controls, tolerance=2e-4),
-                  results)
-    print(f"   {patch.rounds} refinement rounds, {len(patch.source_vertices) - len(xyz)} vertices added, "
-          f"error {patch.error:.2g}")
+    patch = clock(
+        f"compatible_patch() of the {len(xyz)}-vertex disk onto a 20k dome, tolerance 2e-4",
+        lambda: compatible_patch(xyz, tri, controls, dome_xyz, dome_tri, dome_controls, tolerance=2e-4),
+        results,
+    )
+    print(
+        f"   {patch.rounds} refinement rounds, {len(patch.source_vertices) - len(xyz)} vertices added, "
+        f"error {patch.error:.2g}"
+    )
     for label, value in results.items():
         print(f"{label}: {value:.3f}")
 

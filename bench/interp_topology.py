@@ -85,29 +85,47 @@ def main() -> None:
     cached = MeshTopology.of(surface)
     cached.edges  # noqa: B018 - built once before the timed runs
     figures["border_loops_given_edges_ms"] = 1000 * timed(
-        lambda: (cached.__dict__.pop("border_loops", None), cached.border_loops), REPEAT)
+        lambda: (cached.__dict__.pop("border_loops", None), cached.border_loops), REPEAT
+    )
     figures["python_border_walk_ms"] = 1000 * timed(lambda: python_border_walk(surface), REPEAT)
     figures["one_rings_ms"] = 1000 * timed(lambda: one_rings(surface), REPEAT)
     figures["check_disk_ms"] = 1000 * timed(lambda: check_disk(surface), REPEAT)
     figures["shortest_edge_path_ms"] = 1000 * timed(
-        lambda: shortest_edge_path(cached, g(0, 0), g(SIDE - 1, SIDE - 1)), REPEAT)
+        lambda: shortest_edge_path(cached, g(0, 0), g(SIDE - 1, SIDE - 1)), REPEAT
+    )
     crack = [g(c, SIDE // 2) for c in range(50, SIDE - 50)]
     figures["cut_both_inside_ms"] = 1000 * timed(lambda: cut_along_paths(surface, [crack]), REPEAT)
     mid, last = SIDE // 2, SIDE - 1
-    controls = [g(0, 0), g(mid, 0), g(last, 0), g(last, mid), g(last, last), g(mid, last), g(0, last), g(0, mid),
-                g(mid, mid)]
-    fences = [[g(c, mid) for c in range(0, mid + 1)], [g(c, mid) for c in range(mid, last + 1)],
-              [g(mid, r) for r in range(0, mid + 1)], [g(mid, r) for r in range(mid, last + 1)]]
+    controls = [
+        g(0, 0),
+        g(mid, 0),
+        g(last, 0),
+        g(last, mid),
+        g(last, last),
+        g(mid, last),
+        g(0, last),
+        g(0, mid),
+        g(mid, mid),
+    ]
+    fences = [
+        [g(c, mid) for c in range(0, mid + 1)],
+        [g(c, mid) for c in range(mid, last + 1)],
+        [g(mid, r) for r in range(0, mid + 1)],
+        [g(mid, r) for r in range(mid, last + 1)],
+    ]
     part = partition_surface(surface, controls, fences)
     assert len(part.patches) == 4
     figures["partition_4_patches_ms"] = 1000 * timed(lambda: partition_surface(surface, controls, fences), REPEAT)
     figures["partition_pair_ms"] = 1000 * timed(
-        lambda: partition_pair(surface, surface, controls, controls, fences, fences), REPEAT)
+        lambda: partition_pair(surface, surface, controls, controls, fences, fences), REPEAT
+    )
 
     baseline = figures["python_border_walk_ms"]
     assert len(python_border_walk(surface)) == len(border_loops(surface)) == 1
-    print(f"border loops, fresh topology: {figures['border_loops_ms'] / baseline:.2f} x the Python walk; "
-          f"with edges known: {figures['border_loops_given_edges_ms'] / baseline:.4f} x")
+    print(
+        f"border loops, fresh topology: {figures['border_loops_ms'] / baseline:.2f} x the Python walk; "
+        f"with edges known: {figures['border_loops_given_edges_ms'] / baseline:.4f} x"
+    )
     for name, value in figures.items():
         print(f"{name}: {value:.1f}")
 

@@ -52,12 +52,16 @@ EDIT_ROWS = 1_000
 def load(conn: Conn, rows: int, partitions: int = 0) -> float:
     """The table of ``rows`` rows (objects of 10,000), hash-partitioned by object when asked, versioned; seconds taken."""
     start = time.perf_counter()
-    conn.execute("CREATE TABLE parts (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))"
-                 + (" PARTITION BY HASH (objid)" if partitions else ""))
+    conn.execute(
+        "CREATE TABLE parts (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))"
+        + (" PARTITION BY HASH (objid)" if partitions else "")
+    )
     for r in range(partitions):
         conn.execute(f"CREATE TABLE parts_{r} PARTITION OF parts FOR VALUES WITH (MODULUS {partitions}, REMAINDER {r})")
-    conn.execute("INSERT INTO parts SELECT i / %s, i %% %s, random(), random(), random() "
-                 "FROM generate_series(0, %s - 1) i", (OBJECT_ROWS, OBJECT_ROWS, rows))
+    conn.execute(
+        "INSERT INTO parts SELECT i / %s, i %% %s, random(), random(), random() FROM generate_series(0, %s - 1) i",
+        (OBJECT_ROWS, OBJECT_ROWS, rows),
+    )
     conn.commit()
     tgsis.enable_versioning(conn, "parts", "objid", "part")
     conn.commit()
@@ -104,8 +108,10 @@ def one_round(conn: Conn, n: int, objects: int) -> dict[str, float]:
         conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s AND k < %s", (2 * n % objects, EDIT_ROWS))
     conn.execute("UPDATE parts SET y = y + 1 WHERE objid = %s AND k < %s", ((2 * n + 1) % objects, EDIT_ROWS))
     conn.commit()
-    figures = {"find_conflicts": timed(conn, lambda: tgsis.find_conflicts(conn, name)),
-               "refresh": timed(conn, lambda: tgsis.refresh_version(conn, name))}
+    figures = {
+        "find_conflicts": timed(conn, lambda: tgsis.find_conflicts(conn, name)),
+        "refresh": timed(conn, lambda: tgsis.refresh_version(conn, name)),
+    }
     with tgsis.in_version(conn, name):
         conn.execute("UPDATE parts SET z = z + 1 WHERE objid = %s AND k < %s", (2 * n % objects, EDIT_ROWS))
     figures["merge"] = timed(conn, lambda: tgsis.merge_version(conn, name, remove=True))
@@ -117,11 +123,14 @@ def changed_objects_s(conn: Conn, objects: int) -> tuple[float, float]:
     tgsis.create_version(conn, "probe")
     with tgsis.in_version(conn, "probe"):
         conn.execute("UPDATE parts SET x = x + 1 WHERE objid = %s AND k < %s", (objects - 1, EDIT_ROWS))
-    own = conn.execute("SELECT tgsis.own_working_revisions(versionid) FROM tgsis.versions WHERE name = 'probe'"
-                       ).fetchone()
+    own = conn.execute(
+        "SELECT tgsis.own_working_revisions(versionid) FROM tgsis.versions WHERE name = 'probe'"
+    ).fetchone()
     assert own is not None
-    scan = ("SELECT v.objid, count(*) FROM parts_ver v WHERE v.revision = ANY (%s::int[]) OR v.lastrevs && %s::int[] "
-            "GROUP BY 1")
+    scan = (
+        "SELECT v.objid, count(*) FROM parts_ver v WHERE v.revision = ANY (%s::int[]) OR v.lastrevs && %s::int[] "
+        "GROUP BY 1"
+    )
 
     def best(statement: str, params: tuple[Any, ...]) -> tuple[float, list[Any]]:
         samples: list[float] = []
@@ -165,8 +174,10 @@ def upload_cost(server: LocalServer, rounds: int) -> dict[str, float]:
         for _ in range(rounds):
             for kind in samples:
                 for table in NOTE_TABLES:
-                    conn.execute(f"ALTER TABLE {table} {'ENABLE' if kind == 'noted' else 'DISABLE'} "
-                                 "TRIGGER tgsis_storage_changes")
+                    conn.execute(
+                        f"ALTER TABLE {table} {'ENABLE' if kind == 'noted' else 'DISABLE'} "
+                        "TRIGGER tgsis_storage_changes"
+                    )
                 conn.commit()
                 conn.autocommit = True
                 for table in NOTE_TABLES:
@@ -176,8 +187,9 @@ def upload_cost(server: LocalServer, rounds: int) -> dict[str, float]:
                     start = time.perf_counter()
                     tgsis.insert_feature(conn, "surfaces", surface)
                     samples[kind].append(time.perf_counter() - start)
-                    notes = conn.execute("SELECT count(*) FROM tgsis.revision_objects "
-                                         "WHERE tablename IN ('vrtx', 'trgl')").fetchone()  # (COPY; geometry: a view)
+                    notes = conn.execute(
+                        "SELECT count(*) FROM tgsis.revision_objects WHERE tablename IN ('vrtx', 'trgl')"
+                    ).fetchone()  # (COPY; geometry: a view)
                     assert notes == ((2,) if kind == "noted" else (0,)), notes
                     conn.rollback()
         for table in NOTE_TABLES:
@@ -203,8 +215,7 @@ def view_write_cost(server: LocalServer, rounds: int) -> dict[str, float]:
         call, probe = "IF v_w <> 0 AND NOT (v_noted", "EXISTS (SELECT FROM tgsis.revision_objects o"
         assert call in source and probe in source, "the generated trigger has no note probe"
         without = source.replace(call, "IF false AND NOT (v_noted")
-        without = (without[:without.index(probe)] + "true\n      "
-                   + without[without.index("INTO v_locked, v_noted;"):])
+        without = without[: without.index(probe)] + "true\n      " + without[without.index("INTO v_locked, v_noted;") :]
         for _ in range(rounds):
             for kind, definition in (("with probe", source), ("without probe", without)):
                 conn.execute(definition)
@@ -229,14 +240,18 @@ def measure(server: LocalServer, rows: int, rounds: int, label: str, partitions:
     with psycopg.connect(server.dsn(database)) as conn:
         tgsis.install(conn, method="sql")  # this checkout's SQL
         loaded = load(conn, rows, partitions)
-        size = conn.execute("SELECT coalesce(sum(pg_total_relation_size(relid)), pg_total_relation_size('parts_ver')) FROM pg_partition_tree('parts_ver')").fetchone()
+        size = conn.execute(
+            "SELECT coalesce(sum(pg_total_relation_size(relid)), pg_total_relation_size('parts_ver')) FROM pg_partition_tree('parts_ver')"
+        ).fetchone()
         assert size is not None
         samples = [one_round(conn, n, rows // OBJECT_ROWS) for n in range(rounds)]
         figures = {key: statistics.median(s[key] for s in samples) for key in samples[0]}
         figures["changed_objects"], figures["changed_objects_scan"] = changed_objects_s(conn, rows // OBJECT_ROWS)
         figures["read_one_object"], figures["write_one_object"] = one_object_s(conn, rows // OBJECT_ROWS)
-    print(f"{rows:>11,} rows{f' in {partitions} hash partitions' if partitions else ''}: loaded and versioned in "
-          f"{loaded:.0f} s; storage {float(size[0]) / 1e6:.0f} MB")
+    print(
+        f"{rows:>11,} rows{f' in {partitions} hash partitions' if partitions else ''}: loaded and versioned in "
+        f"{loaded:.0f} s; storage {float(size[0]) / 1e6:.0f} MB"
+    )
     for key, value in figures.items():
         print(f"    {key:24s} {value * 1000:9.1f} ms")
     return figures
@@ -247,21 +262,37 @@ def main() -> None:
     parser.add_argument("--small", type=int, default=2_000_000)
     parser.add_argument("--large", type=int, default=20_000_000)
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--upload-cost", action="store_true", help="also time a 1M-vertex upload with and without notes")
-    parser.add_argument("--view-write", action="store_true", help="also time a view write with and without the note probe")
-    parser.add_argument("--partitions", type=int, default=0,
-                        help="also measure each size with the table hash-partitioned by object in this many partitions")
+    parser.add_argument(
+        "--upload-cost", action="store_true", help="also time a 1M-vertex upload with and without notes"
+    )
+    parser.add_argument(
+        "--view-write", action="store_true", help="also time a view write with and without the note probe"
+    )
+    parser.add_argument(
+        "--partitions",
+        type=int,
+        default=0,
+        help="also measure each size with the table hash-partitioned by object in this many partitions",
+    )
     args = parser.parse_args()
 
     binaries = find_binaries()
-    print(f"server: {binaries.describe()} (throwaway cluster, fsync off); a child's and DEFAULT's "
-          f"{EDIT_ROWS}-row edits, medians of {args.rounds} rounds")
+    print(
+        f"server: {binaries.describe()} (throwaway cluster, fsync off); a child's and DEFAULT's "
+        f"{EDIT_ROWS}-row edits, medians of {args.rounds} rounds"
+    )
     server = LocalServer.throwaway(binaries)
     try:
         small = measure(server, args.small, args.rounds, "small")
         large = measure(server, args.large, args.rounds, "large")
-        partitioned = {size: measure(server, rows, args.rounds, size, args.partitions)
-                       for size, rows in (("small", args.small), ("large", args.large))} if args.partitions else {}
+        partitioned = (
+            {
+                size: measure(server, rows, args.rounds, size, args.partitions)
+                for size, rows in (("small", args.small), ("large", args.large))
+            }
+            if args.partitions
+            else {}
+        )
         uploads = upload_cost(server, args.rounds) if args.upload_cost else {}
         view_writes = view_write_cost(server, max(args.rounds, 5)) if args.view_write else {}
     finally:

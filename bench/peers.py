@@ -48,8 +48,9 @@ def sizes(conn: psycopg.Connection[Any], tables: list[str]) -> dict[str, tuple[i
     """(total bytes, index bytes) of each table."""
     result = {}
     for table in tables:
-        row = conn.execute("SELECT pg_total_relation_size(%s::regclass), pg_indexes_size(%s::regclass)",
-                           (table, table)).fetchone()
+        row = conn.execute(
+            "SELECT pg_total_relation_size(%s::regclass), pg_indexes_size(%s::regclass)", (table, table)
+        ).fetchone()
         assert row is not None
         result[table] = (int(row[0]), int(row[1]))
     return result
@@ -84,19 +85,36 @@ def main() -> None:
             conn.execute(f"ALTER TABLE bytea_peer ALTER COLUMN {column} SET STORAGE EXTERNAL")
         # the bound of any upload keeping rows and keys: raw binary COPY of payloads built beforehand
         # into tables with the same columns and primary keys
-        conn.execute("CREATE TABLE keyed_vrtx (geoid int8, vrtxid int8, x float8, y float8, z float8, "
-                     "PRIMARY KEY (geoid, vrtxid))")
-        conn.execute("CREATE TABLE keyed_trgl (geoid int8, trglid int8, v1 int8, v2 int8, v3 int8, "
-                     "PRIMARY KEY (geoid, trglid))")
+        conn.execute(
+            "CREATE TABLE keyed_vrtx (geoid int8, vrtxid int8, x float8, y float8, z float8, "
+            "PRIMARY KEY (geoid, vrtxid))"
+        )
+        conn.execute(
+            "CREATE TABLE keyed_trgl (geoid int8, trglid int8, v1 int8, v2 int8, v3 int8, PRIMARY KEY (geoid, trglid))"
+        )
         conn.execute("CREATE TABLE keyed_prop (geoid int8, idx int8, porosity float8, PRIMARY KEY (geoid, idx))")
         conn.commit()
         porosity = surface.vertex_properties["porosity"]
         one = np.ones(max(n, m), dtype=np.int64)
         payloads = {
-            "vrtx": encode_rows([(one[:n], "int8"), (np.arange(n), "int8"), (surface.vertices[:, 0], "float8"),
-                                 (surface.vertices[:, 1], "float8"), (surface.vertices[:, 2], "float8")]),
-            "trgl": encode_rows([(one[:m], "int8"), (np.arange(m), "int8"), (surface.cells[:, 0], "int8"),
-                                 (surface.cells[:, 1], "int8"), (surface.cells[:, 2], "int8")]),
+            "vrtx": encode_rows(
+                [
+                    (one[:n], "int8"),
+                    (np.arange(n), "int8"),
+                    (surface.vertices[:, 0], "float8"),
+                    (surface.vertices[:, 1], "float8"),
+                    (surface.vertices[:, 2], "float8"),
+                ]
+            ),
+            "trgl": encode_rows(
+                [
+                    (one[:m], "int8"),
+                    (np.arange(m), "int8"),
+                    (surface.cells[:, 0], "int8"),
+                    (surface.cells[:, 1], "int8"),
+                    (surface.cells[:, 2], "int8"),
+                ]
+            ),
             "prop": encode_rows([(one[:n], "int8"), (np.arange(n), "int8"), (porosity, "float8")]),
         }
 
@@ -107,11 +125,15 @@ def main() -> None:
                 with conn.cursor().copy(f"COPY keyed_{name} FROM STDIN (FORMAT binary)") as copy:
                     copy.write(payload)
             conn.commit()
+
         state: dict[str, Any] = {}
 
         def tgsis_up() -> None:
-            conn.execute("TRUNCATE tgsis.vrtx, tgsis.trgl, horizon_cellpros, horizon, tgsis.geometry CASCADE"
-                         if not args.versioned else "SELECT 1")
+            conn.execute(
+                "TRUNCATE tgsis.vrtx, tgsis.trgl, horizon_cellpros, horizon, tgsis.geometry CASCADE"
+                if not args.versioned
+                else "SELECT 1"
+            )
             if args.versioned and "geoid" in state:
                 F.delete_feature(conn, "horizon", state["geoid"])
             conn.commit()
@@ -127,8 +149,10 @@ def main() -> None:
         def bytea_up() -> None:
             conn.execute("TRUNCATE bytea_peer")
             conn.commit()
-            conn.execute("INSERT INTO bytea_peer VALUES (1, %b, %b, %b)",
-                         (surface.vertices.tobytes(), surface.cells.astype(np.int64).tobytes(), porosity.tobytes()))
+            conn.execute(
+                "INSERT INTO bytea_peer VALUES (1, %b, %b, %b)",
+                (surface.vertices.tobytes(), surface.cells.astype(np.int64).tobytes(), porosity.tobytes()),
+            )
             conn.commit()
 
         ups = paired([tgsis_up, postgis_up, bytea_up, keyed_copy], args.repeat)
@@ -155,9 +179,11 @@ def main() -> None:
             with conn.cursor(binary=True) as cursor:
                 row = cursor.execute("SELECT vertices, triangles, porosity FROM bytea_peer WHERE id = 1").fetchone()
             assert row is not None
-            fetched["bytea"] = tgsis.Surface(np.frombuffer(row[0]).reshape(-1, 3),
-                                             np.frombuffer(row[1], dtype=np.int64).reshape(-1, 3),
-                                             vertex_properties={"porosity": np.frombuffer(row[2])})
+            fetched["bytea"] = tgsis.Surface(
+                np.frombuffer(row[0]).reshape(-1, 3),
+                np.frombuffer(row[1], dtype=np.int64).reshape(-1, 3),
+                vertex_properties={"porosity": np.frombuffer(row[2])},
+            )
             conn.commit()
 
         downs = paired([tgsis_down, tgsis_checkout, postgis_down, bytea_down], args.repeat)
@@ -167,8 +193,10 @@ def main() -> None:
         assert fetched["postgis"].n_cells == m, "PostGIS: triangle count differs"
         # what narrower rows would store: int4 local ids, columns ordered for alignment (same keys)
         conn.execute("CREATE TABLE narrow_vrtx AS SELECT geoid, x, y, z, vrtxid::int4 AS vrtxid FROM tgsis.vrtx")
-        conn.execute("CREATE TABLE narrow_trgl AS SELECT geoid, trglid::int4 AS trglid, vrtxid1::int4 AS vrtxid1, "
-                     "vrtxid2::int4 AS vrtxid2, vrtxid3::int4 AS vrtxid3 FROM tgsis.trgl")
+        conn.execute(
+            "CREATE TABLE narrow_trgl AS SELECT geoid, trglid::int4 AS trglid, vrtxid1::int4 AS vrtxid1, "
+            "vrtxid2::int4 AS vrtxid2, vrtxid3::int4 AS vrtxid3 FROM tgsis.trgl"
+        )
         conn.execute("CREATE TABLE narrow_prop AS SELECT _geoid, porosity, _idx::int4 AS _idx FROM horizon_cellpros")
         conn.execute("ALTER TABLE narrow_vrtx ADD PRIMARY KEY (geoid, vrtxid)")
         conn.execute("ALTER TABLE narrow_trgl ADD PRIMARY KEY (geoid, trglid)")
@@ -185,8 +213,12 @@ def main() -> None:
     finally:
         server.destroy()
 
-    names = ["tgsis upload (insert_feature)", "PostGIS TIN Z upload (EWKB built + INSERT)", "bytea upload",
-             "raw COPY into keyed tables (payloads prebuilt)"]
+    names = [
+        "tgsis upload (insert_feature)",
+        "PostGIS TIN Z upload (EWKB built + INSERT)",
+        "bytea upload",
+        "raw COPY into keyed tables (payloads prebuilt)",
+    ]
     for name, t in zip(names, ups):
         print(f"{name:48s} {t:7.3f} s")
     names = ["tgsis download (fetch_feature)", "tgsis checkout", "PostGIS TIN Z download + parse", "bytea download"]

@@ -46,7 +46,7 @@ from tgsis.db.local import LocalServer, find_binaries
 
 Conn = psycopg.Connection[Any]
 OPERATIONS = ("upload", "fetch", "box", "snapshot", "checkin", "merge", "full_scan")
-SPACING = 12_000.0   # grid_surface spans 0..10,000 in x and y: 2,000 between neighbours
+SPACING = 12_000.0  # grid_surface spans 0..10,000 in x and y: 2,000 between neighbours
 
 
 def placed(base: tgsis.Surface, index: int, columns: int) -> tgsis.Surface:
@@ -77,8 +77,9 @@ def load(conn: Conn, base: tgsis.Surface, count: int, columns: int) -> tuple[lis
         ids.append(tgsis.insert_feature(conn, "surfaces", placed(base, i, columns)))
         conn.commit()
     small = grid_surface(50)
-    evolving = tgsis.insert_feature(conn, "moving", evolving_grid(tgsis.Surface(small.vertices, small.cells),
-                                                                  [[float(k) for k in range(10)]]))
+    evolving = tgsis.insert_feature(
+        conn, "moving", evolving_grid(tgsis.Surface(small.vertices, small.cells), [[float(k) for k in range(10)]])
+    )
     conn.commit()
     for v in range(3):
         name = f"team{v}"
@@ -120,10 +121,12 @@ def measure(server: LocalServer, vertices: int, side: int, repeat: int) -> dict[
         stored = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone()
         size = conn.execute("SELECT pg_database_size(current_database())").fetchone()
         assert stored is not None and size is not None
-        print(f"{count * base.n_vertices:>11,} vertices: {count} surfaces of {base.n_vertices:,}, loaded in "
-              f"{loaded:.0f} s; {stored[0]:,} vertex row versions, database {size[0] / 1e9:.2f} GB")
+        print(
+            f"{count * base.n_vertices:>11,} vertices: {count} surfaces of {base.n_vertices:,}, loaded in "
+            f"{loaded:.0f} s; {stored[0]:,} vertex row versions, database {size[0] / 1e9:.2f} GB"
+        )
 
-        extra = placed(base, count + columns, columns)   # a free cell of the layout
+        extra = placed(base, count + columns, columns)  # a free cell of the layout
 
         def upload(_: int) -> float:
             elapsed = clock(lambda: tgsis.insert_feature(conn, "surfaces", extra))
@@ -167,14 +170,22 @@ def measure(server: LocalServer, vertices: int, side: int, repeat: int) -> dict[
         def full_scan(_: int) -> float:
             with tgsis.in_version(conn, "team1"):
                 row: list[Any] = []
-                elapsed = clock(lambda: row.extend(conn.execute("SELECT count(*), sum(z) FROM tgsis.vrtx").fetchone()
-                                                   or ()))
+                elapsed = clock(
+                    lambda: row.extend(conn.execute("SELECT count(*), sum(z) FROM tgsis.vrtx").fetchone() or ())
+                )
                 conn.commit()
             assert row[0] == count * base.n_vertices, row
             return elapsed
 
-        actions = {"upload": upload, "fetch": fetch, "box": in_box, "snapshot": snapshot, "checkin": checkin,
-                   "merge": merge, "full_scan": full_scan}
+        actions = {
+            "upload": upload,
+            "fetch": fetch,
+            "box": in_box,
+            "snapshot": snapshot,
+            "checkin": checkin,
+            "merge": merge,
+            "full_scan": full_scan,
+        }
         figures = {name: median_of(repeat, actions[name]) for name in OPERATIONS}
     for name in OPERATIONS:
         print(f"    {name:10s} {figures[name] * 1000:10.1f} ms")

@@ -66,8 +66,16 @@ def evolving_grid(base: tgsis.Surface, times: list[list[float]]) -> EvolvingSurf
 def vacuum_analyze(conn: Conn) -> None:
     conn.commit()
     conn.autocommit = True
-    for table in ("tgsis.vrtx", "tgsis.trgl", "tgsis.timem", "tgsis.timet", "tgsis.node", "tgsis.d4dtrgl",
-                  "tgsis.d4dvrtx", "tgsis.geometry"):
+    for table in (
+        "tgsis.vrtx",
+        "tgsis.trgl",
+        "tgsis.timem",
+        "tgsis.timet",
+        "tgsis.node",
+        "tgsis.d4dtrgl",
+        "tgsis.d4dvrtx",
+        "tgsis.geometry",
+    ):
         conn.execute(f"VACUUM ANALYZE {table}")
     conn.autocommit = False
 
@@ -92,7 +100,6 @@ def plan(conn: Conn, query: str) -> str:
     return text
 
 
-
 def once(action: Callable[[], object]) -> float:
     start = time.perf_counter()
     action()
@@ -104,8 +111,9 @@ def main() -> None:
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--instants", type=int, default=10)
     parser.add_argument("--repeat", type=int, default=5)
-    parser.add_argument("--no-two-periods", dest="two_periods", action="store_false",
-                        help="skip the variant with two topology periods")
+    parser.add_argument(
+        "--no-two-periods", dest="two_periods", action="store_false", help="skip the variant with two topology periods"
+    )
     parser.add_argument("--show-plans", action="store_true", help="print EXPLAIN (ANALYZE, BUFFERS) of vertices_at")
     args = parser.parse_args()
 
@@ -116,9 +124,11 @@ def main() -> None:
     half = g // 2
     two = evolving_grid(static, [[float(k) for k in range(half + 1)], [float(k) for k in range(half, g)]])
     n, m = static.n_vertices, static.n_cells
-    print(f"static surface: {n} vertices, {m} triangles; evolving: {g} geometry instants in one period "
-          f"({g * n} node positions)" + (f", and two periods 0..{half}, {half}..{g - 1} ({(g + 1) * n} positions)"
-                                          if args.two_periods else ""))
+    print(
+        f"static surface: {n} vertices, {m} triangles; evolving: {g} geometry instants in one period "
+        f"({g * n} node positions)"
+        + (f", and two periods 0..{half}, {half}..{g - 1} ({(g + 1) * n} positions)" if args.two_periods else "")
+    )
     with bench_database() as conn:
         tgsis.create_feature_class(conn, "static_grid", "SURFACE")
         tgsis.create_feature_class(conn, "evolving_grid", "SURFACE", time_model="EVOLVING")
@@ -135,7 +145,7 @@ def main() -> None:
         up_two = once(lambda: upload("two", "evolving_grid", two)) if args.two_periods else float("nan")
         vacuum_analyze(conn)
 
-        t_mid, t_exact = half - 0.5, float(half - 1)   # inside the first period
+        t_mid, t_exact = half - 0.5, float(half - 1)  # inside the first period
         cases = {"one_mid": ("one", t_mid), "one_exact": ("one", t_exact)}
         if args.two_periods:  # inside the second period (node ids from n on)
             cases |= {"two_mid": ("two", half + 0.5), "two_exact": ("two", float(half + 1))}
@@ -158,8 +168,9 @@ def main() -> None:
                 print(f"--- {name}: {vertices_query(key, t)}\n{plan(conn, vertices_query(key, t))}")
             print(f"--- static: {static_query}\n{plan(conn, static_query)}")
 
-        actions: list[Callable[[], object]] = [lambda: (tgsis.fetch_feature(conn, "static_grid", ids["static"]),
-                                                        conn.commit())]
+        actions: list[Callable[[], object]] = [
+            lambda: (tgsis.fetch_feature(conn, "static_grid", ids["static"]), conn.commit())
+        ]
         for key, t in cases.values():
             actions.append(lambda key=key, t=t: (tgsis.get_at(conn, ids[key], t), conn.commit()))  # type: ignore[misc]
         down_static, *down = paired(actions, args.repeat)
@@ -170,12 +181,18 @@ def main() -> None:
     print(f"upload, static surface (insert_feature):          {up_static:6.2f} s")
     print(f"upload, evolving, 1 period x {g} instants:          {up_one:6.2f} s  ({up_one / up_static:.2f}x static)")
     if args.two_periods:
-        print(f"upload, evolving, 2 periods, {g + 1} shapes:            {up_two:6.2f} s  ({up_two / up_static:.2f}x static)")
-    print(f"download, static surface (fetch_feature):         {down_static:6.2f} s   "
-          f"(vertex query on the server: {executor_static * 1000:.0f} ms)")
+        print(
+            f"upload, evolving, 2 periods, {g + 1} shapes:            {up_two:6.2f} s  ({up_two / up_static:.2f}x static)"
+        )
+    print(
+        f"download, static surface (fetch_feature):         {down_static:6.2f} s   "
+        f"(vertex query on the server: {executor_static * 1000:.0f} ms)"
+    )
     for name, (key, t) in cases.items():
-        print(f"snapshot {name:9s} get_at({key}, t={t}):  {downloads[name]:6.2f} s  "
-              f"({downloads[name] / down_static:.2f}x static; vertices_at on the server: {executor[name] * 1000:.0f} ms)")
+        print(
+            f"snapshot {name:9s} get_at({key}, t={t}):  {downloads[name]:6.2f} s  "
+            f"({downloads[name] / down_static:.2f}x static; vertices_at on the server: {executor[name] * 1000:.0f} ms)"
+        )
     print(f"static_download_s: {down_static:.3f}")
     for name in cases:
         print(f"snapshot_{name}_s: {downloads[name]:.3f}")

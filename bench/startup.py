@@ -22,8 +22,6 @@ from tgsis.db.local import LocalServer, find_binaries
 REPEAT = 10
 
 
-
-
 def main() -> None:
     binaries = find_binaries()
     print(f"server: {binaries.describe()}")
@@ -36,8 +34,9 @@ def main() -> None:
 
         def create(template: str) -> str:
             name = f"b_{uuid.uuid4().hex[:10]}"
-            admin.execute(sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(sql.Identifier(name),
-                                                                         sql.Identifier(template)))
+            admin.execute(
+                sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(sql.Identifier(name), sql.Identifier(template))
+            )
             return name
 
         template = create("template0")
@@ -53,8 +52,11 @@ def main() -> None:
 
         empty_db_and_connect = timed(lambda: psycopg.connect(server.dsn(create("template0"))).close(), REPEAT)
         sql_install = timed(lambda: install("sql"), REPEAT) - empty_db_and_connect
-        ext_install = (timed(lambda: install("extension"), REPEAT) - empty_db_and_connect
-                       if binaries.has_extension_control_path or binaries.flavor == "system" else float("nan"))
+        ext_install = (
+            timed(lambda: install("extension"), REPEAT) - empty_db_and_connect
+            if binaries.has_extension_control_path or binaries.flavor == "system"
+            else float("nan")
+        )
         admin.close()
     finally:
         server.destroy()

@@ -25,7 +25,13 @@ from transfer import grid_surface
 import tgsis
 from tgsis.db import features as F
 
-STORAGE = ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", "public.horizon_ver", "public.horizon_cellpros_ver")
+STORAGE = (
+    "tgsis.vrtx_ver",
+    "tgsis.trgl_ver",
+    "tgsis.geometry_ver",
+    "public.horizon_ver",
+    "public.horizon_cellpros_ver",
+)
 
 
 def main() -> None:
@@ -63,7 +69,8 @@ def main() -> None:
                             owner.execute(f"ALTER TABLE {table} ENABLE TRIGGER tgsis_storage_rows")
 
                 checked_s, unchecked_s, owner_s = paired(
-                    [lambda: upload(conn), unchecked, lambda: upload(owner)], args.repeat)  # type: ignore[arg-type]
+                    [lambda: upload(conn), unchecked, lambda: upload(owner)], args.repeat
+                )  # type: ignore[arg-type]
         finally:
             owner.execute(f"DROP OWNED BY {editor}")
             owner.execute(f"DROP ROLE {editor}")

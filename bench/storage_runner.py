@@ -33,8 +33,10 @@ _names = itertools.count()
 
 def make_table(conn: Conn, name: str, objects: int, rows: int) -> None:
     conn.execute(f"CREATE TABLE {name} (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))")
-    conn.execute(f"INSERT INTO {name} SELECT o, k, random(), random(), random() "
-                 f"FROM generate_series(0, {objects - 1}) o, generate_series(0, {rows - 1}) k")
+    conn.execute(
+        f"INSERT INTO {name} SELECT o, k, random(), random(), random() "
+        f"FROM generate_series(0, {objects - 1}) o, generate_series(0, {rows - 1}) k"
+    )
     conn.commit()
     tgsis.enable_versioning(conn, name, "objid", name)
 
@@ -77,10 +79,17 @@ def main() -> None:
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute("CREATE DATABASE ours")
             admin.execute("CREATE DATABASE theirs")
-        conns = {"tgsis": setup(server.dsn("ours"), None, args.objects, args.rows),
-                 "other": setup(server.dsn("theirs"), "bench_admin", args.objects, args.rows)}
-        runner = conns["other"].execute("SELECT count(*) FROM pg_proc WHERE proname = 'parts_ver_run' "
-                                        "AND proowner = 'bench_admin'::regrole").fetchone()
+        conns = {
+            "tgsis": setup(server.dsn("ours"), None, args.objects, args.rows),
+            "other": setup(server.dsn("theirs"), "bench_admin", args.objects, args.rows),
+        }
+        runner = (
+            conns["other"]
+            .execute(
+                "SELECT count(*) FROM pg_proc WHERE proname = 'parts_ver_run' AND proowner = 'bench_admin'::regrole"
+            )
+            .fetchone()
+        )
         assert runner == (1,), "the admin's table has no runner of its own"
         for _ in range(args.repeat):
             for who, conn in conns.items():
@@ -93,11 +102,15 @@ def main() -> None:
     finally:
         server.destroy()
     medians = {name: statistics.median(values) for name, values in samples.items()}
-    print(f"{args.objects} objects x {args.rows} rows per table; each version edits "
-          f"{max(1, args.objects // 100) * args.rows} rows; medians of {args.repeat} rounds")
+    print(
+        f"{args.objects} objects x {args.rows} rows per table; each version edits "
+        f"{max(1, args.objects // 100) * args.rows} rows; medians of {args.repeat} rounds"
+    )
     for op in ("merge", "delete"):
-        print(f"{op:6s}  tgsis's owner's table {medians[f'{op}_tgsis'] * 1000:8.1f} ms   "
-              f"another owner's table {medians[f'{op}_other'] * 1000:8.1f} ms")
+        print(
+            f"{op:6s}  tgsis's owner's table {medians[f'{op}_tgsis'] * 1000:8.1f} ms   "
+            f"another owner's table {medians[f'{op}_other'] * 1000:8.1f} ms"
+        )
     for op in ("merge", "delete"):
         print(f"{op}_other_owner_vs_tgsis_owner: {medians[f'{op}_other'] / medians[f'{op}_tgsis']:.2f}")
     for name, value in medians.items():

@@ -36,8 +36,6 @@ def grid_surface(side: int) -> tgsis.Surface:
     return tgsis.Surface(vertices, triangles, vertex_properties={"porosity": porosity}, name="bench")
 
 
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
@@ -60,16 +58,33 @@ def main() -> None:
 
         geoid = np.full(max(n, m), 1, dtype=np.int64)
         payloads = {
-            "vrtx": encode_rows([(geoid[:n], "int8"), (np.arange(n), "int8"), (surface.vertices[:, 0], "float8"),
-                                 (surface.vertices[:, 1], "float8"), (surface.vertices[:, 2], "float8")]),
-            "trgl": encode_rows([(geoid[:m], "int8"), (np.arange(m), "int8"), (surface.cells[:, 0], "int8"),
-                                 (surface.cells[:, 1], "int8"), (surface.cells[:, 2], "int8")]),
-            "prop": encode_rows([(geoid[:n], "int8"), (np.arange(n), "int8"),
-                                 (surface.vertex_properties["porosity"], "float8")]),
+            "vrtx": encode_rows(
+                [
+                    (geoid[:n], "int8"),
+                    (np.arange(n), "int8"),
+                    (surface.vertices[:, 0], "float8"),
+                    (surface.vertices[:, 1], "float8"),
+                    (surface.vertices[:, 2], "float8"),
+                ]
+            ),
+            "trgl": encode_rows(
+                [
+                    (geoid[:m], "int8"),
+                    (np.arange(m), "int8"),
+                    (surface.cells[:, 0], "int8"),
+                    (surface.cells[:, 1], "int8"),
+                    (surface.cells[:, 2], "int8"),
+                ]
+            ),
+            "prop": encode_rows(
+                [(geoid[:n], "int8"), (np.arange(n), "int8"), (surface.vertex_properties["porosity"], "float8")]
+            ),
         }
-        columns = {"vrtx": "geoid int8, vrtxid int8, x float8, y float8, z float8",
-                   "trgl": "geoid int8, trglid int8, v1 int8, v2 int8, v3 int8",
-                   "prop": "geoid int8, idx int8, porosity float8"}
+        columns = {
+            "vrtx": "geoid int8, vrtxid int8, x float8, y float8, z float8",
+            "trgl": "geoid int8, trglid int8, v1 int8, v2 int8, v3 int8",
+            "prop": "geoid int8, idx int8, porosity float8",
+        }
         keys = {"vrtx": "geoid, vrtxid", "trgl": "geoid, trglid", "prop": "geoid, idx"}
         for name, cols in columns.items():
             conn.execute(f"CREATE TABLE raw_{name} ({cols})")
@@ -96,10 +111,12 @@ def main() -> None:
         conn.commit()
 
         def raw_download() -> None:
-            for name, types in (("vrtx", ["int8", "int8", "float8", "float8", "float8"]),
-                                ("trgl", ["int8"] * 5), ("prop", ["int8", "int8", "float8"])):
-                with conn.cursor().copy(sql.SQL("COPY raw_{} TO STDOUT (FORMAT binary)").format(
-                        sql.SQL(name))) as copy:
+            for name, types in (
+                ("vrtx", ["int8", "int8", "float8", "float8", "float8"]),
+                ("trgl", ["int8"] * 5),
+                ("prop", ["int8", "int8", "float8"]),
+            ):
+                with conn.cursor().copy(sql.SQL("COPY raw_{} TO STDOUT (FORMAT binary)").format(sql.SQL(name))) as copy:
                     decode_rows(b"".join(bytes(c) for c in copy), types)
             conn.commit()
 

@@ -42,8 +42,10 @@ Conn = psycopg.Connection[Any]
 def build(conn: Conn, objects: int, rows: int) -> tuple[str, list[int]]:
     """Load, version, and edit; return the deepest version of the first chain and the objects it inherited edits of."""
     conn.execute("CREATE TABLE parts (objid int, k int, x float8, y float8, z float8, PRIMARY KEY (objid, k))")
-    conn.execute("INSERT INTO parts SELECT i / %s, i %% %s, random(), random(), random() "
-                 "FROM generate_series(0, %s - 1) i", (rows, rows, objects * rows))
+    conn.execute(
+        "INSERT INTO parts SELECT i / %s, i %% %s, random(), random(), random() FROM generate_series(0, %s - 1) i",
+        (rows, rows, objects * rows),
+    )
     conn.commit()
     tgsis.enable_versioning(conn, "parts", "objid", "part")
     edited = 0
@@ -148,11 +150,13 @@ def main() -> None:
             conn.execute("CREATE TABLE plain AS SELECT * FROM parts")
             conn.execute("ALTER TABLE plain ADD PRIMARY KEY (objid, k)")
             vacuum_analyze(conn, "plain")
-            print(f"table: {args.objects * args.rows} rows, {args.objects} objects; 20 versions (4 chains, depth 5); "
-                  f"{stored[0]} row versions stored; version {deepest} sees {visible[0]} rows, "
-                  f"set {tgsis.revisions(conn)}")
+            print(
+                f"table: {args.objects * args.rows} rows, {args.objects} objects; 20 versions (4 chains, depth 5); "
+                f"{stored[0]} row versions stored; version {deepest} sees {visible[0]} rows, "
+                f"set {tgsis.revisions(conn)}"
+            )
 
-            obj = inherited[2]   # edited two levels up
+            obj = inherited[2]  # edited two levels up
             one_view, one_plain = "SELECT * FROM parts WHERE objid = %s", "SELECT * FROM plain WHERE objid = %s"
             all_view, all_plain = "SELECT * FROM parts", "SELECT * FROM plain"
             plan = "\n".join(r[0] for r in conn.execute(f"EXPLAIN (ANALYZE, BUFFERS) {one_view}", (obj,)).fetchall())
@@ -164,24 +168,37 @@ def main() -> None:
 
             untouched = args.objects - 1  # no version edited it
             figures = {
-                "fetch_one_e2e": paired(lambda: copy_out(conn, one_view % obj),
-                                        lambda: copy_out(conn, one_plain % obj), args.repeat * 10),
-                "fetch_unedited_e2e": paired(lambda: copy_out(conn, one_view % untouched),
-                                             lambda: copy_out(conn, one_plain % untouched), args.repeat * 10),
-                "full_scan_e2e": paired(lambda: copy_out(conn, all_view), lambda: copy_out(conn, all_plain),
-                                        args.repeat),
+                "fetch_one_e2e": paired(
+                    lambda: copy_out(conn, one_view % obj), lambda: copy_out(conn, one_plain % obj), args.repeat * 10
+                ),
+                "fetch_unedited_e2e": paired(
+                    lambda: copy_out(conn, one_view % untouched),
+                    lambda: copy_out(conn, one_plain % untouched),
+                    args.repeat * 10,
+                ),
+                "full_scan_e2e": paired(
+                    lambda: copy_out(conn, all_view), lambda: copy_out(conn, all_plain), args.repeat
+                ),
                 # the server's own clock (EXPLAIN ANALYZE), not the round trip
-                "fetch_one_executor": (executor_s(conn, one_view, (obj,), args.repeat * 4),
-                                       executor_s(conn, one_plain, (obj,), args.repeat * 4)),
-                "fetch_unedited_executor": (executor_s(conn, one_view, (untouched,), args.repeat * 4),
-                                            executor_s(conn, one_plain, (untouched,), args.repeat * 4)),
-                "full_scan_executor": (executor_s(conn, all_view, (), args.repeat),
-                                       executor_s(conn, all_plain, (), args.repeat)),
+                "fetch_one_executor": (
+                    executor_s(conn, one_view, (obj,), args.repeat * 4),
+                    executor_s(conn, one_plain, (obj,), args.repeat * 4),
+                ),
+                "fetch_unedited_executor": (
+                    executor_s(conn, one_view, (untouched,), args.repeat * 4),
+                    executor_s(conn, one_plain, (untouched,), args.repeat * 4),
+                ),
+                "full_scan_executor": (
+                    executor_s(conn, all_view, (), args.repeat),
+                    executor_s(conn, all_plain, (), args.repeat),
+                ),
                 # one object's rows (inherited: each closed and written anew) rewritten through the
                 # view (queued by its row trigger, written set-based when the statement ends), undone each time
                 "update_one_e2e": paired(
                     lambda: rolled_back(conn, "UPDATE parts SET x = x + 1 WHERE objid = %s", (obj,)),
-                    lambda: rolled_back(conn, "UPDATE plain SET x = x + 1 WHERE objid = %s", (obj,)), args.repeat),
+                    lambda: rolled_back(conn, "UPDATE plain SET x = x + 1 WHERE objid = %s", (obj,)),
+                    args.repeat,
+                ),
             }
             # the same once the rows are the version's own (of its working revision): changed in place
             for table in ("parts", "plain"):
@@ -189,7 +206,9 @@ def main() -> None:
             conn.commit()
             figures["update_own_e2e"] = paired(
                 lambda: rolled_back(conn, "UPDATE parts SET x = x + 1 WHERE objid = %s", (obj,)),
-                lambda: rolled_back(conn, "UPDATE plain SET x = x + 1 WHERE objid = %s", (obj,)), args.repeat)
+                lambda: rolled_back(conn, "UPDATE plain SET x = x + 1 WHERE objid = %s", (obj,)),
+                args.repeat,
+            )
 
             # an application's loop: 2,000 one-row UPDATEs in one transaction (each statement's rows are
             # found through the queue's index, not among what the statements before it deleted)
@@ -198,14 +217,17 @@ def main() -> None:
                     conn.execute(f"UPDATE {table} SET x = x + 1 WHERE objid = %s AND k = %s", (obj, k))  # noqa: S608
                 conn.rollback()
 
-            figures["update_2000_statements"] = paired(lambda: one_by_one("parts"), lambda: one_by_one("plain"),
-                                                       args.repeat)
+            figures["update_2000_statements"] = paired(
+                lambda: one_by_one("parts"), lambda: one_by_one("plain"), args.repeat
+            )
             merge_s, merge_rows, changed = time_merge(conn, args.objects, args.rows)
     finally:
         server.destroy()
 
-    print(f"merge of a version with {changed} changed rows ({changed / (args.objects * args.rows):.0%}): "
-          f"{merge_s:.2f} s, {merge_rows} rows written")
+    print(
+        f"merge of a version with {changed} changed rows ({changed / (args.objects * args.rows):.0%}): "
+        f"{merge_s:.2f} s, {merge_rows} rows written"
+    )
     for name, (versioned, plain) in figures.items():
         print(f"{name:22s} versioned view {versioned * 1000:9.2f} ms   plain table {plain * 1000:9.2f} ms")
     for name, (versioned, plain) in figures.items():

@@ -87,12 +87,16 @@ def main() -> None:
                 "current_setting('shared_buffers'), tgsis.object_lock_limit()"
             ).fetchone()
             assert settings is not None
-            print(f"max_locks_per_transaction {settings[0]}, max_connections {settings[1]}, "
-                  f"shared_buffers {settings[2]}: a flush locks up to {settings[3]} objects one by one")
+            print(
+                f"max_locks_per_transaction {settings[0]}, max_connections {settings[1]}, "
+                f"shared_buffers {settings[2]}: a flush locks up to {settings[3]} objects one by one"
+            )
             for table in ("t", "plain"):
                 conn.execute(f"CREATE TABLE {table} (id int PRIMARY KEY, val int NOT NULL, note text)")
-                conn.execute(f"INSERT INTO {table} SELECT g, g, 'row ' || g FROM generate_series(1, %s) g",  # noqa: S608
-                             (args.rows,))
+                conn.execute(
+                    f"INSERT INTO {table} SELECT g, g, 'row ' || g FROM generate_series(1, %s) g",  # noqa: S608
+                    (args.rows,),
+                )
             conn.commit()
             tgsis.enable_versioning(conn, "t", "id", "row")
             conn.commit()

@@ -39,8 +39,12 @@ CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ig
 
 def serve(conninfo: str) -> tuple[subprocess.Popen[str], str]:
     """``tgsis view`` in a process of its own, as a user runs it; its base URL."""
-    process = subprocess.Popen([sys.executable, "-m", "tgsis.cli", "--dsn", conninfo, "view", "--port", "0"],
-                               stdout=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    process = subprocess.Popen(
+        [sys.executable, "-m", "tgsis.cli", "--dsn", conninfo, "view", "--port", "0"],
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
     assert process.stdout is not None
     found = re.search(r"(http://127\.0\.0\.1:\d+)/classes", process.stdout.readline())
     assert found, "tgsis view did not start"
@@ -91,8 +95,10 @@ def main() -> None:
                     page = browser.new_page(viewport={"width": 1100, "height": 900})
                     start = time.perf_counter()
                     page.goto(f"{url}/scene?ids={fid}")
-                    page.wait_for_function("document.body.dataset.state === 'error' || "
-                                           "Number(document.body.dataset.frame) >= 1", timeout=120_000)
+                    page.wait_for_function(
+                        "document.body.dataset.state === 'error' || Number(document.body.dataset.frame) >= 1",
+                        timeout=120_000,
+                    )
                     loads.append(time.perf_counter() - start)
                     state, status = page.evaluate("document.body.dataset.state"), page.text_content("#status")
                     assert state == "ready", status
@@ -105,12 +111,20 @@ def main() -> None:
     finally:
         local.destroy()
 
-    as_json = len(json.dumps({"positions": surface.vertices.ravel().tolist(),
-                              "indices": surface.triangles.ravel().tolist(),
-                              "values": surface.vertex_properties["porosity"].tolist()}))
+    as_json = len(
+        json.dumps(
+            {
+                "positions": surface.vertices.ravel().tolist(),
+                "indices": surface.triangles.ravel().tolist(),
+                "values": surface.vertex_properties["porosity"].tolist(),
+            }
+        )
+    )
     print(f"fetch_feature: {', '.join(f'{t:.2f}' for t in fetches)} s")
-    print(f"GET /api/mesh: {', '.join(f'{t:.2f}' for t in gets)} s, {len(body) / 1e6:.1f} MB binary "
-          f"(as JSON lists: {as_json / 1e6:.1f} MB)")
+    print(
+        f"GET /api/mesh: {', '.join(f'{t:.2f}' for t in gets)} s, {len(body) / 1e6:.1f} MB binary "
+        f"(as JSON lists: {as_json / 1e6:.1f} MB)"
+    )
     print(f"navigation to the scene drawn: {', '.join(f'{t:.2f}' for t in loads)} s ({status})")
     for name in ("start", "download", "build", "draw"):
         print(f"  in the page, {name}: {', '.join(f'{p[name] / 1000:.2f}' for p in phases)} s")

@@ -33,9 +33,10 @@ def main() -> None:
     print(f"{FAULT.name}: {fault.n_vertices} vertices, {fault.n_cells} triangles")
     raw = fault.vertices.tobytes() + fault.cells.tobytes()
     for level in (1, 5, 6, 9):
-        size = sum(len(zlib.compress(raw[i: i + 32768], level)) for i in range(0, len(raw), 32768))
-        seconds = timed(lambda: [zlib.compress(raw[i: i + 32768], level) for i in range(0, len(raw), 32768)],
-                        args.repeat)
+        size = sum(len(zlib.compress(raw[i : i + 32768], level)) for i in range(0, len(raw), 32768))
+        seconds = timed(
+            lambda: [zlib.compress(raw[i : i + 32768], level) for i in range(0, len(raw), 32768)], args.repeat
+        )
         print(f"zlib level {level}: ratio {len(raw) / size:.2f}, {seconds:.3f} s")
     figures: dict[str, str] = {}
     with tempfile.TemporaryDirectory() as folder:
@@ -59,8 +60,9 @@ def main() -> None:
         vtk_write = timed(lambda: data.save(out / "vtk.vtp"), args.repeat)
         vtk_read = timed(lambda: pv.read(out / "vtk.vtp"), args.repeat)
         vtk_size = (out / "vtk.vtp").stat().st_size
-        print(f"{'baseline: pyvista/VTK .vtp':28s} {vtk_size:>10,d} bytes  write {vtk_write:.3f} s  "
-              f"read {vtk_read:.3f} s")
+        print(
+            f"{'baseline: pyvista/VTK .vtp':28s} {vtk_size:>10,d} bytes  write {vtk_write:.3f} s  read {vtk_read:.3f} s"
+        )
         figures["vtu_zlib_ratio"] = f"{sizes['vtu raw (base64)'] / sizes['vtu zlib (base64, default)']:.2f}"
         figures["vtu_zlib_appended_ratio"] = f"{sizes['vtu raw appended'] / sizes['vtu zlib appended']:.2f}"
         figures["vtp_size_vs_vtk"] = f"{sizes['vtp zlib'] / vtk_size:.3f}"

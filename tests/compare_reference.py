@@ -58,9 +58,13 @@ def distance(a: Sequence[float], b: Sequence[float]) -> float:
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-def reference_compare(old_vertices: Sequence[Sequence[float]], old_cells: Sequence[Sequence[int]],
-                      new_vertices: Sequence[Sequence[float]], new_cells: Sequence[Sequence[int]],
-                      tolerance: float = 0.0) -> ReferenceDiff:
+def reference_compare(
+    old_vertices: Sequence[Sequence[float]],
+    old_cells: Sequence[Sequence[int]],
+    new_vertices: Sequence[Sequence[float]],
+    new_cells: Sequence[Sequence[int]],
+    tolerance: float = 0.0,
+) -> ReferenceDiff:
     """Compare an edited mesh (``new_*``) with the old one by the definitions above."""
     old_v = [tuple(float(c) for c in v) for v in old_vertices]
     new_v = [tuple(float(c) for c in v) for v in new_vertices]
@@ -77,8 +81,13 @@ def reference_compare(old_vertices: Sequence[Sequence[float]], old_cells: Sequen
     if tolerance > 0:  # brute force: every (edited, old) pair of still unmatched vertices
         taken = set(o for o in vertex_map if o >= 0)
         free_old = [i for i in range(len(old_v)) if i not in taken]
-        pairs = sorted((d, i, j) for j in range(len(new_v)) if vertex_map[j] < 0
-                       for i in free_old if (d := distance(new_v[j], old_v[i])) <= tolerance)
+        pairs = sorted(
+            (d, i, j)
+            for j in range(len(new_v))
+            if vertex_map[j] < 0
+            for i in free_old
+            if (d := distance(new_v[j], old_v[i])) <= tolerance
+        )
         for _d, i, j in pairs:
             if vertex_map[j] < 0 and i not in taken:
                 vertex_map[j] = i
@@ -103,8 +112,9 @@ def reference_compare(old_vertices: Sequence[Sequence[float]], old_cells: Sequen
     )
 
 
-def oriented_cells_by_coordinates(vertices: Sequence[Sequence[float]],
-                                  cells: Sequence[Sequence[int]]) -> dict[CellByCoordinates, int]:
+def oriented_cells_by_coordinates(
+    vertices: Sequence[Sequence[float]], cells: Sequence[Sequence[int]]
+) -> dict[CellByCoordinates, int]:
     """The multiset of cells as (sorted coordinate tuples, orientation parity): independent of vertex numbering.
 
     The parity is None for a cell on coincident points (possible only in a mesh that is not normal).

@@ -12,24 +12,63 @@ IntArray = npt.NDArray[np.int64]
 def octahedron() -> tuple[FloatArray, IntArray]:
     """A sphere: 6 vertices, 12 edges, 8 triangles (chi = 2), orientations mixed on purpose."""
     v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
-    t = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
-                  [2, 0, 5], [1, 2, 5], [5, 3, 1], [0, 3, 5]], dtype=np.int64)
+    t = np.array(
+        [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [5, 3, 1], [0, 3, 5]], dtype=np.int64
+    )
     return v, t
 
 
 def icosahedron() -> tuple[FloatArray, IntArray]:
     """A sphere: 12 vertices, 30 edges, 20 triangles."""
-    p = (1 + 5 ** 0.5) / 2
-    v = np.array([[-1, p, 0], [1, p, 0], [-1, -p, 0], [1, -p, 0], [0, -1, p], [0, 1, p],
-                  [0, -1, -p], [0, 1, -p], [p, 0, -1], [p, 0, 1], [-p, 0, -1], [-p, 0, 1]], dtype=float)
-    t = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], dtype=np.int64)
+    p = (1 + 5**0.5) / 2
+    v = np.array(
+        [
+            [-1, p, 0],
+            [1, p, 0],
+            [-1, -p, 0],
+            [1, -p, 0],
+            [0, -1, p],
+            [0, 1, p],
+            [0, -1, -p],
+            [0, 1, -p],
+            [p, 0, -1],
+            [p, 0, 1],
+            [-p, 0, -1],
+            [-p, 0, 1],
+        ],
+        dtype=float,
+    )
+    t = np.array(
+        [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ],
+        dtype=np.int64,
+    )
     return v, t
 
 
-def grid(nx: int, ny: int, *, wrap_x: bool = False, wrap_y: bool = False,
-         twist: bool = False) -> tuple[FloatArray, IntArray]:
+def grid(
+    nx: int, ny: int, *, wrap_x: bool = False, wrap_y: bool = False, twist: bool = False
+) -> tuple[FloatArray, IntArray]:
     """A triangulated nx x ny grid of the unit square, optionally glued: x (cylinder), x and y (torus).
 
     ``twist`` glues the x ends with y reversed (a Möbius strip). Coordinates are

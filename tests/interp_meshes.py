@@ -78,8 +78,9 @@ def torus(nu: int = 6, nv: int = 5) -> Surface:
     b = np.roll(idx, -1, axis=1)
     c = np.roll(idx, -1, axis=0)
     d = np.roll(b, -1, axis=0)
-    tri = np.concatenate([np.stack([a.ravel(), b.ravel(), d.ravel()], 1),
-                          np.stack([a.ravel(), d.ravel(), c.ravel()], 1)])
+    tri = np.concatenate(
+        [np.stack([a.ravel(), b.ravel(), d.ravel()], 1), np.stack([a.ravel(), d.ravel(), c.ravel()], 1)]
+    )
     return Surface(vertices, tri, name="torus")
 
 
@@ -87,10 +88,12 @@ def mobius(n: int = 8) -> Surface:
     """A Möbius strip of n squares: non-orientable, so some edge is run the same way by its two triangles."""
     t = np.arange(n) * 2 * np.pi / n
     half = t / 2
-    inner = np.stack([(2 - 0.5 * np.cos(half)) * np.cos(t), (2 - 0.5 * np.cos(half)) * np.sin(t),
-                      -0.5 * np.sin(half)], 1)
-    outer = np.stack([(2 + 0.5 * np.cos(half)) * np.cos(t), (2 + 0.5 * np.cos(half)) * np.sin(t),
-                      0.5 * np.sin(half)], 1)
+    inner = np.stack(
+        [(2 - 0.5 * np.cos(half)) * np.cos(t), (2 - 0.5 * np.cos(half)) * np.sin(t), -0.5 * np.sin(half)], 1
+    )
+    outer = np.stack(
+        [(2 + 0.5 * np.cos(half)) * np.cos(t), (2 + 0.5 * np.cos(half)) * np.sin(t), 0.5 * np.sin(half)], 1
+    )
     vertices = np.concatenate([inner, outer])
     tris = []
     for i in range(n):

@@ -57,8 +57,7 @@ def private_home() -> Iterator[Path]:
 
 def child_env(**extra: str) -> dict[str, str]:
     """Environment for a child Python that uses this checkout and the same binaries."""
-    env = {k: v for k, v in os.environ.items() if k not in ("TGSIS_TEST_DSN", "TGSIS_DSN")
-           and not k.startswith("PG")}
+    env = {k: v for k, v in os.environ.items() if k not in ("TGSIS_TEST_DSN", "TGSIS_DSN") and not k.startswith("PG")}
     env["TGSIS_PG"] = str(find_binaries().bindir)
     env["TGSIS_TEST_DOCKER"] = "0"
     env.update(extra)
@@ -67,6 +66,11 @@ def child_env(**extra: str) -> dict[str, str]:
 
 def tgsis_cli(*args: str, home: Path, timeout: float = 120, **env: str) -> subprocess.CompletedProcess[str]:
     """Run the ``tgsis`` console script of this venv with a private TGSIS_HOME (and more ``env``)."""
-    return subprocess.run([str(Path(sys.executable).parent / "tgsis"), *args],
-                          env=child_env(TGSIS_HOME=str(home), **env),
-                          capture_output=True, text=True, timeout=timeout, check=False)
+    return subprocess.run(
+        [str(Path(sys.executable).parent / "tgsis"), *args],
+        env=child_env(TGSIS_HOME=str(home), **env),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+    )

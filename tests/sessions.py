@@ -14,13 +14,17 @@ import tgsis
 
 Conn = psycopg.Connection[Any]
 
-LOCK_TIMEOUT = "20s"        # safety net only: a wait that long is a failure, not a documented lock wait
+LOCK_TIMEOUT = "20s"  # safety net only: a wait that long is a failure, not a documented lock wait
 
 
 def connect(dsn: str, role: str, *, autocommit: bool = False) -> Conn:
     """A connection named after the part it plays (``application_name``), with a safety-net lock timeout."""
-    return psycopg.connect(dsn, autocommit=autocommit, application_name=f"tgsis-concurrency-{role}",
-                           options=f"-c lock_timeout={LOCK_TIMEOUT}")
+    return psycopg.connect(
+        dsn,
+        autocommit=autocommit,
+        application_name=f"tgsis-concurrency-{role}",
+        options=f"-c lock_timeout={LOCK_TIMEOUT}",
+    )
 
 
 class Background:

@@ -17,7 +17,9 @@ def grid(side: int) -> tuple[np.ndarray, np.ndarray]:
     return vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
 
 
-def _values(rng: np.random.Generator, low: float, high: float, shape: tuple[int, ...], levels: int | None) -> np.ndarray:
+def _values(
+    rng: np.random.Generator, low: float, high: float, shape: tuple[int, ...], levels: int | None
+) -> np.ndarray:
     """Uniform values, or with ``levels`` whole numbers 0..levels-1 (so that equal values and plateaus occur)."""
     return rng.uniform(low, high, shape) if levels is None else rng.integers(0, levels, shape).astype(np.float64)
 
@@ -34,12 +36,19 @@ def refine(positions: np.ndarray, side: int) -> np.ndarray:
     fine[::2, ::2] = coarse
     fine[::2, 1::2] = (coarse[:, :-1] + coarse[:, 1:]) / 2
     fine[1::2, ::2] = (coarse[:-1] + coarse[1:]) / 2
-    fine[1::2, 1::2] = (coarse[:-1, :-1] + coarse[1:, 1:]) / 2   # on the diagonal a-d of grid()'s triangles
+    fine[1::2, 1::2] = (coarse[:-1, :-1] + coarse[1:, 1:]) / 2  # on the diagonal a-d of grid()'s triangles
     return fine.reshape(-1, 3)
 
 
-def evolving(rng: np.random.Generator, starts: list[float], instants_per_period: int = 3, side: int = 5,
-             alive: bool = False, with_properties: bool = False, levels: int | None = None) -> EvolvingSurface:
+def evolving(
+    rng: np.random.Generator,
+    starts: list[float],
+    instants_per_period: int = 3,
+    side: int = 5,
+    alive: bool = False,
+    with_properties: bool = False,
+    levels: int | None = None,
+) -> EvolvingSurface:
     """Periods starting at ``starts`` (the last one lasting 1.0), each a grid whose nodes move randomly.
 
     Each period after the first is the grid of the one before refined once
@@ -50,7 +59,7 @@ def evolving(rng: np.random.Generator, starts: list[float], instants_per_period:
     ends = [*starts[1:], starts[-1] + 1.0]
     periods: list[TopologyPeriod] = []
     for i, (t0, t1) in enumerate(zip(starts, ends)):
-        n = (side - 1) * 2 ** i + 1
+        n = (side - 1) * 2**i + 1
         vertices, triangles = grid(n)
         inner = np.sort(rng.uniform(t0, t1, instants_per_period - 2))
         times = np.concatenate([[t0], inner, [t1]])
@@ -59,15 +68,21 @@ def evolving(rng: np.random.Generator, starts: list[float], instants_per_period:
             positions[0] = refine(periods[-1].positions[-1], (side - 1) * 2 ** (i - 1) + 1)
         extra = {}
         if with_properties:
-            extra = dict(vertex_properties={"porosity": _values(rng, 0, 0.4, (len(times), len(vertices)), levels)},
-                         properties={"throw": _values(rng, 0, 100, (len(times),), levels),
-                                     "note_code": np.arange(len(times))})
+            extra = dict(
+                vertex_properties={"porosity": _values(rng, 0, 0.4, (len(times), len(vertices)), levels)},
+                properties={"throw": _values(rng, 0, 100, (len(times),), levels), "note_code": np.arange(len(times))},
+            )
         periods.append(TopologyPeriod(times, triangles, positions, **extra))
     return EvolvingSurface(periods, alive=alive, name="evolving fault")
 
 
-def series(rng: np.random.Generator, times: list[float], alive: bool = False,
-           with_properties: bool = False, levels: int | None = None) -> SurfaceSeries:
+def series(
+    rng: np.random.Generator,
+    times: list[float],
+    alive: bool = False,
+    with_properties: bool = False,
+    levels: int | None = None,
+) -> SurfaceSeries:
     """A surface at each instant, each a grid of its own size with random heights.
 
     With ``levels``, porosity and throw are whole numbers below it.

@@ -35,8 +35,7 @@ def _grid(side: int = 4, z: float = 0.0) -> Surface:
 
 def _bare(conn: Conn, *, versioned: bool, alignment: str = "VERTEX") -> tuple[int, int]:
     """Class c2 with no vertex or cell property and two surfaces (4x4 and 3x3 grids)."""
-    F.create_feature_class(conn, "c2", "SURFACE", feature_properties={"creator": "text"},
-                           alignment=alignment)  # type: ignore[arg-type]
+    F.create_feature_class(conn, "c2", "SURFACE", feature_properties={"creator": "text"}, alignment=alignment)  # type: ignore[arg-type]
     first = F.insert_feature(conn, "c2", _grid(4), {"creator": "ann"})
     second = F.insert_feature(conn, "c2", _grid(3, 1.0), {"creator": "bob"})
     if versioned:
@@ -69,8 +68,12 @@ def test_every_stored_feature_gets_the_default(conn: Conn, versioned: bool, alig
     count = 16 if alignment == "VERTEX" else 18
     mesh = _grid(4, 2.0)
     values = {"porosity": np.linspace(0, 1, count), "dir": np.ones((count, 3), dtype=np.float32)}
-    mesh = Surface(mesh.vertices, mesh.cells, vertex_properties=values if alignment == "VERTEX" else None,
-                   cell_properties=values if alignment == "CELL" else None)
+    mesh = Surface(
+        mesh.vertices,
+        mesh.cells,
+        vertex_properties=values if alignment == "VERTEX" else None,
+        cell_properties=values if alignment == "CELL" else None,
+    )
     third = F.insert_feature(conn, "c2", mesh, {"creator": "cy"})
     conn.commit()
     assert _values(conn, third, "porosity", alignment) == np.linspace(0, 1, count).tolist()
@@ -78,16 +81,20 @@ def test_every_stored_feature_gets_the_default(conn: Conn, versioned: bool, alig
 
 def _storage_matches_geometry(conn: Conn, table: str = "c2_cellpros", source: str = "tgsis.vrtx") -> None:
     """In every version and revision, the property rows are exactly the vertices (keys and row count)."""
-    revisions = conn.execute("SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) "
-                             "ORDER BY 2").fetchall()
+    revisions = conn.execute(
+        "SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) ORDER BY 2"
+    ).fetchall()
     assert len(revisions) >= 3
     key = "vrtxid" if source == "tgsis.vrtx" else "trglid"
     for version, revision in revisions:
-        props = conn.execute(f"SELECT _geoid, _idx FROM tgsis.rows_at(NULL::{table}, %s, %s) ORDER BY 1, 2",
-                             (version, revision)).fetchall()
-        vertices = conn.execute(f"SELECT geoid, {key} FROM tgsis.rows_at(NULL::{source}, %s, %s) "
-                                "WHERE geoid IN (SELECT _geoid FROM tgsis.rows_at(NULL::c2, %s, %s)) ORDER BY 1, 2",
-                                (version, revision, version, revision)).fetchall()
+        props = conn.execute(
+            f"SELECT _geoid, _idx FROM tgsis.rows_at(NULL::{table}, %s, %s) ORDER BY 1, 2", (version, revision)
+        ).fetchall()
+        vertices = conn.execute(
+            f"SELECT geoid, {key} FROM tgsis.rows_at(NULL::{source}, %s, %s) "
+            "WHERE geoid IN (SELECT _geoid FROM tgsis.rows_at(NULL::c2, %s, %s)) ORDER BY 1, 2",
+            (version, revision, version, revision),
+        ).fetchall()
         assert props == vertices, (version, revision)
 
 
@@ -95,13 +102,13 @@ def test_every_version_and_revision_gets_the_rows(conn: Conn) -> None:
     first, second = _bare(conn, versioned=True)
     tgsis.create_version(conn, "v1")
     with tgsis.in_version(conn, "v1"):
-        third = F.insert_feature(conn, "c2", _grid(2, 5.0), {"creator": "cy"})   # only in the child
+        third = F.insert_feature(conn, "c2", _grid(2, 5.0), {"creator": "cy"})  # only in the child
         conn.execute("UPDATE tgsis.vrtx SET z = 7 WHERE geoid = %s AND vrtxid = 0", (first,))
         assert F.delete_feature(conn, "c2", second)
     conn.commit()
     tgsis.save_revision(conn, "before_property")
     conn.commit()
-    with tgsis.in_version(conn, "v1"):   # a second revision of the child moves the vertex again
+    with tgsis.in_version(conn, "v1"):  # a second revision of the child moves the vertex again
         conn.execute("UPDATE tgsis.vrtx SET z = 8 WHERE geoid = %s AND vrtxid = 0", (first,))
     conn.commit()
     tgsis.add_property(conn, "c2", ("porosity", "float8"), default=0.25)
@@ -119,7 +126,7 @@ def test_every_version_and_revision_gets_the_rows(conn: Conn) -> None:
     tgsis.merge_version(conn, "v1")
     conn.commit()
     assert _values(conn, third, "porosity") == [0.25] * 4
-    assert F.fetch_feature(conn, "c2", first).mesh.vertices[0, 2] == 8   # type: ignore[union-attr]
+    assert F.fetch_feature(conn, "c2", first).mesh.vertices[0, 2] == 8  # type: ignore[union-attr]
     _storage_matches_geometry(conn)
     # and versioning switched off keeps readable plain tables
     tgsis.disable_feature_versioning(conn, force=True)
@@ -146,7 +153,7 @@ def test_a_class_without_versioning(conn: Conn) -> None:
     tgsis.create_feature_class(conn, "c2", "SURFACE", versioned=False)
     fid = F.insert_feature(conn, "c2", _grid(3))
     conn.commit()
-    conn.execute("UPDATE tgsis.vrtx SET z = 4 WHERE geoid = %s AND vrtxid = 0", (fid,))   # a closed row version
+    conn.execute("UPDATE tgsis.vrtx SET z = 4 WHERE geoid = %s AND vrtxid = 0", (fid,))  # a closed row version
     conn.commit()
     tgsis.add_property(conn, "c2", ("porosity", "float8"), default=0.5)
     conn.commit()
@@ -177,12 +184,16 @@ def test_uploads_at_the_same_time(db_dsn: str, versioned: bool) -> None:
         late = Background(db_dsn, "writer", lambda c: F.insert_feature(c, stale, _grid(2)))
         wait_until_blocked(conn, late.pid, editor.info.backend_pid)
         editor.commit()
-        with pytest.raises(tgsis.InUseError, match="feature class c3 gained vertex or cell properties while the "
-                                                   "feature was written: nothing of it was stored"):
+        with pytest.raises(
+            tgsis.InUseError,
+            match="feature class c3 gained vertex or cell properties while the "
+            "feature was written: nothing of it was stored",
+        ):
             late.finish()
         assert conn.execute("SELECT count(*) FROM c3").fetchone() == (0,)
-        assert conn.execute("SELECT count(*) FROM tgsis.geometry WHERE geoid NOT IN (%s, %s)",
-                            (first, early)).fetchone() == (1,)   # the second feature of _bare only
+        assert conn.execute(
+            "SELECT count(*) FROM tgsis.geometry WHERE geoid NOT IN (%s, %s)", (first, early)
+        ).fetchone() == (1,)  # the second feature of _bare only
         writer.close()
         editor.close()
 
@@ -190,8 +201,9 @@ def test_uploads_at_the_same_time(db_dsn: str, versioned: bool) -> None:
 def _members() -> list[Any]:
     lines = LineSet([[10, 0, 0], [11, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
     points = PointSet([[20, 20, 20], [21, 20, 20]], name="samples")
-    solid = TetraMesh([[0, 0, -10], [1, 0, -10], [0, 1, -10], [0, 0, -9], [1, 1, -9]],
-                      [[0, 1, 2, 3], [1, 2, 3, 4]], name="body")
+    solid = TetraMesh(
+        [[0, 0, -10], [1, 0, -10], [0, 1, -10], [0, 0, -9], [1, 1, -9]], [[0, 1, 2, 3], [1, 2, 3, 4]], name="body"
+    )
     return [_grid(3), lines, points, solid]
 
 
@@ -217,9 +229,12 @@ def test_refused_with_nothing_done(conn: Conn) -> None:
     _bare(conn, versioned=True)
     before = conn.execute("SELECT cell_properties FROM tgsis.catalog WHERE classname = 'c2'").fetchone()
     # no default: the stored features would have no value
-    with pytest.raises(tgsis.InvalidPropertyError, match="feature class c2 has 2 stored geometries without rows in "
-                                                         "c2_cellpros, which need a value of the new vertex property "
-                                                         "'porosity'") as caught:
+    with pytest.raises(
+        tgsis.InvalidPropertyError,
+        match="feature class c2 has 2 stored geometries without rows in "
+        "c2_cellpros, which need a value of the new vertex property "
+        "'porosity'",
+    ) as caught:
         tgsis.add_property(conn, "c2", ("porosity", "float8"))
     assert caught.value.hint == "give p_default, e.g. '0'"
     conn.rollback()
@@ -240,8 +255,11 @@ def test_a_temporal_class_without_rows_is_refused(conn: Conn) -> None:
     tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="INSTANTS", time_unit="Ma")
     fid = tgsis.insert_feature(conn, "moving", tgsis.SurfaceSeries([0.0, 1.0], [_grid(3), _grid(3, 1.0)]))
     conn.commit()
-    with pytest.raises(tgsis.InvalidPropertyError, match="feature class moving has 1 stored geometries without rows "
-                                                         "in moving_cellpros, and tgsis cannot make them for model 2"):
+    with pytest.raises(
+        tgsis.InvalidPropertyError,
+        match="feature class moving has 1 stored geometries without rows "
+        "in moving_cellpros, and tgsis cannot make them for model 2",
+    ):
         tgsis.add_property(conn, "moving", ("strain", "float8"), default=0)
     conn.rollback()
     assert tgsis.get_feature_class(conn, "moving").cell_properties == ()
@@ -318,11 +336,27 @@ def test_cli_says_what_was_stored(db_dsn: str, capsys: pytest.CaptureFixture[str
     err = capsys.readouterr().err
     assert "feature class c2 has 2 stored geometries without rows in c2_cellpros" in err
     assert "HINT: give the value stored rows get: --add-property NAME:TYPE=VALUE" in err
-    assert main(["--dsn", db_dsn, "class", "alter", "c2", "--add-property", "porosity:float8=0.2",
-                 "--add-feature-property", "basin:text=Paris"]) == 0
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "class",
+                "alter",
+                "c2",
+                "--add-property",
+                "porosity:float8=0.2",
+                "--add-feature-property",
+                "basin:text=Paris",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out.splitlines()
-    assert out[:2] == ["added feature property basin: 2 feature(s) got the default 'Paris'",
-                       "added cell property porosity: 25 vertex row(s) of 2 feature(s) got the default 0.2"]
+    assert out[:2] == [
+        "added feature property basin: 2 feature(s) got the default 'Paris'",
+        "added cell property porosity: 25 vertex row(s) of 2 feature(s) got the default 0.2",
+    ]
     assert main(["--dsn", db_dsn, "class", "alter", "c2", "--add-property", "k:float8:cell=1", "--json"]) == 1
     assert "has no table for cell properties" in capsys.readouterr().err
 
@@ -334,12 +368,17 @@ def test_cli_repairs_a_broken_class(db_dsn: str, capsys: pytest.CaptureFixture[s
         conn.execute("""UPDATE tgsis.catalog SET cell_properties = '[{"name": "porosity", "type": "double precision"}]'
                          WHERE classname = 'c2'""")
         conn.commit()
-    for bad, message in [("porosity", "--fill-property 'porosity' must be NAME=VALUE"),
-                         ("nope=1", "feature class c2 has no"), ("porosity=x", "value 'x' of property 'porosity'")]:
+    for bad, message in [
+        ("porosity", "--fill-property 'porosity' must be NAME=VALUE"),
+        ("nope=1", "feature class c2 has no"),
+        ("porosity=x", "value 'x' of property 'porosity'"),
+    ]:
         assert main(["--dsn", db_dsn, "class", "alter", "c2", "--fill-property", bad]) == 1, bad
         assert message in capsys.readouterr().err, bad
     assert main(["--dsn", db_dsn, "class", "alter", "c2", "--fill-property", "porosity=0.3"]) == 0
-    assert capsys.readouterr().out.splitlines()[0] == \
-        "filled c2_cellpros: 25 row(s) of 2 feature(s) that had none, in every version"
+    assert (
+        capsys.readouterr().out.splitlines()[0]
+        == "filled c2_cellpros: 25 row(s) of 2 feature(s) that had none, in every version"
+    )
     with psycopg.connect(db_dsn) as conn:
         assert _values(conn, first, "porosity") == [0.3] * 16

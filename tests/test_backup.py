@@ -42,8 +42,19 @@ Conn = psycopg.Connection[Any]
 Snapshot = dict[str, Any]
 
 # what the comparison reads besides the versioned tables: the catalog relations of docs/data-models.md
-CATALOG = ["installation", "catalog", "versions", "revisions", "version_privileges", "object_locks", "conflicts",
-           "versioned_tables", "versioning_dropped", "unversioned_features", "revision_objects"]
+CATALOG = [
+    "installation",
+    "catalog",
+    "versions",
+    "revisions",
+    "version_privileges",
+    "object_locks",
+    "conflicts",
+    "versioned_tables",
+    "versioning_dropped",
+    "unversioned_features",
+    "revision_objects",
+]
 
 
 def _bindir_of(pg: TestServer) -> Path:
@@ -90,24 +101,32 @@ def snapshot(conn: Conn) -> Snapshot:
     snap: Snapshot = {}
     for table in CATALOG:
         snap[table] = _rows(conn, sql.SQL("SELECT t::text FROM tgsis.{} t ORDER BY 1").format(sql.Identifier(table)))
-    revisions = conn.execute("SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) "
-                             "ORDER BY 2").fetchall()
+    revisions = conn.execute(
+        "SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) ORDER BY 2"
+    ).fetchall()
     versioned = conn.execute("SELECT schemaname, tablename FROM tgsis.versioned_tables ORDER BY 1, 2").fetchall()
     assert revisions and versioned
     for schema, table in versioned:
         rel = sql.Identifier(schema, table)
         for version, revision in [*((v, None) for v in {v for v, _ in revisions}), *revisions]:
             snap[f"{schema}.{table} in {version}@{revision}"] = _rows(
-                conn, sql.SQL("SELECT t::text FROM tgsis.rows_at(NULL::{}, %s, %s) t ORDER BY 1").format(rel),
-                (version, revision))
+                conn,
+                sql.SQL("SELECT t::text FROM tgsis.rows_at(NULL::{}, %s, %s) t ORDER BY 1").format(rel),
+                (version, revision),
+            )
     # every table as stored, and every sequence's next value
-    tables = conn.execute("SELECT n.nspname, c.relname FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace "
-                          "WHERE c.relkind = 'r' AND n.nspname IN ('public', 'tgsis') ORDER BY 1, 2").fetchall()
+    tables = conn.execute(
+        "SELECT n.nspname, c.relname FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace "
+        "WHERE c.relkind = 'r' AND n.nspname IN ('public', 'tgsis') ORDER BY 1, 2"
+    ).fetchall()
     for schema, table in tables:
         snap[f"table {schema}.{table}"] = _rows(
-            conn, sql.SQL("SELECT t::text FROM {} t ORDER BY 1").format(sql.Identifier(schema, table)))
-    snap["sequences"] = conn.execute("SELECT schemaname, sequencename, last_value FROM pg_sequences "
-                                     "WHERE schemaname IN ('public', 'tgsis') ORDER BY 1, 2").fetchall()
+            conn, sql.SQL("SELECT t::text FROM {} t ORDER BY 1").format(sql.Identifier(schema, table))
+        )
+    snap["sequences"] = conn.execute(
+        "SELECT schemaname, sequencename, last_value FROM pg_sequences "
+        "WHERE schemaname IN ('public', 'tgsis') ORDER BY 1, 2"
+    ).fetchall()
     # the objects: tgsis's (definitions, rights, comments, triggers) and the application's
     snap["tgsis objects"] = describe_tgsis_objects(conn)
     snap["public objects"] = conn.execute(
@@ -115,11 +134,13 @@ def snapshot(conn: Conn) -> Snapshot:
         "       CASE WHEN c.relkind = 'v' THEN pg_get_viewdef(c.oid) END, "
         "       (SELECT array_agg(pg_get_triggerdef(g.oid) ORDER BY g.tgname) FROM pg_trigger g "
         "         WHERE g.tgrelid = c.oid AND NOT g.tgisinternal) "
-        "  FROM pg_class c WHERE c.relnamespace = 'public'::regnamespace ORDER BY 1").fetchall()
+        "  FROM pg_class c WHERE c.relnamespace = 'public'::regnamespace ORDER BY 1"
+    ).fetchall()
     snap["public functions"] = conn.execute(
         "SELECT p.oid::regprocedure::text, pg_get_functiondef(p.oid), p.proacl::text FROM pg_proc p "
         " WHERE p.pronamespace = 'public'::regnamespace AND p.oid NOT IN "
-        "       (SELECT objid FROM pg_depend WHERE deptype = 'e') ORDER BY 1").fetchall()
+        "       (SELECT objid FROM pg_depend WHERE deptype = 'e') ORDER BY 1"
+    ).fetchall()
     snap["extensions"] = conn.execute("SELECT extname, extversion FROM pg_extension ORDER BY 1").fetchall()
     return snap
 
@@ -128,40 +149,69 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
     """The small but complete state a backup must keep; returns the feature ids by name."""
     rng = np.random.default_rng(15)
     tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties={"release": "text"})
-    tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", time_unit="Ma",
-                               cell_properties=[("porosity", "double precision")],
-                               instant_properties=[("throw", "double precision"), ("note_code", "integer")])
-    tgsis.create_feature_class(conn, "stepped", "SURFACE", time_model="INSTANTS",
-                               cell_properties=[("porosity", "double precision")],
-                               instant_properties=[("throw", "double precision")])
-    ids = {f"f{i}": tgsis.insert_feature(conn, "faults", flat_grid(3, float(i)), {"release": "5.3"})
-           for i in range(4)}
+    tgsis.create_feature_class(
+        conn,
+        "moving",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit="Ma",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+    )
+    tgsis.create_feature_class(
+        conn,
+        "stepped",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision")],
+    )
+    ids = {f"f{i}": tgsis.insert_feature(conn, "faults", flat_grid(3, float(i)), {"release": "5.3"}) for i in range(4)}
     ids["moving"] = tgsis.insert_feature(conn, "moving", evolving(rng, [0.0, 2.0], with_properties=True))
     ids["stepped"] = tgsis.insert_feature(conn, "stepped", series(rng, [0.0, 1.0], with_properties=True))
     # G-maps: model 4 (a block of tetrahedra with a porosity per volume) and model 5 (the block with a knowledge axis)
-    tgsis.create_feature_class(conn, "blocks", "GMAP", time_model="GMAP", cell_level=3,
-                               cell_properties=[("porosity", "double precision")])
+    tgsis.create_feature_class(
+        conn, "blocks", "GMAP", time_model="GMAP", cell_level=3, cell_properties=[("porosity", "double precision")]
+    )
     tgsis.create_feature_class(conn, "knowledge", "GMAP", time_model="MULTIDIM", cell_level=3)
     solid = tgsis.GMap.from_tetrahedra(*block_tetrahedra(1))
-    ids["block"] = tgsis.insert_feature(conn, "blocks", tgsis.GMap(
-        solid.alpha, solid.vertex, solid.points, cell_properties={3: {"porosity": rng.random(solid.n_cells(3))}}))
-    ids["history"] = tgsis.insert_gmap(conn, "knowledge", tgsis.GMap(
-        solid.alpha, solid.vertex, np.column_stack([solid.points, np.arange(solid.n_points) % 2])),
-        axes=["x", "y", "z", "knowledge"])
-    conn.execute("CREATE TABLE wells (id integer GENERATED ALWAYS AS IDENTITY PRIMARY KEY, name text NOT NULL, "
-                 "depth double precision)")
+    ids["block"] = tgsis.insert_feature(
+        conn,
+        "blocks",
+        tgsis.GMap(
+            solid.alpha, solid.vertex, solid.points, cell_properties={3: {"porosity": rng.random(solid.n_cells(3))}}
+        ),
+    )
+    ids["history"] = tgsis.insert_gmap(
+        conn,
+        "knowledge",
+        tgsis.GMap(solid.alpha, solid.vertex, np.column_stack([solid.points, np.arange(solid.n_points) % 2])),
+        axes=["x", "y", "z", "knowledge"],
+    )
+    conn.execute(
+        "CREATE TABLE wells (id integer GENERATED ALWAYS AS IDENTITY PRIMARY KEY, name text NOT NULL, "
+        "depth double precision)"
+    )
     conn.execute("COMMENT ON TABLE wells IS 'boreholes'")
     conn.execute("INSERT INTO wells (name, depth) VALUES ('W-1', 1000), ('W-2', 1200), ('W-3', 800)")
-    conn.execute(sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON wells TO {}").format(
-        sql.Identifier(roles.name("ann"))))
+    conn.execute(
+        sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON wells TO {}").format(sql.Identifier(roles.name("ann")))
+    )
     # a partitioned table, versioned: its storage stays partitioned through the dump
-    conn.execute("CREATE TABLE logs (well integer, at double precision, gamma double precision, PRIMARY KEY (well, at)) "
-                 "PARTITION BY HASH (well)")
+    conn.execute(
+        "CREATE TABLE logs (well integer, at double precision, gamma double precision, PRIMARY KEY (well, at)) "
+        "PARTITION BY HASH (well)"
+    )
     for r in range(2):
-        conn.execute(sql.SQL("CREATE TABLE {} PARTITION OF logs FOR VALUES WITH (MODULUS 2, REMAINDER {})").format(
-            sql.Identifier(f"logs_{r}"), sql.Literal(r)))
+        conn.execute(
+            sql.SQL("CREATE TABLE {} PARTITION OF logs FOR VALUES WITH (MODULUS 2, REMAINDER {})").format(
+                sql.Identifier(f"logs_{r}"), sql.Literal(r)
+            )
+        )
     conn.execute("INSERT INTO logs SELECT w, d, 10 * w + d FROM generate_series(1, 3) w, generate_series(0, 4) d")
-    conn.execute(sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON logs TO {}").format(sql.Identifier(roles.name("ann"))))
+    conn.execute(
+        sql.SQL("GRANT SELECT, INSERT, UPDATE, DELETE ON logs TO {}").format(sql.Identifier(roles.name("ann")))
+    )
     # a class without versioning (registered before feature versioning: its key to tgsis.geometry is dropped then)
     tgsis.create_feature_class(conn, "surveys", "SURFACE", feature_properties={"release": "text"}, versioned=False)
     ids["survey"] = tgsis.insert_feature(conn, "surveys", flat_grid(3, 7.0), {"release": "s1"})
@@ -179,8 +229,10 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
         conn.execute("UPDATE tgsis.d4dvrtx SET z = z + 10 WHERE geoid = %s AND timem = 0", (ids["moving"],))
         conn.execute("UPDATE wells SET depth = 1250 WHERE name = 'W-1'")
         conn.execute("UPDATE logs SET gamma = gamma + 1 WHERE well = 1")
-        conn.execute("UPDATE tgsis.gmap_vertex SET coordinate[3] = coordinate[3] + 2 WHERE geoid = %s AND nodeid = 0",
-                     (ids["block"],))
+        conn.execute(
+            "UPDATE tgsis.gmap_vertex SET coordinate[3] = coordinate[3] + 2 WHERE geoid = %s AND nodeid = 0",
+            (ids["block"],),
+        )
         conn.commit()
         tgsis.save_revision(conn, "first_pick")
         ids["new in edit"] = tgsis.insert_feature(conn, "faults", flat_grid(2, 9.0), {"release": "edit"})
@@ -203,7 +255,7 @@ def build_scenario(conn: Conn, roles: Roles) -> dict[str, int]:
     tgsis.lock_objects(conn, "edit", "well", [2])
     tgsis.grant_version(conn, "edit", "write", roles.name("ann"))
     tgsis.grant_version(conn, "other", "create", roles.name("bob"))
-    tgsis.revoke_version(conn, "DEFAULT", "create", "tgsis_editor")   # a shipped right taken back stays taken
+    tgsis.revoke_version(conn, "DEFAULT", "create", "tgsis_editor")  # a shipped right taken back stays taken
     # grants given after the install: on a catalog table and a function of the extension, on a versioned view
     bob = sql.Identifier(roles.name("bob"))
     conn.execute(sql.SQL("GRANT SELECT ON tgsis.conflicts TO {}").format(bob))
@@ -250,8 +302,12 @@ def _fetch(conn: Conn, version: str, ids: dict[str, int]) -> dict[str, Any]:
             if key == "block":
                 g = tgsis.fetch_gmap(conn, "blocks", fid).at(0.0)
                 assert g is not None
-                seen[key] = (g.alpha.tolist(), g.points.tolist(), g.cell_properties[3]["porosity"].tolist(),
-                             tgsis.gmap_check(conn, fid))
+                seen[key] = (
+                    g.alpha.tolist(),
+                    g.points.tolist(),
+                    g.cell_properties[3]["porosity"].tolist(),
+                    tgsis.gmap_check(conn, fid),
+                )
             elif key == "history":
                 h, axes = tgsis.fetch_md_gmap(conn, "knowledge", fid)
                 seen[key] = (h.alpha.tolist(), h.points.tolist(), axes, tgsis.gmap_check(conn, fid))
@@ -282,8 +338,7 @@ def _check_backup(route: str, pg: TestServer, make_database: Any, tmp_path: Path
     source = make_database()
     with psycopg.connect(source) as conn:
         assert tgsis.install(conn, method=route).method == route  # type: ignore[arg-type]
-    with login_roles(source, {"ann": "tgsis_editor", "bob": "tgsis_editor"}) as roles, \
-            psycopg.connect(source) as conn:
+    with login_roles(source, {"ann": "tgsis_editor", "bob": "tgsis_editor"}) as roles, psycopg.connect(source) as conn:
         ids = build_scenario(conn, roles)
         before = snapshot(conn)
         read = {v: _fetch(conn, v, ids) for v in ("DEFAULT", "edit", "other", "deep")}
@@ -295,12 +350,15 @@ def _check_backup(route: str, pg: TestServer, make_database: Any, tmp_path: Path
                 after = snapshot(copy)
                 assert after.keys() == before.keys()
                 differing = [k for k in before if after[k] != before[k]]
-                assert not differing, (f"{route} route, {fmt} dump: differs after restore: {differing}; first: "
-                                       f"only before {_only(before[differing[0]], after[differing[0]])}, "
-                                       f"only after {_only(after[differing[0]], before[differing[0]])}")
+                assert not differing, (
+                    f"{route} route, {fmt} dump: differs after restore: {differing}; first: "
+                    f"only before {_only(before[differing[0]], after[differing[0]])}, "
+                    f"only after {_only(after[differing[0]], before[differing[0]])}"
+                )
                 assert {v: _fetch(copy, v, ids) for v in read} == read
-                _use_restored(copy, ids, roles, dsn, max_geoid[0] if max_geoid else 0,
-                              max_revision[0] if max_revision else 0)
+                _use_restored(
+                    copy, ids, roles, dsn, max_geoid[0] if max_geoid else 0, max_revision[0] if max_revision else 0
+                )
 
 
 def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_geoid: int, max_revision: int) -> None:
@@ -320,14 +378,16 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
     assert revision > max_revision, "a restored database handed out an existing revision again"
     # the class without versioning: one state every version sees, written in DEFAULT only
     with tgsis.in_version(conn, "edit"), pytest.raises(tgsis.NotVersionedError, match="class surveys"):
-        tgsis.save_feature(conn, "surveys", ids["survey"], _lifted(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh,
-                                                                    1, 2.0))
+        tgsis.save_feature(
+            conn, "surveys", ids["survey"], _lifted(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh, 1, 2.0)
+        )
     lifted = _lifted(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh, 1, 2.0)
     tgsis.save_feature(conn, "surveys", ids["survey"], lifted)
     conn.commit()
     with tgsis.in_version(conn, "deep"):
-        np.testing.assert_array_equal(_surface(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh).vertices,
-                                      lifted.vertices)
+        np.testing.assert_array_equal(
+            _surface(tgsis.fetch_feature(conn, "surveys", ids["survey"]).mesh).vertices, lifted.vertices
+        )
     # versioning new tables: a feature class created now is versioned as created; a plain table too
     tgsis.create_feature_class(conn, "late", "MULTIPOINT")
     assert ("public", "late") in {(t.schema, t.table) for t in tgsis.versioned_tables(conn)}
@@ -348,17 +408,21 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
         ann.rollback()
     # the edited classes: written through their rebuilt views in a version, edited again
     with tgsis.in_version(conn, "edit"):
-        assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["new in edit"],)).fetchone() == \
-            ("edit basin",)
+        assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["new in edit"],)).fetchone() == (
+            "edit basin",
+        )
         conn.execute("UPDATE faults SET basin = 'after restore' WHERE _geoid = %s", (ids["new in edit"],))
         conn.execute("UPDATE moving_pros SET note = 7 WHERE _geoid = %s", (ids["moving"],))
         conn.commit()
-        assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["new in edit"],)).fetchone() == \
-            ("after restore",)
-        assert conn.execute("SELECT DISTINCT note FROM moving_pros WHERE _geoid = %s", (ids["moving"],)).fetchall() == \
-            [(7,)]
-        assert conn.execute("SELECT DISTINCT k FROM stepped_cellpros WHERE _geoid = %s ORDER BY 1",
-                            (ids["stepped"],)).fetchall() == [(1.5,), (3.0,)]
+        assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["new in edit"],)).fetchone() == (
+            "after restore",
+        )
+        assert conn.execute("SELECT DISTINCT note FROM moving_pros WHERE _geoid = %s", (ids["moving"],)).fetchall() == [
+            (7,)
+        ]
+        assert conn.execute(
+            "SELECT DISTINCT k FROM stepped_cellpros WHERE _geoid = %s ORDER BY 1", (ids["stepped"],)
+        ).fetchall() == [(1.5,), (3.0,)]
     conn.rollback()
     assert conn.execute("SELECT basin FROM faults WHERE _geoid = %s", (ids["f2"],)).fetchone() == ("Paris",)
     # the unsolved conflict is still there; solved, the merge goes through and DEFAULT sees edit's state
@@ -371,14 +435,18 @@ def _use_restored(conn: Conn, ids: dict[str, int], roles: Roles, dsn: str, max_g
     np.testing.assert_array_equal(_surface(tgsis.fetch_feature(conn, "faults", ids["f0"]).mesh).vertices, in_edit)
     assert conn.execute("SELECT depth FROM wells WHERE name = 'W-1'").fetchone() == (1300,)
     assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'logs_ver'::regclass").fetchone() == ("p",)
-    assert conn.execute("SELECT well, at, gamma FROM logs WHERE at = 0 ORDER BY 1").fetchall() == \
-        [(1, 0.0, 11.0), (2, 0.0, 0.0), (3, 0.0, 130.0)], "the merge brought edit's changes of the partitioned table"
+    assert conn.execute("SELECT well, at, gamma FROM logs WHERE at = 0 ORDER BY 1").fetchall() == [
+        (1, 0.0, 11.0),
+        (2, 0.0, 0.0),
+        (3, 0.0, 130.0),
+    ], "the merge brought edit's changes of the partitioned table"
     assert conn.execute("SELECT sum(gamma) FROM logs WHERE well = 3").fetchone() == (660.0,)
-    assert conn.execute("SELECT _geoid, basin FROM faults WHERE _geoid IN (%s, %s) ORDER BY 1",
-                        (ids["f1"], ids["new in edit"])).fetchall() == [(ids["f1"], "Paris"),
-                                                                        (ids["new in edit"], "after restore")]
-    assert [p.name for p in tgsis.add_property(conn, "faults", ("crew", "text"), kind="feature").feature_properties] \
-        == ["release", "basin", "crew"]
+    assert conn.execute(
+        "SELECT _geoid, basin FROM faults WHERE _geoid IN (%s, %s) ORDER BY 1", (ids["f1"], ids["new in edit"])
+    ).fetchall() == [(ids["f1"], "Paris"), (ids["new in edit"], "after restore")]
+    assert [
+        p.name for p in tgsis.add_property(conn, "faults", ("crew", "text"), kind="feature").feature_properties
+    ] == ["release", "basin", "crew"]
     conn.rollback()
 
 
@@ -389,8 +457,9 @@ def extension_route(pg: TestServer) -> None:
         pytest.fail(pg.extension_files, pytrace=False)
 
 
-def test_backup_of_an_extension_install(extension_route: None, pg: TestServer, make_database: Any,
-                                        tmp_path: Path) -> None:
+def test_backup_of_an_extension_install(
+    extension_route: None, pg: TestServer, make_database: Any, tmp_path: Path
+) -> None:
     _check_backup("extension", pg, make_database, tmp_path)
 
 
@@ -407,7 +476,8 @@ def test_create_extension_by_hand_is_completed_by_install(extension_route: None,
         members = conn.execute(
             "SELECT count(*) FROM pg_depend d JOIN pg_extension e ON e.oid = d.refobjid AND e.extname = 'tgsis' "
             "WHERE d.classid = 'pg_class'::regclass AND d.objid IN ('tgsis.geometry'::regclass, 'tgsis.vrtx'::regclass, "
-            "'tgsis.geometry_geoid_seq'::regclass)").fetchone()
+            "'tgsis.geometry_geoid_seq'::regclass)"
+        ).fetchone()
         assert members == (0,)
         config = conn.execute("SELECT array_length(extconfig, 1) FROM pg_extension WHERE extname = 'tgsis'").fetchone()
         assert config == (len(CATALOG) + 3,)
@@ -426,8 +496,10 @@ def test_nobody_else_can_replace_default_or_create_storage(route: str, pg: TestS
     with login_roles(dsn, {"eve": "tgsis_admin"}) as roles:
         eve = roles.connect("eve")
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
-            eve.execute("INSERT INTO tgsis.versions (versionid, name, workingrevision, workingset, owner) "
-                        "VALUES (0, 'DEFAULT', 99, '{99}', current_user)")
+            eve.execute(
+                "INSERT INTO tgsis.versions (versionid, name, workingrevision, workingset, owner) "
+                "VALUES (0, 'DEFAULT', 99, '{99}', current_user)"
+            )
         eve.rollback()
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
             eve.execute("SELECT tgsis.create_storage()")

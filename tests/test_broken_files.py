@@ -77,8 +77,10 @@ def test_obj_cut_inside_a_face_line_is_an_error(tmp_path: Path) -> None:
     assert info.value.line == 6
 
 
-@pytest.mark.parametrize(("face", "message"), [("f 0 1 2", "index 0"), ("f 1 2 9", "vertex 9"),
-                                               ("f -1 -2 -9", "vertex -9"), ("f 1 2 x", "not an integer")])
+@pytest.mark.parametrize(
+    ("face", "message"),
+    [("f 0 1 2", "index 0"), ("f 1 2 9", "vertex 9"), ("f -1 -2 -9", "vertex -9"), ("f 1 2 x", "not an integer")],
+)
 def test_obj_bad_index_is_an_error(tmp_path: Path, face: str, message: str) -> None:
     path = tmp_path / "s.obj"
     path.write_text(f"v 0 0 0\nv 1 0 0\nv 0 1 0\n{face}\n")
@@ -115,11 +117,17 @@ def test_ply_binary_middle_endian_is_refused(tmp_path: Path) -> None:
 
 def test_ply_binary_big_endian_is_read_right(tmp_path: Path) -> None:
     surface = grid_surface()
-    surface = Surface(surface.vertices, surface.cells, vertex_properties={"q": np.arange(16, dtype=np.int32)},
-                      cell_properties={"w": np.linspace(0, 1, 18)})
-    header = (b"ply\nformat binary_big_endian 1.0\nelement vertex 16\nproperty double x\nproperty double y\n"
-              b"property double z\nproperty int q\nelement face 18\nproperty list uchar int vertex_indices\n"
-              b"property double w\nend_header\n")
+    surface = Surface(
+        surface.vertices,
+        surface.cells,
+        vertex_properties={"q": np.arange(16, dtype=np.int32)},
+        cell_properties={"w": np.linspace(0, 1, 18)},
+    )
+    header = (
+        b"ply\nformat binary_big_endian 1.0\nelement vertex 16\nproperty double x\nproperty double y\n"
+        b"property double z\nproperty int q\nelement face 18\nproperty list uchar int vertex_indices\n"
+        b"property double w\nend_header\n"
+    )
     vertex = np.empty(16, dtype=[("xyz", ">f8", 3), ("q", ">i4")])
     vertex["xyz"], vertex["q"] = surface.vertices, np.arange(16)
     face = np.empty(18, dtype=[("n", "u1"), ("v", ">i4", 3), ("w", ">f8")])
@@ -151,23 +159,29 @@ def test_files_real_tools_write_still_read(tmp_path: Path) -> None:
     }
     for name, content in files.items():
         (tmp_path / name).write_bytes(content if isinstance(content, bytes) else content.encode())
-    mesh = meshio.Mesh(sphere.vertices, [("triangle", sphere.faces)],
-                       point_data={"p": np.arange(n, dtype=float)})
+    mesh = meshio.Mesh(sphere.vertices, [("triangle", sphere.faces)], point_data={"p": np.arange(n, dtype=float)})
     for extension in ("obj", "off", "ply", "stl"):
-        meshio.write(tmp_path / f"meshio.{extension}", mesh if extension == "ply" else
-                     meshio.Mesh(sphere.vertices, [("triangle", sphere.faces)]))
+        meshio.write(
+            tmp_path / f"meshio.{extension}",
+            mesh if extension == "ply" else meshio.Mesh(sphere.vertices, [("triangle", sphere.faces)]),
+        )
     # CRLF line ends, comments, no newline at the end, quads split into triangles
     (tmp_path / "crlf.obj").write_bytes(
         b"# a quad and a pentagon\r\nv 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0 # the fourth\r\nv 0.5 2 0\r\n"
-        b"vt 0 0\r\nvn 0 0 1\r\ng part\r\ns off\r\nf 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 4//1 3//1 \\\r\n 5//1\r\no x")
-    (tmp_path / "quad.off").write_bytes(b"OFF\r\n# a comment\r\n4 1 4\r\n0 0 0\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n"
-                                        b"4 0 1 2 3 255 0 0")
-    (tmp_path / "coff.off").write_bytes(b"COFF 3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n"
-                                        b"3 0 1 2\n")
-    (tmp_path / "quad.ply").write_bytes(b"ply\r\nformat ascii 1.0\r\ncomment made by hand\r\nelement vertex 4\r\n"
-                                        b"property float x\r\nproperty float y\r\nproperty float z\r\n"
-                                        b"element face 1\r\nproperty list uchar int vertex_indices\r\n"
-                                        b"end_header\r\n0 0 0\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n4 0 1 2 3")
+        b"vt 0 0\r\nvn 0 0 1\r\ng part\r\ns off\r\nf 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 4//1 3//1 \\\r\n 5//1\r\no x"
+    )
+    (tmp_path / "quad.off").write_bytes(
+        b"OFF\r\n# a comment\r\n4 1 4\r\n0 0 0\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n4 0 1 2 3 255 0 0"
+    )
+    (tmp_path / "coff.off").write_bytes(
+        b"COFF 3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2\n"
+    )
+    (tmp_path / "quad.ply").write_bytes(
+        b"ply\r\nformat ascii 1.0\r\ncomment made by hand\r\nelement vertex 4\r\n"
+        b"property float x\r\nproperty float y\r\nproperty float z\r\n"
+        b"element face 1\r\nproperty list uchar int vertex_indices\r\n"
+        b"end_header\r\n0 0 0\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n4 0 1 2 3"
+    )
     for name in files:
         back = read_trimesh_file(tmp_path / name)
         expected_n = 3 * m if name.endswith(".stl") else n
@@ -202,22 +216,30 @@ def _text_obj(surface: Surface) -> bytes:
 
 
 def _ascii_ply(surface: Surface, n_vertices: int | None = None, n_faces: int | None = None) -> bytes:
-    header = ["ply", "format ascii 1.0", f"element vertex {surface.n_vertices if n_vertices is None else n_vertices}",
-              "property double x", "property double y", "property double z",
-              f"element face {surface.n_cells if n_faces is None else n_faces}",
-              "property list uchar int vertex_indices", "end_header"]
+    header = [
+        "ply",
+        "format ascii 1.0",
+        f"element vertex {surface.n_vertices if n_vertices is None else n_vertices}",
+        "property double x",
+        "property double y",
+        "property double z",
+        f"element face {surface.n_cells if n_faces is None else n_faces}",
+        "property list uchar int vertex_indices",
+        "end_header",
+    ]
     lines = header + [" ".join(repr(float(v)) for v in row) for row in surface.vertices]
     lines += ["3 " + " ".join(str(int(i)) for i in row) for row in surface.cells]
     return ("\n".join(lines) + "\n").encode()
 
 
-def _binary_ply(surface: Surface, order: str = "<", n_vertices: int | None = None,
-                n_faces: int | None = None) -> bytes:
+def _binary_ply(surface: Surface, order: str = "<", n_vertices: int | None = None, n_faces: int | None = None) -> bytes:
     name = {"<": "binary_little_endian", ">": "binary_big_endian"}[order]
-    header = (f"ply\nformat {name} 1.0\nelement vertex {surface.n_vertices if n_vertices is None else n_vertices}\n"
-              "property double x\nproperty double y\nproperty double z\n"
-              f"element face {surface.n_cells if n_faces is None else n_faces}\n"
-              "property list uchar int vertex_indices\nend_header\n").encode()
+    header = (
+        f"ply\nformat {name} 1.0\nelement vertex {surface.n_vertices if n_vertices is None else n_vertices}\n"
+        "property double x\nproperty double y\nproperty double z\n"
+        f"element face {surface.n_cells if n_faces is None else n_faces}\n"
+        "property list uchar int vertex_indices\nend_header\n"
+    ).encode()
     face = np.empty(surface.n_cells, dtype=[("n", "u1"), ("v", order + "i4", 3)])
     face["n"], face["v"] = 3, surface.cells
     return header + surface.vertices.astype(order + "f8").tobytes() + face.tobytes()
@@ -288,8 +310,17 @@ def _read(path: Path) -> tuple[int, int] | FileFormatError:
 
 
 # refusals of a whole file, which have no line to name
-WHOLE_FILE = ("is empty", "holds no", "no GOCAD object", "not a legacy VTK", "ends", "not a PLY file", "has no END",
-              "not STL", "not a valid")
+WHOLE_FILE = (
+    "is empty",
+    "holds no",
+    "no GOCAD object",
+    "not a legacy VTK",
+    "ends",
+    "not a PLY file",
+    "has no END",
+    "not STL",
+    "not a valid",
+)
 
 
 def _check_error(error: FileFormatError, path: Path, content: bytes) -> None:
@@ -344,16 +375,22 @@ def _count_mutations() -> list[tuple[str, str, bytes]]:
     for d in (1, -1, 1000):
         cases.append((f"binary_stl_{d}", ".stl", _binary_stl(BASE, NC + d)))
     vtk = _vtk(BASE, True)
-    for old, new in ((f"POINTS {NV} ", f"POINTS {NV + 1} "), (f"POINTS {NV} ", f"POINTS {NV - 1} "),
-                     (f"CELLS {NC + 1} ", f"CELLS {NC + 2} "), (f"CELLS {NC + 1} ", f"CELLS {NC} "),
-                     (f"CELL_TYPES {NC}", f"CELL_TYPES {NC + 1}"), (f"CELL_TYPES {NC}", f"CELL_TYPES {NC - 1}")):
+    for old, new in (
+        (f"POINTS {NV} ", f"POINTS {NV + 1} "),
+        (f"POINTS {NV} ", f"POINTS {NV - 1} "),
+        (f"CELLS {NC + 1} ", f"CELLS {NC + 2} "),
+        (f"CELLS {NC + 1} ", f"CELLS {NC} "),
+        (f"CELL_TYPES {NC}", f"CELL_TYPES {NC + 1}"),
+        (f"CELL_TYPES {NC}", f"CELL_TYPES {NC - 1}"),
+    ):
         assert old.encode() in vtk, old
         cases.append((f"vtk_{new.strip()}", ".vtk", vtk.replace(old.encode(), new.encode(), 1)))
     return cases
 
 
-@pytest.mark.parametrize(("label", "extension", "content"),
-                         [pytest.param(*case, id=case[0]) for case in _count_mutations()])
+@pytest.mark.parametrize(
+    ("label", "extension", "content"), [pytest.param(*case, id=case[0]) for case in _count_mutations()]
+)
 def test_counts_off_by_one_are_refused(label: str, extension: str, content: bytes, tmp_path: Path) -> None:
     path = tmp_path / f"{label}{extension}"
     path.write_bytes(content)
@@ -369,8 +406,17 @@ def _index_mutations() -> list[tuple[str, str, bytes]]:
     last_face = obj.splitlines()[-1]
     for bad in (b"0", f"{NV + 1}".encode(), f"-{NV + 1}".encode(), b"1.5", b"", b"1/", b"x"):
         cases.append((f"obj_index_{bad!r}", ".obj", obj.replace(last_face, last_face.rsplit(b" ", 1)[0] + b" " + bad)))
-    for extra in (b"l 1 2\n", b"curv 0 1 1 2\n", b"vertex 1 2 3\n", b"f 1 2 3 \\\n", b"v 1 2\n", b"v 1 2 3 4 5\n",
-                  b"f 1/ 2/ 3/\n", b"f 1///1 2 3\n", b"f 1 2 3 # fine\nf 1 2 -99\n"):
+    for extra in (
+        b"l 1 2\n",
+        b"curv 0 1 1 2\n",
+        b"vertex 1 2 3\n",
+        b"f 1 2 3 \\\n",
+        b"v 1 2\n",
+        b"v 1 2 3 4 5\n",
+        b"f 1/ 2/ 3/\n",
+        b"f 1///1 2 3\n",
+        b"f 1 2 3 # fine\nf 1 2 -99\n",
+    ):
         cases.append((f"obj_extra_{extra[:8]!r}", ".obj", obj + extra))
     off = _text_off(BASE)
     for bad in (b"-1", f"{NV}".encode(), b"2.0"):
@@ -394,12 +440,17 @@ def _index_mutations() -> list[tuple[str, str, bytes]]:
     for drop in ("endloop", "endfacet", "outer loop", "endsolid test"):
         cases.append((f"ascii_stl_no_{drop}", ".stl", _ascii_stl(BASE, drop)))
     ascii_stl = _ascii_stl(BASE)
-    cases.append(("ascii_stl_four_vertices", ".stl",
-                  ascii_stl.replace(b"  endloop", b"    vertex 0 0 0\n  endloop", 1)))
+    cases.append(
+        ("ascii_stl_four_vertices", ".stl", ascii_stl.replace(b"  endloop", b"    vertex 0 0 0\n  endloop", 1))
+    )
     # PLY headers that lie or are not PLY
-    for old, new in ((b"format ascii 1.0", b"format binary_middle_endian 1.0"), (b"format ascii 1.0", b"format ascii 2.0"),
-                     (b"property double z\n", b""), (b"property double z\n", b"property double z\nproperty double w\n"),
-                     (b"property list uchar int vertex_indices", b"property list uchar int other")):
+    for old, new in (
+        (b"format ascii 1.0", b"format binary_middle_endian 1.0"),
+        (b"format ascii 1.0", b"format ascii 2.0"),
+        (b"property double z\n", b""),
+        (b"property double z\n", b"property double z\nproperty double w\n"),
+        (b"property list uchar int vertex_indices", b"property list uchar int other"),
+    ):
         cases.append((f"ply_header_{new!r}", ".ply", ply.replace(old, new, 1)))
     # GOCAD: a TRGL with a missing vertex, a repeated VRTX id, a cut line, a NaN
     tsurf = _gocad(BASE)
@@ -420,9 +471,11 @@ def _binary_ply_cells(order: str, cells: np.ndarray, vertices: np.ndarray | None
     """A binary PLY of the cells and vertices as given, unchecked: the file must hold the bad values."""
     name = {"<": "binary_little_endian", ">": "binary_big_endian"}[order]
     vertices = BASE.vertices if vertices is None else vertices
-    header = (f"ply\nformat {name} 1.0\nelement vertex {len(vertices)}\nproperty double x\nproperty double y\n"
-              f"property double z\nelement face {len(cells)}\nproperty list uchar int vertex_indices\n"
-              "end_header\n").encode()
+    header = (
+        f"ply\nformat {name} 1.0\nelement vertex {len(vertices)}\nproperty double x\nproperty double y\n"
+        f"property double z\nelement face {len(cells)}\nproperty list uchar int vertex_indices\n"
+        "end_header\n"
+    ).encode()
     face = np.empty(len(cells), dtype=[("n", "u1"), ("v", order + "i4", 3)])
     face["n"], face["v"] = 3, cells
     return header + vertices.astype(order + "f8").tobytes() + face.tobytes()
@@ -430,12 +483,13 @@ def _binary_ply_cells(order: str, cells: np.ndarray, vertices: np.ndarray | None
 
 def _binary_stl_nan() -> bytes:
     content = bytearray(_binary_stl(BASE))
-    content[84 + 12 + 4: 84 + 12 + 8] = np.float32(np.nan).tobytes()
+    content[84 + 12 + 4 : 84 + 12 + 8] = np.float32(np.nan).tobytes()
     return bytes(content)
 
 
-@pytest.mark.parametrize(("label", "extension", "content"),
-                         [pytest.param(*case, id=case[0]) for case in _index_mutations()])
+@pytest.mark.parametrize(
+    ("label", "extension", "content"), [pytest.param(*case, id=case[0]) for case in _index_mutations()]
+)
 def test_bad_values_are_refused(label: str, extension: str, content: bytes, tmp_path: Path) -> None:
     path = tmp_path / f"bad{extension}"
     path.write_bytes(content)
@@ -446,13 +500,17 @@ def test_bad_values_are_refused(label: str, extension: str, content: bytes, tmp_
 
 def test_gocad_ids_out_of_order_read_exactly(tmp_path: Path) -> None:
     """VRTX ids need not be ordered nor start at 1: the triangles follow the ids, not the order."""
-    text = ("GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 30 0 0 0\nVRTX 7 1 0 0\nVRTX 12 0 1 0\n"
-            "VRTX 5 1 1 0\nTRGL 30 7 12\nTRGL 7 5 12\nEND\n")
+    text = (
+        "GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 30 0 0 0\nVRTX 7 1 0 0\nVRTX 12 0 1 0\n"
+        "VRTX 5 1 1 0\nTRGL 30 7 12\nTRGL 7 5 12\nEND\n"
+    )
     path = tmp_path / "s.ts"
     path.write_text(text)
     [surface] = read_gocad(path)
-    assert surface.vertices[surface.cells].tolist() == [[[0, 0, 0], [1, 0, 0], [0, 1, 0]],
-                                                        [[1, 0, 0], [1, 1, 0], [0, 1, 0]]]
+    assert surface.vertices[surface.cells].tolist() == [
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+        [[1, 0, 0], [1, 1, 0], [0, 1, 0]],
+    ]
 
 
 # ---------------------------------------------------------------- issue 36, point 13: bounded messages and memory
@@ -462,14 +520,22 @@ def test_a_long_bad_word_is_quoted_short(tmp_path: Path) -> None:
     """A 500,000-character number (under the line limit) is named by its start and its length, not echoed."""
     word = "1x" * 250_000
     path = tmp_path / "s.ts"
-    path.write_text(f"GOCAD TSurf 1\nHEADER {{\nname: s\n}}\nTFACE\nVRTX 1 {word} 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\n"
-                    "TRGL 1 2 3\nEND\n")
+    path.write_text(
+        f"GOCAD TSurf 1\nHEADER {{\nname: s\n}}\nTFACE\nVRTX 1 {word} 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\n"
+        "TRGL 1 2 3\nEND\n"
+    )
     with pytest.raises(FileFormatError) as info:
         read_gocad(path)
     assert len(str(info.value)) < 400 and "500,000 characters" in str(info.value) and info.value.line == 6
-    for extension, text in ((".obj", f"v 0 0 {word}\n"), (".off", f"OFF\n1 0 0\n0 0 {word}\n"),
-                            (".ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                                     f"property float z\nend_header\n0 0 {word}\n")):
+    for extension, text in (
+        (".obj", f"v 0 0 {word}\n"),
+        (".off", f"OFF\n1 0 0\n0 0 {word}\n"),
+        (
+            ".ply",
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+            f"property float z\nend_header\n0 0 {word}\n",
+        ),
+    ):
         path = tmp_path / f"s{extension}"
         path.write_text(text)
         with pytest.raises(FileFormatError) as info:
@@ -500,24 +566,42 @@ def _huge_files() -> list[tuple[str, str, bytes, bytes, int]]:
     return [
         ("obj_face", ".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf ", b"1 2 3 ", 4),
         ("off_face", ".off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n%d " % (HUGE // 2), b"0 1 2 ", 6),
-        ("ply_face", ".ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                             b"property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n"
-                             b"0 0 0\n1 0 0\n0 1 0\n%d " % (HUGE // 2), b"0 1 2 ", 13),
+        (
+            "ply_face",
+            ".ply",
+            b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            b"property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n"
+            b"0 0 0\n1 0 0\n0 1 0\n%d " % (HUGE // 2),
+            b"0 1 2 ",
+            13,
+        ),
         ("stl_vertex", ".stl", b"solid s\nfacet normal 0 0 1\nouter loop\nvertex ", b"1 ", 4),
         ("tsurf_vrtx_values", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 1 ", b"1 ", 6),
         ("tsurf_vrtx_number", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nTFACE\nVRTX 1 0 0 ", b"7", 6),
         ("tsurf_properties", ".ts", b"GOCAD TSurf 1\nHEADER {\nname: s\n}\nPROPERTIES ", b"p ", 5),
-        ("vtk_keyword_line", ".vtk", b"# vtk DataFile Version 5.1\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
-                                     b"FIELD FieldData 1 ", b"x ", 5),
-        ("vtk_points_left_over", ".vtk", b"# vtk DataFile Version 5.1\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
-                                         b"POINTS 1 double\n", b"0 ", 6),
+        (
+            "vtk_keyword_line",
+            ".vtk",
+            b"# vtk DataFile Version 5.1\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nFIELD FieldData 1 ",
+            b"x ",
+            5,
+        ),
+        (
+            "vtk_points_left_over",
+            ".vtk",
+            b"# vtk DataFile Version 5.1\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 double\n",
+            b"0 ",
+            6,
+        ),
     ]
 
 
-@pytest.mark.parametrize(("label", "extension", "head", "words", "line"),
-                         [pytest.param(*case, id=case[0]) for case in _huge_files()])
-def test_a_100_mb_line_is_refused_in_bounded_memory(label: str, extension: str, head: bytes, words: bytes, line: int,
-                                                    tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("label", "extension", "head", "words", "line"), [pytest.param(*case, id=case[0]) for case in _huge_files()]
+)
+def test_a_100_mb_line_is_refused_in_bounded_memory(
+    label: str, extension: str, head: bytes, words: bytes, line: int, tmp_path: Path
+) -> None:
     """A 100 MB line is refused with its number and a short message; the reading process stays under 1 GB
     (measured: peak RSS of a child process; trimesh took 5.5 GB on a 100 MB OBJ face line)."""
     path = tmp_path / f"huge{extension}"
@@ -525,8 +609,9 @@ def test_a_100_mb_line_is_refused_in_bounded_memory(label: str, extension: str, 
         handle.write(head + words * (HUGE // len(words)) + b"\nEND\n")
     try:
         env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-        result = subprocess.run([sys.executable, "-c", _CHILD, str(path)], capture_output=True, text=True,
-                                timeout=600, env=env)
+        result = subprocess.run(
+            [sys.executable, "-c", _CHILD, str(path)], capture_output=True, text=True, timeout=600, env=env
+        )
     finally:
         path.unlink()
     assert result.returncode == 0, result.stderr[-2000:]
@@ -543,8 +628,10 @@ def test_the_fast_and_the_line_by_line_readings_agree(monkeypatch: pytest.Monkey
     the bad line): both give the same surface."""
     from tgsis.formats import _surface_files as sf
 
-    quads = (b"v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nv 2 2 0\r\nvt 0 0\r\nvn 0 0 1\r\n"
-             b"f 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 1//1 2//1 5//1 4//1\r\n")
+    quads = (
+        b"v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nv 2 2 0\r\nvt 0 0\r\nvn 0 0 1\r\n"
+        b"f 1/1/1 2/1/1 3/1/1 4/1/1\r\nf 1//1 2//1 5//1 4//1\r\n"
+    )
     obj_cases = [_text_obj(BASE), quads, _text_obj(BASE).replace(b"\n", b"\r\n")]
     for data in obj_cases:
         fast, slow = sf._obj_fast(data), sf._obj_slow(data, "x.obj")
@@ -568,11 +655,17 @@ def test_an_obj_face_block_the_fast_reader_declines_is_read_without_backtracking
     Run in a child process so that a regression fails (after 120 s) instead of hanging the suite."""
     path = tmp_path / "commented.obj"
     corners = "123/45/67 891/23/45 678/90/12"  # runs of several digits: the old check could split them
-    path.write_text("".join(f"v {i} {i % 7} {i % 3}\n" for i in range(1, 1001))
-                    + "\n".join([f"f {corners}"] * 40) + " # the last face\n")
-    code = ("import sys\nfrom tgsis.formats.trimesh_io import read_trimesh_file\n"
-            "try:\n    m = read_trimesh_file(sys.argv[1])\n    print(m.n_vertices, m.n_cells)\n"
-            "except Exception as e:\n    print(type(e).__name__, e)\n")
-    done = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120,
-                          check=True)
+    path.write_text(
+        "".join(f"v {i} {i % 7} {i % 3}\n" for i in range(1, 1001))
+        + "\n".join([f"f {corners}"] * 40)
+        + " # the last face\n"
+    )
+    code = (
+        "import sys\nfrom tgsis.formats.trimesh_io import read_trimesh_file\n"
+        "try:\n    m = read_trimesh_file(sys.argv[1])\n    print(m.n_vertices, m.n_cells)\n"
+        "except Exception as e:\n    print(type(e).__name__, e)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120, check=True
+    )
     assert done.stdout.split()[:2] == ["1000", "40"] or done.stdout.startswith("FileFormatError"), done.stdout

@@ -70,21 +70,58 @@ INTERVALSTYLES = ["postgres", "postgres_verbose", "sql_standard", "iso_8601"]
 
 # type -> (literal, its canonical text); literals are ISO or plain, which every setting reads alike
 CANONICAL: dict[str, list[tuple[str, str]]] = {
-    "date": [("2024-01-02", "2024-01-02"), ("0044-03-15 BC", "0044-03-15 BC"), ("10000-12-31", "10000-12-31"),
-             ("infinity", "infinity"), ("-infinity", "-infinity")],
-    "timestamp": [("2024-01-02 03:04:05.25", "2024-01-02 03:04:05.25"), ("2024-01-02", "2024-01-02 00:00:00"),
-                  ("2024-01-02 03:04:05.000001", "2024-01-02 03:04:05.000001"),
-                  ("0044-03-15 12:00 BC", "0044-03-15 12:00:00 BC"), ("infinity", "infinity")],
-    "timestamptz": [("2024-01-02 03:04:05.123456+05:45", "2024-01-01 21:19:05.123456+00"),
-                    ("2024-07-01 00:00:00-07", "2024-07-01 07:00:00+00"), ("2024-01-02 00:00:00+00", "2024-01-02 00:00:00+00"),
-                    ("0044-03-15 12:00+00 BC", "0044-03-15 12:00:00+00 BC"), ("-infinity", "-infinity")],
-    "float8": [("0.1", "0.1"), ("-0", "0"), ("0", "0"), ("1e300", "1e+300"), ("0.30000000000000004", "0.30000000000000004"),
-               ("NaN", "NaN"), ("-Infinity", "-Infinity"), ("123456789.125", "123456789.125")],
+    "date": [
+        ("2024-01-02", "2024-01-02"),
+        ("0044-03-15 BC", "0044-03-15 BC"),
+        ("10000-12-31", "10000-12-31"),
+        ("infinity", "infinity"),
+        ("-infinity", "-infinity"),
+    ],
+    "timestamp": [
+        ("2024-01-02 03:04:05.25", "2024-01-02 03:04:05.25"),
+        ("2024-01-02", "2024-01-02 00:00:00"),
+        ("2024-01-02 03:04:05.000001", "2024-01-02 03:04:05.000001"),
+        ("0044-03-15 12:00 BC", "0044-03-15 12:00:00 BC"),
+        ("infinity", "infinity"),
+    ],
+    "timestamptz": [
+        ("2024-01-02 03:04:05.123456+05:45", "2024-01-01 21:19:05.123456+00"),
+        ("2024-07-01 00:00:00-07", "2024-07-01 07:00:00+00"),
+        ("2024-01-02 00:00:00+00", "2024-01-02 00:00:00+00"),
+        ("0044-03-15 12:00+00 BC", "0044-03-15 12:00:00+00 BC"),
+        ("-infinity", "-infinity"),
+    ],
+    "float8": [
+        ("0.1", "0.1"),
+        ("-0", "0"),
+        ("0", "0"),
+        ("1e300", "1e+300"),
+        ("0.30000000000000004", "0.30000000000000004"),
+        ("NaN", "NaN"),
+        ("-Infinity", "-Infinity"),
+        ("123456789.125", "123456789.125"),
+    ],
     "float4": [("0.1", "0.1"), ("-0", "0"), ("3.4028235e38", "3.4028235e+38"), ("16777217", "1.6777216e+07")],
-    "numeric": [("1.0", "1"), ("1.00", "1"), ("123.4500", "123.45"), ("-0.000", "0"), ("NaN", "NaN"), ("1e-20", "0.00000000000000000001")],
-    "interval": [("1 mon", "30 days"), ("30 days", "30 days"), ("720 hours", "30 days"), ("-1 day +2 hours", "-22:00:00"),
-                 ("25 hours", "1 day 01:00:00"), ("1 day 1 hour", "1 day 01:00:00"), ("-3 days -05:00:00", "-3 days -05:00:00"),
-                 ("-3 days +05:00:00", "-2 days -19:00:00"), ("1.5 seconds", "00:00:01.5"), ("1 year", "360 days")],
+    "numeric": [
+        ("1.0", "1"),
+        ("1.00", "1"),
+        ("123.4500", "123.45"),
+        ("-0.000", "0"),
+        ("NaN", "NaN"),
+        ("1e-20", "0.00000000000000000001"),
+    ],
+    "interval": [
+        ("1 mon", "30 days"),
+        ("30 days", "30 days"),
+        ("720 hours", "30 days"),
+        ("-1 day +2 hours", "-22:00:00"),
+        ("25 hours", "1 day 01:00:00"),
+        ("1 day 1 hour", "1 day 01:00:00"),
+        ("-3 days -05:00:00", "-3 days -05:00:00"),
+        ("-3 days +05:00:00", "-2 days -19:00:00"),
+        ("1.5 seconds", "00:00:01.5"),
+        ("1 year", "360 days"),
+    ],
     "bytea": [("\\x00ff", "\\x00ff"), ("", "\\x")],
     "time": [("12:34:56.5", "12:34:56.5"), ("00:00", "00:00:00")],
     "timetz": [("12:34:56+05:45", "12:34:56+05:45"), ("23:00-07", "23:00:00-07")],
@@ -97,21 +134,29 @@ CANONICAL: dict[str, list[tuple[str, str]]] = {
 
 def _settings(i: int) -> dict[str, str]:
     """The i-th combination: every DateStyle with every TimeZone, float digits and IntervalStyle in turn."""
-    return {"DateStyle": DATESTYLES[i % 12], "TimeZone": TIMEZONES[(i // 12) % 4], "extra_float_digits": FLOAT_DIGITS[i % 4],
-            "IntervalStyle": INTERVALSTYLES[(i // 3) % 4], "bytea_output": ("hex", "escape")[i % 2]}
+    return {
+        "DateStyle": DATESTYLES[i % 12],
+        "TimeZone": TIMEZONES[(i // 12) % 4],
+        "extra_float_digits": FLOAT_DIGITS[i % 4],
+        "IntervalStyle": INTERVALSTYLES[(i // 3) % 4],
+        "bytea_output": ("hex", "escape")[i % 2],
+    }
 
 
 def test_every_key_type_has_one_text_under_every_setting_and_reads_back(conn: Conn) -> None:
     pairs = [(t, lit, canon) for t, values in CANONICAL.items() for lit, canon in values]
-    for i in range(48):   # 12 DateStyles x 4 TimeZones, with the other settings in turn
+    for i in range(48):  # 12 DateStyles x 4 TimeZones, with the other settings in turn
         for name, value in _settings(i).items():
             conn.execute("SELECT pg_catalog.set_config(%s, %s, false)", (name, value))
         for t, lit, canon in pairs:
             expr = f"tgsis.object_key_sql({t!r}::regtype, 'x.k')"
             sql = conn.execute(f"SELECT {expr}").fetchone()[0]  # type: ignore[index]
             text, back = conn.execute(
-                f"SELECT {sql}, ({sql})::{t} IS NOT DISTINCT FROM x.k"
-                f"  FROM (SELECT %s::{t} AS k) AS x".replace("{sql}", sql), (lit,)).fetchone()  # type: ignore[misc]
+                f"SELECT {sql}, ({sql})::{t} IS NOT DISTINCT FROM x.k  FROM (SELECT %s::{t} AS k) AS x".replace(
+                    "{sql}", sql
+                ),
+                (lit,),
+            ).fetchone()  # type: ignore[misc]
             assert (text, back) == (canon, True), (t, lit, _settings(i))
             # the text reads back as the same value (the storage's lookups cast it back to the key's type)
             assert conn.execute(f"SELECT %s::{t} = %s::{t}", (canon, lit)).fetchone()[0] in (True, None), (t, lit)
@@ -122,8 +167,11 @@ def test_every_key_type_has_one_text_under_every_setting_and_reads_back(conn: Co
 def test_a_key_type_without_a_canonical_text_is_refused_by_name(conn: Conn, type_: str) -> None:
     conn.execute(f"CREATE TABLE odd (k {type_} PRIMARY KEY, v integer)")
     conn.commit()
-    with pytest.raises(tgsis.InvalidInputError, match=rf"object key column k of .*odd is of type {type_.replace('[', '.').replace(']', '.')}, "
-                                                      r"which has no text independent of the session's settings"):
+    with pytest.raises(
+        tgsis.InvalidInputError,
+        match=rf"object key column k of .*odd is of type {type_.replace('[', '.').replace(']', '.')}, "
+        r"which has no text independent of the session's settings",
+    ):
         tgsis.enable_versioning(conn, "odd", "k", "odd")
     conn.rollback()
     assert conn.execute("SELECT to_regclass('odd_ver') IS NULL AND to_regclass('odd') IS NOT NULL").fetchone()[0]
@@ -144,11 +192,27 @@ def test_a_key_column_of_a_nondeterministic_collation_is_refused(conn: Conn) -> 
 
 # ---- two sessions of different settings on the same objects ---------------------------------------------
 
-A = {"DateStyle": "ISO, MDY", "TimeZone": "UTC", "extra_float_digits": "1", "IntervalStyle": "postgres", "bytea_output": "hex"}
-B = {"DateStyle": "SQL, DMY", "TimeZone": "Asia/Kathmandu", "extra_float_digits": "-15", "IntervalStyle": "sql_standard",
-     "bytea_output": "escape"}
-C = {"DateStyle": "German, YMD", "TimeZone": "America/Los_Angeles", "extra_float_digits": "0", "IntervalStyle": "iso_8601",
-     "bytea_output": "hex"}
+A = {
+    "DateStyle": "ISO, MDY",
+    "TimeZone": "UTC",
+    "extra_float_digits": "1",
+    "IntervalStyle": "postgres",
+    "bytea_output": "hex",
+}
+B = {
+    "DateStyle": "SQL, DMY",
+    "TimeZone": "Asia/Kathmandu",
+    "extra_float_digits": "-15",
+    "IntervalStyle": "sql_standard",
+    "bytea_output": "escape",
+}
+C = {
+    "DateStyle": "German, YMD",
+    "TimeZone": "America/Los_Angeles",
+    "extra_float_digits": "0",
+    "IntervalStyle": "iso_8601",
+    "bytea_output": "hex",
+}
 
 # type -> three keys (ISO or plain literals) whose text differs with the session's settings where the type's does
 KEYS: dict[str, tuple[str, str, str]] = {
@@ -162,8 +226,11 @@ KEYS: dict[str, tuple[str, str, str]] = {
     "time": ("12:34:56.5", "00:00:01", "23:59:59"),
     "timetz": ("12:34:56+05:45", "00:00:01-07", "23:59:59+00"),
     "text": ("a", "b b", "2024-01-02"),
-    "uuid": ("a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11", "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a12",
-             "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a13"),
+    "uuid": (
+        "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11",
+        "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a12",
+        "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a13",
+    ),
     "bytea": ("\\x00", "\\x0102", "\\xff"),
 }
 
@@ -179,8 +246,11 @@ CANON_KEYS: dict[str, tuple[str, str, str]] = {
     "time": ("12:34:56.5", "00:00:01", "23:59:59"),
     "timetz": ("12:34:56+05:45", "00:00:01-07", "23:59:59+00"),
     "text": ("a", "b b", "2024-01-02"),
-    "uuid": ("a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11", "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a12",
-             "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a13"),
+    "uuid": (
+        "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a11",
+        "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a12",
+        "a0eebc99-9c0b-4ef8-bb6d-6bb9bd380a13",
+    ),
     "bytea": ("\\x00", "\\x0102", "\\xff"),
 }
 
@@ -252,6 +322,7 @@ def test_sessions_of_other_settings_see_one_object(conn: Conn, db_dsn: str, type
 
 # ---- keys stored before: made canonical by the upgrade -----------------------------------------------------
 
+
 @pytest.mark.parametrize("method", ["extension", "sql"])
 def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
     method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
@@ -278,9 +349,10 @@ def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
         conn.execute("INSERT INTO arr VALUES ('{1,2}', 0)")
         conn.execute("SELECT tgsis.enable_versioning('arr', 'k', 'arr')")
         conn.commit()
-        assert conn.execute("SELECT objectkey FROM tgsis.object_locks UNION ALL SELECT objectkey FROM tgsis.conflicts"
-                            ).fetchall() == [("2024-01-02 08:49:05+05:45",), ("2024-02-01 05:45:00+05:45",)]
-    with psycopg.connect(dsn) as conn:   # the DBA's session: the server's TimeZone
+        assert conn.execute(
+            "SELECT objectkey FROM tgsis.object_locks UNION ALL SELECT objectkey FROM tgsis.conflicts"
+        ).fetchall() == [("2024-01-02 08:49:05+05:45",), ("2024-02-01 05:45:00+05:45",)]
+    with psycopg.connect(dsn) as conn:  # the DBA's session: the server's TimeZone
         warnings: list[str] = []
         conn.add_notice_handler(lambda d: warnings.append(str(d.message_primary)))
         if method == "extension":
@@ -288,13 +360,19 @@ def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
         else:
             assert tgsis.install(conn).action == "upgraded"
         conn.commit()
-        assert conn.execute("SELECT objectkey FROM tgsis.object_locks UNION ALL SELECT objectkey FROM tgsis.conflicts"
-                            ).fetchall() == [("2024-01-02 03:04:05+00",), ("2024-02-01 00:00:00+00",)]
-        assert conn.execute("SELECT DISTINCT objectkey FROM tgsis.revision_objects WHERE tablename = 't'"
-                            ).fetchall() == [("2024-02-01 00:00:00+00",)]
-        assert "the object key column k of public.arr is of type integer[], which has no text independent of the " \
-               "session's settings" in warnings
-        assert any(re.fullmatch(r"\d+ object keys of public\.t rewritten as canonical text .*", w) for w in warnings), warnings
+        assert conn.execute(
+            "SELECT objectkey FROM tgsis.object_locks UNION ALL SELECT objectkey FROM tgsis.conflicts"
+        ).fetchall() == [("2024-01-02 03:04:05+00",), ("2024-02-01 00:00:00+00",)]
+        assert conn.execute(
+            "SELECT DISTINCT objectkey FROM tgsis.revision_objects WHERE tablename = 't'"
+        ).fetchall() == [("2024-02-01 00:00:00+00",)]
+        assert (
+            "the object key column k of public.arr is of type integer[], which has no text independent of the "
+            "session's settings" in warnings
+        )
+        assert any(re.fullmatch(r"\d+ object keys of public\.t rewritten as canonical text .*", w) for w in warnings), (
+            warnings
+        )
         conn.execute("UPDATE arr SET v = 1")
         conn.commit()
         assert conn.execute("SELECT k, v FROM arr").fetchall() == [([1, 2], 1)]
@@ -306,8 +384,10 @@ def test_the_upgrade_makes_keys_stored_under_other_settings_canonical(
         with pytest.raises(tgsis.ObjectLockedError, match=re.escape("2024-01-02 03:04:05+00 (locked by version 'v1'")):
             _write(utc, "v2", "UPDATE t SET v = 30 WHERE k = '2024-01-02 03:04:05+00'")
         utc.rollback()
-        assert [(c.objectkey, c.solution) for c in tgsis.find_conflicts(utc, "v2")] == [("2024-02-01 00:00:00+00", "unsolved")]
-        tgsis.resolve_conflict(utc, "v2", "thing", "01/02/2024 00:00:00+00", "child")   # DMY: 1 February
+        assert [(c.objectkey, c.solution) for c in tgsis.find_conflicts(utc, "v2")] == [
+            ("2024-02-01 00:00:00+00", "unsolved")
+        ]
+        tgsis.resolve_conflict(utc, "v2", "thing", "01/02/2024 00:00:00+00", "child")  # DMY: 1 February
         tgsis.merge_version(utc, "v2")
         assert utc.execute("SELECT v FROM tgsis.rows_at(NULL::t, 'DEFAULT') ORDER BY k").fetchall() == [(0,), (20,)]
     finally:
@@ -322,7 +402,9 @@ def test_keys_passed_from_python_name_the_object_whatever_the_settings(conn: Con
     tables = {
         "interval": [dt.timedelta(days=-1, seconds=3600), dt.timedelta(days=30), dt.timedelta(microseconds=5)],
         "bytea": [b"\x00\xff", b"", b"abc"],
-        "timestamptz": [dt.datetime(2024, 1, 2, 3, 4, 5, 250000, tzinfo=dt.timezone(dt.timedelta(hours=5, minutes=45)))],
+        "timestamptz": [
+            dt.datetime(2024, 1, 2, 3, 4, 5, 250000, tzinfo=dt.timezone(dt.timedelta(hours=5, minutes=45)))
+        ],
         "date": [dt.date(2024, 1, 2)],
         "numeric": [decimal.Decimal("1.50"), decimal.Decimal("1E+2")],
         "float8": [0.1, 1e300],
@@ -340,7 +422,7 @@ def test_keys_passed_from_python_name_the_object_whatever_the_settings(conn: Con
     try:
         for type_, keys in tables.items():
             name = f"k_{type_}"
-            assert tgsis.lock_objects(b, "v1", name, keys) == len(keys), type_   # every key names an object of v1
+            assert tgsis.lock_objects(b, "v1", name, keys) == len(keys), type_  # every key names an object of v1
             canon = {_canonical(conn, type_, str(r[0])) for r in conn.execute(f"SELECT k::text FROM {name}_ver")}
             conn.rollback()
             locked = {lk.objectkey for lk in tgsis.object_locks(conn) if lk.objectclass == name}
@@ -360,18 +442,27 @@ def test_rows_written_into_storage_under_sql_dmy_are_noted_by_their_canonical_ke
     dmy = _session(db_dsn, DateStyle="SQL, DMY")
     try:
         with tgsis.in_version(dmy, "v1", local=True):
-            dmy.execute("INSERT INTO days_ver (d, v, revision) "
-                        "SELECT '03/01/2024', 1, revision FROM tgsis.write_revision()")   # DMY: 3 January
-            dmy.execute("INSERT INTO days_ver (d, v, revision) "
-                        "SELECT d, 2, revision FROM tgsis.write_revision(), (VALUES (DATE '2024-05-06'), (DATE '2024-06-05')) AS x(d)")
+            dmy.execute(
+                "INSERT INTO days_ver (d, v, revision) SELECT '03/01/2024', 1, revision FROM tgsis.write_revision()"
+            )  # DMY: 3 January
+            dmy.execute(
+                "INSERT INTO days_ver (d, v, revision) "
+                "SELECT d, 2, revision FROM tgsis.write_revision(), (VALUES (DATE '2024-05-06'), (DATE '2024-06-05')) AS x(d)"
+            )
         dmy.commit()
         tgsis.merge_version(dmy, "v1")
     finally:
         dmy.close()
     assert conn.execute("SELECT DISTINCT objectkey FROM tgsis.revision_objects ORDER BY 1").fetchall() == [
-        ("2024-01-03",), ("2024-05-06",), ("2024-06-05",)]
+        ("2024-01-03",),
+        ("2024-05-06",),
+        ("2024-06-05",),
+    ]
     assert conn.execute("SELECT d::text, v FROM tgsis.rows_at(NULL::days, 'DEFAULT') ORDER BY d").fetchall() == [
-        ("2024-01-03", 1), ("2024-05-06", 2), ("2024-06-05", 2)]
+        ("2024-01-03", 1),
+        ("2024-05-06", 2),
+        ("2024-06-05", 2),
+    ]
     conn.rollback()
 
 
@@ -383,12 +474,24 @@ def test_a_fingerprint_is_the_same_in_sessions_of_other_settings(conn: Conn, db_
 
     from tgsis.db import features as F
 
-    fc = F.create_feature_class(conn, "beds", "SURFACE", feature_properties={"surveyed": "timestamptz", "dated": "date"},
-                                cell_properties={"porosity": "float8"})
-    mesh = tgsis.Surface(np.array([[0, 0, 0.1], [1, 0, 0.30000000000000004], [0, 1, 1e-300]]), np.array([[0, 1, 2]]),
-                         vertex_properties={"porosity": [0.1, 0.2, 0.30000000000000004]})
-    fid = F.insert_feature(conn, fc, mesh, {"surveyed": dt.datetime(2024, 1, 2, 3, 4, 5, tzinfo=dt.timezone.utc),
-                                            "dated": dt.date(2024, 1, 2)})
+    fc = F.create_feature_class(
+        conn,
+        "beds",
+        "SURFACE",
+        feature_properties={"surveyed": "timestamptz", "dated": "date"},
+        cell_properties={"porosity": "float8"},
+    )
+    mesh = tgsis.Surface(
+        np.array([[0, 0, 0.1], [1, 0, 0.30000000000000004], [0, 1, 1e-300]]),
+        np.array([[0, 1, 2]]),
+        vertex_properties={"porosity": [0.1, 0.2, 0.30000000000000004]},
+    )
+    fid = F.insert_feature(
+        conn,
+        fc,
+        mesh,
+        {"surveyed": dt.datetime(2024, 1, 2, 3, 4, 5, tzinfo=dt.timezone.utc), "dated": dt.date(2024, 1, 2)},
+    )
     conn.commit()
     prints = set()
     for settings in (A, B, C):
@@ -412,7 +515,7 @@ def test_a_key_two_tables_of_a_class_read_differently_is_refused(conn: Conn) -> 
     with pytest.raises(tgsis.InvalidInputError, match="object key '2024-1-2' of class 'mix' names different objects"):
         tgsis.lock_objects(conn, "DEFAULT", "mix", ["2024-1-2"])
     conn.rollback()
-    assert tgsis.lock_objects(conn, "DEFAULT", "mix", ["2024-01-02"]) == 1   # read alike by both
+    assert tgsis.lock_objects(conn, "DEFAULT", "mix", ["2024-01-02"]) == 1  # read alike by both
     with pytest.raises(tgsis.InvalidInputError, match="object key 'abc' of class 'mix' is not a date"):
         tgsis.lock_objects(conn, "DEFAULT", "mix", ["abc"])
     conn.rollback()

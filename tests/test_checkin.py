@@ -23,8 +23,12 @@ def _grid(side: int, seed: int = 0) -> tgsis.Surface:
     vertices = np.stack([u.ravel(), v.ravel(), rng.random(side * side)], axis=1)
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": rng.random(side * side)}, name="grid")
+    return tgsis.Surface(
+        vertices,
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        vertex_properties={"porosity": rng.random(side * side)},
+        name="grid",
+    )
 
 
 def _edit(mesh: tgsis.Surface, fraction: float, seed: int = 1) -> tgsis.Surface:
@@ -44,8 +48,9 @@ def _edit(mesh: tgsis.Surface, fraction: float, seed: int = 1) -> tgsis.Surface:
     vperm, cperm = rng.permutation(len(vertices)), rng.permutation(len(cells))
     rank = np.empty_like(vperm)
     rank[vperm] = np.arange(len(vperm))
-    return tgsis.Surface(vertices[vperm], rank[cells[cperm]], vertex_properties={"porosity": porosity[vperm]},
-                         name=mesh.name)
+    return tgsis.Surface(
+        vertices[vperm], rank[cells[cperm]], vertex_properties={"porosity": porosity[vperm]}, name=mesh.name
+    )
 
 
 def _same_surface(a: tgsis.Mesh, b: tgsis.Mesh) -> bool:
@@ -53,26 +58,33 @@ def _same_surface(a: tgsis.Mesh, b: tgsis.Mesh) -> bool:
     diff = tgsis.compare_meshes(a, b)
     if not diff.identical:
         return False
-    return all(np.array_equal(a.vertex_properties[k][diff.vertex_map], b.vertex_properties[k])
-               for k in a.vertex_properties)
+    return all(
+        np.array_equal(a.vertex_properties[k][diff.vertex_map], b.vertex_properties[k]) for k in a.vertex_properties
+    )
 
 
 @pytest.fixture
 def horizons(conn: Conn) -> F.FeatureClass:
-    fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
-                                cell_properties={"porosity": "float8"})
+    fc = F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"creator": "text"}, cell_properties={"porosity": "float8"}
+    )
     conn.commit()
     return fc
 
 
 def _rows(conn: Conn, geoid: int) -> dict[str, dict[int, tuple[Any, ...]]]:
     return {
-        "vrtx": {r[0]: r[1:] for r in conn.execute("SELECT vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = %s",
-                                                    (geoid,))},
-        "trgl": {r[0]: r[1:] for r in conn.execute(
-            "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl WHERE geoid = %s", (geoid,))},
-        "cellpros": {r[0]: r[1:] for r in conn.execute(
-            "SELECT _idx, porosity FROM horizons_cellpros WHERE _geoid = %s", (geoid,))},
+        "vrtx": {
+            r[0]: r[1:] for r in conn.execute("SELECT vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = %s", (geoid,))
+        },
+        "trgl": {
+            r[0]: r[1:]
+            for r in conn.execute("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl WHERE geoid = %s", (geoid,))
+        },
+        "cellpros": {
+            r[0]: r[1:]
+            for r in conn.execute("SELECT _idx, porosity FROM horizons_cellpros WHERE _geoid = %s", (geoid,))
+        },
     }
 
 
@@ -98,7 +110,7 @@ def test_save_writes_only_the_difference_and_keeps_ids(conn: Conn, horizons: F.F
     kept_t = set(before["trgl"]) & set(after["trgl"])
     assert len(kept_t) == len(before["trgl"]) - 6 and len(after["trgl"]) == len(before["trgl"])
     assert all(before["trgl"][i] == after["trgl"][i] for i in kept_t)
-    assert min(set(after["trgl"]) - kept_t) == max(before["trgl"]) + 1      # new ids above every old one
+    assert min(set(after["trgl"]) - kept_t) == max(before["trgl"]) + 1  # new ids above every old one
     # rows written are proportional to the edit: 36 moved vertices, 6 triangles, 5 properties, the geometry row
     assert result.rows_written == 2 * 36 + 2 * 6 + 2 * 5 + 1
     mesh_rows = len(base.vertices) * 2 + len(base.cells)
@@ -109,9 +121,11 @@ def test_save_writes_only_the_difference_and_keeps_ids(conn: Conn, horizons: F.F
     assert _same_surface(stored.mesh, edited)  # type: ignore[arg-type]
     assert stored.properties == {"creator": "ann"}
     assert conn.execute("SELECT count(*) FROM tgsis.check_geometry(%s)", (fid,)).fetchone() == (0,)
-    row = conn.execute("SELECT nvrtx, ncell, bbox = cube(ARRAY[0, 0, %s]::float8[], ARRAY[59, 59, %s]::float8[]) "
-                       "FROM tgsis.geometry WHERE geoid = %s",
-                       (float(edited.vertices[:, 2].min()), float(edited.vertices[:, 2].max()), fid)).fetchone()
+    row = conn.execute(
+        "SELECT nvrtx, ncell, bbox = cube(ARRAY[0, 0, %s]::float8[], ARRAY[59, 59, %s]::float8[]) "
+        "FROM tgsis.geometry WHERE geoid = %s",
+        (float(edited.vertices[:, 2].min()), float(edited.vertices[:, 2].max()), fid),
+    ).fetchone()
     assert row == (edited.n_vertices, edited.n_cells, True)
 
 
@@ -120,8 +134,12 @@ def test_saving_the_same_mesh_writes_nothing(conn: Conn, horizons: F.FeatureClas
     fid = F.insert_feature(conn, horizons, base)
     conn.commit()
     shuffled = _edit(base, 0.0, seed=3)  # no vertex moves, but 3 diagonals flip and 5 porosities change
-    plain = tgsis.Surface(base.vertices[::-1], (len(base.vertices) - 1 - base.cells)[::-1],
-                          vertex_properties={"porosity": base.vertex_properties["porosity"][::-1]}, name="grid")
+    plain = tgsis.Surface(
+        base.vertices[::-1],
+        (len(base.vertices) - 1 - base.cells)[::-1],
+        vertex_properties={"porosity": base.vertex_properties["porosity"][::-1]},
+        name="grid",
+    )
     result = tgsis.save_feature(conn, horizons, fid, plain)
     assert result.rows_written == 0 and result.diff.identical
     result = tgsis.save_feature(conn, horizons, fid, shuffled)
@@ -135,9 +153,9 @@ def test_cell_aligned_properties_follow_their_cells(conn: Conn) -> None:
     fid = F.insert_feature(conn, fc, base)
     conn.commit()
     facies = np.arange(base.n_cells)
-    facies[7] = 1000                                                    # a value change on a kept triangle
+    facies[7] = 1000  # a value change on a kept triangle
     vertices = base.vertices.copy()
-    vertices[55, 2] = 5.0                                               # its 6 triangles become new ones
+    vertices[55, 2] = 5.0  # its 6 triangles become new ones
     edited = tgsis.Surface(vertices, base.cells, cell_properties={"facies": facies})
     result = tgsis.save_feature(conn, fc, fid, edited)
     conn.commit()
@@ -156,8 +174,10 @@ def test_save_in_a_child_version_stores_only_new_row_versions(conn: Conn, horizo
     conn.commit()
 
     def storage_rows() -> int:
-        return sum(int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
-                   for t in ("tgsis.vrtx_ver", "tgsis.trgl_ver", "horizons_cellpros_ver", "tgsis.geometry_ver"))
+        return sum(
+            int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
+            for t in ("tgsis.vrtx_ver", "tgsis.trgl_ver", "horizons_cellpros_ver", "tgsis.geometry_ver")
+        )
 
     before = storage_rows()
     edited = _edit(base, 0.01)
@@ -185,10 +205,15 @@ def test_save_is_refused_on_an_object_locked_by_another_version(conn: Conn, hori
     vertices = base.vertices.copy()
     vertices[0, 2] = 99.0
     with pytest.raises(tgsis.ObjectLockedError):
-        tgsis.save_feature(conn, horizons, fid, tgsis.Surface(vertices, base.cells, vertex_properties=base.vertex_properties))
+        tgsis.save_feature(
+            conn, horizons, fid, tgsis.Surface(vertices, base.cells, vertex_properties=base.vertex_properties)
+        )
     # adding a vertex only (no row deleted) is refused as well
-    grown = tgsis.Surface(np.r_[base.vertices, [[100.0, 100.0, 0.0]]], base.cells,
-                          vertex_properties={"porosity": np.r_[base.vertex_properties["porosity"], 0.0]})
+    grown = tgsis.Surface(
+        np.r_[base.vertices, [[100.0, 100.0, 0.0]]],
+        base.cells,
+        vertex_properties={"porosity": np.r_[base.vertex_properties["porosity"], 0.0]},
+    )
     with pytest.raises(tgsis.ObjectLockedError):
         tgsis.save_feature(conn, horizons, fid, grown)
     assert _same_surface(F.fetch_feature(conn, horizons, fid).mesh, base)  # type: ignore[arg-type]
@@ -234,7 +259,7 @@ def test_two_clients_no_lost_update(db_dsn: str, horizons: F.FeatureClass) -> No
         ann.commit()
         ann_co, bob_co = tgsis.checkout(ann, fid), tgsis.checkout(bob, fid)
         ann_mesh, bob_mesh = ann_co.mesh.copy(), bob_co.mesh.copy()
-        ann_mesh.vertices[0, 2] = 100.0            # different vertices: each edit alone is fine
+        ann_mesh.vertices[0, 2] = 100.0  # different vertices: each edit alone is fine
         bob_mesh.vertices[600, 2] = -100.0
         tgsis.checkin(ann, ann_co, ann_mesh)
         ann.commit()
@@ -243,7 +268,7 @@ def test_two_clients_no_lost_update(db_dsn: str, horizons: F.FeatureClass) -> No
             tgsis.checkin(bob, bob_co, bob_mesh)
         assert refused.value.sqlstate == "TG304" and str(fid) in str(refused.value)
         bob.rollback()
-        assert _fingerprint(bob, fid) == state      # nothing of Bob's was written
+        assert _fingerprint(bob, fid) == state  # nothing of Bob's was written
         # Bob checks out again (seeing Ann's edit), redoes his, checks in: both edits are there
         bob_co = tgsis.checkout(bob, fid)
         redo = bob_co.mesh.copy()
@@ -348,7 +373,7 @@ def test_checkout_in_a_version_checks_in_there(conn: Conn, horizons: F.FeatureCl
         co = tgsis.checkout(conn, fid)
     assert co.token.version == "mine"
     edited = _edit(co.mesh, 0.05)  # type: ignore[arg-type]
-    assert tgsis.checkin(conn, co, edited).version == "mine"          # the session is in DEFAULT
+    assert tgsis.checkin(conn, co, edited).version == "mine"  # the session is in DEFAULT
     conn.commit()
     assert tgsis.working_version(conn) == "DEFAULT"
     assert _same_surface(F.fetch_feature(conn, horizons, fid).mesh, base)  # type: ignore[arg-type]
@@ -454,8 +479,10 @@ def test_cfm_releases_checked_in_over_each_other(conn: Conn) -> None:
 
     fc = F.create_feature_class(conn, "faults", "SURFACE")
     conn.commit()
-    for name, tolerance, expect_small in (("GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts", 1e-2, True),
-                                          ("CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m.ts", 0.0, False)):
+    for name, tolerance, expect_small in (
+        ("GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts", 1e-2, True),
+        ("CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m.ts", 0.0, False),
+    ):
         old, new = formats.read_one(cfm(f"cfm5.3/{name}")), formats.read_one(cfm(f"cfm6.1/{name}"))
         fid = F.insert_feature(conn, fc, old)
         conn.commit()
@@ -489,7 +516,7 @@ def test_checkout_in_a_child_goes_through_the_normal_conflict_path(conn: Conn, h
     theirs = base.vertices.copy()
     theirs[3, 2] = 7.0
     tgsis.save_feature(conn, horizons, fid, tgsis.Surface(theirs, base.cells, vertex_properties=base.vertex_properties))
-    conn.commit()                                                        # DEFAULT changed it meanwhile
+    conn.commit()  # DEFAULT changed it meanwhile
     mine = co.mesh.copy()
     mine.vertices[100, 2] = -7.0
     assert tgsis.checkin(conn, co, mine).version == "mine"
@@ -503,8 +530,9 @@ def test_checkout_in_a_child_goes_through_the_normal_conflict_path(conn: Conn, h
 def test_bad_calls_to_the_check_in_functions_of_sql(conn: Conn, horizons: F.FeatureClass) -> None:
     """What psql users call directly: our SQLSTATEs, and nothing changed."""
     fid = F.insert_feature(conn, horizons, _grid(5))
-    evolving = tgsis.EvolvingSurface([tgsis.TopologyPeriod([0.0, 1.0], _grid(3).cells,
-                                                            [_grid(3).vertices, _grid(3).vertices + 1])])
+    evolving = tgsis.EvolvingSurface(
+        [tgsis.TopologyPeriod([0.0, 1.0], _grid(3).cells, [_grid(3).vertices, _grid(3).vertices + 1])]
+    )
     moving = F.insert_feature(conn, F.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING"), evolving)
     conn.commit()
     state = _fingerprint(conn, fid)
@@ -515,8 +543,12 @@ def test_bad_calls_to_the_check_in_functions_of_sql(conn: Conn, horizons: F.Feat
         ("SELECT tgsis.check_unchanged(%s, 'x')", (fid + 999,), "TG304", "was deleted"),
         ("SELECT tgsis.table_fingerprint('tgsis', 'nope', 'geoid', 'id', ARRAY[1::bigint])", (), "TG200", "nope"),
         ("SELECT tgsis.delete_object_rows('tgsis', 'nope', 'geoid', ARRAY[1::bigint])", (), "TG200", "nope"),
-        ("SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[%s::bigint], 'vrtxid', NULL)", (fid,),
-         "TG100", "id column and ids together"),
+        (
+            "SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[%s::bigint], 'vrtxid', NULL)",
+            (fid,),
+            "TG100",
+            "id column and ids together",
+        ),
     ]
     for query, params, code, text in calls:
         with pytest.raises(tgsis.Error, match=text) as raised:
@@ -527,6 +559,8 @@ def test_bad_calls_to_the_check_in_functions_of_sql(conn: Conn, horizons: F.Feat
         assert _fingerprint(conn, fid) == state
     assert conn.execute("SELECT tgsis.object_fingerprint(NULL)").fetchone() == (None,)
     # the id-restricted delete removes exactly those rows
-    assert conn.execute("SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[%s::bigint], 'vrtxid', "
-                        "ARRAY[1, 2]::bigint[])", (fid,)).fetchone() == (2,)
+    assert conn.execute(
+        "SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[%s::bigint], 'vrtxid', ARRAY[1, 2]::bigint[])",
+        (fid,),
+    ).fetchone() == (2,)
     assert conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (fid,)).fetchone() == (23,)

@@ -25,7 +25,7 @@ from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
 
-THEIRS, MINE = 5, 300        # vertex the colleague moves, vertex the modeller moves (in base order)
+THEIRS, MINE = 5, 300  # vertex the colleague moves, vertex the modeller moves (in base order)
 
 
 def _grid(side: int = 20) -> tgsis.Surface:
@@ -34,14 +34,19 @@ def _grid(side: int = 20) -> tgsis.Surface:
     vertices = np.stack([u.ravel(), v.ravel(), rng.random(side * side)], axis=1)
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": rng.random(side * side)}, name="fault")
+    return tgsis.Surface(
+        vertices,
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        vertex_properties={"porosity": rng.random(side * side)},
+        name="fault",
+    )
 
 
 @pytest.fixture
 def faults(conn: Conn) -> F.FeatureClass:
-    fc = F.create_feature_class(conn, "faults", "SURFACE", cell_properties={"porosity": "float8"},
-                                feature_properties={"author": "text"})
+    fc = F.create_feature_class(
+        conn, "faults", "SURFACE", cell_properties={"porosity": "float8"}, feature_properties={"author": "text"}
+    )
     tgsis.enable_feature_versioning(conn)
     conn.commit()
     return fc
@@ -72,10 +77,12 @@ def _moved(mesh: tgsis.Mesh, base: tgsis.Surface, moves: dict[int, float]) -> tg
 
 def _state(conn: Conn) -> tuple[Any, ...]:
     """What a refused call must leave as it was: versions, revisions, DEFAULT's working set, conflicts."""
-    row = conn.execute("SELECT (SELECT array_agg(name ORDER BY name) FROM tgsis.versions), "
-                       "(SELECT count(*) FROM tgsis.revisions), "
-                       "(SELECT workingset FROM tgsis.versions WHERE name = 'DEFAULT'), "
-                       "(SELECT count(*) FROM tgsis.conflicts)").fetchone()
+    row = conn.execute(
+        "SELECT (SELECT array_agg(name ORDER BY name) FROM tgsis.versions), "
+        "(SELECT count(*) FROM tgsis.revisions), "
+        "(SELECT workingset FROM tgsis.versions WHERE name = 'DEFAULT'), "
+        "(SELECT count(*) FROM tgsis.conflicts)"
+    ).fetchone()
     conn.rollback()
     assert row is not None
     return tuple(row)
@@ -95,12 +102,12 @@ def _checked_out_then_changed(conn: Conn, base: tgsis.Surface) -> tuple[int, tgs
 
 
 @pytest.mark.parametrize("solution", ["parent", "child", "manual"])
-def test_conflicting_checkin_meets_the_other_edit_in_the_merge(conn: Conn, faults: F.FeatureClass,
-                                                                solution: str) -> None:
+def test_conflicting_checkin_meets_the_other_edit_in_the_merge(
+    conn: Conn, faults: F.FeatureClass, solution: str
+) -> None:
     base = _grid()
     fid, co = _checked_out_then_changed(conn, base)
-    result = tgsis.checkin(conn, co, _moved(co.mesh, base, {MINE: -50.0}), on_conflict="child",
-                           child_version="mine")
+    result = tgsis.checkin(conn, co, _moved(co.mesh, base, {MINE: -50.0}), on_conflict="child", child_version="mine")
     conn.commit()
     assert result.conflict and result.version == "mine"
 
@@ -114,10 +121,17 @@ def test_conflicting_checkin_meets_the_other_edit_in_the_merge(conn: Conn, fault
     assert "vrtx" in conflicts[0].conflicttype
     rows = tgsis.conflict_rows(conn, "mine", "feature", fid)
     conn.commit()
-    changed = {(side, float(row["x"]), float(row["y"]), float(row["z"])) for table, side, _, row in rows
-               if table == "vrtx" and row is not None}
-    assert changed == {("child", *_xy(base, MINE), -50.0), ("child", *_xy(base, THEIRS), base.vertices[THEIRS, 2]),
-                       ("parent", *_xy(base, MINE), base.vertices[MINE, 2]), ("parent", *_xy(base, THEIRS), 50.0)}
+    changed = {
+        (side, float(row["x"]), float(row["y"]), float(row["z"]))
+        for table, side, _, row in rows
+        if table == "vrtx" and row is not None
+    }
+    assert changed == {
+        ("child", *_xy(base, MINE), -50.0),
+        ("child", *_xy(base, THEIRS), base.vertices[THEIRS, 2]),
+        ("parent", *_xy(base, MINE), base.vertices[MINE, 2]),
+        ("parent", *_xy(base, THEIRS), 50.0),
+    }
 
     # the merge the command line advises is refused until someone decides
     with pytest.raises(tgsis.UnsolvedConflictsError, match=str(fid)):
@@ -136,8 +150,11 @@ def test_conflicting_checkin_meets_the_other_edit_in_the_merge(conn: Conn, fault
     conn.commit()
 
     final = _heights(conn, fid)
-    expected = {"parent": (50.0, base.vertices[MINE, 2]), "child": (base.vertices[THEIRS, 2], -50.0),
-                "manual": (50.0, -50.0)}[solution]
+    expected = {
+        "parent": (50.0, base.vertices[MINE, 2]),
+        "child": (base.vertices[THEIRS, 2], -50.0),
+        "manual": (50.0, -50.0),
+    }[solution]
     assert (final[_xy(base, THEIRS)], final[_xy(base, MINE)]) == expected
     untouched = {_xy(base, i): float(base.vertices[i, 2]) for i in range(base.n_vertices) if i not in (THEIRS, MINE)}
     assert {k: final[k] for k in untouched} == untouched
@@ -176,8 +193,10 @@ def test_checkout_freezes_the_working_revision_and_reads_there(conn: Conn, fault
     co = tgsis.checkout(conn, fid)
     conn.commit()
     assert co.token.base_revision == co.token.revision == before
-    assert tgsis.working_revision(conn) > before                   # a new working revision: the cost of a check-out
-    frozen = conn.execute("SELECT visibleset IS NOT NULL FROM tgsis.revisions WHERE revision = %s", (before,)).fetchone()
+    assert tgsis.working_revision(conn) > before  # a new working revision: the cost of a check-out
+    frozen = conn.execute(
+        "SELECT visibleset IS NOT NULL FROM tgsis.revisions WHERE revision = %s", (before,)
+    ).fetchone()
     assert frozen == (True,)
     grown = conn.execute("SELECT cardinality(workingset) FROM tgsis.versions WHERE name = 'DEFAULT'").fetchone()
     assert sets is not None and grown == (sets[0] + 1,)
@@ -192,9 +211,9 @@ def test_checkout_freezes_the_working_revision_and_reads_there(conn: Conn, fault
     with conn.transaction():
         tgsis.goto_revision(conn, "DEFAULT", before, local=True)
         looked = tgsis.checkout(conn, fid)
-        assert tgsis.viewing_revision(conn) == before                # looking back: that revision is the base
+        assert tgsis.viewing_revision(conn) == before  # looking back: that revision is the base
         assert looked.token.base_revision == before and looked.base.mesh.same_as(co.base.mesh)
-    assert tgsis.working_revision(conn) == before + 1                # nothing more was frozen
+    assert tgsis.working_revision(conn) == before + 1  # nothing more was frozen
 
 
 def test_a_snapshot_older_than_the_freeze_freezes_nothing(conn: Conn, faults: F.FeatureClass) -> None:
@@ -227,8 +246,10 @@ def test_a_reader_checks_out_without_freezing_or_waiting(db_dsn: str, conn: Conn
     fid = F.insert_feature(conn, faults, base)
     other = F.insert_feature(conn, faults, _grid(4))
     conn.commit()
-    with login_roles(db_dsn, {"rita": "tgsis_reader", "eddie": "tgsis_editor"}) as roles, \
-            psycopg.connect(db_dsn) as writer:
+    with (
+        login_roles(db_dsn, {"rita": "tgsis_reader", "eddie": "tgsis_editor"}) as roles,
+        psycopg.connect(db_dsn) as writer,
+    ):
         reader, editor = roles.connect("rita"), roles.connect("eddie")
         for c in (reader, editor):
             c.execute("SET lock_timeout = '300ms'")
@@ -239,9 +260,9 @@ def test_a_reader_checks_out_without_freezing_or_waiting(db_dsn: str, conn: Conn
         assert co.token.base_revision is None and co.token.revision == state[2][-1]
         assert co.base.mesh.same_as(F.fetch_feature(conn, faults, fid).mesh)  # type: ignore[arg-type]
         conn.rollback()
-        assert _state(conn) == state                               # nothing frozen
+        assert _state(conn) == state  # nothing frozen
         with pytest.raises(tgsis.Error, match="lock"):
-            tgsis.checkout(editor, fid)                            # the writer's check-out waits for the open write
+            tgsis.checkout(editor, fid)  # the writer's check-out waits for the open write
         editor.rollback()
         assert _state(conn) == state
         # without a timeout it waits, and then reads what the writer committed: the frozen revision holds it
@@ -271,13 +292,16 @@ def test_a_kept_checkout_has_a_base_too(conn: Conn, faults: F.FeatureClass) -> N
     conn.commit()
     kept = first.checkout
     assert kept is not None and kept.token.base_revision is not None
-    tgsis.save_feature(conn, faults, fid, _moved(base, base, {1: 1.0, THEIRS: 50.0}))   # the colleague, again in place
+    tgsis.save_feature(conn, faults, fid, _moved(base, base, {1: 1.0, THEIRS: 50.0}))  # the colleague, again in place
     conn.commit()
     result = tgsis.checkin(conn, kept, _moved(kept.mesh, base, {MINE: -50.0}), on_conflict="child")
     conn.commit()
     child = _heights(conn, fid, result.version)
-    assert (child[_xy(base, 1)], child[_xy(base, THEIRS)], child[_xy(base, MINE)]) == \
-        (1.0, base.vertices[THEIRS, 2], -50.0)
+    assert (child[_xy(base, 1)], child[_xy(base, THEIRS)], child[_xy(base, MINE)]) == (
+        1.0,
+        base.vertices[THEIRS, 2],
+        -50.0,
+    )
     assert [c.objectkey for c in tgsis.find_conflicts(conn, result.version)] == [str(fid)]
 
 
@@ -293,8 +317,11 @@ def test_checkout_in_a_child_version(conn: Conn, faults: F.FeatureClass) -> None
     conn.commit()
     result = tgsis.checkin(conn, co, _moved(co.mesh, base, {MINE: -50.0}), on_conflict="child")
     conn.commit()
-    parent = conn.execute("SELECT p.name, c.initrevision FROM tgsis.versions c JOIN tgsis.versions p "
-                          "ON p.versionid = c.parentid WHERE c.name = %s", (result.version,)).fetchone()
+    parent = conn.execute(
+        "SELECT p.name, c.initrevision FROM tgsis.versions c JOIN tgsis.versions p "
+        "ON p.versionid = c.parentid WHERE c.name = %s",
+        (result.version,),
+    ).fetchone()
     assert parent == ("work", co.token.base_revision)
     assert [c.objectkey for c in tgsis.find_conflicts(conn, result.version)] == [str(fid)]
     with tgsis.in_version(conn, result.version, local=True):
@@ -318,8 +345,9 @@ def test_tokens_from_before_frozen_checkouts(conn: Conn, faults: F.FeatureClass)
     old = tgsis.CheckoutToken.from_json(json.dumps(data))
     assert old.base_revision is None and old.revision == co.token.revision
     # its revision is frozen and holds the checked-out state: the child path works
-    result = tgsis.checkin(conn, tgsis.Checkout(old, co.base), _moved(co.mesh, base, {MINE: -50.0}),
-                           on_conflict="child")
+    result = tgsis.checkin(
+        conn, tgsis.Checkout(old, co.base), _moved(co.mesh, base, {MINE: -50.0}), on_conflict="child"
+    )
     conn.commit()
     assert result.conflict
     # an old check-out recorded the working revision, in which the colleague then wrote in place: refused
@@ -327,8 +355,10 @@ def test_tokens_from_before_frozen_checkouts(conn: Conn, faults: F.FeatureClass)
     conn.rollback()
     before = tgsis.Checkout(replace(old, revision=working), co.base)
     state = _state(conn)
-    with pytest.raises(tgsis.CheckoutConflictError, match=f"revision {working} of version 'DEFAULT' does not hold "
-                                                          f"feature {fid} as the check-out token describes"):
+    with pytest.raises(
+        tgsis.CheckoutConflictError,
+        match=f"revision {working} of version 'DEFAULT' does not hold feature {fid} as the check-out token describes",
+    ):
         tgsis.checkin(conn, before, co.mesh, on_conflict="child")
     conn.rollback()
     assert _state(conn) == state
@@ -339,7 +369,7 @@ def test_forged_and_stale_tokens_are_refused_and_change_nothing(conn: Conn, faul
     fid = F.insert_feature(conn, faults, base)
     tgsis.create_version(conn, "other")
     conn.commit()
-    earlier = tgsis.checkout(conn, fid).token.base_revision       # a frozen revision of DEFAULT
+    earlier = tgsis.checkout(conn, fid).token.base_revision  # a frozen revision of DEFAULT
     tgsis.save_feature(conn, faults, fid, _moved(base, base, {1: 1.0}))
     conn.commit()
     fid_co = tgsis.checkout(conn, fid)
@@ -352,7 +382,7 @@ def test_forged_and_stale_tokens_are_refused_and_change_nothing(conn: Conn, faul
         ({"base_revision": other_rev[0]}, "belongs to version other"),
         ({"base_revision": 10**6}, "does not exist"),
         ({"base_revision": -1}, "does not exist"),
-        ({"base_revision": earlier}, "does not hold"),            # frozen, but before the state checked out
+        ({"base_revision": earlier}, "does not hold"),  # frozen, but before the state checked out
         ({"fingerprint": "0" * 32}, "does not hold"),
     ]
     state = _state(conn)
@@ -364,8 +394,11 @@ def test_forged_and_stale_tokens_are_refused_and_change_nothing(conn: Conn, faul
         assert "check out again" in (refused.value.hint or ""), change
         conn.rollback()
         assert _state(conn) == state and _heights(conn, fid) == heights, change
-    for text in ('{"feature_id": "1"}', json.dumps({**json.loads(fid_co.token.to_json()), "base_revision": "7"}),
-                 json.dumps({**json.loads(fid_co.token.to_json()), "revision": True})):
+    for text in (
+        '{"feature_id": "1"}',
+        json.dumps({**json.loads(fid_co.token.to_json()), "base_revision": "7"}),
+        json.dumps({**json.loads(fid_co.token.to_json()), "revision": True}),
+    ):
         with pytest.raises(tgsis.FileFormatError):
             tgsis.CheckoutToken.from_json(text)
     # the genuine token still works after all that
@@ -376,7 +409,7 @@ def test_forged_and_stale_tokens_are_refused_and_change_nothing(conn: Conn, faul
 def test_a_base_compressed_away_or_rebased_is_refused_clearly(conn: Conn, faults: F.FeatureClass) -> None:
     base = _grid()
     fid, co = _checked_out_then_changed(conn, base)
-    tgsis.compress_versions(conn)                                   # nothing needs the check-out's revision
+    tgsis.compress_versions(conn)  # nothing needs the check-out's revision
     conn.commit()
     state = _state(conn)
     with pytest.raises(tgsis.CheckoutConflictError, match="does not exist .*compress") as refused:
@@ -423,9 +456,11 @@ def test_create_version_on_a_frozen_base(conn: Conn, faults: F.FeatureClass) -> 
     assert working > frozen
     seen = _scalar(conn, "SELECT visibleset FROM tgsis.revisions WHERE revision = %s", (frozen,))
     child = _scalar(conn, "SELECT tgsis.create_version('b', 'DEFAULT', NULL, %s)", (frozen,))
-    assert _scalar(conn, "SELECT tgsis.get_working_revision()") == working        # the parent gets no new revision
-    assert conn.execute("SELECT initrevision, workingset FROM tgsis.versions WHERE name = 'b'").fetchone() == \
-        (frozen, [*seen, child])
+    assert _scalar(conn, "SELECT tgsis.get_working_revision()") == working  # the parent gets no new revision
+    assert conn.execute("SELECT initrevision, workingset FROM tgsis.versions WHERE name = 'b'").fetchone() == (
+        frozen,
+        [*seen, child],
+    )
     # p_base = the working revision is the ordinary create_version
     child_c = _scalar(conn, "SELECT tgsis.create_version('c', 'DEFAULT', NULL, %s)", (working,))
     assert child_c == working + 3 and _scalar(conn, "SELECT tgsis.get_working_revision()") == working + 2
@@ -453,7 +488,7 @@ def test_checkout_revision_of_sql(conn: Conn, faults: F.FeatureClass) -> None:
     working = _scalar(conn, "SELECT tgsis.get_working_revision()")
     assert working > first
     tgsis.goto_revision(conn, "DEFAULT", first)
-    assert _scalar(conn, "SELECT tgsis.checkout_revision()") == first   # looking back: nothing is frozen
+    assert _scalar(conn, "SELECT tgsis.checkout_revision()") == first  # looking back: nothing is frozen
     conn.commit()
     tgsis.goto_version(conn, "DEFAULT")
     assert _scalar(conn, "SELECT tgsis.get_working_revision()") == working

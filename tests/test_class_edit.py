@@ -30,13 +30,18 @@ def _grid(side: int = 4, z: float = 0.0) -> tgsis.Surface:
     vertices = np.stack([u.ravel(), v.ravel(), np.full(side * side, z)], axis=1)
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": np.linspace(0, 1, side * side)}, name=f"z{z}")
+    return tgsis.Surface(
+        vertices,
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        vertex_properties={"porosity": np.linspace(0, 1, side * side)},
+        name=f"z{z}",
+    )
 
 
 def _horizons(conn: Conn, *, versioned: bool) -> tuple[F.FeatureClass, int]:
-    fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
-                                cell_properties={"porosity": "float8"})
+    fc = F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"creator": "text"}, cell_properties={"porosity": "float8"}
+    )
     fid = F.insert_feature(conn, fc, _grid(), {"creator": "ann"})
     if versioned:
         tgsis.enable_feature_versioning(conn)
@@ -46,19 +51,24 @@ def _horizons(conn: Conn, *, versioned: bool) -> tuple[F.FeatureClass, int]:
 
 def _definition(conn: Conn) -> list[Any]:
     """What an edit of class horizons changes: its catalog row, the columns (and comments) of its relations."""
-    catalog = conn.execute("SELECT feature_properties, cell_properties, instant_properties FROM tgsis.catalog "
-                           "WHERE classname = 'horizons'").fetchall()
+    catalog = conn.execute(
+        "SELECT feature_properties, cell_properties, instant_properties FROM tgsis.catalog WHERE classname = 'horizons'"
+    ).fetchall()
     columns = conn.execute(
         "SELECT c.relname, a.attname, format_type(a.atttypid, a.atttypmod), a.attnotnull, "
         "       col_description(c.oid, a.attnum) "
         "  FROM pg_class c JOIN pg_attribute a ON a.attrelid = c.oid AND a.attnum > 0 AND NOT a.attisdropped "
-        " WHERE c.relnamespace = 'public'::regnamespace AND c.relname LIKE 'horizons%' ORDER BY 1, a.attnum").fetchall()
+        " WHERE c.relnamespace = 'public'::regnamespace AND c.relname LIKE 'horizons%' ORDER BY 1, a.attnum"
+    ).fetchall()
     return [catalog, columns]
 
 
 def _comment(conn: Conn, relation: str, column: str) -> str | None:
-    row = conn.execute("SELECT col_description(%s::regclass, (SELECT attnum FROM pg_attribute "
-                       "WHERE attrelid = %s::regclass AND attname = %s))", (relation, relation, column)).fetchone()
+    row = conn.execute(
+        "SELECT col_description(%s::regclass, (SELECT attnum FROM pg_attribute "
+        "WHERE attrelid = %s::regclass AND attname = %s))",
+        (relation, relation, column),
+    ).fetchone()
     return None if row is None else row[0]
 
 
@@ -76,7 +86,10 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     assert feature.properties == {"creator": "ann", "age": None} and feature.mesh is not None
     assert feature.mesh.vertex_properties["permeability"].dtype == np.float32
     assert np.all(feature.mesh.vertex_properties["permeability"] == 0.5)
-    assert np.all(feature.mesh.vertex_properties["slip"] == -1) and feature.mesh.vertex_properties["slip"].shape == (16, 3)
+    assert np.all(feature.mesh.vertex_properties["slip"] == -1) and feature.mesh.vertex_properties["slip"].shape == (
+        16,
+        3,
+    )
     # commented as at registration; the class view shows the feature property
     storage = "horizons_cellpros_ver" if versioned else "horizons_cellpros"
     assert _comment(conn, "horizons_cellpros", "permeability") == "vertex property (real)"
@@ -113,7 +126,9 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     fc = tgsis.drop_property(conn, "horizons", "k", force=True)
     fc = tgsis.drop_property(conn, "horizons", "slip", force=True)
     fc = tgsis.drop_property(conn, "horizons", "Age_Ma", force=True)
-    assert [p.name for p in fc.cell_properties] == ["porosity"] and [p.name for p in fc.feature_properties] == ["creator"]
+    assert [p.name for p in fc.cell_properties] == ["porosity"] and [p.name for p in fc.feature_properties] == [
+        "creator"
+    ]
     dropped = F.fetch_feature(conn, fc, fid)
     assert dropped.properties == {"creator": "ann"} and dropped.mesh is not None
     assert set(dropped.mesh.vertex_properties) == {"porosity"}
@@ -122,16 +137,23 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     tgsis.drop_property(conn, "horizons", "note")
     if versioned:  # the versioned views and their triggers are the ones tgsis made, over the storage's columns
         for table in ("horizons", "horizons_cellpros"):
-            triggers = conn.execute("SELECT array_agg(tgname::text ORDER BY tgname) FROM pg_trigger "
-                                    "WHERE tgrelid = %s::regclass AND NOT tgisinternal", (table,)).fetchone()
+            triggers = conn.execute(
+                "SELECT array_agg(tgname::text ORDER BY tgname) FROM pg_trigger "
+                "WHERE tgrelid = %s::regclass AND NOT tgisinternal",
+                (table,),
+            ).fetchone()
             assert triggers == (["tgsis_versioning", "tgsis_versioning_flush", "tgsis_versioning_rights"],)
             # the queue of set-based updates was made anew with the table: one new and one old value per column
-            written = conn.execute("SELECT count(*) FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 "
-                                   "AND NOT attisdropped AND attgenerated = '' "
-                                   "AND attname NOT IN ('revision', 'lastrevs', 'revclosed')",
-                                   (f"{table}_ver",)).fetchone()
-            queued = conn.execute("SELECT count(*) FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 "
-                                  "AND NOT attisdropped", (f"{table}_ver_queue",)).fetchone()
+            written = conn.execute(
+                "SELECT count(*) FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 "
+                "AND NOT attisdropped AND attgenerated = '' "
+                "AND attname NOT IN ('revision', 'lastrevs', 'revclosed')",
+                (f"{table}_ver",),
+            ).fetchone()
+            queued = conn.execute(
+                "SELECT count(*) FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 AND NOT attisdropped",
+                (f"{table}_ver_queue",),
+            ).fetchone()
             assert written is not None and queued == (2 + 2 * written[0],)  # transaction, generation
 
 
@@ -149,8 +171,9 @@ def test_every_version_keeps_its_values(conn: Conn) -> None:
     def state(version: str) -> tuple[Any, ...]:
         with tgsis.in_version(conn, version):
             feature = conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone()
-            vertex = conn.execute("SELECT porosity, k FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0",
-                                  (fid,)).fetchone()
+            vertex = conn.execute(
+                "SELECT porosity, k FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0", (fid,)
+            ).fetchone()
         return feature, vertex
 
     # every row version got the default: the child's own rows and DEFAULT's
@@ -166,25 +189,34 @@ def test_every_version_keeps_its_values(conn: Conn) -> None:
     tgsis.rename_property(conn, "horizons", "k", "permeability")
     conn.commit()
     with tgsis.in_version(conn, "v1"):
-        assert conn.execute("SELECT permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0",
-                            (fid,)).fetchone() == (7.0,)
-    assert conn.execute("SELECT permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0",
-                        (fid,)).fetchone() == (2.0,)
+        assert conn.execute(
+            "SELECT permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0", (fid,)
+        ).fetchone() == (7.0,)
+    assert conn.execute(
+        "SELECT permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0", (fid,)
+    ).fetchone() == (2.0,)
     # older revisions too (tgsis.rows_at reads the storage as of any revision)
-    revisions = conn.execute("SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) "
-                             "ORDER BY 2").fetchall()
+    revisions = conn.execute(
+        "SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) ORDER BY 2"
+    ).fetchall()
     assert len(revisions) >= 3
     for version, revision in revisions:
-        rows = conn.execute("SELECT count(*), count(*) FILTER (WHERE permeability IS NULL) FROM "
-                            "tgsis.rows_at(NULL::horizons_cellpros, %s, %s)", (version, revision)).fetchone()
+        rows = conn.execute(
+            "SELECT count(*), count(*) FILTER (WHERE permeability IS NULL) FROM "
+            "tgsis.rows_at(NULL::horizons_cellpros, %s, %s)",
+            (version, revision),
+        ).fetchone()
         assert rows == (16, 0), (version, revision)
     # the merge carries the child's values of the new columns into DEFAULT
     tgsis.merge_version(conn, "v1")
     conn.commit()
-    assert conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == \
-        ("carl", "Aquitaine")
-    assert conn.execute("SELECT porosity, permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0",
-                        (fid,)).fetchone() == (9.0, 7.0)
+    assert conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == (
+        "carl",
+        "Aquitaine",
+    )
+    assert conn.execute(
+        "SELECT porosity, permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0", (fid,)
+    ).fetchone() == (9.0, 7.0)
     fetched = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
     assert fetched.mesh is not None and fetched.mesh.vertex_properties["permeability"][0] == 7.0
     # feature versioning switched off: the plain tables keep the edited columns with DEFAULT's values
@@ -200,7 +232,7 @@ def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
     _, fid = _horizons(conn, versioned=True)
     tgsis.create_version(conn, "edit")
     conn.commit()
-    before = tgsis.checkout(conn, fid)   # of the old columns
+    before = tgsis.checkout(conn, fid)  # of the old columns
     tgsis.add_property(conn, "horizons", ("k", "float8"), default=1)
     tgsis.add_property(conn, "horizons", ("basin", "text"), kind="feature")
     conn.commit()
@@ -212,7 +244,7 @@ def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
         tgsis.checkin(conn, out, edited, {"basin": "Paris"})
         conn.commit()
         mine = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
-    conn.commit()   # (the version set back at the end of in_version, for good)
+    conn.commit()  # (the version set back at the end of in_version, for good)
     assert mine.properties["basin"] == "Paris" and mine.mesh is not None
     assert np.all(mine.mesh.vertex_properties["k"] == 5)
     default = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
@@ -229,8 +261,12 @@ def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
 
 def test_a_property_of_the_other_alignment_and_the_rights_on_the_views(db_dsn: str) -> None:
     with login_roles(db_dsn, {"viewer": "tgsis_nobody"}) as roles, psycopg.connect(db_dsn) as conn:
-        fc = F.create_feature_class(conn, "horizons", "SURFACE", cell_properties=[
-            ("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")])
+        fc = F.create_feature_class(
+            conn,
+            "horizons",
+            "SURFACE",
+            cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")],
+        )
         fid = F.insert_feature(conn, fc, _with_facies(_grid(3)))
         tgsis.enable_feature_versioning(conn)
         conn.execute(f"GRANT SELECT ON horizons_v, horizons_simplexpros TO {roles.name('viewer')}")
@@ -243,8 +279,9 @@ def test_a_property_of_the_other_alignment_and_the_rights_on_the_views(db_dsn: s
         assert feature.mesh.vertex_properties.keys() == {"porosity"}
         # the rights granted on the class's views are kept
         for view in ("horizons_v", "horizons_simplexpros"):
-            assert conn.execute("SELECT has_table_privilege(%s, %s, 'SELECT')",
-                                (roles.name("viewer"), view)).fetchone() == (True,), view
+            assert conn.execute(
+                "SELECT has_table_privilege(%s, %s, 'SELECT')", (roles.name("viewer"), view)
+            ).fetchone() == (True,), view
         conn.rollback()
 
 
@@ -254,8 +291,9 @@ def _with_facies(mesh: tgsis.Surface) -> tgsis.Surface:
 
 
 def test_temporal_class_gets_per_instant_and_vertex_properties(conn: Conn) -> None:
-    tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", time_unit="Ma",
-                               instant_properties={"throw": "float8"})
+    tgsis.create_feature_class(
+        conn, "moving", "SURFACE", time_model="EVOLVING", time_unit="Ma", instant_properties={"throw": "float8"}
+    )
     fc = tgsis.add_property(conn, "moving", ("phase", "text"), kind="instant", default="rift")
     fc = tgsis.add_property(conn, "moving", ("strain", "float8"))
     assert [p.name for p in fc.instant_properties] == ["throw", "phase"]
@@ -274,43 +312,98 @@ def test_bad_input_changes_nothing(conn: Conn) -> None:
     conn.commit()
     before = _definition(conn)
     cases: list[tuple[Any, type[tgsis.Error], str]] = [
-        (lambda: tgsis.add_property(conn, "nope", ("k", "float8")), tgsis.NotFoundError, "feature class 'nope' does not"),
-        (lambda: tgsis.rename_property(conn, "horizons", "nope", "x"), tgsis.InvalidPropertyError,
-         "feature class horizons has no property 'nope'"),
-        (lambda: tgsis.drop_property(conn, "horizons", "nope", kind="cell"), tgsis.InvalidPropertyError,
-         "has no cell property 'nope'"),
-        (lambda: tgsis.drop_property(conn, "horizons", "porosity"), tgsis.InvalidPropertyError,
-         "has more than one property 'porosity'"),
-        (lambda: tgsis.add_property(conn, "horizons", ("creator", "text"), kind="feature"), tgsis.AlreadyExistsError,
-         "has a feature property 'creator' already"),
-        (lambda: tgsis.rename_property(conn, "horizons", "creator", "porosity", kind="feature"),
-         tgsis.AlreadyExistsError, "has a feature property 'porosity' already"),
-        (lambda: tgsis.add_property(conn, "horizons", ("k", "geometry")), tgsis.InvalidPropertyError,
-         "has type 'geometry', which is not allowed"),
-        (lambda: tgsis.add_property(conn, "horizons", ("k", "text")), tgsis.InvalidPropertyError,
-         "vertex and cell properties must be numbers or booleans"),
-        (lambda: tgsis.add_property(conn, "horizons", ("k", "float8")), tgsis.InvalidPropertyError,
-         "has stored rows in horizons_cellpros, which need a value"),
-        (lambda: tgsis.add_property(conn, "horizons", ("k", "int"), default="1.5e"), tgsis.InvalidPropertyError,
-         "default '1.5e' of property 'k' is not a valid integer"),
-        (lambda: tgsis.add_property(conn, "horizons", ('k"; DROP TABLE horizons; --', "int"), default=1),
-         tgsis.InvalidNameError, "property name .* is not allowed"),
-        (lambda: tgsis.rename_property(conn, "horizons", "creator", 'a"b'), tgsis.InvalidNameError,
-         "property name 'a\"b' is not allowed"),
-        (lambda: tgsis.add_property(conn, "horizons", ("bbox", "text"), kind="feature"), tgsis.InvalidNameError,
-         "feature property name 'bbox' is taken by tgsis"),
-        (lambda: tgsis.add_property(conn, "horizons", ("revision", "int"), default=0), tgsis.InvalidNameError,
-         "'revision' is taken by tgsis"),
-        (lambda: tgsis.add_property(conn, "horizons", ("part", "int"), default=0), tgsis.InvalidNameError,
-         "'part' is taken by tgsis"),
-        (lambda: tgsis.drop_property(conn, "horizons", "_geoid"), tgsis.InvalidNameError,
-         "column '_geoid' of feature class horizons is a key, time or versioning column"),
+        (
+            lambda: tgsis.add_property(conn, "nope", ("k", "float8")),
+            tgsis.NotFoundError,
+            "feature class 'nope' does not",
+        ),
+        (
+            lambda: tgsis.rename_property(conn, "horizons", "nope", "x"),
+            tgsis.InvalidPropertyError,
+            "feature class horizons has no property 'nope'",
+        ),
+        (
+            lambda: tgsis.drop_property(conn, "horizons", "nope", kind="cell"),
+            tgsis.InvalidPropertyError,
+            "has no cell property 'nope'",
+        ),
+        (
+            lambda: tgsis.drop_property(conn, "horizons", "porosity"),
+            tgsis.InvalidPropertyError,
+            "has more than one property 'porosity'",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("creator", "text"), kind="feature"),
+            tgsis.AlreadyExistsError,
+            "has a feature property 'creator' already",
+        ),
+        (
+            lambda: tgsis.rename_property(conn, "horizons", "creator", "porosity", kind="feature"),
+            tgsis.AlreadyExistsError,
+            "has a feature property 'porosity' already",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("k", "geometry")),
+            tgsis.InvalidPropertyError,
+            "has type 'geometry', which is not allowed",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("k", "text")),
+            tgsis.InvalidPropertyError,
+            "vertex and cell properties must be numbers or booleans",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("k", "float8")),
+            tgsis.InvalidPropertyError,
+            "has stored rows in horizons_cellpros, which need a value",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("k", "int"), default="1.5e"),
+            tgsis.InvalidPropertyError,
+            "default '1.5e' of property 'k' is not a valid integer",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ('k"; DROP TABLE horizons; --', "int"), default=1),
+            tgsis.InvalidNameError,
+            "property name .* is not allowed",
+        ),
+        (
+            lambda: tgsis.rename_property(conn, "horizons", "creator", 'a"b'),
+            tgsis.InvalidNameError,
+            "property name 'a\"b' is not allowed",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("bbox", "text"), kind="feature"),
+            tgsis.InvalidNameError,
+            "feature property name 'bbox' is taken by tgsis",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("revision", "int"), default=0),
+            tgsis.InvalidNameError,
+            "'revision' is taken by tgsis",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("part", "int"), default=0),
+            tgsis.InvalidNameError,
+            "'part' is taken by tgsis",
+        ),
+        (
+            lambda: tgsis.drop_property(conn, "horizons", "_geoid"),
+            tgsis.InvalidNameError,
+            "column '_geoid' of feature class horizons is a key, time or versioning column",
+        ),
         (lambda: tgsis.rename_property(conn, "horizons", "_idx", "idx"), tgsis.InvalidNameError, "is a key, time"),
         (lambda: tgsis.drop_property(conn, "horizons", "revision"), tgsis.InvalidNameError, "versioning column"),
-        (lambda: tgsis.add_property(conn, "horizons", tgsis.Property("facies", "int", alignment="CELL"), default=0),
-         tgsis.InvalidPropertyError, "feature class horizons has no table for cell properties"),
-        (lambda: tgsis.add_property(conn, "horizons", ("k", "float8"), kind="vertex"),  # type: ignore[arg-type]
-         tgsis.InvalidInputError, "property kind 'vertex' must be feature, cell or instant"),
+        (
+            lambda: tgsis.add_property(conn, "horizons", tgsis.Property("facies", "int", alignment="CELL"), default=0),
+            tgsis.InvalidPropertyError,
+            "feature class horizons has no table for cell properties",
+        ),
+        (
+            lambda: tgsis.add_property(conn, "horizons", ("k", "float8"), kind="vertex"),  # type: ignore[arg-type]
+            tgsis.InvalidInputError,
+            "property kind 'vertex' must be feature, cell or instant",
+        ),
     ]
     for call, error, message in cases:
         with pytest.raises(error, match=message) as caught:
@@ -338,9 +431,11 @@ def test_roles_without_tgsis_admin_are_refused(db_dsn: str) -> None:
         before = _definition(owner)
     with login_roles(db_dsn, {"eve": "tgsis_editor"}) as roles:
         eve = roles.connect("eve")
-        for call in (lambda: tgsis.add_property(eve, "horizons", ("k", "float8"), default=1),
-                     lambda: tgsis.rename_property(eve, "horizons", "porosity", "phi"),
-                     lambda: tgsis.drop_property(eve, "horizons", "porosity", force=True)):
+        for call in (
+            lambda: tgsis.add_property(eve, "horizons", ("k", "float8"), default=1),
+            lambda: tgsis.rename_property(eve, "horizons", "porosity", "phi"),
+            lambda: tgsis.drop_property(eve, "horizons", "porosity", force=True),
+        ):
             with pytest.raises(tgsis.MissingPrivilegeError, match="may not .* properties of feature classes") as caught:
                 call()
             assert caught.value.hint is not None and caught.value.hint.startswith("a DBA may run: GRANT tgsis_admin TO")
@@ -363,17 +458,24 @@ def test_a_writer_during_an_edit_loses_nothing(db_dsn: str) -> None:
         writer = connect(db_dsn, "writer")
         tgsis.goto_version(writer, "v1")
         writer.execute("UPDATE horizons SET creator = 'bob' WHERE _geoid = %s", (fid,))
-        edit = Background(db_dsn, "editor", lambda c: tgsis.add_property(c, "horizons", ("basin", "text"),
-                                                                         kind="feature", default="Paris"))
+        edit = Background(
+            db_dsn,
+            "editor",
+            lambda c: tgsis.add_property(c, "horizons", ("basin", "text"), kind="feature", default="Paris"),
+        )
         wait_until_blocked(conn, edit.pid, writer.info.backend_pid)
         writer.commit()
         edit.finish()
         with tgsis.in_version(conn, "v1"):
-            assert conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == \
-                ("bob", "Paris")
-        assert conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == \
-            ("ann", "Paris")
-        conn.rollback()   # (the observer's reads hold the view until its transaction ends)
+            assert conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == (
+                "bob",
+                "Paris",
+            )
+        assert conn.execute("SELECT creator, basin FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == (
+            "ann",
+            "Paris",
+        )
+        conn.rollback()  # (the observer's reads hold the view until its transaction ends)
         # 2. an edit in flight; a writer through the view waits, then writes through the new view and trigger:
         # its new row version keeps the column's value (the old trigger would have left it NULL)
         editor = connect(db_dsn, "editor")
@@ -387,26 +489,37 @@ def test_a_writer_during_an_edit_loses_nothing(db_dsn: str) -> None:
         editor.commit()
         late.finish()
         with tgsis.in_version(conn, "v1"):
-            assert conn.execute("SELECT creator, basin, depth FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == \
-                ("carl", "Paris", 100.0)
+            assert conn.execute("SELECT creator, basin, depth FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == (
+                "carl",
+                "Paris",
+                100.0,
+            )
         conn.rollback()
         # and the same for an edit that renames: the waiting writer's row keeps every value
         editor.execute("SELECT tgsis.rename_property('horizons', 'basin', 'region')")
-        late = Background(db_dsn, "writer", lambda c: c.execute(
-            "UPDATE horizons SET creator = 'dan' WHERE _geoid = %s", (fid,)), version="v1")
+        late = Background(
+            db_dsn,
+            "writer",
+            lambda c: c.execute("UPDATE horizons SET creator = 'dan' WHERE _geoid = %s", (fid,)),
+            version="v1",
+        )
         wait_until_blocked(conn, late.pid, editor.info.backend_pid)
         editor.commit()
         late.finish()
         with tgsis.in_version(conn, "v1"):
-            assert conn.execute("SELECT creator, region, depth FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == \
-                ("dan", "Paris", 100.0)
+            assert conn.execute("SELECT creator, region, depth FROM horizons WHERE _geoid = %s", (fid,)).fetchone() == (
+                "dan",
+                "Paris",
+                100.0,
+            )
         writer.close()
         editor.close()
 
 
 def test_a_class_cannot_be_versioned_while_feature_versioning_is_off(conn: Conn) -> None:
-    with pytest.raises(tgsis.VersioningError, match="feature class 'wells' cannot be versioned on its own: feature "
-                                                    "versioning is off"):
+    with pytest.raises(
+        tgsis.VersioningError, match="feature class 'wells' cannot be versioned on its own: feature versioning is off"
+    ):
         F.create_feature_class(conn, "wells", "MULTILINESTRING", versioned=True)
     conn.rollback()
     assert conn.execute("SELECT count(*) FROM tgsis.catalog").fetchone() == (0,)

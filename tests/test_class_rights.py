@@ -53,8 +53,12 @@ class World:
 
 def _geoid_tables(conn: Conn) -> list[tuple[str, str]]:
     """Every model table holding rows per geoid, with its geoid column (the registry)."""
-    return [(r[0], r[1]) for r in conn.execute(
-        "SELECT tablename, geoidcolumn FROM tgsis.model_tables WHERE geoidcolumn IS NOT NULL ORDER BY 1").fetchall()]
+    return [
+        (r[0], r[1])
+        for r in conn.execute(
+            "SELECT tablename, geoidcolumn FROM tgsis.model_tables WHERE geoidcolumn IS NOT NULL ORDER BY 1"
+        ).fetchall()
+    ]
 
 
 def _count(conn: Conn, table: str, geoid: int) -> int:
@@ -74,9 +78,11 @@ def _sqlstate(conn: Conn, statement: str, params: tuple[Any, ...] = ()) -> str:
 
 def _rows(su: Conn, geoid: int) -> Any:
     """beta's stored rows as tgsis's owner sees them (every revision)."""
-    return (su.execute("SELECT * FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchall(),
-            su.execute("SELECT * FROM tgsis.vrtx WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall(),
-            su.execute("SELECT * FROM tgsis.trgl WHERE geoid = %s ORDER BY trglid", (geoid,)).fetchall())
+    return (
+        su.execute("SELECT * FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchall(),
+        su.execute("SELECT * FROM tgsis.vrtx WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall(),
+        su.execute("SELECT * FROM tgsis.trgl WHERE geoid = %s ORDER BY trglid", (geoid,)).fetchall(),
+    )
 
 
 @pytest.fixture(params=["plain", "versioned"])
@@ -104,7 +110,9 @@ def world(request: pytest.FixtureRequest, db_dsn: str) -> Iterator[World]:
         # a role of no tgsis group, granted reading of alpha and of the model tables only
         outsider = roles.name("outsider")
         su.execute(f"GRANT USAGE ON SCHEMA tgsis TO {outsider}")
-        su.execute(f"GRANT SELECT ON tgsis.catalog, tgsis.versions, tgsis.revisions, tgsis.versioned_tables TO {outsider}")
+        su.execute(
+            f"GRANT SELECT ON tgsis.catalog, tgsis.versions, tgsis.revisions, tgsis.versioned_tables TO {outsider}"
+        )
         for (table,) in su.execute("SELECT tablename FROM tgsis.class_tables WHERE classname LIKE 'alpha%'").fetchall():
             su.execute(f"GRANT SELECT ON {table} TO {outsider}")
         for table, _ in _geoid_tables(su):
@@ -151,20 +159,30 @@ def test_a_child_version_hides_the_class_too(world: World) -> None:
 def test_writers_cannot_change_a_revoked_class(world: World, who: str) -> None:
     before = _rows(world.su, world.beta)
     conn = world.roles.connect(who)
-    for statement in ("UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s",
-                      "DELETE FROM tgsis.trgl WHERE geoid = %s",
-                      "UPDATE tgsis.geometry SET geoname = 'stolen' WHERE geoid = %s"):
+    for statement in (
+        "UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s",
+        "DELETE FROM tgsis.trgl WHERE geoid = %s",
+        "UPDATE tgsis.geometry SET geoname = 'stolen' WHERE geoid = %s",
+    ):
         cursor = conn.execute(statement, (world.beta,))
-        assert cursor.rowcount == 0, statement   # rows it may not read are not there for it
+        assert cursor.rowcount == 0, statement  # rows it may not read are not there for it
         conn.commit()
     # every row, not only the filtered ones: it changes those it may, and nothing of beta
     visible = world.su.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid <> %s", (world.beta,)).fetchone()
     assert conn.execute("UPDATE tgsis.vrtx SET z = z + 100").rowcount == visible[0] > 0  # type: ignore[index]
     conn.commit()
-    assert _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
-                     (world.beta,)) == "42501"
-    assert _sqlstate(conn, "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 999, 0, 1, 2)",
-                     (world.beta,)) == "42501"
+    assert (
+        _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)", (world.beta,))
+        == "42501"
+    )
+    assert (
+        _sqlstate(
+            conn,
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 999, 0, 1, 2)",
+            (world.beta,),
+        )
+        == "42501"
+    )
     assert _rows(world.su, world.beta) == before
 
 
@@ -175,18 +193,22 @@ def test_reading_without_writing_is_refused_at_the_write(world: World) -> None:
     before = _rows(world.su, world.beta)
     assert _count(editor, "vrtx", world.beta) == 25
     versioned = world.su.execute("SELECT count(*) > 0 FROM tgsis.versioned_tables").fetchone() == (True,)
-    for statement in ("UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s",
-                      "UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s AND vrtxid = 0",
-                      "DELETE FROM tgsis.trgl WHERE geoid = %s"):
-        if versioned:   # the view's trigger refuses, naming the class
+    for statement in (
+        "UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s",
+        "UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s AND vrtxid = 0",
+        "DELETE FROM tgsis.trgl WHERE geoid = %s",
+    ):
+        if versioned:  # the view's trigger refuses, naming the class
             with pytest.raises(psycopg.errors.InsufficientPrivilege, match="beta"):
                 editor.execute(statement, (world.beta,))
             editor.rollback()
-        else:           # row-level security on the plain table: PostgreSQL skips the rows
+        else:  # row-level security on the plain table: PostgreSQL skips the rows
             assert editor.execute(statement, (world.beta,)).rowcount == 0
             editor.commit()
-    assert _sqlstate(editor, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
-                     (world.beta,)) == "42501"
+    assert (
+        _sqlstate(editor, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)", (world.beta,))
+        == "42501"
+    )
     assert _rows(world.su, world.beta) == before
 
 
@@ -221,10 +243,18 @@ def test_upload_into_a_revoked_class_is_refused(world: World) -> None:
     before = _rows(world.su, world.beta)
     with pytest.raises(psycopg.errors.InsufficientPrivilege), editor.transaction():
         storage = Storage.of(editor)
-        storage.copy(editor, "tgsis", "vrtx", [
-            ("geoid", np.full(3, world.beta, dtype=np.int64), "int8"),
-            ("vrtxid", np.arange(100, 103, dtype=np.int64), "int8"),
-            ("x", np.zeros(3), "float8"), ("y", np.zeros(3), "float8"), ("z", np.zeros(3), "float8")])
+        storage.copy(
+            editor,
+            "tgsis",
+            "vrtx",
+            [
+                ("geoid", np.full(3, world.beta, dtype=np.int64), "int8"),
+                ("vrtxid", np.arange(100, 103, dtype=np.int64), "int8"),
+                ("x", np.zeros(3), "float8"),
+                ("y", np.zeros(3), "float8"),
+                ("z", np.zeros(3), "float8"),
+            ],
+        )
     assert _rows(world.su, world.beta) == before
 
 
@@ -256,14 +286,17 @@ def test_tgsis_functions_return_nothing_of_a_revoked_class(world: World, who: st
         for function in ("vertices_at", "triangles_at"):
             row = conn.execute(f"SELECT count(*) FROM tgsis.{function}(%s, 0.5)", (geoid,)).fetchone()
             assert row == (0,), (function, geoid)
-    assert conn.execute("SELECT count(*) > 0 FROM tgsis.vertices_at(%s, 0.5)",
-                        (world.temporal["alpha_steps"],)).fetchone() == (True,)
+    assert conn.execute(
+        "SELECT count(*) > 0 FROM tgsis.vertices_at(%s, 0.5)", (world.temporal["alpha_steps"],)
+    ).fetchone() == (True,)
     conn.rollback()
     # the class tables themselves: refused as before
     assert _sqlstate(conn, "SELECT * FROM tgsis.features_at('beta_steps', 0.5)") == "42501"
     if who == "reader" and world.su.execute("SELECT count(*) > 0 FROM tgsis.versioned_tables").fetchone() == (True,):
-        rows = conn.execute("SELECT count(*) FILTER (WHERE geoid = %s), count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, "
-                            "'DEFAULT')", (world.beta,)).fetchone()
+        rows = conn.execute(
+            "SELECT count(*) FILTER (WHERE geoid = %s), count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, 'DEFAULT')",
+            (world.beta,),
+        ).fetchone()
         assert rows is not None and rows[0] == 0 and rows[1] > 0
         conn.rollback()
 
@@ -275,13 +308,18 @@ def test_version_diffs_and_conflict_rows_hide_a_revoked_class(world: World) -> N
         world.su.execute("UPDATE tgsis.vrtx SET z = z + 5 WHERE geoid IN (%s, %s)", (world.alpha, world.beta))
     world.su.execute("UPDATE tgsis.vrtx SET z = z - 5 WHERE geoid IN (%s, %s)", (world.alpha, world.beta))
     reader = world.roles.connect("reader")
-    diff = reader.execute("SELECT objectkey, shortname, changed FROM tgsis.diff_versions('DEFAULT', 'work') "
-                          "WHERE shortname = 'vrtx'").fetchall()
+    diff = reader.execute(
+        "SELECT objectkey, shortname, changed FROM tgsis.diff_versions('DEFAULT', 'work') WHERE shortname = 'vrtx'"
+    ).fetchall()
     assert [d[0] for d in diff] == [str(world.alpha)]
     reader.rollback()
-    rows = reader.execute("SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.beta),)).fetchone()
+    rows = reader.execute(
+        "SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.beta),)
+    ).fetchone()
     assert rows == (0,)
-    rows = reader.execute("SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.alpha),)).fetchone()
+    rows = reader.execute(
+        "SELECT count(*) FROM tgsis.conflict_rows('work', 'feature', %s)", (str(world.alpha),)
+    ).fetchone()
     assert rows is not None and rows[0] > 0
 
 
@@ -293,12 +331,20 @@ def test_pg_dump_and_restore_keep_the_class_rights(world: World, pg: Any, db_dsn
         reader = psycopg.connect(make_conninfo(dsn, user=world.roles.name("reader")))
         try:
             for geoid in world.revoked:
-                assert _count(reader, "vrtx", geoid) + _count(reader, "times", geoid) + _count(reader, "node", geoid) == 0
+                assert (
+                    _count(reader, "vrtx", geoid) + _count(reader, "times", geoid) + _count(reader, "node", geoid) == 0
+                )
             assert _count(reader, "vrtx", world.alpha) == 25
             editor = psycopg.connect(make_conninfo(dsn, user=world.roles.name("editor")))
             try:
-                assert _sqlstate(editor, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
-                                 (world.beta,)) == "42501"
+                assert (
+                    _sqlstate(
+                        editor,
+                        "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
+                        (world.beta,),
+                    )
+                    == "42501"
+                )
             finally:
                 editor.close()
         finally:
@@ -307,23 +353,38 @@ def test_pg_dump_and_restore_keep_the_class_rights(world: World, pg: Any, db_dsn
 
 def test_every_model_table_and_partitioned_storage_carry_the_policies(conn: Conn) -> None:
     """Every model table with rows per geoid (the registry's), also after partition_model_storage swaps them."""
-    def protected() -> dict[str, int]:
-        return {r[0]: r[1] for r in conn.execute(
-            "SELECT c.relname, count(p.polname) FILTER (WHERE p.polname LIKE 'tgsis_class_%%') "
-            "  FROM tgsis.model_tables t JOIN pg_class c ON c.relname = t.tablename "
-            "   AND c.relnamespace = 'tgsis'::regnamespace AND c.relrowsecurity "
-            "  LEFT JOIN pg_policy p ON p.polrelid = c.oid "
-            " WHERE t.geoidcolumn IS NOT NULL GROUP BY c.relname").fetchall()}
 
-    expected = [r[0] for r in conn.execute(
-        "SELECT tablename FROM tgsis.model_tables WHERE geoidcolumn IS NOT NULL ORDER BY 1").fetchall()]
+    def protected() -> dict[str, int]:
+        return {
+            r[0]: r[1]
+            for r in conn.execute(
+                "SELECT c.relname, count(p.polname) FILTER (WHERE p.polname LIKE 'tgsis_class_%%') "
+                "  FROM tgsis.model_tables t JOIN pg_class c ON c.relname = t.tablename "
+                "   AND c.relnamespace = 'tgsis'::regnamespace AND c.relrowsecurity "
+                "  LEFT JOIN pg_policy p ON p.polrelid = c.oid "
+                " WHERE t.geoidcolumn IS NOT NULL GROUP BY c.relname"
+            ).fetchall()
+        }
+
+    expected = [
+        r[0]
+        for r in conn.execute(
+            "SELECT tablename FROM tgsis.model_tables WHERE geoidcolumn IS NOT NULL ORDER BY 1"
+        ).fetchall()
+    ]
     assert protected() == {t: 4 for t in expected}
     conn.execute("SELECT tgsis.partition_model_storage(1::smallint, 4)")
     assert protected() == {t: 4 for t in expected}
 
 
-@pytest.mark.parametrize("call", ["tgsis.class_denied_geoids('DROP')", "tgsis.class_denied_geoids(NULL)",
-                                  "tgsis.check_class_write(ARRAY[1]::bigint[], 'SELECT')"])
+@pytest.mark.parametrize(
+    "call",
+    [
+        "tgsis.class_denied_geoids('DROP')",
+        "tgsis.class_denied_geoids(NULL)",
+        "tgsis.check_class_write(ARRAY[1]::bigint[], 'SELECT')",
+    ],
+)
 def test_a_privilege_the_checks_do_not_know_is_refused(conn: Conn, call: str) -> None:
     with pytest.raises(psycopg.Error) as caught:
         conn.execute(f"SELECT {call}")
@@ -340,8 +401,10 @@ def test_a_table_named_like_a_class_storage_does_not_hide_the_class(world: World
     for who in ROLES:
         conn = world.roles.connect(who)
         assert _count(conn, "vrtx", world.beta) == 0, who
-        assert _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)",
-                         (world.beta,)) == "42501", who
+        assert (
+            _sqlstate(conn, "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 999, 0, 0, 0)", (world.beta,))
+            == "42501"
+        ), who
 
 
 def test_a_geometry_is_not_slipped_into_a_revoked_class_s_collection(world: World) -> None:
@@ -349,18 +412,31 @@ def test_a_geometry_is_not_slipped_into_a_revoked_class_s_collection(world: Worl
     not change beta may not make one, by INSERT or by UPDATE of its own rows (one row: the row path of a
     versioned view; several: its set-based flush), and the rows stay its own."""
     editor = world.roles.connect("editor")
-    assert _sqlstate(editor, "INSERT INTO tgsis.geometry (geotype, collection) VALUES ('MULTIPOINT', %s)",
-                     (world.beta,)) == "42501"
-    mine = [editor.execute("INSERT INTO tgsis.geometry (geotype) VALUES ('MULTIPOINT') RETURNING geoid").fetchone()[0]  # type: ignore[index]
-            for _ in range(3)]
+    assert (
+        _sqlstate(editor, "INSERT INTO tgsis.geometry (geotype, collection) VALUES ('MULTIPOINT', %s)", (world.beta,))
+        == "42501"
+    )
+    mine = [
+        editor.execute("INSERT INTO tgsis.geometry (geotype) VALUES ('MULTIPOINT') RETURNING geoid").fetchone()[0]  # type: ignore[index]
+        for _ in range(3)
+    ]
     editor.commit()
     for chosen in (mine[:1], mine):
-        assert _sqlstate(editor, "UPDATE tgsis.geometry SET collection = %s WHERE geoid = ANY (%s)",
-                         (world.beta, chosen)) == "42501", chosen
+        assert (
+            _sqlstate(editor, "UPDATE tgsis.geometry SET collection = %s WHERE geoid = ANY (%s)", (world.beta, chosen))
+            == "42501"
+        ), chosen
     # the rows after the first (a versioned view writes them in its flush), the first one harmless
     for first in mine:
-        assert _sqlstate(editor, "UPDATE tgsis.geometry SET collection = CASE WHEN geoid = %s THEN NULL ELSE %s END "
-                                 "WHERE geoid = ANY (%s)", (first, world.beta, mine)) == "42501", first
+        assert (
+            _sqlstate(
+                editor,
+                "UPDATE tgsis.geometry SET collection = CASE WHEN geoid = %s THEN NULL ELSE %s END "
+                "WHERE geoid = ANY (%s)",
+                (first, world.beta, mine),
+            )
+            == "42501"
+        ), first
     members = world.su.execute("SELECT count(*) FROM tgsis.geometry WHERE collection = %s", (world.beta,)).fetchone()
     assert members == (0,)
     # its own collection, of a class it may change, takes them
@@ -379,16 +455,19 @@ def test_a_lesser_role_s_definer_function_reads_with_its_own_class_rights(world:
     world.su.execute(f"GRANT USAGE ON SCHEMA lesser TO {admin_name}")
     world.su.execute(f"GRANT ALL ON beta, beta_cellpros TO {admin_name}")
     editor = world.roles.connect("editor")
-    editor.execute("CREATE FUNCTION lesser.peek(g bigint, t text) RETURNS bigint LANGUAGE plpgsql SECURITY DEFINER "
-                   "SET search_path = pg_catalog AS $$ DECLARE n bigint; "
-                   "BEGIN EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', t) INTO n USING g; "
-                   "RETURN n; END $$")
+    editor.execute(
+        "CREATE FUNCTION lesser.peek(g bigint, t text) RETURNS bigint LANGUAGE plpgsql SECURITY DEFINER "
+        "SET search_path = pg_catalog AS $$ DECLARE n bigint; "
+        "BEGIN EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', t) INTO n USING g; "
+        "RETURN n; END $$"
+    )
     editor.execute(f"GRANT EXECUTE ON FUNCTION lesser.peek(bigint, text) TO {admin_name}")
     editor.commit()
     admin = world.roles.connect("admin")
     for table in ("vrtx", "trgl", "geometry"):
-        assert admin.execute(f"SELECT count(*) > 0 FROM tgsis.{table} WHERE geoid = %s",
-                             (world.beta,)).fetchone() == (True,), table
+        assert admin.execute(f"SELECT count(*) > 0 FROM tgsis.{table} WHERE geoid = %s", (world.beta,)).fetchone() == (
+            True,
+        ), table
         assert admin.execute("SELECT lesser.peek(%s, %s)", (world.beta, table)).fetchone() == (0,), table
         assert admin.execute("SELECT lesser.peek(%s, %s) > 0", (world.alpha, table)).fetchone() == (True,), table
     admin.rollback()

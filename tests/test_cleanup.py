@@ -35,9 +35,15 @@ def _default_sigint() -> None:
 def _spawn(args: list[str], **extra_env: str) -> subprocess.Popen[str]:
     # Its own session: our signals go to the child's process group only, as
     # Ctrl-C in a terminal goes to the foreground group.
-    return subprocess.Popen(args, env=child_env(**extra_env), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, start_new_session=True,
-                            preexec_fn=_default_sigint)
+    return subprocess.Popen(
+        args,
+        env=child_env(**extra_env),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+    )
 
 
 def _server_gone(pid: int, root: Path) -> bool:
@@ -70,16 +76,18 @@ def test_hold(pg, db_dsn):
 """
 
 
-@pytest.mark.parametrize("signals", [(signal.SIGINT,), (signal.SIGINT, signal.SIGINT), (signal.SIGKILL,)],
-                         ids=["ctrl-c", "ctrl-c-twice", "kill-9"])
+@pytest.mark.parametrize(
+    "signals",
+    [(signal.SIGINT,), (signal.SIGINT, signal.SIGINT), (signal.SIGKILL,)],
+    ids=["ctrl-c", "ctrl-c-twice", "kill-9"],
+)
 def test_interrupted_test_run_leaves_no_server(tmp_path: Path, signals: tuple[signal.Signals, ...]) -> None:
     suite = tmp_path / "suite"
     suite.mkdir()
     (suite / "conftest.py").write_text('pytest_plugins = ["tgsis.testing"]\n')
     (suite / "test_hold.py").write_text(textwrap.dedent(TEST_THAT_HOLDS))
     probe = tmp_path / "probe.json"
-    child = _spawn([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(suite)],
-                   PROBE_FILE=str(probe))
+    child = _spawn([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(suite)], PROBE_FILE=str(probe))
     try:
         assert wait_until(probe.exists, timeout=120), "the inner test run did not start its server"
         time.sleep(0.2)
@@ -131,8 +139,10 @@ def _kill_lease_holder(home: Path) -> None:
         child.wait(30)
         # pg_ctl status (postmaster.pid and its process) says whether the server still runs
         stopped = wait_until(lambda: not server.is_running(), timeout=60)
-        assert stopped, "the lease watcher did not stop the server:\n" + subprocess.run(
-            ["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout
+        assert stopped, (
+            "the lease watcher did not stop the server:\n"
+            + subprocess.run(["ps", "-eo", "pid,ppid,stat,args"], capture_output=True, text=True).stdout
+        )
         # the postmaster removes postmaster.pid a moment before its process ends
         assert wait_until(lambda: not process_alive(pid), timeout=10), f"postmaster {pid} outlived its pid file"
     finally:

@@ -32,15 +32,22 @@ def _surface(name: str | None = None) -> tgsis.Surface:
 
 
 def _state(conn: Conn) -> list[Any]:
-    return [conn.execute(q).fetchall() for q in (
-        "SELECT geoid, geoname FROM tgsis.geometry ORDER BY 1", "SELECT * FROM faults ORDER BY 1",
-        "SELECT count(*) FROM tgsis.vrtx", "SELECT * FROM tgsis.model ORDER BY 1")]
+    return [
+        conn.execute(q).fetchall()
+        for q in (
+            "SELECT geoid, geoname FROM tgsis.geometry ORDER BY 1",
+            "SELECT * FROM faults ORDER BY 1",
+            "SELECT count(*) FROM tgsis.vrtx",
+            "SELECT * FROM tgsis.model ORDER BY 1",
+        )
+    ]
 
 
 @pytest.fixture
 def db(conn: Conn) -> tuple[Conn, int]:
-    tgsis.create_feature_class(conn, "faults", "SURFACE",
-                               feature_properties={"n": "integer", "d": "date", "note": "text", "x": "float8"})
+    tgsis.create_feature_class(
+        conn, "faults", "SURFACE", feature_properties={"n": "integer", "d": "date", "note": "text", "x": "float8"}
+    )
     fid = tgsis.insert_feature(conn, "faults", _surface(), {"n": 1})
     conn.commit()
     return conn, fid
@@ -49,31 +56,73 @@ def db(conn: Conn) -> tuple[Conn, int]:
 BIG = "9" * 1_000_000
 
 CASES: list[tuple[str, Callable[[Conn, int], Any], type[tgsis.Error], str]] = [
-    ("integer property", lambda c, f: tgsis.insert_feature(c, "faults", _surface(), {"note": "ok", "n": "abc"}),
-     tgsis.InvalidPropertyError, "value 'abc' of feature property 'n' of class faults is not a valid integer"),
-    ("date property", lambda c, f: tgsis.insert_feature(c, "faults", _surface(), {"d": "31/02/2020"}),
-     tgsis.InvalidPropertyError, "value '31/02/2020' of feature property 'd' of class faults is not a valid date"),
-    ("huge number property", lambda c, f: tgsis.insert_feature(c, "faults", _surface(), {"n": BIG}),
-     tgsis.InvalidPropertyError, "of feature property 'n' of class faults is not a valid integer"),
-    ("NUL in a mesh's name", lambda c, f: tgsis.insert_feature(c, "faults", _surface("top\x00bottom")),
-     tgsis.InvalidInputError, "geometry name contains a NUL byte (at character 3)"),
-    ("huge model number", lambda c, f: tgsis.partition_model_storage(c, 2**40, 4),
-     tgsis.InvalidInputError, "model = 1099511627776 is out of range"),
-    ("huge partition count", lambda c, f: tgsis.partition_model_storage(c, 1, 2**40),
-     tgsis.InvalidInputError, "partitions = 1099511627776 is out of range"),
-    ("model id 2**63", lambda c, f: M.create_model(c, "m", [f, 2**63]),
-     tgsis.InvalidInputError, "objects[1] = 9223372036854775808 is out of range"),
-    ("model id 1.5", lambda c, f: M.create_model(c, "m", [f + 0.5]),  # type: ignore[list-item]
-     tgsis.InvalidInputError, "objects[0] must be an integer id, not float"),
-    ("added id 1.5", lambda c, f: M.add_to_model(c, "m", [1.5]),  # type: ignore[list-item]
-     tgsis.InvalidInputError, "objects[0] must be an integer id, not float 1.5"),
-    ("fetched id 1.5", lambda c, f: tgsis.fetch_features(c, "faults", [f, f + 0.5]),  # type: ignore[list-item]
-     tgsis.InvalidInputError, "ids[1] must be an integer id, not float"),
+    (
+        "integer property",
+        lambda c, f: tgsis.insert_feature(c, "faults", _surface(), {"note": "ok", "n": "abc"}),
+        tgsis.InvalidPropertyError,
+        "value 'abc' of feature property 'n' of class faults is not a valid integer",
+    ),
+    (
+        "date property",
+        lambda c, f: tgsis.insert_feature(c, "faults", _surface(), {"d": "31/02/2020"}),
+        tgsis.InvalidPropertyError,
+        "value '31/02/2020' of feature property 'd' of class faults is not a valid date",
+    ),
+    (
+        "huge number property",
+        lambda c, f: tgsis.insert_feature(c, "faults", _surface(), {"n": BIG}),
+        tgsis.InvalidPropertyError,
+        "of feature property 'n' of class faults is not a valid integer",
+    ),
+    (
+        "NUL in a mesh's name",
+        lambda c, f: tgsis.insert_feature(c, "faults", _surface("top\x00bottom")),
+        tgsis.InvalidInputError,
+        "geometry name contains a NUL byte (at character 3)",
+    ),
+    (
+        "huge model number",
+        lambda c, f: tgsis.partition_model_storage(c, 2**40, 4),
+        tgsis.InvalidInputError,
+        "model = 1099511627776 is out of range",
+    ),
+    (
+        "huge partition count",
+        lambda c, f: tgsis.partition_model_storage(c, 1, 2**40),
+        tgsis.InvalidInputError,
+        "partitions = 1099511627776 is out of range",
+    ),
+    (
+        "model id 2**63",
+        lambda c, f: M.create_model(c, "m", [f, 2**63]),
+        tgsis.InvalidInputError,
+        "objects[1] = 9223372036854775808 is out of range",
+    ),
+    (
+        "model id 1.5",
+        lambda c, f: M.create_model(c, "m", [f + 0.5]),  # type: ignore[list-item]
+        tgsis.InvalidInputError,
+        "objects[0] must be an integer id, not float",
+    ),
+    (
+        "added id 1.5",
+        lambda c, f: M.add_to_model(c, "m", [1.5]),  # type: ignore[list-item]
+        tgsis.InvalidInputError,
+        "objects[0] must be an integer id, not float 1.5",
+    ),
+    (
+        "fetched id 1.5",
+        lambda c, f: tgsis.fetch_features(c, "faults", [f, f + 0.5]),  # type: ignore[list-item]
+        tgsis.InvalidInputError,
+        "ids[1] must be an integer id, not float",
+    ),
 ]
 
 
 @pytest.mark.parametrize("case", CASES, ids=[case[0] for case in CASES])
-def test_python_calls(db: tuple[Conn, int], case: tuple[str, Callable[[Conn, int], Any], type[tgsis.Error], str]) -> None:
+def test_python_calls(
+    db: tuple[Conn, int], case: tuple[str, Callable[[Conn, int], Any], type[tgsis.Error], str]
+) -> None:
     conn, fid = db
     _, call, error, message = case
     before = _state(conn)
@@ -89,8 +138,12 @@ def test_python_calls(db: tuple[Conn, int], case: tuple[str, Callable[[Conn, int
 def test_good_values_still_go_in(db: tuple[Conn, int]) -> None:
     conn, _ = db
     fid = tgsis.insert_feature(conn, "faults", _surface("top"), {"n": "42", "d": "2020-02-28", "note": "x", "x": 1.5})
-    assert tgsis.fetch_feature(conn, "faults", fid).properties == \
-        {"n": 42, "d": datetime.date(2020, 2, 28), "note": "x", "x": 1.5}
+    assert tgsis.fetch_feature(conn, "faults", fid).properties == {
+        "n": 42,
+        "d": datetime.date(2020, 2, 28),
+        "note": "x",
+        "x": 1.5,
+    }
     model = M.create_model(conn, "m", [fid])
     assert model > 0 and [o.id for o in M.model_objects(conn, "m")] == [fid]
 
@@ -117,12 +170,18 @@ def test_a_model5_axis_no_gmap_has(conn: Conn) -> None:
     assert G.md_in_box(conn, fc, ["knowledge"], [1.5], [2]) == [geoid]
 
 
-@pytest.mark.parametrize(("query", "sqlstate", "message"), [
-    ("SELECT tgsis.partition_model_storage(1::smallint, 99999999999)", "TG100",
-     "number of partitions 99999999999 is out of range"),
-    ("SELECT tgsis.partition_model_storage(99999999999, 4)", "TG200", "data model 99999999999 does not exist"),
-    ("SELECT tgsis.partition_model_storage(40000, 4)", "TG200", "data model 40000 does not exist"),
-])
+@pytest.mark.parametrize(
+    ("query", "sqlstate", "message"),
+    [
+        (
+            "SELECT tgsis.partition_model_storage(1::smallint, 99999999999)",
+            "TG100",
+            "number of partitions 99999999999 is out of range",
+        ),
+        ("SELECT tgsis.partition_model_storage(99999999999, 4)", "TG200", "data model 99999999999 does not exist"),
+        ("SELECT tgsis.partition_model_storage(40000, 4)", "TG200", "data model 40000 does not exist"),
+    ],
+)
 def test_partition_numbers_in_sql(conn: Conn, query: str, sqlstate: str, message: str) -> None:
     with pytest.raises(psycopg.Error) as caught:
         conn.execute(query)  # type: ignore[arg-type]  # the test's own literals

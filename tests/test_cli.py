@@ -61,8 +61,7 @@ def test_errors_are_one_clear_line_and_exit_1(capsys: pytest.CaptureFixture[str]
     assert "Traceback" not in err
 
 
-def test_dsn_from_environment(db_dsn: str, monkeypatch: pytest.MonkeyPatch,
-                              capsys: pytest.CaptureFixture[str]) -> None:
+def test_dsn_from_environment(db_dsn: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
     monkeypatch.setenv("TGSIS_DSN", db_dsn)
     assert main(["db", "status"]) == 0
     assert "(from TGSIS_DSN)" in capsys.readouterr().out
@@ -86,30 +85,40 @@ def test_demo_runs_the_release_story(tmp_path: Path) -> None:
         assert result.returncode == 0, result.stderr
         lines = result.stdout.splitlines()
         assert lines[0].startswith("PostgreSQL ") and "database 'tgsis_demo' (local server)" in lines[0]
-        assert lines[1] in (f"tgsis {tgsis.__version__} (installed as extension)",
-                            f"tgsis {tgsis.__version__} (installed as sql)")
+        assert lines[1] in (
+            f"tgsis {tgsis.__version__} (installed as extension)",
+            f"tgsis {tgsis.__version__} (installed as sql)",
+        )
         assert lines[2] == "roles: tgsis_reader, tgsis_editor, tgsis_admin"
         assert lines[3].startswith("data: SCEC Community Fault Model, releases 5.3 and 6.1")
         assert lines[4].startswith("1. stored 3 faults of release 5.3 in DEFAULT")
-        assert lines[5].endswith(": CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m, "
-                                 "CRFA-SLRS-MULT-San_Luis_Range_fault_system-CFM4_1000m")
+        assert lines[5].endswith(
+            ": CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m, CRFA-SLRS-MULT-San_Luis_Range_fault_system-CFM4_1000m"
+        )
         assert lines[6].startswith("3. version cfm6.1: release 6.1 checked in over 3 fault(s) by difference")
         # the re-exported Garlock fault: every vertex kept within 1 cm, a handful of rows instead of 6754
         garlock = next(line for line in lines[7:10] if "Garlock" in line)
         assert "1746 of 1746 vertices kept, 0 moved" in garlock and "(a full upload: 6754)" in garlock
         assert int(garlock.split("; ")[1].split()[0]) <= 12
-        assert "Oceanic_fault-CFM5_1000m: DEFAULT sees release 5.3 (716 vertices); " \
-               "cfm6.1 sees release 6.1 (722 vertices)" in result.stdout
+        assert (
+            "Oceanic_fault-CFM5_1000m: DEFAULT sees release 5.3 (716 vertices); "
+            "cfm6.1 sees release 6.1 (722 vertices)" in result.stdout
+        )
         # each check-out froze the working revision it read (a base for a conflicting check-in's child)
         assert "    cfm6.1 from DEFAULT@0: revisions 2, 3, 4, 5 (release-6.1), 6; working 6" in result.stdout
-        history = lines.index("5. fault history (model 3): CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m slipping 500 m "
-                              "at depth from -2.0 Ma to today, stored as feature 4 of class fault_history (EVOLVING)")
-        assert lines[history + 1:history + 3] == [
+        history = lines.index(
+            "5. fault history (model 3): CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m slipping 500 m "
+            "at depth from -2.0 Ma to today, stored as feature 4 of class fault_history (EVOLVING)"
+        )
+        assert lines[history + 1 : history + 3] == [
             "   at -1.0 Ma (SQL snapshot): 716 vertices, the deepest 250 m from where it is today",
-            f"   21 frames from -2.0 to 0.0 Ma written to {tmp_path / 'demo' / 'fault_history.pvd'} (open it in ParaView)"]
+            f"   21 frames from -2.0 to 0.0 Ma written to {tmp_path / 'demo' / 'fault_history.pvd'} (open it in ParaView)",
+        ]
         lost = lines.index("6. no lost update: ann and bob check out feature 3 in DEFAULT and both edit it")
-        assert lines[lost + 1].startswith("   ann checks in first; bob's check-in is refused: feature 3 was changed in "
-                                          "version 'DEFAULT' since it was checked out")
+        assert lines[lost + 1].startswith(
+            "   ann checks in first; bob's check-in is refused: feature 3 was changed in "
+            "version 'DEFAULT' since it was checked out"
+        )
         assert lines[lost + 2].startswith("   with on_conflict='child' bob's edit goes into new version bob_edit")
         # the picture of release 6.1 over 5.3, coloured by how far 6.1 lies from 5.3, as the other scenarios draw
         png = tmp_path / "demo" / "cfm_release_6.1_over_5.3.png"
@@ -130,10 +139,14 @@ def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> N
         assert result.returncode == 0, result.stderr
         assert "data: synthetic faults (no CFM data found)" in result.stdout
         assert "3. version cfm6.1: release 6.1 checked in over 3 fault(s) by difference" in result.stdout
-        assert "   north_fault: 360 of 360 vertices kept, 0 moved; 1 rows written" in result.stdout  # the release property
+        assert (
+            "   north_fault: 360 of 360 vertices kept, 0 moved; 1 rows written" in result.stdout
+        )  # the release property
         assert "6. no lost update:" in result.stdout
-        assert "middle_fault: DEFAULT sees release 5.3 (360 vertices); cfm6.1 sees release 6.1 (360 vertices)" \
+        assert (
+            "middle_fault: DEFAULT sees release 5.3 (360 vertices); cfm6.1 sees release 6.1 (360 vertices)"
             in result.stdout
+        )
         assert "5. fault history (model 3): north_fault slipping 500 m at depth" in result.stdout
         assert "   at -1.0 Ma (SQL snapshot): 360 vertices, the deepest 250 m from where it is today" in result.stdout
         assert (tmp_path / "out" / "fault_history.pvd").is_file()
@@ -143,16 +156,36 @@ def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> N
 # --------------------------------------------------------------------------- classes and features
 
 
-
 def test_class_create_list_drop(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["--dsn", db_dsn, "class", "create", "faults", "--geotype", "surface",
-                 "--feature-property", "release:text", "--property", "azi:float8", "--property", "dip:float8",
-                 "--srs", "26911"]) == 0
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "class",
+                "create",
+                "faults",
+                "--geotype",
+                "surface",
+                "--feature-property",
+                "release:text",
+                "--property",
+                "azi:float8",
+                "--property",
+                "dip:float8",
+                "--srs",
+                "26911",
+            ]
+        )
+        == 0
+    )
     assert "created feature class faults (SURFACE)" in capsys.readouterr().out
     assert main(["--dsn", db_dsn, "class", "list"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("class\tgeotype\tsrs\tschema\ttime\tfeature properties\tproperties\tper-instant properties\n"
-                          "faults\tSURFACE\t26911\tpublic\tstatic\trelease text\tvertex: azi double precision")
+    assert out.startswith(
+        "class\tgeotype\tsrs\tschema\ttime\tfeature properties\tproperties\tper-instant properties\n"
+        "faults\tSURFACE\t26911\tpublic\tstatic\trelease text\tvertex: azi double precision"
+    )
     assert main(["--dsn", db_dsn, "class", "create", "Bad", "--geotype", "SURFACE"]) == 1
     assert "feature class name 'Bad' is not allowed" in capsys.readouterr().err
     assert main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--property", "porosity"]) == 1
@@ -166,8 +199,26 @@ def test_import_ls_export_a_real_gocad_fault(db_dsn: str, tmp_path: Path, capsys
     from tgsis import formats
 
     source = cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
-    assert main(["--dsn", db_dsn, "class", "create", "faults", "--geotype", "SURFACE",
-                 "--feature-property", "release:text", "--property", "azi:float8", "--property", "dip:float8"]) == 0
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "class",
+                "create",
+                "faults",
+                "--geotype",
+                "SURFACE",
+                "--feature-property",
+                "release:text",
+                "--property",
+                "azi:float8",
+                "--property",
+                "dip:float8",
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     assert main(["--dsn", db_dsn, "import", str(source), "--class", "faults", "--set", "release=CFM5"]) == 0
     fid, name, *_ = capsys.readouterr().out.splitlines()[1].split("\t")
@@ -184,8 +235,7 @@ def test_import_ls_export_a_real_gocad_fault(db_dsn: str, tmp_path: Path, capsys
         assert conn.execute("SELECT release FROM faults").fetchone() == ("CFM5",)
 
 
-def test_import_of_properties_the_class_lacks_needs_a_flag(db_dsn: str,
-                                                           capsys: pytest.CaptureFixture[str]) -> None:
+def test_import_of_properties_the_class_lacks_needs_a_flag(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     source = cfm("formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts")
     assert main(["--dsn", db_dsn, "class", "create", "plain", "--geotype", "SURFACE"]) == 0
     assert main(["--dsn", db_dsn, "import", str(source), "--class", "plain"]) == 1
@@ -200,9 +250,11 @@ FLAGGED = Path(__file__).parent / "data" / "gocad" / "flagged.ts"  # F1: a dupli
 
 def _stored(dsn: str) -> tuple[int, ...]:
     with psycopg.connect(dsn) as conn:
-        row = conn.execute("SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
-                           "(SELECT count(*) FROM tgsis.trgl), (SELECT count(*) FROM faults), "
-                           "(SELECT count(*) FROM blocks)").fetchone()
+        row = conn.execute(
+            "SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
+            "(SELECT count(*) FROM tgsis.trgl), (SELECT count(*) FROM faults), "
+            "(SELECT count(*) FROM blocks)"
+        ).fetchone()
     assert row is not None
     return tuple(row)
 
@@ -215,16 +267,21 @@ def test_reject_flagged_refuses_the_whole_file(db_dsn: str, capsys: pytest.Captu
     for target in ("faults", "blocks"):
         assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", target, "--reject-flagged"]) == 1
         err = capsys.readouterr().err
-        assert err.startswith(f"tgsis: error: {FLAGGED}: refused, nothing imported: "
-                              "object 'F1': 1 duplicate vertices, 1 degenerate cells\n")
+        assert err.startswith(
+            f"tgsis: error: {FLAGGED}: refused, nothing imported: "
+            "object 'F1': 1 duplicate vertices, 1 degenerate cells\n"
+        )
         assert "F2" not in err and "HINT: fix the file, raise --tolerance" in err
         assert _stored(db_dsn) == empty
 
     # a thin triangle of F2 (area 5e-5) is flagged too once the tolerance says so
-    assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--reject-flagged",
-                 "--tolerance", "1e-3"]) == 1
-    assert ("object 'F1': 1 duplicate vertices, 1 degenerate cells; "
-            "object 'F2': 0 duplicate vertices, 1 degenerate cells") in capsys.readouterr().err
+    assert (
+        main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--reject-flagged", "--tolerance", "1e-3"])
+        == 1
+    )
+    assert (
+        "object 'F1': 1 duplicate vertices, 1 degenerate cells; object 'F2': 0 duplicate vertices, 1 degenerate cells"
+    ) in capsys.readouterr().err
     assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--tolerance", "-1"]) == 1
     assert "--tolerance must be a finite number >= 0, got -1.0" in capsys.readouterr().err
     assert _stored(db_dsn) == empty
@@ -233,15 +290,21 @@ def test_reject_flagged_refuses_the_whole_file(db_dsn: str, capsys: pytest.Captu
     assert main(["--dsn", db_dsn, "import", str(FLAGGED), "--class", "faults", "--tolerance", "1e-3"]) == 0
     lines = [line.split("\t") for line in capsys.readouterr().out.splitlines()[1:]]
     assert [(line[1], line[-1]) for line in lines] == [
-        ("F1", "1 duplicate vertices, 1 degenerate cells"), ("F2", "0 duplicate vertices, 1 degenerate cells")]
+        ("F1", "1 duplicate vertices, 1 degenerate cells"),
+        ("F2", "0 duplicate vertices, 1 degenerate cells"),
+    ]
     assert _stored(db_dsn) == (2, 10, 6, 2, 0)
 
 
 def test_reject_flagged_passes_clean_files(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     source = Path(__file__).parent / "data" / "gocad" / "two_lines.pl"
     assert main(["--dsn", db_dsn, "class", "create", "traces", "--geotype", "MULTILINESTRING"]) == 0
-    assert main(["--dsn", db_dsn, "import", str(source), "--class", "traces", "--reject-flagged",
-                 "--drop-extra-properties"]) == 0
+    assert (
+        main(
+            ["--dsn", db_dsn, "import", str(source), "--class", "traces", "--reject-flagged", "--drop-extra-properties"]
+        )
+        == 0
+    )
     assert capsys.readouterr().out.splitlines()[-1].endswith("no duplicate vertices, no degenerate cells")
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT count(*) FROM traces").fetchone() == (1,)

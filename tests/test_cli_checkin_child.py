@@ -14,7 +14,7 @@ from tests.test_cli_checkin import _surface
 from tgsis import formats
 from tgsis.cli import main
 
-ANN, BOB = 1, 100          # the vertex each moves
+ANN, BOB = 1, 100  # the vertex each moves
 
 
 @pytest.fixture
@@ -47,11 +47,12 @@ def _z(dsn: str, fid: int, version: str = "DEFAULT") -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("solution", ["parent", "child", "manual"])
-def test_the_conflict_goes_through_the_merge(db_dsn: str, fault: int, tmp_path: Path, solution: str,
-                                             capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_conflict_goes_through_the_merge(
+    db_dsn: str, fault: int, tmp_path: Path, solution: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     cli = ["--dsn", db_dsn]
     ann, bob = tmp_path / "ann.ts", tmp_path / "bob.vtu"
-    assert main([*cli, "checkout", str(fault), str(bob)]) == 0      # Bob first, Ann edits meanwhile
+    assert main([*cli, "checkout", str(fault), str(bob)]) == 0  # Bob first, Ann edits meanwhile
     assert main([*cli, "checkout", str(fault), str(ann)]) == 0
     _edit_file(ann, {ANN: 5.0})
     assert main([*cli, "checkin", str(ann)]) == 0
@@ -62,14 +63,14 @@ def test_the_conflict_goes_through_the_merge(db_dsn: str, fault: int, tmp_path: 
     assert "into version bob_fix (a new child version" in out
     assert "tgsis version conflicts bob_fix" in out and "tgsis version merge bob_fix" in out
     original = _surface().vertices
-    assert _z(db_dsn, fault, "bob_fix") == (original[ANN, 2], -5.0)   # Ann's edit is not reverted in the child
+    assert _z(db_dsn, fault, "bob_fix") == (original[ANN, 2], -5.0)  # Ann's edit is not reverted in the child
 
     assert main([*cli, "version", "conflicts", "bob_fix"]) == 0
     out = capsys.readouterr().out
     assert main([*cli, "version", "conflicts", "bob_fix", "--no-header"]) == 0
     out = capsys.readouterr().out
     assert out.startswith(f"feature\t{fault}\tunsolved\t") and "vrtx" in out.split("\t")[3]
-    assert main([*cli, "version", "merge", "bob_fix"]) == 1          # no silent merge
+    assert main([*cli, "version", "merge", "bob_fix"]) == 1  # no silent merge
     err = capsys.readouterr().err
     assert "tgsis: error:" in err and str(fault) in err
     assert _z(db_dsn, fault) == (5.0, original[BOB, 2])
@@ -94,15 +95,20 @@ def test_the_conflict_goes_through_the_merge(db_dsn: str, fault: int, tmp_path: 
     assert _z(db_dsn, fault) == expected[solution]
 
 
-def test_a_record_that_cannot_take_the_child_path(db_dsn: str, fault: int, tmp_path: Path,
-                                                  capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_record_that_cannot_take_the_child_path(
+    db_dsn: str, fault: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """A check-out record whose frozen revision compress removed: a clear refusal naming the way out."""
     cli = ["--dsn", db_dsn]
     bob = tmp_path / "bob.ts"
     assert main([*cli, "checkout", str(fault), str(bob)]) == 0
     with psycopg.connect(db_dsn) as conn:
-        tgsis.save_feature(conn, "faults", fault, tgsis.Surface(_surface().vertices + 1, _surface().cells,
-                                                                vertex_properties=_surface().vertex_properties))
+        tgsis.save_feature(
+            conn,
+            "faults",
+            fault,
+            tgsis.Surface(_surface().vertices + 1, _surface().cells, vertex_properties=_surface().vertex_properties),
+        )
     assert main([*cli, "version", "compress"]) == 0
     _edit_file(bob, {BOB: -5.0})
     capsys.readouterr()
@@ -114,8 +120,9 @@ def test_a_record_that_cannot_take_the_child_path(db_dsn: str, fault: int, tmp_p
         assert [v.name for v in tgsis.list_versions(conn)] == ["DEFAULT"]
 
 
-def test_a_child_version_named_in_free_text_gets_commands_that_run(db_dsn: str, fault: int, tmp_path: Path,
-                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_child_version_named_in_free_text_gets_commands_that_run(
+    db_dsn: str, fault: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """A version name with blanks and a quote (free text, as the design's): the commands printed after the conflict
     are quoted for the shell, so that pasting them runs them on that version."""
     import shlex
@@ -128,8 +135,9 @@ def test_a_child_version_named_in_free_text_gets_commands_that_run(db_dsn: str, 
     assert main([*cli, "checkin", str(ann)]) == 0
     _edit_file(bob, {BOB: -5.0})
     capsys.readouterr()
-    assert main([*cli, "checkin", str(bob), "--on-conflict", "child", "--child-version", "Bob's fix; 2024",
-                 "--json"]) == 0
+    assert (
+        main([*cli, "checkin", str(bob), "--on-conflict", "child", "--child-version", "Bob's fix; 2024", "--json"]) == 0
+    )
     doc = json.loads(capsys.readouterr().out)
     assert doc["version"] == "Bob's fix; 2024" and doc["conflict"]
     conflicts, resolve, merge = (shlex.split(c) for c in doc["commands"])

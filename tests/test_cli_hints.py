@@ -28,7 +28,7 @@ def hint_of(dsn: str, capsys: pytest.CaptureFixture[str], *argv: str) -> str:
     assert main(["--dsn", dsn, *argv]) == 1
     err = capsys.readouterr().err
     assert err.startswith("tgsis: error: "), err
-    hints = [line[len("HINT: "):] for line in err.splitlines() if line.startswith("HINT: ")]
+    hints = [line[len("HINT: ") :] for line in err.splitlines() if line.startswith("HINT: ")]
     assert len(hints) == 1, err
     assert foreign_terms(hints[0]) == [], f"tgsis {' '.join(argv)}: {hints[0]}"
     return hints[0]
@@ -82,8 +82,10 @@ def test_hints_of_versions(dsn: str, tmp_path: Path, capsys: pytest.CaptureFixtu
 def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
     """The hints the library gives in its own terms, as the command line prints them."""
     assert to_cli("pass format= with one of ts, vtu") == "give --format with one of ts, vtu"
-    assert to_cli("delete them first, or drop with force => true to delete them with their geometries") == \
-        "delete them first, or repeat with --force to delete them with their geometries"
+    assert (
+        to_cli("delete them first, or drop with force => true to delete them with their geometries")
+        == "delete them first, or repeat with --force to delete them with their geometries"
+    )
     assert foreign_terms("pass drop_extra_properties=True") == ["drop_extra_properties="]
     assert foreign_terms("SELECT tgsis.resolve_conflict('v', class, key, 'parent')") != []
     assert foreign_terms("tgsis version resolve v feature 3 child; tgsis checkin --on-conflict child") == []
@@ -103,8 +105,11 @@ def _sample(text: str) -> str:
 
 def _written_hints() -> list[tuple[str, str]]:
     found = []
-    sources = [line.strip() for line in (ROOT / "sql" / "sources.txt").read_text().splitlines()
-               if line.strip() and not line.startswith("#")]  # the sources, not a built script beside them
+    sources = [
+        line.strip()
+        for line in (ROOT / "sql" / "sources.txt").read_text().splitlines()
+        if line.strip() and not line.startswith("#")
+    ]  # the sources, not a built script beside them
     for path in (ROOT / "sql" / name for name in sources):
         text = path.read_text()
         for m in re.finditer(r"HINT\s*=\s*(?:format\(\s*)?'((?:[^']|'')*)'((?:\s*'(?:[^']|'')*')*)", text):
@@ -138,7 +143,7 @@ NOT_FROM_THE_CLI = {
     "sql/model4/gmap_conditions.sql": "an SQL building block of gmap_check and md_check, which the command calls with valid arguments",
     "sql/geometry/partition_model_storage.sql": "a DBA's set-up step, SQL and Python only (docs/scaling.md): no command",
     "sql/geometry/no_model_rule.sql": "a data model the registry lacks: only SQL and Python callers can name one "
-                                      "(the commands work on stored features, whose models are registered)",
+    "(the commands work on stored features, whose models are registered)",
     "sql/geometry/class_denied_geoids.sql": "the privilege argument of an internal check tgsis's own code calls",
     "sql/geometry/check_class_write.sql": "the privilege argument of an internal check tgsis's own code calls",
     "sql/versioning/conflict_discards.sql": "a key without its class: the command always gives both",
@@ -149,6 +154,9 @@ NOT_FROM_THE_CLI = {
 def test_every_written_hint_is_in_cli_terms_after_the_mapping() -> None:
     hints = _written_hints()
     assert len(hints) > 150  # the scan finds them
-    left = [(where, hint, to_cli(hint)) for where, hint in hints
-            if not any(where.startswith(skip) for skip in NOT_FROM_THE_CLI) and foreign_terms(to_cli(hint))]
+    left = [
+        (where, hint, to_cli(hint))
+        for where, hint in hints
+        if not any(where.startswith(skip) for skip in NOT_FROM_THE_CLI) and foreign_terms(to_cli(hint))
+    ]
     assert not left, "\n".join(f"{where}: {hint!r} -> {cli!r}" for where, hint, cli in left)

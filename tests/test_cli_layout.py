@@ -42,11 +42,19 @@ def test_no_sql_in_the_command_line() -> None:
         for node in ast.walk(tree):
             if isinstance(node, ast.Attribute) and node.attr in ("execute", "executemany", "cursor", "copy"):
                 found.append(f"{path.name}:{node.lineno}: .{node.attr}")
-            if isinstance(node, ast.ImportFrom) and node.module in ("psycopg.sql", "psycopg") and \
-                    any(a.name == "sql" for a in node.names):
+            if (
+                isinstance(node, ast.ImportFrom)
+                and node.module in ("psycopg.sql", "psycopg")
+                and any(a.name == "sql" for a in node.names)
+            ):
                 found.append(f"{path.name}:{node.lineno}: imports psycopg.sql")
-            if isinstance(node, ast.Constant) and isinstance(node.value, str) and \
-                    re.search(r"\bSELECT\b.*\bFROM\b|\bINSERT INTO\b|\bUPDATE\b \w+ \bSET\b|\bDELETE FROM\b", node.value):
+            if (
+                isinstance(node, ast.Constant)
+                and isinstance(node.value, str)
+                and re.search(
+                    r"\bSELECT\b.*\bFROM\b|\bINSERT INTO\b|\bUPDATE\b \w+ \bSET\b|\bDELETE FROM\b", node.value
+                )
+            ):
                 found.append(f"{path.name}:{node.lineno}: SQL text {node.value[:40]!r}")
     assert found == []
 
@@ -59,7 +67,10 @@ def test_the_browser_view_reads_storage_through_tgsis_db() -> None:
     found = []
     for path in sorted(Path(tgsis.view.__file__).parent.glob("*.py")):
         for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Constant) and isinstance(node.value, str) and \
-                    re.search(r"\bFROM\b|\btgsis\.\w+\(|\bINSERT\b|\bUPDATE\b|\bDELETE\b|^tgsis\.\w+$", node.value):
+            if (
+                isinstance(node, ast.Constant)
+                and isinstance(node.value, str)
+                and re.search(r"\bFROM\b|\btgsis\.\w+\(|\bINSERT\b|\bUPDATE\b|\bDELETE\b|^tgsis\.\w+$", node.value)
+            ):
                 found.append(f"{path.name}:{node.lineno}: {node.value[:50]!r}")
     assert found == []

@@ -21,7 +21,9 @@ FLAGGED = Path(__file__).parent / "data" / "gocad" / "flagged.ts"  # F1 (z = 0) 
 
 
 @pytest.fixture
-def data(db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> dict[str, Any]:
+def data(
+    db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> dict[str, Any]:
     """Three faults with a text and a number property; a class without feature properties."""
     monkeypatch.setenv("TGSIS_HOME", str(tmp_path / "home"))
     f1, f2 = tgsis.formats.read(FLAGGED)
@@ -29,11 +31,17 @@ def data(db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: p
     far.vertices = far.vertices + [1000.0, 0.0, 0.0]
     far.name = "Garlock north"
     with psycopg.connect(db_dsn) as conn:
-        tgsis.create_feature_class(conn, "faults", "SURFACE",
-                                   feature_properties={"release": "text", "slip": "double precision"})
-        ids = [tgsis.insert_feature(conn, "faults", m, props) for m, props in
-               [(f1, {"release": "5.3", "slip": 1.5}), (f2, {"release": "6.1", "slip": 2.0}),
-                (far, {"release": "6.1", "slip": None})]]
+        tgsis.create_feature_class(
+            conn, "faults", "SURFACE", feature_properties={"release": "text", "slip": "double precision"}
+        )
+        ids = [
+            tgsis.insert_feature(conn, "faults", m, props)
+            for m, props in [
+                (f1, {"release": "5.3", "slip": 1.5}),
+                (f2, {"release": "6.1", "slip": 2.0}),
+                (far, {"release": "6.1", "slip": None}),
+            ]
+        ]
         tgsis.create_feature_class(conn, "plain", "SURFACE")
         plain = tgsis.insert_feature(conn, "plain", f1)
     capsys.readouterr()
@@ -53,8 +61,12 @@ def ids_of(out: str) -> list[int]:
 
 def test_ls_shows_feature_properties(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     features = json.loads(ls(data, capsys, "--json"))["features"]
-    assert [f["properties"] for f in features] == [{"release": "5.3", "slip": 1.5}, {"release": "6.1", "slip": 2.0},
-                                                   {"release": "6.1", "slip": None}, {}]
+    assert [f["properties"] for f in features] == [
+        {"release": "5.3", "slip": 1.5},
+        {"release": "6.1", "slip": 2.0},
+        {"release": "6.1", "slip": None},
+        {},
+    ]
     header, *rows = (line.split("\t") for line in ls(data, capsys).splitlines())
     assert header[-1] == "properties" and all(len(r) == len(header) for r in rows)
     assert [r[-1] for r in rows] == ["release=5.3 slip=1.5", "release=6.1 slip=2.0", "release=6.1 slip=", ""]
@@ -69,8 +81,21 @@ def test_ls_filters_by_name_box_and_property(data: dict[str, Any], capsys: pytes
     assert ids_of(ls(data, capsys, "--json", "--class", "faults", "--property", "release=6.1")) == [f2, far]
     # the value is read as the property's type: 2 equals 2.0
     assert ids_of(ls(data, capsys, "--json", "--class", "faults", "--property", "slip=2")) == [f2]
-    assert ids_of(ls(data, capsys, "--json", "--class", "faults", "--property", "release=6.1",
-                     "--property", "slip=2", "--name", "f2")) == [f2]
+    assert ids_of(
+        ls(
+            data,
+            capsys,
+            "--json",
+            "--class",
+            "faults",
+            "--property",
+            "release=6.1",
+            "--property",
+            "slip=2",
+            "--name",
+            "f2",
+        )
+    ) == [f2]
     assert main(["--dsn", data["dsn"], "ls", "--name", "nothing like it"]) == 0
     assert capsys.readouterr() == ("", "no features\n")
 

@@ -20,8 +20,12 @@ FLAGGED = Path(__file__).parent / "data" / "gocad" / "flagged.ts"  # surfaces F1
 
 def _names(dsn: str, version: str = "DEFAULT") -> list[tuple[int, str]]:
     with psycopg.connect(dsn) as conn, tgsis.in_version(conn, version):
-        return [(int(r[0]), str(r[1])) for r in conn.execute(
-            "SELECT g.geoid, g.geoname FROM faults f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY 1")]
+        return [
+            (int(r[0]), str(r[1]))
+            for r in conn.execute(
+                "SELECT g.geoid, g.geoname FROM faults f JOIN tgsis.geometry g ON g.geoid = f._geoid ORDER BY 1"
+            )
+        ]
 
 
 def _moved(path: Path, tmp_path: Path, dz: float) -> Path:
@@ -42,13 +46,18 @@ def faults(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> str:
     return db_dsn
 
 
-def test_a_second_import_warns_and_replace_replaces(faults: str, tmp_path: Path,
-                                                     capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_second_import_warns_and_replace_replaces(
+    faults: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     before = _names(faults)
     assert main(["--dsn", faults, "import", str(FLAGGED), "--class", "faults"]) == 0
     err = capsys.readouterr().err
-    assert f"tgsis: warning: class faults already has a feature named 'F1' (id {before[0][0]}): this import adds " \
-           "another one; --replace replaces it" in err and "'F2'" in err
+    assert (
+        f"tgsis: warning: class faults already has a feature named 'F1' (id {before[0][0]}): this import adds "
+        "another one; --replace replaces it"
+        in err
+        and "'F2'" in err
+    )
     assert len(_names(faults)) == 4
     # two of each name now: --replace cannot tell which, and changes nothing
     assert main(["--dsn", faults, "import", str(FLAGGED), "--class", "faults", "--replace"]) == 1
@@ -57,8 +66,9 @@ def test_a_second_import_warns_and_replace_replaces(faults: str, tmp_path: Path,
     assert len(_names(faults)) == 4
 
 
-def test_replace_keeps_the_id_and_writes_by_difference(faults: str, tmp_path: Path,
-                                                       capsys: pytest.CaptureFixture[str]) -> None:
+def test_replace_keeps_the_id_and_writes_by_difference(
+    faults: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     before = _names(faults)
     moved = _moved(FLAGGED, tmp_path, 10.0)
     assert main(["--dsn", faults, "import", str(moved), "--class", "faults", "--replace", "--json"]) == 0
@@ -72,8 +82,9 @@ def test_replace_keeps_the_id_and_writes_by_difference(faults: str, tmp_path: Pa
     assert (z == tgsis.formats.read(FLAGGED)[0].vertices[:, 2] + 10.0).all()
 
 
-def test_replace_in_a_version_is_a_change_of_that_version(faults: str, tmp_path: Path,
-                                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_replace_in_a_version_is_a_change_of_that_version(
+    faults: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     before = _names(faults)
     assert main(["--dsn", faults, "versioning", "enable", "features"]) == 0
     assert main(["--dsn", faults, "version", "create", "v"]) == 0
@@ -100,15 +111,22 @@ def test_two_sessions_replacing_one_name_at_once_leave_one_feature(faults: str, 
     with psycopg.connect(faults, autocommit=True) as holder:
         # hold the lock of the name F9 in class faults, as one import would, while both start
         holder.execute("BEGIN")
-        holder.execute("SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))",
-                       ("tgsis import: public.faults: F9",))
-        runs = [subprocess.Popen([tgsis_command, "--dsn", faults, "import", str(fresh), "--class", "faults",
-                                  "--replace"], env=child_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                 text=True) for _ in range(2)]
+        holder.execute("SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))", ("tgsis import: public.faults: F9",))
+        runs = [
+            subprocess.Popen(
+                [tgsis_command, "--dsn", faults, "import", str(fresh), "--class", "faults", "--replace"],
+                env=child_env(),
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+            for _ in range(2)
+        ]
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
-            waiting = holder.execute("SELECT count(*) FROM pg_locks WHERE locktype = 'advisory' AND NOT granted"
-                                     ).fetchone()
+            waiting = holder.execute(
+                "SELECT count(*) FROM pg_locks WHERE locktype = 'advisory' AND NOT granted"
+            ).fetchone()
             if waiting == (2,):
                 break
             time.sleep(0.05)

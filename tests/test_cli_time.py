@@ -17,8 +17,8 @@ from tgsis.formats.pvd import read_pvd
 from tgsis.mesh import Surface
 from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
-STARTS = [-10.0, -6.5, -2.0]          # the evolving fault exists from -10 to -1 Ma, not after
-INSTANTS = [0.0, 1.0, 2.5]            # the stepped horizon, alive after 2.5
+STARTS = [-10.0, -6.5, -2.0]  # the evolving fault exists from -10 to -1 Ma, not after
+INSTANTS = [0.0, 1.0, 2.5]  # the stepped horizon, alive after 2.5
 
 
 @pytest.fixture
@@ -28,23 +28,36 @@ def stored(db_dsn: str) -> tuple[dict[str, int], EvolvingSurface, SurfaceSeries]
     late = evolving(np.random.default_rng(22), [-4.0], alive=True, with_properties=True)
     horizon = series(np.random.default_rng(23), INSTANTS, alive=True, with_properties=True)
     with psycopg.connect(db_dsn) as conn:
-        faults = tgsis.create_feature_class(conn, "moving_faults", "SURFACE", time_model="EVOLVING", time_unit="Ma",
-                                            cell_properties=[("porosity", "double precision")],
-                                            instant_properties=[("throw", "double precision"),
-                                                                ("note_code", "integer")])
-        horizons = tgsis.create_feature_class(conn, "horizons", "SURFACE", time_model="INSTANTS",
-                                              cell_properties=[("porosity", "double precision")],
-                                              instant_properties=[("throw", "double precision")])
+        faults = tgsis.create_feature_class(
+            conn,
+            "moving_faults",
+            "SURFACE",
+            time_model="EVOLVING",
+            time_unit="Ma",
+            cell_properties=[("porosity", "double precision")],
+            instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+        )
+        horizons = tgsis.create_feature_class(
+            conn,
+            "horizons",
+            "SURFACE",
+            time_model="INSTANTS",
+            cell_properties=[("porosity", "double precision")],
+            instant_properties=[("throw", "double precision")],
+        )
         plain = tgsis.create_feature_class(conn, "plain", "SURFACE")
-        ids = {"fault": tgsis.insert_feature(conn, faults, fault),
-               "late": tgsis.insert_feature(conn, faults, late),
-               "horizon": tgsis.insert_feature(conn, horizons, horizon),
-               "static": tgsis.insert_feature(conn, plain, Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]))}
+        ids = {
+            "fault": tgsis.insert_feature(conn, faults, fault),
+            "late": tgsis.insert_feature(conn, faults, late),
+            "horizon": tgsis.insert_feature(conn, horizons, horizon),
+            "static": tgsis.insert_feature(conn, plain, Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])),
+        }
     return ids, fault, horizon
 
 
-def check_errors(dsn: str, capsys: pytest.CaptureFixture[str], command: list[str],
-                 cases: list[tuple[list[str], str]]) -> None:
+def check_errors(
+    dsn: str, capsys: pytest.CaptureFixture[str], command: list[str], cases: list[tuple[list[str], str]]
+) -> None:
     """Each ``command + argv`` exits with status 1 and a ``tgsis: error:`` message holding the expected text."""
     for argv, message in cases:
         assert main(["--dsn", dsn, *command, *argv]) == 1, argv
@@ -61,8 +74,12 @@ def same_surface(back: Surface, expected: Surface | None) -> None:
 # --------------------------------------------------------------------------- tgsis at
 
 
-def test_at_writes_the_evolving_surface_at_t(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                             tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_at_writes_the_evolving_surface_at_t(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     ids, fault, _ = stored
     fid = ids["fault"]
     t = -7.25
@@ -70,8 +87,10 @@ def test_at_writes_the_evolving_surface_at_t(db_dsn: str, stored: tuple[dict[str
     assert main(["--dsn", db_dsn, "at", str(fid), str(t), str(out)]) == 0
     expected = fault.at(t)
     assert expected is not None
-    assert capsys.readouterr().out == (f"wrote feature {fid} (moving_faults) at t = -7.25 Ma: {expected.n_vertices} "
-                                       f"vertices, {expected.n_cells} triangles, to {out}\n")
+    assert capsys.readouterr().out == (
+        f"wrote feature {fid} (moving_faults) at t = -7.25 Ma: {expected.n_vertices} "
+        f"vertices, {expected.n_cells} triangles, to {out}\n"
+    )
     same_surface(formats.read_one(out), expected)  # type: ignore[arg-type]
     # GOCAD keeps every digit too; --format picks the format whatever the extension
     assert main(["--dsn", db_dsn, "at", str(fid), "-2", str(tmp_path / "fault.ts")]) == 0
@@ -80,8 +99,12 @@ def test_at_writes_the_evolving_surface_at_t(db_dsn: str, stored: tuple[dict[str
     same_surface(formats.read_one(tmp_path / "fault.data", format="ply"), fault.at(-1.0))  # type: ignore[arg-type]
 
 
-def test_at_records_the_time_in_the_file(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_at_records_the_time_in_the_file(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     """A snapshot says when it is: its name in the file (GOCAD header, VTK field data and title) and, with {t} in
     FILE or a folder as FILE, its file name."""
     ids, fault, _ = stored
@@ -106,28 +129,49 @@ def test_at_records_the_time_in_the_file(db_dsn: str, stored: tuple[dict[str, in
     assert "a folder: give --format" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize(("t", "convention", "index"), [
-    (0.0, "left", 0), (0.0, "right", 0), (0.5, "left", 0), (0.5, "right", 1), (1.0, "left", 1), (1.0, "right", 1),
-    (2.0, "left", 1), (2.0, "right", 2), (2.5, "left", 2), (99.0, "right", 2)])
+@pytest.mark.parametrize(
+    ("t", "convention", "index"),
+    [
+        (0.0, "left", 0),
+        (0.0, "right", 0),
+        (0.5, "left", 0),
+        (0.5, "right", 1),
+        (1.0, "left", 1),
+        (1.0, "right", 1),
+        (2.0, "left", 1),
+        (2.0, "right", 2),
+        (2.5, "left", 2),
+        (99.0, "right", 2),
+    ],
+)
 def test_at_a_model_2_feature_follows_the_convention(
-        db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries], tmp_path: Path,
-        t: float, convention: str, index: int) -> None:
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    t: float,
+    convention: str,
+    index: int,
+) -> None:
     ids, _, horizon = stored
     out = tmp_path / "horizon.vtu"
     assert main(["--dsn", db_dsn, "at", str(ids["horizon"]), str(t), str(out), "--convention", convention]) == 0
     same_surface(formats.read_one(out), horizon.surfaces[index])  # type: ignore[arg-type]
 
 
-def test_at_a_time_where_the_object_does_not_exist(db_dsn: str,
-                                                   stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                                   tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_at_a_time_where_the_object_does_not_exist(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     ids, _, _ = stored
     out = tmp_path / "none.ts"
     for fid, t, message, hint in [
-            (ids["fault"], "-0.5", "(moving_faults) does not exist at t = -0.5 Ma", "it exists from t = -10.0 to -1.0 Ma"),
-            (ids["fault"], "-11", "(moving_faults) does not exist at t = -11.0 Ma", "it exists from t = -10.0 to -1.0 Ma"),
-            (ids["late"], "-5", "(moving_faults) does not exist at t = -5.0 Ma", "it exists from t = -4.0 Ma on (alive)"),
-            (ids["horizon"], "-0.001", "(horizons) does not exist at t = -0.001", "it exists from t = 0.0 on (alive)")]:
+        (ids["fault"], "-0.5", "(moving_faults) does not exist at t = -0.5 Ma", "it exists from t = -10.0 to -1.0 Ma"),
+        (ids["fault"], "-11", "(moving_faults) does not exist at t = -11.0 Ma", "it exists from t = -10.0 to -1.0 Ma"),
+        (ids["late"], "-5", "(moving_faults) does not exist at t = -5.0 Ma", "it exists from t = -4.0 Ma on (alive)"),
+        (ids["horizon"], "-0.001", "(horizons) does not exist at t = -0.001", "it exists from t = 0.0 on (alive)"),
+    ]:
         assert main(["--dsn", db_dsn, "at", str(fid), t, str(out)]) == 1
         err = capsys.readouterr().err
         assert err.startswith(f"tgsis: error: feature {fid} {message}\nHINT: {hint}"), err
@@ -135,26 +179,39 @@ def test_at_a_time_where_the_object_does_not_exist(db_dsn: str,
     assert not out.exists()
 
 
-def test_at_a_static_surface_is_the_surface(db_dsn: str,
-                                            stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                            tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_at_a_static_surface_is_the_surface(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     ids, _, _ = stored
-    with pytest.raises(SystemExit):   # argparse takes -1e9 for an option: `--` before it (see docs/cli.md)
+    with pytest.raises(SystemExit):  # argparse takes -1e9 for an option: `--` before it (see docs/cli.md)
         main(["--dsn", db_dsn, "at", str(ids["static"]), "-1e9", str(tmp_path / "s.obj")])
     capsys.readouterr()
     assert main(["--dsn", db_dsn, "at", str(ids["static"]), "--", "-1e9", str(tmp_path / "s.obj")]) == 0
     assert formats.read_one(tmp_path / "s.obj").n_vertices == 3
 
 
-def test_at_bad_arguments(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                          tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_at_bad_arguments(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     fid, out = str(stored[0]["fault"]), str(tmp_path / "x.ts")
-    check_errors(db_dsn, capsys, ["at"], [
-        ([fid, "nan", out], "tgsis: error: T must be a finite number, got nan\n"),
-        ([fid, "inf", out], "tgsis: error: T must be a finite number, got inf\n"),
-        (["987654", "0", out], "tgsis: error: no feature class has a feature 987654\n"),
-        ([fid, "-5", str(tmp_path / "x.xyz")], "x.xyz: unknown file extension '.xyz'"),
-        ([fid, "-5", str(tmp_path / "x.pvd")], "a .pvd is a time series\nHINT: tgsis series writes a .pvd")])
+    check_errors(
+        db_dsn,
+        capsys,
+        ["at"],
+        [
+            ([fid, "nan", out], "tgsis: error: T must be a finite number, got nan\n"),
+            ([fid, "inf", out], "tgsis: error: T must be a finite number, got inf\n"),
+            (["987654", "0", out], "tgsis: error: no feature class has a feature 987654\n"),
+            ([fid, "-5", str(tmp_path / "x.xyz")], "x.xyz: unknown file extension '.xyz'"),
+            ([fid, "-5", str(tmp_path / "x.pvd")], "a .pvd is a time series\nHINT: tgsis series writes a .pvd"),
+        ],
+    )
     for argv in ([fid, "soon", out], [fid, "0", out, "--convention", "middle"], ["x", "0", out], [fid, "0"]):
         with pytest.raises(SystemExit) as info:
             main(["--dsn", db_dsn, "at", *argv])
@@ -166,8 +223,12 @@ def test_at_bad_arguments(db_dsn: str, stored: tuple[dict[str, int], EvolvingSur
 # --------------------------------------------------------------------------- tgsis series
 
 
-def test_series_of_an_evolving_fault(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                     tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_series_of_an_evolving_fault(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     ids, fault, _ = stored
     fid = ids["fault"]
     out = tmp_path / "new" / "folder"
@@ -175,14 +236,14 @@ def test_series_of_an_evolving_fault(db_dsn: str, stored: tuple[dict[str, int], 
     times = [float(t) for t in range(-11, 1)]
     pvd = out / f"feature_{fid}.pvd"
     lines = capsys.readouterr().out.splitlines()
-    assert lines[-1] == (f"wrote {pvd}: feature {fid} (moving_faults) at 12 times from -11.0 to 0.0 Ma, "
-                         "2 without the object")
+    assert lines[-1] == (
+        f"wrote {pvd}: feature {fid} (moving_faults) at 12 times from -11.0 to 0.0 Ma, 2 without the object"
+    )
     assert lines[0] == "t\tfile\tvertices\ttriangles"
     assert lines[1] == f"-11.0\t{out}/feature_{fid}/feature_{fid}_000000.vtu\tno object (empty grid)\t"
     first = fault.at(-10.0)
     assert first is not None
-    assert lines[2] == (f"-10.0\t{out}/feature_{fid}/feature_{fid}_000001.vtu\t{first.n_vertices}\t"
-                        f"{first.n_cells}")
+    assert lines[2] == (f"-10.0\t{out}/feature_{fid}/feature_{fid}_000001.vtu\t{first.n_vertices}\t{first.n_cells}")
     back = read_pvd(pvd)
     assert [t for t, _ in back] == times
     for t, geometry in back:
@@ -196,14 +257,22 @@ def test_series_of_an_evolving_fault(db_dsn: str, stored: tuple[dict[str, int], 
     assert dict(back)[-2.0].n_cells == fault.periods[2].n_triangles  # type: ignore[union-attr]
 
 
-def test_series_at_own_instants_with_a_name(db_dsn: str,
-                                            stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                            tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_series_at_own_instants_with_a_name(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     ids, fault, horizon = stored
     assert main(["--dsn", db_dsn, "series", str(ids["fault"]), str(tmp_path), "--name", "history.pvd"]) == 0
-    assert capsys.readouterr().out.splitlines()[-1].startswith(
-        f"wrote {tmp_path / 'history.pvd'}: feature {ids['fault']} (moving_faults) at "
-        f"{len(fault.geometry_instants)} times from -10.0 to -1.0 Ma")
+    assert (
+        capsys.readouterr()
+        .out.splitlines()[-1]
+        .startswith(
+            f"wrote {tmp_path / 'history.pvd'}: feature {ids['fault']} (moving_faults) at "
+            f"{len(fault.geometry_instants)} times from -10.0 to -1.0 Ma"
+        )
+    )
     back = read_pvd(tmp_path / "history.pvd")
     assert [t for t, _ in back] == fault.geometry_instants.tolist()
     for t, geometry in back:
@@ -218,15 +287,37 @@ def test_series_at_own_instants_with_a_name(db_dsn: str,
 
 @pytest.mark.parametrize("convention", ["left", "right"])
 def test_series_of_a_model_2_feature_between_instants(
-        db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries], tmp_path: Path,
-        capsys: pytest.CaptureFixture[str], convention: str) -> None:
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    convention: str,
+) -> None:
     ids, _, horizon = stored
     hid = ids["horizon"]
-    assert main(["--dsn", db_dsn, "series", str(hid), "--from=-0.5", "--to", "3", "--steps", "8",
-                 "--convention", convention, str(tmp_path)]) == 0
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "series",
+                str(hid),
+                "--from=-0.5",
+                "--to",
+                "3",
+                "--steps",
+                "8",
+                "--convention",
+                convention,
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
     assert capsys.readouterr().out.splitlines()[-1] == (
         f"wrote {tmp_path / f'feature_{hid}.pvd'}: feature {hid} (horizons) at 8 times from -0.5 to 3.0, "
-        "1 without the object")
+        "1 without the object"
+    )
     back = read_pvd(tmp_path / f"feature_{hid}.pvd")
     assert [t for t, _ in back] == np.linspace(-0.5, 3.0, 8).tolist()
     for t, geometry in back:
@@ -237,27 +328,42 @@ def test_series_of_a_model_2_feature_between_instants(
             same_surface(geometry, expected)  # type: ignore[arg-type]
 
 
-def test_series_bad_arguments(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                              tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_series_bad_arguments(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     ids = stored[0]
     fid, out = str(ids["fault"]), str(tmp_path / "out")
-    check_errors(db_dsn, capsys, ["series", fid, out], [
-        (["--from", "0", "--to", "1", "--steps", "0"], "--steps must be an integer >= 1, got 0"),
-        (["--from", "2", "--to", "1", "--steps", "3"], "--from (2.0) must not be after --to (1.0)"),
-        (["--from", "nan", "--to", "1", "--steps", "3"], "--from must be a finite number, got nan"),
-        (["--from", "0", "--to", "inf", "--steps", "3"], "--to must be a finite number, got inf"),
-        (["--from", "0", "--to", "1", "--steps", "1"], "--steps 1 gives one time, so --from and --to must be equal"),
-        (["--from", "1", "--to", "1", "--steps", "4"], "--steps 4 needs --from before --to: both are 1.0"),
-        (["--from", "0", "--steps", "3"], "--from, --to and --steps go together"),
-        (["--name", "a/b"], "--name 'a/b' must be a file name without folders"),
-        (["--name", ".pvd"], "--name '.pvd' must be a file name without folders")])
+    check_errors(
+        db_dsn,
+        capsys,
+        ["series", fid, out],
+        [
+            (["--from", "0", "--to", "1", "--steps", "0"], "--steps must be an integer >= 1, got 0"),
+            (["--from", "2", "--to", "1", "--steps", "3"], "--from (2.0) must not be after --to (1.0)"),
+            (["--from", "nan", "--to", "1", "--steps", "3"], "--from must be a finite number, got nan"),
+            (["--from", "0", "--to", "inf", "--steps", "3"], "--to must be a finite number, got inf"),
+            (
+                ["--from", "0", "--to", "1", "--steps", "1"],
+                "--steps 1 gives one time, so --from and --to must be equal",
+            ),
+            (["--from", "1", "--to", "1", "--steps", "4"], "--steps 4 needs --from before --to: both are 1.0"),
+            (["--from", "0", "--steps", "3"], "--from, --to and --steps go together"),
+            (["--name", "a/b"], "--name 'a/b' must be a file name without folders"),
+            (["--name", ".pvd"], "--name '.pvd' must be a file name without folders"),
+        ],
+    )
     assert main(["--dsn", db_dsn, "series", "987654", out]) == 1
-    assert capsys.readouterr().err == ("tgsis: error: no feature class has a feature 987654\n"
-                                       "HINT: `tgsis ls` lists the features\n")
+    assert capsys.readouterr().err == (
+        "tgsis: error: no feature class has a feature 987654\nHINT: `tgsis ls` lists the features\n"
+    )
     assert main(["--dsn", db_dsn, "series", str(ids["static"]), out]) == 1
-    assert (f"feature {ids['static']} (plain) is static: it has no instants of its own\n"
-            "HINT: give --from, --to and --steps") in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()   # nothing written, no folder made
+    assert (
+        f"feature {ids['static']} (plain) is static: it has no instants of its own\nHINT: give --from, --to and --steps"
+    ) in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()  # nothing written, no folder made
     (tmp_path / "file").write_text("")
     assert main(["--dsn", db_dsn, "series", fid, str(tmp_path / "file")]) == 1
     assert "cannot create the folder" in capsys.readouterr().err
@@ -268,18 +374,24 @@ def test_series_bad_arguments(db_dsn: str, stored: tuple[dict[str, int], Evolvin
         capsys.readouterr()
 
 
-def test_series_of_a_static_surface_with_steps(db_dsn: str,
-                                               stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                               tmp_path: Path) -> None:
+def test_series_of_a_static_surface_with_steps(
+    db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries], tmp_path: Path
+) -> None:
     ids, _, _ = stored
-    assert main(["--dsn", db_dsn, "series", str(ids["static"]), str(tmp_path), "--from", "0", "--to", "0",
-                 "--steps", "1"]) == 0
+    assert (
+        main(["--dsn", db_dsn, "series", str(ids["static"]), str(tmp_path), "--from", "0", "--to", "0", "--steps", "1"])
+        == 0
+    )
     [(t, geometry)] = read_pvd(tmp_path / f"feature_{ids['static']}.pvd")
     assert t == 0.0 and isinstance(geometry, Surface) and geometry.n_vertices == 3
 
 
-def test_at_and_series_in_a_version(db_dsn: str, stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
-                                    tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_at_and_series_in_a_version(
+    db_dsn: str,
+    stored: tuple[dict[str, int], EvolvingSurface, SurfaceSeries],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     """--in: the snapshot of the version's rows (a moved node in the version, the stored one in DEFAULT)."""
     ids, fault, _ = stored
     fid = ids["fault"]
@@ -299,27 +411,61 @@ def test_at_and_series_in_a_version(db_dsn: str, stored: tuple[dict[str, int], E
     np.testing.assert_allclose(moved.vertices[:, 2], expected.vertices[:, 2] + 1000, rtol=0, atol=1e-9)
     assert main(["--dsn", db_dsn, "--in", "moved", "series", str(fid), str(tmp_path), "--name", "moved"]) == 0
     back = read_pvd(tmp_path / "moved.pvd")
-    np.testing.assert_allclose(back[0][1].vertices[:, 2],  # type: ignore[union-attr]
-                               fault.periods[0].positions[0][:, 2] + 1000, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(
+        back[0][1].vertices[:, 2],  # type: ignore[union-attr]
+        fault.periods[0].positions[0][:, 2] + 1000,
+        rtol=0,
+        atol=1e-9,
+    )
 
 
 def test_class_create_temporal(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["--dsn", db_dsn, "class", "create", "growth", "--geotype", "SURFACE", "--time-model", "evolving",
-                 "--time-unit", "Ma", "--instant-property", "throw:float8", "--property", "porosity:float8"]) == 0
-    assert "created feature class growth (SURFACE, EVOLVING in Ma) in schema public: tables growth, growth_cellpros, " \
-           "growth_pros, view growth_v" in capsys.readouterr().out
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "class",
+                "create",
+                "growth",
+                "--geotype",
+                "SURFACE",
+                "--time-model",
+                "evolving",
+                "--time-unit",
+                "Ma",
+                "--instant-property",
+                "throw:float8",
+                "--property",
+                "porosity:float8",
+            ]
+        )
+        == 0
+    )
+    assert (
+        "created feature class growth (SURFACE, EVOLVING in Ma) in schema public: tables growth, growth_cellpros, "
+        "growth_pros, view growth_v" in capsys.readouterr().out
+    )
     assert main(["--dsn", db_dsn, "class", "list"]) == 0
-    assert capsys.readouterr().out.rstrip("\n").endswith(
-        "\tevolving in Ma\t-\tvertex: porosity double precision\tthrow double precision")
-    assert main(["--dsn", db_dsn, "class", "create", "wells", "--geotype", "MULTILINESTRING",
-                 "--time-model", "INSTANTS"]) == 1
+    assert (
+        capsys.readouterr()
+        .out.rstrip("\n")
+        .endswith("\tevolving in Ma\t-\tvertex: porosity double precision\tthrow double precision")
+    )
+    assert (
+        main(["--dsn", db_dsn, "class", "create", "wells", "--geotype", "MULTILINESTRING", "--time-model", "INSTANTS"])
+        == 1
+    )
     assert "holds SURFACE features" in capsys.readouterr().err
-    assert main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--instant-property", "a:float8"]) == 1
+    assert (
+        main(["--dsn", db_dsn, "class", "create", "x", "--geotype", "SURFACE", "--instant-property", "a:float8"]) == 1
+    )
     assert "static feature class x takes no time unit or per-instant properties" in capsys.readouterr().err
 
 
-def test_import_at_adds_model_2_instants_from_files(db_dsn: str, tmp_path: Path,
-                                                    capsys: pytest.CaptureFixture[str]) -> None:
+def test_import_at_adds_model_2_instants_from_files(
+    db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """`tgsis import FILE --class C --at T [--feature ID]`: a new feature known from T, then more instants."""
     with psycopg.connect(db_dsn) as conn:
         tgsis.create_feature_class(conn, "tops", "SURFACE", time_model="INSTANTS", time_unit="Ma")
@@ -336,12 +482,12 @@ def test_import_at_adds_model_2_instants_from_files(db_dsn: str, tmp_path: Path,
     with psycopg.connect(db_dsn) as conn:
         assert [t for t, _ in tgsis.instants(conn, int(fid))] == [-10.0, -5.0]
         at = tgsis.get_at(conn, int(fid), -7.0)
-        assert at is not None and np.array_equal(at.vertices, flat.vertices)      # the step keeps t = -10's shape
+        assert at is not None and np.array_equal(at.vertices, flat.vertices)  # the step keeps t = -10's shape
     # refused, in the command's terms, with nothing stored
     assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "tops"]) == 1
     assert "give --at T" in capsys.readouterr().err
     assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "tops", "--at", "-5", "--feature", fid]) == 1
-    assert "-5" in capsys.readouterr().err                                       # that instant exists already
+    assert "-5" in capsys.readouterr().err  # that instant exists already
     with psycopg.connect(db_dsn) as conn:
         tgsis.create_feature_class(conn, "still", "SURFACE")
     assert main([*dsn, "import", str(tmp_path / "a1.ts"), "--class", "still", "--at", "1"]) == 1
@@ -351,8 +497,9 @@ def test_import_at_adds_model_2_instants_from_files(db_dsn: str, tmp_path: Path,
         assert conn.execute("SELECT count(*) FROM still").fetchone() == (0,)
 
 
-def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(db_dsn: str, tmp_path: Path,
-                                                                           capsys: pytest.CaptureFixture[str]) -> None:
+def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(
+    db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """One default for `alive`: a surface known at T is not claimed to exist after its last instant, from the command
     line as from Python (SurfaceSeries(alive=False)); `--alive` says it does."""
     with psycopg.connect(db_dsn) as conn:
@@ -366,14 +513,32 @@ def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(db_ds
     alive = json.loads(capsys.readouterr().out)["id"]
     with psycopg.connect(db_dsn) as conn:
         python = tgsis.insert_feature(conn, "tops", tgsis.SurfaceSeries([-10.0], [flat]), name="from python")
-        rows = dict(conn.execute("SELECT geoid, alive FROM tgsis.geometry WHERE geoid = ANY (%s)",
-                                 ([plain, alive, python],)).fetchall())
+        rows = dict(
+            conn.execute(
+                "SELECT geoid, alive FROM tgsis.geometry WHERE geoid = ANY (%s)", ([plain, alive, python],)
+            ).fetchall()
+        )
         assert rows == {plain: False, alive: True, python: False}
         assert tgsis.get_at(conn, plain, 0.0) is None
         at = tgsis.get_at(conn, alive, 0.0)
         assert at is not None and np.array_equal(at.vertices, flat.vertices)
-    assert main([*dsn, "import", str(tmp_path / "a0.ts"), "--class", "tops", "--at", "-5", "--feature",
-                 str(plain), "--alive"]) == 1
+    assert (
+        main(
+            [
+                *dsn,
+                "import",
+                str(tmp_path / "a0.ts"),
+                "--class",
+                "tops",
+                "--at",
+                "-5",
+                "--feature",
+                str(plain),
+                "--alive",
+            ]
+        )
+        == 1
+    )
     assert "--alive does not go with --feature" in capsys.readouterr().err
     with psycopg.connect(db_dsn) as conn:
         tgsis.create_feature_class(conn, "still", "SURFACE")
@@ -381,4 +546,4 @@ def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(db_ds
     assert "--alive goes with --at T" in capsys.readouterr().err
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT count(*) FROM still").fetchone() == (0,)
-        assert conn.execute("SELECT count(*) FROM tops").fetchone() == (3,)     # two from the CLI, one from Python
+        assert conn.execute("SELECT count(*) FROM tops").fetchone() == (3,)  # two from the CLI, one from Python

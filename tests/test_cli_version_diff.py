@@ -22,7 +22,9 @@ FLAGGED = Path(__file__).parent / "data" / "gocad" / "flagged.ts"  # F1 and F2
 
 
 @pytest.fixture
-def data(db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> dict[str, Any]:
+def data(
+    db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> dict[str, Any]:
     """In version a: F1 deleted, F2 moved, F3 added."""
     monkeypatch.setenv("TGSIS_HOME", str(tmp_path / "home"))
     f1, f2 = tgsis.formats.read(FLAGGED)
@@ -60,15 +62,25 @@ def test_diff_says_per_feature_what_differs(data: dict[str, Any], capsys: pytest
     # the other way round, the sides swap
     out, _ = diff(data, capsys, "a", "DEFAULT")
     assert {int(line.split("\t")[1]): line.split("\t")[2] for line in out.splitlines()[1:]} == {
-        data["gone"]: "only in DEFAULT", data["added"]: "only in a", data["moved"]: "changed"}
+        data["gone"]: "only in DEFAULT",
+        data["added"]: "only in a",
+        data["moved"]: "changed",
+    }
 
 
 def test_diff_json_has_objects_and_rows(data: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     doc = json.loads(diff(data, capsys, "DEFAULT", "a", "--json")[0])
     objects = {int(o["objectkey"]): o for o in doc["objects"]}
     assert objects[data["gone"]]["difference"] == "only in DEFAULT" and objects[data["gone"]]["added"] == 0
-    assert objects[data["moved"]] == {"objectclass": "feature", "objectkey": str(data["moved"]), "difference": "changed",
-                                      "tables": ["vrtx"], "added": 0, "removed": 0, "changed": 1}
+    assert objects[data["moved"]] == {
+        "objectclass": "feature",
+        "objectkey": str(data["moved"]),
+        "difference": "changed",
+        "tables": ["vrtx"],
+        "added": 0,
+        "removed": 0,
+        "changed": 1,
+    }
     assert sum(o["removed"] for o in doc["objects"]) == sum(d["removed"] for d in doc["differences"])
 
 

@@ -27,20 +27,41 @@ def _run(dsn: str, capsys: pytest.CaptureFixture[str], *argv: str, code: int = 0
     return captured.out if code == 0 else captured.err
 
 
-def test_a_fault_reinterpreted_in_a_version(db_dsn: str, capsys: pytest.CaptureFixture[str],
-                                            private_state: Path) -> None:
+def test_a_fault_reinterpreted_in_a_version(
+    db_dsn: str, capsys: pytest.CaptureFixture[str], private_state: Path
+) -> None:
     _run(db_dsn, capsys, "class", "create", "faults", "--geotype", "SURFACE", "--feature-property", "release:text")
     assert "newly versioned" in _run(db_dsn, capsys, "versioning", "enable", "features")
-    out = _run(db_dsn, capsys, "import", str(cfm(RELEASE_5)), "--class", "faults", "--set", "release=5.3",
-               "--drop-extra-properties")
+    out = _run(
+        db_dsn,
+        capsys,
+        "import",
+        str(cfm(RELEASE_5)),
+        "--class",
+        "faults",
+        "--set",
+        "release=5.3",
+        "--drop-extra-properties",
+    )
     fid = out.splitlines()[1].split("\t")[0]
-    assert _run(db_dsn, capsys, "version", "create", "cfm6") == \
-        "created version cfm6 (parent DEFAULT), working revision 2\n"
+    assert (
+        _run(db_dsn, capsys, "version", "create", "cfm6")
+        == "created version cfm6 (parent DEFAULT), working revision 2\n"
+    )
     assert "now work in version cfm6 (working revision 2)" in _run(db_dsn, capsys, "version", "goto", "cfm6")
     assert private_state.is_file()
     # the new release goes into the version; DEFAULT still has the old one only
-    _run(db_dsn, capsys, "import", str(cfm(RELEASE_6)), "--class", "faults", "--set", "release=6.1",
-         "--drop-extra-properties")
+    _run(
+        db_dsn,
+        capsys,
+        "import",
+        str(cfm(RELEASE_6)),
+        "--class",
+        "faults",
+        "--set",
+        "release=6.1",
+        "--drop-extra-properties",
+    )
     assert _run(db_dsn, capsys, "version", "current") == "cfm6\tworking revision 2\t(from tgsis version goto)\n"
     assert len(_run(db_dsn, capsys, "ls").splitlines()) == 1 + 2  # the header line and two features
     assert len(_run(db_dsn, capsys, "--in", "DEFAULT", "ls").splitlines()) == 1 + 1
@@ -49,8 +70,9 @@ def test_a_fault_reinterpreted_in_a_version(db_dsn: str, capsys: pytest.CaptureF
     tree = _run(db_dsn, capsys, "version", "tree")
     assert tree == "DEFAULT: revisions 0, 1; working 1\n    cfm6 from DEFAULT@0: revisions 2 (imported), 3; working 3\n"
     listing = _run(db_dsn, capsys, "version", "list")
-    assert listing.startswith("current\tversion\tparent\tinitrevision\tworking\towner\tcreated\tdescription\n"
-                              "\tDEFAULT\t-\t-\t1\t")
+    assert listing.startswith(
+        "current\tversion\tparent\tinitrevision\tworking\towner\tcreated\tdescription\n\tDEFAULT\t-\t-\t1\t"
+    )
     assert "\n*\tcfm6\tDEFAULT\t0\t3\t" in listing
     # looking at a revision is read-only
     assert "look at revision 0 of version cfm6" in _run(db_dsn, capsys, "version", "goto", "cfm6@0")
@@ -70,9 +92,12 @@ def test_errors(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert "version 'nope' does not exist" in _run(db_dsn, capsys, "version", "goto", "nope", code=1)
     assert "version 'nope' does not exist" in _run(db_dsn, capsys, "--in", "nope", "ls", code=1)
     assert "is not VERSION or VERSION@REVISION" in _run(db_dsn, capsys, "--in", "a@b", "ls", code=1)
-    assert "version name 'bad\tname' is not allowed" not in _run(db_dsn, capsys, "version", "create", "bad\tname", code=1)
-    assert "version name 'bad<U+0009>name' is not allowed" in _run(db_dsn, capsys, "version", "create", "bad\tname",
-                                                                    code=1)
+    assert "version name 'bad\tname' is not allowed" not in _run(
+        db_dsn, capsys, "version", "create", "bad\tname", code=1
+    )
+    assert "version name 'bad<U+0009>name' is not allowed" in _run(
+        db_dsn, capsys, "version", "create", "bad\tname", code=1
+    )
     assert "version name 'a@1' is not allowed: it holds @" in _run(db_dsn, capsys, "version", "create", "a@1", code=1)
     assert "needs --key and --class" in _run(db_dsn, capsys, "versioning", "enable", "wells", code=1)
     _run(db_dsn, capsys, "version", "create", "a")
@@ -85,9 +110,12 @@ def test_versioning_a_table_from_the_command_line(db_dsn: str, capsys: pytest.Ca
         conn.execute("CREATE TABLE wells (id int PRIMARY KEY, name text)")
         conn.execute("INSERT INTO wells VALUES (1, 'w1')")
     assert "public.wells is versioned (object class well, key id, storage wells_ver)" in _run(
-        db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well")
-    assert _run(db_dsn, capsys, "versioning", "list") == \
-        "table\tclass\tkey\torder\tshortname\trow key\npublic.wells\twell\tid\t0\twells\tid\n"
+        db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well"
+    )
+    assert (
+        _run(db_dsn, capsys, "versioning", "list")
+        == "table\tclass\tkey\torder\tshortname\trow key\npublic.wells\twell\tid\t0\twells\tid\n"
+    )
     assert "DEFAULT's rows kept, 0 row version(s) removed" in _run(db_dsn, capsys, "versioning", "disable", "wells")
     with psycopg.connect(db_dsn) as conn:
         assert conn.execute("SELECT relkind FROM pg_class WHERE relname = 'wells'").fetchone() == ("r",)
@@ -115,12 +143,15 @@ def test_conflicts_and_resolve(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
         "\ttable\tside\trow key (JSON)\trow (JSON)",
         "well\t1\tunsolved\twells\twells\twells\twells: 1 changed (1 value)\twells: 1 changed (1 value)",
         '\twells\tchild\t{"id": 1}\t{"id": 1, "depth": 12}',
-        '\twells\tparent\t{"id": 1}\t{"id": 1, "depth": 11}']
+        '\twells\tparent\t{"id": 1}\t{"id": 1, "depth": 11}',
+    ]
     # child throws the parent's depth away: asked for by name
     err = _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child", code=1)
     assert "would discard the parent's edits: wells: 1 changed (1 value)" in err and "--discard-other" in err
-    assert _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child", "--discard-other") == \
-        "well 1 in a: child\n  discarded the parent's edits: wells: 1 changed (1 value)\n"
+    assert (
+        _run(db_dsn, capsys, "version", "resolve", "a", "well", "1", "child", "--discard-other")
+        == "well 1 in a: child\n  discarded the parent's edits: wells: 1 changed (1 value)\n"
+    )
     assert "not in conflict" in _run(db_dsn, capsys, "version", "resolve", "a", "well", "2", "child", code=1)
 
 
@@ -132,11 +163,13 @@ def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str])
         conn.execute("INSERT INTO wells VALUES (3, 30)")
     assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == (
         "class\tkey\tdifference\ttables\tadded\tremoved\tchanged\n"
-        "well\t1\tchanged\twells\t+0\t-0\t~1\nwell\t3\tonly in a\twells\t+1\t-0\t~0\n")
-    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a", "--tables") == ("class\tkey\ttable\tadded\tremoved\tchanged\n"
-                                                                   "well\t1\twells\t+0\t-0\t~1\nwell\t3\twells\t+1\t-0\t~0\n")
+        "well\t1\tchanged\twells\t+0\t-0\t~1\nwell\t3\tonly in a\twells\t+1\t-0\t~0\n"
+    )
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a", "--tables") == (
+        "class\tkey\ttable\tadded\tremoved\tchanged\nwell\t1\twells\t+0\t-0\t~1\nwell\t3\twells\t+1\t-0\t~0\n"
+    )
     assert _run(db_dsn, capsys, "version", "merge", "a") == "merged a into its parent: 3 row(s) written\n"
-    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ""   # "hold the same rows" goes to stderr
+    assert _run(db_dsn, capsys, "version", "diff", "DEFAULT", "a") == ""  # "hold the same rows" goes to stderr
     assert _run(db_dsn, capsys, "version", "diff", "DEFAULT@0", "DEFAULT").count("\n") == 1 + 2
     assert "refreshed a from its parent: 0 row(s) written" in _run(db_dsn, capsys, "version", "refresh", "a")
     assert "version removed" in _run(db_dsn, capsys, "version", "merge", "a", "--remove")
@@ -145,26 +178,33 @@ def test_merge_refresh_and_diff(db_dsn: str, capsys: pytest.CaptureFixture[str])
 def test_locks_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     _versioned_wells_and_version_a(db_dsn, capsys)
     _run(db_dsn, capsys, "version", "create", "b")
-    assert _run(db_dsn, capsys, "version", "lock", "a", "well", "1", "2") == "a holds 2 well object(s) (2 newly locked)\n"
+    assert (
+        _run(db_dsn, capsys, "version", "lock", "a", "well", "1", "2") == "a holds 2 well object(s) (2 newly locked)\n"
+    )
     with psycopg.connect(db_dsn) as conn:
         me = conn.execute("SELECT current_user").fetchone()[0]  # type: ignore[index]
     assert [line.split("\t")[:5] for line in _run(db_dsn, capsys, "version", "locks").splitlines()] == [
         ["class", "key", "version", "role", "kind"],
-        ["well", "1", "a", me, "version"], ["well", "2", "a", me, "version"]]
+        ["well", "1", "a", me, "version"],
+        ["well", "2", "a", me, "version"],
+    ]
     assert _run(db_dsn, capsys, "version", "locks", "b") == ""
     err = _run(db_dsn, capsys, "--in", "b", "version", "lock", "b", "well", "2", code=1)
     assert "locked by version 'a'" in err
     assert "has no object 9" in _run(db_dsn, capsys, "version", "lock", "b", "well", "9", code=1)
     assert _run(db_dsn, capsys, "version", "unlock", "a", "well", "1") == "released 1 lock(s) of a\n"
-    assert [line.split("\t")[:3] for line in _run(db_dsn, capsys, "version", "locks", "--no-header").splitlines()] \
-        == [["well", "2", "a"]]
+    assert [line.split("\t")[:3] for line in _run(db_dsn, capsys, "version", "locks", "--no-header").splitlines()] == [
+        ["well", "2", "a"]
+    ]
     assert _run(db_dsn, capsys, "version", "unlock", "a") == "released 1 lock(s) of a\n"
     assert _run(db_dsn, capsys, "version", "locks") == ""
 
 
 def test_rights_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     _run(db_dsn, capsys, "version", "create", "a")
-    assert _run(db_dsn, capsys, "version", "grant", "a", "write", "tgsis_editor") == "granted write on a to tgsis_editor\n"
+    assert (
+        _run(db_dsn, capsys, "version", "grant", "a", "write", "tgsis_editor") == "granted write on a to tgsis_editor\n"
+    )
     assert _run(db_dsn, capsys, "version", "grant", "a", "merge", "public") == "granted merge on a to public\n"
     listing = _run(db_dsn, capsys, "version", "privileges", "a", "--no-header").splitlines()
     assert [line.split("\t")[1:3] for line in listing[1:]] == [["public", "merge"], ["tgsis_editor", "write"]]
@@ -173,27 +213,37 @@ def test_rights_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture
     _run(db_dsn, capsys, "version", "revoke", "a", "all", "public")
     assert len(_run(db_dsn, capsys, "version", "privileges", "a").splitlines()) == 1 + 2
     assert _run(db_dsn, capsys, "version", "owner", "a", "tgsis_admin") == "version a is owned by tgsis_admin\n"
-    assert _run(db_dsn, capsys, "version", "privileges", "a").startswith("version\trole\tright\tgranted by\n"
-                                                                         "a\ttgsis_admin\towner")
+    assert _run(db_dsn, capsys, "version", "privileges", "a").startswith(
+        "version\trole\tright\tgranted by\na\ttgsis_admin\towner"
+    )
     assert "role 'nobody' does not exist" in _run(db_dsn, capsys, "version", "grant", "a", "write", "nobody", code=1)
     assert "version 'zz' does not exist" in _run(db_dsn, capsys, "version", "privileges", "zz", code=1)
     # DEFAULT's grants come with the installation
-    assert [line.split("\t")[1:3] for line in _run(db_dsn, capsys, "version", "privileges", "DEFAULT").splitlines()[2:]] \
-        == [["tgsis_editor", "write"], ["tgsis_editor", "create"]]
+    assert [
+        line.split("\t")[1:3] for line in _run(db_dsn, capsys, "version", "privileges", "DEFAULT").splitlines()[2:]
+    ] == [["tgsis_editor", "write"], ["tgsis_editor", "create"]]
 
 
 def test_names_with_blanks_and_quotes_are_shown_quoted(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     """Free-text names (the design's, docs/versioning.md's 'first pick') print as one name: quoted unless plain."""
-    assert _run(db_dsn, capsys, "version", "create", "survey 2024") == \
-        "created version 'survey 2024' (parent DEFAULT), working revision 2\n"
-    assert "now work in version 'survey 2024' (working revision 2)" in _run(db_dsn, capsys, "version", "goto",
-                                                                            "survey 2024")
-    assert _run(db_dsn, capsys, "version", "save", "first pick") == \
-        "saved revision 2 of 'survey 2024' as 'first pick'; new working revision 3\n"
-    assert _run(db_dsn, capsys, "version", "save", "Bob's pick") == \
-        "saved revision 3 of 'survey 2024' as 'Bob''s pick'; new working revision 4\n"
-    assert "'survey 2024' from DEFAULT@0: revisions 2 ('first pick'), 3 ('Bob''s pick'), 4; working 4" in \
-        _run(db_dsn, capsys, "version", "tree")
+    assert (
+        _run(db_dsn, capsys, "version", "create", "survey 2024")
+        == "created version 'survey 2024' (parent DEFAULT), working revision 2\n"
+    )
+    assert "now work in version 'survey 2024' (working revision 2)" in _run(
+        db_dsn, capsys, "version", "goto", "survey 2024"
+    )
+    assert (
+        _run(db_dsn, capsys, "version", "save", "first pick")
+        == "saved revision 2 of 'survey 2024' as 'first pick'; new working revision 3\n"
+    )
+    assert (
+        _run(db_dsn, capsys, "version", "save", "Bob's pick")
+        == "saved revision 3 of 'survey 2024' as 'Bob''s pick'; new working revision 4\n"
+    )
+    assert "'survey 2024' from DEFAULT@0: revisions 2 ('first pick'), 3 ('Bob''s pick'), 4; working 4" in _run(
+        db_dsn, capsys, "version", "tree"
+    )
     assert "look at revision 2 of version 'survey 2024'" in _run(db_dsn, capsys, "version", "goto", "survey 2024@2")
     _run(db_dsn, capsys, "version", "goto", "DEFAULT")
     assert "deleted version 'survey 2024'" in _run(db_dsn, capsys, "version", "delete", "survey 2024")

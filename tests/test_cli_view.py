@@ -23,8 +23,13 @@ from tgsis.testing import TestServer
 
 
 def _tgsis(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "tgsis.cli", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    return subprocess.Popen(
+        [sys.executable, "-m", "tgsis.cli", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
 
 
 def test_view_serves_the_database_and_stops_on_sigterm(db_dsn: str) -> None:
@@ -40,7 +45,10 @@ def test_view_serves_the_database_and_stops_on_sigterm(db_dsn: str) -> None:
         status, body, _ = get(found.group(1))
         assert status == 200 and b'data-class="faults"' in body
         status, body, _ = get(found.group(1).replace("/classes", "/static/vendor/three/three.module.js"))
-        assert status == 200 and b"REVISION" in get(found.group(1).replace("/classes", "/static/vendor/three/three.core.js"))[1]
+        assert (
+            status == 200
+            and b"REVISION" in get(found.group(1).replace("/classes", "/static/vendor/three/three.core.js"))[1]
+        )
     finally:
         process.send_signal(signal.SIGTERM)
         process.wait(30)
@@ -48,8 +56,12 @@ def test_view_serves_the_database_and_stops_on_sigterm(db_dsn: str) -> None:
 
 def test_view_of_a_database_without_tgsis_is_refused(pg: TestServer, make_database: object) -> None:
     empty = make_database()  # type: ignore[operator]
-    done = subprocess.run([sys.executable, "-m", "tgsis.cli", "--dsn", empty, "view", "--port", "0"],
-                          capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "tgsis.cli", "--dsn", empty, "view", "--port", "0"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 1
     assert "tgsis: error: tgsis is not installed in database" in done.stderr
     assert "--db NAME" in done.stderr
@@ -60,7 +72,11 @@ def test_view_on_a_port_in_use_says_so(db_dsn: str) -> None:
         taken.bind(("127.0.0.1", 0))
         taken.listen(1)
         port = taken.getsockname()[1]
-        done = subprocess.run([sys.executable, "-m", "tgsis.cli", "--dsn", db_dsn, "view", "--port", str(port)],
-                              capture_output=True, text=True, timeout=120)
+        done = subprocess.run(
+            [sys.executable, "-m", "tgsis.cli", "--dsn", db_dsn, "view", "--port", str(port)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
     assert done.returncode == 1
     assert f"cannot listen on 127.0.0.1:{port}" in done.stderr and "--port" in done.stderr

@@ -25,17 +25,21 @@ def stored(dsn: str) -> list[int]:
         return [int(r[0]) for r in conn.execute("SELECT _geoid FROM horizons ORDER BY _geoid")]
 
 
-def test_import_pyvista_files_and_export_every_vtk_file(db_dsn: str, tmp_path: Path,
-                                                        capsys: pytest.CaptureFixture[str]) -> None:
+def test_import_pyvista_files_and_export_every_vtk_file(
+    db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     sphere = pv.Sphere(theta_resolution=10, phi_resolution=8)
     sphere.point_data.clear()
     sphere["porosity"] = np.linspace(0, 1, sphere.n_points)
-    assert main(["--dsn", db_dsn, "class", "create", "horizons", "--geotype", "SURFACE",
-                 "--property", "porosity:float8"]) == 0
+    assert (
+        main(["--dsn", db_dsn, "class", "create", "horizons", "--geotype", "SURFACE", "--property", "porosity:float8"])
+        == 0
+    )
     for name in ("dome.vtp", "dome.vtk"):
         sphere.save(tmp_path / name)
-        assert main(["--dsn", db_dsn, "import", str(tmp_path / name), "--class", "horizons"]) == 0, \
+        assert main(["--dsn", db_dsn, "import", str(tmp_path / name), "--class", "horizons"]) == 0, (
             capsys.readouterr().err
+        )
     ids = stored(db_dsn)
     assert len(ids) == 2
     for target in ("out.vtp", "out.vtk", "out.vtu"):
@@ -48,8 +52,9 @@ def test_import_pyvista_files_and_export_every_vtk_file(db_dsn: str, tmp_path: P
             assert np.array_equal(m.cells_dict["triangle"], sphere.regular_faces)
 
 
-def test_a_file_of_quads_is_refused_and_nothing_stored(db_dsn: str, tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_file_of_quads_is_refused_and_nothing_stored(
+    db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["--dsn", db_dsn, "class", "create", "horizons", "--geotype", "SURFACE"]) == 0
     plane = pv.Plane()
     plane.points[12, 2] = 0.05  # quads that are not planar (planar ones are split, issue 37)

@@ -42,9 +42,13 @@ def _with_props(mesh: Mesh, alignment: str, code_dtype: Any = np.int32) -> Mesh:
     """``mesh`` with the properties ``value`` (float64) and ``code`` per vertex or per cell."""
     count = mesh.n_vertices if alignment == "VERTEX" else mesh.n_cells
     props = {"value": rng.random(count), "code": rng.integers(-5, 5, count).astype(code_dtype)}
-    return type(mesh)(mesh.vertices, mesh.cells, name=mesh.name,
-                      vertex_properties=props if alignment == "VERTEX" else None,
-                      cell_properties=props if alignment == "CELL" else None)
+    return type(mesh)(
+        mesh.vertices,
+        mesh.cells,
+        name=mesh.name,
+        vertex_properties=props if alignment == "VERTEX" else None,
+        cell_properties=props if alignment == "CELL" else None,
+    )
 
 
 def _surface(side: int = 4, z: float = 0.0, name: str = "top") -> Surface:
@@ -61,8 +65,9 @@ def _members(alignment: str | None = None, shift: float = 0.0) -> list[Mesh]:
     surface.vertices[0] = [-0.0, 5e-324, np.nextafter(0.0, 1.0)]  # bits that only an exact round trip keeps
     lines = LineSet([[10, 0, 0], [11, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
     points = PointSet([[20, 20, 20], [21, 20, 20], [22, 21, 19]], name="samples")
-    solid = TetraMesh([[0, 0, -10], [1, 0, -10], [0, 1, -10], [0, 0, -9], [1, 1, -9]],
-                      [[0, 1, 2, 3], [1, 2, 3, 4]], name="body")
+    solid = TetraMesh(
+        [[0, 0, -10], [1, 0, -10], [0, 1, -10], [0, 0, -9], [1, 1, -9]], [[0, 1, 2, 3], [1, 2, 3, 4]], name="body"
+    )
     meshes: list[Mesh] = [surface, lines, points, solid]
     for mesh in meshes:
         mesh.vertices[:, 0] += shift
@@ -74,10 +79,14 @@ def _collection(alignment: str | None = None, shift: float = 0.0, name: str = "b
 
 
 def _rocks(conn: Conn, alignment: str = "VERTEX") -> F.FeatureClass:
-    fc = F.create_feature_class(conn, "rocks", "GEOMETRYCOLLECTION",
-                                feature_properties=[("note", "text"), ("age", "float8")],
-                                cell_properties=[("value", "double precision"), ("code", "integer")],
-                                alignment=alignment)  # type: ignore[arg-type]
+    fc = F.create_feature_class(
+        conn,
+        "rocks",
+        "GEOMETRYCOLLECTION",
+        feature_properties=[("note", "text"), ("age", "float8")],
+        cell_properties=[("value", "double precision"), ("code", "integer")],
+        alignment=alignment,
+    )  # type: ignore[arg-type]
     conn.commit()
     return fc
 
@@ -90,12 +99,17 @@ def test_collection_facts_copies_and_reports() -> None:
     c = GeometryCollection(members, name="block", metadata={"source": "test"})
     assert len(c) == 4 and list(c) == members and c[2] is members[2]
     assert c.geotype is tgsis.Geotype.GEOMETRYCOLLECTION
-    assert c.geotypes == (tgsis.Geotype.SURFACE, tgsis.Geotype.MULTILINESTRING, tgsis.Geotype.MULTIPOINT,
-                          tgsis.Geotype.MULTITETRA)
+    assert c.geotypes == (
+        tgsis.Geotype.SURFACE,
+        tgsis.Geotype.MULTILINESTRING,
+        tgsis.Geotype.MULTIPOINT,
+        tgsis.Geotype.MULTITETRA,
+    )
     assert c.n_vertices == 16 + 3 + 3 + 5 and c.n_cells == 18 + 2 + 3 + 2
     assert c.bounds().tolist() == [[-0.0, 0.0, -10.0], [22.0, 21.0, 20.0]]
-    assert repr(c) == ("GeometryCollection(name='block', members=[Surface, LineSet, PointSet, TetraMesh], "
-                       "n_vertices=27, n_cells=25)")
+    assert repr(c) == (
+        "GeometryCollection(name='block', members=[Surface, LineSet, PointSet, TetraMesh], n_vertices=27, n_cells=25)"
+    )
 
     twin = c.copy()
     assert twin.same_as(c) and twin.name == "block" and twin.metadata == {"source": "test"}
@@ -116,14 +130,19 @@ def test_collection_facts_copies_and_reports() -> None:
         GeometryCollection([PointSet(np.empty((0, 3)))]).bounds()
 
 
-@pytest.mark.parametrize(("members", "message"), [
-    ([], "collection 'c' has no member"),
-    ([_surface(), GeometryCollection([_surface()])], "member 1 of collection 'c' is a GeometryCollection: "
-                                                     "collections do not nest"),
-    ([_surface(), np.zeros((3, 3))], "member 1 of collection 'c' is a ndarray, not a PointSet, LineSet"),
-    ([tgsis.Mesh.__new__(tgsis.Mesh)], "member 0 of collection 'c' is a Mesh, not a PointSet"),
-    (_surface(), "a sequence of meshes, got one Surface"),
-])
+@pytest.mark.parametrize(
+    ("members", "message"),
+    [
+        ([], "collection 'c' has no member"),
+        (
+            [_surface(), GeometryCollection([_surface()])],
+            "member 1 of collection 'c' is a GeometryCollection: collections do not nest",
+        ),
+        ([_surface(), np.zeros((3, 3))], "member 1 of collection 'c' is a ndarray, not a PointSet, LineSet"),
+        ([tgsis.Mesh.__new__(tgsis.Mesh)], "member 0 of collection 'c' is a Mesh, not a PointSet"),
+        (_surface(), "a sequence of meshes, got one Surface"),
+    ],
+)
 def test_bad_collections_are_refused(members: Any, message: str) -> None:
     with pytest.raises(tgsis.InvalidGeometryError, match=message):
         GeometryCollection(members, name="c")
@@ -145,21 +164,28 @@ def test_round_trip_with_every_member_type(conn: Conn, alignment: str) -> None:
     cid = F.insert_feature(conn, fc, original, {"note": "mixed"})
     conn.commit()
 
-    row = conn.execute("SELECT geotype, geoname, geoids, collection, nvrtx, ncell, bbox::text "
-                       "FROM tgsis.geometry WHERE geoid = %s", (cid,)).fetchone()
+    row = conn.execute(
+        "SELECT geotype, geoname, geoids, collection, nvrtx, ncell, bbox::text FROM tgsis.geometry WHERE geoid = %s",
+        (cid,),
+    ).fetchone()
     assert row is not None
     geotype, geoname, member_ids, owner, nvrtx, ncell, bbox = row
     assert (geotype, geoname, owner, nvrtx, ncell) == ("GEOMETRYCOLLECTION", "block", None, 27, 25)
-    assert conn.execute("SELECT bbox = cube(ARRAY[0, 0, -10], ARRAY[22, 21, 20]) FROM tgsis.geometry "
-                        "WHERE geoid = %s", (cid,)).fetchone() == (True,), bbox
-    members = conn.execute("SELECT geoid, geotype, geoname, collection, nvrtx, ncell, cube_ll_coord(bbox, 3), "
-                           "cube_ur_coord(bbox, 1) FROM tgsis.geometry WHERE geoid = ANY(%s) ORDER BY geoid",
-                           (member_ids,)).fetchall()
+    assert conn.execute(
+        "SELECT bbox = cube(ARRAY[0, 0, -10], ARRAY[22, 21, 20]) FROM tgsis.geometry WHERE geoid = %s", (cid,)
+    ).fetchone() == (True,), bbox
+    members = conn.execute(
+        "SELECT geoid, geotype, geoname, collection, nvrtx, ncell, cube_ll_coord(bbox, 3), "
+        "cube_ur_coord(bbox, 1) FROM tgsis.geometry WHERE geoid = ANY(%s) ORDER BY geoid",
+        (member_ids,),
+    ).fetchall()
     assert [m[0] for m in members] == member_ids  # stored in member order
-    assert [m[1:] for m in members] == [("SURFACE", "top", cid, 16, 18, original[0].vertices[:, 2].min(), 3.0),
-                                        ("MULTILINESTRING", "trace", cid, 3, 2, 0.0, 12.0),
-                                        ("MULTIPOINT", "samples", cid, 3, 3, 19.0, 22.0),
-                                        ("MULTITETRA", "body", cid, 5, 2, -10.0, 1.0)]
+    assert [m[1:] for m in members] == [
+        ("SURFACE", "top", cid, 16, 18, original[0].vertices[:, 2].min(), 3.0),
+        ("MULTILINESTRING", "trace", cid, 3, 2, 0.0, 12.0),
+        ("MULTIPOINT", "samples", cid, 3, 3, 19.0, 22.0),
+        ("MULTITETRA", "body", cid, 5, 2, -10.0, 1.0),
+    ]
     assert conn.execute("SELECT _geoid, note FROM rocks").fetchall() == [(cid, "mixed")]
     per_member = conn.execute("SELECT _geoid, count(*) FROM rocks_cellpros GROUP BY 1 ORDER BY 1").fetchall()
     sizes = [m.n_vertices if alignment == "VERTEX" else m.n_cells for m in original]
@@ -179,10 +205,18 @@ def test_round_trip_with_every_member_type(conn: Conn, alignment: str) -> None:
 
 def test_fetching_many_members_takes_one_query_for_all_tables(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> None:
     fc = _rocks(conn)
-    originals = [GeometryCollection([_with_props(_surface(3 + i % 3, z=i, name=f"s{i}"), "VERTEX") if i % 2 else
-                                     _with_props(LineSet(rng.random((i + 2, 3)), [[j, j + 1] for j in range(i + 1)]),
-                                                 "VERTEX") for i in range(k, k + 20)], name=f"c{k}")
-                 for k in (0, 20)]
+    originals = [
+        GeometryCollection(
+            [
+                _with_props(_surface(3 + i % 3, z=i, name=f"s{i}"), "VERTEX")
+                if i % 2
+                else _with_props(LineSet(rng.random((i + 2, 3)), [[j, j + 1] for j in range(i + 1)]), "VERTEX")
+                for i in range(k, k + 20)
+            ],
+            name=f"c{k}",
+        )
+        for k in (0, 20)
+    ]
     ids = [F.insert_feature(conn, fc, c) for c in originals]
     queries: list[list[str]] = []
     real = _static.columns_out_all
@@ -210,8 +244,10 @@ def test_box_query_and_class_view(conn: Conn) -> None:
     assert F.features_in_box(conn, fc, [[-1, -1, -20], [2000, 50, 50]]) == [near, far]
     assert F.features_in_box(conn, fc, [[500, 500, 500], [600, 600, 600]]) == []
     rows = conn.execute("SELECT geoname, _geoid, note, geotype, nvrtx, ncell FROM rocks_v ORDER BY _geoid").fetchall()
-    assert rows == [("block", near, "near", "GEOMETRYCOLLECTION", 27, 25),
-                    ("far", far, "far", "GEOMETRYCOLLECTION", 27, 25)]
+    assert rows == [
+        ("block", near, "near", "GEOMETRYCOLLECTION", 27, 25),
+        ("far", far, "far", "GEOMETRYCOLLECTION", 27, 25),
+    ]
 
 
 def test_delete_removes_the_members_with_their_rows(conn: Conn) -> None:
@@ -227,8 +263,16 @@ def test_delete_removes_the_members_with_their_rows(conn: Conn) -> None:
     conn.commit()
     after_insert = _counts(conn, "rocks", "rocks_cellpros", "tops_cellpros")
     assert {t: after_insert[t] - before[t] for t in before} == {
-        "tgsis.geometry": 5, "tgsis.vrtx": 27, "tgsis.point": 3, "tgsis.segment": 2, "tgsis.trgl": 18,
-        "tgsis.tetra": 2, "rocks": 1, "rocks_cellpros": 27, "tops_cellpros": 0}
+        "tgsis.geometry": 5,
+        "tgsis.vrtx": 27,
+        "tgsis.point": 3,
+        "tgsis.segment": 2,
+        "tgsis.trgl": 18,
+        "tgsis.tetra": 2,
+        "rocks": 1,
+        "rocks_cellpros": 27,
+        "tops_cellpros": 0,
+    }
 
     assert F.delete_feature(conn, "rocks", cid) is True
     assert _counts(conn, "rocks", "rocks_cellpros", "tops_cellpros") == before
@@ -255,16 +299,19 @@ def test_drop_class_force_removes_members(conn: Conn) -> None:
 
 def test_a_hand_made_collection_does_not_own_what_it_lists(conn: Conn) -> None:
     tops = F.create_feature_class(conn, "tops", "SURFACE", cell_properties={"value": "float8"})
-    surfaces = [Surface(s.vertices, s.cells, name=s.name, vertex_properties={"value": rng.random(s.n_vertices)})
-                for s in (_surface(name="a"), _surface(z=5, name="b"))]
+    surfaces = [
+        Surface(s.vertices, s.cells, name=s.name, vertex_properties={"value": rng.random(s.n_vertices)})
+        for s in (_surface(name="a"), _surface(z=5, name="b"))
+    ]
     a, b = (F.insert_feature(conn, tops, s) for s in surfaces)
     groups = F.create_feature_class(conn, "groups", "GEOMETRYCOLLECTION")
     conn.commit()
     before = _counts(conn, "tops", "tops_cellpros")
 
     def hand_made(name: str) -> int:
-        row = conn.execute("SELECT tgsis.new_geometry('GEOMETRYCOLLECTION', %s, NULL, 0, 0, ARRAY[%s, %s]::bigint[])",
-                           (name, b, a)).fetchone()
+        row = conn.execute(
+            "SELECT tgsis.new_geometry('GEOMETRYCOLLECTION', %s, NULL, 0, 0, ARRAY[%s, %s]::bigint[])", (name, b, a)
+        ).fetchone()
         assert row is not None
         conn.execute("SELECT tgsis.refresh_geometry(%s)", (row[0],))
         conn.execute("INSERT INTO groups (_geoid) VALUES (%s)", (row[0],))
@@ -320,8 +367,10 @@ def test_members_with_different_properties_round_trip(conn: Conn) -> None:
     assert [sorted(m.vertex_properties) for m in back] == [["code", "value"], [], ["value"], ["code"]]
     assert all("tgsis_properties" not in m.metadata for m in back)
     # a psql user sees NULL where a member has no such property
-    rows = conn.execute("SELECT count(*) FILTER (WHERE value IS NULL), count(*) FILTER (WHERE code IS NULL), count(*) "
-                        "FROM rocks_cellpros").fetchone()
+    rows = conn.execute(
+        "SELECT count(*) FILTER (WHERE value IS NULL), count(*) FILTER (WHERE code IS NULL), count(*) "
+        "FROM rocks_cellpros"
+    ).fetchone()
     assert rows == (5, 3, 16 + 3 + 5)
     # a member's rows of the properties it has come back, also next to members with all of them
     full = _collection("VERTEX")
@@ -329,19 +378,48 @@ def test_members_with_different_properties_round_trip(conn: Conn) -> None:
     assert again[0].mesh.same_as(collection) and again[1].mesh.same_as(full)  # type: ignore[union-attr]
 
 
-@pytest.mark.parametrize(("make", "error", "message"), [
-    (lambda: GeometryCollection([_members("VERTEX")[0], LineSet(
-        [[0, 0, 0], [1, 0, 0]], [[0, 1]], vertex_properties={"value": [1.0, 2.0], "code": [1, 2], "extra": [0, 0]})]),
-     tgsis.InvalidPropertyError, r"has no column for properties \['extra'\] of member 1 \(LineSet\)"),
-    (lambda: GeometryCollection([*_members("VERTEX")[:3], TetraMesh(
-        _members()[3].vertices, _members()[3].cells, name="body",
-        vertex_properties={"value": np.zeros(5), "code": np.full(5, 1.5)})]),
-     tgsis.InvalidPropertyError, r"property 'code' has values that are not integer in member 3 \(TetraMesh 'body'\)"),
-    (lambda: _members("VERTEX")[0], tgsis.InvalidGeometryError,
-     r"feature class rocks holds GEOMETRYCOLLECTION features, not SURFACE \(Surface\)"),
-])
-def test_bad_collection_features_write_nothing(conn: Conn, make: Callable[[], Any], error: type[tgsis.Error],
-                                               message: str) -> None:
+@pytest.mark.parametrize(
+    ("make", "error", "message"),
+    [
+        (
+            lambda: GeometryCollection(
+                [
+                    _members("VERTEX")[0],
+                    LineSet(
+                        [[0, 0, 0], [1, 0, 0]],
+                        [[0, 1]],
+                        vertex_properties={"value": [1.0, 2.0], "code": [1, 2], "extra": [0, 0]},
+                    ),
+                ]
+            ),
+            tgsis.InvalidPropertyError,
+            r"has no column for properties \['extra'\] of member 1 \(LineSet\)",
+        ),
+        (
+            lambda: GeometryCollection(
+                [
+                    *_members("VERTEX")[:3],
+                    TetraMesh(
+                        _members()[3].vertices,
+                        _members()[3].cells,
+                        name="body",
+                        vertex_properties={"value": np.zeros(5), "code": np.full(5, 1.5)},
+                    ),
+                ]
+            ),
+            tgsis.InvalidPropertyError,
+            r"property 'code' has values that are not integer in member 3 \(TetraMesh 'body'\)",
+        ),
+        (
+            lambda: _members("VERTEX")[0],
+            tgsis.InvalidGeometryError,
+            r"feature class rocks holds GEOMETRYCOLLECTION features, not SURFACE \(Surface\)",
+        ),
+    ],
+)
+def test_bad_collection_features_write_nothing(
+    conn: Conn, make: Callable[[], Any], error: type[tgsis.Error], message: str
+) -> None:
     fc = _rocks(conn)
     before = _counts(conn, "rocks", "rocks_cellpros")
     geometry = make()
@@ -355,8 +433,10 @@ def test_collections_only_go_to_collection_classes_and_failures_roll_back(conn: 
     plain = F.create_feature_class(conn, "tops", "SURFACE")
     conn.commit()
     before = _counts(conn, "rocks", "rocks_cellpros", "tops")
-    with pytest.raises(tgsis.InvalidGeometryError,
-                       match=r"feature class tops holds SURFACE features, not GEOMETRYCOLLECTION \(GeometryCollection\)"):
+    with pytest.raises(
+        tgsis.InvalidGeometryError,
+        match=r"feature class tops holds SURFACE features, not GEOMETRYCOLLECTION \(GeometryCollection\)",
+    ):
         F.insert_feature(conn, plain, GeometryCollection([_surface()]))
     with pytest.raises(tgsis.DatabaseError, match="is of type double precision but expression is of type date"):
         F.insert_feature(conn, fc, _collection("VERTEX"), {"age": datetime.date(2020, 1, 1)})  # after every member
@@ -388,19 +468,27 @@ def test_broken_stored_collections_give_clear_errors(conn: Conn) -> None:
     groups = F.create_feature_class(conn, "groups", "GEOMETRYCOLLECTION")
     rows = {}
     for name, geoids in (("empty", "{}"), ("dangling", "{424242}")):
-        row = conn.execute("SELECT tgsis.new_geometry('GEOMETRYCOLLECTION', %s, NULL, 0, 0, %s)",
-                           (name, geoids)).fetchone()
+        row = conn.execute(
+            "SELECT tgsis.new_geometry('GEOMETRYCOLLECTION', %s, NULL, 0, 0, %s)", (name, geoids)
+        ).fetchone()
         assert row is not None
         conn.execute("INSERT INTO groups (_geoid) VALUES (%s)", row)
         rows[name] = row[0]
-    with pytest.raises(tgsis.InvalidGeometryError, match=rf"feature\(s\) \[{rows['empty']}\] of class groups are "
-                                                         "collections without members"):
+    with pytest.raises(
+        tgsis.InvalidGeometryError,
+        match=rf"feature\(s\) \[{rows['empty']}\] of class groups are "
+        "collections without members",
+    ):
         F.fetch_feature(conn, groups, rows["empty"])
-    with pytest.raises(tgsis.InvalidGeometryError, match=rf"member 0 \(geometry 424242\) of feature "
-                                                         rf"{rows['dangling']} of class groups does not exist"):
+    with pytest.raises(
+        tgsis.InvalidGeometryError,
+        match=rf"member 0 \(geometry 424242\) of feature "
+        rf"{rows['dangling']} of class groups does not exist",
+    ):
         F.fetch_feature(conn, groups, rows["dangling"])
-    assert conn.execute("SELECT problem, example FROM tgsis.check_geometry(%s)", (rows["dangling"],)
-                        ).fetchall() == [("member geometry does not exist", "424242")]
+    assert conn.execute("SELECT problem, example FROM tgsis.check_geometry(%s)", (rows["dangling"],)).fetchall() == [
+        ("member geometry does not exist", "424242")
+    ]
 
 
 # --------------------------------------------------------------------------- files (no database)
@@ -417,8 +505,9 @@ def test_vtu_holds_a_mixed_collection_bit_exact(tmp_path: Path, encoding: str) -
     assert [m.name for m in back] == ["top", None, "samples", "body"]
     assert all(m.cell_properties["code"].dtype == np.int32 for m in back)
     assert [m.same_as(o) for m, o in zip(formats.read(path), original)] == [True] * 4
-    root = ET.fromstring(path.read_bytes().split(b"<AppendedData")[0] + b"</VTKFile>" if encoding == "appended"
-                         else path.read_bytes())
+    root = ET.fromstring(
+        path.read_bytes().split(b"<AppendedData")[0] + b"</VTKFile>" if encoding == "appended" else path.read_bytes()
+    )
     piece = root.find("UnstructuredGrid/Piece")
     assert piece is not None and piece.get("NumberOfPoints") == "27" and piece.get("NumberOfCells") == "25"
     with pytest.raises(tgsis.FileFormatError, match="holds a GEOMETRYCOLLECTION of 4 members, not one mesh"):
@@ -443,8 +532,11 @@ def test_vtu_cell_types_are_the_members(tmp_path: Path) -> None:
 def test_vtu_collection_needs_every_property_on_every_member(tmp_path: Path) -> None:
     members = _members()
     members[2] = PointSet(members[2].vertices, vertex_properties={"grade": [1.0, 2.0, 3.0]})
-    with pytest.raises(tgsis.FileFormatError, match=r"vertex property 'grade' is on some members of the collection "
-                                                    r"but not on members \[0, 1, 3\]"):
+    with pytest.raises(
+        tgsis.FileFormatError,
+        match=r"vertex property 'grade' is on some members of the collection "
+        r"but not on members \[0, 1, 3\]",
+    ):
         formats.write(GeometryCollection(members), tmp_path / "bad.vtu")
     assert not (tmp_path / "bad.vtu").exists()
 
@@ -454,9 +546,12 @@ def test_gocad_takes_collections_of_its_type_and_refuses_others(tmp_path: Path) 
     formats.write(surfaces, tmp_path / "two.ts")
     back = formats.read(tmp_path / "two.ts")
     assert [m.name for m in back] == ["a", "b"] and all(m.same_as(s) for m, s in zip(back, surfaces))
-    with pytest.raises(tgsis.FileFormatError, match=r"tsurf files hold objects of one type \(SURFACE\); a "
-                                                    "GEOMETRYCOLLECTION of 4 members mixes SURFACE, MULTILINESTRING, "
-                                                    "MULTIPOINT, MULTITETRA") as info:
+    with pytest.raises(
+        tgsis.FileFormatError,
+        match=r"tsurf files hold objects of one type \(SURFACE\); a "
+        "GEOMETRYCOLLECTION of 4 members mixes SURFACE, MULTILINESTRING, "
+        "MULTIPOINT, MULTITETRA",
+    ) as info:
         formats.write(_collection(), tmp_path / "mixed.ts")
     assert "vtu" in (info.value.hint or "")
     lines = GeometryCollection(_members()[1:2])
@@ -478,9 +573,12 @@ def test_cli_import_export_round_trip(db_dsn: str, tmp_path: Path, capsys: pytes
         return main(["--dsn", db_dsn, *args])
 
     assert run("class", "create", "blocks", "--geotype", "GEOMETRYCOLLECTION", "--property", "value:float8") == 0
-    surfaces = GeometryCollection([Surface(s.vertices, s.cells, name=s.name,
-                                           vertex_properties={"value": rng.random(s.n_vertices)})
-                                   for s in (_surface(name="upper"), _surface(z=7, name="lower"))])
+    surfaces = GeometryCollection(
+        [
+            Surface(s.vertices, s.cells, name=s.name, vertex_properties={"value": rng.random(s.n_vertices)})
+            for s in (_surface(name="upper"), _surface(z=7, name="lower"))
+        ]
+    )
     source = tmp_path / "horizons.ts"
     formats.write(surfaces, source)
     capsys.readouterr()
@@ -500,9 +598,13 @@ def test_cli_import_export_round_trip(db_dsn: str, tmp_path: Path, capsys: pytes
 
     # a mixed collection: GOCAD refuses it, VTU takes it, and it comes back in as an equal feature
     with psycopg.connect(db_dsn) as conn:
-        mixed = GeometryCollection([type(m)(m.vertices, m.cells, name=m.name,
-                                            vertex_properties={"value": rng.random(m.n_vertices)})
-                                    for m in _members()], name="mixed")
+        mixed = GeometryCollection(
+            [
+                type(m)(m.vertices, m.cells, name=m.name, vertex_properties={"value": rng.random(m.n_vertices)})
+                for m in _members()
+            ],
+            name="mixed",
+        )
         mid = F.insert_feature(conn, "blocks", mixed)
         conn.commit()
     assert run("export", str(mid), str(tmp_path / "mixed.ts")) == 1

@@ -35,14 +35,28 @@ ORDER BY 1"""
 
 
 def test_install_classes_and_versioning_leave_nothing_uncommented(conn: psycopg.Connection[Any]) -> None:
-    F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
-                           cell_properties={"porosity": "float8"})
-    F.create_feature_class(conn, "stepped", "SURFACE", time_model="INSTANTS", cell_properties={"porosity": "float8"},
-                           instant_properties={"throw": "float8"})
+    F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"creator": "text"}, cell_properties={"porosity": "float8"}
+    )
+    F.create_feature_class(
+        conn,
+        "stepped",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties={"porosity": "float8"},
+        instant_properties={"throw": "float8"},
+    )
     tgsis.enable_feature_versioning(conn)
     F.create_feature_class(conn, "blocks", "GEOMETRYCOLLECTION", cell_properties={"facies": "int"}, alignment="CELL")
-    F.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", cell_properties={"facies": "int"},
-                           alignment="CELL", instant_properties={"throw": "float8"})
+    F.create_feature_class(
+        conn,
+        "moving",
+        "SURFACE",
+        time_model="EVOLVING",
+        cell_properties={"facies": "int"},
+        alignment="CELL",
+        instant_properties={"throw": "float8"},
+    )
     conn.execute("CREATE TABLE wells (id int PRIMARY KEY, name text)")
     conn.execute("COMMENT ON TABLE wells IS 'wells'")
     conn.execute("COMMENT ON COLUMN wells.id IS 'id'")
@@ -50,4 +64,5 @@ def test_install_classes_and_versioning_leave_nothing_uncommented(conn: psycopg.
     tgsis.enable_versioning(conn, "wells", "id", "well")
     assert [r[0] for r in conn.execute(UNCOMMENTED).fetchall()] == []
     assert conn.execute("SELECT col_description('horizons_cellpros'::regclass, 3)").fetchone() == (
-        "vertex property (double precision)",)
+        "vertex property (double precision)",
+    )

@@ -37,15 +37,16 @@ from .shared_data import cfm
 
 MESH_TYPES: dict[int, type[Mesh]] = {1: PointSet, 2: LineSet, 3: Surface, 4: TetraMesh}
 CELL_SIZES = sorted(MESH_TYPES)
-EVEN_PERMUTATIONS = {k: [p for p in itertools.permutations(range(k)) if permutation_parity(p) == 0]
-                     for k in CELL_SIZES}
+EVEN_PERMUTATIONS = {k: [p for p in itertools.permutations(range(k)) if permutation_parity(p) == 0] for k in CELL_SIZES}
 PROPERTY = settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
-def make_mesh(k: int, vertices: Sequence[Sequence[float]] | np.ndarray,
-              cells: Sequence[Sequence[int]] | np.ndarray) -> Mesh:
-    return MESH_TYPES[k](np.asarray(vertices, dtype=np.float64).reshape(-1, 3),
-                         np.asarray(cells, dtype=np.int64).reshape(-1, k))
+def make_mesh(
+    k: int, vertices: Sequence[Sequence[float]] | np.ndarray, cells: Sequence[Sequence[int]] | np.ndarray
+) -> Mesh:
+    return MESH_TYPES[k](
+        np.asarray(vertices, dtype=np.float64).reshape(-1, 3), np.asarray(cells, dtype=np.int64).reshape(-1, k)
+    )
 
 
 # ---------------------------------------------------------------- strategies
@@ -73,8 +74,9 @@ def grid_surface(draw: st.DrawFn) -> tuple[list[tuple[float, float, float]], lis
 
 
 @st.composite
-def random_mesh(draw: st.DrawFn, k: int, max_vertices: int = 20) -> tuple[list[tuple[float, float, float]],
-                                                                            list[tuple[int, ...]]]:
+def random_mesh(
+    draw: st.DrawFn, k: int, max_vertices: int = 20
+) -> tuple[list[tuple[float, float, float]], list[tuple[int, ...]]]:
     """A normal mesh: distinct vertices, cells on distinct vertex sets (any orientation, any order)."""
     vertices = draw(st.lists(POINT, unique=True, max_size=max_vertices))
     n = len(vertices)
@@ -196,17 +198,26 @@ def repeated_pair(draw: st.DrawFn, k: int) -> tuple[Mesh, Mesh]:
 
 
 def reference(old: Mesh, edited: Mesh, tolerance: float = 0.0) -> dict[str, list[int]]:
-    r = reference_compare(old.vertices.tolist(), old.cells.tolist(), edited.vertices.tolist(), edited.cells.tolist(),
-                          tolerance)
-    return {"vertex_map": r.vertex_map, "cell_map": r.cell_map, "removed_vertices": r.removed_vertices,
-            "removed_cells": r.removed_cells}
+    r = reference_compare(
+        old.vertices.tolist(), old.cells.tolist(), edited.vertices.tolist(), edited.cells.tolist(), tolerance
+    )
+    return {
+        "vertex_map": r.vertex_map,
+        "cell_map": r.cell_map,
+        "removed_vertices": r.removed_vertices,
+        "removed_cells": r.removed_cells,
+    }
 
 
 def as_lists(diff: MeshDiff) -> dict[str, list[int]]:
     for name in ("vertex_map", "cell_map", "removed_vertices", "removed_cells"):
         assert getattr(diff, name).dtype == np.int64, name
-    return {"vertex_map": diff.vertex_map.tolist(), "cell_map": diff.cell_map.tolist(),
-            "removed_vertices": diff.removed_vertices.tolist(), "removed_cells": diff.removed_cells.tolist()}
+    return {
+        "vertex_map": diff.vertex_map.tolist(),
+        "cell_map": diff.cell_map.tolist(),
+        "removed_vertices": diff.removed_vertices.tolist(),
+        "removed_cells": diff.removed_cells.tolist(),
+    }
 
 
 def assert_valid(old: Mesh, edited: Mesh, diff: MeshDiff, tolerance: float = 0.0) -> None:
@@ -250,8 +261,9 @@ def assert_diff_reproduces(old: Mesh, edited: Mesh, diff: MeshDiff) -> None:
     vertices, cells = applied(old, edited, diff)
     assert len(vertices) == edited.n_vertices and len(cells) == edited.n_cells
     assert Counter(map(tuple, vertices.tolist())) == Counter(map(tuple, edited.vertices.tolist()))
-    assert (oriented_cells_by_coordinates(vertices.tolist(), cells.tolist())
-            == oriented_cells_by_coordinates(edited.vertices.tolist(), edited.cells.tolist()))
+    assert oriented_cells_by_coordinates(vertices.tolist(), cells.tolist()) == oriented_cells_by_coordinates(
+        edited.vertices.tolist(), edited.cells.tolist()
+    )
 
 
 # ---------------------------------------------------------------- properties against the reference
@@ -262,7 +274,8 @@ def assert_diff_reproduces(old: Mesh, edited: Mesh, diff: MeshDiff) -> None:
 @PROPERTY
 @given(data=st.data())
 def test_matches_reference_and_reproduces_edited_mesh(
-        meshes: Callable[[int], st.SearchStrategy[tuple[Mesh, Mesh]]], k: int, data: st.DataObject) -> None:
+    meshes: Callable[[int], st.SearchStrategy[tuple[Mesh, Mesh]]], k: int, data: st.DataObject
+) -> None:
     """Adversarial edits of a normal mesh; and meshes that repeat vertices and cells (not normal), which must
     still pair one to one (equal rows in index order, as the reference does)."""
     old, edited = data.draw(meshes(k))
@@ -315,8 +328,10 @@ def crowded_hashes(buckets: int) -> Iterator[list[int]]:
         calls.append(1)
         crowded(*args)
 
-    with mock.patch.object(R, "row_hashes", low_entropy_hashes(buckets)), \
-            mock.patch.object(R, "_match_crowded", counting):
+    with (
+        mock.patch.object(R, "row_hashes", low_entropy_hashes(buckets)),
+        mock.patch.object(R, "_match_crowded", counting),
+    ):
         yield calls
 
 
@@ -355,26 +370,38 @@ def test_collision_path_is_taken_and_exact_on_a_larger_mesh() -> None:
 def tolerance_pair(draw: st.DrawFn, k: int) -> tuple[Mesh, Mesh, float]:
     """Points on a small half-unit grid (many distances tie exactly, so that the order of ties shows), some shared
     by the two meshes, some a little off."""
+
     def point(scale: float) -> st.SearchStrategy[tuple[float, float, float]]:
         c = st.integers(-2, 2).map(lambda i: i * scale)
         return st.tuples(c, c, c)
 
     old_points = draw(st.lists(point(0.5), unique=True, max_size=16))
-    new_points = draw(st.lists(st.one_of(st.sampled_from(old_points), point(0.5), point(0.25))
-                               if old_points else point(0.5), unique=True, max_size=16))
+    new_points = draw(
+        st.lists(
+            st.one_of(st.sampled_from(old_points), point(0.5), point(0.25)) if old_points else point(0.5),
+            unique=True,
+            max_size=16,
+        )
+    )
     offset = draw(st.sampled_from([0.0, 0.0, 1e-9, 0.1]))
     new_points = [(x + offset, y, z) if draw(st.booleans()) else (x, y, z) for x, y, z in new_points]
     assume(len(set(new_points)) == len(new_points))
-    tolerance = draw(st.one_of(st.sampled_from([0.25, 0.5, 0.75, 1.0, 1.5]),
-                               st.floats(1e-6, 2.0, allow_nan=False, allow_infinity=False)))
+    tolerance = draw(
+        st.one_of(
+            st.sampled_from([0.25, 0.5, 0.75, 1.0, 1.5]), st.floats(1e-6, 2.0, allow_nan=False, allow_infinity=False)
+        )
+    )
 
     def cells(n: int) -> list[list[int]]:
         if n < k:
             return []
         return draw(st.lists(st.lists(st.integers(0, n - 1), min_size=k, max_size=k, unique=True), max_size=n))
 
-    return (make_mesh(k, old_points, cells(len(old_points))), make_mesh(k, new_points, cells(len(new_points))),
-            tolerance)
+    return (
+        make_mesh(k, old_points, cells(len(old_points))),
+        make_mesh(k, new_points, cells(len(new_points))),
+        tolerance,
+    )
 
 
 @pytest.mark.parametrize("k", [1, 3])
@@ -401,8 +428,14 @@ def test_identical_mesh_in_another_order_is_not_edited() -> None:
     diff = compare_meshes(old, edited)
     assert diff.identical
     assert diff.vertex_map.tolist() == [2, 0, 3, 1] and diff.cell_map.tolist() == [1, 0]
-    assert diff.counts() == {"vertices_kept": 4, "vertices_removed": 0, "vertices_added": 0,
-                             "cells_kept": 2, "cells_removed": 0, "cells_added": 0}
+    assert diff.counts() == {
+        "vertices_kept": 4,
+        "vertices_removed": 0,
+        "vertices_added": 0,
+        "cells_kept": 2,
+        "cells_removed": 0,
+        "cells_added": 0,
+    }
 
 
 def test_flipped_edge_edits_both_triangles_and_no_vertex() -> None:
@@ -486,8 +519,10 @@ def test_bad_tolerance_is_refused(tolerance: float) -> None:
 # ---------------------------------------------------------------- the real faults of two CFM releases
 
 RE_EXPORTED = "GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts"
-RE_INTERPRETED = ["CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m.ts",
-                  "CRFA-SLRS-MULT-San_Luis_Range_fault_system-CFM4_1000m.ts"]
+RE_INTERPRETED = [
+    "CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m.ts",
+    "CRFA-SLRS-MULT-San_Luis_Range_fault_system-CFM4_1000m.ts",
+]
 #: CFM 5.3 writes 5 decimals (metres), 6.1 the float32 values in full: a re-export moves a vertex by < 1e-5 m
 ROUNDING = 1e-4
 
@@ -508,8 +543,9 @@ def test_cfm_re_exported_fault_is_almost_unchanged_within_rounding() -> None:
     assert len(diff.added_cells) == len(diff.removed_cells) <= 0.01 * new.n_cells  # a few triangles redrawn
     # ... and those are edge flips: on surviving vertices, just another triangulation of them
     assert np.all(diff.vertex_map[new.cells[diff.added_cells]] >= 0)
-    assert (set(diff.vertex_map[new.cells[diff.added_cells]].ravel().tolist())
-            == set(old.cells[diff.removed_cells].ravel().tolist()))
+    assert set(diff.vertex_map[new.cells[diff.added_cells]].ravel().tolist()) == set(
+        old.cells[diff.removed_cells].ravel().tolist()
+    )
     assert as_lists(diff) == reference(old, new, ROUNDING)
     assert_diff_reproduces_within(old, new, diff, ROUNDING)
 
@@ -552,5 +588,6 @@ def assert_diff_reproduces_within(old: Mesh, edited: Mesh, diff: MeshDiff, toler
     assert np.all(np.linalg.norm(snapped[kept] - old.vertices[diff.vertex_map[kept]], axis=1) <= tolerance)
     snapped[kept] = old.vertices[diff.vertex_map[kept]]
     assert Counter(map(tuple, vertices.tolist())) == Counter(map(tuple, snapped.tolist()))
-    assert (oriented_cells_by_coordinates(vertices.tolist(), cells.tolist())
-            == oriented_cells_by_coordinates(snapped.tolist(), edited.cells.tolist()))
+    assert oriented_cells_by_coordinates(vertices.tolist(), cells.tolist()) == oriented_cells_by_coordinates(
+        snapped.tolist(), edited.cells.tolist()
+    )

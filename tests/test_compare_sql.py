@@ -52,8 +52,9 @@ def _distinct_points(rng: np.random.Generator, n: int, exclude: Collection[Point
     return points
 
 
-def _random_cells(rng: np.random.Generator, n: int, k: int, m: int,
-                  taken: set[frozenset[int]]) -> list[tuple[int, ...]]:
+def _random_cells(
+    rng: np.random.Generator, n: int, k: int, m: int, taken: set[frozenset[int]]
+) -> list[tuple[int, ...]]:
     """Up to m cells of k distinct vertices on vertex sets not in ``taken`` (a normal mesh)."""
     cells: list[tuple[int, ...]] = []
     for _ in range(20 * m):
@@ -149,9 +150,15 @@ def edit(rng: np.random.Generator, mesh: Mesh) -> Mesh:
 # ---------------------------------------------------------------- expected answers in stored ids
 
 
-def expected(diff: MeshDiff, vertex_ids_old: np.ndarray | None = None, vertex_ids_new: np.ndarray | None = None,
-             cell_ids_old: np.ndarray | None = None, cell_ids_new: np.ndarray | None = None) -> GeometryChanges:
+def expected(
+    diff: MeshDiff,
+    vertex_ids_old: np.ndarray | None = None,
+    vertex_ids_new: np.ndarray | None = None,
+    cell_ids_old: np.ndarray | None = None,
+    cell_ids_new: np.ndarray | None = None,
+) -> GeometryChanges:
     """A MeshDiff in stored ids (default: the index itself, as a fresh insert_feature stores it)."""
+
     def ids(given: np.ndarray | None, count: int) -> np.ndarray:
         return np.arange(count, dtype=np.int64) if given is None else np.asarray(given, dtype=np.int64)
 
@@ -164,10 +171,15 @@ def expected(diff: MeshDiff, vertex_ids_old: np.ndarray | None = None, vertex_id
         return p[np.argsort(p[:, 1], kind="stable")]
 
     return GeometryChanges(
-        vertices_kept=len(diff.kept_vertices), vertices_removed=np.sort(vo[diff.removed_vertices]),
-        vertices_added=np.sort(vn[diff.added_vertices]), cells_kept=len(diff.kept_cells),
-        cells_removed=np.sort(co[diff.removed_cells]), cells_added=np.sort(cn[diff.added_cells]),
-        vertex_pairs=pairs(diff.vertex_map, vo, vn), cell_pairs=pairs(diff.cell_map, co, cn))
+        vertices_kept=len(diff.kept_vertices),
+        vertices_removed=np.sort(vo[diff.removed_vertices]),
+        vertices_added=np.sort(vn[diff.added_vertices]),
+        cells_kept=len(diff.kept_cells),
+        cells_removed=np.sort(co[diff.removed_cells]),
+        cells_added=np.sort(cn[diff.added_cells]),
+        vertex_pairs=pairs(diff.vertex_map, vo, vn),
+        cell_pairs=pairs(diff.cell_map, co, cn),
+    )
 
 
 def assert_same(got: GeometryChanges, want: GeometryChanges, with_pairs: bool = True) -> None:
@@ -224,8 +236,14 @@ def test_each_kind_of_edit(tx: Conn) -> None:
     assert same.identical and same.counts()["vertices_kept"] == 5 and same.counts()["cells_kept"] == 3
     # a reversed triangle is edited, its vertices are not
     reversed_one = run(Surface(vertices, [[0, 3, 1], [0, 3, 2], [1, 4, 3]]))
-    assert reversed_one.counts() == {"vertices_kept": 5, "vertices_removed": 0, "vertices_added": 0,
-                                     "cells_kept": 2, "cells_removed": 1, "cells_added": 1}
+    assert reversed_one.counts() == {
+        "vertices_kept": 5,
+        "vertices_removed": 0,
+        "vertices_added": 0,
+        "cells_kept": 2,
+        "cells_removed": 1,
+        "cells_added": 1,
+    }
     assert reversed_one.cells_removed.tolist() == [0] and reversed_one.cells_added.tolist() == [0]
     # an edge flip: two triangles edited although all four vertices survive
     flipped = run(Surface(vertices, [[0, 1, 2], [1, 3, 2], [1, 4, 3]]))
@@ -269,8 +287,14 @@ def test_empty_and_identical_geometries(tx: Conn) -> None:
     assert check_stored(tx, fc, empty, empty).identical
     # the six rows a psql user sees: fixed order, NULL ids for kept rows
     rows = tx.execute("SELECT * FROM tgsis.compare_geometries(%s, %s)", (a, b)).fetchall()
-    assert rows == [("vertex", "kept", 0, None), ("vertex", "removed", 3, [0, 1, 2]), ("vertex", "added", 0, []),
-                    ("cell", "kept", 0, None), ("cell", "removed", 2, [0, 1]), ("cell", "added", 0, [])]
+    assert rows == [
+        ("vertex", "kept", 0, None),
+        ("vertex", "removed", 3, [0, 1, 2]),
+        ("vertex", "added", 0, []),
+        ("cell", "kept", 0, None),
+        ("cell", "removed", 2, [0, 1]),
+        ("cell", "added", 0, []),
+    ]
 
 
 # ---------------------------------------------------------------- versions
@@ -284,18 +308,27 @@ def _grid(side: int) -> Surface:
     return Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
 
 
-def _mesh_at(conn: Conn, geoid: int, version: str, revision: int | None = None
-             ) -> tuple[Surface, np.ndarray, np.ndarray]:
+def _mesh_at(
+    conn: Conn, geoid: int, version: str, revision: int | None = None
+) -> tuple[Surface, np.ndarray, np.ndarray]:
     """The surface a version (at a revision) sees, read with tgsis.rows_at, with its vertex and triangle ids."""
-    vertices = np.array(conn.execute(
-        "SELECT vrtxid, x, y, z FROM tgsis.rows_at(NULL::tgsis.vrtx, %s, %s) WHERE geoid = %s ORDER BY vrtxid",
-        (version, revision, geoid)).fetchall(), dtype=np.float64).reshape(-1, 4)
-    triangles = np.array(conn.execute(
-        "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.rows_at(NULL::tgsis.trgl, %s, %s) WHERE geoid = %s "
-        "ORDER BY trglid", (version, revision, geoid)).fetchall(), dtype=np.int64).reshape(-1, 4)
+    vertices = np.array(
+        conn.execute(
+            "SELECT vrtxid, x, y, z FROM tgsis.rows_at(NULL::tgsis.vrtx, %s, %s) WHERE geoid = %s ORDER BY vrtxid",
+            (version, revision, geoid),
+        ).fetchall(),
+        dtype=np.float64,
+    ).reshape(-1, 4)
+    triangles = np.array(
+        conn.execute(
+            "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.rows_at(NULL::tgsis.trgl, %s, %s) WHERE geoid = %s "
+            "ORDER BY trglid",
+            (version, revision, geoid),
+        ).fetchall(),
+        dtype=np.int64,
+    ).reshape(-1, 4)
     vertex_ids = vertices[:, 0].astype(np.int64)
-    return (Surface(vertices[:, 1:], np.searchsorted(vertex_ids, triangles[:, 1:])), vertex_ids,
-            triangles[:, 0].copy())
+    return (Surface(vertices[:, 1:], np.searchsorted(vertex_ids, triangles[:, 1:])), vertex_ids, triangles[:, 0].copy())
 
 
 def check_versions(conn: Conn, geoid: int, old: tuple[str, int | None], new: tuple[str, int | None]) -> GeometryChanges:
@@ -304,20 +337,23 @@ def check_versions(conn: Conn, geoid: int, old: tuple[str, int | None], new: tup
     want = expected(compare_meshes(old_mesh_, new_mesh_), vo, vn, co, cn)
     got = compare_versions(conn, geoid, old[0], new[0], old_revision=old[1], new_revision=new[1], pairs=True)
     assert_same(got, want)
-    assert_same(compare_versions(conn, geoid, old[0], new[0], old_revision=old[1], new_revision=new[1]), want,
-                 with_pairs=False)
+    assert_same(
+        compare_versions(conn, geoid, old[0], new[0], old_revision=old[1], new_revision=new[1]), want, with_pairs=False
+    )
     return got
 
 
 def _storage_rows(conn: Conn) -> dict[str, int]:
-    return {t: int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
-            for t in ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.versions", "tgsis.revisions")}
+    return {
+        t: int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
+        for t in ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.versions", "tgsis.revisions")
+    }
 
 
 def test_surface_edited_in_a_child_version(conn: Conn, db_dsn: str) -> None:
     fc = F.create_feature_class(conn, "horizons", "SURFACE")
-    geoid = F.insert_feature(conn, fc, _grid(12))            # 144 vertices, 242 triangles
-    other = F.insert_feature(conn, fc, _grid(5))             # another geometry: never read
+    geoid = F.insert_feature(conn, fc, _grid(12))  # 144 vertices, 242 triangles
+    other = F.insert_feature(conn, fc, _grid(5))  # another geometry: never read
     tgsis.enable_feature_versioning(conn)
     tgsis.create_version(conn, "edit")
     with tgsis.in_version(conn, "edit"):
@@ -327,15 +363,19 @@ def test_surface_edited_in_a_child_version(conn: Conn, db_dsn: str) -> None:
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND 30 IN (vrtxid1, vrtxid2, vrtxid3)", (geoid,))
         conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 30", (geoid,))
         conn.execute("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 1000, 2.5, 2.5, 7)", (geoid,))
-        conn.execute("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) "
-                     "VALUES (%s, 1000, 1000, 100, 101), (%s, 1001, 1000, 101, 113)", (geoid, geoid))
-        conn.execute("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = 50",
-                     (geoid,))
+        conn.execute(
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) "
+            "VALUES (%s, 1000, 1000, 100, 101), (%s, 1001, 1000, 101, 113)",
+            (geoid, geoid),
+        )
+        conn.execute(
+            "UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = 50", (geoid,)
+        )
         # the quad of triangles 70 (a, b, d) and 70 + 121 (a, d, c) gets its other diagonal
-        a, b, d = conn.execute("SELECT vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl WHERE geoid = %s AND trglid = 70",
-                               (geoid,)).fetchone()  # type: ignore[misc]
-        c = conn.execute("SELECT vrtxid3 FROM tgsis.trgl WHERE geoid = %s AND trglid = 191",
-                         (geoid,)).fetchone()[0]  # type: ignore[index]
+        a, b, d = conn.execute(
+            "SELECT vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl WHERE geoid = %s AND trglid = 70", (geoid,)
+        ).fetchone()  # type: ignore[misc]
+        c = conn.execute("SELECT vrtxid3 FROM tgsis.trgl WHERE geoid = %s AND trglid = 191", (geoid,)).fetchone()[0]  # type: ignore[index]
         flip = "UPDATE tgsis.trgl SET vrtxid1 = %s, vrtxid2 = %s, vrtxid3 = %s WHERE geoid = %s AND trglid = %s"
         conn.execute(flip, (a, b, c, geoid, 70))
         conn.execute(flip, (b, d, c, geoid, 191))
@@ -354,7 +394,7 @@ def test_surface_edited_in_a_child_version(conn: Conn, db_dsn: str) -> None:
     assert got.vertices_removed.tolist() == [5, 6, 30, 77] and got.vertices_added.tolist() == [5, 6, 77, 1000]
     assert got.cells_added.tolist()[-1] == 1001 and 50 in got.cells_added and 70 in got.cells_added
     check_versions(conn, geoid, ("edit", None), ("DEFAULT", None))
-    rev = check_versions(conn, geoid, ("edit", first), ("edit", None))   # a revision against the working state
+    rev = check_versions(conn, geoid, ("edit", first), ("edit", None))  # a revision against the working state
     assert rev.vertices_removed.tolist() == [77] and rev.vertices_added.tolist() == [77]
     # the triangles around vertex 77 are removed and added again; triangle 1000 is only removed
     assert 1000 in rev.cells_removed and len(rev.cells_added) == len(rev.cells_removed) - 1
@@ -393,16 +433,22 @@ def test_bad_calls_are_refused_with_our_sqlstates_and_change_nothing(conn: Conn)
         with pytest.raises(error, match=match) as info:
             call(conn, *args, **kwargs)
         assert info.value.sqlstate == sqlstate
-        assert conn.execute("SELECT 1").fetchone() == (1,)   # the caller's transaction is still usable
+        assert conn.execute("SELECT 1").fetchone() == (1,)  # the caller's transaction is still usable
 
     refused(tgsis.NotFoundError, "TG200", "geometry 999 does not exist", compare_stored, s, 999)
-    refused(tgsis.InvalidInputError, "TG100", r"geometry \d+ \(SURFACE\) with geometry \d+ \(MULTIPOINT\)",
-            compare_stored, s, p)
+    refused(
+        tgsis.InvalidInputError,
+        "TG100",
+        r"geometry \d+ \(SURFACE\) with geometry \d+ \(MULTIPOINT\)",
+        compare_stored,
+        s,
+        p,
+    )
     refused(tgsis.InvalidInputError, "TG100", "is a GEOMETRYCOLLECTION", compare_stored, block, block, pairs=True)
     row = conn.execute("SELECT geoids[1] FROM tgsis.geometry WHERE geoid = %s", (block,)).fetchone()
     assert row is not None
     member = row[0]
-    assert compare_stored(conn, member, s).identical      # a member is a geometry of its own
+    assert compare_stored(conn, member, s).identical  # a member is a geometry of its own
     refused(tgsis.InvalidInputError, "TG100", "temporal surface", compare_stored, temporal, s)
     refused(tgsis.InvalidInputError, "TG100", "model 1 is not versioned", compare_versions, s, "DEFAULT", "DEFAULT")
     with pytest.raises(psycopg.Error) as raw:
@@ -416,12 +462,36 @@ def test_bad_calls_are_refused_with_our_sqlstates_and_change_nothing(conn: Conn)
         added = F.insert_feature(conn, surfaces, _grid(4))
     before = _storage_rows(conn)
     refused(tgsis.NotFoundError, "TG200", "version 'nope' does not exist", compare_versions, s, "DEFAULT", "nope")
-    refused(tgsis.NotFoundError, "TG200", "revision 99 is not in the history", compare_versions, s, "v1", "v1",
-            old_revision=99)
-    refused(tgsis.NotFoundError, "TG200", f"geometry {added} does not exist in version 'DEFAULT'", compare_versions,
-            added, "DEFAULT", "v1")
-    refused(tgsis.NotFoundError, "TG200", f"geometry {added} does not exist in version 'v1' at revision 0",
-            compare_versions, added, "v1", "v1", old_revision=0, pairs=True)
+    refused(
+        tgsis.NotFoundError,
+        "TG200",
+        "revision 99 is not in the history",
+        compare_versions,
+        s,
+        "v1",
+        "v1",
+        old_revision=99,
+    )
+    refused(
+        tgsis.NotFoundError,
+        "TG200",
+        f"geometry {added} does not exist in version 'DEFAULT'",
+        compare_versions,
+        added,
+        "DEFAULT",
+        "v1",
+    )
+    refused(
+        tgsis.NotFoundError,
+        "TG200",
+        f"geometry {added} does not exist in version 'v1' at revision 0",
+        compare_versions,
+        added,
+        "v1",
+        "v1",
+        old_revision=0,
+        pairs=True,
+    )
     refused(tgsis.InvalidInputError, "TG100", "temporal surface", compare_versions, temporal, "DEFAULT", "v1")
     refused(tgsis.InvalidInputError, "TG100", "GEOMETRYCOLLECTION", compare_versions, block, "DEFAULT", "v1")
     assert compare_versions(conn, added, "v1", "v1").identical

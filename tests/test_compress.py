@@ -64,8 +64,10 @@ def tree(conn: Conn) -> dict[str, Any]:
     conn.commit()
     tgsis.enable_versioning(conn, "wells", "id", "well")
     tgsis.enable_feature_versioning(conn)
-    ids = {n: F.insert_feature(conn, "horizons", flat_grid(4, z), {"note": n}) for n, z in (("A", 1.0), ("B", 2.0),
-                                                                                          ("C", 3.0))}
+    ids = {
+        n: F.insert_feature(conn, "horizons", flat_grid(4, z), {"note": n})
+        for n, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))
+    }
     conn.commit()
     a, b, c = ids["A"], ids["B"], ids["C"]
 
@@ -73,8 +75,8 @@ def tree(conn: Conn) -> dict[str, Any]:
     superseded = tgsis.working_revision(conn)
     _depth(conn, "DEFAULT", 1, 11)
     _z(conn, "DEFAULT", a, 5, 11)
-    tgsis.create_version(conn, "tmp2")                   # freezes `superseded` as tmp2's base
-    _depth(conn, "DEFAULT", 1, 12)                       # everything `superseded` wrote is superseded
+    tgsis.create_version(conn, "tmp2")  # freezes `superseded` as tmp2's base
+    _depth(conn, "DEFAULT", 1, 12)  # everything `superseded` wrote is superseded
     _z(conn, "DEFAULT", a, 5, 12)
     tgsis.delete_version(conn, "tmp2")
     tgsis.delete_version(conn, "tmp")
@@ -89,17 +91,17 @@ def tree(conn: Conn) -> dict[str, Any]:
     _depth(conn, "edit", 2, 23)
     tgsis.create_version(conn, "child", "edit")
     _depth(conn, "edit", 2, 24)
-    _z(conn, "edit", a, 0, 50)                           # edit changes A after child's base: a conflict for child
+    _z(conn, "edit", a, 0, 50)  # edit changes A after child's base: a conflict for child
     _z(conn, "child", a, 0, 60)
     _depth(conn, "child", 1, 100)
     _save(conn, "child", "child-s1")
     _depth(conn, "child", 1, 101)
 
-    _z(conn, "side", a, 0, 70)                           # closes the row A.0 that child and edit closed too
+    _z(conn, "side", a, 0, 70)  # closes the row A.0 that child and edit closed too
     _z(conn, "side", c, 0, 70)
     side_merged = _working(conn, "side")
     tgsis.merge_version(conn, "side")
-    tgsis.resolve_conflict(conn, "edit", "feature", a, "child")   # side's merge changed A in DEFAULT too
+    tgsis.resolve_conflict(conn, "edit", "feature", a, "child")  # side's merge changed A in DEFAULT too
     edit_merged = _working(conn, "edit")
     tgsis.merge_version(conn, "edit")
 
@@ -110,40 +112,56 @@ def tree(conn: Conn) -> dict[str, Any]:
     _depth(conn, "fresh", 1, 13)
     tgsis.refresh_version(conn, "fresh")
     _depth(conn, "DEFAULT", 1, 14)
-    _depth(conn, "fresh", 1, 15)                         # unsolved conflict of fresh on well 1
+    _depth(conn, "fresh", 1, 15)  # unsolved conflict of fresh on well 1
 
     [conflict] = tgsis.find_conflicts(conn, "child")
     assert (conflict.objectkey, conflict.solution) == (str(a), "unsolved")
     tgsis.resolve_conflict(conn, "child", "feature", a, "child")
     conn.commit()
-    return {"ids": ids, "superseded": superseded, "release": release, "side_merged": side_merged,
-            "edit_merged": edit_merged}
+    return {
+        "ids": ids,
+        "superseded": superseded,
+        "release": release,
+        "side_merged": side_merged,
+        "edit_merged": edit_merged,
+    }
 
 
 # --------------------------------------------------------------------------- helpers
 
 
 def _tables(conn: Conn) -> list[tuple[str, str]]:
-    return [(r[0], r[1]) for r in conn.execute(
-        "SELECT schemaname, tablename FROM tgsis.versioned_tables ORDER BY 1, 2").fetchall()]
+    return [
+        (r[0], r[1])
+        for r in conn.execute("SELECT schemaname, tablename FROM tgsis.versioned_tables ORDER BY 1, 2").fetchall()
+    ]
 
 
 def _content(conn: Conn, version: str, revision: int | None) -> dict[str, list[str]]:
     """Every versioned table as (version, revision) sees it, through tgsis.rows_at."""
-    return {f"{s}.{t}": [r[0] for r in conn.execute(
-        sql.SQL("SELECT to_jsonb(r)::text FROM tgsis.rows_at(NULL::{}, %s, %s) AS r ORDER BY 1").format(
-            sql.Identifier(s, t)), (version, revision)).fetchall()]
-        for s, t in _tables(conn)}
+    return {
+        f"{s}.{t}": [
+            r[0]
+            for r in conn.execute(
+                sql.SQL("SELECT to_jsonb(r)::text FROM tgsis.rows_at(NULL::{}, %s, %s) AS r ORDER BY 1").format(
+                    sql.Identifier(s, t)
+                ),
+                (version, revision),
+            ).fetchall()
+        ]
+        for s, t in _tables(conn)
+    }
 
 
 def _histories(conn: Conn) -> list[tuple[str, int | None]]:
     """(version, None) for every working state, (version, r) for every revision goto_revision accepts."""
     pairs: list[tuple[str, int | None]] = []
     for name, revs in conn.execute(
-            "SELECT v.name, ARRAY(SELECT r.revision FROM tgsis.revisions r "
-            "                      WHERE r.revision <> v.workingrevision "
-            "                        AND (r.revision = ANY (v.workingset) OR r.versionid = v.versionid) ORDER BY 1) "
-            "  FROM tgsis.versions v ORDER BY v.versionid").fetchall():
+        "SELECT v.name, ARRAY(SELECT r.revision FROM tgsis.revisions r "
+        "                      WHERE r.revision <> v.workingrevision "
+        "                        AND (r.revision = ANY (v.workingset) OR r.versionid = v.versionid) ORDER BY 1) "
+        "  FROM tgsis.versions v ORDER BY v.versionid"
+    ).fetchall():
         pairs += [(name, None)] + [(name, int(r)) for r in revs]
     return pairs
 
@@ -156,8 +174,12 @@ def _snapshot(conn: Conn) -> Snapshot:
 
 def _raw(conn: Conn) -> dict[str, list[tuple[Any, ...]]]:
     """Every stored row of the _ver tables and of the version catalog."""
-    raw = {f"{s}.{t}_ver": conn.execute(sql.SQL("SELECT * FROM {} ORDER BY 1, 2, revision").format(
-        sql.Identifier(s, t + "_ver"))).fetchall() for s, t in _tables(conn)}
+    raw = {
+        f"{s}.{t}_ver": conn.execute(
+            sql.SQL("SELECT * FROM {} ORDER BY 1, 2, revision").format(sql.Identifier(s, t + "_ver"))
+        ).fetchall()
+        for s, t in _tables(conn)
+    }
     raw["versions"] = conn.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall()
     raw["revisions"] = conn.execute("SELECT * FROM tgsis.revisions ORDER BY revision").fetchall()
     raw["conflicts"] = conn.execute("SELECT * FROM tgsis.conflicts ORDER BY 1, 2, 3").fetchall()
@@ -169,9 +191,11 @@ def _conflicts(conn: Conn) -> list[tuple[Any, ...]]:
     """The conflicts of every version as find_conflicts computes them now, with their fingerprints."""
     for (name,) in conn.execute("SELECT name FROM tgsis.versions WHERE parentid IS NOT NULL").fetchall():
         tgsis.find_conflicts(conn, name)
-    rows = conn.execute("SELECT v.name, c.objectclass, c.objectkey, c.conflicttype, c.childtables, c.parenttables, "
-                        "       c.childmark, c.parentmark, c.solution "
-                        "  FROM tgsis.conflicts c JOIN tgsis.versions v USING (versionid) ORDER BY 1, 2, 3").fetchall()
+    rows = conn.execute(
+        "SELECT v.name, c.objectclass, c.objectkey, c.conflicttype, c.childtables, c.parenttables, "
+        "       c.childmark, c.parentmark, c.solution "
+        "  FROM tgsis.conflicts c JOIN tgsis.versions v USING (versionid) ORDER BY 1, 2, 3"
+    ).fetchall()
     conn.commit()
     return rows
 
@@ -179,27 +203,40 @@ def _conflicts(conn: Conn) -> list[tuple[Any, ...]]:
 def _expected_report(conn: Conn) -> Counter[tuple[str, str]]:
     """What compress must remove, worked out in Python from the stored rows and the rule row ∈ S ⇔
     revision ∈ S and lastrevs ∩ S = ∅."""
-    versions = conn.execute("SELECT versionid, name, parentid, initrevision, workingrevision, workingset "
-                            "FROM tgsis.versions").fetchall()
+    versions = conn.execute(
+        "SELECT versionid, name, parentid, initrevision, workingrevision, workingset FROM tgsis.versions"
+    ).fetchall()
     revisions = conn.execute("SELECT revision, versionid, name, visibleset FROM tgsis.revisions").fetchall()
     owner = {rev: vid for rev, vid, _, _ in revisions}
     names = {v[0]: v[1] for v in versions}
     working_set = {v[0]: set(v[5]) for v in versions}
     # what a version's merge and conflict check read: its own revisions in its working set, its parent's since its base
-    checked = {rev for vid, _, parent, init, _, ws in versions if parent is not None
-               for rev in ws if owner.get(rev) == vid}
-    checked |= {rev for _, _, parent, init, _, _ in versions if parent is not None
-                for rev, vid, _, _ in revisions if vid == parent and rev > init}
-    keep = ({v[4] for v in versions} | {v[3] for v in versions if v[3] is not None}
-            | {rev for rev, _, name, _ in revisions if name is not None} | checked)
-    sets = [set(ws) for ws in working_set.values()] + [set(vs) for rev, _, _, vs in revisions
-                                                          if rev in keep and vs is not None]
+    checked = {
+        rev for vid, _, parent, init, _, ws in versions if parent is not None for rev in ws if owner.get(rev) == vid
+    }
+    checked |= {
+        rev
+        for _, _, parent, init, _, _ in versions
+        if parent is not None
+        for rev, vid, _, _ in revisions
+        if vid == parent and rev > init
+    }
+    keep = (
+        {v[4] for v in versions}
+        | {v[3] for v in versions if v[3] is not None}
+        | {rev for rev, _, name, _ in revisions if name is not None}
+        | checked
+    )
+    sets = [set(ws) for ws in working_set.values()] + [
+        set(vs) for rev, _, _, vs in revisions if rev in keep and vs is not None
+    ]
     seen = set().union(*sets)
     report: Counter[tuple[str, str]] = Counter()
     still_used: set[int] = set()
     for s, t in _tables(conn):
         for revision, lastrevs in conn.execute(
-                sql.SQL("SELECT revision, lastrevs FROM {}").format(sql.Identifier(s, t + "_ver"))).fetchall():
+            sql.SQL("SELECT revision, lastrevs FROM {}").format(sql.Identifier(s, t + "_ver"))
+        ).fetchall():
             closed = set(lastrevs)
             if not closed & checked and not any(revision in S and not closed & S for S in sets):
                 report["rows", f"{s}.{t}"] += 1
@@ -211,7 +248,7 @@ def _expected_report(conn: Conn) -> Counter[tuple[str, str]]:
     for rev, vid, _, _ in revisions:
         if rev not in keep:
             report["revisions", names[vid]] += 1
-    unused = seen - keep - still_used - {0}    # 0 labels the rows of tables versioned later: in every set for good
+    unused = seen - keep - still_used - {0}  # 0 labels the rows of tables versioned later: in every set for good
     for vid, ws in working_set.items():
         report["set entries", names[vid]] += len(ws & unused)
     for rev, vid, _, vs in revisions:
@@ -231,11 +268,14 @@ def _report(items: list[tgsis.Compressed]) -> Counter[tuple[str, str]]:
 
 def test_compress_keeps_what_every_version_and_kept_revision_sees(conn: Conn, tree: dict[str, Any]) -> None:
     before = _snapshot(conn)
-    named_and_bases = {(r[0], int(r[1])) for r in conn.execute(
-        "SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) "
-        " WHERE r.name IS NOT NULL UNION ALL "
-        "SELECT p.name, c.initrevision FROM tgsis.versions c JOIN tgsis.versions p ON p.versionid = c.parentid"
-    ).fetchall()}
+    named_and_bases = {
+        (r[0], int(r[1]))
+        for r in conn.execute(
+            "SELECT v.name, r.revision FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid) "
+            " WHERE r.name IS NOT NULL UNION ALL "
+            "SELECT p.name, c.initrevision FROM tgsis.versions c JOIN tgsis.versions p ON p.versionid = c.parentid"
+        ).fetchall()
+    }
     expected = _expected_report(conn)
     report = _report(tgsis.compress_versions(conn))
     after = _snapshot(conn)
@@ -254,10 +294,12 @@ def test_compress_keeps_what_every_version_and_kept_revision_sees(conn: Conn, tr
 
 def test_a_revision_whose_rows_were_all_superseded_goes_with_its_rows(conn: Conn, tree: dict[str, Any]) -> None:
     superseded = tree["superseded"]
-    count = ("SELECT (SELECT count(*) FROM wells_ver WHERE revision = %(r)s), "
-             "       (SELECT count(*) FROM tgsis.vrtx_ver WHERE revision = %(r)s)")
+    count = (
+        "SELECT (SELECT count(*) FROM wells_ver WHERE revision = %(r)s), "
+        "       (SELECT count(*) FROM tgsis.vrtx_ver WHERE revision = %(r)s)"
+    )
     assert conn.execute(count, {"r": superseded}).fetchone() == (1, 1)
-    tgsis.goto_revision(conn, "DEFAULT", superseded)     # viewable before
+    tgsis.goto_revision(conn, "DEFAULT", superseded)  # viewable before
     tgsis.goto_version(conn, "DEFAULT")
     tgsis.compress_versions(conn)
     assert conn.execute(count, {"r": superseded}).fetchone() == (0, 0)
@@ -280,8 +322,8 @@ def test_merged_away_revisions_go_unless_a_child_reads_them(conn: Conn, tree: di
     assert side in _one(conn, lastrevs, (a,)) and side in _one(conn, lastrevs, (c,))
     tgsis.compress_versions(conn)
     kept = {r for (r,) in conn.execute("SELECT revision FROM tgsis.revisions").fetchall()}
-    assert side not in kept                              # side's merged changes are DEFAULT's now
-    assert edit in kept                                  # child's conflict check compares with it
+    assert side not in kept  # side's merged changes are DEFAULT's now
+    assert edit in kept  # child's conflict check compares with it
     assert (_one(conn, written, (side,)), _one(conn, written, (edit,))) == (0, 1)
     # side's revision is trimmed from lastrevs, except on the row child's conflict fingerprints
     assert side not in _one(conn, lastrevs, (c,))
@@ -306,16 +348,21 @@ def test_merges_and_refreshes_after_compress_give_what_they_gave_before(conn: Co
             tgsis.merge_version(conn, "child", remove=True)
             tgsis.resolve_conflict(conn, "fresh", "well", 1, "parent")
             tgsis.refresh_version(conn, "fresh")
-            tgsis.resolve_conflict(conn, "edit", "well", 1, "child")     # child's well 1 against DEFAULT's
+            tgsis.resolve_conflict(conn, "edit", "well", 1, "child")  # child's well 1 against DEFAULT's
             tgsis.merge_version(conn, "edit", remove=True)
-            if compress:                                  # what the merges left behind, compressed again
+            if compress:  # what the merges left behind, compressed again
                 assert tgsis.compress_versions(conn) != []
-            contents = {name: _content(conn, name, None)
-                        for (name,) in conn.execute("SELECT name FROM tgsis.versions ORDER BY 1").fetchall()}
-            conflicts = [(c.objectclass, c.objectkey, c.conflicttype, c.solution)
-                         for (name,) in conn.execute("SELECT name FROM tgsis.versions WHERE parentid IS NOT NULL "
-                                                     "ORDER BY 1").fetchall()
-                         for c in tgsis.find_conflicts(conn, name)]
+            contents = {
+                name: _content(conn, name, None)
+                for (name,) in conn.execute("SELECT name FROM tgsis.versions ORDER BY 1").fetchall()
+            }
+            conflicts = [
+                (c.objectclass, c.objectkey, c.conflicttype, c.solution)
+                for (name,) in conn.execute(
+                    "SELECT name FROM tgsis.versions WHERE parentid IS NOT NULL ORDER BY 1"
+                ).fetchall()
+                for c in tgsis.find_conflicts(conn, name)
+            ]
             return contents, conflicts
 
     conn.commit()
@@ -327,7 +374,7 @@ def test_second_compress_and_dry_run_change_nothing(conn: Conn, tree: dict[str, 
     dry = tgsis.compress_versions(conn, dry_run=True)
     assert _raw(conn) == raw
     assert _report(dry) == _expected_report(conn)
-    assert tgsis.compress_versions(conn) == dry          # the dry run said what compress does
+    assert tgsis.compress_versions(conn) == dry  # the dry run said what compress does
     conn.commit()
     raw = _raw(conn)
     assert tgsis.compress_versions(conn) == []
@@ -348,7 +395,7 @@ def test_nothing_to_compress_without_history(conn: Conn) -> None:
 def test_tables_versioned_after_compress_are_seen_everywhere(conn: Conn) -> None:
     tgsis.create_version(conn, "a")
     _write(conn, "a", "SELECT 1")
-    tgsis.delete_version(conn, "a")            # revision 0 is no base any more, and no row mentions it
+    tgsis.delete_version(conn, "a")  # revision 0 is no base any more, and no row mentions it
     tgsis.create_version(conn, "b")
     expected = _expected_report(conn)
     report = _report(tgsis.compress_versions(conn))
@@ -372,15 +419,15 @@ def test_rows_a_deleted_version_leaves_behind_go_at_the_next_compress(conn: Conn
     _depth(conn, "v", 1, 11)
     tgsis.create_version(conn, "x", "v")
     tgsis.delete_version(conn, "x")
-    tgsis.create_version(conn, "c", "v")                 # c sees v's edit
-    tgsis.merge_version(conn, "v")                       # v moves on: `edited` is no base, not v's, not read by c
+    tgsis.create_version(conn, "c", "v")  # c sees v's edit
+    tgsis.merge_version(conn, "v")  # v moves on: `edited` is no base, not v's, not read by c
     assert ("revisions", "v") in _report(tgsis.compress_versions(conn))
     assert _one(conn, "SELECT count(*) FROM tgsis.revisions WHERE revision = %s", (edited,)) == 0
     assert conn.execute("SELECT depth FROM tgsis.rows_at(NULL::wells, 'c')").fetchall() == [(11,)]
     tgsis.delete_version(conn, "c")
     tgsis.delete_version(conn, "v")
     left = "SELECT count(*) FROM wells_ver WHERE revision = %s"
-    assert _one(conn, left, (edited,)) == 1             # seen by nobody now
+    assert _one(conn, left, (edited,)) == 1  # seen by nobody now
     assert conn.execute("SELECT depth FROM tgsis.rows_at(NULL::wells, 'DEFAULT')").fetchall() == [(11,)]
     expected = _expected_report(conn)
     assert _report(tgsis.compress_versions(conn)) == expected and expected["rows", "public.wells"] == 1
@@ -404,9 +451,9 @@ def test_only_admins_compress(conn: Conn, tree: dict[str, Any]) -> None:
 def test_compress_waits_for_writers(conn: Conn, tree: dict[str, Any], db_dsn: str) -> None:
     with psycopg.connect(db_dsn) as writer:
         tgsis.goto_version(writer, "fresh")
-        writer.execute("UPDATE wells SET depth = 16 WHERE id = 2")       # in flight: fresh is share-locked
+        writer.execute("UPDATE wells SET depth = 16 WHERE id = 2")  # in flight: fresh is share-locked
         conn.execute("SET lock_timeout = '300ms'")
-        assert tgsis.compress_versions(conn, dry_run=True) != []      # a dry run does not wait
+        assert tgsis.compress_versions(conn, dry_run=True) != []  # a dry run does not wait
         with pytest.raises(tgsis.DatabaseError, match="lock timeout"):
             tgsis.compress_versions(conn)
         conn.rollback()
@@ -416,8 +463,14 @@ def test_compress_waits_for_writers(conn: Conn, tree: dict[str, Any], db_dsn: st
     assert conn.execute("SELECT depth FROM tgsis.rows_at(NULL::wells, 'fresh') WHERE id = 2").fetchone() == (16,)
 
 
-def test_version_compress_command(db_dsn: str, conn: Conn, tree: dict[str, Any], capsys: pytest.CaptureFixture[str],
-                                  tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_version_compress_command(
+    db_dsn: str,
+    conn: Conn,
+    tree: dict[str, Any],
+    capsys: pytest.CaptureFixture[str],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
     monkeypatch.delenv("TGSIS_VERSION", raising=False)
     expected = dict(_expected_report(conn))
@@ -431,19 +484,22 @@ def test_version_compress_command(db_dsn: str, conn: Conn, tree: dict[str, Any],
         return {(w, n): int(k) for w, n, k in (line.split("\t") for line in out)}
 
     superseded = tree["superseded"]
-    run("version", "goto", f"DEFAULT@{superseded}")      # a revision compress drops
+    run("version", "goto", f"DEFAULT@{superseded}")  # a revision compress drops
     out = run("version", "compress", "--dry-run")
     assert out[0] == "what\tname\tremoved"  # the header line
     assert lines(out[1:-1]) == expected
     assert out[-1].startswith("compress would remove ") and out[-1].endswith("(dry run: nothing changed)")
-    assert run("version", "current")[0].startswith(f"DEFAULT\tworking revision {_working(conn, 'DEFAULT')}"
-                                                   f"\tviewing revision {superseded}")
+    assert run("version", "current")[0].startswith(
+        f"DEFAULT\tworking revision {_working(conn, 'DEFAULT')}\tviewing revision {superseded}"
+    )
     out = run("version", "compress")
     assert lines(out[1:-2]) == expected
     rows = sum(n for (what, _), n in expected.items() if what == "rows")
     assert out[-2].startswith(f"compress removed {rows} row version(s), ")
-    assert out[-1] == f"revision {superseded} is gone: commands on this database work in DEFAULT again " \
-                      f"(was DEFAULT@{superseded})"
+    assert (
+        out[-1] == f"revision {superseded} is gone: commands on this database work in DEFAULT again "
+        f"(was DEFAULT@{superseded})"
+    )
     assert "viewing" not in run("version", "current")[0]
     assert run("version", "compress") == ["compress removed nothing"]
     assert run("version", "compress", "--dry-run") == ["compress would remove nothing (dry run)"]

@@ -61,32 +61,32 @@ from tgsis.db import features as F
 Conn = psycopg.Connection[Any]
 
 SEED = int(os.environ.get("TGSIS_CONCURRENCY_SEED", "5"))
-WRITERS = 4                 # versions w0..w3, children of DEFAULT, are written by their writers
-PER_VERSION = 2             # writers in each of w0..w3 and in DEFAULT
-OWNERS = range(PER_VERSION * (WRITERS + 1))   # owner o writes in slot o % 5: w0..w3, or DEFAULT (4 and 9)
-PARENTS = tuple(o for o in OWNERS if o % (WRITERS + 1) == WRITERS)   # the owners writing in DEFAULT
+WRITERS = 4  # versions w0..w3, children of DEFAULT, are written by their writers
+PER_VERSION = 2  # writers in each of w0..w3 and in DEFAULT
+OWNERS = range(PER_VERSION * (WRITERS + 1))  # owner o writes in slot o % 5: w0..w3, or DEFAULT (4 and 9)
+PARENTS = tuple(o for o in OWNERS if o % (WRITERS + 1) == WRITERS)  # the owners writing in DEFAULT
 WRITER_TXNS = int(os.environ.get("TGSIS_CONCURRENCY_TXNS", "200"))  # transactions per writer
-PARENT_TXNS = WRITER_TXNS // 2   # transactions per writer in DEFAULT
-MAX_NEW_VERSIONS = 14       # versions the merging session creates while the writers run
-MIN_MERGES = 6              # writers pause half-way until that many merges landed
-DEADLINE = 150.0            # seconds for the whole concurrent phase (test-level timeout)
+PARENT_TXNS = WRITER_TXNS // 2  # transactions per writer in DEFAULT
+MAX_NEW_VERSIONS = 14  # versions the merging session creates while the writers run
+MIN_MERGES = 6  # writers pause half-way until that many merges landed
+DEADLINE = 150.0  # seconds for the whole concurrent phase (test-level timeout)
 
 ITEMS = "CREATE TABLE items (obj int, part int, val int NOT NULL, note text NOT NULL, PRIMARY KEY (obj, part))"
-GRID = flat_grid(3, 0.0)    # every feature is a 3 x 3 grid: 9 vertices, 8 triangles
+GRID = flat_grid(3, 0.0)  # every feature is a 3 x 3 grid: 9 vertices, 8 triangles
 TRIANGLES = tuple((i, *map(int, t)) for i, t in enumerate(GRID.cells))
 
 # --------------------------------------------------------------------------- the transaction lists and their model
 
 Op = tuple[Any, ...]
-Item = tuple[int, int, int, str]                                   # obj, part, val, note
+Item = tuple[int, int, int, str]  # obj, part, val, note
 Feat = tuple[str, str, tuple[tuple[float, ...], ...], tuple[float, ...], tuple[tuple[int, ...], ...]]
-OwnerContent = tuple[tuple[Item, ...], tuple[Feat, ...]]           # what one owner's keys hold
+OwnerContent = tuple[tuple[Item, ...], tuple[Feat, ...]]  # what one owner's keys hold
 
 
 @dataclass(frozen=True)
 class Txn:
     ops: tuple[Op, ...]
-    rollback: bool = False       # run, then roll back: nothing of it may remain
+    rollback: bool = False  # run, then roll back: nothing of it may remain
 
 
 @dataclass
@@ -106,14 +106,15 @@ def owner_of_obj(obj: int) -> int:
 
 
 def owner_of_name(name: str) -> int:
-    return int(name[1:name.index("-")])
+    return int(name[1 : name.index("-")])
 
 
 def surface(z0: float, poro0: float, name: str) -> tgsis.Surface:
     vertices = GRID.vertices.copy()
     vertices[:, 2] = z0
-    return tgsis.Surface(vertices, GRID.cells.copy(),
-                         vertex_properties={"porosity": poro0 + 0.25 * np.arange(len(vertices))}, name=name)
+    return tgsis.Surface(
+        vertices, GRID.cells.copy(), vertex_properties={"porosity": poro0 + 0.25 * np.arange(len(vertices))}, name=name
+    )
 
 
 class Model:
@@ -139,11 +140,20 @@ class Model:
 
     def content(self) -> OwnerContent:
         items = tuple(sorted((o, p, v, n) for (o, p), (v, n) in self.items.items()))
-        feats = tuple(sorted(
-            (name, f.label,
-             tuple((float(i), float(GRID.vertices[i, 0]), float(GRID.vertices[i, 1]), z) for i, z in enumerate(f.z)),
-             tuple(f.poro), TRIANGLES)
-            for name, f in self.features.items()))
+        feats = tuple(
+            sorted(
+                (
+                    name,
+                    f.label,
+                    tuple(
+                        (float(i), float(GRID.vertices[i, 0]), float(GRID.vertices[i, 1]), z) for i, z in enumerate(f.z)
+                    ),
+                    tuple(f.poro),
+                    TRIANGLES,
+                )
+                for name, f in self.features.items()
+            )
+        )
         return items, feats
 
     def apply(self, op: Op) -> None:
@@ -222,9 +232,9 @@ class Model:
         for k in range(count):
             kind = rng.choices(["items", "feature", "mixed", "rollback", "save"], [45, 30, 10, 9, 6])[0]
             if kind == "save":
-                txn = Txn((("save", f"o{self.owner}-s{k}"),))   # revision names are per version
+                txn = Txn((("save", f"o{self.owner}-s{k}"),))  # revision names are per version
             elif kind == "rollback":
-                scratch = copy.deepcopy(self)        # ops valid in the current state; none of them sticks
+                scratch = copy.deepcopy(self)  # ops valid in the current state; none of them sticks
                 ops = [scratch._item_op(rng), scratch._feature_op(rng)]
                 for op in ops:
                     scratch.apply(op)
@@ -268,25 +278,41 @@ def apply_op(conn: Conn, fc: F.FeatureClass, op: Op, versioned: bool) -> int | N
     if kind == "ins":
         conn.execute("INSERT INTO items (obj, part, val, note) VALUES (%s, %s, %s, %s)", op[1:])
     elif kind == "upd":
-        _rows(conn.execute("UPDATE items SET val = %s, note = %s WHERE obj = %s AND part = %s",
-                           (op[3], op[4], op[1], op[2])), 1, op)
+        _rows(
+            conn.execute(
+                "UPDATE items SET val = %s, note = %s WHERE obj = %s AND part = %s", (op[3], op[4], op[1], op[2])
+            ),
+            1,
+            op,
+        )
     elif kind == "del":
         _rows(conn.execute("DELETE FROM items WHERE obj = %s AND part = %s", op[1:]), 1, op)
     elif kind == "rekey":
         _rows(conn.execute("UPDATE items SET part = %s WHERE obj = %s AND part = %s", (op[3], op[1], op[2])), 1, op)
     elif kind == "delobj":
         _rows(conn.execute("DELETE FROM items WHERE obj = %s", (op[1],)), op[2], op)
-    elif kind == "fins":                                     # the bulk COPY path
+    elif kind == "fins":  # the bulk COPY path
         F.insert_feature(conn, fc, surface(op[2], op[3], op[1]), {"label": op[4]})
-    elif kind == "fdel":                                     # set-based delete (delete_object_rows)
+    elif kind == "fdel":  # set-based delete (delete_object_rows)
         if not F.delete_feature(conn, fc, _geoid(conn, op[1])):
             raise AssertionError(f"{op}: nothing deleted")
-    elif kind == "fz":                                       # plain SQL on a model-1 table: its trigger
-        _rows(conn.execute("UPDATE tgsis.vrtx SET z = %s WHERE geoid = %s AND vrtxid = %s",
-                           (op[3], _geoid(conn, op[1]), op[2])), 1, op)
+    elif kind == "fz":  # plain SQL on a model-1 table: its trigger
+        _rows(
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = %s WHERE geoid = %s AND vrtxid = %s", (op[3], _geoid(conn, op[1]), op[2])
+            ),
+            1,
+            op,
+        )
     elif kind == "fporo":
-        _rows(conn.execute("UPDATE horizons_cellpros SET porosity = %s WHERE _geoid = %s AND _idx = %s",
-                           (op[3], _geoid(conn, op[1]), op[2])), 1, op)
+        _rows(
+            conn.execute(
+                "UPDATE horizons_cellpros SET porosity = %s WHERE _geoid = %s AND _idx = %s",
+                (op[3], _geoid(conn, op[1]), op[2]),
+            ),
+            1,
+            op,
+        )
     elif kind == "flabel":
         _rows(conn.execute("UPDATE horizons SET label = %s WHERE _geoid = %s", (op[2], _geoid(conn, op[1]))), 1, op)
     elif kind == "save":
@@ -318,9 +344,10 @@ def setup_database(conn: Conn, models: Sequence[Model], versioned: bool) -> F.Fe
         items, _ = m.seed_ops()
         with conn.cursor() as cur:
             cur.executemany("INSERT INTO items VALUES (%s, %s, %s, %s)", items)
-    fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"label": "text"},
-                                cell_properties={"porosity": "float8"})
-    if versioned:   # rows present before (items) and uploaded after (features) versioning is on
+    fc = F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"label": "text"}, cell_properties={"porosity": "float8"}
+    )
+    if versioned:  # rows present before (items) and uploaded after (features) versioning is on
         tgsis.enable_versioning(conn, "items", "obj", "item")
         tgsis.enable_feature_versioning(conn)
     for m in models:
@@ -360,7 +387,8 @@ def _read_here(conn: Conn, where: str) -> Content:
         by_owner.setdefault(owner_of_obj(obj), ([], []))[0].append((obj, part, val, note))
     for name, label, verts, poro, tris in conn.execute(_FEATURES):
         by_owner.setdefault(owner_of_name(name), ([], []))[1].append(
-            (name, label, tuple(tuple(v) for v in verts or ()), tuple(poro or ()), tuple(tuple(t) for t in tris or ())))
+            (name, label, tuple(tuple(v) for v in verts or ()), tuple(poro or ()), tuple(tuple(t) for t in tris or ()))
+        )
     orphans = conn.execute(_ORPHANS).fetchone()
     if orphans != (0,):
         raise AssertionError(f"{where}: {orphans} rows of features that no longer exist")
@@ -396,9 +424,11 @@ def describe(a: OwnerContent, b: OwnerContent) -> str:
     ia, ib = Counter(a[0]), Counter(b[0])
     fa, fb = Counter(f[0] for f in a[1]), Counter(f[0] for f in b[1])
     differ = sorted({f[0] for f in a[1]} & {f[0] for f in b[1]} - {f[0] for f in set(a[1]) & set(b[1])})
-    return (f"rows only left {sorted((ia - ib).elements())[:5]}, only right {sorted((ib - ia).elements())[:5]}; "
-            f"features only left {sorted((fa - fb).elements())}, only right {sorted((fb - fa).elements())}, "
-            f"different {differ}")
+    return (
+        f"rows only left {sorted((ia - ib).elements())[:5]}, only right {sorted((ib - ia).elements())[:5]}; "
+        f"features only left {sorted((fa - fb).elements())}, only right {sorted((fb - fa).elements())}, "
+        f"different {differ}"
+    )
 
 
 # --------------------------------------------------------------------------- invariants of the version tables
@@ -408,52 +438,80 @@ def invariant_problems(conn: Conn) -> list[str]:
     """Everything wrong with revisions, working sets and stored rows (empty when all is well)."""
     problems = []
     q = conn.execute
-    problems += [f"revision {r} owned {n} times" for r, n in q(
-        "SELECT revision, count(*) FROM tgsis.revisions GROUP BY 1 HAVING count(*) > 1")]
-    problems += [f"version {n}: working set {s} not strictly ascending" for n, s in q(
-        "SELECT name, workingset FROM tgsis.versions "
-        "WHERE workingset <> ARRAY(SELECT DISTINCT r FROM unnest(workingset) r ORDER BY r)")]
-    problems += [f"version {n}: working revision {w} is not its own" for n, w in q(
-        "SELECT v.name, v.workingrevision FROM tgsis.versions v LEFT JOIN tgsis.revisions r "
-        "ON r.revision = v.workingrevision WHERE r.versionid IS DISTINCT FROM v.versionid")]
+    problems += [
+        f"revision {r} owned {n} times"
+        for r, n in q("SELECT revision, count(*) FROM tgsis.revisions GROUP BY 1 HAVING count(*) > 1")
+    ]
+    problems += [
+        f"version {n}: working set {s} not strictly ascending"
+        for n, s in q(
+            "SELECT name, workingset FROM tgsis.versions "
+            "WHERE workingset <> ARRAY(SELECT DISTINCT r FROM unnest(workingset) r ORDER BY r)"
+        )
+    ]
+    problems += [
+        f"version {n}: working revision {w} is not its own"
+        for n, w in q(
+            "SELECT v.name, v.workingrevision FROM tgsis.versions v LEFT JOIN tgsis.revisions r "
+            "ON r.revision = v.workingrevision WHERE r.versionid IS DISTINCT FROM v.versionid"
+        )
+    ]
     # frozen = every revision but the working ones; frozen revisions keep the set they saw
-    problems += [f"revision {r} of version {v}: frozen {frozen}, but visible set {s}" for r, v, frozen, s in q(
-        "SELECT r.revision, r.versionid, r.revision <> v.workingrevision, r.visibleset FROM tgsis.revisions r "
-        "JOIN tgsis.versions v USING (versionid) WHERE (r.revision <> v.workingrevision) <> (r.visibleset IS NOT NULL)")]
+    problems += [
+        f"revision {r} of version {v}: frozen {frozen}, but visible set {s}"
+        for r, v, frozen, s in q(
+            "SELECT r.revision, r.versionid, r.revision <> v.workingrevision, r.visibleset FROM tgsis.revisions r "
+            "JOIN tgsis.versions v USING (versionid) WHERE (r.revision <> v.workingrevision) <> (r.visibleset IS NOT NULL)"
+        )
+    ]
     # a version sees its parent's set at its base (frozen when the base was handed on) plus its own revisions
-    problems += [f"version {n}: working set {s} is not the set of its base {i} ({b}) plus its own" for n, s, i, b in q(
-        "SELECT v.name, v.workingset, v.initrevision, b.visibleset FROM tgsis.versions v "
-        "LEFT JOIN tgsis.revisions b ON b.revision = v.initrevision AND b.versionid = v.parentid "
-        "WHERE v.parentid IS NOT NULL AND ARRAY(SELECT r FROM unnest(v.workingset) r WHERE NOT EXISTS "
-        "  (SELECT FROM tgsis.revisions o WHERE o.revision = r AND o.versionid = v.versionid) ORDER BY r) "
-        "IS DISTINCT FROM b.visibleset")]
-    problems += [f"DEFAULT's working set {s} is not all its revisions {a}" for s, a in q(
-        "SELECT workingset, (SELECT array_agg(revision ORDER BY revision) FROM tgsis.revisions WHERE versionid = 0) "
-        "FROM tgsis.versions WHERE versionid = 0 AND workingset <> "
-        "(SELECT array_agg(revision ORDER BY revision) FROM tgsis.revisions WHERE versionid = 0)")]
-    problems += [f"versions {n} share the base {i} in parent {p}" for p, i, n in q(
-        "SELECT parentid, initrevision, array_agg(name) FROM tgsis.versions WHERE parentid IS NOT NULL "
-        "GROUP BY 1, 2 HAVING count(*) > 1")]
+    problems += [
+        f"version {n}: working set {s} is not the set of its base {i} ({b}) plus its own"
+        for n, s, i, b in q(
+            "SELECT v.name, v.workingset, v.initrevision, b.visibleset FROM tgsis.versions v "
+            "LEFT JOIN tgsis.revisions b ON b.revision = v.initrevision AND b.versionid = v.parentid "
+            "WHERE v.parentid IS NOT NULL AND ARRAY(SELECT r FROM unnest(v.workingset) r WHERE NOT EXISTS "
+            "  (SELECT FROM tgsis.revisions o WHERE o.revision = r AND o.versionid = v.versionid) ORDER BY r) "
+            "IS DISTINCT FROM b.visibleset"
+        )
+    ]
+    problems += [
+        f"DEFAULT's working set {s} is not all its revisions {a}"
+        for s, a in q(
+            "SELECT workingset, (SELECT array_agg(revision ORDER BY revision) FROM tgsis.revisions WHERE versionid = 0) "
+            "FROM tgsis.versions WHERE versionid = 0 AND workingset <> "
+            "(SELECT array_agg(revision ORDER BY revision) FROM tgsis.revisions WHERE versionid = 0)"
+        )
+    ]
+    problems += [
+        f"versions {n} share the base {i} in parent {p}"
+        for p, i, n in q(
+            "SELECT parentid, initrevision, array_agg(name) FROM tgsis.versions WHERE parentid IS NOT NULL "
+            "GROUP BY 1, 2 HAVING count(*) > 1"
+        )
+    ]
     tables = q("SELECT schemaname, tablename || '_ver', keycolumns FROM tgsis.versioned_tables").fetchall()
     for schema, table, keys in tables:
         ver = f'"{schema}"."{table}"'
         for what, n in q(
-                f"SELECT 'unknown revision', count(*) FROM {ver} v "
-                f" WHERE NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = v.revision) UNION ALL "
-                f"SELECT 'unknown revision in lastrevs', count(*) FROM {ver} v, unnest(v.lastrevs) l "
-                f" WHERE NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = l) UNION ALL "
-                f"SELECT 'closed in a revision not after its own', count(*) FROM {ver} v, unnest(v.lastrevs) l "
-                f" WHERE l <= v.revision UNION ALL "
-                f"SELECT 'closed twice in one revision', count(*) FROM {ver} v "
-                f" WHERE cardinality(v.lastrevs) <> (SELECT count(DISTINCT l) FROM unnest(v.lastrevs) l)"):
+            f"SELECT 'unknown revision', count(*) FROM {ver} v "
+            f" WHERE NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = v.revision) UNION ALL "
+            f"SELECT 'unknown revision in lastrevs', count(*) FROM {ver} v, unnest(v.lastrevs) l "
+            f" WHERE NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = l) UNION ALL "
+            f"SELECT 'closed in a revision not after its own', count(*) FROM {ver} v, unnest(v.lastrevs) l "
+            f" WHERE l <= v.revision UNION ALL "
+            f"SELECT 'closed twice in one revision', count(*) FROM {ver} v "
+            f" WHERE cardinality(v.lastrevs) <> (SELECT count(DISTINCT l) FROM unnest(v.lastrevs) l)"
+        ):
             if n:
                 problems.append(f"{ver}: {n} rows: {what}")
         # no key is visible twice in any version
         keylist = ", ".join(f'v."{k}"' for k in keys)
         for name, n in q(
-                f"SELECT s.name, count(*) FROM tgsis.versions s, LATERAL (SELECT {keylist} FROM {ver} v "
-                f" WHERE v.revision = ANY (s.workingset) AND NOT (v.lastrevs && s.workingset) "
-                f" GROUP BY {keylist} HAVING count(*) > 1) d GROUP BY 1"):
+            f"SELECT s.name, count(*) FROM tgsis.versions s, LATERAL (SELECT {keylist} FROM {ver} v "
+            f" WHERE v.revision = ANY (s.workingset) AND NOT (v.lastrevs && s.workingset) "
+            f" GROUP BY {keylist} HAVING count(*) > 1) d GROUP BY 1"
+        ):
             problems.append(f"{ver}: {n} keys visible twice in version {name}")
     conn.rollback()
     return problems
@@ -479,22 +537,22 @@ class Shared:
     errors: list[str] = field(default_factory=list)
     pids: list[int] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
-    txn_seconds: dict[int, list[float]] = field(default_factory=dict)   # per owner, retries included
-    retries: dict[int, Counter[str]] = field(default_factory=dict)     # per owner: 40001 retries by message
+    txn_seconds: dict[int, list[float]] = field(default_factory=dict)  # per owner, retries included
+    retries: dict[int, Counter[str]] = field(default_factory=dict)  # per owner: 40001 retries by message
     saved: list[tuple[int, int, int, Content]] = field(default_factory=list)
     # owner, revision, state index, what the revision held right after the save committed
     stop: threading.Event = field(default_factory=threading.Event)
-    overlap: threading.Event = field(default_factory=threading.Event)   # enough merges while writers run
+    overlap: threading.Event = field(default_factory=threading.Event)  # enough merges while writers run
 
     def fail(self, who: str, exc: BaseException) -> None:
         with self.lock:
             self.errors.append(f"{who}: {type(exc).__name__}: {exc}".strip())
         self.stop.set()
         self.overlap.set()
-        self.barrier.abort()      # nobody waits for a session that has failed
+        self.barrier.abort()  # nobody waits for a session that has failed
 
 
-MAX_RETRIES = 50    # of one transaction: more is a livelock, not contention
+MAX_RETRIES = 50  # of one transaction: more is a livelock, not contention
 
 
 def run_writer(dsn: str, owner: int, txns: Sequence[Txn], shared: Shared) -> None:
@@ -521,13 +579,13 @@ def run_writer(dsn: str, owner: int, txns: Sequence[Txn], shared: Shared) -> Non
                 if shared.stop.is_set():
                     return
                 if k == len(txns) // 2 and not shared.overlap.wait(DEADLINE):
-                    raise AssertionError("the merging session never got going")   # half-way: merges must land
+                    raise AssertionError("the merging session never got going")  # half-way: merges must land
                 t0 = time.perf_counter()
                 for attempt in range(MAX_RETRIES + 1):
                     try:
                         saved = run_txn(conn, fc, txn, versioned=True, version=version if per_txn else None)
                         break
-                    except psycopg.errors.SerializationFailure as exc:   # rolled back by run_txn's block
+                    except psycopg.errors.SerializationFailure as exc:  # rolled back by run_txn's block
                         if attempt == MAX_RETRIES or shared.stop.is_set():
                             raise
                         retries[re.sub(r"[0-9]+", "N", exc.diag.message_primary or str(exc))] += 1
@@ -537,7 +595,7 @@ def run_writer(dsn: str, owner: int, txns: Sequence[Txn], shared: Shared) -> Non
                     # frozen now: the other writer of the version writes in the next working revision
                     [held] = read(conn, (version, saved))
                     shared.saved.append((owner, saved, k + 1, held))
-                time.sleep(0.002)   # let the other sessions in between transactions
+                time.sleep(0.002)  # let the other sessions in between transactions
     except BaseException as exc:  # noqa: BLE001 - every failure is reported by the test
         shared.fail(f"{who(owner)}, transaction {k} {txns[k] if k < len(txns) else ''}", exc)
 
@@ -559,8 +617,8 @@ class Admin:
     shared: Shared
     writers: list[threading.Thread]
     rng: random.Random
-    default: Content = field(default_factory=dict)      # what DEFAULT held after the last step
-    seen: dict[tuple[str, int], int] = field(default_factory=dict)   # (place, owner): lowest state index possible
+    default: Content = field(default_factory=dict)  # what DEFAULT held after the last step
+    seen: dict[tuple[str, int], int] = field(default_factory=dict)  # (place, owner): lowest state index possible
     # version merged, the state index merged of each of its writers, writers running
     merged: list[tuple[int, tuple[int, ...], int]] = field(default_factory=list)
     created: dict[str, tuple[str, int, Content]] = field(default_factory=dict)  # name: parent, revision, content
@@ -577,23 +635,34 @@ class Admin:
                 self.shared.barrier.wait()
                 while any(t.is_alive() for t in self.writers) and not self.shared.stop.is_set():
                     action = self.rng.choices(
-                        ["merge", "refresh", "create_under_writer", "create_under_default", "merge_child",
-                         "refresh_child"], [45, 20, 10, 8, 6, 5])[0]
+                        [
+                            "merge",
+                            "refresh",
+                            "create_under_writer",
+                            "create_under_default",
+                            "merge_child",
+                            "refresh_child",
+                        ],
+                        [45, 20, 10, 8, 6, 5],
+                    )[0]
                     getattr(self, action)(conn)
         except BaseException as exc:  # noqa: BLE001 - every failure is reported by the test
             self.shared.fail(f"admin, {action}", exc)
 
-    def state(self, where: str, place: str, owner: int, held: OwnerContent, *, upto: str | None = None,
-              advance: bool = True) -> int:
+    def state(
+        self, where: str, place: str, owner: int, held: OwnerContent, *, upto: str | None = None, advance: bool = True
+    ) -> int:
         """Index of ``held`` in ``owner``'s list, at or after the last one seen at ``place`` (and not after
         the last one seen at ``upto``); it becomes the last one seen at ``place``."""
         start = self.seen.get((place, owner), 0)
         stop = self.seen.get((upto, owner), len(self.states[owner]) - 1) if upto else len(self.states[owner]) - 1
         k = prefix(self.states[owner], held, start)
         if k is None or k > stop:
-            raise AssertionError(f"{where}: the rows of {who(owner)} are no state of its list in "
-                                 f"[{start}, {stop}] (found at {k}, from 0 at {prefix(self.states[owner], held, 0)}); "
-                                 f"against state {start}: " + describe(self.states[owner][start], held))
+            raise AssertionError(
+                f"{where}: the rows of {who(owner)} are no state of its list in "
+                f"[{start}, {stop}] (found at {k}, from 0 at {prefix(self.states[owner], held, 0)}); "
+                f"against state {start}: " + describe(self.states[owner][start], held)
+            )
         if advance:
             self.seen[(place, owner)] = k
         return k
@@ -737,8 +806,11 @@ def _join(threads: Sequence[threading.Thread], deadline: float, shared: Shared, 
     if any(t.is_alive() for t in threads):
         shared.stop.set()
         with connect(dsn, "watchdog", autocommit=True) as c:
-            stuck = c.execute("SELECT pid, application_name, wait_event_type, wait_event, pg_blocking_pids(pid), query "
-                              "FROM pg_stat_activity WHERE pid = ANY (%s)", (shared.pids,)).fetchall()
+            stuck = c.execute(
+                "SELECT pid, application_name, wait_event_type, wait_event, pg_blocking_pids(pid), query "
+                "FROM pg_stat_activity WHERE pid = ANY (%s)",
+                (shared.pids,),
+            ).fetchall()
             for pid in shared.pids:
                 c.execute("SELECT pg_cancel_backend(%s)", (pid,))
         for t in threads:
@@ -750,13 +822,15 @@ def _join(threads: Sequence[threading.Thread], deadline: float, shared: Shared, 
 
 
 def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a_sequential_replay(
-        db_dsn: str, make_database: Callable[..., str], template_db: str) -> None:
+    db_dsn: str, make_database: Callable[..., str], template_db: str
+) -> None:
     rng = random.Random(SEED)
     lists: dict[int, list[Txn]] = {}
     states: dict[int, list[OwnerContent]] = {}
     for o in OWNERS:
-        lists[o], states[o] = Model(o).generate(random.Random(rng.randrange(2**32)),
-                                                PARENT_TXNS if o in PARENTS else WRITER_TXNS)
+        lists[o], states[o] = Model(o).generate(
+            random.Random(rng.randrange(2**32)), PARENT_TXNS if o in PARENTS else WRITER_TXNS
+        )
 
     # the oracle: the same lists, one after the other, on a plain database
     replay_started = time.monotonic()
@@ -768,16 +842,19 @@ def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a
                 run_txn(replay, fc, txn, versioned=False)
         expected = read_plain(replay)
         replay_meshes = {f.name: f for f in F.fetch_features(replay, "horizons")}
-    for o in OWNERS:                       # the model agrees with PostgreSQL on every list
+    for o in OWNERS:  # the model agrees with PostgreSQL on every list
         assert expected[o] == states[o][-1], f"model and replay differ for owner {o}: " + describe(
-            states[o][-1], expected[o])
+            states[o][-1], expected[o]
+        )
 
     with connect(db_dsn, "setup") as conn:
         setup_database(conn, [Model(o) for o in OWNERS], versioned=True)
 
     shared = Shared(threading.Barrier(len(OWNERS) + 1))
-    writers = [threading.Thread(target=run_writer, args=(db_dsn, o, lists[o], shared), name=version_of(o),
-                                daemon=True) for o in OWNERS]
+    writers = [
+        threading.Thread(target=run_writer, args=(db_dsn, o, lists[o], shared), name=version_of(o), daemon=True)
+        for o in OWNERS
+    ]
     admin = Admin(db_dsn, states, shared, writers, random.Random(rng.randrange(2**32)))
     admin_thread = threading.Thread(target=admin.run, name="admin", daemon=True)
     started = time.monotonic()
@@ -807,22 +884,30 @@ def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a
         # shows whole transactions of each list, never going backwards
         for owner, revision, k, then in shared.saved:
             [held] = read(conn, (version_of(owner), revision))
-            assert held[owner] == states[owner][k], f"saved revision {revision} of {version_of(owner)} " \
-                                                    f"(state {k}): " + describe(states[owner][k], held[owner])
+            assert held[owner] == states[owner][k], (
+                f"saved revision {revision} of {version_of(owner)} "
+                f"(state {k}): " + describe(states[owner][k], held[owner])
+            )
             changed = [o for o in OWNERS if held[o] != then[o]]
-            assert not changed, f"saved revision {revision} of {version_of(owner)} changed after its save: " + \
-                "; ".join(f"rows of {who(o)}: {describe(then[o], held[o])}" for o in changed)
-        frozen = conn.execute("SELECT v.name, v.versionid, r.revision FROM tgsis.revisions r JOIN tgsis.versions v "
-                              "USING (versionid) WHERE r.visibleset IS NOT NULL AND v.name ~ '^(DEFAULT|w[0-9])$' "
-                              "ORDER BY 2, 3").fetchall()
+            assert not changed, (
+                f"saved revision {revision} of {version_of(owner)} changed after its save: "
+                + "; ".join(f"rows of {who(o)}: {describe(then[o], held[o])}" for o in changed)
+            )
+        frozen = conn.execute(
+            "SELECT v.name, v.versionid, r.revision FROM tgsis.revisions r JOIN tgsis.versions v "
+            "USING (versionid) WHERE r.visibleset IS NOT NULL AND v.name ~ '^(DEFAULT|w[0-9])$' "
+            "ORDER BY 2, 3"
+        ).fetchall()
         conn.rollback()
         last: dict[tuple[str, int], int] = {}
         for name, _, revision in frozen:
             [held] = read(conn, (name, revision))
-            for o in (OWNERS if name == "DEFAULT" else [*owners_in(int(name[1:])), *PARENTS]):
+            for o in OWNERS if name == "DEFAULT" else [*owners_in(int(name[1:])), *PARENTS]:
                 at = prefix(states[o], held[o], last.get((name, o), 0))
-                assert at is not None, f"revision {revision} of {name}: rows of {who(o)} are no state of " \
-                                       f"its list at or after state {last.get((name, o), 0)}"
+                assert at is not None, (
+                    f"revision {revision} of {name}: rows of {who(o)} are no state of "
+                    f"its list at or after state {last.get((name, o), 0)}"
+                )
                 last[(name, o)] = at
 
         # a last merge of every writer, then a refresh of each: DEFAULT and all four equal the replay
@@ -832,14 +917,14 @@ def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a
             tgsis.refresh_version(conn, f"w{w}")
         for place, content in zip(places, read(conn, *places)):
             for o in OWNERS:
-                assert content[o] == expected[o], f"{place}, rows of {who(o)}: " + describe(
-                    expected[o], content[o])
+                assert content[o] == expected[o], f"{place}, rows of {who(o)}: " + describe(expected[o], content[o])
 
         # versions made during the run still hold what they held when made (or last merged or refreshed)
         for name, (parent, _, held) in admin.created.items():
             [now] = read(conn, name)
             assert now == held, f"version {name} (child of {parent}) changed: " + "; ".join(
-                f"rows of {who(o)}: {describe(held[o], now[o])}" for o in OWNERS if held[o] != now[o])
+                f"rows of {who(o)}: {describe(held[o], now[o])}" for o in OWNERS if held[o] != now[o]
+            )
 
         # the client's download path gives the replay's meshes
         meshes = {f.name: f for f in F.fetch_features(conn, "horizons")}
@@ -853,8 +938,13 @@ def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a
         # no two versions created concurrently share a revision; the tables of the versions are consistent
         revisions = [revision for _, revision, _ in admin.created.values()]
         assert len(set(revisions)) == len(revisions)
-        owners = dict(conn.execute("SELECT r.revision, v.name FROM tgsis.revisions r JOIN tgsis.versions v "
-                                   "USING (versionid) WHERE r.revision = ANY (%s)", (revisions,)).fetchall())
+        owners = dict(
+            conn.execute(
+                "SELECT r.revision, v.name FROM tgsis.revisions r JOIN tgsis.versions v "
+                "USING (versionid) WHERE r.revision = ANY (%s)",
+                (revisions,),
+            ).fetchall()
+        )
         assert owners == {revision: name for name, (_, revision, _) in admin.created.items()}
         conn.rollback()
         assert invariant_problems(conn) == []
@@ -864,14 +954,18 @@ def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a
     per_version = Counter[str]()
     for o in OWNERS:
         per_version[version_of(o)] += shared.retries[o].total()
-    print(f"\nseed {SEED}: replay and set-up {started - replay_started:.1f} s, checks {time.monotonic() - check_started:.1f}"
-          f" s; {retries.total()} retries after 40001 ({dict(sorted(per_version.items()))}: {dict(retries)})")
-    print(f"seed {SEED}: {elapsed:.1f} s concurrent; {len(times)} writer transactions, median "
-          f"{statistics.median(times) * 1000:.1f} ms, max {max(times) * 1000:.0f} ms, {sum(t > 0.1 for t in times)} "
-          f"over 100 ms; {len(admin.merge_seconds)} merges (median {statistics.median(admin.merge_seconds) * 1000:.0f}"
-          f" ms, max {max(admin.merge_seconds) * 1000:.0f} ms, {len(during)} while writers ran, {len(halfway)} of a "
-          f"half-done list); {len(admin.refresh_seconds)} refreshes; {len(admin.created)} versions created; "
-          f"{len(shared.saved)} revisions saved")
+    print(
+        f"\nseed {SEED}: replay and set-up {started - replay_started:.1f} s, checks {time.monotonic() - check_started:.1f}"
+        f" s; {retries.total()} retries after 40001 ({dict(sorted(per_version.items()))}: {dict(retries)})"
+    )
+    print(
+        f"seed {SEED}: {elapsed:.1f} s concurrent; {len(times)} writer transactions, median "
+        f"{statistics.median(times) * 1000:.1f} ms, max {max(times) * 1000:.0f} ms, {sum(t > 0.1 for t in times)} "
+        f"over 100 ms; {len(admin.merge_seconds)} merges (median {statistics.median(admin.merge_seconds) * 1000:.0f}"
+        f" ms, max {max(admin.merge_seconds) * 1000:.0f} ms, {len(during)} while writers ran, {len(halfway)} of a "
+        f"half-done list); {len(admin.refresh_seconds)} refreshes; {len(admin.created)} versions created; "
+        f"{len(shared.saved)} revisions saved"
+    )
 
 
 # --------------------------------------------------------------------------- focused tests of the lock waits
@@ -883,8 +977,9 @@ def small(conn: Conn) -> Conn:
     inserted row 1.3 and surface 'B', and moved vertex 0 of A."""
     conn.execute(ITEMS)
     conn.execute("INSERT INTO items VALUES (1, 0, 10, 'x'), (1, 1, 11, 'x'), (1, 2, 12, 'x'), (2, 0, 20, 'x')")
-    fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"label": "text"},
-                                cell_properties={"porosity": "float8"})
+    fc = F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"label": "text"}, cell_properties={"porosity": "float8"}
+    )
     tgsis.enable_versioning(conn, "items", "obj", "item")
     tgsis.enable_feature_versioning(conn)
     F.insert_feature(conn, fc, surface(1.0, 0.0, "A"), {"label": "a"})
@@ -905,20 +1000,24 @@ def _items(conn: Conn, version: str) -> list[tuple[Any, ...]]:
 
 def _surfaces(conn: Conn, version: str) -> dict[str, list[float]]:
     with tgsis.in_version(conn, version, local=True):
-        return {f.name: [float(z) for z in f.mesh.vertices[:, 2]] for f in F.fetch_features(conn, "horizons")
-                if f.name is not None and isinstance(f.mesh, tgsis.Surface)}
+        return {
+            f.name: [float(z) for z in f.mesh.vertices[:, 2]]
+            for f in F.fetch_features(conn, "horizons")
+            if f.name is not None and isinstance(f.mesh, tgsis.Surface)
+        }
 
 
 @pytest.mark.parametrize("action", ["merge", "refresh"])
 def test_merge_or_refresh_waits_for_an_open_writer_and_then_takes_its_whole_transaction(
-        small: Conn, db_dsn: str, action: str) -> None:
+    small: Conn, db_dsn: str, action: str
+) -> None:
     writer = connect(db_dsn, "writer")
     tgsis.goto_version(writer, "w")
-    writer.execute("UPDATE items SET val = 101 WHERE obj = 1 AND part = 1")     # holds w until it commits
+    writer.execute("UPDATE items SET val = 101 WHERE obj = 1 AND part = 1")  # holds w until it commits
     call = tgsis.merge_version if action == "merge" else tgsis.refresh_version
     background = Background(db_dsn, action, lambda c: call(c, "w"))
     wait_until_blocked(small, background.pid, writer.info.backend_pid)
-    writer.execute("DELETE FROM items WHERE obj = 1 AND part = 2")              # still before the merge
+    writer.execute("DELETE FROM items WHERE obj = 1 AND part = 2")  # still before the merge
     F.insert_feature(writer, "horizons", surface(3.0, 0.0, "C"))
     writer.commit()
     writer.close()
@@ -926,7 +1025,7 @@ def test_merge_or_refresh_waits_for_an_open_writer_and_then_takes_its_whole_tran
     in_w = [(1, 0, 100), (1, 1, 101), (1, 3, 13), (2, 0, 20)]
     assert _items(small, "w") == in_w
     assert sorted(_surfaces(small, "w")) == ["A", "B", "C"]
-    if action == "merge":                  # the merge took all of the transaction it waited for
+    if action == "merge":  # the merge took all of the transaction it waited for
         assert _items(small, "DEFAULT") == in_w and sorted(_surfaces(small, "DEFAULT")) == ["A", "B", "C"]
     else:
         assert _items(small, "DEFAULT") == [(1, 0, 10), (1, 1, 11), (1, 2, 12), (2, 0, 20)]
@@ -935,15 +1034,15 @@ def test_merge_or_refresh_waits_for_an_open_writer_and_then_takes_its_whole_tran
 
 @pytest.mark.parametrize("action", ["merge", "refresh"])
 def test_writers_wait_for_a_merge_or_refresh_and_write_into_the_new_working_revision(
-        small: Conn, db_dsn: str, action: str) -> None:
+    small: Conn, db_dsn: str, action: str
+) -> None:
     """Each writer's statement is planned before the merge commits and runs after: its rows must go to the
     version's new working revision (not in place into the one the merge froze), by each write path."""
     holder = connect(db_dsn, "holder")
-    revision_before = int(holder.execute("SELECT workingrevision FROM tgsis.versions WHERE name = 'w'")
-                          .fetchone()[0])  # type: ignore[index]
+    revision_before = int(holder.execute("SELECT workingrevision FROM tgsis.versions WHERE name = 'w'").fetchone()[0])  # type: ignore[index]
     holder.rollback()
-    again = (tgsis.merge_version if action == "merge" else tgsis.refresh_version)
-    holder.execute(f"SELECT tgsis.{action}_version('w')")                  # not committed yet: holds DEFAULT and w
+    again = tgsis.merge_version if action == "merge" else tgsis.refresh_version
+    holder.execute(f"SELECT tgsis.{action}_version('w')")  # not committed yet: holds DEFAULT and w
     a = _geoid(small, "A")
     with tgsis.in_version(small, "w", local=True):
         b = _geoid(small, "B")
@@ -953,8 +1052,9 @@ def test_writers_wait_for_a_merge_or_refresh_and_write_into_the_new_working_revi
         "update a parent row": lambda c: c.execute("UPDATE items SET val = 21 WHERE obj = 2 AND part = 0").rowcount,
         "insert": lambda c: c.execute("INSERT INTO items VALUES (3, 0, 30, 'w')").rowcount,
         "key change": lambda c: c.execute("UPDATE items SET part = 5 WHERE obj = 1 AND part = 1").rowcount,
-        "vertex in place": lambda c: c.execute("UPDATE tgsis.vrtx SET z = 6 WHERE geoid = %s AND vrtxid = 0",
-                                               (a,)).rowcount,
+        "vertex in place": lambda c: (
+            c.execute("UPDATE tgsis.vrtx SET z = 6 WHERE geoid = %s AND vrtxid = 0", (a,)).rowcount
+        ),
         "delete_feature": lambda c: int(F.delete_feature(c, "horizons", b)),
         "insert_feature (COPY)": lambda c: int(F.insert_feature(c, "horizons", surface(4.0, 0.0, "D")) > 0),
     }
@@ -967,7 +1067,7 @@ def test_writers_wait_for_a_merge_or_refresh_and_write_into_the_new_working_revi
 
     assert _items(small, "w") == [(1, 0, 102), (1, 2, 12), (1, 5, 11), (2, 0, 21), (3, 0, 30)]
     assert _surfaces(small, "w") == {"A": [6.0] + [1.0] * 8, "D": [4.0] * 9}
-    if action == "merge":   # DEFAULT has w as it was when the merge ran, nothing of the writes after it
+    if action == "merge":  # DEFAULT has w as it was when the merge ran, nothing of the writes after it
         assert _items(small, "DEFAULT") == [(1, 0, 100), (1, 1, 11), (1, 2, 12), (1, 3, 13), (2, 0, 20)]
         assert _surfaces(small, "DEFAULT") == {"A": [5.0] + [1.0] * 8, "B": [2.0] * 9}
     else:
@@ -975,8 +1075,13 @@ def test_writers_wait_for_a_merge_or_refresh_and_write_into_the_new_working_revi
     # the revision w worked in before is frozen and still shows what w held then
     with tgsis.at_revision(small, revision_before, "w", local=True):
         assert small.execute("SELECT obj, part, val FROM items ORDER BY 1, 2").fetchall() == [
-            (1, 0, 100), (1, 1, 11), (1, 2, 12), (1, 3, 13), (2, 0, 20)]
-    again(small, "w")                      # the next merge or refresh is an ordinary one
+            (1, 0, 100),
+            (1, 1, 11),
+            (1, 2, 12),
+            (1, 3, 13),
+            (2, 0, 20),
+        ]
+    again(small, "w")  # the next merge or refresh is an ordinary one
     tgsis.merge_version(small, "w")
     assert _items(small, "DEFAULT") == _items(small, "w")
     assert _surfaces(small, "DEFAULT") == _surfaces(small, "w")
@@ -985,33 +1090,38 @@ def test_writers_wait_for_a_merge_or_refresh_and_write_into_the_new_working_revi
 
 def test_a_second_merge_of_the_same_version_waits_and_then_finds_nothing_to_merge(small: Conn, db_dsn: str) -> None:
     first = connect(db_dsn, "first")
-    written = first.execute("SELECT tgsis.merge_version('w')").fetchone()      # open: holds DEFAULT and w
+    written = first.execute("SELECT tgsis.merge_version('w')").fetchone()  # open: holds DEFAULT and w
     assert written is not None and written[0] > 0
     second = Background(db_dsn, "second", lambda c: tgsis.merge_version(c, "w"))
     wait_until_blocked(small, second.pid, first.info.backend_pid)
     first.commit()
     first.close()
-    assert second.finish() == 0                    # it waited, then found everything merged already
+    assert second.finish() == 0  # it waited, then found everything merged already
     # the revision DEFAULT worked in during the second merge holds no row: nothing was copied or closed twice
-    second_target = small.execute("SELECT workingset[cardinality(workingset) - 1] FROM tgsis.versions "
-                                  "WHERE versionid = 0").fetchone()
+    second_target = small.execute(
+        "SELECT workingset[cardinality(workingset) - 1] FROM tgsis.versions WHERE versionid = 0"
+    ).fetchone()
     assert second_target is not None
     for table in ("items_ver", "tgsis.vrtx_ver", "tgsis.geometry_ver", "horizons_ver"):
-        assert small.execute(f"SELECT count(*) FROM {table} WHERE revision = %s OR %s = ANY (lastrevs)",
-                             (second_target[0], second_target[0])).fetchone() == (0,), table
+        assert small.execute(
+            f"SELECT count(*) FROM {table} WHERE revision = %s OR %s = ANY (lastrevs)",
+            (second_target[0], second_target[0]),
+        ).fetchone() == (0,), table
     small.rollback()
-    assert _items(small, "DEFAULT") == _items(small, "w") == [(1, 0, 100), (1, 1, 11), (1, 2, 12), (1, 3, 13),
-                                                              (2, 0, 20)]
+    assert (
+        _items(small, "DEFAULT") == _items(small, "w") == [(1, 0, 100), (1, 1, 11), (1, 2, 12), (1, 3, 13), (2, 0, 20)]
+    )
     assert _surfaces(small, "DEFAULT") == _surfaces(small, "w") == {"A": [5.0] + [1.0] * 8, "B": [2.0] * 9}
     assert invariant_problems(small) == []
 
 
 @pytest.mark.parametrize("recreated", [False, True], ids=["removed", "removed and re-created"])
 def test_a_merge_waiting_for_a_merge_that_removes_the_version_fails_clearly(
-        small: Conn, db_dsn: str, recreated: bool) -> None:
+    small: Conn, db_dsn: str, recreated: bool
+) -> None:
     first = connect(db_dsn, "first")
     first.execute("SELECT tgsis.merge_version('w', true)")
-    if recreated:                                   # a new version of the same name is not the one asked for
+    if recreated:  # a new version of the same name is not the one asked for
         first.execute("SELECT tgsis.create_version('w')")
     second = Background(db_dsn, "second", lambda c: tgsis.merge_version(c, "w"))
     wait_until_blocked(small, second.pid, first.info.backend_pid)
@@ -1027,7 +1137,8 @@ def test_a_merge_waiting_for_a_merge_that_removes_the_version_fails_clearly(
 
 
 def test_a_create_version_waits_for_another_on_the_same_parent_and_bases_on_its_new_revision(
-        conn: Conn, db_dsn: str) -> None:
+    conn: Conn, db_dsn: str
+) -> None:
     tgsis.create_version(conn, "w")
     first = connect(db_dsn, "first")
     first_revision = first.execute("SELECT tgsis.create_version('x', 'w')").fetchone()[0]  # type: ignore[index]
@@ -1036,11 +1147,19 @@ def test_a_create_version_waits_for_another_on_the_same_parent_and_bases_on_its_
     first.commit()
     first.close()
     second_revision = second.finish()
-    versions = {name: (init, working) for name, init, working in conn.execute(
-        "SELECT name, initrevision, workingrevision FROM tgsis.versions WHERE name IN ('w', 'x', 'y')")}
+    versions = {
+        name: (init, working)
+        for name, init, working in conn.execute(
+            "SELECT name, initrevision, workingrevision FROM tgsis.versions WHERE name IN ('w', 'x', 'y')"
+        )
+    }
     # x is based on w's working revision before, y on the one x's creation handed w
-    w_revisions = [r for (r,) in conn.execute(
-        "SELECT revision FROM tgsis.revisions WHERE versionid = tgsis.version_id('w') ORDER BY 1")]
+    w_revisions = [
+        r
+        for (r,) in conn.execute(
+            "SELECT revision FROM tgsis.revisions WHERE versionid = tgsis.version_id('w') ORDER BY 1"
+        )
+    ]
     assert versions["x"] == (w_revisions[0], first_revision) and versions["y"] == (w_revisions[1], second_revision)
     assert versions["w"][1] == w_revisions[2] and len(w_revisions) == 3
     conn.rollback()
@@ -1069,7 +1188,7 @@ def test_many_create_version_calls_at_once_never_share_a_revision_or_a_base(db_d
         t.join(60)
     assert not errors and len(got) == len(parents)
     assert len(set(got.values())) == len(parents)
-    assert invariant_problems(conn) == []              # includes: no two children share a base revision
+    assert invariant_problems(conn) == []  # includes: no two children share a base revision
 
 
 def test_the_same_new_name_under_two_parents_at_once_fails_clearly(conn: Conn, db_dsn: str) -> None:
@@ -1115,14 +1234,19 @@ def test_a_second_delete_of_the_same_version_waits_and_fails_clearly(conn: Conn,
 
 
 def test_sibling_writers_on_one_inherited_row_wait_for_each_other_and_keep_their_own_changes(
-        small: Conn, db_dsn: str) -> None:
-    tgsis.create_version(small, "b")                     # a sibling of w; both see DEFAULT's row 2.0
+    small: Conn, db_dsn: str
+) -> None:
+    tgsis.create_version(small, "b")  # a sibling of w; both see DEFAULT's row 2.0
     first = connect(db_dsn, "first")
     tgsis.goto_version(first, "w")
-    first.execute("UPDATE items SET val = 22 WHERE obj = 2 AND part = 0")     # closes DEFAULT's row for w
-    second = Background(db_dsn, "second", lambda c: c.execute(
-        "UPDATE items SET val = 23 WHERE obj = 2 AND part = 0").rowcount, version="b")
-    wait_until_blocked(small, second.pid, first.info.backend_pid)             # the same stored row
+    first.execute("UPDATE items SET val = 22 WHERE obj = 2 AND part = 0")  # closes DEFAULT's row for w
+    second = Background(
+        db_dsn,
+        "second",
+        lambda c: c.execute("UPDATE items SET val = 23 WHERE obj = 2 AND part = 0").rowcount,
+        version="b",
+    )
+    wait_until_blocked(small, second.pid, first.info.backend_pid)  # the same stored row
     first.commit()
     first.close()
     assert second.finish() == 1
@@ -1134,7 +1258,8 @@ def test_sibling_writers_on_one_inherited_row_wait_for_each_other_and_keep_their
 
 @pytest.mark.parametrize("action", ["merge", "delete"])
 def test_a_merge_or_delete_and_a_writer_in_a_sibling_changing_the_same_rows_in_the_other_order_do_not_deadlock(
-        small: Conn, db_dsn: str, action: str) -> None:
+    small: Conn, db_dsn: str, action: str
+) -> None:
     """w changed rows 1.0 and 1.2: merging w closes DEFAULT's stored rows 1.0 and 1.2, deleting w takes its
     revision out of their lastrevs -- rows the sibling b sees too. A writer in b changes 1.2, then 1.0: the
     merge or delete must wait for it holding no row, not hold 1.0 while waiting for 1.2 (before
@@ -1154,8 +1279,9 @@ def test_a_merge_or_delete_and_a_writer_in_a_sibling_changing_the_same_rows_in_t
     writer.close()
     assert background.finish() > 0
     in_w = [(1, 0, 100), (1, 1, 11), (1, 2, 112), (1, 3, 13)]
-    assert [r for r in _items(small, "DEFAULT") if r[0] == 1] == (in_w if action == "merge" else
-                                                                  [(1, 0, 10), (1, 1, 11), (1, 2, 12)])
+    assert [r for r in _items(small, "DEFAULT") if r[0] == 1] == (
+        in_w if action == "merge" else [(1, 0, 10), (1, 1, 11), (1, 2, 12)]
+    )
     if action == "merge":
         assert [r for r in _items(small, "w") if r[0] == 1] == in_w
     assert [r for r in _items(small, "b") if r[0] == 1] == [(1, 0, 30), (1, 1, 11), (1, 2, 32)]
@@ -1164,8 +1290,7 @@ def test_a_merge_or_delete_and_a_writer_in_a_sibling_changing_the_same_rows_in_t
 
 # Found by the two-writers test above (seeds 3, 4, sometimes 5): save_revision took the writers' share lock on
 # the version row (tgsis.write_revision) and then upgraded it, so two saves in one version deadlocked (40P01).
-def test_two_writers_saving_in_one_version_at_once_wait_for_each_other_and_both_save(small: Conn,
-                                                                                    db_dsn: str) -> None:
+def test_two_writers_saving_in_one_version_at_once_wait_for_each_other_and_both_save(small: Conn, db_dsn: str) -> None:
     """Writer b has written in w (its write share-locks w's row until it commits) and saves; writer a saves
     meanwhile in a transaction of its own. a must wait for b, then save the next working revision; b must not
     wait for a, which holds nothing of w yet (save_revision checks without locking, then locks for update)."""
@@ -1175,7 +1300,7 @@ def test_two_writers_saving_in_one_version_at_once_wait_for_each_other_and_both_
     b.execute("UPDATE items SET val = 101 WHERE obj = 1 AND part = 1")
     a = Background(db_dsn, "a", lambda c: tgsis.save_revision(c, "a"), version="w")
     wait_until_blocked(small, a.pid, b.info.backend_pid)
-    saved_b = tgsis.save_revision(b, "b")       # 40P01 here, or in a, before the fix
+    saved_b = tgsis.save_revision(b, "b")  # 40P01 here, or in a, before the fix
     b.commit()
     b.close()
     saved_a = a.finish()

@@ -66,14 +66,14 @@ from tgsis.db import features as F
 Conn = psycopg.Connection[Any]
 
 SEED = int(os.environ.get("TGSIS_CONCURRENCY_SEED", "5"))
-TXNS = int(os.environ.get("TGSIS_SAME_KEYS_TXNS", "300"))   # transactions per session
+TXNS = int(os.environ.get("TGSIS_SAME_KEYS_TXNS", "300"))  # transactions per session
 SESSIONS = 2
-ITEM_KEYS = range(1, 7)             # items.id 1..6, shared by both sessions
-FEATURES = ("A", "B")               # two surfaces (3 x 3 grids); vertices 0..2 of each are written
+ITEM_KEYS = range(1, 7)  # items.id 1..6, shared by both sessions
+FEATURES = ("A", "B")  # two surfaces (3 x 3 grids); vertices 0..2 of each are written
 VERTICES = range(3)
-OWN = (2, 4, 6)                     # rows rewritten in the version's working revision before the run
-ANCHOR = 15001                      # advisory lock space (int4, int4) of the key locks; the commit lock is 15002
-MAX_RETRIES = 50                    # of one transaction: more is a livelock, not contention
+OWN = (2, 4, 6)  # rows rewritten in the version's working revision before the run
+ANCHOR = 15001  # advisory lock space (int4, int4) of the key locks; the commit lock is 15002
+MAX_RETRIES = 50  # of one transaction: more is a livelock, not contention
 DEADLINE = 120.0
 
 Op = tuple[Any, ...]
@@ -117,21 +117,27 @@ def apply_op(conn: Conn, geoids: dict[str, int], op: Op) -> tuple[int, ...]:
     if kind == "add":
         return (conn.execute("UPDATE items SET val = val + %s WHERE id = %s", (op[2], op[1])).rowcount,)
     if kind == "mix":
-        return (conn.execute("UPDATE items SET val = (3 * val + %s) %% 1000003, note = %s WHERE id = %s",
-                             (op[2], op[3], op[1])).rowcount,)
+        return (
+            conn.execute(
+                "UPDATE items SET val = (3 * val + %s) %% 1000003, note = %s WHERE id = %s", (op[2], op[3], op[1])
+            ).rowcount,
+        )
     if kind == "del":
         return (conn.execute("DELETE FROM items WHERE id = %s", (op[1],)).rowcount,)
     if kind == "reins":
         deleted = conn.execute("DELETE FROM items WHERE id = %s", (op[1],)).rowcount
         return deleted, conn.execute("INSERT INTO items VALUES (%s, %s, 'again')", (op[1], op[2])).rowcount
     sql = "z + %s" if kind == "z" else "%s - z"
-    return (conn.execute(f"UPDATE tgsis.vrtx SET z = {sql} WHERE geoid = %s AND vrtxid = %s",
-                         (op[3], geoids[op[1]], op[2])).rowcount,)
+    return (
+        conn.execute(
+            f"UPDATE tgsis.vrtx SET z = {sql} WHERE geoid = %s AND vrtxid = %s", (op[3], geoids[op[1]], op[2])
+        ).rowcount,
+    )
 
 
 def lock_keys(conn: Conn, txn: Txn) -> None:
     """The per-key locks that put a key's absence in commit order too (see the module's docstring)."""
-    for op in txn.ops:          # in key order already
+    for op in txn.ops:  # in key order already
         if op[0] in ("add", "mix", "del", "reins"):
             mode = "" if op[0] == "reins" else "_shared"
             conn.execute(f"SELECT pg_advisory_xact_lock{mode}(%s, %s)", (ANCHOR, op[1]))
@@ -166,8 +172,9 @@ def content(conn: Conn, version: str | None) -> tuple[list[tuple[Any, ...]], lis
     if version is not None:
         conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))
     items = conn.execute("SELECT id, val, note FROM items ORDER BY id").fetchall()
-    vertices = conn.execute("SELECT g.geoname, v.vrtxid, v.x, v.y, v.z FROM tgsis.vrtx v "
-                            "JOIN tgsis.geometry g USING (geoid) ORDER BY 1, 2").fetchall()
+    vertices = conn.execute(
+        "SELECT g.geoname, v.vrtxid, v.x, v.y, v.z FROM tgsis.vrtx v JOIN tgsis.geometry g USING (geoid) ORDER BY 1, 2"
+    ).fetchall()
     conn.rollback()
     return items, vertices
 
@@ -178,20 +185,25 @@ class Run:
 
     committed: list[tuple[int, int, int, tuple[tuple[int, ...], ...]]] = field(default_factory=list)
     # ticket, session, transaction index, row counts per op
-    retries: Counter[str] = field(default_factory=Counter)    # 40001 by message
+    retries: Counter[str] = field(default_factory=Counter)  # 40001 by message
     errors: list[str] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
-def run_session(dsn: str, version: str, session: int, txns: Sequence[Txn], run: Run,
-                barrier: threading.Barrier) -> None:
+def run_session(
+    dsn: str, version: str, session: int, txns: Sequence[Txn], run: Run, barrier: threading.Barrier
+) -> None:
     k = 0
     rng = random.Random(session)
     try:
         with connect(dsn, f"same-keys-{session}") as conn:
             tgsis.goto_version(conn, version)
-            geoids = {name: int(g) for name, g in conn.execute(
-                "SELECT geoname, geoid FROM tgsis.geometry WHERE geoname = ANY (%s)", (list(FEATURES),))}
+            geoids = {
+                name: int(g)
+                for name, g in conn.execute(
+                    "SELECT geoname, geoid FROM tgsis.geometry WHERE geoname = ANY (%s)", (list(FEATURES),)
+                )
+            }
             conn.commit()
             barrier.wait()
             for k, txn in enumerate(txns):
@@ -202,7 +214,7 @@ def run_session(dsn: str, version: str, session: int, txns: Sequence[Txn], run: 
                         if txn.rollback:
                             conn.rollback()
                             break
-                        conn.execute("SELECT pg_advisory_xact_lock(15002, 0)")      # held until after COMMIT
+                        conn.execute("SELECT pg_advisory_xact_lock(15002, 0)")  # held until after COMMIT
                         ticket = conn.execute("SELECT nextval('commit_order')").fetchone()
                         conn.commit()
                         assert ticket is not None
@@ -218,14 +230,16 @@ def run_session(dsn: str, version: str, session: int, txns: Sequence[Txn], run: 
                         time.sleep(rng.uniform(0, 0.002))
     except BaseException as exc:  # noqa: BLE001 - every failure is reported by the test
         with run.lock:
-            run.errors.append(f"session {session}, transaction {k} {txns[k] if k < len(txns) else ''}: "
-                              f"{type(exc).__name__}: {exc}")
+            run.errors.append(
+                f"session {session}, transaction {k} {txns[k] if k < len(txns) else ''}: {type(exc).__name__}: {exc}"
+            )
         barrier.abort()
 
 
 @pytest.mark.parametrize("version", ["DEFAULT", "child"])
 def test_two_writers_of_the_same_keys_end_as_a_replay_in_commit_order(
-        db_dsn: str, make_database: Callable[..., str], template_db: str, version: str) -> None:
+    db_dsn: str, make_database: Callable[..., str], template_db: str, version: str
+) -> None:
     rng = random.Random(f"{SEED}-{version}")
     lists = [generate(random.Random(rng.randrange(2**32)), TXNS) for _ in range(SESSIONS)]
     with connect(db_dsn, "setup") as conn:
@@ -235,8 +249,10 @@ def test_two_writers_of_the_same_keys_end_as_a_replay_in_commit_order(
 
     run = Run()
     barrier = threading.Barrier(SESSIONS)
-    threads = [threading.Thread(target=run_session, args=(db_dsn, version, s, lists[s], run, barrier), daemon=True)
-               for s in range(SESSIONS)]
+    threads = [
+        threading.Thread(target=run_session, args=(db_dsn, version, s, lists[s], run, barrier), daemon=True)
+        for s in range(SESSIONS)
+    ]
     started = time.monotonic()
     for t in threads:
         t.start()
@@ -257,8 +273,10 @@ def test_two_writers_of_the_same_keys_end_as_a_replay_in_commit_order(
             txn = lists[session][k]
             replayed = tuple(apply_op(replay, geoids, op) for op in txn.ops)
             replay.commit()
-            assert replayed == counts, (f"seed {SEED}: transaction {k} of session {session} (commit {ticket}) "
-                                        f"{txn.ops}: row counts {counts}, in the replay {replayed}")
+            assert replayed == counts, (
+                f"seed {SEED}: transaction {k} of session {session} (commit {ticket}) "
+                f"{txn.ops}: row counts {counts}, in the replay {replayed}"
+            )
         expected = content(replay, None)
 
     with connect(db_dsn, "check") as conn:
@@ -268,6 +286,8 @@ def test_two_writers_of_the_same_keys_end_as_a_replay_in_commit_order(
 
     ops = Counter(op[0] for _, s, k, _ in run.committed for op in lists[s][k].ops)
     empty = sum(1 for _, _, _, counts in run.committed for c in counts if 0 in c)
-    print(f"\nseed {SEED}, {version}: {elapsed:.1f} s; {len(tickets)} commits ({dict(ops)}), {empty} ops found no "
-          f"row; {run.retries.total()} retries after 40001: {dict(run.retries)}")
+    print(
+        f"\nseed {SEED}, {version}: {elapsed:.1f} s; {len(tickets)} commits ({dict(ops)}), {empty} ops found no "
+        f"row; {run.retries.total()} retries after 40001: {dict(run.retries)}"
+    )
     assert run.retries.total() > 0, "the sessions never met: the test did not test anything"

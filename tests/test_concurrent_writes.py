@@ -33,8 +33,12 @@ from tgsis.db import features as F
 Conn = psycopg.Connection[Any]
 
 # where the contested row lives: version, and whether it was rewritten in the version's working revision
-PLACES = {"default-older": ("DEFAULT", False), "default-own": ("DEFAULT", True),
-          "child-inherited": ("child", False), "child-own": ("child", True)}
+PLACES = {
+    "default-older": ("DEFAULT", False),
+    "default-own": ("DEFAULT", True),
+    "child-inherited": ("child", False),
+    "child-own": ("child", True),
+}
 
 
 @pytest.fixture
@@ -55,8 +59,9 @@ def _place(conn: Conn, place: str) -> str:
         with tgsis.in_version(conn, version):
             conn.execute("UPDATE items SET note = 'own' WHERE id = 1")
             conn.commit()
-            storage = conn.execute("SELECT count(*) FROM items_ver WHERE id = 1 AND revision = %s",
-                                   (tgsis.working_revision(conn),)).fetchone()
+            storage = conn.execute(
+                "SELECT count(*) FROM items_ver WHERE id = 1 AND revision = %s", (tgsis.working_revision(conn),)
+            ).fetchone()
             assert storage == (1,), "the row is not of the working revision"
             conn.commit()
     return version
@@ -106,14 +111,22 @@ def _rowcount(sql: str) -> Callable[[Conn], int]:
 
 @pytest.mark.parametrize("outcome", ["commit", "rollback"])
 @pytest.mark.parametrize("place", PLACES)
-def test_update_waiting_for_an_update_never_writes_a_stale_value(items: Conn, db_dsn: str, place: str,
-                                                                 outcome: str) -> None:
+def test_update_waiting_for_an_update_never_writes_a_stale_value(
+    items: Conn, db_dsn: str, place: str, outcome: str
+) -> None:
     version = _place(items, place)
-    b = _race(db_dsn, version, "UPDATE items SET val = val + 1 WHERE id = 1",
-              _rowcount("UPDATE items SET val = val + 10 WHERE id = 1"), outcome)
+    b = _race(
+        db_dsn,
+        version,
+        "UPDATE items SET val = val + 1 WHERE id = 1",
+        _rowcount("UPDATE items SET val = val + 10 WHERE id = 1"),
+        outcome,
+    )
     if outcome == "commit":
         # a plain table would give 111; the view refuses the stale 110 and the retry gives 111
-        with pytest.raises(psycopg.errors.SerializationFailure, match=r"row \(id\)=\(1\) of public.items in version (DEFAULT|child)"):
+        with pytest.raises(
+            psycopg.errors.SerializationFailure, match=r"row \(id\)=\(1\) of public.items in version (DEFAULT|child)"
+        ):
             b.finish()
         with tgsis.in_version(items, version):
             assert items.execute("UPDATE items SET val = val + 10 WHERE id = 1").rowcount == 1
@@ -127,14 +140,20 @@ def test_update_waiting_for_an_update_never_writes_a_stale_value(items: Conn, db
 
 @pytest.mark.parametrize("outcome", ["commit", "rollback"])
 @pytest.mark.parametrize("place", PLACES)
-def test_update_waiting_for_a_delete_does_not_bring_the_row_back(items: Conn, db_dsn: str, place: str,
-                                                                 outcome: str) -> None:
+def test_update_waiting_for_a_delete_does_not_bring_the_row_back(
+    items: Conn, db_dsn: str, place: str, outcome: str
+) -> None:
     """A one-row UPDATE (its first row: the row path) as on a plain table."""
     version = _place(items, place)
-    b = _race(db_dsn, version, "DELETE FROM items WHERE id = 1",
-              _rowcount("UPDATE items SET val = val + 10 WHERE id = 1"), outcome)
+    b = _race(
+        db_dsn,
+        version,
+        "DELETE FROM items WHERE id = 1",
+        _rowcount("UPDATE items SET val = val + 10 WHERE id = 1"),
+        outcome,
+    )
     if outcome == "commit":
-        assert b.finish() == 0                 # as on a plain table: the row is gone, nothing updated
+        assert b.finish() == 0  # as on a plain table: the row is gone, nothing updated
         assert _value(items, version) is None
     else:
         assert b.finish() == 1
@@ -145,14 +164,17 @@ def test_update_waiting_for_a_delete_does_not_bring_the_row_back(items: Conn, db
 @pytest.mark.parametrize("outcome", ["commit", "rollback"])
 @pytest.mark.parametrize("place", PLACES)
 def test_bulk_update_waiting_for_a_delete_refuses_and_its_retry_finds_the_row_gone(
-        items: Conn, db_dsn: str, place: str, outcome: str) -> None:
+    items: Conn, db_dsn: str, place: str, outcome: str
+) -> None:
     """A row after the statement's first is queued: counted already when the delete commits, so the
     update refuses (40001) instead of bringing it back; the retry updates the others."""
     version = _place(items, place)
     b = _race(db_dsn, version, "DELETE FROM items WHERE id = 5", _rowcount("UPDATE items SET val = val + 10"), outcome)
     if outcome == "commit":
-        with pytest.raises(psycopg.errors.SerializationFailure,
-                           match=r"concurrent delete of row \(id\)=\(5\) of public.items in version (DEFAULT|child)"):
+        with pytest.raises(
+            psycopg.errors.SerializationFailure,
+            match=r"concurrent delete of row \(id\)=\(5\) of public.items in version (DEFAULT|child)",
+        ):
             b.finish()
         assert _value(items, version, 5) is None and _value(items, version) == (100,)
         with tgsis.in_version(items, version):
@@ -167,16 +189,22 @@ def test_bulk_update_waiting_for_a_delete_refuses_and_its_retry_finds_the_row_go
 
 @pytest.mark.parametrize("outcome", ["commit", "rollback"])
 @pytest.mark.parametrize("place", PLACES)
-def test_delete_waiting_for_an_update_refuses_to_delete_a_row_it_did_not_see(items: Conn, db_dsn: str, place: str,
-                                                                             outcome: str) -> None:
+def test_delete_waiting_for_an_update_refuses_to_delete_a_row_it_did_not_see(
+    items: Conn, db_dsn: str, place: str, outcome: str
+) -> None:
     version = _place(items, place)
-    b = _race(db_dsn, version, "UPDATE items SET val = val + 1 WHERE id = 1",
-              _rowcount("DELETE FROM items WHERE id = 1"), outcome)
+    b = _race(
+        db_dsn,
+        version,
+        "UPDATE items SET val = val + 1 WHERE id = 1",
+        _rowcount("DELETE FROM items WHERE id = 1"),
+        outcome,
+    )
     if outcome == "commit":
         with pytest.raises(psycopg.errors.SerializationFailure):
             b.finish()
         assert _value(items, version) == (101,)
-        with tgsis.in_version(items, version):          # the retry deletes it
+        with tgsis.in_version(items, version):  # the retry deletes it
             assert items.execute("DELETE FROM items WHERE id = 1").rowcount == 1
             items.commit()
     else:
@@ -197,14 +225,20 @@ def test_delete_waiting_for_a_delete_deletes_nothing_more(items: Conn, db_dsn: s
 
 @pytest.mark.parametrize("outcome", ["commit", "rollback"])
 @pytest.mark.parametrize("version", ["DEFAULT", "child"])
-def test_insert_waiting_for_an_insert_of_the_same_key_is_the_tables_duplicate(items: Conn, db_dsn: str, version: str,
-                                                                             outcome: str) -> None:
-    b = _race(db_dsn, version, "INSERT INTO items VALUES (50, 1, 'first')",
-              _rowcount("INSERT INTO items VALUES (50, 2, 'second')"), outcome)
+def test_insert_waiting_for_an_insert_of_the_same_key_is_the_tables_duplicate(
+    items: Conn, db_dsn: str, version: str, outcome: str
+) -> None:
+    b = _race(
+        db_dsn,
+        version,
+        "INSERT INTO items VALUES (50, 1, 'first')",
+        _rowcount("INSERT INTO items VALUES (50, 2, 'second')"),
+        outcome,
+    )
     if outcome == "commit":
         with pytest.raises(psycopg.errors.UniqueViolation) as caught:
             b.finish()
-        assert caught.value.diag.constraint_name == "items_pkey"    # the table's key, never items_ver_pkey
+        assert caught.value.diag.constraint_name == "items_pkey"  # the table's key, never items_ver_pkey
         assert _value(items, version, 50) == (1,)
     else:
         assert b.finish() == 1
@@ -214,13 +248,19 @@ def test_insert_waiting_for_an_insert_of_the_same_key_is_the_tables_duplicate(it
 
 @pytest.mark.parametrize("outcome", ["commit", "rollback"])
 @pytest.mark.parametrize("place", PLACES)
-def test_insert_waiting_for_a_delete_of_the_same_key_goes_in_after_it(items: Conn, db_dsn: str, place: str,
-                                                                     outcome: str) -> None:
+def test_insert_waiting_for_a_delete_of_the_same_key_goes_in_after_it(
+    items: Conn, db_dsn: str, place: str, outcome: str
+) -> None:
     version = _place(items, place)
-    b = _race(db_dsn, version, "DELETE FROM items WHERE id = 1",
-              _rowcount("INSERT INTO items VALUES (1, 7, 'again')"), outcome)
+    b = _race(
+        db_dsn,
+        version,
+        "DELETE FROM items WHERE id = 1",
+        _rowcount("INSERT INTO items VALUES (1, 7, 'again')"),
+        outcome,
+    )
     if outcome == "commit":
-        assert b.finish() == 1                 # as on a plain table: the key is free once the delete commits
+        assert b.finish() == 1  # as on a plain table: the key is free once the delete commits
         assert _value(items, version) == (7,)
     else:
         with pytest.raises(psycopg.errors.UniqueViolation) as caught:
@@ -231,11 +271,17 @@ def test_insert_waiting_for_a_delete_of_the_same_key_goes_in_after_it(items: Con
 
 
 @pytest.mark.parametrize("place", PLACES)
-def test_a_key_change_waiting_for_an_insert_of_the_new_key_is_the_tables_duplicate(items: Conn, db_dsn: str,
-                                                                                  place: str) -> None:
+def test_a_key_change_waiting_for_an_insert_of_the_new_key_is_the_tables_duplicate(
+    items: Conn, db_dsn: str, place: str
+) -> None:
     version = _place(items, place)
-    b = _race(db_dsn, version, "INSERT INTO items VALUES (60, 1, 'first')",
-              _rowcount("UPDATE items SET id = 60 WHERE id = 1"), "commit")
+    b = _race(
+        db_dsn,
+        version,
+        "INSERT INTO items VALUES (60, 1, 'first')",
+        _rowcount("UPDATE items SET id = 60 WHERE id = 1"),
+        "commit",
+    )
     with pytest.raises(psycopg.errors.UniqueViolation) as caught:
         b.finish()
     assert caught.value.diag.constraint_name == "items_pkey"
@@ -250,7 +296,7 @@ def test_a_write_after_the_other_committed_in_the_same_transaction_sees_its_row(
         for c in (a, b):
             tgsis.goto_version(c, "child")
             c.commit()
-        b.execute("SELECT val FROM items WHERE id = 2")        # b's transaction is open, its next statement is later
+        b.execute("SELECT val FROM items WHERE id = 2")  # b's transaction is open, its next statement is later
         a.execute("UPDATE items SET val = val + 1 WHERE id = 2")
         a.commit()
         assert b.execute("UPDATE items SET val = val + 10 WHERE id = 2").rowcount == 1
@@ -262,15 +308,16 @@ def test_a_write_after_the_other_committed_in_the_same_transaction_sees_its_row(
 
 
 @pytest.mark.parametrize("version", ["DEFAULT", "child"])
-def test_repeatable_read_writers_get_serialization_failures_not_stale_writes(items: Conn, db_dsn: str,
-                                                                            version: str) -> None:
+def test_repeatable_read_writers_get_serialization_failures_not_stale_writes(
+    items: Conn, db_dsn: str, version: str
+) -> None:
     a, b = connect(db_dsn, "a"), connect(db_dsn, "b")
     try:
         for c in (a, b):
             tgsis.goto_version(c, version)
             c.commit()
         b.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
-        b.execute("SELECT val FROM items WHERE id = 3")                  # b's snapshot
+        b.execute("SELECT val FROM items WHERE id = 3")  # b's snapshot
         a.execute("UPDATE items SET val = val + 1 WHERE id = 3")
         a.commit()
         with pytest.raises(psycopg.errors.SerializationFailure):
@@ -353,17 +400,25 @@ def surfaces(conn: Conn) -> tuple[Conn, int]:
     return conn, geoid
 
 
-def test_a_bulk_delete_waits_for_a_view_writer_and_leaves_no_row_of_the_feature(surfaces: tuple[Conn, int],
-                                                                                db_dsn: str) -> None:
+def test_a_bulk_delete_waits_for_a_view_writer_and_leaves_no_row_of_the_feature(
+    surfaces: tuple[Conn, int], db_dsn: str
+) -> None:
     conn, geoid = surfaces
-    b = _race(db_dsn, "DEFAULT", f"UPDATE tgsis.vrtx SET z = 5 WHERE geoid = {geoid} AND vrtxid = 0",
-              lambda c: F.delete_feature(c, "horizons", geoid), "commit")
+    b = _race(
+        db_dsn,
+        "DEFAULT",
+        f"UPDATE tgsis.vrtx SET z = 5 WHERE geoid = {geoid} AND vrtxid = 0",
+        lambda c: F.delete_feature(c, "horizons", geoid),
+        "commit",
+    )
     assert b.finish() is True
     assert conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone() == (0,)
     assert conn.execute("SELECT count(*) FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone() == (0,)
 
 
-def test_a_view_writer_waiting_for_a_bulk_delete_refuses_and_its_retry_finds_the_rows_gone(surfaces: tuple[Conn, int], db_dsn: str) -> None:
+def test_a_view_writer_waiting_for_a_bulk_delete_refuses_and_its_retry_finds_the_rows_gone(
+    surfaces: tuple[Conn, int], db_dsn: str
+) -> None:
     conn, geoid = surfaces
     a = connect(db_dsn, "deleter")
     observer = connect(db_dsn, "observer", autocommit=True)
@@ -384,8 +439,9 @@ def test_a_view_writer_waiting_for_a_bulk_delete_refuses_and_its_retry_finds_the
 
 
 @pytest.mark.parametrize("first", ["checkin", "sql"])
-def test_a_checkin_and_an_sql_update_of_the_same_vertex_never_lose_either(surfaces: tuple[Conn, int], db_dsn: str,
-                                                                          first: str) -> None:
+def test_a_checkin_and_an_sql_update_of_the_same_vertex_never_lose_either(
+    surfaces: tuple[Conn, int], db_dsn: str, first: str
+) -> None:
     """Check-in racing a plain UPDATE of the vertex it moves: TG304 or 40001 for the later one, never 23505."""
     conn, geoid = surfaces
     with connect(db_dsn, "modeller") as modeller:
@@ -395,8 +451,13 @@ def test_a_checkin_and_an_sql_update_of_the_same_vertex_never_lose_either(surfac
         edited[0, 2] = -7.0
         mesh = tgsis.Surface(edited, out.mesh.cells)
         if first == "sql":
-            b = _race(db_dsn, "DEFAULT", f"UPDATE tgsis.vrtx SET z = 3 WHERE geoid = {geoid} AND vrtxid = 0",
-                      lambda c: tgsis.checkin(c, out, mesh), "commit")
+            b = _race(
+                db_dsn,
+                "DEFAULT",
+                f"UPDATE tgsis.vrtx SET z = 3 WHERE geoid = {geoid} AND vrtxid = 0",
+                lambda c: tgsis.checkin(c, out, mesh),
+                "commit",
+            )
             with pytest.raises(tgsis.CheckoutConflictError):
                 b.finish()
             expected = 3.0
@@ -405,8 +466,9 @@ def test_a_checkin_and_an_sql_update_of_the_same_vertex_never_lose_either(surfac
             try:
                 with modeller.transaction():
                     tgsis.checkin(modeller, out, mesh)
-                    b = Background(db_dsn, "sql", _rowcount(
-                        f"UPDATE tgsis.vrtx SET z = 3 WHERE geoid = {geoid} AND vrtxid = 0"))
+                    b = Background(
+                        db_dsn, "sql", _rowcount(f"UPDATE tgsis.vrtx SET z = 3 WHERE geoid = {geoid} AND vrtxid = 0")
+                    )
                     wait_until_blocked(observer, b.pid, modeller.info.backend_pid)
                 modeller.commit()
                 with pytest.raises(psycopg.errors.SerializationFailure):
@@ -424,8 +486,11 @@ def test_merge_refresh_and_bulk_deletes_refuse_an_old_snapshot(surfaces: tuple[C
     conn, geoid = surfaces
     before = conn.execute("SELECT count(*), sum(revision) FROM tgsis.vrtx_ver").fetchone()
     conn.commit()
-    for call in (lambda: tgsis.merge_version(conn, "child"), lambda: tgsis.refresh_version(conn, "child"),
-                 lambda: F.delete_feature(conn, "horizons", geoid)):
+    for call in (
+        lambda: tgsis.merge_version(conn, "child"),
+        lambda: tgsis.refresh_version(conn, "child"),
+        lambda: F.delete_feature(conn, "horizons", geoid),
+    ):
         conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation}")
         with pytest.raises(tgsis.VersioningError, match=f"cannot run in a {isolation} transaction"):
             call()

@@ -19,7 +19,9 @@ def surfaces(conn: Conn) -> dict[str, int]:
     """Three surfaces A, B, C in DEFAULT, versioned, and a child version 'edit'."""
     F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"note": "text"})
     tgsis.enable_feature_versioning(conn)
-    ids = {name: F.insert_feature(conn, "horizons", flat_grid(4, z)) for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))}
+    ids = {
+        name: F.insert_feature(conn, "horizons", flat_grid(4, z)) for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))
+    }
     tgsis.create_version(conn, "edit")
     return ids
 
@@ -33,15 +35,17 @@ def test_only_objects_changed_on_both_sides_conflict(conn: Conn, surfaces: dict[
         _move_vertex(conn, surfaces["A"], 1)
         _move_vertex(conn, surfaces["B"], 1)
         conn.commit()
-    _move_vertex(conn, surfaces["A"], -1)                                         # DEFAULT moves A too
-    conn.execute("UPDATE horizons SET note = 'checked' WHERE _geoid = %s", (surfaces["C"],))   # and C alone
+    _move_vertex(conn, surfaces["A"], -1)  # DEFAULT moves A too
+    conn.execute("UPDATE horizons SET note = 'checked' WHERE _geoid = %s", (surfaces["C"],))  # and C alone
     conn.commit()
     conflicts = tgsis.find_conflicts(conn, "edit")
     assert conflicts == [tgsis.Conflict("feature", str(surfaces["A"]), ("vrtx",), ("vrtx",), ("vrtx",), "unsolved")]
     # both sides' rows of A: the moved vertex, once per side
     rows = tgsis.conflict_rows(conn, "edit", "feature", surfaces["A"])
     assert [(t, side, key) for t, side, key, _ in rows] == [
-        ("vrtx", "child", {"geoid": surfaces["A"], "vrtxid": 0}), ("vrtx", "parent", {"geoid": surfaces["A"], "vrtxid": 0})]
+        ("vrtx", "child", {"geoid": surfaces["A"], "vrtxid": 0}),
+        ("vrtx", "parent", {"geoid": surfaces["A"], "vrtxid": 0}),
+    ]
     assert rows[0][3]["z"] == 2.0 and rows[1][3]["z"] == 0.0
     with pytest.raises(tgsis.NotFoundError, match="object class 'features' does not exist"):
         tgsis.conflict_rows(conn, "edit", "features", surfaces["A"])
@@ -66,8 +70,8 @@ def test_solutions_hold_until_either_side_changes_again(conn: Conn, surfaces: di
     _move_vertex(conn, a, -1)
     conn.commit()
     assert tgsis.resolve_conflict(conn, "edit", "feature", a, "child").solution == "child"
-    assert [c.solution for c in tgsis.find_conflicts(conn, "edit")] == ["child"]      # nothing changed since
-    _move_vertex(conn, a, -1)                                                          # the parent again
+    assert [c.solution for c in tgsis.find_conflicts(conn, "edit")] == ["child"]  # nothing changed since
+    _move_vertex(conn, a, -1)  # the parent again
     conn.commit()
     assert [c.solution for c in tgsis.find_conflicts(conn, "edit")] == ["unsolved"]
     # manual: write the merged object into the version, then record it
@@ -87,7 +91,7 @@ def test_a_conflict_that_went_away_is_removed(conn: Conn, surfaces: dict[str, in
     conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = 3", (surfaces["A"],))
     conn.commit()
     assert len(tgsis.find_conflicts(conn, "edit")) == 1
-    tgsis.delete_version(conn, "edit")           # its conflicts go with it
+    tgsis.delete_version(conn, "edit")  # its conflicts go with it
     assert conn.execute("SELECT count(*) FROM tgsis.conflicts").fetchone() == (0,)
 
 

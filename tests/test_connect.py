@@ -36,8 +36,13 @@ def test_connect_through_libpq_environment(db_dsn: str, clean_env: pytest.Monkey
     from psycopg.conninfo import conninfo_to_dict
 
     params = conninfo_to_dict(db_dsn)
-    for key, env in (("host", "PGHOST"), ("port", "PGPORT"), ("user", "PGUSER"), ("dbname", "PGDATABASE"),
-                     ("password", "PGPASSWORD")):
+    for key, env in (
+        ("host", "PGHOST"),
+        ("port", "PGPORT"),
+        ("user", "PGUSER"),
+        ("dbname", "PGDATABASE"),
+        ("password", "PGPASSWORD"),
+    ):
         if params.get(key):
             clean_env.setenv(env, str(params[key]))
     with tgsis.connect() as conn:

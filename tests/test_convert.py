@@ -32,27 +32,51 @@ def meshes() -> list[Mesh]:
     n = 12
     vertices = rng.uniform(-1e5, 1e5, (n, 3))
     vertices[0] = [-0.0, 5e-324, 1e300]
-    vertex_properties: dict[str, Any] = {"porosity": rng.random(n), "velocity": rng.normal(size=(n, 3)),
-                                         "facies": np.arange(n, dtype=np.int32) % 3}
+    vertex_properties: dict[str, Any] = {
+        "porosity": rng.random(n),
+        "velocity": rng.normal(size=(n, 3)),
+        "facies": np.arange(n, dtype=np.int32) % 3,
+    }
     return [
         PointSet(vertices, vertex_properties=vertex_properties, cell_properties={"k": np.arange(n)}, name="wells"),
-        LineSet(vertices, np.stack([np.arange(n - 1), np.arange(1, n)], 1), vertex_properties=vertex_properties,
-                cell_properties={"k": np.arange(n - 1, dtype=np.int64)}, name="trace"),
-        Surface(vertices, np.stack([np.arange(n - 2), np.arange(1, n - 1), np.arange(2, n)], 1),
-                vertex_properties=vertex_properties, cell_properties={"k": np.arange(n - 2) * 1.5}, name="top é"),
-        TetraMesh(vertices, np.stack([np.arange(n - 3) + j for j in range(4)], 1),
-                  vertex_properties=vertex_properties, cell_properties={"k": np.arange(n - 3, dtype=np.float32)}),
+        LineSet(
+            vertices,
+            np.stack([np.arange(n - 1), np.arange(1, n)], 1),
+            vertex_properties=vertex_properties,
+            cell_properties={"k": np.arange(n - 1, dtype=np.int64)},
+            name="trace",
+        ),
+        Surface(
+            vertices,
+            np.stack([np.arange(n - 2), np.arange(1, n - 1), np.arange(2, n)], 1),
+            vertex_properties=vertex_properties,
+            cell_properties={"k": np.arange(n - 2) * 1.5},
+            name="top é",
+        ),
+        TetraMesh(
+            vertices,
+            np.stack([np.arange(n - 3) + j for j in range(4)], 1),
+            vertex_properties=vertex_properties,
+            cell_properties={"k": np.arange(n - 3, dtype=np.float32)},
+        ),
     ]
 
 
 def same(a: Any, b: Any) -> bool:
     """Same type, bit-identical arrays, properties with their dtypes, and names."""
     if isinstance(a, GeometryCollection):
-        return (isinstance(b, GeometryCollection) and a.same_as(b) and a.name == b.name
-                and all(same(x, y) for x, y in zip(a.members, b.members)))
-    return (a.same_as(b) and a.name == b.name
-            and {k: v.dtype for k, v in a.vertex_properties.items()} == {k: v.dtype for k, v in b.vertex_properties.items()}
-            and {k: v.dtype for k, v in a.cell_properties.items()} == {k: v.dtype for k, v in b.cell_properties.items()})
+        return (
+            isinstance(b, GeometryCollection)
+            and a.same_as(b)
+            and a.name == b.name
+            and all(same(x, y) for x, y in zip(a.members, b.members))
+        )
+    return (
+        a.same_as(b)
+        and a.name == b.name
+        and {k: v.dtype for k, v in a.vertex_properties.items()} == {k: v.dtype for k, v in b.vertex_properties.items()}
+        and {k: v.dtype for k, v in a.cell_properties.items()} == {k: v.dtype for k, v in b.cell_properties.items()}
+    )
 
 
 # ---------------------------------------------------------------- round trips through the objects
@@ -100,15 +124,20 @@ def test_collections_round_trip_through_both() -> None:
     m = collection.to_meshio()
     assert [c.type for c in m.cells] == ["triangle", "vertex", "line"]
     assert same(tgsis.as_mesh(m), collection)
-    with pytest.raises(InvalidPropertyError, match="'porosity' is on some members of the collection but not on "
-                                                   r"members \[1\]"):
+    with pytest.raises(
+        InvalidPropertyError,
+        match="'porosity' is on some members of the collection but not on "
+        r"members \[1\]",
+    ):
         GeometryCollection([a, Surface(a.vertices, a.cells, cell_properties=a.cell_properties)]).to_pyvista()
 
 
 def test_empty_meshes_keep_their_type() -> None:
-    for mesh in (Surface(np.empty((0, 3)), np.empty((0, 3)), name="nothing yet"),
-                 TetraMesh(np.eye(3)[[0, 1, 2, 0]] + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 1]], []),
-                 LineSet(np.empty((0, 3)), [])):
+    for mesh in (
+        Surface(np.empty((0, 3)), np.empty((0, 3)), name="nothing yet"),
+        TetraMesh(np.eye(3)[[0, 1, 2, 0]] + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 1]], []),
+        LineSet(np.empty((0, 3)), []),
+    ):
         assert same(tgsis.as_mesh(mesh.to_pyvista()), mesh)
         assert same(tgsis.as_mesh(mesh.to_meshio()), mesh)
 
@@ -139,7 +168,9 @@ def test_pyvista_datasets_of_every_kind() -> None:
     spline.cell_data["fault_id"] = [7]
     lines = tgsis.as_mesh(spline)
     assert isinstance(lines, LineSet) and lines.n_cells == 9
-    assert lines.cells.tolist() == [[i, i + 1] for i in range(9)] and lines.cell_properties["fault_id"].tolist() == [7] * 9
+    assert (
+        lines.cells.tolist() == [[i, i + 1] for i in range(9)] and lines.cell_properties["fault_id"].tolist() == [7] * 9
+    )
     # points: pyvista makes a vertex cell of each
     points = tgsis.as_mesh(pv.PolyData(np.random.default_rng(0).random((6, 3))))
     assert isinstance(points, PointSet) and points.n_cells == 6
@@ -157,19 +188,28 @@ def test_pyvista_datasets_of_every_kind() -> None:
 
 
 def test_array_names_that_are_no_property_names_are_kept_for_the_way_back() -> None:
-    m = meshio.Mesh(np.eye(3), [("triangle", [[0, 1, 2]])], cell_data={"gmsh:physical": [np.array([4])]},
-                    point_data={"Elevation value": np.arange(3.0)})
+    m = meshio.Mesh(
+        np.eye(3),
+        [("triangle", [[0, 1, 2]])],
+        cell_data={"gmsh:physical": [np.array([4])]},
+        point_data={"Elevation value": np.arange(3.0)},
+    )
     surface = tgsis.as_mesh(m)
     assert list(surface.cell_properties) == ["gmsh_physical"] and list(surface.vertex_properties) == ["Elevation_value"]
-    assert surface.metadata["vtk_array_names"] == {"point_data": {"Elevation_value": "Elevation value"},
-                                                   "cell_data": {"gmsh_physical": "gmsh:physical"}}
+    assert surface.metadata["vtk_array_names"] == {
+        "point_data": {"Elevation_value": "Elevation value"},
+        "cell_data": {"gmsh_physical": "gmsh:physical"},
+    }
     assert list(to_meshio(surface).cell_data) == ["gmsh:physical"]
     assert list(to_pyvista(surface).point_data) == ["Elevation value"]
 
 
 def test_meshio_2d_points_and_several_blocks_of_one_type() -> None:
-    m = meshio.Mesh(np.array([[0, 0], [1, 0], [0, 1], [1, 1.0]]), [("triangle", [[0, 1, 2]]), ("triangle", [[1, 3, 2]])],
-                    cell_data={"zone": [np.array([1]), np.array([2])]})
+    m = meshio.Mesh(
+        np.array([[0, 0], [1, 0], [0, 1], [1, 1.0]]),
+        [("triangle", [[0, 1, 2]]), ("triangle", [[1, 3, 2]])],
+        cell_data={"zone": [np.array([1]), np.array([2])]},
+    )
     surface = tgsis.as_mesh(m)
     assert surface.vertices[:, 2].tolist() == [0, 0, 0, 0]
     assert surface.cells.tolist() == [[0, 1, 2], [1, 3, 2]] and surface.cell_properties["zone"].tolist() == [1, 2]
@@ -182,8 +222,10 @@ def test_anything_else_is_refused_with_what_is_accepted() -> None:
     for thing in (42, "fault.ts", np.eye(3), {"vertices": np.eye(3)}):
         with pytest.raises(InvalidGeometryError) as info:
             tgsis.as_mesh(thing)
-        assert "tgsis takes a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista " \
-               "PolyData or UnstructuredGrid" in str(info.value)
+        assert (
+            "tgsis takes a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista "
+            "PolyData or UnstructuredGrid" in str(info.value)
+        )
         assert "meshio.Mesh" in str(info.value) and "trimesh.Trimesh" in str(info.value)
     with pytest.raises(InvalidGeometryError, match="cannot store a numpy.ndarray as a mesh"):
         tgsis.as_mesh(np.eye(3))
@@ -209,8 +251,9 @@ def test_polygons_that_are_not_triangles() -> None:
         tgsis.as_mesh(pv.Plane(i_resolution=2, j_resolution=2))
     assert info.value.hint is not None and "mesh.triangulate()" in info.value.hint
     assert info.value.detail == "4 of 4 cells, of 4 points"
-    hexagon = pv.PolyData(np.array([[np.cos(a), np.sin(a), 0] for a in np.linspace(0, 2 * np.pi, 7)[:-1]]),
-                          faces=[6, 0, 1, 2, 3, 4, 5])
+    hexagon = pv.PolyData(
+        np.array([[np.cos(a), np.sin(a), 0] for a in np.linspace(0, 2 * np.pi, 7)[:-1]]), faces=[6, 0, 1, 2, 3, 4, 5]
+    )
     with pytest.raises(InvalidGeometryError, match=r"POLYGON \(7\) cells"):
         tgsis.as_mesh(hexagon)
     with pytest.raises(InvalidGeometryError, match="VOXEL"):
@@ -223,12 +266,15 @@ def test_polygons_that_are_not_triangles() -> None:
 
 
 def test_mixed_cells() -> None:
-    with pytest.raises(InvalidGeometryError, match=r"mixes cells of several kinds \(LINE \(1\), TRIANGLE \(1680\)\)") \
-            as info:
+    with pytest.raises(
+        InvalidGeometryError, match=r"mixes cells of several kinds \(LINE \(1\), TRIANGLE \(1680\)\)"
+    ) as info:
         tgsis.as_mesh(pv.Sphere() + pv.Line())
     assert info.value.hint is not None and "extract_cells_by_type" in info.value.hint
     m = meshio.Mesh(np.eye(3), [("triangle", [[0, 1, 2]]), ("line", [[0, 1]])])
-    with pytest.raises(InvalidGeometryError, match=r"mixes cell blocks of several kinds \(triangle \(1\), line \(1\)\)"):
+    with pytest.raises(
+        InvalidGeometryError, match=r"mixes cell blocks of several kinds \(triangle \(1\), line \(1\)\)"
+    ):
         tgsis.as_mesh(m)
     with pytest.raises(InvalidGeometryError, match="the pyvista dataset is a LineSet, not a Surface"):
         Surface.from_pyvista(pv.Line())
@@ -259,8 +305,9 @@ def test_nan_points() -> None:
 def test_data_arrays_of_the_wrong_length_or_kind() -> None:
     m = meshio.Mesh(np.eye(3), [("triangle", [[0, 1, 2]])])
     m.point_data["porosity"] = np.arange(5.0)  # meshio checks at construction only
-    with pytest.raises(InvalidPropertyError, match="meshio.Mesh: vertex property 'porosity' has 5 values for 3 "
-                                                   "vertices"):
+    with pytest.raises(
+        InvalidPropertyError, match="meshio.Mesh: vertex property 'porosity' has 5 values for 3 vertices"
+    ):
         tgsis.as_mesh(m)
     m = meshio.Mesh(np.eye(3), [("triangle", [[0, 1, 2]])])
     m.cell_data["zone"] = [np.arange(2)]
@@ -275,8 +322,9 @@ def test_data_arrays_of_the_wrong_length_or_kind() -> None:
         tgsis.as_mesh(tm)
     sphere = pv.Sphere()
     sphere.point_data["unit"] = np.array(["salt"] * sphere.n_points)
-    with pytest.raises(InvalidPropertyError, match="pyvista PolyData array 'unit' in point_data holds <U4 values") \
-            as info:
+    with pytest.raises(
+        InvalidPropertyError, match="pyvista PolyData array 'unit' in point_data holds <U4 values"
+    ) as info:
         tgsis.as_mesh(sphere)
     assert info.value.hint == "remove it from point_data before converting (del mesh.point_data['unit'])"
 
@@ -289,8 +337,10 @@ def test_a_pyvista_array_of_the_wrong_length_set_through_vtk() -> None:
     short = numpy_to_vtk(np.arange(5.0))
     short.SetName("porosity")
     sphere.GetPointData().AddArray(short)
-    with pytest.raises(InvalidPropertyError, match=f"pyvista PolyData: vertex property 'porosity' has 5 values for "
-                                                   f"{sphere.n_points} vertices"):
+    with pytest.raises(
+        InvalidPropertyError,
+        match=f"pyvista PolyData: vertex property 'porosity' has 5 values for {sphere.n_points} vertices",
+    ):
         tgsis.as_mesh(sphere)
 
 
@@ -313,8 +363,10 @@ def test_back_conversions_refuse_other_objects() -> None:
 
 
 def test_the_libraries_load_only_when_used() -> None:
-    program = ("import sys, numpy, tgsis, tgsis.convert; s = tgsis.Surface(numpy.eye(3), [[0, 1, 2]]); "
-               "tgsis.as_mesh(s); print(sorted(m for m in ('pyvista', 'meshio', 'vtk', 'vtkmodules') if m in sys.modules))")
+    program = (
+        "import sys, numpy, tgsis, tgsis.convert; s = tgsis.Surface(numpy.eye(3), [[0, 1, 2]]); "
+        "tgsis.as_mesh(s); print(sorted(m for m in ('pyvista', 'meshio', 'vtk', 'vtkmodules') if m in sys.modules))"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"

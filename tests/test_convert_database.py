@@ -34,16 +34,19 @@ def grid(side: int = 12) -> pv.PolyData:
 
 
 def stored(conn: Conn) -> tuple[int, int, int]:
-    row = conn.execute("SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
-                       "(SELECT count(*) FROM tgsis.trgl)").fetchone()
+    row = conn.execute(
+        "SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
+        "(SELECT count(*) FROM tgsis.trgl)"
+    ).fetchone()
     assert row is not None
     return int(row[0]), int(row[1]), int(row[2])
 
 
 @pytest.fixture
 def horizons(conn: Conn) -> F.FeatureClass:
-    fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"model": "text"},
-                                cell_properties={"porosity": "float8"})
+    fc = F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"model": "text"}, cell_properties={"porosity": "float8"}
+    )
     conn.commit()
     return fc
 
@@ -65,8 +68,9 @@ def test_insert_a_pyvista_surface_and_get_it_back_as_one(conn: Conn, horizons: F
 def test_insert_meshio_and_trimesh_objects(conn: Conn, horizons: F.FeatureClass) -> None:
     plane = grid(4)
     m = meshio.Mesh(plane.points, [("triangle", plane.regular_faces)], point_data={"porosity": plane["porosity"]})
-    t = trimesh.Trimesh(plane.points, plane.regular_faces, process=False,
-                        vertex_attributes={"porosity": plane["porosity"]})
+    t = trimesh.Trimesh(
+        plane.points, plane.regular_faces, process=False, vertex_attributes={"porosity": plane["porosity"]}
+    )
     for obj in (m, t):
         fid = tgsis.insert_feature(conn, horizons, obj)
         mesh = tgsis.fetch_feature(conn, horizons, fid).mesh
@@ -95,8 +99,9 @@ def test_a_collection_class_takes_a_mixed_grid_tgsis_wrote(conn: Conn) -> None:
     F.create_feature_class(conn, "models", "GEOMETRYCOLLECTION")
     surface = tgsis.as_mesh(grid(3))
     wells = tgsis.PointSet(surface.vertices[:4] + [0, 0, -100], name="wells")
-    collection = tgsis.GeometryCollection([tgsis.Surface(surface.vertices, surface.cells, name="top"), wells],
-                                          name="model")
+    collection = tgsis.GeometryCollection(
+        [tgsis.Surface(surface.vertices, surface.cells, name="top"), wells], name="model"
+    )
     fid = tgsis.insert_feature(conn, "models", collection.to_pyvista())
     back = tgsis.fetch_feature(conn, "models", fid).mesh
     assert isinstance(back, tgsis.GeometryCollection) and back.same_as(collection)
@@ -120,8 +125,11 @@ def test_hostile_objects_write_nothing(conn: Conn, horizons: F.FeatureClass) -> 
         (nan, tgsis.InvalidGeometryError, "vertex 4 has a non-finite y coordinate"),
         (wrong, tgsis.InvalidPropertyError, "'porosity' has 3 values for 16 vertices"),
         (strings, tgsis.InvalidPropertyError, "array 'unit' in point_data holds <U4 values"),
-        (pv.Line(), tgsis.InvalidGeometryError,
-         "holds SURFACE features, not MULTILINESTRING|cannot compare a Surface with a LineSet"),
+        (
+            pv.Line(),
+            tgsis.InvalidGeometryError,
+            "holds SURFACE features, not MULTILINESTRING|cannot compare a Surface with a LineSet",
+        ),
         ({"vertices": [[0, 0, 0]]}, tgsis.InvalidGeometryError, "cannot store a dict as a mesh: tgsis takes"),
     ]
     for obj, error, message in cases:

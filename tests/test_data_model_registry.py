@@ -32,18 +32,22 @@ Conn = psycopg.Connection[Any]
 
 
 def test_the_python_registry_is_the_sql_registry(conn: Conn) -> None:
-    rows = conn.execute("SELECT model, name, timemodel, geotypes FROM tgsis.data_models WHERE model > 0 "
-                        "ORDER BY model").fetchall()
-    assert [(m.number, m.name, m.time_model, list(m.geotypes)) for m in tgsis.data_models()] == \
-        [(int(r[0]), r[1], r[2], r[3]) for r in rows]
+    rows = conn.execute(
+        "SELECT model, name, timemodel, geotypes FROM tgsis.data_models WHERE model > 0 ORDER BY model"
+    ).fetchall()
+    assert [(m.number, m.name, m.time_model, list(m.geotypes)) for m in tgsis.data_models()] == [
+        (int(r[0]), r[1], r[2], r[3]) for r in rows
+    ]
 
 
 def test_the_time_model_type_names_the_registered_models() -> None:
     assert list(get_args(datamodels.TimeModel)) == [m.time_model for m in tgsis.data_models()]
     assert set(get_args(datamodels.StoredObject)) == {t for m in tgsis.data_models() for t in m.types}
     from tgsis.db import features
+
     assert features.insert_feature.__annotations__["mesh"] in ("StoredObject", datamodels.StoredObject)
     from tgsis.db import classes
+
     for function in (classes.create_feature_class,):
         assert function.__annotations__["time_model"] in ("TimeModel", datamodels.TimeModel)
     assert FeatureClass.__annotations__["time_model"] in ("TimeModel", datamodels.TimeModel)
@@ -51,12 +55,14 @@ def test_the_time_model_type_names_the_registered_models() -> None:
 
 def test_every_shipped_model_has_its_database_functions() -> None:
     # in a fresh interpreter: no module lists the database modules, each entry names its own, loaded on first use
-    program = ("import sys, tgsis.datamodels as d; assert 'tgsis.db' not in sys.modules\n"
-               "for m in d.data_models():\n"
-               "    s = d.storage_of(m); assert callable(s.insert) and callable(s.fetch), m\n"
-               "    assert s.insert.__module__ == m.module, (m, s.insert.__module__)\n"
-               "print(sorted(n for n in sys.modules if n.startswith('tgsis.db.') and n in "
-               "{'tgsis.db.features', 'tgsis.db.temporal', 'tgsis.db.gmaps'}))")
+    program = (
+        "import sys, tgsis.datamodels as d; assert 'tgsis.db' not in sys.modules\n"
+        "for m in d.data_models():\n"
+        "    s = d.storage_of(m); assert callable(s.insert) and callable(s.fetch), m\n"
+        "    assert s.insert.__module__ == m.module, (m, s.insert.__module__)\n"
+        "print(sorted(n for n in sys.modules if n.startswith('tgsis.db.') and n in "
+        "{'tgsis.db.features', 'tgsis.db.temporal', 'tgsis.db.gmaps'}))"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "['tgsis.db.features', 'tgsis.db.gmaps', 'tgsis.db.temporal']"
@@ -76,13 +82,15 @@ def test_an_object_no_model_stores_is_still_converted_or_refused(conn: Conn) -> 
     with pytest.raises(tgsis.Error):
         tgsis.insert_feature(conn, fc, object())  # type: ignore[arg-type]  # what a user may pass
     with pytest.raises(tgsis.InvalidInputError, match="has time model STATIC, not INSTANTS"):
-        tgsis.insert_feature(conn, fc, tgsis.SurfaceSeries([0.0], [tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]],
-                                                                                   [[0, 1, 2]])]))
+        tgsis.insert_feature(
+            conn, fc, tgsis.SurfaceSeries([0.0], [tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])])
+        )
 
 
 def test_fetch_object_reads_a_feature_of_every_shipped_model_as_it_was_stored(conn: Conn) -> None:
     from tests.temporal_data import evolving, series
     from tgsis import gmaps
+
     rng = np.random.default_rng(38)
     surface = tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="tri")
     square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
@@ -97,8 +105,13 @@ def test_fetch_object_reads_a_feature_of_every_shipped_model_as_it_was_stored(co
     assert set(stored) == {m.time_model for m in tgsis.data_models()}
     for time_model, obj in stored.items():
         geotype = "GMAP" if isinstance(obj, gmaps.GMap) else "SURFACE"
-        fc = tgsis.create_feature_class(conn, time_model.lower(), geotype, time_model=time_model,  # type: ignore[arg-type]
-                                        cell_level=2 if geotype == "GMAP" else None)
+        fc = tgsis.create_feature_class(
+            conn,
+            time_model.lower(),
+            geotype,
+            time_model=time_model,  # type: ignore[arg-type]
+            cell_level=2 if geotype == "GMAP" else None,
+        )
         fid = tgsis.insert_feature(conn, fc, obj)  # type: ignore[arg-type]
         back = tgsis.fetch_object(conn, fc.name, fid)
         if time_model == "STATIC":
@@ -108,7 +121,7 @@ def test_fetch_object_reads_a_feature_of_every_shipped_model_as_it_was_stored(co
             assert isinstance(back, tgsis.SurfaceSeries) and back.times.tolist() == [0.0, 1.0, 2.0]
         elif time_model == "EVOLVING":
             assert isinstance(back, tgsis.EvolvingSurface) and [p.times[0] for p in back.periods] == [0.0, 2.0]
-        elif time_model == "GMAP":   # a plain G-map is one period of model 4
+        elif time_model == "GMAP":  # a plain G-map is one period of model 4
             assert isinstance(back, tgsis.EvolvingGMap) and back.at(0.0).same_as(square)  # type: ignore[union-attr]
         else:
             assert isinstance(back, tgsis.GMap) and back.same_as(lifted)
@@ -118,6 +131,7 @@ def test_fetch_object_reads_a_feature_of_every_shipped_model_as_it_was_stored(co
 
 # ---- a throwaway model 9: the SQL of tests/test_model_registry.py and this "module" -------------------------
 
+
 @dataclass
 class StepPoints:
     """Model 9's object: x values of points (the test model stores x only)."""
@@ -126,12 +140,21 @@ class StepPoints:
     name: str | None = None
 
 
-def insert_steps(conn: Conn, fc: FeatureClass, obj: StepPoints, properties: Mapping[str, Any] | None = None, *,
-                 name: str | None = None, drop_extra_properties: bool = False) -> int:
+def insert_steps(
+    conn: Conn,
+    fc: FeatureClass,
+    obj: StepPoints,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    drop_extra_properties: bool = False,
+) -> int:
     values = dict(properties or {})
     with conn.transaction():
-        row = conn.execute("SELECT tgsis.new_geometry('MULTIPOINT', %s, NULL, 0, 0, p_timemodel => 'STEPS', "
-                           "p_class => %s)", (name if name is not None else obj.name, fc.name)).fetchone()
+        row = conn.execute(
+            "SELECT tgsis.new_geometry('MULTIPOINT', %s, NULL, 0, 0, p_timemodel => 'STEPS', p_class => %s)",
+            (name if name is not None else obj.name, fc.name),
+        ).fetchone()
         assert row is not None
         geoid = int(row[0])
         with conn.cursor().copy("COPY tgsis.test9_point (geoid, pid, x) FROM STDIN") as copy:
@@ -139,15 +162,24 @@ def insert_steps(conn: Conn, fc: FeatureClass, obj: StepPoints, properties: Mapp
                 copy.write_row((geoid, i, x))
         conn.execute("SELECT tgsis.refresh_geometry(%s)", (geoid,))
         columns = ["_geoid", *values]
-        conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-            fc.qualified(fc.featuretable), sql.SQL(", ").join(map(sql.Identifier, columns)),
-            sql.SQL(", ").join(sql.Placeholder() * len(columns))), [geoid, *values.values()])
+        conn.execute(
+            sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+                fc.qualified(fc.featuretable),
+                sql.SQL(", ").join(map(sql.Identifier, columns)),
+                sql.SQL(", ").join(sql.Placeholder() * len(columns)),
+            ),
+            [geoid, *values.values()],
+        )
     return geoid
 
 
 def fetch_steps(conn: Conn, fc: FeatureClass, feature_id: int) -> StepPoints:
-    row = conn.execute(sql.SQL("SELECT g.geoname FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-                               "WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)).fetchone()
+    row = conn.execute(
+        sql.SQL("SELECT g.geoname FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid WHERE f._geoid = %s").format(
+            fc.qualified(fc.featuretable)
+        ),
+        (feature_id,),
+    ).fetchone()
     if row is None:
         raise NotFoundError(f"feature class {fc.name} has no feature {feature_id}")
     x = [r[0] for r in conn.execute("SELECT x FROM tgsis.test9_point WHERE geoid = %s ORDER BY pid", (feature_id,))]
@@ -160,29 +192,41 @@ def model9(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> Iterator[datamodels.D
     conn.execute(TEST_MODEL)  # type: ignore[arg-type]  # a test's own literal
     assert conn.execute("SELECT tgsis.create_storage()").fetchone() == (True,)
     conn.commit()
-    for shipped in datamodels.data_models():   # their functions loaded before the registry is copied
+    for shipped in datamodels.data_models():  # their functions loaded before the registry is copied
         datamodels.storage_of(shipped)
-    monkeypatch.setattr(datamodels, "_MODELS", dict(datamodels._MODELS))   # thrown away after the test
+    monkeypatch.setattr(datamodels, "_MODELS", dict(datamodels._MODELS))  # thrown away after the test
     monkeypatch.setattr(datamodels, "_STORAGE", dict(datamodels._STORAGE))
-    model = datamodels.register_data_model(datamodels.DataModel(9, "test points in steps", "STEPS", ("MULTIPOINT",),
-                                                                (StepPoints,)))
+    model = datamodels.register_data_model(
+        datamodels.DataModel(9, "test points in steps", "STEPS", ("MULTIPOINT",), (StepPoints,))
+    )
     datamodels.register_storage("STEPS", insert=insert_steps, fetch=fetch_steps)
     yield model
 
 
 def test_a_new_model_is_stored_fetched_versioned_merged_and_deleted_through_the_public_api(
-        conn: Conn, model9: datamodels.DataModel) -> None:
+    conn: Conn, model9: datamodels.DataModel
+) -> None:
     assert model9 in tgsis.data_models()
-    test_the_python_registry_is_the_sql_registry(conn)   # the module's entry is its SQL row
-    fc = tgsis.create_feature_class(conn, "stepped", "MULTIPOINT", time_model="STEPS",  # type: ignore[arg-type]
-                                    feature_properties=[("label", "text")])
-    first = tgsis.insert_feature(conn, fc, StepPoints(np.array([2.5, 1.0]), "s1"),  # type: ignore[arg-type]
-                                 {"label": "a"})
+    test_the_python_registry_is_the_sql_registry(conn)  # the module's entry is its SQL row
+    fc = tgsis.create_feature_class(
+        conn,
+        "stepped",
+        "MULTIPOINT",
+        time_model="STEPS",  # type: ignore[arg-type]
+        feature_properties=[("label", "text")],
+    )
+    first = tgsis.insert_feature(
+        conn,
+        fc,
+        StepPoints(np.array([2.5, 1.0]), "s1"),  # type: ignore[arg-type]
+        {"label": "a"},
+    )
     fetched = tgsis.fetch_object(conn, "stepped", first)
     assert isinstance(fetched, StepPoints) and fetched.name == "s1"
     np.testing.assert_array_equal(fetched.x, [2.5, 1.0])
-    assert conn.execute("SELECT timemodel, nvrtx, bbox::text FROM tgsis.geometry WHERE geoid = %s",
-                        (first,)).fetchone() == ("STEPS", 2, "(1, 0, 0),(2.5, 0, 0)")
+    assert conn.execute(
+        "SELECT timemodel, nvrtx, bbox::text FROM tgsis.geometry WHERE geoid = %s", (first,)
+    ).fetchone() == ("STEPS", 2, "(1, 0, 0),(2.5, 0, 0)")
     # a static mesh is not a feature of it
     with pytest.raises(tgsis.InvalidGeometryError, match="holds STEPS surfaces"):
         tgsis.insert_feature(conn, fc, tgsis.PointSet([[0, 0, 0]]))

@@ -31,8 +31,10 @@ def _occurrences(text: str) -> dict[str, int]:
 def test_each_helper_is_written_once() -> None:
     assert _occurrences("else get_feature_class(conn, feature_class)") == {"_transfer.py": 1}
     # checkin's check-out opens its snapshot after a first transaction of its own: the one other place
-    assert _occurrences('"SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY"') == {"_transfer.py": 1,
-                                                                                           "checkin.py": 1}
+    assert _occurrences('"SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY"') == {
+        "_transfer.py": 1,
+        "checkin.py": 1,
+    }
     assert _occurrences("current_setting('tgsis.version', true)") == {"_settings.py": 1}
     assert _occurrences('"_ver"') == {}
 

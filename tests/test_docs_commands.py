@@ -51,5 +51,6 @@ def test_documented_command_parses(where: str, command: str, capsys: pytest.Capt
     try:
         build_parser().parse_args(argv)
     except SystemExit as exc:
-        pytest.fail(f"{where} shows `{command}`, which the parser refuses (exit {exc.code}): "
-                    f"{capsys.readouterr().err.strip()}")
+        pytest.fail(
+            f"{where} shows `{command}`, which the parser refuses (exit {exc.code}): {capsys.readouterr().err.strip()}"
+        )

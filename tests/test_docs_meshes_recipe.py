@@ -19,19 +19,24 @@ DOC = Path(__file__).resolve().parents[1] / "docs" / "meshes.md"
 
 def recipe() -> str:
     text = DOC.read_text(encoding="utf-8")
-    section = text[text.index("## Recipe"):]
+    section = text[text.index("## Recipe") :]
     [block] = re.findall(r"```python\n(.*?)```", section, re.S)
     return block
 
 
-def test_the_recipe_runs_and_each_version_has_its_horizons(db_dsn: str, tmp_path: Path,
-                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_recipe_runs_and_each_version_has_its_horizons(
+    db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setenv("TGSIS_DSN", db_dsn)
     monkeypatch.chdir(tmp_path)
     exec(compile(recipe(), str(DOC), "exec"), {"__name__": "recipe"})  # noqa: S102 - our own documentation
     written = sorted(p.name for p in tmp_path.glob("*.vtp"))
-    assert written == ["top_sandstone_DEFAULT.vtp", "top_sandstone_run2.vtp", "top_shale_DEFAULT.vtp",
-                       "top_shale_run2.vtp"]
+    assert written == [
+        "top_sandstone_DEFAULT.vtp",
+        "top_sandstone_run2.vtp",
+        "top_shale_DEFAULT.vtp",
+        "top_shale_run2.vtp",
+    ]
     before, after = pv.read(tmp_path / "top_shale_DEFAULT.vtp"), pv.read(tmp_path / "top_shale_run2.vtp")
     assert np.allclose(after.points[:, 2], before.points[:, 2] - 25.0)
     assert np.array_equal(before["values"], np.full(before.n_points, 1800.0))

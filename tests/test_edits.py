@@ -17,7 +17,9 @@ def _grid(side: int) -> tgsis.Surface:
     return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
 
 
-def _apply(old: tgsis.Mesh, edited: tgsis.Mesh, plan: EditPlan) -> tuple[dict[int, tuple[float, ...]], set[tuple[int, ...]]]:
+def _apply(
+    old: tgsis.Mesh, edited: tgsis.Mesh, plan: EditPlan
+) -> tuple[dict[int, tuple[float, ...]], set[tuple[int, ...]]]:
     """What the database holds after writing the plan: vertex rows by id, cells as oriented id tuples.
 
     Old rows keep ids 0..n-1; new rows get ids from n on. Cells are
@@ -29,7 +31,7 @@ def _apply(old: tgsis.Mesh, edited: tgsis.Mesh, plan: EditPlan) -> tuple[dict[in
     ids = np.where(plan.vertex_map >= 0, plan.vertex_map, -1)
     new_ids = old.n_vertices + np.arange(len(plan.added_vertices))
     ids[plan.added_vertices] = new_ids
-    for i in plan.moved_vertices.tolist():               # rewritten under the old id
+    for i in plan.moved_vertices.tolist():  # rewritten under the old id
         rows[int(ids[i])] = tuple(edited.vertices[i])
     for i, nid in zip(plan.added_vertices.tolist(), new_ids.tolist()):
         rows[nid] = tuple(edited.vertices[i])
@@ -87,8 +89,8 @@ def test_isolated_moves_keep_every_cell() -> None:
 def test_a_moved_block_resolves_ring_by_ring() -> None:
     old = _grid(30)
     vertices = old.vertices.copy()
-    block = ((vertices[:, 0] >= 5) & (vertices[:, 0] <= 20) & (vertices[:, 1] >= 5) & (vertices[:, 1] <= 20))
-    vertices[block, 2] = 3.0                              # a 16 x 16 block lifted: 8 rings
+    block = (vertices[:, 0] >= 5) & (vertices[:, 0] <= 20) & (vertices[:, 1] >= 5) & (vertices[:, 1] <= 20)
+    vertices[block, 2] = 3.0  # a 16 x 16 block lifted: 8 rings
     edited = tgsis.Surface(vertices, old.cells)
     plan = plan_edit(old, edited, tgsis.compare_meshes(old, edited))
     assert len(plan.moved_vertices) == block.sum() and len(plan.added_cells) == 0
@@ -102,8 +104,8 @@ def test_flips_removals_and_additions_stay_edits() -> None:
     half = len(cells) // 2
     a, b, d = cells[7]
     c = cells[half + 7][2]
-    cells[7], cells[half + 7] = (a, b, c), (b, d, c)      # a flipped diagonal: both triangles new
-    keep = ~np.isin(cells, [210]).any(axis=1)             # vertex 210 removed with its triangles
+    cells[7], cells[half + 7] = (a, b, c), (b, d, c)  # a flipped diagonal: both triangles new
+    keep = ~np.isin(cells, [210]).any(axis=1)  # vertex 210 removed with its triangles
     vertices = np.concatenate([old.vertices, [[50.0, 50.0, 0.0]]])
     cells = np.concatenate([cells[keep], [[0, 1, len(vertices) - 1]]])
     used = np.unique(cells)
@@ -111,7 +113,7 @@ def test_flips_removals_and_additions_stay_edits() -> None:
     renumber[used] = np.arange(len(used))
     edited = _shuffle(tgsis.Surface(vertices[used], renumber[cells]), rng)
     plan = plan_edit(old, edited, tgsis.compare_meshes(old, edited))
-    assert len(plan.moved_vertices) == 0                 # nothing explains the new vertex as 210 moved
+    assert len(plan.moved_vertices) == 0  # nothing explains the new vertex as 210 moved
     assert plan.removed_vertices.tolist() == [210] and len(plan.added_vertices) == 1
     assert len(plan.added_cells) == 3 and len(plan.removed_cells) == 2 + 6
     _check_written(old, edited, plan)
@@ -123,7 +125,7 @@ def test_any_random_edit_writes_the_edited_mesh(seed: int) -> None:
     old = _grid(15)
     vertices = old.vertices.copy()
     vertices[rng.choice(old.n_vertices, 40, replace=False), 2] += rng.random(40)
-    cells = old.cells[rng.permutation(old.n_cells)[: old.n_cells - 10]]   # 10 triangles dropped
+    cells = old.cells[rng.permutation(old.n_cells)[: old.n_cells - 10]]  # 10 triangles dropped
     edited = _shuffle(tgsis.Surface(vertices, cells), rng)
     plan = plan_edit(old, edited, tgsis.compare_meshes(old, edited))
     assert len(plan.moved_vertices) > 0

@@ -54,15 +54,19 @@ def test_docs_list_exactly_the_sql_codes(conn: psycopg.Connection[Any]) -> None:
         ("TG9ZZ", tgsis.Error),
         ("TG000", tgsis.Error),
         ("42501", tgsis.MissingPrivilegeError),
-        ("40001", tgsis.ConcurrentChangeError),   # a write through a view that read a row changed meanwhile
+        ("40001", tgsis.ConcurrentChangeError),  # a write through a view that read a row changed meanwhile
         ("40P01", tgsis.ConcurrentChangeError),
         ("22012", tgsis.DatabaseError),
     ],
 )
-def test_server_errors_become_tgsis_exceptions(conn: psycopg.Connection[Any], sqlstate: str,
-                                               cls: type[tgsis.Error]) -> None:
-    raise_it = ("DO $$ BEGIN RAISE EXCEPTION 'bad %', 'thing' USING ERRCODE = '"
-                + sqlstate + "', DETAIL = 'the detail', HINT = 'the hint'; END $$")
+def test_server_errors_become_tgsis_exceptions(
+    conn: psycopg.Connection[Any], sqlstate: str, cls: type[tgsis.Error]
+) -> None:
+    raise_it = (
+        "DO $$ BEGIN RAISE EXCEPTION 'bad %', 'thing' USING ERRCODE = '"
+        + sqlstate
+        + "', DETAIL = 'the detail', HINT = 'the hint'; END $$"
+    )
     with pytest.raises(tgsis.Error) as info, errors.reraise():
         conn.execute(raise_it)
     assert type(info.value) is cls
@@ -84,4 +88,3 @@ def test_connection_failures_are_database_errors() -> None:
     with pytest.raises(tgsis.DatabaseError) as info:
         tgsis.connect("host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2")
     assert "nonexistent-socket-dir" in str(info.value)
-

@@ -26,23 +26,38 @@ def reference_at(surface: EvolvingSurface, t: float) -> tuple[np.ndarray, np.nda
         if chosen is not periods[-1] or not surface.alive:
             return None
         return chosen.positions[-1], chosen.triangles
-    xyz = np.stack([[np.interp(t, chosen.times, chosen.positions[:, k, d]) for d in range(3)]
-                    for k in range(chosen.n_nodes)])
+    xyz = np.stack(
+        [[np.interp(t, chosen.times, chosen.positions[:, k, d]) for d in range(3)] for k in range(chosen.n_nodes)]
+    )
     return xyz, chosen.triangles
 
 
 @pytest.fixture
 def faults(tx: Conn) -> tgsis.FeatureClass:
-    return tgsis.create_feature_class(tx, "moving_faults", "SURFACE", time_model="EVOLVING", time_unit="Ma",
-                                      feature_properties=[("fault_name", "text")],
-                                      cell_properties=[("porosity", "double precision")],
-                                      instant_properties=[("throw", "double precision"), ("note_code", "integer")])
+    return tgsis.create_feature_class(
+        tx,
+        "moving_faults",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit="Ma",
+        feature_properties=[("fault_name", "text")],
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+    )
 
 
 def sample_times(surface: EvolvingSurface, rng: np.random.Generator) -> list[float]:
     """Random times plus every geometry instant, topology changes, before the first and after the last."""
-    return sorted({*rng.uniform(surface.start - 1, surface.end + 1, 40).tolist(), *surface.geometry_instants.tolist(),
-                   surface.start - 5.0, surface.end + 5.0, float("inf"), float("-inf")})
+    return sorted(
+        {
+            *rng.uniform(surface.start - 1, surface.end + 1, 40).tolist(),
+            *surface.geometry_instants.tolist(),
+            surface.start - 5.0,
+            surface.end + 5.0,
+            float("inf"),
+            float("-inf"),
+        }
+    )
 
 
 @pytest.mark.parametrize("alive", [False, True])
@@ -90,10 +105,13 @@ def test_sql_rows_and_frame(tx: Conn, faults: tgsis.FeatureClass) -> None:
     rows = tx.execute("SELECT vrtxid, x, y, z FROM tgsis.vertices_at(%s, %s) ORDER BY vrtxid", (fid, t)).fetchall()
     offset = surface.periods[0].n_nodes  # node ids run on through the periods
     assert [r[0] for r in rows] == list(range(offset, offset + p.n_nodes))
-    triangles = tx.execute("SELECT vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at(%s, %s) ORDER BY trglid",
-                           (fid, t)).fetchall()
+    triangles = tx.execute(
+        "SELECT vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at(%s, %s) ORDER BY trglid", (fid, t)
+    ).fetchall()
     np.testing.assert_array_equal(np.array(triangles) - offset, p.triangles)
-    geometry = tx.execute("SELECT timemodel, nvrtx, ncell, alive FROM tgsis.geometry WHERE geoid = %s", (fid,)).fetchone()
+    geometry = tx.execute(
+        "SELECT timemodel, nvrtx, ncell, alive FROM tgsis.geometry WHERE geoid = %s", (fid,)
+    ).fetchone()
     assert geometry == ("EVOLVING", surface.n_nodes, surface.n_triangles, False)
     assert tgsis.instants(tx, fid) == [(float(x), bool(x in STARTS)) for x in surface.geometry_instants]
 
@@ -105,24 +123,36 @@ def test_stored_rows_and_properties(tx: Conn, faults: tgsis.FeatureClass) -> Non
         "SELECT (SELECT count(*) FROM tgsis.timem WHERE geoid = %(g)s), (SELECT count(*) FROM tgsis.timet WHERE geoid = %(g)s),"
         " (SELECT count(*) FROM tgsis.node WHERE geoid = %(g)s), (SELECT count(*) FROM tgsis.d4dvrtx WHERE geoid = %(g)s),"
         " (SELECT count(*) FROM moving_faults_cellpros WHERE _geoid = %(g)s),"
-        " (SELECT count(*) FROM moving_faults_pros WHERE _geoid = %(g)s)", {"g": fid}).fetchone()
+        " (SELECT count(*) FROM moving_faults_pros WHERE _geoid = %(g)s)",
+        {"g": fid},
+    ).fetchone()
     samples = sum(len(p.times) * p.n_nodes for p in surface.periods)
-    assert counts == (3, sum(len(p.times) for p in surface.periods), surface.n_nodes, samples, samples,
-                      sum(len(p.times) for p in surface.periods))
+    assert counts == (
+        3,
+        sum(len(p.times) for p in surface.periods),
+        surface.n_nodes,
+        samples,
+        samples,
+        sum(len(p.times) for p in surface.periods),
+    )
     p = surface.periods[2]
-    rows = tx.execute("SELECT _timet, throw, note_code FROM moving_faults_pros WHERE _geoid = %s AND _timem = %s "
-                      "ORDER BY _timet", (fid, p.start)).fetchall()
+    rows = tx.execute(
+        "SELECT _timet, throw, note_code FROM moving_faults_pros WHERE _geoid = %s AND _timem = %s ORDER BY _timet",
+        (fid, p.start),
+    ).fetchall()
     assert [r[0] for r in rows] == p.times.tolist()
     assert [r[1] for r in rows] == p.properties["throw"].tolist()
-    porosity = tx.execute("SELECT porosity FROM moving_faults_cellpros WHERE _geoid = %s AND _timem = %s AND _timet = %s "
-                          "ORDER BY _idx", (fid, p.start, p.times[1])).fetchall()
+    porosity = tx.execute(
+        "SELECT porosity FROM moving_faults_cellpros WHERE _geoid = %s AND _timem = %s AND _timet = %s ORDER BY _idx",
+        (fid, p.start, p.times[1]),
+    ).fetchall()
     np.testing.assert_array_equal([r[0] for r in porosity], p.vertex_properties["porosity"][1])
 
 
 def test_surfaces_at_and_features_at(tx: Conn, faults: tgsis.FeatureClass) -> None:
     rng = np.random.default_rng(4)
-    early = evolving(rng, [-10.0, -6.5], with_properties=True)             # exists -10 .. -5.5
-    late = evolving(rng, [-4.0], alive=True, with_properties=True)         # exists from -4 on
+    early = evolving(rng, [-10.0, -6.5], with_properties=True)  # exists -10 .. -5.5
+    late = evolving(rng, [-4.0], alive=True, with_properties=True)  # exists from -4 on
     a, b = tgsis.insert_feature(tx, faults, early), tgsis.insert_feature(tx, faults, late)
     assert tgsis.features_at(tx, faults, -8.0) == [a]
     assert tgsis.features_at(tx, faults, -5.0) == []
@@ -165,7 +195,9 @@ def test_numpy_model_refuses_bad_periods() -> None:
     with pytest.raises(tgsis.InvalidGeometryError, match="shape"):
         TopologyPeriod([0.0, 1.0, 2.0], triangles, positions)
     with pytest.raises(tgsis.InvalidInputError, match="must end where period 1 starts"):
-        EvolvingSurface([TopologyPeriod([0.0, 1.0], triangles, positions), TopologyPeriod([2.0, 3.0], triangles, positions)])
+        EvolvingSurface(
+            [TopologyPeriod([0.0, 1.0], triangles, positions), TopologyPeriod([2.0, 3.0], triangles, positions)]
+        )
     with pytest.raises(tgsis.InvalidGeometryError):
         TopologyPeriod([0.0, 1.0], [[0, 1, 99]], positions)
 
@@ -216,8 +248,9 @@ def test_fetch_evolving_round_trip(tx: Conn, faults: tgsis.FeatureClass) -> None
 
 
 @pytest.mark.parametrize("function", ["vertices_at", "triangles_at", "exists_at"])
-def test_bad_convention_is_an_error_whatever_the_model_and_t(tx: Conn, faults: tgsis.FeatureClass,
-                                                            function: str) -> None:
+def test_bad_convention_is_an_error_whatever_the_model_and_t(
+    tx: Conn, faults: tgsis.FeatureClass, function: str
+) -> None:
     fid = tgsis.insert_feature(tx, faults, evolving(np.random.default_rng(12), STARTS, with_properties=True))
     static = tgsis.create_feature_class(tx, "plain_faults", "SURFACE")
     vertices, triangles = grid(3)
@@ -245,7 +278,8 @@ def test_a_constant_surface_and_a_chain_of_parts() -> None:
     mid = whole.at(1.5)
     assert mid is not None and np.allclose(mid.vertices, moved + 0.5)
     with pytest.raises(tgsis.InvalidInputError, match="part 0 ends at 1.0 but part 1 starts at 2.0"):
-        EvolvingSurface.chain([part1, EvolvingSurface([TopologyPeriod([2.0, 3.0], base.cells,
-                                                                      np.stack([moved, moved]))])])
+        EvolvingSurface.chain(
+            [part1, EvolvingSurface([TopologyPeriod([2.0, 3.0], base.cells, np.stack([moved, moved]))])]
+        )
     with pytest.raises(tgsis.InvalidInputError, match="at least one"):
         EvolvingSurface.chain([])

@@ -19,39 +19,69 @@ def _grid(side: int, z: float = 0.0) -> tgsis.Surface:
     vertices = np.stack([u.ravel(), v.ravel(), np.full(side * side, z)], axis=1)
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": np.linspace(0, 1, side * side)}, name=f"z{z}")
+    return tgsis.Surface(
+        vertices,
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        vertex_properties={"porosity": np.linspace(0, 1, side * side)},
+        name=f"z{z}",
+    )
 
 
 @pytest.fixture
 def horizons(conn: Conn) -> F.FeatureClass:
-    fc = F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
-                                cell_properties={"porosity": "float8"})
+    fc = F.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"creator": "text"}, cell_properties={"porosity": "float8"}
+    )
     storage = conn.execute("SELECT count(*) FROM tgsis.model_tables").fetchone()[0]  # type: ignore[index]
-    assert storage == 31                                     # the core's 3, models 1-5: 7, 3, 5, 8, 5
-    assert tgsis.enable_feature_versioning(conn) == storage + 2                          # + the class's 2
+    assert storage == 31  # the core's 3, models 1-5: 7, 3, 5, 8, 5
+    assert tgsis.enable_feature_versioning(conn) == storage + 2  # + the class's 2
     return fc
 
 
 def _rows(conn: Conn) -> dict[str, int]:
-    return {t: int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
-            for t in ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver", "horizons_ver", "horizons_cellpros_ver")}
+    return {
+        t: int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
+        for t in ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver", "horizons_ver", "horizons_cellpros_ver")
+    }
 
 
 def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureClass) -> None:
     tables = {(t.table, t.objectkeyfield, t.iudorder) for t in tgsis.versioned_tables(conn)}
-    assert tables == {("geometry", "geoid", 0), ("model_object", "geoid", 1), ("model", "modelid", 0), ("vrtx", "geoid", 1), ("point", "geoid", 2), ("segment", "geoid", 2),
-                      ("trgl", "geoid", 2), ("tetra", "geoid", 2), ("atom", "geoid", 2), ("part", "geoid", 2),
-                      ("horizons", "_geoid", 3),
-                      ("horizons_cellpros", "_geoid", 4),
-                      ("times", "geoid", 1), ("times_vrtx", "geoid", 2), ("times_trgl", "geoid", 2),
-                      ("timem", "geoid", 1), ("timet", "geoid", 2), ("node", "geoid", 2), ("d4dtrgl", "geoid", 2),
-                      ("d4dvrtx", "geoid", 2),
-                      ("gmap", "geoid", 1), ("gmap_timem", "geoid", 1), ("gmap_timet", "geoid", 2), ("gmap_node", "geoid", 2),
-                      ("gmap_vertex", "geoid", 2), ("gmap_dart", "geoid", 2), ("gmap_alpha", "geoid", 2),
-                      ("gmap_cell", "geoid", 2),
-                      ("md_gmap", "geoid", 1), ("md_vertex", "geoid", 2), ("md_dart", "geoid", 2), ("md_alpha", "geoid", 2),
-                      ("md_cell", "geoid", 2)}
+    assert tables == {
+        ("geometry", "geoid", 0),
+        ("model_object", "geoid", 1),
+        ("model", "modelid", 0),
+        ("vrtx", "geoid", 1),
+        ("point", "geoid", 2),
+        ("segment", "geoid", 2),
+        ("trgl", "geoid", 2),
+        ("tetra", "geoid", 2),
+        ("atom", "geoid", 2),
+        ("part", "geoid", 2),
+        ("horizons", "_geoid", 3),
+        ("horizons_cellpros", "_geoid", 4),
+        ("times", "geoid", 1),
+        ("times_vrtx", "geoid", 2),
+        ("times_trgl", "geoid", 2),
+        ("timem", "geoid", 1),
+        ("timet", "geoid", 2),
+        ("node", "geoid", 2),
+        ("d4dtrgl", "geoid", 2),
+        ("d4dvrtx", "geoid", 2),
+        ("gmap", "geoid", 1),
+        ("gmap_timem", "geoid", 1),
+        ("gmap_timet", "geoid", 2),
+        ("gmap_node", "geoid", 2),
+        ("gmap_vertex", "geoid", 2),
+        ("gmap_dart", "geoid", 2),
+        ("gmap_alpha", "geoid", 2),
+        ("gmap_cell", "geoid", 2),
+        ("md_gmap", "geoid", 1),
+        ("md_vertex", "geoid", 2),
+        ("md_dart", "geoid", 2),
+        ("md_alpha", "geoid", 2),
+        ("md_cell", "geoid", 2),
+    }
     assert {t.objectclass for t in tgsis.versioned_tables(conn)} == {"feature", "model"}
     assert [t.table for t in tgsis.versioned_tables(conn) if t.objectclass == "model"] == ["model"]
     # a class registered later is versioned as it is created, and its view reads the versioned tables
@@ -61,7 +91,7 @@ def test_all_tables_form_object_class_feature(conn: Conn, horizons: F.FeatureCla
 
 
 def test_surface_edited_in_a_child_is_invisible_in_default(conn: Conn, horizons: F.FeatureClass) -> None:
-    base = _grid(317)                                          # 100,489 vertices, 200,000 triangles
+    base = _grid(317)  # 100,489 vertices, 200,000 triangles
     fid = F.insert_feature(conn, horizons, base, {"creator": "ann"})
     tgsis.create_version(conn, "edit")
     before = _rows(conn)
@@ -71,8 +101,11 @@ def test_surface_edited_in_a_child_is_invisible_in_default(conn: Conn, horizons:
         conn.execute("UPDATE horizons SET creator = 'bob' WHERE _geoid = %s", (fid,))
         conn.commit()
         edited = F.fetch_feature(conn, horizons, fid)
-    assert _rows(conn) == {**before, "tgsis.vrtx_ver": before["tgsis.vrtx_ver"] + 1,
-                           "horizons_ver": before["horizons_ver"] + 1}   # one row each, not 100,000
+    assert _rows(conn) == {
+        **before,
+        "tgsis.vrtx_ver": before["tgsis.vrtx_ver"] + 1,
+        "horizons_ver": before["horizons_ver"] + 1,
+    }  # one row each, not 100,000
     assert edited.properties == {"creator": "bob"} and edited.mesh is not None
     assert edited.mesh.vertices[42, 2] == 5 and np.count_nonzero(edited.mesh.vertices != base.vertices) == 1
     default = F.fetch_feature(conn, horizons, fid)
@@ -93,12 +126,13 @@ def test_upload_and_delete_inside_a_version(conn: Conn, horizons: F.FeatureClass
     assert F.features_in_box(conn, horizons, [[-1, -1, 1.5], [10, 10, 2.5]]) == []
     # the child's rows were copied in by COPY with its working revision, not through triggers
     assert conn.execute("SELECT DISTINCT revision FROM tgsis.vrtx_ver WHERE geoid = %s", (new,)).fetchall() == [(2,)]
-    assert conn.execute("SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND lastrevs = '{2}'", (kept,)
-                        ).fetchone() == (25,)
+    assert conn.execute(
+        "SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND lastrevs = '{2}'", (kept,)
+    ).fetchone() == (25,)
 
 
 def test_writes_while_viewing_an_old_revision_write_nothing(conn: Conn, horizons: F.FeatureClass) -> None:
-    fid = F.insert_feature(conn, horizons, _grid(4))           # revision 0, seen by v1
+    fid = F.insert_feature(conn, horizons, _grid(4))  # revision 0, seen by v1
     tgsis.create_version(conn, "v1")
     tgsis.goto_revision(conn, "v1", 0)
     conn.commit()
@@ -120,7 +154,9 @@ def test_drop_class_removes_its_features_from_every_version(conn: Conn, horizons
         F.drop_feature_class(conn, "horizons")
     assert F.drop_feature_class(conn, "horizons", force=True) == 2
     assert conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone() == (0,)
-    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables WHERE tablename LIKE 'horizons%'").fetchone() == (0,)
+    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables WHERE tablename LIKE 'horizons%'").fetchone() == (
+        0,
+    )
     assert conn.execute("SELECT to_regclass('horizons_ver')").fetchone() == (None,)
 
 
@@ -134,8 +170,9 @@ def test_disable_feature_versioning_keeps_default(conn: Conn, horizons: F.Featur
     tgsis.disable_feature_versioning(conn, force=True)
     assert tgsis.versioned_tables(conn) == []
     assert [f.id for f in F.fetch_features(conn, horizons)] == [fid]
-    fk = conn.execute("SELECT pg_get_constraintdef(oid) FROM pg_constraint WHERE conrelid = 'horizons'::regclass "
-                      "AND contype = 'f'").fetchone()
+    fk = conn.execute(
+        "SELECT pg_get_constraintdef(oid) FROM pg_constraint WHERE conrelid = 'horizons'::regclass AND contype = 'f'"
+    ).fetchone()
     assert fk == ("FOREIGN KEY (_geoid) REFERENCES tgsis.geometry(geoid) ON DELETE CASCADE",)
     assert conn.execute("SELECT count(*) FROM horizons_v").fetchone() == (1,)
 
@@ -159,4 +196,5 @@ def test_a_collection_added_and_deleted_in_a_version(conn: Conn) -> None:
     # the members the collection owns are closed in v1 with it, not deleted from DEFAULT
     members = conn.execute("SELECT geoids FROM tgsis.geometry WHERE geoid = %s", (kept,)).fetchone()
     assert members is not None and conn.execute(
-        "SELECT count(*) FROM tgsis.geometry WHERE geoid = ANY (%s)", (members[0],)).fetchone() == (2,)
+        "SELECT count(*) FROM tgsis.geometry WHERE geoid = ANY (%s)", (members[0],)
+    ).fetchone() == (2,)

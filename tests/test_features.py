@@ -18,9 +18,11 @@ rng = np.random.default_rng(42)
 
 
 def _counts(conn: Conn) -> tuple[int, ...]:
-    row = conn.execute("SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
-                       "(SELECT count(*) FROM tgsis.trgl), (SELECT count(*) FROM tgsis.catalog), "
-                       "(SELECT count(*) FROM pg_class WHERE relnamespace = 'public'::regnamespace)").fetchone()
+    row = conn.execute(
+        "SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.vrtx), "
+        "(SELECT count(*) FROM tgsis.trgl), (SELECT count(*) FROM tgsis.catalog), "
+        "(SELECT count(*) FROM pg_class WHERE relnamespace = 'public'::regnamespace)"
+    ).fetchone()
     assert row is not None
     return tuple(int(v) for v in row)
 
@@ -35,19 +37,27 @@ def _grid(side: int = 4, z: float = 0.0) -> Surface:
 
 @pytest.fixture
 def horizons(conn: Conn) -> F.FeatureClass:
-    fc = F.create_feature_class(conn, "horizons", "SURFACE",
-                                feature_properties=[("creator", "text"), ("note", "varchar"), ("age", "float8")],
-                                cell_properties=[("porosity", "double precision"), ("facies", "int")],
-                                srs=32611, description="seismic horizons")
+    fc = F.create_feature_class(
+        conn,
+        "horizons",
+        "SURFACE",
+        feature_properties=[("creator", "text"), ("note", "varchar"), ("age", "float8")],
+        cell_properties=[("porosity", "double precision"), ("facies", "int")],
+        srs=32611,
+        description="seismic horizons",
+    )
     conn.commit()
     return fc
 
 
 def _horizon(side: int = 4, z: float = 0.0) -> Surface:
     s = _grid(side, z)
-    return Surface(s.vertices, s.cells, name=f"h{z}",
-                   vertex_properties={"porosity": rng.random(s.n_vertices),
-                                      "facies": rng.integers(0, 5, s.n_vertices)})
+    return Surface(
+        s.vertices,
+        s.cells,
+        name=f"h{z}",
+        vertex_properties={"porosity": rng.random(s.n_vertices), "facies": rng.integers(0, 5, s.n_vertices)},
+    )
 
 
 # --------------------------------------------------------------------------- classes
@@ -56,21 +66,31 @@ def _horizon(side: int = 4, z: float = 0.0) -> Surface:
 def test_register_creates_tables_view_and_catalog_row(conn: Conn, horizons: F.FeatureClass) -> None:
     assert horizons.geotype is tgsis.Geotype.SURFACE and horizons.alignment == "VERTEX" and horizons.srs == 32611
     assert [p.type for p in horizons.feature_properties] == ["text", "text", "double precision"]
-    assert [(p.name, p.type) for p in horizons.cell_properties] == [("porosity", "double precision"),
-                                                                    ("facies", "integer")]
-    columns = conn.execute("SELECT attname, format_type(atttypid, atttypmod), attnotnull FROM pg_attribute "
-                           "WHERE attrelid = 'horizons_cellpros'::regclass AND attnum > 0 ORDER BY attnum").fetchall()
-    assert columns == [("_geoid", "bigint", True), ("_idx", "bigint", True),
-                       ("porosity", "double precision", True), ("facies", "integer", True)]
-    pk = conn.execute("SELECT pg_get_constraintdef(oid) FROM pg_constraint WHERE conrelid = 'horizons'::regclass "
-                      "ORDER BY contype").fetchall()
+    assert [(p.name, p.type) for p in horizons.cell_properties] == [
+        ("porosity", "double precision"),
+        ("facies", "integer"),
+    ]
+    columns = conn.execute(
+        "SELECT attname, format_type(atttypid, atttypmod), attnotnull FROM pg_attribute "
+        "WHERE attrelid = 'horizons_cellpros'::regclass AND attnum > 0 ORDER BY attnum"
+    ).fetchall()
+    assert columns == [
+        ("_geoid", "bigint", True),
+        ("_idx", "bigint", True),
+        ("porosity", "double precision", True),
+        ("facies", "integer", True),
+    ]
+    pk = conn.execute(
+        "SELECT pg_get_constraintdef(oid) FROM pg_constraint WHERE conrelid = 'horizons'::regclass ORDER BY contype"
+    ).fetchall()
     assert ("FOREIGN KEY (_geoid) REFERENCES tgsis.geometry(geoid) ON DELETE CASCADE",) in pk
     assert ("PRIMARY KEY (_geoid)",) in pk
-    assert conn.execute("SELECT obj_description('horizons'::regclass), obj_description('horizons_v'::regclass)"
-                        ).fetchone() == ("tgsis feature class horizons: one row per SURFACE feature "
-                                         "(_geoid = tgsis.geometry.geoid)",
-                                         "tgsis feature class horizons: features with their name, geotype, counts "
-                                         "and bounding box")
+    assert conn.execute(
+        "SELECT obj_description('horizons'::regclass), obj_description('horizons_v'::regclass)"
+    ).fetchone() == (
+        "tgsis feature class horizons: one row per SURFACE feature (_geoid = tgsis.geometry.geoid)",
+        "tgsis feature class horizons: features with their name, geotype, counts and bounding box",
+    )
     assert [c.name for c in F.list_feature_classes(conn)] == ["horizons"]
     assert F.get_feature_class(conn, "horizons") == horizons
 
@@ -83,26 +103,36 @@ def test_property_spellings_and_json_forms(conn: Conn) -> None:
     assert fc.cell_properties == (F.Property("gamma", "real"),) and fc.alignment == "VERTEX"
 
 
-@pytest.mark.parametrize(("kwargs", "error", "message"), [
-    ({"name": "Horizons"}, tgsis.InvalidNameError, "feature class name 'Horizons' is not allowed"),
-    ({"name": "select"}, tgsis.InvalidNameError, "feature class name 'select' is not allowed"),
-    ({"name": "a-b"}, tgsis.InvalidNameError, "is not allowed"),
-    ({"name": "x" * 60}, tgsis.InvalidNameError, "is not allowed"),
-    ({"geotype": "POLYGON"}, tgsis.InvalidInputError, "unknown geotype 'POLYGON'"),
-    ({"alignment": "FACE"}, tgsis.InvalidInputError, "must be VERTEX or CELL"),
-    ({"srs": -4}, tgsis.InvalidInputError, "SRS -4"),
-    ({"schema": "nowhere"}, tgsis.NotFoundError, "schema 'nowhere' does not exist"),
-    ({"feature_properties": {"note": "text; drop table x"}}, tgsis.InvalidPropertyError,
-     "has type 'text; drop table x', which is not allowed"),
-    ({"feature_properties": {"No-te": "text"}}, tgsis.InvalidNameError, "feature property name 'No-te'"),
-    ({"feature_properties": {"9lives": "text"}}, tgsis.InvalidNameError, "feature property name '9lives'"),
-    ({"feature_properties": {"_idx": "text"}}, tgsis.InvalidNameError, "'_idx' is not allowed"),
-    ({"feature_properties": [("a", "text"), ("a", "int")]}, tgsis.InvalidPropertyError, "given twice"),
-    ({"cell_properties": {"label": "text"}}, tgsis.InvalidPropertyError,
-     "vertex and cell properties must be numbers or booleans"),
-])
-def test_bad_class_definitions_change_nothing(conn: Conn, kwargs: dict[str, Any], error: type[tgsis.Error],
-                                              message: str) -> None:
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"name": "Horizons"}, tgsis.InvalidNameError, "feature class name 'Horizons' is not allowed"),
+        ({"name": "select"}, tgsis.InvalidNameError, "feature class name 'select' is not allowed"),
+        ({"name": "a-b"}, tgsis.InvalidNameError, "is not allowed"),
+        ({"name": "x" * 60}, tgsis.InvalidNameError, "is not allowed"),
+        ({"geotype": "POLYGON"}, tgsis.InvalidInputError, "unknown geotype 'POLYGON'"),
+        ({"alignment": "FACE"}, tgsis.InvalidInputError, "must be VERTEX or CELL"),
+        ({"srs": -4}, tgsis.InvalidInputError, "SRS -4"),
+        ({"schema": "nowhere"}, tgsis.NotFoundError, "schema 'nowhere' does not exist"),
+        (
+            {"feature_properties": {"note": "text; drop table x"}},
+            tgsis.InvalidPropertyError,
+            "has type 'text; drop table x', which is not allowed",
+        ),
+        ({"feature_properties": {"No-te": "text"}}, tgsis.InvalidNameError, "feature property name 'No-te'"),
+        ({"feature_properties": {"9lives": "text"}}, tgsis.InvalidNameError, "feature property name '9lives'"),
+        ({"feature_properties": {"_idx": "text"}}, tgsis.InvalidNameError, "'_idx' is not allowed"),
+        ({"feature_properties": [("a", "text"), ("a", "int")]}, tgsis.InvalidPropertyError, "given twice"),
+        (
+            {"cell_properties": {"label": "text"}},
+            tgsis.InvalidPropertyError,
+            "vertex and cell properties must be numbers or booleans",
+        ),
+    ],
+)
+def test_bad_class_definitions_change_nothing(
+    conn: Conn, kwargs: dict[str, Any], error: type[tgsis.Error], message: str
+) -> None:
     before = _counts(conn)
     args: dict[str, Any] = {"name": "layers", "geotype": "SURFACE", **kwargs}
     with pytest.raises(error, match=message):
@@ -121,10 +151,14 @@ def test_duplicate_class_or_table_is_refused(conn: Conn, horizons: F.FeatureClas
 
 def test_class_in_another_schema(conn: Conn) -> None:
     conn.execute("CREATE SCHEMA geo")
-    fc = F.create_feature_class(conn, "bodies", "MULTITETRA", cell_properties={"density": "real"},
-                                alignment="CELL", schema="geo")
-    solid = TetraMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], [[0, 1, 2, 3], [1, 2, 3, 4]],
-                      cell_properties={"density": np.array([2.5, 2.7], dtype=np.float32)})
+    fc = F.create_feature_class(
+        conn, "bodies", "MULTITETRA", cell_properties={"density": "real"}, alignment="CELL", schema="geo"
+    )
+    solid = TetraMesh(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
+        [[0, 1, 2, 3], [1, 2, 3, 4]],
+        cell_properties={"density": np.array([2.5, 2.7], dtype=np.float32)},
+    )
     fid = F.insert_feature(conn, fc, solid)
     assert conn.execute("SELECT count(*) FROM geo.bodies_cellpros WHERE _geoid = %s", (fid,)).fetchone() == (2,)
     assert F.fetch_feature(conn, "bodies", fid).mesh.same_as(solid)  # type: ignore[union-attr]
@@ -138,8 +172,9 @@ def test_drop_class_refuses_while_features_exist_unless_forced(conn: Conn, horiz
     assert "force" in (info.value.hint or "")
     assert conn.execute("SELECT to_regclass('horizons') IS NOT NULL").fetchone() == (True,)
     assert F.drop_feature_class(conn, "horizons", force=True) == 1
-    assert conn.execute("SELECT to_regclass('horizons'), to_regclass('horizons_cellpros'), to_regclass('horizons_v')"
-                        ).fetchone() == (None, None, None)
+    assert conn.execute(
+        "SELECT to_regclass('horizons'), to_regclass('horizons_cellpros'), to_regclass('horizons_v')"
+    ).fetchone() == (None, None, None)
     assert conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (fid,)).fetchone() == (0,)
     assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (0,)
     with pytest.raises(tgsis.NotFoundError, match="feature class 'horizons' does not exist"):
@@ -149,11 +184,17 @@ def test_drop_class_refuses_while_features_exist_unless_forced(conn: Conn, horiz
 # --------------------------------------------------------------------------- features
 
 
-@pytest.mark.parametrize("mesh", [
-    PointSet([[0, 0, 0], [1, 2, 3], [4, 5, 6]], vertex_properties={"value": [1.0, 2.0, 3.0]}),
-    LineSet([[0, 0, 0], [1, 0, 0], [2, 1, 0]], [[0, 1], [1, 2]], vertex_properties={"value": [0.0, 0.5, -1.0]}),
-    TetraMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3]], vertex_properties={"value": np.ones(4)}),
-], ids=["points", "lines", "tetra"])
+@pytest.mark.parametrize(
+    "mesh",
+    [
+        PointSet([[0, 0, 0], [1, 2, 3], [4, 5, 6]], vertex_properties={"value": [1.0, 2.0, 3.0]}),
+        LineSet([[0, 0, 0], [1, 0, 0], [2, 1, 0]], [[0, 1], [1, 2]], vertex_properties={"value": [0.0, 0.5, -1.0]}),
+        TetraMesh(
+            [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3]], vertex_properties={"value": np.ones(4)}
+        ),
+    ],
+    ids=["points", "lines", "tetra"],
+)
 def test_every_geotype_round_trips(conn: Conn, mesh: tgsis.Mesh) -> None:
     fc = F.create_feature_class(conn, "things", mesh.geotype, cell_properties={"value": "float8"})
     fid = F.insert_feature(conn, fc, mesh, name="thing")
@@ -176,28 +217,48 @@ def test_surface_round_trip_is_bit_exact_with_properties(conn: Conn, horizons: F
 
 
 def test_cell_aligned_properties(conn: Conn) -> None:
-    fc = F.create_feature_class(conn, "units", "SURFACE", cell_properties={"facies": "smallint", "wet": "boolean"},
-                                alignment="CELL")
+    fc = F.create_feature_class(
+        conn, "units", "SURFACE", cell_properties={"facies": "smallint", "wet": "boolean"}, alignment="CELL"
+    )
     s = _grid(5)
-    s = Surface(s.vertices, s.cells, cell_properties={"facies": np.arange(s.n_cells) % 3,
-                                                      "wet": np.arange(s.n_cells) % 2 == 0})
+    s = Surface(
+        s.vertices, s.cells, cell_properties={"facies": np.arange(s.n_cells) % 3, "wet": np.arange(s.n_cells) % 2 == 0}
+    )
     fid = F.insert_feature(conn, fc, s)
     got = F.fetch_feature(conn, fc, fid).mesh
     assert got is not None and got.same_as(s) and got.cell_properties["wet"].dtype == np.bool_
 
 
-@pytest.mark.parametrize(("change", "error", "message"), [
-    (lambda s: TetraMesh(s.vertices, [[0, 1, 2, 3]]), tgsis.InvalidGeometryError,
-     "holds SURFACE features, not MULTITETRA"),
-    (lambda s: Surface(s.vertices, s.cells, vertex_properties={"porosity": s.vertex_properties["porosity"]}),
-     tgsis.InvalidPropertyError, r"needs vertex properties \['facies'\], which the mesh lacks"),
-    (lambda s: Surface(s.vertices, s.cells, vertex_properties={**s.vertex_properties, "extra": np.zeros(16)}),
-     tgsis.InvalidPropertyError, r"has no column for properties \['extra'\]"),
-    (lambda s: Surface(s.vertices, s.cells, vertex_properties={**s.vertex_properties, "facies": np.full(16, 1.5)}),
-     tgsis.InvalidPropertyError, "property 'facies' has values that are not integer"),
-])
-def test_bad_features_write_nothing(conn: Conn, horizons: F.FeatureClass, change: Any,
-                                    error: type[tgsis.Error], message: str) -> None:
+@pytest.mark.parametrize(
+    ("change", "error", "message"),
+    [
+        (
+            lambda s: TetraMesh(s.vertices, [[0, 1, 2, 3]]),
+            tgsis.InvalidGeometryError,
+            "holds SURFACE features, not MULTITETRA",
+        ),
+        (
+            lambda s: Surface(s.vertices, s.cells, vertex_properties={"porosity": s.vertex_properties["porosity"]}),
+            tgsis.InvalidPropertyError,
+            r"needs vertex properties \['facies'\], which the mesh lacks",
+        ),
+        (
+            lambda s: Surface(s.vertices, s.cells, vertex_properties={**s.vertex_properties, "extra": np.zeros(16)}),
+            tgsis.InvalidPropertyError,
+            r"has no column for properties \['extra'\]",
+        ),
+        (
+            lambda s: Surface(
+                s.vertices, s.cells, vertex_properties={**s.vertex_properties, "facies": np.full(16, 1.5)}
+            ),
+            tgsis.InvalidPropertyError,
+            "property 'facies' has values that are not integer",
+        ),
+    ],
+)
+def test_bad_features_write_nothing(
+    conn: Conn, horizons: F.FeatureClass, change: Any, error: type[tgsis.Error], message: str
+) -> None:
     before = _counts(conn)
     with pytest.raises(error, match=message):
         F.insert_feature(conn, horizons, change(_horizon()))
@@ -240,8 +301,12 @@ def test_fetch_many_box_query_and_delete(conn: Conn, horizons: F.FeatureClass) -
     assert F.features_in_box(conn, "horizons", [[-1, -1, 150], [10, 10, 250]]) == [ids[2]]
     assert F.features_in_box(conn, "horizons", [[-1, -1, -1], [10, 10, 500]]) == ids
     conn.execute("SET enable_seqscan = off")  # 4 rows: only forbidding the seq scan shows the index is usable
-    plan = "\n".join(r[0] for r in conn.execute(
-        "EXPLAIN SELECT geoid FROM tgsis.geometry WHERE bbox && cube(ARRAY[0,0,0], ARRAY[1,1,1])").fetchall())
+    plan = "\n".join(
+        r[0]
+        for r in conn.execute(
+            "EXPLAIN SELECT geoid FROM tgsis.geometry WHERE bbox && cube(ARRAY[0,0,0], ARRAY[1,1,1])"
+        ).fetchall()
+    )
     assert "geometry_bbox_idx" in plan
     conn.execute("RESET enable_seqscan")
     assert F.delete_feature(conn, "horizons", ids[1]) is True
@@ -260,7 +325,9 @@ def test_psql_users_see_features_in_the_class_view(conn: Conn, horizons: F.Featu
     assert row == ("top reservoir", fid, "ana", "SURFACE", 16, 18)
     vertices = conn.execute(
         "SELECT v.vrtxid, v.x, p.porosity FROM tgsis.vrtx v JOIN horizons_cellpros p "
-        "ON p._geoid = v.geoid AND p._idx = v.vrtxid WHERE v.geoid = %s ORDER BY v.vrtxid", (fid,)).fetchall()
+        "ON p._geoid = v.geoid AND p._idx = v.vrtxid WHERE v.geoid = %s ORDER BY v.vrtxid",
+        (fid,),
+    ).fetchall()
     assert len(vertices) == 16
 
 

@@ -70,7 +70,8 @@ END
 
 # The same fault in elevation (z = -depth): the same physical place.
 ELEVATION_TSURF = DEPTH_TSURF.replace("ZPOSITIVE Depth", "ZPOSITIVE Elevation").replace(
-    "name:Fault_A depth", "name:Fault_A elevation")
+    "name:Fault_A depth", "name:Fault_A elevation"
+)
 for _depth in ("-0.0", "1250.75", "1300.0000000000002", "1400.5"):
     ELEVATION_TSURF = ELEVATION_TSURF.replace(f" {_depth} ", f" {-float(_depth)!r} ")
 
@@ -116,12 +117,15 @@ SEG 4 5
 END
 """
 
-VECTOR_PROPERTIES: list[tuple[str, str] | tuple[str, str, int]] = [("Porosity", "double precision"),
-                                                                   ("Slip_Vector", "double precision", 3)]
+VECTOR_PROPERTIES: list[tuple[str, str] | tuple[str, str, int]] = [
+    ("Porosity", "double precision"),
+    ("Slip_Vector", "double precision", 3),
+]
 
 
-def _class(conn: Conn, name: str, geotype: str,
-           properties: list[tuple[str, str] | tuple[str, str, int]] | None = None) -> F.FeatureClass:
+def _class(
+    conn: Conn, name: str, geotype: str, properties: list[tuple[str, str] | tuple[str, str, int]] | None = None
+) -> F.FeatureClass:
     fc = F.create_feature_class(conn, name, geotype, cell_properties=properties)
     conn.commit()
     return fc
@@ -153,25 +157,39 @@ def test_depth_surface_round_trips_through_the_database(conn: Conn) -> None:
     [again] = parse_gocad(format_gocad(back))
     _same_model(mesh, again)
     exported = format_gocad(back)
-    for line in ("ZPOSITIVE Depth", 'NAME "UTM 11N depth"', "*solid*color:0.8 0.25 0.1 1", "name:Fault_A depth",
-                 "PROPERTIES Porosity Slip_Vector", "ESIZES 1 3", "UNITS fraction m", "PATOM 5 2",
-                 "PATOM 6 3 0.33 0.1 0.2 -0.3", "PROPERTY_KINDS Porosity Length", "GEOLOGICAL_TYPE fault"):
+    for line in (
+        "ZPOSITIVE Depth",
+        'NAME "UTM 11N depth"',
+        "*solid*color:0.8 0.25 0.1 1",
+        "name:Fault_A depth",
+        "PROPERTIES Porosity Slip_Vector",
+        "ESIZES 1 3",
+        "UNITS fraction m",
+        "PATOM 5 2",
+        "PATOM 6 3 0.33 0.1 0.2 -0.3",
+        "PROPERTY_KINDS Porosity Length",
+        "GEOLOGICAL_TYPE fault",
+    ):
         assert line in exported.splitlines(), line
     assert exported.count("TFACE") == 2
     # what SQL users see: the convention, the block, name and colour in columns, parts and atoms in rows
-    row = conn.execute("SELECT zpositive, crs, geoname, colorred, colorgreen, colorblue FROM tgsis.geometry "
-                       "WHERE geoid = %s", (fid,)).fetchone()
+    row = conn.execute(
+        "SELECT zpositive, crs, geoname, colorred, colorgreen, colorblue FROM tgsis.geometry WHERE geoid = %s", (fid,)
+    ).fetchone()
     assert row is not None
     assert row[0] == "Depth" and row[1][-1] == "ZPOSITIVE Depth" and row[2] == "Fault_A depth"
     assert [round(c, 6) for c in row[3:]] == [0.8, 0.25, 0.1]
-    assert conn.execute("SELECT vrtxid, refid, patom FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid",
-                        (fid,)).fetchall() == [(4, 1, True), (5, 2, True)]
-    assert conn.execute("SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid",
-                        (fid,)).fetchall() == [(0, 0, 0), (1, 1, 1)]
+    assert conn.execute(
+        "SELECT vrtxid, refid, patom FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (fid,)
+    ).fetchall() == [(4, 1, True), (5, 2, True)]
+    assert conn.execute(
+        "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (fid,)
+    ).fetchall() == [(0, 0, 0), (1, 1, 1)]
     # property names as the file wrote them, quoted columns of the class
     # and the vector property (ESIZES 3) one array column of 3 components, an (n, 3) array in Python
-    assert conn.execute('SELECT "Porosity", "Slip_Vector" FROM faults_cellpros WHERE _geoid = %s AND _idx = 0',
-                        (fid,)).fetchone() == (0.21, [0.1, 0.2, -0.3])
+    assert conn.execute(
+        'SELECT "Porosity", "Slip_Vector" FROM faults_cellpros WHERE _geoid = %s AND _idx = 0', (fid,)
+    ).fetchone() == (0.21, [0.1, 0.2, -0.3])
     assert {k: v.shape for k, v in back.vertex_properties.items()} == {"Porosity": (6,), "Slip_Vector": (6, 3)}
     assert F.get_feature_class(conn, "faults").cell_properties[1] == F.Property("Slip_Vector", "double precision", 3)
     # stored z is elevation: depth 1250.75 is z -1250.75, -0.0 is 0.0 (negation only flips the sign bit)
@@ -187,8 +205,9 @@ def test_depth_and_elevation_features_meet_in_the_same_box(conn: Conn) -> None:
     # the same place: one box query in elevation finds both, a box at the depths' numbers finds neither
     assert F.features_in_box(conn, fc, [[404000, 3759000, -1500], [406000, 3761000, -1000]]) == [did, eid]
     assert F.features_in_box(conn, fc, [[404000, 3759000, 1000], [406000, 3761000, 1500]]) == []
-    stored = conn.execute("SELECT geoid, array_agg(z ORDER BY vrtxid) FROM tgsis.vrtx GROUP BY geoid ORDER BY geoid"
-                          ).fetchall()
+    stored = conn.execute(
+        "SELECT geoid, array_agg(z ORDER BY vrtxid) FROM tgsis.vrtx GROUP BY geoid ORDER BY geoid"
+    ).fetchall()
     assert stored[0][1] == stored[1][1]  # like with like: the same stored z
     # each exports as it was read, in its own convention
     assert format_gocad(depth_back) == format_gocad(depth) and "ZPOSITIVE Depth" in format_gocad(depth_back)
@@ -213,9 +232,14 @@ def test_parts_without_properties_and_atoms_of_lines(conn: Conn) -> None:
     assert conn.execute("SELECT zpositive FROM tgsis.geometry WHERE geoid = %s", (lid,)).fetchone() == ("Depth",)
 
 
-@pytest.mark.parametrize("relative", ["formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts",
-                                      "formats/SAFS-SAFZ-MULT-San_Andreas_fault_Fuis-ALT6_500m.ts",
-                                      "cfm5.3/GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts"])
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts",
+        "formats/SAFS-SAFZ-MULT-San_Andreas_fault_Fuis-ALT6_500m.ts",
+        "cfm5.3/GRFS-GRFZ-WEST-Garlock_fault-CFM5_1000m.ts",
+    ],
+)
 def test_real_files_round_trip(conn: Conn, relative: str) -> None:
     fc = _class(conn, "cfm", "SURFACE")
     meshes = read_gocad(cfm(relative))
@@ -231,10 +255,17 @@ def test_real_files_round_trip(conn: Conn, relative: str) -> None:
 
 
 def test_names_with_capitals_and_keywords_are_columns(conn: Conn) -> None:
-    fc = F.create_feature_class(conn, "wells", "MULTIPOINT", feature_properties=[("Operator", "text")],
-                                cell_properties=[("Order", "double precision"), ("order", "real")])
-    text = ("GOCAD VSet 1\nHEADER {\nname:picks\n}\nPROPERTIES Order order\n"
-            "PVRTX 1 0 0 -5 1 0.5\nPVRTX 2 1 0 -6 2 0.25\nEND\n")
+    fc = F.create_feature_class(
+        conn,
+        "wells",
+        "MULTIPOINT",
+        feature_properties=[("Operator", "text")],
+        cell_properties=[("Order", "double precision"), ("order", "real")],
+    )
+    text = (
+        "GOCAD VSet 1\nHEADER {\nname:picks\n}\nPROPERTIES Order order\n"
+        "PVRTX 1 0 0 -5 1 0.5\nPVRTX 2 1 0 -6 2 0.25\nEND\n"
+    )
     [points] = parse_gocad(text)
     assert list(points.vertex_properties) == ["Order", "order"]
     fid = F.insert_feature(conn, fc, points, {"Operator": "ACME"})
@@ -250,8 +281,11 @@ def test_names_with_capitals_and_keywords_are_columns(conn: Conn) -> None:
 def test_colour_and_convention_edited_in_sql_are_exported(conn: Conn) -> None:
     fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
     _, fid, _ = _stored_and_exported(conn, fc, DEPTH_TSURF)
-    conn.execute("UPDATE tgsis.geometry SET colorred = 0.5, colorgreen = 0.5, colorblue = 0.5, geoname = 'renamed' "
-                 "WHERE geoid = %s", (fid,))
+    conn.execute(
+        "UPDATE tgsis.geometry SET colorred = 0.5, colorgreen = 0.5, colorblue = 0.5, geoname = 'renamed' "
+        "WHERE geoid = %s",
+        (fid,),
+    )
     conn.commit()
     back = F.fetch_feature(conn, fc, fid).mesh
     assert isinstance(back, Mesh)
@@ -259,8 +293,9 @@ def test_colour_and_convention_edited_in_sql_are_exported(conn: Conn) -> None:
     assert "*solid*color:0.5 0.5 0.5" in text and "name:renamed" in text
 
 
-def test_cli_import_export_gives_the_file_back(conn: Conn, db_dsn: str, tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_import_export_gives_the_file_back(
+    conn: Conn, db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
     source = tmp_path / "fault.ts"
     source.write_text(DEPTH_TSURF)
@@ -277,18 +312,25 @@ def test_vector_properties_of_the_wrong_shape_are_refused(conn: Conn) -> None:
     fc = _class(conn, "faults", "SURFACE", VECTOR_PROPERTIES)
     [mesh] = parse_gocad(DEPTH_TSURF)
     mesh.vertex_properties["Slip_Vector"] = mesh.vertex_properties["Slip_Vector"][:, :2]
-    with pytest.raises(tgsis.InvalidPropertyError, match="'Slip_Vector' of the mesh has a vector of 2 values per "
-                                                         "element, but feature class faults stores a vector of 3"):
+    with pytest.raises(
+        tgsis.InvalidPropertyError,
+        match="'Slip_Vector' of the mesh has a vector of 2 values per "
+        "element, but feature class faults stores a vector of 3",
+    ):
         F.insert_feature(conn, fc, mesh)
     mesh.vertex_properties["Slip_Vector"] = mesh.vertex_properties["Slip_Vector"][:, 0]
     with pytest.raises(tgsis.InvalidPropertyError, match="has one value per element"):
         F.insert_feature(conn, fc, mesh)
     assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (0,)
-    for spec, message in ((["v", "float8", 0], "has size 0"), (["v", "float8", 2.5], "has size 2.5"),
-                          (["v", "float8", "3"], "has size \"3\"")):
+    for spec, message in (
+        (["v", "float8", 0], "has size 0"),
+        (["v", "float8", 2.5], "has size 2.5"),
+        (["v", "float8", "3"], 'has size "3"'),
+    ):
         with pytest.raises(psycopg.Error) as caught:
-            conn.execute("SELECT tgsis.register_feature_class('bad', 'SURFACE', '[]', %s::jsonb)",
-                         (json.dumps([spec]),))
+            conn.execute(
+                "SELECT tgsis.register_feature_class('bad', 'SURFACE', '[]', %s::jsonb)", (json.dumps([spec]),)
+            )
         assert caught.value.sqlstate == "TG103" and message in str(caught.value), str(caught.value)
         conn.rollback()
     with pytest.raises(tgsis.InvalidPropertyError, match="only vertex and cell properties may be vectors"):
@@ -335,8 +377,10 @@ def test_delete_and_drop_remove_atoms_and_parts(conn: Conn) -> None:
     assert conn.execute("SELECT count(*) FROM tgsis.atom WHERE geoid = %s", (first,)).fetchone() == (0,)
     assert conn.execute("SELECT count(*) FROM tgsis.part WHERE geoid = %s", (first,)).fetchone() == (0,)
     F.drop_feature_class(conn, "faults", force=True)
-    assert conn.execute("SELECT (SELECT count(*) FROM tgsis.atom), (SELECT count(*) FROM tgsis.part)").fetchone() == \
-        (0, 0)
+    assert conn.execute("SELECT (SELECT count(*) FROM tgsis.atom), (SELECT count(*) FROM tgsis.part)").fetchone() == (
+        0,
+        0,
+    )
 
 
 def test_save_feature_keeps_the_meaning(conn: Conn) -> None:

@@ -16,10 +16,15 @@ from .gmaps_shapes import block_tetrahedra
 
 
 def test_polygons_of_any_size_and_their_properties(tmp_path: Path) -> None:
-    square_and_triangle = gmaps.GMap.from_polygons([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0.5, 0]],
-                                                   [0, 1, 2, 3, 1, 4, 2], [0, 4, 7])
-    g = gmaps.GMap(square_and_triangle.alpha, square_and_triangle.vertex, square_and_triangle.points,
-                   cell_properties={2: {"facies": np.array([3, 7])}})
+    square_and_triangle = gmaps.GMap.from_polygons(
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0.5, 0]], [0, 1, 2, 3, 1, 4, 2], [0, 4, 7]
+    )
+    g = gmaps.GMap(
+        square_and_triangle.alpha,
+        square_and_triangle.vertex,
+        square_and_triangle.points,
+        cell_properties={2: {"facies": np.array([3, 7])}},
+    )
     write_gmap_vtu(g, tmp_path / "faces.vtu", name="two faces")
     grid = pv.read(tmp_path / "faces.vtu")
     assert grid.n_cells == 2 and list(grid.celltypes) == [pv.CellType.POLYGON, pv.CellType.TRIANGLE]
@@ -33,7 +38,7 @@ def test_tetrahedra_and_an_extruded_cube_as_polyhedra(tmp_path: Path) -> None:
     write_gmap_vtu(solid, tmp_path / "solid.vtu")
     grid = pv.read(tmp_path / "solid.vtu")
     assert grid.n_cells == len(tetrahedra) and set(grid.celltypes) == {pv.CellType.POLYHEDRON}
-    assert np.isclose(np.abs(grid.compute_cell_sizes()["Volume"]).sum(), 8.0)         # the 2 x 2 x 2 block
+    assert np.isclose(np.abs(grid.compute_cell_sizes()["Volume"]).sum(), 8.0)  # the 2 x 2 x 2 block
     assert list(grid.cell_data["k"]) == list(range(len(tetrahedra)))
     square = gmaps.GMap.from_polygons([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2, 3]])
     cube = gmaps.extrude(square, [0.0, 1.0])

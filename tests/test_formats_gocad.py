@@ -36,7 +36,6 @@ ATOM_FILE = "formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts"
 BIG_FILE = "formats/SAFS-SAFZ-MULT-San_Andreas_fault_Fuis-ALT6_500m.ts"
 
 
-
 def keyword_counts(path: Path) -> dict[str, int]:
     """How many lines start with each keyword: an independent count to check the parser against."""
     counts: dict[str, int] = {}
@@ -219,9 +218,18 @@ def test_tsurf_sample_writes_back_names_sizes_and_no_data(tmp_path: Path) -> Non
     assert back.same_as(surface)
     assert back.metadata["property_names"] == surface.metadata["property_names"]
     text = (tmp_path / "out.ts").read_text()
-    for line in ("PROPERTIES Porosity Vel", "ESIZES 1 2", "NO_DATA_VALUES -999 -1", "ZPOSITIVE Depth",
-                 "PROPERTY_CLASSES porosity velocity", "UNITS fraction m/s", "GEOLOGICAL_FEATURE test_fault",
-                 "*solid*color:1 0.5 0 1", "PVRTX 2 1.0 0.0 100.0 -999.0 1510.0 -1.0", "ATOM 5 2"):
+    for line in (
+        "PROPERTIES Porosity Vel",
+        "ESIZES 1 2",
+        "NO_DATA_VALUES -999 -1",
+        "ZPOSITIVE Depth",
+        "PROPERTY_CLASSES porosity velocity",
+        "UNITS fraction m/s",
+        "GEOLOGICAL_FEATURE test_fault",
+        "*solid*color:1 0.5 0 1",
+        "PVRTX 2 1.0 0.0 100.0 -999.0 1510.0 -1.0",
+        "ATOM 5 2",
+    ):
         assert line + "\n" in text
     assert text.count("TFACE\n") == 2
 
@@ -233,8 +241,9 @@ def test_tsurf_merge_atoms_sample() -> None:
 
 
 def test_patom_values_and_atom_chains(tmp_path: Path) -> None:
-    text = ("GOCAD VSet 1\nPROPERTIES a\nATOM 9 3\nPVRTX 1 0 0 0 5\nPATOM 2 1\nPATOM 3 1 7\nATOM 4 3\n"
-            "VRTX 5 1 1 1\nEND\n")
+    text = (
+        "GOCAD VSet 1\nPROPERTIES a\nATOM 9 3\nPVRTX 1 0 0 0 5\nPATOM 2 1\nPATOM 3 1 7\nATOM 4 3\nVRTX 5 1 1 1\nEND\n"
+    )
     [points] = parse_gocad(text)
     assert points.vertices.tolist() == [[0, 0, 0]] * 5 + [[1, 1, 1]]
     # a PATOM without values and an ATOM repeat their vertex; ATOM 4 and the forward ATOM 9 repeat PATOM 3
@@ -245,8 +254,11 @@ def test_patom_values_and_atom_chains(tmp_path: Path) -> None:
     assert back.same_as(points)
     # only atoms whose vertex comes earlier are written as atoms: in a file with properties as PATOMs,
     # with values of their own where they differ from the vertex they repeat
-    assert [line for line in (tmp_path / "p.vs").read_text().splitlines() if "ATOM" in line] == \
-        ["PATOM 3 2", "PATOM 4 2 7.0", "ATOM 5 4"]
+    assert [line for line in (tmp_path / "p.vs").read_text().splitlines() if "ATOM" in line] == [
+        "PATOM 3 2",
+        "PATOM 4 2 7.0",
+        "ATOM 5 4",
+    ]
 
 
 def test_pline_sample() -> None:
@@ -281,8 +293,10 @@ def test_sample_round_trips(name: str, tmp_path: Path) -> None:
     [mesh] = read_gocad(DATA / name)
     back = round_trip(mesh, tmp_path, name)
     assert type(back) is type(mesh) and back.same_as(mesh)
-    assert back.metadata["color" if "color" in mesh.metadata else "gocad_kind"] == \
-        mesh.metadata["color" if "color" in mesh.metadata else "gocad_kind"]
+    assert (
+        back.metadata["color" if "color" in mesh.metadata else "gocad_kind"]
+        == mesh.metadata["color" if "color" in mesh.metadata else "gocad_kind"]
+    )
 
 
 def test_several_kinds_in_one_file(tmp_path: Path) -> None:
@@ -306,10 +320,19 @@ def random_meshes() -> list[Mesh]:
     return [
         PointSet(vertices, vertex_properties=props, name="points"),
         LineSet(vertices, np.stack([np.arange(39), np.arange(1, 40)], 1), vertex_properties=props),
-        Surface(vertices, np.stack([np.arange(38), np.arange(1, 39), np.arange(2, 40)], 1),
-                vertex_properties=props, cell_properties={"part": np.repeat([3, 8], 19)}, name="tri"),
-        TetraMesh(vertices, np.stack([np.arange(37) + j for j in range(4)], 1), vertex_properties=props,
-                  metadata={"zpositive": "Depth", "color": (0.25, 0.5, 0.75, 1.0)}),
+        Surface(
+            vertices,
+            np.stack([np.arange(38), np.arange(1, 39), np.arange(2, 40)], 1),
+            vertex_properties=props,
+            cell_properties={"part": np.repeat([3, 8], 19)},
+            name="tri",
+        ),
+        TetraMesh(
+            vertices,
+            np.stack([np.arange(37) + j for j in range(4)], 1),
+            vertex_properties=props,
+            metadata={"zpositive": "Depth", "color": (0.25, 0.5, 0.75, 1.0)},
+        ),
     ]
 
 
@@ -328,8 +351,9 @@ def test_python_meshes_round_trip_bit_exactly(index: int, tmp_path: Path) -> Non
 
 
 def test_no_data_value_avoids_real_values(tmp_path: Path) -> None:
-    mesh = PointSet(np.zeros((3, 3)) + [[0, 0, 0], [1, 0, 0], [2, 0, 0]],
-                    vertex_properties={"v": np.array([-99999.0, np.nan, 1.0])})
+    mesh = PointSet(
+        np.zeros((3, 3)) + [[0, 0, 0], [1, 0, 0], [2, 0, 0]], vertex_properties={"v": np.array([-99999.0, np.nan, 1.0])}
+    )
     back = round_trip(mesh, tmp_path, "p.vs")
     assert back.same_as(mesh)
     assert "NO_DATA_VALUES -999999\n" in (tmp_path / "p.vs").read_text()
@@ -337,8 +361,11 @@ def test_no_data_value_avoids_real_values(tmp_path: Path) -> None:
 
 def test_interleaved_parts_come_back_grouped(tmp_path: Path) -> None:
     vertices = np.eye(4)[:, :3] + np.arange(4)[:, None]
-    surface = Surface(np.vstack([vertices, vertices + 10]), [[0, 1, 2], [4, 5, 6], [1, 2, 3], [5, 6, 7]],
-                      cell_properties={"part": [0, 1, 0, 1]})
+    surface = Surface(
+        np.vstack([vertices, vertices + 10]),
+        [[0, 1, 2], [4, 5, 6], [1, 2, 3], [5, 6, 7]],
+        cell_properties={"part": [0, 1, 0, 1]},
+    )
     back = round_trip(surface, tmp_path)
     assert back.cells.tolist() == [[0, 1, 2], [1, 2, 3], [4, 5, 6], [5, 6, 7]]
     assert back.cell_properties["part"].tolist() == [0, 0, 1, 1]
@@ -368,11 +395,12 @@ def test_written_file_is_plain_gocad(tmp_path: Path) -> None:
     write_gocad(surface, tmp_path / "t.ts")
     assert (tmp_path / "t.ts").read_text() == (
         "GOCAD TSurf 1\nHEADER {\nname:tiny\n}\nTFACE\n"
-        "VRTX 1 0.1 0.2 0.3\nVRTX 2 1.0 0.0 0.0\nVRTX 3 0.0 1.0 0.0\nTRGL 1 2 3\nEND\n")
+        "VRTX 1 0.1 0.2 0.3\nVRTX 2 1.0 0.0 0.0\nVRTX 3 0.0 1.0 0.0\nTRGL 1 2 3\nEND\n"
+    )
 
 
 def test_renamed_property_names_are_written_back(tmp_path: Path) -> None:
-    text = ("GOCAD VSet 1\nPROPERTIES Rock-Type 2nd type\nPVRTX 1 0 0 0 1 2 3\nEND\n")
+    text = "GOCAD VSet 1\nPROPERTIES Rock-Type 2nd type\nPVRTX 1 0 0 0 1 2 3\nEND\n"
     [points] = parse_gocad(text)
     assert list(points.vertex_properties) == ["Rock_Type", "p_2nd", "type"]  # letter case kept
     assert points.metadata["property_names"] == {"Rock_Type": "Rock-Type", "p_2nd": "2nd", "type": "type"}
@@ -384,35 +412,48 @@ def test_renamed_property_names_are_written_back(tmp_path: Path) -> None:
 TSURF_HEAD = "GOCAD TSurf 1\nHEADER {\nname:bad\n}\nTFACE\n"  # 5 lines
 
 
-@pytest.mark.parametrize(("text", "line", "message"), [
-    ("\nGOCAD Voxet 1\nEND\n", 2, "unsupported GOCAD object type 'Voxet'"),
-    ("GOCAD\nEND\n", 1, "names no object type"),
-    ("HEADER {\nname:x\n}\nVRTX 1 0 0 0\nEND\n", 1, "expected a 'GOCAD <type> <version>' line"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 17\nEND\n", 9,
-     "TRGL refers to vertex 17, which is not defined"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 1 0 1 0\nEND\n", 8, "vertex id 1 is defined twice (first at line 6)"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0\nEND\n", 7, "VRTX has 3 values, expected 4"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2\nEND\n", 9, "TRGL has 2 values, expected 3"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3 3\nEND\n", 9, "TRGL has 4 values"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 abc 0\nEND\n", 7, "VRTX has a non-numeric value 'abc'"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 nan 0\nEND\n", 7, "VRTX has a non-finite y coordinate 'nan'"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX x 1 0 0\nEND\n", 7, "VRTX has a vertex id that is not an integer: 'x'"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3\n", 9, "has no END (the file ends first)"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nGOCAD TSurf 1\nEND\n", 7, "has no END before the next GOCAD object"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nATOM 2 9\nEND\n", 7, "ATOM refers to vertex 9, which is not defined"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nATOM 2 1 5\nEND\n", 7, "ATOM has 3 values, expected 2"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nATOM 2 3\nATOM 3 2\nEND\n", 7, "ATOM 2 repeats itself through a chain"),
-    (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nTRGL 1 2 2\nEND\n", 8, "TRGL 1 2 2 uses one vertex twice"),
-    ("GOCAD TSurf 1\nHEADER {\nname:x\nEND\n", 2, "HEADER block is not closed"),
-    ("GOCAD TSurf 1\nPROPERTIES a b\nTFACE\nPVRTX 1 0 0 0 1\nEND\n", 4, "PVRTX has 5 values, expected 6"),
-    ("GOCAD TSurf 1\nPROPERTIES a\nTFACE\nPVRTX 1 0 0 0 1 2\nEND\n", 4, "PVRTX has 6 values, expected 5"),
-    ("GOCAD TSurf 1\nTFACE\nPVRTX 1 0 0 0 7\nEND\n", 3, "PVRTX has 5 values, expected 4"),
-    ("GOCAD TSurf 1\nPROPERTIES a b\nESIZES 1\nEND\n", 3, "ESIZES gives 1 sizes for 2 properties"),
-    ("GOCAD PLine 1\nILINE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nSEG 1 3\nEND\n", 5, "SEG refers to vertex 3"),
-    ("GOCAD TSolid 1\nTVOLUME\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nVRTX 4 0 0 1\nTETRA 1 2 3 5\nEND\n", 7,
-     "TETRA refers to vertex 5"),
-    ("GOCAD VSet 1\nVRTX 1 0 0 0\nVRTX 1 1 0 0\nEND\n", 3, "vertex id 1 is defined twice"),
-])
+@pytest.mark.parametrize(
+    ("text", "line", "message"),
+    [
+        ("\nGOCAD Voxet 1\nEND\n", 2, "unsupported GOCAD object type 'Voxet'"),
+        ("GOCAD\nEND\n", 1, "names no object type"),
+        ("HEADER {\nname:x\n}\nVRTX 1 0 0 0\nEND\n", 1, "expected a 'GOCAD <type> <version>' line"),
+        (
+            TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 17\nEND\n",
+            9,
+            "TRGL refers to vertex 17, which is not defined",
+        ),
+        (
+            TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 1 0 1 0\nEND\n",
+            8,
+            "vertex id 1 is defined twice (first at line 6)",
+        ),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0\nEND\n", 7, "VRTX has 3 values, expected 4"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2\nEND\n", 9, "TRGL has 2 values, expected 3"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3 3\nEND\n", 9, "TRGL has 4 values"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 abc 0\nEND\n", 7, "VRTX has a non-numeric value 'abc'"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 nan 0\nEND\n", 7, "VRTX has a non-finite y coordinate 'nan'"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX x 1 0 0\nEND\n", 7, "VRTX has a vertex id that is not an integer: 'x'"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3\n", 9, "has no END (the file ends first)"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nGOCAD TSurf 1\nEND\n", 7, "has no END before the next GOCAD object"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nATOM 2 9\nEND\n", 7, "ATOM refers to vertex 9, which is not defined"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nATOM 2 1 5\nEND\n", 7, "ATOM has 3 values, expected 2"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nATOM 2 3\nATOM 3 2\nEND\n", 7, "ATOM 2 repeats itself through a chain"),
+        (TSURF_HEAD + "VRTX 1 0 0 0\nVRTX 2 1 0 0\nTRGL 1 2 2\nEND\n", 8, "TRGL 1 2 2 uses one vertex twice"),
+        ("GOCAD TSurf 1\nHEADER {\nname:x\nEND\n", 2, "HEADER block is not closed"),
+        ("GOCAD TSurf 1\nPROPERTIES a b\nTFACE\nPVRTX 1 0 0 0 1\nEND\n", 4, "PVRTX has 5 values, expected 6"),
+        ("GOCAD TSurf 1\nPROPERTIES a\nTFACE\nPVRTX 1 0 0 0 1 2\nEND\n", 4, "PVRTX has 6 values, expected 5"),
+        ("GOCAD TSurf 1\nTFACE\nPVRTX 1 0 0 0 7\nEND\n", 3, "PVRTX has 5 values, expected 4"),
+        ("GOCAD TSurf 1\nPROPERTIES a b\nESIZES 1\nEND\n", 3, "ESIZES gives 1 sizes for 2 properties"),
+        ("GOCAD PLine 1\nILINE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nSEG 1 3\nEND\n", 5, "SEG refers to vertex 3"),
+        (
+            "GOCAD TSolid 1\nTVOLUME\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nVRTX 4 0 0 1\nTETRA 1 2 3 5\nEND\n",
+            7,
+            "TETRA refers to vertex 5",
+        ),
+        ("GOCAD VSet 1\nVRTX 1 0 0 0\nVRTX 1 1 0 0\nEND\n", 3, "vertex id 1 is defined twice"),
+    ],
+)
 def test_errors_name_the_problem_and_line(text: str, line: int, message: str, tmp_path: Path) -> None:
     path = write(tmp_path, text)
     with pytest.raises(FileFormatError) as info:
@@ -446,8 +487,12 @@ def test_unwritable_path(tmp_path: Path) -> None:
 
 
 def test_registry_picks_gocad_by_extension(tmp_path: Path) -> None:
-    for name, kind in (("two_lines.pl", LineSet), ("samples.vs", PointSet), ("two_volumes.so", TetraMesh),
-                       ("two_parts_properties.ts", Surface)):
+    for name, kind in (
+        ("two_lines.pl", LineSet),
+        ("samples.vs", PointSet),
+        ("two_volumes.so", TetraMesh),
+        ("two_parts_properties.ts", Surface),
+    ):
         mesh = formats.read_one(DATA / name)
         assert type(mesh) is kind
         assert formats.format_for(DATA / name).geotypes == (kind.geotype,)
@@ -457,8 +502,11 @@ def test_registry_picks_gocad_by_extension(tmp_path: Path) -> None:
 
 
 def test_registry_errors(tmp_path: Path) -> None:
-    with pytest.raises(FileFormatError, match=r"unknown file extension '\.xyz': known extensions are .ts, .pl, "
-                                              r".vs, .so, .lso, .gp, .ml, .vtu, .vtp, .vtk, .obj, .ply, .off, .stl"):
+    with pytest.raises(
+        FileFormatError,
+        match=r"unknown file extension '\.xyz': known extensions are .ts, .pl, "
+        r".vs, .so, .lso, .gp, .ml, .vtu, .vtp, .vtk, .obj, .ply, .off, .stl",
+    ):
         formats.read(tmp_path / "a.xyz")
     with pytest.raises(FileFormatError, match="unknown format 'dxf'"):
         formats.format_for(tmp_path / "a.ts", "dxf")
@@ -471,5 +519,19 @@ def test_registry_errors(tmp_path: Path) -> None:
     write_gocad_many([lines, lines], both)
     with pytest.raises(FileFormatError, match="expected one mesh, the file holds 2"):
         formats.read_one(both)
-    assert set(formats.FORMATS) == {"tsurf", "pline", "vset", "tsolid", "lightsolid", "gocadgroup", "gocadmodel",
-                                    "vtu", "vtp", "vtk", "obj", "ply", "off", "stl"}
+    assert set(formats.FORMATS) == {
+        "tsurf",
+        "pline",
+        "vset",
+        "tsolid",
+        "lightsolid",
+        "gocadgroup",
+        "gocadmodel",
+        "vtu",
+        "vtp",
+        "vtk",
+        "obj",
+        "ply",
+        "off",
+        "stl",
+    }

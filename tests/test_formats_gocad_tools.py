@@ -52,16 +52,21 @@ def write(tmp_path: Path, text: str, name: str = "f.ts") -> Path:
 # ---------------------------------------------------------------- the tokeniser
 
 
-@pytest.mark.parametrize(("text", "words"), [
-    ("a b  c", ["a", "b", "c"]),
-    ('" default property"  def-prop', [" default property", "def-prop"]),
-    ('"Real Number" X "Real Number"', ["Real Number", "X", "Real Number"]),
-    ('none +"horizon_1_fault_fract 1" -(boundary)"fracture 1"', ["none", "+horizon_1_fault_fract 1",
-                                                                 "-(boundary)fracture 1"]),
-    ('""', [""]),
-    ('"open quote', ["open", "quote"]),
-    ("", []),
-])
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("a b  c", ["a", "b", "c"]),
+        ('" default property"  def-prop', [" default property", "def-prop"]),
+        ('"Real Number" X "Real Number"', ["Real Number", "X", "Real Number"]),
+        (
+            'none +"horizon_1_fault_fract 1" -(boundary)"fracture 1"',
+            ["none", "+horizon_1_fault_fract 1", "-(boundary)fracture 1"],
+        ),
+        ('""', [""]),
+        ('"open quote', ["open", "quote"]),
+        ("", []),
+    ],
+)
 def test_split_words_takes_a_quoted_text_as_one_word(text: str, words: list[str]) -> None:
     assert split_words(text) == words
 
@@ -85,8 +90,14 @@ def test_control_node_flags_are_read_per_vertex() -> None:
     assert solid.cell_properties["part"].tolist() == [0, 0, 1]
     assert solid.metadata["gocad_part_names"] == ["upper", "lower"]
     # the model section names boundary triangles of the tetrahedra: known, counted, not geometry of the mesh
-    assert solid.metadata["gocad_ignored"] == {"MODEL": 1, "SURFACE": 1, "TFACE": 1, "KEYVERTICES": 1, "TRGL": 1,
-                                               "MODEL_REGION": 2}
+    assert solid.metadata["gocad_ignored"] == {
+        "MODEL": 1,
+        "SURFACE": 1,
+        "TFACE": 1,
+        "KEYVERTICES": 1,
+        "TRGL": 1,
+        "MODEL_REGION": 2,
+    }
 
 
 def test_flags_and_part_names_are_written_back(tmp_path: Path) -> None:
@@ -115,14 +126,20 @@ def test_flags_after_property_values() -> None:
     assert "PVRTX 2 110.0 200.0 50.0 1.5 12.5 CNXYZ\n" in format_gocad(surface)
 
 
-@pytest.mark.parametrize("relative", ["formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts",
-                                      "formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts",
-                                      "formats/ETRA-LSBM-MULT-Burnt_Mountain-East_Wide_Canyon_fault-CFM2.ts"])
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "formats/CRFA-SJMZ-CHMN-Big_Spring_fault-50dip-CFM5.ts",
+        "formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts",
+        "formats/ETRA-LSBM-MULT-Burnt_Mountain-East_Wide_Canyon_fault-CFM2.ts",
+    ],
+)
 def test_real_files_with_a_flag_on_every_vertex_read_the_same(relative: str, tmp_path: Path) -> None:
     source = cfm(relative)
     lines = source.read_text().splitlines()
-    flagged = [line.rstrip() + " CNXYZ" if line.split()[:1] in (["VRTX"], ["PVRTX"], ["ATOM"]) else line
-               for line in lines]
+    flagged = [
+        line.rstrip() + " CNXYZ" if line.split()[:1] in (["VRTX"], ["PVRTX"], ["ATOM"]) else line for line in lines
+    ]
     [plain] = read_quietly(source)
     [with_flags] = read_quietly(write(tmp_path, "\n".join(flagged) + "\n"))
     assert with_flags.same_as(plain)
@@ -140,12 +157,15 @@ def test_every_flag_word_is_kept(tmp_path: Path) -> None:
     assert back.metadata["gocad_vertex_flags"] == points.metadata["gocad_vertex_flags"]
 
 
-@pytest.mark.parametrize(("line", "message"), [
-    ("VRTX 2 1 0 0 CNFOO", "VRTX has 5 values, expected 4"),
-    ("VRTX 2 CNXYZ 1 0 0", "VRTX has 5 values, expected 4"),
-    ("VRTX 2 CNXYZ 1 0", "VRTX has a non-numeric value 'CNXYZ'"),
-    ("VRTX 2 1 0 0 CNXYZ CNXYZ", "VRTX has 5 values, expected 4"),
-])
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("VRTX 2 1 0 0 CNFOO", "VRTX has 5 values, expected 4"),
+        ("VRTX 2 CNXYZ 1 0 0", "VRTX has 5 values, expected 4"),
+        ("VRTX 2 CNXYZ 1 0", "VRTX has a non-numeric value 'CNXYZ'"),
+        ("VRTX 2 1 0 0 CNXYZ CNXYZ", "VRTX has 5 values, expected 4"),
+    ],
+)
 def test_a_word_that_is_not_a_trailing_flag_is_still_an_error(line: str, message: str, tmp_path: Path) -> None:
     path = write(tmp_path, f"GOCAD VSet 1\nVRTX 1 0 0 0 CNXYZ\n{line}\nEND\n")
     with pytest.raises(FileFormatError, match=re.escape(message)) as info:
@@ -154,8 +174,10 @@ def test_a_word_that_is_not_a_trailing_flag_is_still_an_error(line: str, message
 
 
 def test_flags_metadata_edited_by_hand_is_checked_before_writing() -> None:
-    points = PointSet([[0, 0, 0], [1, 0, 0]], metadata={"gocad_vertex_flags": {
-        "CNXYZ": [[0, 1], [1, 9], "x"], "rm -rf": [[0, 2]], "XYZ": "all"}})
+    points = PointSet(
+        [[0, 0, 0], [1, 0, 0]],
+        metadata={"gocad_vertex_flags": {"CNXYZ": [[0, 1], [1, 9], "x"], "rm -rf": [[0, 2]], "XYZ": "all"}},
+    )
     assert format_gocad(points).splitlines()[-3:] == ["VRTX 1 0.0 0.0 0.0 CNXYZ", "VRTX 2 1.0 0.0 0.0", "END"]
 
 
@@ -168,8 +190,10 @@ def test_quoted_property_names_are_read() -> None:
     assert surface.metadata["property_names"] == {"default_property": " default property", "throw": "throw"}
     values = surface.vertex_properties["default_property"]
     assert values[:3].tolist() == [0.5, 1.5, 2.5] and np.isnan(values[3])  # -99999 is no data
-    assert surface.metadata["gocad_property_info"]["PROPERTY_KINDS"] == {" default property": '" Real Number"',
-                                                                       "throw": "Length"}
+    assert surface.metadata["gocad_property_info"]["PROPERTY_KINDS"] == {
+        " default property": '" Real Number"',
+        "throw": "Length",
+    }
     assert surface.metadata["gocad_ignored"] == {"BSTONE": 1, "BORDER": 1}
 
 
@@ -205,15 +229,22 @@ def test_a_mixed_file_gives_its_surfaces_and_warns_for_the_rest() -> None:
     skipped = [w.message for w in caught]
     assert all(isinstance(w, SkippedObjectWarning) for w in skipped)
     assert [(w.line, w.object_type, w.name) for w in skipped] == [  # type: ignore[union-attr]
-        (1, "SGrid", "porosity grid"), (31, "Model3d", "structural model")]
-    assert str(skipped[0]) == (f"{path}:1: skipped the GOCAD SGrid object 'porosity grid' (lines 1-20): "
-                               "tgsis reads TSurf, PLine, VSet, TSolid, LightTSolid")
+        (1, "SGrid", "porosity grid"),
+        (31, "Model3d", "structural model"),
+    ]
+    assert str(skipped[0]) == (
+        f"{path}:1: skipped the GOCAD SGrid object 'porosity grid' (lines 1-20): "
+        "tgsis reads TSurf, PLine, VSet, TSolid, LightTSolid"
+    )
     assert tgsis.SkippedObjectWarning is SkippedObjectWarning
 
 
 def test_skip_unsupported_false_refuses_a_mixed_file() -> None:
-    with pytest.raises(FileFormatError, match="unsupported GOCAD SGrid object 'porosity grid' "
-                                              r"\(lines 1-20\)") as info:
+    with pytest.raises(
+        FileFormatError,
+        match="unsupported GOCAD SGrid object 'porosity grid' "
+        r"\(lines 1-20\)",
+    ) as info:
         read_gocad(DATA / "mixed.ts", skip_unsupported=False)
     assert info.value.line == 1 and "skip_unsupported=True" in str(info.value)
     with pytest.raises(FileFormatError, match="unsupported GOCAD SGrid"):
@@ -227,8 +258,10 @@ def test_a_file_of_unsupported_objects_only_is_an_error_naming_them(tmp_path: Pa
         with pytest.raises(FileFormatError) as info:
             read_gocad(write(tmp_path, text))
     assert info.value.line == 1
-    assert ("unsupported GOCAD object type 'SGrid': the file holds no object tgsis reads (GOCAD SGrid object 'g' "
-            "(lines 1-5); GOCAD Voxet object (lines 7-8)") in str(info.value)
+    assert (
+        "unsupported GOCAD object type 'SGrid': the file holds no object tgsis reads (GOCAD SGrid object 'g' "
+        "(lines 1-5); GOCAD Voxet object (lines 7-8)"
+    ) in str(info.value)
 
 
 def test_an_unsupported_object_cut_short_is_an_error(tmp_path: Path) -> None:
@@ -253,11 +286,14 @@ def test_groups_nest(tmp_path: Path) -> None:
     assert [m.name for m in read_quietly(write(tmp_path, text, "nested.gp"))] == ["member surface", "member points"]
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("GOCAD HomogeneousGroup 1\nHEADER {\nname:g\n}\nEND\n", "has no BEGIN_MEMBERS line"),
-    ("GOCAD HomogeneousGroup 1\nBEGIN_MEMBERS\nGOCAD VSet 1\nVRTX 1 0 0 0\nEND\n", "has no END_MEMBERS"),
-    ("GOCAD HomogeneousGroup 1\nBEGIN_MEMBERS\nGOCAD VSet 1\nVRTX 1 0 0 0\nEND\nEND_MEMBERS\n", "no END after"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("GOCAD HomogeneousGroup 1\nHEADER {\nname:g\n}\nEND\n", "has no BEGIN_MEMBERS line"),
+        ("GOCAD HomogeneousGroup 1\nBEGIN_MEMBERS\nGOCAD VSet 1\nVRTX 1 0 0 0\nEND\n", "has no END_MEMBERS"),
+        ("GOCAD HomogeneousGroup 1\nBEGIN_MEMBERS\nGOCAD VSet 1\nVRTX 1 0 0 0\nEND\nEND_MEMBERS\n", "no END after"),
+    ],
+)
 def test_broken_groups_are_errors(text: str, message: str, tmp_path: Path) -> None:
     with pytest.raises(FileFormatError, match=message):
         read_gocad(write(tmp_path, text))
@@ -274,13 +310,16 @@ def test_unknown_keywords_refuse_the_file_naming_line_and_keyword() -> None:
     assert str(info.value).startswith(f"{path}:8: unknown keyword 'VERTEX' in the TSurf begun at line 1")
 
 
-@pytest.mark.parametrize(("text", "line", "keyword"), [
-    ("GOCAD TSurf 1\nTFACE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nSEG 1 2\nEND\n", 5, "SEG"),
-    ("GOCAD PLine 1\nILINE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3\nEND\n", 6, "TRGL"),
-    ("GOCAD TSurf 1\nVERTEX 1 0 0 0\nTFACE\nEND\n", 2, "VERTEX"),  # before the geometry too
-    ("GOCAD VSet 1\nVRTX 1 0 0 0\nvrtx 2 1 0 0\nEND\n", 3, "vrtx"),
-    ("GOCAD TSolid 1\nTVOLUME\nVRTX 1 0 0 0\nTRIANGLE 1 2 3\nEND\n", 4, "TRIANGLE"),
-])
+@pytest.mark.parametrize(
+    ("text", "line", "keyword"),
+    [
+        ("GOCAD TSurf 1\nTFACE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nSEG 1 2\nEND\n", 5, "SEG"),
+        ("GOCAD PLine 1\nILINE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3\nEND\n", 6, "TRGL"),
+        ("GOCAD TSurf 1\nVERTEX 1 0 0 0\nTFACE\nEND\n", 2, "VERTEX"),  # before the geometry too
+        ("GOCAD VSet 1\nVRTX 1 0 0 0\nvrtx 2 1 0 0\nEND\n", 3, "vrtx"),
+        ("GOCAD TSolid 1\nTVOLUME\nVRTX 1 0 0 0\nTRIANGLE 1 2 3\nEND\n", 4, "TRIANGLE"),
+    ],
+)
 def test_unknown_keyword_cases(text: str, line: int, keyword: str, tmp_path: Path) -> None:
     with pytest.raises(FileFormatError, match=f"unknown keyword {keyword!r}") as info:
         read_gocad(write(tmp_path, text))
@@ -288,9 +327,11 @@ def test_unknown_keyword_cases(text: str, line: int, keyword: str, tmp_path: Pat
 
 
 def test_known_harmless_keywords_are_still_read_past() -> None:
-    text = ("GOCAD TSurf 1\nGEOLOGICAL_TYPE fault\nTFACE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3\n"
-            "BSTONE 1\nBORDER 4 1 2\nSTRATIGRAPHIC_POSITION Late 2\nEND\n"
-            "GOCAD VSet 1\nVRTX 1 0 0 0\nSUBVSET\nVRTX 2 1 0 0\nEND\n")
+    text = (
+        "GOCAD TSurf 1\nGEOLOGICAL_TYPE fault\nTFACE\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nTRGL 1 2 3\n"
+        "BSTONE 1\nBORDER 4 1 2\nSTRATIGRAPHIC_POSITION Late 2\nEND\n"
+        "GOCAD VSet 1\nVRTX 1 0 0 0\nSUBVSET\nVRTX 2 1 0 0\nEND\n"
+    )
     surface, points = parse_gocad(text)
     assert surface.metadata["gocad_extra_lines"] == ["GEOLOGICAL_TYPE fault", "STRATIGRAPHIC_POSITION Late 2"]
     assert surface.metadata["gocad_ignored"] == {"BSTONE": 1, "BORDER": 1}
@@ -317,8 +358,15 @@ def test_light_tsolid_is_read_as_a_tetrahedral_mesh() -> None:
     assert np.isnan(props["wf_structural_resolution_map"][4])
     assert solid.metadata["gocad_vertex_flags"] == {"XYZ": [[0, 5]]}
     assert solid.metadata["gocad_extra_lines"] == ["FIXED 0 1", "REGION interpolation_region 0"]
-    assert solid.metadata["gocad_ignored"] == {"BEGIN_VERTEX_REGION_INDICATORS": 1, "MODEL": 1, "SURFACE": 2,
-                                               "TFACE": 2, "KEYVERTICES": 2, "TRGL": 2, "MODEL_REGION": 2}
+    assert solid.metadata["gocad_ignored"] == {
+        "BEGIN_VERTEX_REGION_INDICATORS": 1,
+        "MODEL": 1,
+        "SURFACE": 2,
+        "TFACE": 2,
+        "KEYVERTICES": 2,
+        "TRGL": 2,
+        "MODEL_REGION": 2,
+    }
 
 
 def test_light_tsolid_through_the_registry_and_back_as_tsolid(tmp_path: Path) -> None:
@@ -338,10 +386,13 @@ def test_light_tsolid_through_the_registry_and_back_as_tsolid(tmp_path: Path) ->
     assert by_part(back) == by_part(solid)  # cells come back grouped by part, each with its region
 
 
-@pytest.mark.parametrize(("body", "line", "message"), [
-    ("# CTETRA R1 none none none none\n", 6, "must follow a TETRA line"),
-    ("TETRA 1 2 3 4\n# CTETRA\n", 7, "must follow a TETRA line and name a region"),
-])
+@pytest.mark.parametrize(
+    ("body", "line", "message"),
+    [
+        ("# CTETRA R1 none none none none\n", 6, "must follow a TETRA line"),
+        ("TETRA 1 2 3 4\n# CTETRA\n", 7, "must follow a TETRA line and name a region"),
+    ],
+)
 def test_light_tsolid_errors(body: str, line: int, message: str, tmp_path: Path) -> None:
     text = "GOCAD LightTSolid 1\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nVRTX 3 0 1 0\nVRTX 4 0 0 1\n" + body + "END\n"
     with pytest.raises(FileFormatError, match=message) as info:

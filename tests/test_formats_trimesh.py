@@ -33,7 +33,7 @@ def without_properties(surface: Surface) -> Surface:
 
 def text_tolerance(vertices: npt.NDArray[np.float64], decimals: int) -> npt.NDArray[np.float64]:
     """Fixed-point text with ``decimals`` places: half a unit in the last place plus one rounding of the double."""
-    return np.asarray(0.5 * 10.0 ** -decimals + np.spacing(np.abs(vertices)), dtype=np.float64)
+    return np.asarray(0.5 * 10.0**-decimals + np.spacing(np.abs(vertices)), dtype=np.float64)
 
 
 # ---------------------------------------------------------------- PLY: exact
@@ -71,8 +71,9 @@ def test_trimesh_own_ply_writer_would_lose_bits(fault: Surface, tmp_path: Path) 
 
 
 def test_ply_property_types(tmp_path: Path) -> None:
-    surface = Surface(np.eye(3), [[0, 1, 2]], vertex_properties={"ok": [True, False, True],
-                                                                   "u": np.array([1, 2, 3], dtype=np.uint64)})
+    surface = Surface(
+        np.eye(3), [[0, 1, 2]], vertex_properties={"ok": [True, False, True], "u": np.array([1, 2, 3], dtype=np.uint64)}
+    )
     write_trimesh_file(surface, tmp_path / "s.ply")
     back = read_trimesh_file(tmp_path / "s.ply")
     assert back.vertex_properties["ok"].tolist() == [1, 0, 1]
@@ -86,9 +87,11 @@ def test_ply_property_types(tmp_path: Path) -> None:
 
 
 def test_ply_from_another_writer_with_odd_names(tmp_path: Path) -> None:
-    text = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-            "property uchar red\nproperty float Intensity\nelement face 1\nproperty list uchar int vertex_indices\n"
-            "end_header\n0 0 0 255 0.5\n1 0 0 0 1.5\n0 1 0 7 2.5\n3 0 1 2\n")
+    text = (
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "property uchar red\nproperty float Intensity\nelement face 1\nproperty list uchar int vertex_indices\n"
+        "end_header\n0 0 0 255 0.5\n1 0 0 0 1.5\n0 1 0 7 2.5\n3 0 1 2\n"
+    )
     (tmp_path / "a.ply").write_text(text)
     back = read_trimesh_file(tmp_path / "a.ply")
     assert back.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]] and back.cells.tolist() == [[0, 1, 2]]
@@ -101,8 +104,9 @@ def test_ply_from_another_writer_with_odd_names(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("file_type", "decimals"), [("obj", 8), ("off", 10)])
-def test_text_formats_keep_order_but_round_coordinates(fault: Surface, file_type: str, decimals: int,
-                                                       tmp_path: Path) -> None:
+def test_text_formats_keep_order_but_round_coordinates(
+    fault: Surface, file_type: str, decimals: int, tmp_path: Path
+) -> None:
     surface = without_properties(fault)
     path = tmp_path / f"f.{file_type}"
     write_trimesh_file(surface, path)

@@ -41,18 +41,37 @@ def meshes() -> list[Mesh]:
     n = 40
     vertices = rng.uniform(-1e6, 1e6, (n, 3))
     vertices[0] = [-0.0, 5e-324, 1e300]
-    props: dict[str, Any] = {"porosity": rng.random(n), "velocity": rng.normal(size=(n, 3)),
-                             "depth": rng.random(n).astype(np.float32), "id": np.arange(n, dtype=np.int64) * 2**40}
+    props: dict[str, Any] = {
+        "porosity": rng.random(n),
+        "velocity": rng.normal(size=(n, 3)),
+        "depth": rng.random(n).astype(np.float32),
+        "id": np.arange(n, dtype=np.int64) * 2**40,
+    }
     return [
-        PointSet(vertices, vertex_properties=props, cell_properties={"zone": np.arange(n, dtype=np.int64)},
-                 name="wells"),
-        LineSet(vertices, np.stack([np.arange(n - 1), np.arange(1, n)], 1), vertex_properties=props,
-                cell_properties={"zone": np.arange(n - 1, dtype=np.int64)}, name="trace"),
-        Surface(vertices, np.stack([np.arange(n - 2), np.arange(1, n - 1), np.arange(2, n)], 1),
-                vertex_properties=props, cell_properties={"zone": np.arange(n - 2, dtype=np.int64)},
-                name="horizon é"),
-        TetraMesh(vertices, np.stack([np.arange(n - 3) + j for j in range(4)], 1), vertex_properties=props,
-                  cell_properties={"zone": np.arange(n - 3, dtype=np.int64)}, name="salt"),
+        PointSet(
+            vertices, vertex_properties=props, cell_properties={"zone": np.arange(n, dtype=np.int64)}, name="wells"
+        ),
+        LineSet(
+            vertices,
+            np.stack([np.arange(n - 1), np.arange(1, n)], 1),
+            vertex_properties=props,
+            cell_properties={"zone": np.arange(n - 1, dtype=np.int64)},
+            name="trace",
+        ),
+        Surface(
+            vertices,
+            np.stack([np.arange(n - 2), np.arange(1, n - 1), np.arange(2, n)], 1),
+            vertex_properties=props,
+            cell_properties={"zone": np.arange(n - 2, dtype=np.int64)},
+            name="horizon é",
+        ),
+        TetraMesh(
+            vertices,
+            np.stack([np.arange(n - 3) + j for j in range(4)], 1),
+            vertex_properties=props,
+            cell_properties={"zone": np.arange(n - 3, dtype=np.int64)},
+            name="salt",
+        ),
     ]
 
 
@@ -132,8 +151,11 @@ def test_the_string_field_arrays_that_meshio_refused(tmp_path: Path) -> None:
     surface = meshes()[2]
     data = format_vtu(surface, compression=None)
     root = ET.fromstring(data)
-    fields = {e.get("Name"): e for e in root.iter() if e.tag in ("Array", "DataArray") and e.get("Name", "")
-              .startswith("tgsis_")}
+    fields = {
+        e.get("Name"): e
+        for e in root.iter()
+        if e.tag in ("Array", "DataArray") and e.get("Name", "").startswith("tgsis_")
+    }
     assert set(fields) == {"tgsis_name", "tgsis_geotype"}
     assert all(e.tag == "DataArray" and e.get("type") == "UInt8" for e in fields.values())
     assert fields["tgsis_name"].get("NumberOfTuples") == str(len("horizon é".encode()) + 1)  # pyvista needs it
@@ -141,8 +163,12 @@ def test_the_string_field_arrays_that_meshio_refused(tmp_path: Path) -> None:
     assert meshio.read(tmp_path / "new.vtu").field_data["tgsis_geotype"].tobytes() == b"SURFACE\0"
     # a file of the old layout, a String array as VTK writes one: meshio still refuses it, tgsis reads it
     old = data.replace(b'<DataArray type="UInt8" Name="tgsis_name"', b'<DataArray type="UInt8" Name="x"')
-    old = old.replace(b"<FieldData>", b'<FieldData>\n<Array type="String" Name="name" NumberOfTuples="1" '
-                      b'format="ascii">104 111 114 105 122 111 110 0</Array>', 1)
+    old = old.replace(
+        b"<FieldData>",
+        b'<FieldData>\n<Array type="String" Name="name" NumberOfTuples="1" '
+        b'format="ascii">104 111 114 105 122 111 110 0</Array>',
+        1,
+    )
     (tmp_path / "old.vtu").write_bytes(old)
     with pytest.raises(Exception, match="Illegal data type 'String'"):
         meshio.vtu.read(tmp_path / "old.vtu")
@@ -170,8 +196,11 @@ def test_files_pyvista_writes(tmp_path: Path) -> None:
     sphere.field_data["name"] = ["dome"]
     solid = pv.ImageData(dimensions=(4, 3, 3)).triangulate()
     solid["t"] = np.arange(solid.n_points, dtype=np.int32)
-    for data, kind, files in ((sphere, Surface, ("s.vtp", "s.vtk")), (solid, TetraMesh, ("t.vtu", "t.vtk")),
-                              (pv.Spline(np.eye(3), 6), LineSet, ("l.vtp", "l.vtk"))):
+    for data, kind, files in (
+        (sphere, Surface, ("s.vtp", "s.vtk")),
+        (solid, TetraMesh, ("t.vtu", "t.vtk")),
+        (pv.Spline(np.eye(3), 6), LineSet, ("l.vtp", "l.vtk")),
+    ):
         for name in files:
             for binary in (True, False):
                 data.save(tmp_path / name, binary=binary)
@@ -199,9 +228,12 @@ def test_files_pyvista_writes(tmp_path: Path) -> None:
 def test_files_meshio_writes(kind: str, binary: bool, tmp_path: Path) -> None:
     rng = np.random.default_rng(1)
     points = rng.random((6, 3))
-    m = meshio.Mesh(points, [("tetra", [[0, 1, 2, 3], [1, 2, 3, 4], [2, 3, 4, 5]])],
-                    point_data={"T": rng.random(6), "v": rng.random((6, 3))},
-                    cell_data={"gmsh:physical": [np.array([1, 2, 2])]})
+    m = meshio.Mesh(
+        points,
+        [("tetra", [[0, 1, 2, 3], [1, 2, 3, 4], [2, 3, 4, 5]])],
+        point_data={"T": rng.random(6), "v": rng.random((6, 3))},
+        cell_data={"gmsh:physical": [np.array([1, 2, 2])]},
+    )
     path = tmp_path / ("m.vtu" if kind == "vtu" else "m.vtk")
     if kind == "vtu":
         meshio.vtu.write(path, m, binary=binary, compression="zlib" if binary else None)
@@ -209,8 +241,9 @@ def test_files_meshio_writes(kind: str, binary: bool, tmp_path: Path) -> None:
         meshio.vtk.write(path, m, binary=binary, fmt_version=kind.split()[1])
     mesh = formats.read_one(path)
     exact = binary or kind != "vtu"  # meshio's ASCII .vtu rounds the floats, its legacy ASCII does not
-    assert isinstance(mesh, TetraMesh) and (np.array_equal(mesh.vertices, points) if exact
-                                            else np.allclose(mesh.vertices, points, rtol=1e-10))
+    assert isinstance(mesh, TetraMesh) and (
+        np.array_equal(mesh.vertices, points) if exact else np.allclose(mesh.vertices, points, rtol=1e-10)
+    )
     assert mesh.cells.tolist() == [[0, 1, 2, 3], [1, 2, 3, 4], [2, 3, 4, 5]]
     for key in ("T", "v"):
         assert np.allclose(mesh.vertex_properties[key], m.point_data[key], rtol=0 if exact else 1e-10), key

@@ -21,17 +21,25 @@ from tgsis.mesh import GeometryCollection, LineSet, PointSet, Surface, TetraMesh
 
 
 def surface() -> Surface:
-    return Surface(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]]), [[0, 1, 2], [1, 3, 2]],
-                   vertex_properties={"depth": np.array([0, 1, 2, 3.0]), "flag": np.array([True, False, True, True]),
-                                      "small": np.array([1, 2, 3, 4], dtype=np.int8)},
-                   cell_properties={"zone": np.array([4, 5], dtype=np.int32)}, name="h")
+    return Surface(
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]]),
+        [[0, 1, 2], [1, 3, 2]],
+        vertex_properties={
+            "depth": np.array([0, 1, 2, 3.0]),
+            "flag": np.array([True, False, True, True]),
+            "small": np.array([1, 2, 3, 4], dtype=np.int8),
+        },
+        cell_properties={"zone": np.array([4, 5], dtype=np.int32)},
+        name="h",
+    )
 
 
 def test_registry_and_extensions() -> None:
     assert formats.format_for("a.vtp").name == "vtp" and formats.format_for("a.VTK").name == "vtk"
     assert formats.format_for("a.dat", "vtk").name == "vtk" and formats.format_for("a.dat", ".vtp").name == "vtp"
-    with pytest.raises(FileFormatError, match="vtp files store MULTIPOINT, MULTILINESTRING, SURFACE, not "
-                                              "MULTITETRA") as info:
+    with pytest.raises(
+        FileFormatError, match="vtp files store MULTIPOINT, MULTILINESTRING, SURFACE, not MULTITETRA"
+    ) as info:
         formats.write(TetraMesh(np.eye(4, 3), [[0, 1, 2, 3]]), "t.vtp")
     assert info.value.hint is not None and "vtu (.vtu)" in info.value.hint and "vtk (.vtk)" in info.value.hint
 
@@ -40,8 +48,13 @@ def test_vtp_layout() -> None:
     root = ET.fromstring(format_vtp(surface(), compression=None))
     assert root.attrib == {"type": "PolyData", "version": "1.0", "byte_order": "LittleEndian", "header_type": "UInt64"}
     [piece] = root.findall("PolyData/Piece")
-    assert piece.attrib == {"NumberOfPoints": "4", "NumberOfVerts": "0", "NumberOfLines": "0", "NumberOfStrips": "0",
-                            "NumberOfPolys": "2"}
+    assert piece.attrib == {
+        "NumberOfPoints": "4",
+        "NumberOfVerts": "0",
+        "NumberOfLines": "0",
+        "NumberOfStrips": "0",
+        "NumberOfPolys": "2",
+    }
     assert [e.get("Name") for e in piece.findall("Polys/DataArray")] == ["connectivity", "offsets"]
     assert [child.tag for child in piece] == ["PointData", "CellData", "Points", "Verts", "Lines", "Strips", "Polys"]
     compressed = ET.fromstring(format_vtp(surface()))
@@ -63,12 +76,23 @@ def test_legacy_layout_and_types() -> None:
     assert "CELLS 3 6" in lines and "OFFSETS vtktypeint64" in lines and lines[lines.index("CELL_TYPES 2") + 1] == "5 5"
     assert "small 1 4 vtktypeint64" in lines and "depth 1 4 double" in lines  # small integers widened
     back = parse_vtk(format_vtk(surface()))
-    assert back.same_as(Surface(surface().vertices, surface().cells,
-                                vertex_properties={**surface().vertex_properties,
-                                                   "flag": np.array([1, 0, 1, 1]), "small": np.array([1, 2, 3, 4])},
-                                cell_properties={"zone": np.array([4, 5])}))
-    assert {k: v.dtype for k, v in back.vertex_properties.items()} == {"depth": np.float64, "flag": np.int64,
-                                                                       "small": np.int64}
+    assert back.same_as(
+        Surface(
+            surface().vertices,
+            surface().cells,
+            vertex_properties={
+                **surface().vertex_properties,
+                "flag": np.array([1, 0, 1, 1]),
+                "small": np.array([1, 2, 3, 4]),
+            },
+            cell_properties={"zone": np.array([4, 5])},
+        )
+    )
+    assert {k: v.dtype for k, v in back.vertex_properties.items()} == {
+        "depth": np.float64,
+        "flag": np.int64,
+        "small": np.int64,
+    }
     assert back.name == "h"
 
 
@@ -138,8 +162,10 @@ def test_legacy_sections_other_writers_use() -> None:
 
 
 def test_legacy_polylines_and_poly_vertices() -> None:
-    text = ("# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 4 double\n0 0 0 1 0 0 2 0 0 3 1 0\n"
-            "LINES 2 7\n3 0 1 2\n2 2 3\nCELL_DATA 2\nSCALARS id int\nLOOKUP_TABLE default\n5 6\n")
+    text = (
+        "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 4 double\n0 0 0 1 0 0 2 0 0 3 1 0\n"
+        "LINES 2 7\n3 0 1 2\n2 2 3\nCELL_DATA 2\nSCALARS id int\nLOOKUP_TABLE default\n5 6\n"
+    )
     lines = parse_vtk(text.encode())
     assert isinstance(lines, LineSet) and lines.cells.tolist() == [[0, 1], [1, 2], [2, 3]]
     assert lines.cell_properties["id"].tolist() == [5, 5, 6]
@@ -149,8 +175,15 @@ def test_legacy_polylines_and_poly_vertices() -> None:
 
 
 def test_a_legacy_collection_keeps_its_members() -> None:
-    members = [surface(), PointSet(np.eye(3) + 5, name="wells", vertex_properties={
-        k: v[:3] for k, v in surface().vertex_properties.items()}, cell_properties={"zone": np.arange(3, dtype=np.int32)})]
+    members = [
+        surface(),
+        PointSet(
+            np.eye(3) + 5,
+            name="wells",
+            vertex_properties={k: v[:3] for k, v in surface().vertex_properties.items()},
+            cell_properties={"zone": np.arange(3, dtype=np.int32)},
+        ),
+    ]
     geometry = parse_vtk_geometry(format_vtk(GeometryCollection(members, name="m")))
     assert isinstance(geometry, GeometryCollection) and geometry.name == "m"
     assert [m.name for m in geometry.members] == ["h", "wells"]
@@ -180,15 +213,17 @@ def test_vtp_files_tgsis_refuses(tmp_path: Path) -> None:
         formats.read(tmp_path / "nan.vtp")
     data = format_vtp(surface(), compression=None)
     with pytest.raises(FileFormatError, match="expected one Piece in the PolyData, found 2"):
-        parse_vtp(data.replace(b"</PolyData>", b"<Piece NumberOfPoints=\"0\"/></PolyData>"))
+        parse_vtp(data.replace(b"</PolyData>", b'<Piece NumberOfPoints="0"/></PolyData>'))
     with pytest.raises(FileFormatError, match="DataArray 'Points' has 12 values, expected 5 x 3"):
         parse_vtp(data.replace(b'NumberOfPoints="4"', b'NumberOfPoints="5"'))
-    ascii_file = ('<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="3" NumberOfPolys="1"><PointData>'
-                  '<DataArray type="Float64" Name="depth" format="ascii">1 2</DataArray></PointData>'
-                  '<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0'
-                  '</DataArray></Points><Polys><DataArray type="Int64" Name="connectivity" format="ascii">0 1 2'
-                  '</DataArray><DataArray type="Int64" Name="offsets" format="ascii">3</DataArray></Polys>'
-                  '</Piece></PolyData></VTKFile>')
+    ascii_file = (
+        '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="3" NumberOfPolys="1"><PointData>'
+        '<DataArray type="Float64" Name="depth" format="ascii">1 2</DataArray></PointData>'
+        '<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0'
+        '</DataArray></Points><Polys><DataArray type="Int64" Name="connectivity" format="ascii">0 1 2'
+        '</DataArray><DataArray type="Int64" Name="offsets" format="ascii">3</DataArray></Polys>'
+        "</Piece></PolyData></VTKFile>"
+    )
     with pytest.raises(FileFormatError, match="DataArray 'depth' has 2 values, expected 3 x 1"):
         parse_vtp(ascii_file.encode())
     assert parse_vtp(ascii_file.replace(">1 2<", ">1 2 3<").encode()).vertex_properties["depth"].tolist() == [1, 2, 3]
@@ -211,8 +246,10 @@ def test_legacy_files_tgsis_refuses(tmp_path: Path) -> None:
     data = format_vtk(surface())
     with pytest.raises(FileFormatError, match="the file ends after"):
         parse_vtk(data[: data.index(b"CONNECTIVITY") + 40])
-    wrong = ("# vtk DataFile Version 2.0\nw\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
-             "POLYGONS 1 4\n3 0 1 2\nPOINT_DATA 2\nSCALARS temperature float\nLOOKUP_TABLE default\n10 11\n")
+    wrong = (
+        "# vtk DataFile Version 2.0\nw\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+        "POLYGONS 1 4\n3 0 1 2\nPOINT_DATA 2\nSCALARS temperature float\nLOOKUP_TABLE default\n10 11\n"
+    )
     with pytest.raises(FileFormatError, match="point_data array 'temperature' has 2 tuples, the dataset 3"):
         parse_vtk(wrong.encode())
     with pytest.raises(FileFormatError, match="unexpected section '12'"):  # more values than POINT_DATA says
@@ -223,16 +260,23 @@ def test_legacy_files_tgsis_refuses(tmp_path: Path) -> None:
     quads = "# vtk DataFile Version 2.0\nq\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\nPOLYGONS 1 5\n4 0 1 2 3\n"
     with pytest.raises(FileFormatError, match=r"POLYDATA cell 0 has 4 points and is not convex"):
         parse_vtk(quads.replace("1 1 0 0 1 0", "0.2 0.2 0 0 1 0").encode())  # a dart (a planar one is split)
-    mixed = ("# vtk DataFile Version 2.0\nq\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 1\n"
-             "CELLS 2 7\n3 0 1 2\n2 2 3\nCELL_TYPES 2\n5\n3\n")
+    mixed = (
+        "# vtk DataFile Version 2.0\nq\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 1\n"
+        "CELLS 2 7\n3 0 1 2\n2 2 3\nCELL_TYPES 2\n5\n3\n"
+    )
     with pytest.raises(FileFormatError, match="mixes cells of several kinds"):
         parse_vtk(mixed.encode())
-    hexahedra = mixed.replace("CELLS 2 7\n3 0 1 2\n2 2 3\nCELL_TYPES 2\n5\n3\n", "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n9\n")
+    hexahedra = mixed.replace(
+        "CELLS 2 7\n3 0 1 2\n2 2 3\nCELL_TYPES 2\n5\n3\n", "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n9\n"
+    )
     with pytest.raises(FileFormatError, match=r"UNSTRUCTURED_GRID cell 0 has 4 points and is not planar"):
         parse_vtk(hexahedra.encode())
     with pytest.raises(FileFormatError, match=r"HEXAHEDRON \(12\) cells"):
-        parse_vtk(hexahedra.replace("CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n9", "CELLS 1 9\n8 0 1 2 3 0 1 2 3\n"
-                                    "CELL_TYPES 1\n12").encode())
+        parse_vtk(
+            hexahedra.replace(
+                "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n9", "CELLS 1 9\n8 0 1 2 3 0 1 2 3\nCELL_TYPES 1\n12"
+            ).encode()
+        )
     with pytest.raises(FileFormatError, match="CELL_TYPES gives 1 types for 2 cells"):
         parse_vtk(mixed.replace("CELL_TYPES 2\n5\n3\n", "CELL_TYPES 1\n5\n").encode())
     bits = quads.replace("POLYGONS 1 5\n4 0 1 2 3\n", "POINT_DATA 4\nSCALARS b bit\nLOOKUP_TABLE default\n0 1 0 1\n")

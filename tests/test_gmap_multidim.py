@@ -20,8 +20,9 @@ Conn = psycopg.Connection[Any]
 
 
 def _class(conn: Conn, level: int = 3) -> F.FeatureClass:
-    return F.create_feature_class(conn, "knowledge", "GMAP", time_model="MULTIDIM", cell_level=level,
-                                  cell_properties={"confidence": "float8"})
+    return F.create_feature_class(
+        conn, "knowledge", "GMAP", time_model="MULTIDIM", cell_level=level, cell_properties={"confidence": "float8"}
+    )
 
 
 def _interpretations() -> tuple[gmaps.GMap, list[np.ndarray], gmaps.GMap]:
@@ -33,13 +34,18 @@ def _interpretations() -> tuple[gmaps.GMap, list[np.ndarray], gmaps.GMap]:
     """
     vertices, triangles = grid(5, 4)
     horizon = gmaps.GMap.from_triangles(vertices, triangles)
-    depths = [vertices[:, 0] * 0.0 - 100.0, -100.0 - 5.0 * vertices[:, 0], -110.0 - 5.0 * vertices[:, 0] + vertices[:, 1]]
+    depths = [
+        vertices[:, 0] * 0.0 - 100.0,
+        -100.0 - 5.0 * vertices[:, 0],
+        -110.0 - 5.0 * vertices[:, 0] + vertices[:, 1],
+    ]
     layers = [np.column_stack([vertices[:, :2], z]) for z in depths]
     extruded = gmaps.extrude(horizon, [0.0, 1.0, 2.0])
     points = np.vstack([np.column_stack([layer, np.full(len(layer), float(k))]) for k, layer in enumerate(layers)])
     volumes = extruded.n_cells(3)
-    history = gmaps.GMap(extruded.alpha, extruded.vertex, points,
-                         cell_properties={3: {"confidence": np.linspace(0.2, 0.9, volumes)}})
+    history = gmaps.GMap(
+        extruded.alpha, extruded.vertex, points, cell_properties={3: {"confidence": np.linspace(0.2, 0.9, volumes)}}
+    )
     return horizon, layers, history
 
 
@@ -54,8 +60,9 @@ def test_the_history_of_a_horizon_is_stored_fetched_and_sliced_back(conn: Conn) 
     # the slice at a knowledge value gives that interpretation back, cell for cell
     for k, layer in enumerate(layers):
         section = gmaps.slice(back, 3, float(k))
-        assert section.n_darts == horizon.n_darts and [section.n_cells(i) for i in range(3)] == \
-            [horizon.n_cells(i) for i in range(3)]
+        assert section.n_darts == horizon.n_darts and [section.n_cells(i) for i in range(3)] == [
+            horizon.n_cells(i) for i in range(3)
+        ]
         assert np.array_equal(np.sort(section.points[:, :3], axis=0), np.sort(layer, axis=0))
     for level in range(4):
         _, cells = G.gmap_cells(conn, geoid, level)
@@ -66,15 +73,28 @@ def test_box_queries_over_any_axes_use_the_indexes(conn: Conn) -> None:
     fc = _class(conn)
     _, layers, history = _interpretations()
     geoid = G.insert_gmap(conn, fc, history, axes=["x", "y", "z", "knowledge"])
-    far = G.insert_gmap(conn, fc, gmaps.GMap(history.alpha, history.vertex, history.points + [1000, 0, 0, 0],
-                                             cell_properties=history.cell_properties),
-                        axes=["x", "y", "z", "knowledge"])
+    far = G.insert_gmap(
+        conn,
+        fc,
+        gmaps.GMap(
+            history.alpha, history.vertex, history.points + [1000, 0, 0, 0], cell_properties=history.cell_properties
+        ),
+        axes=["x", "y", "z", "knowledge"],
+    )
     conn.commit()
     assert G.md_in_box(conn, fc, ["x", "knowledge"], [0, 1.5], [2, 2]) == [geoid]
-    assert G.md_in_box(conn, fc, ["x"], [999, ], [2000]) == [far]
+    assert G.md_in_box(
+        conn,
+        fc,
+        ["x"],
+        [
+            999,
+        ],
+        [2000],
+    ) == [far]
     assert G.md_in_box(conn, fc, ["knowledge"], [3], [4]) == []
     with pytest.raises(tgsis.InvalidInputError, match="no feature of class knowledge has an axis 'age'") as caught:
-        G.md_in_box(conn, fc, ["age"], [0], [1])                               # no feature has that axis
+        G.md_in_box(conn, fc, ["age"], [0], [1])  # no feature has that axis
     assert caught.value.detail == "Their axes: knowledge, x, y, z."
     conn.rollback()
     # the points of the last interpretation deeper than -115 (x, y, knowledge and z at once)
@@ -83,13 +103,21 @@ def test_box_queries_over_any_axes_use_the_indexes(conn: Conn) -> None:
     assert np.array_equal(ids, expected) and len(ids) > 0
     with conn.transaction():
         conn.execute("SET LOCAL enable_seqscan = off")
-        plan = "\n".join(r[0] for r in conn.execute(
-            "EXPLAIN SELECT f._geoid FROM knowledge f JOIN tgsis.md_gmap m ON m.geoid = f._geoid "
-            "WHERE m.axes = '{x,y,z,knowledge}' "
-            "AND m.extent && tgsis.md_query_box('{x,y,z,knowledge}', '{x}', '{0}', '{1}')").fetchall())
-        points = "\n".join(r[0] for r in conn.execute(
-            "EXPLAIN SELECT * FROM tgsis.md_vertex v WHERE cube(v.coordinate) <@ "
-            "tgsis.md_query_box('{x,y,z,knowledge}', '{knowledge}', '{1}', '{2}') AND v.geoid = 1").fetchall())
+        plan = "\n".join(
+            r[0]
+            for r in conn.execute(
+                "EXPLAIN SELECT f._geoid FROM knowledge f JOIN tgsis.md_gmap m ON m.geoid = f._geoid "
+                "WHERE m.axes = '{x,y,z,knowledge}' "
+                "AND m.extent && tgsis.md_query_box('{x,y,z,knowledge}', '{x}', '{0}', '{1}')"
+            ).fetchall()
+        )
+        points = "\n".join(
+            r[0]
+            for r in conn.execute(
+                "EXPLAIN SELECT * FROM tgsis.md_vertex v WHERE cube(v.coordinate) <@ "
+                "tgsis.md_query_box('{x,y,z,knowledge}', '{knowledge}', '{1}', '{2}') AND v.geoid = 1"
+            ).fetchall()
+        )
     assert "md_vertex_point_idx" in points, points
     assert "md_gmap_extent_idx" in plan, plan
 
@@ -126,7 +154,7 @@ def test_model_5_is_versioned_with_the_features(conn: Conn) -> None:
         assert G.fetch_md_gmap(conn, fc, geoid)[0].same_as(_interpretations()[2])
         assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == [geoid]
         conn.commit()
-    assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == []              # DEFAULT has none yet
+    assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == []  # DEFAULT has none yet
     conn.commit()
     tgsis.merge_version(conn, "reinterpreted")
     conn.commit()

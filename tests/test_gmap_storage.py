@@ -23,8 +23,15 @@ rng = np.random.default_rng(17)
 
 
 def _class(conn: Conn, name: str = "blocks", level: int = 2) -> F.FeatureClass:
-    return F.create_feature_class(conn, name, "GMAP", time_model="GMAP", cell_level=level,
-                                  cell_properties={"porosity": "float8"}, feature_properties={"note": "text"})
+    return F.create_feature_class(
+        conn,
+        name,
+        "GMAP",
+        time_model="GMAP",
+        cell_level=level,
+        cell_properties={"porosity": "float8"},
+        feature_properties={"note": "text"},
+    )
 
 
 def _faces(g: gmaps.GMap) -> gmaps.GMap:
@@ -35,13 +42,23 @@ def _faces(g: gmaps.GMap) -> gmaps.GMap:
 def _evolving() -> gmaps.EvolvingGMap:
     """A square of 2 triangles rising from t = 0 to 1, then (a topology change) a 3 x 3 grid of 8 triangles to t = 3."""
     square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
-    first = gmaps.GMapPeriod([0.0, 1.0], square, np.stack([square.points, square.points + [0, 0, 1]]), level=2,
-                             cell_values={"porosity": [[0.1, 0.2], [0.3, 0.4]]})
-    vertices, triangles = grid(2, 2)    # its points on the square's edges: the shape does not jump at t = 1
+    first = gmaps.GMapPeriod(
+        [0.0, 1.0],
+        square,
+        np.stack([square.points, square.points + [0, 0, 1]]),
+        level=2,
+        cell_values={"porosity": [[0.1, 0.2], [0.3, 0.4]]},
+    )
+    vertices, triangles = grid(2, 2)  # its points on the square's edges: the shape does not jump at t = 1
     fine = gmaps.GMap.from_triangles(vertices + [0, 0, 1], triangles)
     lifted = fine.points + [0, 0, 2]
-    second = gmaps.GMapPeriod([1.0, 2.0, 3.0], fine, np.stack([fine.points, (fine.points + lifted) / 2, lifted]),
-                              level=2, cell_values={"porosity": rng.random((3, fine.n_cells(2)))})
+    second = gmaps.GMapPeriod(
+        [1.0, 2.0, 3.0],
+        fine,
+        np.stack([fine.points, (fine.points + lifted) / 2, lifted]),
+        level=2,
+        cell_values={"porosity": rng.random((3, fine.n_cells(2)))},
+    )
     return gmaps.EvolvingGMap([first, second], alive=True, name="rising")
 
 
@@ -56,16 +73,19 @@ def test_a_closed_surface_round_trips_with_its_face_properties(conn: Conn) -> No
     back = G.fetch_gmap(conn, fc, geoid)
     assert back.alive and back.name == "ico" and len(back.periods) == 1
     assert back.at(0.0) is not None and back.at(0.0).same_as(sphere)  # type: ignore[union-attr]
-    assert back.at(1e9).same_as(sphere)                               # type: ignore[union-attr]  # alive
+    assert back.at(1e9).same_as(sphere)  # type: ignore[union-attr]  # alive
     assert back.at(-1.0) is None
     assert conn.execute("SELECT note FROM blocks WHERE _geoid = %s", (geoid,)).fetchone() == ("sphere",)
     # the spec's relations, as psql users read them
     assert conn.execute("SELECT dimension, embedding FROM tgsis.gmap WHERE geoid = %s", (geoid,)).fetchone() == (2, 3)
     assert conn.execute("SELECT count(*) FROM tgsis.gmap_dart WHERE geoid = %s", (geoid,)).fetchone() == (120,)
     assert conn.execute("SELECT count(*) FROM tgsis.gmap_alpha WHERE geoid = %s", (geoid,)).fetchone() == (360,)
-    assert conn.execute("SELECT count(*) FROM tgsis.gmap_cell WHERE geoid = %s AND celllevel = 2", (geoid,)).fetchone() == (20,)
-    assert conn.execute("SELECT count(*), bool_and(positive IS NOT NULL) FROM tgsis.gmap_dart WHERE geoid = %s",
-                        (geoid,)).fetchone() == (120, True)                 # a sphere is orientable
+    assert conn.execute(
+        "SELECT count(*) FROM tgsis.gmap_cell WHERE geoid = %s AND celllevel = 2", (geoid,)
+    ).fetchone() == (20,)
+    assert conn.execute(
+        "SELECT count(*), bool_and(positive IS NOT NULL) FROM tgsis.gmap_dart WHERE geoid = %s", (geoid,)
+    ).fetchone() == (120, True)  # a sphere is orientable
     assert G.gmap_check(conn, geoid) == []
     assert conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (geoid,)).fetchall() == []
     assert conn.execute("SELECT nvrtx, ncell FROM tgsis.refresh_geometry(%s)", (geoid,)).fetchone() == (12, 120)
@@ -118,7 +138,7 @@ def test_sql_cells_are_the_python_cells(conn: Conn) -> None:
             dartids, cells = G.gmap_cells(conn, geoid, level, t)
             assert len(dartids) == snapshot.n_darts
             assert np.array_equal(cells, snapshot.cells(level)), (t, level)
-    assert len(G.gmap_cells(conn, geoid, 1, -5.0)[0]) == 0                  # it does not exist then
+    assert len(G.gmap_cells(conn, geoid, 1, -5.0)[0]) == 0  # it does not exist then
     with pytest.raises(tgsis.InvalidInputError, match="cell level 3 is not a cell dimension"):
         G.gmap_cells(conn, geoid, 3, 0.5)
 
@@ -126,8 +146,9 @@ def test_sql_cells_are_the_python_cells(conn: Conn) -> None:
 def test_property_values_at_t_are_interpolated(conn: Conn) -> None:
     fc = _class(conn)
     geoid = F.insert_feature(conn, fc, _evolving())
-    values = conn.execute("SELECT acellid, value FROM tgsis.gmap_property_at('blocks', %s, 'porosity', 0.5)",
-                          (geoid,)).fetchall()
+    values = conn.execute(
+        "SELECT acellid, value FROM tgsis.gmap_property_at('blocks', %s, 'porosity', 0.5)", (geoid,)
+    ).fetchall()
     assert [round(v, 12) for _, v in values] == [0.2, 0.3]
     with pytest.raises(tgsis.InvalidPropertyError, match="no numeric scalar cell property 'nope'"), reraise():
         conn.execute("SELECT * FROM tgsis.gmap_property_at('blocks', %s, 'nope', 0.5)", (geoid,))
@@ -165,8 +186,9 @@ def test_the_sql_check_names_a_non_involution(conn: Conn) -> None:
 
 def test_the_sql_check_names_a_fixed_point_below_n(conn: Conn) -> None:
     _, geoid = _stored_map(conn)
-    conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = dartid WHERE geoid = %s AND level = 1 AND dartid IN (6, 7)",
-                 (geoid,))
+    conn.execute(
+        "UPDATE tgsis.gmap_alpha SET dartid2 = dartid WHERE geoid = %s AND level = 1 AND dartid IN (6, 7)", (geoid,)
+    )
     problems = _problems(conn, geoid)
     assert problems["dart free in alpha_1 (only alpha_2 may have fixed points)"] == (6, 7)
 
@@ -174,10 +196,16 @@ def test_the_sql_check_names_a_fixed_point_below_n(conn: Conn) -> None:
 def test_the_sql_check_names_a_broken_composition(conn: Conn) -> None:
     fc, geoid = _stored_map(conn)
     # two darts of different triangles sewn by alpha_2 as an involution, but across edges that do not match
-    a, b = conn.execute("SELECT min(dartid), max(dartid) FROM tgsis.gmap_alpha WHERE geoid = %s AND level = 2 "
-                        "AND dartid2 = dartid AND dartid < 12", (geoid,)).fetchone()  # type: ignore[misc]
-    conn.execute("UPDATE tgsis.gmap_alpha SET dartid2 = CASE dartid WHEN %s THEN %s ELSE %s END "
-                 "WHERE geoid = %s AND level = 2 AND dartid IN (%s, %s)", (a, b, a, geoid, a, b))
+    a, b = conn.execute(
+        "SELECT min(dartid), max(dartid) FROM tgsis.gmap_alpha WHERE geoid = %s AND level = 2 "
+        "AND dartid2 = dartid AND dartid < 12",
+        (geoid,),
+    ).fetchone()  # type: ignore[misc]
+    conn.execute(
+        "UPDATE tgsis.gmap_alpha SET dartid2 = CASE dartid WHEN %s THEN %s ELSE %s END "
+        "WHERE geoid = %s AND level = 2 AND dartid IN (%s, %s)",
+        (a, b, a, geoid, a, b),
+    )
     problems = _problems(conn, geoid)
     assert "alpha_2 is not an involution" not in problems
     assert "alpha_0 o alpha_2 is not an involution" in problems
@@ -191,8 +219,11 @@ def test_the_sql_check_names_a_dart_crossing_periods(conn: Conn) -> None:
     crossing = [darts for problem, darts in problems.items() if "into another topology period" in problem]
     assert any(3 in darts for darts in crossing)
     assert "dart of a node missing from its topology period" in problems
-    assert [p for p in conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", (geoid,)).fetchall()
-            if "another topology period" in p[0]]
+    assert [
+        p
+        for p in conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", (geoid,)).fetchall()
+        if "another topology period" in p[0]
+    ]
 
 
 def test_a_broken_map_is_refused_naming_its_darts_and_nothing_is_written(conn: Conn) -> None:
@@ -200,7 +231,7 @@ def test_a_broken_map_is_refused_naming_its_darts_and_nothing_is_written(conn: C
     conn.commit()
     square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0]], [[0, 1, 2]])
     alpha = square.alpha.copy()
-    alpha[0, 0], alpha[0, 1] = 0, 0                                        # a fixed point and a non-involution of alpha_0
+    alpha[0, 0], alpha[0, 1] = 0, 0  # a fixed point and a non-involution of alpha_0
     broken = gmaps.GMap(alpha, square.vertex, square.points)
     before = conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone()
     with pytest.raises(tgsis.InvalidGMapError, match="dart"):
@@ -225,7 +256,16 @@ def test_deleting_a_feature_removes_every_model_4_row(conn: Conn) -> None:
     fc = _class(conn)
     geoid = F.insert_feature(conn, fc, _evolving())
     assert F.delete_feature(conn, fc, geoid)
-    for table in ("gmap", "gmap_timem", "gmap_timet", "gmap_node", "gmap_vertex", "gmap_dart", "gmap_alpha", "gmap_cell"):
+    for table in (
+        "gmap",
+        "gmap_timem",
+        "gmap_timet",
+        "gmap_node",
+        "gmap_vertex",
+        "gmap_dart",
+        "gmap_alpha",
+        "gmap_cell",
+    ):
         assert conn.execute(f"SELECT count(*) FROM tgsis.{table}").fetchone() == (0,), table
     assert conn.execute("SELECT count(*) FROM blocks_cellpros").fetchone() == (0,)
 
@@ -238,11 +278,14 @@ def test_gmaps_are_versioned_with_the_features(conn: Conn) -> None:
     tgsis.create_version(conn, "edit")
     with tgsis.in_version(conn, "edit"):
         added = F.insert_feature(conn, fc, _faces(gmaps.GMap.from_triangles(*icosahedron())))
-        conn.execute("UPDATE tgsis.gmap_vertex SET coordinate = ARRAY[9, 9, 9]::float8[] "
-                     "WHERE geoid = %s AND timet = 3 AND nodeid = 4", (base,))
+        conn.execute(
+            "UPDATE tgsis.gmap_vertex SET coordinate = ARRAY[9, 9, 9]::float8[] "
+            "WHERE geoid = %s AND timet = 3 AND nodeid = 4",
+            (base,),
+        )
         conn.commit()
         moved = G.gmap_at(conn, base, 3.0)
-        assert moved is not None and moved.points[0].tolist() == [9.0, 9.0, 9.0]   # node 4: period 1's first
+        assert moved is not None and moved.points[0].tolist() == [9.0, 9.0, 9.0]  # node 4: period 1's first
         assert G.fetch_gmap(conn, fc, added).at(0.0) is not None
     conn.commit()  # (the block's reads left a transaction open: its end put DEFAULT back inside it)
     # DEFAULT sees neither the new G-map nor the moved point
@@ -265,11 +308,11 @@ def test_a_reader_reads_checks_and_cuts_but_cannot_store(db_dsn: str) -> None:
         rita = roles.connect("rita")
         assert G.gmap_at(rita, geoid, 2.0) is not None
         assert G.gmap_check(rita, geoid) == []
-        assert len(G.gmap_cells(rita, geoid, 2, 2.0)[0]) > 0              # its work table is a temporary one
+        assert len(G.gmap_cells(rita, geoid, 2, 2.0)[0]) > 0  # its work table is a temporary one
         with pytest.raises(tgsis.MissingPrivilegeError):
             F.insert_feature(rita, fc, _faces(gmaps.GMap.from_triangles(*icosahedron())))
         rita.rollback()
-        nora = roles.connect("nora")                                     # no tgsis role: nothing to read
+        nora = roles.connect("nora")  # no tgsis role: nothing to read
         with pytest.raises(tgsis.MissingPrivilegeError):
             G.gmap_check(nora, geoid)
     with psycopg.connect(db_dsn) as admin:
@@ -300,19 +343,21 @@ def test_two_versions_moving_one_point_conflict_and_the_merge_takes_a_side(conn:
 
 def test_features_at_t_follow_the_g_maps_life(conn: Conn) -> None:
     fc = _class(conn)
-    rising = F.insert_feature(conn, fc, _evolving())                       # from t = 0, alive
-    ended = F.insert_feature(conn, fc, gmaps.EvolvingGMap(_evolving().periods[:1], alive=False))   # t in [0, 1]
-    lasting = F.insert_feature(conn, fc, _faces(gmaps.GMap.from_triangles(*icosahedron())))     # t = 0 on, alive
+    rising = F.insert_feature(conn, fc, _evolving())  # from t = 0, alive
+    ended = F.insert_feature(conn, fc, gmaps.EvolvingGMap(_evolving().periods[:1], alive=False))  # t in [0, 1]
+    lasting = F.insert_feature(conn, fc, _faces(gmaps.GMap.from_triangles(*icosahedron())))  # t = 0 on, alive
     assert tgsis.features_at(conn, fc, -1.0) == []
     assert tgsis.features_at(conn, fc, 0.5) == [rising, ended, lasting]
     assert tgsis.features_at(conn, fc, 7.0) == [rising, lasting]
-    assert conn.execute("SELECT tgsis.exists_at(%s, 1.5), tgsis.exists_at(%s, 1.5)", (rising, ended)).fetchone() \
-        == (True, False)
+    assert conn.execute("SELECT tgsis.exists_at(%s, 1.5), tgsis.exists_at(%s, 1.5)", (rising, ended)).fetchone() == (
+        True,
+        False,
+    )
 
 
 def test_a_reader_denied_one_class_still_finds_a_feature_of_another(db_dsn: str) -> None:
     with psycopg.connect(db_dsn) as admin:
-        F.create_feature_class(admin, "aaa_secret", "GMAP", time_model="GMAP", cell_level=2)   # listed first
+        F.create_feature_class(admin, "aaa_secret", "GMAP", time_model="GMAP", cell_level=2)  # listed first
         fc = _class(admin)
         geoid = F.insert_feature(admin, fc, _evolving())
         admin.execute("REVOKE SELECT ON aaa_secret FROM tgsis_reader")
@@ -320,6 +365,6 @@ def test_a_reader_denied_one_class_still_finds_a_feature_of_another(db_dsn: str)
     with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
         rita = roles.connect("rita")
         assert class_of_feature(rita, geoid).name == "blocks"
-        assert G.gmap_at(rita, geoid, 2.0) is not None                   # finds its class as gmap_at does
+        assert G.gmap_at(rita, geoid, 2.0) is not None  # finds its class as gmap_at does
         with pytest.raises(tgsis.NotFoundError, match=r"among those this role may read \(1 it may not\)"):
             class_of_feature(rita, geoid + 1000)

@@ -30,10 +30,13 @@ def n_borders(g: GMap) -> int:
 # ---- closed and bordered surfaces
 
 
-@pytest.mark.parametrize(("shape", "expected"), [
-    (shapes.octahedron, [6, 12, 8]),
-    (shapes.icosahedron, [12, 30, 20]),
-])
+@pytest.mark.parametrize(
+    ("shape", "expected"),
+    [
+        (shapes.octahedron, [6, 12, 8]),
+        (shapes.icosahedron, [12, 30, 20]),
+    ],
+)
 def test_spheres(shape: object, expected: list[int]) -> None:
     v, t = shape()  # type: ignore[operator]
     g = GMap.from_triangles(v, t)
@@ -104,25 +107,28 @@ def test_polygon_errors() -> None:
         from_polygons(v, np.array([0, 2, 3]), np.array([0, 4]))
     with pytest.raises(tgsis.InvalidGeometryError, match=r"polygon 0 uses vertex 2 twice"):
         GMap.from_polygons(v, [[0, 2, 3, 2]])
-    with pytest.raises(tgsis.InvalidGeometryError,
-                       match=r"edge \[0, 2\] is shared by 3 polygons \(\[0, 1, 2\]\)"):
+    with pytest.raises(tgsis.InvalidGeometryError, match=r"edge \[0, 2\] is shared by 3 polygons \(\[0, 1, 2\]\)"):
         GMap.from_polygons(v, [[0, 2, 1], [0, 2, 3], [2, 0, 5]])
 
 
 def test_non_manifold_edge_is_an_error_naming_it() -> None:
     v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], dtype=float)
-    with pytest.raises(tgsis.InvalidGeometryError,
-                       match=r"edge \[0, 1\] is shared by 3 triangles \(\[0, 1, 2\]\)") as err:
+    with pytest.raises(
+        tgsis.InvalidGeometryError, match=r"edge \[0, 1\] is shared by 3 triangles \(\[0, 1, 2\]\)"
+    ) as err:
         GMap.from_triangles(v, [[0, 1, 2], [1, 0, 3], [0, 1, 4]])
     assert "DETAIL: 1 edge shared by three or more triangles" in str(err.value)
 
 
-@pytest.mark.parametrize(("triangles", "message"), [
-    ([[0, 1, 5]], r"triangles\[0, 2\] refers to vertex 5, but there are 3 vertices"),
-    ([[0, 1, 1]], r"triangle 0 uses a vertex twice: \[0, 1, 1\]"),
-    ([[0, 1]], r"triangles must be a \(c, 3\) array"),
-    ([[0.0, 1.0, 2.0]], "must be integer vertex indices"),
-])
+@pytest.mark.parametrize(
+    ("triangles", "message"),
+    [
+        ([[0, 1, 5]], r"triangles\[0, 2\] refers to vertex 5, but there are 3 vertices"),
+        ([[0, 1, 1]], r"triangle 0 uses a vertex twice: \[0, 1, 1\]"),
+        ([[0, 1]], r"triangles must be a \(c, 3\) array"),
+        ([[0.0, 1.0, 2.0]], "must be integer vertex indices"),
+    ],
+)
 def test_bad_triangles(triangles: object, message: str) -> None:
     v = np.eye(3)
     with pytest.raises(tgsis.InvalidGeometryError, match=message):
@@ -256,6 +262,7 @@ def test_orbits_with_and_without_propagation(rounds: int) -> None:
     # the same labels as plain scipy on the whole graph
     from scipy.sparse import csr_array
     from scipy.sparse.csgraph import connected_components
+
     a = g.alpha
     graph = csr_array((np.ones(2 * g.n_darts), (np.tile(np.arange(g.n_darts), 2), np.concatenate([a[1], a[2]]))))
     _, reference = connected_components(graph, directed=False)
@@ -275,7 +282,10 @@ def test_cell_properties() -> None:
         GMap(g.alpha, g.vertex, g.points, cell_properties={3: {"rock": np.ones(8)}})
     with pytest.raises(tgsis.InvalidPropertyError, match="property name '2rock' is not allowed"):
         GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"2rock": np.ones(8)}})
-    assert GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"Rock": np.ones(8)}}).cell_properties[2]["Rock"].sum() == 8
+    assert (
+        GMap(g.alpha, g.vertex, g.points, cell_properties={2: {"Rock": np.ones(8)}}).cell_properties[2]["Rock"].sum()
+        == 8
+    )
 
 
 def test_arrays_are_read_only() -> None:
@@ -286,7 +296,7 @@ def test_arrays_are_read_only() -> None:
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.integers(2, 7), st.integers(1, 6), st.booleans(), st.integers(0, 2 ** 32 - 1))
+@given(st.integers(2, 7), st.integers(1, 6), st.booleans(), st.integers(0, 2**32 - 1))
 def test_random_grids(nx: int, ny: int, wrap: bool, seed: int) -> None:
     """Any triangulated grid, with triangles shuffled and re-oriented at random."""
     if wrap and nx < 3:
@@ -301,8 +311,9 @@ def test_random_grids(nx: int, ny: int, wrap: bool, seed: int) -> None:
     assert g.euler_characteristic() == (0 if wrap else 1)
     assert n_borders(g) == (2 if wrap else 1)
     assert np.array_equal(g.simplices(), t)
-    assert g.n_cells(1) == len(np.unique(np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]),
-                                                 axis=1), axis=0))
+    assert g.n_cells(1) == len(
+        np.unique(np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1), axis=0)
+    )
 
 
 # ---- no database layer
@@ -310,16 +321,20 @@ def test_random_grids(nx: int, ny: int, wrap: bool, seed: int) -> None:
 
 def test_gmaps_imports_no_database_layer() -> None:
     """A fresh interpreter imports tgsis.gmaps without psycopg, tgsis.db or (until an orbit needs it) scipy."""
-    program = ("import sys, tgsis.gmaps; print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' "
-               "or m.startswith(('psycopg.', 'tgsis.db', 'scipy')))))")
+    program = (
+        "import sys, tgsis.gmaps; print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' "
+        "or m.startswith(('psycopg.', 'tgsis.db', 'scipy')))))"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     # scipy is imported when an orbit needs it, so that `import tgsis` (and the command line) stays light
     assert done.stdout.strip() == "", f"import tgsis.gmaps loaded {done.stdout.strip()}"
     # and the orbits still work in such an interpreter
-    program = ("import sys, tgsis.gmaps as g; m = g.GMap.from_triangles([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]]); "
-               "print(m.euler_characteristic(), m.incidence(0, 2).shape, "
-               "any(k.startswith(('psycopg', 'tgsis.db')) for k in sys.modules))")
+    program = (
+        "import sys, tgsis.gmaps as g; m = g.GMap.from_triangles([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]]); "
+        "print(m.euler_characteristic(), m.incidence(0, 2).shape, "
+        "any(k.startswith(('psycopg', 'tgsis.db')) for k in sys.modules))"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "1 (3, 1) False"
@@ -328,8 +343,8 @@ def test_gmaps_imports_no_database_layer() -> None:
 def test_the_documented_example() -> None:
     """docs/data-models.md's example runs and gives what its comments say."""
     text = (Path(__file__).resolve().parents[1] / "docs" / "data-models.md").read_text(encoding="utf-8")
-    section = text[text.index("## Models 4 and 5"):]
-    block = section[section.index("```python\n") + 10:section.index("```", section.index("```python\n") + 10)]
+    section = text[text.index("## Models 4 and 5") :]
+    block = section[section.index("```python\n") + 10 : section.index("```", section.index("```python\n") + 10)]
     namespace: dict[str, object] = {}
     checked = 0
     for line in block.splitlines():
@@ -362,7 +377,7 @@ def test_empty_maps() -> None:
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.integers(0, 2 ** 32 - 1), st.floats(0.2, 1.0))
+@given(st.integers(0, 2**32 - 1), st.floats(0.2, 1.0))
 def test_random_pieces_of_a_tetrahedral_block(seed: int, fraction: float) -> None:
     """Any subset of a valid tetrahedral mesh, shuffled and with vertex orders permuted, is a valid 3-G-map."""
     v, t = shapes.block_tetrahedra(3)
@@ -391,12 +406,15 @@ def test_simplices_of_any_dimension() -> None:
     assert border.check().ok and border.n_cells(3) == 8 and border.euler_characteristic() == 0
 
 
-@pytest.mark.parametrize(("shape", "orientable"), [
-    (shapes.octahedron, True),
-    (lambda: shapes.grid(4, 3, wrap_x=True, wrap_y=True), True),
-    (lambda: shapes.grid(3, 2), True),
-    (lambda: shapes.grid(5, 2, wrap_x=True, twist=True), False),
-])
+@pytest.mark.parametrize(
+    ("shape", "orientable"),
+    [
+        (shapes.octahedron, True),
+        (lambda: shapes.grid(4, 3, wrap_x=True, wrap_y=True), True),
+        (lambda: shapes.grid(3, 2), True),
+        (lambda: shapes.grid(5, 2, wrap_x=True, twist=True), False),
+    ],
+)
 def test_orientation(shape: object, orientable: bool) -> None:
     v, t = shape()  # type: ignore[operator]
     rng = np.random.default_rng(3)
@@ -415,8 +433,10 @@ def test_orientation(shape: object, orientable: bool) -> None:
 
 def flips_everywhere(g: GMap, positive: np.ndarray) -> bool:  # type: ignore[type-arg]
     darts = np.arange(g.n_darts)
-    return all(bool(np.all(positive[g.alpha[i, g.alpha[i] != darts]] != positive[g.alpha[i] != darts]))
-               for i in range(g.dimension + 1))
+    return all(
+        bool(np.all(positive[g.alpha[i, g.alpha[i] != darts]] != positive[g.alpha[i] != darts]))
+        for i in range(g.dimension + 1)
+    )
 
 
 def test_orientation_of_solids_and_several_components() -> None:
@@ -424,15 +444,21 @@ def test_orientation_of_solids_and_several_components() -> None:
     solid = GMap.from_tetrahedra(v, t)
     assert solid.is_orientable() and flips_everywhere(solid, solid.orientation())
     one = GMap.from_triangles(*shapes.octahedron())
-    two = GMap(np.concatenate([one.alpha, one.alpha + one.n_darts], axis=1),
-               np.concatenate([one.vertex, one.vertex]), one.points)
+    two = GMap(
+        np.concatenate([one.alpha, one.alpha + one.n_darts], axis=1),
+        np.concatenate([one.vertex, one.vertex]),
+        one.points,
+    )
     positive = two.orientation()
     assert positive[0] and positive[one.n_darts]  # the lowest dart of each component is positive
     assert flips_everywhere(two, positive)
     assert extrude_cube_orientable()
     moebius = GMap.from_triangles(*shapes.grid(5, 2, wrap_x=True, twist=True))
-    both = GMap(np.concatenate([one.alpha, moebius.alpha + one.n_darts], axis=1),
-                np.concatenate([one.vertex, moebius.vertex + one.n_points]), np.concatenate([one.points, moebius.points]))
+    both = GMap(
+        np.concatenate([one.alpha, moebius.alpha + one.n_darts], axis=1),
+        np.concatenate([one.vertex, moebius.vertex + one.n_points]),
+        np.concatenate([one.points, moebius.points]),
+    )
     assert not both.is_orientable()
     with pytest.raises(tgsis.InvalidGMapError, match=f"the component of dart {one.n_darts} is not orientable"):
         both.orientation()
@@ -440,4 +466,5 @@ def test_orientation_of_solids_and_several_components() -> None:
 
 def extrude_cube_orientable() -> bool:
     from tgsis.gmaps import extrude
+
     return extrude(GMap.from_polygons([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2, 3]]), [0, 1, 2]).is_orientable()

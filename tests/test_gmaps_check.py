@@ -28,9 +28,11 @@ def reference(alpha: IntArray) -> dict[str, object]:
     return {
         "not_involutions": {i: [x for x in range(d) if alpha[i, alpha[i, x]] != x] for i in range(n + 1)},
         "fixed_points": {i: [x for x in range(d) if alpha[i, x] == x] for i in range(n)},
-        "compositions": {(i, j): [x for x in range(d)
-                                  if alpha[i, alpha[j, alpha[i, alpha[j, x]]]] != x]
-                         for i in range(n + 1) for j in range(i + 2, n + 1)},
+        "compositions": {
+            (i, j): [x for x in range(d) if alpha[i, alpha[j, alpha[i, alpha[j, x]]]] != x]
+            for i in range(n + 1)
+            for j in range(i + 2, n + 1)
+        },
     }
 
 
@@ -59,10 +61,10 @@ def test_not_an_involution() -> None:
     ref = reference(alpha)
     assert nonempty(report.not_involutions) == expected(ref["not_involutions"])  # type: ignore[arg-type]
     assert report.not_involutions[2].tolist() == sorted([x, y])  # z -> 7 -> z still holds
-    assert f"alpha2 is not an involution at darts {', '.join(map(str, report.not_involutions[2]))}" \
-        in report.problems()
-    with pytest.raises(tgsis.InvalidGMapError, match=r"not a valid 2-G-map: alpha2 is not an involution at darts 0")\
-            as err:
+    assert f"alpha2 is not an involution at darts {', '.join(map(str, report.not_involutions[2]))}" in report.problems()
+    with pytest.raises(
+        tgsis.InvalidGMapError, match=r"not a valid 2-G-map: alpha2 is not an involution at darts 0"
+    ) as err:
         edited(g, alpha=alpha).check(raise_=True)
     assert err.value.sqlstate == "TG104" and isinstance(err.value, tgsis.InvalidGeometryError)
 
@@ -129,8 +131,7 @@ def test_darts_of_one_vertex_on_two_points() -> None:
 def test_topology_periods() -> None:
     one = octahedron_map()
     d = one.n_darts
-    two = GMap(np.concatenate([one.alpha, one.alpha + d], axis=1), np.concatenate([one.vertex, one.vertex]),
-               one.points)
+    two = GMap(np.concatenate([one.alpha, one.alpha + d], axis=1), np.concatenate([one.vertex, one.vertex]), one.points)
     periods = np.repeat([0, 1], d)
     assert two.check(periods).ok
     periods[5] = 1  # one dart of the first object said to be in the second period
@@ -164,17 +165,30 @@ def test_many_darts_are_named_briefly() -> None:
     assert "at darts 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, ... (48 in all)" in problem[0]
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    ((np.zeros((3, 4), dtype=np.int64) + [0, 1, 2, 7], np.zeros(4, dtype=np.int64), np.zeros((1, 2))),
-     "alpha0 sends dart 3 to 7, but the map has 4 darts"),
-    ((np.zeros((0, 4), dtype=np.int64), np.zeros(4, dtype=np.int64), np.zeros((1, 2))), "n \\+ 1 >= 1 rows"),
-    ((np.zeros((2, 2)), np.zeros(2, dtype=np.int64), np.zeros((1, 2))), "alpha must be integers"),
-    ((np.array([[1, 0], [0, 1]]), np.zeros(3, dtype=np.int64), np.zeros((1, 2))),
-     "one point index per dart: 3 for 2 darts"),
-    ((np.array([[1, 0], [0, 1]]), np.array([0, 2]), np.zeros((2, 2))), "dart 1 has vertex 2, but there are 2 points"),
-    ((np.array([[1, 0], [0, 1]]), np.array([0, 1]), [[0, 0], [np.inf, 0]]), "point 1 has a non-finite coordinate 0"),
-    ((np.array([[1, 0], [0, 1]]), np.array([0, 1]), np.zeros(2)), r"points must be a \(k, m\) array"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            (np.zeros((3, 4), dtype=np.int64) + [0, 1, 2, 7], np.zeros(4, dtype=np.int64), np.zeros((1, 2))),
+            "alpha0 sends dart 3 to 7, but the map has 4 darts",
+        ),
+        ((np.zeros((0, 4), dtype=np.int64), np.zeros(4, dtype=np.int64), np.zeros((1, 2))), "n \\+ 1 >= 1 rows"),
+        ((np.zeros((2, 2)), np.zeros(2, dtype=np.int64), np.zeros((1, 2))), "alpha must be integers"),
+        (
+            (np.array([[1, 0], [0, 1]]), np.zeros(3, dtype=np.int64), np.zeros((1, 2))),
+            "one point index per dart: 3 for 2 darts",
+        ),
+        (
+            (np.array([[1, 0], [0, 1]]), np.array([0, 2]), np.zeros((2, 2))),
+            "dart 1 has vertex 2, but there are 2 points",
+        ),
+        (
+            (np.array([[1, 0], [0, 1]]), np.array([0, 1]), [[0, 0], [np.inf, 0]]),
+            "point 1 has a non-finite coordinate 0",
+        ),
+        ((np.array([[1, 0], [0, 1]]), np.array([0, 1]), np.zeros(2)), r"points must be a \(k, m\) array"),
+    ],
+)
 def test_unreadable_arrays(args: tuple[object, object, object], message: str) -> None:
     with pytest.raises(tgsis.InvalidGMapError, match=message):
         GMap(*args)  # type: ignore[arg-type]

@@ -28,18 +28,38 @@ def test_square_extruded_is_a_cube() -> None:
     cube = extrude(SQUARE, [0.0, 1.0])
     assert cube.dimension == 3 and cube.n_darts == 48 and cube.check().ok
     assert counts(cube) == [8, 12, 6, 1] and cube.euler_characteristic() == 1
-    assert cube.points.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
-                                    [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+    assert cube.points.tolist() == [
+        [0, 0, 0],
+        [1, 0, 0],
+        [1, 1, 0],
+        [0, 1, 0],
+        [0, 0, 1],
+        [1, 0, 1],
+        [1, 1, 1],
+        [0, 1, 1],
+    ]
     border = cube.border()
     assert border.check().ok and counts(border) == [8, 12, 6] and border.euler_characteristic() == 2
     indices, face_offsets, cell_offsets = cube.polyhedra()  # its one volume: six quads
     assert cell_offsets.tolist() == [0, 6] and np.diff(face_offsets).tolist() == [4] * 6
     assert sorted(tuple(sorted(indices[a:b].tolist())) for a, b in zip(face_offsets[:-1], face_offsets[1:])) == [
-        (0, 1, 2, 3), (0, 1, 4, 5), (0, 3, 4, 7), (1, 2, 5, 6), (2, 3, 6, 7), (4, 5, 6, 7)]
+        (0, 1, 2, 3),
+        (0, 1, 4, 5),
+        (0, 3, 4, 7),
+        (1, 2, 5, 6),
+        (2, 3, 6, 7),
+        (4, 5, 6, 7),
+    ]
     faces, offsets = border.polygons()
     assert np.diff(offsets).tolist() == [4] * 6
     assert sorted(tuple(sorted(faces[a:b].tolist())) for a, b in zip(offsets[:-1], offsets[1:])) == [
-        (0, 1, 2, 3), (0, 1, 4, 5), (0, 3, 4, 7), (1, 2, 5, 6), (2, 3, 6, 7), (4, 5, 6, 7)]
+        (0, 1, 2, 3),
+        (0, 1, 4, 5),
+        (0, 3, 4, 7),
+        (1, 2, 5, 6),
+        (2, 3, 6, 7),
+        (4, 5, 6, 7),
+    ]
 
 
 def test_several_intervals() -> None:
@@ -54,12 +74,15 @@ def test_several_intervals() -> None:
         SQUARE.polyhedra()
 
 
-@pytest.mark.parametrize(("shape", "chi"), [
-    (lambda: shapes.grid(3, 2), 1),                                      # disk
-    (shapes.octahedron, 2),                                              # sphere
-    (lambda: shapes.grid(4, 3, wrap_x=True, wrap_y=True), 0),            # torus
-    (lambda: shapes.grid(5, 2, wrap_x=True, twist=True), 0),             # Möbius strip
-])
+@pytest.mark.parametrize(
+    ("shape", "chi"),
+    [
+        (lambda: shapes.grid(3, 2), 1),  # disk
+        (shapes.octahedron, 2),  # sphere
+        (lambda: shapes.grid(4, 3, wrap_x=True, wrap_y=True), 0),  # torus
+        (lambda: shapes.grid(5, 2, wrap_x=True, twist=True), 0),  # Möbius strip
+    ],
+)
 def test_triangle_meshes_extruded_twice(shape: object, chi: int) -> None:
     g = GMap.from_triangles(*shape())  # type: ignore[operator]
     once = extrude(g, [0.0, 0.5, 2.0])
@@ -96,8 +119,12 @@ def test_points_segments_and_tetrahedra() -> None:
 
 def test_properties_follow_the_top_cells() -> None:
     v, t = shapes.octahedron()
-    g = GMap(GMap.from_triangles(v, t).alpha, GMap.from_triangles(v, t).vertex, v,
-             cell_properties={2: {"rock": np.arange(8)}, 0: {"depth": np.arange(6.0)}})
+    g = GMap(
+        GMap.from_triangles(v, t).alpha,
+        GMap.from_triangles(v, t).vertex,
+        v,
+        cell_properties={2: {"rock": np.arange(8)}, 0: {"depth": np.arange(6.0)}},
+    )
     ex = extrude(g, [0, 1, 2])
     assert list(ex.cell_properties) == [3]  # lower levels are dropped
     assert ex.cell_properties[3]["rock"].tolist() == list(range(8)) * 2
@@ -114,19 +141,26 @@ def test_bad_values(values: object) -> None:
 # ---- slices
 
 
-@pytest.mark.parametrize("shape", [
-    lambda: GMap.from_triangles(*shapes.grid(3, 2)),
-    lambda: GMap.from_triangles(*shapes.grid(5, 2, wrap_x=True, twist=True)),
-    lambda: GMap.from_tetrahedra(*shapes.cube_tetrahedra()),
-    lambda: GMap.from_segments(np.eye(3), [[0, 1], [1, 2]]),
-    lambda: SQUARE,
-    lambda: GMap.from_polygons([[-0.0, 0], [1, -0.0], [1, 1], [0, 1]], [[0, 1, 2, 3]]),  # -0.0 kept as it is
-])
+@pytest.mark.parametrize(
+    "shape",
+    [
+        lambda: GMap.from_triangles(*shapes.grid(3, 2)),
+        lambda: GMap.from_triangles(*shapes.grid(5, 2, wrap_x=True, twist=True)),
+        lambda: GMap.from_tetrahedra(*shapes.cube_tetrahedra()),
+        lambda: GMap.from_segments(np.eye(3), [[0, 1], [1, 2]]),
+        lambda: SQUARE,
+        lambda: GMap.from_polygons([[-0.0, 0], [1, -0.0], [1, 1], [0, 1]], [[0, 1, 2, 3]]),  # -0.0 kept as it is
+    ],
+)
 def test_slices_of_an_extrusion_give_it_back(shape: object) -> None:
     g = shape()  # type: ignore[operator]
     c = g.n_cells(g.dimension)
-    g = GMap(g.alpha, g.vertex, g.points,
-             cell_properties={g.dimension: {"code": np.arange(c) * 10, "dip": np.arange(2.0 * c).reshape(c, 2)}})
+    g = GMap(
+        g.alpha,
+        g.vertex,
+        g.points,
+        cell_properties={g.dimension: {"code": np.arange(c) * 10, "dip": np.arange(2.0 * c).reshape(c, 2)}},
+    )
     values = [0.0, 0.5, 2.0, 3.0]
     ex = extrude(g, values)
     axis = g.embedding_dimension
@@ -184,14 +218,21 @@ def test_refused_slices() -> None:
         slice(GMap.from_triangles(v, [[0, 1, 2]]), 1, 1.0)
     # an edge in the plane with both its triangles on the same side: which one to take is not defined
     folded = GMap.from_triangles([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 1, 1]], [[0, 1, 2], [1, 0, 3]])
-    with pytest.raises(tgsis.InvalidInputError, match=r"the face of dart \d+ lies in the plane 1 = 0.0 but does "
-                                                      "not separate a cell above from a cell below"):
+    with pytest.raises(
+        tgsis.InvalidInputError,
+        match=r"the face of dart \d+ lies in the plane 1 = 0.0 but does "
+        "not separate a cell above from a cell below",
+    ):
         slice(folded, 1, 0.0)
 
 
 @settings(max_examples=25, deadline=None)
-@given(st.integers(1, 5), st.integers(1, 4), st.booleans(),
-       st.lists(st.floats(-1e6, 1e6, allow_nan=False, width=32), min_size=2, max_size=5, unique=True))
+@given(
+    st.integers(1, 5),
+    st.integers(1, 4),
+    st.booleans(),
+    st.lists(st.floats(-1e6, 1e6, allow_nan=False, width=32), min_size=2, max_size=5, unique=True),
+)
 def test_random_extrusions_round_trip(nx: int, ny: int, wrap: bool, raw_values: list[float]) -> None:
     v, t = shapes.grid(max(nx, 3) if wrap else nx, ny, wrap_x=wrap)
     g = GMap.from_triangles(v, t)

@@ -48,8 +48,13 @@ def test_unreachable_test_dsn_is_an_error_naming_it(monkeypatch: pytest.MonkeyPa
 def test_a_run_without_server_fails_instead_of_skipping(tmp_path: Path) -> None:
     (tmp_path / "conftest.py").write_text('pytest_plugins = ["tgsis.testing"]\n')
     (tmp_path / "test_needs_db.py").write_text("def test_db(conn):\n    pass\n")
-    result = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
-                            env=child_env(TGSIS_TEST_DSN=BAD_DSN), capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
+        env=child_env(TGSIS_TEST_DSN=BAD_DSN),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 1, result.stdout
     assert "1 error" in result.stdout and "skipped" not in result.stdout
     assert "no PostgreSQL server for the tests" in result.stdout

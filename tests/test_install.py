@@ -37,8 +37,10 @@ def test_create_extension(extension_route: None, make_database: MakeDb) -> None:
     with psycopg.connect(dsn, autocommit=True) as conn:
         conn.execute("CREATE EXTENSION tgsis CASCADE")  # CASCADE: cube
         assert conn.execute("SELECT tgsis.version()").fetchone() == (tgsis.__version__,)
-        ext = conn.execute("SELECT extversion, extrelocatable, extnamespace::regnamespace::text "
-                           "FROM pg_extension WHERE extname = 'tgsis'").fetchone()
+        ext = conn.execute(
+            "SELECT extversion, extrelocatable, extnamespace::regnamespace::text "
+            "FROM pg_extension WHERE extname = 'tgsis'"
+        ).fetchone()
         assert ext == (tgsis.__version__, False, "tgsis")
         assert tgsis.installed_version(conn) == tgsis.InstalledVersion(tgsis.__version__, "extension")
         assert conn.execute("SELECT method FROM tgsis.installation").fetchall() == [("extension",)]
@@ -129,8 +131,9 @@ def test_a_foreign_tgsis_schema_is_refused(make_database: MakeDb) -> None:
         conn.commit()
         with pytest.raises(tgsis.InstallationError, match="schema tgsis exists but holds no tgsis installation"):
             tgsis.install(conn)
-        assert conn.execute("SELECT count(*) FROM pg_class WHERE relnamespace = 'tgsis'::regnamespace"
-                            ).fetchone() == (1,)
+        assert conn.execute("SELECT count(*) FROM pg_class WHERE relnamespace = 'tgsis'::regnamespace").fetchone() == (
+            1,
+        )
 
 
 def _sources_at(tmp_path: Path, version: str, *, updates: dict[str, str] | None = None) -> ExtensionSources:
@@ -159,8 +162,11 @@ def test_plain_sql_upgrade_applies_the_update_chain(tmp_path: Path, make_databas
     old = _sources_at(tmp_path, "0.0.9")
     new = _sources_at(tmp_path, "0.1.1")
     # (an upgrade script records the fingerprint of the version it leads to, as the assembled ones do)
-    new = _sources_at(tmp_path / "new", "0.1.1", updates={
-        "tgsis--0.0.9--0.1.1.sql": _upgrade_script("0.0.9", "0.1.1", fingerprint=new.fingerprint)})
+    new = _sources_at(
+        tmp_path / "new",
+        "0.1.1",
+        updates={"tgsis--0.0.9--0.1.1.sql": _upgrade_script("0.0.9", "0.1.1", fingerprint=new.fingerprint)},
+    )
     with psycopg.connect(make_database()) as conn:
         tgsis.install(conn, method="sql", sources=old)
         result = tgsis.install(conn, sources=new)

@@ -55,10 +55,11 @@ def test_the_documentation_shows_how_to_create_the_extension() -> None:
 
 
 @pytest.mark.parametrize("where, statements", COMMANDS, ids=[f"{w}: {' / '.join(s)}" for w, s in COMMANDS])
-def test_a_documented_psql_command_works_on_a_fresh_database(where: str, statements: list[str],
-                                                             make_database: Callable[..., str]) -> None:
-    dsn = make_database()                                     # from template0: nothing installed
-    with psycopg.connect(dsn, autocommit=True) as conn:       # psql -c: each statement on its own
+def test_a_documented_psql_command_works_on_a_fresh_database(
+    where: str, statements: list[str], make_database: Callable[..., str]
+) -> None:
+    dsn = make_database()  # from template0: nothing installed
+    with psycopg.connect(dsn, autocommit=True) as conn:  # psql -c: each statement on its own
         for statement in statements:
             try:
                 conn.execute(statement)  # type: ignore[arg-type]  # the documentation's own text
@@ -75,9 +76,12 @@ def image_server() -> Iterator[LocalServer]:
     sharedir = binaries.sharedir
     assert sharedir is not None, f"{binaries.describe()} has no pg_config"
     if not (sharedir / "extension" / "postgis.control").exists():
-        pytest.fail(f"PostGIS is not installed for {binaries.describe()} (as in the Docker image): "
-                    "apt-get install postgresql-15-postgis-3", pytrace=False)
-    server = LocalServer.throwaway(binaries)   # this checkout's extension files in a share folder of its own
+        pytest.fail(
+            f"PostGIS is not installed for {binaries.describe()} (as in the Docker image): "
+            "apt-get install postgresql-15-postgis-3",
+            pytrace=False,
+        )
+    server = LocalServer.throwaway(binaries)  # this checkout's extension files in a share folder of its own
     try:
         sources = ExtensionSources.default()
         assert server.binaries.sharedir is not None
@@ -93,9 +97,21 @@ def test_the_docker_init_script_runs_as_the_image_runs_it(image_server: LocalSer
     database = f"initdb_{script.stem.replace('-', '_')}"
     image_server.ensure_database(database)
     # what docker-entrypoint.sh runs for each *.sql of /docker-entrypoint-initdb.d
-    done = subprocess.run([str(image_server.binaries.tool("psql")), "-v", "ON_ERROR_STOP=1", "--no-psqlrc",
-                           "--dbname", image_server.dsn(database), "--file", str(script)],
-                          capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        [
+            str(image_server.binaries.tool("psql")),
+            "-v",
+            "ON_ERROR_STOP=1",
+            "--no-psqlrc",
+            "--dbname",
+            image_server.dsn(database),
+            "--file",
+            str(script),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert done.returncode == 0, f"{script.name} failed under ON_ERROR_STOP:\n{done.stderr}"
     with psycopg.connect(image_server.dsn(database)) as conn:
         assert conn.execute("SELECT tgsis.version()").fetchone() == (ExtensionSources.default().version,)

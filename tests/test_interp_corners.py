@@ -16,8 +16,9 @@ def _rectangle(nx: int, ny: int, bump: float = 0.0) -> tgsis.Surface:
     z = bump * np.exp(-((u - 1.5) ** 2 + (v - 1) ** 2))
     idx = np.arange(nx * ny).reshape(ny, nx)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(np.stack([u.ravel(), v.ravel(), z.ravel()], 1),
-                         np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+    return tgsis.Surface(
+        np.stack([u.ravel(), v.ravel(), z.ravel()], 1), np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    )
 
 
 def test_the_four_corners_of_a_dome() -> None:
@@ -48,27 +49,31 @@ def test_wiggles_on_a_straight_side_are_not_corners() -> None:
     plate = _rectangle(41, 41)
     vertices = plate.vertices.copy()
     side = np.flatnonzero(vertices[:, 1] == 0)[1:-1]
-    vertices[side, 1] += np.where(np.arange(len(side)) % 2 == 0, 0.01, -0.01)   # a saw-tooth of 1 % amplitude
+    vertices[side, 1] += np.where(np.arange(len(side)) % 2 == 0, 0.01, -0.01)  # a saw-tooth of 1 % amplitude
     corners = propose_corners(tgsis.Surface(vertices, plate.cells))
     assert len(corners) == 4
 
 
 def test_surfaces_without_one_border_are_refused() -> None:
     two = _rectangle(4, 4)
-    shifted = tgsis.Surface(np.concatenate([two.vertices, two.vertices + [10, 0, 0]]),
-                            np.concatenate([two.cells, two.cells + 16]))
+    shifted = tgsis.Surface(
+        np.concatenate([two.vertices, two.vertices + [10, 0, 0]]), np.concatenate([two.cells, two.cells + 16])
+    )
     with pytest.raises(InterpolationSetupError, match="one border loop, this one has 2"):
         propose_corners(shifted)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"count": 0}, "count must be an integer >= 1"),
-    ({"count": -3}, "count must be an integer >= 1"),
-    ({"count": 2.5}, "count must be an integer >= 1"),
-    ({"min_angle": float("nan")}, "min_angle must be a number of degrees from 0 to 180"),
-    ({"min_angle": -5.0}, "min_angle must be a number of degrees from 0 to 180"),
-    ({"window": 0.0}, "window must be a fraction"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"count": 0}, "count must be an integer >= 1"),
+        ({"count": -3}, "count must be an integer >= 1"),
+        ({"count": 2.5}, "count must be an integer >= 1"),
+        ({"min_angle": float("nan")}, "min_angle must be a number of degrees from 0 to 180"),
+        ({"min_angle": -5.0}, "min_angle must be a number of degrees from 0 to 180"),
+        ({"window": 0.0}, "window must be a fraction"),
+    ],
+)
 def test_bad_arguments_are_refused(kwargs: dict[str, float], message: str) -> None:
     # before: count <= 0 or a NaN angle quietly gave some corners
     with pytest.raises(InterpolationSetupError, match=message):

@@ -29,8 +29,13 @@ def row(r: int, c0: int, c1: int) -> list[int]:
 
 def wavy() -> Surface:
     s = grid(NX, NY, wavy=True)
-    return Surface(s.vertices, s.triangles, vertex_properties={"depth": -s.vertices[:, 2]},
-                   cell_properties={"tag": np.arange(s.n_cells)}, name="horizon")
+    return Surface(
+        s.vertices,
+        s.triangles,
+        vertex_properties={"depth": -s.vertices[:, 2]},
+        cell_properties={"tag": np.arange(s.n_cells)},
+        name="horizon",
+    )
 
 
 def check_cut_is_faithful(before: Surface, cut: CutResult) -> None:
@@ -68,20 +73,24 @@ def check_sides(before: Surface, cut: CutResult, path: list[int], duplicated: se
     assert len(sides[False]) == len(duplicated)  # one copy per duplicated vertex on the right
 
 
-@pytest.mark.parametrize(("path", "ends", "duplicated", "loops", "euler", "pieces"), [
-    (row(2, 0, 6), "both_border", row(2, 0, 6), 2, 2, 2),      # a crack across the surface
-    (row(2, 0, 3), "end_inside", row(2, 0, 2), 1, 1, 1),       # from the border, ending inside
-    (row(2, 3, 0), "start_inside", row(2, 2, 0), 1, 1, 1),     # the same, walked the other way
-    (row(2, 1, 5), "both_inside", row(2, 2, 4), 2, 0, 1),      # closed at both ends: a slit hole
-])
-def test_the_three_end_cases(path: list[int], ends: str, duplicated: list[int], loops: int, euler: int,
-                             pieces: int) -> None:
+@pytest.mark.parametrize(
+    ("path", "ends", "duplicated", "loops", "euler", "pieces"),
+    [
+        (row(2, 0, 6), "both_border", row(2, 0, 6), 2, 2, 2),  # a crack across the surface
+        (row(2, 0, 3), "end_inside", row(2, 0, 2), 1, 1, 1),  # from the border, ending inside
+        (row(2, 3, 0), "start_inside", row(2, 2, 0), 1, 1, 1),  # the same, walked the other way
+        (row(2, 1, 5), "both_inside", row(2, 2, 4), 2, 0, 1),  # closed at both ends: a slit hole
+    ],
+)
+def test_the_three_end_cases(
+    path: list[int], ends: str, duplicated: list[int], loops: int, euler: int, pieces: int
+) -> None:
     before = wavy()
     cut = cut_along_paths(before, [path])
     check_cut_is_faithful(before, cut)
     assert cut.ends == (ends,)
     assert cut.n_copies == len(duplicated)
-    assert sorted(cut.original_vertex[before.n_vertices:].tolist()) == sorted(duplicated)
+    assert sorted(cut.original_vertex[before.n_vertices :].tolist()) == sorted(duplicated)
     report = check_disk(cut.surface)
     assert (report.n_border_loops, report.euler_characteristic, report.n_components) == (loops, euler, pieces)
     assert report.nonmanifold_vertices.size == 0 and report.nonmanifold_edges.size == 0
@@ -115,7 +124,7 @@ def test_crossing_cracks() -> None:
     cut = cut_along_paths(before, [across, down], names=["east-west", "north-south"])
     check_cut_is_faithful(before, cut)
     centre = vid(NX, 3, 2)
-    copies = cut.original_vertex[before.n_vertices:].tolist()
+    copies = cut.original_vertex[before.n_vertices :].tolist()
     assert copies.count(centre) == 3  # four fans meet there
     assert cut.n_copies == 6 + 5 + 3
     report = check_disk(cut.surface)
@@ -124,8 +133,12 @@ def test_crossing_cracks() -> None:
 
 def test_crack_along_a_shortest_path_on_an_irregular_mesh() -> None:
     s = delaunay_disk(200, seed=4)
-    s = Surface(s.vertices, s.triangles, vertex_properties={"depth": s.vertices[:, 0]},
-                cell_properties={"tag": np.zeros(s.n_cells)})
+    s = Surface(
+        s.vertices,
+        s.triangles,
+        vertex_properties={"depth": s.vertices[:, 0]},
+        cell_properties={"tag": np.zeros(s.n_cells)},
+    )
     inner = interior_vertices(s)
     xy = s.vertices[inner, :2]
     a = int(inner[np.argmin(np.linalg.norm(xy - [-0.4, 0.0], axis=1))])
@@ -151,9 +164,13 @@ def test_only_the_triangles_around_the_path_matter() -> None:
     """A non-manifold fin far from the crack does not stop the cut, and is left as it is."""
     s = wavy()
     fin = [[vid(NX, 5, 4), vid(NX, 6, 4), s.n_vertices]]  # a third triangle on the edge (33, 34)
-    before = Surface(np.vstack([s.vertices, [[5.5, 4.0, 1.0]]]), np.vstack([s.triangles, fin]),
-                     vertex_properties={"depth": np.append(s.vertex_properties["depth"], 0.0)},
-                     cell_properties={"tag": np.arange(s.n_cells + 1)}, name="horizon")
+    before = Surface(
+        np.vstack([s.vertices, [[5.5, 4.0, 1.0]]]),
+        np.vstack([s.triangles, fin]),
+        vertex_properties={"depth": np.append(s.vertex_properties["depth"], 0.0)},
+        cell_properties={"tag": np.arange(s.n_cells + 1)},
+        name="horizon",
+    )
     assert check_disk(before).nonmanifold_edges.tolist() == [[33, 34]]
     cut = cut_along_paths(before, [row(2, 0, 3)])
     check_cut_is_faithful(before, cut)
@@ -161,31 +178,62 @@ def test_only_the_triangles_around_the_path_matter() -> None:
     assert check_disk(cut.surface).nonmanifold_edges.tolist() == [[33, 34]]
 
 
-@pytest.mark.parametrize(("paths", "kwargs", "message"), [
-    ([[vid(NX, 0, 2), vid(NX, 2, 2)]], {}, r"^cutting path 0 is not an edge path: vertices 14 and 16 "
-                                          r"\(positions 0 and 1\) share no edge$"),
-    ([[14, 15, 22, 15]], {"names": ["F1"]}, r"^cutting path 0 \('F1'\) passes twice through vertex 15 "
-                                             r"\(positions 1 and 3\)$"),
-    ([[0, 1, 2]], {}, r"^cutting path 0: edges \(0, 1\), \(1, 2\) \(from positions 0, 1\) are on the border "
-                      r"already: there is "
-                   r"nothing to cut$"),
-    ([[vid(NX, 1, 1), vid(NX, 1, 0), vid(NX, 2, 1)]], {},
-     r"^cutting path 0 passes through border vertex 1 \(position 1\): only its end vertices may be on the border"),
-    ([row(2, 0, 6)], {"ends": ["both_inside"]},
-     r"^cutting path 0 is declared 'both_inside', but its start vertex 14 is on the border and its end vertex 20 "
-     r"is on the border \('both_border'\)$"),
-    ([row(2, 1, 3)], {"ends": ["end_inside"], "names": ["f"]},
-     r"^cutting path 0 \('f'\) is declared 'end_inside', but its start vertex 15 is inside the surface and its end "
-     r"vertex 17 is inside the surface \('both_inside'\)$"),
-    ([row(2, 0, 2)], {"ends": ["sideways"]}, r"cutting path 0: unknown end case 'sideways'"),
-    ([row(2, 2, 3)], {}, r"^cutting path 0 ends inside the surface at both ends but has only the 2 vertices 16 and "
-                         r"17: a crack closed at both ends needs a vertex between them$"),
-    ([row(2, 0, 3), [vid(NX, 2, 2), vid(NX, 3, 2), vid(NX, 3, 3)]], {"names": [None, "b"]},
-     r"^cutting path 0 and cutting path 1 \('b'\) share the edge \(16, 17\): cutting paths may meet at vertices only$"),
-    ([[3, 99]], {}, r"^cutting path 0 refers to vertex 99 \(position 1\), but the mesh has 42 vertices$"),
-    ([[3]], {}, r"^cutting path 0 has 1 vertex: a path needs at least 2$"),
-    ([[3.0, 4.0]], {}, r"^cutting path 0 is not a sequence of vertex indices"),
-])
+@pytest.mark.parametrize(
+    ("paths", "kwargs", "message"),
+    [
+        (
+            [[vid(NX, 0, 2), vid(NX, 2, 2)]],
+            {},
+            r"^cutting path 0 is not an edge path: vertices 14 and 16 "
+            r"\(positions 0 and 1\) share no edge$",
+        ),
+        (
+            [[14, 15, 22, 15]],
+            {"names": ["F1"]},
+            r"^cutting path 0 \('F1'\) passes twice through vertex 15 "
+            r"\(positions 1 and 3\)$",
+        ),
+        (
+            [[0, 1, 2]],
+            {},
+            r"^cutting path 0: edges \(0, 1\), \(1, 2\) \(from positions 0, 1\) are on the border "
+            r"already: there is "
+            r"nothing to cut$",
+        ),
+        (
+            [[vid(NX, 1, 1), vid(NX, 1, 0), vid(NX, 2, 1)]],
+            {},
+            r"^cutting path 0 passes through border vertex 1 \(position 1\): only its end vertices may be on the border",
+        ),
+        (
+            [row(2, 0, 6)],
+            {"ends": ["both_inside"]},
+            r"^cutting path 0 is declared 'both_inside', but its start vertex 14 is on the border and its end vertex 20 "
+            r"is on the border \('both_border'\)$",
+        ),
+        (
+            [row(2, 1, 3)],
+            {"ends": ["end_inside"], "names": ["f"]},
+            r"^cutting path 0 \('f'\) is declared 'end_inside', but its start vertex 15 is inside the surface and its end "
+            r"vertex 17 is inside the surface \('both_inside'\)$",
+        ),
+        ([row(2, 0, 2)], {"ends": ["sideways"]}, r"cutting path 0: unknown end case 'sideways'"),
+        (
+            [row(2, 2, 3)],
+            {},
+            r"^cutting path 0 ends inside the surface at both ends but has only the 2 vertices 16 and "
+            r"17: a crack closed at both ends needs a vertex between them$",
+        ),
+        (
+            [row(2, 0, 3), [vid(NX, 2, 2), vid(NX, 3, 2), vid(NX, 3, 3)]],
+            {"names": [None, "b"]},
+            r"^cutting path 0 and cutting path 1 \('b'\) share the edge \(16, 17\): cutting paths may meet at vertices only$",
+        ),
+        ([[3, 99]], {}, r"^cutting path 0 refers to vertex 99 \(position 1\), but the mesh has 42 vertices$"),
+        ([[3]], {}, r"^cutting path 0 has 1 vertex: a path needs at least 2$"),
+        ([[3.0, 4.0]], {}, r"^cutting path 0 is not a sequence of vertex indices"),
+    ],
+)
 def test_bad_cutting_paths_are_named(paths: list[list[int]], kwargs: dict[str, object], message: str) -> None:
     with pytest.raises(InterpolationSetupError, match=message) as info:
         cut_along_paths(wavy(), paths, **kwargs)  # type: ignore[arg-type]
@@ -206,8 +254,12 @@ def test_random_cracks_on_an_irregular_mesh(seed: int) -> None:
     """Shortest paths between random vertices, inner vertices off the border: each end case changes the topology
     as it should, and nothing moves."""
     s = delaunay_disk(150, seed=seed)
-    s = Surface(s.vertices, s.triangles, vertex_properties={"depth": s.vertices[:, 2]},
-                cell_properties={"tag": np.arange(s.n_cells)})
+    s = Surface(
+        s.vertices,
+        s.triangles,
+        vertex_properties={"depth": s.vertices[:, 2]},
+        cell_properties={"tag": np.arange(s.n_cells)},
+    )
     rng = np.random.default_rng(seed)
     border = border_loops(s)[0]
     inner = interior_vertices(s)
@@ -218,8 +270,12 @@ def test_random_cracks_on_an_irregular_mesh(seed: int) -> None:
         "start_inside": (int(rng.choice(inner)), b_border),
         "both_inside": tuple(int(v) for v in rng.choice(inner, 2, replace=False)),
     }
-    expected = {"both_border": (0, 2, 2, 2), "end_inside": (1, 1, 1, 1), "start_inside": (1, 1, 1, 1),
-                "both_inside": (2, 0, 2, 1)}  # (uncopied ends, Euler characteristic, border loops, pieces)
+    expected = {
+        "both_border": (0, 2, 2, 2),
+        "end_inside": (1, 1, 1, 1),
+        "start_inside": (1, 1, 1, 1),
+        "both_inside": (2, 0, 2, 1),
+    }  # (uncopied ends, Euler characteristic, border loops, pieces)
     for ends, (a, b) in cases.items():
         path = shortest_edge_path(s, a, b, avoid=border)
         if ends == "both_inside" and len(path) < 3:

@@ -23,18 +23,25 @@ def _flat(nx: int, ny: int) -> tgsis.Surface:
     u, v = np.meshgrid(np.linspace(0, 4, nx), np.linspace(0, 2, ny))
     idx = np.arange(nx * ny).reshape(ny, nx)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], 1),
-                         np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="flat")
+    return tgsis.Surface(
+        np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], 1),
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        name="flat",
+    )
 
 
 def _dome(seed: int = 0) -> tuple[tgsis.Surface, list[int]]:
     """A dome over [0, 4] x [0, 2], Delaunay-triangulated from scattered points: another topology."""
     rng = np.random.default_rng(seed)
     corners = np.array([[0, 0], [4, 0], [4, 2], [0, 2]], dtype=float)
-    sides = np.concatenate([np.stack([np.linspace(0, 4, 13)[1:-1], np.zeros(11)], 1),
-                            np.stack([np.full(7, 4.0), np.linspace(0, 2, 9)[1:-1]], 1),
-                            np.stack([np.linspace(4, 0, 13)[1:-1], np.full(11, 2.0)], 1),
-                            np.stack([np.zeros(7), np.linspace(2, 0, 9)[1:-1]], 1)])
+    sides = np.concatenate(
+        [
+            np.stack([np.linspace(0, 4, 13)[1:-1], np.zeros(11)], 1),
+            np.stack([np.full(7, 4.0), np.linspace(0, 2, 9)[1:-1]], 1),
+            np.stack([np.linspace(4, 0, 13)[1:-1], np.full(11, 2.0)], 1),
+            np.stack([np.zeros(7), np.linspace(2, 0, 9)[1:-1]], 1),
+        ]
+    )
     inside = rng.random((150, 2)) * [3.8, 1.8] + 0.1
     xy = np.concatenate([corners, sides, inside])
     z = 0.8 * np.exp(-((xy[:, 0] - 2) ** 2 + (xy[:, 1] - 1) ** 2) / 0.5)
@@ -59,7 +66,7 @@ def test_salt_dome_into_the_database_and_back(conn: Conn) -> None:
     assert at0 is not None and at1 is not None
     assert np.array_equal(at0.vertices, result.source.vertices)
     assert np.array_equal(at1.vertices, result.target.vertices)
-    assert np.abs(result.source.vertices[:, 2]).max() == 0.0                     # refinement kept the plane
+    assert np.abs(result.source.vertices[:, 2]).max() == 0.0  # refinement kept the plane
     assert mesh_error(result.target.vertices, result.target.cells, target.vertices, target.cells) <= 0.05
     assert set(result.timings) >= {"partition", "compatible", "trajectories"}
     # stored as model 3 and read back
@@ -74,8 +81,9 @@ def test_salt_dome_into_the_database_and_back(conn: Conn) -> None:
 
 def _stored_and_read_back(conn: Conn, evolving: tgsis.EvolvingSurface, times: list[float]) -> None:
     """Store as model 3, read the shape back at ``times``: bit-identical to EvolvingSurface.at."""
-    fc = tgsis.create_feature_class(conn, f"interp_{len(times)}_{evolving.periods[0].triangles.shape[0]}", "SURFACE",
-                                    time_model="EVOLVING")
+    fc = tgsis.create_feature_class(
+        conn, f"interp_{len(times)}_{evolving.periods[0].triangles.shape[0]}", "SURFACE", time_model="EVOLVING"
+    )
     fid = tgsis.insert_feature(conn, fc, evolving)
     conn.commit()
     for t in times:
@@ -92,12 +100,17 @@ def test_a_fence_splits_the_surface_into_two_patches(conn: Conn) -> None:
     t_mid = [int(np.argmin(np.linalg.norm(target.vertices[:, :2] - p, axis=1))) for p in ([2, 0], [2, 2])]
     s_fence = [s_mid[0] + nx * j for j in range(ny)]
     from tgsis.interpolation import shortest_edge_path
+
     t_fence = shortest_edge_path(target, t_mid[0], t_mid[1]).tolist()
     setup = InterpolationSetup(
         (0, s_mid[0], nx - 1, nx * ny - 1, s_mid[1], nx * (ny - 1)),
         (target_corners[0], t_mid[0], target_corners[1], target_corners[2], t_mid[1], target_corners[3]),
-        source_fences=(tuple(s_fence),), target_fences=(tuple(t_fence),), fence_names=("middle",),
-        steps=4, tolerance=0.1)
+        source_fences=(tuple(s_fence),),
+        target_fences=(tuple(t_fence),),
+        fence_names=("middle",),
+        steps=4,
+        tolerance=0.1,
+    )
     result = interpolate(source, target, setup, 0.0, 1.0)
     assert result.error <= 0.1
     # fence vertices go onto the target's fence path, and the two patches meet there (no gap)
@@ -115,11 +128,12 @@ def test_a_cut_opens_a_crack(conn: Conn) -> None:
     # a crack from the middle of the bottom border up to the centre: ends inside at one end
     crack = [nx // 2 + nx * j for j in range(6)]
     target, corners = _dome(2)
-    setup = InterpolationSetup(tuple(_flat_corners(nx, ny)), tuple(corners), cuts=(CutPath(tuple(crack), "crack"),),
-                               steps=3, tolerance=0.2)
+    setup = InterpolationSetup(
+        tuple(_flat_corners(nx, ny)), tuple(corners), cuts=(CutPath(tuple(crack), "crack"),), steps=3, tolerance=0.2
+    )
     result = interpolate(source, target, setup, 0.0, 1.0)
-    assert result.source.n_vertices > source.n_vertices          # the crack's vertices were duplicated
-    assert np.allclose(result.source.vertices[source.n_vertices:, 2], 0.0)
+    assert result.source.n_vertices > source.n_vertices  # the crack's vertices were duplicated
+    assert np.allclose(result.source.vertices[source.n_vertices :, 2], 0.0)
     _stored_and_read_back(conn, result.evolving, [0.0, 0.5, 1.0])
 
 
@@ -147,13 +161,18 @@ def test_an_attached_border_stays_on_its_wall_read_from_the_set_up_file(tmp_path
     source, (target, corners) = _flat(nx, ny), _dome(3)
     wall = tgsis.Surface([[0, -1, -5], [0, 3, -5], [0, 3, 5], [0, -1, 5]], [[0, 1, 2], [0, 2, 3]], name="west")
     formats.write(wall, tmp_path / "west.ts")
-    west = [nx * j for j in range(ny)]                                   # the source's x = 0 border
-    InterpolationSetup(tuple(_flat_corners(nx, ny)), tuple(corners), controlling_surfaces={"west": "west.ts"},
-                       attachments=tuple(Attachment(v, ("west",)) for v in west), steps=6,
-                       tolerance=0.2).save(tmp_path / "setup.json")
-    setup = InterpolationSetup.load(tmp_path / "setup.json")              # the wall is read from beside the file
+    west = [nx * j for j in range(ny)]  # the source's x = 0 border
+    InterpolationSetup(
+        tuple(_flat_corners(nx, ny)),
+        tuple(corners),
+        controlling_surfaces={"west": "west.ts"},
+        attachments=tuple(Attachment(v, ("west",)) for v in west),
+        steps=6,
+        tolerance=0.2,
+    ).save(tmp_path / "setup.json")
+    setup = InterpolationSetup.load(tmp_path / "setup.json")  # the wall is read from beside the file
     result = interpolate(source, target, setup, 0.0, 1.0)
-    assert np.abs(result.trajectories[:, west, 0]).max() <= 1e-9          # on the wall at every sample
+    assert np.abs(result.trajectories[:, west, 0]).max() <= 1e-9  # on the wall at every sample
     # the wall is a plane holding the attached vertices' straight paths: nothing moves them off those, so the
     # solved interior goes straight too (the design's convex combinations bent it away from them, issue 37)
     straight = result.trajectories[0] + 0.4 * (result.trajectories[-1] - result.trajectories[0])
@@ -169,9 +188,9 @@ def test_the_source_may_be_the_later_shape() -> None:
     assert (evolving.start, evolving.end) == (0.0, 1.0)
     at0, at1 = evolving.at(0.0), evolving.at(1.0)
     assert at0 is not None and at1 is not None
-    assert np.array_equal(at1.vertices, result.source.vertices)              # the source at its own time, t0 = 1
-    assert np.array_equal(at0.vertices, result.target.vertices)              # the compatible target at t1 = 0
-    assert np.abs(at0.vertices[:, 2]).max() <= 0.05                          # flat within the tolerance
+    assert np.array_equal(at1.vertices, result.source.vertices)  # the source at its own time, t0 = 1
+    assert np.array_equal(at0.vertices, result.target.vertices)  # the compatible target at t1 = 0
+    assert np.abs(at0.vertices[:, 2]).max() <= 0.05  # flat within the tolerance
     # the same samples as forwards, read in the other direction
     forwards = interpolate(source, target, setup, 0.0, 1.0)
     middle, forwards_middle = evolving.at(0.25), forwards.evolving.at(0.75)
@@ -190,11 +209,20 @@ def test_the_source_and_target_times_must_differ() -> None:
 def test_vertex_properties_travel_with_the_vertices() -> None:
     """A property both meshes carry goes linearly from the source's value to the target's, along each trajectory."""
     flat, (dome, corners) = _flat(21, 11), _dome()
-    source = tgsis.Surface(flat.vertices, flat.cells, vertex_properties={"age": np.zeros(flat.n_vertices),
-                                                                         "xpos": flat.vertices[:, 0],
-                                                                         "only_here": np.ones(flat.n_vertices)})
-    target = tgsis.Surface(dome.vertices, dome.cells, vertex_properties={"age": np.full(dome.n_vertices, 10.0),
-                                                                         "xpos": dome.vertices[:, 0]})
+    source = tgsis.Surface(
+        flat.vertices,
+        flat.cells,
+        vertex_properties={
+            "age": np.zeros(flat.n_vertices),
+            "xpos": flat.vertices[:, 0],
+            "only_here": np.ones(flat.n_vertices),
+        },
+    )
+    target = tgsis.Surface(
+        dome.vertices,
+        dome.cells,
+        vertex_properties={"age": np.full(dome.n_vertices, 10.0), "xpos": dome.vertices[:, 0]},
+    )
     setup = InterpolationSetup(tuple(_flat_corners(21, 11)), tuple(corners), steps=5, tolerance=0.05)
     result = interpolate(source, target, setup, 0.0, 1.0, alive=True)
     assert result.dropped_properties == ("only_here",) and result.evolving.alive

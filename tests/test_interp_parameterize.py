@@ -59,7 +59,10 @@ def random_disk(n: int, seed: int, bump: float = 0.3) -> tuple[np.ndarray, np.nd
     xy = np.r_[np.c_[np.cos(angle), np.sin(angle)], np.c_[r * np.cos(theta), r * np.sin(theta)]]
     triangles = ccw(xy, Delaunay(xy).simplices.astype(np.int64))
     phase = rng.random(3) * 6
-    z = bump * (np.sin(4 * xy[:, 0] + phase[0]) * np.cos(3 * xy[:, 1] + phase[1]) + 0.5 * np.sin(9 * xy[:, 0] * xy[:, 1] + phase[2]))
+    z = bump * (
+        np.sin(4 * xy[:, 0] + phase[0]) * np.cos(3 * xy[:, 1] + phase[1])
+        + 0.5 * np.sin(9 * xy[:, 0] * xy[:, 1] + phase[2])
+    )
     return np.c_[xy, z], triangles, np.arange(rim)
 
 
@@ -194,8 +197,7 @@ def test_point_location_at_the_border_within_tolerance_and_outside() -> None:
     locator = PointLocator(uv, triangles)
     side = np.array([1.0, 0.0]) + np.linspace(0, 1, 37)[:, None] * np.array([-1.0, 1.0])
     outward = np.array([1.0, 1.0]) / np.sqrt(2)
-    tri, bary, dist = locator.locate(np.r_[side, side[5:6] + 1e-12 * outward, side[5:6] + 1e-3 * outward,
-                                           [[5.0, 5.0]]])
+    tri, bary, dist = locator.locate(np.r_[side, side[5:6] + 1e-12 * outward, side[5:6] + 1e-3 * outward, [[5.0, 5.0]]])
     assert np.all(tri[:38] >= 0) and np.all(dist[:37] <= 1e-15) and 0 < dist[37] < 1e-11
     assert tri[38] == -1 and tri[39] == -1
 
@@ -204,7 +206,9 @@ def dome(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
     """A dome over the unit square, Delaunay-triangulated random points (a different triangulation from grid)."""
     rng = np.random.default_rng(seed)
     edge = np.linspace(0, 1, 11)[:-1]
-    rim = np.r_[np.c_[edge, 0 * edge], np.c_[1 + 0 * edge, edge], np.c_[1 - edge, 1 + 0 * edge], np.c_[0 * edge, 1 - edge]]
+    rim = np.r_[
+        np.c_[edge, 0 * edge], np.c_[1 + 0 * edge, edge], np.c_[1 - edge, 1 + 0 * edge], np.c_[0 * edge, 1 - edge]
+    ]
     xy = np.r_[rim, 0.02 + 0.96 * rng.random((n, 2))]
     triangles = ccw(xy, Delaunay(xy).simplices.astype(np.int64))
     z = 0.4 * np.sin(np.pi * xy[:, 0]) * np.sin(np.pi * xy[:, 1])
@@ -225,20 +229,20 @@ def test_compatible_mesh_lies_on_the_target_and_refines_below_the_tolerance() ->
 
     epsilon = 0.01
     assert coarse_error > epsilon
-    patch = compatible_patch(source, source_tri, source_corners, target, target_tri, target_corners,
-                             tolerance=epsilon)
+    patch = compatible_patch(source, source_tri, source_corners, target, target_tri, target_corners, tolerance=epsilon)
     assert patch.rounds > 0 and len(patch.source_vertices) > len(source)
     assert patch.error <= epsilon
     assert mesh_error(patch.target_positions, patch.triangles, target, target_tri) <= epsilon
     assert closest_points(patch.target_positions, target, target_tri).distances.max() < 1e-12
     # the source's shape is unchanged: old vertices kept, new ones inside old triangles, same area
-    assert np.array_equal(patch.source_vertices[:len(source)], source)
-    new = patch.source_vertices[len(source):]
+    assert np.array_equal(patch.source_vertices[: len(source)], source)
+    new = patch.source_vertices[len(source) :]
     assert closest_points(new, source, source_tri).distances.max() < 1e-15
 
     def area(xyz: np.ndarray, tri: np.ndarray) -> float:
-        return float(np.linalg.norm(np.cross(xyz[tri[:, 1]] - xyz[tri[:, 0]], xyz[tri[:, 2]] - xyz[tri[:, 0]]),
-                                    axis=1).sum() / 2)
+        return float(
+            np.linalg.norm(np.cross(xyz[tri[:, 1]] - xyz[tri[:, 0]], xyz[tri[:, 2]] - xyz[tri[:, 0]]), axis=1).sum() / 2
+        )
 
     assert area(patch.source_vertices, patch.triangles) == pytest.approx(area(source, source_tri), abs=1e-12)
     # the refined source is still a valid parameterised disk with g_s extended linearly
@@ -252,8 +256,9 @@ def test_centroid_splits_alone_stall_where_edge_bisection_converges() -> None:
     source, source_tri, corners = grid(6)
     target, target_tri, target_corners = dome(400, 3)
     with pytest.raises(ParameterizationError, match="after 30 refinement rounds"):
-        compatible_patch(source, source_tri, corners, target, target_tri, target_corners, tolerance=0.01,
-                         split="centroid")
+        compatible_patch(
+            source, source_tri, corners, target, target_tri, target_corners, tolerance=0.01, split="centroid"
+        )
     patch = compatible_patch(source, source_tri, corners, target, target_tri, target_corners, tolerance=0.01)
     assert patch.rounds <= 6 and patch.error <= 0.01
 
@@ -262,8 +267,7 @@ def test_refinement_that_cannot_reach_the_tolerance_is_an_error() -> None:
     source, source_tri, corners = grid(4)
     target, target_tri, target_corners = dome(300, 5)
     with pytest.raises(ParameterizationError, match="after 1 refinement rounds") as raised:
-        compatible_patch(source, source_tri, corners, target, target_tri, target_corners, tolerance=1e-4,
-                         max_rounds=1)
+        compatible_patch(source, source_tri, corners, target, target_tri, target_corners, tolerance=1e-4, max_rounds=1)
     assert raised.value.hint and "the farthest is target vertex" in raised.value.message
     with pytest.raises(ParameterizationError, match="pair up"):
         compatible_patch(source, source_tri, corners, target, target_tri, target_corners[:3], tolerance=0.1)
@@ -276,7 +280,7 @@ def test_closest_points_match_brute_force() -> None:
     got = closest_points(points, vertices, triangles)
     corners = vertices[triangles]
     for i in range(0, 300, 7):
-        p = np.repeat(points[i:i + 1], len(triangles), axis=0)
+        p = np.repeat(points[i : i + 1], len(triangles), axis=0)
         d = np.linalg.norm(closest_on_triangles(p, corners[:, 0], corners[:, 1], corners[:, 2]) - p, axis=1)
         assert got.distances[i] == pytest.approx(d.min(), abs=1e-14)
         assert d[got.triangles[i]] == pytest.approx(d.min(), abs=1e-14)

@@ -37,8 +37,17 @@ def line(a: tuple[int, int], b: tuple[int, int], nx: int = NX) -> list[int]:
 # control vertex sequence of the source (9 x 7 grid) and of a coarser target (5 x 5 grid), pair by pair
 SOURCE_CONTROLS = [v(0, 0), v(4, 0), v(8, 0), v(8, 3), v(8, 6), v(4, 6), v(0, 6), v(0, 3), v(4, 3)]
 SOURCE_FENCES = [line((0, 3), (4, 3)), line((4, 3), (8, 3)), line((4, 0), (4, 3))]
-TARGET_CONTROLS = [v(0, 0, 5), v(2, 0, 5), v(4, 0, 5), v(4, 2, 5), v(4, 4, 5), v(2, 4, 5), v(0, 4, 5), v(0, 2, 5),
-                   v(2, 2, 5)]
+TARGET_CONTROLS = [
+    v(0, 0, 5),
+    v(2, 0, 5),
+    v(4, 0, 5),
+    v(4, 2, 5),
+    v(4, 4, 5),
+    v(2, 4, 5),
+    v(0, 4, 5),
+    v(0, 2, 5),
+    v(2, 2, 5),
+]
 TARGET_FENCES = [line((0, 2), (2, 2), 5), line((2, 2), (4, 2), 5), line((2, 0), (2, 2), 5)]
 
 
@@ -87,20 +96,29 @@ def test_partition_of_a_grid_into_three_patches() -> None:
     assert set(by_controls) == {(0, 1, 8, 7), (1, 2, 3, 8), (3, 4, 5, 6, 7, 8)}
     lower_left = by_controls[(0, 1, 8, 7)]
     assert len(lower_left.triangles) == 2 * 4 * 3
-    assert lower_left.border.tolist() == (line((0, 0), (4, 0)) + line((4, 1), (4, 3)) + line((3, 3), (0, 3))
-                                          + line((0, 2), (0, 1)))
+    assert lower_left.border.tolist() == (
+        line((0, 0), (4, 0)) + line((4, 1), (4, 3)) + line((3, 3), (0, 3)) + line((0, 2), (0, 1))
+    )
     assert lower_left.corners.tolist() == [0, 4, 7, 11]
     top = by_controls[(3, 4, 5, 6, 7, 8)]
-    assert top.border[0] == v(8, 3) and top.control_vertices.tolist() == [v(8, 3), v(8, 6), v(4, 6), v(0, 6),
-                                                                        v(0, 3), v(4, 3)]
+    assert top.border[0] == v(8, 3) and top.control_vertices.tolist() == [
+        v(8, 3),
+        v(8, 6),
+        v(4, 6),
+        v(0, 6),
+        v(0, 3),
+        v(4, 3),
+    ]
     assert [len(f) for f in part.fence_paths] == [5, 5, 4]
 
 
 def test_fences_proposed_by_the_shortest_path_helper() -> None:
     s = source()
     others = SOURCE_CONTROLS
-    fences = [shortest_edge_path(s, a, b, avoid=others) for a, b in ((v(0, 3), v(4, 3)), (v(4, 3), v(8, 3)),
-                                                                     (v(4, 0), v(4, 3)))]
+    fences = [
+        shortest_edge_path(s, a, b, avoid=others)
+        for a, b in ((v(0, 3), v(4, 3)), (v(4, 3), v(8, 3)), (v(4, 0), v(4, 3)))
+    ]
     part = partition_surface(s, SOURCE_CONTROLS, fences)
     assert len(part.patches) == 3
     check_partition(s, part, SOURCE_CONTROLS)
@@ -116,8 +134,9 @@ def test_source_and_target_patches_pair_up() -> None:
         assert np.array_equal(s.control_indices, t.control_indices)
         assert np.array_equal(pair.control_indices, s.control_indices)
         # aligned: the j-th control vertex of one patch pairs with the j-th of the other
-        assert [TARGET_CONTROLS.index(c) for c in t.control_vertices.tolist()] == \
-               [SOURCE_CONTROLS.index(c) for c in s.control_vertices.tolist()]
+        assert [TARGET_CONTROLS.index(c) for c in t.control_vertices.tolist()] == [
+            SOURCE_CONTROLS.index(c) for c in s.control_vertices.tolist()
+        ]
 
 
 def test_pairing_survives_renumbering() -> None:
@@ -139,8 +158,11 @@ def test_pair_patches_directly() -> None:
     b = partition_surface(target(), TARGET_CONTROLS, TARGET_FENCES, mesh_name="target")
     pairs = pair_patches(a, b)
     assert sorted((p.source, p.target) for p in pairs) == sorted(
-        (p.index, q.index) for p in a.patches for q in b.patches
-        if p.control_indices.tolist() == q.control_indices.tolist())
+        (p.index, q.index)
+        for p in a.patches
+        for q in b.patches
+        if p.control_indices.tolist() == q.control_indices.tolist()
+    )
 
 
 def test_validated_fences_are_returned() -> None:
@@ -152,28 +174,56 @@ def test_validated_fences_are_returned() -> None:
 # ---- what is wrong, and where
 
 
-@pytest.mark.parametrize(("controls", "fences", "names", "message"), [
-    (SOURCE_CONTROLS, [[v(0, 3), v(2, 3)]], ["mid"],
-     r"^source fence path 0 \('mid'\) is not an edge path: vertices 27 and 29 \(positions 0 and 1\) share no edge$"),
-    (SOURCE_CONTROLS, SOURCE_FENCES[:2] + [line((4, 0), (4, 2))], None,
-     r"^source fence path 2 ends at vertex 22, which is not a source control vertex$"),
-    (SOURCE_CONTROLS, [line((0, 3), (8, 3))], ["across"],
-     r"^source fence path 0 \('across'\) passes through control vertex 31 \(position 4\): a fence path joins two "
-     r"control vertices with none in between; split it there$"),
-    (SOURCE_CONTROLS[:8], [line((0, 3), (8, 3)), line((4, 0), (4, 6))], ["row", "column"],
-     r"^source fence path 0 \('row'\) and source fence path 1 \('column'\) meet at vertex 31, which is inside "
-     r"source fence path 0 \('row'\) and source fence path 1 \('column'\): fence paths may meet at their end "
-     r"vertices only$"),
-    (SOURCE_CONTROLS + [v(1, 3)], [[v(0, 3), v(1, 3)], [v(1, 3), v(0, 3)]], ["a", "b"],
-     r"^source fence path 0 \('a'\) and source fence path 1 \('b'\) share the edge \(27, 28\): fence paths may meet "
-     r"at their end vertices only$"),
-    (SOURCE_CONTROLS, [[v(0, 3), v(0, 3), v(1, 3)]], None,
-     r"^source fence path 0 passes twice through vertex 27 \(positions 0 and 1\)$"),
-    ([0, 8, 62, 0], [], None, r"^source control vertex 0 is given twice \(positions 0 and 3\)$"),
-    ([0, 8, 99], [], None, r"^source control vertex 99 \(position 2\): not in the mesh, which has 63 vertices$"),
-])
-def test_bad_fences_and_controls_are_named(controls: list[int], fences: list[list[int]],
-                                           names: list[str] | None, message: str) -> None:
+@pytest.mark.parametrize(
+    ("controls", "fences", "names", "message"),
+    [
+        (
+            SOURCE_CONTROLS,
+            [[v(0, 3), v(2, 3)]],
+            ["mid"],
+            r"^source fence path 0 \('mid'\) is not an edge path: vertices 27 and 29 \(positions 0 and 1\) share no edge$",
+        ),
+        (
+            SOURCE_CONTROLS,
+            SOURCE_FENCES[:2] + [line((4, 0), (4, 2))],
+            None,
+            r"^source fence path 2 ends at vertex 22, which is not a source control vertex$",
+        ),
+        (
+            SOURCE_CONTROLS,
+            [line((0, 3), (8, 3))],
+            ["across"],
+            r"^source fence path 0 \('across'\) passes through control vertex 31 \(position 4\): a fence path joins two "
+            r"control vertices with none in between; split it there$",
+        ),
+        (
+            SOURCE_CONTROLS[:8],
+            [line((0, 3), (8, 3)), line((4, 0), (4, 6))],
+            ["row", "column"],
+            r"^source fence path 0 \('row'\) and source fence path 1 \('column'\) meet at vertex 31, which is inside "
+            r"source fence path 0 \('row'\) and source fence path 1 \('column'\): fence paths may meet at their end "
+            r"vertices only$",
+        ),
+        (
+            SOURCE_CONTROLS + [v(1, 3)],
+            [[v(0, 3), v(1, 3)], [v(1, 3), v(0, 3)]],
+            ["a", "b"],
+            r"^source fence path 0 \('a'\) and source fence path 1 \('b'\) share the edge \(27, 28\): fence paths may meet "
+            r"at their end vertices only$",
+        ),
+        (
+            SOURCE_CONTROLS,
+            [[v(0, 3), v(0, 3), v(1, 3)]],
+            None,
+            r"^source fence path 0 passes twice through vertex 27 \(positions 0 and 1\)$",
+        ),
+        ([0, 8, 62, 0], [], None, r"^source control vertex 0 is given twice \(positions 0 and 3\)$"),
+        ([0, 8, 99], [], None, r"^source control vertex 99 \(position 2\): not in the mesh, which has 63 vertices$"),
+    ],
+)
+def test_bad_fences_and_controls_are_named(
+    controls: list[int], fences: list[list[int]], names: list[str] | None, message: str
+) -> None:
     with pytest.raises(InterpolationSetupError, match=message) as info:
         partition_surface(source(), controls, fences, fence_names=names)
     assert len(info.value.problems) == 1
@@ -191,11 +241,15 @@ def test_a_fence_that_separates_nothing() -> None:
     with pytest.raises(InterpolationSetupError) as info:
         partition_surface(source(), controls, [line((4, 0), (4, 3))], fence_names=["dangling"])
     problems = info.value.problems
-    assert problems[0] == ("source fence path 0 ('dangling') separates nothing: both sides of its edge (4, 13) are "
-                           "in source patch 0 (3 of its edges are so); a fence path must run from border to border "
-                           "or between other fence paths")
-    assert problems[1].startswith("source patch 0 (triangles 0, 1, 2, 3 and 92 more; control vertices "
-                                  "[0, 4, 8, 62, 54, 31]): control vertex 31 inside the patch, not on its border")
+    assert problems[0] == (
+        "source fence path 0 ('dangling') separates nothing: both sides of its edge (4, 13) are "
+        "in source patch 0 (3 of its edges are so); a fence path must run from border to border "
+        "or between other fence paths"
+    )
+    assert problems[1].startswith(
+        "source patch 0 (triangles 0, 1, 2, 3 and 92 more; control vertices "
+        "[0, 4, 8, 62, 54, 31]): control vertex 31 inside the patch, not on its border"
+    )
     assert str(info.value).startswith("source partition: 2 problems\n- source fence path 0 ('dangling')")
 
 
@@ -205,7 +259,8 @@ def test_a_patch_that_is_not_a_disk() -> None:
         partition_surface(ring, [0, 5, 35, 30], [])
     assert info.value.problems == (
         "source patch 0 (triangles 0, 1, 2, 3 and 44 more; control vertices [0, 5, 35, 30]) is not a disk: "
-        "2 border loops; Euler characteristic V - E + F = 36 - 84 + 48 = 0, not 1",)
+        "2 border loops; Euler characteristic V - E + F = 36 - 84 + 48 = 0, not 1",
+    )
 
 
 def test_a_patch_pinched_at_a_vertex() -> None:
@@ -217,32 +272,45 @@ def test_a_patch_pinched_at_a_vertex() -> None:
     assert info.value.problems[0] == (
         "source patch 0 (triangles 0, 1, 2, 3 and 83 more; control vertices [0, 8, 62, 54, 58, 31]) is not a disk: "
         "1 non-manifold vertex (whose triangles form separate fans): 58; "
-        "Euler characteristic V - E + F = 62 - 149 + 87 = 0, not 1")  # 58 as in the mesh, not the patch's own number
-    assert any(p.startswith("source patch 1 (") and p.endswith("has 2 control vertices: a patch needs at least 3 "
-                                                                "(the corners of its polygon)")
-               for p in info.value.problems)
+        "Euler characteristic V - E + F = 62 - 149 + 87 = 0, not 1"
+    )  # 58 as in the mesh, not the patch's own number
+    assert any(
+        p.startswith("source patch 1 (")
+        and p.endswith("has 2 control vertices: a patch needs at least 3 (the corners of its polygon)")
+        for p in info.value.problems
+    )
 
 
 def test_a_patch_with_too_few_control_vertices() -> None:
-    with pytest.raises(InterpolationSetupError, match=r"^source patch 1 \(triangles 4, 5, 6, 7 and 44 more; "
-                       r"control vertices \[4, 58\]\) has 2 control vertices: a patch needs at least 3 "):
+    with pytest.raises(
+        InterpolationSetupError,
+        match=r"^source patch 1 \(triangles 4, 5, 6, 7 and 44 more; "
+        r"control vertices \[4, 58\]\) has 2 control vertices: a patch needs at least 3 ",
+    ):
         # a fence down the middle: the right half has only the fence's ends as control vertices
         partition_surface(source(), [v(0, 0), v(4, 0), v(4, 6), v(0, 6)], [line((4, 0), (4, 6))])
 
 
 def test_a_control_vertex_inside_its_patch() -> None:
-    with pytest.raises(InterpolationSetupError, match=r"^source patch 0 \(triangles 0, 1, 2, 3 and 92 more; control "
-                       r"vertices \[0, 8, 62, 54, 31\]\): control vertex 31 inside the patch, not on its border$"):
+    with pytest.raises(
+        InterpolationSetupError,
+        match=r"^source patch 0 \(triangles 0, 1, 2, 3 and 92 more; control "
+        r"vertices \[0, 8, 62, 54, 31\]\): control vertex 31 inside the patch, not on its border$",
+    ):
         partition_surface(source(), [v(0, 0), v(8, 0), v(8, 6), v(0, 6), v(4, 3)], [])
 
 
 def test_different_numbers_of_patches() -> None:
     with pytest.raises(InterpolationSetupError) as info:
         partition_pair(source(), target(), SOURCE_CONTROLS, TARGET_CONTROLS, SOURCE_FENCES, TARGET_FENCES[:2])
-    assert info.value.problems[0].startswith("source has 3 patches and target 2: every patch needs a counterpart "
-                                             "(control vertex pairs of each source patch 0: [0, 1, 8, 7]; ")
-    assert any(p.startswith("source patch") and "has no target patch with the same control vertex pairs" in p
-               for p in info.value.problems)
+    assert info.value.problems[0].startswith(
+        "source has 3 patches and target 2: every patch needs a counterpart "
+        "(control vertex pairs of each source patch 0: [0, 1, 8, 7]; "
+    )
+    assert any(
+        p.startswith("source patch") and "has no target patch with the same control vertex pairs" in p
+        for p in info.value.problems
+    )
 
 
 def test_patches_with_no_counterpart() -> None:
@@ -250,20 +318,27 @@ def test_patches_with_no_counterpart() -> None:
     with pytest.raises(InterpolationSetupError) as info:
         partition_pair(source(), target(), SOURCE_CONTROLS, TARGET_CONTROLS, SOURCE_FENCES, target_fences)
     problems = info.value.problems
-    assert "source patch 0 (control vertex pairs [0, 1, 8, 7], source vertices [0, 4, 31, 27]) has no target " \
-           "patch with the same control vertex pairs" in problems
-    assert any(p.startswith("target patch") and p.endswith("has no source patch with the same control vertex pairs")
-               for p in problems)
+    assert (
+        "source patch 0 (control vertex pairs [0, 1, 8, 7], source vertices [0, 4, 31, 27]) has no target "
+        "patch with the same control vertex pairs" in problems
+    )
+    assert any(
+        p.startswith("target patch") and p.endswith("has no source patch with the same control vertex pairs")
+        for p in problems
+    )
     assert str(info.value).startswith("patch pairing: ")
 
 
 def test_patches_in_another_cyclic_order() -> None:
     s = grid(5, 4)
     corners = [0, 4, 19, 15]
-    with pytest.raises(InterpolationSetupError, match=r"^source patch 0 \(control vertex pairs \[0, 1, 2, 3\], "
-                       r"source vertices \[0, 4, 19, 15\]\) and target patch 0 \(control vertex pairs \[0, 2, 1, 3\], "
-                       r"target vertices \[0, 4, 19, 15\]\) have the same control vertex pairs in a different cyclic "
-                       r"order along their borders$"):
+    with pytest.raises(
+        InterpolationSetupError,
+        match=r"^source patch 0 \(control vertex pairs \[0, 1, 2, 3\], "
+        r"source vertices \[0, 4, 19, 15\]\) and target patch 0 \(control vertex pairs \[0, 2, 1, 3\], "
+        r"target vertices \[0, 4, 19, 15\]\) have the same control vertex pairs in a different cyclic "
+        r"order along their borders$",
+    ):
         partition_pair(s, s, corners, [0, 19, 4, 15])
 
 
@@ -271,14 +346,20 @@ def test_a_target_oriented_the_other_way() -> None:
     s = grid(5, 4)
     flipped = Surface(s.vertices, s.triangles[:, ::-1])
     corners = [0, 4, 19, 15]
-    with pytest.raises(InterpolationSetupError, match=r"different cyclic order along their borders \(reversed: are "
-                       r"the triangles of one mesh oriented the other way\?\)$"):
+    with pytest.raises(
+        InterpolationSetupError,
+        match=r"different cyclic order along their borders \(reversed: are "
+        r"the triangles of one mesh oriented the other way\?\)$",
+    ):
         partition_pair(s, flipped, corners, corners)
 
 
 def test_different_numbers_of_control_vertices() -> None:
-    with pytest.raises(InterpolationSetupError, match=r"^source has 8 control vertices and target 7: control vertices "
-                       r"pair up by position in the two sequences$"):
+    with pytest.raises(
+        InterpolationSetupError,
+        match=r"^source has 8 control vertices and target 7: control vertices "
+        r"pair up by position in the two sequences$",
+    ):
         partition_pair(source(), target(), SOURCE_CONTROLS[:8], TARGET_CONTROLS[:7], [], [])
     a = partition_surface(source(), SOURCE_CONTROLS, SOURCE_FENCES)
     b = partition_surface(target(), TARGET_CONTROLS + [v(1, 0, 5)], TARGET_FENCES, mesh_name="target")
@@ -288,9 +369,16 @@ def test_different_numbers_of_control_vertices() -> None:
 
 def test_both_meshes_are_checked_at_once() -> None:
     with pytest.raises(InterpolationSetupError) as info:
-        partition_pair(source(), target(), SOURCE_CONTROLS, TARGET_CONTROLS,
-                       [[v(0, 3), v(2, 3)]] + SOURCE_FENCES[1:], TARGET_FENCES[:2] + [[v(2, 0, 5), v(2, 2, 5)]],
-                       source_fence_names=["w"], target_fence_names=[None, None, "s"])
+        partition_pair(
+            source(),
+            target(),
+            SOURCE_CONTROLS,
+            TARGET_CONTROLS,
+            [[v(0, 3), v(2, 3)]] + SOURCE_FENCES[1:],
+            TARGET_FENCES[:2] + [[v(2, 0, 5), v(2, 2, 5)]],
+            source_fence_names=["w"],
+            target_fence_names=[None, None, "s"],
+        )
     lines = str(info.value).splitlines()
     assert lines[0] == "interpolation set-up: 2 problems"
     assert lines[1].startswith("- source fence path 0 ('w') is not an edge path: vertices 27 and 29")

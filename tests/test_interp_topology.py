@@ -44,8 +44,11 @@ def test_error_is_invalid_input() -> None:
     assert InterpolationSetupError.collect("setup", ["only"]).message == "only"
 
 
-@pytest.mark.parametrize("surface", [grid(5, 4), annulus(), delaunay_disk(60), shuffled(grid(6, 5))[0], torus()],
-                         ids=["grid", "annulus", "delaunay", "shuffled", "torus"])
+@pytest.mark.parametrize(
+    "surface",
+    [grid(5, 4), annulus(), delaunay_disk(60), shuffled(grid(6, 5))[0], torus()],
+    ids=["grid", "annulus", "delaunay", "shuffled", "torus"],
+)
 def test_edges_and_border_match_brute_force(surface: Surface) -> None:
     edges = mesh_edges(surface)
     assert edges.dtype == np.int64 and edges.shape[1] == 2
@@ -55,8 +58,9 @@ def test_edges_and_border_match_brute_force(surface: Surface) -> None:
     assert set(map(tuple, border_edges(surface).tolist())) == brute_border(surface.triangles)
     in_border = np.unique(border_edges(surface))
     assert np.array_equal(border_vertices(surface), in_border)
-    assert np.array_equal(np.union1d(border_vertices(surface), interior_vertices(surface)),
-                          np.arange(surface.n_vertices))
+    assert np.array_equal(
+        np.union1d(border_vertices(surface), interior_vertices(surface)), np.arange(surface.n_vertices)
+    )
     assert np.intersect1d(border_vertices(surface), interior_vertices(surface)).size == 0
 
 
@@ -64,8 +68,12 @@ def test_grid_edge_count_and_edge_lookup() -> None:
     nx_, ny = 5, 4
     topo = MeshTopology.of(grid(nx_, ny))
     assert len(topo.edges) == (nx_ - 1) * ny + nx_ * (ny - 1) + (nx_ - 1) * (ny - 1)
-    assert topo.find_edges([[vid(nx_, 1, 1), vid(nx_, 2, 1)], [vid(nx_, 2, 2), vid(nx_, 1, 1)],
-                            [vid(nx_, 0, 0), vid(nx_, 2, 0)]]).tolist()[2] == -1
+    assert (
+        topo.find_edges(
+            [[vid(nx_, 1, 1), vid(nx_, 2, 1)], [vid(nx_, 2, 2), vid(nx_, 1, 1)], [vid(nx_, 0, 0), vid(nx_, 2, 0)]]
+        ).tolist()[2]
+        == -1
+    )
     found = topo.find_edges([[1, 0], [0, 1]])
     assert found[0] == found[1] >= 0 and topo.edges[found[0]].tolist() == [0, 1]
     assert (topo.edge_triangle_count[topo.is_border_edge] == 1).all()
@@ -92,8 +100,7 @@ def test_border_loops_follow_the_triangles() -> None:
     areas = sorted(signed_area(s.vertices, loop) for loop in loops)
     assert areas[0] == pytest.approx(-1.0) and areas[1] == pytest.approx(30.0)  # hole turns the other way
     flipped = Surface(s.vertices, s.triangles[:, ::-1])
-    assert [loop.tolist() for loop in border_loops(flipped)] == [
-        np.roll(loop[::-1], 1).tolist() for loop in loops]
+    assert [loop.tolist() for loop in border_loops(flipped)] == [np.roll(loop[::-1], 1).tolist() for loop in loops]
 
 
 def test_long_border_loop() -> None:
@@ -146,8 +153,11 @@ def _check_rings(surface: Surface) -> None:
         assert one_ring(surface, v).tolist() == ring
 
 
-@pytest.mark.parametrize("surface", [grid(5, 4), annulus(), delaunay_disk(80), shuffled(grid(6, 5), 2)[0], torus()],
-                         ids=["grid", "annulus", "delaunay", "shuffled", "torus"])
+@pytest.mark.parametrize(
+    "surface",
+    [grid(5, 4), annulus(), delaunay_disk(80), shuffled(grid(6, 5), 2)[0], torus()],
+    ids=["grid", "annulus", "delaunay", "shuffled", "torus"],
+)
 def test_one_rings_turn_like_the_triangles(surface: Surface) -> None:
     _check_rings(surface)
 
@@ -169,13 +179,20 @@ def test_one_rings_skip_unused_vertices() -> None:
     assert rings.ring(0).tolist() == [1, 2]
 
 
-@pytest.mark.parametrize(("surface", "message"), [
-    (Surface([[0, 0, 0], [1, 0, 0], [1, 1, 0], [2, 1, 0], [2, 2, 0]], [[0, 1, 2], [2, 3, 4]]),
-     r"around vertex 2 form several fans"),
-    (Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
-     r"edges \(0, 1\) are on more than 2 triangles"),
-    (mobius(), r"oriented inconsistently"),
-])
+@pytest.mark.parametrize(
+    ("surface", "message"),
+    [
+        (
+            Surface([[0, 0, 0], [1, 0, 0], [1, 1, 0], [2, 1, 0], [2, 2, 0]], [[0, 1, 2], [2, 3, 4]]),
+            r"around vertex 2 form several fans",
+        ),
+        (
+            Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
+            r"edges \(0, 1\) are on more than 2 triangles",
+        ),
+        (mobius(), r"oriented inconsistently"),
+    ],
+)
 def test_one_rings_refuse_non_manifold_meshes(surface: Surface, message: str) -> None:
     with pytest.raises(InterpolationSetupError, match=message):
         one_rings(surface)
@@ -183,8 +200,10 @@ def test_one_rings_refuse_non_manifold_meshes(surface: Surface, message: str) ->
 
 def test_one_rings_refuse_a_double_cone_vertex() -> None:
     """Two closed fans around one vertex (two cones touching at their tips): no ring is defined."""
+
     def cone(offset: int, apex: int, k: int) -> list[list[int]]:
         return [[apex, offset + i, offset + (i + 1) % k] for i in range(k)]
+
     k = 5
     vertices = np.zeros((1 + 2 * k, 3))
     vertices[1:] = np.random.default_rng(0).normal(size=(2 * k, 3))
@@ -216,8 +235,9 @@ def test_shortest_edge_path_avoids_vertices() -> None:
     flat = grid(6, 6)
     path = shortest_edge_path(flat, 0, 35, avoid=[14, 0, 35])
     assert 14 not in path.tolist() and path[0] == 0 and path[-1] == 35
-    with pytest.raises(InterpolationSetupError,
-                       match=r"no edge path from vertex 0 to vertex 35 avoiding vertices 1, 6, 7"):
+    with pytest.raises(
+        InterpolationSetupError, match=r"no edge path from vertex 0 to vertex 35 avoiding vertices 1, 6, 7"
+    ):
         shortest_edge_path(flat, 0, 35, avoid=[1, 6, 7])
     with pytest.raises(InterpolationSetupError, match=r"start vertex 99 is not in the mesh"):
         shortest_edge_path(flat, 99, 3)
@@ -238,24 +258,43 @@ def _torus_minus_triangle() -> Surface:
     return Surface(t.vertices, t.triangles[1:])
 
 
-@pytest.mark.parametrize(("surface", "reasons"), [
-    (annulus(), ["2 border loops", "Euler characteristic V - E + F = 36 - 84 + 48 = 0, not 1"]),
-    (Surface(grid(3, 3).vertices, np.concatenate([grid_triangles(3, 3)[:1], grid_triangles(3, 3)[6:7]])),
-     ["it is in 2 pieces", "2 border loops", "Euler characteristic V - E + F = 6 - 6 + 2 = 2, not 1",
-      "3 vertices on no triangle: 2, 5, 8"]),
-    (Surface([[0, 0, 0], [1, 0, 0], [1, 1, 0], [2, 1, 0], [2, 2, 0]], [[0, 1, 2], [2, 3, 4]]),
-     ["it is in 2 pieces", "1 non-manifold vertex (whose triangles form separate fans): 2"]),  # bowtie
-    (Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
-     ["1 edge on more than 2 triangles: (0, 1) (on 3 triangles)"]),
-    (Surface(grid(3, 3).vertices, np.concatenate([grid_triangles(3, 3)[:3], grid_triangles(3, 3)[3:4, ::-1],
-                                                  grid_triangles(3, 3)[4:]])),
-     ["the triangles on 2 edges are oriented inconsistently (both run the edge the same way): (4, 5), (4, 8)"]),
-    (mobius(), ["oriented inconsistently", "Euler characteristic V - E + F = 16 - 32 + 16 = 0, not 1"]),
-    (torus(), ["it has no border (a closed surface)", "Euler characteristic V - E + F = 30 - 90 + 60 = 0, not 1"]),
-    (_torus_minus_triangle(), ["Euler characteristic V - E + F = 30 - 90 + 59 = -1, not 1 (genus 1: the surface "
-                               "has handles)"]),
-    (Surface(np.zeros((3, 3)), np.empty((0, 3))), ["it has no triangle"]),
-])
+@pytest.mark.parametrize(
+    ("surface", "reasons"),
+    [
+        (annulus(), ["2 border loops", "Euler characteristic V - E + F = 36 - 84 + 48 = 0, not 1"]),
+        (
+            Surface(grid(3, 3).vertices, np.concatenate([grid_triangles(3, 3)[:1], grid_triangles(3, 3)[6:7]])),
+            [
+                "it is in 2 pieces",
+                "2 border loops",
+                "Euler characteristic V - E + F = 6 - 6 + 2 = 2, not 1",
+                "3 vertices on no triangle: 2, 5, 8",
+            ],
+        ),
+        (
+            Surface([[0, 0, 0], [1, 0, 0], [1, 1, 0], [2, 1, 0], [2, 2, 0]], [[0, 1, 2], [2, 3, 4]]),
+            ["it is in 2 pieces", "1 non-manifold vertex (whose triangles form separate fans): 2"],
+        ),  # bowtie
+        (
+            Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
+            ["1 edge on more than 2 triangles: (0, 1) (on 3 triangles)"],
+        ),
+        (
+            Surface(
+                grid(3, 3).vertices,
+                np.concatenate([grid_triangles(3, 3)[:3], grid_triangles(3, 3)[3:4, ::-1], grid_triangles(3, 3)[4:]]),
+            ),
+            ["the triangles on 2 edges are oriented inconsistently (both run the edge the same way): (4, 5), (4, 8)"],
+        ),
+        (mobius(), ["oriented inconsistently", "Euler characteristic V - E + F = 16 - 32 + 16 = 0, not 1"]),
+        (torus(), ["it has no border (a closed surface)", "Euler characteristic V - E + F = 30 - 90 + 60 = 0, not 1"]),
+        (
+            _torus_minus_triangle(),
+            ["Euler characteristic V - E + F = 30 - 90 + 59 = -1, not 1 (genus 1: the surface has handles)"],
+        ),
+        (Surface(np.zeros((3, 3)), np.empty((0, 3))), ["it has no triangle"]),
+    ],
+)
 def test_not_a_disk_says_why(surface: Surface, reasons: list[str]) -> None:
     report = check_disk(surface)
     assert not report.ok
@@ -268,6 +307,7 @@ def test_disk_check_facts() -> None:
     report = check_disk(mobius())
     assert report.inconsistent_edges.tolist() == [[0, 8]]
     assert report.n_border_loops == 1 and report.n_components == 1
-    report = check_disk(Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]],
-                                [[0, 1, 2], [1, 0, 3], [0, 1, 4]]))
+    report = check_disk(
+        Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    )
     assert report.nonmanifold_edges.tolist() == [[0, 1]]

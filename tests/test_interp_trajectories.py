@@ -35,10 +35,10 @@ def sheet(u: np.ndarray, v: np.ndarray, point: np.ufunc | object) -> tuple[np.nd
 
 # the wall x = 0.3 z^2 and the wall y = 0.2 z (1 - z), both sampled at z = 0 and z = 1 exactly
 Z = np.linspace(-1.0, 2.0, 61)  # step 0.05: rows at 0 and 1
-WALL_X = ControllingSurface(*sheet(np.linspace(-0.5, 1.5, 21), Z, lambda y, z: np.c_[0.3 * z ** 2, y, z]),
-                            name="wall x")
-WALL_Y = ControllingSurface(*sheet(np.linspace(-0.5, 1.5, 21), Z, lambda x, z: np.c_[x, 0.2 * z * (1 - z), z]),
-                            name="wall y")
+WALL_X = ControllingSurface(*sheet(np.linspace(-0.5, 1.5, 21), Z, lambda y, z: np.c_[0.3 * z**2, y, z]), name="wall x")
+WALL_Y = ControllingSurface(
+    *sheet(np.linspace(-0.5, 1.5, 21), Z, lambda x, z: np.c_[x, 0.2 * z * (1 - z), z]), name="wall y"
+)
 
 
 def lifted(source: np.ndarray) -> np.ndarray:
@@ -104,10 +104,12 @@ def test_attached_to_two_surfaces_stays_on_their_intersection_curve() -> None:
 def test_intersection_curve_closes_around_a_cylinder() -> None:
     """A plane through a (seamed) cylinder: one closed polyline, first node repeated at the end."""
     u = np.linspace(0, 2 * np.pi, 41)
-    cylinder = ControllingSurface(*sheet(u, np.linspace(-1, 1, 5), lambda a, z: np.c_[np.cos(a), np.sin(a), z]),
-                                  name="cylinder")
-    tilted = ControllingSurface(*sheet(np.linspace(-2, 2, 3), np.linspace(-2, 2, 3),
-                                       lambda x, y: np.c_[x, y, 0.2 * x + 0.1]), name="tilted")
+    cylinder = ControllingSurface(
+        *sheet(u, np.linspace(-1, 1, 5), lambda a, z: np.c_[np.cos(a), np.sin(a), z]), name="cylinder"
+    )
+    tilted = ControllingSurface(
+        *sheet(np.linspace(-2, 2, 3), np.linspace(-2, 2, 3), lambda x, y: np.c_[x, y, 0.2 * x + 0.1]), name="tilted"
+    )
     curve = IntersectionCurve(cylinder, tilted)
     assert len(curve.polylines) == 1
     line = curve.polylines[0]
@@ -139,12 +141,12 @@ def test_evolving_surface_from_a_compatible_patch() -> None:
     target, target_tri, target_corners = dome(300, 7)
     patch = compatible_patch(source, source_tri, corners, target, target_tri, target_corners, tolerance=0.02)
     # the target's side x = 0 is the line z = 0: attach the source's side x = 0 to the plane x = 0
-    plane = ControllingSurface([[0, -1, -1], [0, 2, -1], [0, 2, 2], [0, -1, 2]], [[0, 1, 2], [0, 2, 3]],
-                               name="plane")
+    plane = ControllingSurface([[0, -1, -1], [0, 2, -1], [0, 2, 2], [0, -1, 2]], [[0, 1, 2], [0, 2, 3]], name="plane")
     side = np.flatnonzero(patch.source_vertices[:, 0] == 0)
     m, t0, t1 = 6, -120.0, -80.0
-    paths = vertex_trajectories(patch.source_vertices, patch.target_positions, patch.triangles, m,
-                         {int(v): [plane] for v in side})
+    paths = vertex_trajectories(
+        patch.source_vertices, patch.target_positions, patch.triangles, m, {int(v): [plane] for v in side}
+    )
     assert np.array_equal(paths[0], patch.source_vertices)
     assert np.array_equal(paths[-1], patch.target_positions)
     surface = evolving_surface(patch.triangles, paths, t0, t1, name="horizon")

@@ -17,35 +17,73 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _ruff(path: str, text: str) -> str:
-    done = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", "--output-format", "concise",
-                           "--stdin-filename", path, "-"], input=text, capture_output=True, text=True, cwd=ROOT,
-                          check=False)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ruff",
+            "check",
+            "--no-cache",
+            "--output-format",
+            "concise",
+            "--stdin-filename",
+            path,
+            "-",
+        ],
+        input=text,
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    )
     return done.stdout + done.stderr
 
 
-PURE_MODULES = ["src/tgsis/mesh.py", "src/tgsis/compare.py", "src/tgsis/temporal.py", "src/tgsis/edits.py",
-                "src/tgsis/interpolation/deposition.py", "src/tgsis/gmaps/_core.py", "src/tgsis/formats/vtk.py",
-                "src/tgsis/convert.py", "src/tgsis/pictures.py", "src/tgsis/postgis.py", "src/tgsis/errors.py"]
+PURE_MODULES = [
+    "src/tgsis/mesh.py",
+    "src/tgsis/compare.py",
+    "src/tgsis/temporal.py",
+    "src/tgsis/edits.py",
+    "src/tgsis/interpolation/deposition.py",
+    "src/tgsis/gmaps/_core.py",
+    "src/tgsis/formats/vtk.py",
+    "src/tgsis/convert.py",
+    "src/tgsis/pictures.py",
+    "src/tgsis/postgis.py",
+    "src/tgsis/errors.py",
+]
 
 
 @pytest.mark.parametrize("path", PURE_MODULES)
-@pytest.mark.parametrize("line", ["import psycopg", "from psycopg import sql", "from tgsis.db import connect",
-                                  "from tgsis.db.features import insert_feature", "import tgsis.db.versions"])
+@pytest.mark.parametrize(
+    "line",
+    [
+        "import psycopg",
+        "from psycopg import sql",
+        "from tgsis.db import connect",
+        "from tgsis.db.features import insert_feature",
+        "import tgsis.db.versions",
+    ],
+)
 def test_a_numpy_module_may_not_import_the_database_layer(path: str, line: str) -> None:
     text = f'"""A module."""\n\n\ndef f() -> object:\n    {line}\n\n    return locals()\n'
     assert "TID251" in _ruff(path, text)
 
 
-@pytest.mark.parametrize("path", ["src/tgsis/db/features.py", "src/tgsis/view/app.py", "tests/test_x.py",
-                                  "bench/bench_x.py"])
+@pytest.mark.parametrize(
+    "path", ["src/tgsis/db/features.py", "src/tgsis/view/app.py", "tests/test_x.py", "bench/bench_x.py"]
+)
 def test_the_database_side_may(path: str) -> None:
-    assert "TID251" not in _ruff(path, '"""A module."""\n\nimport psycopg\n\nfrom tgsis.db import connect\n\n'
-                                       "print(psycopg, connect)\n")
+    assert "TID251" not in _ruff(
+        path, '"""A module."""\n\nimport psycopg\n\nfrom tgsis.db import connect\n\nprint(psycopg, connect)\n'
+    )
 
 
 def test_imports_are_sorted() -> None:
-    text = '"""A module."""\n\nimport sys\nimport os\n\nimport numpy as np\n\nfrom tgsis.mesh import Surface\n\n' \
-           "print(sys, os, np, Surface)\n"
+    text = (
+        '"""A module."""\n\nimport sys\nimport os\n\nimport numpy as np\n\nfrom tgsis.mesh import Surface\n\n'
+        "print(sys, os, np, Surface)\n"
+    )
     assert "I001" in _ruff("src/tgsis/edits.py", text)
 
 
@@ -69,13 +107,16 @@ def _hook_entries() -> dict[str, str]:
 
 def test_pre_commit_runs_the_checks_of_make_check() -> None:
     entries = _hook_entries()
-    assert entries == {"ruff": ".venv/bin/ruff check --force-exclude", "ruff-format": "make --no-print-directory format",
-                       "mypy": ".venv/bin/python -m mypy"}
+    assert entries == {
+        "ruff": ".venv/bin/ruff check --force-exclude",
+        "ruff-format": "make --no-print-directory format",
+        "mypy": ".venv/bin/python -m mypy",
+    }
     makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
-    assert "\t$(BIN)/ruff format $(RUFF_FORMATTED)\n" in makefile      # the files `make check` keeps formatted
-    assert "\t$(BIN)/python -m mypy\n" in makefile                      # the same files ([tool.mypy] files)
+    assert "\t$(BIN)/ruff format $(RUFF_FORMATTED)\n" in makefile  # the files `make check` keeps formatted
+    assert "\t$(BIN)/python -m mypy\n" in makefile  # the same files ([tool.mypy] files)
     done = subprocess.run(["make", "-n", "format"], capture_output=True, text=True, cwd=ROOT, check=False)
-    assert done.returncode == 0 and "ruff format src/tgsis/db/_upgrade.py" in done.stdout, done.stderr
+    assert done.returncode == 0 and "ruff format src tests bench" in done.stdout, done.stderr
 
 
 def test_mypy_checks_the_tests_too() -> None:

@@ -44,8 +44,11 @@ def test_default_home_follows_tgsis_home(monkeypatch: pytest.MonkeyPatch, tmp_pa
     monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
     assert default_home() == tmp_path
     monkeypatch.delenv("TGSIS_HOME")
-    assert default_home() == (Path("/var/lib/tgsis") if os.geteuid() == 0
-                              else Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local/share") / "tgsis")
+    assert default_home() == (
+        Path("/var/lib/tgsis")
+        if os.geteuid() == 0
+        else Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local/share") / "tgsis"
+    )
 
 
 def test_throwaway_cluster_settings_and_removal() -> None:
@@ -57,11 +60,18 @@ def test_throwaway_cluster_settings_and_removal() -> None:
             assert _owner_uid(pid) != 0, "the server must not run as root"  # type: ignore[arg-type]
         assert (server.data_dir.stat().st_mode & 0o777) == 0o700
         with psycopg.connect(server.dsn()) as conn:
-            settings = dict(conn.execute(
-                "SELECT name, setting FROM pg_settings WHERE name IN "
-                "('fsync', 'listen_addresses', 'unix_socket_directories', 'full_page_writes')").fetchall())
-            assert settings == {"fsync": "off", "full_page_writes": "off", "listen_addresses": "",
-                                "unix_socket_directories": str(server.socket_dir)}
+            settings = dict(
+                conn.execute(
+                    "SELECT name, setting FROM pg_settings WHERE name IN "
+                    "('fsync', 'listen_addresses', 'unix_socket_directories', 'full_page_writes')"
+                ).fetchall()
+            )
+            assert settings == {
+                "fsync": "off",
+                "full_page_writes": "off",
+                "listen_addresses": "",
+                "unix_socket_directories": str(server.socket_dir),
+            }
             if server.binaries.has_extension_control_path:
                 path = conn.execute("SHOW extension_control_path").fetchone()
                 assert path == (f"$system:{server.root}",)
@@ -179,8 +189,12 @@ def test_a_throwaway_cluster_before_postgresql_18_serves_this_checkouts_extensio
         with psycopg.connect(server.dsn("ext"), autocommit=True) as conn:
             shared = conn.execute("SELECT setting FROM pg_config WHERE name = 'SHAREDIR'").fetchone()
             assert shared is not None and Path(shared[0]).resolve() == server.binaries.share.resolve()
-            versions = {r[0] for r in conn.execute(
-                "SELECT version FROM pg_available_extension_versions WHERE name = 'tgsis'").fetchall()}
+            versions = {
+                r[0]
+                for r in conn.execute(
+                    "SELECT version FROM pg_available_extension_versions WHERE name = 'tgsis'"
+                ).fetchall()
+            }
             assert sources.version in versions
             # the system's other extensions are still there (PostGIS, contrib)
             system_controls = {p.name.removesuffix(".control") for p in extension_dir.glob("*.control")} - {"tgsis"}

@@ -21,8 +21,10 @@ def story(conn: Conn) -> dict[str, int]:
     """Surfaces A, B, C in DEFAULT; editors' sibling versions e1 and e2."""
     F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"note": "text"})
     tgsis.enable_feature_versioning(conn)
-    ids = {name: F.insert_feature(conn, "horizons", flat_grid(5, z), {"note": name})
-           for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))}
+    ids = {
+        name: F.insert_feature(conn, "horizons", flat_grid(5, z), {"note": name})
+        for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))
+    }
     tgsis.create_version(conn, "e1")
     tgsis.create_version(conn, "e2")
     conn.commit()
@@ -48,19 +50,22 @@ def _rows(conn: Conn, geoid: int) -> list[tuple[Any, ...]]:
 
 
 def _edit_both(conn: Conn, ids: dict[str, int]) -> None:
-    _set_z(conn, "e1", ids["A"], 0, 10.0)        # both editors change A
-    _set_z(conn, "e1", ids["B"], 0, 20.0)        # e1 alone changes B
+    _set_z(conn, "e1", ids["A"], 0, 10.0)  # both editors change A
+    _set_z(conn, "e1", ids["B"], 0, 20.0)  # e1 alone changes B
     _set_z(conn, "e2", ids["A"], 0, 30.0)
-    _set_z(conn, "e2", ids["C"], 0, 40.0)        # e2 alone changes C
+    _set_z(conn, "e2", ids["C"], 0, 40.0)  # e2 alone changes C
 
 
 def test_first_merge_succeeds_second_reports_exactly_the_shared_surface(conn: Conn, story: dict[str, int]) -> None:
     _edit_both(conn, story)
-    assert tgsis.merge_version(conn, "e1") == 4   # A and B: one vertex row closed and one copied each
+    assert tgsis.merge_version(conn, "e1") == 4  # A and B: one vertex row closed and one copied each
     assert _z(conn, "DEFAULT", story["A"])[0] == 10.0 and _z(conn, "DEFAULT", story["B"])[0] == 20.0
     assert tgsis.find_conflicts(conn, "e1") == []
-    with pytest.raises(tgsis.UnsolvedConflictsError, match=rf"merge of version 'e2' refused: 1 unsolved conflict\(s\): "
-                                                           rf"feature {story['A']} \(vrtx\)"):
+    with pytest.raises(
+        tgsis.UnsolvedConflictsError,
+        match=rf"merge of version 'e2' refused: 1 unsolved conflict\(s\): "
+        rf"feature {story['A']} \(vrtx\)",
+    ):
         tgsis.merge_version(conn, "e2")
     [conflict] = tgsis.find_conflicts(conn, "e2")
     assert (conflict.objectkey, conflict.conflicttype) == (str(story["A"]), ("vrtx",))
@@ -80,7 +85,7 @@ def test_each_solution_gives_the_expected_parent(conn: Conn, story: dict[str, in
     assert _z(conn, "DEFAULT", story["A"])[1:] == [1.0] * 24
     assert _z(conn, "DEFAULT", story["C"])[0] == 40.0
     assert _z(conn, "DEFAULT", story["B"])[0] == 20.0
-    assert _rows(conn, story["B"]) == untouched_b     # no row of any other object changed
+    assert _rows(conn, story["B"]) == untouched_b  # no row of any other object changed
     # the merged version goes on from the merged state, with no conflicts left
     assert _z(conn, "e2", story["A"])[0] == expected_a and tgsis.find_conflicts(conn, "e2") == []
 
@@ -88,10 +93,10 @@ def test_each_solution_gives_the_expected_parent(conn: Conn, story: dict[str, in
 def test_unchanged_rows_are_not_copied_and_the_version_goes_on(conn: Conn, story: dict[str, int]) -> None:
     _set_z(conn, "e1", story["A"], 3, 7.0)
     before = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone()
-    assert tgsis.merge_version(conn, "e1") == 2        # one row closed, one copied: not 25
+    assert tgsis.merge_version(conn, "e1") == 2  # one row closed, one copied: not 25
     after = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone()
     assert before is not None and after is not None and after[0] == before[0] + 1
-    _set_z(conn, "e1", story["A"], 4, 8.0)             # go on working; merge again
+    _set_z(conn, "e1", story["A"], 4, 8.0)  # go on working; merge again
     assert tgsis.find_conflicts(conn, "e1") == []
     tgsis.merge_version(conn, "e1", remove=True)
     assert _z(conn, "DEFAULT", story["A"])[3:5] == [7.0, 8.0]
@@ -114,13 +119,13 @@ def test_refresh_brings_the_parents_changes(conn: Conn, story: dict[str, int]) -
     _set_z(conn, "e1", story["B"], 0, 20.0)
     _set_z(conn, "e2", story["C"], 0, 40.0)
     _set_z(conn, "e2", story["B"], 1, 50.0)
-    tgsis.merge_version(conn, "e1")                    # DEFAULT now has e1's B
+    tgsis.merge_version(conn, "e1")  # DEFAULT now has e1's B
     with pytest.raises(tgsis.UnsolvedConflictsError, match=f"refresh of version 'e2' refused.*feature {story['B']}"):
         tgsis.refresh_version(conn, "e2")
     tgsis.resolve_conflict(conn, "e2", "feature", story["B"], "parent")
     tgsis.refresh_version(conn, "e2")
-    assert _z(conn, "e2", story["B"])[:2] == [20.0, 2.0]   # the parent's B, e2's own edit of B dropped
-    assert _z(conn, "e2", story["C"])[0] == 40.0           # e2's own change kept
+    assert _z(conn, "e2", story["B"])[:2] == [20.0, 2.0]  # the parent's B, e2's own edit of B dropped
+    assert _z(conn, "e2", story["C"])[0] == 40.0  # e2's own change kept
     assert tgsis.find_conflicts(conn, "e2") == []
     _set_z(conn, "DEFAULT", story["A"], 0, 11.0)
     tgsis.refresh_version(conn, "e2")
@@ -136,7 +141,7 @@ def test_refresh_keeping_the_child(conn: Conn, story: dict[str, int]) -> None:
     _set_z(conn, "DEFAULT", story["A"], 2, 98.0)
     tgsis.resolve_conflict(conn, "e1", "feature", story["A"], "child")
     tgsis.refresh_version(conn, "e1")
-    assert _z(conn, "e1", story["A"])[:3] == [10.0, 11.0, 1.0]   # exactly e1's object
+    assert _z(conn, "e1", story["A"])[:3] == [10.0, 11.0, 1.0]  # exactly e1's object
     assert _z(conn, "DEFAULT", story["A"])[:3] == [1.0, 99.0, 98.0]
 
 
@@ -155,13 +160,14 @@ def test_merge_refusals_change_nothing(conn: Conn, story: dict[str, int]) -> Non
         tgsis.diff_versions(conn, "DEFAULT", "nope")
     conn.rollback()
     with pytest.raises(tgsis.NotFoundError, match="revision 2 is not in the history of version 'e2'"):
-        tgsis.diff_versions(conn, "DEFAULT", "e2", b_revision=2)     # e1's revision
+        tgsis.diff_versions(conn, "DEFAULT", "e2", b_revision=2)  # e1's revision
     conn.rollback()
     assert conn.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall() == state
 
 
-def test_killing_the_backend_mid_merge_leaves_both_sides_as_they_were(conn: Conn, story: dict[str, int],
-                                                                     db_dsn: str) -> None:
+def test_killing_the_backend_mid_merge_leaves_both_sides_as_they_were(
+    conn: Conn, story: dict[str, int], db_dsn: str
+) -> None:
     with tgsis.in_version(conn, "e1"):
         conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (story["A"],))
         conn.execute("UPDATE tgsis.trgl SET vrtxid1 = vrtxid1 WHERE geoid = %s", (story["A"],))
@@ -190,7 +196,7 @@ def test_killing_the_backend_mid_merge_leaves_both_sides_as_they_were(conn: Conn
     thread = threading.Thread(target=merge)
     thread.start()
     deadline = time.monotonic() + 20
-    while time.monotonic() < deadline:   # wait until the merge sleeps in the trigger
+    while time.monotonic() < deadline:  # wait until the merge sleeps in the trigger
         row = conn.execute("SELECT wait_event FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
         conn.commit()
         if row and row[0] == "PgSleep":
@@ -216,8 +222,13 @@ def test_diff_between_versions_and_revisions(conn: Conn, story: dict[str, int]) 
         conn.commit()
     diff = {(d.objectkey, d.table): (d.added, d.removed, d.changed) for d in tgsis.diff_versions(conn, "DEFAULT", "e1")}
     a, c = str(story["A"]), str(story["C"])
-    assert diff == {(a, "vrtx"): (0, 0, 2), (c, "geometry"): (0, 1, 0), (c, "vrtx"): (0, 25, 0),
-                    (c, "trgl"): (0, 32, 0), (c, "public.horizons"): (0, 1, 0)}
+    assert diff == {
+        (a, "vrtx"): (0, 0, 2),
+        (c, "geometry"): (0, 1, 0),
+        (c, "vrtx"): (0, 25, 0),
+        (c, "trgl"): (0, 32, 0),
+        (c, "public.horizons"): (0, 1, 0),
+    }
     # after a merge the parent holds copies with equal values: no difference, though the row versions differ
     tgsis.merge_version(conn, "e1")
     assert tgsis.diff_versions(conn, "DEFAULT", "e1") == []

@@ -20,24 +20,30 @@ def test_arrays_are_normalised() -> None:
     assert s.bounds().tolist() == [[0, 0, 0], [1, 1, 0]]
 
 
-@pytest.mark.parametrize(("vertices", "message"), [
-    (np.zeros((4, 2)), r"vertices must be an \(n, 3\) array, got shape \(4, 2\)"),
-    ([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]], r"vertex 1 has a non-finite y coordinate \(nan\)"),
-    ([[0, 0, 0], [1, 0, 0], [0, 1, np.inf]], r"vertex 2 has a non-finite z coordinate \(inf\)"),
-    ([["a", 0, 0]], "vertices are not numbers"),
-])
+@pytest.mark.parametrize(
+    ("vertices", "message"),
+    [
+        (np.zeros((4, 2)), r"vertices must be an \(n, 3\) array, got shape \(4, 2\)"),
+        ([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]], r"vertex 1 has a non-finite y coordinate \(nan\)"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, np.inf]], r"vertex 2 has a non-finite z coordinate \(inf\)"),
+        ([["a", 0, 0]], "vertices are not numbers"),
+    ],
+)
 def test_bad_vertices(vertices: object, message: str) -> None:
     with pytest.raises(tgsis.InvalidGeometryError, match=message):
         Surface(vertices, [[0, 1, 2]] if np.ndim(vertices) == 2 and len(vertices) >= 3 else [])  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("cells", "message"), [
-    ([[0, 1, 4]], "triangle 0 refers to vertex 4, but the mesh has 4 vertices"),
-    ([[0, 1, 2], [0, -1, 2]], "triangle 1 refers to vertex -1"),
-    ([[0, 1, 2], [2, 3, 2]], r"triangle 1 uses a vertex twice: \[2, 3, 2\]"),
-    ([[0, 1]], r"triangles must be an \(m, 3\) array of vertex indices, got shape \(1, 2\)"),
-    ([[0.5, 1, 2]], "triangle indices must be integers"),
-])
+@pytest.mark.parametrize(
+    ("cells", "message"),
+    [
+        ([[0, 1, 4]], "triangle 0 refers to vertex 4, but the mesh has 4 vertices"),
+        ([[0, 1, 2], [0, -1, 2]], "triangle 1 refers to vertex -1"),
+        ([[0, 1, 2], [2, 3, 2]], r"triangle 1 uses a vertex twice: \[2, 3, 2\]"),
+        ([[0, 1]], r"triangles must be an \(m, 3\) array of vertex indices, got shape \(1, 2\)"),
+        ([[0.5, 1, 2]], "triangle indices must be integers"),
+    ],
+)
 def test_bad_triangles(cells: object, message: str) -> None:
     with pytest.raises(tgsis.InvalidGeometryError, match=message):
         Surface(SQUARE, cells)  # type: ignore[arg-type]
@@ -50,14 +56,17 @@ def test_bad_tetrahedra_and_segments_name_their_cell_kind() -> None:
         LineSet(SQUARE, [[3, 3]])
 
 
-@pytest.mark.parametrize(("props", "message"), [
-    ({"porosity": np.ones(3)}, "vertex property 'porosity' has 3 values for 4 vertices"),
-    ({"Poro sity": np.ones(4)}, "vertex property name 'Poro sity' is not allowed"),
-    ({"_idx": np.ones(4)}, "not allowed"),
-    ({"label": np.array(["a", "b", "c", "d"])}, "has values of type <U1, not numbers"),
-    ({"vec": np.ones((4, 2, 2))}, r"must be one value or one vector of values per vertex, got shape \(4, 2, 2\)"),
-    ({"vec": np.ones((4, 0))}, r"got shape \(4, 0\)"),
-])
+@pytest.mark.parametrize(
+    ("props", "message"),
+    [
+        ({"porosity": np.ones(3)}, "vertex property 'porosity' has 3 values for 4 vertices"),
+        ({"Poro sity": np.ones(4)}, "vertex property name 'Poro sity' is not allowed"),
+        ({"_idx": np.ones(4)}, "not allowed"),
+        ({"label": np.array(["a", "b", "c", "d"])}, "has values of type <U1, not numbers"),
+        ({"vec": np.ones((4, 2, 2))}, r"must be one value or one vector of values per vertex, got shape \(4, 2, 2\)"),
+        ({"vec": np.ones((4, 0))}, r"got shape \(4, 0\)"),
+    ],
+)
 def test_bad_vertex_properties(props: dict[str, object], message: str) -> None:
     with pytest.raises(tgsis.InvalidPropertyError, match=message):
         Surface(SQUARE, TWO_TRIANGLES, vertex_properties=props)  # type: ignore[arg-type]
@@ -104,16 +113,23 @@ def test_same_as_is_bit_exact() -> None:
 
 
 def test_trimesh_round_trip_keeps_order_and_properties() -> None:
-    s = Surface(SQUARE, TWO_TRIANGLES, vertex_properties={"p": [1.0, 2.0, 3.0, 4.0]},
-                cell_properties={"facies": [7, 8]}, name="sq")
+    s = Surface(
+        SQUARE,
+        TWO_TRIANGLES,
+        vertex_properties={"p": [1.0, 2.0, 3.0, 4.0]},
+        cell_properties={"facies": [7, 8]},
+        name="sq",
+    )
     tm = s.to_trimesh()
     assert tm.vertices.tolist() == SQUARE.tolist() and tm.faces.tolist() == TWO_TRIANGLES.tolist()
     back = Surface.from_trimesh(tm)
     assert back.same_as(s) and back.name == "sq"
 
 
-@pytest.mark.parametrize(("geotype", "cls"), [("SURFACE", Surface), ("multipoint", PointSet),
-                                              (Geotype.MULTITETRA, TetraMesh), ("MULTILINESTRING", LineSet)])
+@pytest.mark.parametrize(
+    ("geotype", "cls"),
+    [("SURFACE", Surface), ("multipoint", PointSet), (Geotype.MULTITETRA, TetraMesh), ("MULTILINESTRING", LineSet)],
+)
 def test_mesh_class(geotype: object, cls: type) -> None:
     assert mesh_class(geotype) is cls  # type: ignore[arg-type]
 

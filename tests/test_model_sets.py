@@ -30,9 +30,11 @@ def test_an_object_belongs_to_several_models(conn: Conn) -> None:
     M.create_model(conn, "resource 2024", [ore, fault], description="after the 2024 survey")
     M.create_model(conn, "geotechnical", [fault, dyke])
     assert [o.id for o in M.model_objects(conn, "resource 2024")] == [ore, fault]
-    assert [(o.feature_class, o.name) for o in M.model_objects(conn, "geotechnical")] == [("orebody", "fault"),
-                                                                                          ("orebody", "dyke")]
-    assert M.add_to_model(conn, "resource 2024", [dyke, ore]) == 1           # ore is in already
+    assert [(o.feature_class, o.name) for o in M.model_objects(conn, "geotechnical")] == [
+        ("orebody", "fault"),
+        ("orebody", "dyke"),
+    ]
+    assert M.add_to_model(conn, "resource 2024", [dyke, ore]) == 1  # ore is in already
     assert M.remove_from_model(conn, "geotechnical", [dyke]) == 1
     assert [(m.name, m.objects) for m in M.list_models(conn)] == [("geotechnical", 1), ("resource 2024", 3)]
     # a deleted object leaves every model it was in
@@ -68,10 +70,10 @@ def test_models_change_in_versions_and_cost_only_their_changes(conn: Conn) -> No
         assert [o.id for o in M.model_objects(conn, "resource")] == [ore, dyke]
         conn.commit()
     conn.commit()
-    assert [o.id for o in M.model_objects(conn, "resource")] == [ore, fault]             # DEFAULT unchanged
+    assert [o.id for o in M.model_objects(conn, "resource")] == [ore, fault]  # DEFAULT unchanged
     # the model's own row and ore's membership were not stored again for survey2
     rows = conn.execute("SELECT count(*) FROM tgsis.model_object_ver").fetchone()
-    assert rows == (3,)                                                                   # ore, fault; dyke added
+    assert rows == (3,)  # ore, fault; dyke added
     assert conn.execute("SELECT count(*) FROM tgsis.model_ver").fetchone() == (1,)
     tgsis.merge_version(conn, "survey2")
     conn.commit()
@@ -114,5 +116,5 @@ def test_readers_read_models_and_cannot_change_them(db_dsn: str) -> None:
         with pytest.raises(tgsis.MissingPrivilegeError):
             M.create_model(rita, "mine", [ore])
         rita.rollback()
-        assert M.create_model(ed, "editor's", [ore]) > 0                              # editors may
+        assert M.create_model(ed, "editor's", [ore]) > 0  # editors may
         ed.commit()

@@ -43,18 +43,22 @@ def _depths(conn: Conn, version: str) -> dict[int, float]:
 
 def test_a_locked_object_changes_only_in_its_version(tree: Conn) -> None:
     assert tgsis.lock_objects(tree, "v1", "well", [1]) == 1
-    assert tgsis.lock_objects(tree, "v1", "well", [1]) == 0             # held already
-    for version, statement in (("v2", "UPDATE wells SET depth = 0 WHERE id = 1"),
-                               ("DEFAULT", "DELETE FROM wells WHERE id = 1"),
-                               ("v3", "UPDATE wells SET id = 10 WHERE id = 1"),  # a child of v1 is another version too
-                               ("v2", "INSERT INTO wells VALUES (1, 'again', 0)")):
+    assert tgsis.lock_objects(tree, "v1", "well", [1]) == 0  # held already
+    for version, statement in (
+        ("v2", "UPDATE wells SET depth = 0 WHERE id = 1"),
+        ("DEFAULT", "DELETE FROM wells WHERE id = 1"),
+        ("v3", "UPDATE wells SET id = 10 WHERE id = 1"),  # a child of v1 is another version too
+        ("v2", "INSERT INTO wells VALUES (1, 'again', 0)"),
+    ):
         before = _depths(tree, version)
-        with pytest.raises(tgsis.ObjectLockedError, match=r"object of class 'well' locked .*: 1 \(locked by version 'v1'"):
+        with pytest.raises(
+            tgsis.ObjectLockedError, match=r"object of class 'well' locked .*: 1 \(locked by version 'v1'"
+        ):
             _write(tree, version, statement)
         tree.rollback()
         assert _depths(tree, version) == before, statement
-    _write(tree, "v2", "UPDATE wells SET depth = 0 WHERE id = 2")          # other objects are free
-    _write(tree, "v1", "UPDATE wells SET depth = 11 WHERE id = 1")         # the holder writes
+    _write(tree, "v2", "UPDATE wells SET depth = 0 WHERE id = 2")  # other objects are free
+    _write(tree, "v1", "UPDATE wells SET depth = 11 WHERE id = 1")  # the holder writes
     assert _depths(tree, "v1")[1] == 11 and _depths(tree, "v2") == {1: 10, 2: 0, 3: 30, 4: 40}
 
     locks = tgsis.object_locks(tree)
@@ -68,7 +72,7 @@ def test_locking_is_all_or_nothing(tree: Conn) -> None:
     with pytest.raises(tgsis.ObjectLockedError, match="locked by version 'v1'"):
         tgsis.lock_objects(tree, "v2", "well", [1, 2, 3])
     tree.rollback()
-    assert [lk.objectkey for lk in tgsis.object_locks(tree)] == ["2"]      # 1 and 3 were not taken either
+    assert [lk.objectkey for lk in tgsis.object_locks(tree)] == ["2"]  # 1 and 3 were not taken either
     with pytest.raises(tgsis.NotFoundError, match="version 'v2' has no object 7, 8 of class 'well'"):
         tgsis.lock_objects(tree, "v2", "well", [7, 1, 8])
     tree.rollback()
@@ -84,9 +88,9 @@ def test_locking_is_all_or_nothing(tree: Conn) -> None:
     with pytest.raises(tgsis.NotFoundError, match="version 'v9' does not exist"):
         tgsis.unlock_objects(tree, "v9")
     tree.rollback()
-    assert [lk.objectkey for lk in tgsis.object_locks(tree)] == ["2"]      # still held after the refusals
+    assert [lk.objectkey for lk in tgsis.object_locks(tree)] == ["2"]  # still held after the refusals
     _write(tree, "v2", "DELETE FROM wells WHERE id = 3")
-    with pytest.raises(tgsis.NotFoundError, match="has no object 3"):    # deleted in v2: nothing to lock there
+    with pytest.raises(tgsis.NotFoundError, match="has no object 3"):  # deleted in v2: nothing to lock there
         tgsis.lock_objects(tree, "v2", "well", [3])
     tree.rollback()
 
@@ -94,13 +98,13 @@ def test_locking_is_all_or_nothing(tree: Conn) -> None:
 def test_a_merge_leaves_objects_locked_elsewhere_alone(tree: Conn) -> None:
     _write(tree, "v2", "UPDATE wells SET depth = 33 WHERE id = 3")
     _write(tree, "v2", "UPDATE wells SET depth = 44 WHERE id = 4")
-    tgsis.lock_objects(tree, "v1", "well", [3])                            # after v2 changed it
+    tgsis.lock_objects(tree, "v1", "well", [3])  # after v2 changed it
     tree.commit()
     with pytest.raises(tgsis.ObjectLockedError, match="3 \\(locked by version 'v1'"):
         tgsis.merge_version(tree, "v2")
     tree.rollback()
-    assert _depths(tree, "DEFAULT") == {1: 10, 2: 20, 3: 30, 4: 40}       # the whole merge was refused
-    tgsis.merge_version(tree, "v1")                                        # the holder merges: its locks do not stop it
+    assert _depths(tree, "DEFAULT") == {1: 10, 2: 20, 3: 30, 4: 40}  # the whole merge was refused
+    tgsis.merge_version(tree, "v1")  # the holder merges: its locks do not stop it
     tree.commit()
     tgsis.unlock_objects(tree, "v1", "well", [3])
     tgsis.merge_version(tree, "v2")
@@ -123,7 +127,9 @@ def test_exclusive_locks_stop_other_roles_in_the_same_version(tree: Conn, db_dsn
         tgsis.grant_version(alice, "a1", "write", roles.name("bob"))
         tgsis.lock_objects(alice, "a1", "well", [1], exclusive=True)
         tgsis.lock_objects(bob, "a1", "well", [2])
-        with pytest.raises(tgsis.ObjectLockedError, match=f"1 \\(locked by version 'a1', {roles.name('alice')}, exclusive\\)"):
+        with pytest.raises(
+            tgsis.ObjectLockedError, match=f"1 \\(locked by version 'a1', {roles.name('alice')}, exclusive\\)"
+        ):
             _write(bob, "a1", "UPDATE wells SET depth = 0 WHERE id = 1")
         bob.rollback()
         _write(bob, "a1", "UPDATE wells SET depth = 2 WHERE id = 2")
@@ -131,7 +137,7 @@ def test_exclusive_locks_stop_other_roles_in_the_same_version(tree: Conn, db_dsn
         with pytest.raises(tgsis.MissingPrivilegeError, match="exclusive locks of other roles"):
             tgsis.unlock_objects(bob, "a1")
         bob.rollback()
-        assert tgsis.unlock_objects(alice, "a1") == 2                      # the owner releases everybody's
+        assert tgsis.unlock_objects(alice, "a1") == 2  # the owner releases everybody's
 
 
 def test_feature_locks_hold_for_vertices_and_deletes(conn: Conn) -> None:
@@ -146,7 +152,7 @@ def test_feature_locks_hold_for_vertices_and_deletes(conn: Conn) -> None:
         _write(conn, "theirs", f"UPDATE tgsis.vrtx SET z = 5 WHERE geoid = {geoid} AND vrtxid = 0")
     conn.rollback()
     with pytest.raises(tgsis.ObjectLockedError), tgsis.in_version(conn, "theirs", local=True):
-        F.delete_feature(conn, "horizons", geoid)                          # the set-based delete path
+        F.delete_feature(conn, "horizons", geoid)  # the set-based delete path
     conn.rollback()
     _write(conn, "mine", f"UPDATE tgsis.vrtx SET z = 5 WHERE geoid = {geoid} AND vrtxid = 0")
     with tgsis.in_version(conn, "theirs", local=True):

@@ -30,16 +30,32 @@ def _surface(side: int = 5) -> Surface:
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     cells = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
-    return Surface(vertices, cells, name="packed", vertex_properties={
-        "porosity": rng.random(side * side), "code": rng.integers(-5, 5, side * side).astype(np.int16),
-        "normal": rng.standard_normal((side * side, 3)), "flag": rng.random(side * side) < 0.5})
+    return Surface(
+        vertices,
+        cells,
+        name="packed",
+        vertex_properties={
+            "porosity": rng.random(side * side),
+            "code": rng.integers(-5, 5, side * side).astype(np.int16),
+            "normal": rng.standard_normal((side * side, 3)),
+            "flag": rng.random(side * side) < 0.5,
+        },
+    )
 
 
 @pytest.fixture
 def horizons(conn: Conn) -> F.FeatureClass:
-    return F.create_feature_class(conn, "horizon", "SURFACE", cell_properties=[
-        {"name": "porosity", "type": "double precision"}, {"name": "code", "type": "smallint"},
-        {"name": "normal", "type": "double precision", "size": 3}, {"name": "flag", "type": "boolean"}])
+    return F.create_feature_class(
+        conn,
+        "horizon",
+        "SURFACE",
+        cell_properties=[
+            {"name": "porosity", "type": "double precision"},
+            {"name": "code", "type": "smallint"},
+            {"name": "normal", "type": "double precision", "size": 3},
+            {"name": "flag", "type": "boolean"},
+        ],
+    )
 
 
 def _bits_equal(a: np.ndarray, b: np.ndarray) -> bool:
@@ -79,8 +95,11 @@ def test_rows_written_in_any_order_with_gaps_read_in_id_order(conn: Conn, horizo
         conn.execute(f"INSERT INTO {table} SELECT * FROM keep")
         conn.execute("DROP TABLE keep")
     conn.execute("UPDATE tgsis.vrtx SET vrtxid = vrtxid * 10 + 7 WHERE geoid = %s", (geoid,))
-    conn.execute("UPDATE tgsis.trgl SET vrtxid1 = vrtxid1 * 10 + 7, vrtxid2 = vrtxid2 * 10 + 7, "
-                 "vrtxid3 = vrtxid3 * 10 + 7 WHERE geoid = %s", (geoid,))
+    conn.execute(
+        "UPDATE tgsis.trgl SET vrtxid1 = vrtxid1 * 10 + 7, vrtxid2 = vrtxid2 * 10 + 7, "
+        "vrtxid3 = vrtxid3 * 10 + 7 WHERE geoid = %s",
+        (geoid,),
+    )
     conn.execute("UPDATE horizon_cellpros SET _idx = _idx * 10 + 7 WHERE _geoid = %s", (geoid,))
     assert F.fetch_feature(conn, horizons, geoid).mesh.same_as(mesh)
 
@@ -103,8 +122,9 @@ def test_a_short_vector_written_by_psql_is_reported(conn: Conn, horizons: F.Feat
     conn.rollback()
 
 
-def test_one_query_for_all_tables_and_versions_read_their_own_rows(conn: Conn, horizons: F.FeatureClass,
-                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+def test_one_query_for_all_tables_and_versions_read_their_own_rows(
+    conn: Conn, horizons: F.FeatureClass, monkeypatch: pytest.MonkeyPatch
+) -> None:
     mesh = _surface(4)
     geoid = F.insert_feature(conn, horizons, mesh)
     conn.commit()
@@ -112,8 +132,7 @@ def test_one_query_for_all_tables_and_versions_read_their_own_rows(conn: Conn, h
     tgsis.create_version(conn, "edit")
     shifted = mesh.vertices.copy()
     shifted[:, 2] += 1.0
-    moved = Surface(shifted, mesh.cells, name="packed",
-                    vertex_properties=mesh.vertex_properties)
+    moved = Surface(shifted, mesh.cells, name="packed", vertex_properties=mesh.vertex_properties)
     with tgsis.in_version(conn, "edit"):
         conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (geoid,))
         calls: list[list[str]] = []
@@ -137,8 +156,9 @@ def _oriented(triangles: np.ndarray) -> np.ndarray:
     return turned[np.lexsort(turned.T[::-1])]
 
 
-def test_corners_travel_packed_one_value_a_triangle(conn: Conn, horizons: F.FeatureClass,
-                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+def test_corners_travel_packed_one_value_a_triangle(
+    conn: Conn, horizons: F.FeatureClass, monkeypatch: pytest.MonkeyPatch
+) -> None:
     mesh = _surface(6)
     geoid = F.insert_feature(conn, horizons, mesh)
     queries: list[str] = []
@@ -154,8 +174,10 @@ def test_corners_travel_packed_one_value_a_triangle(conn: Conn, horizons: F.Feat
     assert got.dtype == np.int64 and np.array_equal(_oriented(got), _oriented(mesh.cells))
     # the largest ids that fit in 21 bits, in every position, keep their bits
     top = 2**21 - 1
-    conn.execute("UPDATE tgsis.trgl SET vrtxid1 = %s, vrtxid2 = %s, vrtxid3 = %s WHERE geoid = %s AND trglid = 0",
-                 (top, top - 1, top - 2, geoid))
+    conn.execute(
+        "UPDATE tgsis.trgl SET vrtxid1 = %s, vrtxid2 = %s, vrtxid3 = %s WHERE geoid = %s AND trglid = 0",
+        (top, top - 1, top - 2, geoid),
+    )
     got = _transfer.corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", ["vrtxid1", "vrtxid2", "vrtxid3"], geoid)
     assert queries == [] and [top, top - 1, top - 2] in got.tolist()
 
@@ -214,8 +236,9 @@ def test_several_geometries_at_once_each_read_its_own_rows(conn: Conn, horizons:
     first, second = _surface(4), _surface(6)
     a, b = F.insert_feature(conn, horizons, first), F.insert_feature(conn, horizons, second)
     # one aggregate per geometry (not one group per geometry): rows interleaved by a psql user read right
-    conn.execute("CREATE TEMP TABLE keep AS SELECT * FROM tgsis.vrtx WHERE geoid IN (%s, %s) ORDER BY vrtxid, geoid",
-                 (a, b))
+    conn.execute(
+        "CREATE TEMP TABLE keep AS SELECT * FROM tgsis.vrtx WHERE geoid IN (%s, %s) ORDER BY vrtxid, geoid", (a, b)
+    )
     conn.execute("DELETE FROM tgsis.vrtx WHERE geoid IN (%s, %s)", (a, b))
     conn.execute("INSERT INTO tgsis.vrtx SELECT * FROM keep")
     got = F.fetch_features(conn, horizons, [b, a, b])
@@ -230,7 +253,8 @@ def test_several_geometries_at_once_each_read_its_own_rows(conn: Conn, horizons:
 
 @pytest.mark.parametrize("versioned", [False, True], ids=["plain", "versioned"])
 def test_parallel_workers_read_the_tables_side_by_side_and_see_the_transactions_writes(
-        conn: Conn, horizons: F.FeatureClass, versioned: bool) -> None:
+    conn: Conn, horizons: F.FeatureClass, versioned: bool
+) -> None:
     """The tables' aggregates of one download as a Parallel Append (here forced by zero costs; the planner
     picks it by itself for a large geometry), through the versioned views too: the workers see what the
     session's transaction wrote and has not committed, in the session's version."""
@@ -241,12 +265,18 @@ def test_parallel_workers_read_the_tables_side_by_side_and_see_the_transactions_
         tgsis.enable_feature_versioning(conn)
         tgsis.create_version(conn, "edit")
         conn.commit()
-    for setting in ("parallel_setup_cost", "parallel_tuple_cost", "min_parallel_table_scan_size",
-                    "min_parallel_index_scan_size"):
+    for setting in (
+        "parallel_setup_cost",
+        "parallel_tuple_cost",
+        "min_parallel_table_scan_size",
+        "min_parallel_index_scan_size",
+    ):
         conn.execute(sql.SQL("SET {} = 0").format(sql.Identifier(setting)))
     conn.execute("SET max_parallel_workers_per_gather = 2")
-    requests = [_transfer.Packed(sql.SQL("tgsis.vrtx"), "geoid", [("vrtxid", "int8"), ("z", "float8")], [geoid]),
-                _transfer.Packed(sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), ("vrtxid1", "int8")], [geoid])]
+    requests = [
+        _transfer.Packed(sql.SQL("tgsis.vrtx"), "geoid", [("vrtxid", "int8"), ("z", "float8")], [geoid]),
+        _transfer.Packed(sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), ("vrtxid1", "int8")], [geoid]),
+    ]
     query = sql.SQL(" UNION ALL ").join(r.query(i) for i, r in enumerate(requests))
     with tgsis.in_version(conn, "edit" if versioned else "DEFAULT"):
         conn.execute("UPDATE tgsis.vrtx SET z = -z WHERE geoid = %s", (geoid,))  # not committed
@@ -255,7 +285,9 @@ def test_parallel_workers_read_the_tables_side_by_side_and_see_the_transactions_
         # side by side (PostgreSQL 18); PostgreSQL 15 keeps the views' initplans above each aggregate, and
         # with the model views' per-class filter (a hashed subplan over tgsis.class_denied_geoids:
         # docs/security.md) it plans their scans serially (before that filter: a Gather per scan)
-        assert ("Gather" in plan and "Workers Planned" in plan) or (versioned and conn.info.server_version < 180000), plan
+        assert ("Gather" in plan and "Workers Planned" in plan) or (versioned and conn.info.server_version < 180000), (
+            plan
+        )
         assert "Parallel Append" in plan or (versioned and conn.info.server_version < 180000), plan
         flipped = mesh.vertices.copy()
         flipped[:, 2] *= -1
@@ -269,13 +301,19 @@ def test_parallel_workers_read_the_tables_side_by_side_and_see_the_transactions_
         # deleted and has not committed as gone (PostgreSQL 15 then plans the versioned views' query serial)
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid < 7", (geoid,))
         conn.execute("SET parallel_leader_participation = off")
-        analyzed = [row[0] for row in conn.execute(sql.SQL("EXPLAIN (ANALYZE, COSTS OFF, TIMING OFF) {}").format(query))]
+        analyzed = [
+            row[0] for row in conn.execute(sql.SQL("EXPLAIN (ANALYZE, COSTS OFF, TIMING OFF) {}").format(query))
+        ]
         launched = [int(m.group(1)) for line in analyzed if (m := re.search(r"Workers Launched: (\d+)", line))]
         if not versioned or conn.info.server_version >= 180000:
             assert launched and all(n >= 1 for n in launched), analyzed
-        scanned = [float(m.group(1)) * int(m.group(2)) for line in analyzed
-                   if "Scan on trgl" in line and "Bitmap Index Scan" not in line
-                   and (m := re.search(r"actual rows=([\d.]+) loops=(\d+)", line))]
+        scanned = [
+            float(m.group(1)) * int(m.group(2))
+            for line in analyzed
+            if "Scan on trgl" in line
+            and "Bitmap Index Scan" not in line
+            and (m := re.search(r"actual rows=([\d.]+) loops=(\d+)", line))
+        ]
         assert sum(scanned) == mesh.n_cells - 7, analyzed
         assert len(_transfer.columns_out_all(conn, requests)[1][0]) == mesh.n_cells - 7
     conn.rollback()

@@ -22,31 +22,38 @@ Conn = psycopg.Connection[Any]
 
 
 def _room(conn: Conn) -> int:
-    row = conn.execute("SELECT current_setting('max_locks_per_transaction')::int * "
-                       "(current_setting('max_connections')::int + current_setting('max_prepared_transactions')::int)"
-                       ).fetchone()
+    row = conn.execute(
+        "SELECT current_setting('max_locks_per_transaction')::int * "
+        "(current_setting('max_connections')::int + current_setting('max_prepared_transactions')::int)"
+    ).fetchone()
     assert row is not None
     return int(row[0])
 
 
 def _plain(conn: Conn) -> list[Any]:
-    return conn.execute("SELECT c.relname, c.relkind FROM tgsis.model_tables t JOIN pg_class c "
-                        "ON c.oid = format('tgsis.%I', t.tablename)::regclass WHERE t.model = 1 ORDER BY 1").fetchall()
+    return conn.execute(
+        "SELECT c.relname, c.relkind FROM tgsis.model_tables t JOIN pg_class c "
+        "ON c.oid = format('tgsis.%I', t.tablename)::regclass WHERE t.model = 1 ORDER BY 1"
+    ).fetchall()
 
 
 def test_both_sides_of_the_limit(conn: Conn) -> None:
     before = _plain(conn)
     assert {kind for _, kind in before} == {"r"}
-    with pytest.raises(tgsis.InvalidInputError, match=r"data model 1 in 1024 partitions needs about \d+ locks in one "
-                                                      r"transaction, more than this server's lock table holds") as caught:
+    with pytest.raises(
+        tgsis.InvalidInputError,
+        match=r"data model 1 in 1024 partitions needs about \d+ locks in one "
+        r"transaction, more than this server's lock table holds",
+    ) as caught:
         tgsis.partition_model_storage(conn, 1, 1024)
     assert f"= {_room(conn)} locks of all sessions" in str(caught.value.detail)
     hint = str(caught.value.hint)
-    found = re.fullmatch(r"give at most (\d+) partitions, or raise max_locks_per_transaction \(a server restart\) for more",
-                         hint)
+    found = re.fullmatch(
+        r"give at most (\d+) partitions, or raise max_locks_per_transaction \(a server restart\) for more", hint
+    )
     assert found, hint
     most = int(found[1])
-    assert 64 <= most < 512   # the default server's figure: what failed with 53200 is refused
+    assert 64 <= most < 512  # the default server's figure: what failed with 53200 is refused
     conn.rollback()
     assert _plain(conn) == before
     # one more than the limit: refused, nothing changed
@@ -56,8 +63,10 @@ def test_both_sides_of_the_limit(conn: Conn) -> None:
     assert _plain(conn) == before
     # the limit itself: done, holding no more locks than the lock table's documented size
     tables = tgsis.partition_model_storage(conn, 1, most)
-    held = conn.execute("SELECT count(DISTINCT (locktype, database, relation, classid, objid, objsubid)) "
-                        "FROM pg_locks WHERE pid = pg_backend_pid()").fetchone()
+    held = conn.execute(
+        "SELECT count(DISTINCT (locktype, database, relation, classid, objid, objsubid)) "
+        "FROM pg_locks WHERE pid = pg_backend_pid()"
+    ).fetchone()
     assert held is not None and held[0] <= _room(conn)
     conn.commit()
     assert set(tables) == {name for name, _ in before}

@@ -33,8 +33,14 @@ Conn = psycopg.Connection[Any]
 PARTITIONS = 4
 
 # the tests of the two check-in modules, collected again here on partitioned storage
-globals().update({name: test for module in (test_checkin, test_checkin_child)
-                  for name, test in vars(module).items() if name.startswith("test_") and callable(test)})
+globals().update(
+    {
+        name: test
+        for module in (test_checkin, test_checkin_child)
+        for name, test in vars(module).items()
+        if name.startswith("test_") and callable(test)
+    }
+)
 __all__ = ["faults", "horizons"]
 
 
@@ -50,22 +56,30 @@ def _grid(side: int) -> tgsis.Surface:
     vertices = np.stack([u.ravel(), v.ravel(), np.sin(u.ravel()) + v.ravel()], axis=1)
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": np.linspace(0, 1, side * side)})
+    return tgsis.Surface(
+        vertices,
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        vertex_properties={"porosity": np.linspace(0, 1, side * side)},
+    )
 
 
-def test_the_storage_is_partitioned_and_versioning_keeps_it_so(conn: Conn, partitioned: list[str],
-                                                               horizons: Any) -> None:
+def test_the_storage_is_partitioned_and_versioning_keeps_it_so(
+    conn: Conn, partitioned: list[str], horizons: Any
+) -> None:
     assert {"vrtx", "trgl", "segment", "point", "tetra"} <= set(partitioned)
     ids = [tgsis.insert_feature(conn, horizons, _grid(6)) for _ in range(12)]
     conn.commit()
     tgsis.enable_feature_versioning(conn)
     for table in ("vrtx", "trgl"):
-        row = conn.execute("SELECT c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
-                           "FROM pg_class c WHERE c.oid = %s::regclass", (f"tgsis.{table}_ver",)).fetchone()
+        row = conn.execute(
+            "SELECT c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
+            "FROM pg_class c WHERE c.oid = %s::regclass",
+            (f"tgsis.{table}_ver",),
+        ).fetchone()
         assert row == ("p", PARTITIONS), table
-        used = conn.execute(sql.SQL("SELECT count(DISTINCT tableoid) FROM {}").format(
-            sql.Identifier("tgsis", f"{table}_ver"))).fetchone()
+        used = conn.execute(
+            sql.SQL("SELECT count(DISTINCT tableoid) FROM {}").format(sql.Identifier("tgsis", f"{table}_ver"))
+        ).fetchone()
         assert used is not None and used[0] > 1, table  # twelve geometries spread over the partitions
     assert all(tgsis.fetch_feature(conn, horizons, i).mesh.same_as(_grid(6)) for i in ids)
 
@@ -100,8 +114,9 @@ def test_an_editor_checks_in_and_a_merge_brings_it_home(db_dsn: str, conn: Conn,
     assert closed == (5,)  # the five moved vertices' old row versions, closed by the merge; nothing else
 
 
-def test_dump_and_restore_keep_the_partitioned_model_storage(pg: TestServer, db_dsn: str, conn: Conn, horizons: Any,
-                                                             tmp_path: Path) -> None:
+def test_dump_and_restore_keep_the_partitioned_model_storage(
+    pg: TestServer, db_dsn: str, conn: Conn, horizons: Any, tmp_path: Path
+) -> None:
     mesh = _grid(6)
     geoid = tgsis.insert_feature(conn, horizons, mesh)
     conn.commit()
@@ -116,8 +131,11 @@ def test_dump_and_restore_keep_the_partitioned_model_storage(pg: TestServer, db_
     conn.commit()
     with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
         for table in ("vrtx_ver", "trgl_ver"):
-            row = restored.execute("SELECT c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
-                                   "FROM pg_class c WHERE c.oid = %s::regclass", (f"tgsis.{table}",)).fetchone()
+            row = restored.execute(
+                "SELECT c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
+                "FROM pg_class c WHERE c.oid = %s::regclass",
+                (f"tgsis.{table}",),
+            ).fetchone()
             assert row == ("p", PARTITIONS), table
         assert tgsis.fetch_feature(restored, horizons.name, geoid).mesh.same_as(mesh)
         with tgsis.in_version(restored, "edit"):
@@ -131,18 +149,30 @@ def _definition(conn: Conn, table: str) -> list[Any]:
     """What partitioning must keep of a model table: columns, constraints, index names and shapes, comments, owner, rights."""
     rel = f"tgsis.{table}"
     return [
-        conn.execute("SELECT array_agg((a.attname, format_type(a.atttypid, a.atttypmod), a.attnotnull, "
-                     "pg_get_expr(d.adbin, d.adrelid), col_description(a.attrelid, a.attnum)) ORDER BY a.attnum)::text "
-                     "FROM pg_attribute a LEFT JOIN pg_attrdef d ON d.adrelid = a.attrelid AND d.adnum = a.attnum "
-                     "WHERE a.attrelid = %s::regclass AND a.attnum > 0 AND NOT a.attisdropped", (rel,)).fetchone(),
-        conn.execute("SELECT array_agg((conname, contype, pg_get_constraintdef(oid)) ORDER BY conname)::text "
-                     "FROM pg_constraint WHERE conrelid = %s::regclass", (rel,)).fetchone(),
-        conn.execute("SELECT array_agg((c.relname, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2)) "
-                     "ORDER BY c.relname)::text FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid "
-                     "WHERE i.indrelid = %s::regclass", (rel,)).fetchone(),
-        conn.execute("SELECT obj_description(c.oid, 'pg_class'), c.relowner::regrole::text, "
-                     "(SELECT array_agg(a::text ORDER BY a::text) FROM unnest(c.relacl) a) "
-                     "FROM pg_class c WHERE c.oid = %s::regclass", (rel,)).fetchone(),
+        conn.execute(
+            "SELECT array_agg((a.attname, format_type(a.atttypid, a.atttypmod), a.attnotnull, "
+            "pg_get_expr(d.adbin, d.adrelid), col_description(a.attrelid, a.attnum)) ORDER BY a.attnum)::text "
+            "FROM pg_attribute a LEFT JOIN pg_attrdef d ON d.adrelid = a.attrelid AND d.adnum = a.attnum "
+            "WHERE a.attrelid = %s::regclass AND a.attnum > 0 AND NOT a.attisdropped",
+            (rel,),
+        ).fetchone(),
+        conn.execute(
+            "SELECT array_agg((conname, contype, pg_get_constraintdef(oid)) ORDER BY conname)::text "
+            "FROM pg_constraint WHERE conrelid = %s::regclass",
+            (rel,),
+        ).fetchone(),
+        conn.execute(
+            "SELECT array_agg((c.relname, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2)) "
+            "ORDER BY c.relname)::text FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid "
+            "WHERE i.indrelid = %s::regclass",
+            (rel,),
+        ).fetchone(),
+        conn.execute(
+            "SELECT obj_description(c.oid, 'pg_class'), c.relowner::regrole::text, "
+            "(SELECT array_agg(a::text ORDER BY a::text) FROM unnest(c.relacl) a) "
+            "FROM pg_class c WHERE c.oid = %s::regclass",
+            (rel,),
+        ).fetchone(),
     ]
 
 
@@ -151,28 +181,39 @@ _MODELS = [m.number for m in tgsis.data_models()]
 
 def test_partitioning_keeps_every_definition_of_every_model(make_database: Any, template_db: str) -> None:
     with psycopg.connect(make_database(template_db)) as plain:
-        tables = {m: [r[0] for r in plain.execute("SELECT tablename FROM tgsis.model_tables WHERE model = %s",
-                                                   (m,)).fetchall()] for m in _MODELS}
+        tables = {
+            m: [
+                r[0]
+                for r in plain.execute("SELECT tablename FROM tgsis.model_tables WHERE model = %s", (m,)).fetchall()
+            ]
+            for m in _MODELS
+        }
         before = {t: _definition(plain, t) for ts in tables.values() for t in ts}
     with psycopg.connect(make_database(template_db)) as conn:
         for model in _MODELS:
             assert sorted(tgsis.partition_model_storage(conn, model, 3)) == sorted(tables[model])
         for table, definition in before.items():
             assert _definition(conn, table) == definition, table
-            parts = conn.execute("SELECT c.relname, obj_description(c.oid, 'pg_class'), c.relacl FROM pg_inherits i "
-                                 "JOIN pg_class c ON c.oid = i.inhrelid WHERE i.inhparent = %s::regclass "
-                                 "ORDER BY 1", (f"tgsis.{table}",)).fetchall()
+            parts = conn.execute(
+                "SELECT c.relname, obj_description(c.oid, 'pg_class'), c.relacl FROM pg_inherits i "
+                "JOIN pg_class c ON c.oid = i.inhrelid WHERE i.inhparent = %s::regclass "
+                "ORDER BY 1",
+                (f"tgsis.{table}",),
+            ).fetchall()
             assert [p[0] for p in parts] == [f"{table}_p{r}" for r in range(3)]
             assert all(p[1] and p[2] is None for p in parts)  # commented; no rights of their own
 
 
-@pytest.mark.parametrize("model, partitions, error, message", [
-    (1, 1, tgsis.InvalidInputError, "number of partitions 1 is out of range"),
-    (1, 5000, tgsis.InvalidInputError, "number of partitions 5000 is out of range"),
-    (0, 4, tgsis.InvalidInputError, "the core tables"),
-    (9, 4, tgsis.NotFoundError, "data model 9 does not exist"),
-    (1, 4, tgsis.InUseError, r"tgsis\.\w+ is not a plain table"),  # partitioned already by the fixture
-])
+@pytest.mark.parametrize(
+    "model, partitions, error, message",
+    [
+        (1, 1, tgsis.InvalidInputError, "number of partitions 1 is out of range"),
+        (1, 5000, tgsis.InvalidInputError, "number of partitions 5000 is out of range"),
+        (0, 4, tgsis.InvalidInputError, "the core tables"),
+        (9, 4, tgsis.NotFoundError, "data model 9 does not exist"),
+        (1, 4, tgsis.InUseError, r"tgsis\.\w+ is not a plain table"),  # partitioned already by the fixture
+    ],
+)
 def test_bad_calls_are_refused(conn: Conn, model: int, partitions: int, error: type[Exception], message: str) -> None:
     with pytest.raises(error, match=message):
         tgsis.partition_model_storage(conn, model, partitions)
@@ -201,14 +242,24 @@ def test_only_the_owner_partitions(db_dsn: str) -> None:
             tgsis.partition_model_storage(admin, 2, 4)
 
 
-@pytest.mark.parametrize(("create", "user", "drop"), [
-    ("CREATE VIEW public.moments AS SELECT geoid, times FROM tgsis.times", "view public.moments",
-     "DROP VIEW public.moments"),
-    # a user's table whose rows point at instants: the swap would leave its key pointing at the old table
-    ("CREATE TABLE public.picks (geoid bigint, times double precision, note text, "
-     "CONSTRAINT picks_instant FOREIGN KEY (geoid, times) REFERENCES tgsis.times)",
-     "constraint picks_instant on table public.picks", "DROP TABLE public.picks"),
-], ids=["view", "foreign-key"])
+@pytest.mark.parametrize(
+    ("create", "user", "drop"),
+    [
+        (
+            "CREATE VIEW public.moments AS SELECT geoid, times FROM tgsis.times",
+            "view public.moments",
+            "DROP VIEW public.moments",
+        ),
+        # a user's table whose rows point at instants: the swap would leave its key pointing at the old table
+        (
+            "CREATE TABLE public.picks (geoid bigint, times double precision, note text, "
+            "CONSTRAINT picks_instant FOREIGN KEY (geoid, times) REFERENCES tgsis.times)",
+            "constraint picks_instant on table public.picks",
+            "DROP TABLE public.picks",
+        ),
+    ],
+    ids=["view", "foreign-key"],
+)
 def test_a_table_other_objects_use_is_refused_naming_them(conn: Conn, create: str, user: str, drop: str) -> None:
     conn.execute(create)
     conn.commit()
@@ -216,8 +267,10 @@ def test_a_table_other_objects_use_is_refused_naming_them(conn: Conn, create: st
         tgsis.partition_model_storage(conn, 2, 4)
     assert caught.value.detail == f"used by: {user}"
     conn.rollback()
-    kinds = conn.execute("SELECT array_agg(DISTINCT c.relkind) FROM tgsis.model_tables t "
-                         "JOIN pg_class c ON c.oid = to_regclass('tgsis.' || t.tablename) WHERE t.model = 2").fetchone()
+    kinds = conn.execute(
+        "SELECT array_agg(DISTINCT c.relkind) FROM tgsis.model_tables t "
+        "JOIN pg_class c ON c.oid = to_regclass('tgsis.' || t.tablename) WHERE t.model = 2"
+    ).fetchone()
     assert kinds == (["r"],)  # nothing partitioned
     conn.execute(drop)
     conn.commit()

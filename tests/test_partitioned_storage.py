@@ -28,13 +28,21 @@ TABLES = ("flat", "part")
 def tables(conn: Conn) -> Conn:
     """flat and part (objid, k, val) with objects 1..20 of 5 rows, part hash-partitioned by objid in 4; versioned."""
     conn.execute("CREATE TABLE flat (objid int, k int, val int NOT NULL, PRIMARY KEY (objid, k))")
-    conn.execute("CREATE TABLE part (objid int, k int, val int NOT NULL, PRIMARY KEY (objid, k)) PARTITION BY HASH (objid)")
+    conn.execute(
+        "CREATE TABLE part (objid int, k int, val int NOT NULL, PRIMARY KEY (objid, k)) PARTITION BY HASH (objid)"
+    )
     for r in range(4):
-        conn.execute(sql.SQL("CREATE TABLE {} PARTITION OF part FOR VALUES WITH (MODULUS 4, REMAINDER {})").format(
-            sql.Identifier(f"part{r}"), sql.Literal(r)))
+        conn.execute(
+            sql.SQL("CREATE TABLE {} PARTITION OF part FOR VALUES WITH (MODULUS 4, REMAINDER {})").format(
+                sql.Identifier(f"part{r}"), sql.Literal(r)
+            )
+        )
     for table in TABLES:
-        conn.execute(sql.SQL("INSERT INTO {} SELECT o, k, 100 * o + k FROM generate_series(1, 20) o, "
-                             "generate_series(1, 5) k").format(sql.Identifier(table)))
+        conn.execute(
+            sql.SQL(
+                "INSERT INTO {} SELECT o, k, 100 * o + k FROM generate_series(1, 20) o, generate_series(1, 5) k"
+            ).format(sql.Identifier(table))
+        )
         tgsis.enable_versioning(conn, table, "objid", table)
     for version in ("a", "b", "gone"):
         tgsis.create_version(conn, version)
@@ -52,14 +60,19 @@ def _both(conn: Conn, version: str, statement: str) -> None:
 
 def _seen(conn: Conn, table: str, version: str) -> list[tuple[Any, ...]]:
     with tgsis.in_version(conn, version, local=True):
-        rows = conn.execute(sql.SQL("SELECT objid, k, val FROM {} ORDER BY 1, 2").format(sql.Identifier(table))).fetchall()
+        rows = conn.execute(
+            sql.SQL("SELECT objid, k, val FROM {} ORDER BY 1, 2").format(sql.Identifier(table))
+        ).fetchall()
     conn.rollback()
     return rows
 
 
 def _stored(conn: Conn, table: str) -> list[tuple[Any, ...]]:
-    return conn.execute(sql.SQL("SELECT objid, k, val, revision, lastrevs FROM {} ORDER BY 1, 2, 4").format(
-        sql.Identifier(table + "_ver"))).fetchall()
+    return conn.execute(
+        sql.SQL("SELECT objid, k, val, revision, lastrevs FROM {} ORDER BY 1, 2, 4").format(
+            sql.Identifier(table + "_ver")
+        )
+    ).fetchall()
 
 
 def _same(conn: Conn) -> None:
@@ -72,19 +85,21 @@ def _same(conn: Conn) -> None:
 def test_versioning_a_partitioned_table_keeps_its_partitions(tables: Conn) -> None:
     conn = tables
     kind = conn.execute("SELECT relkind FROM pg_class WHERE oid = 'part_ver'::regclass").fetchone()
-    parts = conn.execute("SELECT count(*), sum((SELECT count(*) FROM part_ver v WHERE v.tableoid = p.relid)) "
-                         "FROM pg_partition_tree('part_ver') p WHERE p.isleaf").fetchone()
+    parts = conn.execute(
+        "SELECT count(*), sum((SELECT count(*) FROM part_ver v WHERE v.tableoid = p.relid)) "
+        "FROM pg_partition_tree('part_ver') p WHERE p.isleaf"
+    ).fetchone()
     assert kind == ("p",) and parts == (4, 100)
     assert conn.execute("SELECT count(*) FROM part").fetchone() == (100,)
 
 
 def test_edits_merges_and_cleanup_give_the_same_rows_as_a_plain_table(tables: Conn) -> None:
     conn = tables
-    _both(conn, "a", "UPDATE {t} SET val = val + 1 WHERE objid IN (1, 2, 3)")   # inherited rows: closed, written anew
-    _both(conn, "a", "UPDATE {t} SET val = val + 1 WHERE objid = 1")            # rows of its own: in place
+    _both(conn, "a", "UPDATE {t} SET val = val + 1 WHERE objid IN (1, 2, 3)")  # inherited rows: closed, written anew
+    _both(conn, "a", "UPDATE {t} SET val = val + 1 WHERE objid = 1")  # rows of its own: in place
     _both(conn, "a", "DELETE FROM {t} WHERE objid = 4 AND k = 2")
     _both(conn, "a", "INSERT INTO {t} VALUES (30, 1, 1)")
-    _both(conn, "a", "UPDATE {t} SET objid = 31 WHERE objid = 5 AND k = 1")     # a new key: another partition
+    _both(conn, "a", "UPDATE {t} SET objid = 31 WHERE objid = 5 AND k = 1")  # a new key: another partition
     _both(conn, "DEFAULT", "UPDATE {t} SET val = val + 10 WHERE objid IN (3, 6)")
     _both(conn, "b", "UPDATE {t} SET val = 0 WHERE objid IN (6, 7)")
     _both(conn, "gone", "UPDATE {t} SET val = -1 WHERE objid IN (8, 9)")
@@ -119,8 +134,10 @@ def test_edits_merges_and_cleanup_give_the_same_rows_as_a_plain_table(tables: Co
         tgsis.disable_versioning(conn, table, force=True)
     conn.commit()
     assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'part'::regclass").fetchone() == ("p",)
-    assert conn.execute("SELECT * FROM part ORDER BY 1, 2").fetchall() == \
-        conn.execute("SELECT * FROM flat ORDER BY 1, 2").fetchall()
+    assert (
+        conn.execute("SELECT * FROM part ORDER BY 1, 2").fetchall()
+        == conn.execute("SELECT * FROM flat ORDER BY 1, 2").fetchall()
+    )
 
 
 def test_a_merge_waits_for_a_writer_holding_a_row_it_closes_in_a_partition(tables: Conn, db_dsn: str) -> None:
@@ -132,11 +149,11 @@ def test_a_merge_waits_for_a_writer_holding_a_row_it_closes_in_a_partition(table
     holder = psycopg.connect(db_dsn)
     try:
         tgsis.goto_version(holder, "b")
-        holder.execute("UPDATE part SET val = 8 WHERE objid = 1 AND k = 1")   # locks DEFAULT's stored row (1, 1)
+        holder.execute("UPDATE part SET val = 8 WHERE objid = 1 AND k = 1")  # locks DEFAULT's stored row (1, 1)
         merge = Background(db_dsn, "merge", lambda c: tgsis.merge_version(c, "a"))
         wait_until_blocked(conn, merge.pid, holder.info.backend_pid)
         holder.commit()
-        assert merge.finish() == 10   # five rows closed in DEFAULT, five copied
+        assert merge.finish() == 10  # five rows closed in DEFAULT, five copied
     finally:
         holder.close()
     assert [v for _, _, v in _seen(conn, "part", "DEFAULT")[:5]] == [7] * 5
@@ -159,17 +176,22 @@ def test_an_editor_writes_through_the_view_and_the_parent_never_a_partition(tabl
         with ed.cursor().copy("COPY part_ver (objid, k, val, revision) FROM STDIN") as copy:
             copy.write_row((40, 1, 1, working))
         ed.commit()
-        with pytest.raises(psycopg.Error) as wrong:   # the parent's check: a row of another revision
+        with pytest.raises(psycopg.Error) as wrong:  # the parent's check: a row of another revision
             with ed.cursor().copy("COPY part_ver (objid, k, val, revision) FROM STDIN") as copy:
                 copy.write_row((41, 1, 1, 0))
         assert wrong.value.sqlstate == "TG002"
         ed.rollback()
-        partition = conn.execute("SELECT p.relid::regclass::text FROM pg_partition_tree('part_ver') p "
-                                 "WHERE p.isleaf LIMIT 1").fetchone()
+        partition = conn.execute(
+            "SELECT p.relid::regclass::text FROM pg_partition_tree('part_ver') p WHERE p.isleaf LIMIT 1"
+        ).fetchone()
         assert partition is not None
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
-            ed.execute(sql.SQL("INSERT INTO {} (objid, k, val, revision) VALUES (42, 1, 1, %s)").format(
-                sql.Identifier(partition[0])), (working,))
+            ed.execute(
+                sql.SQL("INSERT INTO {} (objid, k, val, revision) VALUES (42, 1, 1, %s)").format(
+                    sql.Identifier(partition[0])
+                ),
+                (working,),
+            )
         ed.rollback()
     changed = {k for (k,) in conn.execute("SELECT objectkey FROM tgsis.changed_objects(%s::int[])", ([working],))}
     assert changed == {"2", "40"}

@@ -39,7 +39,7 @@ def _jumping(offset: float, *, same_nodes: bool = True) -> EvolvingSurface:
     vertices, triangles = _dome(5)
     top = vertices * [1, 1, 2]
     first = TopologyPeriod([0.0, 1.0], triangles, np.stack([vertices, top]))
-    if same_nodes:   # the same nodes, the other diagonal of each grid cell
+    if same_nodes:  # the same nodes, the other diagonal of each grid cell
         a, b, d = triangles[:16].T
         c = triangles[16:, 2]
         flipped = np.concatenate([np.stack([a, b, c], 1), np.stack([b, d, c], 1)])
@@ -64,24 +64,28 @@ def _count(conn: Conn) -> tuple[int, int]:
 
 
 @pytest.mark.parametrize("same_nodes", [True, False])
-def test_insert_refuses_a_jump_naming_period_gap_and_node(conn: Conn, domes: tgsis.FeatureClass, same_nodes: bool) -> None:
+def test_insert_refuses_a_jump_naming_period_gap_and_node(
+    conn: Conn, domes: tgsis.FeatureClass, same_nodes: bool
+) -> None:
     before = _count(conn)
     with pytest.raises(tgsis.DiscontinuousPeriodsError) as info:
         tgsis.insert_feature(conn, domes, _jumping(7.0, same_nodes=same_nodes))
     message = str(info.value)
     assert "topology period from 1 of geometry" in message and "where the period from 0 ends" in message
     gap = float(re.search(r"the shapes are ([0-9.e+-]+) apart", message)[1])  # type: ignore[index]
-    assert 1.0 < gap <= 7.0 + 1e-9            # the distance to the other shape: 7 m on the dome's top, less on its flanks
+    assert 1.0 < gap <= 7.0 + 1e-9  # the distance to the other shape: 7 m on the dome's top, less on its flanks
     assert re.search(r"largest gap at node \d+ of the period from [01]", message)
     assert "triangles, both ways" in (info.value.detail or "")
     assert "sudden_change" in (info.value.hint or "") and "tolerance" in (info.value.hint or "")
     assert info.value.sqlstate == "TG204"
     conn.rollback()
-    assert _count(conn) == before                                   # nothing written
+    assert _count(conn) == before  # nothing written
 
 
 @pytest.mark.parametrize("same_nodes", [True, False])
-def test_a_change_of_topology_on_the_same_shape_is_stored(conn: Conn, domes: tgsis.FeatureClass, same_nodes: bool) -> None:
+def test_a_change_of_topology_on_the_same_shape_is_stored(
+    conn: Conn, domes: tgsis.FeatureClass, same_nodes: bool
+) -> None:
     """Re-triangulating the same nodes, or refining (new nodes on the old triangles of a curved dome): no jump."""
     fid = tgsis.insert_feature(conn, domes, _jumping(0.0, same_nodes=same_nodes))
     conn.commit()
@@ -95,7 +99,7 @@ def test_a_shape_that_covers_less_is_a_jump_both_ways(conn: Conn, domes: tgsis.F
     """Every new node on the old dome, but the new shape is only half of it: the old nodes are off the new one."""
     vertices, triangles = _dome(5)
     first = TopologyPeriod([0.0, 1.0], triangles, np.stack([vertices, vertices]))
-    half = vertices[:15]                                         # rows 0..2 of the 5 x 5 grid
+    half = vertices[:15]  # rows 0..2 of the 5 x 5 grid
     keep = np.all(triangles < 15, axis=1)
     second = TopologyPeriod([1.0, 2.0], triangles[keep], np.stack([half, half]))
     with pytest.raises(tgsis.DiscontinuousPeriodsError, match=r"of the period from 0\)"):
@@ -111,13 +115,20 @@ def test_tolerance_argument_and_setting(conn: Conn, domes: tgsis.FeatureClass) -
     tgsis.insert_feature(conn, domes, _jumping(0.5))
     assert conn.execute("SELECT count(*) FROM tgsis.check_geometry(%s)", (fid,)).fetchone() == (0,)
     conn.execute("RESET tgsis.period_tolerance")
-    assert conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchone()[0].startswith(  # type: ignore[index]
-        "shape jumps at a topology instant")
+    assert (
+        conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,))
+        .fetchone()[0]
+        .startswith(  # type: ignore[index]
+            "shape jumps at a topology instant"
+        )
+    )
     # the default: 1e-6 of the diagonal of the geometry's box (here about 1.5 km: 1.5 mm)
     tolerance, diagonal = conn.execute(
         "SELECT tgsis.gap_tolerance(geoid), sqrt((cube_ur_coord(bbox, 1) - cube_ll_coord(bbox, 1)) ^ 2 + "
         "(cube_ur_coord(bbox, 2) - cube_ll_coord(bbox, 2)) ^ 2 + (cube_ur_coord(bbox, 3) - cube_ll_coord(bbox, 3)) ^ 2) "
-        "FROM tgsis.geometry WHERE geoid = %s", (fid,)).fetchone()  # type: ignore[misc]
+        "FROM tgsis.geometry WHERE geoid = %s",
+        (fid,),
+    ).fetchone()  # type: ignore[misc]
     assert tolerance == pytest.approx(1e-6 * diagonal, rel=1e-12) and 1000 < diagonal < 2000
     for bad in (-1.0, float("nan"), float("inf")):
         with pytest.raises(tgsis.InvalidInputError, match="tolerance"):
@@ -140,20 +151,23 @@ def test_append_period_refuses_a_jump_and_takes_a_sudden_change(conn: Conn, dome
     last = surface.periods[0].positions[-1]
     vertices, triangles = _dome(5)
     seven_off = TopologyPeriod([1.0, 3.0], surface.periods[1].triangles, np.stack([last + [0, 0, 7], last + [0, 0, 9]]))
-    with pytest.raises(tgsis.DiscontinuousPeriodsError, match=r"from 1 of geometry \d+ .* 7(\.0\d*)? apart \(largest gap at node \d+"):
+    with pytest.raises(
+        tgsis.DiscontinuousPeriodsError, match=r"from 1 of geometry \d+ .* 7(\.0\d*)? apart \(largest gap at node \d+"
+    ):
         tgsis.append_period(conn, domes, fid, seven_off)
     conn.rollback()
-    assert [t for t, _ in tgsis.instants(conn, fid)] == [0.0, 1.0]   # unchanged
+    assert [t for t, _ in tgsis.instants(conn, fid)] == [0.0, 1.0]  # unchanged
     tgsis.append_period(conn, domes, fid, seven_off, sudden_change=0.01)
     conn.commit()
     assert [t for t, starts in tgsis.instants(conn, fid)] == [0.0, 1.0, 1.01, 3.0]
     at = {t: tgsis.get_at(conn, fid, t) for t in (1.0, 1.005, 1.01)}
-    np.testing.assert_allclose(at[1.0].vertices, last, atol=1e-6)                  # starts in the old shape
+    np.testing.assert_allclose(at[1.0].vertices, last, atol=1e-6)  # starts in the old shape
     np.testing.assert_allclose(at[1.005].vertices, last + [0, 0, 3.5], atol=1e-6)  # halfway, linearly
-    np.testing.assert_allclose(at[1.01].vertices, last + [0, 0, 7], atol=1e-9)     # its own first shape
+    np.testing.assert_allclose(at[1.01].vertices, last + [0, 0, 7], atol=1e-9)  # its own first shape
     with pytest.raises(tgsis.InvalidInputError, match="must end before its second geometry instant"):
-        tgsis.append_period(conn, domes, fid, TopologyPeriod([3.0, 3.5], triangles, np.stack([vertices, vertices])),
-                            sudden_change=1.0)
+        tgsis.append_period(
+            conn, domes, fid, TopologyPeriod([3.0, 3.5], triangles, np.stack([vertices, vertices])), sudden_change=1.0
+        )
 
 
 def test_sudden_change_at_insert_with_new_nodes(conn: Conn, domes: tgsis.FeatureClass) -> None:
@@ -169,15 +183,22 @@ def test_sudden_change_at_insert_with_new_nodes(conn: Conn, domes: tgsis.Feature
 def test_plain_sql_rows_are_checked_by_the_sql_function(conn: Conn, domes: tgsis.FeatureClass) -> None:
     fid = tgsis.insert_feature(conn, domes, _jumping(0.0))
     conn.commit()
-    conn.execute("UPDATE tgsis.d4dvrtx SET z = z + 4 WHERE geoid = %s AND timem = 1 AND timet = 1 AND nodeid = 30", (fid,))
+    conn.execute(
+        "UPDATE tgsis.d4dvrtx SET z = z + 4 WHERE geoid = %s AND timem = 1 AND timet = 1 AND nodeid = 30", (fid,)
+    )
     # node 30 is node 5 of the second period: the spike is at it, or at node 5 of the first below it
-    with pytest.raises(psycopg.Error, match=r" [34]\.\d+ apart \(largest gap at node (30 of the period from 1|5 of the period from 0)\)") as jump:
+    with pytest.raises(
+        psycopg.Error,
+        match=r" [34]\.\d+ apart \(largest gap at node (30 of the period from 1|5 of the period from 0)\)",
+    ) as jump:
         conn.execute("SELECT tgsis.check_period_continuity(%s)", (fid,))
     assert jump.value.sqlstate == "TG204"
     conn.rollback()
-    conn.execute("UPDATE tgsis.d4dvrtx SET z = z + 4 WHERE geoid = %s AND timem = 1 AND timet = 1 AND nodeid = 30", (fid,))
+    conn.execute(
+        "UPDATE tgsis.d4dvrtx SET z = z + 4 WHERE geoid = %s AND timem = 1 AND timet = 1 AND nodeid = 30", (fid,)
+    )
     conn.execute("SELECT tgsis.check_period_continuity(%s, 4.5)", (fid,))
-    conn.execute("SELECT tgsis.check_period_continuity(%s, p_from => 2)", (fid,))   # no topology instant from 2 on
+    conn.execute("SELECT tgsis.check_period_continuity(%s, p_from => 2)", (fid,))  # no topology instant from 2 on
 
 
 # --------------------------------------------------------------------------- model 4
@@ -189,8 +210,12 @@ def _square_then(points_after: np.ndarray) -> gmaps.EvolvingGMap:
     vertices, triangles = gmap_grid(2, 2)
     fine = gmaps.GMap.from_triangles(points_after, triangles)
     assert len(vertices) == len(points_after)
-    return gmaps.EvolvingGMap([gmaps.GMapPeriod([0.0, 1.0], square),
-                               gmaps.GMapPeriod([1.0, 2.0], fine, np.stack([fine.points, fine.points + [0, 0, 1]]))])
+    return gmaps.EvolvingGMap(
+        [
+            gmaps.GMapPeriod([0.0, 1.0], square),
+            gmaps.GMapPeriod([1.0, 2.0], fine, np.stack([fine.points, fine.points + [0, 0, 1]])),
+        ]
+    )
 
 
 @pytest.fixture
@@ -200,16 +225,19 @@ def blocks(conn: Conn) -> tgsis.FeatureClass:
     return fc
 
 
-def test_gmap_refined_on_its_edges_is_stored_and_a_jump_is_refused_naming_a_dart(conn: Conn,
-                                                                                 blocks: tgsis.FeatureClass) -> None:
+def test_gmap_refined_on_its_edges_is_stored_and_a_jump_is_refused_naming_a_dart(
+    conn: Conn, blocks: tgsis.FeatureClass
+) -> None:
     vertices, _ = gmap_grid(2, 2)
     fid = tgsis.insert_feature(conn, blocks, _square_then(vertices))
     conn.commit()
-    (gap, matching), = conn.execute("SELECT gap, matching FROM tgsis.period_gaps(%s)", (fid,)).fetchall()
+    ((gap, matching),) = conn.execute("SELECT gap, matching FROM tgsis.period_gaps(%s)", (fid,)).fetchall()
     assert gap < 1e-12 and matching == "edges"
     before = _count(conn)
-    with pytest.raises(tgsis.DiscontinuousPeriodsError,
-                       match=r"from 1 of geometry \d+ .* 7(\.0\d*)? apart \(largest gap at dart \d+ \(node \d+\) of the period from"):
+    with pytest.raises(
+        tgsis.DiscontinuousPeriodsError,
+        match=r"from 1 of geometry \d+ .* 7(\.0\d*)? apart \(largest gap at dart \d+ \(node \d+\) of the period from",
+    ):
         tgsis.insert_feature(conn, blocks, _square_then(vertices + [0, 0, 7]))
     conn.rollback()
     assert _count(conn) == before

@@ -50,7 +50,7 @@ class GisServer:
         self.bindir = server.binaries.bindir
         self.template = "gis_template"
         server.ensure_database(self.template)
-        with psycopg.connect(server.dsn(self.template)) as conn:   # tgsis first, PostGIS after it
+        with psycopg.connect(server.dsn(self.template)) as conn:  # tgsis first, PostGIS after it
             tgsis.install(conn, method="sql")
             conn.execute("CREATE EXTENSION postgis")
         with psycopg.connect(server.dsn("postgres"), autocommit=True) as conn:
@@ -61,8 +61,11 @@ class GisServer:
         """A new database (from the template with tgsis and PostGIS, or ``template0``), dropped afterwards."""
         name = f"gis_{uuid.uuid4().hex[:10]}"
         with psycopg.connect(self.server.dsn("postgres"), autocommit=True) as conn:
-            conn.execute(sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(
-                sql.Identifier(name), sql.Identifier(template or self.template)))
+            conn.execute(
+                sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(
+                    sql.Identifier(name), sql.Identifier(template or self.template)
+                )
+            )
         try:
             yield self.server.dsn(name)
         finally:
@@ -85,8 +88,11 @@ def gis() -> Iterator[GisServer]:
     sharedir = binaries.sharedir
     assert sharedir is not None, f"{binaries.describe()} has no pg_config"
     if not (sharedir / "extension" / "postgis.control").exists():
-        pytest.fail(f"PostGIS is not installed for {binaries.describe()}: apt-get install postgresql-15-postgis-3 "
-                    "(CI and the Docker image have it)", pytrace=False)
+        pytest.fail(
+            f"PostGIS is not installed for {binaries.describe()}: apt-get install postgresql-15-postgis-3 "
+            "(CI and the Docker image have it)",
+            pytrace=False,
+        )
     server = LocalServer.throwaway(binaries)
     try:
         yield GisServer(server)
@@ -112,7 +118,9 @@ def _one(conn: Conn, query: str, params: tuple[Any, ...] = ()) -> Any:
 
 def _random_surface(rng: np.random.Generator, n: int = 6) -> tgsis.Surface:
     surface = flat_grid(n, 0.0)
-    vertices = surface.vertices * 1000.0 + rng.normal(scale=1.0, size=surface.vertices.shape) + [326126.29688, 3.8e6, -1200]
+    vertices = (
+        surface.vertices * 1000.0 + rng.normal(scale=1.0, size=surface.vertices.shape) + [326126.29688, 3.8e6, -1200]
+    )
     return tgsis.Surface(vertices, surface.cells)
 
 
@@ -138,9 +146,11 @@ def test_a_surface_is_a_tin_z_with_the_class_srid_bit_for_bit(gconn: Conn) -> No
     fid = tgsis.insert_feature(gconn, "faults", surface, {"release": "5.3"})
     kind, srid, npoints, ngeoms, ndims = gconn.execute(
         "SELECT ST_GeometryType(g), ST_SRID(g), ST_NPoints(g), ST_NumGeometries(g), ST_NDims(g) "
-        "FROM tgsis.postgis_geometry('faults', %s) g", (fid,)).fetchone()  # type: ignore[misc]
+        "FROM tgsis.postgis_geometry('faults', %s) g",
+        (fid,),
+    ).fetchone()  # type: ignore[misc]
     assert (kind, srid, ndims) == ("ST_Tin", 32611, 3)
-    assert ngeoms == len(surface.cells) and npoints == 4 * len(surface.cells)   # each triangle's ring closes
+    assert ngeoms == len(surface.cells) and npoints == 4 * len(surface.cells)  # each triangle's ring closes
     # PostGIS's own EWKB of it is tgsis's, byte for byte, and Python writes the same
     ours = bytes(_one(gconn, "SELECT ST_AsEWKB(tgsis.postgis_geometry('faults', %s), 'XDR')", (fid,)))
     assert ours == mesh_to_ewkb(surface, 32611) == tgsis.fetch_ewkb(gconn, "faults", fid)
@@ -151,9 +161,15 @@ def test_a_surface_is_a_tin_z_with_the_class_srid_bit_for_bit(gconn: Conn) -> No
     assert np.array_equal(back.vertices[back.cells], surface.vertices[surface.cells])
     assert len(back.vertices) == len(surface.vertices)
     # a text round trip through PostGIS gives the same TIN
-    assert _one(gconn, "SELECT ST_AsText(ST_GeomFromText(ST_AsText(g, 17))) = ST_AsText(g, 17) "
-                       "FROM tgsis.postgis_geometry('faults', %s) g", (fid,))
-    assert _one(gconn, "SELECT ST_AsText(g) FROM tgsis.postgis_geometry('faults', %s) g", (fid,)).startswith("TIN Z (((")
+    assert _one(
+        gconn,
+        "SELECT ST_AsText(ST_GeomFromText(ST_AsText(g, 17))) = ST_AsText(g, 17) "
+        "FROM tgsis.postgis_geometry('faults', %s) g",
+        (fid,),
+    )
+    assert _one(gconn, "SELECT ST_AsText(g) FROM tgsis.postgis_geometry('faults', %s) g", (fid,)).startswith(
+        "TIN Z ((("
+    )
 
 
 def test_postgis_measures_distances_and_intersections_between_tgsis_surfaces(gconn: Conn) -> None:
@@ -161,7 +177,7 @@ def test_postgis_measures_distances_and_intersections_between_tgsis_surfaces(gco
     low = tgsis.insert_feature(gconn, "horizons", flat_grid(4, 0.0))
     high = tgsis.insert_feature(gconn, "horizons", flat_grid(4, 7.5))
     tilted = flat_grid(4, 0.0)
-    tilted.vertices[:, 2] = tilted.vertices[:, 0] * 5.0 - 5.0          # from -5 to 10: crosses both
+    tilted.vertices[:, 2] = tilted.vertices[:, 0] * 5.0 - 5.0  # from -5 to 10: crosses both
     cross = tgsis.insert_feature(gconn, "horizons", tilted)
     g = "tgsis.postgis_geometry('horizons', {})".format
     assert _one(gconn, f"SELECT ST_3DDistance({g(low)}, {g(high)})") == pytest.approx(7.5)
@@ -187,11 +203,13 @@ def test_a_solid_is_the_closed_polyhedral_surface_of_its_boundary_facing_outward
     fid = tgsis.insert_feature(gconn, "bodies", block)
     kind, srid, faces, closed = gconn.execute(
         "SELECT ST_GeometryType(g), ST_SRID(g), ST_NumGeometries(g), ST_IsClosed(g) "
-        "FROM tgsis.postgis_geometry('bodies', %s) g", (fid,)).fetchone()  # type: ignore[misc]
-    assert (kind, srid, faces, closed) == ("ST_PolyhedralSurface", 32632, 12, True)   # 6 squares, 2 triangles each
+        "FROM tgsis.postgis_geometry('bodies', %s) g",
+        (fid,),
+    ).fetchone()  # type: ignore[misc]
+    assert (kind, srid, faces, closed) == ("ST_PolyhedralSurface", 32632, 12, True)  # 6 squares, 2 triangles each
     boundary = mesh_from_wkb(_one(gconn, "SELECT tgsis.postgis_geometry('bodies', %s)", (fid,)))
     assert isinstance(boundary, tgsis.Surface) and len(boundary.vertices) == 8
-    assert _signed_volume(boundary) == pytest.approx(1.0)      # outward faces enclose +1; inward would be -1
+    assert _signed_volume(boundary) == pytest.approx(1.0)  # outward faces enclose +1; inward would be -1
     assert bytes(tgsis.fetch_ewkb(gconn, "bodies", fid) or b"") == mesh_to_ewkb(block, 32632)
     inside = "ST_GeomFromText('POINT Z (500.5 600.5 -49.5)', 32632)"
     assert _one(gconn, f"SELECT ST_3DDistance(tgsis.postgis_geometry('bodies', {fid}), {inside})") == pytest.approx(0.5)
@@ -209,8 +227,10 @@ def test_lines_points_and_collections_become_their_postgis_types(gconn: Conn) ->
     text = "SELECT ST_AsText(tgsis.postgis_geometry(%s, %s))"
     assert _one(gconn, text, ("traces", lid)) == "MULTILINESTRING Z ((0 0 0,1 0 0),(1 0 0,1 1 2))"
     assert _one(gconn, text, ("picks", pid)) == "MULTIPOINT Z ((5 5 5),(6 6 6.25))"
-    kinds = gconn.execute("SELECT ST_GeometryType((d).geom), ST_SRID((d).geom) "
-                          "FROM ST_Dump(tgsis.postgis_geometry('groups', %s)) d", (gid,)).fetchall()
+    kinds = gconn.execute(
+        "SELECT ST_GeometryType((d).geom), ST_SRID((d).geom) FROM ST_Dump(tgsis.postgis_geometry('groups', %s)) d",
+        (gid,),
+    ).fetchall()
     assert kinds == [("ST_LineString", 32611)] * 2 + [("ST_Point", 32611)] * 2 + [("ST_Triangle", 32611)] * 2
     assert _one(gconn, "SELECT GeometryType(tgsis.postgis_geometry('groups', %s))", (gid,)) == "GEOMETRYCOLLECTION"
 
@@ -221,14 +241,20 @@ def test_the_shape_at_t_is_the_snapshot_python_computes(gconn: Conn) -> None:
     tgsis.create_feature_class(gconn, "steps", "SURFACE", time_model="INSTANTS", srs=32611)
     mid = tgsis.insert_feature(gconn, "moving", evolving(rng, [-10.0, -5.0]))
     sid = tgsis.insert_feature(gconn, "steps", series(rng, [0.0, 1.0, 2.0]))
-    for class_name, fid, t in [("moving", mid, -7.25), ("moving", mid, -5.0), ("moving", mid, -4.5),
-                               ("steps", sid, 0.5), ("steps", sid, 2.0)]:
+    for class_name, fid, t in [
+        ("moving", mid, -7.25),
+        ("moving", mid, -5.0),
+        ("moving", mid, -4.5),
+        ("steps", sid, 0.5),
+        ("steps", sid, 2.0),
+    ]:
         shape = tgsis.get_at(gconn, fid, t)
         assert shape is not None
         geom = _one(gconn, "SELECT ST_AsEWKB(tgsis.postgis_geometry_at(%s, %s, %s), 'XDR')", (class_name, fid, t))
         assert bytes(geom) == mesh_to_ewkb(shape, 32611), (class_name, t)
-        assert _one(gconn, "SELECT ST_NumGeometries(tgsis.postgis_geometry_at(%s, %s, %s))",
-                    (class_name, fid, t)) == len(shape.cells)
+        assert _one(
+            gconn, "SELECT ST_NumGeometries(tgsis.postgis_geometry_at(%s, %s, %s))", (class_name, fid, t)
+        ) == len(shape.cells)
     # outside its life a feature has no geometry: NULL, as get_at gives None
     assert _one(gconn, "SELECT tgsis.postgis_geometry_at('moving', %s, -11)", (mid,)) is None
     assert _one(gconn, "SELECT tgsis.postgis_geometry_at('moving', %s, 99)", (mid,)) is None
@@ -279,11 +305,14 @@ def test_the_class_view_is_a_postgis_layer_and_follows_versions(gconn: Conn) -> 
     b = tgsis.insert_feature(gconn, "faults", flat_grid(3, 10.0), {"release": "6.1"})
     assert tgsis.create_postgis_view(gconn, "faults") == "faults_postgis"
     # what QGIS reads to list a layer: type, SRID and dimension of the column
-    assert gconn.execute("SELECT type, srid, coord_dimension FROM geometry_columns "
-                         "WHERE f_table_name = 'faults_postgis' AND f_geometry_column = 'geom'").fetchall() \
-        == [("TIN", 32611, 3)]
-    rows = gconn.execute("SELECT _geoid, release, ST_3DDistance(geom, ST_GeomFromText('POINT Z (1 1 4)', 32611)) "
-                         "FROM faults_postgis ORDER BY _geoid").fetchall()
+    assert gconn.execute(
+        "SELECT type, srid, coord_dimension FROM geometry_columns "
+        "WHERE f_table_name = 'faults_postgis' AND f_geometry_column = 'geom'"
+    ).fetchall() == [("TIN", 32611, 3)]
+    rows = gconn.execute(
+        "SELECT _geoid, release, ST_3DDistance(geom, ST_GeomFromText('POINT Z (1 1 4)', 32611)) "
+        "FROM faults_postgis ORDER BY _geoid"
+    ).fetchall()
     assert rows == [(a, "5.3", pytest.approx(4.0)), (b, "6.1", pytest.approx(6.0))]
     assert "tgsis PostGIS view" in _one(gconn, "SELECT obj_description('faults_postgis'::regclass)")
     # feature versioning replaces the feature table by a view: the layer shows each version's rows
@@ -296,8 +325,9 @@ def test_the_class_view_is_a_postgis_layer_and_follows_versions(gconn: Conn) -> 
     # an edit of the class re-creates the layer with the new columns
     tgsis.add_property(gconn, "faults", ("basin", "text"), kind="feature", default="Mojave")
     tgsis.rename_property(gconn, "faults", "release", "release_ma")
-    assert gconn.execute("SELECT _geoid, release_ma, basin, ST_ZMax(geom) FROM faults_postgis ORDER BY _geoid"
-                         ).fetchall() == [(a, "5.3", "Mojave", 0.0), (b, "6.1", "Mojave", 10.0)]
+    assert gconn.execute(
+        "SELECT _geoid, release_ma, basin, ST_ZMax(geom) FROM faults_postgis ORDER BY _geoid"
+    ).fetchall() == [(a, "5.3", "Mojave", 0.0), (b, "6.1", "Mojave", 10.0)]
     assert "tgsis PostGIS view" in _one(gconn, "SELECT obj_description('faults_postgis'::regclass)")
     # created again (e.g. after a class change) it replaces itself; a foreign relation of that name is kept
     tgsis.create_postgis_view(gconn, "faults")
@@ -318,8 +348,9 @@ def test_a_temporal_class_view_has_a_row_per_instant(gconn: Conn) -> None:
     surface = evolving(rng, [-10.0, -5.0])
     fid = tgsis.insert_feature(gconn, "moving", surface)
     tgsis.create_postgis_view(gconn, "moving")
-    rows = gconn.execute("SELECT _t, ST_AsEWKB(geom, 'XDR') FROM moving_postgis WHERE _geoid = %s ORDER BY _t",
-                         (fid,)).fetchall()
+    rows = gconn.execute(
+        "SELECT _t, ST_AsEWKB(geom, 'XDR') FROM moving_postgis WHERE _geoid = %s ORDER BY _t", (fid,)
+    ).fetchall()
     instants = [t for t, _ in tgsis.instants(gconn, fid)]
     assert [r[0] for r in rows] == instants
     for t, geom in rows:
@@ -334,41 +365,59 @@ def test_postgis_geometries_are_stored_as_features_in_sql(gconn: Conn) -> None:
     tgsis.create_feature_class(gconn, "faults", "SURFACE", feature_properties={"release": "text"}, srs=32611)
     tgsis.create_feature_class(gconn, "traces", "MULTILINESTRING", srs=32611)
     tin = "TIN Z (((0 0 0,1 0 0,0 1 0.5,0 0 0)),((1 0 0,1 1 1,0 1 0.5,1 0 0)))"
-    fid = _one(gconn, "SELECT tgsis.insert_postgis_feature('faults', ST_GeomFromText(%s, 32611), "
-                      "'{\"release\": \"7\"}', 'imported')", (tin,))
+    fid = _one(
+        gconn,
+        "SELECT tgsis.insert_postgis_feature('faults', ST_GeomFromText(%s, 32611), '{\"release\": \"7\"}', 'imported')",
+        (tin,),
+    )
     assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('faults', %s))", (fid,)) == tin
     feature = tgsis.fetch_feature(gconn, "faults", fid)
     assert feature.properties["release"] == "7" and feature.mesh.name == "imported"
-    assert len(feature.mesh.vertices) == 4                  # shared corners are one vertex
+    assert len(feature.mesh.vertices) == 4  # shared corners are one vertex
     assert _one(gconn, "SELECT nvrtx FROM tgsis.geometry WHERE geoid = %s", (fid,)) == 4
     assert tgsis.features_in_box(gconn, "faults", [[0, 0, 0], [1, 1, 1]]) == [fid]
     # a polyhedral surface with a quad face: the quad is two triangles
     quad = "POLYHEDRALSURFACE Z (((0 0 5,1 0 5,1 1 5,0 1 5,0 0 5)))"
     qid = _one(gconn, "SELECT tgsis.insert_postgis_feature('faults', %s::geometry)", (quad,))
-    assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('faults', %s))", (qid,)) \
+    assert (
+        _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('faults', %s))", (qid,))
         == "TIN Z (((0 0 5,1 0 5,1 1 5,0 0 5)),((0 0 5,1 1 5,0 1 5,0 0 5)))"
+    )
     line = "MULTILINESTRING Z ((0 0 0,1 0 0,1 1 1),(5 5 5,6 6 6))"
     lid = _one(gconn, "SELECT tgsis.insert_postgis_feature('traces', %s::geometry)", (line,))
-    assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('traces', %s))", (lid,)) \
+    assert (
+        _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('traces', %s))", (lid,))
         == "MULTILINESTRING Z ((0 0 0,1 0 0),(1 0 0,1 1 1),(5 5 5,6 6 6))"
-    mesh = gconn.execute("SELECT geotype, vertices, cells FROM tgsis.mesh_from_postgis(%s::geometry)", (line,)).fetchone()
-    assert mesh == ("MULTILINESTRING", [[0, 0, 0], [1, 0, 0], [1, 1, 1], [5, 5, 5], [6, 6, 6]],
-                    [[0, 1], [1, 2], [3, 4]])
+    )
+    mesh = gconn.execute(
+        "SELECT geotype, vertices, cells FROM tgsis.mesh_from_postgis(%s::geometry)", (line,)
+    ).fetchone()
+    assert mesh == (
+        "MULTILINESTRING",
+        [[0, 0, 0], [1, 0, 0], [1, 1, 1], [5, 5, 5], [6, 6, 6]],
+        [[0, 1], [1, 2], [3, 4]],
+    )
 
 
 def test_python_and_sql_read_a_postgis_geometry_alike(gconn: Conn) -> None:
     rng = np.random.default_rng(5)
     surface = _random_surface(rng, 9)
-    cases = [mesh_to_ewkb(surface, 32611).hex(),                                      # regular: one numpy step
-             _one(gconn, "SELECT ST_GeomFromText('POLYHEDRALSURFACE Z (((0 0 0,2 0 0,2 2 0,0 2 0,0 0 0)),"
-                         "((0 0 0,0 2 0,-1 3 1,-2 1 1,-1 -1 1,0 0 0)),((2 0 0,2 2 0,3 1 2,2 0 0)))')"),  # faces of 4, 5, 3
-             _one(gconn, "SELECT 'MULTILINESTRING Z ((0 0 0,1 0 0,1 1 1),(1 1 1,5 5 5))'::geometry"),
-             _one(gconn, "SELECT 'POINT Z (1 2 3)'::geometry"),
-             _one(gconn, "SELECT 'TRIANGLE Z ((0 0 0,1 0 0,0 1 1,0 0 0))'::geometry")]
+    cases = [
+        mesh_to_ewkb(surface, 32611).hex(),  # regular: one numpy step
+        _one(
+            gconn,
+            "SELECT ST_GeomFromText('POLYHEDRALSURFACE Z (((0 0 0,2 0 0,2 2 0,0 2 0,0 0 0)),"
+            "((0 0 0,0 2 0,-1 3 1,-2 1 1,-1 -1 1,0 0 0)),((2 0 0,2 2 0,3 1 2,2 0 0)))')",
+        ),  # faces of 4, 5, 3
+        _one(gconn, "SELECT 'MULTILINESTRING Z ((0 0 0,1 0 0,1 1 1),(1 1 1,5 5 5))'::geometry"),
+        _one(gconn, "SELECT 'POINT Z (1 2 3)'::geometry"),
+        _one(gconn, "SELECT 'TRIANGLE Z ((0 0 0,1 0 0,0 1 1,0 0 0))'::geometry"),
+    ]
     for case in cases:
         mesh = mesh_from_wkb(case)
         geotype, vertices, cells = gconn.execute(
-            "SELECT geotype, vertices, cells FROM tgsis.mesh_from_postgis(%s::geometry)", (case,)).fetchone()  # type: ignore[misc]
+            "SELECT geotype, vertices, cells FROM tgsis.mesh_from_postgis(%s::geometry)", (case,)
+        ).fetchone()  # type: ignore[misc]
         assert mesh.geotype.value == geotype
         assert np.array_equal(mesh.vertices, np.array(vertices)), geotype
         assert np.array_equal(mesh.cells, np.array(cells)), geotype
@@ -389,24 +438,31 @@ def test_reading_a_large_tin_in_sql_takes_linear_time(gconn: Conn) -> None:
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     surface = tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
     gconn.execute("SET statement_timeout = '120s'")  # the connection is this test's (autocommit)
-    cells = _one(gconn, "SELECT array_length(cells, 1) FROM tgsis.mesh_from_postgis(%s::bytea::geometry)",
-                 (mesh_to_ewkb(surface, 0),))
+    cells = _one(
+        gconn,
+        "SELECT array_length(cells, 1) FROM tgsis.mesh_from_postgis(%s::bytea::geometry)",
+        (mesh_to_ewkb(surface, 0),),
+    )
     assert cells == len(surface.cells) == 12482
     gconn.execute("RESET statement_timeout")
 
 
 def test_every_geotype_gets_its_layer_type(gconn: Conn) -> None:
-    classes = {"bodies": ("MULTITETRA", _tetra_block(), "POLYHEDRALSURFACE"),
-               "traces": ("MULTILINESTRING", tgsis.LineSet([[0, 0, 0], [1, 0, 0]], [[0, 1]]), "MULTILINESTRING"),
-               "picks": ("MULTIPOINT", tgsis.PointSet([[5, 5, 5]]), "MULTIPOINT"),
-               "groups": ("GEOMETRYCOLLECTION", tgsis.GeometryCollection([tgsis.PointSet([[5, 5, 5]])]),
-                          "GEOMETRYCOLLECTION")}
+    classes = {
+        "bodies": ("MULTITETRA", _tetra_block(), "POLYHEDRALSURFACE"),
+        "traces": ("MULTILINESTRING", tgsis.LineSet([[0, 0, 0], [1, 0, 0]], [[0, 1]]), "MULTILINESTRING"),
+        "picks": ("MULTIPOINT", tgsis.PointSet([[5, 5, 5]]), "MULTIPOINT"),
+        "groups": ("GEOMETRYCOLLECTION", tgsis.GeometryCollection([tgsis.PointSet([[5, 5, 5]])]), "GEOMETRYCOLLECTION"),
+    }
     for name, (geotype, mesh, _) in classes.items():
         tgsis.create_feature_class(gconn, name, geotype, srs=3857)
         tgsis.insert_feature(gconn, name, mesh)
         tgsis.create_postgis_view(gconn, name)
-    found = dict(gconn.execute("SELECT f_table_name, type FROM geometry_columns WHERE srid = 3857 "
-                               "AND coord_dimension = 3").fetchall())
+    found = dict(
+        gconn.execute(
+            "SELECT f_table_name, type FROM geometry_columns WHERE srid = 3857 AND coord_dimension = 3"
+        ).fetchall()
+    )
     assert found == {f"{name}_postgis": kind for name, (_, _, kind) in classes.items()}
     for name in classes:
         assert _one(gconn, f"SELECT count(geom) FROM {name}_postgis") == 1
@@ -417,9 +473,11 @@ def test_a_postgis_feature_stored_in_a_version_stays_there(gconn: Conn) -> None:
     tgsis.enable_feature_versioning(gconn)
     tgsis.create_version(gconn, "draft")
     with tgsis.in_version(gconn, "draft"):
-        fid = _one(gconn, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)")
+        fid = _one(
+            gconn, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)"
+        )
         assert _one(gconn, "SELECT ST_NPoints(tgsis.postgis_geometry('faults', %s))", (fid,)) == 4
-    with pytest.raises(tgsis.NotFoundError):          # DEFAULT does not see it
+    with pytest.raises(tgsis.NotFoundError):  # DEFAULT does not see it
         _one(gconn, "SELECT tgsis.postgis_geometry('faults', %s)", (fid,))
 
 
@@ -450,21 +508,34 @@ INSERT INTO tgsis.installation (version, method) VALUES ('0.1.1', 'sql');
         tgsis.install(conn, method="sql", sources=old)
         tgsis.enable_postgis(conn)
         assert tgsis.install(conn, sources=new).action == "upgraded"
-        assert _one(conn, "SELECT to_regprocedure('tgsis.postgis_geometry_at(text, bigint, double precision, text)')"
-                          " IS NOT NULL") is True
+        assert (
+            _one(
+                conn,
+                "SELECT to_regprocedure('tgsis.postgis_geometry_at(text, bigint, double precision, text)') IS NOT NULL",
+            )
+            is True
+        )
 
 
-@pytest.mark.parametrize("geom, error, words", [
-    ("'TIN (((0 0,1 0,0 1,0 0)))'::geometry", tgsis.InvalidGeometryError, "not x, y, z"),
-    ("'POLYGON Z ((0 0 0,9 0 0,0 9 0,0 0 0),(1 1 0,2 1 0,1 2 0,1 1 0))'::geometry", tgsis.InvalidGeometryError, "holes"),
-    ("'TIN Z (((0 0 0,0 0 0,0 1 0,0 0 0)))'::geometry", tgsis.InvalidGeometryError, "repeats a vertex"),
-    ("'TIN Z EMPTY'::geometry", tgsis.InvalidGeometryError, "empty"),
-    ("'MULTIPOINT Z ((0 0 0))'::geometry", tgsis.InvalidInputError, "holds SURFACE features"),
-    ("'GEOMETRYCOLLECTION Z (POINT Z (0 0 0))'::geometry", tgsis.InvalidGeometryError, "no tgsis geotype"),
-    ("'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::text", tgsis.InvalidInputError, "is not a PostGIS geometry"),
-])
-def test_a_geometry_tgsis_cannot_store_is_refused_and_nothing_is_written(gconn: Conn, geom: str, error: type,
-                                                                         words: str) -> None:
+@pytest.mark.parametrize(
+    "geom, error, words",
+    [
+        ("'TIN (((0 0,1 0,0 1,0 0)))'::geometry", tgsis.InvalidGeometryError, "not x, y, z"),
+        (
+            "'POLYGON Z ((0 0 0,9 0 0,0 9 0,0 0 0),(1 1 0,2 1 0,1 2 0,1 1 0))'::geometry",
+            tgsis.InvalidGeometryError,
+            "holes",
+        ),
+        ("'TIN Z (((0 0 0,0 0 0,0 1 0,0 0 0)))'::geometry", tgsis.InvalidGeometryError, "repeats a vertex"),
+        ("'TIN Z EMPTY'::geometry", tgsis.InvalidGeometryError, "empty"),
+        ("'MULTIPOINT Z ((0 0 0))'::geometry", tgsis.InvalidInputError, "holds SURFACE features"),
+        ("'GEOMETRYCOLLECTION Z (POINT Z (0 0 0))'::geometry", tgsis.InvalidGeometryError, "no tgsis geotype"),
+        ("'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::text", tgsis.InvalidInputError, "is not a PostGIS geometry"),
+    ],
+)
+def test_a_geometry_tgsis_cannot_store_is_refused_and_nothing_is_written(
+    gconn: Conn, geom: str, error: type, words: str
+) -> None:
     tgsis.create_feature_class(gconn, "faults", "SURFACE", feature_properties={"release": "text"})
     with pytest.raises(error, match=words):
         _one(gconn, f"SELECT tgsis.insert_postgis_feature('faults', {geom})")  # type: ignore[arg-type]
@@ -490,15 +561,20 @@ def test_properties_and_classes_a_geometry_cannot_fill_are_refused(gconn: Conn) 
 def test_postgis_geometries_are_read_and_stored_from_python(gconn: Conn) -> None:
     tgsis.create_feature_class(gconn, "faults", "SURFACE", feature_properties={"release": "text"}, srs=32611)
     # what psycopg hands over for a geometry column: hex EWKB text
-    hexed = _one(gconn, "SELECT ST_GeomFromText('POLYHEDRALSURFACE Z (((0 0 0,1 0 0,1 1 0,0 1 0,0 0 0)),"
-                        "((0 0 0,0 1 0,0 0 1,0 0 0)))', 32611)")
+    hexed = _one(
+        gconn,
+        "SELECT ST_GeomFromText('POLYHEDRALSURFACE Z (((0 0 0,1 0 0,1 1 0,0 1 0,0 0 0)),"
+        "((0 0 0,0 1 0,0 0 1,0 0 0)))', 32611)",
+    )
     assert isinstance(hexed, str)
     mesh = mesh_from_wkb(hexed)
     assert isinstance(mesh, tgsis.Surface) and mesh.metadata["srid"] == 32611
     assert mesh.cells.tolist() == [[0, 1, 2], [0, 2, 3], [0, 3, 4]]
     fid = tgsis.insert_wkb_feature(gconn, "faults", hexed, {"release": "x"}, name="from postgis")
-    assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('faults', %s))", (fid,)) \
+    assert (
+        _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('faults', %s))", (fid,))
         == "TIN Z (((0 0 0,1 0 0,1 1 0,0 0 0)),((0 0 0,1 1 0,0 1 0,0 0 0)),((0 0 0,0 1 0,0 0 1,0 0 0)))"
+    )
     # little-endian ISO WKB (ST_AsBinary) reads the same
     iso = bytes(_one(gconn, "SELECT ST_AsBinary(tgsis.postgis_geometry('faults', %s), 'NDR')", (fid,)))
     again = mesh_from_wkb(iso)
@@ -507,13 +583,16 @@ def test_postgis_geometries_are_read_and_stored_from_python(gconn: Conn) -> None
     assert isinstance(lines, tgsis.LineSet) and lines.cells.tolist() == [[0, 1], [1, 2]]
 
 
-@pytest.mark.parametrize("data, words", [
-    ("00000000", "ends at byte 4"),
-    ("zz", "not hex-encoded"),
-    ("0300000001", "not a byte order"),
-    ("0101000000" + "00" * 16, "no z coordinates"),
-    ("01" + struct.pack("<I", 1008).hex() + "00000000", "type 8 is none"),
-])
+@pytest.mark.parametrize(
+    "data, words",
+    [
+        ("00000000", "ends at byte 4"),
+        ("zz", "not hex-encoded"),
+        ("0300000001", "not a byte order"),
+        ("0101000000" + "00" * 16, "no z coordinates"),
+        ("01" + struct.pack("<I", 1008).hex() + "00000000", "type 8 is none"),
+    ],
+)
 def test_python_refuses_wkb_it_cannot_read(data: str, words: str) -> None:
     with pytest.raises(tgsis.InvalidInputError, match=words):
         mesh_from_wkb(data)
@@ -553,12 +632,20 @@ def test_postgis_before_tgsis_and_the_extension_route(gis: GisServer) -> None:
         fid = tgsis.insert_feature(conn, "faults", flat_grid(3, 0.0))
         assert _one(conn, "SELECT ST_NPoints(tgsis.postgis_geometry('faults', %s))", (fid,)) == 8 * 4
         # the wrappers are no extension members (a restore's CREATE EXTENSION would not make them)
-        assert _one(conn, "SELECT count(*) FROM pg_depend WHERE refclassid = 'pg_extension'::regclass "
-                          "AND objid = 'tgsis.postgis_geometry(text, bigint)'::regprocedure") == 0
+        assert (
+            _one(
+                conn,
+                "SELECT count(*) FROM pg_depend WHERE refclassid = 'pg_extension'::regclass "
+                "AND objid = 'tgsis.postgis_geometry(text, bigint)'::regprocedure",
+            )
+            == 0
+        )
         # PostGIS in a schema of its own works too (the wrappers follow it when enabled again)
         conn.execute("CREATE SCHEMA gis")
-        conn.execute("DROP FUNCTION tgsis.postgis_geometry(text, bigint), "
-                     "tgsis.postgis_geometry_at(text, bigint, double precision, text)")
+        conn.execute(
+            "DROP FUNCTION tgsis.postgis_geometry(text, bigint), "
+            "tgsis.postgis_geometry_at(text, bigint, double precision, text)"
+        )
         conn.execute("DROP EXTENSION postgis")
         conn.execute("CREATE EXTENSION postgis SCHEMA gis")
         assert tgsis.enable_postgis(conn) == "gis"
@@ -584,9 +671,14 @@ def test_readers_read_editors_import_admins_enable(gis: GisServer) -> None:
             assert _one(rita, "SELECT ST_NPoints(geom) FROM faults_postgis WHERE _geoid = %s", (fid,)) == 32
             assert _one(rita, "SELECT ST_SRID(tgsis.postgis_geometry('faults', %s))", (fid,)) == 32611
             with pytest.raises(tgsis.MissingPrivilegeError):
-                _one(rita, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)")
+                _one(
+                    rita,
+                    "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)",
+                )
             rita.rollback()
-            new = _one(ed, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)")
+            new = _one(
+                ed, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)"
+            )
             ed.commit()
             assert _one(rita, "SELECT count(*) FROM faults_postgis") == 2 and new > fid
 
@@ -604,8 +696,9 @@ def test_a_view_another_role_made_to_look_like_the_layer_is_neither_replaced_nor
             with pytest.raises(tgsis.AlreadyExistsError, match="not the PostGIS view of class wells"):
                 tgsis.create_postgis_view(admin, "wells")
             tgsis.drop_feature_class(admin, "wells", force=True)
-            assert _one(admin, "SELECT pg_get_userbyid(relowner) FROM pg_class WHERE oid = 'wells_postgis'::regclass") \
-                == roles.name("eve")
+            assert _one(
+                admin, "SELECT pg_get_userbyid(relowner) FROM pg_class WHERE oid = 'wells_postgis'::regclass"
+            ) == roles.name("eve")
             eve.execute("DROP VIEW wells_postgis")
             eve.commit()
             admin.execute(f"REVOKE CREATE ON SCHEMA public FROM {roles.name('eve')}")
@@ -626,20 +719,24 @@ def test_psql_with_tgsis_first_in_the_search_path_uses_postgis_types(gis: GisSer
         return subprocess.run(args, capture_output=True, text=True, check=False)
 
     # the documented session (docs/postgis.md): PostGIS's schema first, then tgsis: both names work unqualified
-    done = psql("SET search_path = public, tgsis",
-                "SELECT ST_AsText('POINT Z (1 2 3)'::geometry)",
-                "SELECT count(*) FROM geometry",
-                f"SELECT ST_3DDistance(postgis_geometry('faults', {fid}), ST_SetSRID('POINT Z (1 1 3)'::geometry, 32611))",
-                "CREATE TEMP TABLE wells (trace geometry(LineStringZ, 32611))")
+    done = psql(
+        "SET search_path = public, tgsis",
+        "SELECT ST_AsText('POINT Z (1 2 3)'::geometry)",
+        "SELECT count(*) FROM geometry",
+        f"SELECT ST_3DDistance(postgis_geometry('faults', {fid}), ST_SetSRID('POINT Z (1 1 3)'::geometry, 32611))",
+        "CREATE TEMP TABLE wells (trace geometry(LineStringZ, 32611))",
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["POINT", "Z", "(1", "2", "3)", "1", "3"]
     # tgsis first: the bare type name is tgsis.geometry's row type (PostgreSQL allows no other), PostGIS's is
     # public.geometry; everything else of both works unqualified
-    done = psql("SET search_path = tgsis, public",
-                "SELECT ST_AsText('POINT Z (1 2 3)'::public.geometry)",
-                "SELECT ST_AsText(ST_GeomFromText('POINT Z (1 2 3)'))",
-                f"SELECT ST_3DDistance(postgis_geometry('faults', {fid}), 'SRID=32611;POINT Z (1 1 3)'::public.geometry)",
-                "SELECT count(*) FROM geometry")
+    done = psql(
+        "SET search_path = tgsis, public",
+        "SELECT ST_AsText('POINT Z (1 2 3)'::public.geometry)",
+        "SELECT ST_AsText(ST_GeomFromText('POINT Z (1 2 3)'))",
+        f"SELECT ST_3DDistance(postgis_geometry('faults', {fid}), 'SRID=32611;POINT Z (1 1 3)'::public.geometry)",
+        "SELECT count(*) FROM geometry",
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["POINT", "Z", "(1", "2", "3)", "POINT", "Z", "(1", "2", "3)", "3", "1"]
     tripped = psql("SET search_path = tgsis, public", "SELECT 'POINT Z (1 2 3)'::geometry")
@@ -651,15 +748,16 @@ def test_psql_with_tgsis_first_in_the_search_path_uses_postgis_types(gis: GisSer
 
 @pytest.mark.parametrize("route", ["sql", "extension"])
 @pytest.mark.parametrize("fmt", ["plain", "custom"])
-def test_dump_and_restore_keep_the_postgis_functions_and_views(gis: GisServer, route: str, fmt: str,
-                                                               tmp_path: Path) -> None:
+def test_dump_and_restore_keep_the_postgis_functions_and_views(
+    gis: GisServer, route: str, fmt: str, tmp_path: Path
+) -> None:
     if route == "extension":
         reason = gis.extension_files()
         if reason is not None:
             pytest.fail(reason, pytrace=False)
     with gis.database("template0") as dsn, psycopg.connect(dsn, autocommit=True) as conn:
-        tgsis.install(conn, method=route)                       # type: ignore[arg-type]
-        conn.execute("CREATE EXTENSION postgis")                # after tgsis
+        tgsis.install(conn, method=route)  # type: ignore[arg-type]
+        conn.execute("CREATE EXTENSION postgis")  # after tgsis
         tgsis.enable_postgis(conn)
         tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties={"release": "text"}, srs=32611)
         tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", srs=32611)
@@ -668,11 +766,17 @@ def test_dump_and_restore_keep_the_postgis_functions_and_views(gis: GisServer, r
         tgsis.create_postgis_view(conn, "faults")
         tgsis.create_postgis_view(conn, "moving")
         tgsis.enable_feature_versioning(conn)
-        before = conn.execute("SELECT _geoid, ST_AsEWKB(geom) FROM faults_postgis UNION ALL "
-                              "SELECT _geoid, ST_AsEWKB(geom) FROM moving_postgis ORDER BY 1, 2").fetchall()
+        before = conn.execute(
+            "SELECT _geoid, ST_AsEWKB(geom) FROM faults_postgis UNION ALL "
+            "SELECT _geoid, ST_AsEWKB(geom) FROM moving_postgis ORDER BY 1, 2"
+        ).fetchall()
         dump = tmp_path / f"dump.{fmt}"
-        out = subprocess.run([str(gis.bindir / "pg_dump"), f"--format={fmt}", f"--file={dump}", dsn],
-                             capture_output=True, text=True, check=False)
+        out = subprocess.run(
+            [str(gis.bindir / "pg_dump"), f"--format={fmt}", f"--file={dump}", dsn],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
         assert out.returncode == 0, out.stderr
     with gis.database("template0") as restored:
         if fmt == "plain":
@@ -682,17 +786,27 @@ def test_dump_and_restore_keep_the_postgis_functions_and_views(gis: GisServer, r
         out = subprocess.run(args, capture_output=True, text=True, check=False)
         assert out.returncode == 0 and "ERROR" not in out.stderr, out.stderr
         with psycopg.connect(restored, autocommit=True) as conn:
-            after = conn.execute("SELECT _geoid, ST_AsEWKB(geom) FROM faults_postgis UNION ALL "
-                                 "SELECT _geoid, ST_AsEWKB(geom) FROM moving_postgis ORDER BY 1, 2").fetchall()
+            after = conn.execute(
+                "SELECT _geoid, ST_AsEWKB(geom) FROM faults_postgis UNION ALL "
+                "SELECT _geoid, ST_AsEWKB(geom) FROM moving_postgis ORDER BY 1, 2"
+            ).fetchall()
             assert after == before and len(after) > 2
             assert _one(conn, "SELECT ST_SRID(tgsis.postgis_geometry_at('moving', %s, 0.5))", (mid,)) == 32611
             assert _one(conn, "SELECT ST_NPoints(tgsis.postgis_geometry('faults', %s))", (fid,)) > 0
             assert tgsis.postgis_enabled(conn)
             # and it goes on: a new feature through SQL, seen by the layer
-            new = _one(conn, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)")
+            new = _one(
+                conn, "SELECT tgsis.insert_postgis_feature('faults', 'TIN Z (((0 0 0,1 0 0,0 1 0,0 0 0)))'::geometry)"
+            )
             assert _one(conn, "SELECT count(*) FROM faults_postgis WHERE _geoid = %s", (new,)) == 1
-            assert math.isfinite(_one(conn, "SELECT ST_3DDistance(a.geom, b.geom) FROM faults_postgis a, faults_postgis b "
-                                            "WHERE a._geoid = %s AND b._geoid = %s", (fid, new)))
+            assert math.isfinite(
+                _one(
+                    conn,
+                    "SELECT ST_3DDistance(a.geom, b.geom) FROM faults_postgis a, faults_postgis b "
+                    "WHERE a._geoid = %s AND b._geoid = %s",
+                    (fid, new),
+                )
+            )
 
 
 def test_a_dump_without_postgis_restores_where_there_is_none(gis: GisServer, tmp_path: Path) -> None:
@@ -705,12 +819,15 @@ def test_a_dump_without_postgis_restores_where_there_is_none(gis: GisServer, tmp
         assert out.returncode == 0, out.stderr
         assert "CREATE EXTENSION IF NOT EXISTS postgis" not in dump.read_text(encoding="utf-8")
     with gis.database("template0") as restored:
-        out = subprocess.run([str(gis.bindir / "psql"), "-X", "-q", "-v", "ON_ERROR_STOP=1", "-d", restored,
-                              "-f", str(dump)], capture_output=True, text=True)
+        out = subprocess.run(
+            [str(gis.bindir / "psql"), "-X", "-q", "-v", "ON_ERROR_STOP=1", "-d", restored, "-f", str(dump)],
+            capture_output=True,
+            text=True,
+        )
         assert out.returncode == 0, out.stderr
         with psycopg.connect(restored, autocommit=True) as conn:
             assert _one(conn, "SELECT count(*) FROM pg_extension WHERE extname = 'postgis'") == 0
             assert tgsis.fetch_ewkb(conn, "faults", fid) == mesh_to_ewkb(flat_grid(3, 0.0), 32611)
-            conn.execute("CREATE EXTENSION postgis")             # PostGIS later, on the restored database
+            conn.execute("CREATE EXTENSION postgis")  # PostGIS later, on the restored database
             tgsis.enable_postgis(conn)
             assert _one(conn, "SELECT ST_NPoints(tgsis.postgis_geometry('faults', %s))", (fid,)) == 32

@@ -23,8 +23,11 @@ from tgsis.mesh import Mesh, Surface
 
 Conn = psycopg.Connection[Any]
 
-PROPERTIES = [("porosity", "double precision"), F.Property("Facies", "integer", alignment="CELL"),
-              F.Property("normal", "real", 3, "CELL")]
+PROPERTIES = [
+    ("porosity", "double precision"),
+    F.Property("Facies", "integer", alignment="CELL"),
+    F.Property("normal", "real", 3, "CELL"),
+]
 
 
 def _surface(z: float = 0.0) -> Surface:
@@ -34,11 +37,17 @@ def _surface(z: float = 0.0) -> Surface:
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     triangles = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
     m = len(triangles)
-    return Surface(vertices, triangles, name=f"s{z}",
-                   vertex_properties={"porosity": np.linspace(0.1, 0.3, 16)},
-                   cell_properties={"Facies": np.arange(m, dtype=np.int32) % 3,
-                                    "normal": np.tile(np.array([0, 0, 1], dtype=np.float32), (m, 1)),
-                                    "part": np.repeat([0, 1], [9, m - 9])})
+    return Surface(
+        vertices,
+        triangles,
+        name=f"s{z}",
+        vertex_properties={"porosity": np.linspace(0.1, 0.3, 16)},
+        cell_properties={
+            "Facies": np.arange(m, dtype=np.int32) % 3,
+            "normal": np.tile(np.array([0, 0, 1], dtype=np.float32), (m, 1)),
+            "part": np.repeat([0, 1], [9, m - 9]),
+        },
+    )
 
 
 @pytest.fixture
@@ -52,27 +61,43 @@ def test_a_vertex_class_with_cell_properties(conn: Conn, horizons: F.FeatureClas
     assert horizons.alignment == "VERTEX" and horizons.otherprotable == "horizons_simplexpros"
     assert [horizons.alignment_of(p) for p in horizons.cell_properties] == ["VERTEX", "CELL", "CELL"]
     row = conn.execute("SELECT cell_properties FROM tgsis.catalog WHERE classname = 'horizons'").fetchone()
-    assert row is not None and row[0] == [{"name": "porosity", "type": "double precision"},
-                                          {"name": "Facies", "type": "integer", "alignment": "CELL"},
-                                          {"name": "normal", "type": "real", "size": 3, "alignment": "CELL"}]
-    columns = {t: [r[0] for r in conn.execute("SELECT attname FROM pg_attribute WHERE attrelid = %s::regclass "
-                                              "AND attnum > 0 ORDER BY attnum", (t,))]
-               for t in ("horizons_cellpros", "horizons_simplexpros")}
-    assert columns == {"horizons_cellpros": ["_geoid", "_idx", "porosity"],
-                       "horizons_simplexpros": ["_geoid", "_idx", "Facies", "normal"]}
+    assert row is not None and row[0] == [
+        {"name": "porosity", "type": "double precision"},
+        {"name": "Facies", "type": "integer", "alignment": "CELL"},
+        {"name": "normal", "type": "real", "size": 3, "alignment": "CELL"},
+    ]
+    columns = {
+        t: [
+            r[0]
+            for r in conn.execute(
+                "SELECT attname FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 ORDER BY attnum", (t,)
+            )
+        ]
+        for t in ("horizons_cellpros", "horizons_simplexpros")
+    }
+    assert columns == {
+        "horizons_cellpros": ["_geoid", "_idx", "porosity"],
+        "horizons_simplexpros": ["_geoid", "_idx", "Facies", "normal"],
+    }
     surface = _surface()
     fid = F.insert_feature(conn, horizons, surface)
     conn.commit()
     back = F.fetch_feature(conn, horizons, fid).mesh
     assert isinstance(back, Surface) and back.same_as(surface)  # vertex and cell properties, and the parts
-    assert conn.execute('SELECT count(*), sum("Facies") FROM horizons_simplexpros WHERE _geoid = %s',
-                        (fid,)).fetchone() == (18, int(surface.cell_properties["Facies"].sum()))
+    assert conn.execute(
+        'SELECT count(*), sum("Facies") FROM horizons_simplexpros WHERE _geoid = %s', (fid,)
+    ).fetchone() == (18, int(surface.cell_properties["Facies"].sum()))
     assert conn.execute("SELECT count(*) FROM horizons_cellpros WHERE _geoid = %s", (fid,)).fetchone() == (16,)
 
 
 def test_a_cell_class_with_vertex_properties_from_a_vtk_file(conn: Conn, tmp_path: Path) -> None:
-    fc = F.create_feature_class(conn, "blocks", "SURFACE", alignment="CELL",
-                                cell_properties=[("Facies", "integer"), F.Property("porosity", "float8", 1, "VERTEX")])
+    fc = F.create_feature_class(
+        conn,
+        "blocks",
+        "SURFACE",
+        alignment="CELL",
+        cell_properties=[("Facies", "integer"), F.Property("porosity", "float8", 1, "VERTEX")],
+    )
     assert fc.otherprotable == "blocks_vertexpros"
     surface = _surface()
     surface.cell_properties = {"Facies": surface.cell_properties["Facies"]}
@@ -88,7 +113,9 @@ def test_a_cell_class_with_vertex_properties_from_a_vtk_file(conn: Conn, tmp_pat
 def test_missing_and_extra_properties_are_named_per_alignment(conn: Conn, horizons: F.FeatureClass) -> None:
     surface = _surface()
     del surface.cell_properties["Facies"]
-    with pytest.raises(tgsis.InvalidPropertyError, match=r"needs triangle properties \['Facies'\], which the mesh lacks"):
+    with pytest.raises(
+        tgsis.InvalidPropertyError, match=r"needs triangle properties \['Facies'\], which the mesh lacks"
+    ):
         F.insert_feature(conn, horizons, surface)
     surface = _surface()
     surface.vertex_properties["Facies"] = np.zeros(16, dtype=np.int32)  # the right name on the wrong alignment
@@ -143,18 +170,29 @@ def test_delete_and_drop_remove_both_property_tables(conn: Conn, horizons: F.Fea
     tgsis.enable_feature_versioning(conn)
     F.drop_feature_class(conn, "horizons", force=True)
     conn.commit()
-    assert conn.execute("SELECT to_regclass('horizons_simplexpros'), to_regclass('horizons_simplexpros_ver')"
-                        ).fetchone() == (None, None)
-    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables WHERE tablename LIKE 'horizons%'").fetchone() == (0,)
+    assert conn.execute(
+        "SELECT to_regclass('horizons_simplexpros'), to_regclass('horizons_simplexpros_ver')"
+    ).fetchone() == (None, None)
+    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables WHERE tablename LIKE 'horizons%'").fetchone() == (
+        0,
+    )
 
 
-@pytest.mark.parametrize(("properties", "kwargs", "message"), [
-    ([{"name": "f", "type": "int", "alignment": "FACE"}], {}, "has alignment 'FACE'"),
-    ([], {"feature_properties": [{"name": "f", "type": "int", "alignment": "CELL"}]}, "only vertex and cell properties"),
-    ([{"name": "f", "type": "int", "alignment": "CELL"}], {"time_model": "EVOLVING"}, "nor properties of another"),
-])
-def test_bad_alignments_change_nothing(conn: Conn, properties: list[dict[str, str]], kwargs: dict[str, Any],
-                                       message: str) -> None:
+@pytest.mark.parametrize(
+    ("properties", "kwargs", "message"),
+    [
+        ([{"name": "f", "type": "int", "alignment": "FACE"}], {}, "has alignment 'FACE'"),
+        (
+            [],
+            {"feature_properties": [{"name": "f", "type": "int", "alignment": "CELL"}]},
+            "only vertex and cell properties",
+        ),
+        ([{"name": "f", "type": "int", "alignment": "CELL"}], {"time_model": "EVOLVING"}, "nor properties of another"),
+    ],
+)
+def test_bad_alignments_change_nothing(
+    conn: Conn, properties: list[dict[str, str]], kwargs: dict[str, Any], message: str
+) -> None:
     with pytest.raises(tgsis.InvalidPropertyError, match=message):
         F.create_feature_class(conn, "bad", "SURFACE", cell_properties=properties, **kwargs)  # type: ignore[arg-type]
     assert conn.execute("SELECT count(*) FROM tgsis.catalog").fetchone() == (0,)
@@ -162,11 +200,30 @@ def test_bad_alignments_change_nothing(conn: Conn, properties: list[dict[str, st
 
 
 def test_cli_creates_a_class_with_both_alignments(conn: Conn, db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["--dsn", db_dsn, "class", "create", "wells", "--geotype", "SURFACE", "--property", "porosity:float8",
-                 "--property", "Facies:int:CELL", "--property", "slip:float8:3"]) == 0
+    assert (
+        main(
+            [
+                "--dsn",
+                db_dsn,
+                "class",
+                "create",
+                "wells",
+                "--geotype",
+                "SURFACE",
+                "--property",
+                "porosity:float8",
+                "--property",
+                "Facies:int:CELL",
+                "--property",
+                "slip:float8:3",
+            ]
+        )
+        == 0
+    )
     assert "tables wells, wells_cellpros, wells_simplexpros, view wells_v" in capsys.readouterr().out
     assert main(["--dsn", db_dsn, "class", "list"]) == 0
-    assert "vertex: porosity double precision, Facies integer (cell), slip double precision[3]" in \
-        capsys.readouterr().out
+    assert (
+        "vertex: porosity double precision, Facies integer (cell), slip double precision[3]" in capsys.readouterr().out
+    )
     assert main(["--dsn", db_dsn, "class", "create", "bad", "--geotype", "SURFACE", "--property", "f:int:FACE"]) == 1
     assert "'FACE' is neither a number of components nor VERTEX or CELL" in capsys.readouterr().err

@@ -56,9 +56,12 @@ def test_the_type_checking_block_imports_every_lazy_name() -> None:
 
 
 def test_the_type_checking_block_names_the_module_the_name_comes_from() -> None:
-    wrong = [f"{name} from {module}" for name, module in _type_checking_imports().items()
-             if getattr(importlib.import_module(module), name) is not getattr(tgsis, name)
-             or name not in importlib.import_module(module).__all__]
+    wrong = [
+        f"{name} from {module}"
+        for name, module in _type_checking_imports().items()
+        if getattr(importlib.import_module(module), name) is not getattr(tgsis, name)
+        or name not in importlib.import_module(module).__all__
+    ]
     assert wrong == []
 
 
@@ -82,8 +85,11 @@ def _exported_database_functions() -> list[tuple[str, str]]:
         module = importlib.import_module(module_name)
         for name in getattr(module, "__all__", ()):
             value = getattr(module, name)
-            if inspect.isfunction(value) and inspect.unwrap(value).__module__ == module_name \
-                    and list(inspect.signature(value).parameters)[:1] == ["conn"]:
+            if (
+                inspect.isfunction(value)
+                and inspect.unwrap(value).__module__ == module_name
+                and list(inspect.signature(value).parameters)[:1] == ["conn"]
+            ):
                 found.add((module_name, name))
     for name in tgsis.__all__:
         value = getattr(tgsis, name)
@@ -95,15 +101,21 @@ def _exported_database_functions() -> list[tuple[str, str]]:
 def test_every_exported_database_function_checks_its_arguments() -> None:
     functions = _exported_database_functions()
     assert ("tgsis.db.temporal", "append_period") in functions and ("tgsis.db.features", "insert_feature") in functions
-    unchecked = [f"{m}.{n}" for m, n in functions if not getattr(getattr(importlib.import_module(m), n),
-                                                                   "__tgsis_checked__", False)]
+    unchecked = [
+        f"{m}.{n}"
+        for m, n in functions
+        if not getattr(getattr(importlib.import_module(m), n), "__tgsis_checked__", False)
+    ]
     assert unchecked == []
 
 
 def _decorators(path: Path) -> dict[str, list[str]]:
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    return {node.name: [ast.unparse(d) for d in node.decorator_list]
-            for node in tree.body if isinstance(node, ast.FunctionDef)}
+    return {
+        node.name: [ast.unparse(d) for d in node.decorator_list]
+        for node in tree.body
+        if isinstance(node, ast.FunctionDef)
+    }
 
 
 def test_the_checks_are_a_decorator_at_the_definition() -> None:
@@ -117,8 +129,11 @@ def test_the_checks_are_a_decorator_at_the_definition() -> None:
         if "checked" not in _decorators(path).get(name, []):
             missing.append(f"{module_name}.{name}")
     assert missing == []
-    calls = [str(p.relative_to(SOURCE)) for p in SOURCE.rglob("*.py")
-             if "check_module(globals()" in p.read_text(encoding="utf-8")]
+    calls = [
+        str(p.relative_to(SOURCE))
+        for p in SOURCE.rglob("*.py")
+        if "check_module(globals()" in p.read_text(encoding="utf-8")
+    ]
     assert calls == []
 
 
@@ -128,11 +143,14 @@ def test_users_mypy_sees_the_signatures_of_lazy_and_checked_functions(tmp_path: 
     from mypy import api
 
     user = tmp_path / "user.py"
-    user.write_text("import tgsis\n"
-                    "def f(conn: tgsis.Box) -> None:\n"
-                    "    tgsis.create_postgis_view(1, 2, 3, 4, 5, 6)\n"
-                    "    tgsis.mesh_to_ewkb('not a mesh')\n"
-                    "    tgsis.delete_period(conn, 'x', 1.0)\n", encoding="utf-8")
+    user.write_text(
+        "import tgsis\n"
+        "def f(conn: tgsis.Box) -> None:\n"
+        "    tgsis.create_postgis_view(1, 2, 3, 4, 5, 6)\n"
+        "    tgsis.mesh_to_ewkb('not a mesh')\n"
+        "    tgsis.delete_period(conn, 'x', 1.0)\n",
+        encoding="utf-8",
+    )
     out, err, _ = api.run(["--strict", "--no-incremental", "--cache-dir", str(tmp_path / "cache"), str(user)])
     lines = [line for line in out.splitlines() if "user.py" in line]
     assert any("user.py:3:" in line for line in lines), out + err

@@ -19,30 +19,48 @@ import pytest
 
 import tgsis
 
-PURE = ["tgsis", "tgsis.mesh", "tgsis.convert", "tgsis.compare", "tgsis.edits", "tgsis.temporal",
-        "tgsis.interpolation", "tgsis.gmaps", "tgsis.formats", "tgsis.errors", "tgsis.pictures", "tgsis.postgis",
-        "tgsis.datamodels"]
+PURE = [
+    "tgsis",
+    "tgsis.mesh",
+    "tgsis.convert",
+    "tgsis.compare",
+    "tgsis.edits",
+    "tgsis.temporal",
+    "tgsis.interpolation",
+    "tgsis.gmaps",
+    "tgsis.formats",
+    "tgsis.errors",
+    "tgsis.pictures",
+    "tgsis.postgis",
+    "tgsis.datamodels",
+]
 
 
 @pytest.mark.parametrize("module", PURE)
 def test_a_pure_module_imports_neither_psycopg_nor_the_database_layer(module: str) -> None:
-    program = (f"import sys, {module}; "
-               "print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')))))")
+    program = (
+        f"import sys, {module}; "
+        "print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')))))"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "", f"import {module} loaded {done.stdout.strip()}"
 
 
 # A source tree that is not installed: the package metadata is not found (as with PYTHONPATH=src).
-NOT_INSTALLED = ("import importlib.metadata as m; real = m.version; "
-                 "m.version = lambda n: (_ for _ in ()).throw(m.PackageNotFoundError(n)) if n == 'tgsis' else real(n); ")
+NOT_INSTALLED = (
+    "import importlib.metadata as m; real = m.version; "
+    "m.version = lambda n: (_ for _ in ()).throw(m.PackageNotFoundError(n)) if n == 'tgsis' else real(n); "
+)
 
 
 @pytest.mark.parametrize("module", PURE)
 def test_a_pure_module_of_a_source_tree_imports_neither_psycopg_nor_the_database_layer(module: str) -> None:
     # issue 38: the version fallback of tgsis/__init__.py read sql/tgsis.control through tgsis.db (and psycopg)
-    program = (NOT_INSTALLED + f"import sys, {module}; "
-               "print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')))))")
+    program = (
+        NOT_INSTALLED + f"import sys, {module}; "
+        "print(' '.join(sorted(m for m in sys.modules if m == 'psycopg' or m.startswith(('psycopg.', 'tgsis.db')))))"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "", f"import {module} loaded {done.stdout.strip()}"
@@ -56,11 +74,13 @@ def test_the_version_of_a_source_tree_is_the_extensions() -> None:
 
 
 def test_the_database_names_load_on_first_use() -> None:
-    program = ("import sys, tgsis; assert 'tgsis.db' not in sys.modules; "
-               "f = tgsis.insert_feature; assert 'tgsis.db.features' in sys.modules; "
-               "from tgsis import connect, merge_version; assert f is tgsis.insert_feature; "
-               "assert set(tgsis.__all__) <= set(dir(tgsis)); "
-               "import tgsis as t\ntry:\n    t.no_such_name\nexcept AttributeError as e:\n    print(e)")
+    program = (
+        "import sys, tgsis; assert 'tgsis.db' not in sys.modules; "
+        "f = tgsis.insert_feature; assert 'tgsis.db.features' in sys.modules; "
+        "from tgsis import connect, merge_version; assert f is tgsis.insert_feature; "
+        "assert set(tgsis.__all__) <= set(dir(tgsis)); "
+        "import tgsis as t\ntry:\n    t.no_such_name\nexcept AttributeError as e:\n    print(e)"
+    )
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "module 'tgsis' has no attribute 'no_such_name'"
@@ -70,8 +90,11 @@ def _imports(path: Path) -> list[tuple[str, list[str], bool]]:
     """(module, names, at top level) of every ``from tgsis... import`` of a file."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     top = {id(node) for node in tree.body}
-    return [(node.module, [a.name for a in node.names], id(node) in top)
-            for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("tgsis")]
+    return [
+        (node.module, [a.name for a in node.names], id(node) in top)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("tgsis")
+    ]
 
 
 def _module_name(path: Path) -> str:
@@ -84,11 +107,14 @@ SOURCE = Path(tgsis.__file__).parent
 
 def test_no_module_takes_a_private_name_of_another_public_module() -> None:
     # what several modules share lives in a private module (_name.py) under a public name
-    found = [f"{_module_name(path)} imports {names} from {module}"
-             for path in sorted(SOURCE.rglob("*.py"))
-             for module, imported, _ in _imports(path)
-             if not module.rsplit(".", 1)[-1].startswith("_")
-             for names in [[n for n in imported if n.startswith("_") and not n.startswith("__")]] if names]
+    found = [
+        f"{_module_name(path)} imports {names} from {module}"
+        for path in sorted(SOURCE.rglob("*.py"))
+        for module, imported, _ in _imports(path)
+        if not module.rsplit(".", 1)[-1].startswith("_")
+        for names in [[n for n in imported if n.startswith("_") and not n.startswith("__")]]
+        if names
+    ]
     assert found == []
 
 
@@ -121,7 +147,9 @@ def _import_graph() -> nx.DiGraph:
 # methods to_pyvista/to_meshio/from_pyvista/from_meshio/to_trimesh call tgsis.convert and
 # tgsis._zpositive, which take the mesh classes: breaking it means conversions working on arrays
 # below tgsis.mesh (issue 38, part 4: left for a later step).
-KNOWN_CYCLES = {frozenset({"tgsis.mesh", "tgsis.convert", "tgsis._zpositive", "tgsis._vtk_cells", "tgsis.formats._common"})}
+KNOWN_CYCLES = {
+    frozenset({"tgsis.mesh", "tgsis.convert", "tgsis._zpositive", "tgsis._vtk_cells", "tgsis.formats._common"})
+}
 
 
 def test_the_modules_of_tgsis_import_each_other_without_a_cycle() -> None:
@@ -137,7 +165,7 @@ def test_the_modules_of_tgsis_import_each_other_without_a_cycle() -> None:
 def test_the_database_modules_import_each_other_without_a_cycle() -> None:
     graph = _import_graph().subgraph([name for name in MODULES if name.startswith("tgsis.db")])
     assert list(nx.simple_cycles(graph)) == []
-    assert graph.has_edge("tgsis.db.features", "tgsis.db.classes")        # the graph sees the imports
+    assert graph.has_edge("tgsis.db.features", "tgsis.db.classes")  # the graph sees the imports
     # model 1 hands other models' objects on through the registry (tgsis.datamodels), not by importing their modules
     assert not graph.has_edge("tgsis.db.features", "tgsis.db.temporal")
     assert not nx.has_path(graph, "tgsis.db.temporal", "tgsis.db.features")

@@ -25,13 +25,19 @@ def test_every_sql_folder_is_named() -> None:
 def test_every_folder_of_the_package_is_named() -> None:
     layout = _layout()
     package = ROOT / "src" / "tgsis"
-    missing = [p.name for p in sorted(package.iterdir())
-               if p.is_dir() and not p.name.startswith(("_", ".")) and f"  {p.name}/ " not in layout]
+    missing = [
+        p.name
+        for p in sorted(package.iterdir())
+        if p.is_dir() and not p.name.startswith(("_", ".")) and f"  {p.name}/ " not in layout
+    ]
     assert missing == []
 
 
 def test_every_public_database_module_is_named() -> None:
     layout = _layout()
-    missing = [p.name for p in sorted((ROOT / "src" / "tgsis" / "db").glob("*.py"))
-               if p.name != "__init__.py" and not p.name.startswith("_") and p.name not in layout]
+    missing = [
+        p.name
+        for p in sorted((ROOT / "src" / "tgsis" / "db").glob("*.py"))
+        if p.name != "__init__.py" and not p.name.startswith("_") and p.name not in layout
+    ]
     assert missing == []

@@ -36,8 +36,7 @@ def dome() -> tgsis.Surface:
     idx = np.arange(SIDE * SIDE).reshape(SIDE, SIDE)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     triangles = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
-    return tgsis.Surface(vertices, triangles, name="dome",
-                         vertex_properties={"porosity": np.arange(SIDE * SIDE) / 100})
+    return tgsis.Surface(vertices, triangles, name="dome", vertex_properties={"porosity": np.arange(SIDE * SIDE) / 100})
 
 
 @pytest.fixture(autouse=True)
@@ -55,8 +54,9 @@ def story(conn: Conn) -> dict[str, int]:
     A, in DEFAULT: vertices 20, 21 moved down (another part), vertex 12 down, vertex 6 to z = 7 (the same
     edit as the version's), the porosities of vertices 5 and 7, triangle 31 removed, the feature's note.
     """
-    F.create_feature_class(conn, "domes", "SURFACE", feature_properties={"note": "text"},
-                           cell_properties={"porosity": "float8"})
+    F.create_feature_class(
+        conn, "domes", "SURFACE", feature_properties={"note": "text"}, cell_properties={"porosity": "float8"}
+    )
     tgsis.enable_feature_versioning(conn)
     a = F.insert_feature(conn, "domes", dome())
     b = F.insert_feature(conn, "domes", dome())
@@ -70,8 +70,9 @@ def story(conn: Conn) -> dict[str, int]:
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 0", (a,))
         conn.execute("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 25, 5, 5, 3)", (a,))
         conn.execute("INSERT INTO domes_cellpros (_geoid, _idx, porosity) VALUES (%s, 25, 0.5)", (a,))
-        conn.execute("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 32, 24, 19, 25)",
-                     (a,))
+        conn.execute(
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 32, 24, 19, 25)", (a,)
+        )
         conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (b,))
         conn.commit()
     conn.execute("UPDATE tgsis.vrtx SET z = z - 1 WHERE geoid = %s AND vrtxid IN (20, 21)", (a,))
@@ -86,15 +87,15 @@ def story(conn: Conn) -> dict[str, int]:
 
 # (table, rows added, removed, changed, values changed), per solution: what it loses of the other side
 LOST_BY_CHILD = [  # the parent's edits
-    ("public.domes", 0, 0, 1, 1),             # the note
-    ("vrtx", 0, 0, 3, 3),                     # 20, 21 and the top moved (6: the same edit, kept)
-    ("trgl", 0, 1, 0, 3),                     # 31 comes back (3 vertex ids)
-    ("public.domes_cellpros", 0, 0, 2, 2),    # porosity of 5 and 7
+    ("public.domes", 0, 0, 1, 1),  # the note
+    ("vrtx", 0, 0, 3, 3),  # 20, 21 and the top moved (6: the same edit, kept)
+    ("trgl", 0, 1, 0, 3),  # 31 comes back (3 vertex ids)
+    ("public.domes_cellpros", 0, 0, 2, 2),  # porosity of 5 and 7
 ]
 LOST_BY_PARENT = [  # the version's edits
-    ("vrtx", 1, 0, 4, 4 + 3),                 # 0, 1, 2 and the top moved; 25 added (x, y, z)
-    ("trgl", 1, 1, 0, 3 + 3),                 # 32 added, 0 comes back
-    ("public.domes_cellpros", 1, 0, 1, 2),    # porosity of 5 changed, of 25 added
+    ("vrtx", 1, 0, 4, 4 + 3),  # 0, 1, 2 and the top moved; 25 added (x, y, z)
+    ("trgl", 1, 1, 0, 3 + 3),  # 32 added, 0 comes back
+    ("public.domes_cellpros", 1, 0, 1, 2),  # porosity of 5 changed, of 25 added
 ]
 
 
@@ -102,13 +103,14 @@ def _counts(conn: Conn, solution: str, key: int | None = None) -> list[tuple[Any
     rows = conn.execute(
         "SELECT shortname, rows_added, rows_removed, rows_changed, values_changed, objectkey, discarded"
         "  FROM tgsis.conflict_discards('edit', 'feature', %s) WHERE solution = %s",
-        (None if key is None else str(key), solution)).fetchall()
+        (None if key is None else str(key), solution),
+    ).fetchall()
     return sorted(rows)
 
 
 def test_each_solution_counts_the_other_sides_edits_against_the_base(conn: Conn, story: dict[str, int]) -> None:
     a = str(story["A"])
-    assert [c.objectkey for c in tgsis.find_conflicts(conn, "edit")] == [a]    # B: only the version changed it
+    assert [c.objectkey for c in tgsis.find_conflicts(conn, "edit")] == [a]  # B: only the version changed it
     assert _counts(conn, "child") == sorted((*r, a, "parent") for r in LOST_BY_CHILD)
     assert _counts(conn, "parent") == sorted((*r, a, "child") for r in LOST_BY_PARENT)
     assert _counts(conn, "child", story["B"]) == []
@@ -124,8 +126,9 @@ def test_the_counts_are_what_the_merge_then_loses(conn: Conn, story: dict[str, i
     parent_before = _vertices(conn, "DEFAULT", a)
     child = _vertices(conn, "edit", a)
     conflict = tgsis.resolve_conflict(conn, "edit", "feature", a, "child")
-    assert sorted((d.shortname, d.rows_added, d.rows_removed, d.rows_changed, d.values_changed)
-                  for d in conflict.discarded) == sorted(LOST_BY_CHILD)
+    assert sorted(
+        (d.shortname, d.rows_added, d.rows_removed, d.rows_changed, d.values_changed) for d in conflict.discarded
+    ) == sorted(LOST_BY_CHILD)
     tgsis.merge_version(conn, "edit")
     after = _vertices(conn, "DEFAULT", a)
     assert after == child
@@ -142,14 +145,15 @@ def _vertices(conn: Conn, version: str, geoid: int) -> dict[int, float]:
 def test_parent_solution_and_a_manual_merge_that_holds_everything(conn: Conn, story: dict[str, int]) -> None:
     a = story["A"]
     conflict = tgsis.resolve_conflict(conn, "edit", "feature", a, "parent")
-    assert sorted((d.shortname, d.rows_added, d.rows_removed, d.rows_changed, d.values_changed)
-                  for d in conflict.discarded) == sorted(LOST_BY_PARENT)
+    assert sorted(
+        (d.shortname, d.rows_added, d.rows_removed, d.rows_changed, d.values_changed) for d in conflict.discarded
+    ) == sorted(LOST_BY_PARENT)
     assert all(d.discarded == "child" for d in conflict.discarded)
     assert tgsis.resolve_conflict(conn, "edit", "feature", a, "unsolved").discarded == ()
     # the version takes the parent's edits over: choosing child then loses nothing of the parent's
     with tgsis.in_version(conn, "edit"):
         conn.execute("UPDATE tgsis.vrtx SET z = z - 1 WHERE geoid = %s AND vrtxid IN (20, 21)", (a,))
-        conn.execute("UPDATE tgsis.vrtx SET z = z - 1 WHERE geoid = %s AND vrtxid = 12", (a,))   # +0.5 - 1: the parent's
+        conn.execute("UPDATE tgsis.vrtx SET z = z - 1 WHERE geoid = %s AND vrtxid = 12", (a,))  # +0.5 - 1: the parent's
         conn.execute("UPDATE domes_cellpros SET porosity = 0.30 WHERE _geoid = %s AND _idx = 5", (a,))
         conn.execute("UPDATE domes_cellpros SET porosity = porosity + 0.25 WHERE _geoid = %s AND _idx = 7", (a,))
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 31", (a,))
@@ -165,10 +169,11 @@ def _run(dsn: str, capsys: pytest.CaptureFixture[str], *argv: str, code: int = 0
     return captured.out, captured.err
 
 
-def test_cli_resolve_refuses_to_discard_without_the_flag(db_dsn: str, conn: Conn, story: dict[str, int],
-                                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_resolve_refuses_to_discard_without_the_flag(
+    db_dsn: str, conn: Conn, story: dict[str, int], capsys: pytest.CaptureFixture[str]
+) -> None:
     a = str(story["A"])
-    tgsis.find_conflicts(conn, "edit")   # stored, unsolved
+    tgsis.find_conflicts(conn, "edit")  # stored, unsolved
     conn.commit()
     before = conn.execute("SELECT * FROM tgsis.conflicts").fetchall()
     conn.rollback()
@@ -177,7 +182,7 @@ def test_cli_resolve_refuses_to_discard_without_the_flag(db_dsn: str, conn: Conn
     assert "--discard-other" in err
     assert "vrtx: 3 changed" in err and "trgl: 1 removed" in err and "public.domes_cellpros: 2 changed" in err
     assert "the parent's edits" in err
-    assert conn.execute("SELECT * FROM tgsis.conflicts").fetchall() == before     # nothing recorded
+    assert conn.execute("SELECT * FROM tgsis.conflicts").fetchall() == before  # nothing recorded
     assert [r[0] for r in before] and before[0][8] == "unsolved"
     conn.rollback()
     out, err = _run(db_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", code=1)
@@ -197,10 +202,11 @@ def test_cli_resolve_refuses_to_discard_without_the_flag(db_dsn: str, conn: Conn
     assert f"feature {a} (child): discarded the parent's edits" in out and "vrtx: 3 changed" in out
 
 
-def test_cli_manual_and_a_solution_that_loses_nothing_need_no_flag(db_dsn: str, conn: Conn, story: dict[str, int],
-                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_manual_and_a_solution_that_loses_nothing_need_no_flag(
+    db_dsn: str, conn: Conn, story: dict[str, int], capsys: pytest.CaptureFixture[str]
+) -> None:
     b = story["B"]
-    conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (b,))   # the version's edit of B, alike
+    conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (b,))  # the version's edit of B, alike
     conn.commit()
     out, _ = _run(db_dsn, capsys, "version", "resolve", "edit", "feature", str(b), "parent")
     assert out == f"feature {b} in edit: parent\n"
@@ -208,8 +214,9 @@ def test_cli_manual_and_a_solution_that_loses_nothing_need_no_flag(db_dsn: str, 
     assert "manual" in out and "discarded the parent's edits" in out
 
 
-def test_roles_with_fewer_rights(db_dsn: str, conn: Conn, story: dict[str, int],
-                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_roles_with_fewer_rights(
+    db_dsn: str, conn: Conn, story: dict[str, int], capsys: pytest.CaptureFixture[str]
+) -> None:
     a = str(story["A"])
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:
         reader_dsn = make_conninfo(db_dsn, user=roles.name("reader"))
@@ -219,16 +226,19 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn, story: dict[str, int],
         assert _counts(reader, "child") == sorted((*r, a, "parent") for r in LOST_BY_CHILD)
         reader.rollback()
         out, _ = _run(reader_dsn, capsys, "version", "conflicts", "edit", "--no-header")
-        assert out.split("\t")[6] == ("vrtx: 3 changed (3 values); trgl: 1 removed (3 values); "
-                                       "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values)")
+        assert out.split("\t")[6] == (
+            "vrtx: 3 changed (3 values); trgl: 1 removed (3 values); "
+            "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values)"
+        )
         # without the right to read some of the object's rows: the conflicts, and no counts (never made up)
         conn.execute("REVOKE SELECT ON domes_cellpros_ver FROM tgsis_reader")
         conn.commit()
         out, err = _run(reader_dsn, capsys, "version", "conflicts", "edit", "--no-header")
         assert out.rstrip("\n").split("\t")[:3] == ["feature", a, "unsolved"] and out.rstrip("\n").endswith("\t?\t?")
         assert "what each solution discards is not shown: permission denied" in err
-        _, err = _run(reader_dsn, capsys, "version", "resolve", "edit", "feature", a, "child", "--discard-other",
-                      code=1)
+        _, err = _run(
+            reader_dsn, capsys, "version", "resolve", "edit", "feature", a, "child", "--discard-other", code=1
+        )
         assert "may not resolve conflicts of version 'edit'" in err
         # an editor granted write on the version is refused without the flag, then resolves with it
         tgsis.grant_version(conn, "edit", "write", roles.name("editor"))
@@ -239,8 +249,10 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn, story: dict[str, int],
         assert conn.execute("SELECT solution FROM tgsis.conflicts").fetchall() == []
         conn.rollback()
         out, _ = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", "--discard-other")
-        assert out == f"feature {a} in edit: parent\n  what it discarded of the other side's edits is not shown: " \
-                      "this role may not read the object's rows\n"
+        assert (
+            out == f"feature {a} in edit: parent\n  what it discarded of the other side's edits is not shown: "
+            "this role may not read the object's rows\n"
+        )
         conn.execute("GRANT SELECT ON domes_cellpros_ver TO tgsis_reader")
         conn.commit()
         _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "unsolved")
@@ -248,8 +260,10 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn, story: dict[str, int],
         assert "--discard-other" in err and "vrtx: 1 added, 4 changed (7 values)" in err
         out, _ = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", "--discard-other")
         assert "discarded the version's edits" in out
-        assert conn.execute("SELECT solution, solved_by FROM tgsis.conflicts").fetchone() == \
-            ("parent", roles.name("editor"))
+        assert conn.execute("SELECT solution, solved_by FROM tgsis.conflicts").fetchone() == (
+            "parent",
+            roles.name("editor"),
+        )
         # a merger that may not read the property rows merges all the same, and is told the counts are not shown
         tgsis.grant_version(conn, "DEFAULT", "merge", roles.name("editor"))
         conn.execute("REVOKE SELECT ON domes_cellpros_ver FROM tgsis_reader")
@@ -264,9 +278,11 @@ def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str
     conn.add_notice_handler(lambda d: notices.append(d.message_primary or ""))
     a = story["A"]
     conn.execute("SELECT tgsis.resolve_conflict('edit', 'feature', %s, 'child')", (str(a),))
-    assert notices == [f"feature {a} of version 'edit' (solution child) recorded: the parent's edits discarded: "
-                       "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values); "
-                       "trgl: 1 removed (3 values); vrtx: 3 changed (3 values)"]
+    assert notices == [
+        f"feature {a} of version 'edit' (solution child) recorded: the parent's edits discarded: "
+        "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values); "
+        "trgl: 1 removed (3 values); vrtx: 3 changed (3 values)"
+    ]
     notices.clear()
     conn.execute("SELECT tgsis.resolve_conflict('edit', 'feature', %s, 'unsolved')", (str(a),))
     assert notices == []
@@ -274,28 +290,33 @@ def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str
     conn.commit()
     notices.clear()
     conn.execute("SELECT tgsis.merge_version('edit')")
-    assert notices == [f"feature {a} of version 'edit' (solution parent) merged: the version's edits discarded: "
-                       "public.domes_cellpros: 1 added, 1 changed (2 values); trgl: 1 added, 1 removed (6 values); "
-                       "vrtx: 1 added, 4 changed (7 values)"]
+    assert notices == [
+        f"feature {a} of version 'edit' (solution parent) merged: the version's edits discarded: "
+        "public.domes_cellpros: 1 added, 1 changed (2 values); trgl: 1 added, 1 removed (6 values); "
+        "vrtx: 1 added, 4 changed (7 values)"
+    ]
     conn.commit()
     # merged: the version's edits of A are gone from both sides, B's are in the parent
     assert _vertices(conn, "DEFAULT", a) == _vertices(conn, "edit", a)
 
 
-def test_refresh_says_what_its_solutions_discard_and_json(db_dsn: str, conn: Conn, story: dict[str, int],
-                                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_refresh_says_what_its_solutions_discard_and_json(
+    db_dsn: str, conn: Conn, story: dict[str, int], capsys: pytest.CaptureFixture[str]
+) -> None:
     a = story["A"]
     doc, _ = _run(db_dsn, capsys, "version", "conflicts", "edit", "--json")
     [conflict] = json.loads(doc)["conflicts"]
     assert conflict["discards"]["parent"]["edits_of"] == "child"
-    assert sorted((t["table"], t["rows_added"], t["rows_removed"], t["rows_changed"], t["values_changed"])
-                  for t in conflict["discards"]["parent"]["tables"]) == sorted(LOST_BY_PARENT)
+    assert sorted(
+        (t["table"], t["rows_added"], t["rows_removed"], t["rows_changed"], t["values_changed"])
+        for t in conflict["discards"]["parent"]["tables"]
+    ) == sorted(LOST_BY_PARENT)
     assert conflict["discards"]["child"]["tables"][0]["what"] == "a vertex of a static geometry"
     tgsis.resolve_conflict(conn, "edit", "feature", a, "parent")
     conn.commit()
     out, _ = _run(db_dsn, capsys, "version", "refresh", "edit")
     assert f"feature {a} (parent): discarded the version's edits: vrtx: 1 added, 4 changed (7 values)" in out
-    assert _vertices(conn, "edit", a) == _vertices(conn, "DEFAULT", a)     # what it said is what went
+    assert _vertices(conn, "edit", a) == _vertices(conn, "DEFAULT", a)  # what it said is what went
     out, _ = _run(db_dsn, capsys, "version", "conflicts", "edit")
     assert out == ""
 
@@ -310,7 +331,7 @@ def test_bad_arguments(conn: Conn, story: dict[str, int]) -> None:
     with pytest.raises(tgsis.NotFoundError, match="object class 'features' does not exist"):
         tgsis.conflict_discards(conn, "edit", "features")
     conn.rollback()
-    assert tgsis.conflict_discards(conn, "edit", "feature", story["B"]) == []       # no conflict: nothing
+    assert tgsis.conflict_discards(conn, "edit", "feature", story["B"]) == []  # no conflict: nothing
     with pytest.raises(tgsis.NotFoundError, match="not in conflict"):
         tgsis.resolve_conflict(conn, "edit", "feature", story["B"], "child", discard_other=False)
     conn.rollback()

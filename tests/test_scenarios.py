@@ -25,7 +25,16 @@ from tgsis.formats.pvd import read_pvd
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--list"]) == 0
     names = [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["scenario", "saltdome", "synsed", "river", "interpretations", "mine", "knowledge", "cfm"]  # header first
+    assert names == [
+        "scenario",
+        "saltdome",
+        "synsed",
+        "river",
+        "interpretations",
+        "mine",
+        "knowledge",
+        "cfm",
+    ]  # header first
     assert main(["demo", "--list", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)["scenarios"]
     assert [s["name"] for s in listed] == names[1:] and all(s["summary"] for s in listed)
@@ -42,8 +51,11 @@ def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.Capt
 def _printed_sql(out: str) -> list[tuple[str, str]]:
     """(statement, answer) pairs the report printed."""
     lines = out.splitlines()
-    return [(lines[i].strip().rstrip(";"), lines[i + 1].strip().removeprefix("-> "))
-            for i in range(len(lines) - 1) if lines[i].strip().startswith(("SELECT ", "WITH ")) and lines[i + 1].strip().startswith("->")]
+    return [
+        (lines[i].strip().rstrip(";"), lines[i + 1].strip().removeprefix("-> "))
+        for i in range(len(lines) - 1)
+        if lines[i].strip().startswith(("SELECT ", "WITH ")) and lines[i + 1].strip().startswith("->")
+    ]
 
 
 def _replays(db_dsn: str, scenario: str, out: str, count: int) -> None:
@@ -65,7 +77,7 @@ def test_saltdome(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert "flat at t = 0 (231 vertices, a grid), a dome at t = 1 (194 vertices, Delaunay)" in out
     _replays(db_dsn, "saltdome", out, 2)
     tops = [float(m) for m in re.findall(r"-> vertices, top_m, lowest_m: \d+, (-?[\d.]+)", out)]
-    assert -2500 < tops[1] < tops[0] < -1000                           # risen more by 2/3 than by 1/2
+    assert -2500 < tops[1] < tops[0] < -1000  # risen more by 2/3 than by 1/2
     # pictures, animation and series
     for name in ("saltdome_known_shapes.png", "saltdome_t2_3.png", "saltdome_t1_2.png"):
         with Image.open(folder / name) as picture:
@@ -86,12 +98,18 @@ def test_interpretations(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixt
     assert f"   revisions in the design (7.3): {figure}" in out
     assert f"   revisions tgsis handed out:   {figure}" in out
     assert "revision 0: model 1 (seismic picks)" in out and "version1 (based on revision 0), revision 2: model 2" in out
-    assert "DEFAULT, revision 1: the restored model 1" in out and "version2 (based on revision 3), revision 5: model 3" in out
+    assert (
+        "DEFAULT, revision 1: the restored model 1" in out
+        and "version2 (based on revision 3), revision 5: model 3" in out
+    )
     # the design's question over models (named sets of objects) and the objects' type: the fault is first in model 3
     assert "-> model, version, revision: model 3, version2, 5" in out
     dilated = re.search(r"-> model, version, max_dilatancy: (.*)", out)
     assert dilated is not None
-    assert [tuple(p.split(", ")[:2]) for p in dilated.group(1).split("; ")] == [("model 2", "version1"), ("model 3", "version2")]
+    assert [tuple(p.split(", ")[:2]) for p in dilated.group(1).split("; ")] == [
+        ("model 2", "version1"),
+        ("model 3", "version2"),
+    ]
     _replays(db_dsn, "interpretations", out, 2)
     for label in ("1", "2", "3"):
         with Image.open(folder / f"interpretations_model{label}.png") as picture:
@@ -103,12 +121,16 @@ def test_synsed(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert main(["--dsn", db_dsn, "demo", "synsed", "--dir", str(folder)]) == 0
     out = capsys.readouterr().out
     # C, D and E each grow from the horizon beneath during the interval before they are first known
-    assert ("horizon A 3 period(s), horizon B 3 period(s), horizon C 3 period(s), horizon D 2 period(s), "
-            "horizon E 1 period(s)") in out
+    assert (
+        "horizon A 3 period(s), horizon B 3 period(s), horizon C 3 period(s), horizon D 2 period(s), "
+        "horizon E 1 period(s)"
+    ) in out
     assert "C grows from B over [1, 2], D grows from C over [2, 3], E grows from D over [3, 4]" in out
     # at t = 2.5: the fault and the horizons deposited by then (D is being deposited), equal in SQL and Python
-    assert ("-> surface, vertices, triangles: fault F, 15, 16; horizon A, 70, 96; horizon B, 70, 96; "
-            "horizon C, 70, 96; horizon D, 70, 96") in out
+    assert (
+        "-> surface, vertices, triangles: fault F, 15, 16; horizon A, 70, 96; horizon B, 70, 96; "
+        "horizon C, 70, 96; horizon D, 70, 96"
+    ) in out
     assert "equal to SQL to the bit: yes" in out
     # throw = 60 m/Myr since deposition (A at 0, B at 1, C at 2): older horizons carry more
     assert "-> horizon, throw_m: horizon A, 150.0; horizon B, 90.0; horizon C, 30.0; horizon D, 0.0" in out
@@ -125,11 +147,12 @@ def test_river(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     # the pinch-outs attached to the basement stayed on it at every geometry instant
     strayed = re.search(r"at most ([0-9.e+-]+) m off it at any instant", out)
     assert strayed is not None and float(strayed.group(1)) < 1e-9
-    assert "unit 3 12 vertex-intervals" in out                                  # the later shape as the source too
+    assert "unit 3 12 vertex-intervals" in out  # the later shape as the source too
     assert "unit 2 deposited over [0, 1], unit 3 deposited over [2, 3]" in out
     assert "-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240\n" in out
-    assert ("-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240; "
-            "unit 3, 150, 240") in out                                             # unit 3 growing at t = 2.5
+    assert (
+        "-> surface, vertices, triangles: basement, 606, 1000; unit 1, 150, 240; unit 2, 150, 240; unit 3, 150, 240"
+    ) in out  # unit 3 growing at t = 2.5
     assert "equal to SQL to the bit: yes" in out
     # which unit lies on which: unit 3 reaches unit 1 between t = 3 and 4
     assert "-> unit, lies_on: unit 1, basement; unit 2, basement, unit 1; unit 3, basement, unit 2" in out
@@ -167,19 +190,32 @@ def test_mine(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert "survey_2023 (child of survey_2021), believed 2023-06-01 .. still" in out
     # on 2022-01-15 the 2021 model was believed: 14 holes, the ore top and F1 (F2 came in 2023)
     assert "-> version, objects, boreholes, surfaces: survey_2021, 16, 14, F1, ore top" in out
-    assert "-> models: geotechnical model, resource model" in out                   # F1 is in both
-    stored = re.search(r"-> version, stored, seen: survey_2019, (\d+), (\d+); survey_2021, (\d+), (\d+); "
-                       r"survey_2023, (\d+), (\d+)", out)
+    assert "-> models: geotechnical model, resource model" in out  # F1 is in both
+    stored = re.search(
+        r"-> version, stored, seen: survey_2019, (\d+), (\d+); survey_2021, (\d+), (\d+); "
+        r"survey_2023, (\d+), (\d+)",
+        out,
+    )
     assert stored is not None
     first, seen_first, second, seen_second, third, seen_third = (int(v) for v in stored.groups())
-    assert first == seen_first and second < seen_second / 2 and third < seen_third / 2   # unchanged rows not stored again
+    assert (
+        first == seen_first and second < seen_second / 2 and third < seen_third / 2
+    )  # unchanged rows not stored again
     _replays(db_dsn, "mine", out, 5)
     # believed on a date: in each period and on its bounds ([from, to): a survey's day belongs to the new model)
     with psycopg.connect(make_conninfo(db_dsn, dbname="tgsis_demo_mine")) as conn:
-        for day, expected in (("2019-02-28 23:59:59+00", None), ("2019-03-01 00:00:00+00", "survey_2019"),
-                              ("2020-07-01 12:00:00+00", "survey_2019"), ("2021-04-30 23:59:59.999+00", "survey_2019"),
-                              ("2021-05-01 00:00:00+00", "survey_2021"), ("2023-05-31 23:59:59+00", "survey_2021"),
-                              ("2023-06-01 00:00:00+00", "survey_2023"), ("2031-01-01 00:00:00+00", "survey_2023")):
-            assert conn.execute("SELECT tgsis.version_believed_at(%s::timestamptz)", (day,)).fetchone() == (expected,), day
+        for day, expected in (
+            ("2019-02-28 23:59:59+00", None),
+            ("2019-03-01 00:00:00+00", "survey_2019"),
+            ("2020-07-01 12:00:00+00", "survey_2019"),
+            ("2021-04-30 23:59:59.999+00", "survey_2019"),
+            ("2021-05-01 00:00:00+00", "survey_2021"),
+            ("2023-05-31 23:59:59+00", "survey_2021"),
+            ("2023-06-01 00:00:00+00", "survey_2023"),
+            ("2031-01-01 00:00:00+00", "survey_2023"),
+        ):
+            assert conn.execute("SELECT tgsis.version_believed_at(%s::timestamptz)", (day,)).fetchone() == (
+                expected,
+            ), day
     with Image.open(folder / "mine_ore_top.png") as picture:
         assert picture.format == "PNG"

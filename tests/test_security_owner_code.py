@@ -112,9 +112,9 @@ def test_version_operations_run_a_tables_code_as_its_owner(roles: Roles, db_dsn:
         alice.execute("DELETE FROM mine WHERE id = 2")
         alice.execute("INSERT INTO mine VALUES (4, 4)")
         alice.commit()
-    _log(carol)                                              # writes through the view: carol's trigger function
+    _log(carol)  # writes through the view: carol's trigger function
 
-    tgsis.merge_version(carol, "a1")                         # copies a1's rows into DEFAULT, closes the old ones
+    tgsis.merge_version(carol, "a1")  # copies a1's rows into DEFAULT, closes the old ones
     _ran_only_as(carol, owner, "merge_version")
     assert _mine(carol) == [(1, 10), (3, 3), (4, 4)]
 
@@ -126,14 +126,15 @@ def test_version_operations_run_a_tables_code_as_its_owner(roles: Roles, db_dsn:
         carol.execute("UPDATE mine SET v = 31 WHERE id = 3")
         carol.commit()
     _log(carol)
-    assert [c.objectkey for c in tgsis.find_conflicts(alice, "a2")] == ["3"]   # reads rows as record_out, no cast
+    assert [c.objectkey for c in tgsis.find_conflicts(alice, "a2")] == ["3"]  # reads rows as record_out, no cast
     # (a column named v, the alias tgsis reads rows with, is still a column: rows are read as v.*)
-    assert alice.execute("SELECT side, \"row\" FROM tgsis.conflict_rows('a2', 'mine', '3') ORDER BY side").fetchall() == [
-        ("child", {"id": 3, "v": 30}), ("parent", {"id": 3, "v": 31})]
+    assert alice.execute(
+        "SELECT side, \"row\" FROM tgsis.conflict_rows('a2', 'mine', '3') ORDER BY side"
+    ).fetchall() == [("child", {"id": 3, "v": 30}), ("parent", {"id": 3, "v": 31})]
     alice.rollback()
     tgsis.resolve_conflict(alice, "a2", "mine", 3, "parent")
     assert not [entry for entry in _log(carol) if entry[0] != roles.name("carol")]
-    tgsis.refresh_version(alice, "a2")                       # takes DEFAULT's row 3 into a2
+    tgsis.refresh_version(alice, "a2")  # takes DEFAULT's row 3 into a2
     _ran_only_as(carol, owner, "refresh_version")
     assert _mine(alice, "a2") == [(1, 10), (3, 31), (4, 4)]
 
@@ -142,19 +143,21 @@ def test_version_operations_run_a_tables_code_as_its_owner(roles: Roles, db_dsn:
         alice.execute("UPDATE mine SET v = 40 WHERE id = 4")
         alice.commit()
     _log(carol)
-    tgsis.delete_version(alice, "a3")                        # deletes a3's rows
+    tgsis.delete_version(alice, "a3")  # deletes a3's rows
     _ran_only_as(carol, owner, "delete_version")
 
     tgsis.delete_version(alice, "a2")
     _log(carol)
-    removed = tgsis.compress_versions(carol)                 # deletes rows no version sees, trims lastrevs
+    removed = tgsis.compress_versions(carol)  # deletes rows no version sees, trims lastrevs
     assert removed
     _ran_only_as(carol, owner, "compress_versions")
     assert _mine(carol) == [(1, 10), (3, 31), (4, 4)]
 
-    with psycopg.connect(db_dsn) as su:                      # the traps never made anyone a superuser
-        assert su.execute("SELECT count(*) FROM pg_roles WHERE rolname = ANY (%s) AND rolsuper",
-                          ([roles.name(r) for r in ("carol", "dave", "alice")],)).fetchone() == (0,)
+    with psycopg.connect(db_dsn) as su:  # the traps never made anyone a superuser
+        assert su.execute(
+            "SELECT count(*) FROM pg_roles WHERE rolname = ANY (%s) AND rolsuper",
+            ([roles.name(r) for r in ("carol", "dave", "alice")],),
+        ).fetchone() == (0,)
 
 
 def test_a_runner_made_security_invoker_runs_as_nobody_and_changes_nothing(roles: Roles) -> None:
@@ -169,8 +172,8 @@ def test_a_runner_made_security_invoker_runs_as_nobody_and_changes_nothing(roles
     with pytest.raises(tgsis.Error) as refused:
         tgsis.merge_version(carol, "a1")
     carol.rollback()
-    assert refused.value.sqlstate == "42501"                 # tgsis_nobody may not write mine_ver
-    assert _mine(carol) == [(1, 1), (2, 2), (3, 3)]          # nothing merged
+    assert refused.value.sqlstate == "42501"  # tgsis_nobody may not write mine_ver
+    assert _mine(carol) == [(1, 1), (2, 2), (3, 3)]  # nothing merged
     assert carol.execute("SELECT rolsuper FROM pg_roles WHERE rolname = current_user").fetchone() == (False,)
     # the owner gives the table its runner back, and the merge goes through
     carol.execute("SELECT tgsis.restore_storage_runner('mine')")
@@ -182,8 +185,9 @@ def test_a_runner_made_security_invoker_runs_as_nobody_and_changes_nothing(roles
 def test_no_one_calls_a_runner_but_tgsis(roles: Roles, db_dsn: str) -> None:
     """Not its owner directly, and not another owner's runner altered to call it (it would run as tgsis_nobody)."""
     carol, dave, alice = roles.connect("carol"), roles.connect("dave"), roles.connect("alice")
-    refused = _sqlstate(carol, "SELECT * FROM mine_ver_run(true, 'UPDATE public.mine_ver SET v = 666', "
-                               "NULL, NULL, NULL, NULL, NULL)")
+    refused = _sqlstate(
+        carol, "SELECT * FROM mine_ver_run(true, 'UPDATE public.mine_ver SET v = 666', NULL, NULL, NULL, NULL, NULL)"
+    )
     assert refused == "TG002"
     dave.execute("CREATE TABLE his (id int PRIMARY KEY, v int)")
     dave.execute("GRANT SELECT, INSERT, UPDATE, DELETE ON his TO tgsis_editor")
@@ -235,10 +239,10 @@ def test_a_key_type_changed_afterwards_is_refused_before_any_cast(roles: Roles) 
     carol.execute("DROP VIEW mine")
     carol.execute("ALTER TABLE mine_ver ALTER COLUMN id TYPE mykey")
     carol.commit()
-    _log(carol)                                               # the rewrite checked each row, as carol
+    _log(carol)  # the rewrite checked each row, as carol
     tgsis.create_version(alice, "a1")
     with pytest.raises(tgsis.InvalidInputError, match="not built into PostgreSQL"):
         tgsis.lock_objects(alice, "a1", "mine", ["1"])
     alice.rollback()
-    assert _log(carol) == []                                  # the domain's check never ran, as anyone
+    assert _log(carol) == []  # the domain's check never ran, as anyone
     assert carol.execute("SELECT rolsuper FROM pg_roles WHERE rolname = current_user").fetchone() == (False,)

@@ -44,8 +44,9 @@ def roles(db_dsn: str) -> Iterator[Roles]:
         F.create_feature_class(admin, "horizons", "SURFACE")
         tgsis.enable_feature_versioning(admin)
         F.insert_feature(admin, "horizons", flat_grid(3, 0.0))
-    with login_roles(db_dsn, {"alice": "tgsis_editor", "bob": "tgsis_editor", "rita": "tgsis_reader",
-                              "nora": "pg_read_all_settings"}) as made:
+    with login_roles(
+        db_dsn, {"alice": "tgsis_editor", "bob": "tgsis_editor", "rita": "tgsis_reader", "nora": "pg_read_all_settings"}
+    ) as made:
         alice = made.connect("alice")
         tgsis.create_version(alice, "a1")
         with tgsis.in_version(alice, "a1"):
@@ -58,12 +59,16 @@ def roles(db_dsn: str) -> Iterator[Roles]:
 def _state(dsn: str) -> tuple[list[Any], ...]:
     """The version tree and every stored row version: what a refusal must leave alone."""
     with psycopg.connect(dsn) as c:
-        return (c.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall(),
-                c.execute("SELECT * FROM tgsis.revisions ORDER BY revision").fetchall(),
-                c.execute("SELECT * FROM tgsis.conflicts ORDER BY 1, 2, 3").fetchall(),
-                c.execute("SELECT * FROM wells_ver ORDER BY id, revision").fetchall(),
-                c.execute("SELECT geoid, vrtxid, x, y, z, revision, lastrevs FROM tgsis.vrtx_ver ORDER BY 1, 2, 6").fetchall(),
-                c.execute("SELECT geoid, geoname, revision, lastrevs FROM tgsis.geometry_ver ORDER BY 1, 3").fetchall())
+        return (
+            c.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall(),
+            c.execute("SELECT * FROM tgsis.revisions ORDER BY revision").fetchall(),
+            c.execute("SELECT * FROM tgsis.conflicts ORDER BY 1, 2, 3").fetchall(),
+            c.execute("SELECT * FROM wells_ver ORDER BY id, revision").fetchall(),
+            c.execute(
+                "SELECT geoid, vrtxid, x, y, z, revision, lastrevs FROM tgsis.vrtx_ver ORDER BY 1, 2, 6"
+            ).fetchall(),
+            c.execute("SELECT geoid, geoname, revision, lastrevs FROM tgsis.geometry_ver ORDER BY 1, 3").fetchall(),
+        )
 
 
 def _refused(conn: Conn, statement: str, params: tuple[Any, ...] = ()) -> BaseException:
@@ -89,20 +94,23 @@ def _revision_of(conn: Conn, version: str) -> int:
 # --------------------------------------------------------------------------- storage written directly
 
 
-@pytest.mark.parametrize("statement", [
-    "UPDATE wells_ver SET depth = 666",
-    "UPDATE tgsis.vrtx_ver SET z = 666",
-    "DELETE FROM tgsis.trgl_ver",
-    "DELETE FROM wells_ver WHERE revision = 0",
-    "TRUNCATE tgsis.vrtx_ver",
-    "UPDATE horizons_ver SET _geoid = _geoid",
-    "INSERT INTO wells_ver (id, name, depth, revision) VALUES (1, 'x', 666, 0) "
-    "ON CONFLICT (id, revision) DO UPDATE SET depth = 666",
-])
+@pytest.mark.parametrize(
+    "statement",
+    [
+        "UPDATE wells_ver SET depth = 666",
+        "UPDATE tgsis.vrtx_ver SET z = 666",
+        "DELETE FROM tgsis.trgl_ver",
+        "DELETE FROM wells_ver WHERE revision = 0",
+        "TRUNCATE tgsis.vrtx_ver",
+        "UPDATE horizons_ver SET _geoid = _geoid",
+        "INSERT INTO wells_ver (id, name, depth, revision) VALUES (1, 'x', 666, 0) "
+        "ON CONFLICT (id, revision) DO UPDATE SET depth = 666",
+    ],
+)
 def test_editors_cannot_update_or_delete_storage(roles: Roles, db_dsn: str, statement: str) -> None:
     bob = roles.connect("bob")
     before = _state(db_dsn)
-    assert _sqlstate(_refused(bob, statement)) == "42501"      # permission denied: only storage's owner may
+    assert _sqlstate(_refused(bob, statement)) == "42501"  # permission denied: only storage's owner may
     assert _state(db_dsn) == before
 
 
@@ -110,16 +118,21 @@ def test_editors_cannot_update_or_delete_storage(roles: Roles, db_dsn: str, stat
 def test_editors_cannot_insert_rows_of_another_revision(roles: Roles, db_dsn: str, where: str) -> None:
     """bob may write in DEFAULT; rows labelled for alice's version, her saved revision or an old DEFAULT revision fail."""
     bob = roles.connect("bob")
-    label = {"a1": _revision_of(bob, "a1"),
-             "a1-saved": int(bob.execute("SELECT revision FROM tgsis.revisions WHERE name = 'picked'").fetchone()[0]),  # type: ignore[index]
-             "DEFAULT-old": 0}[where]
+    label = {
+        "a1": _revision_of(bob, "a1"),
+        "a1-saved": int(bob.execute("SELECT revision FROM tgsis.revisions WHERE name = 'picked'").fetchone()[0]),  # type: ignore[index]
+        "DEFAULT-old": 0,
+    }[where]
     bob.rollback()
     before = _state(db_dsn)
     error = _refused(bob, "INSERT INTO wells_ver (id, name, depth, revision) VALUES (9, 'forged', 0, %s)", (label,))
     assert _sqlstate(error) == "TG002" and "not live rows of revision" in str(error)
     # nor rows closed from the start, which would hide other rows of any version
-    error = _refused(bob, "INSERT INTO wells_ver (id, name, depth, revision, lastrevs) VALUES (9, 'x', 0, %s, %s)",
-                     (_revision_of(bob, "DEFAULT"), [label]))
+    error = _refused(
+        bob,
+        "INSERT INTO wells_ver (id, name, depth, revision, lastrevs) VALUES (9, 'x', 0, %s, %s)",
+        (_revision_of(bob, "DEFAULT"), [label]),
+    )
     assert _sqlstate(error) == "TG002"
     assert _state(db_dsn) == before
 
@@ -129,12 +142,22 @@ def test_a_binary_copy_with_a_forged_revision_is_refused_whole(roles: Roles, db_
     bob = roles.connect("bob")
     own, alices = _revision_of(bob, "DEFAULT"), _revision_of(bob, "a1")
     before = _state(db_dsn)
-    payload = encode_rows([(np.array([50, 51]), "int8"), (np.array([0, 0]), "int8"), (np.zeros(2), "float8"),
-                           (np.zeros(2), "float8"), (np.full(2, 666.0), "float8"), (np.array([own, alices]), "int4")])
+    payload = encode_rows(
+        [
+            (np.array([50, 51]), "int8"),
+            (np.array([0, 0]), "int8"),
+            (np.zeros(2), "float8"),
+            (np.zeros(2), "float8"),
+            (np.full(2, 666.0), "float8"),
+            (np.array([own, alices]), "int4"),
+        ]
+    )
     # the model tables are under row-level security (per-class rights): PostgreSQL refuses a role's COPY
     # into them, and the client stages its rows (tgsis.db._transfer.staged); the check holds on that path
     with pytest.raises(psycopg.errors.FeatureNotSupported, match="row-level security"):
-        with bob.cursor().copy("COPY tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision) FROM STDIN (FORMAT binary)") as cp:
+        with bob.cursor().copy(
+            "COPY tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision) FROM STDIN (FORMAT binary)"
+        ) as cp:
             cp.write(payload)
     bob.rollback()
     with pytest.raises(tgsis.MissingPrivilegeError, match="1 row"):
@@ -167,10 +190,12 @@ def test_the_storage_check_cannot_be_fooled_by_an_operator_of_the_writer(roles: 
     bob.execute("SET search_path = trap, pg_catalog, public")
     tgsis.goto_version(bob, "a1")
     before = _state(db_dsn)
-    for statement in ("INSERT INTO wells_ver (id, name, depth, revision) "
-                      "SELECT 9, 'forged', 0, workingrevision FROM tgsis.versions WHERE name = 'a1'",
-                      "UPDATE wells SET depth = 666 WHERE id = 1",
-                      "SELECT tgsis.delete_object_rows('public', 'wells', 'id', '{1}')"):
+    for statement in (
+        "INSERT INTO wells_ver (id, name, depth, revision) "
+        "SELECT 9, 'forged', 0, workingrevision FROM tgsis.versions WHERE name = 'a1'",
+        "UPDATE wells SET depth = 666 WHERE id = 1",
+        "SELECT tgsis.delete_object_rows('public', 'wells', 'id', '{1}')",
+    ):
         error = _refused(bob, statement)
         assert isinstance(error, tgsis.MissingPrivilegeError), (statement, error)
         bob.execute("SET search_path = trap, pg_catalog, public")
@@ -184,10 +209,11 @@ def test_every_definer_and_trigger_function_pins_its_search_path(roles: Roles, d
             "SELECT p.oid::regprocedure::text FROM pg_proc p JOIN pg_namespace n ON n.oid = p.pronamespace "
             "WHERE (p.prosecdef OR p.prorettype = 'trigger'::regtype) "
             "  AND (n.nspname = 'tgsis' OR p.proname LIKE '%\\_ver\\_write') "
-            "  AND NOT EXISTS (SELECT FROM unnest(p.proconfig) AS s WHERE s LIKE 'search\\_path=%')").fetchall()
+            "  AND NOT EXISTS (SELECT FROM unnest(p.proconfig) AS s WHERE s LIKE 'search\\_path=%')"
+        ).fetchall()
         generated = c.execute("SELECT count(*) FROM pg_proc WHERE proname LIKE '%\\_ver\\_write'").fetchone()
     assert unpinned == []
-    assert generated is not None and generated[0] >= 3      # the check saw the generated trigger functions
+    assert generated is not None and generated[0] >= 3  # the check saw the generated trigger functions
 
 
 # --------------------------------------------------------------------------- views and bulk paths
@@ -199,8 +225,11 @@ def test_a_statement_switching_the_version_between_rows_is_checked_per_row(roles
     before = _state(db_dsn)
     error = _refused(bob, "UPDATE wells SET depth = depth + (SELECT 0 FROM set_config('tgsis.version', 'a1', true))")
     assert isinstance(error, tgsis.MissingPrivilegeError) and "'a1'" in str(error)
-    error = _refused(bob, "INSERT INTO wells (id, name, depth) "
-                          "SELECT 9, 'x' || (SELECT '' FROM set_config('tgsis.version', 'a1', true)), 0")
+    error = _refused(
+        bob,
+        "INSERT INTO wells (id, name, depth) "
+        "SELECT 9, 'x' || (SELECT '' FROM set_config('tgsis.version', 'a1', true)), 0",
+    )
     assert isinstance(error, tgsis.MissingPrivilegeError)
     assert _state(db_dsn) == before
 
@@ -210,23 +239,31 @@ def test_set_based_deletes_need_the_table_right_and_the_version_right(roles: Rol
     geoid = int(bob.execute("SELECT min(geoid) FROM tgsis.geometry").fetchone()[0])  # type: ignore[index]
     bob.rollback()
     before = _state(db_dsn)
-    assert isinstance(_refused(rita, "SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', %s)", ([geoid],)),
-                      tgsis.MissingPrivilegeError)                      # a reader: no DELETE on the table
-    assert isinstance(_refused(rita, "SELECT tgsis.close_object_rows('tgsis', 'vrtx', 'geoid', %s)", ([geoid],)),
-                      tgsis.MissingPrivilegeError)
+    assert isinstance(
+        _refused(rita, "SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', %s)", ([geoid],)),
+        tgsis.MissingPrivilegeError,
+    )  # a reader: no DELETE on the table
+    assert isinstance(
+        _refused(rita, "SELECT tgsis.close_object_rows('tgsis', 'vrtx', 'geoid', %s)", ([geoid],)),
+        tgsis.MissingPrivilegeError,
+    )
     tgsis.goto_version(bob, "a1")
-    assert isinstance(_refused(bob, "SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', %s)", ([geoid],)),
-                      tgsis.MissingPrivilegeError)                      # an editor, in alice's version
-    assert isinstance(_refused(bob, "SELECT tgsis.close_object_rows('tgsis', 'vrtx', 'x', %s)", ([geoid],)),
-                      tgsis.InvalidInputError)                          # only by the registered object key
-    assert isinstance(_refused(bob, "SELECT tgsis.close_object_rows('public', 'nothere', 'id', '{1}')"),
-                      tgsis.NotFoundError)
+    assert isinstance(
+        _refused(bob, "SELECT tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', %s)", ([geoid],)),
+        tgsis.MissingPrivilegeError,
+    )  # an editor, in alice's version
+    assert isinstance(
+        _refused(bob, "SELECT tgsis.close_object_rows('tgsis', 'vrtx', 'x', %s)", ([geoid],)), tgsis.InvalidInputError
+    )  # only by the registered object key
+    assert isinstance(
+        _refused(bob, "SELECT tgsis.close_object_rows('public', 'nothere', 'id', '{1}')"), tgsis.NotFoundError
+    )
     assert _state(db_dsn) == before
 
 
 def test_a_reader_cannot_hold_locks_that_stop_saves_children_and_merges(roles: Roles, db_dsn: str) -> None:
     rita, bob = roles.connect("rita"), roles.connect("bob")
-    bob.execute("UPDATE wells SET depth = 12 WHERE id = 1")          # DEFAULT changes what a1 changed: a conflict
+    bob.execute("UPDATE wells SET depth = 12 WHERE id = 1")  # DEFAULT changes what a1 changed: a conflict
     bob.commit()
     with pytest.raises(tgsis.MissingPrivilegeError):
         with reraise():
@@ -254,19 +291,19 @@ def test_a_reader_cannot_hold_locks_that_stop_saves_children_and_merges(roles: R
 
 def test_find_conflicts_by_a_reader_computes_without_storing(roles: Roles, db_dsn: str) -> None:
     alice, bob, rita = roles.connect("alice"), roles.connect("bob"), roles.connect("rita")
-    bob.execute("UPDATE wells SET depth = 12 WHERE id = 1")          # DEFAULT changes what a1 changed too
+    bob.execute("UPDATE wells SET depth = 12 WHERE id = 1")  # DEFAULT changes what a1 changed too
     bob.commit()
     before = _state(db_dsn)
     seen = tgsis.find_conflicts(rita, "a1")
     rita.rollback()
     assert [(c.objectclass, c.objectkey, c.solution) for c in seen] == [("well", "1", "unsolved")]
-    assert _state(db_dsn) == before                                   # nothing stored, nothing locked
+    assert _state(db_dsn) == before  # nothing stored, nothing locked
     stored = tgsis.find_conflicts(alice, "a1")
     alice.commit()
     assert [(c.objectclass, c.objectkey) for c in stored] == [("well", "1")]
     tgsis.resolve_conflict(alice, "a1", "well", 1, "child")
     alice.commit()
-    assert [c.solution for c in tgsis.find_conflicts(rita, "a1")] == ["child"]   # the reader sees the solution
+    assert [c.solution for c in tgsis.find_conflicts(rita, "a1")] == ["child"]  # the reader sees the solution
     rita.rollback()
 
 
@@ -280,6 +317,10 @@ def test_a_version_is_no_confidentiality_boundary_table_rights_are(roles: Roles,
     tgsis.goto_version(rita, "a1")
     assert rita.execute("SELECT depth FROM wells WHERE id = 1").fetchone() == (11,)
     rita.rollback()
-    for statement in ("SELECT * FROM wells", "SELECT * FROM wells_ver",
-                      "SELECT * FROM tgsis.rows_at(NULL::wells, 'a1')", "SELECT * FROM tgsis.vrtx"):
+    for statement in (
+        "SELECT * FROM wells",
+        "SELECT * FROM wells_ver",
+        "SELECT * FROM tgsis.rows_at(NULL::wells, 'a1')",
+        "SELECT * FROM tgsis.vrtx",
+    ):
         assert _sqlstate(_refused(nora, statement)) == "42501", statement

@@ -16,11 +16,12 @@ from tgsis.mesh import Surface
 from tgsis.temporal import EvolvingSurface, SurfaceSeries, even_times, own_instants, series_frames, write_series_pvd
 
 Conn = psycopg.Connection[Any]
-STARTS = [-10.0, -6.5, -2.0]    # three topology periods; the surface exists -10 .. -1 (not alive)
+STARTS = [-10.0, -6.5, -2.0]  # three topology periods; the surface exists -10 .. -1 (not alive)
 
 
-def check_against(pvd: Path, obj: EvolvingSurface | SurfaceSeries, times: list[float],
-                  convention: tgsis.temporal.Convention = "left") -> int:
+def check_against(
+    pvd: Path, obj: EvolvingSurface | SurfaceSeries, times: list[float], convention: tgsis.temporal.Convention = "left"
+) -> int:
     """Times read back exactly, geometry bit-identical to obj.at(t); return how many frames hold a surface."""
     back = read_pvd(pvd)
     assert [t for t, _ in back] == times
@@ -39,7 +40,7 @@ def check_against(pvd: Path, obj: EvolvingSurface | SurfaceSeries, times: list[f
 
 def test_numpy_evolving_surface_to_pvd(tmp_path: Path) -> None:
     surface = evolving(np.random.default_rng(11), STARTS, instants_per_period=4, with_properties=True)
-    times = even_times(-12.0, 0.0, 25).tolist()          # before, through the three periods, after
+    times = even_times(-12.0, 0.0, 25).tolist()  # before, through the three periods, after
     written = write_series_pvd(surface, tmp_path / "fault.pvd", times)
     assert written.pvd == tmp_path / "fault.pvd"
     assert [f.name for f in written.files] == [f"fault_{i:06d}.vtu" for i in range(25)]
@@ -86,14 +87,16 @@ def test_even_times() -> None:
     times = even_times(0.1, 0.7, 7)
     assert times[0] == 0.1 and times[-1] == 0.7 and len(times) == 7  # both ends exactly
     assert even_times(3.0, 3.0, 1).tolist() == [3.0]
-    for args, message in [((0.0, 1.0, 0), "steps must be an integer >= 1, got 0"),
-                          ((0.0, 1.0, 2.5), "steps must be an integer >= 1, got 2.5"),
-                          ((1.0, 0.0, 3), r"start \(1.0\) must not be after end \(0.0\)"),
-                          ((float("nan"), 1.0, 3), "start must be a finite number, got nan"),
-                          ((0.0, float("inf"), 3), "end must be a finite number, got inf"),
-                          ((0.0, 1.0, 1), "steps 1 gives one time"),
-                          ((1.0, 1.0, 2), "steps 2 needs start before end"),
-                          ((0.0, 5e-324, 3), "equal neighbouring times")]:
+    for args, message in [
+        ((0.0, 1.0, 0), "steps must be an integer >= 1, got 0"),
+        ((0.0, 1.0, 2.5), "steps must be an integer >= 1, got 2.5"),
+        ((1.0, 0.0, 3), r"start \(1.0\) must not be after end \(0.0\)"),
+        ((float("nan"), 1.0, 3), "start must be a finite number, got nan"),
+        ((0.0, float("inf"), 3), "end must be a finite number, got inf"),
+        ((0.0, 1.0, 1), "steps 1 gives one time"),
+        ((1.0, 1.0, 2), "steps 2 needs start before end"),
+        ((0.0, 5e-324, 3), "equal neighbouring times"),
+    ]:
         with pytest.raises(tgsis.InvalidInputError, match=message):
             even_times(*args)  # type: ignore[arg-type]
     with pytest.raises(tgsis.InvalidInputError, match="--steps must be"):
@@ -117,9 +120,15 @@ def test_series_frames_refuses_bad_times() -> None:
 
 @pytest.fixture
 def stored(conn: Conn) -> tuple[EvolvingSurface, int]:
-    fc = tgsis.create_feature_class(conn, "moving_faults", "SURFACE", time_model="EVOLVING", time_unit="Ma",
-                                    cell_properties=[("porosity", "double precision")],
-                                    instant_properties=[("throw", "double precision"), ("note_code", "integer")])
+    fc = tgsis.create_feature_class(
+        conn,
+        "moving_faults",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit="Ma",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+    )
     surface = evolving(np.random.default_rng(15), STARTS, instants_per_period=4, with_properties=True)
     fid = tgsis.insert_feature(conn, fc, surface)
     conn.commit()
@@ -142,8 +151,9 @@ def test_database_evolving_surface_to_pvd(conn: Conn, stored: tuple[EvolvingSurf
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE  # its snapshot transaction is over
 
 
-def test_database_default_times_are_the_own_instants(conn: Conn, stored: tuple[EvolvingSurface, int],
-                                                     tmp_path: Path) -> None:
+def test_database_default_times_are_the_own_instants(
+    conn: Conn, stored: tuple[EvolvingSurface, int], tmp_path: Path
+) -> None:
     surface, fid = stored
     written = tgsis.export_series(conn, fid, tmp_path / "own.pvd")
     assert check_against(written.pvd, surface, surface.geometry_instants.tolist()) == len(surface.geometry_instants)
@@ -152,14 +162,20 @@ def test_database_default_times_are_the_own_instants(conn: Conn, stored: tuple[E
 
 
 def test_database_series_of_a_surface_series(tx: Conn, tmp_path: Path) -> None:
-    fc = tgsis.create_feature_class(tx, "horizons", "SURFACE", time_model="INSTANTS",
-                                    cell_properties=[("porosity", "double precision")],
-                                    instant_properties=[("throw", "double precision")])
+    fc = tgsis.create_feature_class(
+        tx,
+        "horizons",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision")],
+    )
     steps = series(np.random.default_rng(16), [0.0, 1.0, 2.5], with_properties=True, alive=True)
     fid = tgsis.insert_feature(tx, fc, steps)
-    for convention in ("left", "right"):   # -1, -0.5, 0, 0.5, ... 3: before, at, between and after the instants
-        written = tgsis.export_series(tx, fid, tmp_path / f"{convention}.pvd", start=-1.0, end=3.0, steps=9,
-                                      convention=convention)
+    for convention in ("left", "right"):  # -1, -0.5, 0, 0.5, ... 3: before, at, between and after the instants
+        written = tgsis.export_series(
+            tx, fid, tmp_path / f"{convention}.pvd", start=-1.0, end=3.0, steps=9, convention=convention
+        )
         assert check_against(written.pvd, steps, even_times(-1.0, 3.0, 9).tolist(), convention) == 7
     own = tgsis.export_series(tx, fid, tmp_path / "own.pvd")
     assert check_against(own.pvd, steps, [0.0, 1.0, 2.5]) == 3

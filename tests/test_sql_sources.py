@@ -25,8 +25,9 @@ def test_pgxs_build_equals_python_build(sources: ExtensionSources, tmp_path: Pat
     work = tmp_path / "sql"
     shutil.copytree(SQL_DIR, work, ignore=shutil.ignore_patterns("build"))
     # PGXS needs pg_config only for `install`; building the script is plain make.
-    result = subprocess.run(["make", "-C", str(work), f"build/tgsis--{sources.version}.sql"],
-                            capture_output=True, text=True, check=False)
+    result = subprocess.run(
+        ["make", "-C", str(work), f"build/tgsis--{sources.version}.sql"], capture_output=True, text=True, check=False
+    )
     assert result.returncode == 0, result.stderr
     built = (work / "build" / f"tgsis--{sources.version}.sql").read_text(encoding="utf-8")
     assert built == sources.script()
@@ -49,8 +50,11 @@ def test_sources_list_every_sql_file_once(sources: ExtensionSources) -> None:
     listed = sources.files
     assert len(listed) == len(set(listed))
     assert all((SQL_DIR / name).is_file() for name in listed)
-    on_disk = {str(p.relative_to(SQL_DIR)) for p in SQL_DIR.rglob("*.sql")
-               if p.parts[len(SQL_DIR.parts)] not in ("build", "updates", "upgrade", "test")}
+    on_disk = {
+        str(p.relative_to(SQL_DIR))
+        for p in SQL_DIR.rglob("*.sql")
+        if p.parts[len(SQL_DIR.parts)] not in ("build", "updates", "upgrade", "test")
+    }
     assert on_disk == set(listed), "every SQL source must be listed in sources.txt (and only those)"
 
 
@@ -58,8 +62,10 @@ def test_every_function_and_table_is_commented(sources: ExtensionSources) -> Non
     script = sources.script()
     import re
 
-    for kind, pattern in (("FUNCTION", r"CREATE (?:OR REPLACE )?FUNCTION (tgsis\.\w+)"),
-                          ("TABLE", r"CREATE TABLE (tgsis\.\w+)")):
+    for kind, pattern in (
+        ("FUNCTION", r"CREATE (?:OR REPLACE )?FUNCTION (tgsis\.\w+)"),
+        ("TABLE", r"CREATE TABLE (tgsis\.\w+)"),
+    ):
         for name in re.findall(pattern, script):
             assert re.search(rf"COMMENT ON {kind} {re.escape(name)}\b", script), f"{name} has no COMMENT"
 
@@ -80,9 +86,14 @@ def _sources_with_updates(tmp_path: Path, *updates: str) -> ExtensionSources:
 
 
 def test_upgrade_path_takes_the_shortest_chain(tmp_path: Path) -> None:
-    src = _sources_with_updates(tmp_path, "tgsis--0.0.1--0.0.2.sql", "tgsis--0.0.2--0.1.0.sql",
-                                "tgsis--0.0.1--0.0.5.sql", "tgsis--0.0.5--0.1.0.sql",
-                                "tgsis--0.0.2--0.0.3.sql")
+    src = _sources_with_updates(
+        tmp_path,
+        "tgsis--0.0.1--0.0.2.sql",
+        "tgsis--0.0.2--0.1.0.sql",
+        "tgsis--0.0.1--0.0.5.sql",
+        "tgsis--0.0.5--0.1.0.sql",
+        "tgsis--0.0.2--0.0.3.sql",
+    )
     names = [p.name for p in src.upgrade_path("0.0.2", "0.1.0")]
     assert names == ["tgsis--0.0.2--0.1.0.sql"]
     assert len(src.upgrade_path("0.0.1", "0.1.0")) == 2

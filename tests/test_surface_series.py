@@ -18,9 +18,15 @@ TIMES = [-100.0, -66.0, -23.0, -5.0]
 
 @pytest.fixture
 def horizons(tx: Conn) -> tgsis.FeatureClass:
-    return tgsis.create_feature_class(tx, "stepped", "SURFACE", time_model="INSTANTS", time_unit="Ma",
-                                      cell_properties=[("porosity", "real")],
-                                      instant_properties=[("throw", "double precision")])
+    return tgsis.create_feature_class(
+        tx,
+        "stepped",
+        "SURFACE",
+        time_model="INSTANTS",
+        time_unit="Ma",
+        cell_properties=[("porosity", "real")],
+        instant_properties=[("throw", "double precision")],
+    )
 
 
 def reference_index(times: list[float], t: float, convention: str, alive: bool) -> int | None:
@@ -40,8 +46,18 @@ def test_step_function_in_sql(tx: Conn, horizons: tgsis.FeatureClass, convention
     rng = np.random.default_rng(11)
     obj = series(rng, TIMES, alive=alive, with_properties=True)
     fid = tgsis.insert_feature(tx, horizons, obj)
-    probes = sorted({*TIMES, *rng.uniform(-120, 20, 30).tolist(), -200.0, 50.0, float("inf"), float("-inf"),
-                     *(np.nextafter(t, -np.inf) for t in TIMES), *(np.nextafter(t, np.inf) for t in TIMES)})
+    probes = sorted(
+        {
+            *TIMES,
+            *rng.uniform(-120, 20, 30).tolist(),
+            -200.0,
+            50.0,
+            float("inf"),
+            float("-inf"),
+            *(np.nextafter(t, -np.inf) for t in TIMES),
+            *(np.nextafter(t, np.inf) for t in TIMES),
+        }
+    )
     for t in probes:
         index = reference_index(TIMES, t, convention, alive)
         got = tgsis.get_at(tx, fid, t, convention=convention)  # type: ignore[arg-type]
@@ -59,16 +75,26 @@ def test_step_function_in_sql(tx: Conn, horizons: tgsis.FeatureClass, convention
 def test_rows_counts_and_properties(tx: Conn, horizons: tgsis.FeatureClass) -> None:
     obj = series(np.random.default_rng(1), TIMES, with_properties=True)
     fid = tgsis.insert_feature(tx, horizons, obj, name="H1")
-    row = tx.execute("SELECT timemodel, geoname, nvrtx, ncell, alive FROM tgsis.geometry WHERE geoid = %s",
-                     (fid,)).fetchone()
-    assert row == ("INSTANTS", "H1", sum(s.n_vertices for s in obj.surfaces), sum(s.n_cells for s in obj.surfaces), False)
+    row = tx.execute(
+        "SELECT timemodel, geoname, nvrtx, ncell, alive FROM tgsis.geometry WHERE geoid = %s", (fid,)
+    ).fetchone()
+    assert row == (
+        "INSTANTS",
+        "H1",
+        sum(s.n_vertices for s in obj.surfaces),
+        sum(s.n_cells for s in obj.surfaces),
+        False,
+    )
     assert tgsis.instants(tx, fid) == [(t, True) for t in TIMES]
     throws = tx.execute("SELECT _times, throw FROM stepped_pros WHERE _geoid = %s ORDER BY _times", (fid,)).fetchall()
     assert throws == list(zip(TIMES, obj.properties["throw"].tolist()))
-    porosity = tx.execute("SELECT porosity FROM stepped_cellpros WHERE _geoid = %s AND _times = %s ORDER BY _idx",
-                          (fid, TIMES[2])).fetchall()
-    np.testing.assert_array_equal(np.array([r[0] for r in porosity], dtype=np.float32),
-                                  obj.surfaces[2].vertex_properties["porosity"].astype(np.float32))
+    porosity = tx.execute(
+        "SELECT porosity FROM stepped_cellpros WHERE _geoid = %s AND _times = %s ORDER BY _idx", (fid, TIMES[2])
+    ).fetchall()
+    np.testing.assert_array_equal(
+        np.array([r[0] for r in porosity], dtype=np.float32),
+        obj.surfaces[2].vertex_properties["porosity"].astype(np.float32),
+    )
     refreshed = tx.execute("SELECT nvrtx, ncell FROM tgsis.refresh_geometry(%s)", (fid,)).fetchone()
     assert refreshed == row[2:4]
 
@@ -97,10 +123,13 @@ def test_add_and_delete_instants(tx: Conn, horizons: tgsis.FeatureClass) -> None
     left = tgsis.get_at(tx, fid, -50.0)
     assert left is not None
     np.testing.assert_array_equal(left.vertices, obj.surfaces[0].vertices)
-    counts = tx.execute("SELECT (SELECT count(*) FROM tgsis.times_vrtx WHERE geoid = %(g)s AND times = -66),"
-                        " (SELECT count(*) FROM stepped_cellpros WHERE _geoid = %(g)s AND _times = -66),"
-                        " (SELECT count(*) FROM stepped_pros WHERE _geoid = %(g)s AND _times = -66),"
-                        " (SELECT nvrtx FROM tgsis.geometry WHERE geoid = %(g)s)", {"g": fid}).fetchone()
+    counts = tx.execute(
+        "SELECT (SELECT count(*) FROM tgsis.times_vrtx WHERE geoid = %(g)s AND times = -66),"
+        " (SELECT count(*) FROM stepped_cellpros WHERE _geoid = %(g)s AND _times = -66),"
+        " (SELECT count(*) FROM stepped_pros WHERE _geoid = %(g)s AND _times = -66),"
+        " (SELECT nvrtx FROM tgsis.geometry WHERE geoid = %(g)s)",
+        {"g": fid},
+    ).fetchone()
     assert counts == (0, 0, 0, obj.surfaces[0].n_vertices + len(vertices))
     tgsis.delete_instant(tx, fid, -100.0)
     with pytest.raises(tgsis.InUseError, match="only"):
@@ -110,9 +139,11 @@ def test_add_and_delete_instants(tx: Conn, horizons: tgsis.FeatureClass) -> None
 def test_delete_feature_removes_every_instant(tx: Conn, horizons: tgsis.FeatureClass) -> None:
     fid = tgsis.insert_feature(tx, horizons, series(np.random.default_rng(3), TIMES, with_properties=True))
     assert tgsis.delete_feature(tx, horizons, fid)
-    left = tx.execute("SELECT (SELECT count(*) FROM tgsis.times), (SELECT count(*) FROM tgsis.times_vrtx),"
-                      " (SELECT count(*) FROM tgsis.times_trgl), (SELECT count(*) FROM stepped_pros),"
-                      " (SELECT count(*) FROM stepped_cellpros)").fetchone()
+    left = tx.execute(
+        "SELECT (SELECT count(*) FROM tgsis.times), (SELECT count(*) FROM tgsis.times_vrtx),"
+        " (SELECT count(*) FROM tgsis.times_trgl), (SELECT count(*) FROM stepped_pros),"
+        " (SELECT count(*) FROM stepped_cellpros)"
+    ).fetchone()
     assert left == (0, 0, 0, 0, 0)
     fid = tgsis.insert_feature(tx, horizons, series(np.random.default_rng(3), TIMES, with_properties=True))
     assert tgsis.drop_feature_class(tx, "stepped", force=True) == 1
@@ -123,9 +154,11 @@ def test_registration(tx: Conn, horizons: tgsis.FeatureClass) -> None:
     assert (horizons.time_model, horizons.time_unit, horizons.protable) == ("INSTANTS", "Ma", "stepped_pros")
     assert [p.name for p in horizons.instant_properties] == ["throw"]
     assert tgsis.get_feature_class(tx, "stepped") == horizons
-    keys = tx.execute("SELECT a.attname FROM pg_index i JOIN pg_attribute a ON a.attrelid = i.indrelid "
-                      "AND a.attnum = ANY (i.indkey) WHERE i.indrelid = 'stepped_cellpros'::regclass AND i.indisprimary "
-                      "ORDER BY array_position(i.indkey, a.attnum)").fetchall()
+    keys = tx.execute(
+        "SELECT a.attname FROM pg_index i JOIN pg_attribute a ON a.attrelid = i.indrelid "
+        "AND a.attnum = ANY (i.indkey) WHERE i.indrelid = 'stepped_cellpros'::regclass AND i.indisprimary "
+        "ORDER BY array_position(i.indkey, a.attnum)"
+    ).fetchall()
     assert [k[0] for k in keys] == ["_geoid", "_times", "_idx"]
     with pytest.raises(tgsis.InvalidInputError, match="SURFACE"):
         tgsis.create_feature_class(tx, "moving_wells", "MULTILINESTRING", time_model="EVOLVING")
@@ -161,9 +194,11 @@ def test_check_geometry_finds_rows_edited_wrongly(tx: Conn, horizons: tgsis.Feat
     tx.execute("DELETE FROM tgsis.times WHERE geoid = %s AND times = %s", (fid, TIMES[1]))
     tx.execute("DELETE FROM tgsis.times_vrtx WHERE geoid = %s AND times = %s AND vrtxid = 0", (fid, TIMES[2]))
     found = {r[0] for r in tx.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchall()}
-    assert found == {"vertex or triangle at an instant not in tgsis.times",
-                     "triangle refers to a missing vertex of its instant",
-                     "bounding box or counts out of date (run tgsis.refresh_geometry)"}
+    assert found == {
+        "vertex or triangle at an instant not in tgsis.times",
+        "triangle refers to a missing vertex of its instant",
+        "bounding box or counts out of date (run tgsis.refresh_geometry)",
+    }
     tx.execute("SELECT tgsis.refresh_geometry(%s)", (fid,))
     found = {r[0] for r in tx.execute("SELECT problem FROM tgsis.check_geometry(%s)", (fid,)).fetchall()}
     assert "bounding box or counts out of date (run tgsis.refresh_geometry)" not in found
@@ -179,8 +214,9 @@ def test_fetch_series_round_trip(tx: Conn, horizons: tgsis.FeatureClass) -> None
     for got, surface in zip(back.surfaces, sent.surfaces):
         np.testing.assert_array_equal(got.vertices, surface.vertices)
         np.testing.assert_array_equal(got.triangles, surface.triangles)
-        np.testing.assert_array_equal(got.vertex_properties["porosity"],
-                                      surface.vertex_properties["porosity"].astype(np.float32))
+        np.testing.assert_array_equal(
+            got.vertex_properties["porosity"], surface.vertex_properties["porosity"].astype(np.float32)
+        )
 
 
 def test_bad_convention_is_an_error_outside_the_instants_too(tx: Conn, horizons: tgsis.FeatureClass) -> None:
@@ -200,17 +236,19 @@ def test_bad_calls_raise_and_leave_the_database_unchanged(tx: Conn, horizons: tg
     lines = tgsis.create_feature_class(tx, "lines", "MULTILINESTRING")
 
     def snapshot() -> Any:
-        return tx.execute("SELECT (SELECT count(*) FROM tgsis.times), (SELECT count(*) FROM tgsis.times_vrtx),"
-                          " (SELECT count(*) FROM stepped_cellpros), (SELECT count(*) FROM stepped_pros),"
-                          " (SELECT count(*) FROM tgsis.geometry), (SELECT nvrtx FROM tgsis.geometry WHERE geoid = %s)",
-                          (fid,)).fetchone()
+        return tx.execute(
+            "SELECT (SELECT count(*) FROM tgsis.times), (SELECT count(*) FROM tgsis.times_vrtx),"
+            " (SELECT count(*) FROM stepped_cellpros), (SELECT count(*) FROM stepped_pros),"
+            " (SELECT count(*) FROM tgsis.geometry), (SELECT nvrtx FROM tgsis.geometry WHERE geoid = %s)",
+            (fid,),
+        ).fetchone()
 
     before = snapshot()
     vertices, triangles = grid(3)
     good = tgsis.Surface(vertices, triangles, vertex_properties={"porosity": np.zeros(9)})
     with pytest.raises(tgsis.InvalidInputError, match="finite"):
         tgsis.add_instant(tx, horizons, fid, float("nan"), good)
-    with pytest.raises(tgsis.InvalidPropertyError, match="porosity"):       # refused after the instant row was written
+    with pytest.raises(tgsis.InvalidPropertyError, match="porosity"):  # refused after the instant row was written
         tgsis.add_instant(tx, horizons, fid, 7.0, tgsis.Surface(vertices, triangles))
     with pytest.raises(tgsis.InvalidPropertyError, match="depth"):
         tgsis.add_instant(tx, horizons, fid, 7.0, good, {"depth": 1.0})

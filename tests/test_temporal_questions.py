@@ -27,7 +27,13 @@ from tgsis.temporal import EvolvingSurface, TopologyPeriod
 Conn = psycopg.Connection[Any]
 OPS = ["<", "<=", ">", ">=", "=", "<>"]
 COMPARE: dict[str, Callable[[float, float], bool]] = {
-    "<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge, "=": operator.eq, "<>": operator.ne}
+    "<": operator.lt,
+    "<=": operator.le,
+    ">": operator.gt,
+    ">=": operator.ge,
+    "=": operator.eq,
+    "<>": operator.ne,
+}
 #: (lower, lower closed, upper, upper closed); infinite bounds for unbounded ends
 Interval = tuple[float, bool, float, bool]
 Value = float | None  # None: unknown (NULL) or no feature at that time
@@ -41,8 +47,13 @@ def holds(x: Value, op: str, v: float) -> bool:
     return x is not None and not math.isnan(x) and COMPARE[op](x, v)
 
 
-def sweep(breaks: Sequence[float], value_at: Callable[[float], Value], op: str, v: float,
-          crossings: frozenset[float] = frozenset()) -> list[Interval]:
+def sweep(
+    breaks: Sequence[float],
+    value_at: Callable[[float], Value],
+    op: str,
+    v: float,
+    crossings: frozenset[float] = frozenset(),
+) -> list[Interval]:
     """Maximal intervals where value_at(t) op v, the value being of one kind between consecutive breakpoints.
 
     At a crossing the value is v exactly (evaluated as such, not recomputed).
@@ -77,8 +88,9 @@ def step_value(times: Sequence[float], values: Sequence[Value], alive: bool, con
     return values[sum(1 for x in times if x < t)]
 
 
-def step_reference(times: Sequence[float], values: Sequence[Value], alive: bool, convention: str, op: str,
-                   v: float) -> list[Interval]:
+def step_reference(
+    times: Sequence[float], values: Sequence[Value], alive: bool, convention: str, op: str, v: float
+) -> list[Interval]:
     return sweep(times, lambda t: step_value(times, values, alive, convention, t), op, v)
 
 
@@ -132,8 +144,15 @@ def assert_periods(got: list[tgsis.Period], expected: list[Interval], what: str)
         assert (p.start_closed, p.end_closed) == (lower_closed, upper_closed), (what, str(p), expected)
 
 
-def assert_samples(got: list[tgsis.Period], value_at: Callable[[float], Value], op: str, v: float,
-                   times: list[float], cross: frozenset[float], what: str) -> None:
+def assert_samples(
+    got: list[tgsis.Period],
+    value_at: Callable[[float], Value],
+    op: str,
+    v: float,
+    times: list[float],
+    cross: frozenset[float],
+    what: str,
+) -> None:
     """Point by point: t lies in a period exactly when the condition holds at t (away from crossings)."""
     for t in times:
         if any(abs(t - c) < 1e-7 for c in cross):
@@ -151,22 +170,33 @@ def sample_times(rng: np.random.Generator, instants: Sequence[float], count: int
 
 @pytest.fixture
 def stepped(tx: Conn) -> tgsis.FeatureClass:
-    return tgsis.create_feature_class(tx, "stepped_horizons", "SURFACE", time_model="INSTANTS",
-                                      feature_properties=[("label", "text")],
-                                      cell_properties=[("porosity", "double precision")],
-                                      instant_properties=[("throw", "double precision"), ("note", "text"),
-                                                          ("rank", "integer")])
+    return tgsis.create_feature_class(
+        tx,
+        "stepped_horizons",
+        "SURFACE",
+        time_model="INSTANTS",
+        feature_properties=[("label", "text")],
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision"), ("note", "text"), ("rank", "integer")],
+    )
 
 
 @pytest.fixture
 def moving(tx: Conn) -> tgsis.FeatureClass:
-    return tgsis.create_feature_class(tx, "moving_faults", "SURFACE", time_model="EVOLVING", time_unit="Ma",
-                                      cell_properties=[("porosity", "double precision")],
-                                      instant_properties=[("throw", "double precision"), ("note_code", "integer")])
+    return tgsis.create_feature_class(
+        tx,
+        "moving_faults",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit="Ma",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+    )
 
 
-def with_unknowns(tx: Conn, table: str, fid: int, keys: Sequence[tuple[float, ...]], values: list[Value],
-                  rng: np.random.Generator) -> list[Value]:
+def with_unknowns(
+    tx: Conn, table: str, fid: int, keys: Sequence[tuple[float, ...]], values: list[Value], rng: np.random.Generator
+) -> list[Value]:
     """Set a NULL and a NaN at random samples of a feature's per-instant throw; return the values as stored."""
     columns = ["_times"] if len(keys[0]) == 1 else ["_timem", "_timet"]
     values = list(values)
@@ -199,22 +229,33 @@ def test_model2_periods_equal_reference(tx: Conn, stepped: tgsis.FeatureClass, a
                 what = f"{convention} {op} {v} alive={alive}"
                 got = tgsis.property_periods(tx, stepped, fid, "throw", op, v, convention=convention)
                 assert_periods(got, step_reference(times, values, alive, convention, op, v), what)
-                assert_samples(got, lambda t: step_value(times, values, alive, convention, t), op, v,
-                               sample_times(rng, times), frozenset(), what)
+                assert_samples(
+                    got,
+                    lambda t: step_value(times, values, alive, convention, t),
+                    op,
+                    v,
+                    sample_times(rng, times),
+                    frozenset(),
+                    what,
+                )
                 checked += len(got)
     assert checked > 50
 
 
 def test_model2_bounds_by_hand(tx: Conn, stepped: tgsis.FeatureClass) -> None:
     surfaces = series(np.random.default_rng(0), [0.0, 1.0, 3.0], with_properties=True).surfaces
-    dead = tgsis.insert_feature(tx, stepped, tgsis.SurfaceSeries([0.0, 1.0, 3.0], surfaces,
-                                                                 properties={"throw": [1.0, 5.0, 2.0]}))
-    alive = tgsis.insert_feature(tx, stepped, tgsis.SurfaceSeries([0.0, 1.0, 3.0], surfaces, alive=True,
-                                                                  properties={"throw": [1.0, 5.0, 2.0]}))
+    dead = tgsis.insert_feature(
+        tx, stepped, tgsis.SurfaceSeries([0.0, 1.0, 3.0], surfaces, properties={"throw": [1.0, 5.0, 2.0]})
+    )
+    alive = tgsis.insert_feature(
+        tx, stepped, tgsis.SurfaceSeries([0.0, 1.0, 3.0], surfaces, alive=True, properties={"throw": [1.0, 5.0, 2.0]})
+    )
 
     def periods(fid: int, op: str, v: float, convention: str) -> list[str]:
-        rows = tx.execute("SELECT period::text FROM tgsis.property_periods('stepped_horizons', %s, 'throw', %s, %s, %s)",
-                          (fid, op, v, convention)).fetchall()
+        rows = tx.execute(
+            "SELECT period::text FROM tgsis.property_periods('stepped_horizons', %s, 'throw', %s, %s, %s)",
+            (fid, op, v, convention),
+        ).fetchall()
         return [r[0] for r in rows]
 
     assert periods(dead, ">", 3, "left") == ["[1,3)"]
@@ -227,8 +268,11 @@ def test_model2_bounds_by_hand(tx: Conn, stepped: tgsis.FeatureClass) -> None:
     assert periods(alive, ">=", -1, "right") == ["[0,)"]
     assert periods(dead, "=", 4, "left") == []
     # the feature-level "first time" is the lower bound of the first period
-    row = tx.execute("SELECT lower(period), lower_inc(period) FROM tgsis.property_periods('stepped_horizons', %s, "
-                     "'throw', '>', 3, 'right') LIMIT 1", (dead,)).fetchone()
+    row = tx.execute(
+        "SELECT lower(period), lower_inc(period) FROM tgsis.property_periods('stepped_horizons', %s, "
+        "'throw', '>', 3, 'right') LIMIT 1",
+        (dead,),
+    ).fetchone()
     assert row == (0.0, False)
     # a missing per-instant row is unknown
     tx.execute("DELETE FROM stepped_horizons_pros WHERE _geoid = %s AND _times = 1", (alive,))
@@ -246,8 +290,9 @@ def test_model2_first_times_equal_reference(tx: Conn, stepped: tgsis.FeatureClas
     data = series(rng, times, alive=alive, with_properties=True, levels=3)
     fid = tgsis.insert_feature(tx, stepped, data)
     # a NaN cell value is unknown
-    tx.execute("UPDATE stepped_horizons_cellpros SET porosity = 'NaN' WHERE _geoid = %s AND _times = 0 AND _idx = 4",
-               (fid,))
+    tx.execute(
+        "UPDATE stepped_horizons_cellpros SET porosity = 'NaN' WHERE _geoid = %s AND _times = 0 AND _idx = 4", (fid,)
+    )
     porosity = [s.vertex_properties["porosity"].astype(float).copy() for s in data.surfaces]
     porosity[1][4] = math.nan
     n = max(len(p) for p in porosity)
@@ -291,8 +336,15 @@ def test_model3_periods_equal_reference(tx: Conn, moving: tgsis.FeatureClass, al
             what = f"{op} {v} alive={alive}"
             got = tgsis.property_periods(tx, moving, fid, "throw", op, v)
             assert_periods(got, linear_reference(periods, alive, op, v), what)
-            assert_samples(got, lambda t: linear_value(periods, alive, t), op, v, sample_times(rng, instants),
-                           crossings(periods, v), what)
+            assert_samples(
+                got,
+                lambda t: linear_value(periods, alive, t),
+                op,
+                v,
+                sample_times(rng, instants),
+                crossings(periods, v),
+                what,
+            )
             # the step convention does not apply to model 3
             assert tgsis.property_periods(tx, moving, fid, "throw", op, v, convention="right") == got
             checked += len(got)
@@ -303,11 +355,24 @@ def test_model3_periods_equal_reference(tx: Conn, moving: tgsis.FeatureClass, al
 def test_model3_topology_change_and_crossings_by_hand(tx: Conn, moving: tgsis.FeatureClass) -> None:
     vertices, triangles = grid(3)
     positions = np.stack([vertices, vertices])
-    surface = EvolvingSurface([
-        TopologyPeriod([0.0, 1.0], triangles, positions, properties={"throw": [0.0, 2.0], "note_code": [0, 0]},
-                       vertex_properties={"porosity": np.zeros((2, 9))}),
-        TopologyPeriod([1.0, 2.0], triangles, positions, properties={"throw": [5.0, 5.0], "note_code": [0, 0]},
-                       vertex_properties={"porosity": np.zeros((2, 9))})])
+    surface = EvolvingSurface(
+        [
+            TopologyPeriod(
+                [0.0, 1.0],
+                triangles,
+                positions,
+                properties={"throw": [0.0, 2.0], "note_code": [0, 0]},
+                vertex_properties={"porosity": np.zeros((2, 9))},
+            ),
+            TopologyPeriod(
+                [1.0, 2.0],
+                triangles,
+                positions,
+                properties={"throw": [5.0, 5.0], "note_code": [0, 0]},
+                vertex_properties={"porosity": np.zeros((2, 9))},
+            ),
+        ]
+    )
     fid = tgsis.insert_feature(tx, moving, surface)
 
     def periods(op: str, v: float) -> list[str]:
@@ -327,22 +392,27 @@ def test_model3_topology_change_and_crossings_by_hand(tx: Conn, moving: tgsis.Fe
     tx.execute("UPDATE tgsis.geometry SET alive = true WHERE geoid = %s", (fid,))
     assert periods(">", 1) == ["(0.5, inf)"]
     assert tgsis.Period(0.5, math.inf, False, False) == tgsis.property_periods(tx, moving, fid, "throw", ">", 1)[0]
-    row = tx.execute("SELECT period::text FROM tgsis.property_periods('moving_faults', %s, 'throw', '>', 1)",
-                     (fid,)).fetchone()
+    row = tx.execute(
+        "SELECT period::text FROM tgsis.property_periods('moving_faults', %s, 'throw', '>', 1)", (fid,)
+    ).fetchone()
     assert row == ("(0.5,)",)
 
 
 @pytest.mark.parametrize("alive", [False, True])
 def test_model3_first_times_equal_reference(tx: Conn, moving: tgsis.FeatureClass, alive: bool) -> None:
     rng = np.random.default_rng(41 + alive)
-    surface = evolving(rng, [-10.0, -6.5, -2.0], instants_per_period=4, side=3, alive=alive, with_properties=True,
-                       levels=3)
+    surface = evolving(
+        rng, [-10.0, -6.5, -2.0], instants_per_period=4, side=3, alive=alive, with_properties=True, levels=3
+    )
     fid = tgsis.insert_feature(tx, moving, surface)
     offsets = np.cumsum([0, *(p.n_nodes for p in surface.periods)])
     # node 2 of period 1 gets a NaN: unknown there and on the stretches next to it
     p1 = surface.periods[1]
-    tx.execute("UPDATE moving_faults_cellpros SET porosity = 'NaN' WHERE _geoid = %s AND _timem = %s AND _timet = %s "
-               "AND _idx = %s", (fid, p1.start, float(p1.times[1]), int(offsets[1]) + 2))
+    tx.execute(
+        "UPDATE moving_faults_cellpros SET porosity = 'NaN' WHERE _geoid = %s AND _timem = %s AND _timet = %s "
+        "AND _idx = %s",
+        (fid, p1.start, float(p1.times[1]), int(offsets[1]) + 2),
+    )
     node_values = [p.vertex_properties["porosity"].astype(float).copy() for p in surface.periods]
     node_values[1][1, 2] = math.nan
     for op in OPS:
@@ -356,25 +426,31 @@ def test_model3_first_times_equal_reference(tx: Conn, moving: tgsis.FeatureClass
                     if runs:
                         expected[int(offsets[i]) + k] = runs[0][0]
             assert idx.tolist() == sorted(expected), (op, v)
-            np.testing.assert_allclose(first, [expected[i] for i in sorted(expected)], rtol=0, atol=1e-9,
-                                       err_msg=f"{op} {v}")
+            np.testing.assert_allclose(
+                first, [expected[i] for i in sorted(expected)], rtol=0, atol=1e-9, err_msg=f"{op} {v}"
+            )
 
 
 def test_first_time_sql_rows(tx: Conn, moving: tgsis.FeatureClass) -> None:
     vertices, triangles = grid(3)
     porosity = np.zeros((3, 9))
-    porosity[:, 0] = [0.0, 1.0, 3.0]      # reaches 2 at t = 1.5 (linear from 1 at t=1 to 3 at t=2)
-    porosity[:, 1] = [2.0, 2.0, 2.0]      # is 2 from the start
-    surface = EvolvingSurface([TopologyPeriod([0.0, 1.0, 2.0], triangles, np.stack([vertices] * 3),
-                                              vertex_properties={"porosity": porosity})])
+    porosity[:, 0] = [0.0, 1.0, 3.0]  # reaches 2 at t = 1.5 (linear from 1 at t=1 to 3 at t=2)
+    porosity[:, 1] = [2.0, 2.0, 2.0]  # is 2 from the start
+    surface = EvolvingSurface(
+        [TopologyPeriod([0.0, 1.0, 2.0], triangles, np.stack([vertices] * 3), vertex_properties={"porosity": porosity})]
+    )
     fid = tgsis.insert_feature(tx, moving, surface)
-    rows = tx.execute("SELECT idx, t FROM tgsis.first_time('moving_faults', %s, 'porosity', '>=', 2)", (fid,)).fetchall()
+    rows = tx.execute(
+        "SELECT idx, t FROM tgsis.first_time('moving_faults', %s, 'porosity', '>=', 2)", (fid,)
+    ).fetchall()
     assert rows == [(0, 1.5), (1, 0.0)]
     rows = tx.execute("SELECT idx, t FROM tgsis.first_time('moving_faults', %s, 'porosity', '>', 2)", (fid,)).fetchall()
     assert rows == [(0, 1.5)]  # the infimum: > 2 holds right after 1.5
     # a missing sample is unknown, and so are the stretches next to it: node 0 is 3 at t = 2, nothing known before
     tx.execute("DELETE FROM moving_faults_cellpros WHERE _geoid = %s AND _timet = 1 AND _idx = 0", (fid,))
-    rows = tx.execute("SELECT idx, t FROM tgsis.first_time('moving_faults', %s, 'porosity', '>=', 2)", (fid,)).fetchall()
+    rows = tx.execute(
+        "SELECT idx, t FROM tgsis.first_time('moving_faults', %s, 'porosity', '>=', 2)", (fid,)
+    ).fetchall()
     assert rows == [(0, 2.0), (1, 0.0)]
     idx, first = tgsis.first_times(tx, moving, fid, "porosity", ">", 10)
     assert idx.dtype == np.int64 and first.dtype == np.float64 and idx.shape == first.shape == (0,)
@@ -398,13 +474,17 @@ def test_questions_read_the_session_version(tx: Conn, moving: tgsis.FeatureClass
 # --------------------------------------------------------------------------- bad input
 
 
-def test_bad_input_raises_and_changes_nothing(tx: Conn, stepped: tgsis.FeatureClass, moving: tgsis.FeatureClass) -> None:
+def test_bad_input_raises_and_changes_nothing(
+    tx: Conn, stepped: tgsis.FeatureClass, moving: tgsis.FeatureClass
+) -> None:
     rng = np.random.default_rng(5)
     fid = tgsis.insert_feature(tx, stepped, series(rng, [0.0, 1.0], with_properties=True))
     other = tgsis.insert_feature(tx, moving, evolving(rng, [0.0], with_properties=True))
     tgsis.create_feature_class(tx, "flat_horizons", "SURFACE", cell_properties=[("porosity", "float8")])
-    state = "SELECT (SELECT count(*) FROM stepped_horizons_pros), (SELECT sum(throw) FROM stepped_horizons_pros), " \
-            "(SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.catalog)"
+    state = (
+        "SELECT (SELECT count(*) FROM stepped_horizons_pros), (SELECT sum(throw) FROM stepped_horizons_pros), "
+        "(SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.catalog)"
+    )
     before = tx.execute(state).fetchone()
     cases: list[tuple[type[tgsis.Error], str, Callable[[], object]]] = [
         (tgsis.NotFoundError, "nope", lambda: tgsis.property_periods(tx, "nope", fid, "throw", ">", 1)),
@@ -417,8 +497,11 @@ def test_bad_input_raises_and_changes_nothing(tx: Conn, stepped: tgsis.FeatureCl
         (tgsis.InvalidInputError, "NaN", lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", math.nan)),
         (tgsis.InvalidInputError, "NaN", lambda: tgsis.first_times(tx, stepped, fid, "porosity", ">", math.nan)),
         (tgsis.InvalidInputError, "static", lambda: tgsis.first_times(tx, "flat_horizons", fid, "porosity", ">", 1)),
-        (tgsis.InvalidInputError, "convention", lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", 1,
-                                                                               convention="middle")),  # type: ignore[arg-type]
+        (
+            tgsis.InvalidInputError,
+            "convention",
+            lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", 1, convention="middle"),
+        ),  # type: ignore[arg-type]
     ]
     for error, match, call in cases:
         with pytest.raises(error, match=match) as raised:
@@ -427,17 +510,21 @@ def test_bad_input_raises_and_changes_nothing(tx: Conn, stepped: tgsis.FeatureCl
     assert tx.execute(state).fetchone() == before
     # the SQL functions raise our SQLSTATEs, with a hint where one helps
     for query, sqlstate, hint in [
-            ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'porosity', '>', 1)", "TG103", "first_time"),
-            ("SELECT * FROM tgsis.first_time('stepped_horizons', %s, 'note', '<', 1)", "TG103", "property_periods"),
-            ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'note', '<', 1)", "TG103", "numeric"),
-            ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'throw', '~', 1)", "TG100", "value op v"),
-            ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'throw', '<', NULL)", "TG100", "Infinity"),
-            ("SELECT * FROM tgsis.first_time('stepped_horizons', %s, 'porosity', '<', 1, 'up')", "TG100", None),
-            ("SELECT * FROM tgsis.first_time('nope', %s, 'porosity', '<', 1)", "TG200", "classname")]:
+        ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'porosity', '>', 1)", "TG103", "first_time"),
+        ("SELECT * FROM tgsis.first_time('stepped_horizons', %s, 'note', '<', 1)", "TG103", "property_periods"),
+        ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'note', '<', 1)", "TG103", "numeric"),
+        ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'throw', '~', 1)", "TG100", "value op v"),
+        ("SELECT * FROM tgsis.property_periods('stepped_horizons', %s, 'throw', '<', NULL)", "TG100", "Infinity"),
+        ("SELECT * FROM tgsis.first_time('stepped_horizons', %s, 'porosity', '<', 1, 'up')", "TG100", None),
+        ("SELECT * FROM tgsis.first_time('nope', %s, 'porosity', '<', 1)", "TG200", "classname"),
+    ]:
         with pytest.raises(psycopg.Error) as db_error, tx.transaction():
             tx.execute(query, (fid,))
         assert db_error.value.sqlstate == sqlstate, query
-        assert hint is None or hint in (db_error.value.diag.message_hint or ""), (query, db_error.value.diag.message_hint)
+        assert hint is None or hint in (db_error.value.diag.message_hint or ""), (
+            query,
+            db_error.value.diag.message_hint,
+        )
     assert tx.execute(state).fetchone() == before
 
 

@@ -17,12 +17,22 @@ STARTS = [0.0, 2.0]
 
 @pytest.fixture
 def classes(conn: Conn) -> tuple[tgsis.FeatureClass, tgsis.FeatureClass]:
-    moving = tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING",
-                                        cell_properties=[("porosity", "double precision")],
-                                        instant_properties=[("throw", "double precision"), ("note_code", "integer")])
-    stepped = tgsis.create_feature_class(conn, "stepped", "SURFACE", time_model="INSTANTS",
-                                         cell_properties=[("porosity", "double precision")],
-                                         instant_properties=[("throw", "double precision")])
+    moving = tgsis.create_feature_class(
+        conn,
+        "moving",
+        "SURFACE",
+        time_model="EVOLVING",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+    )
+    stepped = tgsis.create_feature_class(
+        conn,
+        "stepped",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "double precision")],
+        instant_properties=[("throw", "double precision")],
+    )
     tgsis.enable_feature_versioning(conn)
     return moving, stepped
 
@@ -45,8 +55,10 @@ def test_evolving_surface_edited_in_a_child_version(conn: Conn, classes: Any) ->
     tgsis.create_version(conn, "reinterpretation")
     with tgsis.in_version(conn, "reinterpretation"):
         # a psql user lifts the nodes of the first period at its last geometry instant
-        conn.execute("UPDATE tgsis.d4dvrtx SET z = z + 10 WHERE geoid = %s AND timem = %s AND timet = %s",
-                     (fid, STARTS[0], STARTS[1]))
+        conn.execute(
+            "UPDATE tgsis.d4dvrtx SET z = z + 10 WHERE geoid = %s AND timem = %s AND timet = %s",
+            (fid, STARTS[0], STARTS[1]),
+        )
         conn.execute("UPDATE moving_pros SET throw = -1 WHERE _geoid = %s", (fid,))
         conn.commit()
         edited = tgsis.get_at(conn, fid, t)
@@ -58,7 +70,7 @@ def test_evolving_surface_edited_in_a_child_version(conn: Conn, classes: Any) ->
     j1 = int(np.searchsorted(p.times, t))
     w = (t - p.times[j1 - 1]) / (p.times[j1] - p.times[j1 - 1])
     moved = p.positions.copy()
-    moved[-1, :, 2] += 10                                   # only the last instant of period 0 was edited
+    moved[-1, :, 2] += 10  # only the last instant of period 0 was edited
     lifted = moved[j1 - 1] + w * (moved[j1] - moved[j1 - 1])
     np.testing.assert_allclose(edited.vertices, lifted, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(first.vertices, p.positions[0])  # instants not edited stay
@@ -68,8 +80,9 @@ def test_evolving_surface_edited_in_a_child_version(conn: Conn, classes: Any) ->
     merged = tgsis.get_at(conn, fid, t)
     assert merged is not None
     np.testing.assert_array_equal(merged.vertices, edited.vertices)
-    assert conn.execute("SELECT count(*) FROM moving_pros WHERE _geoid = %s AND throw = -1", (fid,)).fetchone() == \
-        (sum(len(q.times) for q in surface.periods),)
+    assert conn.execute("SELECT count(*) FROM moving_pros WHERE _geoid = %s AND throw = -1", (fid,)).fetchone() == (
+        sum(len(q.times) for q in surface.periods),
+    )
 
 
 def test_uploads_and_deletes_inside_a_version(conn: Conn, classes: Any) -> None:
@@ -85,9 +98,9 @@ def test_uploads_and_deletes_inside_a_version(conn: Conn, classes: Any) -> None:
         local = surface.at(2.5)
         assert got is not None and local is not None
         np.testing.assert_array_equal(got.vertices, local.vertices)
-        assert tgsis.get_at(conn, kept, -0.5) is None        # its last instant (-1) is gone in v1
+        assert tgsis.get_at(conn, kept, -0.5) is None  # its last instant (-1) is gone in v1
         assert tgsis.features_at(conn, moving, 1.0) == [new]
-    assert tgsis.features_at(conn, moving, 1.0) == []         # DEFAULT does not see v1's feature
+    assert tgsis.features_at(conn, moving, 1.0) == []  # DEFAULT does not see v1's feature
     assert conn.execute("SELECT count(*) FROM tgsis.geometry WHERE geoid = %s", (new,)).fetchone() == (0,)
     with pytest.raises(tgsis.NotFoundError):
         tgsis.get_at(conn, new, 1.0)

@@ -45,8 +45,11 @@ def stored(conn: Conn) -> tuple[int, EvolvingSurface, EvolvingSurface]:
 
 def _bare(surface: EvolvingSurface) -> EvolvingSurface:
     """Without properties (the class stores none)."""
-    return EvolvingSurface([tgsis.TopologyPeriod(p.times, p.triangles, p.positions) for p in surface.periods],
-                           alive=surface.alive, name=surface.name)
+    return EvolvingSurface(
+        [tgsis.TopologyPeriod(p.times, p.triangles, p.positions) for p in surface.periods],
+        alive=surface.alive,
+        name=surface.name,
+    )
 
 
 def test_append_then_remove_periods(conn: Conn, stored: tuple[int, EvolvingSurface, EvolvingSurface]) -> None:
@@ -56,21 +59,23 @@ def test_append_then_remove_periods(conn: Conn, stored: tuple[int, EvolvingSurfa
     _same(conn, fid, _bare(EvolvingSurface(whole.periods[:3])))
     # the ids go on: nodes and triangles of the new period follow the old ones'
     assert conn.execute("SELECT count(DISTINCT nodeid) FROM tgsis.node WHERE geoid = %s", (fid,)).fetchone() == (
-        sum(p.n_nodes for p in whole.periods[:3]),)
-    assert tgsis.delete_period(conn, fid, -10.0) is True                      # the first one
+        sum(p.n_nodes for p in whole.periods[:3]),
+    )
+    assert tgsis.delete_period(conn, fid, -10.0) is True  # the first one
     conn.commit()
     _same(conn, fid, _bare(EvolvingSurface(whole.periods[1:3])))
-    assert tgsis.delete_period(conn, fid, -3.0) is True                       # the last one
+    assert tgsis.delete_period(conn, fid, -3.0) is True  # the last one
     conn.commit()
     _same(conn, fid, _bare(EvolvingSurface(whole.periods[1:2])))
-    assert tgsis.delete_period(conn, fid, -7.0) is False                      # no period starts there
+    assert tgsis.delete_period(conn, fid, -7.0) is False  # no period starts there
 
 
-def test_bad_changes_are_refused_and_change_nothing(conn: Conn,
-                                                    stored: tuple[int, EvolvingSurface, EvolvingSurface]) -> None:
+def test_bad_changes_are_refused_and_change_nothing(
+    conn: Conn, stored: tuple[int, EvolvingSurface, EvolvingSurface]
+) -> None:
     fid, first, whole = stored
     with pytest.raises(tgsis.InvalidInputError, match="starts at -1.0, not at its last geometry instant -3.0"):
-        tgsis.append_period(conn, "faults", fid, whole.periods[3], drop_extra_properties=True)   # a gap
+        tgsis.append_period(conn, "faults", fid, whole.periods[3], drop_extra_properties=True)  # a gap
     tgsis.append_period(conn, "faults", fid, whole.periods[2], drop_extra_properties=True)
     conn.commit()
     with pytest.raises(tgsis.InUseError, match="lies between others"):
@@ -93,17 +98,19 @@ def test_periods_change_in_a_version_only(conn: Conn, stored: tuple[int, Evolvin
         tgsis.append_period(conn, "faults", fid, whole.periods[2], drop_extra_properties=True)
         conn.commit()
         _same(conn, fid, _bare(EvolvingSurface(whole.periods[:3])))
-    _same(conn, fid, _bare(first))                                             # DEFAULT still has two periods
+    _same(conn, fid, _bare(first))  # DEFAULT still has two periods
 
 
-def test_two_sessions_appending_at_once_take_turns(db_dsn: str, stored: tuple[int, EvolvingSurface, EvolvingSurface]) -> None:
+def test_two_sessions_appending_at_once_take_turns(
+    db_dsn: str, stored: tuple[int, EvolvingSurface, EvolvingSurface]
+) -> None:
     """The second append waits for the first, then sees the period it added: a clear refusal, never a raw 23505."""
     import threading
 
     fid, first, whole = stored
     with psycopg.connect(db_dsn) as a, psycopg.connect(db_dsn) as b:
         a.execute("BEGIN")
-        tgsis.append_period(a, "faults", fid, whole.periods[2], drop_extra_properties=True)   # not committed yet
+        tgsis.append_period(a, "faults", fid, whole.periods[2], drop_extra_properties=True)  # not committed yet
         outcome: list[BaseException] = []
 
         def second() -> None:
@@ -115,10 +122,10 @@ def test_two_sessions_appending_at_once_take_turns(db_dsn: str, stored: tuple[in
         worker = threading.Thread(target=second)
         worker.start()
         worker.join(1.0)
-        assert worker.is_alive()                                   # b waits for a's lock on the feature
+        assert worker.is_alive()  # b waits for a's lock on the feature
         a.commit()
         worker.join(30)
         assert len(outcome) == 1 and isinstance(outcome[0], tgsis.InvalidInputError)
-        assert "starts at -3.0, not at its last geometry instant -1.0" in str(outcome[0])   # a's period is there
+        assert "starts at -3.0, not at its last geometry instant -1.0" in str(outcome[0])  # a's period is there
     with psycopg.connect(db_dsn) as check:
         _same(check, fid, _bare(EvolvingSurface(whole.periods[:3])))

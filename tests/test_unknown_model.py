@@ -24,8 +24,10 @@ Conn = psycopg.Connection[Any]
 def _stepped(conn: Conn) -> int:
     conn.execute(TEST_MODEL)  # type: ignore[arg-type]  # a test's own literal
     conn.execute("SELECT tgsis.create_storage()")
-    conn.execute("SELECT tgsis.register_feature_class('stepped', 'MULTIPOINT', p_cell_properties => '{\"v\": \"float8\"}', "
-                 "p_instant_properties => '{\"w\": \"float8\"}', p_time_model => 'STEPS')")
+    conn.execute(
+        "SELECT tgsis.register_feature_class('stepped', 'MULTIPOINT', p_cell_properties => '{\"v\": \"float8\"}', "
+        "p_instant_properties => '{\"w\": \"float8\"}', p_time_model => 'STEPS')"
+    )
     row = conn.execute("SELECT tgsis.new_geometry('MULTIPOINT', 'p', NULL, 0, 0, p_timemodel => 'STEPS')").fetchone()
     assert row is not None
     geoid = int(row[0])
@@ -55,8 +57,9 @@ def test_a_registered_model_without_a_rule_is_refused(conn: Conn, function: str,
     geoid = _stepped(conn)
     with pytest.raises(tgsis.UnknownDataModelError) as caught, reraise():
         conn.execute(query, {"g": geoid})  # type: ignore[arg-type]  # the test's own literals
-    assert str(caught.value).startswith(f"{function} has no rule for data model 9 (test points in steps, "
-                                        "time model STEPS)")
+    assert str(caught.value).startswith(
+        f"{function} has no rule for data model 9 (test points in steps, time model STEPS)"
+    )
     assert caught.value.sqlstate == "TG203"
     conn.rollback()
 
@@ -74,13 +77,16 @@ def test_a_class_of_such_a_model_without_features_is_refused_too(conn: Conn) -> 
 
 
 def test_an_unregistered_time_model_is_named(conn: Conn) -> None:
-    with pytest.raises(tgsis.UnknownDataModelError, match="time model 'NOPE' is no registered data model") as caught, \
-            reraise():
+    with (
+        pytest.raises(tgsis.UnknownDataModelError, match="time model 'NOPE' is no registered data model") as caught,
+        reraise(),
+    ):
         conn.execute("SELECT tgsis.no_model_rule('NOPE', 'tgsis.exists_at', ARRAY['STATIC'])")
     assert caught.value.hint == "SELECT model, name, timemodel FROM tgsis.data_models lists the registered models"
     conn.rollback()
     # the known models still answer
     fc = tgsis.create_feature_class(conn, "tops", "SURFACE")
     fid = tgsis.insert_feature(conn, fc, tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]))
-    assert conn.execute("SELECT tgsis.exists_at(%s, 5), (SELECT count(*) FROM tgsis.vertices_at(%s, 5))",
-                        (fid, fid)).fetchone() == (True, 3)
+    assert conn.execute(
+        "SELECT tgsis.exists_at(%s, 5), (SELECT count(*) FROM tgsis.vertices_at(%s, 5))", (fid, fid)
+    ).fetchone() == (True, 3)

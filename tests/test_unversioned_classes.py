@@ -29,28 +29,42 @@ def _grid(side: int, z: float = 0.0) -> tgsis.Surface:
     vertices = np.stack([u.ravel(), v.ravel(), np.full(side * side, z)], axis=1)
     idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                         vertex_properties={"porosity": np.linspace(0, 1, side * side)})
+    return tgsis.Surface(
+        vertices,
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        vertex_properties={"porosity": np.linspace(0, 1, side * side)},
+    )
 
 
 def _classes(conn: Conn) -> tuple[tgsis.FeatureClass, tgsis.FeatureClass]:
     """``horizons`` (versioned) and ``wells`` (without versioning: boreholes nobody edits in versions)."""
     tgsis.enable_feature_versioning(conn)
-    horizons = tgsis.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"creator": "text"},
-                                          cell_properties={"porosity": "float8"})
-    wells = tgsis.create_feature_class(conn, "wells", "SURFACE", feature_properties={"creator": "text"},
-                                       cell_properties={"porosity": "float8"}, versioned=False)
+    horizons = tgsis.create_feature_class(
+        conn, "horizons", "SURFACE", feature_properties={"creator": "text"}, cell_properties={"porosity": "float8"}
+    )
+    wells = tgsis.create_feature_class(
+        conn,
+        "wells",
+        "SURFACE",
+        feature_properties={"creator": "text"},
+        cell_properties={"porosity": "float8"},
+        versioned=False,
+    )
     conn.commit()
     return horizons, wells
 
 
 def _stored(conn: Conn, geoid: int) -> list[tuple[Any, ...]]:
     """(table, revision, closed) of every stored row of ``geoid`` in model 1's storage."""
-    return [tuple(r) for r in conn.execute(
-        "SELECT 'geometry', revision, revclosed FROM tgsis.geometry_ver WHERE geoid = %(g)s "
-        "UNION ALL SELECT 'vrtx', revision, revclosed FROM tgsis.vrtx_ver WHERE geoid = %(g)s "
-        "UNION ALL SELECT 'trgl', revision, revclosed FROM tgsis.trgl_ver WHERE geoid = %(g)s",
-        {"g": geoid}).fetchall()]
+    return [
+        tuple(r)
+        for r in conn.execute(
+            "SELECT 'geometry', revision, revclosed FROM tgsis.geometry_ver WHERE geoid = %(g)s "
+            "UNION ALL SELECT 'vrtx', revision, revclosed FROM tgsis.vrtx_ver WHERE geoid = %(g)s "
+            "UNION ALL SELECT 'trgl', revision, revclosed FROM tgsis.trgl_ver WHERE geoid = %(g)s",
+            {"g": geoid},
+        ).fetchall()
+    ]
 
 
 def _z(conn: Conn, geoid: int) -> float:
@@ -94,7 +108,7 @@ def test_every_version_and_revision_sees_the_one_current_state(conn: Conn) -> No
         assert _z(conn, well) == 5.0
         assert np.array_equal(tgsis.fetch_feature(conn, wells, well).mesh.vertices, edited.vertices)
     with tgsis.at_revision(conn, first, "DEFAULT"):
-        assert _z(conn, well) == 5.0        # it has no history: the old revision sees it as it is
+        assert _z(conn, well) == 5.0  # it has no history: the old revision sees it as it is
     # nothing of it is a difference between versions, nor a change to merge
     assert not [d for d in tgsis.diff_versions(conn, "DEFAULT", "v1") if d.key == str(well)]
     tgsis.merge_version(conn, "v1")
@@ -113,8 +127,11 @@ def test_writes_in_another_version_are_refused_and_change_nothing(conn: Conn) ->
     conn.commit()
     before = _stored(conn, well)
     with tgsis.in_version(conn, "v1"):
-        with pytest.raises(tgsis.NotVersionedError, match="features of class wells are not versioned: a write in "
-                                                          "version 'v1' would change them in every version"):
+        with pytest.raises(
+            tgsis.NotVersionedError,
+            match="features of class wells are not versioned: a write in "
+            "version 'v1' would change them in every version",
+        ):
             tgsis.insert_feature(conn, wells, _grid(2))
     with tgsis.in_version(conn, "v1"):
         with pytest.raises(tgsis.NotVersionedError, match="class wells"):
@@ -125,9 +142,11 @@ def test_writes_in_another_version_are_refused_and_change_nothing(conn: Conn) ->
     # from psql: through the shared views, and by the SQL write functions
     conn.execute("SELECT tgsis.goto_version('v1')")
     conn.commit()
-    for statement in ("UPDATE tgsis.vrtx SET z = 7 WHERE geoid = %s",
-                      "DELETE FROM tgsis.trgl WHERE geoid = %s",
-                      "SELECT tgsis.delete_geometry(%s)"):
+    for statement in (
+        "UPDATE tgsis.vrtx SET z = 7 WHERE geoid = %s",
+        "DELETE FROM tgsis.trgl WHERE geoid = %s",
+        "SELECT tgsis.delete_geometry(%s)",
+    ):
         with pytest.raises(psycopg.Error, match="features of class wells are not versioned") as caught:
             conn.execute(statement, (well,))
         assert caught.value.sqlstate == "TG305"
@@ -150,18 +169,20 @@ def test_writes_in_another_version_are_refused_and_change_nothing(conn: Conn) ->
 def test_writes_through_the_views_change_rows_in_place_in_default(conn: Conn) -> None:
     _, wells = _classes(conn)
     well = tgsis.insert_feature(conn, wells, _grid(3), {"creator": "ann"})
-    tgsis.create_version(conn, "v1")    # DEFAULT's working revision is no longer 0
+    tgsis.create_version(conn, "v1")  # DEFAULT's working revision is no longer 0
     conn.commit()
     assert tgsis.working_revision(conn) > 0
     conn.execute("UPDATE tgsis.vrtx SET z = 3 WHERE geoid = %s AND vrtxid = 0", (well,))
     conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 0", (well,))
     conn.execute("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 100, 0, 1, 4)", (well,))
     conn.commit()
-    rows = conn.execute("SELECT revision, lastrevs FROM tgsis.trgl_ver WHERE geoid = %s AND trglid IN (0, 100)",
-                        (well,)).fetchall()
-    assert rows == [(0, [])]              # trglid 0 gone for good, 100 of no version
-    assert conn.execute("SELECT count(*), min(revision), max(revision) FROM tgsis.vrtx_ver WHERE geoid = %s",
-                        (well,)).fetchone() == (9, 0, 0)
+    rows = conn.execute(
+        "SELECT revision, lastrevs FROM tgsis.trgl_ver WHERE geoid = %s AND trglid IN (0, 100)", (well,)
+    ).fetchall()
+    assert rows == [(0, [])]  # trglid 0 gone for good, 100 of no version
+    assert conn.execute(
+        "SELECT count(*), min(revision), max(revision) FROM tgsis.vrtx_ver WHERE geoid = %s", (well,)
+    ).fetchone() == (9, 0, 0)
     with tgsis.in_version(conn, "v1"):
         assert conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 0", (well,)).fetchone() == (3.0,)
     # one statement cannot move rows between a feature of no version and a versioned one
@@ -189,8 +210,9 @@ def test_deleting_a_feature_leaves_no_row_and_no_record(conn: Conn) -> None:
 
 
 def test_a_class_registered_before_feature_versioning_stays_without_it(conn: Conn) -> None:
-    wells = tgsis.create_feature_class(conn, "wells", "SURFACE", cell_properties={"porosity": "float8"},
-                                       versioned=False)
+    wells = tgsis.create_feature_class(
+        conn, "wells", "SURFACE", cell_properties={"porosity": "float8"}, versioned=False
+    )
     well = tgsis.insert_feature(conn, wells, _grid(3))
     conn.commit()
     tgsis.enable_feature_versioning(conn)
@@ -207,8 +229,9 @@ def test_a_class_registered_before_feature_versioning_stays_without_it(conn: Con
     tgsis.delete_version(conn, "v1")
     tgsis.disable_feature_versioning(conn)
     conn.commit()
-    assert conn.execute("SELECT count(*) FROM pg_constraint WHERE conrelid = 'wells'::regclass AND contype = 'f'"
-                        ).fetchone() == (1,)
+    assert conn.execute(
+        "SELECT count(*) FROM pg_constraint WHERE conrelid = 'wells'::regclass AND contype = 'f'"
+    ).fetchone() == (1,)
     assert _z(conn, well) == 2.0
 
 
@@ -226,8 +249,10 @@ def test_a_role_writing_storage_directly_must_label_rows_right(db_dsn: str) -> N
         for revision, geoid in ((working, well), (0, None)):
             target = geoid if geoid is not None else tgsis.insert_feature(ed, "horizons", _grid(2))
             with pytest.raises(psycopg.Error, match="are not live rows of revision") as caught:
-                ed.execute("INSERT INTO tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision) VALUES (%s, 99, 0, 0, 0, %s)",
-                           (target, revision))
+                ed.execute(
+                    "INSERT INTO tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision) VALUES (%s, 99, 0, 0, 0, %s)",
+                    (target, revision),
+                )
             assert caught.value.sqlstate == "TG002"
             if geoid is not None:
                 assert "revision = 0" in str(caught.value.diag.message_detail)
@@ -262,8 +287,11 @@ def test_two_sessions_editing_one_feature_of_no_version(db_dsn: str) -> None:
         a.commit()
         b.execute("UPDATE tgsis.vrtx SET z = z + 10 WHERE geoid = %s AND vrtxid = 4", (well,))
         b.commit()
-        assert a.execute("SELECT z, (SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND vrtxid = 4) "
-                         "FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 4", (well, well)).fetchone() == (11.0, 1)
+        assert a.execute(
+            "SELECT z, (SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND vrtxid = 4) "
+            "FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 4",
+            (well, well),
+        ).fetchone() == (11.0, 1)
 
 
 def test_only_default_locks_features_of_no_version(conn: Conn) -> None:
@@ -302,7 +330,8 @@ def test_temporal_and_gmap_classes_without_versioning(conn: Conn) -> None:
         "UNION ALL SELECT revision FROM tgsis.d4dvrtx_ver WHERE geoid = %(m)s "
         "UNION ALL SELECT revision FROM tgsis.gmap_ver WHERE geoid = %(b)s "
         "UNION ALL SELECT revision FROM tgsis.geometry_ver WHERE geoid IN (%(s)s, %(m)s, %(b)s)) r",
-        {"s": stepped, "m": moving, "b": block}).fetchone()
+        {"s": stepped, "m": moving, "b": block},
+    ).fetchone()
     assert revisions == ([0],)
     with tgsis.in_version(conn, "v1"):
         assert [float(t) for t, _ in tgsis.instants(conn, stepped)] == [0.0, 1.0, 2.0]
@@ -319,7 +348,8 @@ def test_temporal_and_gmap_classes_without_versioning(conn: Conn) -> None:
 
 
 def test_the_command_line_creates_lists_and_describes_a_class_without_versioning(
-        db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    db_dsn: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     with psycopg.connect(db_dsn) as conn:
         tgsis.enable_feature_versioning(conn)
         conn.commit()
@@ -344,12 +374,19 @@ def test_bad_classes_are_refused_and_nothing_is_claimed(conn: Conn) -> None:
     claimed = "SELECT count(*), (SELECT last_value FROM tgsis.geometry_geoid_seq) FROM tgsis.unversioned_features"
     before = conn.execute(claimed).fetchone()
     for call, sqlstate, message in (
-            ("SELECT tgsis.new_geometry('SURFACE', 'w', NULL, 0, 0, p_class => 'nope')", "TG200",
-             "feature class 'nope' of a new geometry does not exist"),
-            ("SELECT tgsis.claim_unversioned_geoid('nope')", "TG200", "feature class 'nope' does not exist"),
-            ("SELECT tgsis.claim_unversioned_geoid(NULL)", "TG200", "feature class NULL does not exist"),
-            ("SELECT tgsis.claim_unversioned_geoid('horizons')", "TG300",
-             "feature class horizons is versioned: its features take geoids of their own")):
+        (
+            "SELECT tgsis.new_geometry('SURFACE', 'w', NULL, 0, 0, p_class => 'nope')",
+            "TG200",
+            "feature class 'nope' of a new geometry does not exist",
+        ),
+        ("SELECT tgsis.claim_unversioned_geoid('nope')", "TG200", "feature class 'nope' does not exist"),
+        ("SELECT tgsis.claim_unversioned_geoid(NULL)", "TG200", "feature class NULL does not exist"),
+        (
+            "SELECT tgsis.claim_unversioned_geoid('horizons')",
+            "TG300",
+            "feature class horizons is versioned: its features take geoids of their own",
+        ),
+    ):
         with pytest.raises(psycopg.Error, match=message) as caught:
             conn.execute(call)
         assert caught.value.sqlstate == sqlstate
@@ -358,6 +395,7 @@ def test_bad_classes_are_refused_and_nothing_is_claimed(conn: Conn) -> None:
     # a geometry stored for a versioned class is versioned, as one stored for no class
     geoid = conn.execute("SELECT tgsis.new_geometry('SURFACE', 'h', NULL, 0, 0, p_class => 'horizons')").fetchone()
     assert geoid is not None
-    assert conn.execute("SELECT revision FROM tgsis.geometry_ver WHERE geoid = %s", geoid).fetchone() == \
-        (tgsis.working_revision(conn),)
+    assert conn.execute("SELECT revision FROM tgsis.geometry_ver WHERE geoid = %s", geoid).fetchone() == (
+        tgsis.working_revision(conn),
+    )
     assert conn.execute(claimed).fetchone()[0] == 0  # type: ignore[index]

@@ -22,13 +22,25 @@ from tgsis.db.checkin import save_feature
 
 Conn = psycopg.Connection[Any]
 
-TABLES = ("tgsis.geometry", "tgsis.vrtx", "tgsis.trgl", "tgsis.times", "tgsis.times_vrtx", "tgsis.timem",
-          "tgsis.node", "faults", "faults_cellpros", "layers", "moving")
+TABLES = (
+    "tgsis.geometry",
+    "tgsis.vrtx",
+    "tgsis.trgl",
+    "tgsis.times",
+    "tgsis.times_vrtx",
+    "tgsis.timem",
+    "tgsis.node",
+    "faults",
+    "faults_cellpros",
+    "layers",
+    "moving",
+)
 
 
 def _surface(z: float = 0.0) -> tgsis.Surface:
-    return tgsis.Surface(np.array([[0, 0, z], [1, 0, z], [0, 1, z], [1, 1, z]], dtype=float),
-                         np.array([[0, 1, 2], [1, 3, 2]]), name="s")
+    return tgsis.Surface(
+        np.array([[0, 0, z], [1, 0, z], [0, 1, z], [1, 1, z]], dtype=float), np.array([[0, 1, 2], [1, 3, 2]]), name="s"
+    )
 
 
 def _state(conn: Conn) -> dict[str, Any]:
@@ -62,8 +74,8 @@ def _python_writes(conn: Conn) -> dict[str, Any]:
     return {
         "insert_feature": lambda: tgsis.insert_feature(conn, "faults", _surface(5)),
         "insert_feature (collection)": lambda: tgsis.insert_feature(
-            conn, F.create_feature_class(conn, "bag", "GEOMETRYCOLLECTION"),
-            tgsis.GeometryCollection([_surface()])),
+            conn, F.create_feature_class(conn, "bag", "GEOMETRYCOLLECTION"), tgsis.GeometryCollection([_surface()])
+        ),
         "insert_series": lambda: tgsis.insert_feature(conn, "layers", tgsis.SurfaceSeries([0.0], [_surface()])),
         "insert_evolving": lambda: tgsis.insert_feature(conn, "moving", tgsis.EvolvingSurface([period])),
         "add_instant": lambda: T.add_instant(conn, "layers", layer, 2.0, _surface(2)),
@@ -73,9 +85,19 @@ def _python_writes(conn: Conn) -> dict[str, Any]:
     }
 
 
-@pytest.mark.parametrize("write", ["insert_feature", "insert_feature (collection)", "insert_series",
-                                   "insert_evolving", "add_instant", "delete_instant", "delete_feature",
-                                   "save_feature"])
+@pytest.mark.parametrize(
+    "write",
+    [
+        "insert_feature",
+        "insert_feature (collection)",
+        "insert_series",
+        "insert_evolving",
+        "add_instant",
+        "delete_instant",
+        "delete_feature",
+        "save_feature",
+    ],
+)
 def test_python_writes_in_a_version_are_refused(plain: Conn, write: str) -> None:
     before = _state(plain)
     with tgsis.in_version(plain, "v1"):
@@ -131,8 +153,10 @@ def test_sql_writes_in_a_version_are_refused(plain: Conn, write: str) -> None:
     assert caught.value.sqlstate == "TG305", diag.message_primary
     assert diag.message_primary is not None and "is not versioned: a write in version 'v1'" in diag.message_primary
     assert diag.message_detail is not None and "tgsis.version" in diag.message_detail
-    assert diag.message_hint == ("SELECT tgsis.enable_feature_versioning() to write features in versions, "
-                                 "or SELECT tgsis.goto_version('DEFAULT') to write in DEFAULT")
+    assert diag.message_hint == (
+        "SELECT tgsis.enable_feature_versioning() to write features in versions, "
+        "or SELECT tgsis.goto_version('DEFAULT') to write in DEFAULT"
+    )
     plain.rollback()
     assert _state(plain) == before
 
@@ -144,9 +168,9 @@ def test_sql_writes_in_default_still_work(plain: Conn) -> None:
     plain.commit()
 
 
-def test_cli_import_in_a_version_is_refused(plain: Conn, db_dsn: str, tmp_path: Path,
-                                            capsys: pytest.CaptureFixture[str],
-                                            monkeypatch: pytest.MonkeyPatch) -> None:
+def test_cli_import_in_a_version_is_refused(
+    plain: Conn, db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
     monkeypatch.delenv("TGSIS_VERSION", raising=False)
     path = tmp_path / "s.ts"

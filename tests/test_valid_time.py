@@ -36,8 +36,8 @@ def test_the_version_believed_at_a_date(surveys: Conn) -> None:
     assert tgsis.version_believed_at(surveys, _day("2023-12-31")) is None
     assert tgsis.version_believed_at(surveys, _day("2024-01-01")) == "s1"
     assert tgsis.version_believed_at(surveys, _day("2024-05-31")) == "s1"
-    assert tgsis.version_believed_at(surveys, _day("2024-06-01")) == "s2"   # [from, to): the next one
-    assert tgsis.version_believed_at(surveys, _day("2030-01-01")) == "s3"   # still believed
+    assert tgsis.version_believed_at(surveys, _day("2024-06-01")) == "s2"  # [from, to): the next one
+    assert tgsis.version_believed_at(surveys, _day("2030-01-01")) == "s3"  # still believed
     assert tgsis.version_chain(surveys, "s2")[0][0] == "s2"
 
 
@@ -60,7 +60,8 @@ def test_empty_periods_are_refused(surveys: Conn) -> None:
         tgsis.set_version_validity(surveys, "nope", _day("2024-01-01"))
     surveys.rollback()
     assert surveys.execute("SELECT valid_from::date::text FROM tgsis.versions WHERE name = 's1'").fetchone() == (
-        "2024-01-01",)
+        "2024-01-01",
+    )
 
 
 def test_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
@@ -71,7 +72,8 @@ def test_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) 
     assert capsys.readouterr().out == "s1\n"
     assert main(["--dsn", db_dsn, "version", "chain", "--at", "2023-02-01"]) == 3
     assert main(["--dsn", db_dsn, "version", "chain"]) == 0
-    assert capsys.readouterr().out.startswith("-\nversion\tbelieved from\tbelieved to\n"
-                                              "s1\t2024-01-01 00:00:00+00:00\tstill believed")
+    assert capsys.readouterr().out.startswith(
+        "-\nversion\tbelieved from\tbelieved to\ns1\t2024-01-01 00:00:00+00:00\tstill believed"
+    )
     assert main(["--dsn", db_dsn, "version", "valid", "s1", "yesterday"]) == 1
     assert "is not a date or time" in capsys.readouterr().err

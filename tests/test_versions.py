@@ -14,7 +14,9 @@ Conn = psycopg.Connection[Any]
 
 
 def _tree(conn: Conn) -> dict[str, tuple[str | None, int | None, int, list[int]]]:
-    rows = conn.execute("SELECT name, parent, initrevision, workingrevision, revisions FROM tgsis.version_tree").fetchall()
+    rows = conn.execute(
+        "SELECT name, parent, initrevision, workingrevision, revisions FROM tgsis.version_tree"
+    ).fetchall()
     return {r[0]: (r[1], r[2], r[3], list(r[4])) for r in rows}
 
 
@@ -31,14 +33,14 @@ def test_default_exists_with_revision_zero(conn: Conn) -> None:
 
 def test_hand_out_order_worked_out_by_hand(conn: Conn) -> None:
     # Rules: child.init := parent.working; parent gets next; child gets next.
-    assert tgsis.create_version(conn, "a") == 2            # a.init 0, DEFAULT 1, a 2
-    assert tgsis.create_version(conn, "b") == 4            # b.init 1, DEFAULT 3, b 4
-    assert tgsis.create_version(conn, "a1", "a") == 6      # a1.init 2, a 5, a1 6
+    assert tgsis.create_version(conn, "a") == 2  # a.init 0, DEFAULT 1, a 2
+    assert tgsis.create_version(conn, "b") == 4  # b.init 1, DEFAULT 3, b 4
+    assert tgsis.create_version(conn, "a1", "a") == 6  # a1.init 2, a 5, a1 6
     tgsis.goto_version(conn, "a")
-    assert tgsis.save_revision(conn, "checkpoint") == 5    # a's 5 frozen, a gets 7
-    assert tgsis.create_version(conn, "a2", "a") == 9      # a2.init 7, a 8, a2 9
+    assert tgsis.save_revision(conn, "checkpoint") == 5  # a's 5 frozen, a gets 7
+    assert tgsis.create_version(conn, "a2", "a") == 9  # a2.init 7, a 8, a2 9
     assert tgsis.create_version(conn, "c", "DEFAULT") == 11  # c.init 3, DEFAULT 10, c 11
-    assert tgsis.create_version(conn, "a1x", "a1") == 13   # a1x.init 6, a1 12, a1x 13
+    assert tgsis.create_version(conn, "a1x", "a1") == 13  # a1x.init 6, a1 12, a1x 13
     assert _tree(conn) == {
         "DEFAULT": (None, None, 10, [0, 1, 3, 10]),
         "a": ("DEFAULT", 0, 8, [2, 5, 7, 8]),
@@ -64,23 +66,23 @@ def test_hand_out_order_worked_out_by_hand(conn: Conn) -> None:
 
 
 def test_viewing_set_is_the_working_set_up_to_the_revision(conn: Conn) -> None:
-    tgsis.create_version(conn, "a")             # a: {0, 2}
+    tgsis.create_version(conn, "a")  # a: {0, 2}
     tgsis.goto_version(conn, "a")
-    tgsis.save_revision(conn, "s1")             # a: {0, 2, 3}
-    tgsis.save_revision(conn, "s2")             # a: {0, 2, 3, 4}
+    tgsis.save_revision(conn, "s1")  # a: {0, 2, 3}
+    tgsis.save_revision(conn, "s2")  # a: {0, 2, 3, 4}
     assert tgsis.revisions(conn, viewing=False) == [0, 2, 3, 4]
     tgsis.goto_revision(conn, "a", 3)
     assert tgsis.revisions(conn) == [0, 2, 3]
     assert tgsis.revisions(conn, viewing=False) == [0, 2, 3, 4]
     assert tgsis.viewing_revision(conn) == 3
-    tgsis.goto_revision(conn, "a", 0)           # an ancestor's revision in a's history
+    tgsis.goto_revision(conn, "a", 0)  # an ancestor's revision in a's history
     assert tgsis.revisions(conn) == [0]
     tgsis.goto_version(conn, "a")
     assert tgsis.viewing_revision(conn) is None and tgsis.revisions(conn) == [0, 2, 3, 4]
 
 
 def test_goto_revision_outside_the_history_is_refused(conn: Conn) -> None:
-    tgsis.create_version(conn, "a")   # DEFAULT gets 1 after a's creation: not in a's history
+    tgsis.create_version(conn, "a")  # DEFAULT gets 1 after a's creation: not in a's history
     with pytest.raises(tgsis.NotFoundError, match="revision 1 is not in the history of version 'a'"):
         tgsis.goto_revision(conn, "a", 1)
     assert tgsis.working_version(conn) == "DEFAULT"
@@ -104,7 +106,7 @@ def test_local_goto_ends_with_the_transaction(conn: Conn) -> None:
         assert tgsis.working_version(conn) == "a"
     assert tgsis.working_version(conn) == "DEFAULT"
     conn.commit()
-    with conn.transaction():   # what a pooler in transaction mode needs
+    with conn.transaction():  # what a pooler in transaction mode needs
         conn.execute("SET LOCAL tgsis.version = 'a'")
         assert tgsis.working_revision(conn) == 2
     assert tgsis.working_revision(conn) == 1
@@ -123,11 +125,11 @@ def test_context_managers_restore_the_previous_state(conn: Conn) -> None:
     with pytest.raises(psycopg.errors.DivisionByZero), tgsis.in_version(conn, "a"):
         conn.execute("SELECT 1/0")
     assert tgsis.working_version(conn) == "b"
-    with tgsis.in_version(conn, "a", local=True):   # inside an open transaction
+    with tgsis.in_version(conn, "a", local=True):  # inside an open transaction
         assert tgsis.working_version(conn) == "a"
     assert tgsis.working_version(conn) == "b"
     conn.commit()
-    with tgsis.in_version(conn, "a", local=True):   # a transaction of its own
+    with tgsis.in_version(conn, "a", local=True):  # a transaction of its own
         assert tgsis.working_version(conn) == "a"
         assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
@@ -156,10 +158,10 @@ def test_a_rollback_after_the_block_cannot_bring_its_version_back(conn: Conn) ->
         conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
         conn.commit()
         conn.execute("UPDATE wells SET depth = 1200 WHERE id = 1")
-    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE   # the block's transaction ended with it
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE  # the block's transaction ended with it
     conn.rollback()
     assert tgsis.working_version(conn) == "DEFAULT"
-    conn.execute("UPDATE wells SET depth = 900 WHERE id = 1")   # lands in DEFAULT, not in edit
+    conn.execute("UPDATE wells SET depth = 900 WHERE id = 1")  # lands in DEFAULT, not in edit
     conn.commit()
     assert (_depth(conn, "DEFAULT"), _depth(conn, "edit")) == (900, 1200)
 
@@ -168,7 +170,7 @@ def test_a_block_that_raises_keeps_nothing_of_its_own_transaction(conn: Conn) ->
     _wells(conn)
     with pytest.raises(ZeroDivisionError), tgsis.in_version(conn, "edit"):
         conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
-        raise ZeroDivisionError   # Python's error, the transaction itself still fine
+        raise ZeroDivisionError  # Python's error, the transaction itself still fine
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     assert tgsis.working_version(conn) == "DEFAULT"
     assert (_depth(conn, "DEFAULT"), _depth(conn, "edit")) == (1000, 1000)
@@ -182,25 +184,27 @@ def test_an_error_caught_inside_the_block_drops_its_transaction_and_restores_the
             conn.execute("SELECT 1 / 0")
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     assert tgsis.working_version(conn) == "DEFAULT"
-    assert _depth(conn, "edit") == 1000   # the failed transaction's write is not kept
+    assert _depth(conn, "edit") == 1000  # the failed transaction's write is not kept
 
 
 def test_inside_the_callers_transaction_a_rollback_undoes_the_block_whole(conn: Conn) -> None:
     _wells(conn)
-    conn.execute("SELECT 1")   # the caller's transaction
+    conn.execute("SELECT 1")  # the caller's transaction
     with tgsis.in_version(conn, "edit"):
         conn.execute("UPDATE wells SET depth = 1100 WHERE id = 1")
-    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS   # still the caller's
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS  # still the caller's
     conn.rollback()
     assert tgsis.working_version(conn) == "DEFAULT"
     assert _depth(conn, "edit") == 1000
 
 
 def test_unknown_version_everywhere(conn: Conn) -> None:
-    for call in (lambda: tgsis.goto_version(conn, "nope"),
-                 lambda: tgsis.create_version(conn, "x", "nope"),
-                 lambda: tgsis.delete_version(conn, "nope"),
-                 lambda: tgsis.goto_revision(conn, "nope", 0)):
+    for call in (
+        lambda: tgsis.goto_version(conn, "nope"),
+        lambda: tgsis.create_version(conn, "x", "nope"),
+        lambda: tgsis.delete_version(conn, "nope"),
+        lambda: tgsis.goto_revision(conn, "nope", 0),
+    ):
         with pytest.raises(tgsis.NotFoundError, match="version 'nope' does not exist"):
             call()
         conn.rollback()
@@ -212,8 +216,25 @@ def test_unknown_version_everywhere(conn: Conn) -> None:
     assert _tree(conn) == {"DEFAULT": (None, None, 0, [0])}
 
 
-@pytest.mark.parametrize("name", ["", " a", "a ", "x" * 64, "a\tb", "a\nb", "a\x7fb", "a\x85b", "a\u00a0b",
-                                  "a\u200bb", "a\u202eb", "\ufeffa", "a@1", None])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "",
+        " a",
+        "a ",
+        "x" * 64,
+        "a\tb",
+        "a\nb",
+        "a\x7fb",
+        "a\x85b",
+        "a\u00a0b",
+        "a\u200bb",
+        "a\u202eb",
+        "\ufeffa",
+        "a@1",
+        None,
+    ],
+)
 def test_bad_version_names_are_refused_and_nothing_is_written(conn: Conn, name: Any) -> None:
     with pytest.raises(tgsis.InvalidNameError, match="version name") as err:
         tgsis.create_version(conn, name)
@@ -224,8 +245,17 @@ def test_bad_version_names_are_refused_and_nothing_is_written(conn: Conn, name: 
 
 
 # the design's names are free text (revisionname varchar(50)); docs/versioning.md saves 'first pick'
-FREE_NAMES = ["first pick", "x" * 63, "-a", "a;drop", "it's \"quoted\"", "Robert'); DROP TABLE x;--", "été 2024 (v2)",
-              "断层 模型", "%s %I %L"]
+FREE_NAMES = [
+    "first pick",
+    "x" * 63,
+    "-a",
+    "a;drop",
+    'it\'s "quoted"',
+    "Robert'); DROP TABLE x;--",
+    "été 2024 (v2)",
+    "断层 模型",
+    "%s %I %L",
+]
 
 
 @pytest.mark.parametrize("name", FREE_NAMES)
@@ -280,7 +310,7 @@ def test_delete_version_refuses_default_and_parents(conn: Conn) -> None:
     conn.rollback()
     tgsis.goto_version(conn, "a1")
     assert tgsis.delete_version(conn, "a1") == 0
-    assert tgsis.working_version(conn) == "DEFAULT"     # the session left the deleted version
+    assert tgsis.working_version(conn) == "DEFAULT"  # the session left the deleted version
     assert tgsis.delete_version(conn, "a") == 0
     assert set(_tree(conn)) == {"DEFAULT"}
     assert conn.execute("SELECT count(*) FROM tgsis.revisions WHERE versionid <> 0").fetchone() == (0,)

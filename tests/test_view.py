@@ -58,19 +58,24 @@ def _cells(page: Any, selector: str) -> list[str]:
     return [t.strip() for t in page.locator(selector).all_text_contents()]
 
 
-def test_the_classes_page_lists_the_classes_and_features_the_database_holds(view: tuple[str, ViewData, str],
-                                                                              page: Any) -> None:
+def test_the_classes_page_lists_the_classes_and_features_the_database_holds(
+    view: tuple[str, ViewData, str], page: Any
+) -> None:
     url, data, _ = view
     response = page.goto(f"{url}/classes")
     assert response.status == 200
     assert page.locator("#classes tbody tr").evaluate_all("rows => rows.map(r => r.dataset.class)") == [
-        "blocks", "horizons", "layers", "moving", "secret"]
+        "blocks",
+        "horizons",
+        "layers",
+        "moving",
+        "secret",
+    ]
     assert page.locator("#classes tr[data-class=horizons] td.count").text_content() == "3"
     assert page.locator("#classes tr[data-class=moving]").text_content().count("EVOLVING") == 1
     assert "porosity:double precision (vertex)" in page.locator("#classes tr[data-class=horizons]").text_content()
     ids = [int(i) for i in page.locator("#features tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)")]
-    assert sorted(ids) == sorted([data.top, data.base, data.quoted, data.block, data.moving, data.layers,
-                                  data.hidden])
+    assert sorted(ids) == sorted([data.top, data.base, data.quoted, data.block, data.moving, data.layers, data.hidden])
     assert page.locator("#classes tr[data-class=layers]").text_content().count("INSTANTS") == 1
     # a name with quotes and markup is shown as text, not markup
     assert page.locator(f"#features tr[data-id='{data.quoted}'] td.name").text_content() == QUOTED_NAME
@@ -78,7 +83,7 @@ def test_the_classes_page_lists_the_classes_and_features_the_database_holds(view
 
     page.goto(f"{url}/classes?class=horizons&name=O%27BRIEN")
     assert _cells(page, "#features tbody tr td.name") == [QUOTED_NAME]
-    page.goto(f"{url}/classes?bbox=-1,-1,-8,30,30,-3")   # meets the base (z around -6) only, and the moving one
+    page.goto(f"{url}/classes?bbox=-1,-1,-8,30,30,-3")  # meets the base (z around -6) only, and the moving one
     ids = [int(i) for i in page.locator("#features tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)")]
     assert data.base in ids and data.top not in ids and data.quoted not in ids
 
@@ -137,10 +142,10 @@ def test_the_time_slider_over_surfaces_at_instants(view: tuple[str, ViewData, st
     page.locator("#time").fill("-3")
     wait_drawn(page, 2)
     assert page.text_content("#status").startswith("t = -3: ")
-    assert changed_fraction(flat, canvas_pixels(page)) < 0.001      # still the instant -5
+    assert changed_fraction(flat, canvas_pixels(page)) < 0.001  # still the instant -5
     page.locator("#time").fill("-1")
     wait_drawn(page, 3)
-    assert changed_fraction(flat, canvas_pixels(page)) > 0.01       # the dome
+    assert changed_fraction(flat, canvas_pixels(page)) > 0.01  # the dome
 
 
 def test_a_scene_of_features_with_different_lives(view: tuple[str, ViewData, str], page: Any) -> None:
@@ -160,7 +165,9 @@ def test_the_version_tree_and_choosing_the_version(view: tuple[str, ViewData, st
     url, data, _ = view
     page.goto(f"{url}/versions")
     assert page.locator("#versions tbody tr").evaluate_all("rows => rows.map(r => r.dataset.version)") == [
-        "DEFAULT", "edit"]
+        "DEFAULT",
+        "edit",
+    ]
     row = page.locator("#versions tr[data-version=edit]").text_content()
     assert "DEFAULT" in row and "the top lifted in the west" in row
     assert page.text_content("#current") == "DEFAULT"
@@ -190,7 +197,7 @@ def test_two_versions_compared_side_by_side_and_by_displacement(view: tuple[str,
     assert int(page.evaluate("document.body.dataset.highlighted")) > 0
     marked = canvas_pixels(page)
     assert changed_fraction(same, marked) > 0.01
-    page.uncheck("#marks")                                  # the dots off: the displacement colours alone
+    page.uncheck("#marks")  # the dots off: the displacement colours alone
     assert changed_fraction(marked, canvas_pixels(page)) > 0.001
     page.goto(f"{url}/compare?id={data.top}&a=DEFAULT&b=edit&mode=side")
     wait_drawn(page)
@@ -211,24 +218,28 @@ def test_the_conflicts_of_a_version_on_the_mesh(view: tuple[str, ViewData, str],
     assert drawn_fraction(canvas_pixels(page)) > 0.02
 
 
-@pytest.mark.parametrize(("path", "status", "message"), [
-    ("/scene?ids=987654", 404, "no feature 987654"),
-    ("/scene?ids=1%27%3B%20DROP%20TABLE%20x", 400, "is not a feature id"),
-    ("/scene?ids=99999999999999999999", 400, "is not a feature id"),
-    ("/scene?ids={moving}&t=50", 400, "outside the life"),
-    ("/scene?ids={moving}&t=inf", 400, "not a finite number"),
-    ("/scene?ids={top}&color=nope%27", 400, "colour"),
-    ("/classes?class=x%27%22", 404, "no feature class"),
-    ("/classes?bbox=1,2,3", 400, "bbox"),
-    ("/compare?id={top}&a=DEFAULT&b=no%27pe", 404, "does not exist"),
-    ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a static surface"),
-    ("/conflicts?version=DEFAULT", 400, "no parent"),
-    ("/conflicts?version=%27x", 404, "no version"),
-    ("/api/mesh/{moving}?t=nan", 400, "not a finite number"),
-    ("/api/mesh/abc", 400, "is not a feature id"),
-])
-def test_bad_urls_get_an_error_page_with_the_message(view: tuple[str, ViewData, str], page: Any, path: str,
-                                                     status: int, message: str) -> None:
+@pytest.mark.parametrize(
+    ("path", "status", "message"),
+    [
+        ("/scene?ids=987654", 404, "no feature 987654"),
+        ("/scene?ids=1%27%3B%20DROP%20TABLE%20x", 400, "is not a feature id"),
+        ("/scene?ids=99999999999999999999", 400, "is not a feature id"),
+        ("/scene?ids={moving}&t=50", 400, "outside the life"),
+        ("/scene?ids={moving}&t=inf", 400, "not a finite number"),
+        ("/scene?ids={top}&color=nope%27", 400, "colour"),
+        ("/classes?class=x%27%22", 404, "no feature class"),
+        ("/classes?bbox=1,2,3", 400, "bbox"),
+        ("/compare?id={top}&a=DEFAULT&b=no%27pe", 404, "does not exist"),
+        ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a static surface"),
+        ("/conflicts?version=DEFAULT", 400, "no parent"),
+        ("/conflicts?version=%27x", 404, "no version"),
+        ("/api/mesh/{moving}?t=nan", 400, "not a finite number"),
+        ("/api/mesh/abc", 400, "is not a feature id"),
+    ],
+)
+def test_bad_urls_get_an_error_page_with_the_message(
+    view: tuple[str, ViewData, str], page: Any, path: str, status: int, message: str
+) -> None:
     url, data, _ = view
     response = page.goto(url + path.format(top=data.top, moving=data.moving))
     assert response.status == status
@@ -238,8 +249,9 @@ def test_bad_urls_get_an_error_page_with_the_message(view: tuple[str, ViewData, 
         assert message in page.text_content("#error-message")
 
 
-def test_a_long_class_lists_its_first_features_and_says_so(view: tuple[str, ViewData, str], page: Any,
-                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_long_class_lists_its_first_features_and_says_so(
+    view: tuple[str, ViewData, str], page: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
     import tgsis.view.app
 
     url, data, _ = view

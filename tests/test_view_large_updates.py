@@ -97,9 +97,13 @@ def test_the_objects_a_transaction_locked_are_counted_across_statements(items: C
     again counts once; another version counts afresh."""
     limit = _limit(items)
     items.commit()
-    items.execute(f"DO $$ BEGIN FOR i IN 1 .. {limit * 3} LOOP UPDATE items SET val = val + 1 WHERE id = 1; END LOOP; END $$")
+    items.execute(
+        f"DO $$ BEGIN FOR i IN 1 .. {limit * 3} LOOP UPDATE items SET val = val + 1 WHERE id = 1; END LOOP; END $$"
+    )
     assert _advisory(items) == (1, 0)
-    items.execute(f"DO $$ BEGIN FOR i IN 2 .. {limit} LOOP UPDATE items SET val = val + 1 WHERE id = i; END LOOP; END $$")
+    items.execute(
+        f"DO $$ BEGIN FOR i IN 2 .. {limit} LOOP UPDATE items SET val = val + 1 WHERE id = i; END LOOP; END $$"
+    )
     assert _advisory(items) == (limit, 0)
     items.execute("UPDATE items SET val = val + 1 WHERE id = 5000")
     assert _advisory(items) == (limit, 1)
@@ -146,13 +150,21 @@ def test_a_bulk_writer_waits_for_a_large_view_update(items: Conn, db_dsn: str, o
     observer = connect(db_dsn, "observer", autocommit=True)
     try:
         assert a.execute("UPDATE items SET val = val + 1 WHERE id <= 1000").rowcount == 1000
-        other = Background(db_dsn, "other-version", lambda c: c.execute(
-            "SELECT tgsis.object_write_lock('item', ARRAY['5'])").fetchone(), "child")
+        other = Background(
+            db_dsn,
+            "other-version",
+            lambda c: c.execute("SELECT tgsis.object_write_lock('item', ARRAY['5'])").fetchone(),
+            "child",
+        )
         other.finish()  # another version: not waiting
-        b = Background(db_dsn, "bulk-writer", lambda c: [
-            c.execute("SELECT tgsis.object_write_lock('item', ARRAY['5'])"),
-            c.execute("SELECT val FROM items WHERE id = 5").fetchone(),  # read after the lock: a new snapshot
-        ][1])
+        b = Background(
+            db_dsn,
+            "bulk-writer",
+            lambda c: [
+                c.execute("SELECT tgsis.object_write_lock('item', ARRAY['5'])"),
+                c.execute("SELECT val FROM items WHERE id = 5").fetchone(),  # read after the lock: a new snapshot
+            ][1],
+        )
         wait_until_blocked(observer, b.pid, a.info.backend_pid)
         if outcome == "commit":
             a.commit()
@@ -173,11 +185,17 @@ def test_a_large_view_update_waits_for_a_bulk_writer(items: Conn, db_dsn: str, o
     observer = connect(db_dsn, "observer", autocommit=True)
     try:
         a.execute("SELECT tgsis.object_write_lock('item', ARRAY['5'])")
-        small = Background(db_dsn, "small-update", lambda c: c.execute(
-            "UPDATE items SET val = val + 1 WHERE id BETWEEN 100 AND 110").rowcount)
+        small = Background(
+            db_dsn,
+            "small-update",
+            lambda c: c.execute("UPDATE items SET val = val + 1 WHERE id BETWEEN 100 AND 110").rowcount,
+        )
         assert small.finish() == 11  # other objects, locked one by one: not waiting
-        b = Background(db_dsn, "large-update", lambda c: c.execute(
-            "UPDATE items SET val = val + 1 WHERE id BETWEEN 1 AND 1000").rowcount)
+        b = Background(
+            db_dsn,
+            "large-update",
+            lambda c: c.execute("UPDATE items SET val = val + 1 WHERE id BETWEEN 1 AND 1000").rowcount,
+        )
         wait_until_blocked(observer, b.pid, a.info.backend_pid)
         a.execute("UPDATE items_ver SET val = -5 WHERE id = 5")  # a bulk writer writes the storage itself
         if outcome == "commit":
@@ -204,8 +222,11 @@ def test_a_session_claiming_the_class_lock_in_its_settings_still_takes_it(items:
     assert _holds_class_lock(items, "DEFAULT", "ExclusiveLock")
     observer = connect(db_dsn, "observer", autocommit=True)
     try:
-        b = Background(db_dsn, "bulk-writer", lambda c: c.execute(
-            "SELECT tgsis.object_write_lock('item', ARRAY['100000'])").fetchone())
+        b = Background(
+            db_dsn,
+            "bulk-writer",
+            lambda c: c.execute("SELECT tgsis.object_write_lock('item', ARRAY['100000'])").fetchone(),
+        )
         wait_until_blocked(observer, b.pid, items.info.backend_pid)
         items.commit()
         b.finish()

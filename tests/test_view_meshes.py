@@ -23,18 +23,22 @@ from tgsis.view.meshes import drawable, pack, tetra_boundary, unpack, vertex_fla
 
 def test_a_body_holds_its_header_and_little_endian_arrays() -> None:
     positions = np.arange(12, dtype=np.float64).reshape(4, 3) / 3
-    body = pack({"kind": "triangles", "origin": [1e6, 2e6, -3.5]},
-                {"positions": positions, "indices": np.array([[0, 1, 2], [0, 2, 3]])})
+    body = pack(
+        {"kind": "triangles", "origin": [1e6, 2e6, -3.5]},
+        {"positions": positions, "indices": np.array([[0, 1, 2], [0, 2, 3]])},
+    )
     header, arrays = unpack(body)
     assert header["kind"] == "triangles" and header["origin"] == [1e6, 2e6, -3.5]
     assert [(a["name"], a["type"], a["count"]) for a in header["arrays"]] == [
-        ("positions", "float32", 12), ("indices", "uint32", 6)]
+        ("positions", "float32", 12),
+        ("indices", "uint32", 6),
+    ]
     assert (4 + int.from_bytes(body[:4], "little")) % 4 == 0
     assert arrays["positions"].dtype == np.dtype("<f4")
     np.testing.assert_array_equal(arrays["positions"], positions.ravel().astype(np.float32))
     np.testing.assert_array_equal(arrays["indices"], [0, 1, 2, 0, 2, 3])
     with pytest.raises(ValueError):
-        pack({"t": float("nan")}, {})   # strict JSON: the browser's JSON.parse refuses NaN
+        pack({"t": float("nan")}, {})  # strict JSON: the browser's JSON.parse refuses NaN
 
 
 def test_a_tetrahedral_mesh_is_drawn_by_its_boundary() -> None:
@@ -81,9 +85,11 @@ def test_the_endpoint_sends_the_stored_surface_and_property(view: tuple[str, Vie
     assert header["n_vertices"] == mesh.n_vertices and header["kind"] == "triangles"
     xyz = arrays["positions"].reshape(-1, 3).astype(np.float64) + header["origin"]
     np.testing.assert_allclose(xyz, mesh.vertices, atol=1e-5)
+
     # the triangles in no promised order (their corners travel packed), each with its orientation
     def oriented(t: np.ndarray) -> list[tuple[int, ...]]:
         return sorted(tuple(np.roll(row, -int(np.argmin(row))).tolist()) for row in np.asarray(t).reshape(-1, 3))
+
     assert oriented(arrays["indices"]) == oriented(mesh.triangles)
     np.testing.assert_allclose(arrays["values"], mesh.vertex_properties["porosity"], rtol=1e-6)
     status, body, kind = get(f"{url}/api/mesh/{data.top}/header")
@@ -99,13 +105,14 @@ def test_the_endpoint_sends_the_sql_snapshot_at_t(view: tuple[str, ViewData, str
             header, arrays = unpack(body)
             shape = tgsis.get_at(conn, data.moving, t)
             assert shape is not None and header["t"] == t
-            np.testing.assert_allclose(arrays["positions"].reshape(-1, 3) + np.asarray(header["origin"]),
-                                       shape.vertices, atol=1e-5)
+            np.testing.assert_allclose(
+                arrays["positions"].reshape(-1, 3) + np.asarray(header["origin"]), shape.vertices, atol=1e-5
+            )
     # outside its life (a scene's slider spans every feature's): an empty body, not an error
     status, body, _ = get(f"{url}/api/mesh/{data.moving}?t=-11")
     header, arrays = unpack(body)
     assert status == 200 and header["kind"] == "none" and arrays == {}
-    assert get(f"{url}/api/mesh/{data.moving}")[0] == 200   # no t: its last instant
+    assert get(f"{url}/api/mesh/{data.moving}")[0] == 200  # no t: its last instant
 
 
 def test_the_endpoint_in_a_version_sends_what_that_version_holds(view: tuple[str, ViewData, str]) -> None:

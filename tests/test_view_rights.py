@@ -39,9 +39,12 @@ def _ids(page: Any) -> list[int]:
 
 def test_a_role_with_fewer_rights_sees_less(database: tuple[str, ViewData]) -> None:
     dsn, data = database
-    with login_roles(dsn, {"reader": "tgsis_reader"}) as roles, \
-            running_view(make_conninfo(dsn, user=roles.name("reader"))) as reader_url, \
-            running_view(dsn) as owner_url, chromium() as browser:
+    with (
+        login_roles(dsn, {"reader": "tgsis_reader"}) as roles,
+        running_view(make_conninfo(dsn, user=roles.name("reader"))) as reader_url,
+        running_view(dsn) as owner_url,
+        chromium() as browser,
+    ):
         page = browser.new_page()
         page.goto(f"{owner_url}/classes")
         assert data.hidden in _ids(page)

@@ -58,16 +58,21 @@ def shapes(conn: Conn) -> Conn:
             "UPDATE {a} SET val = val + NEW.n WHERE id % 5 = NEW.n % 5; "
             "UPDATE {b} SET note = 'ev ' || NEW.n WHERE id % 7 = NEW.n; RETURN NEW; END $$".format(**names)
         )
-        conn.execute("CREATE TRIGGER before_{ev} BEFORE INSERT ON {ev} FOR EACH ROW EXECUTE FUNCTION on_{ev}()"
-                     .format(**names))
-        conn.execute("CREATE TRIGGER after_{ev} AFTER INSERT ON {ev} FOR EACH ROW EXECUTE FUNCTION on_{ev}()"
-                     .format(**names))
+        conn.execute(
+            "CREATE TRIGGER before_{ev} BEFORE INSERT ON {ev} FOR EACH ROW EXECUTE FUNCTION on_{ev}()".format(**names)
+        )
+        conn.execute(
+            "CREATE TRIGGER after_{ev} AFTER INSERT ON {ev} FOR EACH ROW EXECUTE FUNCTION on_{ev}()".format(**names)
+        )
         conn.execute(
             "CREATE FUNCTION once_{ev}() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN "
             "UPDATE {a} SET note = 'statement' WHERE id > 25; RETURN NULL; END $$".format(**names)
         )
-        conn.execute("CREATE TRIGGER stmt_{ev} AFTER INSERT ON {ev} FOR EACH STATEMENT EXECUTE FUNCTION once_{ev}()"
-                     .format(**names))
+        conn.execute(
+            "CREATE TRIGGER stmt_{ev} AFTER INSERT ON {ev} FOR EACH STATEMENT EXECUTE FUNCTION once_{ev}()".format(
+                **names
+            )
+        )
     conn.commit()
     return conn
 
@@ -128,7 +133,9 @@ SHAPES: dict[str, list[str]] = {
         "UPDATE {b} SET val = val + 10 WHERE id <= 15",
         "RELEASE SAVEPOINT s2",
     ],
-    "multi-statement-string": ["UPDATE {a} SET val = val + 1 WHERE id <= 4; UPDATE {a} SET val = val + 1 WHERE id <= 8"],
+    "multi-statement-string": [
+        "UPDATE {a} SET val = val + 1 WHERE id <= 4; UPDATE {a} SET val = val + 1 WHERE id <= 8"
+    ],
     "on-conflict-do-nothing-without-conflict": [
         "INSERT INTO {b} SELECT g, g, 'oc' FROM generate_series(40, 44) g ON CONFLICT DO NOTHING"
     ],
@@ -155,8 +162,9 @@ def _run(conn: Conn, statements: list[str], names: dict[str, str]) -> list[int]:
 
 @pytest.mark.parametrize("shape", list(SHAPES))
 @pytest.mark.parametrize("version", ["DEFAULT", "child"])
-def test_a_statement_shape_gives_the_plain_tables_result_and_leaves_nothing_queued(shapes: Conn, shape: str,
-                                                                                   version: str) -> None:
+def test_a_statement_shape_gives_the_plain_tables_result_and_leaves_nothing_queued(
+    shapes: Conn, shape: str, version: str
+) -> None:
     tgsis.create_version(shapes, "child")
     shapes.commit()
     with tgsis.in_version(shapes, version):
@@ -170,8 +178,10 @@ def test_a_statement_shape_gives_the_plain_tables_result_and_leaves_nothing_queu
     with tgsis.in_version(shapes, version, local=True):
         assert _data(shapes, "a") == _data(shapes, "pa")
         assert _data(shapes, "b") == _data(shapes, "pb")
-        assert shapes.execute("SELECT n FROM ev ORDER BY n").fetchall() == shapes.execute(
-            "SELECT n FROM pev ORDER BY n").fetchall()
+        assert (
+            shapes.execute("SELECT n FROM ev ORDER BY n").fetchall()
+            == shapes.execute("SELECT n FROM pev ORDER BY n").fetchall()
+        )
     shapes.rollback()
     if version == "child":  # DEFAULT did not move
         assert _data(shapes, "a") == [(i, i * 10, f"n{i}") for i in range(1, ROWS + 1)]
@@ -216,9 +226,7 @@ def test_on_conflict_do_nothing_meeting_a_conflict_is_refused_by_name(shapes: Co
     assert _queued(shapes) == 0
 
 
-@pytest.mark.parametrize(
-    "clause", ["ON CONFLICT (id) DO NOTHING", "ON CONFLICT (id) DO UPDATE SET val = excluded.val"]
-)
+@pytest.mark.parametrize("clause", ["ON CONFLICT (id) DO NOTHING", "ON CONFLICT (id) DO UPDATE SET val = excluded.val"])
 def test_on_conflict_with_a_target_is_refused_before_anything_is_written(shapes: Conn, clause: str) -> None:
     """A view has no unique index to infer: PostgreSQL itself refuses it, before the trigger runs."""
     before = _storage(shapes)
@@ -257,8 +265,10 @@ def test_a_version_change_after_the_last_row_is_refused(shapes: Conn) -> None:
     shapes.commit()
     before = _storage(shapes)
     with pytest.raises(psycopg.Error) as caught:
-        shapes.execute("WITH x AS (UPDATE a SET val = 0 WHERE id <= 10 RETURNING id) "
-                       "UPDATE pb SET val = hop_now(pb.id) FROM x WHERE pb.id = x.id")
+        shapes.execute(
+            "WITH x AS (UPDATE a SET val = 0 WHERE id <= 10 RETURNING id) "
+            "UPDATE pb SET val = hop_now(pb.id) FROM x WHERE pb.id = x.id"
+        )
     assert caught.value.sqlstate == "TG306"
     shapes.rollback()
     assert _storage(shapes) == before
@@ -278,10 +288,14 @@ def test_a_nested_update_of_a_row_the_statement_also_changes_is_refused(shapes: 
         with pytest.raises(psycopg.errors.TriggeredDataChangeViolation):
             shapes.execute(f"UPDATE {table} SET val = same_row(id) WHERE id <= 5")
         shapes.rollback()
-        shapes.execute("CREATE OR REPLACE FUNCTION same_row(i int) RETURNS int LANGUAGE plpgsql AS $$ BEGIN "
-                       "UPDATE pa SET note = 'inner' WHERE id = 3; RETURN i; END $$")
-    shapes.execute("CREATE OR REPLACE FUNCTION same_row(i int) RETURNS int LANGUAGE plpgsql AS $$ BEGIN "
-                   "IF i = 4 THEN UPDATE a SET note = 'inner' WHERE id = 3; END IF; RETURN i; END $$")
+        shapes.execute(
+            "CREATE OR REPLACE FUNCTION same_row(i int) RETURNS int LANGUAGE plpgsql AS $$ BEGIN "
+            "UPDATE pa SET note = 'inner' WHERE id = 3; RETURN i; END $$"
+        )
+    shapes.execute(
+        "CREATE OR REPLACE FUNCTION same_row(i int) RETURNS int LANGUAGE plpgsql AS $$ BEGIN "
+        "IF i = 4 THEN UPDATE a SET note = 'inner' WHERE id = 3; END IF; RETURN i; END $$"
+    )
     with pytest.raises(psycopg.errors.CardinalityViolation):
         shapes.execute("UPDATE a SET val = same_row(id) WHERE id <= 5")
     shapes.rollback()

@@ -22,10 +22,20 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("wheel")
-    done = subprocess.run([sys.executable, "-c", (
-        "import sys; from hatchling.builders.wheel import WheelBuilder; "
-        f"print(*WheelBuilder({str(ROOT)!r}).build(directory={str(out)!r}, versions=['standard']))")],
-        capture_output=True, text=True, check=False, cwd=ROOT)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            (
+                "import sys; from hatchling.builders.wheel import WheelBuilder; "
+                f"print(*WheelBuilder({str(ROOT)!r}).build(directory={str(out)!r}, versions=['standard']))"
+            ),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=ROOT,
+    )
     assert done.returncode == 0, done.stderr
     return Path(done.stdout.split()[-1])
 
@@ -42,12 +52,14 @@ def test_the_wheel_holds_the_sql_and_the_faults_with_their_licence(wheel: Path) 
 def test_the_installed_demo_reads_the_real_faults(wheel: Path, tmp_path: Path) -> None:
     site = tmp_path / "site"
     zipfile.ZipFile(wheel).extractall(site)
-    program = ("import tgsis, tgsis.demo as d; "
-               "print(tgsis.__file__); print(d._cfm_folder()); print(d._load_releases()[0])")
+    program = (
+        "import tgsis, tgsis.demo as d; print(tgsis.__file__); print(d._cfm_folder()); print(d._load_releases()[0])"
+    )
     env = {k: v for k, v in os.environ.items() if k != "TGSIS_DEMO_DATA"}
-    env["PYTHONPATH"] = str(site)                               # before the editable install's source tree
-    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=False,
-                          cwd=tmp_path, env=env)
+    env["PYTHONPATH"] = str(site)  # before the editable install's source tree
+    done = subprocess.run(
+        [sys.executable, "-c", program], capture_output=True, text=True, check=False, cwd=tmp_path, env=env
+    )
     assert done.returncode == 0, done.stderr
     module, folder, source = done.stdout.splitlines()[-3:]
     assert Path(module).is_relative_to(site), f"imported {module}, not the wheel's tgsis"
@@ -60,9 +72,17 @@ def test_the_wheel_holds_the_browser_view_and_three_js_with_its_licence(wheel: P
     names = set(zipfile.ZipFile(wheel).namelist())
     view = "tgsis/view/"
     # vendored code apart from ours, under static/vendor/ (issue 38)
-    for name in ("templates/base.html", "templates/scene.html", "static/view.js", "static/view.css",
-                 "static/vendor/three/three.module.js", "static/vendor/three/three.core.js",
-                 "static/vendor/three/OrbitControls.js", "static/vendor/three/LICENSE", "static/vendor/three/README.md"):
+    for name in (
+        "templates/base.html",
+        "templates/scene.html",
+        "static/view.js",
+        "static/view.css",
+        "static/vendor/three/three.module.js",
+        "static/vendor/three/three.core.js",
+        "static/vendor/three/OrbitControls.js",
+        "static/vendor/three/LICENSE",
+        "static/vendor/three/README.md",
+    ):
         assert view + name in names, f"the wheel has no {view + name}"
     from tgsis.view import THREE_VERSION
 

@@ -30,7 +30,7 @@ from tgsis.view.app import ViewConfig, create_app
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]
 BACKGROUND = np.array([244, 244, 240])  # the scenes' background (0xf4f4f0)
-QUOTED_NAME = "o'brien \"fault\" <b>"
+QUOTED_NAME = 'o\'brien "fault" <b>'
 
 
 @dataclass
@@ -56,21 +56,36 @@ def _bumpy(side: int, z: float, name: str) -> tgsis.Surface:
 def fill_view_database(dsn: str) -> ViewData:
     """Classes of models 1 (surfaces, tetrahedra), 2 and 3, a class tgsis_reader may not read, versions and a conflict."""
     with psycopg.connect(dsn) as conn:
-        tgsis.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"unit": "text"},
-                                   cell_properties={"porosity": "float8"}, description="layer tops")
+        tgsis.create_feature_class(
+            conn,
+            "horizons",
+            "SURFACE",
+            feature_properties={"unit": "text"},
+            cell_properties={"porosity": "float8"},
+            description="layer tops",
+        )
         top = tgsis.insert_feature(conn, "horizons", _bumpy(20, 0.0, "top"), {"unit": "A"})
         base = tgsis.insert_feature(conn, "horizons", _bumpy(20, -6.0, "base"), {"unit": "B"})
         quoted = tgsis.insert_feature(conn, "horizons", _bumpy(4, 40.0, QUOTED_NAME), {"unit": "C"})
         tgsis.create_feature_class(conn, "blocks", "MULTITETRA")
-        cube = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 1]],
-                        dtype=float) * 4
+        cube = (
+            np.array(
+                [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 1]], dtype=float
+            )
+            * 4
+        )
         tets = [[0, 1, 3, 5], [0, 3, 2, 6], [0, 5, 4, 6], [3, 5, 6, 7], [0, 3, 5, 6]]
         block = tgsis.insert_feature(conn, "blocks", tgsis.TetraMesh(cube, tets, name="block"))
         tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", time_unit="Ma")
         start = flat_grid(12, -10.0)
         end = start.vertices + np.array([0.0, 0.0, 8.0]) * (start.vertices[:, [0]] / 11.0)
-        moving = tgsis.insert_feature(conn, "moving", tgsis.EvolvingSurface(
-            [tgsis.TopologyPeriod([-10.0, 0.0], start.triangles, [start.vertices, end])], name="tilting"))
+        moving = tgsis.insert_feature(
+            conn,
+            "moving",
+            tgsis.EvolvingSurface(
+                [tgsis.TopologyPeriod([-10.0, 0.0], start.triangles, [start.vertices, end])], name="tilting"
+            ),
+        )
         tgsis.create_feature_class(conn, "layers", "SURFACE", time_model="INSTANTS", time_unit="Ma")
         flat, dome = flat_grid(10, 20.0), flat_grid(10, 20.0)
         dome.vertices[:, 2] += 6 - ((dome.vertices[:, :2] - 4.5) ** 2).sum(axis=1) / 7
@@ -91,8 +106,9 @@ def fill_view_database(dsn: str) -> ViewData:
 
 
 @contextmanager
-def running_view(conninfo: str, *, writable: bool = False, default_version: str | None = None,
-                 host: str = "127.0.0.1") -> Iterator[str]:
+def running_view(
+    conninfo: str, *, writable: bool = False, default_version: str | None = None, host: str = "127.0.0.1"
+) -> Iterator[str]:
     """The view of ``conninfo`` served by uvicorn in a thread on a free port of ``host``; yields its base URL.
 
     It answers the host names ``tgsis view --host HOST`` answers.
@@ -143,7 +159,8 @@ def wait_drawn(page: Any, frames: int = 1, timeout: float = 60_000) -> None:
     page.wait_for_function(
         f"document.body.dataset.state === 'error' || "
         f"(document.body.dataset.state === 'ready' && Number(document.body.dataset.frame) >= {frames})",
-        timeout=timeout)
+        timeout=timeout,
+    )
     state = page.evaluate("document.body.dataset.state")
     assert state == "ready", page.text_content("#status")
 

@@ -232,8 +232,9 @@ def _module_all(module: str) -> list[str]:
     for path in (_HERE / relative.with_suffix(".py"), _HERE / relative / "__init__.py"):
         if path.is_file():
             for node in ast.parse(path.read_text(encoding="utf-8"), str(path)).body:
-                if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__"
-                                                        for t in node.targets):
+                if isinstance(node, ast.Assign) and any(
+                    isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets
+                ):
                     return list(ast.literal_eval(node.value))
     return list(importlib.import_module(module).__all__)  # no source beside it (compiled only): import it
 

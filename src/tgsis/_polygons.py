@@ -8,7 +8,9 @@ import numpy.typing as npt
 __all__ = ["fan_triangles", "polyline_segments", "PolygonError", "POLYGON_TOLERANCE", "split_convex_polygons"]
 
 
-def fan_triangles(indices: npt.ArrayLike, offsets: npt.ArrayLike) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def fan_triangles(
+    indices: npt.ArrayLike, offsets: npt.ArrayLike
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """Polygons cut into triangles around their first corner.
 
     Parameters
@@ -77,8 +79,11 @@ class PolygonError(ValueError):
 POLYGON_TOLERANCE = 1e-6
 
 
-def split_convex_polygons(vertices: npt.NDArray[np.float64], indices: npt.ArrayLike, offsets: npt.ArrayLike,
-                          ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], int]:
+def split_convex_polygons(
+    vertices: npt.NDArray[np.float64],
+    indices: npt.ArrayLike,
+    offsets: npt.ArrayLike,
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], int]:
     """Polygons cut into a fan of triangles when each is planar and convex, so the cut changes no shape.
 
     A planar convex polygon is the union of the triangles of any fan over it:
@@ -129,10 +134,10 @@ def split_convex_polygons(vertices: npt.NDArray[np.float64], indices: npt.ArrayL
 def _not_convex_planar(points: npt.NDArray[np.float64]) -> npt.NDArray[np.str_]:
     """For (p, k, 3) polygons: "" for each planar convex one, else what it is not."""
     centred = points - points.mean(axis=1, keepdims=True)
-    size = np.sqrt((centred ** 2).sum(-1)).max(axis=1)                       # (p,)
+    size = np.sqrt((centred**2).sum(-1)).max(axis=1)  # (p,)
     ahead = np.roll(centred, -1, axis=1)
-    normal = np.cross(centred, ahead).sum(axis=1)                            # Newell: twice the area vector
-    area2 = np.sqrt((normal ** 2).sum(-1))
+    normal = np.cross(centred, ahead).sum(axis=1)  # Newell: twice the area vector
+    area2 = np.sqrt((normal**2).sum(-1))
     tol = POLYGON_TOLERANCE * np.maximum(size, np.finfo(np.float64).tiny)
     result = np.full(len(points), "", dtype=object)
     flat = area2 <= tol * size
@@ -140,13 +145,13 @@ def _not_convex_planar(points: npt.NDArray[np.float64]) -> npt.NDArray[np.str_]:
     unit = normal / np.where(area2 > 0, area2, 1.0)[:, None]
     off_plane = np.abs((centred * unit[:, None, :]).sum(-1)).max(axis=1)
     result[(result == "") & (off_plane > tol)] = "is not planar"
-    edges = ahead - centred                                                 # edge i: corner i -> i + 1
-    before = np.roll(edges, 1, axis=1)                                      # the edge into corner i
-    turn = (np.cross(before, edges) * unit[:, None, :]).sum(-1)             # > 0: a left turn about the normal
-    lengths = np.sqrt((edges ** 2).sum(-1)) * np.sqrt((before ** 2).sum(-1))
+    edges = ahead - centred  # edge i: corner i -> i + 1
+    before = np.roll(edges, 1, axis=1)  # the edge into corner i
+    turn = (np.cross(before, edges) * unit[:, None, :]).sum(-1)  # > 0: a left turn about the normal
+    lengths = np.sqrt((edges**2).sum(-1)) * np.sqrt((before**2).sum(-1))
     reflex = (turn < -tol[:, None] * size[:, None]).any(axis=1)
     result[(result == "") & reflex] = "is not convex"
-    angle = np.arctan2(turn, (before * edges).sum(-1))                       # the turn at each corner
-    twice = np.abs(angle.sum(axis=1)) > 3 * np.pi                           # a star: it turns 4 pi, not 2 pi
+    angle = np.arctan2(turn, (before * edges).sum(-1))  # the turn at each corner
+    twice = np.abs(angle.sum(axis=1)) > 3 * np.pi  # a star: it turns 4 pi, not 2 pi
     result[(result == "") & twice & (lengths.min(axis=1) > 0)] = "is not convex (it winds around twice)"
     return result.astype(str)

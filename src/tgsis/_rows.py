@@ -43,8 +43,10 @@ def row_hashes(columns: list[U64Array]) -> U64Array:
 
 def coordinate_columns(vertices: npt.NDArray[np.float64]) -> list[U64Array]:
     """The bits of the x, y and z coordinates, with ``-0.0`` made ``0.0`` (equal numbers, equal bits)."""
-    return [(np.ascontiguousarray(vertices[:, j], dtype=np.float64) + 0.0).view(np.uint64)  # -0.0 + 0.0 == +0.0
-            for j in range(3)]
+    return [
+        (np.ascontiguousarray(vertices[:, j], dtype=np.float64) + 0.0).view(np.uint64)  # -0.0 + 0.0 == +0.0
+        for j in range(3)
+    ]
 
 
 # Sorting (hash << 32 | row index) with np.sort is 2.5-3.4 times as fast as
@@ -124,6 +126,7 @@ def match_rows(old: SortedRows, new: SortedRows) -> IntArray:
 
 def _match_crowded(old: SortedRows, new: SortedRows, hashes: U64Array, result: IntArray) -> None:
     """Pair the rows whose hash prefix is one of ``hashes`` by exact value (rare: collisions, repeated rows)."""
+
     def rows_with(side: SortedRows) -> IntArray:
         lo = np.searchsorted(side.sorted_hashes, hashes, side="left")
         hi = np.searchsorted(side.sorted_hashes, hashes, side="right")
@@ -147,7 +150,7 @@ def _permutation_parity(columns: list[IntArray]) -> npt.NDArray[np.uint64]:
     """0 for cells whose vertex order is an even permutation of the ascending order, 1 for odd (inversions)."""
     odd = np.zeros(len(columns[0]), dtype=bool)
     for i, first in enumerate(columns):
-        for second in columns[i + 1:]:
+        for second in columns[i + 1 :]:
             odd ^= first > second
     return odd.view(np.uint8).astype(np.uint64)
 

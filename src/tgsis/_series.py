@@ -28,13 +28,16 @@ def as_times(times: npt.ArrayLike, what: str) -> FloatArray:
     return array
 
 
-def as_series(values: Mapping[str, npt.ArrayLike] | None, shape: tuple[int, ...],
-               what: str) -> dict[str, npt.NDArray[np.generic]]:
+def as_series(
+    values: Mapping[str, npt.ArrayLike] | None, shape: tuple[int, ...], what: str
+) -> dict[str, npt.NDArray[np.generic]]:
     """Numeric arrays of exactly ``shape`` under valid property names."""
     result: dict[str, npt.NDArray[np.generic]] = {}
     for name, raw in (values or {}).items():
         if not PROPERTY_NAME_RE.match(name):
-            raise InvalidPropertyError(f"{what} name {name!r} is not allowed (letters, digits, _; starting with a letter)")
+            raise InvalidPropertyError(
+                f"{what} name {name!r} is not allowed (letters, digits, _; starting with a letter)"
+            )
         array = np.ascontiguousarray(raw)
         if array.dtype.kind not in "biuf":
             raise InvalidPropertyError(f"{what} {name!r} must be numeric or boolean, got {array.dtype}")

@@ -37,6 +37,7 @@ def _kd_tree(points: npt.NDArray[np.float64]) -> Any:
 
     return cKDTree(points)
 
+
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
@@ -61,7 +62,8 @@ def transition_times(times: FloatArray, duration: float, label: str) -> FloatArr
         raise InvalidInputError(
             f"a sudden change of {value!r} at the start of {label} (t = {float(times[0])!r}) must end before its "
             f"second geometry instant {float(times[1]) if len(times) > 1 else float('nan')!r}",
-            hint="a sudden change is a change over a very short period: give a shorter duration")
+            hint="a sudden change is a change over a very short period: give a shorter duration",
+        )
     return np.concatenate([times[:1], [end], times[1:]]).astype(np.float64)
 
 
@@ -73,7 +75,9 @@ def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: Floa
     one unless a large triangle's centroid lies farther than the others'.
     """
     if len(triangles) == 0:
-        return np.asarray(vertices[_kd_tree(vertices).query(points)[1]] if len(vertices) else points.copy(), dtype=np.float64)
+        return np.asarray(
+            vertices[_kd_tree(vertices).query(points)[1]] if len(vertices) else points.copy(), dtype=np.float64
+        )
     from trimesh.triangles import closest_point
 
     corners = vertices[triangles]
@@ -81,8 +85,10 @@ def closest_on_triangles(vertices: FloatArray, triangles: IntArray, points: Floa
     _, candidates = _kd_tree(corners.mean(axis=1)).query(points, k=k)
     candidates = np.asarray(candidates).reshape(len(points), k)
     repeated = np.repeat(points, k, axis=0)
-    found = np.asarray(closest_point(corners[candidates.reshape(-1)], repeated),  # type: ignore[no-untyped-call]
-                       dtype=np.float64).reshape(len(points), k, 3)
+    found = np.asarray(
+        closest_point(corners[candidates.reshape(-1)], repeated),  # type: ignore[no-untyped-call]
+        dtype=np.float64,
+    ).reshape(len(points), k, 3)
     distances = np.linalg.norm(found - points[:, None, :], axis=2)
     return np.asarray(found[np.arange(len(points)), np.argmin(distances, axis=1)], dtype=np.float64)
 
@@ -99,10 +105,12 @@ def closest_on_segments(points: FloatArray, segments: IntArray, queries: FloatAr
     k = min(_CANDIDATES, len(segments))
     _, candidates = _kd_tree((a + b) / 2).query(queries, k=k)
     candidates = np.asarray(candidates).reshape(len(queries), k)
-    ca, cb = a[candidates], b[candidates]                                  # (k_q, k, m)
+    ca, cb = a[candidates], b[candidates]  # (k_q, k, m)
     ab = cb - ca
     length = np.einsum("ijk,ijk->ij", ab, ab)
-    s = np.where(length > 0, np.einsum("ijk,ijk->ij", queries[:, None, :] - ca, ab) / np.where(length > 0, length, 1), 0)
+    s = np.where(
+        length > 0, np.einsum("ijk,ijk->ij", queries[:, None, :] - ca, ab) / np.where(length > 0, length, 1), 0
+    )
     found = ca + np.clip(s, 0, 1)[..., None] * ab
     distances = np.linalg.norm(found - queries[:, None, :], axis=2)
     return np.asarray(found[np.arange(len(queries)), np.argmin(distances, axis=1)], dtype=np.float64)
@@ -128,7 +136,9 @@ def start_on(before: Callable[[FloatArray], FloatArray], after: FloatArray, roun
     return before(after - offset)
 
 
-def prepend_first(values: npt.NDArray[np.generic], first: npt.NDArray[np.generic] | None = None) -> npt.NDArray[np.generic]:
+def prepend_first(
+    values: npt.NDArray[np.generic], first: npt.NDArray[np.generic] | None = None
+) -> npt.NDArray[np.generic]:
     """(g + 1, ...) ``values`` (g, ...) with ``first`` (default: ``values[0]``) put before them."""
     head = values[:1] if first is None else np.asarray(first, dtype=values.dtype)[None]
     return np.concatenate([head, values])

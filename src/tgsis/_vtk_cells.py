@@ -20,9 +20,26 @@ import numpy.typing as npt
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, mesh_class
 
-__all__ = ["KIND_OF_CELL_TYPE", "CELL_TYPE_OF", "VTK_CELL_NAMES", "labelled", "strings", "string_bytes", "first",
-           "split_cells", "mesh_from_cells", "collection_from_cells", "mesh_from_vtk_cells", "one_mesh", "vtk_parts",
-           "shared_properties", "NO_PART", "file_array_names", "named_as_read", "without_no_part"]
+__all__ = [
+    "KIND_OF_CELL_TYPE",
+    "CELL_TYPE_OF",
+    "VTK_CELL_NAMES",
+    "labelled",
+    "strings",
+    "string_bytes",
+    "first",
+    "split_cells",
+    "mesh_from_cells",
+    "collection_from_cells",
+    "mesh_from_vtk_cells",
+    "one_mesh",
+    "vtk_parts",
+    "shared_properties",
+    "NO_PART",
+    "file_array_names",
+    "named_as_read",
+    "without_no_part",
+]
 
 #: The ``part`` of the cells of a collection member that has no parts, where other members have them: one VTK
 #: cell array covers the cells of every member. Read back, a member whose cells all have it has no ``part``.
@@ -32,13 +49,37 @@ _T = TypeVar("_T")
 
 # VTK cell types: the kind of tgsis mesh each belongs to
 _VERTEX, _POLY_VERTEX, _LINE, _POLY_LINE, _TRIANGLE, _TETRA = 1, 2, 3, 4, 5, 10
-KIND_OF_CELL_TYPE: dict[int, type[Mesh]] = {_VERTEX: PointSet, _POLY_VERTEX: PointSet, _LINE: LineSet,
-                                             _POLY_LINE: LineSet, _TRIANGLE: Surface, _TETRA: TetraMesh}
+KIND_OF_CELL_TYPE: dict[int, type[Mesh]] = {
+    _VERTEX: PointSet,
+    _POLY_VERTEX: PointSet,
+    _LINE: LineSet,
+    _POLY_LINE: LineSet,
+    _TRIANGLE: Surface,
+    _TETRA: TetraMesh,
+}
 CELL_TYPE_OF: dict[type[Mesh], int] = {PointSet: _VERTEX, LineSet: _LINE, Surface: _TRIANGLE, TetraMesh: _TETRA}
-VTK_CELL_NAMES = {1: "VERTEX", 2: "POLY_VERTEX", 3: "LINE", 4: "POLY_LINE", 5: "TRIANGLE", 6: "TRIANGLE_STRIP",
-                   7: "POLYGON", 8: "PIXEL", 9: "QUAD", 10: "TETRA", 11: "VOXEL", 12: "HEXAHEDRON", 13: "WEDGE",
-                   14: "PYRAMID", 21: "QUADRATIC_EDGE", 22: "QUADRATIC_TRIANGLE", 23: "QUADRATIC_QUAD",
-                   24: "QUADRATIC_TETRA", 25: "QUADRATIC_HEXAHEDRON", 42: "POLYHEDRON"}
+VTK_CELL_NAMES = {
+    1: "VERTEX",
+    2: "POLY_VERTEX",
+    3: "LINE",
+    4: "POLY_LINE",
+    5: "TRIANGLE",
+    6: "TRIANGLE_STRIP",
+    7: "POLYGON",
+    8: "PIXEL",
+    9: "QUAD",
+    10: "TETRA",
+    11: "VOXEL",
+    12: "HEXAHEDRON",
+    13: "WEDGE",
+    14: "PYRAMID",
+    21: "QUADRATIC_EDGE",
+    22: "QUADRATIC_TRIANGLE",
+    23: "QUADRATIC_QUAD",
+    24: "QUADRATIC_TETRA",
+    25: "QUADRATIC_HEXAHEDRON",
+    42: "POLYHEDRON",
+}
 
 
 def labelled(source: str, build: Callable[[], _T]) -> _T:
@@ -76,8 +117,9 @@ def first(values: Any) -> str | None:
     return found[0] if found else None
 
 
-def split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connectivity: npt.NDArray[np.int64],
-                 source: str) -> tuple[type[Mesh], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def split_cells(
+    types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connectivity: npt.NDArray[np.int64], source: str
+) -> tuple[type[Mesh], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """The mesh class of cells all of one kind, its (m, k) cells, and the source cell of each.
 
     POLY_VERTEX and POLY_LINE cells are split into vertices and segments.
@@ -92,16 +134,19 @@ def split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connect
         raise InvalidGeometryError(
             f"{source} has {listed} cells: tgsis stores vertices, lines, triangles and tetrahedra",
             detail=f"{int(refused.sum())} of {len(types)} cells, of {point_counts} points",
-            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)" if polygons
+            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)"
+            if polygons
             else "convert them to tetrahedra or triangles first (pyvista: mesh.triangulate(); ParaView: the "
-                 "Tetrahedralize filter)")
+            "Tetrahedralize filter)",
+        )
     kinds = list(dict.fromkeys(KIND_OF_CELL_TYPE[t] for t in present))
     if len(kinds) > 1:
         listed = ", ".join(f"{VTK_CELL_NAMES[t]} ({int((types == t).sum())})" for t in present)
         raise InvalidGeometryError(
             f"{source} mixes cells of several kinds ({listed}): a tgsis mesh has one kind of cell",
             hint="extract one kind first (e.g. mesh.extract_cells_by_type(pyvista.CellType.TRIANGLE)), or store "
-                 "the kinds as members of a tgsis.GeometryCollection")
+            "the kinds as members of a tgsis.GeometryCollection",
+        )
     kind = kinds[0]
     k = kind.cell_size
     sizes = np.diff(offsets)
@@ -119,26 +164,51 @@ def split_cells(types: npt.NDArray[Any], offsets: npt.NDArray[np.int64], connect
     return kind, cells.astype(np.int64), source_cell
 
 
-def mesh_from_cells(kind: type[Mesh], vertices: npt.NDArray[np.float64], cells: npt.NDArray[np.int64],
-                     vertex_properties: dict[str, npt.NDArray[Any]], cell_properties: dict[str, npt.NDArray[Any]],
-                     name: str | None, metadata: dict[str, Any]) -> Mesh:
+def mesh_from_cells(
+    kind: type[Mesh],
+    vertices: npt.NDArray[np.float64],
+    cells: npt.NDArray[np.int64],
+    vertex_properties: dict[str, npt.NDArray[Any]],
+    cell_properties: dict[str, npt.NDArray[Any]],
+    name: str | None,
+    metadata: dict[str, Any],
+) -> Mesh:
     if kind is PointSet and len(cells) == 0 and len(vertices):  # points without cells: a point cloud, one each
         return PointSet(vertices, vertex_properties=vertex_properties, name=name, metadata=metadata)
-    return kind(vertices, cells, vertex_properties=vertex_properties, cell_properties=cell_properties, name=name,
-                metadata=metadata)
+    return kind(
+        vertices,
+        cells,
+        vertex_properties=vertex_properties,
+        cell_properties=cell_properties,
+        name=name,
+        metadata=metadata,
+    )
 
 
-def collection_from_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-                           connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
-                           cell_data: dict[str, npt.NDArray[Any]], table: tuple[list[str], list[str], Any],
-                           name: str | None, metadata: dict[str, Any], source: str) -> GeometryCollection:
+def collection_from_cells(
+    vertices: npt.NDArray[np.float64],
+    types: npt.NDArray[Any],
+    offsets: npt.NDArray[np.int64],
+    connectivity: npt.NDArray[np.int64],
+    point_data: dict[str, npt.NDArray[Any]],
+    cell_data: dict[str, npt.NDArray[Any]],
+    table: tuple[list[str], list[str], Any],
+    name: str | None,
+    metadata: dict[str, Any],
+    source: str,
+) -> GeometryCollection:
     """The members of a grid written from a GeometryCollection (its member table in the field data)."""
     geotypes, names, sizes_raw = table
     sizes = np.asarray(sizes_raw, dtype=np.int64).reshape(-1, 2)
-    if len(sizes) != len(geotypes) or sizes.min(initial=0) < 0 or int(sizes[:, 0].sum()) != len(vertices) \
-            or int(sizes[:, 1].sum()) != len(types):
-        raise InvalidGeometryError(f"{source}: its tgsis member table does not match its {len(vertices)} points and "
-                                   f"{len(types)} cells")
+    if (
+        len(sizes) != len(geotypes)
+        or sizes.min(initial=0) < 0
+        or int(sizes[:, 0].sum()) != len(vertices)
+        or int(sizes[:, 1].sum()) != len(types)
+    ):
+        raise InvalidGeometryError(
+            f"{source}: its tgsis member table does not match its {len(vertices)} points and {len(types)} cells"
+        )
     members: list[Mesh] = []
     first_point = first_cell = 0
     for i, (geotype, (n_p, n_c)) in enumerate(zip(geotypes, sizes.tolist())):
@@ -149,13 +219,20 @@ def collection_from_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[
             raise InvalidGeometryError(f"{source}: member {i} is a {geotype} but has other cells")
         start = int(offsets[first_cell])
         k = kind.cell_size
-        member_cells = (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k)
+        member_cells = (connectivity[start : start + n_c * k] - first_point).reshape(n_c, k)
         member_cell_data = without_no_part({key: v[cells] for key, v in cell_data.items()})
-        members.append(labelled(f"{source} member {i}", lambda: kind(
-            vertices[points], member_cells,
-            vertex_properties={key: v[points] for key, v in point_data.items()},
-            cell_properties=member_cell_data,
-            name=(names[i] if i < len(names) else "") or None)))
+        members.append(
+            labelled(
+                f"{source} member {i}",
+                lambda: kind(
+                    vertices[points],
+                    member_cells,
+                    vertex_properties={key: v[points] for key, v in point_data.items()},
+                    cell_properties=member_cell_data,
+                    name=(names[i] if i < len(names) else "") or None,
+                ),
+            )
+        )
         first_point, first_cell = first_point + n_p, first_cell + n_c
     return GeometryCollection(members, name=name, metadata=metadata)
 
@@ -168,10 +245,19 @@ def without_no_part(cell_data: dict[str, npt.NDArray[Any]]) -> dict[str, npt.NDA
     return cell_data
 
 
-def mesh_from_vtk_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-                        connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
-                        cell_data: dict[str, npt.NDArray[Any]], *, name: str | None, geotype: str | None,
-                        metadata: dict[str, Any], source: str) -> Mesh:
+def mesh_from_vtk_cells(
+    vertices: npt.NDArray[np.float64],
+    types: npt.NDArray[Any],
+    offsets: npt.NDArray[np.int64],
+    connectivity: npt.NDArray[np.int64],
+    point_data: dict[str, npt.NDArray[Any]],
+    cell_data: dict[str, npt.NDArray[Any]],
+    *,
+    name: str | None,
+    geotype: str | None,
+    metadata: dict[str, Any],
+    source: str,
+) -> Mesh:
     """One tgsis mesh from cells in VTK's layout (types, offsets from 0, connectivity), as for pyvista objects.
 
     For the VTK file readers (:mod:`tgsis.formats.vtk` for .vtp, :mod:`tgsis.formats.vtk_legacy`): the same rules
@@ -185,30 +271,48 @@ def mesh_from_vtk_cells(vertices: npt.NDArray[np.float64], types: npt.NDArray[An
     return one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name, geotype, metadata, source)
 
 
-def one_mesh(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-              connectivity: npt.NDArray[np.int64], point_data: dict[str, npt.NDArray[Any]],
-              cell_data: dict[str, npt.NDArray[Any]], name: str | None, geotype: str | None,
-              metadata: dict[str, Any], source: str) -> Mesh:
+def one_mesh(
+    vertices: npt.NDArray[np.float64],
+    types: npt.NDArray[Any],
+    offsets: npt.NDArray[np.int64],
+    connectivity: npt.NDArray[np.int64],
+    point_data: dict[str, npt.NDArray[Any]],
+    cell_data: dict[str, npt.NDArray[Any]],
+    name: str | None,
+    geotype: str | None,
+    metadata: dict[str, Any],
+    source: str,
+) -> Mesh:
     if len(types) == 0:
         if geotype is not None:
             kind = mesh_class(geotype)  # written by tgsis: an empty mesh keeps its type
         elif len(vertices):
             kind = PointSet
         else:
-            raise InvalidGeometryError(f"{source} is empty (no point, no cell): nothing says what kind of mesh it is",
-                                       hint="give it points (and cells), or build the empty tgsis mesh you mean "
-                                            "(e.g. tgsis.Surface(numpy.empty((0, 3)), numpy.empty((0, 3))))")
-        return mesh_from_cells(kind, vertices, np.empty((0, kind.cell_size), dtype=np.int64), point_data,
-                                cell_data, name, metadata)
+            raise InvalidGeometryError(
+                f"{source} is empty (no point, no cell): nothing says what kind of mesh it is",
+                hint="give it points (and cells), or build the empty tgsis mesh you mean "
+                "(e.g. tgsis.Surface(numpy.empty((0, 3)), numpy.empty((0, 3))))",
+            )
+        return mesh_from_cells(
+            kind, vertices, np.empty((0, kind.cell_size), dtype=np.int64), point_data, cell_data, name, metadata
+        )
     kind, cells, source_cell = split_cells(types, offsets, connectivity, source)
     if len(source_cell) != len(types):
         cell_data = {k: v[source_cell] for k, v in cell_data.items()}
     return mesh_from_cells(kind, vertices, cells, point_data, cell_data, name, metadata)
 
 
-def vtk_parts(geometry: Geometry) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.int64],
-                                        npt.NDArray[np.uint8], dict[str, npt.NDArray[Any]],
-                                        dict[str, npt.NDArray[Any]]]:
+def vtk_parts(
+    geometry: Geometry,
+) -> tuple[
+    npt.NDArray[np.float64],
+    npt.NDArray[np.int64],
+    npt.NDArray[np.int64],
+    npt.NDArray[np.uint8],
+    dict[str, npt.NDArray[Any]],
+    dict[str, npt.NDArray[Any]],
+]:
     """Points, flat connectivity, offsets (m + 1, from 0), VTK cell types, point data, cell data."""
     members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
     first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
@@ -220,8 +324,14 @@ def vtk_parts(geometry: Geometry) -> tuple[npt.NDArray[np.float64], npt.NDArray[
     else:
         point_data, cell_data = geometry.vertex_properties, geometry.cell_properties
     vertices = np.concatenate([m.vertices for m in members]) if members else np.empty((0, 3))
-    return (vertices, connectivity.astype(np.int64), np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
-            types, dict(point_data), dict(cell_data))
+    return (
+        vertices,
+        connectivity.astype(np.int64),
+        np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
+        types,
+        dict(point_data),
+        dict(cell_data),
+    )
 
 
 def shared_properties(members: tuple[Mesh, ...], kind: str) -> dict[str, npt.NDArray[Any]]:
@@ -231,6 +341,7 @@ def shared_properties(members: tuple[Mesh, ...], kind: str) -> dict[str, npt.NDA
     faults, some of several TFACEs) is :data:`NO_PART` on the cells of the
     members without it; any other property must be on every member.
     """
+
     def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
         return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
 
@@ -238,11 +349,17 @@ def shared_properties(members: tuple[Mesh, ...], kind: str) -> dict[str, npt.NDA
     for name in names:
         lacking = [i for i, m in enumerate(members) if name not in of(m)]
         if lacking and not (kind == "cell" and name == "part"):
-            raise InvalidPropertyError(f"{kind} property {name!r} is on some members of the collection but not on "
-                                       f"members {lacking}: one array covers the points or cells of all members",
-                                       hint="give every member the property, or remove it before converting")
-    return {name: np.concatenate([of(m)[name] if name in of(m) else np.full(m.n_cells, NO_PART, dtype=np.int64)
-                                  for m in members]) for name in names}
+            raise InvalidPropertyError(
+                f"{kind} property {name!r} is on some members of the collection but not on "
+                f"members {lacking}: one array covers the points or cells of all members",
+                hint="give every member the property, or remove it before converting",
+            )
+    return {
+        name: np.concatenate(
+            [of(m)[name] if name in of(m) else np.full(m.n_cells, NO_PART, dtype=np.int64) for m in members]
+        )
+        for name in names
+    }
 
 
 def file_array_names(geometry: Geometry, key: str) -> dict[str, str]:
@@ -254,8 +371,7 @@ def file_array_names(geometry: Geometry, key: str) -> dict[str, str]:
     Entries that are not two strings are left out (metadata may have been
     edited).
     """
-    sources: list[Geometry] = [geometry, *geometry.members] if isinstance(geometry, GeometryCollection) \
-        else [geometry]
+    sources: list[Geometry] = [geometry, *geometry.members] if isinstance(geometry, GeometryCollection) else [geometry]
     result: dict[str, str] = {}
     for source in sources:
         table = source.metadata.get("vtk_array_names") if isinstance(source.metadata, dict) else None
@@ -271,8 +387,9 @@ def file_array_names(geometry: Geometry, key: str) -> dict[str, str]:
     return result
 
 
-def named_as_read(arrays: dict[str, npt.NDArray[Any]], names: dict[str, str],
-                  allowed: Callable[[str], bool]) -> dict[str, npt.NDArray[Any]]:
+def named_as_read(
+    arrays: dict[str, npt.NDArray[Any]], names: dict[str, str], allowed: Callable[[str], bool]
+) -> dict[str, npt.NDArray[Any]]:
     """``arrays`` under the names of the file they were read from (``names``), where the format allows the name
     and no two arrays would get one name (those keep their mesh names)."""
     final = {name: names[name] if name in names and allowed(names[name]) else name for name in arrays}

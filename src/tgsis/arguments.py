@@ -66,7 +66,8 @@ def _kinds(hint: Any) -> frozenset[str]:
 def _nul(name: str, value: str) -> InvalidInputError:
     return InvalidInputError(
         f"{name} contains a NUL byte (at character {value.index(chr(0))}), which PostgreSQL text cannot hold",
-        hint=f"remove the \\x00 from {name}")
+        hint=f"remove the \\x00 from {name}",
+    )
 
 
 def _check_text(name: str, value: Any) -> None:
@@ -106,11 +107,13 @@ def checked_ids(name: str, values: Iterable[Any]) -> list[int]:
     ids: list[int] = []
     for index, value in enumerate(values):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise InvalidInputError(f"{name}[{index}] must be an integer id, not {type(value).__name__} "
-                                    f"{repr(value)[:100]}")
+            raise InvalidInputError(
+                f"{name}[{index}] must be an integer id, not {type(value).__name__} {repr(value)[:100]}"
+            )
         if not _INT8[0] <= int(value) <= _INT8[1]:
-            raise InvalidInputError(f"{name}[{index}] = {str(int(value))[:100]} is out of range: it must be from "
-                                    f"{_INT8[0]} to {_INT8[1]}")
+            raise InvalidInputError(
+                f"{name}[{index}] = {str(int(value))[:100]} is out of range: it must be from {_INT8[0]} to {_INT8[1]}"
+            )
         ids.append(int(value))
     return ids
 

@@ -32,159 +32,260 @@ Replacement = str | Callable[[re.Match[str]], str]
 #: (pattern, replacement), applied in order: the most specific first.
 _RULES: list[tuple[str, Replacement]] = [
     # --- versions
-    (r"record a solution for each: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
-     lambda m: f"record a solution for each: tgsis version resolve {_unquote(m[1])} CLASS KEY parent|child|manual "
-               f"(tgsis version conflicts {_unquote(m[1])} lists them)"),
-    (r"pass discard_other=True to record it all the same, or write the merged object into the version and record "
-     r"manual \(tgsis\.conflict_rows shows both sides' rows\)",
-     "add --discard-other to record it all the same, or write the merged object into the version and record manual "
-     "(tgsis version conflicts VERSION --rows shows both sides' rows)"),
-    (r"SELECT \* FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\) lists the conflicts",
-     lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the conflicts"),
-    (r"SELECT tgsis\.goto_version\('DEFAULT'\); SELECT name FROM tgsis\.versions lists the versions",
-     "work in DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT); tgsis version list lists the versions"),
-    (r"SELECT tgsis\.goto_version\('((?:[^']|'')*)'\) to work in its working revision",
-     lambda m: f"--in {_unquote(m[1])} (or tgsis version goto {_unquote(m[1])}) works in its working revision"),
-    (r"SELECT tgsis\.goto_version\(tgsis\.get_working_version\(\)\) clears it",
-     "leave out @REVISION (--in VERSION, or tgsis version goto VERSION) to work in the working revision"),
-    (r"SELECT tgsis\.goto_version\('DEFAULT'\)( to write the current state)?",
-     lambda m: "work in DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT)" + (m[1] or "")),
+    (
+        r"record a solution for each: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
+        lambda m: (
+            f"record a solution for each: tgsis version resolve {_unquote(m[1])} CLASS KEY parent|child|manual "
+            f"(tgsis version conflicts {_unquote(m[1])} lists them)"
+        ),
+    ),
+    (
+        r"pass discard_other=True to record it all the same, or write the merged object into the version and record "
+        r"manual \(tgsis\.conflict_rows shows both sides' rows\)",
+        "add --discard-other to record it all the same, or write the merged object into the version and record manual "
+        "(tgsis version conflicts VERSION --rows shows both sides' rows)",
+    ),
+    (
+        r"SELECT \* FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\) lists the conflicts",
+        lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the conflicts",
+    ),
+    (
+        r"SELECT tgsis\.goto_version\('DEFAULT'\); SELECT name FROM tgsis\.versions lists the versions",
+        "work in DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT); tgsis version list lists the versions",
+    ),
+    (
+        r"SELECT tgsis\.goto_version\('((?:[^']|'')*)'\) to work in its working revision",
+        lambda m: f"--in {_unquote(m[1])} (or tgsis version goto {_unquote(m[1])}) works in its working revision",
+    ),
+    (
+        r"SELECT tgsis\.goto_version\(tgsis\.get_working_version\(\)\) clears it",
+        "leave out @REVISION (--in VERSION, or tgsis version goto VERSION) to work in the working revision",
+    ),
+    (
+        r"SELECT tgsis\.goto_version\('DEFAULT'\)( to write the current state)?",
+        lambda m: "work in DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT)" + (m[1] or ""),
+    ),
     (r"tgsis\.goto_version\(conn, 'DEFAULT'\)", "work in DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT)"),
     (r"SELECT name FROM tgsis\.versions lists the versions", "tgsis version list lists the versions"),
     (r"or tgsis\.delete_version it first", "or delete it first (tgsis version delete NAME)"),
-    (r"the holder releases them with SELECT tgsis\.unlock_objects\([^)]*\); SELECT \* FROM tgsis\.object_locks "
-     r"lists locks", "the holder releases them with tgsis version unlock VERSION [CLASS [KEY...]]; "
-                     "tgsis version locks lists locks"),
-    (r"the owner or a tgsis_admin can run SELECT tgsis\.grant_version\('((?:[^']|'')*)', '((?:[^']|'')*)', "
-     r"'((?:[^']|'')*)'\)",
-     lambda m: f"the owner or a tgsis_admin can run tgsis version grant {_unquote(m[1])} {_unquote(m[2])} "
-               f"{_unquote(m[3])}"),
+    (
+        r"the holder releases them with SELECT tgsis\.unlock_objects\([^)]*\); SELECT \* FROM tgsis\.object_locks "
+        r"lists locks",
+        "the holder releases them with tgsis version unlock VERSION [CLASS [KEY...]]; tgsis version locks lists locks",
+    ),
+    (
+        r"the owner or a tgsis_admin can run SELECT tgsis\.grant_version\('((?:[^']|'')*)', '((?:[^']|'')*)', "
+        r"'((?:[^']|'')*)'\)",
+        lambda m: (
+            f"the owner or a tgsis_admin can run tgsis version grant {_unquote(m[1])} {_unquote(m[2])} {_unquote(m[3])}"
+        ),
+    ),
     (r"end the earlier one \(tgsis\.set_version_validity\)", "end the earlier one (tgsis version valid NAME FROM TO)"),
-    (r"valid_to must be later than valid_from \(NULL: still believed\)",
-     "TO must be later than FROM (leave TO out: still believed)"),
-    (r"pass p_base => NULL to base the child on the parent's working revision",
-     "create the child without a base revision: it starts from the parent's working revision"),
-    (r"check in into a new child version \(on_conflict=\"child\", tgsis checkin --on-conflict child\)",
-     "check in into a new child version (tgsis checkin FILE --on-conflict child)"),
-    (r"\(or save it over that state with tgsis\.save_feature\), or check it in with on_conflict='raise' to see the "
-     r"conflict only", "(tgsis checkout ID FILE), or check it in with --on-conflict raise to see the conflict only"),
-    (r"tgsis\.enable_feature_versioning\(conn\) \(or `tgsis versioning enable`\) makes on_conflict='child' work",
-     "tgsis versioning enable features makes --on-conflict child work"),
-    (r"(?:SELECT )?tgsis\.enable_feature_versioning\((?:conn)?\) (?:to write features in versions|versions model 1 "
-     r"and every feature class)[^;]*", "tgsis versioning enable features, to write features in versions; or work in "
-                                      "DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT)"),
+    (
+        r"valid_to must be later than valid_from \(NULL: still believed\)",
+        "TO must be later than FROM (leave TO out: still believed)",
+    ),
+    (
+        r"pass p_base => NULL to base the child on the parent's working revision",
+        "create the child without a base revision: it starts from the parent's working revision",
+    ),
+    (
+        r"check in into a new child version \(on_conflict=\"child\", tgsis checkin --on-conflict child\)",
+        "check in into a new child version (tgsis checkin FILE --on-conflict child)",
+    ),
+    (
+        r"\(or save it over that state with tgsis\.save_feature\), or check it in with on_conflict='raise' to see the "
+        r"conflict only",
+        "(tgsis checkout ID FILE), or check it in with --on-conflict raise to see the conflict only",
+    ),
+    (
+        r"tgsis\.enable_feature_versioning\(conn\) \(or `tgsis versioning enable`\) makes on_conflict='child' work",
+        "tgsis versioning enable features makes --on-conflict child work",
+    ),
+    (
+        r"(?:SELECT )?tgsis\.enable_feature_versioning\((?:conn)?\) (?:to write features in versions|versions model 1 "
+        r"and every feature class)[^;]*",
+        "tgsis versioning enable features, to write features in versions; or work in "
+        "DEFAULT (--in DEFAULT, or tgsis version goto DEFAULT)",
+    ),
     (r"; tgsis\.compare_geometries compares two geometries", ""),
-    (r"\(tgsis\.enable_feature_versioning versions the features\)",
-     "(tgsis versioning enable features versions the features)"),
+    (
+        r"\(tgsis\.enable_feature_versioning versions the features\)",
+        "(tgsis versioning enable features versions the features)",
+    ),
     (r"tgsis\.enable_feature_versioning versions it", "tgsis versioning enable features versions it"),
-    (r"tgsis\.enable_versioning versions a table and registers it",
-     "tgsis versioning enable TABLE --key K --class C versions a table and registers it"),
+    (
+        r"tgsis\.enable_versioning versions a table and registers it",
+        "tgsis versioning enable TABLE --key K --class C versions a table and registers it",
+    ),
     (r"tgsis\.enable_versioning records what it drops", "tgsis versioning enable records what it drops"),
-    (r"tgsis\.disable_versioning makes a versioned table plain and forgets it",
-     "tgsis versioning disable TABLE makes a versioned table plain and forgets it"),
-    (r"SELECT \* FROM tgsis\.versioned_tables lists the versioned tables", "tgsis versioning list lists the versioned "
-                                                                          "tables"),
+    (
+        r"tgsis\.disable_versioning makes a versioned table plain and forgets it",
+        "tgsis versioning disable TABLE makes a versioned table plain and forgets it",
+    ),
+    (
+        r"SELECT \* FROM tgsis\.versioned_tables lists the versioned tables",
+        "tgsis versioning list lists the versioned tables",
+    ),
     (r"SELECT DISTINCT objectclass FROM tgsis\.versioned_tables lists them", "tgsis versioning list lists them"),
-    (r"merge or delete those versions first, or pass p_force => true",
-     "merge or delete those versions first, or repeat with --force"),
+    (
+        r"merge or delete those versions first, or pass p_force => true",
+        "merge or delete those versions first, or repeat with --force",
+    ),
     (r"pass another p_shortname", "give another --shortname"),
     (r"pass a non-empty array of keys without NULLs", "give at least one KEY"),
     # --- feature classes and features
-    (r"delete them first, or drop with force => true to delete them with their geometries",
-     "delete them first, or repeat with --force to delete them with their geometries"),
+    (
+        r"delete them first, or drop with force => true to delete them with their geometries",
+        "delete them first, or repeat with --force to delete them with their geometries",
+    ),
     (r"SELECT classname FROM tgsis\.catalog lists the classes", "tgsis class list lists the classes"),
     (r"SELECT geoid(?:, geotype)? FROM tgsis\.geometry lists the stored geometries", "tgsis ls lists the features"),
     (r"SELECT _geoid FROM \S+ lists them", "tgsis ls --class CLASS lists them"),
-    (r"SELECT tgsis\.delete_geometry\(([^)]*)\) deletes the (feature|collection with its members)",
-     lambda m: f"{IN_PSQL}SELECT tgsis.delete_geometry({m[1]}) deletes the {m[2]}"),
+    (
+        r"SELECT tgsis\.delete_geometry\(([^)]*)\) deletes the (feature|collection with its members)",
+        lambda m: f"{IN_PSQL}SELECT tgsis.delete_geometry({m[1]}) deletes the {m[2]}",
+    ),
     (r"give time_model => (.+?) for a temporal class", lambda m: f"give --time-model {m[1]} for a temporal class"),
     (r"^p_cell_level => ", "--cell-level "),
-    (r"leave p_cell_level out, or register a class of G-maps \(p_time_model => 'GMAP'\)",
-     "leave --cell-level out, or create a class of G-maps (--time-model GMAP or MULTIDIM)"),
+    (
+        r"leave p_cell_level out, or register a class of G-maps \(p_time_model => 'GMAP'\)",
+        "leave --cell-level out, or create a class of G-maps (--time-model GMAP or MULTIDIM)",
+    ),
     # --- G-maps (models 4 and 5)
     (r"SELECT geoid FROM tgsis\.(?:gmap|md_gmap) lists (?:the stored G-maps|them)", "tgsis ls lists the features"),
     (r"p_level => 0 \.\. (\S+)", lambda m: f"LEVEL is 0 .. {m[1]}"),
-    (r"create a class with time_model=(\S+) and a cell_level for",
-     lambda m: f"create a class with tgsis class create NAME --geotype GMAP --time-model {m[1].strip(chr(39))} "
-               "--cell-level LEVEL for"),
+    (
+        r"create a class with time_model=(\S+) and a cell_level for",
+        lambda m: (
+            f"create a class with tgsis class create NAME --geotype GMAP --time-model {m[1].strip(chr(39))} "
+            "--cell-level LEVEL for"
+        ),
+    ),
     (r"tgsis\.gmaps\.extrude makes an axis", "tgsis extrude makes an axis"),
     (r"SELECT \* FROM tgsis\.(?:gmap_check|md_check)\(([^)]*)\)", lambda m: f"tgsis gmap check {m[1]}"),
-    (r"write a slice of it \(tgsis\.gmaps\.slice\)", "write a slice of it (tgsis slice ID --axis AXIS --value V "
-                                                          "--output FILE)"),
+    (
+        r"write a slice of it \(tgsis\.gmaps\.slice\)",
+        "write a slice of it (tgsis slice ID --axis AXIS --value V --output FILE)",
+    ),
     # (SQL-only questions of models 4 and 5: no command asks them)
     (r"^(tgsis\.property_at gives .*|p_axes => .*|tgsis\.geometries_in_box finds .*)", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"then run (SELECT tgsis\.create_storage\(\))", lambda m: f"then run, {IN_PSQL}{m[1]}"),
-    (r"As tgsis's owner run SELECT tgsis\.create_storage\(\); \(or tgsis db install, which does it\)\.",
-     "Run tgsis db install as tgsis's owner: it creates the storage tables."),
+    (
+        r"As tgsis's owner run SELECT tgsis\.create_storage\(\); \(or tgsis db install, which does it\)\.",
+        "Run tgsis db install as tgsis's owner: it creates the storage tables.",
+    ),
     (r"p_geotype => ", "--geotype "),
     (r"uninstall with cascade \(tgsis db uninstall --cascade\)", "repeat with --cascade"),
     (r"or install with method='sql'", "or install with --method sql"),
-    (r"delete the feature and insert the edited collection \(tgsis\.insert_feature\)",
-     "import the edited collection as a new feature (tgsis import FILE --class CLASS --replace)"),
-    (r"tgsis\.get_at\(conn, id, t\) gives the surface at model time t", "tgsis at ID T FILE writes the surface at "
-                                                                        "model time T"),
-    (r"give a tgsis\.SurfaceSeries \(INSTANTS\) or tgsis\.EvolvingSurface \(EVOLVING\)",
-     "import it at a model time with --at T (INSTANTS), or build surfaces over time with tgsis interpolate --class "
-     "CLASS (EVOLVING)"),
-    (r"(?:tgsis\.)?features_at lists the features of any class that exist at t",
-     "tgsis ls lists the features of every class"),
+    (
+        r"delete the feature and insert the edited collection \(tgsis\.insert_feature\)",
+        "import the edited collection as a new feature (tgsis import FILE --class CLASS --replace)",
+    ),
+    (
+        r"tgsis\.get_at\(conn, id, t\) gives the surface at model time t",
+        "tgsis at ID T FILE writes the surface at model time T",
+    ),
+    (
+        r"give a tgsis\.SurfaceSeries \(INSTANTS\) or tgsis\.EvolvingSurface \(EVOLVING\)",
+        "import it at a model time with --at T (INSTANTS), or build surfaces over time with tgsis interpolate --class "
+        "CLASS (EVOLVING)",
+    ),
+    (
+        r"(?:tgsis\.)?features_at lists the features of any class that exist at t",
+        "tgsis ls lists the features of every class",
+    ),
     (r"(SELECT \* FROM tgsis\.check_geometry\([^)]*\))", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"tgsis\.drop_feature_class removes it", "tgsis class drop NAME removes it"),
     # --- editing a class (tgsis class alter)
-    (r"SELECT feature_properties, cell_properties, instant_properties FROM tgsis\.catalog WHERE classname = '[^']*'",
-     "tgsis class list shows the properties of the classes"),
+    (
+        r"SELECT feature_properties, cell_properties, instant_properties FROM tgsis\.catalog WHERE classname = '[^']*'",
+        "tgsis class list shows the properties of the classes",
+    ),
     (r"say which: p_kind => 'feature', 'cell' or 'instant'", "say which: feature:NAME, cell:NAME or instant:NAME"),
-    (r"add a feature property \(p_kind => 'feature'\) instead", "add a feature property (--add-feature-property) "
-                                                                "instead"),
+    (
+        r"add a feature property \(p_kind => 'feature'\) instead",
+        "add a feature property (--add-feature-property) instead",
+    ),
     (r"drop it with p_force => true to delete its values", "repeat with --force to delete its values"),
     (r"give p_default, e\.g\. '0'", "give the value stored rows get: --add-property NAME:TYPE=VALUE"),
-    (r"compare its members one by one: (SELECT geoids FROM tgsis\.geometry WHERE .*)",
-     lambda m: f"compare its members one by one ({IN_PSQL}{m[1]})"),
+    (
+        r"compare its members one by one: (SELECT geoids FROM tgsis\.geometry WHERE .*)",
+        lambda m: f"compare its members one by one ({IN_PSQL}{m[1]})",
+    ),
     (r"(?<!in psql: )(tgsis\.delete_instant removes it first)", lambda m: f"{IN_PSQL}{m[1]}"),
-    (r"give them rows first: SELECT \* FROM tgsis\.fill_property_rows\('((?:[^']|'')*)', '[^']*'\)",
-     lambda m: f"give them rows first: tgsis class alter {_unquote(m[1])} --fill-property NAME=VALUE"),
-    (r"SELECT tgsis\.enable_feature_versioning\(\) versions them all", "tgsis versioning enable features versions them all"),
-    (r"read the class again \(tgsis\.get_feature_class\) and give the new properties' values",
-     "run the command again: it reads the class anew (tgsis class list shows its properties)"),
+    (
+        r"give them rows first: SELECT \* FROM tgsis\.fill_property_rows\('((?:[^']|'')*)', '[^']*'\)",
+        lambda m: f"give them rows first: tgsis class alter {_unquote(m[1])} --fill-property NAME=VALUE",
+    ),
+    (
+        r"SELECT tgsis\.enable_feature_versioning\(\) versions them all",
+        "tgsis versioning enable features versions them all",
+    ),
+    (
+        r"read the class again \(tgsis\.get_feature_class\) and give the new properties' values",
+        "run the command again: it reads the class anew (tgsis class list shows its properties)",
+    ),
     # --- only the SQL functions take these (the command line reads them from the file)
     (r"^(p_(?:zpositive|crs|metadata) => .*)", lambda m: f"{IN_PSQL}{m[1]}"),
-    (r"^(SELECT tgsis\.object_fingerprint\(geoid\) at check-out gives the fingerprint)",
-     lambda m: f"{IN_PSQL}{m[1]}"),
+    (r"^(SELECT tgsis\.object_fingerprint\(geoid\) at check-out gives the fingerprint)", lambda m: f"{IN_PSQL}{m[1]}"),
     (r"in SQL, (quote names with capitals)", lambda m: f"{IN_PSQL}{m[1]}"),
     # --- a statement of the user's own that changes the version from inside an UPDATE of a view (SQL only)
-    (r"^Change the version \(goto_version, SET tgsis\.version\) between statements, not from inside one\.",
-     lambda m: f"{IN_PSQL}{m[0]}"),
+    (
+        r"^Change the version \(goto_version, SET tgsis\.version\) between statements, not from inside one\.",
+        lambda m: f"{IN_PSQL}{m[0]}",
+    ),
     # --- files
     (r"pass format= with one of ", "give --format with one of "),
     (r"use tgsis\.formats\.read_pvd or write_pvd", "tgsis series writes a .pvd"),
     (r"use tgsis\.formats\.read to get all of them", "tgsis import stores all of them"),
     (r"tgsis\.formats\.read or read_vt\w+ reads the members", "tgsis import reads the members"),
-    (r"extract one kind first \(e\.g\. mesh\.extract_cells_by_type\([^)]*\)\), or store the kinds as members of a "
-     r"tgsis\.GeometryCollection", "split the file by cell kind first (ParaView: Extract Cells By Type), one file each"),
-    (r"give it points \(and cells\), or build the empty tgsis mesh you mean \(e\.g\. .*\)\)$",
-     "give a file with points (and cells)"),
+    (
+        r"extract one kind first \(e\.g\. mesh\.extract_cells_by_type\([^)]*\)\), or store the kinds as members of a "
+        r"tgsis\.GeometryCollection",
+        "split the file by cell kind first (ParaView: Extract Cells By Type), one file each",
+    ),
+    (
+        r"give it points \(and cells\), or build the empty tgsis mesh you mean \(e\.g\. .*\)\)$",
+        "give a file with points (and cells)",
+    ),
     (r"pass drop_extra_properties=True", "give --drop-extra-properties"),
     (r"drop_extra_properties=True", "--drop-extra-properties"),
-    (r"read it as a file of GOCAD objects with format='tsurf'", "import it with --format tsurf (a file of GOCAD objects)"),
-    (r"pass skip_unsupported=True to read the other objects of the file",
-     "import without --strict to store the other objects of the file"),
+    (
+        r"read it as a file of GOCAD objects with format='tsurf'",
+        "import it with --format tsurf (a file of GOCAD objects)",
+    ),
+    (
+        r"pass skip_unsupported=True to read the other objects of the file",
+        "import without --strict to store the other objects of the file",
+    ),
     (r", or pass drop_properties=True", ""),
     (r"pass drop_cell_properties=True to write the mesh without them", "write it to a .vtu file, which keeps them"),
-    (r"give every member the property, or remove it before (?:writing|converting)",
-     "export to a GOCAD file of the members' type (.ts, .pl, .vs, .so), where each object keeps its own properties, "
-     "or import the objects into a class that is no GEOMETRYCOLLECTION (one feature each)"),
+    (
+        r"give every member the property, or remove it before (?:writing|converting)",
+        "export to a GOCAD file of the members' type (.ts, .pl, .vs, .so), where each object keeps its own properties, "
+        "or import the objects into a class that is no GEOMETRYCOLLECTION (one feature each)",
+    ),
     # --- time
     (r"give start, end and steps", "give --from, --to and --steps"),
-    (r"the condition is \"value op v\", e\.g\. op => '>=' for values of at least v",
-     "the condition is PROPERTY OP VALUE, e.g. throw '>=' 100 for throws of at least 100"),
+    (
+        r"the condition is \"value op v\", e\.g\. op => '>=' for values of at least v",
+        "the condition is PROPERTY OP VALUE, e.g. throw '>=' 100 for throws of at least 100",
+    ),
     # --- roles and storage: only SQL can do these
     (r"(a DBA may run: |Ask a DBA to run once: ?)", lambda m: f"{m[1]}{IN_PSQL}"),
-    (r"the table's owner may run: (SELECT tgsis\.restore_storage_runner\([^)]*\))",
-     lambda m: f"the table's owner may run, {IN_PSQL}{m[1]}"),
-    (r"its owner restores it with (tgsis\.restore_dropped_constraints\([^)]*\))",
-     lambda m: f"its owner restores it, {IN_PSQL}SELECT {m[1]}"),
-    (r"or label the rows with (SELECT revision FROM tgsis\.write_revision\(\))",
-     lambda m: f"or label the rows ({IN_PSQL}{m[1]})"),
+    (
+        r"the table's owner may run: (SELECT tgsis\.restore_storage_runner\([^)]*\))",
+        lambda m: f"the table's owner may run, {IN_PSQL}{m[1]}",
+    ),
+    (
+        r"its owner restores it with (tgsis\.restore_dropped_constraints\([^)]*\))",
+        lambda m: f"its owner restores it, {IN_PSQL}SELECT {m[1]}",
+    ),
+    (
+        r"or label the rows with (SELECT revision FROM tgsis\.write_revision\(\))",
+        lambda m: f"or label the rows ({IN_PSQL}{m[1]})",
+    ),
     (r"call it as (tgsis\.rows_at\([^)]*\))", lambda m: f"call it as {IN_PSQL}SELECT {m[1]}"),
 ]
 RULES: list[tuple[re.Pattern[str], Replacement]] = [(re.compile(p, re.IGNORECASE), r) for p, r in _RULES]

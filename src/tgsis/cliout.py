@@ -31,8 +31,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["out", "table", "emit_json", "jsonable", "progress", "busy", "show_time", "show_moment",
-           "stdout_closed", "drop_stdout", "on_terminal"]
+__all__ = [
+    "out",
+    "table",
+    "emit_json",
+    "jsonable",
+    "progress",
+    "busy",
+    "show_time",
+    "show_moment",
+    "stdout_closed",
+    "drop_stdout",
+    "on_terminal",
+]
 
 _closed = False
 

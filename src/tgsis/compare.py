@@ -135,15 +135,24 @@ class MeshDiff(IndexMaps):
     @property
     def identical(self) -> bool:
         """Whether nothing was edited (same vertices and oriented cells, in any order)."""
-        return (len(self.removed_vertices) == 0 and len(self.removed_cells) == 0
-                and bool(np.all(self.vertex_map >= 0)) and bool(np.all(self.cell_map >= 0)))
+        return (
+            len(self.removed_vertices) == 0
+            and len(self.removed_cells) == 0
+            and bool(np.all(self.vertex_map >= 0))
+            and bool(np.all(self.cell_map >= 0))
+        )
 
     def counts(self) -> dict[str, int]:
         """Numbers of kept, removed and added vertices and cells."""
         added_v, added_c = int(np.count_nonzero(self.vertex_map < 0)), int(np.count_nonzero(self.cell_map < 0))
-        return {"vertices_kept": len(self.vertex_map) - added_v, "vertices_removed": len(self.removed_vertices),
-                "vertices_added": added_v, "cells_kept": len(self.cell_map) - added_c,
-                "cells_removed": len(self.removed_cells), "cells_added": added_c}
+        return {
+            "vertices_kept": len(self.vertex_map) - added_v,
+            "vertices_removed": len(self.removed_vertices),
+            "vertices_added": added_v,
+            "cells_kept": len(self.cell_map) - added_c,
+            "cells_removed": len(self.removed_cells),
+            "cells_added": added_c,
+        }
 
     def __repr__(self) -> str:
         return "MeshDiff(" + ", ".join(f"{k}={v}" for k, v in self.counts().items()) + ")"
@@ -175,8 +184,9 @@ def _tolerance_matches(index: MeshIndex, edited: Mesh, vertex_map: IntArray, tol
     within = distance <= tolerance
     rows, pair_old, distance = rows[within], pair_old[within], distance[within]
     # a pair whose two vertices have no other candidate is matched whatever the order (the usual case: rounding)
-    alone = (np.bincount(rows, minlength=len(free_new))[rows] == 1) & \
-        (np.bincount(pair_old, minlength=len(taken))[pair_old] == 1)
+    alone = (np.bincount(rows, minlength=len(free_new))[rows] == 1) & (
+        np.bincount(pair_old, minlength=len(taken))[pair_old] == 1
+    )
     vertex_map[free_new[rows[alone]]] = pair_old[alone]
     rows, pair_old, distance = rows[~alone], pair_old[~alone], distance[~alone]
     order = np.lexsort((rows, pair_old, distance))
@@ -215,8 +225,10 @@ def compare_meshes(old: Mesh | MeshIndex, edited: Mesh, tolerance: float = 0.0) 
     """
     old_mesh = old.mesh if isinstance(old, MeshIndex) else old
     if old_mesh.cell_size != edited.cell_size:
-        raise InvalidGeometryError(f"cannot compare a {type(old_mesh).__name__} with a {type(edited).__name__}: "
-                                   f"cells of {old_mesh.cell_size} and {edited.cell_size} vertices")
+        raise InvalidGeometryError(
+            f"cannot compare a {type(old_mesh).__name__} with a {type(edited).__name__}: "
+            f"cells of {old_mesh.cell_size} and {edited.cell_size} vertices"
+        )
     if not (np.isfinite(tolerance) and tolerance >= 0):
         raise InvalidInputError(f"tolerance must be a finite number >= 0, got {tolerance}")
     index = old if isinstance(old, MeshIndex) else MeshIndex(old)
@@ -260,5 +272,3 @@ def _diff(old_mesh: Mesh, vertex_map: IntArray, cell_map: IntArray) -> MeshDiff:
         n_old_vertices=old_mesh.n_vertices,
         n_old_cells=old_mesh.n_cells,
     )
-
-

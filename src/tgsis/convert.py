@@ -103,15 +103,18 @@ from tgsis.mesh import PROPERTY_NAME_RE, Geometry, GeometryCollection, LineSet, 
 __all__ = ["as_mesh", "from_pyvista", "from_meshio", "to_pyvista", "to_meshio", "ACCEPTED"]
 
 #: What :func:`as_mesh` accepts, in the words of its error message.
-ACCEPTED = ("a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista PolyData or "
-            "UnstructuredGrid (or another pyvista/VTK dataset, or a MultiBlock of them), a meshio.Mesh, or a "
-            "trimesh.Trimesh or PointCloud")
+ACCEPTED = (
+    "a tgsis PointSet, LineSet, Surface, TetraMesh or GeometryCollection, a pyvista PolyData or "
+    "UnstructuredGrid (or another pyvista/VTK dataset, or a MultiBlock of them), a meshio.Mesh, or a "
+    "trimesh.Trimesh or PointCloud"
+)
 
-_HINT = ("build one with tgsis.Surface(vertices, triangles) (or PointSet, LineSet, TetraMesh), or convert "
-         "your object to one of these first")
+_HINT = (
+    "build one with tgsis.Surface(vertices, triangles) (or PointSet, LineSet, TetraMesh), or convert "
+    "your object to one of these first"
+)
 
-_MESHIO_TYPE_OF: dict[type[Mesh], str] = {PointSet: "vertex", LineSet: "line", Surface: "triangle",
-                                          TetraMesh: "tetra"}
+_MESHIO_TYPE_OF: dict[type[Mesh], str] = {PointSet: "vertex", LineSet: "line", Surface: "triangle", TetraMesh: "tetra"}
 _MESH_OF_MESHIO_TYPE = {v: k for k, v in _MESHIO_TYPE_OF.items()}
 _NAMES_KEY = "vtk_array_names"
 
@@ -129,8 +132,10 @@ def _require(module: str, extra: str) -> ModuleType:
     try:
         return importlib.import_module(module)
     except ImportError:
-        raise InvalidGeometryError(f"this needs the optional package {module}, which is not installed",
-                                   hint=f"pip install 'tgsis[{extra}]' (or pip install {module})") from None
+        raise InvalidGeometryError(
+            f"this needs the optional package {module}, which is not installed",
+            hint=f"pip install 'tgsis[{extra}]' (or pip install {module})",
+        ) from None
 
 
 def as_mesh(obj: Any) -> Geometry:
@@ -169,11 +174,16 @@ def as_mesh(obj: Any) -> Geometry:
     if trimesh is not None and isinstance(obj, trimesh.Trimesh):
         return labelled("trimesh.Trimesh", lambda: Surface.from_trimesh(obj, strict=True))
     if trimesh is not None and isinstance(obj, trimesh.PointCloud):
-        return labelled("trimesh.PointCloud", lambda: PointSet(
-            np.asarray(obj.vertices, dtype=np.float64),
-            vertex_properties=_numeric(getattr(obj, "vertex_attributes", None) or {}, "trimesh.PointCloud",
-                                       "vertex_attributes"),
-            name=(obj.metadata or {}).get("name")))
+        return labelled(
+            "trimesh.PointCloud",
+            lambda: PointSet(
+                np.asarray(obj.vertices, dtype=np.float64),
+                vertex_properties=_numeric(
+                    getattr(obj, "vertex_attributes", None) or {}, "trimesh.PointCloud", "vertex_attributes"
+                ),
+                name=(obj.metadata or {}).get("name"),
+            ),
+        )
     raise InvalidGeometryError(f"cannot store a {_type_name(obj)} as a mesh: tgsis takes {ACCEPTED}", hint=_HINT)
 
 
@@ -191,21 +201,26 @@ def _numeric(arrays: Mapping[str, Any], source: str, where: str) -> dict[str, np
         if array.dtype.kind not in "biuf":
             raise InvalidPropertyError(
                 f"{source} array {name!r} in {where} holds {array.dtype} values: a tgsis property holds numbers",
-                hint=f"remove it from {where} before converting (del mesh.{where}[{name!r}])")
+                hint=f"remove it from {where} before converting (del mesh.{where}[{name!r}])",
+            )
         result[str(name)] = array
     return result
 
 
-def _renamed(arrays: dict[str, npt.NDArray[Any]], names: dict[str, dict[str, str]],
-             key: str) -> dict[str, npt.NDArray[Any]]:
+def _renamed(
+    arrays: dict[str, npt.NDArray[Any]], names: dict[str, dict[str, str]], key: str
+) -> dict[str, npt.NDArray[Any]]:
     """Arrays under valid, distinct property names; ``names[key]`` records {property: original} for renamed ones."""
     from tgsis.formats._common import sanitize_property_name
 
     result: dict[str, npt.NDArray[Any]] = {}
     renamed: dict[str, str] = {}
     for original, values in arrays.items():
-        name = original if PROPERTY_NAME_RE.match(original) and original not in result else \
-            sanitize_property_name(original, result)
+        name = (
+            original
+            if PROPERTY_NAME_RE.match(original) and original not in result
+            else sanitize_property_name(original, result)
+        )
         if name != original:
             renamed[name] = original
         result[name] = values
@@ -236,15 +251,17 @@ def from_pyvista(obj: Any) -> Geometry:
     if not isinstance(obj, pv.DataObject):
         vtk = _loaded("vtkmodules.vtkCommonDataModel")
         if vtk is None or not isinstance(obj, vtk.vtkDataObject):
-            raise InvalidGeometryError(f"{_type_name(obj)} is not a pyvista dataset: tgsis takes {ACCEPTED}",
-                                       hint=_HINT)
+            raise InvalidGeometryError(
+                f"{_type_name(obj)} is not a pyvista dataset: tgsis takes {ACCEPTED}", hint=_HINT
+            )
         obj = pv.wrap(obj)
     source = f"pyvista {type(obj).__name__}"
     if isinstance(obj, pv.MultiBlock):
         return _blocks(pv, obj)
     if not isinstance(obj, pv.DataSet):
-        raise InvalidGeometryError(f"{source} is not a dataset with points and cells: tgsis takes {ACCEPTED}",
-                                   hint=_HINT)
+        raise InvalidGeometryError(
+            f"{source} is not a dataset with points and cells: tgsis takes {ACCEPTED}", hint=_HINT
+        )
     grid = obj if isinstance(obj, pv.UnstructuredGrid) else obj.cast_to_unstructured_grid()
     vertices = np.array(grid.points, dtype=np.float64).reshape(-1, 3)
     types = np.asarray(grid.celltypes, dtype=np.int64)
@@ -254,20 +271,30 @@ def from_pyvista(obj: Any) -> Geometry:
     name = first(fields.get("tgsis_name")) or first(fields.get("name"))
     geotype = first(fields.get("tgsis_geotype"))
     names: dict[str, dict[str, str]] = {}
-    point_data = _renamed(_numeric({k: obj.point_data[k] for k in obj.point_data.keys()}, source, "point_data"),
-                          names, "point_data")
-    cell_data = _renamed(_numeric({k: obj.cell_data[k] for k in obj.cell_data.keys()}, source, "cell_data"),
-                         names, "cell_data")
+    point_data = _renamed(
+        _numeric({k: obj.point_data[k] for k in obj.point_data.keys()}, source, "point_data"), names, "point_data"
+    )
+    cell_data = _renamed(
+        _numeric({k: obj.cell_data[k] for k in obj.cell_data.keys()}, source, "cell_data"), names, "cell_data"
+    )
     metadata: dict[str, Any] = {_NAMES_KEY: names} if names else {}
     geometry: Geometry
     if geotype == GeometryCollection.geotype.value:
-        table = (strings(fields.get("tgsis_member_geotypes", [])), strings(fields.get("tgsis_member_names", [])),
-                 fields.get("tgsis_member_sizes", np.empty((0, 2))))
-        geometry = collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
-                                          metadata, source)
+        table = (
+            strings(fields.get("tgsis_member_geotypes", [])),
+            strings(fields.get("tgsis_member_names", [])),
+            fields.get("tgsis_member_sizes", np.empty((0, 2))),
+        )
+        geometry = collection_from_cells(
+            vertices, types, offsets, connectivity, point_data, cell_data, table, name, metadata, source
+        )
     else:
-        geometry = labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data,
-                                                       name, geotype, metadata, source))
+        geometry = labelled(
+            source,
+            lambda: one_mesh(
+                vertices, types, offsets, connectivity, point_data, cell_data, name, geotype, metadata, source
+            ),
+        )
     _restore_convention(geometry, fields, source)
     return geometry
 
@@ -277,13 +304,13 @@ def _restore_convention(geometry: Geometry, fields: Mapping[str, Any], source: s
     if isinstance(geometry, GeometryCollection):
         where, recorded = MEMBER_ZPOSITIVE_FIELD, strings(fields.get(MEMBER_ZPOSITIVE_FIELD, []))
         if MEMBER_ZPOSITIVE_FIELD in fields and len(recorded) != len(geometry):
-            raise InvalidGeometryError(f"{source} field_data {where!r} has {len(recorded)} values for "
-                                       f"{len(geometry)} members")
+            raise InvalidGeometryError(
+                f"{source} field_data {where!r} has {len(recorded)} values for {len(geometry)} members"
+            )
         values: list[str | None] = list(recorded)
     else:
         where, values = ZPOSITIVE_FIELD, [first(fields.get(ZPOSITIVE_FIELD))]
-    restore(geometry, [recorded_convention(v, f"{source} field_data {where!r}")
-                                  for v in values])
+    restore(geometry, [recorded_convention(v, f"{source} field_data {where!r}") for v in values])
 
 
 def _blocks(pv: ModuleType, blocks: Any) -> GeometryCollection:
@@ -293,19 +320,23 @@ def _blocks(pv: ModuleType, blocks: Any) -> GeometryCollection:
         block = blocks[i]
         label = f"pyvista MultiBlock block {i} ({key!r})"
         if block is None or isinstance(block, pv.MultiBlock):
-            raise InvalidGeometryError(f"{label} is {'empty' if block is None else 'a MultiBlock'}: the blocks "
-                                       "become the members of a GeometryCollection, which do not nest",
-                                       hint="remove it, or flatten the blocks first (blocks.flatten())")
+            raise InvalidGeometryError(
+                f"{label} is {'empty' if block is None else 'a MultiBlock'}: the blocks "
+                "become the members of a GeometryCollection, which do not nest",
+                hint="remove it, or flatten the blocks first (blocks.flatten())",
+            )
         member = labelled(label, lambda: from_pyvista(block))
         if isinstance(member, GeometryCollection):
-            raise InvalidGeometryError(f"{label} is itself a collection tgsis wrote: collections do not nest",
-                                       hint="add its members instead")
+            raise InvalidGeometryError(
+                f"{label} is itself a collection tgsis wrote: collections do not nest", hint="add its members instead"
+            )
         if member.name is None and key:
             member.name = str(key)
         members.append(member)
     if not members:
-        raise InvalidGeometryError("pyvista MultiBlock has no block: nothing to store",
-                                   hint="give it at least one dataset")
+        raise InvalidGeometryError(
+            "pyvista MultiBlock has no block: nothing to store", hint="give it at least one dataset"
+        )
     return GeometryCollection(members)
 
 
@@ -339,8 +370,10 @@ def to_pyvista(geometry: Geometry) -> Any:
     """
     pv = _require("pyvista", "pyvista")
     if not isinstance(geometry, (Mesh, GeometryCollection)):
-        raise InvalidGeometryError(f"to_pyvista converts tgsis meshes, not {_type_name(geometry)}",
-                                   hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
+        raise InvalidGeometryError(
+            f"to_pyvista converts tgsis meshes, not {_type_name(geometry)}",
+            hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes",
+        )
     recorded = conventions(geometry)
     vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(elevation(geometry))
     kind = type(geometry)
@@ -367,8 +400,9 @@ def to_pyvista(geometry: Geometry) -> Any:
     if isinstance(geometry, GeometryCollection):
         data.field_data["tgsis_member_geotypes"] = string_bytes(*(m.geotype.value for m in geometry.members))
         data.field_data["tgsis_member_names"] = string_bytes(*(m.name or "" for m in geometry.members))
-        data.field_data["tgsis_member_sizes"] = np.array([[m.n_vertices, m.n_cells] for m in geometry.members],
-                                                         dtype=np.int64)
+        data.field_data["tgsis_member_sizes"] = np.array(
+            [[m.n_vertices, m.n_cells] for m in geometry.members], dtype=np.int64
+        )
         if any(recorded):
             data.field_data[MEMBER_ZPOSITIVE_FIELD] = string_bytes(*(z or "" for z in recorded))
     elif recorded[0] is not None:
@@ -407,31 +441,45 @@ def from_meshio(obj: Any) -> Geometry:
     if unknown:
         listed = ", ".join(dict.fromkeys(unknown))
         polygons = any(t.startswith(("quad", "polygon")) or t in ("triangle6", "triangle7") for t in unknown)
-        raise InvalidGeometryError(f"{source} has {listed} cells: tgsis stores vertex, line, triangle and tetra cells",
-                                   hint="split them into triangles first" if polygons else
-                                        "split them into tetra (or triangle) cells first")
+        raise InvalidGeometryError(
+            f"{source} has {listed} cells: tgsis stores vertex, line, triangle and tetra cells",
+            hint="split them into triangles first" if polygons else "split them into tetra (or triangle) cells first",
+        )
     names: dict[str, dict[str, str]] = {}
     point_data = _renamed(_numeric(obj.point_data or {}, source, "point_data"), names, "point_data")
     cell_data: dict[str, npt.NDArray[Any]] = {}
     for key, per_block in (obj.cell_data or {}).items():
         arrays = list(per_block)
         if len(arrays) != len(blocks):
-            raise InvalidPropertyError(f"{source} cell_data {key!r} has {len(arrays)} arrays for {len(blocks)} cell "
-                                       "blocks", hint="give cell_data one array per cell block")
+            raise InvalidPropertyError(
+                f"{source} cell_data {key!r} has {len(arrays)} arrays for {len(blocks)} cell blocks",
+                hint="give cell_data one array per cell block",
+            )
         for block, values in zip(blocks, arrays):
             if len(np.asarray(values)) != len(block.data):
-                raise InvalidPropertyError(f"{source} cell_data {key!r} has {len(np.asarray(values))} values for "
-                                           f"the {len(block.data)} {block.type} cells of its block")
+                raise InvalidPropertyError(
+                    f"{source} cell_data {key!r} has {len(np.asarray(values))} values for "
+                    f"the {len(block.data)} {block.type} cells of its block"
+                )
         cell_data[str(key)] = np.concatenate([np.asarray(v) for v in arrays]) if arrays else np.empty(0)
     cell_data = _renamed(_numeric(cell_data, source, "cell_data"), names, "cell_data")
     metadata: dict[str, Any] = {_NAMES_KEY: names} if names else {}
     kinds = list(dict.fromkeys(_MESH_OF_MESHIO_TYPE[b.type] for b in blocks))
-    connectivity = (np.concatenate([np.asarray(b.data, dtype=np.int64).reshape(-1) for b in blocks]) if blocks
-                    else np.empty(0, np.int64))
-    types = (np.concatenate([np.full(len(b.data), CELL_TYPE_OF[_MESH_OF_MESHIO_TYPE[b.type]]) for b in blocks])
-             if blocks else np.empty(0, np.int64))
-    sizes = np.concatenate([np.full(len(b.data), _MESH_OF_MESHIO_TYPE[b.type].cell_size) for b in blocks]) \
-        if blocks else np.empty(0, np.int64)
+    connectivity = (
+        np.concatenate([np.asarray(b.data, dtype=np.int64).reshape(-1) for b in blocks])
+        if blocks
+        else np.empty(0, np.int64)
+    )
+    types = (
+        np.concatenate([np.full(len(b.data), CELL_TYPE_OF[_MESH_OF_MESHIO_TYPE[b.type]]) for b in blocks])
+        if blocks
+        else np.empty(0, np.int64)
+    )
+    sizes = (
+        np.concatenate([np.full(len(b.data), _MESH_OF_MESHIO_TYPE[b.type].cell_size) for b in blocks])
+        if blocks
+        else np.empty(0, np.int64)
+    )
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     vertices = points.astype(np.float64) if points.dtype.kind in "biuf" else points
     if geotype == GeometryCollection.geotype.value:
@@ -439,23 +487,32 @@ def from_meshio(obj: Any) -> Geometry:
             members = info["members"]
             table = ([m[0] for m in members], [m[1] for m in members], [[m[2], m[3]] for m in members])
         else:  # a .vtu file tgsis wrote, read by meshio: the member table is in the field data
-            table = (strings(fields.get("tgsis_member_geotypes", [])), strings(fields.get("tgsis_member_names", [])),
-                     fields.get("tgsis_member_sizes", np.empty((0, 2))))
-        collection = collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table, name,
-                                           metadata, source)
+            table = (
+                strings(fields.get("tgsis_member_geotypes", [])),
+                strings(fields.get("tgsis_member_names", [])),
+                fields.get("tgsis_member_sizes", np.empty((0, 2))),
+            )
+        collection = collection_from_cells(
+            vertices, types, offsets, connectivity, point_data, cell_data, table, name, metadata, source
+        )
         _restore_convention(collection, _recorded_fields(info, fields), source)
         return collection
     if len(kinds) > 1:
         listed = ", ".join(f"{b.type} ({len(b.data)})" for b in blocks)
-        raise InvalidGeometryError(f"{source} mixes cell blocks of several kinds ({listed}): a tgsis mesh has one "
-                                   "kind of cell",
-                                   hint="convert one kind at a time: meshio.Mesh(m.points, [m.cells[i]]), or store "
-                                        "the kinds as members of a tgsis.GeometryCollection")
+        raise InvalidGeometryError(
+            f"{source} mixes cell blocks of several kinds ({listed}): a tgsis mesh has one kind of cell",
+            hint="convert one kind at a time: meshio.Mesh(m.points, [m.cells[i]]), or store "
+            "the kinds as members of a tgsis.GeometryCollection",
+        )
     if not blocks or not len(types):
         if kinds:
             geotype = geotype or kinds[0].geotype.value
-    mesh = labelled(source, lambda: one_mesh(vertices, types, offsets, connectivity, point_data, cell_data, name,
-                                               geotype, metadata, source))
+    mesh = labelled(
+        source,
+        lambda: one_mesh(
+            vertices, types, offsets, connectivity, point_data, cell_data, name, geotype, metadata, source
+        ),
+    )
     _restore_convention(mesh, _recorded_fields(info, fields), source)
     return mesh
 
@@ -493,8 +550,10 @@ def to_meshio(geometry: Geometry) -> Any:
     """
     meshio = _require("meshio", "meshio")
     if not isinstance(geometry, (Mesh, GeometryCollection)):
-        raise InvalidGeometryError(f"to_meshio converts tgsis meshes, not {_type_name(geometry)}",
-                                   hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes")
+        raise InvalidGeometryError(
+            f"to_meshio converts tgsis meshes, not {_type_name(geometry)}",
+            hint="tgsis.as_mesh(obj) converts other mesh objects to tgsis meshes",
+        )
     recorded = conventions(geometry)
     vertices, connectivity, offsets, types, point_data, cell_data = vtk_parts(elevation(geometry))
     members = geometry.members if isinstance(geometry, GeometryCollection) else (geometry,)
@@ -510,8 +569,12 @@ def to_meshio(geometry: Geometry) -> Any:
     elif recorded[0] is not None:
         info["zpositive"] = recorded[0]
     return meshio.Mesh(
-        vertices.copy(), blocks,
+        vertices.copy(),
+        blocks,
         point_data=_named(point_data, _original_names(geometry, "point_data")),
-        cell_data={k: [v[s:e] for s, e in zip(starts, ends)]
-                   for k, v in _named(cell_data, _original_names(geometry, "cell_data")).items()},
-        info={"tgsis": info})
+        cell_data={
+            k: [v[s:e] for s, e in zip(starts, ends)]
+            for k, v in _named(cell_data, _original_names(geometry, "cell_data")).items()
+        },
+        info={"tgsis": info},
+    )

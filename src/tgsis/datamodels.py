@@ -33,8 +33,18 @@ from tgsis.gmaps import EvolvingGMap, GMap
 from tgsis.mesh import GeometryCollection, Mesh
 from tgsis.temporal import EvolvingSurface, SurfaceSeries
 
-__all__ = ["DataModel", "Storage", "StoredObject", "TimeModel", "data_models", "data_model", "model_storing",
-           "register_data_model", "register_storage", "storage_of"]
+__all__ = [
+    "DataModel",
+    "Storage",
+    "StoredObject",
+    "TimeModel",
+    "data_models",
+    "data_model",
+    "model_storing",
+    "register_data_model",
+    "register_storage",
+    "storage_of",
+]
 
 #: The objects the shipped data models store (their :attr:`DataModel.types`), for type checkers; a test keeps
 #: it equal to the registry.
@@ -48,8 +58,17 @@ TimeModel = Literal["STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"]
 class InsertFunction(Protocol):
     """Store ``obj`` as a new feature of the class ``fc`` in one transaction; return its id (geoid)."""
 
-    def __call__(self, conn: Any, fc: Any, obj: Any, properties: Mapping[str, Any] | None = None, /, *,
-                 name: str | None = None, drop_extra_properties: bool = False) -> int: ...
+    def __call__(
+        self,
+        conn: Any,
+        fc: Any,
+        obj: Any,
+        properties: Mapping[str, Any] | None = None,
+        /,
+        *,
+        name: str | None = None,
+        drop_extra_properties: bool = False,
+    ) -> int: ...
 
 
 #: Read feature ``feature_id`` of class ``fc`` back as the object the model stores: ``(conn, fc, feature_id)``.
@@ -126,15 +145,19 @@ def register_data_model(model: DataModel) -> DataModel:
     if not isinstance(model, DataModel):
         raise InvalidInputError(f"a data model is a tgsis.DataModel, not a {type(model).__name__}")
     if model.time_model != model.time_model.upper():
-        raise InvalidInputError(f"data model {model.number}: its time model {model.time_model!r} is upper case in "
-                                "tgsis.data_models", hint=f"time_model={model.time_model.upper()!r}")
+        raise InvalidInputError(
+            f"data model {model.number}: its time model {model.time_model!r} is upper case in tgsis.data_models",
+            hint=f"time_model={model.time_model.upper()!r}",
+        )
     for known in _MODELS.values():
         if known == model:
             return known
         if model.number == known.number or model.time_model == known.time_model:
-            raise InvalidInputError(f"data model {model.number} ({model.time_model}) clashes with the registered "
-                                    f"model {known.number} ({known.time_model})",
-                                    hint="each data model has its own number and time model (tgsis.data_models)")
+            raise InvalidInputError(
+                f"data model {model.number} ({model.time_model}) clashes with the registered "
+                f"model {known.number} ({known.time_model})",
+                hint="each data model has its own number and time model (tgsis.data_models)",
+            )
     _MODELS[model.number] = model
     return model
 
@@ -162,9 +185,11 @@ def data_model(time_model: str) -> DataModel:
     for model in _MODELS.values():
         if model.time_model == wanted:
             return model
-    raise InvalidInputError(f"no Python module registered the data model of time model {time_model!r}",
-                            hint="import the module of the model (it calls tgsis.datamodels.register_data_model), "
-                                 f"or use one of {', '.join(m.time_model for m in data_models())}")
+    raise InvalidInputError(
+        f"no Python module registered the data model of time model {time_model!r}",
+        hint="import the module of the model (it calls tgsis.datamodels.register_data_model), "
+        f"or use one of {', '.join(m.time_model for m in data_models())}",
+    )
 
 
 def model_storing(obj: object, time_model: str) -> DataModel | None:
@@ -192,21 +217,34 @@ def storage_of(model: DataModel) -> Storage:
     try:
         return _STORAGE[model.time_model]
     except KeyError:
-        raise InvalidInputError(f"data model {model.number} ({model.time_model}) has no database functions",
-                                hint="import the database module of the model (it calls "
-                                     "tgsis.datamodels.register_storage)") from None
+        raise InvalidInputError(
+            f"data model {model.number} ({model.time_model}) has no database functions",
+            hint="import the database module of the model (it calls tgsis.datamodels.register_storage)",
+        ) from None
 
 
-STATIC = register_data_model(DataModel(1, "static 3D objects", "STATIC",
-                                       ("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION"),
-                                       (Mesh, GeometryCollection), "tgsis.db.features"))
-INSTANTS = register_data_model(DataModel(2, "surfaces at instants", "INSTANTS", ("SURFACE",), (SurfaceSeries,),
-                                         "tgsis.db.temporal"))
-EVOLVING = register_data_model(DataModel(3, "continuously evolving surfaces", "EVOLVING", ("SURFACE",),
-                                         (EvolvingSurface,), "tgsis.db.temporal"))
-GMAPS_IN_TIME = register_data_model(DataModel(4, "generalized maps in time", "GMAP", ("GMAP",), (EvolvingGMap, GMap),
-                                              "tgsis.db.gmaps"))
-MULTIDIM = register_data_model(DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,), "tgsis.db.gmaps"))
+STATIC = register_data_model(
+    DataModel(
+        1,
+        "static 3D objects",
+        "STATIC",
+        ("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION"),
+        (Mesh, GeometryCollection),
+        "tgsis.db.features",
+    )
+)
+INSTANTS = register_data_model(
+    DataModel(2, "surfaces at instants", "INSTANTS", ("SURFACE",), (SurfaceSeries,), "tgsis.db.temporal")
+)
+EVOLVING = register_data_model(
+    DataModel(3, "continuously evolving surfaces", "EVOLVING", ("SURFACE",), (EvolvingSurface,), "tgsis.db.temporal")
+)
+GMAPS_IN_TIME = register_data_model(
+    DataModel(4, "generalized maps in time", "GMAP", ("GMAP",), (EvolvingGMap, GMap), "tgsis.db.gmaps")
+)
+MULTIDIM = register_data_model(
+    DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,), "tgsis.db.gmaps")
+)
 
 assert set(get_args(TimeModel)) == {m.time_model for m in data_models()}, "TimeModel names the shipped models"
 assert set(get_args(StoredObject)) == {t for m in data_models() for t in m.types}, "StoredObject: the shipped types"

@@ -88,7 +88,7 @@ def _synthetic_release(release: int) -> list[_Fault]:
         x = u + 40_000 * i
         y = 3_900_000 + 0.3 * w + 2_000 * np.sin(u / 5_000)
         if release == 1 and i == 1:
-            y = y + np.where(u > 10_000, 150.0, 0.0)   # re-interpreted eastern half
+            y = y + np.where(u > 10_000, 150.0, 0.0)  # re-interpreted eastern half
         vertices = np.stack([x.ravel(), y.ravel(), w.ravel()], axis=1)
         idx = np.arange(u.size).reshape(u.shape)
         a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
@@ -118,21 +118,26 @@ def _demo_conninfo(dsn: str | None) -> str:
 
 
 def _store_release(conn: psycopg.Connection[Any], faults: Sequence[_Fault], release: str) -> dict[str, int]:
-    return {f.name: F.insert_feature(conn, "faults", f.mesh, {"release": release}, drop_extra_properties=True)
-            for f in faults}
+    return {
+        f.name: F.insert_feature(conn, "faults", f.mesh, {"release": release}, drop_extra_properties=True)
+        for f in faults
+    }
 
 
 def _stored_rows(conn: psycopg.Connection[Any]) -> int:
-    row = conn.execute("SELECT (SELECT count(*) FROM tgsis.vrtx_ver) + (SELECT count(*) FROM tgsis.trgl_ver)"
-                       ).fetchone()
+    row = conn.execute(
+        "SELECT (SELECT count(*) FROM tgsis.vrtx_ver) + (SELECT count(*) FROM tgsis.trgl_ver)"
+    ).fetchone()
     assert row is not None
     return int(row[0])
 
 
 def _releases_seen(conn: psycopg.Connection[Any]) -> dict[str, str]:
     """Per fault name, the release and size the session's version sees."""
-    return {f.name or str(f.id): f"release {f.properties['release']} ({f.mesh.n_vertices if f.mesh else 0} vertices)"
-            for f in F.fetch_features(conn, "faults")}
+    return {
+        f.name or str(f.id): f"release {f.properties['release']} ({f.mesh.n_vertices if f.mesh else 0} vertices)"
+        for f in F.fetch_features(conn, "faults")
+    }
 
 
 def _meshes_seen(conn: psycopg.Connection[Any]) -> dict[str, Mesh]:
@@ -149,9 +154,9 @@ def _fault_history(fault: _Fault) -> tuple[EvolvingSurface, int]:
     assert isinstance(fault.mesh, Surface)
     today = fault.mesh.vertices
     xy = today[:, :2] - today[:, :2].mean(axis=0)
-    strike = np.linalg.svd(xy, full_matrices=False)[2][0]      # horizontal direction of the longest extent
+    strike = np.linalg.svd(xy, full_matrices=False)[2][0]  # horizontal direction of the longest extent
     top, bottom = today[:, 2].max(), today[:, 2].min()
-    depth = (top - today[:, 2]) / (top - bottom)                # 0 at the top, 1 at the bottom
+    depth = (top - today[:, 2]) / (top - bottom)  # 0 at the top, 1 at the bottom
     past = today - SLIP * depth[:, None] * np.array([strike[0], strike[1], 0.0])
     period = TopologyPeriod(list(HISTORY), fault.mesh.triangles, [past, today])
     return EvolvingSurface([period], alive=True, name=fault.name), int(np.argmax(depth))
@@ -160,20 +165,29 @@ def _fault_history(fault: _Fault) -> tuple[EvolvingSurface, int]:
 def _store_history(conn: psycopg.Connection[Any], fault: _Fault, folder: Path) -> list[str]:
     """Step 6: store the fault history, take its shape at the middle time in SQL, export it as a .pvd."""
     history, deepest = _fault_history(fault)
-    F.create_feature_class(conn, "fault_history", "SURFACE", time_model="EVOLVING", time_unit="Ma", srs=26911,
-                           description="faults through geological time (ages in Ma, negative)")
+    F.create_feature_class(
+        conn,
+        "fault_history",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit="Ma",
+        srs=26911,
+        description="faults through geological time (ages in Ma, negative)",
+    )
     fid = F.insert_feature(conn, "fault_history", history)
     middle = (HISTORY[0] + HISTORY[1]) / 2
     shape = T.get_at(conn, fid, middle)
     assert shape is not None
     moved = float(np.linalg.norm(shape.vertices[deepest] - fault.mesh.vertices[deepest]))
     written = T.export_series(conn, fid, folder / "fault_history.pvd", start=HISTORY[0], end=HISTORY[1], steps=21)
-    return [f"5. fault history (model 3): {fault.name} slipping {SLIP:.0f} m at depth from {HISTORY[0]} Ma to today, "
-            f"stored as feature {fid} of class fault_history (EVOLVING)",
-            f"   at {middle} Ma (SQL snapshot): {shape.n_vertices} vertices, the deepest "
-            f"{moved:.0f} m from where it is today",
-            f"   {len(written.files)} frames from {HISTORY[0]} to {HISTORY[1]} Ma written to {written.pvd} "
-            "(open it in ParaView)"]
+    return [
+        f"5. fault history (model 3): {fault.name} slipping {SLIP:.0f} m at depth from {HISTORY[0]} Ma to today, "
+        f"stored as feature {fid} of class fault_history (EVOLVING)",
+        f"   at {middle} Ma (SQL snapshot): {shape.n_vertices} vertices, the deepest "
+        f"{moved:.0f} m from where it is today",
+        f"   {len(written.files)} frames from {HISTORY[0]} to {HISTORY[1]} Ma written to {written.pvd} "
+        "(open it in ParaView)",
+    ]
 
 
 def _draw_releases(old: dict[str, Mesh], new: dict[str, Mesh], folder: Path) -> list[str]:
@@ -193,20 +207,31 @@ def _draw_releases(old: dict[str, Mesh], new: dict[str, Mesh], folder: Path) -> 
         return ["   no picture of release 6.1 over 5.3: it needs matplotlib (pip install 'tgsis[pictures]')"]
     from tgsis import pictures
 
-    moved = {name: closest_points(mesh.vertices, before.vertices, before.triangles).distances
-             for name, mesh in new.items() if isinstance(mesh, Surface)
-             for before in [old.get(name)] if isinstance(before, Surface)}
+    moved = {
+        name: closest_points(mesh.vertices, before.vertices, before.triangles).distances
+        for name, mesh in new.items()
+        if isinstance(mesh, Surface)
+        for before in [old.get(name)]
+        if isinstance(before, Surface)
+    }
     if not moved:
         return ["   no picture of release 6.1 over 5.3: no fault is in both releases"]
     name = max(sorted(moved), key=lambda n: float(moved[n].max()))
     after = new[name]
     assert isinstance(after, Surface)
     # 6.1 alone: 5.3 lies within metres of it and, drawn too, would hide it
-    pictures.scene([Surface(after.vertices, after.triangles, name="release 6.1")], png,
-                   title=f"{name}\nrelease 6.1 over 5.3", colour=[moved[name]],
-                   colour_label="distance of 6.1 from 5.3 (m)", exaggeration=3.0)
-    return [f"   {name}: release 6.1 over 5.3, coloured by its distance from 5.3 (up to {moved[name].max():.0f} m), "
-            f"drawn to {png}"]
+    pictures.scene(
+        [Surface(after.vertices, after.triangles, name="release 6.1")],
+        png,
+        title=f"{name}\nrelease 6.1 over 5.3",
+        colour=[moved[name]],
+        colour_label="distance of 6.1 from 5.3 (m)",
+        exaggeration=3.0,
+    )
+    return [
+        f"   {name}: release 6.1 over 5.3, coloured by its distance from 5.3 (up to {moved[name].max():.0f} m), "
+        f"drawn to {png}"
+    ]
 
 
 def _no_lost_update(conninfo: str, fid: int) -> list[str]:
@@ -214,7 +239,7 @@ def _no_lost_update(conninfo: str, fid: int) -> list[str]:
     with psycopg.connect(conninfo) as ann, psycopg.connect(conninfo) as bob:
         ann_copy, bob_copy = C.checkout(ann, fid), C.checkout(bob, fid)
         ann_mesh, bob_mesh = ann_copy.mesh.copy(), bob_copy.mesh.copy()
-        ann_mesh.vertices[0, 2] += 100.0                       # each lifts a different vertex
+        ann_mesh.vertices[0, 2] += 100.0  # each lifts a different vertex
         bob_mesh.vertices[-1, 2] -= 100.0
         C.checkin(ann, ann_copy, ann_mesh, drop_extra_properties=True)
         try:
@@ -222,16 +247,20 @@ def _no_lost_update(conninfo: str, fid: int) -> list[str]:
             refused = "accepted (unexpected)"
         except CheckoutConflictError as exc:
             refused = f"refused: {str(exc).splitlines()[0]}"
-        kept = C.checkin(bob, bob_copy, bob_mesh, on_conflict="child", child_version="bob_edit",
-                         drop_extra_properties=True)
-    return [f"6. no lost update: ann and bob check out feature {fid} in DEFAULT and both edit it",
-            f"   ann checks in first; bob's check-in is {refused}",
-            f"   with on_conflict='child' bob's edit goes into new version {kept.version} "
-            f"({kept.save.rows_written} rows); DEFAULT keeps ann's"]
+        kept = C.checkin(
+            bob, bob_copy, bob_mesh, on_conflict="child", child_version="bob_edit", drop_extra_properties=True
+        )
+    return [
+        f"6. no lost update: ann and bob check out feature {fid} in DEFAULT and both edit it",
+        f"   ann checks in first; bob's check-in is {refused}",
+        f"   with on_conflict='child' bob's edit goes into new version {kept.version} "
+        f"({kept.save.rows_written} rows); DEFAULT keeps ann's",
+    ]
 
 
-def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print,
-             folder: str | Path | None = None) -> list[Path]:
+def run_demo(
+    dsn: str | None = None, *, out: Callable[[str], None] = print, folder: str | Path | None = None
+) -> list[Path]:
     """Run the demo against the server of ``dsn`` (``None``: the local server), in a database of its own.
 
     Parameters
@@ -260,21 +289,32 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print,
         assert current is not None
         row = conn.execute("SELECT tgsis.version(), current_setting('server_version')").fetchone()
         assert row is not None
-        roles = [r[0] for r in conn.execute(
-            # the group roles users are granted (not tgsis_nobody, which is tgsis's own)
-            "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' AND rolname <> 'tgsis_nobody' "
-            "ORDER BY oid").fetchall()]
+        roles = [
+            r[0]
+            for r in conn.execute(
+                # the group roles users are granted (not tgsis_nobody, which is tgsis's own)
+                "SELECT rolname FROM pg_roles WHERE rolname LIKE 'tgsis\\_%' AND rolname <> 'tgsis_nobody' ORDER BY oid"
+            ).fetchall()
+        ]
         out(f"PostgreSQL {row[1]}, database {DEMO_DATABASE!r} ({target.source})")
         out(f"tgsis {row[0]} (installed as {current.method})")
         out(f"roles: {', '.join(roles)}")
         out(f"data: {source}")
 
-        F.create_feature_class(conn, "faults", "SURFACE", feature_properties={"release": "text"}, srs=26911,
-                               description="fault surfaces, UTM zone 11 metres, z up")
+        F.create_feature_class(
+            conn,
+            "faults",
+            "SURFACE",
+            feature_properties={"release": "text"},
+            srs=26911,
+            description="fault surfaces, UTM zone 11 metres, z up",
+        )
         V.enable_feature_versioning(conn)
         ids = _store_release(conn, old, "5.3")
-        out(f"1. stored {len(ids)} faults of release 5.3 in DEFAULT: "
-            + ", ".join(f"{name} ({old[i].mesh.n_vertices} vertices)" for i, name in enumerate(ids)))
+        out(
+            f"1. stored {len(ids)} faults of release 5.3 in DEFAULT: "
+            + ", ".join(f"{name} ({old[i].mesh.n_vertices} vertices)" for i, name in enumerate(ids))
+        )
 
         box = old[0].mesh.bounds() + np.array([[-10_000.0], [10_000.0]])
         found = F.features_in_box(conn, "faults", box)
@@ -286,29 +326,36 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print,
         report = []
         with V.in_version(conn, "cfm6.1"):
             for fault in new:
-                if fault.name not in ids:   # a fault new in this release
+                if fault.name not in ids:  # a fault new in this release
                     ids[fault.name] = _store_release(conn, [fault], "6.1")[fault.name]
                     report.append(f"   {fault.name}: new, {fault.mesh.n_vertices} vertices stored")
                     continue
                 checked_out = C.checkout(conn, ids[fault.name])
-                result = C.checkin(conn, checked_out, fault.mesh, {"release": "6.1"}, tolerance=TOLERANCE,
-                                   drop_extra_properties=True).save
+                result = C.checkin(
+                    conn, checked_out, fault.mesh, {"release": "6.1"}, tolerance=TOLERANCE, drop_extra_properties=True
+                ).save
                 counts = result.diff.counts()
-                report.append(f"   {fault.name}: {counts['vertices_kept']} of {fault.mesh.n_vertices} vertices kept, "
-                              f"{result.vertices_moved} moved; {result.rows_written} rows written "
-                              f"(a full upload: {2 * fault.mesh.n_vertices + fault.mesh.n_cells})")
+                report.append(
+                    f"   {fault.name}: {counts['vertices_kept']} of {fault.mesh.n_vertices} vertices kept, "
+                    f"{result.vertices_moved} moved; {result.rows_written} rows written "
+                    f"(a full upload: {2 * fault.mesh.n_vertices + fault.mesh.n_cells})"
+                )
             saved = V.save_revision(conn, "release-6.1")
             seen_in_version = _releases_seen(conn)
             meshes_in_version = _meshes_seen(conn)
-        out(f"3. version cfm6.1: release 6.1 checked in over {len(new)} fault(s) by difference "
+        out(
+            f"3. version cfm6.1: release 6.1 checked in over {len(new)} fault(s) by difference "
             f"(vertices within {TOLERANCE * 100:.0f} cm are the same), saved as revision {saved}; "
-            f"rows stored for it: {_stored_rows(conn) - rows_before}")
+            f"rows stored for it: {_stored_rows(conn) - rows_before}"
+        )
         for line in report:
             out(line)
         seen_in_default = _releases_seen(conn)
         for name in sorted(set(seen_in_default) | set(seen_in_version)):
-            out(f"   {name}: DEFAULT sees {seen_in_default.get(name, 'nothing')}; "
-                f"cfm6.1 sees {seen_in_version.get(name, 'nothing')}")
+            out(
+                f"   {name}: DEFAULT sees {seen_in_default.get(name, 'nothing')}; "
+                f"cfm6.1 sees {seen_in_version.get(name, 'nothing')}"
+            )
         out("4. version tree:")
         for line in V.format_tree(V.list_versions(conn)).splitlines():
             out("   " + line)
@@ -325,8 +372,10 @@ def run_demo(dsn: str | None = None, *, out: Callable[[str], None] = print,
         for line in _no_lost_update(conninfo, ids[old[-1].name]):
             out(line)
     if target.dsn is None:
-        out("the local server stops when this command ends; to look around: `tgsis local start`, "
-            f"`psql \"$(tgsis local dsn)\"`, then `\\c {DEMO_DATABASE}`")
+        out(
+            "the local server stops when this command ends; to look around: `tgsis local start`, "
+            f'`psql "$(tgsis local dsn)"`, then `\\c {DEMO_DATABASE}`'
+        )
         out(f"in a browser: `tgsis view --db {DEMO_DATABASE} --open` (the extra tgsis[view])")
     else:
         out(f"dsn: {conninfo}")

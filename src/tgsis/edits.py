@@ -70,7 +70,9 @@ class EditPlan(IndexMaps):
         return np.flatnonzero(self.moved).astype(np.int64)
 
 
-def _one_missing_keys(cells: IntArray, mapped: IntArray, sentinel: int) -> tuple[IntArray, IntArray, list[npt.NDArray[np.uint64]]]:
+def _one_missing_keys(
+    cells: IntArray, mapped: IntArray, sentinel: int
+) -> tuple[IntArray, IntArray, list[npt.NDArray[np.uint64]]]:
     """Cells missing exactly one vertex: their indices, that vertex, and keys with it replaced by ``sentinel``."""
     missing = mapped < 0
     rows = np.flatnonzero(missing.sum(axis=1) == 1)
@@ -84,8 +86,9 @@ def _one_missing_keys(cells: IntArray, mapped: IntArray, sentinel: int) -> tuple
     return rows.astype(np.int64), vertex.astype(np.int64), cell_columns(columns_of(keyed), sentinel + 1)
 
 
-def _pair_moves(old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_map: IntArray,
-                old_free: npt.NDArray[np.bool_]) -> int:
+def _pair_moves(
+    old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_map: IntArray, old_free: npt.NDArray[np.bool_]
+) -> int:
     """One round: pair new vertices with removed old ones whose one-missing cells match; returns pairs made.
 
     ``old_cells`` are the removed old cells, ``new_cells`` the added edited
@@ -112,8 +115,12 @@ def _pair_moves(old_cells: IntArray, new_cells: IntArray, sentinel: int, vertex_
     old_cells_of = np.bincount(old_vertex, minlength=size)
     candidates_of_new = np.bincount(pair_new, minlength=size)
     candidates_of_old = np.bincount(pair_old, minlength=size)
-    good = ((candidates_of_new[pair_new] == 1) & (candidates_of_old[pair_old] == 1)
-            & (votes == new_cells_of[pair_new]) & (votes == old_cells_of[pair_old]))
+    good = (
+        (candidates_of_new[pair_new] == 1)
+        & (candidates_of_old[pair_old] == 1)
+        & (votes == new_cells_of[pair_new])
+        & (votes == old_cells_of[pair_old])
+    )
     vertex_map[pair_new[good]] = pair_old[good]
     old_free[pair_old[good]] = False
     return int(good.sum())
@@ -151,9 +158,18 @@ def plan_edit(old: Mesh | MeshIndex, edited: Mesh, diff: MeshDiff) -> EditPlan:
         renamed = vertex_map[new_cells]
         survives = np.flatnonzero(renamed.min(axis=1) >= 0)
         if len(survives):
-            hit = match_rows(SortedRows.of(cell_columns(columns_of(old_cells), old_mesh.n_vertices)),
-                         SortedRows.of(cell_columns(columns_of(renamed[survives]), old_mesh.n_vertices)))
+            hit = match_rows(
+                SortedRows.of(cell_columns(columns_of(old_cells), old_mesh.n_vertices)),
+                SortedRows.of(cell_columns(columns_of(renamed[survives]), old_mesh.n_vertices)),
+            )
             found = hit >= 0
             cell_map[diff.added_cells[survives[found]]] = diff.removed_cells[hit[found]]
-    return EditPlan(diff, vertex_map, moved, cell_map, unmatched(old_mesh.n_vertices, vertex_map),
-                    unmatched(old_mesh.n_cells, cell_map), edited.bounds() if edited.n_vertices else None)
+    return EditPlan(
+        diff,
+        vertex_map,
+        moved,
+        cell_map,
+        unmatched(old_mesh.n_vertices, vertex_map),
+        unmatched(old_mesh.n_cells, cell_map),
+        edited.bounds() if edited.n_vertices else None,
+    )

@@ -298,8 +298,16 @@ class SkippedObjectWarning(UserWarning):
         ``Model3d`` whose surfaces were read): what, e.g. ``("REGION 'Upper'",)``.
     """
 
-    def __init__(self, message: str, *, path: object = None, line: int, object_type: str,
-                 name: str | None = None, skipped: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self,
+        message: str,
+        *,
+        path: object = None,
+        line: int,
+        object_type: str,
+        name: str | None = None,
+        skipped: tuple[str, ...] = (),
+    ) -> None:
         super().__init__(message)
         self.message = message
         self.path = None if path is None else str(path)

@@ -92,8 +92,7 @@ class MeshReport:
         """One line for logs and the command line."""
         if self.ok:
             return "no duplicate vertices, no degenerate cells"
-        return (f"{len(self.duplicate_vertices)} duplicate vertices, "
-                f"{len(self.degenerate_cells)} degenerate cells")
+        return f"{len(self.duplicate_vertices)} duplicate vertices, {len(self.degenerate_cells)} degenerate cells"
 
 
 def _as_vertices(vertices: npt.ArrayLike) -> FloatArray:
@@ -134,8 +133,10 @@ def _as_properties(
         if array.dtype.kind not in "biuf":
             raise InvalidPropertyError(f"{what} property {name!r} has values of type {array.dtype}, not numbers")
         if array.ndim not in (1, 2) or (array.ndim == 2 and array.shape[1] < 1):
-            raise InvalidPropertyError(f"{what} property {name!r} must be one value or one vector of values per "
-                                       f"{what}, got shape {array.shape}")
+            raise InvalidPropertyError(
+                f"{what} property {name!r} must be one value or one vector of values per "
+                f"{what}, got shape {array.shape}"
+            )
         if len(array) != count:
             raise InvalidPropertyError(f"{what} property {name!r} has {len(array)} values for {count} {_plural(what)}")
         result[name] = array
@@ -202,8 +203,9 @@ class Mesh:
             raise InvalidGeometryError(f"{what} indices must be integers, got {raw.dtype}")
         array = np.ascontiguousarray(raw, dtype=np.int64)
         if array.ndim != 2 or array.shape[1] != k:
-            raise InvalidGeometryError(f"{_plural(what)} must be an (m, {k}) array of vertex indices, "
-                                       f"got shape {array.shape}")
+            raise InvalidGeometryError(
+                f"{_plural(what)} must be an (m, {k}) array of vertex indices, got shape {array.shape}"
+            )
         outside = (array < 0) | (array >= n_vertices)
         if outside.any():
             row, col = (int(v) for v in np.argwhere(outside)[0])
@@ -286,32 +288,40 @@ class Mesh:
         tolerance : float
             Largest length/area/volume still counted as degenerate (0: exactly zero).
         """
-        degenerate = (np.flatnonzero(self.cell_measures() <= tolerance) if self.cell_size > 1
-                      else np.empty(0, dtype=np.int64))
+        degenerate = (
+            np.flatnonzero(self.cell_measures() <= tolerance) if self.cell_size > 1 else np.empty(0, dtype=np.int64)
+        )
         return MeshReport(self.duplicate_vertex_pairs(), degenerate.astype(np.int64))
 
     # ---- comparison and copies
 
     def same_as(self, other: Mesh) -> bool:
         """Same type, bit-identical vertices and cells, and equal properties (NaN equals NaN)."""
+
         def same_props(a: Mapping[str, npt.NDArray[Any]], b: Mapping[str, npt.NDArray[Any]]) -> bool:
             return a.keys() == b.keys() and all(
-                a[k].shape == b[k].shape and np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f")
-                for k in a)
+                a[k].shape == b[k].shape and np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f") for k in a
+            )
 
-        return (type(self) is type(other)
-                and self.vertices.shape == other.vertices.shape
-                and bool(np.all(self.vertices.view(np.int64) == other.vertices.view(np.int64)))
-                and np.array_equal(self.cells, other.cells)
-                and same_props(self.vertex_properties, other.vertex_properties)
-                and same_props(self.cell_properties, other.cell_properties))
+        return (
+            type(self) is type(other)
+            and self.vertices.shape == other.vertices.shape
+            and bool(np.all(self.vertices.view(np.int64) == other.vertices.view(np.int64)))
+            and np.array_equal(self.cells, other.cells)
+            and same_props(self.vertex_properties, other.vertex_properties)
+            and same_props(self.cell_properties, other.cell_properties)
+        )
 
     def copy(self) -> Mesh:
         """A deep copy."""
-        return type(self)(self.vertices.copy(), self.cells.copy(),
-                          vertex_properties={k: v.copy() for k, v in self.vertex_properties.items()},
-                          cell_properties={k: v.copy() for k, v in self.cell_properties.items()},
-                          name=self.name, metadata=dict(self.metadata))
+        return type(self)(
+            self.vertices.copy(),
+            self.cells.copy(),
+            vertex_properties={k: v.copy() for k, v in self.vertex_properties.items()},
+            cell_properties={k: v.copy() for k, v in self.cell_properties.items()},
+            name=self.name,
+            metadata=dict(self.metadata),
+        )
 
     # ---- other libraries' mesh objects (tgsis.convert; pyvista and meshio are optional)
 
@@ -363,15 +373,18 @@ class Mesh:
     @classmethod
     def _expect(cls, mesh: Mesh | GeometryCollection, what: str) -> Mesh:
         if not isinstance(mesh, cls):
-            raise InvalidGeometryError(f"the {what} is a {type(mesh).__name__}, not a {cls.__name__}",
-                                       hint=f"tgsis.as_mesh(obj) gives whatever mesh it is; "
-                                            f"{cls.__name__}.from_... only a {cls.__name__}")
+            raise InvalidGeometryError(
+                f"the {what} is a {type(mesh).__name__}, not a {cls.__name__}",
+                hint=f"tgsis.as_mesh(obj) gives whatever mesh it is; {cls.__name__}.from_... only a {cls.__name__}",
+            )
         return mesh
 
     def __repr__(self) -> str:
         props = list(self.vertex_properties) + list(self.cell_properties)
-        return (f"{type(self).__name__}(name={self.name!r}, n_vertices={self.n_vertices}, "
-                f"n_{_plural(self.cell_name)}={self.n_cells}, properties={props})")
+        return (
+            f"{type(self).__name__}(name={self.name!r}, n_vertices={self.n_vertices}, "
+            f"n_{_plural(self.cell_name)}={self.n_cells}, properties={props})"
+        )
 
 
 class PointSet(Mesh):
@@ -417,7 +430,10 @@ class Surface(Mesh):
         from tgsis._zpositive import elevation
 
         return trimesh.Trimesh(
-            vertices=elevation(self).vertices.copy(), faces=self.cells.copy(), process=False, validate=False,
+            vertices=elevation(self).vertices.copy(),
+            faces=self.cells.copy(),
+            process=False,
+            validate=False,
             vertex_attributes={k: v.copy() for k, v in self.vertex_properties.items()},
             face_attributes={k: v.copy() for k, v in self.cell_properties.items()},
             metadata={"name": self.name} if self.name else {},
@@ -438,18 +454,25 @@ class Surface(Mesh):
             :class:`~tgsis.errors.InvalidPropertyError` (default: it is left
             out, as trimesh's file loaders add attributes of their own).
         """
+
         def numeric(attrs: Mapping[str, Any], count: int) -> dict[str, npt.NDArray[Any]]:
             if strict:
                 return {k: np.asarray(v) for k, v in attrs.items()}  # the constructor names a bad one
-            return {k: np.asarray(v) for k, v in attrs.items()
-                    if np.asarray(v).ndim == 1 and len(v) == count and np.asarray(v).dtype.kind in "biuf"}
+            return {
+                k: np.asarray(v)
+                for k, v in attrs.items()
+                if np.asarray(v).ndim == 1 and len(v) == count and np.asarray(v).dtype.kind in "biuf"
+            }
 
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
         faces = np.asarray(mesh.faces, dtype=np.int64)
-        return cls(vertices, faces,
-                   vertex_properties=numeric(getattr(mesh, "vertex_attributes", {}), len(vertices)),
-                   cell_properties=numeric(getattr(mesh, "face_attributes", {}), len(faces)),
-                   name=name or (mesh.metadata or {}).get("name"))
+        return cls(
+            vertices,
+            faces,
+            vertex_properties=numeric(getattr(mesh, "vertex_attributes", {}), len(vertices)),
+            cell_properties=numeric(getattr(mesh, "face_attributes", {}), len(faces)),
+            name=name or (mesh.metadata or {}).get("name"),
+        )
 
 
 class TetraMesh(Mesh):
@@ -494,20 +517,26 @@ class GeometryCollection:
 
     members: tuple[Mesh, ...]
 
-    def __init__(self, members: Iterable[Mesh], *, name: str | None = None,
-                 metadata: Mapping[str, Any] | None = None) -> None:
+    def __init__(
+        self, members: Iterable[Mesh], *, name: str | None = None, metadata: Mapping[str, Any] | None = None
+    ) -> None:
         if isinstance(members, (Mesh, GeometryCollection)):
-            raise InvalidGeometryError(f"the members of a GeometryCollection are a sequence of meshes, "
-                                       f"got one {type(members).__name__}", hint="wrap it in a list")
+            raise InvalidGeometryError(
+                f"the members of a GeometryCollection are a sequence of meshes, got one {type(members).__name__}",
+                hint="wrap it in a list",
+            )
         items = tuple(members)
         for i, member in enumerate(items):
             if isinstance(member, GeometryCollection):
-                raise InvalidGeometryError(f"member {i} of collection {name!r} is a GeometryCollection: "
-                                           "collections do not nest",
-                                           hint="add its members to the outer collection instead")
+                raise InvalidGeometryError(
+                    f"member {i} of collection {name!r} is a GeometryCollection: collections do not nest",
+                    hint="add its members to the outer collection instead",
+                )
             if not isinstance(member, (PointSet, LineSet, Surface, TetraMesh)):
-                raise InvalidGeometryError(f"member {i} of collection {name!r} is a {type(member).__name__}, "
-                                           "not a PointSet, LineSet, Surface or TetraMesh")
+                raise InvalidGeometryError(
+                    f"member {i} of collection {name!r} is a {type(member).__name__}, "
+                    "not a PointSet, LineSet, Surface or TetraMesh"
+                )
         if not items:
             raise InvalidGeometryError(f"collection {name!r} has no member: a GeometryCollection needs at least one")
         self.members = items
@@ -568,8 +597,11 @@ class GeometryCollection:
 
     def same_as(self, other: Mesh | GeometryCollection) -> bool:
         """Also a collection, with as many members, each :meth:`Mesh.same_as` its counterpart."""
-        return (isinstance(other, GeometryCollection) and len(self.members) == len(other.members)
-                and all(a.same_as(b) for a, b in zip(self.members, other.members)))
+        return (
+            isinstance(other, GeometryCollection)
+            and len(self.members) == len(other.members)
+            and all(a.same_as(b) for a, b in zip(self.members, other.members))
+        )
 
     def copy(self) -> GeometryCollection:
         """A deep copy."""
@@ -589,8 +621,10 @@ class GeometryCollection:
 
     def __repr__(self) -> str:
         kinds = ", ".join(type(m).__name__ for m in self.members)
-        return (f"GeometryCollection(name={self.name!r}, members=[{kinds}], n_vertices={self.n_vertices}, "
-                f"n_cells={self.n_cells})")
+        return (
+            f"GeometryCollection(name={self.name!r}, members=[{kinds}], n_vertices={self.n_vertices}, "
+            f"n_cells={self.n_cells})"
+        )
 
 
 #: What a feature's geometry can be: one mesh or a collection of meshes.
@@ -613,5 +647,5 @@ def mesh_class(geotype: Geotype | str) -> type[Mesh]:
         raise InvalidGeometryError(
             f"no mesh type for geotype {geotype!r}",
             hint="use MULTIPOINT, MULTILINESTRING, SURFACE or MULTITETRA; a GEOMETRYCOLLECTION is a "
-                 "GeometryCollection of such meshes",
+            "GeometryCollection of such meshes",
         ) from None

@@ -47,9 +47,11 @@ def displacement(surface: Surface, reference: Surface) -> FloatArray:
     (n,) float64
     """
     if surface.vertices.shape != reference.vertices.shape:
-        raise InvalidInputError(f"a displacement needs the same vertices: {surface.vertices.shape[0]} against "
-                                f"{reference.vertices.shape[0]} in the reference",
-                                hint="colour by displacement from a state of the same topology period")
+        raise InvalidInputError(
+            f"a displacement needs the same vertices: {surface.vertices.shape[0]} against "
+            f"{reference.vertices.shape[0]} in the reference",
+            hint="colour by displacement from a state of the same topology period",
+        )
     return np.asarray(np.linalg.norm(surface.vertices - reference.vertices, axis=1), dtype=np.float64)
 
 
@@ -61,7 +63,7 @@ def _axes(figure: Any, bounds: FloatArray, units: Sequence[str], exaggeration: f
     ax.set_xlim(bounds[0, 0] - pad[0], bounds[1, 0] + pad[0])
     ax.set_ylim(bounds[0, 1] - pad[1], bounds[1, 1] + pad[1])
     ax.set_zlim(bounds[0, 2] - pad[2], bounds[1, 2] + pad[2])
-    ax.set_box_aspect((span[0], span[1], span[2] * exaggeration))   # equal aspect, z exaggerated on request
+    ax.set_box_aspect((span[0], span[1], span[2] * exaggeration))  # equal aspect, z exaggerated on request
     for set_label, axis, unit in zip((ax.set_xlabel, ax.set_ylabel, ax.set_zlabel), "xyz", units):
         set_label(f"{axis} ({unit})" if unit else axis, labelpad=8)
     from matplotlib.ticker import MaxNLocator
@@ -89,10 +91,19 @@ def _draw(ax: Any, surfaces: Sequence[Surface], colours: Sequence[FloatArray | N
             continue
         v, tri = surface.vertices, surface.cells
         tint = palette[i % len(palette)]
-        collection = ax.plot_trisurf(v[:, 0], v[:, 1], v[:, 2], triangles=tri, linewidth=0.1, edgecolor="0.3",
-                                     color=tint, shade=values is None, alpha=1.0)
+        collection = ax.plot_trisurf(
+            v[:, 0],
+            v[:, 1],
+            v[:, 2],
+            triangles=tri,
+            linewidth=0.1,
+            edgecolor="0.3",
+            color=tint,
+            shade=values is None,
+            alpha=1.0,
+        )
         if values is not None:
-            collection.set_array(values[tri].mean(axis=1))   # a face takes the mean of its vertices
+            collection.set_array(values[tri].mean(axis=1))  # a face takes the mean of its vertices
             collection.set_cmap("viridis")
             collection.set_norm(norm)
         elif len(surfaces) > 1:
@@ -106,10 +117,18 @@ def _title(title: str, exaggeration: float) -> str:
     return title + (f" (vertical exaggeration ×{exaggeration:g})" if exaggeration != 1.0 else "")
 
 
-def scene(surfaces: Sequence[Surface], path: str | Path, *, title: str,
-          colour: Sequence[FloatArray | None] | None = None, colour_label: str = "displacement (m)",
-          units: Sequence[str] = ("m", "m", "m"), exaggeration: float = 1.0, size: tuple[float, float] = (8.0, 6.0),
-          dpi: int = 100) -> Path:
+def scene(
+    surfaces: Sequence[Surface],
+    path: str | Path,
+    *,
+    title: str,
+    colour: Sequence[FloatArray | None] | None = None,
+    colour_label: str = "displacement (m)",
+    units: Sequence[str] = ("m", "m", "m"),
+    exaggeration: float = 1.0,
+    size: tuple[float, float] = (8.0, 6.0),
+    dpi: int = 100,
+) -> Path:
     """Write a PNG of several surfaces in one scene.
 
     Parameters
@@ -161,22 +180,30 @@ def scene(surfaces: Sequence[Surface], path: str | Path, *, title: str,
 def _cut(surface: Surface, y: float) -> FloatArray:
     """(k, 2, 2) float64: the segments (x, z) where the plane of constant ``y`` cuts the surface's triangles."""
     v, tri = surface.vertices, surface.cells
-    d = v[tri, 1] - y                                                     # (m, 3) signed distances
+    d = v[tri, 1] - y  # (m, 3) signed distances
     segments = []
     for i, j in ((0, 1), (1, 2), (2, 0)):
         crossing = (d[:, i] <= 0) != (d[:, j] <= 0)
         w = np.where(crossing, d[:, i] / np.where(crossing, d[:, i] - d[:, j], 1.0), np.nan)
         a, b = v[tri[:, i]], v[tri[:, j]]
         segments.append(np.where(crossing[:, None], a + w[:, None] * (b - a), np.nan)[:, [0, 2]])
-    points = np.stack(segments, axis=1)                                   # (m, 3 edges, 2): two of them cross
+    points = np.stack(segments, axis=1)  # (m, 3 edges, 2): two of them cross
     keep = np.isfinite(points[:, :, 0]).sum(axis=1) == 2
     pairs = points[keep][np.isfinite(points[keep][:, :, 0])].reshape(-1, 2, 2)
     return np.asarray(pairs, dtype=np.float64)
 
 
-def section(surfaces: Sequence[Surface], path: str | Path, *, y: float, title: str,
-            units: Sequence[str] = ("m", "m"), exaggeration: float = 1.0, size: tuple[float, float] = (9.0, 4.0),
-            dpi: int = 100) -> Path:
+def section(
+    surfaces: Sequence[Surface],
+    path: str | Path,
+    *,
+    y: float,
+    title: str,
+    units: Sequence[str] = ("m", "m"),
+    exaggeration: float = 1.0,
+    size: tuple[float, float] = (9.0, 4.0),
+    dpi: int = 100,
+) -> Path:
     """Write a PNG of a vertical cross-section: where the plane of constant ``y`` cuts each surface, in x and z.
 
     Parameters
@@ -208,8 +235,14 @@ def section(surfaces: Sequence[Surface], path: str | Path, *, y: float, title: s
                 continue
             cut = _cut(surface, y)
             if len(cut):
-                ax.add_collection(LineCollection(list(cut), colors=palette[i % len(palette)], linewidths=1.5,
-                                                 label=surface.name or f"surface {i + 1}"))
+                ax.add_collection(
+                    LineCollection(
+                        list(cut),
+                        colors=palette[i % len(palette)],
+                        linewidths=1.5,
+                        label=surface.name or f"surface {i + 1}",
+                    )
+                )
                 drawn += 1
         if not drawn:
             raise InvalidInputError(f"the section at y = {y:g} cuts none of the surfaces")
@@ -226,11 +259,20 @@ def section(surfaces: Sequence[Surface], path: str | Path, *, y: float, title: s
     return target
 
 
-def animation(frames: Sequence[tuple[float, Sequence[Surface]]], path: str | Path, *, title: str,
-              time_unit: str = "", reference: Sequence[Surface] | None = None,
-              colour_label: str = "displacement (m)", units: Sequence[str] = ("m", "m", "m"),
-              exaggeration: float = 1.0, fps: int = 4, size: tuple[float, float] = (6.4, 4.8),
-              dpi: int = 80) -> Path:
+def animation(
+    frames: Sequence[tuple[float, Sequence[Surface]]],
+    path: str | Path,
+    *,
+    title: str,
+    time_unit: str = "",
+    reference: Sequence[Surface] | None = None,
+    colour_label: str = "displacement (m)",
+    units: Sequence[str] = ("m", "m", "m"),
+    exaggeration: float = 1.0,
+    fps: int = 4,
+    size: tuple[float, float] = (6.4, 4.8),
+    dpi: int = 80,
+) -> Path:
     """Write a GIF of surfaces through time, the same axes and colour scale in every frame.
 
     Parameters
@@ -262,14 +304,17 @@ def animation(frames: Sequence[tuple[float, Sequence[Surface]]], path: str | Pat
     def colours(scene_surfaces: Sequence[Surface]) -> list[FloatArray | None]:
         if reference is None:
             return [None] * len(scene_surfaces)
-        return [displacement(s, r) if s.n_vertices and s.vertices.shape == r.vertices.shape else None
-                for s, r in zip(scene_surfaces, reference)]
+        return [
+            displacement(s, r) if s.n_vertices and s.vertices.shape == r.vertices.shape else None
+            for s, r in zip(scene_surfaces, reference)
+        ]
 
     vmax = max((float(np.nanmax(c)) for _, s in frames for c in colours(s) if c is not None and len(c)), default=0.0)
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     figure = plt.figure(figsize=size, dpi=dpi)
     try:
+
         def draw(i: int) -> list[Any]:
             figure.clear()
             ax = _axes(figure, bounds, units, exaggeration)

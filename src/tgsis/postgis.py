@@ -39,8 +39,18 @@ __all__ = ["mesh_from_wkb", "mesh_to_ewkb", "wkb_srid"]
 _POINT, _LINESTRING, _POLYGON, _MULTIPOINT, _MULTILINESTRING, _MULTIPOLYGON, _COLLECTION = 1, 2, 3, 4, 5, 6, 7
 _POLYHEDRALSURFACE, _TIN, _TRIANGLE = 15, 16, 17
 _EWKB_Z, _EWKB_M, _EWKB_SRID = 0x80000000, 0x40000000, 0x20000000
-_NAMES = {1: "POINT", 2: "LINESTRING", 3: "POLYGON", 4: "MULTIPOINT", 5: "MULTILINESTRING", 6: "MULTIPOLYGON",
-          7: "GEOMETRYCOLLECTION", 15: "POLYHEDRALSURFACE", 16: "TIN", 17: "TRIANGLE"}
+_NAMES = {
+    1: "POINT",
+    2: "LINESTRING",
+    3: "POLYGON",
+    4: "MULTIPOINT",
+    5: "MULTILINESTRING",
+    6: "MULTIPOLYGON",
+    7: "GEOMETRYCOLLECTION",
+    15: "POLYHEDRALSURFACE",
+    16: "TIN",
+    17: "TRIANGLE",
+}
 
 
 class _Reader:
@@ -74,25 +84,33 @@ class _Reader:
             (srid,) = self.take("i")
         has_z, has_m = bool(word & _EWKB_Z), bool(word & _EWKB_M)
         code = word & 0x0FFFFFFF
-        if code >= 1000:      # ISO WKB: 1000 z, 2000 m, 3000 zm
+        if code >= 1000:  # ISO WKB: 1000 z, 2000 m, 3000 zm
             has_z, has_m = has_z or (code // 1000) in (1, 3), has_m or (code // 1000) in (2, 3)
             code %= 1000
         if code not in _NAMES:
-            raise InvalidGeometryError(f"WKB geometry type {code} is none tgsis reads",
-                                       hint="give a TIN, POLYHEDRALSURFACE, polygons, lines or points")
+            raise InvalidGeometryError(
+                f"WKB geometry type {code} is none tgsis reads",
+                hint="give a TIN, POLYHEDRALSURFACE, polygons, lines or points",
+            )
         if has_m:
             raise InvalidGeometryError(f"the {_NAMES[code]} has measures (M)", hint="ST_Force3DZ(geom) drops them")
         return code, has_z, srid
 
     def points(self, n: int, has_z: bool) -> npt.NDArray[np.float64]:
         if not has_z:
-            raise InvalidGeometryError("the geometry has no z coordinates (2D)",
-                                       hint="ST_Force3DZ(geom) gives it z = 0, in SQL")
+            raise InvalidGeometryError(
+                "the geometry has no z coordinates (2D)", hint="ST_Force3DZ(geom) gives it z = 0, in SQL"
+            )
         size = 24 * n
         if self.pos + size > len(self.data):
             raise InvalidGeometryError(f"WKB ends at byte {len(self.data)}, inside {n} points (at byte {self.pos})")
-        out = np.frombuffer(self.data, dtype=np.dtype("<f8" if self.order == "<" else ">f8"), count=3 * n,
-                            offset=self.pos).reshape(n, 3).astype(np.float64)
+        out = (
+            np.frombuffer(
+                self.data, dtype=np.dtype("<f8" if self.order == "<" else ">f8"), count=3 * n, offset=self.pos
+            )
+            .reshape(n, 3)
+            .astype(np.float64)
+        )
         self.pos += size
         return out
 
@@ -102,8 +120,10 @@ def _as_bytes(data: bytes | bytearray | memoryview | str) -> bytes:
         try:
             return bytes.fromhex(data)
         except ValueError as exc:
-            raise InvalidInputError("data is text but not hex-encoded WKB (as psycopg gives a geometry column)",
-                                    hint="pass the bytes, or the hex text PostGIS prints") from exc
+            raise InvalidInputError(
+                "data is text but not hex-encoded WKB (as psycopg gives a geometry column)",
+                hint="pass the bytes, or the hex text PostGIS prints",
+            ) from exc
     if isinstance(data, (bytes, bytearray, memoryview)):
         return bytes(data)
     raise InvalidInputError(f"data must be WKB bytes or hex text, not {type(data).__name__}")
@@ -120,8 +140,10 @@ def _read(reader: _Reader, parts: list[tuple[int, npt.NDArray[np.float64]]], dep
     elif code in (_POLYGON, _TRIANGLE):
         (rings,) = reader.take("I")
         if rings > 1:
-            raise InvalidGeometryError(f"a face of the geometry has {rings - 1} holes (inner rings)",
-                                       hint="triangulate it first (ST_TriangulatePolygon)")
+            raise InvalidGeometryError(
+                f"a face of the geometry has {rings - 1} holes (inner rings)",
+                hint="triangulate it first (ST_TriangulatePolygon)",
+            )
         for _ in range(rings):
             (n,) = reader.take("I")
             parts.append((_POLYGON, reader.points(n, has_z)))
@@ -137,9 +159,9 @@ def _read(reader: _Reader, parts: list[tuple[int, npt.NDArray[np.float64]]], dep
 def _record_dtype(order: str, sub: int) -> np.dtype[Any]:
     """The layout of one sub-geometry of the regular multi-geometries tgsis writes (and PostGIS gives)."""
     f8, u4 = np.dtype(order + "f8"), np.dtype(order + "u4")
-    if sub in (_TRIANGLE, _POLYGON):      # one ring of four corners, the last repeating the first
+    if sub in (_TRIANGLE, _POLYGON):  # one ring of four corners, the last repeating the first
         return np.dtype([("order", "u1"), ("type", u4), ("rings", u4), ("n", u4), ("p", f8, (4, 3))])
-    if sub == _LINESTRING:                # two points
+    if sub == _LINESTRING:  # two points
         return np.dtype([("order", "u1"), ("type", u4), ("n", u4), ("p", f8, (2, 3))])
     return np.dtype([("order", "u1"), ("type", u4), ("p", f8, (1, 3))])
 
@@ -149,8 +171,13 @@ def _regular_parts(raw: bytes) -> tuple[int, npt.NDArray[np.float64]] | None:
     parts are all triangles, two-point lines or points of the same byte order: read in one step, or None."""
     reader = _Reader(raw)
     code, has_z, _ = reader.header()
-    subs = {_TIN: (_TRIANGLE,), _POLYHEDRALSURFACE: (_POLYGON,), _MULTIPOLYGON: (_POLYGON,),
-            _MULTILINESTRING: (_LINESTRING,), _MULTIPOINT: (_POINT,)}.get(code)
+    subs = {
+        _TIN: (_TRIANGLE,),
+        _POLYHEDRALSURFACE: (_POLYGON,),
+        _MULTIPOLYGON: (_POLYGON,),
+        _MULTILINESTRING: (_LINESTRING,),
+        _MULTIPOINT: (_POINT,),
+    }.get(code)
     if subs is None or not has_z:
         return None
     (count,) = reader.take("I")
@@ -167,7 +194,7 @@ def _regular_parts(raw: bytes) -> tuple[int, npt.NDArray[np.float64]] | None:
     elif subs[0] == _LINESTRING:
         expected["n"] = 2
     for field, value in expected.items():
-        if field == "type":   # EWKB (flag) or ISO (1000 + code) z
+        if field == "type":  # EWKB (flag) or ISO (1000 + code) z
             if not np.all((records[field] == value) | (records[field] == 1000 + subs[0])):
                 return None
         elif not np.all(records[field] == value):
@@ -224,7 +251,7 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
     raw = _as_bytes(data)
     code, _, srid = _Reader(raw).header()
     regular = _regular_parts(raw)
-    if regular is not None:    # the usual case (what tgsis and PostGIS write): one step, no loop per cell
+    if regular is not None:  # the usual case (what tgsis and PostGIS write): one step, no loop per cell
         kind, grouped = regular
         everything = grouped.reshape(-1, 3)
         sizes = np.full(len(grouped), grouped.shape[1])
@@ -238,10 +265,12 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
         if not parts or all(len(p) == 0 for _, p in parts):
             raise InvalidGeometryError(f"the {_NAMES[code]} is empty", hint="a tgsis object has at least one vertex")
         if len(kinds) > 1:
-            raise InvalidGeometryError(f"the {_NAMES[code]} mixes " + ", ".join(sorted(_NAMES[k] for k in kinds)),
-                                       hint="store surfaces, lines and points as separate features")
+            raise InvalidGeometryError(
+                f"the {_NAMES[code]} mixes " + ", ".join(sorted(_NAMES[k] for k in kinds)),
+                hint="store surfaces, lines and points as separate features",
+            )
         kind = kinds.pop()
-        if kind == _POLYGON:   # drop each ring's closing corner
+        if kind == _POLYGON:  # drop each ring's closing corner
             rings = [p[:-1] if len(p) > 1 and np.array_equal(p[0], p[-1]) else p for _, p in parts]
         else:
             rings = [p for _, p in parts]
@@ -249,7 +278,7 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
         sizes = np.array([len(r) for r in rings])
     keys = np.ascontiguousarray(everything).view(np.dtype((np.void, 24))).ravel()
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")           # vertices by first appearance
+    order = np.argsort(first, kind="stable")  # vertices by first appearance
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     index = rank[inverse.ravel()]
@@ -257,17 +286,19 @@ def mesh_from_wkb(data: bytes | bytearray | memoryview | str, *, name: str | Non
     if kind == _POLYGON and np.any(sizes < 3):
         raise InvalidGeometryError(f"a face of the {_NAMES[code]} has {int(sizes[sizes < 3][0])} corners")
     if np.all(sizes == sizes[0]) and (kind != _POLYGON or sizes[0] == 3) and (kind != _LINESTRING or sizes[0] == 2):
-        cell_array = index.reshape(len(sizes), int(sizes[0])).astype(np.int64)     # triangles, segments or points
-    elif kind == _POLYGON:   # a fan from the first corner of each face
+        cell_array = index.reshape(len(sizes), int(sizes[0])).astype(np.int64)  # triangles, segments or points
+    elif kind == _POLYGON:  # a fan from the first corner of each face
         cell_array = fan_triangles(index, np.concatenate([[0], np.cumsum(sizes)]))[0]
-    else:    # polylines of different lengths (points always have one corner each: the first case)
+    else:  # polylines of different lengths (points always have one corner each: the first case)
         cell_array = polyline_segments(index, np.concatenate([[0], np.cumsum(sizes)]))
     if cell_array.shape[1] > 1:
         ordered = np.sort(cell_array, axis=1)
         bad = np.flatnonzero(np.any(ordered[:, 1:] == ordered[:, :-1], axis=1))
         if len(bad):
-            raise InvalidGeometryError(f"cell {int(bad[0])} of the {_NAMES[code]} repeats a vertex (a degenerate face "
-                                       "or zero-length segment)", hint="ST_RemoveRepeatedPoints(geom), in SQL")
+            raise InvalidGeometryError(
+                f"cell {int(bad[0])} of the {_NAMES[code]} repeats a vertex (a degenerate face or zero-length segment)",
+                hint="ST_RemoveRepeatedPoints(geom), in SQL",
+            )
     metadata = {"srid": srid} if srid is not None else None
     mesh_type: type[Mesh] = Surface if kind == _POLYGON else LineSet if kind == _LINESTRING else PointSet
     return mesh_type(vertices, cell_array, name=name, metadata=metadata)
@@ -288,7 +319,7 @@ def _boundary_faces(mesh: TetraMesh) -> npt.NDArray[np.int64]:
     _, inverse, counts = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True)
     keep = counts[inverse.ravel()] == 1
     faces, opposite = faces[keep], opposite[keep]
-    order = np.lexsort((faces[:, 2], faces[:, 1], faces[:, 0], tetra[keep]))   # the SQL's ORDER BY
+    order = np.lexsort((faces[:, 2], faces[:, 1], faces[:, 0], tetra[keep]))  # the SQL's ORDER BY
     faces, opposite = faces[order], opposite[order]
     p = mesh.vertices
     a, b, c, o = p[faces[:, 0]], p[faces[:, 1]], p[faces[:, 2]], p[opposite]
@@ -331,7 +362,7 @@ def mesh_to_ewkb(mesh: Mesh, srid: int | None = 0) -> bytes:
     records["type"] = _EWKB_Z | sub
     if sub in (_TRIANGLE, _POLYGON):
         records["rings"], records["n"] = 1, 4
-        records["p"] = p[np.concatenate([cells, cells[:, :1]], axis=1)]   # the ring closes on its first corner
+        records["p"] = p[np.concatenate([cells, cells[:, :1]], axis=1)]  # the ring closes on its first corner
     else:
         if sub == _LINESTRING:
             records["n"] = 2

@@ -53,9 +53,23 @@ from tgsis.formats.pvd import write_pvd
 from tgsis.formats.vtk import Encoding
 from tgsis.mesh import Surface
 
-__all__ = ["Convention", "SurfaceSeries", "TopologyPeriod", "EvolvingSurface", "Color", "TemporalSurface",
-           "SurfaceFrame", "WrittenSeries", "own_instants", "even_times", "series_frames", "write_frames_pvd",
-           "write_series_pvd", "Period", "sudden_change"]
+__all__ = [
+    "Convention",
+    "SurfaceSeries",
+    "TopologyPeriod",
+    "EvolvingSurface",
+    "Color",
+    "TemporalSurface",
+    "SurfaceFrame",
+    "WrittenSeries",
+    "own_instants",
+    "even_times",
+    "series_frames",
+    "write_frames_pvd",
+    "write_series_pvd",
+    "Period",
+    "sudden_change",
+]
 
 #: Step convention of model 2 queries.
 Convention = Literal["left", "right"]
@@ -110,14 +124,23 @@ class SurfaceSeries:
     InvalidInputError, InvalidPropertyError
     """
 
-    def __init__(self, times: npt.ArrayLike, surfaces: Sequence[Surface], *,
-                 properties: Mapping[str, npt.ArrayLike] | None = None, alive: bool = False,
-                 name: str | None = None, color: Sequence[float] | None = None) -> None:
+    def __init__(
+        self,
+        times: npt.ArrayLike,
+        surfaces: Sequence[Surface],
+        *,
+        properties: Mapping[str, npt.ArrayLike] | None = None,
+        alive: bool = False,
+        name: str | None = None,
+        color: Sequence[float] | None = None,
+    ) -> None:
         self.times = as_times(times, "instants of a surface series")
         self.surfaces = tuple(surfaces)
         if len(self.surfaces) != len(self.times) or not all(isinstance(s, Surface) for s in self.surfaces):
-            raise InvalidInputError(f"a surface series needs one Surface per instant: {len(self.times)} instants, "
-                                    f"{len(self.surfaces)} surfaces")
+            raise InvalidInputError(
+                f"a surface series needs one Surface per instant: {len(self.times)} instants, "
+                f"{len(self.surfaces)} surfaces"
+            )
         self.properties = as_series(properties, (len(self.times),), "per-instant property")
         self.alive = bool(alive)
         self.name = name
@@ -151,8 +174,10 @@ class SurfaceSeries:
         return None if index is None else self.surfaces[index]
 
     def __repr__(self) -> str:
-        return (f"SurfaceSeries({len(self.times)} instants {self.start!r}..{self.end!r}, alive={self.alive}, "
-                f"name={self.name!r})")
+        return (
+            f"SurfaceSeries({len(self.times)} instants {self.start!r}..{self.end!r}, alive={self.alive}, "
+            f"name={self.name!r})"
+        )
 
 
 # --------------------------------------------------------------------------- model 3
@@ -190,15 +215,23 @@ class TopologyPeriod:
     cell_properties: Mapping[str, npt.NDArray[np.generic]]
     properties: Mapping[str, npt.NDArray[np.generic]]
 
-    def __init__(self, times: npt.ArrayLike, triangles: npt.ArrayLike, positions: npt.ArrayLike, *,
-                 vertex_properties: Mapping[str, npt.ArrayLike] | None = None,
-                 cell_properties: Mapping[str, npt.ArrayLike] | None = None,
-                 properties: Mapping[str, npt.ArrayLike] | None = None) -> None:
+    def __init__(
+        self,
+        times: npt.ArrayLike,
+        triangles: npt.ArrayLike,
+        positions: npt.ArrayLike,
+        *,
+        vertex_properties: Mapping[str, npt.ArrayLike] | None = None,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+        properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> None:
         times_array = as_times(times, "geometry instants of a topology period")
         xyz = np.ascontiguousarray(positions, dtype=np.float64)
         if xyz.ndim != 3 or xyz.shape[0] != len(times_array) or xyz.shape[2] != 3:
-            raise InvalidGeometryError(f"node positions must have shape (g, n, 3) with g = {len(times_array)} "
-                                       f"geometry instants, got {xyz.shape}")
+            raise InvalidGeometryError(
+                f"node positions must have shape (g, n, 3) with g = {len(times_array)} "
+                f"geometry instants, got {xyz.shape}"
+            )
         if not np.all(np.isfinite(xyz)):
             raise InvalidGeometryError("node positions must be finite (NaN or infinite coordinate found)")
         first = Surface(xyz[0], triangles)  # validates the triangles against the nodes
@@ -231,17 +264,22 @@ class TopologyPeriod:
         Node positions and vertex/cell properties (as float64) are
         ``a + w * (b - a)``, the formula the SQL snapshot uses.
         """
+
         def mix(a: npt.NDArray[np.generic], b: npt.NDArray[np.generic]) -> FloatArray:
             a64, b64 = a.astype(np.float64), b.astype(np.float64)
             return a64 if j0 == j1 else a64 + w * (b64 - a64)
 
-        return Surface(mix(self.positions[j0], self.positions[j1]), self.triangles,
-                       vertex_properties={k: mix(v[j0], v[j1]) for k, v in self.vertex_properties.items()},
-                       cell_properties={k: mix(v[j0], v[j1]) for k, v in self.cell_properties.items()})
+        return Surface(
+            mix(self.positions[j0], self.positions[j1]),
+            self.triangles,
+            vertex_properties={k: mix(v[j0], v[j1]) for k, v in self.vertex_properties.items()},
+            cell_properties={k: mix(v[j0], v[j1]) for k, v in self.cell_properties.items()},
+        )
 
 
-def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
-                  label: str = "the period") -> TopologyPeriod:
+def sudden_change(
+    before: Surface, period: TopologyPeriod, duration: float, *, label: str = "the period"
+) -> TopologyPeriod:
     """``period`` starting in the shape ``before`` and reaching its own first shape ``duration`` later, linearly.
 
     The design's sudden change at a topology instant t0: the post-object
@@ -281,10 +319,14 @@ def sudden_change(before: Surface, period: TopologyPeriod, duration: float, *,
     else:
         corners = before.vertices.astype(np.float64)
         start = start_on(lambda q: closest_on_triangles(corners, before.cells, q), period.positions[0])
-    return TopologyPeriod(times, period.triangles, prepend_first(period.positions, start),
-                          vertex_properties={k: prepend_first(v) for k, v in period.vertex_properties.items()},
-                          cell_properties={k: prepend_first(v) for k, v in period.cell_properties.items()},
-                          properties={k: prepend_first(v) for k, v in period.properties.items()})
+    return TopologyPeriod(
+        times,
+        period.triangles,
+        prepend_first(period.positions, start),
+        vertex_properties={k: prepend_first(v) for k, v in period.vertex_properties.items()},
+        cell_properties={k: prepend_first(v) for k, v in period.cell_properties.items()},
+        properties={k: prepend_first(v) for k, v in period.properties.items()},
+    )
 
 
 class EvolvingSurface:
@@ -307,8 +349,14 @@ class EvolvingSurface:
         No period, or periods that do not follow each other.
     """
 
-    def __init__(self, periods: Sequence[TopologyPeriod], *, alive: bool = False, name: str | None = None,
-                 color: Sequence[float] | None = None) -> None:
+    def __init__(
+        self,
+        periods: Sequence[TopologyPeriod],
+        *,
+        alive: bool = False,
+        name: str | None = None,
+        color: Sequence[float] | None = None,
+    ) -> None:
         self.periods = tuple(periods)
         if not self.periods or not all(isinstance(p, TopologyPeriod) for p in self.periods):
             raise InvalidInputError("an evolving surface needs at least one TopologyPeriod")
@@ -317,15 +365,17 @@ class EvolvingSurface:
                 raise InvalidInputError(
                     f"topology period {i} must end where period {i + 1} starts: its last geometry instant is "
                     f"{a.times[-1]!r}, period {i + 1} starts at {b.times[0]!r}",
-                    hint="a sudden change is a change over a very short period")
+                    hint="a sudden change is a change over a very short period",
+                )
         self.alive = bool(alive)
         self.name = name
         self.color = _as_color(color)
         self._starts = np.array([p.start for p in self.periods])
 
     @classmethod
-    def constant(cls, surface: Surface, start: float, end: float, *, alive: bool = False,
-                 name: str | None = None) -> EvolvingSurface:
+    def constant(
+        cls, surface: Surface, start: float, end: float, *, alive: bool = False, name: str | None = None
+    ) -> EvolvingSurface:
         """A surface that stays as it is from ``start`` to ``end`` (one period, two geometry instants).
 
         Vertex and cell properties of ``surface`` are carried, constant too.
@@ -341,12 +391,16 @@ class EvolvingSurface:
         positions = np.stack([surface.vertices, surface.vertices])
         props = {k: np.stack([np.asarray(v), np.asarray(v)]) for k, v in surface.vertex_properties.items()}
         cells = {k: np.stack([np.asarray(v), np.asarray(v)]) for k, v in surface.cell_properties.items()}
-        return cls([TopologyPeriod([start, end], surface.cells, positions, vertex_properties=props,
-                                   cell_properties=cells)], alive=alive, name=name if name is not None else surface.name)
+        return cls(
+            [TopologyPeriod([start, end], surface.cells, positions, vertex_properties=props, cell_properties=cells)],
+            alive=alive,
+            name=name if name is not None else surface.name,
+        )
 
     @classmethod
-    def chain(cls, parts: Sequence[EvolvingSurface], *, alive: bool | None = None,
-              name: str | None = None) -> EvolvingSurface:
+    def chain(
+        cls, parts: Sequence[EvolvingSurface], *, alive: bool | None = None, name: str | None = None
+    ) -> EvolvingSurface:
         """One evolving surface over the whole life of consecutive ones (e.g. per-interval interpolations).
 
         Parameters
@@ -367,10 +421,16 @@ class EvolvingSurface:
             raise InvalidInputError("chaining needs at least one evolving surface")
         for i, (a, b) in enumerate(zip(parts, parts[1:])):
             if a.end != b.start:
-                raise InvalidInputError(f"part {i} ends at {a.end!r} but part {i + 1} starts at {b.start!r}",
-                                        hint="chain parts that follow each other: each starts where the one before ends")
-        return cls([p for part in parts for p in part.periods], alive=parts[-1].alive if alive is None else alive,
-                   name=name if name is not None else parts[0].name, color=parts[0].color)
+                raise InvalidInputError(
+                    f"part {i} ends at {a.end!r} but part {i + 1} starts at {b.start!r}",
+                    hint="chain parts that follow each other: each starts where the one before ends",
+                )
+        return cls(
+            [p for part in parts for p in part.periods],
+            alive=parts[-1].alive if alive is None else alive,
+            name=name if name is not None else parts[0].name,
+            color=parts[0].color,
+        )
 
     def with_sudden_changes(self, duration: float) -> EvolvingSurface:
         """The same surface with every topology change made a short linear transition (:func:`sudden_change`).
@@ -384,8 +444,9 @@ class EvolvingSurface:
         for i, period in enumerate(self.periods[1:], start=1):
             previous = self.periods[i - 1]
             last = len(previous.times) - 1
-            periods.append(sudden_change(previous.shape_at(last, last, 0.0), period, duration,
-                                         label=f"topology period {i}"))
+            periods.append(
+                sudden_change(previous.shape_at(last, last, 0.0), period, duration, label=f"topology period {i}")
+            )
         return EvolvingSurface(periods, alive=self.alive, name=self.name, color=self.color)
 
     @property
@@ -432,8 +493,10 @@ class EvolvingSurface:
         return surface
 
     def __repr__(self) -> str:
-        return (f"EvolvingSurface({len(self.periods)} periods {self.start!r}..{self.end!r}, "
-                f"{self.n_nodes} nodes, alive={self.alive}, name={self.name!r})")
+        return (
+            f"EvolvingSurface({len(self.periods)} periods {self.start!r}..{self.end!r}, "
+            f"{self.n_nodes} nodes, alive={self.alive}, name={self.name!r})"
+        )
 
 
 # --------------------------------------------------------------------------- time series export
@@ -457,8 +520,9 @@ def own_instants(obj: TemporalSurface) -> FloatArray:
 MAX_STEPS = 100_000
 
 
-def even_times(start: float, end: float, steps: int, *,
-               labels: tuple[str, str, str] = ("start", "end", "steps")) -> FloatArray:
+def even_times(
+    start: float, end: float, steps: int, *, labels: tuple[str, str, str] = ("start", "end", "steps")
+) -> FloatArray:
     """``steps`` times evenly spaced from ``start`` to ``end``, both included (exactly).
 
     Parameters
@@ -480,8 +544,10 @@ def even_times(start: float, end: float, steps: int, *,
     if not isinstance(steps, numbers.Integral) or isinstance(steps, bool) or steps < 1:
         raise InvalidInputError(f"{count} must be an integer >= 1, got {steps!r}")
     if steps > MAX_STEPS:  # 1e11 steps asked for 745 GiB of times before a single frame was written
-        raise InvalidInputError(f"{count} {steps} is too many: at most {MAX_STEPS} times (one frame file each)",
-                                hint=f"give {count} {MAX_STEPS} or fewer")
+        raise InvalidInputError(
+            f"{count} {steps} is too many: at most {MAX_STEPS} times (one frame file each)",
+            hint=f"give {count} {MAX_STEPS} or fewer",
+        )
     for label, value in ((first, start), (last, end)):
         if not isinstance(value, numbers.Real) or isinstance(value, bool) or not np.isfinite(float(value)):
             raise InvalidInputError(f"{label} must be a finite number, got {value!r}")
@@ -489,19 +555,23 @@ def even_times(start: float, end: float, steps: int, *,
     if a > b:
         raise InvalidInputError(f"{first} ({a!r}) must not be after {last} ({b!r})")
     if n == 1 and a != b:
-        raise InvalidInputError(f"{count} 1 gives one time, so {first} and {last} must be equal, got {a!r} and {b!r}",
-                                hint=f"{count} 2 gives just the two ends")
+        raise InvalidInputError(
+            f"{count} 1 gives one time, so {first} and {last} must be equal, got {a!r} and {b!r}",
+            hint=f"{count} 2 gives just the two ends",
+        )
     if n > 1 and a == b:
-        raise InvalidInputError(f"{count} {n} needs {first} before {last}: both are {a!r}",
-                                hint=f"{count} 1 gives the one time")
+        raise InvalidInputError(
+            f"{count} {n} needs {first} before {last}: both are {a!r}", hint=f"{count} 1 gives the one time"
+        )
     times = np.linspace(a, b, n)
     if n > 1 and not np.all(np.diff(times) > 0):
         raise InvalidInputError(f"{n} {count} between {a!r} and {b!r} give equal neighbouring times (float precision)")
     return times
 
 
-def series_frames(obj: TemporalSurface, times: npt.ArrayLike | None = None,
-                  convention: Convention = "left") -> list[SurfaceFrame]:
+def series_frames(
+    obj: TemporalSurface, times: npt.ArrayLike | None = None, convention: Convention = "left"
+) -> list[SurfaceFrame]:
     """The surface of ``obj`` at each time: ``[(t, obj.at(t) or None), ...]``.
 
     Parameters
@@ -555,15 +625,20 @@ class WrittenSeries:
         return [t for t, surface in self.frames if surface is None]
 
 
-def write_frames_pvd(frames: Sequence[SurfaceFrame], path: PathLike, *,
-                     encoding: Encoding = "binary") -> WrittenSeries:
+def write_frames_pvd(frames: Sequence[SurfaceFrame], path: PathLike, *, encoding: Encoding = "binary") -> WrittenSeries:
     """Write surface frames with :func:`tgsis.formats.pvd.write_pvd`; return what was written."""
     written = write_pvd(frames, path, encoding=encoding)
     return WrittenSeries(written[-1], tuple(written[:-1]), tuple(frames))
 
 
-def write_series_pvd(obj: TemporalSurface, path: PathLike, times: npt.ArrayLike | None = None, *,
-                     convention: Convention = "left", encoding: Encoding = "binary") -> WrittenSeries:
+def write_series_pvd(
+    obj: TemporalSurface,
+    path: PathLike,
+    times: npt.ArrayLike | None = None,
+    *,
+    convention: Convention = "left",
+    encoding: Encoding = "binary",
+) -> WrittenSeries:
     """Write a surface in time as a ParaView ``.pvd`` time series, one ``.vtu`` frame per time.
 
     Parameters

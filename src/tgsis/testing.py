@@ -95,8 +95,9 @@ class TestServer:
     def create_database(self, name: str, template: str = "template0") -> str:
         """Create a database and return its DSN."""
         with psycopg.connect(self.admin_dsn, autocommit=True) as conn:
-            conn.execute(sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(
-                sql.Identifier(name), sql.Identifier(template)))
+            conn.execute(
+                sql.SQL("CREATE DATABASE {} TEMPLATE {}").format(sql.Identifier(name), sql.Identifier(template))
+            )
         return self.dsn(name)
 
     def drop_database(self, name: str) -> None:
@@ -141,9 +142,7 @@ def _check_extension_files(server: TestServer) -> None:
     if local is not None and not local.binaries.has_extension_control_path and local.binaries.sharedir:
         installed = local.binaries.sharedir / "extension" / f"tgsis--{sources.version}.sql"
         if installed.read_text(encoding="utf-8") != sources.script():
-            server.extension_files = (
-                f"{installed} differs from this checkout's SQL: run `make -C sql install` again"
-            )
+            server.extension_files = f"{installed} differs from this checkout's SQL: run `make -C sql install` again"
 
 
 def _from_dsn(dsn: str) -> TestServer:
@@ -173,8 +172,9 @@ def _from_docker() -> TestServer:
 
 def _from_local() -> TestServer:
     local = LocalServer.throwaway(find_binaries())
-    server = TestServer(local.dsn(), "local",
-                        f"{local.binaries.describe()}, throwaway cluster {local.root}", local=local)
+    server = TestServer(
+        local.dsn(), "local", f"{local.binaries.describe()}, throwaway cluster {local.root}", local=local
+    )
     server._teardown.append(local.destroy)
     return server
 

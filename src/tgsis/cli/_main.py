@@ -69,15 +69,22 @@ def build_parser() -> argparse.ArgumentParser:
         description="tgsis: spatio-temporal geoscience information system on PostgreSQL",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="examples:\n  tgsis demo\n  tgsis --dsn 'host=db.example.org dbname=geo' ls --class faults\n"
-               "  tgsis --in cfm6 version current --json\nsee docs/cli.md",
+        "  tgsis --in cfm6 version current --json\nsee docs/cli.md",
     )
-    parser.add_argument("--version", action="version", version=f"tgsis {tgsis.__version__}",
-                        help="print the client's version and exit")
-    parser.add_argument("--dsn", help="libpq connection string (default: $TGSIS_DSN, PG* variables, "
-                                      "else the local server tgsis runs itself)")
-    parser.add_argument("--in", dest="in_version", metavar="VERSION[@REVISION]",
-                        help="work in this version, or look at one of its revisions (default: $TGSIS_VERSION, "
-                             "else what `tgsis version goto` chose, else DEFAULT)")
+    parser.add_argument(
+        "--version", action="version", version=f"tgsis {tgsis.__version__}", help="print the client's version and exit"
+    )
+    parser.add_argument(
+        "--dsn",
+        help="libpq connection string (default: $TGSIS_DSN, PG* variables, else the local server tgsis runs itself)",
+    )
+    parser.add_argument(
+        "--in",
+        dest="in_version",
+        metavar="VERSION[@REVISION]",
+        help="work in this version, or look at one of its revisions (default: $TGSIS_VERSION, "
+        "else what `tgsis version goto` chose, else DEFAULT)",
+    )
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)")
     parser.add_argument("-q", "--quiet", action="store_true", help="errors only")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -111,8 +118,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             # objects a reader skipped (any command that reads files): one line each, not a Python warning dump
             shown = warnings.showwarning
 
-            def one_line(message: Warning | str, category: type[Warning], filename: str, lineno: int,
-                         file: Any = None, line: str | None = None) -> None:
+            def one_line(
+                message: Warning | str,
+                category: type[Warning],
+                filename: str,
+                lineno: int,
+                file: Any = None,
+                line: str | None = None,
+            ) -> None:
                 if issubclass(category, SkippedObjectWarning):
                     print(f"tgsis: warning: {message}", file=sys.stderr)
                 else:
@@ -132,4 +145,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         release_local_server()
-

@@ -30,8 +30,10 @@ def picture_of(conn: Any, ids: Sequence[int], t: float | None, path: str, title:
     """A PNG of features (at t, or static) in one scene; the first coloured by how far it moved since its start."""
     from tgsis import pictures
 
-    shapes = [get_at(conn, fid, t) if t is not None else fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
-              for fid in ids]
+    shapes = [
+        get_at(conn, fid, t) if t is not None else fetch_feature(conn, class_of_feature(conn, fid), fid).mesh
+        for fid in ids
+    ]
     others = [fid for fid, mesh in zip(ids, shapes) if mesh is not None and not isinstance(mesh, Surface)]
     if others:
         raise InvalidInputError(f"feature {others[0]} is no surface: --png draws surfaces")
@@ -47,8 +49,13 @@ def picture_of(conn: Any, ids: Sequence[int], t: float | None, path: str, title:
         start = get_at(conn, ids[0], span[0])
         if not changes and start is not None and start.vertices.shape == first.vertices.shape:
             colour[0] = pictures.displacement(first, start)
-    pictures.scene(meshes, path, title=title, colour=colour, colour_label=f"moved since t = {span[0]!r} (m)"
-                   if span is not None else "")
+    pictures.scene(
+        meshes,
+        path,
+        title=title,
+        colour=colour,
+        colour_label=f"moved since t = {span[0]!r} (m)" if span is not None else "",
+    )
     out(f"drew {len(meshes)} surface(s) to {path}")
 
 
@@ -91,4 +98,3 @@ def summarize_differences(differences: Sequence[Difference], a: str, b: str) -> 
             what = "changed"
         result.append(ObjectDifference(objectclass, objectkey, what, tables, added, removed, changed))
     return result
-

@@ -20,8 +20,10 @@ from tgsis.errors import DiscontinuousPeriodsError, InvalidInputError
 Conn = psycopg.Connection[Any]
 
 #: What a refused write may do instead, in the words of the Python API.
-HINT = ("start the new period on the last shape of the one before, allow a larger gap with the tolerance argument, "
-        "or store the change as a short linear transition with the sudden_change argument (docs/time.md, Topology changes)")
+HINT = (
+    "start the new period on the last shape of the one before, allow a larger gap with the tolerance argument, "
+    "or store the change as a short linear transition with the sudden_change argument (docs/time.md, Topology changes)"
+)
 
 
 def checked_tolerance(tolerance: float | None) -> float | None:
@@ -43,5 +45,6 @@ def check_continuity(conn: Conn, geoid: int, tolerance: float | None, start: flo
         if exc.sqlstate != DiscontinuousPeriodsError.code:
             raise
         diag = exc.diag
-        raise DiscontinuousPeriodsError(diag.message_primary or str(exc), detail=diag.message_detail,
-                                        hint=HINT) from exc
+        raise DiscontinuousPeriodsError(
+            diag.message_primary or str(exc), detail=diag.message_detail, hint=HINT
+        ) from exc

@@ -19,16 +19,19 @@ VersionSettings = tuple[str | None, str | None]
 
 def read_version_settings(conn: psycopg.Connection[Any]) -> VersionSettings:
     """The session's version and revision settings as they are now."""
-    row = conn.execute("SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
-                       ).fetchone()
+    row = conn.execute(
+        "SELECT current_setting('tgsis.version', true), current_setting('tgsis.revision', true)"
+    ).fetchone()
     assert row is not None
     return row[0], row[1]
 
 
 def restore_statement(settings: VersionSettings, *, local: bool) -> tuple[str, tuple[Any, ...]]:
     """The statement (SQL, parameters) that puts ``settings`` back: for the transaction (``local``) or the session."""
-    return ("SELECT set_config('tgsis.version', coalesce(%s, ''), %s), "
-            "set_config('tgsis.revision', coalesce(%s, ''), %s)", (settings[0], local, settings[1], local))
+    return (
+        "SELECT set_config('tgsis.version', coalesce(%s, ''), %s), set_config('tgsis.revision', coalesce(%s, ''), %s)",
+        (settings[0], local, settings[1], local),
+    )
 
 
 def restore_version_settings(conn: psycopg.Connection[Any], settings: VersionSettings, *, local: bool) -> None:

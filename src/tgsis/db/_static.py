@@ -50,8 +50,11 @@ MEMBER_PROPERTIES_KEY = "tgsis_properties"
 def member_class(fc: FeatureClass, member: Mesh) -> FeatureClass:
     """The class as one member of a collection sees it: the class's properties that the member has."""
     cells = stored_cell_properties(fc, member)
-    kept = tuple(p for p in fc.cell_properties
-                 if p.name in (member.vertex_properties if fc.alignment_of(p) == "VERTEX" else cells))
+    kept = tuple(
+        p
+        for p in fc.cell_properties
+        if p.name in (member.vertex_properties if fc.alignment_of(p) == "VERTEX" else cells)
+    )
     return fc if len(kept) == len(fc.cell_properties) else replace(fc, cell_properties=kept)
 
 
@@ -59,8 +62,10 @@ def with_property_names(meaning: Meaning, fc: FeatureClass, member_class: Featur
     """A member's meaning, with the names of the properties it has when it lacks some of the class's."""
     if member_class is fc:
         return meaning
-    return replace(meaning, metadata={**(meaning.metadata or {}),
-                                      MEMBER_PROPERTIES_KEY: [p.name for p in member_class.cell_properties]})
+    return replace(
+        meaning,
+        metadata={**(meaning.metadata or {}), MEMBER_PROPERTIES_KEY: [p.name for p in member_class.cell_properties]},
+    )
 
 
 def member_label(index: int, mesh: Mesh) -> str:
@@ -85,9 +90,16 @@ def stored_bounds(geometry: Geometry, meanings: Sequence[Meaning]) -> list[float
     return [float(v) for v in np.concatenate([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])]
 
 
-def new_static_geometry(conn: Conn, geometry: Geometry, name: str | None, meaning: Meaning,
-                  member_meanings: Sequence[Meaning], *, collection: int | None = None,
-                  feature_class: str | None = None) -> int:
+def new_static_geometry(
+    conn: Conn,
+    geometry: Geometry,
+    name: str | None,
+    meaning: Meaning,
+    member_meanings: Sequence[Meaning],
+    *,
+    collection: int | None = None,
+    feature_class: str | None = None,
+) -> int:
     """Insert the ``tgsis.geometry`` row of a mesh or collection (bbox and counts from it); return its geoid.
 
     ``meaning`` is the geometry's own (z convention, coordinate system,
@@ -99,18 +111,37 @@ def new_static_geometry(conn: Conn, geometry: Geometry, name: str | None, meanin
     """
     bounds = stored_bounds(geometry, member_meanings)
     geoids: list[int] | None = [] if isinstance(geometry, GeometryCollection) else None  # members come next
-    row = conn.execute("SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s, 'STATIC', false, %s::real[], %s, "
-                       "%s::jsonb, %s::jsonb, %s)",
-                       (geometry.geotype.value, no_nul("geometry name", name), bounds, geometry.n_vertices, geometry.n_cells, geoids,
-                        collection, meaning.color, meaning.zpositive, meaning.crs_json(),
-                        meaning.metadata_json(), feature_class)).fetchone()
+    row = conn.execute(
+        "SELECT tgsis.new_geometry(%s, %s, %s, %s, %s, %s, %s, 'STATIC', false, %s::real[], %s, "
+        "%s::jsonb, %s::jsonb, %s)",
+        (
+            geometry.geotype.value,
+            no_nul("geometry name", name),
+            bounds,
+            geometry.n_vertices,
+            geometry.n_cells,
+            geoids,
+            collection,
+            meaning.color,
+            meaning.zpositive,
+            meaning.crs_json(),
+            meaning.metadata_json(),
+            feature_class,
+        ),
+    ).fetchone()
     assert row is not None
     return int(row[0])
 
 
-def copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
-                 cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], storage: Storage,
-                 meanings: Sequence[Meaning]) -> None:
+def copy_meshes(
+    conn: Conn,
+    fc: FeatureClass,
+    geoids: Sequence[int],
+    meshes: Sequence[Mesh],
+    cell_values: Sequence[Mapping[str, npt.NDArray[Any]]],
+    storage: Storage,
+    meanings: Sequence[Meaning],
+) -> None:
     """COPY the vertices, simplices and cell properties of meshes: one COPY per table, whatever their number.
 
     Parameters
@@ -134,16 +165,34 @@ def copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Seq
         xyz = xyz.copy()
         flip = np.repeat([meaning.depth for meaning in meanings], [m.n_vertices for m in meshes])
         xyz[flip, 2] = -xyz[flip, 2]  # exact: only the sign bit changes
-    storage.copy(conn, "tgsis", "vrtx", [("geoid", vertex_geoids, "int8"), ("vrtxid", vertex_ids, "int8"),
-                                         ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+    storage.copy(
+        conn,
+        "tgsis",
+        "vrtx",
+        [
+            ("geoid", vertex_geoids, "int8"),
+            ("vrtxid", vertex_ids, "int8"),
+            ("x", xyz[:, 0], "float8"),
+            ("y", xyz[:, 1], "float8"),
+            ("z", xyz[:, 2], "float8"),
+        ],
+    )
     for geotype in dict.fromkeys(m.geotype for m in meshes):  # each simplex table once, in member order
         group = [i for i, m in enumerate(meshes) if m.geotype == geotype]
         table, key = SIMPLEX[geotype]
         k = meshes[group[0]].cell_size
         cell_geoids, cell_ids = row_keys([geoids[i] for i in group], [meshes[i].n_cells for i in group])
         cells = concat([meshes[i].cells for i in group])
-        storage.copy(conn, "tgsis", table, [("geoid", cell_geoids, "int8"), (key, cell_ids, "int8"),
-                                            *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(k))])
+        storage.copy(
+            conn,
+            "tgsis",
+            table,
+            [
+                ("geoid", cell_geoids, "int8"),
+                (key, cell_ids, "int8"),
+                *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(k)),
+            ],
+        )
     for alignment in ("VERTEX", "CELL"):  # one table per alignment (the class's own: cellprotable)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
         if not props or protable is None:
@@ -157,24 +206,46 @@ def copy_meshes(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Seq
                 continue
             counts = [meshes[i].n_vertices if alignment == "VERTEX" else meshes[i].n_cells for i in group]
             prop_geoids, prop_ids = row_keys([geoids[i] for i in group], counts)
-            storage.copy(conn, fc.schema, protable, [
-                ("_geoid", prop_geoids, "int8"), ("_idx", prop_ids, "int8"),
-                *((p.name, concat([cell_values[i][p.name] for i in group]), p.wire)
-                  for p in props if p.name in names)])
+            storage.copy(
+                conn,
+                fc.schema,
+                protable,
+                [
+                    ("_geoid", prop_geoids, "int8"),
+                    ("_idx", prop_ids, "int8"),
+                    *(
+                        (p.name, concat([cell_values[i][p.name] for i in group]), p.wire)
+                        for p in props
+                        if p.name in names
+                    ),
+                ],
+            )
     copy_extras(conn, fc, geoids, meshes, meanings, storage)
 
 
-def extra_rows(fc: FeatureClass, geoid: int, mesh: Mesh, meaning: Meaning,
-               vertex_ids: npt.NDArray[np.int64] | None = None,
-               cell_ids: npt.NDArray[np.int64] | None = None) -> tuple[list[tuple[int, ...]], list[tuple[int, ...]]]:
+def extra_rows(
+    fc: FeatureClass,
+    geoid: int,
+    mesh: Mesh,
+    meaning: Meaning,
+    vertex_ids: npt.NDArray[np.int64] | None = None,
+    cell_ids: npt.NDArray[np.int64] | None = None,
+) -> tuple[list[tuple[int, ...]], list[tuple[int, ...]]]:
     """The ``tgsis.atom`` rows ``(geoid, vrtxid, refid, patom)`` and ``tgsis.part`` rows ``(geoid, firstid, lastid, part)`` of a mesh.
 
     ``vertex_ids``/``cell_ids`` give the database id of each vertex and cell
     (default: 0..n-1, as a first upload numbers them); a run of parts never
     spans a gap in the cell ids.
     """
-    atoms = [(geoid, int(vertex_ids[a]) if vertex_ids is not None else a,
-              int(vertex_ids[r]) if vertex_ids is not None else r, int(a in meaning.patoms)) for a, r in meaning.atoms]
+    atoms = [
+        (
+            geoid,
+            int(vertex_ids[a]) if vertex_ids is not None else a,
+            int(vertex_ids[r]) if vertex_ids is not None else r,
+            int(a in meaning.patoms),
+        )
+        for a, r in meaning.atoms
+    ]
     parts: list[tuple[int, ...]] = []
     if "part" in mesh.cell_properties and not stores_part_column(fc):
         values = mesh.cell_properties["part"]
@@ -191,22 +262,46 @@ def extra_rows(fc: FeatureClass, geoid: int, mesh: Mesh, meaning: Meaning,
     return list(atoms), parts
 
 
-def copy_extra_rows(conn: Conn, storage: Storage, atoms: Sequence[tuple[int, ...]],
-                    parts: Sequence[tuple[int, ...]]) -> None:
+def copy_extra_rows(
+    conn: Conn, storage: Storage, atoms: Sequence[tuple[int, ...]], parts: Sequence[tuple[int, ...]]
+) -> None:
     """COPY rows of :func:`extra_rows` into ``tgsis.atom`` and ``tgsis.part``."""
     if atoms:
         columns = np.asarray(atoms, dtype=np.int64).T
-        storage.copy(conn, "tgsis", "atom", [("geoid", columns[0], "int8"), ("vrtxid", columns[1], "int8"),
-                                             ("refid", columns[2], "int8"), ("patom", columns[3] != 0, "bool")])
+        storage.copy(
+            conn,
+            "tgsis",
+            "atom",
+            [
+                ("geoid", columns[0], "int8"),
+                ("vrtxid", columns[1], "int8"),
+                ("refid", columns[2], "int8"),
+                ("patom", columns[3] != 0, "bool"),
+            ],
+        )
     if parts:
         columns = np.asarray(parts, dtype=np.int64).T
-        storage.copy(conn, "tgsis", "part", [("geoid", columns[0], "int8"), ("firstid", columns[1], "int8"),
-                                             ("lastid", columns[2], "int8"),
-                                             ("part", columns[3].astype(np.int32), "int4")])
+        storage.copy(
+            conn,
+            "tgsis",
+            "part",
+            [
+                ("geoid", columns[0], "int8"),
+                ("firstid", columns[1], "int8"),
+                ("lastid", columns[2], "int8"),
+                ("part", columns[3].astype(np.int32), "int4"),
+            ],
+        )
 
 
-def copy_extras(conn: Conn, fc: FeatureClass, geoids: Sequence[int], meshes: Sequence[Mesh],
-                 meanings: Sequence[Meaning], storage: Storage) -> None:
+def copy_extras(
+    conn: Conn,
+    fc: FeatureClass,
+    geoids: Sequence[int],
+    meshes: Sequence[Mesh],
+    meanings: Sequence[Meaning],
+    storage: Storage,
+) -> None:
     """COPY the atoms (``tgsis.atom``) and parts (``tgsis.part``) of freshly uploaded meshes."""
     atoms: list[tuple[int, ...]] = []
     parts: list[tuple[int, ...]] = []
@@ -237,8 +332,12 @@ MEANING_COLUMNS = "g.zpositive, g.crs, g.colorred, g.colorgreen, g.colorblue, g.
 
 def part_meaning(row: Sequence[Any], member: bool = False) -> dict[str, Any]:
     """Part keyword arguments from the values of :data:`MEANING_COLUMNS` (``member``: of a collection member)."""
-    meaning = {"zpositive": row[0], "crs": row[1], "color": tuple(row[2:5]) if row[2] is not None else None,
-               "metadata": row[5]}
+    meaning = {
+        "zpositive": row[0],
+        "crs": row[1],
+        "color": tuple(row[2:5]) if row[2] is not None else None,
+        "metadata": row[5],
+    }
     if member and isinstance(row[5], dict) and MEMBER_PROPERTIES_KEY in row[5]:
         metadata = dict(row[5])
         names = metadata.pop(MEMBER_PROPERTIES_KEY)
@@ -253,20 +352,26 @@ def collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> d
         f"SELECT c.geoid, m.geoid, g.geotype, g.geoname, {MEANING_COLUMNS} FROM tgsis.geometry c "
         "CROSS JOIN LATERAL unnest(c.geoids) WITH ORDINALITY AS m(geoid, ord) "
         "LEFT JOIN tgsis.geometry g ON g.geoid = m.geoid "
-        "WHERE c.geoid = ANY(%s) ORDER BY c.geoid, m.ord", (list(wanted),)).fetchall()
+        "WHERE c.geoid = ANY(%s) ORDER BY c.geoid, m.ord",
+        (list(wanted),),
+    ).fetchall()
     members: dict[int, list[tuple[int, Part]]] = {int(g): [] for g in wanted}
     for cid, mid, geotype, geoname, *meaning in rows:
         where = f"member {len(members[cid])} (geometry {mid}) of feature {cid} of class {fc.name}"
         if geotype is None:
             raise InvalidGeometryError(f"{where} does not exist", hint=f"SELECT * FROM tgsis.check_geometry({cid})")
         if geotype == Geotype.GEOMETRYCOLLECTION.value:
-            raise InvalidGeometryError(f"{where} is a GEOMETRYCOLLECTION: collections do not nest",
-                                       hint=f"SELECT * FROM tgsis.check_geometry({cid})")
+            raise InvalidGeometryError(
+                f"{where} is a GEOMETRYCOLLECTION: collections do not nest",
+                hint=f"SELECT * FROM tgsis.check_geometry({cid})",
+            )
         members[cid].append((int(mid), Part(Geotype(geotype), geoname, where, **part_meaning(meaning, member=True))))
     empty = [cid for cid, listed in members.items() if not listed]
     if empty:
-        raise InvalidGeometryError(f"feature(s) {empty} of class {fc.name} are collections without members",
-                                   hint="a collection lists its members in tgsis.geometry.geoids")
+        raise InvalidGeometryError(
+            f"feature(s) {empty} of class {fc.name} are collections without members",
+            hint="a collection lists its members in tgsis.geometry.geoids",
+        )
     return members
 
 
@@ -292,15 +397,27 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
     a bounded number of parts whatever the number of geometries.
     """
     id_list = sql.Literal(list(parts))
-    requests = [Packed(sql.SQL("tgsis.vrtx"), "geoid",
-                       [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], list(parts))]
+    requests = [
+        Packed(
+            sql.SQL("tgsis.vrtx"),
+            "geoid",
+            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+            list(parts),
+        )
+    ]
     geotypes = list(dict.fromkeys(part.geotype for part in parts.values()))
     for geotype in geotypes:
         table, key = SIMPLEX[geotype]
         cell_cols = [f"vrtxid{i + 1}" for i in range(mesh_class(geotype).cell_size)]
         group = [g for g, part in parts.items() if part.geotype == geotype]
-        requests.append(Packed(sql.SQL("tgsis.{}").format(sql.Identifier(table)), "geoid",
-                               [(c, "int8") for c in (key, *cell_cols)], group))
+        requests.append(
+            Packed(
+                sql.SQL("tgsis.{}").format(sql.Identifier(table)),
+                "geoid",
+                [(c, "int8") for c in (key, *cell_cols)],
+                group,
+            )
+        )
     property_keys: list[tuple[str, tuple[str, ...]]] = []
     for alignment in ("VERTEX", "CELL"):  # one part per property table (and set of properties)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
@@ -309,21 +426,30 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
         for names, members in property_groups(props, parts).items():
             if names:
                 property_keys.append((alignment, names))
-                requests.append(Packed(fc.qualified(protable), "_geoid",
-                                       [("_idx", "int8"), *((p.name, p.wire) for p in props if p.name in names)],
-                                       members))
+                requests.append(
+                    Packed(
+                        fc.qualified(protable),
+                        "_geoid",
+                        [("_idx", "int8"), *((p.name, p.wire) for p in props if p.name in names)],
+                        members,
+                    )
+                )
     vertices, *rest = columns_out_all(conn, requests)
-    cells = dict(zip(geotypes, rest[:len(geotypes)], strict=True))
-    properties = dict(zip(property_keys, rest[len(geotypes):], strict=True))
+    cells = dict(zip(geotypes, rest[: len(geotypes)], strict=True))
+    properties = dict(zip(property_keys, rest[len(geotypes) :], strict=True))
     atoms: dict[int, list[tuple[int, int, bool]]] = {}
-    for geoid, vrtxid, refid, patom in conn.execute(sql.SQL(
-            "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid").format(
-            id_list)).fetchall():
+    for geoid, vrtxid, refid, patom in conn.execute(
+        sql.SQL(
+            "SELECT geoid, vrtxid, refid, patom FROM tgsis.atom WHERE geoid = ANY({}) ORDER BY geoid, vrtxid"
+        ).format(id_list)
+    ).fetchall():
         atoms.setdefault(int(geoid), []).append((int(vrtxid), int(refid), bool(patom)))
     runs: dict[int, list[tuple[int, int, int]]] = {}
-    for geoid, first, last, number in conn.execute(sql.SQL(
-            "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = ANY({}) ORDER BY geoid, firstid").format(
-            id_list)).fetchall():
+    for geoid, first, last, number in conn.execute(
+        sql.SQL(
+            "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = ANY({}) ORDER BY geoid, firstid"
+        ).format(id_list)
+    ).fetchall():
         runs.setdefault(int(geoid), []).append((int(first), int(last), int(number)))
     return Download(vertices, cells, properties, atoms, runs)
 
@@ -341,8 +467,16 @@ def property_groups(props: Sequence[Property], parts: Mapping[int, Part]) -> dic
     return groups
 
 
-def restore_extras(mesh: Mesh, part: Part, data: Download, geoid: int, vertex_ids: npt.NDArray[np.int64],
-                   cell_ids: npt.NDArray[np.int64], *, file_convention: bool = True) -> Mesh:
+def restore_extras(
+    mesh: Mesh,
+    part: Part,
+    data: Download,
+    geoid: int,
+    vertex_ids: npt.NDArray[np.int64],
+    cell_ids: npt.NDArray[np.int64],
+    *,
+    file_convention: bool = True,
+) -> Mesh:
     """The mesh with its parts, atoms and (``file_convention``) its file's z convention and metadata back.
 
     ``vertex_ids``/``cell_ids`` are the database ids of its vertices and cells, ascending.
@@ -390,17 +524,30 @@ def assemble_meshes(fc: FeatureClass, parts: Mapping[int, Part], data: Download)
         for geoid in group:
             vrows, crows = vertex_rows[geoid], cell_rows[geoid]
             vertex_ids = vid[vrows]
-            simplices = np.stack([local_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]],
-                                 axis=1)
+            simplices = np.stack(
+                [local_positions(vertex_ids, c[crows], f"{table} rows", geoid) for c in cells[2:]], axis=1
+            )
             values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
             for alignment, names, prows, columns in prop_rows.get(geoid, []):
                 target_ids = vertex_ids if alignment == "VERTEX" else cells[1][crows]
                 if len(prows) != len(target_ids) or not np.array_equal(columns[1][prows], target_ids):
                     raise InvalidPropertyError(
                         f"{parts[geoid].label}: {fc.property_table(alignment)} has {len(prows)} rows for "
-                        f"{len(target_ids)} {'vertices' if alignment == 'VERTEX' else 'cells'}")
+                        f"{len(target_ids)} {'vertices' if alignment == 'VERTEX' else 'cells'}"
+                    )
                 values[alignment] = {name: columns[2 + i][prows] for i, name in enumerate(names)}
-            meshes[geoid] = restore_extras(mesh_class(geotype)(
-                xyz[vrows], simplices, vertex_properties=values["VERTEX"], cell_properties=values["CELL"],
-                name=parts[geoid].name), parts[geoid], data, geoid, vertex_ids, cells[1][crows])
+            meshes[geoid] = restore_extras(
+                mesh_class(geotype)(
+                    xyz[vrows],
+                    simplices,
+                    vertex_properties=values["VERTEX"],
+                    cell_properties=values["CELL"],
+                    name=parts[geoid].name,
+                ),
+                parts[geoid],
+                data,
+                geoid,
+                vertex_ids,
+                cells[1][crows],
+            )
     return meshes

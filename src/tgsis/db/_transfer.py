@@ -57,6 +57,8 @@ def read_only_snapshot(conn: Conn) -> Iterator[None]:
         if fresh:
             conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
         yield
+
+
 #: columns of a COPY: (name, values, wire type)
 Columns = Sequence[tuple[str, npt.ArrayLike, str]]
 
@@ -68,8 +70,9 @@ def stored_cell_properties(fc: FeatureClass, mesh: Mesh) -> dict[str, npt.NDArra
     return {k: v for k, v in mesh.cell_properties.items() if k != "part"}
 
 
-def aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
-                        what: str = "the mesh") -> dict[str, npt.NDArray[Any]]:
+def aligned_properties(
+    fc: FeatureClass, mesh: Mesh, drop_extra: bool, what: str = "the mesh"
+) -> dict[str, npt.NDArray[Any]]:
     """The mesh properties the class stores, checked and cast to the column types (``what`` names the mesh).
 
     The ``part`` cell property is not one of them unless the class has a
@@ -80,8 +83,9 @@ def aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
     kinds = {"VERTEX": "vertex", "CELL": mesh.cell_name}
     if fc.otherprotable is None:  # one alignment: the other's properties are extra
         other_alignment = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
-        result = class_property_arrays(fc, sources[fc.alignment], sources[other_alignment], kinds[fc.alignment],
-                                       drop_extra, what)
+        result = class_property_arrays(
+            fc, sources[fc.alignment], sources[other_alignment], kinds[fc.alignment], drop_extra, what
+        )
     else:  # vertex and cell properties side by side: each side checked against its own columns
         result = {}
         for alignment in ("VERTEX", "CELL"):
@@ -93,14 +97,21 @@ def aligned_properties(fc: FeatureClass, mesh: Mesh, drop_extra: bool,
         if (values.ndim == 1) != (prop.size == 1) or (values.ndim == 2 and values.shape[1] != prop.size):
             shape = "one value" if prop.size == 1 else f"a vector of {prop.size} values"
             got = "one value" if values.ndim == 1 else f"a vector of {values.shape[1]} values"
-            raise InvalidPropertyError(f"{kind} property {prop.name!r} of {what} has {got} per element, "
-                                       f"but feature class {fc.name} stores {shape}")
+            raise InvalidPropertyError(
+                f"{kind} property {prop.name!r} of {what} has {got} per element, "
+                f"but feature class {fc.name} stores {shape}"
+            )
     return result
 
 
-def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any]],
-                          other: Mapping[str, npt.NDArray[Any]], kind: str, drop_extra: bool,
-                          what: str) -> dict[str, npt.NDArray[Any]]:
+def class_property_arrays(
+    fc: FeatureClass,
+    stored: Mapping[str, npt.NDArray[Any]],
+    other: Mapping[str, npt.NDArray[Any]],
+    kind: str,
+    drop_extra: bool,
+    what: str,
+) -> dict[str, npt.NDArray[Any]]:
     """The class's vertex/cell property arrays (any shape) out of ``stored``, checked and cast to the column types.
 
     ``other`` holds the properties of the other alignment (never stored);
@@ -115,7 +126,7 @@ def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any
         raise InvalidPropertyError(
             f"feature class {fc.name} has no column for properties {extra} of {what}",
             hint=f"it stores {fc.alignment.lower()} properties {sorted(wanted) or 'none'}; "
-                 "drop the others (drop_extra_properties=True) or register them in the class",
+            "drop the others (drop_extra_properties=True) or register them in the class",
         )
     if extra:
         log.warning("not stored by feature class %s: properties %s of %s", fc.name, extra, what)
@@ -125,8 +136,7 @@ def class_property_arrays(fc: FeatureClass, stored: Mapping[str, npt.NDArray[Any
         target = numpy_dtype(SQL_TYPES[prop.type])
         cast = values.astype(target)
         if target.kind in "iub" and not np.array_equal(cast, values):
-            raise InvalidPropertyError(f"{kind} property {prop.name!r} has values that are not {prop.type} "
-                                       f"in {what}")
+            raise InvalidPropertyError(f"{kind} property {prop.name!r} has values that are not {prop.type} in {what}")
         result[prop.name] = cast
     return result
 
@@ -136,8 +146,10 @@ def feature_columns(fc: FeatureClass, properties: Mapping[str, Any] | None) -> d
     values = dict(properties or {})
     unknown = sorted(set(values) - known)
     if unknown:
-        raise InvalidPropertyError(f"feature class {fc.name} has no feature properties {unknown}",
-                                   hint=f"its feature properties: {sorted(known) or 'none'}")
+        raise InvalidPropertyError(
+            f"feature class {fc.name} has no feature properties {unknown}",
+            hint=f"its feature properties: {sorted(known) or 'none'}",
+        )
     return {k: (json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in values.items()}
 
 
@@ -156,16 +168,24 @@ def check_feature_values(conn: Conn, fc: FeatureClass, values: Mapping[str, Any]
         The first value that is not one of its type (the server's words in ``detail``).
     """
     types = {p.name: p.type for p in fc.feature_properties}
-    texts = [(name, value, types[name]) for name, value in values.items()
-             if isinstance(value, str) and types.get(name) not in (None, "text", "character varying", "varchar")]
+    texts = [
+        (name, value, types[name])
+        for name, value in values.items()
+        if isinstance(value, str) and types.get(name) not in (None, "text", "character varying", "varchar")
+    ]
     if not texts:
         return
 
     def cast(items: Sequence[tuple[str, str, str]]) -> None:
         with conn.transaction():
-            conn.execute(sql.SQL("SELECT {}").format(sql.SQL(", ").join(
-                sql.SQL("CAST({} AS {})").format(sql.Placeholder(), sql.SQL(kind)) for _, _, kind in items)),
-                [value for _, value, _ in items])
+            conn.execute(
+                sql.SQL("SELECT {}").format(
+                    sql.SQL(", ").join(
+                        sql.SQL("CAST({} AS {})").format(sql.Placeholder(), sql.SQL(kind)) for _, _, kind in items
+                    )
+                ),
+                [value for _, value, _ in items],
+            )
 
     try:
         cast(texts)
@@ -179,7 +199,8 @@ def check_feature_values(conn: Conn, fc: FeatureClass, values: Mapping[str, Any]
                 raise InvalidPropertyError(
                     f"value {shown} of feature property {name!r} of class {fc.name} is not a valid {kind}",
                     detail=(exc.diag.message_primary or "")[:500],
-                    hint=f"give a value PostgreSQL reads as {kind}") from None
+                    hint=f"give a value PostgreSQL reads as {kind}",
+                ) from None
         raise
 
 
@@ -199,17 +220,21 @@ def check_class_unchanged(conn: Conn, fc: FeatureClass) -> None:
     other = "CELL" if fc.alignment == "VERTEX" else "VERTEX"
     if fc.aligned(fc.alignment) and (fc.otherprotable is None or fc.aligned(other)):
         return
-    row = conn.execute("SELECT jsonb_array_length(cell_properties) FROM tgsis.catalog WHERE classname = %s",
-                       (fc.name,)).fetchone()
+    row = conn.execute(
+        "SELECT jsonb_array_length(cell_properties) FROM tgsis.catalog WHERE classname = %s", (fc.name,)
+    ).fetchone()
     if row is not None and int(row[0]) != len(fc.cell_properties):
-        raise InUseError(f"feature class {fc.name} gained vertex or cell properties while the feature was written: "
-                         "nothing of it was stored",
-                         hint="read the class again (tgsis.get_feature_class) and give the new properties' values")
+        raise InUseError(
+            f"feature class {fc.name} gained vertex or cell properties while the feature was written: "
+            "nothing of it was stored",
+            hint="read the class again (tgsis.get_feature_class) and give the new properties' values",
+        )
 
 
 def _copy_statement(table: sql.Composable, columns: Sequence[str]) -> sql.Composed:
     return sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
-        table, sql.SQL(", ").join(sql.Identifier(c) for c in columns))
+        table, sql.SQL(", ").join(sql.Identifier(c) for c in columns)
+    )
 
 
 def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: bytes) -> None:
@@ -230,15 +255,19 @@ def staged(conn: Conn, table: sql.Composable, columns: Sequence[str]) -> Iterato
     row (docs/security.md, "Per-class rights at the model tables"). Owners and
     superusers, whom row security spares, COPY straight in.
     """
-    guarded = conn.execute(sql.SQL("SELECT row_security_active({}::regclass)").format(
-        sql.Literal(table.as_string(conn)))).fetchone()
+    guarded = conn.execute(
+        sql.SQL("SELECT row_security_active({}::regclass)").format(sql.Literal(table.as_string(conn)))
+    ).fetchone()
     if not guarded or not guarded[0]:
         yield table
         return
     names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
     stage = sql.Identifier(f"tgsis_stage_{next(_STAGES)}")
-    conn.execute(sql.SQL("CREATE TEMPORARY TABLE {} ON COMMIT DROP AS SELECT {} FROM {} WITH NO DATA").format(
-        stage, names, table))
+    conn.execute(
+        sql.SQL("CREATE TEMPORARY TABLE {} ON COMMIT DROP AS SELECT {} FROM {} WITH NO DATA").format(
+            stage, names, table
+        )
+    )
     yield stage
     conn.execute(sql.SQL("INSERT INTO {} ({}) SELECT {} FROM {}").format(table, names, names, stage))
     conn.execute(sql.SQL("DROP TABLE {}").format(stage))
@@ -280,13 +309,17 @@ class Storage:
         NotVersionedError
             ``fc`` has no versioning and the session is elsewhere (nothing is written).
         """
-        stored_in = {(r[0], r[1]): str(r[2]) for r in conn.execute(
-            "SELECT schemaname, tablename, tgsis.storage_table(schemaname, tablename) FROM tgsis.versioned_tables"
-        ).fetchall()}
+        stored_in = {
+            (r[0], r[1]): str(r[2])
+            for r in conn.execute(
+                "SELECT schemaname, tablename, tgsis.storage_table(schemaname, tablename) FROM tgsis.versioned_tables"
+            ).fetchall()
+        }
         versioned = frozenset(stored_in)
         session = conn.execute(
             "SELECT tgsis.get_working_version(), tgsis.get_viewing_revision(), "
-            "(SELECT workingrevision FROM tgsis.versions WHERE name = tgsis.get_working_version())").fetchone()
+            "(SELECT workingrevision FROM tgsis.versions WHERE name = tgsis.get_working_version())"
+        ).fetchone()
         assert session is not None
         version, viewing, working = session
         elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
@@ -316,13 +349,15 @@ class Storage:
                 f"features of class {fc.name} are not versioned: a write in version {self.version!r} would change "
                 "them in every version",
                 detail=f"the connection works in version {self.version!r}, but class {fc.name} was registered "
-                       "without versioning: its features hold one state, which every version reads; nothing was written",
-                hint="tgsis.goto_version(conn, 'DEFAULT') to write them")
+                "without versioning: its features hold one state, which every version reads; nothing was written",
+                hint="tgsis.goto_version(conn, 'DEFAULT') to write them",
+            )
         raise NotVersionedError(
             f"features of class {fc.name} are not versioned: DEFAULT viewed at revision {self.viewing} cannot write them",
             detail=f"the connection looks at an older revision; class {fc.name} holds only the current state of its "
-                   "features; nothing was written",
-            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state")
+            "features; nothing was written",
+            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state",
+        )
 
     def check(self, schema: str, table: str) -> None:
         """Refuse a write to a plain ``schema.table`` while the session is not in DEFAULT's working revision.
@@ -339,14 +374,16 @@ class Storage:
                 f"table {schema}.{table} is not versioned: a write in version {self.version!r} would change DEFAULT, "
                 "which every version reads",
                 detail=f"the connection works in version {self.version!r}, but feature versioning is off, so the "
-                       "feature tables hold one state for all versions; nothing was written",
+                "feature tables hold one state for all versions; nothing was written",
                 hint="tgsis.enable_feature_versioning(conn) to write features in versions, or write in DEFAULT "
-                     "(tgsis.goto_version(conn, 'DEFAULT'), or outside tgsis.in_version)")
+                "(tgsis.goto_version(conn, 'DEFAULT'), or outside tgsis.in_version)",
+            )
         raise NotVersionedError(
             f"table {schema}.{table} is not versioned: DEFAULT viewed at revision {self.viewing} cannot be written",
             detail="the connection looks at an older revision; the table holds only the current state; "
-                   "nothing was written",
-            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state")
+            "nothing was written",
+            hint="tgsis.goto_version(conn, 'DEFAULT') to write the current state",
+        )
 
     def copy(self, conn: Conn, schema: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> None:
         """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision."""
@@ -400,8 +437,7 @@ class Storage:
     def _prepared(self, schema: str, table: str, columns: Columns) -> tuple[sql.Composable, list[str], bytes]:
         """Where ``columns`` go, their names and their payload."""
         target, columns = self._target(schema, table, columns)
-        return (target, [name for name, _, _ in columns],
-                encode_rows([(values, wire) for _, values, wire in columns]))
+        return (target, [name for name, _, _ in columns], encode_rows([(values, wire) for _, values, wire in columns]))
 
 
 def concat(arrays: Sequence[npt.NDArray[Any]]) -> npt.NDArray[Any]:
@@ -415,8 +451,10 @@ def row_keys(geoids: Sequence[int], counts: Sequence[int]) -> tuple[npt.NDArray[
     if len(counts) == 1:
         return np.full(total, geoids[0], dtype=np.int64), np.arange(total, dtype=np.int64)
     starts = np.cumsum([0, *counts[:-1]])
-    return (np.repeat(np.asarray(geoids, dtype=np.int64), counts),
-            np.arange(total, dtype=np.int64) - np.repeat(starts, counts).astype(np.int64))
+    return (
+        np.repeat(np.asarray(geoids, dtype=np.int64), counts),
+        np.arange(total, dtype=np.int64) - np.repeat(starts, counts).astype(np.int64),
+    )
 
 
 def copy_out(conn: Conn, query: sql.Composable, types: Sequence[str]) -> list[npt.NDArray[Any]]:
@@ -427,8 +465,14 @@ def copy_out(conn: Conn, query: sql.Composable, types: Sequence[str]) -> list[np
 
 
 #: the function that gives a value of each wire type in its binary COPY form
-SEND_FUNCTIONS = {"int2": "int2send", "int4": "int4send", "int8": "int8send", "float4": "float4send",
-                  "float8": "float8send", "bool": "boolsend"}
+SEND_FUNCTIONS = {
+    "int2": "int2send",
+    "int4": "int4send",
+    "int8": "int8send",
+    "float4": "float4send",
+    "float8": "float8send",
+    "bool": "boolsend",
+}
 
 
 @dataclass(frozen=True)
@@ -454,16 +498,28 @@ class Packed:
             sends.append(sql.SQL("{}({})").format(sql.Identifier(send), sql.Identifier(name)))
         row = sql.SQL(" || ").join(sends)
         if len(self.geoids) == 1:  # one aggregate, no grouping: a group's state of tens of MB is not hashed or sorted
-            return sql.SQL("SELECT {part}::int4, {geoid}::int8, count(*), string_agg({row}, ''::bytea) FROM {source} "
-                           "WHERE {key} = {geoid}").format(
-                part=sql.Literal(part), key=sql.Identifier(self.key), row=row, source=self.source,
-                geoid=sql.Literal(int(self.geoids[0])))
+            return sql.SQL(
+                "SELECT {part}::int4, {geoid}::int8, count(*), string_agg({row}, ''::bytea) FROM {source} "
+                "WHERE {key} = {geoid}"
+            ).format(
+                part=sql.Literal(part),
+                key=sql.Identifier(self.key),
+                row=row,
+                source=self.source,
+                geoid=sql.Literal(int(self.geoids[0])),
+            )
         # one such aggregate per geometry, one after the other: memory for one geometry's values at a time
-        return sql.SQL("SELECT {part}::int4, g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
-                       "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({row}, ''::bytea) AS v "
-                       "FROM {source} WHERE {key} = g.k) a").format(
-            part=sql.Literal(part), key=sql.Identifier(self.key), row=row, source=self.source,
-            geoids=sql.Literal([int(g) for g in self.geoids]))
+        return sql.SQL(
+            "SELECT {part}::int4, g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
+            "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({row}, ''::bytea) AS v "
+            "FROM {source} WHERE {key} = g.k) a"
+        ).format(
+            part=sql.Literal(part),
+            key=sql.Identifier(self.key),
+            row=row,
+            source=self.source,
+            geoids=sql.Literal([int(g) for g in self.geoids]),
+        )
 
 
 def columns_out_all(conn: Conn, requests: Sequence[Packed]) -> list[list[npt.NDArray[Any]]]:
@@ -511,8 +567,9 @@ def columns_out_all(conn: Conn, requests: Sequence[Packed]) -> list[list[npt.NDA
     return [_decode_groups(conn, request, found) for request, found in zip(requests, groups, strict=True)]
 
 
-def columns_out(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],
-                geoids: Sequence[int]) -> list[npt.NDArray[Any]]:
+def columns_out(
+    conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]], geoids: Sequence[int]
+) -> list[npt.NDArray[Any]]:
     """The rows of ``source`` whose ``key`` is one of ``geoids``, as columns: ``[key, *columns]``.
 
     One :class:`Packed` request of :func:`columns_out_all` (its parameters and errors).
@@ -525,15 +582,17 @@ def _decode_groups(conn: Conn, request: Packed, groups: Sequence[tuple[int, int,
     counts = [count for _, count, _ in groups]
     what = f"columns {', '.join(name for name, _ in request.columns)} of {request.source.as_string(conn)}"
     try:
-        values = decode_packed(b"".join(data for _, _, data in groups), [wire for _, wire in request.columns],
-                               sum(counts), what)
+        values = decode_packed(
+            b"".join(data for _, _, data in groups), [wire for _, wire in request.columns], sum(counts), what
+        )
     except DatabaseError as exc:  # the rare path: find the row to name
         raise _bad_row(conn, request.source, request.key, request.columns, request.geoids) or exc from None
     return [np.repeat(np.asarray([geoid for geoid, _, _ in groups], dtype=np.int64), counts), *values]
 
 
-def corners_out(conn: Conn, source: sql.Composable, key: str, corners: Sequence[str],
-                geoid: int) -> npt.NDArray[np.int64]:
+def corners_out(
+    conn: Conn, source: sql.Composable, key: str, corners: Sequence[str], geoid: int
+) -> npt.NDArray[np.int64]:
     """The corner ids of one geometry's cells (rows of ``source``), in no order and without the cells' ids.
 
     For a mesh that is drawn, not written back (the browser view): when a
@@ -565,14 +624,20 @@ def corners_out(conn: Conn, source: sql.Composable, key: str, corners: Sequence[
     k = len(corners)
     bits = 63 // k
     packed = sql.SQL(" | ").join(
-        sql.SQL("({}::int8 << {})").format(sql.Identifier(c), sql.Literal(bits * (k - 1 - i))) if i < k - 1
-        else sql.SQL("{}::int8").format(sql.Identifier(c)) for i, c in enumerate(corners))
+        sql.SQL("({}::int8 << {})").format(sql.Identifier(c), sql.Literal(bits * (k - 1 - i)))
+        if i < k - 1
+        else sql.SQL("{}::int8").format(sql.Identifier(c))
+        for i, c in enumerate(corners)
+    )
     # every corner in 0 .. 2**bits - 1 exactly when their bitwise or is (a negative id sets the sign bit)
     in_range = sql.SQL("({}) BETWEEN 0 AND {}").format(
-        sql.SQL(" | ").join(sql.SQL("{}::int8").format(sql.Identifier(c)) for c in corners), sql.Literal((1 << bits) - 1))
-    query = sql.SQL("SELECT count(*), string_agg(CASE WHEN {in_range} THEN int8send({packed}) END, ''::bytea) "
-                    "FROM {source} WHERE {key} = {geoid}").format(
-        in_range=in_range, packed=packed, source=source, key=sql.Identifier(key), geoid=sql.Literal(geoid))
+        sql.SQL(" | ").join(sql.SQL("{}::int8").format(sql.Identifier(c)) for c in corners),
+        sql.Literal((1 << bits) - 1),
+    )
+    query = sql.SQL(
+        "SELECT count(*), string_agg(CASE WHEN {in_range} THEN int8send({packed}) END, ''::bytea) "
+        "FROM {source} WHERE {key} = {geoid}"
+    ).format(in_range=in_range, packed=packed, source=source, key=sql.Identifier(key), geoid=sql.Literal(geoid))
     with conn.cursor(binary=True) as cursor:
         row = cursor.execute(query).fetchone()
     assert row is not None
@@ -584,27 +649,44 @@ def corners_out(conn: Conn, source: sql.Composable, key: str, corners: Sequence[
     return np.stack([(values >> (bits * (k - 1 - i))) & mask for i in range(k)], axis=1)
 
 
-def _bad_row(conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]],
-             geoids: Sequence[int]) -> DatabaseError | None:
+def _bad_row(
+    conn: Conn, source: sql.Composable, key: str, columns: Sequence[tuple[str, str]], geoids: Sequence[int]
+) -> DatabaseError | None:
     """The error naming a row of :func:`columns_out` that holds a NULL or a vector of another length."""
     for name, wire in columns:
         size = wire_shape(wire)[1]
-        bad = sql.SQL("{} IS NULL").format(sql.Identifier(name)) if size is None else sql.SQL(
-            "{} IS NULL OR array_ndims({}) IS DISTINCT FROM 1 OR cardinality({}) <> {} OR array_position({}, NULL) "
-            "IS NOT NULL").format(*(sql.Identifier(name),) * 3, size, sql.Identifier(name))
-        row = conn.execute(sql.SQL("SELECT {}, {} FROM {} WHERE {} = ANY({}) AND ({}) LIMIT 1").format(
-            sql.Identifier(key), sql.Identifier(columns[0][0]), source, sql.Identifier(key),
-            sql.Literal(list(geoids)), bad)).fetchone()
+        bad = (
+            sql.SQL("{} IS NULL").format(sql.Identifier(name))
+            if size is None
+            else sql.SQL(
+                "{} IS NULL OR array_ndims({}) IS DISTINCT FROM 1 OR cardinality({}) <> {} OR array_position({}, NULL) "
+                "IS NOT NULL"
+            ).format(*(sql.Identifier(name),) * 3, size, sql.Identifier(name))
+        )
+        row = conn.execute(
+            sql.SQL("SELECT {}, {} FROM {} WHERE {} = ANY({}) AND ({}) LIMIT 1").format(
+                sql.Identifier(key),
+                sql.Identifier(columns[0][0]),
+                source,
+                sql.Identifier(key),
+                sql.Literal(list(geoids)),
+                bad,
+            )
+        ).fetchone()
         if row is not None:
-            return DatabaseError(f"column {name} of {source.as_string(conn)} is NULL or not {wire} in the row "
-                                 f"{key} = {row[0]}, {columns[0][0]} = {row[1]}",
-                                 hint=f"SELECT * FROM tgsis.check_geometry({row[0]})")
+            return DatabaseError(
+                f"column {name} of {source.as_string(conn)} is NULL or not {wire} in the row "
+                f"{key} = {row[0]}, {columns[0][0]} = {row[1]}",
+                hint=f"SELECT * FROM tgsis.check_geometry({row[0]})",
+            )
     return None
 
 
-def rows_by_geoid(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],
-           wanted: Sequence[int]) -> dict[int, npt.NDArray[np.int64]]:
+def rows_by_geoid(
+    geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64], wanted: Sequence[int]
+) -> dict[int, npt.NDArray[np.int64]]:
     """Row positions of each wanted geoid, ordered by the local id."""
+
     def ascending(values: npt.NDArray[np.int64]) -> bool:
         return bool(np.all(values[1:] >= values[:-1]))
 
@@ -618,19 +700,23 @@ def rows_by_geoid(geoids: npt.NDArray[np.int64], ids: npt.NDArray[np.int64],
     return {g: order[s:e] for g, s, e in zip(wanted, starts.tolist(), ends.tolist())}
 
 
-def local_positions(ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: str,
-                    geoid: int) -> npt.NDArray[np.int64]:
+def local_positions(
+    ids: npt.NDArray[np.int64], lookup: npt.NDArray[np.int64], what: str, geoid: int
+) -> npt.NDArray[np.int64]:
     """Indices of ``lookup`` values in the sorted ``ids`` (vertex ids to mesh indices)."""
     if len(ids) and ids[-1] - ids[0] == len(ids) - 1:
         positions = lookup - ids[0] if ids[0] else lookup  # ids k..k+n-1 (unique): index = id - k
         if len(lookup) and (positions.min() < 0 or positions.max() >= len(ids)):
-            raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
-                                       hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+            raise InvalidGeometryError(
+                f"geometry {geoid}: {what} refer to missing vertices",
+                hint=f"SELECT * FROM tgsis.check_geometry({geoid})",
+            )
         return positions
     positions = np.searchsorted(ids, lookup)
     if len(lookup) and (np.any(positions >= len(ids)) or np.any(ids[np.minimum(positions, len(ids) - 1)] != lookup)):
-        raise InvalidGeometryError(f"geometry {geoid}: {what} refer to missing vertices",
-                                   hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+        raise InvalidGeometryError(
+            f"geometry {geoid}: {what} refer to missing vertices", hint=f"SELECT * FROM tgsis.check_geometry({geoid})"
+        )
     return positions
 
 
@@ -639,7 +725,12 @@ def insert_feature_row(conn: Conn, fc: FeatureClass, geoid: int, properties: Map
     values = feature_columns(fc, properties)
     check_feature_values(conn, fc, values)
     columns = ["_geoid", *values]
-    conn.execute(sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-        fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
-        sql.SQL(", ").join(sql.Placeholder() for _ in columns)), [geoid, *values.values()])
+    conn.execute(
+        sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+            fc.qualified(fc.featuretable),
+            sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+            sql.SQL(", ").join(sql.Placeholder() for _ in columns),
+        ),
+        [geoid, *values.values()],
+    )
     check_class_unchanged(conn, fc)

@@ -120,10 +120,13 @@ def _feature_row(conn: Conn, fc: FeatureClass, geoid: int) -> tuple[str | None, 
     """(geoname, geotype, feature properties) of a feature; NotFoundError when the class has no such feature."""
     props = [p.name for p in fc.feature_properties]
     row = conn.execute(
-        sql.SQL("SELECT g.geoname, g.geotype{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-                "WHERE f._geoid = %s").format(
-            sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
-            fc.qualified(fc.featuretable)), (geoid,)).fetchone()
+        sql.SQL(
+            "SELECT g.geoname, g.geotype{} FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid WHERE f._geoid = %s"
+        ).format(
+            sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props), fc.qualified(fc.featuretable)
+        ),
+        (geoid,),
+    ).fetchone()
     if row is None:
         raise NotFoundError(f"feature class {fc.name} has no feature {geoid}")
     return row[0], row[1], dict(zip(props, row[2:]))
@@ -139,25 +142,41 @@ def _stored_mesh(conn: Conn, fc: FeatureClass, geoid: int, name: str | None) -> 
     corder = np.argsort(cells[1], kind="stable")
     cell_ids = cells[1][corder]
     table = SIMPLEX[fc.geotype][0]
-    simplices = np.stack([local_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1) \
-        if len(cells) > 2 else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
+    simplices = (
+        np.stack([local_positions(vertex_ids, c[corder], f"{table} rows", geoid) for c in cells[2:]], axis=1)
+        if len(cells) > 2
+        else np.empty((0, mesh_class(fc.geotype).cell_size), dtype=np.int64)
+    )
     values: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
     for (alignment, _), columns in data.properties.items():  # the class's alignment, and the other one if any
         pid = columns[1]
         porder = np.argsort(pid, kind="stable")
         targets = vertex_ids if alignment == "VERTEX" else cell_ids
         if not np.array_equal(pid[porder], targets):
-            raise InvalidGeometryError(f"feature {geoid} of class {fc.name}: {fc.property_table(alignment)} has "
-                                       f"{len(pid)} rows that do not match its {len(targets)} "
-                                       f"{'vertices' if alignment == 'VERTEX' else 'cells'}",
-                                       hint=f"SELECT * FROM tgsis.check_geometry({geoid})")
+            raise InvalidGeometryError(
+                f"feature {geoid} of class {fc.name}: {fc.property_table(alignment)} has "
+                f"{len(pid)} rows that do not match its {len(targets)} "
+                f"{'vertices' if alignment == 'VERTEX' else 'cells'}",
+                hint=f"SELECT * FROM tgsis.check_geometry({geoid})",
+            )
         values[alignment] = {p.name: columns[2 + i][porder] for i, p in enumerate(fc.aligned(alignment))}  # all of them
     mesh = mesh_class(fc.geotype)(
-        np.stack([x[vorder], y[vorder], z[vorder]], axis=1), simplices,
-        vertex_properties=values["VERTEX"], cell_properties=values["CELL"], name=name)
+        np.stack([x[vorder], y[vorder], z[vorder]], axis=1),
+        simplices,
+        vertex_properties=values["VERTEX"],
+        cell_properties=values["CELL"],
+        name=name,
+    )
     # parts and atoms come with it; z stays in storage's convention (elevation)
-    restore_extras(mesh, Part(fc.geotype, name, ""), data, geoid, vertex_ids.astype(np.int64),
-                   cell_ids.astype(np.int64), file_convention=False)
+    restore_extras(
+        mesh,
+        Part(fc.geotype, name, ""),
+        data,
+        geoid,
+        vertex_ids.astype(np.int64),
+        cell_ids.astype(np.int64),
+        file_convention=False,
+    )
     return StoredMesh(mesh, vertex_ids.astype(np.int64), cell_ids.astype(np.int64))
 
 
@@ -178,13 +197,17 @@ def _checked_class(conn: Conn, feature_class: str | FeatureClass | None, feature
     """The feature's class, refusing the kinds of features saving by difference does not handle."""
     fc = resolve_class(conn, feature_class) if feature_class is not None else class_of_feature(conn, feature_id)
     if fc.time_model != "STATIC":
-        raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): check-out and saving by "
-                                "difference are for static (model-1) features",
-                                hint="store a new SurfaceSeries or EvolvingSurface, or edit its instants")
+        raise InvalidInputError(
+            f"feature class {fc.name} is temporal ({fc.time_model}): check-out and saving by "
+            "difference are for static (model-1) features",
+            hint="store a new SurfaceSeries or EvolvingSurface, or edit its instants",
+        )
     if fc.geotype is Geotype.GEOMETRYCOLLECTION:
-        raise InvalidInputError(f"feature class {fc.name} holds GEOMETRYCOLLECTION features: check-out and saving by "
-                                "difference take one mesh",
-                                hint="delete the feature and insert the edited collection (tgsis.insert_feature)")
+        raise InvalidInputError(
+            f"feature class {fc.name} holds GEOMETRYCOLLECTION features: check-out and saving by "
+            "difference take one mesh",
+            hint="delete the feature and insert the edited collection (tgsis.insert_feature)",
+        )
     return fc
 
 
@@ -250,16 +273,21 @@ def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.boo
 
 def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, geoid: int) -> int:
     """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
-    row = conn.execute(sql.SQL("SELECT max({}) FROM {} WHERE {} = %s").format(
-        sql.Identifier(idfield), storage.table("tgsis", table), sql.Identifier(key)), (geoid,)).fetchone()
+    row = conn.execute(
+        sql.SQL("SELECT max({}) FROM {} WHERE {} = %s").format(
+            sql.Identifier(idfield), storage.table("tgsis", table), sql.Identifier(key)
+        ),
+        (geoid,),
+    ).fetchone()
     return 0 if row is None or row[0] is None else int(row[0]) + 1
 
 
 def _delete_parts(conn: Conn, schema: str, table: str, key: str, geoid: int, idfield: str, ids: IntArray) -> int:
     if len(ids) == 0:
         return 0
-    row = conn.execute("SELECT tgsis.delete_object_rows(%s, %s, %s, %s, %s, %s)",
-                       (schema, table, key, [geoid], idfield, ids.tolist())).fetchone()
+    row = conn.execute(
+        "SELECT tgsis.delete_object_rows(%s, %s, %s, %s, %s, %s)", (schema, table, key, [geoid], idfield, ids.tolist())
+    ).fetchone()
     return int(row[0]) if row else 0
 
 
@@ -275,8 +303,16 @@ class _Written:
     property_changes: int
 
 
-def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: Mesh, plan: EditPlan,
-                cell_values: Mapping[str, npt.NDArray[Any]], storage: Storage) -> _Written:
+def _write_diff(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    stored: StoredMesh,
+    edited: Mesh,
+    plan: EditPlan,
+    cell_values: Mapping[str, npt.NDArray[Any]],
+    storage: Storage,
+) -> _Written:
     """Write the difference ``stored`` -> ``edited`` of one geometry in the session's version (caller's transaction).
 
     Moved vertices are rewritten under their old id (delete + insert: on a
@@ -284,8 +320,11 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
     """
     table, idfield = SIMPLEX[fc.geotype]
     if storage.versioned and ("tgsis", "vrtx") in storage.versioned:
-        conn.execute("SELECT tgsis.check_objects_unlocked(objectclass, ARRAY[%s]) FROM tgsis.versioned_tables "
-                     "WHERE schemaname = 'tgsis' AND tablename = 'vrtx'", (str(geoid),))
+        conn.execute(
+            "SELECT tgsis.check_objects_unlocked(objectclass, ARRAY[%s]) FROM tgsis.versioned_tables "
+            "WHERE schemaname = 'tgsis' AND tablename = 'vrtx'",
+            (str(geoid),),
+        )
 
     # ids: kept and moved vertices and kept cells keep theirs, new ones get fresh ones above every id used before
     added_v, added_c, moved = plan.added_vertices, plan.added_cells, plan.moved_vertices
@@ -308,7 +347,12 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
         if not props or protable is None:
             continue
         if alignment == "VERTEX":
-            element_map, old_ids, new_ids, removed = plan.vertex_map, stored.vertex_ids, vertex_ids, plan.removed_vertices
+            element_map, old_ids, new_ids, removed = (
+                plan.vertex_map,
+                stored.vertex_ids,
+                vertex_ids,
+                plan.removed_vertices,
+            )
             old_values = stored.mesh.vertex_properties
         else:
             element_map, old_ids, new_ids, removed = plan.cell_map, stored.cell_ids, cell_ids, plan.removed_cells
@@ -319,35 +363,71 @@ def _write_diff(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, ed
             changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
         rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
         changes += int(changed.sum())
-        deleted += _delete_parts(conn, fc.schema, protable, "_geoid", geoid, "_idx",
-                                 np.concatenate([old_ids[removed], new_ids[kept[changed]]]))
+        deleted += _delete_parts(
+            conn,
+            fc.schema,
+            protable,
+            "_geoid",
+            geoid,
+            "_idx",
+            np.concatenate([old_ids[removed], new_ids[kept[changed]]]),
+        )
         if len(rewrite):
-            storage.copy(conn, fc.schema, protable, [
-                ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"), ("_idx", new_ids[rewrite], "int8"),
-                *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props)])
+            storage.copy(
+                conn,
+                fc.schema,
+                protable,
+                [
+                    ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"),
+                    ("_idx", new_ids[rewrite], "int8"),
+                    *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props),
+                ],
+            )
             inserted += len(rewrite)
 
     deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
-    deleted += _delete_parts(conn, "tgsis", "vrtx", "geoid", geoid, "vrtxid",
-                             np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]))
+    deleted += _delete_parts(
+        conn,
+        "tgsis",
+        "vrtx",
+        "geoid",
+        geoid,
+        "vrtxid",
+        np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]),
+    )
     written_v = np.concatenate([moved, added_v])
     if len(written_v):
         xyz = edited.vertices[written_v]
-        storage.copy(conn, "tgsis", "vrtx", [
-            ("geoid", np.full(len(written_v), geoid, dtype=np.int64), "int8"), ("vrtxid", vertex_ids[written_v], "int8"),
-            ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+        storage.copy(
+            conn,
+            "tgsis",
+            "vrtx",
+            [
+                ("geoid", np.full(len(written_v), geoid, dtype=np.int64), "int8"),
+                ("vrtxid", vertex_ids[written_v], "int8"),
+                ("x", xyz[:, 0], "float8"),
+                ("y", xyz[:, 1], "float8"),
+                ("z", xyz[:, 2], "float8"),
+            ],
+        )
         inserted += len(written_v)
     if len(added_c):
         cells = vertex_ids[edited.cells[added_c]]
-        storage.copy(conn, "tgsis", table, [
-            ("geoid", np.full(len(added_c), geoid, dtype=np.int64), "int8"), (idfield, cell_ids[added_c], "int8"),
-            *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(edited.cell_size))])
+        storage.copy(
+            conn,
+            "tgsis",
+            table,
+            [
+                ("geoid", np.full(len(added_c), geoid, dtype=np.int64), "int8"),
+                (idfield, cell_ids[added_c], "int8"),
+                *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(edited.cell_size)),
+            ],
+        )
         inserted += len(added_c)
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
-def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written,
-                    storage: Storage) -> int:
+def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written, storage: Storage) -> int:
     """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
 
     What the edited mesh's metadata does not mention stays as stored; atoms
@@ -370,15 +450,33 @@ def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, writ
         names = [sql.Identifier(c) for c, _, _ in columns]
         holders = [sql.SQL(h) for _, h, _ in columns]
         values = [v for _, _, v in columns]
-        changed += max(conn.execute(sql.SQL("UPDATE tgsis.geometry SET ({}) = ROW({}) WHERE geoid = %s "
-                                            "AND ROW({}) IS DISTINCT FROM ROW({})").format(
-            sql.SQL(", ").join(names), sql.SQL(", ").join(holders), sql.SQL(", ").join(names),
-            sql.SQL(", ").join(holders)), [*values, geoid, *values]).rowcount, 0)
+        changed += max(
+            conn.execute(
+                sql.SQL(
+                    "UPDATE tgsis.geometry SET ({}) = ROW({}) WHERE geoid = %s AND ROW({}) IS DISTINCT FROM ROW({})"
+                ).format(
+                    sql.SQL(", ").join(names),
+                    sql.SQL(", ").join(holders),
+                    sql.SQL(", ").join(names),
+                    sql.SQL(", ").join(holders),
+                ),
+                [*values, geoid, *values],
+            ).rowcount,
+            0,
+        )
     atoms, parts = extra_rows(fc, geoid, edited, meaning, written.vertex_ids, written.cell_ids)
-    stored_atoms = [tuple(int(v) for v in r) for r in conn.execute(
-        "SELECT geoid, vrtxid, refid, patom::int FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()]
-    stored_parts = [tuple(int(v) for v in r) for r in conn.execute(
-        "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)).fetchall()]
+    stored_atoms = [
+        tuple(int(v) for v in r)
+        for r in conn.execute(
+            "SELECT geoid, vrtxid, refid, patom::int FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)
+        ).fetchall()
+    ]
+    stored_parts = [
+        tuple(int(v) for v in r)
+        for r in conn.execute(
+            "SELECT geoid, firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
+        ).fetchall()
+    ]
     if sorted(atoms) != stored_atoms:
         changed += max(conn.execute("DELETE FROM tgsis.atom WHERE geoid = %s", (geoid,)).rowcount, 0)
         copy_extra_rows(conn, storage, atoms, [])
@@ -390,33 +488,57 @@ def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, writ
     return changed
 
 
-def _update_rows(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, bounds: npt.NDArray[np.float64] | None,
-                 name: str | None, feature_values: Mapping[str, Any] | None) -> int:
+def _update_rows(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    edited: Mesh,
+    bounds: npt.NDArray[np.float64] | None,
+    name: str | None,
+    feature_values: Mapping[str, Any] | None,
+) -> int:
     """Bring the geometry row (box, counts, name) and the feature row up to date; rows changed (0 when equal)."""
-    low, high = (bounds.tolist() if bounds is not None else (None, None))
+    low, high = bounds.tolist() if bounds is not None else (None, None)
     box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
-    changed = conn.execute(sql.SQL(
-        "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s, geoname = %(name)s "
-        "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s "
-        "OR geoname IS DISTINCT FROM %(name)s)").format(box=box),
-        {"low": low, "high": high, "n": edited.n_vertices, "m": edited.n_cells, "name": name, "g": geoid}).rowcount
+    changed = conn.execute(
+        sql.SQL(
+            "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s, geoname = %(name)s "
+            "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s "
+            "OR geoname IS DISTINCT FROM %(name)s)"
+        ).format(box=box),
+        {"low": low, "high": high, "n": edited.n_vertices, "m": edited.n_cells, "name": name, "g": geoid},
+    ).rowcount
     if feature_values:
         columns = list(feature_values)
-        changed += conn.execute(sql.SQL("UPDATE {} SET {} WHERE _geoid = %s AND ({}) IS DISTINCT FROM ({})").format(
-            fc.qualified(fc.featuretable),
-            sql.SQL(", ").join(sql.SQL("{} = %s").format(sql.Identifier(c)) for c in columns),
-            sql.SQL(", ").join(sql.Identifier(c) for c in columns),
-            sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
-            [*feature_values.values(), geoid, *feature_values.values()]).rowcount
+        changed += conn.execute(
+            sql.SQL("UPDATE {} SET {} WHERE _geoid = %s AND ({}) IS DISTINCT FROM ({})").format(
+                fc.qualified(fc.featuretable),
+                sql.SQL(", ").join(sql.SQL("{} = %s").format(sql.Identifier(c)) for c in columns),
+                sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+                sql.SQL(", ").join(sql.Placeholder() for _ in columns),
+            ),
+            [*feature_values.values(), geoid, *feature_values.values()],
+        ).rowcount
     return max(changed, 0)
 
 
-def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: Mesh, plan: EditPlan,
-          properties: Mapping[str, Any] | None, name: str | None, drop_extra: bool) -> tuple[SaveResult, _Written]:
+def _save(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    stored: StoredMesh,
+    edited: Mesh,
+    plan: EditPlan,
+    properties: Mapping[str, Any] | None,
+    name: str | None,
+    drop_extra: bool,
+) -> tuple[SaveResult, _Written]:
     """Write the edit in the caller's transaction and describe it."""
     if edited.geotype != fc.geotype:
-        raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
-                                   f"not {edited.geotype.value} ({type(edited).__name__})")
+        raise InvalidGeometryError(
+            f"feature class {fc.name} holds {fc.geotype.value} features, "
+            f"not {edited.geotype.value} ({type(edited).__name__})"
+        )
     cell_values = aligned_properties(fc, edited, drop_extra, "the edited mesh")
     feature_values = feature_columns(fc, properties)
     check_feature_values(conn, fc, feature_values)
@@ -426,11 +548,28 @@ def _save(conn: Conn, fc: FeatureClass, geoid: int, stored: StoredMesh, edited: 
     updated = _update_rows(conn, fc, geoid, edited, plan.bounds, name, feature_values)
     updated += _update_meaning(conn, fc, geoid, edited, written, storage)
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
-    result = SaveResult(geoid, version, plan.diff, written.deleted, written.inserted, updated,
-                        written.property_changes, len(plan.moved_vertices), len(plan.removed_cells),
-                        len(plan.added_cells), len(plan.diff.added_cells) - len(plan.added_cells))
-    log.info("saved %s feature %d in %s by difference: %s, %d vertices moved; %d rows written", fc.name, geoid,
-             version, plan.diff, result.vertices_moved, result.rows_written)
+    result = SaveResult(
+        geoid,
+        version,
+        plan.diff,
+        written.deleted,
+        written.inserted,
+        updated,
+        written.property_changes,
+        len(plan.moved_vertices),
+        len(plan.removed_cells),
+        len(plan.added_cells),
+        len(plan.diff.added_cells) - len(plan.added_cells),
+    )
+    log.info(
+        "saved %s feature %d in %s by difference: %s, %d vertices moved; %d rows written",
+        fc.name,
+        geoid,
+        version,
+        plan.diff,
+        result.vertices_moved,
+        result.rows_written,
+    )
     return result, written
 
 
@@ -450,8 +589,9 @@ def _mesh_arg(edited: Any) -> Mesh:
 
         edited = as_mesh(edited)
     if not isinstance(edited, Mesh):
-        raise InvalidGeometryError(f"an edited mesh must be a PointSet, LineSet, Surface or TetraMesh, "
-                                   f"not {type(edited).__name__}")
+        raise InvalidGeometryError(
+            f"an edited mesh must be a PointSet, LineSet, Surface or TetraMesh, not {type(edited).__name__}"
+        )
     return edited
 
 
@@ -508,8 +648,17 @@ def save_feature(
         conn.execute("SELECT tgsis.feature_write_lock(%s)", (feature_id,))
         stored_name, _, _ = _feature_row(conn, fc, feature_id)
         stored = _stored_mesh(conn, fc, feature_id, stored_name)
-        result, _ = _save(conn, fc, feature_id, stored, mesh, _plan(stored.mesh, mesh, tolerance), properties,
-                          _new_name(name, mesh, stored_name), drop_extra_properties)
+        result, _ = _save(
+            conn,
+            fc,
+            feature_id,
+            stored,
+            mesh,
+            _plan(stored.mesh, mesh, tolerance),
+            properties,
+            _new_name(name, mesh, stored_name),
+            drop_extra_properties,
+        )
     return result
 
 
@@ -568,7 +717,9 @@ class CheckoutToken:
             raise FileFormatError(f"not a tgsis check-out token: {exc}") from None
         for key in ("feature_id", "revision", "base_revision"):
             value = getattr(token, key)
-            if (value is not None or key != "base_revision") and (isinstance(value, bool) or not isinstance(value, int)):
+            if (value is not None or key != "base_revision") and (
+                isinstance(value, bool) or not isinstance(value, int)
+            ):
                 raise FileFormatError(f"not a tgsis check-out token: {key} is {value!r}, not an integer")
         return token
 
@@ -618,8 +769,10 @@ class Checkout:
             "properties": np.array(json.dumps(self.properties, default=str)),
             "geotype": np.array(base.geotype.value),
             "name": np.array(json.dumps(base.name)),
-            "vertices": base.vertices, "cells": base.cells,
-            "vertex_ids": self.base.vertex_ids, "cell_ids": self.base.cell_ids,
+            "vertices": base.vertices,
+            "cells": base.cells,
+            "vertex_ids": self.base.vertex_ids,
+            "cell_ids": self.base.cell_ids,
         }
         for kind, values in (("vertex", base.vertex_properties), ("cell", base.cell_properties)):
             for key, array in values.items():
@@ -635,11 +788,17 @@ class Checkout:
         try:
             with np.load(Path(path), allow_pickle=False) as data:
                 token = CheckoutToken.from_json(str(data["token"]))
-                props = {kind: {k.split("__", 1)[1]: data[k] for k in data.files if k.startswith(f"{kind}_property__")}
-                         for kind in ("vertex", "cell")}
+                props = {
+                    kind: {k.split("__", 1)[1]: data[k] for k in data.files if k.startswith(f"{kind}_property__")}
+                    for kind in ("vertex", "cell")
+                }
                 mesh = mesh_class(Geotype(str(data["geotype"])))(
-                    data["vertices"], data["cells"], vertex_properties=props["vertex"],
-                    cell_properties=props["cell"], name=json.loads(str(data["name"])))
+                    data["vertices"],
+                    data["cells"],
+                    vertex_properties=props["vertex"],
+                    cell_properties=props["cell"],
+                    name=json.loads(str(data["name"])),
+                )
                 base = StoredMesh(mesh, data["vertex_ids"].astype(np.int64), data["cell_ids"].astype(np.int64))
                 properties = json.loads(str(data["properties"]))
         except (OSError, ValueError, KeyError) as exc:
@@ -728,8 +887,9 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
                 fc = _checked_class(conn, feature_class, feature_id)
                 _feature_row(conn, fc, feature_id)
             except NotFoundError as exc:  # deleted in, or never brought to, the version worked in: say which
-                raise NotFoundError(f"{exc.message} in version {show_name(_working_state(conn)[0])}",
-                                    detail=exc.detail, hint=exc.hint) from exc
+                raise NotFoundError(
+                    f"{exc.message} in version {show_name(_working_state(conn)[0])}", detail=exc.detail, hint=exc.hint
+                ) from exc
             frozen = _freeze(conn)
         with conn.transaction():
             if fresh:  # one snapshot for the fingerprint and the rows
@@ -743,13 +903,28 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
             row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
             assert row is not None
             base = _stored_mesh(conn, fc, feature_id, name)
-            meaning = conn.execute(f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s",
-                                   (feature_id,)).fetchone()
+            meaning = conn.execute(
+                f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s", (feature_id,)
+            ).fetchone()
             restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
-    token = CheckoutToken(feature_id, fc.name, version, revision, str(row[0]), str(row[1]),
-                          _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"), frozen)
-    log.info("checked out %s feature %d from %s at revision %d%s", fc.name, feature_id, version, revision,
-             " (frozen)" if frozen is not None else "")
+    token = CheckoutToken(
+        feature_id,
+        fc.name,
+        version,
+        revision,
+        str(row[0]),
+        str(row[1]),
+        _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        frozen,
+    )
+    log.info(
+        "checked out %s feature %d from %s at revision %d%s",
+        fc.name,
+        feature_id,
+        version,
+        revision,
+        " (frozen)" if frozen is not None else "",
+    )
     checked_out = Checkout(token, base, properties)
     if meaning is not None:  # the mesh to edit is in its file's convention, with its metadata (the base is as stored)
         restore_meaning(checked_out.mesh, **part_meaning(meaning))
@@ -842,12 +1017,16 @@ def checkin(
     with reraise(), conn.transaction():
         database = conn.execute("SELECT current_database(), current_setting('transaction_isolation')").fetchone()
         if database is not None and database[1] != "read committed":
-            raise InvalidInputError(f"check-in runs in a {database[1]} transaction: it must see commits made while "
-                                    "it waits for the feature's lock",
-                                    hint="check in outside a transaction, or in a READ COMMITTED one")
+            raise InvalidInputError(
+                f"check-in runs in a {database[1]} transaction: it must see commits made while "
+                "it waits for the feature's lock",
+                hint="check in outside a transaction, or in a READ COMMITTED one",
+            )
         if database is None or database[0] != token.database:
-            raise InvalidInputError(f"feature {token.feature_id} was checked out of database {token.database!r}, "
-                                    f"not {database[0] if database else None!r}")
+            raise InvalidInputError(
+                f"feature {token.feature_id} was checked out of database {token.database!r}, "
+                f"not {database[0] if database else None!r}"
+            )
         settings = read_version_settings(conn)
         conn.execute("SELECT tgsis.goto_version(%s, true)", (token.version,))
         fc = _checked_class(conn, token.feature_class, token.feature_id)
@@ -855,8 +1034,10 @@ def checkin(
             pending = pool.submit(_plan, checked_out.index(), mesh, tolerance)
             try:
                 with conn.transaction():
-                    conn.execute("SELECT tgsis.check_unchanged(%s, %s, %s)",
-                                 (token.feature_id, token.fingerprint, token.revision))
+                    conn.execute(
+                        "SELECT tgsis.check_unchanged(%s, %s, %s)",
+                        (token.feature_id, token.fingerprint, token.revision),
+                    )
                 conflict = None
             except psycopg.Error as exc:
                 if getattr(exc, "sqlstate", None) != CheckoutConflictError.code or on_conflict == "raise":
@@ -864,23 +1045,44 @@ def checkin(
                 conflict = exc
             plan = pending.result()
         if conflict is None:
-            result, written = _save(conn, fc, token.feature_id, checked_out.base, mesh, plan, properties,
-                                    _new_name(name, mesh, checked_out.base.mesh.name), drop_extra_properties)
+            result, written = _save(
+                conn,
+                fc,
+                token.feature_id,
+                checked_out.base,
+                mesh,
+                plan,
+                properties,
+                _new_name(name, mesh, checked_out.base.mesh.name),
+                drop_extra_properties,
+            )
         else:
-            result, written = _checkin_into_child(conn, fc, checked_out, mesh, plan, properties, name,
-                                                  child_version, drop_extra_properties, str(conflict))
+            result, written = _checkin_into_child(
+                conn, fc, checked_out, mesh, plan, properties, name, child_version, drop_extra_properties, str(conflict)
+            )
         kept = _kept_checkout(conn, fc, token, mesh, written) if keep else None
         restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
     return CheckinResult(result, conflict is not None, kept)
 
 
-_REDO_HINT = ("check out again and redo the edit on the current state (or save it over that state with "
-              "tgsis.save_feature), or check it in with on_conflict='raise' to see the conflict only")
+_REDO_HINT = (
+    "check out again and redo the edit on the current state (or save it over that state with "
+    "tgsis.save_feature), or check it in with on_conflict='raise' to see the conflict only"
+)
 
 
-def _checkin_into_child(conn: Conn, fc: FeatureClass, checked_out: Checkout, mesh: Mesh, plan: EditPlan,
-                        properties: Mapping[str, Any] | None, name: str | None, child_version: str | None,
-                        drop_extra: bool, reason: str) -> tuple[SaveResult, _Written]:
+def _checkin_into_child(
+    conn: Conn,
+    fc: FeatureClass,
+    checked_out: Checkout,
+    mesh: Mesh,
+    plan: EditPlan,
+    properties: Mapping[str, Any] | None,
+    name: str | None,
+    child_version: str | None,
+    drop_extra: bool,
+    reason: str,
+) -> tuple[SaveResult, _Written]:
     """Create a child of the check-out's version based on the checked-out state and save the edit there by difference.
 
     The child starts at the frozen revision the check-out read, so that its
@@ -892,25 +1094,36 @@ def _checkin_into_child(conn: Conn, fc: FeatureClass, checked_out: Checkout, mes
     """
     token = checked_out.token
     refused = reason.splitlines()[0]
-    versioned = conn.execute("SELECT 1 FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'vrtx'"
-                             ).fetchone()
+    versioned = conn.execute(
+        "SELECT 1 FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'vrtx'"
+    ).fetchone()
     if versioned is None:
         raise CheckoutConflictError(
             f"{refused}; no child version can take the edit: feature versioning is off",
-            hint="tgsis.enable_feature_versioning(conn) (or `tgsis versioning enable`) makes on_conflict='child' work")
+            hint="tgsis.enable_feature_versioning(conn) (or `tgsis versioning enable`) makes on_conflict='child' work",
+        )
     base = token.base_revision if token.base_revision is not None else token.revision
     child = _unique_version_name(conn, child_version or f"checkin_{token.feature_id}")
     try:
         with conn.transaction():
-            conn.execute("SELECT tgsis.create_version(%s, %s, %s, %s)",
-                         (child, token.version, f"check-in of feature {token.feature_id} checked out at revision "
-                                                f"{base}, which conflicted in {token.version}", base))
+            conn.execute(
+                "SELECT tgsis.create_version(%s, %s, %s, %s)",
+                (
+                    child,
+                    token.version,
+                    f"check-in of feature {token.feature_id} checked out at revision "
+                    f"{base}, which conflicted in {token.version}",
+                    base,
+                ),
+            )
     except psycopg.Error as exc:
         if getattr(exc, "sqlstate", None) != NotFoundError.code:
             raise
         raise CheckoutConflictError(
-            f"{refused}; no child version can start from the state it was checked out as: "
-            f"{exc.diag.message_primary}", detail=exc.diag.message_detail, hint=_REDO_HINT) from None
+            f"{refused}; no child version can start from the state it was checked out as: {exc.diag.message_primary}",
+            detail=exc.diag.message_detail,
+            hint=_REDO_HINT,
+        ) from None
     conn.execute("SELECT tgsis.goto_version(%s, true)", (child,))
     row = conn.execute("SELECT tgsis.object_fingerprint(%s)", (token.feature_id,)).fetchone()
     if row is None or row[0] != token.fingerprint:
@@ -918,11 +1131,27 @@ def _checkin_into_child(conn: Conn, fc: FeatureClass, checked_out: Checkout, mes
             f"{refused}; no child version can start from the state it was checked out as: revision {base} of "
             f"version {token.version!r} does not hold feature {token.feature_id} as the check-out token describes "
             "it (a token from before check-outs froze their revision, taken while others could still write in "
-            "that revision, or an altered one)", hint=_REDO_HINT)
-    log.warning("feature %d changed in %s since check-out: the edit goes into new child version %s, based on "
-                "revision %d", token.feature_id, token.version, child, base)
-    return _save(conn, fc, token.feature_id, checked_out.base, mesh, plan, properties,
-                 _new_name(name, mesh, checked_out.base.mesh.name), drop_extra)
+            "that revision, or an altered one)",
+            hint=_REDO_HINT,
+        )
+    log.warning(
+        "feature %d changed in %s since check-out: the edit goes into new child version %s, based on revision %d",
+        token.feature_id,
+        token.version,
+        child,
+        base,
+    )
+    return _save(
+        conn,
+        fc,
+        token.feature_id,
+        checked_out.base,
+        mesh,
+        plan,
+        properties,
+        _new_name(name, mesh, checked_out.base.mesh.name),
+        drop_extra,
+    )
 
 
 def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh, written: _Written) -> Checkout:
@@ -942,12 +1171,23 @@ def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mes
     rank = np.empty_like(vorder)
     rank[vorder] = np.arange(len(vorder))
     by_alignment = {a: {p.name for p in fc.aligned(a)} for a in ("VERTEX", "CELL")}
-    stored = {a: {k: v[vorder if a == "VERTEX" else corder] for k, v in written.cell_values.items()
-                  if k in by_alignment[a]} for a in ("VERTEX", "CELL")}
-    base_mesh = type(mesh)(mesh.vertices[vorder], rank[mesh.cells[corder]],
-                           vertex_properties=stored["VERTEX"], cell_properties=stored["CELL"], name=name)
-    new_token = replace(token, version=version, revision=revision, fingerprint=str(row[0]), base_revision=frozen,
-                        checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
-    return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]),
-                    properties)
-
+    stored = {
+        a: {k: v[vorder if a == "VERTEX" else corder] for k, v in written.cell_values.items() if k in by_alignment[a]}
+        for a in ("VERTEX", "CELL")
+    }
+    base_mesh = type(mesh)(
+        mesh.vertices[vorder],
+        rank[mesh.cells[corder]],
+        vertex_properties=stored["VERTEX"],
+        cell_properties=stored["CELL"],
+        name=name,
+    )
+    new_token = replace(
+        token,
+        version=version,
+        revision=revision,
+        fingerprint=str(row[0]),
+        base_revision=frozen,
+        checked_out_at=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+    )
+    return Checkout(new_token, StoredMesh(base_mesh, written.vertex_ids[vorder], written.cell_ids[corder]), properties)

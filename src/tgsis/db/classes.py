@@ -153,9 +153,11 @@ class FeatureClass:
         return sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(name))
 
 
-_CATALOG_COLUMNS = ("classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
-                    "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
-                    "protablename, otherprotable, celllevel, versioned")
+_CATALOG_COLUMNS = (
+    "classname, schemaname, geotype, proalignment, srs, feature_properties, cell_properties, "
+    "featuretable, cellprotable, viewname, description, timemodel, timeunit, instant_properties, "
+    "protablename, otherprotable, celllevel, versioned"
+)
 
 
 def _class_from_row(row: Sequence[Any]) -> FeatureClass:
@@ -163,11 +165,26 @@ def _class_from_row(row: Sequence[Any]) -> FeatureClass:
         items = json.loads(value) if isinstance(value, str) else value
         return tuple(Property(p["name"], p["type"], int(p.get("size", 1)), p.get("alignment")) for p in items)
 
-    return FeatureClass(name=row[0], schema=row[1], geotype=Geotype(row[2]), alignment=row[3], srs=int(row[4]),
-                        feature_properties=props(row[5]), cell_properties=props(row[6]), featuretable=row[7],
-                        cellprotable=row[8], viewname=row[9], description=row[10], time_model=row[11],
-                        time_unit=row[12], instant_properties=props(row[13]), protable=row[14], otherprotable=row[15],
-                        cell_level=None if row[16] is None else int(row[16]), versioned=bool(row[17]))
+    return FeatureClass(
+        name=row[0],
+        schema=row[1],
+        geotype=Geotype(row[2]),
+        alignment=row[3],
+        srs=int(row[4]),
+        feature_properties=props(row[5]),
+        cell_properties=props(row[6]),
+        featuretable=row[7],
+        cellprotable=row[8],
+        viewname=row[9],
+        description=row[10],
+        time_model=row[11],
+        time_unit=row[12],
+        instant_properties=props(row[13]),
+        protable=row[14],
+        otherprotable=row[15],
+        cell_level=None if row[16] is None else int(row[16]),
+        versioned=bool(row[17]),
+    )
 
 
 def _spec_json(spec: PropertySpec | None) -> str:
@@ -260,8 +277,21 @@ def create_feature_class(
         row = conn.execute(
             f"SELECT {_CATALOG_COLUMNS} FROM tgsis.register_feature_class(%s, %s, %s::jsonb, %s::jsonb, %s, %s, %s, %s, "
             "%s, %s::jsonb, %s, %s, %s)",
-            (name, geotype_value, _spec_json(feature_properties), _spec_json(cell_properties), alignment, srs,
-             schema, description, time_model, _spec_json(instant_properties), time_unit, cell_level, versioned),
+            (
+                name,
+                geotype_value,
+                _spec_json(feature_properties),
+                _spec_json(cell_properties),
+                alignment,
+                srs,
+                schema,
+                description,
+                time_model,
+                _spec_json(instant_properties),
+                time_unit,
+                cell_level,
+                versioned,
+            ),
         ).fetchone()
     assert row is not None
     return _class_from_row(row)
@@ -314,8 +344,14 @@ def _default_text(value: object) -> str | None:
 
 
 @checked
-def add_property(conn: Conn, feature_class: str, prop: Property | tuple[str, str] | tuple[str, str, int], *,
-                 kind: PropertyKind = "cell", default: object = None) -> FeatureClass:
+def add_property(
+    conn: Conn,
+    feature_class: str,
+    prop: Property | tuple[str, str] | tuple[str, str, int],
+    *,
+    kind: PropertyKind = "cell",
+    default: object = None,
+) -> FeatureClass:
     """Give a class one more property, in every version (``tgsis.add_property``).
 
     Parameters
@@ -352,8 +388,10 @@ def add_property(conn: Conn, feature_class: str, prop: Property | tuple[str, str
     else:
         item = list(prop)
     with reraise(), conn.transaction():
-        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.add_property(%s, %s, %s::jsonb, %s)",
-                           (feature_class, kind, json.dumps(item), _default_text(default))).fetchone()
+        row = conn.execute(
+            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.add_property(%s, %s, %s::jsonb, %s)",
+            (feature_class, kind, json.dumps(item), _default_text(default)),
+        ).fetchone()
     assert row is not None
     return _class_from_row(row)
 
@@ -388,14 +426,17 @@ def fill_property_rows(conn: Conn, feature_class: str, values: Mapping[str, obje
     NotFoundError, InvalidPropertyError, MissingPrivilegeError (the caller is no ``tgsis_admin``)
     """
     with reraise(), conn.transaction():
-        rows = conn.execute("SELECT tablename, features, rows FROM tgsis.fill_property_rows(%s, %s::jsonb)",
-                            (feature_class, json.dumps(dict(values)))).fetchall()
+        rows = conn.execute(
+            "SELECT tablename, features, rows FROM tgsis.fill_property_rows(%s, %s::jsonb)",
+            (feature_class, json.dumps(dict(values))),
+        ).fetchall()
     return {str(table): (int(features), int(count)) for table, features, count in rows}
 
 
 @checked
-def rename_property(conn: Conn, feature_class: str, name: str, new_name: str, *,
-                    kind: PropertyKind | None = None) -> FeatureClass:
+def rename_property(
+    conn: Conn, feature_class: str, name: str, new_name: str, *, kind: PropertyKind | None = None
+) -> FeatureClass:
     """Rename a property of a class, in every version, keeping its values (``tgsis.rename_property``).
 
     ``kind`` (``"feature"``, ``"cell"``, ``"instant"``) says which property
@@ -407,15 +448,18 @@ def rename_property(conn: Conn, feature_class: str, name: str, new_name: str, *,
     NotFoundError, InvalidNameError, InvalidPropertyError, AlreadyExistsError, InUseError, MissingPrivilegeError
     """
     with reraise(), conn.transaction():
-        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.rename_property(%s, %s, %s, %s)",
-                           (feature_class, name, new_name, kind)).fetchone()
+        row = conn.execute(
+            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.rename_property(%s, %s, %s, %s)",
+            (feature_class, name, new_name, kind),
+        ).fetchone()
     assert row is not None
     return _class_from_row(row)
 
 
 @checked
-def drop_property(conn: Conn, feature_class: str, name: str, *, kind: PropertyKind | None = None,
-                  force: bool = False) -> FeatureClass:
+def drop_property(
+    conn: Conn, feature_class: str, name: str, *, kind: PropertyKind | None = None, force: bool = False
+) -> FeatureClass:
     """Drop a property of a class, in every version (``tgsis.drop_property``).
 
     Refused (:class:`~tgsis.errors.InUseError`) while a stored row of any
@@ -427,8 +471,9 @@ def drop_property(conn: Conn, feature_class: str, name: str, *, kind: PropertyKi
     NotFoundError, InvalidNameError, InvalidPropertyError, InUseError, MissingPrivilegeError
     """
     with reraise(), conn.transaction():
-        row = conn.execute(f"SELECT {_CATALOG_COLUMNS} FROM tgsis.drop_property(%s, %s, %s, %s)",
-                           (feature_class, name, kind, force)).fetchone()
+        row = conn.execute(
+            f"SELECT {_CATALOG_COLUMNS} FROM tgsis.drop_property(%s, %s, %s, %s)", (feature_class, name, kind, force)
+        ).fetchone()
     assert row is not None
     return _class_from_row(row)
 
@@ -446,23 +491,29 @@ def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
     with reraise():
         # only the classes the role may read are looked into (a class it may not read would end the search
         # with a permission error, though the feature may be in a later one)
-        readable = {r[0] for r in conn.execute(
-            "SELECT classname FROM tgsis.catalog WHERE has_table_privilege(format('%I.%I', schemaname, featuretable), "
-            "'SELECT')").fetchall()}
+        readable = {
+            r[0]
+            for r in conn.execute(
+                "SELECT classname FROM tgsis.catalog WHERE has_table_privilege(format('%I.%I', schemaname, featuretable), "
+                "'SELECT')"
+            ).fetchall()
+        }
         for fc in classes:
             if fc.name not in readable:
                 continue
-            row = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)),
-                               (feature_id,)).fetchone()
+            row = conn.execute(
+                sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)
+            ).fetchone()
             if row is not None:
                 return fc
     hidden = len(classes) - len(readable & {fc.name for fc in classes})
-    raise NotFoundError(f"no feature class has a feature {feature_id}"
-                        + (f" among those this role may read ({hidden} it may not)" if hidden else ""),
-                        hint="`tgsis ls` lists the features")
+    raise NotFoundError(
+        f"no feature class has a feature {feature_id}"
+        + (f" among those this role may read ({hidden} it may not)" if hidden else ""),
+        hint="`tgsis ls` lists the features",
+    )
 
 
 def stores_part_column(fc: FeatureClass) -> bool:
     """Whether the class keeps the ``part`` cell property in a column of its own (else: in ``tgsis.part``)."""
     return any(p.name == "part" and fc.alignment_of(p) == "CELL" for p in fc.cell_properties)
-

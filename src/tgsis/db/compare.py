@@ -31,6 +31,7 @@ __all__ = ["GeometryChanges", "compare_stored", "compare_versions"]
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
 
+
 @dataclass(frozen=True, eq=False)
 class GeometryChanges:
     """What changed from an old geometry (or version of it) to a new one, in stored ids.
@@ -61,14 +62,20 @@ class GeometryChanges:
     @property
     def identical(self) -> bool:
         """Whether nothing changed (same vertices and oriented cells, whatever their ids and order)."""
-        return not (len(self.vertices_removed) or len(self.vertices_added)
-                    or len(self.cells_removed) or len(self.cells_added))
+        return not (
+            len(self.vertices_removed) or len(self.vertices_added) or len(self.cells_removed) or len(self.cells_added)
+        )
 
     def counts(self) -> dict[str, int]:
         """Numbers of kept, removed and added vertices and cells (the keys of :meth:`tgsis.MeshDiff.counts`)."""
-        return {"vertices_kept": self.vertices_kept, "vertices_removed": len(self.vertices_removed),
-                "vertices_added": len(self.vertices_added), "cells_kept": self.cells_kept,
-                "cells_removed": len(self.cells_removed), "cells_added": len(self.cells_added)}
+        return {
+            "vertices_kept": self.vertices_kept,
+            "vertices_removed": len(self.vertices_removed),
+            "vertices_added": len(self.vertices_added),
+            "cells_kept": self.cells_kept,
+            "cells_removed": len(self.cells_removed),
+            "cells_added": len(self.cells_added),
+        }
 
     def __repr__(self) -> str:
         return "GeometryChanges(" + ", ".join(f"{k}={v}" for k, v in self.counts().items()) + ")"
@@ -97,7 +104,8 @@ def _with_pairs(conn: Conn, changes: sql.Composable) -> GeometryChanges:
     query = sql.SQL(
         "COPY (SELECT CASE c.element WHEN 'vertex' THEN 0 ELSE 1 END::int2, "
         "CASE c.status WHEN 'kept' THEN 0 WHEN 'removed' THEN 1 ELSE 2 END::int2, "
-        "coalesce(c.old_id, -1), coalesce(c.new_id, -1) FROM {} c) TO STDOUT (FORMAT binary)").format(changes)
+        "coalesce(c.old_id, -1), coalesce(c.new_id, -1) FROM {} c) TO STDOUT (FORMAT binary)"
+    ).format(changes)
     with reraise(), conn.transaction(), conn.cursor().copy(query) as copy:
         data = b"".join(bytes(chunk) for chunk in copy)
     element, status, old, new = decode_rows(data, ["int2", "int2", "int8", "int8"])
@@ -106,13 +114,25 @@ def _with_pairs(conn: Conn, changes: sql.Composable) -> GeometryChanges:
         mine = element == code
         kept = mine & (status == 0)
         pairs = np.stack([old[kept], new[kept]], axis=1).astype(np.int64).reshape(-1, 2)
-        return (int(np.count_nonzero(kept)), np.sort(old[mine & (status == 1)]).astype(np.int64),
-                np.sort(new[mine & (status == 2)]).astype(np.int64), pairs[np.argsort(pairs[:, 1], kind="stable")])
+        return (
+            int(np.count_nonzero(kept)),
+            np.sort(old[mine & (status == 1)]).astype(np.int64),
+            np.sort(new[mine & (status == 2)]).astype(np.int64),
+            pairs[np.argsort(pairs[:, 1], kind="stable")],
+        )
 
     vertices_kept, vertices_removed, vertices_added, vertex_pairs = split(0)
     cells_kept, cells_removed, cells_added, cell_pairs = split(1)
-    return GeometryChanges(vertices_kept, vertices_removed, vertices_added, cells_kept, cells_removed, cells_added,
-                           vertex_pairs, cell_pairs)
+    return GeometryChanges(
+        vertices_kept,
+        vertices_removed,
+        vertices_added,
+        cells_kept,
+        cells_removed,
+        cells_added,
+        vertex_pairs,
+        cell_pairs,
+    )
 
 
 @checked
@@ -141,15 +161,23 @@ def compare_stored(conn: Conn, old_id: int, new_id: int, *, pairs: bool = False)
         Different geotypes, a GEOMETRYCOLLECTION or a temporal surface.
     """
     if pairs:
-        return _with_pairs(conn, sql.SQL("tgsis.geometry_changes({}, {})").format(sql.Literal(old_id),
-                                                                                  sql.Literal(new_id)))
+        return _with_pairs(
+            conn, sql.SQL("tgsis.geometry_changes({}, {})").format(sql.Literal(old_id), sql.Literal(new_id))
+        )
     return _summary(conn, "SELECT * FROM tgsis.compare_geometries(%s, %s)", (old_id, new_id))
 
 
 @checked
-def compare_versions(conn: Conn, geoid: int, old_version: str, new_version: str, *,
-                     old_revision: int | None = None, new_revision: int | None = None,
-                     pairs: bool = False) -> GeometryChanges:
+def compare_versions(
+    conn: Conn,
+    geoid: int,
+    old_version: str,
+    new_version: str,
+    *,
+    old_revision: int | None = None,
+    new_revision: int | None = None,
+    pairs: bool = False,
+) -> GeometryChanges:
     """Compare one geometry as two versions (or revisions) see it, without moving the session.
 
     Parameters
@@ -179,9 +207,18 @@ def compare_versions(conn: Conn, geoid: int, old_version: str, new_version: str,
         geotypes.
     """
     if pairs:
-        return _with_pairs(conn, sql.SQL("tgsis.geometry_version_changes({}, {}, {}, {}, {})").format(
-            sql.Literal(geoid), sql.Literal(old_version), sql.Literal(new_version),
-            sql.Literal(old_revision), sql.Literal(new_revision)))
-    return _summary(conn, "SELECT * FROM tgsis.compare_geometry_versions(%s, %s, %s, %s, %s)",
-                    (geoid, old_version, new_version, old_revision, new_revision))
-
+        return _with_pairs(
+            conn,
+            sql.SQL("tgsis.geometry_version_changes({}, {}, {}, {}, {})").format(
+                sql.Literal(geoid),
+                sql.Literal(old_version),
+                sql.Literal(new_version),
+                sql.Literal(old_revision),
+                sql.Literal(new_revision),
+            ),
+        )
+    return _summary(
+        conn,
+        "SELECT * FROM tgsis.compare_geometry_versions(%s, %s, %s, %s, %s)",
+        (geoid, old_version, new_version, old_revision, new_revision),
+    )

@@ -100,9 +100,7 @@ def release_local_server() -> None:
 
 
 @checked
-def connect(
-    dsn: str | None = None, *, autocommit: bool = False, **kwargs: Any
-) -> psycopg.Connection[TupleRow]:
+def connect(dsn: str | None = None, *, autocommit: bool = False, **kwargs: Any) -> psycopg.Connection[TupleRow]:
     """Open a connection to a tgsis database.
 
     Parameters

@@ -21,17 +21,34 @@ import numpy.typing as npt
 
 from tgsis.errors import DatabaseError, InvalidPropertyError
 
-__all__ = ["PG_TYPES", "SQL_TYPES", "encode_rows", "decode_rows", "decode_packed", "numpy_dtype", "array_wire",
-           "wire_shape"]
+__all__ = [
+    "PG_TYPES",
+    "SQL_TYPES",
+    "encode_rows",
+    "decode_rows",
+    "decode_packed",
+    "numpy_dtype",
+    "array_wire",
+    "wire_shape",
+]
 
 #: binary wire format of each fixed-width PostgreSQL type
 PG_TYPES: dict[str, str] = {
-    "int2": ">i2", "int4": ">i4", "int8": ">i8", "float4": ">f4", "float8": ">f8", "bool": "?",
+    "int2": ">i2",
+    "int4": ">i4",
+    "int8": ">i8",
+    "float4": ">f4",
+    "float8": ">f8",
+    "bool": "?",
 }
 #: SQL type names (as tgsis.property_types spells them) to wire types
 SQL_TYPES: dict[str, str] = {
-    "smallint": "int2", "integer": "int4", "bigint": "int8",
-    "real": "float4", "double precision": "float8", "boolean": "bool",
+    "smallint": "int2",
+    "integer": "int4",
+    "bigint": "int8",
+    "real": "float4",
+    "double precision": "float8",
+    "boolean": "bool",
 }
 
 #: element type oids of the array wire types
@@ -64,8 +81,16 @@ def _field_dtype(wire: str) -> np.dtype[Any]:
     base, size = wire_shape(wire)
     if size is None:
         return np.dtype(PG_TYPES[base])
-    return np.dtype([("ndim", ">i4"), ("hasnull", ">i4"), ("elemtype", ">i4"), ("dim", ">i4"), ("lbound", ">i4"),
-                     ("elems", [("len", ">i4"), ("val", PG_TYPES[base])], (size,))])
+    return np.dtype(
+        [
+            ("ndim", ">i4"),
+            ("hasnull", ">i4"),
+            ("elemtype", ">i4"),
+            ("dim", ">i4"),
+            ("lbound", ">i4"),
+            ("elems", [("len", ">i4"), ("val", PG_TYPES[base])], (size,)),
+        ]
+    )
 
 
 def _row_dtype(types: Sequence[str]) -> np.dtype[Any]:
@@ -91,7 +116,9 @@ def encode_rows(columns: Sequence[tuple[npt.ArrayLike, str]]) -> bytes:
     return b"".join(encode_chunks(columns, None))
 
 
-def encode_chunks(columns: Sequence[tuple[npt.ArrayLike, str]], rows_per_chunk: int | None = 1 << 20) -> Iterator[bytes]:
+def encode_chunks(
+    columns: Sequence[tuple[npt.ArrayLike, str]], rows_per_chunk: int | None = 1 << 20
+) -> Iterator[bytes]:
     """The binary COPY payload of :func:`encode_rows` in pieces of at most ``rows_per_chunk`` rows, made as asked for.
 
     The first piece starts with the header, the last ends with the trailer
@@ -154,7 +181,7 @@ def decode_rows(data: bytes | bytearray | memoryview, types: Sequence[str]) -> l
     if bytes(view[:11]) != _SIGNATURE:
         raise DatabaseError("not a binary COPY payload (bad signature)")
     extension = int.from_bytes(view[15:19], "big")
-    body = view[19 + extension:]
+    body = view[19 + extension :]
     if bytes(body[-2:]) != _TRAILER:
         raise DatabaseError("binary COPY payload has no trailer")
     body = body[:-2]
@@ -162,8 +189,10 @@ def decode_rows(data: bytes | bytearray | memoryview, types: Sequence[str]) -> l
     if len(body) % dtype.itemsize:
         raise DatabaseError(f"binary COPY rows are not {dtype.itemsize} bytes each: NULLs or other column types")
     rows = np.frombuffer(body, dtype=dtype)
-    if len(rows) and (np.any(rows["count"] != len(types)) or any(
-            np.any(rows[f"len{i}"] != _field_dtype(w).itemsize) for i, w in enumerate(types))):
+    if len(rows) and (
+        np.any(rows["count"] != len(types))
+        or any(np.any(rows[f"len{i}"] != _field_dtype(w).itemsize) for i, w in enumerate(types))
+    ):
         raise DatabaseError("binary COPY rows hold NULLs or columns of other types than expected")
     columns = []
     for i, wire in enumerate(types):
@@ -172,15 +201,20 @@ def decode_rows(data: bytes | bytearray | memoryview, types: Sequence[str]) -> l
         if size is None:
             columns.append(value.astype(numpy_dtype(wire)))
             continue
-        if len(rows) and (np.any(value["ndim"] != 1) or np.any(value["hasnull"] != 0) or np.any(value["dim"] != size)
-                          or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)):
+        if len(rows) and (
+            np.any(value["ndim"] != 1)
+            or np.any(value["hasnull"] != 0)
+            or np.any(value["dim"] != size)
+            or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)
+        ):
             raise DatabaseError(f"binary COPY column {i} holds arrays that are not {size} non-NULL values")
         columns.append(value["elems"]["val"].astype(numpy_dtype(wire)).reshape(len(rows), size))
     return columns
 
 
-def decode_packed(data: bytes | bytearray | memoryview, types: Sequence[str], count: int,
-                  what: str) -> list[npt.NDArray[Any]]:
+def decode_packed(
+    data: bytes | bytearray | memoryview, types: Sequence[str], count: int, what: str
+) -> list[npt.NDArray[Any]]:
     """Columns from ``count`` rows sent as their values' binary send forms, one row after the other.
 
     What ``string_agg(int8send(vrtxid) || float8send(x) || ..., '')`` gives:
@@ -214,8 +248,9 @@ def decode_packed(data: bytes | bytearray | memoryview, types: Sequence[str], co
     """
     dtype = np.dtype([(f"val{i}", _field_dtype(wire)) for i, wire in enumerate(types)])
     if len(data) != count * dtype.itemsize:
-        raise DatabaseError(f"{what}: {len(data)} bytes for {count} rows of {dtype.itemsize}: "
-                            "NULLs or values of other sizes")
+        raise DatabaseError(
+            f"{what}: {len(data)} bytes for {count} rows of {dtype.itemsize}: NULLs or values of other sizes"
+        )
     rows = np.frombuffer(data, dtype=dtype)
     columns = []
     for i, wire in enumerate(types):
@@ -224,8 +259,12 @@ def decode_packed(data: bytes | bytearray | memoryview, types: Sequence[str], co
         if size is None:
             columns.append(value.astype(numpy_dtype(wire)))
             continue
-        if count and (np.any(value["ndim"] != 1) or np.any(value["hasnull"] != 0) or np.any(value["dim"] != size)
-                      or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)):
+        if count and (
+            np.any(value["ndim"] != 1)
+            or np.any(value["hasnull"] != 0)
+            or np.any(value["dim"] != size)
+            or np.any(value["elems"]["len"] != np.dtype(PG_TYPES[base]).itemsize)
+        ):
             raise DatabaseError(f"{what}: column {i + 1} holds arrays that are not {size} non-NULL values")
         columns.append(value["elems"]["val"].astype(numpy_dtype(wire)).reshape(count, size))
     return columns

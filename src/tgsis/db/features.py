@@ -180,39 +180,54 @@ def insert_feature(
     """
     fc = resolve_class(conn, feature_class)
     if (tolerance is not None or sudden_change is not None) and not isinstance(mesh, (EvolvingSurface, EvolvingGMap)):
-        raise InvalidInputError(f"tolerance and sudden_change apply to the topology changes of an EvolvingSurface or "
-                                f"EvolvingGMap, not to a {type(mesh).__name__}")
+        raise InvalidInputError(
+            f"tolerance and sudden_change apply to the topology changes of an EvolvingSurface or "
+            f"EvolvingGMap, not to a {type(mesh).__name__}"
+        )
     # the topology-change options go only to the models that take them (3 and 4: checked just above)
-    options = {} if tolerance is None and sudden_change is None else {"tolerance": tolerance,
-                                                                      "sudden_change": sudden_change}
-    model = datamodels.model_storing(mesh, fc.time_model)   # the class's model if it stores the object's type
+    options = (
+        {} if tolerance is None and sudden_change is None else {"tolerance": tolerance, "sudden_change": sudden_change}
+    )
+    model = datamodels.model_storing(mesh, fc.time_model)  # the class's model if it stores the object's type
     if model is None:
         from tgsis.convert import as_mesh  # a pyvista, meshio or trimesh object (else: what is accepted)
 
         mesh = as_mesh(mesh)
         model = datamodels.data_model("STATIC")
-    return datamodels.storage_of(model).insert(conn, fc, mesh, properties, name=name,
-                                               drop_extra_properties=drop_extra_properties, **options)
+    return datamodels.storage_of(model).insert(
+        conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties, **options
+    )
 
 
-def _insert_static(conn: Conn, fc: FeatureClass, mesh: Geometry, properties: Mapping[str, Any] | None = None, *,
-                   name: str | None = None, drop_extra_properties: bool = False) -> int:
+def _insert_static(
+    conn: Conn,
+    fc: FeatureClass,
+    mesh: Geometry,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    drop_extra_properties: bool = False,
+) -> int:
     """Model 1's insert (:func:`insert_feature` of a Mesh or GeometryCollection)."""
     if fc.time_model != "STATIC":
-        raise InvalidGeometryError(f"feature class {fc.name} holds {fc.time_model} surfaces, not a static "
-                                   f"{type(mesh).__name__}",
-                                   hint="give a tgsis.SurfaceSeries (INSTANTS) or tgsis.EvolvingSurface (EVOLVING)")
+        raise InvalidGeometryError(
+            f"feature class {fc.name} holds {fc.time_model} surfaces, not a static {type(mesh).__name__}",
+            hint="give a tgsis.SurfaceSeries (INSTANTS) or tgsis.EvolvingSurface (EVOLVING)",
+        )
     if mesh.geotype != fc.geotype:
-        raise InvalidGeometryError(f"feature class {fc.name} holds {fc.geotype.value} features, "
-                                   f"not {mesh.geotype.value} ({type(mesh).__name__})")
+        raise InvalidGeometryError(
+            f"feature class {fc.name} holds {fc.geotype.value} features, "
+            f"not {mesh.geotype.value} ({type(mesh).__name__})"
+        )
     members = mesh.members if isinstance(mesh, GeometryCollection) else (mesh,)
-    labels = [member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh"
-              for i, m in enumerate(members)]
+    labels = [member_label(i, m) if isinstance(mesh, GeometryCollection) else "the mesh" for i, m in enumerate(members)]
     meanings = [meaning_of(m, label) for m, label in zip(members, labels)]
     if isinstance(mesh, GeometryCollection):  # each member has the class's properties it has
         member_classes = [member_class(fc, m) for m in members]
-        cell_values = [aligned_properties(c, m, drop_extra_properties, label)
-                       for c, m, label in zip(member_classes, members, labels)]
+        cell_values = [
+            aligned_properties(c, m, drop_extra_properties, label)
+            for c, m, label in zip(member_classes, members, labels)
+        ]
         meanings = [with_property_names(meaning, fc, c) for meaning, c in zip(meanings, member_classes)]
     else:
         cell_values = [aligned_properties(fc, m, drop_extra_properties, label) for m, label in zip(members, labels)]
@@ -223,11 +238,14 @@ def _insert_static(conn: Conn, fc: FeatureClass, mesh: Geometry, properties: Map
         check_feature_values(conn, fc, feature_values)
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
-        geoid = new_static_geometry(conn, mesh, name if name is not None else mesh.name, own_meaning, meanings,
-                                    feature_class=fc.name)
+        geoid = new_static_geometry(
+            conn, mesh, name if name is not None else mesh.name, own_meaning, meanings, feature_class=fc.name
+        )
         if isinstance(mesh, GeometryCollection):
-            member_ids = [new_static_geometry(conn, m, m.name, meaning, [meaning], collection=geoid)
-                          for m, meaning in zip(members, meanings)]
+            member_ids = [
+                new_static_geometry(conn, m, m.name, meaning, [meaning], collection=geoid)
+                for m, meaning in zip(members, meanings)
+            ]
             conn.execute("UPDATE tgsis.geometry SET geoids = %s WHERE geoid = %s", (member_ids, geoid))
         else:
             member_ids = [geoid]
@@ -235,18 +253,26 @@ def _insert_static(conn: Conn, fc: FeatureClass, mesh: Geometry, properties: Map
         columns = ["_geoid", *feature_values]
         conn.execute(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-                fc.qualified(fc.featuretable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
-                sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
-            [geoid, *feature_values.values()])
-        check_class_unchanged(conn, fc)   # a property added meanwhile: this feature has no rows for it
-    log.info("stored %s feature %d: %d vertices, %d cells%s", fc.name, geoid, mesh.n_vertices, mesh.n_cells,
-             f" in {len(members)} members" if isinstance(mesh, GeometryCollection) else "")
+                fc.qualified(fc.featuretable),
+                sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+                sql.SQL(", ").join(sql.Placeholder() for _ in columns),
+            ),
+            [geoid, *feature_values.values()],
+        )
+        check_class_unchanged(conn, fc)  # a property added meanwhile: this feature has no rows for it
+    log.info(
+        "stored %s feature %d: %d vertices, %d cells%s",
+        fc.name,
+        geoid,
+        mesh.n_vertices,
+        mesh.n_cells,
+        f" in {len(members)} members" if isinstance(mesh, GeometryCollection) else "",
+    )
     return geoid
 
 
 @checked
-def fetch_features(conn: Conn, feature_class: str | FeatureClass,
-                   ids: Sequence[int] | None = None) -> list[Feature]:
+def fetch_features(conn: Conn, feature_class: str | FeatureClass, ids: Sequence[int] | None = None) -> list[Feature]:
     """Fetch features with their meshes and properties (three COPYs for all of them).
 
     Parameters
@@ -273,21 +299,25 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
         Stored rows that do not make a valid mesh (written by other means:
         see ``tgsis.check_geometry``).
     """
-    ids = checked_ids("ids", ids) if ids is not None else None   # 1.5 is no id (int() would make it 1)
+    ids = checked_ids("ids", ids) if ids is not None else None  # 1.5 is no id (int() would make it 1)
     fc = resolve_class(conn, feature_class)
     if fc.time_model != "STATIC":
-        raise InvalidInputError(f"feature class {fc.name} is temporal ({fc.time_model}): its features have a shape "
-                                "at each time", hint="tgsis.get_at(conn, id, t) gives the surface at model time t")
+        raise InvalidInputError(
+            f"feature class {fc.name} is temporal ({fc.time_model}): its features have a shape at each time",
+            hint="tgsis.get_at(conn, id, t) gives the surface at model time t",
+        )
     props = [p.name for p in fc.feature_properties]
     is_collection = fc.geotype is Geotype.GEOMETRYCOLLECTION
     with reraise(), read_only_snapshot(conn):
         rows = conn.execute(
-            sql.SQL("SELECT f._geoid, g.geoname, " + MEANING_COLUMNS + "{} FROM {} f "
-                    "JOIN tgsis.geometry g ON g.geoid = f._geoid {} ORDER BY f._geoid").format(
+            sql.SQL(
+                "SELECT f._geoid, g.geoname, " + MEANING_COLUMNS + "{} FROM {} f "
+                "JOIN tgsis.geometry g ON g.geoid = f._geoid {} ORDER BY f._geoid"
+            ).format(
                 sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
                 fc.qualified(fc.featuretable),
-                sql.SQL("WHERE f._geoid = ANY({})").format(sql.Literal(list(ids))) if ids is not None
-                else sql.SQL("")),
+                sql.SQL("WHERE f._geoid = ANY({})").format(sql.Literal(list(ids))) if ids is not None else sql.SQL(""),
+            ),
         ).fetchall()
         found = {int(r[0]): r for r in rows}
         wanted = list(ids) if ids is not None else sorted(found)
@@ -301,8 +331,10 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass,
             members = collection_members(conn, fc, list(dict.fromkeys(wanted)))
             parts = {mid: part for listed in members.values() for mid, part in listed}
         else:
-            parts = {g: Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}",
-                              **part_meaning(found[g][2:8])) for g in wanted}
+            parts = {
+                g: Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}", **part_meaning(found[g][2:8]))
+                for g in wanted
+            }
         data = download(conn, fc, parts)
 
     meshes = assemble_meshes(fc, parts, data)
@@ -386,9 +418,12 @@ def features_in_box(conn: Conn, feature_class: str | FeatureClass, bounds: npt.A
     fc = resolve_class(conn, feature_class)
     with reraise():
         rows = conn.execute(
-            sql.SQL("SELECT f._geoid FROM {} f JOIN tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) AS b(geoid) "
-                    "ON b.geoid = f._geoid ORDER BY 1").format(fc.qualified(fc.featuretable)),
-            box.ravel().tolist()).fetchall()
+            sql.SQL(
+                "SELECT f._geoid FROM {} f JOIN tgsis.geometries_in_box(%s, %s, %s, %s, %s, %s) AS b(geoid) "
+                "ON b.geoid = f._geoid ORDER BY 1"
+            ).format(fc.qualified(fc.featuretable)),
+            box.ravel().tolist(),
+        ).fetchall()
     return [int(r[0]) for r in rows]
 
 
@@ -401,8 +436,9 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     """
     fc = resolve_class(conn, feature_class)
     with reraise(), conn.transaction():
-        exists = conn.execute(sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)),
-                              (feature_id,)).fetchone()
+        exists = conn.execute(
+            sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)
+        ).fetchone()
         if exists is None:
             return False
         Storage.of(conn, fc).check("tgsis", "geometry")  # not "in" a version while the feature tables are plain

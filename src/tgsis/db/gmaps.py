@@ -48,8 +48,17 @@ from tgsis.db.copy import SQL_TYPES, numpy_dtype
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
 
-__all__ = ["insert_gmap", "fetch_gmap", "fetch_md_gmap", "gmap_at", "gmap_cells", "gmap_check", "md_in_box",
-           "md_vertices_in_box", "GMapProblem"]
+__all__ = [
+    "insert_gmap",
+    "fetch_gmap",
+    "fetch_md_gmap",
+    "gmap_at",
+    "gmap_cells",
+    "gmap_check",
+    "md_in_box",
+    "md_vertices_in_box",
+    "GMapProblem",
+]
 
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
@@ -68,8 +77,10 @@ def _gmap_class(conn: Conn, feature_class: str | FeatureClass, model: str = "GMA
     fc = resolve_class(conn, feature_class)
     if fc.time_model != model:
         what = "G-maps in time" if model == "GMAP" else "multiply indexed G-maps"
-        raise InvalidInputError(f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
-                                hint=f"create a class with time_model={model!r} and a cell_level for {what}")
+        raise InvalidInputError(
+            f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
+            hint=f"create a class with time_model={model!r} and a cell_level for {what}",
+        )
     return fc
 
 
@@ -82,10 +93,14 @@ def _as_evolving(obj: GMap | EvolvingGMap, fc: FeatureClass) -> EvolvingGMap:
     if isinstance(obj, EvolvingGMap):
         return obj
     if isinstance(obj, GMap):
-        values = {k: np.asarray(v)[None] for k, v in obj.cell_properties.get(fc.cell_level, {}).items()} \
-            if fc.cell_level is not None else {}
-        return EvolvingGMap([GMapPeriod([0.0], obj, level=fc.cell_level if values else None, cell_values=values)],
-                            alive=True, name=None)
+        values = (
+            {k: np.asarray(v)[None] for k, v in obj.cell_properties.get(fc.cell_level, {}).items()}
+            if fc.cell_level is not None
+            else {}
+        )
+        return EvolvingGMap(
+            [GMapPeriod([0.0], obj, level=fc.cell_level if values else None, cell_values=values)], alive=True, name=None
+        )
     raise InvalidInputError(f"a G-map feature is a tgsis.gmaps.GMap or EvolvingGMap, got {type(obj).__name__}")
 
 
@@ -93,22 +108,29 @@ def _class_values(fc: FeatureClass, obj: EvolvingGMap, drop_extra: bool) -> list
     """Per period, the class's cell property arrays (g, c), checked and cast to the column types."""
     wanted = {p.name: p for p in fc.cell_properties}
     if obj.level is not None and obj.level != fc.cell_level:
-        raise InvalidPropertyError(f"the G-map's cell values belong to {obj.level}-cells, feature class {fc.name} "
-                                   f"stores values of {fc.cell_level}-cells")
+        raise InvalidPropertyError(
+            f"the G-map's cell values belong to {obj.level}-cells, feature class {fc.name} "
+            f"stores values of {fc.cell_level}-cells"
+        )
     if fc.cell_level is not None and fc.cell_level > obj.dimension:
-        raise InvalidGMapError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
-                               f"{obj.dimension}-G-map does not have")
+        raise InvalidGMapError(
+            f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
+            f"{obj.dimension}-G-map does not have"
+        )
     out = []
     for i, period in enumerate(obj.periods):
         given = dict(period.cell_values)
         missing = sorted(set(wanted) - set(given))
         if missing:
-            raise InvalidPropertyError(f"feature class {fc.name} needs cell properties {missing}, which period {i} "
-                                       "of the G-map lacks")
+            raise InvalidPropertyError(
+                f"feature class {fc.name} needs cell properties {missing}, which period {i} of the G-map lacks"
+            )
         extra = sorted(set(given) - set(wanted))
         if extra and not drop_extra:
-            raise InvalidPropertyError(f"feature class {fc.name} has no column for cell properties {extra} of period {i}",
-                                       hint="drop the others (drop_extra_properties=True) or register them in the class")
+            raise InvalidPropertyError(
+                f"feature class {fc.name} has no column for cell properties {extra} of period {i}",
+                hint="drop the others (drop_extra_properties=True) or register them in the class",
+            )
         values: dict[str, npt.NDArray[Any]] = {}
         for name, prop in wanted.items():
             target = numpy_dtype(SQL_TYPES[prop.type])
@@ -146,17 +168,27 @@ def _alpha_columns(geoid: int, images: IntArray) -> list[tuple[str, npt.ArrayLik
     them in the order ``tgsis.gmap_check`` reads them (``tgsis.gmap_alpha_array``) and ``fetch_gmap`` asks for.
     """
     levels, darts = images.shape
-    return [("geoid", np.full(levels * darts, geoid), "int8"),
-            ("level", np.tile(np.arange(levels, dtype=np.int16), darts), "int2"),
-            ("dartid", np.repeat(np.arange(darts, dtype=np.int64), levels), "int8"),
-            ("dartid2", np.ascontiguousarray(images.T).reshape(-1), "int8")]
+    return [
+        ("geoid", np.full(levels * darts, geoid), "int8"),
+        ("level", np.tile(np.arange(levels, dtype=np.int16), darts), "int2"),
+        ("dartid", np.repeat(np.arange(darts, dtype=np.int64), levels), "int8"),
+        ("dartid2", np.ascontiguousarray(images.T).reshape(-1), "int8"),
+    ]
 
 
 @checked
-def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | EvolvingGMap,
-                properties: Mapping[str, Any] | None = None, *, name: str | None = None,
-                drop_extra_properties: bool = False, axes: Sequence[str] | None = None,
-                tolerance: float | None = None, sudden_change: float | None = None) -> int:
+def insert_gmap(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    obj: GMap | EvolvingGMap,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    drop_extra_properties: bool = False,
+    axes: Sequence[str] | None = None,
+    tolerance: float | None = None,
+    sudden_change: float | None = None,
+) -> int:
     """Store a G-map (or a G-map evolving in time) as a new feature of a class of G-maps; return its id.
 
     Parameters
@@ -200,9 +232,11 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
     fc = resolve_class(conn, feature_class)
     if fc.time_model == "MULTIDIM":
         if not isinstance(obj, GMap):
-            raise InvalidInputError(f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
-                                    f"(time is one of its axes), not a {type(obj).__name__}",
-                                    hint="tgsis.gmaps.extrude makes an axis of time or knowledge")
+            raise InvalidInputError(
+                f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
+                f"(time is one of its axes), not a {type(obj).__name__}",
+                hint="tgsis.gmaps.extrude makes an axis of time or knowledge",
+            )
         return _insert_md(conn, fc, obj, properties, name=name, axes=axes, drop_extra=drop_extra_properties)
     if axes is not None:
         raise InvalidInputError(f"feature class {fc.name} holds G-maps in time: their axes are x, y, z (axes=None)")
@@ -223,22 +257,29 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
     starts = np.array([p.start for p in periods])
     instants = [len(p.times) for p in periods]
     rows = [len(p.times) * k for p, k in zip(periods, nodes)]
-    cells: dict[str, Any] = {}    # the cells of the property level, made by the dart rows' callable, used after
+    cells: dict[str, Any] = {}  # the cells of the property level, made by the dart rows' callable, used after
 
     def gmap_rows() -> Columns:
-        return [("geoid", np.array([geoid]), "int8"), ("dimension", np.array([n], np.int16), "int2"),
-                ("embedding", np.array([m], np.int16), "int2")]
+        return [
+            ("geoid", np.array([geoid]), "int8"),
+            ("dimension", np.array([n], np.int16), "int2"),
+            ("embedding", np.array([m], np.int16), "int2"),
+        ]
 
     def timem_rows() -> Columns:
         return [("geoid", np.full(len(periods), geoid), "int8"), ("timem", starts, "float8")]
 
     def timet_rows() -> Columns:
-        return [("geoid", np.full(sum(instants), geoid), "int8"), ("timem", np.repeat(starts, instants), "float8"),
-                ("timet", concat([p.times for p in periods]), "float8")]
+        return [
+            ("geoid", np.full(sum(instants), geoid), "int8"),
+            ("timem", np.repeat(starts, instants), "float8"),
+            ("timet", concat([p.times for p in periods]), "float8"),
+        ]
 
     def alpha_rows() -> Columns:
-        return _alpha_columns(geoid, np.stack([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)])
-                                               for i in range(n + 1)]))
+        return _alpha_columns(
+            geoid, np.stack([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)]) for i in range(n + 1)])
+        )
 
     def dart_rows() -> Columns:
         # the orientation and the cells (orbits over every dart) are made here, while the alpha rows go in
@@ -247,9 +288,11 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         cells["first"] = np.cumsum([0, *cells["counts"][:-1]]).astype(np.int64)
         signs = [_signs(p.gmap) for p in periods]
         columns: list[tuple[str, npt.ArrayLike, str]] = [
-            ("geoid", np.full(sum(darts), geoid), "int8"), ("dartid", np.arange(sum(darts), dtype=np.int64), "int8"),
+            ("geoid", np.full(sum(darts), geoid), "int8"),
+            ("dartid", np.arange(sum(darts), dtype=np.int64), "int8"),
             ("timem", np.repeat(starts, darts), "float8"),
-            ("nodeid", concat([p.gmap.vertex + o for p, o in zip(periods, node0)]), "int8")]
+            ("nodeid", concat([p.gmap.vertex + o for p, o in zip(periods, node0)]), "int8"),
+        ]
         if level is not None:
             columns.append(("acellid", concat([c + o for c, o in zip(labels, cells["first"])]), "int8"))
         if all(s is not None for s in signs):
@@ -257,47 +300,86 @@ def insert_gmap(conn: Conn, feature_class: str | FeatureClass, obj: GMap | Evolv
         return columns
 
     def node_rows() -> Columns:
-        return [("geoid", np.full(sum(nodes), geoid), "int8"), ("timem", np.repeat(starts, nodes), "float8"),
-                ("nodeid", np.arange(sum(nodes), dtype=np.int64), "int8")]
+        return [
+            ("geoid", np.full(sum(nodes), geoid), "int8"),
+            ("timem", np.repeat(starts, nodes), "float8"),
+            ("nodeid", np.arange(sum(nodes), dtype=np.int64), "int8"),
+        ]
 
     def vertex_rows() -> Columns:
-        return [("geoid", np.full(sum(rows), geoid), "int8"), ("timem", np.repeat(starts, rows), "float8"),
-                ("timet", concat([np.repeat(p.times, k) for p, k in zip(periods, nodes)]), "float8"),
-                ("nodeid", concat([np.tile(np.arange(k, dtype=np.int64) + o, len(p.times))
-                                   for p, k, o in zip(periods, nodes, node0)]), "int8"),
-                ("coordinate", concat([p.positions.reshape(-1, m) for p in periods]), f"float8[{m}]")]
+        return [
+            ("geoid", np.full(sum(rows), geoid), "int8"),
+            ("timem", np.repeat(starts, rows), "float8"),
+            ("timet", concat([np.repeat(p.times, k) for p, k in zip(periods, nodes)]), "float8"),
+            (
+                "nodeid",
+                concat(
+                    [np.tile(np.arange(k, dtype=np.int64) + o, len(p.times)) for p, k, o in zip(periods, nodes, node0)]
+                ),
+                "int8",
+            ),
+            ("coordinate", concat([p.positions.reshape(-1, m) for p in periods]), f"float8[{m}]"),
+        ]
 
     def cell_rows() -> Columns:
         counts = cells["counts"]
-        return [("geoid", np.full(sum(counts), geoid), "int8"), ("acellid", np.arange(sum(counts), dtype=np.int64), "int8"),
-                ("timem", np.repeat(starts, counts), "float8"),
-                ("celllevel", np.full(sum(counts), level, dtype=np.int16), "int2")]
+        return [
+            ("geoid", np.full(sum(counts), geoid), "int8"),
+            ("acellid", np.arange(sum(counts), dtype=np.int64), "int8"),
+            ("timem", np.repeat(starts, counts), "float8"),
+            ("celllevel", np.full(sum(counts), level, dtype=np.int16), "int2"),
+        ]
 
     def value_rows() -> Columns:
         counts = cells["counts"]
         per = [len(p.times) * c for p, c in zip(periods, counts)]
-        return [("_geoid", np.full(sum(per), geoid), "int8"), ("_timem", np.repeat(starts, per), "float8"),
-                ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, counts)]), "float8"),
-                ("_idx", concat([np.tile(np.arange(c, dtype=np.int64) + o, len(p.times))
-                                 for p, c, o in zip(periods, counts, cells["first"])]), "int8"),
-                *((prop.name, concat([v[prop.name].reshape(-1) for v in values]), SQL_TYPES[prop.type])
-                  for prop in fc.cell_properties)]
+        return [
+            ("_geoid", np.full(sum(per), geoid), "int8"),
+            ("_timem", np.repeat(starts, per), "float8"),
+            ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, counts)]), "float8"),
+            (
+                "_idx",
+                concat(
+                    [
+                        np.tile(np.arange(c, dtype=np.int64) + o, len(p.times))
+                        for p, c, o in zip(periods, counts, cells["first"])
+                    ]
+                ),
+                "int8",
+            ),
+            *(
+                (prop.name, concat([v[prop.name].reshape(-1) for v in values]), SQL_TYPES[prop.type])
+                for prop in fc.cell_properties
+            ),
+        ]
 
     with reraise(), conn.transaction():
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")
-        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s, "
-                           "p_class => %s)",
-                           (no_nul("geometry name", name if name is not None else evolving.name), _bounds(evolving), sum(nodes), sum(darts),
-                            evolving.alive, fc.name)).fetchone()
+        row = conn.execute(
+            "SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s, p_class => %s)",
+            (
+                no_nul("geometry name", name if name is not None else evolving.name),
+                _bounds(evolving),
+                sum(nodes),
+                sum(darts),
+                evolving.alive,
+                fc.name,
+            ),
+        ).fetchone()
         assert row is not None
         geoid = int(row[0])
         # the largest table first: its rows need nothing but the involutions, and while the server takes them
         # the darts' orientation and cells are computed (Storage.copy_all)
         tables: list[tuple[str, str, Callable[[], Columns]]] = [
-            ("tgsis", "gmap", gmap_rows), ("tgsis", "gmap_timem", timem_rows), ("tgsis", "gmap_timet", timet_rows),
-            ("tgsis", "gmap_alpha", alpha_rows), ("tgsis", "gmap_dart", dart_rows), ("tgsis", "gmap_node", node_rows),
-            ("tgsis", "gmap_vertex", vertex_rows)]
+            ("tgsis", "gmap", gmap_rows),
+            ("tgsis", "gmap_timem", timem_rows),
+            ("tgsis", "gmap_timet", timet_rows),
+            ("tgsis", "gmap_alpha", alpha_rows),
+            ("tgsis", "gmap_dart", dart_rows),
+            ("tgsis", "gmap_node", node_rows),
+            ("tgsis", "gmap_vertex", vertex_rows),
+        ]
         if level is not None:
             tables.append(("tgsis", "gmap_cell", cell_rows))
             if fc.cell_properties:
@@ -314,17 +396,31 @@ def _md_values(fc: FeatureClass, g: GMap, drop_extra: bool) -> dict[str, npt.NDA
     given = dict(g.cell_properties.get(fc.cell_level, {})) if fc.cell_level is not None else {}
     other = sorted(level for level in g.cell_properties if level != fc.cell_level and g.cell_properties[level])
     if other and not drop_extra:
-        raise InvalidPropertyError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, the G-map "
-                                   f"has properties of {other}-cells",
-                                   hint="drop the others (drop_extra_properties=True)")
-    period = GMapPeriod([0.0], GMap(g.alpha, g.vertex, g.points), level=fc.cell_level if given else None,
-                        cell_values={k: np.asarray(v)[None] for k, v in given.items()})
+        raise InvalidPropertyError(
+            f"feature class {fc.name} stores properties of {fc.cell_level}-cells, the G-map "
+            f"has properties of {other}-cells",
+            hint="drop the others (drop_extra_properties=True)",
+        )
+    period = GMapPeriod(
+        [0.0],
+        GMap(g.alpha, g.vertex, g.points),
+        level=fc.cell_level if given else None,
+        cell_values={k: np.asarray(v)[None] for k, v in given.items()},
+    )
     values = _class_values(fc, EvolvingGMap([period]), drop_extra)[0]
     return {k: v[0] for k, v in values.items()}
 
 
-def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, Any] | None, *, name: str | None,
-               axes: Sequence[str] | None, drop_extra: bool) -> int:
+def _insert_md(
+    conn: Conn,
+    fc: FeatureClass,
+    g: GMap,
+    properties: Mapping[str, Any] | None,
+    *,
+    name: str | None,
+    axes: Sequence[str] | None,
+    drop_extra: bool,
+) -> int:
     """Store a model-5 G-map: md_gmap, md_vertex, md_dart, md_alpha, md_cell and the class's cell values."""
     g.check(raise_=True)
     n, m, d = g.dimension, g.embedding_dimension, g.n_darts
@@ -334,22 +430,29 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
     if m > 100:
         raise InvalidGMapError(f"a multiply indexed G-map has at most 100 axes (the cube type's limit), got {m}")
     if fc.cell_level is not None and fc.cell_level > n:
-        raise InvalidGMapError(f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
-                               f"{n}-G-map does not have")
+        raise InvalidGMapError(
+            f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a {n}-G-map does not have"
+        )
     values = _md_values(fc, g, drop_extra)
     level = fc.cell_level
-    cells: list[npt.NDArray[np.int64]] = []   # the darts' cells of the property level, once dart_rows made them
+    cells: list[npt.NDArray[np.int64]] = []  # the darts' cells of the property level, once dart_rows made them
 
     def vertex_rows() -> Columns:
-        return [("geoid", np.full(g.n_points, geoid), "int8"), ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
-                ("coordinate", g.points, f"float8[{m}]")]
+        return [
+            ("geoid", np.full(g.n_points, geoid), "int8"),
+            ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
+            ("coordinate", g.points, f"float8[{m}]"),
+        ]
 
     def alpha_rows() -> Columns:
         return _alpha_columns(geoid, g.alpha)
 
     def dart_rows() -> Columns:
         columns: list[tuple[str, npt.ArrayLike, str]] = [
-            ("geoid", np.full(d, geoid), "int8"), ("dartid", np.arange(d, dtype=np.int64), "int8"), ("vrtxid", g.vertex, "int8")]
+            ("geoid", np.full(d, geoid), "int8"),
+            ("dartid", np.arange(d, dtype=np.int64), "int8"),
+            ("vrtxid", g.vertex, "int8"),
+        ]
         if level is not None:
             cells.append(g.cells(level))
             columns.append(("acellid", cells[0], "int8"))
@@ -363,32 +466,47 @@ def _insert_md(conn: Conn, fc: FeatureClass, g: GMap, properties: Mapping[str, A
 
     def cell_rows() -> Columns:
         count = cell_count()
-        return [("geoid", np.full(count, geoid), "int8"), ("acellid", np.arange(count, dtype=np.int64), "int8"),
-                ("celllevel", np.full(count, level, dtype=np.int16), "int2")]
+        return [
+            ("geoid", np.full(count, geoid), "int8"),
+            ("acellid", np.arange(count, dtype=np.int64), "int8"),
+            ("celllevel", np.full(count, level, dtype=np.int16), "int2"),
+        ]
 
     def value_rows() -> Columns:
         count = cell_count()
-        return [("_geoid", np.full(count, geoid), "int8"), ("_idx", np.arange(count, dtype=np.int64), "int8"),
-                *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties)]
+        return [
+            ("_geoid", np.full(count, geoid), "int8"),
+            ("_idx", np.arange(count, dtype=np.int64), "int8"),
+            *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties),
+        ]
 
     with reraise(), conn.transaction():
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")
         period = EvolvingGMap([GMapPeriod([0.0], g)])
-        row = conn.execute("SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM', p_class => %s)",
-                           (no_nul("geometry name", name), _bounds(period), g.n_points, d, fc.name)).fetchone()
+        row = conn.execute(
+            "SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM', p_class => %s)",
+            (no_nul("geometry name", name), _bounds(period), g.n_points, d, fc.name),
+        ).fetchone()
         assert row is not None
         geoid = int(row[0])
         extent = None
         if g.n_points:
             low, high = g.points.min(axis=0), g.points.max(axis=0)
-            extent = "(" + ", ".join(repr(float(v)) for v in low) + "),(" + ", ".join(repr(float(v)) for v in high) + ")"
+            extent = (
+                "(" + ", ".join(repr(float(v)) for v in low) + "),(" + ", ".join(repr(float(v)) for v in high) + ")"
+            )
         # one row: through the versioned view when versioning is on (its trigger writes the working revision)
-        conn.execute("INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
-                     (geoid, n, m, list(names), extent))
+        conn.execute(
+            "INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
+            (geoid, n, m, list(names), extent),
+        )
         # as insert_gmap: the involutions first, the darts' cells and orientation computed while they go in
         tables: list[tuple[str, str, Callable[[], Columns]]] = [
-            ("tgsis", "md_alpha", alpha_rows), ("tgsis", "md_vertex", vertex_rows), ("tgsis", "md_dart", dart_rows)]
+            ("tgsis", "md_alpha", alpha_rows),
+            ("tgsis", "md_vertex", vertex_rows),
+            ("tgsis", "md_dart", dart_rows),
+        ]
         if level is not None:
             tables.append(("tgsis", "md_cell", cell_rows))
             if fc.cell_properties:
@@ -411,59 +529,103 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
     """
     fc = _gmap_class(conn, feature_class, "MULTIDIM")
     with reraise(), read_only_snapshot(conn):
-        head = conn.execute(sql.SQL("SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
-                                    "ON m.geoid = f._geoid WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)),
-                            (feature_id,)).fetchone()
+        head = conn.execute(
+            sql.SQL(
+                "SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
+                "ON m.geoid = f._geoid WHERE f._geoid = %s"
+            ).format(fc.qualified(fc.featuretable)),
+            (feature_id,),
+        ).fetchone()
         if head is None:
             raise NotFoundError(f"feature class {fc.name} has no multiply indexed G-map feature {feature_id}")
         n, m, axes = int(head[0]), int(head[1]), tuple(head[2])
-        vertex = _copy_rows(conn, "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
-                            feature_id, ["int8", f"float8[{m}]"], [0])
-        dart = _copy_rows(conn, "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {}",
-                          feature_id, ["int8", "int8", "int8"], [0])
-        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {}",
-                           feature_id, ["int2", "int8", "int8"], [1, 0])
+        vertex = _copy_rows(
+            conn,
+            "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
+            feature_id,
+            ["int8", f"float8[{m}]"],
+            [0],
+        )
+        dart = _copy_rows(
+            conn,
+            "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {}",
+            feature_id,
+            ["int8", "int8", "int8"],
+            [0],
+        )
+        alpha = _copy_rows(
+            conn,
+            "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {}",
+            feature_id,
+            ["int2", "int8", "int8"],
+            [1, 0],
+        )
         values = []
         if fc.cell_properties:
-            values = _in_order(copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {}").format(
-                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
-                sql.Literal(feature_id)), ["int8", *(p.wire for p in fc.cell_properties)]), [0])
+            values = _in_order(
+                copy_out(
+                    conn,
+                    sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {}").format(
+                        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties),
+                        fc.qualified(fc.cellprotable),
+                        sql.Literal(feature_id),
+                    ),
+                    ["int8", *(p.wire for p in fc.cell_properties)],
+                ),
+                [0],
+            )
     images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
     if any(len(a) != len(dart[0]) for a in images):
-        raise InvalidGMapError(f"G-map {feature_id}: the alpha rows do not cover its {len(dart[0])} darts",
-                               hint=f"SELECT * FROM tgsis.md_check({feature_id})")
+        raise InvalidGMapError(
+            f"G-map {feature_id}: the alpha rows do not cover its {len(dart[0])} darts",
+            hint=f"SELECT * FROM tgsis.md_check({feature_id})",
+        )
     topology = _period_map(dart[0], dart[1], images, vertex[0], vertex[1].reshape(len(vertex[0]), m), feature_id)
     if fc.cell_level is None or not values or fc.cell_level > n:
         return topology, axes
     first = _cell_ids(topology, fc.cell_level, dart[2])
-    cell_values = {p.name: values[1 + j][local_positions(values[0], first, "cell values", feature_id)]
-                   for j, p in enumerate(fc.cell_properties)}
+    cell_values = {
+        p.name: values[1 + j][local_positions(values[0], first, "cell values", feature_id)]
+        for j, p in enumerate(fc.cell_properties)
+    }
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
 
 
 @checked
-def md_in_box(conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float],
-              high: Sequence[float]) -> list[int]:
+def md_in_box(
+    conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float], high: Sequence[float]
+) -> list[int]:
     """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
     fc = _gmap_class(conn, feature_class, "MULTIDIM")
     with reraise():
-        rows = conn.execute("SELECT * FROM tgsis.md_in_box(%s, %s, %s, %s)",
-                            (fc.name, list(axes), [float(v) for v in low], [float(v) for v in high])).fetchall()
+        rows = conn.execute(
+            "SELECT * FROM tgsis.md_in_box(%s, %s, %s, %s)",
+            (fc.name, list(axes), [float(v) for v in low], [float(v) for v in high]),
+        ).fetchall()
     return sorted(int(r[0]) for r in rows)
 
 
 @checked
-def md_vertices_in_box(conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float],
-                       high: Sequence[float]) -> IntArray:
+def md_vertices_in_box(
+    conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float], high: Sequence[float]
+) -> IntArray:
     """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
     with reraise():
-        rows = conn.execute("SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)",
-                            (feature_id, list(axes), [float(v) for v in low], [float(v) for v in high])).fetchall()
+        rows = conn.execute(
+            "SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)",
+            (feature_id, list(axes), [float(v) for v in low], [float(v) for v in high]),
+        ).fetchall()
     return np.array([r[0] for r in rows], dtype=np.int64)
 
 
-def _period_map(dartids: IntArray, nodeids: IntArray, alpha: Sequence[IntArray], node_ids: IntArray,
-                points: npt.NDArray[np.float64], geoid: int) -> GMap:
+def _period_map(
+    dartids: IntArray,
+    nodeids: IntArray,
+    alpha: Sequence[IntArray],
+    node_ids: IntArray,
+    points: npt.NDArray[np.float64],
+    geoid: int,
+) -> GMap:
     """A period's G-map from its dart rows (sorted by dartid) and its nodes (sorted by nodeid)."""
     local = np.stack([local_positions(dartids, a, "alpha rows", geoid) for a in alpha])
     vertex = local_positions(node_ids, nodeids, "darts", geoid)
@@ -477,12 +639,13 @@ def _cell_ids(topology: GMap, level: int, acellids: IntArray) -> IntArray:
     """
     labels = topology.cells(level)
     ids = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
-    ids[labels[::-1]] = acellids[::-1]          # reversed: the last write wins, so the first dart's id
+    ids[labels[::-1]] = acellids[::-1]  # reversed: the last write wins, so the first dart's id
     return ids
 
 
-def _copy_rows(conn: Conn, query: str, geoid: int, types: Sequence[str],
-               order: Sequence[int]) -> list[npt.NDArray[Any]]:
+def _copy_rows(
+    conn: Conn, query: str, geoid: int, types: Sequence[str], order: Sequence[int]
+) -> list[npt.NDArray[Any]]:
     """The rows of ``query`` (``{}``: the geoid) as columns, sorted by the columns at the positions ``order``."""
     return _in_order(copy_out(conn, sql.SQL(query).format(sql.Literal(geoid)), types), order)
 
@@ -512,22 +675,29 @@ def _key_ordered_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n:
     ``None`` when the rows are not exactly that (then each period's rows are picked out one by one).
     """
     levels, darts = n + 1, len(dartids)
-    if len(alpha[1]) != levels * darts or not np.array_equal(alpha[1], np.repeat(dartids, levels)) \
-            or not np.array_equal(alpha[0], np.tile(np.arange(levels, dtype=alpha[0].dtype), darts)):
+    if (
+        len(alpha[1]) != levels * darts
+        or not np.array_equal(alpha[1], np.repeat(dartids, levels))
+        or not np.array_equal(alpha[0], np.tile(np.arange(levels, dtype=alpha[0].dtype), darts))
+    ):
         return None
     images: IntArray = alpha[2].reshape(darts, levels).T
     return images
 
 
-def _period_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int, start: float,
-                   feature_id: int) -> list[IntArray]:
+def _period_images(
+    alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int, start: float, feature_id: int
+) -> list[IntArray]:
     """The involutions of one period's darts (sorted ``dartids``) from alpha rows of any shape, or an error."""
     images = []
     for i in range(n + 1):
         rows = (alpha[0] == i) & np.isin(alpha[1], dartids)
         if int(rows.sum()) != len(dartids):
-            raise InvalidGMapError(f"G-map {feature_id}: period {float(start)!r} has {int(rows.sum())} alpha_{i} rows for "
-                                   f"{len(dartids)} darts", hint=f"SELECT * FROM tgsis.gmap_check({feature_id})")
+            raise InvalidGMapError(
+                f"G-map {feature_id}: period {float(start)!r} has {int(rows.sum())} alpha_{i} rows for "
+                f"{len(dartids)} darts",
+                hint=f"SELECT * FROM tgsis.gmap_check({feature_id})",
+            )
         images.append(alpha[2][rows])
     return images
 
@@ -545,27 +715,58 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
     """
     fc = _gmap_class(conn, feature_class)
     with reraise(), read_only_snapshot(conn):
-        head = conn.execute(sql.SQL("SELECT g.geoname, g.alive, m.dimension, m.embedding FROM {} f "
-                                    "JOIN tgsis.geometry g ON g.geoid = f._geoid JOIN tgsis.gmap m ON m.geoid = f._geoid "
-                                    "WHERE f._geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)).fetchone()
+        head = conn.execute(
+            sql.SQL(
+                "SELECT g.geoname, g.alive, m.dimension, m.embedding FROM {} f "
+                "JOIN tgsis.geometry g ON g.geoid = f._geoid JOIN tgsis.gmap m ON m.geoid = f._geoid "
+                "WHERE f._geoid = %s"
+            ).format(fc.qualified(fc.featuretable)),
+            (feature_id,),
+        ).fetchone()
         if head is None:
             raise NotFoundError(f"feature class {fc.name} has no G-map feature {feature_id}")
         name, alive, n, m = head[0], bool(head[1]), int(head[2]), int(head[3])
-        times = _copy_rows(conn, "SELECT timem, timet FROM tgsis.gmap_timet WHERE geoid = {}",
-                           feature_id, ["float8", "float8"], [0, 1])
-        nodes = _copy_rows(conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {}",
-                           feature_id, ["float8", "int8"], [0, 1])
-        vertex = _copy_rows(conn, "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {}",
-                            feature_id, ["float8", "float8", "int8", f"float8[{m}]"], [0, 1, 2])
-        dart = _copy_rows(conn, "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",
-                          feature_id, ["float8", "int8", "int8", "int8"], [1])
-        alpha = _copy_rows(conn, "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {}",
-                           feature_id, ["int2", "int8", "int8"], [1, 0])
+        times = _copy_rows(
+            conn, "SELECT timem, timet FROM tgsis.gmap_timet WHERE geoid = {}", feature_id, ["float8", "float8"], [0, 1]
+        )
+        nodes = _copy_rows(
+            conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {}", feature_id, ["float8", "int8"], [0, 1]
+        )
+        vertex = _copy_rows(
+            conn,
+            "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {}",
+            feature_id,
+            ["float8", "float8", "int8", f"float8[{m}]"],
+            [0, 1, 2],
+        )
+        dart = _copy_rows(
+            conn,
+            "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",
+            feature_id,
+            ["float8", "int8", "int8", "int8"],
+            [1],
+        )
+        alpha = _copy_rows(
+            conn,
+            "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {}",
+            feature_id,
+            ["int2", "int8", "int8"],
+            [1, 0],
+        )
         values = []
         if fc.cell_properties:
-            values = _in_order(copy_out(conn, sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {}").format(
-                sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties), fc.qualified(fc.cellprotable),
-                sql.Literal(feature_id)), ["float8", "float8", "int8", *(p.wire for p in fc.cell_properties)]), [0, 1, 2])
+            values = _in_order(
+                copy_out(
+                    conn,
+                    sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {}").format(
+                        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties),
+                        fc.qualified(fc.cellprotable),
+                        sql.Literal(feature_id),
+                    ),
+                    ["float8", "float8", "int8", *(p.wire for p in fc.cell_properties)],
+                ),
+                [0, 1, 2],
+            )
     aligned = _key_ordered_images(alpha, dart[1], n)
     periods = []
     for start in np.unique(times[0]):
@@ -573,7 +774,9 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         in_nodes = nodes[1][nodes[0] == start]
         in_darts = dart[0] == start
         dartids, nodeids, acellids = dart[1][in_darts], dart[2][in_darts], dart[3][in_darts]
-        images = list(aligned[:, in_darts]) if aligned is not None else _period_images(alpha, dartids, n, start, feature_id)
+        images = (
+            list(aligned[:, in_darts]) if aligned is not None else _period_images(alpha, dartids, n, start, feature_id)
+        )
         at = vertex[0] == start
         positions = vertex[3][at].reshape(len(instants), len(in_nodes), m)
         topology = _period_map(dartids, nodeids, images, in_nodes, positions[0], feature_id)
@@ -585,11 +788,15 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
                 column = values[3 + j][here].reshape(len(instants), -1)
                 ids = values[2][here].reshape(len(instants), -1)[0]
                 period_values[prop.name] = column[:, local_positions(ids, first, "cell values", feature_id)]
-        periods.append(GMapPeriod(instants, topology, positions, level=fc.cell_level if period_values else None,
-                                  cell_values=period_values))
+        periods.append(
+            GMapPeriod(
+                instants, topology, positions, level=fc.cell_level if period_values else None, cell_values=period_values
+            )
+        )
     if not periods:
-        raise InvalidGMapError(f"G-map {feature_id} has no topology period",
-                               hint=f"SELECT * FROM tgsis.gmap_check({feature_id})")
+        raise InvalidGMapError(
+            f"G-map {feature_id} has no topology period", hint=f"SELECT * FROM tgsis.gmap_check({feature_id})"
+        )
     return EvolvingGMap(periods, alive=alive, name=name)
 
 
@@ -620,31 +827,65 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
         n, m = int(n_row[0]), int(n_row[1])
         timem, t0, t1, w = (float(v) for v in frame)
         key = [sql.Literal(feature_id), sql.Literal(timem)]
-        dart = copy_out(conn, sql.SQL("SELECT dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart "
-                                      "WHERE geoid = {} AND timem = {} ORDER BY dartid").format(*key),
-                        ["int8", "int8", "int8"])
+        dart = copy_out(
+            conn,
+            sql.SQL(
+                "SELECT dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart "
+                "WHERE geoid = {} AND timem = {} ORDER BY dartid"
+            ).format(*key),
+            ["int8", "int8", "int8"],
+        )
         # the involutions of the period's darts: one range of the key (geoid, dartid, level), whatever the planner's
         # statistics say (a join planned on freshly loaded tables ran for minutes), then only the period's darts
         low, high = (int(dart[0].min()), int(dart[0].max())) if len(dart[0]) else (0, -1)
         span = [sql.Literal(low), sql.Literal(high)]
-        alpha = copy_out(conn, sql.SQL("SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = {} "
-                                       "AND a.dartid BETWEEN {} AND {} ORDER BY a.dartid, a.level").format(key[0], *span),
-                         ["int2", "int8", "int8"])
+        alpha = copy_out(
+            conn,
+            sql.SQL(
+                "SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = {} "
+                "AND a.dartid BETWEEN {} AND {} ORDER BY a.dartid, a.level"
+            ).format(key[0], *span),
+            ["int2", "int8", "int8"],
+        )
         keep = np.isin(alpha[1], dart[0])
         alpha = [column[keep] for column in alpha]
-        ends = [copy_out(conn, sql.SQL("SELECT nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} AND timem = {} "
-                                       "AND timet = {} ORDER BY nodeid").format(*key, sql.Literal(at)),
-                         ["int8", f"float8[{m}]"]) for at in (t0, t1)]
+        ends = [
+            copy_out(
+                conn,
+                sql.SQL(
+                    "SELECT nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} AND timem = {} "
+                    "AND timet = {} ORDER BY nodeid"
+                ).format(*key, sql.Literal(at)),
+                ["int8", f"float8[{m}]"],
+            )
+            for at in (t0, t1)
+        ]
         props = [p for p in fc.cell_properties if p.size == 1 and p.type != "boolean"]
-        values = [copy_out(conn, sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {} AND _timem = {} AND _timet = {} "
-                                         "ORDER BY _idx").format(
-            sql.SQL(", ").join(sql.SQL("{}::float8").format(sql.Identifier(p.name)) for p in props),
-            fc.qualified(fc.cellprotable), *key, sql.Literal(at)), ["int8", *(["float8"] * len(props))])
-                  for at in (t0, t1)] if props and fc.cell_level is not None else []
+        values = (
+            [
+                copy_out(
+                    conn,
+                    sql.SQL(
+                        "SELECT _idx, {} FROM {} WHERE _geoid = {} AND _timem = {} AND _timet = {} ORDER BY _idx"
+                    ).format(
+                        sql.SQL(", ").join(sql.SQL("{}::float8").format(sql.Identifier(p.name)) for p in props),
+                        fc.qualified(fc.cellprotable),
+                        *key,
+                        sql.Literal(at),
+                    ),
+                    ["int8", *(["float8"] * len(props))],
+                )
+                for at in (t0, t1)
+            ]
+            if props and fc.cell_level is not None
+            else []
+        )
     same = t0 == t1
     if not np.array_equal(ends[0][0], ends[1][0]):
-        raise InvalidGMapError(f"G-map {feature_id}: the nodes at {t0!r} and {t1!r} differ",
-                               hint=f"SELECT * FROM tgsis.check_geometry({feature_id})")
+        raise InvalidGMapError(
+            f"G-map {feature_id}: the nodes at {t0!r} and {t1!r} differ",
+            hint=f"SELECT * FROM tgsis.check_geometry({feature_id})",
+        )
     points = _mix(ends[0][1].reshape(-1, m), ends[1][1].reshape(-1, m), w, same)
     images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
     topology = _period_map(dart[0], dart[1], images, ends[0][0], points, feature_id)
@@ -680,7 +921,9 @@ def gmap_cells(conn: Conn, feature_id: int, level: int, t: float | None = None) 
     params: tuple[Any, ...]
     if _model_of(conn, feature_id) == "MULTIDIM":
         if t is not None:
-            raise InvalidInputError(f"feature {feature_id} is a multiply indexed G-map: time is one of its axes (t=None)")
+            raise InvalidInputError(
+                f"feature {feature_id} is a multiply indexed G-map: time is one of its axes (t=None)"
+            )
         query, params = "SELECT dartid, cell FROM tgsis.md_cells(%s, %s)", (feature_id, level)
     else:
         if t is None:
@@ -696,10 +939,10 @@ def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
     """The violated conditions of a stored G-map with their first darts (``tgsis.gmap_check``, ``md_check``); empty: valid."""
     function = "md_check" if _model_of(conn, feature_id) == "MULTIDIM" else "gmap_check"
     with reraise():
-        rows = conn.execute(sql.SQL("SELECT problem, count, darts FROM tgsis.{}(%s)").format(sql.Identifier(function)),
-                            (feature_id,)).fetchall()
+        rows = conn.execute(
+            sql.SQL("SELECT problem, count, darts FROM tgsis.{}(%s)").format(sql.Identifier(function)), (feature_id,)
+        ).fetchall()
     return [GMapProblem(str(p), int(c), tuple(int(d) for d in darts)) for p, c, darts in rows]
-
 
 
 def _fetch_md(conn: Conn, fc: FeatureClass, feature_id: int) -> GMap:

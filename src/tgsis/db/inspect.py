@@ -73,8 +73,9 @@ def stored_rows(conn: Conn, fc: FeatureClass, table: str) -> tuple[int, int]:
     """How many rows table ``table`` of class ``fc`` holds as the working version reads them, and of how many
     geometries: ``(rows, geometries)``."""
     with reraise():
-        row = conn.execute(sql.SQL("SELECT count(*), count(DISTINCT _geoid) FROM {}").format(
-            fc.qualified(table))).fetchone()
+        row = conn.execute(
+            sql.SQL("SELECT count(*), count(DISTINCT _geoid) FROM {}").format(fc.qualified(table))
+        ).fetchone()
     assert row is not None
     return int(row[0]), int(row[1])
 
@@ -100,7 +101,8 @@ def features_versioned(conn: Conn) -> bool:
     """Whether the feature tables are versioned (``tgsis versioning enable features`` was run)."""
     with reraise():
         row = conn.execute(
-            "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')").fetchone()
+            "SELECT EXISTS (SELECT FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
+        ).fetchone()
     return row == (True,)
 
 
@@ -113,8 +115,10 @@ def lock_feature_name(conn: Conn, fc: FeatureClass, name: str, purpose: str) -> 
     it with ``--replace``, instead of both adding a feature of that name).
     """
     with reraise():
-        conn.execute("SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))",
-                     (f"{purpose}: {fc.schema}.{fc.featuretable}: {name}",))
+        conn.execute(
+            "SELECT pg_advisory_xact_lock(hashtextextended(%s, 0))",
+            (f"{purpose}: {fc.schema}.{fc.featuretable}: {name}",),
+        )
 
 
 @checked
@@ -122,8 +126,12 @@ def features_named(conn: Conn, fc: FeatureClass, name: str) -> list[int]:
     """The ids of the features of class ``fc`` named ``name`` (as the working version sees them), in order."""
     with reraise():
         rows = conn.execute(
-            sql.SQL("SELECT g.geoid FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
-                    "WHERE g.geoname = %s ORDER BY g.geoid").format(_named(fc)), (name,)).fetchall()
+            sql.SQL(
+                "SELECT g.geoid FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
+                "WHERE g.geoname = %s ORDER BY g.geoid"
+            ).format(_named(fc)),
+            (name,),
+        ).fetchall()
     return [int(r[0]) for r in rows]
 
 
@@ -152,7 +160,8 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
             "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
             "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
             "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s",
-            (geoid,)).fetchone()
+            (geoid,),
+        ).fetchone()
     if row is None:
         raise NotFoundError(f"feature {geoid} does not exist")
     return GeometrySummary(row[0], row[1], row[2], row[3], row[4], row[5], row[6], tuple(row[7:13]))
@@ -187,13 +196,15 @@ def shape_sizes(conn: Conn, time_model: str, geoid: int) -> ShapeSizes | None:
             "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_vrtx WHERE geoid = %s"
             "        GROUP BY times) AS v(t, n)),"
             "       (SELECT array_agg(n ORDER BY t) FROM (SELECT times, count(*) FROM tgsis.times_trgl WHERE geoid = %s"
-            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)")
+            "        GROUP BY times) AS c(t, n)), (SELECT count(*) FROM tgsis.times WHERE geoid = %s)"
+        )
     elif time_model == "EVOLVING":
         query = (
             "SELECT (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.node WHERE geoid = %s"
             "        GROUP BY timem) AS v(t, n)),"
             "       (SELECT array_agg(n ORDER BY t) FROM (SELECT timem, count(*) FROM tgsis.d4dtrgl WHERE geoid = %s"
-            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)")
+            "        GROUP BY timem) AS c(t, n)), (SELECT count(DISTINCT timem) FROM tgsis.node WHERE geoid = %s)"
+        )
     else:
         return None
     with reraise():
@@ -231,9 +242,16 @@ class FeatureRow:
 
 
 @checked
-def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box: Sequence[float] | None = None,
-                  ids: Sequence[int] | None = None, properties: Mapping[str, str] | None = None,
-                  limit: int | None = None) -> list[FeatureRow]:
+def list_features(
+    conn: Conn,
+    fc: FeatureClass,
+    *,
+    name: str | None = None,
+    box: Sequence[float] | None = None,
+    ids: Sequence[int] | None = None,
+    properties: Mapping[str, str] | None = None,
+    limit: int | None = None,
+) -> list[FeatureRow]:
     """The features of class ``fc`` as the working version sees them, by id, with their feature properties.
 
     Parameters
@@ -259,8 +277,10 @@ def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box:
         params.append(list(ids))
     for prop, value in (properties or {}).items():
         if prop not in props:
-            raise NotFoundError(f"class {fc.name} has no feature property {prop!r}",
-                                hint=f"its feature properties: {', '.join(props) or 'none'}")
+            raise NotFoundError(
+                f"class {fc.name} has no feature property {prop!r}",
+                hint=f"its feature properties: {', '.join(props) or 'none'}",
+            )
         # the value is an untyped literal: PostgreSQL reads it as the column's type (22P02 when it is not one)
         conditions.append(sql.SQL("f.{} = %s").format(sql.Identifier(prop)))
         params.append(value)
@@ -274,25 +294,42 @@ def list_features(conn: Conn, fc: FeatureClass, *, name: str | None = None, box:
         "                            WHERE g.timemodel IN ('INSTANTS', 'EVOLVING') "
         "                           UNION ALL SELECT timet FROM tgsis.gmap_timet "
         "                            WHERE geoid = g.geoid AND g.timemodel = 'GMAP') AS lives (t)) i ON true "
-        "WHERE {} ORDER BY g.geoid {}").format(
+        "WHERE {} ORDER BY g.geoid {}"
+    ).format(
         sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
-        fc.qualified(fc.featuretable), sql.SQL(" AND ").join(conditions),
-        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""))
+        fc.qualified(fc.featuretable),
+        sql.SQL(" AND ").join(conditions),
+        sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""),
+    )
     with reraise():
         rows = conn.execute(query, params).fetchall()
-    return [FeatureRow(int(r[0]), fc.name, r[1], r[2], r[3], r[4], r[5],
-                       None if r[7] is None else float(r[7]), None if r[8] is None else float(r[8]),
-                       None if r[7] is None else bool(r[6]), dict(zip(props, r[16:])),
-                       None if r[9] is None else [float(v) for v in r[9:15]], r[15])
-            for r in rows]
+    return [
+        FeatureRow(
+            int(r[0]),
+            fc.name,
+            r[1],
+            r[2],
+            r[3],
+            r[4],
+            r[5],
+            None if r[7] is None else float(r[7]),
+            None if r[8] is None else float(r[8]),
+            None if r[7] is None else bool(r[6]),
+            dict(zip(props, r[16:])),
+            None if r[9] is None else [float(v) for v in r[9:15]],
+            r[15],
+        )
+        for r in rows
+    ]
 
 
 @checked
 def may_read_features(conn: Conn, fc: FeatureClass) -> bool:
     """Whether the session's role may read the feature table of class ``fc``."""
     with reraise():
-        row = conn.execute("SELECT has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT')",
-                           (fc.schema, fc.featuretable)).fetchone()
+        row = conn.execute(
+            "SELECT has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT')", (fc.schema, fc.featuretable)
+        ).fetchone()
     return bool(row and row[0])
 
 
@@ -348,9 +385,20 @@ def conflicts_with_solutions(conn: Conn, version: str) -> list[dict[str, Any]]:
             "FROM tgsis.current_conflicts(tgsis.version_id(%s)) c "
             "LEFT JOIN tgsis.conflicts k ON k.versionid = tgsis.version_id(%s) AND k.objectclass = c.objectclass "
             "      AND k.objectkey = c.objectkey AND k.childmark = c.childmark AND k.parentmark = c.parentmark "
-            "ORDER BY 1, 2", (version, version)).fetchall()
-    return [{"objectclass": r[0], "objectkey": r[1], "both": list(r[2]), "child": list(r[3]),
-             "parent": list(r[4]), "solution": r[5]} for r in rows]
+            "ORDER BY 1, 2",
+            (version, version),
+        ).fetchall()
+    return [
+        {
+            "objectclass": r[0],
+            "objectkey": r[1],
+            "both": list(r[2]),
+            "child": list(r[3]),
+            "parent": list(r[4]),
+            "solution": r[5],
+        }
+        for r in rows
+    ]
 
 
 # --------------------------------------------------------------------------- model 1 rows, packed (the browser view)
@@ -359,20 +407,26 @@ _CORNERS = [("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")]
 
 
 @checked
-def static_vertex_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64],
-                                                        npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+def static_vertex_rows(
+    conn: Conn, geoid: int
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """The stored vertices of static feature ``geoid`` as the working version sees them, in no set order:
     ``(vrtxid, x, y, z)``, (n,) arrays each, through one packed query (:func:`tgsis.db._transfer.columns_out`)."""
     with reraise():
-        _, vid, x, y, z = columns_out(conn, sql.SQL("tgsis.vrtx"), "geoid",
-                                      [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-                                      [geoid])
+        _, vid, x, y, z = columns_out(
+            conn,
+            sql.SQL("tgsis.vrtx"),
+            "geoid",
+            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+            [geoid],
+        )
     return vid, x, y, z
 
 
 @checked
-def static_triangle_rows(conn: Conn, geoid: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64],
-                                                          npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def static_triangle_rows(
+    conn: Conn, geoid: int
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """The stored triangles of static feature ``geoid``, in no set order: ``(trglid, vrtxid1, vrtxid2, vrtxid3)``."""
     with reraise():
         _, tid, a, b, c = columns_out(conn, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), *_CORNERS], [geoid])
@@ -388,8 +442,9 @@ def static_triangle_corners(conn: Conn, geoid: int) -> npt.NDArray[np.int64]:
 
 
 @checked
-def static_vertex_property_rows(conn: Conn, fc: FeatureClass, geoid: int, prop: str, wire: str
-                                ) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
+def static_vertex_property_rows(
+    conn: Conn, fc: FeatureClass, geoid: int, prop: str, wire: str
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
     """The stored values of vertex property ``prop`` (sent as ``wire``) of feature ``geoid``: ``(_idx, values)``."""
     table = fc.property_table("VERTEX")
     if table is None:
@@ -397,5 +452,3 @@ def static_vertex_property_rows(conn: Conn, fc: FeatureClass, geoid: int, prop: 
     with reraise():
         _, idx, column = columns_out(conn, fc.qualified(table), "_geoid", [("_idx", "int8"), (prop, wire)], [geoid])
     return idx, column
-
-

@@ -148,9 +148,7 @@ def installed_version(conn: psycopg.Connection[Any]) -> InstalledVersion | None:
         If a schema ``tgsis`` exists that is not a tgsis installation.
     """
     with reraise():
-        row = conn.execute(
-            "SELECT extversion FROM pg_catalog.pg_extension WHERE extname = %s", (EXTENSION,)
-        ).fetchone()
+        row = conn.execute("SELECT extversion FROM pg_catalog.pg_extension WHERE extname = %s", (EXTENSION,)).fetchone()
         if row is not None:
             return InstalledVersion(str(row[0]), "extension", _fingerprint(conn, str(row[0])))
         row = conn.execute(
@@ -176,8 +174,7 @@ def _fingerprint(conn: psycopg.Connection[Any], version: str) -> str | None:
     """``tgsis.installation.fingerprint`` of ``version``: ``""`` when none is recorded (before 0.3.0, or a build of
     0.3.0 older than the column), ``None`` when the role may not read it (unknown: no mismatch)."""
     row = conn.execute(
-        "SELECT to_regclass('tgsis.installation') IS NOT NULL "
-        "AND has_table_privilege('tgsis.installation', 'SELECT')"
+        "SELECT to_regclass('tgsis.installation') IS NOT NULL AND has_table_privilege('tgsis.installation', 'SELECT')"
     ).fetchone()
     if row is None or not row[0]:
         return None
@@ -190,7 +187,9 @@ def _fingerprint(conn: psycopg.Connection[Any], version: str) -> str | None:
 
 def _missing_storage(conn: psycopg.Connection[Any]) -> tuple[str, ...]:
     """The storage tables of the registry that do not exist (all of them after a bare CREATE EXTENSION)."""
-    row = conn.execute("SELECT to_regclass('tgsis.model_tables') IS NULL, to_regclass('tgsis.geometry') IS NULL").fetchone()
+    row = conn.execute(
+        "SELECT to_regclass('tgsis.model_tables') IS NULL, to_regclass('tgsis.geometry') IS NULL"
+    ).fetchone()
     assert row is not None
     if row[0]:  # 0.1.0 had no registry of data models: its storage is there when tgsis.geometry is
         return ("tgsis.geometry",) if row[1] else ()
@@ -245,8 +244,9 @@ def installation_status(
     current = installed_version(conn)
     dbname = conn.info.dbname
 
-    def status(state: Any, problem: str | None = None, fix: str | None = None,
-               missing: tuple[str, ...] = ()) -> InstallationStatus:
+    def status(
+        state: Any, problem: str | None = None, fix: str | None = None, missing: tuple[str, ...] = ()
+    ) -> InstallationStatus:
         return InstallationStatus(current, sources.version, sources.fingerprint, missing, state, problem, fix)
 
     if current is None:
@@ -254,24 +254,37 @@ def installation_status(
     with reraise():
         missing = _missing_storage(conn)
     if parse_version(current.version) > parse_version(sources.version):
-        return status("client older", f"database {dbname} has tgsis {current.version}, newer than this client's "
-                      f"{sources.version}", "this client is older than the database: upgrade the client "
-                      "(pip install --upgrade tgsis)", missing)
+        return status(
+            "client older",
+            f"database {dbname} has tgsis {current.version}, newer than this client's {sources.version}",
+            "this client is older than the database: upgrade the client (pip install --upgrade tgsis)",
+            missing,
+        )
     if current.version != sources.version:
-        statement = (f"ALTER EXTENSION tgsis UPDATE TO '{sources.version}'; SELECT tgsis.create_storage();"
-                     if current.method == "extension" else "")
-        return status("upgrade", f"database {dbname} has tgsis {current.version}, this client {sources.version}",
-                      f"run `tgsis db install` ({current.version} -> {sources.version})"
-                      + (f", or in psql: {statement}" if statement else ""), missing)
+        statement = (
+            f"ALTER EXTENSION tgsis UPDATE TO '{sources.version}'; SELECT tgsis.create_storage();"
+            if current.method == "extension"
+            else ""
+        )
+        return status(
+            "upgrade",
+            f"database {dbname} has tgsis {current.version}, this client {sources.version}",
+            f"run `tgsis db install` ({current.version} -> {sources.version})"
+            + (f", or in psql: {statement}" if statement else ""),
+            missing,
+        )
     # (a fingerprint this role may not read is unknown, not another build: db status shows it as such)
     if current.fingerprint is not None and current.fingerprint != sources.fingerprint:
         return status("other build", *_fingerprint_mismatch(current, sources, dbname), missing=missing)
     if missing:
-        return status("storage missing",
-                      f"database {dbname} has tgsis {current.version} without its storage tables "
-                      f"({len(missing)} missing: {', '.join(missing[:4])}{', ...' if len(missing) > 4 else ''}); "
-                      "CREATE EXTENSION alone does not create them",
-                      "run `tgsis db install`, or in psql: SELECT tgsis.create_storage();", missing)
+        return status(
+            "storage missing",
+            f"database {dbname} has tgsis {current.version} without its storage tables "
+            f"({len(missing)} missing: {', '.join(missing[:4])}{', ...' if len(missing) > 4 else ''}); "
+            "CREATE EXTENSION alone does not create them",
+            "run `tgsis db install`, or in psql: SELECT tgsis.create_storage();",
+            missing,
+        )
     return status("up to date")
 
 
@@ -285,9 +298,7 @@ def _extension_available(conn: psycopg.Connection[Any], version: str) -> bool:
 
 def _create_extension(conn: psycopg.Connection[Any], version: str) -> None:
     conn.execute(
-        sql.SQL("CREATE EXTENSION {} VERSION {} CASCADE").format(
-            sql.Identifier(EXTENSION), sql.Literal(version)
-        )
+        sql.SQL("CREATE EXTENSION {} VERSION {} CASCADE").format(sql.Identifier(EXTENSION), sql.Literal(version))
     )
 
 
@@ -318,8 +329,10 @@ def _install_fresh(
         try:
             with conn.transaction():
                 _create_extension(conn, sources.version)
-                steps.append(f"created the extension tgsis {sources.version} "
-                             f"(CREATE EXTENSION tgsis VERSION '{sources.version}' CASCADE)")
+                steps.append(
+                    f"created the extension tgsis {sources.version} "
+                    f"(CREATE EXTENSION tgsis VERSION '{sources.version}' CASCADE)"
+                )
                 if _create_storage(conn):
                     steps.append("created the storage tables (SELECT tgsis.create_storage())")
             return "extension"
@@ -364,12 +377,12 @@ def _upgrade(
                 hint="run `make -C sql install` for the new version on the server",
             )
         conn.execute(
-            sql.SQL("ALTER EXTENSION {} UPDATE TO {}").format(
-                sql.Identifier(EXTENSION), sql.Literal(sources.version)
-            )
+            sql.SQL("ALTER EXTENSION {} UPDATE TO {}").format(sql.Identifier(EXTENSION), sql.Literal(sources.version))
         )
-        steps.append(f"upgraded tgsis {current.version} -> {sources.version} "
-                     f"(ALTER EXTENSION tgsis UPDATE TO '{sources.version}')")
+        steps.append(
+            f"upgraded tgsis {current.version} -> {sources.version} "
+            f"(ALTER EXTENSION tgsis UPDATE TO '{sources.version}')"
+        )
         if _create_storage(conn):
             steps.append("created the storage tables (SELECT tgsis.create_storage())")
         return
@@ -378,8 +391,11 @@ def _upgrade(
     for path in chain:
         log.info("applying %s", path.name)
         conn.execute(sources.upgrade_sql(path).encode("utf-8"))
-    steps.append(f"upgraded tgsis {current.version} -> {sources.version} (plain SQL: "
-                 + ", ".join(path.name for path in chain) + ")")
+    steps.append(
+        f"upgraded tgsis {current.version} -> {sources.version} (plain SQL: "
+        + ", ".join(path.name for path in chain)
+        + ")"
+    )
 
 
 _TGSIS_ROLES = ("tgsis_reader", "tgsis_editor", "tgsis_admin", "tgsis_nobody")
@@ -387,8 +403,12 @@ _TGSIS_ROLES = ("tgsis_reader", "tgsis_editor", "tgsis_admin", "tgsis_nobody")
 
 def _existing(conn: psycopg.Connection[Any]) -> tuple[set[str], set[str]]:
     """The tgsis roles and the extensions that exist (to say what an install created)."""
-    roles = {str(r[0]) for r in conn.execute("SELECT rolname FROM pg_catalog.pg_roles WHERE rolname = ANY(%s)",
-                                             (list(_TGSIS_ROLES),)).fetchall()}
+    roles = {
+        str(r[0])
+        for r in conn.execute(
+            "SELECT rolname FROM pg_catalog.pg_roles WHERE rolname = ANY(%s)", (list(_TGSIS_ROLES),)
+        ).fetchall()
+    }
     extensions = {str(r[0]) for r in conn.execute("SELECT extname FROM pg_catalog.pg_extension").fetchall()}
     return roles, extensions
 
@@ -480,22 +500,24 @@ def install(
             if parse_version(current.version) > parse_version(target):
                 raise InstallationError(
                     f"the database has tgsis {current.version}, newer than this client's {target}",
-                    hint="this client is older than the database: upgrade the client "
-                         "(pip install --upgrade tgsis)",
+                    hint="this client is older than the database: upgrade the client (pip install --upgrade tgsis)",
                 )
             if current.version == target:
                 if current.fingerprint is not None and current.fingerprint != sources.fingerprint:
                     problem, fix = _fingerprint_mismatch(current, sources, conn.info.dbname)
                     raise InstallationError(problem, hint=fix)
                 if _create_storage(conn):
-                    steps.append("created the storage tables the extension was created without "
-                                 "(SELECT tgsis.create_storage())")
+                    steps.append(
+                        "created the storage tables the extension was created without (SELECT tgsis.create_storage())"
+                    )
                 result = ("unchanged", current.method, current.version)
             else:
                 _upgrade(conn, current, sources, steps)
                 # the PostGIS wrappers are made at run time (sql/postgis/enable_postgis.sql): again for the new version
-                if conn.execute("SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL "
-                                "AND to_regprocedure('tgsis.enable_postgis()') IS NOT NULL").fetchone() == (True,):
+                if conn.execute(
+                    "SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL "
+                    "AND to_regprocedure('tgsis.enable_postgis()') IS NOT NULL"
+                ).fetchone() == (True,):
                     conn.execute("SELECT tgsis.enable_postgis()")
                     steps.append("made the PostGIS functions again (SELECT tgsis.enable_postgis())")
                 log.info("upgraded tgsis %s -> %s (%s)", current.version, target, current.method)
@@ -649,15 +671,19 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
         The role may not run it or does not own the tables.
     """
     # the SQL parameters are smallint and integer: a larger number would come back as a raw 22003
-    for name, value, high, hint in (("model", model, 2**15 - 1, "SELECT model FROM tgsis.data_models lists them"),
-                                    ("partitions", partitions, 2**31 - 1, "give 2 to 1024 partitions")):
+    for name, value, high, hint in (
+        ("model", model, 2**15 - 1, "SELECT model FROM tgsis.data_models lists them"),
+        ("partitions", partitions, 2**31 - 1, "give 2 to 1024 partitions"),
+    ):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise InvalidInputError(f"{name} must be an integer, not {type(value).__name__} {repr(value)[:100]}",
-                                    hint=hint)
+            raise InvalidInputError(
+                f"{name} must be an integer, not {type(value).__name__} {repr(value)[:100]}", hint=hint
+            )
         if not -high - 1 <= int(value) <= high:
             raise InvalidInputError(f"{name} = {str(int(value))[:100]} is out of range", hint=hint)
     with reraise(), conn.transaction():
-        row = conn.execute("SELECT tgsis.partition_model_storage(%s::smallint, %s::integer)",
-                           (model, partitions)).fetchone()
+        row = conn.execute(
+            "SELECT tgsis.partition_model_storage(%s::smallint, %s::integer)", (model, partitions)
+        ).fetchone()
     assert row is not None
     return list(row[0])

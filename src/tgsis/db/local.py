@@ -243,12 +243,18 @@ def with_private_share(binaries: PgBinaries, prefix: Path, sources: ExtensionSou
         The copy's programs, ``share`` set to its share folder.
     """
     pg_config = binaries.tool("pg_config")
-    out = subprocess.run([str(pg_config), "--bindir", "--sharedir", "--pkglibdir", "--localedir"],
-                         capture_output=True, text=True, check=False)
+    out = subprocess.run(
+        [str(pg_config), "--bindir", "--sharedir", "--pkglibdir", "--localedir"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     lines = out.stdout.splitlines()
     if out.returncode != 0 or len(lines) != 4:
-        raise LocalServerError(f"cannot read the folders of {binaries.describe()} from {pg_config}",
-                               detail=(out.stdout + out.stderr).strip())
+        raise LocalServerError(
+            f"cannot read the folders of {binaries.describe()} from {pg_config}",
+            detail=(out.stdout + out.stderr).strip(),
+        )
     bindir, sharedir, pkglibdir, localedir = (Path(line.strip()) for line in lines)
     common = Path(os.path.commonpath([bindir, sharedir]))
 
@@ -396,8 +402,13 @@ class LocalServer:
         """The cluster the CLI and :func:`tgsis.connect` use when no DSN is given."""
         binaries = binaries or find_binaries()
         root = (home or default_home()) / f"pg{binaries.major}"
-        return cls(root, binaries, durable=True, port=int(os.environ.get("TGSIS_LOCAL_PORT", "5432")),
-                   tcp="TGSIS_LOCAL_PORT" in os.environ)
+        return cls(
+            root,
+            binaries,
+            durable=True,
+            port=int(os.environ.get("TGSIS_LOCAL_PORT", "5432")),
+            tcp="TGSIS_LOCAL_PORT" in os.environ,
+        )
 
     @classmethod
     def throwaway(cls, binaries: PgBinaries | None = None) -> LocalServer:
@@ -414,8 +425,11 @@ class LocalServer:
         binaries = binaries or find_binaries()
         root = Path(tempfile.mkdtemp(prefix="tgsis-pg-"))
         try:
-            if not binaries.has_extension_control_path and binaries.share is None \
-                    and binaries.tool("pg_config").is_file():
+            if (
+                not binaries.has_extension_control_path
+                and binaries.share is None
+                and binaries.tool("pg_config").is_file()
+            ):
                 binaries = with_private_share(binaries, root / "pg")
         except BaseException:
             shutil.rmtree(root, ignore_errors=True)
@@ -518,16 +532,25 @@ class LocalServer:
         _check_reachable(self.binaries.bindir, self.os_user, "the PostgreSQL binaries in")
         if self.data_dir.exists() and any(self.data_dir.iterdir()):
             raise LocalServerError(f"{self.data_dir} exists, is not empty and holds no PostgreSQL cluster")
-        args = [str(self.binaries.tool("initdb")), "-D", str(self.data_dir), "-U", SUPERUSER,
-                "--auth=trust", "--encoding=UTF8", "--no-locale"]
+        args = [
+            str(self.binaries.tool("initdb")),
+            "-D",
+            str(self.data_dir),
+            "-U",
+            SUPERUSER,
+            "--auth=trust",
+            "--encoding=UTF8",
+            "--no-locale",
+        ]
         if not self.durable:
             args.append("--no-sync")
         result = self._run(args, timeout=300)
         if result.returncode != 0:
             raise LocalServerError(f"initdb failed for {self.data_dir}", detail=result.stdout[-2000:])
         with (self.data_dir / "postgresql.conf").open("a", encoding="utf-8") as conf:
-            conf.write("\n# settings of the tgsis local server, rewritten at every start\n"
-                       "include_if_exists = 'tgsis.conf'\n")
+            conf.write(
+                "\n# settings of the tgsis local server, rewritten at every start\ninclude_if_exists = 'tgsis.conf'\n"
+            )
         log.info("initialised %s with %s", self.data_dir, self.binaries.describe())
 
     def _settings(self) -> dict[str, str]:
@@ -588,8 +611,20 @@ class LocalServer:
         self._write_config()
         if self.binaries.has_extension_control_path:
             self.write_extension_files()
-        result = self._run([str(self.binaries.tool("pg_ctl")), "start", "-D", str(self.data_dir),
-                            "-l", str(self.log_file), "-w", "-t", "120"], timeout=180)
+        result = self._run(
+            [
+                str(self.binaries.tool("pg_ctl")),
+                "start",
+                "-D",
+                str(self.data_dir),
+                "-l",
+                str(self.log_file),
+                "-w",
+                "-t",
+                "120",
+            ],
+            timeout=180,
+        )
         if result.returncode != 0:
             raise LocalServerError(
                 f"could not start PostgreSQL in {self.data_dir}",
@@ -608,8 +643,9 @@ class LocalServer:
         """
         if not self.is_running():
             return False
-        result = self._run([str(self.binaries.tool("pg_ctl")), "stop", "-D", str(self.data_dir),
-                            "-m", mode, "-w", "-t", "60"])
+        result = self._run(
+            [str(self.binaries.tool("pg_ctl")), "stop", "-D", str(self.data_dir), "-m", mode, "-w", "-t", "60"]
+        )
         if result.returncode != 0 and mode != "immediate":
             log.warning("%s shutdown failed (%s); stopping immediately", mode, result.stdout.strip())
             return self.stop("immediate")
@@ -634,17 +670,36 @@ class LocalServer:
         if self._reaper is not None:
             return
         read_end, write_end = os.pipe()
-        args = [sys.executable, str(Path(__file__).with_name("reaper.py")), "--mode", mode,
-                "--pg-ctl", str(self.binaries.tool("pg_ctl")), "--data", str(self.data_dir),
-                "--root", str(self.root), "--lock-file", str(self.lock_file),
-                "--transition-lock-file", str(self.transition_lock_file),
-                "--state-file", str(self.state_file), "--owner-pid", str(os.getpid())]
+        args = [
+            sys.executable,
+            str(Path(__file__).with_name("reaper.py")),
+            "--mode",
+            mode,
+            "--pg-ctl",
+            str(self.binaries.tool("pg_ctl")),
+            "--data",
+            str(self.data_dir),
+            "--root",
+            str(self.root),
+            "--lock-file",
+            str(self.lock_file),
+            "--transition-lock-file",
+            str(self.transition_lock_file),
+            "--state-file",
+            str(self.state_file),
+            "--owner-pid",
+            str(os.getpid()),
+        ]
         if self.os_user is not None:
             args += ["--uid", str(self.os_user.uid), "--gid", str(self.os_user.gid)]
         try:
             self._reaper = subprocess.Popen(  # noqa: S603 - fixed argument list
-                args, stdin=read_end, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                start_new_session=True, cwd="/",
+                args,
+                stdin=read_end,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+                cwd="/",
             )
         finally:
             os.close(read_end)
@@ -681,8 +736,9 @@ class LocalServer:
     # ---- leases (persistent clusters)
 
     def _write_state(self, started_by: Literal["implicit", "explicit"]) -> None:
-        self.state_file.write_text(json.dumps({"started_by": started_by, "pid": os.getpid(),
-                                               "time": time.time()}), encoding="utf-8")
+        self.state_file.write_text(
+            json.dumps({"started_by": started_by, "pid": os.getpid(), "time": time.time()}), encoding="utf-8"
+        )
 
     def started_by(self) -> str | None:
         """``"implicit"`` or ``"explicit"`` while the server runs, else ``None``."""

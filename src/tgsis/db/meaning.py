@@ -103,8 +103,11 @@ def meaning_of(mesh: Mesh | Any, what: str = "the mesh") -> Meaning:
     extra = {k: v for k, v in meta.items() if k not in _OWN_PLACE and _jsonable(k, v)}
     color: list[float] | None = None
     raw = meta.get("color")
-    if (isinstance(raw, (list, tuple)) and len(raw) >= 3
-            and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in raw)):
+    if (
+        isinstance(raw, (list, tuple))
+        and len(raw) >= 3
+        and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in raw)
+    ):
         rgb = [float(c) for c in raw[:3]]
         if all(math.isfinite(c) and 0.0 <= c <= 1.0 for c in rgb):
             color = rgb
@@ -121,19 +124,31 @@ def meaning_of(mesh: Mesh | Any, what: str = "the mesh") -> Meaning:
         bits = vertices.view(np.int64)
         dropped = 0
         for pair in pairs:
-            if (isinstance(pair, (list, tuple)) and len(pair) == 2
-                    and all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in pair)
-                    and 0 <= int(pair[0]) < len(bits) and 0 <= int(pair[1]) < len(bits)
-                    and int(pair[0]) != int(pair[1]) and np.array_equal(bits[int(pair[0])], bits[int(pair[1])])):
+            if (
+                isinstance(pair, (list, tuple))
+                and len(pair) == 2
+                and all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in pair)
+                and 0 <= int(pair[0]) < len(bits)
+                and 0 <= int(pair[1]) < len(bits)
+                and int(pair[0]) != int(pair[1])
+                and np.array_equal(bits[int(pair[0])], bits[int(pair[1])])
+            ):
                 atoms.append((int(pair[0]), int(pair[1])))
             else:
                 dropped += 1
         if dropped:  # an edit moved or renumbered the vertices: such an atom is a vertex of its own now
-            log.warning("%d of the atoms in metadata['gocad_atoms'] of %s no longer repeat a vertex at the same "
-                        "place and are stored as plain vertices", dropped, what)
+            log.warning(
+                "%d of the atoms in metadata['gocad_atoms'] of %s no longer repeat a vertex at the same "
+                "place and are stored as plain vertices",
+                dropped,
+                what,
+            )
     flagged = meta.get("gocad_patoms")
-    patoms = frozenset(int(v) for v in flagged if isinstance(v, (int, np.integer))) \
-        if isinstance(flagged, (list, tuple)) else frozenset()
+    patoms = (
+        frozenset(int(v) for v in flagged if isinstance(v, (int, np.integer)))
+        if isinstance(flagged, (list, tuple))
+        else frozenset()
+    )
     return Meaning(zpositive, crs, color, extra or None, atoms, patoms & {a for a, _ in atoms})
 
 
@@ -174,9 +189,15 @@ def parts_from_runs(cell_ids: IntArray, firsts: IntArray, lasts: IntArray, numbe
     return result
 
 
-def restore_meaning(mesh: Mesh | GeometryCollection, zpositive: str | None, crs: Sequence[str] | None, color: Sequence[Any] | None,
-                    metadata: Mapping[str, Any] | None, atoms: Sequence[tuple[int, int]] = (),
-                    patoms: Sequence[int] = ()) -> None:
+def restore_meaning(
+    mesh: Mesh | GeometryCollection,
+    zpositive: str | None,
+    crs: Sequence[str] | None,
+    color: Sequence[Any] | None,
+    metadata: Mapping[str, Any] | None,
+    atoms: Sequence[tuple[int, int]] = (),
+    patoms: Sequence[int] = (),
+) -> None:
     """Give a mesh read from storage back its file's meaning (in place): z convention, metadata, atoms.
 
     ``mesh.vertices`` are the stored (elevation) ones; for Depth their z is negated.
@@ -196,8 +217,12 @@ def restore_meaning(mesh: Mesh | GeometryCollection, zpositive: str | None, crs:
     columns = [c for c in (color or ()) if c is not None]
     if len(columns) == 3:
         stored = meta.get("color")
-        if (isinstance(stored, list) and len(stored) >= 3 and all(isinstance(c, (int, float)) for c in stored)
-                and [float(np.float32(c)) for c in stored[:3]] == [float(np.float32(c)) for c in columns]):
+        if (
+            isinstance(stored, list)
+            and len(stored) >= 3
+            and all(isinstance(c, (int, float)) for c in stored)
+            and [float(np.float32(c)) for c in stored[:3]] == [float(np.float32(c)) for c in columns]
+        ):
             meta["color"] = tuple(float(c) for c in stored)  # exact, as the file had it
         else:
             meta["color"] = tuple(float(str(np.float32(c))) for c in columns)  # the columns (maybe edited in SQL)

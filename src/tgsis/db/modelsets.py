@@ -89,7 +89,8 @@ def model_objects(conn: Conn, name: str) -> list[ModelObject]:
 def list_models(conn: Conn) -> list[Model]:
     """The models of the session's version, by name."""
     with reraise():
-        rows = conn.execute("SELECT m.modelid, m.name, m.description, (SELECT count(*) FROM tgsis.model_object o "
-                            "WHERE o.modelid = m.modelid) FROM tgsis.model m ORDER BY m.name").fetchall()
+        rows = conn.execute(
+            "SELECT m.modelid, m.name, m.description, (SELECT count(*) FROM tgsis.model_object o "
+            "WHERE o.modelid = m.modelid) FROM tgsis.model m ORDER BY m.name"
+        ).fetchall()
     return [Model(int(r[0]), r[1], r[2], int(r[3])) for r in rows]
-

@@ -24,8 +24,7 @@ __all__ = ["create_postgis_view", "enable_postgis", "fetch_ewkb", "insert_wkb_fe
 def postgis_enabled(conn: psycopg.Connection[Any]) -> bool:
     """Whether :func:`enable_postgis` has created tgsis's PostGIS functions in this database."""
     with reraise():
-        row = conn.execute(
-            "SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL").fetchone()
+        row = conn.execute("SELECT to_regprocedure('tgsis.postgis_geometry(text, bigint)') IS NOT NULL").fetchone()
     return bool(row and row[0])
 
 
@@ -139,11 +138,14 @@ def fetch_ewkb(
     """
     with reraise():
         if t is None:
-            row = conn.execute("SELECT tgsis.ewkb_geometry(%s, tgsis.feature_srid(%s, %s))",
-                               (feature_id, class_name, feature_id)).fetchone()
+            row = conn.execute(
+                "SELECT tgsis.ewkb_geometry(%s, tgsis.feature_srid(%s, %s))", (feature_id, class_name, feature_id)
+            ).fetchone()
         else:
-            row = conn.execute("SELECT tgsis.ewkb_geometry_at(%s, %s, %s, tgsis.feature_srid(%s, %s))",
-                               (feature_id, float(t), convention, class_name, feature_id)).fetchone()
+            row = conn.execute(
+                "SELECT tgsis.ewkb_geometry_at(%s, %s, %s, tgsis.feature_srid(%s, %s))",
+                (feature_id, float(t), convention, class_name, feature_id),
+            ).fetchone()
     assert row is not None
     return None if row[0] is None else bytes(row[0])
 
@@ -174,4 +176,3 @@ def insert_wkb_feature(
     mesh = mesh_from_wkb(data, name=name)
     mesh.metadata.pop("srid", None)
     return insert_feature(conn, class_name, mesh, properties)
-

@@ -101,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
 
     tail = b""
     while chunk := sys.stdin.buffer.read(65536):
-        tail = (tail + chunk)[-len(RELEASED):]
+        tail = (tail + chunk)[-len(RELEASED) :]
     if tail != RELEASED:  # the owner died: its lease may outlive the pipe for a moment
         _wait_for_owner_exit(args.owner_pid)
 

@@ -168,13 +168,18 @@ class ExtensionSources:
         folder = self.root / "upgrade"
         if not folder.is_dir():
             return {}
-        return {m.group(1): path for path in sorted(folder.iterdir())
-                if (m := re.match(rf"^{EXTENSION}--([0-9][0-9.]*)\.sql$", path.name)) and m.group(1) != self.version}
+        return {
+            m.group(1): path
+            for path in sorted(folder.iterdir())
+            if (m := re.match(rf"^{EXTENSION}--([0-9][0-9.]*)\.sql$", path.name)) and m.group(1) != self.version
+        }
 
     def source_texts(self) -> dict[str, str]:
         """``{file: text}`` of the sources in install order, ``@TGSIS_VERSION@`` replaced."""
-        return {name: (self.root / name).read_text(encoding="utf-8").replace(VERSION_TOKEN, self.version)
-                for name in self.files}
+        return {
+            name: (self.root / name).read_text(encoding="utf-8").replace(VERSION_TOKEN, self.version)
+            for name in self.files
+        }
 
     def upgrade(self, from_version: str) -> Upgrade:
         """The assembled upgrade from ``from_version`` to this version (its parts, :attr:`~tgsis.db._upgrade.Upgrade.unhandled`)."""

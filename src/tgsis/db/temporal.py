@@ -99,8 +99,10 @@ Conn = psycopg.Connection[Any]
 def _temporal_class(conn: Conn, feature_class: str | FeatureClass, model: str) -> FeatureClass:
     fc = resolve_class(conn, feature_class)
     if fc.time_model != model:
-        raise InvalidInputError(f"feature class {fc.name} has time model {fc.time_model}, not {model}",
-                                hint="SurfaceSeries go to INSTANTS classes, EvolvingSurface to EVOLVING classes")
+        raise InvalidInputError(
+            f"feature class {fc.name} has time model {fc.time_model}, not {model}",
+            hint="SurfaceSeries go to INSTANTS classes, EvolvingSurface to EVOLVING classes",
+        )
     return fc
 
 
@@ -110,12 +112,32 @@ def _bounds(points: npt.NDArray[np.float64]) -> list[float] | None:
     return None if len(flat) == 0 else [*flat.min(axis=0).tolist(), *flat.max(axis=0).tolist()]
 
 
-def _new_temporal_geometry(conn: Conn, fc: FeatureClass, name: str | None, bounds: list[float] | None, nvrtx: int,
-                           ncell: int, alive: bool, color: Sequence[float] | None, zpositive: str | None = None) -> int:
-    row = conn.execute("SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[], "
-                       "p_zpositive => %s, p_class => %s)",
-                       (no_nul("geometry name", name), bounds, nvrtx, ncell, fc.time_model, alive, list(color) if color else None,
-                        zpositive, fc.name)).fetchone()
+def _new_temporal_geometry(
+    conn: Conn,
+    fc: FeatureClass,
+    name: str | None,
+    bounds: list[float] | None,
+    nvrtx: int,
+    ncell: int,
+    alive: bool,
+    color: Sequence[float] | None,
+    zpositive: str | None = None,
+) -> int:
+    row = conn.execute(
+        "SELECT tgsis.new_geometry('SURFACE', %s, %s, %s, %s, NULL, NULL, %s, %s, %s::real[], "
+        "p_zpositive => %s, p_class => %s)",
+        (
+            no_nul("geometry name", name),
+            bounds,
+            nvrtx,
+            ncell,
+            fc.time_model,
+            alive,
+            list(color) if color else None,
+            zpositive,
+            fc.name,
+        ),
+    ).fetchone()
     assert row is not None
     return int(row[0])
 
@@ -140,13 +162,21 @@ def _instant_rows(fc: FeatureClass, values: Mapping[str, npt.NDArray[Any]], coun
     known = [p.name for p in fc.instant_properties]
     unknown = sorted(set(values) - set(known))
     if unknown:
-        raise InvalidPropertyError(f"feature class {fc.name} has no per-instant properties {unknown}",
-                                   hint=f"its per-instant properties: {known or 'none'}")
+        raise InvalidPropertyError(
+            f"feature class {fc.name} has no per-instant properties {unknown}",
+            hint=f"its per-instant properties: {known or 'none'}",
+        )
     return [[values[name][i].item() if name in values else None for name in known] for i in range(count)]
 
 
-def _insert_instant_properties(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[Sequence[Any]],
-                               rows: Sequence[Sequence[Any]], key_columns: Sequence[str]) -> None:
+def _insert_instant_properties(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    keys: Sequence[Sequence[Any]],
+    rows: Sequence[Sequence[Any]],
+    key_columns: Sequence[str],
+) -> None:
     """One row per instant into ``<name>_pros`` (few rows, any column type: a plain INSERT)."""
     if not fc.instant_properties or not rows:
         return
@@ -155,9 +185,12 @@ def _insert_instant_properties(conn: Conn, fc: FeatureClass, geoid: int, keys: S
     with conn.cursor() as cur:
         cur.executemany(
             sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
-                fc.qualified(fc.protable), sql.SQL(", ").join(sql.Identifier(c) for c in columns),
-                sql.SQL(", ").join(sql.Placeholder() for _ in columns)),
-            [[geoid, *k, *r] for k, r in zip(keys, rows)])
+                fc.qualified(fc.protable),
+                sql.SQL(", ").join(sql.Identifier(c) for c in columns),
+                sql.SQL(", ").join(sql.Placeholder() for _ in columns),
+            ),
+            [[geoid, *k, *r] for k, r in zip(keys, rows)],
+        )
 
 
 # --------------------------------------------------------------------------- model 2
@@ -168,10 +201,19 @@ def _local_ids(counts: Sequence[int]) -> npt.NDArray[np.int64]:
     return row_keys([0] * len(counts), counts)[1]
 
 
-def _copy_instants(conn: Conn, fc: FeatureClass, geoid: int, times: Sequence[float], surfaces: Sequence[Surface],
-                   storage: Storage, drop_extra: bool) -> None:
+def _copy_instants(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    times: Sequence[float],
+    surfaces: Sequence[Surface],
+    storage: Storage,
+    drop_extra: bool,
+) -> None:
     """COPY the vertices, triangles and cell properties of surfaces at instants of geometry ``geoid``."""
-    cell_values = [aligned_properties(fc, s, drop_extra, f"the surface at instant {t!r}") for t, s in zip(times, surfaces)]
+    cell_values = [
+        aligned_properties(fc, s, drop_extra, f"the surface at instant {t!r}") for t, s in zip(times, surfaces)
+    ]
     n = [s.n_vertices for s in surfaces]
     m = [s.n_cells for s in surfaces]
     vertex_ids, triangle_ids = _local_ids(n), _local_ids(m)
@@ -179,25 +221,56 @@ def _copy_instants(conn: Conn, fc: FeatureClass, geoid: int, times: Sequence[flo
     geoids_t = np.full(sum(m), geoid, dtype=np.int64)
     xyz = concat([s.vertices for s in surfaces])
     tri = concat([s.cells for s in surfaces])
-    storage.copy(conn, "tgsis", "times_vrtx", [
-        ("geoid", geoids_v, "int8"), ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
-        ("vrtxid", vertex_ids, "int8"), ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
-    storage.copy(conn, "tgsis", "times_trgl", [
-        ("geoid", geoids_t, "int8"), ("times", np.repeat(np.asarray(times, dtype=np.float64), m), "float8"),
-        ("trglid", triangle_ids, "int8"), *((f"vrtxid{j + 1}", tri[:, j], "int8") for j in range(3))])
+    storage.copy(
+        conn,
+        "tgsis",
+        "times_vrtx",
+        [
+            ("geoid", geoids_v, "int8"),
+            ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
+            ("vrtxid", vertex_ids, "int8"),
+            ("x", xyz[:, 0], "float8"),
+            ("y", xyz[:, 1], "float8"),
+            ("z", xyz[:, 2], "float8"),
+        ],
+    )
+    storage.copy(
+        conn,
+        "tgsis",
+        "times_trgl",
+        [
+            ("geoid", geoids_t, "int8"),
+            ("times", np.repeat(np.asarray(times, dtype=np.float64), m), "float8"),
+            ("trglid", triangle_ids, "int8"),
+            *((f"vrtxid{j + 1}", tri[:, j], "int8") for j in range(3)),
+        ],
+    )
     if fc.cell_properties:
         counts = n if fc.alignment == "VERTEX" else m
         idx = _local_ids(counts)
-        storage.copy(conn, fc.schema, fc.cellprotable, [
-            ("_geoid", np.full(sum(counts), geoid, dtype=np.int64), "int8"),
-            ("_times", np.repeat(np.asarray(times, dtype=np.float64), counts), "float8"), ("_idx", idx, "int8"),
-            *((p.name, concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties)])
+        storage.copy(
+            conn,
+            fc.schema,
+            fc.cellprotable,
+            [
+                ("_geoid", np.full(sum(counts), geoid, dtype=np.int64), "int8"),
+                ("_times", np.repeat(np.asarray(times, dtype=np.float64), counts), "float8"),
+                ("_idx", idx, "int8"),
+                *((p.name, concat([v[p.name] for v in cell_values]), SQL_TYPES[p.type]) for p in fc.cell_properties),
+            ],
+        )
 
 
 @checked
-def insert_series(conn: Conn, feature_class: str | FeatureClass, series: SurfaceSeries,
-                  properties: Mapping[str, Any] | None = None, *, name: str | None = None,
-                  drop_extra_properties: bool = False) -> int:
+def insert_series(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    series: SurfaceSeries,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    drop_extra_properties: bool = False,
+) -> int:
     """Store a surface known at instants as a new feature of an INSTANTS class; return its id.
 
     Parameters
@@ -228,12 +301,22 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
-            conn, fc, name if name is not None else series.name,
+            conn,
+            fc,
+            name if name is not None else series.name,
             _bounds(concat([s.vertices for s in surfaces])),
-            sum(s.n_vertices for s in surfaces), sum(s.n_cells for s in surfaces), series.alive,
-            series.color, zpositive)
-        storage.copy(conn, "tgsis", "times", [("geoid", np.full(len(times), geoid, dtype=np.int64), "int8"),
-                                              ("times", series.times, "float8")])
+            sum(s.n_vertices for s in surfaces),
+            sum(s.n_cells for s in surfaces),
+            series.alive,
+            series.color,
+            zpositive,
+        )
+        storage.copy(
+            conn,
+            "tgsis",
+            "times",
+            [("geoid", np.full(len(times), geoid, dtype=np.int64), "int8"), ("times", series.times, "float8")],
+        )
         _copy_instants(conn, fc, geoid, times, surfaces, storage, drop_extra_properties)
         _insert_instant_properties(conn, fc, geoid, [(t,) for t in times], instant_rows, ["_times"])
         insert_feature_row(conn, fc, geoid, properties)
@@ -242,8 +325,16 @@ def insert_series(conn: Conn, feature_class: str | FeatureClass, series: Surface
 
 
 @checked
-def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, t: float, surface: Surface,
-                properties: Mapping[str, Any] | None = None, *, drop_extra_properties: bool = False) -> None:
+def add_instant(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    feature_id: int,
+    t: float,
+    surface: Surface,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    drop_extra_properties: bool = False,
+) -> None:
     """Store the surface of feature ``feature_id`` at a new instant ``t`` (model 2).
 
     Parameters
@@ -276,7 +367,8 @@ def add_instant(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
             "            WHEN bbox IS NULL THEN cube((%s::float8[])[1:3], (%s::float8[])[4:6]) "
             "            ELSE cube_union(bbox, cube((%s::float8[])[1:3], (%s::float8[])[4:6])) END "
             "WHERE geoid = %s",
-            (surface.n_vertices, surface.n_cells, bounds, bounds, bounds, bounds, bounds, feature_id))
+            (surface.n_vertices, surface.n_cells, bounds, bounds, bounds, bounds, bounds, feature_id),
+        )
 
 
 @checked
@@ -309,18 +401,34 @@ def instants(conn: Conn, feature_id: int) -> list[tuple[float, bool]]:
 # --------------------------------------------------------------------------- model 3
 
 
-def _period_columns(fc: FeatureClass, surface: EvolvingSurface,
-                    drop_extra: bool) -> list[dict[str, npt.NDArray[Any]]]:
+def _period_columns(fc: FeatureClass, surface: EvolvingSurface, drop_extra: bool) -> list[dict[str, npt.NDArray[Any]]]:
     """Per period, the class's vertex or cell property arrays (g, n) or (g, m), checked and cast."""
-    return [class_property_arrays(fc, *((p.vertex_properties, p.cell_properties) if fc.alignment == "VERTEX"
-                                        else (p.cell_properties, p.vertex_properties)),
-                                  "vertex" if fc.alignment == "VERTEX" else "triangle", drop_extra,
-                                  f"topology period {i}")
-            for i, p in enumerate(surface.periods)]
+    return [
+        class_property_arrays(
+            fc,
+            *(
+                (p.vertex_properties, p.cell_properties)
+                if fc.alignment == "VERTEX"
+                else (p.cell_properties, p.vertex_properties)
+            ),
+            "vertex" if fc.alignment == "VERTEX" else "triangle",
+            drop_extra,
+            f"topology period {i}",
+        )
+        for i, p in enumerate(surface.periods)
+    ]
 
 
-def _copy_periods(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int, periods: Sequence[TopologyPeriod],
-                  cell_values: Sequence[Mapping[str, npt.NDArray[Any]]], first_node: int, first_triangle: int) -> None:
+def _copy_periods(
+    conn: Conn,
+    storage: Storage,
+    fc: FeatureClass,
+    geoid: int,
+    periods: Sequence[TopologyPeriod],
+    cell_values: Sequence[Mapping[str, npt.NDArray[Any]]],
+    first_node: int,
+    first_triangle: int,
+) -> None:
     """COPY the rows of model-3 topology periods (instants, nodes, triangles, 4D vertices, vertex or cell properties).
 
     Nodes and triangles are numbered on from ``first_node`` and ``first_triangle``
@@ -336,48 +444,112 @@ def _copy_periods(conn: Conn, storage: Storage, fc: FeatureClass, geoid: int, pe
     def full(count: int) -> npt.NDArray[np.int64]:
         return np.full(count, geoid, dtype=np.int64)
 
-    storage.copy(conn, "tgsis", "timem", [("geoid", full(len(periods)), "int8"),
-                                          ("timem", np.asarray(starts, dtype=np.float64), "float8")])
-    storage.copy(conn, "tgsis", "timet", [("geoid", full(sum(g)), "int8"),
-                                          ("timem", np.repeat(starts, g).astype(np.float64), "float8"),
-                                          ("timet", concat([p.times for p in periods]), "float8")])
-    storage.copy(conn, "tgsis", "node", [("geoid", full(sum(n)), "int8"),
-                                         ("timem", np.repeat(starts, n).astype(np.float64), "float8"),
-                                         ("nodeid", first_node + np.arange(sum(n), dtype=np.int64), "int8")])
+    storage.copy(
+        conn,
+        "tgsis",
+        "timem",
+        [("geoid", full(len(periods)), "int8"), ("timem", np.asarray(starts, dtype=np.float64), "float8")],
+    )
+    storage.copy(
+        conn,
+        "tgsis",
+        "timet",
+        [
+            ("geoid", full(sum(g)), "int8"),
+            ("timem", np.repeat(starts, g).astype(np.float64), "float8"),
+            ("timet", concat([p.times for p in periods]), "float8"),
+        ],
+    )
+    storage.copy(
+        conn,
+        "tgsis",
+        "node",
+        [
+            ("geoid", full(sum(n)), "int8"),
+            ("timem", np.repeat(starts, n).astype(np.float64), "float8"),
+            ("nodeid", first_node + np.arange(sum(n), dtype=np.int64), "int8"),
+        ],
+    )
     triangles = concat([p.triangles + off for p, off in zip(periods, node_offsets.tolist())])
-    storage.copy(conn, "tgsis", "d4dtrgl", [("geoid", full(sum(m)), "int8"),
-                                            ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
-                                            ("trglid", first_triangle + np.arange(sum(m), dtype=np.int64), "int8"),
-                                            *((f"nodeid{j + 1}", triangles[:, j], "int8") for j in range(3))])
+    storage.copy(
+        conn,
+        "tgsis",
+        "d4dtrgl",
+        [
+            ("geoid", full(sum(m)), "int8"),
+            ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
+            ("trglid", first_triangle + np.arange(sum(m), dtype=np.int64), "int8"),
+            *((f"nodeid{j + 1}", triangles[:, j], "int8") for j in range(3)),
+        ],
+    )
     # per period and geometry instant, every node: g_i * n_i rows
     samples = [gi * ni for gi, ni in zip(g, n)]
     xyz = concat([p.positions.reshape(-1, 3) for p in periods])
-    storage.copy(conn, "tgsis", "d4dvrtx", [
-        ("geoid", full(sum(samples)), "int8"),
-        ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
-        ("timet", concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
-        ("nodeid", concat([np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
-                            for p, off in zip(periods, node_offsets.tolist())]), "int8"),
-        ("x", xyz[:, 0], "float8"), ("y", xyz[:, 1], "float8"), ("z", xyz[:, 2], "float8")])
+    storage.copy(
+        conn,
+        "tgsis",
+        "d4dvrtx",
+        [
+            ("geoid", full(sum(samples)), "int8"),
+            ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
+            ("timet", concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
+            (
+                "nodeid",
+                concat(
+                    [
+                        np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
+                        for p, off in zip(periods, node_offsets.tolist())
+                    ]
+                ),
+                "int8",
+            ),
+            ("x", xyz[:, 0], "float8"),
+            ("y", xyz[:, 1], "float8"),
+            ("z", xyz[:, 2], "float8"),
+        ],
+    )
     if fc.cell_properties:
         per = n if fc.alignment == "VERTEX" else m
         offsets = node_offsets if fc.alignment == "VERTEX" else triangle_offsets
         rows = [gi * ci for gi, ci in zip(g, per)]
-        storage.copy(conn, fc.schema, fc.cellprotable, [
-            ("_geoid", full(sum(rows)), "int8"),
-            ("_timem", np.repeat(starts, rows).astype(np.float64), "float8"),
-            ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
-            ("_idx", concat([np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
-                              for p, c, off in zip(periods, per, offsets.tolist())]), "int8"),
-            *((prop.name, concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
-              for prop in fc.cell_properties)])
+        storage.copy(
+            conn,
+            fc.schema,
+            fc.cellprotable,
+            [
+                ("_geoid", full(sum(rows)), "int8"),
+                ("_timem", np.repeat(starts, rows).astype(np.float64), "float8"),
+                ("_timet", concat([np.repeat(p.times, c) for p, c in zip(periods, per)]), "float8"),
+                (
+                    "_idx",
+                    concat(
+                        [
+                            np.tile(np.arange(c, dtype=np.int64) + off, len(p.times))
+                            for p, c, off in zip(periods, per, offsets.tolist())
+                        ]
+                    ),
+                    "int8",
+                ),
+                *(
+                    (prop.name, concat([v[prop.name].reshape(-1) for v in cell_values]), SQL_TYPES[prop.type])
+                    for prop in fc.cell_properties
+                ),
+            ],
+        )
 
 
 @checked
-def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: EvolvingSurface,
-                    properties: Mapping[str, Any] | None = None, *, name: str | None = None,
-                    drop_extra_properties: bool = False, tolerance: float | None = None,
-                    sudden_change: float | None = None) -> int:
+def insert_evolving(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    surface: EvolvingSurface,
+    properties: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    drop_extra_properties: bool = False,
+    tolerance: float | None = None,
+    sudden_change: float | None = None,
+) -> int:
     """Store an evolving surface as a new feature of an EVOLVING class; return its id.
 
     Nodes and triangles are numbered on through the periods (period 0 has
@@ -429,24 +601,43 @@ def insert_evolving(conn: Conn, feature_class: str | FeatureClass, surface: Evol
         storage = Storage.of(conn, fc)
         storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
         geoid = _new_temporal_geometry(
-            conn, fc, name if name is not None else surface.name,
-            _bounds(concat([p.positions.reshape(-1, 3) for p in periods])), sum(n), sum(m), surface.alive,
-            surface.color)
+            conn,
+            fc,
+            name if name is not None else surface.name,
+            _bounds(concat([p.positions.reshape(-1, 3) for p in periods])),
+            sum(n),
+            sum(m),
+            surface.alive,
+            surface.color,
+        )
         _copy_periods(conn, storage, fc, geoid, periods, cell_values, 0, 0)
         keys = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
         _insert_instant_properties(conn, fc, geoid, keys, instant_rows, ["_timem", "_timet"])
         if len(periods) > 1:
             check_continuity(conn, geoid, tolerance)
         insert_feature_row(conn, fc, geoid, properties)
-    log.info("stored %s feature %d: %d topology periods, %d nodes, %d triangles", fc.name, geoid, len(periods),
-             sum(n), sum(m))
+    log.info(
+        "stored %s feature %d: %d topology periods, %d nodes, %d triangles",
+        fc.name,
+        geoid,
+        len(periods),
+        sum(n),
+        sum(m),
+    )
     return geoid
 
 
 @checked
-def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int, period: TopologyPeriod, *,
-                  drop_extra_properties: bool = False, tolerance: float | None = None,
-                  sudden_change: float | None = None) -> None:
+def append_period(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    feature_id: int,
+    period: TopologyPeriod,
+    *,
+    drop_extra_properties: bool = False,
+    tolerance: float | None = None,
+    sudden_change: float | None = None,
+) -> None:
     """Append a topology period to an evolving feature, after its last one (one transaction).
 
     The new period must start at the feature's last geometry instant (periods
@@ -486,18 +677,29 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         conn.execute("SELECT tgsis.temporal_geometry(%s, 'EVOLVING')", (feature_id,))
         # one writer of the feature's periods at a time: a second append waits, then sees the new last instant
         conn.execute("SELECT FROM tgsis.geometry WHERE geoid = %s FOR UPDATE", (feature_id,))
-        if conn.execute(sql.SQL("SELECT FROM {}.{} WHERE _geoid = %s").format(
-                sql.Identifier(fc.schema), sql.Identifier(fc.featuretable)), (feature_id,)).fetchone() is None:
+        if (
+            conn.execute(
+                sql.SQL("SELECT FROM {}.{} WHERE _geoid = %s").format(
+                    sql.Identifier(fc.schema), sql.Identifier(fc.featuretable)
+                ),
+                (feature_id,),
+            ).fetchone()
+            is None
+        ):
             raise NotFoundError(f"feature {feature_id} is not a feature of class {fc.name}")
         row = conn.execute(
             "SELECT (SELECT max(timet) FROM tgsis.timet WHERE geoid = %(g)s), "
             "(SELECT coalesce(max(nodeid) + 1, 0) FROM tgsis.node WHERE geoid = %(g)s), "
-            "(SELECT coalesce(max(trglid) + 1, 0) FROM tgsis.d4dtrgl WHERE geoid = %(g)s)", {"g": feature_id}).fetchone()
+            "(SELECT coalesce(max(trglid) + 1, 0) FROM tgsis.d4dtrgl WHERE geoid = %(g)s)",
+            {"g": feature_id},
+        ).fetchone()
         assert row is not None
         if row[0] is None or float(row[0]) != period.start:
             raise InvalidInputError(
                 f"the new topology period of feature {feature_id} starts at {period.start!r}, not at its last geometry "
-                f"instant {row[0]!r}", hint="periods follow each other: start the new one where the last one ends")
+                f"instant {row[0]!r}",
+                hint="periods follow each other: start the new one where the last one ends",
+            )
         if sudden_change is not None:
             last = get_at(conn, feature_id, period.start)
             assert last is not None  # the feature has a shape at its last geometry instant
@@ -505,8 +707,14 @@ def append_period(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         cell_values = _period_columns(fc, EvolvingSurface([period]), drop_extra_properties)
         instant_rows = _instant_rows(fc, dict(period.properties), len(period.times))
         _copy_periods(conn, storage, fc, feature_id, [period], cell_values, int(row[1]), int(row[2]))
-        _insert_instant_properties(conn, fc, feature_id, [(period.start, float(t)) for t in period.times.tolist()],
-                                   instant_rows, ["_timem", "_timet"])
+        _insert_instant_properties(
+            conn,
+            fc,
+            feature_id,
+            [(period.start, float(t)) for t in period.times.tolist()],
+            instant_rows,
+            ["_timem", "_timet"],
+        )
         conn.execute("SELECT tgsis.refresh_geometry(%s)", (feature_id,))
         check_continuity(conn, feature_id, tolerance, period.start)
 
@@ -551,14 +759,22 @@ def _without_jit(conn: Conn) -> Iterator[None]:
     conn.execute("SELECT set_config('jit', %s, true)", (row[0],))
 
 
-def _assemble(geoid: int, ids: npt.NDArray[np.int64], xyz: Sequence[npt.NDArray[np.float64]],
-              triangles: Sequence[npt.NDArray[np.int64]], name: str | None) -> Surface:
+def _assemble(
+    geoid: int,
+    ids: npt.NDArray[np.int64],
+    xyz: Sequence[npt.NDArray[np.float64]],
+    triangles: Sequence[npt.NDArray[np.int64]],
+    name: str | None,
+) -> Surface:
     """A Surface from vertex rows (ids in any order) and triangle rows pointing at those ids."""
     order = rows_by_geoid(ids, ids, [geoid])[geoid]  # no sort when the rows come in id order
     sorted_ids = ids[order]
     vertices = np.stack([xyz[0][order], xyz[1][order], xyz[2][order]], axis=1)
-    cells = np.stack([local_positions(sorted_ids, t, "triangles", geoid) for t in triangles], axis=1) if len(triangles[0]) \
+    cells = (
+        np.stack([local_positions(sorted_ids, t, "triangles", geoid) for t in triangles], axis=1)
+        if len(triangles[0])
         else np.empty((0, 3), dtype=np.int64)
+    )
     return Surface(vertices, cells, name=name)
 
 
@@ -566,19 +782,34 @@ def _assemble(geoid: int, ids: npt.NDArray[np.int64], xyz: Sequence[npt.NDArray[
 _NUMERIC = frozenset(("smallint", "integer", "bigint", "real", "double precision", "numeric"))
 
 
-def _properties_at(conn: Conn, surface: Surface, feature_id: int, t: float, convention: Convention,
-                   vertex_ids: npt.NDArray[np.int64], triangle_ids: npt.NDArray[np.int64]) -> None:
+def _properties_at(
+    conn: Conn,
+    surface: Surface,
+    feature_id: int,
+    t: float,
+    convention: Convention,
+    vertex_ids: npt.NDArray[np.int64],
+    triangle_ids: npt.NDArray[np.int64],
+) -> None:
     """Attach the class's numeric vertex or cell properties at t (``tgsis.property_at``) to the snapshot."""
     fc = class_of_feature(conn, feature_id)
-    ids, into = (vertex_ids, surface.vertex_properties) if fc.alignment == "VERTEX" else (
-        triangle_ids, surface.cell_properties)
+    ids, into = (
+        (vertex_ids, surface.vertex_properties) if fc.alignment == "VERTEX" else (triangle_ids, surface.cell_properties)
+    )
     for prop in fc.cell_properties:
         if prop.type not in _NUMERIC or prop.size != 1 or prop.alignment not in (None, fc.alignment):
-            continue   # booleans, vectors and the other alignment's properties have no interpolated value here
-        idx, value = copy_out(conn, sql.SQL(
-            "SELECT idx, coalesce(value, 'NaN') FROM tgsis.property_at({}, {}, {}, {}, {})").format(
-            sql.Literal(fc.name), sql.Literal(feature_id), sql.Literal(prop.name), sql.Literal(float(t)),
-            sql.Literal(convention)), ["int8", "float8"])
+            continue  # booleans, vectors and the other alignment's properties have no interpolated value here
+        idx, value = copy_out(
+            conn,
+            sql.SQL("SELECT idx, coalesce(value, 'NaN') FROM tgsis.property_at({}, {}, {}, {}, {})").format(
+                sql.Literal(fc.name),
+                sql.Literal(feature_id),
+                sql.Literal(prop.name),
+                sql.Literal(float(t)),
+                sql.Literal(convention),
+            ),
+            ["int8", "float8"],
+        )
         values = np.full(len(ids), np.nan)
         if len(ids):
             where = np.minimum(np.searchsorted(ids, idx), len(ids) - 1)
@@ -588,8 +819,9 @@ def _properties_at(conn: Conn, surface: Surface, feature_id: int, t: float, conv
 
 
 @checked
-def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "left",
-           properties: bool = False) -> Surface | None:
+def get_at(
+    conn: Conn, feature_id: int, t: float, *, convention: Convention = "left", properties: bool = False
+) -> Surface | None:
     """The surface of a feature at model time ``t``, or None when it does not exist then.
 
     Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``):
@@ -609,8 +841,12 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
     """
     t_lit, c_lit = _time_args(t, convention)
     with reraise(), conn.transaction():
-        row = conn.execute(sql.SQL("SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype FROM tgsis.geometry "
-                                   "WHERE geoid = %s").format(t_lit, c_lit), (feature_id, feature_id)).fetchone()
+        row = conn.execute(
+            sql.SQL("SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype FROM tgsis.geometry WHERE geoid = %s").format(
+                t_lit, c_lit
+            ),
+            (feature_id, feature_id),
+        ).fetchone()
         if row is None:
             raise NotFoundError(f"feature {feature_id} does not exist", hint="`tgsis ls` lists the features")
         if row[2] != "SURFACE":
@@ -618,13 +854,22 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
         if not row[0]:
             return None
         with _without_jit(conn):
-            ids, x, y, z = copy_out(conn, sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
-                sql.Literal(feature_id), t_lit, c_lit), ["int8", "float8", "float8", "float8"])
+            ids, x, y, z = copy_out(
+                conn,
+                sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
+                    sql.Literal(feature_id), t_lit, c_lit
+                ),
+                ["int8", "float8", "float8", "float8"],
+            )
             # ordered by trglid here, not by the server: a sort of every triangle there (on disk
             # past work_mem) where the rows mostly come in stored order already
-            tid, a, b, c = copy_out(conn, sql.SQL(
-                "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
-                sql.Literal(feature_id), t_lit, c_lit), ["int8", "int8", "int8", "int8"])
+            tid, a, b, c = copy_out(
+                conn,
+                sql.SQL("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
+                    sql.Literal(feature_id), t_lit, c_lit
+                ),
+                ["int8", "int8", "int8", "int8"],
+            )
     order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
     surface = _assemble(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
     if properties:
@@ -634,41 +879,55 @@ def get_at(conn: Conn, feature_id: int, t: float, *, convention: Convention = "l
 
 
 @checked
-def features_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
-                convention: Convention = "left") -> list[int]:
+def features_at(
+    conn: Conn, feature_class: str | FeatureClass, t: float, *, convention: Convention = "left"
+) -> list[int]:
     """Ids of the features of a class that exist at ``t`` (``tgsis.features_at``), ascending."""
     name = class_name(feature_class)
     with reraise(), conn.transaction():
-        rows = conn.execute("SELECT * FROM tgsis.features_at(%s, %s, %s)",
-                            (name, check_time(t), check_convention(convention))).fetchall()
+        rows = conn.execute(
+            "SELECT * FROM tgsis.features_at(%s, %s, %s)", (name, check_time(t), check_convention(convention))
+        ).fetchall()
     return [int(r[0]) for r in rows]
 
 
 @checked
-def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
-                convention: Convention = "left") -> dict[int, Surface]:
+def surfaces_at(
+    conn: Conn, feature_class: str | FeatureClass, t: float, *, convention: Convention = "left"
+) -> dict[int, Surface]:
     """Every feature of a SURFACE class that exists at ``t`` with its surface then, by id.
 
     One COPY for the vertices and one for the triangles of all features.
     """
     fc = resolve_class(conn, feature_class)
     if fc.geotype != Geotype.SURFACE:
-        raise InvalidInputError(f"feature class {fc.name} holds {fc.geotype.value} features, not surfaces",
-                                hint="features_at lists the features of any class that exist at t")
+        raise InvalidInputError(
+            f"feature class {fc.name} holds {fc.geotype.value} features, not surfaces",
+            hint="features_at lists the features of any class that exist at t",
+        )
     t_lit, c_lit = _time_args(t, convention)
     with reraise(), conn.transaction():
         alive = features_at(conn, fc, t, convention=convention)
-        names = dict(conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)",
-                                  (alive,)).fetchall())
+        names = dict(
+            conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)", (alive,)).fetchall()
+        )
         wanted = sql.Literal(alive)
-        vg, vid, x, y, z = copy_out(conn, sql.SQL(
-            "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
-            "LATERAL tgsis.vertices_at(f.geoid, {}, {}) v").format(wanted, t_lit, c_lit),
-            ["int8", "int8", "float8", "float8", "float8"])
-        tg, tid, a, b, c = copy_out(conn, sql.SQL(
-            "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
-            "LATERAL tgsis.triangles_at(f.geoid, {}, {}) c").format(wanted, t_lit, c_lit),
-            ["int8", "int8", "int8", "int8", "int8"])
+        vg, vid, x, y, z = copy_out(
+            conn,
+            sql.SQL(
+                "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
+                "LATERAL tgsis.vertices_at(f.geoid, {}, {}) v"
+            ).format(wanted, t_lit, c_lit),
+            ["int8", "int8", "float8", "float8", "float8"],
+        )
+        tg, tid, a, b, c = copy_out(
+            conn,
+            sql.SQL(
+                "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
+                "LATERAL tgsis.triangles_at(f.geoid, {}, {}) c"
+            ).format(wanted, t_lit, c_lit),
+            ["int8", "int8", "int8", "int8", "int8"],
+        )
     vertex_rows = rows_by_geoid(vg, vid, alive) if alive else {}
     triangle_rows = rows_by_geoid(tg, tid, alive) if alive else {}
     result: dict[int, Surface] = {}
@@ -678,35 +937,47 @@ def surfaces_at(conn: Conn, feature_class: str | FeatureClass, t: float, *,
     return result
 
 
-
 # --------------------------------------------------------------------------- whole temporal features
 
 
-def _ordered_copy(conn: Conn, table: sql.Composable, columns: Sequence[str], types: Sequence[str], geoid: int,
-                  key: str = "geoid") -> list[npt.NDArray[Any]]:
+def _ordered_copy(
+    conn: Conn, table: sql.Composable, columns: Sequence[str], types: Sequence[str], geoid: int, key: str = "geoid"
+) -> list[npt.NDArray[Any]]:
     """Binary COPY of ``columns`` of one geometry's rows, ordered by those columns' leading keys."""
     names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
-    return copy_out(conn, sql.SQL("SELECT {} FROM {} WHERE {} = {} ORDER BY {}").format(
-        names, table, sql.Identifier(key), sql.Literal(geoid), names), types)
+    return copy_out(
+        conn,
+        sql.SQL("SELECT {} FROM {} WHERE {} = {} ORDER BY {}").format(
+            names, table, sql.Identifier(key), sql.Literal(geoid), names
+        ),
+        types,
+    )
 
 
 def _tgsis(table: str) -> sql.Composed:
     return sql.SQL("tgsis.{}").format(sql.Identifier(table))
 
 
-def _instant_values(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[str]) -> dict[tuple[float, ...], list[Any]]:
+def _instant_values(
+    conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[str]
+) -> dict[tuple[float, ...], list[Any]]:
     """Per-instant feature property rows of a feature, by their time key."""
     if not fc.instant_properties or fc.protable is None:
         return {}
-    rows = conn.execute(sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
-        sql.SQL(", ").join(sql.Identifier(k) for k in keys),
-        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.instant_properties), fc.qualified(fc.protable)),
-        (geoid,)).fetchall()
-    return {tuple(float(v) for v in r[:len(keys)]): list(r[len(keys):]) for r in rows}
+    rows = conn.execute(
+        sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
+            sql.SQL(", ").join(sql.Identifier(k) for k in keys),
+            sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.instant_properties),
+            fc.qualified(fc.protable),
+        ),
+        (geoid,),
+    ).fetchall()
+    return {tuple(float(v) for v in r[: len(keys)]): list(r[len(keys) :]) for r in rows}
 
 
-def _property_arrays(fc: FeatureClass, values: Mapping[tuple[float, ...], list[Any]],
-                     keys: Sequence[tuple[float, ...]]) -> dict[str, npt.NDArray[Any]]:
+def _property_arrays(
+    fc: FeatureClass, values: Mapping[tuple[float, ...], list[Any]], keys: Sequence[tuple[float, ...]]
+) -> dict[str, npt.NDArray[Any]]:
     """Per-instant numeric properties as arrays over ``keys``, in their column's dtype (float64 with NaN where a
     value is NULL or has no row); properties of other types are left out."""
     result: dict[str, npt.NDArray[Any]] = {}
@@ -715,8 +986,11 @@ def _property_arrays(fc: FeatureClass, values: Mapping[tuple[float, ...], list[A
             continue
         column = [values[k][i] if k in values else None for k in keys]
         complete = all(v is not None for v in column)
-        result[prop.name] = (np.asarray(column, dtype=numpy_dtype(SQL_TYPES[prop.type])) if complete
-                             else np.asarray([np.nan if v is None else v for v in column], dtype=np.float64))
+        result[prop.name] = (
+            np.asarray(column, dtype=numpy_dtype(SQL_TYPES[prop.type]))
+            if complete
+            else np.asarray([np.nan if v is None else v for v in column], dtype=np.float64)
+        )
     return result
 
 
@@ -738,17 +1012,40 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
     fc = _temporal_class(conn, feature_class, "INSTANTS")
     names, types = _cell_columns(fc)
     with reraise(), conn.transaction():
-        row = conn.execute("SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
-                           "WHERE geoid = %s AND timemodel = 'INSTANTS'", (feature_id,)).fetchone()
+        row = conn.execute(
+            "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
+            "WHERE geoid = %s AND timemodel = 'INSTANTS'",
+            (feature_id,),
+        ).fetchone()
         if row is None:
             raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")
         (times,) = _ordered_copy(conn, _tgsis("times"), ["times"], ["float8"], feature_id)
-        vt, vid, x, y, z = _ordered_copy(conn, _tgsis("times_vrtx"), ["times", "vrtxid", "x", "y", "z"],
-                                         ["float8", "int8", "float8", "float8", "float8"], feature_id)
-        tt, tid, a, b, c = _ordered_copy(conn, _tgsis("times_trgl"), ["times", "trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
-                                         ["float8", "int8", "int8", "int8", "int8"], feature_id)
-        props = _ordered_copy(conn, fc.qualified(fc.cellprotable), ["_times", "_idx", *names],
-                              ["float8", "int8", *types], feature_id, "_geoid") if names else []
+        vt, vid, x, y, z = _ordered_copy(
+            conn,
+            _tgsis("times_vrtx"),
+            ["times", "vrtxid", "x", "y", "z"],
+            ["float8", "int8", "float8", "float8", "float8"],
+            feature_id,
+        )
+        tt, tid, a, b, c = _ordered_copy(
+            conn,
+            _tgsis("times_trgl"),
+            ["times", "trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
+            ["float8", "int8", "int8", "int8", "int8"],
+            feature_id,
+        )
+        props = (
+            _ordered_copy(
+                conn,
+                fc.qualified(fc.cellprotable),
+                ["_times", "_idx", *names],
+                ["float8", "int8", *types],
+                feature_id,
+                "_geoid",
+            )
+            if names
+            else []
+        )
         values = _instant_values(conn, fc, feature_id, ["_times"])
     surfaces = []
     for t in times.tolist():
@@ -760,8 +1057,14 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
             target = surface.vertex_properties if fc.alignment == "VERTEX" else surface.cell_properties
             target.update({name: props[2 + i][p] for i, name in enumerate(names)})
         surfaces.append(surface)
-    return SurfaceSeries(times, surfaces, properties=_property_arrays(fc, values, [(t,) for t in times.tolist()]),
-                         alive=bool(row[1]), name=row[0], color=None if row[2] is None else row[2:5])
+    return SurfaceSeries(
+        times,
+        surfaces,
+        properties=_property_arrays(fc, values, [(t,) for t in times.tolist()]),
+        alive=bool(row[1]),
+        name=row[0],
+        color=None if row[2] is None else row[2:5],
+    )
 
 
 @checked
@@ -782,17 +1085,40 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     fc = _temporal_class(conn, feature_class, "EVOLVING")
     names, types = _cell_columns(fc)
     with reraise(), conn.transaction():
-        row = conn.execute("SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
-                           "WHERE geoid = %s AND timemodel = 'EVOLVING'", (feature_id,)).fetchone()
+        row = conn.execute(
+            "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
+            "WHERE geoid = %s AND timemodel = 'EVOLVING'",
+            (feature_id,),
+        ).fetchone()
         if row is None:
             raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")
         tm, tt = _ordered_copy(conn, _tgsis("timet"), ["timem", "timet"], ["float8", "float8"], feature_id)
-        cm, _, a, b, c = _ordered_copy(conn, _tgsis("d4dtrgl"), ["timem", "trglid", "nodeid1", "nodeid2", "nodeid3"],
-                                       ["float8", "int8", "int8", "int8", "int8"], feature_id)
-        vm, vt, nid, x, y, z = _ordered_copy(conn, _tgsis("d4dvrtx"), ["timem", "timet", "nodeid", "x", "y", "z"],
-                                             ["float8", "float8", "int8", "float8", "float8", "float8"], feature_id)
-        props = _ordered_copy(conn, fc.qualified(fc.cellprotable), ["_timem", "_timet", "_idx", *names],
-                              ["float8", "float8", "int8", *types], feature_id, "_geoid") if names else []
+        cm, _, a, b, c = _ordered_copy(
+            conn,
+            _tgsis("d4dtrgl"),
+            ["timem", "trglid", "nodeid1", "nodeid2", "nodeid3"],
+            ["float8", "int8", "int8", "int8", "int8"],
+            feature_id,
+        )
+        vm, vt, nid, x, y, z = _ordered_copy(
+            conn,
+            _tgsis("d4dvrtx"),
+            ["timem", "timet", "nodeid", "x", "y", "z"],
+            ["float8", "float8", "int8", "float8", "float8", "float8"],
+            feature_id,
+        )
+        props = (
+            _ordered_copy(
+                conn,
+                fc.qualified(fc.cellprotable),
+                ["_timem", "_timet", "_idx", *names],
+                ["float8", "float8", "int8", *types],
+                feature_id,
+                "_geoid",
+            )
+            if names
+            else []
+        )
         values = _instant_values(conn, fc, feature_id, ["_timem", "_timet"])
     periods = []
     for start in np.unique(tm).tolist():
@@ -800,8 +1126,10 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
         rows = np.flatnonzero(vm == start)
         nodes = np.unique(nid[rows])
         if len(rows) != len(times) * len(nodes):
-            raise InvalidGeometryError(f"feature {feature_id}: the period starting at {start!r} lacks node positions",
-                                       hint=f"SELECT * FROM tgsis.check_geometry({feature_id})")
+            raise InvalidGeometryError(
+                f"feature {feature_id}: the period starting at {start!r} lacks node positions",
+                hint=f"SELECT * FROM tgsis.check_geometry({feature_id})",
+            )
         xyz = np.stack([x[rows], y[rows], z[rows]], axis=1).reshape(len(times), len(nodes), 3)
         cells = np.flatnonzero(cm == start)
         triangles = np.stack([local_positions(nodes, k[cells], "triangles", feature_id) for k in (a, b, c)], axis=1)
@@ -810,11 +1138,16 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
             p = np.flatnonzero(props[0] == start)
             per_cell = {name: props[3 + i][p].reshape(len(times), -1) for i, name in enumerate(names)}
         keys = [(start, t) for t in times.tolist()]
-        periods.append(TopologyPeriod(
-            times, triangles, xyz,
-            vertex_properties=per_cell if fc.alignment == "VERTEX" else None,
-            cell_properties=per_cell if fc.alignment == "CELL" else None,
-            properties=_property_arrays(fc, values, keys)))
+        periods.append(
+            TopologyPeriod(
+                times,
+                triangles,
+                xyz,
+                vertex_properties=per_cell if fc.alignment == "VERTEX" else None,
+                cell_properties=per_cell if fc.alignment == "CELL" else None,
+                properties=_property_arrays(fc, values, keys),
+            )
+        )
     return EvolvingSurface(periods, alive=bool(row[1]), name=row[0], color=None if row[2] is None else row[2:5])
 
 
@@ -833,9 +1166,12 @@ def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
         No geometry ``feature_id``.
     """
     with reraise(), conn.transaction():
-        row = conn.execute("SELECT g.timemodel, g.alive, i.first, i.last FROM tgsis.geometry g, "
-                           "LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid)) i "
-                           "WHERE g.geoid = %s", (feature_id,)).fetchone()
+        row = conn.execute(
+            "SELECT g.timemodel, g.alive, i.first, i.last FROM tgsis.geometry g, "
+            "LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid)) i "
+            "WHERE g.geoid = %s",
+            (feature_id,),
+        ).fetchone()
     if row is None:
         raise NotFoundError(f"feature {feature_id} does not exist", hint="`tgsis ls` lists the features")
     if row[0] == "STATIC" or row[2] is None:
@@ -844,9 +1180,14 @@ def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
 
 
 @checked
-def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
-              convention: Convention = "left",
-              progress: Callable[[int, int], None] | None = None) -> list[SurfaceFrame]:
+def frames_at(
+    conn: Conn,
+    feature_id: int,
+    times: npt.ArrayLike,
+    *,
+    convention: Convention = "left",
+    progress: Callable[[int, int], None] | None = None,
+) -> list[SurfaceFrame]:
     """The surface of a feature at each of ``times`` by the SQL snapshot (:func:`get_at`), all from one snapshot.
 
     ``progress(done, total)``, when given, is called after each frame.
@@ -873,10 +1214,18 @@ def frames_at(conn: Conn, feature_id: int, times: npt.ArrayLike, *,
 
 
 @checked
-def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float | None = None,
-                  end: float | None = None, steps: int | None = None, convention: Convention = "left",
-                  encoding: Encoding = "binary",
-                  progress: Callable[[int, int], None] | None = None) -> WrittenSeries:
+def export_series(
+    conn: Conn,
+    feature_id: int,
+    path: PathLike,
+    *,
+    start: float | None = None,
+    end: float | None = None,
+    steps: int | None = None,
+    convention: Convention = "left",
+    encoding: Encoding = "binary",
+    progress: Callable[[int, int], None] | None = None,
+) -> WrittenSeries:
     """Write a feature's surface over time as a ParaView ``.pvd`` time series, one ``.vtu`` per time.
 
     Each frame is the SQL snapshot (:func:`get_at`, the same float operations
@@ -927,19 +1276,30 @@ def export_series(conn: Conn, feature_id: int, path: PathLike, *, start: float |
         own = [t for t, _ in instants(conn, feature_id)]
         if not own:
             lifespan(conn, feature_id)  # NotFoundError for an unknown feature
-            raise InvalidInputError(f"feature {feature_id} is static: it has no instants of its own to sample",
-                                    hint="give start, end and steps")
+            raise InvalidInputError(
+                f"feature {feature_id} is static: it has no instants of its own to sample",
+                hint="give start, end and steps",
+            )
         times = np.asarray(own, dtype=np.float64)
-    return write_frames_pvd(frames_at(conn, feature_id, times, convention=convention, progress=progress), path,
-                            encoding=encoding)
+    return write_frames_pvd(
+        frames_at(conn, feature_id, times, convention=convention, progress=progress), path, encoding=encoding
+    )
 
 
 # --------------------------------------------------------------------------- temporal questions
 
 
 @checked
-def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str,
-                     value: float, *, convention: Convention = "left") -> list[Period]:
+def property_periods(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    feature_id: int,
+    prop: str,
+    op: str,
+    value: float,
+    *,
+    convention: Convention = "left",
+) -> list[Period]:
     """The maximal periods over which a per-instant property of a feature satisfies ``prop op value``.
 
     Computed in SQL by ``tgsis.property_periods``: model 2 (INSTANTS) as a
@@ -985,13 +1345,22 @@ def property_periods(conn: Conn, feature_class: str | FeatureClass, feature_id: 
         rows = conn.execute(
             "SELECT coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.property_periods(%s, %s, %s, %s, %s, %s)",
-            (class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention))).fetchall()
+            (class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention)),
+        ).fetchall()
     return [Period(float(r[0]), float(r[1]), bool(r[2]), bool(r[3])) for r in rows]
 
 
 @checked
-def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, prop: str, op: str, value: float, *,
-                convention: Convention = "left") -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+def first_times(
+    conn: Conn,
+    feature_class: str | FeatureClass,
+    feature_id: int,
+    prop: str,
+    op: str,
+    value: float,
+    *,
+    convention: Convention = "left",
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """For each vertex/node or cell of a feature, the first time its property satisfies ``prop op value``.
 
     Computed in SQL by ``tgsis.first_time`` and downloaded with one binary
@@ -1024,17 +1393,22 @@ def first_times(conn: Conn, feature_class: str | FeatureClass, feature_id: int, 
         As :func:`property_periods`.
     """
     query = sql.SQL("SELECT idx, t FROM tgsis.first_time({}, {}, {}, {}, {}, {})").format(
-        sql.Literal(class_name(feature_class)), sql.Literal(int(feature_id)), sql.Literal(prop), sql.Literal(op),
-        sql.Literal(float(value)), sql.Literal(check_convention(convention)))
+        sql.Literal(class_name(feature_class)),
+        sql.Literal(int(feature_id)),
+        sql.Literal(prop),
+        sql.Literal(op),
+        sql.Literal(float(value)),
+        sql.Literal(check_convention(convention)),
+    )
     with reraise(), conn.transaction():
         idx, t = copy_out(conn, query, ["int8", "float8"])
     return idx, t
 
 
-
 @checked
-def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: str, op: str, value: float, *,
-                           convention: Convention = "left") -> dict[int, list[Period]]:
+def class_property_periods(
+    conn: Conn, feature_class: str | FeatureClass, prop: str, op: str, value: float, *, convention: Convention = "left"
+) -> dict[int, list[Period]]:
     """For every feature of a class, the periods over which a per-instant property satisfies ``prop op value``.
 
     One query (``tgsis.class_property_periods``): :func:`property_periods` for
@@ -1056,7 +1430,8 @@ def class_property_periods(conn: Conn, feature_class: str | FeatureClass, prop: 
         rows = conn.execute(
             "SELECT geoid, coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.class_property_periods(%s, %s, %s, %s, %s)",
-            (class_name(feature_class), prop, op, float(value), check_convention(convention))).fetchall()
+            (class_name(feature_class), prop, op, float(value), check_convention(convention)),
+        ).fetchall()
     found: dict[int, list[Period]] = {}
     for r in rows:
         found.setdefault(int(r[0]), []).append(Period(float(r[1]), float(r[2]), bool(r[3]), bool(r[4])))

@@ -152,8 +152,9 @@ def _run_committed(conn: Conn, query: str, params: Sequence[Any] = ()) -> Any:
 
 
 @checked
-def create_version(conn: Conn, name: str, parent: str = "DEFAULT", *, description: str | None = None,
-                   base: int | None = None) -> int:
+def create_version(
+    conn: Conn, name: str, parent: str = "DEFAULT", *, description: str | None = None, base: int | None = None
+) -> int:
     """Create a child version of ``parent``; return the child's working revision.
 
     Parameters
@@ -251,9 +252,23 @@ def list_versions(conn: Conn) -> list[Version]:
     with reraise():
         rows = conn.execute(
             "SELECT name, parent, depth, initrevision, workingrevision, revisions, saved, owner, created_at, "
-            "description FROM tgsis.version_tree").fetchall()
-    return [Version(r[0], r[1], int(r[2]), r[3], int(r[4]), tuple(r[5] or ()),
-                    dict(json.loads(r[6]) if isinstance(r[6], str) else r[6]), r[7], r[8], r[9]) for r in rows]
+            "description FROM tgsis.version_tree"
+        ).fetchall()
+    return [
+        Version(
+            r[0],
+            r[1],
+            int(r[2]),
+            r[3],
+            int(r[4]),
+            tuple(r[5] or ()),
+            dict(json.loads(r[6]) if isinstance(r[6], str) else r[6]),
+            r[7],
+            r[8],
+            r[9],
+        )
+        for r in rows
+    ]
 
 
 _PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]*")
@@ -392,8 +407,9 @@ _TABLE_COLUMNS = "schemaname, tablename, shortname, objectkeyfield, objectclass,
 
 
 @checked
-def enable_versioning(conn: Conn, table: str, objectkeyfield: str, objectclass: str, iudorder: int = 0,
-                      shortname: str | None = None) -> VersionedTable:
+def enable_versioning(
+    conn: Conn, table: str, objectkeyfield: str, objectclass: str, iudorder: int = 0, shortname: str | None = None
+) -> VersionedTable:
     """Version a table in place (``tgsis.enable_versioning``); applications keep using its name.
 
     Parameters
@@ -410,8 +426,10 @@ def enable_versioning(conn: Conn, table: str, objectkeyfield: str, objectclass: 
         Name in conflict reports (default: the table name).
     """
     with reraise(), conn.transaction():
-        row = conn.execute(f"SELECT {_TABLE_COLUMNS} FROM tgsis.enable_versioning(%s, %s, %s, %s, %s)",
-                           (table, objectkeyfield, objectclass, iudorder, shortname)).fetchone()
+        row = conn.execute(
+            f"SELECT {_TABLE_COLUMNS} FROM tgsis.enable_versioning(%s, %s, %s, %s, %s)",
+            (table, objectkeyfield, objectclass, iudorder, shortname),
+        ).fetchone()
     assert row is not None
     return _table_from_row(row)
 
@@ -427,8 +445,9 @@ def disable_versioning(conn: Conn, table: str, *, force: bool = False) -> int:
 def versioned_tables(conn: Conn) -> list[VersionedTable]:
     """The versioned tables, by object class and iudorder."""
     with reraise():
-        rows = conn.execute(f"SELECT {_TABLE_COLUMNS} FROM tgsis.versioned_tables "
-                            "ORDER BY objectclass, iudorder, schemaname, tablename").fetchall()
+        rows = conn.execute(
+            f"SELECT {_TABLE_COLUMNS} FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, schemaname, tablename"
+        ).fetchall()
     return [_table_from_row(r) for r in rows]
 
 
@@ -491,8 +510,11 @@ class Discard:
 
     def summary(self) -> str:
         """``"vrtx: 1 added, 4 changed (7 values)"``: the counts that are not zero."""
-        counts = [f"{n} {what}" for n, what in ((self.rows_added, "added"), (self.rows_removed, "removed"),
-                                                 (self.rows_changed, "changed")) if n]
+        counts = [
+            f"{n} {what}"
+            for n, what in ((self.rows_added, "added"), (self.rows_removed, "removed"), (self.rows_changed, "changed"))
+            if n
+        ]
         return f"{self.shortname}: {', '.join(counts)} ({self.values_changed} value{'s' * (self.values_changed != 1)})"
 
 
@@ -570,8 +592,9 @@ def _key_text(key: object) -> str:
 
 
 @checked
-def conflict_discards(conn: Conn, version: str, objectclass: str | None = None,
-                      objectkey: object | None = None) -> list[Discard]:
+def conflict_discards(
+    conn: Conn, version: str, objectclass: str | None = None, objectkey: object | None = None
+) -> list[Discard]:
     """What each solution of ``version``'s conflicts would throw away of the other side's edits.
 
     Per conflicting object (all of them, those of one class, or one object),
@@ -583,7 +606,8 @@ def conflict_discards(conn: Conn, version: str, objectclass: str | None = None,
             "SELECT objectclass, objectkey, solution, discarded, shortname, tablename, description,"
             "       rows_added, rows_removed, rows_changed, values_changed"
             "  FROM tgsis.conflict_discards(%s, %s, %s)",
-            (version, objectclass, None if objectkey is None else _key_text(objectkey))).fetchall()
+            (version, objectclass, None if objectkey is None else _key_text(objectkey)),
+        ).fetchall()
     return [Discard(*r[:7], *(int(n) for n in r[7:])) for r in rows]
 
 
@@ -612,8 +636,9 @@ def recorded_discards(conn: Conn, version: str) -> dict[tuple[str, str], tuple[s
 
 
 @checked
-def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *,
-                     discard_other: bool = True) -> Conflict:
+def resolve_conflict(
+    conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *, discard_other: bool = True
+) -> Conflict:
     """Record how a conflicting object is merged: ``parent``, ``child``, ``manual`` (or back to ``unsolved``).
 
     Parameters
@@ -640,16 +665,25 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
         ``discard_other=False`` and the caller may not read the object's rows, so what it loses cannot be counted.
     """
     with reraise(), conn.transaction():
-        row = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
-                           (version, objectclass, _key_text(objectkey), solution)).fetchone()
+        row = conn.execute(
+            f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
+            (version, objectclass, _key_text(objectkey), solution),
+        ).fetchone()
         assert row is not None
         conflict = _conflict(row)
         lost_by = _lost_by(conflict.solution)
         discards: tuple[Discard, ...] | None = ()
         try:
-            with conn.transaction():   # read with the caller's rights: a role may resolve what it may not read
-                discards = tuple(d for d in conflict_discards(conn, version, conflict.objectclass, conflict.objectkey)
-                                 if d.solution == lost_by) if lost_by else ()
+            with conn.transaction():  # read with the caller's rights: a role may resolve what it may not read
+                discards = (
+                    tuple(
+                        d
+                        for d in conflict_discards(conn, version, conflict.objectclass, conflict.objectkey)
+                        if d.solution == lost_by
+                    )
+                    if lost_by
+                    else ()
+                )
         except MissingPrivilegeError as exc:
             if not discard_other and conflict.solution in ("child", "parent"):
                 raise MissingPrivilegeError(
@@ -657,16 +691,18 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
                     f"{conflict.solution} discards of the other side's edits: {exc.message}",
                     sqlstate=exc.sqlstate,
                     hint="pass discard_other=True to record it all the same, or write the merged object into the "
-                         "version and record manual (tgsis.conflict_rows shows both sides' rows)") from exc
+                    "version and record manual (tgsis.conflict_rows shows both sides' rows)",
+                ) from exc
             discards = None
         if discards and not discard_other and conflict.solution in ("child", "parent"):
             raise VersioningError(
                 f"solving {conflict.objectclass} {conflict.objectkey} of version {show_name(version)} with "
                 f"{conflict.solution} would discard {describe_discards(discards)}",
                 detail="A solution takes one side's whole object: the other side's edits since the version was "
-                       "based are lost (rows added, removed or changed; the values among them).",
+                "based are lost (rows added, removed or changed; the values among them).",
                 hint="pass discard_other=True to record it all the same, or write the merged object into the "
-                     "version and record manual (tgsis.conflict_rows shows both sides' rows)")
+                "version and record manual (tgsis.conflict_rows shows both sides' rows)",
+            )
     return dataclasses.replace(conflict, discarded=discards)
 
 
@@ -674,9 +710,13 @@ def resolve_conflict(conn: Conn, version: str, objectclass: str, objectkey: obje
 def conflict_rows(conn: Conn, version: str, objectclass: str, objectkey: object) -> list[tuple[str, str, Any, Any]]:
     """Rows of an object that differ between ``version`` (side ``child``) and its parent: (table, side, key, row)."""
     with reraise():
-        return [(r[0], r[1], r[2], r[3]) for r in conn.execute(
-            "SELECT shortname, side, rowkey, row FROM tgsis.conflict_rows(%s, %s, %s)",
-            (version, objectclass, _key_text(objectkey))).fetchall()]
+        return [
+            (r[0], r[1], r[2], r[3])
+            for r in conn.execute(
+                "SELECT shortname, side, rowkey, row FROM tgsis.conflict_rows(%s, %s, %s)",
+                (version, objectclass, _key_text(objectkey)),
+            ).fetchall()
+        ]
 
 
 @checked
@@ -720,16 +760,18 @@ class Difference:
 
 
 @checked
-def diff_versions(conn: Conn, a: str, b: str, *, a_revision: int | None = None,
-                  b_revision: int | None = None) -> list[Difference]:
+def diff_versions(
+    conn: Conn, a: str, b: str, *, a_revision: int | None = None, b_revision: int | None = None
+) -> list[Difference]:
     """Objects whose rows differ between two versions (or revisions of them), per table.
 
     ``added`` rows are seen in ``b`` only, ``removed`` in ``a`` only, ``changed``
     rows have the same row key and other values.
     """
     with reraise():
-        rows = conn.execute("SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)",
-                            (a, b, a_revision, b_revision)).fetchall()
+        rows = conn.execute(
+            "SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)", (a, b, a_revision, b_revision)
+        ).fetchall()
     return [Difference(r[0], r[1], r[2], int(r[3]), int(r[4]), int(r[5])) for r in rows]
 
 
@@ -737,8 +779,9 @@ def diff_versions(conn: Conn, a: str, b: str, *, a_revision: int | None = None,
 
 
 @checked
-def set_version_validity(conn: Conn, version: str, valid_from: datetime | None,
-                         valid_to: datetime | None = None) -> None:
+def set_version_validity(
+    conn: Conn, version: str, valid_from: datetime | None, valid_to: datetime | None = None
+) -> None:
     """Set the period ``[valid_from, valid_to)`` in which ``version`` was believed true (``valid_to`` None: still)."""
     _run_committed(conn, "SELECT tgsis.set_version_validity(%s, %s, %s)", (version, valid_from, valid_to))
 
@@ -822,7 +865,8 @@ def version_privileges(conn: Conn, version: str | None = None) -> list[VersionGr
             "  FROM tgsis.version_privileges p JOIN tgsis.versions v USING (versionid)"
             " WHERE %s::text IS NULL OR v.name = %s"
             " ORDER BY v.name, p.grantee, array_position(%s::text[], p.privilege)",
-            (version, version, list(VERSION_PRIVILEGES))).fetchall()
+            (version, version, list(VERSION_PRIVILEGES)),
+        ).fetchall()
     return [VersionGrant(*r) for r in rows]
 
 
@@ -842,8 +886,7 @@ class ObjectLock:
 
 
 @checked
-def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[object], *,
-                 exclusive: bool = False) -> int:
+def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[object], *, exclusive: bool = False) -> int:
     """Lock objects for ``version``: writes to them from any other version fail until unlocked.
 
     Parameters
@@ -864,16 +907,27 @@ def lock_objects(conn: Conn, version: str, objectclass: str, keys: Sequence[obje
         Another version (or role) holds one of them: nothing is locked.
     MissingPrivilegeError, NotFoundError
     """
-    return int(_run_committed(conn, "SELECT tgsis.lock_objects(%s, %s, %s, %s)",
-                              (version, objectclass, [_key_text(k) for k in keys], exclusive)))
+    return int(
+        _run_committed(
+            conn,
+            "SELECT tgsis.lock_objects(%s, %s, %s, %s)",
+            (version, objectclass, [_key_text(k) for k in keys], exclusive),
+        )
+    )
 
 
 @checked
-def unlock_objects(conn: Conn, version: str, objectclass: str | None = None,
-                   keys: Sequence[object] | None = None) -> int:
+def unlock_objects(
+    conn: Conn, version: str, objectclass: str | None = None, keys: Sequence[object] | None = None
+) -> int:
     """Release ``version``'s locks (all, those of a class, or of some keys); return how many."""
-    return int(_run_committed(conn, "SELECT tgsis.unlock_objects(%s, %s, %s)",
-                              (version, objectclass, None if keys is None else [_key_text(k) for k in keys])))
+    return int(
+        _run_committed(
+            conn,
+            "SELECT tgsis.unlock_objects(%s, %s, %s)",
+            (version, objectclass, None if keys is None else [_key_text(k) for k in keys]),
+        )
+    )
 
 
 @checked
@@ -884,7 +938,8 @@ def object_locks(conn: Conn, version: str | None = None) -> list[ObjectLock]:
             "SELECT l.objectclass, l.objectkey, v.name, l.exclusive, l.locked_by, l.locked_at"
             "  FROM tgsis.object_locks l JOIN tgsis.versions v USING (versionid)"
             " WHERE %s::text IS NULL OR v.name = %s ORDER BY l.objectclass, l.objectkey",
-            (version, version)).fetchall()
+            (version, version),
+        ).fetchall()
     return [ObjectLock(*r) for r in rows]
 
 
@@ -948,4 +1003,3 @@ def compress_versions(conn: Conn, *, dry_run: bool = False) -> list[Compressed]:
     with reraise(), conn.transaction():
         rows = conn.execute("SELECT what, name, removed FROM tgsis.compress_versions(%s)", (dry_run,)).fetchall()
     return [Compressed(r[0], r[1], int(r[2])) for r in rows]
-

@@ -171,34 +171,54 @@ class FileFormat:
             return
         mesh = check_mesh(mesh, f"the {self.name} writer")
         if mesh.geotype not in self.geotypes:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
-                    if mesh.geotype in f.geotypes and f.writer not in _READ_ONLY]
-            raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
-                                  f"{mesh.geotype.value} ({type(mesh).__name__})", path=path,
-                                  hint=f"formats for {mesh.geotype.value}: {', '.join(fits)}")
+            fits = [
+                f.name + " (" + " ".join(f.extensions) + ")"
+                for f in FORMATS.values()
+                if mesh.geotype in f.geotypes and f.writer not in _READ_ONLY
+            ]
+            raise FileFormatError(
+                f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
+                f"{mesh.geotype.value} ({type(mesh).__name__})",
+                path=path,
+                hint=f"formats for {mesh.geotype.value}: {', '.join(fits)}",
+            )
         self.writer(mesh, path, **options)
 
     def _check_collection(self, collection: GeometryCollection, path: PathLike) -> None:
         """Raise FileFormatError unless this format holds all the members of ``collection``."""
         what = f"a GEOMETRYCOLLECTION of {len(collection)} members"
         if self.collection_writer is None:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
-                    if f.collection_writer and f.writer not in _READ_ONLY]
-            raise FileFormatError(f"{self.name} files hold one object, not {what}", path=path,
-                                  hint=f"formats for collections: {', '.join(fits)}")
+            fits = [
+                f.name + " (" + " ".join(f.extensions) + ")"
+                for f in FORMATS.values()
+                if f.collection_writer and f.writer not in _READ_ONLY
+            ]
+            raise FileFormatError(
+                f"{self.name} files hold one object, not {what}",
+                path=path,
+                hint=f"formats for collections: {', '.join(fits)}",
+            )
         types = list(dict.fromkeys(collection.geotypes))
         listed = ", ".join(t.value for t in types)
         if len(self.geotypes) == 1 and len(types) > 1:
-            raise FileFormatError(f"{self.name} files hold objects of one type ({self.geotypes[0].value}); "
-                                  f"{what} mixes {listed}", path=path,
-                                  hint="vtu (.vtu) holds members of mixed types; or export the members one by one")
+            raise FileFormatError(
+                f"{self.name} files hold objects of one type ({self.geotypes[0].value}); {what} mixes {listed}",
+                path=path,
+                hint="vtu (.vtu) holds members of mixed types; or export the members one by one",
+            )
         wrong = [t for t in types if t not in self.geotypes]
         if wrong:
-            fits = [f.name + " (" + " ".join(f.extensions) + ")" for f in FORMATS.values()
-                    if f.collection_writer and f.writer not in _READ_ONLY and all(t in f.geotypes for t in types)]
-            raise FileFormatError(f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
-                                  f"{', '.join(t.value for t in wrong)} ({what})", path=path,
-                                  hint=f"formats for this collection: {', '.join(fits)}")
+            fits = [
+                f.name + " (" + " ".join(f.extensions) + ")"
+                for f in FORMATS.values()
+                if f.collection_writer and f.writer not in _READ_ONLY and all(t in f.geotypes for t in types)
+            ]
+            raise FileFormatError(
+                f"{self.name} files store {', '.join(g.value for g in self.geotypes)}, not "
+                f"{', '.join(t.value for t in wrong)} ({what})",
+                path=path,
+                hint=f"formats for this collection: {', '.join(fits)}",
+            )
 
 
 def _vtu_reader(path: PathLike, **options: Any) -> list[Mesh]:
@@ -215,20 +235,27 @@ def _vtp_reader(path: PathLike, **options: Any) -> list[Mesh]:
 
 
 def _lightsolid_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
-    raise FileFormatError("tgsis reads SKUA LightTSolid files but writes tetrahedra as GOCAD TSolid", path=path,
-                          hint="write a .so file (tsolid)")
+    raise FileFormatError(
+        "tgsis reads SKUA LightTSolid files but writes tetrahedra as GOCAD TSolid",
+        path=path,
+        hint="write a .so file (tsolid)",
+    )
 
 
 def _group_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
-    raise FileFormatError("tgsis reads the members of GOCAD group files but does not write groups", path=path,
-                          hint="write the members to a GOCAD file of their type (.ts, .pl, .vs, .so), which holds "
-                               "several objects")
+    raise FileFormatError(
+        "tgsis reads the members of GOCAD group files but does not write groups",
+        path=path,
+        hint="write the members to a GOCAD file of their type (.ts, .pl, .vs, .so), which holds several objects",
+    )
 
 
 def _model_writer(mesh: Mesh, path: PathLike, **options: Any) -> None:
-    raise FileFormatError("tgsis reads the surfaces of GOCAD model files (.ml) but does not write GOCAD models",
-                          path=path, hint="write the surfaces to a GOCAD TSurf file (.ts), which holds several "
-                                          "objects")
+    raise FileFormatError(
+        "tgsis reads the surfaces of GOCAD model files (.ml) but does not write GOCAD models",
+        path=path,
+        hint="write the surfaces to a GOCAD TSurf file (.ts), which holds several objects",
+    )
 
 
 #: The writers of formats tgsis reads only: they refuse, so hints do not offer them.
@@ -252,31 +279,96 @@ def _trimesh_format(name: str, description: str) -> FileFormat:
 _ALL = (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE, Geotype.MULTITETRA)
 
 #: The known formats by name, in the order they are listed to users.
-FORMATS: dict[str, FileFormat] = {f.name: f for f in (
-    FileFormat("tsurf", (".ts",), (Geotype.SURFACE,), read_gocad, write_gocad, "GOCAD TSurf (triangulated surface)",
-               _gocad_collection_writer),
-    FileFormat("pline", (".pl",), (Geotype.MULTILINESTRING,), read_gocad, write_gocad, "GOCAD PLine (polylines)",
-               _gocad_collection_writer),
-    FileFormat("vset", (".vs",), (Geotype.MULTIPOINT,), read_gocad, write_gocad, "GOCAD VSet (points)",
-               _gocad_collection_writer),
-    FileFormat("tsolid", (".so",), (Geotype.MULTITETRA,), read_gocad, write_gocad, "GOCAD TSolid (tetrahedra)",
-               _gocad_collection_writer),
-    FileFormat("lightsolid", (".lso",), (Geotype.MULTITETRA,), read_gocad, _lightsolid_writer,
-               "SKUA LightTSolid (tetrahedra; read only)"),
-    FileFormat("gocadgroup", (".gp",), _ALL, read_gocad, _group_writer,
-               "GOCAD HeterogeneousGroup/HomogeneousGroup (read only: its members)"),
-    FileFormat("gocadmodel", (".ml",), (Geotype.SURFACE,), read_gocad_model, _model_writer,
-               "GOCAD Model3d (read only: the TSurfs of the model, with their TFACEs)", _model_writer),
-    FileFormat("vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView; zlib)", write_vtu),
-    FileFormat("vtp", (".vtp",), (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE), _vtp_reader,
-               write_vtp, "VTK XML PolyData (ParaView, pyvista; zlib)"),
-    FileFormat("vtk", (".vtk",), _ALL, _vtk_reader, write_vtk, "legacy VTK 5.1 UnstructuredGrid (binary; reads "
-               "POLYDATA too)", write_vtk),
-    _trimesh_format("obj", "Wavefront OBJ (text, 8 decimals, no properties)"),
-    _trimesh_format("ply", "Stanford PLY (binary, exact, with properties)"),
-    _trimesh_format("off", "Object File Format (text, 10 decimals, no properties)"),
-    _trimesh_format("stl", "STL (binary float32 triangle soup, no properties)"),
-)}
+FORMATS: dict[str, FileFormat] = {
+    f.name: f
+    for f in (
+        FileFormat(
+            "tsurf",
+            (".ts",),
+            (Geotype.SURFACE,),
+            read_gocad,
+            write_gocad,
+            "GOCAD TSurf (triangulated surface)",
+            _gocad_collection_writer,
+        ),
+        FileFormat(
+            "pline",
+            (".pl",),
+            (Geotype.MULTILINESTRING,),
+            read_gocad,
+            write_gocad,
+            "GOCAD PLine (polylines)",
+            _gocad_collection_writer,
+        ),
+        FileFormat(
+            "vset",
+            (".vs",),
+            (Geotype.MULTIPOINT,),
+            read_gocad,
+            write_gocad,
+            "GOCAD VSet (points)",
+            _gocad_collection_writer,
+        ),
+        FileFormat(
+            "tsolid",
+            (".so",),
+            (Geotype.MULTITETRA,),
+            read_gocad,
+            write_gocad,
+            "GOCAD TSolid (tetrahedra)",
+            _gocad_collection_writer,
+        ),
+        FileFormat(
+            "lightsolid",
+            (".lso",),
+            (Geotype.MULTITETRA,),
+            read_gocad,
+            _lightsolid_writer,
+            "SKUA LightTSolid (tetrahedra; read only)",
+        ),
+        FileFormat(
+            "gocadgroup",
+            (".gp",),
+            _ALL,
+            read_gocad,
+            _group_writer,
+            "GOCAD HeterogeneousGroup/HomogeneousGroup (read only: its members)",
+        ),
+        FileFormat(
+            "gocadmodel",
+            (".ml",),
+            (Geotype.SURFACE,),
+            read_gocad_model,
+            _model_writer,
+            "GOCAD Model3d (read only: the TSurfs of the model, with their TFACEs)",
+            _model_writer,
+        ),
+        FileFormat(
+            "vtu", (".vtu",), _ALL, _vtu_reader, write_vtu, "VTK XML UnstructuredGrid (ParaView; zlib)", write_vtu
+        ),
+        FileFormat(
+            "vtp",
+            (".vtp",),
+            (Geotype.MULTIPOINT, Geotype.MULTILINESTRING, Geotype.SURFACE),
+            _vtp_reader,
+            write_vtp,
+            "VTK XML PolyData (ParaView, pyvista; zlib)",
+        ),
+        FileFormat(
+            "vtk",
+            (".vtk",),
+            _ALL,
+            _vtk_reader,
+            write_vtk,
+            "legacy VTK 5.1 UnstructuredGrid (binary; reads POLYDATA too)",
+            write_vtk,
+        ),
+        _trimesh_format("obj", "Wavefront OBJ (text, 8 decimals, no properties)"),
+        _trimesh_format("ply", "Stanford PLY (binary, exact, with properties)"),
+        _trimesh_format("off", "Object File Format (text, 10 decimals, no properties)"),
+        _trimesh_format("stl", "STL (binary float32 triangle soup, no properties)"),
+    )
+}
 
 
 def format_for(path: PathLike, format: str | None = None) -> FileFormat:
@@ -289,19 +381,26 @@ def format_for(path: PathLike, format: str | None = None) -> FileFormat:
         The path holds a NUL byte (no file system allows it).
     """
     if "\x00" in os.fspath(path):
-        raise FileFormatError("the file name contains a NUL byte, which no file name can hold",
-                              path=repr(os.fspath(path)))
+        raise FileFormatError(
+            "the file name contains a NUL byte, which no file name can hold", path=repr(os.fspath(path))
+        )
     key = (format if format is not None else Path(path).suffix).lower()
     if key in ("pvd", ".pvd"):
-        raise FileFormatError("a .pvd file is a time series of .vtu files, not a file of meshes", path=path,
-                              hint="use tgsis.formats.read_pvd or write_pvd")
+        raise FileFormatError(
+            "a .pvd file is a time series of .vtu files, not a file of meshes",
+            path=path,
+            hint="use tgsis.formats.read_pvd or write_pvd",
+        )
     for candidate in FORMATS.values():
         if key == candidate.name or key in candidate.extensions or "." + key in candidate.extensions:
             return candidate
     known = ", ".join(ext for f in FORMATS.values() for ext in f.extensions)
     what = f"format {format!r}" if format is not None else f"file extension {Path(path).suffix or '(none)'!r}"
-    raise FileFormatError(f"unknown {what}: known extensions are {known}", path=path,
-                          hint="pass format= with one of " + ", ".join(FORMATS))
+    raise FileFormatError(
+        f"unknown {what}: known extensions are {known}",
+        path=path,
+        hint="pass format= with one of " + ", ".join(FORMATS),
+    )
 
 
 def read(path: PathLike, format: str | None = None, **options: Any) -> list[Mesh]:
@@ -336,8 +435,11 @@ def read_one(path: PathLike, format: str | None = None, **options: Any) -> Mesh:
     """
     meshes = read(path, format, **options)
     if len(meshes) != 1:
-        raise FileFormatError(f"expected one mesh, the file holds {len(meshes)}", path=path,
-                              hint="use tgsis.formats.read to get all of them")
+        raise FileFormatError(
+            f"expected one mesh, the file holds {len(meshes)}",
+            path=path,
+            hint="use tgsis.formats.read to get all of them",
+        )
     return meshes[0]
 
 

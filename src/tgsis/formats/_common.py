@@ -145,8 +145,7 @@ def in_elevation(geometry: _G, path: PathLike | None = None) -> tuple[_G, list[s
         raise FileFormatError(exc.message, path=path, hint=exc.hint) from None
 
 
-def restore_convention(geometry: Geometry, recorded: list[str] | str | None, path: PathLike | None,
-                       where: str) -> None:
+def restore_convention(geometry: Geometry, recorded: list[str] | str | None, path: PathLike | None, where: str) -> None:
     """Give a mesh read in elevation the z convention its file recorded (one per member of a collection).
 
     Raises
@@ -162,8 +161,9 @@ def restore_convention(geometry: Geometry, recorded: list[str] | str | None, pat
     restore(geometry, checked)
 
 
-def property_columns(properties: Mapping[str, npt.NDArray[Any]], *,
-                     split_vectors: bool = True) -> list[tuple[str, npt.NDArray[Any]]]:
+def property_columns(
+    properties: Mapping[str, npt.NDArray[Any]], *, split_vectors: bool = True
+) -> list[tuple[str, npt.NDArray[Any]]]:
     """Properties as ``(name, array)`` in insertion order, booleans as uint8 (no file type has bool).
 
     With ``split_vectors`` an (n, k) vector property becomes k columns
@@ -206,19 +206,28 @@ def check_line_lengths(lines: list[str], path: PathLike | None) -> None:
     """Refuse the first of ``lines`` longer than :data:`MAX_LINE_BYTES` characters, naming its number."""
     if lines and max(map(len, lines)) > MAX_LINE_BYTES:
         number = next(i for i, line in enumerate(lines) if len(line) > MAX_LINE_BYTES)
-        raise FileFormatError(f"line {number + 1} is {len(lines[number]):,} characters long; tgsis reads lines of "
-                              f"at most {MAX_LINE_BYTES:,}", path=path, line=number + 1)
+        raise FileFormatError(
+            f"line {number + 1} is {len(lines[number]):,} characters long; tgsis reads lines of "
+            f"at most {MAX_LINE_BYTES:,}",
+            path=path,
+            line=number + 1,
+        )
 
 
 #: VTK cell types of polygons whose points go round them: TRIANGLE, POLYGON, QUAD.
 _VTK_TRIANGLE, _VTK_POLYGON, _VTK_QUAD = 5, 7, 9
 
 
-def split_vtk_polygons(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any], offsets: npt.NDArray[np.int64],
-                       connectivity: npt.NDArray[np.int64], cell_data: dict[str, npt.NDArray[Any]],
-                       metadata: dict[str, Any], path: PathLike | None, element: str,
-                       ) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64],
-                                  dict[str, npt.NDArray[Any]]]:
+def split_vtk_polygons(
+    vertices: npt.NDArray[np.float64],
+    types: npt.NDArray[Any],
+    offsets: npt.NDArray[np.int64],
+    connectivity: npt.NDArray[np.int64],
+    cell_data: dict[str, npt.NDArray[Any]],
+    metadata: dict[str, Any],
+    path: PathLike | None,
+    element: str,
+) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64], dict[str, npt.NDArray[Any]]]:
     """The cells of a VTK file with its POLYGON and QUAD cells split as the OBJ, OFF and PLY readers split faces.
 
     When every cell is a TRIANGLE, POLYGON or QUAD and at least one is not a
@@ -252,11 +261,23 @@ def split_vtk_polygons(vertices: npt.NDArray[np.float64], types: npt.NDArray[Any
         raise FileFormatError(
             f"{element} {exc.polygon} has {int(sizes[exc.polygon])} points and {exc.reason}: tgsis splits a polygon "
             "of more than 3 points into triangles only when it is planar and convex (the triangles then have its "
-            "shape)", path=path,
-            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)") from None
+            "shape)",
+            path=path,
+            hint="triangulate it first (pyvista: mesh.triangulate(); ParaView: the Triangulate filter)",
+        ) from None
     metadata["polygons_split"] = split
-    warnings.warn(PolygonsSplitWarning(f"{path or 'the file'}: {split:,} polygons of more than 3 points were split "
-                                       "into triangles (each planar and convex: the triangles have its shape)",
-                                       path=path, count=split), stacklevel=3)
-    return (np.full(len(triangles), _VTK_TRIANGLE, dtype=np.int64), np.arange(len(triangles) + 1, dtype=np.int64) * 3,
-            triangles.reshape(-1), {name: values[owner] for name, values in cell_data.items()})
+    warnings.warn(
+        PolygonsSplitWarning(
+            f"{path or 'the file'}: {split:,} polygons of more than 3 points were split "
+            "into triangles (each planar and convex: the triangles have its shape)",
+            path=path,
+            count=split,
+        ),
+        stacklevel=3,
+    )
+    return (
+        np.full(len(triangles), _VTK_TRIANGLE, dtype=np.int64),
+        np.arange(len(triangles) + 1, dtype=np.int64) * 3,
+        triangles.reshape(-1),
+        {name: values[owner] for name, values in cell_data.items()},
+    )

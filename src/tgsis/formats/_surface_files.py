@@ -108,9 +108,11 @@ class _Lines:
         end = len(self.data) if end < 0 else end
         self.number += 1
         if end - self.pos > MAX_LINE_BYTES:
-            raise self.fail(f"line {self.number} is {end - self.pos:,} bytes long; tgsis reads lines of at most "
-                            f"{MAX_LINE_BYTES:,} bytes")
-        line = self.data[self.pos: end]
+            raise self.fail(
+                f"line {self.number} is {end - self.pos:,} bytes long; tgsis reads lines of at most "
+                f"{MAX_LINE_BYTES:,} bytes"
+            )
+        line = self.data[self.pos : end]
         self.pos = end + 1
         return line.rstrip(b"\r") if self.separator == b"\n" else line
 
@@ -153,8 +155,13 @@ def _int(word: bytes, lines: _Lines, what: str) -> int:
         raise lines.fail(f"{what} is not an integer: {quoted(word)}") from None
 
 
-def _triangles(vertices: FloatArray, polygons: list[list[int]] | IntArray, path: PathLike, element: str,
-               line_of: Callable[[int], int | None] | None = None) -> tuple[IntArray, IntArray, int]:
+def _triangles(
+    vertices: FloatArray,
+    polygons: list[list[int]] | IntArray,
+    path: PathLike,
+    element: str,
+    line_of: Callable[[int], int | None] | None = None,
+) -> tuple[IntArray, IntArray, int]:
     """Triangles (m, 3) of the faces, the face of each triangle (m,) and how many faces were split.
 
     The one rule for polygons of every format tgsis reads (OBJ, OFF, PLY, .vtp,
@@ -179,9 +186,10 @@ def _triangles(vertices: FloatArray, polygons: list[list[int]] | IntArray, path:
         raise FileFormatError(
             f"{element} {exc.polygon} has {corners} corners and {exc.reason}: tgsis splits a face of more than 3 "
             "corners into triangles only when it is planar and convex (the triangles then have its shape)",
-            path=path, line=line_of(exc.polygon) if line_of is not None else None,
+            path=path,
+            line=line_of(exc.polygon) if line_of is not None else None,
             hint="triangulate the faces in the tool that wrote the file (Blender: Face > Triangulate Faces; "
-                 "MeshLab: Filters > Remeshing > Turn into a Pure-Triangular mesh; pyvista: mesh.triangulate())"
+            "MeshLab: Filters > Remeshing > Turn into a Pure-Triangular mesh; pyvista: mesh.triangulate())",
         ) from None
 
 
@@ -196,8 +204,7 @@ def _table(lines: list[bytes], dtype: type[np.generic]) -> npt.NDArray[Any] | No
     try:
         with warnings.catch_warnings():  # "input contained no data": blank lines only, refused below
             warnings.simplefilter("ignore", UserWarning)
-            table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=dtype, ndmin=2, comments=None,
-                               encoding="latin-1")
+            table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=dtype, ndmin=2, comments=None, encoding="latin-1")
     except (ValueError, OverflowError):
         return None
     return table if table.shape[0] == len(lines) else None  # loadtxt skips blank lines
@@ -208,8 +215,7 @@ def _table_of(lines: list[bytes], dtype: np.dtype[Any]) -> npt.NDArray[Any] | No
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
-            table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=dtype, ndmin=1, comments=None,
-                               encoding="latin-1")
+            table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=dtype, ndmin=1, comments=None, encoding="latin-1")
     except (ValueError, OverflowError):
         return None
     return table if table.shape[0] == len(lines) else None
@@ -233,10 +239,42 @@ def _vertex_array(rows: list[list[float]]) -> FloatArray:
 
 # ---------------------------------------------------------------- OBJ
 
-_OBJ_SKIPPED = {b"vt", b"vn", b"vp", b"o", b"g", b"s", b"usemtl", b"mtllib", b"lod", b"bevel", b"c_interp",
-                b"d_interp", b"shadow_obj", b"trace_obj", b"maplib", b"usemap"}
-_OBJ_FREE_FORM = {b"cstype", b"deg", b"bmat", b"step", b"curv", b"curv2", b"surf", b"parm", b"trim", b"hole",
-                  b"scrv", b"sp", b"end", b"con", b"ctech", b"stech"}
+_OBJ_SKIPPED = {
+    b"vt",
+    b"vn",
+    b"vp",
+    b"o",
+    b"g",
+    b"s",
+    b"usemtl",
+    b"mtllib",
+    b"lod",
+    b"bevel",
+    b"c_interp",
+    b"d_interp",
+    b"shadow_obj",
+    b"trace_obj",
+    b"maplib",
+    b"usemap",
+}
+_OBJ_FREE_FORM = {
+    b"cstype",
+    b"deg",
+    b"bmat",
+    b"step",
+    b"curv",
+    b"curv2",
+    b"surf",
+    b"parm",
+    b"trim",
+    b"hole",
+    b"scrv",
+    b"sp",
+    b"end",
+    b"con",
+    b"ctech",
+    b"stech",
+}
 
 
 # corners v, v/t, v/t/n or v//n, each followed by white space or the end: one way to match any text, so a
@@ -287,8 +325,11 @@ def _obj_fast(data: bytes) -> ParsedSurface | None:
             parsed.triangles, owner, parsed.polygons_split = _triangles(parsed.vertices, faces - 1, "", "OBJ face")
         except FileFormatError:
             return None  # line by line, which names the face's line
-        groups = [(i, line) for i, line in enumerate(lines) if line[:1] in (b"g", b"o") and line[1:2].isspace()
-                  or line.rstrip() in (b"g", b"o")]
+        groups = [
+            (i, line)
+            for i, line in enumerate(lines)
+            if line[:1] in (b"g", b"o") and line[1:2].isspace() or line.rstrip() in (b"g", b"o")
+        ]
         if groups:
             face_at = np.flatnonzero(np.fromiter((line[:2] == b"f " for line in lines), dtype=bool, count=len(lines)))
             mark = np.searchsorted(np.array([i for i, _ in groups]), face_at) - 1
@@ -312,8 +353,9 @@ def _obj_group(line: bytes) -> str:
 def _set_parts(parsed: ParsedSurface, labels: list[str | None], owner: IntArray) -> None:
     """Parts of an OBJ's faces by group (``labels``: one per face, None before any group), numbered by first use."""
     numbers: dict[str | None, int] = {}
-    part_of_face = np.fromiter((numbers.setdefault(label, len(numbers)) for label in labels), dtype=np.int64,
-                               count=len(labels))
+    part_of_face = np.fromiter(
+        (numbers.setdefault(label, len(numbers)) for label in labels), dtype=np.int64, count=len(labels)
+    )
     if any(label is not None for label in numbers):
         parsed.part_names = [label or "" for label in numbers]
     if len(numbers) > 1:
@@ -334,8 +376,9 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
         if raw.endswith(b"\\"):  # a continued line
             pending += raw[:-1] + b" "
             if len(pending) > MAX_LINE_BYTES:
-                raise lines.fail(f"the continued line ending at line {lines.number} is over {MAX_LINE_BYTES:,} "
-                                 "bytes long")
+                raise lines.fail(
+                    f"the continued line ending at line {lines.number} is over {MAX_LINE_BYTES:,} bytes long"
+                )
             continue
         line, pending = pending + raw, b""
         cut = line.find(b"#")
@@ -345,8 +388,9 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
         keyword = words[0]
         if keyword == b"v":
             if len(words) not in (4, 5, 7):
-                raise lines.fail(f"an OBJ vertex has {len(words) - 1} values, expected x y z (and an optional w, "
-                                 "or r g b)")
+                raise lines.fail(
+                    f"an OBJ vertex has {len(words) - 1} values, expected x y z (and an optional w, or r g b)"
+                )
             vertices.append(_floats(words[1:4], lines, "an OBJ vertex")[:3])
             _floats(words[4:], lines, "an OBJ vertex")
         elif keyword in (b"f", b"p"):
@@ -369,8 +413,9 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
         elif keyword == b"l":
             raise lines.fail("OBJ polylines (l) are not read: tgsis reads OBJ vertices and faces as a surface")
         elif keyword in _OBJ_FREE_FORM:
-            raise lines.fail(f"OBJ free-form geometry ({keyword.decode('latin-1')}) is not read: tgsis reads "
-                             "OBJ vertices and faces")
+            raise lines.fail(
+                f"OBJ free-form geometry ({keyword.decode('latin-1')}) is not read: tgsis reads OBJ vertices and faces"
+            )
         elif keyword not in _OBJ_SKIPPED:
             raise lines.fail(f"unknown OBJ keyword {quoted(keyword)}")
     if pending:
@@ -382,15 +427,18 @@ def _obj_slow(data: bytes, path: PathLike) -> ParsedSurface:
     for corners, number, label in zip(polygons, polygon_lines, polygon_groups):
         for index in corners:
             if index >= n:
-                raise lines.fail(f"an OBJ {'face' if number > 0 else 'point'} uses vertex {index + 1}, the file "
-                                 f"has {n} vertices", line=abs(number))
+                raise lines.fail(
+                    f"an OBJ {'face' if number > 0 else 'point'} uses vertex {index + 1}, the file has {n} vertices",
+                    line=abs(number),
+                )
         if number > 0:
             faces.append(corners)
             face_lines.append(number)
             labels.append(label)
     parsed = ParsedSurface(_vertex_array(vertices), np.empty((0, 3), dtype=np.int64), has_faces)
-    parsed.triangles, owner, parsed.polygons_split = _triangles(parsed.vertices, faces, path, "OBJ face",
-                                                                face_lines.__getitem__)
+    parsed.triangles, owner, parsed.polygons_split = _triangles(
+        parsed.vertices, faces, path, "OBJ face", face_lines.__getitem__
+    )
     if any(label is not None for label in labels):
         _set_parts(parsed, labels, owner)
     return parsed
@@ -403,8 +451,9 @@ def _obj_index(word: bytes, defined: int, lines: _Lines) -> int:
         raise lines.fail(f"an OBJ face corner is v, v/vt, v//vn or v/vt/vn, not {quoted(word)}")
     value = _int(parts[0], lines, "an OBJ vertex index")
     if value == 0:
-        raise lines.fail("an OBJ face uses vertex index 0: OBJ indices start at 1 (negative ones count back from "
-                         "the last vertex)")
+        raise lines.fail(
+            "an OBJ face uses vertex index 0: OBJ indices start at 1 (negative ones count back from the last vertex)"
+        )
     if value < 0:
         if -value > defined:
             raise lines.fail(f"an OBJ face uses vertex {value}, but only {defined} vertices are defined before it")
@@ -439,8 +488,10 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
     if n_vertices < 0 or n_faces < 0:
         raise lines.fail("the OFF header gives a negative count")
     if n_vertices > len(data) // 5 or n_faces > len(data) // 7:  # "0 0 0" and "3 0 1 2" are the shortest lines
-        raise lines.fail(f"the OFF header declares {n_vertices:,} vertices and {n_faces:,} faces, more than "
-                         f"a file of {len(data):,} bytes can hold")
+        raise lines.fail(
+            f"the OFF header declares {n_vertices:,} vertices and {n_faces:,} faces, more than "
+            f"a file of {len(data):,} bytes can hold"
+        )
     fast = _off_fast(data, lines.pos, n_vertices, n_faces, widths)
     if fast is not None:
         return fast
@@ -450,9 +501,11 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
         if words is None:
             raise lines.fail(f"the OFF file ends after {k} of the {n_vertices} vertices its header declares")
         if len(words) not in widths:
-            raise lines.fail(f"OFF vertex {k} has {len(words)} values, expected "
-                             f"{' or '.join(map(str, sorted(widths)))} for a {words and match.group(0).decode()} "
-                             "file")
+            raise lines.fail(
+                f"OFF vertex {k} has {len(words)} values, expected "
+                f"{' or '.join(map(str, sorted(widths)))} for a {words and match.group(0).decode()} "
+                "file"
+            )
         vertices.append(_floats(words[:3], lines, f"OFF vertex {k}"))
         _floats(words[3:], lines, f"OFF vertex {k}")
     polygons: list[list[int]] = []
@@ -465,22 +518,27 @@ def parse_off(data: bytes, path: PathLike) -> ParsedSurface:
         if size < 3:
             raise lines.fail(f"OFF face {k} has {size} corners, at least 3 are needed")
         if len(words) - 1 - size not in (0, 1, 3, 4):  # then a colour: an index, RGB or RGBA
-            raise lines.fail(f"OFF face {k} declares {size} corners but its line has {len(words) - 1} values "
-                             "(the corners, then an optional colour of 1, 3 or 4 values)")
-        corners = [_int(w, lines, f"a vertex index of OFF face {k}") for w in words[1: 1 + size]]
+            raise lines.fail(
+                f"OFF face {k} declares {size} corners but its line has {len(words) - 1} values "
+                "(the corners, then an optional colour of 1, 3 or 4 values)"
+            )
+        corners = [_int(w, lines, f"a vertex index of OFF face {k}") for w in words[1 : 1 + size]]
         bad = [c for c in corners if not 0 <= c < n_vertices]
         if bad:
             raise lines.fail(f"OFF face {k} uses vertex {bad[0]}, outside 0..{n_vertices - 1}")
-        _floats(words[1 + size:], lines, f"the colour of OFF face {k}")
+        _floats(words[1 + size :], lines, f"the colour of OFF face {k}")
         polygons.append(corners)
         face_lines.append(lines.number)
     words = lines.words()
     if words is not None:
-        raise lines.fail(f"the OFF file has data after the {n_vertices} vertices and {n_faces} faces its header "
-                         f"declares: {quoted(b' '.join(words))}")
+        raise lines.fail(
+            f"the OFF file has data after the {n_vertices} vertices and {n_faces} faces its header "
+            f"declares: {quoted(b' '.join(words))}"
+        )
     parsed = ParsedSurface(_vertex_array(vertices), np.empty((0, 3), dtype=np.int64), n_faces > 0)
-    parsed.triangles, _, parsed.polygons_split = _triangles(parsed.vertices, polygons, path, "OFF face",
-                                                            face_lines.__getitem__)
+    parsed.triangles, _, parsed.polygons_split = _triangles(
+        parsed.vertices, polygons, path, "OFF face", face_lines.__getitem__
+    )
     return parsed
 
 
@@ -510,12 +568,30 @@ def _off_fast(data: bytes, start: int, n_vertices: int, n_faces: int, widths: se
 
 # ---------------------------------------------------------------- PLY
 
-_PLY_DTYPES = {b"char": "i1", b"int8": "i1", b"uchar": "u1", b"uint8": "u1", b"short": "i2", b"int16": "i2",
-               b"ushort": "u2", b"uint16": "u2", b"int": "i4", b"int32": "i4", b"uint": "u4", b"uint32": "u4",
-               b"float": "f4", b"float32": "f4", b"double": "f8", b"float64": "f8"}
+_PLY_DTYPES = {
+    b"char": "i1",
+    b"int8": "i1",
+    b"uchar": "u1",
+    b"uint8": "u1",
+    b"short": "i2",
+    b"int16": "i2",
+    b"ushort": "u2",
+    b"uint16": "u2",
+    b"int": "i4",
+    b"int32": "i4",
+    b"uint": "u4",
+    b"uint32": "u4",
+    b"float": "f4",
+    b"float32": "f4",
+    b"double": "f8",
+    b"float64": "f8",
+}
 _ByteOrder = Literal["<", ">"]
-_PLY_FORMATS: dict[bytes, Literal["", "<", ">"]] = {b"ascii": "", b"binary_little_endian": "<",
-                                                     b"binary_big_endian": ">"}
+_PLY_FORMATS: dict[bytes, Literal["", "<", ">"]] = {
+    b"ascii": "",
+    b"binary_little_endian": "<",
+    b"binary_big_endian": ">",
+}
 _PLY_FACE_INDICES = (b"vertex_indices", b"vertex_index")
 
 
@@ -543,22 +619,23 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
     names = [p.name for p in vertex_element.properties]
     for axis in "xyz":
         if axis not in names:
-            raise FileFormatError(f"the PLY vertex element has no {axis!r} property", path=path,
-                                  line=vertex_element.line)
+            raise FileFormatError(
+                f"the PLY vertex element has no {axis!r} property", path=path, line=vertex_element.line
+            )
     face_element = elements.get("face")
     index_name = None
     if face_element is not None:
         index_name = _ply_index_list(face_element)
         if index_name is None:
-            raise FileFormatError("the PLY face element has no vertex_indices list", path=path,
-                                  line=face_element.line)
+            raise FileFormatError("the PLY face element has no vertex_indices list", path=path, line=face_element.line)
     strip_element = elements.get("tristrips")
     strip_index = None
     if strip_element is not None:
         strip_index = _ply_index_list(strip_element)
         if strip_index is None:
-            raise FileFormatError("the PLY tristrips element has no vertex_indices list", path=path,
-                                  line=strip_element.line)
+            raise FileFormatError(
+                "the PLY tristrips element has no vertex_indices list", path=path, line=strip_element.line
+            )
     if order == "":
         tables = _ply_ascii(data, body, body_line, elements, path)
     else:
@@ -568,8 +645,11 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
     bad = ~np.isfinite(vertices)
     if bad.any():
         row, col = (int(v) for v in np.argwhere(bad)[0])
-        raise FileFormatError(f"PLY vertex {row} has a non-finite {'xyz'[col]} coordinate ({vertices[row, col]})",
-                              path=path, line=_ply_row_line(order, body_line, elements, "vertex", row))
+        raise FileFormatError(
+            f"PLY vertex {row} has a non-finite {'xyz'[col]} coordinate ({vertices[row, col]})",
+            path=path,
+            line=_ply_row_line(order, body_line, elements, "vertex", row),
+        )
     renamed: dict[str, dict[str, str]] = {}
     vertex_properties = _ply_scalars(columns, "vertex", ("x", "y", "z"), renamed)
     triangles = np.empty((0, 3), dtype=np.int64)
@@ -582,39 +662,67 @@ def parse_ply(data: bytes, path: PathLike) -> ParsedSurface:
             bad = (polygons < 0) | (polygons >= n)
             if (len(polygons) and polygons.shape[1] < 3) or bad.any():
                 k = int(np.flatnonzero(bad.any(axis=1))[0]) if bad.any() else 0
-                polygons = list(polygons[k:k + 1])  # the loop below names the fault
+                polygons = list(polygons[k : k + 1])  # the loop below names the fault
         for k, corners in enumerate(polygons if isinstance(polygons, list) else ()):
             if len(corners) < 3:
-                raise FileFormatError(f"PLY face {k} has {len(corners)} corners, at least 3 are needed", path=path,
-                                      line=_ply_row_line(order, body_line, elements, "face", k))
+                raise FileFormatError(
+                    f"PLY face {k} has {len(corners)} corners, at least 3 are needed",
+                    path=path,
+                    line=_ply_row_line(order, body_line, elements, "face", k),
+                )
             if len(corners) and (int(corners.min()) < 0 or int(corners.max()) >= n):
                 bad_index = int(corners[(corners < 0) | (corners >= n)][0])
-                raise FileFormatError(f"PLY face {k} uses vertex {bad_index}, outside 0..{n - 1}", path=path,
-                                      line=_ply_row_line(order, body_line, elements, "face", k))
+                raise FileFormatError(
+                    f"PLY face {k} uses vertex {bad_index}, outside 0..{n - 1}",
+                    path=path,
+                    line=_ply_row_line(order, body_line, elements, "face", k),
+                )
         triangles, owner, split = _triangles(
-            vertices, polygons if isinstance(polygons, np.ndarray) else
-            [[int(c) for c in corners] for corners in polygons], path, "PLY face",
-            lambda k: _ply_row_line(order, body_line, elements, "face", k))
-        face_properties = {name: values[owner] for name, values in
-                           _ply_scalars(tables["face"], "face", (index_name,), renamed).items()}
+            vertices,
+            polygons if isinstance(polygons, np.ndarray) else [[int(c) for c in corners] for corners in polygons],
+            path,
+            "PLY face",
+            lambda k: _ply_row_line(order, body_line, elements, "face", k),
+        )
+        face_properties = {
+            name: values[owner] for name, values in _ply_scalars(tables["face"], "face", (index_name,), renamed).items()
+        }
     else:
         split = 0
     if strip_element is not None and strip_index is not None:
-        strips, strip_of = _strip_triangles(tables["tristrips"][strip_index], len(vertices), path,
-                                            lambda k: _ply_row_line(order, body_line, elements, "tristrips", k))
-        strip_properties = {name: values[strip_of] for name, values in
-                            _ply_scalars(tables["tristrips"], "tristrips", (strip_index,), renamed).items()}
+        strips, strip_of = _strip_triangles(
+            tables["tristrips"][strip_index],
+            len(vertices),
+            path,
+            lambda k: _ply_row_line(order, body_line, elements, "tristrips", k),
+        )
+        strip_properties = {
+            name: values[strip_of]
+            for name, values in _ply_scalars(tables["tristrips"], "tristrips", (strip_index,), renamed).items()
+        }
         if face_element is not None and set(strip_properties) != set(face_properties):
-            raise FileFormatError(f"the PLY face and tristrips elements have different properties "
-                                  f"({sorted(face_properties)} and {sorted(strip_properties)}): the triangles of "
-                                  "both become one surface, with one value of each property per triangle", path=path)
+            raise FileFormatError(
+                f"the PLY face and tristrips elements have different properties "
+                f"({sorted(face_properties)} and {sorted(strip_properties)}): the triangles of "
+                "both become one surface, with one value of each property per triangle",
+                path=path,
+            )
         triangles = np.concatenate([triangles, strips])
-        face_properties = {name: np.concatenate([face_properties[name], values]) if name in face_properties
-                           else values for name, values in strip_properties.items()}
+        face_properties = {
+            name: np.concatenate([face_properties[name], values]) if name in face_properties else values
+            for name, values in strip_properties.items()
+        }
     _refuse_unknown_faces(elements, tables, path)
-    return ParsedSurface(vertices, triangles, face_element is not None or strip_element is not None,
-                         vertex_properties, face_properties, renamed, _ply_recorded_zpositive(data[:body]),
-                         polygons_split=split)
+    return ParsedSurface(
+        vertices,
+        triangles,
+        face_element is not None or strip_element is not None,
+        vertex_properties,
+        face_properties,
+        renamed,
+        _ply_recorded_zpositive(data[:body]),
+        polygons_split=split,
+    )
 
 
 def _ply_index_list(element: _PlyElement) -> str | None:
@@ -623,8 +731,9 @@ def _ply_index_list(element: _PlyElement) -> str | None:
     return next((p.decode() for p in _PLY_FACE_INDICES if p.decode() in lists), None)
 
 
-def _strip_triangles(strips: Any, n: int, path: PathLike,
-                     line_of: Callable[[int], int | None]) -> tuple[IntArray, IntArray]:
+def _strip_triangles(
+    strips: Any, n: int, path: PathLike, line_of: Callable[[int], int | None]
+) -> tuple[IntArray, IntArray]:
     """The triangles of PLY triangle strips (-1 restarts a strip) and the strip of each.
 
     In a strip a b c d e ... the triangles are (a, b, c), (c, b, d), (c, d, e),
@@ -639,15 +748,18 @@ def _strip_triangles(strips: Any, n: int, path: PathLike,
         values = np.asarray(row, dtype=np.int64)
         bad = (values < -1) | (values >= n)
         if bad.any():
-            raise FileFormatError(f"PLY tristrips {k} uses vertex {int(values[bad][0])}, outside 0..{n - 1} "
-                                  "(-1 restarts a strip)", path=path, line=line_of(k))
+            raise FileFormatError(
+                f"PLY tristrips {k} uses vertex {int(values[bad][0])}, outside 0..{n - 1} (-1 restarts a strip)",
+                path=path,
+                line=line_of(k),
+            )
         if len(values) < 3:
             continue
         at = np.arange(len(values), dtype=np.int64)
         restart = values == -1
-        run_start = np.maximum.accumulate(np.where(restart, at + 1, 0))      # first index of the run of each entry
+        run_start = np.maximum.accumulate(np.where(restart, at + 1, 0))  # first index of the run of each entry
         first = at[:-2]
-        whole = ~(restart[:-2] | restart[1:-1] | restart[2:])               # three entries of one run
+        whole = ~(restart[:-2] | restart[1:-1] | restart[2:])  # three entries of one run
         first = first[whole]
         a, b, c = values[first], values[first + 1], values[first + 2]
         odd = (first - run_start[first]) % 2 == 1
@@ -660,8 +772,7 @@ def _strip_triangles(strips: Any, n: int, path: PathLike,
     return np.concatenate(triangles), np.concatenate(owners)
 
 
-def _refuse_unknown_faces(elements: dict[str, _PlyElement], tables: dict[str, dict[str, Any]],
-                          path: PathLike) -> None:
+def _refuse_unknown_faces(elements: dict[str, _PlyElement], tables: dict[str, dict[str, Any]], path: PathLike) -> None:
     """An element other than vertex, face and tristrips that lists vertices (faces, strips, lines) is an error.
 
     Left out, its cells would be lost without a word (a file of triangle strips read as a point set).
@@ -674,15 +785,21 @@ def _refuse_unknown_faces(elements: dict[str, _PlyElement], tables: dict[str, di
         if name is None:
             continue
         lists = tables[element.name][name]
-        longest = (lists.shape[1] if lists.ndim == 2 else 0) if isinstance(lists, np.ndarray) \
+        longest = (
+            (lists.shape[1] if lists.ndim == 2 else 0)
+            if isinstance(lists, np.ndarray)
             else max((len(v) for v in lists), default=0)
+        )
         if longest >= 2:
             raise FileFormatError(
                 f"the PLY element {quoted(element.name)} lists vertices ({name}, up to {longest} per row): tgsis "
                 "reads polygons from a 'face' element and triangle strips from 'tristrips', and does not know what "
-                f"{quoted(element.name)} holds, so its cells would be lost", path=path, line=element.line,
+                f"{quoted(element.name)} holds, so its cells would be lost",
+                path=path,
+                line=element.line,
                 hint="rename the element to 'face' (polygons) or 'tristrips' (strips, -1 restarts) if it is one, "
-                     "or convert the file to triangles in the tool that wrote it")
+                "or convert the file to triangles in the tool that wrote it",
+            )
 
 
 def _ply_recorded_zpositive(header: bytes) -> str | None:
@@ -711,8 +828,9 @@ def _ply_header(data: bytes, path: PathLike) -> tuple[Literal["", "<", ">"], dic
     """The byte order ("" for ASCII), the elements in file order, the offset of the body and its first line."""
     end = data.find(b"\nend_header") + 1 or -1
     if not data.startswith(b"ply") or end < 0:
-        raise FileFormatError("not a PLY file: it must begin with 'ply' and have an 'end_header' line", path=path,
-                              line=1)
+        raise FileFormatError(
+            "not a PLY file: it must begin with 'ply' and have an 'end_header' line", path=path, line=1
+        )
     stop = data.find(b"\n", end)
     if stop < 0:
         if data[end:].strip() != b"end_header":
@@ -734,8 +852,10 @@ def _ply_header(data: bytes, path: PathLike) -> tuple[Literal["", "<", ">"], dic
             continue
         elif keyword == b"format":
             if len(words) != 3 or words[1] not in _PLY_FORMATS:
-                raise lines.fail(f"unknown PLY format {quoted(b' '.join(words[1:]))}: tgsis reads ascii, "
-                                 "binary_little_endian and binary_big_endian")
+                raise lines.fail(
+                    f"unknown PLY format {quoted(b' '.join(words[1:]))}: tgsis reads ascii, "
+                    "binary_little_endian and binary_big_endian"
+                )
             if words[2] != b"1.0":
                 raise lines.fail(f"unknown PLY version {quoted(words[2])}: tgsis reads PLY 1.0")
             order = _PLY_FORMATS[words[1]]
@@ -771,16 +891,19 @@ def _ply_property(words: list[bytes], element: _PlyElement, lines: _Lines) -> _P
             raise lines.fail("a PLY list's length must have an integer type")
         prop = _PlyProperty(words[4].decode("latin-1"), np.dtype(_PLY_DTYPES[words[3]]), count_dtype)
     else:
-        raise lines.fail(f"a PLY property line is 'property <type> <name>' or 'property list <type> <type> <name>' "
-                         f"with the types char, uchar, short, ushort, int, uint, float, double: not "
-                         f"{quoted(b' '.join(words))}")
+        raise lines.fail(
+            f"a PLY property line is 'property <type> <name>' or 'property list <type> <type> <name>' "
+            f"with the types char, uchar, short, ushort, int, uint, float, double: not "
+            f"{quoted(b' '.join(words))}"
+        )
     if any(p.name == prop.name for p in element.properties):
         raise lines.fail(f"the PLY element {quoted(element.name)} has two properties named {quoted(prop.name)}")
     return prop
 
 
-def _ply_ascii(data: bytes, body: int, body_line: int, elements: dict[str, _PlyElement],
-               path: PathLike) -> dict[str, dict[str, Any]]:
+def _ply_ascii(
+    data: bytes, body: int, body_line: int, elements: dict[str, _PlyElement], path: PathLike
+) -> dict[str, dict[str, Any]]:
     """Columns of each element of an ASCII PLY body: one row a line, exactly as many rows as declared."""
     fast = _ply_ascii_fast(data, body, elements)
     if fast is not None:
@@ -794,12 +917,14 @@ def _ply_ascii(data: bytes, body: int, body_line: int, elements: dict[str, _PlyE
         for row in range(element.count):
             words = lines.words(comment=b"\x00")
             if words is None:
-                raise lines.fail(f"the PLY file ends after {row} of the {element.count} {element.name} elements "
-                                 "its header declares")
+                raise lines.fail(
+                    f"the PLY file ends after {row} of the {element.count} {element.name} elements its header declares"
+                )
             if fixed:
                 if len(words) != len(scalar):
-                    raise lines.fail(f"PLY {element.name} {row} has {len(words)} values, its header declares "
-                                     f"{len(scalar)}")
+                    raise lines.fail(
+                        f"PLY {element.name} {row} has {len(words)} values, its header declares {len(scalar)}"
+                    )
                 for prop, word in zip(scalar, words):
                     columns[prop.name].append(_ply_value(word, prop.dtype, lines, element.name, prop.name))
                 continue
@@ -813,21 +938,29 @@ def _ply_ascii(data: bytes, body: int, body_line: int, elements: dict[str, _PlyE
                     continue
                 size = _int(words[at], lines, f"the length of the PLY list {quoted(prop.name)}")
                 if size < 0 or at + 1 + size > len(words):
-                    raise lines.fail(f"PLY {element.name} {row} declares {size} {quoted(prop.name)} values but its "
-                                     f"line has {max(len(words) - at - 1, 0)} after the length")
-                columns[prop.name].append(np.array([_ply_value(w, prop.dtype, lines, element.name, prop.name)
-                                                    for w in words[at + 1: at + 1 + size]], dtype=prop.dtype))
+                    raise lines.fail(
+                        f"PLY {element.name} {row} declares {size} {quoted(prop.name)} values but its "
+                        f"line has {max(len(words) - at - 1, 0)} after the length"
+                    )
+                columns[prop.name].append(
+                    np.array(
+                        [
+                            _ply_value(w, prop.dtype, lines, element.name, prop.name)
+                            for w in words[at + 1 : at + 1 + size]
+                        ],
+                        dtype=prop.dtype,
+                    )
+                )
                 at += 1 + size
             if at != len(words):
-                raise lines.fail(f"PLY {element.name} {row} has {len(words) - at} values more than its header "
-                                 "declares")
+                raise lines.fail(f"PLY {element.name} {row} has {len(words) - at} values more than its header declares")
         tables[element.name] = {
             p.name: (columns[p.name] if p.count_dtype is not None else np.array(columns[p.name], dtype=p.dtype))
-            for p in element.properties}
+            for p in element.properties
+        }
     words = lines.words(comment=b"\x00")
     if words is not None:
-        raise lines.fail(f"the PLY file has data after the elements its header declares: "
-                         f"{quoted(b' '.join(words))}")
+        raise lines.fail(f"the PLY file has data after the elements its header declares: {quoted(b' '.join(words))}")
     return tables
 
 
@@ -839,14 +972,16 @@ def _ply_ascii_fast(data: bytes, body: int, elements: dict[str, _PlyElement]) ->
     tables: dict[str, dict[str, Any]] = {}
     start = 0
     for element in elements.values():
-        part, start = rows[start: start + element.count], start + element.count
+        part, start = rows[start : start + element.count], start + element.count
         props = element.properties
         if not element.count:
             return None
         if all(p.count_dtype is None for p in props):
             # integers read as integers (a "1.0" for an int property goes line by line, which refuses it)
-            record = _table_of(part, np.dtype([(f"c{j}", np.int64 if p.dtype.kind in "iu" else np.float64)
-                                               for j, p in enumerate(props)]))
+            record = _table_of(
+                part,
+                np.dtype([(f"c{j}", np.int64 if p.dtype.kind in "iu" else np.float64) for j, p in enumerate(props)]),
+            )
             if record is None:
                 return None
             columns: dict[str, Any] = {}
@@ -887,8 +1022,9 @@ def _ply_value(word: bytes, dtype: np.dtype[Any], lines: _Lines, element: str, n
     return value
 
 
-def _ply_binary(data: bytes, body: int, order: _ByteOrder, elements: dict[str, _PlyElement],
-                path: PathLike) -> dict[str, dict[str, Any]]:
+def _ply_binary(
+    data: bytes, body: int, order: _ByteOrder, elements: dict[str, _PlyElement], path: PathLike
+) -> dict[str, dict[str, Any]]:
     """Columns of each element of a binary PLY body, which must be exactly as long as the header says."""
     pos = body
     tables: dict[str, dict[str, Any]] = {}
@@ -896,16 +1032,20 @@ def _ply_binary(data: bytes, body: int, order: _ByteOrder, elements: dict[str, _
         table, pos = _ply_binary_element(data, pos, order, element, path)
         tables[element.name] = table
     if pos != len(data):
-        raise FileFormatError(f"the binary PLY file has {len(data) - pos:,} bytes after the elements its header "
-                              "declares", path=path)
+        raise FileFormatError(
+            f"the binary PLY file has {len(data) - pos:,} bytes after the elements its header declares", path=path
+        )
     return tables
 
 
-def _ply_binary_element(data: bytes, pos: int, order: _ByteOrder, element: _PlyElement,
-                        path: PathLike) -> tuple[dict[str, Any], int]:
+def _ply_binary_element(
+    data: bytes, pos: int, order: _ByteOrder, element: _PlyElement, path: PathLike
+) -> tuple[dict[str, Any], int]:
     def short(done: int) -> FileFormatError:
-        return FileFormatError(f"the binary PLY file ends inside {element.name} {done} of the {element.count} its "
-                               "header declares", path=path)
+        return FileFormatError(
+            f"the binary PLY file ends inside {element.name} {done} of the {element.count} its header declares",
+            path=path,
+        )
 
     props = element.properties
     lists = [p for p in props if p.count_dtype is not None]
@@ -959,18 +1099,20 @@ def _ply_binary_element(data: bytes, pos: int, order: _ByteOrder, element: _PlyE
             size = int(np.frombuffer(data, p.count_dtype.newbyteorder(order), 1, pos)[0])
             pos += p.count_dtype.itemsize
             if size < 0:
-                raise FileFormatError(f"PLY {element.name} {row} has a list {p.name!r} of negative length",
-                                      path=path)
+                raise FileFormatError(f"PLY {element.name} {row} has a list {p.name!r} of negative length", path=path)
             if pos + size * p.dtype.itemsize > len(data):
                 raise short(row)
             columns[p.name].append(np.frombuffer(data, p.dtype.newbyteorder(order), size, pos).astype(p.dtype))
             pos += size * p.dtype.itemsize
-    return {p.name: (columns[p.name] if p.count_dtype is not None else np.array(columns[p.name], dtype=p.dtype))
-            for p in props}, pos
+    return {
+        p.name: (columns[p.name] if p.count_dtype is not None else np.array(columns[p.name], dtype=p.dtype))
+        for p in props
+    }, pos
 
 
-def _ply_scalars(columns: dict[str, Any], element: str, skip: tuple[str, ...],
-                 renamed: dict[str, dict[str, str]]) -> dict[str, npt.NDArray[Any]]:
+def _ply_scalars(
+    columns: dict[str, Any], element: str, skip: tuple[str, ...], renamed: dict[str, dict[str, str]]
+) -> dict[str, npt.NDArray[Any]]:
     """The scalar properties of an element (lists are skipped): integers as int64, floats as they are."""
     result: dict[str, npt.NDArray[Any]] = {}
     for file_name, values in columns.items():
@@ -991,20 +1133,26 @@ def parse_stl(data: bytes, path: PathLike) -> ParsedSurface:
     declared = struct.unpack_from("<I", data, 80)[0] if len(data) >= 84 else None
     text = data.lstrip().startswith(b"solid") and b"\x00" not in data  # binary data has NULs (the attributes)
     if not text and declared is not None and len(data) == 84 + 50 * declared:
-        table = np.frombuffer(data, np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)),
-                                              ("attribute", "<u2")]), declared, 84)
+        table = np.frombuffer(
+            data, np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")]), declared, 84
+        )
         vertices = table["corners"].reshape(-1, 3).astype(np.float64)
         bad = ~np.isfinite(vertices)
         if bad.any():
-            raise FileFormatError(f"STL triangle {int(np.argwhere(bad)[0][0]) // 3} has a non-finite coordinate",
-                                  path=path)
+            raise FileFormatError(
+                f"STL triangle {int(np.argwhere(bad)[0][0]) // 3} has a non-finite coordinate", path=path
+            )
         return ParsedSurface(vertices, np.arange(3 * declared, dtype=np.int64).reshape(-1, 3), True)
     if not text:
         if declared is None:
-            raise FileFormatError(f"the file is not STL: {len(data)} bytes, shorter than a binary STL header (84)",
-                                  path=path)
-        raise FileFormatError(f"the binary STL file declares {declared:,} triangles ({84 + 50 * declared:,} bytes) "
-                              f"but has {len(data):,} bytes", path=path)
+            raise FileFormatError(
+                f"the file is not STL: {len(data)} bytes, shorter than a binary STL header (84)", path=path
+            )
+        raise FileFormatError(
+            f"the binary STL file declares {declared:,} triangles ({84 + 50 * declared:,} bytes) "
+            f"but has {len(data):,} bytes",
+            path=path,
+        )
     return _parse_ascii_stl(data, path)
 
 
@@ -1019,8 +1167,10 @@ def _parse_ascii_stl(data: bytes, path: PathLike) -> ParsedSurface:
         if words is None:
             raise lines.fail(f"the ASCII STL file ends where {' '.join(k.decode() for k in keywords)} is expected")
         if [w.lower() for w in words[: len(keywords)]] != list(keywords):
-            raise lines.fail(f"expected {' '.join(k.decode() for k in keywords)!r} in the ASCII STL file, found "
-                             f"{quoted(b' '.join(words))}")
+            raise lines.fail(
+                f"expected {' '.join(k.decode() for k in keywords)!r} in the ASCII STL file, found "
+                f"{quoted(b' '.join(words))}"
+            )
         return words
 
     while True:
@@ -1041,8 +1191,7 @@ def _parse_ascii_stl(data: bytes, path: PathLike) -> ParsedSurface:
                 try:
                     float(word)
                 except ValueError:
-                    raise lines.fail(f"an STL facet normal has a value that is not a number: {quoted(word)}"
-                                     ) from None
+                    raise lines.fail(f"an STL facet normal has a value that is not a number: {quoted(word)}") from None
             expect(b"outer", b"loop")
             for _ in range(3):
                 vertex = expect(b"vertex")

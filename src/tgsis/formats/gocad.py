@@ -216,8 +216,18 @@ _DEFAULT_NO_DATA = -99999.0
 # Lines that describe an object without being geometry: kept as they are in metadata["gocad_extra_lines"] and
 # written back. FIXED (per property) and REGION (a named vertex flag) come with SKUA's LightTSolid, READ_ONLY
 # (per property) with RINGMesh's TSolid.
-_DESCRIPTION_KEYWORDS = frozenset(("GEOLOGICAL_FEATURE", "GEOLOGICAL_TYPE", "STRATIGRAPHIC_POSITION",
-                                   "CLASSIFICATION", "NAME", "FIXED", "READ_ONLY", "REGION"))
+_DESCRIPTION_KEYWORDS = frozenset(
+    (
+        "GEOLOGICAL_FEATURE",
+        "GEOLOGICAL_TYPE",
+        "STRATIGRAPHIC_POSITION",
+        "CLASSIFICATION",
+        "NAME",
+        "FIXED",
+        "READ_ONLY",
+        "REGION",
+    )
+)
 # Lines that repeat what the geometry says (border stones, borders, the model section of a solid naming the
 # boundary triangles of its tetrahedra, subsets of points): counted in metadata["gocad_ignored"], not read.
 _REDUNDANT_KEYWORDS: dict[str, frozenset[str]] = {
@@ -225,18 +235,20 @@ _REDUNDANT_KEYWORDS: dict[str, frozenset[str]] = {
     "PLine": frozenset(("BSTONE", "BORDER")),
     "VSet": frozenset(("SUBVSET",)),
     "TSolid": frozenset(("BSTONE", "BORDER", "MODEL", "SURFACE", "TFACE", "KEYVERTICES", "TRGL", "MODEL_REGION")),
-    "LightTSolid": frozenset(("BSTONE", "BORDER", "MODEL", "SURFACE", "TFACE", "KEYVERTICES", "TRGL",
-                              "MODEL_REGION")),
+    "LightTSolid": frozenset(("BSTONE", "BORDER", "MODEL", "SURFACE", "TFACE", "KEYVERTICES", "TRGL", "MODEL_REGION")),
 }
 # Records of a vertex at the place of another: keyword -> may carry property values of its own.
-_ATOM_KEYWORDS = {"ATOM": False, "PATOM": True,
-                  "SHAREDVRTX": False, "SHAREDPVRTX": True}  # LightTSolid's names for ATOM and PATOM
+_ATOM_KEYWORDS = {
+    "ATOM": False,
+    "PATOM": True,
+    "SHAREDVRTX": False,
+    "SHAREDPVRTX": True,
+}  # LightTSolid's names for ATOM and PATOM
 
 #: Words that may end a vertex line: a control node (CN) fixed in some of x, y, z. GOCAD and SKUA write
 #: ``CNXYZ`` (TSurf, TSolid); SKUA's LightTSolid writes ``XYZ``. Kept per vertex in
 #: ``metadata["gocad_vertex_flags"]`` and written back.
-VERTEX_FLAGS = frozenset(prefix + axes for prefix in ("CN", "")
-                         for axes in ("X", "Y", "Z", "XY", "XZ", "YZ", "XYZ"))
+VERTEX_FLAGS = frozenset(prefix + axes for prefix in ("CN", "") for axes in ("X", "Y", "Z", "XY", "XZ", "YZ", "XYZ"))
 
 # A GOCAD word: blank-separated, except that "quoted text" (blanks and all) is one word.
 _WORD_RE = re.compile(r'(?:"[^"]*"|[^\s"]|")+')
@@ -338,8 +350,9 @@ def read_tsurf(path: PathLike, *, merge_atoms: bool = False, skip_unsupported: b
     meshes = read_gocad(path, merge_atoms=merge_atoms, skip_unsupported=skip_unsupported)
     kinds = [m.metadata.get("gocad_kind", type(m).__name__) for m in meshes]
     if len(meshes) != 1 or not isinstance(meshes[0], Surface):
-        raise FileFormatError(f"expected exactly one TSurf, found {len(meshes)} objects ({', '.join(kinds)})",
-                              path=path)
+        raise FileFormatError(
+            f"expected exactly one TSurf, found {len(meshes)} objects ({', '.join(kinds)})", path=path
+        )
     return meshes[0]
 
 
@@ -389,8 +402,9 @@ def read_gocad_model(path: PathLike, *, merge_atoms: bool = False, skip_unsuppor
     return parse_gocad_model(read_text(path), path=path, merge_atoms=merge_atoms, skip_unsupported=skip_unsupported)
 
 
-def parse_gocad_model(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
-                      skip_unsupported: bool = True) -> list[Mesh]:
+def parse_gocad_model(
+    text: str, *, path: PathLike | None = None, merge_atoms: bool = False, skip_unsupported: bool = True
+) -> list[Mesh]:
     """Parse the text of a GOCAD model file; see :func:`read_gocad_model`."""
     lines = text.removeprefix("\ufeff").splitlines()
     check_line_lengths(lines, path)
@@ -399,8 +413,11 @@ def parse_gocad_model(text: str, *, path: PathLike | None = None, merge_atoms: b
     with _gc_paused():
         meshes = _parse_lines(lines, path, merge_atoms, skip_unsupported, models, part_counts)
     if not models:
-        raise FileFormatError("the file holds no GOCAD Model3d, which a .ml file (a GOCAD model) begins with",
-                              path=path, hint="read it as a file of GOCAD objects with format='tsurf'")
+        raise FileFormatError(
+            "the file holds no GOCAD Model3d, which a .ml file (a GOCAD model) begins with",
+            path=path,
+            hint="read it as a file of GOCAD objects with format='tsurf'",
+        )
     for model in models:
         _attach_model(model, meshes, part_counts, path, skip_unsupported)
     return meshes
@@ -452,16 +469,21 @@ def _scan_model(lines: Sequence[str], start: int, path: PathLike | None) -> _Mod
         elif keyword in _DESCRIPTION_KEYWORDS:
             pass  # GEOLOGICAL_FEATURE and the like of the model as a whole
         elif keyword == "GOCAD":
-            raise FileFormatError(f"the Model3d begun at line {start + 1} has no END before the next GOCAD object",
-                                  path=path, line=i + 1)
+            raise FileFormatError(
+                f"the Model3d begun at line {start + 1} has no END before the next GOCAD object", path=path, line=i + 1
+            )
         else:
-            raise FileFormatError(f"unknown keyword {quoted(keyword)} in the Model3d begun at line {start + 1}",
-                                  path=path, line=i + 1,
-                                  hint="a Model3d holds TSURF, TFACE, " + ", ".join(_MODEL_GROUPS) + " lines; tgsis "
-                                       "refuses a line it does not know rather than read the model without it")
+            raise FileFormatError(
+                f"unknown keyword {quoted(keyword)} in the Model3d begun at line {start + 1}",
+                path=path,
+                line=i + 1,
+                hint="a Model3d holds TSURF, TFACE, " + ", ".join(_MODEL_GROUPS) + " lines; tgsis "
+                "refuses a line it does not know rather than read the model without it",
+            )
         i += 1
-    raise FileFormatError(f"the Model3d begun at line {start + 1} has no END (the file ends first)", path=path,
-                          line=len(lines))
+    raise FileFormatError(
+        f"the Model3d begun at line {start + 1} has no END (the file ends first)", path=path, line=len(lines)
+    )
 
 
 def _model_tface(lines: Sequence[str], i: int, words: list[str], model: _Model, path: PathLike | None) -> int:
@@ -475,14 +497,18 @@ def _model_tface(lines: Sequence[str], i: int, words: list[str], model: _Model, 
         except ValueError:
             ok = False
         if not ok:
-            raise FileFormatError(f"TFACE {words[0]} of the Model3d needs three key vertices ('x y z' lines) after it",
-                                  path=path, line=i + k + 1)
+            raise FileFormatError(
+                f"TFACE {words[0]} of the Model3d needs three key vertices ('x y z' lines) after it",
+                path=path,
+                line=i + k + 1,
+            )
     model.tfaces.append((int(words[0]), words[1], " ".join(words[2:]), i))
     return i + 3
 
 
-def _model_group(lines: Sequence[str], i: int, keyword: str, words: list[str], model: _Model,
-                 path: PathLike | None) -> int:
+def _model_group(
+    lines: Sequence[str], i: int, keyword: str, words: list[str], model: _Model, path: PathLike | None
+) -> int:
     """A REGION, LAYER, FAULT_BLOCK or SURFACE group: its name, then ids up to a 0; the index of its last line."""
     named = words[1:] if keyword == "REGION" else words
     model.groups.append((keyword, " ".join(named)))
@@ -491,16 +517,21 @@ def _model_group(lines: Sequence[str], i: int, keyword: str, words: list[str], m
             try:
                 value = int(word)
             except ValueError:
-                raise FileFormatError(f"the {keyword} begun at line {i + 1} lists ids up to a 0, found "
-                                      f"{quoted(word)}", path=path, line=j + 1) from None
+                raise FileFormatError(
+                    f"the {keyword} begun at line {i + 1} lists ids up to a 0, found {quoted(word)}",
+                    path=path,
+                    line=j + 1,
+                ) from None
             if value == 0:
                 return j
-    raise FileFormatError(f"the {keyword} begun at line {i + 1} has no closing 0 (the file ends first)", path=path,
-                          line=i + 1)
+    raise FileFormatError(
+        f"the {keyword} begun at line {i + 1} has no closing 0 (the file ends first)", path=path, line=i + 1
+    )
 
 
-def _attach_model(model: _Model, meshes: Sequence[Mesh], part_counts: Sequence[int], path: PathLike | None,
-                  skip_unsupported: bool) -> None:
+def _attach_model(
+    model: _Model, meshes: Sequence[Mesh], part_counts: Sequence[int], path: PathLike | None, skip_unsupported: bool
+) -> None:
     """Give each TSurf of the model its TFACEs; refuse what does not match; warn about what is not stored."""
     label = f"the GOCAD Model3d {quoted(model.name)}" if model.name else "the GOCAD Model3d"
     by_name: dict[str, tuple[Mesh, int]] = {}
@@ -510,37 +541,65 @@ def _attach_model(model: _Model, meshes: Sequence[Mesh], part_counts: Sequence[i
             by_name.setdefault(_header_value(header, "name_in_model_list") or mesh.name or "", (mesh, count))
     missing = [name for name in model.surfaces if name not in by_name]
     if missing:
-        raise FileFormatError(f"{label} names TSURF {', '.join(map(quoted, missing))}, which this file does not hold",
-                              path=path, line=model.start + 1,
-                              hint="a model whose surfaces are kept in files of their own: import the .ts files of "
-                                   "the model")
+        raise FileFormatError(
+            f"{label} names TSURF {', '.join(map(quoted, missing))}, which this file does not hold",
+            path=path,
+            line=model.start + 1,
+            hint="a model whose surfaces are kept in files of their own: import the .ts files of the model",
+        )
     for number, _, surface, line in model.tfaces:
         if surface not in model.surfaces:
-            raise FileFormatError(f"TFACE {number} of {label} is on the surface {quoted(surface)}, which no TSURF line "
-                                  "of the model names", path=path, line=line + 1)
+            raise FileFormatError(
+                f"TFACE {number} of {label} is on the surface {quoted(surface)}, which no TSURF line "
+                "of the model names",
+                path=path,
+                line=line + 1,
+            )
     for name in model.surfaces:
         mesh, count = by_name[name]
         tfaces = [[number, kind] for number, kind, surface, _ in model.tfaces if surface == name]
         if len(tfaces) != count:
-            raise FileFormatError(f"{label} gives the TSurf {quoted(name)} {len(tfaces)} TFACEs, the TSurf has {count}",
-                                  path=path, line=model.start + 1)
+            raise FileFormatError(
+                f"{label} gives the TSurf {quoted(name)} {len(tfaces)} TFACEs, the TSurf has {count}",
+                path=path,
+                line=model.start + 1,
+            )
         mesh.metadata["gocad_model"] = {"name": model.name, "tfaces": tfaces}
-    lost = [f"{keyword} {quoted(name)}" for keyword, name in model.groups
-            if not (keyword == "REGION" and name == "Universe")]  # Universe: the outside of the model, nothing in it
+    lost = [
+        f"{keyword} {quoted(name)}"
+        for keyword, name in model.groups
+        if not (keyword == "REGION" and name == "Universe")
+    ]  # Universe: the outside of the model, nothing in it
     if not lost:
         return
-    what = (f"{', '.join(lost)} of {label} (line {model.start + 1}): tgsis stores the surfaces of a model (its TSurfs "
-            "and their TFACEs), not the volumes they bound nor groups of them")
+    what = (
+        f"{', '.join(lost)} of {label} (line {model.start + 1}): tgsis stores the surfaces of a model (its TSurfs "
+        "and their TFACEs), not the volumes they bound nor groups of them"
+    )
     if not skip_unsupported:
-        raise FileFormatError(f"not stored: {what}", path=path, line=model.start + 1,
-                              hint="pass skip_unsupported=True to read the other objects of the file")
+        raise FileFormatError(
+            f"not stored: {what}",
+            path=path,
+            line=model.start + 1,
+            hint="pass skip_unsupported=True to read the other objects of the file",
+        )
     where = f"{path}:{model.start + 1}: " if path is not None else f"line {model.start + 1}: "
-    warnings.warn(SkippedObjectWarning(f"{where}skipped {what}", path=path, line=model.start + 1,
-                                       object_type="Model3d", name=model.name, skipped=tuple(lost)), stacklevel=4)
+    warnings.warn(
+        SkippedObjectWarning(
+            f"{where}skipped {what}",
+            path=path,
+            line=model.start + 1,
+            object_type="Model3d",
+            name=model.name,
+            skipped=tuple(lost),
+        ),
+        stacklevel=4,
+    )
 
 
-def parse_gocad(text: str, *, path: PathLike | None = None, merge_atoms: bool = False,
-                skip_unsupported: bool = True) -> list[Mesh]:
+def parse_gocad(
+    text: str, *, path: PathLike | None = None, merge_atoms: bool = False, skip_unsupported: bool = True
+) -> list[Mesh]:
     """Parse the text of a GOCAD ASCII file; see :func:`read_gocad`.
 
     ``path`` is only used in error messages.
@@ -585,8 +644,14 @@ class _Skipped:
 _SUPPORTED = ", ".join(k.name for k in _KINDS)
 
 
-def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool, skip_unsupported: bool,
-                 models: list[_Model] | None = None, part_counts: list[int] | None = None) -> list[Mesh]:
+def _parse_lines(
+    lines: Sequence[str],
+    path: PathLike | None,
+    merge_atoms: bool,
+    skip_unsupported: bool,
+    models: list[_Model] | None = None,
+    part_counts: list[int] | None = None,
+) -> list[Mesh]:
     """The meshes of a file's objects. ``models``: read Model3d objects into it (else they are skipped);
     ``part_counts``: the number of part keywords (TFACE ...) of each mesh read."""
     meshes: list[Mesh] = []
@@ -618,30 +683,46 @@ def _parse_lines(lines: Sequence[str], path: PathLike | None, merge_atoms: bool,
         else:
             item = _skip_object(lines, i, type_name, path)
             if not skip_unsupported:
-                raise FileFormatError(f"unsupported {item.describe()}: tgsis reads {_SUPPORTED}", path=path,
-                                      line=item.start + 1,
-                                      hint="pass skip_unsupported=True to read the other objects of the file")
+                raise FileFormatError(
+                    f"unsupported {item.describe()}: tgsis reads {_SUPPORTED}",
+                    path=path,
+                    line=item.start + 1,
+                    hint="pass skip_unsupported=True to read the other objects of the file",
+                )
             skipped.append(item)
             end = item.end
         i = end + 1
     if groups:
-        raise FileFormatError(f"the GOCAD group begun at line {groups[-1] + 1} has no END_MEMBERS (the file ends "
-                              "first)", path=path, line=len(lines))
+        raise FileFormatError(
+            f"the GOCAD group begun at line {groups[-1] + 1} has no END_MEMBERS (the file ends first)",
+            path=path,
+            line=len(lines),
+        )
     if models:  # the caller checks the model against the objects
         pass
     elif not meshes and skipped:
         first = skipped[0]
         others = "".join(f"; {s.describe()}" for s in skipped[1:])
-        raise FileFormatError(f"unsupported GOCAD object type {quoted(first.type_name)}: the file holds no object tgsis "
-                              f"reads ({first.describe()}{others}; tgsis reads {_SUPPORTED})",
-                              path=path, line=first.start + 1)
+        raise FileFormatError(
+            f"unsupported GOCAD object type {quoted(first.type_name)}: the file holds no object tgsis "
+            f"reads ({first.describe()}{others}; tgsis reads {_SUPPORTED})",
+            path=path,
+            line=first.start + 1,
+        )
     elif not meshes:
         raise FileFormatError("no GOCAD object in the file (no 'GOCAD <type> <version>' line)", path=path)
     for item in skipped:
         where = f"{path}:{item.start + 1}: " if path is not None else f"line {item.start + 1}: "
-        warnings.warn(SkippedObjectWarning(f"{where}skipped the {item.describe()}: tgsis reads {_SUPPORTED}",
-                                           path=path, line=item.start + 1, object_type=item.type_name,
-                                           name=item.name), stacklevel=4)
+        warnings.warn(
+            SkippedObjectWarning(
+                f"{where}skipped the {item.describe()}: tgsis reads {_SUPPORTED}",
+                path=path,
+                line=item.start + 1,
+                object_type=item.type_name,
+                name=item.name,
+            ),
+            stacklevel=4,
+        )
     return meshes
 
 
@@ -649,11 +730,13 @@ def _type_of(line: str, path: PathLike | None, index: int) -> str:
     """The object type of a ``GOCAD <type> <version>`` line."""
     words = line.split()
     if words[0] != "GOCAD":
-        raise FileFormatError(f"expected a 'GOCAD <type> <version>' line, found {line[:60]!r}",
-                              path=path, line=index + 1)
+        raise FileFormatError(
+            f"expected a 'GOCAD <type> <version>' line, found {line[:60]!r}", path=path, line=index + 1
+        )
     if len(words) < 2:
-        raise FileFormatError(f"the GOCAD line names no object type (supported: {_SUPPORTED})",
-                              path=path, line=index + 1)
+        raise FileFormatError(
+            f"the GOCAD line names no object type (supported: {_SUPPORTED})", path=path, line=index + 1
+        )
     return words[1]
 
 
@@ -664,10 +747,12 @@ def _object_end(lines: Sequence[str], start: int, what: str, path: PathLike | No
         if stripped == "END":
             return i
         if stripped.startswith("GOCAD ") and not stripped.startswith("GOCAD_"):
-            raise FileFormatError(f"the {what} begun at line {start + 1} has no END before the next GOCAD object",
-                                  path=path, line=i + 1)
-    raise FileFormatError(f"the {what} begun at line {start + 1} has no END (the file ends first)",
-                          path=path, line=len(lines))
+            raise FileFormatError(
+                f"the {what} begun at line {start + 1} has no END before the next GOCAD object", path=path, line=i + 1
+            )
+    raise FileFormatError(
+        f"the {what} begun at line {start + 1} has no END (the file ends first)", path=path, line=len(lines)
+    )
 
 
 _NAME_RE = re.compile(r"^\s*name\s*:(.*)$")
@@ -676,7 +761,7 @@ _NAME_RE = re.compile(r"^\s*name\s*:(.*)$")
 def _skip_object(lines: Sequence[str], start: int, type_name: str, path: PathLike | None) -> _Skipped:
     """The unsupported object begun at ``lines[start]``: its type, name and extent."""
     end = _object_end(lines, start, f"GOCAD {type_name} object", path)
-    name = next((m.group(1).strip() for m in map(_NAME_RE.match, lines[start + 1:end]) if m), None)
+    name = next((m.group(1).strip() for m in map(_NAME_RE.match, lines[start + 1 : end]) if m), None)
     return _Skipped(type_name, name or None, start, end)
 
 
@@ -688,8 +773,11 @@ def _group_members(lines: Sequence[str], start: int, type_name: str, path: PathL
             return i
         if stripped == "END" or (stripped.startswith("GOCAD ") and not stripped.startswith("GOCAD_")):
             break
-    raise FileFormatError(f"the GOCAD {type_name} begun at line {start + 1} has no BEGIN_MEMBERS line before its "
-                          "members", path=path, line=start + 1)
+    raise FileFormatError(
+        f"the GOCAD {type_name} begun at line {start + 1} has no BEGIN_MEMBERS line before its members",
+        path=path,
+        line=start + 1,
+    )
 
 
 def _group_end(lines: Sequence[str], end_members: int, start: int, path: PathLike | None) -> int:
@@ -700,8 +788,9 @@ def _group_end(lines: Sequence[str], end_members: int, start: int, path: PathLik
             return i
         if stripped:
             break
-    raise FileFormatError(f"the GOCAD group begun at line {start + 1} has no END after its END_MEMBERS",
-                          path=path, line=end_members + 1)
+    raise FileFormatError(
+        f"the GOCAD group begun at line {start + 1} has no END after its END_MEMBERS", path=path, line=end_members + 1
+    )
 
 
 def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike | None) -> tuple[_Records, int]:
@@ -720,7 +809,7 @@ def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike |
         line = lines[i]
         # fast path for the lines that make up nearly all of a big file; the rest is split in full
         if line.startswith(cell_prefix):
-            keyword, rest = cell_prefix[:-1], line[len(cell_prefix):]
+            keyword, rest = cell_prefix[:-1], line[len(cell_prefix) :]
         elif line.startswith("VRTX "):
             keyword, rest = "VRTX", line[5:]
         elif line.startswith("PVRTX "):
@@ -756,8 +845,9 @@ def _scan_object(lines: Sequence[str], start: int, kind: _Kind, path: PathLike |
         else:
             i = _scan_other(lines, i, keyword, rest, rec, path)
         i += 1
-    raise FileFormatError(f"the {kind.name} begun at line {start + 1} has no END (the file ends first)",
-                          path=path, line=len(lines))
+    raise FileFormatError(
+        f"the {kind.name} begun at line {start + 1} has no END (the file ends first)", path=path, line=len(lines)
+    )
 
 
 def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Records, path: PathLike | None) -> int:
@@ -769,8 +859,11 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
     """
     kind = rec.kind
     if keyword == "GOCAD":
-        raise FileFormatError(f"the {kind.name} begun at line {rec.start + 1} has no END before the next "
-                              "GOCAD object", path=path, line=i + 1)
+        raise FileFormatError(
+            f"the {kind.name} begun at line {rec.start + 1} has no END before the next GOCAD object",
+            path=path,
+            line=i + 1,
+        )
     if keyword == "HEADER":
         return _scan_block(lines, i, "}", rec.header, path, inline_open=True)
     if keyword == "GOCAD_ORIGINAL_COORDINATE_SYSTEM":
@@ -785,8 +878,7 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
     if keyword in _PROPERTY_KEYWORDS:
         rec.property_lines[keyword] = (i, split_words(rest))
     elif keyword.startswith("#"):
-        if kind.name == "LightTSolid" and (keyword == "#" and rest.startswith("CTETRA")
-                                           or keyword == "#CTETRA"):
+        if kind.name == "LightTSolid" and (keyword == "#" and rest.startswith("CTETRA") or keyword == "#CTETRA"):
             _tetra_region(rec, i, split_words(rest if keyword == "#" else "CTETRA " + rest), path)
         # any other comment: nothing to read
     elif keyword in _DESCRIPTION_KEYWORDS:
@@ -800,10 +892,13 @@ def _scan_other(lines: Sequence[str], i: int, keyword: str, rest: str, rec: _Rec
         return end
     else:
         known = sorted({"VRTX", "PVRTX", "ATOM", "PATOM", *(k for k in (kind.part_keyword, kind.cell_keyword) if k)})
-        raise FileFormatError(f"unknown keyword {quoted(keyword)} in the {kind.name} begun at line {rec.start + 1}",
-                              path=path, line=i + 1,
-                              hint=f"a {kind.name} holds {', '.join(known)} lines; tgsis refuses a line it does "
-                                   "not know rather than read the file without it")
+        raise FileFormatError(
+            f"unknown keyword {quoted(keyword)} in the {kind.name} begun at line {rec.start + 1}",
+            path=path,
+            line=i + 1,
+            hint=f"a {kind.name} holds {', '.join(known)} lines; tgsis refuses a line it does "
+            "not know rather than read the file without it",
+        )
     return i
 
 
@@ -830,27 +925,36 @@ def _scan_control_nodes(lines: Sequence[str], start: int, rest: str, rec: _Recor
             continue
         if words[0] in ("END", "GOCAD"):
             break
-        raise FileFormatError(f"unknown keyword {quoted(words[0])} in the PROPERTY_CN block begun at line "
-                              f"{start + 1}", path=path, line=i + 1,
-                              hint="a PROPERTY_CN block holds 'CNP <vertex id>' lines and ends with END_PROPERTY_CN")
+        raise FileFormatError(
+            f"unknown keyword {quoted(words[0])} in the PROPERTY_CN block begun at line {start + 1}",
+            path=path,
+            line=i + 1,
+            hint="a PROPERTY_CN block holds 'CNP <vertex id>' lines and ends with END_PROPERTY_CN",
+        )
     raise FileFormatError("PROPERTY_CN block is not closed by 'END_PROPERTY_CN'", path=path, line=start + 1)
 
 
-def _control_nodes(rec: _Records, layout: _PropertyLayout, index: _IdIndex, seq_to_vertex: IntArray,
-                   path: PathLike | None) -> dict[str, list[int]]:
+def _control_nodes(
+    rec: _Records, layout: _PropertyLayout, index: _IdIndex, seq_to_vertex: IntArray, path: PathLike | None
+) -> dict[str, list[int]]:
     """``{property file name: vertex indices}`` of the PROPERTY_CN blocks, in file order."""
     result: dict[str, list[int]] = {}
     for name, line, words, id_lines in rec.control_nodes:
         if name not in layout.file_names:
             declared = " ".join(map(quote_word, layout.file_names)) or "none"
-            raise FileFormatError(f"PROPERTY_CN names the property {quoted(name)}, which PROPERTIES does not declare "
-                                  f"(it declares {declared})", path=path, line=line + 1)
+            raise FileFormatError(
+                f"PROPERTY_CN names the property {quoted(name)}, which PROPERTIES does not declare "
+                f"(it declares {declared})",
+                path=path,
+                line=line + 1,
+            )
         ids = _int_column(words, id_lines, "CNP", "vertex id", path)
         seq, found = index.find(ids)
         if not found.all():
             j = int(np.flatnonzero(~found)[0])
-            raise FileFormatError(f"CNP refers to vertex {ids[j]}, which is not defined", path=path,
-                                  line=id_lines[j] + 1)
+            raise FileFormatError(
+                f"CNP refers to vertex {ids[j]}, which is not defined", path=path, line=id_lines[j] + 1
+            )
         vertices = result.setdefault(name, [])
         vertices.extend(v for v in dict.fromkeys(seq_to_vertex[seq].tolist()) if v not in vertices)
     return result
@@ -859,8 +963,9 @@ def _control_nodes(rec: _Records, layout: _PropertyLayout, index: _IdIndex, seq_
 def _tetra_region(rec: _Records, i: int, words: list[str], path: PathLike | None) -> None:
     """A LightTSolid's ``# CTETRA <region> <face flags>`` line: the region of the TETRA just before it."""
     if not rec.cell_lines or len(words) < 2:
-        raise FileFormatError("a '# CTETRA <region> ...' line must follow a TETRA line and name a region",
-                              path=path, line=i + 1)
+        raise FileFormatError(
+            "a '# CTETRA <region> ...' line must follow a TETRA line and name a region", path=path, line=i + 1
+        )
     name = words[1]
     try:
         part = rec.part_names.index(name)
@@ -870,8 +975,16 @@ def _tetra_region(rec: _Records, i: int, words: list[str], path: PathLike | None
     rec.cell_parts[-1] = part
 
 
-def _scan_block(lines: Sequence[str], start: int, close: str, into: list[str], path: PathLike | None,
-                *, inline_open: bool = False, keep_close: bool = False) -> int:
+def _scan_block(
+    lines: Sequence[str],
+    start: int,
+    close: str,
+    into: list[str],
+    path: PathLike | None,
+    *,
+    inline_open: bool = False,
+    keep_close: bool = False,
+) -> int:
     """Append the lines of a block opened at ``lines[start]`` to ``into``; return the index of its closing line.
 
     ``inline_open``: the block opens with ``{`` on the first line, which may
@@ -927,10 +1040,16 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
         try:
             sizes = [int(w) for w in words]
         except ValueError:
-            raise FileFormatError(f"ESIZES must be integers, got {quoted(' '.join(words))}", path=path, line=line + 1) from None
+            raise FileFormatError(
+                f"ESIZES must be integers, got {quoted(' '.join(words))}", path=path, line=line + 1
+            ) from None
         if len(sizes) != len(names) or min(sizes, default=1) < 1:
-            raise FileFormatError(f"ESIZES gives {len(sizes)} sizes for {len(names)} properties "
-                                  f"({' '.join(names)}); each must be at least 1", path=path, line=line + 1)
+            raise FileFormatError(
+                f"ESIZES gives {len(sizes)} sizes for {len(names)} properties "
+                f"({' '.join(names)}); each must be at least 1",
+                path=path,
+                line=line + 1,
+            )
     columns: list[str] = []
     column_file_names: list[str] = []
     mesh_names: list[str] = []
@@ -946,15 +1065,17 @@ def _property_layout(rec: _Records, path: PathLike | None) -> _PropertyLayout:
         try:
             values = [float(w) for w in words]
         except ValueError:
-            raise FileFormatError(f"NO_DATA_VALUES must be numbers, got {quoted(' '.join(words))}",
-                                  path=path, line=line + 1) from None
+            raise FileFormatError(
+                f"NO_DATA_VALUES must be numbers, got {quoted(' '.join(words))}", path=path, line=line + 1
+            ) from None
         if len(values) == len(names):
             no_data = [v for v, size in zip(values, sizes) for _ in range(size)]
         elif len(values) == len(columns):  # some writers give one value per component
             no_data = values
         else:
-            raise FileFormatError(f"NO_DATA_VALUES gives {len(values)} values for {len(names)} properties",
-                                  path=path, line=line + 1)
+            raise FileFormatError(
+                f"NO_DATA_VALUES gives {len(values)} values for {len(names)} properties", path=path, line=line + 1
+            )
     return _PropertyLayout(list(names), sizes, columns, column_file_names, no_data, mesh_names)
 
 
@@ -986,12 +1107,13 @@ def _float_table(rows: list[list[str]], line_of: Sequence[int], keyword: str, pa
             try:
                 float(word)
             except ValueError:
-                raise FileFormatError(f"{keyword} has a non-numeric value {quoted(word)}", path=path, line=line + 1) from None
+                raise FileFormatError(
+                    f"{keyword} has a non-numeric value {quoted(word)}", path=path, line=line + 1
+                ) from None
     raise AssertionError("unreachable: numpy rejected a table that float() accepts")  # pragma: no cover
 
 
-def _int_column(words: list[str], line_of: Sequence[int], keyword: str, what: str,
-                path: PathLike | None) -> IntArray:
+def _int_column(words: list[str], line_of: Sequence[int], keyword: str, what: str, path: PathLike | None) -> IntArray:
     """Parse integer words (vertex ids); name the first word that is not an integer."""
     try:
         return np.array(words, dtype=np.int64).reshape(len(words))
@@ -1001,13 +1123,15 @@ def _int_column(words: list[str], line_of: Sequence[int], keyword: str, what: st
         try:
             int(word)
         except ValueError:
-            raise FileFormatError(f"{keyword} has a {what} that is not an integer: {quoted(word)}",
-                                  path=path, line=line + 1) from None
+            raise FileFormatError(
+                f"{keyword} has a {what} that is not an integer: {quoted(word)}", path=path, line=line + 1
+            ) from None
     raise FileFormatError(f"{keyword} has a {what} that is too large", path=path)  # pragma: no cover
 
 
-def _bad_count(lengths: IntArray, allowed: Sequence[int], is_p: Sequence[bool] = (),
-               allowed_p: Sequence[int] = ()) -> int | None:
+def _bad_count(
+    lengths: IntArray, allowed: Sequence[int], is_p: Sequence[bool] = (), allowed_p: Sequence[int] = ()
+) -> int | None:
     """Index of the first record with a number of values not in ``allowed`` (``allowed_p`` where ``is_p``)."""
     ok = np.isin(lengths, allowed)
     if len(is_p):
@@ -1027,8 +1151,9 @@ def _strip_flags(texts: Sequence[str]) -> tuple[Sequence[str], dict[int, str]]:
     return (stripped, flags) if flags else (texts, flags)
 
 
-def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
-                          path: PathLike | None) -> tuple[IntArray, FloatArray, dict[int, str]]:
+def _parse_vertex_records(
+    rec: _Records, layout: _PropertyLayout, path: PathLike | None
+) -> tuple[IntArray, FloatArray, dict[int, str]]:
     """Ids (k,) and values (k, 3 + columns) of the VRTX/PVRTX records (missing property values are NaN), and the
     control-node flag of each record that ends with one."""
     p = layout.n_columns
@@ -1051,9 +1176,12 @@ def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
     if j is not None:
         keyword = "PVRTX" if rec.vertex_is_p[j] else "VRTX"
         counts = f"4 or {4 + p}" if p and keyword == "VRTX" else str(4 + p)
-        raise FileFormatError(f"{keyword} has {lengths[j]} values, expected {counts} "
-                              f"(id, x, y, z{f' and {p} property values' if p else ''})",
-                              path=path, line=rec.vertex_lines[j] + 1)
+        raise FileFormatError(
+            f"{keyword} has {lengths[j]} values, expected {counts} "
+            f"(id, x, y, z{f' and {p} property values' if p else ''})",
+            path=path,
+            line=rec.vertex_lines[j] + 1,
+        )
     ids = _int_column([t[0] for t in tokens], rec.vertex_lines, "VRTX", "vertex id", path)
     values = np.full((len(tokens), 3 + p), np.nan)
     full = lengths == 4 + p
@@ -1068,13 +1196,17 @@ def _parse_vertex_records(rec: _Records, layout: _PropertyLayout,
     bad = ~np.isfinite(values[:, :3])
     if bad.any():
         j, col = (int(v) for v in np.argwhere(bad)[0])
-        raise FileFormatError(f"VRTX has a non-finite {'xyz'[col]} coordinate {quoted(tokens[j][1 + col])}",
-                              path=path, line=rec.vertex_lines[j] + 1)
+        raise FileFormatError(
+            f"VRTX has a non-finite {'xyz'[col]} coordinate {quoted(tokens[j][1 + col])}",
+            path=path,
+            line=rec.vertex_lines[j] + 1,
+        )
     return ids, values, flags
 
 
-def _parse_atom_records(rec: _Records, layout: _PropertyLayout,
-                        path: PathLike | None) -> tuple[IntArray, IntArray, FloatArray, dict[int, str]]:
+def _parse_atom_records(
+    rec: _Records, layout: _PropertyLayout, path: PathLike | None
+) -> tuple[IntArray, IntArray, FloatArray, dict[int, str]]:
     """Ids (a,), referenced ids (a,), own property values (a, columns) (NaN rows: inherit) and control-node flags
     of ATOM/PATOM."""
     p = layout.n_columns
@@ -1086,10 +1218,16 @@ def _parse_atom_records(rec: _Records, layout: _PropertyLayout,
     lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
     j = _bad_count(lengths, (2,), rec.atom_is_p, (2, 2 + p))
     if j is not None:
-        expected = (f"2 or {2 + p} (id, vertex id, property values)" if rec.atom_is_p[j]
-                    else "2 (id, id of the vertex it repeats)")
-        raise FileFormatError(f"{'PATOM' if rec.atom_is_p[j] else 'ATOM'} has {lengths[j]} values, "
-                              f"expected {expected}", path=path, line=rec.atom_lines[j] + 1)
+        expected = (
+            f"2 or {2 + p} (id, vertex id, property values)"
+            if rec.atom_is_p[j]
+            else "2 (id, id of the vertex it repeats)"
+        )
+        raise FileFormatError(
+            f"{'PATOM' if rec.atom_is_p[j] else 'ATOM'} has {lengths[j]} values, expected {expected}",
+            path=path,
+            line=rec.atom_lines[j] + 1,
+        )
     ids = _int_column([t[0] for t in tokens], rec.atom_lines, "ATOM", "vertex id", path)
     refs = _int_column([t[1] for t in tokens], rec.atom_lines, "ATOM", "vertex id", path)
     own = np.full((len(tokens), p), np.nan)
@@ -1159,12 +1297,18 @@ def _build_mesh(rec: _Records, path: PathLike | None, merge_atoms: bool) -> Mesh
     if control_nodes:
         metadata["gocad_property_control_nodes"] = control_nodes
     try:
-        return kind.mesh_type(values[:, :3], cells, vertex_properties=_vertex_properties(values[:, 3:], layout),
-                              cell_properties={} if parts is None else {"part": parts},
-                              name=_header_name(rec.header), metadata=metadata)
+        return kind.mesh_type(
+            values[:, :3],
+            cells,
+            vertex_properties=_vertex_properties(values[:, 3:], layout),
+            cell_properties={} if parts is None else {"part": parts},
+            name=_header_name(rec.header),
+            metadata=metadata,
+        )
     except (InvalidGeometryError, InvalidPropertyError) as exc:
-        raise FileFormatError(f"the {kind.name} is not a valid mesh: {exc.message}", path=path,
-                              line=rec.start + 1) from exc
+        raise FileFormatError(
+            f"the {kind.name} is not a valid mesh: {exc.message}", path=path, line=rec.start + 1
+        ) from exc
 
 
 def _vertex_table(rec: _Records, layout: _PropertyLayout, path: PathLike | None) -> _VertexTable:
@@ -1183,13 +1327,17 @@ def _vertex_table(rec: _Records, layout: _PropertyLayout, path: PathLike | None)
     if len(duplicates):
         j = int(duplicates[0])
         first = int(line_of[np.flatnonzero(ids == ids[j])[0]])
-        raise FileFormatError(f"vertex id {ids[j]} is defined twice (first at line {first + 1})",
-                              path=path, line=int(line_of[j]) + 1)
+        raise FileFormatError(
+            f"vertex id {ids[j]} is defined twice (first at line {first + 1})", path=path, line=int(line_of[j]) + 1
+        )
     ref_seq, found = index.find(atom_refs)
     if not found.all():
         j = int(np.flatnonzero(~found)[0])
-        raise FileFormatError(f"{'PATOM' if rec.atom_is_p[j] else 'ATOM'} refers to vertex {atom_refs[j]}, "
-                              "which is not defined", path=path, line=rec.atom_lines[j] + 1)
+        raise FileFormatError(
+            f"{'PATOM' if rec.atom_is_p[j] else 'ATOM'} refers to vertex {atom_refs[j]}, which is not defined",
+            path=path,
+            line=rec.atom_lines[j] + 1,
+        )
     root = _atom_roots(ids, line_of, atom_seq, ref_seq, path)
     values = np.full((n_records, 3 + layout.n_columns), np.nan)
     values[vertex_seq] = vertex_values
@@ -1200,8 +1348,9 @@ def _vertex_table(rec: _Records, layout: _PropertyLayout, path: PathLike | None)
     return _VertexTable(ids, values, index, atom_seq, ref_seq, root, flags)
 
 
-def _atom_roots(ids: IntArray, line_of: IntArray, atom_seq: IntArray, ref_seq: IntArray,
-                path: PathLike | None) -> IntArray:
+def _atom_roots(
+    ids: IntArray, line_of: IntArray, atom_seq: IntArray, ref_seq: IntArray, path: PathLike | None
+) -> IntArray:
     """For every record the VRTX/PVRTX it repeats, following chains of ATOMs; a cycle is an error."""
     root = np.arange(len(ids))
     root[atom_seq] = ref_seq
@@ -1212,13 +1361,15 @@ def _atom_roots(ids: IntArray, line_of: IntArray, atom_seq: IntArray, ref_seq: I
     cyclic = is_atom[root]
     if cyclic.any():
         j = int(np.flatnonzero(cyclic)[0])
-        raise FileFormatError(f"ATOM {ids[j]} repeats itself through a chain of ATOMs", path=path,
-                              line=int(line_of[j]) + 1)
+        raise FileFormatError(
+            f"ATOM {ids[j]} repeats itself through a chain of ATOMs", path=path, line=int(line_of[j]) + 1
+        )
     return root
 
 
-def _fill_atoms(values: FloatArray, atom_seq: IntArray, ref_seq: IntArray, own: npt.NDArray[np.bool_],
-                atom_own: FloatArray) -> None:
+def _fill_atoms(
+    values: FloatArray, atom_seq: IntArray, ref_seq: IntArray, own: npt.NDArray[np.bool_], atom_own: FloatArray
+) -> None:
     """Give each ATOM the values of the record it repeats, and each PATOM its own property values.
 
     An ATOM may repeat a PATOM (whose own values it then takes) or another ATOM,
@@ -1233,8 +1384,9 @@ def _fill_atoms(values: FloatArray, atom_seq: IntArray, ref_seq: IntArray, own: 
             return
 
 
-def _parse_cells(rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_atoms: bool,
-                 path: PathLike | None) -> tuple[IntArray | None, IntArray | None]:
+def _parse_cells(
+    rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_atoms: bool, path: PathLike | None
+) -> tuple[IntArray | None, IntArray | None]:
     """Cells (m, k) as vertex indices and the part of each cell (None: one part), or (None, None) for a VSet."""
     kind = rec.kind
     keyword = kind.cell_keyword
@@ -1249,16 +1401,23 @@ def _parse_cells(rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_
         lengths = np.fromiter(map(len, tokens), dtype=np.int64, count=len(tokens))
         j = _bad_count(lengths, (k,))
         if j is not None:
-            raise FileFormatError(f"{keyword} has {lengths[j]} values, expected {k} vertex ids",
-                                  path=path, line=rec.cell_lines[j] + 1)
-        refs = _int_column(list(itertools.chain.from_iterable(tokens)),
-                           [line for line in rec.cell_lines for _ in range(k)], keyword, "vertex id", path)
+            raise FileFormatError(
+                f"{keyword} has {lengths[j]} values, expected {k} vertex ids", path=path, line=rec.cell_lines[j] + 1
+            )
+        refs = _int_column(
+            list(itertools.chain.from_iterable(tokens)),
+            [line for line in rec.cell_lines for _ in range(k)],
+            keyword,
+            "vertex id",
+            path,
+        )
         refs = refs.reshape(len(tokens), k)
     seq, found = index.find(refs)
     if not found.all():
         j, col = (int(v) for v in np.argwhere(~found)[0])
-        raise FileFormatError(f"{keyword} refers to vertex {refs[j, col]}, which is not defined",
-                              path=path, line=rec.cell_lines[j] + 1)
+        raise FileFormatError(
+            f"{keyword} refers to vertex {refs[j, col]}, which is not defined", path=path, line=rec.cell_lines[j] + 1
+        )
     cells = seq_to_vertex[seq]
     ordered = np.sort(cells, axis=1)
     repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
@@ -1266,8 +1425,10 @@ def _parse_cells(rec: _Records, index: _IdIndex, seq_to_vertex: IntArray, merge_
         j = int(np.flatnonzero(repeated)[0])
         written = " ".join(rec.cell_texts[j].split())
         if merge_atoms and not (np.sort(refs[j])[1:] == np.sort(refs[j])[:-1]).any():
-            message = (f"{keyword} {written} uses one vertex twice once ATOMs are merged onto the vertices "
-                       "they repeat (read with merge_atoms=False)")
+            message = (
+                f"{keyword} {written} uses one vertex twice once ATOMs are merged onto the vertices "
+                "they repeat (read with merge_atoms=False)"
+            )
         else:
             message = f"{keyword} {written} uses one vertex twice"
         raise FileFormatError(message, path=path, line=rec.cell_lines[j] + 1)
@@ -1287,7 +1448,7 @@ def _vertex_properties(values: FloatArray, layout: _PropertyLayout) -> dict[str,
     result: dict[str, FloatArray] = {}
     start = 0
     for name, size in zip(layout.names, layout.sizes):
-        result[name] = columns[start] if size == 1 else np.stack(columns[start:start + size], axis=1)
+        result[name] = columns[start] if size == 1 else np.stack(columns[start : start + size], axis=1)
         start += size
     return result
 
@@ -1320,8 +1481,9 @@ def _parse_color(text: str | None) -> tuple[float, ...] | None:
         return None
 
 
-def _metadata(rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], flags: Mapping[int, str],
-              n_vertices: int) -> dict[str, Any]:
+def _metadata(
+    rec: _Records, layout: _PropertyLayout, atoms: list[list[int]], flags: Mapping[int, str], n_vertices: int
+) -> dict[str, Any]:
     """The facts kept for a faithful rewrite (see the module documentation)."""
     meta: dict[str, Any] = {"gocad_kind": rec.kind.name}
     if rec.header:
@@ -1407,7 +1569,7 @@ def _property_info(rec: _Records, names: Sequence[str]) -> tuple[dict[str, dict[
         pieces = _subclass_pieces(words, len(names)) if keyword == "PROPERTY_SUBCLASSES" else None
         if keyword != "PROPERTY_SUBCLASSES" and words and len(words) % len(names) == 0:
             per = len(words) // len(names)
-            pieces = [words[j * per:(j + 1) * per] for j in range(len(names))]
+            pieces = [words[j * per : (j + 1) * per] for j in range(len(names))]
         if pieces is None:
             if words:
                 whole[keyword] = {"properties": list(names), "words": " ".join(map(quote_word, words))}
@@ -1530,12 +1692,18 @@ def _cell_groups(mesh: Mesh, kind: _Kind, path: PathLike | None, drop_cell_prope
     storable = {"part"} if kind.cell_keyword else set()
     lost = [name for name in mesh.cell_properties if name not in storable]
     if lost and not drop_cell_properties:
-        raise FileFormatError(f"GOCAD {kind.name} cannot store the {mesh.cell_name} properties {', '.join(lost)}",
-                              path=path, hint="pass drop_cell_properties=True to write the mesh without them")
+        raise FileFormatError(
+            f"GOCAD {kind.name} cannot store the {mesh.cell_name} properties {', '.join(lost)}",
+            path=path,
+            hint="pass drop_cell_properties=True to write the mesh without them",
+        )
     if kind.cell_keyword is None:
         if not np.array_equal(mesh.cells[:, 0], np.arange(mesh.n_vertices)):
-            raise FileFormatError("a GOCAD VSet holds one point per vertex, in vertex order; this PointSet's "
-                                  "cells are not 0, 1, ..., n-1", path=path)
+            raise FileFormatError(
+                "a GOCAD VSet holds one point per vertex, in vertex order; this PointSet's "
+                "cells are not 0, 1, ..., n-1",
+                path=path,
+            )
         return []
     if "part" not in mesh.cell_properties:
         return [np.arange(mesh.n_cells)]
@@ -1620,8 +1788,7 @@ def _coordinate_system_lines(meta: Mapping[str, Any]) -> list[str]:
             lines[z_lines[-1]] = f"ZPOSITIVE {zpositive}"
         else:
             lines.append(f"ZPOSITIVE {zpositive}")
-    return ["GOCAD_ORIGINAL_COORDINATE_SYSTEM\n", *(line + "\n" for line in lines),
-            "END_ORIGINAL_COORDINATE_SYSTEM\n"]
+    return ["GOCAD_ORIGINAL_COORDINATE_SYSTEM\n", *(line + "\n" for line in lines), "END_ORIGINAL_COORDINATE_SYSTEM\n"]
 
 
 @dataclass(frozen=True)
@@ -1665,8 +1832,9 @@ def _written_properties(mesh: Mesh) -> list[_WrittenProperty]:
         if name in used:
             name = next(c for c in [columns[0], *(f"{columns[0]}_{j}" for j in itertools.count(2))] if c not in used)
         used.add(name)
-        arrays = [component for c in columns
-                  for component in ([values[c]] if values[c].ndim == 1 else list(values[c].T))]
+        arrays = [
+            component for c in columns for component in ([values[c]] if values[c].ndim == 1 else list(values[c].T))
+        ]
         stored = no_data.get(name)
         result.append(_WrittenProperty(name, arrays, _no_data_value(arrays, stored)))
     return result
@@ -1685,8 +1853,12 @@ def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, A
     names = [p.name for p in properties]
     info = _meta_dict(meta, "gocad_property_info")
     raw = _meta_dict(meta, "gocad_property_lines")
-    defaults = {"PROP_LEGAL_RANGES": "**none** **none**", "PROPERTY_KINDS": "unknown",
-                "PROPERTY_SUBCLASSES": "QUANTITY Float", "UNITS": "none"}
+    defaults = {
+        "PROP_LEGAL_RANGES": "**none** **none**",
+        "PROPERTY_KINDS": "unknown",
+        "PROPERTY_SUBCLASSES": "QUANTITY Float",
+        "UNITS": "none",
+    }
 
     def info_line(keyword: str) -> str | None:
         known = info.get(keyword)
@@ -1703,8 +1875,9 @@ def _property_lines(properties: Sequence[_WrittenProperty], meta: Mapping[str, A
         lines.append(f"PROPERTIES {' '.join(map(quote_word, names))}\n")
         lines += [line for line in [info_line("PROP_LEGAL_RANGES")] if line]
         lines.append(f"NO_DATA_VALUES {' '.join(_format_number(p.no_data) for p in properties)}\n")
-        lines += [line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES"))
-                  if line]
+        lines += [
+            line for line in map(info_line, ("PROPERTY_CLASSES", "PROPERTY_KINDS", "PROPERTY_SUBCLASSES")) if line
+        ]
         lines.append(f"ESIZES {' '.join(str(len(p.columns)) for p in properties)}\n")
         lines += [line for line in [info_line("UNITS")] if line]
     gone = _classes_left_out(names, meta, info)
@@ -1801,9 +1974,13 @@ def _flag_suffixes(mesh: Mesh) -> list[str]:
         if flag not in VERTEX_FLAGS or not isinstance(ranges, (list, tuple)):
             continue
         for pair in ranges:
-            if (isinstance(pair, (list, tuple)) and len(pair) == 2 and all(isinstance(v, int) for v in pair)
-                    and 0 <= pair[0] <= pair[1] <= mesh.n_vertices):
-                ends[pair[0]:pair[1]] = [" " + flag] * (pair[1] - pair[0])
+            if (
+                isinstance(pair, (list, tuple))
+                and len(pair) == 2
+                and all(isinstance(v, int) for v in pair)
+                and 0 <= pair[0] <= pair[1] <= mesh.n_vertices
+            ):
+                ends[pair[0] : pair[1]] = [" " + flag] * (pair[1] - pair[0])
     return ends
 
 
@@ -1821,7 +1998,8 @@ def _valid_atoms(mesh: Mesh) -> list[tuple[int, int, bool]]:
         atom, ref = int(pair[0]), int(pair[1])
         if not 0 <= ref < atom < mesh.n_vertices or not np.array_equal(bits[atom], bits[ref]):
             continue
-        same = all(np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f")
-                   for v in mesh.vertex_properties.values())
+        same = all(
+            np.array_equal(v[atom], v[ref], equal_nan=v.dtype.kind == "f") for v in mesh.vertex_properties.values()
+        )
         valid.append((atom, ref, same))
     return valid

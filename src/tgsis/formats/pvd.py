@@ -75,8 +75,7 @@ _DIGITS = 6
 # ---------------------------------------------------------------- writing
 
 
-def write_pvd(frames: Sequence[Frame], path: PathLike, *,
-              encoding: Encoding = "binary") -> list[Path]:
+def write_pvd(frames: Sequence[Frame], path: PathLike, *, encoding: Encoding = "binary") -> list[Path]:
     """Write a time series as a ``.pvd`` file and one ``.vtu`` file per frame.
 
     Parameters
@@ -114,8 +113,9 @@ def write_pvd(frames: Sequence[Frame], path: PathLike, *,
     times = _check_times(frames, pvd)
     for i, (_, geometry) in enumerate(frames):
         if geometry is not None and not isinstance(geometry, (Mesh, GeometryCollection)):
-            raise FileFormatError(f"frame {i} holds a {type(geometry).__name__}, not a mesh, a collection or None",
-                                  path=pvd)
+            raise FileFormatError(
+                f"frame {i} holds a {type(geometry).__name__}, not a mesh, a collection or None", path=pvd
+            )
     folder = pvd.parent / pvd.stem
     width = max(_DIGITS, len(str(len(frames) - 1)))
     targets = [folder / f"{pvd.stem}_{i:0{width}d}.vtu" for i in range(len(frames))]
@@ -123,8 +123,14 @@ def write_pvd(frames: Sequence[Frame], path: PathLike, *,
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     collection = ET.SubElement(root, "Collection")
     for time, target in zip(times, targets):
-        ET.SubElement(collection, "DataSet", timestep=repr(time), group="", part="0",
-                      file=PurePosixPath(folder.name, target.name).as_posix())
+        ET.SubElement(
+            collection,
+            "DataSet",
+            timestep=repr(time),
+            group="",
+            part="0",
+            file=PurePosixPath(folder.name, target.name).as_posix(),
+        )
     ET.indent(root)
     text = b'<?xml version="1.0"?>\n' + bytes(ET.tostring(root, encoding="utf-8", xml_declaration=False)) + b"\n"
     partial = pvd.with_name(pvd.name + ".partial")
@@ -146,14 +152,16 @@ def _check_times(frames: Sequence[Frame], pvd: Path) -> list[float]:
         if not math.isfinite(value):
             raise FileFormatError(f"frame {i} has time {time!r}: times must be finite numbers", path=pvd)
         if times and not value > times[-1]:
-            raise FileFormatError(f"frame {i} has time {value!r}, not after frame {i - 1}'s "
-                                  f"{times[-1]!r}: times must be strictly increasing", path=pvd)
+            raise FileFormatError(
+                f"frame {i} has time {value!r}, not after frame {i - 1}'s "
+                f"{times[-1]!r}: times must be strictly increasing",
+                path=pvd,
+            )
         times.append(value)
     return times
 
 
-def _write_frames(frames: Sequence[Frame], folder: Path, targets: list[Path],
-                  encoding: Encoding, pvd: Path) -> None:
+def _write_frames(frames: Sequence[Frame], folder: Path, targets: list[Path], encoding: Encoding, pvd: Path) -> None:
     """Write every frame under a temporary name, then rename them all; on error remove what was written."""
     created = not folder.exists()
     try:
@@ -164,8 +172,9 @@ def _write_frames(frames: Sequence[Frame], folder: Path, targets: list[Path],
     try:
         for (_, geometry), target in zip(frames, targets):
             partial = target.with_name(target.name + ".partial")
-            content = (format_empty_vtu(encoding=encoding) if geometry is None
-                       else format_vtu(geometry, encoding=encoding))
+            content = (
+                format_empty_vtu(encoding=encoding) if geometry is None else format_vtu(geometry, encoding=encoding)
+            )
             write_bytes(partial, [content])
             written.append(partial)
     except BaseException:
@@ -190,8 +199,7 @@ def _remove_stale(folder: Path, stem: str, targets: list[Path]) -> None:
             try:
                 entry.unlink()
             except OSError as exc:
-                raise FileFormatError(f"cannot remove the stale frame file: {exc.strerror or exc}",
-                                      path=entry) from exc
+                raise FileFormatError(f"cannot remove the stale frame file: {exc.strerror or exc}", path=entry) from exc
 
 
 def _replace(source: Path, target: Path) -> None:
@@ -239,8 +247,10 @@ def read_pvd(path: PathLike) -> list[Frame]:
         raise FileFormatError(f"not well-formed XML: {exc}", path=pvd, line=exc.position[0]) from None
     collection = root.find("Collection")
     if root.tag != "VTKFile" or root.get("type") != "Collection" or collection is None:
-        raise FileFormatError(f"not a ParaView collection file (root <{root.tag} type={root.get('type')!r}> "
-                              "with a <Collection>)", path=pvd)
+        raise FileFormatError(
+            f"not a ParaView collection file (root <{root.tag} type={root.get('type')!r}> with a <Collection>)",
+            path=pvd,
+        )
     entries = [_entry(i, element, pvd) for i, element in enumerate(collection.findall("DataSet"))]
     by_time: dict[float, list[tuple[str, int, Path]]] = {}
     for time, group, part, file in entries:
@@ -274,8 +284,10 @@ def _entry(index: int, element: ET.Element, pvd: Path) -> tuple[float, str, int,
         raise FileFormatError(f"{what} has no file attribute", path=pvd)
     file = pvd.parent / name
     if file.suffix.lower() != ".vtu":
-        raise FileFormatError(f"{what} refers to {quoted(name)}, not a .vtu file: tgsis reads VTK UnstructuredGrid "
-                              "(.vtu) datasets only", path=pvd)
+        raise FileFormatError(
+            f"{what} refers to {quoted(name)}, not a .vtu file: tgsis reads VTK UnstructuredGrid (.vtu) datasets only",
+            path=pvd,
+        )
     if not file.is_file():
         raise FileFormatError(f"{what} refers to {quoted(name)}, which does not exist ({file})", path=pvd)
     return time, element.get("group", ""), part, file
@@ -289,9 +301,12 @@ def _geometry(files: list[Path], time: float, pvd: Path) -> Geometry | None:
     for file in files:
         geometry = read_vtu_geometry(file)
         if isinstance(geometry, GeometryCollection):
-            raise FileFormatError(f"time {time!r} has {len(files)} parts and part {file} holds a collection "
-                                  f"of {len(geometry)} meshes: collections do not nest", path=pvd,
-                                  hint="write the collection's members as parts of their own")
+            raise FileFormatError(
+                f"time {time!r} has {len(files)} parts and part {file} holds a collection "
+                f"of {len(geometry)} meshes: collections do not nest",
+                path=pvd,
+                hint="write the collection's members as parts of their own",
+            )
         if geometry is not None:
             members.append(geometry)
     if len(members) > 1:

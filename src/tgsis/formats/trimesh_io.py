@@ -87,8 +87,16 @@ __all__ = ["TRIMESH_FILE_TYPES", "read_trimesh_file", "write_trimesh_file"]
 #: File types handled here (the file extension without the dot).
 TRIMESH_FILE_TYPES = ("obj", "ply", "off", "stl")
 
-_PLY_TYPES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint",
-              "f4": "float", "f8": "double"}
+_PLY_TYPES = {
+    "i1": "char",
+    "u1": "uchar",
+    "i2": "short",
+    "u2": "ushort",
+    "i4": "int",
+    "u4": "uint",
+    "f4": "float",
+    "f8": "double",
+}
 _PLY_COORDINATES = ("x", "y", "z")
 _PLY_FACE_INDICES = ("vertex_indices", "vertex_index")
 
@@ -97,16 +105,18 @@ def _file_type(path: PathLike, file_type: str | None) -> str:
     """The file type from ``file_type`` or the extension, checked."""
     kind = (file_type or Path(path).suffix).lower().lstrip(".")
     if kind not in TRIMESH_FILE_TYPES:
-        raise FileFormatError(f"unknown surface file type {kind!r}: use one of {', '.join(TRIMESH_FILE_TYPES)}",
-                              path=path)
+        raise FileFormatError(
+            f"unknown surface file type {kind!r}: use one of {', '.join(TRIMESH_FILE_TYPES)}", path=path
+        )
     return kind
 
 
 # ---------------------------------------------------------------- reading
 
 
-def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
-                      merge_vertices: bool = False) -> Surface | PointSet:
+def read_trimesh_file(
+    path: PathLike, *, file_type: str | None = None, merge_vertices: bool = False
+) -> Surface | PointSet:
     """Read a triangle surface, or points, from an OBJ, PLY, OFF or STL file.
 
     The file is read by the strict readers of :mod:`tgsis.formats._surface_files`
@@ -156,9 +166,15 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
         metadata["part_names"] = parsed.part_names
     if parsed.polygons_split:
         metadata["polygons_split"] = parsed.polygons_split
-        warnings.warn(PolygonsSplitWarning(
-            f"{path}: {parsed.polygons_split:,} faces of more than 3 corners were split into triangles (each planar "
-            "and convex: the triangles have its shape)", path=path, count=parsed.polygons_split), stacklevel=2)
+        warnings.warn(
+            PolygonsSplitWarning(
+                f"{path}: {parsed.polygons_split:,} faces of more than 3 corners were split into triangles (each planar "
+                "and convex: the triangles have its shape)",
+                path=path,
+                count=parsed.polygons_split,
+            ),
+            stacklevel=2,
+        )
     if merge_vertices:
         vertices, faces, vertex_properties = _merge_identical(vertices, faces, vertex_properties)
     mesh: Surface | PointSet
@@ -166,8 +182,9 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
         if len(faces) == 0 and not (kind == "ply" and parsed.has_faces):
             mesh = PointSet(vertices, vertex_properties=vertex_properties, metadata=metadata)
         else:
-            mesh = Surface(vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties,
-                           metadata=metadata)
+            mesh = Surface(
+                vertices, faces, vertex_properties=vertex_properties, cell_properties=face_properties, metadata=metadata
+            )
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the {kind.upper()} file is not a valid surface: {exc.message}", path=path) from exc
     restore_convention(mesh, parsed.zpositive, path, "the PLY comment 'tgsis zpositive'")
@@ -175,12 +192,16 @@ def read_trimesh_file(path: PathLike, *, file_type: str | None = None,
 
 
 _PARSERS: dict[str, Callable[[bytes, PathLike], ParsedSurface]] = {
-    "obj": parse_obj, "off": parse_off, "ply": parse_ply, "stl": parse_stl}
+    "obj": parse_obj,
+    "off": parse_off,
+    "ply": parse_ply,
+    "stl": parse_stl,
+}
 
 
-def _merge_identical(vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64],
-                     properties: dict[str, npt.NDArray[Any]]
-                     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], dict[str, npt.NDArray[Any]]]:
+def _merge_identical(
+    vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64], properties: dict[str, npt.NDArray[Any]]
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], dict[str, npt.NDArray[Any]]]:
     """Join vertices with equal coordinates, keeping the order of first occurrence."""
     if len(vertices) == 0:
         return vertices, faces, properties
@@ -189,15 +210,24 @@ def _merge_identical(vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.in
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     keep = first[order]
-    return (vertices[keep], rank[inverse.reshape(-1)][faces],
-            {name: values[keep] for name, values in properties.items()})
+    return (
+        vertices[keep],
+        rank[inverse.reshape(-1)][faces],
+        {name: values[keep] for name, values in properties.items()},
+    )
 
 
 # ---------------------------------------------------------------- writing
 
 
-def write_trimesh_file(surface: Surface, path: PathLike, *, file_type: str | None = None,
-                       digits: int | None = None, drop_properties: bool = False) -> None:
+def write_trimesh_file(
+    surface: Surface,
+    path: PathLike,
+    *,
+    file_type: str | None = None,
+    digits: int | None = None,
+    drop_properties: bool = False,
+) -> None:
     """Write a surface as OBJ, PLY, OFF or STL.
 
     Parameters
@@ -234,8 +264,11 @@ def write_trimesh_file(surface: Surface, path: PathLike, *, file_type: str | Non
     else:
         lost = [*mesh.vertex_properties, *(k for k in mesh.cell_properties if not (kind == "obj" and k == "part"))]
         if lost and not drop_properties:
-            raise FileFormatError(f"{kind.upper()} cannot store the properties {', '.join(lost)}", path=path,
-                                  hint="write PLY or VTU to keep them, or pass drop_properties=True")
+            raise FileFormatError(
+                f"{kind.upper()} cannot store the properties {', '.join(lost)}",
+                path=path,
+                hint="write PLY or VTU to keep them, or pass drop_properties=True",
+            )
         data = _trimesh_bytes(mesh, kind, digits)
         if kind == "obj" and "part" in mesh.cell_properties:
             data = _obj_with_groups(data, mesh, path)
@@ -254,8 +287,10 @@ def _obj_with_groups(data: bytes, surface: Surface, path: PathLike) -> bytes:
     distinct = np.unique(parts).tolist()
     listed = surface.metadata.get("part_names") or surface.metadata.get("gocad_part_names")
     names = [str(v) for v in listed] if isinstance(listed, list) and len(listed) == len(distinct) else []
-    label = {p: " ".join((names[j] if names and names[j].strip() else f"part_{int(p)}").split())
-             for j, p in enumerate(distinct)}
+    label = {
+        p: " ".join((names[j] if names and names[j].strip() else f"part_{int(p)}").split())
+        for j, p in enumerate(distinct)
+    }
     if len(set(label.values())) != len(label):
         label = {p: f"part_{int(p)}" for p in distinct}  # names that would merge parts
     lines = data.decode("utf-8").split("\n")
@@ -279,12 +314,16 @@ def _trimesh_bytes(surface: Surface, kind: str, digits: int | None) -> bytes:
     import trimesh
     from trimesh.exchange import obj, off, stl
 
-    tm = trimesh.Trimesh(vertices=surface.vertices.copy(), faces=surface.cells.copy(), process=False,
-                         validate=False)
+    tm = trimesh.Trimesh(vertices=surface.vertices.copy(), faces=surface.cells.copy(), process=False, validate=False)
     if kind == "obj":
         export_obj: Any = obj.export_obj  # untyped in trimesh
-        text = export_obj(tm, include_normals=False, include_color=False, include_texture=False,
-                              digits=8 if digits is None else digits)
+        text = export_obj(
+            tm,
+            include_normals=False,
+            include_color=False,
+            include_texture=False,
+            digits=8 if digits is None else digits,
+        )
         return str(text).encode("utf-8")
     if kind == "off":
         return str(off.export_off(tm, digits=10 if digits is None else digits)).encode("utf-8")
@@ -301,8 +340,9 @@ def _ply_type(name: str, values: npt.NDArray[Any], path: PathLike) -> tuple[str,
         narrow = np.dtype(np.int32 if values.dtype.kind == "i" else np.uint32)
         info = np.iinfo(narrow)
         if len(values) and (values.min() < info.min or values.max() > info.max):
-            raise FileFormatError(f"PLY has no 64-bit integers and property {name!r} has values outside "
-                                  f"{narrow.name}", path=path)
+            raise FileFormatError(
+                f"PLY has no 64-bit integers and property {name!r} has values outside {narrow.name}", path=path
+            )
         values = values.astype(narrow)
     values = values.astype(values.dtype.newbyteorder("<"))
     return _PLY_TYPES[values.dtype.str[1:]], values
@@ -317,20 +357,28 @@ def _ply_bytes(surface: Surface, path: PathLike, zpositive: str | None = None) -
     if n > np.iinfo(np.int32).max:
         raise FileFormatError(f"PLY face indices are 32-bit: {n} vertices are too many", path=path)
     recorded = [f"comment tgsis zpositive {zpositive} (z is written up positive, as elevation)"] if zpositive else []
-    header = ["ply", "format binary_little_endian 1.0", "comment tgsis", *recorded, f"element vertex {n}",
-              *(f"property double {c}" for c in _PLY_COORDINATES)]
-    vertex_fields: list[tuple[str, npt.NDArray[Any]]] = [(c, surface.vertices[:, j])
-                                                         for j, c in enumerate(_PLY_COORDINATES)]
+    header = [
+        "ply",
+        "format binary_little_endian 1.0",
+        "comment tgsis",
+        *recorded,
+        f"element vertex {n}",
+        *(f"property double {c}" for c in _PLY_COORDINATES),
+    ]
+    vertex_fields: list[tuple[str, npt.NDArray[Any]]] = [
+        (c, surface.vertices[:, j]) for j, c in enumerate(_PLY_COORDINATES)
+    ]
     for name, values in property_columns(surface.vertex_properties):
         if name in _PLY_COORDINATES:
-            raise FileFormatError(f"a vertex property named {name!r} would clash with the PLY coordinate",
-                                  path=path)
+            raise FileFormatError(f"a vertex property named {name!r} would clash with the PLY coordinate", path=path)
         ply_type, converted = _ply_type(name, values, path)
         header.append(f"property {ply_type} {name}")
         vertex_fields.append((name, converted))
     header += [f"element face {m}", "property list uchar int vertex_indices"]
     face_fields: list[tuple[str, npt.NDArray[Any]]] = [
-        ("count", np.full(m, 3, dtype=np.uint8)), ("vertex_indices", surface.cells.astype("<i4"))]
+        ("count", np.full(m, 3, dtype=np.uint8)),
+        ("vertex_indices", surface.cells.astype("<i4")),
+    ]
     for name, values in property_columns(surface.cell_properties):
         if name in _PLY_FACE_INDICES or name == "count":
             raise FileFormatError(f"a face property named {name!r} would clash with the PLY face list", path=path)

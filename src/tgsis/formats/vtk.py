@@ -126,20 +126,57 @@ from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, PointSet, Su
 if TYPE_CHECKING:  # (tgsis.gmaps imports tgsis.temporal, which imports this module)
     from tgsis.gmaps import GMap
 
-__all__ = ["VTK_CELL_TYPES", "read_vtu", "parse_vtu", "read_vtu_collection", "parse_vtu_collection",
-           "read_vtu_geometry", "parse_vtu_geometry", "write_vtu", "format_vtu", "format_empty_vtu",
-           "read_vtp", "parse_vtp", "write_vtp", "format_vtp", "write_gmap_vtu", "format_gmap_vtu"]
+__all__ = [
+    "VTK_CELL_TYPES",
+    "read_vtu",
+    "parse_vtu",
+    "read_vtu_collection",
+    "parse_vtu_collection",
+    "read_vtu_geometry",
+    "parse_vtu_geometry",
+    "write_vtu",
+    "format_vtu",
+    "format_empty_vtu",
+    "read_vtp",
+    "parse_vtp",
+    "write_vtp",
+    "format_vtp",
+    "write_gmap_vtu",
+    "format_gmap_vtu",
+]
 
 #: VTK cell type of each mesh class.
 VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
 _MESH_OF_CELL_TYPE = {code: cls for cls, code in VTK_CELL_TYPES.items()}
-_CELL_TYPE_NAMES = {1: "VERTEX", 2: "POLY_VERTEX", 3: "LINE", 4: "POLY_LINE", 5: "TRIANGLE",
-                    6: "TRIANGLE_STRIP", 7: "POLYGON", 8: "PIXEL", 9: "QUAD", 10: "TETRA", 11: "VOXEL",
-                    12: "HEXAHEDRON", 13: "WEDGE", 14: "PYRAMID", 42: "POLYHEDRON"}
+_CELL_TYPE_NAMES = {
+    1: "VERTEX",
+    2: "POLY_VERTEX",
+    3: "LINE",
+    4: "POLY_LINE",
+    5: "TRIANGLE",
+    6: "TRIANGLE_STRIP",
+    7: "POLYGON",
+    8: "PIXEL",
+    9: "QUAD",
+    10: "TETRA",
+    11: "VOXEL",
+    12: "HEXAHEDRON",
+    13: "WEDGE",
+    14: "PYRAMID",
+    42: "POLYHEDRON",
+}
 
 _VTK_TYPE_OF: dict[str, str] = {
-    "i1": "Int8", "u1": "UInt8", "i2": "Int16", "u2": "UInt16", "i4": "Int32", "u4": "UInt32",
-    "i8": "Int64", "u8": "UInt64", "f4": "Float32", "f8": "Float64",
+    "i1": "Int8",
+    "u1": "UInt8",
+    "i2": "Int16",
+    "u2": "UInt16",
+    "i4": "Int32",
+    "u4": "UInt32",
+    "i8": "Int64",
+    "u8": "UInt64",
+    "f4": "Float32",
+    "f8": "Float64",
 }
 _DTYPE_OF: dict[str, str] = {v: k for k, v in _VTK_TYPE_OF.items()}
 _DTYPE_OF["String"] = "u1"  # FieldData strings: null-terminated bytes
@@ -151,8 +188,9 @@ Compression = Literal["zlib"] | None
 # ---------------------------------------------------------------- writing
 
 
-def write_vtu(mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary",
-              compression: Compression = "zlib") -> None:
+def write_vtu(
+    mesh: Geometry, path: PathLike, *, encoding: Encoding = "binary", compression: Compression = "zlib"
+) -> None:
     """Write a mesh or a collection as a VTK XML UnstructuredGrid file.
 
     Parameters
@@ -201,10 +239,17 @@ def _mesh_grid(mesh: Mesh) -> _Grid:
     k = mesh.cell_size
     up, zpositive = in_elevation(mesh)
     point_data, cell_data = _as_read(mesh, mesh.vertex_properties, mesh.cell_properties)
-    return _Grid(mesh.name, mesh.geotype.value, up.vertices, mesh.cells.reshape(-1),
-                 np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k,
-                 np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8),
-                 point_data, cell_data, zpositive=tuple(zpositive))
+    return _Grid(
+        mesh.name,
+        mesh.geotype.value,
+        up.vertices,
+        mesh.cells.reshape(-1),
+        np.arange(1, mesh.n_cells + 1, dtype=np.int64) * k,
+        np.full(mesh.n_cells, VTK_CELL_TYPES[mesh_class(mesh.geotype)], dtype=np.uint8),
+        point_data,
+        cell_data,
+        zpositive=tuple(zpositive),
+    )
 
 
 def _xml_name(name: str) -> bool:
@@ -212,11 +257,14 @@ def _xml_name(name: str) -> bool:
     return name.isprintable()
 
 
-def _as_read(geometry: Geometry, point_data: dict[str, npt.NDArray[Any]],
-             cell_data: dict[str, npt.NDArray[Any]]) -> tuple[dict[str, npt.NDArray[Any]], dict[str, npt.NDArray[Any]]]:
+def _as_read(
+    geometry: Geometry, point_data: dict[str, npt.NDArray[Any]], cell_data: dict[str, npt.NDArray[Any]]
+) -> tuple[dict[str, npt.NDArray[Any]], dict[str, npt.NDArray[Any]]]:
     """Point and cell data under the names of the VTK file they were read from (``metadata["vtk_array_names"]``)."""
-    return (named_as_read(point_data, file_array_names(geometry, "point_data"), _xml_name),
-            named_as_read(cell_data, file_array_names(geometry, "cell_data"), _xml_name))
+    return (
+        named_as_read(point_data, file_array_names(geometry, "point_data"), _xml_name),
+        named_as_read(cell_data, file_array_names(geometry, "cell_data"), _xml_name),
+    )
 
 
 def _collection_grid(collection: GeometryCollection) -> _Grid:
@@ -227,18 +275,28 @@ def _collection_grid(collection: GeometryCollection) -> _Grid:
     first_point = np.cumsum([0] + [m.n_vertices for m in members[:-1]])
     connectivity = np.concatenate([m.cells.reshape(-1) + start for m, start in zip(members, first_point)])
     sizes = np.concatenate([np.full(m.n_cells, m.cell_size, dtype=np.int64) for m in members])
-    types = np.concatenate([np.full(m.n_cells, VTK_CELL_TYPES[mesh_class(m.geotype)], dtype=np.uint8)
-                            for m in members])
-    point_data, cell_data = _as_read(collection, _shared_properties(members, "vertex"),
-                                     _shared_properties(members, "cell"))
-    return _Grid(collection.name, collection.geotype.value, np.concatenate([m.vertices for m in members]),
-                 connectivity.astype(np.int64), np.cumsum(sizes).astype(np.int64), types, point_data, cell_data,
-                 collection, zpositive=tuple(zpositive))
+    types = np.concatenate([np.full(m.n_cells, VTK_CELL_TYPES[mesh_class(m.geotype)], dtype=np.uint8) for m in members])
+    point_data, cell_data = _as_read(
+        collection, _shared_properties(members, "vertex"), _shared_properties(members, "cell")
+    )
+    return _Grid(
+        collection.name,
+        collection.geotype.value,
+        np.concatenate([m.vertices for m in members]),
+        connectivity.astype(np.int64),
+        np.cumsum(sizes).astype(np.int64),
+        types,
+        point_data,
+        cell_data,
+        collection,
+        zpositive=tuple(zpositive),
+    )
 
 
 def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"]) -> dict[str, npt.NDArray[Any]]:
     """The members' ``kind`` properties concatenated; each must be on every member, but ``part``, which is
     :data:`~tgsis._vtk_cells.NO_PART` on the cells of members without parts."""
+
     def of(mesh: Mesh) -> dict[str, npt.NDArray[Any]]:
         return mesh.vertex_properties if kind == "vertex" else mesh.cell_properties
 
@@ -248,15 +306,21 @@ def _shared_properties(members: tuple[Mesh, ...], kind: Literal["vertex", "cell"
             raise FileFormatError(
                 f"{kind} property {name!r} is on some members of the collection but not on members {lacking}: "
                 f"a VTU grid holds one value per {'point' if kind == 'vertex' else 'cell'} of all members",
-                hint="give every member the property, or remove it before writing")
+                hint="give every member the property, or remove it before writing",
+            )
     return shared_properties(members, kind)
 
 
 def format_vtu(mesh: Geometry, *, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
     """The ``.vtu`` file content for ``mesh`` or a collection; see :func:`write_vtu`."""
     _check_encoding(encoding, compression)
-    return _format_grid(_collection_grid(mesh) if isinstance(mesh, GeometryCollection)
-                        else _mesh_grid(check_mesh(mesh, "the VTU writer")), encoding, compression)
+    return _format_grid(
+        _collection_grid(mesh)
+        if isinstance(mesh, GeometryCollection)
+        else _mesh_grid(check_mesh(mesh, "the VTU writer")),
+        encoding,
+        compression,
+    )
 
 
 def format_empty_vtu(*, encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
@@ -279,8 +343,9 @@ def format_empty_vtu(*, encoding: Encoding = "binary", compression: Compression 
     """
     _check_encoding(encoding, compression)
     empty = np.empty(0, dtype=np.int64)
-    return _format_grid(_Grid(None, None, np.empty((0, 3)), empty, empty, np.empty(0, dtype=np.uint8), {}, {}),
-                        encoding, compression)
+    return _format_grid(
+        _Grid(None, None, np.empty((0, 3)), empty, empty, np.empty(0, dtype=np.uint8), {}, {}), encoding, compression
+    )
 
 
 def _check_encoding(encoding: str, compression: str | None = None) -> None:
@@ -306,8 +371,9 @@ def _format_grid(source: _Grid, encoding: Encoding, compression: Compression) ->
         members = source.members.members
         field_data.append(writer.strings("tgsis_member_geotypes", *(m.geotype.value for m in members)))
         field_data.append(writer.strings("tgsis_member_names", *(m.name or "" for m in members)))
-        sizes = writer.array("tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members],
-                                                            dtype=np.int64), components=2)
+        sizes = writer.array(
+            "tgsis_member_sizes", np.array([[m.n_vertices, m.n_cells] for m in members], dtype=np.int64), components=2
+        )
         sizes.set("NumberOfTuples", str(len(members)))
         field_data.append(sizes)
         if any(source.zpositive):
@@ -352,8 +418,7 @@ class _ArrayWriter:
 
     def root(self, data_type: str) -> ET.Element:
         """The VTKFile element of a file of ``data_type`` (UnstructuredGrid, PolyData)."""
-        root = ET.Element("VTKFile", type=data_type, version="1.0", byte_order="LittleEndian",
-                          header_type="UInt64")
+        root = ET.Element("VTKFile", type=data_type, version="1.0", byte_order="LittleEndian", header_type="UInt64")
         if self.compressed:
             root.set("compressor", "vtkZLibDataCompressor")
         return root
@@ -366,8 +431,9 @@ class _ArrayWriter:
             return text + b"\n"
         # raw bytes are not XML: the AppendedData section goes after the serialised tree, by hand
         head, _, _ = text.rpartition(b"</VTKFile>")
-        return b"".join([head, b'  <AppendedData encoding="raw">\n   _', *self.blocks,
-                         b"\n  </AppendedData>\n</VTKFile>\n"])
+        return b"".join(
+            [head, b'  <AppendedData encoding="raw">\n   _', *self.blocks, b"\n  </AppendedData>\n</VTKFile>\n"]
+        )
 
     def array(self, name: str, values: npt.NDArray[Any], *, components: int = 1) -> ET.Element:
         data = _vtk_values(values)
@@ -378,10 +444,12 @@ class _ArrayWriter:
         if self.compressed:
             # vtkZLibDataCompressor: header (block count, block size, size of the last block, compressed
             # size of each block), then the blocks; inline, header and blocks are two base64 streams
-            chunks = [zlib.compress(raw[i: i + ZLIB_BLOCK_SIZE], ZLIB_LEVEL)
-                      for i in range(0, len(raw), ZLIB_BLOCK_SIZE)]
-            header = np.array([len(chunks), ZLIB_BLOCK_SIZE, len(raw) % ZLIB_BLOCK_SIZE,
-                               *(len(c) for c in chunks)], dtype="<u8").tobytes()
+            chunks = [
+                zlib.compress(raw[i : i + ZLIB_BLOCK_SIZE], ZLIB_LEVEL) for i in range(0, len(raw), ZLIB_BLOCK_SIZE)
+            ]
+            header = np.array(
+                [len(chunks), ZLIB_BLOCK_SIZE, len(raw) % ZLIB_BLOCK_SIZE, *(len(c) for c in chunks)], dtype="<u8"
+            ).tobytes()
             parts = [header, b"".join(chunks)]
         else:
             parts = [np.uint64(len(raw)).astype("<u8").tobytes() + raw]
@@ -447,8 +515,11 @@ def parse_vtu(data: bytes, *, path: PathLike | None = None) -> Mesh:
     """Parse the content of a ``.vtu`` file; see :func:`read_vtu`. ``path`` is for messages only."""
     result = _parse(data, path)
     if isinstance(result, GeometryCollection):
-        raise FileFormatError(f"the file holds a GEOMETRYCOLLECTION of {len(result)} members, not one mesh",
-                              path=path, hint="tgsis.formats.read or read_vtu_collection reads the members")
+        raise FileFormatError(
+            f"the file holds a GEOMETRYCOLLECTION of {len(result)} members, not one mesh",
+            path=path,
+            hint="tgsis.formats.read or read_vtu_collection reads the members",
+        )
     return result
 
 
@@ -529,8 +600,9 @@ def _parse(data: bytes, path: PathLike | None, *, absent_as_none: bool = False) 
     except ET.ParseError as exc:
         raise FileFormatError(f"not well-formed XML: {exc}", path=path, line=exc.position[0]) from None
     if root.tag != "VTKFile" or root.get("type") != "UnstructuredGrid":
-        raise FileFormatError(f"not a VTK UnstructuredGrid file (root <{root.tag} type={root.get('type')!r}>)",
-                              path=path)
+        raise FileFormatError(
+            f"not a VTK UnstructuredGrid file (root <{root.tag} type={root.get('type')!r}>)", path=path
+        )
     decoder = _Decoder.for_root(root, appended, path)
     grid = root.find("UnstructuredGrid")
     pieces = grid.findall("Piece") if grid is not None else []
@@ -560,30 +632,46 @@ def _parse(data: bytes, path: PathLike | None, *, absent_as_none: bool = False) 
     cell_properties = _data_arrays(piece.find("CellData"), decoder, n_cells, names, "cell_data")
     metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
     try:
-        mesh = mesh_type(vertices.reshape(n_points, 3), cells.reshape(n_cells, mesh_type.cell_size),
-                         vertex_properties=vertex_properties, cell_properties=cell_properties,
-                         name=fields.get("name"), metadata=metadata)
+        mesh = mesh_type(
+            vertices.reshape(n_points, 3),
+            cells.reshape(n_cells, mesh_type.cell_size),
+            vertex_properties=vertex_properties,
+            cell_properties=cell_properties,
+            name=fields.get("name"),
+            metadata=metadata,
+        )
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(f"the grid is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
     restore_convention(mesh, fields.get(ZPOSITIVE_FIELD), path, f"FieldData {ZPOSITIVE_FIELD}")
     return mesh
 
 
-def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices: npt.NDArray[np.float64],
-                n_cells: int, name: str | None) -> GeometryCollection:
+def _collection(
+    grid: ET.Element,
+    piece: ET.Element,
+    decoder: _Decoder,
+    vertices: npt.NDArray[np.float64],
+    n_cells: int,
+    name: str | None,
+) -> GeometryCollection:
     """The members of a grid written from a GeometryCollection, after its FieldData member table."""
     path = decoder.path
     strings = _field_string_lists(grid, decoder)
     geotypes = strings.get("tgsis_member_geotypes")
     sizes_element = _field_element(grid, "tgsis_member_sizes")
     if not geotypes or sizes_element is None:
-        raise FileFormatError("a GEOMETRYCOLLECTION grid needs the FieldData arrays tgsis_member_geotypes and "
-                              "tgsis_member_sizes", path=path)
+        raise FileFormatError(
+            "a GEOMETRYCOLLECTION grid needs the FieldData arrays tgsis_member_geotypes and tgsis_member_sizes",
+            path=path,
+        )
     names = strings.get("tgsis_member_names", [])
     sizes = decoder.array(sizes_element, len(geotypes), 2).astype(np.int64).reshape(-1, 2)
     if sizes.min() < 0 or sizes[:, 0].sum() != len(vertices) or sizes[:, 1].sum() != n_cells:
-        raise FileFormatError(f"tgsis_member_sizes lists {int(sizes[:, 0].sum())} points and "
-                              f"{int(sizes[:, 1].sum())} cells, the grid has {len(vertices)} and {n_cells}", path=path)
+        raise FileFormatError(
+            f"tgsis_member_sizes lists {int(sizes[:, 0].sum())} points and "
+            f"{int(sizes[:, 1].sum())} cells, the grid has {len(vertices)} and {n_cells}",
+            path=path,
+        )
     types, ends, connectivity = _mixed_cells(piece, decoder, n_cells)
     arrays: dict[str, dict[str, str]] = {}
     point_data = _data_arrays(piece.find("PointData"), decoder, len(vertices), arrays, "point_data")
@@ -598,16 +686,21 @@ def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices
         code, k = VTK_CELL_TYPES[mesh_type], mesh_type.cell_size
         cells = slice(first_cell, first_cell + n_c)
         if np.any(types[cells] != code):
-            raise FileFormatError(f"member {i} is a {geotype} but has cells that are not "
-                                  f"{_CELL_TYPE_NAMES[code]} ({code})", path=path)
+            raise FileFormatError(
+                f"member {i} is a {geotype} but has cells that are not {_CELL_TYPE_NAMES[code]} ({code})", path=path
+            )
         start = int(ends[first_cell - 1]) if first_cell else 0
         points = slice(first_point, first_point + n_p)
         try:
-            members.append(mesh_type(
-                vertices[points], (connectivity[start: start + n_c * k] - first_point).reshape(n_c, k),
-                vertex_properties={key: values[points] for key, values in point_data.items()},
-                cell_properties=without_no_part({key: values[cells] for key, values in cell_data.items()}),
-                name=(names[i] if i < len(names) else "") or None))
+            members.append(
+                mesh_type(
+                    vertices[points],
+                    (connectivity[start : start + n_c * k] - first_point).reshape(n_c, k),
+                    vertex_properties={key: values[points] for key, values in point_data.items()},
+                    cell_properties=without_no_part({key: values[cells] for key, values in cell_data.items()}),
+                    name=(names[i] if i < len(names) else "") or None,
+                )
+            )
         except (InvalidGeometryError, InvalidPropertyError) as exc:
             raise FileFormatError(f"member {i} is not a valid {mesh_type.__name__}: {exc.message}", path=path) from exc
         first_point, first_cell = first_point + n_p, first_cell + n_c
@@ -615,14 +708,16 @@ def _collection(grid: ET.Element, piece: ET.Element, decoder: _Decoder, vertices
     recorded = strings.get(MEMBER_ZPOSITIVE_FIELD)
     if recorded is not None:
         if len(recorded) != len(members):
-            raise FileFormatError(f"FieldData {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for "
-                                  f"{len(members)} members", path=path)
+            raise FileFormatError(
+                f"FieldData {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for {len(members)} members", path=path
+            )
         restore_convention(collection, recorded, path, f"FieldData {MEMBER_ZPOSITIVE_FIELD}")
     return collection
 
 
-def _mixed_cells(piece: ET.Element, decoder: _Decoder,
-                 n_cells: int) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def _mixed_cells(
+    piece: ET.Element, decoder: _Decoder, n_cells: int
+) -> tuple[npt.NDArray[Any], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """Cell types (m,), offsets (m,) = end of each cell in the connectivity, connectivity, of any known types."""
     path = decoder.path
     if piece.find("Cells") is None:
@@ -637,8 +732,10 @@ def _mixed_cells(piece: ET.Element, decoder: _Decoder,
     unknown = sorted({int(t) for t in np.unique(types)} - set(_MESH_OF_CELL_TYPE))
     if unknown:
         listed = ", ".join(f"{t} ({_CELL_TYPE_NAMES.get(t, 'unknown')})" for t in unknown)
-        raise FileFormatError(f"VTK cell types {listed} are not supported: tgsis reads VERTEX (1), LINE (3), "
-                              "TRIANGLE (5) and TETRA (10)", path=path)
+        raise FileFormatError(
+            f"VTK cell types {listed} are not supported: tgsis reads VERTEX (1), LINE (3), TRIANGLE (5) and TETRA (10)",
+            path=path,
+        )
     size_of = np.zeros(256, dtype=np.int64)
     for code, cls in _MESH_OF_CELL_TYPE.items():
         size_of[code] = cls.cell_size
@@ -647,8 +744,7 @@ def _mixed_cells(piece: ET.Element, decoder: _Decoder,
     connectivity_element = _find_array(piece, "Cells", "connectivity", path)
     connectivity = decoder.array(connectivity_element, int(offsets[-1]) if n_cells else 0, 1)
     if connectivity.dtype.kind not in "iu":
-        raise FileFormatError(f"cell connectivity must be integers, got {connectivity_element.get('type')}",
-                              path=path)
+        raise FileFormatError(f"cell connectivity must be integers, got {connectivity_element.get('type')}", path=path)
     return types, offsets, connectivity.astype(np.int64)
 
 
@@ -662,7 +758,7 @@ def _split_appended(data: bytes) -> tuple[bytes, bytes]:
     marker = data.find(b"_", tag_end)
     if tag_end < 0 or close < 0 or marker < 0 or marker > close:
         return data, b""  # let the XML parser report what is wrong
-    return data[: tag_end + 1] + data[close:], data[marker + 1: close]
+    return data[: tag_end + 1] + data[close:], data[marker + 1 : close]
 
 
 def _int_attribute(element: ET.Element, name: str, path: PathLike | None) -> int:
@@ -687,8 +783,9 @@ def _find_array(piece: ET.Element, section: str, name: str | None, path: PathLik
     raise FileFormatError(f"<{section}> has no {what}", path=path)
 
 
-def _cells(piece: ET.Element, decoder: _Decoder, n_cells: int,
-           path: PathLike | None) -> tuple[type[Mesh], npt.NDArray[np.int64]]:
+def _cells(
+    piece: ET.Element, decoder: _Decoder, n_cells: int, path: PathLike | None
+) -> tuple[type[Mesh], npt.NDArray[np.int64]]:
     """The mesh class after the (single) cell type, and the connectivity."""
     if piece.find("Cells/DataArray") is None:
         if n_cells:
@@ -705,22 +802,28 @@ def _cells(piece: ET.Element, decoder: _Decoder, n_cells: int,
         raise FileFormatError(f"the grid mixes cell types {listed}; a tgsis mesh has one cell type", path=path)
     if distinct and distinct[0] not in _MESH_OF_CELL_TYPE:
         t = distinct[0]
-        raise FileFormatError(f"VTK cell type {t} ({_CELL_TYPE_NAMES.get(t, 'unknown')}) is not supported: "
-                              "tgsis reads VERTEX (1), LINE (3), TRIANGLE (5) and TETRA (10)", path=path)
+        raise FileFormatError(
+            f"VTK cell type {t} ({_CELL_TYPE_NAMES.get(t, 'unknown')}) is not supported: "
+            "tgsis reads VERTEX (1), LINE (3), TRIANGLE (5) and TETRA (10)",
+            path=path,
+        )
     mesh_type = _MESH_OF_CELL_TYPE[distinct[0]] if distinct else PointSet
     k = mesh_type.cell_size
     if not np.array_equal(offsets, np.arange(1, n_cells + 1, dtype=np.int64) * k):
-        raise FileFormatError(f"cell offsets do not match {n_cells} {_CELL_TYPE_NAMES[VTK_CELL_TYPES[mesh_type]]} "
-                              f"cells of {k} points each", path=path)
+        raise FileFormatError(
+            f"cell offsets do not match {n_cells} {_CELL_TYPE_NAMES[VTK_CELL_TYPES[mesh_type]]} "
+            f"cells of {k} points each",
+            path=path,
+        )
     connectivity = decoder.array(connectivity_element, n_cells * k, 1)
     if connectivity.dtype.kind not in "iu":
-        raise FileFormatError(f"cell connectivity must be integers, got {connectivity_element.get('type')}",
-                              path=path)
+        raise FileFormatError(f"cell connectivity must be integers, got {connectivity_element.get('type')}", path=path)
     return mesh_type, connectivity.astype(np.int64)
 
 
-def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, names: dict[str, dict[str, str]],
-                 key: str) -> dict[str, npt.NDArray[Any]]:
+def _data_arrays(
+    section: ET.Element | None, decoder: _Decoder, count: int, names: dict[str, dict[str, str]], key: str
+) -> dict[str, npt.NDArray[Any]]:
     """PointData/CellData arrays as properties; k-component arrays are split into name_0 .. name_{k-1}."""
     result: dict[str, npt.NDArray[Any]] = {}
     renamed: dict[str, str] = {}
@@ -728,8 +831,9 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
         if element.get("type") == "String":
             continue  # not numeric: no property can hold it
         file_name = element.get("Name") or "array"
-        components = _int_attribute(element, "NumberOfComponents", decoder.path) \
-            if "NumberOfComponents" in element.attrib else 1
+        components = (
+            _int_attribute(element, "NumberOfComponents", decoder.path) if "NumberOfComponents" in element.attrib else 1
+        )
         if components < 1:
             raise FileFormatError(f"DataArray {file_name!r} has NumberOfComponents 0", path=decoder.path)
         values = decoder.array(element, count, components).reshape(count, components)
@@ -745,8 +849,13 @@ def _data_arrays(section: ET.Element | None, decoder: _Decoder, count: int, name
 
 def _field_elements(grid: ET.Element) -> list[ET.Element]:
     """The arrays of FieldData (it belongs to the grid; some writers put it in the Piece)."""
-    return [e for section in (grid.find("FieldData"), grid.find("Piece/FieldData")) if section is not None
-            for e in section if e.tag in ("Array", "DataArray")]
+    return [
+        e
+        for section in (grid.find("FieldData"), grid.find("Piece/FieldData"))
+        if section is not None
+        for e in section
+        if e.tag in ("Array", "DataArray")
+    ]
 
 
 def _field_element(grid: ET.Element, name: str) -> ET.Element | None:
@@ -757,8 +866,9 @@ def _field_element(grid: ET.Element, name: str) -> ET.Element | None:
 def _is_string_field(element: ET.Element) -> bool:
     """A String array (VTK's, older tgsis files) or a tgsis_ UInt8 array of 0-terminated strings."""
     name = element.get("Name") or ""
-    return bool(name) and (element.get("type") == "String"
-                           or (name.startswith("tgsis_") and element.get("type") in ("UInt8", "Int8")))
+    return bool(name) and (
+        element.get("type") == "String" or (name.startswith("tgsis_") and element.get("type") in ("UInt8", "Int8"))
+    )
 
 
 def _field_string_lists(grid: ET.Element, decoder: _Decoder) -> dict[str, list[str]]:
@@ -813,11 +923,15 @@ class _Decoder:
         header = {"UInt32": "u4", "UInt64": "u8"}.get(root.get("header_type", "UInt32"))
         compressor = root.get("compressor", "")
         if order is None or header is None:
-            raise FileFormatError(f"unsupported byte_order {root.get('byte_order')!r} or header_type "
-                                  f"{root.get('header_type')!r}", path=path)
+            raise FileFormatError(
+                f"unsupported byte_order {root.get('byte_order')!r} or header_type {root.get('header_type')!r}",
+                path=path,
+            )
         if compressor not in ("", "vtkZLibDataCompressor"):
-            raise FileFormatError(f"unsupported compressor {compressor!r}: tgsis reads uncompressed and "
-                                  "vtkZLibDataCompressor data", path=path)
+            raise FileFormatError(
+                f"unsupported compressor {compressor!r}: tgsis reads uncompressed and vtkZLibDataCompressor data",
+                path=path,
+            )
         section = root.find("AppendedData")
         is_base64 = section is not None and section.get("encoding", "raw") == "base64"
         return cls(order, np.dtype(order + header), bool(compressor), appended, is_base64, path)
@@ -838,15 +952,19 @@ class _Decoder:
             values = np.frombuffer(self._from_base64(text, 0, name), dtype=dtype)
         elif fmt == "appended":
             offset = _int_attribute(element, "offset", self.path)
-            raw = (self._from_base64(self.appended, offset, name) if self.appended_base64
-                   else self._from_raw(self.appended, offset, name))
+            raw = (
+                self._from_base64(self.appended, offset, name)
+                if self.appended_base64
+                else self._from_raw(self.appended, offset, name)
+            )
             values = np.frombuffer(raw[: len(raw) - len(raw) % dtype.itemsize], dtype=dtype)
         else:
             raise FileFormatError(f"DataArray {quoted(name)} has unknown format {quoted(fmt)}", path=self.path)
         values = values.astype(dtype.newbyteorder("="))
         if count is not None and len(values) != count * components:
-            raise FileFormatError(f"DataArray {quoted(name)} has {len(values)} values, expected {count} x {components}",
-                                  path=self.path)
+            raise FileFormatError(
+                f"DataArray {quoted(name)} has {len(values)} values, expected {count} x {components}", path=self.path
+            )
         return values
 
     def _ascii(self, element: ET.Element, dtype: np.dtype[Any]) -> npt.NDArray[Any]:
@@ -856,19 +974,20 @@ class _Decoder:
                 return np.array([float(w) for w in words], dtype=dtype)
             return np.array([int(w) for w in words], dtype=dtype)
         except (ValueError, OverflowError):
-            raise FileFormatError(f"DataArray {quoted(element.get('Name', '?'))} has values that are not "
-                                  f"{dtype.name}", path=self.path) from None
+            raise FileFormatError(
+                f"DataArray {quoted(element.get('Name', '?'))} has values that are not {dtype.name}", path=self.path
+            ) from None
 
     def _from_raw(self, data: bytes, offset: int, name: str) -> bytes:
         """Bytes of one appended raw block at ``offset``."""
         h = self.header.itemsize
         if self.compressed:
-            head = self._header_values(data[offset: offset + 3 * h], 3, name)
+            head = self._header_values(data[offset : offset + 3 * h], 3, name)
             n_blocks = int(head[0])
-            sizes = self._header_values(data[offset + 3 * h: offset + (3 + n_blocks) * h], n_blocks, name)
-            return self._inflate(data[offset + (3 + n_blocks) * h:], head, sizes, name)
-        (size,) = self._header_values(data[offset: offset + h], 1, name)
-        return self._exact(data[offset + h: offset + h + int(size)], int(size), name)
+            sizes = self._header_values(data[offset + 3 * h : offset + (3 + n_blocks) * h], n_blocks, name)
+            return self._inflate(data[offset + (3 + n_blocks) * h :], head, sizes, name)
+        (size,) = self._header_values(data[offset : offset + h], 1, name)
+        return self._exact(data[offset + h : offset + h + int(size)], int(size), name)
 
     def _from_base64(self, text: bytes, offset: int, name: str) -> bytes:
         """Bytes of one base64 block starting at character ``offset``.
@@ -882,19 +1001,19 @@ class _Decoder:
             n_blocks = int(head[0])
             header_chars = 4 * math.ceil((3 + n_blocks) * h / 3)
             full = self._b64(text, offset, (3 + n_blocks) * h, name)
-            sizes = self._header_values(full[3 * h: (3 + n_blocks) * h], n_blocks, name)
+            sizes = self._header_values(full[3 * h : (3 + n_blocks) * h], n_blocks, name)
             body = self._b64(text, offset + header_chars, int(sizes.sum()), name)
             return self._inflate(body, head, sizes, name)
         (size,) = self._header_values(self._b64(text, offset, h, name)[:h], 1, name)
         header_chars = 4 * math.ceil(h / 3)
-        if text[offset + header_chars - 1: offset + header_chars] == b"=":
+        if text[offset + header_chars - 1 : offset + header_chars] == b"=":
             # some writers encode the byte count as a base64 stream of its own (it ends in padding)
             return self._exact(self._b64(text, offset + header_chars, int(size), name), int(size), name)
         return self._exact(self._b64(text, offset, h + int(size), name)[h:], int(size), name)
 
     def _b64(self, text: bytes, offset: int, n_bytes: int, name: str) -> bytes:
         """Decode the base64 characters at ``offset`` that hold (at least) ``n_bytes`` bytes."""
-        chunk = text[offset: offset + 4 * math.ceil(n_bytes / 3)]
+        chunk = text[offset : offset + 4 * math.ceil(n_bytes / 3)]
         try:
             return base64.b64decode(chunk, validate=True)
         except ValueError:
@@ -916,7 +1035,7 @@ class _Decoder:
         position = 0
         for size in sizes.tolist():
             try:
-                parts.append(zlib.decompress(body[position: position + size]))
+                parts.append(zlib.decompress(body[position : position + size]))
             except zlib.error:
                 raise FileFormatError(f"DataArray {quoted(name)} has a corrupt zlib block", path=self.path) from None
             position += size
@@ -934,8 +1053,7 @@ _SECTION_OF: dict[type[Mesh], str] = {PointSet: "Verts", LineSet: "Lines", Surfa
 _VERTEX, _POLY_VERTEX, _LINE, _POLY_LINE, _TRIANGLE, _STRIP, _POLYGON = 1, 2, 3, 4, 5, 6, 7
 
 
-def write_vtp(mesh: Mesh, path: PathLike, *, encoding: Encoding = "binary",
-              compression: Compression = "zlib") -> None:
+def write_vtp(mesh: Mesh, path: PathLike, *, encoding: Encoding = "binary", compression: Compression = "zlib") -> None:
     """Write a PointSet, LineSet or Surface as a VTK XML PolyData file.
 
     Parameters
@@ -962,8 +1080,10 @@ def format_vtp(mesh: Mesh, *, encoding: Encoding = "binary", compression: Compre
     mesh = check_mesh(mesh, "the VTP writer")
     section = _SECTION_OF.get(type(mesh))
     if section is None:
-        raise FileFormatError(f"VTK PolyData holds points, lines and surfaces, not a {type(mesh).__name__}",
-                              hint="write tetrahedra to a .vtu file")
+        raise FileFormatError(
+            f"VTK PolyData holds points, lines and surfaces, not a {type(mesh).__name__}",
+            hint="write tetrahedra to a .vtu file",
+        )
     compressed = compression == "zlib" and mesh.n_vertices > 0 and mesh.n_cells > 0  # meshio: no empty zlib array
     up, (zpositive,) = in_elevation(mesh)
     writer = _ArrayWriter(appended=encoding == "appended", compressed=compressed)
@@ -1025,16 +1145,20 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
     except ET.ParseError as exc:
         raise FileFormatError(f"not well-formed XML: {exc}", path=path, line=exc.position[0]) from None
     if root.tag != "VTKFile" or root.get("type") != "PolyData":
-        raise FileFormatError(f"not a VTK PolyData file (root <{root.tag} type={root.get('type')!r}>)", path=path,
-                              hint="a .vtu file is read as VTK UnstructuredGrid" if root.get("type") ==
-                              "UnstructuredGrid" else None)
+        raise FileFormatError(
+            f"not a VTK PolyData file (root <{root.tag} type={root.get('type')!r}>)",
+            path=path,
+            hint="a .vtu file is read as VTK UnstructuredGrid" if root.get("type") == "UnstructuredGrid" else None,
+        )
     decoder = _Decoder.for_root(root, appended, path)
     poly = root.find("PolyData")
     pieces = poly.findall("Piece") if poly is not None else []
     if len(pieces) != 1 or poly is None:
-        raise FileFormatError(f"expected one Piece in the PolyData, found {len(pieces)}", path=path,
-                              hint="merge the pieces into one (pyvista: mesh.combine() or "
-                                   "vtkAppendPolyData) before reading")
+        raise FileFormatError(
+            f"expected one Piece in the PolyData, found {len(pieces)}",
+            path=path,
+            hint="merge the pieces into one (pyvista: mesh.combine() or vtkAppendPolyData) before reading",
+        )
     piece = pieces[0]
     n_points = _int_attribute(piece, "NumberOfPoints", path)
     if n_points == 0 and piece.find("Points/DataArray") is None:
@@ -1048,8 +1172,12 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
     sizes: list[npt.NDArray[np.int64]] = []
     connectivity: list[npt.NDArray[np.int64]] = []
     # VTK numbers the cells of a PolyData verts, lines, polys, strips: its CellData is in that order
-    for section, count_name in (("Verts", "NumberOfVerts"), ("Lines", "NumberOfLines"), ("Polys", "NumberOfPolys"),
-                                ("Strips", "NumberOfStrips")):
+    for section, count_name in (
+        ("Verts", "NumberOfVerts"),
+        ("Lines", "NumberOfLines"),
+        ("Polys", "NumberOfPolys"),
+        ("Strips", "NumberOfStrips"),
+    ):
         count = _int_attribute(piece, count_name, path) if count_name in piece.attrib else 0
         if count == 0:
             continue
@@ -1066,10 +1194,12 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
         if ids.dtype.kind not in "iu":
             raise FileFormatError(f"<{section}> connectivity must be integers", path=path)
         size = np.diff(np.concatenate([[0], ends]))
-        kind = {"Verts": np.where(size == 1, _VERTEX, _POLY_VERTEX),
-                "Lines": np.where(size == 2, _LINE, _POLY_LINE),
-                "Polys": np.where(size == 3, _TRIANGLE, _POLYGON),
-                "Strips": np.full(count, _STRIP)}[section]
+        kind = {
+            "Verts": np.where(size == 1, _VERTEX, _POLY_VERTEX),
+            "Lines": np.where(size == 2, _LINE, _POLY_LINE),
+            "Polys": np.where(size == 3, _TRIANGLE, _POLYGON),
+            "Strips": np.full(count, _STRIP),
+        }[section]
         types.append(kind.astype(np.int64))
         sizes.append(size)
         connectivity.append(ids.astype(np.int64))
@@ -1081,12 +1211,28 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
     fields = _field_strings(poly, decoder)
     metadata: dict[str, Any] = {"vtk_array_names": names} if names else {}
     all_types, cell_offsets, cell_points, cell_data = split_vtk_polygons(
-        vertices, all_types, offsets.astype(np.int64),
-        np.concatenate(connectivity) if connectivity else np.empty(0, np.int64), cell_data, metadata, path,
-        "PolyData cell")
+        vertices,
+        all_types,
+        offsets.astype(np.int64),
+        np.concatenate(connectivity) if connectivity else np.empty(0, np.int64),
+        cell_data,
+        metadata,
+        path,
+        "PolyData cell",
+    )
     try:
-        mesh = mesh_from_vtk_cells(vertices, all_types, cell_offsets, cell_points, point_data, cell_data, name=fields.get("name"), geotype=fields.get("tgsis_geotype"),
-                                   metadata=metadata, source="the PolyData")
+        mesh = mesh_from_vtk_cells(
+            vertices,
+            all_types,
+            cell_offsets,
+            cell_points,
+            point_data,
+            cell_data,
+            name=fields.get("name"),
+            geotype=fields.get("tgsis_geotype"),
+            metadata=metadata,
+            source="the PolyData",
+        )
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
     restore_convention(mesh, fields.get(ZPOSITIVE_FIELD), path, f"FieldData {ZPOSITIVE_FIELD}")
@@ -1099,8 +1245,9 @@ def parse_vtp(data: bytes, *, path: PathLike | None = None) -> Mesh:
 VTK_LINE, VTK_TRIANGLE, VTK_POLYGON, VTK_POLYHEDRON = 3, 5, 7, 42
 
 
-def _polyhedron_streams(indices: np.ndarray, face_bounds: np.ndarray,
-                        cell_bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _polyhedron_streams(
+    indices: np.ndarray, face_bounds: np.ndarray, cell_bounds: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """VTK's arrays for polyhedra, vectorised over all cells.
 
     Parameters
@@ -1154,13 +1301,15 @@ def _gmap_grid(g: GMap, name: str | None, axes: Sequence[str] | None) -> _Grid:
     properties as cell data."""
     n, m = g.dimension, g.embedding_dimension
     if n not in (1, 2, 3):
-        raise FileFormatError(f"a {n}-G-map has no VTK cells (ParaView shows lines, polygons and polyhedra)",
-                              hint="write a slice of it (tgsis.gmaps.slice) down to 3 dimensions")
+        raise FileFormatError(
+            f"a {n}-G-map has no VTK cells (ParaView shows lines, polygons and polyhedra)",
+            hint="write a slice of it (tgsis.gmaps.slice) down to 3 dimensions",
+        )
     names = list(axes) if axes is not None else [("x", "y", "z")[i] if i < 3 else f"axis{i + 1}" for i in range(m)]
     if len(names) != m:
         raise FileFormatError(f"axes name {len(names)} axes of a G-map in R^{m}")
     xyz = np.zeros((g.n_points, 3))
-    xyz[:, :min(m, 3)] = g.points[:, :3]
+    xyz[:, : min(m, 3)] = g.points[:, :3]
     point_data = {names[i]: np.ascontiguousarray(g.points[:, i]) for i in range(3, m)}
     faces = faceoffsets = None
     if n == 1:
@@ -1177,19 +1326,42 @@ def _gmap_grid(g: GMap, name: str | None, axes: Sequence[str] | None) -> _Grid:
         connectivity, offsets, faces, faceoffsets = _polyhedron_streams(indices, face_bounds, cell_bounds)
         types = np.full(len(offsets), VTK_POLYHEDRON, dtype=np.uint8)
     cell_data = {k: np.asarray(v) for k, v in g.cell_properties.get(n, {}).items()}
-    return _Grid(name, "GMAP", xyz, connectivity.astype(np.int64), offsets, types, point_data, cell_data,
-                 faces=faces, faceoffsets=faceoffsets)
+    return _Grid(
+        name,
+        "GMAP",
+        xyz,
+        connectivity.astype(np.int64),
+        offsets,
+        types,
+        point_data,
+        cell_data,
+        faces=faces,
+        faceoffsets=faceoffsets,
+    )
 
 
-def format_gmap_vtu(g: GMap, *, name: str | None = None, axes: Sequence[str] | None = None,
-                    encoding: Encoding = "binary", compression: Compression = "zlib") -> bytes:
+def format_gmap_vtu(
+    g: GMap,
+    *,
+    name: str | None = None,
+    axes: Sequence[str] | None = None,
+    encoding: Encoding = "binary",
+    compression: Compression = "zlib",
+) -> bytes:
     """The ``.vtu`` text of an n-G-map's top cells for ParaView (see :func:`write_gmap_vtu`)."""
     _check_encoding(encoding, compression)
     return _format_grid(_gmap_grid(g, name, axes), encoding, compression)
 
 
-def write_gmap_vtu(g: GMap, path: PathLike, *, name: str | None = None, axes: Sequence[str] | None = None,
-                   encoding: Encoding = "binary", compression: Compression = "zlib") -> None:
+def write_gmap_vtu(
+    g: GMap,
+    path: PathLike,
+    *,
+    name: str | None = None,
+    axes: Sequence[str] | None = None,
+    encoding: Encoding = "binary",
+    compression: Compression = "zlib",
+) -> None:
     """Write an n-G-map (n = 1, 2, 3) as a VTK unstructured grid: lines, polygons or polyhedra, for ParaView.
 
     Parameters
@@ -1211,4 +1383,3 @@ def write_gmap_vtu(g: GMap, path: PathLike, *, name: str | None = None, axes: Se
         n = 0 or n > 3 (no VTK cell), or axes that do not name the m axes.
     """
     write_bytes(path, [format_gmap_vtu(g, name=name, axes=axes, encoding=encoding, compression=compression)])
-

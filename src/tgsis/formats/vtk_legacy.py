@@ -83,25 +83,67 @@ __all__ = ["read_vtk", "parse_vtk", "read_vtk_geometry", "parse_vtk_geometry", "
 
 # file type names -> numpy dtype (big-endian in binary files); "long" is 8 bytes where VTK files come from (LP64)
 _DTYPE_OF: dict[str, str] = {
-    "bit": "bit", "char": "i1", "signed_char": "i1", "unsigned_char": "u1", "short": "i2", "unsigned_short": "u2",
-    "int": "i4", "unsigned_int": "u4", "long": "i8", "unsigned_long": "u8", "float": "f4", "double": "f8",
-    "vtkidtype": "i8", "vtktypeint8": "i1", "vtktypeuint8": "u1", "vtktypeint16": "i2", "vtktypeuint16": "u2",
-    "vtktypeint32": "i4", "vtktypeuint32": "u4", "vtktypeint64": "i8", "vtktypeuint64": "u8",
-    "vtktypefloat32": "f4", "vtktypefloat64": "f8",
+    "bit": "bit",
+    "char": "i1",
+    "signed_char": "i1",
+    "unsigned_char": "u1",
+    "short": "i2",
+    "unsigned_short": "u2",
+    "int": "i4",
+    "unsigned_int": "u4",
+    "long": "i8",
+    "unsigned_long": "u8",
+    "float": "f4",
+    "double": "f8",
+    "vtkidtype": "i8",
+    "vtktypeint8": "i1",
+    "vtktypeuint8": "u1",
+    "vtktypeint16": "i2",
+    "vtktypeuint16": "u2",
+    "vtktypeint32": "i4",
+    "vtktypeuint32": "u4",
+    "vtktypeint64": "i8",
+    "vtktypeuint64": "u8",
+    "vtktypefloat32": "f4",
+    "vtktypefloat64": "f8",
 }
 # numpy dtype -> (the name written, the dtype written): VTK's legacy reader and meshio's 5.1 reader agree on
 # float, double, vtktypeint64 and vtktypeuint64 only (meshio reads "int" as 8 bytes, VTK as 4), so every
 # integer is written as a 64-bit one
 _TYPE_NAME_OF: dict[str, tuple[str, str]] = {
-    "i1": ("vtktypeint64", "i8"), "u1": ("vtktypeint64", "i8"), "i2": ("vtktypeint64", "i8"),
-    "u2": ("vtktypeint64", "i8"), "i4": ("vtktypeint64", "i8"), "u4": ("vtktypeint64", "i8"),
-    "i8": ("vtktypeint64", "i8"), "u8": ("vtktypeuint64", "u8"), "f4": ("float", "f4"), "f8": ("double", "f8"),
+    "i1": ("vtktypeint64", "i8"),
+    "u1": ("vtktypeint64", "i8"),
+    "i2": ("vtktypeint64", "i8"),
+    "u2": ("vtktypeint64", "i8"),
+    "i4": ("vtktypeint64", "i8"),
+    "u4": ("vtktypeint64", "i8"),
+    "i8": ("vtktypeint64", "i8"),
+    "u8": ("vtktypeuint64", "u8"),
+    "f4": ("float", "f4"),
+    "f8": ("double", "f8"),
 }
 _TOKEN = re.compile(rb"\S+")
-_ATTRIBUTE_KEYWORDS = {"SCALARS", "VECTORS", "NORMALS", "TENSORS", "TENSORS6", "TEXTURE_COORDINATES", "FIELD",
-                       "COLOR_SCALARS", "LOOKUP_TABLE", "GLOBAL_IDS", "PEDIGREE_IDS", "METADATA"}
-_CELL_SECTIONS = {"VERTICES": "verts", "LINES": "lines", "POLYGONS": "polys", "TRIANGLE_STRIPS": "strips",
-                  "CELLS": "cells"}
+_ATTRIBUTE_KEYWORDS = {
+    "SCALARS",
+    "VECTORS",
+    "NORMALS",
+    "TENSORS",
+    "TENSORS6",
+    "TEXTURE_COORDINATES",
+    "FIELD",
+    "COLOR_SCALARS",
+    "LOOKUP_TABLE",
+    "GLOBAL_IDS",
+    "PEDIGREE_IDS",
+    "METADATA",
+}
+_CELL_SECTIONS = {
+    "VERTICES": "verts",
+    "LINES": "lines",
+    "POLYGONS": "polys",
+    "TRIANGLE_STRIPS": "strips",
+    "CELLS": "cells",
+}
 
 
 # ---------------------------------------------------------------- writing
@@ -243,8 +285,11 @@ def parse_vtk(data: bytes, *, path: PathLike | None = None) -> Mesh:
     """Parse the content of a legacy ``.vtk`` file; see :func:`read_vtk`."""
     result = parse_vtk_geometry(data, path=path)
     if isinstance(result, GeometryCollection):
-        raise FileFormatError(f"the file holds a GEOMETRYCOLLECTION of {len(result)} members, not one mesh",
-                              path=path, hint="tgsis.formats.read or read_vtk_geometry reads the members")
+        raise FileFormatError(
+            f"the file holds a GEOMETRYCOLLECTION of {len(result)} members, not one mesh",
+            path=path,
+            hint="tgsis.formats.read or read_vtk_geometry reads the members",
+        )
     return result
 
 
@@ -280,23 +325,31 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
                 continue
             offsets, connectivity = dataset.cells[section]
             size = np.diff(offsets)
-            kind = {"verts": np.where(size == 1, 1, 2), "lines": np.where(size == 2, 3, 4),
-                    "polys": np.where(size == 3, 5, 7), "strips": np.full(len(size), 6)}[section]
+            kind = {
+                "verts": np.where(size == 1, 1, 2),
+                "lines": np.where(size == 2, 3, 4),
+                "polys": np.where(size == 3, 5, 7),
+                "strips": np.full(len(size), 6),
+            }[section]
             types_parts.append(kind)
             offsets_parts.append(offsets[1:] + base)
             connectivity_parts.append(connectivity)
             base += len(connectivity)
         types = np.concatenate(types_parts).astype(np.int64) if types_parts else np.empty(0, np.int64)
         offsets = np.concatenate([[0], *offsets_parts]).astype(np.int64)
-        connectivity = np.concatenate(connectivity_parts).astype(np.int64) if connectivity_parts \
-            else np.empty(0, np.int64)
+        connectivity = (
+            np.concatenate(connectivity_parts).astype(np.int64) if connectivity_parts else np.empty(0, np.int64)
+        )
     else:
         offsets, connectivity = dataset.cells.get("cells", (np.zeros(1, np.int64), np.empty(0, np.int64)))
         n_cells = len(offsets) - 1
         types = dataset.cell_types if dataset.cell_types is not None else np.empty(0, np.int64)
         if len(types) != n_cells:
-            raise FileFormatError(f"CELL_TYPES gives {len(types)} types for {n_cells} cells", path=path,
-                                  line=dataset.lines.get("CELL_TYPES", dataset.lines.get("cells")))
+            raise FileFormatError(
+                f"CELL_TYPES gives {len(types)} types for {n_cells} cells",
+                path=path,
+                line=dataset.lines.get("CELL_TYPES", dataset.lines.get("cells")),
+            )
     names: dict[str, dict[str, str]] = {}
     point_data = _sanitised(dataset.point_data, n_points, names, "point_data", path)
     cell_data = _sanitised(dataset.cell_data, len(types), names, "cell_data", path)
@@ -305,24 +358,40 @@ def parse_vtk_geometry(data: bytes, *, path: PathLike | None = None) -> Geometry
     geotype = first(dataset.fields.get("tgsis_geotype"))
     if connectivity.size and (connectivity.min() < 0 or connectivity.max() >= n_points):
         bad = int(connectivity.min()) if connectivity.min() < 0 else int(connectivity.max())
-        cells_line = max((line for key, line in dataset.lines.items() if key in _CELL_SECTIONS.values()),
-                         default=None)
-        raise FileFormatError(f"a cell refers to point {bad}, but the file has {n_points} points (0..{n_points - 1})",
-                              path=path, line=cells_line)
+        cells_line = max((line for key, line in dataset.lines.items() if key in _CELL_SECTIONS.values()), default=None)
+        raise FileFormatError(
+            f"a cell refers to point {bad}, but the file has {n_points} points (0..{n_points - 1})",
+            path=path,
+            line=cells_line,
+        )
     if geotype != GeometryCollection.geotype.value:
-        types, offsets, connectivity, cell_data = split_vtk_polygons(vertices, types, offsets, connectivity, cell_data,
-                                                                     metadata, path, f"{dataset.kind} cell")
+        types, offsets, connectivity, cell_data = split_vtk_polygons(
+            vertices, types, offsets, connectivity, cell_data, metadata, path, f"{dataset.kind} cell"
+        )
     geometry: Geometry
     try:
         if geotype == GeometryCollection.geotype.value:
-            table = (strings(dataset.fields.get("tgsis_member_geotypes", [])),
-                     strings(dataset.fields.get("tgsis_member_names", [])),
-                     dataset.fields.get("tgsis_member_sizes", np.empty((0, 2))))
-            geometry = collection_from_cells(vertices, types, offsets, connectivity, point_data, cell_data, table,
-                                             name, metadata, "the file")
+            table = (
+                strings(dataset.fields.get("tgsis_member_geotypes", [])),
+                strings(dataset.fields.get("tgsis_member_names", [])),
+                dataset.fields.get("tgsis_member_sizes", np.empty((0, 2))),
+            )
+            geometry = collection_from_cells(
+                vertices, types, offsets, connectivity, point_data, cell_data, table, name, metadata, "the file"
+            )
         else:
-            geometry = mesh_from_vtk_cells(vertices, types, offsets, connectivity, point_data, cell_data, name=name,
-                                           geotype=geotype, metadata=metadata, source=f"the {dataset.kind}")
+            geometry = mesh_from_vtk_cells(
+                vertices,
+                types,
+                offsets,
+                connectivity,
+                point_data,
+                cell_data,
+                name=name,
+                geotype=geotype,
+                metadata=metadata,
+                source=f"the {dataset.kind}",
+            )
     except (InvalidGeometryError, InvalidPropertyError) as exc:
         raise FileFormatError(exc.message, path=path, detail=exc.detail, hint=exc.hint) from exc
     _restore_recorded(geometry, dataset.fields, path)
@@ -335,20 +404,25 @@ def _restore_recorded(geometry: Geometry, fields: dict[str, Any], path: PathLike
         if MEMBER_ZPOSITIVE_FIELD in fields:
             recorded = strings(fields[MEMBER_ZPOSITIVE_FIELD])
             if len(recorded) != len(geometry):
-                raise FileFormatError(f"FIELD array {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for "
-                                      f"{len(geometry)} members", path=path)
+                raise FileFormatError(
+                    f"FIELD array {MEMBER_ZPOSITIVE_FIELD} has {len(recorded)} values for {len(geometry)} members",
+                    path=path,
+                )
             restore_convention(geometry, list(recorded), path, f"FIELD array {MEMBER_ZPOSITIVE_FIELD}")
     elif ZPOSITIVE_FIELD in fields:
         restore_convention(geometry, first(fields[ZPOSITIVE_FIELD]), path, f"FIELD array {ZPOSITIVE_FIELD}")
 
 
-def _sanitised(arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str, dict[str, str]], key: str,
-               path: PathLike | None) -> dict[str, npt.NDArray[Any]]:
+def _sanitised(
+    arrays: dict[str, npt.NDArray[Any]], count: int, names: dict[str, dict[str, str]], key: str, path: PathLike | None
+) -> dict[str, npt.NDArray[Any]]:
     result: dict[str, npt.NDArray[Any]] = {}
     renamed: dict[str, str] = {}
     for original, values in arrays.items():
         if len(values) != count:
-            raise FileFormatError(f"{key} array {quoted(original)} has {len(values)} tuples, the dataset {count}", path=path)
+            raise FileFormatError(
+                f"{key} array {quoted(original)} has {len(values)} tuples, the dataset {count}", path=path
+            )
         name = sanitize_property_name(original.strip() or original, result)  # as GOCAD names: " default property"
         if name != original:
             renamed[name] = original
@@ -379,9 +453,11 @@ class _Reader:
         end = len(self.data) if end < 0 else end
         if end - self.pos > MAX_LINE_BYTES:  # a keyword line (values are read word by word, not by line)
             self.line_number += 1
-            raise self.fail(f"line {self.line_number} is {end - self.pos:,} bytes long; a legacy VTK keyword line "
-                            f"is at most {MAX_LINE_BYTES:,} bytes long here")
-        text = self.data[self.pos: end].rstrip(b"\r").decode("latin-1")
+            raise self.fail(
+                f"line {self.line_number} is {end - self.pos:,} bytes long; a legacy VTK keyword line "
+                f"is at most {MAX_LINE_BYTES:,} bytes long here"
+            )
+        text = self.data[self.pos : end].rstrip(b"\r").decode("latin-1")
         self.pos = end + 1
         self.line_number += 1
         return text
@@ -405,8 +481,7 @@ class _Reader:
         if code is None:
             raise self.fail(f"{what} has data type {quoted(type_name)}, which tgsis does not read")
         if code == "bit":
-            raise self.fail(f"{what} is a bit array, which tgsis does not read",
-                            hint="store it as unsigned_char (0/1)")
+            raise self.fail(f"{what} is a bit array, which tgsis does not read", hint="store it as unsigned_char (0/1)")
         dtype = np.dtype(">" + code)
         if not self.binary:
             tokens = list(islice(_TOKEN.finditer(self.data, self.pos), count))
@@ -423,11 +498,11 @@ class _Reader:
             except (ValueError, OverflowError):
                 raise self.fail(f"{what} has values that are not {type_name}") from None
         size = count * dtype.itemsize
-        chunk = self.data[self.pos: self.pos + size]
+        chunk = self.data[self.pos : self.pos + size]
         if len(chunk) != size:
             raise self.fail(f"{what}: expected {size} bytes of binary data, the file ends after {len(chunk)}")
         self.pos += size
-        if self.data[self.pos: self.pos + 1] == b"\n":
+        if self.data[self.pos : self.pos + 1] == b"\n":
             self.pos += 1
         self.line_number += chunk.count(b"\n") + 1
         return np.frombuffer(chunk, dtype=dtype).astype(dtype.newbyteorder("="))
@@ -447,19 +522,21 @@ class _Reader:
                 raise self.fail(f"{what}: the file ends inside a string array")
             head = self.data[self.pos]
             width = {3: 1, 2: 2, 1: 4, 0: 8}[head >> 6]  # VTK: the top two bits say how many bytes hold the length
-            length = int.from_bytes(self.data[self.pos: self.pos + width], "big") & ((1 << (8 * width - 2)) - 1)
+            length = int.from_bytes(self.data[self.pos : self.pos + width], "big") & ((1 << (8 * width - 2)) - 1)
             self.pos += width
-            result.append(self.data[self.pos: self.pos + length].decode("utf-8", "replace"))
+            result.append(self.data[self.pos : self.pos + length].decode("utf-8", "replace"))
             self.pos += length
-        if self.data[self.pos: self.pos + 1] == b"\n":
+        if self.data[self.pos : self.pos + 1] == b"\n":
             self.pos += 1
         return result
 
     def header(self) -> str:
         line = self.raw_line()
         if line is None or not line.startswith("# vtk DataFile Version"):
-            raise self.fail("not a legacy VTK file (the first line must be '# vtk DataFile Version x.y')",
-                            hint="a VTK XML file is .vtu (UnstructuredGrid) or .vtp (PolyData)")
+            raise self.fail(
+                "not a legacy VTK file (the first line must be '# vtk DataFile Version x.y')",
+                hint="a VTK XML file is .vtu (UnstructuredGrid) or .vtp (PolyData)",
+            )
         version = line.split()[-1]
         if self.raw_line() is None:
             raise self.fail("the file ends after its first line")
@@ -477,9 +554,11 @@ class _Reader:
             raise self.fail(f"expected 'DATASET type', got {quoted(' '.join(words))}")
         result = _Dataset(kind=words[1].upper())
         if result.kind not in ("POLYDATA", "UNSTRUCTURED_GRID"):
-            raise self.fail(f"DATASET {result.kind} is not read by tgsis: it reads POLYDATA and UNSTRUCTURED_GRID",
-                            hint="convert it to an unstructured grid first (pyvista: "
-                                 "mesh.cast_to_unstructured_grid().save('x.vtk'))")
+            raise self.fail(
+                f"DATASET {result.kind} is not read by tgsis: it reads POLYDATA and UNSTRUCTURED_GRID",
+                hint="convert it to an unstructured grid first (pyvista: "
+                "mesh.cast_to_unstructured_grid().save('x.vtk'))",
+            )
         attributes: dict[str, npt.NDArray[Any]] | None = None
         count = 0
         empty_data: tuple[str, int] | None = None  # a POINT_DATA/CELL_DATA line no array has followed yet
@@ -493,8 +572,11 @@ class _Reader:
                 self._field(words, result.fields, None, keep_strings=True)
             elif keyword == "POINTS":
                 n = self._int(words, 1, "POINTS")
-                result.points = self.values(words[2] if len(words) > 2 else "float", 3 * n, "POINTS") \
-                    .astype(np.float64).reshape(n, 3)
+                result.points = (
+                    self.values(words[2] if len(words) > 2 else "float", 3 * n, "POINTS")
+                    .astype(np.float64)
+                    .reshape(n, 3)
+                )
             elif keyword in _CELL_SECTIONS:
                 result.cells[_CELL_SECTIONS[keyword]] = self._cells(words, modern)
             elif keyword == "CELL_TYPES":
@@ -521,8 +603,9 @@ class _Reader:
         return result
 
     def _no_arrays(self, keyword: str, line: int) -> FileFormatError:
-        return FileFormatError(f"{keyword} is followed by no data array (is the file cut short?)", path=self.path,
-                               line=line)
+        return FileFormatError(
+            f"{keyword} is followed by no data array (is the file cut short?)", path=self.path, line=line
+        )
 
     def _int(self, words: list[str], index: int, what: str) -> int:
         try:
@@ -596,14 +679,19 @@ class _Reader:
             into[name] = values.reshape(count, components) if components > 1 else values
             return
         type_name = words[2] if len(words) > 2 else "float"
-        components = {"VECTORS": 3, "NORMALS": 3, "TENSORS": 9, "TENSORS6": 6, "GLOBAL_IDS": 1,
-                      "PEDIGREE_IDS": 1}.get(keyword, 1)
+        components = {"VECTORS": 3, "NORMALS": 3, "TENSORS": 9, "TENSORS6": 6, "GLOBAL_IDS": 1, "PEDIGREE_IDS": 1}.get(
+            keyword, 1
+        )
         if keyword == "SCALARS":
             components = self._int(words, 3, keyword) if len(words) > 3 else 1
         elif keyword == "TEXTURE_COORDINATES":
             components, type_name = self._int(words, 2, keyword), words[3] if len(words) > 3 else "float"
-        if keyword == "SCALARS" and (nxt := self.peek()) is not None and nxt.split()[0].upper() == "LOOKUP_TABLE" \
-                and len(nxt.split()) == 2:
+        if (
+            keyword == "SCALARS"
+            and (nxt := self.peek()) is not None
+            and nxt.split()[0].upper() == "LOOKUP_TABLE"
+            and len(nxt.split()) == 2
+        ):
             self.line()  # "LOOKUP_TABLE default" between the SCALARS line and its values
         if type_name.lower() in ("string", "utf8_string"):
             self.strings(count * components, f"{keyword} {name}")

@@ -54,5 +54,16 @@ from tgsis.gmaps._core import GMap, GMapReport, from_mesh, from_polygons, from_s
 from tgsis.gmaps._extrude import extrude, slice
 from tgsis.gmaps._time import EvolvingGMap, GMapPeriod, sudden_gmap_change
 
-__all__ = ["GMap", "GMapReport", "GMapPeriod", "EvolvingGMap", "sudden_gmap_change", "from_simplices", "from_polygons", "from_mesh",
-           "orbit_labels", "extrude", "slice"]
+__all__ = [
+    "GMap",
+    "GMapReport",
+    "GMapPeriod",
+    "EvolvingGMap",
+    "sudden_gmap_change",
+    "from_simplices",
+    "from_polygons",
+    "from_mesh",
+    "orbit_labels",
+    "extrude",
+    "slice",
+]

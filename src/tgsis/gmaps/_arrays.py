@@ -21,6 +21,8 @@ def as_points(points: npt.ArrayLike, what: str = "points", one: str = "point") -
     bad = ~np.isfinite(array)
     if bad.any():
         row, col = (int(v) for v in np.argwhere(bad)[0])
-        raise InvalidGMapError(f"{one} {row} has a non-finite coordinate {col} ({array[row, col]})",
-                               detail=f"{int(bad.any(axis=1).sum())} {what} have NaN or infinite coordinates")
+        raise InvalidGMapError(
+            f"{one} {row} has a non-finite coordinate {col} ({array[row, col]})",
+            detail=f"{int(bad.any(axis=1).sum())} {what} have NaN or infinite coordinates",
+        )
     return array

@@ -21,7 +21,6 @@ if TYPE_CHECKING:
     from tgsis.mesh import Mesh
 
 
-
 class Parts(NamedTuple):
     """What a builder makes: the arguments of :class:`~tgsis.gmaps.GMap` (its module builds the map from them)."""
 
@@ -63,9 +62,10 @@ def _indices(values: npt.ArrayLike, what: str, n_vertices: int, ndim: int) -> In
     outside = (array < 0) | (array >= n_vertices)
     if outside.any():
         where = tuple(int(v) for v in np.argwhere(outside)[0])
-        raise InvalidGeometryError(f"{what}{list(where)} refers to vertex {array[where]}, but there are "
-                                   f"{n_vertices} vertices",
-                                   detail=f"{int(outside.sum())} indices are out of range")
+        raise InvalidGeometryError(
+            f"{what}{list(where)} refers to vertex {array[where]}, but there are {n_vertices} vertices",
+            detail=f"{int(outside.sum())} indices are out of range",
+        )
     return array
 
 
@@ -86,7 +86,7 @@ def _pair_rows(rows: IntArray, base: int) -> tuple[IntArray, IntArray]:
         order = np.arange(q)
         same = np.ones(q - 1, dtype=bool)
     else:
-        if float(base) ** w < 2.0 ** 62:
+        if float(base) ** w < 2.0**62:
             key = rows[:, 0].copy()
             for col in range(1, w):
                 key *= base
@@ -123,20 +123,26 @@ def _sort_rows(rows: IntArray) -> IntArray:
     return np.sort(rows, axis=1)
 
 
-def _level_properties(props: Mapping[str, npt.ArrayLike] | None,
-                      level: int) -> dict[int, Mapping[str, npt.ArrayLike]] | None:
+def _level_properties(
+    props: Mapping[str, npt.ArrayLike] | None, level: int
+) -> dict[int, Mapping[str, npt.ArrayLike]] | None:
     return {level: props} if props else None
 
 
-def simplices_parts(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
-                   cell_properties: Mapping[str, npt.ArrayLike] | None = None,
-                   size: int | None = None) -> Parts:
+def simplices_parts(
+    vertices: npt.ArrayLike,
+    simplices: npt.ArrayLike,
+    *,
+    cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    size: int | None = None,
+) -> Parts:
     """The parts of :func:`tgsis.gmaps.from_simplices` (see it): darts, involutions, embedding."""
     points = _vertices(vertices)
     raw = np.asarray(simplices)
     if size is not None and (raw.ndim != 2 or raw.shape[1] != size) and raw.size:
-        raise InvalidGeometryError(f"{_plural(_cell_name(size))} must be a (c, {size}) array of vertex indices, "
-                                   f"got shape {raw.shape}")
+        raise InvalidGeometryError(
+            f"{_plural(_cell_name(size))} must be a (c, {size}) array of vertex indices, got shape {raw.shape}"
+        )
     if raw.size == 0:
         s = size if size is not None else (raw.shape[1] if raw.ndim == 2 else 1)
         cells = np.empty((0, s), dtype=np.int64)
@@ -154,8 +160,10 @@ def simplices_parts(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
             repeated |= cells[:, u] == cells[:, w]
         if repeated.any():
             row = int(np.flatnonzero(repeated)[0])
-            raise InvalidGeometryError(f"{name} {row} uses a vertex twice: {cells[row].tolist()}",
-                                       detail=f"{_plural(name, int(repeated.sum()))} repeat a vertex index")
+            raise InvalidGeometryError(
+                f"{name} {row} uses a vertex twice: {cells[row].tolist()}",
+                detail=f"{_plural(name, int(repeated.sum()))} repeat a vertex index",
+            )
     perms = np.array(list(itertools.permutations(range(s))), dtype=np.int64)
     nf = len(perms)  # (n + 1)!
     d = c * nf
@@ -185,7 +193,8 @@ def simplices_parts(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
             raise InvalidGeometryError(
                 f"{what} {shared.tolist()} is shared by {_plural(name, len(users))} ({users[:10].tolist()}): "
                 f"a G-map needs at most two {_plural(name)} per {what} (a quasi-manifold)",
-                detail=f"{_plural(what, len(crowded))} shared by three or more {_plural(name)}")
+                detail=f"{_plural(what, len(crowded))} shared by three or more {_plural(name)}",
+            )
         # Each dart gets a code 0..n!-1: the order of its facet's global vertices, the same in both
         # simplices of a facet. It depends only on the dart's permutation and on the order of the
         # simplex's global vertices (one of (n + 1)!, read from its pairwise comparisons): a small table.
@@ -194,7 +203,7 @@ def simplices_parts(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
             pattern |= (cells[:, u] < cells[:, w]).astype(np.int64) << bit
         order_of_pattern = np.zeros(1 << len(pairs), dtype=np.int64)
         table_code = np.zeros((nf, nf), dtype=np.int64)
-        lut = np.zeros(n ** n, dtype=np.int64)
+        lut = np.zeros(n**n, dtype=np.int64)
         powers = n ** np.arange(n, dtype=np.int64)
         for j, p in enumerate(itertools.permutations(range(n))):
             lut[int(np.dot(p, powers))] = j
@@ -217,8 +226,13 @@ def simplices_parts(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
     return Parts(alpha, vertex, points, _level_properties(cell_properties, n))
 
 
-def polygons_parts(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: npt.ArrayLike | None = None, *,
-                  cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> Parts:
+def polygons_parts(
+    vertices: npt.ArrayLike,
+    polygons: npt.ArrayLike,
+    offsets: npt.ArrayLike | None = None,
+    *,
+    cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+) -> Parts:
     """The parts of :func:`tgsis.gmaps.from_polygons` (see it): darts, involutions, embedding."""
     points = _vertices(vertices)
     k = len(points)
@@ -227,26 +241,33 @@ def polygons_parts(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: np
         if grid.size == 0:
             grid = np.empty((0, 3), dtype=np.int64)
         if grid.ndim != 2:
-            raise InvalidGeometryError(f"polygons without offsets must be an (f, s) array, got shape {grid.shape}",
-                                       hint="pass a flat index array and offsets for polygons of several sizes")
+            raise InvalidGeometryError(
+                f"polygons without offsets must be an (f, s) array, got shape {grid.shape}",
+                hint="pass a flat index array and offsets for polygons of several sizes",
+            )
         flat = _indices(grid.reshape(-1), "polygons", k, 1)
         offs = np.arange(grid.shape[0] + 1, dtype=np.int64) * grid.shape[1]
     else:
         flat = _indices(polygons, "polygons", k, 1)
         offs_raw = np.asarray(offsets)
         if offs_raw.dtype.kind not in "iu" or offs_raw.ndim != 1 or len(offs_raw) == 0:
-            raise InvalidGeometryError(f"offsets must be a 1-D integer array of f + 1 positions, "
-                                       f"got {offs_raw.dtype} of shape {offs_raw.shape}")
+            raise InvalidGeometryError(
+                f"offsets must be a 1-D integer array of f + 1 positions, "
+                f"got {offs_raw.dtype} of shape {offs_raw.shape}"
+            )
         offs = offs_raw.astype(np.int64)
         if offs[0] != 0 or offs[-1] != len(flat):
-            raise InvalidGeometryError(f"offsets must start at 0 and end at len(polygons) = {len(flat)}, "
-                                       f"got {int(offs[0])} .. {int(offs[-1])}")
+            raise InvalidGeometryError(
+                f"offsets must start at 0 and end at len(polygons) = {len(flat)}, got {int(offs[0])} .. {int(offs[-1])}"
+            )
     sizes = np.diff(offs)
     small = np.flatnonzero(sizes < 3)
     if len(small):
         j = int(small[0])
-        raise InvalidGeometryError(f"polygon {j} has {int(sizes[j])} corners: a polygon needs at least 3",
-                                   detail=f"{len(small)} polygons have fewer than 3 corners")
+        raise InvalidGeometryError(
+            f"polygon {j} has {int(sizes[j])} corners: a polygon needs at least 3",
+            detail=f"{len(small)} polygons have fewer than 3 corners",
+        )
     f = len(sizes)
     face = np.repeat(np.arange(f, dtype=np.int64), sizes)
     if len(flat):
@@ -254,8 +275,9 @@ def polygons_parts(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: np
         twice = np.flatnonzero(pair[1:] == pair[:-1])
         if len(twice):
             j = int(pair[twice[0]] // k)
-            raise InvalidGeometryError(f"polygon {j} uses vertex {int(pair[twice[0]] % k)} twice: "
-                                       f"{flat[offs[j]:offs[j + 1]].tolist()}")
+            raise InvalidGeometryError(
+                f"polygon {j} uses vertex {int(pair[twice[0]] % k)} twice: {flat[offs[j] : offs[j + 1]].tolist()}"
+            )
     q = len(flat)
     corners = np.arange(q, dtype=np.int64)
     nxt = corners + 1
@@ -275,7 +297,8 @@ def polygons_parts(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: np
         raise InvalidGeometryError(
             f"edge {shared.tolist()} is shared by {len(users)} polygons ({users[:10].tolist()}): "
             f"a G-map needs at most two polygons per edge (a quasi-manifold)",
-            detail=f"{_plural('edge', len(crowded))} shared by three or more polygons")
+            detail=f"{_plural('edge', len(crowded))} shared by three or more polygons",
+        )
     low = 2 * corners + (a > b)  # the dart of each side at its lower-numbered vertex
     high = low ^ 1
     alpha2 = np.arange(d, dtype=np.int64)
@@ -291,6 +314,8 @@ def mesh_parts(mesh: Mesh) -> Parts:
     from tgsis.mesh import Mesh as _Mesh
 
     if not isinstance(mesh, _Mesh) or type(mesh) is _Mesh:
-        raise InvalidGeometryError(f"from_mesh takes a PointSet, LineSet, Surface or TetraMesh, "
-                                   f"got {type(mesh).__name__}", hint="convert each member of a collection")
+        raise InvalidGeometryError(
+            f"from_mesh takes a PointSet, LineSet, Surface or TetraMesh, got {type(mesh).__name__}",
+            hint="convert each member of a collection",
+        )
     return simplices_parts(mesh.vertices, mesh.cells, cell_properties=mesh.cell_properties, size=mesh.cell_size)

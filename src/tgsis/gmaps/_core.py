@@ -44,8 +44,9 @@ def _as_int_array(values: npt.ArrayLike, what: str, ndim: int) -> IntArray:
     return np.ascontiguousarray(raw, dtype=np.int64)
 
 
-def orbit_labels(alpha: IntArray, involutions: Sequence[int], *,
-                 rounds: int = _PROPAGATION_ROUNDS) -> tuple[IntArray, int]:
+def orbit_labels(
+    alpha: IntArray, involutions: Sequence[int], *, rounds: int = _PROPAGATION_ROUNDS
+) -> tuple[IntArray, int]:
     """Label the orbits of the darts under a subset of the involutions.
 
     Parameters
@@ -159,20 +160,33 @@ class GMapReport:
     @property
     def ok(self) -> bool:
         """No condition is violated."""
-        return not (self.not_involutions or self.fixed_points or self.not_involutive_compositions
-                    or self.split_vertices or self.crossing_periods)
+        return not (
+            self.not_involutions
+            or self.fixed_points
+            or self.not_involutive_compositions
+            or self.split_vertices
+            or self.crossing_periods
+        )
 
     def problems(self) -> list[str]:
         """One sentence per violated condition, naming (the first) offending darts."""
         out = [f"alpha{i} is not an involution at darts {_named(d)}" for i, d in self.not_involutions.items()]
-        out += [f"alpha{i} has fixed points (only alpha{self.dimension} may) at darts {_named(d)}"
-                for i, d in self.fixed_points.items()]
-        out += [f"alpha{i} o alpha{j} is not an involution at darts {_named(d)}"
-                for (i, j), d in self.not_involutive_compositions.items()]
-        out += [f"darts joined by alpha{i} have different vertices (a 0-cell with two points) at darts "
-                f"{_named(d)}" for i, d in self.split_vertices.items()]
-        out += [f"alpha{i} joins darts of different topology periods at darts {_named(d)}"
-                for i, d in self.crossing_periods.items()]
+        out += [
+            f"alpha{i} has fixed points (only alpha{self.dimension} may) at darts {_named(d)}"
+            for i, d in self.fixed_points.items()
+        ]
+        out += [
+            f"alpha{i} o alpha{j} is not an involution at darts {_named(d)}"
+            for (i, j), d in self.not_involutive_compositions.items()
+        ]
+        out += [
+            f"darts joined by alpha{i} have different vertices (a 0-cell with two points) at darts {_named(d)}"
+            for i, d in self.split_vertices.items()
+        ]
+        out += [
+            f"alpha{i} joins darts of different topology periods at darts {_named(d)}"
+            for i, d in self.crossing_periods.items()
+        ]
         return out
 
     def summary(self) -> str:
@@ -219,8 +233,14 @@ class GMap:
     points: FloatArray
     cell_properties: Properties
 
-    def __init__(self, alpha: npt.ArrayLike, vertex: npt.ArrayLike, points: npt.ArrayLike, *,
-                 cell_properties: Mapping[int, Mapping[str, npt.ArrayLike]] | None = None) -> None:
+    def __init__(
+        self,
+        alpha: npt.ArrayLike,
+        vertex: npt.ArrayLike,
+        points: npt.ArrayLike,
+        *,
+        cell_properties: Mapping[int, Mapping[str, npt.ArrayLike]] | None = None,
+    ) -> None:
         a = _as_int_array(alpha, "alpha", 2)
         if a.shape[0] == 0:
             raise InvalidGMapError("alpha must have n + 1 >= 1 rows (alpha_0 .. alpha_n), got none")
@@ -228,8 +248,10 @@ class GMap:
         outside = (a < 0) | (a >= d)
         if outside.any():
             i, x = (int(v) for v in np.argwhere(outside)[0])
-            raise InvalidGMapError(f"alpha{i} sends dart {x} to {a[i, x]}, but the map has {d} darts",
-                                   detail=f"{int(outside.sum())} involution values are out of range")
+            raise InvalidGMapError(
+                f"alpha{i} sends dart {x} to {a[i, x]}, but the map has {d} darts",
+                detail=f"{int(outside.sum())} involution values are out of range",
+            )
         v = _as_int_array(vertex, "vertex", 1)
         if len(v) != d:
             raise InvalidGMapError(f"vertex must hold one point index per dart: {len(v)} for {d} darts")
@@ -239,8 +261,10 @@ class GMap:
         bad = (v < 0) | (v >= len(p))
         if bad.any():
             x = int(np.flatnonzero(bad)[0])
-            raise InvalidGMapError(f"dart {x} has vertex {v[x]}, but there are {len(p)} points",
-                                   detail=f"{int(bad.sum())} darts have out-of-range vertices")
+            raise InvalidGMapError(
+                f"dart {x} has vertex {v[x]}, but there are {len(p)} points",
+                detail=f"{int(bad.sum())} darts have out-of-range vertices",
+            )
         for array in (a, v, p):
             array.flags.writeable = False
         self.alpha, self.vertex, self.points = a, v, p
@@ -251,23 +275,27 @@ class GMap:
         out: Properties = {}
         for level, named in (props or {}).items():
             if not isinstance(level, (int, np.integer)) or not 0 <= int(level) <= self.dimension:
-                raise InvalidPropertyError(f"property level {level!r} is not a cell dimension of this "
-                                           f"{self.dimension}-G-map (0..{self.dimension})")
+                raise InvalidPropertyError(
+                    f"property level {level!r} is not a cell dimension of this "
+                    f"{self.dimension}-G-map (0..{self.dimension})"
+                )
             count = self.n_cells(int(level))
             into = out.setdefault(int(level), {})
             for name, values in named.items():
                 if not isinstance(name, str) or not PROPERTY_NAME_RE.match(name):
                     raise InvalidPropertyError(
                         f"property name {name!r} is not allowed",
-                        hint="use letters, digits and underscores, starting with a letter (at most 63)")
+                        hint="use letters, digits and underscores, starting with a letter (at most 63)",
+                    )
                 array = np.ascontiguousarray(values)
                 if array.dtype.kind not in "biuf" or array.ndim not in (1, 2):
-                    raise InvalidPropertyError(f"property {name!r} of {level}-cells must be a numeric array of "
-                                               f"one value (or one row of values) per cell, got {array.dtype} of "
-                                               f"shape {array.shape}")
+                    raise InvalidPropertyError(
+                        f"property {name!r} of {level}-cells must be a numeric array of "
+                        f"one value (or one row of values) per cell, got {array.dtype} of "
+                        f"shape {array.shape}"
+                    )
                 if len(array) != count:
-                    raise InvalidPropertyError(f"property {name!r} has {len(array)} values for "
-                                               f"{count} {level}-cells")
+                    raise InvalidPropertyError(f"property {name!r} has {len(array)} values for {count} {level}-cells")
                 into[name] = array
         return out
 
@@ -294,19 +322,27 @@ class GMap:
         return int(self.points.shape[1])
 
     def __repr__(self) -> str:
-        return (f"GMap(dimension={self.dimension}, n_darts={self.n_darts}, n_points={self.n_points}, "
-                f"embedding_dimension={self.embedding_dimension})")
+        return (
+            f"GMap(dimension={self.dimension}, n_darts={self.n_darts}, n_points={self.n_points}, "
+            f"embedding_dimension={self.embedding_dimension})"
+        )
 
     def same_as(self, other: GMap) -> bool:
         """Identical involutions, vertices, points (bit for bit) and properties."""
+
         def same_props(a: Properties, b: Properties) -> bool:
             return a.keys() == b.keys() and all(
-                a[k].keys() == b[k].keys() and all(np.array_equal(a[k][n], b[k][n]) for n in a[k]) for k in a)
+                a[k].keys() == b[k].keys() and all(np.array_equal(a[k][n], b[k][n]) for n in a[k]) for k in a
+            )
 
-        return (self.alpha.shape == other.alpha.shape and np.array_equal(self.alpha, other.alpha)
-                and np.array_equal(self.vertex, other.vertex) and self.points.shape == other.points.shape
-                and bool(np.all(self.points.view(np.int64) == other.points.view(np.int64)))
-                and same_props(self.cell_properties, other.cell_properties))
+        return (
+            self.alpha.shape == other.alpha.shape
+            and np.array_equal(self.alpha, other.alpha)
+            and np.array_equal(self.vertex, other.vertex)
+            and self.points.shape == other.points.shape
+            and bool(np.all(self.points.view(np.int64) == other.points.view(np.int64)))
+            and same_props(self.cell_properties, other.cell_properties)
+        )
 
     # ---- orbits and cells
 
@@ -314,8 +350,9 @@ class GMap:
         out = tuple(sorted(set(int(i) for i in levels)))
         bad = [i for i in out if not 0 <= i <= self.dimension]
         if bad:
-            raise InvalidInputError(f"{what} {bad[0]} is not an involution of this {self.dimension}-G-map "
-                                    f"(0..{self.dimension})")
+            raise InvalidInputError(
+                f"{what} {bad[0]} is not an involution of this {self.dimension}-G-map (0..{self.dimension})"
+            )
         return out
 
     def orbits(self, involutions: Iterable[int]) -> tuple[IntArray, int]:
@@ -367,8 +404,11 @@ class GMap:
         darts = np.arange(d, dtype=np.int64)
         free = self.alpha == darts
         # cover dart 2x + b; a free dart stays where it is
-        cover = np.where(free[:, :, None], (2 * darts)[None, :, None] + np.arange(2)[None, None, :],
-                         (2 * self.alpha)[:, :, None] + (1 - np.arange(2))[None, None, :]).reshape(len(self.alpha), 2 * d)
+        cover = np.where(
+            free[:, :, None],
+            (2 * darts)[None, :, None] + np.arange(2)[None, None, :],
+            (2 * self.alpha)[:, :, None] + (1 - np.arange(2))[None, None, :],
+        ).reshape(len(self.alpha), 2 * d)
         labels, _ = orbit_labels(cover, range(len(cover)))
         return labels[0::2], labels[1::2]
 
@@ -390,8 +430,11 @@ class GMap:
         even, odd = self._orientation_cover()
         bad = np.flatnonzero(even == odd)
         if len(bad):
-            raise InvalidGMapError(f"the component of dart {int(bad[0])} is not orientable: no sign per dart "
-                                   "is flipped by every involution", hint="is_orientable() tells beforehand")
+            raise InvalidGMapError(
+                f"the component of dart {int(bad[0])} is not orientable: no sign per dart "
+                "is flipped by every involution",
+                hint="is_orientable() tells beforehand",
+            )
         component, count = self.components()
         lowest = _first_darts(component, count)
         # positive: in the same cover component as (lowest dart of its component, 0)
@@ -480,8 +523,9 @@ class GMap:
         rows.append(index[cur])
         stacked = np.array(rows, dtype=np.int64).reshape(n, len(free))
         if len(todo) or (stacked < 0).any():
-            raise InvalidGMapError("the border cannot be built: an involution leads a border dart off the border",
-                                   hint="run check() first")
+            raise InvalidGMapError(
+                "the border cannot be built: an involution leads a border dart off the border", hint="run check() first"
+            )
         return GMap(stacked, self.vertex[free], self.points)
 
     # ---- checks
@@ -537,17 +581,20 @@ class GMap:
         if periods is not None:
             raw = np.asarray(periods)
             if raw.dtype.kind not in "iu" or raw.shape != (d,):
-                raise InvalidInputError(f"periods must be one integer per dart, shape ({d},), "
-                                        f"got {raw.dtype} of shape {raw.shape}")
+                raise InvalidInputError(
+                    f"periods must be one integer per dart, shape ({d},), got {raw.dtype} of shape {raw.shape}"
+                )
             for i in range(n + 1):
                 bad = np.flatnonzero(raw[a[i]] != raw)
                 if len(bad):
                     report.crossing_periods[i] = bad
         if raise_ and not report.ok:
             problems = report.problems()
-            raise InvalidGMapError(f"not a valid {n}-G-map: {problems[0]}",
-                                   detail="; ".join(problems[1:]) or None,
-                                   hint="GMap.check() returns the report with every offending dart")
+            raise InvalidGMapError(
+                f"not a valid {n}-G-map: {problems[0]}",
+                detail="; ".join(problems[1:]) or None,
+                hint="GMap.check() returns the report with every offending dart",
+            )
         return report
 
     # ---- back to meshes
@@ -653,9 +700,11 @@ class GMap:
         repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1) if n >= 1 else np.zeros(len(out), bool)
         bad = np.flatnonzero((counts != factorial) | repeated)
         if len(bad):
-            raise InvalidGMapError(f"{n}-cells {_named(bad.astype(np.int64))} are not simplices "
-                                   f"(a simplex has {factorial} darts on {n + 1} distinct points)",
-                                   hint="use polygons() for faces of any size")
+            raise InvalidGMapError(
+                f"{n}-cells {_named(bad.astype(np.int64))} are not simplices "
+                f"(a simplex has {factorial} darts on {n + 1} distinct points)",
+                hint="use polygons() for faces of any size",
+            )
         return out.astype(np.int64)
 
     def to_mesh(self) -> Mesh:
@@ -672,49 +721,80 @@ class GMap:
         from tgsis.mesh import LineSet, PointSet, Surface, TetraMesh
 
         if self.embedding_dimension != 3 or self.dimension > 3:
-            raise InvalidGMapError(f"a mesh is made of simplices in R^3: this is a {self.dimension}-G-map in "
-                                   f"R^{self.embedding_dimension}", hint="use simplices() or polygons()")
+            raise InvalidGMapError(
+                f"a mesh is made of simplices in R^3: this is a {self.dimension}-G-map in R^{self.embedding_dimension}",
+                hint="use simplices() or polygons()",
+            )
         cls = (PointSet, LineSet, Surface, TetraMesh)[self.dimension]
-        return cls(self.points, self.simplices(),
-                   cell_properties=self.cell_properties.get(self.dimension, {}))
+        return cls(self.points, self.simplices(), cell_properties=self.cell_properties.get(self.dimension, {}))
 
     # ---- builders (implemented in tgsis.gmaps._build)
 
     @classmethod
-    def from_simplices(cls, vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
-                       cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    def from_simplices(
+        cls,
+        vertices: npt.ArrayLike,
+        simplices: npt.ArrayLike,
+        *,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> GMap:
         """See :func:`tgsis.gmaps.from_simplices`."""
         return from_simplices(vertices, simplices, cell_properties=cell_properties)
 
     @classmethod
-    def from_points(cls, vertices: npt.ArrayLike, points: npt.ArrayLike | None = None, *,
-                    cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    def from_points(
+        cls,
+        vertices: npt.ArrayLike,
+        points: npt.ArrayLike | None = None,
+        *,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> GMap:
         """A 0-G-map: one free dart per point (``points`` (c,) or (c, 1) indices; default every vertex)."""
         pts = np.arange(len(np.asarray(vertices))) if points is None else np.asarray(points)
         return from_simplices(vertices, pts.reshape(-1, 1), cell_properties=cell_properties)
 
     @classmethod
-    def from_segments(cls, vertices: npt.ArrayLike, segments: npt.ArrayLike, *,
-                      cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    def from_segments(
+        cls,
+        vertices: npt.ArrayLike,
+        segments: npt.ArrayLike,
+        *,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> GMap:
         """A 1-G-map of segments (c, 2): 2 darts per segment, alpha_1 sewn where two segments share a vertex."""
         return from_simplices(vertices, segments, cell_properties=cell_properties, size=2)
 
     @classmethod
-    def from_triangles(cls, vertices: npt.ArrayLike, triangles: npt.ArrayLike, *,
-                       cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    def from_triangles(
+        cls,
+        vertices: npt.ArrayLike,
+        triangles: npt.ArrayLike,
+        *,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> GMap:
         """A 2-G-map of triangles (c, 3): 6 darts per triangle, alpha_2 sewn across shared edges."""
         return from_simplices(vertices, triangles, cell_properties=cell_properties, size=3)
 
     @classmethod
-    def from_tetrahedra(cls, vertices: npt.ArrayLike, tetrahedra: npt.ArrayLike, *,
-                        cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    def from_tetrahedra(
+        cls,
+        vertices: npt.ArrayLike,
+        tetrahedra: npt.ArrayLike,
+        *,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> GMap:
         """A 3-G-map of tetrahedra (c, 4): 24 darts per tetrahedron, alpha_3 sewn across shared faces."""
         return from_simplices(vertices, tetrahedra, cell_properties=cell_properties, size=4)
 
     @classmethod
-    def from_polygons(cls, vertices: npt.ArrayLike, polygons: npt.ArrayLike,
-                      offsets: npt.ArrayLike | None = None, *,
-                      cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+    def from_polygons(
+        cls,
+        vertices: npt.ArrayLike,
+        polygons: npt.ArrayLike,
+        offsets: npt.ArrayLike | None = None,
+        *,
+        cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> GMap:
         """See :func:`tgsis.gmaps.from_polygons`."""
         return from_polygons(vertices, polygons, offsets, cell_properties=cell_properties)
 
@@ -728,9 +808,13 @@ def _assembled(parts: Parts) -> GMap:
     return GMap(parts.alpha, parts.vertex, parts.points, cell_properties=parts.cell_properties)
 
 
-def from_simplices(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
-                   cell_properties: Mapping[str, npt.ArrayLike] | None = None,
-                   size: int | None = None) -> GMap:
+def from_simplices(
+    vertices: npt.ArrayLike,
+    simplices: npt.ArrayLike,
+    *,
+    cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+    size: int | None = None,
+) -> GMap:
     """The n-G-map of a simplicial mesh: (n + 1)! darts per simplex, alpha_n sewn across shared facets.
 
     Dart ``t * (n + 1)! + j`` is the flag of simplex ``t`` given by the j-th
@@ -766,8 +850,13 @@ def from_simplices(vertices: npt.ArrayLike, simplices: npt.ArrayLike, *,
     return _assembled(simplices_parts(vertices, simplices, cell_properties=cell_properties, size=size))
 
 
-def from_polygons(vertices: npt.ArrayLike, polygons: npt.ArrayLike, offsets: npt.ArrayLike | None = None, *,
-                  cell_properties: Mapping[str, npt.ArrayLike] | None = None) -> GMap:
+def from_polygons(
+    vertices: npt.ArrayLike,
+    polygons: npt.ArrayLike,
+    offsets: npt.ArrayLike | None = None,
+    *,
+    cell_properties: Mapping[str, npt.ArrayLike] | None = None,
+) -> GMap:
     """The 2-G-map of polygonal faces of any sizes: 2 darts per polygon side, alpha_2 across shared edges.
 
     Parameters

@@ -45,16 +45,18 @@ def extrude(g: GMap, values: npt.ArrayLike) -> GMap:
     """
     raw = np.asarray(values)
     if raw.dtype.kind not in "iuf" or raw.ndim != 1 or len(raw) < 2:
-        raise InvalidInputError(f"values must be a 1-D array of at least two numbers, got {raw.dtype} "
-                                f"of shape {raw.shape}")
+        raise InvalidInputError(
+            f"values must be a 1-D array of at least two numbers, got {raw.dtype} of shape {raw.shape}"
+        )
     vals = raw.astype(np.float64)
     if not np.isfinite(vals).all():
         raise InvalidInputError(f"values must be finite, got {vals[~np.isfinite(vals)][0]}")
     down = np.flatnonzero(np.diff(vals) <= 0)
     if len(down):
         at = int(down[0])
-        raise InvalidInputError(f"values must be strictly increasing: values[{at}] = {vals[at]} and "
-                                f"values[{at + 1}] = {vals[at + 1]}")
+        raise InvalidInputError(
+            f"values must be strictly increasing: values[{at}] = {vals[at]} and values[{at + 1}] = {vals[at + 1]}"
+        )
     n, d, kp = g.dimension, g.n_darts, g.n_points
     k = len(vals) - 1
     steps = n + 1
@@ -108,12 +110,14 @@ def _take_properties(g: GMap, chosen: IntArray, result: GMap) -> Properties:
 
 
 def _empty(g: GMap, axis: int) -> GMap:
-    return GMap(np.empty((g.dimension, 0), dtype=np.int64), np.empty(0, dtype=np.int64),
-                np.empty((0, g.embedding_dimension - 1)))
+    return GMap(
+        np.empty((g.dimension, 0), dtype=np.int64),
+        np.empty(0, dtype=np.int64),
+        np.empty((0, g.embedding_dimension - 1)),
+    )
 
 
-def _walk(start: IntArray, first: IntArray, second: IntArray, stop: npt.NDArray[np.bool_],
-          what: str) -> IntArray:
+def _walk(start: IntArray, first: IntArray, second: IntArray, stop: npt.NDArray[np.bool_], what: str) -> IntArray:
     """For each start: apply ``first``, then ``second`` and ``first`` again until a dart in ``stop``.
 
     A dart free in ``second`` ends the walk at its start (a border).
@@ -132,8 +136,9 @@ def _walk(start: IntArray, first: IntArray, second: IntArray, stop: npt.NDArray[
         result[todo[free]] = start[todo[free]]
         todo, nxt = todo[~free], nxt[~free]
         cur[todo] = first[nxt]
-    raise InvalidGMapError(f"the {what} of the slice cannot be found: the map is not a valid G-map",
-                           hint="run check() first")
+    raise InvalidGMapError(
+        f"the {what} of the slice cannot be found: the map is not a valid G-map", hint="run check() first"
+    )
 
 
 def slice(g: GMap, axis: int, value: float) -> GMap:  # noqa: A001 - the operation's name in the spec
@@ -202,7 +207,8 @@ def slice(g: GMap, axis: int, value: float) -> GMap:  # noqa: A001 - the operati
             raise InvalidInputError(
                 f"the plane {axis} = {at} passes through vertices and crosses edges (dart {x}, from point "
                 f"{int(g.vertex[x])} to point {int(g.vertex[a[0, x]])}): only slices through whole layers of "
-                "faces, or through no vertex, are supported")
+                "faces, or through no vertex, are supported"
+            )
         return _slice_layer(g, axis, on, above)
     if not crossing.any():
         return _empty(g, axis)
@@ -223,15 +229,19 @@ def _slice_layer(g: GMap, axis: int, on: npt.NDArray[np.bool_], above: npt.NDArr
     ambiguous = in_plane & ~free & (up == up_other)
     if ambiguous.any():
         x = int(np.flatnonzero(ambiguous)[0])
-        raise InvalidInputError(f"the face of dart {x} lies in the plane {axis} = {g.points[g.vertex[x], axis]} "
-                                "but does not separate a cell above from a cell below: not supported")
+        raise InvalidInputError(
+            f"the face of dart {x} lies in the plane {axis} = {g.points[g.vertex[x], axis]} "
+            "but does not separate a cell above from a cell below: not supported"
+        )
     chosen_mask = in_plane & (free | (up & ~up_other))
     chosen = np.flatnonzero(chosen_mask).astype(np.int64)
     lone = np.setdiff1d(g.vertex[on], g.vertex[chosen])
     if len(lone):
-        raise InvalidInputError(f"point {int(lone[0])} lies in the plane {axis} = "
-                                f"{g.points[lone[0], axis]} but on no face in it: not supported "
-                                f"({len(lone)} such points)")
+        raise InvalidInputError(
+            f"point {int(lone[0])} lies in the plane {axis} = "
+            f"{g.points[lone[0], axis]} but on no face in it: not supported "
+            f"({len(lone)} such points)"
+        )
     if len(chosen) == 0:
         return _empty(g, axis)
     index = np.full(d, -1, dtype=np.int64)
@@ -259,12 +269,14 @@ def _slice_between(g: GMap, axis: int, at: float, crossing: npt.NDArray[np.bool_
     return _assemble(g, axis, chosen, rows, low, (high, at))
 
 
-def _assemble(g: GMap, axis: int, chosen: IntArray, rows: list[IntArray], low: IntArray,
-              between: tuple[IntArray, float] | None) -> GMap:
+def _assemble(
+    g: GMap, axis: int, chosen: IntArray, rows: list[IntArray], low: IntArray, between: tuple[IntArray, float] | None
+) -> GMap:
     alpha = np.stack(rows)
     if (alpha < 0).any():
-        raise InvalidGMapError("an involution leads a dart of the slice out of it: the map is not a valid G-map",
-                               hint="run check() first")
+        raise InvalidGMapError(
+            "an involution leads a dart of the slice out of it: the map is not a valid G-map", hint="run check() first"
+        )
     kp = g.n_points
     key = low if between is None else low * kp + between[0]
     unique, vertex = np.unique(key, return_inverse=True)

@@ -49,8 +49,15 @@ class GMapPeriod:
     InvalidInputError, InvalidGMapError, InvalidPropertyError
     """
 
-    def __init__(self, times: npt.ArrayLike, gmap: GMap, positions: npt.ArrayLike | None = None, *,
-                 level: int | None = None, cell_values: Mapping[str, npt.ArrayLike] | None = None) -> None:
+    def __init__(
+        self,
+        times: npt.ArrayLike,
+        gmap: GMap,
+        positions: npt.ArrayLike | None = None,
+        *,
+        level: int | None = None,
+        cell_values: Mapping[str, npt.ArrayLike] | None = None,
+    ) -> None:
         if not isinstance(gmap, GMap):
             raise InvalidInputError(f"a G-map period needs a tgsis.gmaps.GMap, got {type(gmap).__name__}")
         self.times = as_times(times, "geometry instants of a G-map period")
@@ -60,8 +67,9 @@ class GMapPeriod:
         else:
             xyz = np.ascontiguousarray(positions, dtype=np.float64)
         if xyz.shape != (g, k, m):
-            raise InvalidGMapError(f"point positions of a G-map period must have shape (g, k, m) = ({g}, {k}, {m}), "
-                                   f"got {xyz.shape}")
+            raise InvalidGMapError(
+                f"point positions of a G-map period must have shape (g, k, m) = ({g}, {k}, {m}), got {xyz.shape}"
+            )
         if not np.all(np.isfinite(xyz)):
             raise InvalidGMapError("point positions must be finite (NaN or infinite coordinate found)")
         if level is None and cell_values:
@@ -86,13 +94,18 @@ class GMapPeriod:
         Points and cell values (as float64) are ``a + w * (b - a)``, the
         formula the SQL snapshot (``tgsis.gmap_points_at``) uses.
         """
+
         def mix(a: npt.NDArray[np.generic], b: npt.NDArray[np.generic]) -> FloatArray:
             a64, b64 = a.astype(np.float64), b.astype(np.float64)
             return a64 if j0 == j1 else a64 + w * (b64 - a64)
 
         values = {name: mix(v[j0], v[j1]) for name, v in self.cell_values.items()}
-        return GMap(self.gmap.alpha, self.gmap.vertex, mix(self.positions[j0], self.positions[j1]),
-                    cell_properties={self.level: values} if self.level is not None and values else None)
+        return GMap(
+            self.gmap.alpha,
+            self.gmap.vertex,
+            mix(self.positions[j0], self.positions[j1]),
+            cell_properties={self.level: values} if self.level is not None and values else None,
+        )
 
 
 def sudden_gmap_change(before: GMap, period: GMapPeriod, duration: float, *, label: str = "the period") -> GMapPeriod:
@@ -113,18 +126,30 @@ def sudden_gmap_change(before: GMap, period: GMapPeriod, duration: float, *, lab
         a G-map of another embedding dimension.
     """
     if before.embedding_dimension != period.gmap.embedding_dimension:
-        raise InvalidInputError(f"{label} is in R^{period.gmap.embedding_dimension}, the shape before it in "
-                                f"R^{before.embedding_dimension}")
+        raise InvalidInputError(
+            f"{label} is in R^{period.gmap.embedding_dimension}, the shape before it in R^{before.embedding_dimension}"
+        )
     times = transition_times(period.times, duration, label)
-    same = (len(before.points) == len(period.gmap.points) and len(before.alpha) == len(period.gmap.alpha)
-            and all(np.array_equal(a, b) for a, b in zip(before.alpha, period.gmap.alpha))
-            and np.array_equal(before.vertex, period.gmap.vertex))
+    same = (
+        len(before.points) == len(period.gmap.points)
+        and len(before.alpha) == len(period.gmap.alpha)
+        and all(np.array_equal(a, b) for a, b in zip(before.alpha, period.gmap.alpha))
+        and np.array_equal(before.vertex, period.gmap.vertex)
+    )
     points = before.points.astype(np.float64)
-    edges = np.stack([before.vertex, before.vertex[before.alpha[0]]], axis=1) if before.n_darts else \
-        np.empty((0, 2), dtype=np.int64)
+    edges = (
+        np.stack([before.vertex, before.vertex[before.alpha[0]]], axis=1)
+        if before.n_darts
+        else np.empty((0, 2), dtype=np.int64)
+    )
     start = points if same else start_on(lambda q: closest_on_segments(points, edges, q), period.positions[0])
-    return GMapPeriod(times, period.gmap, prepend_first(period.positions, start), level=period.level,
-                      cell_values={k: prepend_first(v) for k, v in period.cell_values.items()})
+    return GMapPeriod(
+        times,
+        period.gmap,
+        prepend_first(period.positions, start),
+        level=period.level,
+        cell_values={k: prepend_first(v) for k, v in period.cell_values.items()},
+    )
 
 
 class EvolvingGMap:
@@ -157,12 +182,15 @@ class EvolvingGMap:
                 raise InvalidInputError(
                     f"G-map period {i} must end where period {i + 1} starts: its last geometry instant is "
                     f"{float(a.times[-1])!r}, period {i + 1} starts at {float(b.times[0])!r}",
-                    hint="a sudden change is a change over a very short period")
+                    hint="a sudden change is a change over a very short period",
+                )
         for i, p in enumerate(self.periods):
             if (p.gmap.dimension, p.gmap.embedding_dimension) != (first.gmap.dimension, first.gmap.embedding_dimension):
-                raise InvalidInputError(f"G-map period {i} is a {p.gmap.dimension}-G-map in "
-                                        f"R^{p.gmap.embedding_dimension}, period 0 a {first.gmap.dimension}-G-map "
-                                        f"in R^{first.gmap.embedding_dimension}")
+                raise InvalidInputError(
+                    f"G-map period {i} is a {p.gmap.dimension}-G-map in "
+                    f"R^{p.gmap.embedding_dimension}, period 0 a {first.gmap.dimension}-G-map "
+                    f"in R^{first.gmap.embedding_dimension}"
+                )
         levels = {p.level for p in self.periods if p.cell_values and p.level is not None}
         if len(levels) > 1:
             raise InvalidPropertyError(f"the periods' cell values belong to different levels {sorted(levels)}")
@@ -171,8 +199,16 @@ class EvolvingGMap:
         self._starts = np.array([p.start for p in self.periods])
 
     @classmethod
-    def constant(cls, gmap: GMap, start: float, end: float, *, alive: bool = False, level: int | None = None,
-                 name: str | None = None) -> EvolvingGMap:
+    def constant(
+        cls,
+        gmap: GMap,
+        start: float,
+        end: float,
+        *,
+        alive: bool = False,
+        level: int | None = None,
+        name: str | None = None,
+    ) -> EvolvingGMap:
         """A G-map that stays as it is from ``start`` to ``end`` (one period, two geometry instants).
 
         The cell properties of ``level`` (default: the only level ``gmap``
@@ -182,8 +218,9 @@ class EvolvingGMap:
         if level is None and len(levels) > 1:
             raise InvalidPropertyError(f"the G-map has properties on levels {levels}: say which one (level=...)")
         chosen = level if level is not None else (levels[0] if levels else None)
-        values = {k: np.stack([v, v]) for k, v in gmap.cell_properties.get(chosen, {}).items()} \
-            if chosen is not None else {}
+        values = (
+            {k: np.stack([v, v]) for k, v in gmap.cell_properties.get(chosen, {}).items()} if chosen is not None else {}
+        )
         return cls([GMapPeriod([start, end], gmap, level=chosen, cell_values=values)], alive=alive, name=name)
 
     def with_sudden_changes(self, duration: float) -> EvolvingGMap:
@@ -195,8 +232,9 @@ class EvolvingGMap:
         for i, period in enumerate(self.periods[1:], start=1):
             previous = self.periods[i - 1]
             last = len(previous.times) - 1
-            periods.append(sudden_gmap_change(previous.shape_at(last, last, 0.0), period, duration,
-                                              label=f"G-map period {i}"))
+            periods.append(
+                sudden_gmap_change(previous.shape_at(last, last, 0.0), period, duration, label=f"G-map period {i}")
+            )
         return EvolvingGMap(periods, alive=self.alive, name=self.name)
 
     @property
@@ -252,14 +290,21 @@ class EvolvingGMap:
         InvalidGMapError
             With ``raise_=True``, when a period is not a valid G-map.
         """
-        problems = [f"period {i} (from t = {p.start!r}): {problem}"
-                    for i, p in enumerate(self.periods) for problem in p.gmap.check().problems()]
+        problems = [
+            f"period {i} (from t = {p.start!r}): {problem}"
+            for i, p in enumerate(self.periods)
+            for problem in p.gmap.check().problems()
+        ]
         if raise_ and problems:
-            raise InvalidGMapError(f"not a valid evolving {self.dimension}-G-map: {problems[0]}",
-                                   detail="; ".join(problems[1:]) or None,
-                                   hint="EvolvingGMap.check() lists every problem")
+            raise InvalidGMapError(
+                f"not a valid evolving {self.dimension}-G-map: {problems[0]}",
+                detail="; ".join(problems[1:]) or None,
+                hint="EvolvingGMap.check() lists every problem",
+            )
         return problems
 
     def __repr__(self) -> str:
-        return (f"EvolvingGMap({len(self.periods)} periods {self.start!r}..{self.end!r}, {self.dimension}-G-map in "
-                f"R^{self.embedding_dimension}, {self.n_darts} darts, alive={self.alive}, name={self.name!r})")
+        return (
+            f"EvolvingGMap({len(self.periods)} periods {self.start!r}..{self.end!r}, {self.dimension}-G-map in "
+            f"R^{self.embedding_dimension}, {self.n_darts} darts, alive={self.alive}, name={self.name!r})"
+        )

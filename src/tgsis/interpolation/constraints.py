@@ -30,8 +30,9 @@ def fence_label(mesh_name: str, index: int, names: Sequence[str | None] | None =
     return f"{mesh_name} fence path {index}" + (f" ({name!r})" if name else "")
 
 
-def validate_control_vertices(mesh: Surface | MeshTopology, control_vertices: npt.ArrayLike, *,
-                              mesh_name: str = "source") -> IntArray:
+def validate_control_vertices(
+    mesh: Surface | MeshTopology, control_vertices: npt.ArrayLike, *, mesh_name: str = "source"
+) -> IntArray:
     """Check a control vertex sequence: vertex indices of the mesh, each on a triangle, none twice.
 
     Parameters
@@ -55,24 +56,29 @@ def validate_control_vertices(mesh: Surface | MeshTopology, control_vertices: np
     topo = mesh_topology(mesh)
     raw = np.asarray(control_vertices)
     if raw.ndim != 1 or (raw.size and raw.dtype.kind not in "iu"):
-        raise InterpolationSetupError(f"{mesh_name} control vertices are not a sequence of vertex indices "
-                                      f"(shape {raw.shape}, type {raw.dtype})")
+        raise InterpolationSetupError(
+            f"{mesh_name} control vertices are not a sequence of vertex indices (shape {raw.shape}, type {raw.dtype})"
+        )
     verts = raw.astype(np.int64)
     n = topo.n_vertices
     problems: list[str] = []
     outside = np.flatnonzero((verts < 0) | (verts >= n))
     if outside.size:
-        problems.append(f"{mesh_name} {named('control vertex', verts[outside])} ({named('position', outside)}): "
-                        f"not in the mesh, which has {n} vertices")
+        problems.append(
+            f"{mesh_name} {named('control vertex', verts[outside])} ({named('position', outside)}): "
+            f"not in the mesh, which has {n} vertices"
+        )
     else:
         order = np.argsort(verts, kind="stable")
         for r in np.flatnonzero(verts[order][1:] == verts[order][:-1])[:3]:
-            problems.append(f"{mesh_name} control vertex {verts[order[r]]} is given twice "
-                            f"(positions {order[r]} and {order[r + 1]})")
+            problems.append(
+                f"{mesh_name} control vertex {verts[order[r]]} is given twice (positions {order[r]} and {order[r + 1]})"
+            )
         loose = np.flatnonzero(~topo.used_vertices[verts])
         if loose.size:
-            problems.append(f"{mesh_name} {named('control vertex', verts[loose])} ({named('position', loose)}): "
-                            "on no triangle")
+            problems.append(
+                f"{mesh_name} {named('control vertex', verts[loose])} ({named('position', loose)}): on no triangle"
+            )
     if problems:
         raise InterpolationSetupError.collect(f"{mesh_name} control vertices", problems)
     return verts
@@ -131,24 +137,31 @@ def validate_fence_paths(
                     found.append(f"{label} {which} at vertex {v}, which is not a {mesh_name} control vertex")
             inside = np.flatnonzero(is_control[verts[1:-1]]) + 1
             if inside.size:
-                found.append(f"{label} passes through {named('control vertex', verts[inside])} "
-                             f"({named('position', inside)}): a fence path joins two control vertices with none "
-                             "in between; "
-                             "split it there")
+                found.append(
+                    f"{label} passes through {named('control vertex', verts[inside])} "
+                    f"({named('position', inside)}): a fence path joins two control vertices with none "
+                    "in between; "
+                    "split it there"
+                )
         problems.extend(found)
         paths.append(verts)
         edges.append(edge_ids if not found else np.empty(0, dtype=np.int64))
     good = [i for i, e in enumerate(edges) if len(e)]
     if len(good) > 1:
-        problems.extend(_crossings(topo, [paths[i] for i in good], [edges[i] for i in good], good,
-                                   names, mesh_name))
+        problems.extend(_crossings(topo, [paths[i] for i in good], [edges[i] for i in good], good, names, mesh_name))
     if problems:
         raise InterpolationSetupError.collect(f"{mesh_name} fence paths", problems)
     return tuple(paths)
 
 
-def _crossings(topo: MeshTopology, paths: list[IntArray], edges: list[IntArray], index: list[int],
-               names: Sequence[str | None] | None, mesh_name: str) -> list[str]:
+def _crossings(
+    topo: MeshTopology,
+    paths: list[IntArray],
+    edges: list[IntArray],
+    index: list[int],
+    names: Sequence[str | None] | None,
+    mesh_name: str,
+) -> list[str]:
     """Pairs of fence paths that share an inner vertex or an edge."""
     problems: list[str] = []
     owner = np.concatenate([np.full(len(p), i, dtype=np.int64) for i, p in enumerate(paths)])
@@ -174,8 +187,10 @@ def _crossings(topo: MeshTopology, paths: list[IntArray], edges: list[IntArray],
                 reported.add(pair)
                 first, second = (fence_label(mesh_name, index[j], names) for j in pair)
                 inside = " and ".join(lbl for lbl, flag in ((first, inner[s + a]), (second, inner[s + b])) if flag)
-                problems.append(f"{first} and {second} meet at vertex {vertex[s]}, which is inside {inside}: "
-                                "fence paths may meet at their end vertices only")
+                problems.append(
+                    f"{first} and {second} meet at vertex {vertex[s]}, which is inside {inside}: "
+                    "fence paths may meet at their end vertices only"
+                )
     edge_owner = np.concatenate([np.full(len(e), i, dtype=np.int64) for i, e in enumerate(edges)])
     edge = np.concatenate(edges)
     order = np.lexsort((edge_owner, edge))
@@ -187,6 +202,7 @@ def _crossings(topo: MeshTopology, paths: list[IntArray], edges: list[IntArray],
         reported.add(pair)
         a, b = topo.edges[edge[r]].tolist()
         first, second = (fence_label(mesh_name, index[j], names) for j in pair)
-        problems.append(f"{first} and {second} share the edge ({a}, {b}): fence paths may meet at their end "
-                        "vertices only")
+        problems.append(
+            f"{first} and {second} share the edge ({a}, {b}): fence paths may meet at their end vertices only"
+        )
     return problems

@@ -66,8 +66,9 @@ def border_turns(surface: Surface, loop: IntArray, window: float = 0.02) -> Floa
     return turns
 
 
-def propose_corners(surface: Surface, *, min_angle: float = 35.0, window: float = 0.02,
-                    count: int | None = None) -> IntArray:
+def propose_corners(
+    surface: Surface, *, min_angle: float = 35.0, window: float = 0.02, count: int | None = None
+) -> IntArray:
     """Border vertices where the border of a disk-like surface turns sharply, in border order.
 
     Parameters
@@ -100,12 +101,15 @@ def propose_corners(surface: Surface, *, min_angle: float = 35.0, window: float 
     if isinstance(min_angle, bool) or not (isinstance(min_angle, numbers.Real) and 0 <= min_angle <= 180):
         raise InterpolationSetupError(f"min_angle must be a number of degrees from 0 to 180, got {min_angle!r}")
     if isinstance(window, bool) or not (isinstance(window, numbers.Real) and 0 < window < 0.5):
-        raise InterpolationSetupError(f"window must be a fraction of the border's length between 0 and 0.5, "
-                                      f"got {window!r}")
+        raise InterpolationSetupError(
+            f"window must be a fraction of the border's length between 0 and 0.5, got {window!r}"
+        )
     loops = MeshTopology.of(surface).border_loops
     if len(loops) != 1:
-        raise InterpolationSetupError(f"corner detection needs a surface with one border loop, this one has "
-                                      f"{len(loops)}", hint="cut it into disks, or give control vertices by hand")
+        raise InterpolationSetupError(
+            f"corner detection needs a surface with one border loop, this one has {len(loops)}",
+            hint="cut it into disks, or give control vertices by hand",
+        )
     loop = loops[0]
     turns = border_turns(surface, loop, window)
     # a corner is the sharpest vertex within its window: compare with the neighbours within reach
@@ -125,8 +129,10 @@ def propose_corners(surface: Surface, *, min_angle: float = 35.0, window: float 
         if count is not None and len(taken) == count:
             break
     if count is not None and len(taken) < count:
-        raise InterpolationSetupError(f"only {len(taken)} corners stand out on the border, {count} were asked for",
-                                      hint="lower min_angle, or give the control vertices by hand")
+        raise InterpolationSetupError(
+            f"only {len(taken)} corners stand out on the border, {count} were asked for",
+            hint="lower min_angle, or give the control vertices by hand",
+        )
     if not taken:
         return np.empty(0, dtype=np.int64)
     ranked = np.sort(np.asarray(taken, dtype=np.int64))

@@ -186,33 +186,44 @@ def cut_along_paths(
         on_edge_border = np.flatnonzero(count[edge_ids] == 1)
         crowded = np.flatnonzero(count[edge_ids] > 2)
         if on_edge_border.size:
-            found.append(f"{label}: {_edges_at(steps, on_edge_border)} on the border already: "
-                         "there is nothing to cut")
+            found.append(f"{label}: {_edges_at(steps, on_edge_border)} on the border already: there is nothing to cut")
         if crowded.size:
-            found.append(f"{label}: {_edges_at(steps, crowded)} on more than 2 triangles (non-manifold): "
-                         "a cut cannot follow a non-manifold edge")
+            found.append(
+                f"{label}: {_edges_at(steps, crowded)} on more than 2 triangles (non-manifold): "
+                "a cut cannot follow a non-manifold edge"
+            )
         inner = np.flatnonzero(on_border[verts[1:-1]]) + 1
         if inner.size and not on_edge_border.size:
-            found.append(f"{label} passes through {named('border vertex', verts[inner])} ({named('position', inner)}): "
-                         "only its end vertices may be on the border; split it there into several cutting paths")
+            found.append(
+                f"{label} passes through {named('border vertex', verts[inner])} ({named('position', inner)}): "
+                "only its end vertices may be on the border; split it there into several cutting paths"
+            )
         tangled = np.flatnonzero(topo.fans_per_vertex[verts] > 1)
         if tangled.size:
-            found.append(f"{label} passes through {named('non-manifold vertex', verts[tangled])} "
-                         f"({named('position', tangled)}): the triangles there form separate fans")
+            found.append(
+                f"{label} passes through {named('non-manifold vertex', verts[tangled])} "
+                f"({named('position', tangled)}): the triangles there form separate fans"
+            )
         start, end = int(verts[0]), int(verts[-1])
         actual = cut_ends(bool(on_border[start]), bool(on_border[end]))
         if declared is not None and declared != actual:
-            found.append(f"{label} is declared {declared!r}, but its start vertex {start} is "
-                         f"{_where(bool(on_border[start]))} and its end vertex {end} is "
-                         f"{_where(bool(on_border[end]))} ({actual!r})")
+            found.append(
+                f"{label} is declared {declared!r}, but its start vertex {start} is "
+                f"{_where(bool(on_border[start]))} and its end vertex {end} is "
+                f"{_where(bool(on_border[end]))} ({actual!r})"
+            )
         elif actual == "both_inside" and len(verts) < 3:
-            found.append(f"{label} ends inside the surface at both ends but has only the 2 vertices {start} and "
-                         f"{end}: a crack closed at both ends needs a vertex between them")
+            found.append(
+                f"{label} ends inside the surface at both ends but has only the 2 vertices {start} and "
+                f"{end}: a crack closed at both ends needs a vertex between them"
+            )
         for j, e in enumerate(edge_ids.tolist()):
             other = edge_owner.setdefault(e, i)
             if other != i:
-                found.append(f"{_label(other, names)} and {label} share the edge ({verts[j]}, {verts[j + 1]}): "
-                             "cutting paths may meet at vertices only")
+                found.append(
+                    f"{_label(other, names)} and {label} share the edge ({verts[j]}, {verts[j + 1]}): "
+                    "cutting paths may meet at vertices only"
+                )
                 break
         if found:
             problems.extend(found)
@@ -246,9 +257,11 @@ def cut_along_paths(
         original = np.concatenate([original, group_vertex[~keeps]])
         new_corners[3 * near[corners // 3] + corners % 3] = new_index[group]
     cut = Surface(
-        surface.vertices[original], new_corners.reshape(-1, 3),
+        surface.vertices[original],
+        new_corners.reshape(-1, 3),
         vertex_properties={k: v[original] for k, v in surface.vertex_properties.items()},
         cell_properties={k: v.copy() for k, v in surface.cell_properties.items()},
-        name=surface.name, metadata=surface.metadata,
+        name=surface.name,
+        metadata=surface.metadata,
     )
     return CutResult(cut, original, tuple(valid), tuple(cases))

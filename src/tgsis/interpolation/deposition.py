@@ -167,7 +167,8 @@ def drape(top: Surface, older: Sequence[Surface], *, name: str | None = None) ->
             f"{len(lost)} of {top.n_vertices} vertices of {top.name or 'the top'} have no older surface "
             f"straight beneath them (the first: vertex {int(lost[0])} at x={top.vertices[lost[0], 0]:g}, "
             f"y={top.vertices[lost[0], 1]:g})",
-            hint="give the older surfaces that cover the unit's whole extent (the basement, say)")
+            hint="give the older surfaces that cover the unit's whole extent (the basement, say)",
+        )
     vertices = top.vertices.copy()
     vertices[:, 2] = z
     return Surface(vertices, top.cells, name=name if name is not None else top.name)
@@ -200,9 +201,17 @@ class Deposition:
     settled: float
 
 
-def deposit(top: Surface, beneath: Surface | Sequence[Surface], setup: InterpolationSetup, start: float,
-            end: float, *, name: str | None = None, surfaces: Mapping[str, Surface] | None = None,
-            alive: bool = False) -> Deposition:
+def deposit(
+    top: Surface,
+    beneath: Surface | Sequence[Surface],
+    setup: InterpolationSetup,
+    start: float,
+    end: float,
+    *,
+    name: str | None = None,
+    surfaces: Mapping[str, Surface] | None = None,
+    alive: bool = False,
+) -> Deposition:
     """A unit deposited during [``start``, ``end``]: at ``start`` it is the surface beneath, at ``end`` its top.
 
     As the source design does it: the interpolation runs from the unit's top
@@ -247,8 +256,10 @@ def deposit(top: Surface, beneath: Surface | Sequence[Surface], setup: Interpola
         As :func:`interpolate`.
     """
     if not (np.isfinite(start) and np.isfinite(end) and start < end):
-        raise InvalidInputError(f"a deposition runs from its start to a later end, got start={start}, end={end}",
-                                hint="start is when the unit begins on the surface beneath, end the time of its top")
+        raise InvalidInputError(
+            f"a deposition runs from its start to a later end, got start={start}, end={end}",
+            hint="start is when the unit begins on the surface beneath, end the time of its top",
+        )
     older = [beneath] if isinstance(beneath, Surface) else list(beneath)
     if not older or not all(isinstance(s, Surface) for s in older):
         raise InvalidInputError("beneath must be a Surface or a non-empty sequence of Surface")
@@ -258,21 +269,33 @@ def deposit(top: Surface, beneath: Surface | Sequence[Surface], setup: Interpola
         if tuple(setup.target_controls) != tuple(setup.source_controls):
             raise InvalidInputError(
                 "the target is draped on the top's own triangulation, so the target controls must be the source "
-                f"controls: got {list(setup.source_controls)} and {list(setup.target_controls)}")
+                f"controls: got {list(setup.source_controls)} and {list(setup.target_controls)}"
+            )
         target = drape(top, older)
-    result = interpolate(top, target, setup, end, start, name=name if name is not None else top.name,
-                         surfaces=surfaces, alive=alive)
+    result = interpolate(
+        top, target, setup, end, start, name=name if name is not None else top.name, surfaces=surfaces, alive=alive
+    )
     period = result.evolving.periods[0]
-    positions = period.positions.copy()                            # (m, n, 3), forward in time: [0] at start
+    positions = period.positions.copy()  # (m, n, 3), forward in time: [0] at start
     floor, which = heights_below(positions[0], older)
     on = which >= 0
     settled = float(np.abs(floor[on] - positions[0, on, 2]).max(initial=0.0))
     positions[0, on, 2] = floor[on]
-    evolving = EvolvingSurface([TopologyPeriod(period.times, period.triangles, positions,
-                                               vertex_properties=dict(period.vertex_properties),
-                                               cell_properties=dict(period.cell_properties),
-                                               properties=dict(period.properties))],
-                               alive=alive, name=result.evolving.name, color=result.evolving.color)
+    evolving = EvolvingSurface(
+        [
+            TopologyPeriod(
+                period.times,
+                period.triangles,
+                positions,
+                vertex_properties=dict(period.vertex_properties),
+                cell_properties=dict(period.cell_properties),
+                properties=dict(period.properties),
+            )
+        ],
+        alive=alive,
+        name=result.evolving.name,
+        color=result.evolving.color,
+    )
     return Deposition(evolving, result, float(start), float(end), settled)
 
 
@@ -390,8 +413,14 @@ class _Samples:
         def kind(name: str) -> dict[str, FloatArray]:
             return {k: v for (what, k), v in self.series.items() if what == name}
 
-        return TopologyPeriod(self.times, triangles, self.positions, vertex_properties=kind("vertex"),
-                              cell_properties=kind("cell"), properties=kind("feature"))
+        return TopologyPeriod(
+            self.times,
+            triangles,
+            self.positions,
+            vertex_properties=kind("vertex"),
+            cell_properties=kind("cell"),
+            properties=kind("feature"),
+        )
 
 
 class _Floors:
@@ -438,8 +467,14 @@ class _Floors:
         return dips
 
 
-def keep_above(younger: EvolvingSurface, older: Sequence[EvolvingSurface | Surface], *,
-               tolerance: float = 1e-6, between: float | None = None, max_halvings: int = 10) -> Stacking:
+def keep_above(
+    younger: EvolvingSurface,
+    older: Sequence[EvolvingSurface | Surface],
+    *,
+    tolerance: float = 1e-6,
+    between: float | None = None,
+    max_halvings: int = 10,
+) -> Stacking:
     """Keep a younger surface from passing below older ones: put it on them where it would, and say where.
 
     At every geometry instant of the younger surface, each vertex that lies
@@ -505,8 +540,9 @@ def keep_above(younger: EvolvingSurface, older: Sequence[EvolvingSurface | Surfa
         samples.insert(extra)
         raised_at: dict[float, FloatArray] = {}
 
-        def raise_instants(times: FloatArray, samples: _Samples = samples,
-                           raised_at: dict[float, FloatArray] = raised_at) -> None:
+        def raise_instants(
+            times: FloatArray, samples: _Samples = samples, raised_at: dict[float, FloatArray] = raised_at
+        ) -> None:
             for t in times:
                 j = int(np.searchsorted(samples.times, t))
                 floor, which = floors.at(samples.positions[j], float(t))

@@ -74,12 +74,17 @@ def _patch_arrays(mesh: Surface, patch: Patch) -> tuple[FloatArray, IntArray, In
     ids = np.unique(mesh.cells[patch.triangles])
     local = np.full(mesh.n_vertices, -1, dtype=np.int64)
     local[ids] = np.arange(len(ids))
-    return (mesh.vertices[ids], local[mesh.cells[patch.triangles]], ids.astype(np.int64),
-            local[np.asarray(patch.control_vertices, dtype=np.int64)])
+    return (
+        mesh.vertices[ids],
+        local[mesh.cells[patch.triangles]],
+        ids.astype(np.int64),
+        local[np.asarray(patch.control_vertices, dtype=np.int64)],
+    )
 
 
-def _controlling_surfaces(setup: InterpolationSetup,
-                          loader: Callable[[str], Surface] | None) -> dict[str, ControllingSurface]:
+def _controlling_surfaces(
+    setup: InterpolationSetup, loader: Callable[[str], Surface] | None
+) -> dict[str, ControllingSurface]:
     if not setup.controlling_surfaces:
         return {}
     if loader is None:
@@ -90,6 +95,7 @@ def _controlling_surfaces(setup: InterpolationSetup,
             if not isinstance(mesh, Surface):
                 raise InterpolationSetupError(f"controlling surface {path} is a {type(mesh).__name__}, not a surface")
             return mesh
+
     surfaces = {}
     for name, path in setup.controlling_surfaces.items():
         mesh = elevation(loader(path))  # z up, as the source and target are
@@ -97,8 +103,9 @@ def _controlling_surfaces(setup: InterpolationSetup,
     return surfaces
 
 
-def _values_at(mesh: Surface, values: Mapping[str, npt.NDArray[np.generic]], points: FloatArray,
-               names: list[str]) -> dict[str, FloatArray]:
+def _values_at(
+    mesh: Surface, values: Mapping[str, npt.NDArray[np.generic]], points: FloatArray, names: list[str]
+) -> dict[str, FloatArray]:
     """Vertex property values of ``mesh`` at points on (or next to) it, barycentric in the nearest triangle.
 
     The candidates are the triangles whose centroids are nearest; of those,
@@ -107,31 +114,34 @@ def _values_at(mesh: Surface, values: Mapping[str, npt.NDArray[np.generic]], poi
     """
     from scipy.spatial import cKDTree
 
-    corners = mesh.vertices[mesh.cells]                                   # (m, 3, 3)
+    corners = mesh.vertices[mesh.cells]  # (m, 3, 3)
     k = min(8, len(mesh.cells))
     _, nearest = cKDTree(corners.mean(axis=1)).query(points, k=k)
     nearest = np.asarray(nearest).reshape(len(points), k)
-    a, b, c = (corners[nearest, i] for i in range(3))                     # (p, k, 3) each
+    a, b, c = (corners[nearest, i] for i in range(3))  # (p, k, 3) each
     e0, e1, d = b - a, c - a, points[:, None, :] - a
     d00, d01, d11 = (e0 * e0).sum(-1), (e0 * e1).sum(-1), (e1 * e1).sum(-1)
     d20, d21 = (d * e0).sum(-1), (d * e1).sum(-1)
     det = np.where(np.abs(d00 * d11 - d01 * d01) > 0, d00 * d11 - d01 * d01, 1.0)
     v = (d11 * d20 - d01 * d21) / det
     w = (d00 * d21 - d01 * d20) / det
-    weights = np.stack([1.0 - v - w, v, w], axis=-1)                      # (p, k, 3)
+    weights = np.stack([1.0 - v - w, v, w], axis=-1)  # (p, k, 3)
     clamped = np.clip(weights, 0.0, None)
     clamped /= np.maximum(clamped.sum(-1, keepdims=True), 1e-300)
     foot = (clamped[..., :, None] * np.stack([a, b, c], axis=-2)).sum(-2)
-    best = np.argmin(((points[:, None, :] - foot) ** 2).sum(-1), axis=1)   # (p,)
+    best = np.argmin(((points[:, None, :] - foot) ** 2).sum(-1), axis=1)  # (p,)
     rows = np.arange(len(points))
     chosen, triangle = clamped[rows, best], nearest[rows, best]
     ids = mesh.cells[triangle]
-    return {name: np.asarray((chosen * np.asarray(values[name], dtype=np.float64)[ids]).sum(-1), dtype=np.float64)
-            for name in names}
+    return {
+        name: np.asarray((chosen * np.asarray(values[name], dtype=np.float64)[ids]).sum(-1), dtype=np.float64)
+        for name in names
+    }
 
 
-def _carried_properties(source: Surface, target: Surface, all_vertices: FloatArray, positions: FloatArray,
-                        steps: int) -> tuple[dict[str, FloatArray], tuple[str, ...]]:
+def _carried_properties(
+    source: Surface, target: Surface, all_vertices: FloatArray, positions: FloatArray, steps: int
+) -> tuple[dict[str, FloatArray], tuple[str, ...]]:
     """(m, n) values of the vertex properties both meshes have, linear along each trajectory; and the others' names.
 
     A vertex starts with the source's value (its own, or for a vertex the
@@ -152,10 +162,19 @@ def _carried_properties(source: Surface, target: Surface, all_vertices: FloatArr
     return {name: (1.0 - s) * start[name][None] + s * end[name][None] for name in names}, dropped
 
 
-def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0: float, t1: float, *,
-                name: str | None = None,
-                surfaces: Mapping[str, Surface] | None = None, alive: bool = False,
-                progress: Callable[[int, int], None] | None = None, split: str = "auto") -> Interpolation:
+def interpolate(
+    source: Surface,
+    target: Surface,
+    setup: InterpolationSetup,
+    t0: float,
+    t1: float,
+    *,
+    name: str | None = None,
+    surfaces: Mapping[str, Surface] | None = None,
+    alive: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+    split: str = "auto",
+) -> Interpolation:
     """The surface evolving from ``source`` at ``t0`` to ``target`` at ``t1`` under the set-up's constraints.
 
     Parameters
@@ -204,8 +223,9 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     if split not in ("auto", "centroid"):
         raise InterpolationSetupError(f"split {split!r} is not one of 'auto', 'centroid'")
     if not (np.isfinite(t0) and np.isfinite(t1) and t0 != t1):
-        raise InterpolationSetupError(f"the source and target times must be two different finite times, "
-                                      f"got t0={t0}, t1={t1}")
+        raise InterpolationSetupError(
+            f"the source and target times must be two different finite times, got t0={t0}, t1={t1}"
+        )
     # z up, as stored: a ZPOSITIVE Depth mesh (a GOCAD file, a fetched feature) negated, so that meshes of two
     # conventions morph into each other and the evolving surface is stored as the shape it is (not mirrored)
     source, target = elevation(source), elevation(target)
@@ -232,9 +252,15 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         source = cut.surface
     lap("cut")
     # 3. partition and pairing
-    pairing = partition_pair(source, target, list(setup.source_controls), list(setup.target_controls),
-                             [list(p) for p in setup.source_fences], [list(p) for p in setup.target_fences],
-                             source_fence_names=list(setup.fence_names) if setup.fence_names else None)
+    pairing = partition_pair(
+        source,
+        target,
+        list(setup.source_controls),
+        list(setup.target_controls),
+        [list(p) for p in setup.source_fences],
+        [list(p) for p in setup.target_fences],
+        source_fence_names=list(setup.fence_names) if setup.fence_names else None,
+    )
     steps[1] = 4 + len(pairing.pairs)
     lap("partition")
     # 4. compatible patches, stitched along the fences they share
@@ -254,10 +280,10 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
         added = len(result.source_vertices) - len(s_ids)
         first_new = n + sum(len(v) for v in extra_vertices)
         to_global = np.concatenate([s_ids, first_new + np.arange(added, dtype=np.int64)])
-        extra_vertices.append(result.source_vertices[len(s_ids):])
+        extra_vertices.append(result.source_vertices[len(s_ids) :])
         known = ~np.isnan(positions[s_ids, 0])  # fence vertices placed by a patch before: the patches agree there
         positions[s_ids[~known]] = result.target_positions[: len(s_ids)][~known]
-        positions = np.concatenate([positions, result.target_positions[len(s_ids):]])
+        positions = np.concatenate([positions, result.target_positions[len(s_ids) :]])
         triangles.append(to_global[result.triangles])
         step()
     lap("compatible")
@@ -269,22 +295,45 @@ def interpolate(source: Surface, target: Surface, setup: InterpolationSetup, t0:
     # 5. trajectories, with attachments
     named = _controlling_surfaces(setup, (lambda path: _named_surface(surfaces, path, setup)) if surfaces else None)
     attachments = {a.vertex: [named[s] for s in a.surfaces] for a in setup.attachments}
-    samples = vertex_trajectories(all_vertices, positions, cells, setup.steps, attachments or None,
-                                  controls=list(setup.source_controls))
+    samples = vertex_trajectories(
+        all_vertices, positions, cells, setup.steps, attachments or None, controls=list(setup.source_controls)
+    )
     lap("trajectories")
     carried, dropped = _carried_properties(source, target, all_vertices, positions, setup.steps)
     # samples run from the source (t0) to the target (t1); an evolving surface runs forward in time
     forward = evolving_surface(cells, samples, min(t0, t1), max(t0, t1), name=name, alive=alive)
     order = slice(None) if t0 < t1 else slice(None, None, -1)
     period = forward.periods[0]
-    evolving = EvolvingSurface([TopologyPeriod(period.times, cells, samples[order].copy(),
-                                               vertex_properties={k: v[order].copy() for k, v in carried.items()})],
-                               name=name, alive=alive)
+    evolving = EvolvingSurface(
+        [
+            TopologyPeriod(
+                period.times,
+                cells,
+                samples[order].copy(),
+                vertex_properties={k: v[order].copy() for k, v in carried.items()},
+            )
+        ],
+        name=name,
+        alive=alive,
+    )
     lap("evolving")
-    log.info("interpolated %d vertices, %d triangles, %d patches, m = %d: %s", len(all_vertices), len(cells),
-             len(pairing.pairs), setup.steps, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
-    return Interpolation(Surface(all_vertices, cells, name=source.name), Surface(positions, cells, name=target.name),
-                         samples, evolving, error, timings, dropped)
+    log.info(
+        "interpolated %d vertices, %d triangles, %d patches, m = %d: %s",
+        len(all_vertices),
+        len(cells),
+        len(pairing.pairs),
+        setup.steps,
+        ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()),
+    )
+    return Interpolation(
+        Surface(all_vertices, cells, name=source.name),
+        Surface(positions, cells, name=target.name),
+        samples,
+        evolving,
+        error,
+        timings,
+        dropped,
+    )
 
 
 def _named_surface(surfaces: Mapping[str, Surface] | None, path: str, setup: InterpolationSetup) -> Surface:
@@ -293,12 +342,15 @@ def _named_surface(surfaces: Mapping[str, Surface] | None, path: str, setup: Int
     for name, file in setup.controlling_surfaces.items():
         if file == path and name in surfaces:
             return surfaces[name]
-    raise InterpolationSetupError(f"no controlling surface given for {path}",
-                                  hint=f"pass surfaces={{name: Surface}} for {sorted(setup.controlling_surfaces)}")
+    raise InterpolationSetupError(
+        f"no controlling surface given for {path}",
+        hint=f"pass surfaces={{name: Surface}} for {sorted(setup.controlling_surfaces)}",
+    )
 
 
-def average_shape(first: Surface, second: Surface, setup: InterpolationSetup,
-                  surfaces: Mapping[str, Surface] | None = None) -> Surface:
+def average_shape(
+    first: Surface, second: Surface, setup: InterpolationSetup, surfaces: Mapping[str, Surface] | None = None
+) -> Surface:
     """The "average" of two versions of a surface: their interpolation at the middle time (manual conflict solving).
 
     Returns

@@ -33,9 +33,22 @@ from tgsis.errors import InvalidInputError
 from tgsis.interpolation._arrays import as_points, as_triangles, interior_mask
 from tgsis.interpolation.projection import ClosestPoints, closest_points
 
-__all__ = ["ParameterizationError", "WeightPattern", "mean_value_weights", "border_loop", "polygon_corners",
-           "Parameterization", "mean_value_embedding", "parameterize_patch", "PointLocator", "locate_points", "CompatiblePatch",
-           "compatible_patch", "mesh_error", "sparse_solve"]
+__all__ = [
+    "ParameterizationError",
+    "WeightPattern",
+    "mean_value_weights",
+    "border_loop",
+    "polygon_corners",
+    "Parameterization",
+    "mean_value_embedding",
+    "parameterize_patch",
+    "PointLocator",
+    "locate_points",
+    "CompatiblePatch",
+    "compatible_patch",
+    "mesh_error",
+    "sparse_solve",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -49,7 +62,6 @@ class ParameterizationError(InvalidInputError):
     """A patch that cannot be parameterised (not a disk, bad control vertices, degenerate triangles) or a
     compatible mesh that cannot be built (points outside the target's parameter domain, refinement that does
     not reach the tolerance)."""
-
 
 
 # --------------------------------------------------------------------------- weights
@@ -95,8 +107,9 @@ class WeightPattern:
         return csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
 
-def mean_value_data(vertices: FloatArray, triangles: IntArray, pattern: WeightPattern,
-                    needed: npt.NDArray[np.bool_] | None = None) -> FloatArray:
+def mean_value_data(
+    vertices: FloatArray, triangles: IntArray, pattern: WeightPattern, needed: npt.NDArray[np.bool_] | None = None
+) -> FloatArray:
     """Mean value coordinates λ_ij as the value array (nnz,) of ``pattern``; rows sum to 1.
 
     w_ij = (tan(α_{j-1}/2) + tan(α_j/2)) / |v_j - v_i|, λ_ij = w_ij / Σ_k w_ik,
@@ -133,8 +146,10 @@ def mean_value_data(vertices: FloatArray, triangles: IntArray, pattern: WeightPa
         fatal = bad if needed is None else bad & np.any(needed[triangles], axis=1)
         if np.any(fatal):
             t = int(np.argmax(fatal))
-            raise ParameterizationError(f"triangle {t} {triangles[t].tolist()} is degenerate (zero length or area): "
-                                        "mean value weights are undefined")
+            raise ParameterizationError(
+                f"triangle {t} {triangles[t].tolist()} is degenerate (zero length or area): "
+                "mean value weights are undefined"
+            )
     with np.errstate(invalid="ignore", divide="ignore"):
         half_tan = np.where(bad[:, None], 0.0, cross / denominator)  # (m, 3): tan(α/2) at each corner
         # contributions in the order of _ROW/_COL: (a,b) (a,c) (b,c) (b,a) (c,a) (c,b)
@@ -188,8 +203,9 @@ def sparse_solve(matrix: csc_matrix, rhs: FloatArray) -> FloatArray:
         A singular matrix.
     """
     try:
-        lu = splu(csc_matrix(matrix), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
+        lu = splu(
+            csc_matrix(matrix), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+        )
     except RuntimeError as exc:
         raise ParameterizationError(f"sparse system cannot be solved: {exc}") from exc
     result: FloatArray = lu.solve(np.ascontiguousarray(rhs))
@@ -207,8 +223,10 @@ def _directed_edges(tri: IntArray, n: int) -> tuple[IntArray, IntArray]:
     order = np.sort(keys)
     if np.any(order[1:] == order[:-1]):
         key = int(order[1:][order[1:] == order[:-1]][0])
-        raise ParameterizationError(f"edge ({key // n}, {key % n}) is used twice in the same direction: "
-                                    "triangles not consistently oriented, or an edge with more than two triangles")
+        raise ParameterizationError(
+            f"edge ({key // n}, {key % n}) is used twice in the same direction: "
+            "triangles not consistently oriented, or an edge with more than two triangles"
+        )
     return a, b
 
 
@@ -249,8 +267,9 @@ def border_loop(triangles: npt.ArrayLike, n: int | None = None) -> IntArray:
         raise ParameterizationError("the patch has no border (a closed surface is not a disk)")
     outgoing = np.bincount(start, minlength=count)
     if np.any(outgoing > 1):
-        raise ParameterizationError(f"the border touches itself at vertex {int(np.argmax(outgoing > 1))}: "
-                                    "the patch is not a disk")
+        raise ParameterizationError(
+            f"the border touches itself at vertex {int(np.argmax(outgoing > 1))}: the patch is not a disk"
+        )
     following = np.full(count, -1, dtype=np.int64)
     following[start] = end
     first = int(start.min())
@@ -260,13 +279,16 @@ def border_loop(triangles: npt.ArrayLike, n: int | None = None) -> IntArray:
         loop.append(current)
         current = int(following[current])
     if len(loop) != len(start):
-        raise ParameterizationError(f"the border has several loops ({len(loop)} of {len(start)} border edges in the "
-                                    "first): the patch has holes or several parts")
+        raise ParameterizationError(
+            f"the border has several loops ({len(loop)} of {len(start)} border edges in the "
+            "first): the patch has holes or several parts"
+        )
     used = np.unique(tri).size
     edges = (len(keys) + len(start)) // 2
     if used - edges + len(tri) != 1:
-        raise ParameterizationError(f"the patch is not a disk: Euler characteristic {used - edges + len(tri)} "
-                                    "(a disk has 1)")
+        raise ParameterizationError(
+            f"the patch is not a disk: Euler characteristic {used - edges + len(tri)} (a disk has 1)"
+        )
     return np.asarray(loop, dtype=np.int64)
 
 
@@ -290,8 +312,9 @@ def _ordered_border(loop: IntArray, controls: IntArray, n: int) -> IntArray:
     where[loop] = np.arange(len(loop))
     position = where[controls]
     if np.any(position < 0):
-        raise ParameterizationError(f"control vertex {int(controls[np.argmax(position < 0)])} is not on the border "
-                                    "of the patch")
+        raise ParameterizationError(
+            f"control vertex {int(controls[np.argmax(position < 0)])} is not on the border of the patch"
+        )
     b = len(loop)
     forward = (position - position[0]) % b
     backward = (position[0] - position) % b
@@ -316,8 +339,9 @@ def _chord_border(xyz: FloatArray, border: IntArray, controls: IntArray) -> Floa
     side_length = np.diff(np.append(side_start, cumulative[-1]))
     if np.any(side_length <= 0):
         i = int(np.argmax(side_length <= 0))
-        raise ParameterizationError(f"border path from control vertex {int(controls[i])} to "
-                                    f"{int(controls[(i + 1) % k])} has zero length")
+        raise ParameterizationError(
+            f"border path from control vertex {int(controls[i])} to {int(controls[(i + 1) % k])} has zero length"
+        )
     s = (cumulative[:-1] - side_start[side]) / side_length[side]
     result: FloatArray = corners[side] + s[:, None] * (corners[(side + 1) % k] - corners[side])
     result[is_control[border]] = corners  # exactly the corners
@@ -366,8 +390,9 @@ def _split_system(weights: csr_matrix, interior: IntArray, border: IntArray) -> 
     return a, csr_matrix(rows[:, border])
 
 
-def mean_value_embedding(vertices: npt.ArrayLike, triangles: npt.ArrayLike, fixed: npt.ArrayLike,
-                         values: npt.ArrayLike) -> FloatArray:
+def mean_value_embedding(
+    vertices: npt.ArrayLike, triangles: npt.ArrayLike, fixed: npt.ArrayLike, values: npt.ArrayLike
+) -> FloatArray:
     """Values at every vertex: given at ``fixed`` vertices, elsewhere the mean value combination of the neighbours.
 
     Solves x_i = Σ_j λ_ij x_j for every free vertex i (λ: :func:`mean_value_weights`
@@ -400,8 +425,9 @@ def mean_value_embedding(vertices: npt.ArrayLike, triangles: npt.ArrayLike, fixe
     where = np.ascontiguousarray(fixed, dtype=np.int64).ravel()
     given = np.asarray(values, dtype=np.float64)
     if given.shape[:1] != where.shape or given.ndim not in (1, 2) or not np.all(np.isfinite(given)):
-        raise ParameterizationError(f"values must be finite with shape ({len(where)},) or ({len(where)}, d), "
-                                    f"got {given.shape}")
+        raise ParameterizationError(
+            f"values must be finite with shape ({len(where)},) or ({len(where)}, d), got {given.shape}"
+        )
     if len(where) and (where.min() < 0 or where.max() >= n):
         raise ParameterizationError(f"fixed vertices must be vertex indices 0..{n - 1}")
     is_fixed = np.zeros(n, dtype=bool)
@@ -473,6 +499,7 @@ def _barycentric(points: FloatArray, corners: FloatArray) -> FloatArray:
 
     A point equal to a corner gets exactly 1 there and 0 elsewhere.
     """
+
     def area(p: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray:
         result: FloatArray = (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
         return result
@@ -480,7 +507,9 @@ def _barycentric(points: FloatArray, corners: FloatArray) -> FloatArray:
     a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
     total = area(a, b, c)
     with np.errstate(invalid="ignore", divide="ignore"):
-        result: FloatArray = np.stack([area(points, b, c), area(a, points, c), area(a, b, points)], axis=1) / total[:, None]
+        result: FloatArray = (
+            np.stack([area(points, b, c), area(a, points, c), area(a, b, points)], axis=1) / total[:, None]
+        )
     return result
 
 
@@ -571,7 +600,7 @@ class PointLocator:
         counts = self.cell_start[cell + 1] - self.cell_start[cell]
         step = max(1, (1 << 21) // max(1, int(counts.max())))
         for s in range(0, p, step):
-            c, k = cell[s:s + step], counts[s:s + step]
+            c, k = cell[s : s + step], counts[s : s + step]
             rows = np.repeat(np.arange(s, s + len(c), dtype=np.int64), k)
             offset = np.arange(int(k.sum()), dtype=np.int64) - np.repeat(np.cumsum(k) - k, k)
             cand = self.cell_triangles[self.cell_start[c].repeat(k) + offset]
@@ -594,8 +623,9 @@ class PointLocator:
         return triangle, bary, distance
 
 
-def locate_points(points: npt.ArrayLike, uv: npt.ArrayLike, triangles: npt.ArrayLike,
-                  tolerance: float | None = None) -> tuple[IntArray, FloatArray]:
+def locate_points(
+    points: npt.ArrayLike, uv: npt.ArrayLike, triangles: npt.ArrayLike, tolerance: float | None = None
+) -> tuple[IntArray, FloatArray]:
     """Triangle (p,) and barycentric coordinates (p, 3) of 2D points in a 2D mesh; -1 where outside.
 
     See :class:`PointLocator`.
@@ -607,9 +637,9 @@ def locate_points(points: npt.ArrayLike, uv: npt.ArrayLike, triangles: npt.Array
 # --------------------------------------------------------------------------- compatible meshes
 
 
-
-def mesh_error(a_vertices: npt.ArrayLike, a_triangles: npt.ArrayLike, b_vertices: npt.ArrayLike,
-               b_triangles: npt.ArrayLike) -> float:
+def mesh_error(
+    a_vertices: npt.ArrayLike, a_triangles: npt.ArrayLike, b_vertices: npt.ArrayLike, b_triangles: npt.ArrayLike
+) -> float:
     """The error between meshes A and B: the larger of the largest distance from an interior vertex of A to B
     and from an interior vertex of B to A (border vertices are not counted).
 
@@ -667,14 +697,17 @@ def _map_to_target(uv: FloatArray, locator: PointLocator, target_xyz: FloatArray
     triangle, bary, _ = locator.locate(uv)
     if np.any(triangle < 0):
         i = int(np.argmax(triangle < 0))
-        raise ParameterizationError(f"{int(np.sum(triangle < 0))} parameter points fall outside the target's "
-                                    f"parameter mesh (first: {uv[i].tolist()})")
+        raise ParameterizationError(
+            f"{int(np.sum(triangle < 0))} parameter points fall outside the target's "
+            f"parameter mesh (first: {uv[i].tolist()})"
+        )
     result: FloatArray = np.einsum("pk,pkj->pj", bary, target_xyz[locator.triangles[triangle]])
     return result
 
 
-def _plan_splits(tri: IntArray, lengths: FloatArray, held: IntArray, order: IntArray,
-                 method: str) -> tuple[IntArray, IntArray, IntArray]:
+def _plan_splits(
+    tri: IntArray, lengths: FloatArray, held: IntArray, order: IntArray, method: str
+) -> tuple[IntArray, IntArray, IntArray]:
     """Which triangles to split at their centroid and which interior edges at their midpoint, this round.
 
     ``held`` (f,) are the triangles holding the closest points of the target
@@ -718,8 +751,11 @@ def _plan_splits(tri: IntArray, lengths: FloatArray, held: IntArray, order: IntA
                 continue
         used[t] = True
         centroid.append(t)
-    return (np.asarray(centroid, dtype=np.int64), np.asarray(edges, dtype=np.int64).reshape(-1, 2),
-            np.asarray(owners, dtype=np.int64).reshape(-1, 2))
+    return (
+        np.asarray(centroid, dtype=np.int64),
+        np.asarray(edges, dtype=np.int64).reshape(-1, 2),
+        np.asarray(owners, dtype=np.int64).reshape(-1, 2),
+    )
 
 
 def _split_edges(tri: IntArray, edges: IntArray, owners: IntArray, new: IntArray) -> IntArray:
@@ -742,28 +778,48 @@ def _split_edges(tri: IntArray, edges: IntArray, owners: IntArray, new: IntArray
     return np.concatenate([tri, *added])
 
 
-def _refinement_error(error: float, tolerance: float, rounds: int, to_source: ClosestPoints,
-                      to_target: FloatArray, target_index: IntArray, tri: IntArray,
-                      is_interior: npt.NDArray[np.bool_]) -> ParameterizationError:
+def _refinement_error(
+    error: float,
+    tolerance: float,
+    rounds: int,
+    to_source: ClosestPoints,
+    to_target: FloatArray,
+    target_index: IntArray,
+    tri: IntArray,
+    is_interior: npt.NDArray[np.bool_],
+) -> ParameterizationError:
     """What to say when refinement stops above the tolerance: which vertex, and why if it can be told."""
-    head = (f"the compatible mesh is still {error:.6g} from the target after {rounds} refinement rounds "
-            f"(tolerance {tolerance:.6g})")
+    head = (
+        f"the compatible mesh is still {error:.6g} from the target after {rounds} refinement rounds "
+        f"(tolerance {tolerance:.6g})"
+    )
     if to_source.distances.max(initial=0.0) < to_target.max(initial=0.0):
         return ParameterizationError(f"{head}: compatible vertices off the target (numerical trouble)")
     worst = int(np.argmax(to_source.distances))
-    where = (f"; the farthest is target vertex {int(target_index[worst])} at "
-             f"{np.round(to_source.points[worst], 6).tolist()}")
+    where = (
+        f"; the farthest is target vertex {int(target_index[worst])} at {np.round(to_source.points[worst], 6).tolist()}"
+    )
     if not np.all(is_interior[tri[to_source.triangles[worst]]]):
         return ParameterizationError(
             head + where + ", next to the patch border",
             hint="refinement never splits patch borders (the neighbouring patch must still match): give the source "
-                 "border more vertices where the target's border bends, or raise the tolerance")
+            "border more vertices where the target's border bends, or raise the tolerance",
+        )
     return ParameterizationError(head + where, hint="raise the tolerance or the number of rounds")
 
 
-def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.ArrayLike, source_controls: npt.ArrayLike,
-                     target_vertices: npt.ArrayLike, target_triangles: npt.ArrayLike, target_controls: npt.ArrayLike,
-                     tolerance: float, *, max_rounds: int = 30, split: str = "auto") -> CompatiblePatch:
+def compatible_patch(
+    source_vertices: npt.ArrayLike,
+    source_triangles: npt.ArrayLike,
+    source_controls: npt.ArrayLike,
+    target_vertices: npt.ArrayLike,
+    target_triangles: npt.ArrayLike,
+    target_controls: npt.ArrayLike,
+    tolerance: float,
+    *,
+    max_rounds: int = 30,
+    split: str = "auto",
+) -> CompatiblePatch:
     """The compatible mesh of a source patch on a target patch, refined until the error is at most ``tolerance``.
 
     Both patches are parameterised onto the same polygon (source control i
@@ -858,7 +914,12 @@ def compatible_patch(source_vertices: npt.ArrayLike, source_triangles: npt.Array
         positions = np.concatenate([positions, _map_to_target(uv[n:], locator, tx)])
         tri = tri.copy()
         tri[centroid] = np.stack([old[:, 0], old[:, 1], at_centroid], axis=1)
-        tri = np.concatenate([tri, np.stack([old[:, 1], old[:, 2], at_centroid], axis=1),
-                              np.stack([old[:, 2], old[:, 0], at_centroid], axis=1)])
+        tri = np.concatenate(
+            [
+                tri,
+                np.stack([old[:, 1], old[:, 2], at_centroid], axis=1),
+                np.stack([old[:, 2], old[:, 0], at_centroid], axis=1),
+            ]
+        )
         tri = _split_edges(tri, edges, owners, at_middle)
         is_interior = np.concatenate([is_interior, np.ones(len(xyz) - n, dtype=bool)])

@@ -25,8 +25,7 @@ from tgsis.interpolation.errors import InterpolationSetupError
 from tgsis.interpolation.topology import MeshTopology, check_disk, few, mesh_topology, named
 from tgsis.mesh import Surface
 
-__all__ = ["Patch", "Partition", "PatchPair", "PartitionPairing", "partition_surface", "pair_patches",
-           "partition_pair"]
+__all__ = ["Patch", "Partition", "PatchPair", "PartitionPairing", "partition_surface", "pair_patches", "partition_pair"]
 
 IntArray = npt.NDArray[np.int64]
 
@@ -128,8 +127,10 @@ class PartitionPairing:
 
 
 def _patch_label(mesh_name: str, index: int, triangles: IntArray, controls: IntArray) -> str:
-    return (f"{mesh_name} patch {index} (triangles {few(triangles, 4)}; "
-            f"control vertices [{', '.join(str(v) for v in controls.tolist())}])")
+    return (
+        f"{mesh_name} patch {index} (triangles {few(triangles, 4)}; "
+        f"control vertices [{', '.join(str(v) for v in controls.tolist())}])"
+    )
 
 
 def partition_surface(
@@ -183,10 +184,12 @@ def partition_surface(
         same = np.flatnonzero(inner & (labels[sides[:, 0]] == labels[np.where(inner, sides[:, 1], 0)]))
         if same.size:
             a, b = topo.edges[e[same[0]]].tolist()
-            problems.append(f"{fence_label(mesh_name, i, fence_names)} separates nothing: both sides of its edge "
-                            f"({a}, {b}) are in {mesh_name} patch {labels[sides[same[0], 0]]}"
-                            + (f" ({same.size} of its edges are so)" if same.size > 1 else "")
-                            + "; a fence path must run from border to border or between other fence paths")
+            problems.append(
+                f"{fence_label(mesh_name, i, fence_names)} separates nothing: both sides of its edge "
+                f"({a}, {b}) are in {mesh_name} patch {labels[sides[same[0], 0]]}"
+                + (f" ({same.size} of its edges are so)" if same.size > 1 else "")
+                + "; a fence path must run from border to border or between other fence paths"
+            )
 
     control_index = np.full(topo.n_vertices, -1, dtype=np.int64)
     control_index[controls] = np.arange(len(controls))
@@ -194,7 +197,7 @@ def partition_surface(
     bounds = np.concatenate([[0], np.cumsum(np.bincount(labels, minlength=count))])
     patches: list[Patch] = []
     for p in range(count):
-        tris = np.sort(order[bounds[p]:bounds[p + 1]])
+        tris = np.sort(order[bounds[p] : bounds[p + 1]])
         used, local = np.unique(topo.triangles[tris], return_inverse=True)
         patch_controls = used[control_index[used] >= 0]
         patch_controls = patch_controls[np.argsort(control_index[patch_controls])]
@@ -210,24 +213,37 @@ def partition_surface(
             inside = np.setdiff1d(patch_controls, border)
             problems.append(f"{label}: {named('control vertex', inside)} inside the patch, not on its border")
         if len(patch_controls) < 3:
-            problems.append(f"{label} has {len(patch_controls)} control vertices: a patch needs at least 3 "
-                            "(the corners of its polygon)")
+            problems.append(
+                f"{label} has {len(patch_controls)} control vertices: a patch needs at least 3 "
+                "(the corners of its polygon)"
+            )
         if problems:
             continue
         start = int(np.flatnonzero(border == patch_controls[0])[0])
         border = np.roll(border, -start)
         corners = np.flatnonzero(control_index[border] >= 0).astype(np.int64)
-        patches.append(Patch(p, tris.astype(np.int64), used.astype(np.int64), border.astype(np.int64), corners,
-                             border[corners], control_index[border[corners]]))
+        patches.append(
+            Patch(
+                p,
+                tris.astype(np.int64),
+                used.astype(np.int64),
+                border.astype(np.int64),
+                corners,
+                border[corners],
+                control_index[border[corners]],
+            )
+        )
     if problems:
         raise InterpolationSetupError.collect(f"{mesh_name} partition", problems)
     return Partition(mesh_name, controls, paths, labels, tuple(patches))
 
 
 def _describe(patch: Patch, partition: Partition) -> str:
-    return (f"{partition.mesh_name} patch {patch.index} (control vertex pairs "
-            f"[{', '.join(str(v) for v in patch.control_indices.tolist())}], {partition.mesh_name} vertices "
-            f"[{', '.join(str(v) for v in patch.control_vertices.tolist())}])")
+    return (
+        f"{partition.mesh_name} patch {patch.index} (control vertex pairs "
+        f"[{', '.join(str(v) for v in patch.control_indices.tolist())}], {partition.mesh_name} vertices "
+        f"[{', '.join(str(v) for v in patch.control_vertices.tolist())}])"
+    )
 
 
 def pair_patches(source: Partition, target: Partition) -> tuple[PatchPair, ...]:
@@ -254,24 +270,32 @@ def pair_patches(source: Partition, target: Partition) -> tuple[PatchPair, ...]:
     if len(source.control_vertices) != len(target.control_vertices):
         raise InterpolationSetupError(
             f"{source.mesh_name} has {len(source.control_vertices)} control vertices and {target.mesh_name} "
-            f"{len(target.control_vertices)}: control vertices pair up by position in the two sequences")
+            f"{len(target.control_vertices)}: control vertices pair up by position in the two sequences"
+        )
     problems: list[str] = []
     if len(source.patches) != len(target.patches):
+
         def listing(part: Partition) -> str:
-            return "; ".join(f"{q.index}: [{', '.join(str(v) for v in q.control_indices.tolist())}]"
-                             for q in part.patches)
-        problems.append(f"{source.mesh_name} has {len(source.patches)} patches and {target.mesh_name} "
-                        f"{len(target.patches)}: every patch needs a counterpart (control vertex pairs of each "
-                        f"{source.mesh_name} patch {listing(source)}; {target.mesh_name} patch {listing(target)})")
+            return "; ".join(
+                f"{q.index}: [{', '.join(str(v) for v in q.control_indices.tolist())}]" for q in part.patches
+            )
+
+        problems.append(
+            f"{source.mesh_name} has {len(source.patches)} patches and {target.mesh_name} "
+            f"{len(target.patches)}: every patch needs a counterpart (control vertex pairs of each "
+            f"{source.mesh_name} patch {listing(source)}; {target.mesh_name} patch {listing(target)})"
+        )
 
     def keyed(part: Partition) -> dict[tuple[int, ...], Patch]:
         found: dict[tuple[int, ...], Patch] = {}
         for q in part.patches:
             key = tuple(q.control_indices.tolist())  # starts at its smallest pair: a canonical rotation
             if key in found:
-                problems.append(f"{_describe(found[key], part)} and {part.mesh_name} patch {q.index} have the "
-                                "same control vertex pairs in the same order: cannot tell which patch pairs with "
-                                "which; add a control vertex to one of them")
+                problems.append(
+                    f"{_describe(found[key], part)} and {part.mesh_name} patch {q.index} have the "
+                    "same control vertex pairs in the same order: cannot tell which patch pairs with "
+                    "which; add a control vertex to one of them"
+                )
             found.setdefault(key, q)
         return found
 
@@ -290,18 +314,21 @@ def pair_patches(source: Partition, target: Partition) -> tuple[PatchPair, ...]:
         if same_set:
             t = same_set[0]
             reversed_order = tuple(np.roll(t.control_indices[::-1], 1).tolist()) == key
-            problems.append(f"{_describe(q, source)} and {_describe(t, target)} have the same control vertex pairs "
-                            "in a different cyclic order along their borders"
-                            + (" (reversed: are the triangles of one mesh oriented the other way?)"
-                               if reversed_order else ""))
+            problems.append(
+                f"{_describe(q, source)} and {_describe(t, target)} have the same control vertex pairs "
+                "in a different cyclic order along their borders"
+                + (" (reversed: are the triangles of one mesh oriented the other way?)" if reversed_order else "")
+            )
             matched.add(t.index)
         else:
-            problems.append(f"{_describe(q, source)} has no {target.mesh_name} patch with the same control "
-                            "vertex pairs")
+            problems.append(
+                f"{_describe(q, source)} has no {target.mesh_name} patch with the same control vertex pairs"
+            )
     for t in target.patches:
         if t.index not in matched:
-            problems.append(f"{_describe(t, target)} has no {source.mesh_name} patch with the same control "
-                            "vertex pairs")
+            problems.append(
+                f"{_describe(t, target)} has no {source.mesh_name} patch with the same control vertex pairs"
+            )
     if problems:
         raise InterpolationSetupError.collect("patch pairing", problems)
     return tuple(pairs)
@@ -342,13 +369,15 @@ def partition_pair(
     problems: list[str] = []
     n_source, n_target = np.size(source_controls), np.size(target_controls)
     if n_source != n_target:
-        problems.append(f"source has {n_source} control vertices and target {n_target}: control vertices pair "
-                        "up by position in the two sequences")
+        problems.append(
+            f"source has {n_source} control vertices and target {n_target}: control vertices pair "
+            "up by position in the two sequences"
+        )
     parts: list[Partition] = []
-    for mesh, controls, fences, names, name in ((source, source_controls, source_fences, source_fence_names,
-                                                 "source"),
-                                                (target, target_controls, target_fences, target_fence_names,
-                                                 "target")):
+    for mesh, controls, fences, names, name in (
+        (source, source_controls, source_fences, source_fence_names, "source"),
+        (target, target_controls, target_fences, target_fence_names, "target"),
+    ):
         try:
             parts.append(partition_surface(mesh, controls, fences, fence_names=names, mesh_name=name))
         except InterpolationSetupError as exc:

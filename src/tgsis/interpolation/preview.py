@@ -18,8 +18,14 @@ from tgsis.temporal import EvolvingSurface
 __all__ = ["write_previews"]
 
 
-def write_previews(evolving: EvolvingSurface, times: Sequence[float], folder: str | Path, *,
-                   stem: str = "frame", max_triangles: int = 60_000) -> list[Path]:
+def write_previews(
+    evolving: EvolvingSurface,
+    times: Sequence[float],
+    folder: str | Path,
+    *,
+    stem: str = "frame",
+    max_triangles: int = 60_000,
+) -> list[Path]:
     """Write ``<stem>_<i>.png`` in ``folder`` (created) for each time; returns the paths.
 
     Parameters
@@ -51,8 +57,16 @@ def write_previews(evolving: EvolvingSurface, times: Sequence[float], folder: st
         axes = figure.add_subplot(projection="3d")
         if shape is not None and shape.n_cells:
             cells = shape.cells[:: max(1, shape.n_cells // max_triangles)]
-            axes.plot_trisurf(shape.vertices[:, 0], shape.vertices[:, 1], shape.vertices[:, 2], triangles=cells,
-                              cmap="viridis", vmin=low[2], vmax=high[2], linewidth=0)
+            axes.plot_trisurf(
+                shape.vertices[:, 0],
+                shape.vertices[:, 1],
+                shape.vertices[:, 2],
+                triangles=cells,
+                cmap="viridis",
+                vmin=low[2],
+                vmax=high[2],
+                linewidth=0,
+            )
         axes.set_xlim(low[0], high[0])
         axes.set_ylim(low[1], high[1])
         axes.set_zlim(low[2], high[2] if high[2] > low[2] else low[2] + 1)

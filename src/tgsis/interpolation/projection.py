@@ -28,8 +28,14 @@ from scipy.spatial import cKDTree
 from tgsis.errors import InvalidInputError
 from tgsis.interpolation._arrays import as_points
 
-__all__ = ["ProjectionError", "ClosestPoints", "closest_points", "ControllingSurface", "IntersectionCurve",
-           "intersection_curve"]
+__all__ = [
+    "ProjectionError",
+    "ClosestPoints",
+    "closest_points",
+    "ControllingSurface",
+    "IntersectionCurve",
+    "intersection_curve",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -46,7 +52,6 @@ class ProjectionError(InvalidInputError):
 def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     result: FloatArray = np.einsum("ij,ij->i", a, b)
     return result
-
 
 
 def _as_mesh(vertices: npt.ArrayLike, triangles: npt.ArrayLike, what: str) -> tuple[FloatArray, IntArray]:
@@ -143,8 +148,9 @@ class _Nearest:
     closest : callable (points (q, 3), primitive indices (q,)) -> (q, 3)
     """
 
-    def __init__(self, centres: FloatArray, radii: FloatArray,
-                 closest: Callable[[FloatArray, IntArray], FloatArray]) -> None:
+    def __init__(
+        self, centres: FloatArray, radii: FloatArray, closest: Callable[[FloatArray, IntArray], FloatArray]
+    ) -> None:
         self.centres = centres
         self.radii = radii
         self.closest = closest
@@ -168,14 +174,20 @@ class _Nearest:
         index = np.zeros(n, dtype=np.int64)
         step = max(1, _CHUNK_PAIRS // 16)
         for start in range(0, n, step):
-            block = points[start:start + step]
+            block = points[start : start + step]
             _, seeds = self.tree.query(block, k=k)
             seeds = np.asarray(seeds, dtype=np.int64).reshape(len(block), k)
             rows = np.repeat(np.arange(len(block)), k)
-            self._update(block, rows, seeds.ravel(), best[start:start + step], dist[start:start + step],
-                         index[start:start + step])
+            self._update(
+                block,
+                rows,
+                seeds.ravel(),
+                best[start : start + step],
+                dist[start : start + step],
+                index[start : start + step],
+            )
             for tree, members, largest in self.classes:
-                bound = dist[start:start + step] * (1 + 1e-12)
+                bound = dist[start : start + step] * (1 + 1e-12)
                 rows, local = _pairs_within(tree, block, bound + largest)
                 cols = members[local]
                 # lower bound |p - centre| - radius must not exceed the best distance found
@@ -183,12 +195,19 @@ class _Nearest:
                 keep = gap <= bound[rows]
                 rows, cols = rows[keep], cols[keep]
                 for s in range(0, len(rows), _CHUNK_PAIRS):
-                    self._update(block, rows[s:s + _CHUNK_PAIRS], cols[s:s + _CHUNK_PAIRS],
-                                 best[start:start + step], dist[start:start + step], index[start:start + step])
+                    self._update(
+                        block,
+                        rows[s : s + _CHUNK_PAIRS],
+                        cols[s : s + _CHUNK_PAIRS],
+                        best[start : start + step],
+                        dist[start : start + step],
+                        index[start : start + step],
+                    )
         return best, dist, index
 
-    def _update(self, block: FloatArray, rows: IntArray, cols: IntArray, best: FloatArray, dist: FloatArray,
-                index: IntArray) -> None:
+    def _update(
+        self, block: FloatArray, rows: IntArray, cols: IntArray, best: FloatArray, dist: FloatArray, index: IntArray
+    ) -> None:
         """Improve best/dist/index (views of one block) with the candidate pairs (rows, cols)."""
         if len(rows) == 0:
             return
@@ -347,8 +366,9 @@ def _plane_crossings(corners: FloatArray, signed: FloatArray) -> tuple[FloatArra
     return candidates[rows, order[:, 0]], candidates[rows, order[:, 1]], ok
 
 
-def _triangle_pairs(a_xyz: FloatArray, a_tri: IntArray, b_xyz: FloatArray,
-                    b_tri: IntArray) -> tuple[IntArray, IntArray]:
+def _triangle_pairs(
+    a_xyz: FloatArray, a_tri: IntArray, b_xyz: FloatArray, b_tri: IntArray
+) -> tuple[IntArray, IntArray]:
     """Triangle pairs (i of A, j of B) whose bounding boxes overlap."""
     a_corners, b_corners = a_xyz[a_tri], b_xyz[b_tri]
     a_centres, b_centres = a_corners.mean(axis=1), b_corners.mean(axis=1)
@@ -357,8 +377,11 @@ def _triangle_pairs(a_xyz: FloatArray, a_tri: IntArray, b_xyz: FloatArray,
     rows, cols = _pairs_within(cKDTree(b_centres), a_centres, a_radii + b_radii.max())
     keep = np.linalg.norm(a_centres[rows] - b_centres[cols], axis=1) <= a_radii[rows] + b_radii[cols]
     rows, cols = rows[keep], cols[keep]
-    overlap = np.all((a_corners[rows].min(axis=1) <= b_corners[cols].max(axis=1))
-                     & (b_corners[cols].min(axis=1) <= a_corners[rows].max(axis=1)), axis=1)
+    overlap = np.all(
+        (a_corners[rows].min(axis=1) <= b_corners[cols].max(axis=1))
+        & (b_corners[cols].min(axis=1) <= a_corners[rows].max(axis=1)),
+        axis=1,
+    )
     return rows[overlap], cols[overlap]
 
 
@@ -389,9 +412,15 @@ def intersection_segments(a: ControllingSurface, b: ControllingSurface) -> Float
     sb[np.abs(sb) <= eps] = 0.0
     direction = np.cross(na, nb)
     dlen = np.linalg.norm(direction, axis=1)
-    candidate = ((la > 0) & (lb > 0) & (dlen > 1e-12)
-                 & ~np.all(sa > 0, axis=1) & ~np.all(sa < 0, axis=1)
-                 & ~np.all(sb > 0, axis=1) & ~np.all(sb < 0, axis=1))
+    candidate = (
+        (la > 0)
+        & (lb > 0)
+        & (dlen > 1e-12)
+        & ~np.all(sa > 0, axis=1)
+        & ~np.all(sa < 0, axis=1)
+        & ~np.all(sb > 0, axis=1)
+        & ~np.all(sb < 0, axis=1)
+    )
     ta, tb, sa, sb, direction = ta[candidate], tb[candidate], sa[candidate], sb[candidate], direction[candidate]
     a0, a1, ok_a = _plane_crossings(ta, sa)
     b0, b1, ok_b = _plane_crossings(tb, sb)

@@ -34,8 +34,18 @@ from tgsis.interpolation.errors import InterpolationSetupError
 
 __all__ = ["Attachment", "CutPath", "InterpolationSetup"]
 
-_KEYS = {"source_controls", "target_controls", "source_fences", "target_fences", "fence_names", "cuts",
-         "controlling_surfaces", "attachments", "steps", "tolerance"}
+_KEYS = {
+    "source_controls",
+    "target_controls",
+    "source_fences",
+    "target_fences",
+    "fence_names",
+    "cuts",
+    "controlling_surfaces",
+    "attachments",
+    "steps",
+    "tolerance",
+}
 
 
 @dataclass(frozen=True)
@@ -91,23 +101,31 @@ class InterpolationSetup:
     def __post_init__(self) -> None:
         problems = []
         if len(self.source_controls) != len(self.target_controls):
-            problems.append(f"{len(self.source_controls)} source control vertices but {len(self.target_controls)} "
-                            "target ones: they pair up by position")
+            problems.append(
+                f"{len(self.source_controls)} source control vertices but {len(self.target_controls)} "
+                "target ones: they pair up by position"
+            )
         if not isinstance(self.steps, int) or self.steps < 2:
             problems.append(f"steps must be an integer >= 2, got {self.steps!r}")
         if not (isinstance(self.tolerance, (int, float)) and self.tolerance > 0):
             problems.append(f"tolerance must be a number > 0, got {self.tolerance!r}")
         for i, attachment in enumerate(self.attachments):
             if not 1 <= len(attachment.surfaces) <= 2:
-                problems.append(f"attachment {i} (vertex {attachment.vertex}) names {len(attachment.surfaces)} "
-                                "controlling surfaces: one or two")
+                problems.append(
+                    f"attachment {i} (vertex {attachment.vertex}) names {len(attachment.surfaces)} "
+                    "controlling surfaces: one or two"
+                )
             unknown = [s for s in attachment.surfaces if s not in self.controlling_surfaces]
             if unknown:
-                problems.append(f"attachment {i} (vertex {attachment.vertex}) names unknown controlling surfaces "
-                                f"{unknown}; known: {sorted(self.controlling_surfaces)}")
+                problems.append(
+                    f"attachment {i} (vertex {attachment.vertex}) names unknown controlling surfaces "
+                    f"{unknown}; known: {sorted(self.controlling_surfaces)}"
+                )
             if len(attachment.surfaces) == 2 and attachment.vertex not in self.source_controls:
-                problems.append(f"attachment {i}: vertex {attachment.vertex} follows the intersection of two "
-                                "surfaces, so it must be a source control vertex")
+                problems.append(
+                    f"attachment {i}: vertex {attachment.vertex} follows the intersection of two "
+                    "surfaces, so it must be a source control vertex"
+                )
         if self.fence_names is not None and len(self.fence_names) != len(self.source_fences):
             problems.append(f"{len(self.fence_names)} fence names for {len(self.source_fences)} source fences")
         if problems:
@@ -118,7 +136,8 @@ class InterpolationSetup:
     def to_dict(self) -> dict[str, Any]:
         """The set-up as JSON-ready data."""
         return {
-            "source_controls": list(self.source_controls), "target_controls": list(self.target_controls),
+            "source_controls": list(self.source_controls),
+            "target_controls": list(self.target_controls),
             "source_fences": [list(p) for p in self.source_fences],
             "target_fences": [list(p) for p in self.target_fences],
             **({"fence_names": list(self.fence_names)} if self.fence_names is not None else {}),
@@ -144,16 +163,22 @@ class InterpolationSetup:
             return cls(
                 source_controls=_indices(data["source_controls"], "source_controls"),
                 target_controls=_indices(data["target_controls"], "target_controls"),
-                source_fences=tuple(_indices(p, f"source_fences[{i}]")
-                                    for i, p in enumerate(data.get("source_fences", []))),
-                target_fences=tuple(_indices(p, f"target_fences[{i}]")
-                                    for i, p in enumerate(data.get("target_fences", []))),
+                source_fences=tuple(
+                    _indices(p, f"source_fences[{i}]") for i, p in enumerate(data.get("source_fences", []))
+                ),
+                target_fences=tuple(
+                    _indices(p, f"target_fences[{i}]") for i, p in enumerate(data.get("target_fences", []))
+                ),
                 fence_names=tuple(str(n) for n in data["fence_names"]) if "fence_names" in data else None,
-                cuts=tuple(CutPath(_indices(c["path"], f"cuts[{i}].path"), c.get("name"))
-                           for i, c in enumerate(data.get("cuts", []))),
+                cuts=tuple(
+                    CutPath(_indices(c["path"], f"cuts[{i}].path"), c.get("name"))
+                    for i, c in enumerate(data.get("cuts", []))
+                ),
                 controlling_surfaces={str(k): str(v) for k, v in dict(data.get("controlling_surfaces", {})).items()},
-                attachments=tuple(Attachment(int(a["vertex"]), tuple(str(s) for s in a["surfaces"]))
-                                  for a in data.get("attachments", [])),
+                attachments=tuple(
+                    Attachment(int(a["vertex"]), tuple(str(s) for s in a["surfaces"]))
+                    for a in data.get("attachments", [])
+                ),
                 steps=int(data.get("steps", 10)),
                 tolerance=float(data.get("tolerance", math.inf)),
             )

@@ -72,9 +72,15 @@ def few(items: npt.ArrayLike, limit: int = 6) -> str:
     return shown if len(values) <= limit else f"{shown} and {len(values) - limit} more"
 
 
-_PLURALS = {"vertex": "vertices", "position": "positions", "edge": "edges", "triangle": "triangles",
-            "control vertex": "control vertices", "border vertex": "border vertices",
-            "non-manifold vertex": "non-manifold vertices"}
+_PLURALS = {
+    "vertex": "vertices",
+    "position": "positions",
+    "edge": "edges",
+    "triangle": "triangles",
+    "control vertex": "control vertices",
+    "border vertex": "border vertices",
+    "non-manifold vertex": "non-manifold vertices",
+}
 
 
 def counted(count: int, noun: str) -> str:
@@ -203,11 +209,11 @@ class OneRings:
 
     def ring(self, vertex: int) -> IntArray:
         """Neighbours of ``vertex`` in ring order: (d,) int64 (a view)."""
-        return self.neighbours[self.indptr[vertex]:self.indptr[vertex + 1]]
+        return self.neighbours[self.indptr[vertex] : self.indptr[vertex + 1]]
 
     def ring_triangles(self, vertex: int) -> IntArray:
         """Triangles around ``vertex`` in ring order: (d,) or (d - 1,) int64 (a view)."""
-        return self.triangles[self.triangle_indptr[vertex]:self.triangle_indptr[vertex + 1]]
+        return self.triangles[self.triangle_indptr[vertex] : self.triangle_indptr[vertex + 1]]
 
 
 @dataclass(frozen=True)
@@ -283,16 +289,18 @@ class MeshTopology:
     >>> loops = border_loops(topo); rings = one_rings(topo)  # doctest: +SKIP
     """
 
-    def __init__(self, triangles: npt.ArrayLike, n_vertices: int | None = None,
-                 vertices: npt.ArrayLike | None = None) -> None:
+    def __init__(
+        self, triangles: npt.ArrayLike, n_vertices: int | None = None, vertices: npt.ArrayLike | None = None
+    ) -> None:
         tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
         n = int(tri.max()) + 1 if n_vertices is None and tri.size else int(n_vertices or 0)
         if tri.size and (tri.min() < 0 or tri.max() >= n):
             raise InterpolationSetupError(f"triangles refer to vertices outside 0..{n - 1}")
         self.triangles: IntArray = tri
         self.n_vertices = n
-        self.vertices: FloatArray | None = (None if vertices is None
-                                            else np.ascontiguousarray(vertices, dtype=np.float64))
+        self.vertices: FloatArray | None = (
+            None if vertices is None else np.ascontiguousarray(vertices, dtype=np.float64)
+        )
         if self.vertices is not None and self.vertices.shape != (n, 3):
             raise InterpolationSetupError(f"vertices must be an ({n}, 3) array, got shape {self.vertices.shape}")
 
@@ -453,7 +461,8 @@ class MeshTopology:
             raise InterpolationSetupError(
                 f"border loops are not defined: the border passes more than once through {named('vertex', bad)}, "
                 "or the triangles there are oriented inconsistently",
-                hint="check_disk() tells what is wrong with the mesh")
+                hint="check_disk() tells what is wrong with the mesh",
+            )
         verts = np.flatnonzero(out_degree)
         local = np.full(n, -1, dtype=np.int64)
         local[verts] = np.arange(len(verts))
@@ -469,7 +478,7 @@ class MeshTopology:
         offsets = np.concatenate([[0], np.cumsum(np.bincount(loop, minlength=len(heads)))])
         ordered = np.empty(len(verts), dtype=np.int64)
         ordered[offsets[loop] + rank] = verts
-        return tuple(ordered[offsets[i]:offsets[i + 1]] for i in range(len(heads)))
+        return tuple(ordered[offsets[i] : offsets[i + 1]] for i in range(len(heads)))
 
     # ---- corners and fans
 
@@ -559,8 +568,7 @@ class MeshTopology:
         edge = self.halfedge_edge
         f = self._edge_first_last[0][edge]
         keep = (f != h) if blocked_edges is None else (f != h) & ~blocked_edges[edge]
-        graph = sp.csr_matrix((np.ones(int(keep.sum()), dtype=np.int8), (h[keep] // 3, f[keep] // 3)),
-                              shape=(m, m))
+        graph = sp.csr_matrix((np.ones(int(keep.sum()), dtype=np.int8), (h[keep] // 3, f[keep] // 3)), shape=(m, m))
         count, labels = connected_components(graph, directed=False)
         lowest = np.full(count, m, dtype=np.int64)
         np.minimum.at(lowest, labels, np.arange(m, dtype=np.int64))
@@ -585,7 +593,9 @@ class MeshTopology:
             bad = self.edges[(self.edge_triangle_count > 2) | self.inconsistent_edges]
             raise InterpolationSetupError(
                 f"one-rings are not defined: edges {few_pairs(bad)} are on more than 2 triangles or their "
-                "triangles are oriented inconsistently", hint="check_disk() tells what is wrong with the mesh")
+                "triangles are oriented inconsistently",
+                hint="check_disk() tells what is wrong with the mesh",
+            )
         nxt = nxt_or_none
         pred = np.full(3 * m, -1, dtype=np.int64)
         has_next = np.flatnonzero(nxt >= 0)
@@ -597,7 +607,9 @@ class MeshTopology:
             bad = np.flatnonzero(heads_per_vertex > 1)
             raise InterpolationSetupError(
                 f"one-rings are not defined: the triangles around {named('vertex', bad)} form several fans "
-                "(non-manifold vertices)", hint="check_disk() tells what is wrong with the mesh")
+                "(non-manifold vertices)",
+                hint="check_disk() tells what is wrong with the mesh",
+            )
         closed = (heads_per_vertex == 0) & (wedges > 0)
         # closed rings start at the vertex's corner in its lowest triangle
         first_corner = np.full(n, 3 * m, dtype=np.int64)
@@ -607,7 +619,9 @@ class MeshTopology:
         if cyclic.any():
             raise InterpolationSetupError(
                 f"one-rings are not defined: the triangles around {named('vertex', np.unique(center[cyclic]))} "
-                "form several fans (non-manifold vertices)", hint="check_disk() tells what is wrong with the mesh")
+                "form several fans (non-manifold vertices)",
+                hint="check_disk() tells what is wrong with the mesh",
+            )
         degree = wedges + (~closed & (wedges > 0))
         indptr = np.concatenate([[0], np.cumsum(degree)]).astype(np.int64)
         neighbours = np.empty(int(indptr[-1]), dtype=np.int64)
@@ -736,8 +750,9 @@ def one_ring(mesh: Surface | MeshTopology, vertex: int) -> IntArray:
     return used[local_topo.one_rings.ring(int(np.searchsorted(used, vertex)))].astype(np.int64)
 
 
-def shortest_edge_path(mesh: Surface | MeshTopology, start: int, end: int, *,
-                       avoid: npt.ArrayLike | None = None) -> IntArray:
+def shortest_edge_path(
+    mesh: Surface | MeshTopology, start: int, end: int, *, avoid: npt.ArrayLike | None = None
+) -> IntArray:
     """Shortest path along edges between two vertices, edge lengths as weights (Dijkstra).
 
     This is how fence paths are proposed: pass the other control vertices as
@@ -835,8 +850,10 @@ def check_disk(mesh: Surface | MeshTopology, *, vertex_ids: npt.ArrayLike | None
         inconsistent = np.sort(ids[inconsistent], axis=1)
     border = topo.edges[count == 1]
     if len(border):
-        graph = sp.coo_matrix((np.ones(len(border), dtype=np.int8), (border[:, 0], border[:, 1])),
-                              shape=(topo.n_vertices, topo.n_vertices)).tocsr()
+        graph = sp.coo_matrix(
+            (np.ones(len(border), dtype=np.int8), (border[:, 0], border[:, 1])),
+            shape=(topo.n_vertices, topo.n_vertices),
+        ).tocsr()
         _, labels = connected_components(graph, directed=False)
         loops = len(np.unique(labels[np.unique(border)]))
     else:
@@ -845,25 +862,45 @@ def check_disk(mesh: Surface | MeshTopology, *, vertex_ids: npt.ArrayLike | None
         reasons.append(f"it is in {pieces} pieces (triangles joined across edges)")
     if len(nonmanifold_edges):
         shared = count[count > 2]
-        reasons.append(f"{counted(len(nonmanifold_edges), 'edge')} on more than 2 triangles: "
-                       + few_pairs(nonmanifold_edges) + f" (on {few(shared)} triangles)")
+        reasons.append(
+            f"{counted(len(nonmanifold_edges), 'edge')} on more than 2 triangles: "
+            + few_pairs(nonmanifold_edges)
+            + f" (on {few(shared)} triangles)"
+        )
     if len(nonmanifold_vertices):
-        reasons.append(f"{counted(len(nonmanifold_vertices), 'non-manifold vertex')} (whose triangles form "
-                       f"separate fans): {few(nonmanifold_vertices)}")
+        reasons.append(
+            f"{counted(len(nonmanifold_vertices), 'non-manifold vertex')} (whose triangles form "
+            f"separate fans): {few(nonmanifold_vertices)}"
+        )
     if len(inconsistent):
-        reasons.append(f"the triangles on {counted(len(inconsistent), 'edge')} are oriented inconsistently "
-                       f"(both run the edge the same way): {few_pairs(inconsistent)}")
+        reasons.append(
+            f"the triangles on {counted(len(inconsistent), 'edge')} are oriented inconsistently "
+            f"(both run the edge the same way): {few_pairs(inconsistent)}"
+        )
     if loops != 1:
         reasons.append("it has no border (a closed surface)" if loops == 0 else f"{loops} border loops")
     if chi != 1:
         manifold = pieces == 1 and not len(nonmanifold_edges) and not len(nonmanifold_vertices)
         genus = (2 - chi - loops) // 2 if manifold and not len(inconsistent) and (2 - chi - loops) % 2 == 0 else 0
-        reasons.append(f"Euler characteristic V - E + F = {V} - {E} + {F} = {chi}, not 1"
-                       + (f" (genus {genus}: the surface has handles)" if genus > 0 else ""))
+        reasons.append(
+            f"Euler characteristic V - E + F = {V} - {E} + {F} = {chi}, not 1"
+            + (f" (genus {genus}: the surface has handles)" if genus > 0 else "")
+        )
     if len(unused):
         reasons.append(f"{counted(len(unused), 'vertex')} on no triangle: {few(unused)}")
-    return DiskCheck(tuple(reasons), V, E, F, chi, pieces, loops, nonmanifold_edges.astype(np.int64),
-                     nonmanifold_vertices, inconsistent.astype(np.int64), unused)
+    return DiskCheck(
+        tuple(reasons),
+        V,
+        E,
+        F,
+        chi,
+        pieces,
+        loops,
+        nonmanifold_edges.astype(np.int64),
+        nonmanifold_vertices,
+        inconsistent.astype(np.int64),
+        unused,
+    )
 
 
 def path_problems(topo: MeshTopology, path: npt.ArrayLike, label: str) -> tuple[IntArray, IntArray, list[str]]:
@@ -896,17 +933,22 @@ def path_problems(topo: MeshTopology, path: npt.ArrayLike, label: str) -> tuple[
         problems.append(f"{label} has {counted(len(verts), 'vertex')}: a path needs at least 2")
     outside = np.flatnonzero((verts < 0) | (verts >= n))
     if outside.size:
-        problems.append(f"{label} refers to {named('vertex', verts[outside])} ({named('position', outside)}), "
-                        f"but the mesh has {n} vertices")
+        problems.append(
+            f"{label} refers to {named('vertex', verts[outside])} ({named('position', outside)}), "
+            f"but the mesh has {n} vertices"
+        )
         return verts, np.full(max(len(verts) - 1, 0), -1, dtype=np.int64), problems
     order = np.argsort(verts, kind="stable")
     repeated = np.flatnonzero(verts[order][1:] == verts[order][:-1])
     for r in repeated[:3]:
-        problems.append(f"{label} passes twice through vertex {verts[order[r]]} "
-                        f"(positions {order[r]} and {order[r + 1]})")
+        problems.append(
+            f"{label} passes twice through vertex {verts[order[r]]} (positions {order[r]} and {order[r + 1]})"
+        )
     steps = np.stack([verts[:-1], verts[1:]], axis=1)
     edge_ids = topo.find_edges(steps)
     for i in np.flatnonzero((edge_ids < 0) & (steps[:, 0] != steps[:, 1]))[:3]:
-        problems.append(f"{label} is not an edge path: vertices {verts[i]} and {verts[i + 1]} "
-                        f"(positions {i} and {i + 1}) share no edge")
+        problems.append(
+            f"{label} is not an edge path: vertices {verts[i]} and {verts[i + 1]} "
+            f"(positions {i} and {i + 1}) share no edge"
+        )
     return verts, edge_ids, problems

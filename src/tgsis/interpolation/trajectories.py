@@ -47,8 +47,14 @@ from tgsis.interpolation.parameterize import (
 from tgsis.interpolation.projection import ControllingSurface, IntersectionCurve
 from tgsis.temporal import EvolvingSurface, TopologyPeriod, even_times
 
-__all__ = ["TrajectoryError", "Attachments", "border_trajectories", "InteriorSteps", "vertex_trajectories",
-           "evolving_surface"]
+__all__ = [
+    "TrajectoryError",
+    "Attachments",
+    "border_trajectories",
+    "InteriorSteps",
+    "vertex_trajectories",
+    "evolving_surface",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -95,8 +101,9 @@ def _linear(start: FloatArray, end: FloatArray, steps: int) -> FloatArray:
     return _lerp(start, end, _weights(steps))
 
 
-def _constraint(surfaces: Sequence[ControllingSurface]) -> tuple[
-        str, Callable[[FloatArray], tuple[FloatArray, FloatArray]]]:
+def _constraint(
+    surfaces: Sequence[ControllingSurface],
+) -> tuple[str, Callable[[FloatArray], tuple[FloatArray, FloatArray]]]:
     """How messages name what a vertex is attached to, and its closest-point function (points, distances)."""
     if len(surfaces) == 1:
         surface = surfaces[0]
@@ -110,9 +117,15 @@ def _constraint(surfaces: Sequence[ControllingSurface]) -> tuple[
     return f"the intersection curve of {surfaces[0].label} and {surfaces[1].label}", curve.closest
 
 
-def border_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, vertices: npt.ArrayLike, steps: int,
-                        attachments: Attachments | None = None, *,
-                        tolerance: float | None = None) -> FloatArray:
+def border_trajectories(
+    source: npt.ArrayLike,
+    target: npt.ArrayLike,
+    vertices: npt.ArrayLike,
+    steps: int,
+    attachments: Attachments | None = None,
+    *,
+    tolerance: float | None = None,
+) -> FloatArray:
     """Trajectories of border vertices: linear, projected onto controlling surfaces where attached.
 
     Parameters
@@ -159,11 +172,14 @@ def border_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, vertices: 
     groups: dict[tuple[int, ...], tuple[Sequence[ControllingSurface], list[int]]] = {}
     for vertex, surfaces in attachments.items():
         if int(vertex) not in column:
-            raise TrajectoryError(f"vertex {vertex} is attached to a controlling surface but is not a border vertex",
-                                  hint="only border vertices take attaching constraints")
+            raise TrajectoryError(
+                f"vertex {vertex} is attached to a controlling surface but is not a border vertex",
+                hint="only border vertices take attaching constraints",
+            )
         if len(surfaces) not in (1, 2) or not all(isinstance(s, ControllingSurface) for s in surfaces):
-            raise TrajectoryError(f"vertex {vertex} must be attached to one or two ControllingSurface objects, "
-                                  f"got {len(surfaces)}")
+            raise TrajectoryError(
+                f"vertex {vertex} must be attached to one or two ControllingSurface objects, got {len(surfaces)}"
+            )
         key = tuple(sorted(id(s) for s in surfaces))
         groups.setdefault(key, (surfaces, []))[1].append(column[int(vertex)])
     for surfaces, columns in groups.values():
@@ -173,8 +189,10 @@ def border_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, vertices: 
             d = closest(result[sample, cols])[1]
             if np.any(d > limit):
                 i = int(np.argmax(d))
-                raise TrajectoryError(f"vertex {int(which[cols[i]])} is {d[i]:.6g} from {label} in the {name} "
-                                      f"mesh (tolerance {limit:.6g}): it cannot stay on it")
+                raise TrajectoryError(
+                    f"vertex {int(which[cols[i]])} is {d[i]:.6g} from {label} in the {name} "
+                    f"mesh (tolerance {limit:.6g}): it cannot stay on it"
+                )
         if m > 2:
             inner = result[1:-1, cols].reshape(-1, 3)
             result[1:-1, cols] = closest(inner)[0].reshape(m - 2, len(cols), 3)
@@ -244,8 +262,9 @@ class InteriorSteps:
     def __init__(self, first: FloatArray, last: FloatArray, triangles: IntArray, interior: BoolArray) -> None:
         n = len(first)
         pattern = WeightPattern.of(triangles, n)
-        lam = 0.5 * (mean_value_data(first, triangles, pattern, interior)
-                     + mean_value_data(last, triangles, pattern, interior))
+        lam = 0.5 * (
+            mean_value_data(first, triangles, pattern, interior) + mean_value_data(last, triangles, pattern, interior)
+        )
         self.interior = np.flatnonzero(interior).astype(np.int64)
         self.border = np.flatnonzero(~interior).astype(np.int64)
         self._first, self._last = first[self.interior], last[self.interior]
@@ -274,8 +293,9 @@ class InteriorSteps:
         self._lu: SuperLU | None = None
         if len(self.solved):
             try:
-                self._lu = splu(self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                options={"SymmetricMode": True})
+                self._lu = splu(
+                    self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+                )
             except RuntimeError as exc:
                 raise TrajectoryError(f"the interior system of the trajectories cannot be solved: {exc}") from exc
             self.factorizations = 1
@@ -292,21 +312,30 @@ class InteriorSteps:
         s = np.ascontiguousarray(weights, dtype=np.float64).ravel()
         placed = np.ascontiguousarray(border_positions, dtype=np.float64)
         if placed.shape != (len(s), len(self.border), 3):
-            raise TrajectoryError(f"border positions must have shape {(len(s), len(self.border), 3)}, "
-                                  f"got {placed.shape}")
+            raise TrajectoryError(
+                f"border positions must have shape {(len(s), len(self.border), 3)}, got {placed.shape}"
+            )
         result = _lerp(self._first, self._last, s)
         if self._lu is None:
             return result
         straight = _lerp(self._border_first, self._border_last, s)
         for j in range(len(s)):
-            departure = placed[j] - straight[j]                         # (b, 3): off the straight paths
+            departure = placed[j] - straight[j]  # (b, 3): off the straight paths
             result[j, self.solved] += self._lu.solve(np.asfortranarray(self.to_border @ departure))
         return result
 
 
-def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles: npt.ArrayLike, steps: int,
-                 attachments: Attachments | None = None, *, controls: npt.ArrayLike | None = None,
-                 tolerance: float | None = None, interior_method: str = "auto") -> FloatArray:
+def vertex_trajectories(
+    source: npt.ArrayLike,
+    target: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    steps: int,
+    attachments: Attachments | None = None,
+    *,
+    controls: npt.ArrayLike | None = None,
+    tolerance: float | None = None,
+    interior_method: str = "auto",
+) -> FloatArray:
     """Trajectories of every vertex from the source mesh to its compatible target mesh.
 
     Parameters
@@ -349,8 +378,9 @@ def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles:
     first = as_points(source, "source positions", ParameterizationError)
     last = as_points(target, "target positions", ParameterizationError)
     if first.shape != last.shape:
-        raise TrajectoryError(f"source and target must be compatible (same vertices): {len(first)} and "
-                              f"{len(last)} vertices")
+        raise TrajectoryError(
+            f"source and target must be compatible (same vertices): {len(first)} and {len(last)} vertices"
+        )
     n = len(first)
     tri = as_triangles(triangles, n, "triangles", ParameterizationError)
     interior = interior_mask(tri, n)
@@ -373,9 +403,16 @@ def vertex_trajectories(source: npt.ArrayLike, target: npt.ArrayLike, triangles:
     return result
 
 
-def evolving_surface(triangles: npt.ArrayLike, trajectories: npt.ArrayLike, t0: float, t1: float, *,
-                     name: str | None = None, color: Sequence[float] | None = None,
-                     alive: bool = False) -> EvolvingSurface:
+def evolving_surface(
+    triangles: npt.ArrayLike,
+    trajectories: npt.ArrayLike,
+    t0: float,
+    t1: float,
+    *,
+    name: str | None = None,
+    color: Sequence[float] | None = None,
+    alive: bool = False,
+) -> EvolvingSurface:
     """An evolving surface (model 3) of one topology period from trajectories sampled evenly on [t0, t1].
 
     Parameters

@@ -66,26 +66,53 @@ def _cfm(context: Context) -> None:
 
 
 SCENARIOS: dict[str, Scenario] = {
-    "saltdome": Scenario("saltdome", "a flat salt layer rising into a dome: the shape at any time, from SQL and Python",
-                         _saltdome),
-    "synsed": Scenario("synsed", "horizons deposited while a normal fault slips: the whole structure at t = 2.5 "
-                       "from one SQL query; older horizons carry more throw", _synsed),
-    "river": Scenario("river", "three units deposited and eroded on a fixed basement: the structure at t = 1.5, "
-                      "which unit lies on which at t = 3 and 4", _river),
-    "interpretations": Scenario("interpretations", "one horizon, several models in versions and named revisions: "
-                                "where the fault first appears, where dilatancy passes a threshold", _interpretations),
-    "mine": Scenario("mine", "a resource model revised after each survey: a chain of versions with validity periods, "
-                     "models as sets of objects; which model was believed on a date, what changed, rows stored",
-                     _mine),
-    "knowledge": Scenario("knowledge", "a horizon's interpretations as one object over a knowledge axis (model 5): "
-                          "box queries over x, y and knowledge, slices back to each interpretation", _knowledge),
-    "cfm": Scenario("cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)",
-                    _cfm),
+    "saltdome": Scenario(
+        "saltdome", "a flat salt layer rising into a dome: the shape at any time, from SQL and Python", _saltdome
+    ),
+    "synsed": Scenario(
+        "synsed",
+        "horizons deposited while a normal fault slips: the whole structure at t = 2.5 "
+        "from one SQL query; older horizons carry more throw",
+        _synsed,
+    ),
+    "river": Scenario(
+        "river",
+        "three units deposited and eroded on a fixed basement: the structure at t = 1.5, "
+        "which unit lies on which at t = 3 and 4",
+        _river,
+    ),
+    "interpretations": Scenario(
+        "interpretations",
+        "one horizon, several models in versions and named revisions: "
+        "where the fault first appears, where dilatancy passes a threshold",
+        _interpretations,
+    ),
+    "mine": Scenario(
+        "mine",
+        "a resource model revised after each survey: a chain of versions with validity periods, "
+        "models as sets of objects; which model was believed on a date, what changed, rows stored",
+        _mine,
+    ),
+    "knowledge": Scenario(
+        "knowledge",
+        "a horizon's interpretations as one object over a knowledge axis (model 5): "
+        "box queries over x, y and knowledge, slices back to each interpretation",
+        _knowledge,
+    ),
+    "cfm": Scenario(
+        "cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)", _cfm
+    ),
 }
 
 
-def run_scenario(name: str, dsn: str | None = None, *, out: Callable[[str], None] = print,
-                 folder: str | Path | None = None, size: Size = "small") -> ScenarioResult:
+def run_scenario(
+    name: str,
+    dsn: str | None = None,
+    *,
+    out: Callable[[str], None] = print,
+    folder: str | Path | None = None,
+    size: Size = "small",
+) -> ScenarioResult:
     """Run scenario ``name`` on the server of ``dsn`` (``None``: the local server).
 
     Parameters

@@ -71,19 +71,27 @@ class Context:
         ``structure_at_<t>`` (the names found) and ``sql_equals_python`` (true only
         if every structure asked for so far was equal) are kept.
         """
-        rows = self.ask("every surface that exists then, from one query", sql.SQL(
-            "SELECT g.geoname AS surface, array_length(s.vertices, 1) AS vertices, "
-            "array_length(s.triangles, 1) AS triangles "
-            "FROM tgsis.surfaces_at({}, {}) s JOIN tgsis.geometry g USING (geoid) ORDER BY g.geoname").format(
-                sql.Literal(feature_class), sql.Literal(t)))
+        rows = self.ask(
+            "every surface that exists then, from one query",
+            sql.SQL(
+                "SELECT g.geoname AS surface, array_length(s.vertices, 1) AS vertices, "
+                "array_length(s.triangles, 1) AS triangles "
+                "FROM tgsis.surfaces_at({}, {}) s JOIN tgsis.geometry g USING (geoid) ORDER BY g.geoname"
+            ).format(sql.Literal(feature_class), sql.Literal(t)),
+        )
         from_sql = {s.name or "": s for s in surfaces_at(self.conn, feature_class, t).values()}
         expected = {name: s.at(t) for name, s in evolving.items()}
         present = sorted(name for name, s in expected.items() if s is not None)
         same = sorted(from_sql) == present and all(
             np.array_equal(from_sql[n].vertices, e.vertices) and np.array_equal(from_sql[n].cells, e.cells)
-            for n in present for e in [expected[n]] if e is not None)
-        self.out(f"   from Python (EvolvingSurface.at): {', '.join(present)}; "
-                 f"equal to SQL to the bit: {'yes' if same else 'NO'}")
+            for n in present
+            for e in [expected[n]]
+            if e is not None
+        )
+        self.out(
+            f"   from Python (EvolvingSurface.at): {', '.join(present)}; "
+            f"equal to SQL to the bit: {'yes' if same else 'NO'}"
+        )
         self.figure(f"structure_at_{t:g}", [row[0] for row in rows])
         self.figure("sql_equals_python", same and self.figures.get("sql_equals_python", True))
 
@@ -121,8 +129,9 @@ def fresh_database(dsn: str | None, database: str) -> str:
 
 
 @contextlib.contextmanager
-def open_context(name: str, dsn: str | None, *, out: Callable[[str], None], folder: str | Path | None,
-                 size: Size) -> Iterator[Context]:
+def open_context(
+    name: str, dsn: str | None, *, out: Callable[[str], None], folder: str | Path | None, size: Size
+) -> Iterator[Context]:
     """A fresh database ``tgsis_demo_<name>`` with tgsis, and the output folder (created)."""
     target = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix=f"tgsis-{name}-"))
     target.mkdir(parents=True, exist_ok=True)

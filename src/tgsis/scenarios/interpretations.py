@@ -103,8 +103,10 @@ def fault(n: int) -> Surface:
 def drill_holes() -> PointSet:
     """Horizon picks in five drill holes."""
     xy = np.array([[1000, 800], [2500, 1500], [3100, 2200], [4200, 900], [5400, 2500]], dtype=float)
-    return PointSet(np.column_stack([xy, DEPTH + 150.0 * np.cos(np.pi * (xy[:, 0] / EXTENT[0] - 0.5)) ** 2]),
-                    name="drill-hole picks")
+    return PointSet(
+        np.column_stack([xy, DEPTH + 150.0 * np.cos(np.pi * (xy[:, 0] / EXTENT[0] - 0.5)) ** 2]),
+        name="drill-hole picks",
+    )
 
 
 #: The design's figure (section 7.3): each version's base revision and the revisions it holds.
@@ -113,23 +115,33 @@ DESIGN = {"DEFAULT": (None, [0, 1, 3, 4]), "version1": (0, [2]), "version2": (3,
 
 def revisions_of(conn: Any) -> dict[str, tuple[int | None, list[int]]]:
     """Each version's base revision and the revisions it holds, as tgsis handed them out."""
-    rows = conn.execute("SELECT v.name, v.initrevision, array_agg(r.revision ORDER BY r.revision) "
-                        "FROM tgsis.versions v JOIN tgsis.revisions r USING (versionid) "
-                        "GROUP BY v.name, v.initrevision").fetchall()
+    rows = conn.execute(
+        "SELECT v.name, v.initrevision, array_agg(r.revision ORDER BY r.revision) "
+        "FROM tgsis.versions v JOIN tgsis.revisions r USING (versionid) "
+        "GROUP BY v.name, v.initrevision"
+    ).fetchall()
     return {name: (base, list(revisions)) for name, base, revisions in rows}
 
 
 def _figure_line(revisions: dict[str, tuple[int | None, list[int]]]) -> str:
-    return "; ".join(f"{name}{'' if base is None else f' based on {base}'} {{{', '.join(map(str, held))}}}"
-                     for name, (base, held) in ((n, revisions.get(n, (None, []))) for n in DESIGN))
+    return "; ".join(
+        f"{name}{'' if base is None else f' based on {base}'} {{{', '.join(map(str, held))}}}"
+        for name, (base, held) in ((n, revisions.get(n, (None, []))) for n in DESIGN)
+    )
 
 
 def run(context: Context) -> None:
     out, conn = context.out, context.conn
     n = 41 if context.size == "large" else 13
     create_feature_class(conn, "horizons", "SURFACE")
-    create_feature_class(conn, "restored", "SURFACE", cell_properties={"dilatancy": "float8"}, alignment="VERTEX",
-                         description="restored (unfolded) states of horizons, with their dilatancy")
+    create_feature_class(
+        conn,
+        "restored",
+        "SURFACE",
+        cell_properties={"dilatancy": "float8"},
+        alignment="VERTEX",
+        description="restored (unfolded) states of horizons, with their dilatancy",
+    )
     create_feature_class(conn, "faults", "SURFACE")
     create_feature_class(conn, "picks", "MULTIPOINT")
     enable_feature_versioning(conn)
@@ -149,16 +161,20 @@ def run(context: Context) -> None:
         r2 = insert_feature(conn, "restored", restored(model_2))
         create_model(conn, "model 2", [h, r2], description="alternative interpretation, with its restored state")
         conn.commit()
-    out(f"2. version1 (based on revision 0), revision 2: model 2, an alternative interpretation, with its restored "
-        f"state (feature {r2})")
+    out(
+        f"2. version1 (based on revision 0), revision 2: model 2, an alternative interpretation, with its restored "
+        f"state (feature {r2})"
+    )
     # 3. DEFAULT, revision 1: the restored model 1, saved as a named revision; DEFAULT works in 3
     r1 = insert_feature(conn, "restored", restored(model_1))
     create_model(conn, "model 1 restored", [r1], description="restored (unfolded) model 1")
     conn.commit()
     saved = save_revision(conn, "restored_model_1")
     conn.commit()
-    out(f"3. DEFAULT, revision {saved}: the restored model 1 (feature {r1}), saved as the named revision "
-        f"'restored_model_1'")
+    out(
+        f"3. DEFAULT, revision {saved}: the restored model 1 (feature {r1}), saved as the named revision "
+        f"'restored_model_1'"
+    )
     # 4. DEFAULT, revision 3: drill-hole picks
     picks = insert_feature(conn, "picks", drill_holes())
     create_model(conn, "drill holes", [h, picks], description="model 1 with the drill-hole picks")
@@ -173,39 +189,58 @@ def run(context: Context) -> None:
         r3 = insert_feature(conn, "restored", restored(model_3))
         create_model(conn, "model 3", [h, t, r3, picks], description="the horizon cut by a thrust into two blocks")
         conn.commit()
-    out(f"5. version2 (based on revision 3), revision 5: model 3, a thrust (feature {t}) cuts the horizon into two "
-        f"blocks ({model_3.n_vertices} vertices); restored (feature {r3})")
+    out(
+        f"5. version2 (based on revision 3), revision 5: model 3, a thrust (feature {t}) cuts the horizon into two "
+        f"blocks ({model_3.n_vertices} vertices); restored (feature {r3})"
+    )
     got = revisions_of(conn)
     out("   revisions in the design (7.3): " + _figure_line(DESIGN))
     out("   revisions tgsis handed out:   " + _figure_line(got))
-    context.figure("revisions_as_the_design", all(got.get(name) == (base, list(held))
-                                                   for name, (base, held) in DESIGN.items()))
+    context.figure(
+        "revisions_as_the_design", all(got.get(name) == (base, list(held)) for name, (base, held) in DESIGN.items())
+    )
 
     # the cross-version questions, over every revision of every version
-    first = context.ask("in which model does the fault first appear?", sql.SQL(
-        "SELECT m.name AS model, v.name AS version, r.revision "
-        "FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid), "
-        "LATERAL tgsis.rows_at(NULL::tgsis.model, v.name, r.revision) m "
-        "WHERE EXISTS (SELECT FROM tgsis.rows_at(NULL::tgsis.model_object, v.name, r.revision) mo "
-        "JOIN tgsis.rows_at(NULL::public.faults, v.name, r.revision) f ON f._geoid = mo.geoid "
-        "WHERE mo.modelid = m.modelid) "
-        "ORDER BY r.revision, m.name LIMIT 1"))
+    first = context.ask(
+        "in which model does the fault first appear?",
+        sql.SQL(
+            "SELECT m.name AS model, v.name AS version, r.revision "
+            "FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid), "
+            "LATERAL tgsis.rows_at(NULL::tgsis.model, v.name, r.revision) m "
+            "WHERE EXISTS (SELECT FROM tgsis.rows_at(NULL::tgsis.model_object, v.name, r.revision) mo "
+            "JOIN tgsis.rows_at(NULL::public.faults, v.name, r.revision) f ON f._geoid = mo.geoid "
+            "WHERE mo.modelid = m.modelid) "
+            "ORDER BY r.revision, m.name LIMIT 1"
+        ),
+    )
     context.figure("fault_first_in", first[0][0] if first else None)
-    above = context.ask(f"in which models is the dilatancy above {THRESHOLD}?", sql.SQL(
-        "SELECT m.name AS model, v.name AS version, round(max(p.dilatancy)::numeric, 3) AS max_dilatancy "
-        "FROM tgsis.versions v, LATERAL tgsis.rows_at(NULL::tgsis.model, v.name) m "
-        "JOIN tgsis.rows_at(NULL::tgsis.model_object, v.name) mo ON mo.modelid = m.modelid "
-        "JOIN tgsis.rows_at(NULL::public.restored_cellpros, v.name) p ON p._geoid = mo.geoid "
-        "GROUP BY m.name, v.name HAVING max(p.dilatancy) > {} ORDER BY v.name, m.name").format(
-            sql.Literal(THRESHOLD)))
+    above = context.ask(
+        f"in which models is the dilatancy above {THRESHOLD}?",
+        sql.SQL(
+            "SELECT m.name AS model, v.name AS version, round(max(p.dilatancy)::numeric, 3) AS max_dilatancy "
+            "FROM tgsis.versions v, LATERAL tgsis.rows_at(NULL::tgsis.model, v.name) m "
+            "JOIN tgsis.rows_at(NULL::tgsis.model_object, v.name) mo ON mo.modelid = m.modelid "
+            "JOIN tgsis.rows_at(NULL::public.restored_cellpros, v.name) p ON p._geoid = mo.geoid "
+            "GROUP BY m.name, v.name HAVING max(p.dilatancy) > {} ORDER BY v.name, m.name"
+        ).format(sql.Literal(THRESHOLD)),
+    )
     context.figure("dilatancy_above_in", [row[0] for row in above])
 
     out("5. pictures")
-    for label, model, restored_state in (("1", model_1, restored(model_1)), ("2", model_2, restored(model_2)),
-                                         ("3", model_3, restored(model_3))):
+    for label, model, restored_state in (
+        ("1", model_1, restored(model_1)),
+        ("2", model_2, restored(model_2)),
+        ("3", model_3, restored(model_3)),
+    ):
         surfaces: list[Surface] = [model, restored_state] + ([fault(n)] if label == "3" else [])
         colours = [None, restored_state.vertex_properties["dilatancy"]] + ([None] if label == "3" else [])
-        context.wrote(pictures.scene(surfaces, context.folder / f"interpretations_model{label}.png",
-                                     colour=colours, colour_label="dilatancy (relative ring-area change)",
-                                     title=f"model {label} and its restored state"))
+        context.wrote(
+            pictures.scene(
+                surfaces,
+                context.folder / f"interpretations_model{label}.png",
+                colour=colours,
+                colour_label="dilatancy (relative ring-area change)",
+                title=f"model {label} and its restored state",
+            )
+        )
     out(f"   {', '.join(p.name for p in context.files)}")

@@ -63,10 +63,11 @@ def history(horizon: gmaps.GMap, layers: list[npt.NDArray[np.float64]]) -> gmaps
     triangle's mean depth moved between the two campaigns.
     """
     extruded = gmaps.extrude(horizon, list(CAMPAIGNS))
-    points = np.vstack([np.column_stack([layer, np.full(len(layer), campaign)])
-                        for layer, campaign in zip(layers, CAMPAIGNS)])
+    points = np.vstack(
+        [np.column_stack([layer, np.full(len(layer), campaign)]) for layer, campaign in zip(layers, CAMPAIGNS)]
+    )
     triangles = horizon.simplices()
-    depth = np.stack([layer[triangles, 2].mean(axis=1) for layer in layers])      # (campaigns, triangles)
+    depth = np.stack([layer[triangles, 2].mean(axis=1) for layer in layers])  # (campaigns, triangles)
     change = np.concatenate([depth[j + 1] - depth[j] for j in range(len(CAMPAIGNS) - 1)])
     return gmaps.GMap(extruded.alpha, extruded.vertex, points, cell_properties={3: {"change_m": change}})
 
@@ -75,46 +76,81 @@ def run(context: Context) -> None:
     out, conn = context.out, context.conn
     nx, ny = (61, 41) if context.size == "large" else (13, 9)
     horizon, layers = interpretations(nx, ny)
-    out(f"1. the top of an anticline picked after each campaign {', '.join(f'{c:g}' for c in CAMPAIGNS)}: "
-        f"{horizon.n_points} points, {horizon.n_cells(2)} triangles each")
+    out(
+        f"1. the top of an anticline picked after each campaign {', '.join(f'{c:g}' for c in CAMPAIGNS)}: "
+        f"{horizon.n_points} points, {horizon.n_cells(2)} triangles each"
+    )
     whole = history(horizon, layers)
-    out(f"   one object over knowledge: the horizon's 2-G-map extruded along it, a 3-G-map in R^4 with "
-        f"{whole.n_darts} darts and {whole.n_cells(3)} volumes (a triangle between two campaigns)")
-    create_feature_class(conn, "horizon_history", "GMAP", time_model="MULTIDIM", cell_level=3,
-                         cell_properties={"change_m": "float8"}, feature_properties={"horizon": "text"},
-                         description="interpretations of a horizon over a knowledge axis (model 5)")
-    geoid = insert_gmap(conn, "horizon_history", whole, {"horizon": "top anticline"}, name="top anticline",
-                        axes=list(AXES))
+    out(
+        f"   one object over knowledge: the horizon's 2-G-map extruded along it, a 3-G-map in R^4 with "
+        f"{whole.n_darts} darts and {whole.n_cells(3)} volumes (a triangle between two campaigns)"
+    )
+    create_feature_class(
+        conn,
+        "horizon_history",
+        "GMAP",
+        time_model="MULTIDIM",
+        cell_level=3,
+        cell_properties={"change_m": "float8"},
+        feature_properties={"horizon": "text"},
+        description="interpretations of a horizon over a knowledge axis (model 5)",
+    )
+    geoid = insert_gmap(
+        conn, "horizon_history", whole, {"horizon": "top anticline"}, name="top anticline", axes=list(AXES)
+    )
     moved = whole.points.copy()
     moved[:, 0] += 5000.0
-    other = insert_gmap(conn, "horizon_history", gmaps.GMap(whole.alpha, whole.vertex, moved,
-                                                            cell_properties=whole.cell_properties),
-                        {"horizon": "top syncline east"}, name="top syncline east", axes=list(AXES))
+    other = insert_gmap(
+        conn,
+        "horizon_history",
+        gmaps.GMap(whole.alpha, whole.vertex, moved, cell_properties=whole.cell_properties),
+        {"horizon": "top syncline east"},
+        name="top syncline east",
+        axes=list(AXES),
+    )
     conn.commit()
     out(f"   stored as features {geoid} and {other} (a second history 5 km east) of class horizon_history")
 
     out("2. box queries over some of the axes (one GiST index over all four serves any subset)")
     (lo_x, lo_y), (hi_x, hi_y) = CREST
-    rows = context.ask("which histories reach the crest window in x and y after 2022?", sql.SQL(
-        "SELECT f._geoid AS feature, f.horizon FROM tgsis.md_in_box('horizon_history', {}, {}, {}) b(geoid) "
-        "JOIN horizon_history f ON f._geoid = b.geoid ORDER BY 1").format(
-            sql.Literal(["x", "y", "knowledge"]), sql.Literal([lo_x, lo_y, 2022.0]), sql.Literal([hi_x, hi_y, 2026.0])))
+    rows = context.ask(
+        "which histories reach the crest window in x and y after 2022?",
+        sql.SQL(
+            "SELECT f._geoid AS feature, f.horizon FROM tgsis.md_in_box('horizon_history', {}, {}, {}) b(geoid) "
+            "JOIN horizon_history f ON f._geoid = b.geoid ORDER BY 1"
+        ).format(
+            sql.Literal(["x", "y", "knowledge"]), sql.Literal([lo_x, lo_y, 2022.0]), sql.Literal([hi_x, hi_y, 2026.0])
+        ),
+    )
     context.figure("histories_in_the_window", [r[1] for r in rows])
-    rows = context.ask("how deep was the crest in each campaign (the points in a box over x, y and knowledge)?", sql.SQL(
-        "SELECT v.coordinate[4]::integer AS campaign, count(*) AS points, round(max(v.coordinate[3])::numeric, 1) AS crest_m "
-        "FROM tgsis.md_vertices_in_box({}, {}, {}, {}) v GROUP BY 1 ORDER BY 1").format(
-            sql.Literal(geoid), sql.Literal(["x", "y", "knowledge"]), sql.Literal([lo_x, lo_y, CAMPAIGNS[0]]),
-            sql.Literal([hi_x, hi_y, CAMPAIGNS[-1]])))
+    rows = context.ask(
+        "how deep was the crest in each campaign (the points in a box over x, y and knowledge)?",
+        sql.SQL(
+            "SELECT v.coordinate[4]::integer AS campaign, count(*) AS points, round(max(v.coordinate[3])::numeric, 1) AS crest_m "
+            "FROM tgsis.md_vertices_in_box({}, {}, {}, {}) v GROUP BY 1 ORDER BY 1"
+        ).format(
+            sql.Literal(geoid),
+            sql.Literal(["x", "y", "knowledge"]),
+            sql.Literal([lo_x, lo_y, CAMPAIGNS[0]]),
+            sql.Literal([hi_x, hi_y, CAMPAIGNS[-1]]),
+        ),
+    )
     crest = [float(r[2]) for r in rows]
     context.figure("crest_m", crest)
     out(f"   each campaign found the crest deeper: {' > '.join(f'{c:g}' for c in crest)} m")
-    rows = context.ask("what is the history made of (its i-cells, from SQL)?", sql.SQL(
-        "SELECT l.level, count(DISTINCT c.cell) AS cells FROM generate_series(0, 3) l(level), "
-        "LATERAL tgsis.md_cells({}, l.level) c GROUP BY 1 ORDER BY 1").format(sql.Literal(geoid)))
+    rows = context.ask(
+        "what is the history made of (its i-cells, from SQL)?",
+        sql.SQL(
+            "SELECT l.level, count(DISTINCT c.cell) AS cells FROM generate_series(0, 3) l(level), "
+            "LATERAL tgsis.md_cells({}, l.level) c GROUP BY 1 ORDER BY 1"
+        ).format(sql.Literal(geoid)),
+    )
     counts = [int(r[1]) for r in rows]
     euler = counts[0] - counts[1] + counts[2] - counts[3]
-    out(f"   vertices {counts[0]}, edges {counts[1]}, faces {counts[2]}, volumes {counts[3]}: Euler characteristic "
-        f"{euler} (a disk times an interval: 1; Python says {whole.euler_characteristic()})")
+    out(
+        f"   vertices {counts[0]}, edges {counts[1]}, faces {counts[2]}, volumes {counts[3]}: Euler characteristic "
+        f"{euler} (a disk times an interval: 1; Python says {whole.euler_characteristic()})"
+    )
     context.figure("cells", counts)
 
     out("3. the slice at each campaign is that interpretation again (Python, tgsis.gmaps.slice)")
@@ -130,10 +166,18 @@ def run(context: Context) -> None:
 
     first = surfaces[0]
     png = context.folder / "knowledge_interpretations.png"
-    context.wrote(pictures.scene(surfaces, png, title="top anticline picked in 2019-2025",
-                                 colour=[pictures.displacement(s, first) for s in surfaces],
-                                 colour_label="moved since 2019 (m)", exaggeration=2.0))
-    series = write_frames_pvd([(campaign, s) for campaign, s in zip(CAMPAIGNS, surfaces)],
-                              context.folder / "knowledge.pvd")
+    context.wrote(
+        pictures.scene(
+            surfaces,
+            png,
+            title="top anticline picked in 2019-2025",
+            colour=[pictures.displacement(s, first) for s in surfaces],
+            colour_label="moved since 2019 (m)",
+            exaggeration=2.0,
+        )
+    )
+    series = write_frames_pvd(
+        [(campaign, s) for campaign, s in zip(CAMPAIGNS, surfaces)], context.folder / "knowledge.pvd"
+    )
     context.wrote([series.pvd])
     out(f"   {', '.join(p.name for p in context.files)} (knowledge.pvd: the campaigns as ParaView time steps)")

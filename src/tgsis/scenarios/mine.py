@@ -34,11 +34,13 @@ from tgsis.mesh import LineSet, Surface
 from tgsis.scenarios._context import Context
 
 #: The surveys (the first builds the initial model), their dates, and how many holes each drilled.
-SURVEYS = (("survey_2019", dt.datetime(2019, 3, 1, tzinfo=dt.timezone.utc), 8),
-           ("survey_2021", dt.datetime(2021, 5, 1, tzinfo=dt.timezone.utc), 6),
-           ("survey_2023", dt.datetime(2023, 6, 1, tzinfo=dt.timezone.utc), 6))
-EXTENT = (1200.0, 800.0)   # m
-COLLAR_Z = 400.0           # m, elevation of the collars
+SURVEYS = (
+    ("survey_2019", dt.datetime(2019, 3, 1, tzinfo=dt.timezone.utc), 8),
+    ("survey_2021", dt.datetime(2021, 5, 1, tzinfo=dt.timezone.utc), 6),
+    ("survey_2023", dt.datetime(2023, 6, 1, tzinfo=dt.timezone.utc), 6),
+)
+EXTENT = (1200.0, 800.0)  # m
+COLLAR_Z = 400.0  # m, elevation of the collars
 
 
 def ore_top(xy: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
@@ -55,8 +57,11 @@ def holes(rng: np.random.Generator, count: int) -> npt.NDArray[np.float64]:
 def borehole(xy: npt.NDArray[np.float64], name: str) -> LineSet:
     """A vertical hole from the collar to 80 m below the ore's top, in 10 segments."""
     z = np.linspace(COLLAR_Z, float(ore_top(xy[None])[0]) - 80.0, 11)
-    return LineSet(np.column_stack([np.full(11, xy[0]), np.full(11, xy[1]), z]),
-                   np.column_stack([np.arange(10), np.arange(1, 11)]), name=name)
+    return LineSet(
+        np.column_stack([np.full(11, xy[0]), np.full(11, xy[1]), z]),
+        np.column_stack([np.arange(10), np.arange(1, 11)]),
+        name=name,
+    )
 
 
 def gridded_top(collars: npt.NDArray[np.float64], nx: int, ny: int) -> Surface:
@@ -66,8 +71,11 @@ def gridded_top(collars: npt.NDArray[np.float64], nx: int, ny: int) -> Surface:
     z = RBFInterpolator(collars, ore_top(collars), kernel="thin_plate_spline", smoothing=1.0)(xy)
     idx = np.arange(nx * ny).reshape(ny, nx)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return Surface(np.column_stack([xy, np.round(z, 2)]), np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
-                   name="ore top")
+    return Surface(
+        np.column_stack([xy, np.round(z, 2)]),
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        name="ore top",
+    )
 
 
 def updated_top(previous: Surface, collars: npt.NDArray[np.float64]) -> Surface:
@@ -104,8 +112,10 @@ def run(context: Context) -> None:
     for name, geotype in (("boreholes", "MULTILINESTRING"), ("orebody", "SURFACE"), ("faults", "SURFACE")):
         create_feature_class(conn, name, geotype, srs=32750)
     enable_feature_versioning(conn)
-    out("1. the initial model from the 2019 boreholes; after each survey a new version of the last one, "
-        "believed from the survey's date until the next")
+    out(
+        "1. the initial model from the 2019 boreholes; after each survey a new version of the last one, "
+        "believed from the survey's date until the next"
+    )
     collars = np.zeros((0, 2))
     parent, top_id = "DEFAULT", 0
     tops: list[Surface] = []
@@ -114,22 +124,30 @@ def run(context: Context) -> None:
         with in_version(conn, version):
             new = holes(rng, count)
             collars = np.vstack([collars, new])
-            hole_ids = [insert_feature(conn, "boreholes", borehole(xy, f"BH{date.year % 100:02d}-{i + 1:02d}"))
-                        for i, xy in enumerate(new)]
+            hole_ids = [
+                insert_feature(conn, "boreholes", borehole(xy, f"BH{date.year % 100:02d}-{i + 1:02d}"))
+                for i, xy in enumerate(new)
+            ]
             top = gridded_top(collars, nx, ny) if k == 0 else updated_top(tops[-1], new)
             tops.append(top)
             if k == 0:
                 top_id = insert_feature(conn, "orebody", top)
                 fault_id = insert_feature(conn, "faults", fault(850.0, "F1"))
-                create_model(conn, "resource model", [*hole_ids, top_id, fault_id],
-                             description="boreholes, the ore body's top and the faults")
+                create_model(
+                    conn,
+                    "resource model",
+                    [*hole_ids, top_id, fault_id],
+                    description="boreholes, the ore body's top and the faults",
+                )
                 create_model(conn, "geotechnical model", [fault_id], description="the faults")
                 how = f"{count} holes, the ore body's top gridded from their intercepts, fault F1"
             else:
                 saved = save_feature(conn, "orebody", top_id, top)
                 add_to_model(conn, "resource model", hole_ids)
-                how = (f"{count} new holes; the ore body's top corrected around them and saved by difference "
-                       f"({saved.vertices_moved} of its {top.n_vertices} vertices moved)")
+                how = (
+                    f"{count} new holes; the ore body's top corrected around them and saved by difference "
+                    f"({saved.vertices_moved} of its {top.n_vertices} vertices moved)"
+                )
                 if k == len(SURVEYS) - 1:
                     f2 = insert_feature(conn, "faults", fault(300.0, "F2"))
                     add_to_model(conn, "resource model", [f2])
@@ -139,47 +157,74 @@ def run(context: Context) -> None:
         following = SURVEYS[k + 1][1] if k + 1 < len(SURVEYS) else None
         set_version_validity(conn, version, date, following)
         conn.commit()
-        out(f"   {version} (child of {parent}), believed {date.date()} .. "
-            f"{following.date() if following else 'still'}: {how}")
+        out(
+            f"   {version} (child of {parent}), believed {date.date()} .. "
+            f"{following.date() if following else 'still'}: {how}"
+        )
         parent = version
 
     out("2. the questions, in SQL that does not move the session between versions")
     day = dt.datetime(2022, 1, 15, tzinfo=dt.timezone.utc)
     believed = sql.SQL("tgsis.version_believed_at({})").format(sql.Literal(day))
-    rows = context.ask(f"which resource model was believed on {day.date()}, and what did it hold?", sql.SQL(
-        "SELECT {b} AS version, count(*) AS objects, "
-        "count(*) FILTER (WHERE g.geotype = 'MULTILINESTRING') AS boreholes, "
-        "string_agg(g.geoname, ', ' ORDER BY g.geoname) FILTER (WHERE g.geotype = 'SURFACE') AS surfaces "
-        "FROM tgsis.rows_at(NULL::tgsis.model, {b}) m "
-        "JOIN tgsis.rows_at(NULL::tgsis.model_object, {b}) mo USING (modelid) "
-        "JOIN tgsis.rows_at(NULL::tgsis.geometry, {b}) g USING (geoid) "
-        "WHERE m.name = 'resource model'").format(b=believed))
+    rows = context.ask(
+        f"which resource model was believed on {day.date()}, and what did it hold?",
+        sql.SQL(
+            "SELECT {b} AS version, count(*) AS objects, "
+            "count(*) FILTER (WHERE g.geotype = 'MULTILINESTRING') AS boreholes, "
+            "string_agg(g.geoname, ', ' ORDER BY g.geoname) FILTER (WHERE g.geotype = 'SURFACE') AS surfaces "
+            "FROM tgsis.rows_at(NULL::tgsis.model, {b}) m "
+            "JOIN tgsis.rows_at(NULL::tgsis.model_object, {b}) mo USING (modelid) "
+            "JOIN tgsis.rows_at(NULL::tgsis.geometry, {b}) g USING (geoid) "
+            "WHERE m.name = 'resource model'"
+        ).format(b=believed),
+    )
     context.figure("believed_on_2022_01_15", rows[0][0])
     for older, newer in zip(SURVEYS, SURVEYS[1:]):
-        rows = context.ask(f"what changed from {older[0]} to {newer[0]} (per table: objects and rows)?", sql.SQL(
-            "SELECT d.shortname AS tbl, count(DISTINCT d.objectkey) AS objects, sum(d.added) AS added, "
-            "sum(d.removed) AS removed, sum(d.changed) AS changed FROM tgsis.diff_versions({}, {}) d "
-            "GROUP BY 1 ORDER BY 1").format(sql.Literal(older[0]), sql.Literal(newer[0])))
+        rows = context.ask(
+            f"what changed from {older[0]} to {newer[0]} (per table: objects and rows)?",
+            sql.SQL(
+                "SELECT d.shortname AS tbl, count(DISTINCT d.objectkey) AS objects, sum(d.added) AS added, "
+                "sum(d.removed) AS removed, sum(d.changed) AS changed FROM tgsis.diff_versions({}, {}) d "
+                "GROUP BY 1 ORDER BY 1"
+            ).format(sql.Literal(older[0]), sql.Literal(newer[0])),
+        )
         context.figure(f"changed_tables_{newer[0]}", [r[0] for r in rows])
-    rows = context.ask("how many vertex rows did each version store, against how many it sees?", sql.SQL(
-        "SELECT v.name AS version, (SELECT count(*) FROM tgsis.vrtx_ver r JOIN tgsis.revisions rv USING (revision) "
-        "WHERE rv.versionid = v.versionid) AS stored, "
-        "(SELECT count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, v.name)) AS seen "
-        "FROM tgsis.versions v WHERE v.valid_from IS NOT NULL ORDER BY v.valid_from"))
+    rows = context.ask(
+        "how many vertex rows did each version store, against how many it sees?",
+        sql.SQL(
+            "SELECT v.name AS version, (SELECT count(*) FROM tgsis.vrtx_ver r JOIN tgsis.revisions rv USING (revision) "
+            "WHERE rv.versionid = v.versionid) AS stored, "
+            "(SELECT count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, v.name)) AS seen "
+            "FROM tgsis.versions v WHERE v.valid_from IS NOT NULL ORDER BY v.valid_from"
+        ),
+    )
     stored, seen = [int(r[1]) for r in rows], [int(r[2]) for r in rows]
-    out(f"   unchanged parts are not stored again: the later versions stored {stored[1]} and {stored[2]} vertex rows "
-        f"while seeing {seen[1]} and {seen[2]} ({100 * sum(stored[1:]) / sum(seen[1:]):.0f} %)")
+    out(
+        f"   unchanged parts are not stored again: the later versions stored {stored[1]} and {stored[2]} vertex rows "
+        f"while seeing {seen[1]} and {seen[2]} ({100 * sum(stored[1:]) / sum(seen[1:]):.0f} %)"
+    )
     context.figure("vertex_rows_stored", stored)
     context.figure("vertex_rows_seen", seen)
-    rows = context.ask("which models is fault F1 in, in the latest version?", sql.SQL(
-        "SELECT string_agg(m.name, ', ' ORDER BY m.name) AS models "
-        "FROM tgsis.rows_at(NULL::tgsis.model_object, 'survey_2023') mo "
-        "JOIN tgsis.rows_at(NULL::tgsis.model, 'survey_2023') m USING (modelid) "
-        "JOIN tgsis.rows_at(NULL::tgsis.geometry, 'survey_2023') g USING (geoid) WHERE g.geoname = 'F1'"))
+    rows = context.ask(
+        "which models is fault F1 in, in the latest version?",
+        sql.SQL(
+            "SELECT string_agg(m.name, ', ' ORDER BY m.name) AS models "
+            "FROM tgsis.rows_at(NULL::tgsis.model_object, 'survey_2023') mo "
+            "JOIN tgsis.rows_at(NULL::tgsis.model, 'survey_2023') m USING (modelid) "
+            "JOIN tgsis.rows_at(NULL::tgsis.geometry, 'survey_2023') g USING (geoid) WHERE g.geoname = 'F1'"
+        ),
+    )
     context.figure("models_of_F1", rows[0][0])
 
     png = context.folder / "mine_ore_top.png"
-    context.wrote(pictures.scene([tops[-1]], png, title="ore body top after the 2023 survey",
-                                 colour=[pictures.displacement(tops[-1], tops[0])], colour_label="moved since 2019 (m)",
-                                 exaggeration=2.0))
+    context.wrote(
+        pictures.scene(
+            [tops[-1]],
+            png,
+            title="ore body top after the 2023 survey",
+            colour=[pictures.displacement(tops[-1], tops[0])],
+            colour_label="moved since 2019 (m)",
+            exaggeration=2.0,
+        )
+    )
     out(f"   {png.name}: the ore body's top in 2023, coloured by how far it moved since the 2019 model")

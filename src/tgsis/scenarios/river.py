@@ -53,10 +53,21 @@ TIME_UNIT = "kyr"
 TIMES = (0.0, 1.0, 2.0, 3.0, 4.0, 5.0)
 #: per unit and known time: (west edge, east edge, greatest thickness in m); a unit absent at a time is left out
 UNITS: dict[str, dict[float, tuple[float, float, float]]] = {
-    "unit 1": {0.0: (600, 2400, 40), 1.0: (500, 2800, 70), 2.0: (500, 2800, 70), 3.0: (500, 2800, 70),
-               4.0: (500, 2800, 70), 5.0: (500, 2800, 70)},
-    "unit 2": {1.0: (1800, 3600, 30), 2.0: (1700, 3900, 60), 3.0: (1700, 3900, 60), 4.0: (1700, 3900, 60),
-               5.0: (1700, 3900, 60)},
+    "unit 1": {
+        0.0: (600, 2400, 40),
+        1.0: (500, 2800, 70),
+        2.0: (500, 2800, 70),
+        3.0: (500, 2800, 70),
+        4.0: (500, 2800, 70),
+        5.0: (500, 2800, 70),
+    },
+    "unit 2": {
+        1.0: (1800, 3600, 30),
+        2.0: (1700, 3900, 60),
+        3.0: (1700, 3900, 60),
+        4.0: (1700, 3900, 60),
+        5.0: (1700, 3900, 60),
+    },
     "unit 3": {3.0: (2400, 4600, 30), 4.0: (1100, 4700, 50), 5.0: (1000, 4700, 60)},
 }
 #: unit 1's top is lowered in its middle between t = 1 and t = 2 (a river cuts into it)
@@ -78,9 +89,9 @@ def thickness(unit: str, t: float, x: np.ndarray) -> np.ndarray:
         return np.zeros_like(x)
     west, east, height = UNITS[unit][t]
     s = np.clip((x - west) / (east - west), 0.0, 1.0)
-    profile = np.where((s > 0) & (s < 1), height * np.sin(np.pi * s) ** 0.7, 0.0)   # exactly 0 at its edges
-    if unit == "unit 1" and t in EROSION:                   # the channel cut into unit 1's top
-        profile = profile - EROSION[t] * np.exp(-((x - 1500.0) / 300.0) ** 2)
+    profile = np.where((s > 0) & (s < 1), height * np.sin(np.pi * s) ** 0.7, 0.0)  # exactly 0 at its edges
+    if unit == "unit 1" and t in EROSION:  # the channel cut into unit 1's top
+        profile = profile - EROSION[t] * np.exp(-(((x - 1500.0) / 300.0) ** 2))
     return np.asarray(np.maximum(profile, 0.0), dtype=np.float64)
 
 
@@ -125,17 +136,24 @@ def deposition(unit: str) -> tuple[float, float] | None:
 
 
 def _setup(glued: list[int], corners: tuple[int, ...]) -> InterpolationSetup:
-    return InterpolationSetup(corners, corners, controlling_surfaces={"basement": "basement (given in memory)"},
-                              attachments=tuple(Attachment(v, ("basement",)) for v in glued), steps=4, tolerance=1.0)
+    return InterpolationSetup(
+        corners,
+        corners,
+        controlling_surfaces={"basement": "basement (given in memory)"},
+        attachments=tuple(Attachment(v, ("basement",)) for v in glued),
+        steps=4,
+        tolerance=1.0,
+    )
 
 
 def _off_basement(trajectories: np.ndarray, glued: list[int]) -> float:
-    path = trajectories[:, glued]                                       # (m, k, 3): every geometry instant
+    path = trajectories[:, glued]  # (m, k, 3): every geometry instant
     return float(np.abs(path[..., 2] - basement_z(path[..., 0])).max(initial=0.0))
 
 
-def evolving_unit(unit: str, floor: Surface, older: list[EvolvingSurface], nx: int,
-                  ny: int) -> tuple[EvolvingSurface, int, float]:
+def evolving_unit(
+    unit: str, floor: Surface, older: list[EvolvingSurface], nx: int, ny: int
+) -> tuple[EvolvingSurface, int, float]:
     """The unit grown from the surfaces beneath, interpolated per interval and chained; vertices attached, how far they strayed.
 
     Each period starts with the very vertices the one before ends with (its
@@ -149,11 +167,11 @@ def evolving_unit(unit: str, floor: Surface, older: list[EvolvingSurface], nx: i
     attached, strayed = 0, 0.0
     for t0, t1 in zip(known, known[1:]):
         earlier, later = unit_top(unit, t0, nx, ny), unit_top(unit, t1, nx, ny)
-        if parts:                          # the shape the period before ends with: the two share it at t0
+        if parts:  # the shape the period before ends with: the two share it at t0
             before = parts[-1].at(t0)
             assert before is not None
             earlier = Surface(before.vertices, before.cells, name=unit)
-        backwards = unit == "unit 3" and (t0, t1) == (3.0, 4.0)      # the later, larger shape as the source
+        backwards = unit == "unit 3" and (t0, t1) == (3.0, 4.0)  # the later, larger shape as the source
         source, target, ts, tt = (later, earlier, t1, t0) if backwards else (earlier, later, t0, t1)
         # edge vertices on the basement in both shapes slide along it
         glued = sorted(set(_on_basement(source, edges)) & set(_on_basement(target, edges)) - set(corners))
@@ -162,7 +180,7 @@ def evolving_unit(unit: str, floor: Surface, older: list[EvolvingSurface], nx: i
         parts.append(result.evolving)
         strayed = max(strayed, _off_basement(result.trajectories, glued))
     grown = deposition(unit)
-    if grown is not None:                  # the design: its top at the end the source, the surface beneath the target
+    if grown is not None:  # the design: its top at the end the source, the surface beneath the target
         start, end = grown
         # the top as the next period starts (its vertices, so that the two periods share their shape at `end`)
         top = parts[0].at(end) if parts else unit_top(unit, end, nx, ny)
@@ -205,45 +223,71 @@ def _lies_on(t: float) -> sql.Composed:
         "top AS (SELECT DISTINCT ON (surface, vrtxid) surface, under FROM h WHERE under_z <= z + 1e-6 "
         "ORDER BY surface, vrtxid, under_z DESC) "
         "SELECT surface AS unit, string_agg(DISTINCT under, ', ' ORDER BY under) AS lies_on FROM top "
-        "GROUP BY surface ORDER BY surface").format(t=sql.Literal(t))
+        "GROUP BY surface ORDER BY surface"
+    ).format(t=sql.Literal(t))
 
 
 def run(context: Context) -> None:
     out, conn = context.out, context.conn
     nx, ny = (61, 21) if context.size == "large" else (25, 6)
     floor = basement(ny)
-    fc = create_feature_class(conn, "river", "SURFACE", time_model="EVOLVING", time_unit=TIME_UNIT,
-                              description="a fixed basement and the tops of three units deposited and eroded on it")
-    out(f"1. known at t = {', '.join(f'{t:g}' for t in TIMES)} {TIME_UNIT}: "
-        + "; ".join(f"{u} known from t = {min(k):g}" for u, k in UNITS.items()) + "; unit 1 partly eroded by t = 2")
+    fc = create_feature_class(
+        conn,
+        "river",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit=TIME_UNIT,
+        description="a fixed basement and the tops of three units deposited and eroded on it",
+    )
+    out(
+        f"1. known at t = {', '.join(f'{t:g}' for t in TIMES)} {TIME_UNIT}: "
+        + "; ".join(f"{u} known from t = {min(k):g}" for u, k in UNITS.items())
+        + "; unit 1 partly eroded by t = 2"
+    )
     evolving = {"basement": EvolvingSurface.constant(floor, TIMES[0], TIMES[-1], alive=True)}
     glued: dict[str, int] = {}
     onlap: dict[str, dict[str, Any]] = {}
     strayed, dip = 0.0, -np.inf
-    for unit in UNITS:                     # oldest first: each grows from, and is kept above, those before it
+    for unit in UNITS:  # oldest first: each grows from, and is kept above, those before it
         grown, glued[unit], off = evolving_unit(unit, floor, list(evolving.values()), nx, ny)
         strayed = max(strayed, off)
         stacking = keep_above(grown, list(evolving.values()))
         dip = max(dip, stacking.residual)
         names = list(evolving)
-        onlap[unit] = {"raised_m": round(stacking.max_raise, 3), "vertex_instants": stacking.clamped,
-                          "on": [names[i] for i in stacking.lies_on()]}
+        onlap[unit] = {
+            "raised_m": round(stacking.max_raise, 3),
+            "vertex_instants": stacking.clamped,
+            "on": [names[i] for i in stacking.lies_on()],
+        }
         evolving[unit] = stacking.surface
     ids = {name: insert_feature(conn, fc, surface) for name, surface in evolving.items()}
     conn.commit()
-    out("   " + ", ".join(f"{u} deposited over [{grown[0]:g}, {grown[1]:g}]" for u in UNITS
-                          for grown in [deposition(u)] if grown is not None)
+    out(
+        "   "
+        + ", ".join(
+            f"{u} deposited over [{grown[0]:g}, {grown[1]:g}]"
+            for u in UNITS
+            for grown in [deposition(u)]
+            if grown is not None
+        )
         + ": each starts on the surfaces beneath (its top at the end the source, those surfaces at the start "
-        + "the target) and thickens")
-    out("   each unit interpolated per interval, its pinch-out edges attached to the basement ("
+        + "the target) and thickens"
+    )
+    out(
+        "   each unit interpolated per interval, its pinch-out edges attached to the basement ("
         + ", ".join(f"{u} {n} vertex-intervals" for u, n in glued.items())
         + f"; at most {strayed:.1e} m off it at any instant of the interpolation), "
         + "unit 3 from its later shape between t = 3 and 4; "
-        + f"chained and stored as features {min(ids.values())}..{max(ids.values())} of class river")
-    out("   no top below an older one; the erosion/onlap contact (where a top lies on an older one): "
-        + "; ".join(f"{u} on {', '.join(c['on'])}, raised {c['vertex_instants']} vertex-instants by at most "
-                    f"{c['raised_m']:g} m" for u, c in onlap.items())
-        + f"; between instants (sampled at 1/4, 1/2, 3/4 of each) at most {max(dip, 0.0):.2g} m below")
+        + f"chained and stored as features {min(ids.values())}..{max(ids.values())} of class river"
+    )
+    out(
+        "   no top below an older one; the erosion/onlap contact (where a top lies on an older one): "
+        + "; ".join(
+            f"{u} on {', '.join(c['on'])}, raised {c['vertex_instants']} vertex-instants by at most {c['raised_m']:g} m"
+            for u, c in onlap.items()
+        )
+        + f"; between instants (sampled at 1/4, 1/2, 3/4 of each) at most {max(dip, 0.0):.2g} m below"
+    )
     context.figure("attached", glued)
     context.figure("pinch_out_off_basement_m", strayed)
     context.figure("onlap_contact", onlap)
@@ -261,7 +305,13 @@ def run(context: Context) -> None:
     out("4. pictures")
     for t in (1.5, 2.5, 3.0, 4.0):
         scene = [s for s in (get_at(conn, ids[name], t) for name in evolving) if s is not None]
-        context.wrote(pictures.section(scene, context.folder / f"river_t{t:g}.png".replace(".", "_", 1).replace("_png", ".png"),
-                                       y=LENGTH / 2, title=f"the units at t = {t:g} {TIME_UNIT} (SQL snapshots)",
-                                       exaggeration=8.0))
+        context.wrote(
+            pictures.section(
+                scene,
+                context.folder / f"river_t{t:g}.png".replace(".", "_", 1).replace("_png", ".png"),
+                y=LENGTH / 2,
+                title=f"the units at t = {t:g} {TIME_UNIT} (SQL snapshots)",
+                exaggeration=8.0,
+            )
+        )
     out(f"   {', '.join(p.name for p in context.files)}")

@@ -38,8 +38,11 @@ def salt_layer(nx: int, ny: int) -> Surface:
     u, v = np.meshgrid(np.linspace(0, EXTENT[0], nx), np.linspace(0, EXTENT[1], ny))
     idx = np.arange(nx * ny).reshape(ny, nx)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return Surface(np.stack([u.ravel(), v.ravel(), np.full(u.size, DEPTH)], 1),
-                   np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="salt layer")
+    return Surface(
+        np.stack([u.ravel(), v.ravel(), np.full(u.size, DEPTH)], 1),
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        name="salt layer",
+    )
 
 
 def salt_dome(inside: int, side: int, seed: int = 7) -> Surface:
@@ -48,8 +51,14 @@ def salt_dome(inside: int, side: int, seed: int = 7) -> Surface:
     w, h = EXTENT
     corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], dtype=float)
     along = np.linspace(0, 1, side + 2)[1:-1]
-    sides = np.concatenate([np.stack([along * w, np.zeros(side)], 1), np.stack([np.full(side, w), along * h], 1),
-                            np.stack([(1 - along) * w, np.full(side, h)], 1), np.stack([np.zeros(side), (1 - along) * h], 1)])
+    sides = np.concatenate(
+        [
+            np.stack([along * w, np.zeros(side)], 1),
+            np.stack([np.full(side, w), along * h], 1),
+            np.stack([(1 - along) * w, np.full(side, h)], 1),
+            np.stack([np.zeros(side), (1 - along) * h], 1),
+        ]
+    )
     points = rng.random((inside, 2)) * [w * 0.96, h * 0.92] + [w * 0.02, h * 0.04]
     xy = np.concatenate([corners, sides, points])
     # a dome with a steeper western flank, centred a little off the middle
@@ -68,13 +77,17 @@ def run(context: Context) -> None:
     nx, ny = (61, 31) if large else (21, 11)
     layer, dome = salt_layer(nx, ny), salt_dome(1500 if large else 150, 24 if large else 10)
     setup = InterpolationSetup((0, nx - 1, nx * ny - 1, nx * (ny - 1)), (0, 1, 2, 3), steps=5, tolerance=10.0)
-    out(f"1. the salt's top: flat at t = 0 ({layer.n_vertices} vertices, a grid), a dome at t = 1 "
-        f"({dome.n_vertices} vertices, Delaunay): four corner control pairs")
+    out(
+        f"1. the salt's top: flat at t = 0 ({layer.n_vertices} vertices, a grid), a dome at t = 1 "
+        f"({dome.n_vertices} vertices, Delaunay): four corner control pairs"
+    )
     result = interpolate(layer, dome, setup, 0.0, 1.0, name="salt")
     evolving = result.evolving
     context.figure("interpolation_error_m", float(result.error))
-    out(f"   interpolated: {len(evolving.periods)} topology period, {result.target.n_vertices} vertices on a common "
-        f"triangulation, compatible target within {result.error:.2f} m of the dome")
+    out(
+        f"   interpolated: {len(evolving.periods)} topology period, {result.target.n_vertices} vertices on a common "
+        f"triangulation, compatible target within {result.error:.2f} m of the dome"
+    )
 
     fc = create_feature_class(conn, "salt", "SURFACE", time_model="EVOLVING", time_unit=TIME_UNIT)
     fid = insert_feature(conn, fc, evolving)
@@ -85,16 +98,23 @@ def run(context: Context) -> None:
     assert start is not None
     snapshots = []
     for label, t in (("2/3", 2.0 / 3.0), ("1/2", 0.5)):
-        rows = context.ask(f"the salt's top at t = {label} {TIME_UNIT}, in SQL",
-                           sql.SQL("SELECT count(*) AS vertices, round(max(z)::numeric, 1) AS top_m, "
-                                   "round(min(z)::numeric, 1) AS lowest_m FROM tgsis.vertices_at({}, {})").format(
-                                       sql.Literal(fid), sql.Literal(t)))
+        rows = context.ask(
+            f"the salt's top at t = {label} {TIME_UNIT}, in SQL",
+            sql.SQL(
+                "SELECT count(*) AS vertices, round(max(z)::numeric, 1) AS top_m, "
+                "round(min(z)::numeric, 1) AS lowest_m FROM tgsis.vertices_at({}, {})"
+            ).format(sql.Literal(fid), sql.Literal(t)),
+        )
         from_sql, from_python = get_at(conn, fid, t), evolving.at(t)
         assert from_sql is not None and from_python is not None
-        same = bool(np.array_equal(from_sql.vertices, from_python.vertices)
-                    and np.array_equal(from_sql.cells, from_python.cells))
-        out(f"   from Python (EvolvingSurface.at): {from_python.n_vertices} vertices, top "
-            f"{from_python.vertices[:, 2].max():.1f} m; equal to SQL to the bit: {'yes' if same else 'NO'}")
+        same = bool(
+            np.array_equal(from_sql.vertices, from_python.vertices)
+            and np.array_equal(from_sql.cells, from_python.cells)
+        )
+        out(
+            f"   from Python (EvolvingSurface.at): {from_python.n_vertices} vertices, top "
+            f"{from_python.vertices[:, 2].max():.1f} m; equal to SQL to the bit: {'yes' if same else 'NO'}"
+        )
         context.figure(f"sql_equals_python_at_{label}", same)
         context.figure(f"top_m_at_{label}", float(rows[0][1]))
         snapshots.append((label, t, from_sql))
@@ -104,17 +124,31 @@ def run(context: Context) -> None:
     context.wrote(pictures.scene([layer, dome], known, title=f"salt: flat at t = 0 and the dome at t = 1 {TIME_UNIT}"))
     for label, _t, surface in snapshots:
         png = context.folder / f"saltdome_t{label.replace('/', '_')}.png"
-        context.wrote(pictures.scene([surface], png, colour=[pictures.displacement(surface, start)],
-                                     colour_label="moved since t = 0 (m)",
-                                     title=f"salt's top at t = {label} {TIME_UNIT} (SQL snapshot)"))
+        context.wrote(
+            pictures.scene(
+                [surface],
+                png,
+                colour=[pictures.displacement(surface, start)],
+                colour_label="moved since t = 0 (m)",
+                title=f"salt's top at t = {label} {TIME_UNIT} (SQL snapshot)",
+            )
+        )
     times = np.linspace(0.0, 1.0, 11)
     frames = []
     for t in times:
         snapshot = get_at(conn, fid, float(t))
         assert snapshot is not None
         frames.append((float(t), [snapshot]))
-    context.wrote(pictures.animation(frames, context.folder / "saltdome.gif", title="salt's top", time_unit=TIME_UNIT,
-                                     reference=[start], colour_label="moved since t = 0 (m)"))
+    context.wrote(
+        pictures.animation(
+            frames,
+            context.folder / "saltdome.gif",
+            title="salt's top",
+            time_unit=TIME_UNIT,
+            reference=[start],
+            colour_label="moved since t = 0 (m)",
+        )
+    )
     series = export_series(conn, fid, context.folder / "saltdome.pvd", start=0.0, end=1.0, steps=len(times))
     context.wrote([series.pvd])
     out(f"   {', '.join(p.name for p in context.files)} (open saltdome.pvd in ParaView)")

@@ -38,12 +38,12 @@ from tgsis.scenarios._context import Context
 from tgsis.temporal import EvolvingSurface
 
 WIDTH, LENGTH = 4000.0, 2000.0
-FAULT_X = 2000.0      # the fault's trace; the blocks stop GAP/2 short of it (the heave)
+FAULT_X = 2000.0  # the fault's trace; the blocks stop GAP/2 short of it (the heave)
 GAP = 200.0
-BURIAL = 100.0        # m of burial per Myr
-THROW_RATE = 60.0     # m of throw per Myr
+BURIAL = 100.0  # m of burial per Myr
+THROW_RATE = 60.0  # m of throw per Myr
 TIME_UNIT = "Myr"
-HORIZONS = {"A": 0.0, "B": 1.0, "C": 2.0, "D": 3.0, "E": 4.0}   # name -> time its top is laid down (oldest first)
+HORIZONS = {"A": 0.0, "B": 1.0, "C": 2.0, "D": 3.0, "E": 4.0}  # name -> time its top is laid down (oldest first)
 KNOWN = (1.0, 2.0, 3.0, 4.0)
 QUERY_TIME = 2.5
 
@@ -78,8 +78,11 @@ def fault(ny: int) -> Surface:
     u, v = np.meshgrid(np.arange(3), np.linspace(0, LENGTH, ny))
     idx = np.arange(3 * ny).reshape(ny, 3)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return Surface(np.stack([x[u.ravel()], v.ravel(), depth[u.ravel()]], 1),
-                   np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]), name="fault F")
+    return Surface(
+        np.stack([x[u.ravel()], v.ravel(), depth[u.ravel()]], 1),
+        np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]),
+        name="fault F",
+    )
 
 
 def deposition(name: str) -> tuple[str, float, float] | None:
@@ -98,7 +101,7 @@ def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, floa
     known = [t for t in KNOWN if t >= HORIZONS[name]]
     for t0, t1 in zip(known, known[1:]):
         (source, source_corners), (target, target_corners) = horizon_at(name, t0, nx, ny), horizon_at(name, t1, nx, ny)
-        if parts:                                  # the shape the period before ends with: the two share it at t0
+        if parts:  # the shape the period before ends with: the two share it at t0
             before = parts[-1].at(t0)
             assert before is not None
             source = Surface(before.vertices, before.cells, name=source.name)
@@ -107,10 +110,10 @@ def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, floa
         parts.append(result.evolving)
         worst = max(worst, float(result.error))
     grown = deposition(name)
-    if grown is not None:                          # the design: its top at the end the source, the surface beneath the target
+    if grown is not None:  # the design: its top at the end the source, the surface beneath the target
         beneath_name, start, end = grown
         top, top_corners = horizon_at(name, end, nx, ny)
-        if parts:                                  # the top as the next period starts: the two share their shape at `end`
+        if parts:  # the top as the next period starts: the two share their shape at `end`
             first = parts[0].at(end)
             assert first is not None
             top = Surface(first.vertices, first.cells, name=top.name)
@@ -125,13 +128,21 @@ def evolving_horizon(name: str, nx: int, ny: int) -> tuple[EvolvingSurface, floa
 def run(context: Context) -> None:
     out, conn = context.out, context.conn
     nx, ny = (24, 16) if context.size == "large" else (7, 5)
-    fc = create_feature_class(conn, "structure", "SURFACE", time_model="EVOLVING", time_unit=TIME_UNIT,
-                              description="a normal fault and the horizons deposited while it slipped")
-    out(f"1. known at t = {', '.join(f'{t:g}' for t in KNOWN)} {TIME_UNIT}: "
-        + "; ".join(f"t = {t:g}: {', '.join(n for n, d in HORIZONS.items() if d <= t)}" for t in KNOWN))
+    fc = create_feature_class(
+        conn,
+        "structure",
+        "SURFACE",
+        time_model="EVOLVING",
+        time_unit=TIME_UNIT,
+        description="a normal fault and the horizons deposited while it slipped",
+    )
+    out(
+        f"1. known at t = {', '.join(f'{t:g}' for t in KNOWN)} {TIME_UNIT}: "
+        + "; ".join(f"t = {t:g}: {', '.join(n for n, d in HORIZONS.items() if d <= t)}" for t in KNOWN)
+    )
     evolving: dict[str, EvolvingSurface] = {}
     ids, worst, raised = {}, 0.0, {}
-    for name in HORIZONS:                          # oldest first: each kept above those before it
+    for name in HORIZONS:  # oldest first: each kept above those before it
         surface, error = evolving_horizon(name, nx, ny)
         worst = max(worst, error)
         stacking = keep_above(surface, list(evolving.values()))
@@ -142,13 +153,22 @@ def run(context: Context) -> None:
     for label, surface in evolving.items():
         ids[label] = insert_feature(conn, fc, surface)
     conn.commit()
-    out("   each horizon interpolated in each interval (8 control pairs: its blocks' corners) and chained: "
+    out(
+        "   each horizon interpolated in each interval (8 control pairs: its blocks' corners) and chained: "
         + ", ".join(f"{label} {len(s.periods)} period(s)" for label, s in evolving.items())
-        + f"; stored as features {min(ids.values())}..{max(ids.values())} of class structure")
-    out("   " + ", ".join(f"{name} grows from {grown[0]} over [{grown[1]:g}, {grown[2]:g}]"
-                          for name in HORIZONS for grown in [deposition(name)] if grown is not None)
+        + f"; stored as features {min(ids.values())}..{max(ids.values())} of class structure"
+    )
+    out(
+        "   "
+        + ", ".join(
+            f"{name} grows from {grown[0]} over [{grown[1]:g}, {grown[2]:g}]"
+            for name in HORIZONS
+            for grown in [deposition(name)]
+            if grown is not None
+        )
         + " (its top at the end the source, the horizon beneath at the start the target); "
-        + f"no horizon below an older one: raised at most {max(raised.values()):.3g} m onto one")
+        + f"no horizon below an older one: raised at most {max(raised.values()):.3g} m onto one"
+    )
     context.figure("interpolation_error_m", worst)
     context.figure("raised_m", raised)
 
@@ -156,20 +176,28 @@ def run(context: Context) -> None:
     context.structure_at("structure", QUERY_TIME, evolving)
 
     out(f"3. the throw of each horizon at t = {QUERY_TIME:g} {TIME_UNIT}")
-    throws = context.ask("mean depth of the footwall block minus that of the hanging wall",
-                         sql.SQL(
-        "SELECT g.geoname AS horizon, round((avg(v.z) FILTER (WHERE v.x < {fault}) "
-        "- avg(v.z) FILTER (WHERE v.x > {fault}))::numeric, 1) AS throw_m "
-        "FROM tgsis.features_at('structure', {t}) AS f(geoid) JOIN tgsis.geometry g USING (geoid), "
-        "LATERAL tgsis.vertices_at(g.geoid, {t}) v WHERE g.geoname LIKE 'horizon %' "
-        "GROUP BY g.geoname ORDER BY g.geoname").format(fault=sql.Literal(FAULT_X), t=sql.Literal(QUERY_TIME)))
+    throws = context.ask(
+        "mean depth of the footwall block minus that of the hanging wall",
+        sql.SQL(
+            "SELECT g.geoname AS horizon, round((avg(v.z) FILTER (WHERE v.x < {fault}) "
+            "- avg(v.z) FILTER (WHERE v.x > {fault}))::numeric, 1) AS throw_m "
+            "FROM tgsis.features_at('structure', {t}) AS f(geoid) JOIN tgsis.geometry g USING (geoid), "
+            "LATERAL tgsis.vertices_at(g.geoid, {t}) v WHERE g.geoname LIKE 'horizon %' "
+            "GROUP BY g.geoname ORDER BY g.geoname"
+        ).format(fault=sql.Literal(FAULT_X), t=sql.Literal(QUERY_TIME)),
+    )
     context.figure("throws_m", {row[0]: float(row[1]) for row in throws})
-    out("   older horizons carry more displacement: " + " > ".join(f"{row[0].split()[-1]} {row[1]} m" for row in throws))
+    out(
+        "   older horizons carry more displacement: " + " > ".join(f"{row[0].split()[-1]} {row[1]} m" for row in throws)
+    )
 
     out("4. pictures")
     for t in (1.0, QUERY_TIME, 4.0):
         scene = [s for s in (get_at(conn, ids[label], t) for label in evolving) if s is not None]
         png = context.folder / f"synsed_t{t:g}.png".replace(".", "_", 1).replace("_png", ".png")
-        context.wrote(pictures.scene(scene, png, title=f"the structure at t = {t:g} {TIME_UNIT} (SQL snapshots)",
-                                     exaggeration=2.0))
+        context.wrote(
+            pictures.scene(
+                scene, png, title=f"the structure at t = {t:g} {TIME_UNIT} (SQL snapshots)", exaggeration=2.0
+            )
+        )
     out(f"   {', '.join(p.name for p in context.files)}")

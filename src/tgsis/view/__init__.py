@@ -27,8 +27,10 @@ THREE_VERSION = "0.187.0"
 
 
 def _missing(exc: ImportError) -> InvalidInputError:
-    return InvalidInputError(f"the browser view needs the optional extra 'view' ({exc.name} is not installed)",
-                             hint="pip install 'tgsis[view]'")
+    return InvalidInputError(
+        f"the browser view needs the optional extra 'view' ({exc.name} is not installed)",
+        hint="pip install 'tgsis[view]'",
+    )
 
 
 def create_app(conninfo: str, *, writable: bool = False, database: str = "") -> Starlette:
@@ -51,9 +53,17 @@ def create_app(conninfo: str, *, writable: bool = False, database: str = "") -> 
     return make(ViewConfig(conninfo, writable, database))
 
 
-def serve(conninfo: str, *, host: str = "127.0.0.1", port: int = 8765, writable: bool = False,
-          database: str = "", open_browser: bool = False,
-          default_version: str | None = None, on_listening: Callable[[str], None] | None = None) -> None:
+def serve(
+    conninfo: str,
+    *,
+    host: str = "127.0.0.1",
+    port: int = 8765,
+    writable: bool = False,
+    database: str = "",
+    open_browser: bool = False,
+    default_version: str | None = None,
+    on_listening: Callable[[str], None] | None = None,
+) -> None:
     """Serve the view until interrupted (uvicorn).
 
     Parameters
@@ -86,8 +96,9 @@ def serve(conninfo: str, *, host: str = "127.0.0.1", port: int = 8765, writable:
         sock.bind((host, port))
     except OSError as exc:
         sock.close()
-        raise InvalidInputError(f"cannot listen on {host}:{port}: {exc.strerror}",
-                                hint="choose another port with --port (0: any free one)") from exc
+        raise InvalidInputError(
+            f"cannot listen on {host}:{port}: {exc.strerror}", hint="choose another port with --port (0: any free one)"
+        ) from exc
     sock.listen(128)  # connections wait in the queue until uvicorn accepts them
     bound = sock.getsockname()[1]
     shown = f"[{host}]" if family == socket.AF_INET6 else host

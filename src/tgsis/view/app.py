@@ -178,8 +178,7 @@ class View:
         self.templates.env.globals["coord"] = lambda v: f"{v:.1f}" if abs(v) >= 1000 else f"{v:.6g}"
 
     @contextlib.contextmanager
-    def session(self, request: Request, version: str | None = None, *, snapshot: str | None = None
-                ) -> Iterator[Conn]:
+    def session(self, request: Request, version: str | None = None, *, snapshot: str | None = None) -> Iterator[Conn]:
         """A connection inside one transaction, in ``version`` (else the browser's choice, else DEFAULT).
 
         The transaction is REPEATABLE READ: every query of a page sees one
@@ -216,9 +215,18 @@ class View:
         return request.cookies.get(VERSION_COOKIE) or self.config.default_version
 
     def page(self, request: Request, template: str, status_code: int = 200, **context: Any) -> Response:
-        return self.templates.TemplateResponse(request, template, {
-            "database": self.config.database, "writable": self.config.writable,
-            "chosen_version": self.chosen(request) or "DEFAULT", "title": None, **context}, status_code=status_code)
+        return self.templates.TemplateResponse(
+            request,
+            template,
+            {
+                "database": self.config.database,
+                "writable": self.config.writable,
+                "chosen_version": self.chosen(request) or "DEFAULT",
+                "title": None,
+                **context,
+            },
+            status_code=status_code,
+        )
 
 
 def readable_classes(conn: Conn) -> list[tuple[FeatureClass, bool]]:
@@ -234,13 +242,25 @@ def feature_class_of(conn: Conn, feature_id: int) -> FeatureClass:
     for fc, readable in readable_classes(conn):
         if readable and class_has_feature(conn, fc, feature_id):
             return fc
-    raise NotFoundError(f"no feature {feature_id} that this role can read in this version",
-                        hint="the classes page lists the features")
+    raise NotFoundError(
+        f"no feature {feature_id} that this role can read in this version", hint="the classes page lists the features"
+    )
 
 
 def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:
-    numeric = ("float4", "float8", "int2", "int4", "int8", "real", "double precision", "integer", "smallint",
-               "bigint", "numeric")
+    numeric = (
+        "float4",
+        "float8",
+        "int2",
+        "int4",
+        "int8",
+        "real",
+        "double precision",
+        "integer",
+        "smallint",
+        "bigint",
+        "numeric",
+    )
     return [p.name for p in fc.aligned("VERTEX") if p.size == 1 and p.type in numeric]
 
 
@@ -268,12 +288,15 @@ def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None,
 
 def _check_drawn(fc: FeatureClass, feature_id: int) -> None:
     if fc.time_model not in _DRAWN_TIME_MODELS:
-        raise _bad(f"feature {feature_id} (class {fc.name}) has the time model {fc.time_model}, which the browser "
-                   f"view does not draw: it draws {', '.join(_DRAWN_TIME_MODELS)}")
+        raise _bad(
+            f"feature {feature_id} (class {fc.name}) has the time model {fc.time_model}, which the browser "
+            f"view does not draw: it draws {', '.join(_DRAWN_TIME_MODELS)}"
+        )
 
 
-def _mesh_of(conn: Conn, fc: FeatureClass, feature_id: int, t: float | None,
-             color: str | None = None) -> tuple[Drawable | None, float | None]:
+def _mesh_of(
+    conn: Conn, fc: FeatureClass, feature_id: int, t: float | None, color: str | None = None
+) -> tuple[Drawable | None, float | None]:
     """What to draw of a feature at t (None when it does not exist then) and the t used."""
     _check_drawn(fc, feature_id)
     if fc.time_model == "MULTIDIM":  # model 5: time, if any, is an axis of the map (colour by the axes beyond z)
@@ -302,24 +325,40 @@ def _origin(vertices: npt.NDArray[np.float64]) -> list[float]:
     return [float(v) for v in (vertices.min(axis=0) + vertices.max(axis=0)) / 2]
 
 
-def _body(header: Mapping[str, Any], mesh: Drawable | None, color: str | None,
-          extra: Mapping[str, npt.NDArray[Any]] | None = None) -> bytes:
+def _body(
+    header: Mapping[str, Any],
+    mesh: Drawable | None,
+    color: str | None,
+    extra: Mapping[str, npt.NDArray[Any]] | None = None,
+) -> bytes:
     arrays: dict[str, npt.NDArray[Any]] = {}
     if mesh is None:
-        return pack({**header, "kind": "none", "origin": [0.0, 0.0, 0.0], "n_vertices": 0, "n_cells": 0,
-                     "properties": []}, {})
+        return pack(
+            {**header, "kind": "none", "origin": [0.0, 0.0, 0.0], "n_vertices": 0, "n_cells": 0, "properties": []}, {}
+        )
     origin = _origin(mesh.vertices)
     arrays["positions"] = mesh.vertices - np.asarray(origin)
     arrays["indices"] = mesh.indices
     if color:
         if color not in mesh.vertex_values:
-            raise _bad(f"feature {header.get('id')} has no numeric vertex property {color!r}: it has "
-                       f"{', '.join(sorted(mesh.vertex_values)) or 'none'}")
+            raise _bad(
+                f"feature {header.get('id')} has no numeric vertex property {color!r}: it has "
+                f"{', '.join(sorted(mesh.vertex_values)) or 'none'}"
+            )
         arrays["values"] = mesh.vertex_values[color]
     arrays.update(extra or {})
-    return pack({**header, "kind": mesh.kind, "origin": origin, "n_vertices": int(len(mesh.vertices)),
-                 "n_cells": int(len(mesh.indices)), "color": color, "properties": sorted(mesh.vertex_values)},
-                arrays)
+    return pack(
+        {
+            **header,
+            "kind": mesh.kind,
+            "origin": origin,
+            "n_vertices": int(len(mesh.vertices)),
+            "n_cells": int(len(mesh.indices)),
+            "color": color,
+            "properties": sorted(mesh.vertex_values),
+        },
+        arrays,
+    )
 
 
 def _binary(body: bytes) -> Response:
@@ -353,9 +392,19 @@ def classes_page(request: Request) -> Response:
                     truncated.append(fc.name)
                 features += found[:LISTED]
         version = V.working_version(conn)
-    return view.page(request, "classes.html", classes=classes, counts=counts, features=features, wanted=wanted,
-                     truncated=truncated, listed=LISTED,
-                     name=name or "", bbox=request.query_params.get("bbox") or "", version=version)
+    return view.page(
+        request,
+        "classes.html",
+        classes=classes,
+        counts=counts,
+        features=features,
+        wanted=wanted,
+        truncated=truncated,
+        listed=LISTED,
+        name=name or "",
+        bbox=request.query_params.get("bbox") or "",
+        version=version,
+    )
 
 
 def versions_page(request: Request) -> Response:
@@ -365,8 +414,15 @@ def versions_page(request: Request) -> Response:
         validity = version_validity(conn)
         current, viewing = V.working_version(conn), V.viewing_revision(conn)
         versioned = features_versioned(conn)
-    return view.page(request, "versions.html", versions=versions, validity=validity, current=current,
-                     viewing=viewing, versioned=versioned)
+    return view.page(
+        request,
+        "versions.html",
+        versions=versions,
+        validity=validity,
+        current=current,
+        viewing=viewing,
+        versioned=versioned,
+    )
 
 
 async def choose_version(request: Request) -> Response:
@@ -409,8 +465,10 @@ def scene_page(request: Request) -> Response:
         properties = sorted(set.intersection(*(set(_colours(conn, classes[r.feature_class], r.id)) for r in rows)))
         version = V.working_version(conn)
     if color != "height" and color not in properties:
-        raise _bad(f"colour {color!r} is neither 'height' nor a numeric vertex property of every feature shown "
-                   f"({', '.join(properties) or 'none'})")
+        raise _bad(
+            f"colour {color!r} is neither 'height' nor a numeric vertex property of every feature shown "
+            f"({', '.join(properties) or 'none'})"
+        )
     units = {classes[r.feature_class].time_unit for r in rows if r.first is not None} - {None}
     temporal = [r.id for r in rows if r.first is not None]
 
@@ -418,12 +476,29 @@ def scene_page(request: Request) -> Response:
         params = {"t": repr(when) if feature_id in temporal else None, "color": None if color == "height" else color}
         return f"/api/mesh/{feature_id}?" + urllib.parse.urlencode({k: v for k, v in params.items() if v is not None})
 
-    config = {"ids": ids, "t": when, "first": first, "last": last, "color": color, "exaggeration": exaggeration,
-              "temporal": temporal, "urls": {str(i): first_url(i) for i in ids}}
+    config = {
+        "ids": ids,
+        "t": when,
+        "first": first,
+        "last": last,
+        "color": color,
+        "exaggeration": exaggeration,
+        "temporal": temporal,
+        "urls": {str(i): first_url(i) for i in ids},
+    }
     comparable = len(rows) == 1 and rows[0].time_model == "STATIC" and rows[0].geotype == "SURFACE"
-    return view.page(request, "scene.html", rows=rows, config=config, properties=properties, color=color,
-                     comparable=comparable,
-                     unit=", ".join(sorted(u for u in units if u)), version=version, title="scene")
+    return view.page(
+        request,
+        "scene.html",
+        rows=rows,
+        config=config,
+        properties=properties,
+        color=color,
+        comparable=comparable,
+        unit=", ".join(sorted(u for u in units if u)),
+        version=version,
+        title="scene",
+    )
 
 
 def compare_page(request: Request) -> Response:
@@ -446,8 +521,18 @@ def compare_page(request: Request) -> Response:
         (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
         changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
     config = {"id": feature_id, "a": a, "b": b, "mode": mode, "marks": request.query_params.get("marks") != "0"}
-    return view.page(request, "compare.html", row=row, config=config, changes=changes.counts(), a=a, b=b, mode=mode,
-                     versions=versions, title="compare")
+    return view.page(
+        request,
+        "compare.html",
+        row=row,
+        config=config,
+        changes=changes.counts(),
+        a=a,
+        b=b,
+        mode=mode,
+        versions=versions,
+        title="compare",
+    )
 
 
 def conflicts_page(request: Request) -> Response:
@@ -465,8 +550,9 @@ def conflicts_page(request: Request) -> Response:
         conflicts = conflicts_with_solutions(conn, name)
     shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
     config = {"version": name, "ids": shown}
-    return view.page(request, "conflicts.html", version=known[name], conflicts=conflicts, config=config,
-                     title="conflicts")
+    return view.page(
+        request, "conflicts.html", version=known[name], conflicts=conflicts, config=config, title="conflicts"
+    )
 
 
 # --------------------------------------------------------------------------- binary endpoints
@@ -498,7 +584,7 @@ def mesh_endpoint(request: Request) -> Response:
 def mesh_header_endpoint(request: Request) -> Response:
     body = _mesh_body(request)
     n = int(np.frombuffer(body[:4], dtype="<u4")[0])
-    return Response(body[4:4 + n].rstrip(), media_type="application/json")
+    return Response(body[4 : 4 + n].rstrip(), media_type="application/json")
 
 
 def _surface_in(view: View, request: Request, version: str, feature_id: int) -> StoredSurface:
@@ -534,13 +620,17 @@ def compare_endpoint(request: Request) -> Response:
         changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
     if side == "a":
         removed_cells = _positions(tids_a, changes.cells_removed)
-        flags = vertex_flags(len(mesh_a.vertices), [(1, _positions(vids_a, changes.vertices_removed)),
-                                                    (1, mesh_a.indices[removed_cells].ravel())])
+        flags = vertex_flags(
+            len(mesh_a.vertices),
+            [(1, _positions(vids_a, changes.vertices_removed)), (1, mesh_a.indices[removed_cells].ravel())],
+        )
         mesh, extra = mesh_a, {"changed": flags}
     else:
         added_cells = _positions(tids_b, changes.cells_added)
-        flags = vertex_flags(len(mesh_b.vertices), [(1, _positions(vids_b, changes.vertices_added)),
-                                                    (1, mesh_b.indices[added_cells].ravel())])
+        flags = vertex_flags(
+            len(mesh_b.vertices),
+            [(1, _positions(vids_b, changes.vertices_added)), (1, mesh_b.indices[added_cells].ravel())],
+        )
         displacement = np.full(len(mesh_b.vertices), np.nan)
         at = np.searchsorted(vids_a, vids_b)
         at = np.minimum(at, max(len(vids_a) - 1, 0))
@@ -573,10 +663,18 @@ def conflict_endpoint(request: Request) -> Response:
     marks = []
     for flag, changes in ((1, child), (2, theirs)):
         cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
-        marks += [(flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
-                  (flag, mesh.indices[cells].ravel())]
-    header = {"id": feature_id, "version": name, "parent": parent, "base": base,
-              "child_changes": child.counts(), "parent_changes": theirs.counts()}
+        marks += [
+            (flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
+            (flag, mesh.indices[cells].ravel()),
+        ]
+    header = {
+        "id": feature_id,
+        "version": name,
+        "parent": parent,
+        "base": base,
+        "child_changes": child.counts(),
+        "parent_changes": theirs.counts(),
+    }
     return _binary(_body(header, mesh, None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
 
 
@@ -675,7 +773,8 @@ class RequestGuard:
                 f"400 Bad Request: tgsis view answers requests for {', '.join(sorted(self.hosts))}, "
                 f"not for the host {host[:200]!r} (a page of another site reaching this machine under a "
                 "name of its own gets nothing; start the view with --host NAME to answer to NAME)",
-                status_code=400)
+                status_code=400,
+            )
         method = str(scope.get("method", "GET")).upper() if scope["type"] == "http" else "WEBSOCKET"
         if scope["type"] == "http" and method in SAFE_METHODS:
             return None
@@ -694,7 +793,8 @@ class RequestGuard:
             f"403 Forbidden: tgsis view refused {method} {scope.get('path', '')}: the request {said}; "
             f"the view accepts changes (the version a browser works in) only from its own pages ({here}). "
             f"Open {here}/versions and choose the version there (a script: send the header 'Origin: {here}').",
-            status_code=403)
+            status_code=403,
+        )
 
 
 # --------------------------------------------------------------------------- errors
@@ -723,8 +823,9 @@ async def error_page(request: Request, exc: Exception) -> Response:
         raise exc
     if request.url.path.startswith("/api/"):
         return JSONResponse({"error": message, "hint": hint, "status": status}, status_code=status)
-    return view.page(request, "error.html", status_code=status, status=status, message=message, hint=hint,
-                     title="error")
+    return view.page(
+        request, "error.html", status_code=status, status=status, message=message, hint=hint, title="error"
+    )
 
 
 def home(request: Request) -> Response:

@@ -52,8 +52,14 @@ class Drawable:
         tetrahedron's boundary faces point at their tetrahedron).
     """
 
-    def __init__(self, kind: Kind, vertices: npt.NDArray[np.float64], indices: npt.NDArray[np.int64],
-                 vertex_values: Mapping[str, npt.NDArray[np.float64]], cell_rows: npt.NDArray[np.int64]) -> None:
+    def __init__(
+        self,
+        kind: Kind,
+        vertices: npt.NDArray[np.float64],
+        indices: npt.NDArray[np.int64],
+        vertex_values: Mapping[str, npt.NDArray[np.float64]],
+        cell_rows: npt.NDArray[np.int64],
+    ) -> None:
         self.kind = kind
         self.vertices = vertices
         self.indices = indices
@@ -102,8 +108,9 @@ def _one(mesh: Mesh) -> Drawable:
         return Drawable("triangles", mesh.vertices, faces, _scalars(mesh), owner)
     if isinstance(mesh, LineSet):
         return Drawable("lines", mesh.vertices, mesh.cells, _scalars(mesh), np.arange(len(mesh.cells)))
-    return Drawable("points", mesh.vertices, np.empty((0, 0), dtype=np.int64), _scalars(mesh),
-                    np.empty(0, dtype=np.int64))
+    return Drawable(
+        "points", mesh.vertices, np.empty((0, 0), dtype=np.int64), _scalars(mesh), np.empty(0, dtype=np.int64)
+    )
 
 
 def drawable(geometry: Geometry) -> Drawable:
@@ -125,9 +132,12 @@ def drawable(geometry: Geometry) -> Drawable:
     names = set.intersection(*(set(p.vertex_values) for p in chosen))
     cells = np.concatenate([p.cell_rows for p in chosen]) if chosen else np.empty(0, dtype=np.int64)
     return Drawable(
-        chosen[0].kind, np.concatenate([p.vertices for p in chosen]).reshape(-1, 3),
+        chosen[0].kind,
+        np.concatenate([p.vertices for p in chosen]).reshape(-1, 3),
         np.concatenate([p.indices + o for p, o in zip(chosen, offsets)]).reshape(-1, k),
-        {n: np.concatenate([p.vertex_values[n] for p in chosen]) for n in sorted(names)}, cells)
+        {n: np.concatenate([p.vertex_values[n] for p in chosen]) for n in sorted(names)},
+        cells,
+    )
 
 
 def gmap_drawable(g: GMap, axes: Sequence[str] = ("x", "y", "z")) -> Drawable:
@@ -147,12 +157,15 @@ def gmap_drawable(g: GMap, axes: Sequence[str] = ("x", "y", "z")) -> Drawable:
     if n > 3:
         raise InvalidInputError(f"a {n}-G-map is not drawn: the browser view draws G-maps of dimension 0 to 3")
     vertices = np.zeros((g.n_points, 3))
-    vertices[:, :min(m, 3)] = g.points[:, :3]
+    vertices[:, : min(m, 3)] = g.points[:, :3]
     values = {(axes[i] if i < len(axes) else f"axis {i + 1}"): g.points[:, i].astype(np.float64) for i in range(3, m)}
     surface = g.border() if n == 3 else g
     if n >= 2:
-        triangles, face = fan_triangles(*surface.polygons()) if surface.n_darts else (
-            np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64))
+        triangles, face = (
+            fan_triangles(*surface.polygons())
+            if surface.n_darts
+            else (np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64))
+        )
         return Drawable("triangles", vertices, triangles, values, face)
     if n == 1:
         first = g.cell_darts(1)
@@ -202,7 +215,7 @@ def pack(header: Mapping[str, Any], arrays: Mapping[str, npt.NDArray[Any]]) -> b
 def unpack(body: bytes) -> tuple[dict[str, Any], dict[str, npt.NDArray[Any]]]:
     """The header and arrays of a body made by :func:`pack` (what the browser's code reads)."""
     n = int(np.frombuffer(body[:4], dtype="<u4")[0])
-    header = json.loads(body[4:4 + n])
+    header = json.loads(body[4 : 4 + n])
     arrays = {}
     offset = 4 + n
     for item in header["arrays"]:

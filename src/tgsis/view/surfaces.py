@@ -57,8 +57,9 @@ class StoredSurface:
     triangle_ids: npt.NDArray[np.int64]
 
 
-def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *,
-                   beside: Conn | None = None) -> StoredSurface:
+def stored_surface(
+    conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *, beside: Conn | None = None
+) -> StoredSurface:
     """The stored vertices and triangles of a static surface (and the vertex property ``prop``), with their ids.
 
     ``beside``: a second connection that sees what ``conn`` sees (the same
@@ -72,6 +73,7 @@ def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | No
     InvalidGeometryError
         Triangles that name vertices the geometry does not have.
     """
+
     def triangles(on: Conn) -> tuple[npt.NDArray[np.int64], ...]:
         return static_triangle_rows(on, feature_id)
 
@@ -82,8 +84,9 @@ def stored_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | No
     return StoredSurface(drawable, vertex_ids, tid[torder])
 
 
-def drawable_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *,
-                     beside: Conn | None = None) -> Drawable:
+def drawable_surface(
+    conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None = None, *, beside: Conn | None = None
+) -> Drawable:
     """What the scene draws of a static surface: :func:`stored_surface` without the triangles' ids or order.
 
     The triangles' corners travel packed (:func:`tgsis.db._transfer.corners_out`,
@@ -98,6 +101,7 @@ def drawable_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | 
     InvalidGeometryError
         Triangles that name vertices the geometry does not have.
     """
+
     def triangles(on: Conn) -> npt.NDArray[np.int64]:
         return static_triangle_corners(on, feature_id)
 
@@ -108,8 +112,9 @@ def drawable_surface(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | 
 _T = TypeVar("_T")
 
 
-def _side_by_side(conn: Conn, feature_id: int, triangles: Callable[[Conn], _T],
-                  beside: Conn | None) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], _T]:
+def _side_by_side(
+    conn: Conn, feature_id: int, triangles: Callable[[Conn], _T], beside: Conn | None
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], _T]:
     """The vertices (ids ascending, (n, 3) coordinates) through ``conn`` and ``triangles(beside)`` at the same time."""
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
         later = pool.submit(triangles, beside) if beside is not None else None
@@ -124,8 +129,15 @@ def _side_by_side(conn: Conn, feature_id: int, triangles: Callable[[Conn], _T],
     return vid[vorder], vertices, cells
 
 
-def _drawable(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None, vertex_ids: npt.NDArray[np.int64],
-              vertices: npt.NDArray[np.float64], corners: npt.NDArray[np.int64]) -> Drawable:
+def _drawable(
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    prop: str | None,
+    vertex_ids: npt.NDArray[np.int64],
+    vertices: npt.NDArray[np.float64],
+    corners: npt.NDArray[np.int64],
+) -> Drawable:
     indices = local_positions(vertex_ids, corners.ravel(), "tgsis.trgl rows", feature_id).reshape(-1, 3)
     values: dict[str, npt.NDArray[np.float64]] = {}
     if prop is not None:
@@ -133,8 +145,9 @@ def _drawable(conn: Conn, fc: FeatureClass, feature_id: int, prop: str | None, v
     return Drawable("triangles", vertices, indices.astype(np.int64), values, np.arange(len(indices), dtype=np.int64))
 
 
-def _vertex_property(conn: Conn, fc: FeatureClass, feature_id: int, prop: str,
-                     vertex_ids: npt.NDArray[np.int64]) -> npt.NDArray[np.float64]:
+def _vertex_property(
+    conn: Conn, fc: FeatureClass, feature_id: int, prop: str, vertex_ids: npt.NDArray[np.int64]
+) -> npt.NDArray[np.float64]:
     found = [p for p in fc.aligned("VERTEX") if p.name == prop and p.size == 1]
     table = fc.property_table("VERTEX")
     if not found or table is None:

@@ -22,8 +22,10 @@ def cmd_db_install(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         result = install(conn, method=args.method)
     if result.action == "unchanged":
-        out(f"tgsis {result.version} is already installed ({result.method})"
-             + (": nothing to do" if not result.steps else ""))
+        out(
+            f"tgsis {result.version} is already installed ({result.method})"
+            + (": nothing to do" if not result.steps else "")
+        )
     elif result.action == "upgraded":
         out(f"upgraded tgsis {result.previous_version} -> {result.version} ({result.method})")
     else:
@@ -31,15 +33,18 @@ def cmd_db_install(args: argparse.Namespace) -> int:
     for step in result.steps:
         out(f"  {step}")
     for statement in result.still_needed:
-        out(f"still needed: a DBA runs `{statement}` (tgsis's owner registers classes and versions features "
-             "as a member of tgsis_admin)")
+        out(
+            f"still needed: a DBA runs `{statement}` (tgsis's owner registers classes and versions features "
+            "as a member of tgsis_admin)"
+        )
     return 0
 
 
 def cmd_db_uninstall(args: argparse.Namespace) -> int:
     if not args.yes:
-        raise Error("uninstall removes every tgsis object and its data from the database",
-                    hint="repeat with --yes to do it")
+        raise Error(
+            "uninstall removes every tgsis object and its data from the database", hint="repeat with --yes to do it"
+        )
     with connect(args.dsn) as conn:
         removed = uninstall(conn, cascade=args.cascade)
     out(f"removed tgsis {removed.version} ({removed.method})" if removed else "tgsis was not installed")
@@ -54,18 +59,30 @@ def cmd_db_status(args: argparse.Namespace) -> int:
         db = conn.info.dbname
     current = status.installed
     if wants_json(args):
-        cliout.emit_json({"database": db, "source": target.source, "server": server,
-                          "tgsis": current.version if current else None,
-                          "method": current.method if current else None,
-                          "fingerprint": current.fingerprint if current else None,
-                          "client": status.client_version, "client_fingerprint": status.client_fingerprint,
-                          "missing_storage": list(status.missing_storage), "state": status.state,
-                          "problem": status.problem, "fix": status.fix})
+        cliout.emit_json(
+            {
+                "database": db,
+                "source": target.source,
+                "server": server,
+                "tgsis": current.version if current else None,
+                "method": current.method if current else None,
+                "fingerprint": current.fingerprint if current else None,
+                "client": status.client_version,
+                "client_fingerprint": status.client_fingerprint,
+                "missing_storage": list(status.missing_storage),
+                "state": status.state,
+                "problem": status.problem,
+                "fix": status.fix,
+            }
+        )
         return 0 if status.ok else 1
     out(f"database: {db} (from {target.source})")
     out(f"server:   {server or '?'}")
-    fingerprint = ("unknown: this role may not read tgsis.installation" if current and current.fingerprint is None
-                   else (current.fingerprint if current else None) or "none recorded")
+    fingerprint = (
+        "unknown: this role may not read tgsis.installation"
+        if current and current.fingerprint is None
+        else (current.fingerprint if current else None) or "none recorded"
+    )
     installed = f"{current.version} ({current.method}, fingerprint {fingerprint})" if current else "not installed"
     out(f"tgsis:    {installed}")
     out(f"client:   {status.client_version} (fingerprint {status.client_fingerprint})")
@@ -81,17 +98,41 @@ def cmd_db_status(args: argparse.Namespace) -> int:
 
 def add_db_parser(commands: Any) -> None:
     """``tgsis db install|uninstall|status``."""
-    db = add_command(commands, "db", "install, upgrade or inspect tgsis in a database",
-                  ["tgsis --dsn 'host=db.example.org dbname=geo' db install"])
+    db = add_command(
+        commands,
+        "db",
+        "install, upgrade or inspect tgsis in a database",
+        ["tgsis --dsn 'host=db.example.org dbname=geo' db install"],
+    )
     db_commands = db.add_subparsers(dest="db_command", metavar="ACTION", required=True)
-    db_install = add_command(db_commands, "install", "install or upgrade tgsis (a no-op when up to date)",
-                          ["tgsis db install", "tgsis db install --method sql   # managed PostgreSQL"], cmd_db_install)
-    db_install.add_argument("--method", choices=("auto", "extension", "sql"), default="auto",
-                            help="extension: CREATE EXTENSION (needs the files on the server); "
-                                 "sql: run the script from the client; auto: extension when available")
-    db_uninstall = add_command(db_commands, "uninstall", "remove tgsis and all its data from the database",
-                            ["tgsis db uninstall --yes"], cmd_db_uninstall)
+    db_install = add_command(
+        db_commands,
+        "install",
+        "install or upgrade tgsis (a no-op when up to date)",
+        ["tgsis db install", "tgsis db install --method sql   # managed PostgreSQL"],
+        cmd_db_install,
+    )
+    db_install.add_argument(
+        "--method",
+        choices=("auto", "extension", "sql"),
+        default="auto",
+        help="extension: CREATE EXTENSION (needs the files on the server); "
+        "sql: run the script from the client; auto: extension when available",
+    )
+    db_uninstall = add_command(
+        db_commands,
+        "uninstall",
+        "remove tgsis and all its data from the database",
+        ["tgsis db uninstall --yes"],
+        cmd_db_uninstall,
+    )
     db_uninstall.add_argument("--yes", action="store_true", help="really do it")
     db_uninstall.add_argument("--cascade", action="store_true", help="also drop objects that depend on tgsis")
-    add_command(db_commands, "status", "the database's tgsis against this client's (exit 1 unless up to date)",
-             ["tgsis db status", "tgsis db status --json"], cmd_db_status, tabular=False)
+    add_command(
+        db_commands,
+        "status",
+        "the database's tgsis against this client's (exit 1 unless up to date)",
+        ["tgsis db status", "tgsis db status --json"],
+        cmd_db_status,
+        tabular=False,
+    )

@@ -30,12 +30,30 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def add_demo_parser(commands: Any) -> None:
     """``tgsis demo``."""
-    demo = add_command(commands, "demo", "run a sample application end to end (default: cfm, the release story)",
-                    ["tgsis demo saltdome --dir out   # then look at out/*.png, out/saltdome.gif",
-                     "tgsis demo --list", "tgsis demo --list --json"], cmd_demo, tabular=True)
-    demo.add_argument("name", nargs="?", default="cfm", metavar="NAME",
-                      help="the scenario (tgsis demo --list names them; default: cfm)")
+    demo = add_command(
+        commands,
+        "demo",
+        "run a sample application end to end (default: cfm, the release story)",
+        [
+            "tgsis demo saltdome --dir out   # then look at out/*.png, out/saltdome.gif",
+            "tgsis demo --list",
+            "tgsis demo --list --json",
+        ],
+        cmd_demo,
+        tabular=True,
+    )
+    demo.add_argument(
+        "name",
+        nargs="?",
+        default="cfm",
+        metavar="NAME",
+        help="the scenario (tgsis demo --list names them; default: cfm)",
+    )
     demo.add_argument("--list", action="store_true", help="list the scenarios and what each shows")
     demo.add_argument("--dir", metavar="DIR", help="folder for the files it writes (default: a new temporary folder)")
-    demo.add_argument("--size", choices=("small", "large"), default="small",
-                      help="how much data the scenario makes (default: small, under a minute)")
+    demo.add_argument(
+        "--size",
+        choices=("small", "large"),
+        default="small",
+        help="how much data the scenario makes (default: small, under a minute)",
+    )

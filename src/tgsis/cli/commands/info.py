@@ -42,7 +42,8 @@ def _sizes_in_time(conn: psycopg.Connection[Any], time_model: str, geoid: int) -
     vertices, cells, k = list(sizes.vertices), list(sizes.cells), sizes.count
     if min(vertices) == max(vertices) and min(cells) == max(cells):
         return f"{vertices[0]} vertices, {cells[0]} cells " + (
-            f"at each of its {k} {unit}" if unit == "instants" else f"in each of its {k} {unit}")
+            f"at each of its {k} {unit}" if unit == "instants" else f"in each of its {k} {unit}"
+        )
     return f"{min(vertices)} to {max(vertices)} vertices, {min(cells)} to {max(cells)} cells {each} ({k} {unit})"
 
 
@@ -64,38 +65,69 @@ def cmd_info(args: argparse.Namespace) -> int:
         if versioned:
             for version in list_versions(conn):
                 if version.name != here:
-                    changed = [d for d in diff_versions(conn, here, version.name)
-                               if d.objectclass == "feature" and d.objectkey == str(args.id)]
+                    changed = [
+                        d
+                        for d in diff_versions(conn, here, version.name)
+                        if d.objectclass == "feature" and d.objectkey == str(args.id)
+                    ]
                     if changed:
                         added, removed = sum(d.added for d in changed), sum(d.removed for d in changed)
-                        what = ("only there" if removed == 0 and sum(d.changed for d in changed) == 0 and added
-                                else "not there" if added == 0 and sum(d.changed for d in changed) == 0 and removed
-                                else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ")
+                        what = (
+                            "only there"
+                            if removed == 0 and sum(d.changed for d in changed) == 0 and added
+                            else "not there"
+                            if added == 0 and sum(d.changed for d in changed) == 0 and removed
+                            else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ"
+                        )
                         differs.append(f"{V.show_name(version.name)} ({what})")
-                        differing.append({"version": version.name,
-                                          "what": what if what in ("only there", "not there") else "differs",
-                                          "rows": sum(d.added + d.removed + d.changed for d in changed)})
+                        differing.append(
+                            {
+                                "version": version.name,
+                                "what": what if what in ("only there", "not there") else "differs",
+                                "rows": sum(d.added + d.removed + d.changed for d in changed),
+                            }
+                        )
         conn.rollback()
-    name, geotype, nvrtx, ncell, members = (summary.name, summary.geotype, summary.n_vertices, summary.n_cells,
-                                            summary.members)
+    name, geotype, nvrtx, ncell, members = (
+        summary.name,
+        summary.geotype,
+        summary.n_vertices,
+        summary.n_cells,
+        summary.members,
+    )
     box = summary.box
     found = feature.mesh if feature is not None else None
     mesh = found if isinstance(found, Mesh) else None
     plain = mesh is not None
     if wants_json(args):
-        cliout.emit_json({
-            "id": args.id, "name": name, "class": fc.name, "geotype": geotype, "time_model": fc.time_model,
-            "time_unit": fc.time_unit, "version": here, "vertices": nvrtx, "cells": ncell, "members": members,
-            "box": None if box[0] is None else {axis: [box[2 * i], box[2 * i + 1]] for i, axis in enumerate("xyz")},
-            "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
-            "instants": [{"t": t, "topology": starts} for t, starts in steps],
-            "properties": properties, "instant_properties": [p.name for p in fc.instant_properties],
-            "vertex_properties": list(mesh.vertex_properties) if plain and mesh is not None else [],
-            "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
-            "versioned": versioned, "differs_in": differing if versioned else None})
+        cliout.emit_json(
+            {
+                "id": args.id,
+                "name": name,
+                "class": fc.name,
+                "geotype": geotype,
+                "time_model": fc.time_model,
+                "time_unit": fc.time_unit,
+                "version": here,
+                "vertices": nvrtx,
+                "cells": ncell,
+                "members": members,
+                "box": None if box[0] is None else {axis: [box[2 * i], box[2 * i + 1]] for i, axis in enumerate("xyz")},
+                "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
+                "instants": [{"t": t, "topology": starts} for t, starts in steps],
+                "properties": properties,
+                "instant_properties": [p.name for p in fc.instant_properties],
+                "vertex_properties": list(mesh.vertex_properties) if plain and mesh is not None else [],
+                "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
+                "versioned": versioned,
+                "differs_in": differing if versioned else None,
+            }
+        )
         return 0
-    out(f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{time_model_suffix(fc)}), "
-         f"in version {V.show_name(here)}")
+    out(
+        f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{time_model_suffix(fc)}), "
+        f"in version {V.show_name(here)}"
+    )
     out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
     if box[0] is not None:
         out("  box: " + ", ".join(f"{axis} [{box[2 * i]!r}, {box[2 * i + 1]!r}]" for i, axis in enumerate("xyz")))
@@ -103,9 +135,11 @@ def cmd_info(args: argparse.Namespace) -> int:
         out("  static: the same at every time")
     else:
         topology = [t for t, starts in steps if starts]
-        out(f"  exists from t = {cliout.show_time(span[0])} to {cliout.show_time(span[1])}{time_unit_suffix(fc)}"
-             + (" and after (alive)" if span[2] else "")
-             + f"; {len(steps)} instants, topology (re)defined at {', '.join(cliout.show_time(t) for t in topology)}")
+        out(
+            f"  exists from t = {cliout.show_time(span[0])} to {cliout.show_time(span[1])}{time_unit_suffix(fc)}"
+            + (" and after (alive)" if span[2] else "")
+            + f"; {len(steps)} instants, topology (re)defined at {', '.join(cliout.show_time(t) for t in topology)}"
+        )
     if properties:
         out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
     if fc.instant_properties:
@@ -116,7 +150,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         if mesh.cell_properties:
             out("  cell properties: " + ", ".join(mesh.cell_properties))
     if versioned:
-        out("  versions where it differs from " + V.show_name(here) + ": " + (", ".join(differs) if differs else "none"))
+        out(
+            "  versions where it differs from " + V.show_name(here) + ": " + (", ".join(differs) if differs else "none")
+        )
     elif not fc.versioned:
         out(f"  class {fc.name} is not versioned: every version sees this state")
     return 0
@@ -130,8 +166,10 @@ def _shown_properties(properties: dict[str, Any]) -> str:
 def cmd_ls(args: argparse.Namespace) -> int:
     wanted = property_filters(args.property)
     if wanted and not args.feature_class:
-        raise InvalidInputError("--property needs --class: feature properties belong to a class",
-                                hint="tgsis class list names the classes and their properties")
+        raise InvalidInputError(
+            "--property needs --class: feature properties belong to a class",
+            hint="tgsis class list names the classes and their properties",
+        )
     with connection(args) as conn:
         classes = [get_feature_class(conn, args.feature_class)] if args.feature_class else list_feature_classes(conn)
         rows = []
@@ -143,18 +181,43 @@ def cmd_ls(args: argparse.Namespace) -> int:
         return (None, ncell) if geotype == "GMAP" else (ncell, None)
 
     if wants_json(args):
-        cliout.emit_json({"features": [{"id": r.id, "class": r.feature_class, "name": r.name, "geotype": r.geotype,
-                                        "vertices": r.vertices, "cells": darts(r.geotype, r.cells)[0],
-                                        "members": r.members, "darts": darts(r.geotype, r.cells)[1],
-                                        "properties": r.properties}
-                                       for r in rows]})
+        cliout.emit_json(
+            {
+                "features": [
+                    {
+                        "id": r.id,
+                        "class": r.feature_class,
+                        "name": r.name,
+                        "geotype": r.geotype,
+                        "vertices": r.vertices,
+                        "cells": darts(r.geotype, r.cells)[0],
+                        "members": r.members,
+                        "darts": darts(r.geotype, r.cells)[1],
+                        "properties": r.properties,
+                    }
+                    for r in rows
+                ]
+            }
+        )
         return 0
-    print_table(args, ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"),
-                [(r.id, r.feature_class, r.name or "", r.geotype, r.vertices,
-                  *("" if n is None else n for n in darts(r.geotype, r.cells)[:1]),
-                  "" if r.members is None else r.members,
-                  *("" if n is None else n for n in darts(r.geotype, r.cells)[1:]), _shown_properties(r.properties))
-                 for r in rows])
+    print_table(
+        args,
+        ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"),
+        [
+            (
+                r.id,
+                r.feature_class,
+                r.name or "",
+                r.geotype,
+                r.vertices,
+                *("" if n is None else n for n in darts(r.geotype, r.cells)[:1]),
+                "" if r.members is None else r.members,
+                *("" if n is None else n for n in darts(r.geotype, r.cells)[1:]),
+                _shown_properties(r.properties),
+            )
+            for r in rows
+        ],
+    )
     if not rows:
         print("no features", file=sys.stderr)
     return 0
@@ -162,22 +225,45 @@ def cmd_ls(args: argparse.Namespace) -> int:
 
 def add_info_parser(commands: Any) -> None:
     """``tgsis info``."""
-    info = add_command(commands, "info", "what a feature is: class, counts, box, lifespan and instants, properties, "
-                                      "the versions where it differs", ["tgsis info 3", "tgsis info 3 --json"],
-                    cmd_info, tabular=False)
+    info = add_command(
+        commands,
+        "info",
+        "what a feature is: class, counts, box, lifespan and instants, properties, the versions where it differs",
+        ["tgsis info 3", "tgsis info 3 --json"],
+        cmd_info,
+        tabular=False,
+    )
     info.add_argument("id", type=FEATURE_ID, help="the feature's id")
 
 
 def add_ls_parser(commands: Any) -> None:
     """``tgsis ls``."""
-    ls = add_command(commands, "ls", "list features", ["tgsis ls", "tgsis ls --class faults --json",
-                                                    "tgsis ls --class faults --property release=6.1 --name garlock",
-                                                    "tgsis ls --box 0,0,-5000,10000,10000,0",
-                                                    "tgsis --in cfm6 ls --no-header | cut -f1"], cmd_ls, tabular=True)
+    ls = add_command(
+        commands,
+        "ls",
+        "list features",
+        [
+            "tgsis ls",
+            "tgsis ls --class faults --json",
+            "tgsis ls --class faults --property release=6.1 --name garlock",
+            "tgsis ls --box 0,0,-5000,10000,10000,0",
+            "tgsis --in cfm6 ls --no-header | cut -f1",
+        ],
+        cmd_ls,
+        tabular=True,
+    )
     ls.add_argument("--class", dest="feature_class", help="only this feature class")
     ls.add_argument("--name", help="only features whose name contains NAME, in any case")
-    ls.add_argument("--box", type=box, metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
-                    help="only features whose bounding box meets this box (write --box=-1,... when XMIN is negative)")
-    ls.add_argument("--property", action="append", metavar="NAME=VALUE",
-                    help="only features whose feature property NAME equals VALUE, read as the property's type "
-                         "(repeatable; with --class)")
+    ls.add_argument(
+        "--box",
+        type=box,
+        metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
+        help="only features whose bounding box meets this box (write --box=-1,... when XMIN is negative)",
+    )
+    ls.add_argument(
+        "--property",
+        action="append",
+        metavar="NAME=VALUE",
+        help="only features whose feature property NAME equals VALUE, read as the property's type "
+        "(repeatable; with --class)",
+    )

@@ -50,11 +50,14 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
     with cliout.progress(f"interpolating {name}", None, "step") as moved:
-        result = interpolate(source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved,
-                             split=args.split)
-    out(f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
-         f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
-         f"error to the target {result.error:.3g}")
+        result = interpolate(
+            source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved, split=args.split
+        )
+    out(
+        f"interpolated {name}: {result.source.n_vertices} vertices, {result.source.n_cells} triangles "
+        f"({result.source.n_vertices - source.n_vertices} added by cutting and refinement), m = {setup.steps}, "
+        f"error to the target {result.error:.3g}"
+    )
     out("  " + ", ".join(f"{stage} {seconds:.2f} s" for stage, seconds in result.timings.items()))
     if args.preview:
         times = np.linspace(args.t0, args.t1, args.frames).tolist()
@@ -65,9 +68,11 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
             fid = insert_feature(conn, args.feature_class, result.evolving)
             unit = time_unit_suffix(get_feature_class(conn, args.feature_class))
         # as the user gave the times (the source may be the later shape), then the span in time order
-        out(f"stored as feature {fid} of class {args.feature_class}: the source ({name}) at t = {args.t0:g}{unit}, "
-             f"the target at t = {args.t1:g}{unit}; it exists from t = {min(args.t0, args.t1):g} to "
-             f"{max(args.t0, args.t1):g}{unit}" + (" and after (alive)" if args.alive else ""))
+        out(
+            f"stored as feature {fid} of class {args.feature_class}: the source ({name}) at t = {args.t0:g}{unit}, "
+            f"the target at t = {args.t1:g}{unit}; it exists from t = {min(args.t0, args.t1):g} to "
+            f"{max(args.t0, args.t1):g}{unit}" + (" and after (alive)" if args.alive else "")
+        )
     return 0
 
 
@@ -81,8 +86,12 @@ def cmd_corners(args: argparse.Namespace) -> int:
     surface = _read_surface(args.file, "surface")
     corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
     if wants_json(args):
-        cliout.emit_json({"file": args.file, "corners": [{"vertex": v, "xyz": surface.vertices[v].tolist()}
-                                                         for v in corners.tolist()]})
+        cliout.emit_json(
+            {
+                "file": args.file,
+                "corners": [{"vertex": v, "xyz": surface.vertices[v].tolist()} for v in corners.tolist()],
+            }
+        )
         return 0
     out(json.dumps(corners.tolist()))
     for vertex in corners.tolist():
@@ -96,7 +105,8 @@ def _vertex_path(text: str) -> list[int]:
         path = [int(v) for v in text.split(",")]
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"a path is vertex indices separated by commas (e.g. 3,7,12), got {text!r}") from None
+            f"a path is vertex indices separated by commas (e.g. 3,7,12), got {text!r}"
+        ) from None
     if len(path) < 2 or min(path) < 0:
         raise argparse.ArgumentTypeError(f"a path has at least two vertex indices >= 0, got {text!r}")
     return path
@@ -110,41 +120,63 @@ def cmd_cut(args: argparse.Namespace) -> int:
     surface = _read_surface(args.file, "surface")
     cut = cut_along_paths(surface, args.path, names=[f"--path {','.join(map(str, p))}" for p in args.path])
     target.write(cut.surface, args.output)
-    out(f"cut {args.file} along {len(args.path)} path(s): {surface.n_vertices} vertices, {cut.n_copies} copied "
-         f"({cut.surface.n_vertices} now), {surface.n_cells} triangles; wrote {args.output}")
+    out(
+        f"cut {args.file} along {len(args.path)} path(s): {surface.n_vertices} vertices, {cut.n_copies} copied "
+        f"({cut.surface.n_vertices} now), {surface.n_cells} triangles; wrote {args.output}"
+    )
     return 0
 
 
 def add_interpolate_parser(commands: Any) -> None:
     """``tgsis interpolate``."""
-    interp = add_command(commands, "interpolate", "the surface evolving from SOURCE (at T0) to TARGET (at T1): "
-                                               "morphological interpolation, stored as a model-3 feature",
-                      ["tgsis interpolate flat.ts dome.ts --setup dome.json --t0 0 --t1 1 --class salt --preview out"],
-                      cmd_interpolate)
+    interp = add_command(
+        commands,
+        "interpolate",
+        "the surface evolving from SOURCE (at T0) to TARGET (at T1): "
+        "morphological interpolation, stored as a model-3 feature",
+        ["tgsis interpolate flat.ts dome.ts --setup dome.json --t0 0 --t1 1 --class salt --preview out"],
+        cmd_interpolate,
+    )
     interp.add_argument("source", help="surface file at T0")
     interp.add_argument("target", help="surface file at T1")
-    interp.add_argument("--setup", required=True, help="JSON set-up: control vertices, fences, cuts, attachments, "
-                                                       "steps, tolerance (see docs/interpolation.md)")
+    interp.add_argument(
+        "--setup",
+        required=True,
+        help="JSON set-up: control vertices, fences, cuts, attachments, steps, tolerance (see docs/interpolation.md)",
+    )
     interp.add_argument("--t0", type=float, required=True, help="time of the source")
     interp.add_argument("--t1", type=float, required=True, help="time of the target")
-    interp.add_argument("--class", dest="feature_class", help="EVOLVING feature class to store it in "
-                                                               "(without: computed and previewed only)")
+    interp.add_argument(
+        "--class",
+        dest="feature_class",
+        help="EVOLVING feature class to store it in (without: computed and previewed only)",
+    )
     interp.add_argument("--name", help="feature name (default: the source's)")
-    interp.add_argument("--split", choices=("auto", "centroid"), default="auto",
-                        help="how the compatible meshes are refined: centroid is the design's rule (split the "
-                             "triangle at its centroid), auto (default) bisects its longest interior edge instead, "
-                             "which converges where centroid splits stall")
-    interp.add_argument("--alive", action="store_true",
-                        help="the surface goes on existing after its last instant, in its last shape")
+    interp.add_argument(
+        "--split",
+        choices=("auto", "centroid"),
+        default="auto",
+        help="how the compatible meshes are refined: centroid is the design's rule (split the "
+        "triangle at its centroid), auto (default) bisects its longest interior edge instead, "
+        "which converges where centroid splits stall",
+    )
+    interp.add_argument(
+        "--alive", action="store_true", help="the surface goes on existing after its last instant, in its last shape"
+    )
     interp.add_argument("--preview", metavar="DIR", help="write PNG views of a few instants to DIR")
     interp.add_argument("--frames", type=INT4, default=5, help="number of preview instants (default 5)")
 
 
 def add_corners_parser(commands: Any) -> None:
     """``tgsis corners``."""
-    corners = add_command(commands, "corners", "propose control vertices: the sharp corners of a surface's border",
-                       ["tgsis corners horizon.ts --count 4", "tgsis corners horizon.ts --json"], cmd_corners,
-                       tabular=False)
+    corners = add_command(
+        commands,
+        "corners",
+        "propose control vertices: the sharp corners of a surface's border",
+        ["tgsis corners horizon.ts --count 4", "tgsis corners horizon.ts --json"],
+        cmd_corners,
+        tabular=False,
+    )
     corners.add_argument("file", help="a file holding one surface")
     corners.add_argument("--count", type=INT4, help="exactly this many corners")
     corners.add_argument("--min-angle", type=float, default=35.0, help="smallest turn of a corner, degrees (35)")
@@ -152,11 +184,22 @@ def add_corners_parser(commands: Any) -> None:
 
 def add_cut_parser(commands: Any) -> None:
     """``tgsis cut``."""
-    cut = add_command(commands, "cut", "cut a surface along vertex paths (its edges become borders on both sides)",
-                   ["tgsis cut horizon.ts horizon_cut.ts --path 12,13,14,15"], cmd_cut)
+    cut = add_command(
+        commands,
+        "cut",
+        "cut a surface along vertex paths (its edges become borders on both sides)",
+        ["tgsis cut horizon.ts horizon_cut.ts --path 12,13,14,15"],
+        cmd_cut,
+    )
     cut.add_argument("file", metavar="FILE", help="a file holding one surface")
     cut.add_argument("output", metavar="OUTPUT", help="the cut surface is written here")
-    cut.add_argument("--path", type=_vertex_path, action="append", required=True, metavar="V1,V2,...",
-                     help="a cutting path: vertex indices of FILE along interior edges, only its ends on the border "
-                          "(repeat for several paths)")
+    cut.add_argument(
+        "--path",
+        type=_vertex_path,
+        action="append",
+        required=True,
+        metavar="V1,V2,...",
+        help="a cutting path: vertex indices of FILE along interior edges, only its ends on the border "
+        "(repeat for several paths)",
+    )
     cut.add_argument("--format", help="format of OUTPUT (default: from its extension)")

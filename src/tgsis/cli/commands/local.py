@@ -42,11 +42,16 @@ def cmd_local_status(args: argparse.Namespace) -> int:
     server = _local_server()
     running = server.is_running()
     if wants_json(args):
-        cliout.emit_json({"cluster": str(server.root), "binaries": server.binaries.describe(),
-                          "status": "running" if running else "stopped" if server.is_initialized() else "not created",
-                          "pid": server.pid() if running else None,
-                          "started_by": (server.started_by() or "outside tgsis") if running else None,
-                          "dsn": server.dsn("tgsis")})
+        cliout.emit_json(
+            {
+                "cluster": str(server.root),
+                "binaries": server.binaries.describe(),
+                "status": "running" if running else "stopped" if server.is_initialized() else "not created",
+                "pid": server.pid() if running else None,
+                "started_by": (server.started_by() or "outside tgsis") if running else None,
+                "dsn": server.dsn("tgsis"),
+            }
+        )
         return 0 if running else 3
     out(f"cluster:  {server.root}")
     out(f"binaries: {server.binaries.describe()}")
@@ -68,12 +73,22 @@ def cmd_local_dsn(args: argparse.Namespace) -> int:
 
 def add_local_parser(commands: Any) -> None:
     """``tgsis local start|stop|status|dsn``."""
-    local = add_command(commands, "local", "the local PostgreSQL server tgsis runs by itself",
-                     ["tgsis local start && psql \"$(tgsis local dsn)\""])
+    local = add_command(
+        commands,
+        "local",
+        "the local PostgreSQL server tgsis runs by itself",
+        ['tgsis local start && psql "$(tgsis local dsn)"'],
+    )
     local_commands = local.add_subparsers(dest="local_command", metavar="ACTION", required=True)
     add_command(local_commands, "start", "start it and keep it running", ["tgsis local start"], cmd_local_start)
     local_stop = add_command(local_commands, "stop", "stop it", ["tgsis local stop"], cmd_local_stop)
     local_stop.add_argument("--force", action="store_true", help="stop it even while other tgsis commands use it")
-    add_command(local_commands, "status", "where it is and whether it runs (exit 3: stopped)",
-             ["tgsis local status", "tgsis local status --json"], cmd_local_status, tabular=False)
-    add_command(local_commands, "dsn", "print its connection string", ["psql \"$(tgsis local dsn)\""], cmd_local_dsn)
+    add_command(
+        local_commands,
+        "status",
+        "where it is and whether it runs (exit 3: stopped)",
+        ["tgsis local status", "tgsis local status --json"],
+        cmd_local_status,
+        tabular=False,
+    )
+    add_command(local_commands, "dsn", "print its connection string", ['psql "$(tgsis local dsn)"'], cmd_local_dsn)

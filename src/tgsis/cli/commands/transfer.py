@@ -46,12 +46,16 @@ def _object_label(index: int, mesh: Mesh) -> str:
 
 def _check_flagged(file: str, meshes: Sequence[Mesh], reports: Sequence[MeshReport]) -> None:
     """Refuse the file when any object has flagged defects (``--reject-flagged``)."""
-    flagged = [f"{_object_label(i, mesh)}: {report.summary()}"
-               for i, (mesh, report) in enumerate(zip(meshes, reports)) if not report.ok]
+    flagged = [
+        f"{_object_label(i, mesh)}: {report.summary()}"
+        for i, (mesh, report) in enumerate(zip(meshes, reports))
+        if not report.ok
+    ]
     if flagged:
-        raise InvalidGeometryError(f"{file}: refused, nothing imported: " + "; ".join(flagged),
-                                   hint="fix the file, raise --tolerance, or import without --reject-flagged "
-                                        "to store it as it is")
+        raise InvalidGeometryError(
+            f"{file}: refused, nothing imported: " + "; ".join(flagged),
+            hint="fix the file, raise --tolerance, or import without --reject-flagged to store it as it is",
+        )
 
 
 def _import_report(mesh: Mesh, tolerance: float) -> MeshReport:
@@ -69,8 +73,13 @@ def _import_report(mesh: Mesh, tolerance: float) -> MeshReport:
         return report
     root = np.arange(mesh.n_vertices)
     for pair in pairs:
-        if (isinstance(pair, (list, tuple)) and len(pair) == 2 and all(isinstance(v, int) for v in pair)
-                and 0 <= pair[0] < mesh.n_vertices and 0 <= pair[1] < mesh.n_vertices):
+        if (
+            isinstance(pair, (list, tuple))
+            and len(pair) == 2
+            and all(isinstance(v, int) for v in pair)
+            and 0 <= pair[0] < mesh.n_vertices
+            and 0 <= pair[1] < mesh.n_vertices
+        ):
             root[pair[0]] = pair[1]
     for _ in range(max(1, mesh.n_vertices.bit_length() + 1)):  # follow chains of ATOMs (halving each step)
         root = root[root]
@@ -94,18 +103,24 @@ def _read_for_import(args: argparse.Namespace) -> list[Mesh]:
             warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
     skipped = [w.message for w in caught if isinstance(w.message, SkippedObjectWarning)]
     if skipped and args.strict:
-        what = "; ".join(f"GOCAD {w.object_type} object{f' {w.name!r}' if w.name else ''} at line {w.line}"
-                         + (f" (its {', '.join(w.skipped)})" if w.skipped else "") for w in skipped)
-        raise FileFormatError(f"{args.file}: refused, nothing imported: it holds objects tgsis does not read: {what}",
-                              hint="import without --strict to store the objects tgsis reads and skip the others")
+        what = "; ".join(
+            f"GOCAD {w.object_type} object{f' {w.name!r}' if w.name else ''} at line {w.line}"
+            + (f" (its {', '.join(w.skipped)})" if w.skipped else "")
+            for w in skipped
+        )
+        raise FileFormatError(
+            f"{args.file}: refused, nothing imported: it holds objects tgsis does not read: {what}",
+            hint="import without --strict to store the objects tgsis reads and skip the others",
+        )
     for message in skipped:
         print(f"tgsis: warning: {message}", file=sys.stderr)
     empty = [_object_label(i, mesh) for i, mesh in enumerate(meshes) if mesh.n_vertices == 0]
     if empty:
-        raise FileFormatError(f"{args.file}: refused, nothing imported: {', '.join(empty)} "
-                              f"{'has' if len(empty) == 1 else 'have'} no vertex",
-                              hint="an object without vertices would be stored as an empty feature; "
-                                   "remove it from the file")
+        raise FileFormatError(
+            f"{args.file}: refused, nothing imported: {', '.join(empty)} "
+            f"{'has' if len(empty) == 1 else 'have'} no vertex",
+            hint="an object without vertices would be stored as an empty feature; remove it from the file",
+        )
     return meshes
 
 
@@ -124,51 +139,71 @@ def _features_named(conn: Any, fc: FeatureClass, name: str) -> list[int]:
 def _replaced_one(fc: FeatureClass, name: str, same: Sequence[int]) -> int | None:
     """The feature ``--replace`` replaces: the one of that name, none, or an error when there are several."""
     if len(same) > 1:
-        raise InvalidInputError(f"--replace: class {fc.name} has {len(same)} features named {name!r} "
-                                f"({', '.join(map(str, same))}): which one to replace is not clear",
-                                hint=f"tgsis ls --class {fc.name} lists them; import with --name to store it under "
-                                     "another name")
+        raise InvalidInputError(
+            f"--replace: class {fc.name} has {len(same)} features named {name!r} "
+            f"({', '.join(map(str, same))}): which one to replace is not clear",
+            hint=f"tgsis ls --class {fc.name} lists them; import with --name to store it under another name",
+        )
     return same[0] if same else None
 
 
 def _warn_same_name(fc: FeatureClass, name: str, same: Sequence[int]) -> None:
     ids = ", ".join(map(str, same))
-    print(f"tgsis: warning: class {fc.name} already has a feature named {name!r} ({'id' if len(same) == 1 else 'ids'} "
-          f"{ids}): this import adds another one; --replace replaces it", file=sys.stderr)
+    print(
+        f"tgsis: warning: class {fc.name} already has a feature named {name!r} ({'id' if len(same) == 1 else 'ids'} "
+        f"{ids}): this import adds another one; --replace replaces it",
+        file=sys.stderr,
+    )
 
 
 def _report_json(report: MeshReport) -> dict[str, Any]:
-    return {"duplicate_vertices": len(report.duplicate_vertices), "degenerate_cells": len(report.degenerate_cells),
-            "summary": report.summary()}
+    return {
+        "duplicate_vertices": len(report.duplicate_vertices),
+        "degenerate_cells": len(report.degenerate_cells),
+        "summary": report.summary(),
+    }
 
 
-def _import_instant(args: argparse.Namespace, conn: psycopg.Connection[Any], fc: FeatureClass, meshes: list[Mesh],
-                    values: dict[str, Any]) -> int:
+def _import_instant(
+    args: argparse.Namespace,
+    conn: psycopg.Connection[Any],
+    fc: FeatureClass,
+    meshes: list[Mesh],
+    values: dict[str, Any],
+) -> int:
     """``tgsis import FILE --class C --at T [--feature ID]``: a surface of a model-2 class at model time T."""
     from tgsis.db.temporal import add_instant
     from tgsis.temporal import SurfaceSeries
 
     if fc.time_model != "INSTANTS":
-        raise InvalidInputError(f"--at and --feature take a class of surfaces at instants (INSTANTS); {fc.name} is "
-                                f"{fc.time_model}", hint="tgsis interpolate --class CLASS builds evolving surfaces")
+        raise InvalidInputError(
+            f"--at and --feature take a class of surfaces at instants (INSTANTS); {fc.name} is {fc.time_model}",
+            hint="tgsis interpolate --class CLASS builds evolving surfaces",
+        )
     if args.at is None:
-        raise InvalidInputError(f"feature class {fc.name} holds surfaces at instants: give --at T, the model time of "
-                                "the file's surface")
+        raise InvalidInputError(
+            f"feature class {fc.name} holds surfaces at instants: give --at T, the model time of the file's surface"
+        )
     if not math.isfinite(args.at):
         raise InvalidInputError(f"--at must be a finite model time, got {args.at!r}")
     if args.replace:
-        raise InvalidInputError("--replace does not go with --at: the instant is new (tgsis import --at T --feature ID "
-                                "adds it)")
+        raise InvalidInputError(
+            "--replace does not go with --at: the instant is new (tgsis import --at T --feature ID adds it)"
+        )
     if len(meshes) != 1 or not isinstance(meshes[0], Surface):
-        raise InvalidInputError(f"{args.file} holds {len(meshes)} object(s) ({', '.join(type(m).__name__ for m in meshes)}): "
-                                "an instant is one surface", hint="write the surface of that instant to a file of its own")
+        raise InvalidInputError(
+            f"{args.file} holds {len(meshes)} object(s) ({', '.join(type(m).__name__ for m in meshes)}): "
+            "an instant is one surface",
+            hint="write the surface of that instant to a file of its own",
+        )
     surface = meshes[0]
     if args.feature is not None:
         if values:
             raise InvalidInputError("--set does not go with --feature: the feature's properties stay")
         if args.alive:
-            raise InvalidInputError("--alive does not go with --feature: the feature keeps whether it is alive "
-                                    "(set when it was stored)")
+            raise InvalidInputError(
+                "--alive does not go with --feature: the feature keeps whether it is alive (set when it was stored)"
+            )
         with conn.transaction():
             add_instant(conn, fc, args.feature, args.at, surface, drop_extra_properties=args.drop_extra_properties)
         fid, known = args.feature, [t for t, _ in instants(conn, args.feature)]
@@ -180,11 +215,22 @@ def _import_instant(args: argparse.Namespace, conn: psycopg.Connection[Any], fc:
             fid = insert_feature(conn, fc, series, values, name=name, drop_extra_properties=args.drop_extra_properties)
         known = [args.at]
     if wants_json(args):
-        cliout.emit_json({"file": args.file, "class": fc.name, "id": fid, "at": args.at, "instants": known,
-                          "vertices": surface.n_vertices, "cells": surface.n_cells})
+        cliout.emit_json(
+            {
+                "file": args.file,
+                "class": fc.name,
+                "id": fid,
+                "at": args.at,
+                "instants": known,
+                "vertices": surface.n_vertices,
+                "cells": surface.n_cells,
+            }
+        )
     else:
-        out(f"stored feature {fid} ({fc.name}) at t = {cliout.show_time(args.at)}{time_unit_suffix(fc)}: {surface.n_vertices} "
-             f"vertices, {surface.n_cells} triangles; its instants: {', '.join(cliout.show_time(t) for t in known)}")
+        out(
+            f"stored feature {fid} ({fc.name}) at t = {cliout.show_time(args.at)}{time_unit_suffix(fc)}: {surface.n_vertices} "
+            f"vertices, {surface.n_cells} triangles; its instants: {', '.join(cliout.show_time(t) for t in known)}"
+        )
     return 0
 
 
@@ -219,29 +265,71 @@ def cmd_import(args: argparse.Namespace) -> int:
             if same and not args.replace:
                 _warn_same_name(fc, collection.name or "", same)
             members: list[dict[str, Any]] = [
-                {"index": i, "name": mesh.name, "geotype": mesh.geotype.value, "vertices": mesh.n_vertices,
-                 "cells": mesh.n_cells, "cell_name": type(mesh).cell_name, "defects": _report_json(report)}
-                for i, (mesh, report) in enumerate(zip(meshes, reports))]
+                {
+                    "index": i,
+                    "name": mesh.name,
+                    "geotype": mesh.geotype.value,
+                    "vertices": mesh.n_vertices,
+                    "cells": mesh.n_cells,
+                    "cell_name": type(mesh).cell_name,
+                    "defects": _report_json(report),
+                }
+                for i, (mesh, report) in enumerate(zip(meshes, reports))
+            ]
             if wants_json(args):
-                cliout.emit_json({"file": args.file, "class": fc.name, "features": [{
-                    "id": fid, "name": collection.name, "geotype": collection.geotype.value,
-                    "vertices": collection.n_vertices, "cells": collection.n_cells, "replaced": old,
-                    "same_name": [] if args.replace else same, "members": members}]})
+                cliout.emit_json(
+                    {
+                        "file": args.file,
+                        "class": fc.name,
+                        "features": [
+                            {
+                                "id": fid,
+                                "name": collection.name,
+                                "geotype": collection.geotype.value,
+                                "vertices": collection.n_vertices,
+                                "cells": collection.n_cells,
+                                "replaced": old,
+                                "same_name": [] if args.replace else same,
+                                "members": members,
+                            }
+                        ],
+                    }
+                )
                 return 0
-            print_table(args, header, [(fid, collection.name, collection.geotype.value, collection.n_vertices,
-                                   collection.n_cells, old if old is not None else "", f"{len(collection)} members")])
+            print_table(
+                args,
+                header,
+                [
+                    (
+                        fid,
+                        collection.name,
+                        collection.geotype.value,
+                        collection.n_vertices,
+                        collection.n_cells,
+                        old if old is not None else "",
+                        f"{len(collection)} members",
+                    )
+                ],
+            )
             for m in members:  # under the collection's line, one per member
-                out(f"\tmember {m['index']}\t{m['name'] or ''}\t{m['geotype']}\t{m['vertices']}\t{m['cells']}\t"
-                     f"\t{m['defects']['summary']}")
+                out(
+                    f"\tmember {m['index']}\t{m['name'] or ''}\t{m['geotype']}\t{m['vertices']}\t{m['cells']}\t"
+                    f"\t{m['defects']['summary']}"
+                )
             return 0
         if args.name and len(meshes) > 1:
-            raise InvalidInputError(f"{args.file} holds {len(meshes)} objects: --name names only one",
-                                    hint="import into a GEOMETRYCOLLECTION class to store them as one feature")
+            raise InvalidInputError(
+                f"{args.file} holds {len(meshes)} objects: --name names only one",
+                hint="import into a GEOMETRYCOLLECTION class to store them as one feature",
+            )
         names = [args.name or mesh.name or stem for mesh in meshes]
         twice = sorted({n for n in names if names.count(n) > 1})
         if twice and args.replace:
-            raise InvalidInputError(f"--replace: {args.file} holds several objects named {twice[0]!r}, so which one "
-                                    "replaces the stored feature is not clear", hint="import without --replace")
+            raise InvalidInputError(
+                f"--replace: {args.file} holds several objects named {twice[0]!r}, so which one "
+                "replaces the stored feature is not clear",
+                hint="import without --replace",
+            )
         ids: list[int] = []
         replaced: list[int | None] = []
         warned: list[tuple[str, list[int]]] = []
@@ -250,12 +338,16 @@ def cmd_import(args: argparse.Namespace) -> int:
                 same = _features_named(conn, fc, name)
                 old = _replaced_one(fc, name, same) if args.replace else None
                 if old is not None:
-                    save_feature(conn, fc, old, mesh, values or None, name=name,
-                                 drop_extra_properties=args.drop_extra_properties)
+                    save_feature(
+                        conn, fc, old, mesh, values or None, name=name, drop_extra_properties=args.drop_extra_properties
+                    )
                     ids.append(old)
                 else:
-                    ids.append(insert_feature(conn, fc, mesh, values, name=name,
-                                              drop_extra_properties=args.drop_extra_properties))
+                    ids.append(
+                        insert_feature(
+                            conn, fc, mesh, values, name=name, drop_extra_properties=args.drop_extra_properties
+                        )
+                    )
                     if same:
                         warned.append((name, same))
                 replaced.append(old)
@@ -263,15 +355,43 @@ def cmd_import(args: argparse.Namespace) -> int:
     for name, same in warned:
         _warn_same_name(fc, name, same)
     if wants_json(args):
-        cliout.emit_json({"file": args.file, "class": fc.name, "features": [{
-            "id": fid, "name": name, "geotype": mesh.geotype.value, "vertices": mesh.n_vertices, "cells": mesh.n_cells,
-            "cell_name": type(mesh).cell_name, "defects": _report_json(report), "replaced": old,
-            "same_name": next((same for n, same in warned if n == name), [])}
-            for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)]})
+        cliout.emit_json(
+            {
+                "file": args.file,
+                "class": fc.name,
+                "features": [
+                    {
+                        "id": fid,
+                        "name": name,
+                        "geotype": mesh.geotype.value,
+                        "vertices": mesh.n_vertices,
+                        "cells": mesh.n_cells,
+                        "cell_name": type(mesh).cell_name,
+                        "defects": _report_json(report),
+                        "replaced": old,
+                        "same_name": next((same for n, same in warned if n == name), []),
+                    }
+                    for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)
+                ],
+            }
+        )
         return 0
-    print_table(args, header, [(fid, name, mesh.geotype.value, mesh.n_vertices, mesh.n_cells,
-                           old if old is not None else "", report.summary())
-                          for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)])
+    print_table(
+        args,
+        header,
+        [
+            (
+                fid,
+                name,
+                mesh.geotype.value,
+                mesh.n_vertices,
+                mesh.n_cells,
+                old if old is not None else "",
+                report.summary(),
+            )
+            for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)
+        ],
+    )
     return 0
 
 
@@ -283,60 +403,104 @@ def cmd_export(args: argparse.Namespace) -> int:
         with cliout.busy(f"downloading feature {args.id}"):
             feature = fetch_feature(conn, fc, args.id)
         assert feature.mesh is not None
-        if args.png and not isinstance(feature.mesh, Surface):     # refused before any file is written
+        if args.png and not isinstance(feature.mesh, Surface):  # refused before any file is written
             raise InvalidInputError(f"feature {args.id} is no surface: --png draws surfaces")
         with cliout.busy(f"writing {args.file}"):
             formats.write(feature.mesh, args.file, format=args.format)
         members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
         out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")
         if args.png:
-            picture_of(conn, [args.id], None, args.png, title=f"feature {args.id} ({fc.name}) {feature.mesh.name or ''}")
+            picture_of(
+                conn, [args.id], None, args.png, title=f"feature {args.id} ({fc.name}) {feature.mesh.name or ''}"
+            )
     return 0
 
 
 def add_import_parser(commands: Any) -> None:
     """``tgsis import``."""
-    imp = add_command(commands, "import", "store the objects of a geometry file as features of a class "
-                                       "(as one feature in a GEOMETRYCOLLECTION class)",
-                   ["tgsis import Garlock.ts --class faults --set release=6.1 --drop-extra-properties",
-                    "tgsis import Garlock.ts --class faults --replace   # a new version of the same fault",
-                    "tgsis import model.vtu --class models --json",
-                    "tgsis import top_2024.ts --class horizons --at 2024 --feature 7   # a model-2 instant"],
-                   cmd_import, tabular=True)
-    imp.add_argument("file", help="the geometry file (.ts, .pl, .vs, .so, .lso, .gp, .ml, .vtu, .obj, .ply, .off, "
-                                       ".stl)")
+    imp = add_command(
+        commands,
+        "import",
+        "store the objects of a geometry file as features of a class (as one feature in a GEOMETRYCOLLECTION class)",
+        [
+            "tgsis import Garlock.ts --class faults --set release=6.1 --drop-extra-properties",
+            "tgsis import Garlock.ts --class faults --replace   # a new version of the same fault",
+            "tgsis import model.vtu --class models --json",
+            "tgsis import top_2024.ts --class horizons --at 2024 --feature 7   # a model-2 instant",
+        ],
+        cmd_import,
+        tabular=True,
+    )
+    imp.add_argument(
+        "file", help="the geometry file (.ts, .pl, .vs, .so, .lso, .gp, .ml, .vtu, .obj, .ply, .off, .stl)"
+    )
     imp.add_argument("--class", dest="feature_class", required=True, help="the feature class to store them in")
-    imp.add_argument("--name", help="feature name (default: the name in the file, else the file name; "
-                                    "for a GEOMETRYCOLLECTION class the file name)")
+    imp.add_argument(
+        "--name",
+        help="feature name (default: the name in the file, else the file name; "
+        "for a GEOMETRYCOLLECTION class the file name)",
+    )
     imp.add_argument("--format", help="file format (default: from the extension)")
     imp.add_argument("--set", action="append", metavar="NAME=VALUE", help="a feature property value (repeatable)")
-    imp.add_argument("--drop-extra-properties", action="store_true",
-                     help="ignore properties of the file that the class does not store")
-    imp.add_argument("--replace", action="store_true",
-                     help="replace the feature of the same name in the class (written by difference, keeping its "
-                          "id; in a version, a change of that version) instead of adding a second one")
-    imp.add_argument("--reject-flagged", action="store_true",
-                     help="refuse the whole file if any object has duplicate vertices (other than GOCAD ATOMs) "
-                          "or degenerate cells")
-    imp.add_argument("--strict", action="store_true",
-                     help="refuse the whole file if it holds objects tgsis cannot read (a GOCAD SGrid beside "
-                          "surfaces), instead of skipping them with a warning")
-    imp.add_argument("--tolerance", type=float, default=0.0, metavar="T",
-                     help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)")
-    imp.add_argument("--at", type=float, metavar="T",
-                     help="a class of surfaces at instants (INSTANTS): the surface is the shape at model time T, of a "
-                          "new feature (known from T on) or, with --feature, of an existing one")
-    imp.add_argument("--feature", type=FEATURE_ID, metavar="ID",
-                     help="with --at: add the instant T to this feature instead of storing a new one")
-    imp.add_argument("--alive", action="store_true",
-                     help="with --at, for a new feature: it still exists after its last instant (keeps its last shape; "
-                          "default: it exists only from its first to its last instant, as from Python)")
+    imp.add_argument(
+        "--drop-extra-properties",
+        action="store_true",
+        help="ignore properties of the file that the class does not store",
+    )
+    imp.add_argument(
+        "--replace",
+        action="store_true",
+        help="replace the feature of the same name in the class (written by difference, keeping its "
+        "id; in a version, a change of that version) instead of adding a second one",
+    )
+    imp.add_argument(
+        "--reject-flagged",
+        action="store_true",
+        help="refuse the whole file if any object has duplicate vertices (other than GOCAD ATOMs) or degenerate cells",
+    )
+    imp.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse the whole file if it holds objects tgsis cannot read (a GOCAD SGrid beside "
+        "surfaces), instead of skipping them with a warning",
+    )
+    imp.add_argument(
+        "--tolerance",
+        type=float,
+        default=0.0,
+        metavar="T",
+        help="cells of length/area/volume at most T count as degenerate (default 0: exactly zero)",
+    )
+    imp.add_argument(
+        "--at",
+        type=float,
+        metavar="T",
+        help="a class of surfaces at instants (INSTANTS): the surface is the shape at model time T, of a "
+        "new feature (known from T on) or, with --feature, of an existing one",
+    )
+    imp.add_argument(
+        "--feature",
+        type=FEATURE_ID,
+        metavar="ID",
+        help="with --at: add the instant T to this feature instead of storing a new one",
+    )
+    imp.add_argument(
+        "--alive",
+        action="store_true",
+        help="with --at, for a new feature: it still exists after its last instant (keeps its last shape; "
+        "default: it exists only from its first to its last instant, as from Python)",
+    )
 
 
 def add_export_parser(commands: Any) -> None:
     """``tgsis export``."""
-    exp = add_command(commands, "export", "write a feature to a geometry file",
-                   ["tgsis export 3 garlock.ts", "tgsis export 3 garlock.vtu --png garlock.png"], cmd_export)
+    exp = add_command(
+        commands,
+        "export",
+        "write a feature to a geometry file",
+        ["tgsis export 3 garlock.ts", "tgsis export 3 garlock.vtu --png garlock.png"],
+        cmd_export,
+    )
     exp.add_argument("id", type=FEATURE_ID, help="the feature's id (tgsis ls lists them)")
     exp.add_argument("file", help="the file to write; its extension gives the format")
     exp.add_argument("--class", dest="feature_class", help="its feature class (default: looked up)")

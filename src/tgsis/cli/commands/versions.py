@@ -47,18 +47,40 @@ def cmd_version_list(args: argparse.Namespace) -> int:
     if wants_json(args):
         cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
         return 0
-    print_table(args, ("current", "version", "parent", "initrevision", "working", "owner", "created", "description"), [
-        ("*" if v.name == current else "", v.name, v.parent or "-",
-         v.initrevision if v.initrevision is not None else "-", v.workingrevision, v.owner,
-         cliout.show_moment(v.created_at), v.description or "") for v in versions])
+    print_table(
+        args,
+        ("current", "version", "parent", "initrevision", "working", "owner", "created", "description"),
+        [
+            (
+                "*" if v.name == current else "",
+                v.name,
+                v.parent or "-",
+                v.initrevision if v.initrevision is not None else "-",
+                v.workingrevision,
+                v.owner,
+                cliout.show_moment(v.created_at),
+                v.description or "",
+            )
+            for v in versions
+        ],
+    )
     return 0
 
 
 def _version_json(v: V.Version, current: str | None) -> dict[str, Any]:
-    return {"name": v.name, "parent": v.parent, "depth": v.depth, "initrevision": v.initrevision,
-            "working_revision": v.workingrevision, "revisions": list(v.revisions),
-            "saved": [{"name": n, "revision": r} for n, r in sorted(v.saved.items(), key=lambda item: item[1])],
-            "owner": v.owner, "created_at": v.created_at, "description": v.description, "current": v.name == current}
+    return {
+        "name": v.name,
+        "parent": v.parent,
+        "depth": v.depth,
+        "initrevision": v.initrevision,
+        "working_revision": v.workingrevision,
+        "revisions": list(v.revisions),
+        "saved": [{"name": n, "revision": r} for n, r in sorted(v.saved.items(), key=lambda item: item[1])],
+        "owner": v.owner,
+        "created_at": v.created_at,
+        "description": v.description,
+        "current": v.name == current,
+    }
 
 
 def cmd_version_tree(args: argparse.Namespace) -> int:
@@ -91,11 +113,25 @@ def cmd_version_goto(args: argparse.Namespace) -> int:
 def cmd_version_current(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         name, working, viewing = V.working_version(conn), V.working_revision(conn), V.viewing_revision(conn)
-    source = ("--in" if args.in_version else "$TGSIS_VERSION" if os.environ.get("TGSIS_VERSION")
-              else "tgsis version goto" if clistate.remembered_version(target_key(args)) else "default")
+    source = (
+        "--in"
+        if args.in_version
+        else "$TGSIS_VERSION"
+        if os.environ.get("TGSIS_VERSION")
+        else "tgsis version goto"
+        if clistate.remembered_version(target_key(args))
+        else "default"
+    )
     if wants_json(args):
-        cliout.emit_json({"version": name, "working_revision": working, "viewing_revision": viewing,
-                          "read_only": viewing is not None, "source": source})
+        cliout.emit_json(
+            {
+                "version": name,
+                "working_revision": working,
+                "viewing_revision": viewing,
+                "read_only": viewing is not None,
+                "source": source,
+            }
+        )
         return 0
     looking = f"\tviewing revision {viewing} (read-only)" if viewing is not None else ""
     out(f"{name}\tworking revision {working}{looking}\t(from {source})")
@@ -120,15 +156,30 @@ def cmd_version_delete(args: argparse.Namespace) -> int:
 
 
 def _discards_json(discards: Sequence[V.Discard]) -> list[dict[str, Any]]:
-    return [{"table": d.shortname, "what": d.description, "rows_added": d.rows_added, "rows_removed": d.rows_removed,
-             "rows_changed": d.rows_changed, "values_changed": d.values_changed} for d in discards]
+    return [
+        {
+            "table": d.shortname,
+            "what": d.description,
+            "rows_added": d.rows_added,
+            "rows_removed": d.rows_removed,
+            "rows_changed": d.rows_changed,
+            "values_changed": d.values_changed,
+        }
+        for d in discards
+    ]
 
 
 def cmd_version_conflicts(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         conflicts = V.find_conflicts(conn, args.name)
-        details = {(c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
-                   for c in conflicts} if args.rows else {}
+        details = (
+            {
+                (c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
+                for c in conflicts
+            }
+            if args.rows
+            else {}
+        )
         # what each solution would throw away of the other side's edits (until merges are three-way), read with
         # this role's rights: one that may not read some of the objects' rows still gets the list, without it
         lost: dict[tuple[str, str, str], list[V.Discard]] | None = None
@@ -142,28 +193,60 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
             print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
             lost = None
     if wants_json(args):
-        cliout.emit_json({"version": args.name, "conflicts": [{
-            "objectclass": c.objectclass, "objectkey": c.objectkey, "solution": c.solution,
-            "both_changed": list(c.conflicttype), "child_tables": list(c.childtables),
-            "parent_tables": list(c.parenttables),
-            "discards": None if lost is None else {
-                solution: {"edits_of": other, "tables": _discards_json(lost.get(key + (solution,), []))}
-                for key in [(c.objectclass, c.objectkey)] for solution, other in (("child", "parent"), ("parent", "child"))},
-            **({"rows": [{"table": table, "side": side, "key": key, "row": row}
-                         for table, side, key, row in details.get((c.objectclass, c.objectkey), [])]}
-               if args.rows else {})} for c in conflicts]})
+        cliout.emit_json(
+            {
+                "version": args.name,
+                "conflicts": [
+                    {
+                        "objectclass": c.objectclass,
+                        "objectkey": c.objectkey,
+                        "solution": c.solution,
+                        "both_changed": list(c.conflicttype),
+                        "child_tables": list(c.childtables),
+                        "parent_tables": list(c.parenttables),
+                        "discards": None
+                        if lost is None
+                        else {
+                            solution: {"edits_of": other, "tables": _discards_json(lost.get(key + (solution,), []))}
+                            for key in [(c.objectclass, c.objectkey)]
+                            for solution, other in (("child", "parent"), ("parent", "child"))
+                        },
+                        **(
+                            {
+                                "rows": [
+                                    {"table": table, "side": side, "key": key, "row": row}
+                                    for table, side, key, row in details.get((c.objectclass, c.objectkey), [])
+                                ]
+                            }
+                            if args.rows
+                            else {}
+                        ),
+                    }
+                    for c in conflicts
+                ],
+            }
+        )
         return 0
     if conflicts and not getattr(args, "no_header", False):
-        out("class\tkey\tsolution\tboth changed\tchanged in " + args.name + "\tchanged in parent"
-             + "\tchild discards (the parent's edits)\tparent discards (the version's edits)"
-             + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if args.rows else ""))
+        out(
+            "class\tkey\tsolution\tboth changed\tchanged in "
+            + args.name
+            + "\tchanged in parent"
+            + "\tchild discards (the parent's edits)\tparent discards (the version's edits)"
+            + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if args.rows else "")
+        )
     for c in conflicts:
         both = ", ".join(c.conflicttype) or "different tables"
-        said = ["?" if lost is None else
-                "; ".join(d.summary() for d in lost.get((c.objectclass, c.objectkey, solution), [])) or "nothing"
-                for solution in ("child", "parent")]
-        out(f"{c.objectclass}\t{c.objectkey}\t{c.solution}\t{both}\t"
-             f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}\t{said[0]}\t{said[1]}")
+        said = [
+            "?"
+            if lost is None
+            else "; ".join(d.summary() for d in lost.get((c.objectclass, c.objectkey, solution), [])) or "nothing"
+            for solution in ("child", "parent")
+        ]
+        out(
+            f"{c.objectclass}\t{c.objectkey}\t{c.solution}\t{both}\t"
+            f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}\t{said[0]}\t{said[1]}"
+        )
         for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
             out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
     if not conflicts:
@@ -173,8 +256,9 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
 
 def cmd_version_resolve(args: argparse.Namespace) -> int:
     with connection(args) as conn:
-        c = V.resolve_conflict(conn, args.name, args.objectclass, args.objectkey, args.solution,
-                               discard_other=args.discard_other)
+        c = V.resolve_conflict(
+            conn, args.name, args.objectclass, args.objectkey, args.solution, discard_other=args.discard_other
+        )
     out(f"{c.objectclass} {c.objectkey} in {V.show_name(args.name)}: {c.solution}")
     if c.discarded is None:
         out("  what it discarded of the other side's edits is not shown: this role may not read the object's rows")
@@ -194,8 +278,10 @@ def _recorded_discards(conn: Any, version: str) -> dict[tuple[str, str], tuple[s
 
 def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | None) -> None:
     if lost is None:
-        out("  what the solutions discarded of the other side's edits is not shown: this role may not read "
-             "some of the objects' rows")
+        out(
+            "  what the solutions discarded of the other side's edits is not shown: this role may not read "
+            "some of the objects' rows"
+        )
         return
     for (objectclass, objectkey), (solution, discards) in lost.items():
         out(f"  {objectclass} {objectkey} ({solution}): discarded {V.describe_discards(discards)}")
@@ -206,7 +292,10 @@ def cmd_version_merge(args: argparse.Namespace) -> int:
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
         lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
-    out(f"merged {V.show_name(args.name)} into its parent: {written} row(s) written" + ("; version removed" if args.remove else ""))
+    out(
+        f"merged {V.show_name(args.name)} into its parent: {written} row(s) written"
+        + ("; version removed" if args.remove else "")
+    )
     _say_discarded(lost)
     if args.remove and clistate.remembered_version(target_key(args)) == args.name:
         clistate.remember_version(target_key(args), None)
@@ -234,8 +323,12 @@ def _feature_as(conn: Any, fid: int, version: str, revision: int | None) -> Mesh
             conn.rollback()
 
 
-def _draw_differences(conn: Any, args: argparse.Namespace, differences: Sequence[Any],
-                      sides: tuple[tuple[str, int | None], tuple[str, int | None]]) -> None:
+def _draw_differences(
+    conn: Any,
+    args: argparse.Namespace,
+    differences: Sequence[Any],
+    sides: tuple[tuple[str, int | None], tuple[str, int | None]],
+) -> None:
     """One PNG per changed surface feature: the new side coloured by how far each vertex moved, or both sides."""
     from tgsis import pictures
 
@@ -249,8 +342,13 @@ def _draw_differences(conn: Any, args: argparse.Namespace, differences: Sequence
         path = folder / f"diff_{fid}.png"
         title = f"feature {fid}: {args.a} -> {args.b}"
         if isinstance(old, Surface) and isinstance(new, Surface) and old.vertices.shape == new.vertices.shape:
-            pictures.scene([new], path, title=title, colour=[pictures.displacement(new, old)],
-                           colour_label=f"moved from {args.a} (m)")
+            pictures.scene(
+                [new],
+                path,
+                title=title,
+                colour=[pictures.displacement(new, old)],
+                colour_label=f"moved from {args.a} (m)",
+            )
         else:
             if isinstance(old, Surface):
                 old.name = f"{old.name or fid} in {args.a}"
@@ -263,8 +361,11 @@ def _draw_differences(conn: Any, args: argparse.Namespace, differences: Sequence
 def _object_order(key: tuple[str, str]) -> tuple[str, int, int, str]:
     """Objects by class, then numeric keys (feature ids) by number before other keys by text."""
     objectclass, objectkey = key
-    return (objectclass, 0, int(objectkey), "") if objectkey.isascii() and objectkey.isdigit() else \
-        (objectclass, 1, 0, objectkey)
+    return (
+        (objectclass, 0, int(objectkey), "")
+        if objectkey.isascii() and objectkey.isdigit()
+        else (objectclass, 1, 0, objectkey)
+    )
 
 
 def cmd_version_diff(args: argparse.Namespace) -> int:
@@ -278,29 +379,74 @@ def cmd_version_diff(args: argparse.Namespace) -> int:
     objects = summarize_differences(differences, args.a, args.b)
     objects.sort(key=lambda o: _object_order((o.objectclass, o.objectkey)))
     if wants_json(args):
-        cliout.emit_json({"a": args.a, "b": args.b, "objects": [
-            {"objectclass": o.objectclass, "objectkey": o.objectkey, "difference": o.difference,
-             "tables": list(o.tables), "added": o.added, "removed": o.removed, "changed": o.changed}
-            for o in objects], "differences": [
-            {"objectclass": d.objectclass, "objectkey": d.objectkey, "table": d.table, "added": d.added,
-             "removed": d.removed, "changed": d.changed} for d in differences]})
+        cliout.emit_json(
+            {
+                "a": args.a,
+                "b": args.b,
+                "objects": [
+                    {
+                        "objectclass": o.objectclass,
+                        "objectkey": o.objectkey,
+                        "difference": o.difference,
+                        "tables": list(o.tables),
+                        "added": o.added,
+                        "removed": o.removed,
+                        "changed": o.changed,
+                    }
+                    for o in objects
+                ],
+                "differences": [
+                    {
+                        "objectclass": d.objectclass,
+                        "objectkey": d.objectkey,
+                        "table": d.table,
+                        "added": d.added,
+                        "removed": d.removed,
+                        "changed": d.changed,
+                    }
+                    for d in differences
+                ],
+            }
+        )
         return 0
     if args.tables:
-        print_table(args, ("class", "key", "table", "added", "removed", "changed"),
-                    [(d.objectclass, d.objectkey, d.table, f"+{d.added}", f"-{d.removed}", f"~{d.changed}")
-                     for d in differences])
+        print_table(
+            args,
+            ("class", "key", "table", "added", "removed", "changed"),
+            [
+                (d.objectclass, d.objectkey, d.table, f"+{d.added}", f"-{d.removed}", f"~{d.changed}")
+                for d in differences
+            ],
+        )
     else:
-        print_table(args, ("class", "key", "difference", "tables", "added", "removed", "changed"),
-                    [(o.objectclass, o.objectkey, o.difference, ",".join(o.tables), f"+{o.added}", f"-{o.removed}",
-                      f"~{o.changed}") for o in objects])
+        print_table(
+            args,
+            ("class", "key", "difference", "tables", "added", "removed", "changed"),
+            [
+                (
+                    o.objectclass,
+                    o.objectkey,
+                    o.difference,
+                    ",".join(o.tables),
+                    f"+{o.added}",
+                    f"-{o.removed}",
+                    f"~{o.changed}",
+                )
+                for o in objects
+            ],
+        )
     if not differences:
         print(f"{args.a} and {args.b} hold the same rows", file=sys.stderr)
     elif not args.tables:
-        counts = {what: sum(o.difference == what for o in objects)
-                  for what in (f"only in {args.a}", f"only in {args.b}", "changed")}
-        print(f"{len(objects)} object{'s' if len(objects) != 1 else ''} differ"
-              f"{'s' if len(objects) == 1 else ''}: " + ", ".join(f"{n} {what}" for what, n in counts.items() if n),
-              file=sys.stderr)
+        counts = {
+            what: sum(o.difference == what for o in objects)
+            for what in (f"only in {args.a}", f"only in {args.b}", "changed")
+        }
+        print(
+            f"{len(objects)} object{'s' if len(objects) != 1 else ''} differ"
+            f"{'s' if len(objects) == 1 else ''}: " + ", ".join(f"{n} {what}" for what, n in counts.items() if n),
+            file=sys.stderr,
+        )
     return 0
 
 
@@ -308,16 +454,21 @@ def _moment(text: str) -> datetime.datetime:
     try:
         moment = datetime.datetime.fromisoformat(text)
     except ValueError:
-        raise InvalidInputError(f"{text!r} is not a date or time (ISO 8601, e.g. 2026-03-01 or 2026-03-01T12:00+01:00)"
-                                ) from None
+        raise InvalidInputError(
+            f"{text!r} is not a date or time (ISO 8601, e.g. 2026-03-01 or 2026-03-01T12:00+01:00)"
+        ) from None
     return moment if moment.tzinfo else moment.replace(tzinfo=datetime.timezone.utc)
 
 
 def cmd_version_valid(args: argparse.Namespace) -> int:
     with connection(args) as conn:
-        V.set_version_validity(conn, args.name, _moment(args.valid_from), _moment(args.valid_to) if args.valid_to else None)
-    out(f"version {V.show_name(args.name)} believed from {args.valid_from}"
-         + (f" to {args.valid_to}" if args.valid_to else " on"))
+        V.set_version_validity(
+            conn, args.name, _moment(args.valid_from), _moment(args.valid_to) if args.valid_to else None
+        )
+    out(
+        f"version {V.show_name(args.name)} believed from {args.valid_from}"
+        + (f" to {args.valid_to}" if args.valid_to else " on")
+    )
     return 0
 
 
@@ -332,20 +483,32 @@ def cmd_version_chain(args: argparse.Namespace) -> int:
             return 0 if believed is not None else 3
         chain = V.version_chain(conn, args.root)
     if wants_json(args):
-        cliout.emit_json({"root": args.root, "chain": [{"version": name, "valid_from": start, "valid_to": end}
-                                                       for name, start, end in chain]})
+        cliout.emit_json(
+            {
+                "root": args.root,
+                "chain": [{"version": name, "valid_from": start, "valid_to": end} for name, start, end in chain],
+            }
+        )
         return 0
-    print_table(args, ("version", "believed from", "believed to"),
-           [(name, cliout.show_moment(start), cliout.show_moment(end) if end else "still believed")
-            for name, start, end in chain])
+    print_table(
+        args,
+        ("version", "believed from", "believed to"),
+        [
+            (name, cliout.show_moment(start), cliout.show_moment(end) if end else "still believed")
+            for name, start, end in chain
+        ],
+    )
     return 0
 
 
 def cmd_version_lock(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         taken = V.lock_objects(conn, args.name, args.objectclass, args.keys, exclusive=args.exclusive)
-    out(f"{args.name} holds {len(set(args.keys))} {args.objectclass} object(s) ({taken} newly locked"
-         + (", exclusive" if args.exclusive else "") + ")")
+    out(
+        f"{args.name} holds {len(set(args.keys))} {args.objectclass} object(s) ({taken} newly locked"
+        + (", exclusive" if args.exclusive else "")
+        + ")"
+    )
     return 0
 
 
@@ -360,13 +523,37 @@ def cmd_version_locks(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         locks = V.object_locks(conn, args.name)
     if wants_json(args):
-        cliout.emit_json({"locks": [{"objectclass": lk.objectclass, "objectkey": lk.objectkey, "version": lk.version,
-                                     "role": lk.locked_by, "exclusive": lk.exclusive, "since": lk.locked_at}
-                                    for lk in locks]})
+        cliout.emit_json(
+            {
+                "locks": [
+                    {
+                        "objectclass": lk.objectclass,
+                        "objectkey": lk.objectkey,
+                        "version": lk.version,
+                        "role": lk.locked_by,
+                        "exclusive": lk.exclusive,
+                        "since": lk.locked_at,
+                    }
+                    for lk in locks
+                ]
+            }
+        )
         return 0
-    print_table(args, ("class", "key", "version", "role", "kind", "since"),
-           [(lk.objectclass, lk.objectkey, lk.version, lk.locked_by, "exclusive" if lk.exclusive else "version",
-             cliout.show_moment(lk.locked_at)) for lk in locks])
+    print_table(
+        args,
+        ("class", "key", "version", "role", "kind", "since"),
+        [
+            (
+                lk.objectclass,
+                lk.objectkey,
+                lk.version,
+                lk.locked_by,
+                "exclusive" if lk.exclusive else "version",
+                cliout.show_moment(lk.locked_at),
+            )
+            for lk in locks
+        ],
+    )
     if not locks:
         print("no object locks" + (f" in {args.name}" if args.name else ""), file=sys.stderr)
     return 0
@@ -375,8 +562,10 @@ def cmd_version_locks(args: argparse.Namespace) -> int:
 def cmd_version_grant(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         (V.revoke_version if args.revoke else V.grant_version)(conn, args.name, args.privilege, args.role)
-    out(f"{'revoked' if args.revoke else 'granted'} {args.privilege} on {args.name} "
-         f"{'from' if args.revoke else 'to'} {args.role}")
+    out(
+        f"{'revoked' if args.revoke else 'granted'} {args.privilege} on {args.name} "
+        f"{'from' if args.revoke else 'to'} {args.role}"
+    )
     return 0
 
 
@@ -394,9 +583,27 @@ def cmd_version_privileges(args: argparse.Namespace) -> int:
     if args.name is not None and not owners:
         raise NotFoundError(f"version {args.name!r} does not exist")
     if wants_json(args):
-        cliout.emit_json({"versions": [{"name": name, "owner": owner, "grants": [
-            {"role": g.grantee, "privilege": g.privilege, "granted_by": g.granted_by, "granted_at": g.granted_at}
-            for g in grants if g.version == name]} for name, owner in owners.items()]})
+        cliout.emit_json(
+            {
+                "versions": [
+                    {
+                        "name": name,
+                        "owner": owner,
+                        "grants": [
+                            {
+                                "role": g.grantee,
+                                "privilege": g.privilege,
+                                "granted_by": g.granted_by,
+                                "granted_at": g.granted_at,
+                            }
+                            for g in grants
+                            if g.version == name
+                        ],
+                    }
+                    for name, owner in owners.items()
+                ]
+            }
+        )
         return 0
     rows: list[tuple[str, ...]] = []
     for name, owner in owners.items():
@@ -412,22 +619,34 @@ def cmd_version_compress(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         report = V.compress_versions(conn, dry_run=args.dry_run)
         gone = looked_at is not None and not args.dry_run and not revision_exists(conn, looked_at)
-    totals = {what: sum(i.removed for i in report if i.what == what)
-              for what in ("rows", "lastrevs", "revisions", "set entries")}
+    totals = {
+        what: sum(i.removed for i in report if i.what == what)
+        for what in ("rows", "lastrevs", "revisions", "set entries")
+    }
     if wants_json(args):
         if gone:
             clistate.remember_version(target_key(args), None)
-        cliout.emit_json({"dry_run": args.dry_run, "removed": [{"what": i.what, "name": i.name, "removed": i.removed}
-                                                               for i in report],
-                          "totals": totals, "forgotten": remembered if gone else None})
+        cliout.emit_json(
+            {
+                "dry_run": args.dry_run,
+                "removed": [{"what": i.what, "name": i.name, "removed": i.removed} for i in report],
+                "totals": totals,
+                "forgotten": remembered if gone else None,
+            }
+        )
         return 0
     if report:
         print_table(args, ("what", "name", "removed"), [(item.what, item.name, item.removed) for item in report])
-    summary = (f"{totals['rows']} row version(s), {totals['lastrevs']} lastrevs entr(ies), "
-               f"{totals['revisions']} revision(s), {totals['set entries']} revision set entr(ies)")
+    summary = (
+        f"{totals['rows']} row version(s), {totals['lastrevs']} lastrevs entr(ies), "
+        f"{totals['revisions']} revision(s), {totals['set entries']} revision set entr(ies)"
+    )
     if args.dry_run:
-        out(f"compress would remove {summary} (dry run: nothing changed)" if report
-             else "compress would remove nothing (dry run)")
+        out(
+            f"compress would remove {summary} (dry run: nothing changed)"
+            if report
+            else "compress would remove nothing (dry run)"
+        )
     else:
         out(f"compress removed {summary}" if report else "compress removed nothing")
     if gone:
@@ -440,14 +659,20 @@ def cmd_versioning_enable(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         if args.table == "features":
             count = V.enable_feature_versioning(conn)
-            out(f"model 1 and the feature classes are versioned (object class feature): {count} table(s) newly versioned")
+            out(
+                f"model 1 and the feature classes are versioned (object class feature): {count} table(s) newly versioned"
+            )
             return 0
         if not (args.key and args.object_class):
-            raise InvalidInputError("versioning a table needs --key and --class",
-                                    hint="e.g. tgsis versioning enable wells --key id --class well")
+            raise InvalidInputError(
+                "versioning a table needs --key and --class",
+                hint="e.g. tgsis versioning enable wells --key id --class well",
+            )
         t = V.enable_versioning(conn, args.table, args.key, args.object_class, args.order, args.shortname)
-    out(f"{t.schema}.{t.table} is versioned (object class {t.objectclass}, key {t.objectkeyfield}, "
-         f"storage {t.table}_ver)")
+    out(
+        f"{t.schema}.{t.table} is versioned (object class {t.objectclass}, key {t.objectkeyfield}, "
+        f"storage {t.table}_ver)"
+    )
     return 0
 
 
@@ -465,13 +690,31 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         tables = V.versioned_tables(conn)
     if wants_json(args):
-        cliout.emit_json({"tables": [{"schema": t.schema, "table": t.table, "objectclass": t.objectclass,
-                                      "key": t.objectkeyfield, "order": t.iudorder, "shortname": t.shortname,
-                                      "row_key": list(t.keycolumns)} for t in tables]})
+        cliout.emit_json(
+            {
+                "tables": [
+                    {
+                        "schema": t.schema,
+                        "table": t.table,
+                        "objectclass": t.objectclass,
+                        "key": t.objectkeyfield,
+                        "order": t.iudorder,
+                        "shortname": t.shortname,
+                        "row_key": list(t.keycolumns),
+                    }
+                    for t in tables
+                ]
+            }
+        )
         return 0
-    print_table(args, ("table", "class", "key", "order", "shortname", "row key"),
-           [(f"{t.schema}.{t.table}", t.objectclass, t.objectkeyfield, t.iudorder, t.shortname,
-             ", ".join(t.keycolumns)) for t in tables])
+    print_table(
+        args,
+        ("table", "class", "key", "order", "shortname", "row key"),
+        [
+            (f"{t.schema}.{t.table}", t.objectclass, t.objectkeyfield, t.iudorder, t.shortname, ", ".join(t.keycolumns))
+            for t in tables
+        ],
+    )
     if not tables:
         print("no versioned tables", file=sys.stderr)
     return 0
@@ -479,139 +722,285 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
 
 def add_version_parser(commands: Any) -> None:
     """``tgsis version ACTION``."""
-    ver = add_command(commands, "version", "versions (long transactions): create, goto, save, merge, lock, grant, ...",
-                   ["tgsis version create cfm6 && tgsis version goto cfm6"])
+    ver = add_command(
+        commands,
+        "version",
+        "versions (long transactions): create, goto, save, merge, lock, grant, ...",
+        ["tgsis version create cfm6 && tgsis version goto cfm6"],
+    )
     ver_commands = ver.add_subparsers(dest="version_command", metavar="ACTION", required=True)
-    ver_create = add_command(ver_commands, "create", "create a child version",
-                          ["tgsis version create cfm6 --description 'release 6.1'"], cmd_version_create)
+    ver_create = add_command(
+        ver_commands,
+        "create",
+        "create a child version",
+        ["tgsis version create cfm6 --description 'release 6.1'"],
+        cmd_version_create,
+    )
     ver_create.add_argument("name", help="the new version's name")
     ver_create.add_argument("--parent", default="DEFAULT", help="parent version (default: DEFAULT)")
     ver_create.add_argument("--description", help="what the version is for, for people")
-    add_command(ver_commands, "list", "list the versions (* marks the one commands work in)",
-             ["tgsis version list", "tgsis version list --json"], cmd_version_list, tabular=True)
-    add_command(ver_commands, "tree", "print the version tree with revisions",
-             ["tgsis version tree", "tgsis version tree --json"], cmd_version_tree, tabular=False)
-    ver_goto = add_command(ver_commands, "goto", "work in a version from now on (remembered per database)",
-                        ["tgsis version goto cfm6", "tgsis version goto cfm6@2   # look at revision 2, read-only",
-                         "tgsis version goto DEFAULT"], cmd_version_goto)
-    ver_goto.add_argument("name", metavar="VERSION[@REVISION]",
-                          help="a version, or a revision of its history to look at read-only")
-    add_command(ver_commands, "current", "the version commands work in, and its working revision",
-             ["tgsis version current", "tgsis version current --json"], cmd_version_current, tabular=False)
-    ver_save = add_command(ver_commands, "save", "freeze the working revision under a name, start a new one",
-                        ["tgsis version save imported"], cmd_version_save)
+    add_command(
+        ver_commands,
+        "list",
+        "list the versions (* marks the one commands work in)",
+        ["tgsis version list", "tgsis version list --json"],
+        cmd_version_list,
+        tabular=True,
+    )
+    add_command(
+        ver_commands,
+        "tree",
+        "print the version tree with revisions",
+        ["tgsis version tree", "tgsis version tree --json"],
+        cmd_version_tree,
+        tabular=False,
+    )
+    ver_goto = add_command(
+        ver_commands,
+        "goto",
+        "work in a version from now on (remembered per database)",
+        [
+            "tgsis version goto cfm6",
+            "tgsis version goto cfm6@2   # look at revision 2, read-only",
+            "tgsis version goto DEFAULT",
+        ],
+        cmd_version_goto,
+    )
+    ver_goto.add_argument(
+        "name", metavar="VERSION[@REVISION]", help="a version, or a revision of its history to look at read-only"
+    )
+    add_command(
+        ver_commands,
+        "current",
+        "the version commands work in, and its working revision",
+        ["tgsis version current", "tgsis version current --json"],
+        cmd_version_current,
+        tabular=False,
+    )
+    ver_save = add_command(
+        ver_commands,
+        "save",
+        "freeze the working revision under a name, start a new one",
+        ["tgsis version save imported"],
+        cmd_version_save,
+    )
     ver_save.add_argument("name", help="the name of the saved revision")
-    ver_delete = add_command(ver_commands, "delete", "delete a version without children, with its changes",
-                          ["tgsis version delete cfm6"], cmd_version_delete)
+    ver_delete = add_command(
+        ver_commands,
+        "delete",
+        "delete a version without children, with its changes",
+        ["tgsis version delete cfm6"],
+        cmd_version_delete,
+    )
     ver_delete.add_argument("name", help="the version to delete")
 
-    ver_conflicts = add_command(ver_commands, "conflicts", "objects changed both in a version and in its parent",
-                             ["tgsis version conflicts cfm6", "tgsis version conflicts cfm6 --rows --json"],
-                             cmd_version_conflicts, tabular=True)
+    ver_conflicts = add_command(
+        ver_commands,
+        "conflicts",
+        "objects changed both in a version and in its parent",
+        ["tgsis version conflicts cfm6", "tgsis version conflicts cfm6 --rows --json"],
+        cmd_version_conflicts,
+        tabular=True,
+    )
     ver_conflicts.add_argument("name", help="the child version (its parent is the other side)")
     ver_conflicts.add_argument("--rows", action="store_true", help="also print the rows that differ, per side")
-    ver_resolve = add_command(ver_commands, "resolve", "record how a conflicting object is merged",
-                           ["tgsis version resolve cfm6 feature 42 child",
-                            "tgsis version resolve cfm6 feature 42 child --discard-other"], cmd_version_resolve)
+    ver_resolve = add_command(
+        ver_commands,
+        "resolve",
+        "record how a conflicting object is merged",
+        ["tgsis version resolve cfm6 feature 42 child", "tgsis version resolve cfm6 feature 42 child --discard-other"],
+        cmd_version_resolve,
+    )
     ver_resolve.add_argument("name", help="the child version")
     ver_resolve.add_argument("objectclass", metavar="CLASS", help="object class ('feature' for features)")
     ver_resolve.add_argument("objectkey", metavar="KEY", help="object key (for features: the id)")
-    ver_resolve.add_argument("solution", type=str.lower, choices=("parent", "child", "manual", "unsolved"),
-                             help="which side the merge keeps: parent, child, manual (the rows as the child has them "
-                                  "after your edit), or unsolved (undecided again)")
-    ver_resolve.add_argument("--discard-other", action="store_true",
-                             help="record child or parent even though it throws away the other side's edits of the "
-                                  "object since the version was based (without it such a solution is refused, "
-                                  "with the counts; tgsis version conflicts shows them)")
+    ver_resolve.add_argument(
+        "solution",
+        type=str.lower,
+        choices=("parent", "child", "manual", "unsolved"),
+        help="which side the merge keeps: parent, child, manual (the rows as the child has them "
+        "after your edit), or unsolved (undecided again)",
+    )
+    ver_resolve.add_argument(
+        "--discard-other",
+        action="store_true",
+        help="record child or parent even though it throws away the other side's edits of the "
+        "object since the version was based (without it such a solution is refused, "
+        "with the counts; tgsis version conflicts shows them)",
+    )
 
-    ver_merge = add_command(ver_commands, "merge", "apply a version's changes to its parent (one transaction)",
-                         ["tgsis version merge cfm6 --remove"], cmd_version_merge)
+    ver_merge = add_command(
+        ver_commands,
+        "merge",
+        "apply a version's changes to its parent (one transaction)",
+        ["tgsis version merge cfm6 --remove"],
+        cmd_version_merge,
+    )
     ver_merge.add_argument("name", help="the version to merge into its parent")
     ver_merge.add_argument("--remove", action="store_true", help="delete the version after merging it")
-    ver_refresh = add_command(ver_commands, "refresh", "bring the parent's changes into a version",
-                           ["tgsis version refresh cfm6"], cmd_version_refresh)
+    ver_refresh = add_command(
+        ver_commands,
+        "refresh",
+        "bring the parent's changes into a version",
+        ["tgsis version refresh cfm6"],
+        cmd_version_refresh,
+    )
     ver_refresh.add_argument("name", help="the version to refresh")
 
-    ver_diff = add_command(ver_commands, "diff", "objects whose rows differ between two versions or revisions",
-                        ["tgsis version diff DEFAULT cfm6", "tgsis version diff cfm6@2 cfm6 --json",
-                         "tgsis version diff DEFAULT cfm6 --tables",
-                         "tgsis version diff DEFAULT cfm6 --png out"], cmd_version_diff, tabular=True)
+    ver_diff = add_command(
+        ver_commands,
+        "diff",
+        "objects whose rows differ between two versions or revisions",
+        [
+            "tgsis version diff DEFAULT cfm6",
+            "tgsis version diff cfm6@2 cfm6 --json",
+            "tgsis version diff DEFAULT cfm6 --tables",
+            "tgsis version diff DEFAULT cfm6 --png out",
+        ],
+        cmd_version_diff,
+        tabular=True,
+    )
     ver_diff.add_argument("a", metavar="A[@REVISION]", help="the version (or revision) compared from")
     ver_diff.add_argument("b", metavar="B[@REVISION]", help="the version (or revision) compared to")
-    ver_diff.add_argument("--tables", action="store_true",
-                          help="one line per object and table, with its rows added, removed and changed (default: "
-                               "one line per object saying whether it is only in A, only in B, or changed)")
-    ver_diff.add_argument("--png", metavar="DIR", help="also draw each changed surface feature to DIR/diff_ID.png, "
-                                                       "coloured by how far its vertices moved from A")
+    ver_diff.add_argument(
+        "--tables",
+        action="store_true",
+        help="one line per object and table, with its rows added, removed and changed (default: "
+        "one line per object saying whether it is only in A, only in B, or changed)",
+    )
+    ver_diff.add_argument(
+        "--png",
+        metavar="DIR",
+        help="also draw each changed surface feature to DIR/diff_ID.png, coloured by how far its vertices moved from A",
+    )
 
-    ver_valid = add_command(ver_commands, "valid", "set the period in which a version was believed true",
-                         ["tgsis version valid cfm5 2020-01-01 2023-06-30", "tgsis version valid cfm6 2023-06-30"],
-                         cmd_version_valid)
+    ver_valid = add_command(
+        ver_commands,
+        "valid",
+        "set the period in which a version was believed true",
+        ["tgsis version valid cfm5 2020-01-01 2023-06-30", "tgsis version valid cfm6 2023-06-30"],
+        cmd_version_valid,
+    )
     ver_valid.add_argument("name", help="the version")
     ver_valid.add_argument("valid_from", metavar="FROM", help="ISO date or time")
     ver_valid.add_argument("valid_to", metavar="TO", nargs="?", help="ISO date or time (omitted: still believed)")
-    ver_chain = add_command(ver_commands, "chain", "the chain of believed versions, or the one believed --at a time",
-                         ["tgsis version chain", "tgsis version chain --at 2024-01-01 --json"], cmd_version_chain,
-                         tabular=True)
+    ver_chain = add_command(
+        ver_commands,
+        "chain",
+        "the chain of believed versions, or the one believed --at a time",
+        ["tgsis version chain", "tgsis version chain --at 2024-01-01 --json"],
+        cmd_version_chain,
+        tabular=True,
+    )
     ver_chain.add_argument("--root", default="DEFAULT", help="the version the chain starts from (default: DEFAULT)")
     ver_chain.add_argument("--at", help="ISO date or time: print the version believed then (exit 3: none)")
 
     ver_compress = add_command(
-        ver_commands, "compress", "remove revisions and row versions no version, named revision or child can reach",
-        ["tgsis version compress --dry-run", "tgsis version compress --json"], cmd_version_compress, tabular=True)
+        ver_commands,
+        "compress",
+        "remove revisions and row versions no version, named revision or child can reach",
+        ["tgsis version compress --dry-run", "tgsis version compress --json"],
+        cmd_version_compress,
+        tabular=True,
+    )
     ver_compress.add_argument("--dry-run", action="store_true", help="only report what would be removed")
 
-    ver_lock = add_command(ver_commands, "lock", "lock objects for a version: no other version may change them",
-                        ["tgsis version lock cfm6 feature 3 4 --exclusive"], cmd_version_lock)
+    ver_lock = add_command(
+        ver_commands,
+        "lock",
+        "lock objects for a version: no other version may change them",
+        ["tgsis version lock cfm6 feature 3 4 --exclusive"],
+        cmd_version_lock,
+    )
     ver_lock.add_argument("name", help="the version that holds the locks")
     ver_lock.add_argument("objectclass", metavar="CLASS", help="object class ('feature' for features)")
     ver_lock.add_argument("keys", nargs="+", metavar="KEY", help="object keys (feature ids)")
-    ver_lock.add_argument("--exclusive", action="store_true", help="also keep other roles from changing them in the version")
-    ver_unlock = add_command(ver_commands, "unlock", "release a version's object locks (all, of a class, or some keys)",
-                          ["tgsis version unlock cfm6", "tgsis version unlock cfm6 feature 3"], cmd_version_unlock)
+    ver_lock.add_argument(
+        "--exclusive", action="store_true", help="also keep other roles from changing them in the version"
+    )
+    ver_unlock = add_command(
+        ver_commands,
+        "unlock",
+        "release a version's object locks (all, of a class, or some keys)",
+        ["tgsis version unlock cfm6", "tgsis version unlock cfm6 feature 3"],
+        cmd_version_unlock,
+    )
     ver_unlock.add_argument("name", help="the version that holds the locks")
     ver_unlock.add_argument("objectclass", metavar="CLASS", nargs="?", help="only the locks of this object class")
     ver_unlock.add_argument("keys", nargs="*", metavar="KEY", help="only the locks of these keys")
-    ver_locks = add_command(ver_commands, "locks", "list object locks (of one version, or all)",
-                         ["tgsis version locks", "tgsis version locks cfm6 --json"], cmd_version_locks, tabular=True)
+    ver_locks = add_command(
+        ver_commands,
+        "locks",
+        "list object locks (of one version, or all)",
+        ["tgsis version locks", "tgsis version locks cfm6 --json"],
+        cmd_version_locks,
+        tabular=True,
+    )
     ver_locks.add_argument("name", nargs="?", help="only the locks of this version")
 
     privileges = ("write", "create", "merge", "delete", "all")
     for verb in ("grant", "revoke"):
-        ver_grant = add_command(ver_commands, verb, f"{verb} a right on a version (owner or tgsis_admin only)",
-                             [f"tgsis version {verb} cfm6 write {'ana' if verb == 'grant' else 'public'}"],
-                             cmd_version_grant)
+        ver_grant = add_command(
+            ver_commands,
+            verb,
+            f"{verb} a right on a version (owner or tgsis_admin only)",
+            [f"tgsis version {verb} cfm6 write {'ana' if verb == 'grant' else 'public'}"],
+            cmd_version_grant,
+        )
         ver_grant.add_argument("name", help="the version")
-        ver_grant.add_argument("privilege", metavar="RIGHT", type=str.lower, choices=privileges,
-                               help="one of " + ", ".join(privileges))
+        ver_grant.add_argument(
+            "privilege", metavar="RIGHT", type=str.lower, choices=privileges, help="one of " + ", ".join(privileges)
+        )
         ver_grant.add_argument("role", help="a role, or public")
         ver_grant.set_defaults(revoke=verb == "revoke")
-    ver_owner = add_command(ver_commands, "owner", "hand a version to another role", ["tgsis version owner cfm6 ana"],
-                         cmd_version_owner)
+    ver_owner = add_command(
+        ver_commands, "owner", "hand a version to another role", ["tgsis version owner cfm6 ana"], cmd_version_owner
+    )
     ver_owner.add_argument("name", help="the version")
     ver_owner.add_argument("role", help="its new owner")
-    ver_privileges = add_command(ver_commands, "privileges", "owners and granted rights (of one version, or all)",
-                              ["tgsis version privileges", "tgsis version privileges cfm6 --json"],
-                              cmd_version_privileges, tabular=True)
+    ver_privileges = add_command(
+        ver_commands,
+        "privileges",
+        "owners and granted rights (of one version, or all)",
+        ["tgsis version privileges", "tgsis version privileges cfm6 --json"],
+        cmd_version_privileges,
+        tabular=True,
+    )
     ver_privileges.add_argument("name", nargs="?", help="only this version")
 
 
 def add_versioning_parser(commands: Any) -> None:
     """``tgsis versioning enable|disable|list``."""
-    vt = add_command(commands, "versioning", "turn versioning of tables on or off", ["tgsis versioning enable features"])
+    vt = add_command(
+        commands, "versioning", "turn versioning of tables on or off", ["tgsis versioning enable features"]
+    )
     vt_commands = vt.add_subparsers(dest="versioning_command", metavar="ACTION", required=True)
-    vt_enable = add_command(vt_commands, "enable", "version a table (or 'features': model 1 and all feature classes)",
-                         ["tgsis versioning enable features", "tgsis versioning enable wells --key id --class well"],
-                         cmd_versioning_enable)
+    vt_enable = add_command(
+        vt_commands,
+        "enable",
+        "version a table (or 'features': model 1 and all feature classes)",
+        ["tgsis versioning enable features", "tgsis versioning enable wells --key id --class well"],
+        cmd_versioning_enable,
+    )
     vt_enable.add_argument("table", help="name or schema.name, or 'features'")
     vt_enable.add_argument("--key", help="column holding the object key")
     vt_enable.add_argument("--class", dest="object_class", help="object class")
     vt_enable.add_argument("--order", type=INT4, default=0, help="iudorder within the object class (default 0)")
     vt_enable.add_argument("--shortname", help="name in conflict reports (default: the table name)")
-    vt_disable = add_command(vt_commands, "disable", "make a versioned table plain again with DEFAULT's rows",
-                          ["tgsis versioning disable wells", "tgsis versioning disable features --force"],
-                          cmd_versioning_disable)
+    vt_disable = add_command(
+        vt_commands,
+        "disable",
+        "make a versioned table plain again with DEFAULT's rows",
+        ["tgsis versioning disable wells", "tgsis versioning disable features --force"],
+        cmd_versioning_disable,
+    )
     vt_disable.add_argument("table", help="name or schema.name, or 'features'")
     vt_disable.add_argument("--force", action="store_true", help="even if versions other than DEFAULT changed it")
-    add_command(vt_commands, "list", "list the versioned tables", ["tgsis versioning list", "tgsis versioning list --json"],
-             cmd_versioning_list, tabular=True)
+    add_command(
+        vt_commands,
+        "list",
+        "list the versioned tables",
+        ["tgsis versioning list", "tgsis versioning list --json"],
+        cmd_versioning_list,
+        tabular=True,
+    )
