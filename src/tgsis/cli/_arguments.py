@@ -7,6 +7,7 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from tgsis.datamodels import data_models
 from tgsis.errors import InvalidInputError
 
 Handler = Callable[[argparse.Namespace], int]
@@ -67,7 +68,8 @@ def add_command(
     return parser
 
 
-GEOTYPES = ("MULTIPOINT", "MULTILINESTRING", "SURFACE", "MULTITETRA", "GEOMETRYCOLLECTION", "GMAP")
+# the geotypes of every data model, in the registry's order (tgsis.datamodels: no list typed here)
+GEOTYPES = tuple(dict.fromkeys(g for m in data_models() for g in m.geotypes))
 
 
 def feature_values(items: Sequence[str] | None) -> dict[str, str]:

@@ -15,6 +15,7 @@ from tgsis.cli._arguments import GEOTYPES, INT4, add_command
 from tgsis.cli._connection import connection
 from tgsis.cli._output import out, print_table, wants_json
 from tgsis.cli._render import time_model_suffix
+from tgsis.datamodels import data_models
 from tgsis.db import versions as V
 from tgsis.db.classes import PropertyKind, add_property, drop_property, fill_property_rows, rename_property
 from tgsis.db.features import (
@@ -30,6 +31,9 @@ from tgsis.errors import (
     InvalidInputError,
 )
 from tgsis.mesh import Geotype
+
+# the time models whose features are G-maps (the registry: models 4 and 5 today)
+_GMAP_MODELS = [m.time_model for m in data_models() if "GMAP" in m.geotypes]
 
 # --------------------------------------------------------------------------- feature classes
 
@@ -387,16 +391,14 @@ def add_class_parser(commands: Any) -> None:
         "--time-model",
         default="STATIC",
         type=str.upper,
-        choices=("STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM"),
-        help="STATIC (model 1), INSTANTS: surfaces at instants (model 2), "
-        "EVOLVING: continuously evolving surfaces (model 3), GMAP: G-maps in time (model 4), "
-        "MULTIDIM: G-maps with time or knowledge as axes (model 5)",
+        choices=[m.time_model for m in data_models()],
+        help=", ".join(f"{m.time_model}: {m.name} (model {m.number})" for m in data_models()),
     )
     cls_create.add_argument(
         "--cell-level",
         type=int,
         metavar="LEVEL",
-        help="classes of G-maps (GMAP, MULTIDIM): the dimension of the cells --property values "
+        help=f"classes of G-maps ({', '.join(_GMAP_MODELS)}): the dimension of the cells --property values "
         "belong to (0 vertices, 1 edges, 2 faces, 3 volumes)",
     )
     cls_create.add_argument("--time-unit", help="unit of model time of a temporal class, e.g. Ma")
