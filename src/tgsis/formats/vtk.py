@@ -107,7 +107,14 @@ from typing import TYPE_CHECKING, Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from tgsis._vtk_cells import file_array_names, mesh_from_vtk_cells, named_as_read, shared_properties, without_no_part
+from tgsis._vtk_cells import (
+    VTK_CELL_NAMES,
+    file_array_names,
+    mesh_from_vtk_cells,
+    named_as_read,
+    shared_properties,
+    without_no_part,
+)
 from tgsis._zpositive import MEMBER_ZPOSITIVE_FIELD, ZPOSITIVE_FIELD
 from tgsis.errors import FileFormatError, InvalidGeometryError, InvalidPropertyError
 from tgsis.formats._common import (
@@ -148,23 +155,8 @@ __all__ = [
 #: VTK cell type of each mesh class.
 VTK_CELL_TYPES: dict[type[Mesh], int] = {PointSet: 1, LineSet: 3, Surface: 5, TetraMesh: 10}
 _MESH_OF_CELL_TYPE = {code: cls for cls, code in VTK_CELL_TYPES.items()}
-_CELL_TYPE_NAMES = {
-    1: "VERTEX",
-    2: "POLY_VERTEX",
-    3: "LINE",
-    4: "POLY_LINE",
-    5: "TRIANGLE",
-    6: "TRIANGLE_STRIP",
-    7: "POLYGON",
-    8: "PIXEL",
-    9: "QUAD",
-    10: "TETRA",
-    11: "VOXEL",
-    12: "HEXAHEDRON",
-    13: "WEDGE",
-    14: "PYRAMID",
-    42: "POLYHEDRON",
-}
+# the names of VTK's cell types, for messages: one table for every VTK reader (tgsis._vtk_cells)
+_CELL_TYPE_NAMES = VTK_CELL_NAMES
 
 _VTK_TYPE_OF: dict[str, str] = {
     "i1": "Int8",
