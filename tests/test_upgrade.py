@@ -464,3 +464,28 @@ def test_a_database_of_the_released_0_2_0_is_upgraded_by_db_install_then_import_
     checked_out = tmp_path / "out.off"
     assert main(["--dsn", dsn, "checkout", fid, str(checked_out)]) == 0, capsys.readouterr().err
     assert checked_out.read_text(encoding="utf-8").split()[:4] == ["OFF", "3", "1", "0"]
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_a_users_view_over_the_old_period_type_stops_the_upgrade_and_survives(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """0.3.0 makes tgsis.timerange a domain (the old range type and the functions over it are dropped and made
+    again). A user's view built on one of those functions must not be dropped with them without a word: the
+    upgrade stops with PostgreSQL's error naming the view, and the view and the release stay as they were."""
+    _upgrade_route(method, pg)
+    dsn = _old_database(method, pg, make_database, tmp_path)
+    with psycopg.connect(dsn, autocommit=True) as conn:
+        conn.execute("CREATE VIEW public.my_periods AS SELECT p.times, p.period FROM tgsis.instant_periods(1) p")
+        before = _objects(conn)
+    with psycopg.connect(dsn) as conn:
+        with pytest.raises((psycopg.Error, tgsis.Error), match="my_periods"):
+            if method == "extension":
+                conn.execute("ALTER EXTENSION tgsis UPDATE")
+            else:
+                tgsis.install(conn)
+        conn.rollback()
+    with psycopg.connect(dsn) as conn:
+        assert conn.execute("SELECT tgsis.version()").fetchone() == (OLD,)
+        assert conn.execute("SELECT to_regclass('public.my_periods') IS NOT NULL").fetchone() == (True,)
+        assert _objects(conn) == before

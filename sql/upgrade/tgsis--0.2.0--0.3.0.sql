@@ -47,9 +47,17 @@ $dump$;
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
 -- ---- issue36-timerange: tgsis.timerange becomes a domain refusing NaN bounds over the range type
--- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one; the functions over the
--- old range type go with it and are made again by the generated part below.
-DROP TYPE tgsis.timerange CASCADE;
+-- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one. The functions over the
+-- old range type are dropped by name (the generated part below makes them again), then the type, without
+-- CASCADE: a user's view or function built on them stops the upgrade with PostgreSQL's error naming it,
+-- rather than being dropped without a word.
+DROP FUNCTION tgsis.invalid_period(text, double precision, double precision);
+DROP FUNCTION tgsis.linear_satisfied(double precision, double precision, double precision, double precision, text, double precision);
+DROP FUNCTION tgsis.instant_periods(bigint, text);
+DROP FUNCTION tgsis.evolving_satisfied(double precision, double precision, double precision, double precision, double precision, double precision, boolean, text, double precision);
+DROP FUNCTION tgsis.property_periods(text, bigint, text, text, double precision, text);
+DROP FUNCTION tgsis.class_property_periods(text, text, text, double precision, text);
+DROP TYPE tgsis.timerange;
 -- @include temporal/timerange.sql
 
 -- @sources
