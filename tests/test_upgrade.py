@@ -266,6 +266,23 @@ def test_shape_changes_are_dropped_before_the_new_definitions() -> None:
     assert handled.unhandled == []
 
 
+def test_a_moved_file_is_the_same_file_under_its_new_name() -> None:
+    """`-- @moved OLD NEW` says a source file of the old version moved: its tables and rows are compared
+    with the new file's, and the directives may name it by either name; a moved file whose tables
+    changed is still unhandled."""
+    old = {"a/t.sql": "CREATE TABLE tgsis.t (a int);\n", "a/u.sql": "CREATE TABLE tgsis.u (a int);\n"}
+    new = {"b/t.sql": "CREATE TABLE tgsis.t (a int);\n", "b/u.sql": "CREATE TABLE tgsis.u (a int, b int);\n"}
+    assert _upgrade.Upgrade(old, new, "").unhandled == ["b/t.sql", "b/u.sql", "a/t.sql", "a/u.sql"]
+    moved = "-- @moved a/t.sql b/t.sql\n-- @moved a/u.sql b/u.sql\n"
+    assert _upgrade.Upgrade(old, new, moved).unhandled == ["b/u.sql"]
+    assert _upgrade.Upgrade(old, new, moved + "ALTER TABLE tgsis.u ADD b int;\n-- @handled a/u.sql\n").unhandled == []
+    included = _upgrade.Upgrade(old, new, moved + "-- @include a/u.sql\n")
+    assert included.unhandled == []
+    assert "-- ==== b/u.sql (included) ====\nCREATE TABLE tgsis.u (a int, b int);" in included.script("--")
+    with pytest.raises(ValueError, match="moved twice"):
+        _ = _upgrade.Upgrade(old, new, moved + "-- @moved a/t.sql c/t.sql\n").unhandled
+
+
 def test_only_new_grants_and_those_of_dropped_objects_run_again() -> None:
     grants = "GRANT SELECT ON tgsis.t TO tgsis_reader;\nREVOKE ALL ON FUNCTION tgsis.g(int) FROM PUBLIC;\n"
     old = {"a.sql": "CREATE FUNCTION tgsis.g(p_x int) RETURNS int LANGUAGE sql AS $$ SELECT 1 $$;\n" + grants}

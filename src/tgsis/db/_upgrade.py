@@ -11,8 +11,10 @@ An upgrade script is not written whole by hand. It is built from
   ``CREATE FUNCTION``/``CREATE VIEW`` made ``CREATE OR REPLACE``), say
   ``-- @rows FILE`` to upsert the shipped rows of a file (its ``INSERT``
   statements, on their first column), say ``-- @handled FILE`` of a file
-  whose changed tables it alters by hand, and put ``-- @sources`` where the
-  generated part goes (at the end when absent);
+  whose changed tables it alters by hand, say ``-- @moved OLD NEW`` of a
+  source file of the old version that the new one has under another name
+  (the two are then one file, and the directives may name it by either name),
+  and put ``-- @sources`` where the generated part goes (at the end when absent);
 * the generated part, from the current sources: ``DROP VIEW`` of every old
   view whose definition changed, ``DROP FUNCTION`` of every old function
   whose signature (arguments, defaults, result) changed or that is gone, then
@@ -63,6 +65,7 @@ INSTALL_GUARD = '\\echo Use "CREATE EXTENSION tgsis" to load this file. \\quit'
 
 FILE_MARKER = re.compile(r"^-- ==== (\S+) ====$", re.MULTILINE)
 _DIRECTIVE = re.compile(r"^--\s*@(include|handled|rows|sources)\b\s*(\S*)", re.MULTILINE)
+_MOVED = re.compile(r"^--\s*@moved\s+(\S+)\s+(\S+)", re.MULTILINE)
 _DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)?\$")
 # words that end a function's header (arguments and RETURNS clause)
 _OPTION_WORDS = {
@@ -313,18 +316,32 @@ class Upgrade:
     fingerprint: str = ""
 
     def _directives(self, *kinds: str) -> set[str]:
-        return {m.group(2) for m in _DIRECTIVE.finditer(self.hand) if m.group(1) in kinds}
+        return {self._new_name(m.group(2)) for m in _DIRECTIVE.finditer(self.hand) if m.group(1) in kinds}
+
+    @property
+    def moves(self) -> dict[str, str]:
+        """``{old file: new file}`` of the hand part's ``-- @moved OLD NEW`` lines."""
+        moves: dict[str, str] = {}
+        for match in _MOVED.finditer(self.hand):
+            if match.group(1) in moves:
+                raise ValueError(f"@moved {match.group(1)}: moved twice")
+            moves[match.group(1)] = match.group(2)
+        return moves
+
+    def _new_name(self, name: str) -> str:
+        return self.moves.get(name, name)
 
     @property
     def unhandled(self) -> list[str]:
         """Files whose tables, rows or other state statements changed (or that are new or gone) and that
-        the hand part neither includes nor marks handled."""
+        the hand part neither includes nor marks handled (a moved file counts under its new name)."""
         dealt = self._directives("include", "handled", "rows")
-        names = list(self.new_files) + [f for f in self.old_files if f not in self.new_files]
+        old_files = {self._new_name(name): text for name, text in self.old_files.items()}
+        names = list(self.new_files) + [f for f in old_files if f not in self.new_files]
         return [
             name
             for name in names
-            if name not in dealt and _state(self.old_files.get(name)) != _state(self.new_files.get(name))
+            if name not in dealt and _state(old_files.get(name)) != _state(self.new_files.get(name))
         ]
 
     def generated(self) -> str:
@@ -368,7 +385,7 @@ class Upgrade:
         placed = False
         for line in self.hand.splitlines(keepends=True):
             directive = _DIRECTIVE.match(line)
-            kind, name = (directive.group(1), directive.group(2)) if directive else ("", "")
+            kind, name = (directive.group(1), self._new_name(directive.group(2))) if directive else ("", "")
             if kind in ("include", "rows") and name not in self.new_files:
                 raise ValueError(f"@{kind} {name}: not a source file of the new version")
             if kind == "include":
