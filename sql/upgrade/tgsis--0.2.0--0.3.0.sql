@@ -46,6 +46,35 @@ $dump$;
 
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
+-- ---- issue38-sql-layers: the SQL folders became layers (sources.txt, one block per folder); these
+-- files of 0.2.0 moved without a change to their tables or rows (nothing to run; the directives above
+-- may name them by either name)
+-- @moved versioning/calling_role.sql core/calling_role.sql
+-- @moved temporal/checked_time.sql core/checked_time.sql
+-- @moved geometry/data_models.sql core/data_models.sql
+-- @moved core/property_types.sql catalog/property_types.sql
+-- @moved core/catalog.sql catalog/catalog.sql
+-- @moved core/class_tables.sql catalog/class_tables.sql
+-- @moved core/catalog_row.sql catalog/catalog_row.sql
+-- @moved core/property_columns.sql catalog/property_columns.sql
+-- @moved core/comment_property_columns.sql catalog/comment_property_columns.sql
+-- @moved core/time_key_columns.sql catalog/time_key_columns.sql
+-- @moved core/comment_time_key_columns.sql catalog/comment_time_key_columns.sql
+-- @moved core/create_class_view.sql geometry/create_class_view.sql
+-- @moved temporal/temporal_geometry.sql geometry/temporal_geometry.sql
+-- @moved core/create_storage.sql storage/create_storage.sql
+-- @moved core/storage.sql storage/storage.sql
+-- @moved model4/check_gmap_geometry.sql temporal/check_gmap_geometry.sql
+-- @moved geometry/new_geometry.sql features/new_geometry.sql
+-- @moved geometry/geometries_in_box.sql features/geometries_in_box.sql
+-- @moved geometry/delete_stored_geometries.sql features/delete_stored_geometries.sql
+-- @moved geometry/delete_geometry.sql features/delete_geometry.sql
+-- @moved core/register_feature_class.sql classes/register_feature_class.sql
+-- @moved core/drop_feature_class.sql classes/drop_feature_class.sql
+-- @moved core/restore_shipped_row.sql final/restore_shipped_row.sql
+-- @moved core/config_dump.sql final/config_dump.sql
+-- @moved core/grants.sql final/grants.sql
+
 -- ---- issue36-timerange: tgsis.timerange becomes a domain refusing NaN bounds over the range type
 -- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one. The functions over the
 -- old range type are dropped by name (the generated part below makes them again), then the type, without
