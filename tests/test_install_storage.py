@@ -1,7 +1,7 @@
 """What an install leaves and says (issue 36, points 10 and 12).
 
 * A bare ``CREATE EXTENSION tgsis`` has no storage tables (``tgsis.create_storage()`` makes them:
-  core/create_storage.sql says why): every entry point that needs them refuses with TG001 and the
+  storage/create_storage.sql says why): every entry point that needs them refuses with TG001 and the
   statement to run, ``tgsis db status`` reports them missing, ``tgsis db install`` creates them and
   says so.
 * ``tgsis db install`` says what it did; a non-superuser owner becomes a member of ``tgsis_admin``

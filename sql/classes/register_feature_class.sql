@@ -59,7 +59,7 @@ DECLARE
     v_caller    name := tgsis.calling_role();
     v_nspowner  oid;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     IF NOT pg_has_role(v_caller, 'tgsis_admin', 'MEMBER') THEN
         RAISE EXCEPTION 'role % may not register feature classes', v_caller
             USING ERRCODE = 'TG002', DETAIL = 'Registering feature classes is for members of tgsis_admin.',

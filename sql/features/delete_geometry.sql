@@ -15,7 +15,7 @@ DECLARE
     v_table text;
     v_own   text;   -- the feature's class (tgsis.class_of_geoid)
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
     PERFORM tgsis.feature_write_lock(p_geoid);  -- a check-in deciding from this object's state finishes first
     -- a feature of a class the role may neither UPDATE nor DELETE: refused by name (42501), not "not there"

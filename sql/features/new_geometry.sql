@@ -32,7 +32,7 @@ DECLARE
     v_owner text;
     v_none  text;  -- the class without versioning the geometry belongs to, if any
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'geometry');  -- not "in" a version while features are plain
     -- geotypes and time models are the registered data models' (tgsis.data_models)
     IF NOT EXISTS (SELECT FROM tgsis.data_models m WHERE upper(p_geotype) = ANY (m.geotypes)) THEN

@@ -1,6 +1,6 @@
 -- tgsis.restore_shipped_row(): a restore's copy of a row the script ships replaces the shipped row.
 -- On the extension route pg_dump dumps the catalog tables' rows
--- (core/config_dump.sql), and the CREATE EXTENSION of the restore has inserted
+-- (final/config_dump.sql), and the CREATE EXTENSION of the restore has inserted
 -- the rows the script ships (DEFAULT, its revision 0, the rights on DEFAULT
 -- granted to tgsis_editor, the installation record) before those rows arrive.
 -- The dumped rows must win: DEFAULT's working revision, set, owner and

@@ -50,7 +50,7 @@ DECLARE
     v_fixed   bigint;
     v_room    bigint;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     IF p_partitions IS NULL OR p_partitions NOT BETWEEN 2 AND 1024 THEN
         RAISE EXCEPTION 'number of partitions % is out of range', coalesce(p_partitions::text, 'NULL')
             USING ERRCODE = 'TG100', HINT = 'give 2 to 1024 partitions';

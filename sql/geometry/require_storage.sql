@@ -1,6 +1,6 @@
 -- tgsis.require_storage(): refuse, with what to run, when tgsis's storage tables do not exist.
 -- CREATE EXTENSION tgsis makes the functions and the catalog, not the tables of stored objects:
--- those come from tgsis.create_storage() (core/create_storage.sql says why), which tgsis db install
+-- those come from tgsis.create_storage() (storage/create_storage.sql says why), which tgsis db install
 -- runs after CREATE EXTENSION. A database where someone ran only CREATE EXTENSION used to fail at
 -- the first class with a raw "relation tgsis.geometry does not exist"; every entry point that needs
 -- the storage (registering a class, making a geometry or a model, versioning features, deleting,

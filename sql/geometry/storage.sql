@@ -1,7 +1,7 @@
 -- tgsis.create_geometry_storage(): create tgsis.geometry, the geometry core every data model shares.
 -- One row per stored object whatever its model: its geotype and time model
 -- (which model's tables hold the rest, tgsis.data_models), bounding box,
--- counts and what the file meant. Called by tgsis.create_storage (core/create_storage.sql
+-- counts and what the file meant. Called by tgsis.create_storage (storage/create_storage.sql
 -- says why the tables are created by a function after CREATE EXTENSION).
 -- The search path is the script's (tgsis, cube's schema).
 CREATE FUNCTION tgsis.create_geometry_storage()

@@ -1,6 +1,6 @@
 -- tgsis.create_model1_storage(): create the tables of model 1 (static 3D objects: vertices, simplices, atoms, parts) and register them.
 -- Their geometry rows are the core's (geometry/storage.sql).
--- Called by tgsis.create_storage (core/create_storage.sql says why the tables
+-- Called by tgsis.create_storage (storage/create_storage.sql says why the tables
 -- are created by a function after CREATE EXTENSION, not by the script).
 -- The search path is the script's (tgsis, cube's schema).
 CREATE FUNCTION tgsis.create_model1_storage()
@@ -159,7 +159,7 @@ REVOKE ALL ON FUNCTION tgsis.create_model1_storage() FROM PUBLIC;
 COMMENT ON FUNCTION tgsis.create_model1_storage() IS
     'create the model-1 tables (vrtx, point, segment, trgl, tetra, atom, part; registered in tgsis.model_tables); called once by tgsis.create_storage';
 
--- the registry rows of model 1 (geometry/data_models.sql says why)
+-- the registry rows of model 1 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, create_function, extent_function, check_function, description)
 VALUES (1, 'static 3D objects', 'STATIC', '{MULTIPOINT,MULTILINESTRING,SURFACE,MULTITETRA,GEOMETRYCOLLECTION}',
         'create_model1_storage', 'static_extent', 'check_static_geometry',

@@ -1,5 +1,5 @@
 -- tgsis.create_model2_storage(): create the tables of model 2 (surfaces at instants: instants, vertices and triangles per instant) and register them.
--- Called by tgsis.create_storage (core/create_storage.sql says why the tables
+-- Called by tgsis.create_storage (storage/create_storage.sql says why the tables
 -- are created by a function after CREATE EXTENSION, not by the script).
 -- The search path is the script's (tgsis, cube's schema).
 CREATE FUNCTION tgsis.create_model2_storage()
@@ -74,7 +74,7 @@ REVOKE ALL ON FUNCTION tgsis.create_model2_storage() FROM PUBLIC;
 COMMENT ON FUNCTION tgsis.create_model2_storage() IS
     'create the model-2 tables (times, times_vrtx, times_trgl); called once by tgsis.create_storage';
 
--- the registry rows of model 2 (geometry/data_models.sql says why)
+-- the registry rows of model 2 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, create_function, extent_function, check_function,
                                description)
 VALUES (2, 'surfaces at instants', 'INSTANTS', '{SURFACE}',

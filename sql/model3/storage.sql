@@ -1,5 +1,5 @@
 -- tgsis.create_model3_storage(): create the tables of model 3 (continuously evolving surfaces: topology and geometry instants, nodes, 4D triangles and vertices) and register them.
--- Called by tgsis.create_storage (core/create_storage.sql says why the tables
+-- Called by tgsis.create_storage (storage/create_storage.sql says why the tables
 -- are created by a function after CREATE EXTENSION, not by the script).
 -- The search path is the script's (tgsis, cube's schema).
 CREATE FUNCTION tgsis.create_model3_storage()
@@ -109,7 +109,7 @@ REVOKE ALL ON FUNCTION tgsis.create_model3_storage() FROM PUBLIC;
 COMMENT ON FUNCTION tgsis.create_model3_storage() IS
     'create the model-3 tables (timem, timet, node, d4dtrgl, d4dvrtx); called once by tgsis.create_storage';
 
--- the registry rows of model 3 (geometry/data_models.sql says why)
+-- the registry rows of model 3 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, create_function, extent_function, check_function,
                                description)
 VALUES (3, 'continuously evolving surfaces', 'EVOLVING', '{SURFACE}',

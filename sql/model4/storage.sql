@@ -4,7 +4,7 @@
 -- ones; a feature is its tgsis.geometry row (geotype and time model GMAP,
 -- alive) with the G-map's dimensions in tgsis.gmap. Times are keys as in
 -- model 3 (a period is its start timem, an instant its value timet).
--- Called by tgsis.create_storage (core/create_storage.sql says why the
+-- Called by tgsis.create_storage (storage/create_storage.sql says why the
 -- tables are created by a function after CREATE EXTENSION).
 -- The search path is the script's (tgsis, cube's schema).
 CREATE FUNCTION tgsis.create_model4_storage()
@@ -146,7 +146,7 @@ REVOKE ALL ON FUNCTION tgsis.create_model4_storage() FROM PUBLIC;
 COMMENT ON FUNCTION tgsis.create_model4_storage() IS
     'create the model-4 tables (gmap, gmap_timem, gmap_timet, gmap_node, gmap_vertex, gmap_dart, gmap_alpha, gmap_cell; registered in tgsis.model_tables); called by tgsis.create_storage';
 
--- the registry rows of model 4 (geometry/data_models.sql says why)
+-- the registry rows of model 4 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, cell_levels, create_function, extent_function,
                                check_function, description)
 VALUES (4, 'generalized maps in time', 'GMAP', '{GMAP}',

@@ -103,7 +103,7 @@ REVOKE ALL ON FUNCTION tgsis.create_model5_storage() FROM PUBLIC;
 COMMENT ON FUNCTION tgsis.create_model5_storage() IS
     'create the model-5 tables (md_gmap, md_vertex, md_dart, md_alpha, md_cell; registered in tgsis.model_tables); called by tgsis.create_storage';
 
--- the registry rows of model 5 (geometry/data_models.sql says why)
+-- the registry rows of model 5 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, cell_levels, create_function, extent_function,
                                check_function, description)
 VALUES (5, 'multiply indexed G-maps', 'MULTIDIM', '{GMAP}', true, 'create_model5_storage', 'md_extent', 'check_md_geometry',

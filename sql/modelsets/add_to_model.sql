@@ -11,7 +11,7 @@ DECLARE
     v_id    bigint;
     v_count bigint;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'model_object');
     v_id := tgsis.model_id(p_name);
     INSERT INTO tgsis.model_object (geoid, modelid)

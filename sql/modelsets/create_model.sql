@@ -14,7 +14,7 @@ DECLARE
     v_objects bigint[];
     v_id      bigint;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'model');
     IF p_name IS NULL OR btrim(p_name) = '' THEN
         RAISE EXCEPTION 'a model needs a name, got %', coalesce(quote_literal(p_name), 'NULL')

@@ -10,7 +10,7 @@ AS $$
 DECLARE
     v_id bigint;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     SELECT m.modelid INTO v_id FROM tgsis.model m WHERE m.name = p_name;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'model % does not exist in version %', coalesce(quote_literal(p_name), 'NULL'),

@@ -8,7 +8,7 @@ AS $$
 DECLARE
     v_id bigint := tgsis.model_id(p_name);
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     RETURN QUERY
     SELECT mo.geoid, c.classname, g.geoname
       FROM tgsis.model_object mo

@@ -9,7 +9,7 @@ DECLARE
     v_id    bigint;
     v_count bigint;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     PERFORM tgsis.plain_write_check('tgsis', 'model_object');
     v_id := tgsis.model_id(p_name);
     DELETE FROM tgsis.model_object mo WHERE mo.modelid = v_id AND mo.geoid = ANY (p_objects);

@@ -9,7 +9,7 @@
 -- (tgsis.install does that), they are ordinary tables, dumped and restored with
 -- their definitions, rows, sequences, grants and whatever versioning made of
 -- them (docs/install.md, "Backup and restore"). The plain-SQL route calls it
--- from the script (core/storage.sql), so both routes leave the same objects.
+-- from the script (storage/storage.sql), so both routes leave the same objects.
 -- The search path is the script's (tgsis, cube's schema): the tables use cube.
 -- A model whose tables are all there is skipped, so the function also serves an
 -- upgrade that registers a new model: its tables are created and granted, and

@@ -3,7 +3,7 @@
 -- route) find them. Inside CREATE EXTENSION (pg_extension has the row while
 -- the script runs) it does not: tables created here would be extension members
 -- that pg_dump leaves out; tgsis.install calls tgsis.create_storage() right
--- after CREATE EXTENSION instead (core/create_storage.sql says why).
+-- after CREATE EXTENSION instead (storage/create_storage.sql says why).
 DO $do$
 BEGIN
     IF NOT EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN

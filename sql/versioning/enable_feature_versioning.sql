@@ -22,7 +22,7 @@ DECLARE
     v_count integer;
     v_con   record;
 BEGIN
-    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (core/require_storage.sql)
+    PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     SELECT count(*) INTO v_count FROM tgsis.versioned_tables
      WHERE objectclass = 'feature' OR (schemaname = 'tgsis' AND tablename IN (SELECT tablename FROM tgsis.model_tables));
     FOR v_class IN SELECT classname FROM tgsis.catalog WHERE versioned ORDER BY classname LOOP  -- not classes registered without

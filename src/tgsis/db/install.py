@@ -306,7 +306,7 @@ def _create_storage(conn: psycopg.Connection[Any]) -> bool:
     """Create the tables of stored objects after ``CREATE EXTENSION``, unless they exist; whether it created any.
 
     They are left out of the extension script so that they are no extension
-    members: pg_dump dumps them whole (``sql/core/create_storage.sql`` says
+    members: pg_dump dumps them whole (``sql/storage/create_storage.sql`` says
     why). Also completes a database where someone ran ``CREATE EXTENSION
     tgsis`` by hand.
     """
