@@ -114,6 +114,16 @@ def test_no_folder_uses_a_later_folder(files: list[str]) -> None:
     assert not found, "\n".join(f"{f} uses tgsis.{o}, defined later in {home}" for f, o, home in found)
 
 
+def test_the_check_sees_the_uses_of_the_real_sources(files: list[str]) -> None:
+    """Listed top down, the layers use each other only downwards, and the parse sees those uses: with
+    the folders in the opposite order, each folder but the ground is found using a later one."""
+    folders = list(dict.fromkeys(folder_of(name) for name in files))
+    upside_down = [name for folder in reversed(folders) for name in files if folder_of(name) == folder]
+    users = {folder_of(name) for name, _, _ in later_folder_uses(SQL_DIR, upside_down)}
+    assert users == set(folders) - {"core"}
+    assert ("final/grants.sql", "versions", "versioning/versions.sql") in later_folder_uses(SQL_DIR, upside_down)
+
+
 def test_allowed_uses_are_still_needed(files: list[str]) -> None:
     found = {use[:2] for use in later_folder_uses(SQL_DIR, files)}
     assert set(ALLOWED) <= found, f"no longer used, remove from ALLOWED: {sorted(set(ALLOWED) - found)}"
