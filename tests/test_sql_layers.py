@@ -2,8 +2,8 @@
 
 A folder of ``sql/`` may use the objects of the folders listed above it in
 ``sources.txt`` and of its own, never those of a folder below it, so the
-install script is built ground first (docs/developing.md, "Where SQL objects
-go"). The check parses the sources:
+install script is built ground first (docs/developing.md, "The layers").
+The check parses the sources:
 
 * what a file defines: ``CREATE [OR REPLACE] FUNCTION / PROCEDURE / TABLE /
   VIEW / TYPE / DOMAIN / SEQUENCE / AGGREGATE tgsis.NAME`` anywhere in it, also
@@ -13,8 +13,8 @@ go"). The check parses the sources:
   ON`` statements, the string literals of ``RAISE`` statements (their
   messages and hints name other functions for the reader, not for the server;
   the expressions of a ``RAISE`` count) and those of top-level ``INSERT`` rows
-  (descriptions and hints of shipped rows). So calls
-  and table references in function bodies (SQL and PL/pgSQL, also inside
+  (descriptions and hints of shipped rows). So calls and table references in
+  function bodies (SQL and PL/pgSQL, also inside
   ``format()`` strings of dynamic SQL), views, column types, foreign keys,
   triggers (``ON tgsis.t ... EXECUTE FUNCTION tgsis.f()``), policies, grants
   and ``pg_extension_config_dump`` calls count.
