@@ -230,7 +230,8 @@ def test_the_conflicts_of_a_version_on_the_mesh(view: tuple[str, ViewData, str],
         ("/classes?class=x%27%22", 404, "no feature class"),
         ("/classes?bbox=1,2,3", 400, "bbox"),
         ("/compare?id={top}&a=DEFAULT&b=no%27pe", 404, "does not exist"),
-        ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a static surface"),
+        ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a surface the view compares between versions"),
+        ("/compare?id={block}&a=DEFAULT&b=edit", 400, "(class blocks: MULTITETRA, STATIC) is not a surface"),
         ("/conflicts?version=DEFAULT", 400, "no parent"),
         ("/conflicts?version=%27x", 404, "no version"),
         ("/api/mesh/{moving}?t=nan", 400, "not a finite number"),
@@ -241,7 +242,7 @@ def test_bad_urls_get_an_error_page_with_the_message(
     view: tuple[str, ViewData, str], page: Any, path: str, status: int, message: str
 ) -> None:
     url, data, _ = view
-    response = page.goto(url + path.format(top=data.top, moving=data.moving))
+    response = page.goto(url + path.format(top=data.top, moving=data.moving, block=data.block))
     assert response.status == status
     if path.startswith("/api/"):
         assert message in response.json()["error"]
