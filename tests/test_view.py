@@ -10,11 +10,15 @@ URLs answered with an error page and the message.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 
+import tgsis
+import tgsis.view
 from tests.view_helpers import (
     QUOTED_NAME,
     ViewData,
@@ -263,3 +267,19 @@ def test_a_long_class_lists_its_first_features_and_says_so(
     assert "horizons" in page.text_content("#truncated")
     page.goto(f"{url}/classes?class=blocks")
     assert page.locator("#truncated").count() == 0
+
+
+def test_the_view_names_no_data_model_and_composes_no_sql() -> None:
+    # how a feature is drawn is its data model's (the hooks of tgsis.datamodels, attached by the model's module);
+    # storage, and the session's settings, are read and set through tgsis.db functions (issue 38)
+    view = Path(tgsis.view.__file__).parent
+    sources = {
+        path.relative_to(view).as_posix(): path.read_text(encoding="utf-8")
+        for path in sorted(view.rglob("*"))
+        if path.suffix in (".py", ".html", ".js", ".css") and "vendor" not in path.parts
+    }
+    assert {"app.py", "meshes.py", "static/view.js", "templates/scene.html"} <= set(sources)
+    for model in tgsis.data_models():
+        assert [name for name, text in sources.items() if re.search(rf"\b{model.time_model}\b", text)] == [], model
+    for pattern in (r"\.execute\(", r"\bpsycopg\.sql\b|from psycopg import sql", r"\btgsis\.\w+\(", r"\bSELECT\b"):
+        assert [name for name, text in sources.items() if re.search(pattern, text)] == [], pattern

@@ -112,7 +112,7 @@ LifeFunction = Callable[[Any, int], tuple[float, float] | None]
 ColoursFunction = Callable[[Any, Any, int], list[str]]
 
 #: The stored surface the browser view compares between versions: ``(conn, fc, feature_id)`` -> a
-#: :class:`tgsis.view.surfaces.StoredSurface` (vertices and triangles with their stored ids).
+#: :class:`tgsis.view.meshes.StoredSurface` (vertices and triangles with their stored ids).
 SurfaceFunction = Callable[[Any, Any, int], Any]
 
 

@@ -44,6 +44,7 @@ from tgsis.db._static import (
     part_meaning,
     with_property_names,
 )
+from tgsis.db._static_drawing import drawable_surface, stored_surface
 from tgsis.db._transfer import (
     Storage,
     aligned_properties,
@@ -67,8 +68,7 @@ from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError,
 from tgsis.gmaps import EvolvingGMap
 from tgsis.mesh import Geometry, GeometryCollection, Geotype
 from tgsis.temporal import EvolvingSurface
-from tgsis.view.meshes import Drawable, drawable
-from tgsis.view.surfaces import StoredSurface, drawable_surface, stored_surface
+from tgsis.view.meshes import Drawable, StoredSurface, drawable
 
 __all__ = [
     "Property",
@@ -465,7 +465,7 @@ def _draw_static(
 ) -> Drawable:
     """Model 1's drawing (:class:`tgsis.datamodels.DrawFunction`; no time): a surface from its stored rows, else the mesh.
 
-    A surface is the view's own download (:func:`tgsis.view.surfaces.drawable_surface`:
+    A surface is the view's own download (:func:`tgsis.db._static_drawing.drawable_surface`:
     the vertices and, through ``beside``, the triangles side by side); other
     geotypes are fetched whole. The view draws z up: a Depth mesh's z is negated.
     """

@@ -5,8 +5,9 @@ its own connection with the user's conninfo (so it sees exactly what the
 user's role may read) in one transaction, read-only unless the server was
 started writable (``default_transaction_read_only``), in the version or
 revision the browser chose (a cookie, or ``v=`` on an endpoint), set for that
-transaction only (``goto_version(..., local => true)``). SQL is composed with
-psycopg parameters and :mod:`psycopg.sql` only.
+transaction only (``goto_version(..., local => true)``). It composes no SQL:
+storage is read through :mod:`tgsis.db` functions, and how a feature is
+drawn comes from its data model's entry in :mod:`tgsis.datamodels`.
 
 Pages: ``/classes`` (feature classes and their features, filtered by class,
 name and box), ``/versions`` (the tree, revisions, validity; choosing the
@@ -30,7 +31,6 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 import psycopg
-from psycopg import sql
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import Headers, MutableHeaders
@@ -46,6 +46,7 @@ from starlette.websockets import WebSocketClose
 
 from tgsis import datamodels
 from tgsis.db import versions as V
+from tgsis.db._session import export_snapshot, read_only_by_default, see_one_state
 from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
 from tgsis.db.inspect import (
@@ -61,8 +62,7 @@ from tgsis.db.inspect import (
 )
 from tgsis.errors import Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError, reraise
 from tgsis.mesh import Geotype
-from tgsis.view.meshes import Drawable, pack, vertex_flags
-from tgsis.view.surfaces import StoredSurface
+from tgsis.view.meshes import Drawable, StoredSurface, pack, vertex_flags
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
 
@@ -183,12 +183,9 @@ class View:
         chosen = version if version is not None else self.chosen(request)
         with reraise(), psycopg.connect(self.config.conninfo) as conn:
             if not self.config.writable:
-                conn.execute("SET default_transaction_read_only = on")
-                conn.commit()
+                read_only_by_default(conn)
             with conn.transaction():
-                conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
-                if snapshot is not None:
-                    conn.execute(sql.SQL("SET TRANSACTION SNAPSHOT {}").format(sql.Literal(snapshot)))
+                see_one_state(conn, snapshot)
                 if chosen:
                     name, revision = split_version(chosen)
                     if revision is None:
@@ -200,9 +197,7 @@ class View:
     @contextlib.contextmanager
     def beside(self, conn: Conn, request: Request, version: str | None = None) -> Iterator[Conn]:
         """A second connection that sees what ``conn`` sees (its snapshot, the same version): for queries side by side."""
-        row = conn.execute("SELECT pg_export_snapshot()").fetchone()
-        assert row is not None
-        with self.session(request, version, snapshot=str(row[0])) as other:
+        with self.session(request, version, snapshot=export_snapshot(conn)) as other:
             yield other
 
     def chosen(self, request: Request) -> str | None:
