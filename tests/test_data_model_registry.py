@@ -27,6 +27,7 @@ from tests.test_model_registry import TEST_MODEL
 from tgsis import datamodels
 from tgsis.db.classes import FeatureClass
 from tgsis.errors import InvalidInputError, NotFoundError
+from tgsis.view.meshes import Drawable, drawable
 
 Conn = psycopg.Connection[Any]
 
@@ -60,6 +61,8 @@ def test_every_shipped_model_has_its_database_functions() -> None:
         "for m in d.data_models():\n"
         "    s = d.storage_of(m); assert callable(s.insert) and callable(s.fetch), m\n"
         "    assert s.insert.__module__ == m.module, (m, s.insert.__module__)\n"
+        "    assert s.draw is not None and s.draw.__module__ == m.module, (m, 'the view draws it')\n"
+        "    assert all(h.__module__ == m.module for h in (s.life, s.colours, s.surface) if h is not None), m\n"
         "print(sorted(n for n in sys.modules if n.startswith('tgsis.db.') and n in "
         "{'tgsis.db.features', 'tgsis.db.temporal', 'tgsis.db.gmaps'}))"
     )
@@ -186,6 +189,27 @@ def fetch_steps(conn: Conn, fc: FeatureClass, feature_id: int) -> StepPoints:
     return StepPoints(np.array(x, dtype=np.float64), row[0])
 
 
+def draw_steps(
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    t: float | None,
+    /,
+    *,
+    colour: str | None = None,
+    beside: Any = None,
+) -> Drawable:
+    """What the browser view draws of a model-9 feature: its points on the x axis (a colour: "x")."""
+    steps = fetch_steps(conn, fc, feature_id)
+    points = np.zeros((len(steps.x), 3))
+    points[:, 0] = steps.x
+    return drawable(tgsis.PointSet(points, vertex_properties={"x": steps.x}))
+
+
+def colours_of_steps(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]:
+    return ["x"]
+
+
 @pytest.fixture
 def model9(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> Iterator[datamodels.DataModel]:
     """Model 9 in SQL (the recipe: its storage file's functions and rows) and in Python (its module's two calls)."""
@@ -199,7 +223,9 @@ def model9(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> Iterator[datamodels.D
     model = datamodels.register_data_model(
         datamodels.DataModel(9, "test points in steps", "STEPS", ("MULTIPOINT",), (StepPoints,))
     )
-    datamodels.register_storage("STEPS", insert=insert_steps, fetch=fetch_steps)
+    datamodels.register_storage(
+        "STEPS", insert=insert_steps, fetch=fetch_steps, draw=draw_steps, colours=colours_of_steps
+    )
     yield model
 
 
@@ -258,6 +284,56 @@ def test_a_new_model_is_stored_fetched_versioned_merged_and_deleted_through_the_
         tgsis.fetch_object(conn, fc, second)
     assert conn.execute("SELECT count(*) FROM tgsis.test9_point").fetchone() == (0,)
     assert not tgsis.delete_feature(conn, fc, second)
+
+
+def test_a_new_model_is_viewed_through_its_registry_entry(
+    conn: Conn, db_dsn: str, model9: datamodels.DataModel, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tests.view_helpers import get, running_view
+    from tgsis.view.meshes import unpack
+
+    fc = tgsis.create_feature_class(conn, "stepped", "MULTIPOINT", time_model="STEPS")  # type: ignore[arg-type]
+    # far from the origin: the view sends float32 offsets from the box's middle, the real coordinates come back
+    stored = np.array([2_500_000.25, 2_500_001.5, 2_499_998.75])
+    first = tgsis.insert_feature(conn, fc, StepPoints(stored, "s1"))  # type: ignore[arg-type]
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "field")
+    with tgsis.in_version(conn, "field"):
+        second = tgsis.insert_feature(conn, fc, StepPoints(np.array([7.0, -3.0]), "s2"))  # type: ignore[arg-type]
+        conn.commit()
+    conn.commit()
+
+    def mesh(query: str) -> tuple[dict[str, Any], npt.NDArray[np.float64], dict[str, Any]]:
+        status, body, _ = get(f"{url}/api/mesh/{query}")
+        assert status == 200, body[:300]
+        header, arrays = unpack(body)
+        return header, arrays["positions"].reshape(-1, 3) + np.asarray(header["origin"]), arrays
+
+    with running_view(db_dsn) as url:
+        header, positions, arrays = mesh(str(first))
+        assert (header["kind"], header["class"], header["name"], header["t"]) == ("points", "stepped", "s1", None)
+        assert (header["n_vertices"], header["n_cells"], header["properties"]) == (3, 0, ["x"])
+        # the stored points, each where it was stored (float32 offsets: to the centimetre at 2.5e6)
+        np.testing.assert_allclose(positions, np.column_stack([stored, np.zeros(3), np.zeros(3)]), atol=0.01)
+        assert np.abs(positions[:, 0] - stored).max() < 0.01 and np.ptp(positions[:, 0]) == pytest.approx(2.75)
+        # coloured by what the model's entry offers
+        header, _, arrays = mesh(f"{first}?color=x")
+        np.testing.assert_allclose(arrays["values"], stored.astype(np.float32))
+        # in a version: what the version holds; DEFAULT does not have it
+        header, positions, _ = mesh(f"{second}?v=field")
+        np.testing.assert_allclose(positions, [[7.0, 0, 0], [-3.0, 0, 0]], atol=1e-5)
+        assert get(f"{url}/api/mesh/{second}")[0] == 404
+        # the scene page takes it (no time slider: the model has no life) and its colour
+        status, body, _ = get(f"{url}/scene?ids={first}&color=x")
+        assert status == 200, body[:300]
+        assert get(f"{url}/scene?ids={first}&color=porosity")[0] == 400
+
+        # a model whose entry gives no way to draw it: refused, naming the model, not drawn wrongly
+        storage = datamodels._STORAGE["STEPS"]
+        monkeypatch.setitem(datamodels._STORAGE, "STEPS", datamodels.Storage(storage.insert, storage.fetch))
+        for path in (f"/api/mesh/{first}", f"/scene?ids={first}"):
+            status, body, _ = get(f"{url}{path}")
+            assert status == 400 and b"data model 9 (STEPS)" in body, body[:300]
 
 
 def test_a_model_without_its_python_module_is_named(conn: Conn) -> None:

@@ -646,19 +646,9 @@ def test_the_browser_view_draws_a_depth_line_set_z_up(db_dsn: str, tmp_path: Pat
         tgsis.create_feature_class(conn, "wells", "MULTILINESTRING")
         wells = LineSet([[0, 0, 10.0], [0, 0, 900.0]], [[0, 1]], metadata={"zpositive": "Depth"})
         fid = tgsis.insert_feature(conn, "wells", wells)
-        captured: list[np.ndarray] = []
-        real = app.drawable
-
-        def spy(mesh: object) -> object:
-            captured.append(np.asarray(mesh.vertices))  # type: ignore[attr-defined]
-            return real(mesh)  # type: ignore[arg-type]
-
-        original, app.drawable = app.drawable, spy  # type: ignore[assignment]
-        try:
-            app._mesh_of(conn, tgsis.get_feature_class(conn, "wells"), fid, None, None)
-        finally:
-            app.drawable = original  # type: ignore[assignment]
-    assert [v[:, 2].tolist() for v in captured] == [[-10.0, -900.0]]
+        drawn, when = app._mesh_of(conn, tgsis.get_feature_class(conn, "wells"), fid, None, None)
+    assert drawn is not None and when is None
+    assert drawn.vertices[:, 2].tolist() == [-10.0, -900.0]
 
 
 def test_interpolation_of_depth_surfaces_is_in_elevation(tmp_path: Path) -> None:

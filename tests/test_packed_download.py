@@ -14,10 +14,10 @@ from psycopg import sql
 import tgsis
 from tgsis.db import _static, _transfer
 from tgsis.db import features as F
+from tgsis.db._static_drawing import drawable_surface, stored_surface
 from tgsis.db.copy import decode_packed
 from tgsis.errors import DatabaseError
 from tgsis.mesh import Surface
-from tgsis.view.surfaces import drawable_surface, stored_surface
 
 Conn = psycopg.Connection[Any]
 

@@ -10,11 +10,15 @@ URLs answered with an error page and the message.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 
+import tgsis
+import tgsis.view
 from tests.view_helpers import (
     QUOTED_NAME,
     ViewData,
@@ -230,7 +234,8 @@ def test_the_conflicts_of_a_version_on_the_mesh(view: tuple[str, ViewData, str],
         ("/classes?class=x%27%22", 404, "no feature class"),
         ("/classes?bbox=1,2,3", 400, "bbox"),
         ("/compare?id={top}&a=DEFAULT&b=no%27pe", 404, "does not exist"),
-        ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a static surface"),
+        ("/compare?id={moving}&a=DEFAULT&b=edit", 400, "not a surface the view compares between versions"),
+        ("/compare?id={block}&a=DEFAULT&b=edit", 400, "(class blocks: MULTITETRA, STATIC) is not a surface"),
         ("/conflicts?version=DEFAULT", 400, "no parent"),
         ("/conflicts?version=%27x", 404, "no version"),
         ("/api/mesh/{moving}?t=nan", 400, "not a finite number"),
@@ -241,7 +246,7 @@ def test_bad_urls_get_an_error_page_with_the_message(
     view: tuple[str, ViewData, str], page: Any, path: str, status: int, message: str
 ) -> None:
     url, data, _ = view
-    response = page.goto(url + path.format(top=data.top, moving=data.moving))
+    response = page.goto(url + path.format(top=data.top, moving=data.moving, block=data.block))
     assert response.status == status
     if path.startswith("/api/"):
         assert message in response.json()["error"]
@@ -262,3 +267,19 @@ def test_a_long_class_lists_its_first_features_and_says_so(
     assert "horizons" in page.text_content("#truncated")
     page.goto(f"{url}/classes?class=blocks")
     assert page.locator("#truncated").count() == 0
+
+
+def test_the_view_names_no_data_model_and_composes_no_sql() -> None:
+    # how a feature is drawn is its data model's (the hooks of tgsis.datamodels, attached by the model's module);
+    # storage, and the session's settings, are read and set through tgsis.db functions (issue 38)
+    view = Path(tgsis.view.__file__).parent
+    sources = {
+        path.relative_to(view).as_posix(): path.read_text(encoding="utf-8")
+        for path in sorted(view.rglob("*"))
+        if path.suffix in (".py", ".html", ".js", ".css") and "vendor" not in path.parts
+    }
+    assert {"app.py", "meshes.py", "static/view.js", "templates/scene.html"} <= set(sources)
+    for model in tgsis.data_models():
+        assert [name for name, text in sources.items() if re.search(rf"\b{model.time_model}\b", text)] == [], model
+    for pattern in (r"\.execute\(", r"\bpsycopg\.sql\b|from psycopg import sql", r"\btgsis\.\w+\(", r"\bSELECT\b"):
+        assert [name for name, text in sources.items() if re.search(pattern, text)] == [], pattern

@@ -15,7 +15,9 @@ module is imported; the entry names the module, which :func:`storage_of`
 imports on first use), so that the numpy side can name the models without
 loading the database layer. Deleting, versioning and merging need no
 function of a model: SQL does them for every model from
-``tgsis.model_tables``.
+``tgsis.model_tables``. The browser view (``tgsis view``) draws a feature
+through the hooks the same module attaches beside them (:class:`Storage`:
+``draw``, ``life``, ``colours``, ``surface``); it names no model itself.
 
 A test (tests/test_data_model_registry.py) keeps these entries equal to the
 rows of ``tgsis.data_models`` of a fresh database.
@@ -75,6 +77,45 @@ class InsertFunction(Protocol):
 FetchFunction = Callable[[Any, Any, int], Any]
 
 
+class DrawFunction(Protocol):
+    """What the browser view draws of feature ``feature_id`` of class ``fc``, as the session's version sees it.
+
+    Returns a :class:`tgsis.view.meshes.Drawable`, or None when the feature
+    does not exist at ``t``. ``t`` is a finite time inside or outside the
+    feature's life for a model with a :attr:`Storage.life`, None for a model
+    without time. ``colour``: the name of the vertex values to carry (one the
+    model's :attr:`Storage.colours` offered), None for height only.
+    ``beside``: a callable returning a context manager of a second connection
+    that sees what ``conn`` sees (same snapshot and version), for reading two
+    tables side by side; None when there is none.
+    """
+
+    def __call__(
+        self,
+        conn: Any,
+        fc: Any,
+        feature_id: int,
+        t: float | None,
+        /,
+        *,
+        colour: str | None = None,
+        beside: Callable[[], Any] | None = None,
+    ) -> Any: ...
+
+
+#: The span of times the browser view's time slider covers for feature ``feature_id``: ``(conn, feature_id)`` ->
+#: ``(first, last)``, None for a feature with no instant stored.
+LifeFunction = Callable[[Any, int], tuple[float, float] | None]
+
+#: What the browser view can colour feature ``feature_id`` of class ``fc`` by besides height: ``(conn, fc,
+#: feature_id)`` -> names of vertex values its :data:`DrawFunction` carries.
+ColoursFunction = Callable[[Any, Any, int], list[str]]
+
+#: The stored surface the browser view compares between versions: ``(conn, fc, feature_id)`` -> a
+#: :class:`tgsis.view.meshes.StoredSurface` (vertices and triangles with their stored ids).
+SurfaceFunction = Callable[[Any, Any, int], Any]
+
+
 @dataclass(frozen=True)
 class DataModel:
     """A data model: the Python side of one row of ``tgsis.data_models``.
@@ -126,10 +167,31 @@ class Storage:
     fetch : callable
         ``fetch(conn, fc, feature_id)``: the stored object (one of the model's
         :attr:`DataModel.types`).
+    draw : callable or None
+        ``draw(conn, fc, feature_id, t, *, colour, beside)``: what the browser
+        view draws of a feature (:class:`DrawFunction`); None: the view does
+        not draw the model, and says so.
+    life : callable or None
+        ``life(conn, feature_id) -> (first, last) | None``: the times the
+        view's slider covers; None: a model without time (drawn whole, ``t``
+        ignored).
+    colours : callable or None
+        ``colours(conn, fc, feature_id) -> list[str]``: what the view colours
+        a feature by besides height; None: the class's numeric vertex
+        properties.
+    surface : callable or None
+        ``surface(conn, fc, feature_id)``: a surface feature as stored, with
+        its vertex and triangle ids, for the view's comparison of two
+        versions and its conflicts; None: the view does not compare the
+        model's features.
     """
 
     insert: InsertFunction
     fetch: FetchFunction
+    draw: DrawFunction | None = None
+    life: LifeFunction | None = None
+    colours: ColoursFunction | None = None
+    surface: SurfaceFunction | None = None
 
 
 _MODELS: dict[int, DataModel] = {}
@@ -162,10 +224,24 @@ def register_data_model(model: DataModel) -> DataModel:
     return model
 
 
-def register_storage(time_model: str, *, insert: InsertFunction, fetch: FetchFunction) -> None:
-    """Attach the database functions of a registered data model (called by its database module)."""
+def register_storage(
+    time_model: str,
+    *,
+    insert: InsertFunction,
+    fetch: FetchFunction,
+    draw: DrawFunction | None = None,
+    life: LifeFunction | None = None,
+    colours: ColoursFunction | None = None,
+    surface: SurfaceFunction | None = None,
+) -> None:
+    """Attach the database functions of a registered data model (called by its database module).
+
+    ``draw``, ``life``, ``colours`` and ``surface`` are how the browser view
+    shows the model's features (:class:`Storage`); a model without ``draw``
+    is stored and read but not drawn.
+    """
     data_model(time_model)  # a registered model
-    _STORAGE[time_model.upper()] = Storage(insert, fetch)
+    _STORAGE[time_model.upper()] = Storage(insert, fetch, draw, life, colours, surface)
 
 
 def data_models() -> list[DataModel]:

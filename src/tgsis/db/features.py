@@ -17,7 +17,8 @@ every member is a geometry row of its own, owned by the collection row
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +28,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis._zpositive import elevation
 from tgsis.arguments import checked, checked_ids
 from tgsis.datamodels import StoredObject
 from tgsis.db._static import (
@@ -42,6 +44,7 @@ from tgsis.db._static import (
     part_meaning,
     with_property_names,
 )
+from tgsis.db._static_drawing import drawable_surface, stored_surface
 from tgsis.db._transfer import (
     Storage,
     aligned_properties,
@@ -65,6 +68,7 @@ from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError,
 from tgsis.gmaps import EvolvingGMap
 from tgsis.mesh import Geometry, GeometryCollection, Geotype
 from tgsis.temporal import EvolvingSurface
+from tgsis.view.meshes import Drawable, StoredSurface, drawable
 
 __all__ = [
     "Property",
@@ -446,4 +450,44 @@ def delete_feature(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     return bool(deleted is not None and deleted[0])
 
 
-datamodels.register_storage("STATIC", insert=_insert_static, fetch=_fetch_static)
+# --------------------------------------------------------------------------- model 1 in the browser view
+
+
+def _draw_static(
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    t: float | None,
+    /,
+    *,
+    colour: str | None = None,
+    beside: Callable[[], AbstractContextManager[Conn]] | None = None,
+) -> Drawable:
+    """Model 1's drawing (:class:`tgsis.datamodels.DrawFunction`; no time): a surface from its stored rows, else the mesh.
+
+    A surface is the view's own download (:func:`tgsis.db._static_drawing.drawable_surface`:
+    the vertices and, through ``beside``, the triangles side by side); other
+    geotypes are fetched whole. The view draws z up: a Depth mesh's z is negated.
+    """
+    if fc.geotype is Geotype.SURFACE:
+        if beside is None:
+            return drawable_surface(conn, fc, feature_id, colour)
+        with beside() as other:
+            return drawable_surface(conn, fc, feature_id, colour, beside=other)
+    mesh = fetch_feature(conn, fc, feature_id).mesh
+    assert mesh is not None
+    return drawable(elevation(mesh))
+
+
+def _surface_static(conn: Conn, fc: FeatureClass, feature_id: int) -> StoredSurface:
+    """Model 1's surface for the view's comparisons: a static surface's stored rows with their ids."""
+    if fc.geotype is not Geotype.SURFACE:
+        raise InvalidInputError(
+            f"feature {feature_id} (class {fc.name}) is a {fc.geotype.value}: versions are compared on surfaces"
+        )
+    return stored_surface(conn, fc, feature_id)
+
+
+datamodels.register_storage(
+    "STATIC", insert=_insert_static, fetch=_fetch_static, draw=_draw_static, surface=_surface_static
+)

@@ -45,8 +45,10 @@ from tgsis.db._transfer import (
 )
 from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
+from tgsis.db.inspect import md_gmap_axes
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
+from tgsis.view.meshes import Drawable, gmap_drawable
 
 __all__ = [
     "insert_gmap",
@@ -950,6 +952,56 @@ def _fetch_md(conn: Conn, fc: FeatureClass, feature_id: int) -> GMap:
     return fetch_md_gmap(conn, fc, feature_id)[0]
 
 
-# models 4 and 5 in the registry of data models: insert_feature and fetch_object come here
-datamodels.register_storage("GMAP", insert=insert_gmap, fetch=fetch_gmap)
-datamodels.register_storage("MULTIDIM", insert=insert_gmap, fetch=_fetch_md)
+# --------------------------------------------------------------------------- models 4 and 5 in the browser view
+
+
+def _draw_at(
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    t: float | None,
+    /,
+    *,
+    colour: str | None = None,
+    beside: Callable[[], Any] | None = None,
+) -> Drawable | None:
+    """Model 4's drawing (:class:`tgsis.datamodels.DrawFunction`): the SQL snapshot at t (:func:`gmap_at`), None outside its life."""
+    if t is None:
+        raise InvalidInputError(f"feature {feature_id} (class {fc.name}) is drawn at a time t")
+    snapshot = gmap_at(conn, feature_id, t)
+    return None if snapshot is None else gmap_drawable(snapshot)
+
+
+def _life(conn: Conn, feature_id: int) -> tuple[float, float] | None:
+    """Model 4's span in the view's time slider: its first and last geometry instant (``tgsis.gmap_timet``)."""
+    with reraise():
+        row = conn.execute(
+            "SELECT min(timet), max(timet) FROM tgsis.gmap_timet WHERE geoid = %s", (feature_id,)
+        ).fetchone()
+    return None if row is None or row[0] is None else (float(row[0]), float(row[1]))
+
+
+def _draw_md(
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    t: float | None,
+    /,
+    *,
+    colour: str | None = None,
+    beside: Callable[[], Any] | None = None,
+) -> Drawable:
+    """Model 5's drawing: the whole map (time, if any, is one of its axes), its axes beyond z as values to colour by."""
+    history, axes = fetch_md_gmap(conn, fc, feature_id)
+    return gmap_drawable(history, axes)
+
+
+def _md_colours(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]:
+    """What the view colours a model-5 map by besides height: its axes beyond z."""
+    axes = md_gmap_axes(conn, feature_id)
+    return axes[3:] if axes is not None else []
+
+
+# models 4 and 5 in the registry of data models: insert_feature, fetch_object and the browser view come here
+datamodels.register_storage("GMAP", insert=insert_gmap, fetch=fetch_gmap, draw=_draw_at, life=_life)
+datamodels.register_storage("MULTIDIM", insert=insert_gmap, fetch=_fetch_md, draw=_draw_md, colours=_md_colours)

@@ -69,6 +69,7 @@ from tgsis.temporal import (
     write_frames_pvd,
 )
 from tgsis.temporal import sudden_change as sudden
+from tgsis.view.meshes import Drawable, drawable
 
 __all__ = [
     "insert_series",
@@ -1438,6 +1439,35 @@ def class_property_periods(
     return found
 
 
-# models 2 and 3 in the registry of data models: insert_feature and fetch_object come here
-datamodels.register_storage("INSTANTS", insert=insert_series, fetch=fetch_series)
-datamodels.register_storage("EVOLVING", insert=insert_evolving, fetch=fetch_evolving)
+# --------------------------------------------------------------------------- models 2 and 3 in the browser view
+
+
+def _draw_at(
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    t: float | None,
+    /,
+    *,
+    colour: str | None = None,
+    beside: Callable[[], Any] | None = None,
+) -> Drawable | None:
+    """Models 2 and 3's drawing (:class:`tgsis.datamodels.DrawFunction`): the SQL snapshot at t (:func:`get_at`).
+
+    None outside the feature's life; the class's numeric properties at t come along to colour by.
+    """
+    if t is None:
+        raise InvalidInputError(f"feature {feature_id} (class {fc.name}) is drawn at a time t")
+    surface = get_at(conn, feature_id, t, properties=True)
+    return None if surface is None else drawable(surface)
+
+
+def _life(conn: Conn, feature_id: int) -> tuple[float, float] | None:
+    """Models 2 and 3's span in the view's time slider: the first and last instant (:func:`lifespan`)."""
+    span = lifespan(conn, feature_id)
+    return None if span is None else (span[0], span[1])
+
+
+# models 2 and 3 in the registry of data models: insert_feature, fetch_object and the browser view come here
+datamodels.register_storage("INSTANTS", insert=insert_series, fetch=fetch_series, draw=_draw_at, life=_life)
+datamodels.register_storage("EVOLVING", insert=insert_evolving, fetch=fetch_evolving, draw=_draw_at, life=_life)

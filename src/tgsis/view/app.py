@@ -5,8 +5,9 @@ its own connection with the user's conninfo (so it sees exactly what the
 user's role may read) in one transaction, read-only unless the server was
 started writable (``default_transaction_read_only``), in the version or
 revision the browser chose (a cookie, or ``v=`` on an endpoint), set for that
-transaction only (``goto_version(..., local => true)``). SQL is composed with
-psycopg parameters and :mod:`psycopg.sql` only.
+transaction only (``goto_version(..., local => true)``). It composes no SQL:
+storage is read through :mod:`tgsis.db` functions, and how a feature is
+drawn comes from its data model's entry in :mod:`tgsis.datamodels`.
 
 Pages: ``/classes`` (feature classes and their features, filtered by class,
 name and box), ``/versions`` (the tree, revisions, validity; choosing the
@@ -22,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import math
 import urllib.parse
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,7 +31,6 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 import psycopg
-from psycopg import sql
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import Headers, MutableHeaders
@@ -44,12 +44,11 @@ from starlette.templating import Jinja2Templates
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from starlette.websockets import WebSocketClose
 
-from tgsis._zpositive import elevation
+from tgsis import datamodels
 from tgsis.db import versions as V
+from tgsis.db._session import export_snapshot, read_only_by_default, see_one_state
 from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
-from tgsis.db.features import fetch_feature
-from tgsis.db.gmaps import fetch_md_gmap, gmap_at
 from tgsis.db.inspect import (
     FeatureRow,
     class_has_feature,
@@ -59,14 +58,11 @@ from tgsis.db.inspect import (
     features_versioned,
     list_features,
     may_read_features,
-    md_gmap_axes,
     version_validity,
 )
-from tgsis.db.temporal import get_at
 from tgsis.errors import Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError, reraise
 from tgsis.mesh import Geotype
-from tgsis.view.meshes import Drawable, drawable, gmap_drawable, pack, vertex_flags
-from tgsis.view.surfaces import StoredSurface, drawable_surface, stored_surface
+from tgsis.view.meshes import Drawable, StoredSurface, pack, vertex_flags
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
 
@@ -76,7 +72,6 @@ HERE = Path(__file__).parent
 #: the cookie that holds the browser's chosen version (``NAME`` or ``NAME@REVISION``)
 VERSION_COOKIE = "tgsis_version"
 _BIGINT = 2**63 - 1
-_DRAWN_TIME_MODELS = ("STATIC", "INSTANTS", "EVOLVING", "GMAP", "MULTIDIM")
 #: features listed per class on the classes page (more: filter by name or box)
 LISTED = 500
 
@@ -188,12 +183,9 @@ class View:
         chosen = version if version is not None else self.chosen(request)
         with reraise(), psycopg.connect(self.config.conninfo) as conn:
             if not self.config.writable:
-                conn.execute("SET default_transaction_read_only = on")
-                conn.commit()
+                read_only_by_default(conn)
             with conn.transaction():
-                conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
-                if snapshot is not None:
-                    conn.execute(sql.SQL("SET TRANSACTION SNAPSHOT {}").format(sql.Literal(snapshot)))
+                see_one_state(conn, snapshot)
                 if chosen:
                     name, revision = split_version(chosen)
                     if revision is None:
@@ -205,9 +197,7 @@ class View:
     @contextlib.contextmanager
     def beside(self, conn: Conn, request: Request, version: str | None = None) -> Iterator[Conn]:
         """A second connection that sees what ``conn`` sees (its snapshot, the same version): for queries side by side."""
-        row = conn.execute("SELECT pg_export_snapshot()").fetchone()
-        assert row is not None
-        with self.session(request, version, snapshot=str(row[0])) as other:
+        with self.session(request, version, snapshot=export_snapshot(conn)) as other:
             yield other
 
     def chosen(self, request: Request) -> str | None:
@@ -264,21 +254,51 @@ def _scalar_vertex_properties(fc: FeatureClass) -> list[str]:
     return [p.name for p in fc.aligned("VERTEX") if p.size == 1 and p.type in numeric]
 
 
+# How a feature is drawn comes from the registry of data models (tgsis.datamodels): the hooks its model's
+# module attaches (Storage.draw, life, colours, surface). Nothing here names a model.
+
+
+def _drawing(fc: FeatureClass, feature_id: int) -> datamodels.Storage:
+    """The hooks of the data model of ``fc``; an InvalidInputError naming the model when the view cannot draw it."""
+    model = datamodels.data_model(fc.time_model)
+    storage = datamodels.storage_of(model)
+    if storage.draw is None:
+        drawn = [f"{m.number} ({m.time_model})" for m in datamodels.data_models() if _draws(m)]
+        raise _bad(
+            f"feature {feature_id} (class {fc.name}) belongs to data model {model.number} ({model.time_model}), "
+            f"which the browser view does not draw: it draws data models {', '.join(drawn)}"
+        )
+    return storage
+
+
+def _draws(model: datamodels.DataModel) -> bool:
+    try:
+        return datamodels.storage_of(model).draw is not None
+    except InvalidInputError:  # its database functions are not attached: not drawn either
+        return False
+
+
 def _colours(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]:
-    """What a feature can be coloured by besides height: numeric vertex properties; a model-5 map's axes beyond z."""
-    if fc.time_model == "MULTIDIM":
-        axes = md_gmap_axes(conn, feature_id)
-        return axes[3:] if axes is not None else []
-    return _scalar_vertex_properties(fc)
+    """What a feature can be coloured by besides height: its model's choice, else the class's numeric vertex properties."""
+    colours = _drawing(fc, feature_id).colours
+    return colours(conn, fc, feature_id) if colours is not None else _scalar_vertex_properties(fc)
 
 
-def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None, float | None, float | None]:
+def _life(conn: Conn, fc: FeatureClass, feature_id: int) -> tuple[float, float] | None:
+    """The span the time slider covers for a feature (None: a model without time, or nothing stored yet)."""
+    life = _drawing(fc, feature_id).life
+    return None if life is None else life(conn, feature_id)
+
+
+def _time_of(
+    lives: Sequence[tuple[float, float] | None], t: float | None
+) -> tuple[float | None, float | None, float | None]:
     """(t, first, last) for a scene: t checked against the temporal features' lives (default: the last instant)."""
-    lives = [(r.first, r.last) for r in rows if r.first is not None and r.last is not None]
-    if not lives:
+    known = [life for life in lives if life is not None]
+    if not known:
         return None, None, None
-    first = min(a for a, _ in lives if a is not None)
-    last = max(b for _, b in lives if b is not None)
+    first = min(a for a, _ in known)
+    last = max(b for _, b in known)
     if t is None:
         return last, first, last
     if not first <= t <= last:
@@ -286,37 +306,25 @@ def _time_of(rows: Sequence[FeatureRow], t: float | None) -> tuple[float | None,
     return t, first, last
 
 
-def _check_drawn(fc: FeatureClass, feature_id: int) -> None:
-    if fc.time_model not in _DRAWN_TIME_MODELS:
-        raise _bad(
-            f"feature {feature_id} (class {fc.name}) has the time model {fc.time_model}, which the browser "
-            f"view does not draw: it draws {', '.join(_DRAWN_TIME_MODELS)}"
-        )
-
-
 def _mesh_of(
-    conn: Conn, fc: FeatureClass, feature_id: int, t: float | None, color: str | None = None
+    conn: Conn,
+    fc: FeatureClass,
+    feature_id: int,
+    t: float | None,
+    color: str | None = None,
+    beside: Callable[[], contextlib.AbstractContextManager[Conn]] | None = None,
 ) -> tuple[Drawable | None, float | None]:
-    """What to draw of a feature at t (None when it does not exist then) and the t used."""
-    _check_drawn(fc, feature_id)
-    if fc.time_model == "MULTIDIM":  # model 5: time, if any, is an axis of the map (colour by the axes beyond z)
-        history, axes = fetch_md_gmap(conn, fc, feature_id)
-        return gmap_drawable(history, axes), None
-    if fc.time_model == "STATIC":
-        if fc.geotype is Geotype.SURFACE:  # the view's own download: the stored rows, no more
-            return drawable_surface(conn, fc, feature_id, color), None
-        feature = fetch_feature(conn, fc, feature_id)
-        assert feature.mesh is not None
-        return drawable(elevation(feature.mesh)), None  # the view draws z up: a Depth mesh's z negated
+    """What to draw of a feature at t (None when it does not exist then) and the t used (None: a model without time)."""
+    drawing = _drawing(fc, feature_id)
+    assert drawing.draw is not None
+    if drawing.life is None:  # drawn whole, whatever t
+        return drawing.draw(conn, fc, feature_id, None, colour=color, beside=beside), None
     # any finite t (a scene's slider spans the lives of all its features): outside this one's life, nothing
-    when = t if t is not None else list_features(conn, fc, ids=[feature_id])[0].last
+    life = drawing.life(conn, feature_id)
+    when = t if t is not None else (None if life is None else life[1])
     if when is None:
         return None, None
-    if fc.time_model == "GMAP":  # model 4: the SQL snapshot at t (tgsis.gmap_at)
-        snapshot = gmap_at(conn, feature_id, when)
-        return (None if snapshot is None else gmap_drawable(snapshot)), when
-    surface = get_at(conn, feature_id, when, properties=True)
-    return (None if surface is None else drawable(surface)), when
+    return drawing.draw(conn, fc, feature_id, when, colour=color, beside=beside), when
 
 
 def _origin(vertices: npt.NDArray[np.float64]) -> list[float]:
@@ -441,12 +449,13 @@ async def choose_version(request: Request) -> Response:
     return response
 
 
-def _scene_rows(conn: Conn, ids: Sequence[int]) -> list[FeatureRow]:
+def _scene_rows(conn: Conn, ids: Sequence[int]) -> list[tuple[FeatureRow, FeatureClass, tuple[float, float] | None]]:
+    """Each feature's row, class and life (the span of the time slider; None: drawn whatever t)."""
     rows = []
     for feature_id in ids:
         fc = feature_class_of(conn, feature_id)
-        _check_drawn(fc, feature_id)
-        rows += list_features(conn, fc, ids=[feature_id])
+        _drawing(fc, feature_id)
+        rows += [(row, fc, _life(conn, fc, feature_id)) for row in list_features(conn, fc, ids=[feature_id])]
     return rows
 
 
@@ -459,18 +468,18 @@ def scene_page(request: Request) -> Response:
     if not 0.01 <= exaggeration <= 1000:
         raise _bad(f"vertical exaggeration {exaggeration!r} must be from 0.01 to 1000")
     with view.session(request) as conn:
-        rows = _scene_rows(conn, ids)
-        classes = {fc.name: fc for fc, _ in readable_classes(conn)}
-        when, first, last = _time_of(rows, t)
-        properties = sorted(set.intersection(*(set(_colours(conn, classes[r.feature_class], r.id)) for r in rows)))
+        shown = _scene_rows(conn, ids)
+        when, first, last = _time_of([life for _, _, life in shown], t)
+        properties = sorted(set.intersection(*(set(_colours(conn, fc, r.id)) for r, fc, _ in shown)))
         version = V.working_version(conn)
+    rows = [r for r, _, _ in shown]
     if color != "height" and color not in properties:
         raise _bad(
             f"colour {color!r} is neither 'height' nor a numeric vertex property of every feature shown "
             f"({', '.join(properties) or 'none'})"
         )
-    units = {classes[r.feature_class].time_unit for r in rows if r.first is not None} - {None}
-    temporal = [r.id for r in rows if r.first is not None]
+    units = {fc.time_unit for _, fc, life in shown if life is not None} - {None}
+    temporal = [r.id for r, _, life in shown if life is not None]
 
     def first_url(feature_id: int) -> str:
         params = {"t": repr(when) if feature_id in temporal else None, "color": None if color == "height" else color}
@@ -486,7 +495,7 @@ def scene_page(request: Request) -> Response:
         "temporal": temporal,
         "urls": {str(i): first_url(i) for i in ids},
     }
-    comparable = len(rows) == 1 and rows[0].time_model == "STATIC" and rows[0].geotype == "SURFACE"
+    comparable = len(shown) == 1 and _compared(shown[0][1])
     return view.page(
         request,
         "scene.html",
@@ -515,8 +524,7 @@ def compare_page(request: Request) -> Response:
         versions = V.list_versions(conn)
     with view.session(request, a) as conn:
         fc = feature_class_of(conn, feature_id)
-        if fc.time_model != "STATIC" or fc.geotype is not Geotype.SURFACE:
-            raise _bad(f"feature {feature_id} is not a static surface: versions compare static surfaces")
+        _comparison(fc, feature_id)
         row = list_features(conn, fc, ids=[feature_id])[0]
         (a_name, a_rev), (b_name, b_rev) = split_version(a), split_version(b)
         changes = compare_versions(conn, feature_id, a_name, b_name, old_revision=a_rev, new_revision=b_rev)
@@ -568,11 +576,7 @@ def _mesh_body(request: Request) -> bytes:
     mesh: Drawable | None
     with view.session(request, version) as conn:
         fc = feature_class_of(conn, feature_id)
-        if fc.time_model == "STATIC" and fc.geotype is Geotype.SURFACE:
-            with view.beside(conn, request, version) as other:
-                mesh, when = drawable_surface(conn, fc, feature_id, color, beside=other), None
-        else:
-            mesh, when = _mesh_of(conn, fc, feature_id, t, color)
+        mesh, when = _mesh_of(conn, fc, feature_id, t, color, lambda: view.beside(conn, request, version))
         name = feature_name(conn, feature_id)
     return _body({"id": feature_id, "class": fc.name, "name": name, "t": when}, mesh, color)
 
@@ -587,12 +591,39 @@ def mesh_header_endpoint(request: Request) -> Response:
     return Response(body[4 : 4 + n].rstrip(), media_type="application/json")
 
 
+def _compared(fc: FeatureClass) -> bool:
+    """Whether the view compares versions of the features of ``fc``: surfaces of a model with a ``surface`` hook."""
+    try:
+        storage = datamodels.storage_of(datamodels.data_model(fc.time_model))
+    except InvalidInputError:
+        return False
+    return storage.surface is not None and fc.geotype is Geotype.SURFACE
+
+
+def _comparison(fc: FeatureClass, feature_id: int) -> datamodels.SurfaceFunction:
+    """The hook that reads a feature of ``fc`` as a stored surface, or an InvalidInputError saying what is compared."""
+    surface = datamodels.storage_of(datamodels.data_model(fc.time_model)).surface
+    if surface is None or fc.geotype is not Geotype.SURFACE:
+        models = [f"{m.number} ({m.time_model})" for m in datamodels.data_models() if _compares(m)]
+        raise _bad(
+            f"feature {feature_id} (class {fc.name}: {fc.geotype.value}, {fc.time_model}) is not a surface "
+            f"the view compares between versions: it compares the surfaces of data models {', '.join(models)}"
+        )
+    return surface
+
+
+def _compares(model: datamodels.DataModel) -> bool:
+    try:
+        return datamodels.storage_of(model).surface is not None
+    except InvalidInputError:
+        return False
+
+
 def _surface_in(view: View, request: Request, version: str, feature_id: int) -> StoredSurface:
     with view.session(request, version) as conn:
         fc = feature_class_of(conn, feature_id)
-        if fc.time_model != "STATIC" or fc.geotype is not Geotype.SURFACE:
-            raise _bad(f"feature {feature_id} is not a static surface: versions compare static surfaces")
-        return stored_surface(conn, fc, feature_id)
+        stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
+        return stored
 
 
 def _positions(ids: npt.NDArray[np.int64], wanted: npt.ArrayLike) -> npt.NDArray[np.int64]:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
@@ -28,7 +29,16 @@ from tgsis.errors import InvalidInputError
 from tgsis.gmaps import GMap
 from tgsis.mesh import Geometry, GeometryCollection, LineSet, Mesh, Surface, TetraMesh
 
-__all__ = ["Drawable", "drawable", "gmap_drawable", "tetra_boundary", "pack", "unpack", "vertex_flags"]
+__all__ = [
+    "Drawable",
+    "StoredSurface",
+    "drawable",
+    "gmap_drawable",
+    "tetra_boundary",
+    "pack",
+    "unpack",
+    "vertex_flags",
+]
 
 Kind = Literal["triangles", "lines", "points"]
 
@@ -65,6 +75,25 @@ class Drawable:
         self.indices = indices
         self.vertex_values = dict(vertex_values)
         self.cell_rows = cell_rows
+
+
+@dataclass(frozen=True)
+class StoredSurface:
+    """A surface as stored, in ascending id order: what the view compares between two versions.
+
+    A data model's ``surface`` hook (:class:`tgsis.datamodels.Storage`) gives it.
+
+    Attributes
+    ----------
+    drawable : Drawable
+        Triangles; ``vertex_values`` holds the property asked for, if any.
+    vertex_ids, triangle_ids : (n,) and (m,) int64
+        Stored ids of the vertices and triangles (for model 1 ``vrtxid``, ``trglid``), ascending.
+    """
+
+    drawable: Drawable
+    vertex_ids: npt.NDArray[np.int64]
+    triangle_ids: npt.NDArray[np.int64]
 
 
 def tetra_boundary(tetrahedra: npt.ArrayLike) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:

@@ -1,4 +1,4 @@
-"""A static surface's rows straight into what the browser draws: the view's download of model 1 surfaces.
+"""Model 1 in the browser view: a static surface's rows straight into what the browser draws.
 
 :func:`tgsis.fetch_feature` builds a validated :class:`~tgsis.Surface` with
 every vertex and cell property, its parts and atoms and its file's z
@@ -10,14 +10,15 @@ the page colours by it: with the stored ids for the comparisons
 (:func:`stored_surface`), or for the scene without the triangles' ids, their
 corners packed one value a triangle (:func:`drawable_surface`). The scene's
 download of a 1M-vertex surface is a fraction of the time of
-``fetch_feature`` (bench/view_load.py).
+``fetch_feature`` (bench/view_load.py). Model 1's hooks of the registry of
+data models (:mod:`tgsis.db.features`: ``draw``, ``surface``) call these; the
+view itself names no model.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
@@ -33,28 +34,11 @@ from tgsis.db.inspect import (
     static_vertex_rows,
 )
 from tgsis.errors import InvalidInputError
-from tgsis.view.meshes import Drawable
+from tgsis.view.meshes import Drawable, StoredSurface
 
-__all__ = ["StoredSurface", "drawable_surface", "stored_surface"]
+__all__ = ["drawable_surface", "stored_surface"]
 
 Conn = psycopg.Connection[Any]
-
-
-@dataclass(frozen=True)
-class StoredSurface:
-    """A static surface as stored, in ascending id order.
-
-    Attributes
-    ----------
-    drawable : Drawable
-        Triangles; ``vertex_values`` holds the property asked for, if any.
-    vertex_ids, triangle_ids : (n,) and (m,) int64
-        Stored ids of the vertices and triangles (``vrtxid``, ``trglid``), ascending.
-    """
-
-    drawable: Drawable
-    vertex_ids: npt.NDArray[np.int64]
-    triangle_ids: npt.NDArray[np.int64]
 
 
 def stored_surface(
