@@ -4,9 +4,10 @@ The storage of each model is in its own module: :mod:`tgsis.db.instants`
 (model 2: ``insert_series``, ``add_instant``, ``delete_instant``,
 ``fetch_series``) and :mod:`tgsis.db.evolving` (model 3: ``insert_evolving``,
 ``append_period``, ``delete_period``, ``fetch_evolving``); this module
-exports their names too (as before the split, see docs/data-models.md).
+exports their names too, as it did before it was split by model (their
+tables: docs/data-models.md).
 
-Here are the questions over time both models answer. Snapshots at t are
+Here are the questions over time both models (and static surfaces) answer. Snapshots at t are
 computed in SQL by ``tgsis.vertices_at`` / ``tgsis.triangles_at`` and
 downloaded with binary COPY (:func:`get_at`, :func:`surfaces_at`).
 :func:`export_series` writes snapshots at several times as a ParaView
