@@ -105,11 +105,24 @@ def test_errors(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert "version 'a' has child versions: 'b'" in _run(db_dsn, capsys, "version", "delete", "a", code=1)
 
 
+def test_versioning_names_the_storage_table_as_sql_does(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
+    # issue 38, part 6: the message appended "_ver" to the bare table name in Python, so that a table of another
+    # schema, or one whose name needs quotes, was told a storage name no SQL statement finds
+    with psycopg.connect(db_dsn) as conn:
+        conn.execute('CREATE SCHEMA "field data"')
+        conn.execute('CREATE TABLE "field data"."My Wells" (id int PRIMARY KEY)')
+    said = _run(db_dsn, capsys, "versioning", "enable", '"field data"."My Wells"', "--key", "id", "--class", "well")
+    assert 'storage "field data"."My Wells_ver")' in said
+    with psycopg.connect(db_dsn) as conn:
+        storage = said.split("storage ", 1)[1].split(")")[0]
+        assert conn.execute(f"SELECT count(*) FROM {storage}").fetchone() == (0,)  # the name SQL finds
+
+
 def test_versioning_a_table_from_the_command_line(db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     with psycopg.connect(db_dsn) as conn:
         conn.execute("CREATE TABLE wells (id int PRIMARY KEY, name text)")
         conn.execute("INSERT INTO wells VALUES (1, 'w1')")
-    assert "public.wells is versioned (object class well, key id, storage wells_ver)" in _run(
+    assert "public.wells is versioned (object class well, key id, storage public.wells_ver)" in _run(
         db_dsn, capsys, "versioning", "enable", "wells", "--key", "id", "--class", "well"
     )
     assert (

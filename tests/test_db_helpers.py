@@ -3,11 +3,13 @@
 Found: the class given by name or as a FeatureClass was resolved in 8
 copies, a read-only snapshot opened in 5, the session's version settings read
 and put back in 2, and the name of a versioned table's storage made by
-appending ``_ver`` in 3 places instead of asking SQL's ``tgsis.storage_table``.
+appending ``_ver`` in 3 places instead of asking SQL's ``tgsis.storage_table``
+(the last one in the command line's message after ``versioning enable``).
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -28,15 +30,26 @@ def _occurrences(text: str) -> dict[str, int]:
     return {name: count for name, count in found.items() if count}
 
 
+def _files_matching(pattern: str) -> list[str]:
+    """The modules of the whole package (the command line and the view too) whose source matches ``pattern``."""
+    found = re.compile(pattern)
+    package = DB.parent
+    return sorted(
+        str(p.relative_to(package)) for p in package.rglob("*.py") if found.search(p.read_text(encoding="utf-8"))
+    )
+
+
 def test_each_helper_is_written_once() -> None:
     assert _occurrences("else get_feature_class(conn, feature_class)") == {"_transfer.py": 1}
-    # checkin's check-out opens its snapshot after a first transaction of its own: the one other place
-    assert _occurrences('"SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY"') == {
-        "_transfer.py": 1,
-        "checkin.py": 1,
-    }
+    assert _files_matching(r"isinstance\(\w+, FeatureClass\)") == ["db/_transfer.py"]
+    # checkin's check-out too opens its snapshot (after a first transaction of its own) with read_only_snapshot
+    assert _files_matching("READ ONLY") == ["db/_transfer.py"]
     assert _occurrences("current_setting('tgsis.version', true)") == {"_settings.py": 1}
+    assert _files_matching(r"(current_setting|set_config)\('tgsis\.(version|revision)'") == ["db/_settings.py"]
+    # a versioned table's rows are where tgsis.storage_table says (quoted, with its schema), not at name + "_ver":
+    # the command line's message too (tgsis.db.versions.storage_table)
     assert _occurrences('"_ver"') == {}
+    assert _files_matching(r"""\}_ver\b|\+\s*["']_ver\b|["']_ver["']""") == []
 
 
 def test_resolve_class(conn: Conn) -> None:

@@ -161,3 +161,21 @@ def test_model_5_is_versioned_with_the_features(conn: Conn) -> None:
     assert G.md_in_box(conn, fc, ["knowledge"], [0], [2]) == [geoid]
     with pytest.raises(tgsis.InvalidInputError, match="time is one of its axes"), reraise():
         G.gmap_cells(conn, geoid, 1, 0.5)
+
+
+def test_a_g_map_in_time_is_refused_by_a_class_of_model_5_by_every_route(conn: Conn) -> None:
+    # the refusal moved with model 5 to db/multidim.py (issue 38, part 6): insert_gmap hands the class on, and
+    # insert_feature reaches the same code through model 4's entry (model 5 stores no EvolvingGMap)
+    fc = _class(conn)
+    conn.commit()
+    evolving = gmaps.EvolvingGMap([gmaps.GMapPeriod([0.0, 1.0], _interpretations()[0])])
+    for insert in (G.insert_gmap, tgsis.insert_feature):
+        with pytest.raises(tgsis.InvalidInputError, match="give a tgsis.gmaps.GMap .time is one of its axes"):
+            insert(conn, fc, evolving)
+        conn.rollback()
+    assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (0,)
+    # a plain G-map through insert_feature is stored by model 5 with the default axis names
+    history = _interpretations()[2]
+    geoid = tgsis.insert_feature(conn, fc, history)
+    assert G.fetch_md_gmap(conn, fc, geoid)[1] == ("x", "y", "z", "axis4")
+    assert tgsis.fetch_object(conn, fc, geoid).same_as(history)

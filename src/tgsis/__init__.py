@@ -97,6 +97,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.classes import add_property, drop_property, fill_property_rows, rename_property
     from tgsis.db.compare import GeometryChanges, compare_stored, compare_versions
+    from tgsis.db.evolving import append_period, delete_period, fetch_evolving
     from tgsis.db.features import (
         Feature,
         FeatureClass,
@@ -112,17 +113,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         insert_feature,
         list_feature_classes,
     )
-    from tgsis.db.gmaps import (
-        GMapProblem,
-        fetch_gmap,
-        fetch_md_gmap,
-        gmap_at,
-        gmap_cells,
-        gmap_check,
-        insert_gmap,
-        md_in_box,
-        md_vertices_in_box,
-    )
+    from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
+    from tgsis.db.instants import add_instant, delete_instant, fetch_series
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -132,17 +124,12 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         model_objects,
         remove_from_model,
     )
+    from tgsis.db.multidim import fetch_md_gmap, md_in_box, md_vertices_in_box
     from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
     from tgsis.db.temporal import (
-        add_instant,
-        append_period,
         class_property_periods,
-        delete_instant,
-        delete_period,
         export_series,
         features_at,
-        fetch_evolving,
-        fetch_series,
         first_times,
         frames_at,
         get_at,
@@ -216,9 +203,12 @@ _LAZY_MODULES = (
     "tgsis.db.checkin",
     "tgsis.db.adapters",
     "tgsis.db.compare",
+    "tgsis.db.instants",
+    "tgsis.db.evolving",
     "tgsis.db.temporal",
     "tgsis.db.postgis",
     "tgsis.postgis",
+    "tgsis.db.multidim",
     "tgsis.db.gmaps",
     "tgsis.db.modelsets",
     # numpy, no database, but with the interpolation's scipy: loaded on first use too

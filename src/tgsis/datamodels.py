@@ -310,16 +310,16 @@ STATIC = register_data_model(
     )
 )
 INSTANTS = register_data_model(
-    DataModel(2, "surfaces at instants", "INSTANTS", ("SURFACE",), (SurfaceSeries,), "tgsis.db.temporal")
+    DataModel(2, "surfaces at instants", "INSTANTS", ("SURFACE",), (SurfaceSeries,), "tgsis.db.instants")
 )
 EVOLVING = register_data_model(
-    DataModel(3, "continuously evolving surfaces", "EVOLVING", ("SURFACE",), (EvolvingSurface,), "tgsis.db.temporal")
+    DataModel(3, "continuously evolving surfaces", "EVOLVING", ("SURFACE",), (EvolvingSurface,), "tgsis.db.evolving")
 )
 GMAPS_IN_TIME = register_data_model(
     DataModel(4, "generalized maps in time", "GMAP", ("GMAP",), (EvolvingGMap, GMap), "tgsis.db.gmaps")
 )
 MULTIDIM = register_data_model(
-    DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,), "tgsis.db.gmaps")
+    DataModel(5, "multiply indexed G-maps", "MULTIDIM", ("GMAP",), (GMap,), "tgsis.db.multidim")
 )
 
 assert set(get_args(TimeModel)) == {m.time_model for m in data_models()}, "TimeModel names the shipped models"

@@ -32,7 +32,6 @@ import os
 import uuid
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Literal
 
 import psycopg
@@ -300,8 +299,3 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
         f"template installed with: {_SESSION.get('template_method', 'not used')}; CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )
-
-
-def repo_root() -> Path:
-    """Root of the source checkout the SQL comes from."""
-    return find_sql_dir().parent

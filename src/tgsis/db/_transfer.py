@@ -5,7 +5,7 @@ where bulk rows go (:class:`Storage`: a table, or a versioned table's
 ``_ver`` storage in the session's working revision), the (geoid, local id)
 key columns of many geometries at once, and the class's property arrays of
 a mesh checked against its columns. Private to ``tgsis.db``: the models'
-modules (``features``, ``temporal``, ``checkin``) import it; users do not.
+modules (``features``, ``instants``, ``evolving``, ``gmaps``, ``multidim``, ``checkin``) import it; users do not.
 """
 
 from __future__ import annotations

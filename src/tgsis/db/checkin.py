@@ -60,6 +60,7 @@ from tgsis.db._transfer import (
     check_feature_values,
     feature_columns,
     local_positions,
+    read_only_snapshot,
     resolve_class,
 )
 from tgsis.db.classes import FeatureClass, class_of_feature
@@ -891,9 +892,7 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
                     f"{exc.message} in version {show_name(_working_state(conn)[0])}", detail=exc.detail, hint=exc.hint
                 ) from exc
             frozen = _freeze(conn)
-        with conn.transaction():
-            if fresh:  # one snapshot for the fingerprint and the rows
-                conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+        with read_only_snapshot(conn):  # one snapshot for the fingerprint and the rows
             settings = read_version_settings(conn)
             version, revision = _working_state(conn)
             if frozen is not None:  # a frozen revision's state never changes: no lock is needed to read it

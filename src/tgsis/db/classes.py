@@ -2,7 +2,7 @@
 
 Every data model's features belong to a feature class; the model-specific
 write and read paths (:mod:`tgsis.db.features` for model 1,
-:mod:`tgsis.db.temporal` for models 2 and 3) take a :class:`FeatureClass`.
+:mod:`tgsis.db.instants` and :mod:`tgsis.db.evolving` for models 2 and 3, ...) take a :class:`FeatureClass`.
 """
 
 from __future__ import annotations

@@ -147,7 +147,7 @@ def insert_feature(
         has them. For a temporal class a
         :class:`~tgsis.temporal.SurfaceSeries` (INSTANTS) or
         :class:`~tgsis.temporal.EvolvingSurface` (EVOLVING), stored by
-        :func:`tgsis.db.temporal.insert_series` / ``insert_evolving``. For a
+        :func:`tgsis.db.instants.insert_series` / :func:`tgsis.db.evolving.insert_evolving`. For a
         class of G-maps a :class:`~tgsis.gmaps.GMap` or
         :class:`~tgsis.gmaps.EvolvingGMap`, stored by
         :func:`tgsis.db.gmaps.insert_gmap`.
@@ -383,10 +383,10 @@ def fetch_object(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
     -------
     Mesh, GeometryCollection, SurfaceSeries, EvolvingSurface, EvolvingGMap, GMap, ...
         What :func:`insert_feature` stored: model 1 as :func:`fetch_feature`'s
-        ``mesh``, model 2 as :func:`~tgsis.db.temporal.fetch_series`, model 3
-        as :func:`~tgsis.db.temporal.fetch_evolving`, model 4 as
+        ``mesh``, model 2 as :func:`~tgsis.db.instants.fetch_series`, model 3
+        as :func:`~tgsis.db.evolving.fetch_evolving`, model 4 as
         :func:`~tgsis.db.gmaps.fetch_gmap`, model 5 the G-map of
-        :func:`~tgsis.db.gmaps.fetch_md_gmap` (without its axis names); a model
+        :func:`~tgsis.db.multidim.fetch_md_gmap` (without its axis names); a model
         added later as its module's fetch function returns.
 
     Raises

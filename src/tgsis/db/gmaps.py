@@ -26,13 +26,25 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import psycopg
 from psycopg import sql
 
 from tgsis import datamodels
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
 from tgsis.db._continuity import check_continuity, checked_tolerance
+from tgsis.db._gmap_common import (
+    Conn,
+    IntArray,
+    alpha_columns,
+    cell_ids,
+    class_values,
+    copy_rows,
+    gmap_bounds,
+    gmap_class,
+    in_order,
+    orientation_signs,
+    period_map,
+)
 from tgsis.db._transfer import (
     Columns,
     Storage,
@@ -44,9 +56,9 @@ from tgsis.db._transfer import (
     resolve_class,
 )
 from tgsis.db.classes import FeatureClass, class_of_feature
-from tgsis.db.copy import SQL_TYPES, numpy_dtype
-from tgsis.db.inspect import md_gmap_axes
-from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
+from tgsis.db.copy import SQL_TYPES
+from tgsis.db.multidim import fetch_md_gmap, insert_md, md_in_box, md_vertices_in_box
+from tgsis.errors import InvalidGMapError, InvalidInputError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
 from tgsis.view.meshes import Drawable, gmap_drawable
 
@@ -62,9 +74,6 @@ __all__ = [
     "GMapProblem",
 ]
 
-Conn = psycopg.Connection[Any]
-IntArray = npt.NDArray[np.int64]
-
 
 @dataclass(frozen=True)
 class GMapProblem:
@@ -73,21 +82,6 @@ class GMapProblem:
     problem: str
     count: int
     darts: tuple[int, ...]
-
-
-def _gmap_class(conn: Conn, feature_class: str | FeatureClass, model: str = "GMAP") -> FeatureClass:
-    fc = resolve_class(conn, feature_class)
-    if fc.time_model != model:
-        what = "G-maps in time" if model == "GMAP" else "multiply indexed G-maps"
-        raise InvalidInputError(
-            f"feature class {fc.name} holds {fc.time_model} {fc.geotype.value} features, not {what}",
-            hint=f"create a class with time_model={model!r} and a cell_level for {what}",
-        )
-    return fc
-
-
-def _default_axes(m: int) -> tuple[str, ...]:
-    return tuple(["x", "y", "z"][:m] + [f"axis{i + 1}" for i in range(3, m)])
 
 
 def _as_evolving(obj: GMap | EvolvingGMap, fc: FeatureClass) -> EvolvingGMap:
@@ -104,78 +98,6 @@ def _as_evolving(obj: GMap | EvolvingGMap, fc: FeatureClass) -> EvolvingGMap:
             [GMapPeriod([0.0], obj, level=fc.cell_level if values else None, cell_values=values)], alive=True, name=None
         )
     raise InvalidInputError(f"a G-map feature is a tgsis.gmaps.GMap or EvolvingGMap, got {type(obj).__name__}")
-
-
-def _class_values(fc: FeatureClass, obj: EvolvingGMap, drop_extra: bool) -> list[dict[str, npt.NDArray[Any]]]:
-    """Per period, the class's cell property arrays (g, c), checked and cast to the column types."""
-    wanted = {p.name: p for p in fc.cell_properties}
-    if obj.level is not None and obj.level != fc.cell_level:
-        raise InvalidPropertyError(
-            f"the G-map's cell values belong to {obj.level}-cells, feature class {fc.name} "
-            f"stores values of {fc.cell_level}-cells"
-        )
-    if fc.cell_level is not None and fc.cell_level > obj.dimension:
-        raise InvalidGMapError(
-            f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a "
-            f"{obj.dimension}-G-map does not have"
-        )
-    out = []
-    for i, period in enumerate(obj.periods):
-        given = dict(period.cell_values)
-        missing = sorted(set(wanted) - set(given))
-        if missing:
-            raise InvalidPropertyError(
-                f"feature class {fc.name} needs cell properties {missing}, which period {i} of the G-map lacks"
-            )
-        extra = sorted(set(given) - set(wanted))
-        if extra and not drop_extra:
-            raise InvalidPropertyError(
-                f"feature class {fc.name} has no column for cell properties {extra} of period {i}",
-                hint="drop the others (drop_extra_properties=True) or register them in the class",
-            )
-        values: dict[str, npt.NDArray[Any]] = {}
-        for name, prop in wanted.items():
-            target = numpy_dtype(SQL_TYPES[prop.type])
-            cast = given[name].astype(target)
-            if target.kind in "iub" and not np.array_equal(cast, given[name]):
-                raise InvalidPropertyError(f"cell property {name!r} has values that are not {prop.type} in period {i}")
-            values[name] = cast
-        out.append(values)
-    return out
-
-
-def _bounds(obj: EvolvingGMap) -> list[float] | None:
-    """The box of the first three coordinates of every position (0 for missing ones), as tgsis.gmap_extent."""
-    boxes = []
-    for period in obj.periods:
-        xyz = period.positions.reshape(-1, period.positions.shape[2])[:, :3]
-        if len(xyz):
-            if xyz.shape[1] < 3:
-                xyz = np.hstack([xyz, np.zeros((len(xyz), 3 - xyz.shape[1]))])
-            boxes.append(np.stack([xyz.min(axis=0), xyz.max(axis=0)]))
-    if not boxes:
-        return None
-    stacked = np.stack(boxes)
-    return [float(v) for v in np.concatenate([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])]
-
-
-def _signs(g: GMap) -> npt.NDArray[np.bool_] | None:
-    return g.orientation() if g.is_orientable() else None
-
-
-def _alpha_columns(geoid: int, images: IntArray) -> list[tuple[str, npt.ArrayLike, str]]:
-    """The rows of ``gmap_alpha`` / ``md_alpha`` for involutions ``images`` ((n + 1, d) int64), in key order.
-
-    Written dart by dart, level by level (the order of the key (geoid, dartid, level)), so that the table holds
-    them in the order ``tgsis.gmap_check`` reads them (``tgsis.gmap_alpha_array``) and ``fetch_gmap`` asks for.
-    """
-    levels, darts = images.shape
-    return [
-        ("geoid", np.full(levels * darts, geoid), "int8"),
-        ("level", np.tile(np.arange(levels, dtype=np.int16), darts), "int2"),
-        ("dartid", np.repeat(np.arange(darts, dtype=np.int64), levels), "int8"),
-        ("dartid2", np.ascontiguousarray(images.T).reshape(-1), "int8"),
-    ]
 
 
 @checked
@@ -233,22 +155,16 @@ def insert_gmap(
     """
     fc = resolve_class(conn, feature_class)
     if fc.time_model == "MULTIDIM":
-        if not isinstance(obj, GMap):
-            raise InvalidInputError(
-                f"feature class {fc.name} holds multiply indexed G-maps: give a tgsis.gmaps.GMap "
-                f"(time is one of its axes), not a {type(obj).__name__}",
-                hint="tgsis.gmaps.extrude makes an axis of time or knowledge",
-            )
-        return _insert_md(conn, fc, obj, properties, name=name, axes=axes, drop_extra=drop_extra_properties)
+        return insert_md(conn, fc, obj, properties, name=name, axes=axes, drop_extra=drop_extra_properties)
     if axes is not None:
         raise InvalidInputError(f"feature class {fc.name} holds G-maps in time: their axes are x, y, z (axes=None)")
-    fc = _gmap_class(conn, fc)
+    fc = gmap_class(conn, fc)
     tolerance = checked_tolerance(tolerance)
     evolving = _as_evolving(obj, fc)
     if sudden_change is not None:
         evolving = evolving.with_sudden_changes(sudden_change)
     evolving.check(raise_=True)
-    values = _class_values(fc, evolving, drop_extra_properties)
+    values = class_values(fc, evolving, drop_extra_properties)
     periods = evolving.periods
     n, m = evolving.dimension, evolving.embedding_dimension
     darts = [p.gmap.n_darts for p in periods]
@@ -279,7 +195,7 @@ def insert_gmap(
         ]
 
     def alpha_rows() -> Columns:
-        return _alpha_columns(
+        return alpha_columns(
             geoid, np.stack([concat([p.gmap.alpha[i] + o for p, o in zip(periods, dart0)]) for i in range(n + 1)])
         )
 
@@ -288,7 +204,7 @@ def insert_gmap(
         labels = [p.gmap.cells(level) for p in periods] if level is not None else []
         cells["counts"] = [int(c.max()) + 1 if len(c) else 0 for c in labels]
         cells["first"] = np.cumsum([0, *cells["counts"][:-1]]).astype(np.int64)
-        signs = [_signs(p.gmap) for p in periods]
+        signs = [orientation_signs(p.gmap) for p in periods]
         columns: list[tuple[str, npt.ArrayLike, str]] = [
             ("geoid", np.full(sum(darts), geoid), "int8"),
             ("dartid", np.arange(sum(darts), dtype=np.int64), "int8"),
@@ -362,7 +278,7 @@ def insert_gmap(
             "SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'GMAP', p_alive => %s, p_class => %s)",
             (
                 no_nul("geometry name", name if name is not None else evolving.name),
-                _bounds(evolving),
+                gmap_bounds(evolving),
                 sum(nodes),
                 sum(darts),
                 evolving.alive,
@@ -391,284 +307,6 @@ def insert_gmap(
             check_continuity(conn, geoid, tolerance)
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
-
-
-def _md_values(fc: FeatureClass, g: GMap, drop_extra: bool) -> dict[str, npt.NDArray[Any]]:
-    """The class's cell property arrays (c,) of a model-5 G-map, checked and cast."""
-    given = dict(g.cell_properties.get(fc.cell_level, {})) if fc.cell_level is not None else {}
-    other = sorted(level for level in g.cell_properties if level != fc.cell_level and g.cell_properties[level])
-    if other and not drop_extra:
-        raise InvalidPropertyError(
-            f"feature class {fc.name} stores properties of {fc.cell_level}-cells, the G-map "
-            f"has properties of {other}-cells",
-            hint="drop the others (drop_extra_properties=True)",
-        )
-    period = GMapPeriod(
-        [0.0],
-        GMap(g.alpha, g.vertex, g.points),
-        level=fc.cell_level if given else None,
-        cell_values={k: np.asarray(v)[None] for k, v in given.items()},
-    )
-    values = _class_values(fc, EvolvingGMap([period]), drop_extra)[0]
-    return {k: v[0] for k, v in values.items()}
-
-
-def _insert_md(
-    conn: Conn,
-    fc: FeatureClass,
-    g: GMap,
-    properties: Mapping[str, Any] | None,
-    *,
-    name: str | None,
-    axes: Sequence[str] | None,
-    drop_extra: bool,
-) -> int:
-    """Store a model-5 G-map: md_gmap, md_vertex, md_dart, md_alpha, md_cell and the class's cell values."""
-    g.check(raise_=True)
-    n, m, d = g.dimension, g.embedding_dimension, g.n_darts
-    names = tuple(axes) if axes is not None else _default_axes(m)
-    if len(names) != m or len(set(names)) != m or not all(isinstance(a, str) and a for a in names):
-        raise InvalidInputError(f"axes must name each of the {m} axes once, got {list(names)!r}")
-    if m > 100:
-        raise InvalidGMapError(f"a multiply indexed G-map has at most 100 axes (the cube type's limit), got {m}")
-    if fc.cell_level is not None and fc.cell_level > n:
-        raise InvalidGMapError(
-            f"feature class {fc.name} stores properties of {fc.cell_level}-cells, which a {n}-G-map does not have"
-        )
-    values = _md_values(fc, g, drop_extra)
-    level = fc.cell_level
-    cells: list[npt.NDArray[np.int64]] = []  # the darts' cells of the property level, once dart_rows made them
-
-    def vertex_rows() -> Columns:
-        return [
-            ("geoid", np.full(g.n_points, geoid), "int8"),
-            ("vrtxid", np.arange(g.n_points, dtype=np.int64), "int8"),
-            ("coordinate", g.points, f"float8[{m}]"),
-        ]
-
-    def alpha_rows() -> Columns:
-        return _alpha_columns(geoid, g.alpha)
-
-    def dart_rows() -> Columns:
-        columns: list[tuple[str, npt.ArrayLike, str]] = [
-            ("geoid", np.full(d, geoid), "int8"),
-            ("dartid", np.arange(d, dtype=np.int64), "int8"),
-            ("vrtxid", g.vertex, "int8"),
-        ]
-        if level is not None:
-            cells.append(g.cells(level))
-            columns.append(("acellid", cells[0], "int8"))
-        signs = _signs(g)
-        if signs is not None:
-            columns.append(("positive", signs, "bool"))
-        return columns
-
-    def cell_count() -> int:
-        return int(cells[0].max()) + 1 if len(cells[0]) else 0
-
-    def cell_rows() -> Columns:
-        count = cell_count()
-        return [
-            ("geoid", np.full(count, geoid), "int8"),
-            ("acellid", np.arange(count, dtype=np.int64), "int8"),
-            ("celllevel", np.full(count, level, dtype=np.int16), "int2"),
-        ]
-
-    def value_rows() -> Columns:
-        count = cell_count()
-        return [
-            ("_geoid", np.full(count, geoid), "int8"),
-            ("_idx", np.arange(count, dtype=np.int64), "int8"),
-            *((prop.name, values[prop.name], SQL_TYPES[prop.type]) for prop in fc.cell_properties),
-        ]
-
-    with reraise(), conn.transaction():
-        storage = Storage.of(conn, fc)
-        storage.check("tgsis", "geometry")
-        period = EvolvingGMap([GMapPeriod([0.0], g)])
-        row = conn.execute(
-            "SELECT tgsis.new_geometry('GMAP', %s, %s, %s, %s, p_timemodel => 'MULTIDIM', p_class => %s)",
-            (no_nul("geometry name", name), _bounds(period), g.n_points, d, fc.name),
-        ).fetchone()
-        assert row is not None
-        geoid = int(row[0])
-        extent = None
-        if g.n_points:
-            low, high = g.points.min(axis=0), g.points.max(axis=0)
-            extent = (
-                "(" + ", ".join(repr(float(v)) for v in low) + "),(" + ", ".join(repr(float(v)) for v in high) + ")"
-            )
-        # one row: through the versioned view when versioning is on (its trigger writes the working revision)
-        conn.execute(
-            "INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
-            (geoid, n, m, list(names), extent),
-        )
-        # as insert_gmap: the involutions first, the darts' cells and orientation computed while they go in
-        tables: list[tuple[str, str, Callable[[], Columns]]] = [
-            ("tgsis", "md_alpha", alpha_rows),
-            ("tgsis", "md_vertex", vertex_rows),
-            ("tgsis", "md_dart", dart_rows),
-        ]
-        if level is not None:
-            tables.append(("tgsis", "md_cell", cell_rows))
-            if fc.cell_properties:
-                tables.append((fc.schema, fc.cellprotable, value_rows))
-        storage.copy_all(conn, tables)
-        insert_feature_row(conn, fc, geoid, properties)
-    return geoid
-
-
-@checked
-def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> tuple[GMap, tuple[str, ...]]:
-    """A stored multiply indexed G-map (model 5) with its cell values, and the names of its axes.
-
-    Raises
-    ------
-    NotFoundError
-        ``feature_id`` is not a feature of the class.
-    InvalidGMapError
-        Stored rows that do not make a G-map (see ``tgsis.md_check``).
-    """
-    fc = _gmap_class(conn, feature_class, "MULTIDIM")
-    with reraise(), read_only_snapshot(conn):
-        head = conn.execute(
-            sql.SQL(
-                "SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
-                "ON m.geoid = f._geoid WHERE f._geoid = %s"
-            ).format(fc.qualified(fc.featuretable)),
-            (feature_id,),
-        ).fetchone()
-        if head is None:
-            raise NotFoundError(f"feature class {fc.name} has no multiply indexed G-map feature {feature_id}")
-        n, m, axes = int(head[0]), int(head[1]), tuple(head[2])
-        vertex = _copy_rows(
-            conn,
-            "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
-            feature_id,
-            ["int8", f"float8[{m}]"],
-            [0],
-        )
-        dart = _copy_rows(
-            conn,
-            "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {}",
-            feature_id,
-            ["int8", "int8", "int8"],
-            [0],
-        )
-        alpha = _copy_rows(
-            conn,
-            "SELECT level, dartid, dartid2 FROM tgsis.md_alpha WHERE geoid = {}",
-            feature_id,
-            ["int2", "int8", "int8"],
-            [1, 0],
-        )
-        values = []
-        if fc.cell_properties:
-            values = _in_order(
-                copy_out(
-                    conn,
-                    sql.SQL("SELECT _idx, {} FROM {} WHERE _geoid = {}").format(
-                        sql.SQL(", ").join(sql.Identifier(p.name) for p in fc.cell_properties),
-                        fc.qualified(fc.cellprotable),
-                        sql.Literal(feature_id),
-                    ),
-                    ["int8", *(p.wire for p in fc.cell_properties)],
-                ),
-                [0],
-            )
-    images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
-    if any(len(a) != len(dart[0]) for a in images):
-        raise InvalidGMapError(
-            f"G-map {feature_id}: the alpha rows do not cover its {len(dart[0])} darts",
-            hint=f"SELECT * FROM tgsis.md_check({feature_id})",
-        )
-    topology = _period_map(dart[0], dart[1], images, vertex[0], vertex[1].reshape(len(vertex[0]), m), feature_id)
-    if fc.cell_level is None or not values or fc.cell_level > n:
-        return topology, axes
-    first = _cell_ids(topology, fc.cell_level, dart[2])
-    cell_values = {
-        p.name: values[1 + j][local_positions(values[0], first, "cell values", feature_id)]
-        for j, p in enumerate(fc.cell_properties)
-    }
-    return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values}), axes
-
-
-@checked
-def md_in_box(
-    conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float], high: Sequence[float]
-) -> list[int]:
-    """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
-    fc = _gmap_class(conn, feature_class, "MULTIDIM")
-    with reraise():
-        rows = conn.execute(
-            "SELECT * FROM tgsis.md_in_box(%s, %s, %s, %s)",
-            (fc.name, list(axes), [float(v) for v in low], [float(v) for v in high]),
-        ).fetchall()
-    return sorted(int(r[0]) for r in rows)
-
-
-@checked
-def md_vertices_in_box(
-    conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float], high: Sequence[float]
-) -> IntArray:
-    """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
-    with reraise():
-        rows = conn.execute(
-            "SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)",
-            (feature_id, list(axes), [float(v) for v in low], [float(v) for v in high]),
-        ).fetchall()
-    return np.array([r[0] for r in rows], dtype=np.int64)
-
-
-def _period_map(
-    dartids: IntArray,
-    nodeids: IntArray,
-    alpha: Sequence[IntArray],
-    node_ids: IntArray,
-    points: npt.NDArray[np.float64],
-    geoid: int,
-) -> GMap:
-    """A period's G-map from its dart rows (sorted by dartid) and its nodes (sorted by nodeid)."""
-    local = np.stack([local_positions(dartids, a, "alpha rows", geoid) for a in alpha])
-    vertex = local_positions(node_ids, nodeids, "darts", geoid)
-    return GMap(local, vertex, points)
-
-
-def _cell_ids(topology: GMap, level: int, acellids: IntArray) -> IntArray:
-    """The stored cell id (``acellid``) of each of the G-map's ``level``-cells, in ``topology.cells(level)`` order.
-
-    The darts of one cell share its id; ``acellids`` : (n_darts,) int64 are the darts' ids.
-    """
-    labels = topology.cells(level)
-    ids = np.full(int(labels.max()) + 1 if len(labels) else 0, -1, dtype=np.int64)
-    ids[labels[::-1]] = acellids[::-1]  # reversed: the last write wins, so the first dart's id
-    return ids
-
-
-def _copy_rows(
-    conn: Conn, query: str, geoid: int, types: Sequence[str], order: Sequence[int]
-) -> list[npt.NDArray[Any]]:
-    """The rows of ``query`` (``{}``: the geoid) as columns, sorted by the columns at the positions ``order``."""
-    return _in_order(copy_out(conn, sql.SQL(query).format(sql.Literal(geoid)), types), order)
-
-
-def _in_order(columns: list[npt.NDArray[Any]], order: Sequence[int]) -> list[npt.NDArray[Any]]:
-    """The rows sorted by the columns at the positions ``order`` (most significant first).
-
-    The server is never asked to sort: on tables just loaded (no statistics yet) its plan sorted 18M rows on
-    disk; the rows come in the order they were written, usually the key's, and then only the check runs here.
-    """
-    keys = [columns[i] for i in order]
-    if len(keys[0]) < 2:
-        return columns
-    later, tied = np.zeros(len(keys[0]) - 1, dtype=bool), np.ones(len(keys[0]) - 1, dtype=bool)
-    for key in keys:
-        later |= tied & (key[1:] > key[:-1])
-        tied &= key[1:] == key[:-1]
-    if bool(np.all(later | tied)):
-        return columns
-    rows = np.lexsort(tuple(reversed(keys)))
-    return [column[rows] for column in columns]
 
 
 def _key_ordered_images(alpha: Sequence[npt.NDArray[Any]], dartids: IntArray, n: int) -> IntArray | None:
@@ -715,7 +353,7 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
     InvalidGMapError
         Stored rows that do not make a G-map (see ``tgsis.gmap_check``).
     """
-    fc = _gmap_class(conn, feature_class)
+    fc = gmap_class(conn, feature_class)
     with reraise(), read_only_snapshot(conn):
         head = conn.execute(
             sql.SQL(
@@ -728,27 +366,27 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         if head is None:
             raise NotFoundError(f"feature class {fc.name} has no G-map feature {feature_id}")
         name, alive, n, m = head[0], bool(head[1]), int(head[2]), int(head[3])
-        times = _copy_rows(
+        times = copy_rows(
             conn, "SELECT timem, timet FROM tgsis.gmap_timet WHERE geoid = {}", feature_id, ["float8", "float8"], [0, 1]
         )
-        nodes = _copy_rows(
+        nodes = copy_rows(
             conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {}", feature_id, ["float8", "int8"], [0, 1]
         )
-        vertex = _copy_rows(
+        vertex = copy_rows(
             conn,
             "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {}",
             feature_id,
             ["float8", "float8", "int8", f"float8[{m}]"],
             [0, 1, 2],
         )
-        dart = _copy_rows(
+        dart = copy_rows(
             conn,
             "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",
             feature_id,
             ["float8", "int8", "int8", "int8"],
             [1],
         )
-        alpha = _copy_rows(
+        alpha = copy_rows(
             conn,
             "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {}",
             feature_id,
@@ -757,7 +395,7 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         )
         values = []
         if fc.cell_properties:
-            values = _in_order(
+            values = in_order(
                 copy_out(
                     conn,
                     sql.SQL("SELECT _timem, _timet, _idx, {} FROM {} WHERE _geoid = {}").format(
@@ -781,10 +419,10 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         )
         at = vertex[0] == start
         positions = vertex[3][at].reshape(len(instants), len(in_nodes), m)
-        topology = _period_map(dartids, nodeids, images, in_nodes, positions[0], feature_id)
+        topology = period_map(dartids, nodeids, images, in_nodes, positions[0], feature_id)
         period_values: dict[str, npt.NDArray[Any]] = {}
         if fc.cell_level is not None and values and fc.cell_level <= n:
-            first = _cell_ids(topology, fc.cell_level, acellids)
+            first = cell_ids(topology, fc.cell_level, acellids)
             here = values[0] == start
             for j, prop in enumerate(fc.cell_properties):
                 column = values[3 + j][here].reshape(len(instants), -1)
@@ -820,7 +458,7 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     snapshot for psql).
     """
     t = check_time(t)
-    fc = _gmap_class(conn, class_of_feature(conn, feature_id))
+    fc = gmap_class(conn, class_of_feature(conn, feature_id))
     with reraise(), conn.transaction():
         n_row = conn.execute("SELECT dimension, embedding FROM tgsis.gmap WHERE geoid = %s", (feature_id,)).fetchone()
         frame = conn.execute("SELECT timem, t0, t1, w FROM tgsis.gmap_frame(%s, %s)", (feature_id, t)).fetchone()
@@ -890,10 +528,10 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
         )
     points = _mix(ends[0][1].reshape(-1, m), ends[1][1].reshape(-1, m), w, same)
     images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
-    topology = _period_map(dart[0], dart[1], images, ends[0][0], points, feature_id)
+    topology = period_map(dart[0], dart[1], images, ends[0][0], points, feature_id)
     if not values or fc.cell_level is None or fc.cell_level > n:
         return topology
-    first = _cell_ids(topology, fc.cell_level, dart[2])
+    first = cell_ids(topology, fc.cell_level, dart[2])
     order = local_positions(values[0][0], first, "cell values", feature_id)
     cell_values = {p.name: _mix(values[0][1 + j], values[1][1 + j], w, same)[order] for j, p in enumerate(props)}
     return GMap(topology.alpha, topology.vertex, topology.points, cell_properties={fc.cell_level: cell_values})
@@ -947,12 +585,7 @@ def gmap_check(conn: Conn, feature_id: int) -> list[GMapProblem]:
     return [GMapProblem(str(p), int(c), tuple(int(d) for d in darts)) for p, c, darts in rows]
 
 
-def _fetch_md(conn: Conn, fc: FeatureClass, feature_id: int) -> GMap:
-    """Model 5's fetch for :func:`tgsis.fetch_object`: the G-map of :func:`fetch_md_gmap`."""
-    return fetch_md_gmap(conn, fc, feature_id)[0]
-
-
-# --------------------------------------------------------------------------- models 4 and 5 in the browser view
+# --------------------------------------------------------------------------- model 4 in the browser view
 
 
 def _draw_at(
@@ -981,27 +614,5 @@ def _life(conn: Conn, feature_id: int) -> tuple[float, float] | None:
     return None if row is None or row[0] is None else (float(row[0]), float(row[1]))
 
 
-def _draw_md(
-    conn: Conn,
-    fc: FeatureClass,
-    feature_id: int,
-    t: float | None,
-    /,
-    *,
-    colour: str | None = None,
-    beside: Callable[[], Any] | None = None,
-) -> Drawable:
-    """Model 5's drawing: the whole map (time, if any, is one of its axes), its axes beyond z as values to colour by."""
-    history, axes = fetch_md_gmap(conn, fc, feature_id)
-    return gmap_drawable(history, axes)
-
-
-def _md_colours(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]:
-    """What the view colours a model-5 map by besides height: its axes beyond z."""
-    axes = md_gmap_axes(conn, feature_id)
-    return axes[3:] if axes is not None else []
-
-
-# models 4 and 5 in the registry of data models: insert_feature, fetch_object and the browser view come here
+# model 4 in the registry of data models: insert_feature, fetch_object and the view come here (model 5: db/multidim.py)
 datamodels.register_storage("GMAP", insert=insert_gmap, fetch=fetch_gmap, draw=_draw_at, life=_life)
-datamodels.register_storage("MULTIDIM", insert=insert_gmap, fetch=_fetch_md, draw=_draw_md, colours=_md_colours)

@@ -50,6 +50,7 @@ __all__ = [
     "enable_versioning",
     "disable_versioning",
     "versioned_tables",
+    "storage_table",
     "enable_feature_versioning",
     "disable_feature_versioning",
     "Conflict",
@@ -439,6 +440,16 @@ def disable_versioning(conn: Conn, table: str, *, force: bool = False) -> int:
     """Make a versioned table plain again with DEFAULT's rows; return the row versions removed."""
     with reraise(), conn.transaction():
         return int(_scalar(conn, "SELECT tgsis.disable_versioning(%s, %s)", (table, force)))
+
+
+@checked
+def storage_table(conn: Conn, schema: str, table: str) -> str:
+    """The relation that stores a table's rows, quoted as SQL writes it (``tgsis.storage_table``).
+
+    ``schema.<table>_ver`` when the table is versioned, else the table
+    itself; never made in Python, so that it is the name a statement finds.
+    """
+    return str(_scalar(conn, "SELECT tgsis.storage_table(%s, %s)", (schema, table)))
 
 
 @checked

@@ -669,10 +669,8 @@ def cmd_versioning_enable(args: argparse.Namespace) -> int:
                 hint="e.g. tgsis versioning enable wells --key id --class well",
             )
         t = V.enable_versioning(conn, args.table, args.key, args.object_class, args.order, args.shortname)
-    out(
-        f"{t.schema}.{t.table} is versioned (object class {t.objectclass}, key {t.objectkeyfield}, "
-        f"storage {t.table}_ver)"
-    )
+        storage = V.storage_table(conn, t.schema, t.table)
+    out(f"{t.schema}.{t.table} is versioned (object class {t.objectclass}, key {t.objectkeyfield}, storage {storage})")
     return 0
 
 
