@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, feature_values
 from tgsis.cli._connection import connection, require_this_build
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import emit_json, out, wants_json
+from tgsis.cli._progress import busy
 from tgsis.db import versions as V
 from tgsis.db.connect import connect
 from tgsis.errors import (
@@ -34,7 +34,7 @@ def cmd_checkout(args: argparse.Namespace) -> int:
     from tgsis import formats
     from tgsis.db.checkin import checkout
 
-    with connection(args) as conn, cliout.busy(f"downloading feature {args.id}"):
+    with connection(args) as conn, busy(f"downloading feature {args.id}"):
         co = checkout(conn, args.id, args.feature_class)
     formats.write(co.mesh, args.file, format=args.format)
     written = formats.read_one(args.file, format=args.format)
@@ -71,7 +71,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"{args.file} holds a {type(edited).__name__}: --png draws surfaces")
     with (
         connect(args.dsn) as conn,
-        cliout.busy("checking in"),
+        busy("checking in"),
     ):  # the check-out's version, whatever version commands work in now
         require_this_build(conn)
         result = checkin(
@@ -117,7 +117,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
             title=f"feature {save.feature_id} checked in to {save.version}",
         )
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "feature_id": save.feature_id,
                 "version": save.version,

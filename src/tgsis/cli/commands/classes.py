@@ -10,10 +10,9 @@ from typing import Any
 
 import psycopg
 
-from tgsis import cliout
 from tgsis.cli._arguments import GEOTYPES, INT4, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, wants_json
 from tgsis.cli._render import time_model_suffix
 from tgsis.datamodels import data_models
 from tgsis.db import versions as V
@@ -106,7 +105,7 @@ def cmd_class_list(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         classes = list_feature_classes(conn)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "classes": [
                     {
@@ -290,7 +289,7 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             else ""
         )
     if wants_json(args):
-        cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
+        emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
         return 0
     members = fc.geotype is Geotype.GEOMETRYCOLLECTION
     for change in changes:

@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import add_command
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import emit_json, out, wants_json
 from tgsis.db.connect import connect, resolve_target
 from tgsis.db.inspect import server_version
 from tgsis.db.install import install, installation_status, uninstall
@@ -59,7 +58,7 @@ def cmd_db_status(args: argparse.Namespace) -> int:
         db = conn.info.dbname
     current = status.installed
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "database": db,
                 "source": target.source,

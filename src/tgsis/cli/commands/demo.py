@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import add_command
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, wants_json
 from tgsis.errors import (
     InvalidInputError,
 )
@@ -18,7 +17,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     if args.list:
         if wants_json(args):
-            cliout.emit_json({"scenarios": [{"name": s.name, "summary": s.summary} for s in SCENARIOS.values()]})
+            emit_json({"scenarios": [{"name": s.name, "summary": s.summary} for s in SCENARIOS.values()]})
         else:
             print_table(args, ("scenario", "shows"), [(s.name, s.summary) for s in SCENARIOS.values()])
         return 0

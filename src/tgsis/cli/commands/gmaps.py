@@ -10,10 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, show_time, wants_json
 from tgsis.db.features import (
     class_of_feature,
     fetch_feature,
@@ -64,7 +63,7 @@ def cmd_gmap_import(args: argparse.Namespace) -> int:
             axes=args.axes.split(",") if args.axes else None,
         )
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "id": geoid,
                 "class": fc.name,
@@ -84,7 +83,7 @@ def cmd_gmap_check(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         problems = gmap_check(conn, args.id)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "id": args.id,
                 "valid": not problems,
@@ -108,9 +107,9 @@ def cmd_gmap_cells(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         dartids, cells = gmap_cells(conn, args.id, args.level, args.at)
     sizes = np.bincount(cells) if len(cells) else np.zeros(0, dtype=np.int64)
-    when = "" if args.at is None else f" at t = {cliout.show_time(args.at)}"
+    when = "" if args.at is None else f" at t = {show_time(args.at)}"
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "id": args.id,
                 "level": args.level,
@@ -142,7 +141,7 @@ def cmd_gmap_at(args: argparse.Namespace) -> int:
     if g is None:
         raise NotFoundError(f"feature {args.id} does not exist at t = {args.time!r}")
     write_gmap_vtu(g, args.file)
-    out(f"wrote feature {args.id} at t = {cliout.show_time(args.time)}: {_gmap_summary(g)}, to {args.file}")
+    out(f"wrote feature {args.id} at t = {show_time(args.time)}: {_gmap_summary(g)}, to {args.file}")
     return 0
 
 
@@ -196,7 +195,7 @@ def cmd_extrude(args: argparse.Namespace) -> int:
             )
     summary = _gmap_summary(extruded)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "id": geoid,
                 "output": args.output,
@@ -230,7 +229,7 @@ def cmd_slice(args: argparse.Namespace) -> int:
     if args.output:
         write_gmap_vtu(section, args.output, axes=rest)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "id": args.id,
                 "axis": args.axis,

@@ -8,10 +8,9 @@ from typing import Any
 
 import psycopg
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, box, property_filters
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, show_time, wants_json
 from tgsis.cli._render import time_model_suffix, time_unit_suffix
 from tgsis.db import versions as V
 from tgsis.db.features import (
@@ -100,7 +99,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     mesh = found if isinstance(found, Mesh) else None
     plain = mesh is not None
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "id": args.id,
                 "name": name,
@@ -136,9 +135,9 @@ def cmd_info(args: argparse.Namespace) -> int:
     else:
         topology = [t for t, starts in steps if starts]
         out(
-            f"  exists from t = {cliout.show_time(span[0])} to {cliout.show_time(span[1])}{time_unit_suffix(fc)}"
+            f"  exists from t = {show_time(span[0])} to {show_time(span[1])}{time_unit_suffix(fc)}"
             + (" and after (alive)" if span[2] else "")
-            + f"; {len(steps)} instants, topology (re)defined at {', '.join(cliout.show_time(t) for t in topology)}"
+            + f"; {len(steps)} instants, topology (re)defined at {', '.join(show_time(t) for t in topology)}"
         )
     if properties:
         out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
@@ -181,7 +180,7 @@ def cmd_ls(args: argparse.Namespace) -> int:
         return (None, ncell) if geotype == "GMAP" else (ncell, None)
 
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "features": [
                     {

@@ -11,10 +11,10 @@ from typing import Any
 import numpy as np
 
 import tgsis
-from tgsis import cliout
 from tgsis.cli._arguments import INT4, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import emit_json, out, wants_json
+from tgsis.cli._progress import busy, progress
 from tgsis.cli._render import time_unit_suffix
 from tgsis.db.features import (
     get_feature_class,
@@ -49,7 +49,7 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
-    with cliout.progress(f"interpolating {name}", None, "step") as moved:
+    with progress(f"interpolating {name}", None, "step") as moved:
         result = interpolate(
             source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved, split=args.split
         )
@@ -64,7 +64,7 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
         paths = write_previews(result.evolving, times, args.preview, stem=Path(args.source).stem)
         out(f"  {len(paths)} previews in {args.preview}")
     if args.feature_class:
-        with connection(args) as conn, cliout.busy(f"uploading {name}"):
+        with connection(args) as conn, busy(f"uploading {name}"):
             fid = insert_feature(conn, args.feature_class, result.evolving)
             unit = time_unit_suffix(get_feature_class(conn, args.feature_class))
         # as the user gave the times (the source may be the later shape), then the span in time order
@@ -86,7 +86,7 @@ def cmd_corners(args: argparse.Namespace) -> int:
     surface = _read_surface(args.file, "surface")
     corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "file": args.file,
                 "corners": [{"vertex": v, "xyz": surface.vertices[v].tolist()} for v in corners.tolist()],

@@ -6,9 +6,8 @@ import argparse
 import sys
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import add_command
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import emit_json, out, wants_json
 from tgsis.db.connect import connect
 from tgsis.db.install import install
 from tgsis.db.local import LocalServer, find_binaries
@@ -42,7 +41,7 @@ def cmd_local_status(args: argparse.Namespace) -> int:
     server = _local_server()
     running = server.is_running()
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "cluster": str(server.root),
                 "binaries": server.binaries.describe(),

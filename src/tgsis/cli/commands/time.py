@@ -9,10 +9,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, INT4, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, show_time, wants_json
+from tgsis.cli._progress import progress
 from tgsis.cli._render import picture_of, time_unit_suffix
 from tgsis.db.features import (
     FeatureClass,
@@ -37,7 +37,7 @@ def cmd_query(args: argparse.Namespace) -> int:
             conn, args.feature_class, args.property, args.op, args.value, convention=args.convention
         )
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "class": args.feature_class,
                 "property": args.property,
@@ -63,7 +63,7 @@ def cmd_query(args: argparse.Namespace) -> int:
             args,
             ("id", "first", "when"),
             [
-                (fid, cliout.show_time(periods[0].start), "" if periods[0].start_closed else "(right after it)")
+                (fid, show_time(periods[0].start), "" if periods[0].start_closed else "(right after it)")
                 for fid, periods in found.items()
             ],
         )
@@ -184,7 +184,7 @@ def cmd_series(args: argparse.Namespace) -> int:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InvalidInputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from exc
-        with cliout.progress("writing frames", args.steps, "frame") as moved:
+        with progress("writing frames", args.steps, "frame") as moved:
             written = export_series(
                 conn,
                 args.id,
@@ -211,7 +211,7 @@ def cmd_series(args: argparse.Namespace) -> int:
         )
     times = [t for t, _ in written.frames]
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "pvd": str(written.pvd),
                 "feature_id": args.id,
@@ -236,7 +236,7 @@ def cmd_series(args: argparse.Namespace) -> int:
         ("t", "file", "vertices", "triangles"),
         [
             (
-                cliout.show_time(t),
+                show_time(t),
                 file,
                 *((surface.n_vertices, surface.n_cells) if surface else ("no object (empty grid)", "")),
             )
@@ -246,7 +246,7 @@ def cmd_series(args: argparse.Namespace) -> int:
     missing = f", {len(written.missing)} without the object" if written.missing else ""
     out(
         f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from "
-        f"{cliout.show_time(times[0])} to {cliout.show_time(times[-1])}{time_unit_suffix(fc)}{missing}"
+        f"{show_time(times[0])} to {show_time(times[-1])}{time_unit_suffix(fc)}{missing}"
     )
     if args.gif:
         out(f"drew {len(times)} frames to {args.gif}")

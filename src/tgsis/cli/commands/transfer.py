@@ -13,10 +13,10 @@ from typing import Any
 import numpy as np
 import psycopg
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, feature_values
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, show_time, wants_json
+from tgsis.cli._progress import busy, progress
 from tgsis.cli._render import picture_of, time_unit_suffix
 from tgsis.db.features import (
     FeatureClass,
@@ -215,7 +215,7 @@ def _import_instant(
             fid = insert_feature(conn, fc, series, values, name=name, drop_extra_properties=args.drop_extra_properties)
         known = [args.at]
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "file": args.file,
                 "class": fc.name,
@@ -228,8 +228,8 @@ def _import_instant(
         )
     else:
         out(
-            f"stored feature {fid} ({fc.name}) at t = {cliout.show_time(args.at)}{time_unit_suffix(fc)}: {surface.n_vertices} "
-            f"vertices, {surface.n_cells} triangles; its instants: {', '.join(cliout.show_time(t) for t in known)}"
+            f"stored feature {fid} ({fc.name}) at t = {show_time(args.at)}{time_unit_suffix(fc)}: {surface.n_vertices} "
+            f"vertices, {surface.n_cells} triangles; its instants: {', '.join(show_time(t) for t in known)}"
         )
     return 0
 
@@ -258,7 +258,7 @@ def cmd_import(args: argparse.Namespace) -> int:
             with conn.transaction():
                 same = _features_named(conn, fc, collection.name or "")
                 old = _replaced_one(fc, collection.name or "", same) if args.replace else None
-                with cliout.busy(f"uploading {collection.n_vertices} vertices"):
+                with busy(f"uploading {collection.n_vertices} vertices"):
                     if old is not None:
                         delete_feature(conn, fc, old)
                     fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
@@ -277,7 +277,7 @@ def cmd_import(args: argparse.Namespace) -> int:
                 for i, (mesh, report) in enumerate(zip(meshes, reports))
             ]
             if wants_json(args):
-                cliout.emit_json(
+                emit_json(
                     {
                         "file": args.file,
                         "class": fc.name,
@@ -333,7 +333,7 @@ def cmd_import(args: argparse.Namespace) -> int:
         ids: list[int] = []
         replaced: list[int | None] = []
         warned: list[tuple[str, list[int]]] = []
-        with conn.transaction(), cliout.progress("uploading objects", len(meshes), "object") as moved:
+        with conn.transaction(), progress("uploading objects", len(meshes), "object") as moved:
             for i, (mesh, name) in enumerate(zip(meshes, names)):  # all objects of the file, or none
                 same = _features_named(conn, fc, name)
                 old = _replaced_one(fc, name, same) if args.replace else None
@@ -355,7 +355,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     for name, same in warned:
         _warn_same_name(fc, name, same)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "file": args.file,
                 "class": fc.name,
@@ -400,12 +400,12 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     with connection(args) as conn:
         fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
-        with cliout.busy(f"downloading feature {args.id}"):
+        with busy(f"downloading feature {args.id}"):
             feature = fetch_feature(conn, fc, args.id)
         assert feature.mesh is not None
         if args.png and not isinstance(feature.mesh, Surface):  # refused before any file is written
             raise InvalidInputError(f"feature {args.id} is no surface: --png draws surfaces")
-        with cliout.busy(f"writing {args.file}"):
+        with busy(f"writing {args.file}"):
             formats.write(feature.mesh, args.file, format=args.format)
         members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
         out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")

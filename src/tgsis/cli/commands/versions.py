@@ -11,11 +11,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from tgsis import cliout, clistate
 from tgsis.cli._arguments import INT4, add_command
 from tgsis.cli._connection import connection, split_version, target_key
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import emit_json, out, print_table, show_moment, wants_json
+from tgsis.cli._progress import busy
 from tgsis.cli._render import summarize_differences
+from tgsis.cli._state import remember_version, remembered_version
 from tgsis.db import versions as V
 from tgsis.db.connect import connect
 from tgsis.db.features import (
@@ -45,7 +46,7 @@ def cmd_version_list(args: argparse.Namespace) -> int:
         versions = V.list_versions(conn)
         current = V.working_version(conn)
     if wants_json(args):
-        cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
+        emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
         return 0
     print_table(
         args,
@@ -58,7 +59,7 @@ def cmd_version_list(args: argparse.Namespace) -> int:
                 v.initrevision if v.initrevision is not None else "-",
                 v.workingrevision,
                 v.owner,
-                cliout.show_moment(v.created_at),
+                show_moment(v.created_at),
                 v.description or "",
             )
             for v in versions
@@ -88,7 +89,7 @@ def cmd_version_tree(args: argparse.Namespace) -> int:
         versions = V.list_versions(conn)
         current = V.working_version(conn)
     if wants_json(args):  # depth-first order: each version after its parent
-        cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
+        emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
         return 0
     out(V.format_tree(versions))
     return 0
@@ -102,7 +103,7 @@ def cmd_version_goto(args: argparse.Namespace) -> int:
             working = V.working_revision(conn)
         else:
             V.goto_revision(conn, name, revision)
-    clistate.remember_version(target_key(args), args.name)
+    remember_version(target_key(args), args.name)
     if revision is None:
         out(f"commands on this database now work in version {V.show_name(name)} (working revision {working})")
     else:
@@ -119,11 +120,11 @@ def cmd_version_current(args: argparse.Namespace) -> int:
         else "$TGSIS_VERSION"
         if os.environ.get("TGSIS_VERSION")
         else "tgsis version goto"
-        if clistate.remembered_version(target_key(args))
+        if remembered_version(target_key(args))
         else "default"
     )
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "version": name,
                 "working_revision": working,
@@ -149,8 +150,8 @@ def cmd_version_save(args: argparse.Namespace) -> int:
 def cmd_version_delete(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         removed = V.delete_version(conn, args.name)
-    if clistate.remembered_version(target_key(args)) == args.name:
-        clistate.remember_version(target_key(args), None)
+    if remembered_version(target_key(args)) == args.name:
+        remember_version(target_key(args), None)
     out(f"deleted version {V.show_name(args.name)} and {removed} row version(s)")
     return 0
 
@@ -193,7 +194,7 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
             print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
             lost = None
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "version": args.name,
                 "conflicts": [
@@ -288,7 +289,7 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | No
 
 
 def cmd_version_merge(args: argparse.Namespace) -> int:
-    with connection(args) as conn, cliout.busy(f"merging {V.show_name(args.name)}"), conn.transaction():
+    with connection(args) as conn, busy(f"merging {V.show_name(args.name)}"), conn.transaction():
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
         lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
@@ -297,8 +298,8 @@ def cmd_version_merge(args: argparse.Namespace) -> int:
         + ("; version removed" if args.remove else "")
     )
     _say_discarded(lost)
-    if args.remove and clistate.remembered_version(target_key(args)) == args.name:
-        clistate.remember_version(target_key(args), None)
+    if args.remove and remembered_version(target_key(args)) == args.name:
+        remember_version(target_key(args), None)
     return 0
 
 
@@ -372,14 +373,14 @@ def cmd_version_diff(args: argparse.Namespace) -> int:
     a, a_rev = split_version(args.a)
     b, b_rev = split_version(args.b)
     with connection(args) as conn:
-        with cliout.busy(f"comparing {args.a} and {args.b}"):
+        with busy(f"comparing {args.a} and {args.b}"):
             differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
         if args.png:
             _draw_differences(conn, args, differences, ((a, a_rev), (b, b_rev)))
     objects = summarize_differences(differences, args.a, args.b)
     objects.sort(key=lambda o: _object_order((o.objectclass, o.objectkey)))
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "a": args.a,
                 "b": args.b,
@@ -477,13 +478,13 @@ def cmd_version_chain(args: argparse.Namespace) -> int:
         if args.at:
             believed = V.version_believed_at(conn, _moment(args.at), args.root)
             if wants_json(args):
-                cliout.emit_json({"at": _moment(args.at), "root": args.root, "version": believed})
+                emit_json({"at": _moment(args.at), "root": args.root, "version": believed})
             else:
                 out(believed if believed is not None else "-")
             return 0 if believed is not None else 3
         chain = V.version_chain(conn, args.root)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "root": args.root,
                 "chain": [{"version": name, "valid_from": start, "valid_to": end} for name, start, end in chain],
@@ -493,10 +494,7 @@ def cmd_version_chain(args: argparse.Namespace) -> int:
     print_table(
         args,
         ("version", "believed from", "believed to"),
-        [
-            (name, cliout.show_moment(start), cliout.show_moment(end) if end else "still believed")
-            for name, start, end in chain
-        ],
+        [(name, show_moment(start), show_moment(end) if end else "still believed") for name, start, end in chain],
     )
     return 0
 
@@ -523,7 +521,7 @@ def cmd_version_locks(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         locks = V.object_locks(conn, args.name)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "locks": [
                     {
@@ -549,7 +547,7 @@ def cmd_version_locks(args: argparse.Namespace) -> int:
                 lk.version,
                 lk.locked_by,
                 "exclusive" if lk.exclusive else "version",
-                cliout.show_moment(lk.locked_at),
+                show_moment(lk.locked_at),
             )
             for lk in locks
         ],
@@ -583,7 +581,7 @@ def cmd_version_privileges(args: argparse.Namespace) -> int:
     if args.name is not None and not owners:
         raise NotFoundError(f"version {args.name!r} does not exist")
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "versions": [
                     {
@@ -614,7 +612,7 @@ def cmd_version_privileges(args: argparse.Namespace) -> int:
 
 
 def cmd_version_compress(args: argparse.Namespace) -> int:
-    remembered = clistate.remembered_version(target_key(args))
+    remembered = remembered_version(target_key(args))
     looked_at = split_version(remembered)[1] if remembered else None
     with connect(args.dsn) as conn:
         report = V.compress_versions(conn, dry_run=args.dry_run)
@@ -625,8 +623,8 @@ def cmd_version_compress(args: argparse.Namespace) -> int:
     }
     if wants_json(args):
         if gone:
-            clistate.remember_version(target_key(args), None)
-        cliout.emit_json(
+            remember_version(target_key(args), None)
+        emit_json(
             {
                 "dry_run": args.dry_run,
                 "removed": [{"what": i.what, "name": i.name, "removed": i.removed} for i in report],
@@ -650,7 +648,7 @@ def cmd_version_compress(args: argparse.Namespace) -> int:
     else:
         out(f"compress removed {summary}" if report else "compress removed nothing")
     if gone:
-        clistate.remember_version(target_key(args), None)
+        remember_version(target_key(args), None)
         out(f"revision {looked_at} is gone: commands on this database work in DEFAULT again (was {remembered})")
     return 0
 
@@ -690,7 +688,7 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         tables = V.versioned_tables(conn)
     if wants_json(args):
-        cliout.emit_json(
+        emit_json(
             {
                 "tables": [
                     {
