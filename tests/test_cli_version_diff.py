@@ -106,6 +106,7 @@ def test_diff_shows_progress_over_the_tables(data: dict[str, Any]) -> None:
     code, out, terminal = _on_a_terminal(["--dsn", data["dsn"], "version", "diff", "DEFAULT", "a"])
     assert code == 0, terminal
     assert "comparing DEFAULT and a" in terminal and f"{tables}/{tables}" in terminal and "table" in terminal
+    assert f" 1/{tables}" in terminal  # table by table, not all at the end
     code, piped, quiet = _in_a_pipe(["--dsn", data["dsn"], "version", "diff", "DEFAULT", "a"])
     assert code == 0 and piped == out
     assert quiet == "3 objects differ: 1 only in DEFAULT, 1 only in a, 1 changed\n"  # the summary alone

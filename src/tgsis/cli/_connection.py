@@ -71,4 +71,5 @@ def connection(args: argparse.Namespace) -> Iterator[psycopg.Connection[Any]]:
                 V.goto_version(conn, name)
             else:
                 V.goto_revision(conn, name, revision)
+        conn.commit()  # the checks' reads end: the command starts outside a transaction (a snapshot of its own)
         yield conn

@@ -13,6 +13,11 @@ Kept in one place so that every command prints the same way:
   ``"-Infinity"``, ``"NaN"``, times as ISO 8601 with every digit.
 * :func:`show_time` and :func:`show_moment` round model times and wall-clock
   times for people (``--json`` keeps them exact).
+* :func:`render` is how a command shows its result: a handler computes the
+  result (plain data: a dataclass, a list), and hands it with its two
+  renderers — ``text(args, result)`` printing lines for people, and
+  ``document(result)`` returning the ``--json`` document — to :func:`render`,
+  which calls the one the flags ask for. The renderers read no database.
 
 Progress on standard error is :mod:`tgsis.cli._progress`'s.
 """
@@ -26,8 +31,8 @@ import json
 import math
 import os
 import sys
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -118,3 +123,23 @@ def wants_json(args: argparse.Namespace) -> bool:
 def print_table(args: argparse.Namespace, header: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
     """Tab-separated rows under a header line (``--no-header`` leaves it out)."""
     table(header, rows, header_shown=not getattr(args, "no_header", False))
+
+
+Result = TypeVar("Result")
+
+
+def render(
+    args: argparse.Namespace,
+    result: Result,
+    text: Callable[[argparse.Namespace, Result], None],
+    document: Callable[[Result], Mapping[str, Any]],
+) -> int:
+    """Show a command's ``result``: ``document(result)`` as one JSON document with ``--json``, else ``text``.
+
+    Returns the command's exit status (0).
+    """
+    if wants_json(args):
+        emit_json(document(result))
+    else:
+        text(args, result)
+    return 0
