@@ -76,3 +76,16 @@ def test_the_browser_view_reads_storage_through_tgsis_db() -> None:
             ):
                 found.append(f"{path.name}:{node.lineno}: {node.value[:50]!r}")
     assert found == []
+
+
+def test_handlers_hand_their_results_to_renderers() -> None:
+    """A command module prints --json documents only through render(args, result, text, document): no handler
+    builds its JSON inline, so the text and the document of a command come from the same result."""
+    found = []
+    for path in sorted((CLI / "commands").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "emit_json":
+                found.append(f"{path.name}:{node.lineno}")
+    assert found == []
+    modules_with_json = [p.name for p in (CLI / "commands").glob("*.py") if "render(args" in p.read_text()]
+    assert len(modules_with_json) >= 10, modules_with_json
