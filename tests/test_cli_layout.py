@@ -89,3 +89,14 @@ def test_handlers_hand_their_results_to_renderers() -> None:
     assert found == []
     modules_with_json = [p.name for p in (CLI / "commands").glob("*.py") if "render(args" in p.read_text()]
     assert len(modules_with_json) >= 10, modules_with_json
+
+
+def test_the_command_lines_plumbing_lives_in_its_package() -> None:
+    """What only the command uses (hints in its words, output, progress, remembered state) is private to tgsis.cli,
+    not public modules beside it: no tgsis.clihints, tgsis.cliout or tgsis.clistate."""
+    import importlib.util
+
+    top = sorted(p.name for p in CLI.parent.glob("cli*.py"))
+    assert top == []
+    assert all(importlib.util.find_spec(f"tgsis.{name}") is None for name in ("clihints", "cliout", "clistate"))
+    assert {p.name for p in CLI.glob("_*.py")} >= {"_hints.py", "_output.py", "_progress.py", "_state.py"}
