@@ -14,9 +14,9 @@ import psycopg
 import pytest
 
 import tgsis
-import tgsis.cliout
 from tests.temporal_data import evolving, series
 from tgsis.cli import main
+from tgsis.cli._output import show_time
 
 Conn = psycopg.Connection[object]
 
@@ -80,7 +80,7 @@ def test_the_command_prints_each_feature_and_when(
     assert main(["--dsn", db_dsn, "query", "faults", "throw", ">=", "50", "--first"]) == 0
     firsts = capsys.readouterr().out.splitlines()[1:]  # under the header line; times rounded for people
     assert [line.split("\t")[:2] for line in firsts] == [
-        [str(fid), tgsis.cliout.show_time(p[0].start)] for fid, p in expected.items()
+        [str(fid), show_time(p[0].start)] for fid, p in expected.items()
     ]
     assert main(["--dsn", db_dsn, "query", "faults", "throw", ">", "1000"]) == 0
     assert "no feature of faults has throw > 1000.0 at any time" in capsys.readouterr().err

@@ -1,7 +1,7 @@
 """Every hint the `tgsis` command prints is in its own terms: flags and commands, no Python keyword or SQL call.
 
 The hints come from the library and the SQL functions in their own terms;
-tgsis.clihints maps them in one place. These tests drive real failing commands
+tgsis.cli._hints maps them in one place. These tests drive real failing commands
 against a real database and read the hint they print; the last one runs every
 hint written in sql/ and src/tgsis/ through the mapping, so that a new hint
 without a rule fails here.
@@ -17,7 +17,7 @@ import pytest
 
 from tests.shared_data import cfm
 from tgsis.cli import main
-from tgsis.clihints import foreign_terms, to_cli
+from tgsis.cli._hints import foreign_terms, to_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 FLAGGED = Path(__file__).parent / "data" / "gocad" / "flagged.ts"
@@ -116,7 +116,7 @@ def _written_hints() -> list[tuple[str, str]]:
             literal = (m[1] + "".join(re.findall(r"'((?:[^']|'')*)'", m[2]))).replace("''", "'")
             found.append((f"{path.relative_to(ROOT)}", _sample(literal)))
     for path in sorted((ROOT / "src" / "tgsis").rglob("*.py")):
-        if path.name == "clihints.py":  # (cli.py's own hints are checked too: they pass through the mapping)
+        if path.name == "_hints.py":  # (the rest of the CLI's own hints are checked too: they pass through the mapping)
             continue
         text = path.read_text()
         for m in re.finditer(r"hint=((?:f?\"(?:[^\"\\]|\\.)*\"\s*)+)", text):

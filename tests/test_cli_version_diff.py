@@ -96,3 +96,27 @@ def test_diff_shows_progress_on_a_terminal(data: dict[str, Any]) -> None:
     assert code == 0, terminal
     assert "comparing DEFAULT and a" in terminal
     assert "only in DEFAULT" in out
+
+
+def test_diff_shows_progress_over_the_tables(data: dict[str, Any]) -> None:
+    """A bar over the versioned tables (not a spinner alone): done/total tables on the terminal, none in a pipe."""
+    with psycopg.connect(data["dsn"]) as conn:
+        tables = len(tgsis.versioned_tables(conn))
+    assert tables > 2
+    code, out, terminal = _on_a_terminal(["--dsn", data["dsn"], "version", "diff", "DEFAULT", "a"])
+    assert code == 0, terminal
+    assert "comparing DEFAULT and a" in terminal and f"{tables}/{tables}" in terminal and "table" in terminal
+    assert f" 1/{tables}" in terminal  # table by table, not all at the end
+    code, piped, quiet = _in_a_pipe(["--dsn", data["dsn"], "version", "diff", "DEFAULT", "a"])
+    assert code == 0 and piped == out
+    assert quiet == "3 objects differ: 1 only in DEFAULT, 1 only in a, 1 changed\n"  # the summary alone
+
+
+def _in_a_pipe(argv: list[str]) -> tuple[int, str, str]:
+    import subprocess
+
+    from tests.local_helpers import child_env
+    from tests.test_cli_terminal import TGSIS
+
+    run = subprocess.run([TGSIS, *argv], env=child_env(), capture_output=True, text=True, check=False)
+    return run.returncode, run.stdout, run.stderr

@@ -22,7 +22,7 @@ import pyvista as pv
 
 from tgsis import formats
 from tgsis.cli import main
-from tgsis.clihints import to_cli
+from tgsis.cli._hints import to_cli
 from tgsis.errors import FileFormatError
 from tgsis.mesh import GeometryCollection, Mesh, Surface
 

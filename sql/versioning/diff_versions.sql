@@ -1,12 +1,8 @@
 -- tgsis.diff_versions(a, b, a_revision, b_revision): objects whose rows differ between two versions (or revisions).
--- Per table and object: rows added (seen in b only), removed (in a only) and
--- changed (same row key, other values). Rows both sides see as the same row
--- version are skipped without reading them twice; rows that are different
--- row versions with equal values (e.g. copied by a merge) are not differences.
--- Objects are named by their keys' canonical text (tgsis.object_key_sql);
--- rows are compared as jsonb with floats written exactly, whatever the
--- session's extra_float_digits (with 0 or less, values differing in the
--- last digits would compare equal).
+-- tgsis.diff_table over every versioned table, in the order of the classes and
+-- their tables, in one statement (one snapshot); see there for what differs.
+-- The versions are checked first, so that a wrong name is an error even
+-- before any table is versioned.
 CREATE FUNCTION tgsis.diff_versions(
     p_a          text,
     p_b          text,
@@ -15,37 +11,17 @@ CREATE FUNCTION tgsis.diff_versions(
 RETURNS TABLE (objectclass text, objectkey text, shortname text, added bigint, removed bigint, changed bigint)
 LANGUAGE plpgsql
 STABLE
-SET extra_float_digits = 1
 AS $$
 DECLARE
-    v_a    integer[] := tgsis.revision_set(tgsis.version_id(p_a), p_a_revision);
-    v_b    integer[] := tgsis.revision_set(tgsis.version_id(p_b), p_b_revision);
-    v_t    tgsis.versioned_tables;
-    v_keys text;
+    v_t tgsis.versioned_tables;
 BEGIN
+    PERFORM tgsis.revision_set(tgsis.version_id(p_a), p_a_revision), tgsis.revision_set(tgsis.version_id(p_b), p_b_revision);
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
-        SELECT string_agg(format('%I', k), ', ' ORDER BY o) INTO v_keys FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o);
-        RETURN QUERY EXECUTE format(
-            'WITH a AS (SELECT %1$s, %7$s AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
-                          FROM %3$I.%4$I v
-                         WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)
-                           AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))),
-                  b AS (SELECT %1$s, %7$s AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
-                          FROM %3$I.%4$I v
-                         WHERE v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
-                           AND NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1)))
-             SELECT %5$L::text, coalesce(a.obj, b.obj), %6$L::text,
-                    count(*) FILTER (WHERE a.r IS NULL), count(*) FILTER (WHERE b.r IS NULL),
-                    count(*) FILTER (WHERE a.r IS NOT NULL AND b.r IS NOT NULL)
-               FROM a FULL JOIN b USING (%1$s)
-              WHERE a.r IS DISTINCT FROM b.r
-              GROUP BY 2 ORDER BY 2',
-            v_keys, v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.objectclass, v_t.shortname,
-            tgsis.object_key_text_sql(v_t, 'v'))
-          USING v_a, v_b;
+        RETURN QUERY SELECT * FROM tgsis.diff_table(format('%I.%I', v_t.schemaname, v_t.tablename)::regclass,
+                                                    p_a, p_b, p_a_revision, p_b_revision);
     END LOOP;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.diff_versions(text, text, integer, integer) IS
-    'objects whose rows differ from version a (at a revision) to version b: per table, rows added, removed and changed (by row key and values)';
+    'objects whose rows differ from version a (at a revision) to version b: per table, rows added, removed and changed (by row key and values); tgsis.diff_table over every versioned table';

@@ -10,7 +10,7 @@ from typing import Any
 
 import psycopg
 
-from tgsis import clistate
+from tgsis.cli._state import remembered_version
 from tgsis.db import versions as V
 from tgsis.db.connect import connect, resolve_target
 from tgsis.db.install import installation_status, installed_version
@@ -30,7 +30,7 @@ def target_key(args: argparse.Namespace) -> str:
 
 def chosen_version(args: argparse.Namespace) -> str | None:
     """--in, else $TGSIS_VERSION, else what `tgsis version goto` remembered for this database."""
-    return args.in_version or os.environ.get("TGSIS_VERSION") or clistate.remembered_version(target_key(args))
+    return args.in_version or os.environ.get("TGSIS_VERSION") or remembered_version(target_key(args))
 
 
 def split_version(text: str) -> tuple[str, int | None]:
@@ -71,4 +71,5 @@ def connection(args: argparse.Namespace) -> Iterator[psycopg.Connection[Any]]:
                 V.goto_version(conn, name)
             else:
                 V.goto_revision(conn, name, revision)
+        conn.commit()  # the checks' reads end: the command starts outside a transaction (a snapshot of its own)
         yield conn

@@ -12,8 +12,9 @@ from collections.abc import Callable, Sequence
 from typing import Any, NoReturn
 
 import tgsis
-from tgsis import clihints, cliout
 from tgsis.cli._arguments import Handler
+from tgsis.cli._hints import to_cli
+from tgsis.cli._output import drop_stdout
 from tgsis.cli.commands import (
     checkin,
     classes,
@@ -134,11 +135,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.showwarning = one_line
             return handler(args)
     except Error as exc:
-        exc.hint = clihints.to_cli(exc.hint)  # the hint in this interface's words (its flags and commands)
+        exc.hint = to_cli(exc.hint)  # the hint in this interface's words (its flags and commands)
         print(f"tgsis: error: {exc}", file=sys.stderr)
         return 1
     except BrokenPipeError:  # the reader went away while something other than _out wrote to stdout
-        cliout.drop_stdout()  # stdout to /dev/null, so that the flush at exit does not fail too
+        drop_stdout()  # stdout to /dev/null, so that the flush at exit does not fail too
         return 0
     except KeyboardInterrupt:
         print("tgsis: interrupted", file=sys.stderr)

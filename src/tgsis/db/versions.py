@@ -17,7 +17,7 @@ import contextlib
 import dataclasses
 import json
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from typing import Any
@@ -65,6 +65,7 @@ __all__ = [
     "refresh_version",
     "Difference",
     "diff_versions",
+    "diff_table",
     "set_version_validity",
     "version_chain",
     "version_believed_at",
@@ -772,18 +773,109 @@ class Difference:
 
 @checked
 def diff_versions(
-    conn: Conn, a: str, b: str, *, a_revision: int | None = None, b_revision: int | None = None
+    conn: Conn,
+    a: str,
+    b: str,
+    *,
+    a_revision: int | None = None,
+    b_revision: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> list[Difference]:
     """Objects whose rows differ between two versions (or revisions of them), per table.
 
     ``added`` rows are seen in ``b`` only, ``removed`` in ``a`` only, ``changed``
-    rows have the same row key and other values.
+    rows have the same row key and other values. The same rows, in the same
+    order, as ``tgsis.diff_versions``.
+
+    ``progress(done, total)``, when given, is called after each versioned table
+    (:func:`diff_table`). The tables are then compared one by one, all in one
+    snapshot: a new ``REPEATABLE READ READ ONLY`` transaction, or the caller's
+    transaction when it is ``REPEATABLE READ`` or ``SERIALIZABLE``. In a caller's
+    ``READ COMMITTED`` transaction, where each statement would see what other
+    sessions committed meanwhile, they are compared in one statement and
+    ``progress`` is called once, at the end.
+    """
+    if progress is None:
+        with reraise():
+            rows = conn.execute(
+                "SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)", (a, b, a_revision, b_revision)
+            ).fetchall()
+        return [_difference(r) for r in rows]
+    with reraise(), _one_snapshot(conn) as stepwise:
+        tables = [
+            str(r[0])
+            for r in conn.execute(
+                "SELECT format('%I.%I', schemaname, tablename) FROM tgsis.versioned_tables"
+                " ORDER BY objectclass, iudorder, shortname"
+            ).fetchall()
+        ]
+        if not stepwise or not tables:
+            rows = conn.execute(
+                "SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)", (a, b, a_revision, b_revision)
+            ).fetchall()
+            progress(len(tables), len(tables))
+            return [_difference(r) for r in rows]
+        differences: list[Difference] = []
+        for done, table in enumerate(tables, start=1):
+            differences += _diff_table(conn, table, a, b, a_revision, b_revision)
+            progress(done, len(tables))
+        return differences
+
+
+@checked
+def diff_table(
+    conn: Conn, table: str, a: str, b: str, *, a_revision: int | None = None, b_revision: int | None = None
+) -> list[Difference]:
+    """Objects whose rows of one versioned table differ between two versions (or revisions of them).
+
+    :func:`diff_versions` is this over every versioned table
+    (:func:`versioned_tables`), in one snapshot.
+
+    Parameters
+    ----------
+    table : str
+        The versioned table (its view): ``name`` or ``schema.name`` as SQL
+        would spell it, e.g. ``tgsis.vrtx``.
+
+    Raises
+    ------
+    NotFoundError
+        The table is not versioned, or a version or revision does not exist.
     """
     with reraise():
-        rows = conn.execute(
-            "SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)", (a, b, a_revision, b_revision)
-        ).fetchall()
-    return [Difference(r[0], r[1], r[2], int(r[3]), int(r[4]), int(r[5])) for r in rows]
+        return _diff_table(conn, table, a, b, a_revision, b_revision)
+
+
+def _diff_table(
+    conn: Conn, table: str, a: str, b: str, a_revision: int | None, b_revision: int | None
+) -> list[Difference]:
+    rows = conn.execute(
+        "SELECT * FROM tgsis.diff_table(%s::regclass, %s, %s, %s, %s)", (table, a, b, a_revision, b_revision)
+    ).fetchall()
+    return [_difference(r) for r in rows]
+
+
+def _difference(row: Sequence[Any]) -> Difference:
+    return Difference(row[0], row[1], row[2], int(row[3]), int(row[4]), int(row[5]))
+
+
+@contextlib.contextmanager
+def _one_snapshot(conn: Conn) -> Iterator[bool]:
+    """A transaction for a read of several statements; True when they all see the same snapshot.
+
+    Outside a transaction, a new ``REPEATABLE READ READ ONLY`` one (True).
+    Inside the caller's, a savepoint of it: True when its isolation level
+    keeps one snapshot for the whole transaction (``REPEATABLE READ``,
+    ``SERIALIZABLE``), False under ``READ COMMITTED``.
+    """
+    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
+        with conn.transaction():
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+            yield True
+        return
+    level = _scalar(conn, "SELECT current_setting('transaction_isolation')")
+    with conn.transaction():
+        yield level in ("repeatable read", "serializable")
 
 
 # --------------------------------------------------------------------------- valid time

@@ -5,16 +5,18 @@ from __future__ import annotations
 import argparse
 import math
 import shlex
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, feature_values
 from tgsis.cli._connection import connection, require_this_build
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import out, render
+from tgsis.cli._progress import busy
 from tgsis.db import versions as V
+from tgsis.db.checkin import CheckinResult
 from tgsis.db.connect import connect
 from tgsis.errors import (
     InvalidInputError,
@@ -34,7 +36,7 @@ def cmd_checkout(args: argparse.Namespace) -> int:
     from tgsis import formats
     from tgsis.db.checkin import checkout
 
-    with connection(args) as conn, cliout.busy(f"downloading feature {args.id}"):
+    with connection(args) as conn, busy(f"downloading feature {args.id}"):
         co = checkout(conn, args.id, args.feature_class)
     formats.write(co.mesh, args.file, format=args.format)
     written = formats.read_one(args.file, format=args.format)
@@ -71,7 +73,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"{args.file} holds a {type(edited).__name__}: --png draws surfaces")
     with (
         connect(args.dsn) as conn,
-        cliout.busy("checking in"),
+        busy("checking in"),
     ):  # the check-out's version, whatever version commands work in now
         require_this_build(conn)
         result = checkin(
@@ -89,8 +91,6 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     save = result.save
     if result.checkout is not None and not result.conflict:  # before anything is printed (a reader may go away)
         result.checkout.save(side)
-    counts = save.diff.counts()
-    moved = save.vertices_moved
     child = shlex.quote(save.version)  # the commands are pasted into a shell: a free-text name stays one argument
     commands = (
         [
@@ -116,36 +116,27 @@ def cmd_checkin(args: argparse.Namespace) -> int:
             colour_label="moved from the check-out (m)",
             title=f"feature {save.feature_id} checked in to {save.version}",
         )
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "feature_id": save.feature_id,
-                "version": save.version,
-                "conflict": result.conflict,
-                "vertices": {
-                    "kept": counts["vertices_kept"],
-                    "moved": moved,
-                    "removed": counts["vertices_removed"] - moved,
-                    "added": counts["vertices_added"] - moved,
-                },
-                "cells": {
-                    "kept": counts["cells_kept"] + save.cells_on_moved,
-                    "removed": save.cells_removed,
-                    "added": save.cells_added,
-                    "on_moved_vertices": save.cells_on_moved,
-                },
-                "rows": {
-                    "written": save.rows_written,
-                    "deleted": save.rows_deleted,
-                    "inserted": save.rows_inserted,
-                    "updated": save.rows_updated,
-                },
-                "record": str(side) if result.checkout is not None and not result.conflict else None,
-                "png": args.png,
-                "commands": commands,
-            }
-        )
-        return 0
+    record = side if result.checkout is not None and not result.conflict else None
+    checked = CheckedIn(result, type(edited).cell_name, record, args.png, commands)
+    return render(args, checked, checkin_text, checkin_json)
+
+
+@dataclass(frozen=True)
+class CheckedIn:
+    """What a check-in did; ``record``: the check-out record kept for the next check-in (None: none), ``commands``:
+    what settles the conflict when the edit went into a child version."""
+
+    result: CheckinResult
+    cell_name: str
+    record: Path | None
+    png: str | None
+    commands: list[str]
+
+
+def checkin_text(args: argparse.Namespace, checked: CheckedIn) -> None:
+    result, save = checked.result, checked.result.save
+    counts = save.diff.counts()
+    moved = save.vertices_moved
     out(
         f"checked in feature {save.feature_id} into version {V.show_name(save.version)}"
         + (" (a new child version: the feature had changed since check-out)" if result.conflict else "")
@@ -153,7 +144,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
     out(
         f"  vertices: {counts['vertices_kept']} kept, {moved} moved, "
         f"{counts['vertices_removed'] - moved} removed, {counts['vertices_added'] - moved} "
-        f"added; {type(edited).cell_name}s: {counts['cells_kept'] + save.cells_on_moved} kept"
+        f"added; {checked.cell_name}s: {counts['cells_kept'] + save.cells_on_moved} kept"
         + (f" ({save.cells_on_moved} of them on moved vertices)" if save.cells_on_moved else "")
         + f", {save.cells_removed} removed, {save.cells_added} added"
     )  # by content, as they are stored
@@ -161,11 +152,42 @@ def cmd_checkin(args: argparse.Namespace) -> int:
         f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
         f"{save.rows_updated} updated)"
     )
-    if args.png:
-        out(f"  drew the edit to {args.png}")
-    if commands:
-        out(f"  both edits meet as a conflict of {V.show_name(save.version)}: " + "; ".join(commands))
-    return 0
+    if checked.png:
+        out(f"  drew the edit to {checked.png}")
+    if checked.commands:
+        out(f"  both edits meet as a conflict of {V.show_name(save.version)}: " + "; ".join(checked.commands))
+
+
+def checkin_json(checked: CheckedIn) -> dict[str, Any]:
+    result, save = checked.result, checked.result.save
+    counts = save.diff.counts()
+    moved = save.vertices_moved
+    return {
+        "feature_id": save.feature_id,
+        "version": save.version,
+        "conflict": result.conflict,
+        "vertices": {
+            "kept": counts["vertices_kept"],
+            "moved": moved,
+            "removed": counts["vertices_removed"] - moved,
+            "added": counts["vertices_added"] - moved,
+        },
+        "cells": {
+            "kept": counts["cells_kept"] + save.cells_on_moved,
+            "removed": save.cells_removed,
+            "added": save.cells_added,
+            "on_moved_vertices": save.cells_on_moved,
+        },
+        "rows": {
+            "written": save.rows_written,
+            "deleted": save.rows_deleted,
+            "inserted": save.rows_inserted,
+            "updated": save.rows_updated,
+        },
+        "record": str(checked.record) if checked.record is not None else None,
+        "png": checked.png,
+        "commands": checked.commands,
+    }
 
 
 def add_checkout_parser(commands: Any) -> None:

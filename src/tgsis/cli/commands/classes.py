@@ -6,14 +6,14 @@ import argparse
 import re
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import psycopg
 
-from tgsis import cliout
 from tgsis.cli._arguments import GEOTYPES, INT4, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import out, print_table, render
 from tgsis.cli._render import time_model_suffix
 from tgsis.datamodels import data_models
 from tgsis.db import versions as V
@@ -105,32 +105,10 @@ def cmd_class_create(args: argparse.Namespace) -> int:
 def cmd_class_list(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         classes = list_feature_classes(conn)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "classes": [
-                    {
-                        "name": fc.name,
-                        "geotype": fc.geotype.value,
-                        "srs": fc.srs,
-                        "schema": fc.schema,
-                        "alignment": fc.alignment,
-                        "time_model": fc.time_model,
-                        "time_unit": fc.time_unit,
-                        "description": fc.description,
-                        "versioned": fc.versioned,
-                        "feature_properties": [{"name": p.name, "type": p.type} for p in fc.feature_properties],
-                        "properties": [
-                            {"name": p.name, "type": p.type, "size": p.size, "alignment": p.alignment or fc.alignment}
-                            for p in fc.cell_properties
-                        ],
-                        "instant_properties": [{"name": p.name, "type": p.type} for p in fc.instant_properties],
-                    }
-                    for fc in classes
-                ]
-            }
-        )
-        return 0
+    return render(args, classes, class_list_text, class_list_json)
+
+
+def class_list_text(args: argparse.Namespace, classes: list[FeatureClass]) -> None:
     rows = []
     for fc in classes:
         fprops = ", ".join(f"{p.name} {p.type}" for p in fc.feature_properties) or "-"
@@ -162,7 +140,31 @@ def cmd_class_list(args: argparse.Namespace) -> int:
     )
     if not classes:
         print("no feature classes", file=sys.stderr)
-    return 0
+
+
+def class_list_json(classes: list[FeatureClass]) -> dict[str, Any]:
+    return {
+        "classes": [
+            {
+                "name": fc.name,
+                "geotype": fc.geotype.value,
+                "srs": fc.srs,
+                "schema": fc.schema,
+                "alignment": fc.alignment,
+                "time_model": fc.time_model,
+                "time_unit": fc.time_unit,
+                "description": fc.description,
+                "versioned": fc.versioned,
+                "feature_properties": [{"name": p.name, "type": p.type} for p in fc.feature_properties],
+                "properties": [
+                    {"name": p.name, "type": p.type, "size": p.size, "alignment": p.alignment or fc.alignment}
+                    for p in fc.cell_properties
+                ],
+                "instant_properties": [{"name": p.name, "type": p.type} for p in fc.instant_properties],
+            }
+            for fc in classes
+        ]
+    }
 
 
 def cmd_class_drop(args: argparse.Namespace) -> int:
@@ -234,6 +236,16 @@ def _shown_value(value: str, typename: str) -> str:
     return value if numeric else "'" + value.replace("'", "''") + "'"
 
 
+@dataclass(frozen=True)
+class ClassAlteration:
+    """A class after ``tgsis class alter``, its changes (one dict each, as ``--json`` shows them) and, when other
+    versions exist, how the stored rows were counted (``in_versions``: words for people, else empty)."""
+
+    fc: FeatureClass
+    changes: list[dict[str, Any]]
+    in_versions: str
+
+
 def cmd_class_alter(args: argparse.Namespace) -> int:
     fills = _value_pairs(args.fill_property, "--fill-property")
     drops = [_property_ref(name) for name in args.drop_property or []]
@@ -289,9 +301,11 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             if other_versions_exist(conn)
             else ""
         )
-    if wants_json(args):
-        cliout.emit_json({"class": fc.name, "changes": changes, **_properties_json(fc)})
-        return 0
+    return render(args, ClassAlteration(fc, changes, in_versions), alteration_text, alteration_json)
+
+
+def alteration_text(args: argparse.Namespace, result: ClassAlteration) -> None:
+    fc, changes, in_versions = result.fc, result.changes, result.in_versions
     members = fc.geotype is Geotype.GEOMETRYCOLLECTION
     for change in changes:
         what = f"{change['kind']} property " if change.get("kind") else "property "
@@ -336,7 +350,10 @@ def cmd_class_alter(args: argparse.Namespace) -> int:
             else ""
         )
     )
-    return 0
+
+
+def alteration_json(result: ClassAlteration) -> dict[str, Any]:
+    return {"class": result.fc.name, "changes": result.changes, **_properties_json(result.fc)}
 
 
 def add_class_parser(commands: Any) -> None:

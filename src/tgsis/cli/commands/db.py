@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import add_command
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import out, render
 from tgsis.db.connect import connect, resolve_target
 from tgsis.db.inspect import server_version
-from tgsis.db.install import install, installation_status, uninstall
+from tgsis.db.install import InstallationStatus, install, installation_status, uninstall
 from tgsis.errors import (
     Error,
 )
@@ -57,27 +57,24 @@ def cmd_db_status(args: argparse.Namespace) -> int:
         status = installation_status(conn)
         server = server_version(conn)
         db = conn.info.dbname
-    current = status.installed
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "database": db,
-                "source": target.source,
-                "server": server,
-                "tgsis": current.version if current else None,
-                "method": current.method if current else None,
-                "fingerprint": current.fingerprint if current else None,
-                "client": status.client_version,
-                "client_fingerprint": status.client_fingerprint,
-                "missing_storage": list(status.missing_storage),
-                "state": status.state,
-                "problem": status.problem,
-                "fix": status.fix,
-            }
-        )
-        return 0 if status.ok else 1
-    out(f"database: {db} (from {target.source})")
-    out(f"server:   {server or '?'}")
+    render(args, DatabaseStatus(db, target.source, server, status), status_text, status_json)
+    return 0 if status.ok else 1
+
+
+@dataclass(frozen=True)
+class DatabaseStatus:
+    """The database a command reaches (and why that one), its server, and the state of tgsis in it."""
+
+    database: str
+    source: str
+    server: str | None
+    status: InstallationStatus
+
+
+def status_text(args: argparse.Namespace, result: DatabaseStatus) -> None:
+    status, current = result.status, result.status.installed
+    out(f"database: {result.database} (from {result.source})")
+    out(f"server:   {result.server or '?'}")
     fingerprint = (
         "unknown: this role may not read tgsis.installation"
         if current and current.fingerprint is None
@@ -93,7 +90,24 @@ def cmd_db_status(args: argparse.Namespace) -> int:
     else:
         out(f"state:    {status.state}: {status.problem}")
         out(f"{'upgrade' if status.state == 'upgrade' else 'fix'}: {status.fix}")
-    return 0 if status.ok else 1
+
+
+def status_json(result: DatabaseStatus) -> dict[str, Any]:
+    status, current = result.status, result.status.installed
+    return {
+        "database": result.database,
+        "source": result.source,
+        "server": result.server,
+        "tgsis": current.version if current else None,
+        "method": current.method if current else None,
+        "fingerprint": current.fingerprint if current else None,
+        "client": status.client_version,
+        "client_fingerprint": status.client_fingerprint,
+        "missing_storage": list(status.missing_storage),
+        "state": status.state,
+        "problem": status.problem,
+        "fix": status.fix,
+    }
 
 
 def add_db_parser(commands: Any) -> None:

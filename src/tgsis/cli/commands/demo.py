@@ -3,29 +3,35 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import add_command
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import out, print_table, render, wants_json
 from tgsis.errors import (
     InvalidInputError,
 )
+
+if TYPE_CHECKING:
+    from tgsis.scenarios import Scenario
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
     from tgsis.scenarios import SCENARIOS, run_scenario
 
     if args.list:
-        if wants_json(args):
-            cliout.emit_json({"scenarios": [{"name": s.name, "summary": s.summary} for s in SCENARIOS.values()]})
-        else:
-            print_table(args, ("scenario", "shows"), [(s.name, s.summary) for s in SCENARIOS.values()])
-        return 0
+        return render(args, list(SCENARIOS.values()), scenarios_text, scenarios_json)
     if wants_json(args) or args.no_header:
         raise InvalidInputError("--json and --no-header go with --list", hint="tgsis demo --list --json")
     run_scenario(args.name, args.dsn, out=out, folder=args.dir, size=args.size)
     return 0
+
+
+def scenarios_text(args: argparse.Namespace, scenarios: list[Scenario]) -> None:
+    print_table(args, ("scenario", "shows"), [(s.name, s.summary) for s in scenarios])
+
+
+def scenarios_json(scenarios: list[Scenario]) -> dict[str, Any]:
+    return {"scenarios": [{"name": s.name, "summary": s.summary} for s in scenarios]}
 
 
 def add_demo_parser(commands: Any) -> None:

@@ -5,15 +5,16 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import out, print_table, render, show_time
 from tgsis.db.features import (
     class_of_feature,
     fetch_feature,
@@ -49,6 +50,20 @@ def _gmap_summary(g: Any) -> str:
     return f"a {g.dimension}-G-map in R^{g.embedding_dimension} with {g.n_darts} darts ({counts})"
 
 
+@dataclass(frozen=True)
+class StoredGMap:
+    """A G-map stored as feature ``id`` of class ``feature_class``."""
+
+    id: int
+    feature_class: str
+    gmap: Any
+
+
+def _gmap_cells_json(g: Any) -> dict[str, Any]:
+    """A G-map's dimension, darts and cells per dimension, as ``--json`` gives them."""
+    return {"dimension": g.dimension, "darts": g.n_darts, "cells": [g.n_cells(i) for i in range(g.dimension + 1)]}
+
+
 def cmd_gmap_import(args: argparse.Namespace) -> int:
     from tgsis.db.gmaps import insert_gmap
 
@@ -63,19 +78,23 @@ def cmd_gmap_import(args: argparse.Namespace) -> int:
             drop_extra_properties=args.drop_extra_properties,
             axes=args.axes.split(",") if args.axes else None,
         )
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "id": geoid,
-                "class": fc.name,
-                "dimension": g.dimension,
-                "darts": g.n_darts,
-                "cells": [g.n_cells(i) for i in range(g.dimension + 1)],
-            }
-        )
-    else:
-        out(f"stored feature {geoid} of class {fc.name}: {_gmap_summary(g)}")
-    return 0
+    return render(args, StoredGMap(geoid, fc.name, g), stored_gmap_text, stored_gmap_json)
+
+
+def stored_gmap_text(args: argparse.Namespace, result: StoredGMap) -> None:
+    out(f"stored feature {result.id} of class {result.feature_class}: {_gmap_summary(result.gmap)}")
+
+
+def stored_gmap_json(result: StoredGMap) -> dict[str, Any]:
+    return {"id": result.id, "class": result.feature_class, **_gmap_cells_json(result.gmap)}
+
+
+@dataclass(frozen=True)
+class GMapCheck:
+    """What ``tgsis gmap check`` found wrong with feature ``id`` (nothing: a valid G-map)."""
+
+    id: int
+    problems: list[Any]
 
 
 def cmd_gmap_check(args: argparse.Namespace) -> int:
@@ -83,23 +102,38 @@ def cmd_gmap_check(args: argparse.Namespace) -> int:
 
     with connection(args) as conn:
         problems = gmap_check(conn, args.id)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "id": args.id,
-                "valid": not problems,
-                "problems": [{"problem": p.problem, "count": p.count, "darts": list(p.darts)} for p in problems],
-            }
-        )
-        return 0 if not problems else 1
+    render(args, GMapCheck(args.id, list(problems)), gmap_check_text, gmap_check_json)
+    return 0 if not problems else 1
+
+
+def gmap_check_text(args: argparse.Namespace, result: GMapCheck) -> None:
+    problems = result.problems
     print_table(
         args, ("problem", "count", "darts"), [(p.problem, p.count, ",".join(map(str, p.darts))) for p in problems]
     )
     print(
-        f"feature {args.id}: " + ("a valid G-map" if not problems else f"{len(problems)} kind(s) of violation"),
+        f"feature {result.id}: " + ("a valid G-map" if not problems else f"{len(problems)} kind(s) of violation"),
         file=sys.stderr,
     )
-    return 0 if not problems else 1
+
+
+def gmap_check_json(result: GMapCheck) -> dict[str, Any]:
+    return {
+        "id": result.id,
+        "valid": not result.problems,
+        "problems": [{"problem": p.problem, "count": p.count, "darts": list(p.darts)} for p in result.problems],
+    }
+
+
+@dataclass(frozen=True)
+class GMapCells:
+    """The ``level``-cells of feature ``id`` (at ``t``): how many darts it has, how many darts each cell has."""
+
+    id: int
+    level: int
+    t: float | None
+    darts: int
+    sizes: npt.NDArray[np.int64]
 
 
 def cmd_gmap_cells(args: argparse.Namespace) -> int:
@@ -108,29 +142,34 @@ def cmd_gmap_cells(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         dartids, cells = gmap_cells(conn, args.id, args.level, args.at)
     sizes = np.bincount(cells) if len(cells) else np.zeros(0, dtype=np.int64)
-    when = "" if args.at is None else f" at t = {cliout.show_time(args.at)}"
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "id": args.id,
-                "level": args.level,
-                "t": args.at,
-                "cells": len(sizes),
-                "darts": len(dartids),
-                "darts_per_cell": {
-                    "min": int(sizes.min()) if len(sizes) else None,
-                    "max": int(sizes.max()) if len(sizes) else None,
-                },
-            }
-        )
-    elif not len(cells):
-        print(f"feature {args.id} does not exist{when}", file=sys.stderr)
+    return render(args, GMapCells(args.id, args.level, args.at, len(dartids), sizes), gmap_cells_text, gmap_cells_json)
+
+
+def gmap_cells_text(args: argparse.Namespace, result: GMapCells) -> None:
+    sizes = result.sizes
+    when = "" if result.t is None else f" at t = {show_time(result.t)}"
+    if not len(sizes):
+        print(f"feature {result.id} does not exist{when}", file=sys.stderr)
     else:
         out(
-            f"feature {args.id}{when}: {len(sizes)} {args.level}-cells of {len(dartids)} darts "
+            f"feature {result.id}{when}: {len(sizes)} {result.level}-cells of {result.darts} darts "
             f"({int(sizes.min())}..{int(sizes.max())} darts each)"
         )
-    return 0
+
+
+def gmap_cells_json(result: GMapCells) -> dict[str, Any]:
+    sizes = result.sizes
+    return {
+        "id": result.id,
+        "level": result.level,
+        "t": result.t,
+        "cells": len(sizes),
+        "darts": result.darts,
+        "darts_per_cell": {
+            "min": int(sizes.min()) if len(sizes) else None,
+            "max": int(sizes.max()) if len(sizes) else None,
+        },
+    }
 
 
 def cmd_gmap_at(args: argparse.Namespace) -> int:
@@ -142,7 +181,7 @@ def cmd_gmap_at(args: argparse.Namespace) -> int:
     if g is None:
         raise NotFoundError(f"feature {args.id} does not exist at t = {args.time!r}")
     write_gmap_vtu(g, args.file)
-    out(f"wrote feature {args.id} at t = {cliout.show_time(args.time)}: {_gmap_summary(g)}, to {args.file}")
+    out(f"wrote feature {args.id} at t = {show_time(args.time)}: {_gmap_summary(g)}, to {args.file}")
     return 0
 
 
@@ -152,6 +191,20 @@ def _values(text: str) -> list[float]:
     except ValueError:
         raise InvalidInputError(f"--values {text!r} must be numbers separated by commas, e.g. 0,1,2") from None
     return values
+
+
+@dataclass(frozen=True)
+class Extrusion:
+    """A G-map extruded along ``axis`` over ``intervals``: stored as feature ``id`` of ``feature_class`` and/or
+    written to ``output``, with its ``axes``."""
+
+    id: int | None
+    feature_class: str | None
+    output: str | None
+    axis: str
+    axes: list[str]
+    intervals: int
+    gmap: Any
 
 
 def cmd_extrude(args: argparse.Namespace) -> int:
@@ -194,25 +247,35 @@ def cmd_extrude(args: argparse.Namespace) -> int:
             geoid = insert_gmap(
                 conn, args.feature_class, extruded, name=args.name or name, axes=axes, drop_extra_properties=True
             )
-    summary = _gmap_summary(extruded)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "id": geoid,
-                "output": args.output,
-                "axes": axes,
-                "dimension": extruded.dimension,
-                "darts": extruded.n_darts,
-                "cells": [extruded.n_cells(i) for i in range(extruded.dimension + 1)],
-            }
-        )
-    else:
-        where = [f"feature {geoid} of class {args.feature_class}" if geoid is not None else "", args.output or ""]
-        out(
-            f"extruded along {args.axis} over {len(values) - 1} interval(s): {summary}; "
-            f"stored as {' and '.join(w for w in where if w)}"
-        )
-    return 0
+    result = Extrusion(geoid, args.feature_class, args.output, args.axis, axes, len(values) - 1, extruded)
+    return render(args, result, extrusion_text, extrusion_json)
+
+
+def extrusion_text(args: argparse.Namespace, result: Extrusion) -> None:
+    where = [
+        f"feature {result.id} of class {result.feature_class}" if result.id is not None else "",
+        result.output or "",
+    ]
+    out(
+        f"extruded along {result.axis} over {result.intervals} interval(s): {_gmap_summary(result.gmap)}; "
+        f"stored as {' and '.join(w for w in where if w)}"
+    )
+
+
+def extrusion_json(result: Extrusion) -> dict[str, Any]:
+    return {"id": result.id, "output": result.output, "axes": result.axes, **_gmap_cells_json(result.gmap)}
+
+
+@dataclass(frozen=True)
+class Section:
+    """Feature ``id`` cut at ``axis`` = ``value``: the G-map of one dimension less over ``axes``."""
+
+    id: int
+    axis: str
+    value: float
+    output: str | None
+    axes: list[str]
+    gmap: Any
 
 
 def cmd_slice(args: argparse.Namespace) -> int:
@@ -229,25 +292,26 @@ def cmd_slice(args: argparse.Namespace) -> int:
     rest = [a for a in axes if a != args.axis]
     if args.output:
         write_gmap_vtu(section, args.output, axes=rest)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "id": args.id,
-                "axis": args.axis,
-                "value": args.value,
-                "output": args.output,
-                "axes": rest,
-                "dimension": section.dimension,
-                "darts": section.n_darts,
-                "cells": [section.n_cells(i) for i in range(section.dimension + 1)],
-            }
-        )
-    else:
-        out(
-            f"feature {args.id} at {args.axis} = {args.value!r}: {_gmap_summary(section)}"
-            + (f", to {args.output}" if args.output else "")
-        )
-    return 0
+    result = Section(args.id, args.axis, args.value, args.output, rest, section)
+    return render(args, result, section_text, section_json)
+
+
+def section_text(args: argparse.Namespace, result: Section) -> None:
+    out(
+        f"feature {result.id} at {result.axis} = {result.value!r}: {_gmap_summary(result.gmap)}"
+        + (f", to {result.output}" if result.output else "")
+    )
+
+
+def section_json(result: Section) -> dict[str, Any]:
+    return {
+        "id": result.id,
+        "axis": result.axis,
+        "value": result.value,
+        "output": result.output,
+        "axes": result.axes,
+        **_gmap_cells_json(result.gmap),
+    }
 
 
 def add_gmap_parser(commands: Any) -> None:

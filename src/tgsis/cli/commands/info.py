@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import dataclass
 from typing import Any
 
 import psycopg
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, box, property_filters
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import out, print_table, render, show_time
 from tgsis.cli._render import time_model_suffix, time_unit_suffix
 from tgsis.db import versions as V
+from tgsis.db.classes import FeatureClass
 from tgsis.db.features import (
     class_of_feature,
     fetch_feature,
@@ -21,6 +22,8 @@ from tgsis.db.features import (
     list_feature_classes,
 )
 from tgsis.db.inspect import (
+    FeatureRow,
+    GeometrySummary,
     feature_property_values,
     features_versioned,
     geometry_summary,
@@ -47,6 +50,32 @@ def _sizes_in_time(conn: psycopg.Connection[Any], time_model: str, geoid: int) -
     return f"{min(vertices)} to {max(vertices)} vertices, {min(cells)} to {max(cells)} cells {each} ({k} {unit})"
 
 
+@dataclass(frozen=True)
+class Differing:
+    """A version where a feature differs: ``what`` for people (``only there``, ``not there``, ``N rows differ``)."""
+
+    version: str
+    what: str
+    rows: int
+
+
+@dataclass(frozen=True)
+class FeatureInfo:
+    """What ``tgsis info`` says of one feature; ``differing`` is None when its class is not versioned."""
+
+    id: int
+    fc: FeatureClass
+    summary: GeometrySummary
+    sizes: str | None
+    span: tuple[float, float, bool] | None
+    steps: list[tuple[float, bool]]
+    properties: dict[str, Any]
+    vertex_properties: list[str]
+    cell_properties: list[str]
+    version: str
+    differing: list[Differing] | None
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     from tgsis.db.versions import diff_versions, list_versions, working_version
 
@@ -60,8 +89,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         sizes = _sizes_in_time(conn, fc.time_model, args.id)
         here = working_version(conn)
         versioned = fc.versioned and features_versioned(conn)
-        differs = []
-        differing: list[dict[str, Any]] = []
+        differing: list[Differing] = []
         if versioned:
             for version in list_versions(conn):
                 if version.name != here:
@@ -79,56 +107,38 @@ def cmd_info(args: argparse.Namespace) -> int:
                             if added == 0 and sum(d.changed for d in changed) == 0 and removed
                             else f"{sum(d.added + d.removed + d.changed for d in changed)} rows differ"
                         )
-                        differs.append(f"{V.show_name(version.name)} ({what})")
-                        differing.append(
-                            {
-                                "version": version.name,
-                                "what": what if what in ("only there", "not there") else "differs",
-                                "rows": sum(d.added + d.removed + d.changed for d in changed),
-                            }
-                        )
+                        rows = sum(d.added + d.removed + d.changed for d in changed)
+                        differing.append(Differing(version.name, what, rows))
         conn.rollback()
-    name, geotype, nvrtx, ncell, members = (
-        summary.name,
-        summary.geotype,
-        summary.n_vertices,
-        summary.n_cells,
-        summary.members,
-    )
-    box = summary.box
     found = feature.mesh if feature is not None else None
     mesh = found if isinstance(found, Mesh) else None
-    plain = mesh is not None
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "id": args.id,
-                "name": name,
-                "class": fc.name,
-                "geotype": geotype,
-                "time_model": fc.time_model,
-                "time_unit": fc.time_unit,
-                "version": here,
-                "vertices": nvrtx,
-                "cells": ncell,
-                "members": members,
-                "box": None if box[0] is None else {axis: [box[2 * i], box[2 * i + 1]] for i, axis in enumerate("xyz")},
-                "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
-                "instants": [{"t": t, "topology": starts} for t, starts in steps],
-                "properties": properties,
-                "instant_properties": [p.name for p in fc.instant_properties],
-                "vertex_properties": list(mesh.vertex_properties) if plain and mesh is not None else [],
-                "cell_properties": list(mesh.cell_properties) if plain and mesh is not None else [],
-                "versioned": versioned,
-                "differs_in": differing if versioned else None,
-            }
-        )
-        return 0
-    out(
-        f"feature {args.id}: {name or '(no name)'}, class {fc.name} ({geotype}{time_model_suffix(fc)}), "
-        f"in version {V.show_name(here)}"
+    info = FeatureInfo(
+        args.id,
+        fc,
+        summary,
+        sizes,
+        span,
+        list(steps),
+        properties,
+        list(mesh.vertex_properties) if mesh is not None else [],
+        list(mesh.cell_properties) if mesh is not None else [],
+        here,
+        differing if versioned else None,
     )
-    out(f"  {sizes or f'{nvrtx} vertices, {ncell} cells'}" + (f", {members} members" if members is not None else ""))
+    return render(args, info, info_text, info_json)
+
+
+def info_text(args: argparse.Namespace, info: FeatureInfo) -> None:
+    fc, summary, span, steps = info.fc, info.summary, info.span, info.steps
+    box = summary.box
+    out(
+        f"feature {info.id}: {summary.name or '(no name)'}, class {fc.name} "
+        f"({summary.geotype}{time_model_suffix(fc)}), in version {V.show_name(info.version)}"
+    )
+    out(
+        f"  {info.sizes or f'{summary.n_vertices} vertices, {summary.n_cells} cells'}"
+        + (f", {summary.members} members" if summary.members is not None else "")
+    )
     if box[0] is not None:
         out("  box: " + ", ".join(f"{axis} [{box[2 * i]!r}, {box[2 * i + 1]!r}]" for i, axis in enumerate("xyz")))
     if span is None:
@@ -136,31 +146,74 @@ def cmd_info(args: argparse.Namespace) -> int:
     else:
         topology = [t for t, starts in steps if starts]
         out(
-            f"  exists from t = {cliout.show_time(span[0])} to {cliout.show_time(span[1])}{time_unit_suffix(fc)}"
+            f"  exists from t = {show_time(span[0])} to {show_time(span[1])}{time_unit_suffix(fc)}"
             + (" and after (alive)" if span[2] else "")
-            + f"; {len(steps)} instants, topology (re)defined at {', '.join(cliout.show_time(t) for t in topology)}"
+            + f"; {len(steps)} instants, topology (re)defined at {', '.join(show_time(t) for t in topology)}"
         )
-    if properties:
-        out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in properties.items()))
+    if info.properties:
+        out("  properties: " + ", ".join(f"{k} = {v!r}" for k, v in info.properties.items()))
     if fc.instant_properties:
         out("  per-instant properties: " + ", ".join(p.name for p in fc.instant_properties))
-    if plain and mesh is not None:
-        if mesh.vertex_properties:
-            out("  vertex properties: " + ", ".join(mesh.vertex_properties))
-        if mesh.cell_properties:
-            out("  cell properties: " + ", ".join(mesh.cell_properties))
-    if versioned:
+    if info.vertex_properties:
+        out("  vertex properties: " + ", ".join(info.vertex_properties))
+    if info.cell_properties:
+        out("  cell properties: " + ", ".join(info.cell_properties))
+    if info.differing is not None:
+        differs = [f"{V.show_name(d.version)} ({d.what})" for d in info.differing]
         out(
-            "  versions where it differs from " + V.show_name(here) + ": " + (", ".join(differs) if differs else "none")
+            "  versions where it differs from "
+            + V.show_name(info.version)
+            + ": "
+            + (", ".join(differs) if differs else "none")
         )
     elif not fc.versioned:
         out(f"  class {fc.name} is not versioned: every version sees this state")
-    return 0
+
+
+def info_json(info: FeatureInfo) -> dict[str, Any]:
+    fc, summary, span, box = info.fc, info.summary, info.span, info.summary.box
+    return {
+        "id": info.id,
+        "name": summary.name,
+        "class": fc.name,
+        "geotype": summary.geotype,
+        "time_model": fc.time_model,
+        "time_unit": fc.time_unit,
+        "version": info.version,
+        "vertices": summary.n_vertices,
+        "cells": summary.n_cells,
+        "members": summary.members,
+        "box": None if box[0] is None else {axis: [box[2 * i], box[2 * i + 1]] for i, axis in enumerate("xyz")},
+        "lifespan": None if span is None else {"first": span[0], "last": span[1], "alive": span[2]},
+        "instants": [{"t": t, "topology": starts} for t, starts in info.steps],
+        "properties": info.properties,
+        "instant_properties": [p.name for p in fc.instant_properties],
+        "vertex_properties": info.vertex_properties,
+        "cell_properties": info.cell_properties,
+        "versioned": info.differing is not None,
+        "differs_in": None
+        if info.differing is None
+        else [
+            {
+                "version": d.version,
+                "what": d.what if d.what in ("only there", "not there") else "differs",
+                "rows": d.rows,
+            }
+            for d in info.differing
+        ],
+    }
 
 
 def _shown_properties(properties: dict[str, Any]) -> str:
     """``release=6.1 slip=2.0``: a feature's properties in one table cell (a NULL as nothing after ``=``)."""
     return " ".join(f"{k}={'' if v is None else v}" for k, v in properties.items())
+
+
+@dataclass(frozen=True)
+class FeatureList:
+    """The features ``tgsis ls`` found."""
+
+    features: list[FeatureRow]
 
 
 def cmd_ls(args: argparse.Namespace) -> int:
@@ -175,31 +228,17 @@ def cmd_ls(args: argparse.Namespace) -> int:
         rows = []
         for fc in classes:
             rows += list_features(conn, fc, name=args.name, box=args.box, properties=wanted)
+    return render(args, FeatureList(rows), ls_text, ls_json)
 
-    # a G-map's geometry row counts its darts where other geometries count cells (tgsis gmap cells counts its cells)
-    def darts(geotype: str, ncell: int | None) -> tuple[int | None, int | None]:
-        return (None, ncell) if geotype == "GMAP" else (ncell, None)
 
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "features": [
-                    {
-                        "id": r.id,
-                        "class": r.feature_class,
-                        "name": r.name,
-                        "geotype": r.geotype,
-                        "vertices": r.vertices,
-                        "cells": darts(r.geotype, r.cells)[0],
-                        "members": r.members,
-                        "darts": darts(r.geotype, r.cells)[1],
-                        "properties": r.properties,
-                    }
-                    for r in rows
-                ]
-            }
-        )
-        return 0
+def _darts(geotype: str, ncell: int | None) -> tuple[int | None, int | None]:
+    """(cells, darts): a G-map's geometry row counts its darts where other geometries count cells
+    (tgsis gmap cells counts its cells)."""
+    return (None, ncell) if geotype == "GMAP" else (ncell, None)
+
+
+def ls_text(args: argparse.Namespace, result: FeatureList) -> None:
+    rows = result.features
     print_table(
         args,
         ("id", "class", "name", "geotype", "vertices", "cells", "members", "darts", "properties"),
@@ -210,9 +249,9 @@ def cmd_ls(args: argparse.Namespace) -> int:
                 r.name or "",
                 r.geotype,
                 r.vertices,
-                *("" if n is None else n for n in darts(r.geotype, r.cells)[:1]),
+                *("" if n is None else n for n in _darts(r.geotype, r.cells)[:1]),
                 "" if r.members is None else r.members,
-                *("" if n is None else n for n in darts(r.geotype, r.cells)[1:]),
+                *("" if n is None else n for n in _darts(r.geotype, r.cells)[1:]),
                 _shown_properties(r.properties),
             )
             for r in rows
@@ -220,7 +259,25 @@ def cmd_ls(args: argparse.Namespace) -> int:
     )
     if not rows:
         print("no features", file=sys.stderr)
-    return 0
+
+
+def ls_json(result: FeatureList) -> dict[str, Any]:
+    return {
+        "features": [
+            {
+                "id": r.id,
+                "class": r.feature_class,
+                "name": r.name,
+                "geotype": r.geotype,
+                "vertices": r.vertices,
+                "cells": _darts(r.geotype, r.cells)[0],
+                "members": r.members,
+                "darts": _darts(r.geotype, r.cells)[1],
+                "properties": r.properties,
+            }
+            for r in result.features
+        ]
+    }
 
 
 def add_info_parser(commands: Any) -> None:

@@ -5,16 +5,17 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import tgsis
-from tgsis import cliout
 from tgsis.cli._arguments import INT4, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import out, render
+from tgsis.cli._progress import busy, progress
 from tgsis.cli._render import time_unit_suffix
 from tgsis.db.features import (
     get_feature_class,
@@ -49,7 +50,7 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
     source, target = _read_surface(args.source, "source"), _read_surface(args.target, "target")
     setup = InterpolationSetup.load(args.setup)
     name = args.name or source.name or Path(args.source).stem
-    with cliout.progress(f"interpolating {name}", None, "step") as moved:
+    with progress(f"interpolating {name}", None, "step") as moved:
         result = interpolate(
             source, target, setup, args.t0, args.t1, name=name, alive=args.alive, progress=moved, split=args.split
         )
@@ -64,7 +65,7 @@ def cmd_interpolate(args: argparse.Namespace) -> int:
         paths = write_previews(result.evolving, times, args.preview, stem=Path(args.source).stem)
         out(f"  {len(paths)} previews in {args.preview}")
     if args.feature_class:
-        with connection(args) as conn, cliout.busy(f"uploading {name}"):
+        with connection(args) as conn, busy(f"uploading {name}"):
             fid = insert_feature(conn, args.feature_class, result.evolving)
             unit = time_unit_suffix(get_feature_class(conn, args.feature_class))
         # as the user gave the times (the source may be the later shape), then the span in time order
@@ -85,19 +86,31 @@ def cmd_corners(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--min-angle must be from 0 to 180 degrees, got {args.min_angle}")
     surface = _read_surface(args.file, "surface")
     corners = propose_corners(surface, min_angle=args.min_angle, count=args.count)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "file": args.file,
-                "corners": [{"vertex": v, "xyz": surface.vertices[v].tolist()} for v in corners.tolist()],
-            }
-        )
-        return 0
-    out(json.dumps(corners.tolist()))
-    for vertex in corners.tolist():
-        x, y, z = surface.vertices[vertex].tolist()  # every digit: repr of the float (6 digits are ~10 m in UTM)
+    return render(args, Corners(args.file, surface, corners.tolist()), corners_text, corners_json)
+
+
+@dataclass(frozen=True)
+class Corners:
+    """The vertices of ``surface`` (read from ``file``) proposed as its corners."""
+
+    file: str
+    surface: tgsis.Surface
+    vertices: list[int]
+
+
+def corners_text(args: argparse.Namespace, result: Corners) -> None:
+    """The indices on standard output (as JSON: a setup takes them), every coordinate on standard error."""
+    out(json.dumps(result.vertices))
+    for vertex in result.vertices:
+        x, y, z = result.surface.vertices[vertex].tolist()  # every digit: repr of the float (6 digits are ~10 m in UTM)
         print(f"vertex {vertex}: {x!r} {y!r} {z!r}", file=sys.stderr)
-    return 0
+
+
+def corners_json(result: Corners) -> dict[str, Any]:
+    return {
+        "file": result.file,
+        "corners": [{"vertex": v, "xyz": result.surface.vertices[v].tolist()} for v in result.vertices],
+    }
 
 
 def _vertex_path(text: str) -> list[int]:

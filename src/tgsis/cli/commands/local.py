@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import dataclass
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import add_command
-from tgsis.cli._output import out, wants_json
+from tgsis.cli._output import out, render
 from tgsis.db.connect import connect
 from tgsis.db.install import install
 from tgsis.db.local import LocalServer, find_binaries
@@ -41,26 +41,52 @@ def cmd_local_stop(args: argparse.Namespace) -> int:
 def cmd_local_status(args: argparse.Namespace) -> int:
     server = _local_server()
     running = server.is_running()
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "cluster": str(server.root),
-                "binaries": server.binaries.describe(),
-                "status": "running" if running else "stopped" if server.is_initialized() else "not created",
-                "pid": server.pid() if running else None,
-                "started_by": (server.started_by() or "outside tgsis") if running else None,
-                "dsn": server.dsn("tgsis"),
-            }
-        )
-        return 0 if running else 3
-    out(f"cluster:  {server.root}")
-    out(f"binaries: {server.binaries.describe()}")
-    if running:
-        out(f"status:   running (pid {server.pid()}, started {server.started_by() or 'outside tgsis'})")
-        out(f"dsn:      {server.dsn('tgsis')}")
-    else:
-        out("status:   " + ("stopped" if server.is_initialized() else "not created yet"))
+    state = LocalStatus(
+        cluster=str(server.root),
+        binaries=server.binaries.describe(),
+        running=running,
+        initialized=server.is_initialized(),
+        pid=server.pid() if running else None,
+        started_by=server.started_by() if running else None,
+        dsn=server.dsn("tgsis"),
+    )
+    render(args, state, local_status_text, local_status_json)
     return 0 if running else 3
+
+
+@dataclass(frozen=True)
+class LocalStatus:
+    """The local server: its cluster folder, binaries, whether it runs (pid, who started it: None is outside
+    tgsis) and the DSN of its tgsis database."""
+
+    cluster: str
+    binaries: str
+    running: bool
+    initialized: bool
+    pid: int | None
+    started_by: str | None
+    dsn: str
+
+
+def local_status_text(args: argparse.Namespace, state: LocalStatus) -> None:
+    out(f"cluster:  {state.cluster}")
+    out(f"binaries: {state.binaries}")
+    if state.running:
+        out(f"status:   running (pid {state.pid}, started {state.started_by or 'outside tgsis'})")
+        out(f"dsn:      {state.dsn}")
+    else:
+        out("status:   " + ("stopped" if state.initialized else "not created yet"))
+
+
+def local_status_json(state: LocalStatus) -> dict[str, Any]:
+    return {
+        "cluster": state.cluster,
+        "binaries": state.binaries,
+        "status": "running" if state.running else "stopped" if state.initialized else "not created",
+        "pid": state.pid,
+        "started_by": (state.started_by or "outside tgsis") if state.running else None,
+        "dsn": state.dsn,
+    }
 
 
 def cmd_local_dsn(args: argparse.Namespace) -> int:

@@ -6,13 +6,14 @@ import argparse
 import math
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, INT4, add_command
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import out, print_table, render, show_time
+from tgsis.cli._progress import progress
 from tgsis.cli._render import picture_of, time_unit_suffix
 from tgsis.db.features import (
     FeatureClass,
@@ -24,7 +25,21 @@ from tgsis.errors import (
     NotFoundError,
 )
 from tgsis.mesh import Surface
-from tgsis.temporal import even_times
+from tgsis.temporal import WrittenSeries, even_times
+
+
+@dataclass(frozen=True)
+class PropertyQuery:
+    """The features of a class whose per-instant ``property`` is ``op`` ``value``, with the periods when it is
+    (``first``: show the first moment only)."""
+
+    feature_class: str
+    property: str
+    op: str
+    value: float
+    convention: str
+    first: bool
+    found: dict[int, list[Any]]
 
 
 def cmd_query(args: argparse.Namespace) -> int:
@@ -36,34 +51,22 @@ def cmd_query(args: argparse.Namespace) -> int:
         found = class_property_periods(
             conn, args.feature_class, args.property, args.op, args.value, convention=args.convention
         )
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "class": args.feature_class,
-                "property": args.property,
-                "op": args.op,
-                "value": args.value,
-                "convention": args.convention,
-                "features": [
-                    {
-                        "id": fid,
-                        "first": {"t": periods[0].start, "right_after": not periods[0].start_closed},
-                        "periods": [
-                            {"start": p.start, "end": p.end, "start_closed": p.start_closed, "end_closed": p.end_closed}
-                            for p in periods
-                        ],
-                    }
-                    for fid, periods in found.items()
-                ],
-            }
-        )
-        return 0
-    if args.first:
+    return render(
+        args,
+        PropertyQuery(args.feature_class, args.property, args.op, args.value, args.convention, args.first, found),
+        query_text,
+        query_json,
+    )
+
+
+def query_text(args: argparse.Namespace, result: PropertyQuery) -> None:
+    found = result.found
+    if result.first:
         print_table(
             args,
             ("id", "first", "when"),
             [
-                (fid, cliout.show_time(periods[0].start), "" if periods[0].start_closed else "(right after it)")
+                (fid, show_time(periods[0].start), "" if periods[0].start_closed else "(right after it)")
                 for fid, periods in found.items()
             ],
         )
@@ -73,10 +76,31 @@ def cmd_query(args: argparse.Namespace) -> int:
         )
     if not found:
         print(
-            f"no feature of {args.feature_class} has {args.property} {args.op} {args.value!r} at any time",
+            f"no feature of {result.feature_class} has {result.property} {result.op} {result.value!r} at any time",
             file=sys.stderr,
         )
-    return 0
+
+
+def query_json(result: PropertyQuery) -> dict[str, Any]:
+    found = result.found
+    return {
+        "class": result.feature_class,
+        "property": result.property,
+        "op": result.op,
+        "value": result.value,
+        "convention": result.convention,
+        "features": [
+            {
+                "id": fid,
+                "first": {"t": periods[0].start, "right_after": not periods[0].start_closed},
+                "periods": [
+                    {"start": p.start, "end": p.end, "start_closed": p.start_closed, "end_closed": p.end_closed}
+                    for p in periods
+                ],
+            }
+            for fid, periods in found.items()
+        ],
+    }
 
 
 # --------------------------------------------------------------------------- time
@@ -162,6 +186,16 @@ def _series_name(name: str) -> str:
     return stem
 
 
+@dataclass(frozen=True)
+class WrittenFrames:
+    """Feature ``id``'s series as written (and drawn to ``gif``, when given)."""
+
+    id: int
+    fc: FeatureClass
+    written: WrittenSeries
+    gif: str | None
+
+
 def cmd_series(args: argparse.Namespace) -> int:
     sampling = (args.start, args.end, args.steps)
     if any(v is not None for v in sampling):
@@ -184,7 +218,7 @@ def cmd_series(args: argparse.Namespace) -> int:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InvalidInputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from exc
-        with cliout.progress("writing frames", args.steps, "frame") as moved:
+        with progress("writing frames", args.steps, "frame") as moved:
             written = export_series(
                 conn,
                 args.id,
@@ -209,34 +243,18 @@ def cmd_series(args: argparse.Namespace) -> int:
             reference=[first] if same and first is not None else None,
             colour_label=f"moved since t = {shown[0][0]!r} (m)" if shown else "",
         )
+    return render(args, WrittenFrames(args.id, fc, written, args.gif), series_text, series_json)
+
+
+def series_text(args: argparse.Namespace, result: WrittenFrames) -> None:
+    written, fc = result.written, result.fc
     times = [t for t, _ in written.frames]
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "pvd": str(written.pvd),
-                "feature_id": args.id,
-                "class": fc.name,
-                "time_unit": fc.time_unit,
-                "frames": [
-                    {
-                        "t": t,
-                        "file": str(file),
-                        "vertices": surface.n_vertices if surface else None,
-                        "triangles": surface.n_cells if surface else None,
-                    }
-                    for (t, surface), file in zip(written.frames, written.files)
-                ],
-                "missing": len(written.missing),
-                "gif": args.gif,
-            }
-        )
-        return 0
     print_table(
         args,
         ("t", "file", "vertices", "triangles"),
         [
             (
-                cliout.show_time(t),
+                show_time(t),
                 file,
                 *((surface.n_vertices, surface.n_cells) if surface else ("no object (empty grid)", "")),
             )
@@ -245,12 +263,32 @@ def cmd_series(args: argparse.Namespace) -> int:
     )
     missing = f", {len(written.missing)} without the object" if written.missing else ""
     out(
-        f"wrote {written.pvd}: feature {args.id} ({fc.name}) at {len(times)} times from "
-        f"{cliout.show_time(times[0])} to {cliout.show_time(times[-1])}{time_unit_suffix(fc)}{missing}"
+        f"wrote {written.pvd}: feature {result.id} ({fc.name}) at {len(times)} times from "
+        f"{show_time(times[0])} to {show_time(times[-1])}{time_unit_suffix(fc)}{missing}"
     )
-    if args.gif:
-        out(f"drew {len(times)} frames to {args.gif}")
-    return 0
+    if result.gif:
+        out(f"drew {len(times)} frames to {result.gif}")
+
+
+def series_json(result: WrittenFrames) -> dict[str, Any]:
+    written, fc = result.written, result.fc
+    return {
+        "pvd": str(written.pvd),
+        "feature_id": result.id,
+        "class": fc.name,
+        "time_unit": fc.time_unit,
+        "frames": [
+            {
+                "t": t,
+                "file": str(file),
+                "vertices": surface.n_vertices if surface else None,
+                "triangles": surface.n_cells if surface else None,
+            }
+            for (t, surface), file in zip(written.frames, written.files)
+        ],
+        "missing": len(written.missing),
+        "gif": result.gif,
+    }
 
 
 def add_at_parser(commands: Any) -> None:

@@ -7,16 +7,17 @@ import math
 import sys
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import psycopg
 
-from tgsis import cliout
 from tgsis.cli._arguments import FEATURE_ID, add_command, feature_values
 from tgsis.cli._connection import connection
-from tgsis.cli._output import out, print_table, wants_json
+from tgsis.cli._output import out, print_table, render, show_time
+from tgsis.cli._progress import busy, progress
 from tgsis.cli._render import picture_of, time_unit_suffix
 from tgsis.db.features import (
     FeatureClass,
@@ -214,24 +215,179 @@ def _import_instant(
         with conn.transaction():
             fid = insert_feature(conn, fc, series, values, name=name, drop_extra_properties=args.drop_extra_properties)
         known = [args.at]
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "file": args.file,
-                "class": fc.name,
-                "id": fid,
-                "at": args.at,
-                "instants": known,
-                "vertices": surface.n_vertices,
-                "cells": surface.n_cells,
-            }
-        )
-    else:
+    return render(args, ImportedInstant(args.file, fc, fid, args.at, known, surface), instant_text, instant_json)
+
+
+@dataclass(frozen=True)
+class ImportedInstant:
+    """A surface stored as feature ``id``'s instant ``at``; ``instants``: the feature's instants now."""
+
+    file: str
+    fc: FeatureClass
+    id: int
+    at: float
+    instants: list[float]
+    surface: Surface
+
+
+def instant_text(args: argparse.Namespace, result: ImportedInstant) -> None:
+    fc, surface = result.fc, result.surface
+    out(
+        f"stored feature {result.id} ({fc.name}) at t = {show_time(result.at)}{time_unit_suffix(fc)}: "
+        f"{surface.n_vertices} vertices, {surface.n_cells} triangles; "
+        f"its instants: {', '.join(show_time(t) for t in result.instants)}"
+    )
+
+
+def instant_json(result: ImportedInstant) -> dict[str, Any]:
+    return {
+        "file": result.file,
+        "class": result.fc.name,
+        "id": result.id,
+        "at": result.at,
+        "instants": result.instants,
+        "vertices": result.surface.n_vertices,
+        "cells": result.surface.n_cells,
+    }
+
+
+@dataclass(frozen=True)
+class ImportedCollection:
+    """A file stored as one feature ``id`` (a geometry collection of its objects); ``replaced``: the feature it
+    replaced (``--replace``); ``same_name``: features of that name it did not replace."""
+
+    file: str
+    feature_class: str
+    id: int
+    collection: GeometryCollection
+    replaced: int | None
+    same_name: list[int]
+    members: list[Mesh]
+    reports: list[MeshReport]
+
+
+def _members_json(result: ImportedCollection) -> list[dict[str, Any]]:
+    return [
+        {
+            "index": i,
+            "name": mesh.name,
+            "geotype": mesh.geotype.value,
+            "vertices": mesh.n_vertices,
+            "cells": mesh.n_cells,
+            "cell_name": type(mesh).cell_name,
+            "defects": _report_json(report),
+        }
+        for i, (mesh, report) in enumerate(zip(result.members, result.reports))
+    ]
+
+
+def collection_text(args: argparse.Namespace, result: ImportedCollection) -> None:
+    collection, old = result.collection, result.replaced
+    print_table(
+        args,
+        IMPORT_HEADER,
+        [
+            (
+                result.id,
+                collection.name,
+                collection.geotype.value,
+                collection.n_vertices,
+                collection.n_cells,
+                old if old is not None else "",
+                f"{len(collection)} members",
+            )
+        ],
+    )
+    for m in _members_json(result):  # under the collection's line, one per member
         out(
-            f"stored feature {fid} ({fc.name}) at t = {cliout.show_time(args.at)}{time_unit_suffix(fc)}: {surface.n_vertices} "
-            f"vertices, {surface.n_cells} triangles; its instants: {', '.join(cliout.show_time(t) for t in known)}"
+            f"\tmember {m['index']}\t{m['name'] or ''}\t{m['geotype']}\t{m['vertices']}\t{m['cells']}\t"
+            f"\t{m['defects']['summary']}"
         )
-    return 0
+
+
+def collection_json(result: ImportedCollection) -> dict[str, Any]:
+    collection = result.collection
+    return {
+        "file": result.file,
+        "class": result.feature_class,
+        "features": [
+            {
+                "id": result.id,
+                "name": collection.name,
+                "geotype": collection.geotype.value,
+                "vertices": collection.n_vertices,
+                "cells": collection.n_cells,
+                "replaced": result.replaced,
+                "same_name": result.same_name,
+                "members": _members_json(result),
+            }
+        ],
+    }
+
+
+@dataclass(frozen=True)
+class ImportedObject:
+    """An object of a file stored as feature ``id``, or over feature ``replaced`` (``--replace``); ``same_name``:
+    features of that name it did not replace."""
+
+    id: int
+    name: str
+    mesh: Mesh
+    report: MeshReport
+    replaced: int | None
+    same_name: list[int]
+
+
+@dataclass(frozen=True)
+class ImportedObjects:
+    """The objects of a file, each stored as a feature of ``feature_class``."""
+
+    file: str
+    feature_class: str
+    features: list[ImportedObject]
+
+
+def objects_text(args: argparse.Namespace, result: ImportedObjects) -> None:
+    print_table(
+        args,
+        IMPORT_HEADER,
+        [
+            (
+                f.id,
+                f.name,
+                f.mesh.geotype.value,
+                f.mesh.n_vertices,
+                f.mesh.n_cells,
+                f.replaced if f.replaced is not None else "",
+                f.report.summary(),
+            )
+            for f in result.features
+        ],
+    )
+
+
+def objects_json(result: ImportedObjects) -> dict[str, Any]:
+    return {
+        "file": result.file,
+        "class": result.feature_class,
+        "features": [
+            {
+                "id": f.id,
+                "name": f.name,
+                "geotype": f.mesh.geotype.value,
+                "vertices": f.mesh.n_vertices,
+                "cells": f.mesh.n_cells,
+                "cell_name": type(f.mesh).cell_name,
+                "defects": _report_json(f.report),
+                "replaced": f.replaced,
+                "same_name": f.same_name,
+            }
+            for f in result.features
+        ],
+    }
+
+
+IMPORT_HEADER = ("id", "name", "geotype", "vertices", "cells", "replaced", "defects")
 
 
 def cmd_import(args: argparse.Namespace) -> int:
@@ -246,7 +402,6 @@ def cmd_import(args: argparse.Namespace) -> int:
         _check_flagged(args.file, meshes, reports)
     values = feature_values(args.set)
     stem = Path(args.file).stem
-    header = ("id", "name", "geotype", "vertices", "cells", "replaced", "defects")
     with connection(args) as conn:
         fc = get_feature_class(conn, args.feature_class)
         if args.at is not None or args.feature is not None or fc.time_model == "INSTANTS":
@@ -258,65 +413,16 @@ def cmd_import(args: argparse.Namespace) -> int:
             with conn.transaction():
                 same = _features_named(conn, fc, collection.name or "")
                 old = _replaced_one(fc, collection.name or "", same) if args.replace else None
-                with cliout.busy(f"uploading {collection.n_vertices} vertices"):
+                with busy(f"uploading {collection.n_vertices} vertices"):
                     if old is not None:
                         delete_feature(conn, fc, old)
                     fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
             if same and not args.replace:
                 _warn_same_name(fc, collection.name or "", same)
-            members: list[dict[str, Any]] = [
-                {
-                    "index": i,
-                    "name": mesh.name,
-                    "geotype": mesh.geotype.value,
-                    "vertices": mesh.n_vertices,
-                    "cells": mesh.n_cells,
-                    "cell_name": type(mesh).cell_name,
-                    "defects": _report_json(report),
-                }
-                for i, (mesh, report) in enumerate(zip(meshes, reports))
-            ]
-            if wants_json(args):
-                cliout.emit_json(
-                    {
-                        "file": args.file,
-                        "class": fc.name,
-                        "features": [
-                            {
-                                "id": fid,
-                                "name": collection.name,
-                                "geotype": collection.geotype.value,
-                                "vertices": collection.n_vertices,
-                                "cells": collection.n_cells,
-                                "replaced": old,
-                                "same_name": [] if args.replace else same,
-                                "members": members,
-                            }
-                        ],
-                    }
-                )
-                return 0
-            print_table(
-                args,
-                header,
-                [
-                    (
-                        fid,
-                        collection.name,
-                        collection.geotype.value,
-                        collection.n_vertices,
-                        collection.n_cells,
-                        old if old is not None else "",
-                        f"{len(collection)} members",
-                    )
-                ],
+            result = ImportedCollection(
+                args.file, fc.name, fid, collection, old, [] if args.replace else same, list(meshes), list(reports)
             )
-            for m in members:  # under the collection's line, one per member
-                out(
-                    f"\tmember {m['index']}\t{m['name'] or ''}\t{m['geotype']}\t{m['vertices']}\t{m['cells']}\t"
-                    f"\t{m['defects']['summary']}"
-                )
-            return 0
+            return render(args, result, collection_text, collection_json)
         if args.name and len(meshes) > 1:
             raise InvalidInputError(
                 f"{args.file} holds {len(meshes)} objects: --name names only one",
@@ -333,7 +439,7 @@ def cmd_import(args: argparse.Namespace) -> int:
         ids: list[int] = []
         replaced: list[int | None] = []
         warned: list[tuple[str, list[int]]] = []
-        with conn.transaction(), cliout.progress("uploading objects", len(meshes), "object") as moved:
+        with conn.transaction(), progress("uploading objects", len(meshes), "object") as moved:
             for i, (mesh, name) in enumerate(zip(meshes, names)):  # all objects of the file, or none
                 same = _features_named(conn, fc, name)
                 old = _replaced_one(fc, name, same) if args.replace else None
@@ -354,45 +460,11 @@ def cmd_import(args: argparse.Namespace) -> int:
                 moved(i + 1, len(meshes))
     for name, same in warned:
         _warn_same_name(fc, name, same)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "file": args.file,
-                "class": fc.name,
-                "features": [
-                    {
-                        "id": fid,
-                        "name": name,
-                        "geotype": mesh.geotype.value,
-                        "vertices": mesh.n_vertices,
-                        "cells": mesh.n_cells,
-                        "cell_name": type(mesh).cell_name,
-                        "defects": _report_json(report),
-                        "replaced": old,
-                        "same_name": next((same for n, same in warned if n == name), []),
-                    }
-                    for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)
-                ],
-            }
-        )
-        return 0
-    print_table(
-        args,
-        header,
-        [
-            (
-                fid,
-                name,
-                mesh.geotype.value,
-                mesh.n_vertices,
-                mesh.n_cells,
-                old if old is not None else "",
-                report.summary(),
-            )
-            for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)
-        ],
-    )
-    return 0
+    features = [
+        ImportedObject(fid, name, mesh, report, old, next((same for n, same in warned if n == name), []))
+        for fid, name, mesh, report, old in zip(ids, names, meshes, reports, replaced)
+    ]
+    return render(args, ImportedObjects(args.file, fc.name, features), objects_text, objects_json)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -400,12 +472,12 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     with connection(args) as conn:
         fc = get_feature_class(conn, args.feature_class) if args.feature_class else class_of_feature(conn, args.id)
-        with cliout.busy(f"downloading feature {args.id}"):
+        with busy(f"downloading feature {args.id}"):
             feature = fetch_feature(conn, fc, args.id)
         assert feature.mesh is not None
         if args.png and not isinstance(feature.mesh, Surface):  # refused before any file is written
             raise InvalidInputError(f"feature {args.id} is no surface: --png draws surfaces")
-        with cliout.busy(f"writing {args.file}"):
+        with busy(f"writing {args.file}"):
             formats.write(feature.mesh, args.file, format=args.format)
         members = f" in {len(feature.mesh)} members" if isinstance(feature.mesh, GeometryCollection) else ""
         out(f"wrote feature {feature.id} ({fc.name}, {feature.mesh.n_vertices} vertices{members}) to {args.file}")

@@ -8,14 +8,16 @@ import json
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tgsis import cliout, clistate
 from tgsis.cli._arguments import INT4, add_command
 from tgsis.cli._connection import connection, split_version, target_key
-from tgsis.cli._output import out, print_table, wants_json
-from tgsis.cli._render import summarize_differences
+from tgsis.cli._output import out, print_table, render, show_moment
+from tgsis.cli._progress import busy, progress
+from tgsis.cli._render import ObjectDifference, summarize_differences
+from tgsis.cli._state import remember_version, remembered_version
 from tgsis.db import versions as V
 from tgsis.db.connect import connect
 from tgsis.db.features import (
@@ -40,31 +42,44 @@ def cmd_version_create(args: argparse.Namespace) -> int:
     return 0
 
 
+@dataclass(frozen=True)
+class VersionList:
+    """The versions, and the one this command works in."""
+
+    current: str | None
+    versions: list[V.Version]
+
+
 def cmd_version_list(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         versions = V.list_versions(conn)
         current = V.working_version(conn)
-    if wants_json(args):
-        cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
-        return 0
+    return render(args, VersionList(current, versions), version_list_text, version_list_json)
+
+
+def version_list_text(args: argparse.Namespace, result: VersionList) -> None:
     print_table(
         args,
         ("current", "version", "parent", "initrevision", "working", "owner", "created", "description"),
         [
             (
-                "*" if v.name == current else "",
+                "*" if v.name == result.current else "",
                 v.name,
                 v.parent or "-",
                 v.initrevision if v.initrevision is not None else "-",
                 v.workingrevision,
                 v.owner,
-                cliout.show_moment(v.created_at),
+                show_moment(v.created_at),
                 v.description or "",
             )
-            for v in versions
+            for v in result.versions
         ],
     )
-    return 0
+
+
+def version_list_json(result: VersionList) -> dict[str, Any]:
+    """Also ``tgsis version tree --json``'s: the versions depth-first, each after its parent."""
+    return {"current": result.current, "versions": [_version_json(v, result.current) for v in result.versions]}
 
 
 def _version_json(v: V.Version, current: str | None) -> dict[str, Any]:
@@ -87,11 +102,11 @@ def cmd_version_tree(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         versions = V.list_versions(conn)
         current = V.working_version(conn)
-    if wants_json(args):  # depth-first order: each version after its parent
-        cliout.emit_json({"current": current, "versions": [_version_json(v, current) for v in versions]})
-        return 0
-    out(V.format_tree(versions))
-    return 0
+    return render(args, VersionList(current, versions), version_tree_text, version_list_json)
+
+
+def version_tree_text(args: argparse.Namespace, result: VersionList) -> None:
+    out(V.format_tree(result.versions))
 
 
 def cmd_version_goto(args: argparse.Namespace) -> int:
@@ -102,12 +117,22 @@ def cmd_version_goto(args: argparse.Namespace) -> int:
             working = V.working_revision(conn)
         else:
             V.goto_revision(conn, name, revision)
-    clistate.remember_version(target_key(args), args.name)
+    remember_version(target_key(args), args.name)
     if revision is None:
         out(f"commands on this database now work in version {V.show_name(name)} (working revision {working})")
     else:
         out(f"commands on this database now look at revision {revision} of version {V.show_name(name)} (read-only)")
     return 0
+
+
+@dataclass(frozen=True)
+class CurrentVersion:
+    """The version a command works in, the revision it looks at (None: the working one), where the choice came from."""
+
+    version: str
+    working: int
+    viewing: int | None
+    source: str
 
 
 def cmd_version_current(args: argparse.Namespace) -> int:
@@ -119,23 +144,25 @@ def cmd_version_current(args: argparse.Namespace) -> int:
         else "$TGSIS_VERSION"
         if os.environ.get("TGSIS_VERSION")
         else "tgsis version goto"
-        if clistate.remembered_version(target_key(args))
+        if remembered_version(target_key(args))
         else "default"
     )
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "version": name,
-                "working_revision": working,
-                "viewing_revision": viewing,
-                "read_only": viewing is not None,
-                "source": source,
-            }
-        )
-        return 0
-    looking = f"\tviewing revision {viewing} (read-only)" if viewing is not None else ""
-    out(f"{name}\tworking revision {working}{looking}\t(from {source})")
-    return 0
+    return render(args, CurrentVersion(name, working, viewing, source), current_version_text, current_version_json)
+
+
+def current_version_text(args: argparse.Namespace, result: CurrentVersion) -> None:
+    looking = f"\tviewing revision {result.viewing} (read-only)" if result.viewing is not None else ""
+    out(f"{result.version}\tworking revision {result.working}{looking}\t(from {result.source})")
+
+
+def current_version_json(result: CurrentVersion) -> dict[str, Any]:
+    return {
+        "version": result.version,
+        "working_revision": result.working,
+        "viewing_revision": result.viewing,
+        "read_only": result.viewing is not None,
+        "source": result.source,
+    }
 
 
 def cmd_version_save(args: argparse.Namespace) -> int:
@@ -149,8 +176,8 @@ def cmd_version_save(args: argparse.Namespace) -> int:
 def cmd_version_delete(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         removed = V.delete_version(conn, args.name)
-    if clistate.remembered_version(target_key(args)) == args.name:
-        clistate.remember_version(target_key(args), None)
+    if remembered_version(target_key(args)) == args.name:
+        remember_version(target_key(args), None)
     out(f"deleted version {V.show_name(args.name)} and {removed} row version(s)")
     return 0
 
@@ -167,6 +194,18 @@ def _discards_json(discards: Sequence[V.Discard]) -> list[dict[str, Any]]:
         }
         for d in discards
     ]
+
+
+@dataclass(frozen=True)
+class VersionConflicts:
+    """The conflicts of a version with its parent; ``rows``: both sides' rows per object (``--rows``);
+    ``lost``: what each solution discards per (class, key, solution), None when this role may not read it."""
+
+    version: str
+    conflicts: list[V.Conflict]
+    with_rows: bool
+    rows: dict[tuple[str, str], list[tuple[str, str, Any, Any]]]
+    lost: dict[tuple[str, str, str], list[V.Discard]] | None
 
 
 def cmd_version_conflicts(args: argparse.Namespace) -> int:
@@ -192,48 +231,19 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         except MissingPrivilegeError as exc:
             print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
             lost = None
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "version": args.name,
-                "conflicts": [
-                    {
-                        "objectclass": c.objectclass,
-                        "objectkey": c.objectkey,
-                        "solution": c.solution,
-                        "both_changed": list(c.conflicttype),
-                        "child_tables": list(c.childtables),
-                        "parent_tables": list(c.parenttables),
-                        "discards": None
-                        if lost is None
-                        else {
-                            solution: {"edits_of": other, "tables": _discards_json(lost.get(key + (solution,), []))}
-                            for key in [(c.objectclass, c.objectkey)]
-                            for solution, other in (("child", "parent"), ("parent", "child"))
-                        },
-                        **(
-                            {
-                                "rows": [
-                                    {"table": table, "side": side, "key": key, "row": row}
-                                    for table, side, key, row in details.get((c.objectclass, c.objectkey), [])
-                                ]
-                            }
-                            if args.rows
-                            else {}
-                        ),
-                    }
-                    for c in conflicts
-                ],
-            }
-        )
-        return 0
+    result = VersionConflicts(args.name, conflicts, args.rows, details, lost)
+    return render(args, result, conflicts_text, conflicts_json)
+
+
+def conflicts_text(args: argparse.Namespace, result: VersionConflicts) -> None:
+    conflicts, lost = result.conflicts, result.lost
     if conflicts and not getattr(args, "no_header", False):
         out(
             "class\tkey\tsolution\tboth changed\tchanged in "
-            + args.name
+            + result.version
             + "\tchanged in parent"
             + "\tchild discards (the parent's edits)\tparent discards (the version's edits)"
-            + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if args.rows else "")
+            + ("\n\ttable\tside\trow key (JSON)\trow (JSON)" if result.with_rows else "")
         )
     for c in conflicts:
         both = ", ".join(c.conflicttype) or "different tables"
@@ -247,11 +257,45 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
             f"{c.objectclass}\t{c.objectkey}\t{c.solution}\t{both}\t"
             f"{', '.join(c.childtables)}\t{', '.join(c.parenttables)}\t{said[0]}\t{said[1]}"
         )
-        for table, side, key, row in details.get((c.objectclass, c.objectkey), []):
+        for table, side, key, row in result.rows.get((c.objectclass, c.objectkey), []):
             out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
     if not conflicts:
-        print(f"version {V.show_name(args.name)} has no conflicts with its parent", file=sys.stderr)
-    return 0
+        print(f"version {V.show_name(result.version)} has no conflicts with its parent", file=sys.stderr)
+
+
+def conflicts_json(result: VersionConflicts) -> dict[str, Any]:
+    lost = result.lost
+    return {
+        "version": result.version,
+        "conflicts": [
+            {
+                "objectclass": c.objectclass,
+                "objectkey": c.objectkey,
+                "solution": c.solution,
+                "both_changed": list(c.conflicttype),
+                "child_tables": list(c.childtables),
+                "parent_tables": list(c.parenttables),
+                "discards": None
+                if lost is None
+                else {
+                    solution: {"edits_of": other, "tables": _discards_json(lost.get(key + (solution,), []))}
+                    for key in [(c.objectclass, c.objectkey)]
+                    for solution, other in (("child", "parent"), ("parent", "child"))
+                },
+                **(
+                    {
+                        "rows": [
+                            {"table": table, "side": side, "key": key, "row": row}
+                            for table, side, key, row in result.rows.get((c.objectclass, c.objectkey), [])
+                        ]
+                    }
+                    if result.with_rows
+                    else {}
+                ),
+            }
+            for c in result.conflicts
+        ],
+    }
 
 
 def cmd_version_resolve(args: argparse.Namespace) -> int:
@@ -288,7 +332,7 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | No
 
 
 def cmd_version_merge(args: argparse.Namespace) -> int:
-    with connection(args) as conn, cliout.busy(f"merging {V.show_name(args.name)}"), conn.transaction():
+    with connection(args) as conn, busy(f"merging {V.show_name(args.name)}"), conn.transaction():
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
         lost = _recorded_discards(conn, args.name)
         written = V.merge_version(conn, args.name, remove=args.remove)
@@ -297,8 +341,8 @@ def cmd_version_merge(args: argparse.Namespace) -> int:
         + ("; version removed" if args.remove else "")
     )
     _say_discarded(lost)
-    if args.remove and clistate.remembered_version(target_key(args)) == args.name:
-        clistate.remember_version(target_key(args), None)
+    if args.remove and remembered_version(target_key(args)) == args.name:
+        remember_version(target_key(args), None)
     return 0
 
 
@@ -368,48 +412,35 @@ def _object_order(key: tuple[str, str]) -> tuple[str, int, int, str]:
     )
 
 
+@dataclass(frozen=True)
+class VersionDiff:
+    """What differs from ``a`` to ``b`` (as the user named them): per object (``objects``, in key order) and per
+    object and table (``differences``); ``per_table``: ``--tables`` shows the latter."""
+
+    a: str
+    b: str
+    differences: list[V.Difference]
+    objects: list[ObjectDifference]
+    per_table: bool = False
+
+
 def cmd_version_diff(args: argparse.Namespace) -> int:
     a, a_rev = split_version(args.a)
     b, b_rev = split_version(args.b)
     with connection(args) as conn:
-        with cliout.busy(f"comparing {args.a} and {args.b}"):
-            differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev)
+        with progress(f"comparing {args.a} and {args.b}", None, "table") as moved:
+            differences = V.diff_versions(conn, a, b, a_revision=a_rev, b_revision=b_rev, progress=moved)
         if args.png:
             _draw_differences(conn, args, differences, ((a, a_rev), (b, b_rev)))
     objects = summarize_differences(differences, args.a, args.b)
     objects.sort(key=lambda o: _object_order((o.objectclass, o.objectkey)))
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "a": args.a,
-                "b": args.b,
-                "objects": [
-                    {
-                        "objectclass": o.objectclass,
-                        "objectkey": o.objectkey,
-                        "difference": o.difference,
-                        "tables": list(o.tables),
-                        "added": o.added,
-                        "removed": o.removed,
-                        "changed": o.changed,
-                    }
-                    for o in objects
-                ],
-                "differences": [
-                    {
-                        "objectclass": d.objectclass,
-                        "objectkey": d.objectkey,
-                        "table": d.table,
-                        "added": d.added,
-                        "removed": d.removed,
-                        "changed": d.changed,
-                    }
-                    for d in differences
-                ],
-            }
-        )
-        return 0
-    if args.tables:
+    return render(args, VersionDiff(args.a, args.b, differences, objects, args.tables), diff_text, diff_json)
+
+
+def diff_text(args: argparse.Namespace, result: VersionDiff) -> None:
+    """A line per object (``--tables``: per object and table) on standard output, a summary on standard error."""
+    differences, objects = result.differences, result.objects
+    if result.per_table:
         print_table(
             args,
             ("class", "key", "table", "added", "removed", "changed"),
@@ -436,18 +467,47 @@ def cmd_version_diff(args: argparse.Namespace) -> int:
             ],
         )
     if not differences:
-        print(f"{args.a} and {args.b} hold the same rows", file=sys.stderr)
-    elif not args.tables:
+        print(f"{result.a} and {result.b} hold the same rows", file=sys.stderr)
+    elif not result.per_table:
         counts = {
             what: sum(o.difference == what for o in objects)
-            for what in (f"only in {args.a}", f"only in {args.b}", "changed")
+            for what in (f"only in {result.a}", f"only in {result.b}", "changed")
         }
         print(
             f"{len(objects)} object{'s' if len(objects) != 1 else ''} differ"
             f"{'s' if len(objects) == 1 else ''}: " + ", ".join(f"{n} {what}" for what, n in counts.items() if n),
             file=sys.stderr,
         )
-    return 0
+
+
+def diff_json(result: VersionDiff) -> dict[str, Any]:
+    return {
+        "a": result.a,
+        "b": result.b,
+        "objects": [
+            {
+                "objectclass": o.objectclass,
+                "objectkey": o.objectkey,
+                "difference": o.difference,
+                "tables": list(o.tables),
+                "added": o.added,
+                "removed": o.removed,
+                "changed": o.changed,
+            }
+            for o in result.objects
+        ],
+        "differences": [
+            {
+                "objectclass": d.objectclass,
+                "objectkey": d.objectkey,
+                "table": d.table,
+                "added": d.added,
+                "removed": d.removed,
+                "changed": d.changed,
+            }
+            for d in result.differences
+        ],
+    }
 
 
 def _moment(text: str) -> datetime.datetime:
@@ -472,33 +532,58 @@ def cmd_version_valid(args: argparse.Namespace) -> int:
     return 0
 
 
+@dataclass(frozen=True)
+class VersionBelieved:
+    """The version of the chain below ``root`` believed true ``at`` a moment (None: none)."""
+
+    at: datetime.datetime
+    root: str
+    version: str | None
+
+
+@dataclass(frozen=True)
+class VersionChain:
+    """The versions below ``root`` with a validity period: (name, believed from, believed to or None)."""
+
+    root: str
+    chain: list[tuple[str, datetime.datetime, datetime.datetime | None]]
+
+
 def cmd_version_chain(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         if args.at:
-            believed = V.version_believed_at(conn, _moment(args.at), args.root)
-            if wants_json(args):
-                cliout.emit_json({"at": _moment(args.at), "root": args.root, "version": believed})
-            else:
-                out(believed if believed is not None else "-")
+            at = _moment(args.at)
+            believed = V.version_believed_at(conn, at, args.root)
+            render(args, VersionBelieved(at, args.root, believed), believed_text, believed_json)
             return 0 if believed is not None else 3
         chain = V.version_chain(conn, args.root)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "root": args.root,
-                "chain": [{"version": name, "valid_from": start, "valid_to": end} for name, start, end in chain],
-            }
-        )
-        return 0
+    return render(args, VersionChain(args.root, chain), chain_text, chain_json)
+
+
+def believed_text(args: argparse.Namespace, result: VersionBelieved) -> None:
+    out(result.version if result.version is not None else "-")
+
+
+def believed_json(result: VersionBelieved) -> dict[str, Any]:
+    return {"at": result.at, "root": result.root, "version": result.version}
+
+
+def chain_text(args: argparse.Namespace, result: VersionChain) -> None:
     print_table(
         args,
         ("version", "believed from", "believed to"),
         [
-            (name, cliout.show_moment(start), cliout.show_moment(end) if end else "still believed")
-            for name, start, end in chain
+            (name, show_moment(start), show_moment(end) if end else "still believed")
+            for name, start, end in result.chain
         ],
     )
-    return 0
+
+
+def chain_json(result: VersionChain) -> dict[str, Any]:
+    return {
+        "root": result.root,
+        "chain": [{"version": name, "valid_from": start, "valid_to": end} for name, start, end in result.chain],
+    }
 
 
 def cmd_version_lock(args: argparse.Namespace) -> int:
@@ -519,26 +604,21 @@ def cmd_version_unlock(args: argparse.Namespace) -> int:
     return 0
 
 
+@dataclass(frozen=True)
+class ObjectLocks:
+    """The object locks, of one version (``version``) or of all (None)."""
+
+    version: str | None
+    locks: list[V.ObjectLock]
+
+
 def cmd_version_locks(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         locks = V.object_locks(conn, args.name)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "locks": [
-                    {
-                        "objectclass": lk.objectclass,
-                        "objectkey": lk.objectkey,
-                        "version": lk.version,
-                        "role": lk.locked_by,
-                        "exclusive": lk.exclusive,
-                        "since": lk.locked_at,
-                    }
-                    for lk in locks
-                ]
-            }
-        )
-        return 0
+    return render(args, ObjectLocks(args.name, locks), locks_text, locks_json)
+
+
+def locks_text(args: argparse.Namespace, result: ObjectLocks) -> None:
     print_table(
         args,
         ("class", "key", "version", "role", "kind", "since"),
@@ -549,14 +629,29 @@ def cmd_version_locks(args: argparse.Namespace) -> int:
                 lk.version,
                 lk.locked_by,
                 "exclusive" if lk.exclusive else "version",
-                cliout.show_moment(lk.locked_at),
+                show_moment(lk.locked_at),
             )
-            for lk in locks
+            for lk in result.locks
         ],
     )
-    if not locks:
-        print("no object locks" + (f" in {args.name}" if args.name else ""), file=sys.stderr)
-    return 0
+    if not result.locks:
+        print("no object locks" + (f" in {result.version}" if result.version else ""), file=sys.stderr)
+
+
+def locks_json(result: ObjectLocks) -> dict[str, Any]:
+    return {
+        "locks": [
+            {
+                "objectclass": lk.objectclass,
+                "objectkey": lk.objectkey,
+                "version": lk.version,
+                "role": lk.locked_by,
+                "exclusive": lk.exclusive,
+                "since": lk.locked_at,
+            }
+            for lk in result.locks
+        ]
+    }
 
 
 def cmd_version_grant(args: argparse.Namespace) -> int:
@@ -576,72 +671,91 @@ def cmd_version_owner(args: argparse.Namespace) -> int:
     return 0
 
 
+@dataclass(frozen=True)
+class VersionRights:
+    """Owners by version, and the grants on them."""
+
+    owners: dict[str, str]
+    grants: list[V.VersionGrant]
+
+
 def cmd_version_privileges(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         owners = {v.name: v.owner for v in V.list_versions(conn) if args.name in (None, v.name)}
         grants = V.version_privileges(conn, args.name)
     if args.name is not None and not owners:
         raise NotFoundError(f"version {args.name!r} does not exist")
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "versions": [
-                    {
-                        "name": name,
-                        "owner": owner,
-                        "grants": [
-                            {
-                                "role": g.grantee,
-                                "privilege": g.privilege,
-                                "granted_by": g.granted_by,
-                                "granted_at": g.granted_at,
-                            }
-                            for g in grants
-                            if g.version == name
-                        ],
-                    }
-                    for name, owner in owners.items()
-                ]
-            }
-        )
-        return 0
+    return render(args, VersionRights(owners, grants), privileges_text, privileges_json)
+
+
+def privileges_text(args: argparse.Namespace, result: VersionRights) -> None:
     rows: list[tuple[str, ...]] = []
-    for name, owner in owners.items():
+    for name, owner in result.owners.items():
         rows.append((name, owner, "owner (every right)"))
-        rows += [(name, g.grantee, g.privilege, g.granted_by) for g in grants if g.version == name]
+        rows += [(name, g.grantee, g.privilege, g.granted_by) for g in result.grants if g.version == name]
     print_table(args, ("version", "role", "right", "granted by"), rows)
-    return 0
+
+
+def privileges_json(result: VersionRights) -> dict[str, Any]:
+    return {
+        "versions": [
+            {
+                "name": name,
+                "owner": owner,
+                "grants": [
+                    {
+                        "role": g.grantee,
+                        "privilege": g.privilege,
+                        "granted_by": g.granted_by,
+                        "granted_at": g.granted_at,
+                    }
+                    for g in result.grants
+                    if g.version == name
+                ],
+            }
+            for name, owner in result.owners.items()
+        ]
+    }
+
+
+@dataclass(frozen=True)
+class Compression:
+    """What compress removed (or would, ``dry_run``); ``forgotten``: the remembered revision it removed, if any."""
+
+    dry_run: bool
+    report: list[V.Compressed]
+    forgotten: str | None
+    looked_at: int | None
+
+    @property
+    def totals(self) -> dict[str, int]:
+        return {
+            what: sum(i.removed for i in self.report if i.what == what)
+            for what in ("rows", "lastrevs", "revisions", "set entries")
+        }
 
 
 def cmd_version_compress(args: argparse.Namespace) -> int:
-    remembered = clistate.remembered_version(target_key(args))
+    remembered = remembered_version(target_key(args))
     looked_at = split_version(remembered)[1] if remembered else None
     with connect(args.dsn) as conn:
         report = V.compress_versions(conn, dry_run=args.dry_run)
         gone = looked_at is not None and not args.dry_run and not revision_exists(conn, looked_at)
-    totals = {
-        what: sum(i.removed for i in report if i.what == what)
-        for what in ("rows", "lastrevs", "revisions", "set entries")
-    }
-    if wants_json(args):
-        if gone:
-            clistate.remember_version(target_key(args), None)
-        cliout.emit_json(
-            {
-                "dry_run": args.dry_run,
-                "removed": [{"what": i.what, "name": i.name, "removed": i.removed} for i in report],
-                "totals": totals,
-                "forgotten": remembered if gone else None,
-            }
-        )
-        return 0
+    if gone:
+        remember_version(target_key(args), None)
+    result = Compression(args.dry_run, report, remembered if gone else None, looked_at)
+    return render(args, result, compression_text, compression_json)
+
+
+def compression_text(args: argparse.Namespace, result: Compression) -> None:
+    report, totals = result.report, result.totals
     if report:
         print_table(args, ("what", "name", "removed"), [(item.what, item.name, item.removed) for item in report])
     summary = (
         f"{totals['rows']} row version(s), {totals['lastrevs']} lastrevs entr(ies), "
         f"{totals['revisions']} revision(s), {totals['set entries']} revision set entr(ies)"
     )
-    if args.dry_run:
+    if result.dry_run:
         out(
             f"compress would remove {summary} (dry run: nothing changed)"
             if report
@@ -649,10 +763,20 @@ def cmd_version_compress(args: argparse.Namespace) -> int:
         )
     else:
         out(f"compress removed {summary}" if report else "compress removed nothing")
-    if gone:
-        clistate.remember_version(target_key(args), None)
-        out(f"revision {looked_at} is gone: commands on this database work in DEFAULT again (was {remembered})")
-    return 0
+    if result.forgotten is not None:
+        out(
+            f"revision {result.looked_at} is gone: commands on this database work in DEFAULT again "
+            f"(was {result.forgotten})"
+        )
+
+
+def compression_json(result: Compression) -> dict[str, Any]:
+    return {
+        "dry_run": result.dry_run,
+        "removed": [{"what": i.what, "name": i.name, "removed": i.removed} for i in result.report],
+        "totals": result.totals,
+        "forgotten": result.forgotten,
+    }
 
 
 def cmd_versioning_enable(args: argparse.Namespace) -> int:
@@ -687,24 +811,10 @@ def cmd_versioning_disable(args: argparse.Namespace) -> int:
 def cmd_versioning_list(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
         tables = V.versioned_tables(conn)
-    if wants_json(args):
-        cliout.emit_json(
-            {
-                "tables": [
-                    {
-                        "schema": t.schema,
-                        "table": t.table,
-                        "objectclass": t.objectclass,
-                        "key": t.objectkeyfield,
-                        "order": t.iudorder,
-                        "shortname": t.shortname,
-                        "row_key": list(t.keycolumns),
-                    }
-                    for t in tables
-                ]
-            }
-        )
-        return 0
+    return render(args, tables, versioned_tables_text, versioned_tables_json)
+
+
+def versioned_tables_text(args: argparse.Namespace, tables: list[V.VersionedTable]) -> None:
     print_table(
         args,
         ("table", "class", "key", "order", "shortname", "row key"),
@@ -715,7 +825,23 @@ def cmd_versioning_list(args: argparse.Namespace) -> int:
     )
     if not tables:
         print("no versioned tables", file=sys.stderr)
-    return 0
+
+
+def versioned_tables_json(tables: list[V.VersionedTable]) -> dict[str, Any]:
+    return {
+        "tables": [
+            {
+                "schema": t.schema,
+                "table": t.table,
+                "objectclass": t.objectclass,
+                "key": t.objectkeyfield,
+                "order": t.iudorder,
+                "shortname": t.shortname,
+                "row_key": list(t.keycolumns),
+            }
+            for t in tables
+        ]
+    }
 
 
 def add_version_parser(commands: Any) -> None:

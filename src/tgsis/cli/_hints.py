@@ -22,8 +22,6 @@ from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 
-__all__ = ["to_cli", "foreign_terms", "IN_PSQL", "RULES"]
-
 #: What a hint says before an SQL statement that has no command-line equivalent.
 IN_PSQL = "in psql: "
 

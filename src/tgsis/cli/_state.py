@@ -14,8 +14,6 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-__all__ = ["state_file", "remembered_version", "remember_version"]
-
 
 def state_file() -> Path:
     """Where the command's state is kept."""
