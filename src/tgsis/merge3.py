@@ -26,7 +26,7 @@ a few passes over the rows plus work proportional to the change.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeAlias
 
@@ -56,6 +56,7 @@ __all__ = [
 IntArray = npt.NDArray[np.int64]
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
+Positions: TypeAlias = "IntArray | slice"
 
 #: What a conflicting region takes: one side's rows, the base's, or a manual state (docs/merge.md).
 Solution: TypeAlias = "Literal['parent', 'child', 'base'] | MeshState"
@@ -105,6 +106,15 @@ def _flags(keys: IntArray, flags: npt.NDArray[np.uint8], query: IntArray) -> npt
     return np.where(pos >= 0, flags[np.maximum(pos, 0)], 0).astype(np.uint8)
 
 
+def _cell_hits(keys: IntArray, cells: IntArray) -> BoolArray:
+    """Per cell, whether any of its vertex ids is one of ``keys`` (sorted, unique)."""
+    ones = np.ones(len(keys), dtype=np.uint8)
+    hit = np.zeros(len(cells), dtype=np.uint8)
+    for j in range(cells.shape[1]):
+        hit |= _flags(keys, ones, cells[:, j])
+    return hit.astype(bool)
+
+
 def _canonical_cells(cells: IntArray) -> IntArray:
     """(m, k + 1): each cell's vertex ids ascending, then the parity of its order (same oriented cell, same row)."""
     k = cells.shape[1]
@@ -113,6 +123,14 @@ def _canonical_cells(cells: IntArray) -> IntArray:
         for j in range(i + 1, k):
             parity ^= (cells[:, i] > cells[:, j]).astype(np.int64)
     return np.concatenate([np.sort(cells, axis=1), parity[:, None]], axis=1)
+
+
+def _same_rows(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> BoolArray:
+    """Per row of two (n, c) arrays, whether all c values are equal (column by column: faster than all(axis=1))."""
+    same = a[:, 0] == b[:, 0]
+    for j in range(1, a.shape[1]):
+        same &= a[:, j] == b[:, j]
+    return np.asarray(same, dtype=bool)
 
 
 def _values_equal(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> BoolArray:
@@ -294,17 +312,18 @@ class MeshState:
         """Number of cell rows m."""
         return len(self.cell_ids)
 
-    def _vertex_rows_equal(self, other: MeshState, mine: IntArray, theirs: IntArray) -> BoolArray:
-        """Whether vertex rows at positions ``mine`` here and ``theirs`` there hold equal values."""
-        same = np.all(self.vertices[mine] == other.vertices[theirs], axis=1)
+    def _vertex_rows_equal(self, other: MeshState, mine: Positions, theirs: Positions) -> tuple[BoolArray, BoolArray]:
+        """(equal rows, equal coordinates) of vertex rows at positions ``mine`` here and ``theirs`` there."""
+        same_place = _same_rows(self.vertices[mine], other.vertices[theirs])
+        same = same_place.copy()
         for name, values in self.vertex_properties.items():
             same &= _values_equal(values[mine], other.vertex_properties[name][theirs])
-        return np.asarray(same, dtype=bool)
+        return same, same_place
 
-    def _cell_rows_equal(self, other: MeshState, mine: IntArray, theirs: IntArray) -> tuple[BoolArray, BoolArray]:
+    def _cell_rows_equal(self, other: MeshState, mine: Positions, theirs: Positions) -> tuple[BoolArray, BoolArray]:
         """(equal rows, equal as oriented cells) of cell rows at these positions (a rotated row is the same cell)."""
         a, b = self.cells[mine], other.cells[theirs]
-        same_cell = np.all(a == b, axis=1)
+        same_cell = _same_rows(a, b)
         differ = np.flatnonzero(~same_cell)
         if len(differ):
             same_cell[differ] = np.all(_canonical_cells(a[differ]) == _canonical_cells(b[differ]), axis=1)
@@ -331,11 +350,13 @@ class _Edit:
     topology_cells: IntArray  # added, removed, other vertices or orientation: their vertices join the margin
 
 
-def _aligned(base_ids: IntArray, side_ids: IntArray) -> tuple[IntArray, IntArray, IntArray, IntArray]:
-    """(base positions, side positions) of the common ids, the side's added ids, the base's removed ids."""
+def _aligned(base_ids: IntArray, side_ids: IntArray) -> tuple[Positions, Positions, IntArray, IntArray]:
+    """(base positions, side positions) of the common ids, the side's added ids, the base's removed ids.
+
+    The same ids on both sides (the common case: nothing added or removed) give slices, which copy nothing.
+    """
     if len(base_ids) == len(side_ids) and np.array_equal(base_ids, side_ids):
-        everything = np.arange(len(base_ids), dtype=np.int64)
-        return everything, everything, base_ids[:0], base_ids[:0]
+        return slice(None), slice(None), base_ids[:0], base_ids[:0]
     pos = _positions(base_ids, side_ids)
     found = pos >= 0
     hit = np.zeros(len(base_ids), dtype=bool)
@@ -345,16 +366,17 @@ def _aligned(base_ids: IntArray, side_ids: IntArray) -> tuple[IntArray, IntArray
 
 def _edit(base: MeshState, side: MeshState) -> _Edit:
     pb, ps, added, removed = _aligned(base.vertex_ids, side.vertex_ids)
-    moved_mask = np.any(base.vertices[pb] != side.vertices[ps], axis=1)
-    unchanged = base._vertex_rows_equal(side, pb, ps)
-    moved = base.vertex_ids[pb[moved_mask]]
+    unchanged, in_place = base._vertex_rows_equal(side, pb, ps)
+    common = base.vertex_ids[pb]
+    moved = common[~in_place]
     shape = np.union1d(np.union1d(moved, added), removed)
-    changed = np.union1d(shape, base.vertex_ids[pb[~unchanged]])
+    changed = np.union1d(shape, common[~unchanged])
 
     cb, cs, cadded, cremoved = _aligned(base.cell_ids, side.cell_ids)
     same, same_cell = base._cell_rows_equal(side, cb, cs)
-    topology = np.union1d(np.union1d(cadded, cremoved), base.cell_ids[cb[~same_cell]])
-    changed_cells = np.union1d(topology, base.cell_ids[cb[~same]])
+    common = base.cell_ids[cb]
+    topology = np.union1d(np.union1d(cadded, cremoved), common[~same_cell])
+    changed_cells = np.union1d(topology, common[~same])
     return _Edit(changed, shape, moved, changed_cells, topology)
 
 
@@ -392,12 +414,25 @@ def _renumber(
     return result, next_id + len(clash)
 
 
+def _new_ids(base_ids: IntArray, side_ids: IntArray) -> IntArray:
+    """The side's ids the base does not have (both sorted)."""
+    if len(base_ids) == len(side_ids) and np.array_equal(base_ids, side_ids):
+        return side_ids[:0]
+    return side_ids[~_contains(base_ids, side_ids)]
+
+
+def _known(ids: IntArray, *sorted_ids: IntArray) -> BoolArray:
+    """Whether each id is in any of the sorted id arrays."""
+    found = np.zeros(len(ids), dtype=bool)
+    for known in sorted_ids:
+        found |= _contains(known, ids)
+    return found
+
+
 def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tuple[MeshState, IntArray, IntArray]:
     """The child with its new ids in the merged numbering, and the (old, new) pairs of the ids that changed."""
-    p_new_v = np.setdiff1d(parent.vertex_ids, base.vertex_ids, assume_unique=True)
-    c_new_v = np.setdiff1d(child.vertex_ids, base.vertex_ids, assume_unique=True)
-    p_new_c = np.setdiff1d(parent.cell_ids, base.cell_ids, assume_unique=True)
-    c_new_c = np.setdiff1d(child.cell_ids, base.cell_ids, assume_unique=True)
+    p_new_v, c_new_v = _new_ids(base.vertex_ids, parent.vertex_ids), _new_ids(base.vertex_ids, child.vertex_ids)
+    p_new_c, c_new_c = _new_ids(base.cell_ids, parent.cell_ids), _new_ids(base.cell_ids, child.cell_ids)
     empty = np.empty((0, 2), dtype=np.int64)
     if (len(c_new_v) == 0 or len(p_new_v) == 0) and (len(c_new_c) == 0 or len(p_new_c) == 0):
         return child, empty, empty
@@ -622,7 +657,7 @@ def _state_rows_equal(
     pa, pb = _positions(a.vertex_ids, vertex_ids), _positions(b.vertex_ids, vertex_ids)
     v_same = (pa < 0) & (pb < 0)
     both = np.flatnonzero((pa >= 0) & (pb >= 0))
-    v_same[both] = a._vertex_rows_equal(b, pa[both], pb[both])
+    v_same[both] = a._vertex_rows_equal(b, pa[both], pb[both])[0]
     ca, cb = _positions(a.cell_ids, cell_ids), _positions(b.cell_ids, cell_ids)
     c_same = (ca < 0) & (cb < 0)
     both = np.flatnonzero((ca >= 0) & (cb >= 0))
@@ -796,37 +831,58 @@ def _regions(
 # ---------------------------------------------------------------- solutions
 
 
+Table: TypeAlias = "tuple[IntArray, npt.NDArray[Any], dict[str, npt.NDArray[Any]]]"
+
+
+def _replace_rows(table: Table, drop: IntArray, added: list[Table]) -> Table:
+    """The rows of ``table`` (ids ascending) without ids ``drop`` (few), with the ``added`` rows at their places.
+
+    When the added ids are the dropped ones (moves, property changes) the rows
+    are rewritten in place in one copy; else the few rows are inserted, never
+    sorting the many.
+    """
+    ids, rows, props = table
+    at = _positions(ids, drop)
+    at = np.unique(at[at >= 0])
+    new_ids = np.concatenate([a[0] for a in added])
+    order = np.argsort(new_ids, kind="stable")
+    new_ids = new_ids[order]
+    new_rows = np.concatenate([a[1] for a in added])[order]
+    new_props = {n: np.concatenate([a[2][n] for a in added])[order] for n in props}
+    if len(at) == len(new_ids) and np.array_equal(ids[at], new_ids):
+        out_rows, out_props = rows.copy(), {n: v.copy() for n, v in props.items()}
+        out_rows[at] = new_rows
+        for n in props:
+            out_props[n][at] = new_props[n]
+        return ids.copy(), out_rows, out_props
+    keep = np.ones(len(ids), dtype=bool)
+    keep[at] = False
+    kept = ids[keep]
+    where = np.searchsorted(kept, new_ids)
+    return (
+        np.insert(kept, where, new_ids),
+        np.insert(rows[keep], where, new_rows, axis=0),
+        {n: np.insert(v[keep], where, new_props[n], axis=0) for n, v in props.items()},
+    )
+
+
 def _take_rows(
     into: MeshState, drop_v: IntArray, drop_c: IntArray, sources: list[tuple[MeshState, IntArray, IntArray]]
 ) -> MeshState:
     """``into`` without the rows ``drop_*``, with the rows of these ids taken from each source (when it has them)."""
-    keep_v = ~_contains(np.sort(drop_v), into.vertex_ids)
-    keep_c = ~_contains(np.sort(drop_c), into.cell_ids)
-    parts_v = [
-        (into.vertex_ids[keep_v], into.vertices[keep_v], {n: v[keep_v] for n, v in into.vertex_properties.items()})
-    ]
-    parts_c = [(into.cell_ids[keep_c], into.cells[keep_c], {n: v[keep_c] for n, v in into.cell_properties.items()})]
+    added_v: list[Table] = []
+    added_c: list[Table] = []
     for source, vids, cids in sources:
         at = _positions(source.vertex_ids, vids)
         at = at[at >= 0]
-        parts_v.append(
+        added_v.append(
             (source.vertex_ids[at], source.vertices[at], {n: v[at] for n, v in source.vertex_properties.items()})
         )
         at = _positions(source.cell_ids, cids)
         at = at[at >= 0]
-        parts_c.append((source.cell_ids[at], source.cells[at], {n: v[at] for n, v in source.cell_properties.items()}))
-
-    def joined(parts: list[tuple[IntArray, npt.NDArray[Any], dict[str, npt.NDArray[Any]]]]) -> tuple[Any, ...]:
-        if len(parts) == 1 or all(len(p[0]) == 0 for p in parts[1:]):
-            return parts[0]
-        ids = np.concatenate([p[0] for p in parts])
-        order = np.argsort(ids, kind="stable")
-        rows = np.concatenate([p[1] for p in parts])[order]
-        props = {n: np.concatenate([p[2][n] for p in parts])[order] for n in parts[0][2]}
-        return ids[order], rows, props
-
-    vids, xyz, vprops = joined(parts_v)
-    cids, cells, cprops = joined(parts_c)
+        added_c.append((source.cell_ids[at], source.cells[at], {n: v[at] for n, v in source.cell_properties.items()}))
+    vids, xyz, vprops = _replace_rows((into.vertex_ids, into.vertices, dict(into.vertex_properties)), drop_v, added_v)
+    cids, cells, cprops = _replace_rows((into.cell_ids, into.cells, dict(into.cell_properties)), drop_c, added_c)
     return _unchecked_state(into, vids, xyz, cids, cells, vprops, cprops)
 
 
@@ -929,15 +985,14 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
     sources = [(merge.child, child_v, child_c), (merge.base, base_v, base_c)]
     state = _take_rows(merge.parent, drop_v, drop_c, sources)
     if by_source["manual"]:  # ids no state has: a manual mesh's new rows
-        known_v = np.union1d(np.union1d(merge.base.vertex_ids, merge.parent.vertex_ids), merge.child.vertex_ids)
-        known_c = np.union1d(np.union1d(merge.base.cell_ids, merge.parent.cell_ids), merge.child.cell_ids)
+        states = (merge.base, merge.parent, merge.child)
     manual_new: list[tuple[IntArray, IntArray]] = []
     for index in by_source["manual"]:
         manual = solutions[index]
         assert isinstance(manual, MeshState)
         in_v, in_c = ids_of([index])
-        take_v = _contains(in_v, manual.vertex_ids) | ~_contains(known_v, manual.vertex_ids)
-        take_c = _contains(in_c, manual.cell_ids) | ~_contains(known_c, manual.cell_ids)
+        take_v = _contains(in_v, manual.vertex_ids) | ~_known(manual.vertex_ids, *(s.vertex_ids for s in states))
+        take_c = _contains(in_c, manual.cell_ids) | ~_known(manual.cell_ids, *(s.cell_ids for s in states))
         _check_outside_rows(name, index, manual, state, ~take_v, ~take_c)
         manual_new.append(
             (
@@ -993,19 +1048,14 @@ def _check_valid(
     near = np.unique(np.concatenate([taken_cells.ravel(), replaced.ravel(), new_v]))
 
     missing = ~_contains(state.vertex_ids, taken_cells)
-    kept_parent = ~_contains(np.sort(new_c), state.cell_ids)
-    gone_v = np.setdiff1d(near, state.vertex_ids)
-    if len(gone_v):
-        lost = _flags(gone_v, np.ones(len(gone_v), np.uint8), state.cells).any(axis=1)
-        lost &= kept_parent
-    else:
-        lost = np.zeros(state.n_cells, dtype=bool)
+    gone_v = near[~_contains(state.vertex_ids, near)]
+    lost = _cell_hits(gone_v, state.cells) if len(gone_v) else np.zeros(state.n_cells, dtype=bool)
     if missing.any() or lost.any():
         bad = np.union1d(taken_ids[missing.any(axis=1)], state.cell_ids[lost])
         rows = state.cells[_positions(state.cell_ids, bad)]
         raise InvalidMergeError(
             f"{name}: the merge would keep {word}s {_ids_text(bad)} on vertices "
-            f"{_ids_text(np.setdiff1d(rows, state.vertex_ids))} that it removes",
+            f"{_ids_text(np.unique(rows[~_contains(state.vertex_ids, rows)]))} that it removes",
             hint="one side removed vertices the other side's cells use: solve the region with one side's rows",
         )
 
@@ -1013,24 +1063,31 @@ def _check_valid(
         """(cell ids, cells) of a state's cells on any vertex near the change."""
         if len(near) == 0 or s.n_cells == 0:
             return s.cell_ids[:0], s.cells[:0]
-        hit = _flags(near, np.ones(len(near), np.uint8), s.cells).any(axis=1)
+        hit = _cell_hits(near, s.cells)
         return s.cell_ids[hit], s.cells[hit]
 
     mine_ids, mine = local(state)
-    sides = [local(merge.parent), local(merge.child)]
+    sides_found: list[tuple[IntArray, IntArray]] = []
+
+    def sides() -> list[tuple[IntArray, IntArray]]:  # the two sides near the change: only to excuse a finding
+        if not sides_found:
+            sides_found.extend([local(merge.parent), local(merge.child)])
+        return sides_found
+
     # duplicated cells (the same vertices, any order) among the taken ones
     keys = np.sort(mine, axis=1)
-    _refuse_new_excess(name, f"{word}s", keys, mine_ids, taken_ids, [np.sort(c, axis=1) for _, c in sides], 1)
+    _refuse_new_excess(name, f"{word}s", keys, mine_ids, taken_ids, lambda: [np.sort(c, axis=1) for _, c in sides()], 1)
     if k >= 3:  # an edge of triangles, a face of tetrahedra, shared by more than two cells
         what = "edge" if k == 3 else "face"
         faces, owners = _facets(mine, mine_ids)
-        side_faces = [_facets(c, i)[0] for i, c in sides]
-        _refuse_new_excess(name, f"{what}s (non-manifold)", faces, owners, taken_ids, side_faces, 2)
+        _refuse_new_excess(
+            name, f"{what}s (non-manifold)", faces, owners, taken_ids, lambda: [_facets(c, i)[0] for i, c in sides()], 2
+        )
     # vertices near the change left without cells, which both sides used
     used = np.unique(mine)
-    dangling = np.setdiff1d(np.intersect1d(near, state.vertex_ids), used)
+    dangling = near[_contains(state.vertex_ids, near) & ~_contains(used, near)]
     if len(dangling):
-        for s, (_, c) in zip((merge.parent, merge.child), sides):
+        for s, (_, c) in zip((merge.parent, merge.child), sides()):
             unused_there = _contains(s.vertex_ids, dangling) & ~_contains(np.unique(c), dangling)
             dangling = dangling[~unused_there]
         if len(dangling):
@@ -1055,7 +1112,13 @@ def _counts(keys: IntArray) -> tuple[IntArray, IntArray]:
 
 
 def _refuse_new_excess(
-    name: str, what: str, keys: IntArray, owners: IntArray, taken: IntArray, side_keys: list[IntArray], limit: int
+    name: str,
+    what: str,
+    keys: IntArray,
+    owners: IntArray,
+    taken: IntArray,
+    side_keys: Callable[[], list[IntArray]],
+    limit: int,
 ) -> None:
     """Refuse keys held by more than ``limit`` cells, one of them taken, that neither side has so often."""
     unique, counts = _counts(keys)
@@ -1070,7 +1133,10 @@ def _refuse_new_excess(
         _, inverse = np.unique(both, axis=0, return_inverse=True)
         return np.isin(inverse.ravel()[len(table) :], inverse.ravel()[: len(table)])
 
-    for side in side_keys:
+    over = over[rows_in(over, keys[_contains(np.sort(taken), owners)])]  # only what a taken cell is part of
+    if len(over) == 0:
+        return
+    for side in side_keys():
         su, sc = _counts(side)
         over = over[~rows_in(over, su[sc > limit])]
     bad_rows = rows_in(keys, over)
