@@ -145,7 +145,7 @@ def _values_equal(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> BoolArray:
 
 def _value_bits(values: npt.NDArray[Any]) -> npt.NDArray[np.uint64]:
     """(n, c) uint64 words of property values, equal words for equal values (one NaN, no -0.0)."""
-    column = values.reshape(len(values), -1)
+    column = values.reshape(len(values), int(np.prod(values.shape[1:], dtype=np.int64)))
     if column.dtype.kind == "f":
         floats = np.asarray(column, dtype=np.float64) + 0.0
         floats[np.isnan(floats)] = np.nan
@@ -384,7 +384,7 @@ def _edit(base: MeshState, side: MeshState) -> _Edit:
 
 
 def _row_keys(parts: list[npt.NDArray[np.uint64]]) -> list[bytes]:
-    rows = np.ascontiguousarray(np.concatenate([p.reshape(len(p), -1) for p in parts], axis=1))
+    rows = np.ascontiguousarray(np.concatenate(parts, axis=1))
     return [r.tobytes() for r in rows]
 
 
@@ -1028,7 +1028,7 @@ def _check_outside_rows(
 def _check_valid(
     merge: MeshMerge, state: MeshState, drop_v: IntArray, drop_c: IntArray, manual_new: list[tuple[IntArray, IntArray]]
 ) -> None:
-    """Refuse a merged state that is no valid mesh where neither side was invalid; only the changed rows are looked at.
+    """Refuse a merged state that is invalid where neither the base nor a side was; only the changed rows are looked at.
 
     Rows not replaced are the parent's, which was valid, so only the rows taken
     from elsewhere, and the vertices they and the dropped rows touch, can break it.
@@ -1069,30 +1069,44 @@ def _check_valid(
     mine_ids, mine = local(state)
     sides_found: list[tuple[IntArray, IntArray]] = []
 
-    def sides() -> list[tuple[IntArray, IntArray]]:  # the two sides near the change: only to excuse a finding
+    def sides() -> list[tuple[IntArray, IntArray]]:  # the three states near the change: only to excuse a finding
         if not sides_found:
-            sides_found.extend([local(merge.parent), local(merge.child)])
+            sides_found.extend([local(merge.parent), local(merge.child), local(merge.base)])
         return sides_found
 
     # duplicated cells (the same vertices, any order) among the taken ones
     keys = np.sort(mine, axis=1)
-    _refuse_new_excess(name, f"{word}s", keys, mine_ids, taken_ids, lambda: [np.sort(c, axis=1) for _, c in sides()], 1)
+    _refuse_new_excess(
+        name,
+        f"duplicated {word}s (the same vertices)",
+        keys,
+        mine_ids,
+        taken_ids,
+        lambda: [np.sort(c, axis=1) for _, c in sides()],
+        1,
+    )
     if k >= 3:  # an edge of triangles, a face of tetrahedra, shared by more than two cells
         what = "edge" if k == 3 else "face"
         faces, owners = _facets(mine, mine_ids)
         _refuse_new_excess(
-            name, f"{what}s (non-manifold)", faces, owners, taken_ids, lambda: [_facets(c, i)[0] for i, c in sides()], 2
+            name,
+            f"non-manifold {what}s (in more than two {word}s)",
+            faces,
+            owners,
+            taken_ids,
+            lambda: [_facets(c, i)[0] for i, c in sides()],
+            2,
         )
-    # vertices near the change left without cells, which both sides used
+    # vertices near the change left without cells, which no state leaves so
     used = np.unique(mine)
     dangling = near[_contains(state.vertex_ids, near) & ~_contains(used, near)]
     if len(dangling):
-        for s, (_, c) in zip((merge.parent, merge.child), sides()):
+        for s, (_, c) in zip((merge.parent, merge.child, merge.base), sides()):
             unused_there = _contains(s.vertex_ids, dangling) & ~_contains(np.unique(c), dangling)
             dangling = dangling[~unused_there]
         if len(dangling):
             raise InvalidMergeError(
-                f"{name}: the merge would leave vertices {_ids_text(dangling)} without {word}s (both sides use them)",
+                f"{name}: the merge would leave vertices {_ids_text(dangling)} without {word}s, which no state does",
                 hint="solve the region with one side's rows",
             )
 
@@ -1120,7 +1134,7 @@ def _refuse_new_excess(
     side_keys: Callable[[], list[IntArray]],
     limit: int,
 ) -> None:
-    """Refuse keys held by more than ``limit`` cells, one of them taken, that neither side has so often."""
+    """Refuse keys held by more than ``limit`` cells, one of them taken, that no state (base, sides) has so often."""
     unique, counts = _counts(keys)
     over = unique[counts > limit]
     if len(over) == 0:
@@ -1143,8 +1157,8 @@ def _refuse_new_excess(
     bad_owners = np.intersect1d(owners[bad_rows], taken)
     if len(bad_owners):
         raise InvalidMergeError(
-            f"{name}: the merge would make {what} {_ids_text([tuple(r) for r in over.tolist()])} that neither side "
-            f"has, with cells {_ids_text(np.unique(owners[bad_rows]))}",
+            f"{name}: the merge would make {what} that no state has: vertex ids "
+            f"{_ids_text([str(tuple(r)) for r in over.tolist()])}, cells {_ids_text(np.unique(owners[bad_rows]))}",
             hint="solve the region with one side's rows, or give a manual mesh without them",
         )
 
