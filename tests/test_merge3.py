@@ -88,10 +88,11 @@ def bits(xyz: Iterable[float]) -> tuple[int, ...]:
 
 
 def assert_same_rows(got: MeshState, expected: Rows) -> None:
-    """Exactly these rows: the same ids, coordinates bit for bit, properties, cell rows."""
+    """Exactly these rows: the same ids, coordinates bit for bit, properties, oriented cells."""
     rows = rows_of(got)
     assert {i: bits(x) for i, x in rows.verts.items()} == {i: bits(x) for i, x in expected.verts.items()}
-    assert rows.cells == expected.cells
+    # cells as oriented cells: a row rotated by an even permutation is the same cell (either row may be kept)
+    assert {c: canonical(r) for c, r in rows.cells.items()} == {c: canonical(r) for c, r in expected.cells.items()}
     assert rows.vprop == expected.vprop and rows.cprop == expected.cprop
 
 
@@ -149,7 +150,11 @@ def edit(draw: st.DrawFn, rows: Rows, zone: set[int] | None, count: int) -> None
         cells_inside = sorted(c for c, row in rows.cells.items() if all(v in inside for v in row))
         if not inside:
             return
-        action = draw(st.sampled_from(["move", "move", "ulp", "prop", "cprop", "remove_vertex", "split", "add_cell"]))
+        action = draw(
+            st.sampled_from(
+                ["move", "move", "ulp", "prop", "cprop", "remove_vertex", "split", "add_cell", "rotate", "reverse"]
+            )
+        )
         v = draw(st.sampled_from(inside))
         if action == "move":
             x, y, z = rows.verts[v]
@@ -176,6 +181,20 @@ def edit(draw: st.DrawFn, rows: Rows, zone: set[int] | None, count: int) -> None
                 new[i] = x
                 rows.cells[rows.new_id()] = tuple(new)
                 rows.cprop[max(rows.cells)] = 2.0
+        elif action == "rotate" and cells_inside and k >= 3:  # the same oriented cell in another row: no change
+            c = draw(st.sampled_from(cells_inside))
+            rows.cells[c] = (
+                rows.cells[c][1:] + rows.cells[c][:1]
+                if k == 3
+                else rows.cells[c][1:3]
+                + (
+                    rows.cells[c][0],
+                    rows.cells[c][3],
+                )
+            )
+        elif action == "reverse" and cells_inside and k >= 2:  # the cell turned over: a change
+            c = draw(st.sampled_from(cells_inside))
+            rows.cells[c] = rows.cells[c][::-1] if k != 3 else (rows.cells[c][1], rows.cells[c][0], rows.cells[c][2])
         elif action == "add_cell" and len(inside) >= k - 1:
             x = rows.new_id()
             base_xyz = rows.verts[v]
@@ -718,3 +737,18 @@ def test_a_mesh_state_round_trips_a_mesh_and_sorts_rows_by_id() -> None:
     assert {frozenset(map(tuple, back.vertices[t])) for t in back.cells} == {
         frozenset(map(tuple, surface.vertices[t])) for t in surface.cells
     }
+
+
+def test_a_manual_mesh_removing_a_vertex_that_cells_outside_its_region_use_is_refused() -> None:
+    base, _ = _small_grid()
+    parent, child = base.copy(), base.copy()
+    del parent.cells[0], parent.cprop[0]  # the triangle (0, 2, 3): its corners join the parent's region
+    child.verts[0] = (0.0, 0.0, 4.0)  # the cells around vertex 0 join the child's
+    merge = three_way_merge(base.state(), parent.state(), child.state())
+    (region,) = merge.conflicts
+    assert set(region.vertex_ids.tolist()) == {0, 2, 3} and set(region.cell_ids.tolist()) == {0, 1}
+    manual = parent.copy()
+    manual.remove_vertex(3)  # and its cells: 1 of the region, 3 outside it (which the manual mesh leaves out)
+    manual.cells, manual.cprop = {}, {}
+    with pytest.raises(tgsis.InvalidMergeError, match=rf"{NAME}: the merge would keep triangles 3 on vertices 3 that"):
+        apply_solutions(merge, {region.index: manual.state()})
