@@ -40,7 +40,9 @@ def patch(side: int, row0: int, col0: int, rows: int = 40, cols: int = 25) -> np
     return (r * side + c).ravel()
 
 
-def edited(surface: tgsis.Surface, moved: np.ndarray, dz: float, changed_property: np.ndarray | None = None) -> MeshState:
+def edited(
+    surface: tgsis.Surface, moved: np.ndarray, dz: float, changed_property: np.ndarray | None = None
+) -> MeshState:
     vertices = surface.vertices.copy()
     vertices[moved, 2] += dz
     porosity = surface.vertex_properties["porosity"].copy()

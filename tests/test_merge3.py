@@ -672,9 +672,8 @@ def test_a_manual_mesh_with_a_duplicated_cell_is_refused() -> None:
     (region,) = merge.conflicts
     manual = rows_of(merge.parent)
     twin = manual.new_id() + 1000
-    manual.cells[twin], manual.cprop[twin] = (3, 1, 0), 0.0  # base cell 0 is (0, 2, 3)? no: (0, 2, 3) in some order
     first = base.cells[0]
-    manual.cells[twin] = (first[1], first[2], first[0])
+    manual.cells[twin], manual.cprop[twin] = (first[1], first[2], first[0]), 0.0  # cell 0 again, another row
     with pytest.raises(
         tgsis.InvalidMergeError, match=rf"{NAME}: the merge would make duplicated triangles .*cells 0, {twin}"
     ):
@@ -716,16 +715,26 @@ def test_solutions_are_only_for_conflicts_and_a_manual_mesh_stays_in_its_region(
 def test_states_that_cannot_be_merged_are_refused() -> None:
     base, _ = _small_grid()
     state = base.state()
-    lines = MeshState(2, [0, 1], [[0, 0, 0], [1, 1, 1]], [0], [[0, 1]], {"porosity": [0, 0]}, {"facies": [0]}, NAME)
+    a = np.asarray
+    lines = MeshState(
+        2,
+        a([0, 1]),
+        a([[0, 0, 0], [1, 1, 1.0]]),
+        a([0]),
+        a([[0, 1]]),
+        {"porosity": a([0, 0])},
+        {"facies": a([0])},
+        NAME,
+    )
     with pytest.raises(tgsis.InvalidGeometryError, match="cannot merge cells of 3 and 2 vertices"):
         three_way_merge(state, state, lines)
     other = MeshState(3, state.vertex_ids, state.vertices, state.cell_ids, state.cells, {}, {}, NAME)
     with pytest.raises(tgsis.InvalidPropertyError, match="vertex properties differ"):
         three_way_merge(state, other, state)
     with pytest.raises(tgsis.InvalidGeometryError, match="vertex ids 1 are given twice"):
-        MeshState(1, [1, 1], [[0, 0, 0], [1, 1, 1]], [], [])
+        MeshState(1, a([1, 1]), a([[0, 0, 0], [1, 1, 1.0]]), a([], dtype=np.int64), a([], dtype=np.int64))
     with pytest.raises(tgsis.InvalidGeometryError, match="points 3 use vertex ids 9"):
-        MeshState(1, [1, 2], [[0, 0, 0], [1, 1, 1]], [3], [[9]])
+        MeshState(1, a([1, 2]), a([[0, 0, 0], [1, 1, 1.0]]), a([3]), a([[9]]))
 
 
 def test_a_mesh_state_round_trips_a_mesh_and_sorts_rows_by_id() -> None:
