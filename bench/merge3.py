@@ -12,7 +12,11 @@ runs, in the same process:
 - the baseline: ``compare_meshes(base, parent)`` of the same meshes (the
   comparison check-in by difference runs on one edit today);
 - with conflicts: the child's patch moved onto the parent's (overlapping
-  edits), ``three_way_merge`` and then ``apply_solutions`` with ``child``.
+  edits), ``three_way_merge`` and then ``apply_solutions`` with ``child``;
+- edits that add and remove rows: the parent removes 500 vertices of its
+  patch with their triangles, the child splits 500 triangles of its patch
+  into fans of three around a new vertex, its new ids the same as the
+  parent's would be (renumbered), so that rows are inserted, not rewritten.
 
 The merged state is checked to be exactly the union of the two edits before
 anything is timed. No database here.
@@ -51,6 +55,45 @@ def edited(
     return MeshState.from_mesh(tgsis.Surface(vertices, surface.cells, vertex_properties={"porosity": porosity}))
 
 
+def remove_vertices(state: MeshState, gone: np.ndarray) -> MeshState:
+    """The state without these vertex ids and the cells on them."""
+    keep_v = ~np.isin(state.vertex_ids, gone)
+    keep_c = ~np.isin(state.cells, gone).any(axis=1)
+    return MeshState(
+        3,
+        state.vertex_ids[keep_v],
+        state.vertices[keep_v],
+        state.cell_ids[keep_c],
+        state.cells[keep_c],
+        {n: v[keep_v] for n, v in state.vertex_properties.items()},
+        {n: v[keep_c] for n, v in state.cell_properties.items()},
+        state.name,
+    )
+
+
+def split_cells(state: MeshState, cells: np.ndarray) -> MeshState:
+    """The state with these cell ids (positions, ids 0..m-1) split into three around a new vertex at the centre."""
+    rows = state.cells[cells]
+    first_v = int(state.vertex_ids.max()) + 1
+    first_c = int(state.cell_ids.max()) + 1
+    new_v = first_v + np.arange(len(cells))
+    centres = state.vertices[rows].mean(axis=1) + [0.0, 0.0, 1.0]
+    a, b, c = rows[:, 0], rows[:, 1], rows[:, 2]
+    fans = np.concatenate([np.stack(t, axis=1) for t in ((a, b, new_v), (b, c, new_v), (c, a, new_v))])
+    keep = np.ones(state.n_cells, dtype=bool)
+    keep[cells] = False
+    return MeshState(
+        3,
+        np.concatenate([state.vertex_ids, new_v]),
+        np.concatenate([state.vertices, centres]),
+        np.concatenate([state.cell_ids[keep], first_c + np.arange(len(fans))]),
+        np.concatenate([state.cells[keep], fans]),
+        {n: np.concatenate([v, np.zeros(len(cells))]) for n, v in state.vertex_properties.items()},
+        {},
+        state.name,
+    )
+
+
 def merge_figures(side: int = 1000, repeat: int = 3) -> dict[str, Any]:
     surface = grid_surface(side)
     base = MeshState.from_mesh(surface, name="bench")
@@ -77,6 +120,29 @@ def merge_figures(side: int = 1000, repeat: int = 3) -> dict[str, Any]:
     assert len(conflicting.conflicts) == 1
     solution = {conflicting.conflicts[0].index: "child"}
 
+    # rows added and removed: the parent removes vertices, the child splits triangles (their new ids collide)
+    removed = patch(side, 10, 10)[::2]
+    c_quads = patch(side - 1, side - 60, side - 60)[:500]
+    rows_parent = remove_vertices(base, removed)
+    rows_child = split_cells(base, c_quads)
+    rows_parent = MeshState(
+        3,
+        np.concatenate([rows_parent.vertex_ids, [base.n_vertices]]),
+        np.concatenate([rows_parent.vertices, [[0.0, 0.0, 0.0]]]),
+        rows_parent.cell_ids,
+        rows_parent.cells,
+        {"porosity": np.concatenate([rows_parent.vertex_properties["porosity"], [0.0]])},
+        {},
+        "bench",
+    )  # a lone new vertex of the parent: the child's first new id is renumbered
+    structural = three_way_merge(base, rows_parent, rows_child)
+    assert structural.merged is not None and not structural.conflicts
+    merged = structural.merged.state
+    assert merged.n_vertices == base.n_vertices - len(removed) + 1 + 500
+    assert merged.n_cells == rows_parent.n_cells + 2 * 500
+    assert structural.child_vertex_renumbering.tolist() == [[base.n_vertices, base.n_vertices + 500]]
+    t_structural = timed(lambda: three_way_merge(base, rows_parent, rows_child), repeat)
+
     base_mesh, parent_mesh = base.to_mesh(), parent.to_mesh()
     t_merge = timed(lambda: three_way_merge(base, parent, child), repeat)
     t_compare = timed(lambda: tgsis.compare_meshes(base_mesh, parent_mesh), repeat)
@@ -91,12 +157,14 @@ def merge_figures(side: int = 1000, repeat: int = 3) -> dict[str, Any]:
     print(f"baseline: compare_meshes(base, parent):      {t_compare:6.3f} s  (merge is {t_merge / t_compare:.2f}x)")
     print(f"three_way_merge, overlapping edits:          {t_conflict:6.3f} s  (1 conflicting region)")
     print(f"apply_solutions(child) of that conflict:     {t_solve:6.3f} s")
+    print(f"three_way_merge, rows added and removed:     {t_structural:6.3f} s  (500 vertices removed, 500 split)")
     return {
         "merge_disjoint_s": round(t_merge, 3),
         "compare_baseline_s": round(t_compare, 3),
         "merge_vs_compare": round(t_merge / t_compare, 2),
         "merge_overlapping_s": round(t_conflict, 3),
         "apply_solution_s": round(t_solve, 3),
+        "merge_rows_added_removed_s": round(t_structural, 3),
     }
 
 

@@ -286,13 +286,13 @@ def renumbered_child(child: Rows, merge: MeshMerge) -> Rows:
 
 def check_renumbering(base: Rows, parent: Rows, child: Rows, merge: MeshMerge) -> None:
     """Only the child's new ids the parent uses for something else change, to fresh ids above all."""
-    top = max([*base.verts, *parent.verts, *child.verts, *base.cells, *parent.cells, *child.cells])
     vmap = dict(merge.child_vertex_renumbering.tolist())
     for kind, renumbering, mine, theirs, known in (
         ("v", merge.child_vertex_renumbering, child.verts, parent.verts, base.verts),
         ("c", merge.child_cell_renumbering, child.cells, parent.cells, base.cells),
     ):
         mapping = dict(renumbering.tolist())
+        top = max([*known, *theirs, *mine], default=-1)  # fresh ids: above every id of this kind of row
         new = set(mine) - set(known)
         assert set(mapping) <= new
         for old in new:
@@ -555,10 +555,10 @@ def test_the_same_new_id_meaning_two_things_is_renumbered_and_both_are_kept() ->
     assert max(parent.verts) == max(child.verts)
     merge = three_way_merge(base.state(), parent.state(), child.state())
     assert not merge.conflicts and merge.merged is not None
-    top = max([*base.verts, *base.cells, *parent.verts, *parent.cells])
     ((old_v, new_v),) = merge.child_vertex_renumbering.tolist()
     ((old_c, new_c),) = merge.child_cell_renumbering.tolist()
-    assert old_v == max(child.verts) and new_v > top and old_c == max(child.cells) and new_c > top and new_v != new_c
+    assert (old_v, new_v) == (max(child.verts), max([*parent.verts, *child.verts]) + 1)
+    assert (old_c, new_c) == (max(child.cells), max([*parent.cells, *child.cells]) + 1)
     state = merge.merged.state
     assert state.n_vertices == len(base.verts) + 2 and state.n_cells == len(base.cells) + 2
     row = state.cells[state.cell_ids == new_c][0]

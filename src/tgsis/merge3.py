@@ -436,19 +436,16 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     empty = np.empty((0, 2), dtype=np.int64)
     if (len(c_new_v) == 0 or len(p_new_v) == 0) and (len(c_new_c) == 0 or len(p_new_c) == 0):
         return child, empty, empty
-    top = max(
-        [int(s.vertex_ids[-1]) for s in (base, parent, child) if s.n_vertices]
-        + [int(s.cell_ids[-1]) for s in (base, parent, child) if s.n_cells]
-        + [-1]
-    )
+    top_v = max([int(s.vertex_ids[-1]) for s in (base, parent, child) if s.n_vertices] + [-1])
+    top_c = max([int(s.cell_ids[-1]) for s in (base, parent, child) if s.n_cells] + [-1])
 
     def vertex_keys(state: MeshState, ids: IntArray) -> list[bytes]:
         at = _positions(state.vertex_ids, ids)
         words = [_value_bits(state.vertices[at])] + [_value_bits(v[at]) for v in state.vertex_properties.values()]
         return _row_keys(words)
 
-    merged_v, next_id = _renumber(
-        c_new_v, vertex_keys(child, c_new_v), p_new_v, vertex_keys(parent, p_new_v), parent.vertex_ids, top + 1
+    merged_v, _ = _renumber(
+        c_new_v, vertex_keys(child, c_new_v), p_new_v, vertex_keys(parent, p_new_v), parent.vertex_ids, top_v + 1
     )
     vmap_old, vmap_new = c_new_v[merged_v != c_new_v], merged_v[merged_v != c_new_v]
     cells = child.cells
@@ -467,7 +464,7 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
         p_new_c,
         cell_keys(parent, parent.cells, p_new_c),
         parent.cell_ids,
-        next_id,
+        top_c + 1,
     )
     cmap_old, cmap_new = c_new_c[merged_c != c_new_c], merged_c[merged_c != c_new_c]
     cell_ids = child.cell_ids
@@ -597,8 +594,8 @@ class MeshMerge:
     child_vertex_renumbering, child_cell_renumbering : (r, 2) int64
         ``(child id, merged id)`` of the child's new rows whose id changed:
         the parent's new row with the same content (the same edit made twice),
-        or a fresh id above every id of the three states (the same id meaning
-        something else on the parent).
+        or a fresh id above every vertex (cell) id of the three states (the
+        same id meaning something else on the parent).
     merged : ResolvedMerge or None
         The merge, when no region conflicts.
     """
