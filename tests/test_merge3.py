@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from unittest import mock
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -24,6 +25,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tgsis
+import tgsis.merge3
 from tgsis.merge3 import MeshMerge, MeshState, apply_solutions, three_way_merge
 
 PROPERTY = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -761,3 +763,11 @@ def test_a_manual_mesh_removing_a_vertex_that_cells_outside_its_region_use_is_re
     manual.cells, manual.cprop = {}, {}
     with pytest.raises(tgsis.InvalidMergeError, match=rf"{NAME}: the merge would keep triangles 3 on vertices 3 that"):
         apply_solutions(merge, {region.index: manual.state()})
+
+
+def test_the_same_answers_when_ids_are_looked_up_through_tables() -> None:
+    # large meshes look ids up through a table of positions (small ones by binary search): both must agree
+    with mock.patch.object(tgsis.merge3, "_TABLE_FROM", 1):
+        test_disjoint_edits_merge_into_exactly_the_union()
+        test_regions_and_conflicts_are_those_of_the_rule()
+        test_every_solution_gives_the_stated_mesh_and_says_what_it_discards()
