@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import itertools
 import math
-from unittest import mock
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from unittest import mock
 
 import networkx as nx
 import numpy as np
