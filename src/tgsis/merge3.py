@@ -75,10 +75,24 @@ def _strictly_increasing(ids: IntArray) -> bool:
     return len(ids) < 2 or bool(np.all(ids[1:] > ids[:-1]))
 
 
+_TABLE_FROM = 1 << 14  # ids looked up through a table of positions from this many on both sides
+
+
 def _positions(sorted_ids: IntArray, query: IntArray) -> IntArray:
-    """Per query id, its position in ``sorted_ids`` (strictly increasing), or -1."""
+    """Per query id, its position in ``sorted_ids`` (strictly increasing), or -1.
+
+    Many ids in many ids over a range not much larger than their number (the
+    usual: ids 0..n-1 with a few gaps) go through a table of positions, one
+    gather; else a binary search.
+    """
     if len(sorted_ids) == 0:
         return np.full(np.shape(query), -1, dtype=np.int64)
+    if np.size(query) >= _TABLE_FROM and len(sorted_ids) >= _TABLE_FROM:
+        lo, hi = int(sorted_ids[0]), int(sorted_ids[-1])
+        if hi - lo <= 4 * len(sorted_ids):
+            table = np.full(hi - lo + 3, -1, dtype=np.int64)  # a -1 pad on each side: clipped lookups hit it
+            table[sorted_ids - (lo - 1)] = np.arange(len(sorted_ids), dtype=np.int64)
+            return np.take(table, np.subtract(query, lo - 1, dtype=np.int64), mode="clip")
     pos = np.searchsorted(sorted_ids, query)
     np.minimum(pos, len(sorted_ids) - 1, out=pos)
     return np.where(sorted_ids[pos] == query, pos, -1).astype(np.int64)
@@ -475,15 +489,17 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     if len(vmap_old):
         at = _positions(vmap_old, vertex_ids)
         vertex_ids = np.where(at >= 0, vmap_new[np.maximum(at, 0)], vertex_ids)
-    renumbered = MeshState(
-        child.cell_size,
-        vertex_ids,
-        child.vertices,
-        cell_ids,
-        cells,
-        child.vertex_properties,
-        child.cell_properties,
-        child.name,
+    # a consistent renaming of a valid state: only the order by id may need restoring
+    vorder = slice(None) if _strictly_increasing(vertex_ids) else np.argsort(vertex_ids, kind="stable")
+    corder = slice(None) if _strictly_increasing(cell_ids) else np.argsort(cell_ids, kind="stable")
+    renumbered = _unchecked_state(
+        child,
+        vertex_ids[vorder],
+        child.vertices[vorder],
+        cell_ids[corder],
+        cells[corder],
+        {n: v[vorder] for n, v in child.vertex_properties.items()},
+        {n: v[corder] for n, v in child.cell_properties.items()},
     )
     return renumbered, np.stack([vmap_old, vmap_new], axis=1), np.stack([cmap_old, cmap_new], axis=1)
 
