@@ -771,3 +771,30 @@ def test_the_same_answers_when_ids_are_looked_up_through_tables() -> None:
         test_disjoint_edits_merge_into_exactly_the_union()
         test_regions_and_conflicts_are_those_of_the_rule()
         test_every_solution_gives_the_stated_mesh_and_says_what_it_discards()
+
+
+def test_values_are_compared_as_numbers_nan_equal_nan_and_vectors_by_component() -> None:
+    surface = tgsis.Surface(*_cylinder(6, 4))
+    n = surface.n_vertices
+    dip = np.zeros((n, 2))
+    dip[3] = np.nan  # a NULL of the database, on every side: no change
+    base = MeshState.from_mesh(
+        tgsis.Surface(surface.vertices, surface.cells, vertex_properties={"dip": dip}), name=NAME
+    )
+    vertices = surface.vertices.copy()
+    vertices[0, 0] = -0.0  # the same number as 0.0: not moved
+    assert surface.vertices[0, 0] == 0.0
+    parent_dip = dip.copy()
+    parent_dip[20, 1] = 7.0  # one component of a vector changed
+    child_dip = dip.copy()
+    child_dip[5, 0] = np.nan  # a value made NULL
+    parent = MeshState.from_mesh(tgsis.Surface(vertices, surface.cells, vertex_properties={"dip": parent_dip}))
+    child = MeshState.from_mesh(tgsis.Surface(surface.vertices, surface.cells, vertex_properties={"dip": child_dip}))
+    merge = three_way_merge(base, parent, child)
+    assert [(r.sides, r.vertex_ids.tolist(), r.cell_ids.tolist()) for r in merge.regions] == [
+        ("child", [5], []),
+        ("parent", [20], []),
+    ]
+    assert merge.merged is not None
+    got = merge.merged.state.vertex_properties["dip"]
+    assert got[20, 1] == 7.0 and np.isnan(got[5, 0]) and np.isnan(got[3]).all()
