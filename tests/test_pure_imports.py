@@ -25,6 +25,7 @@ PURE = [
     "tgsis.convert",
     "tgsis.compare",
     "tgsis.edits",
+    "tgsis.merge3",
     "tgsis.temporal",
     "tgsis.interpolation",
     "tgsis.gmaps",

@@ -39,6 +39,7 @@ from tgsis.errors import (
     InvalidGeometryError,
     InvalidGMapError,
     InvalidInputError,
+    InvalidMergeError,
     InvalidNameError,
     InvalidPropertyError,
     LocalServerError,
@@ -57,6 +58,15 @@ from tgsis.errors import (
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
 from tgsis.gmaps import extrude as extrude_gmap
 from tgsis.gmaps import slice as slice_gmap
+from tgsis.merge3 import (
+    MergeRegion,
+    MeshMerge,
+    MeshState,
+    RegionDiscard,
+    ResolvedMerge,
+    apply_solutions,
+    three_way_merge,
+)
 from tgsis.mesh import (
     GeometryCollection,
     Geotype,
@@ -353,6 +363,14 @@ __all__ = [
     "MeshDiff",
     "MeshIndex",
     "compare_meshes",
+    # three-way merge of one mesh's edits per region (numpy, no database; docs/merge.md)
+    "MeshState",
+    "MergeRegion",
+    "MeshMerge",
+    "RegionDiscard",
+    "ResolvedMerge",
+    "three_way_merge",
+    "apply_solutions",
     # generalized maps, models 4 and 5 (numpy, no database; more in tgsis.gmaps)
     "GMap",
     "GMapReport",
@@ -466,6 +484,7 @@ __all__ = [
     "InvalidGeometryError",
     "InvalidGMapError",
     "InvalidInputError",
+    "InvalidMergeError",
     "InvalidNameError",
     "InvalidPropertyError",
     "LocalServerError",

@@ -44,6 +44,7 @@ __all__ = [
     "VersioningError",
     "ReadOnlyRevisionError",
     "UnsolvedConflictsError",
+    "InvalidMergeError",
     "DatabaseError",
     "LocalServerError",
     "SkippedObjectWarning",
@@ -212,6 +213,16 @@ class UnsolvedConflictsError(VersioningError):
     """A merge or refresh while objects changed on both sides have no recorded solution."""
 
     code = "TG302"
+
+
+class InvalidMergeError(VersioningError):
+    """A three-way merge of a mesh whose result would not be a valid mesh; refused, nothing merged.
+
+    A cell on a vertex the merged mesh no longer has, a cell or a non-manifold
+    edge (face) neither side had, a vertex left without cells that both sides
+    used (:mod:`tgsis.merge3`); the message names the object and the ids.
+    Its SQLSTATE is ``TG300``, the class's.
+    """
 
 
 class ObjectLockedError(VersioningError):
