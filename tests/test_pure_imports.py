@@ -91,7 +91,7 @@ def _imports(path: Path) -> list[tuple[str, list[str], bool]]:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     top = {id(node) for node in tree.body}
     return [
-        (node.module, [a.name for a in node.names], id(node) in top)
+        (node.module or "", [a.name for a in node.names], id(node) in top)
         for node in ast.walk(tree)
         if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("tgsis")
     ]
