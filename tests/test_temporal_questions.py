@@ -500,7 +500,7 @@ def test_bad_input_raises_and_changes_nothing(
         (
             tgsis.InvalidInputError,
             "convention",
-            lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", 1, convention="middle"),  # type: ignore[arg-type]
+            lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", 1, convention="middle"),  # type: ignore[arg-type]  # the bad value
         ),
     ]
     for error, match, call in cases:
