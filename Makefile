@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PYTEST_ARGS ?=
 
-.PHONY: all install demo test setup check format extension installcheck clean pictures
+.PHONY: all install demo test setup check typecheck lint format extension installcheck clean pictures
 
 # A bare `make` builds the extension scripts and `make install` installs them
 # (PGXS, the PostgreSQL of pg_config): what `pgxn install tgsis` runs (META.json).
@@ -70,12 +70,17 @@ pictures: $(VENV)/.installed
 # what ruff format keeps formatted: the whole tree of Python code (docs/developing.md, "Lint and format")
 RUFF_FORMATTED = src tests bench
 
-check: $(VENV)/.installed
-	$(BIN)/python -m mypy
-	$(BIN)/ruff check src tests bench
+check: typecheck lint
 	$(BIN)/ruff format --check $(RUFF_FORMATTED)
 
-# What pre-commit's ruff-format hook runs (.pre-commit-config.yaml): format the tree.
+# The hooks of pre-commit (.pre-commit-config.yaml) run these, with the venv's tools: the checks of
+# `make check`, one tool each; `format` writes what `check` checks.
+typecheck: $(VENV)/.installed
+	$(BIN)/python -m mypy
+
+lint: $(VENV)/.installed
+	$(BIN)/ruff check $(RUFF_FORMATTED)
+
 format: $(VENV)/.installed
 	$(BIN)/ruff format $(RUFF_FORMATTED)
 

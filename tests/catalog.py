@@ -57,7 +57,7 @@ def describe_tgsis_objects(conn: psycopg.Connection[Any], schema: str = "tgsis")
         kind: sorted(
             tuple("" if v is None else str(v) for v in row)
             for row in conn.execute(query.replace("'tgsis'", f"'{schema}'")).fetchall()
-        )  # type: ignore[arg-type]
+        )
         for kind, query in _QUERIES.items()
         if schema == "tgsis" or kind not in ("schema", "role", "error_code")
     }

@@ -48,7 +48,7 @@ def test_boxes_come_back_as_2_by_3_arrays(conn: psycopg.Connection[Any]) -> None
 
 def test_a_box_goes_in_as_a_cube(conn: psycopg.Connection[Any]) -> None:
     tgsis.register_types(conn)
-    box = tgsis.Box.of([[0, 0, 0], [1, 2, 3.25]])
+    box = tgsis.Box.of([[0.0, 0, 0], [1, 2, 3.25]])
     row = conn.execute(
         "SELECT %s::cube @> cube(ARRAY[0.5, 1, 3]::float8[]), cube_dim(%s), %s", (box, box, box)
     ).fetchone()

@@ -46,9 +46,9 @@ def _bare(conn: Conn, *, versioned: bool, alignment: str = "VERTEX") -> tuple[in
 
 def _values(conn: Conn, fid: int, name: str, alignment: str = "VERTEX") -> list[Any]:
     feature = F.fetch_feature(conn, F.get_feature_class(conn, "c2"), fid)
-    assert feature.mesh is not None
+    assert isinstance(feature.mesh, tgsis.Mesh)
     values = feature.mesh.vertex_properties if alignment == "VERTEX" else feature.mesh.cell_properties
-    return np.asarray(values[name]).tolist()
+    return list(np.asarray(values[name]).tolist())
 
 
 @pytest.mark.parametrize("versioned", [False, True], ids=["plain", "versioned"])
@@ -67,7 +67,7 @@ def test_every_stored_feature_gets_the_default(conn: Conn, versioned: bool, alig
     # new features give their own values, as in a class registered with the properties
     count = 16 if alignment == "VERTEX" else 18
     mesh = _grid(4, 2.0)
-    values = {"porosity": np.linspace(0, 1, count), "dir": np.ones((count, 3), dtype=np.float32)}
+    values: dict[str, np.ndarray] = {"porosity": np.linspace(0, 1, count), "dir": np.ones((count, 3), dtype=np.float32)}
     mesh = Surface(
         mesh.vertices,
         mesh.cells,
@@ -119,7 +119,7 @@ def test_every_version_and_revision_gets_the_rows(conn: Conn) -> None:
         assert _values(conn, first, "porosity") == [0.25] * 16
         assert _values(conn, third, "porosity") == [0.25] * 4
         moved = F.fetch_feature(conn, "c2", first).mesh
-        assert moved is not None and moved.vertices[0, 2] == 8
+        assert isinstance(moved, tgsis.Mesh) and moved.vertices[0, 2] == 8
         assert conn.execute("SELECT count(*) FROM c2 WHERE _geoid = %s", (second,)).fetchone() == (0,)
     _storage_matches_geometry(conn)
     # the child's edits and the new rows merge: DEFAULT reads the child's features with the property
@@ -199,7 +199,7 @@ def test_uploads_at_the_same_time(db_dsn: str, versioned: bool) -> None:
 
 
 def _members() -> list[Any]:
-    lines = LineSet([[10, 0, 0], [11, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
+    lines = LineSet([[10.0, 0, 0], [11.0, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
     points = PointSet([[20, 20, 20], [21, 20, 20]], name="samples")
     solid = TetraMesh(
         [[0, 0, -10], [1, 0, -10], [0, 1, -10], [0, 0, -9], [1, 1, -9]], [[0, 1, 2, 3], [1, 2, 3, 4]], name="body"

@@ -147,10 +147,13 @@ def test_files_real_tools_write_still_read(tmp_path: Path) -> None:
     import trimesh
 
     sphere = trimesh.creation.icosphere(1)
-    sphere.visual = trimesh.visual.TextureVisuals(uv=np.random.default_rng(1).random((len(sphere.vertices), 2)))
+    uv = np.random.default_rng(1).random((len(sphere.vertices), 2))
+    sphere.visual = trimesh.visual.TextureVisuals(uv=uv)  # type: ignore[no-untyped-call]  # trimesh: no annotations
     n, m = len(sphere.vertices), len(sphere.faces)
     files = {
-        "normals_uv.obj": trimesh.exchange.obj.export_obj(sphere, include_normals=True, include_texture=True),
+        "normals_uv.obj": trimesh.exchange.obj.export_obj(  # type: ignore[no-untyped-call]  # trimesh: no annotations
+            sphere, include_normals=True, include_texture=True
+        ),
         "trimesh.off": trimesh.exchange.off.export_off(sphere),
         "normals_uv.ply": trimesh.exchange.ply.export_ply(sphere, encoding="ascii", vertex_normal=True),
         "binary_normals.ply": trimesh.exchange.ply.export_ply(sphere, encoding="binary", vertex_normal=True),

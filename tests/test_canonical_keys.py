@@ -159,7 +159,7 @@ def test_every_key_type_has_one_text_under_every_setting_and_reads_back(conn: Co
             ).fetchone()  # type: ignore[misc]
             assert (text, back) == (canon, True), (t, lit, _settings(i))
             # the text reads back as the same value (the storage's lookups cast it back to the key's type)
-            assert conn.execute(f"SELECT %s::{t} = %s::{t}", (canon, lit)).fetchone()[0] in (True, None), (t, lit)
+            assert conn.execute(f"SELECT %s::{t} = %s::{t}", (canon, lit)).fetchone() in ((True,), (None,)), (t, lit)
     conn.rollback()
 
 
@@ -174,7 +174,9 @@ def test_a_key_type_without_a_canonical_text_is_refused_by_name(conn: Conn, type
     ):
         tgsis.enable_versioning(conn, "odd", "k", "odd")
     conn.rollback()
-    assert conn.execute("SELECT to_regclass('odd_ver') IS NULL AND to_regclass('odd') IS NOT NULL").fetchone()[0]
+    assert conn.execute("SELECT to_regclass('odd_ver') IS NULL AND to_regclass('odd') IS NOT NULL").fetchone() == (
+        True,
+    )
     conn.rollback()
 
 
@@ -312,8 +314,8 @@ def test_sessions_of_other_settings_see_one_object(conn: Conn, db_dsn: str, type
     finally:
         for s in (a, b, c):
             s.close()
-    rows = conn.execute("SELECT n, v FROM tgsis.rows_at(NULL::t, 'DEFAULT') ORDER BY n").fetchall()
-    assert rows == [(1, 0), (2, 100), (3, 100)]
+    seen = conn.execute("SELECT n, v FROM tgsis.rows_at(NULL::t, 'DEFAULT') ORDER BY n").fetchall()
+    assert seen == [(1, 0), (2, 100), (3, 100)]
     # every note and lock names the objects by their canonical text
     noted = {r[0] for r in conn.execute("SELECT objectkey FROM tgsis.revision_objects WHERE tablename = 't'")}
     assert noted and noted <= set(canon.values())
@@ -399,7 +401,7 @@ def test_keys_passed_from_python_name_the_object_whatever_the_settings(conn: Con
     import datetime as dt
     import decimal
 
-    tables = {
+    tables: dict[str, list[object]] = {
         "interval": [dt.timedelta(days=-1, seconds=3600), dt.timedelta(days=30), dt.timedelta(microseconds=5)],
         "bytea": [b"\x00\xff", b"", b"abc"],
         "timestamptz": [

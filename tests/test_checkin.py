@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -175,7 +176,7 @@ def test_save_in_a_child_version_stores_only_new_row_versions(conn: Conn, horizo
 
     def storage_rows() -> int:
         return sum(
-            int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
+            int(conn.execute(f"SELECT count(*) FROM {t}").fetchall()[0][0])
             for t in ("tgsis.vrtx_ver", "tgsis.trgl_ver", "horizons_cellpros_ver", "tgsis.geometry_ver")
         )
 
@@ -409,7 +410,7 @@ def test_bad_saves_and_checkins_change_nothing(conn: Conn, horizons: F.FeatureCl
     state = _fingerprint(conn, fid)
     no_props = tgsis.Surface(base.vertices, base.cells)
     lines = tgsis.LineSet(base.vertices, [[0, 1]], vertex_properties=base.vertex_properties)
-    bad_calls = [
+    bad_calls: list[tuple[Callable[[], object], type[Exception], str]] = [
         (lambda: tgsis.save_feature(conn, horizons, fid, no_props), tgsis.InvalidPropertyError, "porosity"),
         (lambda: tgsis.save_feature(conn, horizons, fid, lines), tgsis.InvalidGeometryError, "LineSet"),
         (lambda: tgsis.save_feature(conn, horizons, fid + 1000, base), tgsis.NotFoundError, str(fid + 1000)),
@@ -462,7 +463,7 @@ def test_fingerprint_sees_every_kind_of_change(conn: Conn, horizons: F.FeatureCl
         "UPDATE horizons_cellpros SET _idx = 1000 WHERE _geoid = {g} AND _idx = 2",
     ]
     for change in changes:
-        conn.execute(change.format(g=fid))  # type: ignore[arg-type]
+        conn.execute(change.format(g=fid))
         now = _fingerprint(conn, fid)
         assert now not in seen, change
         seen.add(now)
@@ -553,7 +554,7 @@ def test_bad_calls_to_the_check_in_functions_of_sql(conn: Conn, horizons: F.Feat
     for query, params, code, text in calls:
         with pytest.raises(tgsis.Error, match=text) as raised:
             with tgsis.errors.reraise():
-                conn.execute(query, params)  # type: ignore[arg-type]
+                conn.execute(query, params)
         assert raised.value.sqlstate == code, query
         conn.rollback()
         assert _fingerprint(conn, fid) == state

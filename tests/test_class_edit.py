@@ -11,6 +11,7 @@ class").
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -83,7 +84,7 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     assert fc == F.get_feature_class(conn, "horizons")
     # the stored feature has the new properties: the default per vertex, none for the feature
     feature = F.fetch_feature(conn, fc, fid)
-    assert feature.properties == {"creator": "ann", "age": None} and feature.mesh is not None
+    assert feature.properties == {"creator": "ann", "age": None} and isinstance(feature.mesh, tgsis.Mesh)
     assert feature.mesh.vertex_properties["permeability"].dtype == np.float32
     assert np.all(feature.mesh.vertex_properties["permeability"] == 0.5)
     assert np.all(feature.mesh.vertex_properties["slip"] == -1) and feature.mesh.vertex_properties["slip"].shape == (
@@ -102,7 +103,7 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     mesh.vertex_properties["permeability"] = np.arange(16, dtype=np.float32)
     tgsis.save_feature(conn, fc, fid, mesh, {"age": 12})
     again = F.fetch_feature(conn, fc, fid)
-    assert again.properties == {"creator": "ann", "age": 12} and again.mesh is not None
+    assert again.properties == {"creator": "ann", "age": 12} and isinstance(again.mesh, tgsis.Mesh)
     assert np.array_equal(again.mesh.vertex_properties["permeability"], np.arange(16))
     # a new feature stored after the edit carries them too
     new = _grid(3, 1.0)
@@ -114,7 +115,7 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
     fc = tgsis.rename_property(conn, "horizons", "permeability", "k")
     fc = tgsis.rename_property(conn, "horizons", "age", "Age_Ma", kind="feature")
     renamed = F.fetch_feature(conn, fc, fid)
-    assert renamed.properties == {"creator": "ann", "Age_Ma": 12} and renamed.mesh is not None
+    assert renamed.properties == {"creator": "ann", "Age_Ma": 12} and isinstance(renamed.mesh, tgsis.Mesh)
     assert np.array_equal(renamed.mesh.vertex_properties["k"], np.arange(16))
     assert "permeability" not in renamed.mesh.vertex_properties
     assert _comment(conn, "horizons_cellpros", "k") == "vertex property (real)"
@@ -130,7 +131,7 @@ def test_add_rename_drop_keeps_the_features(conn: Conn, versioned: bool) -> None
         "creator"
     ]
     dropped = F.fetch_feature(conn, fc, fid)
-    assert dropped.properties == {"creator": "ann"} and dropped.mesh is not None
+    assert dropped.properties == {"creator": "ann"} and isinstance(dropped.mesh, tgsis.Mesh)
     assert set(dropped.mesh.vertex_properties) == {"porosity"}
     # a property nobody gave a value is dropped without force
     tgsis.add_property(conn, "horizons", ("note", "text"), kind="feature")
@@ -218,12 +219,12 @@ def test_every_version_keeps_its_values(conn: Conn) -> None:
         "SELECT porosity, permeability FROM horizons_cellpros WHERE _geoid = %s AND _idx = 0", (fid,)
     ).fetchone() == (9.0, 7.0)
     fetched = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
-    assert fetched.mesh is not None and fetched.mesh.vertex_properties["permeability"][0] == 7.0
+    assert isinstance(fetched.mesh, tgsis.Mesh) and fetched.mesh.vertex_properties["permeability"][0] == 7.0
     # feature versioning switched off: the plain tables keep the edited columns with DEFAULT's values
     tgsis.disable_feature_versioning(conn, force=True)
     conn.commit()
     plain = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
-    assert plain.properties == {"creator": "carl", "basin": "Aquitaine"} and plain.mesh is not None
+    assert plain.properties == {"creator": "carl", "basin": "Aquitaine"} and isinstance(plain.mesh, tgsis.Mesh)
     assert plain.mesh.vertex_properties["permeability"][0] == 7.0
     assert conn.execute("SELECT count(*) FROM horizons_cellpros").fetchone() == (16,)
 
@@ -245,10 +246,10 @@ def test_checkout_and_checkin_see_a_new_property(conn: Conn) -> None:
         conn.commit()
         mine = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
     conn.commit()  # (the version set back at the end of in_version, for good)
-    assert mine.properties["basin"] == "Paris" and mine.mesh is not None
+    assert mine.properties["basin"] == "Paris" and isinstance(mine.mesh, tgsis.Mesh)
     assert np.all(mine.mesh.vertex_properties["k"] == 5)
     default = F.fetch_feature(conn, F.get_feature_class(conn, "horizons"), fid)
-    assert default.properties["basin"] is None and default.mesh is not None
+    assert default.properties["basin"] is None and isinstance(default.mesh, tgsis.Mesh)
     assert np.all(default.mesh.vertex_properties["k"] == 1)
     # a check-out of the old columns is of another state of the feature: its check-in is refused, nothing written
     with pytest.raises(tgsis.CheckoutConflictError, match=f"feature {fid} was changed in version 'DEFAULT'"):
@@ -275,7 +276,7 @@ def test_a_property_of_the_other_alignment_and_the_rights_on_the_views(db_dsn: s
         assert fc.cell_properties[-1] == tgsis.Property("rank", "smallint", alignment="CELL")
         assert _comment(conn, "horizons_simplexpros", "rank") == "cell property (smallint)"
         feature = F.fetch_feature(conn, fc, fid)
-        assert feature.mesh is not None and feature.mesh.cell_properties["rank"].tolist() == [2] * 8
+        assert isinstance(feature.mesh, tgsis.Mesh) and feature.mesh.cell_properties["rank"].tolist() == [2] * 8
         assert feature.mesh.vertex_properties.keys() == {"porosity"}
         # the rights granted on the class's views are kept
         for view in ("horizons_v", "horizons_simplexpros"):
@@ -431,11 +432,12 @@ def test_roles_without_tgsis_admin_are_refused(db_dsn: str) -> None:
         before = _definition(owner)
     with login_roles(db_dsn, {"eve": "tgsis_editor"}) as roles:
         eve = roles.connect("eve")
-        for call in (
+        calls: list[Callable[[], object]] = [
             lambda: tgsis.add_property(eve, "horizons", ("k", "float8"), default=1),
             lambda: tgsis.rename_property(eve, "horizons", "porosity", "phi"),
             lambda: tgsis.drop_property(eve, "horizons", "porosity", force=True),
-        ):
+        ]
+        for call in calls:
             with pytest.raises(tgsis.MissingPrivilegeError, match="may not .* properties of feature classes") as caught:
                 call()
             assert caught.value.hint is not None and caught.value.hint.startswith("a DBA may run: GRANT tgsis_admin TO")

@@ -96,7 +96,7 @@ def test_bad_questions_are_refused_as_for_one_feature(db_dsn: str, faults: dict[
             (("nope", "throw", ">", 1.0), tgsis.NotFoundError, "nope"),
         ]:
             with pytest.raises(error, match=message):
-                tgsis.class_property_periods(conn, *args)  # type: ignore[arg-type]
+                tgsis.class_property_periods(conn, *args)
         # the same question of a model-2 class, by each step convention
         horizon = conn.execute("SELECT _geoid FROM horizons").fetchone()[0]  # type: ignore[index]
         for convention in ("left", "right"):

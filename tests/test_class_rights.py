@@ -29,6 +29,7 @@ from tests.roles import Roles, login_roles
 from tests.synthetic import flat_grid
 from tests.temporal_data import evolving, series
 from tgsis import gmaps
+from tgsis.datamodels import TimeModel
 from tgsis.db import features as F
 from tgsis.db._transfer import Storage
 
@@ -96,7 +97,12 @@ def world(request: pytest.FixtureRequest, db_dsn: str) -> Iterator[World]:
         # models 2 and 3: a surface at instants and an evolving one
         rng = np.random.default_rng(36)
         temporal = {}
-        for name, model in (("alpha_steps", "INSTANTS"), ("beta_steps", "INSTANTS"), ("beta_moves", "EVOLVING")):
+        models: list[tuple[str, TimeModel]] = [
+            ("alpha_steps", "INSTANTS"),
+            ("beta_steps", "INSTANTS"),
+            ("beta_moves", "EVOLVING"),
+        ]
+        for name, model in models:
             tgsis.create_feature_class(su, name, "SURFACE", time_model=model, time_unit="Ma")
             shape = series(rng, [0.0, 1.0, 2.0]) if model == "INSTANTS" else evolving(rng, [0.0, 1.0])
             temporal[name] = F.insert_feature(su, name, shape)
@@ -217,7 +223,7 @@ def test_the_permitted_class_stays_fully_usable(world: World) -> None:
     # an upload (binary COPY, staged through a temporary table under row-level security)
     geoid = F.insert_feature(editor, "alpha", flat_grid(4, 3.0))
     fetched = F.fetch_feature(editor, "alpha", geoid)
-    assert fetched.mesh.n_vertices == 16
+    assert fetched.mesh is not None and fetched.mesh.n_vertices == 16
     editor.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (world.alpha,))
     editor.commit()
     assert editor.execute("SELECT min(z) FROM tgsis.vrtx WHERE geoid = %s", (world.alpha,)).fetchone() == (2.0,)

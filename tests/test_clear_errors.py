@@ -184,7 +184,7 @@ def test_a_model5_axis_no_gmap_has(conn: Conn) -> None:
 )
 def test_partition_numbers_in_sql(conn: Conn, query: str, sqlstate: str, message: str) -> None:
     with pytest.raises(psycopg.Error) as caught:
-        conn.execute(query)  # type: ignore[arg-type]  # the test's own literals
+        conn.execute(query)
     assert caught.value.sqlstate == sqlstate and message in str(caught.value.diag.message_primary)
     conn.rollback()
     # written without casts, a good call works

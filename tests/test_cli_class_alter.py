@@ -67,7 +67,7 @@ def test_alter_adds_renames_and_drops(db_dsn: str, versioned: bool, capsys: pyte
     ]
     with psycopg.connect(db_dsn) as conn:
         feature = tgsis.fetch_feature(conn, "faults", fid)
-    assert feature.properties == {"release": "5.3", "author": "ann"} and feature.mesh is not None
+    assert feature.properties == {"release": "5.3", "author": "ann"} and isinstance(feature.mesh, tgsis.Mesh)
     assert feature.mesh.vertex_properties["azimuth"].tolist() == [10, 20, 30]
     assert feature.mesh.vertex_properties["dip"].tolist() == [45, 45, 45]
     # dropping stored values needs --force, in CLI words
@@ -212,4 +212,4 @@ def test_alter_says_how_many_rows_got_the_default(db_dsn: str, capsys: pytest.Ca
     )
     with psycopg.connect(db_dsn) as conn:
         feature = tgsis.fetch_feature(conn, "faults", fid)  # in DEFAULT, the feature's rows got it too
-    assert feature.mesh is not None and feature.mesh.vertex_properties["dip"].tolist() == [45, 45, 45]
+    assert isinstance(feature.mesh, tgsis.Mesh) and feature.mesh.vertex_properties["dip"].tolist() == [45, 45, 45]

@@ -123,7 +123,8 @@ def test_a_backward_interpolation_says_when_the_feature_exists(
         "from t = 0 to 1 Ma"
     ) in out
     with psycopg.connect(db_dsn) as conn:
-        assert tgsis.lifespan(conn, 1)[:2] == (0.0, 1.0)
+        span = tgsis.lifespan(conn, 1)
+        assert span is not None and span[:2] == (0.0, 1.0)
 
 
 def test_interpolate_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

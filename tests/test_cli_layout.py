@@ -30,7 +30,8 @@ def test_the_cli_is_a_package_of_command_modules() -> None:
     assert all(f.__module__.startswith(command_modules.__name__ + ".") for f in _main.COMMANDS)
     parser = _main.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
-    names = list(sub.choices)  # type: ignore[union-attr]
+    assert sub.choices is not None
+    names = list(sub.choices)
     assert [f.__name__ for f in _main.COMMANDS] == [f"add_{n}_parser" for n in names]
 
 

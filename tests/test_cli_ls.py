@@ -36,11 +36,13 @@ def data(
         )
         ids = [
             tgsis.insert_feature(conn, "faults", m, props)
-            for m, props in [
-                (f1, {"release": "5.3", "slip": 1.5}),
-                (f2, {"release": "6.1", "slip": 2.0}),
-                (far, {"release": "6.1", "slip": None}),
-            ]
+            for m, props in list[tuple[tgsis.Mesh, dict[str, Any]]](
+                [
+                    (f1, {"release": "5.3", "slip": 1.5}),
+                    (f2, {"release": "6.1", "slip": 2.0}),
+                    (far, {"release": "6.1", "slip": None}),
+                ]
+            )
         ]
         tgsis.create_feature_class(conn, "plain", "SURFACE")
         plain = tgsis.insert_feature(conn, "plain", f1)

@@ -89,7 +89,7 @@ def test_series_draws_an_animation(
     )
     assert "drew 8 frames to" in capsys.readouterr().out
     with Image.open(gif) as movie:
-        assert movie.format == "GIF" and movie.n_frames == 8
+        assert movie.format == "GIF" and movie.n_frames == 8  # type: ignore[attr-defined]  # PIL: only multi-frame formats
 
 
 def test_export_draws_a_surface_and_refuses_points(

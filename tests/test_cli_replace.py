@@ -34,7 +34,7 @@ def _moved(path: Path, tmp_path: Path, dz: float) -> Path:
     for m in mesh:
         m.vertices[:, 2] += dz
     out = tmp_path / "flagged.ts"
-    tgsis.formats.write(tgsis.GeometryCollection(mesh) if len(mesh) > 1 else mesh[0], out)  # type: ignore[arg-type]
+    tgsis.formats.write(tgsis.GeometryCollection(mesh) if len(mesh) > 1 else mesh[0], out)
     return out
 
 

@@ -513,7 +513,7 @@ def test_import_at_stores_not_alive_like_a_series_from_python_unless_alive(
     alive = json.loads(capsys.readouterr().out)["id"]
     with psycopg.connect(db_dsn) as conn:
         python = tgsis.insert_feature(conn, "tops", tgsis.SurfaceSeries([-10.0], [flat]), name="from python")
-        rows = dict(
+        rows: dict[int, bool] = dict(
             conn.execute(
                 "SELECT geoid, alive FROM tgsis.geometry WHERE geoid = ANY (%s)", ([plain, alive, python],)
             ).fetchall()

@@ -10,6 +10,7 @@ layout is not this test's concern).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import meshio
 import numpy as np
@@ -44,7 +45,9 @@ def test_import_pyvista_files_and_export_every_vtk_file(
     assert len(ids) == 2
     for target in ("out.vtp", "out.vtk", "out.vtu"):
         assert main(["--dsn", db_dsn, "export", str(ids[0]), str(tmp_path / target)]) == 0, capsys.readouterr().err
-        back = pv.read(tmp_path / target)
+        # cast: mypy cannot narrow pyvista.read's DataSet | MultiBlock by isinstance (their vtk bases are untyped)
+        back = cast(pv.DataSet, pv.read(tmp_path / target))
+        assert isinstance(back, pv.DataSet)
         assert np.array_equal(back.points, sphere.points) and back.n_cells == sphere.n_cells
         assert np.array_equal(back["porosity"], sphere["porosity"])
         if target != "out.vtp":  # meshio reads no .vtp
@@ -57,7 +60,8 @@ def test_a_file_of_quads_is_refused_and_nothing_stored(
 ) -> None:
     assert main(["--dsn", db_dsn, "class", "create", "horizons", "--geotype", "SURFACE"]) == 0
     plane = pv.Plane()
-    plane.points[12, 2] = 0.05  # quads that are not planar (planar ones are split, issue 37)
+    plane.points[12, 2] = 0.05  # type: ignore[index]  # pyvista types __setitem__'s key int only
+    # quads that are not planar (planar ones are split, issue 37)
     plane.save(tmp_path / "plane.vtk")
     capsys.readouterr()
     assert main(["--dsn", db_dsn, "import", str(tmp_path / "plane.vtk"), "--class", "horizons"]) == 1

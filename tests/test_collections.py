@@ -16,7 +16,7 @@ import pytest
 import tgsis
 from tgsis import formats
 from tgsis.cli import main
-from tgsis.db import _static
+from tgsis.db import _static, _transfer
 from tgsis.db import features as F
 from tgsis.errors import reraise
 from tgsis.formats.vtk import parse_vtu, read_vtu_collection
@@ -63,7 +63,7 @@ def _members(alignment: str | None = None, shift: float = 0.0) -> list[Mesh]:
     """A surface, lines, points and a tetrahedral solid, apart from each other; ``shift`` moves all in x."""
     surface = _surface()
     surface.vertices[0] = [-0.0, 5e-324, np.nextafter(0.0, 1.0)]  # bits that only an exact round trip keeps
-    lines = LineSet([[10, 0, 0], [11, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
+    lines = LineSet([[10.0, 0, 0], [11.0, 0, 0], [12, 1, 0.5]], [[0, 1], [1, 2]], name="trace")
     points = PointSet([[20, 20, 20], [21, 20, 20], [22, 21, 19]], name="samples")
     solid = TetraMesh(
         [[0, 0, -10], [1, 0, -10], [0, 1, -10], [0, 0, -9], [1, 1, -9]], [[0, 1, 2, 3], [1, 2, 3, 4]], name="body"
@@ -85,8 +85,8 @@ def _rocks(conn: Conn, alignment: str = "VERTEX") -> F.FeatureClass:
         "GEOMETRYCOLLECTION",
         feature_properties=[("note", "text"), ("age", "float8")],
         cell_properties=[("value", "double precision"), ("code", "integer")],
-        alignment=alignment,
-    )  # type: ignore[arg-type]
+        alignment=alignment,  # type: ignore[arg-type]  # the tests pass both alignments as str
+    )
     conn.commit()
     return fc
 
@@ -118,7 +118,7 @@ def test_collection_facts_copies_and_reports() -> None:
     assert not twin.same_as(c) and c.members[1].vertices[0, 0] == 10.0
     assert not c.same_as(GeometryCollection(members[:3]))  # fewer members
     assert not c.same_as(GeometryCollection([members[1], members[0], *members[2:]]))  # other order
-    assert not c.same_as(members[0])  # type: ignore[arg-type]
+    assert not c.same_as(members[0])
 
     flawed = LineSet([[0, 0, 0], [0, 0, 0], [1, 0, 0]], [[0, 2], [1, 2]], name="dup")
     reports = GeometryCollection([members[0], flawed]).report()
@@ -198,6 +198,7 @@ def test_round_trip_with_every_member_type(conn: Conn, alignment: str) -> None:
     assert got.mesh.same_as(original) and got.name == got.mesh.name == "block"
     assert [m.name for m in got.mesh] == ["top", "trace", "samples", "body"]
     assert got.mesh[0].vertices[0].tobytes() == original[0].vertices[0].tobytes()
+    props: Callable[[Mesh], dict[str, npt.NDArray[Any]]]
     props = (lambda m: m.vertex_properties) if alignment == "VERTEX" else (lambda m: m.cell_properties)
     assert all(props(m)["code"].dtype == np.int32 and props(m)["value"].dtype == np.float64 for m in got.mesh)
     assert got.properties == {"note": "mixed", "age": None}
@@ -219,7 +220,7 @@ def test_fetching_many_members_takes_one_query_for_all_tables(conn: Conn, monkey
     ]
     ids = [F.insert_feature(conn, fc, c) for c in originals]
     queries: list[list[str]] = []
-    real = _static.columns_out_all
+    real = _transfer.columns_out_all  # what _static imports
 
     def spy(conn: Conn, requests: Any) -> list[list[npt.NDArray[Any]]]:
         queries.append([request.source.as_string(conn) for request in requests])
@@ -239,7 +240,7 @@ def test_box_query_and_class_view(conn: Conn) -> None:
     near = F.insert_feature(conn, fc, _collection("VERTEX"), {"note": "near"})
     far = F.insert_feature(conn, fc, _collection("VERTEX", shift=1000.0, name="far"), {"note": "far"})
     # the box of a collection is the union of its members' boxes
-    assert F.features_in_box(conn, fc, [[21.5, 20.5, 18], [30, 30, 30]]) == [near]  # near its points
+    assert F.features_in_box(conn, fc, [[21.5, 20.5, 18], [30.0, 30, 30]]) == [near]  # near its points
     assert F.features_in_box(conn, fc, [[1000.2, 0.2, -9.9], [1000.3, 0.3, -9.8]]) == [far]  # inside its solid
     assert F.features_in_box(conn, fc, [[-1, -1, -20], [2000, 50, 50]]) == [near, far]
     assert F.features_in_box(conn, fc, [[500, 500, 500], [600, 600, 600]]) == []

@@ -875,8 +875,8 @@ def test_two_writers_in_each_of_four_versions_and_default_with_a_merger_end_as_a
         places = [*(f"w{w}" for w in range(WRITERS)), "DEFAULT"]
         contents = dict(zip(places, read(conn, *places)))
         for o in OWNERS:
-            held = contents[version_of(o)][o]
-            assert held == expected[o], f"{who(o)}: " + describe(expected[o], held)
+            shown = contents[version_of(o)][o]
+            assert shown == expected[o], f"{who(o)}: " + describe(expected[o], shown)
 
         # frozen revisions never change: a saved one shows the state it was saved at, all of it (the other
         # writer's rows of the version too) as it showed right after the save committed, and every frozen

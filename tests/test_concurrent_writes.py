@@ -486,11 +486,12 @@ def test_merge_refresh_and_bulk_deletes_refuse_an_old_snapshot(surfaces: tuple[C
     conn, geoid = surfaces
     before = conn.execute("SELECT count(*), sum(revision) FROM tgsis.vrtx_ver").fetchone()
     conn.commit()
-    for call in (
+    calls: list[Callable[[], object]] = [
         lambda: tgsis.merge_version(conn, "child"),
         lambda: tgsis.refresh_version(conn, "child"),
         lambda: F.delete_feature(conn, "horizons", geoid),
-    ):
+    ]
+    for call in calls:
         conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation}")
         with pytest.raises(tgsis.VersioningError, match=f"cannot run in a {isolation} transaction"):
             call()

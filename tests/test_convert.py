@@ -148,7 +148,7 @@ def test_trimesh_objects() -> None:
     surface = tgsis.as_mesh(sphere)
     assert isinstance(surface, Surface) and np.array_equal(surface.cells, sphere.faces)
     assert np.array_equal(surface.vertex_properties["depth"], -sphere.vertices[:, 2])
-    cloud = tgsis.as_mesh(trimesh.PointCloud(sphere.vertices[:5]))
+    cloud = tgsis.as_mesh(trimesh.PointCloud(sphere.vertices[:5]))  # type: ignore[no-untyped-call]  # trimesh: no annotations
     assert isinstance(cloud, PointSet) and cloud.n_cells == 5
 
 
@@ -195,6 +195,7 @@ def test_array_names_that_are_no_property_names_are_kept_for_the_way_back() -> N
         point_data={"Elevation value": np.arange(3.0)},
     )
     surface = tgsis.as_mesh(m)
+    assert isinstance(surface, Surface)
     assert list(surface.cell_properties) == ["gmsh_physical"] and list(surface.vertex_properties) == ["Elevation_value"]
     assert surface.metadata["vtk_array_names"] == {
         "point_data": {"Elevation_value": "Elevation value"},
@@ -211,6 +212,7 @@ def test_meshio_2d_points_and_several_blocks_of_one_type() -> None:
         cell_data={"zone": [np.array([1]), np.array([2])]},
     )
     surface = tgsis.as_mesh(m)
+    assert isinstance(surface, Surface)
     assert surface.vertices[:, 2].tolist() == [0, 0, 0, 0]
     assert surface.cells.tolist() == [[0, 1, 2], [1, 3, 2]] and surface.cell_properties["zone"].tolist() == [1, 2]
 
@@ -233,7 +235,9 @@ def test_anything_else_is_refused_with_what_is_accepted() -> None:
 
 def test_a_multiblock_is_a_collection_of_its_blocks() -> None:
     blocks = pv.MultiBlock({"salt": pv.Sphere(theta_resolution=6, phi_resolution=6), "well": pv.Line()})
-    blocks["salt"].field_data["name"] = ["salt dome"]
+    salt = blocks["salt"]
+    assert salt is not None
+    salt.field_data["name"] = ["salt dome"]
     collection = tgsis.as_mesh(blocks)
     assert isinstance(collection, GeometryCollection)
     assert [type(m) for m in collection.members] == [Surface, LineSet]
@@ -334,7 +338,7 @@ def test_a_pyvista_array_of_the_wrong_length_set_through_vtk() -> None:
     from vtkmodules.util.numpy_support import numpy_to_vtk
 
     sphere = pv.Sphere(theta_resolution=6, phi_resolution=6)
-    short = numpy_to_vtk(np.arange(5.0))
+    short = numpy_to_vtk(np.arange(5.0))  # type: ignore[no-untyped-call]  # vtk: no annotations
     short.SetName("porosity")
     sphere.GetPointData().AddArray(short)
     with pytest.raises(

@@ -19,6 +19,7 @@ import pyvista as pv
 import trimesh
 
 import tgsis
+from tests.fetched import geometry_of, mesh_of
 from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
@@ -26,8 +27,8 @@ Conn = psycopg.Connection[Any]
 
 def grid(side: int = 12) -> pv.PolyData:
     """A bumpy horizon as pyvista makes one (float32 points of a triangulated plane), with a porosity array."""
-    plane = pv.Plane(i_size=1000, j_size=1000, i_resolution=side, j_resolution=side).triangulate()
-    plane.points[:, 2] = np.sin(plane.points[:, 0] / 200.0) * 50.0
+    plane: pv.PolyData = pv.Plane(i_size=1000, j_size=1000, i_resolution=side, j_resolution=side).triangulate()
+    plane.points[:, 2] = np.sin(plane.points[:, 0] / 200.0) * 50.0  # type: ignore[index]  # pyvista stub, as below
     plane.point_data.clear()
     plane["porosity"] = np.linspace(0.1, 0.3, plane.n_points)
     return plane
@@ -57,7 +58,7 @@ def test_insert_a_pyvista_surface_and_get_it_back_as_one(conn: Conn, horizons: F
     fid = tgsis.insert_feature(conn, "horizons", surface, {"model": "gempy"})
     conn.commit()
     feature = tgsis.fetch_feature(conn, "horizons", fid)
-    assert feature.mesh.name == "H1" and feature.properties == {"model": "gempy"}
+    assert feature.mesh is not None and feature.mesh.name == "H1" and feature.properties == {"model": "gempy"}
     back = feature.mesh.to_pyvista()
     assert isinstance(back, pv.PolyData) and back.n_cells == surface.n_cells
     assert np.array_equal(back.points, surface.points.astype(np.float64))
@@ -71,6 +72,7 @@ def test_insert_meshio_and_trimesh_objects(conn: Conn, horizons: F.FeatureClass)
     t = trimesh.Trimesh(
         plane.points, plane.regular_faces, process=False, vertex_attributes={"porosity": plane["porosity"]}
     )
+    obj: Any  # insert_feature takes what tgsis.as_mesh takes; its signature names tgsis's own types only
     for obj in (m, t):
         fid = tgsis.insert_feature(conn, horizons, obj)
         mesh = tgsis.fetch_feature(conn, horizons, fid).mesh
@@ -81,23 +83,24 @@ def test_insert_meshio_and_trimesh_objects(conn: Conn, horizons: F.FeatureClass)
 def test_save_and_checkin_take_edited_pyvista_and_meshio_objects(conn: Conn, horizons: F.FeatureClass) -> None:
     fid = tgsis.insert_feature(conn, horizons, grid())
     conn.commit()
-    edited = tgsis.fetch_feature(conn, horizons, fid).mesh.to_pyvista()
+    edited = geometry_of(tgsis.fetch_feature(conn, horizons, fid)).to_pyvista()
     edited.points[:5, 2] += 10.0  # the modeller moves five vertices in pyvista
     result = tgsis.save_feature(conn, horizons, fid, edited)
     conn.commit()
     assert result.vertices_moved == 5 and result.rows_deleted == result.rows_inserted  # five vertices moved, no more
-    assert np.array_equal(tgsis.fetch_feature(conn, horizons, fid).mesh.vertices, edited.points)
+    assert np.array_equal(mesh_of(tgsis.fetch_feature(conn, horizons, fid)).vertices, edited.points)
     co = tgsis.checkout(conn, fid)
     m = co.mesh.to_meshio()
     m.points[0, 2] -= 3.0
     tgsis.checkin(conn, co, m)
     conn.commit()
-    assert tgsis.fetch_feature(conn, horizons, fid).mesh.vertices[0, 2] == m.points[0, 2]
+    assert mesh_of(tgsis.fetch_feature(conn, horizons, fid)).vertices[0, 2] == m.points[0, 2]
 
 
 def test_a_collection_class_takes_a_mixed_grid_tgsis_wrote(conn: Conn) -> None:
     F.create_feature_class(conn, "models", "GEOMETRYCOLLECTION")
     surface = tgsis.as_mesh(grid(3))
+    assert isinstance(surface, tgsis.Surface)
     wells = tgsis.PointSet(surface.vertices[:4] + [0, 0, -100], name="wells")
     collection = tgsis.GeometryCollection(
         [tgsis.Surface(surface.vertices, surface.cells, name="top"), wells], name="model"
@@ -113,7 +116,7 @@ def test_hostile_objects_write_nothing(conn: Conn, horizons: F.FeatureClass) -> 
     conn.commit()
     before = stored(conn)
     nan = grid(3)
-    nan.points[4, 1] = np.nan
+    nan.points[4, 1] = np.nan  # type: ignore[index]  # pyvista types __setitem__'s key int only
     wrong = meshio.Mesh(grid(3).points, [("triangle", grid(3).regular_faces)])
     wrong.point_data["porosity"] = np.zeros(3)
     strings = grid(3)

@@ -231,7 +231,7 @@ def colours_of_steps(conn: Conn, fc: FeatureClass, feature_id: int) -> list[str]
 @pytest.fixture
 def model9(conn: Conn, monkeypatch: pytest.MonkeyPatch) -> Iterator[datamodels.DataModel]:
     """Model 9 in SQL (the recipe: its storage file's functions and rows) and in Python (its module's two calls)."""
-    conn.execute(TEST_MODEL)  # type: ignore[arg-type]  # a test's own literal
+    conn.execute(TEST_MODEL)
     assert conn.execute("SELECT tgsis.create_storage()").fetchone() == (True,)
     conn.commit()
     for shipped in datamodels.data_models():  # their functions loaded before the registry is copied
@@ -355,7 +355,7 @@ def test_a_new_model_is_viewed_through_its_registry_entry(
 
 
 def test_a_model_without_its_python_module_is_named(conn: Conn) -> None:
-    conn.execute(TEST_MODEL)  # type: ignore[arg-type]  # a test's own literal
+    conn.execute(TEST_MODEL)
     conn.execute("SELECT tgsis.create_storage()")
     fc = tgsis.create_feature_class(conn, "stepped", "MULTIPOINT", time_model="STEPS")  # type: ignore[arg-type]
     conn.commit()

@@ -263,5 +263,5 @@ def test_keep_above_carries_the_properties_through_the_instants_it_adds() -> Non
     period = stacking.surface.periods[0]
     assert period.times.tolist() == [0.0, 1.0, 2.0]
     np.testing.assert_allclose(period.vertex_properties["porosity"][1], 0.2)
-    np.testing.assert_allclose(period.properties["age"], [10.0, 11.0, 12.0])
+    np.testing.assert_allclose(period.properties["age"].astype(np.float64), [10.0, 11.0, 12.0])
     np.testing.assert_allclose(period.positions[1][:, 2], 6.0)  # raised onto the older surface at t = 1

@@ -50,7 +50,7 @@ def _heights(surface: Surface, xy: np.ndarray) -> np.ndarray:
     z = np.where(inside, z, np.nan)
     with np.errstate(all="ignore"):
         return np.asarray(
-            np.nanmax(np.where(inside.any(axis=1)[:, None], z, -np.inf), axis=1) if len(xy) else np.zeros(0)
+            np.nanmax(np.where(np.asarray(inside.any(axis=1))[:, None], z, -np.inf), axis=1) if len(xy) else np.zeros(0)
         )
 
 

@@ -21,7 +21,7 @@ def recipe() -> str:
     text = DOC.read_text(encoding="utf-8")
     section = text[text.index("## Recipe") :]
     [block] = re.findall(r"```python\n(.*?)```", section, re.S)
-    return block
+    return str(block)
 
 
 def test_the_recipe_runs_and_each_version_has_its_horizons(
@@ -38,6 +38,7 @@ def test_the_recipe_runs_and_each_version_has_its_horizons(
         "top_shale_run2.vtp",
     ]
     before, after = pv.read(tmp_path / "top_shale_DEFAULT.vtp"), pv.read(tmp_path / "top_shale_run2.vtp")
+    assert isinstance(before, pv.PolyData) and isinstance(after, pv.PolyData)
     assert np.allclose(after.points[:, 2], before.points[:, 2] - 25.0)
     assert np.array_equal(before["values"], np.full(before.n_points, 1800.0))
     same = pv.read(tmp_path / "top_sandstone_DEFAULT.vtp"), pv.read(tmp_path / "top_sandstone_run2.vtp")

@@ -36,7 +36,8 @@ def test_every_sql_code_has_its_python_class(conn: psycopg.Connection[Any]) -> N
 
 def test_every_python_code_is_in_sql(conn: psycopg.Connection[Any]) -> None:
     codes = _sql_codes(conn)
-    python_codes = {c.code for c in [errors.Error, *errors._all_subclasses(errors.Error)] if c.code}
+    classes: list[type[errors.Error]] = [errors.Error, *errors._all_subclasses(errors.Error)]
+    python_codes = {c.code for c in classes if c.code}
     assert python_codes == set(codes)
 
 

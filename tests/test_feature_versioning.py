@@ -106,7 +106,7 @@ def test_surface_edited_in_a_child_is_invisible_in_default(conn: Conn, horizons:
         "tgsis.vrtx_ver": before["tgsis.vrtx_ver"] + 1,
         "horizons_ver": before["horizons_ver"] + 1,
     }  # one row each, not 100,000
-    assert edited.properties == {"creator": "bob"} and edited.mesh is not None
+    assert edited.properties == {"creator": "bob"} and isinstance(edited.mesh, tgsis.Mesh)
     assert edited.mesh.vertices[42, 2] == 5 and np.count_nonzero(edited.mesh.vertices != base.vertices) == 1
     default = F.fetch_feature(conn, horizons, fid)
     assert default.mesh is not None and default.mesh.same_as(base) and default.properties == {"creator": "ann"}

@@ -208,7 +208,7 @@ def test_surface_round_trip_is_bit_exact_with_properties(conn: Conn, horizons: F
     fid = F.insert_feature(conn, horizons, surface, {"creator": "ana", "age": -12.5})
     conn.commit()
     got = F.fetch_feature(conn, "horizons", fid)
-    assert got.mesh is not None and got.mesh.same_as(surface)
+    assert isinstance(got.mesh, Surface) and got.mesh.same_as(surface)
     assert got.mesh.vertex_properties["facies"].dtype == np.int32
     assert got.properties == {"creator": "ana", "note": None, "age": -12.5}
     row = conn.execute("SELECT nvrtx, ncell, bbox::text FROM tgsis.geometry WHERE geoid = %s", (fid,)).fetchone()
@@ -226,7 +226,7 @@ def test_cell_aligned_properties(conn: Conn) -> None:
     )
     fid = F.insert_feature(conn, fc, s)
     got = F.fetch_feature(conn, fc, fid).mesh
-    assert got is not None and got.same_as(s) and got.cell_properties["wet"].dtype == np.bool_
+    assert isinstance(got, Surface) and got.same_as(s) and got.cell_properties["wet"].dtype == np.bool_
 
 
 @pytest.mark.parametrize(

@@ -17,7 +17,7 @@ from .gmaps_shapes import block_tetrahedra
 
 def test_polygons_of_any_size_and_their_properties(tmp_path: Path) -> None:
     square_and_triangle = gmaps.GMap.from_polygons(
-        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0.5, 0]], [0, 1, 2, 3, 1, 4, 2], [0, 4, 7]
+        [[0.0, 0, 0], [1.0, 0, 0], [1.0, 1, 0], [0.0, 1, 0], [2, 0.5, 0]], [0, 1, 2, 3, 1, 4, 2], [0, 4, 7]
     )
     g = gmaps.GMap(
         square_and_triangle.alpha,

@@ -371,11 +371,13 @@ def test_light_tsolid_is_read_as_a_tetrahedral_mesh() -> None:
 
 def test_light_tsolid_through_the_registry_and_back_as_tsolid(tmp_path: Path) -> None:
     [solid] = formats.read(DATA / "light_solid.lso")
+    assert isinstance(solid, TetraMesh)
     with pytest.raises(FileFormatError, match="writes tetrahedra as GOCAD TSolid") as info:
         formats.write(solid, tmp_path / "out.lso")
     assert "write a .so file" in str(info.value)
     formats.write(solid, tmp_path / "out.so")
     [back] = read_quietly(tmp_path / "out.so")
+    assert isinstance(back, TetraMesh)
     assert back.metadata["gocad_kind"] == "TSolid"
     assert back.metadata["gocad_part_names"] == ["R1", "R2"]
     assert back.vertices.tobytes() == solid.vertices.tobytes()

@@ -73,6 +73,7 @@ def z_as_others_read_it(path: Path) -> np.ndarray:
     import trimesh
 
     loaded = trimesh.load(path, process=False, force="mesh")
+    assert isinstance(loaded, trimesh.Trimesh)
     return np.asarray(loaded.vertices[:, 2], dtype=np.float64)
 
 
@@ -243,7 +244,9 @@ def test_gocad_depth_through_vtu_and_back_keeps_stored_shape_and_meaning(
     grid.save(plain)
     assert main(["--dsn", db_dsn, "import", str(plain), "--class", "horizons", "--name", "plain"]) == 0
     with psycopg.connect(db_dsn) as conn:
-        third, zpositive = conn.execute("SELECT geoid, zpositive FROM tgsis.geometry ORDER BY geoid DESC").fetchone()
+        row = conn.execute("SELECT geoid, zpositive FROM tgsis.geometry ORDER BY geoid DESC").fetchone()
+    assert row is not None
+    third, zpositive = row
     assert zpositive is None and stored_z(db_dsn, third) == stored_z(db_dsn, first)
 
 
@@ -523,7 +526,8 @@ def test_a_ply_of_triangle_strips_is_a_surface(tmp_path: Path) -> None:
         [6, 2, 7],
         [7, 2, 3],
     ]  # restarted; 3 3 3 dropped
-    normals = np.cross(*(mesh.vertices[mesh.cells[:, j]] - mesh.vertices[mesh.cells[:, 0]] for j in (1, 2)))
+    edges = [mesh.vertices[mesh.cells[:, j]] - mesh.vertices[mesh.cells[:, 0]] for j in (1, 2)]
+    normals = np.cross(edges[0], edges[1])
     assert np.all(normals[:, 2] > 0)  # all facing one way (up)
     assert border_edges(mesh) == 8
 
@@ -632,14 +636,16 @@ def test_a_picture_of_a_depth_surface_draws_it_below_the_ground(
 
     def spy(self: Axes3D, *args: object, **kwargs: object) -> object:
         drawn.append(np.asarray(args[2], dtype=np.float64))
-        return original(self, *args, **kwargs)  # type: ignore[arg-type]
+        return original(self, *args, **kwargs)
 
     monkeypatch.setattr(Axes3D, "plot_trisurf", spy)
     pictures.scene([depth_surface(depth_file)], tmp_path / "deep.png", title="deep")
     assert [z.tolist() for z in drawn] == [(-DEPTHS).tolist()]
 
 
-def test_the_browser_view_draws_a_depth_line_set_z_up(db_dsn: str, tmp_path: Path) -> None:
+def test_the_browser_view_draws_a_depth_line_set_z_up(
+    db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from tgsis.view import app
 
     with psycopg.connect(db_dsn, autocommit=True) as conn:

@@ -48,7 +48,7 @@ def same_frames(back: list[Frame], frames: list[Frame]) -> bool:
         if a is None or b is None:
             assert a is b
             continue
-        assert a.same_as(b) and a.name == b.name  # type: ignore[arg-type]  # same_as checks the type
+        assert a.same_as(b) and a.name == b.name
         for m, n in zip(
             a.members if isinstance(a, GeometryCollection) else [a],
             b.members if isinstance(b, GeometryCollection) else [b],

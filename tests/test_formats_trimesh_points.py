@@ -45,7 +45,7 @@ def test_a_file_without_vertices_is_an_error() -> None:
 
 
 def test_a_surface_without_triangles_keeps_its_vertices(tmp_path: Path) -> None:
-    surface = Surface([[0.5, 0, 0], [1, 0, 0], [0, 1, 0]], np.empty((0, 3), dtype=np.int64))
+    surface = Surface([[0.5, 0, 0], [1.0, 0, 0], [0.0, 1, 0]], np.empty((0, 3), dtype=np.int64))
     write_trimesh_file(surface, tmp_path / "s.ply")
     back = read_trimesh_file(tmp_path / "s.ply")
     assert isinstance(back, Surface) and back.same_as(surface)  # the PLY file declares its (empty) face element

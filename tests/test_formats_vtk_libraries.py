@@ -75,7 +75,7 @@ def meshes() -> list[Mesh]:
     ]
 
 
-WRITERS = {
+WRITERS: dict[str, tuple[str, dict[str, Any]]] = {
     "vtu zlib binary": ("x.vtu", {}),
     "vtu zlib appended": ("x.vtu", {"encoding": "appended"}),
     "vtu raw binary": ("x.vtu", {"compression": None}),

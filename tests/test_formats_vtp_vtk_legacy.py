@@ -196,7 +196,8 @@ def test_a_legacy_collection_keeps_its_members() -> None:
 
 def test_vtp_files_tgsis_refuses(tmp_path: Path) -> None:
     warped = pv.Plane(i_resolution=2, j_resolution=1)
-    warped.points[1, 2] = 0.25  # quads that are not planar: no one surface to split them into (issue 37)
+    warped.points[1, 2] = 0.25  # type: ignore[index]  # pyvista types __setitem__'s key int only
+    # quads that are not planar: no one surface to split them into (issue 37)
     warped.save(tmp_path / "quads.vtp")
     with pytest.raises(FileFormatError, match=r"quads.vtp: PolyData cell 0 has 4 points and is not planar") as info:
         formats.read(tmp_path / "quads.vtp")

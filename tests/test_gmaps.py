@@ -137,7 +137,7 @@ def test_bad_triangles(triangles: object, message: str) -> None:
 
 def test_bad_vertices() -> None:
     with pytest.raises(tgsis.InvalidGeometryError, match=r"vertex 1 has a non-finite coordinate 2 \(nan\)"):
-        GMap.from_triangles([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], [[0, 1, 2]])
+        GMap.from_triangles([[0.0, 0, 0], [1, 0, np.nan], [0.0, 1, 0]], [[0, 1, 2]])
     with pytest.raises(tgsis.InvalidGMapError, match="a 2-G-map needs points in R\\^m with m >= 2, got m = 1"):
         GMap.from_triangles([[0], [1], [2]], [[0, 1, 2]])
 
@@ -431,7 +431,7 @@ def test_orientation(shape: object, orientable: bool) -> None:
     assert positive.reshape(-1, 6).sum(axis=1).tolist() == [3] * len(t)  # half the darts of each triangle
 
 
-def flips_everywhere(g: GMap, positive: np.ndarray) -> bool:  # type: ignore[type-arg]
+def flips_everywhere(g: GMap, positive: np.ndarray) -> bool:
     darts = np.arange(g.n_darts)
     return all(
         bool(np.all(positive[g.alpha[i, g.alpha[i] != darts]] != positive[g.alpha[i] != darts]))

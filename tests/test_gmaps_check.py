@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 import numpy.typing as npt
 import pytest
@@ -36,7 +38,7 @@ def reference(alpha: IntArray) -> dict[str, object]:
     }
 
 
-def nonempty(found: dict[object, IntArray]) -> dict[object, list[int]]:
+def nonempty(found: Mapping[int, IntArray]) -> dict[int, list[int]]:
     return {k: v.tolist() for k, v in found.items()}
 
 

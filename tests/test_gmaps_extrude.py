@@ -149,7 +149,7 @@ def test_bad_values(values: object) -> None:
         lambda: GMap.from_tetrahedra(*shapes.cube_tetrahedra()),
         lambda: GMap.from_segments(np.eye(3), [[0, 1], [1, 2]]),
         lambda: SQUARE,
-        lambda: GMap.from_polygons([[-0.0, 0], [1, -0.0], [1, 1], [0, 1]], [[0, 1, 2, 3]]),  # -0.0 kept as it is
+        lambda: GMap.from_polygons([[-0.0, 0], [1, -0.0], [1.0, 1], [0.0, 1]], [[0, 1, 2, 3]]),  # -0.0 kept as it is
     ],
 )
 def test_slices_of_an_extrusion_give_it_back(shape: object) -> None:
@@ -217,7 +217,7 @@ def test_refused_slices() -> None:
     with pytest.raises(tgsis.InvalidInputError, match="point 2 lies in the plane 1 = 1.0 but on no face in it"):
         slice(GMap.from_triangles(v, [[0, 1, 2]]), 1, 1.0)
     # an edge in the plane with both its triangles on the same side: which one to take is not defined
-    folded = GMap.from_triangles([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 1, 1]], [[0, 1, 2], [1, 0, 3]])
+    folded = GMap.from_triangles([[0.0, 0, 0], [1.0, 0, 0], [0.5, 1, 0], [0.5, 1, 1]], [[0, 1, 2], [1, 0, 3]])
     with pytest.raises(
         tgsis.InvalidInputError,
         match=r"the face of dart \d+ lies in the plane 1 = 0.0 but does "

@@ -285,7 +285,7 @@ def test_a_role_without_createrole_is_told_what_the_dba_must_run() -> None:
         for method in ("sql", "auto"):
             with psycopg.connect(alice) as conn:
                 with pytest.raises(tgsis.MissingPrivilegeError, match="role alice may not create roles") as info:
-                    tgsis.install(conn, method=method)  # type: ignore[arg-type]
+                    tgsis.install(conn, method=method)
                 hint = info.value.hint or ""
                 assert "CREATE ROLE tgsis_reader NOLOGIN;" in hint and "GRANT tgsis_editor TO tgsis_admin;" in hint
                 assert "GRANT tgsis_admin TO alice;" in hint, "the owner registers classes: tgsis_admin"

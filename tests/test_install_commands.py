@@ -62,7 +62,7 @@ def test_a_documented_psql_command_works_on_a_fresh_database(
     with psycopg.connect(dsn, autocommit=True) as conn:  # psql -c: each statement on its own
         for statement in statements:
             try:
-                conn.execute(statement)  # type: ignore[arg-type]  # the documentation's own text
+                conn.execute(statement)
             except psycopg.Error as exc:
                 pytest.fail(f"{where}: `{statement}` fails on a fresh database: {exc}")
         assert conn.execute("SELECT tgsis.version()").fetchone() == (ExtensionSources.default().version,)

@@ -61,7 +61,7 @@ def test_every_entry_point_of_a_bare_create_extension_says_what_to_run(bare: str
     with psycopg.connect(bare, autocommit=True) as conn:
         before = describe_tgsis_objects(conn)
         with pytest.raises(psycopg.Error) as info:
-            conn.execute(statement)  # type: ignore[arg-type]
+            conn.execute(statement)
         assert info.value.sqlstate == "TG001", f"{statement}: {info.value}"
         assert "storage tables do not exist" in (info.value.diag.message_primary or "")
         assert "SELECT tgsis.create_storage();" in (info.value.diag.message_hint or "")

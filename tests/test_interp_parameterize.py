@@ -46,7 +46,7 @@ def ccw(xy: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 
 def signed_areas(uv: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     e1, e2 = uv[triangles[:, 1]] - uv[triangles[:, 0]], uv[triangles[:, 2]] - uv[triangles[:, 0]]
-    return e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    return np.asarray(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
 
 
 def random_disk(n: int, seed: int, bump: float = 0.3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -53,7 +53,7 @@ def test_round_trip_through_a_file(tmp_path: Path) -> None:
 )
 def test_mistakes_are_named(change: dict[str, object], message: str) -> None:
     with pytest.raises(InterpolationSetupError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        InterpolationSetup(**{**_setup().__dict__, **change})  # type: ignore[arg-type]
+        InterpolationSetup(**{**_setup().__dict__, **change})
 
 
 @pytest.mark.parametrize(

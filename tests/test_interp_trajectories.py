@@ -44,7 +44,7 @@ WALL_Y = ControllingSurface(
 def lifted(source: np.ndarray) -> np.ndarray:
     """Target of the unit square at z=0: lifted to z=1 and squeezed to x in [0.3, 1], with a bump inside."""
     x, y = source[:, 0], source[:, 1]
-    return np.c_[0.3 + 0.7 * x, y, 1 + 0.3 * np.sin(np.pi * x) * np.sin(np.pi * y)]
+    return np.asarray(np.c_[0.3 + 0.7 * x, y, 1 + 0.3 * np.sin(np.pi * x) * np.sin(np.pi * y)])
 
 
 def relative_distance(surface: ControllingSurface, points: np.ndarray) -> float:

@@ -60,7 +60,7 @@ def test_throwaway_cluster_settings_and_removal() -> None:
             assert _owner_uid(pid) != 0, "the server must not run as root"  # type: ignore[arg-type]
         assert (server.data_dir.stat().st_mode & 0o777) == 0o700
         with psycopg.connect(server.dsn()) as conn:
-            settings = dict(
+            settings: dict[str, str] = dict(
                 conn.execute(
                     "SELECT name, setting FROM pg_settings WHERE name IN "
                     "('fsync', 'listen_addresses', 'unix_socket_directories', 'full_page_writes')"

@@ -34,7 +34,7 @@ def story(conn: Conn) -> dict[str, int]:
 def _z(conn: Conn, version: str, geoid: int) -> list[float]:
     with tgsis.in_version(conn, version):
         mesh = F.fetch_feature(conn, "horizons", geoid).mesh
-    assert mesh is not None
+    assert isinstance(mesh, tgsis.Mesh)
     return [float(z) for z in mesh.vertices[:, 2]]
 
 
@@ -112,7 +112,7 @@ def test_history_survives_a_merge(conn: Conn, story: dict[str, int]) -> None:
     _set_z(conn, "e1", story["A"], 0, 7.0)
     with tgsis.at_revision(conn, saved, "e1"):
         mesh = F.fetch_feature(conn, "horizons", story["A"]).mesh
-    assert mesh is not None and mesh.vertices[0, 2] == 5.0
+    assert isinstance(mesh, tgsis.Mesh) and mesh.vertices[0, 2] == 5.0
 
 
 def test_refresh_brings_the_parents_changes(conn: Conn, story: dict[str, int]) -> None:

@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any, Literal
 from unittest import mock
 
 import networkx as nx
@@ -117,7 +118,8 @@ def curved_grid(draw: st.DrawFn, min_columns: int = 4) -> tuple[Rows, dict[int, 
             verts[vid] = (radius * math.sin(angle), 0.7 * j, radius * math.cos(angle) + 0.01 * j * j)
             vprop[vid] = float(i + 10 * j)
             column[vid] = i
-    cells, cprop = {}, {}
+    cells: dict[int, tuple[int, ...]] = {}
+    cprop: dict[int, float] = {}
     cell_ids = itertools.count(draw(st.sampled_from([0, 5, 1 << 35])), draw(st.sampled_from([1, 2])))
     for i in range(nx_ - 1):
         for j in range(ny - 1):
@@ -144,7 +146,7 @@ def random_rows(draw: st.DrawFn, k: int) -> Rows:
 # ---------------------------------------------------------------- edits
 
 
-def edit(draw: st.DrawFn, rows: Rows, zone: set[int] | None, count: int) -> None:
+def edit(draw: Callable[[st.SearchStrategy[Any]], Any], rows: Rows, zone: set[int] | None, count: int) -> None:
     """``count`` random edits of the rows, touching only vertices of ``zone`` (None: anywhere), in place."""
     k = rows.k
     for _ in range(count):
@@ -441,7 +443,7 @@ def test_regions_and_conflicts_are_those_of_the_rule(case: tuple[Rows, Rows, Row
 @PROPERTY
 @given(any_edits(), st.sampled_from(["parent", "child", "base"]))
 def test_every_solution_gives_the_stated_mesh_and_says_what_it_discards(
-    case: tuple[Rows, Rows, Rows], solution: str
+    case: tuple[Rows, Rows, Rows], solution: Literal["parent", "child", "base"]
 ) -> None:
     base, parent, child = case
     merge = three_way_merge(base.state(), parent.state(), child.state())
@@ -571,7 +573,7 @@ def _small_grid(columns: int = 4, rows: int = 2) -> tuple[Rows, dict[int, int]]:
     verts = {
         i * rows + j: (math.sin(0.3 * i), float(j), math.cos(0.3 * i)) for i in range(columns) for j in range(rows)
     }
-    cells = {}
+    cells: dict[int, tuple[int, ...]] = {}
     for i in range(columns - 1):
         a, b, c, d = i * rows, (i + 1) * rows, i * rows + 1, (i + 1) * rows + 1
         cells[2 * i], cells[2 * i + 1] = (a, b, d), (a, d, c)

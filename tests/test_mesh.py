@@ -78,7 +78,7 @@ def test_bad_cell_property_length() -> None:
 
 
 def test_report_flags_duplicates_and_degenerate_cells() -> None:
-    vertices = np.vstack([SQUARE, [[1, 0, 0], [2, 0, 0], [-0.0, 0.0, 0.0]]])  # 4 = copy of 1, 6 = copy of 0
+    vertices = np.vstack([SQUARE, np.array([[1, 0, 0], [2, 0, 0], [-0.0, 0.0, 0.0]])])  # 4 = copy of 1, 6 = copy of 0
     triangles = [[0, 1, 2], [0, 1, 5], [0, 2, 3], [1, 4, 2]]  # 1: collinear (zero area); 3: uses a duplicate
     report = Surface(vertices, triangles).report()
     assert report.duplicate_vertices.tolist() == [[0, 6], [1, 4]]

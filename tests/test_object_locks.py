@@ -8,6 +8,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.fetched import mesh_of
 from tests.roles import login_roles
 from tests.synthetic import flat_grid
 from tgsis.db import features as F
@@ -156,5 +157,5 @@ def test_feature_locks_hold_for_vertices_and_deletes(conn: Conn) -> None:
     conn.rollback()
     _write(conn, "mine", f"UPDATE tgsis.vrtx SET z = 5 WHERE geoid = {geoid} AND vrtxid = 0")
     with tgsis.in_version(conn, "theirs", local=True):
-        assert F.fetch_feature(conn, "horizons", geoid).mesh.vertices[0, 2] == 1.0
+        assert mesh_of(F.fetch_feature(conn, "horizons", geoid)).vertices[0, 2] == 1.0
     conn.rollback()

@@ -12,6 +12,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.fetched import geometry_of
 from tgsis.db import _static, _transfer
 from tgsis.db import features as F
 from tgsis.db._static_drawing import drawable_surface, stored_surface
@@ -101,7 +102,7 @@ def test_rows_written_in_any_order_with_gaps_read_in_id_order(conn: Conn, horizo
         (geoid,),
     )
     conn.execute("UPDATE horizon_cellpros SET _idx = _idx * 10 + 7 WHERE _geoid = %s", (geoid,))
-    assert F.fetch_feature(conn, horizons, geoid).mesh.same_as(mesh)
+    assert geometry_of(F.fetch_feature(conn, horizons, geoid)).same_as(mesh)
 
 
 def test_a_null_written_by_psql_is_reported_naming_the_column(conn: Conn, horizons: F.FeatureClass) -> None:
@@ -136,17 +137,17 @@ def test_one_query_for_all_tables_and_versions_read_their_own_rows(
     with tgsis.in_version(conn, "edit"):
         conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (geoid,))
         calls: list[list[str]] = []
-        real = _static.columns_out_all
+        real = _transfer.columns_out_all  # what _static imports
 
         def spy(conn: Conn, requests: Any) -> list[list[np.ndarray]]:
             calls.append([request.source.as_string(conn) for request in requests])
             return real(conn, requests)
 
         monkeypatch.setattr(_static, "columns_out_all", spy)
-        assert F.fetch_feature(conn, horizons, geoid).mesh.same_as(moved)
+        assert geometry_of(F.fetch_feature(conn, horizons, geoid)).same_as(moved)
         assert len(calls) == 1, calls  # one query, all three tables
         assert sorted(calls[0]) == sorted(['"public"."horizon_cellpros"', "tgsis.vrtx", 'tgsis."trgl"']), calls
-    assert F.fetch_feature(conn, horizons, geoid).mesh.same_as(mesh)  # DEFAULT does not see the edit
+    assert geometry_of(F.fetch_feature(conn, horizons, geoid)).same_as(mesh)  # DEFAULT does not see the edit
 
 
 def _oriented(triangles: np.ndarray) -> np.ndarray:
@@ -243,7 +244,8 @@ def test_several_geometries_at_once_each_read_its_own_rows(conn: Conn, horizons:
     conn.execute("INSERT INTO tgsis.vrtx SELECT * FROM keep")
     got = F.fetch_features(conn, horizons, [b, a, b])
     assert [f.id for f in got] == [b, a, b]
-    assert got[0].mesh.same_as(second) and got[1].mesh.same_as(first) and got[2].mesh.same_as(second)
+    assert geometry_of(got[0]).same_as(second) and geometry_of(got[1]).same_as(first)
+    assert geometry_of(got[2]).same_as(second)
     conn.execute("ALTER TABLE horizon_cellpros ALTER COLUMN porosity DROP NOT NULL")  # as the table's owner may
     conn.execute("UPDATE horizon_cellpros SET porosity = NULL WHERE _geoid = %s AND _idx = 7", (b,))
     with pytest.raises(DatabaseError, match=rf"column porosity of .*horizon_cellpros.* row _geoid = {b}, _idx = 7"):
@@ -292,7 +294,7 @@ def test_parallel_workers_read_the_tables_side_by_side_and_see_the_transactions_
         flipped = mesh.vertices.copy()
         flipped[:, 2] *= -1
         got = F.fetch_feature(conn, horizons, geoid).mesh
-        assert got is not None and np.array_equal(got.vertices, flipped)
+        assert isinstance(got, Surface) and np.array_equal(got.vertices, flipped)
         assert np.array_equal(_oriented(got.cells), _oriented(mesh.cells))
         vertices, triangles = _transfer.columns_out_all(conn, requests)
         assert np.array_equal(vertices[2][np.argsort(vertices[1])], flipped[:, 2])

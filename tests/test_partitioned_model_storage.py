@@ -22,6 +22,7 @@ from psycopg import sql
 
 import tgsis
 from tests import test_checkin, test_checkin_child
+from tests.fetched import geometry_of
 from tests.roles import login_roles
 from tests.sessions import Background, wait_until_blocked
 from tests.test_backup import _bindir_of, _restored
@@ -81,7 +82,7 @@ def test_the_storage_is_partitioned_and_versioning_keeps_it_so(
             sql.SQL("SELECT count(DISTINCT tableoid) FROM {}").format(sql.Identifier("tgsis", f"{table}_ver"))
         ).fetchone()
         assert used is not None and used[0] > 1, table  # twelve geometries spread over the partitions
-    assert all(tgsis.fetch_feature(conn, horizons, i).mesh.same_as(_grid(6)) for i in ids)
+    assert all(geometry_of(tgsis.fetch_feature(conn, horizons, i)).same_as(_grid(6)) for i in ids)
 
 
 def test_an_editor_checks_in_and_a_merge_brings_it_home(db_dsn: str, conn: Conn, horizons: Any) -> None:
@@ -101,15 +102,15 @@ def test_an_editor_checks_in_and_a_merge_brings_it_home(db_dsn: str, conn: Conn,
         edited = tgsis.Surface(moved, out.mesh.cells, vertex_properties=out.mesh.vertex_properties)
         tgsis.checkin(editor, out, edited)
         editor.commit()
-        assert tgsis.fetch_feature(editor, horizons.name, geoid).mesh.same_as(edited)
+        assert geometry_of(tgsis.fetch_feature(editor, horizons.name, geoid)).same_as(edited)
         # a partition by name is not the editor's to write: the parent's rights are
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
             editor.execute("INSERT INTO tgsis.vrtx_p0 VALUES (1, 1, 0, 0, 0, 0)")
         editor.rollback()
-    assert tgsis.fetch_feature(conn, horizons, geoid).mesh.same_as(mesh)  # DEFAULT untouched until the merge
+    assert geometry_of(tgsis.fetch_feature(conn, horizons, geoid)).same_as(mesh)  # DEFAULT untouched until the merge
     tgsis.merge_version(conn, "edit")
     conn.commit()
-    assert tgsis.fetch_feature(conn, horizons, geoid).mesh.same_as(edited)
+    assert geometry_of(tgsis.fetch_feature(conn, horizons, geoid)).same_as(edited)
     closed = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND revclosed", (geoid,)).fetchone()
     assert closed == (5,)  # the five moved vertices' old row versions, closed by the merge; nothing else
 
@@ -137,12 +138,12 @@ def test_dump_and_restore_keep_the_partitioned_model_storage(
                 (f"tgsis.{table}",),
             ).fetchone()
             assert row == ("p", PARTITIONS), table
-        assert tgsis.fetch_feature(restored, horizons.name, geoid).mesh.same_as(mesh)
+        assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(mesh)
         with tgsis.in_version(restored, "edit"):
-            assert tgsis.fetch_feature(restored, horizons.name, geoid).mesh.same_as(edited)
+            assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(edited)
         tgsis.merge_version(restored, "edit")
         restored.commit()
-        assert tgsis.fetch_feature(restored, horizons.name, geoid).mesh.same_as(edited)
+        assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(edited)
 
 
 def _definition(conn: Conn, table: str) -> list[Any]:

@@ -111,7 +111,7 @@ def gconn(gis: GisServer) -> Iterator[Conn]:
 def _one(conn: Conn, query: str, params: tuple[Any, ...] = ()) -> Any:
     """The one value of a query; errors as tgsis's exceptions (tgsis.errors.reraise), as a client sees them."""
     with reraise():
-        row = conn.execute(query, params).fetchone()  # type: ignore[arg-type]
+        row = conn.execute(query, params).fetchone()
     assert row is not None
     return row[0]
 
@@ -220,7 +220,7 @@ def test_lines_points_and_collections_become_their_postgis_types(gconn: Conn) ->
     tgsis.create_feature_class(gconn, "picks", "MULTIPOINT", srs=32611)
     tgsis.create_feature_class(gconn, "groups", "GEOMETRYCOLLECTION", srs=32611)
     line = tgsis.LineSet([[0, 0, 0], [1, 0, 0], [1, 1, 2]], [[0, 1], [1, 2]])
-    points = tgsis.PointSet([[5, 5, 5], [6, 6, 6.25]])
+    points = tgsis.PointSet([[5.0, 5, 5], [6, 6, 6.25]])
     lid = tgsis.insert_feature(gconn, "traces", line)
     pid = tgsis.insert_feature(gconn, "picks", points)
     gid = tgsis.insert_feature(gconn, "groups", tgsis.GeometryCollection([line, points, flat_grid(2, 1.0)]))
@@ -262,7 +262,7 @@ def test_the_shape_at_t_is_the_snapshot_python_computes(gconn: Conn) -> None:
     # a temporal feature has no shape without a time; a bad time is refused
     with pytest.raises(tgsis.InvalidInputError, match="depends on the time") as err:
         _one(gconn, "SELECT tgsis.postgis_geometry('moving', %s)", (mid,))
-    assert err.value.sqlstate == "TG100" and "postgis_geometry_at" in (err.value.hint or "")  # type: ignore[attr-defined]
+    assert err.value.sqlstate == "TG100" and "postgis_geometry_at" in (err.value.hint or "")
     with pytest.raises(tgsis.InvalidInputError):
         _one(gconn, "SELECT tgsis.postgis_geometry_at('moving', %s, 'NaN')", (mid,))
     with pytest.raises(tgsis.InvalidInputError):
@@ -372,7 +372,8 @@ def test_postgis_geometries_are_stored_as_features_in_sql(gconn: Conn) -> None:
     )
     assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('faults', %s))", (fid,)) == tin
     feature = tgsis.fetch_feature(gconn, "faults", fid)
-    assert feature.properties["release"] == "7" and feature.mesh.name == "imported"
+    assert feature.properties["release"] == "7" and isinstance(feature.mesh, tgsis.Mesh)
+    assert feature.mesh.name == "imported"
     assert len(feature.mesh.vertices) == 4  # shared corners are one vertex
     assert _one(gconn, "SELECT nvrtx FROM tgsis.geometry WHERE geoid = %s", (fid,)) == 4
     assert tgsis.features_in_box(gconn, "faults", [[0, 0, 0], [1, 1, 1]]) == [fid]
@@ -448,7 +449,7 @@ def test_reading_a_large_tin_in_sql_takes_linear_time(gconn: Conn) -> None:
 
 
 def test_every_geotype_gets_its_layer_type(gconn: Conn) -> None:
-    classes = {
+    classes: dict[str, tuple[str, tgsis.Mesh | tgsis.GeometryCollection, str]] = {
         "bodies": ("MULTITETRA", _tetra_block(), "POLYHEDRALSURFACE"),
         "traces": ("MULTILINESTRING", tgsis.LineSet([[0, 0, 0], [1, 0, 0]], [[0, 1]]), "MULTILINESTRING"),
         "picks": ("MULTIPOINT", tgsis.PointSet([[5, 5, 5]]), "MULTIPOINT"),
@@ -538,7 +539,7 @@ def test_a_geometry_tgsis_cannot_store_is_refused_and_nothing_is_written(
 ) -> None:
     tgsis.create_feature_class(gconn, "faults", "SURFACE", feature_properties={"release": "text"})
     with pytest.raises(error, match=words):
-        _one(gconn, f"SELECT tgsis.insert_postgis_feature('faults', {geom})")  # type: ignore[arg-type]
+        _one(gconn, f"SELECT tgsis.insert_postgis_feature('faults', {geom})")
     assert _one(gconn, "SELECT count(*) FROM tgsis.geometry") == 0
     assert _one(gconn, "SELECT count(*) FROM faults") == 0
 
@@ -549,12 +550,12 @@ def test_properties_and_classes_a_geometry_cannot_fill_are_refused(gconn: Conn) 
     tgsis.create_feature_class(gconn, "porous", "SURFACE", cell_properties={"porosity": "float8"})
     tgsis.create_feature_class(gconn, "moving", "SURFACE", time_model="EVOLVING")
     with pytest.raises(tgsis.InvalidPropertyError, match="no feature properties colour") as err:
-        _one(gconn, f"SELECT tgsis.insert_postgis_feature('faults', {tin}, '{{\"colour\": 1}}')")  # type: ignore[arg-type]
-    assert "release" in (err.value.hint or "")  # type: ignore[attr-defined]
+        _one(gconn, f"SELECT tgsis.insert_postgis_feature('faults', {tin}, '{{\"colour\": 1}}')")
+    assert "release" in (err.value.hint or "")
     with pytest.raises(tgsis.InvalidPropertyError, match="vertex or cell properties"):
-        _one(gconn, f"SELECT tgsis.insert_postgis_feature('porous', {tin})")  # type: ignore[arg-type]
+        _one(gconn, f"SELECT tgsis.insert_postgis_feature('porous', {tin})")
     with pytest.raises(tgsis.InvalidInputError, match="EVOLVING"):
-        _one(gconn, f"SELECT tgsis.insert_postgis_feature('moving', {tin})")  # type: ignore[arg-type]
+        _one(gconn, f"SELECT tgsis.insert_postgis_feature('moving', {tin})")
     assert _one(gconn, "SELECT count(*) FROM tgsis.geometry") == 0
 
 

@@ -23,7 +23,7 @@ from tgsis.mesh import Mesh, Surface
 
 Conn = psycopg.Connection[Any]
 
-PROPERTIES = [
+PROPERTIES: list[tuple[str, str] | F.Property] = [
     ("porosity", "double precision"),
     F.Property("Facies", "integer", alignment="CELL"),
     F.Property("normal", "real", 3, "CELL"),
@@ -194,7 +194,7 @@ def test_bad_alignments_change_nothing(
     conn: Conn, properties: list[dict[str, str]], kwargs: dict[str, Any], message: str
 ) -> None:
     with pytest.raises(tgsis.InvalidPropertyError, match=message):
-        F.create_feature_class(conn, "bad", "SURFACE", cell_properties=properties, **kwargs)  # type: ignore[arg-type]
+        F.create_feature_class(conn, "bad", "SURFACE", cell_properties=properties, **kwargs)
     assert conn.execute("SELECT count(*) FROM tgsis.catalog").fetchone() == (0,)
     assert conn.execute("SELECT to_regclass('bad'), to_regclass('bad_simplexpros')").fetchone() == (None, None)
 

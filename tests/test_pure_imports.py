@@ -92,7 +92,7 @@ def _imports(path: Path) -> list[tuple[str, list[str], bool]]:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     top = {id(node) for node in tree.body}
     return [
-        (node.module, [a.name for a in node.names], id(node) in top)
+        (node.module or "", [a.name for a in node.names], id(node) in top)
         for node in ast.walk(tree)
         if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("tgsis")
     ]
@@ -144,10 +144,12 @@ def _import_graph() -> nx.DiGraph:
     return graph
 
 
-# Cycles not broken yet, each named by its modules: a new cycle, or a longer one, fails. The meshes'
-# methods to_pyvista/to_meshio/from_pyvista/from_meshio/to_trimesh call tgsis.convert and
-# tgsis._zpositive, which take the mesh classes: breaking it means conversions working on arrays
-# below tgsis.mesh (issue 38, part 4: left for a later step).
+# Cycles not broken yet, each named by its modules: a new cycle, a longer one, or one that is gone while
+# still listed here fails. The meshes' methods to_pyvista/to_meshio/from_pyvista/from_meshio (Mesh and
+# GeometryCollection) call tgsis.convert and Surface.to_trimesh tgsis._zpositive, which build and read the
+# mesh classes (with tgsis._vtk_cells and tgsis.formats._common): breaking it means the pyvista/meshio
+# readers and writers working on arrays (VTK's cell layout) below tgsis.mesh, and the mesh classes built
+# from those arrays in tgsis.mesh (issue 38, part 4: left for a later step).
 KNOWN_CYCLES = {
     frozenset({"tgsis.mesh", "tgsis.convert", "tgsis._zpositive", "tgsis._vtk_cells", "tgsis.formats._common"})
 }
@@ -161,6 +163,7 @@ def test_the_modules_of_tgsis_import_each_other_without_a_cycle() -> None:
     assert len(graph) > 60 and graph.has_edge("tgsis.convert", "tgsis.mesh")
     cycles = {frozenset(c) for c in nx.strongly_connected_components(graph) if len(c) > 1}
     assert sorted(sorted(c) for c in cycles - KNOWN_CYCLES) == []
+    assert sorted(sorted(c) for c in KNOWN_CYCLES - cycles) == []  # broken: remove it from KNOWN_CYCLES
 
 
 def test_the_database_modules_import_each_other_without_a_cycle() -> None:

@@ -126,6 +126,7 @@ def test_the_counts_are_what_the_merge_then_loses(conn: Conn, story: dict[str, i
     parent_before = _vertices(conn, "DEFAULT", a)
     child = _vertices(conn, "edit", a)
     conflict = tgsis.resolve_conflict(conn, "edit", "feature", a, "child")
+    assert conflict.discarded is not None
     assert sorted(
         (d.shortname, d.rows_added, d.rows_removed, d.rows_changed, d.values_changed) for d in conflict.discarded
     ) == sorted(LOST_BY_CHILD)
@@ -145,6 +146,7 @@ def _vertices(conn: Conn, version: str, geoid: int) -> dict[int, float]:
 def test_parent_solution_and_a_manual_merge_that_holds_everything(conn: Conn, story: dict[str, int]) -> None:
     a = story["A"]
     conflict = tgsis.resolve_conflict(conn, "edit", "feature", a, "parent")
+    assert conflict.discarded is not None
     assert sorted(
         (d.shortname, d.rows_added, d.rows_removed, d.rows_changed, d.values_changed) for d in conflict.discarded
     ) == sorted(LOST_BY_PARENT)

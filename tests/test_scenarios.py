@@ -65,7 +65,7 @@ def _replays(db_dsn: str, scenario: str, out: str, count: int) -> None:
     with psycopg.connect(make_conninfo(db_dsn, dbname=f"tgsis_demo_{scenario}")) as conn:
         for statement, answer in asked:
             values = answer.split(": ", 1)[1]
-            rows = conn.execute(statement).fetchall()  # type: ignore[arg-type]  # the report's own text
+            rows = conn.execute(statement).fetchall()
             assert "; ".join(", ".join(str(v) for v in row) for row in rows) == values, statement
 
 
@@ -83,7 +83,7 @@ def test_saltdome(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str
         with Image.open(folder / name) as picture:
             assert picture.format == "PNG" and picture.size == (800, 600)
     with Image.open(folder / "saltdome.gif") as movie:
-        assert movie.format == "GIF" and movie.n_frames == 11
+        assert movie.format == "GIF" and movie.n_frames == 11  # type: ignore[attr-defined]  # PIL: only multi-frame formats
     frames = read_pvd(folder / "saltdome.pvd")
     assert len(frames) == 11 and frames[0][0] == 0.0 and frames[-1][0] == 1.0
     assert "summary: interpolation_error_m" in out

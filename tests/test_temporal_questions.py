@@ -116,7 +116,7 @@ def linear_value(periods: Series, alive: bool, t: float, end: float | None = Non
     a, b = values[j], values[j + 1]
     if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
         return None
-    return a + (b - a) * (t - times[j]) / (times[j + 1] - times[j])
+    return float(a + (b - a) * (t - times[j]) / (times[j + 1] - times[j]))
 
 
 def crossings(periods: Series, v: float) -> frozenset[float]:
@@ -500,8 +500,8 @@ def test_bad_input_raises_and_changes_nothing(
         (
             tgsis.InvalidInputError,
             "convention",
-            lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", 1, convention="middle"),
-        ),  # type: ignore[arg-type]
+            lambda: tgsis.property_periods(tx, stepped, fid, "throw", ">", 1, convention="middle"),  # type: ignore[arg-type]  # the bad value
+        ),
     ]
     for error, match, call in cases:
         with pytest.raises(error, match=match) as raised:

@@ -22,7 +22,7 @@ Conn = psycopg.Connection[Any]
 
 
 def _stepped(conn: Conn) -> int:
-    conn.execute(TEST_MODEL)  # type: ignore[arg-type]  # a test's own literal
+    conn.execute(TEST_MODEL)
     conn.execute("SELECT tgsis.create_storage()")
     conn.execute(
         "SELECT tgsis.register_feature_class('stepped', 'MULTIPOINT', p_cell_properties => '{\"v\": \"float8\"}', "
@@ -56,7 +56,7 @@ CALLS = [
 def test_a_registered_model_without_a_rule_is_refused(conn: Conn, function: str, query: str) -> None:
     geoid = _stepped(conn)
     with pytest.raises(tgsis.UnknownDataModelError) as caught, reraise():
-        conn.execute(query, {"g": geoid})  # type: ignore[arg-type]  # the test's own literals
+        conn.execute(query, {"g": geoid})
     assert str(caught.value).startswith(
         f"{function} has no rule for data model 9 (test points in steps, time model STEPS)"
     )

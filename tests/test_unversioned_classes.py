@@ -16,6 +16,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.fetched import mesh_of
 from tests.gmaps_shapes import block_tetrahedra
 from tests.roles import login_roles
 from tests.temporal_data import evolving, series
@@ -106,11 +107,11 @@ def test_every_version_and_revision_sees_the_one_current_state(conn: Conn) -> No
     assert _z(conn, well) == 5.0
     with tgsis.in_version(conn, "v1"):
         assert _z(conn, well) == 5.0
-        assert np.array_equal(tgsis.fetch_feature(conn, wells, well).mesh.vertices, edited.vertices)
+        assert np.array_equal(mesh_of(tgsis.fetch_feature(conn, wells, well)).vertices, edited.vertices)
     with tgsis.at_revision(conn, first, "DEFAULT"):
         assert _z(conn, well) == 5.0  # it has no history: the old revision sees it as it is
     # nothing of it is a difference between versions, nor a change to merge
-    assert not [d for d in tgsis.diff_versions(conn, "DEFAULT", "v1") if d.key == str(well)]
+    assert not [d for d in tgsis.diff_versions(conn, "DEFAULT", "v1") if d.objectkey == str(well)]
     tgsis.merge_version(conn, "v1")
     conn.commit()
     assert {(r[1], r[2]) for r in _stored(conn, well)} == {(0, False)}

@@ -195,11 +195,13 @@ def test_data_of_a_release_is_readable_and_writable_after_the_upgrade(
         tgsis.install(conn)
         conn.commit()
         (geoid,) = conn.execute("SELECT _geoid FROM public.horizon").fetchone()  # type: ignore[misc]
-        old = tgsis.fetch_feature(conn, "horizon", geoid)
-        assert old.mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
-        assert old.properties["unit"] == "Triassic"
+        stored = tgsis.fetch_feature(conn, "horizon", geoid)
+        assert isinstance(stored.mesh, tgsis.Surface)
+        assert stored.mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+        assert stored.properties["unit"] == "Triassic"
         with tgsis.in_version(conn, "survey2"):
             changed = tgsis.fetch_feature(conn, "horizon", geoid)
+        assert isinstance(changed.mesh, tgsis.Surface)
         assert changed.mesh.vertices[2].tolist() == [0, 1, -5] and changed.properties["unit"] == "Jurassic"
         # written after: a new feature in the version, a change saved, the old revision still there
         mesh = tgsis.Surface(
@@ -223,6 +225,7 @@ def test_data_of_a_release_is_readable_and_writable_after_the_upgrade(
         # the changes made under the old version were noted by the upgrade (tgsis.revision_objects): the merge copies them
         tgsis.merge_version(conn, "survey2")
         merged = tgsis.fetch_feature(conn, "horizon", geoid)
+        assert isinstance(merged.mesh, tgsis.Surface)
         assert merged.mesh.vertices[2].tolist() == [0, 1, -5] and merged.properties["unit"] == "Jurassic"
         assert tgsis.fetch_feature(conn, "horizon", new).properties["unit"] == "Cretaceous"
 
@@ -415,7 +418,7 @@ def test_rows_upserts_the_shipped_rows(conn: psycopg.Connection[Any]) -> None:
         "INSERT INTO public.codes (code, name, note) VALUES ('A', 'a', 'x'), ('C', 'c; new', 'z');\n"
     }
     script = _upgrade.Upgrade({}, new, "-- @rows c.sql\n").script("--")
-    conn.execute(script.split("-- ---- generated")[0])  # type: ignore[arg-type]
+    conn.execute(script.split("-- ---- generated")[0])
     assert conn.execute("SELECT * FROM public.codes ORDER BY code").fetchall() == [
         ("A", "a", "x"),
         ("B", "b", "y"),

@@ -295,7 +295,7 @@ class Mesh:
 
     # ---- comparison and copies
 
-    def same_as(self, other: Mesh) -> bool:
+    def same_as(self, other: Mesh | GeometryCollection) -> bool:
         """Same type, bit-identical vertices and cells, and equal properties (NaN equals NaN)."""
 
         def same_props(a: Mapping[str, npt.NDArray[Any]], b: Mapping[str, npt.NDArray[Any]]) -> bool:

@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 Conn = psycopg.Connection[Any]
-PropertySpec = Mapping[str, str] | Sequence["tuple[str, str] | tuple[str, str, int] | Property"]
+PropertySpec = Mapping[str, str] | Sequence["tuple[str, str] | tuple[str, str, int] | Property | Mapping[str, Any]"]
 #: Which list of a class a property is in: per feature, per vertex or cell, per feature and instant.
 PropertyKind = Literal["feature", "cell", "instant"]
 
@@ -231,7 +231,8 @@ def create_feature_class(
         one array column of k values. A :class:`Property` item may give its
         own ``alignment`` (``Property("facies", "integer",
         alignment="CELL")`` in a VERTEX class): a class may have vertex and
-        cell properties side by side.
+        cell properties side by side. An item may also be a mapping as the
+        SQL function takes it (``{"name": ..., "type": ..., "size": k}``).
     alignment : {"VERTEX", "CELL"}
     srs : int
     schema : str
