@@ -79,6 +79,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._conversions import Conversions, install
 from tgsis._vtk_cells import (
     CELL_TYPE_OF,
     collection_from_cells,
@@ -578,3 +579,15 @@ def to_meshio(geometry: Geometry) -> Any:
         },
         info={"tgsis": info},
     )
+
+
+# the mesh classes' methods (Mesh.to_pyvista, ..., Surface.to_trimesh) call these: tgsis.mesh cannot import this module
+install(
+    Conversions(
+        to_pyvista=to_pyvista,
+        to_meshio=to_meshio,
+        from_pyvista=from_pyvista,
+        from_meshio=from_meshio,
+        elevation=elevation,
+    )
+)

@@ -32,6 +32,7 @@ from typing import Any, ClassVar, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._conversions import installed as _conversions
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
 
 __all__ = [
@@ -323,25 +324,22 @@ class Mesh:
             metadata=dict(self.metadata),
         )
 
-    # ---- other libraries' mesh objects (tgsis.convert; pyvista and meshio are optional)
+    # ---- other libraries' mesh objects (tgsis.convert, reached through tgsis._conversions: it imports this
+    # module; pyvista and meshio are optional)
 
     def to_pyvista(self) -> Any:
         """This mesh as a pyvista ``PolyData`` (points, lines, surfaces) or ``UnstructuredGrid`` (tetrahedra).
 
         See :func:`tgsis.convert.to_pyvista`; needs pyvista (``pip install 'tgsis[pyvista]'``).
         """
-        from tgsis.convert import to_pyvista
-
-        return to_pyvista(self)
+        return _conversions().to_pyvista(self)
 
     def to_meshio(self) -> Any:
         """This mesh as a ``meshio.Mesh`` of one cell block.
 
         See :func:`tgsis.convert.to_meshio`; needs meshio (``pip install 'tgsis[meshio]'``).
         """
-        from tgsis.convert import to_meshio
-
-        return to_meshio(self)
+        return _conversions().to_meshio(self)
 
     @classmethod
     def from_pyvista(cls, obj: Any) -> Mesh:
@@ -353,9 +351,7 @@ class Mesh:
             The dataset is not a mesh of this class (``Surface.from_pyvista`` of
             lines), or not one tgsis can store.
         """
-        from tgsis.convert import from_pyvista
-
-        return cls._expect(from_pyvista(obj), "pyvista dataset")
+        return cls._expect(_conversions().from_pyvista(obj), "pyvista dataset")
 
     @classmethod
     def from_meshio(cls, obj: Any) -> Mesh:
@@ -366,9 +362,7 @@ class Mesh:
         InvalidGeometryError
             As :meth:`from_pyvista`.
         """
-        from tgsis.convert import from_meshio
-
-        return cls._expect(from_meshio(obj), "meshio.Mesh")
+        return cls._expect(_conversions().from_meshio(obj), "meshio.Mesh")
 
     @classmethod
     def _expect(cls, mesh: Mesh | GeometryCollection, what: str) -> Mesh:
@@ -427,10 +421,9 @@ class Surface(Mesh):
         """
         import trimesh
 
-        from tgsis._zpositive import elevation
-
+        up: Surface = _conversions().elevation(self)  # tgsis._zpositive.elevation
         return trimesh.Trimesh(
-            vertices=elevation(self).vertices.copy(),
+            vertices=up.vertices.copy(),
             faces=self.cells.copy(),
             process=False,
             validate=False,
@@ -609,15 +602,11 @@ class GeometryCollection:
 
     def to_pyvista(self) -> Any:
         """The collection as one pyvista ``UnstructuredGrid`` of mixed cells; see :func:`tgsis.convert.to_pyvista`."""
-        from tgsis.convert import to_pyvista
-
-        return to_pyvista(self)
+        return _conversions().to_pyvista(self)
 
     def to_meshio(self) -> Any:
         """The collection as a ``meshio.Mesh`` of one cell block per member; see :func:`tgsis.convert.to_meshio`."""
-        from tgsis.convert import to_meshio
-
-        return to_meshio(self)
+        return _conversions().to_meshio(self)
 
     def __repr__(self) -> str:
         kinds = ", ".join(type(m).__name__ for m in self.members)
