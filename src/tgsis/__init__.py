@@ -148,6 +148,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         property_periods,
         surfaces_at,
     )
+    from tgsis.db.merging import object_merge
     from tgsis.db.versions import (
         Compressed,
         Conflict,
@@ -209,6 +210,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
 _LAZY_MODULES = (
     "tgsis.db",
     "tgsis.db.versions",
+    "tgsis.db.merging",
     "tgsis.db.features",
     "tgsis.db.classes",
     "tgsis.db.checkin",
@@ -328,6 +330,7 @@ __all__ = [
     "Discard",
     "conflict_discards",
     "merge_version",
+    "object_merge",
     "refresh_version",
     "Difference",
     "diff_versions",

@@ -1,0 +1,207 @@
+"""tgsis.object_merge: the three-way merge of one model-1 object of a version, read from the database (issue 39)."""
+
+from __future__ import annotations
+
+import json
+import threading
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+import pytest
+
+import tgsis
+from tests.roles import login_roles
+from tgsis.db import features as F
+from tgsis.db import merging
+
+Conn = psycopg.Connection[Any]
+
+SIDE = 12
+
+
+def curved_surface() -> tgsis.Surface:
+    """A SIDE x SIDE grid bent into a curved sheet (z = sin x cos y), coordinates with full mantissas."""
+    u, v = np.meshgrid(np.linspace(0.0, 3.1, SIDE), np.linspace(0.0, 2.7, SIDE))
+    vertices = np.stack([u.ravel() * 1000.3, v.ravel() * 997.1, 150.0 * np.sin(u.ravel()) * np.cos(v.ravel())], axis=1)
+    idx = np.arange(SIDE * SIDE).reshape(SIDE, SIDE)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    cells = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    return tgsis.Surface(
+        vertices,
+        cells,
+        vertex_properties={"porosity": np.linspace(0.1, 0.3, SIDE * SIDE)},
+        name="fault",
+    )
+
+
+@pytest.fixture
+def fault(conn: Conn) -> int:
+    """One curved surface with a vertex property in DEFAULT, and version e1 based on it."""
+    F.create_feature_class(conn, "faults", "SURFACE", cell_properties={"porosity": "float8"})
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "faults", curved_surface())
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def _move(conn: Conn, version: str, geoid: int, ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
+    """Move vertices ``ids`` by ``shift`` in ``version`` (one committed UPDATE, as a psql user would)."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+            (*shift, geoid, [int(i) for i in np.asarray(ids)]),
+        )
+
+
+def _moved(vertices: npt.NDArray[np.float64], ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
+    """The same move made in Python (float8 + float8 in PostgreSQL and numpy are both IEEE: bit for bit)."""
+    at = np.asarray(ids)
+    for axis in range(3):
+        vertices[at, axis] = vertices[at, axis] + shift[axis]
+
+
+NORTH = np.arange(0, 2 * SIDE)  # the first two rows of the grid
+SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)  # the last two
+
+
+def test_disjoint_ends_merge_into_the_union(conn: Conn, fault: int) -> None:
+    _move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    _move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    merge = tgsis.object_merge(conn, "e1", fault)
+    assert merge.conflicts == ()
+    assert sorted(r.sides for r in merge.regions) == ["child", "parent"]
+    expected = curved_surface().vertices.copy()
+    _moved(expected, NORTH, (0.125, -3.3, 7.77))
+    _moved(expected, SOUTH, (-1.1, 0.0, -2.9))
+    assert merge.merged is not None
+    state = merge.merged.state
+    np.testing.assert_array_equal(state.vertex_ids, np.arange(SIDE * SIDE))
+    assert state.vertices.tobytes() == expected.tobytes()  # bit for bit
+    surface = curved_surface()
+    assert {tuple(c) for c in state.cells.tolist()} == {tuple(c) for c in surface.cells.tolist()}
+    assert state.vertex_properties["porosity"].tobytes() == surface.vertex_properties["porosity"].tobytes()
+    assert merge.merged.discards == ()
+
+
+def test_overlapping_edits_are_one_conflict_region_with_the_edited_ids(conn: Conn, fault: int) -> None:
+    child_ids = np.array([50, 51, 52])
+    parent_ids = np.array([52, 53])  # vertex 52 moved by both, differently
+    _move(conn, "e1", fault, child_ids, (0.0, 0.0, 5.0))
+    _move(conn, "DEFAULT", fault, parent_ids, (0.0, 0.0, -4.0))
+    merge = tgsis.object_merge(conn, "e1", fault)
+    [region] = merge.conflicts
+    assert len(merge.regions) == 1 and region.sides == "both"
+    np.testing.assert_array_equal(region.child_vertex_ids, child_ids)
+    np.testing.assert_array_equal(region.parent_vertex_ids, parent_ids)
+    assert region.child_displacement == 5.0 and region.parent_displacement == 4.0
+    assert merge.merged is None
+
+
+def test_base_is_the_state_at_the_initial_revision(conn: Conn, fault: int) -> None:
+    """DEFAULT's edit after e1 was created is the parent's, not the base's."""
+    original = curved_surface().vertices
+    _move(conn, "DEFAULT", fault, [7], (0.0, 0.0, 1.5))
+    _move(conn, "e1", fault, [100], (0.0, 0.0, 2.5))
+    merge = tgsis.object_merge(conn, "e1", fault)
+    assert merge.base.vertices.tobytes() == original.tobytes()
+    assert merge.parent.vertices[7, 2] == original[7, 2] + 1.5 and merge.parent.vertices[100, 2] == original[100, 2]
+    assert merge.child.vertices[100, 2] == original[100, 2] + 2.5 and merge.child.vertices[7, 2] == original[7, 2]
+    [p] = [r for r in merge.regions if r.sides == "parent"]
+    np.testing.assert_array_equal(p.parent_vertex_ids, [7])
+
+
+def test_ids_are_read_as_stored_not_renumbered(conn: Conn, fault: int) -> None:
+    """A removed vertex leaves a gap in the ids; the states keep it."""
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND %s IN (vrtxid1, vrtxid2, vrtxid3)", (fault, 0))
+        conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 0", (fault,))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, 1.0))
+    merge = tgsis.object_merge(conn, "e1", fault)
+    np.testing.assert_array_equal(merge.child.vertex_ids, np.arange(1, SIDE * SIDE))
+    assert merge.conflicts == () and merge.merged is not None
+    np.testing.assert_array_equal(merge.merged.state.vertex_ids, np.arange(1, SIDE * SIDE))
+    assert merge.merged.state.vertices[-1, 2] == curved_surface().vertices[-1, 2] + 1.0
+
+
+def test_a_writer_committing_between_the_reads_does_not_change_the_answer(
+    conn: Conn, fault: int, db_dsn: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    before = tgsis.object_merge(conn, "e1", fault)
+    read = merging._read_state
+    calls: list[str] = []
+
+    def read_then_write(*args: Any) -> Any:
+        result = read(*args)
+        calls.append(args[3])
+        if len(calls) == 1:  # after the base's read, another session writes in both sides and commits
+            with psycopg.connect(db_dsn, autocommit=True) as other:
+                for version in ("DEFAULT", "e1"):
+                    _move(other, version, fault, [60, 61], (0.0, 0.0, 11.0))
+        return result
+
+    monkeypatch.setattr(merging, "_read_state", read_then_write)
+    during = tgsis.object_merge(conn, "e1", fault)
+    assert calls == ["e1", "DEFAULT", "e1"]
+    assert during.merged is not None and before.merged is not None
+    for state in ("base", "parent", "child"):
+        assert getattr(during, state).vertices.tobytes() == getattr(before, state).vertices.tobytes()
+    assert during.merged.state.vertices.tobytes() == before.merged.state.vertices.tobytes()
+    monkeypatch.setattr(merging, "_read_state", read)
+    after = tgsis.object_merge(conn, "e1", fault)  # the write is there for the next call
+    assert after.child.vertices[60, 2] == before.child.vertices[60, 2] + 11.0
+
+
+def test_a_read_committed_transaction_is_refused(conn: Conn, fault: int) -> None:
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    conn.execute("SELECT 1")  # the caller's READ COMMITTED transaction
+    with pytest.raises(tgsis.InvalidInputError, match="one snapshot.*read committed"):
+        tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    conn.execute("BEGIN ISOLATION LEVEL REPEATABLE READ")
+    assert tgsis.object_merge(conn, "e1", fault).conflicts == ()
+    conn.rollback()
+
+
+def test_the_session_stays_in_its_version(conn: Conn, fault: int) -> None:
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    tgsis.goto_version(conn, "e1")
+    tgsis.object_merge(conn, "e1", fault)
+    assert tgsis.working_version(conn) == "e1" and tgsis.viewing_revision(conn) is None
+
+
+def test_an_object_not_changed_on_both_sides_is_refused(conn: Conn, fault: int) -> None:
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    with pytest.raises(tgsis.VersioningError, match=rf"feature {fault} of class faults was not changed both in version e1 ") as caught:
+        tgsis.object_merge(conn, "e1", fault)
+    assert caught.value.hint is not None and "find_conflicts" in caught.value.hint
+    with pytest.raises(tgsis.NotFoundError):
+        tgsis.object_merge(conn, "e1", fault + 1000)
+
+
+def test_an_object_of_another_model_is_refused(conn: Conn, fault: int) -> None:
+    F.create_feature_class(conn, "collections", "GEOMETRYCOLLECTION")
+    member = tgsis.Surface(curved_surface().vertices, curved_surface().cells)
+    geoid = F.insert_feature(conn, "collections", tgsis.GeometryCollection([member]))
+    conn.commit()
+    with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class collections is a geometry collection"):
+        tgsis.object_merge(conn, "e1", geoid)
+
+
+def test_a_role_without_rights_on_the_class_is_refused(conn: Conn, fault: int, db_dsn: str) -> None:
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        assert tgsis.object_merge(rita, "e1", fault).conflicts == ()  # a reader may
+        conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
+        conn.commit()
+        with pytest.raises(tgsis.MissingPrivilegeError, match="faults"):
+            tgsis.object_merge(made.connect("rita"), "e1", fault)
