@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 import pytest
+from psycopg import sql
 
 import tgsis
 from tests.roles import login_roles
@@ -32,6 +33,7 @@ def curved_surface() -> tgsis.Surface:
         vertices,
         cells,
         vertex_properties={"porosity": np.linspace(0.1, 0.3, SIDE * SIDE)},
+        cell_properties={"facies": np.arange(len(cells), dtype=np.int32) % 5},
         name="fault",
     )
 
@@ -39,7 +41,7 @@ def curved_surface() -> tgsis.Surface:
 @pytest.fixture
 def fault(conn: Conn) -> int:
     """One curved surface with a vertex property in DEFAULT, and version e1 based on it."""
-    F.create_feature_class(conn, "faults", "SURFACE", cell_properties={"porosity": "float8"})
+    F.create_feature_class(conn, "faults", "SURFACE", cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")])
     tgsis.enable_feature_versioning(conn)
     geoid = F.insert_feature(conn, "faults", curved_surface())
     tgsis.create_version(conn, "e1")
@@ -98,6 +100,36 @@ def test_overlapping_edits_are_one_conflict_region_with_the_edited_ids(conn: Con
     np.testing.assert_array_equal(region.parent_vertex_ids, parent_ids)
     assert region.child_displacement == 5.0 and region.parent_displacement == 4.0
     assert merge.merged is None
+
+
+def test_property_values_are_read_and_merged(conn: Conn, fault: int) -> None:
+    """A vertex value changed in DEFAULT and a cell value changed in e1 are two regions, both kept."""
+    fc = tgsis.get_feature_class(conn, "faults")
+    vertex_table, cell_table = fc.property_table("VERTEX"), fc.property_table("CELL")
+    assert vertex_table is not None and cell_table is not None
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute(
+            sql.SQL("UPDATE {} SET porosity = 0.99 WHERE _geoid = %s AND _idx = 3").format(fc.qualified(vertex_table)),
+            (fault,),
+        )
+    with tgsis.in_version(conn, "e1"):
+        conn.execute(
+            sql.SQL("UPDATE {} SET facies = 42 WHERE _geoid = %s AND _idx = 200").format(fc.qualified(cell_table)),
+            (fault,),
+        )
+    merge = tgsis.object_merge(conn, "e1", fault)
+    surface = curved_surface()
+    assert merge.base.cell_properties["facies"].tolist() == surface.cell_properties["facies"].tolist()
+    assert merge.base.vertex_properties["porosity"].tobytes() == surface.vertex_properties["porosity"].tobytes()
+    assert {r.sides: (r.parent_vertex_ids.tolist(), r.child_cell_ids.tolist()) for r in merge.regions} == {
+        "parent": ([3], []),
+        "child": ([], [200]),
+    }
+    assert merge.merged is not None
+    assert merge.merged.state.vertex_properties["porosity"][3] == 0.99
+    assert merge.merged.state.cell_properties["facies"][200] == 42
+    assert merge.merged.state.cell_properties["facies"][199] == 199 % 5
 
 
 def test_base_is_the_state_at_the_initial_revision(conn: Conn, fault: int) -> None:
