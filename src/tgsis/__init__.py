@@ -125,6 +125,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
     from tgsis.db.instants import add_instant, delete_instant, fetch_series
+    from tgsis.db.merging import object_merge
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -148,7 +149,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         property_periods,
         surfaces_at,
     )
-    from tgsis.db.merging import object_merge
     from tgsis.db.versions import (
         Compressed,
         Conflict,

@@ -131,7 +131,12 @@ def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision
     table, key = SIMPLEX[fc.geotype]
     k = mesh_class(fc.geotype).cell_size
     requests = [
-        Packed(sql.SQL("tgsis.vrtx"), "geoid", [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], [geoid]),
+        Packed(
+            sql.SQL("tgsis.vrtx"),
+            "geoid",
+            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+            [geoid],
+        ),
         Packed(
             sql.SQL("tgsis.{}").format(sql.Identifier(table)),
             "geoid",
@@ -145,7 +150,9 @@ def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision
         if props and protable is not None:
             tables.append((alignment, [p.name for p in props]))
             requests.append(
-                Packed(fc.qualified(protable), "_geoid", [("_idx", "int8"), *((p.name, p.wire) for p in props)], [geoid])
+                Packed(
+                    fc.qualified(protable), "_geoid", [("_idx", "int8"), *((p.name, p.wire) for p in props)], [geoid]
+                )
             )
     vertex_cols, cell_cols, *prop_cols = columns_out_all(conn, requests)
     vids, xyz = _sorted_rows(vertex_cols[1], np.stack(vertex_cols[2:5], axis=1) if len(vertex_cols[1]) else None)
@@ -158,9 +165,7 @@ def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision
         idx = np.asarray(columns[1], dtype=np.int64)
         for name, values in zip(names, columns[2:], strict=True):
             props_by[alignment][name] = _aligned_values(ids, idx, np.asarray(values))
-    atoms = conn.execute(
-        "SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)
-    ).fetchall()
+    atoms = conn.execute("SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()
     runs = conn.execute(
         "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
     ).fetchall()
@@ -185,7 +190,9 @@ def _sorted_rows(ids: npt.ArrayLike, rows: npt.NDArray[Any] | None) -> tuple[npt
     return ids[order], rows[order]
 
 
-def _aligned_values(ids: npt.NDArray[np.int64], idx: npt.NDArray[np.int64], values: npt.NDArray[Any]) -> npt.NDArray[Any]:
+def _aligned_values(
+    ids: npt.NDArray[np.int64], idx: npt.NDArray[np.int64], values: npt.NDArray[Any]
+) -> npt.NDArray[Any]:
     """A property's values in the order of ``ids`` (rows keyed by ``_idx``); an id without a row gets NaN."""
     order = np.argsort(idx, kind="stable")
     idx, values = idx[order], values[order]
@@ -277,7 +284,9 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
             conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
             fc = _feature_class(conn, feature_id)
             if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
-                what = "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
+                what = (
+                    "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
+                )
                 raise InvalidInputError(
                     f"feature {feature_id} of class {fc.name} is {what}: only a static (model 1) point set, line set, "
                     f"surface or tetrahedral solid merges by region (version {show_name(version)})",
