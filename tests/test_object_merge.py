@@ -212,6 +212,10 @@ def test_the_session_stays_in_its_version(conn: Conn, fault: int) -> None:
     tgsis.goto_version(conn, "e1")
     tgsis.object_merge(conn, "e1", fault)
     assert tgsis.working_version(conn) == "e1" and tgsis.viewing_revision(conn) is None
+    conn.execute("BEGIN ISOLATION LEVEL REPEATABLE READ")  # in the caller's transaction too
+    tgsis.object_merge(conn, "e1", fault)
+    assert tgsis.working_version(conn) == "e1" and tgsis.viewing_revision(conn) is None
+    conn.rollback()
 
 
 def test_an_object_not_changed_on_both_sides_is_refused(conn: Conn, fault: int) -> None:
