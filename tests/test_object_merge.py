@@ -201,7 +201,8 @@ def test_a_read_committed_transaction_is_refused(conn: Conn, fault: int) -> None
     with pytest.raises(tgsis.InvalidInputError, match="one snapshot.*read committed"):
         tgsis.object_merge(conn, "e1", fault)
     conn.rollback()
-    conn.execute("BEGIN ISOLATION LEVEL REPEATABLE READ")
+    conn.isolation_level = psycopg.IsolationLevel.REPEATABLE_READ
+    assert conn.execute("SELECT current_setting('transaction_isolation')").fetchone() == ("repeatable read",)
     assert tgsis.object_merge(conn, "e1", fault).conflicts == ()
     conn.rollback()
 
@@ -212,7 +213,9 @@ def test_the_session_stays_in_its_version(conn: Conn, fault: int) -> None:
     tgsis.goto_version(conn, "e1")
     tgsis.object_merge(conn, "e1", fault)
     assert tgsis.working_version(conn) == "e1" and tgsis.viewing_revision(conn) is None
-    conn.execute("BEGIN ISOLATION LEVEL REPEATABLE READ")  # in the caller's transaction too
+    conn.commit()
+    conn.isolation_level = psycopg.IsolationLevel.REPEATABLE_READ  # in the caller's transaction too
+    assert tgsis.working_version(conn) == "e1"  # the transaction has begun
     tgsis.object_merge(conn, "e1", fault)
     assert tgsis.working_version(conn) == "e1" and tgsis.viewing_revision(conn) is None
     conn.rollback()
