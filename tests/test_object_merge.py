@@ -94,6 +94,45 @@ def test_disjoint_ends_merge_into_the_union(conn: Conn, fault: int) -> None:
     assert merge.merged.discards == ()
 
 
+def _other_kind(geotype: str) -> tgsis.Mesh:
+    """A point set, a polyline or a column of tetrahedra along x, with curved z, 40 vertices."""
+    n = 40
+    x = np.linspace(0.0, 3.9, n) * 1000.3
+    vertices = np.stack([x, np.cos(x / 700.0) * 33.3, np.sin(x / 900.0) * 151.7], axis=1)
+    if geotype == "MULTIPOINT":
+        return tgsis.PointSet(vertices, np.arange(n).reshape(-1, 1))
+    if geotype == "MULTILINESTRING":
+        return tgsis.LineSet(vertices, np.stack([np.arange(n - 1), np.arange(1, n)], axis=1))
+    vertices[1::2, 1] += 250.0  # a strip of tetrahedra: vertex i with its three followers
+    vertices[2::4, 2] += 90.0
+    i = np.arange(n - 3)
+    return tgsis.TetraMesh(vertices, np.stack([i, i + 1, i + 2, i + 3], axis=1))
+
+
+@pytest.mark.parametrize("geotype", ["MULTIPOINT", "MULTILINESTRING", "MULTITETRA"])
+def test_points_lines_and_solids_merge_disjoint_ends_into_the_union(conn: Conn, geotype: str) -> None:
+    F.create_feature_class(conn, "bodies", geotype)
+    tgsis.enable_feature_versioning(conn)
+    mesh = _other_kind(geotype)
+    geoid = F.insert_feature(conn, "bodies", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    first, last = np.arange(0, 5), np.arange(34, 40)
+    _move(conn, "e1", geoid, first, (0.5, 0.25, -1.125))
+    _move(conn, "DEFAULT", geoid, last, (-3.3, 0.0, 2.2))
+    merge = tgsis.object_merge(conn, "e1", geoid)
+    assert merge.conflicts == () and merge.merged is not None
+    assert merge.base.cell_size == mesh.cell_size
+    expected = mesh.vertices.copy()
+    _moved(expected, first, (0.5, 0.25, -1.125))
+    _moved(expected, last, (-3.3, 0.0, 2.2))
+    assert merge.merged.state.vertices.tobytes() == expected.tobytes()
+    np.testing.assert_array_equal(merge.merged.state.cells, mesh.cells)
+    _move(conn, "DEFAULT", geoid, [2], (0.0, 0.0, 1.0))  # now the parent also moves one the child moved
+    [region] = tgsis.object_merge(conn, "e1", geoid).conflicts
+    assert 2 in region.parent_vertex_ids and 2 in region.child_vertex_ids
+
+
 def test_overlapping_edits_are_one_conflict_region_with_the_edited_ids(conn: Conn, fault: int) -> None:
     child_ids = np.array([50, 51, 52])
     parent_ids = np.array([52, 53])  # vertex 52 moved by both, differently
