@@ -11,6 +11,7 @@ import numpy.typing as npt
 import psycopg
 import pytest
 from psycopg import sql
+from psycopg.conninfo import make_conninfo
 
 import tgsis
 from tests.roles import login_roles
@@ -350,3 +351,20 @@ def test_cli_regions_of_disjoint_edits(conn: Conn, fault: int, db_dsn: str, caps
     conn.commit()
     text = _cli(db_dsn, capsys, "version", "conflicts", "e1", "--regions")
     assert "\tregions\t2 region(s), 0 in conflict: the object merges by itself" in text.splitlines()
+
+
+@pytest.mark.usefixtures("cli_state")
+def test_cli_regions_for_a_role_without_rights_is_the_permission_error(
+    conn: Conn, fault: int, db_dsn: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No table of conflicts without the regions: the command fails as a whole."""
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita_dsn = make_conninfo(db_dsn, user=made.name("rita"))
+        assert main(["--dsn", rita_dsn, "version", "conflicts", "e1", "--regions"]) != 0
+        captured = capsys.readouterr()
+        assert captured.out == "" and "permission denied" in captured.err and "faults" in captured.err
+        assert "feature" in _cli(rita_dsn, capsys, "version", "conflicts", "e1")  # the list without regions stays hers
