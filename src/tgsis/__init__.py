@@ -125,6 +125,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
     from tgsis.db.instants import add_instant, delete_instant, fetch_series
+    from tgsis.db.merging import object_merge
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -209,6 +210,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
 _LAZY_MODULES = (
     "tgsis.db",
     "tgsis.db.versions",
+    "tgsis.db.merging",
     "tgsis.db.features",
     "tgsis.db.classes",
     "tgsis.db.checkin",
@@ -328,6 +330,7 @@ __all__ = [
     "Discard",
     "conflict_discards",
     "merge_version",
+    "object_merge",
     "refresh_version",
     "Difference",
     "diff_versions",

@@ -43,6 +43,23 @@ _RULES: list[tuple[str, Replacement]] = [
         "add --discard-other to record it all the same, or write the merged object into the version and record manual "
         "(tgsis version conflicts VERSION --rows shows both sides' rows)",
     ),
+    # tgsis.object_merge (tgsis version conflicts --regions)
+    (
+        r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) lists the objects changed on both sides",
+        lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the objects changed on both sides",
+    ),
+    (
+        r"tgsis\.resolve_conflict solves it as a whole object \(parent, child or manual\)",
+        "tgsis version resolve VERSION feature ID parent|child|manual solves it as a whole object",
+    ),
+    (
+        r"tgsis\.list_feature_classes and tgsis\.fetch_features show the features there are",
+        "tgsis ls --in VERSION lists the features there are",
+    ),
+    (
+        r"call tgsis\.object_merge outside a transaction, or in a REPEATABLE READ or SERIALIZABLE one",
+        "run tgsis version conflicts VERSION --regions again",
+    ),
     (
         r"SELECT \* FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\) lists the conflicts",
         lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the conflicts",

@@ -8,9 +8,11 @@ import json
 import os
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import psycopg
 
 from tgsis.cli._arguments import INT4, add_command
 from tgsis.cli._connection import connection, split_version, target_key
@@ -25,11 +27,14 @@ from tgsis.db.features import (
     fetch_feature,
 )
 from tgsis.db.inspect import revision_exists
+from tgsis.db.merging import object_merge
 from tgsis.errors import (
     InvalidInputError,
     MissingPrivilegeError,
     NotFoundError,
+    VersioningError,
 )
+from tgsis.merge3 import MergeRegion, MeshMerge
 from tgsis.mesh import GeometryCollection, Mesh, Surface
 
 # --------------------------------------------------------------------------- versions
@@ -206,11 +211,82 @@ class VersionConflicts:
     with_rows: bool
     rows: dict[tuple[str, str], list[tuple[str, str, Any, Any]]]
     lost: dict[tuple[str, str, str], list[V.Discard]] | None
+    #: ``--regions``: per (class, key), the object's three-way merge, or why it merges as a whole object only
+    regions: dict[tuple[str, str], MeshMerge | str] = field(default_factory=dict)
+
+
+def _object_regions(conn: Any, version: str, conflicts: Sequence[V.Conflict]) -> dict[tuple[str, str], MeshMerge | str]:
+    """The three-way merge of each conflicting model-1 feature (read in one snapshot each), or why there is none.
+
+    A role that may not read an object's class gets the permission error: no partial answer.
+    """
+    if conn.info.transaction_status != psycopg.pq.TransactionStatus.IDLE:
+        conn.commit()  # find_conflicts' own transaction is over; object_merge reads in a snapshot of its own
+    found: dict[tuple[str, str], MeshMerge | str] = {}
+    for c in conflicts:
+        key = (c.objectclass, c.objectkey)
+        if c.objectclass != "feature":
+            found[key] = f"whole object: a row of {c.objectclass}, not a mesh"
+            continue
+        try:
+            found[key] = object_merge(conn, version, int(c.objectkey))
+        except InvalidInputError as exc:  # not a mesh of model 1, or states that do not compare (other columns)
+            found[key] = f"whole object: {exc.message}"
+        except VersioningError as exc:  # changed on one side only by now (another session's merge or refresh)
+            found[key] = f"no merge: {exc.message}"
+    return found
+
+
+def _region_text(region: MergeRegion) -> str:
+    low, high = region.bounds
+    how = (
+        "conflict" if region.conflict else ("merges (same rows on both sides)" if region.sides == "both" else "merges")
+    )
+    return (
+        f"\tregion {region.index}\t{how}\tchanged in {region.sides}"
+        f"\tvertices {len(region.parent_vertex_ids)} parent, {len(region.child_vertex_ids)} child, "
+        f"{len(region.vertex_ids)} in all"
+        f"\tcells {len(region.parent_cell_ids)} parent, {len(region.child_cell_ids)} child, {len(region.cell_ids)} in all"
+        f"\tbox {' '.join(f'{v:.17g}' for v in low)} .. {' '.join(f'{v:.17g}' for v in high)}"
+        f"\tlargest displacement {region.parent_displacement:.17g} parent, {region.child_displacement:.17g} child"
+    )
+
+
+def _regions_json(merge: MeshMerge | str) -> dict[str, Any]:
+    if isinstance(merge, str):
+        return {"merges_by_region": False, "reason": merge, "regions": []}
+    return {
+        "merges_by_region": True,
+        "merges_by_itself": not merge.conflicts,
+        "regions": [
+            {
+                "index": r.index,
+                "conflict": r.conflict,
+                "changed_in": r.sides,
+                "merges_by_itself": not r.conflict,
+                "vertex_ids": r.vertex_ids.tolist(),
+                "cell_ids": r.cell_ids.tolist(),
+                "parent": {
+                    "vertex_ids": r.parent_vertex_ids.tolist(),
+                    "cell_ids": r.parent_cell_ids.tolist(),
+                    "largest_displacement": r.parent_displacement,
+                },
+                "child": {
+                    "vertex_ids": r.child_vertex_ids.tolist(),
+                    "cell_ids": r.child_cell_ids.tolist(),
+                    "largest_displacement": r.child_displacement,
+                },
+                "bounds": r.bounds.tolist(),
+            }
+            for r in merge.regions
+        ],
+    }
 
 
 def cmd_version_conflicts(args: argparse.Namespace) -> int:
     with connection(args) as conn:
         conflicts = V.find_conflicts(conn, args.name)
+        regions = _object_regions(conn, args.name, conflicts) if getattr(args, "regions", False) else {}
         details = (
             {
                 (c.objectclass, c.objectkey): V.conflict_rows(conn, args.name, c.objectclass, c.objectkey)
@@ -231,7 +307,7 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         except MissingPrivilegeError as exc:
             print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
             lost = None
-    result = VersionConflicts(args.name, conflicts, args.rows, details, lost)
+    result = VersionConflicts(args.name, conflicts, args.rows, details, lost, regions)
     return render(args, result, conflicts_text, conflicts_json)
 
 
@@ -259,6 +335,21 @@ def conflicts_text(args: argparse.Namespace, result: VersionConflicts) -> None:
         )
         for table, side, key, row in result.rows.get((c.objectclass, c.objectkey), []):
             out(f"\t{table}\t{side}\t{json.dumps(key)}\t{json.dumps(row)}")
+        merge = result.regions.get((c.objectclass, c.objectkey))
+        if isinstance(merge, str):
+            out(f"\tregions\t{merge}")
+        elif merge is not None:
+            conflicting = len(merge.conflicts)
+            out(
+                f"\tregions\t{len(merge.regions)} region(s), {conflicting} in conflict: "
+                + (
+                    "the object merges by itself"
+                    if not conflicting
+                    else "those need a solution, the others merge by themselves"
+                )
+            )
+            for region in merge.regions:
+                out(_region_text(region))
     if not conflicts:
         print(f"version {V.show_name(result.version)} has no conflicts with its parent", file=sys.stderr)
 
@@ -290,6 +381,11 @@ def conflicts_json(result: VersionConflicts) -> dict[str, Any]:
                         ]
                     }
                     if result.with_rows
+                    else {}
+                ),
+                **(
+                    {"regions": _regions_json(result.regions[(c.objectclass, c.objectkey)])}
+                    if (c.objectclass, c.objectkey) in result.regions
                     else {}
                 ),
             }
@@ -922,12 +1018,22 @@ def add_version_parser(commands: Any) -> None:
         ver_commands,
         "conflicts",
         "objects changed both in a version and in its parent",
-        ["tgsis version conflicts cfm6", "tgsis version conflicts cfm6 --rows --json"],
+        [
+            "tgsis version conflicts cfm6",
+            "tgsis version conflicts cfm6 --rows --json",
+            "tgsis version conflicts cfm6 --regions",
+        ],
         cmd_version_conflicts,
         tabular=True,
     )
     ver_conflicts.add_argument("name", help="the child version (its parent is the other side)")
     ver_conflicts.add_argument("--rows", action="store_true", help="also print the rows that differ, per side")
+    ver_conflicts.add_argument(
+        "--regions",
+        action="store_true",
+        help="also merge each conflicting mesh (points, lines, surfaces, solids) three-way and print its regions: "
+        "what each side changed, box, largest displacement, and which merge by themselves (docs/merge.md)",
+    )
     ver_resolve = add_command(
         ver_commands,
         "resolve",
