@@ -59,6 +59,26 @@ def read_only_snapshot(conn: Conn) -> Iterator[None]:
         yield
 
 
+@contextlib.contextmanager
+def one_snapshot(conn: Conn) -> Iterator[bool]:
+    """A transaction for a read of several statements; True when they all see the same snapshot.
+
+    Outside a transaction, a new ``REPEATABLE READ READ ONLY`` one (True).
+    Inside the caller's, a savepoint of it (the caller's transaction is left
+    as it was): True when its isolation level keeps one snapshot for the
+    whole transaction (``REPEATABLE READ``, ``SERIALIZABLE``), False under
+    ``READ COMMITTED``, where each statement sees what others committed
+    meanwhile.
+    """
+    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
+        with read_only_snapshot(conn):
+            yield True
+        return
+    row = conn.execute("SELECT current_setting('transaction_isolation')").fetchone()
+    with conn.transaction():
+        yield row is not None and row[0] in ("repeatable read", "serializable")
+
+
 #: columns of a COPY: (name, values, wire type)
 Columns = Sequence[tuple[str, npt.ArrayLike, str]]
 

@@ -15,7 +15,7 @@ the vertex and cell property values, and handed to
 :func:`tgsis.merge3.three_way_merge`. Nothing is written: what
 ``merge_version`` and ``refresh_version`` do is unchanged.
 
-The three reads see one snapshot (``REPEATABLE READ READ ONLY``), so a writer
+The three reads see one snapshot (a read-only repeatable-read transaction), so a writer
 committing meanwhile cannot mix states. The session's version settings are
 moved for the reads (``SET LOCAL``) and put back.
 """
@@ -35,7 +35,7 @@ from psycopg import sql
 from tgsis.arguments import checked
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._static import SIMPLEX
-from tgsis.db._transfer import Packed, columns_out_all
+from tgsis.db._transfer import Packed, columns_out_all, one_snapshot
 from tgsis.db.classes import FeatureClass, list_feature_classes, stores_part_column
 from tgsis.db.meaning import parts_from_runs
 from tgsis.db.versions import show_name
@@ -64,24 +64,18 @@ class _Rows:
 
 @contextmanager
 def _snapshot(conn: Conn, version: str) -> Iterator[None]:
-    """One snapshot for every read: a new REPEATABLE READ READ ONLY transaction, or the caller's if it keeps one.
+    """One snapshot for every read (:func:`one_snapshot`); a caller's READ COMMITTED transaction is refused.
 
-    In a caller's READ COMMITTED transaction each statement would see what
-    others committed meanwhile (states of two moments mixed): refused.
+    There each statement would see what others committed meanwhile: the
+    states of two moments mixed.
     """
-    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
-        with conn.transaction():
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
-            yield
-        return
-    row = conn.execute("SELECT current_setting('transaction_isolation')").fetchone()
-    if row is None or row[0] not in ("repeatable read", "serializable"):
-        raise InvalidInputError(
-            f"the merge of an object of version {show_name(version)} reads three states, which need one snapshot: "
-            f"the caller's transaction is {row[0] if row else 'unknown'}",
-            hint="call tgsis.object_merge outside a transaction, or in a REPEATABLE READ or SERIALIZABLE one",
-        )
-    with conn.transaction():  # a savepoint: the caller's transaction is left as it was
+    with one_snapshot(conn) as consistent:
+        if not consistent:
+            raise InvalidInputError(
+                f"the merge of an object of version {show_name(version)} reads three states, which need one "
+                "snapshot: the caller's transaction is read committed",
+                hint="call tgsis.object_merge outside a transaction, or in a REPEATABLE READ or SERIALIZABLE one",
+            )
         yield
 
 

@@ -27,6 +27,7 @@ import psycopg
 from tgsis._optional import require
 from tgsis.arguments import checked
 from tgsis.db._settings import read_version_settings, restore_statement
+from tgsis.db._transfer import one_snapshot
 from tgsis.errors import MissingPrivilegeError, VersioningError, reraise
 
 __all__ = [
@@ -789,7 +790,7 @@ def diff_versions(
 
     ``progress(done, total)``, when given, is called after each versioned table
     (:func:`diff_table`). The tables are then compared one by one, all in one
-    snapshot: a new ``REPEATABLE READ READ ONLY`` transaction, or the caller's
+    snapshot: a new read-only repeatable-read transaction, or the caller's
     transaction when it is ``REPEATABLE READ`` or ``SERIALIZABLE``. In a caller's
     ``READ COMMITTED`` transaction, where each statement would see what other
     sessions committed meanwhile, they are compared in one statement and
@@ -801,7 +802,7 @@ def diff_versions(
                 "SELECT * FROM tgsis.diff_versions(%s, %s, %s, %s)", (a, b, a_revision, b_revision)
             ).fetchall()
         return [_difference(r) for r in rows]
-    with reraise(), _one_snapshot(conn) as stepwise:
+    with reraise(), one_snapshot(conn) as stepwise:
         tables = [
             str(r[0])
             for r in conn.execute(
@@ -857,25 +858,6 @@ def _diff_table(
 
 def _difference(row: Sequence[Any]) -> Difference:
     return Difference(row[0], row[1], row[2], int(row[3]), int(row[4]), int(row[5]))
-
-
-@contextlib.contextmanager
-def _one_snapshot(conn: Conn) -> Iterator[bool]:
-    """A transaction for a read of several statements; True when they all see the same snapshot.
-
-    Outside a transaction, a new ``REPEATABLE READ READ ONLY`` one (True).
-    Inside the caller's, a savepoint of it: True when its isolation level
-    keeps one snapshot for the whole transaction (``REPEATABLE READ``,
-    ``SERIALIZABLE``), False under ``READ COMMITTED``.
-    """
-    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
-        with conn.transaction():
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
-            yield True
-        return
-    level = _scalar(conn, "SELECT current_setting('transaction_isolation')")
-    with conn.transaction():
-        yield level in ("repeatable read", "serializable")
 
 
 # --------------------------------------------------------------------------- valid time
