@@ -800,3 +800,35 @@ def test_values_are_compared_as_numbers_nan_equal_nan_and_vectors_by_component()
     assert merge.merged is not None
     got = merge.merged.state.vertex_properties["dip"]
     assert got[20, 1] == 7.0 and np.isnan(got[5, 0]) and np.isnan(got[3]).all()
+
+
+def _strip() -> tuple[np.ndarray, np.ndarray]:
+    """Four triangles on six vertices: a strip along x."""
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 0, 0], [2, 1, 0]], dtype=np.float64)
+    return vertices, np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3], [4, 5, 3]], dtype=np.int64)
+
+
+def test_an_integer_column_read_as_float_on_one_side_keeps_its_nulls_and_values() -> None:
+    # the database step reads an integer column as int64 where every row has a value and as float64 with NaN
+    # where one row has none: the merged values must not be cast back to the parent's integers (NaN -> -2**63)
+    vertices, cells = _strip()
+    facies = np.arange(6, dtype=np.int64)
+    base = MeshState(3, np.arange(6), vertices, np.arange(4), cells, {"facies": facies}, name=NAME)
+    parent = MeshState(3, np.arange(6), vertices, np.arange(4), cells, {"facies": facies.copy()}, name=NAME)
+    child_facies = np.array([0, 1, 2, 3, 4, 5, np.nan, 2.5])
+    child_facies[5] = 7.5  # a changed value that is not an integer
+    child = MeshState(
+        3,
+        np.arange(8),
+        np.vstack([vertices, [[3, 0, 0], [3, 1, 0]]]),
+        np.arange(6),
+        np.vstack([cells, [[4, 6, 5], [6, 7, 5]]]),
+        {"facies": child_facies},
+        name=NAME,
+    )
+    merge = three_way_merge(base, parent, child)
+    assert merge.merged is not None
+    got = merge.merged.state.vertex_properties["facies"]
+    assert got[5] == 7.5 and np.isnan(got[6]) and got[7] == 2.5
+    assert got[:5].tolist() == [0, 1, 2, 3, 4]
+

@@ -859,6 +859,8 @@ def _replace_rows(table: Table, drop: IntArray, added: list[Table]) -> Table:
     new_ids = new_ids[order]
     new_rows = np.concatenate([a[1] for a in added])[order]
     new_props = {n: np.concatenate([a[2][n] for a in added])[order] for n in props}
+    # a column may be int64 in one state and float64 (NaN for a NULL) in another: never cast a value down
+    props = {n: v.astype(np.result_type(v, new_props[n]), copy=False) for n, v in props.items()}
     if len(at) == len(new_ids) and np.array_equal(ids[at], new_ids):
         out_rows, out_props = rows.copy(), {n: v.copy() for n, v in props.items()}
         out_rows[at] = new_rows
