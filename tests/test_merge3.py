@@ -832,3 +832,32 @@ def test_an_integer_column_read_as_float_on_one_side_keeps_its_nulls_and_values(
     assert got[5] == 7.5 and np.isnan(got[6]) and got[7] == 2.5
     assert got[:5].tolist() == [0, 1, 2, 3, 4]
 
+
+def test_a_conflict_with_vector_properties_is_solved_and_its_discards_counted() -> None:
+    # a region where one side changed no vertex (or a manual mesh with nothing outside its region) compares
+    # empty selections of a vector property: that must not fail
+    vertices, cells = _strip()
+    dip = {"dip": np.zeros((6, 2))}
+    base = MeshState(3, np.arange(6), vertices, np.arange(4), cells, dip, name=NAME)
+    flipped = cells.copy()
+    flipped[0] = [0, 2, 1]  # the parent turns triangle 0 over
+    parent = MeshState(3, np.arange(6), vertices, np.arange(4), flipped, dip, name=NAME)
+    moved = vertices.copy()
+    moved[0, 2] = 1.0  # the child lifts one of its corners
+    child = MeshState(3, np.arange(6), moved, np.arange(4), cells, dip, name=NAME)
+    merge = three_way_merge(base, parent, child)
+    assert [r.index for r in merge.conflicts] == [0]
+    resolved = apply_solutions(merge, {0: "child"})
+    assert [(d.side, d.vertices, d.cells) for d in resolved.discards] == [("parent", 0, 1)]
+    region = merge.regions[0]
+    manual = MeshState(
+        3,
+        region.vertex_ids,
+        moved[region.vertex_ids],
+        region.cell_ids,
+        flipped[region.cell_ids],
+        {"dip": np.zeros((len(region.vertex_ids), 2))},
+        name=NAME,
+    )
+    both = apply_solutions(merge, {0: manual})
+    assert both.state.cells[0].tolist() == [0, 2, 1] and both.state.vertices[0, 2] == 1.0

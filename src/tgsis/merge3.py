@@ -153,7 +153,7 @@ def _values_equal(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> BoolArray:
     if a.dtype.kind == "f" or b.dtype.kind == "f":
         same |= np.isnan(a) & np.isnan(b)
     if same.ndim > 1:
-        same = same.reshape(len(same), -1).all(axis=1)
+        same = same.reshape(len(same), int(np.prod(same.shape[1:]))).all(axis=1)  # -1 fails on 0 rows
     return np.asarray(same, dtype=bool)
 
 
