@@ -861,3 +861,22 @@ def test_a_conflict_with_vector_properties_is_solved_and_its_discards_counted() 
     )
     both = apply_solutions(merge, {0: manual})
     assert both.state.cells[0].tolist() == [0, 2, 1] and both.state.vertices[0, 2] == 1.0
+
+
+def test_the_same_point_added_on_both_sides_is_one_point_when_a_column_is_int_on_one_side_float_on_the_other() -> None:
+    # both sides add point 6 at the same place with refid 3; the parent's column reads as int64, the child's
+    # as float64 (a NULL elsewhere in it): the same edit made twice, not a second point on top of the first
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0]], dtype=np.float64)
+    ids = np.arange(6)
+    refid = np.full(6, -1, dtype=np.int64)
+    base = MeshState(1, ids, xyz, ids, ids[:, None], {"refid": refid}, name=NAME)
+    more = np.vstack([xyz, [[9, 9, 9]]])
+    parent = MeshState(1, np.arange(7), more, np.arange(7), np.arange(7)[:, None], {"refid": np.append(refid, 3)})
+    child = MeshState(
+        1, np.arange(7), more, np.arange(7), np.arange(7)[:, None], {"refid": np.append(refid, 3).astype(np.float64)}
+    )
+    merge = three_way_merge(base, parent, child)
+    assert merge.child_vertex_renumbering.size == 0 and merge.child_cell_renumbering.size == 0
+    assert merge.merged is not None
+    assert merge.merged.state.vertex_ids.tolist() == list(range(7))
+    assert merge.merged.state.n_cells == 7

@@ -453,9 +453,15 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     top_v = max([int(s.vertex_ids[-1]) for s in (base, parent, child) if s.n_vertices] + [-1])
     top_c = max([int(s.cell_ids[-1]) for s in (base, parent, child) if s.n_cells] + [-1])
 
+    # a column may be int64 on one side and float64 (NaN for a NULL) on the other: compare in a common type
+    vtypes = {n: np.result_type(v, child.vertex_properties[n]) for n, v in parent.vertex_properties.items()}
+    ctypes = {n: np.result_type(v, child.cell_properties[n]) for n, v in parent.cell_properties.items()}
+
     def vertex_keys(state: MeshState, ids: IntArray) -> list[bytes]:
         at = _positions(state.vertex_ids, ids)
-        words = [_value_bits(state.vertices[at])] + [_value_bits(v[at]) for v in state.vertex_properties.values()]
+        words = [_value_bits(state.vertices[at])] + [
+            _value_bits(v[at].astype(vtypes[n])) for n, v in state.vertex_properties.items()
+        ]
         return _row_keys(words)
 
     merged_v, _ = _renumber(
@@ -470,7 +476,7 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     def cell_keys(state: MeshState, state_cells: IntArray, ids: IntArray) -> list[bytes]:
         at = _positions(state.cell_ids, ids)
         canonical = _canonical_cells(state_cells[at]).view(np.uint64)
-        return _row_keys([canonical] + [_value_bits(v[at]) for v in state.cell_properties.values()])
+        return _row_keys([canonical] + [_value_bits(v[at].astype(ctypes[n])) for n, v in state.cell_properties.items()])
 
     merged_c, _ = _renumber(
         c_new_c,
