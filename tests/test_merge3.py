@@ -308,6 +308,12 @@ def check_renumbering(base: Rows, parent: Rows, child: Rows, merge: MeshMerge) -
                     assert (canonical(row), child.cprop[old]) == (canonical(parent.cells[old]), parent.cprop[old])
             to = mapping.get(old, old)
             assert to == old or to > top or (to in theirs and to not in known)
+            if to != old and to in theirs:  # taken over by the parent's new row: only when it is the same row
+                if kind == "v":
+                    assert (child.verts[old], child.vprop[old]) == (parent.verts[to], parent.vprop[to])
+                else:
+                    row = tuple(vmap.get(v, v) for v in child.cells[old])
+                    assert (canonical(row), child.cprop[old]) == (canonical(parent.cells[to]), parent.cprop[to])
         assert len(set(mapping.values())) == len(mapping)
 
 
