@@ -886,3 +886,25 @@ def test_the_same_point_added_on_both_sides_is_one_point_when_a_column_is_int_on
     assert merge.merged is not None
     assert merge.merged.state.vertex_ids.tolist() == list(range(7))
     assert merge.merged.state.n_cells == 7
+
+
+def test_one_whole_manual_mesh_solves_two_conflicting_regions() -> None:
+    # `average` hands in the whole object (the averaged regions attached to the unchanged rest): the same mesh
+    # given for both conflicting regions must be accepted, each region taking its rows from it
+    base, column = _small_grid(columns=12)
+    parent, child = base.copy(), base.copy()
+    parent.verts[0], child.verts[0] = (0.0, 0.0, 5.0), (0.0, 0.0, 6.0)
+    far = max(v for v, c in column.items() if c == 11)
+    parent.verts[far], child.verts[far] = (11.0, 1.0, 2.0), (11.0, 1.0, 3.0)
+    merge = three_way_merge(base.state(), parent.state(), child.state())
+    assert [r.sides for r in merge.conflicts] == ["both", "both"]
+    whole = parent.copy()
+    whole.verts[0], whole.verts[far] = (0.0, 0.0, 5.5), (11.0, 1.0, 2.5)
+    resolved = apply_solutions(merge, {r.index: whole.state() for r in merge.conflicts})
+    assert_same_rows(resolved.state, whole)
+    assert sorted((d.region, d.side, d.vertices) for d in resolved.discards) == [
+        (0, "child", 1),
+        (0, "parent", 1),
+        (1, "child", 1),
+        (1, "parent", 1),
+    ]

@@ -1011,7 +1011,10 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
         in_v, in_c = ids_of([index])
         take_v = _contains(in_v, manual.vertex_ids) | ~_known(manual.vertex_ids, *(s.vertex_ids for s in states))
         take_c = _contains(in_c, manual.cell_ids) | ~_known(manual.cell_ids, *(s.cell_ids for s in states))
-        _check_outside_rows(name, index, manual, state, ~take_v, ~take_c)
+        # rows of another manually solved region are that region's solution's to give (one whole mesh may solve all)
+        elsewhere_v = ~take_v & ~_contains(manual_v, manual.vertex_ids)
+        elsewhere_c = ~take_c & ~_contains(manual_c, manual.cell_ids)
+        _check_outside_rows(name, index, manual, state, elsewhere_v, elsewhere_c)
         manual_new.append(
             (
                 manual.vertex_ids[take_v & ~_contains(in_v, manual.vertex_ids)],
