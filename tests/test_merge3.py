@@ -908,3 +908,27 @@ def test_one_whole_manual_mesh_solves_two_conflicting_regions() -> None:
         (1, "child", 1),
         (1, "parent", 1),
     ]
+
+
+def test_an_atom_of_a_renumbered_new_vertex_follows_it() -> None:
+    # GOCAD atoms come as the vertex property refid (docs/merge.md): a vertex id, not a value. Both sides add
+    # vertex 6, meaning two things; the child's 6 is renumbered, and the child's atom 7 of its 6 must follow it
+    # rather than point at the parent's vertex 6
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0]], dtype=np.float64)
+    segments = np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]])
+    none = np.full(6, -1, dtype=np.int64)
+    base = MeshState(2, np.arange(6), xyz, np.arange(5), segments, {"refid": none}, name=NAME)
+    parent = MeshState(
+        2, np.arange(7), np.vstack([xyz, [[6, 0, 0]]]), np.arange(6), np.vstack([segments, [[5, 6]]]),
+        {"refid": np.append(none, -1)}, name=NAME,
+    )  # fmt: skip
+    child = MeshState(
+        2, np.arange(8), np.vstack([xyz, [[-1, 0, 0], [-1, 0, 0]]]), np.arange(6), np.vstack([segments, [[6, 0]]]),
+        {"refid": np.append(none, [-1, 6])}, name=NAME,
+    )  # fmt: skip
+    merge = three_way_merge(base, parent, child)
+    assert merge.child_vertex_renumbering.tolist() == [[6, 8]]
+    assert merge.merged is not None
+    state = merge.merged.state
+    refid = dict(zip(state.vertex_ids.tolist(), state.vertex_properties["refid"].tolist()))
+    assert refid[7] == 8 and state.vertices[state.vertex_ids == 8].tolist() == [[-1.0, 0.0, 0.0]]

@@ -495,6 +495,12 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     if len(vmap_old):
         at = _positions(vmap_old, vertex_ids)
         vertex_ids = np.where(at >= 0, vmap_new[np.maximum(at, 0)], vertex_ids)
+    vprops = dict(child.vertex_properties)
+    if len(vmap_old) and "refid" in vprops:  # a GOCAD atom's refid is a vertex id (docs/merge.md): it follows it
+        ref = vprops["refid"]
+        values = np.nan_to_num(ref, nan=-1).astype(np.int64) if ref.dtype.kind == "f" else ref.astype(np.int64)
+        at = _positions(vmap_old, values)
+        vprops["refid"] = np.where(at >= 0, vmap_new[np.maximum(at, 0)], ref)
     # a consistent renaming of a valid state: only the order by id may need restoring
     vorder = slice(None) if _strictly_increasing(vertex_ids) else np.argsort(vertex_ids, kind="stable")
     corder = slice(None) if _strictly_increasing(cell_ids) else np.argsort(cell_ids, kind="stable")
@@ -504,7 +510,7 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
         child.vertices[vorder],
         cell_ids[corder],
         cells[corder],
-        {n: v[vorder] for n, v in child.vertex_properties.items()},
+        {n: v[vorder] for n, v in vprops.items()},
         {n: v[corder] for n, v in child.cell_properties.items()},
     )
     return renumbered, np.stack([vmap_old, vmap_new], axis=1), np.stack([cmap_old, cmap_new], axis=1)
