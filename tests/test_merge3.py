@@ -932,3 +932,19 @@ def test_an_atom_of_a_renumbered_new_vertex_follows_it() -> None:
     state = merge.merged.state
     refid = dict(zip(state.vertex_ids.tolist(), state.vertex_properties["refid"].tolist()))
     assert refid[7] == 8 and state.vertices[state.vertex_ids == 8].tolist() == [[-1.0, 0.0, 0.0]]
+
+
+def test_an_atom_of_a_vertex_the_other_side_removes_is_refused() -> None:
+    # the parent removes vertex 5; the child, far from it, adds an atom of 5 (refid 5): merged, the atom would
+    # refer to a vertex the object no longer has
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0]], dtype=np.float64)
+    segments = np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]])
+    none = np.full(6, -1, dtype=np.int64)
+    base = MeshState(2, np.arange(6), xyz, np.arange(5), segments, {"refid": none}, name=NAME)
+    parent = MeshState(2, np.arange(5), xyz[:5], np.arange(4), segments[:4], {"refid": none[:5]}, name=NAME)
+    child = MeshState(
+        2, np.arange(7), np.vstack([xyz, [[5, 0, 0]]]), np.arange(6), np.vstack([segments, [[0, 6]]]),
+        {"refid": np.append(none, 5)}, name=NAME,
+    )  # fmt: skip
+    with pytest.raises(tgsis.InvalidMergeError, match=rf"{NAME}: .*vertices 6, .*refer to vertices 5"):
+        three_way_merge(base, parent, child)

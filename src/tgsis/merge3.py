@@ -1086,6 +1086,20 @@ def _check_valid(
             hint="one side removed vertices the other side's cells use: solve the region with one side's rows",
         )
 
+    if "refid" in state.vertex_properties:  # GOCAD atoms: a vertex id, which must still be there
+        ref = state.vertex_properties["refid"]
+        ref = np.nan_to_num(ref, nan=-1).astype(np.int64) if ref.dtype.kind == "f" else ref.astype(np.int64)
+        dangling_ref = (ref >= 0) & ~_contains(state.vertex_ids, ref)
+        if dangling_ref.any():  # the parent's own rows are excused: it is the state merged into
+            v_same, _ = _state_rows_equal(state, merge.parent, state.vertex_ids[dangling_ref], np.empty(0, np.int64))
+            dangling_ref[np.flatnonzero(dangling_ref)[v_same]] = False
+        if dangling_ref.any():
+            raise InvalidMergeError(
+                f"{name}: the merge would keep vertices {_ids_text(state.vertex_ids[dangling_ref])}, atoms (refid) "
+                f"that refer to vertices {_ids_text(np.unique(ref[dangling_ref]))}, which it removes",
+                hint="one side removed vertices the other side's atoms refer to: solve the region with one side's rows",
+            )
+
     def local(s: MeshState) -> tuple[IntArray, IntArray]:
         """(cell ids, cells) of a state's cells on any vertex near the change."""
         if len(near) == 0 or s.n_cells == 0:
