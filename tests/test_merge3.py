@@ -948,3 +948,16 @@ def test_an_atom_of_a_vertex_the_other_side_removes_is_refused() -> None:
     )  # fmt: skip
     with pytest.raises(tgsis.InvalidMergeError, match=rf"{NAME}: .*vertices 6, .*refer to vertices 5"):
         three_way_merge(base, parent, child)
+
+
+def test_a_region_index_that_is_not_an_integer_is_refused_clearly() -> None:
+    # a region index read from JSON or a command line is a string; True is no region either
+    base, _ = _small_grid(columns=6)
+    parent, child = base.copy(), base.copy()
+    parent.verts[0], child.verts[0] = (0.0, 0.0, 5.0), (0.0, 0.0, 6.0)
+    merge = three_way_merge(base.state(), parent.state(), child.state())
+    assert [r.index for r in merge.conflicts] == [0]
+    for index in ("0", 0.5, True):
+        with pytest.raises(tgsis.InvalidInputError, match=f"region {index!r} is not a region"):
+            apply_solutions(merge, {0: "parent", index: "parent"})  # type: ignore[dict-item]
+    assert apply_solutions(merge, {np.int64(0): "parent"}).discards[0].side == "child"  # type: ignore[dict-item]

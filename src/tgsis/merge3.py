@@ -978,6 +978,8 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
             hint="give each conflicting region parent, child, base or a manual mesh",
         )
     for index, solution in solutions.items():
+        if not isinstance(index, (int, np.integer)) or isinstance(index, bool):  # "0" from JSON, True == 1
+            raise InvalidInputError(f"{name}: region {index!r} is not a region: a region is given by its index")
         if index not in conflicts:
             raise InvalidInputError(
                 f"{name}: region {index} is {'not a region' if not 0 <= index < len(merge.regions) else 'no conflict'}"
