@@ -308,6 +308,12 @@ def check_renumbering(base: Rows, parent: Rows, child: Rows, merge: MeshMerge) -
                     assert (canonical(row), child.cprop[old]) == (canonical(parent.cells[old]), parent.cprop[old])
             to = mapping.get(old, old)
             assert to == old or to > top or (to in theirs and to not in known)
+            if to != old and to in theirs:  # taken over by the parent's new row: only when it is the same row
+                if kind == "v":
+                    assert (child.verts[old], child.vprop[old]) == (parent.verts[to], parent.vprop[to])
+                else:
+                    row = tuple(vmap.get(v, v) for v in child.cells[old])
+                    assert (canonical(row), child.cprop[old]) == (canonical(parent.cells[to]), parent.cprop[to])
         assert len(set(mapping.values())) == len(mapping)
 
 
@@ -800,3 +806,158 @@ def test_values_are_compared_as_numbers_nan_equal_nan_and_vectors_by_component()
     assert merge.merged is not None
     got = merge.merged.state.vertex_properties["dip"]
     assert got[20, 1] == 7.0 and np.isnan(got[5, 0]) and np.isnan(got[3]).all()
+
+
+def _strip() -> tuple[np.ndarray, np.ndarray]:
+    """Four triangles on six vertices: a strip along x."""
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 0, 0], [2, 1, 0]], dtype=np.float64)
+    return vertices, np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3], [4, 5, 3]], dtype=np.int64)
+
+
+def test_an_integer_column_read_as_float_on_one_side_keeps_its_nulls_and_values() -> None:
+    # the database step reads an integer column as int64 where every row has a value and as float64 with NaN
+    # where one row has none: the merged values must not be cast back to the parent's integers (NaN -> -2**63)
+    vertices, cells = _strip()
+    facies = np.arange(6, dtype=np.int64)
+    base = MeshState(3, np.arange(6), vertices, np.arange(4), cells, {"facies": facies}, name=NAME)
+    parent = MeshState(3, np.arange(6), vertices, np.arange(4), cells, {"facies": facies.copy()}, name=NAME)
+    child_facies = np.array([0, 1, 2, 3, 4, 5, np.nan, 2.5])
+    child_facies[5] = 7.5  # a changed value that is not an integer
+    child = MeshState(
+        3,
+        np.arange(8),
+        np.vstack([vertices, [[3, 0, 0], [3, 1, 0]]]),
+        np.arange(6),
+        np.vstack([cells, [[4, 6, 5], [6, 7, 5]]]),
+        {"facies": child_facies},
+        name=NAME,
+    )
+    merge = three_way_merge(base, parent, child)
+    assert merge.merged is not None
+    got = merge.merged.state.vertex_properties["facies"]
+    assert got[5] == 7.5 and np.isnan(got[6]) and got[7] == 2.5
+    assert got[:5].tolist() == [0, 1, 2, 3, 4]
+
+
+def test_a_conflict_with_vector_properties_is_solved_and_its_discards_counted() -> None:
+    # a region where one side changed no vertex (or a manual mesh with nothing outside its region) compares
+    # empty selections of a vector property: that must not fail
+    vertices, cells = _strip()
+    dip = {"dip": np.zeros((6, 2))}
+    base = MeshState(3, np.arange(6), vertices, np.arange(4), cells, dip, name=NAME)
+    flipped = cells.copy()
+    flipped[0] = [0, 2, 1]  # the parent turns triangle 0 over
+    parent = MeshState(3, np.arange(6), vertices, np.arange(4), flipped, dip, name=NAME)
+    moved = vertices.copy()
+    moved[0, 2] = 1.0  # the child lifts one of its corners
+    child = MeshState(3, np.arange(6), moved, np.arange(4), cells, dip, name=NAME)
+    merge = three_way_merge(base, parent, child)
+    assert [r.index for r in merge.conflicts] == [0]
+    resolved = apply_solutions(merge, {0: "child"})
+    assert [(d.side, d.vertices, d.cells) for d in resolved.discards] == [("parent", 0, 1)]
+    region = merge.regions[0]
+    manual = MeshState(
+        3,
+        region.vertex_ids,
+        moved[region.vertex_ids],
+        region.cell_ids,
+        flipped[region.cell_ids],
+        {"dip": np.zeros((len(region.vertex_ids), 2))},
+        name=NAME,
+    )
+    both = apply_solutions(merge, {0: manual})
+    assert both.state.cells[0].tolist() == [0, 2, 1] and both.state.vertices[0, 2] == 1.0
+
+
+def test_the_same_point_added_on_both_sides_is_one_point_when_a_column_is_int_on_one_side_float_on_the_other() -> None:
+    # both sides add point 6 at the same place with refid 3; the parent's column reads as int64, the child's
+    # as float64 (a NULL elsewhere in it): the same edit made twice, not a second point on top of the first
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0]], dtype=np.float64)
+    ids = np.arange(6)
+    refid = np.full(6, -1, dtype=np.int64)
+    base = MeshState(1, ids, xyz, ids, ids[:, None], {"refid": refid}, name=NAME)
+    more = np.vstack([xyz, [[9, 9, 9]]])
+    parent = MeshState(1, np.arange(7), more, np.arange(7), np.arange(7)[:, None], {"refid": np.append(refid, 3)})
+    child = MeshState(
+        1, np.arange(7), more, np.arange(7), np.arange(7)[:, None], {"refid": np.append(refid, 3).astype(np.float64)}
+    )
+    merge = three_way_merge(base, parent, child)
+    assert merge.child_vertex_renumbering.size == 0 and merge.child_cell_renumbering.size == 0
+    assert merge.merged is not None
+    assert merge.merged.state.vertex_ids.tolist() == list(range(7))
+    assert merge.merged.state.n_cells == 7
+
+
+def test_one_whole_manual_mesh_solves_two_conflicting_regions() -> None:
+    # `average` hands in the whole object (the averaged regions attached to the unchanged rest): the same mesh
+    # given for both conflicting regions must be accepted, each region taking its rows from it
+    base, column = _small_grid(columns=12)
+    parent, child = base.copy(), base.copy()
+    parent.verts[0], child.verts[0] = (0.0, 0.0, 5.0), (0.0, 0.0, 6.0)
+    far = max(v for v, c in column.items() if c == 11)
+    parent.verts[far], child.verts[far] = (11.0, 1.0, 2.0), (11.0, 1.0, 3.0)
+    merge = three_way_merge(base.state(), parent.state(), child.state())
+    assert [r.sides for r in merge.conflicts] == ["both", "both"]
+    whole = parent.copy()
+    whole.verts[0], whole.verts[far] = (0.0, 0.0, 5.5), (11.0, 1.0, 2.5)
+    resolved = apply_solutions(merge, {r.index: whole.state() for r in merge.conflicts})
+    assert_same_rows(resolved.state, whole)
+    assert sorted((d.region, d.side, d.vertices) for d in resolved.discards) == [
+        (0, "child", 1),
+        (0, "parent", 1),
+        (1, "child", 1),
+        (1, "parent", 1),
+    ]
+
+
+def test_an_atom_of_a_renumbered_new_vertex_follows_it() -> None:
+    # GOCAD atoms come as the vertex property refid (docs/merge.md): a vertex id, not a value. Both sides add
+    # vertex 6, meaning two things; the child's 6 is renumbered, and the child's atom 7 of its 6 must follow it
+    # rather than point at the parent's vertex 6
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0]], dtype=np.float64)
+    segments = np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]])
+    none = np.full(6, -1, dtype=np.int64)
+    base = MeshState(2, np.arange(6), xyz, np.arange(5), segments, {"refid": none}, name=NAME)
+    parent = MeshState(
+        2, np.arange(7), np.vstack([xyz, [[6, 0, 0]]]), np.arange(6), np.vstack([segments, [[5, 6]]]),
+        {"refid": np.append(none, -1)}, name=NAME,
+    )  # fmt: skip
+    child = MeshState(
+        2, np.arange(8), np.vstack([xyz, [[-1, 0, 0], [-1, 0, 0]]]), np.arange(6), np.vstack([segments, [[6, 0]]]),
+        {"refid": np.append(none, [-1, 6])}, name=NAME,
+    )  # fmt: skip
+    merge = three_way_merge(base, parent, child)
+    assert merge.child_vertex_renumbering.tolist() == [[6, 8]]
+    assert merge.merged is not None
+    state = merge.merged.state
+    refid = dict(zip(state.vertex_ids.tolist(), state.vertex_properties["refid"].tolist()))
+    assert refid[7] == 8 and state.vertices[state.vertex_ids == 8].tolist() == [[-1.0, 0.0, 0.0]]
+
+
+def test_an_atom_of_a_vertex_the_other_side_removes_is_refused() -> None:
+    # the parent removes vertex 5; the child, far from it, adds an atom of 5 (refid 5): merged, the atom would
+    # refer to a vertex the object no longer has
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0]], dtype=np.float64)
+    segments = np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]])
+    none = np.full(6, -1, dtype=np.int64)
+    base = MeshState(2, np.arange(6), xyz, np.arange(5), segments, {"refid": none}, name=NAME)
+    parent = MeshState(2, np.arange(5), xyz[:5], np.arange(4), segments[:4], {"refid": none[:5]}, name=NAME)
+    child = MeshState(
+        2, np.arange(7), np.vstack([xyz, [[5, 0, 0]]]), np.arange(6), np.vstack([segments, [[0, 6]]]),
+        {"refid": np.append(none, 5)}, name=NAME,
+    )  # fmt: skip
+    with pytest.raises(tgsis.InvalidMergeError, match=rf"{NAME}: .*vertices 6, .*refer to vertices 5"):
+        three_way_merge(base, parent, child)
+
+
+def test_a_region_index_that_is_not_an_integer_is_refused_clearly() -> None:
+    # a region index read from JSON or a command line is a string; True is no region either
+    base, _ = _small_grid(columns=6)
+    parent, child = base.copy(), base.copy()
+    parent.verts[0], child.verts[0] = (0.0, 0.0, 5.0), (0.0, 0.0, 6.0)
+    merge = three_way_merge(base.state(), parent.state(), child.state())
+    assert [r.index for r in merge.conflicts] == [0]
+    for index in ("0", 0.5, True):
+        with pytest.raises(tgsis.InvalidInputError, match=f"region {index!r} is not a region"):
+            apply_solutions(merge, {0: "parent", index: "parent"})  # type: ignore[dict-item]
+    assert apply_solutions(merge, {np.int64(0): "parent"}).discards[0].side == "child"  # type: ignore[dict-item]

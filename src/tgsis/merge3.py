@@ -153,7 +153,7 @@ def _values_equal(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> BoolArray:
     if a.dtype.kind == "f" or b.dtype.kind == "f":
         same |= np.isnan(a) & np.isnan(b)
     if same.ndim > 1:
-        same = same.reshape(len(same), -1).all(axis=1)
+        same = same.reshape(len(same), int(np.prod(same.shape[1:]))).all(axis=1)  # -1 fails on 0 rows
     return np.asarray(same, dtype=bool)
 
 
@@ -453,9 +453,15 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     top_v = max([int(s.vertex_ids[-1]) for s in (base, parent, child) if s.n_vertices] + [-1])
     top_c = max([int(s.cell_ids[-1]) for s in (base, parent, child) if s.n_cells] + [-1])
 
+    # a column may be int64 on one side and float64 (NaN for a NULL) on the other: compare in a common type
+    vtypes = {n: np.result_type(v, child.vertex_properties[n]) for n, v in parent.vertex_properties.items()}
+    ctypes = {n: np.result_type(v, child.cell_properties[n]) for n, v in parent.cell_properties.items()}
+
     def vertex_keys(state: MeshState, ids: IntArray) -> list[bytes]:
         at = _positions(state.vertex_ids, ids)
-        words = [_value_bits(state.vertices[at])] + [_value_bits(v[at]) for v in state.vertex_properties.values()]
+        words = [_value_bits(state.vertices[at])] + [
+            _value_bits(v[at].astype(vtypes[n])) for n, v in state.vertex_properties.items()
+        ]
         return _row_keys(words)
 
     merged_v, _ = _renumber(
@@ -470,7 +476,7 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     def cell_keys(state: MeshState, state_cells: IntArray, ids: IntArray) -> list[bytes]:
         at = _positions(state.cell_ids, ids)
         canonical = _canonical_cells(state_cells[at]).view(np.uint64)
-        return _row_keys([canonical] + [_value_bits(v[at]) for v in state.cell_properties.values()])
+        return _row_keys([canonical] + [_value_bits(v[at].astype(ctypes[n])) for n, v in state.cell_properties.items()])
 
     merged_c, _ = _renumber(
         c_new_c,
@@ -489,6 +495,12 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
     if len(vmap_old):
         at = _positions(vmap_old, vertex_ids)
         vertex_ids = np.where(at >= 0, vmap_new[np.maximum(at, 0)], vertex_ids)
+    vprops = dict(child.vertex_properties)
+    if len(vmap_old) and "refid" in vprops:  # a GOCAD atom's refid is a vertex id (docs/merge.md): it follows it
+        ref = vprops["refid"]
+        values = np.nan_to_num(ref, nan=-1).astype(np.int64) if ref.dtype.kind == "f" else ref.astype(np.int64)
+        at = _positions(vmap_old, values)
+        vprops["refid"] = np.where(at >= 0, vmap_new[np.maximum(at, 0)], ref)
     # a consistent renaming of a valid state: only the order by id may need restoring
     vorder = slice(None) if _strictly_increasing(vertex_ids) else np.argsort(vertex_ids, kind="stable")
     corder = slice(None) if _strictly_increasing(cell_ids) else np.argsort(cell_ids, kind="stable")
@@ -498,7 +510,7 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
         child.vertices[vorder],
         cell_ids[corder],
         cells[corder],
-        {n: v[vorder] for n, v in child.vertex_properties.items()},
+        {n: v[vorder] for n, v in vprops.items()},
         {n: v[corder] for n, v in child.cell_properties.items()},
     )
     return renumbered, np.stack([vmap_old, vmap_new], axis=1), np.stack([cmap_old, cmap_new], axis=1)
@@ -859,6 +871,8 @@ def _replace_rows(table: Table, drop: IntArray, added: list[Table]) -> Table:
     new_ids = new_ids[order]
     new_rows = np.concatenate([a[1] for a in added])[order]
     new_props = {n: np.concatenate([a[2][n] for a in added])[order] for n in props}
+    # a column may be int64 in one state and float64 (NaN for a NULL) in another: never cast a value down
+    props = {n: v.astype(np.result_type(v, new_props[n]), copy=False) for n, v in props.items()}
     if len(at) == len(new_ids) and np.array_equal(ids[at], new_ids):
         out_rows, out_props = rows.copy(), {n: v.copy() for n, v in props.items()}
         out_rows[at] = new_rows
@@ -964,6 +978,8 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
             hint="give each conflicting region parent, child, base or a manual mesh",
         )
     for index, solution in solutions.items():
+        if not isinstance(index, (int, np.integer)) or isinstance(index, bool):  # "0" from JSON, True == 1
+            raise InvalidInputError(f"{name}: region {index!r} is not a region: a region is given by its index")
         if index not in conflicts:
             raise InvalidInputError(
                 f"{name}: region {index} is {'not a region' if not 0 <= index < len(merge.regions) else 'no conflict'}"
@@ -1003,7 +1019,10 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
         in_v, in_c = ids_of([index])
         take_v = _contains(in_v, manual.vertex_ids) | ~_known(manual.vertex_ids, *(s.vertex_ids for s in states))
         take_c = _contains(in_c, manual.cell_ids) | ~_known(manual.cell_ids, *(s.cell_ids for s in states))
-        _check_outside_rows(name, index, manual, state, ~take_v, ~take_c)
+        # rows of another manually solved region are that region's solution's to give (one whole mesh may solve all)
+        elsewhere_v = ~take_v & ~_contains(manual_v, manual.vertex_ids)
+        elsewhere_c = ~take_c & ~_contains(manual_c, manual.cell_ids)
+        _check_outside_rows(name, index, manual, state, elsewhere_v, elsewhere_c)
         manual_new.append(
             (
                 manual.vertex_ids[take_v & ~_contains(in_v, manual.vertex_ids)],
@@ -1068,6 +1087,20 @@ def _check_valid(
             f"{_ids_text(np.unique(rows[~_contains(state.vertex_ids, rows)]))} that it removes",
             hint="one side removed vertices the other side's cells use: solve the region with one side's rows",
         )
+
+    if "refid" in state.vertex_properties:  # GOCAD atoms: a vertex id, which must still be there
+        ref = state.vertex_properties["refid"]
+        ref = np.nan_to_num(ref, nan=-1).astype(np.int64) if ref.dtype.kind == "f" else ref.astype(np.int64)
+        dangling_ref = (ref >= 0) & ~_contains(state.vertex_ids, ref)
+        if dangling_ref.any():  # the parent's own rows are excused: it is the state merged into
+            v_same, _ = _state_rows_equal(state, merge.parent, state.vertex_ids[dangling_ref], np.empty(0, np.int64))
+            dangling_ref[np.flatnonzero(dangling_ref)[v_same]] = False
+        if dangling_ref.any():
+            raise InvalidMergeError(
+                f"{name}: the merge would keep vertices {_ids_text(state.vertex_ids[dangling_ref])}, atoms (refid) "
+                f"that refer to vertices {_ids_text(np.unique(ref[dangling_ref]))}, which it removes",
+                hint="one side removed vertices the other side's atoms refer to: solve the region with one side's rows",
+            )
 
     def local(s: MeshState) -> tuple[IntArray, IntArray]:
         """(cell ids, cells) of a state's cells on any vertex near the change."""
