@@ -368,3 +368,51 @@ def test_cli_regions_for_a_role_without_rights_is_the_permission_error(
         captured = capsys.readouterr()
         assert captured.out == "" and "permission denied" in captured.err and "faults" in captured.err
         assert "feature" in _cli(rita_dsn, capsys, "version", "conflicts", "e1")  # the list without regions stays hers
+
+
+def _fault_with_status(conn: Conn) -> int:
+    """A curved surface of class 'faults' with a feature attribute 'status' = 'a' in DEFAULT; version e1 based on it."""
+    F.create_feature_class(
+        conn, "faults", "SURFACE", feature_properties=[("status", "text")], cell_properties=[("porosity", "float8")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    plain = tgsis.Surface(surface.vertices, surface.cells, vertex_properties=dict(surface.vertex_properties))
+    geoid = F.insert_feature(conn, "faults", plain, {"status": "a"})
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def _set_status(conn: Conn, version: str, geoid: int, status: str) -> None:
+    with tgsis.in_version(conn, version):
+        conn.execute("UPDATE faults SET status = %s WHERE _geoid = %s", (status, geoid))
+    conn.commit()
+
+
+def test_a_feature_deleted_in_the_parent_is_no_merge_to_an_empty_mesh(conn: Conn) -> None:
+    # was: no conflict and merged = a mesh without rows, while the version edited the feature the parent deleted
+    geoid = _fault_with_status(conn)
+    _set_status(conn, "e1", geoid, "b")
+    with tgsis.in_version(conn, "DEFAULT"):
+        F.delete_feature(conn, "faults", geoid)
+    conn.commit()
+    with pytest.raises(
+        tgsis.InvalidInputError, match=rf"feature {geoid} of class faults was deleted in version DEFAULT"
+    ):
+        tgsis.object_merge(conn, "e1", geoid)
+    _move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))  # a geometry edit too: refused the same way
+    with pytest.raises(tgsis.InvalidInputError, match="was deleted in version DEFAULT"):
+        tgsis.object_merge(conn, "e1", geoid)
+
+
+def test_a_feature_deleted_in_the_version_is_named_as_deleted(conn: Conn) -> None:
+    # was: NotFoundError "no feature class has feature", for a conflict find_conflicts lists
+    geoid = _fault_with_status(conn)
+    _move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
+    with tgsis.in_version(conn, "e1"):
+        F.delete_feature(conn, "faults", geoid)
+    conn.commit()
+    assert [c.objectkey for c in tgsis.find_conflicts(conn, "e1")] == [str(geoid)]
+    with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class faults was deleted in version e1"):
+        tgsis.object_merge(conn, "e1", geoid)

@@ -125,6 +125,12 @@ def _version_row(conn: Conn, version: str) -> tuple[int, str, int, int, int]:
     return int(row[0]), str(row[1]), int(row[2]), int(row[3]), int(row[4])
 
 
+def _exists(conn: Conn, geoid: int, version: str, revision: int) -> bool:
+    """Whether ``version`` has the geometry at ``revision`` (the session is moved there)."""
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+    return conn.execute("SELECT 1 FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone() is not None
+
+
 def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int) -> _Rows:
     """The object's rows as ``version`` sees them at ``revision`` (the session is moved there for the reads)."""
     conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
@@ -280,8 +286,12 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
         settings = read_version_settings(conn)
         try:
             versionid, parent, initrevision, working, parent_working = _version_row(conn, version)
-            # the class is looked up as the version sees its features
-            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
+            # the class is looked up as the version sees its features; as the parent does, when the version
+            # deleted a feature of its base
+            in_child = _exists(conn, feature_id, version, working)
+            in_parent = _exists(conn, feature_id, parent, parent_working)
+            if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
+                conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
             fc = _feature_class(conn, feature_id)
             if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
                 what = (
@@ -301,6 +311,13 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
                     f"feature {feature_id} of class {fc.name} was not changed both in version {show_name(version)} "
                     f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
                     hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
+                )
+            if not (in_child and in_parent):
+                raise InvalidInputError(
+                    f"feature {feature_id} of class {fc.name} was deleted in version "
+                    f"{show_name(parent if in_child else version)} and changed in "
+                    f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
+                    hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )
             rows = {
                 "base": _read_state(conn, fc, feature_id, version, initrevision),
