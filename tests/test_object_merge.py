@@ -416,3 +416,19 @@ def test_a_feature_deleted_in_the_version_is_named_as_deleted(conn: Conn) -> Non
     assert [c.objectkey for c in tgsis.find_conflicts(conn, "e1")] == [str(geoid)]
     with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class faults was deleted in version e1"):
         tgsis.object_merge(conn, "e1", geoid)
+
+
+def test_feature_attributes_changed_on_both_sides_are_no_clean_merge(conn: Conn) -> None:
+    # was: regions () and a merged mesh: the conflict (status 'b' against 'c') silently left out
+    geoid = _fault_with_status(conn)
+    _set_status(conn, "e1", geoid, "b")
+    _set_status(conn, "DEFAULT", geoid, "c")
+    with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class faults: its attributes .*status"):
+        tgsis.object_merge(conn, "e1", geoid)
+    _set_status(conn, "DEFAULT", geoid, "b")  # the same change on both sides: nothing to decide
+    _move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
+    merge = tgsis.object_merge(conn, "e1", geoid)
+    assert merge.conflicts == () and merge.merged is not None
+    _set_status(conn, "DEFAULT", geoid, "a")  # changed back in the parent only: the version's change stands
+    assert tgsis.object_merge(conn, "e1", geoid).conflicts == ()

@@ -131,6 +131,35 @@ def _exists(conn: Conn, geoid: int, version: str, revision: int) -> bool:
     return conn.execute("SELECT 1 FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone() is not None
 
 
+def _require_same_attributes(
+    conn: Conn, fc: FeatureClass, geoid: int, version: str, parent: str, revisions: tuple[int, int, int]
+) -> None:
+    """Refuse a feature whose attributes (its feature-table row) the two sides changed differently.
+
+    The merge is of the mesh only: such a conflict would be left out of its
+    answer. Values are compared as read in binary (floats exactly).
+    """
+    rows = []
+    for side, revision in zip((version, parent, version), revisions, strict=True):
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (side, revision))
+        with conn.cursor(binary=True) as cursor:
+            cursor.execute(
+                sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (geoid,)
+            )
+            names = [d.name for d in cursor.description or ()]
+            rows.append({n: repr(v) for n, v in zip(names, cursor.fetchone() or (), strict=False)})
+    base, theirs, ours = rows
+    if theirs == ours or theirs == base or ours == base:
+        return
+    differ = sorted(n for n in theirs.keys() | ours.keys() if theirs.get(n) != ours.get(n))
+    raise InvalidInputError(
+        f"feature {geoid} of class {fc.name}: its attributes were changed both in version {show_name(version)} "
+        f"and in its parent {show_name(parent)}, to other values ({', '.join(differ)}): "
+        "the merge by region merges the mesh only",
+        hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+    )
+
+
 def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int) -> _Rows:
     """The object's rows as ``version`` sees them at ``revision`` (the session is moved there for the reads)."""
     conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
@@ -319,6 +348,7 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
                     f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
                     hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )
+            _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
             rows = {
                 "base": _read_state(conn, fc, feature_id, version, initrevision),
                 "parent": _read_state(conn, fc, feature_id, parent, parent_working),
