@@ -432,3 +432,20 @@ def test_feature_attributes_changed_on_both_sides_are_no_clean_merge(conn: Conn)
     assert merge.conflicts == () and merge.merged is not None
     _set_status(conn, "DEFAULT", geoid, "a")  # changed back in the parent only: the version's change stands
     assert tgsis.object_merge(conn, "e1", geoid).conflicts == ()
+
+
+def test_a_class_in_a_schema_the_role_may_not_use_does_not_refuse_another_class(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    # was: permission denied for schema vault (the search for the feature's class named every class's table)
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    conn.execute("CREATE SCHEMA vault")
+    F.create_feature_class(conn, "vaulted", "SURFACE", schema="vault")
+    conn.execute("REVOKE ALL ON SCHEMA vault FROM PUBLIC, tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        assert rita.execute("SELECT has_schema_privilege('vault', 'USAGE')").fetchone() == (False,)
+        rita.rollback()
+        assert tgsis.object_merge(rita, "e1", fault).conflicts == ()

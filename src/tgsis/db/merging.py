@@ -91,8 +91,9 @@ def _feature_class(conn: Conn, feature_id: int) -> FeatureClass:
     readable = {
         str(r[0])
         for r in conn.execute(
-            "SELECT classname FROM tgsis.catalog"
-            " WHERE has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT')"
+            # a name in a schema the role may not use is a permission error of has_table_privilege: CASE tests first
+            "SELECT classname FROM tgsis.catalog WHERE CASE WHEN has_schema_privilege(schemaname, 'USAGE')"
+            " THEN has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT') END"
         ).fetchall()
     }
     # readable classes first: an unreadable one is only looked into (and refused) when no readable one holds it
