@@ -13,6 +13,7 @@ from tgsis import gmaps
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.db.classes import class_of_feature
+from tgsis.db.inspect import may_read_features
 from tgsis.errors import reraise
 
 from .gmaps_shapes import block_tetrahedra, grid, icosahedron
@@ -366,5 +367,24 @@ def test_a_reader_denied_one_class_still_finds_a_feature_of_another(db_dsn: str)
         rita = roles.connect("rita")
         assert class_of_feature(rita, geoid).name == "blocks"
         assert G.gmap_at(rita, geoid, 2.0) is not None  # finds its class as gmap_at does
+        with pytest.raises(tgsis.NotFoundError, match=r"among those this role may read \(1 it may not\)"):
+            class_of_feature(rita, geoid + 1000)
+
+
+def test_a_reader_denied_a_schema_still_finds_a_feature_of_another_class(db_dsn: str) -> None:
+    # was: permission denied for schema vault (has_table_privilege of every class's table by name)
+    with psycopg.connect(db_dsn) as admin:
+        admin.execute("CREATE SCHEMA vault")
+        F.create_feature_class(admin, "aaa_secret", "GMAP", time_model="GMAP", cell_level=2, schema="vault")
+        fc = _class(admin)
+        geoid = F.insert_feature(admin, fc, _evolving())
+        admin.execute("REVOKE ALL ON SCHEMA vault FROM PUBLIC, tgsis_reader")
+        admin.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
+        rita = roles.connect("rita")
+        assert class_of_feature(rita, geoid).name == "blocks"
+        assert G.gmap_at(rita, geoid, 2.0) is not None
+        secret = next(c for c in tgsis.list_feature_classes(rita) if c.name == "aaa_secret")
+        assert may_read_features(rita, secret) is False
         with pytest.raises(tgsis.NotFoundError, match=r"among those this role may read \(1 it may not\)"):
             class_of_feature(rita, geoid + 1000)

@@ -368,3 +368,84 @@ def test_cli_regions_for_a_role_without_rights_is_the_permission_error(
         captured = capsys.readouterr()
         assert captured.out == "" and "permission denied" in captured.err and "faults" in captured.err
         assert "feature" in _cli(rita_dsn, capsys, "version", "conflicts", "e1")  # the list without regions stays hers
+
+
+def _fault_with_status(conn: Conn) -> int:
+    """A curved surface of class 'faults' with a feature attribute 'status' = 'a' in DEFAULT; version e1 based on it."""
+    F.create_feature_class(
+        conn, "faults", "SURFACE", feature_properties=[("status", "text")], cell_properties=[("porosity", "float8")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    plain = tgsis.Surface(surface.vertices, surface.cells, vertex_properties=dict(surface.vertex_properties))
+    geoid = F.insert_feature(conn, "faults", plain, {"status": "a"})
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def _set_status(conn: Conn, version: str, geoid: int, status: str) -> None:
+    with tgsis.in_version(conn, version):
+        conn.execute("UPDATE faults SET status = %s WHERE _geoid = %s", (status, geoid))
+    conn.commit()
+
+
+def test_a_feature_deleted_in_the_parent_is_no_merge_to_an_empty_mesh(conn: Conn) -> None:
+    # was: no conflict and merged = a mesh without rows, while the version edited the feature the parent deleted
+    geoid = _fault_with_status(conn)
+    _set_status(conn, "e1", geoid, "b")
+    with tgsis.in_version(conn, "DEFAULT"):
+        F.delete_feature(conn, "faults", geoid)
+    conn.commit()
+    with pytest.raises(
+        tgsis.InvalidInputError, match=rf"feature {geoid} of class faults was deleted in version DEFAULT"
+    ):
+        tgsis.object_merge(conn, "e1", geoid)
+    _move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))  # a geometry edit too: refused the same way
+    with pytest.raises(tgsis.InvalidInputError, match="was deleted in version DEFAULT"):
+        tgsis.object_merge(conn, "e1", geoid)
+
+
+def test_a_feature_deleted_in_the_version_is_named_as_deleted(conn: Conn) -> None:
+    # was: NotFoundError "no feature class has feature", for a conflict find_conflicts lists
+    geoid = _fault_with_status(conn)
+    _move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
+    with tgsis.in_version(conn, "e1"):
+        F.delete_feature(conn, "faults", geoid)
+    conn.commit()
+    assert [c.objectkey for c in tgsis.find_conflicts(conn, "e1")] == [str(geoid)]
+    with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class faults was deleted in version e1"):
+        tgsis.object_merge(conn, "e1", geoid)
+
+
+def test_feature_attributes_changed_on_both_sides_are_no_clean_merge(conn: Conn) -> None:
+    # was: regions () and a merged mesh: the conflict (status 'b' against 'c') silently left out
+    geoid = _fault_with_status(conn)
+    _set_status(conn, "e1", geoid, "b")
+    _set_status(conn, "DEFAULT", geoid, "c")
+    with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class faults: its attributes .*status"):
+        tgsis.object_merge(conn, "e1", geoid)
+    _set_status(conn, "DEFAULT", geoid, "b")  # the same change on both sides: nothing to decide
+    _move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
+    merge = tgsis.object_merge(conn, "e1", geoid)
+    assert merge.conflicts == () and merge.merged is not None
+    _set_status(conn, "DEFAULT", geoid, "a")  # changed back in the parent only: the version's change stands
+    assert tgsis.object_merge(conn, "e1", geoid).conflicts == ()
+
+
+def test_a_class_in_a_schema_the_role_may_not_use_does_not_refuse_another_class(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    # was: permission denied for schema vault (the search for the feature's class named every class's table)
+    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    conn.execute("CREATE SCHEMA vault")
+    F.create_feature_class(conn, "vaulted", "SURFACE", schema="vault")
+    conn.execute("REVOKE ALL ON SCHEMA vault FROM PUBLIC, tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        assert rita.execute("SELECT has_schema_privilege('vault', 'USAGE')").fetchone() == (False,)
+        rita.rollback()
+        assert tgsis.object_merge(rita, "e1", fault).conflicts == ()

@@ -495,8 +495,9 @@ def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
         readable = {
             r[0]
             for r in conn.execute(
-                "SELECT classname FROM tgsis.catalog WHERE has_table_privilege(format('%I.%I', schemaname, featuretable), "
-                "'SELECT')"
+                # (a table in a schema it may not use would be a permission error of has_table_privilege)
+                "SELECT classname FROM tgsis.catalog WHERE CASE WHEN has_schema_privilege(schemaname, 'USAGE') "
+                "THEN has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT') END"
             ).fetchall()
         }
         for fc in classes:

@@ -328,7 +328,9 @@ def may_read_features(conn: Conn, fc: FeatureClass) -> bool:
     """Whether the session's role may read the feature table of class ``fc``."""
     with reraise():
         row = conn.execute(
-            "SELECT has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT')", (fc.schema, fc.featuretable)
+            "SELECT CASE WHEN has_schema_privilege(%s, 'USAGE')"
+            " THEN has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT') ELSE false END",
+            (fc.schema, fc.schema, fc.featuretable),
         ).fetchone()
     return bool(row and row[0])
 

@@ -85,8 +85,9 @@ def _feature_class(conn: Conn, feature_id: int) -> FeatureClass:
     readable = {
         str(r[0])
         for r in conn.execute(
-            "SELECT classname FROM tgsis.catalog"
-            " WHERE has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT')"
+            # a name in a schema the role may not use is a permission error of has_table_privilege: CASE tests first
+            "SELECT classname FROM tgsis.catalog WHERE CASE WHEN has_schema_privilege(schemaname, 'USAGE')"
+            " THEN has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT') END"
         ).fetchall()
     }
     # readable classes first: an unreadable one is only looked into (and refused) when no readable one holds it
@@ -117,6 +118,41 @@ def _version_row(conn: Conn, version: str) -> tuple[int, str, int, int, int]:
             "version DEFAULT has no parent to merge with", hint="give the name of a version made by create_version"
         )
     return int(row[0]), str(row[1]), int(row[2]), int(row[3]), int(row[4])
+
+
+def _exists(conn: Conn, geoid: int, version: str, revision: int) -> bool:
+    """Whether ``version`` has the geometry at ``revision`` (the session is moved there)."""
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+    return conn.execute("SELECT 1 FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone() is not None
+
+
+def _require_same_attributes(
+    conn: Conn, fc: FeatureClass, geoid: int, version: str, parent: str, revisions: tuple[int, int, int]
+) -> None:
+    """Refuse a feature whose attributes (its feature-table row) the two sides changed differently.
+
+    The merge is of the mesh only: such a conflict would be left out of its
+    answer. Values are compared as read in binary (floats exactly).
+    """
+    rows = []
+    for side, revision in zip((version, parent, version), revisions, strict=True):
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (side, revision))
+        with conn.cursor(binary=True) as cursor:
+            cursor.execute(
+                sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (geoid,)
+            )
+            names = [d.name for d in cursor.description or ()]
+            rows.append({n: repr(v) for n, v in zip(names, cursor.fetchone() or (), strict=False)})
+    base, theirs, ours = rows
+    if theirs == ours or theirs == base or ours == base:
+        return
+    differ = sorted(n for n in theirs.keys() | ours.keys() if theirs.get(n) != ours.get(n))
+    raise InvalidInputError(
+        f"feature {geoid} of class {fc.name}: its attributes were changed both in version {show_name(version)} "
+        f"and in its parent {show_name(parent)}, to other values ({', '.join(differ)}): "
+        "the merge by region merges the mesh only",
+        hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+    )
 
 
 def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int) -> _Rows:
@@ -274,8 +310,12 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
         settings = read_version_settings(conn)
         try:
             versionid, parent, initrevision, working, parent_working = _version_row(conn, version)
-            # the class is looked up as the version sees its features
-            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
+            # the class is looked up as the version sees its features; as the parent does, when the version
+            # deleted a feature of its base
+            in_child = _exists(conn, feature_id, version, working)
+            in_parent = _exists(conn, feature_id, parent, parent_working)
+            if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
+                conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
             fc = _feature_class(conn, feature_id)
             if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
                 what = (
@@ -296,6 +336,14 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
                     f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
                     hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
                 )
+            if not (in_child and in_parent):
+                raise InvalidInputError(
+                    f"feature {feature_id} of class {fc.name} was deleted in version "
+                    f"{show_name(parent if in_child else version)} and changed in "
+                    f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
+                    hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+                )
+            _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
             rows = {
                 "base": _read_state(conn, fc, feature_id, version, initrevision),
                 "parent": _read_state(conn, fc, feature_id, parent, parent_working),
