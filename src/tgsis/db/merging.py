@@ -325,6 +325,7 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
 #: GOCAD's file of each kind (what ``tgsis export`` writes by default)
 _GOCAD = {1: "vs", 2: "pl", 3: "ts", 4: "so"}
 _SIDES = ("base", "parent", "child")
+_GOCAD_FORMATS = ("tsurf", "pline", "vset", "tsolid")
 #: metadata of the stored object that holds vertex indices of its own state: not valid for the other states
 #: (atoms travel as the vertex property ``refid``)
 _INDEXED_METADATA = ("gocad_atoms", "gocad_patoms")
@@ -520,31 +521,69 @@ def export_conflict(
     meshes = {side: _state_mesh(getattr(merge, side), cell_key, name, metadata) for side in _SIDES}
     stem = _file_stem(feature_id, name)
     target = Path(folder)
-    names = [f"{stem}_{side}.{ext}" for side in _SIDES] + [f"{feature_id}_regions.json"]
+    # GOCAD files hold no cell values: the cells' ids and values go to a CSV beside each (row j: file cell j)
+    sidecar = kind.name in _GOCAD_FORMATS
+    files: list[tuple[str, str]] = []  # (what, file name)
+    for side in _SIDES:
+        files.append((side, f"{stem}_{side}.{ext}"))
+        if sidecar:
+            files.append((f"{side} cells", f"{stem}_{side}_cells.csv"))
+    files.append(("regions", f"{feature_id}_regions.json"))
     if picture:
-        names.append(f"{stem}_overlay.png")
+        files.append(("picture", f"{stem}_overlay.png"))
+    names = [n for _, n in files]
     if not overwrite:
         _refuse_existing(target, names)
     target.mkdir(parents=True, exist_ok=True)
     scratch = Path(tempfile.mkdtemp(prefix=".tgsis-export-", dir=target))
     try:
-        for side, file in zip(_SIDES, names, strict=False):
-            formats.write(meshes[side], scratch / file, format=kind.name)
-        (scratch / names[3]).write_text(json.dumps(merge_regions_json(merge), indent=1) + "\n", encoding="utf-8")
-        if picture:
-            from tgsis import pictures
+        for what, file in files:
+            if what in _SIDES:
+                mesh = meshes[what]
+                formats.write(
+                    mesh, scratch / file, format=kind.name, **({"drop_cell_properties": True} if sidecar else {})
+                )
+            elif what.endswith(" cells"):
+                _write_cells_csv(meshes[what.split()[0]], scratch / file)
+            elif what == "regions":
+                (scratch / file).write_text(json.dumps(merge_regions_json(merge), indent=1) + "\n", encoding="utf-8")
+            else:
+                from tgsis import pictures
 
-            pictures.conflict_overlay(
-                merge,
-                meshes["base"],
-                meshes["parent"],
-                meshes["child"],
-                scratch / names[4],
-                title=f"feature {feature_id} {name or ''} in {show_name(version)}: base, parent, child",
-            )
+                pictures.conflict_overlay(
+                    merge,
+                    meshes["base"],
+                    meshes["parent"],
+                    meshes["child"],
+                    scratch / file,
+                    title=f"feature {feature_id} {name or ''} in {show_name(version)}: base, parent, child",
+                )
         return _move_into(scratch, target, names, overwrite)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _write_cells_csv(mesh: Mesh, path: Path) -> None:
+    """The cells' values, one row per file cell in file order; a (m, c) property as columns ``name[0]`` ...
+
+    Floats are written with ``repr`` (the shortest text that reads back bit for bit); NaN (no value) as ``nan``.
+    """
+    import csv
+
+    header: list[str] = []
+    columns: list[npt.NDArray[Any]] = []
+    for n, values in mesh.cell_properties.items():
+        if values.ndim == 1:
+            header.append(n)
+            columns.append(values)
+        else:
+            header += [f"{n}[{i}]" for i in range(values.shape[1])]
+            columns += [values[:, i] for i in range(values.shape[1])]
+    with path.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(header)
+        for j in range(len(mesh.cells)):
+            writer.writerow([repr(c[j].item()) for c in columns])
 
 
 def _refuse_existing(target: Path, names: list[str]) -> None:
