@@ -339,8 +339,7 @@ OVERLAY_COLOURS = {"base": "#b0b0b0", "parent": "#1f5fd0", "child": "#f08010", "
 def _cells_touching(mesh: Any, vertex_ids: npt.NDArray[np.int64], cell_ids: npt.NDArray[np.int64]) -> Any:
     """Indices of ``mesh``'s cells with a changed id or on a changed vertex (ids from ``vrtxid`` and the cell key)."""
     vids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.int64)
-    key = next(n for n in ("trglid", "segid", "pointid", "tetraid", "cellid") if n in mesh.cell_properties)
-    cids = np.asarray(mesh.cell_properties[key], dtype=np.int64)
+    cids = _cell_ids(mesh)
     on_vertex = np.isin(vids, vertex_ids)
     touched = np.isin(cids, cell_ids)
     if len(mesh.cells):
@@ -348,7 +347,12 @@ def _cells_touching(mesh: Any, vertex_ids: npt.NDArray[np.int64], cell_ids: npt.
     return touched, on_vertex
 
 
-def _plan(ax: Any, mesh: Any, cells: Any, colour: str, *, fill: bool, width: float, z: int) -> None:
+def _cell_ids(mesh: Any) -> npt.NDArray[np.int64]:
+    key = next(n for n in ("trglid", "segid", "pointid", "tetraid", "cellid") if n in mesh.cell_properties)
+    return np.asarray(mesh.cell_properties[key], dtype=np.int64)
+
+
+def _plan(ax: Any, mesh: Any, cells: Any, colour: str, *, fill: bool, width: float, z: int, style: str = "-") -> None:
     """Draw cells of ``mesh`` in map view (x, y): triangles filled, segments and tetrahedra by edges, points."""
     from matplotlib.collections import LineCollection, PolyCollection
 
@@ -358,13 +362,20 @@ def _plan(ax: Any, mesh: Any, cells: Any, colour: str, *, fill: bool, width: flo
         return
     k = chosen.shape[1]
     if k == 1:
-        ax.scatter(v[chosen[:, 0], 0], v[chosen[:, 0], 1], s=6 * width, color=colour, zorder=z)
+        ax.scatter(
+            v[chosen[:, 0], 0],
+            v[chosen[:, 0], 1],
+            s=6 * width,
+            color=colour,
+            zorder=z,
+            marker="x" if style != "-" else "o",
+        )
     elif k == 3 and fill:
-        ax.add_collection(PolyCollection(v[chosen], facecolors=colour, edgecolors=colour, linewidths=width, zorder=z))
+        ax.add_collection(PolyCollection(v[chosen], facecolors=colour, edgecolors="white", linewidths=width, zorder=z))
     else:
         pairs = [(a, b) for a in range(k) for b in range(a + 1, k)] if k > 2 else [(0, 1)]
         edges = np.concatenate([chosen[:, [a, b]] for a, b in pairs])
-        ax.add_collection(LineCollection(v[edges], colors=colour, linewidths=width, zorder=z))
+        ax.add_collection(LineCollection(v[edges], colors=colour, linewidths=width, linestyles=style, zorder=z))
 
 
 def conflict_overlay(
@@ -404,7 +415,7 @@ def conflict_overlay(
     from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
 
-    figure, ax = plt.subplots(figsize=(8, 7))
+    figure, ax = plt.subplots(figsize=(9, 7))
     try:
         _plan(ax, base, np.ones(len(base.cells), dtype=bool), OVERLAY_COLOURS["base"], fill=True, width=0.3, z=1)
         for side, mesh, alpha_z in (("parent", parent, 2), ("child", child, 3)):
@@ -414,6 +425,9 @@ def conflict_overlay(
             _plan(ax, mesh, cells, OVERLAY_COLOURS[side], fill=False, width=1.6, z=alpha_z)
             moved = mesh.vertices[on_vertex]
             ax.scatter(moved[:, 0], moved[:, 1], s=10, color=OVERLAY_COLOURS[side], zorder=alpha_z + 2)
+            # what the side removed: the base's cells of changed ids the side no longer has, dotted
+            gone, _ = _cells_touching(base, np.empty(0, np.int64), np.setdiff1d(cids, _cell_ids(mesh)))
+            _plan(ax, base, gone, OVERLAY_COLOURS[side], fill=False, width=1.0, z=alpha_z, style=":")
         for r in merge.regions:
             (x0, y0, _), (x1, y1, _) = np.asarray(r.bounds)
             ax.add_patch(
@@ -445,12 +459,13 @@ def conflict_overlay(
                 Line2D([], [], color=OVERLAY_COLOURS["conflict"], label="conflict region"),
                 Line2D([], [], color="tab:green", linestyle="--", label="merges by itself"),
             ],
-            loc="upper right",
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
             fontsize="small",
         )
         if title:
             ax.set_title(title)
-        figure.savefig(path, dpi=dpi)
+        figure.savefig(path, dpi=dpi, bbox_inches="tight")
     finally:
         plt.close(figure)
     return Path(path)

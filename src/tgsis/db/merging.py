@@ -556,7 +556,7 @@ def export_conflict(
                     meshes["parent"],
                     meshes["child"],
                     scratch / file,
-                    title=f"feature {feature_id} {name or ''} in {show_name(version)}: base, parent, child",
+                    title=f"feature {feature_id}{f' {name}' if name else ''} in {show_name(version)}: base, parent, child",
                 )
         return _move_into(scratch, target, names, overwrite)
     finally:
