@@ -272,3 +272,26 @@ def test_a_role_without_rights_gets_the_permission_error_and_no_files(
 def test_force_and_format_need_export(conn: Conn, fault: int, db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--force"]) != 0
     assert "--force" in capsys.readouterr().err
+
+
+@pytest.mark.usefixtures("cli_state")
+def test_cli_says_why_no_files_are_written_for_a_row_that_is_no_mesh(
+    conn: Conn, fault: int, db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    conn.execute("CREATE TABLE wells (id int PRIMARY KEY, depth float8)")
+    conn.execute("INSERT INTO wells VALUES (1, 1000.0)")
+    conn.commit()
+    tgsis.enable_versioning(conn, "wells", "id", "well")
+    tgsis.create_version(conn, "w1")
+    conn.commit()
+    with tgsis.in_version(conn, "w1"):
+        conn.execute("UPDATE wells SET depth = 1250 WHERE id = 1")
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute("UPDATE wells SET depth = 1300 WHERE id = 1")
+    conn.commit()
+    out = tmp_path / "out"
+    text = _cli(db_dsn, capsys, "version", "conflicts", "w1", "--export", str(out))
+    assert "well 1: no files: a row of well, not a mesh" in text.splitlines()
+    assert not any(out.iterdir())
+    document = json.loads(_cli(db_dsn, capsys, "version", "conflicts", "w1", "--export", str(out), "--json"))
+    assert document["conflicts"][0]["exported"] == {"files": [], "reason": "no files: a row of well, not a mesh"}
