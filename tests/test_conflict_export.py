@@ -295,3 +295,31 @@ def test_cli_says_why_no_files_are_written_for_a_row_that_is_no_mesh(
     assert not any(out.iterdir())
     document = json.loads(_cli(db_dsn, capsys, "version", "conflicts", "w1", "--export", str(out), "--json"))
     assert document["conflicts"][0]["exported"] == {"files": [], "reason": "no files: a row of well, not a mesh"}
+
+
+def test_a_real_cfm_fault_with_an_atom_round_trips(conn: Conn, tmp_path: Path) -> None:
+    """The file a real tool wrote (two TFACE parts, an ATOM, a CRS block): the three files read back as stored."""
+    from tests.shared_data import cfm
+
+    [source] = formats.read(cfm("formats/WTRA-NCFS-PPT-Pitas_Point_fault.ts"))
+    assert source.metadata.get("gocad_atoms")
+    F.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    source.vertex_properties.clear()
+    geoid = F.insert_feature(conn, "faults", source)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _move(conn, "e1", geoid, [3, 4], (0.0, 0.0, 5.5))
+    _move(conn, "DEFAULT", geoid, [4, 5], (1.25, 0.0, 0.0))
+    conn.commit()
+    written = tgsis.export_conflict(conn, "e1", geoid, tmp_path, picture=False)
+    merge = tgsis.object_merge(conn, "e1", geoid)
+    assert merge.conflicts and "refid" in merge.base.vertex_properties
+    depth = source.metadata.get("zpositive") == "Depth"
+    for path, state in zip(written[0:6:2], (merge.base, merge.parent, merge.child), strict=True):
+        mesh = _read_back(path)
+        assert mesh.name == source.name
+        assert mesh.metadata.get("zpositive") == source.metadata.get("zpositive")
+        assert mesh.metadata.get("gocad_coordinate_system") == source.metadata.get("gocad_coordinate_system")
+        _same_as_state(mesh, state, depth=depth)
+    assert _read_back(written[0]).vertices.tobytes() == source.vertices.tobytes()
