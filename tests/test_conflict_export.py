@@ -323,3 +323,25 @@ def test_a_real_cfm_fault_with_an_atom_round_trips(conn: Conn, tmp_path: Path) -
         assert mesh.metadata.get("gocad_coordinate_system") == source.metadata.get("gocad_coordinate_system")
         _same_as_state(mesh, state, depth=depth)
     assert _read_back(written[0]).vertices.tobytes() == source.vertices.tobytes()
+
+
+@pytest.mark.usefixtures("cli_state")
+def test_without_matplotlib_the_pngs_are_skipped_with_a_notice(
+    conn: Conn,
+    fault: int,
+    db_dsn: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import sys
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # Python then refuses to import it, as when not installed
+    out = tmp_path / "out"
+    assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--export", str(out)]) == 0
+    captured = capsys.readouterr()
+    [notice] = [line for line in captured.err.splitlines() if "notice" in line]
+    assert "no PNG overlays" in notice and "matplotlib" in notice and "tgsis[pictures]" in notice
+    names = sorted(p.name for p in out.iterdir())
+    assert len(names) == 7 and not any(n.endswith(".png") for n in names)
+    assert sum(line.startswith("wrote ") for line in captured.out.splitlines()) == 7

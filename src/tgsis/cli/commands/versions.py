@@ -262,18 +262,20 @@ def _export_conflicts(
     Every object is written into a scratch folder inside DIR first; the files are moved into DIR only when
     all are written and (without ``--force``) no name is taken, so a refusal leaves DIR as it was.
     """
-    import importlib.util
     import shutil
     import tempfile
 
+    from tgsis._optional import require
+    from tgsis.errors import InstallationError
+
     if conn.info.transaction_status != psycopg.pq.TransactionStatus.IDLE:
         conn.commit()  # find_conflicts' own transaction is over; each export reads in a snapshot of its own
-    picture = importlib.util.find_spec("matplotlib") is not None
-    if not picture:
-        print(
-            "tgsis: notice: no PNG overlays: matplotlib is not installed (pip install 'tgsis[pictures]')",
-            file=sys.stderr,
-        )
+    try:
+        require("matplotlib", "the PNG overlays")
+        picture = True
+    except InstallationError as exc:
+        picture = False
+        print(f"tgsis: notice: no PNG overlays: {exc.message} ({exc.hint})", file=sys.stderr)
     folder = Path(args.export)
     folder.mkdir(parents=True, exist_ok=True)
     done: dict[tuple[str, str], list[Path] | str] = {}
