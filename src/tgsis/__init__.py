@@ -125,7 +125,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
     from tgsis.db.instants import add_instant, delete_instant, fetch_series
-    from tgsis.db.merging import object_merge
+    from tgsis.db.merging import export_conflict, merge_regions_json, object_merge
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -331,6 +331,8 @@ __all__ = [
     "conflict_discards",
     "merge_version",
     "object_merge",
+    "export_conflict",
+    "merge_regions_json",
     "refresh_version",
     "Difference",
     "diff_versions",

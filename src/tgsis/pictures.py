@@ -28,7 +28,7 @@ from tgsis._optional import require
 from tgsis.errors import InvalidInputError
 from tgsis.mesh import Surface
 
-__all__ = ["displacement", "scene", "section", "animation"]
+__all__ = ["displacement", "scene", "section", "animation", "conflict_overlay"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -330,3 +330,142 @@ def animation(
     finally:
         plt.close(figure)
     return target
+
+
+#: colours of the conflict overlay (RGB 0-255 too, for tests reading the pixels)
+OVERLAY_COLOURS = {"base": "#b0b0b0", "parent": "#1f5fd0", "child": "#f08010", "conflict": "#e00000"}
+
+
+def _cells_touching(mesh: Any, vertex_ids: npt.NDArray[np.int64], cell_ids: npt.NDArray[np.int64]) -> Any:
+    """Indices of ``mesh``'s cells with a changed id or on a changed vertex (ids from ``vrtxid`` and the cell key)."""
+    vids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.int64)
+    cids = _cell_ids(mesh)
+    on_vertex = np.isin(vids, vertex_ids)
+    touched = np.isin(cids, cell_ids)
+    if len(mesh.cells):
+        touched |= on_vertex[mesh.cells].any(axis=1)
+    return touched, on_vertex
+
+
+def _cell_ids(mesh: Any) -> npt.NDArray[np.int64]:
+    key = next(n for n in ("trglid", "segid", "pointid", "tetraid", "cellid") if n in mesh.cell_properties)
+    return np.asarray(mesh.cell_properties[key], dtype=np.int64)
+
+
+def _plan(ax: Any, mesh: Any, cells: Any, colour: str, *, fill: bool, width: float, z: int, style: str = "-") -> None:
+    """Draw cells of ``mesh`` in map view (x, y): triangles filled, segments and tetrahedra by edges, points."""
+    from matplotlib.collections import LineCollection, PolyCollection
+
+    v = mesh.vertices[:, :2]
+    chosen = mesh.cells[cells]
+    if not len(chosen):
+        return
+    k = chosen.shape[1]
+    if k == 1:
+        ax.scatter(
+            v[chosen[:, 0], 0],
+            v[chosen[:, 0], 1],
+            s=6 * width,
+            color=colour,
+            zorder=z,
+            marker="x" if style != "-" else "o",
+        )
+    elif k == 3 and fill:
+        ax.add_collection(PolyCollection(v[chosen], facecolors=colour, edgecolors="white", linewidths=width, zorder=z))
+    else:
+        pairs = [(a, b) for a in range(k) for b in range(a + 1, k)] if k > 2 else [(0, 1)]
+        edges = np.concatenate([chosen[:, [a, b]] for a, b in pairs])
+        ax.add_collection(LineCollection(v[edges], colors=colour, linewidths=width, linestyles=style, zorder=z))
+
+
+def conflict_overlay(
+    merge: Any,
+    base: Any,
+    parent: Any,
+    child: Any,
+    path: str | Path,
+    *,
+    title: str = "",
+    dpi: int = 110,
+) -> Path:
+    """A map view (x, y) of a three-way merge: base grey, parent's edits blue, child's orange, regions boxed.
+
+    Parameters
+    ----------
+    merge : tgsis.MeshMerge
+        Its ``regions`` give the changed ids and the boxes (conflicts red, regions that merge by themselves
+        dashed green).
+    base, parent, child : tgsis.Mesh
+        The three states as :func:`tgsis.export_conflict` builds them (vertex property ``vrtxid``, the stored
+        cell ids as a cell property); the sides' changed cells (and those on a changed vertex) are drawn as
+        that side has them, their vertices as dots.
+    path : path
+        The PNG written.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    require("matplotlib", "tgsis.pictures")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Rectangle
+
+    figure, ax = plt.subplots(figsize=(9, 7))
+    try:
+        _plan(ax, base, np.ones(len(base.cells), dtype=bool), OVERLAY_COLOURS["base"], fill=True, width=0.3, z=1)
+        for side, mesh, alpha_z in (("parent", parent, 2), ("child", child, 3)):
+            vids = np.concatenate([getattr(r, f"{side}_vertex_ids") for r in merge.regions] or [np.empty(0, np.int64)])
+            cids = np.concatenate([getattr(r, f"{side}_cell_ids") for r in merge.regions] or [np.empty(0, np.int64)])
+            cells, on_vertex = _cells_touching(mesh, vids, cids)
+            _plan(ax, mesh, cells, OVERLAY_COLOURS[side], fill=False, width=1.6, z=alpha_z)
+            moved = mesh.vertices[on_vertex]
+            ax.scatter(moved[:, 0], moved[:, 1], s=10, color=OVERLAY_COLOURS[side], zorder=alpha_z + 2)
+            # what the side removed: the base's cells of changed ids the side no longer has, dotted
+            gone, _ = _cells_touching(base, np.empty(0, np.int64), np.setdiff1d(cids, _cell_ids(mesh)))
+            _plan(ax, base, gone, OVERLAY_COLOURS[side], fill=False, width=1.0, z=alpha_z, style=":")
+        for r in merge.regions:
+            (x0, y0, _), (x1, y1, _) = np.asarray(r.bounds)
+            ax.add_patch(
+                Rectangle(
+                    (x0, y0),
+                    x1 - x0,
+                    y1 - y0,
+                    fill=False,
+                    edgecolor=OVERLAY_COLOURS["conflict"] if r.conflict else "tab:green",
+                    linestyle="-" if r.conflict else "--",
+                    linewidth=2.0 if r.conflict else 1.0,
+                    zorder=6,
+                )
+            )
+            ax.annotate(f"region {r.index}", (x0, y1), fontsize="small", zorder=7)
+        everything = np.concatenate([m.vertices[:, :2] for m in (base, parent, child) if len(m.vertices)])
+        low, high = everything.min(axis=0), everything.max(axis=0)
+        pad = 0.03 * max(float((high - low).max()), 1.0)
+        ax.set_xlim(low[0] - pad, high[0] + pad)
+        ax.set_ylim(low[1] - pad, high[1] + pad)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.legend(
+            handles=[
+                Line2D([], [], color=OVERLAY_COLOURS["base"], label="base"),
+                Line2D([], [], color=OVERLAY_COLOURS["parent"], label="parent's edits"),
+                Line2D([], [], color=OVERLAY_COLOURS["child"], label="child's edits"),
+                Line2D([], [], color=OVERLAY_COLOURS["conflict"], label="conflict region"),
+                Line2D([], [], color="tab:green", linestyle="--", label="merges by itself"),
+            ],
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
+            fontsize="small",
+        )
+        if title:
+            ax.set_title(title)
+        figure.savefig(path, dpi=dpi, bbox_inches="tight")
+    finally:
+        plt.close(figure)
+    return Path(path)

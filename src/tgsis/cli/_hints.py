@@ -276,6 +276,7 @@ _RULES: list[tuple[str, Replacement]] = [
     ),
     (r", or pass drop_properties=True", ""),
     (r"pass drop_cell_properties=True to write the mesh without them", "write it to a .vtu file, which keeps them"),
+    (r"replace them \(overwrite=True; tgsis: --force\)", "add --force to replace them"),
     (
         r"give every member the property, or remove it before (?:writing|converting)",
         "export to a GOCAD file of the members' type (.ts, .pl, .vs, .so), where each object keeps its own properties, "

@@ -27,7 +27,7 @@ from tgsis.db.features import (
     fetch_feature,
 )
 from tgsis.db.inspect import revision_exists
-from tgsis.db.merging import object_merge
+from tgsis.db.merging import export_conflict, merge_regions_json, object_merge
 from tgsis.errors import (
     InvalidInputError,
     MissingPrivilegeError,
@@ -213,6 +213,8 @@ class VersionConflicts:
     lost: dict[tuple[str, str, str], list[V.Discard]] | None
     #: ``--regions``: per (class, key), the object's three-way merge, or why it merges as a whole object only
     regions: dict[tuple[str, str], MeshMerge | str] = field(default_factory=dict)
+    #: ``--export``: per (class, key), the files written, or why none was
+    exported: dict[tuple[str, str], list[Path] | str] = field(default_factory=dict)
 
 
 def _object_regions(conn: Any, version: str, conflicts: Sequence[V.Conflict]) -> dict[tuple[str, str], MeshMerge | str]:
@@ -252,40 +254,67 @@ def _region_text(region: MergeRegion) -> str:
     )
 
 
-def _regions_json(merge: MeshMerge | str) -> dict[str, Any]:
-    if isinstance(merge, str):
-        return {"merges_by_region": False, "reason": merge, "regions": []}
-    return {
-        "merges_by_region": True,
-        "merges_by_itself": not merge.conflicts,
-        "regions": [
-            {
-                "index": r.index,
-                "conflict": r.conflict,
-                "changed_in": r.sides,
-                "merges_by_itself": not r.conflict,
-                "vertex_ids": r.vertex_ids.tolist(),
-                "cell_ids": r.cell_ids.tolist(),
-                "parent": {
-                    "vertex_ids": r.parent_vertex_ids.tolist(),
-                    "cell_ids": r.parent_cell_ids.tolist(),
-                    "largest_displacement": r.parent_displacement,
-                },
-                "child": {
-                    "vertex_ids": r.child_vertex_ids.tolist(),
-                    "cell_ids": r.child_cell_ids.tolist(),
-                    "largest_displacement": r.child_displacement,
-                },
-                "bounds": r.bounds.tolist(),
-            }
-            for r in merge.regions
-        ],
-    }
+def _export_conflicts(
+    conn: Any, args: argparse.Namespace, conflicts: Sequence[V.Conflict]
+) -> dict[tuple[str, str], list[Path] | str]:
+    """``--export DIR``: each conflicting mesh's three states, regions and picture, or why none is written.
+
+    Every object is written into a scratch folder inside DIR first; the files are moved into DIR only when
+    all are written and (without ``--force``) no name is taken, so a refusal leaves DIR as it was.
+    """
+    import shutil
+    import tempfile
+
+    from tgsis._optional import require
+    from tgsis.errors import InstallationError
+
+    if conn.info.transaction_status != psycopg.pq.TransactionStatus.IDLE:
+        conn.commit()  # find_conflicts' own transaction is over; each export reads in a snapshot of its own
+    try:
+        require("matplotlib", "the PNG overlays")
+        picture = True
+    except InstallationError as exc:
+        picture = False
+        print(f"tgsis: notice: no PNG overlays: {exc.message} ({exc.hint})", file=sys.stderr)
+    folder = Path(args.export)
+    folder.mkdir(parents=True, exist_ok=True)
+    done: dict[tuple[str, str], list[Path] | str] = {}
+    scratch = Path(tempfile.mkdtemp(prefix=".tgsis-export-", dir=folder))
+    try:
+        for c in conflicts:
+            key = (c.objectclass, c.objectkey)
+            if c.objectclass != "feature":
+                done[key] = f"no files: a row of {c.objectclass}, not a mesh"
+                continue
+            try:
+                done[key] = export_conflict(
+                    conn, args.name, int(c.objectkey), scratch, format=args.format, picture=picture, overwrite=True
+                )
+            except (InvalidInputError, VersioningError) as exc:  # not a mesh of model 1; changed on one side only
+                done[key] = f"no files: {exc.message}"
+        written = [f for files in done.values() if not isinstance(files, str) for f in files]
+        there = [f.name for f in written if (folder / f.name).exists()]
+        if there and not args.force:
+            raise InvalidInputError(
+                f"{len(there)} file(s) already in {folder}: {', '.join(there)}; nothing was written",
+                hint="remove them, choose another --export folder, or add --force to replace them",
+            )
+        for f in written:
+            os.replace(f, folder / f.name)
+        return {
+            key: files if isinstance(files, str) else [folder / f.name for f in files] for key, files in done.items()
+        }
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def cmd_version_conflicts(args: argparse.Namespace) -> int:
+    for flag in ("force", "format"):
+        if getattr(args, flag, None) and not getattr(args, "export", None):
+            raise InvalidInputError(f"--{flag} is for the exported files: it needs --export DIR")
     with connection(args) as conn:
         conflicts = V.find_conflicts(conn, args.name)
+        exported = _export_conflicts(conn, args, conflicts) if getattr(args, "export", None) else {}
         regions = _object_regions(conn, args.name, conflicts) if getattr(args, "regions", False) else {}
         details = (
             {
@@ -307,7 +336,14 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         except MissingPrivilegeError as exc:
             print(f"tgsis: warning: what each solution discards is not shown: {exc.message}", file=sys.stderr)
             lost = None
-    result = VersionConflicts(args.name, conflicts, args.rows, details, lost, regions)
+    result = VersionConflicts(args.name, conflicts, args.rows, details, lost, regions, exported)
+    if not getattr(args, "json", False):
+        for (objectclass, objectkey), files in exported.items():
+            if isinstance(files, str):
+                out(f"{objectclass} {objectkey}: {files}")
+            else:
+                for f in files:
+                    out(f"wrote {f}")
     return render(args, result, conflicts_text, conflicts_json)
 
 
@@ -384,14 +420,25 @@ def conflicts_json(result: VersionConflicts) -> dict[str, Any]:
                     else {}
                 ),
                 **(
-                    {"regions": _regions_json(result.regions[(c.objectclass, c.objectkey)])}
+                    {"regions": merge_regions_json(result.regions[(c.objectclass, c.objectkey)])}
                     if (c.objectclass, c.objectkey) in result.regions
+                    else {}
+                ),
+                **(
+                    {"exported": _exported_json(result.exported[(c.objectclass, c.objectkey)])}
+                    if (c.objectclass, c.objectkey) in result.exported
                     else {}
                 ),
             }
             for c in result.conflicts
         ],
     }
+
+
+def _exported_json(files: list[Path] | str) -> dict[str, Any]:
+    if isinstance(files, str):
+        return {"files": [], "reason": files}
+    return {"files": [str(f) for f in files]}
 
 
 def cmd_version_resolve(args: argparse.Namespace) -> int:
@@ -1022,6 +1069,7 @@ def add_version_parser(commands: Any) -> None:
             "tgsis version conflicts cfm6",
             "tgsis version conflicts cfm6 --rows --json",
             "tgsis version conflicts cfm6 --regions",
+            "tgsis version conflicts cfm6 --export conflicts/ --format vtu",
         ],
         cmd_version_conflicts,
         tabular=True,
@@ -1034,6 +1082,20 @@ def add_version_parser(commands: Any) -> None:
         help="also merge each conflicting mesh (points, lines, surfaces, solids) three-way and print its regions: "
         "what each side changed, box, largest displacement, and which merge by themselves (docs/merge.md)",
     )
+    ver_conflicts.add_argument(
+        "--export",
+        metavar="DIR",
+        help="write each conflicting mesh's base, parent and child as files, its regions as JSON and a PNG "
+        "overlay into DIR (made when missing); file vertex i is the i-th stored vertex id, kept as the "
+        "vertex property vrtxid (docs/merge.md)",
+    )
+    ver_conflicts.add_argument(
+        "--format",
+        metavar="EXT",
+        help="with --export: the file extension (ts, pl, vs, so, vtu, vtp, ply; default: the GOCAD file of the "
+        "object's kind, ts for surfaces)",
+    )
+    ver_conflicts.add_argument("--force", action="store_true", help="with --export: replace existing files")
     ver_resolve = add_command(
         ver_commands,
         "resolve",
