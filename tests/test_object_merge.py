@@ -278,7 +278,7 @@ def test_an_object_of_another_model_is_refused(conn: Conn, fault: int) -> None:
     geoid = F.insert_feature(conn, "collections", tgsis.GeometryCollection([member]))
     tgsis.create_version(conn, "e2")  # e1 does not see what DEFAULT added after its base
     conn.commit()
-    with pytest.raises(tgsis.NotFoundError, match=f"no feature class has feature {geoid}"):
+    with pytest.raises(tgsis.NotFoundError, match=f"no feature class has a feature {geoid}"):
         tgsis.object_merge(conn, "e1", geoid)
     with pytest.raises(
         tgsis.InvalidInputError, match=rf"feature {geoid} of class collections is a geometry collection"

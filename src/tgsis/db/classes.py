@@ -479,6 +479,19 @@ def drop_property(
     return _class_from_row(row)
 
 
+def readable_class_names(conn: Conn) -> set[str]:
+    """The classes whose feature table the session's role may read.
+
+    A class in a schema the role may not use is not readable (not an error:
+    ``has_table_privilege`` of a name in such a schema raises one).
+    """
+    rows = conn.execute(
+        "SELECT classname FROM tgsis.catalog WHERE CASE WHEN has_schema_privilege(schemaname, 'USAGE') "
+        "THEN has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT') END"
+    ).fetchall()
+    return {str(r[0]) for r in rows}
+
+
 @checked
 def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
     """The feature class that holds feature ``feature_id``.
@@ -492,14 +505,7 @@ def class_of_feature(conn: Conn, feature_id: int) -> FeatureClass:
     with reraise():
         # only the classes the role may read are looked into (a class it may not read would end the search
         # with a permission error, though the feature may be in a later one)
-        readable = {
-            r[0]
-            for r in conn.execute(
-                # (a table in a schema it may not use would be a permission error of has_table_privilege)
-                "SELECT classname FROM tgsis.catalog WHERE CASE WHEN has_schema_privilege(schemaname, 'USAGE') "
-                "THEN has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT') END"
-            ).fetchall()
-        }
+        readable = readable_class_names(conn)
         for fc in classes:
             if fc.name not in readable:
                 continue

@@ -20,7 +20,7 @@ from psycopg import sql
 
 from tgsis.arguments import checked
 from tgsis.db._transfer import columns_out, corners_out
-from tgsis.db.classes import FeatureClass  # at run time: @checked reads the hints
+from tgsis.db.classes import FeatureClass, readable_class_names  # FeatureClass at run time: @checked reads the hints
 from tgsis.errors import NotFoundError, reraise
 
 Conn = psycopg.Connection[Any]
@@ -327,12 +327,7 @@ def list_features(
 def may_read_features(conn: Conn, fc: FeatureClass) -> bool:
     """Whether the session's role may read the feature table of class ``fc``."""
     with reraise():
-        row = conn.execute(
-            "SELECT CASE WHEN has_schema_privilege(%s, 'USAGE')"
-            " THEN has_table_privilege(format('%%I.%%I', %s::text, %s::text), 'SELECT') ELSE false END",
-            (fc.schema, fc.schema, fc.featuretable),
-        ).fetchone()
-    return bool(row and row[0])
+        return fc.name in readable_class_names(conn)
 
 
 @checked

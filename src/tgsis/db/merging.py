@@ -42,7 +42,13 @@ from tgsis.arguments import checked
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import Packed, columns_out_all, one_snapshot
-from tgsis.db.classes import FeatureClass, list_feature_classes, stores_part_column
+from tgsis.db.classes import (
+    FeatureClass,
+    class_of_feature,
+    list_feature_classes,
+    readable_class_names,
+    stores_part_column,
+)
 from tgsis.db.meaning import parts_from_runs
 from tgsis.db.versions import show_name
 from tgsis.errors import InvalidInputError, NotFoundError, VersioningError, reraise
@@ -86,28 +92,18 @@ def _snapshot(conn: Conn, version: str) -> Iterator[None]:
 
 
 def _feature_class(conn: Conn, feature_id: int) -> FeatureClass:
-    """The class holding the feature; a class the role may not read gives its permission error, not 'not found'."""
-    classes = list_feature_classes(conn)
-    readable = {
-        str(r[0])
-        for r in conn.execute(
-            # a name in a schema the role may not use is a permission error of has_table_privilege: CASE tests first
-            "SELECT classname FROM tgsis.catalog WHERE CASE WHEN has_schema_privilege(schemaname, 'USAGE')"
-            " THEN has_table_privilege(format('%I.%I', schemaname, featuretable), 'SELECT') END"
-        ).fetchall()
-    }
-    # readable classes first: an unreadable one is only looked into (and refused) when no readable one holds it
-    for fc in sorted(classes, key=lambda c: c.name not in readable):
-        with conn.transaction():  # a savepoint: a refused read leaves the snapshot usable for the error
-            found = conn.execute(
-                sql.SQL("SELECT 1 FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)
-            ).fetchone()
-        if found is not None:
-            return fc
-    raise NotFoundError(
-        f"no feature class has feature {feature_id}",
-        hint="tgsis.list_feature_classes and tgsis.fetch_features show the features there are",
-    )
+    """The class holding the feature; one in a class the role may not read gives its permission error, not 'not found'."""
+    try:
+        return class_of_feature(conn, feature_id)
+    except NotFoundError:
+        readable = readable_class_names(conn)
+        for fc in list_feature_classes(conn):  # only looked into when no readable class holds it: refused
+            if fc.name not in readable:
+                with conn.transaction():  # a savepoint: the refusal leaves the snapshot usable to put settings back
+                    conn.execute(
+                        sql.SQL("SELECT FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)
+                    )
+        raise
 
 
 def _version_row(conn: Conn, version: str) -> tuple[int, str, int, int, int]:
