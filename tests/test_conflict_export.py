@@ -13,8 +13,8 @@ import pytest
 from psycopg.conninfo import make_conninfo
 
 import tgsis
+from tests.merge_data import SIDE, curved_surface, make_fault, move
 from tests.roles import login_roles
-from tests.test_object_merge import SIDE, curved_surface
 from tgsis import formats
 from tgsis.cli import main
 from tgsis.db import features as F
@@ -23,36 +23,12 @@ from tgsis.merge3 import MeshState
 Conn = psycopg.Connection[Any]
 
 
-def _make(conn: Conn, metadata: dict[str, Any] | None = None) -> int:
-    F.create_feature_class(
-        conn,
-        "faults",
-        "SURFACE",
-        cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")],
-    )
-    tgsis.enable_feature_versioning(conn)
-    surface = curved_surface()
-    surface.metadata.update(metadata or {})
-    geoid = F.insert_feature(conn, "faults", surface)
-    tgsis.create_version(conn, "e1")
-    conn.commit()
-    return geoid
-
-
-def _move(conn: Conn, version: str, geoid: int, ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
-    with tgsis.in_version(conn, version):
-        conn.execute(
-            "UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
-            (*shift, geoid, [int(i) for i in np.asarray(ids)]),
-        )
-
-
 def _conflicting_edits(conn: Conn, geoid: int) -> None:
     """The child moves 50-52 up and one end sideways; the parent moves 52-53 down and removes vertex 0
     (with its triangles): parent file indices are then shifted by one against the ids."""
-    _move(conn, "e1", geoid, [50, 51, 52], (0.0, 0.0, 5.0))
-    _move(conn, "e1", geoid, np.arange((SIDE - 2) * SIDE, SIDE * SIDE), (0.0, 2.0, 0.0))
-    _move(conn, "DEFAULT", geoid, [52, 53], (0.0, 0.0, -4.0))
+    move(conn, "e1", geoid, [50, 51, 52], (0.0, 0.0, 5.0))
+    move(conn, "e1", geoid, np.arange((SIDE - 2) * SIDE, SIDE * SIDE), (0.0, 2.0, 0.0))
+    move(conn, "DEFAULT", geoid, [52, 53], (0.0, 0.0, -4.0))
     with tgsis.in_version(conn, "DEFAULT"):
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND 0 IN (vrtxid1, vrtxid2, vrtxid3)", (geoid,))
         conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 0", (geoid,))
@@ -61,7 +37,7 @@ def _conflicting_edits(conn: Conn, geoid: int) -> None:
 
 @pytest.fixture
 def fault(conn: Conn) -> int:
-    geoid = _make(conn)
+    geoid = make_fault(conn)
     _conflicting_edits(conn, geoid)
     return geoid
 
@@ -127,7 +103,7 @@ def test_the_three_files_read_back_as_the_three_states(conn: Conn, fault: int, t
 
 
 def test_a_depth_surface_stays_depth(conn: Conn, tmp_path: Path) -> None:
-    geoid = _make(conn, {"zpositive": "Depth"})
+    geoid = make_fault(conn, {"zpositive": "Depth"})
     _conflicting_edits(conn, geoid)
     written = tgsis.export_conflict(conn, "e1", geoid, tmp_path, picture=False)
     merge = tgsis.object_merge(conn, "e1", geoid)
@@ -213,8 +189,8 @@ def test_other_kinds_are_written_as_their_gocad_files(conn: Conn, tmp_path: Path
     geoid = F.insert_feature(conn, "bodies", _other_kind(geotype))
     tgsis.create_version(conn, "e1")
     conn.commit()
-    _move(conn, "e1", geoid, [1, 2], (0.5, 0.25, -1.125))
-    _move(conn, "DEFAULT", geoid, [2, 3], (-3.3, 0.0, 2.2))
+    move(conn, "e1", geoid, [1, 2], (0.5, 0.25, -1.125))
+    move(conn, "DEFAULT", geoid, [2, 3], (-3.3, 0.0, 2.2))
     conn.commit()
     written = tgsis.export_conflict(conn, "e1", geoid, tmp_path, picture=True)
     ext = {"MULTIPOINT": "vs", "MULTILINESTRING": "pl", "MULTITETRA": "so"}[geotype]
@@ -310,8 +286,8 @@ def test_a_real_cfm_fault_with_an_atom_round_trips(conn: Conn, tmp_path: Path) -
     geoid = F.insert_feature(conn, "faults", source)
     tgsis.create_version(conn, "e1")
     conn.commit()
-    _move(conn, "e1", geoid, [3, 4], (0.0, 0.0, 5.5))
-    _move(conn, "DEFAULT", geoid, [4, 5], (1.25, 0.0, 0.0))
+    move(conn, "e1", geoid, [3, 4], (0.0, 0.0, 5.5))
+    move(conn, "DEFAULT", geoid, [4, 5], (1.25, 0.0, 0.0))
     conn.commit()
     written = tgsis.export_conflict(conn, "e1", geoid, tmp_path, picture=False)
     merge = tgsis.object_merge(conn, "e1", geoid)

@@ -14,6 +14,7 @@ from psycopg import sql
 from psycopg.conninfo import make_conninfo
 
 import tgsis
+from tests.merge_data import SIDE, curved_surface, make_fault, move
 from tests.roles import login_roles
 from tgsis.cli import main
 from tgsis.db import features as F
@@ -21,48 +22,11 @@ from tgsis.db import merging
 
 Conn = psycopg.Connection[Any]
 
-SIDE = 12
-
-
-def curved_surface() -> tgsis.Surface:
-    """A SIDE x SIDE grid bent into a curved sheet (z = sin x cos y), coordinates with full mantissas."""
-    u, v = np.meshgrid(np.linspace(0.0, 3.1, SIDE), np.linspace(0.0, 2.7, SIDE))
-    vertices = np.stack([u.ravel() * 1000.3, v.ravel() * 997.1, 150.0 * np.sin(u.ravel()) * np.cos(v.ravel())], axis=1)
-    idx = np.arange(SIDE * SIDE).reshape(SIDE, SIDE)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    cells = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
-    return tgsis.Surface(
-        vertices,
-        cells,
-        vertex_properties={"porosity": np.linspace(0.1, 0.3, SIDE * SIDE)},
-        cell_properties={"facies": np.arange(len(cells), dtype=np.int32) % 5},
-        name="fault",
-    )
-
 
 @pytest.fixture
 def fault(conn: Conn) -> int:
     """One curved surface with a vertex property in DEFAULT, and version e1 based on it."""
-    F.create_feature_class(
-        conn,
-        "faults",
-        "SURFACE",
-        cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")],
-    )
-    tgsis.enable_feature_versioning(conn)
-    geoid = F.insert_feature(conn, "faults", curved_surface())
-    tgsis.create_version(conn, "e1")
-    conn.commit()
-    return geoid
-
-
-def _move(conn: Conn, version: str, geoid: int, ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
-    """Move vertices ``ids`` by ``shift`` in ``version`` (one committed UPDATE, as a psql user would)."""
-    with tgsis.in_version(conn, version):
-        conn.execute(
-            "UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
-            (*shift, geoid, [int(i) for i in np.asarray(ids)]),
-        )
+    return make_fault(conn)
 
 
 def _moved(vertices: npt.NDArray[np.float64], ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
@@ -77,8 +41,8 @@ SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)  # the last two
 
 
 def test_disjoint_ends_merge_into_the_union(conn: Conn, fault: int) -> None:
-    _move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
-    _move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
     merge = tgsis.object_merge(conn, "e1", fault)
     assert merge.conflicts == ()
     assert sorted(r.sides for r in merge.regions) == ["child", "parent"]
@@ -119,8 +83,8 @@ def test_points_lines_and_solids_merge_disjoint_ends_into_the_union(conn: Conn, 
     tgsis.create_version(conn, "e1")
     conn.commit()
     first, last = np.arange(0, 5), np.arange(34, 40)
-    _move(conn, "e1", geoid, first, (0.5, 0.25, -1.125))
-    _move(conn, "DEFAULT", geoid, last, (-3.3, 0.0, 2.2))
+    move(conn, "e1", geoid, first, (0.5, 0.25, -1.125))
+    move(conn, "DEFAULT", geoid, last, (-3.3, 0.0, 2.2))
     merge = tgsis.object_merge(conn, "e1", geoid)
     assert merge.conflicts == () and merge.merged is not None
     assert merge.base.cell_size == mesh.cell_size
@@ -129,7 +93,7 @@ def test_points_lines_and_solids_merge_disjoint_ends_into_the_union(conn: Conn, 
     _moved(expected, last, (-3.3, 0.0, 2.2))
     assert merge.merged.state.vertices.tobytes() == expected.tobytes()
     np.testing.assert_array_equal(merge.merged.state.cells, mesh.cells)
-    _move(conn, "DEFAULT", geoid, [2], (0.0, 0.0, 1.0))  # now the parent also moves one the child moved
+    move(conn, "DEFAULT", geoid, [2], (0.0, 0.0, 1.0))  # now the parent also moves one the child moved
     [region] = tgsis.object_merge(conn, "e1", geoid).conflicts
     assert 2 in region.parent_vertex_ids and 2 in region.child_vertex_ids
 
@@ -137,8 +101,8 @@ def test_points_lines_and_solids_merge_disjoint_ends_into_the_union(conn: Conn, 
 def test_overlapping_edits_are_one_conflict_region_with_the_edited_ids(conn: Conn, fault: int) -> None:
     child_ids = np.array([50, 51, 52])
     parent_ids = np.array([52, 53])  # vertex 52 moved by both, differently
-    _move(conn, "e1", fault, child_ids, (0.0, 0.0, 5.0))
-    _move(conn, "DEFAULT", fault, parent_ids, (0.0, 0.0, -4.0))
+    move(conn, "e1", fault, child_ids, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, parent_ids, (0.0, 0.0, -4.0))
     merge = tgsis.object_merge(conn, "e1", fault)
     [region] = merge.conflicts
     assert len(merge.regions) == 1 and region.sides == "both"
@@ -181,8 +145,8 @@ def test_property_values_are_read_and_merged(conn: Conn, fault: int) -> None:
 def test_base_is_the_state_at_the_initial_revision(conn: Conn, fault: int) -> None:
     """DEFAULT's edit after e1 was created is the parent's, not the base's."""
     original = curved_surface().vertices
-    _move(conn, "DEFAULT", fault, [7], (0.0, 0.0, 1.5))
-    _move(conn, "e1", fault, [100], (0.0, 0.0, 2.5))
+    move(conn, "DEFAULT", fault, [7], (0.0, 0.0, 1.5))
+    move(conn, "e1", fault, [100], (0.0, 0.0, 2.5))
     merge = tgsis.object_merge(conn, "e1", fault)
     assert merge.base.vertices.tobytes() == original.tobytes()
     assert merge.parent.vertices[7, 2] == original[7, 2] + 1.5 and merge.parent.vertices[100, 2] == original[100, 2]
@@ -196,7 +160,7 @@ def test_ids_are_read_as_stored_not_renumbered(conn: Conn, fault: int) -> None:
     with tgsis.in_version(conn, "e1"):
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND %s IN (vrtxid1, vrtxid2, vrtxid3)", (fault, 0))
         conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 0", (fault,))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, 1.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, 1.0))
     merge = tgsis.object_merge(conn, "e1", fault)
     np.testing.assert_array_equal(merge.child.vertex_ids, np.arange(1, SIDE * SIDE))
     assert merge.conflicts == () and merge.merged is not None
@@ -207,8 +171,8 @@ def test_ids_are_read_as_stored_not_renumbered(conn: Conn, fault: int) -> None:
 def test_a_writer_committing_between_the_reads_does_not_change_the_answer(
     conn: Conn, fault: int, db_dsn: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     before = tgsis.object_merge(conn, "e1", fault)
     read = merging._read_state
     calls: list[str] = []
@@ -219,7 +183,7 @@ def test_a_writer_committing_between_the_reads_does_not_change_the_answer(
         if len(calls) == 1:  # after the base's read, another session writes in both sides and commits
             with psycopg.connect(db_dsn, autocommit=True) as other:
                 for version in ("DEFAULT", "e1"):
-                    _move(other, version, fault, [60, 61], (0.0, 0.0, 11.0))
+                    move(other, version, fault, [60, 61], (0.0, 0.0, 11.0))
         return result
 
     monkeypatch.setattr(merging, "_read_state", read_then_write)
@@ -235,8 +199,8 @@ def test_a_writer_committing_between_the_reads_does_not_change_the_answer(
 
 
 def test_a_read_committed_transaction_is_refused(conn: Conn, fault: int) -> None:
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     conn.execute("SELECT 1")  # the caller's READ COMMITTED transaction
     with pytest.raises(tgsis.InvalidInputError, match="one snapshot.*read committed"):
         tgsis.object_merge(conn, "e1", fault)
@@ -248,8 +212,8 @@ def test_a_read_committed_transaction_is_refused(conn: Conn, fault: int) -> None
 
 
 def test_the_session_stays_in_its_version(conn: Conn, fault: int) -> None:
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     tgsis.goto_version(conn, "e1")
     tgsis.object_merge(conn, "e1", fault)
     assert tgsis.working_version(conn) == "e1" and tgsis.viewing_revision(conn) is None
@@ -262,7 +226,7 @@ def test_the_session_stays_in_its_version(conn: Conn, fault: int) -> None:
 
 
 def test_an_object_not_changed_on_both_sides_is_refused(conn: Conn, fault: int) -> None:
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
     with pytest.raises(
         tgsis.VersioningError, match=rf"feature {fault} of class faults was not changed both in version e1 "
     ) as caught:
@@ -287,8 +251,8 @@ def test_an_object_of_another_model_is_refused(conn: Conn, fault: int) -> None:
 
 
 def test_a_role_without_rights_on_the_class_is_refused(conn: Conn, fault: int, db_dsn: str) -> None:
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     conn.commit()
     with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
         rita = made.connect("rita")
@@ -312,9 +276,9 @@ def _cli(dsn: str, capsys: pytest.CaptureFixture[str], *argv: str) -> str:
 
 @pytest.mark.usefixtures("cli_state")
 def test_cli_regions_text_and_json(conn: Conn, fault: int, db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
-    _move(conn, "e1", fault, [50, 51, 52], (0.0, 0.0, 5.0))  # overlaps the parent's edit at 52
-    _move(conn, "DEFAULT", fault, [52, 53], (0.0, 0.0, -4.0))
-    _move(conn, "e1", fault, SOUTH, (0.0, 2.0, 0.0))  # and an end of the child's own
+    move(conn, "e1", fault, [50, 51, 52], (0.0, 0.0, 5.0))  # overlaps the parent's edit at 52
+    move(conn, "DEFAULT", fault, [52, 53], (0.0, 0.0, -4.0))
+    move(conn, "e1", fault, SOUTH, (0.0, 2.0, 0.0))  # and an end of the child's own
     conn.commit()
     text = _cli(db_dsn, capsys, "version", "conflicts", "e1", "--regions")
     lines = text.splitlines()
@@ -346,8 +310,8 @@ def test_cli_regions_text_and_json(conn: Conn, fault: int, db_dsn: str, capsys: 
 @pytest.mark.usefixtures("cli_state")
 def test_cli_regions_of_disjoint_edits(conn: Conn, fault: int, db_dsn: str, capsys: pytest.CaptureFixture[str]) -> None:
     """An object-level conflict today whose edits are apart: the CLI says it merges by itself."""
-    _move(conn, "e1", fault, [5], (0.0, 0.0, 1.0))
-    _move(conn, "DEFAULT", fault, [100], (0.0, 0.0, 1.0))
+    move(conn, "e1", fault, [5], (0.0, 0.0, 1.0))
+    move(conn, "DEFAULT", fault, [100], (0.0, 0.0, 1.0))
     conn.commit()
     text = _cli(db_dsn, capsys, "version", "conflicts", "e1", "--regions")
     assert "\tregions\t2 region(s), 0 in conflict: the object merges by itself" in text.splitlines()
@@ -358,8 +322,8 @@ def test_cli_regions_for_a_role_without_rights_is_the_permission_error(
     conn: Conn, fault: int, db_dsn: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """No table of conflicts without the regions: the command fails as a whole."""
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
     conn.commit()
     with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
@@ -401,7 +365,7 @@ def test_a_feature_deleted_in_the_parent_is_no_merge_to_an_empty_mesh(conn: Conn
         tgsis.InvalidInputError, match=rf"feature {geoid} of class faults was deleted in version DEFAULT"
     ):
         tgsis.object_merge(conn, "e1", geoid)
-    _move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))  # a geometry edit too: refused the same way
+    move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))  # a geometry edit too: refused the same way
     with pytest.raises(tgsis.InvalidInputError, match="was deleted in version DEFAULT"):
         tgsis.object_merge(conn, "e1", geoid)
 
@@ -409,7 +373,7 @@ def test_a_feature_deleted_in_the_parent_is_no_merge_to_an_empty_mesh(conn: Conn
 def test_a_feature_deleted_in_the_version_is_named_as_deleted(conn: Conn) -> None:
     # was: NotFoundError "no feature class has feature", for a conflict find_conflicts lists
     geoid = _fault_with_status(conn)
-    _move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
     with tgsis.in_version(conn, "e1"):
         F.delete_feature(conn, "faults", geoid)
     conn.commit()
@@ -426,8 +390,8 @@ def test_feature_attributes_changed_on_both_sides_are_no_clean_merge(conn: Conn)
     with pytest.raises(tgsis.InvalidInputError, match=rf"feature {geoid} of class faults: its attributes .*status"):
         tgsis.object_merge(conn, "e1", geoid)
     _set_status(conn, "DEFAULT", geoid, "b")  # the same change on both sides: nothing to decide
-    _move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -3.0))
     merge = tgsis.object_merge(conn, "e1", geoid)
     assert merge.conflicts == () and merge.merged is not None
     _set_status(conn, "DEFAULT", geoid, "a")  # changed back in the parent only: the version's change stands
@@ -438,8 +402,8 @@ def test_a_class_in_a_schema_the_role_may_not_use_does_not_refuse_another_class(
     conn: Conn, fault: int, db_dsn: str
 ) -> None:
     # was: permission denied for schema vault (the search for the feature's class named every class's table)
-    _move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
-    _move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     conn.execute("CREATE SCHEMA vault")
     F.create_feature_class(conn, "vaulted", "SURFACE", schema="vault")
     conn.execute("REVOKE ALL ON SCHEMA vault FROM PUBLIC, tgsis_reader")

@@ -1,0 +1,58 @@
+"""A curved, versioned fault and moves of its vertices: the set-up of the tests of a merge read from the database."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+
+import tgsis
+from tgsis.db import features as F
+
+Conn = psycopg.Connection[Any]
+
+SIDE = 12
+
+
+def curved_surface() -> tgsis.Surface:
+    """A SIDE x SIDE grid bent into a curved sheet (z = sin x cos y), coordinates with full mantissas."""
+    u, v = np.meshgrid(np.linspace(0.0, 3.1, SIDE), np.linspace(0.0, 2.7, SIDE))
+    vertices = np.stack([u.ravel() * 1000.3, v.ravel() * 997.1, 150.0 * np.sin(u.ravel()) * np.cos(v.ravel())], axis=1)
+    idx = np.arange(SIDE * SIDE).reshape(SIDE, SIDE)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    cells = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    return tgsis.Surface(
+        vertices,
+        cells,
+        vertex_properties={"porosity": np.linspace(0.1, 0.3, SIDE * SIDE)},
+        cell_properties={"facies": np.arange(len(cells), dtype=np.int32) % 5},
+        name="fault",
+    )
+
+
+def make_fault(conn: Conn, metadata: dict[str, Any] | None = None) -> int:
+    """One curved surface (``metadata`` added) in class faults of DEFAULT, and version e1 based on it (committed)."""
+    F.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    surface.metadata.update(metadata or {})
+    geoid = F.insert_feature(conn, "faults", surface)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def move(conn: Conn, version: str, geoid: int, ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
+    """Move vertices ``ids`` by ``shift`` in ``version`` (one committed UPDATE, as a psql user would)."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+            (*shift, geoid, [int(i) for i in np.asarray(ids)]),
+        )
