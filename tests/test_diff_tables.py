@@ -160,3 +160,25 @@ def test_diff_table_is_documented_in_sql(conn: Conn) -> None:
         "SELECT obj_description('tgsis.diff_table(regclass, text, text, integer, integer)'::regprocedure)"
     ).fetchone()
     assert comment is not None and "one versioned table" in str(comment[0])
+
+
+def test_a_role_that_may_not_read_a_table_gets_the_permission_error_not_a_partial_diff(
+    db_dsn: str, conn: Conn, changed: dict[str, Any]
+) -> None:
+    from tests.roles import login_roles
+
+    whole = _whole(conn, "DEFAULT", "v")
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        assert V.diff_versions(rita, "DEFAULT", "v") == whole  # a reader may
+        assert V.diff_versions(rita, "DEFAULT", "v", progress=lambda done, total: None) == whole
+        rita.close()
+        conn.execute("REVOKE SELECT ON public.static, public.static_ver FROM tgsis_reader, PUBLIC")
+        conn.commit()
+        rita = made.connect("rita")
+        for progress in (None, lambda done, total: None):
+            with pytest.raises(tgsis.MissingPrivilegeError, match="static"):
+                V.diff_versions(rita, "DEFAULT", "v", progress=progress)
+            rita.rollback()
+        with pytest.raises(psycopg.errors.InsufficientPrivilege, match="static"):  # in psql: PostgreSQL's 42501
+            rita.execute("SELECT * FROM tgsis.diff_table('public.static', 'DEFAULT', 'v')").fetchall()
