@@ -17,8 +17,8 @@ import tgsis
 from tests.merge_data import SIDE, curved_surface, make_fault, move
 from tests.roles import login_roles
 from tgsis.cli import main
+from tgsis.db import _merge_states
 from tgsis.db import features as F
-from tgsis.db import merging
 
 Conn = psycopg.Connection[Any]
 
@@ -174,7 +174,7 @@ def test_a_writer_committing_between_the_reads_does_not_change_the_answer(
     move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
     move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -3.0))
     before = tgsis.object_merge(conn, "e1", fault)
-    read = merging._read_state
+    read = _merge_states._read_state
     calls: list[str] = []
 
     def read_then_write(*args: Any) -> Any:
@@ -186,14 +186,14 @@ def test_a_writer_committing_between_the_reads_does_not_change_the_answer(
                     move(other, version, fault, [60, 61], (0.0, 0.0, 11.0))
         return result
 
-    monkeypatch.setattr(merging, "_read_state", read_then_write)
+    monkeypatch.setattr(_merge_states, "_read_state", read_then_write)
     during = tgsis.object_merge(conn, "e1", fault)
     assert calls == ["e1", "DEFAULT", "e1"]
     assert during.merged is not None and before.merged is not None
     for state in ("base", "parent", "child"):
         assert getattr(during, state).vertices.tobytes() == getattr(before, state).vertices.tobytes()
     assert during.merged.state.vertices.tobytes() == before.merged.state.vertices.tobytes()
-    monkeypatch.setattr(merging, "_read_state", read)
+    monkeypatch.setattr(_merge_states, "_read_state", read)
     after = tgsis.object_merge(conn, "e1", fault)  # the write is there for the next call
     assert after.child.vertices[60, 2] == before.child.vertices[60, 2] + 11.0
 

@@ -1,0 +1,313 @@
+"""Reading the three states of one model-1 object a merge by region needs (docs/merge.md).
+
+Shared by :func:`tgsis.object_merge` (in a snapshot of its own) and the merges
+that write (in the locked transaction of ``tgsis.lock_for_merge``): the caller
+provides the consistent transaction; this module reads, moving the session's
+version settings for the reads and putting them back.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._static import SIMPLEX
+from tgsis.db._transfer import Packed, columns_out_all
+from tgsis.db.classes import (
+    FeatureClass,
+    class_of_feature,
+    list_feature_classes,
+    readable_class_names,
+    stores_part_column,
+)
+from tgsis.db.meaning import parts_from_runs
+from tgsis.db.versions import show_name
+from tgsis.errors import InvalidInputError, NotFoundError, VersioningError
+from tgsis.merge3 import MeshState
+from tgsis.mesh import Geotype, mesh_class
+
+__all__ = ["MergeInputs", "read_merge_states", "version_row"]
+
+Conn = psycopg.Connection[Any]
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """One state's rows as read: ids ascending."""
+
+    vertex_ids: npt.NDArray[np.int64]
+    vertices: npt.NDArray[np.float64]
+    cell_ids: npt.NDArray[np.int64]
+    cells: npt.NDArray[np.int64]
+    vertex_properties: dict[str, npt.NDArray[Any]]
+    cell_properties: dict[str, npt.NDArray[Any]]
+    atoms: npt.NDArray[np.int64]  # (a, 2): vertex id, the vertex id it repeats
+    runs: npt.NDArray[np.int64]  # (r, 3): first cell id, last cell id, part
+
+
+def _feature_class(conn: Conn, feature_id: int) -> FeatureClass:
+    """The class holding the feature; one in a class the role may not read gives its permission error, not 'not found'."""
+    try:
+        return class_of_feature(conn, feature_id)
+    except NotFoundError:
+        readable = readable_class_names(conn)
+        for fc in list_feature_classes(conn):  # only looked into when no readable class holds it: refused
+            if fc.name not in readable:
+                with conn.transaction():  # a savepoint: the refusal leaves the snapshot usable to put settings back
+                    conn.execute(
+                        sql.SQL("SELECT FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (feature_id,)
+                    )
+        raise
+
+
+def version_row(conn: Conn, version: str) -> tuple[int, str, int, int, int]:
+    """(version id, parent name, initrevision, working revision, parent's working revision)."""
+    row = conn.execute(
+        "SELECT v.versionid, p.name, v.initrevision, v.workingrevision, p.workingrevision"
+        "  FROM tgsis.versions v LEFT JOIN tgsis.versions p ON p.versionid = v.parentid"
+        " WHERE v.versionid = tgsis.version_id(%s)",
+        (version,),
+    ).fetchone()
+    assert row is not None  # version_id raised TG200 otherwise
+    if row[1] is None:
+        raise InvalidInputError(
+            "version DEFAULT has no parent to merge with", hint="give the name of a version made by create_version"
+        )
+    return int(row[0]), str(row[1]), int(row[2]), int(row[3]), int(row[4])
+
+
+def _exists(conn: Conn, geoid: int, version: str, revision: int) -> bool:
+    """Whether ``version`` has the geometry at ``revision`` (the session is moved there)."""
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+    return conn.execute("SELECT 1 FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone() is not None
+
+
+def _require_same_attributes(
+    conn: Conn, fc: FeatureClass, geoid: int, version: str, parent: str, revisions: tuple[int, int, int]
+) -> None:
+    """Refuse a feature whose attributes (its feature-table row) the two sides changed differently.
+
+    The merge is of the mesh only: such a conflict would be left out of its
+    answer. Values are compared as read in binary (floats exactly).
+    """
+    rows = []
+    for side, revision in zip((version, parent, version), revisions, strict=True):
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (side, revision))
+        with conn.cursor(binary=True) as cursor:
+            cursor.execute(
+                sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(fc.qualified(fc.featuretable)), (geoid,)
+            )
+            names = [d.name for d in cursor.description or ()]
+            rows.append({n: repr(v) for n, v in zip(names, cursor.fetchone() or (), strict=False)})
+    base, theirs, ours = rows
+    if theirs == ours or theirs == base or ours == base:
+        return
+    differ = sorted(n for n in theirs.keys() | ours.keys() if theirs.get(n) != ours.get(n))
+    raise InvalidInputError(
+        f"feature {geoid} of class {fc.name}: its attributes were changed both in version {show_name(version)} "
+        f"and in its parent {show_name(parent)}, to other values ({', '.join(differ)}): "
+        "the merge by region merges the mesh only",
+        hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+    )
+
+
+def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int) -> _Rows:
+    """The object's rows as ``version`` sees them at ``revision`` (the session is moved there for the reads)."""
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+    table, key = SIMPLEX[fc.geotype]
+    k = mesh_class(fc.geotype).cell_size
+    requests = [
+        Packed(
+            sql.SQL("tgsis.vrtx"),
+            "geoid",
+            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+            [geoid],
+        ),
+        Packed(
+            sql.SQL("tgsis.{}").format(sql.Identifier(table)),
+            "geoid",
+            [(key, "int8"), *((f"vrtxid{i + 1}", "int8") for i in range(k))],
+            [geoid],
+        ),
+    ]
+    tables: list[tuple[str, list[str]]] = []
+    for alignment in ("VERTEX", "CELL"):
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if props and protable is not None:
+            tables.append((alignment, [p.name for p in props]))
+            requests.append(
+                Packed(
+                    fc.qualified(protable), "_geoid", [("_idx", "int8"), *((p.name, p.wire) for p in props)], [geoid]
+                )
+            )
+    vertex_cols, cell_cols, *prop_cols = columns_out_all(conn, requests)
+    vids, xyz = _sorted_rows(vertex_cols[1], np.stack(vertex_cols[2:5], axis=1) if len(vertex_cols[1]) else None)
+    cids, cells = _sorted_rows(cell_cols[1], np.stack(cell_cols[2:], axis=1) if len(cell_cols[1]) else None)
+    xyz = xyz.reshape(-1, 3).astype(np.float64)
+    cells = cells.reshape(-1, k).astype(np.int64)
+    props_by: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
+    for (alignment, names), columns in zip(tables, prop_cols, strict=True):
+        ids = vids if alignment == "VERTEX" else cids
+        idx = np.asarray(columns[1], dtype=np.int64)
+        for name, values in zip(names, columns[2:], strict=True):
+            props_by[alignment][name] = _aligned_values(ids, idx, np.asarray(values))
+    atoms = conn.execute("SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()
+    runs = conn.execute(
+        "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
+    ).fetchall()
+    return _Rows(
+        vids,
+        xyz,
+        cids,
+        cells,
+        props_by["VERTEX"],
+        props_by["CELL"],
+        np.asarray(atoms, dtype=np.int64).reshape(-1, 2),
+        np.asarray(runs, dtype=np.int64).reshape(-1, 3),
+    )
+
+
+def _sorted_rows(ids: npt.ArrayLike, rows: npt.NDArray[Any] | None) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
+    """Ids ascending with their rows (the packed reads come in no order)."""
+    ids = np.asarray(ids, dtype=np.int64)
+    if rows is None:
+        return ids, np.empty((0,), dtype=np.float64)
+    order = np.argsort(ids, kind="stable")
+    return ids[order], rows[order]
+
+
+def _aligned_values(
+    ids: npt.NDArray[np.int64], idx: npt.NDArray[np.int64], values: npt.NDArray[Any]
+) -> npt.NDArray[Any]:
+    """A property's values in the order of ``ids`` (rows keyed by ``_idx``); an id without a row gets NaN."""
+    order = np.argsort(idx, kind="stable")
+    idx, values = idx[order], values[order]
+    pos = np.searchsorted(idx, ids)
+    found = pos < len(idx)
+    found[found] = idx[pos[found]] == ids[found]
+    if found.all():
+        return values[pos]
+    out = np.full((len(ids), *values.shape[1:]), np.nan, dtype=np.float64)
+    out[found] = values[pos[found]]
+    return out
+
+
+def _states(fc: FeatureClass, geoid: int, rows: Mapping[str, _Rows]) -> dict[str, MeshState]:
+    """MeshStates of the three reads; GOCAD atoms (``refid``) and parts (``part``) as properties when a state has them."""
+    with_atoms = any(len(r.atoms) for r in rows.values())
+    with_parts = not stores_part_column(fc) and any(len(r.runs) for r in rows.values())
+    states = {}
+    for side, r in rows.items():
+        vprops = dict(r.vertex_properties)
+        cprops = dict(r.cell_properties)
+        if with_atoms:
+            refid = np.full(len(r.vertex_ids), -1, dtype=np.int64)
+            at = np.searchsorted(r.vertex_ids, r.atoms[:, 0])
+            ok = at < len(r.vertex_ids)
+            ok[ok] = r.vertex_ids[at[ok]] == r.atoms[ok, 0]
+            refid[at[ok]] = r.atoms[ok, 1]
+            vprops.setdefault("refid", refid)
+        if with_parts:
+            cprops.setdefault("part", parts_from_runs(r.cell_ids, r.runs[:, 0], r.runs[:, 1], r.runs[:, 2]))
+        states[side] = MeshState(
+            mesh_class(fc.geotype).cell_size,
+            r.vertex_ids,
+            r.vertices,
+            r.cell_ids,
+            r.cells,
+            vprops,
+            cprops,
+            f"feature {geoid} ({side})",
+        )
+    return states
+
+
+@dataclass(frozen=True)
+class MergeInputs:
+    """What a merge by region of one object reads.
+
+    Attributes
+    ----------
+    feature_class : FeatureClass
+    versionid : int
+    parent : str
+        The parent version's name.
+    revisions : (int, int, int)
+        The base (the version's ``initrevision``), the parent's and the version's working revisions.
+    states : dict
+        ``base``, ``parent``, ``child``: :class:`tgsis.merge3.MeshState`.
+    """
+
+    feature_class: FeatureClass
+    versionid: int
+    parent: str
+    revisions: tuple[int, int, int]
+    states: dict[str, MeshState]
+
+
+def read_merge_states(conn: Conn, version: str, feature_id: int) -> MergeInputs:
+    """Read base, parent and child of one object changed on both sides, in the caller's transaction.
+
+    The caller makes the reads consistent: one snapshot (``object_merge``) or
+    the versions locked by ``tgsis.lock_for_merge`` (no writer of either side
+    can commit meanwhile). The session's version settings are put back.
+
+    Raises
+    ------
+    InvalidInputError
+        Not a model-1 point set, line set, surface or solid; deleted on one
+        side; attributes changed on both sides.
+    VersioningError
+        Not changed on both sides since the version was based.
+    """
+    settings = read_version_settings(conn)
+    try:
+        versionid, parent, initrevision, working, parent_working = version_row(conn, version)
+        # the class is looked up as the version sees its features; as the parent does, when the version
+        # deleted a feature of its base
+        in_child = _exists(conn, feature_id, version, working)
+        in_parent = _exists(conn, feature_id, parent, parent_working)
+        if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
+            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
+        fc = _feature_class(conn, feature_id)
+        if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
+            what = "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
+            raise InvalidInputError(
+                f"feature {feature_id} of class {fc.name} is {what}: only a static (model 1) point set, line set, "
+                f"surface or tetrahedral solid merges by region (version {show_name(version)})",
+                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+            )
+        both = conn.execute(
+            "SELECT 1 FROM tgsis.current_conflicts(%s) WHERE objectclass = 'feature' AND objectkey = %s",
+            (versionid, str(feature_id)),
+        ).fetchone()
+        if both is None:
+            raise VersioningError(
+                f"feature {feature_id} of class {fc.name} was not changed both in version {show_name(version)} "
+                f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
+                hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
+            )
+        if not (in_child and in_parent):
+            raise InvalidInputError(
+                f"feature {feature_id} of class {fc.name} was deleted in version "
+                f"{show_name(parent if in_child else version)} and changed in "
+                f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
+                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+            )
+        _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
+        rows = {
+            "base": _read_state(conn, fc, feature_id, version, initrevision),
+            "parent": _read_state(conn, fc, feature_id, parent, parent_working),
+            "child": _read_state(conn, fc, feature_id, version, working),
+        }
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
+    return MergeInputs(fc, versionid, parent, (initrevision, parent_working, working), _states(fc, feature_id, rows))
