@@ -53,6 +53,7 @@ from tgsis.errors import (
     UnknownDataModelError,
     UnsolvedConflictsError,
     UnsupportedViewStatementError,
+    RegionSolutionError,
     VersioningError,
 )
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
@@ -126,6 +127,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
     from tgsis.db.instants import add_instant, delete_instant, fetch_series
     from tgsis.db.merging import export_conflict, merge_regions_json, object_merge
+    from tgsis.db.regions import ConflictRegion, RegionResolution, find_conflicts, resolve_region
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -170,7 +172,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         disable_versioning,
         enable_feature_versioning,
         enable_versioning,
-        find_conflicts,
         goto_revision,
         goto_version,
         grant_version,
@@ -209,6 +210,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
 # other list. The first module that lists a name gives it.
 _LAZY_MODULES = (
     "tgsis.db",
+    "tgsis.db.regions",  # before versions: its region-aware find_conflicts is the public one
     "tgsis.db.versions",
     "tgsis.db.merging",
     "tgsis.db.features",
@@ -326,6 +328,9 @@ __all__ = [
     "Conflict",
     "find_conflicts",
     "resolve_conflict",
+    "resolve_region",
+    "ConflictRegion",
+    "RegionResolution",
     "conflict_rows",
     "Discard",
     "conflict_discards",
@@ -497,6 +502,7 @@ __all__ = [
     "NotFoundError",
     "NotVersionedError",
     "UnsupportedViewStatementError",
+    "RegionSolutionError",
     "ObjectLockedError",
     "CheckoutConflictError",
     "ReadOnlyRevisionError",
