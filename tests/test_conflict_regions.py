@@ -132,7 +132,8 @@ def test_record_conflict_regions_stores_and_keeps_solutions_found_again(conn: Co
     marks = _marks(conn, fault)
     regions = [REGION, {**REGION, "region": 1, "conflict": False, "changed_by": "child", "vertex_ids": [9]}]
     count = conn.execute(
-        "SELECT tgsis.record_conflict_regions('e1', 'feature', %s, %s, %s, %s)", (str(fault), *marks, json.dumps(regions))
+        "SELECT tgsis.record_conflict_regions('e1', 'feature', %s, %s, %s, %s)",
+        (str(fault), *marks, json.dumps(regions)),
     ).fetchone()
     assert count == (2,)
     conn.execute("SELECT tgsis.resolve_region('e1', 'feature', %s, 0, 'child')", (str(fault),))

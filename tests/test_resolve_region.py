@@ -59,8 +59,9 @@ def test_a_side_solution_is_recorded_with_what_it_discards(conn: Conn, fault: in
     assert set(lost) == expected_sides
     for side in expected_sides:
         assert lost[side].vertices == len(MIDDLE)
-        assert lost[side].max_displacement == pytest.approx({"parent": 7.0, "child": 5.0}[side] + (
-            0.0 if solution == "base" else {"parent": 5.0, "child": 7.0}[side]))
+        assert lost[side].max_displacement == pytest.approx(
+            {"parent": 7.0, "child": 5.0}[side] + (0.0 if solution == "base" else {"parent": 5.0, "child": 7.0}[side])
+        )
     merge, solutions = _solutions(conn, fault)
     assert solutions == {middle.region: solution}
     state = apply_solutions(merge, solutions).state  # the merge the apply engineer makes of it
@@ -68,7 +69,10 @@ def test_a_side_solution_is_recorded_with_what_it_discards(conn: Conn, fault: in
     at = np.searchsorted(state.vertex_ids, MIDDLE)
     assert state.vertices[at].tobytes() == source.vertices[np.searchsorted(source.vertex_ids, MIDDLE)].tobytes()
     north = np.searchsorted(state.vertex_ids, NORTH)  # the automatic regions merge as ever
-    assert state.vertices[north].tobytes() == merge.child.vertices[np.searchsorted(merge.child.vertex_ids, NORTH)].tobytes()
+    assert (
+        state.vertices[north].tobytes()
+        == merge.child.vertices[np.searchsorted(merge.child.vertex_ids, NORTH)].tobytes()
+    )
 
 
 def test_region_solutions_are_empty_for_a_merge_of_other_states(conn: Conn, fault: int) -> None:
@@ -107,7 +111,9 @@ def test_average_is_a_valid_mesh_attached_to_the_unchanged_rest(conn: Conn, faul
     np.testing.assert_allclose(z, (pz + cz) / 2)
     margin = np.setdiff1d(middle.vertex_ids, MIDDLE)  # the region's vertices shared with the rest stay put
     at_m = np.searchsorted(state.vertex_ids, margin)
-    assert state.vertices[at_m].tobytes() == merge.base.vertices[np.searchsorted(merge.base.vertex_ids, margin)].tobytes()
+    assert (
+        state.vertices[at_m].tobytes() == merge.base.vertices[np.searchsorted(merge.base.vertex_ids, margin)].tobytes()
+    )
     assert {c.tolist().__len__() for c in state.cells} == {3}
 
 
@@ -133,8 +139,9 @@ def test_every_refusal_leaves_the_database_unchanged(conn: Conn, fault: int) -> 
     child = _merge(conn, fault).child
     edited = child.vertices.copy()
     edited[np.searchsorted(child.vertex_ids, SOUTH[0]), 2] += 40.0
-    wrong = MeshState(3, child.vertex_ids, edited, child.cell_ids, child.cells, child.vertex_properties,
-                      child.cell_properties)
+    wrong = MeshState(
+        3, child.vertex_ids, edited, child.cell_ids, child.cells, child.vertex_properties, child.cell_properties
+    )
     _refused(conn, fault, InvalidInputError, "outside the region", middle.region, "manual", mesh=wrong)
     # stale: either side changed the object since the regions were found
     from tests.merge_data import move
@@ -213,13 +220,25 @@ def test_manual_through_the_command_line_from_an_exported_file(
     at = np.flatnonzero(np.isin(ids, MIDDLE))
     vertices = mesh.vertices.copy()
     vertices[at, 2] = 111.25  # the geologist's own choice, made in GOCAD
-    edited = type(mesh)(vertices, mesh.cells, vertex_properties=mesh.vertex_properties, name=mesh.name,
-                        metadata=mesh.metadata)
+    edited = type(mesh)(
+        vertices, mesh.cells, vertex_properties=mesh.vertex_properties, name=mesh.name, metadata=mesh.metadata
+    )
     edited_file = tmp_path / "edited.ts"
     formats.write(edited, edited_file)
     capsys.readouterr()
-    args = ["--dsn", db_dsn, "version", "resolve", "e1", str(fault), "manual", "--region", str(middle.region),
-            "--mesh", str(edited_file)]
+    args = [
+        "--dsn",
+        db_dsn,
+        "version",
+        "resolve",
+        "e1",
+        str(fault),
+        "manual",
+        "--region",
+        str(middle.region),
+        "--mesh",
+        str(edited_file),
+    ]
     assert main(args) == 1  # it discards both sides' edits there: refused without --discard-other
     err = capsys.readouterr().err
     assert "discards" in err and "--discard-other" in err

@@ -49,11 +49,11 @@ from tgsis.errors import (
     ObjectLockedError,
     PolygonsSplitWarning,
     ReadOnlyRevisionError,
+    RegionSolutionError,
     SkippedObjectWarning,
     UnknownDataModelError,
     UnsolvedConflictsError,
     UnsupportedViewStatementError,
-    RegionSolutionError,
     VersioningError,
 )
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod, GMapReport
@@ -127,7 +127,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
     from tgsis.db.instants import add_instant, delete_instant, fetch_series
     from tgsis.db.merging import export_conflict, merge_regions_json, object_merge
-    from tgsis.db.regions import ConflictRegion, RegionResolution, find_conflicts, resolve_region
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -139,6 +138,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.multidim import fetch_md_gmap, md_in_box, md_vertices_in_box
     from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
+    from tgsis.db.regions import ConflictRegion, RegionResolution, find_conflicts, resolve_region
     from tgsis.db.temporal import (
         class_property_periods,
         export_series,

@@ -70,22 +70,28 @@ _RULES: list[tuple[str, Replacement]] = [
     (
         r"only a region with conflict = true takes a solution: SELECT region FROM tgsis\.conflict_regions WHERE "
         r"versionid = tgsis\.version_id\('((?:[^']|'')*)'\) AND conflict",
-        lambda m: f"only a region with \"conflict\": true takes a solution (tgsis version conflicts {_unquote(m[1])} "
-        "--json lists them)",
+        lambda m: (
+            f'only a region with "conflict": true takes a solution (tgsis version conflicts {_unquote(m[1])} '
+            "--json lists them)"
+        ),
     ),
     (
         r"solve the conflicting regions with SELECT tgsis\.resolve_region\('((?:[^']|'')*)', '((?:[^']|'')*)', "
         r"'((?:[^']|'')*)', region, '(\w+)'\); the merge takes the rest by itself",
-        lambda m: f"solve the conflicting regions with tgsis version resolve {_unquote(m[1])} {_unquote(m[3])} {m[4]} "
-        "--region N; the merge takes the rest by itself",
+        lambda m: (
+            f"solve the conflicting regions with tgsis version resolve {_unquote(m[1])} {_unquote(m[3])} {m[4]} "
+            "--region N; the merge takes the rest by itself"
+        ),
     ),
     (
         r"the meshes (.*?) merge by region: `tgsis version (\w+) ((?:[^`])*)` or tgsis\.\w+_version\(conn, '(?:[^']|'')*'\) "
         r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\([^)]*\)\); "
         r"record a solution for the others: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
-        lambda m: f"the meshes {m[1]} merge by region: tgsis version {m[2]} {m[3]} merges them (solve their "
-        f"conflicting regions first: tgsis version resolve {_unquote(m[4])} ID parent|child|base --region N); record "
-        f"a solution for the others: tgsis version resolve {_unquote(m[4])} CLASS KEY parent|child|manual",
+        lambda m: (
+            f"the meshes {m[1]} merge by region: tgsis version {m[2]} {m[3]} merges them (solve their "
+            f"conflicting regions first: tgsis version resolve {_unquote(m[4])} ID parent|child|base --region N); record "
+            f"a solution for the others: tgsis version resolve {_unquote(m[4])} CLASS KEY parent|child|manual"
+        ),
     ),
     (
         r"SELECT tgsis\.resolve_region\(version, class, key, region, 'parent'\|'child'\|'base'\) or 'average'\|'manual' "
@@ -102,8 +108,10 @@ _RULES: list[tuple[str, Replacement]] = [
         "give --mesh FILE, a mesh file",
     ),
     (r"give the region's number, as tgsis\.conflict_regions lists it", "give --region N"),
-    (r"automatic is no choice: find_conflicts records it for the regions that merge by themselves",
-     "automatic is no choice: the regions that are no conflict merge by themselves"),
+    (
+        r"automatic is no choice: find_conflicts records it for the regions that merge by themselves",
+        "automatic is no choice: the regions that are no conflict merge by themselves",
+    ),
     (r"leave mesh out, or give solution='manual'( \(average is computed\))?", "leave --mesh out, or give manual"),
     (r"^give mesh=$", "give --mesh FILE"),
     (

@@ -29,7 +29,7 @@ import math
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -88,9 +88,7 @@ def _consistent(conn: Conn, version: str, *, write: bool) -> Iterator[None]:
     """
     if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
         with conn.transaction():
-            conn.execute(
-                "SET TRANSACTION ISOLATION LEVEL REPEATABLE READ" + ("" if write else " READ ONLY")
-            )
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ" + ("" if write else " READ ONLY"))
             yield
         return
     row = conn.execute("SELECT current_setting('transaction_isolation')").fetchone()
@@ -118,19 +116,20 @@ def _ids(values: Any) -> npt.NDArray[np.int64]:
 
 
 def _region_of_row(row: tuple[Any, ...]) -> ConflictRegion:
+    ids = {name: _ids(value) for name, value in zip(_ID_FIELDS, row[3:9], strict=True)}
     return ConflictRegion(
-        int(row[0]),
-        bool(row[1]),
-        str(row[2]),
-        *(_ids(v) for v in row[3:9]),
-        None if row[9] is None else np.asarray(row[9], dtype=np.float64),
-        float(row[10]),
-        float(row[11]),
-        str(row[12]),
-        str(row[13]),
-        str(row[14]),
-        row[15],
-        row[16],
+        region=int(row[0]),
+        conflict=bool(row[1]),
+        changed_by=str(row[2]),
+        **ids,
+        bbox=None if row[9] is None else np.asarray(row[9], dtype=np.float64),
+        parent_displacement=float(row[10]),
+        child_displacement=float(row[11]),
+        solution=str(row[12]),
+        childmark=str(row[13]),
+        parentmark=str(row[14]),
+        solved_at=row[15],
+        solved_by=row[16],
     )
 
 
@@ -155,18 +154,18 @@ def _computed_region(region: MergeRegion, marks: tuple[str, str], stored: Confli
     if stored is not None and region.conflict and _same_region(stored, region):
         solution, solved_at, solved_by = stored.solution, stored.solved_at, stored.solved_by
     return ConflictRegion(
-        region.index,
-        region.conflict,
-        region.sides,
-        *(getattr(region, name) for name in _ID_FIELDS),
-        None if as_json["bbox"] is None else np.asarray(as_json["bbox"]),
-        float(region.parent_displacement),
-        float(region.child_displacement),
-        solution,
-        marks[0],
-        marks[1],
-        solved_at,
-        solved_by,
+        region=region.index,
+        conflict=region.conflict,
+        changed_by=region.sides,
+        **{name: getattr(region, name) for name in _ID_FIELDS},
+        bbox=None if as_json["bbox"] is None else np.asarray(as_json["bbox"], dtype=np.float64),
+        parent_displacement=float(region.parent_displacement),
+        child_displacement=float(region.child_displacement),
+        solution=solution,
+        childmark=marks[0],
+        parentmark=marks[1],
+        solved_at=solved_at,
+        solved_by=solved_by,
     )
 
 
@@ -312,7 +311,9 @@ def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) ->
 
 
 @checked
-def region_solutions(conn: Conn, version: str, objectclass: str, objectkey: str, merge: MeshMerge) -> dict[int, Solution]:
+def region_solutions(
+    conn: Conn, version: str, objectclass: str, objectkey: str, merge: MeshMerge
+) -> dict[int, Solution]:
     """The solutions recorded for the conflicting regions of ``merge``, when they hold for it.
 
     They hold when the stored regions were found on the object's current marks
@@ -357,7 +358,7 @@ def region_solutions(conn: Conn, version: str, objectclass: str, objectkey: str,
         if region.solution in ("average", "manual"):
             solutions[region.region] = state_from_npz(bytes(meshes[region.region]), merge.base.name)
         else:
-            solutions[region.region] = region.solution
+            solutions[region.region] = cast(Solution, region.solution)
     return solutions
 
 
@@ -521,7 +522,8 @@ def resolve_region(
     if wanted != "manual" and mesh is not None:
         raise InvalidInputError(
             f"{name}: solution {wanted} takes no mesh: one was given",
-            hint="leave mesh out, or give solution='manual'" + (" (average is computed)" if wanted == "average" else ""),
+            hint="leave mesh out, or give solution='manual'"
+            + (" (average is computed)" if wanted == "average" else ""),
         )
     for attempt in range(_retrying(conn)):
         try:
@@ -574,7 +576,7 @@ def _resolve(
         assert mesh is not None
         given = _manual_state(merge, target, mesh, name)
     else:
-        given = solution
+        given = cast(Solution, solution)
     others = region_solutions(conn, version, "feature", key, merge)
     others.pop(index, None)
     placeholders: dict[int, Solution] = {r.index: "parent" for r in merge.conflicts if r.index not in others}
@@ -697,15 +699,22 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
     vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
     for n, values in vprops.items():
         if values.dtype.kind == "f":
-            values[at_p] = 0.5 * np.asarray(parent.vertex_properties[n])[pv] + 0.5 * np.asarray(
-                child.vertex_properties[n]
-            )[cv]
+            values[at_p] = (
+                0.5 * np.asarray(parent.vertex_properties[n])[pv] + 0.5 * np.asarray(child.vertex_properties[n])[cv]
+            )
     cprops = {n: np.asarray(v).copy() for n, v in rows.cell_properties.items()}
     for n, values in cprops.items():
         if values.dtype.kind == "f":
             values[:] = 0.5 * np.asarray(parent.cell_properties[n])[pc] + 0.5 * np.asarray(child.cell_properties[n])[cc]
     return MeshState(
-        rows.cell_size, rows.vertex_ids, vertices, rows.cell_ids, rows.cells, vprops, cprops, f"{merge.base.name} average"
+        rows.cell_size,
+        rows.vertex_ids,
+        vertices,
+        rows.cell_ids,
+        rows.cells,
+        vprops,
+        cprops,
+        f"{merge.base.name} average",
     )
 
 
@@ -724,7 +733,9 @@ def _file_ids(mesh: Mesh, name: str) -> npt.NDArray[np.int64]:
         raise InvalidInputError(f"{name}: vertex property 'vrtxid' holds values that are no ids (not integers)")
     ids[known] = raw[known].astype(np.int64)
     if len(np.unique(ids[known])) != int(known.sum()):
-        raise InvalidInputError(f"{name}: two vertices of the mesh have the same 'vrtxid'", hint="give each vertex its own id")
+        raise InvalidInputError(
+            f"{name}: two vertices of the mesh have the same 'vrtxid'", hint="give each vertex its own id"
+        )
     return ids
 
 

@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from typing import Any
 
+import numpy as np
+import numpy.typing as npt
 import psycopg
 
 from tgsis._optional import require
@@ -576,13 +578,13 @@ class ConflictRegion:
     region: int
     conflict: bool
     changed_by: str
-    vertex_ids: Any
-    cell_ids: Any
-    parent_vertex_ids: Any
-    parent_cell_ids: Any
-    child_vertex_ids: Any
-    child_cell_ids: Any
-    bbox: Any
+    vertex_ids: npt.NDArray[np.int64]
+    cell_ids: npt.NDArray[np.int64]
+    parent_vertex_ids: npt.NDArray[np.int64]
+    parent_cell_ids: npt.NDArray[np.int64]
+    child_vertex_ids: npt.NDArray[np.int64]
+    child_cell_ids: npt.NDArray[np.int64]
+    bbox: npt.NDArray[np.float64] | None
     parent_displacement: float
     child_displacement: float
     solution: str

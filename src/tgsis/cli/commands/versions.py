@@ -491,7 +491,9 @@ def _resolve_region(args: argparse.Namespace) -> int:
         )
     for discard in result.discards:
         out(f"  {R.discard_text(discard)}")
-    out(f"feature {feature} in {V.show_name(args.name)}: region {result.region.region} recorded {result.region.solution}")
+    out(
+        f"feature {feature} in {V.show_name(args.name)}: region {result.region.region} recorded {result.region.solution}"
+    )
     return 0
 
 
