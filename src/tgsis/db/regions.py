@@ -313,7 +313,7 @@ def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) ->
 @checked
 def region_solutions(
     conn: Conn, version: str, objectclass: str, objectkey: str, merge: MeshMerge
-) -> dict[int, Solution]:
+) -> dict[int, str | MeshState]:
     """The solutions recorded for the conflicting regions of ``merge``, when they hold for it.
 
     They hold when the stored regions were found on the object's current marks
@@ -351,14 +351,14 @@ def region_solutions(
                 (versionid, objectclass, objectkey),
             ).fetchall()
         )
-    solutions: dict[int, Solution] = {}
+    solutions: dict[int, str | MeshState] = {}
     for region in stored:
         if not region.conflict or region.solution == "unsolved":
             continue
         if region.solution in ("average", "manual"):
             solutions[region.region] = state_from_npz(bytes(meshes[region.region]), merge.base.name)
         else:
-            solutions[region.region] = cast(Solution, region.solution)
+            solutions[region.region] = region.solution
     return solutions
 
 
@@ -577,7 +577,7 @@ def _resolve(
         given = _manual_state(merge, target, mesh, name)
     else:
         given = cast(Solution, solution)
-    others = region_solutions(conn, version, "feature", key, merge)
+    others = cast(dict[int, Solution], region_solutions(conn, version, "feature", key, merge))
     others.pop(index, None)
     placeholders: dict[int, Solution] = {r.index: "parent" for r in merge.conflicts if r.index not in others}
     placeholders.pop(index, None)
