@@ -294,7 +294,7 @@ def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) ->
     if objectclass != "feature":
         return None, f"a row of the versioned table(s) of object class {objectclass}: it merges as a whole object"
     try:
-        with conn.transaction():  # a savepoint: a refused read leaves the transaction usable
+        with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
             states = read_merge_states(conn, version, int(objectkey)).states
         return three_way_merge(states["base"], states["parent"], states["child"]), None
     except MissingPrivilegeError as exc:
