@@ -305,3 +305,13 @@ def test_pg_dump_and_restore_keep_unresolved_and_resolved_regions(
                 [again] = tgsis.find_conflicts(restored, "e1")  # the same marks there: the solutions hold
                 assert [r.solution for r in again.regions if r.conflict] == ["child", "unsolved"]
                 assert stored(restored) == before
+
+
+def test_a_role_that_may_not_read_the_class_gets_the_list_with_why(db_dsn: str, conn: Conn, fault: int) -> None:
+    conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
+        [conflict] = tgsis.find_conflicts(roles.connect("rita"), "e1")
+    assert conflict.objectkey == str(fault) and conflict.regions == ()
+    assert conflict.region_refusal is not None and "may not read" in conflict.region_refusal
+    assert stored(conn) == []
