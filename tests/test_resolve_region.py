@@ -249,7 +249,10 @@ def test_manual_through_the_command_line_from_an_exported_file(
     state = apply_solutions(merge, solutions).state
     z = state.vertices[np.searchsorted(state.vertex_ids, MIDDLE), 2]
     assert np.all(z == 111.25)
-    # and the JSON of the conflicts shows the solution
+    # the regions of the command line say the solution; so does the JSON
+    assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--regions"]) == 0
+    [line] = [x for x in capsys.readouterr().out.splitlines() if x.startswith(f"\tregion {middle.region}\t")]
+    assert line.endswith("\tsolution manual")
     assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     [region] = [r for r in data["conflicts"][0]["conflict_regions"] if r["conflict"]]
