@@ -339,3 +339,33 @@ def test_average_refuses_sides_that_meshed_the_region_differently() -> None:
     assert z == base.vertices[middle, 2]  # +4 and -4: back in the middle
     resolved = apply_solutions(merge, {region.index: average}).state
     resolved.to_mesh()
+
+
+def test_a_file_with_a_vertex_added_in_paraview_gives_new_ids(conn: Conn, fault: int, tmp_path: Path) -> None:
+    """An exported VTU edited in ParaView: a vertex added (no vrtxid: NaN) splits a triangle of the region."""
+    middle = _middle(conn)
+    assert (
+        main(["--dsn", str(conn.info.dsn), "version", "conflicts", "e1", "--export", str(tmp_path), "--format", "vtu"])
+        == 0
+    )
+    [child_file] = tmp_path.glob(f"{fault}_*_child.vtu")
+    mesh = formats.read_one(child_file)
+    ids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64)
+    inside = set(middle.vertex_ids.tolist())
+    row = next(i for i, cell in enumerate(mesh.cells.tolist()) if {int(ids[v]) for v in cell} <= inside)
+    a, b, c = mesh.cells[row].tolist()
+    n = mesh.n_vertices
+    vertices = np.vstack([mesh.vertices, mesh.vertices[[a, b, c]].mean(axis=0)])
+    cells = np.vstack([np.delete(mesh.cells, row, axis=0), [[a, b, n], [b, c, n], [c, a, n]]])
+    props = {k: np.append(np.asarray(v, dtype=np.float64), np.nan) for k, v in mesh.vertex_properties.items()}
+    edited = tgsis.Surface(vertices, cells, vertex_properties=props, name=mesh.name)
+    result = tgsis.resolve_region(conn, "e1", fault, middle.region, "manual", edited)
+    assert result.state is not None
+    merge, solutions = _solutions(conn, fault)
+    state = apply_solutions(merge, solutions).state
+    state.to_mesh()
+    top = max(int(s.vertex_ids.max()) for s in (merge.base, merge.parent, merge.child))
+    assert state.n_vertices == SIDE * SIDE + 1 and int(state.vertex_ids.max()) == top + 1  # a fresh id
+    assert state.n_cells == curved_surface().n_cells + 2
+    kept = set(state.cell_ids.tolist()) & set(merge.child.cell_ids.tolist())
+    assert len(kept) == merge.child.n_cells - 1  # the other cells kept their ids; the split one became three new
