@@ -65,7 +65,8 @@ _CELL_WORDS = {1: "point", 2: "segment", 3: "triangle", 4: "tetrahedron"}
 _SHOWN = 10  # ids a message names before "..."
 
 
-def _ids_text(ids: npt.ArrayLike) -> str:
+def ids_text(ids: npt.ArrayLike) -> str:
+    """Ids for a message: the first few, and how many in all when there are more."""
     values = np.asarray(ids).ravel().tolist()
     shown = ", ".join(str(v) for v in values[:_SHOWN])
     return shown + (f", ... ({len(values)} in all)" if len(values) > _SHOWN else "")
@@ -223,7 +224,7 @@ class MeshState:
             )
         if not np.all(np.isfinite(xyz)):
             bad = vids[~np.isfinite(xyz).all(axis=1)]
-            raise InvalidGeometryError(f"{self.name}: vertices {_ids_text(bad)} have non-finite coordinates")
+            raise InvalidGeometryError(f"{self.name}: vertices {ids_text(bad)} have non-finite coordinates")
         vprops = self._properties(self.vertex_properties, len(vids), "vertex")
         cprops = self._properties(self.cell_properties, len(cids), _CELL_WORDS[k])
         if not _strictly_increasing(vids):
@@ -237,15 +238,15 @@ class MeshState:
         for what, ids in (("vertex", vids), (_CELL_WORDS[k], cids)):
             if len(ids) > 1 and not _strictly_increasing(ids):
                 repeated = np.unique(ids[1:][ids[1:] == ids[:-1]])
-                raise InvalidGeometryError(f"{self.name}: {what} ids {_ids_text(repeated)} are given twice")
+                raise InvalidGeometryError(f"{self.name}: {what} ids {ids_text(repeated)} are given twice")
         if len(cells):
             dense = len(vids) > 0 and vids[0] == 0 and vids[-1] == len(vids) - 1
             missing = (cells < 0) | (cells >= len(vids)) if dense else ~_contains(vids, cells)
             if missing.any():
                 rows = np.flatnonzero(missing.any(axis=1))
                 raise InvalidGeometryError(
-                    f"{self.name}: {_CELL_WORDS[k]}s {_ids_text(cids[rows])} use vertex ids "
-                    f"{_ids_text(np.unique(cells[missing]))} that the mesh does not have"
+                    f"{self.name}: {_CELL_WORDS[k]}s {ids_text(cids[rows])} use vertex ids "
+                    f"{ids_text(np.unique(cells[missing]))} that the mesh does not have"
                 )
             repeated = np.zeros(len(cells), dtype=bool)
             for i in range(k):
@@ -253,7 +254,7 @@ class MeshState:
                     repeated |= cells[:, i] == cells[:, j]
             if repeated.any():
                 raise InvalidGeometryError(
-                    f"{self.name}: {_CELL_WORDS[k]}s {_ids_text(cids[repeated])} use a vertex twice"
+                    f"{self.name}: {_CELL_WORDS[k]}s {ids_text(cids[repeated])} use a vertex twice"
                 )
         for name, value in (("vertex_ids", vids), ("vertices", xyz), ("cell_ids", cids), ("cells", cells)):
             object.__setattr__(self, name, value)
@@ -675,7 +676,7 @@ def _incidences(base: MeshState, side: MeshState, vertices: IntArray, cells: Int
     return np.concatenate(pairs_c), np.concatenate(pairs_v)
 
 
-def _state_rows_equal(
+def state_rows_equal(
     a: MeshState, b: MeshState, vertex_ids: IntArray, cell_ids: IntArray
 ) -> tuple[BoolArray, BoolArray]:
     """Per id, whether the two states hold the same row (both without it counts as the same)."""
@@ -800,7 +801,7 @@ def _regions(
 
     changed = [(_contains(e.changed_vertices, node_v), _contains(e.changed_cells, node_c)) for e in edits]
     has_parent, has_child = per_region(*changed[0]), per_region(*changed[1])
-    v_same, c_same = _state_rows_equal(parent, child, node_v, node_c)
+    v_same, c_same = state_rows_equal(parent, child, node_v, node_c)
     differs = per_region(~v_same, ~c_same)
     conflict = has_parent & has_child & differs
 
@@ -974,7 +975,7 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
     unsolved = sorted(conflicts - set(solutions))
     if unsolved:
         raise UnsolvedConflictsError(
-            f"{name}: regions {_ids_text(unsolved)} changed on both sides have no solution",
+            f"{name}: regions {ids_text(unsolved)} changed on both sides have no solution",
             hint="give each conflicting region parent, child, base or a manual mesh",
         )
     for index, solution in solutions.items():
@@ -1044,11 +1045,11 @@ def _check_outside_rows(
 ) -> None:
     """A manual state's rows outside its region must be the merge's own (it may hold the whole object)."""
     ov, oc = manual.vertex_ids[outside_v], manual.cell_ids[outside_c]
-    v_same, c_same = _state_rows_equal(manual, state, ov, oc)
+    v_same, c_same = state_rows_equal(manual, state, ov, oc)
     if not (v_same.all() and c_same.all()):
         raise InvalidInputError(
             f"{name}: the manual mesh of region {index} changes rows outside the region: vertices "
-            f"{_ids_text(ov[~v_same]) or 'none'}, cells {_ids_text(oc[~c_same]) or 'none'}",
+            f"{ids_text(ov[~v_same]) or 'none'}, cells {ids_text(oc[~c_same]) or 'none'}",
             hint="a manual mesh replaces its region's rows (and may add rows of new ids); solve the other regions "
             "on their own",
         )
@@ -1066,7 +1067,7 @@ def _check_valid(
     for what, ids in (("vertex", state.vertex_ids), (word, state.cell_ids)):
         if not _strictly_increasing(ids):
             repeated = np.unique(ids[1:][ids[1:] <= ids[:-1]])
-            raise InvalidMergeError(f"{name}: the merge would give two {what} rows the id {_ids_text(repeated)}")
+            raise InvalidMergeError(f"{name}: the merge would give two {what} rows the id {ids_text(repeated)}")
     new_c = np.union1d(drop_c, np.concatenate([c for _, c in manual_new] + [np.empty(0, np.int64)]))
     new_v = np.union1d(drop_v, np.concatenate([v for v, _ in manual_new] + [np.empty(0, np.int64)]))
     at = _positions(state.cell_ids, new_c)
@@ -1083,8 +1084,8 @@ def _check_valid(
         bad = np.union1d(taken_ids[missing.any(axis=1)], state.cell_ids[lost])
         rows = state.cells[_positions(state.cell_ids, bad)]
         raise InvalidMergeError(
-            f"{name}: the merge would keep {word}s {_ids_text(bad)} on vertices "
-            f"{_ids_text(np.unique(rows[~_contains(state.vertex_ids, rows)]))} that it removes",
+            f"{name}: the merge would keep {word}s {ids_text(bad)} on vertices "
+            f"{ids_text(np.unique(rows[~_contains(state.vertex_ids, rows)]))} that it removes",
             hint="one side removed vertices the other side's cells use: solve the region with one side's rows",
         )
 
@@ -1093,12 +1094,12 @@ def _check_valid(
         ref = np.nan_to_num(ref, nan=-1).astype(np.int64) if ref.dtype.kind == "f" else ref.astype(np.int64)
         dangling_ref = (ref >= 0) & ~_contains(state.vertex_ids, ref)
         if dangling_ref.any():  # the parent's own rows are excused: it is the state merged into
-            v_same, _ = _state_rows_equal(state, merge.parent, state.vertex_ids[dangling_ref], np.empty(0, np.int64))
+            v_same, _ = state_rows_equal(state, merge.parent, state.vertex_ids[dangling_ref], np.empty(0, np.int64))
             dangling_ref[np.flatnonzero(dangling_ref)[v_same]] = False
         if dangling_ref.any():
             raise InvalidMergeError(
-                f"{name}: the merge would keep vertices {_ids_text(state.vertex_ids[dangling_ref])}, atoms (refid) "
-                f"that refer to vertices {_ids_text(np.unique(ref[dangling_ref]))}, which it removes",
+                f"{name}: the merge would keep vertices {ids_text(state.vertex_ids[dangling_ref])}, atoms (refid) "
+                f"that refer to vertices {ids_text(np.unique(ref[dangling_ref]))}, which it removes",
                 hint="one side removed vertices the other side's atoms refer to: solve the region with one side's rows",
             )
 
@@ -1149,7 +1150,7 @@ def _check_valid(
             dangling = dangling[~unused_there]
         if len(dangling):
             raise InvalidMergeError(
-                f"{name}: the merge would leave vertices {_ids_text(dangling)} without {word}s, which no state does",
+                f"{name}: the merge would leave vertices {ids_text(dangling)} without {word}s, which no state does",
                 hint="solve the region with one side's rows",
             )
 
@@ -1201,7 +1202,7 @@ def _refuse_new_excess(
     if len(bad_owners):
         raise InvalidMergeError(
             f"{name}: the merge would make {what} that no state has: vertex ids "
-            f"{_ids_text([str(tuple(r)) for r in over.tolist()])}, cells {_ids_text(np.unique(owners[bad_rows]))}",
+            f"{ids_text([str(tuple(r)) for r in over.tolist()])}, cells {ids_text(np.unique(owners[bad_rows]))}",
             hint="solve the region with one side's rows, or give a manual mesh without them",
         )
 
@@ -1215,7 +1216,7 @@ def _discards(merge: MeshMerge, solutions: Mapping[int, Solution], state: MeshSt
             ("parent", merge.parent, region.parent_vertex_ids, region.parent_cell_ids),
             ("child", merge.child, region.child_vertex_ids, region.child_cell_ids),
         ):
-            v_same, c_same = _state_rows_equal(side, state, vids, cids)
+            v_same, c_same = state_rows_equal(side, state, vids, cids)
             lost_v = vids[~v_same]
             ps, pm = _positions(side.vertex_ids, lost_v), _positions(state.vertex_ids, lost_v)
             both = (ps >= 0) & (pm >= 0)

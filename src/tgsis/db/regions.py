@@ -37,7 +37,7 @@ import psycopg
 
 from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
-from tgsis.db.versions import Conflict, ConflictRegion, _conflict, show_name
+from tgsis.db.versions import Conflict, ConflictRegion, show_name
 from tgsis.errors import (
     ConcurrentChangeError,
     Error,
@@ -241,7 +241,7 @@ def _find(conn: Conn, version: str) -> list[Conflict]:
     stores = _stores_conflicts(conn, version)
     result = []
     for row in rows:
-        conflict = _conflict(row)
+        conflict = Conflict.from_row(row)
         marks = (str(row[6]), str(row[7]))
         merge, refusal = _object_merge(conn, version, conflict.objectclass, conflict.objectkey)
         if merge is None:
@@ -760,11 +760,11 @@ def _manual_state(merge: MeshMerge, region: MergeRegion, mesh: MeshState | Mesh,
         changed_v &= ~same_v
         changed_c &= ~same_c
     if changed_v.any() or changed_c.any():
-        from tgsis.merge3 import _ids_text
+        from tgsis.merge3 import ids_text
 
         raise InvalidInputError(
             f"{name}: the manual mesh changes rows outside the region: vertices "
-            f"{_ids_text(outside_v[changed_v]) or 'none'}, cells {_ids_text(outside_c[changed_c]) or 'none'}",
+            f"{ids_text(outside_v[changed_v]) or 'none'}, cells {ids_text(outside_c[changed_c]) or 'none'}",
             hint="edit only the region's vertices and cells (its vertex_ids and cell_ids), or solve the other "
             "regions on their own",
         )
@@ -775,9 +775,9 @@ def _rows_equal(
     a: MeshState, b: MeshState, vids: npt.NDArray[np.int64], cids: npt.NDArray[np.int64]
 ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
     """Per id, whether both states have the row and it is the same (coordinates, values; a rotated cell alike)."""
-    from tgsis.merge3 import _state_rows_equal
+    from tgsis.merge3 import state_rows_equal
 
-    same_v, same_c = _state_rows_equal(a, b, vids, cids)
+    same_v, same_c = state_rows_equal(a, b, vids, cids)
     return same_v & np.isin(vids, b.vertex_ids), same_c & np.isin(cids, b.cell_ids)
 
 

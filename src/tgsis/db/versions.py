@@ -651,12 +651,14 @@ class Conflict:
     regions: tuple[ConflictRegion, ...] = field(default=(), compare=False)
     region_refusal: str | None = field(default=None, compare=False)
 
+    @classmethod
+    def from_row(cls, row: Sequence[Any]) -> Conflict:
+        """A conflict from a row of ``tgsis.find_conflicts`` (its columns in the order of ``COLUMNS``)."""
+        return cls(row[0], row[1], tuple(row[2]), tuple(row[3]), tuple(row[4]), row[5])
 
-_CONFLICT_COLUMNS = "objectclass, objectkey, conflicttype, childtables, parenttables, solution"
 
-
-def _conflict(row: Sequence[Any]) -> Conflict:
-    return Conflict(row[0], row[1], tuple(row[2]), tuple(row[3]), tuple(row[4]), row[5])
+#: the columns of ``tgsis.conflicts`` :meth:`Conflict.from_row` reads
+CONFLICT_COLUMNS = "objectclass, objectkey, conflicttype, childtables, parenttables, solution"
 
 
 @checked
@@ -666,8 +668,8 @@ def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
     Solutions recorded before are kept while neither side changed the object again.
     """
     with reraise(), conn.transaction():
-        rows = conn.execute(f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.find_conflicts(%s)", (version,)).fetchall()
-    return [_conflict(r) for r in rows]
+        rows = conn.execute(f"SELECT {CONFLICT_COLUMNS} FROM tgsis.find_conflicts(%s)", (version,)).fetchall()
+    return [Conflict.from_row(r) for r in rows]
 
 
 def _key_text(key: object) -> str:
@@ -761,11 +763,11 @@ def resolve_conflict(
     """
     with reraise(), conn.transaction():
         row = conn.execute(
-            f"SELECT {_CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
+            f"SELECT {CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
             (version, objectclass, _key_text(objectkey), solution),
         ).fetchone()
         assert row is not None
-        conflict = _conflict(row)
+        conflict = Conflict.from_row(row)
         lost_by = _lost_by(conflict.solution)
         discards: tuple[Discard, ...] | None = ()
         try:
