@@ -1,0 +1,201 @@
+"""The merge regions of a conflicting object as the browser view draws them on the mesh (no database).
+
+A region (:class:`tgsis.merge3.MergeRegion`) travels as a few facts in the
+JSON header — its index, what happens there (its *state*, below), the solution,
+each side's count of changed vertices and cells and largest displacement, its
+box — and as the *positions* of its vertices and cells (margin included) in the
+drawn mesh's own arrays: two flat uint32 arrays, ``region_vertices`` and
+``region_cells``, the regions one after the other (``drawn`` in each header
+entry says how many are its). Nothing of the mesh is copied: the bytes follow
+the size of the regions, not of the mesh.
+
+The drawn mesh is the version's (the child's) rows with their stored ids.
+The merge names the child's new rows in the merged numbering (where the parent
+gave the same new id to something else, :attr:`MeshMerge.child_vertex_renumbering`),
+so the drawn ids are renamed to the merged ones before they are looked up: a
+region of the parent never colours the child's row that happens to share the
+parent's id. What a region holds that the drawn mesh does not (the parent's
+new rows, rows the child removed) is counted as ``missing``.
+
+States (the legend of the page):
+
+- ``merges-parent``, ``merges-child``: changed on one side only, merges by itself from that side;
+- ``merges-both``: changed on both sides to the same rows, merges by itself;
+- ``unsolved``: a conflict no solution is recorded for;
+- ``solved-parent``, ``solved-child``, ``solved-base``, ``solved-average``, ``solved-manual``: a
+  conflict and the solution recorded for it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tgsis.errors import InvalidInputError
+from tgsis.merge3 import MergeRegion, MeshMerge
+
+__all__ = ["REGION_STATES", "CONFLICT_SOLUTIONS", "region_state", "region_drawing"]
+
+#: what can happen in a region, in the order of the legend
+REGION_STATES = (
+    "merges-parent",
+    "merges-child",
+    "merges-both",
+    "unsolved",
+    "solved-parent",
+    "solved-child",
+    "solved-base",
+    "solved-average",
+    "solved-manual",
+)
+#: the solutions of a conflicting region (``tgsis.conflict_regions.solution`` but ``automatic``)
+CONFLICT_SOLUTIONS = ("unsolved", "parent", "child", "base", "average", "manual")
+
+
+def region_state(region: MergeRegion, solution: str | None = None) -> str:
+    """What happens in a region: one of :data:`REGION_STATES`.
+
+    Parameters
+    ----------
+    region : MergeRegion
+    solution : str, optional
+        The solution recorded for it: ``automatic`` (or None) for a region
+        that merges by itself; ``unsolved`` (or None), ``parent``, ``child``,
+        ``base``, ``average`` or ``manual`` for a conflict.
+
+    Raises
+    ------
+    InvalidInputError
+        A solution that does not fit the region (a conflict cannot be
+        ``automatic``; a region that merges by itself takes no other).
+    """
+    if not region.conflict:
+        if solution not in (None, "automatic"):
+            raise InvalidInputError(
+                f"region {region.index} merges by itself (changed by {region.sides}): its solution is 'automatic', "
+                f"not {solution!r}"
+            )
+        return "merges-both" if region.sides == "both" else f"merges-{region.sides}"
+    if solution is None or solution == "unsolved":
+        return "unsolved"
+    if solution not in CONFLICT_SOLUTIONS:
+        raise InvalidInputError(
+            f"region {region.index} is a conflict: its solution is one of {', '.join(CONFLICT_SOLUTIONS)}, "
+            f"not {solution!r}"
+        )
+    return f"solved-{solution}"
+
+
+def _merged_ids(stored: npt.NDArray[np.int64], renumbering: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """The drawn (stored) ids in the merge's numbering: the renumbered new ids of the child renamed."""
+    if len(renumbering) == 0:
+        return stored
+    old, new = renumbering[:, 0], renumbering[:, 1]
+    order = np.argsort(old)
+    old, new = old[order], new[order]
+    at = np.minimum(np.searchsorted(old, stored), len(old) - 1)
+    return np.where(old[at] == stored, new[at], stored)
+
+
+class _Lookup:
+    """Positions in a drawn array of given ids (by a sort of the drawn ids, once)."""
+
+    def __init__(self, ids: npt.NDArray[np.int64]) -> None:
+        self.order = np.argsort(ids, kind="stable")
+        self.sorted = ids[self.order]
+
+    def positions(self, wanted: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], int]:
+        """(positions of the wanted ids that are drawn, how many are not)."""
+        if len(self.sorted) == 0:
+            return np.empty(0, dtype=np.int64), len(wanted)
+        at = np.minimum(np.searchsorted(self.sorted, wanted), len(self.sorted) - 1)
+        found = self.sorted[at] == wanted
+        return self.order[at[found]].astype(np.int64), int(len(wanted) - found.sum())
+
+
+def _side(region: MergeRegion, side: str) -> dict[str, Any]:
+    return {
+        "vertices": len(getattr(region, f"{side}_vertex_ids")),
+        "cells": len(getattr(region, f"{side}_cell_ids")),
+        "largest_displacement": float(getattr(region, f"{side}_displacement")),
+    }
+
+
+def region_drawing(
+    merge: MeshMerge,
+    vertex_ids: npt.ArrayLike,
+    cell_ids: npt.ArrayLike,
+    solutions: Mapping[int, str] | None = None,
+) -> tuple[list[dict[str, Any]], dict[str, npt.NDArray[np.int64]]]:
+    """The regions of a merge as the view sends them with the drawn mesh.
+
+    Parameters
+    ----------
+    merge : MeshMerge
+        :func:`tgsis.object_merge` of the object.
+    vertex_ids : (n,) array_like of int
+        The stored id of each drawn vertex, in the drawn order (the version's rows: the child's numbering).
+    cell_ids : (m,) array_like of int
+        The stored id of each drawn cell, in the drawn order.
+    solutions : mapping of int to str, optional
+        The solution recorded for a region (by index); a conflict without one is ``unsolved``.
+
+    Returns
+    -------
+    regions : list of dict
+        Per region, in index order: ``index``, ``conflict``, ``changed_by`` (``parent``, ``child`` or
+        ``both``), ``state`` (:func:`region_state`), ``solution``, ``parent`` and ``child`` (``vertices``,
+        ``cells``: the counts of the rows that side changed; ``largest_displacement``), ``ids`` (the region's
+        vertex and cell counts, margin included), ``drawn`` and ``missing`` (how many of them the drawn mesh
+        has, and has not), ``bounds`` ([[xmin, ymin, zmin], [xmax, ymax, zmax]]).
+    arrays : dict
+        ``region_vertices`` (sum of ``drawn.vertices``,) and ``region_cells`` (sum of ``drawn.cells``,) int64:
+        the positions in the drawn arrays, region after region.
+
+    Raises
+    ------
+    InvalidInputError
+        A solution for no region of the merge, or one that does not fit its region.
+    """
+    solutions = dict(solutions or {})
+    known = {r.index for r in merge.regions}
+    unknown = sorted(set(solutions) - known)
+    if unknown:
+        raise InvalidInputError(
+            f"a solution for no region {unknown[0]} of this merge: it has regions 0 to {len(known) - 1}"
+            if known
+            else f"a solution for no region {unknown[0]}: this merge has no region"
+        )
+    vertices = _Lookup(_merged_ids(np.asarray(vertex_ids, dtype=np.int64).ravel(), merge.child_vertex_renumbering))
+    cells = _Lookup(_merged_ids(np.asarray(cell_ids, dtype=np.int64).ravel(), merge.child_cell_renumbering))
+    entries: list[dict[str, Any]] = []
+    found_vertices, found_cells = [], []
+    for region in merge.regions:
+        state = region_state(region, solutions.get(region.index))
+        v, v_missing = vertices.positions(region.vertex_ids)
+        c, c_missing = cells.positions(region.cell_ids)
+        found_vertices.append(v)
+        found_cells.append(c)
+        entries.append(
+            {
+                "index": region.index,
+                "conflict": region.conflict,
+                "changed_by": region.sides,
+                "state": state,
+                "solution": "automatic" if not region.conflict else solutions.get(region.index, "unsolved"),
+                "parent": _side(region, "parent"),
+                "child": _side(region, "child"),
+                "ids": {"vertices": len(region.vertex_ids), "cells": len(region.cell_ids)},
+                "drawn": {"vertices": len(v), "cells": len(c)},
+                "missing": {"vertices": v_missing, "cells": c_missing},
+                "bounds": np.asarray(region.bounds, dtype=np.float64).tolist(),
+            }
+        )
+    empty = np.empty(0, dtype=np.int64)
+    return entries, {
+        "region_vertices": np.concatenate(found_vertices) if found_vertices else empty,
+        "region_cells": np.concatenate(found_cells) if found_cells else empty,
+    }
