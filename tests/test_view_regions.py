@@ -279,13 +279,14 @@ def test_an_object_that_merges_as_a_whole_only_says_why(pg: TestServer, template
         with psycopg.connect(dsn) as conn:
             tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties={"unit": "text"})
             tgsis.enable_feature_versioning(conn)
-            geoid = tgsis.insert_feature(conn, "faults", curved_surface(), {"unit": "A"})
+            fault = curved_surface()
+            geoid = tgsis.insert_feature(conn, "faults", tgsis.Surface(fault.vertices, fault.cells), {"unit": "A"})
             tgsis.create_version(conn, "e1")
             conn.commit()
             with tgsis.in_version(conn, "e1"):
-                conn.execute("UPDATE faults SET unit = 'B' WHERE geoid = %s", (geoid,))
+                conn.execute("UPDATE faults SET unit = 'B' WHERE _geoid = %s", (geoid,))
                 conn.commit()
-            conn.execute("UPDATE faults SET unit = 'C' WHERE geoid = %s", (geoid,))
+            conn.execute("UPDATE faults SET unit = 'C' WHERE _geoid = %s", (geoid,))
             conn.commit()
         with running_view(dsn) as url:
             status, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1")
@@ -389,3 +390,4 @@ def test_the_facts_of_the_region_under_the_pointer(regions_view: tuple[str, int,
     page.mouse.click(canvas["x"] + xs[pick] + 0.5, canvas["y"] + ys[pick] + 0.5)
     assert page.locator(f"#regions tr.picked[data-region='{region}']").count() == 1
     assert x0 <= xs[pick] <= x1 and y0 <= ys[pick] <= y1
+

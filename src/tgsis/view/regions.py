@@ -37,7 +37,7 @@ import numpy.typing as npt
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MergeRegion, MeshMerge
 
-__all__ = ["REGION_STATES", "CONFLICT_SOLUTIONS", "region_state", "region_drawing"]
+__all__ = ["REGION_STATES", "REGION_LABELS", "REGION_COLOURS", "CONFLICT_SOLUTIONS", "region_state", "region_drawing"]
 
 #: what can happen in a region, in the order of the legend
 REGION_STATES = (
@@ -51,6 +51,30 @@ REGION_STATES = (
     "solved-average",
     "solved-manual",
 )
+#: what the legend and the pointer's facts say of each state
+REGION_LABELS = {
+    "merges-parent": "merges by itself from the parent",
+    "merges-child": "merges by itself from the child",
+    "merges-both": "merges by itself: identical on both sides",
+    "unsolved": "conflict, unsolved",
+    "solved-parent": "conflict, solved with the parent's",
+    "solved-child": "conflict, solved with the child's",
+    "solved-base": "conflict, solved with the base's",
+    "solved-average": "conflict, solved with the average",
+    "solved-manual": "conflict, solved with a manual mesh",
+}
+#: each state's colour (sRGB), drawn unlit over the mesh (grey, lit): nine colours told apart, none a grey
+REGION_COLOURS = {
+    "merges-parent": "#2666ff",
+    "merges-child": "#ff8c00",
+    "merges-both": "#00a651",
+    "unsolved": "#e00000",
+    "solved-parent": "#00b5d8",
+    "solved-child": "#b8860b",
+    "solved-base": "#8b4513",
+    "solved-average": "#8a2be2",
+    "solved-manual": "#e0119d",
+}
 #: the solutions of a conflicting region (``tgsis.conflict_regions.solution`` but ``automatic``)
 CONFLICT_SOLUTIONS = ("unsolved", "parent", "child", "base", "average", "manual")
 
