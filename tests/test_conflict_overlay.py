@@ -32,8 +32,8 @@ def _pixels_near(image: npt.NDArray[Any], colour: str) -> int:
 def _draw(merge: MeshMerge, path: Path, solutions: dict[int, str] | None) -> npt.NDArray[Any]:
     from matplotlib import image as mpimg
 
-    meshes = [_state_mesh(s, "trglid", "fault", {}) for s in (merge.base, merge.parent, merge.child)]
-    conflict_overlay(merge, *meshes, path, title="fault", solutions=solutions)
+    base, parent, child = (_state_mesh(s, "trglid", "fault", {}) for s in (merge.base, merge.parent, merge.child))
+    conflict_overlay(merge, base, parent, child, path, title="fault", solutions=solutions)
     return np.asarray(mpimg.imread(path))
 
 

@@ -14,7 +14,6 @@ facts of the region under the pointer.
 
 from __future__ import annotations
 
-import io
 import json
 from collections.abc import Iterator
 from typing import Any
@@ -23,7 +22,6 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 import pytest
-from PIL import Image
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface, make_fault, move
@@ -75,7 +73,9 @@ def _four_regions() -> MeshMerge:
 
 
 def _region_with(merge: MeshMerge, vertex: int) -> int:
-    (found,) = [r.index for r in merge.regions if vertex in r.vertex_ids and len(r.parent_vertex_ids) + len(r.child_vertex_ids)]
+    (found,) = [
+        r.index for r in merge.regions if vertex in r.vertex_ids and len(r.parent_vertex_ids) + len(r.child_vertex_ids)
+    ]
     return found
 
 
@@ -319,7 +319,8 @@ def _rgb(css: str) -> npt.NDArray[np.int64]:
 
 
 def _near(pixels: npt.NDArray[np.uint8], rgb: npt.NDArray[np.int64], tolerance: int = 6) -> npt.NDArray[np.bool_]:
-    return np.abs(pixels.astype(np.int64) - rgb).max(axis=2) <= tolerance
+    near: npt.NDArray[np.bool_] = np.abs(pixels.astype(np.int64) - rgb).max(axis=2) <= tolerance
+    return near
 
 
 def test_the_page_draws_each_region_in_the_colour_of_what_happens_there(
@@ -368,7 +369,9 @@ def test_the_facts_of_the_region_under_the_pointer(regions_view: tuple[str, int,
     rows = page.locator("#regions tbody tr").evaluate_all("rows => rows.map(r => [r.dataset.region, r.dataset.state])")
     (region,) = [r for r, s in rows if s == "unsolved"]
     unsolved = _rgb(
-        page.locator("#region-legend [data-state=unsolved] .swatch").evaluate("s => getComputedStyle(s).backgroundColor")
+        page.locator("#region-legend [data-state=unsolved] .swatch").evaluate(
+            "s => getComputedStyle(s).backgroundColor"
+        )
     )
     pixels = canvas_pixels(page)
     ys, xs = np.nonzero(_near(pixels, unsolved))
@@ -390,4 +393,3 @@ def test_the_facts_of_the_region_under_the_pointer(regions_view: tuple[str, int,
     page.mouse.click(canvas["x"] + xs[pick] + 0.5, canvas["y"] + ys[pick] + 0.5)
     assert page.locator(f"#regions tr.picked[data-region='{region}']").count() == 1
     assert x0 <= xs[pick] <= x1 and y0 <= ys[pick] <= y1
-

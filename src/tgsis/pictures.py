@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -344,7 +344,7 @@ OVERLAY_COLOURS = {
 _LEGEND_REGIONS = 12
 
 
-def _overlay_legend(merge: Any, solutions: Mapping[int, str] | None) -> list[tuple[str, str, str]]:
+def _overlay_legend(merge: Any, solutions: Mapping[int, str] | None) -> list[tuple[str, str, Literal["-", "--"]]]:
     """The overlay's legend: (label, colour, line style), the conflicting regions with their solutions last.
 
     Raises
@@ -359,7 +359,7 @@ def _overlay_legend(merge: Any, solutions: Mapping[int, str] | None) -> list[tup
     if unknown:
         raise InvalidInputError(f"a solution for region {unknown[0]}, which this merge does not have")
     states = {r.index: region_state(r, solutions.get(r.index)) for r in merge.regions}
-    entries = [
+    entries: list[tuple[str, str, Literal["-", "--"]]] = [
         ("base", OVERLAY_COLOURS["base"], "-"),
         ("parent's edits", OVERLAY_COLOURS["parent"], "-"),
         ("child's edits", OVERLAY_COLOURS["child"], "-"),

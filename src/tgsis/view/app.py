@@ -738,7 +738,7 @@ def conflict_endpoint(request: Request) -> Response:
         "reason": merge if isinstance(merge, str) else None,
         "regions": regions,
     }
-    extra = {"changed": vertex_flags(len(mesh.vertices), marks), **region_arrays}
+    extra: dict[str, npt.NDArray[Any]] = {"changed": vertex_flags(len(mesh.vertices), marks), **region_arrays}
     return _binary(_body(header, mesh, None, extra))
 
 
