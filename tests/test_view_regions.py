@@ -30,7 +30,7 @@ from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
 from tgsis.testing import TestServer
 from tgsis.view.meshes import pack, unpack
-from tgsis.view.regions import REGION_STATES, region_drawing, region_state
+from tgsis.view.regions import REGION_STATES, edit_flags, region_drawing, region_state
 
 # four vertices of the 12 x 12 fault, far enough apart that their one-ring regions never touch
 CHILD_ONLY, PARENT_ONLY, IDENTICAL, CONFLICT = 2 * SIDE + 2, 2 * SIDE + 9, 9 * SIDE + 2, 9 * SIDE + 9
@@ -203,6 +203,11 @@ def test_the_regions_are_drawn_in_the_stored_numbering_where_the_merge_renumbere
     assert m not in stored_child.cell_ids[cells["parent"]]
     assert by_side["parent"]["missing"] == {"vertices": 1, "cells": 1}
     assert by_side["child"]["missing"] == {"vertices": 0, "cells": 0}
+    # who changed each drawn vertex: the child's 144 is the child's (1), not the parent's (2)
+    flags = edit_flags(merge, stored_child.vertex_ids)
+    assert flags[np.searchsorted(stored_child.vertex_ids, n)] == 1
+    assert set(np.flatnonzero(flags == 2).tolist()) == {5, 6}  # the corners of the parent's new triangle it draws
+    assert set(stored_child.vertex_ids[flags == 1].tolist()) == {SIDE * (SIDE - 1) + 5, SIDE * (SIDE - 1) + 6, n}
 
 
 def test_the_bytes_sent_follow_the_regions_not_the_mesh() -> None:
@@ -271,6 +276,28 @@ def test_the_conflict_endpoint_sends_the_regions_of_object_merge(regions_view: t
         )
         np.testing.assert_allclose(drawn, want, atol=0.02)
         assert sent["solution"] == ("unsolved" if region.conflict else "automatic")
+
+
+def test_who_changed_each_vertex_comes_from_the_merge_of_an_object_that_merges_by_region(
+    regions_view: tuple[str, int, str],
+) -> None:
+    """The per-vertex ``changed`` flags of such an object are the merge's id-keyed edits (1 child, 2 parent, 3 both).
+
+    Not a comparison of the meshes by content (``compare_versions`` twice,
+    tens of seconds on a 10,000-vertex surface): the merge the regions come
+    from already knows each side's edit.
+    """
+    url, geoid, dsn = regions_view
+    _, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1")
+    header, arrays = unpack(body)
+    with psycopg.connect(dsn) as conn:
+        merge = tgsis.object_merge(conn, "e1", geoid)
+    flags = np.asarray(arrays["changed"]).astype(int)
+    drawn = merge.child.vertex_ids  # the drawn vertices are the version's, in id order (no renumbering here)
+    expected = {CHILD_ONLY: 1, PARENT_ONLY: 2, IDENTICAL: 3, CONFLICT: 3}
+    assert {int(drawn[i]): int(flags[i]) for i in np.flatnonzero(flags)} == expected
+    assert header["child_changes"] == {"vertices": 3, "cells": 0}
+    assert header["parent_changes"] == {"vertices": 3, "cells": 0}
 
 
 def test_an_object_that_merges_as_a_whole_only_says_why(pg: TestServer, template_db: str) -> None:

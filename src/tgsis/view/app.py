@@ -73,7 +73,14 @@ from tgsis.errors import (
 from tgsis.merge3 import MeshMerge
 from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, StoredSurface, pack, vertex_flags
-from tgsis.view.regions import REGION_COLOURS, REGION_LABELS, REGION_STATES, region_drawing
+from tgsis.view.regions import (
+    REGION_COLOURS,
+    REGION_LABELS,
+    REGION_STATES,
+    edit_counts,
+    edit_flags,
+    region_drawing,
+)
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
 
@@ -712,33 +719,38 @@ def conflict_endpoint(request: Request) -> Response:
         merge = _object_merge(conn, name, feature_id)
         solutions = {} if isinstance(merge, str) else _recorded_solutions(conn, name, feature_id, merge)
     mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
-    with view.session(request) as conn:
-        child = compare_versions(conn, feature_id, parent, name, old_revision=base)
-        theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
-    marks = []
-    for flag, changes in ((1, child), (2, theirs)):
-        cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
-        marks += [
-            (flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
-            (flag, mesh.indices[cells].ravel()),
-        ]
+    regions: list[dict[str, Any]] = []
+    region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
     if isinstance(merge, str):
-        regions: list[dict[str, Any]] = []
-        region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
+        # merges as a whole only: who changed what, by comparing the meshes (the merge knows nothing here)
+        with view.session(request) as conn:
+            child = compare_versions(conn, feature_id, parent, name, old_revision=base)
+            theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
+        marks = []
+        for flag, changes in ((1, child), (2, theirs)):
+            cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
+            marks += [
+                (flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
+                (flag, mesh.indices[cells].ravel()),
+            ]
+        flags = vertex_flags(len(mesh.vertices), marks)
+        counts: dict[str, dict[str, int]] = {"child": child.counts(), "parent": theirs.counts()}
     else:
+        # the merge's own id-keyed edits: no second comparison of the meshes by content
         regions, region_arrays = region_drawing(merge, vids, tids, solutions)
+        flags, counts = edit_flags(merge, vids), edit_counts(merge)
     header = {
         "id": feature_id,
         "version": name,
         "parent": parent,
         "base": base,
-        "child_changes": child.counts(),
-        "parent_changes": theirs.counts(),
+        "child_changes": counts["child"],
+        "parent_changes": counts["parent"],
         "merges_by_region": not isinstance(merge, str),
         "reason": merge if isinstance(merge, str) else None,
         "regions": regions,
     }
-    extra: dict[str, npt.NDArray[Any]] = {"changed": vertex_flags(len(mesh.vertices), marks), **region_arrays}
+    extra: dict[str, npt.NDArray[Any]] = {"changed": flags, **region_arrays}
     return _binary(_body(header, mesh, None, extra))
 
 

@@ -37,7 +37,16 @@ import numpy.typing as npt
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MergeRegion, MeshMerge
 
-__all__ = ["REGION_STATES", "REGION_LABELS", "REGION_COLOURS", "CONFLICT_SOLUTIONS", "region_state", "region_drawing"]
+__all__ = [
+    "REGION_STATES",
+    "REGION_LABELS",
+    "REGION_COLOURS",
+    "CONFLICT_SOLUTIONS",
+    "region_state",
+    "region_drawing",
+    "edit_flags",
+    "edit_counts",
+]
 
 #: what can happen in a region, in the order of the legend
 REGION_STATES = (
@@ -222,4 +231,51 @@ def region_drawing(
     return entries, {
         "region_vertices": np.concatenate(found_vertices) if found_vertices else empty,
         "region_cells": np.concatenate(found_cells) if found_cells else empty,
+    }
+
+
+def edit_flags(merge: MeshMerge, vertex_ids: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """Who changed each drawn vertex, from the merge's edits: the child (1), the parent (2), both (3), none (0).
+
+    A vertex is changed by a side when that side moved, added or changed it,
+    or changed a cell on it (added, removed, reconnected, gave other values to;
+    its corners as that side or the base has them). The merge knows it already,
+    by id: no comparison of the meshes by content.
+
+    Parameters
+    ----------
+    merge : MeshMerge
+    vertex_ids : (n,) array_like of int
+        As for :func:`region_drawing`.
+
+    Returns
+    -------
+    (n,) float32
+    """
+    from tgsis.view.meshes import vertex_flags
+
+    vids = np.asarray(vertex_ids, dtype=np.int64).ravel()
+    vertices = _Lookup(_merged_ids(vids, merge.child_vertex_renumbering))
+    cells_of = {id(s): _Lookup(s.cell_ids) for s in (merge.base, merge.parent, merge.child)}  # one sort each
+    marks = []
+    for flag, side in ((1, "child"), (2, "parent")):
+        state = getattr(merge, side)
+        for region in merge.regions:
+            changed = getattr(region, f"{side}_cell_ids")
+            corners = [getattr(region, f"{side}_vertex_ids")]
+            for holder in (state, merge.base):  # a removed cell is the base's only
+                at = cells_of[id(holder)].positions(changed)[0] if len(changed) else np.empty(0, np.int64)
+                corners.append(holder.cells[at].ravel())
+            marks.append((flag, vertices.positions(np.unique(np.concatenate(corners)))[0]))
+    return vertex_flags(len(vids), marks)
+
+
+def edit_counts(merge: MeshMerge) -> dict[str, dict[str, int]]:
+    """``{"child": {"vertices": n, "cells": m}, "parent": {...}}``: the rows each side changed, over all regions."""
+    return {
+        side: {
+            "vertices": sum(len(getattr(r, f"{side}_vertex_ids")) for r in merge.regions),
+            "cells": sum(len(getattr(r, f"{side}_cell_ids")) for r in merge.regions),
+        }
+        for side in ("child", "parent")
     }
