@@ -12,7 +12,8 @@ view is served in a process of its own (``tgsis view --port 0``); medians of
   in the same snapshot, then :func:`tgsis.view.regions.region_drawing`);
 - ``tgsis.object_merge`` alone, and ``region_drawing`` alone;
 
-and the bytes the regions add to the conflict body (their header entries, as
+the navigation to ``/conflicts?version=e1`` until the scene is drawn (headless Chromium, as
+``bench/view_load.py``); and the bytes the regions add to the conflict body (their header entries, as
 JSON, and the two uint32 arrays of positions), against the body's size and
 against one float32 per vertex (what a per-vertex region array would cost).
 
@@ -30,8 +31,9 @@ import urllib.request
 
 import numpy as np
 import psycopg
+from playwright.sync_api import sync_playwright
 from transfer import grid_surface
-from view_load import serve
+from view_load import CHROMIUM, CHROMIUM_ARGS, serve
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
@@ -98,6 +100,22 @@ def main() -> None:
                 meshes.append(t)
                 t, body = get(f"{url}/api/conflict/{fid}?version=e1")
                 conflicts.append(t)
+            pages = []
+            with sync_playwright() as playwright:
+                browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+                for _ in range(args.repeat):
+                    page = browser.new_page(viewport={"width": 1100, "height": 900})
+                    start = time.perf_counter()
+                    page.goto(f"{url}/conflicts?version=e1")
+                    page.wait_for_function(
+                        "document.body.dataset.state === 'error' || Number(document.body.dataset.frame) >= 1",
+                        timeout=600_000,
+                    )
+                    pages.append(time.perf_counter() - start)
+                    status = page.text_content("#status")
+                    assert page.evaluate("document.body.dataset.state") == "ready", status
+                    page.close()
+                browser.close()
         finally:
             server.send_signal(signal.SIGTERM)
             server.wait(30)
@@ -115,6 +133,7 @@ def main() -> None:
     print(f"object_merge: {', '.join(f'{t:.2f}' for t in merges)} s; region_drawing: {', '.join(f'{t:.3f}' for t in drawings)} s")
     print(f"GET /api/mesh: {', '.join(f'{t:.2f}' for t in meshes)} s, {len(mesh_body) / 1e6:.1f} MB")
     print(f"GET /api/conflict: {', '.join(f'{t:.2f}' for t in conflicts)} s, {len(body) / 1e6:.1f} MB")
+    print(f"navigation to /conflicts drawn: {', '.join(f'{t:.2f}' for t in pages)} s ({status})")
     print(f"view_regions_json_bytes: {region_json}")
     print(f"view_regions_array_bytes: {region_arrays}")
     print(f"view_regions_added_bytes: {added}")
@@ -125,6 +144,7 @@ def main() -> None:
     print(f"view_mesh_endpoint_s: {statistics.median(meshes):.2f}")
     print(f"view_conflict_endpoint_s: {statistics.median(conflicts):.2f}")
     print(f"view_conflict_per_mesh_endpoint: {statistics.median(conflicts) / statistics.median(meshes):.2f}")
+    print(f"view_conflicts_page_s: {statistics.median(pages):.2f}")
 
 
 if __name__ == "__main__":
