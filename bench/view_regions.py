@@ -130,7 +130,9 @@ def main() -> None:
     per_vertex = 4 * surface.n_vertices
     counts = [(r["ids"]["vertices"], r["ids"]["cells"]) for r in header["regions"]]
     print(f"regions (vertices, cells, margin included): {counts}")
-    print(f"object_merge: {', '.join(f'{t:.2f}' for t in merges)} s; region_drawing: {', '.join(f'{t:.3f}' for t in drawings)} s")
+    print(
+        f"object_merge: {', '.join(f'{t:.2f}' for t in merges)} s; region_drawing: {', '.join(f'{t:.3f}' for t in drawings)} s"
+    )
     print(f"GET /api/mesh: {', '.join(f'{t:.2f}' for t in meshes)} s, {len(mesh_body) / 1e6:.1f} MB")
     print(f"GET /api/conflict: {', '.join(f'{t:.2f}' for t in conflicts)} s, {len(body) / 1e6:.1f} MB")
     print(f"navigation to /conflicts drawn: {', '.join(f'{t:.2f}' for t in pages)} s ({status})")

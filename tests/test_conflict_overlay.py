@@ -13,15 +13,20 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+import psycopg
 import pytest
 
-from tests.test_view_regions import CONFLICT, _four_regions, _region_with
+import tgsis
+from tests.merge_data import make_fault, move
+from tests.test_view_regions import CHILD_ONLY, CONFLICT, _four_regions, _region_with
 from tgsis.db.merging import _state_mesh
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshMerge
 from tgsis.pictures import OVERLAY_COLOURS, _overlay_legend, conflict_overlay
 
 pytest.importorskip("matplotlib")  # the extra "pictures" (installed by the test extra)
+
+Conn = psycopg.Connection[Any]
 
 
 def _pixels_near(image: npt.NDArray[Any], colour: str) -> int:
@@ -62,3 +67,24 @@ def test_a_solved_conflict_is_boxed_in_the_solved_colour_not_red(tmp_path: Path)
     assert _pixels_near(unsolved, OVERLAY_COLOURS["solved"]) == 0
     assert _pixels_near(solved, OVERLAY_COLOURS["solved"]) > 50
     assert _pixels_near(solved, OVERLAY_COLOURS["conflict"]) == 0
+
+
+def test_the_exported_overlay_shows_the_recorded_solution(conn: Conn, tmp_path: Path) -> None:
+    """``tgsis.export_conflict`` draws each conflicting region with the solution recorded for it (tgsis.resolve_region)."""
+    from matplotlib import image as mpimg
+
+    geoid = make_fault(conn)
+    move(conn, "e1", geoid, [CONFLICT], (0.0, 0.0, 30.0))
+    move(conn, "DEFAULT", geoid, [CONFLICT], (0.0, 0.0, 80.0))
+    move(conn, "e1", geoid, [CHILD_ONLY], (0.0, 0.0, 10.0))
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    before = np.asarray(mpimg.imread(tgsis.export_conflict(conn, "e1", geoid, tmp_path / "before")[-1]))
+    assert _pixels_near(before, OVERLAY_COLOURS["conflict"]) > 50  # recorded, but unsolved: red
+    assert _pixels_near(before, OVERLAY_COLOURS["solved"]) == 0
+    region = _region_with(tgsis.object_merge(conn, "e1", geoid), CONFLICT)
+    tgsis.resolve_region(conn, "e1", geoid, region, "average")
+    conn.commit()
+    after = np.asarray(mpimg.imread(tgsis.export_conflict(conn, "e1", geoid, tmp_path / "after")[-1]))
+    assert _pixels_near(after, OVERLAY_COLOURS["solved"]) > 50
+    assert _pixels_near(after, OVERLAY_COLOURS["conflict"]) == 0

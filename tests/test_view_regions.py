@@ -420,3 +420,116 @@ def test_the_facts_of_the_region_under_the_pointer(regions_view: tuple[str, int,
     page.mouse.click(canvas["x"] + xs[pick] + 0.5, canvas["y"] + ys[pick] + 0.5)
     assert page.locator(f"#regions tr.picked[data-region='{region}']").count() == 1
     assert x0 <= xs[pick] <= x1 and y0 <= ys[pick] <= y1
+
+
+# --------------------------------------------------------------------------- recorded solutions (tgsis.conflict_regions)
+
+# six conflicting vertices, one region each, apart: rows 2 and 5, columns 2, 5 and 8 of the grid
+SOLVED = {"parent": 2 * SIDE + 2, "child": 2 * SIDE + 5, "base": 2 * SIDE + 8, "average": 5 * SIDE + 2}
+MANUAL, UNSOLVED = 5 * SIDE + 5, 5 * SIDE + 8
+
+
+def _six_conflicts(conn: psycopg.Connection[Any]) -> tuple[int, dict[str, int]]:
+    """The fault with six conflicting regions in e1, five solved (one per solution) and one not: (geoid, region of each)."""
+    geoid = make_fault(conn)
+    for vertex in [*SOLVED.values(), MANUAL, UNSOLVED]:
+        move(conn, "e1", geoid, [vertex], (0.0, 0.0, 30.0))
+        move(conn, "DEFAULT", geoid, [vertex], (0.0, 0.0, -45.0))
+    tgsis.find_conflicts(conn, "e1")
+    merge = tgsis.object_merge(conn, "e1", geoid)
+    region = {name: _region_with(merge, vertex) for name, vertex in [*SOLVED.items(), ("manual", MANUAL)]}
+    region["unsolved"] = _region_with(merge, UNSOLVED)
+    for solution, index in region.items():
+        if solution in SOLVED:
+            tgsis.resolve_region(conn, "e1", geoid, index, solution)
+    # manual: the parent's rows with the region's vertex put 12 m above its base position
+    parent = merge.parent
+    vertices = parent.vertices.copy()
+    vertices[np.searchsorted(parent.vertex_ids, MANUAL), 2] += 45.0 + 12.0
+    manual = MeshState(
+        3,
+        parent.vertex_ids,
+        vertices,
+        parent.cell_ids,
+        parent.cells,
+        parent.vertex_properties,
+        parent.cell_properties,
+        parent.name,
+    )
+    tgsis.resolve_region(conn, "e1", geoid, region["manual"], "manual", manual)
+    conn.commit()
+    return geoid, region
+
+
+@pytest.fixture(scope="module")
+def solved_view(pg: TestServer, template_db: str) -> Iterator[tuple[str, int, dict[str, int], str]]:
+    with pg.database("tgsis_view_solved", template_db) as (_, dsn):
+        with psycopg.connect(dsn) as conn:
+            geoid, region = _six_conflicts(conn)
+        with running_view(dsn) as url:
+            yield url, geoid, region, dsn
+
+
+def test_the_endpoint_sends_the_recorded_solution_of_each_region(
+    solved_view: tuple[str, int, dict[str, int], str],
+) -> None:
+    url, geoid, region, _ = solved_view
+    status, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1")
+    assert status == 200, body[:300]
+    header, _ = unpack(body)
+    assert header["solutions"] == "recorded"
+    sent = {r["index"]: (r["solution"], r["state"]) for r in header["regions"]}
+    for solution, index in region.items():
+        assert sent[index] == (solution, "unsolved" if solution == "unsolved" else f"solved-{solution}")
+
+
+def test_the_page_draws_each_solution_in_its_colour(
+    solved_view: tuple[str, int, dict[str, int], str], page: Any
+) -> None:
+    url, geoid, region, _ = solved_view
+    page.goto(f"{url}/conflicts?version=e1")
+    wait_drawn(page)
+    legend = {
+        k: _rgb(c)
+        for k, c in page.locator("#region-legend [data-state]").evaluate_all(
+            "items => items.map(i => [i.dataset.state, getComputedStyle(i.querySelector('.swatch')).backgroundColor])"
+        )
+    }
+    rows = page.locator("#regions tbody tr").evaluate_all(
+        "rows => rows.map(r => [r.dataset.region, r.dataset.state, r.children[3].textContent])"
+    )
+    assert sorted((int(i), s, text) for i, s, text in rows) == sorted(
+        (index, "unsolved" if name == "unsolved" else f"solved-{name}", name) for name, index in region.items()
+    )
+    pixels = canvas_pixels(page)
+    boxes = json.loads(page.evaluate("document.body.dataset.regionBoxes"))
+    for index, state, _ in rows:
+        mask = _near(pixels, legend[state])
+        assert mask.sum() >= 20, f"region {index} ({state}): {mask.sum()} pixels of its colour"
+        x0, y0, x1, y1 = boxes[f"{geoid}:{index}"]
+        ys, xs = np.nonzero(mask)
+        inside = (xs >= x0 - 3) & (xs <= x1 + 3) & (ys >= y0 - 3) & (ys <= y1 + 3)
+        assert inside.mean() > 0.95, f"region {index} ({state}): its colour outside its place"
+    for state in ("merges-parent", "merges-child", "merges-both"):
+        assert _near(pixels, legend[state], 3).sum() == 0, state
+    # the facts under the pointer name the solution
+    ys, xs = np.nonzero(_near(pixels, legend["solved-average"]))
+    pick = int(np.argmin((xs - xs.mean()) ** 2 + (ys - ys.mean()) ** 2))
+    canvas = page.locator("#scene").bounding_box()
+    page.mouse.move(canvas["x"] + xs[pick] + 0.5, canvas["y"] + ys[pick] + 0.5)
+    page.locator("#region-info").wait_for(state="visible")
+    text = page.locator("#region-info").text_content()
+    assert f"region {region['average']}: conflict, solved with the average; solution: average" in text
+
+
+def test_solutions_recorded_on_an_earlier_state_are_not_shown_as_holding(
+    db_dsn: str, conn: psycopg.Connection[Any]
+) -> None:
+    """A new edit after the solutions: the regions are found again; until then the page shows them unsolved, and says why."""
+    geoid, region = _six_conflicts(conn)
+    move(conn, "e1", geoid, [SOLVED["parent"]], (0.0, 0.0, 1.0))  # the version edits a solved region again
+    with running_view(db_dsn) as url:
+        _, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1")
+    header, _ = unpack(body)
+    assert header["solutions"] == "stale"
+    assert {r["solution"] for r in header["regions"]} == {"unsolved"}

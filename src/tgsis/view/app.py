@@ -61,6 +61,7 @@ from tgsis.db.inspect import (
     version_validity,
 )
 from tgsis.db.merging import object_merge
+from tgsis.db.regions import recorded_solutions
 from tgsis.errors import (
     Error,
     InvalidInputError,
@@ -717,7 +718,9 @@ def conflict_endpoint(request: Request) -> Response:
         fc = feature_class_of(conn, feature_id)
         stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
         merge = _object_merge(conn, name, feature_id)
-        solutions = {} if isinstance(merge, str) else _recorded_solutions(conn, name, feature_id, merge)
+        solutions, recorded = (
+            ({}, "none") if isinstance(merge, str) else _recorded_solutions(conn, name, feature_id, merge)
+        )
     mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
     regions: list[dict[str, Any]] = []
     region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
@@ -749,6 +752,7 @@ def conflict_endpoint(request: Request) -> Response:
         "merges_by_region": not isinstance(merge, str),
         "reason": merge if isinstance(merge, str) else None,
         "regions": regions,
+        "solutions": recorded,
     }
     extra: dict[str, npt.NDArray[Any]] = {"changed": flags, **region_arrays}
     return _binary(_body(header, mesh, None, extra))
@@ -762,9 +766,17 @@ def _object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge | str:
         return str(exc).splitlines()[0]
 
 
-def _recorded_solutions(conn: Conn, version: str, feature_id: int, merge: MeshMerge) -> dict[int, str]:
-    """The solution recorded for each region of ``merge`` (none recorded: every conflict is unsolved)."""
-    return {}
+def _recorded_solutions(conn: Conn, version: str, feature_id: int, merge: MeshMerge) -> tuple[dict[int, str], str]:
+    """The solution recorded for each region of ``merge`` (:func:`tgsis.db.regions.recorded_solutions`), and whether:
+
+    ``recorded`` (they hold for this merge), ``none`` (no region stored: every
+    conflict unsolved), ``stale`` (found on another state: shown unsolved until
+    the conflicts are found again).
+    """
+    solutions = recorded_solutions(conn, version, "feature", str(feature_id), merge)
+    if solutions is None:
+        return {}, "stale"
+    return solutions, "recorded" if solutions else "none"
 
 
 # --------------------------------------------------------------------------- request guard

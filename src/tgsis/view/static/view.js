@@ -537,9 +537,15 @@ export function conflictView(config) {
       const tbody = document.querySelector("#regions tbody"), notes = document.getElementById("region-notes");
       for (const m of meshes) {
         for (const region of m.header.regions) tbody.append(regionRow(m.header, region, labels, palette));
-        if (!m.header.merges_by_region) {
+        const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
+          : m.header.solutions === "stale" ? `feature ${m.header.id}: the solutions recorded for its regions were ` +
+            `found on an earlier state of ${m.header.version} or ${m.header.parent}, so they do not hold and every ` +
+            `conflict is shown unsolved; find the conflicts again (tgsis version conflicts ${m.header.version})`
+          : null;
+        if (note) {
           const p = document.createElement("p");
-          p.textContent = `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`;
+          p.className = "note";
+          p.textContent = note;
           notes.append(p);
         }
       }
