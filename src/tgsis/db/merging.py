@@ -38,9 +38,9 @@ import psycopg
 
 from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
-from tgsis.db.regions import recorded_solutions
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import one_snapshot
+from tgsis.db.regions import recorded_solutions
 from tgsis.db.versions import show_name
 from tgsis.errors import InvalidInputError, NotFoundError, reraise
 from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
