@@ -29,7 +29,7 @@ from tests.view_helpers import canvas_pixels, chromium, get, running_view, wait_
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
 from tgsis.testing import TestServer
-from tgsis.view.meshes import pack, unpack
+from tgsis.view.meshes import pack, tetra_boundary, unpack
 from tgsis.view.regions import REGION_STATES, edit_flags, region_drawing, region_state
 
 # four vertices of the 12 x 12 fault, far enough apart that their one-ring regions never touch
@@ -533,3 +533,97 @@ def test_solutions_recorded_on_an_earlier_state_are_not_shown_as_holding(
     header, _ = unpack(body)
     assert header["solutions"] == "stale"
     assert {r["solution"] for r in header["regions"]} == {"unsolved"}
+
+
+# --------------------------------------------------------------------------- lines, points, solids
+
+
+def _kinds(conn: psycopg.Connection[Any]) -> dict[str, int]:
+    """A line set, a point set and a tetrahedral solid, each with a conflict in e1 (vertex 2 moved differently on both
+    sides) and an edit of the version's own elsewhere (the last vertex)."""
+    tgsis.create_feature_class(conn, "wells", "MULTILINESTRING")
+    tgsis.create_feature_class(conn, "samples", "MULTIPOINT")
+    tgsis.create_feature_class(conn, "blocks", "MULTITETRA")
+    tgsis.enable_feature_versioning(conn)
+    x = np.linspace(0.0, 900.0, 10)
+    line = tgsis.LineSet(np.stack([x, 0.5 * x, np.sin(x / 100) * 50], 1), [[i, i + 1] for i in range(9)])
+    points = tgsis.PointSet(np.stack([x, x[::-1], np.cos(x / 100) * 50], 1))
+    u, v, w = np.meshgrid(np.arange(4.0), np.arange(3.0), np.arange(2.0), indexing="ij")
+    cube = np.stack([u.ravel(), v.ravel(), w.ravel()], 1) * 100
+    from scipy.spatial import Delaunay
+
+    tets = Delaunay(cube).simplices
+    solid = tgsis.TetraMesh(cube, tets)
+    ids = {
+        "wells": tgsis.insert_feature(conn, "wells", line),
+        "samples": tgsis.insert_feature(conn, "samples", points),
+        "blocks": tgsis.insert_feature(conn, "blocks", solid),
+    }
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for geoid in ids.values():
+        last = conn.execute("SELECT max(vrtxid) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone()
+        assert last is not None
+        move(conn, "e1", geoid, [2], (0.0, 0.0, 30.0))
+        move(conn, "DEFAULT", geoid, [2], (0.0, 0.0, -20.0))
+        move(conn, "e1", geoid, [int(last[0])], (0.0, 0.0, 40.0))
+    return ids
+
+
+@pytest.fixture(scope="module")
+def kinds_view(pg: TestServer, template_db: str) -> Iterator[tuple[str, dict[str, int], str]]:
+    with pg.database("tgsis_view_kinds", template_db) as (_, dsn):
+        with psycopg.connect(dsn) as conn:
+            ids = _kinds(conn)
+        with running_view(dsn) as url:
+            yield url, ids, dsn
+
+
+def test_lines_points_and_solids_are_drawn_with_their_regions(kinds_view: tuple[str, dict[str, int], str]) -> None:
+    url, ids, dsn = kinds_view
+    for name, geoid in ids.items():
+        status, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1")
+        assert status == 200, (name, body[:300])
+        header, arrays = unpack(body)
+        with psycopg.connect(dsn) as conn:
+            merge = tgsis.object_merge(conn, "e1", geoid)
+        assert header["kind"] == {"wells": "lines", "samples": "points", "blocks": "triangles"}[name]
+        assert sorted(r["state"] for r in header["regions"]) == ["merges-child", "unsolved"], name
+        positions = arrays["positions"].reshape(-1, 3).astype(np.float64) + np.asarray(header["origin"])
+        for sent, region, v in zip(header["regions"], merge.regions, _split(arrays, header["regions"], "vertices")):
+            want = merge.child.vertices[np.searchsorted(merge.child.vertex_ids, region.vertex_ids)]
+            np.testing.assert_allclose(np.sort(positions[v], axis=0), np.sort(want, axis=0), atol=1e-3)
+            assert sent["missing"] == {"vertices": 0, "cells": 0} or name == "blocks"
+        cells = _split(arrays, header["regions"], "cells")
+        if name == "wells":  # each region's segments, by their corners
+            k = 2
+            for region, c in zip(merge.regions, cells):
+                corners = merge.child.cells[np.searchsorted(merge.child.cell_ids, region.cell_ids)]
+                want = np.sort(
+                    merge.child.vertices[np.searchsorted(merge.child.vertex_ids, corners)].reshape(-1, 3 * k), axis=0
+                )
+                got = positions[arrays["indices"].reshape(-1, k)[c]].reshape(-1, 3 * k)
+                np.testing.assert_allclose(np.sort(got, axis=0), want, atol=1e-3)
+        if name == "blocks":  # the boundary faces of the region's tetrahedra, every one of them
+            faces = merge.child.vertex_ids[arrays["indices"].reshape(-1, 3).astype(np.int64)]
+            boundary, owner = tetra_boundary(merge.child.cells)  # the solid's faces, as vertex ids
+            for sent, region, c in zip(header["regions"], merge.regions, cells):
+                assert len(c) == sent["drawn"]["cells"] > 0
+                mine = np.isin(merge.child.cell_ids[owner], region.cell_ids)
+                assert sorted(map(sorted, faces[c].tolist())) == sorted(map(sorted, boundary[mine].tolist()))
+
+
+def test_a_page_of_lines_points_and_a_solid_draws_their_regions(
+    kinds_view: tuple[str, dict[str, int], str], page: Any
+) -> None:
+    url, ids, _ = kinds_view
+    page.goto(f"{url}/conflicts?version=e1")
+    wait_drawn(page)
+    rows = page.locator("#regions tbody tr").evaluate_all("rows => rows.map(r => [r.dataset.feature, r.dataset.state])")
+    assert sorted(map(tuple, rows)) == sorted((str(g), s) for g in ids.values() for s in ("merges-child", "unsolved"))
+    unsolved = _rgb(
+        page.locator("#region-legend [data-state=unsolved] .swatch").evaluate(
+            "s => getComputedStyle(s).backgroundColor"
+        )
+    )
+    assert _near(canvas_pixels(page), unsolved).sum() >= 20

@@ -81,6 +81,7 @@ from tgsis.view.regions import (
     edit_counts,
     edit_flags,
     region_drawing,
+    state_drawable,
 )
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
@@ -714,18 +715,31 @@ def conflict_endpoint(request: Request) -> Response:
         raise NotFoundError(f"no version {name!r} with a parent", hint="the versions page lists them")
     parent, base = known[name].parent, known[name].initrevision
     assert parent is not None
-    with view.session(request, name) as conn:
-        fc = feature_class_of(conn, feature_id)
-        stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
-        merge = _object_merge(conn, name, feature_id)
-        solutions, recorded = (
-            ({}, "none") if isinstance(merge, str) else _recorded_solutions(conn, name, feature_id, merge)
-        )
-    mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
     regions: list[dict[str, Any]] = []
     region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
-    if isinstance(merge, str):
-        # merges as a whole only: who changed what, by comparing the meshes (the merge knows nothing here)
+    counts: dict[str, dict[str, int]] = {"child": {}, "parent": {}}
+    recorded = "none"
+    with view.session(request, name) as conn:
+        fc = feature_class_of(conn, feature_id)
+        merge = _object_merge(conn, name, feature_id)
+        if isinstance(merge, MeshMerge):
+            # drawn from the merge's own child state (the version's rows, read in the merge's snapshot): one read,
+            # any model-1 kind, the regions' ids in the drawing's numbering
+            solutions, recorded = _recorded_solutions(conn, name, feature_id, merge)
+            mesh, drawn_cells = state_drawable(merge.child)
+            regions, region_arrays = region_drawing(merge, merge.child.vertex_ids, drawn_cells, solutions, merged=True)
+            # who changed each vertex: the merge's own id-keyed edits, no second comparison of the meshes
+            flags, counts = edit_flags(merge, merge.child.vertex_ids, merged=True), edit_counts(merge)
+        elif _compared(fc):
+            stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
+        else:  # merges as a whole only and not compared: drawn, nobody's changes marked
+            drawable, _ = _mesh_of(conn, fc, feature_id, None)
+            if drawable is None:
+                raise NotFoundError(f"feature {feature_id} has no geometry in version {name!r}")
+            mesh, flags = drawable, np.zeros(len(drawable.vertices), dtype=np.float32)
+    if isinstance(merge, str) and _compared(fc):
+        # merges as a whole only: who changed what, by comparing the meshes by content (the merge knows nothing)
+        mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
         with view.session(request) as conn:
             child = compare_versions(conn, feature_id, parent, name, old_revision=base)
             theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
@@ -737,11 +751,7 @@ def conflict_endpoint(request: Request) -> Response:
                 (flag, mesh.indices[cells].ravel()),
             ]
         flags = vertex_flags(len(mesh.vertices), marks)
-        counts: dict[str, dict[str, int]] = {"child": child.counts(), "parent": theirs.counts()}
-    else:
-        # the merge's own id-keyed edits: no second comparison of the meshes by content
-        regions, region_arrays = region_drawing(merge, vids, tids, solutions)
-        flags, counts = edit_flags(merge, vids), edit_counts(merge)
+        counts = {"child": child.counts(), "parent": theirs.counts()}
     header = {
         "id": feature_id,
         "version": name,

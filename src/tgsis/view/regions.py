@@ -29,13 +29,14 @@ States (the legend of the page):
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 
 from tgsis.errors import InvalidInputError
-from tgsis.merge3 import MergeRegion, MeshMerge
+from tgsis.merge3 import MergeRegion, MeshMerge, MeshState
+from tgsis.view.meshes import Drawable, tetra_boundary, vertex_flags
 
 __all__ = [
     "REGION_STATES",
@@ -44,6 +45,7 @@ __all__ = [
     "CONFLICT_SOLUTIONS",
     "region_state",
     "region_drawing",
+    "state_drawable",
     "edit_flags",
     "edit_counts",
 ]
@@ -141,12 +143,20 @@ class _Lookup:
         self.sorted = ids[self.order]
 
     def positions(self, wanted: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], int]:
-        """(positions of the wanted ids that are drawn, how many are not)."""
-        if len(self.sorted) == 0:
-            return np.empty(0, dtype=np.int64), len(wanted)
-        at = np.minimum(np.searchsorted(self.sorted, wanted), len(self.sorted) - 1)
-        found = self.sorted[at] == wanted
-        return self.order[at[found]].astype(np.int64), int(len(wanted) - found.sum())
+        """(every position of each wanted id that is drawn, how many wanted ids are not drawn).
+
+        An id may be drawn several times (the boundary faces of one tetrahedron): all its positions come.
+        """
+        left = np.searchsorted(self.sorted, wanted, side="left")
+        many = np.searchsorted(self.sorted, wanted, side="right") - left
+        starts = np.cumsum(many) - many
+        at = np.repeat(left, many) + (np.arange(int(many.sum())) - np.repeat(starts, many))
+        return self.order[at].astype(np.int64), int(np.count_nonzero(many == 0))
+
+
+def _lookup(ids: npt.ArrayLike, renumbering: npt.NDArray[np.int64], merged: bool) -> _Lookup:
+    stored = np.asarray(ids, dtype=np.int64).ravel()
+    return _Lookup(stored if merged else _merged_ids(stored, renumbering))
 
 
 def _side(region: MergeRegion, side: str) -> dict[str, Any]:
@@ -157,11 +167,34 @@ def _side(region: MergeRegion, side: str) -> dict[str, Any]:
     }
 
 
+def state_drawable(state: MeshState) -> tuple[Drawable, npt.NDArray[np.int64] | None]:
+    """What the view draws of a merge's state, and the id of the stored cell of each drawn cell.
+
+    Triangles, segments and points as they are; a tetrahedral solid by its
+    boundary faces (each face carries its tetrahedron's id; tetrahedra inside
+    have none). Vertices in id order; cell ids None for a point set (its
+    points are drawn as its vertices).
+    """
+    corners = np.searchsorted(state.vertex_ids, state.cells).reshape(-1, state.cell_size)
+    no_values: dict[str, npt.NDArray[np.float64]] = {}
+    if state.cell_size == 1:
+        empty = np.empty((0, 0), dtype=np.int64)
+        return Drawable("points", state.vertices, empty, no_values, np.empty(0, dtype=np.int64)), None
+    if state.cell_size == 4:
+        faces, owner = tetra_boundary(corners)
+        return Drawable("triangles", state.vertices, faces, no_values, owner), state.cell_ids[owner]
+    kind: Literal["triangles", "lines"] = "triangles" if state.cell_size == 3 else "lines"
+    rows = np.arange(len(corners), dtype=np.int64)
+    return Drawable(kind, state.vertices, corners, no_values, rows), state.cell_ids
+
+
 def region_drawing(
     merge: MeshMerge,
     vertex_ids: npt.ArrayLike,
-    cell_ids: npt.ArrayLike,
+    cell_ids: npt.ArrayLike | None,
     solutions: Mapping[int, str] | None = None,
+    *,
+    merged: bool = False,
 ) -> tuple[list[dict[str, Any]], dict[str, npt.NDArray[np.int64]]]:
     """The regions of a merge as the view sends them with the drawn mesh.
 
@@ -171,10 +204,13 @@ def region_drawing(
         :func:`tgsis.object_merge` of the object.
     vertex_ids : (n,) array_like of int
         The stored id of each drawn vertex, in the drawn order (the version's rows: the child's numbering).
-    cell_ids : (m,) array_like of int
-        The stored id of each drawn cell, in the drawn order.
+    cell_ids : (m,) array_like of int, or None
+        The stored id of each drawn cell, in the drawn order (an id drawn several times, as a solid's
+        boundary faces, gives them all); None when no cell is drawn (a point set).
     solutions : mapping of int to str, optional
         The solution recorded for a region (by index); a conflict without one is ``unsolved``.
+    merged : bool
+        The ids are already in the merge's numbering (a drawing of ``merge.child``, :func:`state_drawable`).
 
     Returns
     -------
@@ -202,14 +238,14 @@ def region_drawing(
             if known
             else f"a solution for no region {unknown[0]}: this merge has no region"
         )
-    vertices = _Lookup(_merged_ids(np.asarray(vertex_ids, dtype=np.int64).ravel(), merge.child_vertex_renumbering))
-    cells = _Lookup(_merged_ids(np.asarray(cell_ids, dtype=np.int64).ravel(), merge.child_cell_renumbering))
+    vertices = _lookup(vertex_ids, merge.child_vertex_renumbering, merged)
+    cells = None if cell_ids is None else _lookup(cell_ids, merge.child_cell_renumbering, merged)
     entries: list[dict[str, Any]] = []
     found_vertices, found_cells = [], []
     for region in merge.regions:
         state = region_state(region, solutions.get(region.index))
         v, v_missing = vertices.positions(region.vertex_ids)
-        c, c_missing = cells.positions(region.cell_ids)
+        c, c_missing = (np.empty(0, dtype=np.int64), 0) if cells is None else cells.positions(region.cell_ids)
         found_vertices.append(v)
         found_cells.append(c)
         entries.append(
@@ -234,7 +270,7 @@ def region_drawing(
     }
 
 
-def edit_flags(merge: MeshMerge, vertex_ids: npt.ArrayLike) -> npt.NDArray[np.float32]:
+def edit_flags(merge: MeshMerge, vertex_ids: npt.ArrayLike, *, merged: bool = False) -> npt.NDArray[np.float32]:
     """Who changed each drawn vertex, from the merge's edits: the child (1), the parent (2), both (3), none (0).
 
     A vertex is changed by a side when that side moved, added or changed it,
@@ -246,16 +282,15 @@ def edit_flags(merge: MeshMerge, vertex_ids: npt.ArrayLike) -> npt.NDArray[np.fl
     ----------
     merge : MeshMerge
     vertex_ids : (n,) array_like of int
+    merged : bool
         As for :func:`region_drawing`.
 
     Returns
     -------
     (n,) float32
     """
-    from tgsis.view.meshes import vertex_flags
-
     vids = np.asarray(vertex_ids, dtype=np.int64).ravel()
-    vertices = _Lookup(_merged_ids(vids, merge.child_vertex_renumbering))
+    vertices = _lookup(vids, merge.child_vertex_renumbering, merged)
     cells_of = {id(s): _Lookup(s.cell_ids) for s in (merge.base, merge.parent, merge.child)}  # one sort each
     marks = []
     for flag, side in ((1, "child"), (2, "parent")):

@@ -382,56 +382,66 @@ const short = (x) => String(Number(Number(x).toPrecision(6)));
 const plural = (n, one, many) => `${n} ${n === 1 ? one : many}`;
 
 // The merge regions of one feature (its header's `regions`, the positions `region_vertices`, `region_cells` in
-// its arrays): the regions' cells as an unlit overlay in their state's colour, their vertices as darker dots.
-// Returns the overlay (its userData.regionOf: the region entry of each overlay triangle) and the dots, or nulls.
+// its arrays): the regions' cells (triangles, or segments) as an unlit overlay in their state's colour, their
+// vertices as dots (darker over cells; a point set's points in the state's colour itself).
+// Returns [overlay or null, dots or null]; each has userData.regionOf: the region entry of each of its items.
 function regionObjects(mesh, palette, sceneOrigin) {
   const { header, arrays } = mesh;
   const regions = header.regions || [];
+  if (!regions.length) return [null, null];
   const cells = arrays.region_cells, vertices = arrays.region_vertices;
-  if (!regions.length || header.kind !== "triangles") return [null, null];
+  const k = header.kind === "triangles" ? 3 : header.kind === "lines" ? 2 : 0;
   const p = arrays.positions, idx = arrays.indices;
-  const positions = new Float32Array(cells.length * 9), colour = new Float32Array(cells.length * 9);
-  const regionOf = new Uint32Array(cells.length);
+  const positions = new Float32Array(cells.length * 3 * k), colour = new Float32Array(cells.length * 3 * k);
+  const regionOf = new Uint32Array(cells.length), dotRegion = new Uint32Array(vertices.length);
   const dots = new Float32Array(vertices.length * 3), dotColour = new Float32Array(vertices.length * 3);
+  const shade = k ? 0.3 : 1.0;
   let c = 0, v = 0;
-  regions.forEach((region, k) => {
+  regions.forEach((region, r) => {
     const rgb = palette[region.state];
     for (let j = 0; j < region.drawn.cells; j++, c++) {
-      const t = cells[c];
-      for (let corner = 0; corner < 3; corner++) {
-        const at = idx[3 * t + corner];
-        positions.set(p.subarray(3 * at, 3 * at + 3), 9 * c + 3 * corner);
-        colour.set(rgb, 9 * c + 3 * corner);
+      for (let corner = 0; corner < k; corner++) {
+        const at = idx[k * cells[c] + corner];
+        positions.set(p.subarray(3 * at, 3 * at + 3), 3 * (k * c + corner));
+        colour.set(rgb, 3 * (k * c + corner));
       }
-      regionOf[c] = k;
+      regionOf[c] = r;
     }
     for (let j = 0; j < region.drawn.vertices; j++, v++) {
       const at = vertices[v];
       dots.set(p.subarray(3 * at, 3 * at + 3), 3 * v);
-      dotColour.set(rgb.map((x) => 0.3 * x), 3 * v);     // darker: a vertex a side changed, on its region's cells
+      dotColour.set(rgb.map((x) => shade * x), 3 * v);
+      dotRegion[v] = r;
     }
   });
   const o = header.origin;
-  const place = (object) => {
+  const place = (object, items) => {
     object.position.set(o[0] - sceneOrigin[0], o[1] - sceneOrigin[1], o[2] - sceneOrigin[2]);
+    object.userData.header = header;
+    object.userData.regionOf = items;
     return object;
   };
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
-  geometry.setAttribute("color", new THREE.BufferAttribute(colour, 3));
-  // unlit, so that each state keeps its colour; pulled in front of the mesh's own (same) triangles
-  const overlay = place(new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
-    vertexColors: true, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -1, polygonOffsetUnits: -4 })));
-  overlay.userData.regionOf = regionOf;
-  overlay.userData.header = header;
-  overlay.renderOrder = 1;
+  const buffers = (xyz, rgb) => {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.BufferAttribute(xyz, 3));
+    geometry.setAttribute("color", new THREE.BufferAttribute(rgb, 3));
+    return geometry;
+  };
+  let overlay = null;
+  if (k === 3 && cells.length) {
+    // unlit, so that each state keeps its colour; pulled in front of the mesh's own (same) triangles
+    overlay = place(new THREE.Mesh(buffers(positions, colour), new THREE.MeshBasicMaterial({
+      vertexColors: true, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -1, polygonOffsetUnits: -4 })),
+      regionOf);
+  } else if (k === 2 && cells.length) {
+    overlay = place(new THREE.LineSegments(buffers(positions, colour),
+      new THREE.LineBasicMaterial({ vertexColors: true, depthTest: false })), regionOf);
+  }
+  if (overlay) overlay.renderOrder = 1;
   let points = null;
   if (vertices.length) {
-    const g = new THREE.BufferGeometry();
-    g.setAttribute("position", new THREE.BufferAttribute(dots, 3));
-    g.setAttribute("color", new THREE.BufferAttribute(dotColour, 3));
-    points = place(new THREE.Points(g, new THREE.PointsMaterial(
-      { vertexColors: true, size: 6, sizeAttenuation: false, depthTest: false })));
+    points = place(new THREE.Points(buffers(dots, dotColour), new THREE.PointsMaterial(
+      { vertexColors: true, size: k ? 6 : 9, sizeAttenuation: false, depthTest: false })), dotRegion);
     points.renderOrder = 2;
   }
   return [overlay, points];
@@ -439,26 +449,26 @@ function regionObjects(mesh, palette, sceneOrigin) {
 
 // where each region's drawn cells and vertices fall on the canvas (CSS pixels from its top left corner, border
 // included, as a screenshot of the canvas has them): {"feature:region": [x0, y0, x1, y1]}
-function regionBoxes(viewer, meshes, overlays) {
+function regionBoxes(viewer, objects) {
   const canvas = viewer.canvas, w = canvas.clientWidth, h = canvas.clientHeight;
   const boxes = {};
   const point = new THREE.Vector3();
-  meshes.forEach((m, i) => {
-    const overlay = overlays[i];
-    if (!overlay) return;
-    const p = overlay.geometry.getAttribute("position").array, regionOf = overlay.userData.regionOf;
-    overlay.updateMatrixWorld();
-    for (let t = 0; t < regionOf.length; t++) {
-      const key = `${m.header.id}:${m.header.regions[regionOf[t]].index}`;
+  for (const object of objects) {
+    const p = object.geometry.getAttribute("position").array, regionOf = object.userData.regionOf;
+    const per = p.length / 3 / Math.max(regionOf.length, 1);       // vertices of each item (3, 2 or 1)
+    const header = object.userData.header;
+    object.updateMatrixWorld();
+    for (let i = 0; i < regionOf.length; i++) {
+      const key = `${header.id}:${header.regions[regionOf[i]].index}`;
       const box = boxes[key] || (boxes[key] = [Infinity, Infinity, -Infinity, -Infinity]);
-      for (let corner = 0; corner < 3; corner++) {
-        point.fromArray(p, 9 * t + 3 * corner).applyMatrix4(overlay.matrixWorld).project(viewer.camera);
+      for (let corner = 0; corner < per; corner++) {
+        point.fromArray(p, 3 * (per * i + corner)).applyMatrix4(object.matrixWorld).project(viewer.camera);
         const x = (point.x + 1) / 2 * w + canvas.clientLeft, y = (1 - point.y) / 2 * h + canvas.clientTop;
         box[0] = Math.min(box[0], x); box[1] = Math.min(box[1], y);
         box[2] = Math.max(box[2], x); box[3] = Math.max(box[3], y);
       }
     }
-  });
+  }
   return boxes;
 }
 
@@ -475,8 +485,9 @@ function regionText(header, region, labels) {
          `${sideText("parent", region)}; ${sideText("child", region)}. ` +
          `${plural(region.ids.vertices, "vertex", "vertices")} and ${plural(region.ids.cells, "cell", "cells")}` +
          ` (margin included)` +
-         (missing ? `, of which ${region.missing.vertices} vertices and ${region.missing.cells} cells are not in ` +
-                    `${header.version}'s mesh (added by the parent or removed by the child)` : "");
+         (missing ? `, of which ${region.missing.vertices} vertices and ${region.missing.cells} cells are not drawn ` +
+                    `(not in ${header.version}'s mesh: the parent's new rows or those ${header.version} removed; ` +
+                    `or tetrahedra inside the solid)` : "");
 }
 
 function regionRow(header, region, labels, palette) {
@@ -518,12 +529,12 @@ export function conflictView(config) {
   Promise.all(config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))))
     .then((meshes) => {
       const origin = meshes[0].header.origin;
-      const overlays = [];
+      const overlays = [];      // every overlay and dots object: what the pointer picks, what the boxes are of
       const grey = (n) => flagColours(new Float32Array(n));
       for (const m of meshes) {
         const [overlay, dots] = regionObjects(m, linear, origin);
-        overlays.push(overlay);
-        if (overlay) {
+        overlays.push(...[overlay, dots].filter((o) => o));
+        if (m.header.regions.length) {
           viewer.replace(0, m.header.id, object3d(m, grey(m.header.n_vertices), origin));
           viewer.replace(0, `${m.header.id}:regions`, overlay);
           viewer.replace(0, `${m.header.id}:dots`, dots);
@@ -551,7 +562,10 @@ export function conflictView(config) {
       }
       // the region under the pointer (or the one clicked) and its facts
       const raycaster = new THREE.Raycaster();
-      const pickable = overlays.filter((o) => o);
+      const pickable = overlays;
+      const size = new THREE.Box3().setFromObject(viewer.scenes[0].group).getSize(new THREE.Vector3()).length();
+      raycaster.params.Line.threshold = size / 300;      // a segment or a dot a few pixels away is picked
+      raycaster.params.Points.threshold = size / 300;
       let pinned = null;
       const at = (event) => {
         const rect = viewer.canvas.getBoundingClientRect();
@@ -560,8 +574,9 @@ export function conflictView(config) {
         raycaster.setFromCamera(ndc, viewer.camera);
         const hit = raycaster.intersectObjects(pickable, false)[0];
         if (!hit) return null;
-        const header = hit.object.userData.header;
-        return { header, region: header.regions[hit.object.userData.regionOf[hit.faceIndex]] };
+        const header = hit.object.userData.header, regionOf = hit.object.userData.regionOf;
+        const item = hit.object.isMesh ? hit.faceIndex : hit.object.isLineSegments ? Math.floor(hit.index / 2) : hit.index;
+        return { header, region: header.regions[regionOf[item]] };
       };
       const show = (found) => {
         const shown = found || pinned;
@@ -584,7 +599,7 @@ export function conflictView(config) {
       const unsolved = regions.filter((r) => r.state === "unsolved").length;
       document.body.dataset.flags = tally.join(",");
       document.body.dataset.regions = String(regions.length);
-      document.body.dataset.regionBoxes = JSON.stringify(regionBoxes(viewer, meshes, overlays));
+      document.body.dataset.regionBoxes = JSON.stringify(regionBoxes(viewer, overlays));
       drawn(viewer);
       setState("ready", `${count(meshes)}; changed here ${tally[1]}, in the parent ${tally[2]}, on both sides ${tally[3]} vertices; ` +
                `${plural(regions.length, "region", "regions")}, ${regions.filter((r) => r.conflict).length} in conflict, ${unsolved} unsolved`);
