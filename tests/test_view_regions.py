@@ -627,3 +627,40 @@ def test_a_page_of_lines_points_and_a_solid_draws_their_regions(
         )
     )
     assert _near(canvas_pixels(page), unsolved).sum() >= 20
+
+
+def test_a_feature_the_version_deleted_does_not_blank_the_page(
+    db_dsn: str, conn: psycopg.Connection[Any], page: Any
+) -> None:
+    """Deleted in the version, moved in the parent: a conflict with nothing to draw in the version.
+
+    Was: its endpoint answered 404 and the whole page failed, the other
+    features' regions undrawn. Now the others are drawn and the page says why
+    that one is not.
+    """
+    from tgsis.db import features as F
+
+    geoid = make_fault(conn)
+    fault = curved_surface()
+    fault.vertices[:, 0] += 5000.0
+    gone = F.insert_feature(conn, "faults", fault)  # in DEFAULT, and so in e1 once refreshed
+    conn.commit()
+    tgsis.refresh_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, [CONFLICT], (0.0, 0.0, 30.0))
+    move(conn, "DEFAULT", geoid, [CONFLICT], (0.0, 0.0, 80.0))
+    move(conn, "DEFAULT", gone, [3], (0.0, 0.0, 5.0))
+    with tgsis.in_version(conn, "e1"):
+        F.delete_feature(conn, "faults", gone)
+    conn.commit()
+    assert {c.objectkey for c in tgsis.find_conflicts(conn, "e1")} == {str(geoid), str(gone)}
+    conn.commit()
+    with running_view(db_dsn) as url:
+        page.goto(f"{url}/conflicts?version=e1")
+        wait_drawn(page)
+        rows = page.locator("#regions tbody tr").evaluate_all(
+            "rows => rows.map(r => [r.dataset.feature, r.dataset.state])"
+        )
+        assert [tuple(r) for r in rows] == [(str(geoid), "unsolved")]
+        notes = page.locator("#region-notes").text_content()
+        assert f"feature {gone}" in notes and "not drawn" in notes, notes

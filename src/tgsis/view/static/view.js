@@ -526,8 +526,14 @@ export function conflictView(config) {
   }
   const info = document.getElementById("region-info");
   setState("loading", "loading…");
-  Promise.all(config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))))
-    .then((meshes) => {
+  // one feature that cannot be drawn (deleted in the version, a kind the view does not draw) leaves the others
+  const fetched = config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))
+    .catch((error) => ({ failed: id, message: String(error.message || error) })));
+  Promise.all(fetched)
+    .then((results) => {
+      const failed = results.filter((r) => r.failed !== undefined);
+      const meshes = results.filter((r) => r.failed === undefined);
+      if (!meshes.length) throw new Error(failed.map((f) => `feature ${f.failed}: ${f.message}`).join("; "));
       const origin = meshes[0].header.origin;
       const overlays = [];      // every overlay and dots object: what the pointer picks, what the boxes are of
       const grey = (n) => flagColours(new Float32Array(n));
@@ -546,6 +552,12 @@ export function conflictView(config) {
       viewer.fit();
       viewer.render();
       const tbody = document.querySelector("#regions tbody"), notes = document.getElementById("region-notes");
+      for (const f of failed) {
+        const p = document.createElement("p");
+        p.className = "note";
+        p.textContent = `feature ${f.failed} is not drawn: ${f.message}`;
+        notes.append(p);
+      }
       for (const m of meshes) {
         for (const region of m.header.regions) tbody.append(regionRow(m.header, region, labels, palette));
         const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
@@ -602,6 +614,7 @@ export function conflictView(config) {
       document.body.dataset.regionBoxes = JSON.stringify(regionBoxes(viewer, overlays));
       drawn(viewer);
       setState("ready", `${count(meshes)}; changed here ${tally[1]}, in the parent ${tally[2]}, on both sides ${tally[3]} vertices; ` +
-               `${plural(regions.length, "region", "regions")}, ${regions.filter((r) => r.conflict).length} in conflict, ${unsolved} unsolved`);
+               `${plural(regions.length, "region", "regions")}, ${regions.filter((r) => r.conflict).length} in conflict, ${unsolved} unsolved` +
+               (failed.length ? `; ${plural(failed.length, "feature", "features")} not drawn` : ""));
     }).catch((error) => setState("error", String(error.message || error)));
 }
