@@ -139,8 +139,9 @@ class _Lookup:
     """Positions in a drawn array of given ids (by a sort of the drawn ids, once)."""
 
     def __init__(self, ids: npt.NDArray[np.int64]) -> None:
-        self.order = np.argsort(ids, kind="stable")
-        self.sorted = ids[self.order]
+        # ids in increasing order (a state's rows, a drawing of one) need no sort: positions are the places found
+        self.order: npt.NDArray[np.int64] | None = None if np.all(ids[1:] > ids[:-1]) else np.argsort(ids, kind="stable")
+        self.sorted = ids if self.order is None else ids[self.order]
 
     def positions(self, wanted: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], int]:
         """(every position of each wanted id that is drawn, how many wanted ids are not drawn).
@@ -151,7 +152,8 @@ class _Lookup:
         many = np.searchsorted(self.sorted, wanted, side="right") - left
         starts = np.cumsum(many) - many
         at = np.repeat(left, many) + (np.arange(int(many.sum())) - np.repeat(starts, many))
-        return self.order[at].astype(np.int64), int(np.count_nonzero(many == 0))
+        found = at if self.order is None else self.order[at]
+        return found.astype(np.int64), int(np.count_nonzero(many == 0))
 
 
 def _lookup(ids: npt.ArrayLike, renumbering: npt.NDArray[np.int64], merged: bool) -> _Lookup:
@@ -175,7 +177,9 @@ def state_drawable(state: MeshState) -> tuple[Drawable, npt.NDArray[np.int64] | 
     have none). Vertices in id order; cell ids None for a point set (its
     points are drawn as its vertices).
     """
-    corners = np.searchsorted(state.vertex_ids, state.cells).reshape(-1, state.cell_size)
+    vids = state.vertex_ids
+    dense = len(vids) == 0 or (vids[0] == 0 and vids[-1] == len(vids) - 1)  # ids 0..n-1 (kept in order): positions
+    corners = (state.cells if dense else np.searchsorted(vids, state.cells)).reshape(-1, state.cell_size)
     no_values: dict[str, npt.NDArray[np.float64]] = {}
     if state.cell_size == 1:
         empty = np.empty((0, 0), dtype=np.int64)
@@ -291,7 +295,7 @@ def edit_flags(merge: MeshMerge, vertex_ids: npt.ArrayLike, *, merged: bool = Fa
     """
     vids = np.asarray(vertex_ids, dtype=np.int64).ravel()
     vertices = _lookup(vids, merge.child_vertex_renumbering, merged)
-    cells_of = {id(s): _Lookup(s.cell_ids) for s in (merge.base, merge.parent, merge.child)}  # one sort each
+    cells_of = {id(s): _Lookup(s.cell_ids) for s in (merge.base, merge.parent, merge.child)}  # ids kept in order
     marks = []
     for flag, side in ((1, "child"), (2, "parent")):
         state = getattr(merge, side)
