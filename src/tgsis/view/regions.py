@@ -140,7 +140,9 @@ class _Lookup:
 
     def __init__(self, ids: npt.NDArray[np.int64]) -> None:
         # ids in increasing order (a state's rows, a drawing of one) need no sort: positions are the places found
-        self.order: npt.NDArray[np.int64] | None = None if np.all(ids[1:] > ids[:-1]) else np.argsort(ids, kind="stable")
+        self.order: npt.NDArray[np.int64] | None = (
+            None if np.all(ids[1:] > ids[:-1]) else np.argsort(ids, kind="stable")
+        )
         self.sorted = ids if self.order is None else ids[self.order]
 
     def positions(self, wanted: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], int]:
