@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import psycopg
 
 from tgsis.cli._arguments import INT4, add_command
@@ -386,8 +387,16 @@ def conflicts_text(args: argparse.Namespace, result: VersionConflicts) -> None:
                     else "those need a solution, the others merge by themselves"
                 )
             )
+            # the solution stored for the same region (same ids), as find_conflicts left it
+            recorded = {r.region: r for r in c.regions}
             for region in merge.regions:
-                out(_region_text(region))
+                stored = recorded.get(region.index)
+                same = (
+                    stored is not None
+                    and np.array_equal(stored.vertex_ids, region.vertex_ids)
+                    and np.array_equal(stored.cell_ids, region.cell_ids)
+                )
+                out(_region_text(region) + (f"\tsolution {stored.solution}" if same and stored else ""))
     if not conflicts:
         print(f"version {V.show_name(result.version)} has no conflicts with its parent", file=sys.stderr)
 
