@@ -664,3 +664,41 @@ def test_a_feature_the_version_deleted_does_not_blank_the_page(
         assert [tuple(r) for r in rows] == [(str(geoid), "unsolved")]
         notes = page.locator("#region-notes").text_content()
         assert f"feature {gone}" in notes and "not drawn" in notes, notes
+
+
+def test_a_solution_recorded_while_the_page_reads_is_seen_whole_or_not_at_all(
+    db_dsn: str, conn: psycopg.Connection[Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Another session records a solution between the view's read of the merge and of the solutions.
+
+    The view reads both in one snapshot: the answer is the state before (the
+    region unsolved, with that state's regions), the next one the state after.
+    """
+    import tgsis.view.app as app
+
+    geoid = make_fault(conn)
+    move(conn, "e1", geoid, [CONFLICT], (0.0, 0.0, 30.0))
+    move(conn, "DEFAULT", geoid, [CONFLICT], (0.0, 0.0, 80.0))
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    region = _region_with(tgsis.object_merge(conn, "e1", geoid), CONFLICT)
+    conn.commit()
+    real = app.object_merge
+    calls = []
+
+    def merge_then_resolve(c: psycopg.Connection[Any], version: str, feature_id: int) -> MeshMerge:
+        merged = real(c, version, feature_id)
+        if not calls:  # the first request only: the other session solves the region meanwhile
+            with psycopg.connect(db_dsn) as other:
+                tgsis.resolve_region(other, "e1", geoid, region, "base")
+                other.commit()
+        calls.append(feature_id)
+        return merged
+
+    monkeypatch.setattr(app, "object_merge", merge_then_resolve)
+    with running_view(db_dsn) as url:
+        first, _ = unpack(get(f"{url}/api/conflict/{geoid}?version=e1")[1])
+        second, _ = unpack(get(f"{url}/api/conflict/{geoid}?version=e1")[1])
+    assert [r["solution"] for r in first["regions"] if r["conflict"]] == ["unsolved"]
+    assert [r["solution"] for r in second["regions"] if r["conflict"]] == ["base"]
+    assert second["regions"][region]["state"] == "solved-base"
