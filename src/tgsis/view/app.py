@@ -696,12 +696,14 @@ def compare_endpoint(request: Request) -> Response:
 def conflict_endpoint(request: Request) -> Response:
     """A conflicting feature as the version sees it, with its merge regions (:mod:`tgsis.view.regions`).
 
-    Per vertex, ``changed``: changed in the version (1), in the parent (2),
-    both (3). Then the regions of :func:`tgsis.object_merge`, read in the same
-    snapshot as the mesh drawn (so that their positions in its arrays hold),
-    with the solution recorded for each: the header's ``regions`` and the
-    arrays ``region_vertices``, ``region_cells``. An object that merges as a
-    whole only has no regions and says why (``reason``).
+    An object that merges by region (:func:`tgsis.object_merge`, any model-1
+    kind) is drawn from the merge's child state, with the regions (header
+    ``regions``; arrays ``region_vertices``, ``region_cells``: positions in the
+    drawn arrays), the solution recorded for each, read in the same snapshot,
+    and per vertex ``changed``: changed in the version (1), in the parent (2),
+    both (3), from the merge's edits. One that merges as a whole only says why
+    (``reason``); a surface is then flagged by comparing the meshes by
+    content, another kind drawn unflagged.
     """
     view: View = request.app.state.view
     feature_id = _feature_id(request.path_params["id"])
