@@ -683,8 +683,8 @@ def test_a_solution_recorded_while_the_page_reads_is_seen_whole_or_not_at_all(
     conn.commit()
     region = _region_with(tgsis.object_merge(conn, "e1", geoid), CONFLICT)
     conn.commit()
-    real = app.object_merge
-    calls = []
+    real = tgsis.object_merge
+    calls: list[int] = []
 
     def merge_then_resolve(c: psycopg.Connection[Any], version: str, feature_id: int) -> MeshMerge:
         merged = real(c, version, feature_id)
