@@ -32,6 +32,7 @@ PURE = [
     "tgsis.formats",
     "tgsis.errors",
     "tgsis.pictures",
+    "tgsis.view.regions",
     "tgsis.postgis",
     "tgsis.datamodels",
 ]

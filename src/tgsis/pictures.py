@@ -17,9 +17,9 @@ surface at t0, or in another version) rather than by height.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -332,8 +332,59 @@ def animation(
     return target
 
 
-#: colours of the conflict overlay (RGB 0-255 too, for tests reading the pixels)
-OVERLAY_COLOURS = {"base": "#b0b0b0", "parent": "#1f5fd0", "child": "#f08010", "conflict": "#e00000"}
+#: colours of the conflict overlay: the base, each side's edits, unsolved conflict regions, solved ones
+OVERLAY_COLOURS = {
+    "base": "#b0b0b0",
+    "parent": "#1f5fd0",
+    "child": "#f08010",
+    "conflict": "#e00000",
+    "solved": "#8a2be2",
+}
+#: conflicting regions named one by one in the legend (the others counted in one entry)
+_LEGEND_REGIONS = 12
+
+
+def _overlay_legend(merge: Any, solutions: Mapping[int, str] | None) -> list[tuple[str, str, Literal["-", "--"]]]:
+    """The overlay's legend: (label, colour, line style), the conflicting regions with their solutions last.
+
+    Raises
+    ------
+    InvalidInputError
+        A solution that does not fit its region (:func:`tgsis.view.regions.region_state`).
+    """
+    from tgsis.view.regions import region_state
+
+    solutions = dict(solutions or {})
+    unknown = sorted(set(solutions) - {r.index for r in merge.regions})
+    if unknown:
+        raise InvalidInputError(f"a solution for region {unknown[0]}, which this merge does not have")
+    states = {r.index: region_state(r, solutions.get(r.index)) for r in merge.regions}
+    entries: list[tuple[str, str, Literal["-", "--"]]] = [
+        ("base", OVERLAY_COLOURS["base"], "-"),
+        ("parent's edits", OVERLAY_COLOURS["parent"], "-"),
+        ("child's edits", OVERLAY_COLOURS["child"], "-"),
+    ]
+    if any(not r.conflict for r in merge.regions):
+        entries.append(("merges by itself", "tab:green", "--"))
+    conflicts = [r for r in merge.regions if r.conflict]
+    for r in conflicts[:_LEGEND_REGIONS]:
+        state = states[r.index]
+        if state == "unsolved":
+            entries.append((f"region {r.index}: conflict, unsolved", OVERLAY_COLOURS["conflict"], "-"))
+        else:
+            solution = state.removeprefix("solved-")
+            entries.append((f"region {r.index}: conflict, solved with {solution}", OVERLAY_COLOURS["solved"], "-"))
+    rest = conflicts[_LEGEND_REGIONS:]
+    if rest:
+        open_ = sum(states[r.index] == "unsolved" for r in rest)
+        entries.append(
+            (
+                f"{len(rest)} more conflicts: {open_} unsolved, {len(rest) - open_} solved",
+                OVERLAY_COLOURS["conflict"] if open_ else OVERLAY_COLOURS["solved"],
+                "-",
+            )
+        )
+    return entries
 
 
 def _cells_touching(mesh: Any, vertex_ids: npt.NDArray[np.int64], cell_ids: npt.NDArray[np.int64]) -> Any:
@@ -387,26 +438,38 @@ def conflict_overlay(
     *,
     title: str = "",
     dpi: int = 110,
+    solutions: Mapping[int, str] | None = None,
 ) -> Path:
     """A map view (x, y) of a three-way merge: base grey, parent's edits blue, child's orange, regions boxed.
 
     Parameters
     ----------
     merge : tgsis.MeshMerge
-        Its ``regions`` give the changed ids and the boxes (conflicts red, regions that merge by themselves
-        dashed green).
+        Its ``regions`` give the changed ids and the boxes (unsolved conflicts red, solved ones violet,
+        regions that merge by themselves dashed green).
     base, parent, child : tgsis.Mesh
         The three states as :func:`tgsis.export_conflict` builds them (vertex property ``vrtxid``, the stored
         cell ids as a cell property); the sides' changed cells (and those on a changed vertex) are drawn as
         that side has them, their vertices as dots.
     path : path
         The PNG written.
+    solutions : mapping of int to str, optional
+        The solution recorded for a conflicting region (by index): ``unsolved`` (the default), ``parent``,
+        ``child``, ``base``, ``average`` or ``manual``. The legend names each conflicting region with its
+        solution (the first 12; the others counted), and each box is labelled with it.
 
     Returns
     -------
     Path
         ``path``.
+
+    Raises
+    ------
+    InvalidInputError
+        A solution for a region that merges by itself, or an unknown one.
     """
+    legend = _overlay_legend(merge, solutions)
+    solved = {i: s for i, s in (solutions or {}).items() if s not in ("unsolved", "automatic")}
     require("matplotlib", "tgsis.pictures")
     import matplotlib
 
@@ -430,19 +493,21 @@ def conflict_overlay(
             _plan(ax, base, gone, OVERLAY_COLOURS[side], fill=False, width=1.0, z=alpha_z, style=":")
         for r in merge.regions:
             (x0, y0, _), (x1, y1, _) = np.asarray(r.bounds)
+            box = OVERLAY_COLOURS["solved" if r.index in solved else "conflict"] if r.conflict else "tab:green"
             ax.add_patch(
                 Rectangle(
                     (x0, y0),
                     x1 - x0,
                     y1 - y0,
                     fill=False,
-                    edgecolor=OVERLAY_COLOURS["conflict"] if r.conflict else "tab:green",
+                    edgecolor=box,
                     linestyle="-" if r.conflict else "--",
                     linewidth=2.0 if r.conflict else 1.0,
                     zorder=6,
                 )
             )
-            ax.annotate(f"region {r.index}", (x0, y1), fontsize="small", zorder=7)
+            said = f": {solved.get(r.index, 'unsolved')}" if r.conflict else ""
+            ax.annotate(f"region {r.index}{said}", (x0, y1), fontsize="small", zorder=7)
         everything = np.concatenate([m.vertices[:, :2] for m in (base, parent, child) if len(m.vertices)])
         low, high = everything.min(axis=0), everything.max(axis=0)
         pad = 0.03 * max(float((high - low).max()), 1.0)
@@ -452,13 +517,7 @@ def conflict_overlay(
         ax.set_xlabel("x")
         ax.set_ylabel("y")
         ax.legend(
-            handles=[
-                Line2D([], [], color=OVERLAY_COLOURS["base"], label="base"),
-                Line2D([], [], color=OVERLAY_COLOURS["parent"], label="parent's edits"),
-                Line2D([], [], color=OVERLAY_COLOURS["child"], label="child's edits"),
-                Line2D([], [], color=OVERLAY_COLOURS["conflict"], label="conflict region"),
-                Line2D([], [], color="tab:green", linestyle="--", label="merges by itself"),
-            ],
+            handles=[Line2D([], [], color=colour, linestyle=style, label=label) for label, colour, style in legend],
             loc="upper left",
             bbox_to_anchor=(1.01, 1.0),
             fontsize="small",

@@ -40,6 +40,7 @@ from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import one_snapshot
+from tgsis.db.regions import recorded_solutions
 from tgsis.db.versions import show_name
 from tgsis.errors import InvalidInputError, NotFoundError, reraise
 from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
@@ -247,7 +248,8 @@ def export_conflict(
       key (``trglid``, ``segid``, ``pointid``, ``tetraid``). GOCAD atoms are the vertex property ``refid``.
     - ``<feature>_regions.json``: the regions, as :func:`merge_regions_json` gives them;
     - ``<feature>_<name>_overlay.png`` when ``picture``: a map view (x, y) of the base in grey, the parent's
-      edits in blue, the child's in orange, conflict regions boxed in red, regions that merge by themselves
+      edits in blue, the child's in orange, conflict regions boxed in red (violet once solved, the solution
+      recorded for each named: :func:`tgsis.db.regions.recorded_solutions`), regions that merge by themselves
       dashed green (:func:`tgsis.pictures.conflict_overlay`).
 
     The files are written into a temporary folder inside ``folder`` and moved into place only when all are
@@ -295,6 +297,8 @@ def export_conflict(
         merge = object_merge(conn, version, feature_id)
         _, parent, *_ = version_row(conn, version)
         name, metadata = _looks(conn, version, parent, feature_id)
+        # the picture names each region's recorded solution (none, or found on another state: unsolved)
+        solutions = recorded_solutions(conn, version, "feature", str(feature_id), merge) or {}
     k = merge.base.cell_size
     ext = (format or _GOCAD[k]).lower().lstrip(".")
     geotype = _GEOTYPE_OF_K[k]
@@ -349,6 +353,7 @@ def export_conflict(
                     meshes["child"],
                     scratch / file,
                     title=f"feature {feature_id}{f' {name}' if name else ''} in {show_name(version)}: base, parent, child",
+                    solutions=solutions,
                 )
         return _move_into(scratch, target, names, overwrite)
     finally:

@@ -57,6 +57,7 @@ __all__ = [
     "average_region",
     "discard_text",
     "find_conflicts",
+    "recorded_solutions",
     "region_solutions",
     "resolve_region",
     "state_from_npz",
@@ -852,3 +853,44 @@ def _columns(
         else:
             result[column] = values
     return result
+
+
+# --------------------------------------------------------------------------- issue39-view: the names of the solutions
+
+
+@checked
+def recorded_solutions(
+    conn: Conn, version: str, objectclass: str, objectkey: str, merge: MeshMerge
+) -> dict[int, str] | None:
+    """The solution recorded for each region of ``merge``, by name, when the stored regions hold for it (read-only).
+
+    What the browser view and the PNG overlay show: ``automatic`` for a region
+    that is no conflict, ``unsolved``, ``parent``, ``child``, ``base``,
+    ``average`` or ``manual`` for a conflicting one (:func:`region_solutions`
+    gives the rows of the last two, not their names).
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        In the transaction ``merge`` was read in.
+    version, objectclass, objectkey : str
+        The conflict (``objectkey`` a feature's geoid).
+    merge : MeshMerge
+
+    Returns
+    -------
+    dict of int to str, or None
+        Region index to solution name; ``{}`` when no region is stored for
+        the object; None when the stored regions were found on another
+        state (other marks, or other regions): their solutions do not hold
+        until the conflicts are found again (:func:`find_conflicts`).
+    """
+    with reraise():
+        versionid = version_row(conn, version)[0]
+        stored = _stored_regions(conn, versionid, objectclass, objectkey)
+        if not stored:
+            return {}
+        marks = _current_marks(conn, versionid, objectclass, objectkey)
+        if marks is None or not _holds(stored, marks, merge):
+            return None
+    return {r.region: r.solution for r in stored}

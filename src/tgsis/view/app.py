@@ -60,9 +60,29 @@ from tgsis.db.inspect import (
     may_read_features,
     version_validity,
 )
-from tgsis.errors import Error, InvalidInputError, MissingPrivilegeError, NotFoundError, ReadOnlyRevisionError, reraise
+from tgsis.db.merging import object_merge
+from tgsis.db.regions import recorded_solutions
+from tgsis.errors import (
+    Error,
+    InvalidInputError,
+    MissingPrivilegeError,
+    NotFoundError,
+    ReadOnlyRevisionError,
+    VersioningError,
+    reraise,
+)
+from tgsis.merge3 import MeshMerge
 from tgsis.mesh import Geotype
 from tgsis.view.meshes import Drawable, StoredSurface, pack, vertex_flags
+from tgsis.view.regions import (
+    REGION_COLOURS,
+    REGION_LABELS,
+    REGION_STATES,
+    edit_counts,
+    edit_flags,
+    region_drawing,
+    state_drawable,
+)
 
 __all__ = ["ViewConfig", "create_app", "VERSION_COOKIE", "RequestGuard"]
 
@@ -557,7 +577,8 @@ def conflicts_page(request: Request) -> Response:
             raise _bad("DEFAULT has no parent: it has no conflicts")
         conflicts = conflicts_with_solutions(conn, name)
     shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
-    config = {"version": name, "ids": shown}
+    legend = [{"state": s, "label": REGION_LABELS[s], "colour": REGION_COLOURS[s]} for s in REGION_STATES]
+    config = {"version": name, "parent": known[name].parent, "ids": shown, "legend": legend}
     return view.page(
         request, "conflicts.html", version=known[name], conflicts=conflicts, config=config, title="conflicts"
     )
@@ -673,7 +694,17 @@ def compare_endpoint(request: Request) -> Response:
 
 
 def conflict_endpoint(request: Request) -> Response:
-    """A conflicting feature as the version sees it: vertices the version changed (1), the parent changed (2), both (3)."""
+    """A conflicting feature as the version sees it, with its merge regions (:mod:`tgsis.view.regions`).
+
+    An object that merges by region (:func:`tgsis.object_merge`, any model-1
+    kind) is drawn from the merge's child state, with the regions (header
+    ``regions``; arrays ``region_vertices``, ``region_cells``: positions in the
+    drawn arrays), the solution recorded for each, read in the same snapshot,
+    and per vertex ``changed``: changed in the version (1), in the parent (2),
+    both (3), from the merge's edits. One that merges as a whole only says why
+    (``reason``); a surface is then flagged by comparing the meshes by
+    content, another kind drawn unflagged.
+    """
     view: View = request.app.state.view
     feature_id = _feature_id(request.path_params["id"])
     version = request.query_params.get("version") or ""
@@ -686,27 +717,78 @@ def conflict_endpoint(request: Request) -> Response:
         raise NotFoundError(f"no version {name!r} with a parent", hint="the versions page lists them")
     parent, base = known[name].parent, known[name].initrevision
     assert parent is not None
-    stored = _surface_in(view, request, name, feature_id)
-    mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
-    with view.session(request) as conn:
-        child = compare_versions(conn, feature_id, parent, name, old_revision=base)
-        theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
-    marks = []
-    for flag, changes in ((1, child), (2, theirs)):
-        cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
-        marks += [
-            (flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
-            (flag, mesh.indices[cells].ravel()),
-        ]
+    regions: list[dict[str, Any]] = []
+    region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
+    counts: dict[str, dict[str, int]] = {"child": {}, "parent": {}}
+    recorded = "none"
+    with view.session(request, name) as conn:
+        fc = feature_class_of(conn, feature_id)
+        merge = _object_merge(conn, name, feature_id)
+        if isinstance(merge, MeshMerge):
+            # drawn from the merge's own child state (the version's rows, read in the merge's snapshot): one read,
+            # any model-1 kind, the regions' ids in the drawing's numbering
+            solutions, recorded = _recorded_solutions(conn, name, feature_id, merge)
+            mesh, drawn_cells = state_drawable(merge.child)
+            regions, region_arrays = region_drawing(merge, merge.child.vertex_ids, drawn_cells, solutions, merged=True)
+            # who changed each vertex: the merge's own id-keyed edits, no second comparison of the meshes
+            flags, counts = edit_flags(merge, merge.child.vertex_ids, merged=True), edit_counts(merge)
+        elif _compared(fc):
+            stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
+        else:  # merges as a whole only and not compared: drawn, nobody's changes marked
+            drawable, _ = _mesh_of(conn, fc, feature_id, None)
+            if drawable is None:
+                raise NotFoundError(f"feature {feature_id} has no geometry in version {name!r}")
+            mesh, flags = drawable, np.zeros(len(drawable.vertices), dtype=np.float32)
+    if isinstance(merge, str) and _compared(fc):
+        # merges as a whole only: who changed what, by comparing the meshes by content (the merge knows nothing)
+        mesh, vids, tids = stored.drawable, stored.vertex_ids, stored.triangle_ids
+        with view.session(request) as conn:
+            child = compare_versions(conn, feature_id, parent, name, old_revision=base)
+            theirs = compare_versions(conn, feature_id, parent, parent, old_revision=base)
+        marks = []
+        for flag, changes in ((1, child), (2, theirs)):
+            cells = _positions(tids, np.concatenate([changes.cells_added, changes.cells_removed]))
+            marks += [
+                (flag, _positions(vids, np.concatenate([changes.vertices_added, changes.vertices_removed]))),
+                (flag, mesh.indices[cells].ravel()),
+            ]
+        flags = vertex_flags(len(mesh.vertices), marks)
+        counts = {"child": child.counts(), "parent": theirs.counts()}
     header = {
         "id": feature_id,
         "version": name,
         "parent": parent,
         "base": base,
-        "child_changes": child.counts(),
-        "parent_changes": theirs.counts(),
+        "child_changes": counts["child"],
+        "parent_changes": counts["parent"],
+        "merges_by_region": not isinstance(merge, str),
+        "reason": merge if isinstance(merge, str) else None,
+        "regions": regions,
+        "solutions": recorded,
     }
-    return _binary(_body(header, mesh, None, {"changed": vertex_flags(len(mesh.vertices), marks)}))
+    extra: dict[str, npt.NDArray[Any]] = {"changed": flags, **region_arrays}
+    return _binary(_body(header, mesh, None, extra))
+
+
+def _object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge | str:
+    """:func:`tgsis.object_merge` in the caller's snapshot, or why the object has no regions (it merges whole)."""
+    try:
+        return object_merge(conn, version, feature_id)
+    except (InvalidInputError, VersioningError, MissingPrivilegeError) as exc:
+        return str(exc).splitlines()[0]
+
+
+def _recorded_solutions(conn: Conn, version: str, feature_id: int, merge: MeshMerge) -> tuple[dict[int, str], str]:
+    """The solution recorded for each region of ``merge`` (:func:`tgsis.db.regions.recorded_solutions`), and whether:
+
+    ``recorded`` (they hold for this merge), ``none`` (no region stored: every
+    conflict unsolved), ``stale`` (found on another state: shown unsolved until
+    the conflicts are found again).
+    """
+    solutions = recorded_solutions(conn, version, "feature", str(feature_id), merge)
+    if solutions is None:
+        return {}, "stale"
+    return solutions, "recorded" if solutions else "none"
 
 
 # --------------------------------------------------------------------------- request guard

@@ -377,23 +377,244 @@ export function compareView(config) {
   }).catch((error) => setState("error", String(error.message || error)));
 }
 
-// A version's conflicting features, coloured by who changed each vertex since the version's base.
+// a number for people: six significant digits, no trailing zeros
+const short = (x) => String(Number(Number(x).toPrecision(6)));
+const plural = (n, one, many) => `${n} ${n === 1 ? one : many}`;
+
+// The merge regions of one feature (its header's `regions`, the positions `region_vertices`, `region_cells` in
+// its arrays): the regions' cells (triangles, or segments) as an unlit overlay in their state's colour, their
+// vertices as dots (darker over cells; a point set's points in the state's colour itself).
+// Returns [overlay or null, dots or null]; each has userData.regionOf: the region entry of each of its items.
+function regionObjects(mesh, palette, sceneOrigin) {
+  const { header, arrays } = mesh;
+  const regions = header.regions || [];
+  if (!regions.length) return [null, null];
+  const cells = arrays.region_cells, vertices = arrays.region_vertices;
+  const k = header.kind === "triangles" ? 3 : header.kind === "lines" ? 2 : 0;
+  const p = arrays.positions, idx = arrays.indices;
+  const positions = new Float32Array(cells.length * 3 * k), colour = new Float32Array(cells.length * 3 * k);
+  const regionOf = new Uint32Array(cells.length), dotRegion = new Uint32Array(vertices.length);
+  const dots = new Float32Array(vertices.length * 3), dotColour = new Float32Array(vertices.length * 3);
+  const shade = k ? 0.3 : 1.0;
+  let c = 0, v = 0;
+  regions.forEach((region, r) => {
+    const rgb = palette[region.state];
+    for (let j = 0; j < region.drawn.cells; j++, c++) {
+      for (let corner = 0; corner < k; corner++) {
+        const at = idx[k * cells[c] + corner];
+        positions.set(p.subarray(3 * at, 3 * at + 3), 3 * (k * c + corner));
+        colour.set(rgb, 3 * (k * c + corner));
+      }
+      regionOf[c] = r;
+    }
+    for (let j = 0; j < region.drawn.vertices; j++, v++) {
+      const at = vertices[v];
+      dots.set(p.subarray(3 * at, 3 * at + 3), 3 * v);
+      dotColour.set(rgb.map((x) => shade * x), 3 * v);
+      dotRegion[v] = r;
+    }
+  });
+  const o = header.origin;
+  const place = (object, items) => {
+    object.position.set(o[0] - sceneOrigin[0], o[1] - sceneOrigin[1], o[2] - sceneOrigin[2]);
+    object.userData.header = header;
+    object.userData.regionOf = items;
+    return object;
+  };
+  const buffers = (xyz, rgb) => {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.BufferAttribute(xyz, 3));
+    geometry.setAttribute("color", new THREE.BufferAttribute(rgb, 3));
+    return geometry;
+  };
+  let overlay = null;
+  if (k === 3 && cells.length) {
+    // unlit, so that each state keeps its colour; pulled in front of the mesh's own (same) triangles
+    overlay = place(new THREE.Mesh(buffers(positions, colour), new THREE.MeshBasicMaterial({
+      vertexColors: true, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -1, polygonOffsetUnits: -4 })),
+      regionOf);
+  } else if (k === 2 && cells.length) {
+    overlay = place(new THREE.LineSegments(buffers(positions, colour),
+      new THREE.LineBasicMaterial({ vertexColors: true, depthTest: false })), regionOf);
+  }
+  if (overlay) overlay.renderOrder = 1;
+  let points = null;
+  if (vertices.length) {
+    points = place(new THREE.Points(buffers(dots, dotColour), new THREE.PointsMaterial(
+      { vertexColors: true, size: k ? 6 : 9, sizeAttenuation: false, depthTest: false })), dotRegion);
+    points.renderOrder = 2;
+  }
+  return [overlay, points];
+}
+
+// where each region's drawn cells and vertices fall on the canvas (CSS pixels from its top left corner, border
+// included, as a screenshot of the canvas has them): {"feature:region": [x0, y0, x1, y1]}
+function regionBoxes(viewer, objects) {
+  const canvas = viewer.canvas, w = canvas.clientWidth, h = canvas.clientHeight;
+  const boxes = {};
+  const point = new THREE.Vector3();
+  for (const object of objects) {
+    const p = object.geometry.getAttribute("position").array, regionOf = object.userData.regionOf;
+    const per = p.length / 3 / Math.max(regionOf.length, 1);       // vertices of each item (3, 2 or 1)
+    const header = object.userData.header;
+    object.updateMatrixWorld();
+    for (let i = 0; i < regionOf.length; i++) {
+      const key = `${header.id}:${header.regions[regionOf[i]].index}`;
+      const box = boxes[key] || (boxes[key] = [Infinity, Infinity, -Infinity, -Infinity]);
+      for (let corner = 0; corner < per; corner++) {
+        point.fromArray(p, 3 * (per * i + corner)).applyMatrix4(object.matrixWorld).project(viewer.camera);
+        const x = (point.x + 1) / 2 * w + canvas.clientLeft, y = (1 - point.y) / 2 * h + canvas.clientTop;
+        box[0] = Math.min(box[0], x); box[1] = Math.min(box[1], y);
+        box[2] = Math.max(box[2], x); box[3] = Math.max(box[3], y);
+      }
+    }
+  }
+  return boxes;
+}
+
+function sideText(side, region) {
+  const s = region[side];
+  if (!s.vertices && !s.cells) return `${side} changed nothing here`;
+  return `${side} changed ${plural(s.vertices, "vertex", "vertices")}, ${plural(s.cells, "cell", "cells")}, ` +
+         `largest displacement ${short(s.largest_displacement)}`;
+}
+
+function regionText(header, region, labels) {
+  const missing = region.missing.vertices + region.missing.cells;
+  return `feature ${header.id} region ${region.index}: ${labels[region.state]}; solution: ${region.solution}. ` +
+         `${sideText("parent", region)}; ${sideText("child", region)}. ` +
+         `${plural(region.ids.vertices, "vertex", "vertices")} and ${plural(region.ids.cells, "cell", "cells")}` +
+         ` (margin included)` +
+         (missing ? `, of which ${region.missing.vertices} vertices and ${region.missing.cells} cells are not drawn ` +
+                    `(not in ${header.version}'s mesh: the parent's new rows or those ${header.version} removed; ` +
+                    `or tetrahedra inside the solid)` : "");
+}
+
+function regionRow(header, region, labels, palette) {
+  const row = document.createElement("tr");
+  row.dataset.feature = String(header.id);
+  row.dataset.region = String(region.index);
+  row.dataset.state = region.state;
+  const cells = [String(header.id), String(region.index), null, region.solution,
+                 sideText("parent", region).replace(/^parent /, ""), sideText("child", region).replace(/^child /, ""),
+                 `${plural(region.ids.vertices, "vertex", "vertices")}, ${plural(region.ids.cells, "cell", "cells")}`];
+  for (const text of cells) {
+    const td = document.createElement("td");
+    if (text === null) {
+      const swatch = document.createElement("span");
+      swatch.className = "swatch";
+      swatch.style.background = palette[region.state];
+      td.append(swatch, " " + labels[region.state]);
+    } else {
+      td.textContent = text;
+    }
+    row.append(td);
+  }
+  return row;
+}
+
+// A version's conflicting features: their merge regions coloured by what happens there (and the solution chosen);
+// a feature that merges as a whole only coloured by who changed each vertex since the version's base.
 export function conflictView(config) {
   const viewer = new Viewer(document.getElementById("scene"));
+  const labels = {}, palette = {}, linear = {};
+  for (const item of config.legend) {
+    labels[item.state] = item.label;
+    palette[item.state] = item.colour;
+    const c = new THREE.Color(item.colour);            // sRGB in, the renderer's linear working space out
+    linear[item.state] = [c.r, c.g, c.b];
+  }
+  const info = document.getElementById("region-info");
   setState("loading", "loading…");
-  Promise.all(config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))))
-    .then((meshes) => {
+  // one feature that cannot be drawn (deleted in the version, a kind the view does not draw) leaves the others
+  const fetched = config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))
+    .catch((error) => ({ failed: id, message: String(error.message || error) })));
+  Promise.all(fetched)
+    .then((results) => {
+      const failed = results.filter((r) => r.failed !== undefined);
+      const meshes = results.filter((r) => r.failed === undefined);
+      if (!meshes.length) throw new Error(failed.map((f) => `feature ${f.failed}: ${f.message}`).join("; "));
       const origin = meshes[0].header.origin;
+      const overlays = [];      // every overlay and dots object: what the pointer picks, what the boxes are of
+      const grey = (n) => flagColours(new Float32Array(n));
       for (const m of meshes) {
-        viewer.replace(0, m.header.id, object3d(m, flagColours(m.arrays.changed), origin));
-        viewer.replace(0, `${m.header.id}:marks`, markers(m, m.arrays.changed, (f) => FLAG_COLOURS[f], origin));
+        const [overlay, dots] = regionObjects(m, linear, origin);
+        overlays.push(...[overlay, dots].filter((o) => o));
+        if (m.header.regions.length) {
+          viewer.replace(0, m.header.id, object3d(m, grey(m.header.n_vertices), origin));
+          viewer.replace(0, `${m.header.id}:regions`, overlay);
+          viewer.replace(0, `${m.header.id}:dots`, dots);
+        } else {
+          viewer.replace(0, m.header.id, object3d(m, flagColours(m.arrays.changed), origin));
+          viewer.replace(0, `${m.header.id}:marks`, markers(m, m.arrays.changed, (f) => FLAG_COLOURS[f], origin));
+        }
       }
       viewer.fit();
       viewer.render();
+      const tbody = document.querySelector("#regions tbody"), notes = document.getElementById("region-notes");
+      for (const f of failed) {
+        const p = document.createElement("p");
+        p.className = "note";
+        p.textContent = `feature ${f.failed} is not drawn: ${f.message}`;
+        notes.append(p);
+      }
+      for (const m of meshes) {
+        for (const region of m.header.regions) tbody.append(regionRow(m.header, region, labels, palette));
+        const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
+          : m.header.solutions === "stale" ? `feature ${m.header.id}: the solutions recorded for its regions were ` +
+            `found on an earlier state of ${m.header.version} or ${m.header.parent}, so they do not hold and every ` +
+            `conflict is shown unsolved; find the conflicts again (tgsis version conflicts ${m.header.version})`
+          : null;
+        if (note) {
+          const p = document.createElement("p");
+          p.className = "note";
+          p.textContent = note;
+          notes.append(p);
+        }
+      }
+      // the region under the pointer (or the one clicked) and its facts
+      const raycaster = new THREE.Raycaster();
+      const pickable = overlays;
+      const size = new THREE.Box3().setFromObject(viewer.scenes[0].group).getSize(new THREE.Vector3()).length();
+      raycaster.params.Line.threshold = size / 300;      // a segment or a dot a few pixels away is picked
+      raycaster.params.Points.threshold = size / 300;
+      let pinned = null;
+      const at = (event) => {
+        const rect = viewer.canvas.getBoundingClientRect();
+        const ndc = new THREE.Vector2(((event.clientX - rect.left - viewer.canvas.clientLeft) / viewer.canvas.clientWidth) * 2 - 1,
+                                      -((event.clientY - rect.top - viewer.canvas.clientTop) / viewer.canvas.clientHeight) * 2 + 1);
+        raycaster.setFromCamera(ndc, viewer.camera);
+        const hit = raycaster.intersectObjects(pickable, false)[0];
+        if (!hit) return null;
+        const header = hit.object.userData.header, regionOf = hit.object.userData.regionOf;
+        const item = hit.object.isMesh ? hit.faceIndex : hit.object.isLineSegments ? Math.floor(hit.index / 2) : hit.index;
+        return { header, region: header.regions[regionOf[item]] };
+      };
+      const show = (found) => {
+        const shown = found || pinned;
+        info.hidden = !shown;
+        info.textContent = shown ? regionText(shown.header, shown.region, labels) : "no region here";
+      };
+      viewer.canvas.addEventListener("pointermove", (event) => show(at(event)));
+      viewer.canvas.addEventListener("pointerleave", () => show(null));
+      viewer.canvas.addEventListener("click", (event) => {
+        pinned = at(event);
+        for (const row of tbody.querySelectorAll("tr")) {
+          row.classList.toggle("picked", !!pinned && row.dataset.feature === String(pinned.header.id) &&
+                                         row.dataset.region === String(pinned.region.index));
+        }
+        show(pinned);
+      });
       const tally = [0, 0, 0, 0];
       for (const m of meshes) for (const f of m.arrays.changed) tally[f] += 1;
+      const regions = meshes.flatMap((m) => m.header.regions);
+      const unsolved = regions.filter((r) => r.state === "unsolved").length;
       document.body.dataset.flags = tally.join(",");
+      document.body.dataset.regions = String(regions.length);
+      document.body.dataset.regionBoxes = JSON.stringify(regionBoxes(viewer, overlays));
       drawn(viewer);
-      setState("ready", `${count(meshes)}; changed here ${tally[1]}, in the parent ${tally[2]}, on both sides ${tally[3]} vertices`);
+      setState("ready", `${count(meshes)}; changed here ${tally[1]}, in the parent ${tally[2]}, on both sides ${tally[3]} vertices; ` +
+               `${plural(regions.length, "region", "regions")}, ${regions.filter((r) => r.conflict).length} in conflict, ${unsolved} unsolved` +
+               (failed.length ? `; ${plural(failed.length, "feature", "features")} not drawn` : ""));
     }).catch((error) => setState("error", String(error.message || error)));
 }
