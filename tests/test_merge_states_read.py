@@ -24,6 +24,7 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import curved_surface
+from tests.roles import login_roles
 from tgsis.db import _merge_states
 from tgsis.db import features as F
 from tgsis.db._static import SIMPLEX
@@ -69,18 +70,14 @@ def _full_read(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision:
                 )
             )
     vertex_cols, cell_cols, *prop_cols = columns_out_all(conn, requests)
-    vids, xyz = _merge_states._sorted_rows(
-        vertex_cols[1], np.stack(vertex_cols[2:5], axis=1) if len(vertex_cols[1]) else None
-    )
-    cids, cells = _merge_states._sorted_rows(
-        cell_cols[1], np.stack(cell_cols[2:], axis=1) if len(cell_cols[1]) else None
-    )
+    vids, xyz = _sorted_rows(vertex_cols[1], np.stack(vertex_cols[2:5], axis=1) if len(vertex_cols[1]) else None)
+    cids, cells = _sorted_rows(cell_cols[1], np.stack(cell_cols[2:], axis=1) if len(cell_cols[1]) else None)
     props_by: dict[str, dict[str, Any]] = {"VERTEX": {}, "CELL": {}}
     for (alignment, names), columns in zip(tables, prop_cols, strict=True):
         ids = vids if alignment == "VERTEX" else cids
         idx = np.asarray(columns[1], dtype=np.int64)
         for name, values in zip(names, columns[2:], strict=True):
-            props_by[alignment][name] = _merge_states._aligned_values(ids, idx, np.asarray(values))
+            props_by[alignment][name] = _aligned_values(ids, idx, np.asarray(values))
     atoms = conn.execute("SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()
     runs = conn.execute(
         "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
@@ -95,6 +92,29 @@ def _full_read(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision:
         np.asarray(atoms, dtype=np.int64).reshape(-1, 2),
         np.asarray(runs, dtype=np.int64).reshape(-1, 3),
     )
+
+
+def _sorted_rows(ids: Any, rows: Any) -> tuple[Any, Any]:
+    """Ids ascending with their rows (as the full read of before sorted them)."""
+    ids = np.asarray(ids, dtype=np.int64)
+    if rows is None:
+        return ids, np.empty((0,), dtype=np.float64)
+    order = np.argsort(ids, kind="stable")
+    return ids[order], rows[order]
+
+
+def _aligned_values(ids: Any, idx: Any, values: Any) -> Any:
+    """A property's values in the order of ``ids``; an id without a row gets NaN (as before)."""
+    order = np.argsort(idx, kind="stable")
+    idx, values = idx[order], values[order]
+    pos = np.searchsorted(idx, ids)
+    found = pos < len(idx)
+    found[found] = idx[pos[found]] == ids[found]
+    if found.all():
+        return values[pos]
+    out = np.full((len(ids), *values.shape[1:]), np.nan, dtype=np.float64)
+    out[found] = values[pos[found]]
+    return out
 
 
 def reference_states(conn: Conn, version: str, geoid: int) -> dict[str, MeshState]:
@@ -305,3 +325,57 @@ def test_the_read_by_change_equals_three_full_reads(
     assert fast.keys() == reference.keys()
     for side in reference:
         assert_identical(fast[side], reference[side])
+
+
+def _a_merge_to_read(conn: Conn) -> tuple[int, str]:
+    """A fault moved at its two ends (DEFAULT and version e1), a vertex value changed in e1 (committed)."""
+    geoid = F.insert_feature(conn, "faults", curved_surface())
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    edit(conn, tgsis.get_feature_class(conn, "faults"), "DEFAULT", geoid, ("move", [0, 1, 2], 1.0))
+    conn.commit()
+    edit(conn, tgsis.get_feature_class(conn, "faults"), "e1", geoid, ("move", [140, 141], -1.0))
+    edit(conn, tgsis.get_feature_class(conn, "faults"), "e1", geoid, ("vertex value", [141], 0.5))
+    conn.commit()
+    return geoid, "e1"
+
+
+def test_a_role_that_may_read_the_views_but_not_the_storage_reads_the_same_states(
+    conn: Conn, faults: FeatureClass, db_dsn: str
+) -> None:
+    """A grant on a view only (SELECT on the storage of the cell values, which neither side changed, revoked).
+
+    The conflict check reads only the storage of the tables the sides
+    changed; the states are read in full through the views, and are equal.
+    """
+    geoid, version = _a_merge_to_read(conn)
+    cell_table = faults.property_table("CELL")
+    assert cell_table is not None
+    owner = fast_states(conn, version, geoid)
+    conn.execute(sql.SQL("REVOKE SELECT ON {} FROM tgsis_reader").format(faults.qualified(cell_table + "_ver")))
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        fc = tgsis.get_feature_class(rita, "faults")
+        rita.rollback()
+        assert not _merge_states._storage_readable(rita, _merge_states._tables(fc)[0])
+        rita.rollback()
+        read = fast_states(rita, version, geoid)
+        for side in owner:
+            assert_identical(read[side], owner[side])
+        assert read["child"].vertex_properties["porosity"][141] == 0.5
+
+
+def test_a_role_without_the_right_on_a_property_table_gets_the_permission_error(
+    conn: Conn, faults: FeatureClass, db_dsn: str
+) -> None:
+    """The view of the cell values revoked: reading the merge is refused, not a state without those values."""
+    geoid, version = _a_merge_to_read(conn)
+    cell_table = faults.property_table("CELL")
+    assert cell_table is not None
+    conn.execute(sql.SQL("REVOKE SELECT ON {} FROM tgsis_reader").format(faults.qualified(cell_table)))
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        with pytest.raises(psycopg.errors.InsufficientPrivilege, match=cell_table):
+            fast_states(rita, version, geoid)
