@@ -158,6 +158,25 @@ def assert_identical(fast: MeshState, reference: MeshState) -> None:
             assert a[name].tobytes() == b[name].tobytes(), (what, name)
 
 
+def _arrays(state: MeshState) -> list[Any]:
+    return [
+        state.vertex_ids,
+        state.vertices,
+        state.cell_ids,
+        state.cells,
+        *state.vertex_properties.values(),
+        *state.cell_properties.values(),
+    ]
+
+
+def assert_nothing_shared(states: dict[str, MeshState]) -> None:
+    """No array of one state shares memory with another's: a user changing one state changes no other."""
+    for a, b in itertools.combinations(states, 2):
+        for x in _arrays(states[a]):
+            for y in _arrays(states[b]):
+                assert not np.shares_memory(x, y), (a, b)
+
+
 # ---------------------------------------------------------------- random edits, as SQL users make them
 
 
@@ -325,6 +344,7 @@ def test_the_read_by_change_equals_three_full_reads(
     assert fast.keys() == reference.keys()
     for side in reference:
         assert_identical(fast[side], reference[side])
+    assert_nothing_shared(fast)
 
 
 def _a_merge_to_read(conn: Conn) -> tuple[int, str]:

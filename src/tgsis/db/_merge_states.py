@@ -196,8 +196,8 @@ def _rows_of(fc: FeatureClass, properties: list[tuple[str, list[str]]], read: li
     vertex_cols, cell_cols, atom_cols, part_cols, *prop_cols = read
     vids, xyz = _sorted_rows(vertex_cols[1], np.stack(vertex_cols[2:5], axis=1) if len(vertex_cols[1]) else None)
     cids, cells = _sorted_rows(cell_cols[1], np.stack(cell_cols[2:], axis=1) if len(cell_cols[1]) else None)
-    xyz = xyz.reshape(-1, 3).astype(np.float64)
-    cells = cells.reshape(-1, k).astype(np.int64)
+    xyz = xyz.reshape(-1, 3).astype(np.float64, copy=False)  # (stacked: arrays of their own)
+    cells = cells.reshape(-1, k).astype(np.int64, copy=False)
     props_by: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
     for (alignment, names), columns in zip(properties, prop_cols, strict=True):
         ids = vids if alignment == "VERTEX" else cids
@@ -273,7 +273,7 @@ def _patched(base: list[npt.NDArray[Any]], changed: list[npt.NDArray[Any]], bit:
     in_base, in_side = (seen & 1) != 0, (seen & bit) != 0
     gone, added = in_base & ~in_side, in_side & ~in_base
     if not gone.any() and not added.any():
-        return [c.copy() for c in base]  # no array is shared between two states: their users may change them
+        return base  # (the states made of it copy what they keep: _rows_of)
     keys = base[1]
     gone_keys = np.unique(np.asarray(changed[1])[gone])
     at = np.searchsorted(keys, gone_keys)
@@ -333,7 +333,7 @@ def _read_states(conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, t
 
 def _sorted_rows(ids: npt.ArrayLike, rows: npt.NDArray[Any] | None) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
     """Ids ascending with their rows (the packed reads come in no order)."""
-    ids = np.asarray(ids, dtype=np.int64)
+    ids = np.array(ids, dtype=np.int64)  # a copy: no array is shared between two states, their users may change them
     if rows is None:
         return ids, np.empty((0,), dtype=np.float64)
     if _ascending(ids):
@@ -347,7 +347,7 @@ def _aligned_values(
 ) -> npt.NDArray[Any]:
     """A property's values in the order of ``ids`` (rows keyed by ``_idx``); an id without a row gets NaN."""
     if len(idx) == len(ids) and np.array_equal(idx, ids):  # a value for every id, in their order
-        return values
+        return values.copy()  # (not shared with another state's)
     if not _ascending(idx):
         order = np.argsort(idx, kind="stable")
         idx, values = idx[order], values[order]
