@@ -142,7 +142,9 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
 
     # (b) object_merge, and its read against the three full reads it replaced
     merge = tgsis.object_merge(conn, "regions", geoid)
-    assert merge.merged is not None and not merge.conflicts and len(merge.regions) == 2, [(r.sides, len(r.vertex_ids)) for r in merge.regions]
+    assert merge.merged is not None and not merge.conflicts and len(merge.regions) == 2, [
+        (r.sides, len(r.vertex_ids)) for r in merge.regions
+    ]
     expected = surface.vertices.copy()
     expected[parent_patch, 2] += 5.0
     expected[child_patch, 2] -= 3.0
