@@ -118,50 +118,94 @@ def _require_same_attributes(
     )
 
 
-def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int) -> _Rows:
-    """The object's rows as ``version`` sees them at ``revision`` (the session is moved there for the reads)."""
-    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+@dataclass(frozen=True)
+class _Table:
+    """One table a state is read from: its versioned view, the object's key column there, its columns.
+
+    The first column is the row's key within the object (vertex, cell,
+    property row ``_idx``, atom vertex, part run's first cell).
+    """
+
+    view: str  # the table's name in ``schema``; its storage is ``<view>_ver``
+    schema: str
+    key: str
+    columns: tuple[tuple[str, str], ...]
+
+    @property
+    def source(self) -> sql.Composed:
+        return sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(self.view))
+
+    def changed(self, sets: Mapping[str, list[int]], since: list[int]) -> sql.Composed:
+        """The storage's rows of the object some revision of ``since`` wrote or closed, as a subquery.
+
+        A row visible in one set and not in another was written in a
+        revision one set has and the other has not, or closed in one: the
+        rows with ``revision`` or ``lastrevs`` in the symmetric differences
+        ``since`` are all the rows whose visibility can differ. Column
+        ``_seen`` says where each is visible (bit 1 base, 2 parent, 4
+        child), with the test of the versioned views.
+        """
+        seen = sql.SQL(" + ").join(
+            sql.SQL("(v.revision = ANY ({s}) AND NOT (v.revclosed AND v.lastrevs && {s}))::int4 * {bit}").format(
+                s=_int_array(sets[side]), bit=sql.Literal(bit)
+            )
+            for side, bit in _SIDE_BITS.items()
+        )
+        return sql.SQL(
+            "(SELECT {cols}, {seen} AS _seen FROM {storage} v "
+            "WHERE (v.revision = ANY ({since}) OR (v.revclosed AND v.lastrevs && {since}))) AS _changed"
+        ).format(
+            cols=sql.SQL(", ").join(
+                sql.SQL("v.{}").format(sql.Identifier(c)) for c in (self.key, *(n for n, _ in self.columns))
+            ),
+            seen=seen,
+            storage=sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(self.view + "_ver")),
+            since=_int_array(since),
+        )
+
+
+_SIDE_BITS = {"base": 1, "parent": 2, "child": 4}
+
+
+def _int_array(values: list[int]) -> sql.Composed:
+    return sql.SQL("{}::int4[]").format(sql.Literal("{" + ",".join(str(int(v)) for v in values) + "}"))
+
+
+def _tables(fc: FeatureClass) -> tuple[list[_Table], list[tuple[str, list[str]]]]:
+    """The tables of one object's state, in the order :func:`_rows_of` takes them, and the property tables' names."""
     table, key = SIMPLEX[fc.geotype]
     k = mesh_class(fc.geotype).cell_size
-    requests = [
-        Packed(
-            sql.SQL("tgsis.vrtx"),
-            "geoid",
-            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-            [geoid],
-        ),
-        Packed(
-            sql.SQL("tgsis.{}").format(sql.Identifier(table)),
-            "geoid",
-            [(key, "int8"), *((f"vrtxid{i + 1}", "int8") for i in range(k))],
-            [geoid],
-        ),
+    tables = [
+        _Table("vrtx", "tgsis", "geoid", (("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8"))),
+        _Table(table, "tgsis", "geoid", ((key, "int8"), *((f"vrtxid{i + 1}", "int8") for i in range(k)))),
+        _Table("atom", "tgsis", "geoid", (("vrtxid", "int8"), ("refid", "int8"))),
+        _Table("part", "tgsis", "geoid", (("firstid", "int8"), ("lastid", "int8"), ("part", "int4"))),
     ]
-    tables: list[tuple[str, list[str]]] = []
+    properties: list[tuple[str, list[str]]] = []
     for alignment in ("VERTEX", "CELL"):
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
         if props and protable is not None:
-            tables.append((alignment, [p.name for p in props]))
-            requests.append(
-                Packed(
-                    fc.qualified(protable), "_geoid", [("_idx", "int8"), *((p.name, p.wire) for p in props)], [geoid]
-                )
-            )
-    vertex_cols, cell_cols, *prop_cols = columns_out_all(conn, requests)
+            properties.append((alignment, [p.name for p in props]))
+            tables.append(_Table(protable, fc.schema, "_geoid", (("_idx", "int8"), *((p.name, p.wire) for p in props))))
+    return tables, properties
+
+
+def _rows_of(fc: FeatureClass, properties: list[tuple[str, list[str]]], read: list[list[npt.NDArray[Any]]]) -> _Rows:
+    """A state's rows from its tables' columns as read (``[key, *columns]`` per table of :func:`_tables`)."""
+    k = mesh_class(fc.geotype).cell_size
+    vertex_cols, cell_cols, atom_cols, part_cols, *prop_cols = read
     vids, xyz = _sorted_rows(vertex_cols[1], np.stack(vertex_cols[2:5], axis=1) if len(vertex_cols[1]) else None)
     cids, cells = _sorted_rows(cell_cols[1], np.stack(cell_cols[2:], axis=1) if len(cell_cols[1]) else None)
-    xyz = xyz.reshape(-1, 3).astype(np.float64)
-    cells = cells.reshape(-1, k).astype(np.int64)
+    xyz = xyz.reshape(-1, 3).astype(np.float64, copy=False)  # (stacked: arrays of their own)
+    cells = cells.reshape(-1, k).astype(np.int64, copy=False)
     props_by: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
-    for (alignment, names), columns in zip(tables, prop_cols, strict=True):
+    for (alignment, names), columns in zip(properties, prop_cols, strict=True):
         ids = vids if alignment == "VERTEX" else cids
         idx = np.asarray(columns[1], dtype=np.int64)
         for name, values in zip(names, columns[2:], strict=True):
             props_by[alignment][name] = _aligned_values(ids, idx, np.asarray(values))
-    atoms = conn.execute("SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()
-    runs = conn.execute(
-        "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
-    ).fetchall()
+    atoms = np.stack([np.asarray(c, dtype=np.int64) for c in atom_cols[1:3]], axis=1).reshape(-1, 2)
+    runs = np.stack([np.asarray(c, dtype=np.int64) for c in part_cols[1:4]], axis=1).reshape(-1, 3)
     return _Rows(
         vids,
         xyz,
@@ -169,16 +213,131 @@ def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision
         cells,
         props_by["VERTEX"],
         props_by["CELL"],
-        np.asarray(atoms, dtype=np.int64).reshape(-1, 2),
-        np.asarray(runs, dtype=np.int64).reshape(-1, 3),
+        atoms[np.argsort(atoms[:, 0], kind="stable")],
+        runs[np.argsort(runs[:, 0], kind="stable")],
     )
+
+
+def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int) -> _Rows:
+    """The object's rows as ``version`` sees them at ``revision``, all through the views (the session is moved there)."""
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+    tables, properties = _tables(fc)
+    return _rows_of(
+        fc, properties, columns_out_all(conn, [Packed(t.source, t.key, t.columns, [geoid]) for t in tables])
+    )
+
+
+def _storage_readable(conn: Conn, tables: list[_Table]) -> bool:
+    """Whether every table is versioned with the object key read here, and the role may read its storage.
+
+    A role that may read a view but not its storage (a grant made on the
+    view only) reads as before: three full reads through the views.
+    """
+    names = [f"{t.schema}.{t.view}" for t in tables]
+    row = conn.execute(
+        "SELECT count(*) FILTER (WHERE has_table_privilege(format('%%I.%%I', t.schemaname, t.tablename || '_ver'), 'SELECT')"
+        "                          AND t.objectkeyfield = k.key)"
+        "  FROM tgsis.versioned_tables t"
+        "  JOIN unnest(%s::text[], %s::text[], %s::text[]) AS k(schemaname, tablename, key)"
+        "    ON k.schemaname = t.schemaname AND k.tablename = t.tablename",
+        ([t.schema for t in tables], [t.view for t in tables], [t.key for t in tables]),
+    ).fetchone()
+    return row is not None and row[0] == len(names)
+
+
+def _by_key(columns: list[npt.NDArray[Any]]) -> list[npt.NDArray[Any]]:
+    """A table's columns (``[object key, row key, ...]``) with the rows in ascending row key."""
+    keys = np.asarray(columns[1])
+    if _ascending(keys):
+        return [np.asarray(c) for c in columns]
+    order = np.argsort(keys, kind="stable")
+    return [np.asarray(c)[order] for c in columns]
+
+
+def _ascending(ids: npt.NDArray[Any]) -> bool:
+    """Whether the ids are strictly ascending (as the rows of an uploaded object usually come)."""
+    return len(ids) < 2 or bool(np.all(ids[1:] > ids[:-1]))
+
+
+def _patched(base: list[npt.NDArray[Any]], changed: list[npt.NDArray[Any]], bit: int) -> list[npt.NDArray[Any]]:
+    """A side's columns: the base's rows without those the side does not see, with those only the side sees.
+
+    ``base`` is in ascending row key (:func:`_by_key`), and so is the
+    result. ``changed`` holds ``[object key, row key, *columns, _seen]`` of
+    the rows whose visibility can differ (:meth:`_Table.changed`); rows are
+    told apart by their row key, of which a revision set sees one version
+    at most. The cost follows the change: the base's rows are found by
+    binary search and copied once.
+    """
+    seen = np.asarray(changed[-1])
+    in_base, in_side = (seen & 1) != 0, (seen & bit) != 0
+    gone, added = in_base & ~in_side, in_side & ~in_base
+    if not gone.any() and not added.any():
+        return base  # (the states made of it copy what they keep: _rows_of)
+    keys = base[1]
+    gone_keys = np.unique(np.asarray(changed[1])[gone])
+    at = np.searchsorted(keys, gone_keys)
+    at = at[(at < len(keys)) & (keys[np.minimum(at, len(keys) - 1)] == gone_keys)] if len(keys) else at[:0]
+    new = [np.asarray(c)[added] for c in changed[:-1]]
+    order = np.argsort(new[1], kind="stable")
+    new = [c[order] for c in new]
+    if len(at) == len(new[1]) and np.array_equal(keys[at], new[1]):  # rows rewritten in place: same keys
+        out = [c.copy() for c in base]
+        for column, values in zip(out, new, strict=True):
+            column[at] = values
+        return out
+    kept = [np.delete(c, at, axis=0) for c in base]
+    where = np.searchsorted(kept[1], new[1])
+    return [
+        np.insert(c, where, values, axis=0) if len(c) else values.astype(c.dtype, copy=False)
+        for c, values in zip(kept, new, strict=True)
+    ]
+
+
+def _read_states(conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]]) -> dict[str, _Rows]:
+    """The rows of base, parent and child (``sides``: side -> (version, revision)).
+
+    The base is read in full through the views; of parent and child only
+    the rows their revisions since the base wrote or closed, from the
+    storage, with the test of the views, in the same statement: the sides
+    are the base patched with them. The cost of the sides follows their
+    change (the storage's object index, the object's rows filtered on
+    ``revision``/``lastrevs``), not three full transfers. A role that may
+    not read the storage reads the three states in full through the views.
+    """
+    tables, properties = _tables(fc)
+    sets = {}
+    for side, (version, revision) in sides.items():
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+        row = conn.execute("SELECT tgsis.get_revisions(true)").fetchone()
+        assert row is not None
+        sets[side] = sorted(int(r) for r in row[0])
+    base_version, base_revision = sides["base"]
+    if not _storage_readable(conn, tables):
+        return {side: _read_state(conn, fc, geoid, version, revision) for side, (version, revision) in sides.items()}
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (base_version, base_revision))
+    since = sorted(
+        set(sets["base"]).symmetric_difference(sets["parent"]) | set(sets["base"]).symmetric_difference(sets["child"])
+    )
+    requests = [Packed(t.source, t.key, t.columns, [geoid]) for t in tables]
+    requests += [Packed(t.changed(sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid]) for t in tables]
+    read = columns_out_all(conn, requests)
+    base, changed = [_by_key(columns) for columns in read[: len(tables)]], read[len(tables) :]
+    rows = {"base": _rows_of(fc, properties, base)}
+    for side in ("parent", "child"):
+        rows[side] = _rows_of(
+            fc, properties, [_patched(b, c, _SIDE_BITS[side]) for b, c in zip(base, changed, strict=True)]
+        )
+    return rows
 
 
 def _sorted_rows(ids: npt.ArrayLike, rows: npt.NDArray[Any] | None) -> tuple[npt.NDArray[np.int64], npt.NDArray[Any]]:
     """Ids ascending with their rows (the packed reads come in no order)."""
-    ids = np.asarray(ids, dtype=np.int64)
+    ids = np.array(ids, dtype=np.int64)  # a copy: no array is shared between two states, their users may change them
     if rows is None:
         return ids, np.empty((0,), dtype=np.float64)
+    if _ascending(ids):
+        return ids, rows
     order = np.argsort(ids, kind="stable")
     return ids[order], rows[order]
 
@@ -187,8 +346,11 @@ def _aligned_values(
     ids: npt.NDArray[np.int64], idx: npt.NDArray[np.int64], values: npt.NDArray[Any]
 ) -> npt.NDArray[Any]:
     """A property's values in the order of ``ids`` (rows keyed by ``_idx``); an id without a row gets NaN."""
-    order = np.argsort(idx, kind="stable")
-    idx, values = idx[order], values[order]
+    if len(idx) == len(ids) and np.array_equal(idx, ids):  # a value for every id, in their order
+        return values.copy()  # (not shared with another state's)
+    if not _ascending(idx):
+        order = np.argsort(idx, kind="stable")
+        idx, values = idx[order], values[order]
     pos = np.searchsorted(idx, ids)
     found = pos < len(idx)
     found[found] = idx[pos[found]] == ids[found]
@@ -302,11 +464,12 @@ def read_merge_states(conn: Conn, version: str, feature_id: int) -> MergeInputs:
                 hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
             )
         _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
-        rows = {
-            "base": _read_state(conn, fc, feature_id, version, initrevision),
-            "parent": _read_state(conn, fc, feature_id, parent, parent_working),
-            "child": _read_state(conn, fc, feature_id, version, working),
-        }
+        rows = _read_states(
+            conn,
+            fc,
+            feature_id,
+            {"base": (version, initrevision), "parent": (parent, parent_working), "child": (version, working)},
+        )
     finally:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
             restore_version_settings(conn, settings, local=True)

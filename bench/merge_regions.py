@@ -1,0 +1,229 @@
+"""Merges by region read from the database: a 1M-vertex surface with two disjoint 1,000-vertex edits (issue 39's figures).
+
+The surface is the bumpy 1000 x 1000 grid of ``transfer.py`` (1,000,000
+vertices, 1,996,002 triangles, one vertex property), uploaded into a
+versioned class. Two versions are made from DEFAULT; each moves a 40 x 25
+patch (1,000 vertices) near one corner and changes the property of 100 of
+them; then DEFAULT moves another patch near the opposite corner. The object
+is then changed on both sides, disjointly. Timed in one process, medians of
+``--repeat`` runs, every write rolled back after it was timed:
+
+- baseline (a): today's object-level merge of one such edit: the conflict of
+  version ``objlevel`` solved ``child`` (the parent's edit dropped, as a whole
+  object), then ``tgsis.merge_version`` (SQL, through
+  ``tgsis.db.versions.merge_version``), and the rows it writes;
+- (b) ``tgsis.object_merge`` of version ``regions`` (its three states read
+  in one snapshot, ``three_way_merge``), and its read alone
+  (``read_merge_states``: the base in full, of each side only the rows its
+  revisions wrote or closed) against the three full reads through the views
+  it replaced;
+- (c) the SQL ``tgsis.find_conflicts`` (object-level: which objects changed on
+  both sides);
+- (d) when the checkout has them: the region-aware ``find_conflicts``
+  (``tgsis.db.regions``: regions computed and recorded) and the region-aware
+  ``merge_version`` (``tgsis.db.merging``) of the two disjoint edits, with
+  the rows it writes, each as a ratio to (a).
+
+The upload of the surface into versioned storage is timed once (what an index
+on the storage would cost inserts shows there).
+
+    python bench/merge_regions.py [--side 1000] [--repeat 3]
+    # TGSIS_PG=system|embedded
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import platform
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import psycopg
+from merge3 import patch
+from psycopg import sql
+from timing import bench_database, timed
+from transfer import grid_surface
+
+import tgsis
+from tgsis.db import _merge_states
+from tgsis.db import features as F
+from tgsis.db import versions as V
+
+Conn = psycopg.Connection[Any]
+
+
+def move(conn: Conn, version: str, geoid: int, ids: np.ndarray, dz: float, valued: np.ndarray | None = None) -> None:
+    """Move vertices ``ids`` by ``dz`` in ``version`` (and set the property of ``valued``), one committed transaction."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)", (dz, geoid, [int(i) for i in ids])
+        )
+        if valued is not None:
+            conn.execute(
+                sql.SQL("UPDATE {} SET porosity = 0.5 WHERE _geoid = %s AND _idx = ANY(%s)").format(
+                    sql.Identifier(tgsis.get_feature_class(conn, "horizon").property_table("VERTEX") or "")
+                ),
+                (geoid, [int(i) for i in valued]),
+            )
+
+
+def rolled_back(conn: Conn, action: Callable[[], Any]) -> Callable[[], Any]:
+    """``action`` in a transaction rolled back afterwards (a merge's writes undone for the next run)."""
+
+    def run() -> Any:
+        conn.rollback()
+        conn.execute("SELECT 1")  # a transaction open: what the action commits is a savepoint of it
+        try:
+            return action()
+        finally:
+            conn.rollback()
+
+    return run
+
+
+def in_snapshot(conn: Conn, action: Callable[[], Any]) -> Callable[[], Any]:
+    """``action`` in a REPEATABLE READ transaction of its own (as ``object_merge`` reads)."""
+
+    def run() -> Any:
+        conn.rollback()
+        conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+        try:
+            return action()
+        finally:
+            conn.rollback()
+
+    return run
+
+
+def three_full_reads(conn: Conn, version: str, geoid: int) -> None:
+    """The read of before: base, parent and child each in full through the versioned views."""
+    _versionid, parent, initrevision, working, parent_working = _merge_states.version_row(conn, version)
+    fc = tgsis.get_feature_class(conn, "horizon")
+    rows = {
+        "base": _merge_states._read_state(conn, fc, geoid, version, initrevision),
+        "parent": _merge_states._read_state(conn, fc, geoid, parent, parent_working),
+        "child": _merge_states._read_state(conn, fc, geoid, version, working),
+    }
+    _merge_states._states(fc, geoid, rows)
+
+
+def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
+    surface = grid_surface(side)
+    F.create_feature_class(conn, "horizon", "SURFACE", cell_properties={"porosity": "double precision"})
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    start = time.perf_counter()
+    geoid = F.insert_feature(conn, "horizon", surface)
+    conn.commit()
+    upload = time.perf_counter() - start
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE")
+    conn.autocommit = False
+    print(f"surface: {surface.n_vertices} vertices, {surface.n_cells} triangles, uploaded in {upload:.2f} s")
+
+    parent_patch, child_patch = patch(side, 10, 10), patch(side, side - 60, side - 60)
+    for version in ("objlevel", "regions"):
+        tgsis.create_version(conn, version)
+        conn.commit()
+        move(conn, version, geoid, child_patch, -3.0, valued=child_patch[:100])
+    move(conn, "DEFAULT", geoid, parent_patch, 5.0)
+    print(f"DEFAULT moved {len(parent_patch)} vertices; versions objlevel and regions moved {len(child_patch)} others")
+
+    # (a) the baseline: object-level, the conflict solved 'child', then the SQL merge
+    V.find_conflicts(conn, "objlevel")
+    V.resolve_conflict(conn, "objlevel", "feature", geoid, "child")
+    conn.commit()
+    rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel"))())
+    t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel")), repeat)
+
+    # (b) object_merge, and its read against the three full reads it replaced
+    merge = tgsis.object_merge(conn, "regions", geoid)
+    assert merge.merged is not None and not merge.conflicts and len(merge.regions) == 2, [
+        (r.sides, len(r.vertex_ids)) for r in merge.regions
+    ]
+    expected = surface.vertices.copy()
+    expected[parent_patch, 2] += 5.0
+    expected[child_patch, 2] -= 3.0
+    assert np.array_equal(merge.merged.state.vertices.view(np.int64), expected.view(np.int64))
+    conn.rollback()
+    t_object_merge = timed(in_snapshot(conn, lambda: tgsis.object_merge(conn, "regions", geoid)), repeat)
+    t_read = timed(in_snapshot(conn, lambda: _merge_states.read_merge_states(conn, "regions", geoid)), repeat)
+    t_full = timed(in_snapshot(conn, lambda: three_full_reads(conn, "regions", geoid)), repeat)
+
+    # (c) the SQL conflict check
+    t_sql_conflicts = timed(
+        rolled_back(conn, lambda: conn.execute("SELECT * FROM tgsis.find_conflicts('regions')").fetchall()), repeat
+    )
+    out: dict[str, Any] = {
+        "upload_s": round(upload, 3),
+        "objlevel_merge_s": round(t_a, 3),
+        "objlevel_merge_rows": rows_a,
+        "object_merge_s": round(t_object_merge, 3),
+        "object_merge_vs_objlevel": round(t_object_merge / t_a, 2),
+        "read_merge_states_s": round(t_read, 3),
+        "three_full_reads_s": round(t_full, 3),
+        "read_vs_full": round(t_read / t_full, 2),
+        "sql_find_conflicts_s": round(t_sql_conflicts, 3),
+    }
+    print(f"(a) baseline, object-level merge of one edit (SQL merge_version): {t_a:6.3f} s, {rows_a} rows written")
+    print(
+        f"(b) object_merge (read + three_way_merge) of two disjoint edits:  {t_object_merge:6.3f} s ({t_object_merge / t_a:.2f}x (a))"
+    )
+    print(f"    its read_merge_states:                                        {t_read:6.3f} s")
+    print(
+        f"    three full reads through the views (the read of before):      {t_full:6.3f} s (the read is {t_read / t_full:.2f}x)"
+    )
+    print(f"(c) SQL tgsis.find_conflicts (object-level):                      {t_sql_conflicts:6.3f} s")
+
+    # (d) the region-aware conflict check and merge, when this checkout has them
+    if importlib.util.find_spec("tgsis.db.regions") is not None:
+        from tgsis.db import regions
+
+        [conflict] = rolled_back(conn, lambda: regions.find_conflicts(conn, "regions"))()
+        assert conflict.regions and not any(r.conflict for r in conflict.regions), conflict
+        t_regions = timed(rolled_back(conn, lambda: regions.find_conflicts(conn, "regions")), repeat)
+        out["region_find_conflicts_s"] = round(t_regions, 3)
+        print(f"(d) region-aware find_conflicts (regions found and recorded):     {t_regions:6.3f} s")
+    else:
+        print("(d) no tgsis.db.regions in this checkout: region-aware find_conflicts not measured")
+    from tgsis.db import merging
+
+    if hasattr(merging, "merge_version"):
+        rows_d = int(rolled_back(conn, lambda: merging.merge_version(conn, "regions"))())
+        t_d = timed(rolled_back(conn, lambda: merging.merge_version(conn, "regions")), repeat)
+        out.update(
+            {
+                "region_merge_s": round(t_d, 3),
+                "region_merge_rows": rows_d,
+                "region_merge_vs_objlevel": round(t_d / t_a, 2),
+            }
+        )
+        print(
+            f"(d) region-aware merge_version of two disjoint edits:             {t_d:6.3f} s ({t_d / t_a:.2f}x (a)), {rows_d} rows written"
+        )
+    else:
+        print("(d) no region-aware merge_version in this checkout: not measured")
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--side", type=int, default=1000)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
+        f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}; medians of {args.repeat}"
+    )
+    with bench_database() as conn:
+        results = figures(conn, args.side, args.repeat)
+    for name, value in results.items():
+        print(f"{name}: {value}")
+
+
+if __name__ == "__main__":
+    main()
