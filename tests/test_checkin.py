@@ -515,7 +515,7 @@ def test_checkout_in_a_child_goes_through_the_normal_conflict_path(conn: Conn, h
     with tgsis.in_version(conn, "mine"):
         co = tgsis.checkout(conn, fid)
     theirs = base.vertices.copy()
-    theirs[3, 2] = 7.0
+    theirs[100, 2] = 7.0  # the same vertex as below, elsewhere: a region conflict (disjoint edits merge by region)
     tgsis.save_feature(conn, horizons, fid, tgsis.Surface(theirs, base.cells, vertex_properties=base.vertex_properties))
     conn.commit()  # DEFAULT changed it meanwhile
     mine = co.mesh.copy()

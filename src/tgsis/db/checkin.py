@@ -44,6 +44,7 @@ from psycopg import sql
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import delete_rows, update_geometry_row
 from tgsis.db._static import (
     MEANING_COLUMNS,
     SIMPLEX,
@@ -283,15 +284,6 @@ def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, g
     return 0 if row is None or row[0] is None else int(row[0]) + 1
 
 
-def _delete_parts(conn: Conn, schema: str, table: str, key: str, geoid: int, idfield: str, ids: IntArray) -> int:
-    if len(ids) == 0:
-        return 0
-    row = conn.execute(
-        "SELECT tgsis.delete_object_rows(%s, %s, %s, %s, %s, %s)", (schema, table, key, [geoid], idfield, ids.tolist())
-    ).fetchone()
-    return int(row[0]) if row else 0
-
-
 @dataclass(frozen=True)
 class _Written:
     """Database ids of the edited mesh's vertices and cells after a save, and the row counts."""
@@ -364,7 +356,7 @@ def _write_diff(
             changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
         rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
         changes += int(changed.sum())
-        deleted += _delete_parts(
+        deleted += delete_rows(
             conn,
             fc.schema,
             protable,
@@ -386,8 +378,8 @@ def _write_diff(
             )
             inserted += len(rewrite)
 
-    deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
-    deleted += _delete_parts(
+    deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
+    deleted += delete_rows(
         conn,
         "tgsis",
         "vrtx",
@@ -499,16 +491,7 @@ def _update_rows(
     feature_values: Mapping[str, Any] | None,
 ) -> int:
     """Bring the geometry row (box, counts, name) and the feature row up to date; rows changed (0 when equal)."""
-    low, high = bounds.tolist() if bounds is not None else (None, None)
-    box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
-    changed = conn.execute(
-        sql.SQL(
-            "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s, geoname = %(name)s "
-            "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s "
-            "OR geoname IS DISTINCT FROM %(name)s)"
-        ).format(box=box),
-        {"low": low, "high": high, "n": edited.n_vertices, "m": edited.n_cells, "name": name, "g": geoid},
-    ).rowcount
+    changed = update_geometry_row(conn, geoid, bounds, edited.n_vertices, edited.n_cells, name=name, set_name=True)
     if feature_values:
         columns = list(feature_values)
         changed += conn.execute(
