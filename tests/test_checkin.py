@@ -420,7 +420,7 @@ def test_bad_saves_and_checkins_change_nothing(conn: Conn, horizons: F.FeatureCl
         (lambda: tgsis.save_feature(conn, horizons, fid, base, tolerance=-1.0), tgsis.InvalidInputError, "tolerance"),
         (lambda: tgsis.save_feature(conn, horizons, fid, "mesh"), tgsis.InvalidGeometryError, "str"),  # type: ignore[arg-type]
         (lambda: tgsis.checkin(conn, co, no_props), tgsis.InvalidPropertyError, "porosity"),
-        (lambda: tgsis.checkin(conn, co, base, on_conflict="merge"), tgsis.InvalidInputError, "on_conflict"),  # type: ignore[arg-type]
+        (lambda: tgsis.checkin(conn, co, base, on_conflict="nope"), tgsis.InvalidInputError, "on_conflict"),  # type: ignore[arg-type]
         (lambda: tgsis.checkout(conn, fid + 1000), tgsis.NotFoundError, str(fid + 1000)),
     ]
     for call, error, text in bad_calls:

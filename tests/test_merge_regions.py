@@ -313,3 +313,39 @@ def test_the_command_line_merges_by_region_and_says_so(
     assert main(["--dsn", db_dsn, "version", "merge", "e1"]) == 0
     assert "merged e1 into its parent: " in capsys.readouterr().out
     assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == _union().tobytes()
+
+
+def test_parts_changed_in_the_parent_are_merged_with_the_childs_moves(conn: Conn) -> None:
+    """Parts kept in tgsis.part (runs of cell ids) go through the merge as the cell property ``part``."""
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    half = len(surface.cells) // 2
+    square_row = np.concatenate([np.arange(half), np.arange(half)]) // (SIDE - 1)
+    parted = tgsis.Surface(
+        surface.vertices, surface.cells, cell_properties={"part": (square_row >= 8).astype(np.int64)}
+    )
+    geoid = tgsis.insert_feature(conn, "faults", parted)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    runs = conn.execute("SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,))
+    assert [r[2] for r in runs.fetchall()] == [0, 1, 0, 1]
+    conn.execute("UPDATE tgsis.part SET part = 2 WHERE geoid = %s AND part = 1", (geoid,))  # DEFAULT: the south
+    conn.commit()
+    move(conn, "e1", geoid, NORTH, CHILD_SHIFT)
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            parts = conn.execute(
+                "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
+            ).fetchall()
+            mesh = tgsis.fetch_feature(conn, "faults", geoid).mesh
+        conn.commit()
+        assert [p[2] for p in parts] == [0, 2, 0, 2]
+        expected = surface.vertices.copy()
+        moved(expected, NORTH, CHILD_SHIFT)
+        assert isinstance(mesh, tgsis.Surface)
+        assert mesh.vertices.tobytes() == expected.tobytes()
+        np.testing.assert_array_equal(mesh.cell_properties["part"], np.where(square_row >= 8, 2, 0))

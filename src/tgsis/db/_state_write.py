@@ -31,7 +31,7 @@ from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshState
 
-__all__ = ["delete_rows", "update_geometry_row", "write_state_difference"]
+__all__ = ["delete_rows", "update_geometry_row", "write_state_difference", "write_state_rows"]
 
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
@@ -125,9 +125,9 @@ def _values(state: MeshState, alignment: str, name: str, what: str) -> npt.NDArr
 
 def _write_properties(
     conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, storage: Storage
-) -> int:
-    """The property rows (``_idx``) of the ids that are gone, new, or whose values differ; rows written."""
-    written = 0
+) -> tuple[int, int]:
+    """The property rows (``_idx``) of the ids that are gone, new, or whose values differ; (deleted, inserted)."""
+    deleted = inserted = 0
     for alignment in ("VERTEX", "CELL"):
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
         if not props or protable is None:
@@ -143,7 +143,7 @@ def _write_properties(
             return result
 
         gone, fresh = _difference(old_ids, new_ids, same)
-        written += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
+        deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
         if len(fresh):
             columns: list[tuple[str, npt.ArrayLike, str]] = [
                 ("_geoid", np.full(len(fresh), geoid, dtype=np.int64), "int8"),
@@ -163,8 +163,8 @@ def _write_properties(
                     chosen = chosen.astype(np.int64)
                 columns.append((p.name, chosen, array_wire(wire, p.size)))
             storage.copy(conn, fc.schema, protable, columns)
-            written += len(fresh)
-    return written
+            inserted += len(fresh)
+    return deleted, inserted
 
 
 def _atoms(state: MeshState) -> tuple[IntArray, IntArray]:
@@ -177,7 +177,7 @@ def _atoms(state: MeshState) -> tuple[IntArray, IntArray]:
     return state.vertex_ids[at], refid[at].astype(np.int64)
 
 
-def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage: Storage) -> int:
+def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage: Storage) -> tuple[int, int]:
     """The ``tgsis.atom`` rows of vertices whose atom is gone, new or repeats another vertex now; rows written.
 
     An atom row's ``patom`` flag (a GOCAD PATOM) is not in the state: a row
@@ -187,38 +187,38 @@ def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage
     old_ids, old_ref = _atoms(old)
     new_ids, new_ref = _atoms(new)
     gone, fresh = _difference(old_ids, new_ids, lambda a, b: old_ref[a] == new_ref[b])
-    written = delete_rows(conn, "tgsis", "atom", "geoid", geoid, "vrtxid", gone)
-    if len(fresh):
-        ids, refs = new_ids[fresh], new_ref[fresh]
-        flags = dict(
-            ((int(v), int(r)), bool(p))
-            for v, r, p in conn.execute(
-                sql.SQL("SELECT DISTINCT vrtxid, refid, patom FROM {} WHERE geoid = %s AND vrtxid = ANY(%s)").format(
-                    storage.table("tgsis", "atom")
-                ),
-                (geoid, ids.tolist()),
-            ).fetchall()
-        )
-        rows = [(geoid, int(v), int(r), int(flags.get((int(v), int(r)), False))) for v, r in zip(ids, refs)]
-        copy_extra_rows(conn, storage, rows, [])
-        written += len(rows)
-    return written
+    deleted = delete_rows(conn, "tgsis", "atom", "geoid", geoid, "vrtxid", gone)
+    if not len(fresh):
+        return deleted, 0
+    ids, refs = new_ids[fresh], new_ref[fresh]
+    flags = dict(
+        ((int(v), int(r)), bool(p))
+        for v, r, p in conn.execute(
+            sql.SQL("SELECT DISTINCT vrtxid, refid, patom FROM {} WHERE geoid = %s AND vrtxid = ANY(%s)").format(
+                storage.table("tgsis", "atom")
+            ),
+            (geoid, ids.tolist()),
+        ).fetchall()
+    )
+    rows = [(geoid, int(v), int(r), int(flags.get((int(v), int(r)), False))) for v, r in zip(ids, refs)]
+    copy_extra_rows(conn, storage, rows, [])
+    return deleted, len(rows)
 
 
-def _write_parts(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, storage: Storage) -> int:
-    """The ``tgsis.part`` runs, rewritten when the parts differ (a few rows per object); rows written."""
+def _write_parts(
+    conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, storage: Storage
+) -> tuple[int, int]:
+    """The ``tgsis.part`` runs, rewritten when the parts differ (a few rows per object); (deleted, inserted)."""
     if stores_part_column(fc) or PART_PROPERTY not in new.cell_properties:
-        return 0
+        return 0, 0
     after = part_rows(geoid, new.cell_ids, np.asarray(new.cell_properties[PART_PROPERTY]))
     if PART_PROPERTY in old.cell_properties:
         before = part_rows(geoid, old.cell_ids, np.asarray(old.cell_properties[PART_PROPERTY]))
         if before == after:
-            return 0
-    written = 0
+            return 0, 0
     row = conn.execute("SELECT tgsis.delete_object_rows('tgsis', 'part', 'geoid', %s)", ([geoid],)).fetchone()
-    written += int(row[0]) if row else 0
     copy_extra_rows(conn, storage, [], after)
-    return written + len(after)
+    return (int(row[0]) if row else 0), len(after)
 
 
 def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState) -> int:
@@ -258,6 +258,11 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
     InvalidInputError
         ``new`` lacks a property column of the class, or has no value for an integer property of a row to write.
     """
+    return sum(write_state_rows(conn, fc, geoid, old, new))
+
+
+def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState) -> tuple[int, int, int]:
+    """:func:`write_state_difference`, counted: (rows deleted or closed, rows inserted, geometry rows updated)."""
     if fc.geotype not in SIMPLEX:
         raise InvalidInputError(f"feature {geoid} of class {fc.name}: {fc.geotype.value} is not written by rows")
     table, idfield = SIMPLEX[fc.geotype]
@@ -269,11 +274,11 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
             "WHERE schemaname = 'tgsis' AND tablename = 'vrtx'",
             (str(geoid),),
         )
-    written = _write_properties(conn, fc, geoid, old, new, storage)
+    deleted, inserted = _write_properties(conn, fc, geoid, old, new, storage)
     gone_c, fresh_c = _row_difference(old.cell_ids, old.cells, new.cell_ids, new.cells)
     gone_v, fresh_v = _row_difference(old.vertex_ids, old.vertices, new.vertex_ids, new.vertices)
-    written += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone_c)
-    written += delete_rows(conn, "tgsis", "vrtx", "geoid", geoid, "vrtxid", gone_v)
+    deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone_c)
+    deleted += delete_rows(conn, "tgsis", "vrtx", "geoid", geoid, "vrtxid", gone_v)
     if len(fresh_v):
         xyz = new.vertices[fresh_v]
         storage.copy(
@@ -288,7 +293,7 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
                 ("z", xyz[:, 2], "float8"),
             ],
         )
-        written += len(fresh_v)
+        inserted += len(fresh_v)
     if len(fresh_c):
         cells = new.cells[fresh_c]
         storage.copy(
@@ -301,9 +306,8 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
                 *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(new.cell_size)),
             ],
         )
-        written += len(fresh_c)
-    written += _write_atoms(conn, geoid, old, new, storage)
-    written += _write_parts(conn, fc, geoid, old, new, storage)
+        inserted += len(fresh_c)
+    for gone, added in (_write_atoms(conn, geoid, old, new, storage), _write_parts(conn, fc, geoid, old, new, storage)):
+        deleted, inserted = deleted + gone, inserted + added
     bounds = np.stack([new.vertices.min(axis=0), new.vertices.max(axis=0)]) if new.n_vertices else None
-    written += update_geometry_row(conn, geoid, bounds, new.n_vertices, new.n_cells)
-    return written
+    return deleted, inserted, update_geometry_row(conn, geoid, bounds, new.n_vertices, new.n_cells)
