@@ -140,3 +140,21 @@ def test_the_command_line_checks_in_with_on_conflict_merge(
     moved(expected, SOUTH, (0.0, 0.0, -2.0))
     moved(expected, NORTH, (0.0, 0.0, 3.0))
     np.testing.assert_allclose(stored_state(conn, "DEFAULT", fault)[1], expected, rtol=0, atol=1e-9)
+
+
+def test_the_merge_holds_the_features_write_lock_until_it_commits(conn: Conn, fault: int, db_dsn: str) -> None:
+    from tests.sessions import Background, wait_until_blocked
+
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -1.0))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 2.0
+    with conn.transaction():
+        assert tgsis.checkin(conn, co, mine, on_conflict="merge").merged
+        other = Background(db_dsn, "saver", lambda c: tgsis.save_feature(c, "faults", fault, curved_surface()))
+        with psycopg.connect(db_dsn) as observer:  # a writer of the feature waits for the merge
+            wait_until_blocked(observer, other.pid, conn.info.backend_pid)
+    other.finish()  # then saves over the merged state
+    assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == curved_surface().vertices.tobytes()

@@ -1186,12 +1186,14 @@ def _checkin_merge(
 ) -> SaveResult:
     """Merge the edit with the change made since check-out by region and write the result (caller's transaction).
 
-    ``check_unchanged`` holds the feature's write lock: the current state read
+    The feature's write lock is taken again (the refused ``check_unchanged``
+    took it in a savepoint, whose rollback let it go): the current state read
     here stays current until the transaction ends.
     """
     token = checked_out.token
     geoid = token.feature_id
     refused = str(conflict).splitlines()[0]
+    conn.execute("SELECT tgsis.feature_write_lock(%s)", (geoid,))
     try:
         stored_name, _, _ = _feature_row(conn, fc, geoid)
     except NotFoundError:
