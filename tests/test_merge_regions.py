@@ -378,3 +378,42 @@ def test_recorded_region_solutions_are_applied_by_the_merge(conn: Conn, fault: i
         moved(expected, [64, 65, 66], (0.0, 0.0, 5.0))
     for version in ("DEFAULT", "e1"):
         assert stored_state(conn, version, fault)[1].tobytes() == expected.tobytes()
+
+
+@pytest.mark.parametrize("geotype", ["MULTIPOINT", "MULTILINESTRING", "MULTITETRA"])
+def test_points_lines_and_solids_merge_by_region_with_cells_added_on_one_side(conn: Conn, geotype: str) -> None:
+    from tests.test_object_merge import _other_kind
+
+    tgsis.create_feature_class(conn, "bodies", geotype)
+    tgsis.enable_feature_versioning(conn)
+    mesh = _other_kind(geotype)
+    geoid = tgsis.insert_feature(conn, "bodies", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    first, last = np.arange(0, 5), np.arange(34, 40)
+    move(conn, "e1", geoid, first, (0.5, 0.25, -1.125))
+    move(conn, "DEFAULT", geoid, last, (-3.3, 0.0, 2.2))
+    table, key = {
+        "MULTIPOINT": ("point", "pointid"),
+        "MULTILINESTRING": ("segment", "segid"),
+        "MULTITETRA": ("tetra", "tetraid"),
+    }[geotype]
+    k = mesh.cell_size
+    with tgsis.in_version(conn, "e1"):  # the child adds a cell on the first vertices (a new id)
+        columns = ", ".join(f"vrtxid{j + 1}" for j in range(k))
+        conn.execute(
+            f"INSERT INTO tgsis.{table} (geoid, {key}, {columns}) VALUES (%s, 1000, {', '.join(['%s'] * k)})",
+            (geoid, *([0, 2, 4, 1][:k] if k > 1 else [3])),
+        )
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    expected = mesh.vertices.copy()
+    moved(expected, first, (0.5, 0.25, -1.125))
+    moved(expected, last, (-3.3, 0.0, 2.2))
+    with tgsis.in_version(conn, "DEFAULT"):
+        rows = conn.execute("SELECT x, y, z FROM tgsis.vrtx WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()
+        cells = conn.execute(f"SELECT {key} FROM tgsis.{table} WHERE geoid = %s ORDER BY 1", (geoid,)).fetchall()
+    conn.commit()
+    assert np.array(rows).tobytes() == expected.tobytes()
+    assert [c[0] for c in cells] == [*range(len(mesh.cells)), 1000]
