@@ -12,14 +12,20 @@ from __future__ import annotations
 import json
 import re
 from pathlib import Path
+from typing import Any
 
+import numpy as np
+import numpy.typing as npt
 import psycopg
 import pytest
 from PIL import Image
 from psycopg.conninfo import make_conninfo
 
+from tgsis import formats
 from tgsis.cli import main
+from tgsis.db.versions import list_versions
 from tgsis.formats.pvd import read_pvd
+from tgsis.merge3 import MeshState
 
 
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
@@ -33,6 +39,7 @@ def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
         "interpretations",
         "mine",
         "knowledge",
+        "merge",
         "cfm",
     ]  # header first
     assert main(["demo", "--list", "--json"]) == 0
@@ -45,7 +52,10 @@ def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, interpretations, knowledge, mine, river, saltdome, synsed" in err
+    assert (
+        "no scenario 'volcano'" in err
+        and "cfm, interpretations, knowledge, merge, mine, river, saltdome, synsed" in err
+    )
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
@@ -219,3 +229,107 @@ def test_mine(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
             ), day
     with Image.open(folder / "mine_ore_top.png") as picture:
         assert picture.format == "PNG"
+
+
+def _fault_state(conn: psycopg.Connection[Any], geoid: int, version: str, revision: int | None) -> MeshState:
+    """The fault as ``version`` (at ``revision``) holds it, read through tgsis.rows_at as a psql user would."""
+    vertices = conn.execute(
+        "SELECT vrtxid, x, y, z FROM tgsis.rows_at(NULL::tgsis.vrtx, %s, %s) WHERE geoid = %s ORDER BY vrtxid",
+        (version, revision, geoid),
+    ).fetchall()
+    cells = conn.execute(
+        "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.rows_at(NULL::tgsis.trgl, %s, %s) "
+        "WHERE geoid = %s ORDER BY trglid",
+        (version, revision, geoid),
+    ).fetchall()
+    return MeshState(
+        3,
+        np.array([r[0] for r in vertices]),
+        np.array([r[1:] for r in vertices], dtype=np.float64),
+        np.array([r[0] for r in cells]),
+        np.array([r[1:] for r in cells]),
+        name=f"{version}@{revision}",
+    )
+
+
+def _moved(state: MeshState, base: MeshState) -> npt.NDArray[np.int64]:
+    """Ids of the vertices whose coordinates differ from the base's (same ids, same cells on both)."""
+    assert np.array_equal(state.vertex_ids, base.vertex_ids) and np.array_equal(state.cells, base.cells)
+    return state.vertex_ids[np.any(state.vertices != base.vertices, axis=1)]
+
+
+def _region_words(base: MeshState, moved: npt.NDArray[np.int64]) -> str:
+    """How the report counts a region of moved vertices: the vertices and the triangles on them (the margin)."""
+    triangles = int(np.isin(base.cells, moved).any(axis=1).sum())
+    return f"{len(moved)} vertices, {triangles} triangles"
+
+
+def _largest(state: MeshState, base: MeshState, ids: npt.NDArray[np.int64]) -> str:
+    at = np.searchsorted(base.vertex_ids, ids)
+    return f"{np.linalg.norm(state.vertices[at] - base.vertices[at], axis=1).max():.0f} m"
+
+
+def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "merge"
+    assert main(["--dsn", db_dsn, "demo", "merge", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m (feature 1, 716 vertices, 1271 triangles)" in out
+    with psycopg.connect(make_conninfo(db_dsn, dbname="tgsis_demo_merge")) as conn:
+        versions = {v.name: v for v in list_versions(conn)}
+        initial = {versions[n].initrevision for n in ("north_tip", "south_tip", "north_review")}
+        assert len(initial) == 1  # the three geologists start from the same state
+        base = _fault_state(conn, 1, "DEFAULT", initial.pop())
+        ann, bob, cat = (
+            _fault_state(conn, 1, name, versions[name].saved[f"{name}_edit"])
+            for name in ("north_tip", "south_tip", "north_review")
+        )
+        both = _fault_state(conn, 1, "DEFAULT", versions["DEFAULT"].saved["both_tips"])
+        final = _fault_state(conn, 1, "DEFAULT", None)
+    a, b, c = _moved(ann, base), _moved(bob, base), _moved(cat, base)
+    # the edits as stated: ann's and bob's at the two ends, cat's over ann's
+    assert len(a) > 20 and len(b) > 20 and len(np.intersect1d(a, c)) > 20
+    assert not len(np.intersect1d(a, b)) and not len(np.intersect1d(b, c))
+    for name, moved in (("north_tip", a), ("south_tip", b), ("north_review", c)):
+        assert f"({name}) " in out and f": {len(moved)} vertices moved, {2 * len(moved) + 1} rows written" in out
+
+    # the merge of south_tip: ann's region (parent) and bob's (child), disjoint, merged by themselves
+    assert f"changed by parent, merges by itself; {_region_words(base, a)} (parent moved {len(a)}, up to " in out
+    assert f"changed by child, merges by itself; {_region_words(base, b)} (parent moved 0, up to 0 m; child" in out
+    # ... and DEFAULT then holds both edits bit for bit, the rest and every triangle as the base
+    assert np.array_equal(both.vertex_ids, base.vertex_ids) and np.array_equal(both.cells, base.cells)
+    assert np.array_equal(both.cell_ids, base.cell_ids)
+    expected = base.vertices.copy()
+    for side, moved in ((ann, a), (bob, b)):
+        at = np.searchsorted(base.vertex_ids, moved)
+        expected[at] = side.vertices[at]
+    assert both.vertices.tobytes() == expected.tobytes()
+    assert "bit for bit, every other vertex and every triangle as in release 5.3: yes" in out
+
+    # the merge of north_review: one conflict region, exactly ann's and cat's moved vertices and the triangles
+    # on them; bob's region (now the parent's) merges by itself
+    union = np.union1d(a, c)
+    assert (
+        f"changed by both, a CONFLICT; {_region_words(base, union)} "
+        f"(parent moved {len(a)}, up to {_largest(ann, base, a)}; child moved {len(c)}, up to {_largest(cat, base, c)})"
+    ) in out
+    assert f"changed by parent, merges by itself; {_region_words(base, b)}" in out.split("5. north_review")[1]
+    assert out.count("a CONFLICT") == 1
+
+    # solved by average: every vertex of the region between ann's and cat's position, bob's edit and the rest kept
+    assert np.array_equal(final.vertex_ids, base.vertex_ids) and np.array_equal(final.cells, base.cells)
+    inside = np.isin(final.vertex_ids, union)
+    assert final.vertices[~inside].tobytes() == both.vertices[~inside].tobytes()
+    p, q, r = ann.vertices[inside], cat.vertices[inside], final.vertices[inside]
+    span = q - p
+    t = np.einsum("ij,ij->i", r - p, span) / np.einsum("ij,ij->i", span, span)
+    assert np.all(t > 0.0) and np.all(t < 1.0)
+    off_segment = np.linalg.norm(r - (p + t[:, None] * span), axis=1)
+    assert off_segment.max() <= 0.05 * np.linalg.norm(span, axis=1).max()
+
+    _replays(db_dsn, "merge", out, 2)
+    overlay = folder / "1_CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m_overlay.png"
+    for picture_file in (overlay, folder / "merge_both_tips.png", folder / "merge_resolved.png"):
+        with Image.open(picture_file) as picture:
+            assert picture.format == "PNG"
+    for side in ("base", "parent", "child"):
+        assert formats.read_one(folder / f"1_CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m_{side}.ts").n_vertices == 716
