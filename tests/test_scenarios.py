@@ -289,8 +289,12 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     # the edits as stated: ann's and bob's at the two ends, cat's over ann's
     assert len(a) > 20 and len(b) > 20 and len(np.intersect1d(a, c)) > 20
     assert not len(np.intersect1d(a, b)) and not len(np.intersect1d(b, c))
-    for name, moved in (("north_tip", a), ("south_tip", b), ("north_review", c)):
-        assert f"({name}) " in out and f": {len(moved)} vertices moved, {2 * len(moved) + 1} rows written" in out
+    for name, state, moved in (("north_tip", ann, a), ("south_tip", bob, b), ("north_review", cat, c)):
+        assert (
+            f"({name}) " in out
+            and f": {len(moved)} vertices moved (up to {_largest(state, base, moved)}), {2 * len(moved) + 1} rows written"
+            in out
+        )
 
     # the merge of south_tip: ann's region (parent) and bob's (child), disjoint, merged by themselves
     assert f"changed by parent, merges by itself; {_region_words(base, a)} (parent moved {len(a)}, up to " in out

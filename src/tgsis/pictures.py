@@ -186,10 +186,14 @@ def scene(
 
 
 def _box_bounds(bounds: npt.ArrayLike, label: str) -> FloatArray:
-    box = np.asarray(bounds, dtype=np.float64)
+    try:
+        box = np.asarray(bounds, dtype=np.float64)
+    except (TypeError, ValueError):  # ragged or not numbers
+        box = np.full((0,), np.nan)
     if box.shape != (2, 3) or not np.all(np.isfinite(box)) or np.any(box[0] > box[1]):
+        shown = box.tolist() if box.size else bounds
         raise InvalidInputError(
-            f"the box {label!r} is not [[xmin, ymin, zmin], [xmax, ymax, zmax]] (finite, min <= max): {box.tolist()}"
+            f"the box {label!r} is not [[xmin, ymin, zmin], [xmax, ymax, zmax]] (finite, min <= max): {shown}"
         )
     return box
 

@@ -80,6 +80,7 @@ class Edit:
     what: str
     moved: IntArray  # vertex ids moved
     vertices: FloatArray  # (n, 3) the whole fault after the edit, rows in vertex-id order
+    largest: float  # the largest distance a vertex moved (m)
     rows: int  # rows the check-in wrote
     revision: int  # the revision the edit was saved as
 
@@ -130,6 +131,7 @@ def _edit(context: Context, geoid: int, geologist: str, version: str, what: str,
         what,
         np.sort(checked_out.base.vertex_ids[moved]),
         moved_to[order],
+        float(np.linalg.norm(moved_to - checked_out.mesh.vertices, axis=1).max()),
         result.save.rows_written,
         revision,
     )
@@ -260,8 +262,8 @@ def run(context: Context) -> None:
             geoid,
             "bob",
             "south_tip",
-            f"puts the {south}ern end's base deeper: the {slide_zone / 1000:.1f} km next to the tip slide down dip, "
-            f"up to {slide:.0f} m at the base, none at the top",
+            f"puts the {south}ern end's base deeper: the {slide_zone / 1000:.1f} km next to the tip slide down dip in proportion to depth "
+            f"({slide:.0f} m at the base, none at the top)",
             lambda v, f: deepen_tip(v, f, -1, slide, slide_zone),
         ),
         _edit(
@@ -278,7 +280,8 @@ def run(context: Context) -> None:
     out("2. the three edits, each checked out of its version and checked in by difference:")
     for e in edits:
         out(
-            f"   {e.geologist} ({e.version}) {e.what}: {len(e.moved)} vertices moved, {e.rows} rows written, "
+            f"   {e.geologist} ({e.version}) {e.what}: {len(e.moved)} vertices moved (up to {e.largest:.0f} m), "
+            f"{e.rows} rows written, "
             f"saved as revision {e.revision}"
         )
     context.figure("vertices_moved", {e.version: len(e.moved) for e in edits})
