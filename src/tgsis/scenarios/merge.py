@@ -262,8 +262,8 @@ def run(context: Context) -> None:
             geoid,
             "bob",
             "south_tip",
-            f"puts the {south}ern end's base deeper: the {slide_zone / 1000:.1f} km next to the tip slide down dip in proportion to depth "
-            f"({slide:.0f} m at the base, none at the top)",
+            f"puts the {south}ern end's base deeper: the {slide_zone / 1000:.1f} km next to the tip slide down dip "
+            f"in proportion to depth ({slide:.0f} m at the base, none at the top)",
             lambda v, f: deepen_tip(v, f, -1, slide, slide_zone),
         ),
         _edit(
