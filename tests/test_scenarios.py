@@ -337,3 +337,20 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
             assert picture.format == "PNG"
     for side in ("base", "parent", "child"):
         assert formats.read_one(folder / f"1_CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m_{side}.ts").n_vertices == 716
+
+
+def test_merge_without_the_cfm_data_runs_on_a_synthetic_fault(
+    db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A trimmed install (no data/cfm): the same story on the stand-in fault, saying so, with the same outcome."""
+    from tgsis.scenarios import run_scenario
+
+    monkeypatch.setenv("TGSIS_DEMO_DATA", str(tmp_path / "no such folder"))
+    lines: list[str] = []
+    result = run_scenario("merge", db_dsn, out=lines.append, folder=tmp_path / "out")
+    out = "\n".join(lines)
+    assert "data: synthetic faults (no CFM data found)" in out and "middle_fault (feature 1, 360 vertices" in out
+    assert result.figures["both_edits_kept"] is True and result.figures["conflict_region_exact"] is True
+    low, high = result.figures["average_between"]
+    assert 0.0 < low <= high < 1.0
+    assert (tmp_path / "out" / "merge_resolved.png").is_file()
