@@ -14,6 +14,7 @@ BEGIN
     IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
         FOREACH v_name IN ARRAY ARRAY['tgsis.installation', 'tgsis.catalog', 'tgsis.versions', 'tgsis.revisions',
                                       'tgsis.version_privileges', 'tgsis.object_locks', 'tgsis.conflicts',
+                                      'tgsis.conflict_regions',
                                       'tgsis.versioned_tables', 'tgsis.versioning_dropped', 'tgsis.unversioned_features',
                                       'tgsis.revision_objects',
                                       'tgsis.revision_seq', 'tgsis.versions_versionid_seq',

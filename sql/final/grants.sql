@@ -12,6 +12,9 @@ GRANT SELECT ON tgsis.data_models, tgsis.model_tables TO PUBLIC;
 GRANT SELECT ON tgsis.versions, tgsis.revisions, tgsis.version_tree, tgsis.versioned_tables, tgsis.versioning_dropped,
                 tgsis.conflicts, tgsis.version_privileges
     TO tgsis_reader;
+-- the regions of conflicting meshes: read as the conflicts are, written only through
+-- tgsis.record_conflict_regions and tgsis.resolve_region
+GRANT SELECT ON tgsis.conflict_regions TO tgsis_reader;
 -- the generated write triggers run as each table's owner and probe the locks
 GRANT SELECT ON tgsis.object_locks TO PUBLIC;
 -- version state changes only through the SECURITY DEFINER functions, which

@@ -46,6 +46,18 @@ $dump$;
 
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
+-- ---- issue39-store: the regions of conflicting meshes (tgsis.conflict_regions), a new catalog table
+-- dumped with the conflicts (final/config_dump.sql)
+-- @include versioning/conflict_regions.sql
+DO $dump$
+BEGIN
+    IF EXISTS (SELECT FROM pg_catalog.pg_extension WHERE extname = 'tgsis') THEN
+        PERFORM pg_catalog.pg_extension_config_dump('tgsis.conflict_regions'::regclass, '');
+    END IF;
+END
+$dump$;
+-- @handled final/config_dump.sql
+
 -- ---- issue38-sql-layers: the SQL folders became layers (sources.txt, one block per folder); these
 -- files of 0.2.0 moved without a change to their tables or rows (nothing to run; the directives above
 -- may name them by either name)

@@ -6,6 +6,8 @@
 -- version or merge into its parent stores the result (which locks the
 -- version's conflict rows until its transaction ends): anyone else who may
 -- read gets the same answer computed, without writing or locking anything.
+-- Storing also removes the regions of meshes (tgsis.conflict_regions) found on
+-- marks that are no longer the object's: they describe a state that is gone.
 CREATE FUNCTION tgsis.find_conflicts(p_version text)
 RETURNS SETOF tgsis.conflicts
 LANGUAGE plpgsql
@@ -55,9 +57,15 @@ BEGIN
                             THEN k.solved_at END,
            solved_by = CASE WHEN (k.childmark, k.parentmark) = (excluded.childmark, excluded.parentmark)
                             THEN k.solved_by END;
+    -- regions of a mesh hold for the marks they were found on (tgsis.conflict_regions): a side that
+    -- changed the object since makes them stale; gone conflicts took theirs along (ON DELETE CASCADE)
+    DELETE FROM tgsis.conflict_regions r
+     USING tgsis.conflicts k
+     WHERE r.versionid = v_version.versionid AND k.versionid = r.versionid AND k.objectclass = r.objectclass
+       AND k.objectkey = r.objectkey AND (k.childmark, k.parentmark) IS DISTINCT FROM (r.childmark, r.parentmark);
     RETURN QUERY SELECT * FROM tgsis.conflicts WHERE versionid = v_version.versionid ORDER BY objectclass, objectkey;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.find_conflicts(text) IS
-    '(re)compute and return the objects changed both in a version and in its parent since the version was based; keeps solutions while neither side changed the object again; stored only for roles that may write in the version or merge into its parent';
+    '(re)compute and return the objects changed both in a version and in its parent since the version was based; keeps solutions while neither side changed the object again, and removes the stored regions of objects that changed since they were found; stored only for roles that may write in the version or merge into its parent';

@@ -6,7 +6,10 @@
 -- read in the key column's type with the session's settings
 -- (tgsis.canonical_object_keys): '02/01/2024' under DateStyle DMY names the
 -- conflict of 2024-01-02. A NOTICE says what the solution discards of the
--- other side's edits (tgsis.conflict_discards).
+-- other side's edits (tgsis.conflict_discards). When the regions of the
+-- mesh are stored (tgsis.conflict_regions), parent and child are refused
+-- (TG307) if the other side has edits in a region that is no conflict:
+-- tgsis.resolve_region solves the conflicting regions, the merge keeps the rest.
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
@@ -18,6 +21,7 @@ DECLARE
     v_id  integer := tgsis.version_id(p_version);
     v_row tgsis.conflicts;
     v_key text := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
+    v_lost text;
 BEGIN
     IF p_solution IS NULL OR lower(p_solution) NOT IN ('parent', 'child', 'manual', 'unsolved') THEN
         RAISE EXCEPTION 'solution % is not parent, child, manual or unsolved', coalesce(quote_literal(p_solution), 'NULL')
@@ -26,6 +30,23 @@ BEGIN
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     -- the marks must be those of now: a manual solution is written just before it is recorded
     PERFORM tgsis.find_conflicts(p_version);
+    -- a mesh whose regions are stored (current marks: find_conflicts just dropped older ones): one side's
+    -- whole object would drop the other side's edits in regions that merge by themselves
+    IF lower(p_solution) IN ('parent', 'child') THEN
+        SELECT string_agg(r.region::text, ', ' ORDER BY r.region) INTO v_lost
+          FROM tgsis.conflict_regions r
+         WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key AND NOT r.conflict
+           AND r.changed_by = CASE lower(p_solution) WHEN 'parent' THEN 'child' ELSE 'parent' END;
+        IF v_lost IS NOT NULL THEN
+            RAISE EXCEPTION 'solution % of object % of class % in version % would drop the % edits in regions % that are no conflict',
+                    lower(p_solution), quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version),
+                    CASE lower(p_solution) WHEN 'parent' THEN 'version''s' ELSE 'parent''s' END, v_lost
+                USING ERRCODE = 'TG307',
+                      DETAIL = 'Only the other side changed those regions: the merge by region keeps those edits by itself.',
+                      HINT = format('solve the conflicting regions with SELECT tgsis.resolve_region(%L, %L, %L, region, ''%s''); the merge takes the rest by itself (or record manual after writing the merged object)',
+                                    p_version, p_objectclass, v_key, lower(p_solution));
+        END IF;
+    END IF;
     UPDATE tgsis.conflicts
        SET solution = lower(p_solution),
            solved_at = CASE WHEN lower(p_solution) <> 'unsolved' THEN now() END,

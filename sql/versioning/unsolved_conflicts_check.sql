@@ -1,4 +1,6 @@
 -- tgsis.check_no_unsolved_conflicts(version, action): recompute a version's conflicts; TG302 naming the unsolved ones.
+-- Its hint points meshes whose regions are stored (tgsis.conflict_regions) to the Python merge by
+-- region (tgsis version merge / refresh): SQL cannot run the three-way merge.
 CREATE FUNCTION tgsis.check_no_unsolved_conflicts(p_version text, p_action text)
 RETURNS void
 LANGUAGE plpgsql
@@ -7,6 +9,7 @@ AS $$
 DECLARE
     v_count integer;
     v_list  text;
+    v_regions text;
 BEGIN
     SELECT count(*), string_agg(format('%s %s (%s)', objectclass, objectkey,
                                        coalesce(nullif(array_to_string(conflicttype, ', '), ''), 'different tables')),
@@ -14,10 +17,21 @@ BEGIN
       INTO v_count, v_list
       FROM tgsis.find_conflicts(p_version) WHERE solution = 'unsolved';
     IF v_count > 0 THEN
+        -- the unsolved meshes whose regions are stored (current marks: find_conflicts dropped older ones)
+        -- merge by region, which needs the Python client (numpy): SQL cannot do it
+        SELECT string_agg(DISTINCT format('%s %s', r.objectclass, r.objectkey), ', ')
+          INTO v_regions
+          FROM tgsis.conflict_regions r JOIN tgsis.conflicts k USING (versionid, objectclass, objectkey)
+         WHERE r.versionid = tgsis.version_id(p_version) AND k.solution = 'unsolved';
         RAISE EXCEPTION '% of version % refused: % unsolved conflict(s): %', p_action, quote_literal(p_version), v_count, v_list
             USING ERRCODE = 'TG302',
-                  HINT = format('record a solution for each: SELECT tgsis.resolve_conflict(%L, class, key, ''parent''|''child''|''manual'')',
-                                p_version);
+                  HINT = CASE WHEN v_regions IS NULL
+                              THEN format('record a solution for each: SELECT tgsis.resolve_conflict(%L, class, key, ''parent''|''child''|''manual'')',
+                                          p_version)
+                              ELSE format('the meshes %s merge by region: `tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges them '
+                                          '(solve their conflicting regions first: SELECT tgsis.resolve_region(%L, class, key, region, ''parent''|''child''|''base'')); '
+                                          'record a solution for the others: SELECT tgsis.resolve_conflict(%L, class, key, ''parent''|''child''|''manual'')',
+                                          v_regions, p_action, p_version, p_action, p_version, p_version, p_version) END;
     END IF;
 END
 $$;

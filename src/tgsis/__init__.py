@@ -49,6 +49,7 @@ from tgsis.errors import (
     ObjectLockedError,
     PolygonsSplitWarning,
     ReadOnlyRevisionError,
+    RegionSolutionError,
     SkippedObjectWarning,
     UnknownDataModelError,
     UnsolvedConflictsError,
@@ -137,6 +138,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.multidim import fetch_md_gmap, md_in_box, md_vertices_in_box
     from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
+    from tgsis.db.regions import ConflictRegion, RegionResolution, find_conflicts, resolve_region
     from tgsis.db.temporal import (
         class_property_periods,
         export_series,
@@ -170,7 +172,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         disable_versioning,
         enable_feature_versioning,
         enable_versioning,
-        find_conflicts,
         goto_revision,
         goto_version,
         grant_version,
@@ -209,6 +210,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
 # other list. The first module that lists a name gives it.
 _LAZY_MODULES = (
     "tgsis.db",
+    "tgsis.db.regions",  # before versions: its region-aware find_conflicts is the public one
     "tgsis.db.versions",
     "tgsis.db.merging",
     "tgsis.db.features",
@@ -326,6 +328,9 @@ __all__ = [
     "Conflict",
     "find_conflicts",
     "resolve_conflict",
+    "resolve_region",
+    "ConflictRegion",
+    "RegionResolution",
     "conflict_rows",
     "Discard",
     "conflict_discards",
@@ -497,6 +502,7 @@ __all__ = [
     "NotFoundError",
     "NotVersionedError",
     "UnsupportedViewStatementError",
+    "RegionSolutionError",
     "ObjectLockedError",
     "CheckoutConflictError",
     "ReadOnlyRevisionError",

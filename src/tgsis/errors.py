@@ -37,6 +37,7 @@ __all__ = [
     "CheckoutConflictError",
     "NotVersionedError",
     "UnsupportedViewStatementError",
+    "RegionSolutionError",
     "AlreadyExistsError",
     "InUseError",
     "UnknownDataModelError",
@@ -257,6 +258,18 @@ class UnsupportedViewStatementError(VersioningError):
     """
 
     code = "TG306"
+
+
+class RegionSolutionError(VersioningError):
+    """A solution the stored regions of a conflicting mesh refuse; nothing is recorded.
+
+    A solution for a region that is no conflict (it merges by itself), for a
+    region found on a state either side changed since (find the regions
+    again), or a whole side of an object (``parent``, ``child``) that would
+    drop the other side's edits in regions that are no conflict (docs/merge.md).
+    """
+
+    code = "TG307"
 
 
 class DatabaseError(Error):

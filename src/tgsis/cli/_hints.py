@@ -43,6 +43,83 @@ _RULES: list[tuple[str, Replacement]] = [
         "add --discard-other to record it all the same, or write the merged object into the version and record manual "
         "(tgsis version conflicts VERSION --rows shows both sides' rows)",
     ),
+    # conflicts per region (tgsis.db.regions, sql/versioning/resolve_region.sql and friends)
+    (
+        r"call again with discard_other=True to discard them, or choose another solution",
+        "add --discard-other to record it all the same, or choose another solution",
+    ),
+    (
+        r"find the regions again(?: on the object's current state)?(?::| \()? ?tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\)"
+        r"(?:, or tgsis version conflicts \S+| \(tgsis\.find_conflicts in Python, or tgsis version conflicts\))?\)?",
+        lambda m: f"find the regions again: tgsis version conflicts {_unquote(m[1])}",
+    ),
+    (
+        r"find the regions again(?: on the object's current state)? \(tgsis\.find_conflicts in Python, or tgsis version "
+        r"conflicts\)(, then solve them)?",
+        lambda m: "find the regions again: tgsis version conflicts VERSION" + (m[1] or ""),
+    ),
+    (
+        r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) finds and records them \(tgsis version conflicts [^)]*\)",
+        lambda m: f"tgsis version conflicts {_unquote(m[1])} finds and records them",
+    ),
+    (
+        r"SELECT region, conflict, solution FROM tgsis\.conflict_regions WHERE versionid = tgsis\.version_id\('((?:[^']|'')*)'\) "
+        r"lists them; tgsis\.find_conflicts in Python finds them",
+        lambda m: f"tgsis version conflicts {_unquote(m[1])} --json lists them (conflict_regions)",
+    ),
+    (
+        r"only a region with conflict = true takes a solution: SELECT region FROM tgsis\.conflict_regions WHERE "
+        r"versionid = tgsis\.version_id\('((?:[^']|'')*)'\) AND conflict",
+        lambda m: (
+            f'only a region with "conflict": true takes a solution (tgsis version conflicts {_unquote(m[1])} '
+            "--json lists them)"
+        ),
+    ),
+    (
+        r"solve the conflicting regions with SELECT tgsis\.resolve_region\('((?:[^']|'')*)', '((?:[^']|'')*)', "
+        r"'((?:[^']|'')*)', region, '(\w+)'\); the merge takes the rest by itself",
+        lambda m: (
+            f"solve the conflicting regions with tgsis version resolve {_unquote(m[1])} {_unquote(m[3])} {m[4]} "
+            "--region N; the merge takes the rest by itself"
+        ),
+    ),
+    (
+        r"the meshes (.*?) merge by region: `tgsis version (\w+) ((?:[^`])*)` or tgsis\.\w+_version\(conn, '(?:[^']|'')*'\) "
+        r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\([^)]*\)\); "
+        r"record a solution for the others: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
+        lambda m: (
+            f"the meshes {m[1]} merge by region: tgsis version {m[2]} {m[3]} merges them (solve their "
+            f"conflicting regions first: tgsis version resolve {_unquote(m[4])} ID parent|child|base --region N); record "
+            f"a solution for the others: tgsis version resolve {_unquote(m[4])} CLASS KEY parent|child|manual"
+        ),
+    ),
+    (
+        r"SELECT tgsis\.resolve_region\(version, class, key, region, 'parent'\|'child'\|'base'\) or 'average'\|'manual' "
+        r"with a mesh",
+        "tgsis version resolve VERSION ID parent|child|base|average|manual --region N [--mesh FILE]",
+    ),
+    (
+        r"give the mesh as the sixth argument \(an \.npz of a MeshState: tgsis\.resolve_region in Python builds it\)",
+        "give --mesh FILE",
+    ),
+    (r"leave the sixth argument out, or give the solution manual with the mesh", "leave --mesh out, or give manual"),
+    (
+        r"give the bytes numpy\.savez writes of a MeshState \(tgsis\.resolve_region in Python builds them\)",
+        "give --mesh FILE, a mesh file",
+    ),
+    (r"give the region's number, as tgsis\.conflict_regions lists it", "give --region N"),
+    (
+        r"automatic is no choice: find_conflicts records it for the regions that merge by themselves",
+        "automatic is no choice: the regions that are no conflict merge by themselves",
+    ),
+    (r"leave mesh out, or give solution='manual'( \(average is computed\))?", "leave --mesh out, or give manual"),
+    (r"^give mesh=$", "give --mesh FILE"),
+    (
+        r"give a JSON array with one object per region \(''\[\]'' for none\)|each element of the array is an object "
+        r"with the keys .*|give the childmark and parentmark of the row of tgsis\.find_conflicts",
+        lambda m: f"{IN_PSQL}{m[0]}",
+    ),
+    (r", or give a MeshState$", ""),
     # tgsis.object_merge (tgsis version conflicts --regions)
     (
         r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) lists the objects changed on both sides",

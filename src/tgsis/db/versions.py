@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from typing import Any
 
+import numpy as np
+import numpy.typing as npt
 import psycopg
 
 from tgsis._optional import require
@@ -55,6 +57,7 @@ __all__ = [
     "enable_feature_versioning",
     "disable_feature_versioning",
     "Conflict",
+    "ConflictRegion",
     "Discard",
     "find_conflicts",
     "resolve_conflict",
@@ -542,6 +545,77 @@ def describe_discards(discards: Sequence[Discard]) -> str:
     return f"{_side_words(discards[0].discarded)}: " + "; ".join(d.summary() for d in discards)
 
 
+@dataclass(frozen=True, eq=False)
+class ConflictRegion:
+    """One region of a conflicting mesh (a row of ``tgsis.conflict_regions``, docs/merge.md).
+
+    Ids are in the merged numbering (the child's new ids renumbered as
+    :func:`tgsis.merge3.three_way_merge` does).
+
+    Attributes
+    ----------
+    region : int
+        Index of the region in the merge (0-based): solutions are keyed by it.
+    conflict : bool
+        Both sides changed the region to different rows: it needs a solution.
+    changed_by : {"parent", "child", "both"}
+    vertex_ids, cell_ids : (a,), (b,) int64
+        Every vertex and cell of the region, its one-ring margin included.
+    parent_vertex_ids, parent_cell_ids, child_vertex_ids, child_cell_ids : int64 arrays
+        The rows of the region each side changed.
+    bbox : (6,) float64 or None
+        ``xmin, ymin, zmin, xmax, ymax, zmax`` of the region in the three states (stored z).
+    parent_displacement, child_displacement : float
+        Largest distance a vertex of the region moved on that side.
+    solution : {"unsolved", "automatic", "parent", "child", "base", "average", "manual"}
+        ``automatic`` exactly for a region that is no conflict.
+    childmark, parentmark : str
+        The conflict's marks the region was found on.
+    solved_at : datetime or None
+    solved_by : str or None
+    """
+
+    region: int
+    conflict: bool
+    changed_by: str
+    vertex_ids: npt.NDArray[np.int64]
+    cell_ids: npt.NDArray[np.int64]
+    parent_vertex_ids: npt.NDArray[np.int64]
+    parent_cell_ids: npt.NDArray[np.int64]
+    child_vertex_ids: npt.NDArray[np.int64]
+    child_cell_ids: npt.NDArray[np.int64]
+    bbox: npt.NDArray[np.float64] | None
+    parent_displacement: float
+    child_displacement: float
+    solution: str
+    childmark: str = ""
+    parentmark: str = ""
+    solved_at: datetime | None = None
+    solved_by: str | None = None
+
+    def as_json(self) -> dict[str, Any]:
+        """The region as plain JSON values (what ``tgsis version conflicts --json`` prints)."""
+        return {
+            "region": self.region,
+            "conflict": self.conflict,
+            "changed_by": self.changed_by,
+            "solution": self.solution,
+            "vertex_ids": [int(i) for i in self.vertex_ids],
+            "cell_ids": [int(i) for i in self.cell_ids],
+            "parent": {
+                "vertex_ids": [int(i) for i in self.parent_vertex_ids],
+                "cell_ids": [int(i) for i in self.parent_cell_ids],
+                "largest_displacement": self.parent_displacement,
+            },
+            "child": {
+                "vertex_ids": [int(i) for i in self.child_vertex_ids],
+                "cell_ids": [int(i) for i in self.child_cell_ids],
+                "largest_displacement": self.child_displacement,
+            },
+            "bbox": None if self.bbox is None else [float(v) for v in self.bbox],
+        }
+
+
 @dataclass(frozen=True)
 class Conflict:
     """An object changed both in a version and in its parent (a row of ``tgsis.conflicts``).
@@ -559,6 +633,12 @@ class Conflict:
         Set by :func:`resolve_conflict`: what the recorded solution throws away
         of the other side's edits, per table (empty: nothing, or unsolved;
         None: not counted, the caller may not read some of the object's rows).
+    regions : tuple of ConflictRegion
+        Set by the region-aware :func:`tgsis.find_conflicts`: the regions of a
+        model-1 mesh (empty for an object that merges as a whole only).
+    region_refusal : str or None
+        Set by the region-aware :func:`tgsis.find_conflicts`: why the object
+        does not merge by region (None when it does, or was not looked at).
     """
 
     objectclass: str
@@ -568,6 +648,8 @@ class Conflict:
     parenttables: tuple[str, ...]
     solution: str
     discarded: tuple[Discard, ...] | None = field(default=(), compare=False)
+    regions: tuple[ConflictRegion, ...] = field(default=(), compare=False)
+    region_refusal: str | None = field(default=None, compare=False)
 
 
 _CONFLICT_COLUMNS = "objectclass, objectkey, conflicttype, childtables, parenttables, solution"

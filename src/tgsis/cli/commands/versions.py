@@ -20,6 +20,7 @@ from tgsis.cli._output import out, print_table, render, show_moment
 from tgsis.cli._progress import busy, progress
 from tgsis.cli._render import ObjectDifference, summarize_differences
 from tgsis.cli._state import remember_version, remembered_version
+from tgsis.db import regions as R
 from tgsis.db import versions as V
 from tgsis.db.connect import connect
 from tgsis.db.features import (
@@ -313,7 +314,8 @@ def cmd_version_conflicts(args: argparse.Namespace) -> int:
         if getattr(args, flag, None) and not getattr(args, "export", None):
             raise InvalidInputError(f"--{flag} is for the exported files: it needs --export DIR")
     with connection(args) as conn:
-        conflicts = V.find_conflicts(conn, args.name)
+        # region-aware: the regions of each conflicting mesh found (in one snapshot with the marks) and stored
+        conflicts = R.find_conflicts(conn, args.name)
         exported = _export_conflicts(conn, args, conflicts) if getattr(args, "export", None) else {}
         regions = _object_regions(conn, args.name, conflicts) if getattr(args, "regions", False) else {}
         details = (
@@ -419,6 +421,9 @@ def conflicts_json(result: VersionConflicts) -> dict[str, Any]:
                     if result.with_rows
                     else {}
                 ),
+                # the stored regions of a mesh with their solutions (tgsis version resolve ... --region N)
+                "conflict_regions": [r.as_json() for r in c.regions],
+                "region_refusal": c.region_refusal,
                 **(
                     {"regions": merge_regions_json(result.regions[(c.objectclass, c.objectkey)])}
                     if (c.objectclass, c.objectkey) in result.regions
@@ -441,7 +446,69 @@ def _exported_json(files: list[Path] | str) -> dict[str, Any]:
     return {"files": [str(f) for f in files]}
 
 
+def _resolve_region(args: argparse.Namespace) -> int:
+    """``--region N``: FEATURE SOLUTION (or feature FEATURE SOLUTION); what the solution discards is said first."""
+    words = [w for w in (args.objectclass, args.objectkey, args.solution) if w is not None]
+    if len(words) == 3:
+        if words[0] != "feature":
+            raise InvalidInputError(
+                f"--region solves a region of a feature's mesh, not of an object of class {words[0]!r}",
+                hint="give the feature's id and the solution: tgsis version resolve VERSION ID SOLUTION --region N",
+            )
+        words = words[1:]
+    if len(words) != 2:
+        raise InvalidInputError(
+            "--region needs the feature's id and the solution",
+            hint="tgsis version resolve VERSION ID parent|child|base|average|manual --region N [--mesh FILE]",
+        )
+    try:
+        feature = int(words[0])
+    except ValueError:
+        raise InvalidInputError(
+            f"feature {words[0]!r} is not a feature id",
+            hint="give the feature's id (tgsis version conflicts VERSION lists them)",
+        ) from None
+    solution = words[1].lower()
+    mesh: Mesh | None = None
+    if args.mesh is not None:
+        if solution != "manual":
+            raise InvalidInputError(
+                f"--mesh is the region's rows of the solution manual, not of {solution}",
+                hint="give manual with --mesh, or leave --mesh out",
+            )
+        from tgsis import formats
+
+        mesh = formats.read_one(args.mesh)
+    elif solution == "manual":
+        raise InvalidInputError(
+            "the solution manual needs the region's mesh",
+            hint="give --mesh FILE: e.g. the child file of tgsis version conflicts VERSION --export DIR, edited "
+            "(its vertex property vrtxid keeps the ids)",
+        )
+    with connection(args) as conn:
+        result = R.resolve_region(
+            conn, args.name, feature, args.region, solution, mesh, discard_other=args.discard_other
+        )
+    for discard in result.discards:
+        out(f"  {R.discard_text(discard)}")
+    out(
+        f"feature {feature} in {V.show_name(args.name)}: region {result.region.region} recorded {result.region.solution}"
+    )
+    return 0
+
+
 def cmd_version_resolve(args: argparse.Namespace) -> int:
+    if args.region is not None:
+        return _resolve_region(args)
+    if args.mesh is not None:
+        raise InvalidInputError("--mesh is for a region's manual solution: it needs --region N")
+    if args.solution is None or args.solution not in ("parent", "child", "manual", "unsolved"):
+        raise InvalidInputError(
+            f"solution {args.solution!r} of an object is not parent, child, manual or unsolved"
+            if args.solution is not None
+            else "the solution is missing",
+            hint="tgsis version resolve VERSION CLASS KEY parent|child|manual|unsolved (a region: --region N)",
+        )
     with connection(args) as conn:
         c = V.resolve_conflict(
             conn, args.name, args.objectclass, args.objectkey, args.solution, discard_other=args.discard_other
@@ -1100,18 +1167,43 @@ def add_version_parser(commands: Any) -> None:
         ver_commands,
         "resolve",
         "record how a conflicting object is merged",
-        ["tgsis version resolve cfm6 feature 42 child", "tgsis version resolve cfm6 feature 42 child --discard-other"],
+        [
+            "tgsis version resolve cfm6 feature 42 child",
+            "tgsis version resolve cfm6 feature 42 child --discard-other",
+            "tgsis version resolve cfm6 42 average --region 0 --discard-other",
+            "tgsis version resolve cfm6 42 manual --region 0 --mesh edited_child.ts --discard-other",
+        ],
         cmd_version_resolve,
     )
     ver_resolve.add_argument("name", help="the child version")
-    ver_resolve.add_argument("objectclass", metavar="CLASS", help="object class ('feature' for features)")
-    ver_resolve.add_argument("objectkey", metavar="KEY", help="object key (for features: the id)")
+    ver_resolve.add_argument(
+        "objectclass", metavar="CLASS", help="object class ('feature' for features); with --region: the feature id"
+    )
+    ver_resolve.add_argument(
+        "objectkey", metavar="KEY", help="object key (for features: the id); with --region: the solution"
+    )
     ver_resolve.add_argument(
         "solution",
+        nargs="?",
         type=str.lower,
-        choices=("parent", "child", "manual", "unsolved"),
         help="which side the merge keeps: parent, child, manual (the rows as the child has them "
-        "after your edit), or unsolved (undecided again)",
+        "after your edit), or unsolved (undecided again); a region (--region) also takes base (the rows the "
+        "version was based on) and average (each vertex halfway between the two sides)",
+    )
+    ver_resolve.add_argument(
+        "--region",
+        type=int,
+        metavar="N",
+        help="solve one conflicting region of a feature's mesh (tgsis version conflicts NAME --json lists them "
+        "as conflict_regions): tgsis version resolve NAME FEATURE SOLUTION --region N; the merge takes the "
+        "regions that are no conflict by itself (docs/merge.md)",
+    )
+    ver_resolve.add_argument(
+        "--mesh",
+        metavar="FILE",
+        help="with --region and manual: the region's new rows, a mesh file whose vertex property vrtxid holds the "
+        "stored vertex ids (as --export writes it: edit the exported child file in GOCAD or ParaView and give it "
+        "back); vertices without an id are new",
     )
     ver_resolve.add_argument(
         "--discard-other",

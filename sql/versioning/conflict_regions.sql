@@ -1,0 +1,65 @@
+-- The regions of conflicting meshes (issue 39, docs/merge.md): per object of
+-- tgsis.conflicts that merges by region (a model-1 point set, line set,
+-- surface or tetrahedral solid), the connected sets of vertices and cells the
+-- two sides changed, as the three-way merge found them (tgsis.merge3), with
+-- the solution of each. Found and recorded by the Python client
+-- (tgsis.find_conflicts: numpy runs there), on the conflict's marks: a region
+-- holds for the states it was found on, and tgsis.find_conflicts removes the
+-- regions of an object either side changed again (their marks are stale).
+-- A region changed on one side only, or on both alike, merges by itself
+-- ('automatic'); the others need a solution (tgsis.resolve_region). Rows are
+-- written only by the SECURITY DEFINER functions; readers of conflicts read them.
+CREATE TABLE tgsis.conflict_regions (
+    versionid           integer     NOT NULL,
+    objectclass         text        NOT NULL,
+    objectkey           text        NOT NULL,
+    region              integer     NOT NULL CHECK (region >= 0),
+    childmark           text        NOT NULL,
+    parentmark          text        NOT NULL,
+    conflict            boolean     NOT NULL,
+    changed_by          text        NOT NULL CHECK (changed_by IN ('parent', 'child', 'both')),
+    vertex_ids          bigint[]    NOT NULL,
+    cell_ids            bigint[]    NOT NULL,
+    parent_vertex_ids   bigint[]    NOT NULL,
+    parent_cell_ids     bigint[]    NOT NULL,
+    child_vertex_ids    bigint[]    NOT NULL,
+    child_cell_ids      bigint[]    NOT NULL,
+    bbox                float8[]    CHECK (bbox IS NULL OR cardinality(bbox) = 6),
+    parent_displacement float8      NOT NULL DEFAULT 0 CHECK (parent_displacement >= 0),
+    child_displacement  float8      NOT NULL DEFAULT 0 CHECK (child_displacement >= 0),
+    solution            text        NOT NULL DEFAULT 'unsolved'
+                                    CHECK (solution IN ('unsolved', 'automatic', 'parent', 'child', 'base', 'average', 'manual')),
+    solution_mesh       bytea,
+    solved_at           timestamptz,
+    solved_by           name,
+    PRIMARY KEY (versionid, objectclass, objectkey, region),
+    FOREIGN KEY (versionid, objectclass, objectkey) REFERENCES tgsis.conflicts (versionid, objectclass, objectkey)
+        ON DELETE CASCADE,
+    CONSTRAINT conflict_regions_automatic CHECK ((solution = 'automatic') = (NOT conflict)),
+    CONSTRAINT conflict_regions_mesh CHECK ((solution_mesh IS NOT NULL) = (solution IN ('average', 'manual'))),
+    CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL))
+);
+
+COMMENT ON TABLE tgsis.conflict_regions IS
+    'regions of the conflicting meshes of versions (the three-way merge by region, docs/merge.md), found on the conflict''s marks, with the solution of each (tgsis.find_conflicts in Python, tgsis.resolve_region)';
+COMMENT ON COLUMN tgsis.conflict_regions.versionid IS 'the child version';
+COMMENT ON COLUMN tgsis.conflict_regions.objectclass IS 'object class of the conflicting object (feature)';
+COMMENT ON COLUMN tgsis.conflict_regions.objectkey IS 'object key (as text: the feature''s geoid)';
+COMMENT ON COLUMN tgsis.conflict_regions.region IS 'index of the region in the merge (0-based), as tgsis.merge3 numbers them';
+COMMENT ON COLUMN tgsis.conflict_regions.childmark IS 'the conflict''s childmark the region was found on (another one: the region is stale and removed)';
+COMMENT ON COLUMN tgsis.conflict_regions.parentmark IS 'the conflict''s parentmark the region was found on';
+COMMENT ON COLUMN tgsis.conflict_regions.conflict IS 'true: both sides changed the region to different rows, it needs a solution; false: it merges by itself';
+COMMENT ON COLUMN tgsis.conflict_regions.changed_by IS 'parent, child or both: the sides that changed the region';
+COMMENT ON COLUMN tgsis.conflict_regions.vertex_ids IS 'every vertex id of the region, its one-ring margin included, ascending (merged numbering)';
+COMMENT ON COLUMN tgsis.conflict_regions.cell_ids IS 'every cell id of the region, its one-ring margin included, ascending';
+COMMENT ON COLUMN tgsis.conflict_regions.parent_vertex_ids IS 'vertex ids of the region the parent changed (moved, added, removed, values)';
+COMMENT ON COLUMN tgsis.conflict_regions.parent_cell_ids IS 'cell ids of the region the parent changed';
+COMMENT ON COLUMN tgsis.conflict_regions.child_vertex_ids IS 'vertex ids of the region the version changed (its new ids renumbered as the merge does)';
+COMMENT ON COLUMN tgsis.conflict_regions.child_cell_ids IS 'cell ids of the region the version changed';
+COMMENT ON COLUMN tgsis.conflict_regions.bbox IS '{xmin,ymin,zmin,xmax,ymax,zmax} of the region in the three states (stored z), or NULL';
+COMMENT ON COLUMN tgsis.conflict_regions.parent_displacement IS 'largest distance a vertex of the region moved in the parent';
+COMMENT ON COLUMN tgsis.conflict_regions.child_displacement IS 'largest distance a vertex of the region moved in the version';
+COMMENT ON COLUMN tgsis.conflict_regions.solution IS 'unsolved, automatic (no conflict: merges by itself), parent, child, base (that state''s rows of the region), average (the average shape of the two sides), manual (a mesh given)';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_mesh IS 'average and manual: the region''s rows, an .npz of a tgsis.merge3.MeshState (read without pickles)';
+COMMENT ON COLUMN tgsis.conflict_regions.solved_at IS 'when the solution was recorded';
+COMMENT ON COLUMN tgsis.conflict_regions.solved_by IS 'role that recorded it';

@@ -1,0 +1,100 @@
+-- tgsis.resolve_region(version, objectclass, objectkey, region, solution, mesh): record how one
+-- conflicting region of a mesh is to be merged (docs/merge.md, "Solutions per region").
+-- parent, child, base: that state's rows of the region; average, manual: the
+-- rows of p_mesh (an .npz of a tgsis.merge3.MeshState; the Python client
+-- computes the average shape and says what a solution discards before it
+-- records it: tgsis.resolve_region in Python); unsolved takes a solution back.
+-- The conflict's marks are recomputed first (tgsis.find_conflicts): a region
+-- found on a state either side changed since is stale and refused (TG307),
+-- as is a region that is no conflict (it merges by itself). The key is read
+-- in the key column's type with the session's settings, as resolve_conflict
+-- reads it. The same right as resolve_conflict: write in the version.
+CREATE FUNCTION tgsis.resolve_region(p_version text, p_objectclass text, p_objectkey text, p_region integer,
+                                     p_solution text, p_mesh bytea DEFAULT NULL)
+RETURNS tgsis.conflict_regions
+LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_id       integer := tgsis.version_id(p_version);
+    v_solution text := lower(p_solution);
+    v_key      text;
+    v_stored   boolean;
+    v_row      tgsis.conflict_regions;
+    v_object   text;
+BEGIN
+    IF v_solution IS NULL OR v_solution NOT IN ('parent', 'child', 'base', 'average', 'manual', 'unsolved') THEN
+        RAISE EXCEPTION 'solution % of a region is not parent, child, base, average, manual or unsolved',
+                coalesce(quote_literal(p_solution), 'NULL')
+            USING ERRCODE = 'TG100',
+                  HINT = CASE WHEN v_solution = 'automatic'
+                              THEN 'automatic is no choice: find_conflicts records it for the regions that merge by themselves'
+                              ELSE 'SELECT tgsis.resolve_region(version, class, key, region, ''parent''|''child''|''base'') or ''average''|''manual'' with a mesh' END;
+    END IF;
+    v_object := format('region %s of object %s of class %s in version %s', coalesce(p_region::text, 'NULL'),
+                       quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version));
+    IF v_solution IN ('average', 'manual') AND p_mesh IS NULL THEN
+        RAISE EXCEPTION 'solution % of % needs the region''s mesh', v_solution, v_object
+            USING ERRCODE = 'TG100',
+                  HINT = 'give the mesh as the sixth argument (an .npz of a MeshState: tgsis.resolve_region in Python builds it)';
+    END IF;
+    IF v_solution NOT IN ('average', 'manual') AND p_mesh IS NOT NULL THEN
+        RAISE EXCEPTION 'solution % of % takes no mesh: one was given', v_solution, v_object
+            USING ERRCODE = 'TG100', HINT = 'leave the sixth argument out, or give the solution manual with the mesh';
+    END IF;
+    IF p_mesh IS NOT NULL AND substr(p_mesh, 1, 4) <> '\x504b0304'::bytea THEN
+        RAISE EXCEPTION 'the mesh of % is no .npz file (a zip archive): it starts with %', v_object,
+                encode(substr(p_mesh, 1, 8), 'hex')
+            USING ERRCODE = 'TG100', HINT = 'give the bytes numpy.savez writes of a MeshState (tgsis.resolve_region in Python builds them)';
+    END IF;
+    IF p_region IS NULL THEN
+        RAISE EXCEPTION 'the region of object % of class % in version % is NULL', quote_literal(p_objectkey),
+                quote_literal(p_objectclass), quote_literal(p_version)
+            USING ERRCODE = 'TG100', HINT = 'give the region''s number, as tgsis.conflict_regions lists it';
+    END IF;
+    PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
+    v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
+    v_stored := EXISTS (SELECT FROM tgsis.conflict_regions
+                         WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region);
+    -- the marks must be those of now: regions found on an older state are removed
+    PERFORM tgsis.find_conflicts(p_version);
+    SELECT * INTO v_row FROM tgsis.conflict_regions
+     WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region
+       FOR UPDATE;
+    IF NOT FOUND AND v_stored THEN
+        RAISE EXCEPTION '% was found on a state that changed since: the object changed in the version or its parent',
+                v_object
+            USING ERRCODE = 'TG307',
+                  HINT = 'find the regions again (tgsis.find_conflicts in Python, or tgsis version conflicts), then solve them';
+    ELSIF NOT FOUND THEN
+        RAISE EXCEPTION '% is not a stored region: %', v_object,
+                coalesce((SELECT format('the object has regions 0 to %s', max(region)) FROM tgsis.conflict_regions
+                           WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key HAVING count(*) > 0),
+                         'no regions of the object are stored')
+            USING ERRCODE = 'TG200',
+                  HINT = format('SELECT region, conflict, solution FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%L) lists them; tgsis.find_conflicts in Python finds them',
+                                p_version);
+    END IF;
+    IF NOT v_row.conflict THEN
+        RAISE EXCEPTION '% is not a conflict: only the % changed it, it merges by itself (automatic)', v_object,
+                CASE v_row.changed_by WHEN 'both' THEN 'two sides, alike,' WHEN 'parent' THEN 'parent' ELSE 'version' END
+            USING ERRCODE = 'TG307',
+                  DETAIL = 'A solution there would drop the other side''s edit nobody needs to choose against.',
+                  HINT = format('only a region with conflict = true takes a solution: SELECT region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%L) AND conflict',
+                                p_version);
+    END IF;
+    UPDATE tgsis.conflict_regions
+       SET solution = v_solution,
+           solution_mesh = p_mesh,
+           solved_at = CASE WHEN v_solution <> 'unsolved' THEN now() END,
+           solved_by = CASE WHEN v_solution <> 'unsolved' THEN tgsis.calling_role() END
+     WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region
+    RETURNING * INTO v_row;
+    RETURN v_row;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.resolve_region(text, text, text, integer, text, bytea) IS
+    'record the solution of one conflicting region of a mesh: parent, child, base (that state''s rows), average or manual (with the region''s mesh), or unsolved; refused (TG307) for a region that is no conflict or was found on a state that changed since';

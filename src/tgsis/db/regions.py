@@ -1,0 +1,854 @@
+"""Conflicts per region: the regions of conflicting meshes, stored, and their solutions (docs/merge.md).
+
+:func:`find_conflicts` is the region-aware form of
+:func:`tgsis.db.versions.find_conflicts`: it (re)computes the conflicting
+objects of a version (SQL ``tgsis.find_conflicts``), and for each that is a
+model-1 mesh of a feature class (point set, line set, surface, tetrahedral
+solid) reads its three states (:func:`~tgsis.db._merge_states.read_merge_states`)
+and runs :func:`tgsis.merge3.three_way_merge` on them — all in one
+``REPEATABLE READ`` transaction, so that the conflict's marks and the states
+agree — and records the regions (``tgsis.record_conflict_regions``, which
+refuses marks that are not the conflict's). Recorded solutions of regions
+found again alike are kept.
+
+:func:`resolve_region` records the solution of one conflicting region
+(``parent``, ``child``, ``base``, ``average``, ``manual``) after computing,
+with :func:`tgsis.merge3.apply_solutions`, what it discards of either side;
+:func:`region_solutions` gives the merges that write (``tgsis.merge_version``
+in Python) the recorded solutions valid for a merge.
+
+The merge itself (writing the merged mesh) is :mod:`tgsis.db.merging`'s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+import math
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any, cast
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+
+from tgsis.arguments import checked
+from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db.versions import Conflict, ConflictRegion, _conflict, show_name
+from tgsis.errors import (
+    ConcurrentChangeError,
+    Error,
+    InvalidInputError,
+    InvalidMergeError,
+    MissingPrivilegeError,
+    NotFoundError,
+    RegionSolutionError,
+    reraise,
+)
+from tgsis.merge3 import MergeRegion, MeshMerge, MeshState, RegionDiscard, Solution, apply_solutions, three_way_merge
+from tgsis.mesh import Mesh
+
+__all__ = [
+    "ConflictRegion",
+    "RegionResolution",
+    "average_region",
+    "discard_text",
+    "find_conflicts",
+    "region_solutions",
+    "resolve_region",
+    "state_from_npz",
+    "state_to_npz",
+]
+
+Conn = psycopg.Connection[Any]
+
+_SOLUTIONS = ("parent", "child", "base", "average", "manual", "unsolved")
+_RETRIES = 5  # serialization failures of a transaction of our own (two sessions storing at once) are retried
+_REGION_COLUMNS = (
+    "region, conflict, changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids, child_vertex_ids,"
+    " child_cell_ids, bbox, parent_displacement, child_displacement, solution, childmark, parentmark, solved_at,"
+    " solved_by"
+)
+_ID_FIELDS = ("vertex_ids", "cell_ids", "parent_vertex_ids", "parent_cell_ids", "child_vertex_ids", "child_cell_ids")
+
+
+# --------------------------------------------------------------------------- transactions
+
+
+@contextmanager
+def _consistent(conn: Conn, version: str, *, write: bool) -> Iterator[None]:
+    """One transaction whose reads agree: a new REPEATABLE READ one, or the caller's.
+
+    Inside the caller's transaction, a savepoint; under READ COMMITTED the
+    version and its parent are locked as ``tgsis.lock_for_merge`` locks them
+    (parent first), so no writer of either commits between the reads.
+    """
+    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
+        with conn.transaction():
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ" + ("" if write else " READ ONLY"))
+            yield
+        return
+    row = conn.execute("SELECT current_setting('transaction_isolation')").fetchone()
+    with conn.transaction():
+        if row is None or row[0] not in ("repeatable read", "serializable"):
+            conn.execute(
+                "SELECT FROM tgsis.versions WHERE versionid = (SELECT parentid FROM tgsis.versions"
+                " WHERE versionid = tgsis.version_id(%s)) FOR UPDATE",
+                (version,),
+            )
+            conn.execute("SELECT FROM tgsis.versions WHERE versionid = tgsis.version_id(%s) FOR UPDATE", (version,))
+        yield
+
+
+def _retrying(conn: Conn) -> int:
+    """How often a transaction may be tried: again after a serialization failure only when it is our own."""
+    return _RETRIES if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE else 1
+
+
+# --------------------------------------------------------------------------- rows <-> regions
+
+
+def _ids(values: Any) -> npt.NDArray[np.int64]:
+    return np.asarray(values if values is not None else [], dtype=np.int64)
+
+
+def _region_of_row(row: tuple[Any, ...]) -> ConflictRegion:
+    ids = {name: _ids(value) for name, value in zip(_ID_FIELDS, row[3:9], strict=True)}
+    return ConflictRegion(
+        region=int(row[0]),
+        conflict=bool(row[1]),
+        changed_by=str(row[2]),
+        **ids,
+        bbox=None if row[9] is None else np.asarray(row[9], dtype=np.float64),
+        parent_displacement=float(row[10]),
+        child_displacement=float(row[11]),
+        solution=str(row[12]),
+        childmark=str(row[13]),
+        parentmark=str(row[14]),
+        solved_at=row[15],
+        solved_by=row[16],
+    )
+
+
+def _region_json(region: MergeRegion) -> dict[str, Any]:
+    bounds = np.asarray(region.bounds, dtype=np.float64).ravel()
+    return {
+        "region": region.index,
+        "conflict": region.conflict,
+        "changed_by": region.sides,
+        **{name: [int(i) for i in getattr(region, name)] for name in _ID_FIELDS},
+        "bbox": [float(v) for v in bounds] if len(bounds) == 6 and np.all(np.isfinite(bounds)) else None,
+        "parent_displacement": float(region.parent_displacement),
+        "child_displacement": float(region.child_displacement),
+    }
+
+
+def _computed_region(region: MergeRegion, marks: tuple[str, str], stored: ConflictRegion | None) -> ConflictRegion:
+    """A region as found, with the stored solution of the same region (same marks, same ids), if any."""
+    as_json = _region_json(region)
+    solution = "unsolved" if region.conflict else "automatic"
+    solved_at = solved_by = None
+    if stored is not None and region.conflict and _same_region(stored, region):
+        solution, solved_at, solved_by = stored.solution, stored.solved_at, stored.solved_by
+    return ConflictRegion(
+        region=region.index,
+        conflict=region.conflict,
+        changed_by=region.sides,
+        **{name: getattr(region, name) for name in _ID_FIELDS},
+        bbox=None if as_json["bbox"] is None else np.asarray(as_json["bbox"], dtype=np.float64),
+        parent_displacement=float(region.parent_displacement),
+        child_displacement=float(region.child_displacement),
+        solution=solution,
+        childmark=marks[0],
+        parentmark=marks[1],
+        solved_at=solved_at,
+        solved_by=solved_by,
+    )
+
+
+def _same_region(stored: ConflictRegion, region: MergeRegion) -> bool:
+    return stored.conflict == region.conflict and all(
+        np.array_equal(getattr(stored, name), getattr(region, name)) for name in _ID_FIELDS
+    )
+
+
+def _stored_regions(conn: Conn, versionid: int, objectclass: str, objectkey: str) -> list[ConflictRegion]:
+    rows = conn.execute(
+        f"SELECT {_REGION_COLUMNS} FROM tgsis.conflict_regions"
+        " WHERE versionid = %s AND objectclass = %s AND objectkey = %s ORDER BY region",
+        (versionid, objectclass, objectkey),
+    ).fetchall()
+    return [_region_of_row(r) for r in rows]
+
+
+def _current_marks(conn: Conn, versionid: int, objectclass: str, objectkey: str) -> tuple[str, str] | None:
+    """The object's marks as the transaction sees the two sides now (``tgsis.current_conflicts``), or None."""
+    row = conn.execute(
+        "SELECT childmark, parentmark FROM tgsis.current_conflicts(%s) WHERE objectclass = %s AND objectkey = %s",
+        (versionid, objectclass, objectkey),
+    ).fetchone()
+    return None if row is None else (str(row[0]), str(row[1]))
+
+
+# --------------------------------------------------------------------------- find_conflicts
+
+
+@checked
+def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
+    """(Re)compute the conflicting objects of ``version``, with the regions of the conflicting meshes.
+
+    The objects changed both in the version and in its parent since it was
+    based (:func:`tgsis.db.versions.find_conflicts`); for each that is a
+    model-1 mesh of a feature class, its regions (docs/merge.md) computed from
+    its three states read in the same snapshot as the conflict's marks, and
+    recorded (``tgsis.conflict_regions``) when the role stores conflicts (it
+    may write in the version or merge into its parent); a region found again
+    alike keeps its recorded solution.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        Idle (a REPEATABLE READ transaction of its own, retried when another
+        session stored the same conflicts at the same time), or in a
+        transaction (a savepoint; under READ COMMITTED the version and its
+        parent are locked as a merge locks them).
+    version : str
+        A version other than DEFAULT.
+
+    Returns
+    -------
+    list of Conflict
+        With ``regions`` for the objects that merge by region, and
+        ``region_refusal`` saying why for those that do not (a feature
+        property changed on both sides, a deletion, another data model, a
+        plain table's row).
+    """
+    for attempt in range(_retrying(conn)):
+        try:
+            with reraise(), _consistent(conn, version, write=True):
+                return _find(conn, version)
+        except ConcurrentChangeError:
+            if attempt == _retrying(conn) - 1:
+                raise
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _find(conn: Conn, version: str) -> list[Conflict]:
+    rows = conn.execute(
+        "SELECT objectclass, objectkey, conflicttype, childtables, parenttables, solution, childmark, parentmark"
+        "  FROM tgsis.find_conflicts(%s)",
+        (version,),
+    ).fetchall()
+    versionid = version_row(conn, version)[0]
+    stores = _stores_conflicts(conn, version)
+    result = []
+    for row in rows:
+        conflict = _conflict(row)
+        marks = (str(row[6]), str(row[7]))
+        merge, refusal = _object_merge(conn, version, conflict.objectclass, conflict.objectkey)
+        if merge is None:
+            result.append(_with(conflict, (), refusal))
+            continue
+        payload = json.dumps([_region_json(r) for r in merge.regions])
+        if stores:
+            conn.execute(
+                "SELECT tgsis.record_conflict_regions(%s, %s, %s, %s, %s, %s::jsonb)",
+                (version, conflict.objectclass, conflict.objectkey, *marks, payload),
+            )
+            regions = tuple(_stored_regions(conn, versionid, conflict.objectclass, conflict.objectkey))
+        else:  # computed only, with the solutions recorded for the same regions
+            stored = {r.region: r for r in _stored_regions(conn, versionid, conflict.objectclass, conflict.objectkey)}
+            regions = tuple(
+                _computed_region(r, marks, stored.get(r.index) if _marks_of(stored) == marks else None)
+                for r in merge.regions
+            )
+        result.append(_with(conflict, regions, None))
+    return result
+
+
+def _marks_of(stored: Mapping[int, ConflictRegion]) -> tuple[str, str] | None:
+    first = next(iter(stored.values()), None)
+    return None if first is None else (first.childmark, first.parentmark)
+
+
+def _with(conflict: Conflict, regions: tuple[ConflictRegion, ...], refusal: str | None) -> Conflict:
+    return dataclasses.replace(conflict, regions=regions, region_refusal=refusal)
+
+
+def _stores_conflicts(conn: Conn, version: str) -> bool:
+    """Whether the role stores the version's conflicts (SQL find_conflicts does for these roles only)."""
+    row = conn.execute(
+        "SELECT tgsis.holds_version_privilege(v.versionid, 'write', tgsis.calling_role())"
+        "    OR tgsis.holds_version_privilege(v.parentid, 'merge', tgsis.calling_role())"
+        "  FROM tgsis.versions v WHERE v.versionid = tgsis.version_id(%s)",
+        (version,),
+    ).fetchone()
+    return bool(row and row[0])
+
+
+def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) -> tuple[MeshMerge | None, str | None]:
+    """The three-way merge of a conflicting object, or None and why it merges as a whole object only."""
+    if objectclass != "feature":
+        return None, f"a row of the versioned table(s) of object class {objectclass}: it merges as a whole object"
+    try:
+        with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
+            states = read_merge_states(conn, version, int(objectkey)).states
+        return three_way_merge(states["base"], states["parent"], states["child"]), None
+    except MissingPrivilegeError as exc:
+        return None, f"the role may not read it: {exc.message}"
+    except (InvalidInputError, InvalidMergeError, NotFoundError) as exc:
+        return None, exc.message
+    except Error as exc:
+        if exc.code == "TG300":  # VersioningError: not changed on both sides (a conflict of tables only)
+            return None, exc.message
+        raise
+
+
+# --------------------------------------------------------------------------- region_solutions
+
+
+@checked
+def region_solutions(
+    conn: Conn, version: str, objectclass: str, objectkey: str, merge: MeshMerge
+) -> dict[int, str | MeshState]:
+    """The solutions recorded for the conflicting regions of ``merge``, when they hold for it.
+
+    They hold when the stored regions were found on the object's current marks
+    (as the caller's transaction sees the two sides) and are the regions of
+    ``merge`` (same count, same six id arrays each). Otherwise, or when none
+    is recorded, ``{}``: a merge then treats every conflicting region as
+    unsolved.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        In the merge's transaction (the states of ``merge`` read in it).
+    version, objectclass, objectkey : str
+        The conflict (``objectkey`` as ``tgsis.conflicts`` names it: a feature's geoid).
+    merge : MeshMerge
+        The three-way merge of the object's states.
+
+    Returns
+    -------
+    dict of int to str or MeshState
+        Region index to ``"parent"``, ``"child"``, ``"base"`` or a
+        :class:`~tgsis.merge3.MeshState` (the rows of an ``average`` or
+        ``manual`` solution), for the solved conflicting regions only.
+    """
+    with reraise():
+        versionid = version_row(conn, version)[0]
+        marks = _current_marks(conn, versionid, objectclass, objectkey)
+        stored = _stored_regions(conn, versionid, objectclass, objectkey)
+        if marks is None or not _holds(stored, marks, merge):
+            return {}
+        meshes = dict(
+            conn.execute(
+                "SELECT region, solution_mesh FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
+                " AND objectkey = %s AND solution_mesh IS NOT NULL",
+                (versionid, objectclass, objectkey),
+            ).fetchall()
+        )
+    solutions: dict[int, str | MeshState] = {}
+    for region in stored:
+        if not region.conflict or region.solution == "unsolved":
+            continue
+        if region.solution in ("average", "manual"):
+            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), merge.base.name)
+        else:
+            solutions[region.region] = region.solution
+    return solutions
+
+
+def _holds(stored: list[ConflictRegion], marks: tuple[str, str], merge: MeshMerge) -> bool:
+    return (
+        len(stored) == len(merge.regions)
+        and len(stored) > 0
+        and all((r.childmark, r.parentmark) == marks for r in stored)
+        and all(_same_region(s, m) for s, m in zip(stored, merge.regions, strict=True))
+    )
+
+
+# --------------------------------------------------------------------------- a MeshState as .npz bytes
+
+
+def state_to_npz(state: MeshState) -> bytes:
+    """A state as the bytes of an ``.npz`` (numpy arrays only: read back without pickles)."""
+    arrays: dict[str, npt.NDArray[Any]] = {
+        "cell_size": np.asarray(state.cell_size, dtype=np.int64),
+        "vertex_ids": state.vertex_ids,
+        "vertices": state.vertices,
+        "cell_ids": state.cell_ids,
+        "cells": state.cells,
+    }
+    for prefix, props in (("vertex:", state.vertex_properties), ("cell:", state.cell_properties)):
+        for name, values in props.items():
+            arrays[prefix + name] = np.asarray(values)
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)  # type: ignore[arg-type]
+    return buffer.getvalue()
+
+
+def state_from_npz(data: bytes, name: str = "mesh") -> MeshState:
+    """The state of :func:`state_to_npz` bytes (``allow_pickle=False``); a bad file is :class:`InvalidInputError`."""
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
+            arrays = {key: npz[key] for key in npz.files}
+        return MeshState(
+            int(arrays["cell_size"]),
+            arrays["vertex_ids"],
+            arrays["vertices"],
+            arrays["cell_ids"],
+            arrays["cells"],
+            {k.split(":", 1)[1]: v for k, v in arrays.items() if k.startswith("vertex:")},
+            {k.split(":", 1)[1]: v for k, v in arrays.items() if k.startswith("cell:")},
+            name,
+        )
+    except Error:
+        raise
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InvalidInputError(f"{name}: the stored mesh of a solution is no .npz of a mesh state: {exc}") from exc
+
+
+# --------------------------------------------------------------------------- resolve_region
+
+
+@dataclass(frozen=True)
+class RegionResolution:
+    """What :func:`resolve_region` recorded.
+
+    Attributes
+    ----------
+    region : ConflictRegion
+        The stored region with its solution.
+    discards : tuple of RegionDiscard
+        What the solution throws away of each side's edit in the region
+        (counted against the merge with the other regions' recorded
+        solutions, ``parent`` for those still unsolved).
+    state : MeshState or None
+        The rows of an ``average`` or ``manual`` solution as recorded.
+    """
+
+    region: ConflictRegion
+    discards: tuple[RegionDiscard, ...]
+    state: MeshState | None = None
+
+    def summary(self) -> str:
+        """One line per discard, or that nothing is discarded."""
+        if not self.discards:
+            return f"region {self.region.region}: {self.region.solution} discards nothing"
+        return "\n".join(discard_text(d) for d in self.discards)
+
+
+def discard_text(d: RegionDiscard) -> str:
+    """What a region's solution discards, in one line."""
+    return (
+        f"region {d.region}: {d.solution} discards the {'version' if d.side == 'child' else 'parent'}'s edit of "
+        f"{d.vertices} vertices and {d.cells} cells (largest displacement {d.max_displacement:.6g})"
+    )
+
+
+@checked
+def resolve_region(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    region: int,
+    solution: str,
+    mesh: MeshState | Mesh | None = None,
+    *,
+    discard_other: bool = True,
+) -> RegionResolution:
+    """Record the solution of one conflicting region of a mesh (docs/merge.md, "Solutions per region").
+
+    The regions must have been found on the object's current state
+    (:func:`find_conflicts`); what the solution discards of either side's
+    edit in the region is computed first (:func:`tgsis.merge3.apply_solutions`
+    with the other regions' recorded solutions) and returned.
+
+    Parameters
+    ----------
+    version : str
+    feature_id : int
+        The conflicting feature (geoid).
+    region : int
+        The region's index (:attr:`ConflictRegion.region`).
+    solution : {"parent", "child", "base", "average", "manual", "unsolved"}
+        ``parent``, ``child``, ``base``: that state's rows of the region;
+        ``average``: each vertex of the region at the middle of its parent
+        and child positions (docs/merge.md says the rule); ``manual``: the
+        rows of ``mesh``; ``unsolved`` takes a solution back.
+    mesh : MeshState or Mesh, optional
+        ``manual`` only. A :class:`~tgsis.merge3.MeshState` keyed by the
+        stored ids, or a :class:`~tgsis.mesh.Mesh` whose vertex property
+        ``vrtxid`` holds them (what ``tgsis version conflicts --export``
+        writes: a vertex without an id, NaN or negative, is a new vertex). Its
+        rows of the region's ids, and of ids no state has, are the region's;
+        its other rows must be those of a state (base, parent or version).
+    discard_other : bool
+        When False, a solution that discards anything is refused.
+
+    Returns
+    -------
+    RegionResolution
+
+    Raises
+    ------
+    RegionSolutionError
+        The region is no conflict; the regions were found on a state that
+        changed since (find them again); ``discard_other=False`` and the
+        solution discards something.
+    InvalidInputError
+        An unknown solution; a mesh for parent/child/base or none for manual;
+        a mesh that changes rows outside the region.
+    InvalidMergeError
+        The solution gives no valid mesh.
+    MissingPrivilegeError
+        The role may not write in the version (nothing recorded).
+    """
+    wanted = solution.lower() if isinstance(solution, str) else solution
+    name = f"region {region} of feature {feature_id} in version {show_name(version)}"
+    if wanted not in _SOLUTIONS:
+        raise InvalidInputError(
+            f"{name}: solution {solution!r} is not parent, child, base, average, manual or unsolved",
+            hint="automatic is no choice: regions that are no conflict merge by themselves"
+            if wanted == "automatic"
+            else None,
+        )
+    if wanted == "manual" and mesh is None:
+        raise InvalidInputError(f"{name}: solution manual needs the region's mesh", hint="give mesh=")
+    if wanted != "manual" and mesh is not None:
+        raise InvalidInputError(
+            f"{name}: solution {wanted} takes no mesh: one was given",
+            hint="leave mesh out, or give solution='manual'"
+            + (" (average is computed)" if wanted == "average" else ""),
+        )
+    for attempt in range(_retrying(conn)):
+        try:
+            with reraise(), _consistent(conn, version, write=True):
+                return _resolve(conn, version, feature_id, region, wanted, mesh, discard_other, name)
+        except ConcurrentChangeError:
+            if attempt == _retrying(conn) - 1:
+                raise
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _resolve(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    index: int,
+    solution: str,
+    mesh: MeshState | Mesh | None,
+    discard_other: bool,
+    name: str,
+) -> RegionResolution:
+    versionid = version_row(conn, version)[0]
+    # the right first: a role that may not resolve learns that, whatever else is wrong
+    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
+    key = str(feature_id)
+    stored_before = _stored_regions(conn, versionid, "feature", key)
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))  # the marks of now; stale regions go
+    stored = _stored_regions(conn, versionid, "feature", key)
+    if not stored:
+        if stored_before:
+            raise RegionSolutionError(
+                f"{name}: the regions were found on a state that changed since: the object changed in the version "
+                "or its parent",
+                hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r}), or tgsis version conflicts "
+                f"{version}",
+            )
+        raise NotFoundError(
+            f"{name}: no regions of the feature are stored",
+            hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {version})",
+        )
+    if solution == "unsolved" or not 0 <= index < len(stored) or not stored[index].conflict:
+        # nothing to compute: the SQL function records it or refuses (not a region, no conflict)
+        return RegionResolution(_record(conn, version, key, index, solution, None), ())
+    merge = _checked_merge(conn, version, feature_id, stored, name)
+    target = merge.regions[index]
+    given: Solution
+    if solution == "average":
+        given = average_region(merge, target)
+    elif solution == "manual":
+        assert mesh is not None
+        given = _manual_state(merge, target, mesh, name)
+    else:
+        given = cast(Solution, solution)
+    others = cast(dict[int, Solution], region_solutions(conn, version, "feature", key, merge))
+    others.pop(index, None)
+    placeholders: dict[int, Solution] = {r.index: "parent" for r in merge.conflicts if r.index not in others}
+    placeholders.pop(index, None)
+    resolved = apply_solutions(merge, {**placeholders, **others, index: given})
+    discards = tuple(d for d in resolved.discards if d.region == index)
+    if discards and not discard_other:
+        raise RegionSolutionError(
+            f"{name}: solution {solution} discards edits: " + "; ".join(discard_text(d) for d in discards),
+            hint="call again with discard_other=True to discard them, or choose another solution",
+        )
+    state = given if isinstance(given, MeshState) else None
+    row = _record(conn, version, key, index, solution, None if state is None else state_to_npz(state))
+    return RegionResolution(row, discards, state)
+
+
+def _record(conn: Conn, version: str, key: str, index: int, solution: str, mesh: bytes | None) -> ConflictRegion:
+    row = conn.execute(
+        f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s)",
+        (version, key, index, solution, mesh),
+    ).fetchone()
+    assert row is not None
+    return _region_of_row(row)
+
+
+def _checked_merge(conn: Conn, version: str, feature_id: int, stored: list[ConflictRegion], name: str) -> MeshMerge:
+    states = read_merge_states(conn, version, feature_id).states
+    merge = three_way_merge(states["base"], states["parent"], states["child"])
+    if len(stored) != len(merge.regions) or not all(
+        _same_region(s, m) for s, m in zip(stored, merge.regions, strict=True)
+    ):
+        raise RegionSolutionError(  # marks unchanged but other regions: found by another client or rules
+            f"{name}: the stored regions are not those of the object's states now",
+            hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r})",
+        )
+    return merge
+
+
+# --------------------------------------------------------------------------- average and manual
+
+
+def _closure(merge: MeshMerge, vids: npt.NDArray[np.int64], cells: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """The vertex ids the region's cells use that are not region rows (unchanged everywhere: the rest)."""
+    used = np.unique(cells)
+    return used[~np.isin(used, vids)]
+
+
+def _rows_state(
+    merge: MeshMerge,
+    source: MeshState,
+    vids: npt.NDArray[np.int64],
+    cids: npt.NDArray[np.int64],
+    name: str,
+) -> MeshState:
+    """``source``'s rows of these ids, with the rest's vertices its cells use (from the parent)."""
+    at_v = np.flatnonzero(np.isin(source.vertex_ids, vids))
+    at_c = np.flatnonzero(np.isin(source.cell_ids, cids))
+    cells = source.cells[at_c]
+    extra = _closure(merge, source.vertex_ids[at_v], cells)
+    # the rest's vertices the region's cells use: the parent's rows (the merge keeps them), else the version's
+    parts = [(source, at_v)]
+    for state in (merge.parent, merge.child):
+        at_e = np.flatnonzero(np.isin(state.vertex_ids, extra))
+        parts.append((state, at_e))
+        extra = extra[~np.isin(extra, state.vertex_ids)]
+    return MeshState(
+        source.cell_size,
+        np.concatenate([s.vertex_ids[a] for s, a in parts]),
+        np.concatenate([s.vertices[a] for s, a in parts]),
+        source.cell_ids[at_c],
+        cells,
+        {
+            n: np.concatenate([np.asarray(s.vertex_properties[n])[a] for s, a in parts])
+            for n in source.vertex_properties
+        },
+        {n: np.asarray(v)[at_c] for n, v in source.cell_properties.items()},
+        name,
+    )
+
+
+def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
+    """The ``average`` solution of a conflicting region: its rows at the middle of the two sides.
+
+    The rule (docs/merge.md): the region's rows are the parent's and the
+    child's with the same ids and the same cells (the two sides moved or
+    re-valued the region's vertices, neither re-meshed it); each vertex takes
+    the middle of its parent and child positions, ``(p + c) / 2``, which is
+    the average shape of two meshes of one topology (every vertex halfway
+    along its straight trajectory); a real-valued property the middle of the
+    two values, any other the parent's. Vertices the region shares with the
+    rest are the rest's and are not moved (both sides have them unchanged).
+    Sides whose region topologies differ are refused: the average of two
+    meshings would need a new meshing of the region, which ``manual`` gives.
+
+    Raises
+    ------
+    RegionSolutionError
+        The two sides' rows of the region have other ids or other cells.
+    """
+    parent, child = merge.parent, merge.child
+    vids, cids = region.vertex_ids, region.cell_ids
+    pv, cv = np.isin(parent.vertex_ids, vids), np.isin(child.vertex_ids, vids)
+    pc, cc = np.isin(parent.cell_ids, cids), np.isin(child.cell_ids, cids)
+    same_topology = (
+        np.array_equal(parent.vertex_ids[pv], child.vertex_ids[cv])
+        and np.array_equal(parent.cell_ids[pc], child.cell_ids[cc])
+        and np.array_equal(np.sort(parent.cells[pc], axis=1), np.sort(child.cells[cc], axis=1))
+    )
+    if not same_topology:
+        raise RegionSolutionError(
+            f"{merge.base.name}: region {region.index} has other vertices or cells in the parent and in the version: "
+            "average needs the same meshing of the region on both sides",
+            hint="solve it with parent, child or base, or give a manual mesh (e.g. an edited export)",
+        )
+    rows = _rows_state(merge, parent, vids, cids, merge.base.name)
+    at_p = np.flatnonzero(np.isin(rows.vertex_ids, parent.vertex_ids[pv]))  # the region's own vertices
+    middle = 0.5 * parent.vertices[pv] + 0.5 * child.vertices[cv]
+    vertices = rows.vertices.copy()
+    vertices[at_p] = middle
+    vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
+    for n, values in vprops.items():
+        if values.dtype.kind == "f":
+            values[at_p] = (
+                0.5 * np.asarray(parent.vertex_properties[n])[pv] + 0.5 * np.asarray(child.vertex_properties[n])[cv]
+            )
+    cprops = {n: np.asarray(v).copy() for n, v in rows.cell_properties.items()}
+    for n, values in cprops.items():
+        if values.dtype.kind == "f":
+            values[:] = 0.5 * np.asarray(parent.cell_properties[n])[pc] + 0.5 * np.asarray(child.cell_properties[n])[cc]
+    return MeshState(
+        rows.cell_size,
+        rows.vertex_ids,
+        vertices,
+        rows.cell_ids,
+        rows.cells,
+        vprops,
+        cprops,
+        f"{merge.base.name} average",
+    )
+
+
+def _file_ids(mesh: Mesh, name: str) -> npt.NDArray[np.int64]:
+    """Per file vertex, its stored id from the vertex property ``vrtxid``; -1 for a vertex without one."""
+    if "vrtxid" not in mesh.vertex_properties:
+        raise InvalidInputError(
+            f"{name}: the mesh has no vertex property 'vrtxid': its vertices cannot be matched to the stored ones",
+            hint="edit a file written by tgsis version conflicts --export (it keeps the ids as the vertex property "
+            "vrtxid), or give a MeshState",
+        )
+    raw = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64).ravel()
+    ids = np.full(len(raw), -1, dtype=np.int64)
+    known = np.isfinite(raw) & (raw >= 0)
+    if np.any(raw[known] != np.round(raw[known])):
+        raise InvalidInputError(f"{name}: vertex property 'vrtxid' holds values that are no ids (not integers)")
+    ids[known] = raw[known].astype(np.int64)
+    if len(np.unique(ids[known])) != int(known.sum()):
+        raise InvalidInputError(
+            f"{name}: two vertices of the mesh have the same 'vrtxid'", hint="give each vertex its own id"
+        )
+    return ids
+
+
+def _manual_state(merge: MeshMerge, region: MergeRegion, mesh: MeshState | Mesh, name: str) -> MeshState:
+    """The region's rows of a manual mesh, checked: its rows outside the region must be a state's."""
+    states = (merge.base, merge.parent, merge.child)
+    if isinstance(mesh, MeshState):
+        given = mesh
+    else:
+        given = _state_of_file(merge, mesh, name)
+    known_v = np.unique(np.concatenate([s.vertex_ids for s in states]))
+    known_c = np.unique(np.concatenate([s.cell_ids for s in states]))
+    take_v = np.isin(given.vertex_ids, region.vertex_ids) | ~np.isin(given.vertex_ids, known_v)
+    take_c = np.isin(given.cell_ids, region.cell_ids) | ~np.isin(given.cell_ids, known_c)
+    # the rest: every row must be one of the three states' (an export of any side, unedited there)
+    outside_v = given.vertex_ids[~take_v]
+    outside_c = given.cell_ids[~take_c]
+    changed_v = np.ones(len(outside_v), dtype=bool)
+    changed_c = np.ones(len(outside_c), dtype=bool)
+    for state in states:
+        same_v, same_c = _rows_equal(given, state, outside_v, outside_c)
+        changed_v &= ~same_v
+        changed_c &= ~same_c
+    if changed_v.any() or changed_c.any():
+        from tgsis.merge3 import _ids_text
+
+        raise InvalidInputError(
+            f"{name}: the manual mesh changes rows outside the region: vertices "
+            f"{_ids_text(outside_v[changed_v]) or 'none'}, cells {_ids_text(outside_c[changed_c]) or 'none'}",
+            hint="edit only the region's vertices and cells (its vertex_ids and cell_ids), or solve the other "
+            "regions on their own",
+        )
+    return _rows_state(merge, given, given.vertex_ids[take_v], given.cell_ids[take_c], f"{merge.base.name} manual")
+
+
+def _rows_equal(
+    a: MeshState, b: MeshState, vids: npt.NDArray[np.int64], cids: npt.NDArray[np.int64]
+) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """Per id, whether both states have the row and it is the same (coordinates, values; a rotated cell alike)."""
+    from tgsis.merge3 import _state_rows_equal
+
+    same_v, same_c = _state_rows_equal(a, b, vids, cids)
+    return same_v & np.isin(vids, b.vertex_ids), same_c & np.isin(cids, b.cell_ids)
+
+
+def _state_of_file(merge: MeshMerge, mesh: Mesh, name: str) -> MeshState:
+    """A mesh read from a file as a state of the stored ids (vertex property ``vrtxid``; see docs/merge.md).
+
+    New vertices get ids above every state's; a cell takes the id of the
+    child's (else parent's, base's) cell on the same vertices, a new one
+    otherwise. Property columns the file lacks (GOCAD files hold no cell
+    values) are those of the matched rows (NaN for new rows); columns of the
+    file the object does not have are dropped.
+    """
+    states = (merge.child, merge.parent, merge.base)
+    base = merge.base
+    if mesh.cell_size != base.cell_size:
+        raise InvalidInputError(
+            f"{name}: the mesh has cells of {mesh.cell_size} vertices, the object of {base.cell_size}"
+        )
+    ids = _file_ids(mesh, name)
+    top_v = max(int(s.vertex_ids.max()) for s in states if s.n_vertices) if any(s.n_vertices for s in states) else -1
+    new = ids < 0
+    ids[new] = np.arange(top_v + 1, top_v + 1 + int(new.sum()))
+    vertices = np.asarray(mesh.vertices, dtype=np.float64).copy()
+    if str(mesh.metadata.get("zpositive", "")).lower() == "depth":
+        vertices[:, 2] = -vertices[:, 2]  # the export wrote depths for a Depth object; stored z is elevation
+    cells = ids[np.asarray(mesh.cells, dtype=np.int64)]
+    # cell ids: the same vertices (any order) as a stored cell
+    lookup: dict[tuple[int, ...], int] = {}
+    for state in reversed(states):  # the child's win
+        for cid, row in zip(state.cell_ids.tolist(), np.sort(state.cells, axis=1).tolist()):
+            lookup[tuple(row)] = cid
+    top_c = max(int(s.cell_ids.max()) for s in states if s.n_cells) if any(s.n_cells for s in states) else -1
+    cell_ids = np.empty(len(cells), dtype=np.int64)
+    fresh = top_c + 1
+    for i, row in enumerate(np.sort(cells, axis=1).tolist()):
+        cid = lookup.get(tuple(row))
+        if cid is None:
+            cid, fresh = fresh, fresh + 1
+        cell_ids[i] = cid
+    if len(np.unique(cell_ids)) != len(cell_ids):
+        raise InvalidInputError(f"{name}: the mesh has two cells on the same vertices")
+    vprops = _columns(mesh.vertex_properties, base.vertex_properties, ids, states, "vertex")
+    cprops = _columns(mesh.cell_properties, base.cell_properties, cell_ids, states, "cell")
+    return MeshState(base.cell_size, ids, vertices, cell_ids, cells, vprops, cprops, name)
+
+
+def _columns(
+    given: Mapping[str, Any],
+    wanted: Mapping[str, npt.NDArray[Any]],
+    ids: npt.NDArray[np.int64],
+    states: tuple[MeshState, ...],
+    what: str,
+) -> dict[str, npt.NDArray[Any]]:
+    """The object's property columns for these rows: the file's values, else the stored rows' (NaN for new ones)."""
+    result: dict[str, npt.NDArray[Any]] = {}
+    for column, like in wanted.items():
+        if column in given:
+            result[column] = np.asarray(given[column]).astype(like.dtype if like.dtype.kind == "f" else np.float64)
+            continue
+        values = np.full((len(ids), *like.shape[1:]), math.nan)
+        filled = np.zeros(len(ids), dtype=bool)
+        for state in states:
+            table_ids = state.vertex_ids if what == "vertex" else state.cell_ids
+            props = state.vertex_properties if what == "vertex" else state.cell_properties
+            pos = np.searchsorted(table_ids, ids)
+            pos = np.minimum(pos, max(len(table_ids) - 1, 0))
+            hit = ~filled & (len(table_ids) > 0) & (table_ids[pos] == ids if len(table_ids) else False)
+            values[hit] = np.asarray(props[column])[pos[hit]]
+            filled |= hit
+        if filled.all() and like.dtype.kind != "f":
+            result[column] = values.astype(like.dtype)
+        else:
+            result[column] = values
+    return result
