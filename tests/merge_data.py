@@ -7,9 +7,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 import psycopg
+from psycopg import sql
 
 import tgsis
 from tgsis.db import features as F
+from tgsis.db.classes import class_of_feature
 
 Conn = psycopg.Connection[Any]
 
@@ -56,3 +58,33 @@ def move(conn: Conn, version: str, geoid: int, ids: npt.ArrayLike, shift: tuple[
             "UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
             (*shift, geoid, [int(i) for i in np.asarray(ids)]),
         )
+
+
+def stored_state(conn: Conn, version: str, geoid: int) -> tuple[Any, Any, set[tuple[int, ...]], Any]:
+    """(vertex ids, (n, 3) coordinates, cells as a set of (id, v1, v2, v3), porosity) as a psql user reads them.
+
+    Read through the versioned views after ``tgsis.goto_version`` (the session is put back by ``in_version``).
+    """
+    with tgsis.in_version(conn, version):
+        vertices = conn.execute(
+            "SELECT vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = %s ORDER BY vrtxid", (geoid,)
+        ).fetchall()
+        cells = conn.execute("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl WHERE geoid = %s", (geoid,))
+        cell_set = {tuple(int(v) for v in row) for row in cells.fetchall()}
+        fc = class_of_feature(conn, geoid)
+        porosity = conn.execute(
+            sql.SQL("SELECT _idx, porosity FROM {} WHERE _geoid = %s ORDER BY _idx").format(
+                fc.qualified(fc.property_table("VERTEX") or "")
+            ),
+            (geoid,),
+        ).fetchall()
+    ids = np.array([r[0] for r in vertices], dtype=np.int64)
+    xyz = np.array([r[1:] for r in vertices], dtype=np.float64).reshape(-1, 3)
+    return ids, xyz, cell_set, dict(porosity)
+
+
+def moved(vertices: npt.NDArray[np.float64], ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:
+    """The same move made in Python (float8 + float8 in PostgreSQL and numpy are both IEEE: bit for bit)."""
+    at = np.asarray(ids)
+    for axis in range(3):
+        vertices[at, axis] = vertices[at, axis] + shift[axis]

@@ -420,7 +420,7 @@ def test_bad_saves_and_checkins_change_nothing(conn: Conn, horizons: F.FeatureCl
         (lambda: tgsis.save_feature(conn, horizons, fid, base, tolerance=-1.0), tgsis.InvalidInputError, "tolerance"),
         (lambda: tgsis.save_feature(conn, horizons, fid, "mesh"), tgsis.InvalidGeometryError, "str"),  # type: ignore[arg-type]
         (lambda: tgsis.checkin(conn, co, no_props), tgsis.InvalidPropertyError, "porosity"),
-        (lambda: tgsis.checkin(conn, co, base, on_conflict="merge"), tgsis.InvalidInputError, "on_conflict"),  # type: ignore[arg-type]
+        (lambda: tgsis.checkin(conn, co, base, on_conflict="nope"), tgsis.InvalidInputError, "on_conflict"),  # type: ignore[arg-type]
         (lambda: tgsis.checkout(conn, fid + 1000), tgsis.NotFoundError, str(fid + 1000)),
     ]
     for call, error, text in bad_calls:
@@ -515,7 +515,7 @@ def test_checkout_in_a_child_goes_through_the_normal_conflict_path(conn: Conn, h
     with tgsis.in_version(conn, "mine"):
         co = tgsis.checkout(conn, fid)
     theirs = base.vertices.copy()
-    theirs[3, 2] = 7.0
+    theirs[100, 2] = 7.0  # the same vertex as below, elsewhere: a region conflict (disjoint edits merge by region)
     tgsis.save_feature(conn, horizons, fid, tgsis.Surface(theirs, base.cells, vertex_properties=base.vertex_properties))
     conn.commit()  # DEFAULT changed it meanwhile
     mine = co.mesh.copy()

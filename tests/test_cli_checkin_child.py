@@ -14,7 +14,7 @@ from tests.test_cli_checkin import _surface
 from tgsis import formats
 from tgsis.cli import main
 
-ANN, BOB = 1, 100  # the vertex each moves
+ANN, BOB = 1, 2  # the vertex each moves: neighbours, so that the edits meet in one region (a conflict)
 
 
 @pytest.fixture

@@ -21,6 +21,7 @@ GRANT SELECT ON tgsis.object_locks TO PUBLIC;
 -- check the caller's version rights (tgsis.has_version_privilege); the
 -- helpers they share are theirs alone
 REVOKE ALL ON FUNCTION tgsis.next_working_revision(integer, integer[], integer), tgsis.lock_for_merge(text, text),
+                       tgsis.lock_version_pair(text, text),
                        tgsis.copy_object_state(text, text[], integer[], integer[], integer),
                        tgsis.update_shared_rows(tgsis.versioned_tables, text, text, text[], integer[], integer[], integer)
     FROM PUBLIC;

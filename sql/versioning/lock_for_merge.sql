@@ -1,8 +1,8 @@
 -- tgsis.lock_for_merge(version, action): lock a version and its parent for a merge or refresh; returns the version's row.
--- Parent first, then child: the order every merge and refresh takes. It waits
--- for writers of either (write_revision share-locks a version) and for another
--- merge or refresh of either. Then the conflicts are recomputed: TG302 names
--- the unsolved ones.
+-- Parent first, then child (tgsis.lock_version_pair): the order every merge
+-- and refresh takes, waiting for writers of either and for another merge or
+-- refresh of either. Then the conflicts are recomputed: TG302 names the
+-- unsolved ones.
 CREATE FUNCTION tgsis.lock_for_merge(p_version text, p_action text)
 RETURNS tgsis.versions
 LANGUAGE plpgsql
@@ -11,20 +11,7 @@ AS $$
 DECLARE
     v_child tgsis.versions;
 BEGIN
-    PERFORM tgsis.require_read_committed(p_action);
-    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    IF v_child.parentid IS NULL THEN
-        RAISE EXCEPTION 'version DEFAULT has no parent: nothing to %', p_action USING ERRCODE = 'TG100';
-    END IF;
-    PERFORM FROM tgsis.versions WHERE versionid = v_child.parentid FOR UPDATE;
-    SELECT * INTO v_child FROM tgsis.versions WHERE versionid = v_child.versionid FOR UPDATE;
-    IF NOT FOUND THEN
-        -- a merge with remove (or delete_version) committed while this one waited: go
-        -- no further with an empty row (a version re-created under the same name
-        -- meanwhile is another version, and not the one asked for)
-        RAISE EXCEPTION 'version % does not exist', quote_literal(p_version)
-            USING ERRCODE = 'TG200', DETAIL = format('It was removed while this %s waited for it.', p_action);
-    END IF;
+    v_child := tgsis.lock_version_pair(p_version, p_action);
     PERFORM tgsis.check_no_unsolved_conflicts(p_version, p_action);
     RETURN v_child;
 END

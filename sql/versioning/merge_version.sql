@@ -22,10 +22,7 @@ DECLARE
     v_written bigint := 0;
 BEGIN
     -- the right to merge into the parent, and to change (or delete) the version itself, whose base moves
-    PERFORM tgsis.require_version_privilege(parentid, 'merge', 'merge into'),
-            tgsis.require_version_privilege(versionid, CASE WHEN p_remove THEN 'delete' ELSE 'write' END,
-                                            CASE WHEN p_remove THEN 'delete' ELSE 'write in' END)
-       FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version) AND parentid IS NOT NULL;
+    PERFORM tgsis.require_merge_privileges(p_version, 'merge', coalesce(p_remove, false));
     IF coalesce(p_remove, false) AND EXISTS (SELECT FROM tgsis.versions WHERE parentid = tgsis.version_id(p_version)) THEN
         RAISE EXCEPTION 'version % has child versions and cannot be removed by the merge', quote_literal(p_version)
             USING ERRCODE = 'TG202', HINT = 'merge without removing it, or merge or delete its children first';

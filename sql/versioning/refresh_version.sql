@@ -21,7 +21,7 @@ DECLARE
     v_class   record;
     v_written bigint := 0;
 BEGIN
-    PERFORM tgsis.require_version_privilege(tgsis.version_id(p_version), 'write', 'refresh');
+    PERFORM tgsis.require_merge_privileges(p_version, 'refresh');
     v_child := tgsis.lock_for_merge(p_version, 'refresh');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
     PERFORM tgsis.notice_discards(p_version, 'refreshed');  -- what the solutions throw away, said before it is gone

@@ -126,7 +126,15 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.gmaps import GMapProblem, fetch_gmap, gmap_at, gmap_cells, gmap_check, insert_gmap
     from tgsis.db.instants import add_instant, delete_instant, fetch_series
-    from tgsis.db.merging import export_conflict, merge_regions_json, object_merge
+    from tgsis.db.merging import (
+        MergedObject,
+        MergeResult,
+        export_conflict,
+        merge_regions_json,
+        merge_version,
+        object_merge,
+        refresh_version,
+    )
     from tgsis.db.modelsets import (
         Model,
         ModelObject,
@@ -179,9 +187,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         in_version,
         list_versions,
         lock_objects,
-        merge_version,
         object_locks,
-        refresh_version,
         resolve_conflict,
         revisions,
         revoke_version,
@@ -211,8 +217,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
 _LAZY_MODULES = (
     "tgsis.db",
     "tgsis.db.regions",  # before versions: its region-aware find_conflicts is the public one
+    "tgsis.db.merging",  # before versions: the merges by region are the public merge_version, refresh_version
     "tgsis.db.versions",
-    "tgsis.db.merging",
     "tgsis.db.features",
     "tgsis.db.classes",
     "tgsis.db.checkin",
@@ -336,6 +342,8 @@ __all__ = [
     "conflict_discards",
     "merge_version",
     "object_merge",
+    "MergeResult",
+    "MergedObject",
     "export_conflict",
     "merge_regions_json",
     "refresh_version",

@@ -248,18 +248,26 @@ def extra_rows(
     ]
     parts: list[tuple[int, ...]] = []
     if "part" in mesh.cell_properties and not stores_part_column(fc):
-        values = mesh.cell_properties["part"]
         ids = cell_ids if cell_ids is not None else np.arange(mesh.n_cells, dtype=np.int64)
-        order = np.argsort(ids, kind="stable")
-        ids, values = ids[order], values[order]
-        firsts, _, _ = part_runs(values)
-        if len(firsts):
-            breaks = np.flatnonzero(np.diff(ids) != 1) + 1
-            starts = np.union1d(firsts, breaks).astype(np.int64)
-            ends = np.concatenate([starts[1:] - 1, [len(ids) - 1]]).astype(np.int64)
-            numbers = values[starts].astype(np.int64)
-            parts = [(geoid, int(f), int(last), int(n)) for f, last, n in zip(ids[starts], ids[ends], numbers)]
+        parts = part_rows(geoid, ids, mesh.cell_properties["part"])
     return list(atoms), parts
+
+
+def part_rows(geoid: int, cell_ids: npt.NDArray[np.int64], values: npt.NDArray[Any]) -> list[tuple[int, ...]]:
+    """The ``tgsis.part`` rows ``(geoid, firstid, lastid, part)`` of cells ``cell_ids`` (m,) with part numbers ``values`` (m,).
+
+    A run never spans a gap in the cell ids.
+    """
+    order = np.argsort(cell_ids, kind="stable")
+    ids, values = np.asarray(cell_ids)[order], np.asarray(values)[order]
+    firsts, _, _ = part_runs(values)
+    if not len(firsts):
+        return []
+    breaks = np.flatnonzero(np.diff(ids) != 1) + 1
+    starts = np.union1d(firsts, breaks).astype(np.int64)
+    ends = np.concatenate([starts[1:] - 1, [len(ids) - 1]]).astype(np.int64)
+    numbers = values[starts].astype(np.int64)
+    return [(geoid, int(f), int(last), int(n)) for f, last, n in zip(ids[starts], ids[ends], numbers)]
 
 
 def copy_extra_rows(

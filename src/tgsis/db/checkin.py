@@ -44,6 +44,7 @@ from psycopg import sql
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import delete_rows, update_geometry_row, write_state_rows
 from tgsis.db._static import (
     MEANING_COLUMNS,
     SIMPLEX,
@@ -76,6 +77,7 @@ from tgsis.errors import (
     NotFoundError,
     reraise,
 )
+from tgsis.merge3 import MeshState, three_way_merge
 from tgsis.mesh import Geotype, Mesh, mesh_class
 
 __all__ = [
@@ -283,15 +285,6 @@ def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, g
     return 0 if row is None or row[0] is None else int(row[0]) + 1
 
 
-def _delete_parts(conn: Conn, schema: str, table: str, key: str, geoid: int, idfield: str, ids: IntArray) -> int:
-    if len(ids) == 0:
-        return 0
-    row = conn.execute(
-        "SELECT tgsis.delete_object_rows(%s, %s, %s, %s, %s, %s)", (schema, table, key, [geoid], idfield, ids.tolist())
-    ).fetchone()
-    return int(row[0]) if row else 0
-
-
 @dataclass(frozen=True)
 class _Written:
     """Database ids of the edited mesh's vertices and cells after a save, and the row counts."""
@@ -364,7 +357,7 @@ def _write_diff(
             changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
         rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
         changes += int(changed.sum())
-        deleted += _delete_parts(
+        deleted += delete_rows(
             conn,
             fc.schema,
             protable,
@@ -386,8 +379,8 @@ def _write_diff(
             )
             inserted += len(rewrite)
 
-    deleted += _delete_parts(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
-    deleted += _delete_parts(
+    deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
+    deleted += delete_rows(
         conn,
         "tgsis",
         "vrtx",
@@ -499,16 +492,7 @@ def _update_rows(
     feature_values: Mapping[str, Any] | None,
 ) -> int:
     """Bring the geometry row (box, counts, name) and the feature row up to date; rows changed (0 when equal)."""
-    low, high = bounds.tolist() if bounds is not None else (None, None)
-    box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
-    changed = conn.execute(
-        sql.SQL(
-            "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s, geoname = %(name)s "
-            "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s "
-            "OR geoname IS DISTINCT FROM %(name)s)"
-        ).format(box=box),
-        {"low": low, "high": high, "n": edited.n_vertices, "m": edited.n_cells, "name": name, "g": geoid},
-    ).rowcount
+    changed = update_geometry_row(conn, geoid, bounds, edited.n_vertices, edited.n_cells, name=name, set_name=True)
     if feature_values:
         columns = list(feature_values)
         changed += conn.execute(
@@ -816,15 +800,21 @@ class CheckinResult:
     save : SaveResult
         The rows written (in ``save.version``).
     conflict : bool
-        True when the feature had changed since check-out and the edit went
-        into the new child version ``save.version`` (``on_conflict="child"``).
+        True when the feature had changed since check-out: the edit went into
+        the new child version ``save.version`` (``on_conflict="child"``), or
+        was merged by region with that change (``on_conflict="merge"``, ``merged``).
     checkout : Checkout or None
-        With ``keep=True``: a check-out of the new state, to go on editing.
+        With ``keep=True``: a check-out of the new state, to go on editing
+        (none after a merge: the stored state holds both edits, not the file's; check out again).
+    merged : bool
+        The edit and the change made since check-out were merged by region
+        (``on_conflict="merge"``); ``save`` counts the rows of the merged state written.
     """
 
     save: SaveResult
     conflict: bool = False
     checkout: Checkout | None = None
+    merged: bool = False
 
     @property
     def version(self) -> str:
@@ -948,7 +938,7 @@ def checkin(
     *,
     name: str | None = None,
     tolerance: float = 0.0,
-    on_conflict: Literal["raise", "child"] = "raise",
+    on_conflict: Literal["raise", "child", "merge"] = "raise",
     child_version: str | None = None,
     keep: bool = False,
     drop_extra_properties: bool = False,
@@ -987,6 +977,15 @@ def checkin(
         reports the feature, so that :func:`tgsis.resolve_conflict` decides
         what :func:`tgsis.merge_version` keeps (``parent``: theirs,
         ``child``: yours, ``manual``: a merged mesh you save in the child).
+        ``"merge"``: a three-way merge by region (:func:`tgsis.merge3.three_way_merge`)
+        of the checked-out base, the current state (read under the feature's
+        write lock) and the edit (its kept and moved rows with the base's ids,
+        new rows with new ids): when no region conflicts, the merged state is
+        written over the current one by an id-keyed difference in the
+        check-out's version; otherwise :class:`~tgsis.errors.CheckoutConflictError`
+        names the conflicting regions (ids, box) and nothing is written. The
+        mesh is merged: GOCAD atoms and parts, and the file's meaning
+        (coordinate system, colour, metadata) stay as currently stored.
     child_version : str, optional
         Name for that child version.
     keep : bool
@@ -1011,8 +1010,8 @@ def checkin(
     """
     token = checked_out.token
     mesh = _in_storage_convention(_mesh_arg(edited if edited is not None else checked_out.mesh))
-    if on_conflict not in ("raise", "child"):
-        raise InvalidInputError(f"on_conflict must be 'raise' or 'child', not {on_conflict!r}")
+    if on_conflict not in ("raise", "child", "merge"):
+        raise InvalidInputError(f"on_conflict must be 'raise', 'child' or 'merge', not {on_conflict!r}")
     with reraise(), conn.transaction():
         database = conn.execute("SELECT current_database(), current_setting('transaction_isolation')").fetchone()
         if database is not None and database[1] != "read committed":
@@ -1055,6 +1054,12 @@ def checkin(
                 _new_name(name, mesh, checked_out.base.mesh.name),
                 drop_extra_properties,
             )
+        elif on_conflict == "merge":
+            result = _checkin_merge(
+                conn, fc, checked_out, mesh, plan, properties, name, drop_extra_properties, conflict
+            )
+            restore_version_settings(conn, settings, local=True)
+            return CheckinResult(result, True, None, merged=True)
         else:
             result, written = _checkin_into_child(
                 conn, fc, checked_out, mesh, plan, properties, name, child_version, drop_extra_properties, str(conflict)
@@ -1150,6 +1155,121 @@ def _checkin_into_child(
         properties,
         _new_name(name, mesh, checked_out.base.mesh.name),
         drop_extra,
+    )
+
+
+def _mesh_state(fc: FeatureClass, mesh: Mesh, vertex_ids: IntArray, cell_ids: IntArray, what: str) -> MeshState:
+    """A mesh with the database ids of its rows as a :class:`MeshState`, with the class's property columns."""
+    by_alignment = {a: [p.name for p in fc.aligned(a)] for a in ("VERTEX", "CELL")}
+    return MeshState(
+        mesh.cell_size,
+        vertex_ids,
+        mesh.vertices,
+        cell_ids,
+        vertex_ids[mesh.cells] if mesh.n_cells else np.empty((0, mesh.cell_size), dtype=np.int64),
+        {n: np.asarray(mesh.vertex_properties[n]) for n in by_alignment["VERTEX"]},
+        {n: np.asarray(mesh.cell_properties[n]) for n in by_alignment["CELL"]},
+        what,
+    )
+
+
+def _checkin_merge(
+    conn: Conn,
+    fc: FeatureClass,
+    checked_out: Checkout,
+    mesh: Mesh,
+    plan: EditPlan,
+    properties: Mapping[str, Any] | None,
+    name: str | None,
+    drop_extra: bool,
+    conflict: psycopg.Error,
+) -> SaveResult:
+    """Merge the edit with the change made since check-out by region and write the result (caller's transaction).
+
+    ``check_unchanged`` holds the feature's write lock: the current state read
+    here stays current until the transaction ends.
+    """
+    token = checked_out.token
+    geoid = token.feature_id
+    refused = str(conflict).splitlines()[0]
+    try:
+        stored_name, _, _ = _feature_row(conn, fc, geoid)
+    except NotFoundError:
+        raise CheckoutConflictError(
+            f"{refused}; it was deleted since: there is nothing to merge the edit with", hint=_REDO_HINT
+        ) from None
+    cell_values = aligned_properties(fc, mesh, drop_extra, "the edited mesh")
+    feature_values = feature_columns(fc, properties)
+    check_feature_values(conn, fc, feature_values)
+    storage = Storage.of(conn, fc)
+    current = _stored_mesh(conn, fc, geoid, stored_name)
+    base = checked_out.base
+    # the edit's ids as the check-in by difference gives them: kept and moved rows keep the base's, new rows get
+    # ids above every id the object ever had (so never one the current state gives to something else)
+    table, idfield = SIMPLEX[fc.geotype]
+    vertex_ids = np.empty(mesh.n_vertices, dtype=np.int64)
+    kept_v = plan.vertex_map >= 0
+    vertex_ids[kept_v] = base.vertex_ids[plan.vertex_map[kept_v]]
+    vertex_ids[~kept_v] = _next_id(conn, storage, "vrtx", "geoid", "vrtxid", geoid) + np.arange(int((~kept_v).sum()))
+    cell_ids = np.empty(mesh.n_cells, dtype=np.int64)
+    kept_c = plan.cell_map >= 0
+    cell_ids[kept_c] = base.cell_ids[plan.cell_map[kept_c]]
+    cell_ids[~kept_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(int((~kept_c).sum()))
+    edit = mesh_class(fc.geotype)(
+        mesh.vertices,
+        mesh.cells,
+        vertex_properties={p.name: cell_values[p.name] for p in fc.aligned("VERTEX")},
+        cell_properties={p.name: cell_values[p.name] for p in fc.aligned("CELL")},
+    )  # the class's columns, cast as stored
+    what = f"feature {geoid} of class {fc.name}"
+    theirs = _mesh_state(fc, current.mesh, current.vertex_ids, current.cell_ids, f"{what} (stored now)")
+    merge = three_way_merge(
+        _mesh_state(fc, base.mesh, base.vertex_ids, base.cell_ids, f"{what} (checked out)"),
+        theirs,
+        _mesh_state(fc, edit, vertex_ids, cell_ids, f"{what} (edited)"),
+    )
+    if merge.conflicts:
+        described = "; ".join(
+            f"region {r.index}: stored-now vertices {r.parent_vertex_ids[:10].tolist()}, edited vertices "
+            f"{r.child_vertex_ids[:10].tolist()}, box {r.bounds[0].tolist()}-{r.bounds[1].tolist()}"
+            for r in merge.conflicts[:5]
+        )
+        raise CheckoutConflictError(
+            f"{refused}; the edit and the change made since check-out meet in {len(merge.conflicts)} region(s) "
+            f"where they differ: {described}; nothing was written",
+            hint='check in into a new child version (on_conflict="child", tgsis checkin --on-conflict child)',
+        )
+    assert merge.merged is not None
+    deleted, inserted, updated = write_state_rows(conn, fc, geoid, theirs, merge.merged.state)
+    merged_mesh = merge.merged.state.to_mesh()
+    updated += _update_rows(
+        conn,
+        fc,
+        geoid,
+        merged_mesh,
+        merged_mesh.bounds() if merged_mesh.n_vertices else None,
+        _new_name(name, mesh, stored_name),
+        feature_values,
+    )
+    version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
+    log.warning(
+        "feature %d changed in %s since check-out: the edit was merged with that change by region (%d regions)",
+        geoid,
+        token.version,
+        len(merge.regions),
+    )
+    return SaveResult(
+        geoid,
+        version,
+        plan.diff,
+        deleted,
+        inserted,
+        updated,
+        0,
+        len(plan.moved_vertices),
+        len(plan.removed_cells),
+        len(plan.added_cells),
+        len(plan.diff.added_cells) - len(plan.added_cells),
     )
 
 

@@ -18,19 +18,34 @@ the vertex and cell property values, and handed to
 The three reads see one snapshot (a read-only repeatable-read transaction), so a writer
 committing meanwhile cannot mix states. The session's version settings are
 moved for the reads (``SET LOCAL``) and put back.
+
+The merges that write — :func:`merge_version` and :func:`refresh_version`,
+the public ``tgsis.merge_version`` / ``tgsis.refresh_version`` — merge such
+objects by region in one READ COMMITTED transaction: the versions are
+locked (``tgsis.lock_for_region_merge``: the rights and locks of the SQL
+merge, without its refusal of unsolved conflicts), each unsolved conflict
+that is a model-1 mesh is read in that locked transaction and merged; a
+merge whose regions all merge by themselves (or have recorded solutions) is
+written into the version's working revision by an id-keyed difference
+(:func:`tgsis.db._state_write.write_state_difference`) and recorded
+``manual``; then the SQL ``tgsis.merge_version`` / ``tgsis.refresh_version``
+run in the same transaction and refuse (TG302) what is still unsolved.
 """
 
 from __future__ import annotations
 
+import importlib
 import json
+import logging
 import os
 import re
 import shutil
 import tempfile
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -38,16 +53,35 @@ import psycopg
 
 from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import write_state_difference
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import one_snapshot
 from tgsis.db.versions import show_name
-from tgsis.errors import InvalidInputError, NotFoundError, reraise
-from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
+from tgsis.errors import (
+    InvalidInputError,
+    InvalidMergeError,
+    MissingPrivilegeError,
+    NotFoundError,
+    UnsolvedConflictsError,
+    VersioningError,
+    reraise,
+)
+from tgsis.merge3 import MeshMerge, MeshState, RegionDiscard, Solution, apply_solutions, three_way_merge
 from tgsis.mesh import Geotype, Mesh, mesh_class
 
-__all__ = ["export_conflict", "merge_regions_json", "object_merge"]
+__all__ = [
+    "MergeResult",
+    "MergedObject",
+    "export_conflict",
+    "merge_regions_json",
+    "merge_version",
+    "object_merge",
+    "refresh_version",
+]
 
 Conn = psycopg.Connection[Any]
+log = logging.getLogger(__name__)
 
 
 @contextmanager
@@ -403,3 +437,291 @@ def _move_into(scratch: Path, target: Path, names: list[str], overwrite: bool) -
         _refuse_existing(target, names)
         raise
     return placed
+
+
+# --------------------------------------------------------------------------- merges that write: by region
+
+
+@dataclass(frozen=True)
+class MergedObject:
+    """One object a merge or refresh merged by region (written into the version, then recorded ``manual``).
+
+    Attributes
+    ----------
+    objectclass, objectkey : str
+        ``feature`` and the feature id as text (as ``tgsis.conflicts`` names it).
+    how : {"automatic", "solutions"}
+        Every region merged by itself, or some conflicting regions took their recorded solutions.
+    regions : int
+        Regions either side changed.
+    solved : int
+        Conflicting regions solved by a recorded solution (0 for ``automatic``).
+    rows_written : int
+        Rows the merged mesh wrote into the version (the id-keyed difference from its state).
+    discards : tuple of RegionDiscard
+        What the solutions threw away of one side's edit (empty for ``automatic``).
+    """
+
+    objectclass: str
+    objectkey: str
+    how: Literal["automatic", "solutions"]
+    regions: int
+    solved: int
+    rows_written: int
+    discards: tuple[RegionDiscard, ...] = ()
+
+
+class MergeResult(int):
+    """The rows a merge or refresh wrote (an ``int``, as before), with the objects it merged by region.
+
+    The number counts the rows the SQL merge or refresh wrote plus the rows
+    written into the version by the merges by region.
+
+    Attributes
+    ----------
+    objects : tuple of MergedObject
+    """
+
+    objects: tuple[MergedObject, ...]
+
+    def __new__(cls, rows: int, objects: tuple[MergedObject, ...] = ()) -> MergeResult:
+        result = super().__new__(cls, rows)
+        result.objects = objects
+        return result
+
+    def __repr__(self) -> str:
+        return f"MergeResult({int(self)}, objects={self.objects!r})"
+
+    def __str__(self) -> str:
+        return str(int(self))  # the number, as before (f-strings, the command line)
+
+
+def _recorded_solutions(conn: Conn, version: str, key: str, merge: MeshMerge) -> dict[int, Solution]:
+    """The recorded solutions of the merge's conflicting regions (``tgsis.db.regions.region_solutions``).
+
+    Only solutions of regions that conflict in this very merge count (the
+    store hands back those recorded for the same marks and regions). Without
+    the region store in this build, none.
+    """
+    if not merge.conflicts:
+        return {}
+    try:
+        regions = importlib.import_module("tgsis.db.regions")
+    except ModuleNotFoundError:  # the region store is not part of this build: only automatic merges
+        return {}
+    recorded: Mapping[int, Any] = regions.region_solutions(conn, version, "feature", key, merge)
+    conflicting = {r.index for r in merge.conflicts}
+    return {
+        int(i): s
+        for i, s in recorded.items()
+        if int(i) in conflicting and (isinstance(s, MeshState) or s in ("parent", "child", "base"))
+    }
+
+
+def _unsolved_reason(merge: MeshMerge, solutions: Mapping[int, Solution]) -> str:
+    """Why a merge with conflicting regions is not written: the regions without a solution, with their boxes."""
+    unsolved = [r for r in merge.conflicts if r.index not in solutions]
+    parts = []
+    for r in unsolved[:5]:
+        low, high = r.bounds.tolist()
+        parts.append(
+            f"region {r.index} unsolved (changed on both sides, differently: parent vertices "
+            f"{_ids(r.parent_vertex_ids)}, child vertices {_ids(r.child_vertex_ids)}; box "
+            f"{_point(low)}-{_point(high)})"
+        )
+    more = f"; {len(unsolved) - 5} more regions unsolved" if len(unsolved) > 5 else ""
+    return "; ".join(parts) + more
+
+
+def _in_quotes(text: str) -> str:
+    """``text`` as it goes between the quotes of an SQL string literal (for a hint a psql user can paste)."""
+    return text.replace("'", "''")
+
+
+def _ids(ids: npt.NDArray[np.int64]) -> str:
+    values = ids.tolist()
+    return "[" + ", ".join(str(v) for v in values[:8]) + (", ...]" if len(values) > 8 else "]")
+
+
+def _point(xyz: list[float]) -> str:
+    return "(" + ", ".join(f"{v:.6g}" for v in xyz) + ")"
+
+
+def _discard_text(d: RegionDiscard) -> str:
+    return (
+        f"region {d.region} solved {d.solution} discards the {d.side}'s edit there: {d.vertices} vertices, "
+        f"{d.cells} cells, largest displacement {d.max_displacement:.6g}"
+    )
+
+
+def _merge_object(
+    conn: Conn, version: str, key: str, reasons: dict[str, str], may_write: list[bool | None]
+) -> MergedObject | None:
+    """Merge one conflicting feature by region into the version (locked transaction); None with the reason when not."""
+    try:
+        inputs = read_merge_states(conn, version, int(key))
+    except (InvalidInputError, VersioningError) as exc:  # not model 1, deleted on one side, attributes on both
+        reasons[key] = exc.message
+        return None
+    states = inputs.states
+    merge = three_way_merge(states["base"], states["parent"], states["child"])
+    solutions = _recorded_solutions(conn, version, key, merge)
+    if any(r.index not in solutions for r in merge.conflicts):
+        reasons[key] = _unsolved_reason(merge, solutions)
+        return None
+    try:
+        resolved = merge.merged if merge.merged is not None and not solutions else apply_solutions(merge, solutions)
+    except InvalidMergeError as exc:
+        reasons[key] = f"invalid merge: {exc.message}"
+        return None
+    for discard in resolved.discards:  # said before it is written
+        log.warning("feature %s of version %s: %s", key, show_name(version), _discard_text(discard))
+    if may_write[0] is None:
+        may_write[0] = bool(
+            conn.execute("SELECT tgsis.has_version_privilege(%s, 'write')", (version,)).fetchone()[0]  # type: ignore[index]
+        )
+    if not may_write[0]:
+        role = conn.execute("SELECT tgsis.calling_role()").fetchone()[0]  # type: ignore[index]
+        raise MissingPrivilegeError(
+            f"role {role} may not write in version {show_name(version)}: merging feature {key} by region writes the "
+            "merged mesh into the version first, then merges it",
+            hint=f"the owner or a tgsis_admin can run SELECT tgsis.grant_version('{_in_quotes(version)}', 'write', "
+            f"'{_in_quotes(str(role))}'); else tgsis.resolve_conflict solves it as a whole object (parent, child or "
+            "manual)",
+        )
+    settings = read_version_settings(conn)
+    conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, for this transaction
+    try:
+        written = write_state_difference(conn, inputs.feature_class, int(key), states["child"], resolved.state)
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:  # else the rollback puts them back
+            restore_version_settings(conn, settings, local=True)
+    conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
+    how: Literal["automatic", "solutions"] = "solutions" if solutions else "automatic"
+    log.info(
+        "feature %s of version %s merged by region (%s, %d regions): %d rows written into the version",
+        key,
+        show_name(version),
+        how,
+        len(merge.regions),
+        written,
+    )
+    return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, resolved.discards)
+
+
+def _merge_by_region(
+    conn: Conn, version: str, action: Literal["merge", "refresh"], remove: bool, reasons: dict[str, str]
+) -> tuple[MergedObject, ...]:
+    """Lock (``tgsis.lock_for_region_merge``), then merge every unsolved conflicting mesh that merges by region."""
+    conn.execute("SELECT FROM tgsis.lock_for_region_merge(%s, %s, %s)", (version, action, remove))
+    unsolved = conn.execute(
+        "SELECT objectkey FROM tgsis.find_conflicts(%s) WHERE solution = 'unsolved' AND objectclass = 'feature' "
+        "ORDER BY objectkey::bigint",
+        (version,),
+    ).fetchall()
+    may_write: list[bool | None] = [None]
+    merged = []
+    for (key,) in unsolved:
+        done = _merge_object(conn, version, str(key), reasons, may_write)
+        if done is not None:
+            merged.append(done)
+    return tuple(merged)
+
+
+def _refusal(exc: UnsolvedConflictsError, reasons: Mapping[str, str]) -> UnsolvedConflictsError:
+    """The SQL refusal (TG302) with, per feature it names, why it does not merge by region."""
+    if not reasons:
+        return exc
+    why = "; ".join(f"feature {k}: {r}" for k, r in sorted(reasons.items(), key=lambda kv: int(kv[0])))
+    return UnsolvedConflictsError(
+        f"{exc.message}. Not merged by region (nothing was written): {why}",
+        sqlstate=exc.sqlstate,
+        detail=exc.detail,
+        hint=exc.hint,
+    )
+
+
+@checked
+def merge_version(conn: Conn, version: str, *, remove: bool = False) -> MergeResult:
+    """Apply ``version``'s changes to its parent in one transaction, merging conflicting meshes by region.
+
+    In one READ COMMITTED transaction: the version and its parent are locked
+    (parent first, waiting for their writers and for other merges); every
+    unsolved conflict that is a model-1 feature (point set, line set, surface,
+    solid) is merged three ways by region (:func:`tgsis.merge3.three_way_merge`,
+    docs/merge.md). When all its regions merge by themselves (one side
+    changed them, or both made the same change) or the conflicting ones have
+    recorded solutions, the merged mesh is written into the version by
+    difference and the conflict recorded ``manual``; then the SQL
+    ``tgsis.merge_version`` merges the version as before. Anything still
+    unsolved refuses the whole merge and nothing is written.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        Idle, or in a READ COMMITTED transaction.
+    version : str
+        A version other than DEFAULT.
+    remove : bool
+        Delete the version after the merge (else it goes on from the merged state).
+
+    Returns
+    -------
+    MergeResult
+        An ``int``: the rows written (the merges by region into the version
+        and the merge into the parent); ``objects``: the objects merged by region.
+
+    Raises
+    ------
+    UnsolvedConflictsError
+        Objects changed on both sides that do not merge by region and have no
+        recorded solution; the message says per object why (regions unsolved
+        with their ids and box, an invalid merge, a deletion, ...).
+    MissingPrivilegeError
+        The role may not merge into the parent, or change (with ``remove``:
+        delete) the version; a merge by region also needs the right to write
+        in the version (the merged mesh is written there first), even with
+        ``remove``; or the role may not change or read the class.
+    """
+    reasons: dict[str, str] = {}
+    try:
+        with reraise(), conn.transaction():
+            objects = _merge_by_region(conn, version, "merge", remove, reasons)
+            row = conn.execute("SELECT tgsis.merge_version(%s, %s)", (version, remove)).fetchone()
+    except UnsolvedConflictsError as exc:
+        raise _refusal(exc, reasons) from exc
+    assert row is not None
+    return MergeResult(int(row[0]) + sum(o.rows_written for o in objects), objects)
+
+
+@checked
+def refresh_version(conn: Conn, version: str) -> MergeResult:
+    """Bring the parent's changes since ``version``'s base into it in one transaction, merging meshes by region.
+
+    As :func:`merge_version`: conflicting model-1 meshes whose regions all
+    merge by themselves (or have recorded solutions) are merged into the
+    version and recorded ``manual`` in the locked transaction, then the SQL
+    ``tgsis.refresh_version`` moves the version's base.
+
+    Returns
+    -------
+    MergeResult
+        An ``int``: the rows written; ``objects``: the objects merged by region.
+
+    Raises
+    ------
+    UnsolvedConflictsError
+        Objects changed on both sides that do not merge by region and have
+        no recorded solution; the message says per object why.
+    MissingPrivilegeError
+        The role may not write in the version, or change or read the class.
+    """
+    reasons: dict[str, str] = {}
+    try:
+        with reraise(), conn.transaction():
+            objects = _merge_by_region(conn, version, "refresh", False, reasons)
+            row = conn.execute("SELECT tgsis.refresh_version(%s)", (version,)).fetchone()
+    except UnsolvedConflictsError as exc:
+        raise _refusal(exc, reasons) from exc
+    assert row is not None
+    return MergeResult(int(row[0]) + sum(o.rows_written for o in objects), objects)

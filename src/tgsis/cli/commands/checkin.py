@@ -98,7 +98,7 @@ def cmd_checkin(args: argparse.Namespace) -> int:
             f"tgsis version resolve {child} feature {save.feature_id} parent|child|manual",
             f"tgsis version merge {child} --remove",
         ]
-        if result.conflict
+        if result.conflict and not result.merged
         else []
     )
     if args.png and isinstance(edited, Surface):
@@ -139,7 +139,13 @@ def checkin_text(args: argparse.Namespace, checked: CheckedIn) -> None:
     moved = save.vertices_moved
     out(
         f"checked in feature {save.feature_id} into version {V.show_name(save.version)}"
-        + (" (a new child version: the feature had changed since check-out)" if result.conflict else "")
+        + (
+            " (merged by region with the change made since check-out; check out again to go on editing)"
+            if result.merged
+            else " (a new child version: the feature had changed since check-out)"
+            if result.conflict
+            else ""
+        )
     )
     out(
         f"  vertices: {counts['vertices_kept']} kept, {moved} moved, "
@@ -166,6 +172,7 @@ def checkin_json(checked: CheckedIn) -> dict[str, Any]:
         "feature_id": save.feature_id,
         "version": save.version,
         "conflict": result.conflict,
+        "merged": result.merged,
         "vertices": {
             "kept": counts["vertices_kept"],
             "moved": moved,
@@ -226,9 +233,10 @@ def add_checkin_parser(commands: Any) -> None:
     )
     ci.add_argument(
         "--on-conflict",
-        choices=("raise", "child"),
+        choices=("raise", "child", "merge"),
         default="raise",
-        help="when the feature changed since check-out: fail (default) or write the edit into a new child version",
+        help="when the feature changed since check-out: fail (default), write the edit into a new child version, "
+        "or merge it with that change by region (refused, nothing written, where both changed the same part)",
     )
     ci.add_argument("--child-version", metavar="NAME", help="name of that child version (default checkin_ID)")
     ci.add_argument("--name", help="new feature name")

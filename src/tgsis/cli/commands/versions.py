@@ -28,7 +28,14 @@ from tgsis.db.features import (
     fetch_feature,
 )
 from tgsis.db.inspect import revision_exists
-from tgsis.db.merging import export_conflict, merge_regions_json, object_merge
+from tgsis.db.merging import (
+    MergeResult,
+    export_conflict,
+    merge_regions_json,
+    merge_version,
+    object_merge,
+    refresh_version,
+)
 from tgsis.errors import (
     InvalidInputError,
     MissingPrivilegeError,
@@ -541,15 +548,30 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | No
         out(f"  {objectclass} {objectkey} ({solution}): discarded {V.describe_discards(discards)}")
 
 
+def _say_merged_by_region(result: MergeResult) -> None:
+    for o in result.objects:
+        how = "every region merged by itself" if o.how == "automatic" else f"{o.solved} region(s) by their solutions"
+        out(
+            f"  {o.objectclass} {o.objectkey} merged by region ({o.regions} region(s), {how}): "
+            f"{o.rows_written} row(s) written into the version"
+        )
+        for d in o.discards:
+            out(
+                f"    region {d.region} ({d.solution}) discarded the {d.side}'s edit there: {d.vertices} vertices, "
+                f"{d.cells} cells, largest displacement {d.max_displacement:.6g}"
+            )
+
+
 def cmd_version_merge(args: argparse.Namespace) -> int:
     with connection(args) as conn, busy(f"merging {V.show_name(args.name)}"), conn.transaction():
         # what the recorded solutions throw away, read in the merge's transaction (a change since unsolves them)
         lost = _recorded_discards(conn, args.name)
-        written = V.merge_version(conn, args.name, remove=args.remove)
+        written = merge_version(conn, args.name, remove=args.remove)
     out(
         f"merged {V.show_name(args.name)} into its parent: {written} row(s) written"
         + ("; version removed" if args.remove else "")
     )
+    _say_merged_by_region(written)
     _say_discarded(lost)
     if args.remove and remembered_version(target_key(args)) == args.name:
         remember_version(target_key(args), None)
@@ -559,8 +581,9 @@ def cmd_version_merge(args: argparse.Namespace) -> int:
 def cmd_version_refresh(args: argparse.Namespace) -> int:
     with connection(args) as conn, conn.transaction():
         lost = _recorded_discards(conn, args.name)
-        written = V.refresh_version(conn, args.name)
+        written = refresh_version(conn, args.name)
     out(f"refreshed {V.show_name(args.name)} from its parent: {written} row(s) written")
+    _say_merged_by_region(written)
     _say_discarded(lost)
     return 0
 

@@ -1,0 +1,142 @@
+"""tgsis.checkin(..., on_conflict="merge"): a check-in of a feature changed since check-out merges by region (issue 39)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
+from tgsis.cli import main
+
+Conn = psycopg.Connection[Any]
+
+NORTH = np.arange(0, 2 * SIDE)
+SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)
+
+
+@pytest.fixture
+def fault(conn: Conn) -> int:
+    return make_fault(conn)
+
+
+def _tables(conn: Conn) -> dict[str, list[Any]]:
+    tables = ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", "tgsis.versions")
+    state = {t: conn.execute(f"SELECT * FROM {t} ORDER BY 1, 2, 3").fetchall() for t in tables}
+    conn.commit()
+    return state
+
+
+def test_disjoint_edits_since_check_out_merge_by_region(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 1.25, -3.5))  # another writer, after the check-out
+    conn.commit()
+    mine = co.mesh.copy()
+    for axis, shift in enumerate((0.5, 0.0, 2.75)):
+        mine.vertices[NORTH, axis] = mine.vertices[NORTH, axis] + shift
+    with pytest.raises(tgsis.CheckoutConflictError):  # the default still refuses
+        tgsis.checkin(conn, co, mine)
+    conn.rollback()
+    result = tgsis.checkin(conn, co, mine, on_conflict="merge")
+    conn.commit()
+    assert result.conflict and result.version == "DEFAULT"
+    expected = curved_surface().vertices.copy()
+    moved(expected, SOUTH, (0.0, 1.25, -3.5))
+    moved(expected, NORTH, (0.5, 0.0, 2.75))
+    ids, xyz, cells, _ = stored_state(conn, "DEFAULT", fault)
+    np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))  # ids kept
+    assert xyz.tobytes() == expected.tobytes()
+    assert cells == {(i, *map(int, c)) for i, c in enumerate(curved_surface().cells)}
+    assert result.save.rows_written > 0
+
+
+def test_a_new_vertex_and_cells_of_the_edit_get_new_ids(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -1.0))
+    conn.commit()
+    base = co.mesh
+    # split the first triangle (cell 0: a, b, d) at its centroid into three
+    a, b, d = (int(v) for v in base.cells[0])
+    centroid = base.vertices[[a, b, d]].mean(axis=0)
+    vertices = np.vstack([base.vertices, centroid])
+    c = len(base.vertices)
+    cells = np.vstack([base.cells[1:], [[a, b, c], [b, d, c], [d, a, c]]])
+    porosity = np.append(base.vertex_properties["porosity"], 0.2)
+    facies = np.append(base.cell_properties["facies"][1:], [1, 1, 1]).astype(np.int32)
+    mine = tgsis.Surface(vertices, cells, vertex_properties={"porosity": porosity}, cell_properties={"facies": facies})
+    result = tgsis.checkin(conn, co, mine, on_conflict="merge")
+    conn.commit()
+    assert result.conflict
+    ids, xyz, stored_cells, porosities = stored_state(conn, "DEFAULT", fault)
+    assert len(ids) == SIDE * SIDE + 1 and ids[-1] >= SIDE * SIDE
+    assert xyz[-1].tobytes() == centroid.tobytes()
+    assert porosities[int(ids[-1])] == 0.2
+    expected = curved_surface().vertices.copy()
+    moved(expected, SOUTH, (0.0, 0.0, -1.0))
+    assert xyz[:-1].tobytes() == expected.tobytes()
+    new = int(ids[-1])
+    triangles = {tuple(sorted(c[1:])) for c in stored_cells}
+    assert {tuple(sorted(t)) for t in ((a, b, new), (b, d, new), (d, a, new))} <= triangles
+    assert tuple(sorted((a, b, d))) not in triangles
+    assert len(stored_cells) == len(curved_surface().cells) + 2
+
+
+def test_overlapping_edits_refuse_naming_the_regions_and_nothing_is_written(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, [52, 53], (0.0, 0.0, -4.0))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[[50, 51, 52], 2] += 5.0
+    before = _tables(conn)
+    with pytest.raises(tgsis.CheckoutConflictError, match=r"region 0: .*vertices") as caught:
+        tgsis.checkin(conn, co, mine, on_conflict="merge")
+    conn.rollback()
+    assert "52" in str(caught.value) and "box" in str(caught.value)
+    assert _tables(conn) == before
+
+
+def test_unchanged_since_check_out_is_a_plain_check_in(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 1.0
+    result = tgsis.checkin(conn, co, mine, on_conflict="merge")
+    conn.commit()
+    assert not result.conflict
+    expected = curved_surface().vertices.copy()
+    moved(expected, NORTH, (0.0, 0.0, 1.0))
+    assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == expected.tobytes()
+
+
+def test_bad_on_conflict_names_merge(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    with pytest.raises(tgsis.InvalidInputError, match="'merge'"):
+        tgsis.checkin(conn, co, co.mesh, on_conflict="nope")  # type: ignore[arg-type]
+
+
+def test_the_command_line_checks_in_with_on_conflict_merge(
+    conn: Conn, fault: int, db_dsn: str, tmp_path: Any, monkeypatch: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
+    monkeypatch.delenv("TGSIS_VERSION", raising=False)
+    path = tmp_path / "fault.vtu"
+    assert main(["--dsn", db_dsn, "checkout", str(fault), str(path)]) == 0
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -2.0))
+    conn.commit()
+    mesh = tgsis.formats.read_one(path)
+    mesh.vertices[NORTH, 2] += 3.0
+    tgsis.formats.write(mesh, path)
+    capsys.readouterr()
+    assert main(["--dsn", db_dsn, "checkin", str(path), "--on-conflict", "merge"]) == 0
+    assert "merged" in capsys.readouterr().out
+    expected = curved_surface().vertices.copy()
+    moved(expected, SOUTH, (0.0, 0.0, -2.0))
+    moved(expected, NORTH, (0.0, 0.0, 3.0))
+    np.testing.assert_allclose(stored_state(conn, "DEFAULT", fault)[1], expected, rtol=0, atol=1e-9)

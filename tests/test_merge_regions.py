@@ -1,0 +1,351 @@
+"""tgsis.merge_version by region: disjoint edits of one mesh on both sides merge into the union (issue 39)."""
+
+from __future__ import annotations
+
+import itertools
+import time
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import tgsis
+from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
+from tests.roles import login_roles
+from tests.sessions import Background, connect, wait_until_blocked
+from tgsis.db import merging
+
+Conn = psycopg.Connection[Any]
+
+NORTH = np.arange(0, 2 * SIDE)  # the first two rows of the grid
+SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)  # the last two
+CHILD_SHIFT = (0.125, -3.3, 7.77)
+PARENT_SHIFT = (-1.1, 0.0, -2.9)
+
+
+@pytest.fixture
+def fault(conn: Conn) -> int:
+    return make_fault(conn)
+
+
+def _union() -> Any:
+    expected = curved_surface().vertices.copy()
+    moved(expected, NORTH, CHILD_SHIFT)
+    moved(expected, SOUTH, PARENT_SHIFT)
+    return expected
+
+
+def _cells() -> set[tuple[int, ...]]:
+    cells = curved_surface().cells
+    return {(i, *map(int, c)) for i, c in enumerate(cells)}
+
+
+def _storage(conn: Conn) -> dict[str, list[Any]]:
+    """Every row version of the model tables and the version catalog: what 'nothing written' compares."""
+    tables = ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", "tgsis.versions", "tgsis.conflicts")
+    state = {t: conn.execute(f"SELECT * FROM {t} ORDER BY 1, 2, 3").fetchall() for t in tables}
+    conn.commit()
+    return state
+
+
+def test_disjoint_edits_merge_into_the_union_bit_for_bit(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert isinstance(result, merging.MergeResult)
+    assert [(o.objectkey, o.how) for o in result.objects] == [(str(fault), "automatic")]
+    assert int(result) > 0 and result.objects[0].rows_written > 0
+    for version in ("DEFAULT", "e1"):  # the version goes on from the merged state
+        ids, xyz, cells, porosity = stored_state(conn, version, fault)
+        np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
+        assert xyz.tobytes() == _union().tobytes()
+        assert cells == _cells()
+        assert np.array(list(porosity.values())).tobytes() == curved_surface().vertex_properties["porosity"].tobytes()
+    assert tgsis.find_conflicts(conn, "e1") == []
+
+
+def test_a_psql_user_sees_the_merged_object_and_its_box(conn: Conn, fault: int, db_dsn: str) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    with psycopg.connect(db_dsn, autocommit=True) as psql:
+        psql.execute("SELECT tgsis.goto_version('DEFAULT')")
+        rows = psql.execute("SELECT x, y, z FROM tgsis.vrtx WHERE geoid = %s ORDER BY vrtxid", (fault,)).fetchall()
+        assert np.array(rows).tobytes() == _union().tobytes()
+        box = psql.execute(
+            "SELECT cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3), nvrtx FROM tgsis.geometry WHERE geoid = %s",
+            (fault,),
+        ).fetchone()
+    union = _union()
+    assert box == (union[:, 2].min(), union[:, 2].max(), SIDE * SIDE)
+
+
+def test_identical_edits_on_both_sides_merge(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, [60, 61], (0.0, 0.0, 5.5))
+    move(conn, "DEFAULT", fault, [60, 61], (0.0, 0.0, 5.5))
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    expected = curved_surface().vertices.copy()
+    moved(expected, [60, 61], (0.0, 0.0, 5.5))
+    assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == expected.tobytes()
+
+
+def test_rows_written_are_proportional_to_the_change(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, [3, 4, 5], CHILD_SHIFT)  # three vertices in the child
+    move(conn, "DEFAULT", fault, [140], PARENT_SHIFT)  # one in the parent
+    conn.commit()
+    parent_rev, child_rev = conn.execute(
+        "SELECT p.workingrevision, c.workingrevision FROM tgsis.versions c JOIN tgsis.versions p "
+        "ON p.versionid = c.parentid WHERE c.name = 'e1'"
+    ).fetchone()  # type: ignore[misc]
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+
+    def added(table: str, revision: int) -> int:
+        return int(conn.execute(f"SELECT count(*) FROM {table} WHERE revision = %s", (revision,)).fetchone()[0])  # type: ignore[index]
+
+    # the parent's edit went into the child: one vertex row version; the child's into the parent: three
+    assert added("tgsis.vrtx_ver", child_rev) == 3 + 1
+    assert added("tgsis.vrtx_ver", parent_rev) == 1 + 3
+    assert added("tgsis.trgl_ver", parent_rev) == 0
+    assert added("tgsis.trgl_ver", child_rev) == 0
+    notes = {
+        r[0]
+        for r in conn.execute(
+            "SELECT revision FROM tgsis.revision_objects WHERE schemaname = 'tgsis' AND tablename = 'vrtx' "
+            "AND objectkey = %s",
+            (str(fault),),
+        ).fetchall()
+    }
+    assert {parent_rev, child_rev} <= notes  # the revision notes of the merge's writes are kept
+
+
+def test_a_region_conflict_refuses_naming_the_region_and_leaves_everything_unchanged(conn: Conn, fault: int) -> None:
+    other = tgsis.db.features.insert_feature(conn, "faults", curved_surface())  # merges by region on its own
+    conn.commit()
+    tgsis.delete_version(conn, "e1")
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", other, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", other, SOUTH, PARENT_SHIFT)
+    move(conn, "e1", fault, [50, 51, 52], (0.0, 0.0, 5.0))  # overlaps the parent's edit at 52
+    move(conn, "DEFAULT", fault, [52, 53], (0.0, 0.0, -4.0))
+    conn.commit()
+    before = _storage(conn)
+    with pytest.raises(tgsis.UnsolvedConflictsError) as caught:
+        tgsis.merge_version(conn, "e1")
+    message = str(caught.value)
+    assert f"feature {fault}" in message and "region 0" in message and "unsolved" in message
+    assert f"feature {other}:" not in message  # the other merged by region (then rolled back with the rest)
+    assert _storage(conn) == before
+
+
+def test_merge_after_refresh_equals_the_merge(conn: Conn, fault: int) -> None:
+    tgsis.delete_version(conn, "e1")
+    for name in ("p1", "p2"):
+        tgsis.create_version(conn, name)
+    conn.commit()
+    for parent, child in (("p1", "c1"), ("p2", "c2")):
+        tgsis.create_version(conn, child, parent=parent)
+        conn.commit()
+        move(conn, child, fault, NORTH, CHILD_SHIFT)
+        move(conn, parent, fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    tgsis.refresh_version(conn, "c1")
+    tgsis.merge_version(conn, "c1")
+    tgsis.merge_version(conn, "c2")
+    first, second = stored_state(conn, "p1", fault), stored_state(conn, "p2", fault)
+    assert first[1].tobytes() == second[1].tobytes() == _union().tobytes()
+    assert first[2] == second[2] == _cells()
+    assert stored_state(conn, "c1", fault)[1].tobytes() == stored_state(conn, "c2", fault)[1].tobytes()
+
+
+_pairs = itertools.count()
+_rows = st.lists(st.integers(0, SIDE - 1), min_size=1, max_size=8, unique=True)
+_shift = st.tuples(*(st.floats(-50.0, 50.0, allow_nan=False, allow_subnormal=False) for _ in range(3)))
+
+
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    child_rows=st.lists(st.integers(0, 3), min_size=1, max_size=3, unique=True),
+    parent_rows=st.lists(st.integers(7, SIDE - 1), min_size=1, max_size=4, unique=True),
+    child_cols=_rows,
+    parent_cols=_rows,
+    child_shift=_shift,
+    parent_shift=_shift,
+)
+def test_random_disjoint_edits_merge_into_exactly_the_union(
+    conn: Conn,
+    fault: int,
+    child_rows: list[int],
+    parent_rows: list[int],
+    child_cols: list[int],
+    parent_cols: list[int],
+    child_shift: tuple[float, float, float],
+    parent_shift: tuple[float, float, float],
+) -> None:
+    # rows 0-3 and 7-11: the one-ring margins (a row either side) never meet
+    n = next(_pairs)
+    parent, child = f"hp{n}", f"hc{n}"
+    tgsis.create_version(conn, parent)
+    conn.commit()
+    tgsis.create_version(conn, child, parent=parent)
+    conn.commit()
+    start = stored_state(conn, parent, fault)[1]
+    child_ids = [r * SIDE + c for r in child_rows for c in child_cols]
+    parent_ids = [r * SIDE + c for r in parent_rows for c in parent_cols]
+    move(conn, child, fault, child_ids, child_shift)
+    move(conn, parent, fault, parent_ids, parent_shift)
+    conn.commit()
+    result = tgsis.merge_version(conn, child, remove=True)
+    expected = start.copy()
+    moved(expected, child_ids, child_shift)
+    moved(expected, parent_ids, parent_shift)
+    assert [o.how for o in result.objects] == ["automatic"]
+    ids, xyz, cells, _ = stored_state(conn, parent, fault)
+    np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
+    assert xyz.tobytes() == expected.tobytes()
+    assert cells == _cells()
+
+
+def _wait_until_waiting(observer: Conn, pid: int) -> None:
+    deadline = time.monotonic() + 15
+    while time.monotonic() < deadline:
+        row = observer.execute("SELECT cardinality(pg_blocking_pids(%s)) > 0", (pid,)).fetchone()
+        observer.rollback()
+        if row == (True,):
+            return
+        time.sleep(0.02)
+    pytest.fail(f"backend {pid} never waited")
+
+
+def test_two_sessions_merging_and_refreshing_at_once(conn: Conn, fault: int, db_dsn: str) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    holder = connect(db_dsn, "holder")
+    holder.execute("SELECT tgsis.lock_for_region_merge('e1', 'refresh')")  # both below wait for it
+    merger = Background(db_dsn, "merger", lambda c: tgsis.merge_version(c, "e1"))
+    wait_until_blocked(conn, merger.pid, holder.info.backend_pid)
+    refresher = Background(db_dsn, "refresher", lambda c: tgsis.refresh_version(c, "e1"))
+    _wait_until_waiting(conn, refresher.pid)  # for the holder, or behind the merger in the queue of the row lock
+    holder.rollback()
+    holder.close()
+    merger.finish()
+    refresher.finish()
+    for version in ("DEFAULT", "e1"):
+        ids, xyz, cells, _ = stored_state(conn, version, fault)
+        assert xyz.tobytes() == _union().tobytes()
+        assert cells == _cells()
+
+
+def test_a_writer_in_the_version_during_the_merge(conn: Conn, fault: int, db_dsn: str) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    writer = connect(db_dsn, "writer")
+    tgsis.goto_version(writer, "e1")
+    writer.execute("UPDATE tgsis.vrtx SET z = z + 1.5 WHERE geoid = %s AND vrtxid = 70", (fault,))
+    merger = Background(db_dsn, "merger", lambda c: tgsis.merge_version(c, "e1"))
+    wait_until_blocked(conn, merger.pid, writer.info.backend_pid)  # the merge waits for the writer
+    writer.commit()
+    writer.close()
+    merger.finish()
+    expected = _union()
+    moved(expected, [70], (0.0, 0.0, 1.5))
+    assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == expected.tobytes()
+
+
+def test_a_role_without_rights_on_the_class_gets_the_permission_error_and_nothing_is_written(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    with login_roles(db_dsn, {"ed": "tgsis_editor", "rita": "tgsis_reader"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.faults FROM tgsis_editor")
+        conn.commit()
+        before = _storage(conn)
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.merge_version(made.connect("rita"), "e1")
+        assert _storage(conn) == before
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.merge_version(made.connect("ed"), "e1")
+        assert _storage(conn) == before
+
+
+def test_remove_needs_the_right_to_write_the_merged_mesh_into_the_version(conn: Conn, fault: int, db_dsn: str) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    with login_roles(db_dsn, {"mo": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "delete", made.name("mo"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("mo"))
+        conn.commit()
+        before = _storage(conn)
+        with pytest.raises(tgsis.MissingPrivilegeError, match="write"):
+            tgsis.merge_version(made.connect("mo"), "e1", remove=True)
+        assert _storage(conn) == before
+
+
+def test_the_command_line_merges_by_region_and_says_so(
+    conn: Conn, fault: int, db_dsn: str, capsys: pytest.CaptureFixture[str], tmp_path: Any, monkeypatch: Any
+) -> None:
+    from tgsis.cli import main
+
+    monkeypatch.setenv("TGSIS_HOME", str(tmp_path))
+    monkeypatch.delenv("TGSIS_VERSION", raising=False)
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    conn.commit()
+    assert main(["--dsn", db_dsn, "version", "refresh", "e1"]) == 0
+    out = capsys.readouterr().out
+    assert f"feature {fault} merged by region (2 region(s), every region merged by itself)" in out
+    assert main(["--dsn", db_dsn, "version", "merge", "e1"]) == 0
+    assert "merged e1 into its parent: " in capsys.readouterr().out
+    assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == _union().tobytes()
+
+
+def test_parts_changed_in_the_parent_are_merged_with_the_childs_moves(conn: Conn) -> None:
+    """Parts kept in tgsis.part (runs of cell ids) go through the merge as the cell property ``part``."""
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    half = len(surface.cells) // 2
+    square_row = np.concatenate([np.arange(half), np.arange(half)]) // (SIDE - 1)
+    parted = tgsis.Surface(
+        surface.vertices, surface.cells, cell_properties={"part": (square_row >= 8).astype(np.int64)}
+    )
+    geoid = tgsis.insert_feature(conn, "faults", parted)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    runs = conn.execute("SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,))
+    assert [r[2] for r in runs.fetchall()] == [0, 1, 0, 1]
+    conn.execute("UPDATE tgsis.part SET part = 2 WHERE geoid = %s AND part = 1", (geoid,))  # DEFAULT: the south
+    conn.commit()
+    move(conn, "e1", geoid, NORTH, CHILD_SHIFT)
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            parts = conn.execute(
+                "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
+            ).fetchall()
+            mesh = tgsis.fetch_feature(conn, "faults", geoid).mesh
+        conn.commit()
+        assert [p[2] for p in parts] == [0, 2, 0, 2]
+        expected = surface.vertices.copy()
+        moved(expected, NORTH, CHILD_SHIFT)
+        assert isinstance(mesh, tgsis.Surface)
+        assert mesh.vertices.tobytes() == expected.tobytes()
+        np.testing.assert_array_equal(mesh.cell_properties["part"], np.where(square_row >= 8, 2, 0))
