@@ -129,6 +129,7 @@ def scene(
     size: tuple[float, float] = (8.0, 6.0),
     dpi: int = 100,
     boxes: Sequence[tuple[npt.ArrayLike, str, str]] = (),
+    view: tuple[float, float] | None = None,
 ) -> Path:
     """Write a PNG of several surfaces in one scene.
 
@@ -150,6 +151,9 @@ def scene(
         Boxes drawn as wire frames with their label (e.g. the regions of a
         merge): ``bounds`` (2, 3) ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``
         (z up), ``colour`` a matplotlib colour.
+    view : (elevation, azimuth), optional
+        Where the eye is, in degrees (matplotlib's ``view_init``: azimuth
+        from +x towards +y); default matplotlib's (30, -60).
     """
     require("matplotlib", "tgsis.pictures")
     import matplotlib
@@ -176,6 +180,8 @@ def scene(
         mappable = _draw(ax, surfaces, colours, vmax)
         for bounds, label, tint in frames:
             _wire_box(ax, bounds, label, tint)
+        if view is not None:
+            ax.view_init(elev=view[0], azim=view[1])
         if any(c is not None for c in colours):
             figure.colorbar(mappable, ax=ax, shrink=0.6, pad=0.12, label=colour_label)
         ax.set_title(_title(title, exaggeration))

@@ -43,7 +43,9 @@ regions boxed.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -55,7 +57,14 @@ from tgsis import pictures
 from tgsis._cfm import CfmFault, load_releases
 from tgsis.db.checkin import checkin, checkout
 from tgsis.db.features import create_feature_class, insert_feature
-from tgsis.db.versions import create_version, enable_feature_versioning, in_version, list_versions, save_revision
+from tgsis.db.versions import (
+    ConflictRegion,
+    create_version,
+    enable_feature_versioning,
+    in_version,
+    list_versions,
+    save_revision,
+)
 from tgsis.mesh import Surface
 from tgsis.scenarios._context import Context
 from tgsis.scenarios._fault_edits import FaultFrame, bend_tip, deepen_tip, lengthen_tip
@@ -137,16 +146,68 @@ def _edit(context: Context, geoid: int, geologist: str, version: str, what: str,
     )
 
 
-def _region_line(region: Any) -> str:
-    """What a region of a merge is: who changed it, its ids, box and largest displacements."""
-    (x0, y0, z0), (x1, y1, z1) = np.asarray(region.bounds)
-    return (
-        f"region {region.index}: changed by {region.sides}, "
+def _ids_text(ids: IntArray, shown: int = 8) -> str:
+    """Ids as ascending runs, ``"3-17, 40, 52-60"``; after ``shown`` runs, ``"..."`` and the count."""
+    ids = np.asarray(ids, dtype=np.int64)
+    if not len(ids):
+        return "none"
+    breaks = np.flatnonzero(np.diff(ids) != 1) + 1
+    runs = [(int(r[0]), int(r[-1])) for r in np.split(ids, breaks)]
+    text = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs[:shown])
+    return text + (f", ... ({len(ids)} in all)" if len(runs) > shown else "")
+
+
+def _region_lines(region: ConflictRegion) -> list[str]:
+    """What a region is: who changed it, its ids, box and largest displacements (as tgsis.find_conflicts has it)."""
+    x0, y0, z0, x1, y1, z1 = np.asarray(region.bbox) if region.bbox is not None else [np.nan] * 6
+    return [
+        f"region {region.region}: changed by {region.changed_by}, "
         f"{'a CONFLICT' if region.conflict else 'merges by itself'}; "
         f"{len(region.vertex_ids)} vertices, {len(region.cell_ids)} triangles "
         f"(parent moved {len(region.parent_vertex_ids)}, up to {region.parent_displacement:.0f} m; "
         f"child moved {len(region.child_vertex_ids)}, up to {region.child_displacement:.0f} m); "
-        f"box x {x0:.0f}..{x1:.0f}, y {y0:.0f}..{y1:.0f}, z {z0:.0f}..{z1:.0f}"
+        f"box x {x0:.0f}..{x1:.0f}, y {y0:.0f}..{y1:.0f}, z {z0:.0f}..{z1:.0f}",
+        f"  vertex ids {_ids_text(region.vertex_ids)}",
+    ]
+
+
+def _list_regions(context: Context, version: str) -> list[ConflictRegion]:
+    """``tgsis.find_conflicts`` of ``version``, its regions printed; the regions of the (one) conflicting fault."""
+    conflicts = tgsis.find_conflicts(context.conn, version)
+    regions: list[ConflictRegion] = []
+    for conflict in conflicts:
+        context.out(
+            f"   tgsis.find_conflicts: {conflict.objectclass} {conflict.objectkey} changed on both sides "
+            f"({', '.join(conflict.conflicttype)}), {len(conflict.regions)} region(s)"
+            + (f"; not by region: {conflict.region_refusal}" if conflict.region_refusal else "")
+        )
+        for region in conflict.regions:
+            for line in _region_lines(region):
+                context.out(f"     {line}")
+        regions.extend(conflict.regions)
+    context.figure(f"regions_of_{version}", [(r.changed_by, r.conflict) for r in regions])
+    return regions
+
+
+def _ask_now(context: Context, question: str, query: sql.Composed) -> None:
+    """Like :meth:`Context.ask`, for an answer of this moment (``=>``: a later step changes it)."""
+    with context.conn.transaction():
+        cursor = context.conn.execute(query)
+        rows = cursor.fetchall()
+        names = [d.name for d in cursor.description or []]
+    context.out(f"   {question}")
+    context.out(f"     {query.as_string(context.conn)};")
+    context.out(f"     => {', '.join(names)}: " + "; ".join(", ".join(str(v) for v in row) for row in rows))
+
+
+def _names(paths: list[Path]) -> str:
+    return ", ".join(p.name for p in paths)
+
+
+def _rows_at(version: str, revision: int | None, table: str = "vrtx") -> sql.Composed:
+    """``tgsis.rows_at(NULL::tgsis.<table>, version, revision)``: the rows as that version saw them then."""
+    return sql.SQL("tgsis.rows_at(NULL::tgsis.{}, {}, {})").format(
+        sql.Identifier(table), sql.Literal(version), sql.Literal(revision)
     )
 
 
@@ -154,7 +215,9 @@ def _same_bits(a: FloatArray, b: FloatArray) -> bool:
     return a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
-def _provenance_sql(geoid: int, sources: list[tuple[str, str, int | None]], merged: sql.Composable) -> sql.Composed:
+def _provenance_sql(
+    geoid: int, sources: Sequence[tuple[str, str, int | None]], merged: sql.Composable, otherwise: str = "none of them"
+) -> sql.Composed:
     """Per vertex of the merged fault, the first source whose position it has (bit-equal in SQL: float8 ``=``)."""
     joins = sql.SQL(" ").join(
         sql.SQL("LEFT JOIN tgsis.rows_at(NULL::tgsis.vrtx, {}, {}) {} USING (geoid, vrtxid)").format(
@@ -169,12 +232,12 @@ def _provenance_sql(geoid: int, sources: list[tuple[str, str, int | None]], merg
         for i, (label, _, _) in enumerate(sources)
     )
     return sql.SQL(
-        "SELECT CASE {cases} ELSE 'none of them' END AS position_as_in, count(*) AS vertices "
+        "SELECT CASE {cases} ELSE {otherwise} END AS position_as_in, count(*) AS vertices "
         "FROM {merged} m {joins} WHERE m.geoid = {geoid} GROUP BY 1 ORDER BY 1"
-    ).format(cases=cases, merged=merged, joins=joins, geoid=sql.Literal(geoid))
+    ).format(cases=cases, merged=merged, joins=joins, geoid=sql.Literal(geoid), otherwise=sql.Literal(otherwise))
 
 
-def _exactly(region: Any, parent: Edit, child: Edit, triangles: IntArray) -> bool:
+def _exactly(region: ConflictRegion, parent: Edit, child: Edit, triangles: IntArray) -> bool:
     """Whether a conflict region holds exactly the two sides' moved vertices and the triangles on them."""
     union = np.union1d(parent.moved, child.moved)
     on = triangles[np.isin(triangles[:, 1:], union).any(axis=1), 0]
@@ -191,12 +254,14 @@ def _draw(
     geoid: int,
     base_ids: IntArray,
     base_xyz: FloatArray,
-    regions: Any,
+    regions: list[ConflictRegion],
+    solutions: dict[int, str],
     file: str,
     title: str,
-) -> Any:
+) -> Path:
     """DEFAULT's fault now, coloured by how far each vertex lies from its place in release 5.3, regions boxed."""
     ids, xyz = _vertices(context.conn, geoid, "DEFAULT")
+    frame = FaultFrame.of(base_xyz)
     triangles = _triangles(context.conn, geoid, "DEFAULT")[:, 1:]
     moved = np.full(len(ids), np.nan)
     at = np.searchsorted(base_ids, ids).clip(0, max(len(base_ids) - 1, 0))
@@ -204,11 +269,12 @@ def _draw(
     moved[known] = np.linalg.norm(xyz[known] - base_xyz[at[known]], axis=1)
     boxes = [
         (
-            np.asarray(r.bounds),
-            f"region {r.index}: {r.sides}{' (conflict)' if r.conflict else ''}",
+            np.asarray(r.bbox).reshape(2, 3),
+            f"region {r.region}: {r.changed_by}, {solutions.get(r.region, r.solution)}",
             "tab:red" if r.conflict else "tab:green",
         )
         for r in regions
+        if r.bbox is not None
     ]
     return pictures.scene(
         [Surface(xyz, np.searchsorted(ids, triangles), name="merged")],
@@ -218,6 +284,7 @@ def _draw(
         colour_label="distance from release 5.3 (m)",
         exaggeration=2.0,
         boxes=boxes,
+        view=(25.0, float(np.degrees(np.arctan2(frame.normal[1], frame.normal[0])))),  # facing the fault
     )
 
 
@@ -238,11 +305,16 @@ def run(context: Context) -> None:
         f"{fault.mesh.n_cells} triangles), {length / 1000:.1f} km along strike from its {south}ern to its "
         f"{north}ern end, dipping {np.degrees(np.arccos(frame.normal[2])):.0f} degrees"
     )
+    base_revision = save_revision(conn, "release_5.3")  # a merge moves a version's base: keep this one by name
     for version, geologist in (("north_tip", "ann"), ("south_tip", "bob"), ("north_review", "cat")):
         create_version(conn, version, description=f"{geologist}'s edit of {fault.name}")
     conn.commit()
-    base_revision = next(v.initrevision for v in list_versions(conn) if v.name == "north_tip")
-    out(f"   versions north_tip (ann), south_tip (bob), north_review (cat), all based on revision {base_revision}")
+    based = {v.initrevision for v in list_versions(conn) if v.name in ("north_tip", "south_tip", "north_review")}
+    out(
+        f"   saved as revision {base_revision} (release_5.3); versions north_tip (ann), south_tip (bob) and "
+        f"north_review (cat) made from it one after the other (based on revisions "
+        f"{', '.join(str(r) for r in sorted(r for r in based if r is not None))} of DEFAULT: the same fault)"
+    )
 
     stretch, stretch_zone = LENGTHEN[0] * length, LENGTHEN[1] * length
     slide, slide_zone = DEEPEN[0], DEEPEN[1] * length
@@ -290,48 +362,46 @@ def run(context: Context) -> None:
 
     # 3. ann merges first: DEFAULT had not changed the fault
     rows = tgsis.merge_version(conn, "north_tip")
-    conn.commit()
     out(f"3. north_tip merged into DEFAULT (which had not changed the fault): {rows} rows written")
 
-    # 4. bob's edit against ann's, now in DEFAULT: two disjoint regions of one mesh
-    out(f"4. south_tip against DEFAULT: both changed the fault since revision {base_revision}; its regions:")
-    preview = tgsis.object_merge(conn, "south_tip", geoid)
-    for region in preview.regions:
-        out(f"   {_region_line(region)}")
-    context.figure("regions_of_south_tip", [(r.sides, r.conflict) for r in preview.regions])
-    rows = tgsis.merge_version(conn, "south_tip")
-    conn.commit()
-    changed = len(ann.moved) + len(bob.moved)
-    out(
-        f"   merged by region: {rows} rows written ({changed} vertices changed on the two sides; "
-        f"a whole fault is {2 * fault.mesh.n_vertices + fault.mesh.n_cells} rows)"
-    )
+    # 4. bob's edit against ann's, now in DEFAULT: two disjoint regions of one mesh, merged by themselves
+    out(f"4. south_tip: DEFAULT and south_tip both changed the fault since revision {base_revision}")
+    regions = _list_regions(context, "south_tip")
+    result = tgsis.merge_version(conn, "south_tip")
+    for merged_object in result.objects:
+        out(
+            f"   merged by region ({merged_object.how}, {merged_object.regions} regions): "
+            f"{merged_object.rows_written} rows written into south_tip (ann's edit, by id), then "
+            f"{int(result) - merged_object.rows_written} into DEFAULT (bob's); {int(result)} in all, for "
+            f"{len(ann.moved) + len(bob.moved)} vertices moved (the whole fault: "
+            f"{2 * fault.mesh.n_vertices + fault.mesh.n_cells} rows)"
+        )
+    context.figure("south_tip_rows", int(result))
     both = save_revision(conn, "both_tips")
     conn.commit()
     ids, merged = _vertices(conn, geoid, "DEFAULT")
     expected = base_xyz.copy()
     for e in (ann, bob):
-        expected[np.searchsorted(base_ids, e.moved)] = e.vertices[np.searchsorted(base_ids, e.moved)]
+        at = np.searchsorted(base_ids, e.moved)
+        expected[at] = e.vertices[at]
     kept = bool(
         np.array_equal(ids, base_ids)
         and _same_bits(merged, expected)
         and np.array_equal(_triangles(conn, geoid, "DEFAULT"), base_triangles)
     )
     out(
-        f"   DEFAULT (saved as revision {both}) holds ann's {len(ann.moved)} and bob's {len(bob.moved)} vertices "
-        f"bit for bit, every other vertex and every triangle as in release 5.3: {'yes' if kept else 'NO'}"
+        f"   DEFAULT (saved as revision {both}, both_tips) holds ann's {len(ann.moved)} and bob's {len(bob.moved)} "
+        f"moved vertices bit for bit, every other vertex and every triangle as in release 5.3: {'yes' if kept else 'NO'}"
     )
     context.figure("both_edits_kept", kept)
-    provenance = [
+    sources = [
         ("release 5.3", "DEFAULT", base_revision),
         ("north_tip (ann)", "north_tip", ann.revision),
         ("south_tip (bob)", "south_tip", bob.revision),
     ]
     context.ask(
-        "in psql: where each vertex of the merged fault comes from (revision both_tips of DEFAULT)",
-        _provenance_sql(
-            geoid, provenance, sql.SQL("tgsis.rows_at(NULL::tgsis.vrtx, 'DEFAULT', {})").format(sql.Literal(both))
-        ),
+        "in psql: where each vertex of DEFAULT's fault at revision both_tips comes from",
+        _provenance_sql(geoid, sources, _rows_at("DEFAULT", both)),
     )
     context.wrote(
         _draw(
@@ -339,20 +409,16 @@ def run(context: Context) -> None:
             geoid,
             base_ids,
             base_xyz,
-            preview.regions,
+            regions,
+            {},
             "merge_both_tips.png",
-            f"{fault.name}\nDEFAULT after merging north_tip and south_tip",
+            f"{fault.name}\nDEFAULT after north_tip and south_tip",
         )
     )
 
     # 5. cat's edit overlaps ann's: one conflict region; bob's, now DEFAULT's, merges by itself
-    out("5. north_review against DEFAULT (both tips merged): cat's tip over ann's")
-    conflicts = tgsis.find_conflicts(conn, "north_review")
-    conn.commit()
-    regions = [r for c in conflicts for r in c.regions]
-    for region in regions:
-        out(f"   {_region_line(region)}")
-    context.figure("regions_of_north_review", [(r.sides, r.conflict) for r in regions])
+    out(f"5. north_review: cat's tip against DEFAULT's (ann's), and bob's end, since revision {base_revision}")
+    regions = _list_regions(context, "north_review")
     clash = [r for r in regions if r.conflict]
     exact = len(clash) == 1 and _exactly(clash[0], ann, cat, base_triangles)
     out(
@@ -362,36 +428,65 @@ def run(context: Context) -> None:
     context.figure("conflict_region_exact", exact)
     written = tgsis.export_conflict(conn, "north_review", geoid, context.folder, overwrite=True)
     context.wrote(written)
-    out(f"   the three states (GOCAD), the regions and the overlay: {', '.join(p.name for p in written)}")
+    out(f"   to look at it in one's own tool (tgsis version conflicts north_review --export DIR): {_names(written)}")
 
     # 6. solved by average, merged
     for region in clash:
-        solved = tgsis.resolve_region(conn, "north_review", geoid, region.index, "average")
-        conn.commit()
-        out(f"6. region {region.index} solved by average: {solved}")
-    rows = tgsis.merge_version(conn, "north_review")
-    conn.commit()
-    out(f"   north_review merged: {rows} rows written")
+        solved = tgsis.resolve_region(conn, "north_review", geoid, region.region, "average")
+        out(
+            f"6. region {region.region} solved by average (each vertex halfway between ann's and cat's), "
+            "which discards of each side's edit there, as tgsis.resolve_region counts it:"
+        )
+        for d in solved.discards:
+            out(
+                f"   {'ann' if d.side == 'parent' else 'cat'}'s ({d.side}): {d.vertices} vertices, {d.cells} cells "
+                f"not as that side has them; the largest move away from its position {d.max_displacement:.0f} m"
+            )
+    _ask_now(
+        context,
+        "in psql, before the merge: the regions of north_review and their solutions",
+        sql.SQL(
+            "SELECT region, changed_by, solution, cardinality(vertex_ids) AS vertices, "
+            "cardinality(cell_ids) AS triangles, round(parent_displacement) AS parent_m, "
+            "round(child_displacement) AS child_m FROM tgsis.conflict_regions "
+            "WHERE versionid = (SELECT versionid FROM tgsis.versions WHERE name = {}) ORDER BY region"
+        ).format(sql.Literal("north_review")),
+    )
+    result = tgsis.merge_version(conn, "north_review")
+    out(
+        f"   north_review merged: {int(result)} rows written"
+        + "".join(f" ({m.rows_written} into north_review by region, {m.how})" for m in result.objects)
+    )
     _, final = _vertices(conn, geoid, "DEFAULT")
-    ids_now, both_xyz = _vertices(conn, geoid, "DEFAULT", both)
+    _, both_xyz = _vertices(conn, geoid, "DEFAULT", both)
     inside = np.isin(base_ids, np.union1d(ann.moved, cat.moved))
-    kept = bool(_same_bits(final[~inside], both_xyz[~inside]))
+    kept = _same_bits(final[~inside], both_xyz[~inside])
     span = cat.vertices[inside] - ann.vertices[inside]
     t = np.einsum("ij,ij->i", final[inside] - ann.vertices[inside], span) / np.einsum("ij,ij->i", span, span)
     out(
-        f"   outside the region the fault is as after the first merges (bob's tip bit for bit): {'yes' if kept else 'NO'}; "
-        f"the {int(inside.sum())} vertices of the region lie from {t.min():.2f} to {t.max():.2f} of the way "
-        "from ann's position to cat's"
+        "   outside the region the fault is as after the first two merges (bob's end bit for bit): "
+        f"{'yes' if kept else 'NO'}; the region's {int(inside.sum())} vertices lie {t.min():.3f} to {t.max():.3f} "
+        "of the way from ann's position to cat's"
     )
-    context.figure("average_between", (float(t.min()), float(t.max())))
-    sources = [
-        *provenance,
-        ("north_review (cat)", "north_review", cat.revision),
-        ("DEFAULT after the first merges", "DEFAULT", both),
-    ]
+    context.figure("rest_kept", kept)
+    context.figure("average_between", (round(float(t.min()), 6), round(float(t.max()), 6)))
     context.ask(
         "in psql, in DEFAULT (the session's version): where each vertex of the fault comes from now",
-        _provenance_sql(geoid, sources, sql.SQL("tgsis.vrtx")),
+        _provenance_sql(
+            geoid,
+            [*sources, ("north_review (cat)", "north_review", cat.revision)],
+            sql.SQL("tgsis.vrtx"),
+            otherwise="none (the average)",
+        ),
+    )
+    context.ask(
+        "in psql: the fault's triangles in DEFAULT now, and how many are not as in release 5.3",
+        sql.SQL(
+            "SELECT count(m.trglid) AS triangles, count(*) FILTER (WHERE (m.vrtxid1, m.vrtxid2, m.vrtxid3) "
+            "IS DISTINCT FROM (b.vrtxid1, b.vrtxid2, b.vrtxid3)) AS not_as_in_release_5_3 "
+            "FROM (SELECT * FROM tgsis.trgl WHERE geoid = {g}) m "
+            "FULL JOIN (SELECT * FROM {base} WHERE geoid = {g}) b USING (trglid)"
+        ).format(g=sql.Literal(geoid), base=_rows_at("DEFAULT", base_revision, "trgl")),
     )
     context.wrote(
         _draw(
@@ -400,7 +495,9 @@ def run(context: Context) -> None:
             base_ids,
             base_xyz,
             regions,
+            {r.region: "average" for r in clash},
             "merge_resolved.png",
-            f"{fault.name}\nDEFAULT after merging north_review (its tip the average of ann's and cat's)",
+            f"{fault.name}\nDEFAULT after the three merges",
         )
     )
+    out(f"7. pictures: {_names([p for p in context.files if p.suffix == '.png'])}")
