@@ -50,6 +50,7 @@ CATALOG = [
     "version_privileges",
     "object_locks",
     "conflicts",
+    "conflict_regions",
     "versioned_tables",
     "versioning_dropped",
     "unversioned_features",

@@ -22,6 +22,7 @@ import pytest
 import tgsis
 from tests.roles import login_roles
 from tgsis.db import features as F
+from tgsis.db import versions as V
 
 Conn = psycopg.Connection[Any]
 
@@ -115,7 +116,9 @@ def test_conflicting_checkin_meets_the_other_edit_in_the_merge(
     child = _heights(conn, fid, "mine")
     assert child[_xy(base, THEIRS)] == base.vertices[THEIRS, 2] and child[_xy(base, MINE)] == -50.0
     # ...so the child's difference is my edit only, and the colleague's change is the parent's side
-    conflicts = tgsis.find_conflicts(conn, "mine")
+    # object-level (versions.find_conflicts): with the mesh's regions stored (tgsis.find_conflicts), a whole side
+    # that drops the other's edits outside the conflicting regions is refused (tests/test_resolve_region.py)
+    conflicts = V.find_conflicts(conn, "mine")
     conn.commit()
     assert [(c.objectclass, c.objectkey, c.solution) for c in conflicts] == [("feature", str(fid), "unsolved")]
     assert "vrtx" in conflicts[0].conflicttype

@@ -305,3 +305,40 @@ def test_pg_dump_and_restore_keep_unresolved_and_resolved_regions(
                 [again] = tgsis.find_conflicts(restored, "e1")  # the same marks there: the solutions hold
                 assert [r.solution for r in again.regions if r.conflict] == ["child", "unsolved"]
                 assert stored(restored) == before
+
+
+def test_a_role_that_may_not_read_the_class_gets_the_list_with_why(db_dsn: str, conn: Conn, fault: int) -> None:
+    conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
+        [conflict] = tgsis.find_conflicts(roles.connect("rita"), "e1")
+    assert conflict.objectkey == str(fault) and conflict.regions == ()
+    assert conflict.region_refusal is not None and "may not read" in conflict.region_refusal
+    assert stored(conn) == []
+
+
+def test_inside_a_callers_read_committed_transaction_the_regions_are_stored_with_it(conn: Conn, fault: int) -> None:
+    """How a merge calls it: in its own transaction (a savepoint here); a rollback takes the regions back."""
+    conn.execute("SELECT 1")  # the caller's transaction is open (read committed)
+    with conn.transaction():
+        [conflict] = tgsis.find_conflicts(conn, "e1")
+        assert len(conflict.regions) == 3
+        assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (3,)
+    conn.rollback()
+    assert stored(conn) == []
+    with conn.transaction():
+        tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    assert len(stored(conn)) == 3
+
+
+def test_the_command_line_merge_hint_names_the_command(
+    conn: Conn, db_dsn: str, fault: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.test_cli_hints import hint_of
+
+    tgsis.find_conflicts(conn, "e1")
+    hint = hint_of(db_dsn, capsys, "version", "merge", "e1")
+    assert "tgsis version merge e1 merges them" in hint and "--region N" in hint, hint
+    hint = hint_of(db_dsn, capsys, "version", "resolve", "e1", "feature", str(fault), "child")
+    assert "tgsis version resolve e1" in hint and "--region N" in hint, hint

@@ -255,3 +255,84 @@ def test_manual_through_the_command_line_from_an_exported_file(
     [region] = [r for r in data["conflicts"][0]["conflict_regions"] if r["conflict"]]
     assert region["solution"] == "manual" and region["child"]["vertex_ids"] == MIDDLE.tolist()
     assert len(region["bbox"]) == 6
+
+
+def test_a_manual_mesh_may_remesh_the_region_with_new_ids(conn: Conn, fault: int) -> None:
+    middle = _middle(conn)
+    child = _merge(conn, fault).child
+    inside = set(middle.vertex_ids.tolist())
+    at = next(
+        i
+        for i, cid in enumerate(child.cell_ids.tolist())
+        if cid in set(middle.cell_ids.tolist()) and set(child.cells[i].tolist()) <= inside
+    )
+    a, b, c = child.cells[at].tolist()
+    new_v = int(child.vertex_ids.max()) + 1
+    new_c = int(child.cell_ids.max()) + 1
+    centre = child.vertices[np.searchsorted(child.vertex_ids, [a, b, c])].mean(axis=0) + [0.0, 0.0, 2.5]
+    cells = child.cells.copy()
+    cells[at] = [a, b, new_v]
+    remeshed = MeshState(
+        3,
+        np.append(child.vertex_ids, new_v),
+        np.vstack([child.vertices, centre]),
+        np.append(child.cell_ids, [new_c, new_c + 1]),
+        np.vstack([cells, [[b, c, new_v], [c, a, new_v]]]),
+        {n: np.append(v, 0.2) for n, v in child.vertex_properties.items()},
+        {n: np.append(v, [1, 1]).astype(v.dtype) for n, v in child.cell_properties.items()},
+    )
+    result = tgsis.resolve_region(conn, "e1", fault, middle.region, "manual", remeshed)
+    assert result.region.solution == "manual"
+    merge, solutions = _solutions(conn, fault)
+    state = apply_solutions(merge, solutions).state
+    mesh = state.to_mesh()  # valid: no dangling vertex, every cell on vertices it has
+    assert new_v in state.vertex_ids and mesh.n_cells == curved_surface().n_cells + 2
+    np.testing.assert_array_equal(state.vertices[np.searchsorted(state.vertex_ids, new_v)], centre)
+    south = np.searchsorted(state.vertex_ids, SOUTH)  # the parent's edit elsewhere is kept
+    assert (
+        state.vertices[south].tobytes()
+        == merge.parent.vertices[np.searchsorted(merge.parent.vertex_ids, SOUTH)].tobytes()
+    )
+
+
+def test_average_refuses_sides_that_meshed_the_region_differently() -> None:
+    from tgsis.merge3 import three_way_merge
+
+    surface = curved_surface()
+    base = MeshState.from_mesh(surface)
+    middle = 5 * SIDE + 5
+    moved = base.vertices.copy()
+    moved[middle, 2] += 4.0
+    parent = MeshState(
+        3, base.vertex_ids, moved, base.cell_ids, base.cells, base.vertex_properties, base.cell_properties
+    )
+    # the child moves it the other way and splits a triangle on it with a new vertex
+    at = int(np.flatnonzero((base.cells == middle).any(axis=1))[0])
+    a, b, c = base.cells[at].tolist()
+    other = base.vertices.copy()
+    other[middle, 2] -= 4.0
+    new_v, new_c = base.n_vertices, base.n_cells
+    cells = base.cells.copy()
+    cells[at] = [a, b, new_v]
+    child = MeshState(
+        3,
+        np.append(base.vertex_ids, new_v),
+        np.vstack([other, other[[a, b, c]].mean(axis=0)]),
+        np.append(base.cell_ids, [new_c, new_c + 1]),
+        np.vstack([cells, [[b, c, new_v], [c, a, new_v]]]),
+        {n: np.append(v, 0.2) for n, v in base.vertex_properties.items()},
+        {n: np.append(v, [1, 1]).astype(v.dtype) for n, v in base.cell_properties.items()},
+    )
+    merge = three_way_merge(base, parent, child)
+    [region] = merge.conflicts
+    with pytest.raises(RegionSolutionError, match="same meshing"):
+        R.average_region(merge, region)
+    # one meshing on both sides: the middle of the two positions, the margin put
+    same = MeshState(3, base.vertex_ids, other, base.cell_ids, base.cells, base.vertex_properties, base.cell_properties)
+    merge = three_way_merge(base, parent, same)
+    [region] = merge.conflicts
+    average = R.average_region(merge, region)
+    z = average.vertices[np.searchsorted(average.vertex_ids, middle), 2]
+    assert z == base.vertices[middle, 2]  # +4 and -4: back in the middle
+    resolved = apply_solutions(merge, {region.index: average}).state
+    resolved.to_mesh()

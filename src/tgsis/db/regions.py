@@ -79,27 +79,22 @@ _ID_FIELDS = ("vertex_ids", "cell_ids", "parent_vertex_ids", "parent_cell_ids", 
 
 
 @contextmanager
-def _consistent(conn: Conn, version: str, *, write: bool) -> Iterator[None]:
-    """One transaction whose reads agree: a new REPEATABLE READ one, or the caller's.
+def _consistent(conn: Conn, *, write: bool) -> Iterator[None]:
+    """One transaction whose reads agree: a new REPEATABLE READ one, or a savepoint of the caller's.
 
-    Inside the caller's transaction, a savepoint; under READ COMMITTED the
-    version and its parent are locked as ``tgsis.lock_for_merge`` locks them
-    (parent first), so no writer of either commits between the reads.
+    In a caller's READ COMMITTED transaction (a merge that holds the locks of
+    ``tgsis.lock_for_merge``, where no writer of either side can commit) each
+    statement sees its own moment: the marks are checked again after the
+    states are read (``tgsis.record_conflict_regions`` refuses marks that are
+    no longer the conflict's, and a computed-only answer says the object
+    changed meanwhile), so regions of a mixed state are never stored or given.
     """
     if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
         with conn.transaction():
             conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ" + ("" if write else " READ ONLY"))
             yield
         return
-    row = conn.execute("SELECT current_setting('transaction_isolation')").fetchone()
     with conn.transaction():
-        if row is None or row[0] not in ("repeatable read", "serializable"):
-            conn.execute(
-                "SELECT FROM tgsis.versions WHERE versionid = (SELECT parentid FROM tgsis.versions"
-                " WHERE versionid = tgsis.version_id(%s)) FOR UPDATE",
-                (version,),
-            )
-            conn.execute("SELECT FROM tgsis.versions WHERE versionid = tgsis.version_id(%s) FOR UPDATE", (version,))
         yield
 
 
@@ -228,7 +223,7 @@ def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
     """
     for attempt in range(_retrying(conn)):
         try:
-            with reraise(), _consistent(conn, version, write=True):
+            with reraise(), _consistent(conn, write=True):
                 return _find(conn, version)
         except ConcurrentChangeError:
             if attempt == _retrying(conn) - 1:
@@ -259,6 +254,11 @@ def _find(conn: Conn, version: str) -> list[Conflict]:
                 (version, conflict.objectclass, conflict.objectkey, *marks, payload),
             )
             regions = tuple(_stored_regions(conn, versionid, conflict.objectclass, conflict.objectkey))
+        elif _current_marks(conn, versionid, conflict.objectclass, conflict.objectkey) != marks:
+            result.append(
+                _with(conflict, (), "the object changed while its states were read: find the conflicts again")
+            )
+            continue
         else:  # computed only, with the solutions recorded for the same regions
             stored = {r.region: r for r in _stored_regions(conn, versionid, conflict.objectclass, conflict.objectkey)}
             regions = tuple(
@@ -527,7 +527,7 @@ def resolve_region(
         )
     for attempt in range(_retrying(conn)):
         try:
-            with reraise(), _consistent(conn, version, write=True):
+            with reraise(), _consistent(conn, write=True):
                 return _resolve(conn, version, feature_id, region, wanted, mesh, discard_other, name)
         except ConcurrentChangeError:
             if attempt == _retrying(conn) - 1:
