@@ -26,7 +26,8 @@ from tgsis.db import versions as V
 
 Conn = psycopg.Connection[Any]
 
-THEIRS, MINE = 5, 300  # vertex the colleague moves, vertex the modeller moves (in base order)
+THEIRS, MINE = 5, 6  # vertex the colleague moves, vertex the modeller moves (in base order): neighbours, so
+# that the edits meet in one region (disjoint edits merge by region, tests/test_merge_regions.py)
 
 
 def _grid(side: int = 20) -> tgsis.Surface:

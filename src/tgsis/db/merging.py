@@ -590,13 +590,16 @@ def _merge_object(
             "manual)",
         )
     settings = read_version_settings(conn)
-    conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, for this transaction
     try:
-        written = write_state_difference(conn, inputs.feature_class, int(key), states["child"], resolved.state)
-    finally:
-        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:  # else the rollback puts them back
+        with conn.transaction():  # a savepoint: an object whose rows cannot be written leaves nothing behind
+            conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
+            written = write_state_difference(conn, inputs.feature_class, int(key), states["child"], resolved.state)
             restore_version_settings(conn, settings, local=True)
-    conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
+            conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
+    except InvalidInputError as exc:  # e.g. an integer property without a value for a row to write
+        restore_version_settings(conn, settings, local=True)
+        reasons[key] = f"its merged rows cannot be written: {exc.message}"
+        return None
     how: Literal["automatic", "solutions"] = "solutions" if solutions else "automatic"
     log.info(
         "feature %s of version %s merged by region (%s, %d regions): %d rows written into the version",
