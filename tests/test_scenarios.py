@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import re
+import shlex
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,7 @@ from PIL import Image
 from psycopg.conninfo import make_conninfo
 
 from tgsis import formats
-from tgsis.cli import main
+from tgsis.cli import build_parser, main
 from tgsis.db.versions import list_versions
 from tgsis.formats.pvd import read_pvd
 from tgsis.merge3 import MeshState
@@ -333,6 +334,11 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     assert "-> triangles, not_as_in_release_5_3: 1271, 0" in out
 
     _replays(db_dsn, "merge", out, 3)
+    after = out.split("8. steps 3 to 6 from the command line")[1].splitlines()[1:]
+    commands = [line.strip() for line in after if line.startswith("   tgsis ")]
+    assert len(commands) == 7 and "tgsis version resolve north_review 1 average --region 0" in commands
+    for command in commands:  # the commands shown are the command line's
+        build_parser().parse_args(shlex.split(command)[1:])
     overlay = folder / "1_CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m_overlay.png"
     for picture_file in (overlay, folder / "merge_both_tips.png", folder / "merge_resolved.png"):
         with Image.open(picture_file) as picture:

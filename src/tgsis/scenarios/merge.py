@@ -501,3 +501,14 @@ def run(context: Context) -> None:
         )
     )
     out(f"7. pictures: {_names([p for p in context.files if p.suffix == '.png'])}")
+    out("8. steps 3 to 6 from the command line (tgsis --dsn DSN ..., DSN that of the database tgsis_demo_merge):")
+    for command in (
+        "version merge north_tip",
+        "version conflicts south_tip --regions",
+        "version merge south_tip",
+        "version conflicts north_review --regions --json",
+        "version conflicts north_review --export DIR",
+        *(f"version resolve north_review {geoid} average --region {r.region}" for r in clash),
+        "version merge north_review",
+    ):
+        out(f"   tgsis {command}")
