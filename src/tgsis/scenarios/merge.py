@@ -14,8 +14,9 @@ their own:
    (a half cosine) to nothing at the zone's inner edge;
 2. **bob** (``south_tip``) puts the southern end's base deeper (relocated
    seismicity): the vertices within 15 % of the length of the southern end
-   slide down dip, by up to 1,000 m at the fault's base and not at all at its
-   top, with the same taper along strike;
+   slide down dip (in the fault's mean plane) in proportion to their depth,
+   1,000 m at the fault's base and not at all at its top, with the same taper
+   along strike;
 3. **cat** (``north_review``) re-picks the northern tip on a new seismic line:
    the vertices within 17 % of the length of that end are bent 600 m sideways
    (horizontal, normal to strike), tapered likewise — an edit overlapping
@@ -32,18 +33,23 @@ in by difference (only the moved vertices are written). Then:
   ids, box, largest displacements), bob's region merges by itself; the
   conflict is drawn (``tgsis.export_conflict``: the three states as GOCAD
   files and the overlay PNG), solved by ``average`` (``tgsis.resolve_region``:
-  the morphological average of ann's and cat's tip, attached to the rest)
-  and merged.
+  each vertex of the region halfway between ann's and cat's position, the
+  rule of docs/merge.md for two sides of one meshing; what it discards of
+  each side is said first) and merged.
 
-The SQL a psql user runs to see the result through the versioned views is
-printed with its answers. Pictures: the overlay of the conflict and the
-merged fault coloured by how far each vertex moved from release 5.3, the
-regions boxed.
+The state the three started from is kept as the named revision
+``release_5.3`` of DEFAULT, the state after the first two merges as
+``both_tips`` (a merge moves a version's base, so these are what the SQL
+compares with). The SQL a psql user runs to see the result through the
+versioned views is printed with its answers; then the same steps as
+``tgsis`` commands. Pictures: the overlay of the conflict and the merged
+fault coloured by how far each vertex moved from release 5.3, the regions
+boxed with their solutions.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -122,7 +128,10 @@ def _triangles(conn: Any, geoid: int, version: str, revision: int | None = None)
     return np.array(rows, dtype=np.int64).reshape(-1, 4)
 
 
-def _edit(context: Context, geoid: int, geologist: str, version: str, what: str, change: Any) -> Edit:
+Change = Callable[[FloatArray, FaultFrame], tuple[FloatArray, npt.NDArray[np.bool_]]]
+
+
+def _edit(context: Context, geoid: int, geologist: str, version: str, what: str, change: Change) -> Edit:
     """Check the fault out of ``version``, move its vertices by ``change(vertices, frame)``, check it in, save."""
     conn = context.conn
     with in_version(conn, version):
