@@ -374,7 +374,7 @@ def run(context: Context) -> None:
     out(f"3. north_tip merged into DEFAULT (which had not changed the fault): {rows} rows written")
 
     # 4. bob's edit against ann's, now in DEFAULT: two disjoint regions of one mesh, merged by themselves
-    out(f"4. south_tip: DEFAULT and south_tip both changed the fault since revision {base_revision}")
+    out("4. south_tip: DEFAULT and south_tip both changed the fault since release_5.3")
     regions = _list_regions(context, "south_tip")
     result = tgsis.merge_version(conn, "south_tip")
     for merged_object in result.objects:
@@ -426,7 +426,7 @@ def run(context: Context) -> None:
     )
 
     # 5. cat's edit overlaps ann's: one conflict region; bob's, now DEFAULT's, merges by itself
-    out(f"5. north_review: cat's tip against DEFAULT's (ann's), and bob's end, since revision {base_revision}")
+    out("5. north_review: cat's tip against DEFAULT's (ann's), and bob's end, both changed since release_5.3")
     regions = _list_regions(context, "north_review")
     clash = [r for r in regions if r.conflict]
     exact = len(clash) == 1 and _exactly(clash[0], ann, cat, base_triangles)
