@@ -48,6 +48,13 @@ def stored(conn: Conn) -> list[tuple[Any, ...]]:
     return rows
 
 
+def everything(conn: Conn) -> tuple[list[tuple[Any, ...]], list[tuple[Any, ...]]]:
+    """The regions and the conflicts they belong to (solutions, marks), as text."""
+    conflicts = conn.execute("SELECT k::text FROM tgsis.conflicts k ORDER BY versionid, objectkey").fetchall()
+    conn.rollback()
+    return stored(conn), conflicts
+
+
 def by_side(regions: tuple[R.ConflictRegion, ...]) -> dict[str, R.ConflictRegion]:
     return {r.changed_by: r for r in regions}
 

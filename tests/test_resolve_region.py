@@ -17,7 +17,7 @@ import pytest
 import tgsis
 from tests.merge_data import SIDE, curved_surface
 from tests.roles import login_roles
-from tests.test_conflict_regions import MIDDLE, NORTH, SOUTH, by_side, stored, three_regions
+from tests.test_conflict_regions import MIDDLE, NORTH, SOUTH, by_side, everything, stored, three_regions
 from tgsis import formats
 from tgsis.cli import main
 from tgsis.db import regions as R
@@ -118,11 +118,11 @@ def test_average_is_a_valid_mesh_attached_to_the_unchanged_rest(conn: Conn, faul
 
 
 def _refused(conn: Conn, fault: int, error: type[Exception], match: str, *args: Any, **kwargs: Any) -> None:
-    before = stored(conn)
+    before = everything(conn)
     with pytest.raises(error, match=match):
         tgsis.resolve_region(conn, "e1", fault, *args, **kwargs)
     conn.rollback()
-    assert stored(conn) == before
+    assert everything(conn) == before
 
 
 def test_every_refusal_leaves_the_database_unchanged(conn: Conn, fault: int) -> None:
