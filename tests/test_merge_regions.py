@@ -349,3 +349,32 @@ def test_parts_changed_in_the_parent_are_merged_with_the_childs_moves(conn: Conn
         assert isinstance(mesh, tgsis.Surface)
         assert mesh.vertices.tobytes() == expected.tobytes()
         np.testing.assert_array_equal(mesh.cell_properties["part"], np.where(square_row >= 8, 2, 0))
+
+
+@pytest.mark.parametrize("solution", ["parent", "child"])
+def test_recorded_region_solutions_are_applied_by_the_merge(conn: Conn, fault: int, solution: str) -> None:
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)  # merges by itself
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))  # overlaps the parent's edit at 66
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    conflicts = tgsis.find_conflicts(conn, "e1")  # the region-aware one: records the regions
+    conn.commit()
+    (conflict,) = conflicts
+    (region,) = [r for r in conflict.regions if r.conflict]
+    with pytest.raises(tgsis.UnsolvedConflictsError, match=rf"feature {fault}: region {region.region} unsolved"):
+        tgsis.merge_version(conn, "e1")
+    conn.rollback()
+    tgsis.resolve_region(conn, "e1", fault, region.region, solution)
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    (merged,) = result.objects
+    assert (merged.how, merged.solved) == ("solutions", 1)
+    assert [d.side for d in merged.discards] == ["child" if solution == "parent" else "parent"]
+    expected = curved_surface().vertices.copy()
+    moved(expected, NORTH, CHILD_SHIFT)
+    if solution == "parent":
+        moved(expected, [66, 67], (0.0, 0.0, -4.0))
+    else:
+        moved(expected, [64, 65, 66], (0.0, 0.0, 5.0))
+    for version in ("DEFAULT", "e1"):
+        assert stored_state(conn, version, fault)[1].tobytes() == expected.tobytes()

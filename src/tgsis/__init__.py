@@ -216,8 +216,8 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
 # other list. The first module that lists a name gives it.
 _LAZY_MODULES = (
     "tgsis.db",
-    "tgsis.db.regions",  # before versions: its region-aware find_conflicts is the public one
     "tgsis.db.merging",  # before versions: the merges by region are the public merge_version, refresh_version
+    "tgsis.db.regions",  # before versions: its region-aware find_conflicts is the public one
     "tgsis.db.versions",
     "tgsis.db.features",
     "tgsis.db.classes",

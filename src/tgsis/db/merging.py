@@ -34,7 +34,6 @@ run in the same transaction and refuse (TG302) what is still unsolved.
 
 from __future__ import annotations
 
-import importlib
 import json
 import logging
 import os
@@ -57,6 +56,7 @@ from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import one_snapshot
+from tgsis.db.regions import region_solutions
 from tgsis.db.versions import show_name
 from tgsis.errors import (
     InvalidInputError,
@@ -496,26 +496,30 @@ class MergeResult(int):
         return str(int(self))  # the number, as before (f-strings, the command line)
 
 
-def _recorded_solutions(conn: Conn, version: str, key: str, merge: MeshMerge) -> dict[int, Solution]:
-    """The recorded solutions of the merge's conflicting regions (``tgsis.db.regions.region_solutions``).
+#: a region solved by one side's (or the base's) rows
+_SIDE_SOLUTIONS: dict[str, Literal["parent", "child", "base"]] = {"parent": "parent", "child": "child", "base": "base"}
 
-    Only solutions of regions that conflict in this very merge count (the
-    store hands back those recorded for the same marks and regions). Without
-    the region store in this build, none.
+
+def _recorded_solutions(conn: Conn, version: str, key: str, merge: MeshMerge) -> dict[int, Solution]:
+    """The recorded solutions of the merge's conflicting regions (:func:`tgsis.db.regions.region_solutions`).
+
+    The store hands back those recorded for the object's current marks and
+    these very regions; only conflicting regions' solutions are kept.
     """
     if not merge.conflicts:
         return {}
-    try:
-        regions = importlib.import_module("tgsis.db.regions")
-    except ModuleNotFoundError:  # the region store is not part of this build: only automatic merges
-        return {}
-    recorded: Mapping[int, Any] = regions.region_solutions(conn, version, "feature", key, merge)
     conflicting = {r.index for r in merge.conflicts}
-    return {
-        int(i): s
-        for i, s in recorded.items()
-        if int(i) in conflicting and (isinstance(s, MeshState) or s in ("parent", "child", "base"))
-    }
+    solutions: dict[int, Solution] = {}
+    for i, s in region_solutions(conn, version, "feature", key, merge).items():
+        if int(i) not in conflicting:
+            continue
+        if isinstance(s, MeshState):
+            solutions[int(i)] = s
+        else:
+            side = _SIDE_SOLUTIONS.get(s)
+            if side is not None:
+                solutions[int(i)] = side
+    return solutions
 
 
 def _unsolved_reason(merge: MeshMerge, solutions: Mapping[int, Solution]) -> str:
