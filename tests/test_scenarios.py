@@ -259,15 +259,24 @@ def _moved(state: MeshState, base: MeshState) -> npt.NDArray[np.int64]:
     return state.vertex_ids[np.any(state.vertices != base.vertices, axis=1)]
 
 
+def _triangles_on(base: MeshState, moved: npt.NDArray[np.int64]) -> int:
+    """The triangles with a moved vertex: a region's one-ring margin (docs/merge.md)."""
+    return int(np.isin(base.cells, moved).any(axis=1).sum())
+
+
 def _region_words(base: MeshState, moved: npt.NDArray[np.int64]) -> str:
-    """How the report counts a region of moved vertices: the vertices and the triangles on them (the margin)."""
-    triangles = int(np.isin(base.cells, moved).any(axis=1).sum())
-    return f"{len(moved)} vertices, {triangles} triangles"
+    """How the report counts a region of moved vertices: the vertices and the triangles on them."""
+    return f"{len(moved)} vertices, {_triangles_on(base, moved)} triangles"
+
+
+def _metres(state: MeshState, base: MeshState, ids: npt.NDArray[np.int64]) -> float:
+    """The largest distance a vertex of ``ids`` moved from the base, in whole metres."""
+    at = np.searchsorted(base.vertex_ids, ids)
+    return float(round(np.linalg.norm(state.vertices[at] - base.vertices[at], axis=1).max()))
 
 
 def _largest(state: MeshState, base: MeshState, ids: npt.NDArray[np.int64]) -> str:
-    at = np.searchsorted(base.vertex_ids, ids)
-    return f"{np.linalg.norm(state.vertices[at] - base.vertices[at], axis=1).max():.0f} m"
+    return f"{_metres(state, base, ids):.0f} m"
 
 
 def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -318,6 +327,13 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     ) in out
     assert f"changed by parent, merges by itself; {_region_words(base, b)}" in out.split("5. north_review")[1]
     assert out.count("a CONFLICT") == 1
+    # ... and what a psql user reads of them in tgsis.conflict_regions once the conflict is solved by average
+    assert (
+        "=> region, changed_by, solution, vertices, triangles, parent_m, child_m: "
+        f"0, both, average, {len(union)}, {_triangles_on(base, union)}, {_metres(ann, base, a)}, "
+        f"{_metres(cat, base, c)}; 1, parent, automatic, {len(b)}, {_triangles_on(base, b)}, "
+        f"{_metres(bob, base, b)}, 0.0"
+    ) in out
 
     # solved by average: every vertex of the region between ann's and cat's position, bob's edit and the rest kept
     assert np.array_equal(final.vertex_ids, base.vertex_ids) and np.array_equal(final.cells, base.cells)
