@@ -59,12 +59,13 @@ pictures: $(VENV)/.installed
 	$(BIN)/tgsis demo interpretations --dir build/pictures
 	$(BIN)/tgsis demo mine --dir build/pictures
 	$(BIN)/tgsis demo knowledge --dir build/pictures
+	$(BIN)/tgsis demo merge --dir build/pictures
 	$(BIN)/tgsis demo --dir build/pictures
 	$(BIN)/python docs/view_pictures.py --dir build/pictures   # tgsis view of the demo in headless Chromium
 	cp build/pictures/saltdome_t2_3.png build/pictures/saltdome.gif build/pictures/synsed_t2_5.png \
 	    build/pictures/river_t4.png build/pictures/interpretations_model3.png build/pictures/mine_ore_top.png \
 	    build/pictures/knowledge_interpretations.png build/pictures/view_scene.png build/pictures/view_time.png \
-	    build/pictures/view_compare.png docs/pictures/
+	    build/pictures/view_compare.png build/pictures/merge_resolved.png docs/pictures/
 	cp build/pictures/cfm_release_6.1_over_5.3.png docs/pictures/
 
 # what ruff format keeps formatted: the whole tree of Python code (docs/developing.md, "Lint and format")

@@ -11,15 +11,22 @@ from __future__ import annotations
 
 import json
 import re
+import shlex
 from pathlib import Path
+from typing import Any
 
+import numpy as np
+import numpy.typing as npt
 import psycopg
 import pytest
 from PIL import Image
 from psycopg.conninfo import make_conninfo
 
-from tgsis.cli import main
+from tgsis import formats
+from tgsis.cli import build_parser, main
+from tgsis.db.versions import list_versions
 from tgsis.formats.pvd import read_pvd
+from tgsis.merge3 import MeshState
 
 
 def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
@@ -33,6 +40,7 @@ def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
         "interpretations",
         "mine",
         "knowledge",
+        "merge",
         "cfm",
     ]  # header first
     assert main(["demo", "--list", "--json"]) == 0
@@ -45,7 +53,10 @@ def test_the_scenarios_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
 def test_an_unknown_scenario_is_refused_naming_the_scenarios(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--dsn", "host=/nonexistent", "demo", "volcano"]) == 1
     err = capsys.readouterr().err
-    assert "no scenario 'volcano'" in err and "cfm, interpretations, knowledge, mine, river, saltdome, synsed" in err
+    assert (
+        "no scenario 'volcano'" in err
+        and "cfm, interpretations, knowledge, merge, mine, river, saltdome, synsed" in err
+    )
 
 
 def _printed_sql(out: str) -> list[tuple[str, str]]:
@@ -219,3 +230,151 @@ def test_mine(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
             ), day
     with Image.open(folder / "mine_ore_top.png") as picture:
         assert picture.format == "PNG"
+
+
+def _fault_state(conn: psycopg.Connection[Any], geoid: int, version: str, revision: int | None) -> MeshState:
+    """The fault as ``version`` (at ``revision``) holds it, read through tgsis.rows_at as a psql user would."""
+    vertices = conn.execute(
+        "SELECT vrtxid, x, y, z FROM tgsis.rows_at(NULL::tgsis.vrtx, %s, %s) WHERE geoid = %s ORDER BY vrtxid",
+        (version, revision, geoid),
+    ).fetchall()
+    cells = conn.execute(
+        "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.rows_at(NULL::tgsis.trgl, %s, %s) "
+        "WHERE geoid = %s ORDER BY trglid",
+        (version, revision, geoid),
+    ).fetchall()
+    return MeshState(
+        3,
+        np.array([r[0] for r in vertices]),
+        np.array([r[1:] for r in vertices], dtype=np.float64),
+        np.array([r[0] for r in cells]),
+        np.array([r[1:] for r in cells]),
+        name=f"{version}@{revision}",
+    )
+
+
+def _moved(state: MeshState, base: MeshState) -> npt.NDArray[np.int64]:
+    """Ids of the vertices whose coordinates differ from the base's (same ids, same cells on both)."""
+    assert np.array_equal(state.vertex_ids, base.vertex_ids) and np.array_equal(state.cells, base.cells)
+    return state.vertex_ids[np.any(state.vertices != base.vertices, axis=1)]
+
+
+def _triangles_on(base: MeshState, moved: npt.NDArray[np.int64]) -> int:
+    """The triangles with a moved vertex: a region's one-ring margin (docs/merge.md)."""
+    return int(np.isin(base.cells, moved).any(axis=1).sum())
+
+
+def _region_words(base: MeshState, moved: npt.NDArray[np.int64]) -> str:
+    """How the report counts a region of moved vertices: the vertices and the triangles on them."""
+    return f"{len(moved)} vertices, {_triangles_on(base, moved)} triangles"
+
+
+def _metres(state: MeshState, base: MeshState, ids: npt.NDArray[np.int64]) -> float:
+    """The largest distance a vertex of ``ids`` moved from the base, in whole metres."""
+    at = np.searchsorted(base.vertex_ids, ids)
+    return float(round(np.linalg.norm(state.vertices[at] - base.vertices[at], axis=1).max()))
+
+
+def _largest(state: MeshState, base: MeshState, ids: npt.NDArray[np.int64]) -> str:
+    return f"{_metres(state, base, ids):.0f} m"
+
+
+def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "merge"
+    assert main(["--dsn", db_dsn, "demo", "merge", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m (feature 1, 716 vertices, 1271 triangles)" in out
+    with psycopg.connect(make_conninfo(db_dsn, dbname="tgsis_demo_merge")) as conn:
+        versions = {v.name: v for v in list_versions(conn)}
+        base = _fault_state(conn, 1, "DEFAULT", versions["DEFAULT"].saved["release_5.3"])
+        assert base.n_vertices == 716 and base.n_cells == 1271
+        ann, bob, cat = (
+            _fault_state(conn, 1, name, versions[name].saved[f"{name}_edit"])
+            for name in ("north_tip", "south_tip", "north_review")
+        )
+        both = _fault_state(conn, 1, "DEFAULT", versions["DEFAULT"].saved["both_tips"])
+        final = _fault_state(conn, 1, "DEFAULT", None)
+    a, b, c = _moved(ann, base), _moved(bob, base), _moved(cat, base)
+    # the edits as stated: ann's and bob's at the two ends, cat's over ann's
+    assert len(a) > 20 and len(b) > 20 and len(np.intersect1d(a, c)) > 20
+    assert not len(np.intersect1d(a, b)) and not len(np.intersect1d(b, c))
+    for name, state, moved in (("north_tip", ann, a), ("south_tip", bob, b), ("north_review", cat, c)):
+        assert (
+            f"({name}) " in out
+            and f": {len(moved)} vertices moved (up to {_largest(state, base, moved)}), {2 * len(moved) + 1} rows written"
+            in out
+        )
+
+    # the merge of south_tip: ann's region (parent) and bob's (child), disjoint, merged by themselves
+    assert f"changed by parent, merges by itself; {_region_words(base, a)} (parent moved {len(a)}, up to " in out
+    assert f"changed by child, merges by itself; {_region_words(base, b)} (parent moved 0, up to 0 m; child" in out
+    # ... and DEFAULT then holds both edits bit for bit, the rest and every triangle as the base
+    assert np.array_equal(both.vertex_ids, base.vertex_ids) and np.array_equal(both.cells, base.cells)
+    assert np.array_equal(both.cell_ids, base.cell_ids)
+    expected = base.vertices.copy()
+    for side, moved in ((ann, a), (bob, b)):
+        at = np.searchsorted(base.vertex_ids, moved)
+        expected[at] = side.vertices[at]
+    assert both.vertices.tobytes() == expected.tobytes()
+    assert "bit for bit, every other vertex and every triangle as in release 5.3: yes" in out
+
+    # the merge of north_review: one conflict region, exactly ann's and cat's moved vertices and the triangles
+    # on them; bob's region (now the parent's) merges by itself
+    union = np.union1d(a, c)
+    assert (
+        f"changed by both, a CONFLICT; {_region_words(base, union)} "
+        f"(parent moved {len(a)}, up to {_largest(ann, base, a)}; child moved {len(c)}, up to {_largest(cat, base, c)})"
+    ) in out
+    assert f"changed by parent, merges by itself; {_region_words(base, b)}" in out.split("5. north_review")[1]
+    assert out.count("a CONFLICT") == 1
+    # ... and what a psql user reads of them in tgsis.conflict_regions once the conflict is solved by average
+    assert (
+        "=> region, changed_by, solution, vertices, triangles, parent_m, child_m: "
+        f"0, both, average, {len(union)}, {_triangles_on(base, union)}, {_metres(ann, base, a)}, "
+        f"{_metres(cat, base, c)}; 1, parent, automatic, {len(b)}, {_triangles_on(base, b)}, "
+        f"{_metres(bob, base, b)}, 0.0"
+    ) in out
+
+    # solved by average: every vertex of the region between ann's and cat's position, bob's edit and the rest kept
+    assert np.array_equal(final.vertex_ids, base.vertex_ids) and np.array_equal(final.cells, base.cells)
+    inside = np.isin(final.vertex_ids, union)
+    assert final.vertices[~inside].tobytes() == both.vertices[~inside].tobytes()
+    p, q, r = ann.vertices[inside], cat.vertices[inside], final.vertices[inside]
+    span = q - p
+    t = np.einsum("ij,ij->i", r - p, span) / np.einsum("ij,ij->i", span, span)
+    assert np.all(t > 0.0) and np.all(t < 1.0)
+    off_segment = np.linalg.norm(r - (p + t[:, None] * span), axis=1)
+    assert off_segment.max() <= 1e-9 * np.linalg.norm(span, axis=1).max()
+    assert r.tobytes() == (0.5 * p + 0.5 * q).tobytes()  # halfway, the rule of docs/merge.md, to the bit
+    assert "-> position_as_in, vertices: none (the average), 108; release 5.3, 499; south_tip (bob), 109" in out
+    assert "-> triangles, not_as_in_release_5_3: 1271, 0" in out
+
+    _replays(db_dsn, "merge", out, 3)
+    after = out.split("8. steps 3 to 6 from the command line")[1].splitlines()[1:]
+    commands = [line.strip() for line in after if line.startswith("   tgsis ")]
+    assert len(commands) == 7 and "tgsis version resolve north_review 1 average --region 0" in commands
+    for command in commands:  # the commands shown are the command line's
+        build_parser().parse_args(shlex.split(command)[1:])
+    overlay = folder / "1_CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m_overlay.png"
+    for picture_file in (overlay, folder / "merge_both_tips.png", folder / "merge_resolved.png"):
+        with Image.open(picture_file) as picture:
+            assert picture.format == "PNG"
+    for exported in ("base", "parent", "child"):
+        assert formats.read_one(folder / f"1_CRFA-OCNZ-MULT-Oceanic_fault-CFM5_1000m_{exported}.ts").n_vertices == 716
+
+
+def test_merge_without_the_cfm_data_runs_on_a_synthetic_fault(
+    db_dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A trimmed install (no data/cfm): the same story on the stand-in fault, saying so, with the same outcome."""
+    from tgsis.scenarios import run_scenario
+
+    monkeypatch.setenv("TGSIS_DEMO_DATA", str(tmp_path / "no such folder"))
+    lines: list[str] = []
+    result = run_scenario("merge", db_dsn, out=lines.append, folder=tmp_path / "out")
+    out = "\n".join(lines)
+    assert "data: synthetic faults (no CFM data found)" in out and "middle_fault (feature 1, 360 vertices" in out
+    assert result.figures["both_edits_kept"] is True and result.figures["conflict_region_exact"] is True
+    low, high = result.figures["average_between"]
+    assert 0.0 < low <= high < 1.0
+    assert (tmp_path / "out" / "merge_resolved.png").is_file()

@@ -28,16 +28,15 @@ Every step uses the public API; the same steps work from ``psql`` and the
 
 from __future__ import annotations
 
-import os
 import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import psycopg
 
+from tgsis._cfm import CfmFault, load_releases
 from tgsis.db import checkin as C
 from tgsis.db import features as F
 from tgsis.db import temporal as T
@@ -51,63 +50,11 @@ from tgsis.temporal import EvolvingSurface, TopologyPeriod
 __all__ = ["run_demo", "DEMO_DATABASE"]
 
 DEMO_DATABASE = "tgsis_demo"
-RELEASES = ("cfm5.3", "cfm6.1")
 #: Synthetic slip of the fault history (metres at the fault's deepest node) over HISTORY (Ma, ages negative).
 SLIP = 500.0
 HISTORY = (-2.0, 0.0)
 #: Coordinates of the two releases are rounded differently: vertices within 1 cm are the same vertex.
 TOLERANCE = 0.01
-
-
-@dataclass(frozen=True)
-class _Fault:
-    name: str
-    mesh: Mesh
-
-
-def _cfm_folder() -> Path | None:
-    """The CFM data: ``$TGSIS_DEMO_DATA`` when set, else the copy inside the installed package, else the source tree's.
-
-    The wheel holds ``data/cfm`` as ``tgsis/_data/cfm``; a source checkout
-    (an editable install) reads ``data/cfm`` itself.
-    """
-    env = os.environ.get("TGSIS_DEMO_DATA")
-    here = Path(__file__).resolve().parent
-    candidates = [Path(env)] if env else [here / "_data" / "cfm", here.parents[1] / "data" / "cfm"]
-    for folder in candidates:
-        if all((folder / r).is_dir() for r in RELEASES):
-            return folder
-    return None
-
-
-def _synthetic_release(release: int) -> list[_Fault]:
-    """Three gridded fault-like surfaces; release 1 moves part of the second one."""
-    faults = []
-    for i, name in enumerate(("north_fault", "middle_fault", "south_fault")):
-        u, w = np.meshgrid(np.linspace(0, 20_000, 30), np.linspace(-10_000, 0, 12))
-        x = u + 40_000 * i
-        y = 3_900_000 + 0.3 * w + 2_000 * np.sin(u / 5_000)
-        if release == 1 and i == 1:
-            y = y + np.where(u > 10_000, 150.0, 0.0)  # re-interpreted eastern half
-        vertices = np.stack([x.ravel(), y.ravel(), w.ravel()], axis=1)
-        idx = np.arange(u.size).reshape(u.shape)
-        a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-        triangles = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
-        faults.append(_Fault(name, Surface(vertices, triangles, name=name)))
-    return faults
-
-
-def _load_releases() -> tuple[str, list[list[_Fault]]]:
-    folder = _cfm_folder()
-    if folder is None:
-        return "synthetic faults (no CFM data found)", [_synthetic_release(0), _synthetic_release(1)]
-    from tgsis import formats
-
-    releases = []
-    for release in RELEASES:
-        files = sorted((folder / release).glob("*.ts"))
-        releases.append([_Fault(m.name or f.stem, m) for f in files for m in formats.read(f)])
-    return f"SCEC Community Fault Model, releases 5.3 and 6.1 ({folder})", releases
 
 
 def _demo_conninfo(dsn: str | None) -> str:
@@ -117,7 +64,7 @@ def _demo_conninfo(dsn: str | None) -> str:
     return fresh_database(dsn, DEMO_DATABASE)
 
 
-def _store_release(conn: psycopg.Connection[Any], faults: Sequence[_Fault], release: str) -> dict[str, int]:
+def _store_release(conn: psycopg.Connection[Any], faults: Sequence[CfmFault], release: str) -> dict[str, int]:
     return {
         f.name: F.insert_feature(conn, "faults", f.mesh, {"release": release}, drop_extra_properties=True)
         for f in faults
@@ -145,7 +92,7 @@ def _meshes_seen(conn: psycopg.Connection[Any]) -> dict[str, Mesh]:
     return {f.name or str(f.id): f.mesh for f in F.fetch_features(conn, "faults") if isinstance(f.mesh, Mesh)}
 
 
-def _fault_history(fault: _Fault) -> tuple[EvolvingSurface, int]:
+def _fault_history(fault: CfmFault) -> tuple[EvolvingSurface, int]:
     """The fault over HISTORY: displaced along strike 2 Ma ago (SLIP at depth, none at the top), as it is today.
 
     One topology period, two geometry instants; returns it and the index of
@@ -162,7 +109,7 @@ def _fault_history(fault: _Fault) -> tuple[EvolvingSurface, int]:
     return EvolvingSurface([period], alive=True, name=fault.name), int(np.argmax(depth))
 
 
-def _store_history(conn: psycopg.Connection[Any], fault: _Fault, folder: Path) -> list[str]:
+def _store_history(conn: psycopg.Connection[Any], fault: CfmFault, folder: Path) -> list[str]:
     """Step 6: store the fault history, take its shape at the middle time in SQL, export it as a .pvd."""
     history, deepest = _fault_history(fault)
     F.create_feature_class(
@@ -282,7 +229,7 @@ def run_demo(
     """
     target = resolve_target(dsn)
     conninfo = _demo_conninfo(dsn)
-    source, (old, new) = _load_releases()
+    source, (old, new) = load_releases()
     with psycopg.connect(conninfo) as conn:
         install(conn)
         current = installed_version(conn)

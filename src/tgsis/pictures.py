@@ -128,6 +128,8 @@ def scene(
     exaggeration: float = 1.0,
     size: tuple[float, float] = (8.0, 6.0),
     dpi: int = 100,
+    boxes: Sequence[tuple[npt.ArrayLike, str, str]] = (),
+    view: tuple[float, float] | None = None,
 ) -> Path:
     """Write a PNG of several surfaces in one scene.
 
@@ -145,6 +147,13 @@ def scene(
         Units of x, y and z for the axis labels.
     exaggeration : float
         Vertical exaggeration (said in the title).
+    boxes : sequence of (bounds, label, colour)
+        Boxes drawn as wire frames with their label (e.g. the regions of a
+        merge): ``bounds`` (2, 3) ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``
+        (z up), ``colour`` a matplotlib colour.
+    view : (elevation, azimuth), optional
+        Where the eye is, in degrees (matplotlib's ``view_init``: azimuth
+        from +x towards +y); default matplotlib's (30, -60).
     """
     require("matplotlib", "tgsis.pictures")
     import matplotlib
@@ -161,6 +170,7 @@ def scene(
     colours = list(colour) if colour is not None else [None] * len(surfaces)
     if len(colours) != len(surfaces):
         raise InvalidInputError(f"{len(colours)} colourings for {len(surfaces)} surfaces")
+    frames = [(_box_bounds(b, label), label, tint) for b, label, tint in boxes]
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     figure = plt.figure(figsize=size, dpi=dpi)
@@ -168,6 +178,10 @@ def scene(
         ax = _axes(figure, _bounds(shown), units, exaggeration)
         vmax = max((float(np.nanmax(c)) for c in colours if c is not None and len(c)), default=0.0)
         mappable = _draw(ax, surfaces, colours, vmax)
+        for bounds, label, tint in frames:
+            _wire_box(ax, bounds, label, tint)
+        if view is not None:
+            ax.view_init(elev=view[0], azim=view[1])
         if any(c is not None for c in colours):
             figure.colorbar(mappable, ax=ax, shrink=0.6, pad=0.12, label=colour_label)
         ax.set_title(_title(title, exaggeration))
@@ -175,6 +189,30 @@ def scene(
     finally:
         plt.close(figure)
     return target
+
+
+def _box_bounds(bounds: npt.ArrayLike, label: str) -> FloatArray:
+    try:
+        box = np.asarray(bounds, dtype=np.float64)
+    except (TypeError, ValueError):  # ragged or not numbers
+        box = np.full((0,), np.nan)
+    if box.shape != (2, 3) or not np.all(np.isfinite(box)) or np.any(box[0] > box[1]):
+        shown = box.tolist() if box.size else bounds
+        raise InvalidInputError(
+            f"the box {label!r} is not [[xmin, ymin, zmin], [xmax, ymax, zmax]] (finite, min <= max): {shown}"
+        )
+    return box
+
+
+def _wire_box(ax: Any, box: FloatArray, label: str, colour: str) -> None:
+    """The 12 edges of an axis-aligned box, and its label at its top corner."""
+    corners = np.array([[box[(i >> a) & 1, a] for a in range(3)] for i in range(8)])
+    for i in range(8):
+        for a in range(3):
+            j = i | (1 << a)
+            if j != i:
+                ax.plot(*corners[[i, j]].T, color=colour, linewidth=1.2, zorder=10)
+    ax.text(*box[1], label, color=colour, fontsize="small", zorder=11)
 
 
 def _cut(surface: Surface, y: float) -> FloatArray:

@@ -61,6 +61,12 @@ def _knowledge(context: Context) -> None:
     run(context)
 
 
+def _merge(context: Context) -> None:
+    from tgsis.scenarios.merge import run
+
+    run(context)
+
+
 def _cfm(context: Context) -> None:
     raise AssertionError("cfm runs through tgsis.demo.run_demo")  # pragma: no cover - dispatched below
 
@@ -98,6 +104,12 @@ SCENARIOS: dict[str, Scenario] = {
         "a horizon's interpretations as one object over a knowledge axis (model 5): "
         "box queries over x, y and knowledge, slices back to each interpretation",
         _knowledge,
+    ),
+    "merge": Scenario(
+        "merge",
+        "three geologists edit the two ends of one real CFM fault in three versions: disjoint edits merge "
+        "by region, an overlapping one is a region conflict solved by average",
+        _merge,
     ),
     "cfm": Scenario(
         "cfm", "the release story on real faults of the SCEC Community Fault Model (versions, check-in)", _cfm
