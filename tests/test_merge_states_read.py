@@ -378,7 +378,7 @@ def test_a_role_that_may_read_the_views_but_not_the_storage_reads_the_same_state
         rita = made.connect("rita")
         fc = tgsis.get_feature_class(rita, "faults")
         rita.rollback()
-        assert not _merge_states._storage_readable(rita, _merge_states._tables(fc)[0])
+        assert _merge_states._readable_storages(rita, _merge_states._tables(fc)[0]) is None
         rita.rollback()
         read = fast_states(rita, version, geoid)
         for side in owner:

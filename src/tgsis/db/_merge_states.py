@@ -126,7 +126,7 @@ class _Table:
     property row ``_idx``, atom vertex, part run's first cell).
     """
 
-    view: str  # the table's name in ``schema``; its storage is ``<view>_ver``
+    view: str  # the table's name in ``schema``; its storage is where ``tgsis.storage_table`` says
     schema: str
     key: str
     columns: tuple[tuple[str, str], ...]
@@ -135,7 +135,7 @@ class _Table:
     def source(self) -> sql.Composed:
         return sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(self.view))
 
-    def changed(self, sets: Mapping[str, list[int]], since: list[int]) -> sql.Composed:
+    def changed(self, storage: str, sets: Mapping[str, list[int]], since: list[int]) -> sql.Composed:
         """The storage's rows of the object some revision of ``since`` wrote or closed, as a subquery.
 
         A row visible in one set and not in another was written in a
@@ -159,7 +159,7 @@ class _Table:
                 sql.SQL("v.{}").format(sql.Identifier(c)) for c in (self.key, *(n for n, _ in self.columns))
             ),
             seen=seen,
-            storage=sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(self.view + "_ver")),
+            storage=sql.SQL(storage),  # quoted by tgsis.storage_table
             since=_int_array(since),
         )
 
@@ -227,22 +227,25 @@ def _read_state(conn: Conn, fc: FeatureClass, geoid: int, version: str, revision
     )
 
 
-def _storage_readable(conn: Conn, tables: list[_Table]) -> bool:
-    """Whether every table is versioned with the object key read here, and the role may read its storage.
+def _readable_storages(conn: Conn, tables: list[_Table]) -> list[str] | None:
+    """Each table's storage (``tgsis.storage_table``: quoted) when all are versioned with the object key read here
+    and the role may read them; else None.
 
     A role that may read a view but not its storage (a grant made on the
     view only) reads as before: three full reads through the views.
     """
-    names = [f"{t.schema}.{t.view}" for t in tables]
-    row = conn.execute(
-        "SELECT count(*) FILTER (WHERE has_table_privilege(format('%%I.%%I', t.schemaname, t.tablename || '_ver'), 'SELECT')"
-        "                          AND t.objectkeyfield = k.key)"
-        "  FROM tgsis.versioned_tables t"
-        "  JOIN unnest(%s::text[], %s::text[], %s::text[]) AS k(schemaname, tablename, key)"
-        "    ON k.schemaname = t.schemaname AND k.tablename = t.tablename",
+    rows = conn.execute(
+        "SELECT tgsis.storage_table(k.schemaname, k.tablename) AS storage,"
+        "       t.objectkeyfield IS NOT DISTINCT FROM k.key"
+        "       AND has_table_privilege(tgsis.storage_table(k.schemaname, k.tablename), 'SELECT')"
+        "  FROM unnest(%s::text[], %s::text[], %s::text[]) WITH ORDINALITY AS k(schemaname, tablename, key, n)"
+        "  LEFT JOIN tgsis.versioned_tables t ON t.schemaname = k.schemaname AND t.tablename = k.tablename"
+        " ORDER BY k.n",
         ([t.schema for t in tables], [t.view for t in tables], [t.key for t in tables]),
-    ).fetchone()
-    return row is not None and row[0] == len(names)
+    ).fetchall()
+    if len(rows) != len(tables) or not all(r[1] for r in rows):
+        return None
+    return [str(r[0]) for r in rows]
 
 
 def _by_key(columns: list[npt.NDArray[Any]]) -> list[npt.NDArray[Any]]:
@@ -313,14 +316,18 @@ def _read_states(conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, t
         assert row is not None
         sets[side] = sorted(int(r) for r in row[0])
     base_version, base_revision = sides["base"]
-    if not _storage_readable(conn, tables):
+    storages = _readable_storages(conn, tables)
+    if storages is None:
         return {side: _read_state(conn, fc, geoid, version, revision) for side, (version, revision) in sides.items()}
     conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (base_version, base_revision))
     since = sorted(
         set(sets["base"]).symmetric_difference(sets["parent"]) | set(sets["base"]).symmetric_difference(sets["child"])
     )
     requests = [Packed(t.source, t.key, t.columns, [geoid]) for t in tables]
-    requests += [Packed(t.changed(sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid]) for t in tables]
+    requests += [
+        Packed(t.changed(storage, sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+        for t, storage in zip(tables, storages, strict=True)
+    ]
     read = columns_out_all(conn, requests)
     base, changed = [_by_key(columns) for columns in read[: len(tables)]], read[len(tables) :]
     rows = {"base": _rows_of(fc, properties, base)}

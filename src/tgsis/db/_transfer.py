@@ -52,10 +52,20 @@ def read_only_snapshot(conn: Conn) -> Iterator[None]:
     inside the caller's transaction, a savepoint of it (its isolation level is
     the caller's to choose, and it may write).
     """
+    with repeatable_read(conn, write=False):
+        yield
+
+
+@contextlib.contextmanager
+def repeatable_read(conn: Conn, *, write: bool) -> Iterator[None]:
+    """Outside a transaction, a new ``REPEATABLE READ`` one (``READ ONLY`` unless ``write``); inside, a savepoint.
+
+    Inside the caller's transaction its isolation level is the caller's.
+    """
     fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     with conn.transaction():
         if fresh:
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ READ ONLY")
+            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ" + ("" if write else " READ ONLY"))
         yield
 
 

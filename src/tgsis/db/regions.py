@@ -37,6 +37,7 @@ import psycopg
 
 from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db._transfer import repeatable_read
 from tgsis.db.versions import Conflict, ConflictRegion, show_name
 from tgsis.errors import (
     ConcurrentChangeError,
@@ -90,12 +91,7 @@ def _consistent(conn: Conn, *, write: bool) -> Iterator[None]:
     no longer the conflict's, and a computed-only answer says the object
     changed meanwhile), so regions of a mixed state are never stored or given.
     """
-    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
-        with conn.transaction():
-            conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ" + ("" if write else " READ ONLY"))
-            yield
-        return
-    with conn.transaction():
+    with repeatable_read(conn, write=write):
         yield
 
 
