@@ -158,3 +158,26 @@ def test_the_merge_holds_the_features_write_lock_until_it_commits(conn: Conn, fa
             wait_until_blocked(observer, other.pid, conn.info.backend_pid)
     other.finish()  # then saves over the merged state
     assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == curved_surface().vertices.tobytes()
+
+
+def test_vertices_within_the_tolerance_are_unchanged_in_the_merge_as_in_a_plain_check_in(
+    conn: Conn, fault: int
+) -> None:
+    """A file that rounds every coordinate (checked in with a tolerance) moved nothing but what it moved."""
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 1.25, -3.5))  # another writer, after the check-out
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[:] = np.round(mine.vertices, 3)  # the tool wrote millimetres: every vertex within 0.001
+    mine.vertices[NORTH, 2] += 2.75
+    result = tgsis.checkin(conn, co, mine, tolerance=0.001, on_conflict="merge")
+    conn.commit()
+    assert result.merged
+    expected = curved_surface().vertices.copy()
+    moved(expected, SOUTH, (0.0, 1.25, -3.5))  # theirs, bit for bit: not overwritten by a rounding
+    expected[NORTH] = mine.vertices[NORTH]  # mine, as edited
+    ids, xyz, _, _ = stored_state(conn, "DEFAULT", fault)
+    np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
+    assert xyz.tobytes() == expected.tobytes()
+

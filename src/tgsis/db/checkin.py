@@ -1217,8 +1217,13 @@ def _checkin_merge(
     kept_c = plan.cell_map >= 0
     cell_ids[kept_c] = base.cell_ids[plan.cell_map[kept_c]]
     cell_ids[~kept_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(int((~kept_c).sum()))
+    # a vertex the comparison matched (within the tolerance) and did not pair as moved is unchanged, as a plain
+    # check-in keeps it: the base's coordinates, not the file's rounding of them (else every such vertex is an edit)
+    vertices = mesh.vertices.copy()
+    unchanged = (plan.vertex_map >= 0) & ~plan.moved
+    vertices[unchanged] = base.mesh.vertices[plan.vertex_map[unchanged]]
     edit = mesh_class(fc.geotype)(
-        mesh.vertices,
+        vertices,
         mesh.cells,
         vertex_properties={p.name: cell_values[p.name] for p in fc.aligned("VERTEX")},
         cell_properties={p.name: cell_values[p.name] for p in fc.aligned("CELL")},
