@@ -181,3 +181,31 @@ def test_vertices_within_the_tolerance_are_unchanged_in_the_merge_as_in_a_plain_
     np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
     assert xyz.tobytes() == expected.tobytes()
 
+
+def test_a_rename_made_since_check_out_is_kept_by_the_merge(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -1.0))
+    conn.execute("UPDATE tgsis.geometry SET geoname = 'San Andreas (renamed)' WHERE geoid = %s", (fault,))
+    conn.commit()
+    mine = co.mesh.copy()  # the checked-out mesh, name and all
+    mine.vertices[NORTH, 2] += 1.0
+    assert tgsis.checkin(conn, co, mine, on_conflict="merge").merged
+    conn.commit()
+    name = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (fault,)).fetchone()
+    assert name == ("San Andreas (renamed)",)
+
+
+def test_both_renamed_differently_refuses_and_writes_nothing(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    conn.execute("UPDATE tgsis.geometry SET geoname = 'theirs' WHERE geoid = %s", (fault,))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 1.0
+    before = _tables(conn)
+    with pytest.raises(tgsis.CheckoutConflictError, match="name"):
+        tgsis.checkin(conn, co, mine, name="mine", on_conflict="merge")
+    conn.rollback()
+    assert _tables(conn) == before
+

@@ -1173,6 +1173,24 @@ def _mesh_state(fc: FeatureClass, mesh: Mesh, vertex_ids: IntArray, cell_ids: In
     )
 
 
+def _merged_name(
+    name: str | None, mesh: Mesh, base_name: str | None, stored_name: str | None, refused: str
+) -> str | None:
+    """The geometry name after a merging check-in: the edit's when it renamed (``name``, else the mesh's), else the
+    stored one (a rename made since check-out is kept); both renamed, differently: CheckoutConflictError."""
+    wanted = name if name is not None else mesh.name
+    if wanted is None or (name is None and wanted == base_name):
+        return stored_name  # the edit did not rename
+    if stored_name not in (base_name, wanted):
+        raise CheckoutConflictError(
+            f"{refused}; its name was changed since check-out to {stored_name!r} (from {base_name!r}) and the edit "
+            f"names it {wanted!r}: a merge by region does not choose between two names; nothing was written",
+            hint="check in with the current name (name=..., tgsis checkin --name), or into a new child version "
+            '(on_conflict="child", tgsis checkin --on-conflict child)',
+        )
+    return wanted
+
+
 def _checkin_merge(
     conn: Conn,
     fc: FeatureClass,
@@ -1203,6 +1221,7 @@ def _checkin_merge(
     cell_values = aligned_properties(fc, mesh, drop_extra, "the edited mesh")
     feature_values = feature_columns(fc, properties)
     check_feature_values(conn, fc, feature_values)
+    merged_name = _merged_name(name, mesh, checked_out.base.mesh.name, stored_name, refused)
     storage = Storage.of(conn, fc)
     current = _stored_mesh(conn, fc, geoid, stored_name)
     base = checked_out.base
@@ -1255,7 +1274,7 @@ def _checkin_merge(
         geoid,
         merged_mesh,
         merged_mesh.bounds() if merged_mesh.n_vertices else None,
-        _new_name(name, mesh, stored_name),
+        merged_name,
         feature_values,
     )
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
