@@ -209,3 +209,39 @@ def test_both_renamed_differently_refuses_and_writes_nothing(conn: Conn, fault: 
     conn.rollback()
     assert _tables(conn) == before
 
+
+def _class_with_a_feature_property(conn: Conn) -> int:
+    tgsis.create_feature_class(conn, "wells", "SURFACE", feature_properties=[("status", "text")])
+    tgsis.enable_feature_versioning(conn)
+    geoid = tgsis.insert_feature(conn, "wells", curved_surface(), {"status": "draft"}, drop_extra_properties=True)
+    conn.commit()
+    return geoid
+
+
+def test_a_feature_property_both_changed_refuses_and_writes_nothing(conn: Conn) -> None:
+    geoid = _class_with_a_feature_property(conn)
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    conn.execute("UPDATE public.wells SET status = 'approved' WHERE _geoid = %s", (geoid,))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 1.0
+    before = _tables(conn)
+    with pytest.raises(tgsis.CheckoutConflictError, match="status"):
+        tgsis.checkin(conn, co, mine, {"status": "rejected"}, on_conflict="merge")
+    conn.rollback()
+    assert _tables(conn) == before
+    assert conn.execute("SELECT status FROM public.wells WHERE _geoid = %s", (geoid,)).fetchone() == ("approved",)
+
+
+def test_a_feature_property_only_the_edit_changed_is_written_by_the_merge(conn: Conn) -> None:
+    geoid = _class_with_a_feature_property(conn)
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -1.0))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 1.0
+    assert tgsis.checkin(conn, co, mine, {"status": "reviewed"}, on_conflict="merge").merged
+    conn.commit()
+    assert conn.execute("SELECT status FROM public.wells WHERE _geoid = %s", (geoid,)).fetchone() == ("reviewed",)

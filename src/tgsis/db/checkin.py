@@ -1191,6 +1191,51 @@ def _merged_name(
     return wanted
 
 
+def _check_feature_values_merge(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    checked_out_values: Mapping[str, Any],
+    values: Mapping[str, Any],
+    refused: str,
+) -> None:
+    """Refuse (CheckoutConflictError) feature properties the edit sets that were changed since check-out to another value.
+
+    The three values are compared as the column's type (the database casts
+    them): a property changed since check-out and set by the edit to the
+    same value, or set by the edit only, merges.
+    """
+    clashes = []
+    for column, value in values.items():
+        base = checked_out_values.get(column)
+        row = conn.execute(
+            sql.SQL(
+                "SELECT (jsonb_populate_record(NULL::{t}, %(base)s::jsonb)).{c} IS DISTINCT FROM f.{c}, "
+                "(jsonb_populate_record(NULL::{t}, %(new)s::jsonb)).{c} IS DISTINCT FROM f.{c}, f.{c}::text "
+                "FROM {t} f WHERE f._geoid = %(g)s"
+            ).format(t=fc.qualified(fc.featuretable), c=sql.Identifier(column)),
+            {
+                "base": json.dumps({column: base}, default=str),
+                "new": json.dumps({column: value}, default=str),
+                "g": geoid,
+            },
+        ).fetchone()
+        if row is None:
+            continue
+        # a check-out that did not record the value: whether it changed since is unknown, so it may have
+        base_differs = bool(row[0]) if column in checked_out_values else True
+        if base_differs and row[1]:
+            clashes.append(f"{column} (now {row[2]!r}, checked out as {base!r}, the edit sets {value!r})")
+    if clashes:
+        raise CheckoutConflictError(
+            f"{refused}; feature properties changed since check-out that the edit sets to other values: "
+            + ", ".join(clashes)
+            + "; a merge by region does not choose between two values; nothing was written",
+            hint="check in without setting them, or with their current values, or into a new child version "
+            '(on_conflict="child", tgsis checkin --on-conflict child)',
+        )
+
+
 def _checkin_merge(
     conn: Conn,
     fc: FeatureClass,
@@ -1221,6 +1266,7 @@ def _checkin_merge(
     cell_values = aligned_properties(fc, mesh, drop_extra, "the edited mesh")
     feature_values = feature_columns(fc, properties)
     check_feature_values(conn, fc, feature_values)
+    _check_feature_values_merge(conn, fc, geoid, checked_out.properties, properties or {}, refused)
     merged_name = _merged_name(name, mesh, checked_out.base.mesh.name, stored_name, refused)
     storage = Storage.of(conn, fc)
     current = _stored_mesh(conn, fc, geoid, stored_name)
