@@ -245,3 +245,45 @@ def test_a_feature_property_only_the_edit_changed_is_written_by_the_merge(conn: 
     assert tgsis.checkin(conn, co, mine, {"status": "reviewed"}, on_conflict="merge").merged
     conn.commit()
     assert conn.execute("SELECT status FROM public.wells WHERE _geoid = %s", (geoid,)).fetchone() == ("reviewed",)
+
+
+def test_the_parts_of_the_cells_the_edit_added_are_stored_by_the_merge(conn: Conn) -> None:
+    """A GOCAD surface of two TFACEs (parts in tgsis.part): the triangles the edit adds keep the part it gave them."""
+    tgsis.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    half = surface.n_cells // 2
+    surface.cell_properties["part"] = (np.arange(surface.n_cells) >= half).astype(np.int64)
+    geoid = tgsis.insert_feature(conn, "faults", surface)
+    conn.commit()
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    assert np.array_equal(co.mesh.cell_properties["part"], surface.cell_properties["part"])
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -1.0))
+    conn.commit()
+    base = co.mesh
+    split = half  # a triangle of part 1 at the northern end, split at its centroid into three
+    a, b, d = (int(v) for v in base.cells[split])
+    c = base.n_vertices
+    rest = np.arange(base.n_cells) != split
+    mine = tgsis.Surface(
+        np.vstack([base.vertices, base.vertices[[a, b, d]].mean(axis=0)]),
+        np.vstack([base.cells[rest], [[a, b, c], [b, d, c], [d, a, c]]]),
+        vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.2)},
+        cell_properties={
+            "facies": np.append(base.cell_properties["facies"][rest], [1, 1, 1]).astype(np.int32),
+            "part": np.append(base.cell_properties["part"][rest], [1, 1, 1]),
+        },
+    )
+    assert tgsis.checkin(conn, co, mine, on_conflict="merge").merged
+    conn.commit()
+    again = tgsis.checkout(conn, geoid)
+    conn.commit()
+    parts = again.mesh.cell_properties["part"]
+    assert len(parts) == surface.n_cells + 2 and np.min(parts) >= 0  # -1: a triangle in no part
+    assert np.array_equal(np.bincount(np.asarray(parts, dtype=np.int64)), [half, surface.n_cells - half + 2])

@@ -44,7 +44,7 @@ from psycopg import sql
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._settings import read_version_settings, restore_version_settings
-from tgsis.db._state_write import delete_rows, update_geometry_row, write_state_rows
+from tgsis.db._state_write import PART_PROPERTY, delete_rows, update_geometry_row, write_state_rows
 from tgsis.db._static import (
     MEANING_COLUMNS,
     SIMPLEX,
@@ -64,7 +64,7 @@ from tgsis.db._transfer import (
     read_only_snapshot,
     resolve_class,
 )
-from tgsis.db.classes import FeatureClass, class_of_feature
+from tgsis.db.classes import FeatureClass, class_of_feature, stores_part_column
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.db.versions import show_name
@@ -1158,9 +1158,20 @@ def _checkin_into_child(
     )
 
 
-def _mesh_state(fc: FeatureClass, mesh: Mesh, vertex_ids: IntArray, cell_ids: IntArray, what: str) -> MeshState:
-    """A mesh with the database ids of its rows as a :class:`MeshState`, with the class's property columns."""
+def _mesh_state(
+    fc: FeatureClass,
+    mesh: Mesh,
+    vertex_ids: IntArray,
+    cell_ids: IntArray,
+    what: str,
+    parts: npt.NDArray[Any] | None = None,
+) -> MeshState:
+    """A mesh with the database ids of its rows as a :class:`MeshState`, with the class's property columns
+    (and ``parts``, (m,), as the cell property ``part`` that :mod:`tgsis.db._state_write` writes to ``tgsis.part``)."""
     by_alignment = {a: [p.name for p in fc.aligned(a)] for a in ("VERTEX", "CELL")}
+    cell_properties = {n: np.asarray(mesh.cell_properties[n]) for n in by_alignment["CELL"]}
+    if parts is not None:
+        cell_properties[PART_PROPERTY] = parts
     return MeshState(
         mesh.cell_size,
         vertex_ids,
@@ -1168,9 +1179,32 @@ def _mesh_state(fc: FeatureClass, mesh: Mesh, vertex_ids: IntArray, cell_ids: In
         cell_ids,
         vertex_ids[mesh.cells] if mesh.n_cells else np.empty((0, mesh.cell_size), dtype=np.int64),
         {n: np.asarray(mesh.vertex_properties[n]) for n in by_alignment["VERTEX"]},
-        {n: np.asarray(mesh.cell_properties[n]) for n in by_alignment["CELL"]},
+        cell_properties,
         what,
     )
+
+
+def _merge_parts(fc: FeatureClass, base: Mesh, current: Mesh, edited: Mesh, cell_map: IntArray) -> list[Any]:
+    """The part of each cell of the base, the current state and the edit, when the class keeps parts in ``tgsis.part``.
+
+    ``[None, None, None]`` when neither has parts. -1: a cell in no part. An
+    edit without parts (a file that dropped them) keeps the base's parts of
+    the cells it kept: it changed no part.
+    """
+    if stores_part_column(fc) or not any(PART_PROPERTY in m.cell_properties for m in (base, current, edited)):
+        return [None, None, None]
+
+    def of(mesh: Mesh) -> npt.NDArray[Any]:
+        values = mesh.cell_properties.get(PART_PROPERTY)
+        return np.full(mesh.n_cells, -1, dtype=np.int64) if values is None else np.asarray(values)
+
+    mine = edited.cell_properties.get(PART_PROPERTY)
+    if mine is None:
+        known = of(base)
+        kept = cell_map >= 0
+        mine = np.full(edited.n_cells, -1, dtype=known.dtype)
+        mine[kept] = known[cell_map[kept]]
+    return [of(base), of(current), np.asarray(mine)]
 
 
 def _merged_name(
@@ -1294,11 +1328,13 @@ def _checkin_merge(
         cell_properties={p.name: cell_values[p.name] for p in fc.aligned("CELL")},
     )  # the class's columns, cast as stored
     what = f"feature {geoid} of class {fc.name}"
-    theirs = _mesh_state(fc, current.mesh, current.vertex_ids, current.cell_ids, f"{what} (stored now)")
+    # the parts (GOCAD TFACEs...) merge with the mesh: a cell's part is a value of its row like its properties
+    parts = _merge_parts(fc, base.mesh, current.mesh, mesh, plan.cell_map)
+    theirs = _mesh_state(fc, current.mesh, current.vertex_ids, current.cell_ids, f"{what} (stored now)", parts[1])
     merge = three_way_merge(
-        _mesh_state(fc, base.mesh, base.vertex_ids, base.cell_ids, f"{what} (checked out)"),
+        _mesh_state(fc, base.mesh, base.vertex_ids, base.cell_ids, f"{what} (checked out)", parts[0]),
         theirs,
-        _mesh_state(fc, edit, vertex_ids, cell_ids, f"{what} (edited)"),
+        _mesh_state(fc, edit, vertex_ids, cell_ids, f"{what} (edited)", parts[2]),
     )
     if merge.conflicts:
         described = "; ".join(
