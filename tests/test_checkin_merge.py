@@ -287,3 +287,35 @@ def test_the_parts_of_the_cells_the_edit_added_are_stored_by_the_merge(conn: Con
     parts = again.mesh.cell_properties["part"]
     assert len(parts) == surface.n_cells + 2 and np.min(parts) >= 0  # -1: a triangle in no part
     assert np.array_equal(np.bincount(np.asarray(parts, dtype=np.int64)), [half, surface.n_cells - half + 2])
+
+
+def test_a_merge_says_which_meaning_of_the_file_it_did_not_apply(conn: Conn) -> None:
+    """The colour changed in the edited mesh (a GOCAD file's header): the merge keeps the stored one, and says so."""
+    fault = make_fault(conn, {"color": [1.0, 0.0, 0.0]})
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    assert list(co.mesh.metadata["color"]) == [1.0, 0.0, 0.0]
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -2.0))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 3.0
+    mine.metadata["color"] = [0.0, 0.0, 1.0]
+    result = tgsis.checkin(conn, co, mine, on_conflict="merge")
+    conn.commit()
+    assert result.merged and result.not_applied == ("colour",)
+    colour = conn.execute("SELECT colorred, colorblue FROM tgsis.geometry WHERE geoid = %s", (fault,)).fetchone()
+    assert colour == (1.0, 0.0)  # the stored colour, as said
+    from tgsis.cli.commands.checkin import CheckedIn, checkin_json
+
+    assert checkin_json(CheckedIn(result, "triangle", None, None, []))["not_applied"] == ["colour"]
+
+
+def test_a_merge_of_a_file_saying_what_is_stored_reports_nothing_not_applied(conn: Conn, fault: int) -> None:
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -2.0))
+    conn.commit()
+    mine = co.mesh.copy()
+    mine.vertices[NORTH, 2] += 3.0
+    result = tgsis.checkin(conn, co, mine, on_conflict="merge")
+    assert result.merged and result.not_applied == ()

@@ -421,13 +421,8 @@ def _write_diff(
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
-def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written, storage: Storage) -> int:
-    """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
-
-    What the edited mesh's metadata does not mention stays as stored; atoms
-    and parts are rewritten only when they changed (few rows). Returns the
-    rows changed.
-    """
+def _meaning_columns(edited: Mesh) -> list[tuple[str, str, Any]]:
+    """(column of ``tgsis.geometry``, placeholder, value) of what the edited mesh's metadata says of its file's meaning."""
     meaning = meaning_of(edited, "the edited mesh")
     meta = edited.metadata
     columns: list[tuple[str, str, Any]] = []
@@ -439,6 +434,59 @@ def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, writ
         columns += [(c, "%s::real", v) for c, v in zip(("colorred", "colorgreen", "colorblue"), meaning.color)]
     if meaning.metadata is not None:
         columns.append(("metadata", "%s::jsonb", meaning.metadata_json()))
+    return columns
+
+
+_MEANING_WORDS = {
+    "zpositive": "z convention",
+    "crs": "coordinate system",
+    "colorred": "colour",
+    "colorgreen": "colour",
+    "colorblue": "colour",
+    "metadata": "metadata",
+}
+
+
+def _meaning_not_applied(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, vertex_ids: IntArray) -> list[str]:
+    """What the edited file says of its meaning that differs from the stored one (which a merge keeps): the words
+    of :data:`_MEANING_WORDS`, and ``GOCAD atoms``; compared as a plain check-in would write them, but a
+    coordinate system or metadata where none is stored (what a file format adds by itself)."""
+    differ: list[str] = []
+    for column, holder, value in _meaning_columns(edited):
+        # a coordinate system or metadata the database never had: the file format's defaults (a GOCAD writer's
+        # coordinate system block, its header keys), which tell nothing of an edit
+        optional = column in ("crs", "metadata")
+        row = conn.execute(
+            sql.SQL(
+                "SELECT {c} IS DISTINCT FROM {v} AND ({c} IS NOT NULL OR NOT %s) FROM tgsis.geometry WHERE geoid = %s"
+            ).format(c=sql.Identifier(column), v=sql.SQL(holder)),
+            (value, optional, geoid),
+        ).fetchone()
+        word = _MEANING_WORDS[column]
+        if row is not None and row[0] and word not in differ:
+            differ.append(word)
+    meaning = meaning_of(edited, "the edited mesh")
+    atoms = sorted((int(vertex_ids[a]), int(vertex_ids[r])) for a, r in meaning.atoms)
+    stored = [
+        (int(v), int(r))
+        for v, r in conn.execute(
+            "SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid, refid", (geoid,)
+        ).fetchall()
+    ]
+    if "gocad_atoms" in edited.metadata and atoms != stored:
+        differ.append("GOCAD atoms")
+    return differ
+
+
+def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written, storage: Storage) -> int:
+    """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
+
+    What the edited mesh's metadata does not mention stays as stored; atoms
+    and parts are rewritten only when they changed (few rows). Returns the
+    rows changed.
+    """
+    meaning = meaning_of(edited, "the edited mesh")
+    columns = _meaning_columns(edited)
     changed = 0
     if columns:
         names = [sql.Identifier(c) for c, _, _ in columns]
@@ -809,12 +857,18 @@ class CheckinResult:
     merged : bool
         The edit and the change made since check-out were merged by region
         (``on_conflict="merge"``); ``save`` counts the rows of the merged state written.
+    not_applied : tuple of str
+        After a merge: what the edited file says of its meaning that differs
+        from the stored one and was not written (the merge keeps the stored
+        ``z convention``, ``coordinate system``, ``colour``, ``metadata``,
+        ``GOCAD atoms``); empty otherwise.
     """
 
     save: SaveResult
     conflict: bool = False
     checkout: Checkout | None = None
     merged: bool = False
+    not_applied: tuple[str, ...] = ()
 
     @property
     def version(self) -> str:
@@ -984,8 +1038,10 @@ def checkin(
         written over the current one by an id-keyed difference in the
         check-out's version; otherwise :class:`~tgsis.errors.CheckoutConflictError`
         names the conflicting regions (ids, box) and nothing is written. The
-        mesh is merged: GOCAD atoms and parts, and the file's meaning
-        (coordinate system, colour, metadata) stay as currently stored.
+        mesh is merged, with its parts (``tgsis.part``); GOCAD atoms and the
+        file's meaning (z convention, coordinate system, colour, metadata)
+        stay as currently stored, and :attr:`CheckinResult.not_applied` names
+        those the edited file gives otherwise.
     child_version : str, optional
         Name for that child version.
     keep : bool
@@ -1055,11 +1111,11 @@ def checkin(
                 drop_extra_properties,
             )
         elif on_conflict == "merge":
-            result = _checkin_merge(
+            result, not_applied = _checkin_merge(
                 conn, fc, checked_out, mesh, plan, properties, name, drop_extra_properties, conflict
             )
             restore_version_settings(conn, settings, local=True)
-            return CheckinResult(result, True, None, merged=True)
+            return CheckinResult(result, True, None, merged=True, not_applied=not_applied)
         else:
             result, written = _checkin_into_child(
                 conn, fc, checked_out, mesh, plan, properties, name, child_version, drop_extra_properties, str(conflict)
@@ -1280,8 +1336,11 @@ def _checkin_merge(
     name: str | None,
     drop_extra: bool,
     conflict: psycopg.Error,
-) -> SaveResult:
+) -> tuple[SaveResult, tuple[str, ...]]:
     """Merge the edit with the change made since check-out by region and write the result (caller's transaction).
+
+    Also returns what the edited file says of its meaning that differs from
+    the stored one, which the merge keeps (see :attr:`CheckinResult.not_applied`).
 
     The feature's write lock is taken again (the refused ``check_unchanged``
     took it in a savepoint, whose rollback let it go): the current state read
@@ -1366,6 +1425,13 @@ def _checkin_merge(
         token.version,
         len(merge.regions),
     )
+    not_applied = tuple(_meaning_not_applied(conn, fc, geoid, mesh, vertex_ids))
+    if not_applied:
+        log.warning(
+            "feature %d: the merge kept the stored %s, not the edited file's (it merges the mesh only)",
+            geoid,
+            ", ".join(not_applied),
+        )
     return SaveResult(
         geoid,
         version,
@@ -1378,7 +1444,7 @@ def _checkin_merge(
         len(plan.removed_cells),
         len(plan.added_cells),
         len(plan.diff.added_cells) - len(plan.added_cells),
-    )
+    ), not_applied
 
 
 def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh, written: _Written) -> Checkout:
