@@ -319,3 +319,37 @@ def test_a_merge_of_a_file_saying_what_is_stored_reports_nothing_not_applied(con
     mine.vertices[NORTH, 2] += 3.0
     result = tgsis.checkin(conn, co, mine, on_conflict="merge")
     assert result.merged and result.not_applied == ()
+
+
+def test_vertices_and_triangles_reordered_by_the_tool_keep_their_rows(conn: Conn, fault: int) -> None:
+    """A tool that writes the vertices in another order and each triangle from another corner changed nothing there:
+    the merge writes the moved vertices only, as a plain check-in does, and every triangle row stays as stored."""
+    co = tgsis.checkout(conn, fault)
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, -1.0))
+    conn.commit()
+    base = co.mesh
+    order = np.random.default_rng(7).permutation(base.n_vertices)
+    position = np.empty_like(order)
+    position[order] = np.arange(len(order))
+    vertices = base.vertices[order].copy()
+    vertices[position[NORTH], 2] += 2.0
+    mine = tgsis.Surface(
+        vertices,
+        np.roll(position[base.cells], 1, axis=1)[::-1],  # each triangle from its next corner (same orientation)
+        vertex_properties={"porosity": base.vertex_properties["porosity"][order]},
+        cell_properties={"facies": base.cell_properties["facies"][::-1]},
+    )
+    before = conn.execute("SELECT count(*) FROM tgsis.trgl_ver").fetchone()
+    result = tgsis.checkin(conn, co, mine, on_conflict="merge")
+    conn.commit()
+    assert result.merged
+    expected = curved_surface().vertices.copy()
+    moved(expected, SOUTH, (0.0, 0.0, -1.0))
+    moved(expected, NORTH, (0.0, 0.0, 2.0))
+    ids, xyz, cells, _ = stored_state(conn, "DEFAULT", fault)
+    np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
+    assert xyz.tobytes() == expected.tobytes()
+    assert cells == {(i, *map(int, c)) for i, c in enumerate(curved_surface().cells)}  # as stored, corner order too
+    assert conn.execute("SELECT count(*) FROM tgsis.trgl_ver").fetchone() == before  # no triangle row rewritten
+    assert result.save.rows_written == len(NORTH) * 2 + 1  # vertex rows closed and added, the geometry row

@@ -1380,9 +1380,16 @@ def _checkin_merge(
     vertices = mesh.vertices.copy()
     unchanged = (plan.vertex_map >= 0) & ~plan.moved
     vertices[unchanged] = base.mesh.vertices[plan.vertex_map[unchanged]]
+    # likewise a kept cell is the stored row, from the corner it is stored from (a tool may write a triangle from
+    # another corner, the same oriented cell): else the merge rewrites it, unchanged, into a new row version
+    cells = mesh.cells.copy()
+    if len(cells) and kept_c.any():
+        position_of = np.full(base.mesh.n_vertices, -1, dtype=np.int64)
+        position_of[plan.vertex_map[kept_v]] = np.flatnonzero(kept_v)
+        cells[kept_c] = position_of[base.mesh.cells[plan.cell_map[kept_c]]]
     edit = mesh_class(fc.geotype)(
         vertices,
-        mesh.cells,
+        cells,
         vertex_properties={p.name: cell_values[p.name] for p in fc.aligned("VERTEX")},
         cell_properties={p.name: cell_values[p.name] for p in fc.aligned("CELL")},
     )  # the class's columns, cast as stored
