@@ -289,6 +289,48 @@ def test_the_parts_of_the_cells_the_edit_added_are_stored_by_the_merge(conn: Con
     assert np.array_equal(np.bincount(np.asarray(parts, dtype=np.int64)), [half, surface.n_cells - half + 2])
 
 
+def _two_part_fault(conn: Conn) -> tuple[int, int]:
+    tgsis.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        cell_properties=[("porosity", "float8"), tgsis.Property("facies", "int", alignment="CELL")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    half = surface.n_cells // 2
+    surface.cell_properties["part"] = (np.arange(surface.n_cells) >= half).astype(np.int64)
+    geoid = tgsis.insert_feature(conn, "faults", surface)
+    conn.commit()
+    return geoid, half
+
+
+def test_an_edit_without_parts_leaves_its_new_cells_in_no_part_and_the_others_in_theirs(conn: Conn) -> None:
+    """A mesh given without the cell property part (a tool that drops it) changed no part: the kept cells keep
+    theirs, the cells it added are in none (as stored: no run), and the merge is written."""
+    geoid, half = _two_part_fault(conn)
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -1.0))
+    conn.commit()
+    base = co.mesh
+    a, b, d = (int(v) for v in base.cells[half])
+    c = base.n_vertices
+    rest = np.arange(base.n_cells) != half
+    mine = tgsis.Surface(
+        np.vstack([base.vertices, base.vertices[[a, b, d]].mean(axis=0)]),
+        np.vstack([base.cells[rest], [[a, b, c], [b, d, c], [d, a, c]]]),
+        vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.2)},
+        cell_properties={"facies": np.append(base.cell_properties["facies"][rest], [1, 1, 1]).astype(np.int32)},
+    )
+    assert tgsis.checkin(conn, co, mine, on_conflict="merge").merged
+    conn.commit()
+    again = tgsis.checkout(conn, geoid)
+    conn.commit()
+    parts = np.asarray(again.mesh.cell_properties["part"])
+    assert np.array_equal(np.sort(parts), np.sort(np.append(base.cell_properties["part"][rest], [-1, -1, -1])))
+
+
 def test_a_merge_says_which_meaning_of_the_file_it_did_not_apply(conn: Conn) -> None:
     """The colour changed in the edited mesh (a GOCAD file's header): the merge keeps the stored one, and says so."""
     fault = make_fault(conn, {"color": [1.0, 0.0, 0.0]})
