@@ -371,9 +371,7 @@ def test_a_file_with_a_vertex_added_in_paraview_gives_new_ids(conn: Conn, fault:
     assert len(kept) == merge.child.n_cells - 1  # the other cells kept their ids; the split one became three new
 
 
-def test_a_role_that_may_not_read_the_class_reads_nothing_of_its_regions(
-    db_dsn: str, conn: Conn, fault: int
-) -> None:
+def test_a_role_that_may_not_read_the_class_reads_nothing_of_its_regions(db_dsn: str, conn: Conn, fault: int) -> None:
     """The regions hold ids, boxes, displacements and (average, manual) the rows of a mesh: no more readable than
     the mesh's own rows (tgsis.vrtx, per-class row security)."""
     middle = _middle(conn)
