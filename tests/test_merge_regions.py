@@ -417,3 +417,37 @@ def test_points_lines_and_solids_merge_by_region_with_cells_added_on_one_side(co
     conn.commit()
     assert np.array(rows).tobytes() == expected.tobytes()
     assert [c[0] for c in cells] == [*range(len(mesh.cells)), 1000]
+
+
+def test_a_triangle_added_in_psql_to_a_surface_of_parts_merges_in_no_part(conn: Conn) -> None:
+    """A multi-part surface (tgsis.part runs) whose version gained a triangle by a psql INSERT (in no run: part -1
+    as read): the merge by region writes it, in no part, and keeps every other triangle in its part."""
+    from tests.merge_data import curved_surface, move
+
+    tgsis.create_feature_class(conn, "sheets", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    surface.vertex_properties.clear()
+    surface.cell_properties.clear()
+    half = surface.n_cells // 2
+    surface.cell_properties["part"] = (np.arange(surface.n_cells) >= half).astype(np.int64)
+    geoid = tgsis.insert_feature(conn, "sheets", surface)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):  # edge 0 -> 1 of triangle (0, 1, 13) is on the boundary: a triangle beyond it
+        n = surface.n_vertices
+        conn.execute("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 50.0, -300.0, 0.0)", (geoid, n))
+        conn.execute(
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 1, 0, %s)",
+            (geoid, surface.n_cells, n),
+        )
+        conn.execute("UPDATE tgsis.geometry SET nvrtx = nvrtx + 1, ncell = ncell + 1 WHERE geoid = %s", (geoid,))
+    move(conn, "DEFAULT", geoid, np.arange(130, 144), (0.0, 0.0, -1.0))
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    merged = tgsis.checkout(conn, geoid)
+    conn.commit()
+    parts = np.asarray(merged.mesh.cell_properties["part"])
+    assert len(parts) == surface.n_cells + 1
+    assert np.array_equal(parts, np.append(surface.cell_properties["part"], -1))

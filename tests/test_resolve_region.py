@@ -369,3 +369,23 @@ def test_a_file_with_a_vertex_added_in_paraview_gives_new_ids(conn: Conn, fault:
     assert state.n_cells == curved_surface().n_cells + 2
     kept = set(state.cell_ids.tolist()) & set(merge.child.cell_ids.tolist())
     assert len(kept) == merge.child.n_cells - 1  # the other cells kept their ids; the split one became three new
+
+
+def test_a_role_that_may_not_read_the_class_reads_nothing_of_its_regions(db_dsn: str, conn: Conn, fault: int) -> None:
+    """The regions hold ids, boxes, displacements and (average, manual) the rows of a mesh: no more readable than
+    the mesh's own rows (tgsis.vrtx, per-class row security)."""
+    middle = _middle(conn)
+    tgsis.resolve_region(conn, "e1", fault, middle.region, "average")
+    conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        assert reader.execute("SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s", (fault,)).fetchone() == (0,)
+        rows = reader.execute(
+            "SELECT bbox, parent_displacement, solution_mesh FROM tgsis.conflict_regions WHERE objectkey = %s",
+            (str(fault),),
+        ).fetchall()
+        assert rows == []
+        assert reader.execute("SELECT count(*) FROM tgsis.conflicts").fetchone() == (1,)  # that it conflicts
+    # the roles that may read the class still read them
+    assert len(conn.execute("SELECT * FROM tgsis.conflict_regions").fetchall()) == 3

@@ -202,6 +202,10 @@ $upgrade$;
 
 -- ---- (blocks of later changes that run after the functions, outside the DO block, go here)
 
+-- ---- issue39-review2: the regions of a feature readable only by the roles that may read its class
+-- (row-level security of tgsis.conflict_regions; it needs tgsis.class_denied_geoids, new in 0.3.0)
+-- @include versioning/conflict_regions_policy.sql
+
 -- ---- issue36-keys: object keys stored as text under other sessions' settings, made canonical
 -- Tables keyed by a type whose text depends on the session (date, timestamp(tz), float, numeric,
 -- interval, bytea: tgsis.object_key_kind) get their write triggers generated anew (they name

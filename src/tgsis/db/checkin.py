@@ -44,7 +44,7 @@ from psycopg import sql
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._settings import read_version_settings, restore_version_settings
-from tgsis.db._state_write import delete_rows, update_geometry_row, write_state_rows
+from tgsis.db._state_write import PART_PROPERTY, delete_rows, update_geometry_row, write_state_rows
 from tgsis.db._static import (
     MEANING_COLUMNS,
     SIMPLEX,
@@ -64,7 +64,7 @@ from tgsis.db._transfer import (
     read_only_snapshot,
     resolve_class,
 )
-from tgsis.db.classes import FeatureClass, class_of_feature
+from tgsis.db.classes import FeatureClass, class_of_feature, stores_part_column
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.db.meaning import meaning_of, restore_meaning, z_convention
 from tgsis.db.versions import show_name
@@ -421,13 +421,8 @@ def _write_diff(
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
-def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written, storage: Storage) -> int:
-    """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
-
-    What the edited mesh's metadata does not mention stays as stored; atoms
-    and parts are rewritten only when they changed (few rows). Returns the
-    rows changed.
-    """
+def _meaning_columns(edited: Mesh) -> list[tuple[str, str, Any]]:
+    """(column of ``tgsis.geometry``, placeholder, value) of what the edited mesh's metadata says of its file's meaning."""
     meaning = meaning_of(edited, "the edited mesh")
     meta = edited.metadata
     columns: list[tuple[str, str, Any]] = []
@@ -439,6 +434,59 @@ def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, writ
         columns += [(c, "%s::real", v) for c, v in zip(("colorred", "colorgreen", "colorblue"), meaning.color)]
     if meaning.metadata is not None:
         columns.append(("metadata", "%s::jsonb", meaning.metadata_json()))
+    return columns
+
+
+_MEANING_WORDS = {
+    "zpositive": "z convention",
+    "crs": "coordinate system",
+    "colorred": "colour",
+    "colorgreen": "colour",
+    "colorblue": "colour",
+    "metadata": "metadata",
+}
+
+
+def _meaning_not_applied(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, vertex_ids: IntArray) -> list[str]:
+    """What the edited file says of its meaning that differs from the stored one (which a merge keeps): the words
+    of :data:`_MEANING_WORDS`, and ``GOCAD atoms``; compared as a plain check-in would write them, but a
+    coordinate system or metadata where none is stored (what a file format adds by itself)."""
+    differ: list[str] = []
+    for column, holder, value in _meaning_columns(edited):
+        # a coordinate system or metadata the database never had: the file format's defaults (a GOCAD writer's
+        # coordinate system block, its header keys), which tell nothing of an edit
+        optional = column in ("crs", "metadata")
+        row = conn.execute(
+            sql.SQL(
+                "SELECT {c} IS DISTINCT FROM {v} AND ({c} IS NOT NULL OR NOT %s) FROM tgsis.geometry WHERE geoid = %s"
+            ).format(c=sql.Identifier(column), v=sql.SQL(holder)),
+            (value, optional, geoid),
+        ).fetchone()
+        word = _MEANING_WORDS[column]
+        if row is not None and row[0] and word not in differ:
+            differ.append(word)
+    meaning = meaning_of(edited, "the edited mesh")
+    atoms = sorted((int(vertex_ids[a]), int(vertex_ids[r])) for a, r in meaning.atoms)
+    stored = [
+        (int(v), int(r))
+        for v, r in conn.execute(
+            "SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s ORDER BY vrtxid, refid", (geoid,)
+        ).fetchall()
+    ]
+    if "gocad_atoms" in edited.metadata and atoms != stored:
+        differ.append("GOCAD atoms")
+    return differ
+
+
+def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, written: _Written, storage: Storage) -> int:
+    """Bring the file's meaning (z convention, coordinate system, colour, metadata, atoms, parts) up to date.
+
+    What the edited mesh's metadata does not mention stays as stored; atoms
+    and parts are rewritten only when they changed (few rows). Returns the
+    rows changed.
+    """
+    meaning = meaning_of(edited, "the edited mesh")
+    columns = _meaning_columns(edited)
     changed = 0
     if columns:
         names = [sql.Identifier(c) for c, _, _ in columns]
@@ -809,12 +857,18 @@ class CheckinResult:
     merged : bool
         The edit and the change made since check-out were merged by region
         (``on_conflict="merge"``); ``save`` counts the rows of the merged state written.
+    not_applied : tuple of str
+        After a merge: what the edited file says of its meaning that differs
+        from the stored one and was not written (the merge keeps the stored
+        ``z convention``, ``coordinate system``, ``colour``, ``metadata``,
+        ``GOCAD atoms``); empty otherwise.
     """
 
     save: SaveResult
     conflict: bool = False
     checkout: Checkout | None = None
     merged: bool = False
+    not_applied: tuple[str, ...] = ()
 
     @property
     def version(self) -> str:
@@ -984,8 +1038,10 @@ def checkin(
         written over the current one by an id-keyed difference in the
         check-out's version; otherwise :class:`~tgsis.errors.CheckoutConflictError`
         names the conflicting regions (ids, box) and nothing is written. The
-        mesh is merged: GOCAD atoms and parts, and the file's meaning
-        (coordinate system, colour, metadata) stay as currently stored.
+        mesh is merged, with its parts (``tgsis.part``); GOCAD atoms and the
+        file's meaning (z convention, coordinate system, colour, metadata)
+        stay as currently stored, and :attr:`CheckinResult.not_applied` names
+        those the edited file gives otherwise.
     child_version : str, optional
         Name for that child version.
     keep : bool
@@ -1055,11 +1111,11 @@ def checkin(
                 drop_extra_properties,
             )
         elif on_conflict == "merge":
-            result = _checkin_merge(
+            result, not_applied = _checkin_merge(
                 conn, fc, checked_out, mesh, plan, properties, name, drop_extra_properties, conflict
             )
             restore_version_settings(conn, settings, local=True)
-            return CheckinResult(result, True, None, merged=True)
+            return CheckinResult(result, True, None, merged=True, not_applied=not_applied)
         else:
             result, written = _checkin_into_child(
                 conn, fc, checked_out, mesh, plan, properties, name, child_version, drop_extra_properties, str(conflict)
@@ -1158,9 +1214,20 @@ def _checkin_into_child(
     )
 
 
-def _mesh_state(fc: FeatureClass, mesh: Mesh, vertex_ids: IntArray, cell_ids: IntArray, what: str) -> MeshState:
-    """A mesh with the database ids of its rows as a :class:`MeshState`, with the class's property columns."""
+def _mesh_state(
+    fc: FeatureClass,
+    mesh: Mesh,
+    vertex_ids: IntArray,
+    cell_ids: IntArray,
+    what: str,
+    parts: npt.NDArray[Any] | None = None,
+) -> MeshState:
+    """A mesh with the database ids of its rows as a :class:`MeshState`, with the class's property columns
+    (and ``parts``, (m,), as the cell property ``part`` that :mod:`tgsis.db._state_write` writes to ``tgsis.part``)."""
     by_alignment = {a: [p.name for p in fc.aligned(a)] for a in ("VERTEX", "CELL")}
+    cell_properties = {n: np.asarray(mesh.cell_properties[n]) for n in by_alignment["CELL"]}
+    if parts is not None:
+        cell_properties[PART_PROPERTY] = parts
     return MeshState(
         mesh.cell_size,
         vertex_ids,
@@ -1168,9 +1235,95 @@ def _mesh_state(fc: FeatureClass, mesh: Mesh, vertex_ids: IntArray, cell_ids: In
         cell_ids,
         vertex_ids[mesh.cells] if mesh.n_cells else np.empty((0, mesh.cell_size), dtype=np.int64),
         {n: np.asarray(mesh.vertex_properties[n]) for n in by_alignment["VERTEX"]},
-        {n: np.asarray(mesh.cell_properties[n]) for n in by_alignment["CELL"]},
+        cell_properties,
         what,
     )
+
+
+def _merge_parts(fc: FeatureClass, base: Mesh, current: Mesh, edited: Mesh, cell_map: IntArray) -> list[Any]:
+    """The part of each cell of the base, the current state and the edit, when the class keeps parts in ``tgsis.part``.
+
+    ``[None, None, None]`` when neither has parts. -1: a cell in no part. An
+    edit without parts (a file that dropped them) keeps the base's parts of
+    the cells it kept: it changed no part.
+    """
+    if stores_part_column(fc) or not any(PART_PROPERTY in m.cell_properties for m in (base, current, edited)):
+        return [None, None, None]
+
+    def of(mesh: Mesh) -> npt.NDArray[Any]:
+        values = mesh.cell_properties.get(PART_PROPERTY)
+        return np.full(mesh.n_cells, -1, dtype=np.int64) if values is None else np.asarray(values)
+
+    mine = edited.cell_properties.get(PART_PROPERTY)
+    if mine is None:
+        known = of(base)
+        kept = cell_map >= 0
+        mine = np.full(edited.n_cells, -1, dtype=known.dtype)
+        mine[kept] = known[cell_map[kept]]
+    return [of(base), of(current), np.asarray(mine)]
+
+
+def _merged_name(
+    name: str | None, mesh: Mesh, base_name: str | None, stored_name: str | None, refused: str
+) -> str | None:
+    """The geometry name after a merging check-in: the edit's when it renamed (``name``, else the mesh's), else the
+    stored one (a rename made since check-out is kept); both renamed, differently: CheckoutConflictError."""
+    wanted = name if name is not None else mesh.name
+    if wanted is None or (name is None and wanted == base_name):
+        return stored_name  # the edit did not rename
+    if stored_name not in (base_name, wanted):
+        raise CheckoutConflictError(
+            f"{refused}; its name was changed since check-out to {stored_name!r} (from {base_name!r}) and the edit "
+            f"names it {wanted!r}: a merge by region does not choose between two names; nothing was written",
+            hint="check in with the current name (name=..., tgsis checkin --name), or into a new child version "
+            '(on_conflict="child", tgsis checkin --on-conflict child)',
+        )
+    return wanted
+
+
+def _check_feature_values_merge(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    checked_out_values: Mapping[str, Any],
+    values: Mapping[str, Any],
+    refused: str,
+) -> None:
+    """Refuse (CheckoutConflictError) feature properties the edit sets that were changed since check-out to another value.
+
+    The three values are compared as the column's type (the database casts
+    them): a property changed since check-out and set by the edit to the
+    same value, or set by the edit only, merges.
+    """
+    clashes = []
+    for column, value in values.items():
+        base = checked_out_values.get(column)
+        row = conn.execute(
+            sql.SQL(
+                "SELECT (jsonb_populate_record(NULL::{t}, %(base)s::jsonb)).{c} IS DISTINCT FROM f.{c}, "
+                "(jsonb_populate_record(NULL::{t}, %(new)s::jsonb)).{c} IS DISTINCT FROM f.{c}, f.{c}::text "
+                "FROM {t} f WHERE f._geoid = %(g)s"
+            ).format(t=fc.qualified(fc.featuretable), c=sql.Identifier(column)),
+            {
+                "base": json.dumps({column: base}, default=str),
+                "new": json.dumps({column: value}, default=str),
+                "g": geoid,
+            },
+        ).fetchone()
+        if row is None:
+            continue
+        # a check-out that did not record the value: whether it changed since is unknown, so it may have
+        base_differs = bool(row[0]) if column in checked_out_values else True
+        if base_differs and row[1]:
+            clashes.append(f"{column} (now {row[2]!r}, checked out as {base!r}, the edit sets {value!r})")
+    if clashes:
+        raise CheckoutConflictError(
+            f"{refused}; feature properties changed since check-out that the edit sets to other values: "
+            + ", ".join(clashes)
+            + "; a merge by region does not choose between two values; nothing was written",
+            hint="check in without setting them, or with their current values, or into a new child version "
+            '(on_conflict="child", tgsis checkin --on-conflict child)',
+        )
 
 
 def _checkin_merge(
@@ -1183,8 +1336,11 @@ def _checkin_merge(
     name: str | None,
     drop_extra: bool,
     conflict: psycopg.Error,
-) -> SaveResult:
+) -> tuple[SaveResult, tuple[str, ...]]:
     """Merge the edit with the change made since check-out by region and write the result (caller's transaction).
+
+    Also returns what the edited file says of its meaning that differs from
+    the stored one, which the merge keeps (see :attr:`CheckinResult.not_applied`).
 
     The feature's write lock is taken again (the refused ``check_unchanged``
     took it in a savepoint, whose rollback let it go): the current state read
@@ -1203,6 +1359,8 @@ def _checkin_merge(
     cell_values = aligned_properties(fc, mesh, drop_extra, "the edited mesh")
     feature_values = feature_columns(fc, properties)
     check_feature_values(conn, fc, feature_values)
+    _check_feature_values_merge(conn, fc, geoid, checked_out.properties, properties or {}, refused)
+    merged_name = _merged_name(name, mesh, checked_out.base.mesh.name, stored_name, refused)
     storage = Storage.of(conn, fc)
     current = _stored_mesh(conn, fc, geoid, stored_name)
     base = checked_out.base
@@ -1217,18 +1375,32 @@ def _checkin_merge(
     kept_c = plan.cell_map >= 0
     cell_ids[kept_c] = base.cell_ids[plan.cell_map[kept_c]]
     cell_ids[~kept_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(int((~kept_c).sum()))
+    # a vertex the comparison matched (within the tolerance) and did not pair as moved is unchanged, as a plain
+    # check-in keeps it: the base's coordinates, not the file's rounding of them (else every such vertex is an edit)
+    vertices = mesh.vertices.copy()
+    unchanged = (plan.vertex_map >= 0) & ~plan.moved
+    vertices[unchanged] = base.mesh.vertices[plan.vertex_map[unchanged]]
+    # likewise a kept cell is the stored row, from the corner it is stored from (a tool may write a triangle from
+    # another corner, the same oriented cell): else the merge rewrites it, unchanged, into a new row version
+    cells = mesh.cells.copy()
+    if len(cells) and kept_c.any():
+        position_of = np.full(base.mesh.n_vertices, -1, dtype=np.int64)
+        position_of[plan.vertex_map[kept_v]] = np.flatnonzero(kept_v)
+        cells[kept_c] = position_of[base.mesh.cells[plan.cell_map[kept_c]]]
     edit = mesh_class(fc.geotype)(
-        mesh.vertices,
-        mesh.cells,
+        vertices,
+        cells,
         vertex_properties={p.name: cell_values[p.name] for p in fc.aligned("VERTEX")},
         cell_properties={p.name: cell_values[p.name] for p in fc.aligned("CELL")},
     )  # the class's columns, cast as stored
     what = f"feature {geoid} of class {fc.name}"
-    theirs = _mesh_state(fc, current.mesh, current.vertex_ids, current.cell_ids, f"{what} (stored now)")
+    # the parts (GOCAD TFACEs...) merge with the mesh: a cell's part is a value of its row like its properties
+    parts = _merge_parts(fc, base.mesh, current.mesh, mesh, plan.cell_map)
+    theirs = _mesh_state(fc, current.mesh, current.vertex_ids, current.cell_ids, f"{what} (stored now)", parts[1])
     merge = three_way_merge(
-        _mesh_state(fc, base.mesh, base.vertex_ids, base.cell_ids, f"{what} (checked out)"),
+        _mesh_state(fc, base.mesh, base.vertex_ids, base.cell_ids, f"{what} (checked out)", parts[0]),
         theirs,
-        _mesh_state(fc, edit, vertex_ids, cell_ids, f"{what} (edited)"),
+        _mesh_state(fc, edit, vertex_ids, cell_ids, f"{what} (edited)", parts[2]),
     )
     if merge.conflicts:
         described = "; ".join(
@@ -1250,7 +1422,7 @@ def _checkin_merge(
         geoid,
         merged_mesh,
         merged_mesh.bounds() if merged_mesh.n_vertices else None,
-        _new_name(name, mesh, stored_name),
+        merged_name,
         feature_values,
     )
     version = str(conn.execute("SELECT tgsis.get_working_version()").fetchone()[0])  # type: ignore[index]
@@ -1260,6 +1432,13 @@ def _checkin_merge(
         token.version,
         len(merge.regions),
     )
+    not_applied = tuple(_meaning_not_applied(conn, fc, geoid, mesh, vertex_ids))
+    if not_applied:
+        log.warning(
+            "feature %d: the merge kept the stored %s, not the edited file's (it merges the mesh only)",
+            geoid,
+            ", ".join(not_applied),
+        )
     return SaveResult(
         geoid,
         version,
@@ -1272,7 +1451,7 @@ def _checkin_merge(
         len(plan.removed_cells),
         len(plan.added_cells),
         len(plan.diff.added_cells) - len(plan.added_cells),
-    )
+    ), not_applied
 
 
 def _kept_checkout(conn: Conn, fc: FeatureClass, token: CheckoutToken, mesh: Mesh, written: _Written) -> Checkout:

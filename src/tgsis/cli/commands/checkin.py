@@ -158,6 +158,11 @@ def checkin_text(args: argparse.Namespace, checked: CheckedIn) -> None:
         f"  rows written: {save.rows_written} ({save.rows_deleted} deleted, {save.rows_inserted} inserted, "
         f"{save.rows_updated} updated)"
     )
+    if result.not_applied:
+        out(
+            f"  not applied: the file's {', '.join(result.not_applied)} (the merge merges the mesh and keeps the "
+            "stored ones; check out again and check in the change alone to apply them)"
+        )
     if checked.png:
         out(f"  drew the edit to {checked.png}")
     if checked.commands:
@@ -173,6 +178,7 @@ def checkin_json(checked: CheckedIn) -> dict[str, Any]:
         "version": save.version,
         "conflict": result.conflict,
         "merged": result.merged,
+        "not_applied": list(result.not_applied),
         "vertices": {
             "kept": counts["vertices_kept"],
             "moved": moved,
