@@ -321,19 +321,30 @@ def test_random_edits_with_identical_rewrites_merge_and_refresh_to_exactly_the_s
     def takes_child(obj: int) -> bool:
         return obj in changed_by_child and solved.get(obj) != "parent"
 
+    expected = {o: before_child[o] if takes_child(o) else before_parent[o] for o in before_parent}
     if refresh:
         V.refresh_version(conn, child)
-        expected = {o: before_child[o] if takes_child(o) else before_parent[o] for o in before_parent}
         assert _state(conn, child, base) == expected
         assert _state(conn, parent, base) == before_parent
-        return
+        # then merged: the parent takes the version's state, writing only what differs from its own
+        assert V.find_conflicts(conn, child) == []
+    _merged_exactly(conn, parent, child, base, expected, before_parent)
+
+
+def _merged_exactly(
+    conn: Conn,
+    parent: str,
+    child: str,
+    base: int,
+    expected: dict[int, dict[int, str]],
+    before_parent: dict[int, dict[int, str]],
+) -> None:
+    """Merge ``child``: the parent then holds ``expected``, and only the rows whose content changed were written."""
     revision = _revision(conn, parent)
     V.merge_version(conn, child)
-    expected = {o: before_child[o] if takes_child(o) else before_parent[o] for o in before_parent}
     after = _state(conn, parent, base)
     assert after == expected
     assert _state(conn, child, base) == expected  # the version goes on from the merged state
-    # written: exactly the rows whose content the merge changed
     new = conn.execute("SELECT obj, k FROM obs_ver WHERE revision = %s", (revision,)).fetchall()
     closed = conn.execute("SELECT obj, k FROM obs_ver WHERE %s = ANY (lastrevs)", (revision,)).fetchall()
     conn.commit()
