@@ -8,17 +8,17 @@ from typing import Any
 
 import numpy as np
 import psycopg
-from psycopg import sql
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from psycopg import sql
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
 from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
-from tgsis.db.classes import class_of_feature
 from tgsis.db import merging
+from tgsis.db.classes import class_of_feature
 
 Conn = psycopg.Connection[Any]
 
@@ -443,7 +443,9 @@ def _object_rows(conn: Conn, version: str, geoid: int) -> dict[tuple[str, str], 
     return rows
 
 
-def _written_in(conn: Conn, revision: int, geoid: int) -> dict[tuple[str, str], tuple[set[tuple[str, ...]], set[tuple[str, ...]]]]:
+def _written_in(
+    conn: Conn, revision: int, geoid: int
+) -> dict[tuple[str, str], tuple[set[tuple[str, ...]], set[tuple[str, ...]]]]:
     """Per table: (keys of the row versions written in ``revision``, keys of those closed in it) of one object."""
     found = {}
     for schema, table, keys, objectkey in conn.execute(
@@ -453,7 +455,9 @@ def _written_in(conn: Conn, revision: int, geoid: int) -> dict[tuple[str, str], 
         key = sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(k)) for k in keys)
         storage = sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table + "_ver"))
         written = conn.execute(
-            sql.SQL("SELECT {} FROM {} WHERE {} = %s AND revision = %s").format(key, storage, sql.Identifier(objectkey)),
+            sql.SQL("SELECT {} FROM {} WHERE {} = %s AND revision = %s").format(
+                key, storage, sql.Identifier(objectkey)
+            ),
             (geoid, revision),
         ).fetchall()
         closed = conn.execute(
@@ -470,12 +474,14 @@ def _written_in(conn: Conn, revision: int, geoid: int) -> dict[tuple[str, str], 
 def test_the_merge_writes_into_the_parent_exactly_the_rows_the_child_changed(conn: Conn, fault: int) -> None:
     """Not the parent's own edits again: only the rows whose content the merge changes (issue 39, item 5)."""
     fc = class_of_feature(conn, fault)
-    vertex_props = fc.qualified(fc.property_table("VERTEX") or "")
-    cell_props = fc.qualified(fc.property_table("CELL") or "")
+    vertex_table, cell_table = fc.property_table("VERTEX") or "", fc.property_table("CELL") or ""
+    vertex_props, cell_props = fc.qualified(vertex_table), fc.qualified(cell_table)
     move(conn, "e1", fault, NORTH, CHILD_SHIFT)
     with tgsis.in_version(conn, "e1"):
         conn.execute(
-            sql.SQL("UPDATE {} SET porosity = porosity + 0.01 WHERE _geoid = %s AND _idx IN (30, 31)").format(vertex_props),
+            sql.SQL("UPDATE {} SET porosity = porosity + 0.01 WHERE _geoid = %s AND _idx IN (30, 31)").format(
+                vertex_props
+            ),
             (fault,),
         )
         conn.execute(sql.SQL("UPDATE {} SET facies = 4 WHERE _geoid = %s AND _idx = 5").format(cell_props), (fault,))
@@ -499,10 +505,9 @@ def test_the_merge_writes_into_the_parent_exactly_the_rows_the_child_changed(con
         new, closed = written[table]
         assert new == {k for k, v in rows.items() if before[table].get(k) != v}, table
         assert closed == {k for k, v in before[table].items() if rows.get(k) != v}, table
-    vertex_table = ("tgsis", "vrtx")
-    assert written[vertex_table][0] == {(str(fault), str(i)) for i in NORTH}  # the child's moves, not SOUTH again
-    assert written[fc.schema, fc.property_table("VERTEX")][0] == {(str(fault), "30"), (str(fault), "31")}
-    assert written[fc.schema, fc.property_table("CELL")][0] == {(str(fault), "5")}
+    assert written["tgsis", "vrtx"][0] == {(str(fault), str(i)) for i in NORTH}  # the child's moves, not SOUTH again
+    assert written[fc.schema, vertex_table][0] == {(str(fault), "30"), (str(fault), "31")}
+    assert written[fc.schema, cell_table][0] == {(str(fault), "5")}
     assert written["tgsis", "trgl"] == (set(), set())
     (merged,) = result.objects
     assert int(result) - merged.rows_written == sum(len(n) + len(c) for n, c in written.values())

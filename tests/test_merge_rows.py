@@ -185,9 +185,7 @@ def test_keys_of_other_types_and_an_object_key_outside_the_row_key(conn: Conn, k
     conn.commit()
     revision = _revision(conn, "DEFAULT")
     assert V.merge_version(conn, "e1") == 4  # values[1] (the child's) and values[2] (back to the child's 0)
-    rows = conn.execute(
-        "SELECT k::text, x::text FROM tgsis.rows_at(NULL::parts, 'DEFAULT') ORDER BY k"
-    ).fetchall()
+    rows = conn.execute("SELECT k::text, x::text FROM tgsis.rows_at(NULL::parts, 'DEFAULT') ORDER BY k").fetchall()
     new = conn.execute("SELECT k::text FROM parts_ver WHERE revision = %s ORDER BY k", (revision,)).fetchall()
     conn.commit()
     conn.execute("SET extra_float_digits = 1")
@@ -224,7 +222,7 @@ _examples = itertools.count()
 _values = st.tuples(
     st.sampled_from([None, "0", "-0", "1.5", "NaN", "0.30000000000000004"]),
     st.sampled_from([None, "", "a"]),
-    st.sampled_from([None, '{"a": 1.0}', '{"a": 1.00}', '[]']),
+    st.sampled_from([None, '{"a": 1.0}', '{"a": 1.00}', "[]"]),
 )
 _op = st.tuples(
     st.sampled_from(["update", "delete", "insert", "rewrite", "reinsert"]),
@@ -240,8 +238,10 @@ def _apply(conn: Conn, version: str, base: int, ops: list[tuple[str, int, int, t
         for op, obj, k, (f8, t, jb) in ops:
             where = (base + obj, k)
             if op == "update":
-                conn.execute("UPDATE obs SET f8 = %s::float8, t = %s, jb = %s::jsonb WHERE obj = %s AND k = %s",
-                             (f8, t, jb, *where))
+                conn.execute(
+                    "UPDATE obs SET f8 = %s::float8, t = %s, jb = %s::jsonb WHERE obj = %s AND k = %s",
+                    (f8, t, jb, *where),
+                )
             elif op == "delete":
                 conn.execute("DELETE FROM obs WHERE obj = %s AND k = %s", where)
             elif op == "insert":
@@ -274,7 +274,9 @@ def _state(conn: Conn, version: str, base: int) -> dict[int, dict[int, str]]:
     return state
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
 @given(
     parent_ops=st.lists(_op, max_size=8),
     child_ops=st.lists(_op, max_size=8),
