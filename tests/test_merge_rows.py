@@ -356,3 +356,37 @@ def _merged_exactly(
     assert sorted(closed) == sorted(
         (o, k) for o, rows in before_parent.items() for k, text in rows.items() if after[o].get(k) != text
     )
+
+
+def test_names_that_need_quoting_and_a_domain_over_float8(conn: Conn) -> None:
+    col = '"x ""y"""'  # the column x "y"
+    conn.execute('CREATE DOMAIN "depth m" AS float8')
+    conn.execute(
+        'CREATE TABLE "Odd Table" ("o\'k" int, "my%col" int, ' + col + ' "depth m", PRIMARY KEY ("o\'k", "my%col"))'
+    )
+    conn.execute('INSERT INTO "Odd Table" VALUES (1, 1, 5), (1, 2, 5), (1, 3, 5)')
+    tgsis.enable_versioning(conn, '"Odd Table"', "o'k", "odd class")
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for version, values in (("e1", ("1", "-0", "2")), ("DEFAULT", ("1", "0", "5"))):
+        with tgsis.in_version(conn, version):
+            for key, value in enumerate(values, 1):
+                conn.execute('UPDATE "Odd Table" SET ' + col + ' = %s::float8 WHERE "my%%col" = %s', (value, key))
+            if version == "DEFAULT":
+                tgsis.save_revision(conn, "parent")
+    conn.commit()
+    (conflict,) = V.find_conflicts(conn, "e1")
+    V.resolve_conflict(conn, "e1", conflict.objectclass, conflict.objectkey, "child")
+    conn.commit()
+    revision = _revision(conn, "DEFAULT")
+    assert V.merge_version(conn, "e1") == 4  # rows 2 (-0 is not 0) and 3; row 1 is the same on both sides
+    rows = conn.execute(
+        'SELECT "my%col", float8send(' + col + ") FROM tgsis.rows_at(NULL::\"Odd Table\", 'DEFAULT')"
+    ).fetchall()
+    new = conn.execute('SELECT "my%%col" FROM "Odd Table_ver" WHERE revision = %s', (revision,)).fetchall()
+    assert sorted(new) == [(2,), (3,)]
+    assert {r[0]: bytes(r[1]) for r in rows} == {
+        1: bytes.fromhex("3ff0000000000000"),  # 1.0
+        2: bytes.fromhex("8000000000000000"),  # -0.0, bit for bit
+        3: bytes.fromhex("4000000000000000"),  # 2.0
+    }
