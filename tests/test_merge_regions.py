@@ -11,12 +11,14 @@ import psycopg
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from psycopg import sql
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
 from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
 from tgsis.db import merging
+from tgsis.db.classes import class_of_feature
 
 Conn = psycopg.Connection[Any]
 
@@ -451,3 +453,95 @@ def test_a_triangle_added_in_psql_to_a_surface_of_parts_merges_in_no_part(conn: 
     parts = np.asarray(merged.mesh.cell_properties["part"])
     assert len(parts) == surface.n_cells + 1
     assert np.array_equal(parts, np.append(surface.cell_properties["part"], -1))
+
+
+def _object_rows(conn: Conn, version: str, geoid: int) -> dict[tuple[str, str], dict[tuple[str, ...], tuple[str, ...]]]:
+    """Per versioned table of the feature class: the object's visible rows, key -> content, all as exact text."""
+    conn.execute("SET extra_float_digits = 1")  # floats as their shortest exact text (-0 is not 0)
+    rows: dict[tuple[str, str], dict[tuple[str, ...], tuple[str, ...]]] = {}
+    for schema, table, keys, objectkey in conn.execute(
+        "SELECT schemaname, tablename, keycolumns, objectkeyfield FROM tgsis.versioned_tables "
+        "WHERE objectclass = 'feature' ORDER BY 1, 2"
+    ).fetchall():
+        cursor = conn.execute(
+            sql.SQL("SELECT v::text, {} FROM tgsis.rows_at(NULL::{}.{}, %s) v WHERE {} = %s").format(
+                sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(k)) for k in keys),
+                sql.Identifier(schema),
+                sql.Identifier(table),
+                sql.Identifier(objectkey),
+            ),
+            (version, geoid),
+        )
+        rows[schema, table] = {tuple(r[1:]): (r[0],) for r in cursor.fetchall()}
+    conn.commit()
+    return rows
+
+
+def _written_in(
+    conn: Conn, revision: int, geoid: int
+) -> dict[tuple[str, str], tuple[set[tuple[str, ...]], set[tuple[str, ...]]]]:
+    """Per table: (keys of the row versions written in ``revision``, keys of those closed in it) of one object."""
+    found = {}
+    for schema, table, keys, objectkey in conn.execute(
+        "SELECT schemaname, tablename, keycolumns, objectkeyfield FROM tgsis.versioned_tables "
+        "WHERE objectclass = 'feature' ORDER BY 1, 2"
+    ).fetchall():
+        key = sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(k)) for k in keys)
+        storage = sql.SQL("{}.{}").format(sql.Identifier(schema), sql.Identifier(table + "_ver"))
+        written = conn.execute(
+            sql.SQL("SELECT {} FROM {} WHERE {} = %s AND revision = %s").format(
+                key, storage, sql.Identifier(objectkey)
+            ),
+            (geoid, revision),
+        ).fetchall()
+        closed = conn.execute(
+            sql.SQL("SELECT {} FROM {} WHERE {} = %s AND %s = ANY (lastrevs)").format(
+                key, storage, sql.Identifier(objectkey)
+            ),
+            (geoid, revision),
+        ).fetchall()
+        found[schema, table] = ({tuple(r) for r in written}, {tuple(r) for r in closed})
+    conn.commit()
+    return found
+
+
+def test_the_merge_writes_into_the_parent_exactly_the_rows_the_child_changed(conn: Conn, fault: int) -> None:
+    """Not the parent's own edits again: only the rows whose content the merge changes (issue 39, item 5)."""
+    fc = class_of_feature(conn, fault)
+    vertex_table, cell_table = fc.property_table("VERTEX") or "", fc.property_table("CELL") or ""
+    vertex_props, cell_props = fc.qualified(vertex_table), fc.qualified(cell_table)
+    move(conn, "e1", fault, NORTH, CHILD_SHIFT)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute(
+            sql.SQL("UPDATE {} SET porosity = porosity + 0.01 WHERE _geoid = %s AND _idx IN (30, 31)").format(
+                vertex_props
+            ),
+            (fault,),
+        )
+        conn.execute(sql.SQL("UPDATE {} SET facies = 4 WHERE _geoid = %s AND _idx = 5").format(cell_props), (fault,))
+    conn.commit()
+    move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute(
+            sql.SQL("UPDATE {} SET porosity = 0.5 WHERE _geoid = %s AND _idx IN (130, 131)").format(vertex_props),
+            (fault,),
+        )
+        tgsis.save_revision(conn, "parent's edits")  # frozen: the merge writes in a revision of its own
+    conn.commit()
+    (merge_revision,) = conn.execute("SELECT workingrevision FROM tgsis.versions WHERE name = 'DEFAULT'").fetchone()  # type: ignore[misc]
+    conn.commit()
+    before = _object_rows(conn, "DEFAULT", fault)
+    result = tgsis.merge_version(conn, "e1")
+    after = _object_rows(conn, "DEFAULT", fault)
+    assert after == _object_rows(conn, "e1", fault)
+    written = _written_in(conn, merge_revision, fault)
+    for table, rows in after.items():
+        new, closed = written[table]
+        assert new == {k for k, v in rows.items() if before[table].get(k) != v}, table
+        assert closed == {k for k, v in before[table].items() if rows.get(k) != v}, table
+    assert written["tgsis", "vrtx"][0] == {(str(fault), str(i)) for i in NORTH}  # the child's moves, not SOUTH again
+    assert written[fc.schema, vertex_table][0] == {(str(fault), "30"), (str(fault), "31")}
+    assert written[fc.schema, cell_table][0] == {(str(fault), "5")}
+    assert written["tgsis", "trgl"] == (set(), set())
+    (merged,) = result.objects
+    assert int(result) - merged.rows_written == sum(len(n) + len(c) for n, c in written.values())

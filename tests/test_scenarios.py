@@ -317,6 +317,13 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
         expected[at] = side.vertices[at]
     assert both.vertices.tobytes() == expected.tobytes()
     assert "bit for bit, every other vertex and every triangle as in release 5.3: yes" in out
+    # ... writing into DEFAULT only bob's rows (a closed and a new one per moved vertex, and the fault's box),
+    # never ann's again, which DEFAULT holds already
+    into_south_tip = 2 * len(a) + 1
+    assert (
+        f"{into_south_tip} rows written into south_tip (the merged fault, by id: ann's moves), then "
+        f"{2 * len(b) + 2} into DEFAULT (only what it did not hold: bob's moves, "
+    ) in out
 
     # the merge of north_review: one conflict region, exactly ann's and cat's moved vertices and the triangles
     # on them; bob's region (now the parent's) merges by itself

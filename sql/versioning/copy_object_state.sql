@@ -3,8 +3,20 @@
 -- not in from_set are closed with revision (deleted when written in it), and
 -- the rows visible in from_set but not in to_set are copied with revision.
 -- Rows visible in both are left alone: unchanged rows are never copied.
+-- Nor is a row whose content to_set already holds: when a row key (the
+-- table's keycolumns) has exactly one row visible only in to_set and one
+-- visible only in from_set, and the two hold the same content
+-- (tgsis.same_row_sql: exactly, value for value), the first stays and the
+-- second is not copied. So a merge does not write again into the parent the
+-- parent's own edits the child holds too (a merge by region writes the merged
+-- mesh into the child first: it holds them all), nor rows one side deleted
+-- and inserted again as they were; what it writes is the child's change.
+-- The match is read by key (the storage's primary key) for the candidate
+-- rows only: the cost follows the change, not the object's size.
 -- The common step of merge (child's state into the parent) and refresh.
--- The objects are noted as changed in revision (tgsis.revision_objects).
+-- The objects are noted as changed in revision (tgsis.revision_objects) in the
+-- tables where rows were written; an object with nothing written looks in
+-- to_set as in from_set already and is not noted.
 -- Returns the rows written (closed, deleted and copied).
 CREATE FUNCTION tgsis.copy_object_state(
     p_objectclass text,
@@ -15,6 +27,13 @@ CREATE FUNCTION tgsis.copy_object_state(
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
+-- the text of a value tgsis.same_row_sql compares is one text per value under these
+-- (floats shortest-exact, date and time ISO with offsets), whatever the session's
+SET DateStyle = 'ISO, YMD'
+SET IntervalStyle = 'postgres'
+SET extra_float_digits = 1
+SET bytea_output = 'hex'
+SET lc_monetary = 'C'
 AS $$
 DECLARE
     v_t       tgsis.versioned_tables;
@@ -23,6 +42,12 @@ DECLARE
     v_keytype text;
     v_count   bigint;
     v_written bigint := 0;
+    v_same    text;
+    -- visible only in p_to, only in p_from (rows f of the storage): the rows copy_object_state acts on
+    v_to_only   CONSTANT text := 'f.revision = ANY ($3) AND NOT (f.lastrevs && $3)
+                                  AND NOT (f.revision = ANY ($2) AND NOT (f.lastrevs && $2))';
+    v_from_only CONSTANT text := 'f.revision = ANY ($2) AND NOT (f.lastrevs && $2)
+                                  AND NOT (f.revision = ANY ($3) AND NOT (f.lastrevs && $3))';
 BEGIN
     IF cardinality(p_keys) = 0 THEN
         RETURN 0;
@@ -33,20 +58,25 @@ BEGIN
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder DESC, shortname LOOP
         v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
         v_keytype := tgsis.object_key_type(v_t);  -- keys compared in the column's own type, so that its index serves
+        -- a row v only p_to sees stays when its key's one row only p_from sees holds its content
+        v_same := tgsis.copy_object_match_sql(v_t, v_to_only, v_from_only);
         -- (every statement on storage as its owner: tgsis.storage_run)
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'DELETE FROM %s v WHERE v.%I = ANY ($1::%s[]) AND v.revision = $4
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
-                AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))',
-            v_ver, v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision) AS r;
+                AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))
+                AND NOT %s',
+            v_ver, v_t.objectkeyfield, v_keytype, v_same),
+            p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
         -- other versions see these rows too (the siblings of a merged version share
         -- the parent's rows): closed without waiting for one while holding others
         v_count := tgsis.update_shared_rows(v_t, 'lastrevs = v.lastrevs || $4', format(
             'v.%I = ANY ($1::%s[]) AND v.revision <> $4
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
-                AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))',
-            v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision);
+                AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))
+                AND NOT %s',
+            v_t.objectkeyfield, v_keytype, v_same), p_keys, p_from, p_to, p_revision);
         v_written := v_written + v_count;
         IF v_count > 0 THEN
             -- closed in p_revision: noted for the next merge or conflict check (tgsis.revision_objects)
@@ -61,13 +91,18 @@ BEGIN
          WHERE attrelid = v_ver::regclass AND attnum > 0 AND NOT attisdropped AND attgenerated = ''
            AND attname NOT IN ('revision', 'lastrevs');
         v_keytype := tgsis.object_key_type(v_t);
+        -- a row v only p_from sees is not copied when its key's one row only p_to sees holds
+        -- its content and was left open by the closes above (those closed in p_revision are gone)
+        v_same := tgsis.copy_object_match_sql(v_t, v_from_only, v_to_only || ' AND NOT ($4 = ANY (f.lastrevs))');
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'INSERT INTO %s (%s, revision)
              SELECT %s, $4 FROM %s v
               WHERE v.%I = ANY ($1::%s[])
                 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
-                AND NOT (v.revision = ANY ($3) AND NOT (v.lastrevs && $3))',
-            v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype), p_keys, p_from, p_to, p_revision) AS r;
+                AND NOT (v.revision = ANY ($3) AND NOT (v.lastrevs && $3))
+                AND NOT %s',
+            v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype, v_same),
+            p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
         IF v_count > 0 THEN
             -- (the storage's statement trigger notes them too, unless this runs inside a trigger)
@@ -79,4 +114,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.copy_object_state(text, text[], integer[], integer[], integer) IS
-    'make objects of a class look in revision set p_to (plus p_revision) as they look in p_from: close or delete rows only p_to sees, copy rows only p_from sees; returns rows written';
+    'make objects of a class look in revision set p_to (plus p_revision) as they look in p_from: close or delete rows only p_to sees, copy rows only p_from sees, except a row key''s one row only p_to sees when the one only p_from sees holds exactly its content (then both are left alone); returns rows written';

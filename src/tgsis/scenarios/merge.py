@@ -380,8 +380,9 @@ def run(context: Context) -> None:
     for merged_object in result.objects:
         out(
             f"   merged by region ({merged_object.how}, {merged_object.regions} regions): "
-            f"{merged_object.rows_written} rows written into south_tip (the merged fault, by id), then "
-            f"{int(result) - merged_object.rows_written} into DEFAULT; {int(result)} in all, for "
+            f"{merged_object.rows_written} rows written into south_tip (the merged fault, by id: ann's moves), then "
+            f"{int(result) - merged_object.rows_written} into DEFAULT (only what it did not hold: bob's moves, "
+            f"a row closed and one written per vertex, and the fault's box); {int(result)} in all, for "
             f"{len(ann.moved) + len(bob.moved)} vertices moved (the whole fault written again: "
             f"{2 * fault.mesh.n_vertices + fault.mesh.n_cells} rows)"
         )
