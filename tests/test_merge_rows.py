@@ -253,9 +253,11 @@ def _apply(conn: Conn, version: str, base: int, ops: list[tuple[str, int, int, t
             elif op == "rewrite":  # the same values written again
                 conn.execute("UPDATE obs SET f8 = f8, t = t, jb = jb WHERE obj = %s AND k = %s", where)
             else:  # deleted and inserted again as it was
-                row = conn.execute("DELETE FROM obs WHERE obj = %s AND k = %s RETURNING *", where).fetchone()
+                row = conn.execute(  # jsonb as its text: a dict would be written back re-encoded (1.00 -> 1.0)
+                    "DELETE FROM obs WHERE obj = %s AND k = %s RETURNING obj, k, f8, t, jb::text", where
+                ).fetchone()
                 if row is not None:
-                    conn.execute("INSERT INTO obs VALUES (%s, %s, %s, %s, %s)", row)
+                    conn.execute("INSERT INTO obs VALUES (%s, %s, %s, %s, %s::jsonb)", row)
     conn.commit()
 
 
