@@ -578,7 +578,11 @@ def _merge_object(
         reasons[key] = _unsolved_reason(merge, solutions)
         return None
     try:
-        resolved = merge.merged if merge.merged is not None and not solutions else apply_solutions(merge, solutions)
+        if merge.merged is not None and not solutions:
+            resolved = merge.merged
+        else:  # a recorded mesh is named as recorded in what it discards: average or manual
+            names = recorded_solutions(conn, version, "feature", key, merge) or {}
+            resolved = apply_solutions(merge, solutions, names=names)
     except InvalidMergeError as exc:
         reasons[key] = f"invalid merge: {exc.message}"
         return None
