@@ -5,11 +5,13 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+import numpy as np
 import psycopg
 import pytest
 
 import tgsis
-from tests.merge_data import make_fault, move
+from tests.merge_data import curved_surface, make_fault, move, moved, stored_state
+from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
 
@@ -44,3 +46,88 @@ def test_an_average_solution_is_named_average_in_what_it_discards(
     assert merged.discards and {d.solution for d in merged.discards} == {"average"}
     warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
     assert warnings and all("solved average" in w for w in warnings), warnings
+
+
+NORTH = np.arange(0, 24)  # the first two rows of the grid
+SOUTH = np.arange(120, 144)  # the last two
+
+
+def _fault_with_status(conn: Conn) -> int:
+    """The curved fault (porosity per vertex) in class 'faults' with a feature attribute 'status' = 'a'; version e1."""
+    F.create_feature_class(
+        conn, "faults", "SURFACE", feature_properties=[("status", "text")], cell_properties=[("porosity", "float8")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    plain = tgsis.Surface(surface.vertices, surface.cells, vertex_properties=dict(surface.vertex_properties))
+    geoid = F.insert_feature(conn, "faults", plain, {"status": "a"})
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def _looks(conn: Conn, version: str, geoid: int) -> tuple[Any, ...]:
+    with tgsis.in_version(conn, version):
+        row = conn.execute(
+            "SELECT g.geoname, g.colorred, g.metadata, f.status FROM tgsis.geometry g JOIN faults f ON f._geoid = g.geoid"
+            " WHERE g.geoid = %s",
+            (geoid,),
+        ).fetchone()
+    conn.commit()
+    assert row is not None
+    return tuple(row)
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_the_parents_edit_of_the_objects_attributes_is_kept_by_a_merge_by_region(conn: Conn, action: str) -> None:
+    # was: the merged mesh went into the version and was recorded manual, so the version's geometry and
+    # feature rows (the base's) replaced the parent's new name, colour, metadata and status: lost, silently
+    geoid = _fault_with_status(conn)
+    move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -2.0))
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute(
+            "UPDATE tgsis.geometry SET geoname = 'renamed', colorred = 0.5, metadata = '{\"by\": \"parent\"}' "
+            "WHERE geoid = %s",
+            (geoid,),
+        )
+        conn.execute("UPDATE faults SET status = 'checked' WHERE _geoid = %s", (geoid,))
+    conn.commit()
+    expected = curved_surface().vertices.copy()
+    moved(expected, NORTH, (0.0, 0.0, 3.0))
+    moved(expected, SOUTH, (0.0, 0.0, -2.0))
+    result = tgsis.merge_version(conn, "e1") if action == "merge" else tgsis.refresh_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    if action == "refresh":  # then a merge: the version's rows must not take the parent's edits back
+        assert _looks(conn, "e1", geoid) == ("renamed", 0.5, {"by": "parent"}, "checked")
+        assert stored_state(conn, "e1", geoid)[1].tobytes() == expected.tobytes()
+        tgsis.merge_version(conn, "e1")
+    for version in ("DEFAULT", "e1"):
+        assert _looks(conn, version, geoid) == ("renamed", 0.5, {"by": "parent"}, "checked"), version
+        assert stored_state(conn, version, geoid)[1].tobytes() == expected.tobytes()
+
+
+def test_the_versions_edit_of_the_objects_attributes_is_kept_too(conn: Conn) -> None:
+    geoid = _fault_with_status(conn)
+    move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE tgsis.geometry SET geoname = 'mine' WHERE geoid = %s", (geoid,))
+    move(conn, "DEFAULT", geoid, SOUTH, (0.0, 0.0, -2.0))
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute("UPDATE faults SET status = 'checked' WHERE _geoid = %s", (geoid,))
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    assert _looks(conn, "DEFAULT", geoid) == ("mine", None, None, "checked")
+
+
+def test_a_name_changed_on_both_sides_to_other_values_is_not_merged_by_region(conn: Conn) -> None:
+    geoid = _fault_with_status(conn)
+    for version, name, ids in (("e1", "mine", NORTH), ("DEFAULT", "theirs", SOUTH)):
+        move(conn, version, geoid, ids, (0.0, 0.0, 1.0))
+        with tgsis.in_version(conn, version):
+            conn.execute("UPDATE tgsis.geometry SET geoname = %s WHERE geoid = %s", (name, geoid))
+        conn.commit()
+    with pytest.raises(tgsis.UnsolvedConflictsError, match=rf"feature {geoid}: .*geoname"):
+        tgsis.merge_version(conn, "e1")
+    conn.rollback()
+    assert _looks(conn, "DEFAULT", geoid)[0] == "theirs" and _looks(conn, "e1", geoid)[0] == "mine"
