@@ -11,7 +11,10 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface, make_fault, move, moved, stored_state
+from tests.roles import login_roles
 from tgsis.db import features as F
+from tgsis.db.regions import state_to_npz
+from tgsis.merge3 import MeshState, apply_solutions
 
 Conn = psycopg.Connection[Any]
 
@@ -131,3 +134,37 @@ def test_a_name_changed_on_both_sides_to_other_values_is_not_merged_by_region(co
         tgsis.merge_version(conn, "e1")
     conn.rollback()
     assert _looks(conn, "DEFAULT", geoid)[0] == "theirs" and _looks(conn, "e1", geoid)[0] == "mine"
+
+
+def test_a_role_that_may_not_change_the_class_cannot_record_a_mesh_the_merge_would_write(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    # was: tgsis.resolve_region (SECURITY DEFINER) took any role's manual mesh with the write right on the
+    # version only; the merge of a role that may change the class then wrote those coordinates into the
+    # version and the parent, for a role that may not change the class
+    region = _overlapping_edits(conn, fault)
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.commit()
+    state = apply_solutions(merge, {region.region: "child"}).state
+    at = np.searchsorted(state.vertex_ids, region.vertex_ids)
+    xyz = state.vertices.copy()
+    xyz[at, 2] += 1000.0
+    forged = MeshState(
+        3, state.vertex_ids, xyz, state.cell_ids, state.cells, state.vertex_properties, state.cell_properties, "forged"
+    )
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "write", made.name("ed"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.faults FROM tgsis_editor")
+        conn.commit()
+        ed = made.connect("ed")
+        for solution in ("manual", "average"):
+            with pytest.raises(psycopg.errors.InsufficientPrivilege, match=f"feature {fault} of class 'faults'"):
+                ed.execute(
+                    "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, %s, %s)",
+                    (str(fault), region.region, solution, state_to_npz(forged)),
+                )
+            ed.rollback()
+        ed.execute("SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'child')", (str(fault), region.region))
+        ed.commit()  # choosing one side's rows stays hers, as resolve_conflict's parent or child does
+    (stored,) = [r for r in tgsis.find_conflicts(conn, "e1")[0].regions if r.conflict]
+    assert stored.solution == "child"
