@@ -168,3 +168,37 @@ def test_a_role_that_may_not_change_the_class_cannot_record_a_mesh_the_merge_wou
         ed.commit()  # choosing one side's rows stays hers, as resolve_conflict's parent or child does
     (stored,) = [r for r in tgsis.find_conflicts(conn, "e1")[0].regions if r.conflict]
     assert stored.solution == "child"
+
+
+def test_a_cell_in_no_part_merges_by_region_and_stays_in_none(conn: Conn) -> None:
+    # was: a triangle the parent added without a tgsis.part run (part -1 in the merge) made the parts'
+    # rewrite refuse the merge ("part must hold part numbers 0 .. 2147483647")
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    parts = (np.arange(len(surface.cells)) >= len(surface.cells) // 2).astype(np.int64)
+    geoid = tgsis.insert_feature(
+        conn, "faults", tgsis.Surface(surface.vertices, surface.cells, cell_properties={"part": parts})
+    )
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    runs = conn.execute("SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,))
+    before = runs.fetchall()
+    n = len(surface.cells)
+    conn.execute(  # DEFAULT, as a psql user: one more triangle on the south edge, in no part
+        "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 142, 143, 130)", (geoid, n)
+    )
+    conn.commit()
+    move(conn, "e1", geoid, NORTH, (0.0, 0.0, 3.0))
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            runs = conn.execute(
+                "SELECT firstid, lastid, part FROM tgsis.part WHERE geoid = %s ORDER BY firstid", (geoid,)
+            )
+            assert runs.fetchall() == before, version
+            cells = conn.execute("SELECT count(*) FROM tgsis.trgl WHERE geoid = %s", (geoid,)).fetchone()
+            assert cells == (n + 1,)
+        conn.commit()

@@ -205,15 +205,22 @@ def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage
     return deleted, len(rows)
 
 
+def _part_rows(geoid: int, state: MeshState) -> list[tuple[int, ...]]:
+    """The ``tgsis.part`` runs of a state's cells; a cell in no run (part -1 or NaN, as read) stays in none."""
+    parts = np.asarray(state.cell_properties[PART_PROPERTY])
+    inside = ~np.isnan(parts) & (parts >= 0) if parts.dtype.kind == "f" else parts >= 0
+    return part_rows(geoid, state.cell_ids[inside], parts[inside])
+
+
 def _write_parts(
     conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, storage: Storage
 ) -> tuple[int, int]:
     """The ``tgsis.part`` runs, rewritten when the parts differ (a few rows per object); (deleted, inserted)."""
     if stores_part_column(fc) or PART_PROPERTY not in new.cell_properties:
         return 0, 0
-    after = part_rows(geoid, new.cell_ids, np.asarray(new.cell_properties[PART_PROPERTY]))
+    after = _part_rows(geoid, new)
     if PART_PROPERTY in old.cell_properties:
-        before = part_rows(geoid, old.cell_ids, np.asarray(old.cell_properties[PART_PROPERTY]))
+        before = _part_rows(geoid, old)
         if before == after:
             return 0, 0
     row = conn.execute("SELECT tgsis.delete_object_rows('tgsis', 'part', 'geoid', %s)", ([geoid],)).fetchone()
