@@ -8,11 +8,13 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
+from psycopg import sql
 
 import tgsis
 from tests.merge_data import curved_surface, make_fault, move, moved, stored_state
 from tests.roles import login_roles
 from tgsis.db import features as F
+from tgsis.db.classes import class_of_feature
 from tgsis.db.regions import state_to_npz
 from tgsis.merge3 import MeshState, apply_solutions
 
@@ -202,3 +204,34 @@ def test_a_cell_in_no_part_merges_by_region_and_stays_in_none(conn: Conn) -> Non
             cells = conn.execute("SELECT count(*) FROM tgsis.trgl WHERE geoid = %s", (geoid,)).fetchone()
             assert cells == (n + 1,)
         conn.commit()
+
+
+def test_rows_without_property_rows_merge_by_region_and_stay_without(conn: Conn, fault: int) -> None:
+    # was: a vertex and a triangle the parent added without property rows (NaN in the merge) made the
+    # merge by region refuse the object (the integer facies "has no value"); a float one got a NaN row
+    n = len(curved_surface().cells)
+    with tgsis.in_version(conn, "DEFAULT"):  # as a psql user: rows of the model tables only
+        conn.execute("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, 144, 3200.5, 2700.25, 1.0)", (fault,))
+        conn.execute(
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 142, 143, 144)",
+            (fault, n),
+        )
+    conn.commit()
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 3.0))
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    expected = np.vstack([curved_surface().vertices, [[3200.5, 2700.25, 1.0]]])
+    moved(expected, NORTH, (0.0, 0.0, 3.0))
+    for version in ("DEFAULT", "e1"):
+        ids, xyz, cells, porosity = stored_state(conn, version, fault)
+        assert xyz.tobytes() == expected.tobytes() and len(cells) == n + 1
+        assert 144 not in porosity and len(porosity) == 144, version
+        fc = class_of_feature(conn, fault)
+        with tgsis.in_version(conn, version):
+            facies = conn.execute(
+                sql.SQL("SELECT _idx FROM {} WHERE _geoid = %s").format(fc.qualified(fc.property_table("CELL") or "")),
+                (fault,),
+            ).fetchall()
+        conn.commit()
+        assert len(facies) == n and (n,) not in facies, version

@@ -123,6 +123,17 @@ def _values(state: MeshState, alignment: str, name: str, what: str) -> npt.NDArr
     return np.asarray(props[name])
 
 
+def _without_row(values: list[npt.NDArray[Any]], at: npt.NDArray[np.intp]) -> npt.NDArray[np.bool_]:
+    """Per position ``at``, whether every property value there is NaN (no property row in the state)."""
+    empty = np.ones(len(at), dtype=bool)
+    for column in values:
+        chosen = column[at]
+        if chosen.dtype.kind != "f":
+            return np.zeros(len(at), dtype=bool)
+        empty &= np.isnan(chosen).reshape(len(at), -1).all(axis=1)
+    return empty
+
+
 def _write_properties(
     conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, storage: Storage
 ) -> tuple[int, int]:
@@ -144,6 +155,9 @@ def _write_properties(
 
         gone, fresh = _difference(old_ids, new_ids, same)
         deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
+        # an id whose values are all NaN has no row in the state it comes from (the read gives a missing row
+        # NaN): it gets none, rather than a row of NaN or a refusal for an integer column
+        fresh = fresh[~_without_row(news, fresh)]
         if len(fresh):
             columns: list[tuple[str, npt.ArrayLike, str]] = [
                 ("_geoid", np.full(len(fresh), geoid, dtype=np.int64), "int8"),
