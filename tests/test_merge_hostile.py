@@ -235,3 +235,22 @@ def test_rows_without_property_rows_merge_by_region_and_stay_without(conn: Conn,
             ).fetchall()
         conn.commit()
         assert len(facies) == n and (n,) not in facies, version
+
+
+def test_a_role_that_may_not_read_the_class_does_not_read_its_regions(conn: Conn, fault: int, db_dsn: str) -> None:
+    # was: tgsis.conflict_regions was granted to every reader without the per-class rights of the model
+    # tables: a role kept from the class's vertices read their ids, box and a recorded mesh's coordinates
+    region = _overlapping_edits(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, region.region, "average")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        query = "SELECT count(*) FROM tgsis.conflict_regions WHERE objectkey = %s"
+        assert rita.execute(query, (str(fault),)).fetchone() == (1,)  # she may read it
+        rita.rollback()
+        conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader")
+        conn.commit()
+        assert rita.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (fault,)).fetchone() == (0,)
+        assert rita.execute(query, (str(fault),)).fetchone() == (0,)
+        rita.rollback()
+    assert conn.execute(query, (str(fault),)).fetchone() == (1,)  # (the owner's reads are not filtered)

@@ -46,6 +46,10 @@ $dump$;
 
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
+-- ---- issue39-review1: the read policy of tgsis.conflict_regions (in versioning/conflict_regions.sql) names
+-- tgsis.class_denied_geoids, new in 0.3.0: made before the table (made again, the same, at @sources)
+-- @include geometry/class_denied_geoids.sql
+
 -- ---- issue39-store: the regions of conflicting meshes (tgsis.conflict_regions), a new catalog table
 -- dumped with the conflicts (final/config_dump.sql)
 -- @include versioning/conflict_regions.sql
