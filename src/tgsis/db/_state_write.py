@@ -126,6 +126,8 @@ def _values(state: MeshState, alignment: str, name: str, what: str) -> npt.NDArr
 def _without_row(values: list[npt.NDArray[Any]], at: npt.NDArray[np.intp]) -> npt.NDArray[np.bool_]:
     """Per position ``at``, whether every property value there is NaN (no property row in the state)."""
     empty = np.ones(len(at), dtype=bool)
+    if not len(at):
+        return empty
     for column in values:
         chosen = column[at]
         if chosen.dtype.kind != "f":
