@@ -254,3 +254,26 @@ def test_a_role_that_may_not_read_the_class_does_not_read_its_regions(conn: Conn
         assert rita.execute(query, (str(fault),)).fetchone() == (0,)
         rita.rollback()
     assert conn.execute(query, (str(fault),)).fetchone() == (1,)  # (the owner's reads are not filtered)
+
+
+@pytest.mark.parametrize("setting", ["search_path = ''", "extra_float_digits = -15", "DateStyle = 'SQL, DMY'"])
+def test_the_merge_by_region_under_other_session_settings(conn: Conn, fault: int, setting: str) -> None:
+    # was: with a search_path without the cube extension's schema the write of the geometry row's box
+    # failed (function cube(double precision[], double precision[]) does not exist)
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.execute("SET " + setting)
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    conn.execute("RESET ALL")
+    conn.commit()
+    expected = curved_surface().vertices.copy()
+    moved(expected, NORTH, (0.125, -3.3, 7.77))
+    moved(expected, SOUTH, (-1.1, 0.0, -2.9))
+    assert stored_state(conn, "DEFAULT", fault)[1].tobytes() == expected.tobytes()
+    with tgsis.in_version(conn, "DEFAULT"):
+        box = conn.execute(
+            "SELECT cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s", (fault,)
+        ).fetchone()
+    assert box == (expected[:, 2].min(), expected[:, 2].max())

@@ -68,14 +68,26 @@ def update_geometry_row(
     ``bounds`` (2, 3): the low and high corners, None for a mesh without vertices (the box is then NULL).
     """
     low, high = bounds.tolist() if bounds is not None else (None, None)
-    box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
+    # the cube extension's functions by their schema: the session's search_path may not hold it
+    row = conn.execute(
+        "SELECT n.nspname FROM pg_catalog.pg_extension e JOIN pg_catalog.pg_namespace n ON n.oid = e.extnamespace"
+        " WHERE e.extname = 'cube'"
+    ).fetchone()
+    assert row is not None  # tgsis requires cube
+    ll, ur = sql.Identifier(str(row[0]), "cube_ll_coord"), sql.Identifier(str(row[0]), "cube_ur_coord")
+    box = sql.SQL("{}(%(low)s::float8[], %(high)s::float8[])").format(sql.Identifier(str(row[0]), "cube"))
+    corners = sql.SQL("ARRAY[{ll}(bbox, 1), {ll}(bbox, 2), {ll}(bbox, 3), {ur}(bbox, 1), {ur}(bbox, 2), {ur}(bbox, 3)]")
+    box_differs = sql.SQL(
+        "(bbox IS NULL) <> (%(low)s::float8[] IS NULL) "
+        "OR (bbox IS NOT NULL AND {corners} IS DISTINCT FROM %(low)s::float8[] || %(high)s::float8[])"
+    ).format(corners=corners.format(ll=ll, ur=ur))
     naming = sql.SQL(", geoname = %(name)s") if set_name else sql.SQL("")
     name_differs = sql.SQL(" OR geoname IS DISTINCT FROM %(name)s") if set_name else sql.SQL("")
     changed = conn.execute(
         sql.SQL(
             "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s{naming} "
-            "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s{differs})"
-        ).format(box=box, naming=naming, differs=name_differs),
+            "WHERE geoid = %(g)s AND ({box_differs} OR nvrtx <> %(n)s OR ncell <> %(m)s{differs})"
+        ).format(box=box, naming=naming, box_differs=box_differs, differs=name_differs),
         {"low": low, "high": high, "n": n_vertices, "m": n_cells, "name": name, "g": geoid},
     ).rowcount
     return max(changed, 0)
