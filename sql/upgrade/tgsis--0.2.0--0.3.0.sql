@@ -46,6 +46,10 @@ $dump$;
 
 -- ---- (blocks of later changes that must run before the functions go here: -- ---- issue36-NAME: ...)
 
+-- ---- issue39-review1: the read policy of tgsis.conflict_regions (in versioning/conflict_regions.sql) names
+-- tgsis.class_denied_geoids, new in 0.3.0: made before the table (made again, the same, at @sources)
+-- @include geometry/class_denied_geoids.sql
+
 -- ---- issue39-store: the regions of conflicting meshes (tgsis.conflict_regions), a new catalog table
 -- dumped with the conflicts (final/config_dump.sql)
 -- @include versioning/conflict_regions.sql
@@ -201,10 +205,6 @@ END
 $upgrade$;
 
 -- ---- (blocks of later changes that run after the functions, outside the DO block, go here)
-
--- ---- issue39-review2: the regions of a feature readable only by the roles that may read its class
--- (row-level security of tgsis.conflict_regions; it needs tgsis.class_denied_geoids, new in 0.3.0)
--- @include versioning/conflict_regions_policy.sql
 
 -- ---- issue36-keys: object keys stored as text under other sessions' settings, made canonical
 -- Tables keyed by a type whose text depends on the session (date, timestamp(tz), float, numeric,

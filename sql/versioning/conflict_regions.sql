@@ -40,6 +40,18 @@ CREATE TABLE tgsis.conflict_regions (
     CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL))
 );
 
+-- Per-class rights (docs/security.md) hold here as at the model tables: a region holds vertex and cell
+-- ids, a box and, solved average or manual, the rows of a feature's mesh, so a role sees the regions of
+-- features of the classes it may read only (tgsis.class_denied_geoids, as the model tables' policies).
+-- The definer functions that write the table run as its owner, whom the policy spares.
+ALTER TABLE tgsis.conflict_regions ENABLE ROW LEVEL SECURITY;
+CREATE POLICY tgsis_class_read ON tgsis.conflict_regions FOR SELECT
+    USING (CASE WHEN objectclass = 'feature'
+                THEN objectkey::bigint NOT IN (SELECT tgsis.class_denied_geoids('SELECT', current_user))
+                ELSE true END);
+COMMENT ON POLICY tgsis_class_read ON tgsis.conflict_regions IS
+    'per-class rights: the regions of features of classes the role may not SELECT are not seen (tgsis.class_denied_geoids)';
+
 COMMENT ON TABLE tgsis.conflict_regions IS
     'regions of the conflicting meshes of versions (the three-way merge by region, docs/merge.md), found on the conflict''s marks, with the solution of each (tgsis.find_conflicts in Python, tgsis.resolve_region)';
 COMMENT ON COLUMN tgsis.conflict_regions.versionid IS 'the child version';

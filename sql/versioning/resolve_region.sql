@@ -8,7 +8,9 @@
 -- found on a state either side changed since is stale and refused (TG307),
 -- as is a region that is no conflict (it merges by itself). The key is read
 -- in the key column's type with the session's settings, as resolve_conflict
--- reads it. The same right as resolve_conflict: write in the version.
+-- reads it. The same right as resolve_conflict: write in the version; a mesh
+-- (average, manual) also the right to change the feature (tgsis.check_class_write),
+-- as the merge that applies it writes its rows.
 CREATE FUNCTION tgsis.resolve_region(p_version text, p_objectclass text, p_objectkey text, p_region integer,
                                      p_solution text, p_mesh bytea DEFAULT NULL)
 RETURNS tgsis.conflict_regions
@@ -56,6 +58,11 @@ BEGIN
     END IF;
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
+    IF v_solution IN ('average', 'manual') AND p_objectclass = 'feature' THEN
+        -- the rows of the mesh are the role's own: the merge (maybe another role's) writes them into the
+        -- version and the parent, so only a role that may change the feature gives them (42501 otherwise)
+        PERFORM tgsis.check_class_write(ARRAY[v_key::bigint], 'UPDATE');
+    END IF;
     v_stored := EXISTS (SELECT FROM tgsis.conflict_regions
                          WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region);
     -- the marks must be those of now: regions found on an older state are removed

@@ -576,7 +576,7 @@ class RegionDiscard:
     ----------
     region : int
     solution : str
-        ``parent``, ``child``, ``base`` or ``manual``.
+        ``parent``, ``child``, ``base``, ``average`` or ``manual``.
     side : str
         ``parent`` or ``child``: whose edit is lost.
     vertices, cells : int
@@ -940,7 +940,9 @@ def _solution_name(solution: Solution) -> str:
     return "manual" if isinstance(solution, MeshState) else str(solution)
 
 
-def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> ResolvedMerge:
+def apply_solutions(
+    merge: MeshMerge, solutions: Mapping[int, Solution], *, names: Mapping[int, str] | None = None
+) -> ResolvedMerge:
     """The merged state with each conflicting region solved, and what the solutions discard.
 
     Parameters
@@ -953,6 +955,10 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
         state has are the region's rows; rows of other ids it holds must equal
         the merge's). ``average`` is a manual state the caller builds
         (docs/merge.md).
+    names : mapping of region index to str, optional
+        What a :class:`MeshState` solution is called in the discards
+        (:attr:`RegionDiscard.solution`): ``"average"`` for an average shape;
+        ``"manual"`` when not given.
 
     Returns
     -------
@@ -1037,7 +1043,7 @@ def apply_solutions(merge: MeshMerge, solutions: Mapping[int, Solution]) -> Reso
             [(manual, manual.vertex_ids[take_v], manual.cell_ids[take_c])],
         )
     _check_valid(merge, state, drop_v, drop_c, manual_new)
-    return ResolvedMerge(state, _discards(merge, solutions, state))
+    return ResolvedMerge(state, _discards(merge, solutions, state, names or {}))
 
 
 def _check_outside_rows(
@@ -1207,7 +1213,9 @@ def _refuse_new_excess(
         )
 
 
-def _discards(merge: MeshMerge, solutions: Mapping[int, Solution], state: MeshState) -> tuple[RegionDiscard, ...]:
+def _discards(
+    merge: MeshMerge, solutions: Mapping[int, Solution], state: MeshState, names: Mapping[int, str]
+) -> tuple[RegionDiscard, ...]:
     """Per solved region and side: that side's changed rows the result does not hold as the side does."""
     found = []
     for index in sorted(solutions):
@@ -1225,7 +1233,12 @@ def _discards(merge: MeshMerge, solutions: Mapping[int, Solution], state: MeshSt
             if len(lost_v) or (~c_same).any():
                 found.append(
                     RegionDiscard(
-                        index, _solution_name(solution), side_name, len(lost_v), int((~c_same).sum()), largest
+                        index,
+                        names.get(index, "manual") if isinstance(solution, MeshState) else str(solution),
+                        side_name,
+                        len(lost_v),
+                        int((~c_same).sum()),
+                        largest,
                     )
                 )
     return tuple(found)

@@ -578,7 +578,7 @@ def _resolve(
     others.pop(index, None)
     placeholders: dict[int, Solution] = {r.index: "parent" for r in merge.conflicts if r.index not in others}
     placeholders.pop(index, None)
-    resolved = apply_solutions(merge, {**placeholders, **others, index: given})
+    resolved = apply_solutions(merge, {**placeholders, **others, index: given}, names={index: solution})
     discards = tuple(d for d in resolved.discards if d.region == index)
     if discards and not discard_other:
         raise RegionSolutionError(
