@@ -68,14 +68,26 @@ def update_geometry_row(
     ``bounds`` (2, 3): the low and high corners, None for a mesh without vertices (the box is then NULL).
     """
     low, high = bounds.tolist() if bounds is not None else (None, None)
-    box = sql.SQL("cube(%(low)s::float8[], %(high)s::float8[])")  # NULL without vertices
+    # the cube extension's functions by their schema: the session's search_path may not hold it
+    row = conn.execute(
+        "SELECT n.nspname FROM pg_catalog.pg_extension e JOIN pg_catalog.pg_namespace n ON n.oid = e.extnamespace"
+        " WHERE e.extname = 'cube'"
+    ).fetchone()
+    assert row is not None  # tgsis requires cube
+    ll, ur = sql.Identifier(str(row[0]), "cube_ll_coord"), sql.Identifier(str(row[0]), "cube_ur_coord")
+    box = sql.SQL("{}(%(low)s::float8[], %(high)s::float8[])").format(sql.Identifier(str(row[0]), "cube"))
+    corners = sql.SQL("ARRAY[{ll}(bbox, 1), {ll}(bbox, 2), {ll}(bbox, 3), {ur}(bbox, 1), {ur}(bbox, 2), {ur}(bbox, 3)]")
+    box_differs = sql.SQL(
+        "(bbox IS NULL) <> (%(low)s::float8[] IS NULL) "
+        "OR (bbox IS NOT NULL AND {corners} IS DISTINCT FROM %(low)s::float8[] || %(high)s::float8[])"
+    ).format(corners=corners.format(ll=ll, ur=ur))
     naming = sql.SQL(", geoname = %(name)s") if set_name else sql.SQL("")
     name_differs = sql.SQL(" OR geoname IS DISTINCT FROM %(name)s") if set_name else sql.SQL("")
     changed = conn.execute(
         sql.SQL(
             "UPDATE tgsis.geometry SET bbox = {box}, nvrtx = %(n)s, ncell = %(m)s{naming} "
-            "WHERE geoid = %(g)s AND (bbox IS DISTINCT FROM {box} OR nvrtx <> %(n)s OR ncell <> %(m)s{differs})"
-        ).format(box=box, naming=naming, differs=name_differs),
+            "WHERE geoid = %(g)s AND ({box_differs} OR nvrtx <> %(n)s OR ncell <> %(m)s{differs})"
+        ).format(box=box, naming=naming, box_differs=box_differs, differs=name_differs),
         {"low": low, "high": high, "n": n_vertices, "m": n_cells, "name": name, "g": geoid},
     ).rowcount
     return max(changed, 0)
@@ -123,6 +135,19 @@ def _values(state: MeshState, alignment: str, name: str, what: str) -> npt.NDArr
     return np.asarray(props[name])
 
 
+def _without_row(values: list[npt.NDArray[Any]], at: npt.NDArray[np.intp]) -> npt.NDArray[np.bool_]:
+    """Per position ``at``, whether every property value there is NaN (no property row in the state)."""
+    empty = np.ones(len(at), dtype=bool)
+    if not len(at):
+        return empty
+    for column in values:
+        chosen = column[at]
+        if chosen.dtype.kind != "f":
+            return np.zeros(len(at), dtype=bool)
+        empty &= np.isnan(chosen).reshape(len(at), -1).all(axis=1)
+    return empty
+
+
 def _write_properties(
     conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, storage: Storage
 ) -> tuple[int, int]:
@@ -144,6 +169,9 @@ def _write_properties(
 
         gone, fresh = _difference(old_ids, new_ids, same)
         deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
+        # an id whose values are all NaN has no row in the state it comes from (the read gives a missing row
+        # NaN): it gets none, rather than a row of NaN or a refusal for an integer column
+        fresh = fresh[~_without_row(news, fresh)]
         if len(fresh):
             columns: list[tuple[str, npt.ArrayLike, str]] = [
                 ("_geoid", np.full(len(fresh), geoid, dtype=np.int64), "int8"),
@@ -205,12 +233,11 @@ def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage
     return deleted, len(rows)
 
 
-def _part_runs(geoid: int, state: MeshState) -> list[tuple[int, ...]]:
-    """The ``tgsis.part`` rows of a state's cells that are in a part: -1 (or NaN) is a cell in none, as stored
-    (:func:`tgsis.db.meaning.parts_from_runs`), and has no run."""
-    values = np.asarray(state.cell_properties[PART_PROPERTY])
-    inside = ~np.isnan(values) & (values >= 0) if values.dtype.kind == "f" else values >= 0
-    return part_rows(geoid, state.cell_ids[inside], values[inside])
+def _part_rows(geoid: int, state: MeshState) -> list[tuple[int, ...]]:
+    """The ``tgsis.part`` runs of a state's cells; a cell in no run (part -1 or NaN, as read) stays in none."""
+    parts = np.asarray(state.cell_properties[PART_PROPERTY])
+    inside = ~np.isnan(parts) & (parts >= 0) if parts.dtype.kind == "f" else parts >= 0
+    return part_rows(geoid, state.cell_ids[inside], parts[inside])
 
 
 def _write_parts(
@@ -219,9 +246,9 @@ def _write_parts(
     """The ``tgsis.part`` runs, rewritten when the parts differ (a few rows per object); (deleted, inserted)."""
     if stores_part_column(fc) or PART_PROPERTY not in new.cell_properties:
         return 0, 0
-    after = _part_runs(geoid, new)
+    after = _part_rows(geoid, new)
     if PART_PROPERTY in old.cell_properties:
-        before = _part_runs(geoid, old)
+        before = _part_rows(geoid, old)
         if before == after:
             return 0, 0
     row = conn.execute("SELECT tgsis.delete_object_rows('tgsis', 'part', 'geoid', %s)", ([geoid],)).fetchone()
