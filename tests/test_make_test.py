@@ -324,7 +324,7 @@ def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_pat
     by_server = {server: (folder, args) for server, folder, args, _ in runs}
     beside = {server: set(listing.split()) for server, _, _, listing in runs}
     assert set(by_server) == {"system", "embedded"}
-    assert by_server["system"] == (str(ROOT), "-m pytest -p no:cacheprovider -k x y")
+    assert by_server["system"] == (str(ROOT), "-m pytest -p no:cacheprovider --durations=15 -k x y")
     copy = Path(by_server["embedded"][0])
     assert copy.name == "tgsis" and copy != ROOT and by_server["embedded"][1] == by_server["system"][1]
     # nothing beside the copy but the logs of this run (no ../shared, no other checkout)

@@ -53,7 +53,7 @@ def test_the_installed_demo_reads_the_real_faults(wheel: Path, tmp_path: Path) -
     site = tmp_path / "site"
     zipfile.ZipFile(wheel).extractall(site)
     program = (
-        "import tgsis, tgsis.demo as d; print(tgsis.__file__); print(d._cfm_folder()); print(d._load_releases()[0])"
+        "import tgsis, tgsis._cfm as d; print(tgsis.__file__); print(d.cfm_folder()); print(d.load_releases()[0])"
     )
     env = {k: v for k, v in os.environ.items() if k != "TGSIS_DEMO_DATA"}
     env["PYTHONPATH"] = str(site)  # before the editable install's source tree
