@@ -52,9 +52,7 @@ def test_the_wheel_holds_the_sql_and_the_faults_with_their_licence(wheel: Path) 
 def test_the_installed_demo_reads_the_real_faults(wheel: Path, tmp_path: Path) -> None:
     site = tmp_path / "site"
     zipfile.ZipFile(wheel).extractall(site)
-    program = (
-        "import tgsis, tgsis._cfm as d; print(tgsis.__file__); print(d.cfm_folder()); print(d.load_releases()[0])"
-    )
+    program = "import tgsis, tgsis._cfm as d; print(tgsis.__file__); print(d.cfm_folder()); print(d.load_releases()[0])"
     env = {k: v for k, v in os.environ.items() if k != "TGSIS_DEMO_DATA"}
     env["PYTHONPATH"] = str(site)  # before the editable install's source tree
     done = subprocess.run(
