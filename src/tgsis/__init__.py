@@ -146,7 +146,15 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
     )
     from tgsis.db.multidim import fetch_md_gmap, md_in_box, md_vertices_in_box
     from tgsis.db.postgis import create_postgis_view, enable_postgis, fetch_ewkb, insert_wkb_feature, postgis_enabled
-    from tgsis.db.regions import ConflictRegion, RegionResolution, find_conflicts, resolve_region
+    from tgsis.db.regions import (
+        ConflictRegion,
+        ObjectResolution,
+        RegionResolution,
+        SideDiscard,
+        find_conflicts,
+        resolve_all_regions,
+        resolve_region,
+    )
     from tgsis.db.temporal import (
         class_property_periods,
         export_series,
@@ -335,8 +343,11 @@ __all__ = [
     "find_conflicts",
     "resolve_conflict",
     "resolve_region",
+    "resolve_all_regions",
     "ConflictRegion",
     "RegionResolution",
+    "ObjectResolution",
+    "SideDiscard",
     "conflict_rows",
     "Discard",
     "conflict_discards",

@@ -54,13 +54,17 @@ from tgsis.mesh import Mesh
 
 __all__ = [
     "ConflictRegion",
+    "ObjectResolution",
     "RegionResolution",
+    "SideDiscard",
     "average_region",
     "discard_text",
     "find_conflicts",
     "recorded_solutions",
     "region_solutions",
+    "resolve_all_regions",
     "resolve_region",
+    "side_discard_text",
     "state_from_npz",
     "state_to_npz",
 ]
@@ -549,18 +553,7 @@ def _resolve(
     stored_before = _stored_regions(conn, versionid, "feature", key)
     conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))  # the marks of now; stale regions go
     stored = _stored_regions(conn, versionid, "feature", key)
-    if not stored:
-        if stored_before:
-            raise RegionSolutionError(
-                f"{name}: the regions were found on a state that changed since: the object changed in the version "
-                "or its parent",
-                hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r}), or tgsis version conflicts "
-                f"{version}",
-            )
-        raise NotFoundError(
-            f"{name}: no regions of the feature are stored",
-            hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {version})",
-        )
+    _require_regions(stored, stored_before, version, name)
     if solution == "unsolved" or not 0 <= index < len(stored) or not stored[index].conflict:
         # nothing to compute: the SQL function records it or refuses (not a region, no conflict)
         return RegionResolution(_record(conn, version, key, index, solution, None), ())
@@ -590,6 +583,23 @@ def _resolve(
     return RegionResolution(row, discards, state)
 
 
+def _require_regions(stored: list[ConflictRegion], stored_before: list[ConflictRegion], version: str, name: str) -> None:
+    """Refuse when no regions are stored now: stale ones (gone with the marks) or none ever found."""
+    if stored:
+        return
+    if stored_before:
+        raise RegionSolutionError(
+            f"{name}: the regions were found on a state that changed since: the object changed in the version "
+            "or its parent",
+            hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r}), or tgsis version conflicts "
+            f"{version}",
+        )
+    raise NotFoundError(
+        f"{name}: no regions of the feature are stored",
+        hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {version})",
+    )
+
+
 def _record(conn: Conn, version: str, key: str, index: int, solution: str, mesh: bytes | None) -> ConflictRegion:
     row = conn.execute(
         f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s)",
@@ -610,6 +620,205 @@ def _checked_merge(conn: Conn, version: str, feature_id: int, stored: list[Confl
             hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r})",
         )
     return merge
+
+
+# --------------------------------------------------------------------------- resolve_all_regions: one solution per object
+
+_OBJECT_SOLUTIONS = ("parent", "child", "base", "average", "unsolved")
+
+
+@dataclass(frozen=True)
+class SideDiscard:
+    """What an object's solution throws away of one side's edits, summed over its conflicting regions.
+
+    Attributes
+    ----------
+    solution : str
+        ``parent``, ``child``, ``base`` or ``average``.
+    side : str
+        ``parent`` or ``child``: whose edits are lost.
+    vertices, cells : int
+        The sums of the regions' :class:`~tgsis.merge3.RegionDiscard` counts.
+    max_displacement : float
+        The largest of the regions' largest displacements.
+    regions : tuple of int
+        The regions where that side loses something.
+    """
+
+    solution: str
+    side: str
+    vertices: int
+    cells: int
+    max_displacement: float
+    regions: tuple[int, ...]
+
+
+def side_discard_text(d: SideDiscard) -> str:
+    """What an object's solution discards of one side, in one line."""
+    return (
+        f"{d.solution} discards the {'version' if d.side == 'child' else 'parent'}'s edit of {d.vertices} vertices "
+        f"and {d.cells} cells in {len(d.regions)} region(s) (largest displacement {d.max_displacement:.6g})"
+    )
+
+
+@dataclass(frozen=True)
+class ObjectResolution:
+    """What :func:`resolve_all_regions` recorded.
+
+    Attributes
+    ----------
+    regions : tuple of ConflictRegion
+        The conflicting regions with their solution, as stored (the regions
+        that merge by themselves are not among them: they stay automatic).
+    discards : tuple of RegionDiscard
+        What the solution throws away, per region and side.
+    totals : tuple of SideDiscard
+        The same summed per side (``parent`` first); empty when nothing is discarded.
+    """
+
+    regions: tuple[ConflictRegion, ...]
+    discards: tuple[RegionDiscard, ...]
+    totals: tuple[SideDiscard, ...]
+
+    def summary(self) -> str:
+        """One line per side (the sums), then one per region's discard; or that nothing is discarded."""
+        if not self.discards:
+            solutions = sorted({r.solution for r in self.regions})
+            return f"{', '.join(solutions) or 'the solution'} discards nothing"
+        return "\n".join([*(side_discard_text(t) for t in self.totals), *(discard_text(d) for d in self.discards)])
+
+
+def _totals(discards: tuple[RegionDiscard, ...], solution: str) -> tuple[SideDiscard, ...]:
+    totals = []
+    for side in ("parent", "child"):
+        mine = [d for d in discards if d.side == side]
+        if mine:
+            totals.append(
+                SideDiscard(
+                    solution,
+                    side,
+                    sum(d.vertices for d in mine),
+                    sum(d.cells for d in mine),
+                    max(d.max_displacement for d in mine),
+                    tuple(sorted({d.region for d in mine})),
+                )
+            )
+    return tuple(totals)
+
+
+@checked
+def resolve_all_regions(
+    conn: Conn, version: str, feature_id: int, solution: str, *, discard_other: bool = True
+) -> ObjectResolution:
+    """Record one solution for every conflicting region of a mesh at once (docs/merge.md, "Solutions per object").
+
+    All or nothing, in one transaction: each conflicting region gets
+    ``solution`` (replacing a solution recorded before), or, if one region
+    refuses it (``average`` where the two sides meshed the region
+    differently), none is recorded and the error names the region. The
+    regions that are no conflict are not touched: they merge by themselves,
+    so a per-object ``parent`` never drops the version's edits outside the
+    conflicts (unlike ``resolve_conflict(..., 'parent')``, which is refused
+    for such an object).
+
+    Parameters
+    ----------
+    version : str
+    feature_id : int
+        The conflicting feature (geoid); its regions must have been found on
+        its current state (:func:`find_conflicts`).
+    solution : {"parent", "child", "base", "average", "unsolved"}
+        As for :func:`resolve_region`, for each conflicting region;
+        ``unsolved`` takes every region's solution back. ``manual`` is per
+        region only (its mesh is a region's rows).
+    discard_other : bool
+        When False, a solution that discards anything is refused.
+
+    Returns
+    -------
+    ObjectResolution
+        The regions recorded and what the solution discards, per region and
+        summed per side (:attr:`ObjectResolution.totals`).
+
+    Raises
+    ------
+    RegionSolutionError
+        The object has no conflicting region; the regions were found on a
+        state that changed since; a region refuses the solution (named);
+        ``discard_other=False`` and the solution discards something.
+    InvalidInputError
+        An unknown solution, or ``manual``.
+    NotFoundError
+        No regions of the feature are stored.
+    InvalidMergeError
+        The solutions give no valid mesh.
+    MissingPrivilegeError
+        The role may not write in the version (nothing recorded).
+    """
+    wanted = solution.lower()
+    name = f"feature {feature_id} in version {show_name(version)}"
+    if wanted not in _OBJECT_SOLUTIONS:
+        raise InvalidInputError(
+            f"{name}: solution {solution!r} of all its regions is not parent, child, base, average or unsolved",
+            hint="manual is a region's: resolve_region(conn, version, feature_id, N, 'manual', mesh)"
+            if wanted == "manual"
+            else None,
+        )
+    for attempt in range(_retrying(conn)):
+        try:
+            with reraise(), _consistent(conn, write=True):
+                return _resolve_all(conn, version, feature_id, wanted, discard_other, name)
+        except ConcurrentChangeError:
+            if attempt == _retrying(conn) - 1:
+                raise
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _resolve_all(
+    conn: Conn, version: str, feature_id: int, solution: str, discard_other: bool, name: str
+) -> ObjectResolution:
+    versionid = version_row(conn, version)[0]
+    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
+    key = str(feature_id)
+    stored_before = _stored_regions(conn, versionid, "feature", key)
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))  # the marks of now; stale regions go
+    stored = _stored_regions(conn, versionid, "feature", key)
+    _require_regions(stored, stored_before, version, name)
+    conflicting = [r.region for r in stored if r.conflict]
+    if not conflicting:
+        raise RegionSolutionError(
+            f"{name}: no region of the feature is a conflict: nothing to choose, it merges by itself",
+            hint=f"merge the version: tgsis version merge {version}",
+        )
+    if solution == "unsolved":
+        return ObjectResolution(tuple(_record(conn, version, key, i, solution, None) for i in conflicting), (), ())
+    merge = _checked_merge(conn, version, feature_id, stored, name)
+    given: dict[int, Solution] = {}
+    for region in merge.conflicts:
+        if solution == "average":
+            try:
+                given[region.index] = average_region(merge, region)
+            except RegionSolutionError as exc:  # the whole solution is refused: say which region refused it
+                raise RegionSolutionError(
+                    f"{name}: average of all its regions refused, nothing recorded: {exc.message}", hint=exc.hint
+                ) from exc
+        else:
+            given[region.index] = cast(Solution, solution)
+    resolved = apply_solutions(merge, given, names=dict.fromkeys(given, solution))
+    discards = tuple(sorted((d for d in resolved.discards if d.region in given), key=lambda d: (d.region, d.side)))
+    totals = _totals(discards, solution)
+    if discards and not discard_other:
+        raise RegionSolutionError(
+            f"{name}: solution {solution} of all its regions discards edits: "
+            + "; ".join([*(side_discard_text(t) for t in totals), *(discard_text(d) for d in discards)]),
+            hint="call again with discard_other=True to discard them, or choose another solution",
+        )
+    rows = []
+    for index in sorted(given):
+        value = given[index]
+        mesh = state_to_npz(value) if isinstance(value, MeshState) else None
+        rows.append(_record(conn, version, key, index, solution, mesh))
+    return ObjectResolution(tuple(rows), discards, totals)
 
 
 # --------------------------------------------------------------------------- average and manual

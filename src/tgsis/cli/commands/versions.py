@@ -485,6 +485,8 @@ def _resolve_region(args: argparse.Namespace) -> int:
             hint="give the feature's id (tgsis version conflicts VERSION lists them)",
         ) from None
     solution = words[1].lower()
+    if args.region == "all":
+        return _resolve_all_regions(args, feature, solution)
     mesh: Mesh | None = None
     if args.mesh is not None:
         if solution != "manual":
@@ -503,7 +505,7 @@ def _resolve_region(args: argparse.Namespace) -> int:
         )
     with connection(args) as conn:
         result = R.resolve_region(
-            conn, args.name, feature, args.region, solution, mesh, discard_other=args.discard_other
+            conn, args.name, feature, int(args.region), solution, mesh, discard_other=args.discard_other
         )
     for discard in result.discards:
         out(f"  {R.discard_text(discard)}")
@@ -511,6 +513,36 @@ def _resolve_region(args: argparse.Namespace) -> int:
         f"feature {feature} in {V.show_name(args.name)}: region {result.region.region} recorded {result.region.solution}"
     )
     return 0
+
+
+def _resolve_all_regions(args: argparse.Namespace, feature: int, solution: str) -> int:
+    """``--region all``: one solution for every conflicting region of the feature; the sums said first."""
+    if solution == "manual" or args.mesh is not None:
+        raise InvalidInputError(
+            "--region all takes parent, child, base, average or unsolved, without --mesh: manual is a region's "
+            "(its mesh holds the region's rows)",
+            hint="tgsis version resolve VERSION ID manual --region N --mesh FILE",
+        )
+    with connection(args) as conn:
+        result = R.resolve_all_regions(conn, args.name, feature, solution, discard_other=args.discard_other)
+    for total in result.totals:
+        out(f"  {R.side_discard_text(total)}")
+    for discard in result.discards:
+        out(f"  {R.discard_text(discard)}")
+    recorded = ", ".join(str(r.region) for r in result.regions)
+    out(f"feature {feature} in {V.show_name(args.name)}: regions {recorded} recorded {solution}")
+    return 0
+
+
+def _region_argument(value: str) -> int | str:
+    """``--region``: a region's index, or ``all`` (every conflicting region of the feature)."""
+    if value.strip().lower() == "all":
+        return "all"
+    try:
+        index = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is no region: give its index N or all") from None
+    return index
 
 
 def cmd_version_resolve(args: argparse.Namespace) -> int:
@@ -1203,6 +1235,7 @@ def add_version_parser(commands: Any) -> None:
             "tgsis version resolve cfm6 feature 42 child",
             "tgsis version resolve cfm6 feature 42 child --discard-other",
             "tgsis version resolve cfm6 42 average --region 0 --discard-other",
+            "tgsis version resolve cfm6 42 parent --region all --discard-other",
             "tgsis version resolve cfm6 42 manual --region 0 --mesh edited_child.ts --discard-other",
         ],
         cmd_version_resolve,
@@ -1224,11 +1257,12 @@ def add_version_parser(commands: Any) -> None:
     )
     ver_resolve.add_argument(
         "--region",
-        type=int,
-        metavar="N",
+        type=_region_argument,
+        metavar="N|all",
         help="solve one conflicting region of a feature's mesh (tgsis version conflicts NAME --json lists them "
-        "as conflict_regions): tgsis version resolve NAME FEATURE SOLUTION --region N; the merge takes the "
-        "regions that are no conflict by itself (docs/merge.md)",
+        "as conflict_regions): tgsis version resolve NAME FEATURE SOLUTION --region N; all: every conflicting "
+        "region of the feature at once (parent, child, base, average or unsolved; all or nothing); the merge "
+        "takes the regions that are no conflict by itself (docs/merge.md)",
     )
     ver_resolve.add_argument(
         "--mesh",
