@@ -70,7 +70,7 @@ def _conflicting(conn: Conn) -> list[R.ConflictRegion]:
 def _solved_state(conn: Conn, fault: int) -> Any:
     merge = tgsis.object_merge(conn, "e1", fault)
     with conn.transaction():
-        solutions = R.region_solutions(conn, "e1", "feature", str(fault), merge)
+        solutions: dict[int, Any] = dict(R.region_solutions(conn, "e1", "feature", str(fault), merge))
     conn.commit()
     return merge, solutions, apply_solutions(merge, solutions).state
 

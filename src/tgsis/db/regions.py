@@ -583,7 +583,9 @@ def _resolve(
     return RegionResolution(row, discards, state)
 
 
-def _require_regions(stored: list[ConflictRegion], stored_before: list[ConflictRegion], version: str, name: str) -> None:
+def _require_regions(
+    stored: list[ConflictRegion], stored_before: list[ConflictRegion], version: str, name: str
+) -> None:
     """Refuse when no regions are stored now: stale ones (gone with the marks) or none ever found."""
     if stored:
         return
