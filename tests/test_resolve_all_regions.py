@@ -183,3 +183,50 @@ def test_the_command_line_solves_the_object_with_region_all(
     assert main(args_mesh) == 1 and "without --mesh" in capsys.readouterr().err
     # without --region the object-level resolve is as it was: it refuses a side that drops edits outside the conflicts
     assert main(["--dsn", db_dsn, "version", "resolve", "e1", "feature", str(fault), "child"]) == 1
+
+
+def test_a_role_without_rights_and_a_stale_state_record_nothing(db_dsn: str, conn: Conn) -> None:
+    from tests.roles import login_roles
+    from tgsis.errors import MissingPrivilegeError
+
+    fault = _two_conflicts(conn)
+    regions = _conflicting(conn)
+    before = everything(conn)
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        with pytest.raises(MissingPrivilegeError, match="resolve conflicts"):
+            tgsis.resolve_all_regions(reader, "e1", fault, "child")
+        reader.rollback()
+    assert everything(conn) == before
+    move(conn, "e1", fault, [70], (0.0, 0.0, 0.25))  # the version edits the object again: the regions are stale
+    conn.commit()
+    with pytest.raises(RegionSolutionError, match="changed since"):
+        tgsis.resolve_all_regions(conn, "e1", fault, "child")
+    conn.rollback()
+    # found again, solved at once and taken back at once
+    assert len([r for r in tgsis.find_conflicts(conn, "e1")[0].regions if r.conflict]) == len(regions)
+    conn.commit()
+    tgsis.resolve_all_regions(conn, "e1", fault, "child")
+    conn.commit()
+    back = tgsis.resolve_all_regions(conn, "e1", fault, "unsolved")
+    conn.commit()
+    assert [r.solution for r in back.regions] == ["unsolved"] * len(regions) and back.discards == ()
+    assert {r.solution for r in tgsis.find_conflicts(conn, "e1")[0].regions if r.conflict} == {"unsolved"}
+    conn.commit()
+
+
+def test_an_object_without_conflicting_regions_is_refused(conn: Conn) -> None:
+    from tests.merge_data import make_fault
+
+    fault = make_fault(conn)
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 1.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -1.0))
+    conn.commit()
+    [conflict] = tgsis.find_conflicts(conn, "e1")  # both sides changed the object, in disjoint regions
+    conn.commit()
+    assert conflict.regions and not any(r.conflict for r in conflict.regions)
+    before = everything(conn)
+    with pytest.raises(RegionSolutionError, match="no region of the feature is a conflict"):
+        tgsis.resolve_all_regions(conn, "e1", fault, "child")
+    conn.rollback()
+    assert everything(conn) == before
