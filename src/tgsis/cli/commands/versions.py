@@ -475,7 +475,8 @@ def _resolve_region(args: argparse.Namespace) -> int:
     if len(words) != 2:
         raise InvalidInputError(
             "--region needs the feature's id and the solution",
-            hint="tgsis version resolve VERSION ID parent|child|base|average|manual --region N [--mesh FILE]",
+            hint="tgsis version resolve VERSION ID parent|child|base|average|manual --region N [--mesh FILE] (every "
+            "conflicting region at once: --region all)",
         )
     try:
         feature = int(words[0])
