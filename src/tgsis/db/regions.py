@@ -26,10 +26,10 @@ import dataclasses
 import io
 import json
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -72,6 +72,7 @@ __all__ = [
 Conn = psycopg.Connection[Any]
 
 _SOLUTIONS = ("parent", "child", "base", "average", "manual", "unsolved")
+_T = TypeVar("_T")
 _RETRIES = 5  # serialization failures of a transaction of our own (two sessions storing at once) are retried
 _REGION_COLUMNS = (
     "region, conflict, changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids, child_vertex_ids,"
@@ -99,9 +100,18 @@ def _consistent(conn: Conn, *, write: bool) -> Iterator[None]:
         yield
 
 
-def _retrying(conn: Conn) -> int:
-    """How often a transaction may be tried: again after a serialization failure only when it is our own."""
-    return _RETRIES if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE else 1
+def _retried(conn: Conn, work: Callable[[], _T]) -> _T:
+    """``work`` in one consistent transaction (:func:`_consistent`, writing), tried again after a serialization
+    failure (two sessions storing at once) when the transaction is our own; a caller's transaction is tried once."""
+    tries = _RETRIES if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE else 1
+    for attempt in range(tries):
+        try:
+            with reraise(), _consistent(conn, write=True):
+                return work()
+        except ConcurrentChangeError:
+            if attempt == tries - 1:
+                raise
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 # --------------------------------------------------------------------------- rows <-> regions
@@ -222,14 +232,7 @@ def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
         property changed on both sides, a deletion, another data model, a
         plain table's row).
     """
-    for attempt in range(_retrying(conn)):
-        try:
-            with reraise(), _consistent(conn, write=True):
-                return _find(conn, version)
-        except ConcurrentChangeError:
-            if attempt == _retrying(conn) - 1:
-                raise
-    raise AssertionError("unreachable")  # pragma: no cover
+    return _retried(conn, lambda: _find(conn, version))
 
 
 def _find(conn: Conn, version: str) -> list[Conflict]:
@@ -526,14 +529,7 @@ def resolve_region(
             hint="leave mesh out, or give solution='manual'"
             + (" (average is computed)" if wanted == "average" else ""),
         )
-    for attempt in range(_retrying(conn)):
-        try:
-            with reraise(), _consistent(conn, write=True):
-                return _resolve(conn, version, feature_id, region, wanted, mesh, discard_other, name)
-        except ConcurrentChangeError:
-            if attempt == _retrying(conn) - 1:
-                raise
-    raise AssertionError("unreachable")  # pragma: no cover
+    return _retried(conn, lambda: _resolve(conn, version, feature_id, region, wanted, mesh, discard_other, name))
 
 
 def _resolve(
@@ -546,14 +542,7 @@ def _resolve(
     discard_other: bool,
     name: str,
 ) -> RegionResolution:
-    versionid = version_row(conn, version)[0]
-    # the right first: a role that may not resolve learns that, whatever else is wrong
-    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
-    key = str(feature_id)
-    stored_before = _stored_regions(conn, versionid, "feature", key)
-    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))  # the marks of now; stale regions go
-    stored = _stored_regions(conn, versionid, "feature", key)
-    _require_regions(stored, stored_before, version, name)
+    key, stored = _regions_of_now(conn, version, feature_id, name)
     if solution == "unsolved" or not 0 <= index < len(stored) or not stored[index].conflict:
         # nothing to compute: the SQL function records it or refuses (not a region, no conflict)
         return RegionResolution(_record(conn, version, key, index, solution, None), ())
@@ -581,6 +570,21 @@ def _resolve(
     state = given if isinstance(given, MeshState) else None
     row = _record(conn, version, key, index, solution, None if state is None else state_to_npz(state))
     return RegionResolution(row, discards, state)
+
+
+def _regions_of_now(conn: Conn, version: str, feature_id: int, name: str) -> tuple[str, list[ConflictRegion]]:
+    """The feature's key and its stored regions, on the marks of now (stale ones dropped); refused without regions.
+
+    The right first: a role that may not resolve learns that, whatever else is wrong.
+    """
+    versionid = version_row(conn, version)[0]
+    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
+    key = str(feature_id)
+    stored_before = _stored_regions(conn, versionid, "feature", key)
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))  # the marks of now; stale regions go
+    stored = _stored_regions(conn, versionid, "feature", key)
+    _require_regions(stored, stored_before, version, name)
+    return key, stored
 
 
 def _require_regions(
@@ -766,26 +770,13 @@ def resolve_all_regions(
             if wanted == "manual"
             else None,
         )
-    for attempt in range(_retrying(conn)):
-        try:
-            with reraise(), _consistent(conn, write=True):
-                return _resolve_all(conn, version, feature_id, wanted, discard_other, name)
-        except ConcurrentChangeError:
-            if attempt == _retrying(conn) - 1:
-                raise
-    raise AssertionError("unreachable")  # pragma: no cover
+    return _retried(conn, lambda: _resolve_all(conn, version, feature_id, wanted, discard_other, name))
 
 
 def _resolve_all(
     conn: Conn, version: str, feature_id: int, solution: str, discard_other: bool, name: str
 ) -> ObjectResolution:
-    versionid = version_row(conn, version)[0]
-    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
-    key = str(feature_id)
-    stored_before = _stored_regions(conn, versionid, "feature", key)
-    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))  # the marks of now; stale regions go
-    stored = _stored_regions(conn, versionid, "feature", key)
-    _require_regions(stored, stored_before, version, name)
+    key, stored = _regions_of_now(conn, version, feature_id, name)
     conflicting = [r.region for r in stored if r.conflict]
     if not conflicting:
         raise RegionSolutionError(
