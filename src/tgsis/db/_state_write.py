@@ -31,10 +31,18 @@ from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshState
 
-__all__ = ["delete_rows", "update_geometry_row", "write_state_difference", "write_state_rows"]
+__all__ = [
+    "copy_cell_rows",
+    "copy_vertex_rows",
+    "delete_rows",
+    "update_geometry_row",
+    "write_state_difference",
+    "write_state_rows",
+]
 
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
+FloatArray = npt.NDArray[np.float64]
 
 #: the vertex property of a :class:`MeshState` read by ``read_merge_states`` that holds the GOCAD atoms (-1: none)
 ATOM_PROPERTY = "refid"
@@ -296,6 +304,42 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
     return sum(write_state_rows(conn, fc, geoid, old, new))
 
 
+def copy_vertex_rows(conn: Conn, storage: Storage, geoid: int, ids: IntArray, xyz: FloatArray) -> int:
+    """COPY vertex rows ``ids`` (n,) at ``xyz`` (n, 3) of one geometry into ``tgsis.vrtx``; returns n."""
+    if len(ids):
+        storage.copy(
+            conn,
+            "tgsis",
+            "vrtx",
+            [
+                ("geoid", np.full(len(ids), geoid, dtype=np.int64), "int8"),
+                ("vrtxid", ids, "int8"),
+                ("x", xyz[:, 0], "float8"),
+                ("y", xyz[:, 1], "float8"),
+                ("z", xyz[:, 2], "float8"),
+            ],
+        )
+    return len(ids)
+
+
+def copy_cell_rows(
+    conn: Conn, storage: Storage, table: str, idfield: str, geoid: int, ids: IntArray, cells: IntArray
+) -> int:
+    """COPY cell rows ``ids`` (m,) on vertex ids ``cells`` (m, k) of one geometry into its simplex table; returns m."""
+    if len(ids):
+        storage.copy(
+            conn,
+            "tgsis",
+            table,
+            [
+                ("geoid", np.full(len(ids), geoid, dtype=np.int64), "int8"),
+                (idfield, ids, "int8"),
+                *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(cells.shape[1])),
+            ],
+        )
+    return len(ids)
+
+
 def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState) -> tuple[int, int, int]:
     """:func:`write_state_difference`, counted: (rows deleted or closed, rows inserted, geometry rows updated)."""
     if fc.geotype not in SIMPLEX:
@@ -314,34 +358,8 @@ def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, n
     gone_v, fresh_v = _row_difference(old.vertex_ids, old.vertices, new.vertex_ids, new.vertices)
     deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone_c)
     deleted += delete_rows(conn, "tgsis", "vrtx", "geoid", geoid, "vrtxid", gone_v)
-    if len(fresh_v):
-        xyz = new.vertices[fresh_v]
-        storage.copy(
-            conn,
-            "tgsis",
-            "vrtx",
-            [
-                ("geoid", np.full(len(fresh_v), geoid, dtype=np.int64), "int8"),
-                ("vrtxid", new.vertex_ids[fresh_v], "int8"),
-                ("x", xyz[:, 0], "float8"),
-                ("y", xyz[:, 1], "float8"),
-                ("z", xyz[:, 2], "float8"),
-            ],
-        )
-        inserted += len(fresh_v)
-    if len(fresh_c):
-        cells = new.cells[fresh_c]
-        storage.copy(
-            conn,
-            "tgsis",
-            table,
-            [
-                ("geoid", np.full(len(fresh_c), geoid, dtype=np.int64), "int8"),
-                (idfield, new.cell_ids[fresh_c], "int8"),
-                *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(new.cell_size)),
-            ],
-        )
-        inserted += len(fresh_c)
+    inserted += copy_vertex_rows(conn, storage, geoid, new.vertex_ids[fresh_v], new.vertices[fresh_v])
+    inserted += copy_cell_rows(conn, storage, table, idfield, geoid, new.cell_ids[fresh_c], new.cells[fresh_c])
     for gone, added in (_write_atoms(conn, geoid, old, new, storage), _write_parts(conn, fc, geoid, old, new, storage)):
         deleted, inserted = deleted + gone, inserted + added
     bounds = np.stack([new.vertices.min(axis=0), new.vertices.max(axis=0)]) if new.n_vertices else None

@@ -44,7 +44,14 @@ from psycopg import sql
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._settings import read_version_settings, restore_version_settings
-from tgsis.db._state_write import PART_PROPERTY, delete_rows, update_geometry_row, write_state_rows
+from tgsis.db._state_write import (
+    PART_PROPERTY,
+    copy_cell_rows,
+    copy_vertex_rows,
+    delete_rows,
+    update_geometry_row,
+    write_state_rows,
+)
 from tgsis.db._static import (
     MEANING_COLUMNS,
     SIMPLEX,
@@ -390,34 +397,16 @@ def _write_diff(
         np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]),
     )
     written_v = np.concatenate([moved, added_v])
-    if len(written_v):
-        xyz = edited.vertices[written_v]
-        storage.copy(
-            conn,
-            "tgsis",
-            "vrtx",
-            [
-                ("geoid", np.full(len(written_v), geoid, dtype=np.int64), "int8"),
-                ("vrtxid", vertex_ids[written_v], "int8"),
-                ("x", xyz[:, 0], "float8"),
-                ("y", xyz[:, 1], "float8"),
-                ("z", xyz[:, 2], "float8"),
-            ],
-        )
-        inserted += len(written_v)
-    if len(added_c):
-        cells = vertex_ids[edited.cells[added_c]]
-        storage.copy(
-            conn,
-            "tgsis",
-            table,
-            [
-                ("geoid", np.full(len(added_c), geoid, dtype=np.int64), "int8"),
-                (idfield, cell_ids[added_c], "int8"),
-                *((f"vrtxid{j + 1}", cells[:, j], "int8") for j in range(edited.cell_size)),
-            ],
-        )
-        inserted += len(added_c)
+    inserted += copy_vertex_rows(conn, storage, geoid, vertex_ids[written_v], edited.vertices[written_v])
+    inserted += copy_cell_rows(
+        conn,
+        storage,
+        table,
+        idfield,
+        geoid,
+        cell_ids[added_c],
+        vertex_ids[edited.cells[added_c]].reshape(-1, edited.cell_size),
+    )
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
