@@ -413,8 +413,8 @@ def _write_cells_csv(mesh: Mesh, path: Path) -> None:
     with path.open("w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(header)
-        for j in range(len(mesh.cells)):
-            writer.writerow([repr(c[j].item()) for c in columns])
+        texts = [[repr(v) for v in c.tolist()] for c in columns]  # tolist: Python numbers, whose repr reads back exact
+        writer.writerows(zip(*texts, strict=True) if texts else ([] for _ in range(len(mesh.cells))))
 
 
 def _refuse_existing(target: Path, names: list[str]) -> None:
