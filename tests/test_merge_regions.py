@@ -111,7 +111,9 @@ def test_rows_written_are_proportional_to_the_change(conn: Conn, fault: int) -> 
     def added(table: str, revision: int) -> int:
         return int(conn.execute(f"SELECT count(*) FROM {table} WHERE revision = %s", (revision,)).fetchone()[0])  # type: ignore[index]
 
-    # the parent's edit went into the child: one vertex row version; the child's into the parent: three
+    # each side's working revision holds its own edit and the other side's merged in: the child's 3 + the
+    # parent's 1, and the parent's 1 + the child's 3 (the parent's own row is not written again: that rows are
+    # not rewritten is shown apart, test_the_merge_writes_into_the_parent_exactly_the_rows_the_child_changed)
     assert added("tgsis.vrtx_ver", child_rev) == 3 + 1
     assert added("tgsis.vrtx_ver", parent_rev) == 1 + 3
     assert added("tgsis.trgl_ver", parent_rev) == 0
