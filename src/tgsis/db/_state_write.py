@@ -24,6 +24,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.db._cube import box_corners, cube_name
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
 from tgsis.db._transfer import Storage
 from tgsis.db.classes import FeatureClass, stores_part_column
@@ -76,19 +77,12 @@ def update_geometry_row(
     ``bounds`` (2, 3): the low and high corners, None for a mesh without vertices (the box is then NULL).
     """
     low, high = bounds.tolist() if bounds is not None else (None, None)
-    # the cube extension's functions by their schema: the session's search_path may not hold it
-    row = conn.execute(
-        "SELECT n.nspname FROM pg_catalog.pg_extension e JOIN pg_catalog.pg_namespace n ON n.oid = e.extnamespace"
-        " WHERE e.extname = 'cube'"
-    ).fetchone()
-    assert row is not None  # tgsis requires cube
-    ll, ur = sql.Identifier(str(row[0]), "cube_ll_coord"), sql.Identifier(str(row[0]), "cube_ur_coord")
-    box = sql.SQL("{}(%(low)s::float8[], %(high)s::float8[])").format(sql.Identifier(str(row[0]), "cube"))
-    corners = sql.SQL("ARRAY[{ll}(bbox, 1), {ll}(bbox, 2), {ll}(bbox, 3), {ur}(bbox, 1), {ur}(bbox, 2), {ur}(bbox, 3)]")
+    # the cube extension's objects by their schema: the session's search_path may not hold it
+    box = sql.SQL("{}(%(low)s::float8[], %(high)s::float8[])").format(cube_name(conn, "cube"))
     box_differs = sql.SQL(
         "(bbox IS NULL) <> (%(low)s::float8[] IS NULL) "
-        "OR (bbox IS NOT NULL AND {corners} IS DISTINCT FROM %(low)s::float8[] || %(high)s::float8[])"
-    ).format(corners=corners.format(ll=ll, ur=ur))
+        "OR (bbox IS NOT NULL AND ARRAY[{corners}] IS DISTINCT FROM %(low)s::float8[] || %(high)s::float8[])"
+    ).format(corners=box_corners(conn, sql.Identifier("bbox")))
     naming = sql.SQL(", geoname = %(name)s") if set_name else sql.SQL("")
     name_differs = sql.SQL(" OR geoname IS DISTINCT FROM %(name)s") if set_name else sql.SQL("")
     changed = conn.execute(

@@ -19,6 +19,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import checked
+from tgsis.db._cube import box_corners
 from tgsis.db._transfer import columns_out, corners_out
 from tgsis.db.classes import FeatureClass, readable_class_names  # FeatureClass at run time: @checked reads the hints
 from tgsis.errors import NotFoundError, reraise
@@ -157,9 +158,10 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
     """The :class:`GeometrySummary` of feature ``geoid``; :class:`NotFoundError` when there is none."""
     with reraise():
         row = conn.execute(
-            "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, "
-            "cube_ll_coord(bbox, 1), cube_ur_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ur_coord(bbox, 2), "
-            "cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s",
+            sql.SQL(
+                "SELECT geoname, geotype, nvrtx, ncell, cardinality(geoids), timemodel, alive, {} "
+                "FROM tgsis.geometry WHERE geoid = %s"
+            ).format(box_corners(conn, sql.Identifier("bbox"), "axes")),
             (geoid,),
         ).fetchone()
     if row is None:
@@ -286,8 +288,7 @@ def list_features(
         params.append(value)
     query = sql.SQL(
         "SELECT g.geoid, g.geoname, g.geotype, g.nvrtx, g.ncell, g.timemodel, g.alive, i.first, i.last, "
-        "cube_ll_coord(g.bbox, 1), cube_ll_coord(g.bbox, 2), cube_ll_coord(g.bbox, 3), "
-        "cube_ur_coord(g.bbox, 1), cube_ur_coord(g.bbox, 2), cube_ur_coord(g.bbox, 3), cardinality(g.geoids){} "
+        "{}, cardinality(g.geoids){} "
         "FROM {} f JOIN tgsis.geometry g ON g.geoid = f._geoid "
         "LEFT JOIN LATERAL (SELECT min(t) AS first, max(t) AS last "
         "                     FROM (SELECT t FROM tgsis.geometry_instants(g.geoid) "
@@ -296,6 +297,7 @@ def list_features(
         "                            WHERE geoid = g.geoid AND g.timemodel = 'GMAP') AS lives (t)) i ON true "
         "WHERE {} ORDER BY g.geoid {}"
     ).format(
+        box_corners(conn, sql.Identifier("g", "bbox")),
         sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props),
         fc.qualified(fc.featuretable),
         sql.SQL(" AND ").join(conditions),

@@ -19,10 +19,12 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from psycopg import sql
 
 from tgsis import datamodels
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import checked
+from tgsis.db._cube import cube_name
 from tgsis.db._temporal_common import (
     Conn,
     assemble_surface,
@@ -233,12 +235,14 @@ def add_instant(
         _copy_instants(conn, fc, feature_id, [float(t)], [surface], storage, drop_extra_properties)
         insert_instant_properties(conn, fc, feature_id, [(float(t),)], rows, ["_times"])
         conn.execute(
-            "UPDATE tgsis.geometry SET nvrtx = nvrtx + %s, ncell = ncell + %s, "
-            "bbox = CASE WHEN %s::float8[] IS NULL THEN bbox "
-            "            WHEN bbox IS NULL THEN cube((%s::float8[])[1:3], (%s::float8[])[4:6]) "
-            "            ELSE cube_union(bbox, cube((%s::float8[])[1:3], (%s::float8[])[4:6])) END "
-            "WHERE geoid = %s",
-            (surface.n_vertices, surface.n_cells, bounds, bounds, bounds, bounds, bounds, feature_id),
+            sql.SQL(
+                "UPDATE tgsis.geometry SET nvrtx = nvrtx + %(n)s, ncell = ncell + %(m)s, "
+                "bbox = CASE WHEN %(b)s::float8[] IS NULL THEN bbox "
+                "            WHEN bbox IS NULL THEN {cube}((%(b)s::float8[])[1:3], (%(b)s::float8[])[4:6]) "
+                "            ELSE {union}(bbox, {cube}((%(b)s::float8[])[1:3], (%(b)s::float8[])[4:6])) END "
+                "WHERE geoid = %(g)s"
+            ).format(cube=cube_name(conn, "cube"), union=cube_name(conn, "cube_union")),
+            {"n": surface.n_vertices, "m": surface.n_cells, "b": bounds, "g": feature_id},
         )
 
 

@@ -23,6 +23,7 @@ from psycopg import sql
 
 from tgsis import datamodels
 from tgsis.arguments import checked, no_nul
+from tgsis.db._cube import cube_name
 from tgsis.db._gmap_common import (
     Conn,
     IntArray,
@@ -175,7 +176,9 @@ def insert_md(
             )
         # one row: through the versioned view when versioning is on (its trigger writes the working revision)
         conn.execute(
-            "INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::cube)",
+            sql.SQL(
+                "INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes, extent) VALUES (%s, %s, %s, %s, %s::{})"
+            ).format(cube_name(conn, "cube")),
             (geoid, n, m, list(names), extent),
         )
         # as insert_gmap: the involutions first, the darts' cells and orientation computed while they go in
