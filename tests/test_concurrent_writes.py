@@ -125,7 +125,7 @@ def test_update_waiting_for_an_update_never_writes_a_stale_value(
     if outcome == "commit":
         # a plain table would give 111; the view refuses the stale 110 and the retry gives 111
         with pytest.raises(
-            psycopg.errors.SerializationFailure, match=r"row \(id\)=\(1\) of public.items in version (DEFAULT|child)"
+            psycopg.errors.SerializationFailure, match=r"row \(id\)=\(1\) of public.items in version '(DEFAULT|child)'"
         ):
             b.finish()
         with tgsis.in_version(items, version):
@@ -173,7 +173,7 @@ def test_bulk_update_waiting_for_a_delete_refuses_and_its_retry_finds_the_row_go
     if outcome == "commit":
         with pytest.raises(
             psycopg.errors.SerializationFailure,
-            match=r"concurrent delete of row \(id\)=\(5\) of public.items in version (DEFAULT|child)",
+            match=r"concurrent delete of row \(id\)=\(5\) of public.items in version '(DEFAULT|child)'",
         ):
             b.finish()
         assert _value(items, version, 5) is None and _value(items, version) == (100,)

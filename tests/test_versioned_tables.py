@@ -118,7 +118,7 @@ def test_duplicate_keys_per_version(wells: Conn) -> None:
         wells.commit()
     with pytest.raises(psycopg.errors.UniqueViolation, match='"wells_pkey"') as err:
         wells.execute("INSERT INTO wells (id, name) VALUES (1, 'again')")  # w1 is visible in b
-    assert err.value.diag.message_detail == "Key (id)=(1) already exists in version b."
+    assert err.value.diag.message_detail == "Key (id)=(1) already exists in version 'b'."
     wells.rollback()
     wells.execute("DELETE FROM wells WHERE id = 1")
     wells.execute("INSERT INTO wells (id, name) VALUES (1, 'reborn')")  # a deleted key may come back
@@ -398,7 +398,7 @@ def test_names_that_need_quoting(conn: Conn) -> None:
     conn.commit()
     with pytest.raises(psycopg.errors.UniqueViolation) as err:
         conn.execute("""INSERT INTO "Odd Table" VALUES (1, 2, 'c')""")
-    assert err.value.diag.message_detail == 'Key ("o\'k", "my%col")=(1, 2) already exists in version v.'
+    assert err.value.diag.message_detail == """Key ("o'k", "my%col")=(1, 2) already exists in version 'v'."""
     conn.rollback()
     assert conn.execute('SELECT v FROM "Odd Table"').fetchall() == [("b",)]
     tgsis.goto_version(conn, "DEFAULT")

@@ -238,7 +238,7 @@ BEGIN
     v_dup := format($dup$
             RAISE EXCEPTION 'duplicate key value violates unique constraint %%', %L
                 USING ERRCODE = 'unique_violation',
-                      DETAIL = format(%L, concat_ws(', ', %s), tgsis.get_working_version()),
+                      DETAIL = format(%L, concat_ws(', ', %s), quote_literal(tgsis.get_working_version())),
                       CONSTRAINT = %L, TABLE = %L, SCHEMA = %L;$dup$,
         '"' || p_pkey || '"',
         'Key (' || replace(v_key_list, '%', '%%') || ')=(%s) already exists in version %s.',
@@ -252,7 +252,7 @@ BEGIN
             IF pg_catalog.current_query() ~* '\mon\s+conflict\M' THEN
                 RAISE EXCEPTION 'INSERT ... ON CONFLICT is not supported on the versioned view %%', %L
                     USING ERRCODE = 'TG306',
-                          DETAIL = format(%L, concat_ws(', ', %s), tgsis.get_working_version()),
+                          DETAIL = format(%L, concat_ws(', ', %s), quote_literal(tgsis.get_working_version())),
                           HINT = %L,
                           TABLE = %L, SCHEMA = %L;
             END IF;$dup$,
@@ -276,7 +276,7 @@ BEGIN
     -- what PostgreSQL raises when a repeatable-read transaction meets a concurrent update: clients retry it
     v_stale := format($stale$
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
-                    %L, concat_ws(', ', %s), %L, %L, tgsis.get_working_version()
+                    %L, concat_ws(', ', %s), %L, %L, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A transaction that committed after this statement read the row changed or replaced it; '
                                'writing values computed from the old row would undo that change.',
@@ -422,7 +422,7 @@ BEGIN
                AND NOT EXISTS (SELECT FROM %11$s v WHERE %12$s AND %13$s)
              LIMIT 1;
             RAISE EXCEPTION 'could not serialize access due to concurrent delete of row %%=(%%) of %%.%% in version %%',
-                    %14$L, v_key, %4$L, %5$L, tgsis.get_working_version()
+                    %14$L, v_key, %4$L, %5$L, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A transaction that committed after this statement read the row deleted it or changed its key.',
                       HINT = 'Retry the transaction.',
@@ -433,7 +433,7 @@ BEGIN
         END IF;
         IF v_key IS NOT NULL THEN
             RAISE EXCEPTION 'could not serialize access due to concurrent update of row %%=(%%) of %%.%% in version %%',
-                    %14$L, v_key, %4$L, %5$L, tgsis.get_working_version()
+                    %14$L, v_key, %4$L, %5$L, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A transaction that committed after this statement read the row changed or replaced it; '
                                'writing values computed from the old row would undo that change.',
@@ -457,7 +457,7 @@ BEGIN
         SELECT (SELECT count(*) FROM closed), (SELECT count(*) FROM written) INTO v_closed, v_written;
         IF v_written <> v_closed THEN
             RAISE EXCEPTION 'could not serialize access due to concurrent update of rows of %%.%% in version %%',
-                    %4$L, %5$L, tgsis.get_working_version()
+                    %4$L, %5$L, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A row version of the working revision was written for a key by a transaction that committed meanwhile.',
                       HINT = 'Retry the transaction.',
