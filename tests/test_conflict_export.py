@@ -162,6 +162,33 @@ def test_cli_export_refuses_existing_files_and_writes_nothing(
     assert taken.read_text() != "mine\n" and len(list(out.iterdir())) == 8
 
 
+@pytest.mark.usefixtures("cli_state")
+def test_cli_export_refuses_a_format_before_making_the_folder(
+    conn: Conn, fault: int, db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # was: exit 0, every object "no files: no file format has the extension 'xyz'", and DIR made and left empty
+    out = tmp_path / "made" / "here"
+    assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--export", str(out), "--format", "xyz"]) != 0
+    err = capsys.readouterr().err
+    assert "no file format has the extension 'xyz'" in err and "--format" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.usefixtures("cli_state")
+def test_cli_export_that_fails_midway_leaves_no_folder_it_made(
+    conn: Conn, fault: int, db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any
+) -> None:
+    # a write that fails (here: the disk is full) after the folder was made: the folders made go again
+    def disk_full(*args: Any, **kwargs: Any) -> list[Path]:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("tgsis.cli.commands.versions.export_conflict", disk_full)
+    out = tmp_path / "made" / "here"
+    assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--export", str(out)]) != 0
+    assert "No space left on device" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_export_conflict_refuses_existing_files_and_writes_nothing(conn: Conn, fault: int, tmp_path: Path) -> None:
     taken = tmp_path / f"{fault}_regions.json"
     taken.write_text("{}")

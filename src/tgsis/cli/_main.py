@@ -141,6 +141,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away while something other than _out wrote to stdout
         drop_stdout()  # stdout to /dev/null, so that the flush at exit does not fail too
         return 0
+    except OSError as exc:  # a file that cannot be read or written (full disk, no right, a folder gone)
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"tgsis: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("tgsis: interrupted", file=sys.stderr)
         return 130

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import json
 import os
@@ -285,10 +286,13 @@ def _export_conflicts(
     except InstallationError as exc:
         picture = False
         print(f"tgsis: notice: no PNG overlays: {exc.message} ({exc.hint})", file=sys.stderr)
+    _check_export_format(args.format)
     folder = Path(args.export)
+    made = [p for p in (folder, *folder.parents) if not p.exists()]  # removed again when the export is refused
     folder.mkdir(parents=True, exist_ok=True)
     done: dict[tuple[str, str], list[Path] | str] = {}
     scratch = Path(tempfile.mkdtemp(prefix=".tgsis-export-", dir=folder))
+    refused = True
     try:
         for c in conflicts:
             key = (c.objectclass, c.objectkey)
@@ -308,6 +312,7 @@ def _export_conflicts(
                 f"{len(there)} file(s) already in {folder}: {', '.join(there)}; nothing was written",
                 hint="remove them, choose another --export folder, or add --force to replace them",
             )
+        refused = False
         for f in written:
             os.replace(f, folder / f.name)
         return {
@@ -315,6 +320,27 @@ def _export_conflicts(
         }
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+        if refused:
+            for p in made:  # innermost first; a folder someone else filled meanwhile stays
+                with contextlib.suppress(OSError):
+                    p.rmdir()
+
+
+def _check_export_format(ext: str | None) -> None:
+    """Refuse ``--format`` before anything is made when no file format of tgsis writes that extension."""
+    if ext is None:
+        return
+    from tgsis import formats
+
+    try:
+        kind = formats.format_for(f"x.{ext.lower().lstrip('.')}")
+    except Exception:  # FileFormatError: unknown extension
+        kind = None
+    if kind is None or kind.writer is None:
+        raise InvalidInputError(
+            f"no file format has the extension {ext!r}",
+            hint="give --format ts, pl, vs, so, vtu, vtp or ply (or leave it out: the GOCAD file of the object's kind)",
+        )
 
 
 def cmd_version_conflicts(args: argparse.Namespace) -> int:
