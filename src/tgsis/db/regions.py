@@ -26,6 +26,7 @@ import dataclasses
 import io
 import json
 import math
+import zipfile
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -398,8 +399,7 @@ def state_to_npz(state: MeshState) -> bytes:
 def state_from_npz(data: bytes, name: str = "mesh") -> MeshState:
     """The state of :func:`state_to_npz` bytes (``allow_pickle=False``); a bad file is :class:`InvalidInputError`."""
     try:
-        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
-            arrays = {key: npz[key] for key in npz.files}
+        arrays = _npz_arrays(data)
         return MeshState(
             int(arrays["cell_size"]),
             arrays["vertex_ids"],
@@ -412,8 +412,42 @@ def state_from_npz(data: bytes, name: str = "mesh") -> MeshState:
         )
     except Error:
         raise
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as exc:
         raise InvalidInputError(f"{name}: the stored mesh of a solution is no .npz of a mesh state: {exc}") from exc
+
+
+def _npz_arrays(data: bytes) -> dict[str, npt.NDArray[Any]]:
+    """The arrays of .npz ``data``, each checked before it is made: a forged file is refused, not inflated.
+
+    The bytes are written by any role that may resolve a conflict and read by
+    the merge of another: only members stored uncompressed (as
+    :func:`numpy.savez` writes them; a deflated member could expand a few
+    bytes into gigabytes), no object arrays (pickles), and a header whose
+    shape and type hold exactly the member's bytes. ValueError names the member.
+    """
+    arrays: dict[str, npt.NDArray[Any]] = {}
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        for info in archive.infolist():
+            if info.compress_type != zipfile.ZIP_STORED:
+                raise ValueError(
+                    f"member {info.filename} is compressed; .npz of numpy.savez stores its arrays as they are"
+                )
+            payload = archive.read(info)  # stored: as long as it is in data, CRC checked
+            stream = io.BytesIO(payload)
+            version = np.lib.format.read_magic(stream)
+            read_header = (
+                np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            )
+            shape, fortran, dtype = read_header(stream)
+            if dtype.hasobject:
+                raise ValueError(f"member {info.filename} holds Python objects (pickles are not read)")
+            count = int(np.prod(shape, dtype=object))
+            held = len(payload) - stream.tell()
+            if count * dtype.itemsize != held:
+                raise ValueError(f"member {info.filename} declares shape {shape} of {dtype} but holds {held} bytes")
+            values = np.frombuffer(payload, dtype=dtype, count=count, offset=stream.tell())
+            arrays[info.filename.removesuffix(".npy")] = values.reshape(shape, order="F" if fortran else "C").copy()
+    return arrays
 
 
 # --------------------------------------------------------------------------- resolve_region
