@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import psycopg
 import pytest
 
@@ -389,3 +390,30 @@ def test_a_role_that_may_not_read_the_class_reads_nothing_of_its_regions(db_dsn:
         assert reader.execute("SELECT count(*) FROM tgsis.conflicts").fetchone() == (1,)  # that it conflicts
     # the roles that may read the class still read them
     assert len(conn.execute("SELECT * FROM tgsis.conflict_regions").fetchall()) == 3
+
+
+def test_ids_a_tool_rewrote_as_float32_beyond_exact_integers_are_refused(
+    conn: Conn, fault: int, tmp_path: Path
+) -> None:
+    """float32 holds integers exactly only up to 2**24: above, a vrtxid may name a neighbour's vertex."""
+    middle = _middle(conn)
+    assert (
+        main(["--dsn", str(conn.info.dsn), "version", "conflicts", "e1", "--export", str(tmp_path), "--format", "vtu"])
+        == 0
+    )
+    [child_file] = tmp_path.glob(f"{fault}_*_child.vtu")
+    mesh = formats.read_one(child_file)
+    ids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float32)
+    tgsis.resolve_region(  # float32 ids below 2**24 are exact: accepted
+        conn, "e1", fault, middle.region, "manual", _with_ids(mesh, ids)
+    )
+    big = ids.copy()
+    big[-1] = np.float32(2**24 + 2)  # was: matched as if exact (any of 2**24 + 1 .. 2**24 + 3 reads so)
+    with pytest.raises(tgsis.InvalidInputError, match=r"vrtxid.*float32.*16777216"):
+        tgsis.resolve_region(conn, "e1", fault, middle.region, "manual", _with_ids(mesh, big))
+
+
+def _with_ids(mesh: tgsis.Mesh, ids: npt.NDArray[Any]) -> tgsis.Surface:
+    return tgsis.Surface(
+        mesh.vertices, mesh.cells, vertex_properties={**mesh.vertex_properties, "vrtxid": ids}, name=mesh.name
+    )

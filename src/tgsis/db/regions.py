@@ -959,11 +959,20 @@ def _file_ids(mesh: Mesh, name: str) -> npt.NDArray[np.int64]:
             hint="edit a file written by tgsis version conflicts --export (it keeps the ids as the vertex property "
             "vrtxid), or give a MeshState",
         )
-    raw = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64).ravel()
+    given = np.asarray(mesh.vertex_properties["vrtxid"])
+    raw = given.astype(np.float64).ravel()
     ids = np.full(len(raw), -1, dtype=np.int64)
     known = np.isfinite(raw) & (raw >= 0)
     if np.any(raw[known] != np.round(raw[known])):
         raise InvalidInputError(f"{name}: vertex property 'vrtxid' holds values that are no ids (not integers)")
+    if given.dtype.kind == "f":
+        exact = 2 ** (np.finfo(given.dtype).nmant + 1)  # from there on, neighbouring integers share one value
+        if np.any(raw[known] >= exact):
+            raise InvalidInputError(
+                f"{name}: vertex property 'vrtxid' is stored as {given.dtype} and holds ids of {exact} or more, "
+                f"which {given.dtype} cannot tell apart from their neighbours",
+                hint="write vrtxid as an integer (or float64) property, as tgsis version conflicts --export does",
+            )
     ids[known] = raw[known].astype(np.int64)
     if len(np.unique(ids[known])) != int(known.sum()):
         raise InvalidInputError(
