@@ -51,6 +51,37 @@ def serve(conninfo: str) -> tuple[subprocess.Popen[str], str]:
     return process, found.group(1)
 
 
+def drawn_navigations(
+    url: str, repeat: int, timeout_ms: float = 120_000
+) -> tuple[list[float], list[dict[str, float]], str, str]:
+    """Navigations to ``url`` in headless Chromium until the scene's first frame, ``repeat`` times, each page fresh.
+
+    Returns the seconds of each, the page's own timings of each (``document.body.dataset.timings``, empty when
+    the page keeps none), the browser's version and the last page's status line.
+    """
+    loads: list[float] = []
+    phases: list[dict[str, float]] = []
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            for _ in range(repeat):
+                page = browser.new_page(viewport={"width": 1100, "height": 900})
+                start = time.perf_counter()
+                page.goto(url)
+                page.wait_for_function(
+                    "document.body.dataset.state === 'error' || Number(document.body.dataset.frame) >= 1",
+                    timeout=timeout_ms,
+                )
+                loads.append(time.perf_counter() - start)
+                state, status = page.evaluate("document.body.dataset.state"), page.text_content("#status") or ""
+                assert state == "ready", status
+                phases.append(json.loads(page.evaluate("document.body.dataset.timings || '{}'")))
+                page.close()
+            return loads, phases, str(browser.version), status
+        finally:
+            browser.close()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
@@ -86,25 +117,8 @@ def main() -> None:
                 with urllib.request.urlopen(f"{url}/api/mesh/{fid}", timeout=120) as response:
                     body = response.read()
                 gets.append(time.perf_counter() - start)
-            loads = []
-            phases: list[dict[str, float]] = []
-            with sync_playwright() as playwright:
-                browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-                print(f"browser: Chromium {browser.version} (headless, SwiftShader)")
-                for _ in range(args.repeat):
-                    page = browser.new_page(viewport={"width": 1100, "height": 900})
-                    start = time.perf_counter()
-                    page.goto(f"{url}/scene?ids={fid}")
-                    page.wait_for_function(
-                        "document.body.dataset.state === 'error' || Number(document.body.dataset.frame) >= 1",
-                        timeout=120_000,
-                    )
-                    loads.append(time.perf_counter() - start)
-                    state, status = page.evaluate("document.body.dataset.state"), page.text_content("#status")
-                    assert state == "ready", status
-                    phases.append(json.loads(page.evaluate("document.body.dataset.timings")))
-                    page.close()
-                browser.close()
+            loads, phases, version, status = drawn_navigations(f"{url}/scene?ids={fid}", args.repeat)
+            print(f"browser: Chromium {version} (headless, SwiftShader)")
         finally:
             server.send_signal(signal.SIGTERM)
             server.wait(30)

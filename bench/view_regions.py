@@ -31,9 +31,8 @@ import urllib.request
 
 import numpy as np
 import psycopg
-from playwright.sync_api import sync_playwright
 from transfer import grid_surface
-from view_load import CHROMIUM, CHROMIUM_ARGS, serve
+from view_load import drawn_navigations, serve
 
 import tgsis
 from tgsis.db.local import LocalServer, find_binaries
@@ -100,22 +99,7 @@ def main() -> None:
                 meshes.append(t)
                 t, body = get(f"{url}/api/conflict/{fid}?version=e1")
                 conflicts.append(t)
-            pages = []
-            with sync_playwright() as playwright:
-                browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-                for _ in range(args.repeat):
-                    page = browser.new_page(viewport={"width": 1100, "height": 900})
-                    start = time.perf_counter()
-                    page.goto(f"{url}/conflicts?version=e1")
-                    page.wait_for_function(
-                        "document.body.dataset.state === 'error' || Number(document.body.dataset.frame) >= 1",
-                        timeout=600_000,
-                    )
-                    pages.append(time.perf_counter() - start)
-                    status = page.text_content("#status")
-                    assert page.evaluate("document.body.dataset.state") == "ready", status
-                    page.close()
-                browser.close()
+            pages, _, _, status = drawn_navigations(f"{url}/conflicts?version=e1", args.repeat, timeout_ms=600_000)
         finally:
             server.send_signal(signal.SIGTERM)
             server.wait(30)

@@ -29,6 +29,7 @@ from tests.view_helpers import (
     fill_view_database,
     running_view,
     wait_drawn,
+    watched_page,
 )
 from tgsis.testing import TestServer
 
@@ -49,13 +50,8 @@ def browser() -> Iterator[Any]:
 
 @pytest.fixture
 def page(browser: Any) -> Iterator[Any]:
-    context = browser.new_context(viewport={"width": 1100, "height": 900})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    yield page
-    context.close()
-    assert errors == []
+    with watched_page(browser, 1100, 900) as page:
+        yield page
 
 
 def _cells(page: Any, selector: str) -> list[str]:

@@ -18,7 +18,16 @@ import pytest
 
 import tgsis
 from tests.gmaps_shapes import block_tetrahedra, octahedron
-from tests.view_helpers import canvas_pixels, changed_fraction, chromium, drawn_fraction, get, running_view, wait_drawn
+from tests.view_helpers import (
+    canvas_pixels,
+    changed_fraction,
+    chromium,
+    drawn_fraction,
+    get,
+    running_view,
+    wait_drawn,
+    watched_page,
+)
 from tgsis import gmaps
 from tgsis.testing import TestServer
 from tgsis.view.meshes import gmap_drawable, unpack
@@ -122,13 +131,8 @@ def browser() -> Iterator[Any]:
 
 @pytest.fixture
 def page(browser: Any) -> Iterator[Any]:
-    context = browser.new_context(viewport={"width": 900, "height": 700})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    yield page
-    context.close()
-    assert errors == []
+    with watched_page(browser, 900, 700) as page:
+        yield page
 
 
 def test_a_g_map_moves_through_time_in_the_scene(view: tuple[str, GMapData, str], page: Any) -> None:

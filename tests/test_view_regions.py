@@ -25,7 +25,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface, make_fault, move
-from tests.view_helpers import canvas_pixels, chromium, get, running_view, wait_drawn
+from tests.view_helpers import canvas_pixels, chromium, get, running_view, wait_drawn, watched_page
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
 from tgsis.testing import TestServer
@@ -332,13 +332,8 @@ def browser() -> Iterator[Any]:
 
 @pytest.fixture
 def page(browser: Any) -> Iterator[Any]:
-    context = browser.new_context(viewport={"width": 1100, "height": 1200})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    yield page
-    context.close()
-    assert errors == []
+    with watched_page(browser, 1100, 1200) as page:
+        yield page
 
 
 def _rgb(css: str) -> npt.NDArray[np.int64]:

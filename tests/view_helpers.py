@@ -154,6 +154,18 @@ def chromium() -> Iterator[Any]:
             browser.close()
 
 
+@contextmanager
+def watched_page(browser: Any, width: int, height: int) -> Iterator[Any]:
+    """A page of its own browser context, ``width`` x ``height``; a script error on it fails the test at the end."""
+    context = browser.new_context(viewport={"width": width, "height": height})
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    yield page
+    context.close()
+    assert errors == []
+
+
 def wait_drawn(page: Any, frames: int = 1, timeout: float = 60_000) -> None:
     """Wait until the page has drawn ``frames`` frames (or failed: then the test fails with its message)."""
     page.wait_for_function(
