@@ -26,8 +26,8 @@ import tgsis
 from tests.test_model_registry import TEST_MODEL
 from tgsis import datamodels
 from tgsis.db.classes import FeatureClass
+from tgsis.drawing import Drawable, drawable
 from tgsis.errors import InvalidInputError, NotFoundError
-from tgsis.view.meshes import Drawable, drawable
 
 Conn = psycopg.Connection[Any]
 

@@ -32,6 +32,8 @@ PURE = [
     "tgsis.formats",
     "tgsis.errors",
     "tgsis.pictures",
+    "tgsis.drawing",
+    "tgsis.view.meshes",
     "tgsis.view.regions",
     "tgsis.postgis",
     "tgsis.datamodels",

@@ -1,6 +1,6 @@
 """G-maps in the browser view: model 4 through time (the SQL snapshot at t) and model 5 (extra axes as colours).
 
-What is drawn of a G-map (tgsis.view.meshes.gmap_drawable: a surface's faces,
+What is drawn of a G-map (tgsis.drawing.gmap_drawable: a surface's faces,
 a solid's border, fan-triangulated), the endpoint against the snapshot
 ``tgsis.gmap_at`` gives from the same database, and the scene in headless
 Chromium: drawn, and redrawn when the time slider moves.
@@ -29,8 +29,9 @@ from tests.view_helpers import (
     watched_page,
 )
 from tgsis import gmaps
+from tgsis.drawing import gmap_drawable
 from tgsis.testing import TestServer
-from tgsis.view.meshes import gmap_drawable, unpack
+from tgsis.view.meshes import unpack
 
 
 def test_a_surface_draws_its_faces_and_a_solid_its_border() -> None:

@@ -17,8 +17,9 @@ import pytest
 
 import tgsis
 from tests.view_helpers import ViewData, fill_view_database, get, running_view
+from tgsis.drawing import drawable, tetra_boundary, vertex_flags
 from tgsis.testing import TestServer
-from tgsis.view.meshes import drawable, pack, tetra_boundary, unpack, vertex_flags
+from tgsis.view.meshes import pack, unpack
 
 
 def test_a_body_holds_its_header_and_little_endian_arrays() -> None:

@@ -26,10 +26,11 @@ import pytest
 import tgsis
 from tests.merge_data import SIDE, curved_surface, make_fault, move
 from tests.view_helpers import canvas_pixels, chromium, get, running_view, wait_drawn, watched_page
+from tgsis.drawing import tetra_boundary
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MeshMerge, MeshState, three_way_merge
 from tgsis.testing import TestServer
-from tgsis.view.meshes import pack, tetra_boundary, unpack
+from tgsis.view.meshes import pack, unpack
 from tgsis.view.regions import REGION_STATES, edit_flags, region_drawing, region_state
 
 # four vertices of the 12 x 12 fault, far enough apart that their one-ring regions never touch

@@ -80,7 +80,7 @@ FetchFunction = Callable[[Any, Any, int], Any]
 class DrawFunction(Protocol):
     """What the browser view draws of feature ``feature_id`` of class ``fc``, as the session's version sees it.
 
-    Returns a :class:`tgsis.view.meshes.Drawable`, or None when the feature
+    Returns a :class:`tgsis.drawing.Drawable`, or None when the feature
     does not exist at ``t``. ``t`` is a finite time inside or outside the
     feature's life for a model with a :attr:`Storage.life`, None for a model
     without time. ``colour``: the name of the vertex values to carry (one the
@@ -112,7 +112,7 @@ LifeFunction = Callable[[Any, int], tuple[float, float] | None]
 ColoursFunction = Callable[[Any, Any, int], list[str]]
 
 #: The stored surface the browser view compares between versions: ``(conn, fc, feature_id)`` -> a
-#: :class:`tgsis.view.meshes.StoredSurface` (vertices and triangles with their stored ids).
+#: :class:`tgsis.drawing.StoredSurface` (vertices and triangles with their stored ids).
 SurfaceFunction = Callable[[Any, Any, int], Any]
 
 

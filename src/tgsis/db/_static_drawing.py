@@ -33,8 +33,8 @@ from tgsis.db.inspect import (
     static_vertex_property_rows,
     static_vertex_rows,
 )
+from tgsis.drawing import Drawable, StoredSurface
 from tgsis.errors import InvalidInputError
-from tgsis.view.meshes import Drawable, StoredSurface
 
 __all__ = ["drawable_surface", "stored_surface"]
 

@@ -24,10 +24,10 @@ from tgsis.arguments import checked, no_nul
 from tgsis.db._transfer import copy_out, local_positions, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES, numpy_dtype
+from tgsis.drawing import Drawable, drawable
 from tgsis.errors import InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.mesh import Surface
 from tgsis.temporal import Convention, check_convention
-from tgsis.view.meshes import Drawable, drawable
 
 Conn = psycopg.Connection[Any]
 

@@ -46,10 +46,10 @@ from tgsis.db._temporal_common import (
 from tgsis.db._transfer import Storage, class_property_arrays, concat, insert_feature_row, local_positions
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
+from tgsis.drawing import Drawable
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 from tgsis.temporal import sudden_change as sudden
-from tgsis.view.meshes import Drawable
 
 __all__ = ["insert_evolving", "append_period", "delete_period", "fetch_evolving"]
 

@@ -64,11 +64,11 @@ from tgsis.db.classes import (
     list_feature_classes,
 )
 from tgsis.db.meaning import meaning_of, restore_meaning
+from tgsis.drawing import Drawable, StoredSurface, drawable
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap
 from tgsis.mesh import Geometry, GeometryCollection, Geotype
 from tgsis.temporal import EvolvingSurface
-from tgsis.view.meshes import Drawable, StoredSurface, drawable
 
 __all__ = [
     "Property",

@@ -58,9 +58,9 @@ from tgsis.db._transfer import (
 from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES
 from tgsis.db.multidim import fetch_md_gmap, insert_md, md_in_box, md_vertices_in_box
+from tgsis.drawing import Drawable, gmap_drawable
 from tgsis.errors import InvalidGMapError, InvalidInputError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
-from tgsis.view.meshes import Drawable, gmap_drawable
 
 __all__ = [
     "insert_gmap",

@@ -44,10 +44,10 @@ from tgsis.db._temporal_common import (
 from tgsis.db._transfer import Storage, aligned_properties, concat, insert_feature_row, row_keys
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
+from tgsis.drawing import Drawable
 from tgsis.errors import NotFoundError, reraise
 from tgsis.mesh import Surface
 from tgsis.temporal import SurfaceSeries
-from tgsis.view.meshes import Drawable
 
 __all__ = ["insert_series", "add_instant", "delete_instant", "fetch_series"]
 

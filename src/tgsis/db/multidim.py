@@ -49,9 +49,9 @@ from tgsis.db._transfer import (
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
 from tgsis.db.inspect import md_gmap_axes
+from tgsis.drawing import Drawable, gmap_drawable
 from tgsis.errors import InvalidGMapError, InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap, GMap, GMapPeriod
-from tgsis.view.meshes import Drawable, gmap_drawable
 
 __all__ = ["fetch_md_gmap", "md_in_box", "md_vertices_in_box"]
 

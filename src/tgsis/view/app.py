@@ -62,6 +62,7 @@ from tgsis.db.inspect import (
 )
 from tgsis.db.merging import object_merge
 from tgsis.db.regions import recorded_solutions
+from tgsis.drawing import Drawable, StoredSurface, vertex_flags
 from tgsis.errors import (
     Error,
     InvalidInputError,
@@ -73,7 +74,7 @@ from tgsis.errors import (
 )
 from tgsis.merge3 import MeshMerge
 from tgsis.mesh import Geotype
-from tgsis.view.meshes import Drawable, StoredSurface, pack, vertex_flags
+from tgsis.view.meshes import pack
 from tgsis.view.regions import (
     REGION_COLOURS,
     REGION_LABELS,

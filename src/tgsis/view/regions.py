@@ -34,9 +34,9 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from tgsis.drawing import Drawable, tetra_boundary, vertex_flags
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MergeRegion, MeshMerge, MeshState
-from tgsis.view.meshes import Drawable, tetra_boundary, vertex_flags
 
 __all__ = [
     "REGION_STATES",
