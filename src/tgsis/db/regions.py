@@ -720,8 +720,8 @@ def resolve_all_regions(
 
     All or nothing, in one transaction: each conflicting region gets
     ``solution`` (replacing a solution recorded before), or, if one region
-    refuses it (``average`` where the two sides meshed the region
-    differently), none is recorded and the error names the region. The
+    refuses it (``average`` where the two sides' meshings of the region
+    have no average shape), none is recorded and the error names the region. The
     regions that are no conflict are not touched: they merge by themselves,
     so a per-object ``parent`` never drops the version's edits outside the
     conflicts (unlike ``resolve_conflict(..., 'parent')``, which is refused
