@@ -37,8 +37,10 @@ import psycopg
 
 from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
-from tgsis.db.versions import Conflict, ConflictRegion, show_name
+from tgsis.db.versions import CONFLICT_COLUMNS, Conflict, ConflictRegion, show_name
 from tgsis.errors import (
     ConcurrentChangeError,
     Error,
@@ -63,6 +65,7 @@ __all__ = [
     "recorded_solutions",
     "region_solutions",
     "resolve_all_regions",
+    "resolve_object_average",
     "resolve_region",
     "side_discard_text",
     "state_from_npz",
@@ -812,6 +815,109 @@ def _resolve_all(
         mesh = state_to_npz(value) if isinstance(value, MeshState) else None
         rows.append(_record(conn, version, key, index, solution, mesh))
     return ObjectResolution(tuple(rows), discards, totals)
+
+
+# --------------------------------------------------------------------------- average of a whole object
+
+
+@checked
+def resolve_object_average(
+    conn: Conn, version: str, feature_id: int, *, discard_other: bool = True
+) -> tuple[Conflict, tuple[RegionDiscard, ...]]:
+    """The object-level ``average`` of a conflicting mesh: written into the version, the conflict recorded ``manual``.
+
+    :func:`tgsis.resolve_conflict` with ``average`` calls it (docs/merge.md,
+    "Whole-object solutions"). The average of the two sides' whole meshes:
+    where they are the same (everything neither side changed) it is that
+    mesh, bit for bit; each conflicting region is averaged as
+    :func:`average_region` does (the exact midpoint for one meshing,
+    :func:`tgsis.interpolation.average_shape` of the two patches for two
+    meshings of a surface), attached to the unchanged rest. The merged mesh
+    is written into the version by difference and the conflict recorded
+    ``manual``, in one READ COMMITTED transaction holding the locks of a
+    refresh (the version and its parent, so that no writer of either side
+    commits between the read and the write); what it discards of each side
+    is computed first. A mesh with a region that merges by itself is refused: averaging
+    it would halve the one side's edit there, which
+    :func:`resolve_all_regions` with ``average`` keeps.
+
+    Returns
+    -------
+    (Conflict, tuple of RegionDiscard)
+        The recorded conflict (solution ``manual``) and, per region and side,
+        what the average discards.
+
+    Raises
+    ------
+    RegionSolutionError
+        A region that merges by itself (the hint: ``--region all``); no
+        conflicting region; a region whose average is refused (named);
+        ``discard_other=False`` and the average discards something.
+    InvalidInputError
+        Not a model-1 feature mesh, deleted on one side, attributes changed
+        on both sides (the merge reader's refusals).
+    MissingPrivilegeError
+        The role may not write in the version or change the feature.
+    """
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():  # READ COMMITTED, the pair locked: the write by difference needs it
+        if fresh:
+            conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
+        return _average_object(conn, version, feature_id, discard_other)
+
+
+def _average_object(
+    conn: Conn, version: str, feature_id: int, discard_other: bool
+) -> tuple[Conflict, tuple[RegionDiscard, ...]]:
+    name = f"feature {feature_id} in version {show_name(version)}"
+    versionid = version_row(conn, version)[0]
+    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
+    # the locks of a refresh (which writes into the version too): no writer of either side commits meanwhile
+    conn.execute("SELECT FROM tgsis.lock_for_region_merge(%s, 'refresh')", (version,))
+    inputs = read_merge_states(conn, version, feature_id)
+    states = inputs.states
+    merge = three_way_merge(states["base"], states["parent"], states["child"])
+    by_itself = [r.index for r in merge.regions if not r.conflict]
+    if by_itself or not merge.conflicts:
+        from tgsis.merge3 import ids_text
+
+        raise RegionSolutionError(
+            f"{name}: the average of the whole object would halve the edits of regions {ids_text(by_itself)}, which "
+            "merge by themselves"
+            if by_itself
+            else f"{name}: no region of it conflicts: it merges by itself",
+            hint=f"average its conflicting regions only: tgsis version resolve {version} {feature_id} average --region "
+            "all; the merge takes the rest by itself"
+            if by_itself
+            else f"merge it: tgsis version merge {version}",
+        )
+    averages: dict[int, Solution] = {}
+    for region in merge.conflicts:
+        try:
+            averages[region.index] = average_region(merge, region)
+        except RegionSolutionError as exc:
+            raise RegionSolutionError(
+                f"{name}: average refused, nothing written: {exc.message}", hint=exc.hint
+            ) from exc
+    resolved = apply_solutions(merge, averages, names=dict.fromkeys(averages, "average"))
+    if resolved.discards and not discard_other:
+        raise RegionSolutionError(
+            f"{name}: solution average discards edits: " + "; ".join(discard_text(d) for d in resolved.discards),
+            hint="call again with discard_other=True to discard them, or choose another solution",
+        )
+    settings = read_version_settings(conn)
+    try:
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
+        write_state_difference(conn, inputs.feature_class, feature_id, states["child"], resolved.state)
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
+    row = conn.execute(
+        f"SELECT {CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')",
+        (version, str(feature_id)),
+    ).fetchone()
+    assert row is not None
+    return Conflict.from_row(row), resolved.discards
 
 
 # --------------------------------------------------------------------------- average and manual
