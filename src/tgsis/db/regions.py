@@ -41,6 +41,7 @@ from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
 from tgsis.db.versions import CONFLICT_COLUMNS, Conflict, ConflictRegion, show_name
+from tgsis.db.versions import resolve_conflict as resolve_whole_object
 from tgsis.errors import (
     ConcurrentChangeError,
     Error,
@@ -65,6 +66,7 @@ __all__ = [
     "recorded_solutions",
     "region_solutions",
     "resolve_all_regions",
+    "resolve_conflict",
     "resolve_object_average",
     "resolve_region",
     "side_discard_text",
@@ -818,6 +820,54 @@ def _resolve_all(
 
 
 # --------------------------------------------------------------------------- average of a whole object
+
+
+@checked
+def resolve_conflict(
+    conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *, discard_other: bool = True
+) -> Conflict:
+    """Record how a conflicting object is merged; ``average`` of a feature's mesh computed here (docs/merge.md).
+
+    The public ``tgsis.resolve_conflict``: ``parent``, ``child``, ``base``,
+    ``manual`` and ``unsolved`` are :func:`tgsis.db.versions.resolve_conflict`'s
+    (``base`` writes the object as the version was based on it into the
+    version and records ``manual``); ``average`` of a feature writes the
+    average of the two sides' meshes into the version and records ``manual``
+    (:func:`resolve_object_average`; what it discards in
+    :attr:`Conflict.region_discards`).
+
+    Parameters
+    ----------
+    version, objectclass : str
+    objectkey : object
+        The object's key (a feature's geoid for class ``feature``).
+    solution : {"parent", "child", "base", "average", "manual", "unsolved"}
+    discard_other : bool
+        When False, a solution that discards the other side's edits (for
+        ``base`` and ``average``: either side's) is refused.
+
+    Returns
+    -------
+    Conflict
+        The recorded row (``manual`` for ``base`` and ``average``).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown solution; ``average`` of a row of a versioned table (no mesh).
+    RegionSolutionError, VersioningError, NotFoundError, MissingPrivilegeError
+        As :func:`tgsis.db.versions.resolve_conflict` and :func:`resolve_object_average` say.
+    """
+    if isinstance(solution, str) and solution.lower() == "average":
+        if objectclass != "feature":
+            raise InvalidInputError(
+                f"solution average is the average shape of a feature's two meshes: object {objectkey} of class "
+                f"{objectclass} in version {show_name(version)} is a row of a versioned table",
+                hint="solve it with parent, child, base or manual",
+            )
+        conflict, discards = resolve_object_average(conn, version, int(str(objectkey)), discard_other=discard_other)
+        return dataclasses.replace(conflict, region_discards=discards)
+    return resolve_whole_object(conn, version, objectclass, objectkey, solution, discard_other=discard_other)
 
 
 @checked

@@ -771,7 +771,8 @@ def resolve_conflict(
     NotFoundError
         The object is not in conflict in that version.
     InvalidInputError
-        Unknown solution; ``average`` (computed by :func:`tgsis.resolve_conflict`, the region-aware one).
+        Unknown solution; ``average`` (computed by the region-aware :func:`tgsis.resolve_conflict`,
+        :func:`tgsis.db.regions.resolve_conflict`).
     VersioningError
         ``discard_other=False`` and the solution loses the other side's edits (the message counts them).
     RegionSolutionError
@@ -781,19 +782,12 @@ def resolve_conflict(
         ``base`` and the role may not change the object.
     """
     wanted = solution.lower() if isinstance(solution, str) else solution
-    if wanted == "average" and objectclass != "feature":
+    if wanted == "average":  # computed in numpy: the region-aware tgsis.resolve_conflict (tgsis.db.regions)
         raise InvalidInputError(
-            f"solution average is the average shape of a feature's two meshes: object {objectkey} of class "
-            f"{objectclass} in version {show_name(version)} is a row of a versioned table",
-            hint="solve it with parent, child, base or manual",
+            f"solution average of {objectclass} {objectkey} in version {show_name(version)} is the average shape of "
+            "a feature's two meshes, computed by tgsis.resolve_conflict (tgsis.db.regions.resolve_conflict)",
+            hint=f"tgsis version resolve {version} {objectclass} {_key_text(objectkey)} average",
         )
-    if wanted == "average":  # computed in numpy (tgsis.db.regions imports this module)
-        from tgsis.db.regions import resolve_object_average
-
-        conflict, region_discards = resolve_object_average(
-            conn, version, int(_key_text(objectkey)), discard_other=discard_other
-        )
-        return dataclasses.replace(conflict, region_discards=region_discards)
     with reraise(), conn.transaction():
         before: tuple[Discard, ...] | None = ()
         if wanted == "base":  # both sides' edits, counted before the version's are overwritten

@@ -560,7 +560,7 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
             "--region N)",
         )
     with connection(args) as conn:
-        c = V.resolve_conflict(
+        c = R.resolve_conflict(
             conn, args.name, args.objectclass, args.objectkey, args.solution, discard_other=args.discard_other
         )
     if args.solution in ("base", "average"):  # written into the version, recorded manual
