@@ -221,3 +221,23 @@ def test_the_command_line_resolves_an_object_with_base_and_average(
     assert code == 0 and "base written into the version, recorded manual" in out and "discarded" in out
     _, xyz, _, _ = stored_state(conn, "e1", geoid)
     assert xyz.tobytes() == base.tobytes()
+
+
+def test_average_needs_the_right_to_change_the_object(conn: Conn, db_dsn: str) -> None:
+    from tests.roles import login_roles
+
+    geoid = _middle_only(conn)
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
+        conn.execute("SELECT tgsis.grant_version('e1', 'write', %s)", (roles.name("rita"),))
+        conn.commit()
+        before = everything(conn)
+        _, xyz_before, _, _ = stored_state(conn, "e1", geoid)
+        conn.commit()
+        rita = roles.connect("rita")
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.resolve_conflict(rita, "e1", "feature", geoid, "average")
+        rita.rollback()
+        assert everything(conn) == before
+        _, xyz_after, _, _ = stored_state(conn, "e1", geoid)
+        conn.commit()
+        assert xyz_after.tobytes() == xyz_before.tobytes()
