@@ -258,6 +258,20 @@ def test_a_region_patch_that_is_no_disk_is_refused_saying_why() -> None:
     assert refused.value.sqlstate == "TG307"
 
 
+def test_an_average_that_folds_the_surface_is_refused_naming_the_triangles() -> None:
+    """The version pushes one column of the block 900 m (three grid steps) past its neighbours: folded, halfway too."""
+    base = _base()
+    xyz = base.vertices.copy()
+    column = INNER[INNER % SIDE == 4]
+    xyz[column, 0] += 900.0
+    pushed = MeshState(3, base.vertex_ids, xyz, base.cell_ids, base.cells, base.vertex_properties, base.cell_properties)
+    merge = three_way_merge(base, _subdivided(base), pushed)
+    [region] = merge.conflicts
+    with pytest.raises(RegionSolutionError, match=r"region 0: .*turns triangles \d+, .* over \(a fold\)") as refused:
+        R.average_region(merge, region)
+    assert refused.value.sqlstate == "TG307"
+
+
 # --------------------------------------------------------------------------- through the database
 
 
