@@ -100,7 +100,9 @@ def test_errors_write_nothing(conn: Conn, surfaces: dict[str, int]) -> None:
         tgsis.find_conflicts(conn, "nope")
     with pytest.raises(tgsis.InvalidInputError, match="DEFAULT has no parent"):
         tgsis.find_conflicts(conn, "DEFAULT")
-    with pytest.raises(tgsis.InvalidInputError, match="solution 'mine' is not parent, child, manual or unsolved"):
+    with pytest.raises(
+        tgsis.InvalidInputError, match="solution 'mine' is not parent, child, base, average, manual or unsolved"
+    ):
         tgsis.resolve_conflict(conn, "edit", "feature", surfaces["A"], "mine")
     with pytest.raises(tgsis.NotFoundError, match=f"object '{surfaces['A']}' of class 'feature' is not in conflict"):
         tgsis.resolve_conflict(conn, "edit", "feature", surfaces["A"], "child")

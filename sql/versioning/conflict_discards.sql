@@ -1,7 +1,7 @@
 -- tgsis.conflict_discards(version, objectclass, objectkey): what each solution of a conflicting object throws away.
 -- Until merges are three-way, a solution takes one side's whole object:
 -- 'child' (and 'manual', which takes the version's object too) discards the
--- parent's edits, 'parent' the version's. An edit is a row key whose row
+-- parent's edits, 'parent' the version's, 'base' both sides' (a row each). An edit is a row key whose row
 -- differs between the common base (what the version was based on: its
 -- working set without its own revisions) and that side; it is discarded when
 -- the chosen side's row differs from the edited one (an edit both sides made
@@ -99,7 +99,8 @@ BEGIN
                  lost AS (
                      SELECT x.obj, x.solution, x.discarded, x.b, x.o, x.k
                        FROM keyed,
-                            LATERAL (VALUES (obj, ''child'', ''parent'', b, p, c), (obj, ''parent'', ''child'', b, c, p))
+                            LATERAL (VALUES (obj, ''child'', ''parent'', b, p, c), (obj, ''parent'', ''child'', b, c, p),
+                                            (obj, ''base'', ''parent'', b, p, b), (obj, ''base'', ''child'', b, c, b))
                                     AS x (obj, solution, discarded, b, o, k)
                       WHERE x.o IS DISTINCT FROM x.b AND x.k IS DISTINCT FROM x.o)
                  SELECT ARRAY[obj, solution, discarded,
@@ -123,4 +124,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.conflict_discards(text, text, text) IS
-    'per conflicting object of a version (optionally one class or object), solution (child: the parent''s edits are lost, as with manual; parent: the version''s) and table: the other side''s edits since the common base that the solution discards: rows added, removed, changed, and the column values among them';
+    'per conflicting object of a version (optionally one class or object), solution (child: the parent''s edits are lost, as with manual; parent: the version''s; base: both sides'') and table: the other side''s edits since the common base that the solution discards: rows added, removed, changed, and the column values among them';

@@ -10,6 +10,16 @@
 -- mesh are stored (tgsis.conflict_regions), parent and child are refused
 -- (TG307) if the other side has edits in a region that is no conflict:
 -- tgsis.resolve_region solves the conflicting regions, the merge keeps the rest.
+-- base: the object as the version was based on it (its initial revision's
+-- state, attributes included) is written into the version
+-- (tgsis.copy_object_state: only the rows that differ) and the conflict
+-- recorded manual; a NOTICE first says what it discards of each side's
+-- edits (both are lost). It is refused (TG307) when the regions are stored
+-- and one merges by itself: it would drop that side's edit, which
+-- tgsis.resolve_region(..., 'base') per conflicting region (the Python
+-- tgsis.resolve_all_regions(..., 'base')) does not. average is computed in
+-- Python (the average shape of two meshes): refused here (TG100), the hint
+-- naming the command.
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
@@ -23,13 +33,28 @@ DECLARE
     v_key text := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
     v_lost text;
 BEGIN
-    IF p_solution IS NULL OR lower(p_solution) NOT IN ('parent', 'child', 'manual', 'unsolved') THEN
-        RAISE EXCEPTION 'solution % is not parent, child, manual or unsolved', coalesce(quote_literal(p_solution), 'NULL')
+    IF p_solution IS NULL OR lower(p_solution) NOT IN ('parent', 'child', 'base', 'average', 'manual', 'unsolved') THEN
+        RAISE EXCEPTION 'solution % is not parent, child, base, average, manual or unsolved', coalesce(quote_literal(p_solution), 'NULL')
             USING ERRCODE = 'TG100';
+    END IF;
+    IF lower(p_solution) = 'average' AND p_objectclass <> 'feature' THEN
+        RAISE EXCEPTION 'solution average is the average shape of a feature''s two meshes: object % of class % in version % is a row of a versioned table',
+                quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version)
+            USING ERRCODE = 'TG100', HINT = 'solve it with parent, child, base or manual';
+    ELSIF lower(p_solution) = 'average' THEN
+        RAISE EXCEPTION 'solution average of object % of class % in version % is computed by the Python library, not in SQL',
+                quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version)
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'The average is the morphological average shape of the two sides'' meshes (numpy), written into the version and recorded manual.',
+                  HINT = format('tgsis version resolve %s %s %s average', p_version, p_objectclass, v_key);
     END IF;
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     -- the marks must be those of now: a manual solution is written just before it is recorded
     PERFORM tgsis.find_conflicts(p_version);
+    IF lower(p_solution) = 'base' THEN
+        PERFORM tgsis.resolve_conflict_base(p_version, p_objectclass, p_objectkey, v_key);
+        p_solution := 'manual';  -- the version holds the base's object now
+    END IF;
     -- a mesh whose regions are stored (current marks: find_conflicts just dropped older ones): one side's
     -- whole object would drop the other side's edits in regions that merge by themselves
     IF lower(p_solution) IN ('parent', 'child') THEN
@@ -65,4 +90,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.resolve_conflict(text, text, text, text) IS
-    'record the solution of a conflicting object: parent (keep the parent''s), child (take the version''s), manual (the version holds the merged object), or unsolved';
+    'record the solution of a conflicting object: parent (keep the parent''s), child (take the version''s), base (write the object as the version was based on it into the version, recorded manual), manual (the version holds the merged object), or unsolved; average is the Python library''s';

@@ -153,6 +153,7 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         SideDiscard,
         find_conflicts,
         resolve_all_regions,
+        resolve_conflict,
         resolve_region,
     )
     from tgsis.db.temporal import (
@@ -196,7 +197,6 @@ if TYPE_CHECKING:  # the database layer, for type checkers; at run time it loads
         list_versions,
         lock_objects,
         object_locks,
-        resolve_conflict,
         revisions,
         revoke_version,
         save_revision,

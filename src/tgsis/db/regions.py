@@ -38,8 +38,11 @@ import psycopg
 
 from tgsis.arguments import checked
 from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
-from tgsis.db.versions import Conflict, ConflictRegion, show_name
+from tgsis.db.versions import CONFLICT_COLUMNS, Conflict, ConflictRegion, show_name
+from tgsis.db.versions import resolve_conflict as resolve_whole_object
 from tgsis.errors import (
     ConcurrentChangeError,
     Error,
@@ -64,6 +67,8 @@ __all__ = [
     "recorded_solutions",
     "region_solutions",
     "resolve_all_regions",
+    "resolve_conflict",
+    "resolve_object_average",
     "resolve_region",
     "side_discard_text",
     "state_from_npz",
@@ -754,8 +759,8 @@ def resolve_all_regions(
 
     All or nothing, in one transaction: each conflicting region gets
     ``solution`` (replacing a solution recorded before), or, if one region
-    refuses it (``average`` where the two sides meshed the region
-    differently), none is recorded and the error names the region. The
+    refuses it (``average`` where the two sides' meshings of the region
+    have no average shape), none is recorded and the error names the region. The
     regions that are no conflict are not touched: they merge by themselves,
     so a per-object ``parent`` never drops the version's edits outside the
     conflicts (unlike ``resolve_conflict(..., 'parent')``, which is refused
@@ -848,6 +853,157 @@ def _resolve_all(
     return ObjectResolution(tuple(rows), discards, totals)
 
 
+# --------------------------------------------------------------------------- average of a whole object
+
+
+@checked
+def resolve_conflict(
+    conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *, discard_other: bool = True
+) -> Conflict:
+    """Record how a conflicting object is merged; ``average`` of a feature's mesh computed here (docs/merge.md).
+
+    The public ``tgsis.resolve_conflict``: ``parent``, ``child``, ``base``,
+    ``manual`` and ``unsolved`` are :func:`tgsis.db.versions.resolve_conflict`'s
+    (``base`` writes the object as the version was based on it into the
+    version and records ``manual``); ``average`` of a feature writes the
+    average of the two sides' meshes into the version and records ``manual``
+    (:func:`resolve_object_average`; what it discards in
+    :attr:`Conflict.region_discards`).
+
+    Parameters
+    ----------
+    version, objectclass : str
+    objectkey : object
+        The object's key (a feature's geoid for class ``feature``).
+    solution : {"parent", "child", "base", "average", "manual", "unsolved"}
+    discard_other : bool
+        When False, a solution that discards the other side's edits (for
+        ``base`` and ``average``: either side's) is refused.
+
+    Returns
+    -------
+    Conflict
+        The recorded row (``manual`` for ``base`` and ``average``).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown solution; ``average`` of a row of a versioned table (no mesh).
+    RegionSolutionError, VersioningError, NotFoundError, MissingPrivilegeError
+        As :func:`tgsis.db.versions.resolve_conflict` and :func:`resolve_object_average` say.
+    """
+    if isinstance(solution, str) and solution.lower() == "average":
+        if objectclass != "feature":
+            raise InvalidInputError(
+                f"solution average is the average shape of a feature's two meshes: object {objectkey} of class "
+                f"{objectclass} in version {show_name(version)} is a row of a versioned table",
+                hint="solve it with parent, child, base or manual",
+            )
+        conflict, discards = resolve_object_average(conn, version, int(str(objectkey)), discard_other=discard_other)
+        return dataclasses.replace(conflict, region_discards=discards)
+    return resolve_whole_object(conn, version, objectclass, objectkey, solution, discard_other=discard_other)
+
+
+@checked
+def resolve_object_average(
+    conn: Conn, version: str, feature_id: int, *, discard_other: bool = True
+) -> tuple[Conflict, tuple[RegionDiscard, ...]]:
+    """The object-level ``average`` of a conflicting mesh: written into the version, the conflict recorded ``manual``.
+
+    :func:`tgsis.resolve_conflict` with ``average`` calls it (docs/merge.md,
+    "Whole-object solutions"). The average of the two sides' whole meshes:
+    where they are the same (everything neither side changed) it is that
+    mesh, bit for bit; each conflicting region is averaged as
+    :func:`average_region` does (the exact midpoint for one meshing,
+    :func:`tgsis.interpolation.average_shape` of the two patches for two
+    meshings of a surface), attached to the unchanged rest. The merged mesh
+    is written into the version by difference and the conflict recorded
+    ``manual``, in one READ COMMITTED transaction holding the locks of a
+    refresh (the version and its parent, so that no writer of either side
+    commits between the read and the write); what it discards of each side
+    is computed first. A mesh with a region that merges by itself is refused: averaging
+    it would halve the one side's edit there, which
+    :func:`resolve_all_regions` with ``average`` keeps.
+
+    Returns
+    -------
+    (Conflict, tuple of RegionDiscard)
+        The recorded conflict (solution ``manual``) and, per region and side,
+        what the average discards.
+
+    Raises
+    ------
+    RegionSolutionError
+        A region that merges by itself (the hint: ``--region all``); no
+        conflicting region; a region whose average is refused (named);
+        ``discard_other=False`` and the average discards something.
+    InvalidInputError
+        Not a model-1 feature mesh, deleted on one side, attributes changed
+        on both sides (the merge reader's refusals).
+    MissingPrivilegeError
+        The role may not write in the version or change the feature.
+    """
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+    with reraise(), conn.transaction():  # READ COMMITTED, the pair locked: the write by difference needs it
+        if fresh:
+            conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
+        return _average_object(conn, version, feature_id, discard_other)
+
+
+def _average_object(
+    conn: Conn, version: str, feature_id: int, discard_other: bool
+) -> tuple[Conflict, tuple[RegionDiscard, ...]]:
+    name = f"feature {feature_id} in version {show_name(version)}"
+    versionid = version_row(conn, version)[0]
+    conn.execute("SELECT tgsis.require_version_privilege(%s, 'write', 'resolve conflicts of')", (versionid,))
+    # the locks of a refresh (which writes into the version too): no writer of either side commits meanwhile
+    conn.execute("SELECT FROM tgsis.lock_for_region_merge(%s, 'refresh')", (version,))
+    inputs = read_merge_states(conn, version, feature_id)
+    states = inputs.states
+    merge = three_way_merge(states["base"], states["parent"], states["child"])
+    by_itself = [r.index for r in merge.regions if not r.conflict]
+    if by_itself or not merge.conflicts:
+        from tgsis.merge3 import ids_text
+
+        raise RegionSolutionError(
+            f"{name}: the average of the whole object would halve the edits of regions {ids_text(by_itself)}, which "
+            "merge by themselves"
+            if by_itself
+            else f"{name}: no region of it conflicts: it merges by itself",
+            hint=f"average its conflicting regions only: tgsis version resolve {version} {feature_id} average --region "
+            "all; the merge takes the rest by itself"
+            if by_itself
+            else f"merge it: tgsis version merge {version}",
+        )
+    averages: dict[int, Solution] = {}
+    for region in merge.conflicts:
+        try:
+            averages[region.index] = average_region(merge, region)
+        except RegionSolutionError as exc:
+            raise RegionSolutionError(
+                f"{name}: average refused, nothing written: {exc.message}", hint=exc.hint
+            ) from exc
+    resolved = apply_solutions(merge, averages, names=dict.fromkeys(averages, "average"))
+    if resolved.discards and not discard_other:
+        raise RegionSolutionError(
+            f"{name}: solution average discards edits: " + "; ".join(discard_text(d) for d in resolved.discards),
+            hint="call again with discard_other=True to discard them, or choose another solution",
+        )
+    settings = read_version_settings(conn)
+    try:
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
+        write_state_difference(conn, inputs.feature_class, feature_id, states["child"], resolved.state)
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
+    row = conn.execute(
+        f"SELECT {CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')",
+        (version, str(feature_id)),
+    ).fetchone()
+    assert row is not None
+    return Conflict.from_row(row), resolved.discards
+
+
 # --------------------------------------------------------------------------- average and manual
 
 
@@ -893,21 +1049,29 @@ def _rows_state(
 def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
     """The ``average`` solution of a conflicting region: its rows at the middle of the two sides.
 
-    The rule (docs/merge.md): the region's rows are the parent's and the
-    child's with the same ids and the same cells (the two sides moved or
-    re-valued the region's vertices, neither re-meshed it); each vertex takes
+    The rule (docs/merge.md): when the region's rows are the parent's and
+    the child's with the same ids and the same cells (the two sides moved or
+    re-valued the region's vertices, neither re-meshed it), each vertex takes
     the middle of its parent and child positions, ``(p + c) / 2``, which is
     the average shape of two meshes of one topology (every vertex halfway
     along its straight trajectory); a real-valued property the middle of the
     two values, any other the parent's. Vertices the region shares with the
     rest are the rest's and are not moved (both sides have them unchanged).
-    Sides whose region topologies differ are refused: the average of two
-    meshings would need a new meshing of the region, which ``manual`` gives.
+
+    When the two sides meshed the region differently (a surface only), the
+    average is :func:`tgsis.interpolation.average_shape` of the two sides'
+    triangles of the region, the finer meshing carrying it and the border
+    vertices both sides share as control vertices (see
+    :func:`_average_of_meshings`): attached to the unchanged rest without a
+    seam, with the finer side's ids (no new id, so none clashes).
 
     Raises
     ------
     RegionSolutionError
-        The two sides' rows of the region have other ids or other cells.
+        The sides meshed the region differently and its average shape is not
+        defined (points, segments, tetrahedra; a side's triangles of the
+        region that are no disk; fewer than three shared border vertices) or
+        not valid (folds, or a mesh the merge refuses); the message says why.
     """
     parent, child = merge.parent, merge.child
     vids, cids = region.vertex_ids, region.cell_ids
@@ -919,11 +1083,7 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
         and np.array_equal(np.sort(parent.cells[pc], axis=1), np.sort(child.cells[cc], axis=1))
     )
     if not same_topology:
-        raise RegionSolutionError(
-            f"{merge.base.name}: region {region.index} has other vertices or cells in the parent and in the version: "
-            "average needs the same meshing of the region on both sides",
-            hint="solve it with parent, child or base, or give a manual mesh (e.g. an edited export)",
-        )
+        return _average_of_meshings(merge, region)
     rows = _rows_state(merge, parent, vids, cids, merge.base.name)
     at_p = np.flatnonzero(np.isin(rows.vertex_ids, parent.vertex_ids[pv]))  # the region's own vertices
     middle = 0.5 * parent.vertices[pv] + 0.5 * child.vertices[cv]
@@ -949,6 +1109,186 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
         cprops,
         f"{merge.base.name} average",
     )
+
+
+_MESHING_WORDS = {1: "points", 2: "segments", 3: "triangles", 4: "tetrahedra"}
+_NOT_AVERAGED = "solve it with parent, child or base, or give a manual mesh (e.g. an edited export)"
+
+
+@dataclass(frozen=True)
+class _Patch:
+    """One side's cells of a region as a surface of its own: vertex ids (ascending), their rows, local triangles."""
+
+    side: str  # "parent" or "child"
+    state: MeshState
+    vertex_ids: npt.NDArray[np.int64]
+    at_vertices: npt.NDArray[np.int64]  # rows of state
+    at_cells: npt.NDArray[np.int64]  # rows of state
+    triangles: npt.NDArray[np.int64]  # local indices into vertex_ids
+
+    @property
+    def words(self) -> str:
+        return "the version" if self.side == "child" else "the parent"
+
+
+def _patch(side: str, state: MeshState, region: MergeRegion) -> _Patch:
+    at_c = np.flatnonzero(np.isin(state.cell_ids, region.cell_ids))
+    ids = np.unique(state.cells[at_c])
+    return _Patch(
+        side, state, ids, np.searchsorted(state.vertex_ids, ids), at_c, np.searchsorted(ids, state.cells[at_c])
+    )
+
+
+def _patch_surface(patch: _Patch) -> Any:
+    """The patch as a Surface, with its one-valued real vertex properties (atoms' ``refid`` is an id, not a value)."""
+    from tgsis.mesh import Surface
+
+    props = {
+        n: np.asarray(v, dtype=np.float64)[patch.at_vertices]
+        for n, v in patch.state.vertex_properties.items()
+        if np.asarray(v).dtype.kind == "f" and np.asarray(v).ndim == 1 and n != "refid"
+    }
+    return Surface(patch.state.vertices[patch.at_vertices], patch.triangles, vertex_properties=props)
+
+
+def _average_of_meshings(merge: MeshMerge, region: MergeRegion) -> MeshState:
+    """``average`` of a region the two sides meshed differently: the morphological average shape of their patches.
+
+    Each side's triangles of the region (its patch: the region's own
+    vertices and the rest's vertices its triangles use) must be a
+    topological disk. The patch with more vertices (the parent's on a tie)
+    is the source of :func:`tgsis.interpolation.average_shape`, the other the
+    target; the control vertices are the source's border vertices that are
+    on the target's border too (same ids: the unchanged rest around the
+    region, and the mesh-border vertices both sides kept), in the source's
+    border order, so each border edge of the rest is a border edge of both
+    patches and maps onto itself. With an infinite tolerance nothing is
+    refined: the average has the source's triangles and ids, each vertex
+    halfway between its place and its image on the target (the common
+    parameterisation of the two disks), the real vertex properties halfway
+    as well; cell values are the source's. Shared border vertices that are
+    region rows take ``(p + c) / 2`` exactly (their own straight path; those
+    both sides left alone stay bit for bit) and the rest's vertices are the
+    rest's rows. The result is checked: no triangle turned over against the
+    source, and the merge with it (the other conflicts solved ``parent``)
+    valid — else refused, saying why.
+    """
+    from tgsis.interpolation import InterpolationSetup, average_shape, border_loops, border_vertices, check_disk
+
+    name = f"{merge.base.name}: region {region.index}"
+    k = merge.base.cell_size
+    if k != 3:
+        raise RegionSolutionError(
+            f"{name} has other {_MESHING_WORDS[k]} in the parent and in the version: the average of two meshings "
+            "(tgsis.interpolation.average_shape) is defined for triangulated surfaces only",
+            hint=_NOT_AVERAGED,
+        )
+    patches = [_patch("parent", merge.parent, region), _patch("child", merge.child, region)]
+    for patch in patches:
+        if len(patch.triangles) == 0:
+            raise RegionSolutionError(
+                f"{name}: {patch.words} has no triangle in the region: there is no shape of it to average",
+                hint=_NOT_AVERAGED,
+            )
+    source, target = patches if len(patches[0].vertex_ids) >= len(patches[1].vertex_ids) else patches[::-1]
+    surfaces = [_patch_surface(p) for p in (source, target)]
+    for patch, surface in zip((source, target), surfaces, strict=True):
+        disk = check_disk(surface, vertex_ids=patch.vertex_ids)
+        if not disk.ok:
+            raise RegionSolutionError(
+                f"{name}: {patch.words}'s triangles of the region are no topological disk ({disk.summary()}): "
+                "average_shape maps one disk onto another",
+                hint=_NOT_AVERAGED,
+            )
+    loop = source.vertex_ids[border_loops(surfaces[0])[0]]
+    controls = loop[np.isin(loop, target.vertex_ids[border_vertices(surfaces[1])])]
+    if len(controls) < 3:
+        raise RegionSolutionError(
+            f"{name}: the two sides' triangles of the region share {len(controls)} border vertices: average_shape "
+            "needs three or more to pair the two borders",
+            hint=_NOT_AVERAGED,
+        )
+    setup = InterpolationSetup(
+        tuple(np.searchsorted(source.vertex_ids, controls).tolist()),
+        tuple(np.searchsorted(target.vertex_ids, controls).tolist()),
+        steps=3,  # the middle is a sample
+    )
+    try:
+        middle = average_shape(surfaces[0], surfaces[1], setup)
+    except InvalidInputError as exc:  # the interpolation's set-up, parameterisation or trajectory errors
+        raise RegionSolutionError(
+            f"{name}: the average shape of the two sides' meshings of the region failed: {exc.message}",
+            hint=_NOT_AVERAGED,
+        ) from exc
+    if middle.n_vertices != len(source.vertex_ids) or not np.array_equal(middle.cells, source.triangles):
+        raise RegionSolutionError(f"{name}: the average shape re-meshed the region", hint=_NOT_AVERAGED)
+    state = _averaged_rows(merge, region, source, middle, controls, name)
+    _check_average(merge, region, source, state, name)
+    return state
+
+
+def _averaged_rows(
+    merge: MeshMerge, region: MergeRegion, source: _Patch, middle: Any, controls: npt.NDArray[np.int64], name: str
+) -> MeshState:
+    """The source's rows of the region at the average shape; the rest's rows as they are (see _average_of_meshings)."""
+    own = source.vertex_ids[np.isin(source.vertex_ids, region.vertex_ids)]
+    rows = _rows_state(merge, source.state, own, source.state.cell_ids[source.at_cells], name)
+    at_rows, at_mid = np.searchsorted(rows.vertex_ids, own), np.searchsorted(source.vertex_ids, own)
+    vertices = rows.vertices.copy()
+    vertices[at_rows] = middle.vertices[at_mid]
+    vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
+    for n, values in middle.vertex_properties.items():
+        vprops[n] = vprops[n].astype(np.float64)
+        vprops[n][at_rows] = np.asarray(values)[at_mid]
+    # the shared border's region rows: their own straight path, exactly as for one meshing
+    paired = controls[np.isin(controls, region.vertex_ids)]
+    at_p = np.searchsorted(merge.parent.vertex_ids, paired)
+    at_c = np.searchsorted(merge.child.vertex_ids, paired)
+    at_s = np.searchsorted(rows.vertex_ids, paired)
+    vertices[at_s] = 0.5 * merge.parent.vertices[at_p] + 0.5 * merge.child.vertices[at_c]
+    for n in middle.vertex_properties:
+        vprops[n][at_s] = (
+            0.5 * np.asarray(merge.parent.vertex_properties[n])[at_p]
+            + 0.5 * np.asarray(merge.child.vertex_properties[n])[at_c]
+        )
+    return MeshState(
+        rows.cell_size,
+        rows.vertex_ids,
+        vertices,
+        rows.cell_ids,
+        rows.cells,
+        vprops,
+        rows.cell_properties,
+        f"{merge.base.name} average",
+    )
+
+
+def _check_average(merge: MeshMerge, region: MergeRegion, source: _Patch, state: MeshState, name: str) -> None:
+    """Refuse (TG307, saying why) an average with triangles turned over, or whose merge would be no valid mesh."""
+    from tgsis.merge3 import ids_text
+
+    def normals(xyz: npt.NDArray[np.float64], ids: npt.NDArray[np.int64], cells: npt.NDArray[np.int64]) -> Any:
+        corners = xyz[np.searchsorted(ids, cells)]
+        return np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+
+    cells = source.state.cells[source.at_cells]
+    before = normals(source.state.vertices, source.state.vertex_ids, cells)
+    after = normals(state.vertices, state.vertex_ids, cells)
+    turned = np.einsum("ij,ij->i", before, after) <= 0.0
+    if turned.any():
+        raise RegionSolutionError(
+            f"{name}: the average shape of the two sides' meshings turns triangles "
+            f"{ids_text(source.state.cell_ids[source.at_cells][turned])} over (a fold)",
+            hint=_NOT_AVERAGED,
+        )
+    others: dict[int, Solution] = {r.index: "parent" for r in merge.conflicts}
+    try:
+        apply_solutions(merge, {**others, region.index: state}, names={region.index: "average"})
+    except (InvalidMergeError, InvalidInputError) as exc:
+        raise RegionSolutionError(
+            f"{name}: the average shape of the two sides' meshings would not merge into a valid mesh: {exc.message}",
+            hint=_NOT_AVERAGED,
+        ) from exc
 
 
 def _file_ids(mesh: Mesh, name: str) -> npt.NDArray[np.int64]:

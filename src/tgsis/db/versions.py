@@ -20,7 +20,7 @@ import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -30,7 +30,10 @@ from tgsis._optional import require
 from tgsis.arguments import checked
 from tgsis.db._settings import read_version_settings, restore_statement
 from tgsis.db._transfer import one_snapshot
-from tgsis.errors import MissingPrivilegeError, VersioningError, reraise
+from tgsis.errors import InvalidInputError, MissingPrivilegeError, VersioningError, reraise
+
+if TYPE_CHECKING:
+    from tgsis.merge3 import RegionDiscard
 
 __all__ = [
     "Version",
@@ -498,8 +501,9 @@ class Discard:
     ----------
     objectclass, objectkey : str
         The conflicting object.
-    solution : {"child", "parent"}
-        The solution (``manual`` keeps the version's object: it loses what ``child`` loses).
+    solution : {"child", "parent", "base"}
+        The solution (``manual`` keeps the version's object: it loses what ``child`` loses; ``base``
+        loses both sides' edits: one row per side).
     discarded : {"parent", "child"}
         Whose edits are lost: the other side's.
     shortname, tablename : str
@@ -639,6 +643,9 @@ class Conflict:
     region_refusal : str or None
         Set by the region-aware :func:`tgsis.find_conflicts`: why the object
         does not merge by region (None when it does, or was not looked at).
+    region_discards : tuple of RegionDiscard
+        Set by :func:`resolve_conflict` with ``average``: what the average
+        written into the version discards of each side, per region.
     """
 
     objectclass: str
@@ -650,6 +657,7 @@ class Conflict:
     discarded: tuple[Discard, ...] | None = field(default=(), compare=False)
     regions: tuple[ConflictRegion, ...] = field(default=(), compare=False)
     region_refusal: str | None = field(default=None, compare=False)
+    region_discards: tuple[RegionDiscard, ...] = field(default=(), compare=False)
 
     @classmethod
     def from_row(cls, row: Sequence[Any]) -> Conflict:
@@ -736,7 +744,7 @@ def recorded_discards(conn: Conn, version: str) -> dict[tuple[str, str], tuple[s
 def resolve_conflict(
     conn: Conn, version: str, objectclass: str, objectkey: object, solution: str, *, discard_other: bool = True
 ) -> Conflict:
-    """Record how a conflicting object is merged: ``parent``, ``child``, ``manual`` (or back to ``unsolved``).
+    """Record how a conflicting object is merged: ``parent``, ``child``, ``base``, ``manual`` (or back to ``unsolved``).
 
     Parameters
     ----------
@@ -744,6 +752,14 @@ def resolve_conflict(
         With ``False``, a ``child`` or ``parent`` solution that would throw away
         edits of the other side (:func:`conflict_discards`) is refused and
         nothing is recorded. The check and the record are one transaction.
+
+    ``base`` writes the object as the version was based on it into the
+    version (only the rows that differ) and records ``manual``: the
+    returned row's solution is ``manual``, its ``discarded`` both sides'
+    edits (computed before anything is written). A mesh whose stored regions
+    include one that merges by itself is refused (``RegionSolutionError``):
+    :func:`tgsis.resolve_all_regions` with ``base`` solves its conflicting
+    regions and keeps the rest (docs/merge.md, "Whole-object solutions").
 
     Returns
     -------
@@ -755,19 +771,35 @@ def resolve_conflict(
     NotFoundError
         The object is not in conflict in that version.
     InvalidInputError
-        Unknown solution.
+        Unknown solution; ``average`` (computed by the region-aware :func:`tgsis.resolve_conflict`,
+        :func:`tgsis.db.regions.resolve_conflict`).
     VersioningError
         ``discard_other=False`` and the solution loses the other side's edits (the message counts them).
+    RegionSolutionError
+        ``base`` for a mesh with regions that merge by themselves.
     MissingPrivilegeError
-        ``discard_other=False`` and the caller may not read the object's rows, so what it loses cannot be counted.
+        ``discard_other=False`` and the caller may not read the object's rows, so what it loses cannot be counted;
+        ``base`` and the role may not change the object.
     """
+    wanted = solution.lower() if isinstance(solution, str) else solution
+    if wanted == "average":  # computed in numpy: the region-aware tgsis.resolve_conflict (tgsis.db.regions)
+        raise InvalidInputError(
+            f"solution average of {objectclass} {objectkey} in version {show_name(version)} is the average shape of "
+            "a feature's two meshes, computed by tgsis.resolve_conflict (tgsis.db.regions.resolve_conflict)",
+            hint=f"tgsis version resolve {version} {objectclass} {_key_text(objectkey)} average",
+        )
     with reraise(), conn.transaction():
+        before: tuple[Discard, ...] | None = ()
+        if wanted == "base":  # both sides' edits, counted before the version's are overwritten
+            before = _base_discards(conn, version, objectclass, objectkey, discard_other)
         row = conn.execute(
             f"SELECT {CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
             (version, objectclass, _key_text(objectkey), solution),
         ).fetchone()
         assert row is not None
         conflict = Conflict.from_row(row)
+        if wanted == "base":
+            return dataclasses.replace(conflict, discarded=before)
         lost_by = _lost_by(conflict.solution)
         discards: tuple[Discard, ...] | None = ()
         try:
@@ -801,6 +833,36 @@ def resolve_conflict(
                 "version and record manual (tgsis.conflict_rows shows both sides' rows)",
             )
     return dataclasses.replace(conflict, discarded=discards)
+
+
+def _base_discards(
+    conn: Conn, version: str, objectclass: str, objectkey: object, discard_other: bool
+) -> tuple[Discard, ...] | None:
+    """What ``base`` throws away of both sides' edits (read with the caller's rights); refused as ``discard_other`` says."""
+    name = f"solving {objectclass} {objectkey} of version {show_name(version)} with base"
+    hint = (
+        "pass discard_other=True to record it all the same, or write the merged object into the version and record "
+        "manual (tgsis.conflict_rows shows both sides' rows)"
+    )
+    try:
+        with conn.transaction():
+            found = tuple(d for d in conflict_discards(conn, version, objectclass, objectkey) if d.solution == "base")
+    except MissingPrivilegeError as exc:
+        if not discard_other:
+            raise MissingPrivilegeError(
+                f"cannot tell what {name} discards of either side's edits: {exc.message}",
+                sqlstate=exc.sqlstate,
+                hint=hint,
+            ) from exc
+        return None
+    if found and not discard_other:
+        sides = (describe_discards([d for d in found if d.discarded == side]) for side in ("parent", "child"))
+        raise VersioningError(
+            f"{name} would discard " + "; and ".join(said for said in sides if said),
+            detail="base takes the object as the version was based on it: both sides' edits since are lost.",
+            hint=hint,
+        )
+    return found
 
 
 @checked

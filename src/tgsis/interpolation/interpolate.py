@@ -356,9 +356,11 @@ def average_shape(
     Returns
     -------
     Surface
-        The first version's (cut, refined) topology at the middle shape.
+        The first version's (cut, refined) topology at the middle shape,
+        with the vertex properties both versions carry at their middle
+        values (as :func:`interpolate` carries them).
     """
     result = interpolate(first, second, setup, 0.0, 1.0, surfaces=surfaces)
     middle = result.evolving.at(0.5)
     assert middle is not None
-    return Surface(middle.vertices, middle.cells, name=first.name)
+    return Surface(middle.vertices, middle.cells, vertex_properties=dict(middle.vertex_properties), name=first.name)

@@ -577,18 +577,27 @@ def cmd_version_resolve(args: argparse.Namespace) -> int:
         return _resolve_region(args)
     if args.mesh is not None:
         raise InvalidInputError("--mesh is for a region's manual solution: it needs --region N")
-    if args.solution is None or args.solution not in ("parent", "child", "manual", "unsolved"):
+    if args.solution is None or args.solution not in ("parent", "child", "base", "average", "manual", "unsolved"):
         raise InvalidInputError(
-            f"solution {args.solution!r} of an object is not parent, child, manual or unsolved"
+            f"solution {args.solution!r} of an object is not parent, child, base, average, manual or unsolved"
             if args.solution is not None
             else "the solution is missing",
-            hint="tgsis version resolve VERSION CLASS KEY parent|child|manual|unsolved (a region: --region N)",
+            hint="tgsis version resolve VERSION CLASS KEY parent|child|base|average|manual|unsolved (a region: "
+            "--region N)",
         )
     with connection(args) as conn:
-        c = V.resolve_conflict(
+        c = R.resolve_conflict(
             conn, args.name, args.objectclass, args.objectkey, args.solution, discard_other=args.discard_other
         )
-    out(f"{c.objectclass} {c.objectkey} in {V.show_name(args.name)}: {c.solution}")
+    if args.solution in ("base", "average"):  # written into the version, recorded manual
+        for d in c.region_discards:
+            out(f"  {R.discard_text(d)}")
+        out(
+            f"{c.objectclass} {c.objectkey} in {V.show_name(args.name)}: {args.solution} written into the version, "
+            f"recorded {c.solution}"
+        )
+    else:
+        out(f"{c.objectclass} {c.objectkey} in {V.show_name(args.name)}: {c.solution}")
     if c.discarded is None:
         out("  what it discarded of the other side's edits is not shown: this role may not read the object's rows")
     elif c.discarded:
@@ -1279,8 +1288,10 @@ def add_version_parser(commands: Any) -> None:
         nargs="?",
         type=str.lower,
         help="which side the merge keeps: parent, child, manual (the rows as the child has them "
-        "after your edit), or unsolved (undecided again); a region (--region) also takes base (the rows the "
-        "version was based on) and average (each vertex halfway between the two sides)",
+        "after your edit), base (the object as the version was based on it, written into the version and "
+        "recorded manual), average (a feature's mesh: the average shape of the two sides, written into the "
+        "version and recorded manual), or unsolved (undecided again); a region (--region) takes parent, child, "
+        "base, average (each vertex halfway between the two sides), manual (--mesh) or unsolved",
     )
     ver_resolve.add_argument(
         "--region",
@@ -1301,7 +1312,7 @@ def add_version_parser(commands: Any) -> None:
     ver_resolve.add_argument(
         "--discard-other",
         action="store_true",
-        help="record child or parent even though it throws away the other side's edits of the "
+        help="record child, parent, base or average even though it throws away edits of the "
         "object since the version was based (without it such a solution is refused, "
         "with the counts; tgsis version conflicts shows them)",
     )
