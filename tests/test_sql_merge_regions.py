@@ -15,6 +15,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import SIDE, make_fault, move
+from tgsis.db.classes import class_of_feature
 
 Conn = psycopg.Connection[Any]
 
@@ -76,3 +77,144 @@ def test_three_regions_found_by_sql_as_merge3_finds_them(conn: Conn) -> None:
     regions = assert_same_regions(conn, "e1", geoid)
     assert sorted(r["changed_by"] for r in regions) == ["both", "child", "parent"]
     assert [r["conflict"] for r in regions].count(True) == 1
+
+
+def psql(conn: Conn, version: str, *statements: tuple[str, tuple[Any, ...]]) -> None:
+    """Statements a psql user runs in ``version`` (committed)."""
+    with tgsis.in_version(conn, version):
+        for text, args in statements:
+            conn.execute(text, args)
+    conn.commit()
+
+
+@pytest.fixture
+def fault(conn: Conn) -> int:
+    return make_fault(conn)
+
+
+def test_disjoint_edits_are_two_regions_that_merge_by_themselves(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.5, 0.0, 1.25))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.0, 0.0, -2.0))
+    conn.commit()
+    regions = assert_same_regions(conn, "e1", fault)
+    assert [(r["changed_by"], r["conflict"], r["solution"]) for r in regions] == [
+        ("child", False, "automatic"),
+        ("parent", False, "automatic"),
+    ]
+
+
+def test_identical_rewrites_on_both_sides_merge_and_the_same_place_twice_is_no_conflict(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, 0.0))  # rewritten as it was: no edit at all
+    conn.commit()
+    regions = assert_same_regions(conn, "e1", fault)
+    assert [(r["changed_by"], r["conflict"]) for r in regions] == [("both", False)]
+
+
+def property_tables(conn: Conn, geoid: int) -> tuple[str, str]:
+    """The quoted vertex and cell property tables of the feature's class."""
+    fc = class_of_feature(conn, geoid)
+    conn.rollback()
+    return tuple(fc.qualified(fc.property_table(a) or "").as_string(conn) for a in ("VERTEX", "CELL"))  # type: ignore[return-value]
+
+
+def test_values_changed_and_nulls_minus_zero_and_reorientations(conn: Conn, fault: int) -> None:
+    """Property-only edits add no margin; NULL equals a missing value, -0.0 equals 0.0; an even rotation of a
+    triangle's row is no edit, an odd one (the triangle turned over) is."""
+    vp, cp = property_tables(conn, fault)
+    psql(
+        conn,
+        "e1",
+        (f"UPDATE {vp} SET porosity = porosity * 2 WHERE _geoid = %s AND _idx IN (3, 50)", (fault,)),
+        (f"UPDATE {cp} SET facies = 7 WHERE _geoid = %s AND _idx = 40", (fault,)),
+        ("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid3, vrtxid3 = vrtxid1"
+         " WHERE geoid = %s AND trglid = 10", (fault,)),
+        ("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = 90", (fault,)),
+    )
+    psql(
+        conn,
+        "DEFAULT",
+        (f"UPDATE {vp} SET porosity = 'NaN' WHERE _geoid = %s AND _idx = 100", (fault,)),
+        (f"UPDATE {cp} SET facies = 1 WHERE _geoid = %s AND _idx = 40", (fault,)),
+        (f"DELETE FROM {cp} WHERE _geoid = %s AND _idx = 120", (fault,)),
+        (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 101", (fault,)),
+        ("UPDATE tgsis.vrtx SET z = -z WHERE geoid = %s AND vrtxid = 0 AND z = 0", (fault,)),
+    )
+    regions = assert_same_regions(conn, "e1", fault)
+    assert [r["cell_ids"] for r in regions if r["conflict"]] == [[40]]
+    assert len(regions) == 7  # 3, 50, triangle 90 turned over; 100, 101, 120; 40
+
+
+def test_vertices_and_triangles_added_and_removed_with_the_same_new_ids_on_both_sides(conn: Conn, fault: int) -> None:
+    """Both sides hand out the same new ids: the version's new vertex and triangle that are the parent's (same
+    content) take its ids, the others fresh ids above every id (merge3's child renumbering)."""
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
+    tri = "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)"
+    psql(
+        conn,
+        "e1",
+        (add, (fault, n, 50.0, -300.0, 0.0)),  # the same vertex as the parent's n, beyond edge 0-1
+        (tri, (fault, m, 1, 0, n)),  # the same triangle as the parent's m
+        (add, (fault, n + 1, 9000.0, 2000.0, 1.0)),  # the parent's n + 1 is elsewhere
+        (tri, (fault, m + 1, SIDE - 1, 2 * SIDE - 1, n + 1)),
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 60", (fault,)),
+    )
+    psql(
+        conn,
+        "DEFAULT",
+        (add, (fault, n, 50.0, -300.0, 0.0)),
+        (tri, (fault, m, 1, 0, n)),
+        (add, (fault, n + 1, -500.0, 2000.0, 1.0)),
+        (tri, (fault, m + 1, SIDE * (SIDE - 1), SIDE * (SIDE - 2), n + 1)),
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 61", (fault,)),
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND 77 IN (vrtxid1, vrtxid2, vrtxid3)", (fault,)),
+        ("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 77", (fault,)),
+    )
+    regions = assert_same_regions(conn, "e1", fault)
+    child_ids = sorted({i for r in regions for i in r["child_vertex_ids"]})
+    assert n + 2 in child_ids and n + 1 not in child_ids  # renumbered above every id
+
+
+@pytest.mark.parametrize("geotype", ["MULTIPOINT", "MULTILINESTRING", "MULTITETRA"])
+def test_points_lines_and_solids(conn: Conn, geotype: str) -> None:
+    from tests.test_object_merge import _other_kind
+
+    tgsis.create_feature_class(conn, "bodies", geotype)
+    tgsis.enable_feature_versioning(conn)
+    mesh = _other_kind(geotype)
+    geoid = tgsis.insert_feature(conn, "bodies", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, np.arange(0, 5), (0.5, 0.25, -1.125))
+    move(conn, "e1", geoid, [20], (0.0, 1.0, 0.0))
+    move(conn, "DEFAULT", geoid, np.arange(19, 23), (-3.3, 0.0, 2.2))
+    move(conn, "DEFAULT", geoid, np.arange(34, 40), (-3.3, 0.0, 2.2))
+    conn.commit()
+    regions = assert_same_regions(conn, "e1", geoid)
+    assert any(r["conflict"] for r in regions)
+
+
+def test_parts_and_atoms_are_values_of_the_cells_and_vertices(conn: Conn) -> None:
+    from tests.merge_data import curved_surface
+
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    half = len(surface.cells) // 2
+    parted = tgsis.Surface(surface.vertices, surface.cells, cell_properties={"part": (np.arange(2 * half) >= half).astype(np.int64)})
+    geoid = tgsis.insert_feature(conn, "faults", parted)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    psql(conn, "DEFAULT", ("UPDATE tgsis.part SET part = 2 WHERE geoid = %s AND part = 1", (geoid,)))
+    psql(
+        conn,
+        "e1",
+        ("INSERT INTO tgsis.atom (geoid, vrtxid, refid) VALUES (%s, 5, 4)", (geoid,)),
+        ("UPDATE tgsis.vrtx SET x = x + 1 WHERE geoid = %s AND vrtxid = 130", (geoid,)),
+    )
+    regions = assert_same_regions(conn, "e1", geoid)
+    # a value-only edit adds no margin: each cell whose part the parent changed is a region of its own
+    assert sum(len(r["parent_cell_ids"]) for r in regions) == half
+    assert [r["child_vertex_ids"] for r in regions if r["changed_by"] == "child"] == [[5]]  # the new atom
