@@ -7,11 +7,14 @@ must be exactly those merge3 computes, for hand-written edits and random ones.
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
 import psycopg
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import tgsis
 from tests.merge_data import SIDE, make_fault, move
@@ -218,3 +221,154 @@ def test_parts_and_atoms_are_values_of_the_cells_and_vertices(conn: Conn) -> Non
     # a value-only edit adds no margin: each cell whose part the parent changed is a region of its own
     assert sum(len(r["parent_cell_ids"]) for r in regions) == half
     assert [r["child_vertex_ids"] for r in regions if r["changed_by"] == "child"] == [[5]]  # the new atom
+
+
+def three_regions(conn: Conn, fault: int) -> None:
+    """North end moved in e1, south end in DEFAULT, the middle on both sides to other places (committed)."""
+    move(conn, "e1", fault, NORTH, (0.5, 0.0, 1.25))
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.0, 0.0, -2.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -7.0))
+    conn.commit()
+
+
+def sqlstate(conn: Conn, query: str, args: tuple[Any, ...]) -> tuple[str | None, str, str | None]:
+    try:
+        conn.execute(query, args)
+    except psycopg.Error as exc:
+        conn.rollback()
+        return exc.sqlstate, str(exc), exc.diag.message_hint
+    conn.rollback()
+    return None, "", None
+
+
+@pytest.mark.parametrize("solution", ["child", "parent"])
+def test_a_psql_whole_side_that_drops_the_other_sides_edits_is_refused_without_python(
+    conn: Conn, fault: int, solution: str
+) -> None:
+    """Item 4 from psql: nobody ran the Python find_conflicts; resolve_conflict finds the regions itself."""
+    three_regions(conn, fault)
+    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+    conn.rollback()
+    state, message, hint = sqlstate(
+        conn, "SELECT tgsis.resolve_conflict('e1', 'feature', %s, %s)", (str(fault), solution)
+    )
+    assert state == "TG307", message
+    assert "resolve_region" in (hint or "")
+    assert conn.execute("SELECT solution FROM tgsis.conflicts").fetchall() in ([], [("unsolved",)])
+    conn.rollback()
+    # the manual solution (a merged object written into the version first) stays allowed
+    state, message, _ = sqlstate(conn, "SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'manual')", (str(fault),))
+    assert state is None, message
+
+
+def test_a_role_that_may_not_read_the_class_stores_no_regions(conn: Conn, fault: int, db_dsn: str) -> None:
+    """SQL region detection reads with the calling role's rights on the class: a role that stores conflicts
+    (it may write in the version) but may not read the class gets the conflicts and no regions."""
+    from tests.roles import login_roles
+
+    three_regions(conn, fault)
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "write", made.name("ed"))
+        conn.execute("REVOKE SELECT ON public.faults FROM tgsis_editor, tgsis_reader")
+        conn.commit()
+        ed = made.connect("ed")
+        rows = ed.execute("SELECT objectkey FROM tgsis.find_conflicts('e1')").fetchall()
+        ed.commit()
+        assert rows == [(str(fault),)]
+        assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+        conn.rollback()
+        state, _, _ = sqlstate(ed, "SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,))
+        assert state == "42501"
+        # the owner's find_conflicts stores them; the role still sees none (the table's read policy)
+        regions = sql_regions(conn, "e1", fault)
+        assert len(regions) == 3
+        conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+        conn.commit()
+        assert ed.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+        ed.rollback()
+
+
+def test_works_with_an_empty_search_path_and_a_refusal_stores_nothing(conn: Conn, fault: int) -> None:
+    three_regions(conn, fault)
+    conn.execute("SET search_path = ''")
+    assert len(sql_regions(conn, "e1", fault)) == 3
+    # a deletion on one side: no regions (the object merges as a whole only), the conflict stays
+    with tgsis.in_version(conn, "DEFAULT"):
+        tgsis.delete_feature(conn, "faults", fault)
+    conn.commit()
+    conn.execute("SET search_path = ''")
+    assert sql_regions(conn, "e1", fault) == []
+    state, message, _ = sqlstate(conn, "SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,))
+    assert state == "TG100" and "deleted" in message
+
+
+_pairs = itertools.count()
+_SHIFTS = [(0.0, 0.0, 1.5), (0.25, -0.5, 0.0), (-3.3, 7.77, 0.125)]
+# one edit of a side: (kind, where, which shift or value)
+_edit = st.tuples(
+    st.sampled_from(["move", "move", "move", "porosity", "facies", "delete", "flip", "add"]),
+    st.integers(0, 2 * (SIDE - 1) ** 2 - 1),
+    st.integers(0, 2),
+)
+
+
+def _apply(conn: Conn, version: str, geoid: int, edits: list[tuple[str, int, int]], vp: str, cp: str) -> None:
+    """A side's random edits as psql statements; vertices by a 3 x 3 patch around a grid point, so that the
+    two sides' edits meet, touch or stay apart."""
+    statements: list[tuple[str, tuple[Any, ...]]] = []
+    for kind, where, which in edits:
+        row, col = (where // 2) // (SIDE - 1), (where // 2) % (SIDE - 1)
+        patch = [r * SIDE + c for r in range(row, min(row + 2, SIDE)) for c in range(col, min(col + 2, SIDE))]
+        if kind == "move":
+            dx, dy, dz = _SHIFTS[which]
+            statements.append(
+                ("UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY (%s)",
+                 (dx, dy, dz, geoid, patch[: which + 1]))
+            )
+        elif kind == "porosity":
+            statements.append((f"UPDATE {vp} SET porosity = %s WHERE _geoid = %s AND _idx = %s", (0.5 + which, geoid, patch[0])))
+        elif kind == "facies":
+            statements.append((f"UPDATE {cp} SET facies = %s WHERE _geoid = %s AND _idx = %s", (which, geoid, where)))
+        elif kind == "delete":
+            statements.append(("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = %s", (geoid, where)))
+        elif kind == "flip":
+            statements.append(
+                ("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = %s", (geoid, where))
+            )
+        else:  # a new vertex over a triangle and a triangle on it, with the next ids (both sides hand out the same)
+            statements.append(
+                ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)"
+                 " SELECT %s, max(vrtxid) + 1, 1000.0 * %s, -400.0, %s FROM tgsis.vrtx WHERE geoid = %s",
+                 (geoid, col, float(which), geoid))
+            )
+            statements.append(
+                ("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3)"
+                 " SELECT %s, (SELECT max(trglid) + 1 FROM tgsis.trgl WHERE geoid = %s), %s, %s, max(vrtxid)"
+                 "   FROM tgsis.vrtx WHERE geoid = %s",
+                 (geoid, geoid, col, col + 1, geoid))
+            )
+    psql(conn, version, *statements)
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(
+    child=st.lists(_edit, min_size=1, max_size=4),
+    parent=st.lists(_edit, min_size=1, max_size=4),
+)
+def test_random_edits_give_exactly_merge3s_regions(
+    conn: Conn, fault: int, child: list[tuple[str, int, int]], parent: list[tuple[str, int, int]]
+) -> None:
+    n = next(_pairs)
+    parent_version, child_version = f"hp{n}", f"hc{n}"
+    tgsis.create_version(conn, parent_version)
+    conn.commit()
+    tgsis.create_version(conn, child_version, parent=parent_version)
+    conn.commit()
+    vp, cp = property_tables(conn, fault)
+    _apply(conn, child_version, fault, child, vp, cp)
+    _apply(conn, parent_version, fault, parent, vp, cp)
+    conflicts = conn.execute("SELECT objectkey FROM tgsis.find_conflicts(%s)", (child_version,)).fetchall()
+    conn.rollback()
+    if conflicts:
+        assert_same_regions(conn, child_version, fault)

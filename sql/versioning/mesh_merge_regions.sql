@@ -36,8 +36,9 @@
 --     their rows differ).
 -- The work tables are temporary (VOLATILE). A role that may not read the
 -- feature's class is refused (42501): regions computed without its rows
--- would be wrong. Refusals (tgsis.region_merge_refusal: deleted on one side,
--- ...) raise TG309 with the reason. extra_float_digits is pinned: values are
+-- would be wrong. A feature not changed on both sides is refused (TG300),
+-- one that does not merge by region (tgsis.region_merge_refusal: deleted on
+-- one side, ...) too (TG100), as the Python reader refuses them. extra_float_digits is pinned: values are
 -- compared as text, floats exactly.
 CREATE FUNCTION tgsis.mesh_merge_regions(p_version text, p_geoid bigint)
 RETURNS TABLE (region integer, conflict boolean, changed_by text, vertex_ids bigint[], cell_ids bigint[],
@@ -85,10 +86,16 @@ BEGIN
                 quote_ident(tgsis.calling_role()), p_geoid
             USING ERRCODE = '42501', HINT = 'the class''s owner can GRANT SELECT on its feature table';
     END IF;
+    IF NOT EXISTS (SELECT FROM tgsis.current_conflicts(v_version.versionid) AS k
+                    WHERE k.objectclass = 'feature' AND k.objectkey = p_geoid::text) THEN
+        RAISE EXCEPTION 'feature % was not changed both in version % and in its parent since the version was based: there is nothing to merge',
+                p_geoid, quote_literal(p_version)
+            USING ERRCODE = 'TG300', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the objects changed on both sides', p_version);
+    END IF;
     v_refusal := tgsis.region_merge_refusal(p_version, p_geoid);
-    IF v_refusal IS NOT NULL THEN
+    IF v_refusal IS NOT NULL THEN  -- the Python reader's InvalidInputError, with its code
         RAISE EXCEPTION 'feature % does not merge by region in version %: %', p_geoid, quote_literal(p_version), v_refusal
-            USING ERRCODE = 'TG309',
+            USING ERRCODE = 'TG100',
                   DETAIL = 'The merge by region merges the mesh of a static feature changed on both sides.',
                   HINT = format('solve it as a whole object: SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
                                 p_version, p_geoid::text);
@@ -439,4 +446,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.mesh_merge_regions(text, bigint) IS
-    'the regions of the three-way merge of a model-1 feature changed both in a version and in its parent, computed in SQL exactly as tgsis.merge3 finds them (ids per side, box, largest displacements, conflict); TG309 for a feature that does not merge by region, 42501 for a class the role may not read';
+    'the regions of the three-way merge of a model-1 feature changed both in a version and in its parent, computed in SQL exactly as tgsis.merge3 finds them (ids per side, box, largest displacements, conflict); TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
