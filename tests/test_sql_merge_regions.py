@@ -372,3 +372,26 @@ def test_random_edits_give_exactly_merge3s_regions(
     conn.rollback()
     if conflicts:
         assert_same_regions(conn, child_version, fault)
+
+
+def test_a_region_found_again_on_new_marks_is_stale_for_a_solution_given_by_its_old_number(conn: Conn, fault: int) -> None:
+    """SQL finds the regions again when either side edits the object; a psql resolve_region of a number seen
+    before is refused (TG307), as another region may now have that number."""
+    three_regions(conn, fault)
+    (conflict,) = [r for r in sql_regions(conn, "e1", fault) if r["conflict"]]
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    move(conn, "DEFAULT", fault, [70], (0.0, 0.0, 0.25))
+    conn.commit()
+    state, message, _ = sqlstate(
+        conn, "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'child')", (str(fault), conflict["region"])
+    )
+    assert state == "TG307" and "changed since" in message
+    # found again (the refusal rolled back), it takes the solution
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    (again,) = [r for r in sql_regions(conn, "e1", fault) if r["conflict"]]
+    state, message, _ = sqlstate(
+        conn, "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'child')", (str(fault), again["region"])
+    )
+    assert state is None, message
