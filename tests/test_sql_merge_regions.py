@@ -395,3 +395,88 @@ def test_a_region_found_again_on_new_marks_is_stale_for_a_solution_given_by_its_
         conn, "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'child')", (str(fault), again["region"])
     )
     assert state is None, message
+
+
+# ---------------------------------------------------------------------------- step 2: solutions per object in SQL
+
+
+def two_conflicts(conn: Conn) -> int:
+    """Three regions (tests/test_conflict_regions.py) and a fourth, a second conflict in the west (committed)."""
+    from tests.test_resolve_all_regions import _two_conflicts
+
+    return _two_conflicts(conn)
+
+
+def notices(conn: Conn) -> list[str]:
+    said: list[str] = []
+    conn.add_notice_handler(lambda d: said.append(str(d.message_primary)))
+    return said
+
+
+@pytest.mark.parametrize("solution", ["parent", "child", "base"])
+def test_psql_resolve_all_regions_records_and_says_what_python_says(conn: Conn, solution: str) -> None:
+    fault = two_conflicts(conn)
+    from tgsis.db import regions as R
+
+    # the oracle: Python's resolve_all_regions, rolled back
+    with conn.transaction(force_rollback=True):
+        python = tgsis.resolve_all_regions(conn, "e1", fault, solution)
+    conn.rollback()
+    expected = [R.side_discard_text(t) for t in python.totals] + [R.discard_text(d) for d in python.discards]
+    conn.execute("DELETE FROM tgsis.conflict_regions")  # nobody ran the Python find_conflicts: SQL finds them
+    conn.commit()
+    said = notices(conn)
+    rows = conn.execute(
+        "SELECT region, solution, solved_by IS NOT NULL FROM tgsis.resolve_all_regions('e1', 'feature', %s, %s)",
+        (str(fault), solution),
+    ).fetchall()
+    conn.commit()
+    assert rows == [(r.region, solution, True) for r in python.regions]
+    assert [s.split(": ", 1)[1] for s in said] == expected  # nothing else: no notice of the work tables
+    solutions = conn.execute("SELECT conflict, solution FROM tgsis.conflict_regions ORDER BY region").fetchall()
+    assert {s for c, s in solutions if not c} == {"automatic"}
+    # taken back at once
+    back = conn.execute("SELECT solution FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'unsolved')", (str(fault),))
+    assert [r[0] for r in back.fetchall()] == ["unsolved", "unsolved"]
+    conn.rollback()
+
+
+def test_psql_resolve_all_regions_refusals_record_nothing(conn: Conn, db_dsn: str) -> None:
+    fault = two_conflicts(conn)
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    before = conn.execute("SELECT r::text FROM tgsis.conflict_regions r ORDER BY region").fetchall()
+    conn.commit()
+    key = str(fault)
+    state, message, hint = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'average')", (key,))
+    assert state == "TG307" and f"tgsis version resolve e1 {key} average --region all" in (hint or ""), message
+    state, _, _ = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'manual')", (key,))
+    assert state == "TG100"
+    state, _, _ = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'theirs')", (key,))
+    assert state == "TG100"
+    state, _, _ = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, NULL)", (key,))
+    assert state == "TG100"
+    from tests.roles import login_roles
+
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        state, message, _ = sqlstate(
+            made.connect("rita"), "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'child')", (key,)
+        )
+        assert state == "TG002", message
+    assert conn.execute("SELECT r::text FROM tgsis.conflict_regions r ORDER BY region").fetchall() == before
+    conn.commit()
+    # stale: the object changed since the regions were seen
+    move(conn, "e1", fault, [70], (0.0, 0.0, 0.25))
+    conn.commit()
+    state, message, _ = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'child')", (key,))
+    assert state == "TG307" and "changed since" in message
+
+
+def test_psql_resolve_all_regions_of_an_object_that_merges_by_itself(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.5, 0.0, 1.25))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.0, 0.0, -2.0))
+    conn.commit()
+    state, message, _ = sqlstate(
+        conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'child')", (str(fault),)
+    )
+    assert state == "TG307" and "merges by itself" in message

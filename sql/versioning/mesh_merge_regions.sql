@@ -32,22 +32,28 @@
 --     vertices ascending, then cells ascending);
 --   * per region: its ids, each side's changed ids, a box over its vertices
 --     and its cells' corners in the three states, the largest displacement of
---     each side, and whether it is a conflict (both sides changed it and
---     their rows differ).
+--     each side, whether it is a conflict (both sides changed it and their
+--     rows differ), and what each whole-region solution discards of each side
+--     (discards: {"parent": {"child": [vertices, cells, largest displacement]},
+--     "child": {"parent": [...]}, "base": {"parent": [...], "child": [...]}},
+--     merge3's RegionDiscard).
 -- The work tables are temporary (VOLATILE). A role that may not read the
 -- feature's class is refused (42501): regions computed without its rows
 -- would be wrong. A feature not changed on both sides is refused (TG300),
 -- one that does not merge by region (tgsis.region_merge_refusal: deleted on
 -- one side, ...) too (TG100), as the Python reader refuses them. extra_float_digits is pinned: values are
--- compared as text, floats exactly.
+-- compared as text, floats exactly; client_min_messages too: dropping the
+-- work tables of an earlier call says nothing.
 CREATE FUNCTION tgsis.mesh_merge_regions(p_version text, p_geoid bigint)
 RETURNS TABLE (region integer, conflict boolean, changed_by text, vertex_ids bigint[], cell_ids bigint[],
                parent_vertex_ids bigint[], parent_cell_ids bigint[], child_vertex_ids bigint[], child_cell_ids bigint[],
-               bbox double precision[], parent_displacement double precision, child_displacement double precision)
+               bbox double precision[], parent_displacement double precision, child_displacement double precision,
+               discards jsonb)
 LANGUAGE plpgsql
 VOLATILE
 SET search_path = pg_catalog, pg_temp
 SET extra_float_digits = 1
+SET client_min_messages = warning
 AS $$
 #variable_conflict use_column
 DECLARE
@@ -401,7 +407,9 @@ BEGIN
                CASE WHEN vx.p_moved THEN sqrt((vx.px - vx.bx) * (vx.px - vx.bx) + (vx.py - vx.by) * (vx.py - vx.by)
                                               + (vx.pz - vx.bz) * (vx.pz - vx.bz)) END AS p_disp,
                CASE WHEN vx.c_moved THEN sqrt((vx.cx - vx.bx) * (vx.cx - vx.bx) + (vx.cy - vx.by) * (vx.cy - vx.by)
-                                              + (vx.cz - vx.bz) * (vx.cz - vx.bz)) END AS c_disp
+                                              + (vx.cz - vx.bz) * (vx.cz - vx.bz)) END AS c_disp,
+               CASE WHEN vx.ip AND vx.ic THEN sqrt((vx.cx - vx.px) * (vx.cx - vx.px) + (vx.cy - vx.py) * (vx.cy - vx.py)
+                                                   + (vx.cz - vx.pz) * (vx.cz - vx.pz)) END AS pc_dist
           FROM pg_temp.tgsis_mr_node n
           LEFT JOIN pg_temp.tgsis_mr_vx vx ON n.kind = 'v' AND vx.id = n.id
           LEFT JOIN pg_temp.tgsis_mr_cx cx ON n.kind = 'c' AND cx.id = n.id),
@@ -432,11 +440,30 @@ BEGIN
                coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v' AND d.c_changed), '{}') AS cv,
                coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c' AND d.c_changed), '{}') AS cc,
                bool_or(d.p_changed) AS has_p, bool_or(d.c_changed) AS has_c, bool_or(d.differ) AS differ,
-               coalesce(max(d.p_disp), 0) AS p_disp, coalesce(max(d.c_disp), 0) AS c_disp
+               coalesce(max(d.p_disp), 0) AS p_disp, coalesce(max(d.c_disp), 0) AS c_disp,
+               -- what each whole-region solution discards of each side (merge3's RegionDiscard): the side's
+               -- changed rows the solution's rows do not hold as the side has them, and the largest distance
+               -- between the side's place of such a vertex and the solution's
+               jsonb_build_object(
+                   'parent', jsonb_build_object('child', jsonb_build_array(
+                       count(*) FILTER (WHERE d.kind = 'v' AND d.c_changed AND d.differ),
+                       count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed AND d.differ),
+                       coalesce(max(d.pc_dist) FILTER (WHERE d.kind = 'v' AND d.c_changed AND d.differ), 0))),
+                   'child', jsonb_build_object('parent', jsonb_build_array(
+                       count(*) FILTER (WHERE d.kind = 'v' AND d.p_changed AND d.differ),
+                       count(*) FILTER (WHERE d.kind = 'c' AND d.p_changed AND d.differ),
+                       coalesce(max(d.pc_dist) FILTER (WHERE d.kind = 'v' AND d.p_changed AND d.differ), 0))),
+                   'base', jsonb_build_object(
+                       'parent', jsonb_build_array(count(*) FILTER (WHERE d.kind = 'v' AND d.p_changed),
+                                                   count(*) FILTER (WHERE d.kind = 'c' AND d.p_changed),
+                                                   coalesce(max(d.p_disp), 0)),
+                       'child', jsonb_build_array(count(*) FILTER (WHERE d.kind = 'v' AND d.c_changed),
+                                                  count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed),
+                                                  coalesce(max(d.c_disp), 0)))) AS discards
           FROM nodes d GROUP BY d.region)
     SELECT f.region, f.has_p AND f.has_c AND f.differ,
            CASE WHEN f.has_p AND f.has_c THEN 'both' WHEN f.has_p THEN 'parent' ELSE 'child' END,
-           f.vertex_ids, f.cell_ids, f.pv, f.pc, f.cv, f.cc, b.bbox, f.p_disp, f.c_disp
+           f.vertex_ids, f.cell_ids, f.pv, f.pc, f.cv, f.cc, b.bbox, f.p_disp, f.c_disp, f.discards
       FROM facts f LEFT JOIN boxes b ON b.region = f.region
      ORDER BY f.region;
     DROP TABLE pg_temp.tgsis_mr_v, pg_temp.tgsis_mr_c, pg_temp.tgsis_mr_vmap, pg_temp.tgsis_mr_cmap,
