@@ -480,3 +480,24 @@ def test_psql_resolve_all_regions_of_an_object_that_merges_by_itself(conn: Conn,
         conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'child')", (str(fault),)
     )
     assert state == "TG307" and "merges by itself" in message
+
+
+def test_a_psql_merge_of_a_mesh_that_merges_by_region_names_the_merge_that_does_it(conn: Conn, fault: int) -> None:
+    """No Python call: the SQL merge and refresh still refuse (TG302) a mesh changed on both sides, but the
+    regions are stored now, so the hint names the command that merges it by region."""
+    move(conn, "e1", fault, NORTH, (0.5, 0.0, 1.25))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.0, 0.0, -2.0))
+    conn.commit()
+    for action in ("merge", "refresh"):
+        state, message, hint = sqlstate(conn, f"SELECT tgsis.{action}_version('e1')", ())
+        assert state == "TG302", message
+        assert f"tgsis version {action} e1" in (hint or ""), hint
+
+
+def test_saying_the_client_finds_the_regions_does_not_let_a_whole_side_drop_edits(conn: Conn, fault: int) -> None:
+    three_regions(conn, fault)
+    conn.execute("SET tgsis.region_detection = 'client'")
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)  # left to the client
+    state, message, _ = sqlstate(conn, "SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'child')", (str(fault),))
+    assert state == "TG307", message

@@ -7,7 +7,9 @@
 -- version's conflict rows until its transaction ends): anyone else who may
 -- read gets the same answer computed, without writing or locking anything.
 -- Storing also removes the regions of meshes (tgsis.conflict_regions) found on
--- marks that are no longer the object's: they describe a state that is gone.
+-- marks that are no longer the object's: they describe a state that is gone,
+-- and finds, in SQL, those of the unsolved meshes without regions
+-- (tgsis.store_mesh_regions) unless the client finds them itself.
 CREATE FUNCTION tgsis.find_conflicts(p_version text)
 RETURNS SETOF tgsis.conflicts
 LANGUAGE plpgsql
@@ -64,29 +66,21 @@ BEGIN
      USING tgsis.conflicts k
      WHERE r.versionid = v_version.versionid AND k.versionid = r.versionid AND k.objectclass = r.objectclass
        AND k.objectkey = r.objectkey AND (k.childmark, k.parentmark) IS DISTINCT FROM (r.childmark, r.parentmark);
-    -- the regions of the meshes that merge by region and have none stored on their marks, found in SQL
-    -- (tgsis.mesh_merge_regions: what tgsis.merge3 finds), so that a psql user has them too; only for
-    -- features of classes the calling role may read (as the Python client reads them)
-    FOR v_key IN
-        SELECT k.objectkey FROM tgsis.conflicts k
-         WHERE k.versionid = v_version.versionid AND k.objectclass = 'feature'
-           AND NOT EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = k.versionid
-                              AND r.objectclass = k.objectclass AND r.objectkey = k.objectkey)
-           AND k.objectkey::bigint NOT IN (SELECT tgsis.class_denied_geoids('SELECT', v_role))
-         ORDER BY k.objectkey::bigint
-    LOOP
-        CONTINUE WHEN tgsis.region_merge_refusal(p_version, v_key::bigint) IS NOT NULL;
-        INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
-                                            changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
-                                            child_vertex_ids, child_cell_ids, bbox, parent_displacement,
-                                            child_displacement, solution)
-        SELECT v_version.versionid, 'feature', v_key, m.region, k.childmark, k.parentmark, m.conflict, m.changed_by,
-               m.vertex_ids, m.cell_ids, m.parent_vertex_ids, m.parent_cell_ids, m.child_vertex_ids, m.child_cell_ids,
-               m.bbox, m.parent_displacement, m.child_displacement,
-               CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END
-          FROM tgsis.mesh_merge_regions(p_version, v_key::bigint) AS m
-          JOIN tgsis.conflicts k ON k.versionid = v_version.versionid AND k.objectclass = 'feature' AND k.objectkey = v_key;
-    END LOOP;
+    -- the regions of the unsolved meshes that have none stored on their marks, found in SQL
+    -- (tgsis.store_mesh_regions: what tgsis.merge3 finds), so that a psql user has them too. A client
+    -- that finds them itself in this transaction (tgsis.find_conflicts and the merges by region in
+    -- Python) says so (tgsis.region_detection = 'client'), and they are not computed twice.
+    IF current_setting('tgsis.region_detection', true) IS DISTINCT FROM 'client' THEN
+        FOR v_key IN
+            SELECT k.objectkey FROM tgsis.conflicts k
+             WHERE k.versionid = v_version.versionid AND k.objectclass = 'feature' AND k.solution = 'unsolved'
+               AND NOT EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = k.versionid
+                                  AND r.objectclass = k.objectclass AND r.objectkey = k.objectkey)
+             ORDER BY k.objectkey::bigint
+        LOOP
+            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        END LOOP;
+    END IF;
     RETURN QUERY SELECT * FROM tgsis.conflicts WHERE versionid = v_version.versionid ORDER BY objectclass, objectkey;
 END
 $$;

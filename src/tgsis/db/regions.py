@@ -236,6 +236,7 @@ def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
 
 
 def _find(conn: Conn, version: str) -> list[Conflict]:
+    conn.execute("SELECT set_config('tgsis.region_detection', 'client', true)")  # found here: SQL need not
     rows = conn.execute(
         "SELECT objectclass, objectkey, conflicttype, childtables, parenttables, solution, childmark, parentmark"
         "  FROM tgsis.find_conflicts(%s)",
