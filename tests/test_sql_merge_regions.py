@@ -131,8 +131,11 @@ def test_values_changed_and_nulls_minus_zero_and_reorientations(conn: Conn, faul
         "e1",
         (f"UPDATE {vp} SET porosity = porosity * 2 WHERE _geoid = %s AND _idx IN (3, 50)", (fault,)),
         (f"UPDATE {cp} SET facies = 7 WHERE _geoid = %s AND _idx = 40", (fault,)),
-        ("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid3, vrtxid3 = vrtxid1"
-         " WHERE geoid = %s AND trglid = 10", (fault,)),
+        (
+            "UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid3, vrtxid3 = vrtxid1"
+            " WHERE geoid = %s AND trglid = 10",
+            (fault,),
+        ),
         ("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = 90", (fault,)),
     )
     psql(
@@ -206,7 +209,9 @@ def test_parts_and_atoms_are_values_of_the_cells_and_vertices(conn: Conn) -> Non
     tgsis.enable_feature_versioning(conn)
     surface = curved_surface()
     half = len(surface.cells) // 2
-    parted = tgsis.Surface(surface.vertices, surface.cells, cell_properties={"part": (np.arange(2 * half) >= half).astype(np.int64)})
+    parted = tgsis.Surface(
+        surface.vertices, surface.cells, cell_properties={"part": (np.arange(2 * half) >= half).astype(np.int64)}
+    )
     geoid = tgsis.insert_feature(conn, "faults", parted)
     tgsis.create_version(conn, "e1")
     conn.commit()
@@ -323,35 +328,48 @@ def _apply(conn: Conn, version: str, geoid: int, edits: list[tuple[str, int, int
         if kind == "move":
             dx, dy, dz = _SHIFTS[which]
             statements.append(
-                ("UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY (%s)",
-                 (dx, dy, dz, geoid, patch[: which + 1]))
+                (
+                    "UPDATE tgsis.vrtx SET x = x + %s, y = y + %s, z = z + %s WHERE geoid = %s AND vrtxid = ANY (%s)",
+                    (dx, dy, dz, geoid, patch[: which + 1]),
+                )
             )
         elif kind == "porosity":
-            statements.append((f"UPDATE {vp} SET porosity = %s WHERE _geoid = %s AND _idx = %s", (0.5 + which, geoid, patch[0])))
+            statements.append(
+                (f"UPDATE {vp} SET porosity = %s WHERE _geoid = %s AND _idx = %s", (0.5 + which, geoid, patch[0]))
+            )
         elif kind == "facies":
             statements.append((f"UPDATE {cp} SET facies = %s WHERE _geoid = %s AND _idx = %s", (which, geoid, where)))
         elif kind == "delete":
             statements.append(("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = %s", (geoid, where)))
         elif kind == "flip":
             statements.append(
-                ("UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = %s", (geoid, where))
+                (
+                    "UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1 WHERE geoid = %s AND trglid = %s",
+                    (geoid, where),
+                )
             )
         else:  # a new vertex over a triangle and a triangle on it, with the next ids (both sides hand out the same)
             statements.append(
-                ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)"
-                 " SELECT %s, max(vrtxid) + 1, 1000.0 * %s, -400.0, %s FROM tgsis.vrtx WHERE geoid = %s",
-                 (geoid, col, float(which), geoid))
+                (
+                    "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)"
+                    " SELECT %s, max(vrtxid) + 1, 1000.0 * %s, -400.0, %s FROM tgsis.vrtx WHERE geoid = %s",
+                    (geoid, col, float(which), geoid),
+                )
             )
             statements.append(
-                ("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3)"
-                 " SELECT %s, (SELECT max(trglid) + 1 FROM tgsis.trgl WHERE geoid = %s), %s, %s, max(vrtxid)"
-                 "   FROM tgsis.vrtx WHERE geoid = %s",
-                 (geoid, geoid, col, col + 1, geoid))
+                (
+                    "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3)"
+                    " SELECT %s, (SELECT max(trglid) + 1 FROM tgsis.trgl WHERE geoid = %s), %s, %s, max(vrtxid)"
+                    "   FROM tgsis.vrtx WHERE geoid = %s",
+                    (geoid, geoid, col, col + 1, geoid),
+                )
             )
     psql(conn, version, *statements)
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
 @given(
     child=st.lists(_edit, min_size=1, max_size=4),
     parent=st.lists(_edit, min_size=1, max_size=4),
@@ -374,7 +392,9 @@ def test_random_edits_give_exactly_merge3s_regions(
         assert_same_regions(conn, child_version, fault)
 
 
-def test_a_region_found_again_on_new_marks_is_stale_for_a_solution_given_by_its_old_number(conn: Conn, fault: int) -> None:
+def test_a_region_found_again_on_new_marks_is_stale_for_a_solution_given_by_its_old_number(
+    conn: Conn, fault: int
+) -> None:
     """SQL finds the regions again when either side edits the object; a psql resolve_region of a number seen
     before is refused (TG307), as another region may now have that number."""
     three_regions(conn, fault)
@@ -436,7 +456,9 @@ def test_psql_resolve_all_regions_records_and_says_what_python_says(conn: Conn, 
     solutions = conn.execute("SELECT conflict, solution FROM tgsis.conflict_regions ORDER BY region").fetchall()
     assert {s for c, s in solutions if not c} == {"automatic"}
     # taken back at once
-    back = conn.execute("SELECT solution FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'unsolved')", (str(fault),))
+    back = conn.execute(
+        "SELECT solution FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'unsolved')", (str(fault),)
+    )
     assert [r[0] for r in back.fetchall()] == ["unsolved", "unsolved"]
     conn.rollback()
 
@@ -448,7 +470,9 @@ def test_psql_resolve_all_regions_refusals_record_nothing(conn: Conn, db_dsn: st
     before = conn.execute("SELECT r::text FROM tgsis.conflict_regions r ORDER BY region").fetchall()
     conn.commit()
     key = str(fault)
-    state, message, hint = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'average')", (key,))
+    state, message, hint = sqlstate(
+        conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'average')", (key,)
+    )
     assert state == "TG307" and f"tgsis version resolve e1 {key} average --region all" in (hint or ""), message
     state, _, _ = sqlstate(conn, "SELECT * FROM tgsis.resolve_all_regions('e1', 'feature', %s, 'manual')", (key,))
     assert state == "TG100"
