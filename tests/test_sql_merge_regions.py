@@ -525,3 +525,33 @@ def test_saying_the_client_finds_the_regions_does_not_let_a_whole_side_drop_edit
     assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)  # left to the client
     state, message, _ = sqlstate(conn, "SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'child')", (str(fault),))
     assert state == "TG307", message
+
+
+def test_two_psql_sessions_finding_the_regions_at_once_store_them_once(conn: Conn, fault: int, db_dsn: str) -> None:
+    """Two sessions run SQL find_conflicts at once (READ COMMITTED, as psql does): the second waits for the
+    first's conflict rows, then sees its regions stored and stores none again; neither fails."""
+    import threading
+
+    three_regions(conn, fault)
+    results: list[Any] = []
+    barrier = threading.Barrier(2)
+
+    def run() -> None:
+        with psycopg.connect(db_dsn) as other:
+            barrier.wait()
+            try:
+                other.execute("SELECT FROM tgsis.find_conflicts('e1')")
+                other.commit()
+                results.append("ok")
+            except Exception as exc:  # noqa: BLE001 - reported below
+                results.append(exc)
+
+    threads = [threading.Thread(target=run) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert results == ["ok", "ok"]
+    assert conn.execute("SELECT count(*), count(DISTINCT region) FROM tgsis.conflict_regions").fetchone() == (3, 3)
+    conn.rollback()
+    assert_same_regions(conn, "e1", fault)
