@@ -9,7 +9,7 @@ is then changed on both sides, disjointly. Timed in one process, medians of
 ``--repeat`` runs, every write rolled back after it was timed:
 
 - baseline (a): today's object-level merge of one such edit: the conflict of
-  version ``objlevel`` solved ``child`` (the parent's edit dropped, as a whole
+  version ``objlevel`` solved ``manual`` (the version's object taken, the parent's edit dropped, as a whole
   object), then ``tgsis.merge_version`` (SQL, through
   ``tgsis.db.versions.merge_version``), and the rows it writes;
 - (b) ``tgsis.object_merge`` of version ``regions`` (its three states read
@@ -133,9 +133,9 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     move(conn, "DEFAULT", geoid, parent_patch, 5.0)
     print(f"DEFAULT moved {len(parent_patch)} vertices; versions objlevel and regions moved {len(child_patch)} others")
 
-    # (a) the baseline: object-level, the conflict solved 'child', then the SQL merge
+    # (a) the baseline: object-level, the conflict solved 'manual' (the version's object), then the SQL merge
     V.find_conflicts(conn, "objlevel")
-    V.resolve_conflict(conn, "objlevel", "feature", geoid, "child")
+    V.resolve_conflict(conn, "objlevel", "feature", geoid, "manual")  # child: refused, it drops an edit
     conn.commit()
     rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel"))())
     t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel")), repeat)
