@@ -9,7 +9,7 @@ is then changed on both sides, disjointly. Timed in one process, medians of
 ``--repeat`` runs, every write rolled back after it was timed:
 
 - baseline (a): today's object-level merge of one such edit: the conflict of
-  version ``objlevel`` solved ``child`` (the parent's edit dropped, as a whole
+  version ``objlevel`` solved ``manual`` (the version's object taken, the parent's edit dropped, as a whole
   object), then ``tgsis.merge_version`` (SQL, through
   ``tgsis.db.versions.merge_version``), and the rows it writes;
 - (b) ``tgsis.object_merge`` of version ``regions`` (its three states read
@@ -133,9 +133,9 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     move(conn, "DEFAULT", geoid, parent_patch, 5.0)
     print(f"DEFAULT moved {len(parent_patch)} vertices; versions objlevel and regions moved {len(child_patch)} others")
 
-    # (a) the baseline: object-level, the conflict solved 'child', then the SQL merge
+    # (a) the baseline: object-level, the conflict solved 'manual' (the version's object), then the SQL merge
     V.find_conflicts(conn, "objlevel")
-    V.resolve_conflict(conn, "objlevel", "feature", geoid, "child")
+    V.resolve_conflict(conn, "objlevel", "feature", geoid, "manual")  # child: refused, it drops an edit
     conn.commit()
     rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel"))())
     t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel")), repeat)
@@ -178,6 +178,15 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         f"    three full reads through the views (the read of before):      {t_full:6.3f} s (the read is {t_read / t_full:.2f}x)"
     )
     print(f"(c) SQL tgsis.find_conflicts (object-level):                      {t_sql_conflicts:6.3f} s")
+    # (c') issue39-sqlmerge: SQL finds the regions itself (tgsis.mesh_merge_regions, which the SQL find_conflicts
+    # of (c) runs for a mesh without regions stored on its marks: (c) includes it when the function exists)
+    if conn.execute("SELECT to_regprocedure('tgsis.mesh_merge_regions(text, bigint)')").fetchone() != (None,):
+        in_sql = "SELECT region, conflict, cardinality(vertex_ids) FROM tgsis.mesh_merge_regions('regions', %s)"
+        found = rolled_back(conn, lambda: conn.execute(in_sql, (geoid,)).fetchall())()
+        assert [r[1:] for r in found] == [(False, len(r.vertex_ids)) for r in merge.regions], found
+        t_sql_regions = timed(rolled_back(conn, lambda: conn.execute(in_sql, (geoid,)).fetchall()), repeat)
+        out["sql_region_detection_s"] = round(t_sql_regions, 3)
+        print(f"(c') SQL region detection alone (tgsis.mesh_merge_regions):       {t_sql_regions:6.3f} s")
 
     # (d) the region-aware conflict check and merge, when this checkout has them
     if importlib.util.find_spec("tgsis.db.regions") is not None:

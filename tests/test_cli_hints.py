@@ -148,6 +148,10 @@ NOT_FROM_THE_CLI = {
     "sql/geometry/check_class_write.sql": "the privilege argument of an internal check tgsis's own code calls",
     "sql/versioning/conflict_discards.sql": "a key without its class: the command always gives both",
     "sql/model5/md_vertices_in_box.sql": "box queries of multiply indexed G-maps are SQL and Python only: no command",
+    "sql/versioning/mesh_merge_regions.sql": "SQL region detection of psql users: the command finds the regions in "
+    "Python, and SQL calls it only after the same checks (tgsis.store_mesh_regions)",
+    "sql/versioning/resolve_all_regions.sql": "the psql face of --region all: the command calls the Python "
+    "resolve_all_regions",
 }
 
 

@@ -100,6 +100,15 @@ LOST_BY_PARENT = [  # the version's edits
 ]
 
 
+def _object_level(conn: Conn, a: int) -> None:
+    """The version gives A's note another value too: A then merges as a whole object only (attributes changed on
+    both sides), so whole-side solutions are what merges it. Without this, SQL finds A's regions and refuses
+    ``child``, which would drop the parent's edit of vertices 20, 21 in a region that is no conflict."""
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE domes SET note = 'mine' WHERE _geoid = %s", (a,))
+    conn.commit()
+
+
 def _counts(conn: Conn, solution: str, key: int | None = None) -> list[tuple[Any, ...]]:
     rows = conn.execute(
         "SELECT shortname, rows_added, rows_removed, rows_changed, values_changed, objectkey, discarded"
@@ -124,6 +133,7 @@ def test_each_solution_counts_the_other_sides_edits_against_the_base(conn: Conn,
 
 def test_the_counts_are_what_the_merge_then_loses(conn: Conn, story: dict[str, int]) -> None:
     a = story["A"]
+    _object_level(conn, a)
     parent_before = _vertices(conn, "DEFAULT", a)
     child = _vertices(conn, "edit", a)
     conflict = tgsis.resolve_conflict(conn, "edit", "feature", a, "child")
@@ -176,7 +186,8 @@ def test_cli_resolve_refuses_to_discard_without_the_flag(
     db_dsn: str, conn: Conn, story: dict[str, int], capsys: pytest.CaptureFixture[str]
 ) -> None:
     a = str(story["A"])
-    # stored, unsolved; object-level only (the regions of the mesh not stored: with them, a side that drops the
+    _object_level(conn, int(a))
+    # stored, unsolved; object-level only (A does not merge by region: with regions, a side that drops the
     # other's edits outside the conflicting regions is refused whatever the flag, tests/test_resolve_region.py)
     V.find_conflicts(conn, "edit")
     conn.commit()
@@ -282,6 +293,7 @@ def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str
     notices: list[str] = []
     conn.add_notice_handler(lambda d: notices.append(d.message_primary or ""))
     a = story["A"]
+    _object_level(conn, a)
     conn.execute("SELECT tgsis.resolve_conflict('edit', 'feature', %s, 'child')", (str(a),))
     assert notices == [
         f"feature {a} of version 'edit' (solution child) recorded: the parent's edits discarded: "
@@ -297,8 +309,8 @@ def test_sql_resolve_and_merge_say_what_they_discard(conn: Conn, story: dict[str
     conn.execute("SELECT tgsis.merge_version('edit')")
     assert notices == [
         f"feature {a} of version 'edit' (solution parent) merged: the version's edits discarded: "
-        "public.domes_cellpros: 1 added, 1 changed (2 values); trgl: 1 added, 1 removed (6 values); "
-        "vrtx: 1 added, 4 changed (7 values)"
+        "public.domes: 1 changed (1 value); public.domes_cellpros: 1 added, 1 changed (2 values); "
+        "trgl: 1 added, 1 removed (6 values); vrtx: 1 added, 4 changed (7 values)"
     ]
     conn.commit()
     # merged: the version's edits of A are gone from both sides, B's are in the parent

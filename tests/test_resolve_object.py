@@ -126,6 +126,19 @@ def test_base_of_a_mesh_with_regions_that_merge_by_themselves_is_refused(conn: C
     assert (xyz[:24, 0] != _base_rows()[1][:24, 0]).all()  # the version's north end kept
 
 
+def test_base_from_psql_finds_the_regions_itself_before_it_drops_every_edit(conn: Conn) -> None:
+    # was: with no regions stored (no Python call, SQL told the client finds them), base was recorded and
+    # dropped the two ends each side edited alone, which merge by themselves
+    geoid = three_regions(conn)
+    conn.execute("SELECT pg_catalog.set_config('tgsis.region_detection', 'client', false)")
+    conn.execute("SELECT * FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+    conn.rollback()
+    state, message, _ = _sql(conn, "SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'base')", (str(geoid),))
+    assert state == "TG307" and "would drop the edits in regions" in message
+
+
 def test_base_needs_the_right_to_change_the_object(conn: Conn, db_dsn: str) -> None:
     from tests.roles import login_roles
 

@@ -7,7 +7,9 @@
 -- version's conflict rows until its transaction ends): anyone else who may
 -- read gets the same answer computed, without writing or locking anything.
 -- Storing also removes the regions of meshes (tgsis.conflict_regions) found on
--- marks that are no longer the object's: they describe a state that is gone.
+-- marks that are no longer the object's: they describe a state that is gone,
+-- and finds, in SQL, those of the unsolved meshes without regions
+-- (tgsis.store_mesh_regions) unless the client finds them itself.
 CREATE FUNCTION tgsis.find_conflicts(p_version text)
 RETURNS SETOF tgsis.conflicts
 LANGUAGE plpgsql
@@ -18,6 +20,7 @@ AS $$
 DECLARE
     v_version tgsis.versions;
     v_role    name := tgsis.calling_role();
+    v_key     text;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
@@ -63,6 +66,21 @@ BEGIN
      USING tgsis.conflicts k
      WHERE r.versionid = v_version.versionid AND k.versionid = r.versionid AND k.objectclass = r.objectclass
        AND k.objectkey = r.objectkey AND (k.childmark, k.parentmark) IS DISTINCT FROM (r.childmark, r.parentmark);
+    -- the regions of the unsolved meshes that have none stored on their marks, found in SQL
+    -- (tgsis.store_mesh_regions: what tgsis.merge3 finds), so that a psql user has them too. A client
+    -- that finds them itself in this transaction (tgsis.find_conflicts and the merges by region in
+    -- Python) says so (tgsis.region_detection = 'client'), and they are not computed twice.
+    IF current_setting('tgsis.region_detection', true) IS DISTINCT FROM 'client' THEN
+        FOR v_key IN
+            SELECT k.objectkey FROM tgsis.conflicts k
+             WHERE k.versionid = v_version.versionid AND k.objectclass = 'feature' AND k.solution = 'unsolved'
+               AND NOT EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = k.versionid
+                                  AND r.objectclass = k.objectclass AND r.objectkey = k.objectkey)
+             ORDER BY k.objectkey::bigint
+        LOOP
+            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        END LOOP;
+    END IF;
     RETURN QUERY SELECT * FROM tgsis.conflicts WHERE versionid = v_version.versionid ORDER BY objectclass, objectkey;
 END
 $$;

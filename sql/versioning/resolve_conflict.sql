@@ -6,8 +6,9 @@
 -- read in the key column's type with the session's settings
 -- (tgsis.canonical_object_keys): '02/01/2024' under DateStyle DMY names the
 -- conflict of 2024-01-02. A NOTICE says what the solution discards of the
--- other side's edits (tgsis.conflict_discards). When the regions of the
--- mesh are stored (tgsis.conflict_regions), parent and child are refused
+-- other side's edits (tgsis.conflict_discards). A mesh's regions are found
+-- first when none are stored (tgsis.store_mesh_regions, in SQL: no client
+-- needed), and parent and child are refused
 -- (TG307) if the other side has edits in a region that is no conflict:
 -- tgsis.resolve_region solves the conflicting regions, the merge keeps the rest.
 -- base: the object as the version was based on it (its initial revision's
@@ -52,12 +53,18 @@ BEGIN
     -- the marks must be those of now: a manual solution is written just before it is recorded
     PERFORM tgsis.find_conflicts(p_version);
     IF lower(p_solution) = 'base' THEN
+        IF p_objectclass = 'feature' THEN  -- its regions first, as for parent and child: base drops every side's edits
+            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        END IF;
         PERFORM tgsis.resolve_conflict_base(p_version, p_objectclass, p_objectkey, v_key);
         p_solution := 'manual';  -- the version holds the base's object now
     END IF;
     -- a mesh whose regions are stored (current marks: find_conflicts just dropped older ones): one side's
     -- whole object would drop the other side's edits in regions that merge by themselves
     IF lower(p_solution) IN ('parent', 'child') THEN
+        IF p_objectclass = 'feature' THEN  -- found in SQL if nobody found them (a psql user: no Python call)
+            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        END IF;
         SELECT string_agg(r.region::text, ', ' ORDER BY r.region) INTO v_lost
           FROM tgsis.conflict_regions r
          WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key AND NOT r.conflict

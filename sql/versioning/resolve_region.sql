@@ -24,6 +24,7 @@ DECLARE
     v_solution text := lower(p_solution);
     v_key      text;
     v_stored   boolean;
+    v_marks    text[];
     v_row      tgsis.conflict_regions;
     v_object   text;
 BEGIN
@@ -63,14 +64,17 @@ BEGIN
         -- version and the parent, so only a role that may change the feature gives them (42501 otherwise)
         PERFORM tgsis.check_class_write(ARRAY[v_key::bigint], 'UPDATE');
     END IF;
-    v_stored := EXISTS (SELECT FROM tgsis.conflict_regions
-                         WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region);
+    -- the marks the region was found on: find_conflicts below finds the regions again on new marks (in
+    -- SQL) when either side changed the object since, and a region of that number is then another one
+    SELECT ARRAY[childmark, parentmark] INTO v_marks FROM tgsis.conflict_regions
+     WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region;
+    v_stored := FOUND;
     -- the marks must be those of now: regions found on an older state are removed
     PERFORM tgsis.find_conflicts(p_version);
     SELECT * INTO v_row FROM tgsis.conflict_regions
      WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region
        FOR UPDATE;
-    IF NOT FOUND AND v_stored THEN
+    IF (NOT FOUND AND v_stored) OR (FOUND AND v_stored AND ARRAY[v_row.childmark, v_row.parentmark] <> v_marks) THEN
         RAISE EXCEPTION '% was found on a state that changed since: the object changed in the version or its parent',
                 v_object
             USING ERRCODE = 'TG307',

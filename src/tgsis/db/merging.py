@@ -730,6 +730,7 @@ def _merge_by_region(
     conn: Conn, version: str, action: Literal["merge", "refresh"], remove: bool, reasons: dict[str, str]
 ) -> tuple[MergedObject, ...]:
     """Lock (``tgsis.lock_for_region_merge``), then merge every unsolved conflicting mesh that merges by region."""
+    conn.execute("SELECT set_config('tgsis.region_detection', 'client', true)")  # merged here: SQL need not find them
     conn.execute("SELECT FROM tgsis.lock_for_region_merge(%s, %s, %s)", (version, action, remove))
     unsolved = conn.execute(
         "SELECT objectkey FROM tgsis.find_conflicts(%s) WHERE solution = 'unsolved' AND objectclass = 'feature' "

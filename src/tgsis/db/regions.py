@@ -242,6 +242,7 @@ def find_conflicts(conn: Conn, version: str) -> list[Conflict]:
 
 
 def _find(conn: Conn, version: str) -> list[Conflict]:
+    conn.execute("SELECT set_config('tgsis.region_detection', 'client', true)")  # found here: SQL need not
     rows = conn.execute(
         "SELECT objectclass, objectkey, conflicttype, childtables, parenttables, solution, childmark, parentmark"
         "  FROM tgsis.find_conflicts(%s)",
@@ -629,8 +630,13 @@ def _regions_of_now(conn: Conn, version: str, feature_id: int, name: str) -> tup
 def _require_regions(
     stored: list[ConflictRegion], stored_before: list[ConflictRegion], version: str, name: str
 ) -> None:
-    """Refuse when no regions are stored now: stale ones (gone with the marks) or none ever found."""
-    if stored:
+    """Refuse when no regions are stored now: stale ones (gone with the marks, or found again on new marks by SQL
+    tgsis.find_conflicts) or none ever found."""
+    again = bool(stored and stored_before) and (stored[0].childmark, stored[0].parentmark) != (
+        stored_before[0].childmark,
+        stored_before[0].parentmark,
+    )
+    if stored and not again:
         return
     if stored_before:
         raise RegionSolutionError(

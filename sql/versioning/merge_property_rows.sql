@@ -1,0 +1,54 @@
+-- tgsis.merge_property_rows(table, geoid, since, keys, base, parent, version): a property table's rows for the merge by region.
+-- The vertex or cell property rows (_idx = vertex or cell id) of one feature
+-- that tgsis.mesh_merge_regions compares, read from the table's storage
+-- through tgsis.storage_run (the caller's rights, or the owner's runner as
+-- tgsis's owner). Without p_keys: the keys of the rows whose visibility can
+-- differ between the three sets (revision or lastrevs in p_since), seen and
+-- val NULL. With p_keys: every row of those keys some set sees, seen saying
+-- where (bit 1 base, 2 parent, 4 version), val its values as one canonical
+-- text: the columns other than _geoid and _idx in order, a float as its
+-- exact text with -0 as 0 and NULL as NaN (so that equal texts are equal
+-- values as tgsis.merge3 compares them: NaN equals NaN and a missing row),
+-- any other value as its text, NULL as NaN. nulls (tgsis.merge_value_text)
+-- is the text of a missing row. extra_float_digits is pinned: exact floats.
+CREATE FUNCTION tgsis.merge_property_rows(p_t tgsis.versioned_tables, p_geoid bigint, p_since integer[],
+                                          p_keys bigint[], p_base integer[], p_parent integer[], p_child integer[])
+RETURNS TABLE (key bigint, seen integer, val text)
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1
+AS $$
+DECLARE
+    v_canon text := (SELECT m.canon FROM tgsis.merge_value_text(p_t.schemaname, p_t.tablename) AS m);
+    v_vis   text := '(v.revision = ANY (%1$s) AND NOT (v.revclosed AND v.lastrevs && %1$s))';
+BEGIN
+    IF v_canon IS NULL THEN
+        RETURN;
+    END IF;
+    IF p_keys IS NULL THEN
+        RETURN QUERY
+        SELECT r[1]::bigint, NULL::integer, NULL::text
+          FROM tgsis.storage_run(p_t, false, format(
+                 'SELECT ARRAY[v._idx::text] FROM %I.%I v WHERE v._geoid = $1[1]::bigint
+                     AND (v.revision = ANY ($1[2]::integer[]) OR (v.revclosed AND v.lastrevs && $1[2]::integer[]))',
+                 p_t.schemaname, p_t.tablename || '_ver'),
+               p_1 => ARRAY[p_geoid::text, p_since::text]) AS r;
+        RETURN;
+    END IF;
+    RETURN QUERY
+    SELECT r[1]::bigint, r[2]::integer, r[3]
+      FROM tgsis.storage_run(p_t, false, format(
+             'SELECT ARRAY[w._idx::text, w.seen::text, w.val]
+                FROM (SELECT v._idx, %1$s::integer | (%2$s::integer << 1) | (%3$s::integer << 2) AS seen, %4$s AS val
+                        FROM %5$I.%6$I v WHERE v._geoid = $1[1]::bigint AND v._idx = ANY ($1[2]::bigint[])) AS w
+               WHERE w.seen <> 0',
+             format(v_vis, '$2'), format(v_vis, '$5::integer[]'), format(v_vis, '$3'), v_canon,
+             p_t.schemaname, p_t.tablename || '_ver'),
+           p_1 => ARRAY[p_geoid::text, p_keys::text], p_2 => p_base, p_3 => p_child,
+           p_5 => p_parent::bigint[]) AS r;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[]) IS
+    'the property rows of one feature for the merge by region in SQL: the keys whose visibility can differ between the three sets (no keys given), or the rows of the keys given with where they are seen (1 base, 2 parent, 4 version) and their values as a canonical text';

@@ -1,0 +1,46 @@
+-- tgsis.store_mesh_regions(version, objectkey): find and store, in SQL, the regions of one conflicting mesh that has none stored.
+-- Called by tgsis.find_conflicts (for each unsolved conflicting feature) and
+-- tgsis.resolve_conflict (for the object it solves, whatever its solution
+-- was: the rule that refuses a whole side dropping the other side's edits
+-- needs them), as tgsis's owner, after the conflicts and their marks were
+-- stored. It stores nothing when regions are stored already (on the current
+-- marks: find_conflicts removed stale ones), when the calling role may not
+-- read the feature's class (the Python client would not read it either),
+-- or when the feature does not merge by region (tgsis.region_merge_refusal).
+-- Otherwise the rows of tgsis.mesh_merge_regions go in as found: a conflict
+-- unsolved, the others automatic. Returns the regions stored.
+CREATE FUNCTION tgsis.store_mesh_regions(p_version text, p_objectkey text)
+RETURNS integer
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_row   tgsis.conflicts;
+    v_count integer;
+BEGIN
+    SELECT * INTO v_row FROM tgsis.conflicts k
+     WHERE k.versionid = tgsis.version_id(p_version) AND k.objectclass = 'feature' AND k.objectkey = p_objectkey;
+    IF NOT FOUND
+       OR EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = v_row.versionid
+                     AND r.objectclass = 'feature' AND r.objectkey = p_objectkey)
+       OR p_objectkey::bigint IN (SELECT tgsis.class_denied_geoids('SELECT'))
+       OR tgsis.region_merge_refusal(p_version, p_objectkey::bigint) IS NOT NULL THEN
+        RETURN 0;
+    END IF;
+    INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
+                                        changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
+                                        child_vertex_ids, child_cell_ids, bbox, parent_displacement,
+                                        child_displacement, solution)
+    SELECT v_row.versionid, 'feature', p_objectkey, m.region, v_row.childmark, v_row.parentmark, m.conflict,
+           m.changed_by, m.vertex_ids, m.cell_ids, m.parent_vertex_ids, m.parent_cell_ids, m.child_vertex_ids,
+           m.child_cell_ids, m.bbox, m.parent_displacement, m.child_displacement,
+           CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END
+      FROM tgsis.mesh_merge_regions(p_version, p_objectkey::bigint) AS m;
+    GET DIAGNOSTICS v_count = ROW_COUNT;
+    RETURN v_count;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.store_mesh_regions(text, text) IS
+    'find (tgsis.mesh_merge_regions) and store the regions of one conflicting feature of a version that has none stored, when the calling role may read its class and it merges by region; returns the regions stored';
