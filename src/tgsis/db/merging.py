@@ -51,15 +51,26 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis._merge_slices import apply_sliced, merge_sliced, slice_text
 from tgsis.arguments import checked
-from tgsis.db._merge_states import MergeInputs, read_merge_states, version_row
+from tgsis.db._continuity import check_continuity
+from tgsis.db._merge_states import (
+    SLICE_KEYS,
+    MergeInputs,
+    SlicedInputs,
+    feature_time_model,
+    read_merge_states,
+    read_sliced_states,
+    version_row,
+)
 from tgsis.db._settings import read_version_settings, restore_version_settings
-from tgsis.db._state_write import write_state_difference
+from tgsis.db._state_write import write_sliced_difference, write_state_difference
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import one_snapshot
-from tgsis.db.regions import recorded_solutions, region_solutions
+from tgsis.db.regions import recorded_solutions, region_solutions, sliced_recorded_solutions, sliced_region_solutions
 from tgsis.db.versions import show_name
 from tgsis.errors import (
+    DiscontinuousPeriodsError,
     InvalidInputError,
     InvalidMergeError,
     MissingPrivilegeError,
@@ -585,7 +596,7 @@ class _AttributeEdits:
     both: tuple[str, ...]  # columns both sides changed to other values
 
 
-def _attribute_edits(conn: Conn, inputs: MergeInputs, version: str, geoid: int) -> _AttributeEdits:
+def _attribute_edits(conn: Conn, inputs: MergeInputs | SlicedInputs, version: str, geoid: int) -> _AttributeEdits:
     """Three ways, column by column: the parent's edits of the geometry row's attributes and of the feature row.
 
     A merge by region writes the merged mesh into the version and records
@@ -660,6 +671,8 @@ def _merge_object(
     conn: Conn, version: str, key: str, reasons: dict[str, str], may_write: list[bool | None]
 ) -> MergedObject | None:
     """Merge one conflicting feature by region into the version (locked transaction); None with the reason when not."""
+    if feature_time_model(conn, version, int(key)) in SLICE_KEYS:  # models 2 and 3: slice by slice
+        return _merge_sliced_object(conn, version, key, reasons, may_write)
     try:
         inputs = read_merge_states(conn, version, int(key))
     except (InvalidInputError, VersioningError) as exc:  # not model 1, deleted on one side, attributes on both
@@ -724,6 +737,109 @@ def _merge_object(
         written,
     )
     return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, resolved.discards)
+
+
+def _merge_sliced_object(
+    conn: Conn, version: str, key: str, reasons: dict[str, str], may_write: list[bool | None]
+) -> MergedObject | None:
+    """:func:`_merge_object` for a model-2 or model-3 feature: per instant, or per geometry instant of each period.
+
+    Raises
+    ------
+    PeriodTopologyError
+        Model 3: merged instant by instant, a period's geometry instants would have other topologies (TG308).
+    """
+    try:
+        inputs = read_sliced_states(conn, version, int(key))
+        states = inputs.states
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
+    except (InvalidInputError, VersioningError) as exc:  # a removal against a change, topology on both sides, ...
+        reasons[key] = exc.message
+        return None
+    recorded = sliced_region_solutions(conn, version, "feature", key, merge)
+    conflicting = {r.index for r in merge.conflicts}
+    solutions: dict[int, Solution] = {}
+    for i, value in recorded.items():
+        if i in conflicting:
+            solutions[i] = value if isinstance(value, MeshState) else _SIDE_SOLUTIONS[value]
+    unsolved = [r for r in merge.conflicts if r.index not in solutions]
+    if unsolved:
+        parts = []
+        for r in unsolved[:5]:
+            low, high = r.region.bounds.tolist()
+            parts.append(
+                f"region {r.index} at {slice_text(merge.base.kind, r.key)} unsolved (changed on both sides, "
+                f"differently: parent vertices {_ids(r.region.parent_vertex_ids)}, child vertices "
+                f"{_ids(r.region.child_vertex_ids)}; box {_point(low)}-{_point(high)})"
+            )
+        more = f"; {len(unsolved) - 5} more regions unsolved" if len(unsolved) > 5 else ""
+        reasons[key] = "; ".join(parts) + more
+        return None
+    try:
+        names = sliced_recorded_solutions(conn, version, "feature", key, merge) or {}
+        slices, discards = apply_sliced(merge, solutions, names=names)
+    except InvalidMergeError as exc:
+        reasons[key] = f"invalid merge: {exc.message}"
+        return None
+    attributes = _attribute_edits(conn, inputs, version, int(key))
+    if attributes.both:
+        reasons[key] = (
+            f"its attributes were changed both in the version and in its parent, to other values "
+            f"({', '.join(attributes.both)}): the merge by region merges the mesh only"
+        )
+        return None
+    for discard in discards:  # said before it is written
+        log.warning("feature %s of version %s: %s", key, show_name(version), _discard_text(discard))
+    _require_write(conn, version, key, may_write)
+    settings = read_version_settings(conn)
+    try:
+        with conn.transaction():  # a savepoint: an object whose rows cannot be written leaves nothing behind
+            conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))
+            written = write_sliced_difference(
+                conn,
+                inputs.feature_class,
+                int(key),
+                states["child"].slices,
+                slices,
+                states["child"].instant_rows,
+                merge.instant_rows,
+            )
+            written += _write_attribute_edits(conn, int(key), attributes)
+            if merge.base.kind == "EVOLVING" and len({k[0] for k in slices}) > 1:
+                check_continuity(conn, int(key), None)
+            restore_version_settings(conn, settings, local=True)
+            conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
+    except (InvalidInputError, DiscontinuousPeriodsError) as exc:
+        restore_version_settings(conn, settings, local=True)
+        reasons[key] = f"its merged rows cannot be written: {exc.message}"
+        return None
+    how: Literal["automatic", "solutions"] = "solutions" if solutions else "automatic"
+    log.info(
+        "feature %s of version %s merged slice by slice (%s, %d regions): %d rows written into the version",
+        key,
+        show_name(version),
+        how,
+        len(merge.regions),
+        written,
+    )
+    return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, discards)
+
+
+def _require_write(conn: Conn, version: str, key: str, may_write: list[bool | None]) -> None:
+    """Refuse a role that may not write in the version: a merge by region writes the merged object there first."""
+    if may_write[0] is None:
+        may_write[0] = bool(
+            conn.execute("SELECT tgsis.has_version_privilege(%s, 'write')", (version,)).fetchone()[0]  # type: ignore[index]
+        )
+    if not may_write[0]:
+        role = conn.execute("SELECT tgsis.calling_role()").fetchone()[0]  # type: ignore[index]
+        raise MissingPrivilegeError(
+            f"role {role} may not write in version {show_name(version)}: merging feature {key} by region writes the "
+            "merged mesh into the version first, then merges it",
+            hint=f"the owner or a tgsis_admin can run SELECT tgsis.grant_version('{_in_quotes(version)}', 'write', "
+            f"'{_in_quotes(str(role))}'); else tgsis.resolve_conflict solves it as a whole object (parent, child or "
+            "manual)",
+        )
 
 
 def _merge_by_region(

@@ -1,0 +1,275 @@
+"""Merge by region of models 2 and 3: per instant (surfaces at instants), per period (evolving surfaces) (issue 39).
+
+A surface at instants merges instant by instant, an evolving surface
+geometry instant by geometry instant within each topology period
+(docs/merge.md, "Models 2 and 3"): disjoint edits merge bit for bit,
+overlapping ones are regions of that slice, what cannot be split (an instant
+removed on one side and changed on the other, a period's topology changed on
+both sides) stays an object-level conflict.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import tgsis
+from tests.merge_data import SIDE, curved_surface
+from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
+
+Conn = psycopg.Connection[Any]
+
+TIMES = (1.0, 2.0, 3.0)
+NORTH = np.arange(0, 2 * SIDE)  # the first two rows of the grid
+SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)  # the last two
+MIDDLE = np.arange(5 * SIDE, 7 * SIDE)
+CHILD_SHIFT = (0.125, -3.3, 7.77)
+PARENT_SHIFT = (-1.1, 0.0, -2.9)
+
+
+# --------------------------------------------------------------------------- set-up
+
+
+def _shape(i: int) -> np.ndarray:
+    """The curved grid, a little other at each instant (full mantissas)."""
+    return curved_surface().vertices + np.array([0.0, 0.0, 1.0 / 3.0]) * (i + 1)
+
+
+def _porosity() -> np.ndarray:
+    return np.asarray(curved_surface().vertex_properties["porosity"])
+
+
+def make_series(conn: Conn) -> int:
+    """A model-2 surface at TIMES (a vertex property, a per-instant property) in DEFAULT, version e1 on it."""
+    tgsis.create_feature_class(
+        conn,
+        "horizons",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "double precision")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    cells = curved_surface().cells
+    surfaces = [tgsis.Surface(_shape(i), cells, vertex_properties={"porosity": _porosity()}) for i in range(len(TIMES))]
+    series = SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": np.asarray([10.0, 20.0, 30.0])})
+    geoid = tgsis.insert_feature(conn, "horizons", series)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def make_evolving(conn: Conn, timet: tuple[float, ...] = TIMES) -> int:
+    """A model-3 surface of one topology period (geometry instants ``timet``) in DEFAULT, version e1 on it."""
+    tgsis.create_feature_class(
+        conn, "evolving", "SURFACE", time_model="EVOLVING", cell_properties=[("porosity", "float8")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    positions = np.stack([_shape(i) for i in range(len(timet))])
+    porosity = np.stack([_porosity()] * len(timet))
+    period = TopologyPeriod(
+        np.asarray(timet), curved_surface().cells, positions, vertex_properties={"porosity": porosity}
+    )
+    geoid = tgsis.insert_feature(conn, "evolving", EvolvingSurface([period], name="evolving fault"))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def move(conn: Conn, version: str, geoid: int, t: float, ids: Any, shift: tuple[float, float, float]) -> None:
+    """Move vertices ``ids`` at instant ``t`` of a model-2 surface (one committed UPDATE, as in psql)."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.times_vrtx SET x = x + %s, y = y + %s, z = z + %s"
+            " WHERE geoid = %s AND times = %s AND vrtxid = ANY(%s)",
+            (*shift, geoid, t, [int(i) for i in np.asarray(ids)]),
+        )
+    conn.commit()
+
+
+def move3(conn: Conn, version: str, geoid: int, timet: float, ids: Any, shift: tuple[float, float, float]) -> None:
+    """Move nodes ``ids`` at geometry instant ``timet`` of a model-3 surface (one committed UPDATE)."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.d4dvrtx SET x = x + %s, y = y + %s, z = z + %s"
+            " WHERE geoid = %s AND timet = %s AND nodeid = ANY(%s)",
+            (*shift, geoid, timet, [int(i) for i in np.asarray(ids)]),
+        )
+    conn.commit()
+
+
+def shifted(base: np.ndarray, ids: Any, shift: tuple[float, float, float]) -> np.ndarray:
+    out = base.copy()
+    out[np.asarray(ids)] += np.asarray(shift)  # the same float additions as the UPDATEs
+    return out
+
+
+def instants(conn: Conn, version: str, geoid: int) -> dict[float, tuple[np.ndarray, np.ndarray, set[tuple[int, ...]]]]:
+    """Per instant: (vertex ids, (n, 3) coordinates, cells as (id, v1, v2, v3)) as a psql user reads them."""
+    out = {}
+    with tgsis.in_version(conn, version):
+        times = [r[0] for r in conn.execute("SELECT times FROM tgsis.times WHERE geoid = %s ORDER BY 1", (geoid,))]
+        for t in times:
+            rows = conn.execute(
+                "SELECT vrtxid, x, y, z FROM tgsis.times_vrtx WHERE geoid = %s AND times = %s ORDER BY vrtxid",
+                (geoid, t),
+            ).fetchall()
+            cells = conn.execute(
+                "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.times_trgl WHERE geoid = %s AND times = %s",
+                (geoid, t),
+            ).fetchall()
+            out[float(t)] = (
+                np.array([r[0] for r in rows], dtype=np.int64),
+                np.array([r[1:] for r in rows], dtype=np.float64).reshape(-1, 3),
+                {tuple(int(v) for v in c) for c in cells},
+            )
+    conn.commit()
+    return out
+
+
+def geometry_instants(conn: Conn, version: str, geoid: int) -> dict[tuple[float, float], np.ndarray]:
+    """Per (timem, timet) of a model-3 surface: the (n, 3) node positions by node id, as a psql user reads them."""
+    out: dict[tuple[float, float], list[Any]] = {}
+    with tgsis.in_version(conn, version):
+        rows = conn.execute(
+            "SELECT timem, timet, x, y, z FROM tgsis.d4dvrtx WHERE geoid = %s ORDER BY timem, timet, nodeid", (geoid,)
+        ).fetchall()
+    conn.commit()
+    for m, t, *xyz in rows:
+        out.setdefault((float(m), float(t)), []).append(xyz)
+    return {k: np.array(v, dtype=np.float64) for k, v in out.items()}
+
+
+def triangles3(conn: Conn, version: str, geoid: int) -> set[tuple[float, int, int, int, int]]:
+    with tgsis.in_version(conn, version):
+        rows = conn.execute(
+            "SELECT timem, trglid, nodeid1, nodeid2, nodeid3 FROM tgsis.d4dtrgl WHERE geoid = %s", (geoid,)
+        ).fetchall()
+    conn.commit()
+    return {(float(r[0]), *(int(v) for v in r[1:])) for r in rows}  # type: ignore[misc]
+
+
+def _cells() -> set[tuple[int, ...]]:
+    return {(i, *map(int, c)) for i, c in enumerate(curved_surface().cells)}
+
+
+# --------------------------------------------------------------------------- model 2: per instant
+
+
+@pytest.fixture
+def series(conn: Conn) -> int:
+    return make_series(conn)
+
+
+def test_disjoint_edits_of_one_instant_merge_bit_for_bit(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    result = tgsis.merge_version(conn, "e1")
+    assert [(o.objectkey, o.how) for o in result.objects] == [(str(series), "automatic")]
+    expected = {t: _shape(i) for i, t in enumerate(TIMES)}
+    expected[2.0] = shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT)
+    for version in ("DEFAULT", "e1"):
+        got = instants(conn, version, series)
+        assert sorted(got) == list(TIMES)
+        for t in TIMES:
+            ids, xyz, cells = got[t]
+            np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
+            assert xyz.tobytes() == expected[t].tobytes(), (version, t)
+            assert cells == _cells()
+    assert tgsis.find_conflicts(conn, "e1") == []
+
+
+def test_edits_at_different_instants_merge(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    conflicts = tgsis.find_conflicts(conn, "e1")
+    assert [c.region_refusal for c in conflicts] == [None]
+    assert [(r.times, r.timem, r.changed_by, r.conflict) for r in conflicts[0].regions] == [
+        (1.0, None, "child", False),
+        (3.0, None, "parent", False),
+    ]
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    assert got[1.0][1].tobytes() == shifted(_shape(0), NORTH, CHILD_SHIFT).tobytes()
+    assert got[2.0][1].tobytes() == _shape(1).tobytes()
+    assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
+def test_an_instant_added_on_one_side_and_an_edit_on_the_other(conn: Conn, series: int) -> None:
+    new = tgsis.Surface(_shape(7), curved_surface().cells, vertex_properties={"porosity": _porosity() * 2})
+    with tgsis.in_version(conn, "e1"):
+        tgsis.add_instant(conn, "horizons", series, 4.0, new, {"throw": 44.0})
+    conn.commit()
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    assert sorted(got) == [1.0, 2.0, 3.0, 4.0]
+    assert got[4.0][1].tobytes() == _shape(7).tobytes()
+    assert got[2.0][1].tobytes() == shifted(_shape(1), SOUTH, PARENT_SHIFT).tobytes()
+    throws = conn.execute("SELECT _times, throw FROM horizons_pros WHERE _geoid = %s ORDER BY 1", (series,)).fetchall()
+    assert throws == [(1.0, 10.0), (2.0, 20.0), (3.0, 30.0), (4.0, 44.0)]
+    porosity = conn.execute(
+        "SELECT porosity FROM horizons_cellpros WHERE _geoid = %s AND _times = 4 ORDER BY _idx", (series,)
+    ).fetchall()
+    assert np.array([p[0] for p in porosity]).tobytes() == (_porosity() * 2).tobytes()
+    conn.commit()
+
+
+def test_overlapping_edits_at_one_instant_are_that_instants_regions(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)  # another instant: merges by itself
+    with pytest.raises(tgsis.UnsolvedConflictsError, match=r"region 0 at instant 2\.0 unsolved"):
+        tgsis.merge_version(conn, "e1")
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    regions = conflict.regions
+    assert [(r.region, r.times, r.conflict) for r in regions] == [(0, 2.0, True), (1, 3.0, False)]
+    np.testing.assert_array_equal(regions[0].child_vertex_ids, NORTH)
+    np.testing.assert_array_equal(regions[0].parent_vertex_ids, NORTH[:SIDE])
+    stored = conn.execute(
+        "SELECT region, times, timem, conflict FROM tgsis.conflict_regions ORDER BY region"
+    ).fetchall()
+    assert stored == [(0, 2.0, None, True), (1, 3.0, None, False)]
+    conn.commit()
+    assert regions[0].as_json()["times"] == 2.0
+    resolution = tgsis.resolve_region(conn, "e1", series, 0, "child")
+    assert [(d.region, d.side, d.vertices) for d in resolution.discards] == [(0, "parent", SIDE)]
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    assert got[2.0][1].tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
+    assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
+def test_an_instant_removed_on_one_side_and_changed_on_the_other_is_an_object_conflict(
+    conn: Conn, series: int
+) -> None:
+    with tgsis.in_version(conn, "e1"):
+        tgsis.delete_instant(conn, series, 2.0)
+    conn.commit()
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert conflict.regions == ()
+    assert "instant 2.0 was removed in the version and changed in the parent" in (conflict.region_refusal or "")
+    before = instants(conn, "DEFAULT", series)
+    with pytest.raises(tgsis.UnsolvedConflictsError, match="instant 2.0 was removed in the version"):
+        tgsis.merge_version(conn, "e1")
+    after = instants(conn, "DEFAULT", series)
+    assert {t: v[1].tobytes() for t, v in before.items()} == {t: v[1].tobytes() for t, v in after.items()}
+
+
+def test_an_instant_removed_on_one_side_only_is_removed(conn: Conn, series: int) -> None:
+    with tgsis.in_version(conn, "e1"):
+        tgsis.delete_instant(conn, series, 2.0)
+    conn.commit()
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    assert sorted(got) == [1.0, 3.0]
+    assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+    assert conn.execute("SELECT _times FROM horizons_pros ORDER BY 1").fetchall() == [(1.0,), (3.0,)]
+    conn.commit()
