@@ -273,3 +273,106 @@ def test_an_instant_removed_on_one_side_only_is_removed(conn: Conn, series: int)
     assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
     assert conn.execute("SELECT _times FROM horizons_pros ORDER BY 1").fetchall() == [(1.0,), (3.0,)]
     conn.commit()
+
+
+# --------------------------------------------------------------------------- model 3: per period
+
+
+@pytest.fixture
+def evolving(conn: Conn) -> int:
+    return make_evolving(conn)
+
+
+def _period(conn: Conn, version: str, geoid: int) -> dict[float, np.ndarray]:
+    return {k[1]: v for k, v in geometry_instants(conn, version, geoid).items()}
+
+
+def test_disjoint_position_edits_at_one_geometry_instant_merge(conn: Conn, evolving: int) -> None:
+    move3(conn, "e1", evolving, 2.0, NORTH, CHILD_SHIFT)
+    move3(conn, "DEFAULT", evolving, 2.0, SOUTH, PARENT_SHIFT)
+    result = tgsis.merge_version(conn, "e1")
+    assert [(o.objectkey, o.how) for o in result.objects] == [(str(evolving), "automatic")]
+    for version in ("DEFAULT", "e1"):
+        got = _period(conn, version, evolving)
+        assert got[1.0].tobytes() == _shape(0).tobytes()
+        assert got[2.0].tobytes() == shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT).tobytes()
+        assert got[3.0].tobytes() == _shape(2).tobytes()
+        assert triangles3(conn, version, evolving) == {(1.0, *c) for c in _cells()}
+
+
+def test_disjoint_position_edits_at_several_geometry_instants_merge(conn: Conn, evolving: int) -> None:
+    for t in (1.0, 3.0):
+        move3(conn, "e1", evolving, t, NORTH, CHILD_SHIFT)
+    for t in (2.0, 3.0):
+        move3(conn, "DEFAULT", evolving, t, SOUTH, PARENT_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert [(r.timem, r.times, r.changed_by, r.conflict) for r in conflict.regions] == [
+        (1.0, 1.0, "child", False),
+        (1.0, 2.0, "parent", False),
+        (1.0, 3.0, "child", False),
+        (1.0, 3.0, "parent", False),
+    ]
+    tgsis.merge_version(conn, "e1")
+    got = _period(conn, "DEFAULT", evolving)
+    assert got[1.0].tobytes() == shifted(_shape(0), NORTH, CHILD_SHIFT).tobytes()
+    assert got[2.0].tobytes() == shifted(_shape(1), SOUTH, PARENT_SHIFT).tobytes()
+    assert got[3.0].tobytes() == shifted(shifted(_shape(2), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT).tobytes()
+
+
+def _drop_corner_triangle(conn: Conn, version: str, geoid: int) -> None:
+    """A topology edit of the period: the first triangle (0, 1, SIDE + 1) removed, at every geometry instant."""
+    with tgsis.in_version(conn, version):
+        conn.execute("DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND trglid = 0", (geoid,))
+    conn.commit()
+
+
+def test_topology_on_one_side_and_positions_on_the_other_merge(conn: Conn, evolving: int) -> None:
+    _drop_corner_triangle(conn, "e1", evolving)
+    move3(conn, "DEFAULT", evolving, 2.0, SOUTH, PARENT_SHIFT)
+    tgsis.merge_version(conn, "e1")
+    expected_cells = {(1.0, *c) for c in _cells() if c[0] != 0}
+    for version in ("DEFAULT", "e1"):
+        assert triangles3(conn, version, evolving) == expected_cells
+        got = _period(conn, version, evolving)
+        assert got[2.0].tobytes() == shifted(_shape(1), SOUTH, PARENT_SHIFT).tobytes()
+        assert got[1.0].tobytes() == _shape(0).tobytes()
+
+
+def test_topology_changed_on_both_sides_is_an_object_conflict(conn: Conn, evolving: int) -> None:
+    _drop_corner_triangle(conn, "e1", evolving)
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute("DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND trglid = 5", (evolving,))
+    conn.commit()
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert conflict.regions == ()
+    assert "topology (nodes, triangles) of the topology period starting at 1.0 was changed on both sides" in (
+        conflict.region_refusal or ""
+    )
+    with pytest.raises(tgsis.UnsolvedConflictsError, match="changed on both sides"):
+        tgsis.merge_version(conn, "e1")
+    assert len(triangles3(conn, "DEFAULT", evolving)) == len(_cells()) - 1
+
+
+def test_a_geometry_instant_added_to_a_period_whose_topology_the_other_side_changed_is_refused(
+    conn: Conn, evolving: int
+) -> None:
+    _drop_corner_triangle(conn, "DEFAULT", evolving)
+    with tgsis.in_version(conn, "e1"):  # a new geometry instant of the period, with the period's (old) topology
+        conn.execute("INSERT INTO tgsis.timet VALUES (%s, 1.0, 2.5)", (evolving,))
+        conn.execute(
+            "INSERT INTO tgsis.d4dvrtx SELECT geoid, timem, 2.5, nodeid, x, y, z FROM tgsis.d4dvrtx"
+            " WHERE geoid = %s AND timet = 2.0",
+            (evolving,),
+        )
+        conn.execute(
+            "INSERT INTO evolving_cellpros SELECT _geoid, _timem, 2.5, _idx, porosity FROM evolving_cellpros"
+            " WHERE _geoid = %s AND _timet = 2.0",
+            (evolving,),
+        )
+    conn.commit()
+    before = triangles3(conn, "DEFAULT", evolving)
+    with pytest.raises(tgsis.PeriodTopologyError, match="period starting at 1.0") as caught:
+        tgsis.merge_version(conn, "e1")
+    assert caught.value.code == "TG308"
+    assert triangles3(conn, "DEFAULT", evolving) == before
+    assert sorted(_period(conn, "DEFAULT", evolving)) == [1.0, 2.0, 3.0]
