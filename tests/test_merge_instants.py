@@ -245,9 +245,7 @@ def test_overlapping_edits_at_one_instant_are_that_instants_regions(conn: Conn, 
     assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
 
 
-def test_an_instant_removed_on_one_side_and_changed_on_the_other_is_an_object_conflict(
-    conn: Conn, series: int
-) -> None:
+def test_an_instant_removed_on_one_side_and_changed_on_the_other_is_an_object_conflict(conn: Conn, series: int) -> None:
     with tgsis.in_version(conn, "e1"):
         tgsis.delete_instant(conn, series, 2.0)
     conn.commit()
@@ -376,3 +374,168 @@ def test_a_geometry_instant_added_to_a_period_whose_topology_the_other_side_chan
     assert caught.value.code == "TG308"
     assert triangles3(conn, "DEFAULT", evolving) == before
     assert sorted(_period(conn, "DEFAULT", evolving)) == [1.0, 2.0, 3.0]
+
+
+# --------------------------------------------------------------------------- Hypothesis: disjoint edits at random instants
+
+_pairs = iter(range(10**6))
+_grid_rows = st.lists(st.integers(0, SIDE - 1), min_size=1, max_size=SIDE, unique=True)
+_shift = st.tuples(*(st.floats(-50.0, 50.0, allow_nan=False, allow_subnormal=False) for _ in range(3)))
+_instants = st.lists(st.sampled_from(TIMES), min_size=1, max_size=3, unique=True)
+
+
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    child_rows=st.lists(st.integers(0, 3), min_size=1, max_size=3, unique=True),
+    parent_rows=st.lists(st.integers(7, SIDE - 1), min_size=1, max_size=4, unique=True),
+    child_cols=_grid_rows,
+    parent_cols=_grid_rows,
+    child_shift=_shift,
+    parent_shift=_shift,
+    child_times=_instants,
+    parent_times=_instants,
+)
+def test_random_disjoint_edits_at_random_instants_merge_into_exactly_the_union(
+    conn: Conn,
+    series: int,
+    child_rows: list[int],
+    parent_rows: list[int],
+    child_cols: list[int],
+    parent_cols: list[int],
+    child_shift: tuple[float, float, float],
+    parent_shift: tuple[float, float, float],
+    child_times: list[float],
+    parent_times: list[float],
+) -> None:
+    # rows 0-3 and 7-11: the one-ring margins (a row either side) never meet
+    n = next(_pairs)
+    parent, child = f"hp{n}", f"hc{n}"
+    tgsis.create_version(conn, parent)
+    conn.commit()
+    tgsis.create_version(conn, child, parent=parent)
+    conn.commit()
+    start = {t: v[1] for t, v in instants(conn, parent, series).items()}
+    child_ids = [r * SIDE + c for r in child_rows for c in child_cols]
+    parent_ids = [r * SIDE + c for r in parent_rows for c in parent_cols]
+    expected = dict(start)
+    for t in child_times:
+        move(conn, child, series, t, child_ids, child_shift)
+        expected[t] = shifted(expected[t], child_ids, child_shift)
+    for t in parent_times:
+        move(conn, parent, series, t, parent_ids, parent_shift)
+        expected[t] = shifted(expected[t], parent_ids, parent_shift)
+    result = tgsis.merge_version(conn, child)
+    assert [o.how for o in result.objects] == ["automatic"]
+    got = instants(conn, parent, series)
+    assert {t: v[1].tobytes() for t, v in got.items()} == {t: v.tobytes() for t, v in expected.items()}
+    assert all(v[2] == _cells() for v in got.values())
+
+
+# --------------------------------------------------------------------------- hostile: settings, rights, order
+
+
+@pytest.mark.parametrize("setting", ["search_path = ''", "extra_float_digits = -15"])
+def test_the_merge_per_instant_under_other_session_settings(conn: Conn, series: int, setting: str) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    conn.execute("UPDATE horizons_pros SET throw = 1.0 / 3.0 WHERE _geoid = %s AND _times = 3", (series,))
+    conn.commit()
+    conn.execute("SET " + setting)
+    conn.commit()
+    result = tgsis.merge_version(conn, "e1")
+    assert [o.how for o in result.objects] == ["automatic"]
+    conn.execute("RESET ALL")
+    conn.commit()
+    for version in ("DEFAULT", "e1"):
+        got = instants(conn, version, series)
+        expected = shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT)
+        assert got[2.0][1].tobytes() == expected.tobytes()
+        with tgsis.in_version(conn, version):
+            throw = conn.execute("SELECT throw FROM horizons_pros WHERE _geoid = %s AND _times = 3", (series,))
+            assert throw.fetchone() == (1.0 / 3.0,)
+            box = conn.execute(
+                "SELECT cube_ll_coord(bbox, 3), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s", (series,)
+            ).fetchone()
+        conn.commit()
+        everything = np.concatenate([v[1] for v in got.values()])
+        assert box == (everything[:, 2].min(), everything[:, 2].max())
+
+
+@pytest.mark.parametrize("setting", ["search_path = ''"])
+def test_the_merge_per_period_under_other_session_settings(conn: Conn, evolving: int, setting: str) -> None:
+    move3(conn, "e1", evolving, 2.0, NORTH, CHILD_SHIFT)
+    move3(conn, "DEFAULT", evolving, 3.0, SOUTH, PARENT_SHIFT)
+    conn.execute("SET " + setting)
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.execute("RESET ALL")
+    conn.commit()
+    got = _period(conn, "DEFAULT", evolving)
+    assert got[2.0].tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
+    assert got[3.0].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
+def _rows(conn: Conn) -> dict[str, list[Any]]:
+    """Every row version of the model-2 storage and the version catalog: what 'nothing written' compares."""
+    tables = [
+        str(conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (t,)).fetchone()[0])  # type: ignore[index]
+        for t in ("times", "times_vrtx", "times_trgl", "geometry")
+    ]
+    state = {t: conn.execute(f"SELECT * FROM {t} ORDER BY 1, 2, 3").fetchall() for t in tables}
+    state["versions"] = conn.execute("SELECT * FROM tgsis.versions ORDER BY 1").fetchall()
+    conn.commit()
+    return state
+
+
+def test_a_role_without_rights_on_the_class_gets_the_permission_error_and_nothing_is_written(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    with login_roles(db_dsn, {"ed": "tgsis_editor", "rita": "tgsis_reader"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.horizons FROM tgsis_editor")
+        conn.commit()
+        before = _rows(conn)
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.merge_version(made.connect("rita"), "e1")
+        assert _rows(conn) == before
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.merge_version(made.connect("ed"), "e1")
+        assert _rows(conn) == before
+        conn.execute("REVOKE SELECT ON public.horizons FROM tgsis_reader")  # regions of a class it may not read
+        conn.commit()
+        tgsis.find_conflicts(conn, "e1")
+        rita = made.connect("rita")
+        assert rita.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+        rita.rollback()
+
+
+@pytest.mark.parametrize("order", ["merge", "refresh, merge", "refresh, refresh, merge"])
+def test_any_order_of_merge_and_refresh_gives_the_same_state(conn: Conn, order: str) -> None:
+    series = make_series(conn)
+    new = tgsis.Surface(_shape(7), curved_surface().cells, vertex_properties={"porosity": _porosity()})
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    with tgsis.in_version(conn, "e1"):
+        tgsis.add_instant(conn, "horizons", series, 4.0, new, {"throw": 44.0})
+    conn.commit()
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 1.0, MIDDLE, PARENT_SHIFT)
+    for step in order.split(", "):
+        (tgsis.merge_version if step == "merge" else tgsis.refresh_version)(conn, "e1")
+    expected = {
+        1.0: shifted(_shape(0), MIDDLE, PARENT_SHIFT),
+        2.0: shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT),
+        3.0: _shape(2),
+        4.0: _shape(7),
+    }
+    for version in ("DEFAULT", "e1"):
+        got = instants(conn, version, series)
+        assert {t: v[1].tobytes() for t, v in got.items()} == {t: v.tobytes() for t, v in expected.items()}
+        assert all(v[2] == _cells() for v in got.values())
+    assert tgsis.find_conflicts(conn, "e1") == []

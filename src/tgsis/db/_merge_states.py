@@ -729,14 +729,20 @@ def _instant_rows(
         return {}
     keys = SLICE_KEYS[fc.time_model]
     conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
-    rows = conn.execute(
-        sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
-            sql.SQL(", ").join(sql.Identifier(k) for k in keys),
-            sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(p.name)) for p in fc.instant_properties),
-            fc.qualified(fc.protable),
-        ),
-        (geoid,),
-    ).fetchall()
+    digits = conn.execute("SELECT current_setting('extra_float_digits')").fetchone()
+    conn.execute("SELECT set_config('extra_float_digits', '3', true)")  # floats as text, exactly
+    try:
+        rows = conn.execute(
+            sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
+                sql.SQL(", ").join(sql.Identifier(k) for k in keys),
+                sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(p.name)) for p in fc.instant_properties),
+                fc.qualified(fc.protable),
+            ),
+            (geoid,),
+        ).fetchall()
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            conn.execute("SELECT set_config('extra_float_digits', %s, true)", (str(digits[0] if digits else "1"),))
     return {tuple(float(v) for v in r[: len(keys)]): tuple(r[len(keys) :]) for r in rows}
 
 
