@@ -37,7 +37,8 @@ PARENT_SHIFT = (-1.1, 0.0, -2.9)
 
 def _shape(i: int) -> np.ndarray:
     """The curved grid, a little other at each instant (full mantissas)."""
-    return curved_surface().vertices + np.array([0.0, 0.0, 1.0 / 3.0]) * (i + 1)
+    shape: np.ndarray = curved_surface().vertices + np.array([0.0, 0.0, 1.0 / 3.0]) * (i + 1)
+    return shape
 
 
 def _porosity() -> np.ndarray:
@@ -243,6 +244,40 @@ def test_overlapping_edits_at_one_instant_are_that_instants_regions(conn: Conn, 
     got = instants(conn, "DEFAULT", series)
     assert got[2.0][1].tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
     assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
+def test_all_regions_of_the_instants_solved_at_once_by_average(conn: Conn, series: int) -> None:
+    for t in (1.0, 3.0):
+        move(conn, "e1", series, t, NORTH, CHILD_SHIFT)
+        move(conn, "DEFAULT", series, t, NORTH, PARENT_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert [(r.region, r.times, r.conflict) for r in conflict.regions] == [(0, 1.0, True), (1, 3.0, True)]
+    resolution = tgsis.resolve_all_regions(conn, "e1", series, "average")
+    assert [r.region for r in resolution.regions] == [0, 1]
+    assert [(t.side, t.vertices, t.regions) for t in resolution.totals] == [
+        ("parent", 2 * len(NORTH), (0, 1)),
+        ("child", 2 * len(NORTH), (0, 1)),
+    ]
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    for i, t in ((0, 1.0), (2, 3.0)):
+        expected = _shape(i).copy()
+        p, c = shifted(_shape(i), NORTH, PARENT_SHIFT), shifted(_shape(i), NORTH, CHILD_SHIFT)
+        expected[NORTH] = 0.5 * p[NORTH] + 0.5 * c[NORTH]
+        assert got[t][1].tobytes() == expected.tobytes()
+    assert got[2.0][1].tobytes() == _shape(1).tobytes()
+
+
+def test_a_region_solution_is_stale_once_its_instant_changes(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH, PARENT_SHIFT)
+    tgsis.find_conflicts(conn, "e1")
+    tgsis.resolve_region(conn, "e1", series, 0, "parent")
+    move(conn, "e1", series, 2.0, [100], CHILD_SHIFT)
+    with pytest.raises(tgsis.RegionSolutionError, match="found on a state that changed since"):
+        tgsis.resolve_region(conn, "e1", series, 0, "child")
+    with pytest.raises(tgsis.UnsolvedConflictsError):
+        tgsis.merge_version(conn, "e1")
 
 
 def test_an_instant_removed_on_one_side_and_changed_on_the_other_is_an_object_conflict(conn: Conn, series: int) -> None:
