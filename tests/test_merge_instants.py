@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface
+from tgsis import formats
 from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
@@ -280,6 +281,48 @@ def test_a_region_solution_is_stale_once_its_instant_changes(conn: Conn, series:
         tgsis.merge_version(conn, "e1")
 
 
+def test_json_export_and_the_command_line_name_the_instant(
+    conn: Conn, series: int, tmp_path: Any, db_dsn: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from tgsis.cli import main
+
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    [listed] = data["conflicts"]
+    assert [(r["region"], r["times"], r["conflict"]) for r in listed["conflict_regions"]] == [
+        (0, 2.0, True),
+        (1, 3.0, False),
+    ]
+    assert all("timem" not in r for r in listed["conflict_regions"])
+    files = tgsis.export_conflict(conn, "e1", series, tmp_path, picture=False)
+    names = sorted(f.name for f in files)
+    assert names == sorted(
+        [f"{series}_regions.json"]
+        + [f"{series}_t2.0_{side}{end}" for side in ("base", "parent", "child") for end in (".ts", "_cells.csv")]
+    ), names
+    regions = json.loads((tmp_path / f"{series}_regions.json").read_text())
+    assert [(s["times"], [r["index"] for r in s["regions"]]) for s in regions["slices"]] == [(2.0, [0]), (3.0, [1])]
+    [child] = formats.read([f for f in files if f.name.endswith("_child.ts")][0])
+    ids = np.asarray(child.vertex_properties["vrtxid"], dtype=np.int64)
+    assert child.vertices[np.argsort(ids)].tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
+    with pytest.raises(tgsis.InvalidInputError, match="merges slice by slice"):
+        tgsis.object_merge(conn, "e1", series)
+    conn.rollback()
+    assert (
+        main(["--dsn", db_dsn, "version", "resolve", "e1", str(series), "child", "--region", "0", "--discard-other"])
+        == 0
+    )
+    assert main(["--dsn", db_dsn, "version", "merge", "e1"]) == 0
+    got = instants(conn, "DEFAULT", series)
+    assert got[2.0][1].tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
+    assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
 def test_an_instant_removed_on_one_side_and_changed_on_the_other_is_an_object_conflict(conn: Conn, series: int) -> None:
     with tgsis.in_version(conn, "e1"):
         tgsis.delete_instant(conn, series, 2.0)
@@ -293,6 +336,35 @@ def test_an_instant_removed_on_one_side_and_changed_on_the_other_is_an_object_co
         tgsis.merge_version(conn, "e1")
     after = instants(conn, "DEFAULT", series)
     assert {t: v[1].tobytes() for t, v in before.items()} == {t: v[1].tobytes() for t, v in after.items()}
+
+
+def test_the_same_edit_on_both_sides_merges(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "e1", series, 3.0, SOUTH, PARENT_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert [(r.times, r.changed_by, r.conflict) for r in conflict.regions] == [
+        (2.0, "both", False),
+        (3.0, "child", False),
+    ]
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    assert got[2.0][1].tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
+    assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
+def test_a_per_instant_property_changed_on_both_sides_is_an_object_conflict(conn: Conn, series: int) -> None:
+    for version, throw in (("e1", 21.0), ("DEFAULT", 22.0)):
+        with tgsis.in_version(conn, version):
+            conn.execute("UPDATE horizons_pros SET throw = %s WHERE _geoid = %s AND _times = 2", (throw, series))
+        conn.commit()
+    move(conn, "e1", series, 1.0, NORTH, CHILD_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert "per-instant feature properties (throw) of instant 2.0 were changed on both sides" in (
+        conflict.region_refusal or ""
+    )
+    with pytest.raises(tgsis.UnsolvedConflictsError, match=r"\(throw\) of instant 2\.0"):
+        tgsis.merge_version(conn, "e1")
 
 
 def test_an_instant_removed_on_one_side_only_is_removed(conn: Conn, series: int) -> None:

@@ -74,12 +74,15 @@ class SlicedState:
         The per-instant feature property row of each instant that has one.
     name : str
         The object, as messages name it.
+    instant_columns : tuple of str
+        The names of the per-instant feature properties (the columns of ``instant_rows``).
     """
 
     kind: Kind
     slices: Mapping[SliceKey, MeshState]
     instant_rows: Mapping[SliceKey, InstantRow]
     name: str
+    instant_columns: tuple[str, ...] = ()
 
     def periods(self) -> dict[float, list[SliceKey]]:
         """Model 3: each period's geometry instants (slice keys, ascending)."""
@@ -214,8 +217,10 @@ def _merge_rows(
                     merged.append(pv)
                     both.append(i)
             if both:
+                columns = base.instant_columns
+                named = [columns[i] if i < len(columns) else f"column {i + 1}" for i in both]
                 raise InvalidInputError(
-                    f"{name}: per-instant feature properties (columns {', '.join(str(i + 1) for i in both)}) of "
+                    f"{name}: per-instant feature properties ({', '.join(named)}) of "
                     f"{slice_text(kind, key)} were changed on both sides to other values",
                     hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )

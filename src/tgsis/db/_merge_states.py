@@ -718,7 +718,13 @@ def _sliced_state(
             f"feature {geoid} ({side}, {slice_text(fc.time_model, key)})",
         )
     kind: Literal["INSTANTS", "EVOLVING"] = "EVOLVING" if evolving else "INSTANTS"
-    return SlicedState(kind, slices, dict(instant_rows), f"feature {geoid} of class {fc.name}")
+    return SlicedState(
+        kind,
+        slices,
+        dict(instant_rows),
+        f"feature {geoid} of class {fc.name}",
+        tuple(p.name for p in fc.instant_properties),
+    )
 
 
 def _instant_rows(

@@ -154,6 +154,14 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
         The role may not read the class or the version.
     """
     with reraise(), _snapshot(conn, version):
+        model = feature_time_model(conn, version, feature_id)
+        if model in SLICE_KEYS:
+            raise InvalidInputError(
+                f"feature {feature_id} is of model {model}: it merges slice by slice (per instant, or per geometry "
+                f"instant of a topology period), not as one mesh (version {show_name(version)})",
+                hint="tgsis.find_conflicts lists its regions, each with its slice (times, timem); "
+                "tgsis.export_conflict writes each slice's states",
+            )
         states = read_merge_states(conn, version, feature_id).states
     return three_way_merge(states["base"], states["parent"], states["child"])
 
@@ -339,6 +347,10 @@ def export_conflict(
 
         require("matplotlib", "the picture of tgsis.export_conflict")
     with reraise(), _snapshot(conn, version):
+        sliced = feature_time_model(conn, version, feature_id) in SLICE_KEYS
+    if sliced:  # models 2 and 3: the files of each slice that has regions
+        return _export_sliced(conn, version, feature_id, Path(folder), format, picture, overwrite)
+    with reraise(), _snapshot(conn, version):
         merge = object_merge(conn, version, feature_id)
         _, parent, *_ = version_row(conn, version)
         name, metadata = _looks(conn, version, parent, feature_id)
@@ -403,6 +415,114 @@ def export_conflict(
         return _move_into(scratch, target, names, overwrite)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _slice_tag(key: tuple[float, ...]) -> str:
+    """A slice in a file name: ``t2.5`` (an instant), ``m1.0_t2.5`` (a geometry instant of a period)."""
+    tag = f"m{key[0]!r}_t{key[1]!r}" if len(key) == 2 else f"t{key[0]!r}"
+    return re.sub(r"[^A-Za-z0-9.+-]+", "_", tag)
+
+
+def _export_sliced(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    target: Path,
+    format: str | None,
+    picture: bool,
+    overwrite: bool,
+) -> list[Path]:
+    """:func:`export_conflict` of a model-2/3 feature: the three states of each slice with regions, named by slice.
+
+    The slices written are those with a conflicting region (all the merged
+    slices when none conflicts); the regions file lists each slice's
+    regions under its ``times`` (and ``timem``), numbered in the object.
+    """
+    from tgsis import formats
+
+    with reraise(), _snapshot(conn, version):
+        states = read_sliced_states(conn, version, feature_id).states
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
+        row = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+        recorded = sliced_recorded_solutions(conn, version, "feature", str(feature_id), merge) or {}
+    name = None if row is None or row[0] is None else str(row[0])
+    ext = (format or "ts").lower().lstrip(".")
+    try:
+        kind = formats.format_for(f"x.{ext}")
+    except Exception as exc:  # FileFormatError: unknown extension
+        raise InvalidInputError(f"no file format has the extension {ext!r}", hint="give ts, vtu, vtp or ply") from exc
+    if Geotype.SURFACE not in kind.geotypes or kind.writer is None:
+        raise InvalidInputError(
+            f"{kind.name} files (.{ext}) do not store surfaces (feature {feature_id})", hint="give ts, vtu, vtp or ply"
+        )
+    conflicting = sorted({r.key for r in merge.conflicts}) or sorted(merge.merges)
+    stem = _file_stem(feature_id, name)
+    sidecar = kind.name in _GOCAD_FORMATS
+    files: list[tuple[tuple[float, ...] | None, str, str]] = []  # (slice, what, file name)
+    for chosen in conflicting:
+        tag = _slice_tag(chosen)
+        for side in _SIDES:
+            files.append((chosen, side, f"{stem}_{tag}_{side}.{ext}"))
+            if sidecar:
+                files.append((chosen, f"{side} cells", f"{stem}_{tag}_{side}_cells.csv"))
+        if picture:
+            files.append((chosen, "picture", f"{stem}_{tag}_overlay.png"))
+    files.append((None, "regions", f"{feature_id}_regions.json"))
+    names = [n for _, _, n in files]
+    if not overwrite:
+        _refuse_existing(target, names)
+    target.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=".tgsis-export-", dir=target))
+    slices_json = []
+    for merged_key in sorted(merge.merges):
+        number = {r.region.index: r.index for r in merge.regions if r.key == merged_key}
+        regions = merge_regions_json(merge.merges[merged_key])["regions"]
+        for r in regions:
+            r["index"] = number[r["index"]]
+        slices_json.append({**_slice_json(merged_key), "regions": regions})
+    try:
+        meshes: dict[tuple[tuple[float, ...], str], Mesh] = {}
+        for key, what, file in files:
+            if key is None:
+                document = {
+                    "merges_by_region": True,
+                    "merges_by_itself": not merge.conflicts,
+                    "slices": slices_json,
+                }
+                (scratch / file).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
+                continue
+            mm = merge.merges[key]
+            if what in _SIDES:
+                mesh = _state_mesh(getattr(mm, what), "trglid", name, {})
+                meshes[(key, what)] = mesh
+                formats.write(
+                    mesh, scratch / file, format=kind.name, **({"drop_cell_properties": True} if sidecar else {})
+                )
+            elif what.endswith(" cells"):
+                _write_cells_csv(meshes[(key, what.split()[0])], scratch / file)
+            else:
+                from tgsis import pictures
+
+                local = {
+                    r.region.index: recorded[r.index] for r in merge.regions if r.key == key and r.index in recorded
+                }
+                pictures.conflict_overlay(
+                    mm,
+                    meshes[(key, "base")],
+                    meshes[(key, "parent")],
+                    meshes[(key, "child")],
+                    scratch / file,
+                    title=f"feature {feature_id}{f' {name}' if name else ''} in {show_name(version)}, "
+                    f"{slice_text(merge.base.kind, key)}: base, parent, child",
+                    solutions=local,
+                )
+        return _move_into(scratch, target, names, overwrite)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _slice_json(key: tuple[float, ...]) -> dict[str, float]:
+    return {"times": key[1], "timem": key[0]} if len(key) == 2 else {"times": key[0]}
 
 
 def _write_cells_csv(mesh: Mesh, path: Path) -> None:
