@@ -424,6 +424,26 @@ def test_disjoint_position_edits_at_several_geometry_instants_merge(conn: Conn, 
     assert got[3.0].tobytes() == shifted(shifted(_shape(2), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT).tobytes()
 
 
+def test_a_period_appended_on_one_side_and_positions_moved_on_the_other_merge(conn: Conn, evolving: int) -> None:
+    last = _shape(2)
+    period = TopologyPeriod(
+        np.asarray([3.0, 4.5]),
+        curved_surface().cells,
+        np.stack([last, last + np.array([0.0, 0.0, 0.1])]),
+        vertex_properties={"porosity": np.stack([_porosity()] * 2)},
+    )
+    with tgsis.in_version(conn, "e1"):
+        tgsis.append_period(conn, "evolving", evolving, period)
+    conn.commit()
+    move3(conn, "DEFAULT", evolving, 2.0, SOUTH, PARENT_SHIFT)
+    tgsis.merge_version(conn, "e1")
+    got = geometry_instants(conn, "DEFAULT", evolving)
+    assert sorted(got) == [(1.0, 1.0), (1.0, 2.0), (1.0, 3.0), (3.0, 3.0), (3.0, 4.5)]
+    assert got[(1.0, 2.0)].tobytes() == shifted(_shape(1), SOUTH, PARENT_SHIFT).tobytes()
+    assert got[(3.0, 4.5)].tobytes() == (last + np.array([0.0, 0.0, 0.1])).tobytes()
+    assert len(triangles3(conn, "DEFAULT", evolving)) == 2 * len(_cells())
+
+
 def _drop_corner_triangle(conn: Conn, version: str, geoid: int) -> None:
     """A topology edit of the period: the first triangle (0, 1, SIDE + 1) removed, at every geometry instant."""
     with tgsis.in_version(conn, version):
