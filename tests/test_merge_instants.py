@@ -367,6 +367,34 @@ def test_a_per_instant_property_changed_on_both_sides_is_an_object_conflict(conn
         tgsis.merge_version(conn, "e1")
 
 
+def test_the_sides_read_from_the_storage_rows_are_the_states_the_views_show(conn: Conn, series: int) -> None:
+    from tgsis.db._merge_states import read_sliced_states
+
+    new = tgsis.Surface(_shape(7), curved_surface().cells, vertex_properties={"porosity": _porosity()})
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    with tgsis.in_version(conn, "e1"):
+        tgsis.add_instant(conn, "horizons", series, 4.0, new, {"throw": 44.0})
+        tgsis.delete_instant(conn, series, 1.0)
+        conn.execute("DELETE FROM tgsis.times_trgl WHERE geoid = %s AND times = 3 AND trglid = 0", (series,))
+    conn.commit()
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)  # twice: a row version closed by the same side
+    with conn.transaction():
+        conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+        states = read_sliced_states(conn, "e1", series).states
+    for side, version in (("parent", "DEFAULT"), ("child", "e1")):
+        seen = instants(conn, version, series)
+        state = states[side]
+        assert sorted(k[0] for k in state.slices) == sorted(seen)
+        for (t,), mesh in state.slices.items():
+            ids, xyz, cells = seen[t]
+            np.testing.assert_array_equal(mesh.vertex_ids, ids)
+            assert mesh.vertices.tobytes() == xyz.tobytes()
+            assert {(int(i), *map(int, c)) for i, c in zip(mesh.cell_ids, mesh.cells)} == cells
+    assert sorted(k[0] for k in states["base"].slices) == list(TIMES)
+    assert states["child"].instant_rows[(4.0,)] == ("44",)
+
+
 def test_an_instant_removed_on_one_side_only_is_removed(conn: Conn, series: int) -> None:
     with tgsis.in_version(conn, "e1"):
         tgsis.delete_instant(conn, series, 2.0)

@@ -371,8 +371,8 @@ def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, n
 
 # --------------------------------------------------------------------------- models 2 and 3: slice by slice
 
-#: the time key columns of a model's tables (tgsis's) and of the class's property tables (the registry's timekey)
-_TIME_COLUMNS = {"INSTANTS": (("times",), ("_times",)), "EVOLVING": (("timem", "timet"), ("_timem", "_timet"))}
+#: the time key columns of the class's property tables (the registry's ``timekey``)
+_PROPERTY_TIME_KEYS = {"INSTANTS": ("_times",), "EVOLVING": ("_timem", "_timet")}
 
 
 @dataclass(frozen=True)
@@ -390,7 +390,7 @@ def _slice_rows(fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState])
     """The rows of every model-2/3 table a state's slices make, in the order they are inserted."""
     keys = sorted(slices)
     evolving = fc.time_model == "EVOLVING"
-    tcols, pcols = _TIME_COLUMNS[fc.time_model]
+    pcols = _PROPERTY_TIME_KEYS[fc.time_model]
     f8, i8 = "float8", "int8"
 
     def times(column: int, counts: list[int], of: list[tuple[float, ...]]) -> npt.NDArray[np.float64]:
@@ -506,7 +506,6 @@ def _slice_rows(fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState])
                 tuple(columns),
             )
         )
-    del tcols  # (the model's own time columns are named in the tables above)
     return tables
 
 
@@ -591,7 +590,7 @@ def _write_instant_rows(
     """The per-instant feature property rows (``<class>_pros``, few rows of any column type, as text); rows written."""
     if not fc.instant_properties or fc.protable is None:
         return 0
-    keys = _TIME_COLUMNS[fc.time_model][1]
+    keys = _PROPERTY_TIME_KEYS[fc.time_model]
     names = [p.name for p in fc.instant_properties]
     table = fc.qualified(fc.protable)
     where = sql.SQL(" AND ").join(sql.SQL("{} = %s").format(sql.Identifier(k)) for k in ("_geoid", *keys))
