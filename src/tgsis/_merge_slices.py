@@ -404,6 +404,5 @@ def check_periods(name: str, slices: Mapping[SliceKey, MeshState]) -> None:
                 f"{name}: merged instant by instant, the topology period starting at {key[0]!r} would have other "
                 f"nodes or triangles at its geometry instant {key[1]!r} than at {seen[0][1]!r}: a period has one "
                 "topology",
-                hint="solve the object as a whole (tgsis.resolve_conflict: parent, child or manual), or the regions "
-                "of the period's instants with the same solution",
+                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
             )

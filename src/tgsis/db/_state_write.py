@@ -572,7 +572,7 @@ def _write_table_difference(
             if np.isnan(chosen).any():
                 raise InvalidInputError(
                     f"feature {geoid}: {new.table}.{name} has no value for some merged rows: they cannot be written",
-                    hint="solve the object as a whole (tgsis.resolve_conflict)",
+                    hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )
             chosen = chosen.astype(np.int64)
         columns.append((name, chosen, wire))

@@ -159,8 +159,8 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
             raise InvalidInputError(
                 f"feature {feature_id} is of model {model}: it merges slice by slice (per instant, or per geometry "
                 f"instant of a topology period), not as one mesh (version {show_name(version)})",
-                hint="tgsis.find_conflicts lists its regions, each with its slice (times, timem); "
-                "tgsis.export_conflict writes each slice's states",
+                hint=f"its regions, each with its slice: tgsis.find_conflicts(conn, {version!r}) finds and records "
+                f"them (tgsis version conflicts {version})",
             )
         states = read_merge_states(conn, version, feature_id).states
     return three_way_merge(states["base"], states["parent"], states["child"])
