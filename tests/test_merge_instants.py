@@ -472,6 +472,26 @@ def test_a_period_appended_on_one_side_and_positions_moved_on_the_other_merge(co
     assert len(triangles3(conn, "DEFAULT", evolving)) == 2 * len(_cells())
 
 
+def test_overlapping_position_edits_at_one_geometry_instant_are_its_regions(conn: Conn, evolving: int) -> None:
+    move3(conn, "e1", evolving, 2.0, NORTH, CHILD_SHIFT)
+    move3(conn, "DEFAULT", evolving, 2.0, NORTH, PARENT_SHIFT)
+    move3(conn, "e1", evolving, 3.0, SOUTH, CHILD_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert [(r.region, r.timem, r.times, r.conflict) for r in conflict.regions] == [
+        (0, 1.0, 2.0, True),
+        (1, 1.0, 3.0, False),
+    ]
+    stored = conn.execute("SELECT region, timem, times FROM tgsis.conflict_regions ORDER BY region").fetchall()
+    assert stored == [(0, 1.0, 2.0), (1, 1.0, 3.0)]
+    conn.commit()
+    resolution = tgsis.resolve_region(conn, "e1", evolving, 0, "base")
+    assert sorted((d.side, d.vertices) for d in resolution.discards) == [("child", len(NORTH)), ("parent", len(NORTH))]
+    tgsis.merge_version(conn, "e1")
+    got = _period(conn, "DEFAULT", evolving)
+    assert got[2.0].tobytes() == _shape(1).tobytes()
+    assert got[3.0].tobytes() == shifted(_shape(2), SOUTH, CHILD_SHIFT).tobytes()
+
+
 def _drop_corner_triangle(conn: Conn, version: str, geoid: int) -> None:
     """A topology edit of the period: the first triangle (0, 1, SIDE + 1) removed, at every geometry instant."""
     with tgsis.in_version(conn, version):
