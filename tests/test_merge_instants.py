@@ -269,6 +269,32 @@ def test_all_regions_of_the_instants_solved_at_once_by_average(conn: Conn, serie
     assert got[2.0][1].tobytes() == _shape(1).tobytes()
 
 
+def test_a_manual_mesh_solves_a_region_of_an_instant(conn: Conn, series: int) -> None:
+    import dataclasses
+
+    from tgsis.db._merge_states import read_sliced_states
+
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    tgsis.find_conflicts(conn, "e1")
+    with conn.transaction():
+        conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+        child = read_sliced_states(conn, "e1", series).states["child"].slices[(2.0,)]
+    vertices = child.vertices.copy()
+    vertices[NORTH, 2] = 99.5
+    resolution = tgsis.resolve_region(conn, "e1", series, 0, "manual", dataclasses.replace(child, vertices=vertices))
+    assert resolution.region.solution == "manual" and resolution.region.times == 2.0
+    with pytest.raises(tgsis.RegionSolutionError, match="not a conflict"):
+        tgsis.resolve_region(conn, "e1", series, 1, "child")
+    tgsis.merge_version(conn, "e1")
+    got = instants(conn, "DEFAULT", series)
+    expected = _shape(1).copy()
+    expected[NORTH, 2] = 99.5
+    assert got[2.0][1][:, 2].tobytes() == expected[:, 2].tobytes()
+    assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
+
+
 def test_a_region_solution_is_stale_once_its_instant_changes(conn: Conn, series: int) -> None:
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", series, 2.0, NORTH, PARENT_SHIFT)
