@@ -740,3 +740,20 @@ def test_any_order_of_merge_and_refresh_gives_the_same_state(conn: Conn, order: 
         assert {t: v[1].tobytes() for t, v in got.items()} == {t: v.tobytes() for t, v in expected.items()}
         assert all(v[2] == _cells() for v in got.values())
     assert tgsis.find_conflicts(conn, "e1") == []
+
+
+def test_a_writer_of_an_instant_in_the_version_during_the_merge(conn: Conn, series: int, db_dsn: str) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    writer = connect(db_dsn, "writer")
+    tgsis.goto_version(writer, "e1")
+    writer.execute("UPDATE tgsis.times_vrtx SET z = z + 1.5 WHERE geoid = %s AND times = 2 AND vrtxid = 70", (series,))
+    merger = Background(db_dsn, "merger", lambda c: tgsis.merge_version(c, "e1"))
+    wait_until_blocked(conn, merger.pid, writer.info.backend_pid)  # the merge waits for the writer
+    writer.commit()
+    writer.close()
+    merger.finish()
+    expected = shifted(shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT), [70], (0.0, 0.0, 1.5))
+    assert instants(conn, "DEFAULT", series)[2.0][1].tobytes() == expected.tobytes()
