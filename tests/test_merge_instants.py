@@ -379,6 +379,22 @@ def test_the_same_edit_on_both_sides_merges(conn: Conn, series: int) -> None:
     assert got[3.0][1].tobytes() == shifted(_shape(2), SOUTH, PARENT_SHIFT).tobytes()
 
 
+def test_a_property_row_removed_on_one_side_stays_removed(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    conn.execute("DELETE FROM horizons_cellpros WHERE _geoid = %s AND _times = 2 AND _idx = 100", (series,))
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            rows = conn.execute(
+                "SELECT _idx, porosity FROM horizons_cellpros WHERE _geoid = %s AND _times = 2 ORDER BY _idx",
+                (series,),
+            ).fetchall()
+        conn.commit()
+        assert [r[0] for r in rows] == [i for i in range(SIDE * SIDE) if i != 100]
+        assert np.array([r[1] for r in rows]).tobytes() == np.delete(_porosity(), 100).tobytes()
+
+
 def test_a_per_instant_property_changed_on_both_sides_is_an_object_conflict(conn: Conn, series: int) -> None:
     for version, throw in (("e1", 21.0), ("DEFAULT", 22.0)):
         with tgsis.in_version(conn, version):

@@ -561,6 +561,8 @@ def _write_table_difference(
             ).rowcount,
             0,
         )
+    if new.objectkey == "_geoid":  # a property row whose values are all NaN had none where it comes from: none
+        fresh = fresh[~_without_row([np.asarray(v) for _, _, v in new.values], fresh)]
     if not len(fresh):
         return deleted, 0
     columns: list[tuple[str, npt.ArrayLike, str]] = [
