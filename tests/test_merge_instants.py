@@ -773,3 +773,23 @@ def test_a_writer_of_an_instant_in_the_version_during_the_merge(conn: Conn, seri
     merger.finish()
     expected = shifted(shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT), [70], (0.0, 0.0, 1.5))
     assert instants(conn, "DEFAULT", series)[2.0][1].tobytes() == expected.tobytes()
+
+
+def test_a_role_that_may_read_the_views_but_not_the_storage_finds_the_same_regions(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    [owner] = tgsis.find_conflicts(conn, "e1")
+    conn.execute("REVOKE SELECT ON public.horizons_cellpros_ver FROM tgsis_reader")
+    conn.commit()
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
+        rita = made.connect("rita")
+        [seen] = tgsis.find_conflicts(rita, "e1")
+        rita.rollback()
+    assert seen.region_refusal is None
+    assert [r.as_json() for r in seen.regions] == [r.as_json() for r in owner.regions]
+    assert [r.times for r in seen.regions] == [2.0, 3.0]
