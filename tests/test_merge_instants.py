@@ -325,6 +325,8 @@ def test_json_export_and_the_command_line_name_the_instant(
         (1, 3.0, False),
     ]
     assert all("timem" not in r for r in listed["conflict_regions"])
+    assert main(["--dsn", db_dsn, "version", "conflicts", "e1", "--regions"]) == 0
+    assert "by instant: 2 regions at 2 instant(s) (2, 3); --json lists them" in capsys.readouterr().out
     files = tgsis.export_conflict(conn, "e1", series, tmp_path, picture=False)
     names = sorted(f.name for f in files)
     assert names == sorted(
