@@ -795,3 +795,57 @@ def test_a_role_that_may_read_the_views_but_not_the_storage_finds_the_same_regio
     assert seen.region_refusal is None
     assert [r.as_json() for r in seen.regions] == [r.as_json() for r in owner.regions]
     assert [r.times for r in seen.regions] == [2.0, 3.0]
+
+
+def _two_periods(conn: Conn) -> int:
+    """The evolving surface with a second period (3.0 to 4.5) appended in DEFAULT before e1 is made."""
+    tgsis.create_feature_class(
+        conn, "evolving", "SURFACE", time_model="EVOLVING", cell_properties=[("porosity", "float8")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    last = _shape(2)
+    periods = [
+        TopologyPeriod(
+            np.asarray(TIMES),
+            curved_surface().cells,
+            np.stack([_shape(i) for i in range(3)]),
+            vertex_properties={"porosity": np.stack([_porosity()] * 3)},
+        ),
+        TopologyPeriod(
+            np.asarray([3.0, 4.5]),
+            curved_surface().cells,
+            np.stack([last, last + np.array([0.0, 0.0, 0.1])]),
+            vertex_properties={"porosity": np.stack([_porosity()] * 2)},
+        ),
+    ]
+    geoid = tgsis.insert_feature(conn, "evolving", EvolvingSurface(periods, name="evolving fault"))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def test_a_period_removed_on_one_side_and_positions_moved_in_another_merge(conn: Conn) -> None:
+    geoid = _two_periods(conn)
+    with tgsis.in_version(conn, "e1"):
+        assert tgsis.delete_period(conn, geoid, 3.0)
+    conn.commit()
+    move3(conn, "DEFAULT", geoid, 2.0, SOUTH, PARENT_SHIFT)
+    tgsis.merge_version(conn, "e1")
+    got = geometry_instants(conn, "DEFAULT", geoid)
+    assert sorted(got) == [(1.0, 1.0), (1.0, 2.0), (1.0, 3.0)]
+    assert got[(1.0, 2.0)].tobytes() == shifted(_shape(1), SOUTH, PARENT_SHIFT).tobytes()
+    assert {m for m, *_ in triangles3(conn, "DEFAULT", geoid)} == {1.0}
+
+
+def test_a_period_removed_on_one_side_and_changed_on_the_other_is_an_object_conflict(conn: Conn) -> None:
+    geoid = _two_periods(conn)
+    with tgsis.in_version(conn, "e1"):
+        assert tgsis.delete_period(conn, geoid, 3.0)
+    conn.commit()
+    move3(conn, "DEFAULT", geoid, 4.5, SOUTH + SIDE * SIDE, PARENT_SHIFT)  # (the period's nodes are numbered on)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert "the topology period starting at 3.0 was removed in the version and changed in the parent" in (
+        conflict.region_refusal or ""
+    )
+    with pytest.raises(tgsis.UnsolvedConflictsError, match="period starting at 3.0 was removed"):
+        tgsis.merge_version(conn, "e1")
