@@ -664,12 +664,22 @@ def _read_sliced_rows(
     return out
 
 
-def _slice_mask(columns: list[npt.NDArray[Any]], key: tuple[float, ...]) -> npt.NDArray[np.bool_]:
-    """The rows whose first ``len(key)`` columns (after the object key) are the slice key."""
-    mask = np.ones(len(np.asarray(columns[0])), dtype=bool)
-    for c, value in zip(columns[1 : 1 + len(key)], key, strict=False):
-        mask &= np.asarray(c, dtype=np.float64) == value
-    return mask
+def _slice_rows(columns: list[npt.NDArray[Any]], width: int) -> dict[tuple[float, ...], npt.NDArray[np.intp]]:
+    """The rows of each slice: the positions whose first ``width`` columns (after the object key) are its key.
+
+    One sort of the rows by their key (not a scan per slice): the cost
+    stays that of the rows however many instants an object has.
+    """
+    keys = [np.asarray(c, dtype=np.float64) + 0.0 for c in columns[1 : 1 + width]]
+    if not len(keys[0]):
+        return {}
+    order = np.lexsort(keys[::-1])
+    sorted_keys = np.stack([k[order] for k in keys], axis=1)
+    starts = np.flatnonzero(np.concatenate([[True], np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)]))
+    ends = np.append(starts[1:], len(order))
+    return {
+        tuple(float(v) for v in sorted_keys[a]): np.sort(order[a:b]) for a, b in zip(starts.tolist(), ends.tolist())
+    }
 
 
 def _sliced_state(
@@ -688,9 +698,13 @@ def _sliced_state(
         {tuple(float(v) for v in row) for row in zip(*(np.asarray(c).tolist() for c in keys_cols[1 : 1 + width]))}
     )
     slices: dict[tuple[float, ...], MeshState] = {}
+    none = np.zeros(0, dtype=np.intp)
+    vertex_rows = _slice_rows(vertex_cols, width)
+    cell_rows = _slice_rows(cell_cols, 1)  # model 3: the period's triangles; model 2: the instant's
+    prop_rows = [_slice_rows(columns, width) for columns in prop_cols]
     for key in keys:
-        at_v = _slice_mask(vertex_cols, key)
-        at_c = _slice_mask(cell_cols, key[:1])  # model 3: the period's triangles; model 2: the instant's
+        at_v = vertex_rows.get(key, none)
+        at_c = cell_rows.get(key[:1], none)
         first_v, first_c = 1 + width, 1 + (1 if evolving else width)
         vids, xyz = _sorted_rows(
             np.asarray(vertex_cols[first_v])[at_v],
@@ -701,8 +715,8 @@ def _sliced_state(
             np.stack([np.asarray(cell_cols[first_c + i])[at_c] for i in (1, 2, 3)], axis=1),
         )
         props_by: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
-        for (alignment, names), columns in zip(properties, prop_cols, strict=True):
-            at = _slice_mask(columns, key)
+        for (alignment, names), columns, rows in zip(properties, prop_cols, prop_rows, strict=True):
+            at = rows.get(key, none)
             ids = vids if alignment == "VERTEX" else cids
             idx = np.asarray(columns[1 + width], dtype=np.int64)[at]
             for i, name in enumerate(names):
