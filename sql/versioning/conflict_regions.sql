@@ -7,7 +7,11 @@
 -- holds for the states it was found on, and tgsis.find_conflicts removes the
 -- regions of an object either side changed again (their marks are stale).
 -- A region changed on one side only, or on both alike, merges by itself
--- ('automatic'); the others need a solution (tgsis.resolve_region). Rows are
+-- ('automatic'); the others need a solution (tgsis.resolve_region). A
+-- surface at instants (model 2) merges per instant and an evolving surface
+-- (model 3) per geometry instant of a topology period: its regions name
+-- that slice (times; timem for the period) and are numbered through the
+-- object's slices, so a region index names one region of the object. Rows are
 -- written only by the SECURITY DEFINER functions; readers of conflicts read them.
 CREATE TABLE tgsis.conflict_regions (
     versionid           integer     NOT NULL,
@@ -32,12 +36,15 @@ CREATE TABLE tgsis.conflict_regions (
     solution_mesh       bytea,
     solved_at           timestamptz,
     solved_by           name,
+    times               float8      CHECK (times > '-Infinity' AND times < 'Infinity'),
+    timem               float8      CHECK (timem > '-Infinity' AND timem < 'Infinity'),
     PRIMARY KEY (versionid, objectclass, objectkey, region),
     FOREIGN KEY (versionid, objectclass, objectkey) REFERENCES tgsis.conflicts (versionid, objectclass, objectkey)
         ON DELETE CASCADE,
     CONSTRAINT conflict_regions_automatic CHECK ((solution = 'automatic') = (NOT conflict)),
     CONSTRAINT conflict_regions_mesh CHECK ((solution_mesh IS NOT NULL) = (solution IN ('average', 'manual'))),
-    CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL))
+    CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL)),
+    CONSTRAINT conflict_regions_slice CHECK (timem IS NULL OR times IS NOT NULL)
 );
 
 -- Per-class rights (docs/security.md) hold here as at the model tables: a region holds vertex and cell
@@ -75,3 +82,5 @@ COMMENT ON COLUMN tgsis.conflict_regions.solution IS 'unsolved, automatic (no co
 COMMENT ON COLUMN tgsis.conflict_regions.solution_mesh IS 'average and manual: the region''s rows, an .npz of a tgsis.merge3.MeshState (read without pickles)';
 COMMENT ON COLUMN tgsis.conflict_regions.solved_at IS 'when the solution was recorded';
 COMMENT ON COLUMN tgsis.conflict_regions.solved_by IS 'role that recorded it';
+COMMENT ON COLUMN tgsis.conflict_regions.times IS 'the slice of a temporal surface the region lies in: the instant (tgsis.times, model 2) or the geometry instant (tgsis.timet, model 3); NULL for a model-1 mesh';
+COMMENT ON COLUMN tgsis.conflict_regions.timem IS 'model 3: the topology period (tgsis.timem) of the region''s geometry instant; NULL otherwise';

@@ -15,6 +15,9 @@
 --    "child_vertex_ids": [...], "child_cell_ids": [...],
 --    "bbox": [xmin, ymin, zmin, xmax, ymax, zmax] or null,
 --    "parent_displacement": 0.0, "child_displacement": 1.5}
+-- and, for a region of a temporal surface (model 2 or 3), the slice it lies in:
+-- "times" (the instant, or the geometry instant) and, model 3, "timem" (the
+-- topology period); absent or null for a model-1 mesh.
 CREATE FUNCTION tgsis.record_conflict_regions(p_version text, p_objectclass text, p_objectkey text,
                                               p_childmark text, p_parentmark text, p_regions jsonb)
 RETURNS integer
@@ -36,6 +39,7 @@ DECLARE
     v_keys    constant text[] := ARRAY['region', 'conflict', 'changed_by', 'vertex_ids', 'cell_ids',
                                        'parent_vertex_ids', 'parent_cell_ids', 'child_vertex_ids', 'child_cell_ids',
                                        'bbox', 'parent_displacement', 'child_displacement'];
+    v_slice   constant text[] := ARRAY['times', 'timem'];  -- optional: the slice of a temporal surface
     v_count   integer;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
@@ -71,7 +75,8 @@ BEGIN
                     quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(v_version.name), left(v_r::text, 80)
                 USING ERRCODE = 'TG100', HINT = format('each element of the array is an object with the keys %s', array_to_string(v_keys, ', '));
         END IF;
-        SELECT string_agg(k, ', ' ORDER BY k) INTO v_name FROM jsonb_object_keys(v_r) AS k WHERE k <> ALL (v_keys);
+        SELECT string_agg(k, ', ' ORDER BY k) INTO v_name FROM jsonb_object_keys(v_r) AS k
+         WHERE k <> ALL (v_keys || v_slice);
         IF v_name IS NULL THEN
             SELECT string_agg(k, ', ' ORDER BY o) INTO v_name FROM unnest(v_keys) WITH ORDINALITY AS u(k, o) WHERE NOT v_r ? k;
             IF v_name IS NOT NULL THEN
@@ -97,6 +102,12 @@ BEGIN
                      AND (jsonb_typeof(v_r -> 'bbox') <> 'array' OR jsonb_array_length(v_r -> 'bbox') <> 6
                           OR EXISTS (SELECT FROM jsonb_array_elements(v_r -> 'bbox') e WHERE jsonb_typeof(e) <> 'number'))
                     THEN format('has "bbox": %s, not null or 6 numbers (xmin, ymin, zmin, xmax, ymax, zmax)', left((v_r -> 'bbox')::text, 80))
+                WHEN jsonb_typeof(coalesce(v_r -> 'times', 'null')) NOT IN ('null', 'number')
+                    THEN format('has "times": %s, not null or a number', left((v_r -> 'times')::text, 80))
+                WHEN jsonb_typeof(coalesce(v_r -> 'timem', 'null')) NOT IN ('null', 'number')
+                    THEN format('has "timem": %s, not null or a number', left((v_r -> 'timem')::text, 80))
+                WHEN jsonb_typeof(coalesce(v_r -> 'timem', 'null')) = 'number' AND jsonb_typeof(coalesce(v_r -> 'times', 'null')) <> 'number'
+                    THEN 'has "timem" without "times": a region of a topology period lies in one of its geometry instants'
             END;
         END IF;
         IF v_name IS NULL THEN
@@ -136,7 +147,7 @@ BEGIN
     INSERT INTO tgsis.conflict_regions AS o (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
                                              changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
                                              child_vertex_ids, child_cell_ids, bbox, parent_displacement,
-                                             child_displacement, solution)
+                                             child_displacement, solution, times, timem)
     SELECT v_version.versionid, p_objectclass, v_key, (e ->> 'region')::integer, p_childmark, p_parentmark,
            (e ->> 'conflict')::boolean, e ->> 'changed_by',
            ARRAY(SELECT x::bigint FROM jsonb_array_elements_text(e -> 'vertex_ids') WITH ORDINALITY AS a(x, o) ORDER BY o),
@@ -148,7 +159,8 @@ BEGIN
            CASE WHEN jsonb_typeof(e -> 'bbox') = 'array'
                 THEN ARRAY(SELECT x::float8 FROM jsonb_array_elements_text(e -> 'bbox') WITH ORDINALITY AS b(x, o) ORDER BY o) END,
            (e ->> 'parent_displacement')::float8, (e ->> 'child_displacement')::float8,
-           CASE WHEN (e ->> 'conflict')::boolean THEN 'unsolved' ELSE 'automatic' END
+           CASE WHEN (e ->> 'conflict')::boolean THEN 'unsolved' ELSE 'automatic' END,
+           (e ->> 'times')::float8, (e ->> 'timem')::float8
       FROM jsonb_array_elements(p_regions) AS e
         ON CONFLICT (versionid, objectclass, objectkey, region) DO UPDATE
        SET childmark = excluded.childmark, parentmark = excluded.parentmark, conflict = excluded.conflict,
@@ -156,6 +168,7 @@ BEGIN
            parent_vertex_ids = excluded.parent_vertex_ids, parent_cell_ids = excluded.parent_cell_ids,
            child_vertex_ids = excluded.child_vertex_ids, child_cell_ids = excluded.child_cell_ids, bbox = excluded.bbox,
            parent_displacement = excluded.parent_displacement, child_displacement = excluded.child_displacement,
+           times = excluded.times, timem = excluded.timem,
            -- a solution holds for the region it was given on: the same marks, the same ids
            (solution, solution_mesh, solved_at, solved_by) = (
                SELECT CASE WHEN same THEN o.solution ELSE excluded.solution END,
@@ -168,7 +181,9 @@ BEGIN
                               AND o.parent_vertex_ids = excluded.parent_vertex_ids
                               AND o.parent_cell_ids = excluded.parent_cell_ids
                               AND o.child_vertex_ids = excluded.child_vertex_ids
-                              AND o.child_cell_ids = excluded.child_cell_ids AS same) AS s);
+                              AND o.child_cell_ids = excluded.child_cell_ids
+                              AND o.times IS NOT DISTINCT FROM excluded.times
+                              AND o.timem IS NOT DISTINCT FROM excluded.timem AS same) AS s);
     GET DIAGNOSTICS v_count = ROW_COUNT;
     DELETE FROM tgsis.conflict_regions o
      WHERE o.versionid = v_version.versionid AND o.objectclass = p_objectclass AND o.objectkey = v_key

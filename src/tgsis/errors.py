@@ -37,6 +37,7 @@ __all__ = [
     "CheckoutConflictError",
     "NotVersionedError",
     "UnsupportedViewStatementError",
+    "PeriodTopologyError",
     "RegionSolutionError",
     "AlreadyExistsError",
     "InUseError",
@@ -270,6 +271,19 @@ class RegionSolutionError(VersioningError):
     """
 
     code = "TG307"
+
+
+class PeriodTopologyError(VersioningError):
+    """A merge by region of an evolving surface (model 3) whose merged topology would differ within one period.
+
+    Model 3 merges per geometry instant of a topology period; all the
+    instants of a period share its nodes and triangles, so a merge whose
+    instants disagree there (a side added a geometry instant to a period
+    whose topology the other changed, or a solution re-meshed one instant
+    only) is refused for that object, naming the period.
+    """
+
+    code = "TG308"
 
 
 class DatabaseError(Error):

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis._merge_slices import SlicedState, slice_text
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import Packed, columns_out_all
@@ -33,7 +34,15 @@ from tgsis.errors import InvalidInputError, NotFoundError, VersioningError
 from tgsis.merge3 import MeshState
 from tgsis.mesh import Geotype, mesh_class
 
-__all__ = ["MergeInputs", "read_merge_states", "version_row"]
+__all__ = [
+    "SLICE_KEYS",
+    "MergeInputs",
+    "SlicedInputs",
+    "feature_time_model",
+    "read_merge_states",
+    "read_sliced_states",
+    "version_row",
+]
 
 Conn = psycopg.Connection[Any]
 
@@ -481,3 +490,373 @@ def read_merge_states(conn: Conn, version: str, feature_id: int) -> MergeInputs:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
             restore_version_settings(conn, settings, local=True)
     return MergeInputs(fc, versionid, parent, (initrevision, parent_working, working), _states(fc, feature_id, rows))
+
+
+# --------------------------------------------------------------------------- models 2 and 3: the states slice by slice
+
+#: per time model: the tables a state is read from (the view's name in tgsis, and how many of its first columns,
+#: after the object key, make the row's key within the object: the slice key columns and the row id)
+_SLICE_TABLES: dict[str, tuple[tuple[_Table, int], ...]] = {
+    "INSTANTS": (
+        (_Table("times", "tgsis", "geoid", (("times", "float8"),)), 1),
+        (
+            _Table(
+                "times_vrtx",
+                "tgsis",
+                "geoid",
+                (("times", "float8"), ("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")),
+            ),
+            2,
+        ),
+        (
+            _Table(
+                "times_trgl",
+                "tgsis",
+                "geoid",
+                (
+                    ("times", "float8"),
+                    ("trglid", "int8"),
+                    ("vrtxid1", "int8"),
+                    ("vrtxid2", "int8"),
+                    ("vrtxid3", "int8"),
+                ),
+            ),
+            2,
+        ),
+    ),
+    "EVOLVING": (
+        (_Table("timet", "tgsis", "geoid", (("timem", "float8"), ("timet", "float8"))), 2),
+        (
+            _Table(
+                "d4dvrtx",
+                "tgsis",
+                "geoid",
+                (
+                    ("timem", "float8"),
+                    ("timet", "float8"),
+                    ("nodeid", "int8"),
+                    ("x", "float8"),
+                    ("y", "float8"),
+                    ("z", "float8"),
+                ),
+            ),
+            3,
+        ),
+        (
+            _Table(
+                "d4dtrgl",
+                "tgsis",
+                "geoid",
+                (
+                    ("timem", "float8"),
+                    ("trglid", "int8"),
+                    ("nodeid1", "int8"),
+                    ("nodeid2", "int8"),
+                    ("nodeid3", "int8"),
+                ),
+            ),
+            2,
+        ),
+    ),
+}
+#: per time model: the time key columns of the class's property tables (the registry's ``timekey``)
+SLICE_KEYS = {"INSTANTS": ("_times",), "EVOLVING": ("_timem", "_timet")}
+
+
+def _sliced_tables(fc: FeatureClass) -> tuple[list[tuple[_Table, int]], list[tuple[str, list[str]]]]:
+    """The tables of a model-2/3 object's state (with their key widths) and the property tables' names."""
+    tables = list(_SLICE_TABLES[fc.time_model])
+    keys = SLICE_KEYS[fc.time_model]
+    properties: list[tuple[str, list[str]]] = []
+    for alignment in ("VERTEX", "CELL"):
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if props and protable is not None:
+            properties.append((alignment, [p.name for p in props]))
+            columns = (*((k, "float8") for k in keys), ("_idx", "int8"), *((p.name, p.wire) for p in props))
+            tables.append((_Table(protable, fc.schema, "_geoid", columns), len(keys) + 1))
+    return tables, properties
+
+
+def _key_words(columns: list[npt.NDArray[Any]]) -> npt.NDArray[np.int64]:
+    """(n, k) words of k key columns, equal words exactly for equal keys (a float's -0.0 as 0.0, as PostgreSQL)."""
+    words = []
+    for c in columns:
+        a = np.asarray(c)
+        if a.dtype.kind == "f":
+            words.append(np.ascontiguousarray(a.astype(np.float64) + 0.0).view(np.int64))
+        else:
+            words.append(a.astype(np.int64))
+    return np.stack(words, axis=1) if words else np.zeros((0, 0), dtype=np.int64)
+
+
+def _patched_by_keys(
+    base: list[npt.NDArray[Any]], changed: list[npt.NDArray[Any]], width: int, bit: int
+) -> list[npt.NDArray[Any]]:
+    """:func:`_patched` for rows keyed by their first ``width`` columns (after the object key): slice key and id.
+
+    The composite keys of both reads are numbered in their order
+    (``np.unique`` over the rows), the number stands in as :func:`_patched`'s
+    row key, and is dropped again.
+    """
+    n = len(np.asarray(base[0]))
+    words = _key_words(
+        [
+            np.concatenate([np.asarray(b), np.asarray(c)])
+            for b, c in zip(base[1 : 1 + width], changed[1 : 1 + width], strict=True)
+        ]
+    )
+    if len(words):
+        _, codes = np.unique(words, axis=0, return_inverse=True)
+        codes = codes.reshape(-1).astype(np.int64)
+    else:
+        codes = np.zeros(0, dtype=np.int64)
+    order = np.argsort(codes[:n], kind="stable")
+    coded_base = [np.asarray(base[0])[order], codes[:n][order], *(np.asarray(c)[order] for c in base[1:])]
+    coded_changed = [np.asarray(changed[0]), codes[n:], *(np.asarray(c) for c in changed[1:])]
+    patched = _patched(coded_base, coded_changed, bit)
+    return [patched[0], *patched[2:]]
+
+
+def _read_sliced_rows(
+    conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]]
+) -> dict[str, list[list[npt.NDArray[Any]]]]:
+    """Each side's columns of each table of :func:`_sliced_tables` (``[object key, *columns]``).
+
+    As :func:`_read_states`: the base in full through the views, the sides
+    patched with the storage rows their revisions since the base wrote or
+    closed (``tgsis.storage_table``, the caller's rights and row-level
+    security); a role that may not read the storage reads every side in full
+    through the views.
+    """
+    tables = [t for t, _ in _sliced_tables(fc)[0]]
+    widths = [w for _, w in _sliced_tables(fc)[0]]
+    sets = {}
+    for side, (version, revision) in sides.items():
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+        row = conn.execute("SELECT tgsis.get_revisions(true)").fetchone()
+        assert row is not None
+        sets[side] = sorted(int(r) for r in row[0])
+    storages = _readable_storages(conn, tables)
+    full = [Packed(t.source, t.key, t.columns, [geoid]) for t in tables]
+    if storages is None:
+        out = {}
+        for side, (version, revision) in sides.items():
+            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+            out[side] = [list(c) for c in columns_out_all(conn, full)]
+        return out
+    base_version, base_revision = sides["base"]
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (base_version, base_revision))
+    since = sorted(
+        set(sets["base"]).symmetric_difference(sets["parent"]) | set(sets["base"]).symmetric_difference(sets["child"])
+    )
+    requests = full + [
+        Packed(t.changed(storage, sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+        for t, storage in zip(tables, storages, strict=True)
+    ]
+    read = columns_out_all(conn, requests)
+    base, changed = read[: len(tables)], read[len(tables) :]
+    out = {"base": [list(c) for c in base]}
+    for side in ("parent", "child"):
+        out[side] = [
+            _patched_by_keys(list(b), list(c), w, _SIDE_BITS[side])
+            for b, c, w in zip(base, changed, widths, strict=True)
+        ]
+    return out
+
+
+def _slice_rows(columns: list[npt.NDArray[Any]], width: int) -> dict[tuple[float, ...], npt.NDArray[np.intp]]:
+    """The rows of each slice: the positions whose first ``width`` columns (after the object key) are its key.
+
+    One sort of the rows by their key (not a scan per slice): the cost
+    stays that of the rows however many instants an object has.
+    """
+    keys = [np.asarray(c, dtype=np.float64) + 0.0 for c in columns[1 : 1 + width]]
+    if not len(keys[0]):
+        return {}
+    order = np.lexsort(keys[::-1])
+    sorted_keys = np.stack([k[order] for k in keys], axis=1)
+    starts = np.flatnonzero(np.concatenate([[True], np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)]))
+    ends = np.append(starts[1:], len(order))
+    return {
+        tuple(float(v) for v in sorted_keys[a]): np.sort(order[a:b]) for a, b in zip(starts.tolist(), ends.tolist())
+    }
+
+
+def _sliced_state(
+    fc: FeatureClass,
+    geoid: int,
+    side: str,
+    read: list[list[npt.NDArray[Any]]],
+    properties: list[tuple[str, list[str]]],
+    instant_rows: Mapping[tuple[float, ...], tuple[str | None, ...]],
+) -> SlicedState:
+    """One side's slices (:class:`tgsis._merge_slices.SlicedState`) from its tables' columns."""
+    evolving = fc.time_model == "EVOLVING"
+    keys_cols, vertex_cols, cell_cols, *prop_cols = read
+    width = 2 if evolving else 1
+    keys = sorted(
+        {tuple(float(v) for v in row) for row in zip(*(np.asarray(c).tolist() for c in keys_cols[1 : 1 + width]))}
+    )
+    slices: dict[tuple[float, ...], MeshState] = {}
+    none = np.zeros(0, dtype=np.intp)
+    vertex_rows = _slice_rows(vertex_cols, width)
+    cell_rows = _slice_rows(cell_cols, 1)  # model 3: the period's triangles; model 2: the instant's
+    prop_rows = [_slice_rows(columns, width) for columns in prop_cols]
+    for key in keys:
+        at_v = vertex_rows.get(key, none)
+        at_c = cell_rows.get(key[:1], none)
+        first_v, first_c = 1 + width, 1 + (1 if evolving else width)
+        vids, xyz = _sorted_rows(
+            np.asarray(vertex_cols[first_v])[at_v],
+            np.stack([np.asarray(vertex_cols[first_v + i])[at_v] for i in (1, 2, 3)], axis=1),
+        )
+        cids, cells = _sorted_rows(
+            np.asarray(cell_cols[first_c])[at_c],
+            np.stack([np.asarray(cell_cols[first_c + i])[at_c] for i in (1, 2, 3)], axis=1),
+        )
+        props_by: dict[str, dict[str, npt.NDArray[Any]]] = {"VERTEX": {}, "CELL": {}}
+        for (alignment, names), columns, rows in zip(properties, prop_cols, prop_rows, strict=True):
+            at = rows.get(key, none)
+            ids = vids if alignment == "VERTEX" else cids
+            idx = np.asarray(columns[1 + width], dtype=np.int64)[at]
+            for i, name in enumerate(names):
+                props_by[alignment][name] = _aligned_values(ids, idx, np.asarray(columns[2 + width + i])[at])
+        slices[key] = MeshState(
+            3,
+            vids,
+            xyz.reshape(-1, 3).astype(np.float64, copy=False),
+            cids,
+            cells.reshape(-1, 3).astype(np.int64, copy=False),
+            props_by["VERTEX"],
+            props_by["CELL"],
+            f"feature {geoid} ({side}, {slice_text(fc.time_model, key)})",
+        )
+    kind: Literal["INSTANTS", "EVOLVING"] = "EVOLVING" if evolving else "INSTANTS"
+    return SlicedState(
+        kind,
+        slices,
+        dict(instant_rows),
+        f"feature {geoid} of class {fc.name}",
+        tuple(p.name for p in fc.instant_properties),
+    )
+
+
+def _instant_rows(
+    conn: Conn, fc: FeatureClass, geoid: int, version: str, revision: int
+) -> dict[tuple[float, ...], tuple[str | None, ...]]:
+    """The per-instant feature property rows (``<class>_pros``) as ``version`` sees them at ``revision``, as text."""
+    if not fc.instant_properties or fc.protable is None:
+        return {}
+    keys = SLICE_KEYS[fc.time_model]
+    conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+    digits = conn.execute("SELECT current_setting('extra_float_digits')").fetchone()
+    conn.execute("SELECT set_config('extra_float_digits', '3', true)")  # floats as text, exactly
+    try:
+        rows = conn.execute(
+            sql.SQL("SELECT {}, {} FROM {} WHERE _geoid = %s").format(
+                sql.SQL(", ").join(sql.Identifier(k) for k in keys),
+                sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(p.name)) for p in fc.instant_properties),
+                fc.qualified(fc.protable),
+            ),
+            (geoid,),
+        ).fetchall()
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            conn.execute("SELECT set_config('extra_float_digits', %s, true)", (str(digits[0] if digits else "1"),))
+    return {tuple(float(v) for v in r[: len(keys)]): tuple(r[len(keys) :]) for r in rows}
+
+
+@dataclass(frozen=True)
+class SlicedInputs:
+    """What a merge by region of one model-2 or model-3 object reads (as :class:`MergeInputs`, slice by slice).
+
+    Attributes
+    ----------
+    feature_class : FeatureClass
+    versionid : int
+    parent : str
+    revisions : (int, int, int)
+    states : dict
+        ``base``, ``parent``, ``child``: :class:`tgsis._merge_slices.SlicedState`.
+    """
+
+    feature_class: FeatureClass
+    versionid: int
+    parent: str
+    revisions: tuple[int, int, int]
+    states: dict[str, SlicedState]
+
+
+def feature_time_model(conn: Conn, version: str, feature_id: int) -> str | None:
+    """The time model of a feature as the version (else its parent) sees it now; None when neither has it."""
+    settings = read_version_settings(conn)
+    try:
+        _, parent, _, working, parent_working = version_row(conn, version)
+        for side, revision in ((version, working), (parent, parent_working)):
+            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (side, revision))
+            row = conn.execute("SELECT timemodel::text FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+            if row is not None:
+                return str(row[0])
+        return None
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
+
+
+def read_sliced_states(conn: Conn, version: str, feature_id: int) -> SlicedInputs:
+    """Read base, parent and child of one model-2 or model-3 object changed on both sides, slice by slice.
+
+    As :func:`read_merge_states` (the caller's transaction makes the reads
+    consistent; the session's version settings are put back; the same
+    refusals), for a surface at instants (model 2: a slice per instant) or an
+    evolving surface (model 3: a slice per geometry instant of each topology
+    period), with the per-instant feature properties.
+
+    Raises
+    ------
+    InvalidInputError
+        Not of model 2 or 3; deleted on one side; attributes changed on both sides.
+    VersioningError
+        Not changed on both sides since the version was based.
+    """
+    settings = read_version_settings(conn)
+    try:
+        versionid, parent, initrevision, working, parent_working = version_row(conn, version)
+        in_child = _exists(conn, feature_id, version, working)
+        in_parent = _exists(conn, feature_id, parent, parent_working)
+        if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
+            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
+        fc = _feature_class(conn, feature_id)
+        if fc.time_model not in SLICE_KEYS or fc.geotype is not Geotype.SURFACE:
+            raise InvalidInputError(
+                f"feature {feature_id} of class {fc.name} is of model {fc.time_model}: only a surface at instants "
+                f"(model 2) or an evolving surface (model 3) merges slice by slice (version {show_name(version)})",
+                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+            )
+        both = conn.execute(
+            "SELECT 1 FROM tgsis.current_conflicts(%s) WHERE objectclass = 'feature' AND objectkey = %s",
+            (versionid, str(feature_id)),
+        ).fetchone()
+        if both is None:
+            raise VersioningError(
+                f"feature {feature_id} of class {fc.name} was not changed both in version {show_name(version)} "
+                f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
+                hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
+            )
+        if not (in_child and in_parent):
+            raise InvalidInputError(
+                f"feature {feature_id} of class {fc.name} was deleted in version "
+                f"{show_name(parent if in_child else version)} and changed in "
+                f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
+                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+            )
+        _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
+        sides = {"base": (version, initrevision), "parent": (parent, parent_working), "child": (version, working)}
+        rows = _read_sliced_rows(conn, fc, feature_id, sides)
+        instants = {side: _instant_rows(conn, fc, feature_id, v, r) for side, (v, r) in sides.items()}
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
+    properties = _sliced_tables(fc)[1]
+    states = {side: _sliced_state(fc, feature_id, side, rows[side], properties, instants[side]) for side in sides}
+    return SlicedInputs(fc, versionid, parent, (initrevision, parent_working, working), states)

@@ -17,6 +17,8 @@ by id, the geometry row's box and counts).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -37,6 +39,7 @@ __all__ = [
     "copy_vertex_rows",
     "delete_rows",
     "update_geometry_row",
+    "write_sliced_difference",
     "write_state_difference",
     "write_state_rows",
 ]
@@ -358,3 +361,310 @@ def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, n
         deleted, inserted = deleted + gone, inserted + added
     bounds = np.stack([new.vertices.min(axis=0), new.vertices.max(axis=0)]) if new.n_vertices else None
     return deleted, inserted, update_geometry_row(conn, geoid, bounds, new.n_vertices, new.n_cells)
+
+
+# --------------------------------------------------------------------------- models 2 and 3: slice by slice
+
+#: the time key columns of the class's property tables (the registry's ``timekey``)
+_PROPERTY_TIME_KEYS = {"INSTANTS": ("_times",), "EVOLVING": ("_timem", "_timet")}
+
+
+@dataclass(frozen=True)
+class _TableRows:
+    """One table's rows of one object: key columns (the row's key within the object) and value columns."""
+
+    schema: str
+    table: str
+    objectkey: str
+    keys: tuple[tuple[str, str, npt.NDArray[Any]], ...]  # (name, wire type, (n,) values)
+    values: tuple[tuple[str, str, npt.NDArray[Any]], ...]
+
+
+def _slice_rows(fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState]) -> list[_TableRows]:
+    """The rows of every model-2/3 table a state's slices make, in the order they are inserted."""
+    keys = sorted(slices)
+    evolving = fc.time_model == "EVOLVING"
+    pcols = _PROPERTY_TIME_KEYS[fc.time_model]
+    f8, i8 = "float8", "int8"
+
+    def times(column: int, counts: list[int], of: list[tuple[float, ...]]) -> npt.NDArray[np.float64]:
+        return np.repeat(np.asarray([k[column] for k in of], dtype=np.float64), counts)
+
+    def cat(arrays: list[npt.NDArray[Any]], dtype: Any, width: int = 0) -> npt.NDArray[Any]:
+        if arrays:
+            return np.concatenate(arrays).astype(dtype, copy=False)
+        return np.zeros((0, width) if width else 0, dtype=dtype)
+
+    tables: list[_TableRows] = []
+    nv = [slices[k].n_vertices for k in keys]
+    xyz = cat([slices[k].vertices for k in keys], np.float64, 3)
+    vids = cat([slices[k].vertex_ids for k in keys], np.int64)
+    if evolving:
+        periods = sorted({k[0] for k in keys})
+        first = [next(k for k in keys if k[0] == m) for m in periods]  # a period's topology: its first instant's
+        tables.append(
+            _TableRows("tgsis", "timem", "geoid", (("timem", f8, np.asarray(periods, dtype=np.float64)),), ())
+        )
+        tables.append(
+            _TableRows(
+                "tgsis",
+                "timet",
+                "geoid",
+                (("timem", f8, times(0, [1] * len(keys), keys)), ("timet", f8, times(1, [1] * len(keys), keys))),
+                (),
+            )
+        )
+        nn = [slices[k].n_vertices for k in first]
+        tables.append(
+            _TableRows(
+                "tgsis",
+                "node",
+                "geoid",
+                (
+                    ("timem", f8, times(0, nn, first)),
+                    ("nodeid", i8, cat([slices[k].vertex_ids for k in first], np.int64)),
+                ),
+                (),
+            )
+        )
+        nt = [slices[k].n_cells for k in first]
+        tri = cat([slices[k].cells for k in first], np.int64, 3)
+        tables.append(
+            _TableRows(
+                "tgsis",
+                "d4dtrgl",
+                "geoid",
+                (
+                    ("timem", f8, times(0, nt, first)),
+                    ("trglid", i8, cat([slices[k].cell_ids for k in first], np.int64)),
+                ),
+                tuple((f"nodeid{j + 1}", i8, tri[:, j]) for j in range(3)),
+            )
+        )
+        tables.append(
+            _TableRows(
+                "tgsis",
+                "d4dvrtx",
+                "geoid",
+                (("timem", f8, times(0, nv, keys)), ("timet", f8, times(1, nv, keys)), ("nodeid", i8, vids)),
+                tuple((c, f8, xyz[:, j]) for j, c in enumerate("xyz")),
+            )
+        )
+    else:
+        nc = [slices[k].n_cells for k in keys]
+        tri = cat([slices[k].cells for k in keys], np.int64, 3)
+        tables.append(
+            _TableRows(
+                "tgsis", "times", "geoid", (("times", f8, np.asarray([k[0] for k in keys], dtype=np.float64)),), ()
+            )
+        )
+        tables.append(
+            _TableRows(
+                "tgsis",
+                "times_vrtx",
+                "geoid",
+                (("times", f8, times(0, nv, keys)), ("vrtxid", i8, vids)),
+                tuple((c, f8, xyz[:, j]) for j, c in enumerate("xyz")),
+            )
+        )
+        tables.append(
+            _TableRows(
+                "tgsis",
+                "times_trgl",
+                "geoid",
+                (("times", f8, times(0, nc, keys)), ("trglid", i8, cat([slices[k].cell_ids for k in keys], np.int64))),
+                tuple((f"vrtxid{j + 1}", i8, tri[:, j]) for j in range(3)),
+            )
+        )
+    for alignment in ("VERTEX", "CELL"):
+        props, protable = fc.aligned(alignment), fc.property_table(alignment)
+        if not props or protable is None:
+            continue
+        ids = [slices[k].vertex_ids if alignment == "VERTEX" else slices[k].cell_ids for k in keys]
+        counts = [len(i) for i in ids]
+        columns = []
+        for p in props:
+            per = [
+                np.asarray((s.vertex_properties if alignment == "VERTEX" else s.cell_properties)[p.name])
+                for s in (slices[k] for k in keys)
+            ]
+            columns.append(
+                (p.name, array_wire(SQL_TYPES[p.type], p.size), cat(per, per[0].dtype if per else np.float64))
+            )
+        tables.append(
+            _TableRows(
+                fc.schema,
+                protable,
+                "_geoid",
+                (*((c, f8, times(i, counts, keys)) for i, c in enumerate(pcols)), ("_idx", i8, cat(ids, np.int64))),
+                tuple(columns),
+            )
+        )
+    return tables
+
+
+def _key_codes(old: _TableRows, new: _TableRows) -> tuple[IntArray, IntArray]:
+    """Numbers of the rows' composite keys, equal for equal keys (floats by value, -0.0 as 0.0)."""
+    words = []
+    for (_, _, a), (_, _, b) in zip(old.keys, new.keys, strict=True):
+        both = np.concatenate([a, b])
+        words.append(
+            np.ascontiguousarray(both.astype(np.float64) + 0.0).view(np.int64)
+            if both.dtype.kind == "f"
+            else both.astype(np.int64)
+        )
+    n = len(old.keys[0][2])
+    if not len(words[0]):
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    _, codes = np.unique(np.stack(words, axis=1), axis=0, return_inverse=True)
+    codes = codes.reshape(-1).astype(np.int64)
+    return codes[:n], codes[n:]
+
+
+def _write_table_difference(
+    conn: Conn, storage: Storage, geoid: int, old: _TableRows, new: _TableRows
+) -> tuple[int, int]:
+    """Delete the rows whose key is gone or whose values differ, insert the new and differing ones; (deleted, inserted)."""
+    old_codes, new_codes = _key_codes(old, new)
+
+    def same(a: npt.NDArray[np.intp], b: npt.NDArray[np.intp]) -> Any:
+        result = np.ones(len(a), dtype=bool)
+        for (_, _, o), (_, _, n) in zip(old.values, new.values, strict=True):
+            if o.dtype.kind == "f" and n.dtype.kind == "f" and o.ndim == 1:
+                result &= _bits(o[a].reshape(-1, 1))[:, 0] == _bits(n[b].reshape(-1, 1))[:, 0]
+            else:
+                result &= _same_values(o[a], n[b])
+        return result
+
+    gone, fresh = _difference(old_codes, new_codes, same)
+    deleted = 0
+    if len(gone):
+        at = np.flatnonzero(np.isin(old_codes, gone))
+        names = [k for k, _, _ in old.keys]
+        arrays = [np.asarray(v)[at].tolist() for _, _, v in old.keys]
+        wires = [w for _, w, _ in old.keys]
+        deleted = max(
+            conn.execute(
+                sql.SQL("DELETE FROM {} WHERE {} = %s AND ({}) IN (SELECT * FROM unnest({}))").format(
+                    sql.Identifier(old.schema, old.table),
+                    sql.Identifier(old.objectkey),
+                    sql.SQL(", ").join(sql.Identifier(n) for n in names),
+                    sql.SQL(", ").join(sql.SQL("%s::{}[]").format(sql.SQL(w)) for w in wires),  # wires: ours, fixed
+                ),
+                (geoid, *arrays),
+            ).rowcount,
+            0,
+        )
+    if new.objectkey == "_geoid":  # a property row whose values are all NaN had none where it comes from: none
+        fresh = fresh[~_without_row([np.asarray(v) for _, _, v in new.values], fresh)]
+    if not len(fresh):
+        return deleted, 0
+    columns: list[tuple[str, npt.ArrayLike, str]] = [
+        (new.objectkey, np.full(len(fresh), geoid, dtype=np.int64), "int8")
+    ]
+    for name, wire, values in (*new.keys, *new.values):
+        chosen = np.asarray(values)[fresh]
+        if wire not in ("float4", "float8") and chosen.dtype.kind == "f" and not wire.endswith("[]"):
+            if np.isnan(chosen).any():
+                raise InvalidInputError(
+                    f"feature {geoid}: {new.table}.{name} has no value for some merged rows: they cannot be written",
+                    hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+                )
+            chosen = chosen.astype(np.int64)
+        columns.append((name, chosen, wire))
+    storage.copy(conn, new.schema, new.table, columns)
+    return deleted, len(fresh)
+
+
+def _write_instant_rows(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    old: Mapping[tuple[float, ...], tuple[str | None, ...]],
+    new: Mapping[tuple[float, ...], tuple[str | None, ...]],
+) -> int:
+    """The per-instant feature property rows (``<class>_pros``, few rows of any column type, as text); rows written."""
+    if not fc.instant_properties or fc.protable is None:
+        return 0
+    keys = _PROPERTY_TIME_KEYS[fc.time_model]
+    names = [p.name for p in fc.instant_properties]
+    table = fc.qualified(fc.protable)
+    where = sql.SQL(" AND ").join(sql.SQL("{} = %s").format(sql.Identifier(k)) for k in ("_geoid", *keys))
+    written = 0
+    for key in sorted(set(old) | set(new)):
+        before, after = old.get(key), new.get(key)
+        if before == after:
+            continue
+        if after is None:
+            written += max(
+                conn.execute(sql.SQL("DELETE FROM {} WHERE {}").format(table, where), (geoid, *key)).rowcount, 0
+            )
+        elif before is None:
+            written += max(
+                conn.execute(
+                    sql.SQL("INSERT INTO {} ({}) VALUES ({})").format(
+                        table,
+                        sql.SQL(", ").join(sql.Identifier(c) for c in ("_geoid", *keys, *names)),
+                        sql.SQL(", ").join(sql.Placeholder() for _ in ("_geoid", *keys, *names)),
+                    ),
+                    (geoid, *key, *after),
+                ).rowcount,
+                0,
+            )
+        else:
+            changed = [(n, v) for n, b, v in zip(names, before, after, strict=True) if b != v]
+            written += max(
+                conn.execute(
+                    sql.SQL("UPDATE {} SET {} WHERE {}").format(
+                        table,
+                        sql.SQL(", ").join(sql.SQL("{} = %s").format(sql.Identifier(n)) for n, _ in changed),
+                        where,
+                    ),
+                    (*(v for _, v in changed), geoid, *key),
+                ).rowcount,
+                0,
+            )
+    return written
+
+
+def write_sliced_difference(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    old: Mapping[tuple[float, ...], MeshState],
+    new: Mapping[tuple[float, ...], MeshState],
+    old_rows: Mapping[tuple[float, ...], tuple[str | None, ...]] | None = None,
+    new_rows: Mapping[tuple[float, ...], tuple[str | None, ...]] | None = None,
+) -> int:
+    """Write a model-2/3 object's slices ``new`` over ``old`` by a difference keyed by (slice, id), in the session's version.
+
+    The generalisation of :func:`write_state_difference` to a surface at
+    instants (tables ``tgsis.times``, ``times_vrtx``, ``times_trgl``) and an
+    evolving surface (``tgsis.timem``, ``timet``, ``node``, ``d4dtrgl``,
+    ``d4dvrtx``), with the class's property rows (keyed with the time key) and
+    per-instant feature property rows (``old_rows``/``new_rows``, as text):
+    a row whose key (the slice's time key and the row's id) is gone or whose
+    content differs is deleted through the versioned view (closed in the
+    working revision), a row whose key is new or whose content differs is
+    added. Nothing is renumbered. The geometry row's box and counts follow
+    (``tgsis.refresh_geometry``). Runs in the caller's transaction.
+
+    Returns
+    -------
+    int
+        Rows deleted, closed, inserted or updated.
+    """
+    storage = Storage.of(conn, fc)
+    storage.check("tgsis", "geometry")  # not "in" a version while the feature tables are plain
+    conn.execute(
+        "SELECT tgsis.check_objects_unlocked(objectclass, ARRAY[%s]) FROM tgsis.versioned_tables "
+        "WHERE schemaname = 'tgsis' AND tablename = 'geometry'",
+        (str(geoid),),
+    )
+    olds, news = _slice_rows(fc, old), _slice_rows(fc, new)
+    written = _write_instant_rows(conn, fc, geoid, old_rows or {}, new_rows or {})
+    for o, n in zip(olds, news, strict=True):
+        deleted, inserted = _write_table_difference(conn, storage, geoid, o, n)
+        written += deleted + inserted
+    conn.execute("SELECT tgsis.refresh_geometry(%s)", (geoid,))
+    return written

@@ -51,15 +51,26 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis._merge_slices import apply_sliced, merge_sliced, slice_text
 from tgsis.arguments import checked
-from tgsis.db._merge_states import MergeInputs, read_merge_states, version_row
+from tgsis.db._continuity import check_continuity
+from tgsis.db._merge_states import (
+    SLICE_KEYS,
+    MergeInputs,
+    SlicedInputs,
+    feature_time_model,
+    read_merge_states,
+    read_sliced_states,
+    version_row,
+)
 from tgsis.db._settings import read_version_settings, restore_version_settings
-from tgsis.db._state_write import write_state_difference
+from tgsis.db._state_write import write_sliced_difference, write_state_difference
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import one_snapshot
-from tgsis.db.regions import recorded_solutions, region_solutions
+from tgsis.db.regions import recorded_solutions, region_solutions, sliced_recorded_solutions, sliced_region_solutions
 from tgsis.db.versions import show_name
 from tgsis.errors import (
+    DiscontinuousPeriodsError,
     InvalidInputError,
     InvalidMergeError,
     MissingPrivilegeError,
@@ -143,6 +154,14 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
         The role may not read the class or the version.
     """
     with reraise(), _snapshot(conn, version):
+        model = feature_time_model(conn, version, feature_id)
+        if model in SLICE_KEYS:
+            raise InvalidInputError(
+                f"feature {feature_id} is of model {model}: it merges slice by slice (per instant, or per geometry "
+                f"instant of a topology period), not as one mesh (version {show_name(version)})",
+                hint=f"its regions, each with its slice: tgsis.find_conflicts(conn, {version!r}) finds and records "
+                f"them (tgsis version conflicts {version})",
+            )
         states = read_merge_states(conn, version, feature_id).states
     return three_way_merge(states["base"], states["parent"], states["child"])
 
@@ -328,6 +347,10 @@ def export_conflict(
 
         require("matplotlib", "the picture of tgsis.export_conflict")
     with reraise(), _snapshot(conn, version):
+        sliced = feature_time_model(conn, version, feature_id) in SLICE_KEYS
+    if sliced:  # models 2 and 3: the files of each slice that has regions
+        return _export_sliced(conn, version, feature_id, Path(folder), format, picture, overwrite)
+    with reraise(), _snapshot(conn, version):
         merge = object_merge(conn, version, feature_id)
         _, parent, *_ = version_row(conn, version)
         name, metadata = _looks(conn, version, parent, feature_id)
@@ -392,6 +415,114 @@ def export_conflict(
         return _move_into(scratch, target, names, overwrite)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _slice_tag(key: tuple[float, ...]) -> str:
+    """A slice in a file name: ``t2.5`` (an instant), ``m1.0_t2.5`` (a geometry instant of a period)."""
+    tag = f"m{key[0]!r}_t{key[1]!r}" if len(key) == 2 else f"t{key[0]!r}"
+    return re.sub(r"[^A-Za-z0-9.+-]+", "_", tag)
+
+
+def _export_sliced(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    target: Path,
+    format: str | None,
+    picture: bool,
+    overwrite: bool,
+) -> list[Path]:
+    """:func:`export_conflict` of a model-2/3 feature: the three states of each slice with regions, named by slice.
+
+    The slices written are those with a conflicting region (all the merged
+    slices when none conflicts); the regions file lists each slice's
+    regions under its ``times`` (and ``timem``), numbered in the object.
+    """
+    from tgsis import formats
+
+    with reraise(), _snapshot(conn, version):
+        states = read_sliced_states(conn, version, feature_id).states
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
+        row = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+        recorded = sliced_recorded_solutions(conn, version, "feature", str(feature_id), merge) or {}
+    name = None if row is None or row[0] is None else str(row[0])
+    ext = (format or "ts").lower().lstrip(".")
+    try:
+        kind = formats.format_for(f"x.{ext}")
+    except Exception as exc:  # FileFormatError: unknown extension
+        raise InvalidInputError(f"no file format has the extension {ext!r}", hint="give ts, vtu, vtp or ply") from exc
+    if Geotype.SURFACE not in kind.geotypes or kind.writer is None:
+        raise InvalidInputError(
+            f"{kind.name} files (.{ext}) do not store surfaces (feature {feature_id})", hint="give ts, vtu, vtp or ply"
+        )
+    conflicting = sorted({r.key for r in merge.conflicts}) or sorted(merge.merges)
+    stem = _file_stem(feature_id, name)
+    sidecar = kind.name in _GOCAD_FORMATS
+    files: list[tuple[tuple[float, ...] | None, str, str]] = []  # (slice, what, file name)
+    for chosen in conflicting:
+        tag = _slice_tag(chosen)
+        for side in _SIDES:
+            files.append((chosen, side, f"{stem}_{tag}_{side}.{ext}"))
+            if sidecar:
+                files.append((chosen, f"{side} cells", f"{stem}_{tag}_{side}_cells.csv"))
+        if picture:
+            files.append((chosen, "picture", f"{stem}_{tag}_overlay.png"))
+    files.append((None, "regions", f"{feature_id}_regions.json"))
+    names = [n for _, _, n in files]
+    if not overwrite:
+        _refuse_existing(target, names)
+    target.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=".tgsis-export-", dir=target))
+    slices_json = []
+    for merged_key in sorted(merge.merges):
+        number = {r.region.index: r.index for r in merge.regions if r.key == merged_key}
+        regions = merge_regions_json(merge.merges[merged_key])["regions"]
+        for r in regions:
+            r["index"] = number[r["index"]]
+        slices_json.append({**_slice_json(merged_key), "regions": regions})
+    try:
+        meshes: dict[tuple[tuple[float, ...], str], Mesh] = {}
+        for key, what, file in files:
+            if key is None:
+                document = {
+                    "merges_by_region": True,
+                    "merges_by_itself": not merge.conflicts,
+                    "slices": slices_json,
+                }
+                (scratch / file).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
+                continue
+            mm = merge.merges[key]
+            if what in _SIDES:
+                mesh = _state_mesh(getattr(mm, what), "trglid", name, {})
+                meshes[(key, what)] = mesh
+                formats.write(
+                    mesh, scratch / file, format=kind.name, **({"drop_cell_properties": True} if sidecar else {})
+                )
+            elif what.endswith(" cells"):
+                _write_cells_csv(meshes[(key, what.split()[0])], scratch / file)
+            else:
+                from tgsis import pictures
+
+                local = {
+                    r.region.index: recorded[r.index] for r in merge.regions if r.key == key and r.index in recorded
+                }
+                pictures.conflict_overlay(
+                    mm,
+                    meshes[(key, "base")],
+                    meshes[(key, "parent")],
+                    meshes[(key, "child")],
+                    scratch / file,
+                    title=f"feature {feature_id}{f' {name}' if name else ''} in {show_name(version)}, "
+                    f"{slice_text(merge.base.kind, key)}: base, parent, child",
+                    solutions=local,
+                )
+        return _move_into(scratch, target, names, overwrite)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _slice_json(key: tuple[float, ...]) -> dict[str, float]:
+    return {"times": key[1], "timem": key[0]} if len(key) == 2 else {"times": key[0]}
 
 
 def _write_cells_csv(mesh: Mesh, path: Path) -> None:
@@ -585,7 +716,7 @@ class _AttributeEdits:
     both: tuple[str, ...]  # columns both sides changed to other values
 
 
-def _attribute_edits(conn: Conn, inputs: MergeInputs, version: str, geoid: int) -> _AttributeEdits:
+def _attribute_edits(conn: Conn, inputs: MergeInputs | SlicedInputs, version: str, geoid: int) -> _AttributeEdits:
     """Three ways, column by column: the parent's edits of the geometry row's attributes and of the feature row.
 
     A merge by region writes the merged mesh into the version and records
@@ -660,6 +791,8 @@ def _merge_object(
     conn: Conn, version: str, key: str, reasons: dict[str, str], may_write: list[bool | None]
 ) -> MergedObject | None:
     """Merge one conflicting feature by region into the version (locked transaction); None with the reason when not."""
+    if feature_time_model(conn, version, int(key)) in SLICE_KEYS:  # models 2 and 3: slice by slice
+        return _merge_sliced_object(conn, version, key, reasons, may_write)
     try:
         inputs = read_merge_states(conn, version, int(key))
     except (InvalidInputError, VersioningError) as exc:  # not model 1, deleted on one side, attributes on both
@@ -724,6 +857,109 @@ def _merge_object(
         written,
     )
     return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, resolved.discards)
+
+
+def _merge_sliced_object(
+    conn: Conn, version: str, key: str, reasons: dict[str, str], may_write: list[bool | None]
+) -> MergedObject | None:
+    """:func:`_merge_object` for a model-2 or model-3 feature: per instant, or per geometry instant of each period.
+
+    Raises
+    ------
+    PeriodTopologyError
+        Model 3: merged instant by instant, a period's geometry instants would have other topologies (TG308).
+    """
+    try:
+        inputs = read_sliced_states(conn, version, int(key))
+        states = inputs.states
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
+    except (InvalidInputError, VersioningError) as exc:  # a removal against a change, topology on both sides, ...
+        reasons[key] = exc.message
+        return None
+    recorded = sliced_region_solutions(conn, version, "feature", key, merge)
+    conflicting = {r.index for r in merge.conflicts}
+    solutions: dict[int, Solution] = {}
+    for i, value in recorded.items():
+        if i in conflicting:
+            solutions[i] = value if isinstance(value, MeshState) else _SIDE_SOLUTIONS[value]
+    unsolved = [r for r in merge.conflicts if r.index not in solutions]
+    if unsolved:
+        parts = []
+        for r in unsolved[:5]:
+            low, high = r.region.bounds.tolist()
+            parts.append(
+                f"region {r.index} at {slice_text(merge.base.kind, r.key)} unsolved (changed on both sides, "
+                f"differently: parent vertices {_ids(r.region.parent_vertex_ids)}, child vertices "
+                f"{_ids(r.region.child_vertex_ids)}; box {_point(low)}-{_point(high)})"
+            )
+        more = f"; {len(unsolved) - 5} more regions unsolved" if len(unsolved) > 5 else ""
+        reasons[key] = "; ".join(parts) + more
+        return None
+    try:
+        names = sliced_recorded_solutions(conn, version, "feature", key, merge) or {}
+        slices, discards = apply_sliced(merge, solutions, names=names)
+    except InvalidMergeError as exc:
+        reasons[key] = f"invalid merge: {exc.message}"
+        return None
+    attributes = _attribute_edits(conn, inputs, version, int(key))
+    if attributes.both:
+        reasons[key] = (
+            f"its attributes were changed both in the version and in its parent, to other values "
+            f"({', '.join(attributes.both)}): the merge by region merges the mesh only"
+        )
+        return None
+    for discard in discards:  # said before it is written
+        log.warning("feature %s of version %s: %s", key, show_name(version), _discard_text(discard))
+    _require_write(conn, version, key, may_write)
+    settings = read_version_settings(conn)
+    try:
+        with conn.transaction():  # a savepoint: an object whose rows cannot be written leaves nothing behind
+            conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))
+            written = write_sliced_difference(
+                conn,
+                inputs.feature_class,
+                int(key),
+                states["child"].slices,
+                slices,
+                states["child"].instant_rows,
+                merge.instant_rows,
+            )
+            written += _write_attribute_edits(conn, int(key), attributes)
+            if merge.base.kind == "EVOLVING" and len({k[0] for k in slices}) > 1:
+                check_continuity(conn, int(key), None)
+            restore_version_settings(conn, settings, local=True)
+            conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
+    except (InvalidInputError, DiscontinuousPeriodsError) as exc:
+        restore_version_settings(conn, settings, local=True)
+        reasons[key] = f"its merged rows cannot be written: {exc.message}"
+        return None
+    how: Literal["automatic", "solutions"] = "solutions" if solutions else "automatic"
+    log.info(
+        "feature %s of version %s merged slice by slice (%s, %d regions): %d rows written into the version",
+        key,
+        show_name(version),
+        how,
+        len(merge.regions),
+        written,
+    )
+    return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, discards)
+
+
+def _require_write(conn: Conn, version: str, key: str, may_write: list[bool | None]) -> None:
+    """Refuse a role that may not write in the version: a merge by region writes the merged object there first."""
+    if may_write[0] is None:
+        may_write[0] = bool(
+            conn.execute("SELECT tgsis.has_version_privilege(%s, 'write')", (version,)).fetchone()[0]  # type: ignore[index]
+        )
+    if not may_write[0]:
+        role = conn.execute("SELECT tgsis.calling_role()").fetchone()[0]  # type: ignore[index]
+        raise MissingPrivilegeError(
+            f"role {role} may not write in version {show_name(version)}: merging feature {key} by region writes the "
+            "merged mesh into the version first, then merges it",
+            hint=f"the owner or a tgsis_admin can run SELECT tgsis.grant_version('{_in_quotes(version)}', 'write', "
+            f"'{_in_quotes(str(role))}'); else tgsis.resolve_conflict solves it as a whole object (parent, child or "
+            "manual)",
+        )
 
 
 def _merge_by_region(

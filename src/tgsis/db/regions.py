@@ -36,8 +36,9 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 
+from tgsis._merge_slices import SlicedMerge, SliceKey, merge_sliced
 from tgsis.arguments import checked
-from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db._merge_states import SLICE_KEYS, feature_time_model, read_merge_states, read_sliced_states, version_row
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
@@ -71,6 +72,8 @@ __all__ = [
     "resolve_object_average",
     "resolve_region",
     "side_discard_text",
+    "sliced_recorded_solutions",
+    "sliced_region_solutions",
     "state_from_npz",
     "state_to_npz",
 ]
@@ -83,7 +86,7 @@ _RETRIES = 5  # serialization failures of a transaction of our own (two sessions
 _REGION_COLUMNS = (
     "region, conflict, changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids, child_vertex_ids,"
     " child_cell_ids, bbox, parent_displacement, child_displacement, solution, childmark, parentmark, solved_at,"
-    " solved_by"
+    " solved_by, times, timem"
 )
 _ID_FIELDS = ("vertex_ids", "cell_ids", "parent_vertex_ids", "parent_cell_ids", "child_vertex_ids", "child_cell_ids")
 
@@ -142,12 +145,15 @@ def _region_of_row(row: tuple[Any, ...]) -> ConflictRegion:
         parentmark=str(row[14]),
         solved_at=row[15],
         solved_by=row[16],
+        times=None if row[17] is None else float(row[17]),
+        timem=None if row[18] is None else float(row[18]),
     )
 
 
-def _region_json(region: MergeRegion) -> dict[str, Any]:
+def _region_json(region: MergeRegion, key: SliceKey | None = None) -> dict[str, Any]:
     bounds = np.asarray(region.bounds, dtype=np.float64).ravel()
     return {
+        **_slice_json(key),
         "region": region.index,
         "conflict": region.conflict,
         "changed_by": region.sides,
@@ -158,12 +164,14 @@ def _region_json(region: MergeRegion) -> dict[str, Any]:
     }
 
 
-def _computed_region(region: MergeRegion, marks: tuple[str, str], stored: ConflictRegion | None) -> ConflictRegion:
+def _computed_region(
+    region: MergeRegion, marks: tuple[str, str], stored: ConflictRegion | None, key: SliceKey | None = None
+) -> ConflictRegion:
     """A region as found, with the stored solution of the same region (same marks, same ids), if any."""
-    as_json = _region_json(region)
+    as_json = _region_json(region, key)
     solution = "unsolved" if region.conflict else "automatic"
     solved_at = solved_by = None
-    if stored is not None and region.conflict and _same_region(stored, region):
+    if stored is not None and region.conflict and _same_region(stored, region) and _same_slice(stored, key):
         solution, solved_at, solved_by = stored.solution, stored.solved_at, stored.solved_by
     return ConflictRegion(
         region=region.index,
@@ -178,7 +186,23 @@ def _computed_region(region: MergeRegion, marks: tuple[str, str], stored: Confli
         parentmark=marks[1],
         solved_at=solved_at,
         solved_by=solved_by,
+        times=as_json.get("times"),
+        timem=as_json.get("timem"),
     )
+
+
+def _slice_json(key: SliceKey | None) -> dict[str, float]:
+    """A slice key as the region's ``times`` (and model 3's ``timem``); nothing for a model-1 region."""
+    if key is None:
+        return {}
+    if len(key) == 2:
+        return {"times": float(key[1]), "timem": float(key[0])}
+    return {"times": float(key[0])}
+
+
+def _same_slice(stored: ConflictRegion, key: SliceKey | None) -> bool:
+    wanted = _slice_json(key)
+    return (stored.times, stored.timem) == (wanted.get("times"), wanted.get("timem"))
 
 
 def _same_region(stored: ConflictRegion, region: MergeRegion) -> bool:
@@ -254,11 +278,11 @@ def _find(conn: Conn, version: str) -> list[Conflict]:
     for row in rows:
         conflict = Conflict.from_row(row)
         marks = (str(row[6]), str(row[7]))
-        merge, refusal = _object_merge(conn, version, conflict.objectclass, conflict.objectkey)
-        if merge is None:
+        found, refusal = _object_regions(conn, version, conflict.objectclass, conflict.objectkey)
+        if found is None:
             result.append(_with(conflict, (), refusal))
             continue
-        payload = json.dumps([_region_json(r) for r in merge.regions])
+        payload = json.dumps([_region_json(r, k) for r, k in found])
         if stores:
             conn.execute(
                 "SELECT tgsis.record_conflict_regions(%s, %s, %s, %s, %s, %s::jsonb)",
@@ -273,8 +297,8 @@ def _find(conn: Conn, version: str) -> list[Conflict]:
         else:  # computed only, with the solutions recorded for the same regions
             stored = {r.region: r for r in _stored_regions(conn, versionid, conflict.objectclass, conflict.objectkey)}
             regions = tuple(
-                _computed_region(r, marks, stored.get(r.index) if _marks_of(stored) == marks else None)
-                for r in merge.regions
+                _computed_region(r, marks, stored.get(r.index) if _marks_of(stored) == marks else None, k)
+                for r, k in found
             )
         result.append(_with(conflict, regions, None))
     return result
@@ -298,6 +322,41 @@ def _stores_conflicts(conn: Conn, version: str) -> bool:
         (version,),
     ).fetchone()
     return bool(row and row[0])
+
+
+def _object_regions(
+    conn: Conn, version: str, objectclass: str, objectkey: str
+) -> tuple[list[tuple[MergeRegion, SliceKey | None]] | None, str | None]:
+    """The regions of a conflicting object (each with its slice: models 2 and 3), or None and why not."""
+    if objectclass == "feature":
+        try:
+            with reraise(), conn.transaction():
+                sliced = feature_time_model(conn, version, int(objectkey)) in SLICE_KEYS
+        except Error as exc:
+            return None, exc.message
+        if sliced:
+            merge, refusal = _sliced_object_merge(conn, version, objectkey)
+            if merge is None:
+                return None, refusal
+            return [(dataclasses.replace(r.region, index=r.index), r.key) for r in merge.regions], None
+    mesh, refusal = _object_merge(conn, version, objectclass, objectkey)
+    return (None, refusal) if mesh is None else ([(r, None) for r in mesh.regions], None)
+
+
+def _sliced_object_merge(conn: Conn, version: str, objectkey: str) -> tuple[SlicedMerge | None, str | None]:
+    """:func:`_object_merge` for a model-2 or model-3 feature: its merge slice by slice, or None and why not."""
+    try:
+        with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
+            states = read_sliced_states(conn, version, int(objectkey)).states
+        return merge_sliced(states["base"], states["parent"], states["child"]), None
+    except MissingPrivilegeError as exc:
+        return None, f"the role may not read it: {exc.message}"
+    except (InvalidInputError, InvalidMergeError, NotFoundError) as exc:
+        return None, exc.message
+    except Error as exc:
+        if exc.code == "TG300":  # VersioningError: not changed on both sides (a conflict of tables only)
+            return None, exc.message
+        raise
 
 
 def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) -> tuple[MeshMerge | None, str | None]:
@@ -380,6 +439,67 @@ def _holds(stored: list[ConflictRegion], marks: tuple[str, str], merge: MeshMerg
         and all((r.childmark, r.parentmark) == marks for r in stored)
         and all(_same_region(s, m) for s, m in zip(stored, merge.regions, strict=True))
     )
+
+
+def _holds_sliced(stored: list[ConflictRegion], marks: tuple[str, str], merge: SlicedMerge) -> bool:
+    return (
+        len(stored) == len(merge.regions)
+        and len(stored) > 0
+        and all((r.childmark, r.parentmark) == marks for r in stored)
+        and all(
+            _same_region(s, dataclasses.replace(m.region, index=m.index)) and _same_slice(s, m.key)
+            for s, m in zip(stored, merge.regions, strict=True)
+        )
+    )
+
+
+@checked
+def sliced_region_solutions(
+    conn: Conn, version: str, objectclass: str, objectkey: str, merge: SlicedMerge
+) -> dict[int, str | MeshState]:
+    """:func:`region_solutions` for a model-2 or model-3 object merged slice by slice (regions numbered in the object).
+
+    The stored regions hold when found on the current marks and they are the
+    merge's, slice and ids alike; otherwise ``{}``.
+    """
+    with reraise():
+        versionid = version_row(conn, version)[0]
+        marks = _current_marks(conn, versionid, objectclass, objectkey)
+        stored = _stored_regions(conn, versionid, objectclass, objectkey)
+        if marks is None or not _holds_sliced(stored, marks, merge):
+            return {}
+        meshes = dict(
+            conn.execute(
+                "SELECT region, solution_mesh FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
+                " AND objectkey = %s AND solution_mesh IS NOT NULL",
+                (versionid, objectclass, objectkey),
+            ).fetchall()
+        )
+    solutions: dict[int, str | MeshState] = {}
+    for region in stored:
+        if not region.conflict or region.solution == "unsolved":
+            continue
+        if region.solution in ("average", "manual"):
+            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), merge.base.name)
+        else:
+            solutions[region.region] = region.solution
+    return solutions
+
+
+@checked
+def sliced_recorded_solutions(
+    conn: Conn, version: str, objectclass: str, objectkey: str, merge: SlicedMerge
+) -> dict[int, str] | None:
+    """:func:`recorded_solutions` for a model-2 or model-3 object merged slice by slice."""
+    with reraise():
+        versionid = version_row(conn, version)[0]
+        stored = _stored_regions(conn, versionid, objectclass, objectkey)
+        if not stored:
+            return {}
+        marks = _current_marks(conn, versionid, objectclass, objectkey)
+        if marks is None or not _holds_sliced(stored, marks, merge):
+            return None
+    return {r.region: r.solution for r in stored}
 
 
 # --------------------------------------------------------------------------- a MeshState as .npz bytes
@@ -586,6 +706,8 @@ def _resolve(
     if solution == "unsolved" or not 0 <= index < len(stored) or not stored[index].conflict:
         # nothing to compute: the SQL function records it or refuses (not a region, no conflict)
         return RegionResolution(_record(conn, version, key, index, solution, None), ())
+    if stored[index].times is not None:  # a region of one slice of a temporal surface (models 2, 3)
+        return _resolve_sliced(conn, version, feature_id, key, stored, index, solution, mesh, discard_other, name)
     merge = _checked_merge(conn, version, feature_id, stored, name)
     target = merge.regions[index]
     given: Solution
@@ -602,6 +724,97 @@ def _resolve(
     placeholders.pop(index, None)
     resolved = apply_solutions(merge, {**placeholders, **others, index: given}, names={index: solution})
     discards = tuple(d for d in resolved.discards if d.region == index)
+    if discards and not discard_other:
+        raise RegionSolutionError(
+            f"{name}: solution {solution} discards edits: " + "; ".join(discard_text(d) for d in discards),
+            hint="call again with discard_other=True to discard them, or choose another solution",
+        )
+    state = given if isinstance(given, MeshState) else None
+    row = _record(conn, version, key, index, solution, None if state is None else state_to_npz(state))
+    return RegionResolution(row, discards, state)
+
+
+def _checked_sliced_merge(
+    conn: Conn, version: str, feature_id: int, stored: list[ConflictRegion], name: str
+) -> SlicedMerge:
+    """:func:`_checked_merge` of a model-2/3 object: its merge slice by slice, refused when other than stored."""
+    states = read_sliced_states(conn, version, feature_id).states
+    merge = merge_sliced(states["base"], states["parent"], states["child"])
+    if len(stored) != len(merge.regions) or not all(
+        _same_region(s, dataclasses.replace(m.region, index=m.index)) and _same_slice(s, m.key)
+        for s, m in zip(stored, merge.regions, strict=True)
+    ):
+        raise RegionSolutionError(
+            f"{name}: the stored regions are not those of the object's states now",
+            hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r})",
+        )
+    return merge
+
+
+def _slice_solution(
+    conn: Conn,
+    version: str,
+    key: str,
+    merge: SlicedMerge,
+    given: Mapping[int, Solution],
+    names: Mapping[int, str],
+) -> tuple[RegionDiscard, ...]:
+    """Check the solutions ``given`` (object region numbers) on their slices with the other recorded ones there.
+
+    Each slice of a given region takes :func:`apply_solutions` with the
+    recorded solutions of its other conflicting regions (``parent`` for those
+    still unsolved) and the given ones; what the given ones discard is
+    returned, numbered in the object.
+    """
+    recorded = sliced_region_solutions(conn, version, "feature", key, merge)
+    discards: list[RegionDiscard] = []
+    for slice_key in sorted({merge.region(i).key for i in given}):
+        mine = [r for r in merge.regions if r.key == slice_key]
+        number = {r.region.index: r.index for r in mine}
+        local: dict[int, Solution] = {}
+        for r in mine:
+            if not r.region.conflict:
+                continue
+            if r.index in given:
+                local[r.region.index] = given[r.index]
+            elif r.index in recorded:
+                value = recorded[r.index]
+                local[r.region.index] = value if isinstance(value, MeshState) else cast(Solution, value)
+            else:
+                local[r.region.index] = "parent"
+        local_names = {r.region.index: names[r.index] for r in mine if r.index in names}
+        resolved = apply_solutions(merge.merges[slice_key], local, names=local_names)
+        discards += [
+            dataclasses.replace(d, region=number[d.region]) for d in resolved.discards if number[d.region] in given
+        ]
+    return tuple(sorted(discards, key=lambda d: (d.region, d.side)))
+
+
+def _resolve_sliced(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    key: str,
+    stored: list[ConflictRegion],
+    index: int,
+    solution: str,
+    mesh: MeshState | Mesh | None,
+    discard_other: bool,
+    name: str,
+) -> RegionResolution:
+    """:func:`_resolve` for a region of one slice of a model-2/3 object: solved on that slice's merge."""
+    merge = _checked_sliced_merge(conn, version, feature_id, stored, name)
+    target = merge.region(index)
+    mm = merge.merges[target.key]
+    given: Solution
+    if solution == "average":
+        given = average_region(mm, target.region)
+    elif solution == "manual":
+        assert mesh is not None
+        given = _manual_state(mm, target.region, mesh, name)
+    else:
+        given = cast(Solution, solution)
+    discards = _slice_solution(conn, version, key, merge, {index: given}, {index: solution})
     if discards and not discard_other:
         raise RegionSolutionError(
             f"{name}: solution {solution} discards edits: " + "; ".join(discard_text(d) for d in discards),
@@ -830,6 +1043,8 @@ def _resolve_all(
         )
     if solution == "unsolved":
         return ObjectResolution(tuple(_record(conn, version, key, i, solution, None) for i in conflicting), (), ())
+    if any(r.times is not None for r in stored):  # a model-2/3 object: its regions lie in its slices
+        return _resolve_all_sliced(conn, version, feature_id, key, stored, solution, discard_other, name)
     merge = _checked_merge(conn, version, feature_id, stored, name)
     given: dict[int, Solution] = {}
     for region in merge.conflicts:
@@ -844,6 +1059,46 @@ def _resolve_all(
             given[region.index] = cast(Solution, solution)
     resolved = apply_solutions(merge, given, names=dict.fromkeys(given, solution))
     discards = tuple(sorted((d for d in resolved.discards if d.region in given), key=lambda d: (d.region, d.side)))
+    totals = _totals(discards, solution)
+    if discards and not discard_other:
+        raise RegionSolutionError(
+            f"{name}: solution {solution} of all its regions discards edits: "
+            + "; ".join([*(side_discard_text(t) for t in totals), *(discard_text(d) for d in discards)]),
+            hint="call again with discard_other=True to discard them, or choose another solution",
+        )
+    rows = []
+    for index in sorted(given):
+        value = given[index]
+        mesh = state_to_npz(value) if isinstance(value, MeshState) else None
+        rows.append(_record(conn, version, key, index, solution, mesh))
+    return ObjectResolution(tuple(rows), discards, totals)
+
+
+def _resolve_all_sliced(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    key: str,
+    stored: list[ConflictRegion],
+    solution: str,
+    discard_other: bool,
+    name: str,
+) -> ObjectResolution:
+    """:func:`_resolve_all` for a model-2/3 object: every conflicting region of every slice, all or nothing."""
+    merge = _checked_sliced_merge(conn, version, feature_id, stored, name)
+    given: dict[int, Solution] = {}
+    for r in merge.conflicts:
+        if solution == "average":
+            try:
+                given[r.index] = average_region(merge.merges[r.key], r.region)
+            except RegionSolutionError as exc:
+                raise RegionSolutionError(
+                    f"{name}: average of all its regions refused, nothing recorded: region {r.index}: {exc.message}",
+                    hint=exc.hint,
+                ) from exc
+        else:
+            given[r.index] = cast(Solution, solution)
+    discards = _slice_solution(conn, version, key, merge, given, dict.fromkeys(given, solution))
     totals = _totals(discards, solution)
     if discards and not discard_other:
         raise RegionSolutionError(

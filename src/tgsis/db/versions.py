@@ -577,6 +577,10 @@ class ConflictRegion:
         The conflict's marks the region was found on.
     solved_at : datetime or None
     solved_by : str or None
+    times : float or None
+        A region of a temporal surface: the instant (model 2) or geometry instant (model 3) it lies in; None for model 1.
+    timem : float or None
+        Model 3: the topology period of that geometry instant.
     """
 
     region: int
@@ -596,10 +600,19 @@ class ConflictRegion:
     parentmark: str = ""
     solved_at: datetime | None = None
     solved_by: str | None = None
+    times: float | None = None
+    timem: float | None = None
 
     def as_json(self) -> dict[str, Any]:
-        """The region as plain JSON values (what ``tgsis version conflicts --json`` prints)."""
+        """The region as plain JSON values (what ``tgsis version conflicts --json`` prints).
+
+        A region of a temporal surface names its slice: ``times`` (the
+        instant of model 2, the geometry instant of model 3) and ``timem``
+        (model 3: the topology period).
+        """
         return {
+            **({} if self.times is None else {"times": self.times}),
+            **({} if self.timem is None else {"timem": self.timem}),
             "region": self.region,
             "conflict": self.conflict,
             "changed_by": self.changed_by,

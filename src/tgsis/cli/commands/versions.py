@@ -240,6 +240,14 @@ def _object_regions(conn: Any, version: str, conflicts: Sequence[V.Conflict]) ->
         if c.objectclass != "feature":
             found[key] = f"whole object: a row of {c.objectclass}, not a mesh"
             continue
+        sliced = sorted({r.times for r in c.regions if r.times is not None})
+        if sliced:  # models 2 and 3: found and listed per instant by find_conflicts
+            found[key] = (
+                f"by instant: {len(c.regions)} regions at {len(sliced)} instant(s) "
+                f"({', '.join(f'{t:.17g}' for t in sliced[:8])}{', ...' if len(sliced) > 8 else ''}); "
+                "--json lists them (conflict_regions, each with its times)"
+            )
+            continue
         try:
             found[key] = object_merge(conn, version, int(c.objectkey))
         except InvalidInputError as exc:  # not a mesh of model 1, or states that do not compare (other columns)
