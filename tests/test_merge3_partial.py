@@ -55,7 +55,10 @@ def region_key(r: MergeRegion) -> tuple[Any, ...]:
 
 def vertex_rows(state: MeshState) -> dict[int, tuple[Any, ...]]:
     """Per vertex id: coordinates as bits and property values as bits."""
-    props = [np.asarray(v, dtype=np.float64).reshape(state.n_vertices, max(1, v[0].size if len(v) else 1)) for v in state.vertex_properties.values()]
+    props = [
+        np.asarray(v, dtype=np.float64).reshape(state.n_vertices, max(1, v[0].size if len(v) else 1))
+        for v in state.vertex_properties.values()
+    ]
     return {
         int(i): (state.vertices[n].tobytes(), *(p[n].tobytes() for p in props))
         for n, i in enumerate(state.vertex_ids.tolist())
@@ -64,7 +67,10 @@ def vertex_rows(state: MeshState) -> dict[int, tuple[Any, ...]]:
 
 def cell_rows(state: MeshState) -> dict[int, tuple[Any, ...]]:
     """Per cell id: its vertex ids in order and property values as bits."""
-    props = [np.asarray(v, dtype=np.float64).reshape(state.n_cells, max(1, v[0].size if len(v) else 1)) for v in state.cell_properties.values()]
+    props = [
+        np.asarray(v, dtype=np.float64).reshape(state.n_cells, max(1, v[0].size if len(v) else 1))
+        for v in state.cell_properties.values()
+    ]
     return {
         int(i): (tuple(state.cells[n].tolist()), *(p[n].tobytes() for p in props))
         for n, i in enumerate(state.cell_ids.tolist())
@@ -104,9 +110,7 @@ def assert_same_merge(case: tuple[Rows, Rows, Rows], data: st.DataObject) -> Non
     extra_c = data.draw(st.lists(st.sampled_from(base.cell_ids.tolist()), max_size=3)) if base.n_cells else []
     parts = neighbourhood(base, parent, child, extra_v, extra_c)
     whole, whole_refusal = merged_or_refusal(lambda: three_way_merge(base, parent, child))
-    part, part_refusal = merged_or_refusal(
-        lambda: three_way_merge(*parts, top_ids=largest_ids(base, parent, child))
-    )
+    part, part_refusal = merged_or_refusal(lambda: three_way_merge(*parts, top_ids=largest_ids(base, parent, child)))
     assert part_refusal == whole_refusal
     if whole is None:
         return
@@ -151,8 +155,10 @@ def test_a_clashing_new_id_is_renumbered_above_the_whole_states_not_the_restrict
     xyz = np.stack([np.arange(11.0), np.zeros(11), np.zeros(11)], axis=1)
     ids = np.array([*range(10), 500])
     base = MeshState(2, ids, xyz, np.arange(9), np.stack([ids[:9], ids[1:10]], axis=1))
-    parent = MeshState(2, [*ids, 100], [*xyz, [0.0, 1.0, 0.0]], np.arange(10), [*base.cells, [0, 100]])
-    child = MeshState(2, [*ids, 100], [*xyz, [0.0, -1.0, 0.0]], [*range(9), 10], [*base.cells, [0, 100]])
+    added = np.append(ids, 100)
+    cells = np.concatenate([base.cells, [[0, 100]]])
+    parent = MeshState(2, added, np.concatenate([xyz, [[0.0, 1.0, 0.0]]]), np.arange(10), cells)
+    child = MeshState(2, added, np.concatenate([xyz, [[0.0, -1.0, 0.0]]]), np.append(np.arange(9), 10), cells)
     whole = three_way_merge(base, parent, child)
     parts = neighbourhood(base, parent, child, [], [])
     assert 500 not in parts[0].vertex_ids  # the far vertex is not read

@@ -52,7 +52,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import checked
-from tgsis.db._merge_states import MergeInputs, read_merge_states, version_row
+from tgsis.db._merge_states import MergeInputs, read_merge_change, read_merge_states, version_row
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._static import SIMPLEX
@@ -661,13 +661,24 @@ def _merge_object(
 ) -> MergedObject | None:
     """Merge one conflicting feature by region into the version (locked transaction); None with the reason when not."""
     try:
-        inputs = read_merge_states(conn, version, int(key))
+        # the change and its two rings (docs/merge.md): the same regions and merged rows, read by key
+        change = read_merge_change(conn, version, int(key))
+        inputs = change[0] if change is not None else read_merge_states(conn, version, int(key))
     except (InvalidInputError, VersioningError) as exc:  # not model 1, deleted on one side, attributes on both
         reasons[key] = exc.message
         return None
     states = inputs.states
-    merge = three_way_merge(states["base"], states["parent"], states["child"])
+    merge = three_way_merge(
+        states["base"], states["parent"], states["child"], top_ids=change[1] if change is not None else None
+    )
     solutions = _recorded_solutions(conn, version, key, merge)
+    if change is not None and any(isinstance(s, MeshState) for s in solutions.values()):
+        # a recorded mesh (average, manual) may hold the object's other rows, which must equal the merge's: whole
+        change = None
+        inputs = read_merge_states(conn, version, int(key))
+        states = inputs.states
+        merge = three_way_merge(states["base"], states["parent"], states["child"])
+        solutions = _recorded_solutions(conn, version, key, merge)
     if any(r.index not in solutions for r in merge.conflicts):
         reasons[key] = _unsolved_reason(merge, solutions)
         return None
@@ -706,7 +717,9 @@ def _merge_object(
     try:
         with conn.transaction():  # a savepoint: an object whose rows cannot be written leaves nothing behind
             conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
-            written = write_state_difference(conn, inputs.feature_class, int(key), states["child"], resolved.state)
+            written = write_state_difference(
+                conn, inputs.feature_class, int(key), states["child"], resolved.state, whole=change is None
+            )
             written += _write_attribute_edits(conn, int(key), attributes)
             restore_version_settings(conn, settings, local=True)
             conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))

@@ -36,7 +36,7 @@ import numpy.typing as npt
 import psycopg
 
 from tgsis.arguments import checked
-from tgsis.db._merge_states import read_merge_states, version_row
+from tgsis.db._merge_states import read_merge_change, read_merge_states, version_row
 from tgsis.db._transfer import repeatable_read
 from tgsis.db.versions import Conflict, ConflictRegion, show_name
 from tgsis.errors import (
@@ -299,8 +299,11 @@ def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) ->
         return None, f"a row of the versioned table(s) of object class {objectclass}: it merges as a whole object"
     try:
         with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
-            states = read_merge_states(conn, version, int(objectkey)).states
-        return three_way_merge(states["base"], states["parent"], states["child"]), None
+            # the change and its two rings (docs/merge.md): the same regions, read by key
+            change = read_merge_change(conn, version, int(objectkey))
+            states = change[0].states if change is not None else read_merge_states(conn, version, int(objectkey)).states
+        top = change[1] if change is not None else None
+        return three_way_merge(states["base"], states["parent"], states["child"], top_ids=top), None
     except MissingPrivilegeError as exc:
         return None, f"the role may not read it: {exc.message}"
     except (InvalidInputError, InvalidMergeError, NotFoundError) as exc:
