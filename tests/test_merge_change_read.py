@@ -15,6 +15,7 @@ reference merge of the whole states computes.
 from __future__ import annotations
 
 from typing import Any
+from unittest import mock
 
 import numpy as np
 import psycopg
@@ -24,7 +25,7 @@ from hypothesis import strategies as st
 import tgsis
 from tests.merge_data import curved_surface
 from tests.test_merge3_partial import assert_restriction, region_key
-from tests.test_merge_states_read import EDIT, _COUNTER, assert_identical, edit, faults, reference_states
+from tests.test_merge_states_read import _COUNTER, EDIT, assert_identical, edit, faults, reference_states
 from tgsis.db import _merge_states, merging, regions
 from tgsis.db import features as F
 from tgsis.db.classes import FeatureClass
@@ -120,25 +121,18 @@ def test_find_conflicts_and_merge_read_the_change_and_write_the_whole_merge(conn
     expected = three_way_merge(whole["base"], whole["parent"], whole["child"])
     assert expected.merged is not None and not expected.conflicts
     # the reads of the whole object are not needed: refused here, the merge by region must not make them
-    real = _merge_states.read_merge_states
-
-    def refused(*args: Any) -> Any:
-        raise AssertionError("read_merge_states called")
-
-    _merge_states.read_merge_states = refused  # type: ignore[assignment]
-    merging.read_merge_states = refused  # type: ignore[attr-defined]
-    regions.read_merge_states = refused  # type: ignore[attr-defined]
-    try:
+    refused = mock.Mock(side_effect=AssertionError("read_merge_states called"))
+    with (
+        mock.patch.object(merging, "read_merge_states", refused),
+        mock.patch.object(regions, "read_merge_states", refused),
+    ):
         [conflict] = regions.find_conflicts(conn, version)
         assert [r.vertex_ids.tolist() for r in conflict.regions] == [r.vertex_ids.tolist() for r in expected.regions]
         assert [r.cell_ids.tolist() for r in conflict.regions] == [r.cell_ids.tolist() for r in expected.regions]
         conn.commit()
         merging.merge_version(conn, version)
         conn.commit()
-    finally:
-        _merge_states.read_merge_states = real  # type: ignore[assignment]
-        merging.read_merge_states = real  # type: ignore[attr-defined]
-        regions.read_merge_states = real  # type: ignore[attr-defined]
+    assert not refused.called
     merged = expected.merged.state
     with tgsis.in_version(conn, "DEFAULT"):
         rows = conn.execute(
