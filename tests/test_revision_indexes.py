@@ -104,3 +104,37 @@ def test_a_merge_finds_the_rows_it_writes_through_the_revision_indexes(conn: Con
     with tgsis.in_version(conn, "DEFAULT"):
         rows = conn.execute("SELECT obj, k, v FROM samples WHERE v < 0 OR v <> round(v) ORDER BY obj, k").fetchall()
     assert rows == [(1, k, -float(k)) for k in range(1, 11)] + [(2, k, k + 0.5) for k in range(19991, 20001)]
+
+
+def test_the_conflict_check_finds_the_changed_rows_through_the_revision_indexes(conn: Conn) -> None:
+    conn.execute("CREATE TABLE samples (obj int, k int, v float8, PRIMARY KEY (obj, k))")
+    conn.execute("INSERT INTO samples SELECT 1, k, k FROM generate_series(1, 20000) k")
+    tgsis.enable_versioning(conn, "samples", "obj", "sample")
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE samples SET v = -v WHERE obj = 1 AND k <= 10")
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute("UPDATE samples SET v = v + 0.5 WHERE obj = 1 AND k > 19990")
+    conn.commit()
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE samples_ver")
+    conn.autocommit = False
+    plans: list[str] = []
+    conn.add_notice_handler(lambda d: plans.append(d.message_primary or ""))
+    for setting in (
+        "LOAD 'auto_explain'",
+        "SET auto_explain.log_min_duration = 0",
+        "SET auto_explain.log_nested_statements = on",
+        "SET auto_explain.log_level = notice",
+        "SET enable_seqscan = off",
+    ):
+        conn.execute(setting)
+    (conflict,) = V.find_conflicts(conn, "e1")
+    conn.commit()
+    assert conflict.objectkey == "1"
+    reads = [p for p in plans if "md5(string_agg" in p and "samples_ver v" in p]
+    assert reads, plans
+    for plan in reads:  # each side's changed rows: written in its revisions (by index), or closed (the partial index)
+        assert "Seq Scan on samples_ver v" not in plan, plan
+        assert "Bitmap Index Scan on samples_ver_obj_idx" in plan, plan
