@@ -87,11 +87,14 @@ def assert_restriction(whole: MeshState, part: MeshState, parent: MeshState) -> 
 
 
 def neighbourhood(
-    base: MeshState, parent: MeshState, child: MeshState, extra_v: list[int], extra_c: list[int]
+    base: MeshState, parent: MeshState, child: MeshState, extra_v: list[int], extra_c: list[int], rings: int = 2
 ) -> tuple[MeshState, MeshState, MeshState]:
     (pv, pc), (cv, cc) = changed_ids(base, parent), changed_ids(base, child)
     vids, cids = change_neighbourhood(
-        (base, parent, child), np.concatenate([pv, cv, extra_v]).astype(np.int64), np.concatenate([pc, cc, extra_c])
+        (base, parent, child),
+        np.concatenate([pv, cv, extra_v]).astype(np.int64),
+        np.concatenate([pc, cc, extra_c]),
+        rings=rings,
     )
     return tuple(restrict_state(s, vids, cids) for s in (base, parent, child))  # type: ignore[return-value]
 
@@ -103,12 +106,12 @@ def merged_or_refusal(action: Any) -> tuple[Any, str | None]:
         return None, str(exc)
 
 
-def assert_same_merge(case: tuple[Rows, Rows, Rows], data: st.DataObject) -> None:
+def assert_same_merge(case: tuple[Rows, Rows, Rows], data: st.DataObject, rings: int = 2) -> None:
     base, parent, child = (rows.state() for rows in case)
     # rows changed or not: what the database reads is any superset of the changed rows (rows rewritten alike)
     extra_v = data.draw(st.lists(st.sampled_from(base.vertex_ids.tolist()), max_size=3)) if base.n_vertices else []
     extra_c = data.draw(st.lists(st.sampled_from(base.cell_ids.tolist()), max_size=3)) if base.n_cells else []
-    parts = neighbourhood(base, parent, child, extra_v, extra_c)
+    parts = neighbourhood(base, parent, child, extra_v, extra_c, rings)
     whole, whole_refusal = merged_or_refusal(lambda: three_way_merge(base, parent, child))
     part, part_refusal = merged_or_refusal(lambda: three_way_merge(*parts, top_ids=largest_ids(base, parent, child)))
     assert part_refusal == whole_refusal
@@ -140,6 +143,14 @@ def test_a_merge_of_the_change_and_two_rings_is_the_merge_of_the_whole_states(
     case: tuple[Rows, Rows, Rows], data: st.DataObject
 ) -> None:
     assert_same_merge(case, data)
+
+
+@PROPERTY
+@given(any_edits(), st.data())
+def test_one_ring_is_enough_for_the_regions_an_automatic_merge_and_the_side_solutions(
+    case: tuple[Rows, Rows, Rows], data: st.DataObject
+) -> None:
+    assert_same_merge(case, data, rings=1)
 
 
 @PROPERTY

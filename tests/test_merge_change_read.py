@@ -1,10 +1,10 @@
-"""read_merge_change reads the change and its two rings: merges of it equal merges of the three whole states.
+"""read_merge_change reads the change and its one-ring: merges of it equal merges of the three whole states.
 
 For random edits on both sides made as SQL users make them (the edits of
 tests/test_merge_states_read.py without GOCAD atoms and part runs, which are
 read whole), in several revisions of each side: the states it reads must be
 the whole states' rows of the ids it read, bit for bit, those ids must hold
-the change and its two rings (tgsis.merge3.change_neighbourhood), its
+the change and its one-ring (tgsis.merge3.change_neighbourhood, rings=1), its
 largest ids must be the whole states', and three_way_merge of them (with
 those ids) must give exactly the regions, renumbering and merged rows of the
 merge of the whole states. Then find_conflicts and merge_version, which read
@@ -14,11 +14,13 @@ reference merge of the whole states computes.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 from unittest import mock
 
 import numpy as np
 import psycopg
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -29,8 +31,10 @@ from tests.test_merge_states_read import _COUNTER, EDIT, assert_identical, edit,
 from tgsis.db import _merge_states, merging, regions
 from tgsis.db import features as F
 from tgsis.db.classes import FeatureClass
+from tgsis.errors import InvalidMergeError
 from tgsis.merge3 import (
     MeshState,
+    apply_solutions,
     change_neighbourhood,
     changed_ids,
     largest_ids,
@@ -92,7 +96,7 @@ def test_the_read_of_the_change_merges_as_the_whole_states(
         assert_identical(part[side], restrict_state(whole[side], vids, cids))
     states = (whole["base"], whole["parent"], whole["child"])
     (pv, pc), (cv, cc) = changed_ids(states[0], states[1]), changed_ids(states[0], states[2])
-    need_v, need_c = change_neighbourhood(states, np.concatenate([pv, cv]), np.concatenate([pc, cc]))
+    need_v, need_c = change_neighbourhood(states, np.concatenate([pv, cv]), np.concatenate([pc, cc]), rings=1)
     assert set(need_v.tolist()) <= set(vids.tolist())
     assert set(need_c.tolist()) <= set(cids.tolist())
     assert top == largest_ids(*states)
@@ -104,6 +108,18 @@ def test_the_read_of_the_change_merges_as_the_whole_states(
     assert (got.merged is None) == (expected.merged is None)
     if got.merged is not None and expected.merged is not None:
         assert_restriction(expected.merged.state, got.merged.state, whole["parent"])
+    for solution in ("parent", "child", "base"):  # the solutions the merge applies to what it read
+        chosen = {r.index: solution for r in expected.conflicts}
+        if chosen:
+            try:
+                want = apply_solutions(expected, chosen)  # type: ignore[arg-type]
+            except InvalidMergeError as exc:
+                with pytest.raises(InvalidMergeError, match=re.escape(exc.message)):
+                    apply_solutions(got, chosen)  # type: ignore[arg-type]
+                continue
+            have = apply_solutions(got, chosen)  # type: ignore[arg-type]
+            assert have.discards == want.discards
+            assert_restriction(want.state, have.state, whole["parent"])
 
 
 def test_an_object_with_atoms_is_read_whole(conn: Conn, faults: FeatureClass) -> None:

@@ -553,7 +553,7 @@ def _corners(state: MeshState, cell_ids: IntArray) -> IntArray:
 
 
 def change_neighbourhood(
-    states: tuple[MeshState, ...], vertex_ids: npt.ArrayLike, cell_ids: npt.ArrayLike
+    states: tuple[MeshState, ...], vertex_ids: npt.ArrayLike, cell_ids: npt.ArrayLike, *, rings: int = 2
 ) -> tuple[IntArray, IntArray]:
     """The rows a merge restricted to the change reads: the changed rows and two rings around them (docs/merge.md).
 
@@ -572,8 +572,18 @@ def change_neighbourhood(
     :func:`three_way_merge` of the three states restricted to ``(V3, C2)``
     (:func:`restrict_state`), given the whole states' largest ids, finds
     exactly the regions, conflicts, renumbering and validity of the whole
-    states. The database reads the same sets by key
-    (:mod:`tgsis.db._merge_states`).
+    states, and :func:`apply_solutions` gives the whole result's rows for
+    any solution.
+
+    With ``rings=1``, ``(V2, C1)``: enough for the regions, the renumbering,
+    an automatic merge and the solutions ``parent``, ``child`` and ``base``.
+    The validity check looks at the cells around the corners of the cells
+    it takes; those it can find wrong (a duplicated or non-manifold cell, a
+    cell on a removed vertex, a vertex left without cells) involve a changed
+    cell or a removed vertex, whose cells all lie on ``V1`` (docs/merge.md),
+    as long as every cell of ``C1`` no side changed stays: a manual mesh may
+    drop one, and needs the second ring. The database reads one ring for the
+    merges by region (:mod:`tgsis.db._merge_states`).
 
     Parameters
     ----------
@@ -581,16 +591,22 @@ def change_neighbourhood(
         The states whose cells count (the whole ones here).
     vertex_ids, cell_ids : array_like of int
         ``V0`` and ``C0``: the ids of the changed rows (any superset of them).
+    rings : int
+        2 (any solution) or 1 (no manual mesh).
 
     Returns
     -------
-    (V3, C2) : int64 arrays, sorted, unique
+    (V3, C2), or (V2, C1) with ``rings=1`` : int64 arrays, sorted, unique
     """
+    if rings not in (1, 2):
+        raise InvalidInputError(f"rings={rings!r}: the neighbourhood of a change is of 1 or 2 rings")
     v0 = np.unique(np.asarray(vertex_ids, dtype=np.int64))
     c0 = np.unique(np.asarray(cell_ids, dtype=np.int64))
     v1 = np.unique(np.concatenate([v0, *(_corners(s, c0) for s in states)]))
     c1 = np.unique(np.concatenate([c0, *(_cells_on(s, v1) for s in states)]))
     v2 = np.unique(np.concatenate([v1, *(_corners(s, c1) for s in states)]))
+    if rings == 1:
+        return v2, c1
     c2 = np.unique(np.concatenate([c1, *(_cells_on(s, v2) for s in states)]))
     v3 = np.unique(np.concatenate([v2, *(_corners(s, c2) for s in states)]))
     return v3, c2

@@ -492,7 +492,7 @@ def _checked_object(conn: Conn, version: str, feature_id: int) -> tuple[int, str
     return versionid, parent, (initrevision, parent_working, working), fc
 
 
-# --------------------------------------------------------------------------- the change and its two rings
+# --------------------------------------------------------------------------- the change and its one-ring
 
 
 def _visible_in(sets: Mapping[str, list[int]]) -> sql.Composed:
@@ -553,13 +553,15 @@ def _revision_sets(conn: Conn, sides: Mapping[str, tuple[str, int]]) -> dict[str
 def _read_change(
     conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]]
 ) -> tuple[dict[str, _Rows], tuple[int, int]] | None:
-    """The rows of base, parent and child restricted to the change and its two rings, and the largest ids of the three.
+    """The rows of base, parent and child restricted to the change and its one-ring, and the largest ids of the three.
 
-    The sets of :func:`tgsis.merge3.change_neighbourhood`, read by key: the
-    rows the sides' revisions since the base wrote or closed (the storage's
-    revision indexes), the cells of those ids, the cells on the vertices
-    found (two scans of the object's cells, a hashed ``= ANY`` of constants
-    per row), then the rows of the vertex and cell ids so found. None when
+    The sets of :func:`tgsis.merge3.change_neighbourhood` with ``rings=1``
+    (enough for the regions, automatic merges and side solutions; a manual
+    mesh is applied to whole states), read by key: the rows the sides'
+    revisions since the base wrote or closed (the storage's revision
+    indexes), the cells of those ids, the cells on the vertices found (one
+    scan of the object's cells, a hashed ``= ANY`` of constants per row),
+    then the rows of the vertex and cell ids so found. None when
     the object is read whole instead: a role that may not read the storage,
     or an object with GOCAD atoms or part runs (kept whole by
     :func:`read_merge_states`: an atom refers to a vertex anywhere, the runs
@@ -622,17 +624,14 @@ def _read_change(
     ring1 = cells(on(v1))
     c1 = np.unique(np.concatenate([c0_ids, np.asarray(ring1[1], dtype=np.int64)[np.asarray(ring1[-1]) != 0]]))
     v2 = np.unique(np.concatenate([v1, _corner_ids(ring1, k)] + ([_corner_ids(by_id, k)] if by_id is not None else [])))
-    ring2 = cells(on(v2))
-    c2 = np.unique(np.concatenate([c1, np.asarray(ring2[1], dtype=np.int64)[np.asarray(ring2[-1]) != 0]]))
-    v3 = np.unique(np.concatenate([v2, _corner_ids(ring2, k)]))
 
     def by_ids(t: _Table, ids: npt.NDArray[np.int64]) -> sql.Composable:
         if len(ids) == 0:
             return sql.SQL("false")
         return sql.SQL("v.{} = ANY ({})").format(sql.Identifier(t.columns[0][0]), _int8_array(ids))
 
-    wanted = [(vertex_t, vertex_s, v3), (cell_t, cell_s, c2)] + [
-        (t, s, v3 if alignment == "VERTEX" else c2)
+    wanted = [(vertex_t, vertex_s, v2), (cell_t, cell_s, c1)] + [
+        (t, s, v2 if alignment == "VERTEX" else c1)
         for t, s, alignment in zip(tables[4:], storages[4:], alignments, strict=True)
     ]
     read = columns_out_all(
@@ -666,15 +665,17 @@ def _read_change(
 
 
 def read_merge_change(conn: Conn, version: str, feature_id: int) -> tuple[MergeInputs, tuple[int, int]] | None:
-    """:func:`read_merge_states` restricted to the change and its two rings, and the largest vertex and cell ids.
+    """:func:`read_merge_states` restricted to the change and its one-ring, and the largest vertex and cell ids.
 
     The states hold the rows :func:`tgsis.merge3.change_neighbourhood` names
-    (docs/merge.md): :func:`tgsis.merge3.three_way_merge` of them with
-    ``top_ids`` finds exactly the regions, renumbering and merged rows of
-    the whole states, reading rows in proportion to the change rather than
-    the object. For the merges that need regions and the merged rows; not
-    for what needs the whole object (an export, a manual mesh holding rows
-    elsewhere). Same checks, refusals and settings as :func:`read_merge_states`.
+    with ``rings=1`` (docs/merge.md): :func:`tgsis.merge3.three_way_merge` of
+    them with ``top_ids`` finds exactly the regions, renumbering and merged
+    rows of the whole states, and so do the solutions ``parent``, ``child``
+    and ``base``, reading rows in proportion to the change rather than the
+    object. For the merges that need regions and the merged rows; not for
+    what needs the whole object (an export, a manual or average mesh, which
+    may hold rows elsewhere and drop cells of the ring). Same checks,
+    refusals and settings as :func:`read_merge_states`.
 
     Returns
     -------
