@@ -28,7 +28,7 @@ The upload of the surface into versioned storage is timed once, then, with
 ``--upload-cost``, paired: uploads of the same surface (rolled back) with the
 storage's revision indexes (``tgsis.create_revision_indexes``) and with them
 dropped, in turn, medians of ``--repeat``: what those indexes cost inserts.
-The read of the change and its two rings (``read_merge_change``, what the
+The read of the change and its one-ring (``read_merge_change``, what the
 merges by region read) is timed beside the whole read.
 
     python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost]
@@ -186,7 +186,7 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
         f"    three full reads through the views (the read of before):      {t_full:6.3f} s (the read is {t_read / t_full:.2f}x)"
     )
     print(
-        f"    read_merge_change (the change and its two rings):             {t_change:6.3f} s (the read is {t_change / t_full:.3f}x)"
+        f"    read_merge_change (the change and its one-ring):               {t_change:6.3f} s (the read is {t_change / t_full:.3f}x)"
     )
     print(f"(c) SQL tgsis.find_conflicts (object-level):                      {t_sql_conflicts:6.3f} s")
 
