@@ -382,14 +382,17 @@ def _update_geometry_row_from_rows(conn: Conn, geoid: int, cell_table: str) -> i
     """:func:`update_geometry_row` with the box and counts of the object's rows as the session sees them now.
 
     For a write of part of the object's rows: one pass over its vertex rows
-    and one over its cell rows (their count), in the server.
+    and one over its cell rows (their count), in the server. Read in binary:
+    the coordinates exactly, whatever the session's ``extra_float_digits``.
     """
-    row = conn.execute(
-        "SELECT count(*), min(x), min(y), min(z), max(x), max(y), max(z) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)
-    ).fetchone()
-    cells = conn.execute(
-        sql.SQL("SELECT count(*) FROM {} WHERE geoid = %s").format(sql.Identifier("tgsis", cell_table)), (geoid,)
-    ).fetchone()
+    with conn.cursor(binary=True) as cursor:
+        row = cursor.execute(
+            "SELECT count(*), min(x), min(y), min(z), max(x), max(y), max(z) FROM tgsis.vrtx WHERE geoid = %s",
+            (geoid,),
+        ).fetchone()
+        cells = cursor.execute(
+            sql.SQL("SELECT count(*) FROM {} WHERE geoid = %s").format(sql.Identifier("tgsis", cell_table)), (geoid,)
+        ).fetchone()
     assert row is not None and cells is not None
     n = int(row[0])
     bounds = np.array([row[1:4], row[4:7]], dtype=np.float64) if n else None
