@@ -1,14 +1,16 @@
-"""A three-way merge of the change and its two rings equals the merge of the whole states (tgsis.merge3, no database).
+"""A three-way merge of the change and its rings equals the merge of the whole states (tgsis.merge3, no database).
 
 ``three_way_merge(..., top_ids=...)`` on the three states restricted to the
 rows :func:`tgsis.merge3.change_neighbourhood` names (the changed rows, any
-superset of them, and two rings of cells around) must give exactly what the
+superset of them, and one or two rings of cells around) must give exactly what the
 merge of the whole states gives: the same regions (ids, edits, boxes,
 displacements bit for bit, conflicts), the same renumbering of the child's
 new ids, the same refusal of an invalid merge, and a merged state whose rows
 are the whole merge's rows of those ids, the rest of the whole merge being
-the parent's rows, untouched. Then every solution gives the same rows and
-discards. This is what lets a merge read only the change from the database.
+the parent's rows, untouched. Then the solutions parent, child and base give
+the same rows and discards, with one ring or two (a manual mesh may drop a
+cell of the ring: docs/merge.md). This is what lets a merge read only the
+change from the database.
 """
 
 from __future__ import annotations

@@ -555,7 +555,7 @@ def _corners(state: MeshState, cell_ids: IntArray) -> IntArray:
 def change_neighbourhood(
     states: tuple[MeshState, ...], vertex_ids: npt.ArrayLike, cell_ids: npt.ArrayLike, *, rings: int = 2
 ) -> tuple[IntArray, IntArray]:
-    """The rows a merge restricted to the change reads: the changed rows and two rings around them (docs/merge.md).
+    """The rows a merge restricted to the change reads: the changed rows and one or two rings around them (docs/merge.md).
 
     From the ids of the rows changed on either side (vertices ``V0``, cells
     ``C0``), in every state of ``states`` (base, parent, child):
@@ -847,10 +847,11 @@ def three_way_merge(
     base, parent, child : MeshState
         The object at the common base, in the parent and in the child; same
         cell size and property columns. Either the whole object, or, with
-        ``top_ids``, the three states restricted to the change and its two
-        rings (:func:`change_neighbourhood`, :func:`restrict_state`): the
-        regions, conflicts, renumbering and validity are then exactly those
-        of the whole states, and the merged state is the whole merge
+        ``top_ids``, the three states restricted to the change and its rings
+        (:func:`change_neighbourhood`, :func:`restrict_state`): the regions,
+        conflicts, renumbering and validity are then exactly those of the
+        whole states, and the merged state (and a solved one, for the
+        solutions :func:`change_neighbourhood` says) is the whole merge
         restricted to the same rows.
     top_ids : (int, int), optional
         The largest vertex id and the largest cell id of the three whole

@@ -661,7 +661,7 @@ def _merge_object(
 ) -> MergedObject | None:
     """Merge one conflicting feature by region into the version (locked transaction); None with the reason when not."""
     try:
-        # the change and its two rings (docs/merge.md): the same regions and merged rows, read by key
+        # the change and its one-ring (docs/merge.md): the same regions and merged rows, read by key
         change = read_merge_change(conn, version, int(key))
         inputs = change[0] if change is not None else read_merge_states(conn, version, int(key))
     except (InvalidInputError, VersioningError) as exc:  # not model 1, deleted on one side, attributes on both

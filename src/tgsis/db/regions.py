@@ -299,7 +299,7 @@ def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) ->
         return None, f"a row of the versioned table(s) of object class {objectclass}: it merges as a whole object"
     try:
         with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
-            # the change and its two rings (docs/merge.md): the same regions, read by key
+            # the change and its one-ring (docs/merge.md): the same regions, read by key
             change = read_merge_change(conn, version, int(objectkey))
             states = change[0].states if change is not None else read_merge_states(conn, version, int(objectkey)).states
         top = change[1] if change is not None else None
