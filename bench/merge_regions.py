@@ -24,10 +24,14 @@ is then changed on both sides, disjointly. Timed in one process, medians of
   ``merge_version`` (``tgsis.db.merging``) of the two disjoint edits, with
   the rows it writes, each as a ratio to (a).
 
-The upload of the surface into versioned storage is timed once (what an index
-on the storage would cost inserts shows there).
+The upload of the surface into versioned storage is timed once, then, with
+``--upload-cost``, paired: uploads of the same surface (rolled back) with the
+storage's revision indexes (``tgsis.create_revision_indexes``) and with them
+dropped, in turn, medians of ``--repeat``: what those indexes cost inserts.
+The read of the change and its one-ring (``read_merge_change``, what the
+merges by region read) is timed beside the whole read.
 
-    python bench/merge_regions.py [--side 1000] [--repeat 3]
+    python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost]
     # TGSIS_PG=system|embedded
 """
 
@@ -37,6 +41,7 @@ import argparse
 import importlib.util
 import os
 import platform
+import statistics
 import time
 from collections.abc import Callable
 from typing import Any
@@ -111,7 +116,7 @@ def three_full_reads(conn: Conn, version: str, geoid: int) -> None:
     _merge_states._states(fc, geoid, rows)
 
 
-def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
+def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> dict[str, Any]:
     surface = grid_surface(side)
     F.create_feature_class(conn, "horizon", "SURFACE", cell_properties={"porosity": "double precision"})
     tgsis.enable_feature_versioning(conn)
@@ -153,6 +158,7 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     t_object_merge = timed(in_snapshot(conn, lambda: tgsis.object_merge(conn, "regions", geoid)), repeat)
     t_read = timed(in_snapshot(conn, lambda: _merge_states.read_merge_states(conn, "regions", geoid)), repeat)
     t_full = timed(in_snapshot(conn, lambda: three_full_reads(conn, "regions", geoid)), repeat)
+    t_change = timed(in_snapshot(conn, lambda: _merge_states.read_merge_change(conn, "regions", geoid)), repeat)
 
     # (c) the SQL conflict check
     t_sql_conflicts = timed(
@@ -167,6 +173,8 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         "read_merge_states_s": round(t_read, 3),
         "three_full_reads_s": round(t_full, 3),
         "read_vs_full": round(t_read / t_full, 2),
+        "read_merge_change_s": round(t_change, 3),
+        "change_read_vs_full": round(t_change / t_full, 3),
         "sql_find_conflicts_s": round(t_sql_conflicts, 3),
     }
     print(f"(a) baseline, object-level merge of one edit (SQL merge_version): {t_a:6.3f} s, {rows_a} rows written")
@@ -176,6 +184,9 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     print(f"    its read_merge_states:                                        {t_read:6.3f} s")
     print(
         f"    three full reads through the views (the read of before):      {t_full:6.3f} s (the read is {t_read / t_full:.2f}x)"
+    )
+    print(
+        f"    read_merge_change (the change and its one-ring):               {t_change:6.3f} s (the read is {t_change / t_full:.3f}x)"
     )
     print(f"(c) SQL tgsis.find_conflicts (object-level):                      {t_sql_conflicts:6.3f} s")
     # (c') issue39-sqlmerge: SQL finds the regions itself (tgsis.mesh_merge_regions, which the SQL find_conflicts
@@ -216,20 +227,73 @@ def figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         )
     else:
         print("(d) no region-aware merge_version in this checkout: not measured")
+    if upload_cost:
+        out.update(upload_with_and_without_indexes(conn, surface, repeat))
     return out
+
+
+def _revision_indexes(conn: Conn) -> list[tuple[str, str]]:
+    """(index, definition) of the revision indexes of the class's storage (BRIN on revision, btree WHERE revclosed)."""
+    rows = conn.execute(
+        "SELECT i.indexrelid::regclass::text, pg_get_indexdef(i.indexrelid) FROM pg_index i"
+        " JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam"
+        " WHERE i.indrelid::regclass::text IN (SELECT tgsis.storage_table(schemaname, tablename)"
+        "        FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
+        "   AND ((a.amname = 'brin' AND pg_get_indexdef(i.indexrelid) LIKE '%(revision)%')"
+        "        OR pg_get_expr(i.indpred, i.indrelid) = 'revclosed')"
+    ).fetchall()
+    conn.commit()
+    return [(str(r[0]), str(r[1])) for r in rows]
+
+
+def upload_with_and_without_indexes(conn: Conn, surface: Any, repeat: int) -> dict[str, Any]:
+    """Uploads of the surface (rolled back) with the revision indexes and without, in turn: medians and their ratio."""
+    indexes = _revision_indexes(conn)
+    assert indexes, "no revision indexes in this checkout"
+
+    def upload() -> float:
+        start = time.perf_counter()
+        F.insert_feature(conn, "horizon", surface)
+        elapsed = time.perf_counter() - start
+        conn.rollback()
+        return elapsed
+
+    samples: dict[bool, list[float]] = {True: [], False: []}
+    for _ in range(repeat):  # in turn, so that drift of the machine hits both alike
+        samples[True].append(upload())
+        for name, _definition in indexes:
+            conn.execute(sql.SQL("DROP INDEX {}").format(sql.SQL(name)))
+        conn.commit()
+        try:
+            samples[False].append(upload())
+        finally:
+            for _name, definition in indexes:
+                conn.execute(definition)
+            conn.commit()
+    with_s, without_s = statistics.median(samples[True]), statistics.median(samples[False])
+    print(
+        f"upload with the revision indexes: {with_s:.2f} s, without: {without_s:.2f} s "
+        f"({with_s / without_s:.3f}x; {len(indexes)} indexes)"
+    )
+    return {
+        "upload_with_indexes_s": round(with_s, 3),
+        "upload_without_indexes_s": round(without_s, 3),
+        "upload_indexes_ratio": round(with_s / without_s, 3),
+    }
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--upload-cost", action="store_true", help="time uploads with and without the revision indexes")
     args = parser.parse_args()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}; medians of {args.repeat}"
     )
     with bench_database() as conn:
-        results = figures(conn, args.side, args.repeat)
+        results = figures(conn, args.side, args.repeat, args.upload_cost)
     for name, value in results.items():
         print(f"{name}: {value}")
 

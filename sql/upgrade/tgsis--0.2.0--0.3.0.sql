@@ -150,6 +150,13 @@ BEGIN
 
     -- ---- (blocks of later changes that need the new functions go here)
 
+    -- ---- issue39-speed: the indexes that find a versioned table's row versions by revision
+    -- (tgsis.create_revision_indexes: a BRIN on revision, a btree on the object key of closed rows),
+    -- which a fresh tgsis.enable_versioning_rel makes
+    FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
+        PERFORM tgsis.create_revision_indexes(v_t.schemaname, v_t.tablename, v_t.objectkeyfield);
+    END LOOP;
+
     -- ---- issue36-rls: per-class rights at the model tables (docs/security.md)
     -- the storage's row-level security keyed by the classes' rights (a fresh install's create_storage does it);
     -- the versioned views of the model tables filter by them as security barriers (tgsis.create_versioned_view);

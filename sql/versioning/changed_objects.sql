@@ -31,7 +31,8 @@ BEGIN
         RETURN;
     END IF;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables ORDER BY objectclass, iudorder, shortname LOOP
-        v_where := 'v.revision = ANY ($2) OR v.lastrevs && $2';
+        -- (a closed row is revclosed: so written, the storage's revision indexes serve it, tgsis.create_revision_indexes)
+        v_where := 'v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2)';
         IF NOT v_scan THEN
             v_keys := ARRAY(SELECT DISTINCT o.objectkey FROM tgsis.revision_objects o
                              WHERE o.revision = ANY (p_revisions) AND o.schemaname = v_t.schemaname

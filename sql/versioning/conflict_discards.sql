@@ -24,6 +24,7 @@ DECLARE
     v_parent  integer[];
     v_base    integer[];
     v_changed integer[];
+    v_differ  integer[];
     v_t       tgsis.versioned_tables;
     v_class   text;
     v_keys    text[];
@@ -48,6 +49,13 @@ BEGIN
     -- the revisions either side changed something in since the base (never revision 0, which the base holds)
     v_changed := ARRAY(SELECT r FROM unnest(v_version.workingset || v_parent) AS r
                        EXCEPT SELECT r FROM unnest(v_base) AS r ORDER BY 1);
+    -- the revisions not in all three sets: a row version seen by some of them and not all was written in
+    -- one of these or closed in one, the form the storage's revision indexes serve
+    -- (tgsis.create_revision_indexes)
+    v_differ := ARRAY(SELECT r FROM unnest(v_base || v_version.workingset || v_parent) AS r
+                      EXCEPT (SELECT r FROM unnest(v_base) AS r
+                              INTERSECT SELECT r FROM unnest(v_version.workingset) AS r
+                              INTERSECT SELECT r FROM unnest(v_parent) AS r) ORDER BY 1);
     FOR v_class, v_keys IN
         SELECT c.objectclass, array_agg(c.objectkey ORDER BY c.objectkey)
           FROM tgsis.current_conflicts(v_version.versionid) AS c
@@ -87,7 +95,8 @@ BEGIN
                         -- not a row version all three see (a base row neither side closed): rows of the object
                         -- that nobody changed cost a test, not a jsonb
                         AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $3)
-                                 AND NOT (v.lastrevs && $5::integer[]))),
+                                 AND NOT (v.lastrevs && $5::integer[]))
+                        AND (v.revision = ANY (%8$L::integer[]) OR (v.revclosed AND v.lastrevs && %8$L::integer[]))),
                  keyed AS (
                      SELECT obj, (array_agg(r) FILTER (WHERE in_base))[1] AS b,
                             (array_agg(r) FILTER (WHERE in_child))[1] AS c,
@@ -116,7 +125,8 @@ BEGIN
                   ORDER BY obj, solution',
                 v_t.objectkeyfield, v_rowkey, v_t.schemaname, v_t.tablename || '_ver', tgsis.object_key_type(v_t),
                 v_t.keycolumns || v_t.objectkeyfield,
-                tgsis.object_key_text_sql(v_t, 'v')),  -- the key's canonical text, as the conflicts name it
+                tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text, as the conflicts name it
+                v_differ),
                 p_1 => v_keys, p_2 => v_base, p_3 => v_version.workingset, p_5 => v_parent::bigint[]) AS r;
         END LOOP;
     END LOOP;

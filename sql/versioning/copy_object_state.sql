@@ -14,6 +14,12 @@
 -- The match is read by key (the storage's primary key) for the candidate
 -- rows only: the cost follows the change, not the object's size.
 -- The common step of merge (child's state into the parent) and refresh.
+-- Every statement also states what both kinds of rows share, in a form the
+-- storage's revision indexes serve (tgsis.create_revision_indexes): a row
+-- visible in one set and not the other was written in a revision of their
+-- symmetric difference, or closed in one (revclosed, lastrevs meeting it).
+-- Redundant, so the rows acted on are the same; but the statements read the
+-- rows of the change instead of filtering all the objects' rows.
 -- The objects are noted as changed in revision (tgsis.revision_objects) in the
 -- tables where rows were written; an object with nothing written looks in
 -- to_set as in from_set already and is not noted.
@@ -43,6 +49,7 @@ DECLARE
     v_count   bigint;
     v_written bigint := 0;
     v_same    text;
+    v_changed text;  -- (v.revision in the symmetric difference, or v closed in one of its revisions)
     -- visible only in p_to, only in p_from (rows f of the storage): the rows copy_object_state acts on
     v_to_only   CONSTANT text := 'f.revision = ANY ($3) AND NOT (f.lastrevs && $3)
                                   AND NOT (f.revision = ANY ($2) AND NOT (f.lastrevs && $2))';
@@ -52,6 +59,10 @@ BEGIN
     IF cardinality(p_keys) = 0 THEN
         RETURN 0;
     END IF;
+    v_changed := format('(v.revision = ANY (%1$L::integer[]) OR (v.revclosed AND v.lastrevs && %1$L::integer[]))',
+                        ARRAY(SELECT r FROM ((SELECT unnest(p_from) EXCEPT SELECT unnest(p_to))
+                                             UNION (SELECT unnest(p_to) EXCEPT SELECT unnest(p_from))) AS d(r)
+                               WHERE r IS NOT NULL ORDER BY r));
     -- closes first (reverse iudorder), then copies (iudorder): closing touches
     -- only rows p_from does not see, so it cannot change what is copied, and
     -- copies made first would look like rows to close
@@ -62,21 +73,21 @@ BEGIN
         v_same := tgsis.copy_object_match_sql(v_t, v_to_only, v_from_only);
         -- (every statement on storage as its owner: tgsis.storage_run)
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
-            'DELETE FROM %s v WHERE v.%I = ANY ($1::%s[]) AND v.revision = $4
+            'DELETE FROM %s v WHERE v.%I = ANY ($1::%s[]) AND v.revision = $4 AND %s
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
                 AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))
                 AND NOT %s',
-            v_ver, v_t.objectkeyfield, v_keytype, v_same),
+            v_ver, v_t.objectkeyfield, v_keytype, v_changed, v_same),
             p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
         -- other versions see these rows too (the siblings of a merged version share
         -- the parent's rows): closed without waiting for one while holding others
         v_count := tgsis.update_shared_rows(v_t, 'lastrevs = v.lastrevs || $4', format(
-            'v.%I = ANY ($1::%s[]) AND v.revision <> $4
+            'v.%I = ANY ($1::%s[]) AND v.revision <> $4 AND %s
                 AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
                 AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))
                 AND NOT %s',
-            v_t.objectkeyfield, v_keytype, v_same), p_keys, p_from, p_to, p_revision);
+            v_t.objectkeyfield, v_keytype, v_changed, v_same), p_keys, p_from, p_to, p_revision);
         v_written := v_written + v_count;
         IF v_count > 0 THEN
             -- closed in p_revision: noted for the next merge or conflict check (tgsis.revision_objects)
@@ -97,11 +108,11 @@ BEGIN
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
             'INSERT INTO %s (%s, revision)
              SELECT %s, $4 FROM %s v
-              WHERE v.%I = ANY ($1::%s[])
+              WHERE v.%I = ANY ($1::%s[]) AND %s
                 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
                 AND NOT (v.revision = ANY ($3) AND NOT (v.lastrevs && $3))
                 AND NOT %s',
-            v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype, v_same),
+            v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype, v_changed, v_same),
             p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
         IF v_count > 0 THEN

@@ -216,6 +216,8 @@ BEGIN
     IF v_keys[1] <> p_objectkeyfield THEN
         EXECUTE format('CREATE INDEX %I ON %I.%I (%I, revision)', v_ver || '_object_idx', v_schema, v_ver, p_objectkeyfield);
     END IF;
+    -- the rows written or closed in given revisions, found by index (merges, refreshes, merges by region)
+    PERFORM tgsis.create_revision_indexes(v_schema, v_table, p_objectkeyfield);
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_schema, v_ver,
                    format('row versions of %s.%s (tgsis versioning): read and write it through the view %s.%s',
                           v_schema, v_table, v_schema, v_table));

@@ -444,8 +444,13 @@ def _known(ids: IntArray, *sorted_ids: IntArray) -> BoolArray:
     return found
 
 
-def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tuple[MeshState, IntArray, IntArray]:
-    """The child with its new ids in the merged numbering, and the (old, new) pairs of the ids that changed."""
+def _renumber_child(
+    base: MeshState, parent: MeshState, child: MeshState, top_ids: tuple[int, int] | None = None
+) -> tuple[MeshState, IntArray, IntArray]:
+    """The child with its new ids in the merged numbering, and the (old, new) pairs of the ids that changed.
+
+    ``top_ids``: the largest vertex and cell ids of the whole states, when these are restricted to the change.
+    """
     p_new_v, c_new_v = _new_ids(base.vertex_ids, parent.vertex_ids), _new_ids(base.vertex_ids, child.vertex_ids)
     p_new_c, c_new_c = _new_ids(base.cell_ids, parent.cell_ids), _new_ids(base.cell_ids, child.cell_ids)
     empty = np.empty((0, 2), dtype=np.int64)
@@ -453,6 +458,8 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
         return child, empty, empty
     top_v = max([int(s.vertex_ids[-1]) for s in (base, parent, child) if s.n_vertices] + [-1])
     top_c = max([int(s.cell_ids[-1]) for s in (base, parent, child) if s.n_cells] + [-1])
+    if top_ids is not None:
+        top_v, top_c = max(top_v, int(top_ids[0])), max(top_c, int(top_ids[1]))
 
     # a column may be int64 on one side and float64 (NaN for a NULL) on the other: compare in a common type
     vtypes = {n: np.result_type(v, child.vertex_properties[n]) for n, v in parent.vertex_properties.items()}
@@ -515,6 +522,126 @@ def _renumber_child(base: MeshState, parent: MeshState, child: MeshState) -> tup
         {n: v[corder] for n, v in child.cell_properties.items()},
     )
     return renumbered, np.stack([vmap_old, vmap_new], axis=1), np.stack([cmap_old, cmap_new], axis=1)
+
+
+# ---------------------------------------------------------------- a merge restricted to the change
+
+
+def changed_ids(base: MeshState, side: MeshState) -> tuple[IntArray, IntArray]:
+    """(vertex ids, cell ids) of the rows ``side`` holds otherwise than ``base``: changed, added or removed.
+
+    A row rewritten with the same content is no change (a rotated cell row
+    neither). The rows whose storage versions differ between two revision
+    sets are a superset of these, which :func:`change_neighbourhood` takes
+    as well.
+    """
+    edit = _edit(base, side)
+    return edit.changed_vertices, edit.changed_cells
+
+
+def _cells_on(state: MeshState, vertex_ids: IntArray) -> IntArray:
+    """Ids of the state's cells with a vertex among ``vertex_ids`` (sorted, unique)."""
+    if len(vertex_ids) == 0 or state.n_cells == 0:
+        return state.cell_ids[:0]
+    return state.cell_ids[_cell_hits(vertex_ids, state.cells)]
+
+
+def _corners(state: MeshState, cell_ids: IntArray) -> IntArray:
+    """The vertex ids of the state's cells ``cell_ids`` (those it has)."""
+    at = _positions(state.cell_ids, cell_ids)
+    return state.cells[at[at >= 0]].ravel()
+
+
+def change_neighbourhood(
+    states: tuple[MeshState, ...], vertex_ids: npt.ArrayLike, cell_ids: npt.ArrayLike, *, rings: int = 2
+) -> tuple[IntArray, IntArray]:
+    """The rows a merge restricted to the change reads: the changed rows and one or two rings around them (docs/merge.md).
+
+    From the ids of the rows changed on either side (vertices ``V0``, cells
+    ``C0``), in every state of ``states`` (base, parent, child):
+
+    - ``V1``: ``V0`` and the vertices of the cells ``C0``;
+    - ``C1``: ``C0`` and the cells on a vertex of ``V1`` (the one-ring: the
+      regions' margins are in it);
+    - ``V2``: the vertices of ``C1`` (a region's vertices, its cells'
+      corners: what the validity check looks around);
+    - ``C2``: the cells on a vertex of ``V2`` (the two-ring: every cell the
+      validity check counts);
+    - ``V3``: ``V2`` and the vertices of ``C2`` (what those cells stand on).
+
+    :func:`three_way_merge` of the three states restricted to ``(V3, C2)``
+    (:func:`restrict_state`), given the whole states' largest ids, finds
+    exactly the regions, conflicts, renumbering and validity of the whole
+    states, and :func:`apply_solutions` gives the whole result's rows for
+    any solution.
+
+    With ``rings=1``, ``(V2, C1)``: enough for the regions, the renumbering,
+    an automatic merge and the solutions ``parent``, ``child`` and ``base``.
+    The validity check looks at the cells around the corners of the cells
+    it takes; those it can find wrong (a duplicated or non-manifold cell, a
+    cell on a removed vertex, a vertex left without cells) involve a changed
+    cell or a removed vertex, whose cells all lie on ``V1`` (docs/merge.md),
+    as long as every cell of ``C1`` no side changed stays: a manual mesh may
+    drop one, and needs the second ring. The database reads one ring for the
+    merges by region (:mod:`tgsis.db._merge_states`).
+
+    Parameters
+    ----------
+    states : tuple of MeshState
+        The states whose cells count (the whole ones here).
+    vertex_ids, cell_ids : array_like of int
+        ``V0`` and ``C0``: the ids of the changed rows (any superset of them).
+    rings : int
+        2 (any solution) or 1 (no manual mesh).
+
+    Returns
+    -------
+    (V3, C2), or (V2, C1) with ``rings=1`` : int64 arrays, sorted, unique
+    """
+    if rings not in (1, 2):
+        raise InvalidInputError(f"rings={rings!r}: the neighbourhood of a change is of 1 or 2 rings")
+    v0 = np.unique(np.asarray(vertex_ids, dtype=np.int64))
+    c0 = np.unique(np.asarray(cell_ids, dtype=np.int64))
+    v1 = np.unique(np.concatenate([v0, *(_corners(s, c0) for s in states)]))
+    c1 = np.unique(np.concatenate([c0, *(_cells_on(s, v1) for s in states)]))
+    v2 = np.unique(np.concatenate([v1, *(_corners(s, c1) for s in states)]))
+    if rings == 1:
+        return v2, c1
+    c2 = np.unique(np.concatenate([c1, *(_cells_on(s, v2) for s in states)]))
+    v3 = np.unique(np.concatenate([v2, *(_corners(s, c2) for s in states)]))
+    return v3, c2
+
+
+def restrict_state(state: MeshState, vertex_ids: IntArray, cell_ids: IntArray) -> MeshState:
+    """The state's rows of these ids (sorted, unique; ids it does not have are left out), properties with them.
+
+    Raises
+    ------
+    InvalidGeometryError
+        A kept cell stands on a vertex left out.
+    """
+    vat = _positions(state.vertex_ids, vertex_ids)
+    vat = vat[vat >= 0]
+    cat = _positions(state.cell_ids, cell_ids)
+    cat = cat[cat >= 0]
+    return MeshState(
+        state.cell_size,
+        state.vertex_ids[vat],
+        state.vertices[vat],
+        state.cell_ids[cat],
+        state.cells[cat],
+        {n: v[vat] for n, v in state.vertex_properties.items()},
+        {n: v[cat] for n, v in state.cell_properties.items()},
+        state.name,
+    )
+
+
+def largest_ids(*states: MeshState) -> tuple[int, int]:
+    """The largest vertex id and the largest cell id of the states (-1 for none): :func:`three_way_merge`'s ``top_ids``."""
+    return (
+        max([int(s.vertex_ids[-1]) for s in states if s.n_vertices] + [-1]),
+        max([int(s.cell_ids[-1]) for s in states if s.n_cells] + [-1]),
+    )
 
 
 # ---------------------------------------------------------------- regions
@@ -710,14 +837,26 @@ def _check_comparable(base: MeshState, parent: MeshState, child: MeshState) -> N
                 )
 
 
-def three_way_merge(base: MeshState, parent: MeshState, child: MeshState) -> MeshMerge:
+def three_way_merge(
+    base: MeshState, parent: MeshState, child: MeshState, *, top_ids: tuple[int, int] | None = None
+) -> MeshMerge:
     """Merge the parent's and the child's edits of one object, both made from ``base``.
 
     Parameters
     ----------
     base, parent, child : MeshState
         The object at the common base, in the parent and in the child; same
-        cell size and property columns.
+        cell size and property columns. Either the whole object, or, with
+        ``top_ids``, the three states restricted to the change and its rings
+        (:func:`change_neighbourhood`, :func:`restrict_state`): the regions,
+        conflicts, renumbering and validity are then exactly those of the
+        whole states, and the merged state (and a solved one, for the
+        solutions :func:`change_neighbourhood` says) is the whole merge
+        restricted to the same rows.
+    top_ids : (int, int), optional
+        The largest vertex id and the largest cell id of the three whole
+        states (-1 for none), for states restricted to the change: the
+        child's new ids that clash are renumbered above them.
 
     Returns
     -------
@@ -733,7 +872,7 @@ def three_way_merge(base: MeshState, parent: MeshState, child: MeshState) -> Mes
         No region conflicts but the merged mesh would not be valid.
     """
     _check_comparable(base, parent, child)
-    child, vertex_renumbering, cell_renumbering = _renumber_child(base, parent, child)
+    child, vertex_renumbering, cell_renumbering = _renumber_child(base, parent, child, top_ids)
     edits = (_edit(base, parent), _edit(base, child))
 
     # the one-ring margin of both sides in one pass over the base's cells

@@ -39,6 +39,7 @@ __all__ = [
     "MergeInputs",
     "SlicedInputs",
     "feature_time_model",
+    "read_merge_change",
     "read_merge_states",
     "read_sliced_states",
     "version_row",
@@ -447,39 +448,7 @@ def read_merge_states(conn: Conn, version: str, feature_id: int) -> MergeInputs:
     """
     settings = read_version_settings(conn)
     try:
-        versionid, parent, initrevision, working, parent_working = version_row(conn, version)
-        # the class is looked up as the version sees its features; as the parent does, when the version
-        # deleted a feature of its base
-        in_child = _exists(conn, feature_id, version, working)
-        in_parent = _exists(conn, feature_id, parent, parent_working)
-        if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
-            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
-        fc = _feature_class(conn, feature_id)
-        if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
-            what = "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
-            raise InvalidInputError(
-                f"feature {feature_id} of class {fc.name} is {what}: only a static (model 1) point set, line set, "
-                f"surface or tetrahedral solid merges by region (version {show_name(version)})",
-                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
-            )
-        both = conn.execute(
-            "SELECT 1 FROM tgsis.current_conflicts(%s) WHERE objectclass = 'feature' AND objectkey = %s",
-            (versionid, str(feature_id)),
-        ).fetchone()
-        if both is None:
-            raise VersioningError(
-                f"feature {feature_id} of class {fc.name} was not changed both in version {show_name(version)} "
-                f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
-                hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
-            )
-        if not (in_child and in_parent):
-            raise InvalidInputError(
-                f"feature {feature_id} of class {fc.name} was deleted in version "
-                f"{show_name(parent if in_child else version)} and changed in "
-                f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
-                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
-            )
-        _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
+        versionid, parent, (initrevision, parent_working, working), fc = _checked_object(conn, version, feature_id)
         rows = _read_states(
             conn,
             fc,
@@ -490,6 +459,257 @@ def read_merge_states(conn: Conn, version: str, feature_id: int) -> MergeInputs:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
             restore_version_settings(conn, settings, local=True)
     return MergeInputs(fc, versionid, parent, (initrevision, parent_working, working), _states(fc, feature_id, rows))
+
+
+def _checked_object(conn: Conn, version: str, feature_id: int) -> tuple[int, str, tuple[int, int, int], FeatureClass]:
+    """(version id, parent, (base, parent's, version's working revisions), class) of an object that merges by region.
+
+    Raises what :func:`read_merge_states` says; moves the session's version settings (the caller puts them back).
+    """
+    versionid, parent, initrevision, working, parent_working = version_row(conn, version)
+    # the class is looked up as the version sees its features; as the parent does, when the version
+    # deleted a feature of its base
+    in_child = _exists(conn, feature_id, version, working)
+    in_parent = _exists(conn, feature_id, parent, parent_working)
+    if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
+    fc = _feature_class(conn, feature_id)
+    if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
+        what = "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
+        raise InvalidInputError(
+            f"feature {feature_id} of class {fc.name} is {what}: only a static (model 1) point set, line set, "
+            f"surface or tetrahedral solid merges by region (version {show_name(version)})",
+            hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+        )
+    both = conn.execute(
+        "SELECT 1 FROM tgsis.current_conflicts(%s) WHERE objectclass = 'feature' AND objectkey = %s",
+        (versionid, str(feature_id)),
+    ).fetchone()
+    if both is None:
+        raise VersioningError(
+            f"feature {feature_id} of class {fc.name} was not changed both in version {show_name(version)} "
+            f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
+            hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
+        )
+    if not (in_child and in_parent):
+        raise InvalidInputError(
+            f"feature {feature_id} of class {fc.name} was deleted in version "
+            f"{show_name(parent if in_child else version)} and changed in "
+            f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
+            hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+        )
+    _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
+    return versionid, parent, (initrevision, parent_working, working), fc
+
+
+# --------------------------------------------------------------------------- the change and its one-ring
+
+
+def _visible_in(sets: Mapping[str, list[int]]) -> sql.Composed:
+    """A row ``v`` of storage visible in at least one of the revision sets (the test of the versioned views)."""
+    return sql.SQL("({})").format(
+        sql.SQL(" OR ").join(
+            sql.SQL("(v.revision = ANY ({s}) AND NOT (v.revclosed AND v.lastrevs && {s}))").format(s=_int_array(s))
+            for s in sets.values()
+        )
+    )
+
+
+def _seen_in(sets: Mapping[str, list[int]]) -> sql.Composed:
+    """Column ``_seen`` of a row ``v``: where it is visible (bit 1 base, 2 parent, 4 child), as in :meth:`_Table.changed`."""
+    return sql.SQL(" + ").join(
+        sql.SQL("(v.revision = ANY ({s}) AND NOT (v.revclosed AND v.lastrevs && {s}))::int4 * {bit}").format(
+            s=_int_array(sets[side]), bit=sql.Literal(bit)
+        )
+        for side, bit in _SIDE_BITS.items()
+    )
+
+
+def _int8_array(values: npt.ArrayLike) -> sql.Composed:
+    """A literal int8[]: a constant the planner hashes in ``= ANY`` (a scan tests each row in constant time)."""
+    ids = np.unique(np.asarray(values, dtype=np.int64))
+    return sql.SQL("{}::int8[]").format(sql.Literal("{" + ",".join(str(int(v)) for v in ids) + "}"))
+
+
+def _rows_where(table: _Table, storage: str, sets: Mapping[str, list[int]], where: sql.Composable) -> sql.Composed:
+    """The storage's rows visible in some side and satisfying ``where`` (over ``v``), with ``_seen``, as a subquery."""
+    return sql.SQL("(SELECT {cols}, {seen} AS _seen FROM {storage} v WHERE {visible} AND ({where})) AS _rows").format(
+        cols=sql.SQL(", ").join(
+            sql.SQL("v.{}").format(sql.Identifier(c)) for c in (table.key, *(n for n, _ in table.columns))
+        ),
+        seen=_seen_in(sets),
+        storage=sql.SQL(storage),  # quoted by tgsis.storage_table
+        visible=_visible_in(sets),
+        where=where,
+    )
+
+
+def _corner_ids(columns: list[npt.NDArray[Any]], k: int) -> npt.NDArray[np.int64]:
+    """The vertex ids of cell rows read as ``[object key, cell id, vrtxid1..k, _seen]``, of rows some side sees."""
+    seen = np.asarray(columns[-1]) != 0
+    return np.concatenate([np.asarray(c, dtype=np.int64)[seen] for c in columns[2 : 2 + k]] + [np.empty(0, np.int64)])
+
+
+def _revision_sets(conn: Conn, sides: Mapping[str, tuple[str, int]]) -> dict[str, list[int]]:
+    sets = {}
+    for side, (version, revision) in sides.items():
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+        row = conn.execute("SELECT tgsis.get_revisions(true)").fetchone()
+        assert row is not None
+        sets[side] = sorted(int(r) for r in row[0])
+    return sets
+
+
+def _read_change(
+    conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]]
+) -> tuple[dict[str, _Rows], tuple[int, int]] | None:
+    """The rows of base, parent and child restricted to the change and its one-ring, and the largest ids of the three.
+
+    The sets of :func:`tgsis.merge3.change_neighbourhood` with ``rings=1``
+    (enough for the regions, automatic merges and side solutions; a manual
+    mesh is applied to whole states), read by key: the rows the sides'
+    revisions since the base wrote or closed (the storage's revision
+    indexes), the cells of those ids, the cells on the vertices found (one
+    scan of the object's cells, a hashed ``= ANY`` of constants per row),
+    then the rows of the vertex and cell ids so found. None when
+    the object is read whole instead: a role that may not read the storage,
+    or an object with GOCAD atoms or part runs (kept whole by
+    :func:`read_merge_states`: an atom refers to a vertex anywhere, the runs
+    are the object's).
+    """
+    tables, properties = _tables(fc)
+    storages = _readable_storages(conn, tables)
+    if storages is None:
+        return None
+    vertex_t, cell_t, atom_t, part_t = tables[:4]
+    vertex_s, cell_s, atom_s, part_s = storages[:4]
+    for storage, t in ((atom_s, atom_t), (part_s, part_t)):
+        any_row = conn.execute(
+            sql.SQL("SELECT EXISTS (SELECT FROM {} v WHERE v.{} = %s)").format(sql.SQL(storage), sql.Identifier(t.key)),
+            (geoid,),
+        ).fetchone()
+        if any_row is None or any_row[0]:
+            return None
+    sets = _revision_sets(conn, sides)
+    since = sorted(
+        set(sets["base"]).symmetric_difference(sets["parent"]) | set(sets["base"]).symmetric_difference(sets["child"])
+    )
+    k = mesh_class(fc.geotype).cell_size
+    alignments = [a for a, _ in properties]
+    cell_cols = (*cell_t.columns, ("_seen", "int4"))
+
+    # the rows whose visibility differs: their ids are the change (any superset of it will do)
+    changed = columns_out_all(
+        conn,
+        [
+            Packed(t.changed(s, sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+            for t, s in zip([vertex_t, cell_t, *tables[4:]], [vertex_s, cell_s, *storages[4:]], strict=True)
+        ],
+    )
+    v0 = [np.asarray(changed[0][1], dtype=np.int64)]
+    c0 = [np.asarray(changed[1][1], dtype=np.int64)]
+    for alignment, columns in zip(alignments, changed[2:], strict=True):
+        (v0 if alignment == "VERTEX" else c0).append(np.asarray(columns[1], dtype=np.int64))
+    v0_ids, c0_ids = np.unique(np.concatenate(v0)), np.unique(np.concatenate(c0))
+
+    def cells(where: sql.Composable) -> list[npt.NDArray[Any]]:
+        return columns_out_all(
+            conn, [Packed(_rows_where(cell_t, cell_s, sets, where), cell_t.key, cell_cols, [geoid])]
+        )[0]
+
+    def on(vertex_ids: npt.NDArray[np.int64]) -> sql.Composable:
+        if len(vertex_ids) == 0:
+            return sql.SQL("false")
+        ids = _int8_array(vertex_ids)
+        return sql.SQL(" OR ").join(
+            sql.SQL("v.{} = ANY ({})").format(sql.Identifier(f"vrtxid{j + 1}"), ids) for j in range(k)
+        )
+
+    by_id = (
+        cells(sql.SQL("v.{} = ANY ({})").format(sql.Identifier(cell_t.columns[0][0]), _int8_array(c0_ids)))
+        if len(c0_ids)
+        else None
+    )
+    v1 = np.unique(np.concatenate([v0_ids, _corner_ids(by_id, k) if by_id is not None else v0_ids[:0]]))
+    ring1 = cells(on(v1))
+    c1 = np.unique(np.concatenate([c0_ids, np.asarray(ring1[1], dtype=np.int64)[np.asarray(ring1[-1]) != 0]]))
+    v2 = np.unique(np.concatenate([v1, _corner_ids(ring1, k)] + ([_corner_ids(by_id, k)] if by_id is not None else [])))
+
+    def by_ids(t: _Table, ids: npt.NDArray[np.int64]) -> sql.Composable:
+        if len(ids) == 0:
+            return sql.SQL("false")
+        return sql.SQL("v.{} = ANY ({})").format(sql.Identifier(t.columns[0][0]), _int8_array(ids))
+
+    wanted = [(vertex_t, vertex_s, v2), (cell_t, cell_s, c1)] + [
+        (t, s, v2 if alignment == "VERTEX" else c1)
+        for t, s, alignment in zip(tables[4:], storages[4:], alignments, strict=True)
+    ]
+    read = columns_out_all(
+        conn,
+        [
+            Packed(_rows_where(t, s, sets, by_ids(t, ids)), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+            for t, s, ids in wanted
+        ],
+    )
+    top = []
+    for t, s in ((vertex_t, vertex_s), (cell_t, cell_s)):
+        idcol = sql.Identifier(t.columns[0][0])
+        row = conn.execute(
+            sql.SQL(
+                "SELECT v.{id} FROM {storage} v WHERE v.{key} = %s AND {visible} ORDER BY v.{id} DESC LIMIT 1"
+            ).format(id=idcol, storage=sql.SQL(s), key=sql.Identifier(t.key), visible=_visible_in(sets)),
+            (geoid,),
+        ).fetchone()
+        top.append(-1 if row is None else int(row[0]))
+
+    none = np.empty(0, dtype=np.int64)
+    rows = {}
+    for side, bit in _SIDE_BITS.items():
+        per_table = []
+        for columns in read:
+            mine = (np.asarray(columns[-1]) & bit) != 0
+            per_table.append([np.asarray(c)[mine] for c in columns[:-1]])
+        vertex_cols, cell_cols_read, *prop_cols = per_table
+        rows[side] = _rows_of(fc, properties, [vertex_cols, cell_cols_read, [none] * 3, [none] * 4, *prop_cols])
+    return rows, (top[0], top[1])
+
+
+def read_merge_change(conn: Conn, version: str, feature_id: int) -> tuple[MergeInputs, tuple[int, int]] | None:
+    """:func:`read_merge_states` restricted to the change and its one-ring, and the largest vertex and cell ids.
+
+    The states hold the rows :func:`tgsis.merge3.change_neighbourhood` names
+    with ``rings=1`` (docs/merge.md): :func:`tgsis.merge3.three_way_merge` of
+    them with ``top_ids`` finds exactly the regions, renumbering and merged
+    rows of the whole states, and so do the solutions ``parent``, ``child``
+    and ``base``, reading rows in proportion to the change rather than the
+    object. For the merges that need regions and the merged rows; not for
+    what needs the whole object (an export, a manual or average mesh, which
+    may hold rows elsewhere and drop cells of the ring). Same checks,
+    refusals and settings as :func:`read_merge_states`.
+
+    Returns
+    -------
+    (MergeInputs, (int, int)) or None
+        None when the object is read whole instead (a role that may not read
+        the storage, GOCAD atoms or part runs): then :func:`read_merge_states`.
+    """
+    settings = read_version_settings(conn)
+    try:
+        versionid, parent, (initrevision, parent_working, working), fc = _checked_object(conn, version, feature_id)
+        read = _read_change(
+            conn,
+            fc,
+            feature_id,
+            {"base": (version, initrevision), "parent": (parent, parent_working), "child": (version, working)},
+        )
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
+    if read is None:
+        return None
+    rows, top = read
+    inputs = MergeInputs(fc, versionid, parent, (initrevision, parent_working, working), _states(fc, feature_id, rows))
+    return inputs, top
 
 
 # --------------------------------------------------------------------------- models 2 and 3: the states slice by slice

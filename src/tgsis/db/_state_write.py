@@ -261,7 +261,9 @@ def _write_parts(
     return (int(row[0]) if row else 0), len(after)
 
 
-def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState) -> int:
+def write_state_difference(
+    conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, *, whole: bool = True
+) -> int:
     """Write ``new`` over ``old`` (the object's stored state) by an id-keyed difference, in the session's version.
 
     A vertex (cell) row whose id is gone or whose content differs (coordinates
@@ -285,6 +287,12 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
         ``old``: the object's rows as the session sees them now (as
         :func:`tgsis.db._merge_states.read_merge_states` reads them);
         ``new``: what it must hold, with the class's property columns.
+    whole : bool
+        False: ``old`` and ``new`` hold only some of the object's rows, the
+        same ids outside of which the two agree (a merge restricted to the
+        change, :func:`tgsis.db._merge_states.read_merge_change`): the rows
+        are written alike, and the geometry row's box and counts are those of
+        the object's rows as stored after the write.
 
     Returns
     -------
@@ -298,7 +306,7 @@ def write_state_difference(conn: Conn, fc: FeatureClass, geoid: int, old: MeshSt
     InvalidInputError
         ``new`` lacks a property column of the class, or has no value for an integer property of a row to write.
     """
-    return sum(write_state_rows(conn, fc, geoid, old, new))
+    return sum(write_state_rows(conn, fc, geoid, old, new, whole=whole))
 
 
 def copy_vertex_rows(conn: Conn, storage: Storage, geoid: int, ids: IntArray, xyz: FloatArray) -> int:
@@ -337,7 +345,9 @@ def copy_cell_rows(
     return len(ids)
 
 
-def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState) -> tuple[int, int, int]:
+def write_state_rows(
+    conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, *, whole: bool = True
+) -> tuple[int, int, int]:
     """:func:`write_state_difference`, counted: (rows deleted or closed, rows inserted, geometry rows updated)."""
     if fc.geotype not in SIMPLEX:
         raise InvalidInputError(f"feature {geoid} of class {fc.name}: {fc.geotype.value} is not written by rows")
@@ -359,8 +369,31 @@ def write_state_rows(conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, n
     inserted += copy_cell_rows(conn, storage, table, idfield, geoid, new.cell_ids[fresh_c], new.cells[fresh_c])
     for gone, added in (_write_atoms(conn, geoid, old, new, storage), _write_parts(conn, fc, geoid, old, new, storage)):
         deleted, inserted = deleted + gone, inserted + added
+    if not whole:
+        return deleted, inserted, _update_geometry_row_from_rows(conn, geoid, table)
     bounds = np.stack([new.vertices.min(axis=0), new.vertices.max(axis=0)]) if new.n_vertices else None
     return deleted, inserted, update_geometry_row(conn, geoid, bounds, new.n_vertices, new.n_cells)
+
+
+def _update_geometry_row_from_rows(conn: Conn, geoid: int, cell_table: str) -> int:
+    """:func:`update_geometry_row` with the box and counts of the object's rows as the session sees them now.
+
+    For a write of part of the object's rows: one pass over its vertex rows
+    and one over its cell rows (their count), in the server. Read in binary:
+    the coordinates exactly, whatever the session's ``extra_float_digits``.
+    """
+    with conn.cursor(binary=True) as cursor:
+        row = cursor.execute(
+            "SELECT count(*), min(x), min(y), min(z), max(x), max(y), max(z) FROM tgsis.vrtx WHERE geoid = %s",
+            (geoid,),
+        ).fetchone()
+        cells = cursor.execute(
+            sql.SQL("SELECT count(*) FROM {} WHERE geoid = %s").format(sql.Identifier("tgsis", cell_table)), (geoid,)
+        ).fetchone()
+    assert row is not None and cells is not None
+    n = int(row[0])
+    bounds = np.array([row[1:4], row[4:7]], dtype=np.float64) if n else None
+    return update_geometry_row(conn, geoid, bounds, n, int(cells[0]))
 
 
 # --------------------------------------------------------------------------- models 2 and 3: slice by slice

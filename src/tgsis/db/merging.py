@@ -59,6 +59,7 @@ from tgsis.db._merge_states import (
     MergeInputs,
     SlicedInputs,
     feature_time_model,
+    read_merge_change,
     read_merge_states,
     read_sliced_states,
     version_row,
@@ -794,13 +795,24 @@ def _merge_object(
     if feature_time_model(conn, version, int(key)) in SLICE_KEYS:  # models 2 and 3: slice by slice
         return _merge_sliced_object(conn, version, key, reasons, may_write)
     try:
-        inputs = read_merge_states(conn, version, int(key))
+        # the change and its one-ring (docs/merge.md): the same regions and merged rows, read by key
+        change = read_merge_change(conn, version, int(key))
+        inputs = change[0] if change is not None else read_merge_states(conn, version, int(key))
     except (InvalidInputError, VersioningError) as exc:  # not model 1, deleted on one side, attributes on both
         reasons[key] = exc.message
         return None
     states = inputs.states
-    merge = three_way_merge(states["base"], states["parent"], states["child"])
+    merge = three_way_merge(
+        states["base"], states["parent"], states["child"], top_ids=change[1] if change is not None else None
+    )
     solutions = _recorded_solutions(conn, version, key, merge)
+    if change is not None and any(isinstance(s, MeshState) for s in solutions.values()):
+        # a recorded mesh (average, manual) may hold the object's other rows, which must equal the merge's: whole
+        change = None
+        inputs = read_merge_states(conn, version, int(key))
+        states = inputs.states
+        merge = three_way_merge(states["base"], states["parent"], states["child"])
+        solutions = _recorded_solutions(conn, version, key, merge)
     if any(r.index not in solutions for r in merge.conflicts):
         reasons[key] = _unsolved_reason(merge, solutions)
         return None
@@ -822,24 +834,14 @@ def _merge_object(
         return None
     for discard in resolved.discards:  # said before it is written
         log.warning("feature %s of version %s: %s", key, show_name(version), _discard_text(discard))
-    if may_write[0] is None:
-        may_write[0] = bool(
-            conn.execute("SELECT tgsis.has_version_privilege(%s, 'write')", (version,)).fetchone()[0]  # type: ignore[index]
-        )
-    if not may_write[0]:
-        role = conn.execute("SELECT tgsis.calling_role()").fetchone()[0]  # type: ignore[index]
-        raise MissingPrivilegeError(
-            f"role {role} may not write in version {show_name(version)}: merging feature {key} by region writes the "
-            "merged mesh into the version first, then merges it",
-            hint=f"the owner or a tgsis_admin can run SELECT tgsis.grant_version('{_in_quotes(version)}', 'write', "
-            f"'{_in_quotes(str(role))}'); else tgsis.resolve_conflict solves it as a whole object (parent, child or "
-            "manual)",
-        )
+    _require_write(conn, version, key, may_write)
     settings = read_version_settings(conn)
     try:
         with conn.transaction():  # a savepoint: an object whose rows cannot be written leaves nothing behind
             conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
-            written = write_state_difference(conn, inputs.feature_class, int(key), states["child"], resolved.state)
+            written = write_state_difference(
+                conn, inputs.feature_class, int(key), states["child"], resolved.state, whole=change is None
+            )
             written += _write_attribute_edits(conn, int(key), attributes)
             restore_version_settings(conn, settings, local=True)
             conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))

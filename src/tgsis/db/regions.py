@@ -38,7 +38,14 @@ import psycopg
 
 from tgsis._merge_slices import SlicedMerge, SliceKey, merge_sliced
 from tgsis.arguments import checked
-from tgsis.db._merge_states import SLICE_KEYS, feature_time_model, read_merge_states, read_sliced_states, version_row
+from tgsis.db._merge_states import (
+    SLICE_KEYS,
+    feature_time_model,
+    read_merge_change,
+    read_merge_states,
+    read_sliced_states,
+    version_row,
+)
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
@@ -365,8 +372,11 @@ def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) ->
         return None, f"a row of the versioned table(s) of object class {objectclass}: it merges as a whole object"
     try:
         with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
-            states = read_merge_states(conn, version, int(objectkey)).states
-        return three_way_merge(states["base"], states["parent"], states["child"]), None
+            # the change and its one-ring (docs/merge.md): the same regions, read by key
+            change = read_merge_change(conn, version, int(objectkey))
+            states = change[0].states if change is not None else read_merge_states(conn, version, int(objectkey)).states
+        top = change[1] if change is not None else None
+        return three_way_merge(states["base"], states["parent"], states["child"], top_ids=top), None
     except MissingPrivilegeError as exc:
         return None, f"the role may not read it: {exc.message}"
     except (InvalidInputError, InvalidMergeError, NotFoundError) as exc:

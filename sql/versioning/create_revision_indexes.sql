@@ -1,0 +1,40 @@
+-- tgsis.create_revision_indexes(schema, table, object key column): the indexes of <table>_ver that find row versions by revision.
+-- Merges, refreshes and the reads of a merge by region ask "which rows of
+-- these objects were written or closed in these revisions": rows with
+-- revision in a set, or closed (revclosed) with lastrevs meeting it. Two
+-- indexes answer it by a BitmapOr instead of a scan of the objects' rows:
+-- * a BRIN on revision: rows are appended in revision order, so page ranges
+--   hold few revisions; an insert into the table's last, unsummarized range
+--   costs nothing (VACUUM, autovacuum with autosummarize, summarize them);
+-- * a btree on the object key of closed rows only (WHERE revclosed): no
+--   upload writes a closed row, so uploads do not pay for it; its rows are
+--   those closed by edits.
+-- A btree on revision would cost every upload a third more, and one on the
+-- cells' vertex columns double it (docs/performance.md, the merge section).
+-- Idempotent (an index of the same kind already there is kept); called by
+-- tgsis.enable_versioning_rel and by the upgrade for tables versioned before.
+-- Runs with the caller's rights: the caller acts as the storage's owner.
+CREATE FUNCTION tgsis.create_revision_indexes(p_schema text, p_table text, p_keyfield text)
+RETURNS void
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_rel regclass := format('%I.%I', p_schema, p_table || '_ver')::regclass;
+BEGIN
+    IF NOT EXISTS (SELECT FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam
+                    WHERE i.indrelid = v_rel AND a.amname = 'brin'
+                      AND i.indkey[0] = (SELECT attnum FROM pg_attribute WHERE attrelid = v_rel AND attname = 'revision')) THEN
+        EXECUTE format('CREATE INDEX ON %s USING brin (revision) WITH (autosummarize = on)', v_rel);
+    END IF;
+    IF NOT EXISTS (SELECT FROM pg_index i
+                    WHERE i.indrelid = v_rel AND i.indpred IS NOT NULL
+                      AND pg_get_expr(i.indpred, i.indrelid) = 'revclosed') THEN
+        EXECUTE format('CREATE INDEX ON %s (%I) WHERE revclosed', v_rel, p_keyfield);
+    END IF;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.create_revision_indexes(text, text, text) IS
+    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); idempotent';
