@@ -1,0 +1,210 @@
+"""Hostile review of the object-level ``base`` (and ``average``) solutions of a conflict.
+
+``base`` writes rows into a version for the caller: the rights, locks and
+checks any other write into a version takes hold for it too — nobody gets in
+through it, a writer of the version or a save in flight cannot make it write
+into a frozen revision or leave a mix of states recorded ``manual``.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any
+
+import psycopg
+import pytest
+
+import tgsis
+from tests.roles import login_roles
+
+Conn = psycopg.Connection[Any]
+
+
+def _rocks(conn: Conn) -> None:
+    """A versioned table rocks (class rock); rock 1 edited on both sides of version e1: a conflict."""
+    conn.execute("CREATE TABLE rocks (id int PRIMARY KEY, kind text, grade float8)")
+    conn.execute("INSERT INTO rocks VALUES (1, 'base', 1.0), (2, 'other', 2.0)")
+    tgsis.enable_versioning(conn, "rocks", "id", "rock")
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE rocks SET kind = 'child', grade = 3.0 WHERE id = 1")
+    conn.execute("UPDATE rocks SET kind = 'parent' WHERE id = 1")
+    conn.commit()
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+
+
+def _rows(conn: Conn, version: str) -> list[tuple[Any, ...]]:
+    rows = conn.execute("SELECT id, kind, grade FROM tgsis.rows_at(NULL::rocks, %s) ORDER BY id", (version,)).fetchall()
+    conn.commit()
+    return rows
+
+
+def _storage(conn: Conn) -> list[tuple[Any, ...]]:
+    rows = conn.execute("SELECT id, kind, grade, revision, lastrevs FROM rocks_ver ORDER BY 1, 4").fetchall()
+    conn.commit()
+    return rows
+
+
+def _refused(conn: Conn, query: str, params: tuple[Any, ...]) -> str | None:
+    try:
+        conn.execute(query, params)
+    except psycopg.Error as exc:
+        conn.rollback()
+        return exc.sqlstate
+    conn.commit()
+    return None
+
+
+def test_the_base_helper_is_not_callable_by_a_role_without_the_write_right(conn: Conn, db_dsn: str) -> None:
+    """tgsis.resolve_conflict_base is SECURITY DEFINER: it must not be a way around resolve_conflict's checks."""
+    _rocks(conn)
+    with login_roles(db_dsn, {"rita": "tgsis_reader"}) as roles:
+        conn.execute(f"GRANT SELECT ON rocks TO {roles.name('rita')}")
+        conn.commit()
+        before = _storage(conn)
+        rita = roles.connect("rita")
+        # resolve_conflict itself refuses her: no write right on e1
+        assert _refused(rita, "SELECT tgsis.resolve_conflict('e1', 'rock', '1', 'base')", ()) == "TG002"
+        state = _refused(rita, "SELECT tgsis.resolve_conflict_base('e1', 'rock', '1', '1')", ())
+        assert state == "42501"  # permission denied for the function
+        assert _storage(conn) == before
+        assert _rows(conn, "e1")[0] == (1, "child", 3.0)
+
+
+def test_base_needs_the_right_to_change_the_rows_of_the_table(conn: Conn, db_dsn: str) -> None:
+    """A role that may only read rocks cannot revert the version's rows through base (as through the view)."""
+    _rocks(conn)
+    with login_roles(db_dsn, {"rita": "tgsis_editor"}) as roles:
+        conn.execute(f"GRANT SELECT ON rocks TO {roles.name('rita')}")
+        conn.execute("SELECT tgsis.grant_version('e1', 'write', %s)", (roles.name("rita"),))
+        conn.commit()
+        before = _storage(conn)
+        rita = roles.connect("rita")
+        # through the view she cannot change it
+        rita.execute("SELECT set_config('tgsis.version', 'e1', false)")
+        assert _refused(rita, "UPDATE rocks SET kind = 'base', grade = 1.0 WHERE id = 1", ()) == "42501"
+        state = _refused(rita, "SELECT tgsis.resolve_conflict('e1', 'rock', '1', 'base')", ())
+        assert state in ("42501", "TG002")
+        assert _storage(conn) == before
+        assert _rows(conn, "e1")[0] == (1, "child", 3.0)
+
+
+def _blocked(admin: Conn, pid: int, seconds: float = 20.0) -> None:
+    """Wait until backend pid waits for a lock."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        row = admin.execute("SELECT wait_event_type FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
+        admin.commit()
+        if row is not None and row[0] in ("Lock", "advisory"):
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"backend {pid} never waited for a lock")
+
+
+def _run(target: Any) -> tuple[threading.Thread, list[BaseException]]:
+    errors: list[BaseException] = []
+
+    def body() -> None:
+        try:
+            target()
+        except BaseException as exc:  # noqa: BLE001 - handed to the test
+            errors.append(exc)
+
+    thread = threading.Thread(target=body, daemon=True)
+    thread.start()
+    return thread, errors
+
+
+def test_a_save_during_base_does_not_change_the_saved_revision_afterwards(conn: Conn, db_dsn: str) -> None:
+    """base writes into the version's working revision: a save_revision in between must wait, not freeze it first.
+
+    Otherwise the base's rows land in a revision already saved: what the saved revision shows changes after
+    the save returned (a frozen revision rewritten).
+    """
+    _rocks(conn)
+    holder = psycopg.connect(db_dsn)
+    resolver = psycopg.connect(db_dsn, autocommit=True)
+    saver = psycopg.connect(db_dsn)
+    admin = psycopg.connect(db_dsn)
+    try:
+        holder.execute("LOCK TABLE rocks_ver IN EXCLUSIVE MODE")  # reads go on, base's first write waits
+        pid = resolver.info.backend_pid
+        t1, e1 = _run(lambda: resolver.execute("SELECT tgsis.resolve_conflict('e1', 'rock', '1', 'base')"))
+        _blocked(admin, pid)
+        seen: list[list[tuple[Any, ...]]] = []
+
+        def save() -> None:
+            saver.execute("SELECT set_config('tgsis.version', 'e1', false)")
+            revision = tgsis.save_revision(saver, "checkpoint")
+            saver.commit()
+            seen.append(
+                saver.execute(
+                    "SELECT id, kind, grade FROM tgsis.rows_at(NULL::rocks, 'e1', %s) ORDER BY id", (revision,)
+                ).fetchall()
+            )
+            saver.commit()
+            seen.append([(revision,)])
+
+        t2, e2 = _run(save)
+        t2.join(1.0)  # the save waits for the base (fixed) or finishes at once (the defect)
+        holder.rollback()
+        t1.join(30)
+        t2.join(30)
+        assert not e1 and not e2, (e1, e2)
+        [saved_rows, [(revision,)]] = seen
+        now = admin.execute(
+            "SELECT id, kind, grade FROM tgsis.rows_at(NULL::rocks, 'e1', %s) ORDER BY id", (revision,)
+        ).fetchall()
+        admin.commit()
+        assert now == saved_rows  # a saved revision never changes
+        assert _rows(conn, "e1")[0] == (1, "base", 1.0)
+    finally:
+        for c in (holder, resolver, saver, admin):
+            c.close()
+
+
+def test_base_waits_for_a_writer_of_the_object_in_the_version(conn: Conn, db_dsn: str) -> None:
+    """A write of the object through the view in flight: base must wait for it and then write the whole base.
+
+    Otherwise the version ends up with a mix (the writer's row over the base's), recorded manual.
+    """
+    _rocks(conn)
+    writer = psycopg.connect(db_dsn)
+    resolver = psycopg.connect(db_dsn, autocommit=True)
+    admin = psycopg.connect(db_dsn)
+    try:
+        writer.execute("SELECT set_config('tgsis.version', 'e1', false)")
+        writer.commit()
+        writer.execute("UPDATE rocks SET kind = 'late', grade = 9.0 WHERE id = 1")
+        writer.execute("INSERT INTO rocks VALUES (3, 'late', 9.0)")
+        t1, e1 = _run(lambda: resolver.execute("SELECT tgsis.resolve_conflict('e1', 'rock', '1', 'base')"))
+        t1.join(1.0)
+        writer.commit()
+        t1.join(30)
+        assert not e1, e1
+        rows = _rows(conn, "e1")
+        assert rows[0] == (1, "base", 1.0), rows
+        [c] = [c for c in tgsis.find_conflicts(conn, "e1") if c.objectkey == "1"]
+        conn.commit()
+        assert c.solution == "manual"
+    finally:
+        for c_ in (writer, resolver, admin):
+            c_.close()
+
+
+def test_base_in_a_repeatable_read_transaction_is_refused(conn: Conn, db_dsn: str) -> None:
+    """A snapshot older than a writer's commit would leave that writer's rows beside the base's, recorded manual."""
+    _rocks(conn)
+    before = _storage(conn)
+    reader = psycopg.connect(db_dsn)
+    try:
+        reader.execute("BEGIN ISOLATION LEVEL REPEATABLE READ")
+        reader.execute("SELECT count(*) FROM tgsis.versions").fetchone()
+        state = _refused(reader, "SELECT tgsis.resolve_conflict('e1', 'rock', '1', 'base')", ())
+        assert state == "TG300"
+    finally:
+        reader.close()
+    assert _storage(conn) == before
