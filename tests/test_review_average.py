@@ -208,3 +208,76 @@ def test_base_in_a_repeatable_read_transaction_is_refused(conn: Conn, db_dsn: st
     finally:
         reader.close()
     assert _storage(conn) == before
+
+
+# --------------------------------------------------------------------------- average of two meshings: properties
+
+
+def _with_zone(state: Any, zone: Any) -> Any:
+    from tgsis.merge3 import MeshState
+
+    return MeshState(
+        state.cell_size,
+        state.vertex_ids,
+        state.vertices,
+        state.cell_ids,
+        state.cells,
+        {**state.vertex_properties, "zone": zone},
+        state.cell_properties,
+    )
+
+
+@pytest.mark.parametrize("parent_subdivides", [False, True], ids=["child-subdivides", "parent-subdivides"])
+def test_average_of_two_meshings_keeps_an_integer_property_a_code(parent_subdivides: bool) -> None:
+    """A code (an integer vertex property: a zone, a facies) is not averaged into a value no side has.
+
+    The one-meshing average keeps a property that is not real-valued (the parent's, docs/merge.md); the
+    average of two meshings must not interpolate zones 1 and 3 into 2, nor turn the column into floats.
+    """
+    import numpy as np
+
+    from tests.test_merge_average import _base, _moved, _subdivided
+    from tgsis.db import regions as R
+    from tgsis.merge3 import apply_solutions, three_way_merge
+
+    base = _base()
+    codes = np.array([1, 3, 7], dtype=np.int64)
+    base = _with_zone(base, codes[base.vertex_ids % 3])
+    split = _subdivided(base)
+    # the new (centroid) vertices get the code of their triangle's first corner
+    new = split.vertex_ids[base.n_vertices :]
+    first = split.cells[np.isin(split.cells[:, 2], new)]
+    zone_new = np.empty(len(new), dtype=np.int64)
+    zone_new[np.searchsorted(new, first[:, 2])] = codes[first[:, 0] % 3]
+    split = _with_zone(split, np.concatenate([codes[base.vertex_ids % 3], zone_new]))
+    moved = _with_zone(_moved(base), codes[base.vertex_ids % 3])
+    parent, child = (split, moved) if parent_subdivides else (moved, split)
+    merge = three_way_merge(base, parent, child)
+    [region] = merge.conflicts
+    average = R.average_region(merge, region)
+    zone = np.asarray(average.vertex_properties["zone"])
+    assert zone.dtype.kind == "i", zone.dtype
+    assert np.isin(zone, codes).all(), sorted(set(zone.tolist()) - set(codes.tolist()))
+    # the real-valued porosity is still averaged
+    assert np.asarray(average.vertex_properties["porosity"]).dtype.kind == "f"
+    resolved = apply_solutions(merge, {region.index: average}, names={region.index: "average"})
+    assert np.asarray(resolved.state.vertex_properties["zone"]).dtype.kind == "i"
+
+
+# --------------------------------------------------------------------------- bad keys
+
+
+def test_average_of_a_key_that_is_no_feature_id_is_a_clear_error(conn: Conn, db_dsn: str, capsys: Any) -> None:
+    """'abc' or '1.5' as a feature's key: InvalidInputError naming it (the command fails with it, exit 1), not a ValueError."""
+    from tgsis.cli import main
+    from tgsis.errors import InvalidInputError
+
+    _rocks(conn)
+    for key in ("abc", "1.5", ""):
+        with pytest.raises(InvalidInputError, match="feature id"):
+            tgsis.resolve_conflict(conn, "e1", "feature", key, "average")
+        conn.rollback()
+    capsys.readouterr()
+    code = main(["--dsn", db_dsn, "version", "resolve", "e1", "feature", "abc", "average", "--discard-other"])
+    err = capsys.readouterr().err
+    assert code == 1 and "'abc'" in err and "Traceback" not in err, (code, err)

@@ -899,7 +899,14 @@ def resolve_conflict(
                 f"{objectclass} in version {show_name(version)} is a row of a versioned table",
                 hint="solve it with parent, child, base or manual",
             )
-        conflict, discards = resolve_object_average(conn, version, int(str(objectkey)), discard_other=discard_other)
+        try:
+            feature_id = int(str(objectkey).strip())
+        except ValueError:
+            raise InvalidInputError(
+                f"key {str(objectkey)!r} of class feature is not a feature id",
+                hint="give the feature's id (tgsis version conflicts VERSION lists the conflicting objects)",
+            ) from None
+        conflict, discards = resolve_object_average(conn, version, feature_id, discard_other=discard_other)
         return dataclasses.replace(conflict, region_discards=discards)
     return resolve_whole_object(conn, version, objectclass, objectkey, solution, discard_other=discard_other)
 
