@@ -17,6 +17,7 @@ import pytest
 
 import tgsis
 from tests.roles import login_roles
+from tests.test_resolve_discards import private_state, story  # noqa: F401 - fixtures
 
 Conn = psycopg.Connection[Any]
 
@@ -281,3 +282,84 @@ def test_average_of_a_key_that_is_no_feature_id_is_a_clear_error(conn: Conn, db_
     code = main(["--dsn", db_dsn, "version", "resolve", "e1", "feature", "abc", "average", "--discard-other"])
     err = capsys.readouterr().err
     assert code == 1 and "'abc'" in err and "Traceback" not in err, (code, err)
+
+
+# --------------------------------------------------------------------------- what base says it discards
+
+
+def _object_rows(conn: Conn, version: str, geoid: int) -> dict[str, dict[tuple[Any, ...], Any]]:
+    """Per versioned table of class feature, the object's rows the version sees: {row key: the row as json}."""
+    tables = conn.execute(
+        "SELECT format('%I.%I', schemaname, tablename), objectkeyfield, keycolumns FROM tgsis.versioned_tables"
+        " WHERE objectclass = 'feature'"
+    ).fetchall()
+    out: dict[str, dict[tuple[Any, ...], Any]] = {}
+    for table, keyfield, keys in tables:
+        rows = conn.execute(
+            f"SELECT to_jsonb(r) FROM tgsis.rows_at(NULL::{table}, %s) r WHERE r.{keyfield} = %s", (version, geoid)
+        ).fetchall()
+        out[table] = {tuple(r[0][k] for k in keys): r[0] for (r,) in ((x,) for x in rows)}
+    conn.commit()
+    return out
+
+
+def _diff(old: dict[tuple[Any, ...], Any], new: dict[tuple[Any, ...], Any]) -> tuple[int, int, int]:
+    """(rows added, removed, changed) from old to new."""
+    return (
+        len(new.keys() - old.keys()),
+        len(old.keys() - new.keys()),
+        sum(1 for k in old.keys() & new.keys() if old[k] != new[k]),
+    )
+
+
+def test_what_base_says_it_discards_is_what_a_direct_diff_finds(conn: Conn, story: dict[str, int]) -> None:  # noqa: F811
+    """conflict_discards(solution base) per side against a plain diff of the object's rows before and after."""
+    a = story["A"]
+    conn.execute("SELECT tgsis.find_conflicts('edit')")  # the SQL's: no regions stored (the regions merge otherwise)
+    conn.commit()
+    said = {
+        (d.discarded, d.tablename): (d.rows_added, d.rows_removed, d.rows_changed)
+        for d in tgsis.conflict_discards(conn, "edit", "feature", a)
+        if d.solution == "base"
+    }
+    conn.commit()
+    parent, child = _object_rows(conn, "DEFAULT", a), _object_rows(conn, "edit", a)
+    solved = tgsis.resolve_conflict(conn, "edit", "feature", a, "base")
+    conn.commit()
+    after = _object_rows(conn, "edit", a)
+    found = {}
+    for side, rows in (("parent", parent), ("child", child)):
+        for table in rows:
+            counts = _diff(after[table], rows[table])  # the side's edits against the base the version holds now
+            if counts != (0, 0, 0):
+                found[side, table] = counts
+    assert said == found
+    assert solved.discarded is not None
+    assert {
+        (d.discarded, d.tablename): (d.rows_added, d.rows_removed, d.rows_changed) for d in solved.discarded
+    } == found
+
+
+# --------------------------------------------------------------------------- average keeps the parent's attributes
+
+
+def test_average_of_a_whole_object_keeps_the_attributes_only_the_parent_changed(conn: Conn) -> None:
+    """The parent renames the feature and both move the mesh: average records manual, the merge takes the version's
+    object whole — so the parent's new name must be in the version too (as the merge by region brings it), or the
+    merge silently puts the old name back."""
+    from tests.merge_data import make_fault, move
+    from tests.test_conflict_regions import MIDDLE
+
+    geoid = make_fault(conn)
+    move(conn, "e1", geoid, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", geoid, MIDDLE, (0.0, 0.0, -7.0))
+    conn.execute("UPDATE tgsis.geometry SET geoname = 'renamed in DEFAULT' WHERE geoid = %s", (geoid,))
+    conn.commit()
+    solved = tgsis.resolve_conflict(conn, "e1", "feature", geoid, "average")
+    conn.commit()
+    assert solved.solution == "manual"
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        [(name,)] = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchall()
+    assert name == "renamed in DEFAULT"

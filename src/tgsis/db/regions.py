@@ -37,6 +37,7 @@ import numpy.typing as npt
 import psycopg
 
 from tgsis.arguments import checked
+from tgsis.db._attribute_edits import attribute_edits, write_attribute_edits
 from tgsis.db._merge_states import read_merge_states, version_row
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
@@ -991,6 +992,15 @@ def _average_object(
                 f"{name}: average refused, nothing written: {exc.message}", hint=exc.hint
             ) from exc
     resolved = apply_solutions(merge, averages, names=dict.fromkeys(averages, "average"))
+    # the version's object replaces the parent's at the merge: an attribute only the parent changed goes into it
+    # too, as the merge by region brings it (read_merge_states refused attributes both sides changed)
+    attributes = attribute_edits(conn, inputs, version, feature_id)
+    if attributes.both:
+        raise RegionSolutionError(
+            f"{name}: its attributes were changed both in the version and in its parent, to other values "
+            f"({', '.join(attributes.both)}): the average is of the mesh only",
+            hint="solve it with parent, child or base, or write the merged object into the version and record manual",
+        )
     if resolved.discards and not discard_other:
         raise RegionSolutionError(
             f"{name}: solution average discards edits: " + "; ".join(discard_text(d) for d in resolved.discards),
@@ -1000,6 +1010,7 @@ def _average_object(
     try:
         conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
         write_state_difference(conn, inputs.feature_class, feature_id, states["child"], resolved.state)
+        write_attribute_edits(conn, feature_id, attributes)
     finally:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
             restore_version_settings(conn, settings, local=True)
