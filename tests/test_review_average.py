@@ -363,3 +363,64 @@ def test_average_of_a_whole_object_keeps_the_attributes_only_the_parent_changed(
     with tgsis.in_version(conn, "DEFAULT"):
         [(name,)] = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchall()
     assert name == "renamed in DEFAULT"
+
+
+def test_base_with_an_empty_search_path(conn: Conn) -> None:
+    """search_path = '' (a careful DBA's session): base through the Python route."""
+    _rocks(conn)
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    solved = tgsis.resolve_conflict(conn, "e1", "rock", 1, "base")
+    conn.commit()
+    assert solved.solution == "manual" and solved.discarded
+    conn.execute("RESET search_path")
+    assert _rows(conn, "e1")[0] == (1, "base", 1.0)
+
+
+def test_average_with_an_empty_search_path(conn: Conn) -> None:
+    """search_path = '': the object-level average reads, writes and records as with the default path."""
+    from tests.merge_data import make_fault, move
+    from tests.test_conflict_regions import MIDDLE
+
+    geoid = make_fault(conn)
+    move(conn, "e1", geoid, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", geoid, MIDDLE, (0.0, 0.0, -7.0))
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    averaged = tgsis.resolve_conflict(conn, "e1", "feature", geoid, "average")
+    conn.commit()
+    assert averaged.solution == "manual"
+
+
+@pytest.mark.parametrize("deleter", ["e1", "DEFAULT"])
+def test_base_of_an_object_deleted_on_one_side(conn: Conn, deleter: str) -> None:
+    """One side deletes rock 1, the other changes it: base brings the base's row back on both, saying so."""
+    conn.execute("CREATE TABLE rocks (id int PRIMARY KEY, kind text, grade float8)")
+    conn.execute("INSERT INTO rocks VALUES (1, 'base', 1.0)")
+    tgsis.enable_versioning(conn, "rocks", "id", "rock")
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    changer = "DEFAULT" if deleter == "e1" else "e1"
+    with tgsis.in_version(conn, deleter):
+        conn.execute("DELETE FROM rocks WHERE id = 1")
+    with tgsis.in_version(conn, changer):
+        conn.execute("UPDATE rocks SET kind = 'changed' WHERE id = 1")
+    conn.commit()
+    solved = tgsis.resolve_conflict(conn, "e1", "rock", 1, "base")
+    conn.commit()
+    assert solved.discarded is not None
+    said = {(d.discarded, d.rows_added, d.rows_removed, d.rows_changed) for d in solved.discarded}
+    side = {"e1": "child", "DEFAULT": "parent"}
+    assert said == {(side[deleter], 0, 1, 0), (side[changer], 0, 0, 1)}
+    assert _rows(conn, "e1") == [(1, "base", 1.0)]
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    assert _rows(conn, "DEFAULT") == [(1, "base", 1.0)]
+    # an object only one side has is no conflict: base is refused, nothing written
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("INSERT INTO rocks VALUES (5, 'new', 5.0)")
+    conn.commit()
+    with pytest.raises(tgsis.NotFoundError):
+        tgsis.resolve_conflict(conn, "e1", "rock", 5, "base")
+    conn.rollback()
+    assert (5, "new", 5.0) in _rows(conn, "e1")
