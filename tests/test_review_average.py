@@ -424,3 +424,23 @@ def test_base_of_an_object_deleted_on_one_side(conn: Conn, deleter: str) -> None
         tgsis.resolve_conflict(conn, "e1", "rock", 5, "base")
     conn.rollback()
     assert (5, "new", 5.0) in _rows(conn, "e1")
+
+
+def test_base_from_python_on_a_connection_whose_default_is_repeatable_read(conn: Conn, db_dsn: str) -> None:
+    """A client whose connections default to REPEATABLE READ: the Python base runs its own READ COMMITTED
+    transaction (as average does) rather than failing; inside the caller's open REPEATABLE READ it is refused."""
+    _rocks(conn)
+    client = psycopg.connect(db_dsn)
+    try:
+        client.isolation_level = psycopg.IsolationLevel.REPEATABLE_READ
+        solved = tgsis.resolve_conflict(client, "e1", "rock", 1, "base")
+        client.commit()
+        assert solved.solution == "manual"
+        assert _rows(conn, "e1")[0] == (1, "base", 1.0)
+        client.execute("SELECT 1")  # the caller's own REPEATABLE READ transaction, open
+        with pytest.raises(tgsis.Error) as refused:
+            tgsis.resolve_conflict(client, "e1", "rock", 1, "base")
+        assert refused.value.sqlstate == "TG300"
+        client.rollback()
+    finally:
+        client.close()

@@ -788,8 +788,11 @@ def resolve_conflict(
             "a feature's two meshes, computed by tgsis.resolve_conflict (tgsis.db.regions.resolve_conflict)",
             hint=f"tgsis version resolve {version} {objectclass} {_key_text(objectkey)} average",
         )
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     with reraise(), conn.transaction():
         before: tuple[Discard, ...] | None = ()
+        if wanted == "base" and fresh:  # base writes after waiting for writers: READ COMMITTED (TG300 otherwise)
+            conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
         if wanted == "base":  # both sides' edits, counted before the version's are overwritten
             before = _base_discards(conn, version, objectclass, objectkey, discard_other)
         row = conn.execute(
