@@ -444,3 +444,33 @@ def test_base_from_python_on_a_connection_whose_default_is_repeatable_read(conn:
         client.rollback()
     finally:
         client.close()
+
+
+@pytest.mark.parametrize("parent_subdivides", [False, True], ids=["child-subdivides", "parent-subdivides"])
+def test_average_of_two_meshings_does_not_spread_a_removed_property_value(parent_subdivides: bool) -> None:
+    """One side removed the porosity of one vertex (NaN: no property row); the other re-meshed the block.
+
+    The average may drop that vertex's value (halfway between a value and none, as for one meshing), but not
+    its neighbours': a value both sides kept was turned into NaN, i.e. its property row silently deleted.
+    """
+    import numpy as np
+
+    import tests.test_merge_average as T
+    from tgsis.db import regions as R
+    from tgsis.merge3 import MeshState, three_way_merge
+
+    base = T._base()
+    moved = T._moved(base)
+    porosity = np.asarray(moved.vertex_properties["porosity"], dtype=np.float64).copy()
+    removed = int(T.INNER[5])
+    porosity[removed] = np.nan
+    moved = MeshState(
+        3, moved.vertex_ids, moved.vertices, moved.cell_ids, moved.cells, {"porosity": porosity}, moved.cell_properties
+    )
+    split = T._subdivided(base)
+    parent, child = (split, moved) if parent_subdivides else (moved, split)
+    merge = three_way_merge(base, parent, child)
+    [region] = merge.conflicts
+    average = R.average_region(merge, region)
+    values = np.asarray(average.vertex_properties["porosity"])
+    assert set(average.vertex_ids[np.isnan(values)].tolist()) <= {removed}
