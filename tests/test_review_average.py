@@ -91,6 +91,13 @@ def test_base_needs_the_right_to_change_the_rows_of_the_table(conn: Conn, db_dsn
         assert state in ("42501", "TG002")
         assert _storage(conn) == before
         assert _rows(conn, "e1")[0] == (1, "child", 3.0)
+        # with the rights, the Python route works for her (the locks it takes are hers to take)
+        conn.execute(f"GRANT INSERT, UPDATE, DELETE ON rocks TO {roles.name('rita')}")
+        conn.commit()
+        solved = tgsis.resolve_conflict(rita, "e1", "rock", 1, "base")
+        rita.commit()
+        assert solved.solution == "manual"
+        assert _rows(conn, "e1")[0] == (1, "base", 1.0)
 
 
 def _blocked(admin: Conn, pid: int, seconds: float = 20.0) -> None:
@@ -474,3 +481,39 @@ def test_average_of_two_meshings_does_not_spread_a_removed_property_value(parent
     average = R.average_region(merge, region)
     values = np.asarray(average.vertex_properties["porosity"])
     assert set(average.vertex_ids[np.isnan(values)].tolist()) <= {removed}
+
+
+def test_what_python_base_returns_includes_an_edit_committed_while_it_waited(conn: Conn, db_dsn: str) -> None:
+    """A writer of the object in the version commits a new row while base waits for it: base removes that row,
+    so the discards it returns must count it (they were read before the wait)."""
+    conn.execute("CREATE TABLE layers (obj int, k text, v float8, PRIMARY KEY (obj, k))")
+    conn.execute("INSERT INTO layers VALUES (1, 'a', 1.0), (1, 'b', 2.0)")
+    tgsis.enable_versioning(conn, "layers", "obj", "layer")
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE layers SET v = 10 WHERE obj = 1 AND k = 'a'")
+    conn.execute("UPDATE layers SET v = 20 WHERE obj = 1 AND k = 'a'")
+    conn.commit()
+    writer = psycopg.connect(db_dsn)
+    resolver = psycopg.connect(db_dsn)
+    try:
+        writer.execute("SELECT set_config('tgsis.version', 'e1', false)")
+        writer.commit()
+        writer.execute("INSERT INTO layers VALUES (1, 'late', 9.0)")  # open: holds the object's write lock
+        result: list[Any] = []
+        thread, errors = _run(lambda: result.append(tgsis.resolve_conflict(resolver, "e1", "layer", 1, "base")))
+        thread.join(1.0)
+        writer.commit()
+        thread.join(30)
+        resolver.commit()
+        assert not errors, errors
+        [solved] = result
+        rows = conn.execute("SELECT obj, k, v FROM tgsis.rows_at(NULL::layers, 'e1') ORDER BY k").fetchall()
+        conn.commit()
+        assert rows == [(1, "a", 1.0), (1, "b", 2.0)]  # the late row went with the version's edits
+        child = [d for d in solved.discarded if d.discarded == "child"]
+        assert [(d.rows_added, d.rows_changed) for d in child] == [(1, 1)]
+    finally:
+        writer.close()
+        resolver.close()

@@ -794,6 +794,7 @@ def resolve_conflict(
         if wanted == "base" and fresh:  # base writes after waiting for writers: READ COMMITTED (TG300 otherwise)
             conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
         if wanted == "base":  # both sides' edits, counted before the version's are overwritten
+            _lock_object_in_version(conn, version, objectclass, objectkey)  # none committed between count and write
             before = _base_discards(conn, version, objectclass, objectkey, discard_other)
         row = conn.execute(
             f"SELECT {CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
@@ -836,6 +837,24 @@ def resolve_conflict(
                 "version and record manual (tgsis.conflict_rows shows both sides' rows)",
             )
     return dataclasses.replace(conflict, discarded=discards)
+
+
+def _lock_object_in_version(conn: Conn, version: str, objectclass: str, objectkey: object) -> None:
+    """Take the object's write lock in ``version`` (tgsis.object_write_lock's), as tgsis.resolve_conflict's base does.
+
+    Taken before the discards are counted: a writer of the object in the
+    version then commits before the count or after the base is written,
+    never in between (its edit would be overwritten without being counted).
+    """
+    conn.execute(
+        "SELECT pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_class_lock_key(%s, tgsis.version_id(%s)))",
+        (objectclass, version),
+    )
+    conn.execute(
+        "SELECT pg_catalog.pg_advisory_xact_lock(tgsis.object_lock_key(%s,"
+        " (tgsis.canonical_object_keys(%s, ARRAY[%s]))[1], tgsis.version_id(%s)))",
+        (objectclass, objectclass, _key_text(objectkey), version),
+    )
 
 
 def _base_discards(
