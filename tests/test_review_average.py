@@ -517,3 +517,30 @@ def test_what_python_base_returns_includes_an_edit_committed_while_it_waited(con
     finally:
         writer.close()
         resolver.close()
+
+
+def test_base_with_quotes_and_percent_signs_in_every_name(conn: Conn) -> None:
+    """A table, a class and a version whose names hold quotes, %, and a space: base works and says so."""
+    from psycopg import sql
+
+    table = sql.Identifier("we'ird %s", "Rock's %I")
+    conn.execute(sql.SQL("CREATE SCHEMA {}").format(sql.Identifier("we'ird %s")))
+    conn.execute(sql.SQL("CREATE TABLE {} (id int PRIMARY KEY, kind text)").format(table))
+    conn.execute(sql.SQL("INSERT INTO {} VALUES (1, 'base')").format(table))
+    tgsis.enable_versioning(conn, table.as_string(conn), "id", "o'k %L")
+    tgsis.create_version(conn, "it's 100% v")
+    conn.commit()
+    with tgsis.in_version(conn, "it's 100% v"):
+        conn.execute(sql.SQL("UPDATE {} SET kind = 'child' WHERE id = 1").format(table))
+    conn.execute(sql.SQL("UPDATE {} SET kind = 'parent' WHERE id = 1").format(table))
+    conn.commit()
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(d.message_primary or ""))
+    row = conn.execute("SELECT solution FROM tgsis.resolve_conflict(%s, %s, '1', 'base')", ("it's 100% v", "o'k %L"))
+    assert row.fetchone() == ("manual",)
+    conn.commit()
+    assert any("(solution base)" in n and "'it''s 100% v'" in n for n in notices), notices
+    rows = conn.execute(
+        sql.SQL("SELECT id, kind FROM tgsis.rows_at(NULL::{}, {})").format(table, sql.Literal("it's 100% v"))
+    ).fetchall()
+    assert rows == [(1, "base")]
