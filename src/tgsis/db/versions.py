@@ -28,7 +28,7 @@ import psycopg
 
 from tgsis._optional import require
 from tgsis.arguments import checked
-from tgsis.db._settings import read_version_settings, restore_statement
+from tgsis.db._settings import read_version_settings, restore_statement, restore_version_settings
 from tgsis.db._transfer import one_snapshot
 from tgsis.errors import InvalidInputError, MissingPrivilegeError, VersioningError, reraise
 
@@ -840,21 +840,27 @@ def resolve_conflict(
 
 
 def _lock_object_in_version(conn: Conn, version: str, objectclass: str, objectkey: object) -> None:
-    """Take the object's write lock in ``version`` (tgsis.object_write_lock's), as tgsis.resolve_conflict's base does.
+    """Take the locks of a write of the object in ``version``, as tgsis.resolve_conflict's base does.
 
-    Taken before the discards are counted: a writer of the object in the
-    version then commits before the count or after the base is written,
-    never in between (its edit would be overwritten without being counted).
+    Taken before the discards are counted, in the writers' order: the
+    version's row shared (tgsis.write_revision, which also checks the write
+    right: TG002), then the object's write lock (tgsis.object_write_lock's).
+    A writer of the object in the version then commits before the count or
+    after the base is written, never in between (its edit would be
+    overwritten without being counted); a merge or refresh holding the
+    version waits, or is waited for, without a deadlock.
     """
-    conn.execute(
-        "SELECT pg_catalog.pg_advisory_xact_lock_shared(tgsis.object_class_lock_key(%s, tgsis.version_id(%s)))",
-        (objectclass, version),
-    )
-    conn.execute(
-        "SELECT pg_catalog.pg_advisory_xact_lock(tgsis.object_lock_key(%s,"
-        " (tgsis.canonical_object_keys(%s, ARRAY[%s]))[1], tgsis.version_id(%s)))",
-        (objectclass, objectclass, _key_text(objectkey), version),
-    )
+    settings = read_version_settings(conn)
+    try:
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # this transaction only
+        conn.execute("SELECT FROM tgsis.write_revision()")
+        conn.execute(
+            "SELECT tgsis.object_write_lock(%s, tgsis.canonical_object_keys(%s, ARRAY[%s]))",
+            (objectclass, objectclass, _key_text(objectkey)),
+        )
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
 
 
 def _base_discards(
