@@ -49,15 +49,13 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 import psycopg
-from psycopg import sql
 
 from tgsis._merge_slices import apply_sliced, merge_sliced, slice_text
 from tgsis.arguments import checked
+from tgsis.db._attribute_edits import attribute_edits, write_attribute_edits
 from tgsis.db._continuity import check_continuity
 from tgsis.db._merge_states import (
     SLICE_KEYS,
-    MergeInputs,
-    SlicedInputs,
     feature_time_model,
     read_merge_change,
     read_merge_states,
@@ -695,99 +693,6 @@ def _discard_text(d: RegionDiscard) -> str:
     )
 
 
-#: the columns of an object's ``tgsis.geometry`` row that are its attributes, not derived from its rows
-_GEOMETRY_ATTRIBUTES = (
-    "geoname",
-    "collection",
-    "alive",
-    "colorred",
-    "colorgreen",
-    "colorblue",
-    "zpositive",
-    "crs",
-    "metadata",
-)
-
-
-@dataclass(frozen=True)
-class _AttributeEdits:
-    """The parent's edits of an object's attributes the version does not have: (view, key column, {column: text})."""
-
-    updates: tuple[tuple[sql.Composable, str, dict[str, str | None]], ...]
-    both: tuple[str, ...]  # columns both sides changed to other values
-
-
-def _attribute_edits(conn: Conn, inputs: MergeInputs | SlicedInputs, version: str, geoid: int) -> _AttributeEdits:
-    """Three ways, column by column: the parent's edits of the geometry row's attributes and of the feature row.
-
-    A merge by region writes the merged mesh into the version and records
-    the object ``manual``: the version's object then replaces the parent's,
-    its geometry and feature rows included. So an attribute only the parent
-    changed (a new name, colour, CRS, metadata or feature property) must be
-    brought into the version as well, or it is lost. Values are compared as
-    text with exact floats; the session's version settings are put back.
-    """
-    fc = inputs.feature_class
-    columns = conn.execute(
-        "SELECT attname FROM pg_catalog.pg_attribute WHERE attrelid = pg_catalog.to_regclass(format('%%I.%%I', %s::text, %s::text))"
-        " AND attnum > 0 AND NOT attisdropped AND attname <> '_geoid' ORDER BY attnum",
-        (fc.schema, fc.featuretable),
-    ).fetchall()
-    tables: list[tuple[sql.Composable, str, tuple[str, ...]]] = [
-        (sql.SQL("tgsis.geometry"), "geoid", _GEOMETRY_ATTRIBUTES),
-        (fc.qualified(fc.featuretable), "_geoid", tuple(str(c[0]) for c in columns)),
-    ]
-    base_revision, parent_revision, working = inputs.revisions
-    sides = ((version, base_revision), (inputs.parent, parent_revision), (version, working))
-    settings = read_version_settings(conn)
-    digits = conn.execute("SELECT current_setting('extra_float_digits')").fetchone()[0]  # type: ignore[index]
-    conn.execute("SELECT set_config('extra_float_digits', '3', true)")  # floats as text, exactly
-    updates, both = [], []
-    try:
-        for view, keycol, names in tables:
-            if not names:
-                continue
-            read = sql.SQL("SELECT {} FROM {} WHERE {} = %s").format(
-                sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(n)) for n in names),
-                view,
-                sql.Identifier(keycol),
-            )
-            rows = []
-            for side, revision in sides:
-                conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (side, revision))
-                rows.append(conn.execute(read, (geoid,)).fetchone() or (None,) * len(names))
-            base, theirs, ours = rows
-            take = {}
-            for i, name in enumerate(names):
-                if theirs[i] == ours[i] or theirs[i] == base[i]:
-                    continue
-                if ours[i] == base[i]:
-                    take[name] = theirs[i]
-                else:
-                    both.append(name)
-            if take:
-                updates.append((view, keycol, take))
-    finally:
-        conn.execute("SELECT set_config('extra_float_digits', %s, true)", (str(digits),))
-        restore_version_settings(conn, settings, local=True)
-    return _AttributeEdits(tuple(updates), tuple(both))
-
-
-def _write_attribute_edits(conn: Conn, geoid: int, edits: _AttributeEdits) -> int:
-    """Bring the parent's attribute edits into the version (the session is in its working revision); rows changed."""
-    changed = 0
-    for view, keycol, values in edits.updates:
-        changed += conn.execute(
-            sql.SQL("UPDATE {} SET {} WHERE {} = %s").format(
-                view,
-                sql.SQL(", ").join(sql.SQL("{} = %s").format(sql.Identifier(n)) for n in values),
-                sql.Identifier(keycol),
-            ),
-            (*values.values(), geoid),
-        ).rowcount
-    return max(changed, 0)
-
-
 def _merge_object(
     conn: Conn, version: str, key: str, reasons: dict[str, str], may_write: list[bool | None]
 ) -> MergedObject | None:
@@ -825,7 +730,7 @@ def _merge_object(
     except InvalidMergeError as exc:
         reasons[key] = f"invalid merge: {exc.message}"
         return None
-    attributes = _attribute_edits(conn, inputs, version, int(key))
+    attributes = attribute_edits(conn, inputs, version, int(key))
     if attributes.both:
         reasons[key] = (
             f"its attributes were changed both in the version and in its parent, to other values "
@@ -842,7 +747,7 @@ def _merge_object(
             written = write_state_difference(
                 conn, inputs.feature_class, int(key), states["child"], resolved.state, whole=change is None
             )
-            written += _write_attribute_edits(conn, int(key), attributes)
+            written += write_attribute_edits(conn, int(key), attributes)
             restore_version_settings(conn, settings, local=True)
             conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
     except InvalidInputError as exc:  # e.g. an integer property without a value for a row to write
@@ -903,7 +808,7 @@ def _merge_sliced_object(
     except InvalidMergeError as exc:
         reasons[key] = f"invalid merge: {exc.message}"
         return None
-    attributes = _attribute_edits(conn, inputs, version, int(key))
+    attributes = attribute_edits(conn, inputs, version, int(key))
     if attributes.both:
         reasons[key] = (
             f"its attributes were changed both in the version and in its parent, to other values "
@@ -926,7 +831,7 @@ def _merge_sliced_object(
                 states["child"].instant_rows,
                 merge.instant_rows,
             )
-            written += _write_attribute_edits(conn, int(key), attributes)
+            written += write_attribute_edits(conn, int(key), attributes)
             if merge.base.kind == "EVOLVING" and len({k[0] for k in slices}) > 1:
                 check_continuity(conn, int(key), None)
             restore_version_settings(conn, settings, local=True)

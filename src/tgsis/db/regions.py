@@ -38,6 +38,7 @@ import psycopg
 
 from tgsis._merge_slices import SlicedMerge, SliceKey, merge_sliced
 from tgsis.arguments import checked
+from tgsis.db._attribute_edits import attribute_edits, write_attribute_edits
 from tgsis.db._merge_states import (
     SLICE_KEYS,
     feature_time_model,
@@ -1170,7 +1171,14 @@ def resolve_conflict(
                 f"{objectclass} in version {show_name(version)} is a row of a versioned table",
                 hint="solve it with parent, child, base or manual",
             )
-        conflict, discards = resolve_object_average(conn, version, int(str(objectkey)), discard_other=discard_other)
+        try:
+            feature_id = int(str(objectkey).strip())
+        except ValueError:
+            raise InvalidInputError(
+                f"key {str(objectkey)!r} of class feature is not a feature id",
+                hint="give the feature's id (tgsis version conflicts VERSION lists the conflicting objects)",
+            ) from None
+        conflict, discards = resolve_object_average(conn, version, feature_id, discard_other=discard_other)
         return dataclasses.replace(conflict, region_discards=discards)
     return resolve_whole_object(conn, version, objectclass, objectkey, solution, discard_other=discard_other)
 
@@ -1255,6 +1263,15 @@ def _average_object(
                 f"{name}: average refused, nothing written: {exc.message}", hint=exc.hint
             ) from exc
     resolved = apply_solutions(merge, averages, names=dict.fromkeys(averages, "average"))
+    # the version's object replaces the parent's at the merge: an attribute only the parent changed goes into it
+    # too, as the merge by region brings it (read_merge_states refused attributes both sides changed)
+    attributes = attribute_edits(conn, inputs, version, feature_id)
+    if attributes.both:
+        raise RegionSolutionError(
+            f"{name}: its attributes were changed both in the version and in its parent, to other values "
+            f"({', '.join(attributes.both)}): the average is of the mesh only",
+            hint="solve it with parent, child or base, or write the merged object into the version and record manual",
+        )
     if resolved.discards and not discard_other:
         raise RegionSolutionError(
             f"{name}: solution average discards edits: " + "; ".join(discard_text(d) for d in resolved.discards),
@@ -1264,6 +1281,7 @@ def _average_object(
     try:
         conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # its working revision, this transaction
         write_state_difference(conn, inputs.feature_class, feature_id, states["child"], resolved.state)
+        write_attribute_edits(conn, feature_id, attributes)
     finally:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
             restore_version_settings(conn, settings, local=True)

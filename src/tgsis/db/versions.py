@@ -28,7 +28,7 @@ import psycopg
 
 from tgsis._optional import require
 from tgsis.arguments import checked
-from tgsis.db._settings import read_version_settings, restore_statement
+from tgsis.db._settings import read_version_settings, restore_statement, restore_version_settings
 from tgsis.db._transfer import one_snapshot
 from tgsis.errors import InvalidInputError, MissingPrivilegeError, VersioningError, reraise
 
@@ -801,9 +801,13 @@ def resolve_conflict(
             "a feature's two meshes, computed by tgsis.resolve_conflict (tgsis.db.regions.resolve_conflict)",
             hint=f"tgsis version resolve {version} {objectclass} {_key_text(objectkey)} average",
         )
+    fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     with reraise(), conn.transaction():
         before: tuple[Discard, ...] | None = ()
+        if wanted == "base" and fresh:  # base writes after waiting for writers: READ COMMITTED (TG300 otherwise)
+            conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
         if wanted == "base":  # both sides' edits, counted before the version's are overwritten
+            _lock_object_in_version(conn, version, objectclass, objectkey)  # none committed between count and write
             before = _base_discards(conn, version, objectclass, objectkey, discard_other)
         row = conn.execute(
             f"SELECT {CONFLICT_COLUMNS} FROM tgsis.resolve_conflict(%s, %s, %s, %s)",
@@ -846,6 +850,30 @@ def resolve_conflict(
                 "version and record manual (tgsis.conflict_rows shows both sides' rows)",
             )
     return dataclasses.replace(conflict, discarded=discards)
+
+
+def _lock_object_in_version(conn: Conn, version: str, objectclass: str, objectkey: object) -> None:
+    """Take the locks of a write of the object in ``version``, as tgsis.resolve_conflict's base does.
+
+    Taken before the discards are counted, in the writers' order: the
+    version's row shared (tgsis.write_revision, which also checks the write
+    right: TG002), then the object's write lock (tgsis.object_write_lock's).
+    A writer of the object in the version then commits before the count or
+    after the base is written, never in between (its edit would be
+    overwritten without being counted); a merge or refresh holding the
+    version waits, or is waited for, without a deadlock.
+    """
+    settings = read_version_settings(conn)
+    try:
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))  # this transaction only
+        conn.execute("SELECT FROM tgsis.write_revision()")
+        conn.execute(
+            "SELECT tgsis.object_write_lock(%s, tgsis.canonical_object_keys(%s, ARRAY[%s]))",
+            (objectclass, objectclass, _key_text(objectkey)),
+        )
+    finally:
+        if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
+            restore_version_settings(conn, settings, local=True)
 
 
 def _base_discards(

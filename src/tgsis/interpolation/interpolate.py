@@ -110,7 +110,11 @@ def _values_at(
 
     The candidates are the triangles whose centroids are nearest; of those,
     the one the point projects into (else the closest after clamping its
-    barycentric coordinates onto the triangle) gives the weights.
+    barycentric coordinates onto the triangle) gives the weights. A corner
+    without a value (NaN: no property row) is left out and the weights of
+    the others renormalised, so a missing value does not spread to every
+    point of the triangles around it; the value is NaN only where the
+    corners with values have no weight (the point is at the missing one).
     """
     from scipy.spatial import cKDTree
 
@@ -133,10 +137,20 @@ def _values_at(
     rows = np.arange(len(points))
     chosen, triangle = clamped[rows, best], nearest[rows, best]
     ids = mesh.cells[triangle]
-    return {
-        name: np.asarray((chosen * np.asarray(values[name], dtype=np.float64)[ids]).sum(-1), dtype=np.float64)
-        for name in names
-    }
+    return {name: _weighted(chosen, np.asarray(values[name], dtype=np.float64)[ids]) for name in names}
+
+
+def _weighted(weights: FloatArray, corner_values: FloatArray) -> FloatArray:
+    """(p,) sums of (p, 3) weights times corner values; NaN corners left out, the other weights renormalised."""
+    missing = np.isnan(corner_values)
+    plain = (weights * corner_values).sum(-1)
+    if not missing.any():
+        return np.asarray(plain, dtype=np.float64)
+    known = np.where(missing, 0.0, weights)
+    total = known.sum(-1)
+    renormalised = (known * np.where(missing, 0.0, corner_values)).sum(-1) / np.where(total > 0.0, total, 1.0)
+    out = np.where(missing.any(-1), np.where(total > 0.0, renormalised, np.nan), plain)
+    return np.asarray(out, dtype=np.float64)
 
 
 def _carried_properties(
