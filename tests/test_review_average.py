@@ -322,7 +322,12 @@ def _diff(old: dict[tuple[Any, ...], Any], new: dict[tuple[Any, ...], Any]) -> t
 def test_what_base_says_it_discards_is_what_a_direct_diff_finds(conn: Conn, story: dict[str, int]) -> None:  # noqa: F811
     """conflict_discards(solution base) per side against a plain diff of the object's rows before and after."""
     a = story["A"]
-    conn.execute("SELECT tgsis.find_conflicts('edit')")  # the SQL's: no regions stored (the regions merge otherwise)
+    # the note set on both sides (DEFAULT: 'checked'): an object-level conflict, so that base may drop every edit
+    # (a mesh whose regions merge by themselves refuses base, the SQL finding its regions first)
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE domes SET note = 'reviewed' WHERE _geoid = %s", (a,))
+    conn.commit()
+    conn.execute("SELECT tgsis.find_conflicts('edit')")
     conn.commit()
     said = {
         (d.discarded, d.tablename): (d.rows_added, d.rows_removed, d.rows_changed)
