@@ -189,3 +189,30 @@ def test_sql_base_on_a_series_refuses_to_drop_an_edit_that_merges_by_itself(conn
     assert "instant 1" in str(error)
     after = instants(conn, "e1", series)
     assert {t: v[1].tobytes() for t, v in before.items()} == {t: v[1].tobytes() for t, v in after.items()}
+
+
+def test_sql_child_stays_the_way_out_of_a_period_topology_refusal(conn: Conn) -> None:
+    """TG308 (a geometry instant added to a period whose topology the other side changed) names resolve_conflict."""
+    geoid = make_evolving(conn)
+    with tgsis.in_version(conn, "DEFAULT"):
+        conn.execute("DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND trglid = 0", (geoid,))
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("INSERT INTO tgsis.timet VALUES (%s, 1.0, 2.5)", (geoid,))
+        conn.execute(
+            "INSERT INTO tgsis.d4dvrtx SELECT geoid, timem, 2.5, nodeid, x, y, z FROM tgsis.d4dvrtx"
+            " WHERE geoid = %s AND timet = 2.0",
+            (geoid,),
+        )
+        conn.execute(
+            "INSERT INTO evolving_cellpros SELECT _geoid, _timem, 2.5, _idx, porosity FROM evolving_cellpros"
+            " WHERE _geoid = %s AND _timet = 2.0",
+            (geoid,),
+        )
+    conn.commit()
+    with pytest.raises(tgsis.PeriodTopologyError):
+        tgsis.merge_version(conn, "e1")
+    conn.rollback()
+    assert _sql_resolve(conn, geoid, "child") is None
+    tgsis.merge_version(conn, "e1")
+    assert sorted(geometry_instants(conn, "DEFAULT", geoid)) == [(1.0, 1.0), (1.0, 2.0), (1.0, 2.5), (1.0, 3.0)]

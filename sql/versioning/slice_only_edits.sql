@@ -15,8 +15,10 @@
 -- class tables through tgsis.storage_run. NULL also when the object does not
 -- merge by region slice by slice (an object-level conflict: a slice removed
 -- on one side and changed on the other, added on both sides differently, a
--- model-3 period's topology changed on both sides differently): there the
--- whole-object solution is the way, as the Python merge's refusal says.
+-- model-3 period's topology changed on both sides differently, a geometry
+-- instant added on one side to a period whose topology the other changed:
+-- TG308): there the whole-object solution is the way, as the Python merge's
+-- refusal says.
 -- p_side: 'parent' or 'child' (the side whose edits a solution would drop).
 CREATE FUNCTION tgsis.slice_only_edits(p_version text, p_geoid bigint, p_side text)
 RETURNS text
@@ -130,6 +132,11 @@ BEGIN
                              AND (s.b IS NULL OR s.p IS NULL OR s.c IS NULL))
                OR EXISTS (SELECT FROM topology t
                            WHERE t.p IS DISTINCT FROM t.b AND t.c IS DISTINCT FROM t.b AND t.p IS DISTINCT FROM t.c)
+               -- a geometry instant added to a period whose topology the other side changed (TG308 in Python)
+               OR EXISTS (SELECT FROM topology t JOIN sides s ON s.km = t.km
+                           WHERE t.b IS NOT NULL AND s.b IS NULL
+                             AND ((t.p IS DISTINCT FROM t.b AND s.c IS NOT NULL AND s.p IS NULL)
+                               OR (t.c IS DISTINCT FROM t.b AND s.p IS NOT NULL AND s.c IS NULL)))
              THEN NULL
              ELSE (SELECT string_agg(CASE WHEN v_evolve
                                           THEN format('geometry instant %s of the period starting at %s', s.kt, s.km)
