@@ -216,3 +216,16 @@ def test_sql_child_stays_the_way_out_of_a_period_topology_refusal(conn: Conn) ->
     assert _sql_resolve(conn, geoid, "child") is None
     tgsis.merge_version(conn, "e1")
     assert sorted(geometry_instants(conn, "DEFAULT", geoid)) == [(1.0, 1.0), (1.0, 2.0), (1.0, 2.5), (1.0, 3.0)]
+
+
+def test_sql_child_stays_the_way_out_of_a_per_instant_property_set_on_both_sides(conn: Conn, series: int) -> None:
+    """The Python merge refuses it (object level) and names resolve_conflict: the SQL check must not refuse too."""
+    for version, throw in (("e1", 21.0), ("DEFAULT", 22.0)):
+        with tgsis.in_version(conn, version):
+            conn.execute("UPDATE horizons_pros SET throw = %s WHERE _geoid = %s AND _times = 2", (throw, series))
+        conn.commit()
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    assert "changed on both sides" in (conflict.region_refusal or "")
+    assert _sql_resolve(conn, series, "child") is None

@@ -15,6 +15,7 @@
 -- class tables through tgsis.storage_run. NULL also when the object does not
 -- merge by region slice by slice (an object-level conflict: a slice removed
 -- on one side and changed on the other, added on both sides differently, a
+-- per-instant feature property set on both sides to other values, a
 -- model-3 period's topology changed on both sides differently, a geometry
 -- instant added on one side to a period whose topology the other changed:
 -- TG308): there the whole-object solution is the way, as the Python merge's
@@ -100,6 +101,26 @@ BEGIN
                  v_km, v_kt, v_cols, v_spec[1], v_spec[2] || '_ver', v_spec[3]),
                p_1 => ARRAY[p_geoid::text], p_2 => v_base, p_3 => v_version.workingset,
                p_5 => v_parent.workingset::bigint[]) AS r;
+        IF v_spec[2] = v_class.protablename THEN  -- per-instant feature properties: column by column, as Python merges them
+            SELECT string_agg(format('(%L, quote_nullable(v.%I::text))', a.attname, a.attname), ', ' ORDER BY a.attnum)
+              INTO v_cols
+              FROM pg_catalog.pg_attribute a
+             WHERE a.attrelid = pg_catalog.to_regclass(format('%I.%I', v_spec[1], v_spec[2]))
+               AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_times', '_timem', '_timet');
+            CONTINUE WHEN v_cols IS NULL;
+            SELECT v_rows || coalesce(array_agg(r[1] || E'\x1f' || coalesce(r[2], '') || E'\x1f' || coalesce(r[3], '')
+                                                || E'\x1f' || 'pros:' || r[4] || E'\x1f' || r[5]), '{}')
+              INTO v_rows
+              FROM tgsis.storage_run(v_t, false, format(
+                     'SELECT ARRAY[s.side::text, %1$s, %2$s, c.name, c.value]
+                        FROM (VALUES (1, $2), (2, $5::integer[]), (3, $3)) AS s (side, revs)
+                        JOIN %4$I.%5$I v ON v.%6$I = $1[1]::bigint
+                                        AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)
+                       CROSS JOIN LATERAL (VALUES %3$s) AS c (name, value)',
+                     v_km, v_kt, v_cols, v_spec[1], v_spec[2] || '_ver', v_spec[3]),
+                   p_1 => ARRAY[p_geoid::text], p_2 => v_base, p_3 => v_version.workingset,
+                   p_5 => v_parent.workingset::bigint[]) AS r;
+        END IF;
     END LOOP;
     WITH e AS (  -- (side, period key, instant key or '', table, digest)
         SELECT p[1]::integer AS side, p[2] AS km, p[3] AS kt, p[4] AS tab, p[5] AS digest
@@ -132,6 +153,12 @@ BEGIN
                              AND (s.b IS NULL OR s.p IS NULL OR s.c IS NULL))
                OR EXISTS (SELECT FROM topology t
                            WHERE t.p IS DISTINCT FROM t.b AND t.c IS DISTINCT FROM t.b AND t.p IS DISTINCT FROM t.c)
+               -- a per-instant feature property both sides set to other values (removed against changed too)
+               OR EXISTS (SELECT FROM (SELECT max(digest) FILTER (WHERE side = 1) AS b,
+                                              max(digest) FILTER (WHERE side = 2) AS p,
+                                              max(digest) FILTER (WHERE side = 3) AS c
+                                         FROM e WHERE tab LIKE 'pros:%' GROUP BY km, kt, tab) x
+                           WHERE x.p IS DISTINCT FROM x.b AND x.c IS DISTINCT FROM x.b AND x.p IS DISTINCT FROM x.c)
                -- a geometry instant added to a period whose topology the other side changed (TG308 in Python)
                OR EXISTS (SELECT FROM topology t JOIN sides s ON s.km = t.km
                            WHERE t.b IS NOT NULL AND s.b IS NULL
