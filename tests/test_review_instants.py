@@ -15,7 +15,6 @@ from tests.test_merge_instants import (
     NORTH,
     PARENT_SHIFT,
     SOUTH,
-    TIMES,
     _shape,
     geometry_instants,
     instants,
@@ -110,9 +109,7 @@ def test_sql_child_on_an_evolving_surface_refuses_to_drop_a_geometry_instant_onl
     assert _sql_resolve(conn, geoid, "parent") is None  # the version changed nothing the parent did not
 
 
-def test_python_child_on_a_series_refuses_to_drop_the_parents_edits_at_other_instants(
-    conn: Conn, series: int
-) -> None:
+def test_python_child_on_a_series_refuses_to_drop_the_parents_edits_at_other_instants(conn: Conn, series: int) -> None:
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
     move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
@@ -137,7 +134,11 @@ def test_signed_zero_tiny_integer_and_null_properties_survive_a_merge_per_instan
     cells = curved_surface().cells
     nv = len(_shape(0))
     surfaces = [
-        tgsis.Surface(_shape(i), cells, vertex_properties={"nx": np.full(nv, -0.0), "nz": np.arange(nv) * 1e-300, "facies": np.arange(nv) % 5})
+        tgsis.Surface(
+            _shape(i),
+            cells,
+            vertex_properties={"nx": np.full(nv, -0.0), "nz": np.arange(nv) * 1e-300, "facies": np.arange(nv) % 5},
+        )
         for i in range(2)
     ]
     from tgsis.temporal import SurfaceSeries
