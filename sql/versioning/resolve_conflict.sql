@@ -78,6 +78,22 @@ BEGIN
                       HINT = format('solve the conflicting regions with SELECT tgsis.resolve_region(%L, %L, %L, region, ''%s''); the merge takes the rest by itself (or record manual after writing the merged object)',
                                     p_version, p_objectclass, v_key, lower(p_solution));
         END IF;
+        -- models 2 and 3: their regions are the Python client's; a slice only the other side changed merges by
+        -- itself (an instant moved, added or removed on that side alone), which the whole object would drop
+        IF p_objectclass = 'feature' AND EXISTS (SELECT FROM tgsis.conflicts c WHERE c.versionid = v_id
+                                                    AND c.objectclass = 'feature' AND c.objectkey = v_key) THEN
+            v_lost := tgsis.slice_only_edits(p_version, v_key::bigint,
+                                             CASE lower(p_solution) WHEN 'parent' THEN 'child' ELSE 'parent' END);
+            IF v_lost IS NOT NULL THEN
+                RAISE EXCEPTION 'solution % of object % of class % in version % would drop the % edits of %, which only that side changed',
+                        lower(p_solution), quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version),
+                        CASE lower(p_solution) WHEN 'parent' THEN 'version''s' ELSE 'parent''s' END, v_lost
+                    USING ERRCODE = 'TG307',
+                          DETAIL = 'A surface at instants merges instant by instant, an evolving surface geometry instant by geometry instant: a slice only one side changed merges by itself.',
+                          HINT = format('tgsis version merge %s merges it slice by slice (tgsis version conflicts %s lists its regions, tgsis version resolve solves them); or record manual after writing the merged object',
+                                        p_version, p_version);
+            END IF;
+        END IF;
     END IF;
     UPDATE tgsis.conflicts
        SET solution = lower(p_solution),
