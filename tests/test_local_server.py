@@ -54,7 +54,7 @@ def test_default_home_follows_tgsis_home(monkeypatch: pytest.MonkeyPatch, tmp_pa
 
 
 def test_throwaway_cluster_settings_and_removal() -> None:
-    server = LocalServer.throwaway()
+    server = LocalServer.throwaway(in_memory=True)
     try:
         pid = server.pid()
         assert process_alive(pid)
@@ -96,13 +96,25 @@ def test_throwaway_clusters_go_to_memory_when_it_has_room(monkeypatch: pytest.Mo
     monkeypatch.setattr(tempfile, "tempdir", None)  # (tempfile caches the folder it found first)
     try:
         assert throwaway_parent() is None
-        server = LocalServer.throwaway()
+        server = LocalServer.throwaway(in_memory=True)
         try:
             assert server.root.parent == chosen
         finally:
             server.destroy()
     finally:
         shutil.rmtree(chosen, ignore_errors=True)
+
+
+def test_a_throwaway_cluster_not_asked_in_memory_stays_in_the_temporary_folder(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the benches' clusters (millions of rows) must neither fill memory nor time a memory disk
+    monkeypatch.delenv("TMPDIR", raising=False)
+    server = LocalServer.throwaway()
+    try:
+        assert server.root.parent == Path(tempfile.gettempdir())
+    finally:
+        server.destroy()
 
 
 def test_persistent_cluster_is_durable_and_listens_on_a_socket(home: Path) -> None:

@@ -216,7 +216,7 @@ def _from_docker() -> TestServer:
 
 
 def _from_local() -> TestServer:
-    local = LocalServer.throwaway(find_binaries())
+    local = LocalServer.throwaway(find_binaries(), in_memory=True)
     server = TestServer(
         local.dsn(), "local", f"{local.binaries.describe()}, throwaway cluster {local.root}", local=local
     )

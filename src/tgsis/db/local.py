@@ -451,8 +451,13 @@ class LocalServer:
         )
 
     @classmethod
-    def throwaway(cls, binaries: PgBinaries | None = None) -> LocalServer:
+    def throwaway(cls, binaries: PgBinaries | None = None, *, in_memory: bool = False) -> LocalServer:
         """A started cluster in a temporary folder, removed with the server.
+
+        ``in_memory``: in :func:`throwaway_parent`'s memory file system when it
+        has room (the test suite's small clusters, which create and drop a
+        database per test); by default in the temporary folder, so that a bench
+        of millions of rows neither fills memory nor times a memory disk.
 
         Before PostgreSQL 18 it runs on a private copy of the installation
         whose share folder holds this checkout's extension files
@@ -460,11 +465,10 @@ class LocalServer:
         checkout's SQL, and the system's extension folder is left alone.
 
         The server is stopped and its folder removed by :meth:`destroy`, or by
-        the watcher process when this process ends without calling it. The
-        folder is made in :func:`throwaway_parent`.
+        the watcher process when this process ends without calling it.
         """
         binaries = binaries or find_binaries()
-        root = Path(tempfile.mkdtemp(prefix="tgsis-pg-", dir=throwaway_parent()))
+        root = Path(tempfile.mkdtemp(prefix="tgsis-pg-", dir=throwaway_parent() if in_memory else None))
         try:
             if (
                 not binaries.has_extension_control_path
