@@ -1,4 +1,87 @@
 """Every test that takes `pg`, `db_dsn`, `conn` or `make_database` gets a real
-PostgreSQL from the tgsis.testing plugin (see docs/testing.md)."""
+PostgreSQL from the tgsis.testing plugin (see docs/testing.md).
+
+Set-ups built once: a test that asks for one of the fixtures of
+``_BUILT_ONCE`` gets, as its fresh database (``db_dsn``, ``conn``), a clone
+(``CREATE DATABASE ... TEMPLATE``) of a database where that set-up was
+built once per session, instead of building it again: the test still has a
+database of its own, which it may change and commit as it likes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, Any
+
+import psycopg
+import pytest
+
+if TYPE_CHECKING:  # (imported at run time as the plugin below, not before it: pytest rewrites its asserts)
+    from tgsis.testing import TestServer
 
 pytest_plugins = ["tgsis.testing"]
+
+Conn = psycopg.Connection[Any]
+
+
+def _fault(conn: Conn) -> int:
+    from tests.merge_data import make_fault
+
+    return make_fault(conn)
+
+
+def _three_regions(conn: Conn) -> int:
+    from tests.test_conflict_regions import three_regions
+
+    return three_regions(conn)
+
+
+# fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
+_BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
+    "fault_clone": _fault,  # tests.merge_data.make_fault: the curved fault in DEFAULT, version e1
+    "three_regions_clone": _three_regions,  # tests.test_conflict_regions.three_regions
+}
+
+
+@pytest.fixture(scope="session")
+def built_once(pg: TestServer, template_db: str) -> Iterator[Callable[[str], tuple[str, int]]]:
+    """``get(fixture name) -> (database, value)``: the set-up of ``_BUILT_ONCE``, built at its first use."""
+    built: dict[str, tuple[str, int]] = {}
+    with contextlib.ExitStack() as stack:
+
+        def get(name: str) -> tuple[str, int]:
+            if name not in built:
+                database, dsn = stack.enter_context(pg.database("tgsis_once", template_db))
+                with psycopg.connect(dsn) as conn:
+                    value = _BUILT_ONCE[name](conn)
+                    conn.commit()
+                built[name] = (database, value)
+            return built[name]
+
+        yield get
+
+
+@pytest.fixture
+def db_dsn(
+    request: pytest.FixtureRequest,
+    make_database: Callable[..., str],
+    template_db: str,
+    built_once: Callable[[str], tuple[str, int]],
+) -> str:
+    """The plugin's fresh database, or a clone of the set-up built once that the test asks for."""
+    asked = [name for name in _BUILT_ONCE if name in request.fixturenames]
+    assert len(asked) <= 1, f"a test's database is the clone of one set-up, not of {asked}"
+    return make_database(built_once(asked[0])[0] if asked else template_db)
+
+
+@pytest.fixture
+def fault_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+    """Geoid of ``make_fault``'s fault, already in the test's database (cloned, not built again)."""
+    return built_once("fault_clone")[1]
+
+
+@pytest.fixture
+def three_regions_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+    """Geoid of ``three_regions``'s fault, already in the test's database (cloned, not built again)."""
+    return built_once("three_regions_clone")[1]

@@ -19,8 +19,8 @@ SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
 def _tables(conn: Conn) -> dict[str, list[Any]]:

@@ -19,7 +19,7 @@ from tgsis.db.local import LocalServer, find_binaries
 HOLD_SERVER = """
 import json, sys, time
 from tgsis.db.local import LocalServer
-server = LocalServer.throwaway()
+server = LocalServer.throwaway(in_memory=True)
 print(json.dumps({"pid": server.pid(), "root": str(server.root)}), flush=True)
 time.sleep(300)
 """

@@ -6,6 +6,7 @@ import fcntl
 import os
 import pty
 import select
+import signal
 import struct
 import subprocess
 import sys
@@ -154,6 +155,25 @@ def test_corners_print_every_digit(tmp_path: Path, capsys: pytest.CaptureFixture
 
     doc = json.loads(capsys.readouterr().out)
     assert [c["vertex"] for c in doc["corners"]] == corners and doc["corners"][0]["xyz"] == stored[corners[0]].tolist()
+
+
+def test_the_command_called_in_a_program_gives_its_sigterm_handler_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``main`` stops on SIGTERM while it runs, then leaves the caller's handler (pytest's: CI's timeout stops it)."""
+
+    def callers(signum: int, frame: object) -> None:
+        raise AssertionError("not called")
+
+    before = signal.signal(signal.SIGTERM, callers)
+    try:
+        path = tmp_path / "one.ts"
+        tgsis.formats.write(tgsis.Surface([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], [[0, 1, 2]]), path)
+        assert main(["corners", str(path)]) == 0
+        assert signal.getsignal(signal.SIGTERM) is callers
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    capsys.readouterr()
 
 
 def test_interpolation_and_import_show_progress_on_a_terminal(db_dsn: str, tmp_path: Path) -> None:

@@ -36,8 +36,8 @@ def _conflicting_edits(conn: Conn, geoid: int) -> None:
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    geoid = make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    geoid = fault_clone  # make_fault's, built once (tests/conftest.py)
     _conflicting_edits(conn, geoid)
     return geoid
 

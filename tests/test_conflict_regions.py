@@ -60,8 +60,8 @@ def by_side(regions: tuple[R.ConflictRegion, ...]) -> dict[str, R.ConflictRegion
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return three_regions(conn)
+def fault(conn: Conn, three_regions_clone: int) -> int:
+    return three_regions_clone  # three_regions's, built once (tests/conftest.py)
 
 
 def test_find_conflicts_records_the_regions_of_a_mesh(conn: Conn, fault: int) -> None:

@@ -37,6 +37,31 @@ def test_fresh_database_per_test_part_2(conn: psycopg.Connection[Any], pg: TestS
     assert pg.server_version and pg.major >= 15
 
 
+def test_a_database_is_dropped_with_the_sessions_a_test_left_open(pg: TestServer, template_db: str) -> None:
+    with pg.database("tgsis_left_open", template_db) as (name, dsn):
+        left = psycopg.connect(dsn)
+        left.execute("SELECT 1")
+        closed = psycopg.connect(dsn)
+        closed.close()
+    with psycopg.connect(pg.admin_dsn) as admin:
+        assert admin.execute("SELECT count(*) FROM pg_database WHERE datname = %s", (name,)).fetchone() == (0,)
+    with pytest.raises(psycopg.OperationalError):  # ended by the drop
+        left.execute("SELECT 1")
+    left.close()
+
+
+def test_databases_are_still_made_after_a_test_ended_the_harness_session(pg: TestServer, template_db: str) -> None:
+    # the harness keeps one connection to the maintenance database: a test may end it (or every session)
+    with pg.database("tgsis_first", template_db):
+        pass
+    assert pg._admin is not None
+    with psycopg.connect(pg.admin_dsn, autocommit=True) as admin:
+        ended = admin.execute("SELECT pg_terminate_backend(%s)", (pg._admin.info.backend_pid,)).fetchone()
+        assert ended == (True,)
+    with pg.database("tgsis_after", template_db) as (_, dsn), psycopg.connect(dsn) as conn:
+        assert conn.execute("SELECT tgsis.version()").fetchone() is not None
+
+
 def test_unreachable_test_dsn_is_an_error_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("TGSIS_TEST_DSN", BAD_DSN)
     with pytest.raises(RuntimeError, match="no PostgreSQL server for the tests") as info:

@@ -276,7 +276,7 @@ def test_a_role_without_createrole_is_told_what_the_dba_must_run() -> None:
 
     from tgsis.db.local import LocalServer
 
-    server = LocalServer.throwaway()  # a cluster of its own: roles are cluster-wide
+    server = LocalServer.throwaway(in_memory=True)  # a cluster of its own: roles are cluster-wide
     try:
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute("CREATE ROLE alice LOGIN")

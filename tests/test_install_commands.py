@@ -81,7 +81,9 @@ def image_server() -> Iterator[LocalServer]:
             "apt-get install postgresql-15-postgis-3",
             pytrace=False,
         )
-    server = LocalServer.throwaway(binaries)  # this checkout's extension files in a share folder of its own
+    server = LocalServer.throwaway(
+        binaries, in_memory=True
+    )  # this checkout's extension files in a share folder of its own
     try:
         sources = ExtensionSources.default()
         assert server.binaries.sharedir is not None

@@ -189,7 +189,7 @@ def test_a_non_superuser_owner_is_made_admin_or_told_the_grant() -> None:
     by a role that may grant it to itself does; one that may not names the GRANT a DBA must run."""
     from tgsis.db.local import LocalServer
 
-    server = LocalServer.throwaway()  # a cluster of its own: roles are cluster-wide
+    server = LocalServer.throwaway(in_memory=True)  # a cluster of its own: roles are cluster-wide
     try:
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute("CREATE ROLE alice LOGIN CREATEROLE")

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -10,7 +12,7 @@ import psycopg
 import pytest
 
 from tests.local_helpers import private_home, process_alive
-from tgsis.db.local import LocalServer, _check_reachable, _OsUser, default_home, find_binaries
+from tgsis.db.local import LocalServer, _check_reachable, _OsUser, default_home, find_binaries, throwaway_parent
 from tgsis.errors import LocalServerError
 
 
@@ -52,7 +54,7 @@ def test_default_home_follows_tgsis_home(monkeypatch: pytest.MonkeyPatch, tmp_pa
 
 
 def test_throwaway_cluster_settings_and_removal() -> None:
-    server = LocalServer.throwaway()
+    server = LocalServer.throwaway(in_memory=True)
     try:
         pid = server.pid()
         assert process_alive(pid)
@@ -63,7 +65,7 @@ def test_throwaway_cluster_settings_and_removal() -> None:
             settings: dict[str, str] = dict(
                 conn.execute(
                     "SELECT name, setting FROM pg_settings WHERE name IN "
-                    "('fsync', 'listen_addresses', 'unix_socket_directories', 'full_page_writes')"
+                    "('fsync', 'listen_addresses', 'unix_socket_directories', 'full_page_writes', 'max_wal_size')"
                 ).fetchall()
             )
             assert settings == {
@@ -71,14 +73,48 @@ def test_throwaway_cluster_settings_and_removal() -> None:
                 "full_page_writes": "off",
                 "listen_addresses": "",
                 "unix_socket_directories": str(server.socket_dir),
+                "max_wal_size": "256",  # MB: a cluster in memory (throwaway_parent) stays small
             }
             if server.binaries.has_extension_control_path:
                 path = conn.execute("SHOW extension_control_path").fetchone()
                 assert path == (f"$system:{server.root}",)
+        assert server.root.parent == (throwaway_parent() or Path(tempfile.gettempdir()))
     finally:
         server.destroy()
     assert not server.root.exists()
     assert not process_alive(pid)
+
+
+def test_throwaway_clusters_go_to_memory_when_it_has_room(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("TMPDIR", raising=False)
+    memory = Path("/dev/shm")
+    roomy = memory.is_dir() and os.access(memory, os.W_OK) and shutil.disk_usage(memory).free >= 2 * 1024**3
+    assert throwaway_parent() == (memory if roomy else None)
+    chosen = Path(tempfile.mkdtemp(prefix="tgsis-tmpdir-"))
+    chosen.chmod(0o755)  # the server may run as another OS user (postgres, as root)
+    monkeypatch.setenv("TMPDIR", str(chosen))  # a temporary folder chosen by the user wins
+    monkeypatch.setattr(tempfile, "tempdir", None)  # (tempfile caches the folder it found first)
+    try:
+        assert throwaway_parent() is None
+        server = LocalServer.throwaway(in_memory=True)
+        try:
+            assert server.root.parent == chosen
+        finally:
+            server.destroy()
+    finally:
+        shutil.rmtree(chosen, ignore_errors=True)
+
+
+def test_a_throwaway_cluster_not_asked_in_memory_stays_in_the_temporary_folder(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the benches' clusters (millions of rows) must neither fill memory nor time a memory disk
+    monkeypatch.delenv("TMPDIR", raising=False)
+    server = LocalServer.throwaway()
+    try:
+        assert server.root.parent == Path(tempfile.gettempdir())
+    finally:
+        server.destroy()
 
 
 def test_persistent_cluster_is_durable_and_listens_on_a_socket(home: Path) -> None:

@@ -290,16 +290,18 @@ def _fake_venv(folder: Path, record: Path, fail_when: str = "") -> None:
     )
 
 
-def _run_suites(tmp_path: Path, fail_when: str = "", **env: str) -> tuple[int, str, list[list[str]]]:
+def _run_suites(
+    tmp_path: Path, fail_when: str = "", make_first: str = "", **env: str
+) -> tuple[int, str, list[list[str]]]:
     record = tmp_path / "runs.txt"
     record.touch()
     _fake_venv(tmp_path / "venv", record, fail_when)
     fake_bin = tmp_path / "bin"
     fake_bin.mkdir()
-    # `make -C COPY .venv/.installed` in the copy: a fake venv there too
+    # `make -C COPY .venv/.installed` in the copy: a fake venv there too (after `make_first`, shell)
     _script(
         fake_bin / "make",
-        f'[ "$1" = -C ] && mkdir -p "$2/.venv/bin" && '
+        make_first + f'[ "$1" = -C ] && mkdir -p "$2/.venv/bin" && '
         f'ln -s {shlex.quote(str(tmp_path / "venv" / "bin" / "python"))} "$2/.venv/bin/python"\n',
     )
     done = subprocess.run(
@@ -339,6 +341,25 @@ def test_a_failing_suite_fails_the_command(tmp_path: Path, failing: str) -> None
     assert status == 3, out
     assert {r[0] for r in runs} == {"system", "embedded"}, "the other suite still ran"
     assert "a test suite failed (exit 3)" in out
+
+
+def test_the_copys_venv_is_made_while_the_system_suite_runs(tmp_path: Path) -> None:
+    # the fake make of the copy's venv waits for the system's suite to have started (10 s at most)
+    record = shlex.quote(str(tmp_path / "runs.txt"))
+    status, out, runs = _run_suites(
+        tmp_path,
+        make_first=f"for i in $(seq 100); do grep -q '^system|' {record} && break; sleep 0.1; done\n"
+        f"grep -q '^system|' {record} || exit 7\n",
+    )
+    assert status == 0, out
+    assert {r[0] for r in runs} == {"system", "embedded"}
+
+
+def test_a_copy_without_its_venv_fails_the_command_saying_so(tmp_path: Path) -> None:
+    status, out, runs = _run_suites(tmp_path, make_first="echo pip: no such package >&2; exit 2\n")
+    assert status == 1, out
+    assert "pip: no such package" in out and "the copy's venv could not be made" in out
+    assert "embedded" not in {r[0] for r in runs}
 
 
 def test_one_server_chosen_runs_one_suite_here(tmp_path: Path) -> None:

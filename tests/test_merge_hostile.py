@@ -11,7 +11,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import curved_surface, make_fault, move, moved, stored_state
+from tests.merge_data import curved_surface, move, moved, stored_state
 from tests.roles import login_roles
 from tgsis.db import features as F
 from tgsis.db.classes import class_of_feature
@@ -22,8 +22,8 @@ Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
 def _overlapping_edits(conn: Conn, fault: int) -> tgsis.ConflictRegion:

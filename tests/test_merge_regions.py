@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
+from tests.merge_data import SIDE, curved_surface, move, moved, stored_state
 from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
 from tgsis.db import merging
@@ -29,8 +29,8 @@ PARENT_SHIFT = (-1.1, 0.0, -2.9)
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
 def _union() -> Any:

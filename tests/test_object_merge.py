@@ -14,7 +14,7 @@ from psycopg import sql
 from psycopg.conninfo import make_conninfo
 
 import tgsis
-from tests.merge_data import SIDE, curved_surface, make_fault, move
+from tests.merge_data import SIDE, curved_surface, move
 from tests.roles import login_roles
 from tgsis.cli import main
 from tgsis.db import _merge_states
@@ -24,9 +24,9 @@ Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    """One curved surface with a vertex property in DEFAULT, and version e1 based on it."""
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    """One curved surface with a vertex property in DEFAULT, and version e1 based on it (make_fault's, cloned)."""
+    return fault_clone
 
 
 def _moved(vertices: npt.NDArray[np.float64], ids: npt.ArrayLike, shift: tuple[float, float, float]) -> None:

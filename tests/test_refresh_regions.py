@@ -9,7 +9,7 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
+from tests.merge_data import SIDE, curved_surface, move, moved, stored_state
 from tests.roles import login_roles
 
 Conn = psycopg.Connection[Any]
@@ -21,8 +21,8 @@ PARENT_SHIFT = (4.4, -0.5, 1.03)
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
 def _tables(conn: Conn) -> dict[str, list[Any]]:

@@ -18,7 +18,7 @@ import pytest
 import tgsis
 from tests.merge_data import SIDE, curved_surface
 from tests.roles import login_roles
-from tests.test_conflict_regions import MIDDLE, NORTH, SOUTH, by_side, everything, stored, three_regions
+from tests.test_conflict_regions import MIDDLE, NORTH, SOUTH, by_side, everything, stored
 from tgsis import formats
 from tgsis.cli import main
 from tgsis.db import regions as R
@@ -29,8 +29,8 @@ Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return three_regions(conn)
+def fault(conn: Conn, three_regions_clone: int) -> int:
+    return three_regions_clone  # three_regions's, built once (tests/conftest.py)
 
 
 def _middle(conn: Conn) -> R.ConflictRegion:

@@ -112,7 +112,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _configure_logging(args.verbose, args.quiet)
-    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    caller_sigterm = signal.signal(signal.SIGTERM, _exit_on_sigterm)  # given back at the end (main in a program)
     handler: Handler = args.handler
     try:
         with warnings.catch_warnings():
@@ -150,3 +150,5 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         release_local_server()
+        if caller_sigterm is not None:  # (None: a handler not installed from Python, left alone)
+            signal.signal(signal.SIGTERM, caller_sigterm)
