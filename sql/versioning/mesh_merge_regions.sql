@@ -209,26 +209,35 @@ BEGIN
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.%1$I DESC LIMIT 1))',
                    v_cellid, v_table || '_ver')
        INTO v_top_v, v_top_c USING p_geoid, v_base;
-    CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
-    WITH pn AS (
-        SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
-               row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_v a
-         WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
-    cn AS (
-        SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
-               row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_v a
-         WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
-    matched AS (
-        SELECT c.id AS old, p.id AS new
-          FROM cn c JOIN pn p ON p.x = c.x AND p.y = c.y AND p.z = c.z AND p.val IS NOT DISTINCT FROM c.val
-                              AND p.ref IS NOT DISTINCT FROM c.ref AND p.rn = c.rn)
-    SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
-    UNION ALL
-    SELECT c.id, v_top_v + row_number() OVER (ORDER BY c.id)
-      FROM cn c
-     WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
+        CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
+        WITH pn AS (
+            SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
+                   row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_v a
+             WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
+        cn AS (
+            SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
+                   row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_v a
+             WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
+        matched AS (
+            SELECT c.id AS old, p.id AS new
+              FROM cn c JOIN pn p ON p.x = c.x AND p.y = c.y AND p.z = c.z AND p.val IS NOT DISTINCT FROM c.val
+                                  AND p.ref IS NOT DISTINCT FROM c.ref AND p.rn = c.rn)
+        SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
+        UNION ALL
+        SELECT c.id, v_top_v + row_number() OVER (ORDER BY c.id)
+          FROM cn c
+         WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    EXCEPTION WHEN numeric_value_out_of_range THEN
+        RAISE EXCEPTION 'feature % does not merge by region in version %: the version''s new vertices that clash with the parent''s need ids above %, and bigint ends at 9223372036854775807',
+                p_geoid, quote_literal(p_version), v_top_v
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'The merge by region gives the version''s new rows that clash with the parent''s a fresh id above every id of the three states.',
+                  HINT = format('solve it as a whole object: SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                                p_version, p_geoid::text);
+    END;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mr_vmap) THEN
         UPDATE pg_temp.tgsis_mr_v m SET id = p.new FROM pg_temp.tgsis_mr_vmap p WHERE m.st = 4 AND m.id = p.old;
         UPDATE pg_temp.tgsis_mr_v m SET ref = p.new FROM pg_temp.tgsis_mr_vmap p WHERE m.st = 4 AND m.ref = p.old;
@@ -237,26 +246,35 @@ BEGIN
                            LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.old = u.x ORDER BY u.o)
          WHERE m.st = 4 AND m.v && (SELECT array_agg(p.old) FROM pg_temp.tgsis_mr_vmap p);
     END IF;
-    CREATE TEMPORARY TABLE tgsis_mr_cmap ON COMMIT DROP AS
-    WITH pn AS (
-        SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
-               row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_c a
-         WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
-    cn AS (
-        SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
-               row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_c a
-         WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
-    matched AS (
-        SELECT c.id AS old, p.id AS new
-          FROM cn c JOIN pn p ON p.k = c.k AND p.val IS NOT DISTINCT FROM c.val
-                              AND p.part IS NOT DISTINCT FROM c.part AND p.rn = c.rn)
-    SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
-    UNION ALL
-    SELECT c.id, v_top_c + row_number() OVER (ORDER BY c.id)
-      FROM cn c
-     WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
+        CREATE TEMPORARY TABLE tgsis_mr_cmap ON COMMIT DROP AS
+        WITH pn AS (
+            SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
+                   row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_c a
+             WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
+        cn AS (
+            SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
+                   row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_c a
+             WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
+        matched AS (
+            SELECT c.id AS old, p.id AS new
+              FROM cn c JOIN pn p ON p.k = c.k AND p.val IS NOT DISTINCT FROM c.val
+                                  AND p.part IS NOT DISTINCT FROM c.part AND p.rn = c.rn)
+        SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
+        UNION ALL
+        SELECT c.id, v_top_c + row_number() OVER (ORDER BY c.id)
+          FROM cn c
+         WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    EXCEPTION WHEN numeric_value_out_of_range THEN
+        RAISE EXCEPTION 'feature % does not merge by region in version %: the version''s new cells that clash with the parent''s need ids above %, and bigint ends at 9223372036854775807',
+                p_geoid, quote_literal(p_version), v_top_c
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'The merge by region gives the version''s new rows that clash with the parent''s a fresh id above every id of the three states.',
+                  HINT = format('solve it as a whole object: SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                                p_version, p_geoid::text);
+    END;
     UPDATE pg_temp.tgsis_mr_c m SET id = p.new FROM pg_temp.tgsis_mr_cmap p WHERE m.st = 4 AND m.id = p.old;
 
     -- 4. each side's edit against the base, per id (merged numbering)
@@ -349,7 +367,10 @@ BEGIN
            (row_number() OVER (ORDER BY n.kind DESC, n.id) - 1)::integer AS label
       FROM (SELECT DISTINCT f.id, 'v'::text AS kind FROM pg_temp.tgsis_mr_fv f
             UNION ALL SELECT DISTINCT f.id, 'c' FROM pg_temp.tgsis_mr_fc f) AS n;
-    IF NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_node) THEN
+    IF NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_node) THEN  -- no region: no work table outlives the call
+        DROP TABLE pg_temp.tgsis_mr_v, pg_temp.tgsis_mr_c, pg_temp.tgsis_mr_vmap, pg_temp.tgsis_mr_cmap,
+                   pg_temp.tgsis_mr_vx, pg_temp.tgsis_mr_cx, pg_temp.tgsis_mr_margin, pg_temp.tgsis_mr_fv,
+                   pg_temp.tgsis_mr_fc, pg_temp.tgsis_mr_node;
         RETURN;
     END IF;
     CREATE TEMPORARY TABLE tgsis_mr_edge ON COMMIT DROP AS
