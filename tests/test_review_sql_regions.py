@@ -306,3 +306,26 @@ def test_a_whole_side_from_a_role_that_may_not_read_the_class_is_not_left_unchec
         conn.commit()
         state, message, _ = sqlstate(ed, "SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'child')", (str(fault),))
         assert state == "TG307", message
+
+
+def test_many_region_detections_in_one_transaction_hold_no_locks_and_leave_no_tables(conn: Conn) -> None:
+    """Each SQL region detection made about 12 temporary work tables (with indexes and TOAST tables) and dropped
+    them: a relation created and dropped keeps its lock until the transaction ends, about 100 locks per mesh.
+    It was: 100 detections in one transaction (a find_conflicts over 100 conflicting meshes, or a psql loop)
+    held 10,250 locks, beyond the lock table's nominal 6,400 (max_locks_per_transaction 64 x 100 connections):
+    some hundreds of meshes fail with 53200 out of shared memory, and take the lock table from every other
+    session meanwhile."""
+    fault = make_fault(conn)
+    three_regions(conn, fault)
+    expected = conn.execute("SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,)).fetchall()
+    conn.rollback()
+    before = conn.execute("SELECT count(*) FROM pg_locks WHERE pid = pg_backend_pid()").fetchone()
+    for _ in range(100):
+        assert conn.execute("SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,)).fetchall() == expected
+    after = conn.execute("SELECT count(*) FROM pg_locks WHERE pid = pg_backend_pid()").fetchone()
+    assert before is not None and after is not None and after[0] - before[0] < 50
+    left = conn.execute("SELECT count(*) FROM pg_class WHERE relname LIKE 'tgsis\\_mr\\_%%'").fetchone()
+    assert left == (0,)
+    conn.rollback()
+    assert len(expected) == 3
+    assert_same_regions(conn, "e1", fault)
