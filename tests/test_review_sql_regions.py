@@ -329,3 +329,71 @@ def test_many_region_detections_in_one_transaction_hold_no_locks_and_leave_no_ta
     conn.rollback()
     assert len(expected) == 3
     assert_same_regions(conn, "e1", fault)
+
+
+def test_psql_conflicts_of_a_g_map_and_an_evolving_surface_have_no_regions_and_solve_whole(conn: Conn) -> None:
+    """Model 3 (g-map) and model 2 (evolving) features in conflict, from psql only: SQL find_conflicts stores no
+    regions for them and says nothing, resolve_conflict records a whole side, mesh_merge_regions refuses (TG100)."""
+    from tests.test_gmap_storage import _class, _evolving
+    from tests.test_temporal_versioning import STARTS, evolving
+
+    fc = _class(conn)
+    geoid = F.insert_feature(conn, fc, _evolving())
+    moving = F.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING")
+    fid = F.insert_feature(conn, moving, evolving(np.random.default_rng(8), STARTS))
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "other")
+    conn.commit()
+    move_g = "UPDATE tgsis.gmap_vertex SET coordinate = %s::float8[] WHERE geoid = %s AND timet = 3 AND nodeid = 4"
+    move_e = "UPDATE tgsis.d4dvrtx SET x = x + %s WHERE geoid = %s AND nodeid = 0"
+    psql(conn, "DEFAULT", (move_g, ([7, 7, 7], geoid)), (move_e, (1.0, fid)))
+    psql(conn, "other", (move_g, ([8, 8, 8], geoid)), (move_e, (-1.0, fid)))
+    keys = conn.execute("SELECT objectkey FROM tgsis.find_conflicts('other') ORDER BY objectkey::bigint").fetchall()
+    assert sorted(int(k) for (k,) in keys) == sorted([geoid, fid])
+    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+    for g in (geoid, fid):
+        state, message, _ = sqlstate(conn, "SELECT * FROM tgsis.mesh_merge_regions('other', %s)", (g,))
+        assert state == "TG100", message
+    for g in (geoid, fid):
+        conn.execute("SELECT tgsis.resolve_conflict('other', 'feature', %s, 'child')", (str(g),))
+    conn.commit()
+    assert conn.execute("SELECT array_agg(DISTINCT solution) FROM tgsis.conflicts").fetchone() == (["child"],)
+
+
+def test_regions_of_a_mesh_in_partitioned_model_storage(conn: Conn) -> None:
+    tgsis.partition_model_storage(conn, 1, 4)
+    conn.commit()
+    fault = make_fault(conn)
+    three_regions(conn, fault)
+    assert len(assert_same_regions(conn, "e1", fault)) == 3
+
+
+def test_resolving_conflicts_one_by_one_does_not_find_every_other_objects_regions_again(conn: Conn) -> None:
+    """Each SQL resolve_conflict / resolve_region / resolve_all_regions runs find_conflicts for the marks of
+    now. It was: that find_conflicts also tried to find the regions of every other unsolved mesh without
+    stored regions (a feature deleted on one side, attributes set alike on both: no regions, tried each time),
+    so solving n such conflicts one by one from psql checked them n (n + 1) / 2 times: quadratic. Now a
+    solution finds the regions of its own object only (counted with track_functions)."""
+    F.create_feature_class(conn, "small", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    verts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=float)
+    cells = np.array([[0, 1, 2], [1, 3, 2]])
+    ids = [F.insert_feature(conn, "small", tgsis.Surface(verts, cells)) for _ in range(20)]
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    psql(conn, "e1", ("UPDATE tgsis.vrtx SET z = 1 WHERE geoid = ANY (%s) AND vrtxid = 0", (ids,)))
+    with tgsis.in_version(conn, "DEFAULT"):
+        for g in ids:
+            F.delete_feature(conn, "small", g)
+    conn.commit()
+    assert len(conn.execute("SELECT * FROM tgsis.find_conflicts('e1')").fetchall()) == len(ids)
+    conn.commit()
+    conn.execute("SET track_functions = 'pl'")
+    for g in ids:
+        conn.execute("SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'child')", (str(g),))
+    calls = conn.execute(
+        "SELECT coalesce(sum(calls), 0) FROM pg_stat_xact_user_functions WHERE funcname = 'region_merge_refusal'"
+    ).fetchone()
+    conn.rollback()
+    assert calls is not None and 0 < calls[0] <= 3 * len(ids), calls

@@ -13,12 +13,17 @@
 -- computes and stores as a mesh: refused here (TG307) with the command that
 -- does it; manual is one region's mesh (tgsis.resolve_region), refused
 -- (TG100). The same rights as tgsis.resolve_region: write in the version.
+-- Its find_conflicts (the marks of now) finds no other object's regions
+-- (tgsis.region_detection = 'client' while it runs): it finds its own
+-- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
+-- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_all_regions(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS SETOF tgsis.conflict_regions
 LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
+SET tgsis.region_detection = 'client'
 AS $$
 DECLARE
     v_id       integer := tgsis.version_id(p_version);
@@ -55,7 +60,10 @@ BEGIN
     v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
     SELECT ARRAY[r.childmark, r.parentmark] INTO v_marks FROM tgsis.conflict_regions r
      WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key LIMIT 1;
-    PERFORM tgsis.find_conflicts(p_version);  -- the marks of now: stale regions go, and are found again in SQL
+    PERFORM tgsis.find_conflicts(p_version);  -- the marks of now: stale regions go
+    IF p_objectclass = 'feature' THEN  -- and this object's are found again in SQL
+        PERFORM tgsis.store_mesh_regions(p_version, v_key);
+    END IF;
     SELECT ARRAY[r.childmark, r.parentmark] INTO v_now FROM tgsis.conflict_regions r
      WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key LIMIT 1;
     IF v_marks IS NOT NULL AND v_now IS DISTINCT FROM v_marks THEN

@@ -23,12 +23,17 @@
 -- tgsis.resolve_all_regions(..., 'base')) does not. average is computed in
 -- Python (the average shape of two meshes): refused here (TG100), the hint
 -- naming the command.
+-- Its find_conflicts (the marks of now) finds no other object's regions
+-- (tgsis.region_detection = 'client' while it runs): it finds its own
+-- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
+-- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
+SET tgsis.region_detection = 'client'
 AS $$
 DECLARE
     v_id  integer := tgsis.version_id(p_version);

@@ -11,6 +11,10 @@
 -- reads it. The same right as resolve_conflict: write in the version; a mesh
 -- (average, manual) also the right to change the feature (tgsis.check_class_write),
 -- as the merge that applies it writes its rows.
+-- Its find_conflicts (the marks of now) finds no other object's regions
+-- (tgsis.region_detection = 'client' while it runs): it finds its own
+-- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
+-- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_region(p_version text, p_objectclass text, p_objectkey text, p_region integer,
                                      p_solution text, p_mesh bytea DEFAULT NULL)
 RETURNS tgsis.conflict_regions
@@ -18,6 +22,7 @@ LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
+SET tgsis.region_detection = 'client'
 AS $$
 DECLARE
     v_id       integer := tgsis.version_id(p_version);
@@ -71,6 +76,9 @@ BEGIN
     v_stored := FOUND;
     -- the marks must be those of now: regions found on an older state are removed
     PERFORM tgsis.find_conflicts(p_version);
+    IF p_objectclass = 'feature' THEN  -- found again in SQL on the marks of now (this object's only)
+        PERFORM tgsis.store_mesh_regions(p_version, v_key);
+    END IF;
     SELECT * INTO v_row FROM tgsis.conflict_regions
      WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region
        FOR UPDATE;
