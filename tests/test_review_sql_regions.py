@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 import psycopg
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -334,8 +335,9 @@ def test_many_region_detections_in_one_transaction_hold_no_locks_and_leave_no_ta
 def test_psql_conflicts_of_a_g_map_and_an_evolving_surface_have_no_regions_and_solve_whole(conn: Conn) -> None:
     """Model 3 (g-map) and model 2 (evolving) features in conflict, from psql only: SQL find_conflicts stores no
     regions for them and says nothing, resolve_conflict records a whole side, mesh_merge_regions refuses (TG100)."""
+    from tests.temporal_data import evolving
     from tests.test_gmap_storage import _class, _evolving
-    from tests.test_temporal_versioning import STARTS, evolving
+    from tests.test_temporal_versioning import STARTS
 
     fc = _class(conn)
     geoid = F.insert_feature(conn, fc, _evolving())
@@ -397,3 +399,101 @@ def test_resolving_conflicts_one_by_one_does_not_find_every_other_objects_region
     ).fetchone()
     conn.rollback()
     assert calls is not None and 0 < calls[0] <= 3 * len(ids), calls
+
+
+@pytest.mark.parametrize(
+    "setting",
+    [
+        "extra_float_digits = -15",
+        "DateStyle = 'SQL, DMY'",
+        "lc_numeric = 'C'",
+        "enable_seqscan = off",
+        "jit = on; SET jit_above_cost = 0; SET jit_optimize_above_cost = 0",
+        "search_path = pg_temp, public",
+    ],
+)
+def test_the_regions_are_the_same_under_other_session_settings(conn: Conn, setting: str) -> None:
+    """Stored under the setting, read back (and compared with merge3) without it: the text this session
+    reads floats in is the setting's, not what was stored."""
+    fault = make_fault(conn)
+    three_regions(conn, fault)
+    conn.execute("SET " + setting)
+    conn.commit()
+    assert len(conn.execute("SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,)).fetchall()) == 3
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert len(assert_same_regions(conn, "e1", fault)) == 3
+
+
+_KINDS = {
+    "MULTIPOINT": ("point", "pointid", 1),
+    "MULTILINESTRING": ("segment", "segid", 2),
+    "MULTITETRA": ("tetra", "tetraid", 4),
+}
+_other_edit = st.tuples(st.sampled_from(["move", "delete", "flip", "rotate"]), st.integers(0, 35), st.integers(0, 2))
+_other_pairs = iter(range(10**6))
+_BODIES: dict[str, int] = {}
+
+
+@pytest.mark.parametrize("geotype", list(_KINDS))
+@settings(
+    max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(child=st.lists(_other_edit, min_size=1, max_size=4), parent=st.lists(_other_edit, min_size=1, max_size=4))
+def test_random_edits_of_points_lines_and_solids_give_merge3s_regions(
+    conn: Conn, geotype: str, child: list[tuple[str, int, int]], parent: list[tuple[str, int, int]]
+) -> None:
+    from tests.test_object_merge import _other_kind
+
+    table, key, k = _KINDS[geotype]
+    if conn.info.dbname not in _BODIES:
+        F.create_feature_class(conn, "bodies", geotype)
+        tgsis.enable_feature_versioning(conn)
+        _BODIES[conn.info.dbname] = F.insert_feature(conn, "bodies", _other_kind(geotype))
+        conn.commit()
+    geoid = _BODIES[conn.info.dbname]
+    n = next(_other_pairs)
+    pv, cv = f"op{n}", f"oc{n}"
+    tgsis.create_version(conn, pv)
+    conn.commit()
+    tgsis.create_version(conn, cv, parent=pv)
+    conn.commit()
+
+    def statements(edits: list[tuple[str, int, int]]) -> list[tuple[str, tuple[Any, ...]]]:
+        out: list[tuple[str, tuple[Any, ...]]] = []
+        for kind, where, which in edits:
+            if kind == "move":
+                out.append(
+                    (
+                        "UPDATE tgsis.vrtx SET y = y + %s WHERE geoid = %s AND vrtxid = ANY (%s)",
+                        (0.25 + which, geoid, list(range(where, where + which + 1))),
+                    )
+                )
+            elif kind == "delete":
+                out.append((f"DELETE FROM tgsis.{table} WHERE geoid = %s AND {key} = %s", (geoid, where)))
+            elif kind == "flip" and k >= 2:
+                out.append(
+                    (
+                        f"UPDATE tgsis.{table} SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid1"
+                        f" WHERE geoid = %s AND {key} = %s",
+                        (geoid, where),
+                    )
+                )
+            elif kind == "rotate" and k >= 3:
+                out.append(
+                    (
+                        f"UPDATE tgsis.{table} SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid3, vrtxid3 = vrtxid1"
+                        f" WHERE geoid = %s AND {key} = %s",
+                        (geoid, where),
+                    )
+                )
+        return out or [("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = 0", (geoid,))]
+
+    psql(conn, cv, *statements(child))
+    psql(conn, pv, *statements(parent))
+    conflicts = conn.execute("SELECT objectkey FROM tgsis.find_conflicts(%s)", (cv,)).fetchall()
+    conn.rollback()
+    if conflicts:
+        assert_same_regions(conn, cv, geoid)
