@@ -14,7 +14,7 @@
 -- does it; manual is one region's mesh (tgsis.resolve_region), refused
 -- (TG100). The same rights as tgsis.resolve_region: write in the version.
 -- Its find_conflicts (the marks of now) finds no other object's regions
--- (tgsis.region_detection = 'client' while it runs): it finds its own
+-- (tgsis.region_detection = 'client' around it): it finds its own
 -- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
 -- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_all_regions(p_version text, p_objectclass text, p_objectkey text, p_solution text)
@@ -23,9 +23,9 @@ LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
-SET tgsis.region_detection = 'client'
 AS $$
 DECLARE
+    v_detect text;
     v_id       integer := tgsis.version_id(p_version);
     v_solution text := lower(p_solution);
     v_key      text;
@@ -60,7 +60,11 @@ BEGIN
     v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
     SELECT ARRAY[r.childmark, r.parentmark] INTO v_marks FROM tgsis.conflict_regions r
      WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key LIMIT 1;
+    v_detect := current_setting('tgsis.region_detection', true);
+    PERFORM set_config('tgsis.region_detection', 'client', true);  -- (not a function SET: only a superuser may
+    -- create a function that sets a parameter tgsis does not define)
     PERFORM tgsis.find_conflicts(p_version);  -- the marks of now: stale regions go
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
     IF p_objectclass = 'feature' THEN  -- and this object's are found again in SQL
         PERFORM tgsis.store_mesh_regions(p_version, v_key);
     END IF;

@@ -24,7 +24,7 @@
 -- Python (the average shape of two meshes): refused here (TG100), the hint
 -- naming the command.
 -- Its find_conflicts (the marks of now) finds no other object's regions
--- (tgsis.region_detection = 'client' while it runs): it finds its own
+-- (tgsis.region_detection = 'client' around it): it finds its own
 -- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
 -- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
@@ -33,9 +33,9 @@ LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
-SET tgsis.region_detection = 'client'
 AS $$
 DECLARE
+    v_detect text;
     v_id  integer := tgsis.version_id(p_version);
     v_row tgsis.conflicts;
     v_key text := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
@@ -58,7 +58,11 @@ BEGIN
     END IF;
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     -- the marks must be those of now: a manual solution is written just before it is recorded
+    v_detect := current_setting('tgsis.region_detection', true);
+    PERFORM set_config('tgsis.region_detection', 'client', true);  -- (not a function SET: only a superuser may
+    -- create a function that sets a parameter tgsis does not define)
     PERFORM tgsis.find_conflicts(p_version);
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
     IF p_objectclass = 'feature' AND lower(p_solution) IN ('parent', 'child', 'base') THEN
         -- its regions first (in SQL if nobody found them: a psql user runs no Python): base drops every
         -- side's edits, and parent or child is checked against the other side's below
