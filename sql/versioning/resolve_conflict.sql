@@ -77,7 +77,7 @@ BEGIN
                     quote_ident(tgsis.calling_role()), v_key, lower(p_solution),
                     CASE lower(p_solution) WHEN 'parent' THEN 'version''s' ELSE 'parent''s' END
                 USING ERRCODE = '42501',
-                      HINT = format('a role that may read the class finds its regions with SELECT FROM tgsis.find_conflicts(%L); the class''s owner can GRANT SELECT on its feature table',
+                      HINT = format('a role that may read the class finds its regions with SELECT FROM tgsis.find_conflicts(%L), or the class''s owner lets this role read it',
                                     p_version);
         END IF;
     END IF;
