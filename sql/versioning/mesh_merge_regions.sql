@@ -37,7 +37,8 @@
 --     (discards: {"parent": {"child": [vertices, cells, largest displacement]},
 --     "child": {"parent": [...]}, "base": {"parent": [...], "child": [...]}},
 --     merge3's RegionDiscard).
--- The work tables are temporary (VOLATILE). A role that may not read the
+-- The work tables are temporary (VOLATILE), made in a subtransaction
+-- rolled back at the end: neither they nor their locks outlive the call. A role that may not read the
 -- feature's class is refused (42501): regions computed without its rows
 -- would be wrong. A feature not changed on both sides is refused (TG300),
 -- one that does not merge by region (tgsis.region_merge_refusal: deleted on
@@ -81,6 +82,7 @@ DECLARE
     v_top_v   bigint;
     v_top_c   bigint;
     v_moved   bigint;
+    v_out     jsonb;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
@@ -106,6 +108,11 @@ BEGIN
                   HINT = format('solve it as a whole object: SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
                                 p_version, p_geoid::text);
     END IF;
+    -- the work, in a subtransaction rolled back once the regions are in v_out: neither the work tables nor
+    -- the locks on them outlive the call (a relation created and dropped keeps its lock until the
+    -- transaction ends: about 100 per call, and a find_conflicts over many meshes ran out of the shared
+    -- lock table). The block's body is not indented.
+    BEGIN
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
     v_base := tgsis.revision_set(v_version.versionid, v_version.initrevision);
     v_since := ARRAY(SELECT r FROM unnest(v_base || v_parent.workingset || v_version.workingset) AS r
@@ -209,26 +216,35 @@ BEGIN
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.%1$I DESC LIMIT 1))',
                    v_cellid, v_table || '_ver')
        INTO v_top_v, v_top_c USING p_geoid, v_base;
-    CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
-    WITH pn AS (
-        SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
-               row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_v a
-         WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
-    cn AS (
-        SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
-               row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_v a
-         WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
-    matched AS (
-        SELECT c.id AS old, p.id AS new
-          FROM cn c JOIN pn p ON p.x = c.x AND p.y = c.y AND p.z = c.z AND p.val IS NOT DISTINCT FROM c.val
-                              AND p.ref IS NOT DISTINCT FROM c.ref AND p.rn = c.rn)
-    SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
-    UNION ALL
-    SELECT c.id, v_top_v + row_number() OVER (ORDER BY c.id)
-      FROM cn c
-     WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
+        CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
+        WITH pn AS (
+            SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
+                   row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_v a
+             WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
+        cn AS (
+            SELECT a.id, a.x, a.y, a.z, a.val, a.ref,
+                   row_number() OVER (PARTITION BY a.x, a.y, a.z, a.val, a.ref ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_v a
+             WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v b WHERE b.id = a.id AND b.st = 1)),
+        matched AS (
+            SELECT c.id AS old, p.id AS new
+              FROM cn c JOIN pn p ON p.x = c.x AND p.y = c.y AND p.z = c.z AND p.val IS NOT DISTINCT FROM c.val
+                                  AND p.ref IS NOT DISTINCT FROM c.ref AND p.rn = c.rn)
+        SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
+        UNION ALL
+        SELECT c.id, v_top_v + row_number() OVER (ORDER BY c.id)
+          FROM cn c
+         WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    EXCEPTION WHEN numeric_value_out_of_range THEN
+        RAISE EXCEPTION 'feature % does not merge by region in version %: the version''s new vertices that clash with the parent''s need ids above %, and bigint ends at 9223372036854775807',
+                p_geoid, quote_literal(p_version), v_top_v
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'The merge by region gives the version''s new rows that clash with the parent''s a fresh id above every id of the three states.',
+                  HINT = format('solve it as a whole object: SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                                p_version, p_geoid::text);
+    END;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mr_vmap) THEN
         UPDATE pg_temp.tgsis_mr_v m SET id = p.new FROM pg_temp.tgsis_mr_vmap p WHERE m.st = 4 AND m.id = p.old;
         UPDATE pg_temp.tgsis_mr_v m SET ref = p.new FROM pg_temp.tgsis_mr_vmap p WHERE m.st = 4 AND m.ref = p.old;
@@ -237,26 +253,35 @@ BEGIN
                            LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.old = u.x ORDER BY u.o)
          WHERE m.st = 4 AND m.v && (SELECT array_agg(p.old) FROM pg_temp.tgsis_mr_vmap p);
     END IF;
-    CREATE TEMPORARY TABLE tgsis_mr_cmap ON COMMIT DROP AS
-    WITH pn AS (
-        SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
-               row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_c a
-         WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
-    cn AS (
-        SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
-               row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
-          FROM pg_temp.tgsis_mr_c a
-         WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
-    matched AS (
-        SELECT c.id AS old, p.id AS new
-          FROM cn c JOIN pn p ON p.k = c.k AND p.val IS NOT DISTINCT FROM c.val
-                              AND p.part IS NOT DISTINCT FROM c.part AND p.rn = c.rn)
-    SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
-    UNION ALL
-    SELECT c.id, v_top_c + row_number() OVER (ORDER BY c.id)
-      FROM cn c
-     WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
+        CREATE TEMPORARY TABLE tgsis_mr_cmap ON COMMIT DROP AS
+        WITH pn AS (
+            SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
+                   row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_c a
+             WHERE a.st = 2 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
+        cn AS (
+            SELECT a.id, tgsis.oriented_cell_key(a.v) AS k, a.val, a.part,
+                   row_number() OVER (PARTITION BY tgsis.oriented_cell_key(a.v), a.val, a.part ORDER BY a.id) AS rn
+              FROM pg_temp.tgsis_mr_c a
+             WHERE a.st = 4 AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c b WHERE b.id = a.id AND b.st = 1)),
+        matched AS (
+            SELECT c.id AS old, p.id AS new
+              FROM cn c JOIN pn p ON p.k = c.k AND p.val IS NOT DISTINCT FROM c.val
+                                  AND p.part IS NOT DISTINCT FROM c.part AND p.rn = c.rn)
+        SELECT m.old, m.new FROM matched m WHERE m.new <> m.old
+        UNION ALL
+        SELECT c.id, v_top_c + row_number() OVER (ORDER BY c.id)
+          FROM cn c
+         WHERE NOT EXISTS (SELECT FROM matched m WHERE m.old = c.id) AND EXISTS (SELECT FROM pn p WHERE p.id = c.id);
+    EXCEPTION WHEN numeric_value_out_of_range THEN
+        RAISE EXCEPTION 'feature % does not merge by region in version %: the version''s new cells that clash with the parent''s need ids above %, and bigint ends at 9223372036854775807',
+                p_geoid, quote_literal(p_version), v_top_c
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'The merge by region gives the version''s new rows that clash with the parent''s a fresh id above every id of the three states.',
+                  HINT = format('solve it as a whole object: SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                                p_version, p_geoid::text);
+    END;
     UPDATE pg_temp.tgsis_mr_c m SET id = p.new FROM pg_temp.tgsis_mr_cmap p WHERE m.st = 4 AND m.id = p.old;
 
     -- 4. each side's edit against the base, per id (merged numbering)
@@ -349,8 +374,9 @@ BEGIN
            (row_number() OVER (ORDER BY n.kind DESC, n.id) - 1)::integer AS label
       FROM (SELECT DISTINCT f.id, 'v'::text AS kind FROM pg_temp.tgsis_mr_fv f
             UNION ALL SELECT DISTINCT f.id, 'c' FROM pg_temp.tgsis_mr_fc f) AS n;
-    IF NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_node) THEN
-        RETURN;
+    IF NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_node) THEN  -- no region
+        v_out := '[]';
+        RAISE EXCEPTION 'tgsis_mr_done';
     END IF;
     CREATE TEMPORARY TABLE tgsis_mr_edge ON COMMIT DROP AS
     WITH rows AS (
@@ -398,7 +424,7 @@ BEGIN
                                           UNION SELECT unnest(c.v) FROM pg_temp.tgsis_mr_c c
                                           EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m))'
        USING p_geoid, v_base;
-    RETURN QUERY
+    SELECT coalesce(jsonb_agg(to_jsonb(q) ORDER BY q.region), '[]') INTO v_out FROM (
     WITH nodes AS (
         SELECT n.kind, n.id, (dense_rank() OVER (ORDER BY n.label) - 1)::integer AS region,
                coalesce(vx.p_changed, cx.p_changed, false) AS p_changed,
@@ -461,14 +487,27 @@ BEGIN
                                                   count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed),
                                                   coalesce(max(d.c_disp), 0)))) AS discards
           FROM nodes d GROUP BY d.region)
-    SELECT f.region, f.has_p AND f.has_c AND f.differ,
-           CASE WHEN f.has_p AND f.has_c THEN 'both' WHEN f.has_p THEN 'parent' ELSE 'child' END,
-           f.vertex_ids, f.cell_ids, f.pv, f.pc, f.cv, f.cc, b.bbox, f.p_disp, f.c_disp, f.discards
-      FROM facts f LEFT JOIN boxes b ON b.region = f.region
-     ORDER BY f.region;
-    DROP TABLE pg_temp.tgsis_mr_v, pg_temp.tgsis_mr_c, pg_temp.tgsis_mr_vmap, pg_temp.tgsis_mr_cmap,
-               pg_temp.tgsis_mr_vx, pg_temp.tgsis_mr_cx, pg_temp.tgsis_mr_margin, pg_temp.tgsis_mr_fv,
-               pg_temp.tgsis_mr_fc, pg_temp.tgsis_mr_node, pg_temp.tgsis_mr_edge, pg_temp.tgsis_mr_vb;
+    SELECT f.region, f.has_p AND f.has_c AND f.differ AS conflict,
+           CASE WHEN f.has_p AND f.has_c THEN 'both' WHEN f.has_p THEN 'parent' ELSE 'child' END AS changed_by,
+           f.vertex_ids, f.cell_ids, f.pv AS parent_vertex_ids, f.pc AS parent_cell_ids, f.cv AS child_vertex_ids,
+           f.cc AS child_cell_ids, b.bbox, f.p_disp AS parent_displacement, f.c_disp AS child_displacement, f.discards
+      FROM facts f LEFT JOIN boxes b ON b.region = f.region) AS q;
+    RAISE EXCEPTION 'tgsis_mr_done';  -- rolls the work tables and their locks back
+    EXCEPTION WHEN raise_exception THEN
+        IF SQLERRM <> 'tgsis_mr_done' THEN
+            RAISE;
+        END IF;
+    END;
+    -- floats went through jsonb as their exact text (extra_float_digits 1): the same values come back
+    RETURN QUERY
+    SELECT r.region, r.conflict, r.changed_by, r.vertex_ids, r.cell_ids, r.parent_vertex_ids, r.parent_cell_ids,
+           r.child_vertex_ids, r.child_cell_ids, r.bbox, r.parent_displacement, r.child_displacement, r.discards
+      FROM jsonb_to_recordset(v_out) AS r (region integer, conflict boolean, changed_by text, vertex_ids bigint[],
+                                            cell_ids bigint[], parent_vertex_ids bigint[], parent_cell_ids bigint[],
+                                            child_vertex_ids bigint[], child_cell_ids bigint[],
+                                            bbox double precision[], parent_displacement double precision,
+                                            child_displacement double precision, discards jsonb)
+     ORDER BY r.region;
 END
 $$;
 

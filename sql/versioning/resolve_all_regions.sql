@@ -13,6 +13,10 @@
 -- computes and stores as a mesh: refused here (TG307) with the command that
 -- does it; manual is one region's mesh (tgsis.resolve_region), refused
 -- (TG100). The same rights as tgsis.resolve_region: write in the version.
+-- Its find_conflicts (the marks of now) finds no other object's regions
+-- (tgsis.region_detection = 'client' around it): it finds its own
+-- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
+-- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_all_regions(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS SETOF tgsis.conflict_regions
 LANGUAGE plpgsql
@@ -21,6 +25,7 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
+    v_detect text;
     v_id       integer := tgsis.version_id(p_version);
     v_solution text := lower(p_solution);
     v_key      text;
@@ -55,7 +60,14 @@ BEGIN
     v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
     SELECT ARRAY[r.childmark, r.parentmark] INTO v_marks FROM tgsis.conflict_regions r
      WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key LIMIT 1;
-    PERFORM tgsis.find_conflicts(p_version);  -- the marks of now: stale regions go, and are found again in SQL
+    v_detect := current_setting('tgsis.region_detection', true);
+    PERFORM set_config('tgsis.region_detection', 'client', true);  -- (not a function SET: only a superuser may
+    -- create a function that sets a parameter tgsis does not define)
+    PERFORM tgsis.find_conflicts(p_version);  -- the marks of now: stale regions go
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
+    IF p_objectclass = 'feature' THEN  -- and this object's are found again in SQL
+        PERFORM tgsis.store_mesh_regions(p_version, v_key);
+    END IF;
     SELECT ARRAY[r.childmark, r.parentmark] INTO v_now FROM tgsis.conflict_regions r
      WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key LIMIT 1;
     IF v_marks IS NOT NULL AND v_now IS DISTINCT FROM v_marks THEN

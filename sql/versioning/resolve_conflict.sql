@@ -8,7 +8,9 @@
 -- conflict of 2024-01-02. A NOTICE says what the solution discards of the
 -- other side's edits (tgsis.conflict_discards). A mesh's regions are found
 -- first when none are stored (tgsis.store_mesh_regions, in SQL: no client
--- needed), and parent and child are refused
+-- needed; a role that may not read the feature's class gets none computed,
+-- and its parent or child is refused, 42501, until they are stored), and
+-- parent and child are refused
 -- (TG307) if the other side has edits in a region that is no conflict:
 -- tgsis.resolve_region solves the conflicting regions, the merge keeps the rest.
 -- base: the object as the version was based on it (its initial revision's
@@ -21,6 +23,10 @@
 -- tgsis.resolve_all_regions(..., 'base')) does not. average is computed in
 -- Python (the average shape of two meshes): refused here (TG100), the hint
 -- naming the command.
+-- Its find_conflicts (the marks of now) finds no other object's regions
+-- (tgsis.region_detection = 'client' around it): it finds its own
+-- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
+-- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_conflict(p_version text, p_objectclass text, p_objectkey text, p_solution text)
 RETURNS tgsis.conflicts
 LANGUAGE plpgsql
@@ -29,6 +35,7 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
+    v_detect text;
     v_id  integer := tgsis.version_id(p_version);
     v_row tgsis.conflicts;
     v_key text := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
@@ -51,20 +58,36 @@ BEGIN
     END IF;
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     -- the marks must be those of now: a manual solution is written just before it is recorded
+    v_detect := current_setting('tgsis.region_detection', true);
+    PERFORM set_config('tgsis.region_detection', 'client', true);  -- (not a function SET: only a superuser may
+    -- create a function that sets a parameter tgsis does not define)
     PERFORM tgsis.find_conflicts(p_version);
-    IF lower(p_solution) = 'base' THEN
-        IF p_objectclass = 'feature' THEN  -- its regions first, as for parent and child: base drops every side's edits
-            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
+    IF p_objectclass = 'feature' AND lower(p_solution) IN ('parent', 'child', 'base') THEN
+        -- its regions first (in SQL if nobody found them: a psql user runs no Python): base drops every
+        -- side's edits, and parent or child is checked against the other side's below
+        PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        IF lower(p_solution) <> 'base' AND v_key::bigint IN (SELECT tgsis.class_denied_geoids('SELECT'))
+           AND NOT EXISTS (SELECT FROM tgsis.conflict_regions r
+                            WHERE r.versionid = v_id AND r.objectclass = 'feature' AND r.objectkey = v_key)
+           AND tgsis.region_merge_refusal(p_version, v_key::bigint) IS NULL THEN
+            -- the regions are found with the caller's rights: none for a role kept from the class, and
+            -- unchecked, its whole side could drop the other side's edits in regions that merge by themselves
+            RAISE EXCEPTION 'role % may not read feature % (its class): whether solution % drops the % edits in regions that are no conflict cannot be checked',
+                    quote_ident(tgsis.calling_role()), v_key, lower(p_solution),
+                    CASE lower(p_solution) WHEN 'parent' THEN 'version''s' ELSE 'parent''s' END
+                USING ERRCODE = '42501',
+                      HINT = format('a role that may read the class finds its regions with SELECT FROM tgsis.find_conflicts(%L), or the class''s owner lets this role read it',
+                                    p_version);
         END IF;
+    END IF;
+    IF lower(p_solution) = 'base' THEN
         PERFORM tgsis.resolve_conflict_base(p_version, p_objectclass, p_objectkey, v_key);
         p_solution := 'manual';  -- the version holds the base's object now
     END IF;
     -- a mesh whose regions are stored (current marks: find_conflicts just dropped older ones): one side's
     -- whole object would drop the other side's edits in regions that merge by themselves
     IF lower(p_solution) IN ('parent', 'child') THEN
-        IF p_objectclass = 'feature' THEN  -- found in SQL if nobody found them (a psql user: no Python call)
-            PERFORM tgsis.store_mesh_regions(p_version, v_key);
-        END IF;
         SELECT string_agg(r.region::text, ', ' ORDER BY r.region) INTO v_lost
           FROM tgsis.conflict_regions r
          WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key AND NOT r.conflict

@@ -11,6 +11,10 @@
 -- reads it. The same right as resolve_conflict: write in the version; a mesh
 -- (average, manual) also the right to change the feature (tgsis.check_class_write),
 -- as the merge that applies it writes its rows.
+-- Its find_conflicts (the marks of now) finds no other object's regions
+-- (tgsis.region_detection = 'client' around it): it finds its own
+-- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
+-- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_region(p_version text, p_objectclass text, p_objectkey text, p_region integer,
                                      p_solution text, p_mesh bytea DEFAULT NULL)
 RETURNS tgsis.conflict_regions
@@ -20,6 +24,7 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
+    v_detect text;
     v_id       integer := tgsis.version_id(p_version);
     v_solution text := lower(p_solution);
     v_key      text;
@@ -70,7 +75,14 @@ BEGIN
      WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region;
     v_stored := FOUND;
     -- the marks must be those of now: regions found on an older state are removed
+    v_detect := current_setting('tgsis.region_detection', true);
+    PERFORM set_config('tgsis.region_detection', 'client', true);  -- (not a function SET: only a superuser may
+    -- create a function that sets a parameter tgsis does not define)
     PERFORM tgsis.find_conflicts(p_version);
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
+    IF p_objectclass = 'feature' THEN  -- found again in SQL on the marks of now (this object's only)
+        PERFORM tgsis.store_mesh_regions(p_version, v_key);
+    END IF;
     SELECT * INTO v_row FROM tgsis.conflict_regions
      WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region
        FOR UPDATE;

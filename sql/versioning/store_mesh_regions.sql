@@ -6,7 +6,9 @@
 -- stored. It stores nothing when regions are stored already (on the current
 -- marks: find_conflicts removed stale ones), when the calling role may not
 -- read the feature's class (the Python client would not read it either),
--- or when the feature does not merge by region (tgsis.region_merge_refusal).
+-- or when the feature does not merge by region (tgsis.region_merge_refusal,
+-- or mesh_merge_regions' TG100: new ids that cannot be renumbered within
+-- bigint), so that one such feature does not make find_conflicts fail.
 -- Otherwise the rows of tgsis.mesh_merge_regions go in as found: a conflict
 -- unsolved, the others automatic. Returns the regions stored.
 CREATE FUNCTION tgsis.store_mesh_regions(p_version text, p_objectkey text)
@@ -28,16 +30,20 @@ BEGIN
        OR tgsis.region_merge_refusal(p_version, p_objectkey::bigint) IS NOT NULL THEN
         RETURN 0;
     END IF;
-    INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
-                                        changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
-                                        child_vertex_ids, child_cell_ids, bbox, parent_displacement,
-                                        child_displacement, solution)
-    SELECT v_row.versionid, 'feature', p_objectkey, m.region, v_row.childmark, v_row.parentmark, m.conflict,
-           m.changed_by, m.vertex_ids, m.cell_ids, m.parent_vertex_ids, m.parent_cell_ids, m.child_vertex_ids,
-           m.child_cell_ids, m.bbox, m.parent_displacement, m.child_displacement,
-           CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END
-      FROM tgsis.mesh_merge_regions(p_version, p_objectkey::bigint) AS m;
-    GET DIAGNOSTICS v_count = ROW_COUNT;
+    BEGIN
+        INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
+                                            changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
+                                            child_vertex_ids, child_cell_ids, bbox, parent_displacement,
+                                            child_displacement, solution)
+        SELECT v_row.versionid, 'feature', p_objectkey, m.region, v_row.childmark, v_row.parentmark, m.conflict,
+               m.changed_by, m.vertex_ids, m.cell_ids, m.parent_vertex_ids, m.parent_cell_ids, m.child_vertex_ids,
+               m.child_cell_ids, m.bbox, m.parent_displacement, m.child_displacement,
+               CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END
+          FROM tgsis.mesh_merge_regions(p_version, p_objectkey::bigint) AS m;
+        GET DIAGNOSTICS v_count = ROW_COUNT;
+    EXCEPTION WHEN SQLSTATE 'TG100' THEN  -- it does not merge by region after all (new ids beyond bigint)
+        RETURN 0;
+    END;
     RETURN v_count;
 END
 $$;

@@ -58,6 +58,10 @@ _RULES: list[tuple[str, Replacement]] = [
         r"conflicts\)(, then solve them)?",
         lambda m: "find the regions again: tgsis version conflicts VERSION" + (m[1] or ""),
     ),
+    (  # resolve_conflict's parent/child from a role that may not read the class, no regions stored yet
+        r"a role that may read the class finds its regions with SELECT FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\)",
+        lambda m: f"a role that may read the class finds its regions with tgsis version conflicts {_unquote(m[1])}",
+    ),
     (
         r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) finds and records them \(tgsis version conflicts [^)]*\)",
         lambda m: f"tgsis version conflicts {_unquote(m[1])} finds and records them",
