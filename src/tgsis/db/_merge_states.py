@@ -8,7 +8,7 @@ version settings for the reads and putting them back.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -461,10 +461,38 @@ def read_merge_states(conn: Conn, version: str, feature_id: int) -> MergeInputs:
     return MergeInputs(fc, versionid, parent, (initrevision, parent_working, working), _states(fc, feature_id, rows))
 
 
-def _checked_object(conn: Conn, version: str, feature_id: int) -> tuple[int, str, tuple[int, int, int], FeatureClass]:
+def _refuse_unless_static_mesh(fc: FeatureClass, feature_id: int, version: str) -> None:
+    """The model rule of :func:`read_merge_states`: a static (model 1) point set, line set, surface or solid."""
+    if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
+        what = "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
+        raise InvalidInputError(
+            f"feature {feature_id} of class {fc.name} is {what}: only a static (model 1) point set, line set, "
+            f"surface or tetrahedral solid merges by region (version {show_name(version)})",
+            hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+        )
+
+
+def _refuse_unless_sliced_surface(fc: FeatureClass, feature_id: int, version: str) -> None:
+    """The model rule of :func:`read_sliced_states`: a surface at instants (model 2) or an evolving one (model 3)."""
+    if fc.time_model not in SLICE_KEYS or fc.geotype is not Geotype.SURFACE:
+        raise InvalidInputError(
+            f"feature {feature_id} of class {fc.name} is of model {fc.time_model}: only a surface at instants "
+            f"(model 2) or an evolving surface (model 3) merges slice by slice (version {show_name(version)})",
+            hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
+        )
+
+
+def _checked_object(
+    conn: Conn,
+    version: str,
+    feature_id: int,
+    model_rule: Callable[[FeatureClass, int, str], None] = _refuse_unless_static_mesh,
+) -> tuple[int, str, tuple[int, int, int], FeatureClass]:
     """(version id, parent, (base, parent's, version's working revisions), class) of an object that merges by region.
 
-    Raises what :func:`read_merge_states` says; moves the session's version settings (the caller puts them back).
+    ``model_rule`` refuses a class whose objects do not merge so. Raises what
+    :func:`read_merge_states` says; moves the session's version settings (the
+    caller puts them back).
     """
     versionid, parent, initrevision, working, parent_working = version_row(conn, version)
     # the class is looked up as the version sees its features; as the parent does, when the version
@@ -474,13 +502,7 @@ def _checked_object(conn: Conn, version: str, feature_id: int) -> tuple[int, str
     if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
         conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
     fc = _feature_class(conn, feature_id)
-    if fc.time_model != "STATIC" or fc.geotype not in SIMPLEX:
-        what = "a geometry collection" if fc.geotype is Geotype.GEOMETRYCOLLECTION else f"of model {fc.time_model}"
-        raise InvalidInputError(
-            f"feature {feature_id} of class {fc.name} is {what}: only a static (model 1) point set, line set, "
-            f"surface or tetrahedral solid merges by region (version {show_name(version)})",
-            hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
-        )
+    model_rule(fc, feature_id, version)
     both = conn.execute(
         "SELECT 1 FROM tgsis.current_conflicts(%s) WHERE objectclass = 'feature' AND objectkey = %s",
         (versionid, str(feature_id)),
@@ -1041,36 +1063,9 @@ def read_sliced_states(conn: Conn, version: str, feature_id: int) -> SlicedInput
     """
     settings = read_version_settings(conn)
     try:
-        versionid, parent, initrevision, working, parent_working = version_row(conn, version)
-        in_child = _exists(conn, feature_id, version, working)
-        in_parent = _exists(conn, feature_id, parent, parent_working)
-        if in_child or not (in_parent and _exists(conn, feature_id, version, initrevision)):
-            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, working))
-        fc = _feature_class(conn, feature_id)
-        if fc.time_model not in SLICE_KEYS or fc.geotype is not Geotype.SURFACE:
-            raise InvalidInputError(
-                f"feature {feature_id} of class {fc.name} is of model {fc.time_model}: only a surface at instants "
-                f"(model 2) or an evolving surface (model 3) merges slice by slice (version {show_name(version)})",
-                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
-            )
-        both = conn.execute(
-            "SELECT 1 FROM tgsis.current_conflicts(%s) WHERE objectclass = 'feature' AND objectkey = %s",
-            (versionid, str(feature_id)),
-        ).fetchone()
-        if both is None:
-            raise VersioningError(
-                f"feature {feature_id} of class {fc.name} was not changed both in version {show_name(version)} "
-                f"and in its parent {show_name(parent)} since the version was based: there is nothing to merge",
-                hint=f"tgsis.find_conflicts(conn, {version!r}) lists the objects changed on both sides",
-            )
-        if not (in_child and in_parent):
-            raise InvalidInputError(
-                f"feature {feature_id} of class {fc.name} was deleted in version "
-                f"{show_name(parent if in_child else version)} and changed in "
-                f"{show_name(version if in_child else parent)}: a deletion does not merge by region",
-                hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
-            )
-        _require_same_attributes(conn, fc, feature_id, version, parent, (initrevision, parent_working, working))
+        versionid, parent, (initrevision, parent_working, working), fc = _checked_object(
+            conn, version, feature_id, _refuse_unless_sliced_surface
+        )
         sides = {"base": (version, initrevision), "parent": (parent, parent_working), "child": (version, working)}
         rows = _read_sliced_rows(conn, fc, feature_id, sides)
         instants = {side: _instant_rows(conn, fc, feature_id, v, r) for side, (v, r) in sides.items()}

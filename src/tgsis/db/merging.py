@@ -52,10 +52,12 @@ import psycopg
 
 from tgsis._merge_slices import apply_sliced, merge_sliced, slice_text
 from tgsis.arguments import checked
-from tgsis.db._attribute_edits import attribute_edits, write_attribute_edits
+from tgsis.db._attribute_edits import AttributeEdits, attribute_edits, write_attribute_edits
 from tgsis.db._continuity import check_continuity
 from tgsis.db._merge_states import (
     SLICE_KEYS,
+    MergeInputs,
+    SlicedInputs,
     feature_time_model,
     read_merge_change,
     read_merge_states,
@@ -730,12 +732,8 @@ def _merge_object(
     except InvalidMergeError as exc:
         reasons[key] = f"invalid merge: {exc.message}"
         return None
-    attributes = attribute_edits(conn, inputs, version, int(key))
-    if attributes.both:
-        reasons[key] = (
-            f"its attributes were changed both in the version and in its parent, to other values "
-            f"({', '.join(attributes.both)}): the merge by region merges the mesh only"
-        )
+    attributes = _attributes_to_bring(conn, inputs, version, key, reasons)
+    if attributes is None:
         return None
     for discard in resolved.discards:  # said before it is written
         log.warning("feature %s of version %s: %s", key, show_name(version), _discard_text(discard))
@@ -808,12 +806,8 @@ def _merge_sliced_object(
     except InvalidMergeError as exc:
         reasons[key] = f"invalid merge: {exc.message}"
         return None
-    attributes = attribute_edits(conn, inputs, version, int(key))
-    if attributes.both:
-        reasons[key] = (
-            f"its attributes were changed both in the version and in its parent, to other values "
-            f"({', '.join(attributes.both)}): the merge by region merges the mesh only"
-        )
+    attributes = _attributes_to_bring(conn, inputs, version, key, reasons)
+    if attributes is None:
         return None
     for discard in discards:  # said before it is written
         log.warning("feature %s of version %s: %s", key, show_name(version), _discard_text(discard))
@@ -850,6 +844,21 @@ def _merge_sliced_object(
         written,
     )
     return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, discards)
+
+
+def _attributes_to_bring(
+    conn: Conn, inputs: MergeInputs | SlicedInputs, version: str, key: str, reasons: dict[str, str]
+) -> AttributeEdits | None:
+    """The parent's attribute edits the merge brings into the version; None (the reason given) when both sides
+    changed one to other values."""
+    attributes = attribute_edits(conn, inputs, version, int(key))
+    if attributes.both:
+        reasons[key] = (
+            f"its attributes were changed both in the version and in its parent, to other values "
+            f"({', '.join(attributes.both)}): the merge by region merges the mesh only"
+        )
+        return None
+    return attributes
 
 
 def _require_write(conn: Conn, version: str, key: str, may_write: list[bool | None]) -> None:

@@ -425,6 +425,14 @@ def region_solutions(
         stored = _stored_regions(conn, versionid, objectclass, objectkey)
         if marks is None or not _holds(stored, marks, merge):
             return {}
+    return _solutions_of(conn, versionid, objectclass, objectkey, stored, merge.base.name)
+
+
+def _solutions_of(
+    conn: Conn, versionid: int, objectclass: str, objectkey: str, stored: list[ConflictRegion], name: str
+) -> dict[int, str | MeshState]:
+    """The recorded solutions of the stored regions that hold: a side's name, or the rows of average/manual."""
+    with reraise():
         meshes = dict(
             conn.execute(
                 "SELECT region, solution_mesh FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
@@ -437,7 +445,7 @@ def region_solutions(
         if not region.conflict or region.solution == "unsolved":
             continue
         if region.solution in ("average", "manual"):
-            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), merge.base.name)
+            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), name)
         else:
             solutions[region.region] = region.solution
     return solutions
@@ -479,22 +487,7 @@ def sliced_region_solutions(
         stored = _stored_regions(conn, versionid, objectclass, objectkey)
         if marks is None or not _holds_sliced(stored, marks, merge):
             return {}
-        meshes = dict(
-            conn.execute(
-                "SELECT region, solution_mesh FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
-                " AND objectkey = %s AND solution_mesh IS NOT NULL",
-                (versionid, objectclass, objectkey),
-            ).fetchall()
-        )
-    solutions: dict[int, str | MeshState] = {}
-    for region in stored:
-        if not region.conflict or region.solution == "unsolved":
-            continue
-        if region.solution in ("average", "manual"):
-            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), merge.base.name)
-        else:
-            solutions[region.region] = region.solution
-    return solutions
+    return _solutions_of(conn, versionid, objectclass, objectkey, stored, merge.base.name)
 
 
 @checked
