@@ -1,4 +1,5 @@
--- tgsis.simplex_table(geotype): the table holding the simplices of a geotype.
+-- tgsis.simplex_table(geotype): the table holding the simplices of a geotype (model 1's tables, named
+-- here in the geometry core because versioning's region detection and the models above it read it).
 CREATE FUNCTION tgsis.simplex_table(p_geotype text)
 RETURNS text
 LANGUAGE sql
