@@ -961,3 +961,34 @@ def test_a_region_index_that_is_not_an_integer_is_refused_clearly() -> None:
         with pytest.raises(tgsis.InvalidInputError, match=f"region {index!r} is not a region"):
             apply_solutions(merge, {0: "parent", index: "parent"})  # type: ignore[dict-item]
     assert apply_solutions(merge, {np.int64(0): "parent"}).discards[0].side == "child"  # type: ignore[dict-item]
+
+
+def test_new_ids_that_would_need_renumbering_past_int64_are_refused_by_name() -> None:
+    """Both sides add a different vertex (and cell) with the largest id there is: no id is left above it."""
+    top = 2**63 - 1
+    base = MeshState(
+        3,
+        np.array([0, 1, 2]),
+        np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        np.array([0]),
+        np.array([[0, 1, 2]]),
+        {},
+        {},
+        "fault",
+    )
+
+    def with_vertex(z: float) -> MeshState:
+        return MeshState(
+            3,
+            np.array([0, 1, 2, top]),
+            np.vstack([base.vertices, [[1.0, 1.0, z]]]),
+            np.array([0, 1]),
+            np.array([[0, 1, 2], [1, top, 2]]),
+            {},
+            {},
+            "fault",
+        )
+
+    # was: OverflowError (Python int too large to convert to C long) out of numpy
+    with pytest.raises(tgsis.InvalidMergeError, match=r"fault: .*vertex .*9223372036854775807.*no id"):
+        three_way_merge(base, with_vertex(1.0), with_vertex(2.0))

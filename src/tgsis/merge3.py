@@ -398,6 +398,10 @@ def _edit(base: MeshState, side: MeshState) -> _Edit:
 # ---------------------------------------------------------------- the child's new ids
 
 
+#: the largest id a row can have (ids are bigint in the database)
+_LARGEST_ID = 2**63 - 1
+
+
 def _row_keys(parts: list[npt.NDArray[np.uint64]]) -> list[bytes]:
     rows = np.ascontiguousarray(np.concatenate(parts, axis=1))
     return [r.tobytes() for r in rows]
@@ -410,9 +414,17 @@ def _renumber(
     other_keys: list[bytes],
     taken: IntArray,
     next_id: int,
+    what: str,
+    name: str,
 ) -> tuple[IntArray, int]:
     """Merged ids of one side's new rows: the other side's new row with the same content, else the same id
-    when the other side does not use it, else a fresh id from ``next_id``."""
+    when the other side does not use it, else a fresh id from ``next_id``.
+
+    Raises
+    ------
+    InvalidMergeError
+        A fresh id would pass the largest int64 (``what``: vertex or cell; ``name``: the object).
+    """
     waiting: dict[bytes, list[int]] = {}
     for i, key in zip(other_ids.tolist()[::-1], other_keys[::-1]):
         waiting.setdefault(key, []).append(i)  # pop() hands out the lowest id first
@@ -425,6 +437,13 @@ def _renumber(
             matched[n] = True
     unmatched = np.flatnonzero(~matched)
     clash = unmatched[_contains(taken, new_ids[unmatched])]  # the other side's ids, matched ones among them
+    if len(clash) and next_id + len(clash) - 1 > _LARGEST_ID:
+        raise InvalidMergeError(
+            f"{name}: the version's new {what} ids {ids_text(new_ids[clash])} are the parent's too and must be "
+            f"renumbered above {next_id - 1}, which leaves no id in a bigint",
+            hint="solve the object as a whole (resolve_conflict with parent, child or manual), or give the new rows "
+            "smaller ids",
+        )
     result[clash] = np.arange(next_id, next_id + len(clash), dtype=np.int64)
     return result, next_id + len(clash)
 
@@ -473,7 +492,14 @@ def _renumber_child(
         return _row_keys(words)
 
     merged_v, _ = _renumber(
-        c_new_v, vertex_keys(child, c_new_v), p_new_v, vertex_keys(parent, p_new_v), parent.vertex_ids, top_v + 1
+        c_new_v,
+        vertex_keys(child, c_new_v),
+        p_new_v,
+        vertex_keys(parent, p_new_v),
+        parent.vertex_ids,
+        top_v + 1,
+        "vertex",
+        base.name,
     )
     vmap_old, vmap_new = c_new_v[merged_v != c_new_v], merged_v[merged_v != c_new_v]
     cells = child.cells
@@ -493,6 +519,8 @@ def _renumber_child(
         cell_keys(parent, parent.cells, p_new_c),
         parent.cell_ids,
         top_c + 1,
+        "cell",
+        base.name,
     )
     cmap_old, cmap_new = c_new_c[merged_c != c_new_c], merged_c[merged_c != c_new_c]
     cell_ids = child.cell_ids
