@@ -1063,6 +1063,21 @@ def _resolve_all(
             given[region.index] = cast(Solution, solution)
     resolved = apply_solutions(merge, given, names=dict.fromkeys(given, solution))
     discards = tuple(sorted((d for d in resolved.discards if d.region in given), key=lambda d: (d.region, d.side)))
+    return _record_all(conn, version, key, given, solution, discards, discard_other, name)
+
+
+def _record_all(
+    conn: Conn,
+    version: str,
+    key: str,
+    given: Mapping[int, Solution],
+    solution: str,
+    discards: tuple[RegionDiscard, ...],
+    discard_other: bool,
+    name: str,
+) -> ObjectResolution:
+    """Record one solution for every given region, after saying what it discards (refused, nothing recorded,
+    when it discards and ``discard_other`` is False)."""
     totals = _totals(discards, solution)
     if discards and not discard_other:
         raise RegionSolutionError(
@@ -1103,19 +1118,7 @@ def _resolve_all_sliced(
         else:
             given[r.index] = cast(Solution, solution)
     discards = _slice_solution(conn, version, key, merge, given, dict.fromkeys(given, solution))
-    totals = _totals(discards, solution)
-    if discards and not discard_other:
-        raise RegionSolutionError(
-            f"{name}: solution {solution} of all its regions discards edits: "
-            + "; ".join([*(side_discard_text(t) for t in totals), *(discard_text(d) for d in discards)]),
-            hint="call again with discard_other=True to discard them, or choose another solution",
-        )
-    rows = []
-    for index in sorted(given):
-        value = given[index]
-        mesh = state_to_npz(value) if isinstance(value, MeshState) else None
-        rows.append(_record(conn, version, key, index, solution, mesh))
-    return ObjectResolution(tuple(rows), discards, totals)
+    return _record_all(conn, version, key, given, solution, discards, discard_other, name)
 
 
 # --------------------------------------------------------------------------- average of a whole object
