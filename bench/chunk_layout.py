@@ -335,31 +335,46 @@ def upload(conn: psycopg.Connection[Any], layout: Layout, names: tuple[str, str,
 
 
 def download(
-    conn: psycopg.Connection[Any], layout: Layout, names: tuple[str, str, str], revs: list[int]
+    conn: psycopg.Connection[Any],
+    layout: Layout,
+    names: tuple[str, str, str],
+    revs: list[int],
+    geoid: int = 1,
+    parts: str = "vcp",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vertices, cells and the property of object 1 as the revision set sees them (decoded from chunks)."""
+    """Vertices, cells and the property of an object as the revision set sees them (decoded from chunks).
+
+    ``parts`` says which of the three to read (v, c, p); the others come back empty.
+    """
     cur = conn.cursor(binary=True)
 
     def rows(table: str, columns: str) -> bytes:
         query = sql.SQL("COPY (SELECT chunk, {} FROM chunks.{} WHERE {} ORDER BY chunk) TO STDOUT (FORMAT binary)")
         statement = query.format(sql.SQL(columns), sql.Identifier(table), sql.SQL(VISIBLE))
         out = bytearray()
-        with cur.copy(statement, (1, revs, revs)) as copy:
+        with cur.copy(statement, (geoid, revs, revs)) as copy:
             for block in copy:
                 out += block
         return bytes(out)
 
-    x, y, z = decode_arrays(rows(names[0], "x, y, z"), 3, ["float8"] * 3)
+    empty = np.empty(0)
+    vertices, cells, prop = np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), empty
+    if "v" in parts:
+        x, y, z = decode_arrays(rows(names[0], "x, y, z"), 3, ["float8"] * 3)
+        vertices = np.stack([x, y, z], axis=1)
     kind = "int8" if layout.cells == "abs8" else "int4"
-    if layout.cells == "rel4":
+    if "c" not in parts:
+        pass
+    elif layout.cells == "rel4":
         r1, d2, d3, vbase = decode_arrays(rows(names[1], "vbase, v1, v2, v3"), 3, [kind] * 3, n_scalars=1)
         v1 = np.repeat(vbase, layout.n)[: len(r1)] + r1
         cells = np.stack([v1, v1 + d2, v1 + d3], axis=1)
     else:
         cells = np.stack(decode_arrays(rows(names[1], "v1, v2, v3"), 3, [kind] * 3), axis=1).astype(np.int64)
-    (prop,) = decode_arrays(rows(names[2], "porosity"), 1, ["float8"])
+    if "p" in parts:
+        (prop,) = decode_arrays(rows(names[2], "porosity"), 1, ["float8"])
     conn.commit()
-    return np.stack([x, y, z], axis=1), cells, prop
+    return vertices, cells, prop
 
 
 def total_bytes(conn: psycopg.Connection[Any], tables: list[str]) -> int:
@@ -551,7 +566,11 @@ def main() -> None:
                     "SELECT vertices, triangles, porosity FROM public.bytea_peer WHERE id = 1"
                 ).fetchone()
             assert row is not None
-            _ = np.frombuffer(row[0]).reshape(-1, 3).copy(), np.frombuffer(row[1], dtype=np.int64).reshape(-1, 3).copy()
+            tgsis.Surface(  # as bench/peers.py: the mesh built from the bytes
+                np.frombuffer(row[0]).reshape(-1, 3),
+                np.frombuffer(row[1], dtype=np.int64).reshape(-1, 3),
+                vertex_properties={"porosity": np.frombuffer(row[2])},
+            )
             conn.commit()
 
         def rows_down() -> None:
@@ -559,12 +578,41 @@ def main() -> None:
             conn.commit()
 
         def chunk_down(layout: Layout) -> Any:
-            return lambda: download(conn, layout, names[layout.tag], revs)
+            def run() -> None:
+                v, c, p = download(conn, layout, names[layout.tag], revs)
+                tgsis.Surface(v, c, vertex_properties={"porosity": p})
+
+            return run
 
         present = [lay for lay in timed_downloads if lay.tag in names]
         downs = paired([bytea_down, rows_down, *[chunk_down(lay) for lay in present]], args.repeat)
         down_bytea, down_rows = downs[0], downs[1]
         down_chunks = dict(zip([lay.tag for lay in present], downs[2:]))
+
+        # ---- snapshot at t of a surface known at two instants (model 3's d4dvrtx in chunks: the same
+        # node -> chunk mapping at both instants, so the interpolation is arithmetic on aligned arrays)
+        snap_names = names[chosen.tag]
+        later = orders["morton"].vertices.copy()
+        later[:, 2] += 30 * np.sin(later[:, 0] / 1_500)
+        columns = [(later[:, j].copy(), "float8") for j in range(3)]
+        copy_in(
+            conn, snap_names[0], ["geoid", "chunk", "revision", "x", "y", "z"], encode_chunks(2, 0, chosen.n, columns)
+        )
+        conn.commit()
+        conn.autocommit = True
+        conn.execute(sql.SQL("VACUUM ANALYZE chunks.{}").format(sql.Identifier(snap_names[0])))
+        conn.autocommit = False
+
+        def static_down() -> None:  # the baseline: one shape, vertices and triangles
+            v, c, _ = download(conn, chosen, snap_names, revs, parts="vc")
+            tgsis.Surface(v, c)
+
+        def snapshot_between() -> None:  # t between the two instants: both shapes, x0 + w (x1 - x0)
+            v0, c, _ = download(conn, chosen, snap_names, revs, parts="vc")
+            v1, _, _ = download(conn, chosen, snap_names, revs, geoid=2, parts="v")
+            tgsis.Surface(v0 + 0.25 * (v1 - v0), c)
+
+        snap = paired([static_down, snapshot_between], args.repeat)
 
         # ---- a spatially coherent edit: chunks touched, bytes of those chunks
         tree = cKDTree(base_vertices[:, :2])
@@ -787,6 +835,10 @@ def main() -> None:
     )
     for tag, t in down_chunks.items():
         print(f"  {tag:40s} {t:.3f} s: {t / down_bytea:.2f}x bytea, {t / down_rows:.2f}x fetch_feature")
+    print(
+        f"snapshot at t between two instants (chosen layout): {snap[1]:.3f} s vs the static download "
+        f"(vertices and triangles) {snap[0]:.3f} s: {snap[1] / snap[0]:.2f}x"
+    )
     print()
     print("a spatially coherent edit (k nearest vertices of a point), chunks touched: vertex / triangle chunks")
     for (order, n, k), (vc, cc, _) in touched.items():
@@ -824,6 +876,7 @@ def main() -> None:
     for layout in layouts:
         print(f"upload_vs_bytea_{layout.tag}: {uploads[layout.tag] / bytea_upload:.2f}")
     print(f"today_download_vs_bytea: {down_rows / down_bytea:.2f}")
+    print(f"snapshot_between_vs_static: {snap[1] / snap[0]:.2f}")
     for tag, t in down_chunks.items():
         print(f"download_vs_bytea_{tag}: {t / down_bytea:.2f}")
     for (tag, k), b in edit_bytes.items():
