@@ -18,7 +18,8 @@ elsewhere), in two ways:
   relative (``rel4``: a chunk's smallest corner id ``vbase`` as ``int8``,
   ``v1 - vbase``, ``v2 - v1``, ``v3 - v1`` as ``int4[]``, decoded by
   additions). Candidates: N = 256 / 1024 / 4096, TOAST compression pglz /
-  lz4 / none (``STORAGE EXTERNAL``), id order as the file gave it (row
+  lz4 / none (``STORAGE EXTERNAL``) / mixed (lz4 for doubles, pglz for
+  ids), id order as the file gave it (row
   major), shuffled (a file whose order means nothing), or spatially
   coherent (vertices by the Morton code of their position, cells by their
   smallest corner).
@@ -26,16 +27,20 @@ elsewhere), in two ways:
 Printed for each: bytes per vertex on disk (heap, TOAST, indexes, after
 VACUUM), the upload (binary COPY of the chunk rows, encoded by numpy) and,
 for some, the download (binary COPY of the visible chunks, parsed by numpy,
-checked bit-exact against the surface), beside the ``bytea`` row of
-``bench/peers.py`` (the raw bytes, uncompressed) and today's
-``fetch_feature`` in the same run. Then the write of a spatially coherent
+checked bit-exact against the surface, the ``Surface`` built), beside the
+``bytea`` row of ``bench/peers.py`` (the raw bytes, uncompressed, the
+``Surface`` built), today's ``fetch_feature`` and the PostGIS ``TIN Z`` row
+of each surface (its size; skipped without PostGIS) in the same run. Then
+the snapshot at t of the grid known at two instants (aligned vertex chunks,
+interpolated in numpy) against its static download. Then the write of a spatially coherent
 edit (the 1,000 and the 10,000 vertices nearest a point: a move of each
 vertex): chunks touched and bytes of those chunks, per order and N, and, for
-two layouts and today's rows, the versioned write itself (close the old row
+some layouts and today's rows, the versioned write itself (close the old row
 or chunk versions, insert new ones) with the write-ahead log it produced.
-Then a point lookup of one vertex by key (today's view; chunk by key; a
-view over chunks with the key as a computed column) and the rewrite of one
-chunk for a one-vertex update.
+Then a point lookup of one vertex by key and a scan of one object (today's
+view; chunk by key; a view over chunks with the key as a computed column; a
+view joined to a table of local ids) and the rewrite of one chunk for a
+one-vertex update. The whole run takes 2-3 minutes on 2 shared cores.
 
 Bench surface and a second one with the same triangles and irregular
 positions (x, y jittered, z from them): the grid's y is constant along a
