@@ -36,7 +36,7 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 
-from tgsis._merge_slices import SlicedMerge, SliceKey, merge_sliced
+from tgsis._merge_slices import SlicedMerge, SliceKey, fixed_period_refusal, merge_sliced
 from tgsis.arguments import checked
 from tgsis.db._attribute_edits import attribute_edits, write_attribute_edits
 from tgsis.db._merge_states import (
@@ -356,7 +356,7 @@ def _sliced_object_merge(conn: Conn, version: str, objectkey: str) -> tuple[Slic
     try:
         with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
             states = read_sliced_states(conn, version, int(objectkey)).states
-        return merge_sliced(states["base"], states["parent"], states["child"]), None
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
     except MissingPrivilegeError as exc:
         return None, f"the role may not read it: {exc.message}"
     except (InvalidInputError, InvalidMergeError, NotFoundError) as exc:
@@ -365,6 +365,8 @@ def _sliced_object_merge(conn: Conn, version: str, objectkey: str) -> tuple[Slic
         if exc.code == "TG300":  # VersioningError: not changed on both sides (a conflict of tables only)
             return None, exc.message
         raise
+    refusal = fixed_period_refusal(merge)  # TG308 whatever the solutions: said now, not first at the merge
+    return (merge, None) if refusal is None else (None, refusal)
 
 
 def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) -> tuple[MeshMerge | None, str | None]:

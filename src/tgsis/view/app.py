@@ -45,7 +45,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from starlette.websockets import WebSocketClose
 
 from tgsis import datamodels
-from tgsis._merge_slices import SlicedMerge, merge_sliced
+from tgsis._merge_slices import SlicedMerge, fixed_period_refusal, merge_sliced
 from tgsis.db import versions as V
 from tgsis.db._merge_states import SLICE_KEYS, read_sliced_states
 from tgsis.db._session import export_snapshot, read_only_by_default, see_one_state
@@ -824,9 +824,11 @@ def _sliced_merge(conn: Conn, version: str, feature_id: int) -> SlicedMerge | st
     try:
         with reraise(), conn.transaction():  # a savepoint: a refused read leaves the page's transaction usable
             states = read_sliced_states(conn, version, feature_id).states
-        return merge_sliced(states["base"], states["parent"], states["child"])
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
     except (InvalidInputError, VersioningError, MissingPrivilegeError) as exc:
         return str(exc).splitlines()[0]
+    refusal = fixed_period_refusal(merge)  # TG308 whatever the solutions: it merges as a whole only
+    return merge if refusal is None else refusal
 
 
 def _recorded_sliced_solutions(
