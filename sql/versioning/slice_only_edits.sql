@@ -63,7 +63,8 @@ BEGIN
     IF p_geoid IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
         RAISE EXCEPTION 'role % may not read feature % (its class): the slices only one side changed cannot be told',
                 quote_ident(tgsis.calling_role()), p_geoid
-            USING ERRCODE = '42501', HINT = 'the class''s owner can GRANT SELECT on its feature table';
+            USING ERRCODE = '42501',
+                  HINT = 'a role that may read the class can do it, or the class''s owner lets this role read it (in psql: GRANT SELECT ON its feature table)';
     END IF;
     v_evolve := v_class.timemodel = 'EVOLVING';
     v_base := tgsis.revision_set(v_version.versionid, v_version.initrevision);
