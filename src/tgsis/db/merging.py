@@ -38,6 +38,7 @@ import json
 import logging
 import os
 import re
+import shlex
 import shutil
 import tempfile
 from collections.abc import Iterator, Mapping
@@ -161,7 +162,7 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
                 f"feature {feature_id} is of model {model}: it merges slice by slice (per instant, or per geometry "
                 f"instant of a topology period), not as one mesh (version {show_name(version)})",
                 hint=f"its regions, each with its slice: tgsis.find_conflicts(conn, {version!r}) finds and records "
-                f"them (tgsis version conflicts {version})",
+                f"them (tgsis version conflicts {shlex.quote(version)})",
             )
         states = read_merge_states(conn, version, feature_id).states
     return three_way_merge(states["base"], states["parent"], states["child"])

@@ -26,6 +26,7 @@ import dataclasses
 import io
 import json
 import math
+import shlex
 import zipfile
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -862,11 +863,11 @@ def _require_regions(
             f"{name}: the regions were found on a state that changed since: the object changed in the version "
             "or its parent",
             hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r}), or tgsis version conflicts "
-            f"{version}",
+            f"{shlex.quote(version)}",
         )
     raise NotFoundError(
         f"{name}: no regions of the feature are stored",
-        hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {version})",
+        hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {shlex.quote(version)})",
     )
 
 
@@ -1045,7 +1046,7 @@ def _resolve_all(
     if not conflicting:
         raise RegionSolutionError(
             f"{name}: no region of the feature is a conflict: nothing to choose, it merges by itself",
-            hint=f"merge the version: tgsis version merge {version}",
+            hint=f"merge the version: tgsis version merge {shlex.quote(version)}",
         )
     if solution == "unsolved":
         return ObjectResolution(tuple(_record(conn, version, key, i, solution, None) for i in conflicting), (), ())
@@ -1247,10 +1248,11 @@ def _average_object(
             "merge by themselves"
             if by_itself
             else f"{name}: no region of it conflicts: it merges by itself",
-            hint=f"average its conflicting regions only: tgsis version resolve {version} {feature_id} average --region "
+            hint=f"average its conflicting regions only: tgsis version resolve {shlex.quote(version)} {feature_id} average "
+            "--region "
             "all; the merge takes the rest by itself"
             if by_itself
-            else f"merge it: tgsis version merge {version}",
+            else f"merge it: tgsis version merge {shlex.quote(version)}",
         )
     averages: dict[int, Solution] = {}
     for region in merge.conflicts:
