@@ -867,3 +867,17 @@ def test_the_page_draws_the_regions_of_the_instant_chosen_and_names_each_regions
     assert (
         f"feature {geoid} region 1 at {named[2.0]}: conflict, unsolved" in page.locator("#region-info").text_content()
     )
+
+
+def test_the_page_quotes_a_version_name_in_the_commands_it_prints(
+    regions_view: tuple[str, int, str], page: Any
+) -> None:
+    """The notes print ``tgsis version conflicts NAME``: NAME as one shell word, as ``shlex.quote`` writes it."""
+    import shlex
+
+    url, _, _ = regions_view
+    page.goto(f"{url}/conflicts?version=e1")
+    wait_drawn(page)
+    names = ["e1", "my version", "o'brien", "a$b `c`", "", "x;y", "é"]
+    quoted = page.evaluate("names => import('/static/view.js').then(m => names.map(m.shellQuote))", names)
+    assert quoted == [shlex.quote(n) for n in names]

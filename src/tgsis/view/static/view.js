@@ -377,6 +377,13 @@ export function compareView(config) {
   }).catch((error) => setState("error", String(error.message || error)));
 }
 
+// a text as one word of a shell command line, as Python's shlex.quote writes it (a version name with a space)
+export function shellQuote(word) {
+  if (word === "") return "''";
+  if (/^[A-Za-z0-9_@%+=:,.\/-]+$/.test(word)) return word;
+  return "'" + word.replaceAll("'", "'\"'\"'") + "'";
+}
+
 // a number for people: six significant digits, no trailing zeros
 const short = (x) => String(Number(Number(x).toPrecision(6)));
 const plural = (n, one, many) => `${n} ${n === 1 ? one : many}`;
@@ -607,7 +614,7 @@ export function conflictView(config) {
         const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
           : m.header.solutions === "stale" ? `feature ${m.header.id}: the solutions recorded for its regions were ` +
             `found on an earlier state of ${m.header.version} or ${m.header.parent}, so they do not hold and every ` +
-            `conflict is shown unsolved; find the conflicts again (tgsis version conflicts ${m.header.version})`
+            `conflict is shown unsolved; find the conflicts again (tgsis version conflicts ${shellQuote(m.header.version)})`
           : null;
         if (note) {
           const p = document.createElement("p");
