@@ -698,3 +698,186 @@ def test_a_solution_recorded_while_the_page_reads_is_seen_whole_or_not_at_all(
     assert [r["solution"] for r in first["regions"] if r["conflict"]] == ["unsolved"]
     assert [r["solution"] for r in second["regions"] if r["conflict"]] == ["base"]
     assert second["regions"][region]["state"] == "solved-base"
+
+
+# --------------------------------------------------------------------------- models 2 and 3: regions of a slice
+
+
+def _sliced_conflicts(conn: psycopg.Connection[Any], model: int) -> int:
+    """A model-2 surface (instants 1, 2, 3) or a model-3 one (one period starting at 1, geometry instants 1, 2, 3)
+    with, between e1 and DEFAULT: at 1 a change of the version's only, at 2 a conflict, at 3 a change of the parent's.
+    """
+    from tests.test_merge_instants import make_evolving, make_series, move3
+    from tests.test_merge_instants import move as move_at
+
+    geoid = make_series(conn) if model == 2 else make_evolving(conn)
+    shift = move_at if model == 2 else move3
+    shift(conn, "e1", geoid, 1.0, [CHILD_ONLY], (0.0, 0.0, 50.0))
+    shift(conn, "e1", geoid, 2.0, [CONFLICT], (0.0, 0.0, 30.0))
+    shift(conn, "DEFAULT", geoid, 2.0, [CONFLICT], (0.0, 0.0, 80.0))
+    shift(conn, "DEFAULT", geoid, 3.0, [PARENT_ONLY], (0.0, 0.0, 40.0))
+    return geoid
+
+
+@pytest.fixture(scope="module")
+def sliced_view(pg: TestServer, template_db: str) -> Iterator[tuple[str, dict[int, int], str]]:
+    """A model-2 and a model-3 surface with the regions of :func:`_sliced_conflicts`, each in its database; the views."""
+    with (
+        pg.database("tgsis_view_sliced2", template_db) as (_, dsn2),
+        pg.database("tgsis_view_sliced3", template_db) as (_, dsn3),
+    ):
+        ids = {}
+        for model, dsn in ((2, dsn2), (3, dsn3)):
+            with psycopg.connect(dsn) as conn:
+                ids[model] = _sliced_conflicts(conn, model)
+        with running_view(dsn2) as url2, running_view(dsn3) as url3:
+            yield f"{url2} {url3}", ids, f"{dsn2} {dsn3}"
+
+
+def _slice_of(region: dict[str, Any]) -> float:
+    return float(region["slice"]["times"])
+
+
+@pytest.mark.parametrize("model", [2, 3])
+def test_the_endpoint_draws_the_regions_of_the_slice_at_the_views_time(
+    sliced_view: tuple[str, dict[int, int], str], model: int
+) -> None:
+    """Every region of the object is sent, with its slice; those of the slice at t are drawn as model 1's are."""
+    urls, ids, dsns = sliced_view
+    url, geoid = urls.split()[model - 2], ids[model]
+    expected = {1.0: "merges-child", 2.0: "unsolved", 3.0: "merges-parent"}
+    for t, moved, dz in ((2.0, CONFLICT, 30.0), (1.0, CHILD_ONLY, 50.0), (3.0, PARENT_ONLY, 0.0)):
+        status, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1&t={t}")
+        assert status == 200, body[:300]
+        header, arrays = unpack(body)
+        assert header["merges_by_region"] is True, header["reason"]
+        regions = header["regions"]
+        assert [r["index"] for r in regions] == [0, 1, 2]
+        assert {_slice_of(r): r["state"] for r in regions} == expected
+        if model == 3:
+            assert {r["slice"]["timem"] for r in regions} == {1.0}
+        assert header["slice"]["times"] == t and header["t"] == t
+        for r in regions:
+            assert r["at_t"] is (_slice_of(r) == t)
+            if not r["at_t"]:  # listed, not drawn: another slice's mesh is not this one
+                assert r["drawn"] == {"vertices": 0, "cells": 0}
+        (here,) = [r for r in regions if r["at_t"]]
+        assert here["drawn"]["vertices"] == 1 and here["drawn"]["cells"] == 6  # the vertex and its one ring
+        # the drawn vertex is the version's at t: the base's shape at that instant, moved by the version's edit
+        (v,) = _split(arrays, regions, "vertices")[here["index"]]
+        origin = np.asarray(header["origin"])
+        position = arrays["positions"].reshape(-1, 3)[v].astype(np.float64) + origin
+        shape = curved_surface().vertices[moved] + np.array([0.0, 0.0, 1.0 / 3.0]) * t
+        np.testing.assert_allclose(position, shape + [0.0, 0.0, dz], atol=1e-3)
+        assert len(arrays["positions"]) == 3 * SIDE * SIDE and len(arrays["changed"]) == SIDE * SIDE
+    # no t: the first slice with a conflict
+    header, _ = unpack(get(f"{url}/api/conflict/{geoid}?version=e1")[1])
+    assert header["slice"]["times"] == 2.0 and [r["at_t"] for r in header["regions"]] == [False, True, False]
+    # a t that is no slice of the merge: the object drawn at t, every region listed, none drawn
+    header, arrays = unpack(get(f"{url}/api/conflict/{geoid}?version=e1&t=1.5")[1])
+    assert header["slice"] is None and header["t"] == 1.5 and header["merges_by_region"] is True
+    assert [r["at_t"] for r in header["regions"]] == [False, False, False]
+    assert len(arrays["region_vertices"]) == 0 and header["n_vertices"] == SIDE * SIDE
+
+
+def test_the_regions_of_a_slice_carry_its_recorded_solutions(pg: TestServer, template_db: str) -> None:
+    with pg.database("tgsis_view_sliced_solved", template_db) as (_, dsn):
+        with psycopg.connect(dsn) as conn:
+            geoid = _sliced_conflicts(conn, 2)
+            tgsis.find_conflicts(conn, "e1")
+            tgsis.resolve_region(conn, "e1", geoid, 1, "base")
+            conn.commit()
+        with running_view(dsn) as url:
+            header, _ = unpack(get(f"{url}/api/conflict/{geoid}?version=e1&t=2")[1])
+    assert header["solutions"] == "recorded"
+    assert [(r["index"], r["solution"], r["state"]) for r in header["regions"]] == [
+        (0, "automatic", "merges-child"),
+        (1, "base", "solved-base"),
+        (2, "automatic", "merges-parent"),
+    ]
+
+
+@pytest.mark.parametrize("model", [2, 3])
+def test_the_page_draws_the_regions_of_the_instant_chosen_and_names_each_regions_instant(
+    sliced_view: tuple[str, dict[int, int], str], page: Any, model: int
+) -> None:
+    urls, ids, _ = sliced_view
+    url, geoid = urls.split()[model - 2], ids[model]
+    named = {
+        2: {1.0: "instant 1", 2.0: "instant 2", 3.0: "instant 3"},
+        3: {t: f"geometry instant {t:g} of the period starting at 1" for t in (1.0, 2.0, 3.0)},
+    }[model]
+    for t, state in ((2.0, "unsolved"), (1.0, "merges-child"), (3.0, "merges-parent")):
+        page.goto(f"{url}/conflicts?version=e1&t={t:g}")
+        wait_drawn(page)
+        legend = {
+            k: _rgb(c)
+            for k, c in page.locator("#region-legend [data-state]").evaluate_all(
+                "items => items.map(i => [i.dataset.state, getComputedStyle(i.querySelector('.swatch')).backgroundColor])"
+            )
+        }
+        rows = page.locator("#regions tbody tr").evaluate_all(
+            "rows => rows.map(r => [r.dataset.region, r.dataset.state, r.dataset.drawn, r.lastElementChild.textContent])"
+        )
+        # every region of the object is listed with its instant; the instant's own are drawn
+        assert sorted(rows) == sorted(
+            [
+                ["0", "merges-child", str(t == 1.0).lower(), named[1.0]],
+                ["1", "unsolved", str(t == 2.0).lower(), named[2.0]],
+                ["2", "merges-parent", str(t == 3.0).lower(), named[3.0]],
+            ]
+        )
+        # the time chosen: the instants of the regions offered, this one selected
+        assert page.locator("#region-time").input_value() == f"{t:g}"
+        assert page.locator("#region-time option").evaluate_all("o => o.map(x => x.value)") == ["1", "2", "3"]
+        pixels = canvas_pixels(page)
+        boxes = json.loads(page.evaluate("document.body.dataset.regionBoxes"))
+        mask = _near(pixels, legend[state])
+        assert mask.sum() >= 20, f"t={t}: {mask.sum()} pixels of {state}"
+        x0, y0, x1, y1 = boxes[f"{geoid}:{[r[0] for r in rows if r[1] == state][0]}"]
+        ys, xs = np.nonzero(mask)
+        inside = (xs >= x0 - 3) & (xs <= x1 + 3) & (ys >= y0 - 3) & (ys <= y1 + 3)
+        assert inside.mean() > 0.95
+        for other in {"unsolved", "merges-child", "merges-parent"} - {state}:  # the other instants' regions: not drawn
+            assert _near(pixels, legend[other], 3).sum() == 0, (t, other)
+        assert len(boxes) == 1
+    # choosing another instant on the page draws its regions
+    page.select_option("#region-time", "2")
+    page.wait_for_url("**t=2**")
+    wait_drawn(page)
+    assert page.locator("#regions tbody tr[data-drawn=true]").evaluate_all("r => r.map(x => x.dataset.state)") == [
+        "unsolved"
+    ]
+    ys, xs = np.nonzero(
+        _near(
+            canvas_pixels(page),
+            _rgb(
+                page.locator("#region-legend [data-state=unsolved] .swatch").evaluate(
+                    "s => getComputedStyle(s).backgroundColor"
+                )
+            ),
+        )
+    )
+    assert len(xs) >= 20
+    # the facts under the pointer name the instant
+    pick = int(np.argmin((xs - xs.mean()) ** 2 + (ys - ys.mean()) ** 2))
+    canvas = page.locator("#scene").bounding_box()
+    page.mouse.move(canvas["x"] + xs[pick] + 0.5, canvas["y"] + ys[pick] + 0.5)
+    page.locator("#region-info").wait_for(state="visible")
+    assert (
+        f"feature {geoid} region 1 at {named[2.0]}: conflict, unsolved" in page.locator("#region-info").text_content()
+    )
+
+
+def test_the_page_quotes_a_version_name_in_the_commands_it_prints(
+    regions_view: tuple[str, int, str], page: Any
+) -> None:
+    """The notes print ``tgsis version conflicts NAME``: NAME as one shell word, as ``shlex.quote`` writes it."""
+    import shlex
+
+    url, _, _ = regions_view
+    page.goto(f"{url}/conflicts?version=e1")
+    wait_drawn(page)
+    names = ["e1", "my version", "o'brien", "a$b `c`", "", "x;y", "é"]
+    quoted = page.evaluate("names => import('/static/view.js').then(m => names.map(m.shellQuote))", names)
+    assert quoted == [shlex.quote(n) for n in names]

@@ -54,7 +54,8 @@ BEGIN
                 quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version)
             USING ERRCODE = 'TG100',
                   DETAIL = 'The average is the morphological average shape of the two sides'' meshes (numpy), written into the version and recorded manual.',
-                  HINT = format('tgsis version resolve %s %s %s average', p_version, p_objectclass, v_key);
+                  HINT = format('tgsis version resolve %s %s %s average', tgsis.shell_quote(p_version),
+                                tgsis.shell_quote(p_objectclass), tgsis.shell_quote(v_key));
     END IF;
     PERFORM tgsis.require_version_privilege(v_id, 'write', 'resolve conflicts of');
     -- the marks must be those of now: a manual solution is written just before it is recorded
@@ -114,7 +115,7 @@ BEGIN
                     USING ERRCODE = 'TG307',
                           DETAIL = 'A surface at instants merges instant by instant, an evolving surface geometry instant by geometry instant: a slice only one side changed merges by itself.',
                           HINT = format('tgsis version merge %s merges it slice by slice (tgsis version conflicts %s lists its regions, tgsis version resolve solves them); or record manual after writing the merged object',
-                                        p_version, p_version);
+                                        tgsis.shell_quote(p_version), tgsis.shell_quote(p_version));
             END IF;
         END IF;
     END IF;

@@ -83,7 +83,7 @@ BEGIN
                 USING ERRCODE = 'TG307',
                       DETAIL = 'A surface at instants merges instant by instant, an evolving surface geometry instant by geometry instant: a slice only one side changed merges by itself.',
                       HINT = format('tgsis version merge %s merges it slice by slice (tgsis version resolve %s %s base --region N solves its conflicting regions)',
-                                    p_version, p_version, p_key);
+                                    tgsis.shell_quote(p_version), tgsis.shell_quote(p_version), tgsis.shell_quote(p_key));
         END IF;
         PERFORM tgsis.check_class_write(ARRAY[p_key::bigint], 'UPDATE');
     END IF;

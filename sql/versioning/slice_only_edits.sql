@@ -20,6 +20,10 @@
 -- instant added on one side to a period whose topology the other changed:
 -- TG308): there the whole-object solution is the way, as the Python merge's
 -- refusal says.
+-- A role that may not read the feature's class is refused (42501), as
+-- tgsis.mesh_merge_regions refuses it: the slices' instants are the class's
+-- data, and tgsis.resolve_conflict (SECURITY DEFINER, reading as tgsis's
+-- owner) would otherwise name them in its message.
 -- p_side: 'parent' or 'child' (the side whose edits a solution would drop).
 CREATE FUNCTION tgsis.slice_only_edits(p_version text, p_geoid bigint, p_side text)
 RETURNS text
@@ -55,6 +59,12 @@ BEGIN
     SELECT * INTO v_class FROM tgsis.catalog WHERE classname = tgsis.class_of_geoid(p_geoid);
     IF NOT FOUND OR v_class.timemodel NOT IN ('INSTANTS', 'EVOLVING') THEN
         RETURN NULL;
+    END IF;
+    IF p_geoid IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
+        RAISE EXCEPTION 'role % may not read feature % (its class): the slices only one side changed cannot be told',
+                quote_ident(tgsis.calling_role()), p_geoid
+            USING ERRCODE = '42501',
+                  HINT = 'a role that may read the class can do it, or the class''s owner lets this role read it (in psql: GRANT SELECT ON its feature table)';
     END IF;
     v_evolve := v_class.timemodel = 'EVOLVING';
     v_base := tgsis.revision_set(v_version.versionid, v_version.initrevision);
@@ -179,4 +189,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.slice_only_edits(text, bigint, text) IS
-    'the slices (instants; geometry instants of topology periods) of a model-2/3 feature that only the given side (parent or child) changed since the version''s base, as text, or NULL (none, not model 2/3, or an object-level conflict): what a whole-object solution taking the other side would drop although it merges by itself';
+    'the slices (instants; geometry instants of topology periods) of a model-2/3 feature that only the given side (parent or child) changed since the version''s base, as text, or NULL (none, not model 2/3, or an object-level conflict): what a whole-object solution taking the other side would drop although it merges by itself; 42501 for a role that may not read the feature''s class';

@@ -25,7 +25,9 @@ The rules (the design note says why):
   region of the object;
 - model 3: after the solutions, every geometry instant of a period must
   have the same nodes and triangles, else :class:`~tgsis.errors.PeriodTopologyError`
-  (TG308, naming the period);
+  (TG308, naming the period); when the slices no solution changes (taken
+  from one side, merged by themselves) already disagree, no solution can
+  merge the object: :func:`fixed_period_refusal` says so before any is chosen;
 - the per-instant feature properties (the class's ``_pros`` rows) merge
   three ways column by column; a column both sides changed to other values
   is an object-level conflict.
@@ -49,6 +51,8 @@ __all__ = [
     "SlicedMerge",
     "SlicedState",
     "apply_sliced",
+    "check_periods",
+    "fixed_period_refusal",
     "merge_sliced",
     "same_state",
     "slice_text",
@@ -406,3 +410,29 @@ def check_periods(name: str, slices: Mapping[SliceKey, MeshState]) -> None:
                 "topology",
                 hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
             )
+
+
+def fixed_period_refusal(merge: SlicedMerge) -> str | None:
+    """Model 3: the TG308 refusal every merge of ``merge`` would meet whatever the solutions (its text), or None.
+
+    The slices no solution changes — taken from one side, or merged without a
+    conflicting region — must already give each topology period one
+    topology; when they do not (a geometry instant added on one side with the
+    period's old topology, the period's triangles changed on the other), no
+    choice of solutions merges the object: it is an object-level conflict
+    (``tgsis.find_conflicts`` says so before the merge). Slices with a
+    conflicting region are left out: their topology hangs on the solutions,
+    and :func:`apply_sliced` checks it once they are chosen.
+    """
+    if merge.base.kind != "EVOLVING":
+        return None
+    conflicting = {r.key for r in merge.conflicts}
+    fixed = dict(merge.taken)
+    for key, mm in merge.merges.items():
+        if key not in conflicting and mm.merged is not None:
+            fixed[key] = mm.merged.state
+    try:
+        check_periods(merge.base.name, fixed)
+    except PeriodTopologyError as exc:
+        return f"{exc.message} (the merge refuses it: {exc.code}); {exc.hint}"
+    return None

@@ -18,6 +18,7 @@ A few hints have no command-line equivalent: statements a DBA runs in psql
 from __future__ import annotations
 
 import re
+import shlex
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
@@ -33,8 +34,8 @@ _RULES: list[tuple[str, Replacement]] = [
     (
         r"record a solution for each: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
         lambda m: (
-            f"record a solution for each: tgsis version resolve {_unquote(m[1])} CLASS KEY parent|child|manual "
-            f"(tgsis version conflicts {_unquote(m[1])} lists them)"
+            f"record a solution for each: tgsis version resolve {_word(m[1])} CLASS KEY parent|child|manual "
+            f"(tgsis version conflicts {_word(m[1])} lists them)"
         ),
     ),
     (
@@ -51,7 +52,7 @@ _RULES: list[tuple[str, Replacement]] = [
     (
         r"find the regions again(?: on the object's current state)?(?::| \()? ?tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\)"
         r"(?:, or tgsis version conflicts \S+| \(tgsis\.find_conflicts in Python, or tgsis version conflicts\))?\)?",
-        lambda m: f"find the regions again: tgsis version conflicts {_unquote(m[1])}",
+        lambda m: f"find the regions again: tgsis version conflicts {_word(m[1])}",
     ),
     (
         r"find the regions again(?: on the object's current state)? \(tgsis\.find_conflicts in Python, or tgsis version "
@@ -60,22 +61,22 @@ _RULES: list[tuple[str, Replacement]] = [
     ),
     (  # resolve_conflict's parent/child from a role that may not read the class, no regions stored yet
         r"a role that may read the class finds its regions with SELECT FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\)",
-        lambda m: f"a role that may read the class finds its regions with tgsis version conflicts {_unquote(m[1])}",
+        lambda m: f"a role that may read the class finds its regions with tgsis version conflicts {_word(m[1])}",
     ),
     (
         r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) finds and records them \(tgsis version conflicts [^)]*\)",
-        lambda m: f"tgsis version conflicts {_unquote(m[1])} finds and records them",
+        lambda m: f"tgsis version conflicts {_word(m[1])} finds and records them",
     ),
     (
         r"SELECT region, conflict, solution FROM tgsis\.conflict_regions WHERE versionid = tgsis\.version_id\('((?:[^']|'')*)'\) "
         r"lists them; tgsis\.find_conflicts in Python finds them",
-        lambda m: f"tgsis version conflicts {_unquote(m[1])} --json lists them (conflict_regions)",
+        lambda m: f"tgsis version conflicts {_word(m[1])} --json lists them (conflict_regions)",
     ),
     (
         r"only a region with conflict = true takes a solution: SELECT region FROM tgsis\.conflict_regions WHERE "
         r"versionid = tgsis\.version_id\('((?:[^']|'')*)'\) AND conflict",
         lambda m: (
-            f'only a region with "conflict": true takes a solution (tgsis version conflicts {_unquote(m[1])} '
+            f'only a region with "conflict": true takes a solution (tgsis version conflicts {_word(m[1])} '
             "--json lists them)"
         ),
     ),
@@ -83,18 +84,19 @@ _RULES: list[tuple[str, Replacement]] = [
         r"solve the conflicting regions with SELECT tgsis\.resolve_region\('((?:[^']|'')*)', '((?:[^']|'')*)', "
         r"'((?:[^']|'')*)', region, '(\w+)'\); the merge takes the rest by itself",
         lambda m: (
-            f"solve the conflicting regions with tgsis version resolve {_unquote(m[1])} {_unquote(m[3])} {m[4]} "
+            f"solve the conflicting regions with tgsis version resolve {_word(m[1])} {_word(m[3])} {m[4]} "
             "--region N; the merge takes the rest by itself"
         ),
     ),
     (
-        r"the meshes (.*?) merge by region: `tgsis version (\w+) ((?:[^`])*)` or tgsis\.\w+_version\(conn, '(?:[^']|'')*'\) "
+        # the version's name from the SQL literal (a name inside the backticks may hold a backtick itself)
+        r"the meshes (.*?) merge by region: `tgsis version (\w+) .*?` or tgsis\.\w+_version\(conn, '((?:[^']|'')*)'\) "
         r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\([^)]*\)\); "
         r"record a solution for the others: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
         lambda m: (
-            f"the meshes {m[1]} merge by region: tgsis version {m[2]} {m[3]} merges them (solve their "
-            f"conflicting regions first: tgsis version resolve {_unquote(m[4])} ID parent|child|base --region N); record "
-            f"a solution for the others: tgsis version resolve {_unquote(m[4])} CLASS KEY parent|child|manual"
+            f"the meshes {m[1]} merge by region: tgsis version {m[2]} {_word(m[3])} merges them (solve their "
+            f"conflicting regions first: tgsis version resolve {_word(m[4])} ID parent|child|base --region N); record "
+            f"a solution for the others: tgsis version resolve {_word(m[4])} CLASS KEY parent|child|manual"
         ),
     ),
     (
@@ -127,7 +129,7 @@ _RULES: list[tuple[str, Replacement]] = [
     # tgsis.object_merge (tgsis version conflicts --regions)
     (
         r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) lists the objects changed on both sides",
-        lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the objects changed on both sides",
+        lambda m: f"tgsis version conflicts {_word(m[1])} lists the objects changed on both sides",
     ),
     (
         r"tgsis\.resolve_conflict solves it as a whole object \(parent, child or manual\)",
@@ -143,7 +145,7 @@ _RULES: list[tuple[str, Replacement]] = [
     ),
     (
         r"SELECT \* FROM tgsis\.find_conflicts\('((?:[^']|'')*)'\) lists the conflicts",
-        lambda m: f"tgsis version conflicts {_unquote(m[1])} lists the conflicts",
+        lambda m: f"tgsis version conflicts {_word(m[1])} lists the conflicts",
     ),
     (
         r"SELECT tgsis\.goto_version\('DEFAULT'\); SELECT name FROM tgsis\.versions lists the versions",
@@ -151,7 +153,7 @@ _RULES: list[tuple[str, Replacement]] = [
     ),
     (
         r"SELECT tgsis\.goto_version\('((?:[^']|'')*)'\) to work in its working revision",
-        lambda m: f"--in {_unquote(m[1])} (or tgsis version goto {_unquote(m[1])}) works in its working revision",
+        lambda m: f"--in {_word(m[1])} (or tgsis version goto {_word(m[1])}) works in its working revision",
     ),
     (
         r"SELECT tgsis\.goto_version\(tgsis\.get_working_version\(\)\) clears it",
@@ -172,9 +174,7 @@ _RULES: list[tuple[str, Replacement]] = [
     (
         r"the owner or a tgsis_admin can run SELECT tgsis\.grant_version\('((?:[^']|'')*)', '((?:[^']|'')*)', "
         r"'((?:[^']|'')*)'\)",
-        lambda m: (
-            f"the owner or a tgsis_admin can run tgsis version grant {_unquote(m[1])} {_unquote(m[2])} {_unquote(m[3])}"
-        ),
+        lambda m: f"the owner or a tgsis_admin can run tgsis version grant {_word(m[1])} {_word(m[2])} {_word(m[3])}",
     ),
     (r"end the earlier one \(tgsis\.set_version_validity\)", "end the earlier one (tgsis version valid NAME FROM TO)"),
     (
@@ -312,7 +312,7 @@ _RULES: list[tuple[str, Replacement]] = [
     (r"(?<!in psql: )(tgsis\.delete_instant removes it first)", lambda m: f"{IN_PSQL}{m[1]}"),
     (
         r"give them rows first: SELECT \* FROM tgsis\.fill_property_rows\('((?:[^']|'')*)', '[^']*'\)",
-        lambda m: f"give them rows first: tgsis class alter {_unquote(m[1])} --fill-property NAME=VALUE",
+        lambda m: f"give them rows first: tgsis class alter {_word(m[1])} --fill-property NAME=VALUE",
     ),
     (
         r"SELECT tgsis\.enable_feature_versioning\(\) versions them all",
@@ -390,6 +390,11 @@ RULES: list[tuple[re.Pattern[str], Replacement]] = [(re.compile(p, re.IGNORECASE
 
 def _unquote(literal: str) -> str:
     return literal.replace("''", "'")
+
+
+def _word(literal: str) -> str:
+    """An SQL literal's text as one shell word of a printed command (a version name with a space stays one)."""
+    return shlex.quote(_unquote(literal))
 
 
 def to_cli(hint: str | None) -> str | None:

@@ -38,6 +38,7 @@ import json
 import logging
 import os
 import re
+import shlex
 import shutil
 import tempfile
 from collections.abc import Iterator, Mapping
@@ -161,7 +162,7 @@ def object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge:
                 f"feature {feature_id} is of model {model}: it merges slice by slice (per instant, or per geometry "
                 f"instant of a topology period), not as one mesh (version {show_name(version)})",
                 hint=f"its regions, each with its slice: tgsis.find_conflicts(conn, {version!r}) finds and records "
-                f"them (tgsis version conflicts {version})",
+                f"them (tgsis version conflicts {shlex.quote(version)})",
             )
         states = read_merge_states(conn, version, feature_id).states
     return three_way_merge(states["base"], states["parent"], states["child"])
@@ -444,9 +445,11 @@ def _export_sliced(
     with reraise(), _snapshot(conn, version):
         states = read_sliced_states(conn, version, feature_id).states
         merge = merge_sliced(states["base"], states["parent"], states["child"])
-        row = conn.execute("SELECT geoname FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
+        row = conn.execute("SELECT geoname, zpositive FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
         recorded = sliced_recorded_solutions(conn, version, "feature", str(feature_id), merge) or {}
     name = None if row is None or row[0] is None else str(row[0])
+    # the z convention stored beside elevation: a Depth object's files hold depths, as every other export gives them
+    metadata = {} if row is None or row[1] is None else {"zpositive": str(row[1])}
     ext = (format or "ts").lower().lstrip(".")
     try:
         kind = formats.format_for(f"x.{ext}")
@@ -494,7 +497,7 @@ def _export_sliced(
                 continue
             mm = merge.merges[key]
             if what in _SIDES:
-                mesh = _state_mesh(getattr(mm, what), "trglid", name, {})
+                mesh = _state_mesh(getattr(mm, what), "trglid", name, metadata)
                 meshes[(key, what)] = mesh
                 formats.write(
                     mesh, scratch / file, format=kind.name, **({"drop_cell_properties": True} if sidecar else {})

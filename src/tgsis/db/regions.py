@@ -26,6 +26,7 @@ import dataclasses
 import io
 import json
 import math
+import shlex
 import zipfile
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -36,7 +37,7 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 
-from tgsis._merge_slices import SlicedMerge, SliceKey, merge_sliced
+from tgsis._merge_slices import SlicedMerge, SliceKey, fixed_period_refusal, merge_sliced
 from tgsis.arguments import checked
 from tgsis.db._attribute_edits import attribute_edits, write_attribute_edits
 from tgsis.db._merge_states import (
@@ -356,7 +357,7 @@ def _sliced_object_merge(conn: Conn, version: str, objectkey: str) -> tuple[Slic
     try:
         with reraise(), conn.transaction():  # a savepoint: a refused read leaves the transaction usable
             states = read_sliced_states(conn, version, int(objectkey)).states
-        return merge_sliced(states["base"], states["parent"], states["child"]), None
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
     except MissingPrivilegeError as exc:
         return None, f"the role may not read it: {exc.message}"
     except (InvalidInputError, InvalidMergeError, NotFoundError) as exc:
@@ -365,6 +366,8 @@ def _sliced_object_merge(conn: Conn, version: str, objectkey: str) -> tuple[Slic
         if exc.code == "TG300":  # VersioningError: not changed on both sides (a conflict of tables only)
             return None, exc.message
         raise
+    refusal = fixed_period_refusal(merge)  # TG308 whatever the solutions: said now, not first at the merge
+    return (merge, None) if refusal is None else (None, refusal)
 
 
 def _object_merge(conn: Conn, version: str, objectclass: str, objectkey: str) -> tuple[MeshMerge | None, str | None]:
@@ -860,11 +863,11 @@ def _require_regions(
             f"{name}: the regions were found on a state that changed since: the object changed in the version "
             "or its parent",
             hint=f"find the regions again: tgsis.find_conflicts(conn, {version!r}), or tgsis version conflicts "
-            f"{version}",
+            f"{shlex.quote(version)}",
         )
     raise NotFoundError(
         f"{name}: no regions of the feature are stored",
-        hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {version})",
+        hint=f"tgsis.find_conflicts(conn, {version!r}) finds and records them (tgsis version conflicts {shlex.quote(version)})",
     )
 
 
@@ -1043,7 +1046,7 @@ def _resolve_all(
     if not conflicting:
         raise RegionSolutionError(
             f"{name}: no region of the feature is a conflict: nothing to choose, it merges by itself",
-            hint=f"merge the version: tgsis version merge {version}",
+            hint=f"merge the version: tgsis version merge {shlex.quote(version)}",
         )
     if solution == "unsolved":
         return ObjectResolution(tuple(_record(conn, version, key, i, solution, None) for i in conflicting), (), ())
@@ -1245,10 +1248,11 @@ def _average_object(
             "merge by themselves"
             if by_itself
             else f"{name}: no region of it conflicts: it merges by itself",
-            hint=f"average its conflicting regions only: tgsis version resolve {version} {feature_id} average --region "
+            hint=f"average its conflicting regions only: tgsis version resolve {shlex.quote(version)} {feature_id} average "
+            "--region "
             "all; the merge takes the rest by itself"
             if by_itself
-            else f"merge it: tgsis version merge {version}",
+            else f"merge it: tgsis version merge {shlex.quote(version)}",
         )
     averages: dict[int, Solution] = {}
     for region in merge.conflicts:

@@ -17,6 +17,7 @@ import contextlib
 import dataclasses
 import json
 import re
+import shlex
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
@@ -799,7 +800,8 @@ def resolve_conflict(
         raise InvalidInputError(
             f"solution average of {objectclass} {objectkey} in version {show_name(version)} is the average shape of "
             "a feature's two meshes, computed by tgsis.resolve_conflict (tgsis.db.regions.resolve_conflict)",
-            hint=f"tgsis version resolve {version} {objectclass} {_key_text(objectkey)} average",
+            hint=f"tgsis version resolve {shlex.quote(version)} {shlex.quote(objectclass)} "
+            f"{shlex.quote(_key_text(objectkey))} average",
         )
     fresh = conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
     with reraise(), conn.transaction():

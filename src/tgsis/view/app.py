@@ -45,7 +45,9 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from starlette.websockets import WebSocketClose
 
 from tgsis import datamodels
+from tgsis._merge_slices import SlicedMerge, fixed_period_refusal, merge_sliced
 from tgsis.db import versions as V
+from tgsis.db._merge_states import SLICE_KEYS, read_sliced_states
 from tgsis.db._session import export_snapshot, read_only_by_default, see_one_state
 from tgsis.db.classes import FeatureClass, list_feature_classes
 from tgsis.db.compare import compare_versions
@@ -61,7 +63,7 @@ from tgsis.db.inspect import (
     version_validity,
 )
 from tgsis.db.merging import object_merge
-from tgsis.db.regions import recorded_solutions
+from tgsis.db.regions import recorded_solutions, sliced_recorded_solutions
 from tgsis.drawing import Drawable, StoredSurface, vertex_flags
 from tgsis.errors import (
     Error,
@@ -82,6 +84,10 @@ from tgsis.view.regions import (
     edit_counts,
     edit_flags,
     region_drawing,
+    slice_at,
+    slice_json,
+    sliced_edit_counts,
+    sliced_region_drawing,
     state_drawable,
 )
 
@@ -579,7 +585,8 @@ def conflicts_page(request: Request) -> Response:
         conflicts = conflicts_with_solutions(conn, name)
     shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
     legend = [{"state": s, "label": REGION_LABELS[s], "colour": REGION_COLOURS[s]} for s in REGION_STATES]
-    config = {"version": name, "parent": known[name].parent, "ids": shown, "legend": legend}
+    t = _number(request.query_params.get("t"), "time t")  # the slice drawn of a model-2/3 feature's regions
+    config = {"version": name, "parent": known[name].parent, "ids": shown, "legend": legend, "t": t}
     return view.page(
         request, "conflicts.html", version=known[name], conflicts=conflicts, config=config, title="conflicts"
     )
@@ -705,10 +712,19 @@ def conflict_endpoint(request: Request) -> Response:
     both (3), from the merge's edits. One that merges as a whole only says why
     (``reason``); a surface is then flagged by comparing the meshes by
     content, another kind drawn unflagged.
+
+    A model-2/3 surface merges slice by slice (an instant, a geometry
+    instant): ``t`` chooses the slice drawn (:func:`tgsis.view.regions.slice_at`;
+    none given: the first with a conflict), whose regions are drawn on its
+    child mesh as model 1's; every region of the object is listed with its
+    ``slice`` and ``at_t``. Header ``slice`` (None when no merged slice is at
+    ``t``: the object is drawn at ``t`` as the scene draws it, no region on it)
+    and ``t``.
     """
     view: View = request.app.state.view
     feature_id = _feature_id(request.path_params["id"])
     version = request.query_params.get("version") or ""
+    t = _number(request.query_params.get("t"), "time t")
     name, revision = split_version(version)
     if revision is not None:
         raise _bad(f"conflicts belong to a version, not to a revision: {version!r}")
@@ -722,10 +738,32 @@ def conflict_endpoint(request: Request) -> Response:
     region_arrays = {n: np.empty(0, dtype=np.int64) for n in ("region_vertices", "region_cells")}
     counts: dict[str, dict[str, int]] = {"child": {}, "parent": {}}
     recorded = "none"
+    drawn_slice: dict[str, float] | None = None
+    drawn_t: float | None = None
+    merge: MeshMerge | SlicedMerge | str
     with view.session(request, name) as conn:
         fc = feature_class_of(conn, feature_id)
-        merge = _object_merge(conn, name, feature_id)
-        if isinstance(merge, MeshMerge):
+        if fc.time_model in SLICE_KEYS:
+            merge = _sliced_merge(conn, name, feature_id)
+        else:
+            merge = _object_merge(conn, name, feature_id)
+        if isinstance(merge, SlicedMerge):
+            # the slice at t drawn from the merge's child state of that slice, as a model-1 object's merge
+            solutions, recorded = _recorded_sliced_solutions(conn, name, feature_id, merge)
+            key = slice_at(merge, t)
+            regions, region_arrays = sliced_region_drawing(merge, key, solutions)
+            counts = sliced_edit_counts(merge)
+            if key is not None:
+                at = merge.merges[key]
+                mesh, _ = state_drawable(at.child)
+                flags = edit_flags(at, at.child.vertex_ids, merged=True)
+                drawn_slice, drawn_t = slice_json(key), float(key[-1])
+            else:  # no merged slice at t: the object at t as the scene draws it, no region on it
+                drawable, drawn_t = _mesh_of(conn, fc, feature_id, t)
+                if drawable is None:
+                    raise NotFoundError(f"feature {feature_id} does not exist at t = {t:g} in version {name!r}")
+                mesh, flags = drawable, np.zeros(len(drawable.vertices), dtype=np.float32)
+        elif isinstance(merge, MeshMerge):
             # drawn from the merge's own child state (the version's rows, read in the merge's snapshot): one read,
             # any model-1 kind, the regions' ids in the drawing's numbering
             solutions, recorded = _recorded_solutions(conn, name, feature_id, merge)
@@ -736,7 +774,7 @@ def conflict_endpoint(request: Request) -> Response:
         elif _compared(fc):
             stored: StoredSurface = _comparison(fc, feature_id)(conn, fc, feature_id)
         else:  # merges as a whole only and not compared: drawn, nobody's changes marked
-            drawable, _ = _mesh_of(conn, fc, feature_id, None)
+            drawable, drawn_t = _mesh_of(conn, fc, feature_id, t)
             if drawable is None:
                 raise NotFoundError(f"feature {feature_id} has no geometry in version {name!r}")
             mesh, flags = drawable, np.zeros(len(drawable.vertices), dtype=np.float32)
@@ -766,6 +804,8 @@ def conflict_endpoint(request: Request) -> Response:
         "reason": merge if isinstance(merge, str) else None,
         "regions": regions,
         "solutions": recorded,
+        "slice": drawn_slice,
+        "t": drawn_t,
     }
     extra: dict[str, npt.NDArray[Any]] = {"changed": flags, **region_arrays}
     return _binary(_body(header, mesh, None, extra))
@@ -777,6 +817,28 @@ def _object_merge(conn: Conn, version: str, feature_id: int) -> MeshMerge | str:
         return object_merge(conn, version, feature_id)
     except (InvalidInputError, VersioningError, MissingPrivilegeError) as exc:
         return str(exc).splitlines()[0]
+
+
+def _sliced_merge(conn: Conn, version: str, feature_id: int) -> SlicedMerge | str:
+    """The slice-by-slice merge of a model-2/3 feature in the caller's snapshot, or why it merges as a whole only."""
+    try:
+        with reraise(), conn.transaction():  # a savepoint: a refused read leaves the page's transaction usable
+            states = read_sliced_states(conn, version, feature_id).states
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
+    except (InvalidInputError, VersioningError, MissingPrivilegeError) as exc:
+        return str(exc).splitlines()[0]
+    refusal = fixed_period_refusal(merge)  # TG308 whatever the solutions: it merges as a whole only
+    return merge if refusal is None else refusal
+
+
+def _recorded_sliced_solutions(
+    conn: Conn, version: str, feature_id: int, merge: SlicedMerge
+) -> tuple[dict[int, str], str]:
+    """:func:`_recorded_solutions` of a model-2/3 merge (regions numbered in the object)."""
+    solutions = sliced_recorded_solutions(conn, version, "feature", str(feature_id), merge)
+    if solutions is None:
+        return {}, "stale"
+    return solutions, "recorded" if solutions else "none"
 
 
 def _recorded_solutions(conn: Conn, version: str, feature_id: int, merge: MeshMerge) -> tuple[dict[int, str], str]:

@@ -34,6 +34,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._merge_slices import SlicedMerge, SliceKey
 from tgsis.drawing import Drawable, tetra_boundary, vertex_flags
 from tgsis.errors import InvalidInputError
 from tgsis.merge3 import MergeRegion, MeshMerge, MeshState
@@ -45,9 +46,13 @@ __all__ = [
     "CONFLICT_SOLUTIONS",
     "region_state",
     "region_drawing",
+    "slice_at",
+    "slice_json",
+    "sliced_region_drawing",
     "state_drawable",
     "edit_flags",
     "edit_counts",
+    "sliced_edit_counts",
 ]
 
 #: what can happen in a region, in the order of the legend
@@ -318,5 +323,88 @@ def edit_counts(merge: MeshMerge) -> dict[str, dict[str, int]]:
             "vertices": sum(len(getattr(r, f"{side}_vertex_ids")) for r in merge.regions),
             "cells": sum(len(getattr(r, f"{side}_cell_ids")) for r in merge.regions),
         }
+        for side in ("child", "parent")
+    }
+
+
+# --------------------------------------------------------------------------- models 2 and 3: the regions of a slice
+
+
+def slice_json(key: SliceKey) -> dict[str, float]:
+    """A slice as the header names it: ``times`` (and model 3's ``timem``), as ``tgsis.conflict_regions`` does."""
+    return {"times": float(key[1]), "timem": float(key[0])} if len(key) == 2 else {"times": float(key[0])}
+
+
+def slice_at(merge: SlicedMerge, t: float | None) -> SliceKey | None:
+    """The merged slice the view draws at time ``t``, or None when none is at ``t``.
+
+    A slice is at ``t`` when its instant is ``t`` exactly (model 2: the
+    instant; model 3: the geometry instant, in the latest period that has one
+    at ``t``). No ``t``: the first slice with a conflicting region, else the
+    first merged slice (None when no slice merged).
+    """
+    keys = sorted(merge.merges)
+    if t is None:
+        first = sorted({r.key for r in merge.conflicts}) or keys
+        return first[0] if first else None
+    at = [k for k in keys if k[-1] == t]
+    return at[-1] if at else None
+
+
+def sliced_region_drawing(
+    merge: SlicedMerge, key: SliceKey | None, solutions: Mapping[int, str] | None = None
+) -> tuple[list[dict[str, Any]], dict[str, npt.NDArray[np.int64]]]:
+    """The regions of a model-2/3 merge, those of the slice ``key`` drawn on that slice's child mesh.
+
+    Every region of the object is listed, in its number in the object
+    (``index``), with its ``slice`` (``times``, and model 3's ``timem``) and
+    ``at_t`` (it is of the drawn slice). The drawn slice's regions are as
+    :func:`region_drawing` gives them on :func:`state_drawable` of
+    ``merge.merges[key].child``; the others are not drawn (``drawn`` and
+    ``missing`` zero): their ids are of another mesh.
+
+    Parameters
+    ----------
+    merge : SlicedMerge
+    key : SliceKey or None
+        The drawn slice (:func:`slice_at`), None when no merged slice is drawn.
+    solutions : mapping of int to str, optional
+        The solution recorded for a region (by its number in the object).
+
+    Returns
+    -------
+    regions, arrays
+        As :func:`region_drawing`'s, the arrays holding the drawn slice's regions only.
+    """
+    solutions = dict(solutions or {})
+    unknown = sorted(set(solutions) - {r.index for r in merge.regions})
+    if unknown:
+        raise InvalidInputError(f"a solution for no region {unknown[0]} of {merge.base.name}")
+    entries: list[dict[str, Any]] = []
+    empty = np.empty(0, dtype=np.int64)
+    arrays = {"region_vertices": empty, "region_cells": empty}
+    for k in sorted(merge.merges):
+        mine = [r for r in merge.regions if r.key == k]
+        local = {r.region.index: solutions[r.index] for r in mine if r.index in solutions}
+        mm = merge.merges[k]
+        if k == key:
+            _, drawn_cells = state_drawable(mm.child)
+            found, arrays = region_drawing(mm, mm.child.vertex_ids, drawn_cells, local, merged=True)
+        else:
+            found, _ = region_drawing(mm, empty, None if mm.child.cell_size == 1 else empty, local, merged=True)
+            for entry in found:
+                entry["drawn"] = entry["missing"] = {"vertices": 0, "cells": 0}
+        number = {r.region.index: r.index for r in mine}
+        for entry in found:
+            entry.update(index=number[entry["index"]], slice=slice_json(k), at_t=k == key)
+        entries += found
+    return entries, arrays
+
+
+def sliced_edit_counts(merge: SlicedMerge) -> dict[str, dict[str, int]]:
+    """:func:`edit_counts` over every merged slice of a model-2/3 merge."""
+    counts = [edit_counts(mm) for mm in merge.merges.values()]
+    return {
+        side: {what: sum(c[side][what] for c in counts) for what in ("vertices", "cells")}
         for side in ("child", "parent")
     }

@@ -251,7 +251,8 @@ def _object_regions(conn: Any, version: str, conflicts: Sequence[V.Conflict]) ->
         try:
             found[key] = object_merge(conn, version, int(c.objectkey))
         except InvalidInputError as exc:  # not a mesh of model 1, or states that do not compare (other columns)
-            found[key] = f"whole object: {exc.message}"
+            # find_conflicts' own reason first: a model-2/3 object refused there is not "of another model"
+            found[key] = f"whole object: {c.region_refusal or exc.message}"
         except VersioningError as exc:  # changed on one side only by now (another session's merge or refresh)
             found[key] = f"no merge: {exc.message}"
     return found

@@ -377,6 +377,13 @@ export function compareView(config) {
   }).catch((error) => setState("error", String(error.message || error)));
 }
 
+// a text as one word of a shell command line, as Python's shlex.quote writes it (a version name with a space)
+export function shellQuote(word) {
+  if (word === "") return "''";
+  if (/^[A-Za-z0-9_@%+=:,.\/-]+$/.test(word)) return word;
+  return "'" + word.replaceAll("'", "'\"'\"'") + "'";
+}
+
 // a number for people: six significant digits, no trailing zeros
 const short = (x) => String(Number(Number(x).toPrecision(6)));
 const plural = (n, one, many) => `${n} ${n === 1 ? one : many}`;
@@ -479,9 +486,17 @@ function sideText(side, region) {
          `largest displacement ${short(s.largest_displacement)}`;
 }
 
+// the slice a region of a model-2/3 feature belongs to, as the Python messages name it; "" for model 1
+function sliceText(slice) {
+  if (!slice) return "";
+  return slice.timem === undefined ? `instant ${short(slice.times)}`
+    : `geometry instant ${short(slice.times)} of the period starting at ${short(slice.timem)}`;
+}
+
 function regionText(header, region, labels) {
   const missing = region.missing.vertices + region.missing.cells;
-  return `feature ${header.id} region ${region.index}: ${labels[region.state]}; solution: ${region.solution}. ` +
+  const at = region.slice ? ` at ${sliceText(region.slice)}` : "";
+  return `feature ${header.id} region ${region.index}${at}: ${labels[region.state]}; solution: ${region.solution}. ` +
          `${sideText("parent", region)}; ${sideText("child", region)}. ` +
          `${plural(region.ids.vertices, "vertex", "vertices")} and ${plural(region.ids.cells, "cell", "cells")}` +
          ` (margin included)` +
@@ -495,9 +510,12 @@ function regionRow(header, region, labels, palette) {
   row.dataset.feature = String(header.id);
   row.dataset.region = String(region.index);
   row.dataset.state = region.state;
+  row.dataset.drawn = String(region.at_t !== false);      // a region of another instant is listed, not drawn
+  if (region.at_t === false) row.classList.add("elsewhere");
   const cells = [String(header.id), String(region.index), null, region.solution,
                  sideText("parent", region).replace(/^parent /, ""), sideText("child", region).replace(/^child /, ""),
-                 `${plural(region.ids.vertices, "vertex", "vertices")}, ${plural(region.ids.cells, "cell", "cells")}`];
+                 `${plural(region.ids.vertices, "vertex", "vertices")}, ${plural(region.ids.cells, "cell", "cells")}`,
+                 sliceText(region.slice)];
   for (const text of cells) {
     const td = document.createElement("td");
     if (text === null) {
@@ -511,6 +529,30 @@ function regionRow(header, region, labels, palette) {
     row.append(td);
   }
   return row;
+}
+
+// The instants of the model-2/3 regions: choosing one reloads the page at that t (the regions of that instant drawn)
+function timeChoice(config, meshes) {
+  const times = [...new Set(meshes.flatMap((m) => m.header.regions.filter((r) => r.slice).map((r) => r.slice.times)))]
+    .sort((a, b) => a - b);
+  if (!times.length) return;
+  const select = document.getElementById("region-time");
+  const drawn = config.t !== null && config.t !== undefined ? config.t
+    : (meshes.find((m) => m.header.slice) || { header: { t: times[0] } }).header.t;
+  if (!times.includes(drawn)) times.push(drawn);
+  for (const t of times.sort((a, b) => a - b)) {
+    const option = document.createElement("option");
+    option.value = String(t);
+    option.textContent = short(t);
+    option.selected = t === drawn;
+    select.append(option);
+  }
+  select.addEventListener("change", () => {
+    const url = new URL(window.location.href);
+    url.searchParams.set("t", select.value);
+    window.location.assign(url);
+  });
+  document.getElementById("region-time-control").hidden = false;
 }
 
 // A version's conflicting features: their merge regions coloured by what happens there (and the solution chosen);
@@ -527,7 +569,7 @@ export function conflictView(config) {
   const info = document.getElementById("region-info");
   setState("loading", "loading…");
   // one feature that cannot be drawn (deleted in the version, a kind the view does not draw) leaves the others
-  const fetched = config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version }))
+  const fetched = config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version, t: config.t }))
     .catch((error) => ({ failed: id, message: String(error.message || error) })));
   Promise.all(fetched)
     .then((results) => {
@@ -558,12 +600,21 @@ export function conflictView(config) {
         p.textContent = `feature ${f.failed} is not drawn: ${f.message}`;
         notes.append(p);
       }
+      timeChoice(config, meshes);
       for (const m of meshes) {
         for (const region of m.header.regions) tbody.append(regionRow(m.header, region, labels, palette));
+        if (m.header.slice !== undefined && m.header.regions.some((r) => r.at_t === false)) {
+          const p = document.createElement("p");
+          p.className = "note";
+          p.textContent = `feature ${m.header.id} is drawn ` +
+            (m.header.slice ? `at ${sliceText(m.header.slice)}` : `at t = ${short(m.header.t)}, where no instant merges`) +
+            `: its regions at other instants are listed, drawn when t is theirs`;
+          notes.append(p);
+        }
         const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
           : m.header.solutions === "stale" ? `feature ${m.header.id}: the solutions recorded for its regions were ` +
             `found on an earlier state of ${m.header.version} or ${m.header.parent}, so they do not hold and every ` +
-            `conflict is shown unsolved; find the conflicts again (tgsis version conflicts ${m.header.version})`
+            `conflict is shown unsolved; find the conflicts again (tgsis version conflicts ${shellQuote(m.header.version)})`
           : null;
         if (note) {
           const p = document.createElement("p");

@@ -1,0 +1,165 @@
+"""Hints that print a command line name a version as one shell word: ``tgsis version merge 'my version'``.
+
+A version name is free text (``create_version`` takes spaces, quotes, ``$``):
+pasted into a shell, ``tgsis version merge my version`` is three arguments,
+and ``o'brien`` opens a quote. Every hint that prints a command with a version
+name quotes it as ``shlex.quote`` does — the command line's mapping of the SQL
+and Python hints (tgsis.cli._hints), the Python library's own, the SQL
+functions' (``tgsis.shell_quote``, equal to ``shlex.quote``) — and a plain name
+stays as it is.
+"""
+
+from __future__ import annotations
+
+import shlex
+from typing import Any
+
+import psycopg
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import tgsis
+from tests.merge_data import make_fault, move
+from tgsis.cli._hints import to_cli
+
+Conn = psycopg.Connection[Any]
+
+NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y"]
+
+
+def _sql(name: str) -> str:
+    return "'" + name.replace("'", "''") + "'"
+
+
+def _cases(name: str) -> list[tuple[str, list[str]]]:
+    """(an SQL or Python hint naming version ``name``, the commands its CLI form must hold)."""
+    q, lit = shlex.quote(name), _sql(name)
+    return [
+        (
+            f"record a solution for each: SELECT tgsis.resolve_conflict({lit}, class, key, 'parent'|'child'|'manual')",
+            [f"tgsis version resolve {q} CLASS KEY", f"tgsis version conflicts {q} lists them"],
+        ),
+        (f"find the regions again: tgsis.find_conflicts(conn, {lit})", [f"tgsis version conflicts {q}"]),
+        (
+            f"a role that may read the class finds its regions with SELECT FROM tgsis.find_conflicts({lit}), or the "
+            "class's owner lets this role read it",
+            [f"finds its regions with tgsis version conflicts {q}"],
+        ),
+        (
+            f"tgsis.find_conflicts(conn, {lit}) finds and records them (tgsis version conflicts {q})",
+            [f"tgsis version conflicts {q} finds and records them"],
+        ),
+        (
+            f"SELECT region, conflict, solution FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id({lit}) "
+            "lists them; tgsis.find_conflicts in Python finds them",
+            [f"tgsis version conflicts {q} --json"],
+        ),
+        (
+            "only a region with conflict = true takes a solution: SELECT region FROM tgsis.conflict_regions WHERE "
+            f"versionid = tgsis.version_id({lit}) AND conflict",
+            [f"tgsis version conflicts {q} --json"],
+        ),
+        (
+            f"solve the conflicting regions with SELECT tgsis.resolve_region({lit}, 'feature', '12', region, 'child'); "
+            "the merge takes the rest by itself",
+            [f"tgsis version resolve {q} 12 child --region N"],
+        ),
+        (
+            f"the meshes 12 merge by region: `tgsis version merge {name}` or tgsis.merge_version(conn, {lit}) in "
+            f"Python merges them (solve their conflicting regions first: SELECT tgsis.resolve_region({lit}, "
+            f"'feature', key, region, 'parent'|'child'|'base')); record a solution for the others: SELECT "
+            f"tgsis.resolve_conflict({lit}, class, key, 'parent'|'child'|'manual')",
+            [
+                f"tgsis version merge {q} merges them",
+                f"tgsis version resolve {q} ID",
+                f"tgsis version resolve {q} CLASS",
+            ],
+        ),
+        (
+            f"tgsis.find_conflicts(conn, {lit}) lists the objects changed on both sides",
+            [f"tgsis version conflicts {q} lists"],
+        ),
+        (f"SELECT * FROM tgsis.find_conflicts({lit}) lists the conflicts", [f"tgsis version conflicts {q} lists"]),
+        (
+            f"SELECT tgsis.goto_version({lit}) to work in its working revision",
+            [f"--in {q} (or tgsis version goto {q})"],
+        ),
+        (
+            f"the owner or a tgsis_admin can run SELECT tgsis.grant_version({lit}, 'write', 'ana')",
+            [f"tgsis version grant {q} write ana"],
+        ),
+    ]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_mapped_hints_quote_the_version_name(name: str) -> None:
+    for hint, commands in _cases(name):
+        said = to_cli(hint) or ""
+        for command in commands:
+            assert command in said, (hint, said)
+        if " " in name:
+            assert f" {name} " not in said.replace(shlex.quote(name), "QUOTED"), said
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.text(alphabet=st.characters(min_codepoint=1, max_codepoint=0x2FF), max_size=12))
+def test_sql_shell_quote_is_shlex_quote(pg_conn_for_quote: Conn, name: str) -> None:
+    row = pg_conn_for_quote.execute("SELECT tgsis.shell_quote(%s)", (name,)).fetchone()
+    assert row == (shlex.quote(name),)
+
+
+@pytest.fixture(scope="module")
+def pg_conn_for_quote(pg: Any, template_db: str) -> Any:
+    with pg.database("tgsis_shell_quote", template_db) as (_, dsn), psycopg.connect(dsn, autocommit=True) as conn:
+        yield conn
+
+
+def test_the_python_and_sql_hints_of_a_version_with_a_space(conn: Conn) -> None:
+    """The library's hints (object_merge; resolve_conflict's TG307 of a model-2 feature) from the database."""
+    from tests.test_merge_instants import NORTH, SOUTH, make_series
+    from tests.test_merge_instants import move as move_at
+
+    series = make_series(conn)
+    tgsis.create_version(conn, "my version")
+    conn.commit()
+    move_at(conn, "my version", series, 2.0, NORTH, (0.0, 0.0, 5.0))
+    move_at(conn, "DEFAULT", series, 3.0, SOUTH, (0.0, 0.0, -3.0))
+    with pytest.raises(tgsis.InvalidInputError) as caught:
+        tgsis.object_merge(conn, "my version", series)
+    assert "(tgsis version conflicts 'my version')" in (caught.value.hint or ""), caught.value.hint
+    conn.rollback()
+    conn.execute("SELECT tgsis.find_conflicts('my version')")
+    conn.commit()
+    with pytest.raises(psycopg.Error) as sql_caught:
+        conn.execute("SELECT tgsis.resolve_conflict('my version', 'feature', %s, 'child')", (str(series),))
+    hint = sql_caught.value.diag.message_hint or ""
+    assert "tgsis version merge 'my version' merges it" in hint and "tgsis version conflicts 'my version'" in hint
+    conn.rollback()
+
+
+def test_the_command_line_prints_the_name_quoted(db_dsn: str, conn: Conn, capsys: pytest.CaptureFixture[str]) -> None:
+    from tests.test_cli_hints import hint_of
+
+    geoid = make_fault(conn)
+    tgsis.create_version(conn, "north edit")
+    conn.commit()
+    move(conn, "north edit", geoid, [5], (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, [5], (0.0, 0.0, -3.0))
+    conn.execute("CREATE TABLE notes (id int PRIMARY KEY, note text)")
+    conn.execute("INSERT INTO notes VALUES (1, 'a')")
+    conn.commit()
+    tgsis.enable_versioning(conn, "notes", "id", "note")
+    conn.commit()
+    tgsis.create_version(conn, "o'brien")
+    conn.commit()
+    with tgsis.in_version(conn, "o'brien"):
+        conn.execute("UPDATE notes SET note = 'b'")
+    conn.commit()
+    conn.execute("UPDATE notes SET note = 'c'")
+    conn.commit()
+    hint = hint_of(db_dsn, capsys, "version", "merge", "north edit")
+    assert "tgsis version merge 'north edit' merges them" in hint, hint
+    hint = hint_of(db_dsn, capsys, "version", "merge", "o'brien")
+    assert "tgsis version resolve 'o'\"'\"'brien' CLASS KEY" in hint, hint
+    assert shlex.split(hint.split("tgsis version resolve ")[1])[0] == "o'brien"
