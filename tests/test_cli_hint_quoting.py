@@ -33,21 +33,25 @@ def _sql(name: str) -> str:
 
 
 def _cases(name: str) -> list[tuple[str, list[str]]]:
-    """(an SQL or Python hint naming version ``name``, the commands its CLI form must hold)."""
+    """(an SQL or Python hint naming version ``name``, the commands its CLI form must hold).
+
+    The Python library's hints name it as ``repr`` does (``tgsis.find_conflicts(conn, {version!r})``), the SQL
+    functions' as ``%L`` does.
+    """
     q, lit = shlex.quote(name), _sql(name)
     return [
         (
             f"record a solution for each: SELECT tgsis.resolve_conflict({lit}, class, key, 'parent'|'child'|'manual')",
             [f"tgsis version resolve {q} CLASS KEY", f"tgsis version conflicts {q} lists them"],
         ),
-        (f"find the regions again: tgsis.find_conflicts(conn, {lit})", [f"tgsis version conflicts {q}"]),
+        (f"find the regions again: tgsis.find_conflicts(conn, {name!r})", [f"tgsis version conflicts {q}"]),
         (
             f"a role that may read the class finds its regions with SELECT FROM tgsis.find_conflicts({lit}), or the "
             "class's owner lets this role read it",
             [f"finds its regions with tgsis version conflicts {q}"],
         ),
         (
-            f"tgsis.find_conflicts(conn, {lit}) finds and records them (tgsis version conflicts {q})",
+            f"tgsis.find_conflicts(conn, {name!r}) finds and records them (tgsis version conflicts {q})",
             [f"tgsis version conflicts {q} finds and records them"],
         ),
         (
@@ -77,7 +81,7 @@ def _cases(name: str) -> list[tuple[str, list[str]]]:
             ],
         ),
         (
-            f"tgsis.find_conflicts(conn, {lit}) lists the objects changed on both sides",
+            f"tgsis.find_conflicts(conn, {name!r}) lists the objects changed on both sides",
             [f"tgsis version conflicts {q} lists"],
         ),
         (f"SELECT * FROM tgsis.find_conflicts({lit}) lists the conflicts", [f"tgsis version conflicts {q} lists"]),
@@ -163,3 +167,74 @@ def test_the_command_line_prints_the_name_quoted(db_dsn: str, conn: Conn, capsys
     hint = hint_of(db_dsn, capsys, "version", "merge", "o'brien")
     assert "tgsis version resolve 'o'\"'\"'brien' CLASS KEY" in hint, hint
     assert shlex.split(hint.split("tgsis version resolve ")[1])[0] == "o'brien"
+
+
+PYTHON_NAMES = ["my version", "o'brien", "a)b", "back\\slash", 'say "hi"', "both ' and \"", "e1"]
+
+
+def _python_cases(name: str) -> list[tuple[str, str]]:
+    """(a hint as the Python library writes it — the name as ``repr`` — and the command its CLI form must be)."""
+    q = shlex.quote(name)
+    return [  # the f-strings of tgsis.db.regions, tgsis.db.merging and tgsis.db._merge_states
+        (
+            f"find the regions again: tgsis.find_conflicts(conn, {name!r}), or tgsis version conflicts {q}",
+            f"find the regions again: tgsis version conflicts {q}",
+        ),
+        (
+            f"find the regions again: tgsis.find_conflicts(conn, {name!r})",
+            f"find the regions again: tgsis version conflicts {q}",
+        ),
+        (
+            f"tgsis.find_conflicts(conn, {name!r}) finds and records them (tgsis version conflicts {q})",
+            f"tgsis version conflicts {q} finds and records them",
+        ),
+        (
+            f"its regions, each with its slice: tgsis.find_conflicts(conn, {name!r}) finds and records them "
+            f"(tgsis version conflicts {q})",
+            f"its regions, each with its slice: tgsis version conflicts {q} finds and records them",
+        ),
+        (
+            f"tgsis.find_conflicts(conn, {name!r}) lists the objects changed on both sides",
+            f"tgsis version conflicts {q} lists the objects changed on both sides",
+        ),
+    ]
+
+
+@pytest.mark.parametrize("name", PYTHON_NAMES)
+def test_the_python_hints_map_the_name_as_repr_wrote_it(name: str) -> None:
+    """The library's hints name the version as Python's repr: the whole hint becomes the command, nothing left over.
+
+    (Was: 'my version' gave ``tgsis version conflicts 'my version' version'``, a name with ``)`` cut the command
+    short, a backslash was doubled, a name with a quote stayed in Python's terms.)
+    """
+    for hint, expected in _python_cases(name):
+        said = to_cli(hint)
+        assert said == expected, (hint, said)
+        assert shlex.split(said.split("tgsis version conflicts ")[1])[0] == name
+
+
+def test_the_sql_hint_naming_find_conflicts_in_python_without_a_name() -> None:
+    """tgsis.resolve_all_regions' TG307 names no version: the command line says VERSION, nothing of Python is left."""
+    hint = "find the regions again: tgsis.find_conflicts(conn, version) in Python, or tgsis version conflicts"
+    assert to_cli(hint) == "find the regions again: tgsis version conflicts VERSION"
+
+
+def test_the_sql_merge_refusal_prints_the_command_with_the_name_quoted(conn: Conn) -> None:
+    """psql's TG302 of a merge whose meshes merge by region names `tgsis version merge NAME` quoted as the shell wants.
+
+    (Was: `tgsis version merge north edit`, three arguments when pasted; only the command line's mapping quoted it.)
+    """
+    geoid = make_fault(conn)
+    tgsis.create_version(conn, "north edit")
+    conn.commit()
+    move(conn, "north edit", geoid, [5], (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, [5], (0.0, 0.0, -3.0))
+    conn.execute("SELECT tgsis.find_conflicts('north edit')")
+    conn.commit()
+    for action in ("merge", "refresh"):
+        with pytest.raises(psycopg.Error) as caught:
+            conn.execute(f"SELECT tgsis.{action}_version('north edit')")
+        conn.rollback()
+        hint = caught.value.diag.message_hint or ""
+        assert f"`tgsis version {action} 'north edit'`" in hint, hint
+        assert f"tgsis version {action} 'north edit' merges them" in (to_cli(hint) or ""), to_cli(hint)

@@ -17,6 +17,7 @@ A few hints have no command-line equivalent: statements a DBA runs in psql
 
 from __future__ import annotations
 
+import ast
 import re
 import shlex
 from collections.abc import Callable
@@ -27,6 +28,11 @@ from pathlib import Path
 IN_PSQL = "in psql: "
 
 Replacement = str | Callable[[re.Match[str]], str]
+
+#: A version name as the Python library's hints write it (``{version!r}``: repr's quotes and backslash escapes).
+_PY_LITERAL = r"""('(?:[^'\\\n]|\\.)*'|"(?:[^"\\\n]|\\.)*")"""
+#: A word as :func:`shlex.quote` writes it (the hints that already print the command beside the Python call).
+_SHELL_WORD = r"""(?:'(?:[^']|'"'"')*'|[\w@%+=:,./-]+)"""
 
 #: (pattern, replacement), applied in order: the most specific first.
 _RULES: list[tuple[str, Replacement]] = [
@@ -49,10 +55,11 @@ _RULES: list[tuple[str, Replacement]] = [
         r"call again with discard_other=True to discard them, or choose another solution",
         "add --discard-other to record it all the same, or choose another solution",
     ),
-    (
-        r"find the regions again(?: on the object's current state)?(?::| \()? ?tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\)"
-        r"(?:, or tgsis version conflicts \S+| \(tgsis\.find_conflicts in Python, or tgsis version conflicts\))?\)?",
-        lambda m: f"find the regions again: tgsis version conflicts {_word(m[1])}",
+    (  # the Python library's (the name as repr), or SQL's naming no version (tgsis.resolve_all_regions)
+        r"find the regions again(?: on the object's current state)?(?::| \()? ?tgsis\.find_conflicts\(conn, "
+        rf"(?:{_PY_LITERAL}|(\w+))\)(?:, or tgsis version conflicts(?: {_SHELL_WORD})?| in Python, or tgsis version "
+        r"conflicts| \(tgsis\.find_conflicts in Python, or tgsis version conflicts\))?\)?",
+        lambda m: f"find the regions again: tgsis version conflicts {_py_word(m[1], m[2])}",
     ),
     (
         r"find the regions again(?: on the object's current state)? \(tgsis\.find_conflicts in Python, or tgsis version "
@@ -64,8 +71,9 @@ _RULES: list[tuple[str, Replacement]] = [
         lambda m: f"a role that may read the class finds its regions with tgsis version conflicts {_word(m[1])}",
     ),
     (
-        r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) finds and records them \(tgsis version conflicts [^)]*\)",
-        lambda m: f"tgsis version conflicts {_word(m[1])} finds and records them",
+        rf"tgsis\.find_conflicts\(conn, (?:{_PY_LITERAL}|(\w+))\) finds and records them \(tgsis version conflicts "
+        rf"{_SHELL_WORD}\)",
+        lambda m: f"tgsis version conflicts {_py_word(m[1], m[2])} finds and records them",
     ),
     (
         r"SELECT region, conflict, solution FROM tgsis\.conflict_regions WHERE versionid = tgsis\.version_id\('((?:[^']|'')*)'\) "
@@ -128,8 +136,8 @@ _RULES: list[tuple[str, Replacement]] = [
     (r", or give a MeshState$", ""),
     # tgsis.object_merge (tgsis version conflicts --regions)
     (
-        r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) lists the objects changed on both sides",
-        lambda m: f"tgsis version conflicts {_word(m[1])} lists the objects changed on both sides",
+        rf"tgsis\.find_conflicts\(conn, (?:{_PY_LITERAL}|(\w+))\) lists the objects changed on both sides",
+        lambda m: f"tgsis version conflicts {_py_word(m[1], m[2])} lists the objects changed on both sides",
     ),
     (
         r"tgsis\.resolve_conflict solves it as a whole object \(parent, child or manual\)",
@@ -395,6 +403,14 @@ def _unquote(literal: str) -> str:
 def _word(literal: str) -> str:
     """An SQL literal's text as one shell word of a printed command (a version name with a space stays one)."""
     return shlex.quote(_unquote(literal))
+
+
+def _py_word(literal: str | None, bare: str | None = None) -> str:
+    """A Python literal's text (repr of a version name) as one shell word; a bare word as it is (``version``:
+    the placeholder VERSION)."""
+    if literal is None:
+        return "VERSION" if bare is None or bare.lower() == "version" else bare
+    return shlex.quote(str(ast.literal_eval(literal)))
 
 
 def to_cli(hint: str | None) -> str | None:
