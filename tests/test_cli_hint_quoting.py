@@ -11,6 +11,7 @@ stays as it is.
 
 from __future__ import annotations
 
+import json
 import shlex
 from typing import Any
 
@@ -70,7 +71,7 @@ def _cases(name: str) -> list[tuple[str, list[str]]]:
             [f"tgsis version resolve {q} 12 child --region N"],
         ),
         (
-            f"the meshes 12 merge by region: `tgsis version merge {name}` or tgsis.merge_version(conn, {lit}) in "
+            f"the meshes 12 merge by region: `tgsis version merge {name}` or tgsis.merge_version(conn, {json.dumps(name, ensure_ascii=False)}) in "
             f"Python merges them (solve their conflicting regions first: SELECT tgsis.resolve_region({lit}, "
             f"'feature', key, region, 'parent'|'child'|'base')); record a solution for the others: SELECT "
             f"tgsis.resolve_conflict({lit}, class, key, 'parent'|'child'|'manual')",
@@ -238,3 +239,40 @@ def test_the_sql_merge_refusal_prints_the_command_with_the_name_quoted(conn: Con
         hint = caught.value.diag.message_hint or ""
         assert f"`tgsis version {action} 'north edit'`" in hint, hint
         assert f"tgsis version {action} 'north edit' merges them" in (to_cli(hint) or ""), to_cli(hint)
+
+
+@pytest.mark.parametrize("name", ['o\'brien "x"', "back\\slash's"])
+def test_the_python_calls_psql_hints_print_name_the_version_itself(conn: Conn, name: str) -> None:
+    """A psql hint that prints a Python call writes the name as a Python literal that is the name.
+
+    (Was: ``tgsis.merge_version(conn, 'o''brien')``, an SQL literal: Python reads two adjacent strings, the
+    version ``obrien`` — another version, merged if it exists; ``E'...'`` of a backslash is no Python at all.)
+    """
+    import ast
+    import re
+
+    geoid = make_fault(conn)
+    tgsis.create_version(conn, name)
+    conn.commit()
+    move(conn, name, geoid, [5], (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, [5], (0.0, 0.0, -3.0))
+    conn.execute("SELECT tgsis.find_conflicts(%s)", (name,))
+    conn.commit()
+    calls = []
+    for statement in (
+        "SELECT tgsis.merge_version(%s)",
+        "SELECT tgsis.refresh_version(%s)",
+        f"SELECT tgsis.resolve_all_regions(%s, 'feature', '{geoid}', 'average')",
+    ):
+        with pytest.raises(psycopg.Error) as caught:
+            conn.execute(statement, (name,))
+        conn.rollback()
+        hint = caught.value.diag.message_hint or ""
+        found = re.search(r"tgsis\.(\w+)\(conn, (.*?)(?:, \d+, 'average')?\) in Python", hint)
+        assert found, hint
+        calls.append(found[1])
+        assert ast.literal_eval(found[2]) == name, hint
+        if found[1] != "resolve_all_regions" and "\\" not in name:  # the CLI's words (SQL's E'' literals aside)
+            said = to_cli(hint) or ""
+            assert f"tgsis version {found[1].split('_')[0]} {shlex.quote(name)} merges them" in said, said
+    assert calls == ["merge_version", "refresh_version", "resolve_all_regions"]
