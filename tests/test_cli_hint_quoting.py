@@ -26,7 +26,7 @@ from tgsis.cli._hints import to_cli
 
 Conn = psycopg.Connection[Any]
 
-NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y"]
+NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y", "a)b (c"]
 
 
 def _sql(name: str) -> str:

@@ -99,7 +99,8 @@ _RULES: list[tuple[str, Replacement]] = [
     (
         # the version's name from the Python literal (a name inside the backticks may hold a backtick itself)
         rf"the meshes (.*?) merge by region: `tgsis version (\w+) .*?` or tgsis\.\w+_version\(conn, {_PY_LITERAL}\) "
-        r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\([^)]*\)\); "
+        r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\('(?:[^']|'')*', "
+        r"[^)]*\)\); "
         r"record a solution for the others: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
         lambda m: (
             f"the meshes {m[1]} merge by region: tgsis version {m[2]} {_py_word(m[3])} merges them (solve their "
