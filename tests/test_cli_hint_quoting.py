@@ -26,11 +26,13 @@ from tgsis.cli._hints import to_cli
 
 Conn = psycopg.Connection[Any]
 
-NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y", "a)b (c"]
+NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y", "a)b (c", "dev\\ana's"]
 
 
 def _sql(name: str) -> str:
-    return "'" + name.replace("'", "''") + "'"
+    """``name`` as format's %L writes it: E'...' with the backslashes doubled when it holds one."""
+    quoted = "'" + name.replace("'", "''").replace("\\", "\\\\") + "'"
+    return "E" + quoted if "\\" in name else quoted
 
 
 def _cases(name: str) -> list[tuple[str, list[str]]]:
@@ -272,7 +274,7 @@ def test_the_python_calls_psql_hints_print_name_the_version_itself(conn: Conn, n
         assert found, hint
         calls.append(found[1])
         assert ast.literal_eval(found[2]) == name, hint
-        if found[1] != "resolve_all_regions" and "\\" not in name:  # the CLI's words (SQL's E'' literals aside)
+        if found[1] != "resolve_all_regions":  # the CLI's words (the E'' literal of a backslash too)
             said = to_cli(hint) or ""
             assert f"tgsis version {found[1].split('_')[0]} {shlex.quote(name)} merges them" in said, said
     assert calls == ["merge_version", "refresh_version", "resolve_all_regions"]

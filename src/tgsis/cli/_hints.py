@@ -414,10 +414,20 @@ def _py_word(literal: str | None, bare: str | None = None) -> str:
     return shlex.quote(str(ast.literal_eval(literal)))
 
 
+#: An escape string literal, as format's %L writes a text holding a backslash (``E'dev\\ana'``).
+_ESCAPE_LITERAL = re.compile(r"(?<![\w'])E'((?:[^'\\]|''|\\.)*)'", re.DOTALL)
+
+
+def _standard_literal(m: re.Match[str]) -> str:
+    """An escape string literal as the standard one of the same text, which the rules read (``'dev\\ana'``)."""
+    return "'" + re.sub(r"\\(.)", r"\1", m[1], flags=re.DOTALL) + "'"
+
+
 def to_cli(hint: str | None) -> str | None:
     """``hint`` in the command line's terms (its flags and commands), through :data:`RULES`."""
     if not hint:
         return hint
+    hint = _ESCAPE_LITERAL.sub(_standard_literal, hint)
     for pattern, replacement in RULES:
         hint = pattern.sub(replacement, hint)
     return hint
