@@ -55,7 +55,7 @@ BEGIN
             USING ERRCODE = 'TG307',
                   DETAIL = 'The Python client computes it (the midpoint of the two sides, or a manual mesh where they were meshed differently) and stores it as the region''s mesh.',
                   HINT = format('run `tgsis version resolve %s %s average --region all`, or tgsis.resolve_all_regions(conn, %s, %s, ''average'') in Python; parent, child and base are recorded from SQL',
-                                tgsis.shell_quote(p_version), tgsis.shell_quote(p_objectkey), to_json(p_version)::text,
+                                tgsis.shell_quote(p_version), tgsis.shell_quote(p_objectkey), pg_catalog.to_json(p_version)::text,
                                 p_objectkey);
     END IF;
     v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];

@@ -32,7 +32,7 @@ BEGIN
                                           '(solve their conflicting regions first: SELECT tgsis.resolve_region(%L, class, key, region, ''parent''|''child''|''base'')); '
                                           'record a solution for the others: SELECT tgsis.resolve_conflict(%L, class, key, ''parent''|''child''|''manual'')',
                                           v_regions, p_action, tgsis.shell_quote(p_version), p_action,
-                                          to_json(p_version)::text, p_version, p_version) END;
+                                          pg_catalog.to_json(p_version)::text, p_version, p_version) END;
     END IF;
 END
 $$;
