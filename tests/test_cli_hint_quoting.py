@@ -26,7 +26,7 @@ from tgsis.cli._hints import to_cli
 
 Conn = psycopg.Connection[Any]
 
-NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y", "a)b (c", "dev\\ana's"]
+NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y", "a)b (c", "dev\\ana's", "a E'b"]
 
 
 def _sql(name: str) -> str:

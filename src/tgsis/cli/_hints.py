@@ -415,7 +415,8 @@ def _py_word(literal: str | None, bare: str | None = None) -> str:
 
 
 #: An escape string literal, as format's %L writes a text holding a backslash (``E'dev\\ana'``).
-_ESCAPE_LITERAL = re.compile(r"(?<![\w'])E'((?:[^'\\]|''|\\.)*)'", re.DOTALL)
+#: (Only one that holds a backslash escape: %L writes no other, and a standard literal's text may hold " E''".)
+_ESCAPE_LITERAL = re.compile(r"(?<![\w'])E'((?:[^'\\]|'')*\\.(?:[^'\\]|''|\\.)*)'", re.DOTALL)
 
 
 def _standard_literal(m: re.Match[str]) -> str:
