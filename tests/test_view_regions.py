@@ -987,3 +987,24 @@ def test_the_page_offers_each_period_of_a_time_and_draws_the_one_chosen(
     wait_drawn(page)
     assert drawn() == ["unsolved"]  # was: t=2 drew the second period's slice, the conflict never
     assert page.locator("#region-time option:checked").text_content() == "2 (period starting at 1)"
+
+
+def test_a_time_near_an_instant_is_told_apart_from_it_in_the_choice(
+    sliced_view: tuple[str, dict[int, int], str], page: Any
+) -> None:
+    """A t that is no instant, though six digits cannot tell it from one, is offered under its own exact figure.
+
+    (Was: two options "2": the t given, where no region is drawn, selected, and the instant 2 beside it.)
+    """
+    urls, _, _ = sliced_view
+    near = 2.0000000000000004  # the float after 2
+    page.goto(f"{urls.split()[0]}/conflicts?version=e1&t={near!r}")
+    wait_drawn(page)
+    options = page.locator("#region-time option").evaluate_all("o => o.map(x => [x.value, x.textContent, x.selected])")
+    assert options == [
+        ["1", "1", False],
+        ["2", "2", False],
+        [repr(near), repr(near), True],
+        ["3", "3", False],
+    ]
+    assert page.locator("#regions tbody tr[data-drawn=true]").count() == 0

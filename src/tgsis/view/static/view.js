@@ -548,12 +548,14 @@ function timeChoice(config, meshes) {
   if (!slices.has(key)) slices.set(key, drawn);
   const sorted = [...slices.values()].sort((a, b) => a.times - b.times || (a.timem ?? 0) - (b.timem ?? 0));
   const select = document.getElementById("region-time");
+  // six digits, unless another time reads the same in six digits (a t given near an instant): then every digit
+  const label = (t) => sorted.some((o) => o.times !== t && short(o.times) === short(t)) ? String(t) : short(t);
   for (const s of sorted) {
     const option = document.createElement("option");
     option.value = String(s.times);
     if (s.timem !== undefined && s.timem !== null) option.dataset.timem = String(s.timem);
     const twice = sorted.filter((o) => o.times === s.times).length > 1;
-    option.textContent = short(s.times) + (twice && option.dataset.timem ? ` (period starting at ${short(s.timem)})` : "");
+    option.textContent = label(s.times) + (twice && option.dataset.timem ? ` (period starting at ${short(s.timem)})` : "");
     option.selected = s === drawn || (s.times === drawn.times && s.timem === drawn.timem);
     select.append(option);
   }
