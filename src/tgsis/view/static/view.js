@@ -623,7 +623,7 @@ export function conflictView(config) {
           p.className = "note";
           p.textContent = `feature ${m.header.id} is drawn ` +
             (m.header.slice ? `at ${sliceText(m.header.slice)}` : `at t = ${short(m.header.t)}, where no instant merges`) +
-            `: its regions at other instants are listed, drawn when t is theirs`;
+            `: its regions at other instants are listed, drawn when theirs is chosen (t above)`;
           notes.append(p);
         }
         const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
