@@ -11,6 +11,7 @@ stays as it is.
 
 from __future__ import annotations
 
+import json
 import shlex
 from typing import Any
 
@@ -25,29 +26,35 @@ from tgsis.cli._hints import to_cli
 
 Conn = psycopg.Connection[Any]
 
-NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y"]
+NAMES = ["my version", "o'brien", "a$b `c`", "e1", "x;rm -rf y", "a)b (c", "dev\\ana's", "a E'b"]
 
 
 def _sql(name: str) -> str:
-    return "'" + name.replace("'", "''") + "'"
+    """``name`` as format's %L writes it: E'...' with the backslashes doubled when it holds one."""
+    quoted = "'" + name.replace("'", "''").replace("\\", "\\\\") + "'"
+    return "E" + quoted if "\\" in name else quoted
 
 
 def _cases(name: str) -> list[tuple[str, list[str]]]:
-    """(an SQL or Python hint naming version ``name``, the commands its CLI form must hold)."""
+    """(an SQL or Python hint naming version ``name``, the commands its CLI form must hold).
+
+    The Python library's hints name it as ``repr`` does (``tgsis.find_conflicts(conn, {version!r})``), the SQL
+    functions' as ``%L`` does.
+    """
     q, lit = shlex.quote(name), _sql(name)
     return [
         (
             f"record a solution for each: SELECT tgsis.resolve_conflict({lit}, class, key, 'parent'|'child'|'manual')",
             [f"tgsis version resolve {q} CLASS KEY", f"tgsis version conflicts {q} lists them"],
         ),
-        (f"find the regions again: tgsis.find_conflicts(conn, {lit})", [f"tgsis version conflicts {q}"]),
+        (f"find the regions again: tgsis.find_conflicts(conn, {name!r})", [f"tgsis version conflicts {q}"]),
         (
             f"a role that may read the class finds its regions with SELECT FROM tgsis.find_conflicts({lit}), or the "
             "class's owner lets this role read it",
             [f"finds its regions with tgsis version conflicts {q}"],
         ),
         (
-            f"tgsis.find_conflicts(conn, {lit}) finds and records them (tgsis version conflicts {q})",
+            f"tgsis.find_conflicts(conn, {name!r}) finds and records them (tgsis version conflicts {q})",
             [f"tgsis version conflicts {q} finds and records them"],
         ),
         (
@@ -66,7 +73,7 @@ def _cases(name: str) -> list[tuple[str, list[str]]]:
             [f"tgsis version resolve {q} 12 child --region N"],
         ),
         (
-            f"the meshes 12 merge by region: `tgsis version merge {name}` or tgsis.merge_version(conn, {lit}) in "
+            f"the meshes 12 merge by region: `tgsis version merge {name}` or tgsis.merge_version(conn, {json.dumps(name, ensure_ascii=False)}) in "
             f"Python merges them (solve their conflicting regions first: SELECT tgsis.resolve_region({lit}, "
             f"'feature', key, region, 'parent'|'child'|'base')); record a solution for the others: SELECT "
             f"tgsis.resolve_conflict({lit}, class, key, 'parent'|'child'|'manual')",
@@ -77,7 +84,7 @@ def _cases(name: str) -> list[tuple[str, list[str]]]:
             ],
         ),
         (
-            f"tgsis.find_conflicts(conn, {lit}) lists the objects changed on both sides",
+            f"tgsis.find_conflicts(conn, {name!r}) lists the objects changed on both sides",
             [f"tgsis version conflicts {q} lists"],
         ),
         (f"SELECT * FROM tgsis.find_conflicts({lit}) lists the conflicts", [f"tgsis version conflicts {q} lists"]),
@@ -163,3 +170,111 @@ def test_the_command_line_prints_the_name_quoted(db_dsn: str, conn: Conn, capsys
     hint = hint_of(db_dsn, capsys, "version", "merge", "o'brien")
     assert "tgsis version resolve 'o'\"'\"'brien' CLASS KEY" in hint, hint
     assert shlex.split(hint.split("tgsis version resolve ")[1])[0] == "o'brien"
+
+
+PYTHON_NAMES = ["my version", "o'brien", "a)b", "back\\slash", 'say "hi"', "both ' and \"", "e1"]
+
+
+def _python_cases(name: str) -> list[tuple[str, str]]:
+    """(a hint as the Python library writes it — the name as ``repr`` — and the command its CLI form must be)."""
+    q = shlex.quote(name)
+    return [  # the f-strings of tgsis.db.regions, tgsis.db.merging and tgsis.db._merge_states
+        (
+            f"find the regions again: tgsis.find_conflicts(conn, {name!r}), or tgsis version conflicts {q}",
+            f"find the regions again: tgsis version conflicts {q}",
+        ),
+        (
+            f"find the regions again: tgsis.find_conflicts(conn, {name!r})",
+            f"find the regions again: tgsis version conflicts {q}",
+        ),
+        (
+            f"tgsis.find_conflicts(conn, {name!r}) finds and records them (tgsis version conflicts {q})",
+            f"tgsis version conflicts {q} finds and records them",
+        ),
+        (
+            f"its regions, each with its slice: tgsis.find_conflicts(conn, {name!r}) finds and records them "
+            f"(tgsis version conflicts {q})",
+            f"its regions, each with its slice: tgsis version conflicts {q} finds and records them",
+        ),
+        (
+            f"tgsis.find_conflicts(conn, {name!r}) lists the objects changed on both sides",
+            f"tgsis version conflicts {q} lists the objects changed on both sides",
+        ),
+    ]
+
+
+@pytest.mark.parametrize("name", PYTHON_NAMES)
+def test_the_python_hints_map_the_name_as_repr_wrote_it(name: str) -> None:
+    """The library's hints name the version as Python's repr: the whole hint becomes the command, nothing left over.
+
+    (Was: 'my version' gave ``tgsis version conflicts 'my version' version'``, a name with ``)`` cut the command
+    short, a backslash was doubled, a name with a quote stayed in Python's terms.)
+    """
+    for hint, expected in _python_cases(name):
+        said = to_cli(hint)
+        assert said == expected, (hint, said)
+        assert shlex.split(said.split("tgsis version conflicts ")[1])[0] == name
+
+
+def test_the_sql_hint_naming_find_conflicts_in_python_without_a_name() -> None:
+    """tgsis.resolve_all_regions' TG307 names no version: the command line says VERSION, nothing of Python is left."""
+    hint = "find the regions again: tgsis.find_conflicts(conn, version) in Python, or tgsis version conflicts"
+    assert to_cli(hint) == "find the regions again: tgsis version conflicts VERSION"
+
+
+def test_the_sql_merge_refusal_prints_the_command_with_the_name_quoted(conn: Conn) -> None:
+    """psql's TG302 of a merge whose meshes merge by region names `tgsis version merge NAME` quoted as the shell wants.
+
+    (Was: `tgsis version merge north edit`, three arguments when pasted; only the command line's mapping quoted it.)
+    """
+    geoid = make_fault(conn)
+    tgsis.create_version(conn, "north edit")
+    conn.commit()
+    move(conn, "north edit", geoid, [5], (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, [5], (0.0, 0.0, -3.0))
+    conn.execute("SELECT tgsis.find_conflicts('north edit')")
+    conn.commit()
+    for action in ("merge", "refresh"):
+        with pytest.raises(psycopg.Error) as caught:
+            conn.execute(f"SELECT tgsis.{action}_version('north edit')")
+        conn.rollback()
+        hint = caught.value.diag.message_hint or ""
+        assert f"`tgsis version {action} 'north edit'`" in hint, hint
+        assert f"tgsis version {action} 'north edit' merges them" in (to_cli(hint) or ""), to_cli(hint)
+
+
+@pytest.mark.parametrize("name", ['o\'brien "x"', "back\\slash's"])
+def test_the_python_calls_psql_hints_print_name_the_version_itself(conn: Conn, name: str) -> None:
+    """A psql hint that prints a Python call writes the name as a Python literal that is the name.
+
+    (Was: ``tgsis.merge_version(conn, 'o''brien')``, an SQL literal: Python reads two adjacent strings, the
+    version ``obrien`` — another version, merged if it exists; ``E'...'`` of a backslash is no Python at all.)
+    """
+    import ast
+    import re
+
+    geoid = make_fault(conn)
+    tgsis.create_version(conn, name)
+    conn.commit()
+    move(conn, name, geoid, [5], (0.0, 0.0, 3.0))
+    move(conn, "DEFAULT", geoid, [5], (0.0, 0.0, -3.0))
+    conn.execute("SELECT tgsis.find_conflicts(%s)", (name,))
+    conn.commit()
+    calls = []
+    for statement in (
+        "SELECT tgsis.merge_version(%s)",
+        "SELECT tgsis.refresh_version(%s)",
+        f"SELECT tgsis.resolve_all_regions(%s, 'feature', '{geoid}', 'average')",
+    ):
+        with pytest.raises(psycopg.Error) as caught:
+            conn.execute(statement, (name,))
+        conn.rollback()
+        hint = caught.value.diag.message_hint or ""
+        found = re.search(r"tgsis\.(\w+)\(conn, (.*?)(?:, \d+, 'average')?\) in Python", hint)
+        assert found, hint
+        calls.append(found[1])
+        assert ast.literal_eval(found[2]) == name, hint
+        if found[1] != "resolve_all_regions":  # the CLI's words (the E'' literal of a backslash too)
+            said = to_cli(hint) or ""
+            assert f"tgsis version {found[1].split('_')[0]} {shlex.quote(name)} merges them" in said, said
+    assert calls == ["merge_version", "refresh_version", "resolve_all_regions"]

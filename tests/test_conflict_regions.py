@@ -285,7 +285,7 @@ def test_the_sql_merge_hint_points_to_the_python_merge(conn: Conn, fault: int) -
     tgsis.find_conflicts(conn, "e1")
     state, message, hint = _sqlstate(conn, "SELECT tgsis.merge_version('e1')", ())
     assert state == "TG302" and hint is not None
-    assert "tgsis version merge e1" in hint and "tgsis.merge_version(conn, 'e1')" in hint, hint
+    assert "tgsis version merge e1" in hint and 'tgsis.merge_version(conn, "e1")' in hint, hint
     state, _, hint = _sqlstate(conn, "SELECT tgsis.refresh_version('e1')", ())
     assert state == "TG302" and hint is not None and "tgsis version refresh e1" in hint
 

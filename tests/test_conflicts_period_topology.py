@@ -118,3 +118,18 @@ def test_a_topology_that_hangs_on_the_solutions_still_merges_by_region(conn: Con
     with tgsis.in_version(conn, "DEFAULT"):
         left = conn.execute("SELECT count(*) FROM tgsis.d4dtrgl WHERE geoid = %s AND trglid = 0", (geoid,)).fetchone()
     assert left == (0,)
+
+
+def test_the_export_says_it_merges_as_a_whole(conn: Conn, tmp_path: Any) -> None:
+    """``--export``'s regions file agrees with find_conflicts: no merge by region, the TG308 reason named.
+
+    (Was: ``"merges_by_region": true`` and ``"merges_by_itself": true`` for an object no solution can merge.)
+    """
+    geoid = _instant_added_and_topology_changed(conn)
+    files = tgsis.export_conflict(conn, "e1", geoid, tmp_path, picture=False)
+    [regions] = [f for f in files if f.name == f"{geoid}_regions.json"]
+    document = json.loads(regions.read_text())
+    assert document["merges_by_region"] is False and document["merges_by_itself"] is False, document
+    assert "TG308" in document["reason"] and "period starting at 1.0" in document["reason"], document
+    with pytest.raises(tgsis.PeriodTopologyError):  # what the merge says
+        tgsis.merge_version(conn, "e1")

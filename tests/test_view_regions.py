@@ -881,3 +881,130 @@ def test_the_page_quotes_a_version_name_in_the_commands_it_prints(
     names = ["e1", "my version", "o'brien", "a$b `c`", "", "x;y", "é"]
     quoted = page.evaluate("names => import('/static/view.js').then(m => names.map(m.shellQuote))", names)
     assert quoted == [shlex.quote(n) for n in names]
+
+
+def _two_periods(conn: psycopg.Connection[Any]) -> int:
+    """A model-3 surface of two topology periods, [1, 2] and [2, 3]: 2 is the first's last geometry instant and the
+    second's start, two slices at one time. Between e1 and DEFAULT: a conflict at (1, 2), the version's edit at (2, 2).
+    """
+    from tests.test_merge_instants import _shape
+    from tgsis.temporal import TopologyPeriod
+
+    tgsis.create_feature_class(conn, "evolving", "SURFACE", time_model="EVOLVING")
+    tgsis.enable_feature_versioning(conn)
+    cells = curved_surface().cells
+    first = TopologyPeriod(np.asarray([1.0, 2.0]), cells, np.stack([_shape(0), _shape(1)]))
+    second = TopologyPeriod(np.asarray([2.0, 3.0]), cells, np.stack([_shape(1), _shape(2)]))
+    geoid = tgsis.insert_feature(conn, "evolving", tgsis.EvolvingSurface([first, second], name="two periods"))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    row = conn.execute(  # the second period's node ids follow the first's
+        "SELECT min(nodeid) FROM tgsis.d4dvrtx WHERE geoid = %s AND timem = 2", (geoid,)
+    ).fetchone()
+    conn.commit()
+    assert row is not None
+    offset = int(row[0])
+    for version, timem, node, dz in (
+        ("e1", 1.0, CONFLICT, 30.0),
+        ("DEFAULT", 1.0, CONFLICT, 80.0),
+        ("e1", 2.0, CHILD_ONLY + offset, 50.0),
+    ):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.d4dvrtx SET z = z + %s WHERE geoid = %s AND timem = %s AND timet = 2 AND nodeid = %s",
+                (dz, geoid, timem, node),
+            )
+        conn.commit()
+    return geoid
+
+
+@pytest.fixture(scope="module")
+def two_periods_view(pg: TestServer, template_db: str) -> Iterator[tuple[str, int]]:
+    with pg.database("tgsis_view_two_periods", template_db) as (_, dsn):
+        with psycopg.connect(dsn) as conn:
+            geoid = _two_periods(conn)
+        with running_view(dsn) as url:
+            yield url, geoid
+
+
+def test_the_regions_of_a_periods_last_geometry_instant_are_drawn_at_that_period(
+    two_periods_view: tuple[str, int],
+) -> None:
+    """At a period's end the next period starts: ``timem`` chooses the period whose slice at ``t`` is drawn.
+
+    (Was: t = 2 always drew the second period's slice, and the conflict at the first period's last geometry
+    instant was listed "drawn when t is theirs" and never drawn.)
+    """
+    url, geoid = two_periods_view
+    conflict = {"times": 2.0, "timem": 1.0}
+    for query, drawn in (("&t=2&timem=1", conflict), ("&t=2&timem=2", {"times": 2.0, "timem": 2.0}), ("", conflict)):
+        status, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1{query}")
+        assert status == 200, body[:300]
+        header, arrays = unpack(body)
+        assert header["slice"] == drawn and header["t"] == 2.0, query
+        assert [(r["slice"], r["state"], r["at_t"]) for r in header["regions"]] == [
+            (conflict, "unsolved", drawn == conflict),
+            ({"times": 2.0, "timem": 2.0}, "merges-child", drawn != conflict),
+        ], query
+        (here,) = [r for r in header["regions"] if r["at_t"]]
+        assert here["drawn"]["vertices"] == 1 and len(arrays["region_vertices"]) == 1
+    # t alone: the latest period that has a geometry instant at t (the period starting there), as before
+    header, _ = unpack(get(f"{url}/api/conflict/{geoid}?version=e1&t=2")[1])
+    assert header["slice"] == {"times": 2.0, "timem": 2.0}
+    # a period with no geometry instant at t: no slice, the object drawn at t
+    header, _ = unpack(get(f"{url}/api/conflict/{geoid}?version=e1&t=2.5&timem=1")[1])
+    assert header["slice"] is None and not any(r["at_t"] for r in header["regions"])
+    status, body, _ = get(f"{url}/api/conflict/{geoid}?version=e1&t=2&timem=x")
+    assert status == 400 and b"timem" in body
+
+
+def test_the_page_offers_each_period_of_a_time_and_draws_the_one_chosen(
+    two_periods_view: tuple[str, int], page: Any
+) -> None:
+    url, _ = two_periods_view
+    page.goto(f"{url}/conflicts?version=e1")
+    wait_drawn(page)
+
+    def drawn() -> list[str]:
+        rows = page.locator("#regions tbody tr[data-drawn=true]")
+        return list(rows.evaluate_all("r => r.map(x => x.dataset.state)"))
+
+    options = page.locator("#region-time option").evaluate_all(
+        "o => o.map(x => [x.value, x.dataset.timem, x.textContent, x.selected])"
+    )
+    assert options == [
+        ["2", "1", "2 (period starting at 1)", True],
+        ["2", "2", "2 (period starting at 2)", False],
+    ]
+    assert drawn() == ["unsolved"]  # no t: the first slice with a conflict, the first period's last instant
+    page.select_option("#region-time", label="2 (period starting at 2)")
+    page.wait_for_url("**timem=2**")
+    wait_drawn(page)
+    assert drawn() == ["merges-child"]
+    assert page.locator("#region-time option:checked").text_content() == "2 (period starting at 2)"
+    page.select_option("#region-time", label="2 (period starting at 1)")
+    page.wait_for_url("**timem=1**")
+    wait_drawn(page)
+    assert drawn() == ["unsolved"]  # was: t=2 drew the second period's slice, the conflict never
+    assert page.locator("#region-time option:checked").text_content() == "2 (period starting at 1)"
+
+
+def test_a_time_near_an_instant_is_told_apart_from_it_in_the_choice(
+    sliced_view: tuple[str, dict[int, int], str], page: Any
+) -> None:
+    """A t that is no instant, though six digits cannot tell it from one, is offered under its own exact figure.
+
+    (Was: two options "2": the t given, where no region is drawn, selected, and the instant 2 beside it.)
+    """
+    urls, _, _ = sliced_view
+    near = 2.0000000000000004  # the float after 2
+    page.goto(f"{urls.split()[0]}/conflicts?version=e1&t={near!r}")
+    wait_drawn(page)
+    options = page.locator("#region-time option").evaluate_all("o => o.map(x => [x.value, x.textContent, x.selected])")
+    assert options == [
+        ["1", "1", False],
+        ["2", "2", False],
+        [repr(near), repr(near), True],
+        ["3", "3", False],
+    ]
+    assert page.locator("#regions tbody tr[data-drawn=true]").count() == 0

@@ -54,8 +54,9 @@ BEGIN
                 v_name
             USING ERRCODE = 'TG307',
                   DETAIL = 'The Python client computes it (the midpoint of the two sides, or a manual mesh where they were meshed differently) and stores it as the region''s mesh.',
-                  HINT = format('run `tgsis version resolve %s %s average --region all`, or tgsis.resolve_all_regions(conn, %L, %s, ''average'') in Python; parent, child and base are recorded from SQL',
-                                tgsis.shell_quote(p_version), tgsis.shell_quote(p_objectkey), p_version, p_objectkey);
+                  HINT = format('run `tgsis version resolve %s %s average --region all`, or tgsis.resolve_all_regions(conn, %s, %s, ''average'') in Python; parent, child and base are recorded from SQL',
+                                tgsis.shell_quote(p_version), tgsis.shell_quote(p_objectkey), pg_catalog.to_json(p_version)::text,
+                                p_objectkey);
     END IF;
     v_key := (tgsis.canonical_object_keys(p_objectclass, ARRAY[p_objectkey]))[1];
     SELECT ARRAY[r.childmark, r.parentmark] INTO v_marks FROM tgsis.conflict_regions r

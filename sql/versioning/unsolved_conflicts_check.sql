@@ -28,10 +28,11 @@ BEGIN
                   HINT = CASE WHEN v_regions IS NULL
                               THEN format('record a solution for each: SELECT tgsis.resolve_conflict(%L, class, key, ''parent''|''child''|''manual'')',
                                           p_version)
-                              ELSE format('the meshes %s merge by region: `tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges them '
+                              ELSE format('the meshes %s merge by region: `tgsis version %s %s` or tgsis.%s_version(conn, %s) in Python merges them '
                                           '(solve their conflicting regions first: SELECT tgsis.resolve_region(%L, class, key, region, ''parent''|''child''|''base'')); '
                                           'record a solution for the others: SELECT tgsis.resolve_conflict(%L, class, key, ''parent''|''child''|''manual'')',
-                                          v_regions, p_action, p_version, p_action, p_version, p_version, p_version) END;
+                                          v_regions, p_action, tgsis.shell_quote(p_version), p_action,
+                                          pg_catalog.to_json(p_version)::text, p_version, p_version) END;
     END IF;
 END
 $$;

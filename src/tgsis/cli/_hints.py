@@ -17,6 +17,7 @@ A few hints have no command-line equivalent: statements a DBA runs in psql
 
 from __future__ import annotations
 
+import ast
 import re
 import shlex
 from collections.abc import Callable
@@ -27,6 +28,11 @@ from pathlib import Path
 IN_PSQL = "in psql: "
 
 Replacement = str | Callable[[re.Match[str]], str]
+
+#: A version name as the Python library's hints write it (``{version!r}``: repr's quotes and backslash escapes).
+_PY_LITERAL = r"""('(?:[^'\\\n]|\\.)*'|"(?:[^"\\\n]|\\.)*")"""
+#: A word as :func:`shlex.quote` writes it (the hints that already print the command beside the Python call).
+_SHELL_WORD = r"""(?:'(?:[^']|'"'"')*'|[\w@%+=:,./-]+)"""
 
 #: (pattern, replacement), applied in order: the most specific first.
 _RULES: list[tuple[str, Replacement]] = [
@@ -49,10 +55,11 @@ _RULES: list[tuple[str, Replacement]] = [
         r"call again with discard_other=True to discard them, or choose another solution",
         "add --discard-other to record it all the same, or choose another solution",
     ),
-    (
-        r"find the regions again(?: on the object's current state)?(?::| \()? ?tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\)"
-        r"(?:, or tgsis version conflicts \S+| \(tgsis\.find_conflicts in Python, or tgsis version conflicts\))?\)?",
-        lambda m: f"find the regions again: tgsis version conflicts {_word(m[1])}",
+    (  # the Python library's (the name as repr), or SQL's naming no version (tgsis.resolve_all_regions)
+        r"find the regions again(?: on the object's current state)?(?::| \()? ?tgsis\.find_conflicts\(conn, "
+        rf"(?:{_PY_LITERAL}|(\w+))\)(?:, or tgsis version conflicts(?: {_SHELL_WORD})?| in Python, or tgsis version "
+        r"conflicts| \(tgsis\.find_conflicts in Python, or tgsis version conflicts\))?\)?",
+        lambda m: f"find the regions again: tgsis version conflicts {_py_word(m[1], m[2])}",
     ),
     (
         r"find the regions again(?: on the object's current state)? \(tgsis\.find_conflicts in Python, or tgsis version "
@@ -64,8 +71,9 @@ _RULES: list[tuple[str, Replacement]] = [
         lambda m: f"a role that may read the class finds its regions with tgsis version conflicts {_word(m[1])}",
     ),
     (
-        r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) finds and records them \(tgsis version conflicts [^)]*\)",
-        lambda m: f"tgsis version conflicts {_word(m[1])} finds and records them",
+        rf"tgsis\.find_conflicts\(conn, (?:{_PY_LITERAL}|(\w+))\) finds and records them \(tgsis version conflicts "
+        rf"{_SHELL_WORD}\)",
+        lambda m: f"tgsis version conflicts {_py_word(m[1], m[2])} finds and records them",
     ),
     (
         r"SELECT region, conflict, solution FROM tgsis\.conflict_regions WHERE versionid = tgsis\.version_id\('((?:[^']|'')*)'\) "
@@ -89,12 +97,13 @@ _RULES: list[tuple[str, Replacement]] = [
         ),
     ),
     (
-        # the version's name from the SQL literal (a name inside the backticks may hold a backtick itself)
-        r"the meshes (.*?) merge by region: `tgsis version (\w+) .*?` or tgsis\.\w+_version\(conn, '((?:[^']|'')*)'\) "
-        r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\([^)]*\)\); "
+        # the version's name from the Python literal (a name inside the backticks may hold a backtick itself)
+        rf"the meshes (.*?) merge by region: `tgsis version (\w+) .*?` or tgsis\.\w+_version\(conn, {_PY_LITERAL}\) "
+        r"in Python merges them \(solve their conflicting regions first: SELECT tgsis\.resolve_region\('(?:[^']|'')*', "
+        r"[^)]*\)\); "
         r"record a solution for the others: SELECT tgsis\.resolve_conflict\('((?:[^']|'')*)', class, key, [^)]*\)",
         lambda m: (
-            f"the meshes {m[1]} merge by region: tgsis version {m[2]} {_word(m[3])} merges them (solve their "
+            f"the meshes {m[1]} merge by region: tgsis version {m[2]} {_py_word(m[3])} merges them (solve their "
             f"conflicting regions first: tgsis version resolve {_word(m[4])} ID parent|child|base --region N); record "
             f"a solution for the others: tgsis version resolve {_word(m[4])} CLASS KEY parent|child|manual"
         ),
@@ -128,8 +137,8 @@ _RULES: list[tuple[str, Replacement]] = [
     (r", or give a MeshState$", ""),
     # tgsis.object_merge (tgsis version conflicts --regions)
     (
-        r"tgsis\.find_conflicts\(conn, '?((?:[^')]|'')*)'?\) lists the objects changed on both sides",
-        lambda m: f"tgsis version conflicts {_word(m[1])} lists the objects changed on both sides",
+        rf"tgsis\.find_conflicts\(conn, (?:{_PY_LITERAL}|(\w+))\) lists the objects changed on both sides",
+        lambda m: f"tgsis version conflicts {_py_word(m[1], m[2])} lists the objects changed on both sides",
     ),
     (
         r"tgsis\.resolve_conflict solves it as a whole object \(parent, child or manual\)",
@@ -397,10 +406,29 @@ def _word(literal: str) -> str:
     return shlex.quote(_unquote(literal))
 
 
+def _py_word(literal: str | None, bare: str | None = None) -> str:
+    """A Python literal's text (repr of a version name) as one shell word; a bare word as it is (``version``:
+    the placeholder VERSION)."""
+    if literal is None:
+        return "VERSION" if bare is None or bare.lower() == "version" else bare
+    return shlex.quote(str(ast.literal_eval(literal)))
+
+
+#: An escape string literal, as format's %L writes a text holding a backslash (``E'dev\\ana'``).
+#: (Only one that holds a backslash escape: %L writes no other, and a standard literal's text may hold " E''".)
+_ESCAPE_LITERAL = re.compile(r"(?<![\w'])E'((?:[^'\\]|'')*\\.(?:[^'\\]|''|\\.)*)'", re.DOTALL)
+
+
+def _standard_literal(m: re.Match[str]) -> str:
+    """An escape string literal as the standard one of the same text, which the rules read (``'dev\\ana'``)."""
+    return "'" + re.sub(r"\\(.)", r"\1", m[1], flags=re.DOTALL) + "'"
+
+
 def to_cli(hint: str | None) -> str | None:
     """``hint`` in the command line's terms (its flags and commands), through :data:`RULES`."""
     if not hint:
         return hint
+    hint = _ESCAPE_LITERAL.sub(_standard_literal, hint)
     for pattern, replacement in RULES:
         hint = pattern.sub(replacement, hint)
     return hint

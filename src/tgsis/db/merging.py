@@ -51,7 +51,7 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 
-from tgsis._merge_slices import apply_sliced, merge_sliced, slice_text
+from tgsis._merge_slices import apply_sliced, fixed_period_refusal, merge_sliced, slice_text
 from tgsis.arguments import checked
 from tgsis.db._attribute_edits import AttributeEdits, attribute_edits, write_attribute_edits
 from tgsis.db._continuity import check_continuity
@@ -438,7 +438,9 @@ def _export_sliced(
 
     The slices written are those with a conflicting region (all the merged
     slices when none conflicts); the regions file lists each slice's
-    regions under its ``times`` (and ``timem``), numbered in the object.
+    regions under its ``times`` (and ``timem``), numbered in the object,
+    and says ``merges_by_region`` false with the ``reason`` when no solution
+    can merge it (:func:`tgsis._merge_slices.fixed_period_refusal`).
     """
     from tgsis import formats
 
@@ -488,9 +490,12 @@ def _export_sliced(
         meshes: dict[tuple[tuple[float, ...], str], Mesh] = {}
         for key, what, file in files:
             if key is None:
+                # TG308 whatever the solutions: it merges as a whole only, as find_conflicts says
+                refusal = fixed_period_refusal(merge)
                 document = {
-                    "merges_by_region": True,
-                    "merges_by_itself": not merge.conflicts,
+                    "merges_by_region": refusal is None,
+                    "merges_by_itself": refusal is None and not merge.conflicts,
+                    **({} if refusal is None else {"reason": refusal}),
                     "slices": slices_json,
                 }
                 (scratch / file).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")

@@ -586,7 +586,8 @@ def conflicts_page(request: Request) -> Response:
     shown = [int(c["objectkey"]) for c in conflicts if c["objectclass"] == "feature"]
     legend = [{"state": s, "label": REGION_LABELS[s], "colour": REGION_COLOURS[s]} for s in REGION_STATES]
     t = _number(request.query_params.get("t"), "time t")  # the slice drawn of a model-2/3 feature's regions
-    config = {"version": name, "parent": known[name].parent, "ids": shown, "legend": legend, "t": t}
+    timem = _number(request.query_params.get("timem"), "period start timem")  # model 3: the period of t
+    config = {"version": name, "parent": known[name].parent, "ids": shown, "legend": legend, "t": t, "timem": timem}
     return view.page(
         request, "conflicts.html", version=known[name], conflicts=conflicts, config=config, title="conflicts"
     )
@@ -714,8 +715,10 @@ def conflict_endpoint(request: Request) -> Response:
     content, another kind drawn unflagged.
 
     A model-2/3 surface merges slice by slice (an instant, a geometry
-    instant): ``t`` chooses the slice drawn (:func:`tgsis.view.regions.slice_at`;
-    none given: the first with a conflict), whose regions are drawn on its
+    instant): ``t`` chooses the slice drawn, model 3's ``timem`` the period
+    whose geometry instant it is (a period's last is the next one's start;
+    :func:`tgsis.view.regions.slice_at`; none given: the first with a
+    conflict), whose regions are drawn on its
     child mesh as model 1's; every region of the object is listed with its
     ``slice`` and ``at_t``. Header ``slice`` (None when no merged slice is at
     ``t``: the object is drawn at ``t`` as the scene draws it, no region on it)
@@ -725,6 +728,7 @@ def conflict_endpoint(request: Request) -> Response:
     feature_id = _feature_id(request.path_params["id"])
     version = request.query_params.get("version") or ""
     t = _number(request.query_params.get("t"), "time t")
+    timem = _number(request.query_params.get("timem"), "period start timem")
     name, revision = split_version(version)
     if revision is not None:
         raise _bad(f"conflicts belong to a version, not to a revision: {version!r}")
@@ -750,7 +754,7 @@ def conflict_endpoint(request: Request) -> Response:
         if isinstance(merge, SlicedMerge):
             # the slice at t drawn from the merge's child state of that slice, as a model-1 object's merge
             solutions, recorded = _recorded_sliced_solutions(conn, name, feature_id, merge)
-            key = slice_at(merge, t)
+            key = slice_at(merge, t, timem)
             regions, region_arrays = sliced_region_drawing(merge, key, solutions)
             counts = sliced_edit_counts(merge)
             if key is not None:

@@ -335,19 +335,21 @@ def slice_json(key: SliceKey) -> dict[str, float]:
     return {"times": float(key[1]), "timem": float(key[0])} if len(key) == 2 else {"times": float(key[0])}
 
 
-def slice_at(merge: SlicedMerge, t: float | None) -> SliceKey | None:
+def slice_at(merge: SlicedMerge, t: float | None, timem: float | None = None) -> SliceKey | None:
     """The merged slice the view draws at time ``t``, or None when none is at ``t``.
 
     A slice is at ``t`` when its instant is ``t`` exactly (model 2: the
-    instant; model 3: the geometry instant, in the latest period that has one
-    at ``t``). No ``t``: the first slice with a conflicting region, else the
-    first merged slice (None when no slice merged).
+    instant; model 3: the geometry instant of the period starting at
+    ``timem``, else of the latest period that has one at ``t``: a period's
+    last geometry instant is the next one's start, two slices at one time).
+    No ``t``: the first slice with a conflicting region, else the first
+    merged slice (None when no slice merged).
     """
     keys = sorted(merge.merges)
     if t is None:
         first = sorted({r.key for r in merge.conflicts}) or keys
         return first[0] if first else None
-    at = [k for k in keys if k[-1] == t]
+    at = [k for k in keys if k[-1] == t and (timem is None or len(k) == 1 or k[0] == timem)]
     return at[-1] if at else None
 
 

@@ -531,25 +531,40 @@ function regionRow(header, region, labels, palette) {
   return row;
 }
 
-// The instants of the model-2/3 regions: choosing one reloads the page at that t (the regions of that instant drawn)
+// The slices of the model-2/3 regions (an instant; model 3: a geometry instant of a topology period, and a period's
+// last geometry instant is the next one's start: one time, two slices): choosing one reloads the page at its t and,
+// for model 3, its period's start timem (the regions of that slice drawn)
 function timeChoice(config, meshes) {
-  const times = [...new Set(meshes.flatMap((m) => m.header.regions.filter((r) => r.slice).map((r) => r.slice.times)))]
-    .sort((a, b) => a - b);
-  if (!times.length) return;
+  const slices = new Map();
+  for (const m of meshes) {
+    for (const r of m.header.regions) if (r.slice) slices.set(`${r.slice.times} ${r.slice.timem}`, r.slice);
+  }
+  if (!slices.size) return;
+  const shown = meshes.find((m) => m.header.slice);
+  const given = config.t !== null && config.t !== undefined;
+  const drawn = shown ? shown.header.slice
+    : given ? { times: config.t, timem: config.timem ?? undefined } : [...slices.values()][0];
+  const key = `${drawn.times} ${drawn.timem}`;
+  if (!slices.has(key)) slices.set(key, drawn);
+  const sorted = [...slices.values()].sort((a, b) => a.times - b.times || (a.timem ?? 0) - (b.timem ?? 0));
   const select = document.getElementById("region-time");
-  const drawn = config.t !== null && config.t !== undefined ? config.t
-    : (meshes.find((m) => m.header.slice) || { header: { t: times[0] } }).header.t;
-  if (!times.includes(drawn)) times.push(drawn);
-  for (const t of times.sort((a, b) => a - b)) {
+  // six digits, unless another time reads the same in six digits (a t given near an instant): then every digit
+  const label = (t) => sorted.some((o) => o.times !== t && short(o.times) === short(t)) ? String(t) : short(t);
+  for (const s of sorted) {
     const option = document.createElement("option");
-    option.value = String(t);
-    option.textContent = short(t);
-    option.selected = t === drawn;
+    option.value = String(s.times);
+    if (s.timem !== undefined && s.timem !== null) option.dataset.timem = String(s.timem);
+    const twice = sorted.filter((o) => o.times === s.times).length > 1;
+    option.textContent = label(s.times) + (twice && option.dataset.timem ? ` (period starting at ${short(s.timem)})` : "");
+    option.selected = s === drawn || (s.times === drawn.times && s.timem === drawn.timem);
     select.append(option);
   }
   select.addEventListener("change", () => {
     const url = new URL(window.location.href);
-    url.searchParams.set("t", select.value);
+    const option = select.selectedOptions[0];
+    url.searchParams.set("t", option.value);
+    if (option.dataset.timem !== undefined) url.searchParams.set("timem", option.dataset.timem);
+    else url.searchParams.delete("timem");
     window.location.assign(url);
   });
   document.getElementById("region-time-control").hidden = false;
@@ -569,7 +584,7 @@ export function conflictView(config) {
   const info = document.getElementById("region-info");
   setState("loading", "loading…");
   // one feature that cannot be drawn (deleted in the version, a kind the view does not draw) leaves the others
-  const fetched = config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version, t: config.t }))
+  const fetched = config.ids.map((id) => fetchMesh(`/api/conflict/${id}?` + query({ version: config.version, t: config.t, timem: config.timem }))
     .catch((error) => ({ failed: id, message: String(error.message || error) })));
   Promise.all(fetched)
     .then((results) => {
@@ -608,7 +623,7 @@ export function conflictView(config) {
           p.className = "note";
           p.textContent = `feature ${m.header.id} is drawn ` +
             (m.header.slice ? `at ${sliceText(m.header.slice)}` : `at t = ${short(m.header.t)}, where no instant merges`) +
-            `: its regions at other instants are listed, drawn when t is theirs`;
+            `: its regions at other instants are listed, drawn when theirs is chosen (t above)`;
           notes.append(p);
         }
         const note = !m.header.merges_by_region ? `feature ${m.header.id} merges as a whole object only: ${m.header.reason}`
