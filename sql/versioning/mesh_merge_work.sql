@@ -92,7 +92,12 @@ DECLARE
     v_ckeys   bigint[];
     v_top_v   bigint;
     v_top_c   bigint;
-    v_moved   bigint;
+    v_shape   bigint[];
+    v_up      integer[];
+    v_ea      integer[];
+    v_eb      integer[];
+    v_x       integer;
+    v_y       integer;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
@@ -354,21 +359,23 @@ BEGIN
                       FROM pg_temp.tgsis_mr_c m GROUP BY m.id) AS u) AS w;
 
     -- 5. the one-ring margin: the base's cells on a vertex either side moved, added or removed (one pass over
-    -- the base's cells, each vertex column probed in a hashed set of the few shape changes)
+    -- the base's cells, each vertex column probed in a hashed set of the few shape changes: the set is a
+    -- constant of the statement, so the planner hashes it, and each cell found meets the changes of its
+    -- corners by equality, not by a scan of them)
     CREATE TEMPORARY TABLE tgsis_mr_margin (id bigint NOT NULL, v bigint[] NOT NULL, sides integer NOT NULL) ON COMMIT DROP;
-    IF EXISTS (SELECT FROM pg_temp.tgsis_mr_vx x WHERE x.p_shape OR x.c_shape) THEN
+    v_shape := ARRAY(SELECT x.id FROM pg_temp.tgsis_mr_vx x WHERE x.p_shape OR x.c_shape);
+    IF cardinality(v_shape) > 0 THEN
         EXECUTE format('INSERT INTO pg_temp.tgsis_mr_margin (id, v, sides)
                         SELECT c.id, c.v, bit_or(x.p_shape::integer | (x.c_shape::integer << 1))
                           FROM (SELECT v.%1$I AS id, %2$s AS v FROM tgsis.%3$I v
                                  WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
                                    AND (%4$s)) AS c
-                          JOIN pg_temp.tgsis_mr_vx x ON x.id = ANY (c.v) AND (x.p_shape OR x.c_shape)
+                          CROSS JOIN LATERAL unnest(c.v) AS u (vid)
+                          JOIN pg_temp.tgsis_mr_vx x ON x.id = u.vid AND (x.p_shape OR x.c_shape)
                          GROUP BY c.id, c.v',
                        v_cellid, v_row, v_table || '_ver',
-                       (SELECT string_agg(format('v.vrtxid%s IN (SELECT s.id FROM pg_temp.tgsis_mr_vx s WHERE s.p_shape OR s.c_shape)', i),
-                                          ' OR ')
-                          FROM generate_series(1, v_k) AS i))
-           USING p_geoid, v_base;
+                       (SELECT string_agg(format('v.vrtxid%s = ANY ($3)', i), ' OR ') FROM generate_series(1, v_k) AS i))
+           USING p_geoid, v_base, v_shape;
     END IF;
 
     -- 6. each side's footprint (side 1 parent, 2 version): its changed cells and margin; its changed vertices
@@ -417,18 +424,36 @@ BEGIN
     CREATE UNIQUE INDEX ON pg_temp.tgsis_mr_node (node);
     ANALYZE pg_temp.tgsis_mr_node;
     ANALYZE pg_temp.tgsis_mr_edge;
-    LOOP
-        UPDATE pg_temp.tgsis_mr_node w SET label = m.label
-          FROM (SELECT e.a AS node, min(o.label) AS label
-                  FROM pg_temp.tgsis_mr_edge e JOIN pg_temp.tgsis_mr_node o ON o.node = e.b
-                 GROUP BY e.a) AS m
-         WHERE w.node = m.node AND m.label < w.label;
-        GET DIAGNOSTICS v_moved = ROW_COUNT;
-        EXIT WHEN v_moved = 0;
-        UPDATE pg_temp.tgsis_mr_node w SET label = o.label
-          FROM pg_temp.tgsis_mr_node o
-         WHERE o.node = w.label AND o.label < w.label;
+    -- the components by union-find over the node numbers in arrays (v_up[node + 1]: the node's parent, never
+    -- above the node; a union hangs the larger root under the smaller, a find halves its path), so that
+    -- each root is the least node of its component: one pass over the edges, then one over the nodes in
+    -- ascending order (a node's parent is already its root)
+    v_up := ARRAY(SELECT n.node FROM pg_temp.tgsis_mr_node n ORDER BY n.node);
+    SELECT coalesce(array_agg(e.a), '{}'), coalesce(array_agg(e.b), '{}') INTO v_ea, v_eb
+      FROM pg_temp.tgsis_mr_edge e WHERE e.a < e.b;
+    FOR i IN 1 .. cardinality(v_ea) LOOP
+        v_x := v_ea[i];
+        WHILE v_up[v_x + 1] <> v_x LOOP
+            v_up[v_x + 1] := v_up[v_up[v_x + 1] + 1];
+            v_x := v_up[v_x + 1];
+        END LOOP;
+        v_y := v_eb[i];
+        WHILE v_up[v_y + 1] <> v_y LOOP
+            v_up[v_y + 1] := v_up[v_up[v_y + 1] + 1];
+            v_y := v_up[v_y + 1];
+        END LOOP;
+        IF v_x < v_y THEN
+            v_up[v_y + 1] := v_x;
+        ELSIF v_y < v_x THEN
+            v_up[v_x + 1] := v_y;
+        END IF;
     END LOOP;
+    FOR i IN 1 .. cardinality(v_up) LOOP
+        v_up[i] := v_up[v_up[i] + 1];
+    END LOOP;
+    UPDATE pg_temp.tgsis_mr_node w SET label = u.label
+      FROM unnest(v_up) WITH ORDINALITY AS u (label, o)
+     WHERE w.node = u.o - 1 AND u.label <> w.label;
 
     -- 8. the base's coordinates of the vertices no side changed that a region touches (corners of its cells),
     -- for the boxes of the regions
