@@ -30,9 +30,9 @@
 --     vertices of the cells it added, removed or reconnected;
 --   * regions: connected components of the footprints' vertices and cells
 --     (a cell and a vertex of its row, base's or the side's, both in one
---     side's footprint), by least-label propagation with pointer jumping over
---     the few changed elements (rounds grow with the logarithm of a region's
---     diameter), numbered as merge3 numbers them (by their first element:
+--     side's footprint), by union-find over the few changed elements (one
+--     pass over their edges in arrays; each component's root is its least
+--     element), numbered as merge3 numbers them (by their first element:
 --     vertices ascending, then cells ascending);
 --   * per region: its ids, each side's changed ids, a box over its vertices
 --     and its cells' corners in the three states, the largest displacement of
