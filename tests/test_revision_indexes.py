@@ -12,11 +12,17 @@ must come from those indexes. What the merge writes is the same as before
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
+import numpy as np
 import psycopg
+import pytest
 
 import tgsis
+from tests.test_sql_merge_regions import assert_same_regions
+from tgsis.db import _merge_states
+from tgsis.db import features as F
 from tgsis.db import versions as V
 
 Conn = psycopg.Connection[Any]
@@ -176,3 +182,122 @@ def test_what_a_solution_discards_is_read_through_the_revision_indexes(conn: Con
     for plan in reads:  # the rows not all three sets see alike: written or closed in a revision not in all three
         assert "Seq Scan on samples_ver v" not in plan, plan
         assert "Bitmap Index Scan on samples_ver_obj_idx" in plan, plan
+
+
+# --------------------------------------------------------------------------- the cells on given vertices (issue 39)
+
+
+def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_none(conn: Conn) -> None:
+    for name, geotype in (
+        ("wells", "MULTIPOINT"),
+        ("traces", "MULTILINESTRING"),
+        ("faults", "SURFACE"),
+        ("bodies", "MULTITETRA"),
+    ):
+        tgsis.create_feature_class(conn, name, geotype)
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    for table, k in (("point", 1), ("segment", 2), ("trgl", 3), ("tetra", 4)):
+        columns = ", ".join(f"vrtxid{i + 1}" for i in range(k))
+        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"({columns})" in d]
+        assert len(found) == 1, _indexes(conn, f"tgsis.{table}_ver")
+        before = _indexes(conn, f"tgsis.{table}_ver")
+        conn.execute("SELECT tgsis.create_revision_indexes('tgsis', %s, 'geoid')", (table,))  # as the upgrade calls it
+        assert _indexes(conn, f"tgsis.{table}_ver") == before
+    # the storage of other versioned tables (vertices, the model-2 triangles of instants) gets none
+    for table in ("tgsis.vrtx_ver", "tgsis.times_trgl_ver"):
+        assert not any("vrtxid1" in d for am, d in _indexes(conn, table) if am == "brin"), table
+
+
+def _plans_of(conn: Conn, action: Any) -> list[str]:
+    """The plans of every statement ``action`` runs, nested ones too (auto_explain at WARNING: the region
+    functions pin client_min_messages), sequential scans made costly as on a large table."""
+    plans: list[str] = []
+    conn.add_notice_handler(lambda d: plans.append(d.message_primary or ""))
+    for setting in (
+        "LOAD 'auto_explain'",
+        "SET auto_explain.log_min_duration = 0",
+        "SET auto_explain.log_nested_statements = on",
+        "SET auto_explain.log_level = warning",
+        "SET enable_seqscan = off",
+    ):
+        conn.execute(setting)
+    try:
+        action()
+    finally:
+        conn.rollback()
+        conn.execute("RESET ALL")
+    return plans
+
+
+@pytest.fixture
+def two_edits(conn: Conn) -> int:
+    """A 300 x 300 grid surface whose parent moves a patch near one corner and whose version e1 one near the other.
+
+    Large enough for its triangles to fill many of a BRIN's page ranges (128 pages): on a table of one range
+    the planner rightly takes any index.
+    """
+    side = 300
+    u, v = np.meshgrid(np.linspace(0.0, 29900.0, side), np.linspace(0.0, 29900.0, side))
+    vertices = np.stack([u.ravel(), v.ravel(), 20.0 * np.sin(u.ravel() / 700.0)], axis=1)
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    surface = tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "faults", surface)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for version, ids, dz in (("DEFAULT", idx[3:8, 3:9], 5.0), ("e1", idx[290:296, 289:295], -3.0)):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+                (dz, geoid, [int(i) for i in ids.ravel()]),
+            )
+        conn.commit()
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE tgsis.trgl_ver, tgsis.vrtx_ver")
+    conn.autocommit = False
+    return geoid
+
+
+def _reads_the_ring_by_spans(plan: str) -> None:
+    """The cells on the changed vertices come from the vertex BRIN searched by spans of ids, not value by value."""
+    assert "Seq Scan on trgl_ver" not in plan, plan
+    assert re.search(r"Bitmap Index Scan on trgl_ver_vrtxid1_vrtxid2_vrtxid3_idx", plan), plan
+    conditions = [line for line in plan.splitlines() if "Index Cond:" in line and "vrtxid" in line]
+    assert conditions and not any("ANY" in line for line in conditions), plan  # each search one span
+    assert not any("Join Filter:" in line and "ANY" in line for line in plan.splitlines()), plan
+
+
+def test_sql_region_detection_reads_the_cells_on_changed_vertices_by_spans_of_the_vertex_brin(
+    conn: Conn, two_edits: int
+) -> None:
+    found: list[Any] = []
+    plans = _plans_of(
+        conn,
+        lambda: found.extend(
+            conn.execute(
+                "SELECT region, changed_by, cardinality(vertex_ids) FROM tgsis.mesh_merge_regions('e1', %s)",
+                (two_edits,),
+            ).fetchall()
+        ),
+    )
+    assert found == [(0, "parent", 30), (1, "child", 36)]
+    (ring,) = [
+        p for p in plans if p.split("Query Text:", 1)[-1].lstrip().startswith("INSERT INTO pg_temp.tgsis_mr_margin")
+    ]
+    _reads_the_ring_by_spans(ring)
+    assert_same_regions(conn, "e1", two_edits)  # what it finds is merge3's
+
+
+def test_the_python_merge_read_takes_the_cells_on_changed_vertices_by_spans_of_the_vertex_brin(
+    conn: Conn, two_edits: int
+) -> None:
+    read: list[Any] = []
+    plans = _plans_of(conn, lambda: read.append(_merge_states.read_merge_change(conn, "e1", two_edits)))
+    assert read[0] is not None
+    # the statement that finds the cells on given vertices (the others find cells by id)
+    on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
+    assert len(on_vertices) == 1, plans
+    _reads_the_ring_by_spans(on_vertices[0])
