@@ -21,8 +21,8 @@
 --     compare as merge3 compares them (NaN equals NaN and a missing row,
 --     -0.0 equals 0.0);
 --   * each side's footprint: its changed vertices and cells, the base cells
---     on a vertex it moved, added or removed (one pass over the base's cells
---     with the vertex columns tested against the few shape changes), the
+--     on a vertex it moved, added or removed (found through the vertex BRIN
+--     of the cell storage, by a few spans of those vertex ids), the
 --     vertices of the cells it added, removed or reconnected;
 --   * regions: connected components of the footprints' vertices and cells
 --     (a cell and a vertex of its row, base's or the side's, both in one
