@@ -207,6 +207,10 @@ def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_
     # the storage of other versioned tables (vertices, the model-2 triangles of instants) gets none
     for table in ("tgsis.vrtx_ver", "tgsis.times_trgl_ver"):
         assert not any("vrtxid1" in d for am, d in _indexes(conn, table) if am == "brin"), table
+    tgsis.disable_feature_versioning(conn)  # what versioning made goes
+    conn.commit()
+    for table in ("point", "segment", "trgl", "tetra"):
+        assert not any(am == "brin" for am, _ in _indexes(conn, f"tgsis.{table}")), _indexes(conn, f"tgsis.{table}")
 
 
 def _plans_of(conn: Conn, action: Any) -> list[str]:
