@@ -21,7 +21,7 @@ import pytest
 
 import tgsis
 from tests.test_sql_merge_regions import assert_same_regions
-from tgsis.db import _merge_states
+from tgsis.db import _merge_states, regions
 from tgsis.db import features as F
 from tgsis.db import versions as V
 
@@ -305,3 +305,46 @@ def test_the_python_merge_read_takes_the_cells_on_changed_vertices_by_spans_of_t
     on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
     assert len(on_vertices) == 1, plans
     _reads_the_ring_by_spans(on_vertices[0])
+
+
+def test_scattered_edits_found_through_the_vertex_brin_give_merge3s_regions_in_sql_and_in_python(
+    conn: Conn, two_edits: int
+) -> None:
+    """Shape changes all over the mesh (many gaps between their ids, more than spans): the spans cover them all,
+    the exact test keeps only theirs; SQL and the Python read of the change give the regions of the whole states."""
+    rng = np.random.default_rng(39)
+    ids = rng.choice(np.arange(300 * 300), size=120, replace=False)
+    for version, moved, dz in (("DEFAULT", ids[:60], 1.5), ("e1", ids[60:], -2.5)):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+                (dz, two_edits, [int(i) for i in moved]),
+            )
+        conn.commit()
+    with tgsis.in_version(conn, "e1"):  # and a vertex removed with its cells: a shape change of another kind
+        conn.execute(
+            "DELETE FROM tgsis.trgl WHERE geoid = %s AND %s IN (vrtxid1, vrtxid2, vrtxid3)", (two_edits, 45150)
+        )
+        conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s", (two_edits, 45150))
+    conn.commit()
+    conn.execute("SET enable_seqscan = off")  # the index is taken, as on a large table
+    whole = {tuple(r["vertex_ids"]) for r in assert_same_regions(conn, "e1", two_edits)}
+    assert len(whole) > 100
+    conn.execute("SET enable_seqscan = off")
+    [conflict] = regions.find_conflicts(conn, "e1")  # Python, through read_merge_change
+    conn.rollback()
+    assert {tuple(int(i) for i in r.vertex_ids) for r in conflict.regions} == whole
+
+
+@pytest.mark.parametrize(
+    ("ids", "spans"),
+    [
+        ([5], [(5, 5)]),
+        (list(range(100)), [(0, 99)]),
+        ([1, 2, 3, 10, 11, 50, 51, 52, 1000], [(1, 3), (10, 11), (50, 52), (1000, 1000)]),
+        ([1, 3, 5, 7, 9, 11, 13, 15], [(1, 1), (3, 3), (5, 5), (7, 15)]),  # ties: the first gaps cut
+        ([-7, 0, 2**62, 2**62 + 1], [(-7, -7), (0, 0), (2**62, 2**62 + 1)]),
+    ],
+)
+def test_the_spans_of_ids_cover_them_cut_at_the_widest_gaps(ids: list[int], spans: list[tuple[int, int]]) -> None:
+    assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
