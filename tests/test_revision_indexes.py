@@ -348,3 +348,20 @@ def test_scattered_edits_found_through_the_vertex_brin_give_merge3s_regions_in_s
 )
 def test_the_spans_of_ids_cover_them_cut_at_the_widest_gaps(ids: list[int], spans: list[tuple[int, int]]) -> None:
     assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
+
+
+def test_the_sql_condition_of_cells_on_vertices_cuts_the_spans_as_the_python_reader(conn: Conn) -> None:
+    rng = np.random.default_rng(7)
+    for ids in ([5], [1, 2, 3, 10, 11, 50, 51, 52, 1000], rng.choice(10**6, size=300, replace=False).tolist()):
+        (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(3, %s, '$3')", (ids,)).fetchone()  # type: ignore[misc]
+        spans = sorted(
+            (int(lo), int(hi)) for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text))
+        )
+        assert spans == _merge_states._id_spans(np.unique(np.asarray(ids, dtype=np.int64))), text
+        assert text.count("BETWEEN") == 3 * len(spans)
+        assert "(v.vrtxid3 + 0) = ANY ($3)" in text and "vrtxid4" not in text
+    assert conn.execute("SELECT tgsis.cells_on_vertices_sql(2, '{}', '$3')").fetchone() == ("false",)
+    for bad in ("'$3; DROP TABLE x'", "'3'"):
+        with pytest.raises(psycopg.errors.InvalidParameterValue):
+            conn.execute(f"SELECT tgsis.cells_on_vertices_sql(3, '{{1}}', {bad})")
+        conn.rollback()

@@ -93,7 +93,6 @@ DECLARE
     v_top_v   bigint;
     v_top_c   bigint;
     v_shape   bigint[];
-    v_spans   text;
     v_up      integer[];
     v_ea      integer[];
     v_eb      integer[];
@@ -360,30 +359,20 @@ BEGIN
                       FROM pg_temp.tgsis_mr_c m GROUP BY m.id) AS u) AS w;
 
     -- 5. the one-ring margin: the base's cells on a vertex either side moved, added or removed. Found through
-    -- the vertex BRIN of the cell storage (tgsis.create_revision_indexes), searched by spans of those ids (cut
-    -- at their 3 widest gaps: at most 4 spans a column; a BRIN searched by an = ANY would be searched once
-    -- per id), each cell found tested exactly against a hashed set of the ids (a constant of the statement;
-    -- + 0: not an index condition) and meeting the changes of its corners by equality
+    -- the vertex BRIN of the cell storage by spans of those ids, each cell tested exactly against a hashed
+    -- set of them (tgsis.cells_on_vertices_sql), and meeting the changes of its corners by equality
     CREATE TEMPORARY TABLE tgsis_mr_margin (id bigint NOT NULL, v bigint[] NOT NULL, sides integer NOT NULL) ON COMMIT DROP;
     v_shape := ARRAY(SELECT x.id FROM pg_temp.tgsis_mr_vx x WHERE x.p_shape OR x.c_shape ORDER BY x.id);
     IF cardinality(v_shape) > 0 THEN
-        WITH ids AS (SELECT u.id, u.id - lag(u.id) OVER (ORDER BY u.id) AS gap FROM unnest(v_shape) AS u (id)),
-        cuts AS (SELECT i.id FROM ids i WHERE i.gap > 1 ORDER BY i.gap DESC, i.id LIMIT 3),
-        spans AS (SELECT min(g.id) AS lo, max(g.id) AS hi
-                    FROM (SELECT i.id, count(c.id) OVER (ORDER BY i.id) AS grp FROM ids i LEFT JOIN cuts c ON c.id = i.id) AS g
-                   GROUP BY g.grp)
-        SELECT string_agg(format('v.vrtxid%s BETWEEN %L AND %L', k.i, s.lo, s.hi), ' OR ' ORDER BY k.i, s.lo) INTO v_spans
-          FROM spans s, generate_series(1, v_k) AS k (i);
         EXECUTE format('INSERT INTO pg_temp.tgsis_mr_margin (id, v, sides)
                         SELECT c.id, c.v, bit_or(x.p_shape::integer | (x.c_shape::integer << 1))
                           FROM (SELECT v.%1$I AS id, %2$s AS v FROM tgsis.%3$I v
                                  WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
-                                   AND (%4$s) AND (%5$s)) AS c
+                                   AND %4$s) AS c
                           CROSS JOIN LATERAL unnest(c.v) AS u (vid)
                           JOIN pg_temp.tgsis_mr_vx x ON x.id = u.vid AND (x.p_shape OR x.c_shape)
                          GROUP BY c.id, c.v',
-                       v_cellid, v_row, v_table || '_ver', v_spans,
-                       (SELECT string_agg(format('(v.vrtxid%s + 0) = ANY ($3)', i), ' OR ') FROM generate_series(1, v_k) AS i))
+                       v_cellid, v_row, v_table || '_ver', tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'))
            USING p_geoid, v_base, v_shape;
     END IF;
 
