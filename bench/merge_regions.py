@@ -17,8 +17,14 @@ is then changed on both sides, disjointly. Timed in one process, medians of
   (``read_merge_states``: the base in full, of each side only the rows its
   revisions wrote or closed) against the three full reads through the views
   it replaced;
-- (c) the SQL ``tgsis.find_conflicts`` (object-level: which objects changed on
-  both sides);
+- (c) the SQL ``tgsis.find_conflicts`` (which objects changed on both sides;
+  when the checkout has SQL region detection, it finds and stores the
+  regions of the mesh too, as a psql user gets them): the first call in a
+  new session (``sql_find_conflicts_first_s``, medians of ``--repeat`` new
+  sessions), repeated in one session (rolled back each time, so the regions
+  are found again each time), and once the regions are stored (the call
+  then only checks them); ``tgsis.mesh_merge_regions`` alone the same way;
+  each as a ratio to the Python detection of (d) in the same run;
 - (d) when the checkout has them: the region-aware ``find_conflicts``
   (``tgsis.db.regions``: regions computed and recorded) and the region-aware
   ``merge_version`` (``tgsis.db.merging``) of the two disjoint edits, with
@@ -104,6 +110,27 @@ def in_snapshot(conn: Conn, action: Callable[[], Any]) -> Callable[[], Any]:
     return run
 
 
+def in_new_session(
+    conn: Conn, query: str, args: tuple[Any, ...], stored_regions: int | None = None
+) -> Callable[[], Any]:
+    """``query`` as the first statement of a new session to the same database (rolled back; the session closed)."""
+
+    def run() -> Any:
+        with psycopg.connect(conn.info.dsn) as other:
+            try:
+                rows = other.execute(query, args).fetchall()
+                if stored_regions is not None:
+                    count = other.execute(
+                        "SELECT count(*) FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('regions')"
+                    ).fetchone()
+                    assert count == (stored_regions,), count
+                return rows
+            finally:
+                other.rollback()
+
+    return run
+
+
 def three_full_reads(conn: Conn, version: str, geoid: int) -> None:
     """The read of before: base, parent and child each in full through the versioned views."""
     _versionid, parent, initrevision, working, parent_working = _merge_states.version_row(conn, version)
@@ -160,7 +187,7 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
     t_full = timed(in_snapshot(conn, lambda: three_full_reads(conn, "regions", geoid)), repeat)
     t_change = timed(in_snapshot(conn, lambda: _merge_states.read_merge_change(conn, "regions", geoid)), repeat)
 
-    # (c) the SQL conflict check
+    # (c) the SQL conflict check (with the regions found in SQL when the checkout has it), repeated in one session
     t_sql_conflicts = timed(
         rolled_back(conn, lambda: conn.execute("SELECT * FROM tgsis.find_conflicts('regions')").fetchall()), repeat
     )
@@ -188,16 +215,46 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
     print(
         f"    read_merge_change (the change and its one-ring):               {t_change:6.3f} s (the read is {t_change / t_full:.3f}x)"
     )
-    print(f"(c) SQL tgsis.find_conflicts (object-level):                      {t_sql_conflicts:6.3f} s")
+    print(f"(c) SQL tgsis.find_conflicts, repeated in one session:           {t_sql_conflicts:6.3f} s")
     # (c') issue39-sqlmerge: SQL finds the regions itself (tgsis.mesh_merge_regions, which the SQL find_conflicts
     # of (c) runs for a mesh without regions stored on its marks: (c) includes it when the function exists)
+    sql_detection = {}
     if conn.execute("SELECT to_regprocedure('tgsis.mesh_merge_regions(text, bigint)')").fetchone() != (None,):
         in_sql = "SELECT region, conflict, cardinality(vertex_ids) FROM tgsis.mesh_merge_regions('regions', %s)"
         found = rolled_back(conn, lambda: conn.execute(in_sql, (geoid,)).fetchall())()
         assert [r[1:] for r in found] == [(False, len(r.vertex_ids)) for r in merge.regions], found
         t_sql_regions = timed(rolled_back(conn, lambda: conn.execute(in_sql, (geoid,)).fetchall()), repeat)
-        out["sql_region_detection_s"] = round(t_sql_regions, 3)
-        print(f"(c') SQL region detection alone (tgsis.mesh_merge_regions):       {t_sql_regions:6.3f} s")
+        conflicts = "SELECT * FROM tgsis.find_conflicts('regions')"
+        t_first = timed(in_new_session(conn, conflicts, (), stored_regions=2), repeat)
+        t_regions_first = timed(in_new_session(conn, in_sql, (geoid,)), repeat)
+
+        def stored_then_again() -> float:  # the regions found and stored, then the call again: it only checks them
+            conn.execute(conflicts).fetchall()
+            start = time.perf_counter()
+            conn.execute(conflicts).fetchall()
+            return time.perf_counter() - start
+
+        t_stored = statistics.median(rolled_back(conn, stored_then_again)() for _ in range(repeat))
+        sql_detection = {
+            "sql_find_conflicts_first_s": t_first,
+            "sql_find_conflicts_s": t_sql_conflicts,
+            "sql_region_detection_first_s": t_regions_first,
+            "sql_region_detection_s": t_sql_regions,
+        }
+        out.update(
+            {
+                "sql_find_conflicts_first_s": round(t_first, 3),
+                "sql_find_conflicts_stored_s": round(t_stored, 3),
+                "sql_region_detection_first_s": round(t_regions_first, 3),
+                "sql_region_detection_s": round(t_sql_regions, 3),
+            }
+        )
+        print(
+            f"(c) SQL tgsis.find_conflicts, first call of a new session:       {t_first:6.3f} s (regions found, stored)"
+        )
+        print(f"(c) SQL tgsis.find_conflicts, the regions stored already:        {t_stored:6.3f} s")
+        print(f"(c') SQL region detection alone (tgsis.mesh_merge_regions), first: {t_regions_first:6.3f} s")
+        print(f"(c') SQL region detection alone, repeated in one session:        {t_sql_regions:6.3f} s")
 
     # (d) the region-aware conflict check and merge, when this checkout has them
     if importlib.util.find_spec("tgsis.db.regions") is not None:
@@ -208,6 +265,9 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
         t_regions = timed(rolled_back(conn, lambda: regions.find_conflicts(conn, "regions")), repeat)
         out["region_find_conflicts_s"] = round(t_regions, 3)
         print(f"(d) region-aware find_conflicts (regions found and recorded):     {t_regions:6.3f} s")
+        for name, seconds in sql_detection.items():  # SQL detection against Python's, in this run
+            out[name.removesuffix("_s") + "_vs_python"] = round(seconds / t_regions, 2)
+            print(f"    {name} / (d): {seconds / t_regions:.2f}")
     else:
         print("(d) no tgsis.db.regions in this checkout: region-aware find_conflicts not measured")
     from tgsis.db import merging
@@ -233,13 +293,15 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
 
 
 def _revision_indexes(conn: Conn) -> list[tuple[str, str]]:
-    """(index, definition) of the revision indexes of the class's storage (BRIN on revision, btree WHERE revclosed)."""
+    """(index, definition) of the revision indexes of the class's storage (BRINs on revision and on the cells'
+    vertex columns, btree WHERE revclosed)."""
     rows = conn.execute(
         "SELECT i.indexrelid::regclass::text, pg_get_indexdef(i.indexrelid) FROM pg_index i"
         " JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam"
         " WHERE i.indrelid::regclass::text IN (SELECT tgsis.storage_table(schemaname, tablename)"
         "        FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
-        "   AND ((a.amname = 'brin' AND pg_get_indexdef(i.indexrelid) LIKE '%(revision)%')"
+        "   AND ((a.amname = 'brin' AND (pg_get_indexdef(i.indexrelid) LIKE '%(revision)%'"
+        "                              OR pg_get_indexdef(i.indexrelid) LIKE '%(vrtxid1, vrtxid2, vrtxid3)%'))"
         "        OR pg_get_expr(i.indpred, i.indrelid) = 'revclosed')"
     ).fetchall()
     conn.commit()

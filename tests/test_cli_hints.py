@@ -150,6 +150,8 @@ NOT_FROM_THE_CLI = {
     "sql/model5/md_vertices_in_box.sql": "box queries of multiply indexed G-maps are SQL and Python only: no command",
     "sql/versioning/mesh_merge_regions.sql": "SQL region detection of psql users: the command finds the regions in "
     "Python, and SQL calls it only after the same checks (tgsis.store_mesh_regions)",
+    "sql/versioning/mesh_merge_work.sql": "the work tables of SQL region detection and of the psql merge by region: "
+    "the command finds and merges the regions in Python",
     "sql/versioning/resolve_all_regions.sql": "the psql face of --region all: the command calls the Python "
     "resolve_all_regions",
 }

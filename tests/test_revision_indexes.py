@@ -12,11 +12,17 @@ must come from those indexes. What the merge writes is the same as before
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
+import numpy as np
 import psycopg
+import pytest
 
 import tgsis
+from tests.test_sql_merge_regions import assert_same_regions
+from tgsis.db import _merge_states, regions
+from tgsis.db import features as F
 from tgsis.db import versions as V
 
 Conn = psycopg.Connection[Any]
@@ -176,3 +182,186 @@ def test_what_a_solution_discards_is_read_through_the_revision_indexes(conn: Con
     for plan in reads:  # the rows not all three sets see alike: written or closed in a revision not in all three
         assert "Seq Scan on samples_ver v" not in plan, plan
         assert "Bitmap Index Scan on samples_ver_obj_idx" in plan, plan
+
+
+# --------------------------------------------------------------------------- the cells on given vertices (issue 39)
+
+
+def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_none(conn: Conn) -> None:
+    for name, geotype in (
+        ("wells", "MULTIPOINT"),
+        ("traces", "MULTILINESTRING"),
+        ("faults", "SURFACE"),
+        ("bodies", "MULTITETRA"),
+    ):
+        tgsis.create_feature_class(conn, name, geotype)
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    for table, k in (("point", 1), ("segment", 2), ("trgl", 3), ("tetra", 4)):
+        columns = ", ".join(f"vrtxid{i + 1}" for i in range(k))
+        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"({columns})" in d]
+        assert len(found) == 1, _indexes(conn, f"tgsis.{table}_ver")
+        before = _indexes(conn, f"tgsis.{table}_ver")
+        conn.execute("SELECT tgsis.create_revision_indexes('tgsis', %s, 'geoid')", (table,))  # as the upgrade calls it
+        assert _indexes(conn, f"tgsis.{table}_ver") == before
+    # the storage of other versioned tables (vertices, the model-2 triangles of instants) gets none
+    for table in ("tgsis.vrtx_ver", "tgsis.times_trgl_ver"):
+        assert not any("vrtxid1" in d for am, d in _indexes(conn, table) if am == "brin"), table
+    tgsis.disable_feature_versioning(conn)  # what versioning made goes
+    conn.commit()
+    for table in ("point", "segment", "trgl", "tetra"):
+        assert not any(am == "brin" for am, _ in _indexes(conn, f"tgsis.{table}")), _indexes(conn, f"tgsis.{table}")
+
+
+def _plans_of(conn: Conn, action: Any) -> list[str]:
+    """The plans of every statement ``action`` runs, nested ones too (auto_explain at WARNING: the region
+    functions pin client_min_messages), sequential scans made costly as on a large table."""
+    plans: list[str] = []
+    conn.add_notice_handler(lambda d: plans.append(d.message_primary or ""))
+    for setting in (
+        "LOAD 'auto_explain'",
+        "SET auto_explain.log_min_duration = 0",
+        "SET auto_explain.log_nested_statements = on",
+        "SET auto_explain.log_level = warning",
+        "SET enable_seqscan = off",
+    ):
+        conn.execute(setting)
+    try:
+        action()
+    finally:
+        conn.rollback()
+        conn.execute("RESET ALL")
+    return plans
+
+
+@pytest.fixture
+def two_edits(conn: Conn) -> int:
+    """A 300 x 300 grid surface whose parent moves a patch near one corner and whose version e1 one near the other.
+
+    Large enough for its triangles to fill many of a BRIN's page ranges (128 pages): on a table of one range
+    the planner rightly takes any index.
+    """
+    side = 300
+    u, v = np.meshgrid(np.linspace(0.0, 29900.0, side), np.linspace(0.0, 29900.0, side))
+    vertices = np.stack([u.ravel(), v.ravel(), 20.0 * np.sin(u.ravel() / 700.0)], axis=1)
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    surface = tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "faults", surface)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for version, ids, dz in (("DEFAULT", idx[3:8, 3:9], 5.0), ("e1", idx[290:296, 289:295], -3.0)):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+                (dz, geoid, [int(i) for i in ids.ravel()]),
+            )
+        conn.commit()
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE tgsis.trgl_ver, tgsis.vrtx_ver")
+    conn.autocommit = False
+    return geoid
+
+
+def _reads_the_ring_by_spans(plan: str) -> None:
+    """The cells on the changed vertices come from the vertex BRIN searched by spans of ids, not value by value."""
+    assert "Seq Scan on trgl_ver" not in plan, plan
+    assert re.search(r"Bitmap Index Scan on trgl_ver_vrtxid1_vrtxid2_vrtxid3_idx", plan), plan
+    conditions = [line for line in plan.splitlines() if "Index Cond:" in line and "vrtxid" in line]
+    assert conditions and not any("ANY" in line for line in conditions), plan  # each search one span
+    assert not any("Join Filter:" in line and "ANY" in line for line in plan.splitlines()), plan
+
+
+def test_sql_region_detection_reads_the_cells_on_changed_vertices_by_spans_of_the_vertex_brin(
+    conn: Conn, two_edits: int
+) -> None:
+    found: list[Any] = []
+    plans = _plans_of(
+        conn,
+        lambda: found.extend(
+            conn.execute(
+                "SELECT region, changed_by, cardinality(vertex_ids) FROM tgsis.mesh_merge_regions('e1', %s)",
+                (two_edits,),
+            ).fetchall()
+        ),
+    )
+    assert found == [(0, "parent", 30), (1, "child", 36)]
+    (ring,) = [
+        p for p in plans if p.split("Query Text:", 1)[-1].lstrip().startswith("INSERT INTO pg_temp.tgsis_mr_margin")
+    ]
+    _reads_the_ring_by_spans(ring)
+    assert_same_regions(conn, "e1", two_edits)  # what it finds is merge3's
+
+
+def test_the_python_merge_read_takes_the_cells_on_changed_vertices_by_spans_of_the_vertex_brin(
+    conn: Conn, two_edits: int
+) -> None:
+    read: list[Any] = []
+    plans = _plans_of(conn, lambda: read.append(_merge_states.read_merge_change(conn, "e1", two_edits)))
+    assert read[0] is not None
+    # the statement that finds the cells on given vertices (the others find cells by id)
+    on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
+    assert len(on_vertices) == 1, plans
+    _reads_the_ring_by_spans(on_vertices[0])
+
+
+def test_scattered_edits_found_through_the_vertex_brin_give_merge3s_regions_in_sql_and_in_python(
+    conn: Conn, two_edits: int
+) -> None:
+    """Shape changes all over the mesh (many gaps between their ids, more than spans): the spans cover them all,
+    the exact test keeps only theirs; SQL and the Python read of the change give the regions of the whole states."""
+    rng = np.random.default_rng(39)
+    ids = rng.choice(np.arange(300 * 300), size=120, replace=False)
+    for version, moved, dz in (("DEFAULT", ids[:60], 1.5), ("e1", ids[60:], -2.5)):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+                (dz, two_edits, [int(i) for i in moved]),
+            )
+        conn.commit()
+    with tgsis.in_version(conn, "e1"):  # and a vertex removed with its cells: a shape change of another kind
+        conn.execute(
+            "DELETE FROM tgsis.trgl WHERE geoid = %s AND %s IN (vrtxid1, vrtxid2, vrtxid3)", (two_edits, 45150)
+        )
+        conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s", (two_edits, 45150))
+    conn.commit()
+    conn.execute("SET enable_seqscan = off")  # the index is taken, as on a large table
+    whole = {tuple(r["vertex_ids"]) for r in assert_same_regions(conn, "e1", two_edits)}
+    assert len(whole) > 100
+    conn.execute("SET enable_seqscan = off")
+    [conflict] = regions.find_conflicts(conn, "e1")  # Python, through read_merge_change
+    conn.rollback()
+    assert {tuple(int(i) for i in r.vertex_ids) for r in conflict.regions} == whole
+
+
+@pytest.mark.parametrize(
+    ("ids", "spans"),
+    [
+        ([5], [(5, 5)]),
+        (list(range(100)), [(0, 99)]),
+        ([1, 2, 3, 10, 11, 50, 51, 52, 1000], [(1, 3), (10, 11), (50, 52), (1000, 1000)]),
+        ([1, 3, 5, 7, 9, 11, 13, 15], [(1, 1), (3, 3), (5, 5), (7, 15)]),  # ties: the first gaps cut
+        ([-7, 0, 2**62, 2**62 + 1], [(-7, -7), (0, 0), (2**62, 2**62 + 1)]),
+    ],
+)
+def test_the_spans_of_ids_cover_them_cut_at_the_widest_gaps(ids: list[int], spans: list[tuple[int, int]]) -> None:
+    assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
+
+
+def test_the_sql_condition_of_cells_on_vertices_cuts_the_spans_as_the_python_reader(conn: Conn) -> None:
+    rng = np.random.default_rng(7)
+    for ids in ([5], [1, 2, 3, 10, 11, 50, 51, 52, 1000], rng.choice(10**6, size=300, replace=False).tolist()):
+        (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(3, %s, '$3')", (ids,)).fetchone()  # type: ignore[misc]
+        spans = sorted(
+            (int(lo), int(hi)) for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text))
+        )
+        assert spans == _merge_states._id_spans(np.unique(np.asarray(ids, dtype=np.int64))), text
+        assert text.count("BETWEEN") == 3 * len(spans)
+        assert "(v.vrtxid3 + 0) = ANY ($3)" in text and "vrtxid4" not in text
+    assert conn.execute("SELECT tgsis.cells_on_vertices_sql(2, '{}', '$3')").fetchone() == ("false",)
+    for bad in ("'$3; DROP TABLE x'", "'3'"):
+        with pytest.raises(psycopg.errors.InvalidParameterValue):
+            conn.execute(f"SELECT tgsis.cells_on_vertices_sql(3, '{{1}}', {bad})")
+        conn.rollback()

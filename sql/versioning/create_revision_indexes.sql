@@ -11,6 +11,20 @@
 --   those closed by edits.
 -- A btree on revision would cost every upload a third more, and one on the
 -- cells' vertex columns double it (docs/performance.md, the merge section).
+-- Model 1's cell tables (tgsis.point, segment, trgl, tetra) get a third, a
+-- BRIN on the vertex columns (vrtxid1..k): the merges by region ask "which
+-- cells stand on these vertices" (the one-ring of the change), and a
+-- mesh's cells are stored near the cells that share their vertices (files
+-- and meshers number them so; uploads keep their order), so a few page
+-- ranges hold them. Ranges of 32 pages (a cell found rechecks a few
+-- thousand rows). It costs uploads nothing measurable (an insert of 2M
+-- triangles 1.00-1.07x); it is not autosummarized: a large upload's ranges
+-- overflow autovacuum's queue of work items, which logs each one it drops,
+-- and the insert-driven autovacuum after the upload summarizes them (a range
+-- not yet summarized is read whole, so results never depend on it).
+-- Searched by spans of vertex ids (BETWEEN), not by an = ANY of the ids: a
+-- BRIN is searched once per value of an = ANY (tgsis.mesh_merge_work,
+-- tgsis.db._merge_states).
 -- Idempotent (an index of the same kind already there is kept); called by
 -- tgsis.enable_versioning_rel and by the upgrade for tables versioned before.
 -- Runs with the caller's rights: the caller acts as the storage's owner.
@@ -33,8 +47,16 @@ BEGIN
                       AND pg_get_expr(i.indpred, i.indrelid) = 'revclosed') THEN
         EXECUTE format('CREATE INDEX ON %s (%I) WHERE revclosed', v_rel, p_keyfield);
     END IF;
+    IF p_schema = 'tgsis' AND p_table IN ('point', 'segment', 'trgl', 'tetra')
+       AND NOT EXISTS (SELECT FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam
+                        WHERE i.indrelid = v_rel AND a.amname = 'brin'
+                          AND i.indkey[0] = (SELECT attnum FROM pg_attribute WHERE attrelid = v_rel AND attname = 'vrtxid1')) THEN
+        EXECUTE format('CREATE INDEX ON %s USING brin (%s) WITH (pages_per_range = 32)', v_rel,
+                       (SELECT string_agg(quote_ident(a.attname), ', ' ORDER BY a.attnum) FROM pg_attribute a
+                         WHERE a.attrelid = v_rel AND a.attname ~ '^vrtxid[0-9]+$' AND NOT a.attisdropped));
+    END IF;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.create_revision_indexes(text, text, text) IS
-    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); idempotent';
+    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on model 1''s cell tables also a BRIN on the vertex columns (the cells on given vertices); idempotent';

@@ -566,6 +566,19 @@ def _rows_where(table: _Table, storage: str, sets: Mapping[str, list[int]], wher
     )
 
 
+def _id_spans(ids: npt.NDArray[np.int64], cuts: int = 3) -> list[tuple[int, int]]:
+    """(first, last) spans covering the sorted unique ``ids``, cut at their ``cuts`` widest gaps (at most ``cuts + 1``).
+
+    What a BRIN is searched by: one search per span, the page ranges whose
+    values meet it rechecked (as ``tgsis.mesh_merge_work`` cuts them).
+    """
+    gaps = np.diff(ids)
+    widest = np.argsort(-gaps, kind="stable")[:cuts]
+    cut = np.sort(widest[gaps[widest] > 1])
+    starts, ends = np.concatenate([[0], cut + 1]), np.concatenate([cut, [len(ids) - 1]])
+    return [(int(ids[a]), int(ids[b])) for a, b in zip(starts, ends, strict=True)]
+
+
 def _corner_ids(columns: list[npt.NDArray[Any]], k: int) -> npt.NDArray[np.int64]:
     """The vertex ids of cell rows read as ``[object key, cell id, vrtxid1..k, _seen]``, of rows some side sees."""
     seen = np.asarray(columns[-1]) != 0
@@ -640,12 +653,20 @@ def _read_change(
         )[0]
 
     def on(vertex_ids: npt.NDArray[np.int64]) -> sql.Composable:
+        # the storage's vertex BRIN (tgsis.create_revision_indexes) searched by a few spans of the ids, each
+        # cell found tested exactly against the hashed ids (+ 0: not an index condition, which would search
+        # the BRIN once per id)
         if len(vertex_ids) == 0:
             return sql.SQL("false")
         ids = _int8_array(vertex_ids)
-        return sql.SQL(" OR ").join(
-            sql.SQL("v.{} = ANY ({})").format(sql.Identifier(f"vrtxid{j + 1}"), ids) for j in range(k)
+        columns = [sql.Identifier(f"vrtxid{j + 1}") for j in range(k)]
+        spans = sql.SQL(" OR ").join(
+            sql.SQL("v.{} BETWEEN {} AND {}").format(c, sql.Literal(lo), sql.Literal(hi))
+            for c in columns
+            for lo, hi in _id_spans(np.unique(vertex_ids))
         )
+        exact = sql.SQL(" OR ").join(sql.SQL("(v.{} + 0) = ANY ({})").format(c, ids) for c in columns)
+        return sql.SQL("({}) AND ({})").format(spans, exact)
 
     by_id = (
         cells(sql.SQL("v.{} = ANY ({})").format(sql.Identifier(cell_t.columns[0][0]), _int8_array(c0_ids)))
