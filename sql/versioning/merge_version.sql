@@ -20,6 +20,7 @@ DECLARE
     v_own     integer[];
     v_class   record;
     v_written bigint := 0;
+    v_detect  text;
 BEGIN
     -- the right to merge into the parent, and to change (or delete) the version itself, whose base moves
     PERFORM tgsis.require_merge_privileges(p_version, 'merge', coalesce(p_remove, false));
@@ -27,6 +28,10 @@ BEGIN
         RAISE EXCEPTION 'version % has child versions and cannot be removed by the merge', quote_literal(p_version)
             USING ERRCODE = 'TG202', HINT = 'merge without removing it, or merge or delete its children first';
     END IF;
+    -- the unsolved conflicting meshes whose regions all have a solution are merged by region into the version
+    -- first (tgsis.merge_regions_in_sql), as the Python merge does; the merge then copies them as 'manual'
+    v_detect := current_setting('tgsis.region_detection', true);
+    v_written := tgsis.merge_regions_in_sql(p_version, 'merge', coalesce(p_remove, false));
     v_child := tgsis.lock_for_merge(p_version, 'merge');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
     -- what the solutions throw away of the other side's edits, said before it is gone
@@ -62,6 +67,7 @@ BEGIN
         PERFORM tgsis.next_working_revision(v_child.versionid, v_parent.workingset, v_parent.workingrevision);
         DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
     END IF;
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
     RETURN v_written;
 END
 $$;

@@ -20,8 +20,13 @@ DECLARE
     v_next    integer;
     v_class   record;
     v_written bigint := 0;
+    v_detect  text;
 BEGIN
     PERFORM tgsis.require_merge_privileges(p_version, 'refresh');
+    -- the unsolved conflicting meshes whose regions all have a solution are merged by region into the version
+    -- first (tgsis.merge_regions_in_sql), as the Python merge does; the merge then copies them as 'manual'
+    v_detect := current_setting('tgsis.region_detection', true);
+    v_written := tgsis.merge_regions_in_sql(p_version, 'refresh', false);
     v_child := tgsis.lock_for_merge(p_version, 'refresh');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
     PERFORM tgsis.notice_discards(p_version, 'refreshed');  -- what the solutions throw away, said before it is gone
@@ -47,6 +52,7 @@ BEGIN
             v_newset, v_next);
     END LOOP;
     DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
     RETURN v_written;
 END
 $$;

@@ -1,0 +1,337 @@
+"""The merge by region written in SQL: a psql user's tgsis.merge_version / refresh_version (issue 39, items 2 and 5).
+
+The oracle is the Python merge (``tgsis.merge_version(conn, v)``): from one
+committed state the Python merge runs in a transaction rolled back (the
+revision sequence put back), then the psql ``SELECT tgsis.merge_version(v)``;
+every row version of the feature's storage, the revision notes, the versions,
+conflicts and regions afterwards must be the same (timestamps aside), and so
+must the rows counted and the refusals (SQLSTATE).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from typing import Any
+
+import psycopg
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from psycopg import sql
+
+import tgsis
+from tests.merge_data import SIDE, move
+from tests.test_sql_merge_regions import MIDDLE, NORTH, SOUTH, _apply, _edit, property_tables, psql
+
+Conn = psycopg.Connection[Any]
+
+_TIMES = ("timestamp with time zone", "timestamp without time zone")
+
+
+@pytest.fixture
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # tests.merge_data.make_fault's (tests/conftest.py)
+
+
+def everything(conn: Conn) -> dict[str, list[tuple[str, ...]]]:
+    """Every row version of the feature storage and the versioning catalog, as exact text (timestamps left out)."""
+    conn.execute("SET LOCAL extra_float_digits = 1")
+    tables = [
+        str(r[0])
+        for r in conn.execute(
+            "SELECT tgsis.storage_table(schemaname, tablename) FROM tgsis.versioned_tables"
+            " WHERE objectclass = 'feature' ORDER BY 1"
+        ).fetchall()
+    ]
+    tables += ["tgsis.revision_objects", "tgsis.versions", "tgsis.conflicts", "tgsis.conflict_regions"]
+    found: dict[str, list[tuple[str, ...]]] = {}
+    for table in tables:
+        columns = [
+            str(c[0])
+            for c in conn.execute(
+                "SELECT attname FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 AND NOT attisdropped"
+                " AND format_type(atttypid, atttypmod) <> ALL (%s) ORDER BY attnum",
+                (table, list(_TIMES)),
+            ).fetchall()
+        ]
+        rows = conn.execute(
+            sql.SQL("SELECT {} FROM {}").format(
+                sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(c)) for c in columns), sql.SQL(table)
+            )
+        ).fetchall()
+        found[table] = sorted(tuple("\\N" if v is None else v for v in r) for r in rows)
+    return found
+
+
+def _outcome(conn: Conn, run: Callable[[], int]) -> tuple[Any, ...]:
+    """(rows counted, everything after) of a merge, or (SQLSTATE, message) of its refusal; rolled back."""
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    try:
+        with conn.transaction(force_rollback=True):
+            rows = run()
+            return ("done", rows, everything(conn))
+    except psycopg.Error as exc:
+        return ("refused", exc.sqlstate, str(exc))
+    except tgsis.Error as exc:
+        return ("refused", exc.sqlstate, str(exc))
+    finally:
+        conn.rollback()
+
+
+def both_merges(
+    conn: Conn, version: str, action: str = "merge", remove: bool = False
+) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+    """(Python's outcome, SQL's outcome) of the same merge or refresh from the same committed state."""
+    conn.commit()
+    seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
+    conn.commit()
+
+    def python() -> int:
+        if action == "merge":
+            return int(tgsis.merge_version(conn, version, remove=remove))
+        return int(tgsis.refresh_version(conn, version))
+
+    def psql_merge() -> int:
+        if action == "merge":
+            row = conn.execute("SELECT tgsis.merge_version(%s, %s)", (version, remove)).fetchone()
+        else:
+            row = conn.execute("SELECT tgsis.refresh_version(%s)", (version,)).fetchone()
+        assert row is not None
+        return int(row[0])
+
+    theirs = _outcome(conn, python)
+    conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+    conn.commit()
+    mine = _outcome(conn, psql_merge)
+    conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+    conn.commit()
+    return theirs, mine
+
+
+def assert_same_merge(conn: Conn, version: str, action: str = "merge", remove: bool = False) -> tuple[Any, ...]:
+    theirs, mine = both_merges(conn, version, action, remove)
+    assert theirs[0] == "done", theirs
+    assert mine[0] == "done", mine
+    assert mine[1] == theirs[1]  # rows counted
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+    return mine
+
+
+def solve(conn: Conn, version: str, geoid: int, solution: str) -> None:
+    """Record ``solution`` for every conflicting region, as a psql user does (committed)."""
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))
+    regions = conn.execute(
+        "SELECT region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%s) AND objectkey = %s"
+        " AND conflict ORDER BY region",
+        (version, str(geoid)),
+    ).fetchall()
+    assert regions
+    for (region,) in regions:
+        conn.execute("SELECT tgsis.resolve_region(%s, 'feature', %s, %s, %s)", (version, str(geoid), region, solution))
+    conn.commit()
+
+
+# ---------------------------------------------------------------------------- merges that write, against Python
+
+
+@pytest.mark.parametrize(("action", "remove"), [("merge", False), ("merge", True), ("refresh", False)])
+def test_disjoint_moves_merge_in_psql_exactly_as_in_python(conn: Conn, fault: int, action: str, remove: bool) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    assert_same_merge(conn, "e1", action, remove)
+
+
+@pytest.mark.parametrize("solution", ["parent", "child", "base"])
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_conflicting_region_solved_in_psql_merges_as_in_python(
+    conn: Conn, fault: int, solution: str, action: str
+) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))  # merges by itself
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))  # overlaps the parent's edit at 66
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    solve(conn, "e1", fault, solution)
+    assert_same_merge(conn, "e1", action)
+
+
+def test_new_vertices_and_cells_with_clashing_ids_removed_cells_and_property_edits(conn: Conn, fault: int) -> None:
+    """Both sides hand out the same new ids (the child's that are not the parent's content are renumbered above
+    every id, their cells and property rows follow); cells removed; vertex and cell property values changed."""
+    vp, cp = property_tables(conn, fault)
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
+    tri = "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)"
+    psql(
+        conn,
+        "e1",
+        (add, (fault, n, 50.0, -300.0, 0.0)),  # the same vertex and triangle as the parent's n, m
+        (tri, (fault, m, 1, 0, n)),
+        (f"INSERT INTO {vp} (_geoid, _idx, porosity) VALUES (%s, %s, 0.125)", (fault, n)),
+        (f"INSERT INTO {cp} (_geoid, _idx, facies) VALUES (%s, %s, 3)", (fault, m)),
+        (add, (fault, n + 1, 9000.0, 2000.0, 1.0)),  # the parent's n + 1 is elsewhere: renumbered
+        (tri, (fault, m + 1, SIDE - 1, 2 * SIDE - 1, n + 1)),
+        (f"INSERT INTO {vp} (_geoid, _idx, porosity) VALUES (%s, %s, 0.375)", (fault, n + 1)),
+        (f"INSERT INTO {cp} (_geoid, _idx, facies) VALUES (%s, %s, 4)", (fault, m + 1)),
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 60", (fault,)),
+        (f"UPDATE {vp} SET porosity = porosity * 2 WHERE _geoid = %s AND _idx IN (30, 31)", (fault,)),
+    )
+    psql(
+        conn,
+        "DEFAULT",
+        (add, (fault, n, 50.0, -300.0, 0.0)),
+        (tri, (fault, m, 1, 0, n)),
+        (f"INSERT INTO {vp} (_geoid, _idx, porosity) VALUES (%s, %s, 0.125)", (fault, n)),
+        (f"INSERT INTO {cp} (_geoid, _idx, facies) VALUES (%s, %s, 3)", (fault, m)),
+        (add, (fault, n + 1, -500.0, 2000.0, 1.0)),
+        (tri, (fault, m + 1, SIDE * (SIDE - 1), SIDE * (SIDE - 2), n + 1)),
+        (f"INSERT INTO {vp} (_geoid, _idx, porosity) VALUES (%s, %s, 0.5)", (fault, n + 1)),
+        (f"INSERT INTO {cp} (_geoid, _idx, facies) VALUES (%s, %s, 1)", (fault, m + 1)),
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 161", (fault,)),
+        (f"UPDATE {cp} SET facies = 9 WHERE _geoid = %s AND _idx IN (150, 151)", (fault,)),
+        (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 101", (fault,)),
+    )
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_a_vertex_removed_by_the_parent_that_the_childs_new_triangle_uses(conn: Conn, fault: int) -> None:
+    """A conflict; solved each way, both merges write the same (and no solution leaves a dangling cell)."""
+    v = 5 * SIDE + 5
+    psql(
+        conn,
+        "DEFAULT",
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND %s IN (vrtxid1, vrtxid2, vrtxid3)", (fault, v)),
+        ("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s", (fault, v)),
+    )
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    psql(
+        conn,
+        "e1",
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 5000.0, 5000.0, 40.0)", (fault, n)),
+        ("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
+         (fault, m, v, v + 1, n)),
+    )
+    solve(conn, "e1", fault, "child")
+    assert_same_merge(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- what SQL refuses, by name
+
+
+def _psql_state(conn: Conn, query: str, args: tuple[Any, ...]) -> tuple[str | None, str, str | None]:
+    try:
+        conn.execute(query, args)
+    except psycopg.Error as exc:
+        conn.rollback()
+        return exc.sqlstate, str(exc), exc.diag.message_hint
+    conn.rollback()
+    return None, "", None
+
+
+def test_an_unsolved_region_is_refused_as_today_and_nothing_is_written(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -7.0))
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state == "TG302", message
+    assert "tgsis version merge" in (hint or "")
+    assert everything(conn) == before
+    conn.rollback()
+
+
+def test_an_average_solution_is_refused_naming_the_python_command(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -7.0))
+    conn.commit()
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    (region,) = [r for r in tgsis.conflicts(conn, "e1")[0].regions if r.conflict]
+    tgsis.resolve_region(conn, "e1", fault, region.region, "average")
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state == "TG302", message
+    assert "average" in message and "tgsis version merge" in (hint or "")
+    assert everything(conn) == before
+    conn.rollback()
+    # the Python merge applies it
+    assert tgsis.merge_version(conn, "e1").objects
+
+
+def test_atoms_are_refused_by_name_until_sql_writes_them(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    psql(conn, "e1", ("INSERT INTO tgsis.atom (geoid, vrtxid, refid) VALUES (%s, 5, 4)", (fault,)))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state == "TG302", message
+    assert "atom" in message and "tgsis version merge" in (hint or "")
+    assert tgsis.merge_version(conn, "e1").objects  # Python writes them
+
+
+def test_session_settings_do_not_change_what_is_written(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    conn.execute("SET extra_float_digits = -15")
+    conn.execute("SET DateStyle = 'SQL, DMY'")
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
+# ---------------------------------------------------------------------------- random edits
+
+
+_pairs = itertools.count()
+
+
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    child=st.lists(_edit, min_size=1, max_size=3),
+    parent=st.lists(_edit, min_size=1, max_size=3),
+    solution=st.sampled_from(["parent", "child", "base"]),
+)
+def test_random_edits_merge_in_psql_exactly_as_in_python(
+    conn: Conn, fault: int, child: list[tuple[str, int, int]], parent: list[tuple[str, int, int]], solution: str
+) -> None:
+    n = next(_pairs)
+    parent_version, child_version = f"wp{n}", f"wc{n}"
+    tgsis.create_version(conn, parent_version)
+    conn.commit()
+    tgsis.create_version(conn, child_version, parent=parent_version)
+    conn.commit()
+    vp, cp = property_tables(conn, fault)
+    _apply(conn, child_version, fault, child, vp, cp)
+    _apply(conn, parent_version, fault, parent, vp, cp)
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (child_version,))
+    for (key, region) in conn.execute(
+        "SELECT objectkey, region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%s) AND conflict",
+        (child_version,),
+    ).fetchall():
+        conn.execute("SELECT tgsis.resolve_region(%s, 'feature', %s, %s, %s)", (child_version, key, region, solution))
+    conn.commit()
+    theirs, mine = both_merges(conn, child_version)
+    if theirs[0] == "refused":
+        assert mine[0] == "refused" and mine[1] == theirs[1], (theirs, mine)
+        return
+    assert mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
