@@ -249,9 +249,9 @@ def test_an_average_solution_is_refused_naming_the_python_command(conn: Conn, fa
     move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
     move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -7.0))
     conn.commit()
-    tgsis.find_conflicts(conn, "e1")
+    (conflict,) = tgsis.find_conflicts(conn, "e1")
     conn.commit()
-    (region,) = [r for r in tgsis.conflicts(conn, "e1")[0].regions if r.conflict]
+    (region,) = [r for r in conflict.regions if r.conflict]
     tgsis.resolve_region(conn, "e1", fault, region.region, "average")
     conn.commit()
     before = everything(conn)
