@@ -1,11 +1,12 @@
--- tgsis.merge_geometry_row(geoid, cell table): bring the geometry row's box and counts up to the object's rows as the session sees them; rows changed.
+-- tgsis.merge_geometry_row(geoid, cell table, set): bring the geometry row's box and counts up to the object's rows in a revision set; rows changed.
 -- The last step of the SQL merge by region's write (tgsis.merge_mesh_by_region),
 -- as tgsis.db._state_write updates the row after a write of part of the rows:
--- the box and counts of the object's vertex and cell rows in the session's
--- version (one pass over each), written through the view tgsis.geometry only
+-- the box and counts of the object's vertex and cell rows in p_set, the
+-- session's working set (one pass over each: the rows its views show),
+-- written through the view tgsis.geometry only
 -- when they differ (0 when equal). cube's functions are named by the schema
 -- the extension is in.
-CREATE FUNCTION tgsis.merge_geometry_row(p_geoid bigint, p_table text)
+CREATE FUNCTION tgsis.merge_geometry_row(p_geoid bigint, p_table text, p_set integer[])
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
@@ -19,9 +20,13 @@ DECLARE
     v_cube    name;
     v_changed bigint;
 BEGIN
-    SELECT count(*), ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]
-      INTO v_n, v_low, v_high FROM tgsis.vrtx v WHERE v.geoid = p_geoid;
-    EXECUTE format('SELECT count(*) FROM tgsis.%I WHERE geoid = $1', p_table) INTO v_m USING p_geoid;
+    EXECUTE format('SELECT count(*), ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]
+                      FROM %s v WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+                   tgsis.storage_table('tgsis', 'vrtx'))
+       INTO v_n, v_low, v_high USING p_geoid, p_set;
+    EXECUTE format('SELECT count(*) FROM %s v WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+                   tgsis.storage_table('tgsis', p_table))
+       INTO v_m USING p_geoid, p_set;
     IF v_n = 0 THEN
         v_low := NULL;
         v_high := NULL;
@@ -42,5 +47,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.merge_geometry_row(bigint, text) IS
-    'bring a feature''s geometry row (box, vertex and cell counts) up to its rows as the session sees them, through the view, when they differ; returns the rows changed (0 or 1)';
+COMMENT ON FUNCTION tgsis.merge_geometry_row(bigint, text, integer[]) IS
+    'bring a feature''s geometry row (box, vertex and cell counts) up to its rows in a revision set (the session''s working set), through the view, when they differ; returns the rows changed (0 or 1)';

@@ -401,7 +401,8 @@ BEGIN
           USING p_geoid, v_cid, v_cv, v_rev;
         v_written := v_written + cardinality(v_cid);
     END IF;
-    v_written := v_written + tgsis.merge_geometry_row(p_geoid, v_table);
+    v_written := v_written + tgsis.merge_geometry_row(p_geoid, v_table,
+                                                      (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
     FOR v_i IN 1 .. cardinality(v_aview) LOOP  -- the parent's attribute edits (a view's columns in one UPDATE)
         EXECUTE format('UPDATE %s SET %s WHERE %I = $1', v_aview[v_i], v_aset[v_i], v_akey[v_i]) USING p_geoid;
         GET DIAGNOSTICS v_count = ROW_COUNT;
