@@ -11,6 +11,7 @@ must the rows counted and the refusals (SQLSTATE).
 from __future__ import annotations
 
 import itertools
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -21,7 +22,7 @@ from hypothesis import strategies as st
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import SIDE, move
+from tests.merge_data import SIDE, curved_surface, move, moved, stored_state
 from tests.test_sql_merge_regions import MIDDLE, NORTH, SOUTH, _apply, _edit, property_tables, psql
 
 Conn = psycopg.Connection[Any]
@@ -335,3 +336,133 @@ def test_random_edits_merge_in_psql_exactly_as_in_python(
     assert mine[1] == theirs[1]
     for table in theirs[2]:
         assert mine[2][table] == theirs[2][table], table
+
+
+# ---------------------------------------------------------------------------- more kinds, attributes
+
+
+@pytest.mark.parametrize("geotype", ["MULTIPOINT", "MULTILINESTRING", "MULTITETRA"])
+def test_points_lines_and_solids_with_a_cell_added_merge_as_in_python(conn: Conn, geotype: str) -> None:
+    from tests.test_object_merge import _other_kind
+
+    tgsis.create_feature_class(conn, "bodies", geotype)
+    tgsis.enable_feature_versioning(conn)
+    mesh = _other_kind(geotype)
+    geoid = tgsis.insert_feature(conn, "bodies", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, range(0, 5), (0.5, 0.25, -1.125))
+    move(conn, "DEFAULT", geoid, range(34, 40), (-3.3, 0.0, 2.2))
+    table, key = {"MULTIPOINT": ("point", "pointid"), "MULTILINESTRING": ("segment", "segid"),
+                  "MULTITETRA": ("tetra", "tetraid")}[geotype]
+    k = mesh.cell_size
+    columns = ", ".join(f"vrtxid{j + 1}" for j in range(k))
+    psql(
+        conn,
+        "e1",
+        (
+            f"INSERT INTO tgsis.{table} (geoid, {key}, {columns}) VALUES (%s, 1000, {', '.join(['%s'] * k)})",
+            (geoid, *([0, 2, 4, 1][:k] if k > 1 else [3])),
+        ),
+    )
+    assert_same_merge(conn, "e1")
+    assert_same_merge(conn, "e1", "refresh")
+
+
+def test_the_parents_attribute_edits_come_along_and_both_changed_is_refused_as_in_python(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    psql(conn, "DEFAULT", ("UPDATE tgsis.geometry SET geoname = 'renamed', colorred = 0.25 WHERE geoid = %s", (fault,)))
+    assert_same_merge(conn, "e1")
+    assert_same_merge(conn, "e1", "refresh")
+    psql(conn, "e1", ("UPDATE tgsis.geometry SET geoname = 'mine' WHERE geoid = %s", (fault,)))
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[:2] == ("refused", "TG302") and mine[:2] == ("refused", "TG302"), (theirs, mine)
+    assert "geoname" in mine[2] and "both" in mine[2]
+
+
+# ---------------------------------------------------------------------------- rights, sessions
+
+
+def test_a_role_without_rights_on_the_class_or_the_version_gets_42501_and_nothing_is_written(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    with login_roles(db_dsn, {"ed": "tgsis_editor", "rita": "tgsis_reader", "mo": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        tgsis.grant_version(conn, "e1", "delete", made.name("mo"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("mo"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.faults FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        for role, action, remove in (
+            ("rita", "merge", False),
+            ("ed", "merge", False),
+            ("ed", "refresh", False),
+            ("mo", "merge", True),  # may delete e1, not write the merged mesh in it
+        ):
+            session = made.connect(role)
+            with pytest.raises(tgsis.MissingPrivilegeError) as python:
+                if action == "merge":
+                    tgsis.merge_version(session, "e1", remove=remove)
+                else:
+                    tgsis.refresh_version(session, "e1")
+            session.rollback()
+            query = f"SELECT tgsis.{action}_version('e1'{', true' if remove else ''})"
+            state, message, _ = _psql_state(session, query, ())
+            assert state == python.value.sqlstate and state in ("42501", "TG002"), (role, query, message)
+            assert everything(conn) == before
+            conn.commit()
+
+
+def test_two_psql_sessions_merging_and_refreshing_at_once(conn: Conn, fault: int, db_dsn: str) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    holder = connect(db_dsn, "holder")
+    holder.execute("SELECT tgsis.lock_for_region_merge('e1', 'refresh')")  # both below wait for it
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    wait_until_blocked(conn, merger.pid, holder.info.backend_pid)
+    refresher = Background(db_dsn, "refresher", lambda c: c.execute("SELECT tgsis.refresh_version('e1')"))
+    time.sleep(0.3)
+    holder.rollback()
+    holder.close()
+    merger.finish()
+    refresher.finish()
+    # the merge wrote what the Python merge writes; the refresh after it found nothing to bring
+    after = everything(conn)
+    conn.commit()
+    for table in ("tgsis.vrtx_ver", "tgsis.trgl_ver"):
+        assert after[table] == theirs[2][table], table
+
+
+def test_a_writer_in_the_version_during_a_psql_merge(conn: Conn, fault: int, db_dsn: str) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    writer = connect(db_dsn, "writer")
+    tgsis.goto_version(writer, "e1")
+    writer.execute("UPDATE tgsis.vrtx SET z = z + 1.5 WHERE geoid = %s AND vrtxid = 70", (fault,))
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    wait_until_blocked(conn, merger.pid, holder_pid := writer.info.backend_pid)
+    assert holder_pid
+    writer.commit()
+    writer.close()
+    merger.finish()
+    expected = curved_surface().vertices.copy()
+    moved(expected, NORTH, (0.125, -3.3, 7.77))
+    moved(expected, SOUTH, (-1.1, 0.0, -2.9))
+    moved(expected, [70], (0.0, 0.0, 1.5))
+    for version in ("DEFAULT", "e1"):
+        assert stored_state(conn, version, fault)[1].tobytes() == expected.tobytes()

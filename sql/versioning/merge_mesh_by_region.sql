@@ -24,8 +24,8 @@
 -- regions of now, attributes changed on both sides, a merged mesh that is not
 -- valid where no state was invalid (merge3's checks: cells on removed vertices,
 -- duplicated cells, non-manifold edges or faces, vertices left without cells),
--- merged rows of no value for an integer property. 42501 for a role that may
--- not write in the version or change the class. The work tables are made in a
+-- merged rows of no value for an integer property. TG002 for a role that may
+-- not write in the version, 42501 for one that may not change the class. The work tables are made in a
 -- subtransaction rolled back once the plan (the rows to close and to write) is
 -- in variables: neither they nor their locks outlive the call.
 -- extra_float_digits is pinned: values are compared as text, floats exactly.
@@ -325,7 +325,7 @@ BEGIN
     IF NOT tgsis.has_version_privilege(p_version, 'write') THEN
         RAISE EXCEPTION 'role % may not write in version %: merging feature % by region writes the merged mesh into the version first, then merges it',
                 quote_ident(tgsis.calling_role()), quote_literal(p_version), p_geoid
-            USING ERRCODE = '42501',
+            USING ERRCODE = 'TG002',
                   HINT = format('the owner or a tgsis_admin can run SELECT tgsis.grant_version(%L, ''write'', %L); else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
                                 p_version, tgsis.calling_role());
     END IF;
@@ -416,4 +416,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; TG302 for what SQL does not merge (average/manual solutions, atoms, parts, an invalid merged mesh), 42501 without the rights; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; TG302 for what SQL does not merge (average/manual solutions, atoms, parts, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
