@@ -466,3 +466,19 @@ def test_a_writer_in_the_version_during_a_psql_merge(conn: Conn, fault: int, db_
     moved(expected, [70], (0.0, 0.0, 1.5))
     for version in ("DEFAULT", "e1"):
         assert stored_state(conn, version, fault)[1].tobytes() == expected.tobytes()
+
+
+def test_the_parents_edit_of_a_feature_property_is_refused_by_name_and_python_brings_it(conn: Conn) -> None:
+    from tests.merge_data import curved_surface
+
+    tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties=[("owner", "text")])
+    tgsis.enable_feature_versioning(conn)
+    geoid = tgsis.insert_feature(conn, "faults", curved_surface(), {"owner": "ann"}, drop_extra_properties=True)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
+    psql(conn, "DEFAULT", ("UPDATE public.faults SET owner = 'bob' WHERE _geoid = %s", (geoid,)))
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done"
+    assert mine[:2] == ("refused", "TG302") and "owner" in mine[2] and "tgsis version merge" in mine[2], mine

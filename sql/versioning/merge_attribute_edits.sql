@@ -22,7 +22,8 @@ DECLARE
     v_class tgsis.catalog;
     v_view  record;
     v_cols  text[];
-    v_sql   text;
+    v_t     tgsis.versioned_tables;
+    v_rows  text[];
     v_base  text[];
     v_their text[];
     v_ours  text[];
@@ -41,12 +42,23 @@ BEGIN
         IF cardinality(v_view.cols) = 0 THEN
             CONTINUE;
         END IF;
-        v_sql := format('SELECT ARRAY[%s] FROM %s v WHERE v.%I = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-                        (SELECT string_agg(format('v.%I::text', c), ', ' ORDER BY o) FROM unnest(v_view.cols) WITH ORDINALITY AS u(c, o)),
-                        tgsis.storage_table(v_view.schemaname, v_view.tablename), v_view.keycol);
-        EXECUTE v_sql INTO v_base USING p_geoid, p_base;
-        EXECUTE v_sql INTO v_their USING p_geoid, p_parentset;
-        EXECUTE v_sql INTO v_ours USING p_geoid, p_versionset;
+        -- each side's row as one text[] (NULL: no row), through tgsis.storage_run: the feature table's storage
+        -- is its owner's, read as that owner, never as tgsis's
+        SELECT * INTO v_t FROM tgsis.versioned_tables t
+         WHERE t.schemaname = v_view.schemaname AND t.tablename = v_view.tablename;
+        v_rows := ARRAY(
+            SELECT r[2] FROM tgsis.storage_run(v_t, false, format(
+                'SELECT ARRAY[s.side::text, (SELECT ARRAY[%1$s]::text FROM %2$I.%3$I v
+                                              WHERE v.%4$I = $1[1]::bigint
+                                                AND v.revision = ANY (s.revs) AND NOT (v.lastrevs && s.revs))]
+                   FROM (VALUES (1, $2), (2, $3), (3, $5::integer[])) AS s (side, revs)',
+                (SELECT string_agg(format('v.%I::text', c), ', ' ORDER BY o) FROM unnest(v_view.cols) WITH ORDINALITY AS u(c, o)),
+                v_view.schemaname, v_view.tablename || '_ver', v_view.keycol),
+                p_1 => ARRAY[p_geoid::text], p_2 => p_base, p_3 => p_parentset, p_5 => p_versionset::bigint[]) AS r
+             ORDER BY r[1]::integer);
+        v_base := v_rows[1]::text[];
+        v_their := v_rows[2]::text[];
+        v_ours := v_rows[3]::text[];
         RETURN QUERY
         SELECT format('%I.%I', v_view.schemaname, v_view.tablename), v_view.keycol, u.c, v_their[u.o],
                v_ours[u.o] IS DISTINCT FROM v_base[u.o]

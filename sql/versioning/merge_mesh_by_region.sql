@@ -14,13 +14,14 @@
 -- property rows alike (values equal as merge3 compares them; a row of no value
 -- is not written), copied from the stored row of the state they come from; the
 -- geometry row's box and counts follow; the parent's edits of the feature's
--- attributes (geometry row and feature row) are brought in. Then the conflict
+-- attributes of the geometry row (name, colour, CRS, ...) are brought in. Then the conflict
 -- is recorded 'manual', and the merge or refresh that follows copies the
 -- version's object as for any other solution.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
--- hint of tgsis.check_no_unsolved_conflicts, which names the Python command:
--- a region solved average or manual (their meshes need numpy), GOCAD atoms or
--- parts kept as runs (not written in SQL yet), stored regions that are not the
+-- hint naming the Python command that merges it: a region solved average or
+-- manual (their meshes need numpy), GOCAD atoms or parts kept as runs, the
+-- parent's edits of the feature row (the class owner's table; not written in
+-- SQL yet), stored regions that are not the
 -- regions of now, attributes changed on both sides, a merged mesh that is not
 -- valid where no state was invalid (merge3's checks: cells on removed vertices,
 -- duplicated cells, non-manifold edges or faces, vertices left without cells),
@@ -87,7 +88,10 @@ DECLARE
     v_written  bigint := 0;
     v_cols     text;
     v_vals     text;
-    v_null     text;
+    v_casts    text;
+    v_width    integer;
+    v_rows     text[];
+    v_pt       tgsis.versioned_tables;
     v_t        record;
     v_note     text;
     v_attr     record;
@@ -299,7 +303,8 @@ BEGIN
     FOR v_attr IN
         SELECT e.viewname, e.keycolumn, bool_or(e.both_sides) AS both_sides,
                string_agg(e.columnname, ', ' ORDER BY e.o) FILTER (WHERE e.both_sides) AS both_columns,
-               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets
+               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
+               string_agg(e.columnname, ', ' ORDER BY e.o) AS all_columns
           FROM (SELECT a.*, row_number() OVER () AS o
                   FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_pset, v_cset) AS a) AS e
          GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
@@ -313,6 +318,13 @@ BEGIN
     END LOOP;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: its attributes were changed both in the version and in its parent, to other values (%): the merge by region merges the mesh only',
+                v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+    -- the feature row is the class owner's table: SQL does not write the parent's edits of it yet (Python does)
+    SELECT string_agg(v_aset[i], '; ') INTO v_why FROM generate_subscripts(v_aview, 1) AS i WHERE v_aview[i] <> 'tgsis.geometry';
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: its parent changed its feature properties (%), which the SQL merge by region does not bring into the version yet',
                 v_refused, v_why
             USING ERRCODE = 'TG302', HINT = v_hint;
     END IF;
@@ -341,47 +353,55 @@ BEGIN
                                      ('CELL', v_cps, v_cpn, v_pcgone, v_pcid, v_pcsrc, v_pcfrom))
                                 AS t (alignment, schemaname, tablename, gone, ids, src, src_ids)
                 WHERE t.gone IS NOT NULL LOOP
-        -- the rows to write, read before anything of the version is closed (they may be its own)
-        SELECT string_agg(format('%I', a.attname), ', ' ORDER BY a.attnum),
-               string_agg(CASE WHEN a.atttypid IN ('real'::regtype, 'double precision'::regtype)
-                               THEN format('coalesce(s.%1$I, ''NaN'') AS %1$I', a.attname)
-                               WHEN a.atttypid IN ('real[]'::regtype, 'double precision[]'::regtype)
-                               THEN format('(SELECT array_agg(coalesce(e, ''NaN'') ORDER BY o) FROM unnest(s.%1$I) WITH ORDINALITY AS u(e, o)) AS %1$I',
-                                           a.attname)
-                               ELSE format('s.%1$I AS %1$I', a.attname) END, ', ' ORDER BY a.attnum),
-               string_agg(CASE WHEN a.atttypid NOT IN ('real'::regtype, 'double precision'::regtype,
-                                                       'real[]'::regtype, 'double precision[]'::regtype)
-                               THEN format('s.%I IS NULL', a.attname) END, ' OR ')
-          INTO v_cols, v_vals, v_null
-          FROM pg_catalog.pg_attribute a
+        -- (statements on the class's storage through tgsis.storage_run: as its owner, never as tgsis's)
+        SELECT * INTO v_pt FROM tgsis.versioned_tables t WHERE t.schemaname = v_t.schemaname AND t.tablename = v_t.tablename;
+        SELECT count(*) + 1 INTO v_width FROM pg_catalog.pg_attribute a
          WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename)::regclass
            AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx');
-        DROP TABLE IF EXISTS pg_temp.tgsis_mw_rows;
-        EXECUTE format('CREATE TEMPORARY TABLE tgsis_mw_rows ON COMMIT DROP AS
-                        SELECT f.id AS _idx, %1$s, %3$s AS no_value
-                          FROM unnest($2, $3, $4) AS f (id, src, sid)
-                          JOIN %2$s s ON s._geoid = $1 AND s._idx = f.sid
-                           AND s.revision = ANY (CASE f.src WHEN 1 THEN $5 WHEN 2 THEN $6 ELSE $7 END)
-                           AND NOT (s.lastrevs && CASE f.src WHEN 1 THEN $5 WHEN 2 THEN $6 ELSE $7 END)',
-                       v_vals, tgsis.storage_table(v_t.schemaname, v_t.tablename), coalesce(v_null, 'false'))
-          USING p_geoid, v_t.ids, v_t.src, v_t.src_ids, v_base, v_pset, v_cset;
-        SELECT string_agg(r._idx::text, ', ' ORDER BY r._idx) INTO v_why FROM pg_temp.tgsis_mw_rows r WHERE r.no_value;
-        IF v_why IS NOT NULL THEN
+        SELECT string_agg(format('%I', c.attname), ', ' ORDER BY c.attnum),
+               string_agg(CASE WHEN c.atttypid IN ('real'::regtype, 'double precision'::regtype)
+                               THEN format('coalesce(s.%I, ''NaN'')::text', c.attname)
+                               WHEN c.atttypid IN ('real[]'::regtype, 'double precision[]'::regtype)
+                               THEN format('(SELECT array_agg(coalesce(e, ''NaN'') ORDER BY o) FROM unnest(s.%I) WITH ORDINALITY AS u(e, o))::text',
+                                           c.attname)
+                               ELSE format('s.%I::text', c.attname) END, ', ' ORDER BY c.attnum),
+               string_agg(format('$1[2 + (g.i - 1) * %s + %s]::%s', v_width, c.j,
+                                 format_type(c.atttypid, c.atttypmod)), ', ' ORDER BY c.attnum)
+          INTO v_cols, v_vals, v_casts
+          FROM (SELECT a.attname, a.attnum, a.atttypid, a.atttypmod, row_number() OVER (ORDER BY a.attnum) AS j
+                  FROM pg_catalog.pg_attribute a
+                 WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename)::regclass
+                   AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx')) AS c;
+        -- the rows to write, read (as text: exact) before anything of the version is closed (they may be its own)
+        v_rows := ARRAY(
+            SELECT r FROM tgsis.storage_run(v_pt, false, format(
+                'SELECT ARRAY[f.id::text, %s]
+                   FROM (SELECT $5[g.i] AS id, $5[c.n + g.i] AS sid, $5[2 * c.n + g.i] AS src
+                           FROM (SELECT cardinality($5) / 3 AS n) AS c, generate_series(1, cardinality($5) / 3) AS g(i)) AS f
+                   JOIN %I.%I s ON s._geoid = $1[1]::bigint AND s._idx = f.sid
+                    AND s.revision = ANY (CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
+                    AND NOT (s.lastrevs && CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
+                  ORDER BY f.id', v_vals, v_pt.schemaname, v_pt.tablename || '_ver'),
+                p_1 => ARRAY[p_geoid::text, v_cset::text], p_2 => v_base, p_3 => v_pset,
+                p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r);
+        SELECT string_agg(v_rows[i][1], ', ' ORDER BY i) INTO v_why
+          FROM generate_subscripts(v_rows, 1) AS i
+         WHERE EXISTS (SELECT FROM generate_subscripts(v_rows, 2) AS j WHERE v_rows[i][j] IS NULL);
+        IF v_why IS NOT NULL THEN  -- (a float's NULL is written NaN, as the Python client writes it)
             RAISE EXCEPTION '%: its merged rows cannot be written: % property rows of ids % have no value for an integer or boolean property',
                     v_refused, lower(v_t.alignment), v_why
                 USING ERRCODE = 'TG302', HINT = v_hint;
         END IF;
         v_written := v_written + tgsis.delete_object_rows(v_t.schemaname, v_t.tablename, '_geoid', ARRAY[p_geoid], '_idx', v_t.gone);
-        EXECUTE format('INSERT INTO %s (_geoid, _idx, %s, revision) SELECT $1, r._idx, %s, $2 FROM pg_temp.tgsis_mw_rows r',
-                       tgsis.storage_table(v_t.schemaname, v_t.tablename), v_cols,
-                       (SELECT string_agg(format('r.%I', a.attname), ', ' ORDER BY a.attnum)
-                          FROM pg_catalog.pg_attribute a
-                         WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename)::regclass
-                           AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx')))
-          USING p_geoid, v_rev;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
-        v_written := v_written + v_count;
-        DROP TABLE pg_temp.tgsis_mw_rows;
+        IF cardinality(v_rows) > 0 THEN
+            SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pt, true, format(
+                'INSERT INTO %I.%I (_geoid, _idx, %s, revision)
+                 SELECT $1[1]::bigint, $1[2 + (g.i - 1) * %s]::bigint, %s, $4
+                   FROM generate_series(1, (cardinality($1) - 1) / %s) AS g(i)',
+                v_pt.schemaname, v_pt.tablename || '_ver', v_cols, v_width, v_casts, v_width),
+                p_1 => ARRAY[p_geoid::text] || ARRAY(SELECT unnest(v_rows)), p_4 => v_rev) AS r;
+            v_written := v_written + v_count;
+        END IF;
     END LOOP;
     v_written := v_written + tgsis.delete_object_rows('tgsis', v_table, 'geoid', ARRAY[p_geoid], v_cellid, v_cgone)
                            + tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[p_geoid], 'vrtxid', v_vgone);
