@@ -482,3 +482,25 @@ def test_the_parents_edit_of_a_feature_property_is_refused_by_name_and_python_br
     theirs, mine = both_merges(conn, "e1")
     assert theirs[0] == "done"
     assert mine[:2] == ("refused", "TG302") and "owner" in mine[2] and "tgsis version merge" in mine[2], mine
+
+
+@pytest.mark.parametrize("solution", ["parent", "child", "base"])
+def test_psql_is_told_what_a_solution_discards_as_python_says_it(conn: Conn, fault: int, solution: str) -> None:
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    solve(conn, "e1", fault, solution)
+    with conn.transaction(force_rollback=True):
+        (merged,) = tgsis.merge_version(conn, "e1").objects
+    expected = [
+        f"region {d.region}: {d.solution} discards the {d.side}'s edit there: {d.vertices} vertices, {d.cells} cells, "
+        f"largest displacement {d.max_displacement:.6g}"
+        for d in merged.discards
+    ]
+    assert expected
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    with conn.transaction(force_rollback=True):
+        conn.execute("SELECT tgsis.merge_version('e1')")
+    said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {fault} of version 'e1': region")]
+    assert said == expected

@@ -4,7 +4,10 @@
 -- version did not change are not touched. The parent's working revision is
 -- then frozen and a new one started. Without p_remove the version goes on
 -- from the merged state (its base moves to that revision); with it, the
--- version is deleted. Refused (TG302) while a conflict is unsolved. A NOTICE
+-- version is deleted. First the unsolved conflicting meshes of static
+-- classes whose conflicting regions all have a solution are merged by
+-- region into the version (tgsis.merge_regions_in_sql, as the Python merge
+-- does). Refused (TG302) while a conflict is unsolved. A NOTICE
 -- per solved conflict says what of the other side's edits its solution
 -- discards (tgsis.notice_discards).
 CREATE FUNCTION tgsis.merge_version(p_version text, p_remove boolean DEFAULT false)
@@ -73,4 +76,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_version(text, boolean) IS
-    'apply a version''s changes (object by object, unchanged rows untouched) to its parent''s working revision in one transaction; refused while conflicts are unsolved; the version goes on from the merged state, or is removed; returns the rows written';
+    'apply a version''s changes (object by object, unchanged rows untouched) to its parent''s working revision in one transaction, meshes changed on both sides merged by region first; refused while conflicts are unsolved; the version goes on from the merged state, or is removed; returns the rows written';

@@ -4,7 +4,10 @@
 -- only the version changed keep the version's state, and each conflicting
 -- object follows its solution ('parent' takes the parent's object, 'child'
 -- and 'manual' keep the version's; a NOTICE says what each discards).
--- Refused (TG302) while a conflict is unsolved.
+-- First the unsolved conflicting meshes of static classes whose conflicting
+-- regions all have a solution are merged by region into the version
+-- (tgsis.merge_regions_in_sql, as the Python refresh does). Refused (TG302)
+-- while a conflict is unsolved.
 CREATE FUNCTION tgsis.refresh_version(p_version text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -58,4 +61,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.refresh_version(text) IS
-    'bring the parent''s changes since the version''s base into the version (its base moves to the parent''s working revision); conflicting objects follow their solutions; refused while conflicts are unsolved; returns the rows written';
+    'bring the parent''s changes since the version''s base into the version (its base moves to the parent''s working revision); conflicting objects follow their solutions, meshes changed on both sides merged by region first; refused while conflicts are unsolved; returns the rows written';
