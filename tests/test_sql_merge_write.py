@@ -213,8 +213,10 @@ def test_a_vertex_removed_by_the_parent_that_the_childs_new_triangle_uses(conn: 
         conn,
         "e1",
         ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 5000.0, 5000.0, 40.0)", (fault, n)),
-        ("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
-         (fault, m, v, v + 1, n)),
+        (
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
+            (fault, m, v, v + 1, n),
+        ),
     )
     solve(conn, "e1", fault, "child")
     assert_same_merge(conn, "e1")
@@ -322,7 +324,7 @@ def test_random_edits_merge_in_psql_exactly_as_in_python(
     _apply(conn, child_version, fault, child, vp, cp)
     _apply(conn, parent_version, fault, parent, vp, cp)
     conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (child_version,))
-    for (key, region) in conn.execute(
+    for key, region in conn.execute(
         "SELECT objectkey, region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%s) AND conflict",
         (child_version,),
     ).fetchall():
@@ -353,8 +355,11 @@ def test_points_lines_and_solids_with_a_cell_added_merge_as_in_python(conn: Conn
     conn.commit()
     move(conn, "e1", geoid, range(0, 5), (0.5, 0.25, -1.125))
     move(conn, "DEFAULT", geoid, range(34, 40), (-3.3, 0.0, 2.2))
-    table, key = {"MULTIPOINT": ("point", "pointid"), "MULTILINESTRING": ("segment", "segid"),
-                  "MULTITETRA": ("tetra", "tetraid")}[geotype]
+    table, key = {
+        "MULTIPOINT": ("point", "pointid"),
+        "MULTILINESTRING": ("segment", "segid"),
+        "MULTITETRA": ("tetra", "tetraid"),
+    }[geotype]
     k = mesh.cell_size
     columns = ", ".join(f"vrtxid{j + 1}" for j in range(k))
     psql(
@@ -369,7 +374,9 @@ def test_points_lines_and_solids_with_a_cell_added_merge_as_in_python(conn: Conn
     assert_same_merge(conn, "e1", "refresh")
 
 
-def test_the_parents_attribute_edits_come_along_and_both_changed_is_refused_as_in_python(conn: Conn, fault: int) -> None:
+def test_the_parents_attribute_edits_come_along_and_both_changed_is_refused_as_in_python(
+    conn: Conn, fault: int
+) -> None:
     move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
     move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
     psql(conn, "DEFAULT", ("UPDATE tgsis.geometry SET geoname = 'renamed', colorred = 0.25 WHERE geoid = %s", (fault,)))
