@@ -625,3 +625,27 @@ def test_sql_validity_refuses_what_merge3_refuses_saying_the_same(
     expected = _validity_in_python(merged_v, merged_c, drop_v, drop_c)
     assert (expected is None) == (case == "a valid change"), expected
     assert _validity_in_sql(conn, merged_v, merged_c, drop_v, drop_c) == expected
+
+
+def test_identical_edits_and_rows_rewritten_as_they_were_merge_as_in_python(conn: Conn, fault: int) -> None:
+    """No region at all (rows rewritten as they were on both sides), then one region both changed alike."""
+    move(conn, "e1", fault, NORTH, (0.0, 0.0, 0.0))
+    move(conn, "DEFAULT", fault, SOUTH, (0.0, 0.0, 0.0))
+    assert_same_merge(conn, "e1")
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, 5.0))
+    assert_same_merge(conn, "e1")
+    assert_same_merge(conn, "e1", "refresh")
+
+
+def test_an_unsolved_region_found_by_the_merge_itself_is_named_in_the_refusal(conn: Conn, fault: int) -> None:
+    """Nobody ran find_conflicts: the psql merge finds the regions, and refuses naming the mesh's regions."""
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -7.0))
+    conn.commit()
+    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+    conn.rollback()
+    for action in ("merge", "refresh"):
+        state, message, hint = _psql_state(conn, f"SELECT tgsis.{action}_version('e1')", ())
+        assert state == "TG302", message
+        assert f"tgsis version {action} e1" in (hint or "") and f"feature {fault}" in (hint or ""), hint

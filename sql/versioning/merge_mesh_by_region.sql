@@ -16,7 +16,9 @@
 -- geometry row's box and counts follow; the parent's edits of the feature's
 -- attributes of the geometry row (name, colour, CRS, ...) are brought in. Then the conflict
 -- is recorded 'manual', and the merge or refresh that follows copies the
--- version's object as for any other solution.
+-- version's object as for any other solution. NULL, nothing written, when a
+-- conflicting region has no solution (or the regions were not stored: none
+-- could be recorded): the merge's refusal (TG302) names it.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
 -- hint naming the Python command that merges it: a region solved average or
 -- manual (their meshes need numpy), GOCAD atoms or parts kept as runs, the
@@ -99,6 +101,7 @@ DECLARE
     v_akey     text[] := '{}';
     v_aset     text[] := '{}';
     v_i        integer;
+    v_unsolved boolean := false;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
 
@@ -176,6 +179,13 @@ BEGIN
       LEFT JOIN tgsis.conflict_regions r
         ON r.versionid = v_version.versionid AND r.objectclass = 'feature' AND r.objectkey = v_key AND r.region = f.region;
 
+    -- a region conflict of a mesh whose regions are not stored yet has no solution: left unsolved (NULL)
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict)
+       AND NOT EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = v_version.versionid
+                          AND r.objectclass = 'feature' AND r.objectkey = v_key) THEN
+        v_unsolved := true;
+        RAISE EXCEPTION 'tgsis_mw_done';
+    END IF;
     -- the recorded solutions hold only for these very regions (else every conflict is unsolved, as in Python)
     IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict)
        AND (EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE NOT g.holds)
@@ -191,13 +201,9 @@ BEGIN
         RAISE EXCEPTION '%: % (its mesh is applied by the Python client)', v_refused, v_why
             USING ERRCODE = 'TG302', HINT = v_hint;
     END IF;
-    SELECT string_agg(format('region %s unsolved', g.region), ', ' ORDER BY g.region) INTO v_why
-      FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.src IS NULL;
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: %', v_refused, v_why
-            USING ERRCODE = 'TG302',
-                  HINT = format('solve each conflicting region first: SELECT tgsis.resolve_region(%L, ''feature'', %L, region, ''parent''|''child''|''base'')',
-                                p_version, v_key);
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.src IS NULL) THEN
+        v_unsolved := true;  -- a conflicting region without a solution: left unsolved (NULL)
+        RAISE EXCEPTION 'tgsis_mw_done';
     END IF;
     -- what the solutions discard, said before it is written (merge3's discards, as the Python client says them)
     v_notes := ARRAY(
@@ -297,6 +303,9 @@ BEGIN
             RAISE;
         END IF;
     END;
+    IF v_unsolved THEN
+        RETURN NULL;
+    END IF;
 
     -- the parent's edits of the attributes, and the refusal of attributes changed on both sides
     v_why := NULL;
@@ -436,4 +445,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; TG302 for what SQL does not merge (average/manual solutions, atoms, parts, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, atoms, parts, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
