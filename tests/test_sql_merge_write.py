@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import psycopg
@@ -569,7 +569,7 @@ def _validity_in_python(
 
     from tgsis import merge3
 
-    def state(verts: dict[int, tuple[float, ...]], cells: dict[int, tuple[int, ...]]) -> Any:
+    def state(verts: Mapping[int, tuple[float, ...]], cells: Mapping[int, tuple[int, ...]]) -> Any:
         vids, cids = sorted(verts), sorted(cells)
         like = merge3.MeshState(
             3,
