@@ -268,15 +268,42 @@ def test_an_average_solution_is_refused_naming_the_python_command(conn: Conn, fa
     assert tgsis.merge_version(conn, "e1").objects
 
 
-def test_atoms_are_refused_by_name_until_sql_writes_them(conn: Conn, fault: int) -> None:
-    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
-    psql(conn, "e1", ("INSERT INTO tgsis.atom (geoid, vrtxid, refid) VALUES (%s, 5, 4)", (fault,)))
-    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+def test_gocad_atoms_added_on_both_sides_and_one_on_a_renumbered_vertex_merge_as_in_python(
+    conn: Conn, fault: int
+) -> None:
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    atom = "INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, %s, %s)"
+    psql(conn, "DEFAULT", (atom, (fault, 60, 61, True)))  # in the base: a PATOM
+    conn.execute("SELECT tgsis.merge_version('e1', true)")  # (nothing to merge; e1 made again on it)
     conn.commit()
-    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
-    assert state == "TG302", message
-    assert "atom" in message and "tgsis version merge" in (hint or "")
-    assert tgsis.merge_version(conn, "e1").objects  # Python writes them
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    psql(
+        conn,
+        "e1",
+        (atom, (fault, 5, 4, False)),
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 9000.0, 2000.0, 1.0)", (fault, n + 1)),
+        (
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
+            (fault, m + 1, SIDE - 1, 2 * SIDE - 1, n + 1),
+        ),
+        (atom, (fault, 10, n + 1, False)),  # refers to a new vertex the merge renumbers
+        ("UPDATE tgsis.atom SET refid = 49 WHERE geoid = %s AND vrtxid = 60", (fault,)),
+    )
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    psql(
+        conn,
+        "DEFAULT",
+        (atom, (fault, 130, 131, False)),
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, -500.0, 2000.0, 1.0)", (fault, n + 1)),
+        (
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
+            (fault, m + 1, SIDE * (SIDE - 1), SIDE * (SIDE - 2), n + 1),
+        ),
+    )
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
 
 
 def test_session_settings_do_not_change_what_is_written(conn: Conn, fault: int) -> None:
@@ -524,25 +551,36 @@ _TRIANGLES = {
 
 
 def _validity_in_sql(
-    conn: Conn, merged_v: set[int], merged_c: dict[int, tuple[int, ...]], drop_v: list[int], drop_c: list[int]
+    conn: Conn,
+    merged_v: set[int],
+    merged_c: dict[int, tuple[int, ...]],
+    drop_v: list[int],
+    drop_c: list[int],
+    refs: dict[int, int],
 ) -> str | None:
     """tgsis.merge_mesh_validity on work tables that hold a whole small object: base = parent = version (the
     grid), the merged state given, the dropped ids one region taken from the version; its message or None."""
-    conn.execute("CREATE TEMPORARY TABLE tgsis_mr_v (id bigint, st smallint)")
+    conn.execute(
+        "CREATE TEMPORARY TABLE tgsis_mr_v (id bigint, st smallint, x float8, y float8, z float8, val text, ref bigint)"
+    )
     conn.execute("CREATE TEMPORARY TABLE tgsis_mr_c (id bigint, st smallint, v bigint[])")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint)")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mr_margin (id bigint, v bigint[])")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_node (kind text, id bigint, region integer)")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_region (region integer, src smallint)")
-    conn.execute("CREATE TEMPORARY TABLE tgsis_mw_v (id bigint, present boolean)")
+    conn.execute(
+        "CREATE TEMPORARY TABLE tgsis_mw_v (id bigint, present boolean, x float8, y float8, z float8, val text, ref bigint)"
+    )
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_c (id bigint, present boolean, v bigint[])")
     for state in (1, 2, 4):
         for v in _GRID:
-            conn.execute("INSERT INTO tgsis_mr_v VALUES (%s, %s)", (v, state))
+            conn.execute("INSERT INTO tgsis_mr_v VALUES (%s, %s, %s, %s, %s, NULL, NULL)", (v, state, *_GRID[v]))
         for c, t in _TRIANGLES.items():
             conn.execute("INSERT INTO tgsis_mr_c VALUES (%s, %s, %s)", (c, state, list(t)))
     for v in set(_GRID) | merged_v:
-        conn.execute("INSERT INTO tgsis_mw_v VALUES (%s, %s)", (v, v in merged_v))
+        conn.execute(
+            "INSERT INTO tgsis_mw_v VALUES (%s, %s, %s, %s, %s, NULL, %s)", (v, v in merged_v, *_GRID[v], refs.get(v))
+        )
     for c in set(_TRIANGLES) | set(merged_c):
         conn.execute("INSERT INTO tgsis_mw_c VALUES (%s, %s, %s)", (c, c in merged_c, list(merged_c.get(c, (0, 0, 0)))))
     conn.execute("INSERT INTO tgsis_mw_region VALUES (0, 4)")
@@ -563,13 +601,15 @@ def _validity_in_sql(
 
 
 def _validity_in_python(
-    merged_v: set[int], merged_c: dict[int, tuple[int, ...]], drop_v: list[int], drop_c: list[int]
+    merged_v: set[int], merged_c: dict[int, tuple[int, ...]], drop_v: list[int], drop_c: list[int], refs: dict[int, int]
 ) -> str | None:
     import numpy as np
 
     from tgsis import merge3
 
-    def state(verts: Mapping[int, tuple[float, ...]], cells: Mapping[int, tuple[int, ...]]) -> Any:
+    def state(
+        verts: Mapping[int, tuple[float, ...]], cells: Mapping[int, tuple[int, ...]], atoms: Mapping[int, int]
+    ) -> Any:
         vids, cids = sorted(verts), sorted(cells)
         like = merge3.MeshState(
             3,
@@ -587,13 +627,13 @@ def _validity_in_python(
             np.array([verts[v] for v in vids], np.float64).reshape(-1, 3),
             np.array(cids, np.int64),
             np.array([cells[c] for c in cids], np.int64).reshape(-1, 3),
-            {},
+            {"refid": np.array([atoms.get(v, -1) for v in vids], np.int64)},
             {},
         )
 
-    grid = state(_GRID, _TRIANGLES)
+    grid = state(_GRID, _TRIANGLES, {})
     merge = merge3.three_way_merge(grid, grid, grid)
-    merged = state({v: _GRID.get(v, (9.0, 9.0, 9.0)) for v in merged_v}, merged_c)
+    merged = state({v: _GRID[v] for v in merged_v}, merged_c, refs)
     try:
         merge3._check_valid(merge, merged, np.array(drop_v, np.int64), np.array(drop_c, np.int64), [])
     except tgsis.InvalidMergeError as exc:
@@ -609,6 +649,13 @@ def _validity_in_python(
         ("a non-manifold edge", set(_GRID), {**_TRIANGLES, 6: (0, 2, 5), 7: (2, 0, 7)}, [], [6, 7]),
         ("vertices left without triangles", set(_GRID), {c: t for c, t in _TRIANGLES.items() if c > 1}, [], [0, 1]),
         ("a valid change", set(_GRID), {**_TRIANGLES, 1: (0, 3, 1)}, [], [1]),
+        (
+            "an atom on a removed vertex",
+            set(_GRID) - {5},
+            {c: t for c, t in _TRIANGLES.items() if 5 not in t},
+            [5, 6],
+            [2, 3, 5],
+        ),
     ],
 )
 def test_sql_validity_refuses_what_merge3_refuses_saying_the_same(
@@ -622,9 +669,10 @@ def test_sql_validity_refuses_what_merge3_refuses_saying_the_same(
 ) -> None:
     """The merges by region whose regions come from one side each cannot break validity (the regions join what
     they touch): the check is merge3's for what can, run here on work tables of a made-up merged state."""
-    expected = _validity_in_python(merged_v, merged_c, drop_v, drop_c)
+    refs = {6: 5} if case == "an atom on a removed vertex" else {}
+    expected = _validity_in_python(merged_v, merged_c, drop_v, drop_c, refs)
     assert (expected is None) == (case == "a valid change"), expected
-    assert _validity_in_sql(conn, merged_v, merged_c, drop_v, drop_c) == expected
+    assert _validity_in_sql(conn, merged_v, merged_c, drop_v, drop_c, refs) == expected
 
 
 def test_identical_edits_and_rows_rewritten_as_they_were_merge_as_in_python(conn: Conn, fault: int) -> None:

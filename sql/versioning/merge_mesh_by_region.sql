@@ -13,6 +13,7 @@
 -- a row whose id is new or differs is inserted with exactly the merged id; the
 -- property rows alike (values equal as merge3 compares them; a row of no value
 -- is not written), copied from the stored row of the state they come from; the
+-- GOCAD atoms (tgsis.atom) alike, their refid renumbered with the vertices; the
 -- geometry row's box and counts follow; the parent's edits of the feature's
 -- attributes of the geometry row (name, colour, CRS, ...) are brought in. Then the conflict
 -- is recorded 'manual', and the merge or refresh that follows copies the
@@ -21,7 +22,7 @@
 -- could be recorded): the merge's refusal (TG302) names it.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
 -- hint naming the Python command that merges it: a region solved average or
--- manual (their meshes need numpy), GOCAD atoms or parts kept as runs, the
+-- manual (their meshes need numpy), parts kept as runs (tgsis.part), the
 -- parent's edits of the feature row (the class owner's table; not written in
 -- SQL yet), stored regions that are not the
 -- regions of now, attributes changed on both sides, a merged mesh that is not
@@ -47,7 +48,7 @@ DECLARE
     v_refused  text := format('%s of version %s refused: feature %s does not merge by region in SQL',
                               p_action, quote_literal(p_version), p_geoid);
     v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges it by region '
-                              '(average and manual solutions, atoms, parts); else solve it as a whole object: '
+                              '(average and manual solutions, parts, feature properties); else solve it as a whole object: '
                               'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
                               p_action, p_version, p_action, p_version, p_version, p_geoid::text);
     v_why      text;
@@ -79,6 +80,9 @@ DECLARE
     v_pcid     bigint[];
     v_pcsrc    smallint[];
     v_pcfrom   bigint[];
+    v_agone    bigint[];
+    v_aid      bigint[];
+    v_aref     bigint[];
     v_notes    text[];
     v_base     integer[];
     v_pset     integer[];
@@ -114,14 +118,7 @@ BEGIN
       FROM pg_temp.tgsis_mr_info i;
     v_word := CASE v_k WHEN 1 THEN 'point' WHEN 2 THEN 'segment' WHEN 3 THEN 'triangle' ELSE 'tetrahedron' END;
 
-    -- what SQL does not write yet: atoms, parts kept as runs (the Python merge does)
-    IF EXISTS (SELECT FROM tgsis.atom_ver v WHERE v.geoid = p_geoid
-                  AND ((v.revision = ANY (v_base) AND NOT (v.lastrevs && v_base))
-                       OR (v.revision = ANY (v_pset) AND NOT (v.lastrevs && v_pset))
-                       OR (v.revision = ANY (v_cset) AND NOT (v.lastrevs && v_cset)))) THEN
-        RAISE EXCEPTION '%: it has GOCAD atoms, which the SQL merge by region does not write yet', v_refused
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
+    -- what SQL does not write yet: parts kept as runs (the Python merge does)
     IF v_runs AND EXISTS (SELECT FROM tgsis.part_ver v WHERE v.geoid = p_geoid
                              AND ((v.revision = ANY (v_base) AND NOT (v.lastrevs && v_base))
                                   OR (v.revision = ANY (v_pset) AND NOT (v.lastrevs && v_pset))
@@ -223,7 +220,7 @@ BEGIN
     -- the merged rows of the keys the states do not all hold alike (the others are the same everywhere):
     -- per id its region's source (a row the source lacks is no row), the parent's outside every region
     CREATE TEMPORARY TABLE tgsis_mw_v ON COMMIT DROP AS
-    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.x, m.y, m.z, m.val
+    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.x, m.y, m.z, m.val, m.ref
       FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_v m) AS k
       LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
                   WHERE n.kind = 'v') AS s ON s.id = k.id
@@ -236,8 +233,9 @@ BEGIN
       LEFT JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
     -- the version's rows as stored (its own numbering: the renumbering undone)
     CREATE TEMPORARY TABLE tgsis_mw_vold ON COMMIT DROP AS
-    SELECT coalesce(p.old, m.id) AS id, m.x, m.y, m.z, m.val
+    SELECT coalesce(p.old, m.id) AS id, m.x, m.y, m.z, m.val, coalesce(q.old, m.ref) AS ref
       FROM pg_temp.tgsis_mr_v m LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = m.id
+      LEFT JOIN pg_temp.tgsis_mr_vmap q ON q.new = m.ref
      WHERE m.st = 4;
     CREATE TEMPORARY TABLE tgsis_mw_cold ON COMMIT DROP AS
     SELECT coalesce(p.old, m.id) AS id,
@@ -270,6 +268,16 @@ BEGIN
       FROM pg_temp.tgsis_mw_c n CROSS JOIN LATERAL unnest(n.v) WITH ORDINALITY AS u(x, o)
      WHERE n.present AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.v = n.v);
     v_cid := ARRAY(SELECT DISTINCT u FROM unnest(v_cid) AS u ORDER BY 1);
+    -- GOCAD atoms (tgsis.atom: a vertex that repeats another, refid): gone, new, or repeating another vertex now
+    v_agone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_vold o
+                      WHERE o.ref IS NOT NULL
+                        AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.present AND n.id = o.id AND n.ref = o.ref)
+                      ORDER BY o.id);
+    SELECT coalesce(array_agg(n.id ORDER BY n.id), '{}'), coalesce(array_agg(n.ref ORDER BY n.id), '{}')
+      INTO v_aid, v_aref
+      FROM pg_temp.tgsis_mw_v n
+     WHERE n.present AND n.ref IS NOT NULL
+       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.ref = n.ref);
     -- property rows: values equal as merge3 compares them (the canonical texts); a row of no value is not written
     SELECT (SELECT nulls FROM tgsis.merge_value_text(i.vpschema, i.vptable)),
            (SELECT nulls FROM tgsis.merge_value_text(i.cpschema, i.cptable))
@@ -430,6 +438,18 @@ BEGIN
           USING p_geoid, v_cid, v_cv, v_rev;
         v_written := v_written + cardinality(v_cid);
     END IF;
+    -- the atoms: closed, then written; a row that comes back as stored in some revision of the object takes its
+    -- PATOM flag from there, any other is an ATOM (as tgsis.db._state_write writes them)
+    v_written := v_written + tgsis.delete_object_rows('tgsis', 'atom', 'geoid', ARRAY[p_geoid], 'vrtxid', v_agone);
+    IF cardinality(v_aid) > 0 THEN
+        EXECUTE format('INSERT INTO %1$s (geoid, vrtxid, refid, patom, revision)
+                        SELECT $1, u.id, u.ref,
+                               coalesce((SELECT bool_or(a.patom) FROM %1$s a
+                                          WHERE a.geoid = $1 AND a.vrtxid = u.id AND a.refid = u.ref), false), $4
+                          FROM unnest($2, $3) AS u (id, ref)', tgsis.storage_table('tgsis', 'atom'))
+          USING p_geoid, v_aid, v_aref, v_rev;
+        v_written := v_written + cardinality(v_aid);
+    END IF;
     v_written := v_written + tgsis.merge_geometry_row(p_geoid, v_table,
                                                       (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
     FOR v_i IN 1 .. cardinality(v_aview) LOOP  -- the parent's attribute edits (a view's columns in one UPDATE)
@@ -445,4 +465,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, atoms, parts, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, parts, the parent''s feature-row edits, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';

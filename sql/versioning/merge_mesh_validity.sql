@@ -6,7 +6,8 @@
 -- rows with the rows of the regions taken from the version or the base; only
 -- those can break it: near = the vertices of the taken cells, of the parent's
 -- cells they replace, and the taken vertices. Refused, in merge3's order:
--- cells on a vertex near the change the merge removes; duplicated cells (the
+-- cells on a vertex near the change the merge removes; GOCAD atoms that refer
+-- to a vertex it removes (a row as the parent holds it excused); duplicated cells (the
 -- same vertices, any order) or, for triangles and tetrahedra, edges or faces
 -- in more than two cells, one of them taken, that no state (base, parent,
 -- version) has so often; vertices near the change left without cells, which no
@@ -91,6 +92,30 @@ BEGIN
                 p_word, tgsis.merge_ids_text(v_bad::text[]), tgsis.merge_ids_text(v_badv::text[])
             USING ERRCODE = 'TG302', DETAIL = 'one side removed vertices the other side''s cells use: solve the region with one side''s rows',
                   HINT = p_hint;
+    END IF;
+
+    -- atoms (refid) that refer to vertices the merge removes (a vertex row the parent holds so is excused)
+    v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n
+                     WHERE n.present AND n.ref IS NOT NULL
+                       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v r WHERE r.id = n.ref AND r.present)
+                       AND EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref));
+    IF cardinality(v_badv) > 0 THEN  -- refs no state changed are there when the base has them
+        v_bad := ARRAY(
+            SELECT n.id FROM pg_temp.tgsis_mw_v n
+             WHERE n.present AND n.ref = ANY (v_badv)
+               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v p
+                                WHERE p.id = n.id AND p.st = 2 AND p.x = n.x AND p.y = n.y AND p.z = n.z
+                                  AND 'NaN'::float8 NOT IN (n.x, n.y, n.z)
+                                  AND p.val IS NOT DISTINCT FROM n.val AND p.ref IS NOT DISTINCT FROM n.ref)
+             ORDER BY n.id);
+        IF cardinality(v_bad) > 0 THEN
+            v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n WHERE n.id = ANY (v_bad) ORDER BY n.ref);
+            RAISE EXCEPTION '%: invalid merge: %: the merge would keep vertices %, atoms (refid) that refer to vertices %, which it removes',
+                    p_refused, p_name, tgsis.merge_ids_text(v_bad::text[]), tgsis.merge_ids_text(v_badv::text[])
+                USING ERRCODE = 'TG302',
+                      DETAIL = 'one side removed vertices the other side''s atoms refer to: solve the region with one side''s rows',
+                      HINT = p_hint;
+        END IF;
     END IF;
 
     -- duplicated cells (the same vertices), then edges of triangles / faces of tetrahedra in more than two cells:
