@@ -697,3 +697,47 @@ def test_an_unsolved_region_found_by_the_merge_itself_is_named_in_the_refusal(co
         state, message, hint = _psql_state(conn, f"SELECT tgsis.{action}_version('e1')", ())
         assert state == "TG302", message
         assert f"tgsis version {action} e1" in (hint or "") and f"feature {fault}" in (hint or ""), hint
+
+
+def _parted_fault(conn: Conn) -> int:
+    """The curved fault in two parts kept as runs in tgsis.part (rows of squares 8 and above: part 1), version e1."""
+    import numpy as np
+
+    from tests.merge_data import curved_surface
+
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    half = len(surface.cells) // 2
+    square_row = np.concatenate([np.arange(half), np.arange(half)]) // (SIDE - 1)
+    parted = tgsis.Surface(
+        surface.vertices, surface.cells, cell_properties={"part": (square_row >= 8).astype(np.int64)}
+    )
+    geoid = tgsis.insert_feature(conn, "faults", parted)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def test_parts_kept_as_runs_merge_as_in_python(conn: Conn) -> None:
+    """The parent renumbers a part, the child moves vertices, deletes a triangle inside a run and adds one in no
+    part, then on a second round gives cells another part: the runs are rewritten exactly as Python does."""
+    geoid = _parted_fault(conn)
+    psql(conn, "DEFAULT", ("UPDATE tgsis.part SET part = 2 WHERE geoid = %s AND part = 1", (geoid,)))
+    move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    psql(
+        conn,
+        "e1",
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 3", (geoid,)),
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 50.0, -300.0, 0.0)", (geoid, n)),
+        ("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 1, 0, %s)", (geoid, m, n)),
+    )
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    conn.commit()
+    psql(conn, "e1", ("UPDATE tgsis.part SET part = 5 WHERE geoid = %s AND firstid = 0", (geoid,)))
+    move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)

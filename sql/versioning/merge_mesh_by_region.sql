@@ -13,7 +13,9 @@
 -- a row whose id is new or differs is inserted with exactly the merged id; the
 -- property rows alike (values equal as merge3 compares them; a row of no value
 -- is not written), copied from the stored row of the state they come from; the
--- GOCAD atoms (tgsis.atom) alike, their refid renumbered with the vertices; the
+-- GOCAD atoms (tgsis.atom) alike, their refid renumbered with the vertices;
+-- the part runs (tgsis.part) of the merged cells, rewritten when they differ
+-- from the version's; the
 -- geometry row's box and counts follow; the parent's edits of the feature's
 -- attributes of the geometry row (name, colour, CRS, ...) are brought in. Then the conflict
 -- is recorded 'manual', and the merge or refresh that follows copies the
@@ -22,7 +24,7 @@
 -- could be recorded): the merge's refusal (TG302) names it.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
 -- hint naming the Python command that merges it: a region solved average or
--- manual (their meshes need numpy), parts kept as runs (tgsis.part), the
+-- manual (their meshes need numpy), the
 -- parent's edits of the feature row (the class owner's table; not written in
 -- SQL yet), stored regions that are not the
 -- regions of now, attributes changed on both sides, a merged mesh that is not
@@ -48,7 +50,7 @@ DECLARE
     v_refused  text := format('%s of version %s refused: feature %s does not merge by region in SQL',
                               p_action, quote_literal(p_version), p_geoid);
     v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges it by region '
-                              '(average and manual solutions, parts, feature properties); else solve it as a whole object: '
+                              '(average and manual solutions, feature properties); else solve it as a whole object: '
                               'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
                               p_action, p_version, p_action, p_version, p_version, p_geoid::text);
     v_why      text;
@@ -81,6 +83,9 @@ DECLARE
     v_pcsrc    smallint[];
     v_pcfrom   bigint[];
     v_agone    bigint[];
+    v_parts    boolean := false;
+    v_runs_old bigint[];
+    v_runs_new bigint[];
     v_aid      bigint[];
     v_aref     bigint[];
     v_notes    text[];
@@ -118,14 +123,12 @@ BEGIN
       FROM pg_temp.tgsis_mr_info i;
     v_word := CASE v_k WHEN 1 THEN 'point' WHEN 2 THEN 'segment' WHEN 3 THEN 'triangle' ELSE 'tetrahedron' END;
 
-    -- what SQL does not write yet: parts kept as runs (the Python merge does)
-    IF v_runs AND EXISTS (SELECT FROM tgsis.part_ver v WHERE v.geoid = p_geoid
-                             AND ((v.revision = ANY (v_base) AND NOT (v.lastrevs && v_base))
-                                  OR (v.revision = ANY (v_pset) AND NOT (v.lastrevs && v_pset))
-                                  OR (v.revision = ANY (v_cset) AND NOT (v.lastrevs && v_cset)))) THEN
-        RAISE EXCEPTION '%: its cells are in parts (tgsis.part), which the SQL merge by region does not write yet', v_refused
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
+    -- parts kept as runs (tgsis.part) when some state has one: the runs are the object's, rewritten below when
+    -- they differ (as the Python merge reads such an object whole)
+    v_parts := v_runs AND EXISTS (SELECT FROM tgsis.part_ver v WHERE v.geoid = p_geoid
+                                     AND ((v.revision = ANY (v_base) AND NOT (v.lastrevs && v_base))
+                                          OR (v.revision = ANY (v_pset) AND NOT (v.lastrevs && v_pset))
+                                          OR (v.revision = ANY (v_cset) AND NOT (v.lastrevs && v_cset))));
 
     -- the regions, numbered as tgsis.mesh_merge_regions numbers them, with what each side changed there
     CREATE TEMPORARY TABLE tgsis_mw_node ON COMMIT DROP AS
@@ -226,7 +229,7 @@ BEGIN
                   WHERE n.kind = 'v') AS s ON s.id = k.id
       LEFT JOIN pg_temp.tgsis_mr_v m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
     CREATE TEMPORARY TABLE tgsis_mw_c ON COMMIT DROP AS
-    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.v, m.val
+    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.v, m.val, m.part
       FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_c m) AS k
       LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
                   WHERE n.kind = 'c') AS s ON s.id = k.id
@@ -268,6 +271,36 @@ BEGIN
       FROM pg_temp.tgsis_mw_c n CROSS JOIN LATERAL unnest(n.v) WITH ORDINALITY AS u(x, o)
      WHERE n.present AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.v = n.v);
     v_cid := ARRAY(SELECT DISTINCT u FROM unnest(v_cid) AS u ORDER BY 1);
+    -- the part runs of the version's cells now and of the merged cells (cells in no run stay in none; a run
+    -- never spans a gap in the ids), over every cell: those no state changed have the base's part
+    IF v_parts THEN
+        EXECUTE format(
+            'WITH kept AS (
+                 SELECT c.%3$I AS id, r.part FROM %1$s c JOIN %2$s r
+                     ON r.geoid = $1 AND r.revision = ANY ($2) AND NOT (r.lastrevs && $2) AND c.%3$I BETWEEN r.firstid AND r.lastid
+                  WHERE c.geoid = $1 AND c.revision = ANY ($2) AND NOT (c.lastrevs && $2)
+                    AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.%3$I)),
+             states AS (
+                 SELECT 4 AS st, k.id, k.part FROM kept k
+                 UNION ALL SELECT 4, coalesce(p.old, m.id), m.part
+                             FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id WHERE m.st = 4
+                 UNION ALL SELECT 8, k.id, k.part FROM kept k
+                 UNION ALL SELECT 8, n.id, n.part FROM pg_temp.tgsis_mw_c n WHERE n.present),
+             breaks AS (
+                 SELECT s.st, s.id, s.part,
+                        CASE WHEN lag(s.id) OVER w = s.id - 1 AND lag(s.part) OVER w = s.part THEN 0 ELSE 1 END AS brk
+                   FROM states s WHERE s.part >= 0
+                 WINDOW w AS (PARTITION BY s.st ORDER BY s.id)),
+             runs AS (
+                 SELECT b.st, min(b.id) AS firstid, max(b.id) AS lastid, min(b.part) AS part
+                   FROM (SELECT b.*, sum(b.brk) OVER (PARTITION BY b.st ORDER BY b.id) AS g FROM breaks b) AS b
+                  GROUP BY b.st, b.g)
+             SELECT coalesce(array_agg(ARRAY[r.firstid, r.lastid, r.part] ORDER BY r.firstid) FILTER (WHERE r.st = 4), ''{}''),
+                    coalesce(array_agg(ARRAY[r.firstid, r.lastid, r.part] ORDER BY r.firstid) FILTER (WHERE r.st = 8), ''{}'')
+               FROM runs r',
+            tgsis.storage_table('tgsis', v_table), tgsis.storage_table('tgsis', 'part'), v_cellid)
+          INTO v_runs_old, v_runs_new USING p_geoid, v_base;
+    END IF;
     -- GOCAD atoms (tgsis.atom: a vertex that repeats another, refid): gone, new, or repeating another vertex now
     v_agone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_vold o
                       WHERE o.ref IS NOT NULL
@@ -450,6 +483,17 @@ BEGIN
           USING p_geoid, v_aid, v_aref, v_rev;
         v_written := v_written + cardinality(v_aid);
     END IF;
+    -- the part runs, rewritten when they differ (a few rows per object)
+    IF v_parts AND v_runs_old IS DISTINCT FROM v_runs_new THEN
+        v_written := v_written + tgsis.delete_object_rows('tgsis', 'part', 'geoid', ARRAY[p_geoid]);
+        IF cardinality(v_runs_new) > 0 THEN
+            EXECUTE format('INSERT INTO %s (geoid, firstid, lastid, part, revision)
+                            SELECT $1, $2[i][1], $2[i][2], $2[i][3]::integer, $3 FROM generate_subscripts($2, 1) AS i',
+                           tgsis.storage_table('tgsis', 'part'))
+              USING p_geoid, v_runs_new, v_rev;
+            v_written := v_written + array_length(v_runs_new, 1);
+        END IF;
+    END IF;
     v_written := v_written + tgsis.merge_geometry_row(p_geoid, v_table,
                                                       (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
     FOR v_i IN 1 .. cardinality(v_aview) LOOP  -- the parent's attribute edits (a view's columns in one UPDATE)
@@ -465,4 +509,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, parts, the parent''s feature-row edits, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, the parent''s feature-row edits, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
