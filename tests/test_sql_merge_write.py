@@ -741,3 +741,17 @@ def test_parts_kept_as_runs_merge_as_in_python(conn: Conn) -> None:
     move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
     for action in ("merge", "refresh"):
         assert_same_merge(conn, "e1", action)
+
+
+def test_after_pg_dump_and_restore_the_solved_regions_merge_in_psql_as_in_python(
+    conn: Conn, fault: int, pg: Any, db_dsn: str, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    solve(conn, "e1", fault, "child")
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
+        assert_same_merge(restored, "e1")
