@@ -755,3 +755,12 @@ def test_after_pg_dump_and_restore_the_solved_regions_merge_in_psql_as_in_python
     solve(conn, "e1", fault, "child")
     with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
         assert_same_merge(restored, "e1")
+
+
+@pytest.mark.parametrize(
+    "x", [0.0, -0.0, 1.0, 5.0, 0.1, 1234567.0, 999999.7, 0.0001, 0.00001234567, 123.456789, -2.5e-9, 7.77e12, 1e6]
+)
+def test_numbers_in_notices_are_written_as_python_writes_them(conn: Conn, x: float) -> None:
+    (text,) = conn.execute("SELECT tgsis.merge_number_text(%s)", (x,)).fetchone()  # type: ignore[misc]
+    conn.rollback()
+    assert text == f"{x:.6g}"

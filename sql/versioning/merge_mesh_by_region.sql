@@ -208,7 +208,7 @@ BEGIN
     -- what the solutions discard, said before it is written (merge3's discards, as the Python client says them)
     v_notes := ARRAY(
         SELECT format('region %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
-                      g.region, g.solution, s.side, s.nv, s.nc, trim_scale(round(s.d::numeric, 6)))
+                      g.region, g.solution, s.side, s.nv, s.nc, tgsis.merge_number_text(s.d))
           FROM pg_temp.tgsis_mw_region g
           CROSS JOIN LATERAL (VALUES
               (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
