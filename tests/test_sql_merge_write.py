@@ -337,9 +337,15 @@ _pairs = itertools.count()
     child=st.lists(_edit, min_size=1, max_size=3),
     parent=st.lists(_edit, min_size=1, max_size=3),
     solution=st.sampled_from(["parent", "child", "base"]),
+    action=st.sampled_from(["merge", "refresh"]),
 )
 def test_random_edits_merge_in_psql_exactly_as_in_python(
-    conn: Conn, fault: int, child: list[tuple[str, int, int]], parent: list[tuple[str, int, int]], solution: str
+    conn: Conn,
+    fault: int,
+    child: list[tuple[str, int, int]],
+    parent: list[tuple[str, int, int]],
+    solution: str,
+    action: str,
 ) -> None:
     n = next(_pairs)
     parent_version, child_version = f"wp{n}", f"wc{n}"
@@ -357,7 +363,7 @@ def test_random_edits_merge_in_psql_exactly_as_in_python(
     ).fetchall():
         conn.execute("SELECT tgsis.resolve_region(%s, 'feature', %s, %s, %s)", (child_version, key, region, solution))
     conn.commit()
-    theirs, mine = both_merges(conn, child_version)
+    theirs, mine = both_merges(conn, child_version, action)
     if theirs[0] == "refused":
         assert mine[0] == "refused" and mine[1] == theirs[1], (theirs, mine)
         return
