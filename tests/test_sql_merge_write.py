@@ -424,7 +424,7 @@ def test_the_parents_attribute_edits_come_along_and_both_changed_is_refused_as_i
 # ---------------------------------------------------------------------------- rights, sessions
 
 
-def test_a_role_without_rights_on_the_class_or_the_version_gets_42501_and_nothing_is_written(
+def test_a_role_without_rights_on_the_class_or_the_version_is_refused_as_in_python_and_nothing_is_written(
     conn: Conn, fault: int, db_dsn: str
 ) -> None:
     from tests.roles import login_roles
