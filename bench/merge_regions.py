@@ -287,6 +287,21 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
         )
     else:
         print("(d) no region-aware merge_version in this checkout: not measured")
+    # (e) issue39-sqlwrite: the psql merge by region (SQL tgsis.merge_version merges the mesh itself, in PL/pgSQL)
+    if conn.execute("SELECT to_regprocedure('tgsis.merge_regions_in_sql(text, text, boolean)')").fetchone() != (None,):
+        psql_merge = "SELECT tgsis.merge_version('regions')"
+        rows_e = int(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()[0])())  # type: ignore[index]
+        t_e = timed(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()), repeat)
+        out.update(
+            {
+                "sql_region_merge_s": round(t_e, 3),
+                "sql_region_merge_rows": rows_e,
+                "sql_region_merge_vs_objlevel": round(t_e / t_a, 2),
+            }
+        )
+        print(
+            f"(e) psql merge_version by region (SQL) of two disjoint edits:    {t_e:6.3f} s ({t_e / t_a:.2f}x (a)), {rows_e} rows written"
+        )
     if upload_cost:
         out.update(upload_with_and_without_indexes(conn, surface, repeat))
     return out

@@ -152,6 +152,8 @@ NOT_FROM_THE_CLI = {
     "Python, and SQL calls it only after the same checks (tgsis.store_mesh_regions)",
     "sql/versioning/mesh_merge_work.sql": "the work tables of SQL region detection and of the psql merge by region: "
     "the command finds and merges the regions in Python",
+    "sql/versioning/merge_mesh_by_region.sql": "the psql merge by region: the command merges by region in Python "
+    "(tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/resolve_all_regions.sql": "the psql face of --region all: the command calls the Python "
     "resolve_all_regions",
 }

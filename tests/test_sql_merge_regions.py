@@ -507,11 +507,10 @@ def test_psql_resolve_all_regions_of_an_object_that_merges_by_itself(conn: Conn,
 
 
 def test_a_psql_merge_of_a_mesh_that_merges_by_region_names_the_merge_that_does_it(conn: Conn, fault: int) -> None:
-    """No Python call: the SQL merge and refresh still refuse (TG302) a mesh changed on both sides, but the
-    regions are stored now, so the hint names the command that merges it by region."""
-    move(conn, "e1", fault, NORTH, (0.5, 0.0, 1.25))
-    move(conn, "DEFAULT", fault, SOUTH, (-1.0, 0.0, -2.0))
-    conn.commit()
+    """No Python call: the SQL merge and refresh refuse (TG302) a mesh with a region conflict not solved (the
+    regions are stored now, so the hint names the command that merges it by region); disjoint edits the SQL
+    merge merges by region itself (tests/test_sql_merge_write.py)."""
+    three_regions(conn, fault)
     for action in ("merge", "refresh"):
         state, message, hint = sqlstate(conn, f"SELECT tgsis.{action}_version('e1')", ())
         assert state == "TG302", message

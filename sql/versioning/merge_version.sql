@@ -4,7 +4,10 @@
 -- version did not change are not touched. The parent's working revision is
 -- then frozen and a new one started. Without p_remove the version goes on
 -- from the merged state (its base moves to that revision); with it, the
--- version is deleted. Refused (TG302) while a conflict is unsolved. A NOTICE
+-- version is deleted. First the unsolved conflicting meshes of static
+-- classes whose conflicting regions all have a solution are merged by
+-- region into the version (tgsis.merge_regions_in_sql, as the Python merge
+-- does). Refused (TG302) while a conflict is unsolved. A NOTICE
 -- per solved conflict says what of the other side's edits its solution
 -- discards (tgsis.notice_discards).
 CREATE FUNCTION tgsis.merge_version(p_version text, p_remove boolean DEFAULT false)
@@ -20,6 +23,7 @@ DECLARE
     v_own     integer[];
     v_class   record;
     v_written bigint := 0;
+    v_detect  text;
 BEGIN
     -- the right to merge into the parent, and to change (or delete) the version itself, whose base moves
     PERFORM tgsis.require_merge_privileges(p_version, 'merge', coalesce(p_remove, false));
@@ -27,6 +31,10 @@ BEGIN
         RAISE EXCEPTION 'version % has child versions and cannot be removed by the merge', quote_literal(p_version)
             USING ERRCODE = 'TG202', HINT = 'merge without removing it, or merge or delete its children first';
     END IF;
+    -- the unsolved conflicting meshes whose regions all have a solution are merged by region into the version
+    -- first (tgsis.merge_regions_in_sql), as the Python merge does; the merge then copies them as 'manual'
+    v_detect := current_setting('tgsis.region_detection', true);
+    v_written := tgsis.merge_regions_in_sql(p_version, 'merge', coalesce(p_remove, false));
     v_child := tgsis.lock_for_merge(p_version, 'merge');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
     -- what the solutions throw away of the other side's edits, said before it is gone
@@ -62,9 +70,10 @@ BEGIN
         PERFORM tgsis.next_working_revision(v_child.versionid, v_parent.workingset, v_parent.workingrevision);
         DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
     END IF;
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
     RETURN v_written;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_version(text, boolean) IS
-    'apply a version''s changes (object by object, unchanged rows untouched) to its parent''s working revision in one transaction; refused while conflicts are unsolved; the version goes on from the merged state, or is removed; returns the rows written';
+    'apply a version''s changes (object by object, unchanged rows untouched) to its parent''s working revision in one transaction, meshes changed on both sides merged by region first; refused while conflicts are unsolved; the version goes on from the merged state, or is removed; returns the rows written';

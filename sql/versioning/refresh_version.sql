@@ -4,7 +4,10 @@
 -- only the version changed keep the version's state, and each conflicting
 -- object follows its solution ('parent' takes the parent's object, 'child'
 -- and 'manual' keep the version's; a NOTICE says what each discards).
--- Refused (TG302) while a conflict is unsolved.
+-- First the unsolved conflicting meshes of static classes whose conflicting
+-- regions all have a solution are merged by region into the version
+-- (tgsis.merge_regions_in_sql, as the Python refresh does). Refused (TG302)
+-- while a conflict is unsolved.
 CREATE FUNCTION tgsis.refresh_version(p_version text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -20,8 +23,13 @@ DECLARE
     v_next    integer;
     v_class   record;
     v_written bigint := 0;
+    v_detect  text;
 BEGIN
     PERFORM tgsis.require_merge_privileges(p_version, 'refresh');
+    -- the unsolved conflicting meshes whose regions all have a solution are merged by region into the version
+    -- first (tgsis.merge_regions_in_sql), as the Python merge does; the merge then copies them as 'manual'
+    v_detect := current_setting('tgsis.region_detection', true);
+    v_written := tgsis.merge_regions_in_sql(p_version, 'refresh', false);
     v_child := tgsis.lock_for_merge(p_version, 'refresh');
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_child.parentid;
     PERFORM tgsis.notice_discards(p_version, 'refreshed');  -- what the solutions throw away, said before it is gone
@@ -47,9 +55,10 @@ BEGIN
             v_newset, v_next);
     END LOOP;
     DELETE FROM tgsis.conflicts WHERE versionid = v_child.versionid;
+    PERFORM set_config('tgsis.region_detection', coalesce(v_detect, ''), true);
     RETURN v_written;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.refresh_version(text) IS
-    'bring the parent''s changes since the version''s base into the version (its base moves to the parent''s working revision); conflicting objects follow their solutions; refused while conflicts are unsolved; returns the rows written';
+    'bring the parent''s changes since the version''s base into the version (its base moves to the parent''s working revision); conflicting objects follow their solutions, meshes changed on both sides merged by region first; refused while conflicts are unsolved; returns the rows written';

@@ -1,6 +1,7 @@
 -- tgsis.check_no_unsolved_conflicts(version, action): recompute a version's conflicts; TG302 naming the unsolved ones.
 -- Its hint points meshes whose regions are stored (tgsis.conflict_regions) to the Python merge by
--- region (tgsis version merge / refresh): SQL cannot run the three-way merge.
+-- region (tgsis version merge / refresh), which also applies average and manual solutions (the SQL
+-- merge by region, tgsis.merge_regions_in_sql, merges the others once their regions are solved).
 CREATE FUNCTION tgsis.check_no_unsolved_conflicts(p_version text, p_action text)
 RETURNS void
 LANGUAGE plpgsql
@@ -18,7 +19,7 @@ BEGIN
       FROM tgsis.find_conflicts(p_version) WHERE solution = 'unsolved';
     IF v_count > 0 THEN
         -- the unsolved meshes whose regions are stored (current marks: find_conflicts dropped older ones)
-        -- merge by region, which needs the Python client (numpy): SQL cannot do it
+        -- merge by region once solved (average and manual solutions need the Python client: numpy)
         SELECT string_agg(DISTINCT format('%s %s', r.objectclass, r.objectkey), ', ')
           INTO v_regions
           FROM tgsis.conflict_regions r JOIN tgsis.conflicts k USING (versionid, objectclass, objectkey)

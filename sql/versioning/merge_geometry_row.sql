@@ -1,0 +1,51 @@
+-- tgsis.merge_geometry_row(geoid, cell table, set): bring the geometry row's box and counts up to the object's rows in a revision set; rows changed.
+-- The last step of the SQL merge by region's write (tgsis.merge_mesh_by_region),
+-- as tgsis.db._state_write updates the row after a write of part of the rows:
+-- the box and counts of the object's vertex and cell rows in p_set, the
+-- session's working set (one pass over each: the rows its views show),
+-- written through the view tgsis.geometry only
+-- when they differ (0 when equal). cube's functions are named by the schema
+-- the extension is in.
+CREATE FUNCTION tgsis.merge_geometry_row(p_geoid bigint, p_table text, p_set integer[])
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_n       bigint;
+    v_m       bigint;
+    v_low     float8[];
+    v_high    float8[];
+    v_cube    name;
+    v_changed bigint;
+BEGIN
+    EXECUTE format('SELECT count(*), ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]
+                      FROM %s v WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+                   tgsis.storage_table('tgsis', 'vrtx'))
+       INTO v_n, v_low, v_high USING p_geoid, p_set;
+    EXECUTE format('SELECT count(*) FROM %s v WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+                   tgsis.storage_table('tgsis', p_table))
+       INTO v_m USING p_geoid, p_set;
+    IF v_n = 0 THEN
+        v_low := NULL;
+        v_high := NULL;
+    END IF;
+    SELECT n.nspname INTO v_cube FROM pg_catalog.pg_extension e JOIN pg_catalog.pg_namespace n ON n.oid = e.extnamespace
+     WHERE e.extname = 'cube';
+    EXECUTE format('UPDATE tgsis.geometry SET bbox = %1$I.cube($1, $2), nvrtx = $3, ncell = $4
+                     WHERE geoid = $5
+                       AND ((bbox IS NULL) <> ($1 IS NULL)
+                            OR (bbox IS NOT NULL AND ARRAY[%1$I.cube_ll_coord(bbox, 1), %1$I.cube_ll_coord(bbox, 2),
+                                                           %1$I.cube_ll_coord(bbox, 3), %1$I.cube_ur_coord(bbox, 1),
+                                                           %1$I.cube_ur_coord(bbox, 2), %1$I.cube_ur_coord(bbox, 3)]
+                                                     IS DISTINCT FROM $1 || $2)
+                            OR nvrtx <> $3 OR ncell <> $4)', v_cube)
+      USING v_low, v_high, v_n, v_m, p_geoid;
+    GET DIAGNOSTICS v_changed = ROW_COUNT;
+    RETURN v_changed;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.merge_geometry_row(bigint, text, integer[]) IS
+    'bring a feature''s geometry row (box, vertex and cell counts) up to its rows in a revision set (the session''s working set), through the view, when they differ; returns the rows changed (0 or 1)';

@@ -1,0 +1,512 @@
+-- tgsis.merge_mesh_by_region(version, action, geoid): merge one model-1 feature by region in SQL, written into the version; returns the rows written.
+-- The psql face of the Python merge by region (tgsis.db.merging._merge_object,
+-- docs/merge.md), which is its oracle, row for row: the three states and the
+-- regions are tgsis.mesh_merge_work's (the same as tgsis.merge3's); the merged
+-- state is, per region, the rows of the side that changed it (a region both
+-- changed alike: the parent's) or of the solution recorded for it
+-- (tgsis.resolve_region: parent, child or base), the parent's elsewhere, with
+-- the version's new ids as merge3 renumbers them (tgsis_mr_vmap / _cmap). It is
+-- written into the VERSION's working revision by an id-keyed difference
+-- against the version's stored rows, as tgsis.db._state_write writes it: a
+-- vertex or cell whose id is gone or whose row differs (coordinates bit for
+-- bit, a cell's vertex ids in order) is closed (tgsis.delete_object_rows) and
+-- a row whose id is new or differs is inserted with exactly the merged id; the
+-- property rows alike (values equal as merge3 compares them; a row of no value
+-- is not written), copied from the stored row of the state they come from; the
+-- GOCAD atoms (tgsis.atom) alike, their refid renumbered with the vertices;
+-- the part runs (tgsis.part) of the merged cells, rewritten when they differ
+-- from the version's; the
+-- geometry row's box and counts follow; the parent's edits of the feature's
+-- attributes of the geometry row (name, colour, CRS, ...) are brought in. Then the conflict
+-- is recorded 'manual', and the merge or refresh that follows copies the
+-- version's object as for any other solution. NULL, nothing written, when a
+-- conflicting region has no solution (or the regions were not stored: none
+-- could be recorded): the merge's refusal (TG302) names it.
+-- Refused (TG302, nothing written: the caller's transaction is aborted) with the
+-- hint naming the Python command that merges it: a region solved average or
+-- manual (their meshes need numpy), the
+-- parent's edits of the feature row (the class owner's table; not written in
+-- SQL yet), stored regions that are not the
+-- regions of now, attributes changed on both sides, a merged mesh that is not
+-- valid where no state was invalid (merge3's checks: cells on removed vertices,
+-- duplicated cells, non-manifold edges or faces, vertices left without cells),
+-- merged rows of no value for an integer property. TG002 for a role that may
+-- not write in the version, 42501 for one that may not change the class. The work tables are made in a
+-- subtransaction rolled back once the plan (the rows to close and to write) is
+-- in variables: neither they nor their locks outlive the call.
+-- extra_float_digits is pinned: values are compared as text, floats exactly.
+CREATE FUNCTION tgsis.merge_mesh_by_region(p_version text, p_action text, p_geoid bigint)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1
+AS $$
+DECLARE
+    v_key      text := p_geoid::text;
+    v_version  tgsis.versions;
+    v_class    tgsis.catalog;
+    v_name     text := format('feature %s (base)', p_geoid);
+    v_refused  text := format('%s of version %s refused: feature %s does not merge by region in SQL',
+                              p_action, quote_literal(p_version), p_geoid);
+    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges it by region '
+                              '(average and manual solutions, feature properties); else solve it as a whole object: '
+                              'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                              p_action, p_version, p_action, p_version, p_version, p_geoid::text);
+    v_why      text;
+    v_word     text;
+    v_table    text;
+    v_cellid   text;
+    v_k        integer;
+    v_vps      text;
+    v_vpn      text;
+    v_cps      text;
+    v_cpn      text;
+    v_vnull    text;
+    v_cnull    text;
+    v_runs     boolean;
+    -- the plan, computed in the subtransaction
+    v_vgone    bigint[];
+    v_vid      bigint[];
+    v_vx       float8[];
+    v_vy       float8[];
+    v_vz       float8[];
+    v_cgone    bigint[];
+    v_cid      bigint[];
+    v_cv       bigint[];
+    v_pvgone   bigint[];
+    v_pvid     bigint[];
+    v_pvsrc    smallint[];
+    v_pvfrom   bigint[];
+    v_pcgone   bigint[];
+    v_pcid     bigint[];
+    v_pcsrc    smallint[];
+    v_pcfrom   bigint[];
+    v_agone    bigint[];
+    v_parts    boolean := false;
+    v_runs_old bigint[];
+    v_runs_new bigint[];
+    v_aid      bigint[];
+    v_aref     bigint[];
+    v_notes    text[];
+    v_base     integer[];
+    v_pset     integer[];
+    v_cset     integer[];
+    -- writing
+    v_settings text[];
+    v_rev      integer;
+    v_count    bigint;
+    v_written  bigint := 0;
+    v_cols     text;
+    v_vals     text;
+    v_casts    text;
+    v_width    integer;
+    v_rows     text[];
+    v_pt       tgsis.versioned_tables;
+    v_t        record;
+    v_note     text;
+    v_attr     record;
+    v_aview    text[] := '{}';
+    v_akey     text[] := '{}';
+    v_aset     text[] := '{}';
+    v_i        integer;
+    v_unsolved boolean := false;
+BEGIN
+    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+
+    -- the plan: the work tables in a subtransaction rolled back once the rows to write are in variables.
+    -- The block's body is not indented.
+    BEGIN
+    PERFORM tgsis.mesh_merge_work(p_version, p_geoid);
+    SELECT i.base, i.parentset, i.versionset, i.simplex, i.cellid, i.k, i.runs
+      INTO v_base, v_pset, v_cset, v_table, v_cellid, v_k, v_runs
+      FROM pg_temp.tgsis_mr_info i;
+    v_word := CASE v_k WHEN 1 THEN 'point' WHEN 2 THEN 'segment' WHEN 3 THEN 'triangle' ELSE 'tetrahedron' END;
+
+    -- parts kept as runs (tgsis.part) when some state has one: the runs are the object's, rewritten below when
+    -- they differ (as the Python merge reads such an object whole)
+    v_parts := v_runs AND EXISTS (SELECT FROM tgsis.part_ver v WHERE v.geoid = p_geoid
+                                     AND ((v.revision = ANY (v_base) AND NOT (v.lastrevs && v_base))
+                                          OR (v.revision = ANY (v_pset) AND NOT (v.lastrevs && v_pset))
+                                          OR (v.revision = ANY (v_cset) AND NOT (v.lastrevs && v_cset))));
+
+    -- the regions, numbered as tgsis.mesh_merge_regions numbers them, with what each side changed there
+    CREATE TEMPORARY TABLE tgsis_mw_node ON COMMIT DROP AS
+    SELECT n.kind, n.id, (dense_rank() OVER (ORDER BY n.label) - 1)::integer AS region,
+           coalesce(vx.p_changed, cx.p_changed, false) AS p_changed,
+           coalesce(vx.c_changed, cx.c_changed, false) AS c_changed,
+           coalesce(vx.differ, cx.differ, false) AS differ,
+           CASE WHEN vx.ip AND vx.ic THEN sqrt((vx.cx - vx.px) * (vx.cx - vx.px) + (vx.cy - vx.py) * (vx.cy - vx.py)
+                                               + (vx.cz - vx.pz) * (vx.cz - vx.pz)) END AS pc_dist,
+           CASE WHEN vx.p_moved THEN sqrt((vx.px - vx.bx) * (vx.px - vx.bx) + (vx.py - vx.by) * (vx.py - vx.by)
+                                          + (vx.pz - vx.bz) * (vx.pz - vx.bz)) END AS p_disp,
+           CASE WHEN vx.c_moved THEN sqrt((vx.cx - vx.bx) * (vx.cx - vx.bx) + (vx.cy - vx.by) * (vx.cy - vx.by)
+                                          + (vx.cz - vx.bz) * (vx.cz - vx.bz)) END AS c_disp
+      FROM pg_temp.tgsis_mr_node n
+      LEFT JOIN pg_temp.tgsis_mr_vx vx ON n.kind = 'v' AND vx.id = n.id
+      LEFT JOIN pg_temp.tgsis_mr_cx cx ON n.kind = 'c' AND cx.id = n.id;
+    CREATE TEMPORARY TABLE tgsis_mw_region ON COMMIT DROP AS
+    SELECT f.*, r.solution, r.region IS NOT NULL AS stored,
+           -- the stored region is this one (tgsis.db.regions: same ids, all six arrays)
+           coalesce(r.vertex_ids = f.vertex_ids AND r.cell_ids = f.cell_ids AND r.parent_vertex_ids = f.pv
+                    AND r.parent_cell_ids = f.pc AND r.child_vertex_ids = f.cv AND r.child_cell_ids = f.cc, false) AS holds,
+           CASE WHEN NOT f.conflict THEN CASE WHEN f.has_c AND NOT f.has_p THEN 4 ELSE 2 END
+                WHEN r.solution = 'parent' THEN 2 WHEN r.solution = 'child' THEN 4 WHEN r.solution = 'base' THEN 1
+           END::smallint AS src
+      FROM (SELECT d.region, bool_or(d.p_changed) AND bool_or(d.c_changed) AND bool_or(d.differ) AS conflict,
+                   bool_or(d.p_changed) AS has_p, bool_or(d.c_changed) AS has_c,
+                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v'), '{}') AS vertex_ids,
+                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c'), '{}') AS cell_ids,
+                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v' AND d.p_changed), '{}') AS pv,
+                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c' AND d.p_changed), '{}') AS pc,
+                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v' AND d.c_changed), '{}') AS cv,
+                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c' AND d.c_changed), '{}') AS cc,
+                   -- what a whole-region solution discards of each side (merge3's RegionDiscard): the side's changed
+                   -- rows the solution does not hold as the side has them, the largest distance of such a vertex
+                   count(*) FILTER (WHERE d.kind = 'v' AND d.c_changed AND d.differ) AS pcv,
+                   count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed AND d.differ) AS pcc,
+                   coalesce(max(d.pc_dist) FILTER (WHERE d.kind = 'v' AND d.c_changed AND d.differ), 0) AS pcd,
+                   count(*) FILTER (WHERE d.kind = 'v' AND d.p_changed AND d.differ) AS cpv,
+                   count(*) FILTER (WHERE d.kind = 'c' AND d.p_changed AND d.differ) AS cpc,
+                   coalesce(max(d.pc_dist) FILTER (WHERE d.kind = 'v' AND d.p_changed AND d.differ), 0) AS cpd,
+                   count(*) FILTER (WHERE d.kind = 'v' AND d.p_changed) AS bpv,
+                   count(*) FILTER (WHERE d.kind = 'c' AND d.p_changed) AS bpc,
+                   coalesce(max(d.p_disp), 0) AS bpd,
+                   count(*) FILTER (WHERE d.kind = 'v' AND d.c_changed) AS bcv,
+                   count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed) AS bcc,
+                   coalesce(max(d.c_disp), 0) AS bcd
+              FROM pg_temp.tgsis_mw_node d GROUP BY d.region) AS f
+      LEFT JOIN tgsis.conflict_regions r
+        ON r.versionid = v_version.versionid AND r.objectclass = 'feature' AND r.objectkey = v_key AND r.region = f.region;
+
+    -- a region conflict of a mesh whose regions are not stored yet has no solution: left unsolved (NULL)
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict)
+       AND NOT EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = v_version.versionid
+                          AND r.objectclass = 'feature' AND r.objectkey = v_key) THEN
+        v_unsolved := true;
+        RAISE EXCEPTION 'tgsis_mw_done';
+    END IF;
+    -- the recorded solutions hold only for these very regions (else every conflict is unsolved, as in Python)
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict)
+       AND (EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE NOT g.holds)
+            OR (SELECT count(*) FROM tgsis.conflict_regions r WHERE r.versionid = v_version.versionid
+                   AND r.objectclass = 'feature' AND r.objectkey = v_key) <> (SELECT count(*) FROM pg_temp.tgsis_mw_region)) THEN
+        RAISE EXCEPTION '%: its stored regions are not the regions of its states now: their solutions do not hold', v_refused
+            USING ERRCODE = 'TG302',
+                  HINT = format('SELECT * FROM tgsis.find_conflicts(%L) finds them again; then solve them (tgsis.resolve_region)', p_version);
+    END IF;
+    SELECT string_agg(format('region %s solved %s', g.region, g.solution), ', ' ORDER BY g.region) INTO v_why
+      FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.solution IN ('average', 'manual');
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: % (its mesh is applied by the Python client)', v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.src IS NULL) THEN
+        v_unsolved := true;  -- a conflicting region without a solution: left unsolved (NULL)
+        RAISE EXCEPTION 'tgsis_mw_done';
+    END IF;
+    -- what the solutions discard, said before it is written (merge3's discards, as the Python client says them)
+    v_notes := ARRAY(
+        SELECT format('region %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
+                      g.region, g.solution, s.side, s.nv, s.nc, tgsis.merge_number_text(s.d))
+          FROM pg_temp.tgsis_mw_region g
+          CROSS JOIN LATERAL (VALUES
+              (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
+                            CASE g.solution WHEN 'child' THEN g.cpc WHEN 'base' THEN g.bpc END,
+                            CASE g.solution WHEN 'child' THEN g.cpd WHEN 'base' THEN g.bpd END),
+              (2, 'child', CASE g.solution WHEN 'parent' THEN g.pcv WHEN 'base' THEN g.bcv END,
+                           CASE g.solution WHEN 'parent' THEN g.pcc WHEN 'base' THEN g.bcc END,
+                           CASE g.solution WHEN 'parent' THEN g.pcd WHEN 'base' THEN g.bcd END)) AS s (o, side, nv, nc, d)
+         WHERE g.conflict AND (s.nv > 0 OR s.nc > 0)
+         ORDER BY g.region, s.o);
+
+    -- the merged rows of the keys the states do not all hold alike (the others are the same everywhere):
+    -- per id its region's source (a row the source lacks is no row), the parent's outside every region
+    CREATE TEMPORARY TABLE tgsis_mw_v ON COMMIT DROP AS
+    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.x, m.y, m.z, m.val, m.ref
+      FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_v m) AS k
+      LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
+                  WHERE n.kind = 'v') AS s ON s.id = k.id
+      LEFT JOIN pg_temp.tgsis_mr_v m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
+    CREATE TEMPORARY TABLE tgsis_mw_c ON COMMIT DROP AS
+    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.v, m.val, m.part
+      FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_c m) AS k
+      LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
+                  WHERE n.kind = 'c') AS s ON s.id = k.id
+      LEFT JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
+    -- the version's rows as stored (its own numbering: the renumbering undone)
+    CREATE TEMPORARY TABLE tgsis_mw_vold ON COMMIT DROP AS
+    SELECT coalesce(p.old, m.id) AS id, m.x, m.y, m.z, m.val, coalesce(q.old, m.ref) AS ref
+      FROM pg_temp.tgsis_mr_v m LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = m.id
+      LEFT JOIN pg_temp.tgsis_mr_vmap q ON q.new = m.ref
+     WHERE m.st = 4;
+    CREATE TEMPORARY TABLE tgsis_mw_cold ON COMMIT DROP AS
+    SELECT coalesce(p.old, m.id) AS id,
+           ARRAY(SELECT coalesce(q.old, u.x) FROM unnest(m.v) WITH ORDINALITY AS u(x, o)
+                   LEFT JOIN pg_temp.tgsis_mr_vmap q ON q.new = u.x ORDER BY u.o) AS v, m.val
+      FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id
+     WHERE m.st = 4;
+
+    PERFORM tgsis.merge_mesh_validity(v_name, v_k, v_word, v_table, p_geoid, v_base, v_refused, v_hint);
+
+    -- the difference, keyed by id: rows to close (gone, or differing) and rows to write (new, or differing)
+    v_vgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_vold o
+                      WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v n
+                                         WHERE n.present AND n.id = o.id AND float8send(n.x) = float8send(o.x)
+                                           AND float8send(n.y) = float8send(o.y) AND float8send(n.z) = float8send(o.z))
+                      ORDER BY o.id);
+    SELECT coalesce(array_agg(n.id ORDER BY n.id), '{}'), coalesce(array_agg(n.x ORDER BY n.id), '{}'),
+           coalesce(array_agg(n.y ORDER BY n.id), '{}'), coalesce(array_agg(n.z ORDER BY n.id), '{}')
+      INTO v_vid, v_vx, v_vy, v_vz
+      FROM pg_temp.tgsis_mw_v n
+     WHERE n.present
+       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o
+                        WHERE o.id = n.id AND float8send(n.x) = float8send(o.x)
+                          AND float8send(n.y) = float8send(o.y) AND float8send(n.z) = float8send(o.z));
+    v_cgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_cold o
+                      WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.present AND n.id = o.id AND n.v = o.v)
+                      ORDER BY o.id);
+    SELECT coalesce(array_agg(n.id ORDER BY n.id), '{}'), coalesce(array_agg(u.x ORDER BY n.id, u.o), '{}')
+      INTO v_cid, v_cv
+      FROM pg_temp.tgsis_mw_c n CROSS JOIN LATERAL unnest(n.v) WITH ORDINALITY AS u(x, o)
+     WHERE n.present AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.v = n.v);
+    v_cid := ARRAY(SELECT DISTINCT u FROM unnest(v_cid) AS u ORDER BY 1);
+    -- the part runs of the version's cells now and of the merged cells (cells in no run stay in none; a run
+    -- never spans a gap in the ids), over every cell: those no state changed have the base's part
+    IF v_parts THEN
+        EXECUTE format(
+            'WITH kept AS (
+                 SELECT c.%3$I AS id, r.part FROM %1$s c JOIN %2$s r
+                     ON r.geoid = $1 AND r.revision = ANY ($2) AND NOT (r.lastrevs && $2) AND c.%3$I BETWEEN r.firstid AND r.lastid
+                  WHERE c.geoid = $1 AND c.revision = ANY ($2) AND NOT (c.lastrevs && $2)
+                    AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.%3$I)),
+             states AS (
+                 SELECT 4 AS st, k.id, k.part FROM kept k
+                 UNION ALL SELECT 4, coalesce(p.old, m.id), m.part
+                             FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id WHERE m.st = 4
+                 UNION ALL SELECT 8, k.id, k.part FROM kept k
+                 UNION ALL SELECT 8, n.id, n.part FROM pg_temp.tgsis_mw_c n WHERE n.present),
+             breaks AS (
+                 SELECT s.st, s.id, s.part,
+                        CASE WHEN lag(s.id) OVER w = s.id - 1 AND lag(s.part) OVER w = s.part THEN 0 ELSE 1 END AS brk
+                   FROM states s WHERE s.part >= 0
+                 WINDOW w AS (PARTITION BY s.st ORDER BY s.id)),
+             runs AS (
+                 SELECT b.st, min(b.id) AS firstid, max(b.id) AS lastid, min(b.part) AS part
+                   FROM (SELECT b.*, sum(b.brk) OVER (PARTITION BY b.st ORDER BY b.id) AS g FROM breaks b) AS b
+                  GROUP BY b.st, b.g)
+             SELECT coalesce(array_agg(ARRAY[r.firstid, r.lastid, r.part] ORDER BY r.firstid) FILTER (WHERE r.st = 4), ''{}''),
+                    coalesce(array_agg(ARRAY[r.firstid, r.lastid, r.part] ORDER BY r.firstid) FILTER (WHERE r.st = 8), ''{}'')
+               FROM runs r',
+            tgsis.storage_table('tgsis', v_table), tgsis.storage_table('tgsis', 'part'), v_cellid)
+          INTO v_runs_old, v_runs_new USING p_geoid, v_base;
+    END IF;
+    -- GOCAD atoms (tgsis.atom: a vertex that repeats another, refid): gone, new, or repeating another vertex now
+    v_agone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_vold o
+                      WHERE o.ref IS NOT NULL
+                        AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.present AND n.id = o.id AND n.ref = o.ref)
+                      ORDER BY o.id);
+    SELECT coalesce(array_agg(n.id ORDER BY n.id), '{}'), coalesce(array_agg(n.ref ORDER BY n.id), '{}')
+      INTO v_aid, v_aref
+      FROM pg_temp.tgsis_mw_v n
+     WHERE n.present AND n.ref IS NOT NULL
+       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.ref = n.ref);
+    -- property rows: values equal as merge3 compares them (the canonical texts); a row of no value is not written
+    SELECT (SELECT nulls FROM tgsis.merge_value_text(i.vpschema, i.vptable)),
+           (SELECT nulls FROM tgsis.merge_value_text(i.cpschema, i.cptable))
+      INTO v_vnull, v_cnull FROM pg_temp.tgsis_mr_info i;
+    IF v_vnull IS NOT NULL THEN
+        v_pvgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_vold o
+                           WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.present AND n.id = o.id AND n.val = o.val)
+                           ORDER BY o.id);
+        SELECT coalesce(array_agg(n.id ORDER BY n.id), '{}'), coalesce(array_agg(n.src ORDER BY n.id), '{}'),
+               coalesce(array_agg(CASE WHEN n.src = 4 THEN coalesce(p.old, n.id) ELSE n.id END ORDER BY n.id), '{}')
+          INTO v_pvid, v_pvsrc, v_pvfrom
+          FROM pg_temp.tgsis_mw_v n LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = n.id
+         WHERE n.present AND n.val <> v_vnull
+           AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val);
+    END IF;
+    IF v_cnull IS NOT NULL THEN
+        v_pcgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_cold o
+                           WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.present AND n.id = o.id AND n.val = o.val)
+                           ORDER BY o.id);
+        SELECT coalesce(array_agg(n.id ORDER BY n.id), '{}'), coalesce(array_agg(n.src ORDER BY n.id), '{}'),
+               coalesce(array_agg(CASE WHEN n.src = 4 THEN coalesce(p.old, n.id) ELSE n.id END ORDER BY n.id), '{}')
+          INTO v_pcid, v_pcsrc, v_pcfrom
+          FROM pg_temp.tgsis_mw_c n LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = n.id
+         WHERE n.present AND n.val <> v_cnull
+           AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val);
+    END IF;
+    SELECT i.vpschema, i.vptable, i.cpschema, i.cptable INTO v_vps, v_vpn, v_cps, v_cpn FROM pg_temp.tgsis_mr_info i;
+    RAISE EXCEPTION 'tgsis_mw_done';  -- rolls the work tables and their locks back
+    EXCEPTION WHEN raise_exception THEN
+        IF SQLERRM <> 'tgsis_mw_done' THEN
+            RAISE;
+        END IF;
+    END;
+    IF v_unsolved THEN
+        RETURN NULL;
+    END IF;
+
+    -- the parent's edits of the attributes, and the refusal of attributes changed on both sides
+    v_why := NULL;
+    FOR v_attr IN
+        SELECT e.viewname, e.keycolumn, bool_or(e.both_sides) AS both_sides,
+               string_agg(e.columnname, ', ' ORDER BY e.o) FILTER (WHERE e.both_sides) AS both_columns,
+               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
+               string_agg(e.columnname, ', ' ORDER BY e.o) AS all_columns
+          FROM (SELECT a.*, row_number() OVER () AS o
+                  FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_pset, v_cset) AS a) AS e
+         GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
+    LOOP
+        IF v_attr.both_sides THEN
+            v_why := concat_ws(', ', v_why, v_attr.both_columns);
+        END IF;
+        v_aview := v_aview || v_attr.viewname;
+        v_akey := v_akey || v_attr.keycolumn;
+        v_aset := v_aset || v_attr.sets;
+    END LOOP;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: its attributes were changed both in the version and in its parent, to other values (%): the merge by region merges the mesh only',
+                v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+    -- the feature row is the class owner's table: SQL does not write the parent's edits of it yet (Python does)
+    SELECT string_agg(v_aset[i], '; ') INTO v_why FROM generate_subscripts(v_aview, 1) AS i WHERE v_aview[i] <> 'tgsis.geometry';
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: its parent changed its feature properties (%), which the SQL merge by region does not bring into the version yet',
+                v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+
+    FOREACH v_note IN ARRAY v_notes LOOP
+        RAISE NOTICE 'feature % of version %: %', p_geoid, quote_literal(p_version), v_note;
+    END LOOP;
+
+    -- the merged mesh goes into the version first: the right to write there, and to change the class
+    IF NOT tgsis.has_version_privilege(p_version, 'write') THEN
+        RAISE EXCEPTION 'role % may not write in version %: merging feature % by region writes the merged mesh into the version first, then merges it',
+                quote_ident(tgsis.calling_role()), quote_literal(p_version), p_geoid
+            USING ERRCODE = 'TG002',
+                  HINT = format('the owner or a tgsis_admin can run SELECT tgsis.grant_version(%L, ''write'', %L); else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
+                                p_version, tgsis.calling_role());
+    END IF;
+    PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE, DELETE');
+
+    -- the writes, in the version's working revision, as tgsis.db._state_write writes them
+    v_settings := ARRAY[current_setting('tgsis.version', true), current_setting('tgsis.revision', true)];
+    PERFORM tgsis.goto_version(p_version, true);
+    SELECT workingrevision INTO v_rev FROM tgsis.versions WHERE versionid = v_version.versionid;
+    PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
+       FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'vrtx';
+    FOR v_t IN SELECT * FROM (VALUES ('VERTEX', v_vps, v_vpn, v_pvgone, v_pvid, v_pvsrc, v_pvfrom),
+                                     ('CELL', v_cps, v_cpn, v_pcgone, v_pcid, v_pcsrc, v_pcfrom))
+                                AS t (alignment, schemaname, tablename, gone, ids, src, src_ids)
+                WHERE t.gone IS NOT NULL LOOP
+        -- (statements on the class's storage through tgsis.storage_run: as its owner, never as tgsis's)
+        SELECT * INTO v_pt FROM tgsis.versioned_tables t WHERE t.schemaname = v_t.schemaname AND t.tablename = v_t.tablename;
+        SELECT count(*) + 1 INTO v_width FROM pg_catalog.pg_attribute a
+         WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename)::regclass
+           AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx');
+        SELECT string_agg(format('%I', c.attname), ', ' ORDER BY c.attnum),
+               string_agg(CASE WHEN c.atttypid IN ('real'::regtype, 'double precision'::regtype)
+                               THEN format('coalesce(s.%I, ''NaN'')::text', c.attname)
+                               WHEN c.atttypid IN ('real[]'::regtype, 'double precision[]'::regtype)
+                               THEN format('(SELECT array_agg(coalesce(e, ''NaN'') ORDER BY o) FROM unnest(s.%I) WITH ORDINALITY AS u(e, o))::text',
+                                           c.attname)
+                               ELSE format('s.%I::text', c.attname) END, ', ' ORDER BY c.attnum),
+               string_agg(format('$1[2 + (g.i - 1) * %s + %s]::%s', v_width, c.j,
+                                 format_type(c.atttypid, c.atttypmod)), ', ' ORDER BY c.attnum)
+          INTO v_cols, v_vals, v_casts
+          FROM (SELECT a.attname, a.attnum, a.atttypid, a.atttypmod, row_number() OVER (ORDER BY a.attnum) AS j
+                  FROM pg_catalog.pg_attribute a
+                 WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename)::regclass
+                   AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx')) AS c;
+        -- the rows to write, read (as text: exact) before anything of the version is closed (they may be its own)
+        v_rows := ARRAY(
+            SELECT r FROM tgsis.storage_run(v_pt, false, format(
+                'SELECT ARRAY[f.id::text, %s]
+                   FROM (SELECT $5[g.i] AS id, $5[c.n + g.i] AS sid, $5[2 * c.n + g.i] AS src
+                           FROM (SELECT cardinality($5) / 3 AS n) AS c, generate_series(1, cardinality($5) / 3) AS g(i)) AS f
+                   JOIN %I.%I s ON s._geoid = $1[1]::bigint AND s._idx = f.sid
+                    AND s.revision = ANY (CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
+                    AND NOT (s.lastrevs && CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
+                  ORDER BY f.id', v_vals, v_pt.schemaname, v_pt.tablename || '_ver'),
+                p_1 => ARRAY[p_geoid::text, v_cset::text], p_2 => v_base, p_3 => v_pset,
+                p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r);
+        SELECT string_agg(v_rows[i][1], ', ' ORDER BY i) INTO v_why
+          FROM generate_subscripts(v_rows, 1) AS i
+         WHERE EXISTS (SELECT FROM generate_subscripts(v_rows, 2) AS j WHERE v_rows[i][j] IS NULL);
+        IF v_why IS NOT NULL THEN  -- (a float's NULL is written NaN, as the Python client writes it)
+            RAISE EXCEPTION '%: its merged rows cannot be written: % property rows of ids % have no value for an integer or boolean property',
+                    v_refused, lower(v_t.alignment), v_why
+                USING ERRCODE = 'TG302', HINT = v_hint;
+        END IF;
+        v_written := v_written + tgsis.delete_object_rows(v_t.schemaname, v_t.tablename, '_geoid', ARRAY[p_geoid], '_idx', v_t.gone);
+        IF cardinality(v_rows) > 0 THEN
+            SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pt, true, format(
+                'INSERT INTO %I.%I (_geoid, _idx, %s, revision)
+                 SELECT $1[1]::bigint, $1[2 + (g.i - 1) * %s]::bigint, %s, $4
+                   FROM generate_series(1, (cardinality($1) - 1) / %s) AS g(i)',
+                v_pt.schemaname, v_pt.tablename || '_ver', v_cols, v_width, v_casts, v_width),
+                p_1 => ARRAY[p_geoid::text] || ARRAY(SELECT unnest(v_rows)), p_4 => v_rev) AS r;
+            v_written := v_written + v_count;
+        END IF;
+    END LOOP;
+    v_written := v_written + tgsis.delete_object_rows('tgsis', v_table, 'geoid', ARRAY[p_geoid], v_cellid, v_cgone)
+                           + tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[p_geoid], 'vrtxid', v_vgone);
+    IF cardinality(v_vid) > 0 THEN
+        EXECUTE format('INSERT INTO %s (geoid, vrtxid, x, y, z, revision) SELECT $1, u.id, u.x, u.y, u.z, $6
+                          FROM unnest($2, $3, $4, $5) AS u (id, x, y, z)', tgsis.storage_table('tgsis', 'vrtx'))
+          USING p_geoid, v_vid, v_vx, v_vy, v_vz, v_rev;
+        v_written := v_written + cardinality(v_vid);
+    END IF;
+    IF cardinality(v_cid) > 0 THEN
+        EXECUTE format('INSERT INTO %s (geoid, %I, %s, revision) SELECT $1, u.id, %s, $4
+                          FROM unnest($2) WITH ORDINALITY AS u (id, o)',
+                       tgsis.storage_table('tgsis', v_table), v_cellid,
+                       (SELECT string_agg(format('vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, v_k) AS i),
+                       (SELECT string_agg(format('$3[(u.o - 1) * %s + %s]', v_k, i), ', ' ORDER BY i)
+                          FROM generate_series(1, v_k) AS i))
+          USING p_geoid, v_cid, v_cv, v_rev;
+        v_written := v_written + cardinality(v_cid);
+    END IF;
+    -- the atoms: closed, then written; a row that comes back as stored in some revision of the object takes its
+    -- PATOM flag from there, any other is an ATOM (as tgsis.db._state_write writes them)
+    v_written := v_written + tgsis.delete_object_rows('tgsis', 'atom', 'geoid', ARRAY[p_geoid], 'vrtxid', v_agone);
+    IF cardinality(v_aid) > 0 THEN
+        EXECUTE format('INSERT INTO %1$s (geoid, vrtxid, refid, patom, revision)
+                        SELECT $1, u.id, u.ref,
+                               coalesce((SELECT bool_or(a.patom) FROM %1$s a
+                                          WHERE a.geoid = $1 AND a.vrtxid = u.id AND a.refid = u.ref), false), $4
+                          FROM unnest($2, $3) AS u (id, ref)', tgsis.storage_table('tgsis', 'atom'))
+          USING p_geoid, v_aid, v_aref, v_rev;
+        v_written := v_written + cardinality(v_aid);
+    END IF;
+    -- the part runs, rewritten when they differ (a few rows per object)
+    IF v_parts AND v_runs_old IS DISTINCT FROM v_runs_new THEN
+        v_written := v_written + tgsis.delete_object_rows('tgsis', 'part', 'geoid', ARRAY[p_geoid]);
+        IF cardinality(v_runs_new) > 0 THEN
+            EXECUTE format('INSERT INTO %s (geoid, firstid, lastid, part, revision)
+                            SELECT $1, $2[i][1], $2[i][2], $2[i][3]::integer, $3 FROM generate_subscripts($2, 1) AS i',
+                           tgsis.storage_table('tgsis', 'part'))
+              USING p_geoid, v_runs_new, v_rev;
+            v_written := v_written + array_length(v_runs_new, 1);
+        END IF;
+    END IF;
+    v_written := v_written + tgsis.merge_geometry_row(p_geoid, v_table,
+                                                      (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
+    FOR v_i IN 1 .. cardinality(v_aview) LOOP  -- the parent's attribute edits (a view's columns in one UPDATE)
+        EXECUTE format('UPDATE %s SET %s WHERE %I = $1', v_aview[v_i], v_aset[v_i], v_akey[v_i]) USING p_geoid;
+        GET DIAGNOSTICS v_count = ROW_COUNT;
+        v_written := v_written + v_count;
+    END LOOP;
+    PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
+            set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
+    PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
+    RETURN v_written;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, the parent''s feature-row edits, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';

@@ -1,0 +1,173 @@
+-- tgsis.merge_mesh_validity(name, k, word, cell table, geoid, base set, refused, hint): refuse a merged mesh of the SQL merge by region that is not valid.
+-- tgsis.merge3's checks of a merged state (_check_valid), on the work tables
+-- of tgsis.merge_mesh_by_region (pg_temp.tgsis_mr_* of tgsis.mesh_merge_work,
+-- tgsis_mw_node / _region / _v / _c), so that SQL refuses exactly the objects
+-- the Python merge refuses, saying the same. The merged state is the parent's
+-- rows with the rows of the regions taken from the version or the base; only
+-- those can break it: near = the vertices of the taken cells, of the parent's
+-- cells they replace, and the taken vertices. Refused, in merge3's order:
+-- cells on a vertex near the change the merge removes; GOCAD atoms that refer
+-- to a vertex it removes (a row as the parent holds it excused); duplicated cells (the
+-- same vertices, any order) or, for triangles and tetrahedra, edges or faces
+-- in more than two cells, one of them taken, that no state (base, parent,
+-- version) has so often; vertices near the change left without cells, which no
+-- state leaves so. The cells on near vertices are the work tables' rows and,
+-- for the cells no state changed, the base's rows (one pass over its cells,
+-- the vertex columns probed in the few near vertices). TG302 with p_refused
+-- and p_hint; nothing is written before.
+CREATE FUNCTION tgsis.merge_mesh_validity(p_name text, p_k integer, p_word text, p_table text, p_geoid bigint,
+                                          p_base integer[], p_refused text, p_hint text)
+RETURNS void
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_near  bigint[];
+    v_bad   bigint[];
+    v_badv  bigint[];
+    v_keys  text[];
+    v_what  text;
+    v_limit integer;
+    v_msg   text;
+BEGIN
+    -- the rows taken from the version or the base (a parent-only merge is the parent's valid state)
+    CREATE TEMPORARY TABLE tgsis_mw_drop ON COMMIT DROP AS
+    SELECT n.kind, n.id FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region) WHERE g.src IN (1, 4);
+    IF NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_drop) THEN
+        RETURN;
+    END IF;
+    -- the merged state's taken cells, and the parent's cells of those ids (a cell no state changed: its one row)
+    CREATE TEMPORARY TABLE tgsis_mw_taken ON COMMIT DROP AS
+    SELECT d.id, coalesce(c.v, g.v) AS v
+      FROM pg_temp.tgsis_mw_drop d
+      LEFT JOIN pg_temp.tgsis_mw_c c ON c.id = d.id
+      LEFT JOIN pg_temp.tgsis_mr_margin g ON g.id = d.id
+     WHERE d.kind = 'c' AND (c.present OR (c.id IS NULL AND g.id IS NOT NULL));
+    v_near := ARRAY(SELECT unnest(t.v) FROM pg_temp.tgsis_mw_taken t
+                    UNION SELECT unnest(coalesce(p.v, g.v))
+                            FROM pg_temp.tgsis_mw_drop d
+                            LEFT JOIN pg_temp.tgsis_mr_c p ON p.id = d.id AND p.st = 2
+                            LEFT JOIN pg_temp.tgsis_mr_margin g ON g.id = d.id
+                                  AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c c WHERE c.id = d.id)
+                           WHERE d.kind = 'c'
+                    UNION SELECT d.id FROM pg_temp.tgsis_mw_drop d WHERE d.kind = 'v');
+    -- the near vertices, in which state each is (st 1 base, 2 parent, 4 version, 8 merged; one no state
+    -- changed is in all or none: tgsis_mr_vb holds the base's)
+    CREATE TEMPORARY TABLE tgsis_mw_nearv ON COMMIT DROP AS
+    SELECT u.id,
+           CASE WHEN NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id)
+                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id) THEN 15 ELSE 0 END
+                ELSE (SELECT coalesce(sum(DISTINCT m.st), 0) FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id)
+                     + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
+           END AS st
+      FROM unnest(v_near) AS u(id);
+    -- each state's cells on a near vertex: the work tables' rows, and the base's rows of the cells no state changed
+    CREATE TEMPORARY TABLE tgsis_mw_local (st smallint NOT NULL, id bigint NOT NULL, v bigint[] NOT NULL) ON COMMIT DROP;
+    EXECUTE format('INSERT INTO pg_temp.tgsis_mw_local
+                    SELECT s.st, c.id, c.v
+                      FROM (SELECT v.%1$I AS id, %2$s AS v FROM %3$s v
+                             WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
+                               AND (%4$s)) AS c,
+                           (VALUES (1::smallint), (2), (4), (8)) AS s (st)
+                     WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.id)',
+                   CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END,
+                   format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, p_k) AS i)),
+                   tgsis.storage_table('tgsis', p_table),
+                   (SELECT string_agg(format('v.vrtxid%s = ANY ($3)', i), ' OR ') FROM generate_series(1, p_k) AS i))
+      USING p_geoid, p_base, v_near;
+    INSERT INTO pg_temp.tgsis_mw_local
+    SELECT m.st, m.id, m.v FROM pg_temp.tgsis_mr_c m WHERE m.v && v_near
+    UNION ALL
+    SELECT 8, n.id, n.v FROM pg_temp.tgsis_mw_c n WHERE n.present AND n.v && v_near;
+
+    -- cells the merge keeps on vertices it removes
+    v_bad := ARRAY(SELECT l.id FROM pg_temp.tgsis_mw_local l
+                    WHERE l.st = 8 AND EXISTS (SELECT FROM pg_temp.tgsis_mw_nearv x WHERE x.id = ANY (l.v) AND x.st & 8 = 0)
+                    ORDER BY l.id);
+    IF cardinality(v_bad) > 0 THEN
+        v_badv := ARRAY(SELECT DISTINCT x.id FROM pg_temp.tgsis_mw_local l JOIN pg_temp.tgsis_mw_nearv x ON x.id = ANY (l.v)
+                         WHERE l.st = 8 AND l.id = ANY (v_bad) AND x.st & 8 = 0 ORDER BY x.id);
+        RAISE EXCEPTION '%: invalid merge: %: the merge would keep %s % on vertices % that it removes', p_refused, p_name,
+                p_word, tgsis.merge_ids_text(v_bad::text[]), tgsis.merge_ids_text(v_badv::text[])
+            USING ERRCODE = 'TG302', DETAIL = 'one side removed vertices the other side''s cells use: solve the region with one side''s rows',
+                  HINT = p_hint;
+    END IF;
+
+    -- atoms (refid) that refer to vertices the merge removes (a vertex row the parent holds so is excused)
+    v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n
+                     WHERE n.present AND n.ref IS NOT NULL
+                       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v r WHERE r.id = n.ref AND r.present)
+                       AND EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref));
+    IF cardinality(v_badv) > 0 THEN  -- refs no state changed are there when the base has them
+        v_bad := ARRAY(
+            SELECT n.id FROM pg_temp.tgsis_mw_v n
+             WHERE n.present AND n.ref = ANY (v_badv)
+               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v p
+                                WHERE p.id = n.id AND p.st = 2 AND p.x = n.x AND p.y = n.y AND p.z = n.z
+                                  AND 'NaN'::float8 NOT IN (n.x, n.y, n.z)
+                                  AND p.val IS NOT DISTINCT FROM n.val AND p.ref IS NOT DISTINCT FROM n.ref)
+             ORDER BY n.id);
+        IF cardinality(v_bad) > 0 THEN
+            v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n WHERE n.id = ANY (v_bad) ORDER BY n.ref);
+            RAISE EXCEPTION '%: invalid merge: %: the merge would keep vertices %, atoms (refid) that refer to vertices %, which it removes',
+                    p_refused, p_name, tgsis.merge_ids_text(v_bad::text[]), tgsis.merge_ids_text(v_badv::text[])
+                USING ERRCODE = 'TG302',
+                      DETAIL = 'one side removed vertices the other side''s atoms refer to: solve the region with one side''s rows',
+                      HINT = p_hint;
+        END IF;
+    END IF;
+
+    -- duplicated cells (the same vertices), then edges of triangles / faces of tetrahedra in more than two cells:
+    -- a key held more often than the limit, by a taken cell among others, that no state holds so often
+    CREATE TEMPORARY TABLE tgsis_mw_keys (st smallint NOT NULL, kind integer NOT NULL, id bigint NOT NULL, k bigint[] NOT NULL)
+        ON COMMIT DROP;
+    INSERT INTO pg_temp.tgsis_mw_keys
+    SELECT l.st, 1, l.id, ARRAY(SELECT x FROM unnest(l.v) AS x ORDER BY x) FROM pg_temp.tgsis_mw_local l;
+    IF p_k >= 3 THEN
+        INSERT INTO pg_temp.tgsis_mw_keys
+        SELECT l.st, 2, l.id, ARRAY(SELECT u.x FROM unnest(l.v) WITH ORDINALITY AS u(x, o) WHERE u.o <> i ORDER BY u.x)
+          FROM pg_temp.tgsis_mw_local l, generate_series(1, p_k) AS i;
+    END IF;
+    FOR v_limit, v_what IN SELECT 1, format('duplicated %ss (the same vertices)', p_word)
+                           UNION ALL SELECT 2, format('non-manifold %ss (in more than two %ss)',
+                                                      CASE p_k WHEN 3 THEN 'edge' ELSE 'face' END, p_word)
+                            WHERE p_k >= 3 ORDER BY 1 LOOP
+        v_keys := ARRAY(
+            SELECT format('(%s%s)', array_to_string(o.k, ', '), CASE WHEN cardinality(o.k) = 1 THEN ',' ELSE '' END)
+              FROM (SELECT q.k FROM pg_temp.tgsis_mw_keys q WHERE q.st = 8 AND q.kind = v_limit
+                     GROUP BY q.k HAVING count(*) > v_limit
+                       AND bool_or(q.id IN (SELECT t.id FROM pg_temp.tgsis_mw_taken t))) AS o
+             WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_keys s WHERE s.st IN (1, 2, 4) AND s.kind = v_limit AND s.k = o.k
+                                GROUP BY s.st HAVING count(*) > v_limit)
+             ORDER BY o.k);
+        IF cardinality(v_keys) > 0 THEN
+            v_bad := ARRAY(SELECT DISTINCT q.id FROM pg_temp.tgsis_mw_keys q
+                            WHERE q.st = 8 AND q.kind = v_limit
+                              AND format('(%s%s)', array_to_string(q.k, ', '), CASE WHEN cardinality(q.k) = 1 THEN ',' ELSE '' END) = ANY (v_keys)
+                            ORDER BY q.id);
+            RAISE EXCEPTION '%: invalid merge: %: the merge would make % that no state has: vertex ids %, cells %', p_refused,
+                    p_name, v_what, tgsis.merge_ids_text(v_keys), tgsis.merge_ids_text(v_bad::text[])
+                USING ERRCODE = 'TG302', DETAIL = 'solve the region with one side''s rows', HINT = p_hint;
+        END IF;
+    END LOOP;
+
+    -- vertices near the change left without cells, which no state leaves so
+    v_badv := ARRAY(SELECT x.id FROM pg_temp.tgsis_mw_nearv x
+                     WHERE x.st & 8 <> 0
+                       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_local l WHERE l.st = 8 AND x.id = ANY (l.v))
+                       AND NOT EXISTS (SELECT FROM (VALUES (1), (2), (4)) AS s (st)
+                                        WHERE x.st & s.st <> 0
+                                          AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_local l
+                                                           WHERE l.st = s.st AND x.id = ANY (l.v)))
+                     ORDER BY x.id);
+    IF cardinality(v_badv) > 0 THEN
+        RAISE EXCEPTION '%: invalid merge: %: the merge would leave vertices % without %s, which no state does', p_refused,
+                p_name, tgsis.merge_ids_text(v_badv::text[]), p_word
+            USING ERRCODE = 'TG302', DETAIL = 'solve the region with one side''s rows', HINT = p_hint;
+    END IF;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.merge_mesh_validity(text, integer, text, text, bigint, integer[], text, text) IS
+    'refuse (TG302) the merged mesh of the SQL merge by region (work tables of tgsis.merge_mesh_by_region) that tgsis.merge3 refuses: cells on removed vertices, duplicated cells or non-manifold edges/faces no state has, vertices left without cells';
