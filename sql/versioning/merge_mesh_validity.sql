@@ -68,13 +68,14 @@ BEGIN
                     SELECT s.st, c.id, c.v
                       FROM (SELECT v.%1$I AS id, %2$s AS v FROM %3$s v
                              WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
-                               AND (%4$s)) AS c,
+                               AND %4$s) AS c,
                            (VALUES (1::smallint), (2), (4), (8)) AS s (st)
                      WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.id)',
                    CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END,
                    format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, p_k) AS i)),
                    tgsis.storage_table('tgsis', p_table),
-                   (SELECT string_agg(format('v.vrtxid%s = ANY ($3)', i), ' OR ') FROM generate_series(1, p_k) AS i))
+                   -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)
+                   tgsis.cells_on_vertices_sql(p_k, v_near, '$3'))
       USING p_geoid, p_base, v_near;
     INSERT INTO pg_temp.tgsis_mw_local
     SELECT m.st, m.id, m.v FROM pg_temp.tgsis_mr_c m WHERE m.v && v_near
