@@ -1,0 +1,265 @@
+"""The psql merge by region against its oracle, the Python merge: the scenarios a hostile review added.
+
+Property rows missing on one side, -0.0, NaN and infinite values, integer, boolean and
+real property columns, a class whose properties are per cell, parts kept as a
+cell property column, atoms on vertices the other side moved, a region solved
+``base`` where both sides removed rows, a version that has a child version, a
+merge that removes the version while regions are solved, a refresh after the
+merge (tests/test_sql_merge_write.py has the set-up and the first scenarios).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tests.merge_data import SIDE, curved_surface, move
+from tests.test_sql_merge_regions import NORTH, SOUTH, property_tables, psql
+from tests.test_sql_merge_write import assert_same_merge, solve
+
+Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # tests.merge_data.make_fault's (tests/conftest.py)
+
+
+def _typed_fault(conn: Conn, alignment: str = "VERTEX") -> int:
+    """The curved fault in a class with properties of every scalar type (per vertex, or per cell), version e1."""
+    props = [
+        tgsis.Property("k8", "bigint"),
+        tgsis.Property("k4", "integer"),
+        tgsis.Property("k2", "smallint"),
+        tgsis.Property("ok", "boolean"),
+        tgsis.Property("r4", "real"),
+        tgsis.Property("r8", "double precision"),
+    ]
+    tgsis.create_feature_class(conn, "faults", "SURFACE", cell_properties=props, alignment=alignment)  # type: ignore[arg-type]
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    n = len(surface.vertices) if alignment == "VERTEX" else len(surface.cells)
+    ids = np.arange(n)
+    values = {
+        "k8": ids.astype(np.int64) * 10_000_000_000,
+        "k4": ids.astype(np.int32) * 3,
+        "k2": (ids % 7).astype(np.int16),
+        "ok": ids % 2 == 0,
+        "r4": (ids / 7.0).astype(np.float32),
+        "r8": ids / 3.0,
+    }
+    if alignment == "VERTEX":
+        mesh = tgsis.Surface(surface.vertices, surface.cells, vertex_properties=values)
+    else:
+        mesh = tgsis.Surface(surface.vertices, surface.cells, cell_properties=values)
+    geoid = tgsis.insert_feature(conn, "faults", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    return geoid
+
+
+def test_property_rows_missing_null_minus_zero_and_nan_merge_as_in_python(conn: Conn, fault: int) -> None:
+    vp, cp = property_tables(conn, fault)
+    psql(
+        conn,
+        "e1",
+        (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 5", (fault,)),
+        (f"UPDATE {vp} SET porosity = '-0' WHERE _geoid = %s AND _idx = 10", (fault,)),
+        (f"UPDATE {vp} SET porosity = 'NaN' WHERE _geoid = %s AND _idx = 12", (fault,)),
+        (f"UPDATE {vp} SET porosity = '-0' WHERE _geoid = %s AND _idx = 60", (fault,)),  # parent: 0
+        (f"UPDATE {vp} SET porosity = 'NaN' WHERE _geoid = %s AND _idx = 70", (fault,)),  # parent: NaN too
+        (f"UPDATE {vp} SET porosity = 0.5 WHERE _geoid = %s AND _idx = 80", (fault,)),  # parent: no row
+        (f"DELETE FROM {cp} WHERE _geoid = %s AND _idx = 9", (fault,)),
+    )
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    psql(
+        conn,
+        "DEFAULT",
+        (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx IN (110, 80)", (fault,)),
+        (f"UPDATE {vp} SET porosity = 'NaN' WHERE _geoid = %s AND _idx IN (120, 70)", (fault,)),
+        (f"UPDATE {vp} SET porosity = 0 WHERE _geoid = %s AND _idx = 60", (fault,)),
+        (f"UPDATE {vp} SET porosity = '-0' WHERE _geoid = %s AND _idx = 125", (fault,)),
+        (f"DELETE FROM {cp} WHERE _geoid = %s AND _idx = 180", (fault,)),
+    )
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    solve(conn, "e1", fault, "child")  # 80: a value in the version, no row in the parent
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def _typed_edits(conn: Conn, geoid: int, alignment: str) -> None:
+    vp = property_tables(conn, geoid)[0 if alignment == "VERTEX" else 1]
+    psql(
+        conn,
+        "e1",
+        (f"UPDATE {vp} SET k8 = -1234567890123, ok = NOT ok WHERE _geoid = %s AND _idx = 3", (geoid,)),
+        (f"UPDATE {vp} SET k4 = -2147483648, r4 = '-0' WHERE _geoid = %s AND _idx = 4", (geoid,)),
+        (f"UPDATE {vp} SET k2 = -1, r8 = 'NaN', ok = NOT ok WHERE _geoid = %s AND _idx = 6", (geoid,)),
+        (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 9", (geoid,)),
+    )
+    move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+    psql(
+        conn,
+        "DEFAULT",
+        (f"UPDATE {vp} SET k8 = 4503599627370496, r4 = 'NaN' WHERE _geoid = %s AND _idx = 130", (geoid,)),
+        (f"UPDATE {vp} SET k4 = k4 + 1, r8 = '-0', ok = NOT ok WHERE _geoid = %s AND _idx = 131", (geoid,)),
+        (f"UPDATE {vp} SET r4 = '-Infinity', r8 = 'Infinity' WHERE _geoid = %s AND _idx = 132", (geoid,)),
+    )
+    move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
+
+
+def test_integer_boolean_and_real_properties_per_vertex_merge_as_in_python(conn: Conn) -> None:
+    geoid = _typed_fault(conn, "VERTEX")
+    _typed_edits(conn, geoid, "VERTEX")
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_a_class_whose_properties_are_per_cell_merges_as_in_python(conn: Conn) -> None:
+    geoid = _typed_fault(conn, "CELL")
+    _typed_edits(conn, geoid, "CELL")
+    solve(conn, "e1", geoid, "parent")
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_parts_kept_as_a_cell_property_column_merge_as_in_python(conn: Conn) -> None:
+    tgsis.create_feature_class(
+        conn, "faults", "SURFACE", cell_properties=[tgsis.Property("part", "bigint", alignment="CELL")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    parted = tgsis.Surface(
+        surface.vertices, surface.cells, cell_properties={"part": (np.arange(len(surface.cells)) % 3).astype(np.int64)}
+    )
+    geoid = tgsis.insert_feature(conn, "faults", parted)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    cp = property_tables(conn, geoid)[1]
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    psql(conn, "DEFAULT", (f"UPDATE {cp} SET part = 7 WHERE _geoid = %s AND _idx BETWEEN 150 AND 160", (geoid,)))
+    move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+    psql(
+        conn,
+        "e1",
+        ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 3", (geoid,)),
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 50.0, -300.0, 0.0)", (geoid, n)),
+        ("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 1, 0, %s)", (geoid, m, n)),
+        (f"INSERT INTO {cp} (_geoid, _idx, part) VALUES (%s, %s, 4)", (geoid, m)),
+    )
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_atoms_on_vertices_the_other_side_moved_merge_as_in_python(conn: Conn, fault: int) -> None:
+
+    atom = "INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, %s, %s)"
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    psql(
+        conn,
+        "e1",
+        (atom, (fault, 130, 131, False)),  # on the parent's moved SOUTH
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 9000.0, 2000.0, 1.0)", (fault, n)),
+        (
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
+            (fault, m, SIDE - 1, 2 * SIDE - 1, n),
+        ),
+    )
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    psql(
+        conn,
+        "DEFAULT",
+        (atom, (fault, 3, 4, False)),  # on the child's moved NORTH
+        ("INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, -500.0, 2000.0, 1.0)", (fault, n)),
+        (
+            "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)",
+            (fault, m, SIDE * (SIDE - 1), SIDE * (SIDE - 2), n),
+        ),
+    )
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    solve(conn, "e1", fault, "child")  # an atom on a vertex the other side moved is a conflict
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_a_region_solved_base_where_both_sides_removed_rows_merges_as_in_python(conn: Conn, fault: int) -> None:
+    vp, cp = property_tables(conn, fault)
+    for version, dz in (("e1", 5.0), ("DEFAULT", -4.0)):
+        psql(
+            conn,
+            version,
+            ("UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid IN (64, 65, 66)", (dz, fault)),
+            ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 110", (fault,)),
+            (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 65", (fault,)),
+            (f"DELETE FROM {cp} WHERE _geoid = %s AND _idx = 111", (fault,)),
+        )
+    solve(conn, "e1", fault, "base")
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_merge_removing_the_version_while_regions_are_solved_as_in_python(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    solve(conn, "e1", fault, "child")
+    assert_same_merge(conn, "e1", "merge", remove=True)
+
+
+def test_a_version_with_a_child_version_of_its_own_merges_as_in_python(conn: Conn, fault: int) -> None:
+    tgsis.create_version(conn, "e2", parent="e1")
+    conn.commit()
+    move(conn, "e2", fault, [30, 31], (0.0, 1.0, 0.0))
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    solve(conn, "e1", fault, "parent")
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    conn.commit()
+    move(conn, "e2", fault, SOUTH, (0.0, 0.0, 1.5))  # moves the parent's moved vertices again
+    move(conn, "e1", fault, [30, 31, 32], (0.0, 0.5, 0.0))
+    conn.commit()
+    solve(conn, "e2", fault, "child")
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e2", action)
+
+
+def test_a_refresh_after_a_psql_merge_by_region_as_in_python(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    conn.commit()
+    move(conn, "e1", fault, [64, 65], (0.0, 0.0, 2.0))
+    move(conn, "DEFAULT", fault, [65, 66], (0.0, 0.0, -3.0))
+    move(conn, "DEFAULT", fault, NORTH, (0.0, 0.0, -3.0))
+    conn.commit()
+    solve(conn, "e1", fault, "child")
+    assert_same_merge(conn, "e1", "refresh")
+    conn.execute("SELECT tgsis.refresh_version('e1')")
+    conn.commit()
+    move(conn, "e1", fault, [100], (0.0, 0.0, 2.0))
+    assert_same_merge(conn, "e1", "merge")
+
+
+def test_the_region_detection_setting_is_put_back_after_a_psql_merge(conn: Conn, fault: int) -> None:
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    conn.commit()
+    for scope in ("SESSION", "LOCAL"):
+        with conn.transaction(force_rollback=True):
+            conn.execute(f"SET {scope} tgsis.region_detection = 'sql'")
+            conn.execute("SELECT tgsis.merge_version('e1')")
+            after = conn.execute("SELECT current_setting('tgsis.region_detection', true)").fetchone()
+            assert after == ("sql",), scope
+        conn.rollback()
+        conn.execute("RESET tgsis.region_detection")
+        conn.commit()
