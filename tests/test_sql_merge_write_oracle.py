@@ -263,3 +263,42 @@ def test_the_region_detection_setting_is_put_back_after_a_psql_merge(conn: Conn,
         conn.rollback()
         conn.execute("RESET tgsis.region_detection")
         conn.commit()
+
+
+def test_bigint_values_beyond_two_to_the_53_are_merged_exactly_by_python_and_sql(conn: Conn) -> None:
+    """A state with a missing property row read its integer columns as float64 (NaN for the row): 2**63 - 1
+    came back -2**63, 2**53 + 1 came back 2**53, written so into the parent without a word."""
+    geoid = _typed_fault(conn, "VERTEX")
+    vp = property_tables(conn, geoid)[0]
+    big = {130: 2**63 - 1, 131: 2**53 + 1, 132: -(2**62) - 3}
+    n = SIDE * SIDE
+    add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 50.0, -300.0, 0.0)"
+    row = f"INSERT INTO {vp} (_geoid, _idx, k8, k4, k2, ok, r4, r8) VALUES (%s, %s, %s, 1, 1, true, 1, 1)"
+    # both add a vertex at one place, of values that differ only beyond float64: not the same vertex
+    psql(conn, "e1", (add, (geoid, n)), (row, (geoid, n, 2**53 + 1)))
+    psql(conn, "e1", (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 9", (geoid,)))  # a row missing in the child
+    move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+    psql(
+        conn,
+        "DEFAULT",
+        *((f"UPDATE {vp} SET k8 = %s WHERE _geoid = %s AND _idx = %s", (v, geoid, i)) for i, v in big.items()),
+        (add, (geoid, n)),
+        (row, (geoid, n, 2**53)),
+        (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 140", (geoid,)),
+    )
+    move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
+    assert_same_merge(conn, "e1", "refresh")
+    assert_same_merge(conn, "e1", "merge")
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            rows = conn.execute(f"SELECT _idx, k8 FROM {vp} WHERE _geoid = %s AND _idx = ANY (%s)", (geoid, list(big)))
+            assert dict(rows.fetchall()) == big, version
+            added = conn.execute(
+                f"SELECT p.k8 FROM tgsis.vrtx v JOIN {vp} p ON p._geoid = v.geoid AND p._idx = v.vrtxid"
+                " WHERE v.geoid = %s AND v.x = 50 AND v.y = -300 ORDER BY 1",
+                (geoid,),
+            ).fetchall()
+            assert added == [(2**53,), (2**53 + 1,)], version
+        conn.rollback()
