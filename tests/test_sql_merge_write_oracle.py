@@ -10,6 +10,7 @@ merge (tests/test_sql_merge_write.py has the set-up and the first scenarios).
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -302,3 +303,99 @@ def test_bigint_values_beyond_two_to_the_53_are_merged_exactly_by_python_and_sql
             ).fetchall()
             assert added == [(2**53,), (2**53 + 1,)], version
         conn.rollback()
+
+
+def test_a_class_in_a_schema_of_an_odd_name_and_odd_attribute_values_merge_as_in_python(conn: Conn) -> None:
+    conn.execute('CREATE SCHEMA "Odd ""Schema"""')
+    tgsis.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        schema='Odd "Schema"',
+        cell_properties=[tgsis.Property("porosity", "double precision")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    mesh = tgsis.Surface(
+        surface.vertices, surface.cells, vertex_properties={"porosity": np.linspace(0.1, 0.3, SIDE * SIDE)}
+    )
+    geoid = tgsis.insert_feature(conn, "faults", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    vp = property_tables(conn, geoid)[0]
+    move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "e1", geoid, [64, 65, 66], (0.0, 0.0, 5.0))
+    psql(conn, "e1", (f"UPDATE {vp} SET porosity = 2 WHERE _geoid = %s AND _idx = 3", (geoid,)))
+    move(conn, "DEFAULT", geoid, [66, 67], (0.0, 0.0, -4.0))
+    psql(
+        conn,
+        "DEFAULT",
+        (f"UPDATE {vp} SET porosity = 3 WHERE _geoid = %s AND _idx = 140", (geoid,)),
+        ("UPDATE tgsis.geometry SET colorred = 0.25, geoname = 'it''s; \"odd\"' WHERE geoid = %s", (geoid,)),
+    )
+    solve(conn, "e1", geoid, "child")
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_a_region_solution_changed_by_another_session_during_a_psql_merge_is_not_lost(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    """The resolver records 'parent' (not committed yet) where 'child' was recorded; the merge started then
+    must merge with what the resolver commits, or fail: never apply 'child' over the resolver's success."""
+    from tests.sessions import Background, connect
+
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    solve(conn, "e1", fault, "child")
+    parent_z = conn.execute(
+        "SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid IN (66, 67) ORDER BY vrtxid", (fault,)
+    ).fetchall()
+    conn.commit()
+    resolver = connect(db_dsn, "resolver")
+    (region,) = resolver.execute(
+        "SELECT region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND conflict"
+    ).fetchone()  # type: ignore[misc]
+    resolver.execute("SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'parent')", (str(fault), region))
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    time.sleep(1.0)
+    resolver.commit()
+    resolver.close()
+    try:
+        merger.finish()
+    except psycopg.Error:
+        return  # refused: the resolver's solution stands, nothing merged
+    z = conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid IN (66, 67) ORDER BY vrtxid", (fault,))
+    assert z.fetchall() == parent_z  # the solution the resolver was told it recorded
+
+
+def test_a_region_resolved_while_a_psql_merge_holds_the_version_fails_once_it_is_merged(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    solve(conn, "e1", fault, "child")
+    (region,) = conn.execute(
+        "SELECT region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND conflict"
+    ).fetchone()  # type: ignore[misc]
+    conn.commit()
+    merger = connect(db_dsn, "merger")
+    merger.execute("SELECT tgsis.merge_version('e1')")
+    resolver = Background(
+        db_dsn,
+        "resolver",
+        lambda c: c.execute("SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'parent')", (str(fault), region)),
+    )
+    wait_until_blocked(conn, resolver.pid, merger.info.backend_pid)
+    merger.commit()
+    merger.close()
+    try:
+        resolver.finish()
+    except psycopg.Error as exc:
+        assert exc.sqlstate in ("TG200", "TG300", "TG307"), exc
+    left = conn.execute("SELECT count(*) FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1')")
+    assert left.fetchone() == (0,)  # no solution recorded for a conflict the merge settled
