@@ -20,7 +20,7 @@ import pytest
 import tgsis
 from tests.merge_data import SIDE, curved_surface, move
 from tests.test_sql_merge_regions import NORTH, SOUTH, property_tables, psql
-from tests.test_sql_merge_write import assert_same_merge, solve
+from tests.test_sql_merge_write import assert_same_merge, both_merges, solve
 
 Conn = psycopg.Connection[Any]
 
@@ -399,3 +399,61 @@ def test_a_region_resolved_while_a_psql_merge_holds_the_version_fails_once_it_is
         assert exc.sqlstate in ("TG200", "TG300", "TG307"), exc
     left = conn.execute("SELECT count(*) FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1')")
     assert left.fetchone() == (0,)  # no solution recorded for a conflict the merge settled
+
+
+def test_coordinates_of_minus_zero_merge_as_in_python(conn: Conn, fault: int) -> None:
+    psql(
+        conn,
+        "e1",
+        ("UPDATE tgsis.vrtx SET z = '-0' WHERE geoid = %s AND vrtxid IN (0, 1)", (fault,)),
+        ("UPDATE tgsis.vrtx SET x = '-0' WHERE geoid = %s AND vrtxid = 30", (fault,)),
+    )
+    psql(conn, "DEFAULT", ("UPDATE tgsis.vrtx SET z = 0 WHERE geoid = %s AND vrtxid IN (1, 130)", (fault,)))
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize(("side", "value"), [("DEFAULT", "NaN"), ("e1", "Infinity"), ("e1", "-Infinity")])
+def test_non_finite_coordinates_are_refused_as_python_refuses_them(
+    conn: Conn, fault: int, side: str, value: str
+) -> None:
+    """merge3 takes no state with non-finite coordinates: the Python merge refuses it (TG302); the psql merge
+    merged it and wrote the NaN into the parent."""
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    psql(conn, side, ("UPDATE tgsis.vrtx SET y = %s::float8 WHERE geoid = %s AND vrtxid = 70", (value, fault)))
+    for action in ("merge", "refresh"):
+        theirs, mine = both_merges(conn, "e1", action)
+        assert theirs[:2] == ("refused", "TG302"), theirs
+        assert mine[:2] == theirs[:2], mine
+        assert "vertices 70 have non-finite coordinates" in theirs[2] and "vertices 70 have non-finite" in mine[2]
+
+
+def test_parent_new_cells_and_atoms_on_an_id_the_childs_new_vertex_is_renumbered_from(conn: Conn, fault: int) -> None:
+    vp, cp = property_tables(conn, fault)
+    n, m = SIDE * SIDE, 2 * (SIDE - 1) ** 2
+    add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
+    tri = "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)"
+    atom = "INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, %s, %s)"
+    psql(
+        conn,
+        "e1",
+        (add, (fault, n, 9000.0, 2000.0, 1.0)),  # renumbered: the parent's n is elsewhere
+        (tri, (fault, m, SIDE - 1, 2 * SIDE - 1, n)),
+        (f"INSERT INTO {vp} (_geoid, _idx, porosity) VALUES (%s, %s, 0.375)", (fault, n)),
+        (atom, (fault, 20, n, False)),
+    )
+    psql(
+        conn,
+        "DEFAULT",
+        (add, (fault, n, -500.0, 2000.0, 1.0)),
+        (add, (fault, n + 1, -600.0, 2100.0, 1.0)),
+        (tri, (fault, m, SIDE * (SIDE - 1), SIDE * (SIDE - 2), n)),
+        (tri, (fault, m + 1, SIDE * (SIDE - 2), n, n + 1)),
+        (f"INSERT INTO {cp} (_geoid, _idx, facies) VALUES (%s, %s, 2)", (fault, m + 1)),
+        (atom, (fault, n + 1, n, False)),
+        (atom, (fault, 130, n, False)),
+    )
+    move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
