@@ -457,3 +457,28 @@ def test_parent_new_cells_and_atoms_on_an_id_the_childs_new_vertex_is_renumbered
     move(conn, "DEFAULT", fault, SOUTH, (-1.1, 0.0, -2.9))
     for action in ("merge", "refresh"):
         assert_same_merge(conn, "e1", action)
+
+
+def test_regions_stored_unsolved_then_the_overlap_undone_merge_as_in_python(conn: Conn, fault: int) -> None:
+    """Regions stored with a conflict (psql find_conflicts), then the version takes its overlapping edit
+    back: the stored regions are stale; both merges find the regions of now, which merge by themselves."""
+    move(conn, "e1", fault, NORTH, (0.125, -3.3, 7.77))
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, [66, 67], (0.0, 0.0, -4.0))
+    conn.commit()
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions WHERE conflict").fetchone() == (1,)
+    conn.commit()
+    move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, -5.0))  # back where they were (up to rounding)
+    psql(
+        conn,
+        "e1",
+        (
+            "UPDATE tgsis.vrtx v SET z = b.z FROM tgsis.vrtx_ver b WHERE v.geoid = %s AND v.vrtxid IN (64, 65, 66)"
+            " AND b.geoid = v.geoid AND b.vrtxid = v.vrtxid AND b.revision = 0",
+            (fault,),
+        ),
+    )
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
