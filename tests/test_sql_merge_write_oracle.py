@@ -482,3 +482,28 @@ def test_regions_stored_unsolved_then_the_overlap_undone_merge_as_in_python(conn
     )
     for action in ("merge", "refresh"):
         assert_same_merge(conn, "e1", action)
+
+
+def test_a_refusal_after_another_feature_merged_by_region_leaves_nothing_written(conn: Conn) -> None:
+    from tests.test_sql_merge_write import everything
+
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    plain = curved_surface()
+    first, second = (tgsis.insert_feature(conn, "faults", tgsis.Surface(plain.vertices, plain.cells)) for _ in range(2))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for geoid in (first, second):
+        move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
+        move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
+    psql(conn, "DEFAULT", ("UPDATE tgsis.vrtx SET y = 'NaN' WHERE geoid = %s AND vrtxid = 70", (second,)))
+    before = everything(conn)
+    conn.commit()
+    for action in ("merge", "refresh"):
+        theirs, mine = both_merges(conn, "e1", action)
+        assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
+        with pytest.raises(psycopg.Error):
+            conn.execute(f"SELECT tgsis.{action}_version('e1')")
+        conn.rollback()
+        assert everything(conn) == before
+        conn.rollback()
