@@ -30,7 +30,8 @@
 -- regions of now, attributes changed on both sides, a merged mesh that is not
 -- valid where no state was invalid (merge3's checks: cells on removed vertices,
 -- duplicated cells, non-manifold edges or faces, vertices left without cells),
--- merged rows of no value for an integer property. TG002 for a role that may
+-- merged rows of no value for an integer property, a state with non-finite
+-- coordinates (NaN, infinity; merge3 takes no such mesh). TG002 for a role that may
 -- not write in the version, 42501 for one that may not change the class. The work tables are made in a
 -- subtransaction rolled back once the plan (the rows to close and to write) is
 -- in variables: neither they nor their locks outlive the call.
@@ -122,6 +123,31 @@ BEGIN
       INTO v_base, v_pset, v_cset, v_table, v_cellid, v_k, v_runs
       FROM pg_temp.tgsis_mr_info i;
     v_word := CASE v_k WHEN 1 THEN 'point' WHEN 2 THEN 'segment' WHEN 3 THEN 'triangle' ELSE 'tetrahedron' END;
+    -- a state with non-finite coordinates (NaN, infinity: a psql UPDATE stores them) is no mesh merge3 takes
+    -- (MeshState): the Python merge refuses it; so does SQL, naming the first such state as Python does
+    -- (base, parent, version), among the rows read: the changed ones and the base's around them
+    IF pg_catalog.to_regclass('pg_temp.tgsis_mr_vb') IS NULL THEN  -- (not made when there is no region)
+        CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint, x float8, y float8, z float8) ON COMMIT DROP;
+    END IF;
+    SELECT format('feature %s (%s): vertices %s have non-finite coordinates', p_geoid,
+                  CASE s.st WHEN 1 THEN 'base' WHEN 2 THEN 'parent' ELSE 'child' END,
+                  tgsis.merge_ids_text(ARRAY(
+                      SELECT m.id::text FROM (SELECT m.id, m.x, m.y, m.z FROM pg_temp.tgsis_mr_v m WHERE m.st = s.st
+                                              UNION ALL SELECT b.id, b.x, b.y, b.z FROM pg_temp.tgsis_mr_vb b) AS m
+                       WHERE 'NaN'::float8 IN (m.x, m.y, m.z) OR 'Infinity'::float8 IN (abs(m.x), abs(m.y), abs(m.z))
+                       ORDER BY m.id)))
+      INTO v_why
+      FROM (VALUES (1::smallint), (2), (4)) AS s (st)
+     WHERE EXISTS (SELECT FROM (SELECT m.x, m.y, m.z FROM pg_temp.tgsis_mr_v m WHERE m.st = s.st
+                                UNION ALL SELECT b.x, b.y, b.z FROM pg_temp.tgsis_mr_vb b) AS m
+                    WHERE 'NaN'::float8 IN (m.x, m.y, m.z) OR 'Infinity'::float8 IN (abs(m.x), abs(m.y), abs(m.z)))
+     ORDER BY s.st LIMIT 1;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: %', v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = 'correct the coordinates in the version or its parent, or solve it as a whole object: '
+                                            || format('SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                                                      p_version, p_geoid::text);
+    END IF;
 
     -- parts kept as runs (tgsis.part) when some state has one: the runs are the object's, rewritten below when
     -- they differ (as the Python merge reads such an object whole)

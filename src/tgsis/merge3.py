@@ -161,6 +161,13 @@ def _values_equal(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> BoolArray:
 def _value_bits(values: npt.NDArray[Any]) -> npt.NDArray[np.uint64]:
     """(n, c) uint64 words of property values, equal words for equal values (one NaN, no -0.0)."""
     column = values.reshape(len(values), int(np.prod(values.shape[1:], dtype=np.int64)))
+    if column.dtype.kind == "f" and column.dtype.itemsize > 8:
+        # long double (64-bit integers with NaN for missing rows): two doubles whose sum is the value, exactly
+        high = np.asarray(column, dtype=np.float64) + 0.0
+        low = np.asarray(column - high.astype(column.dtype), dtype=np.float64) + 0.0
+        both = np.concatenate([high, low], axis=1)
+        both[np.isnan(both)] = np.nan
+        return both.view(np.uint64)
     if column.dtype.kind == "f":
         floats = np.asarray(column, dtype=np.float64) + 0.0
         floats[np.isnan(floats)] = np.nan

@@ -373,9 +373,25 @@ def _aligned_values(
     found[found] = idx[pos[found]] == ids[found]
     if found.all():
         return values[pos]
-    out = np.full((len(ids), *values.shape[1:]), np.nan, dtype=np.float64)
+    out = np.full((len(ids), *values.shape[1:]), np.nan, dtype=_with_nan(values))
     out[found] = values[pos[found]]
     return out
+
+
+def _with_nan(values: npt.NDArray[Any]) -> npt.DTypeLike:
+    """The type of a property column that gets NaN for its missing rows: float64, or for 64-bit integers the
+    long double that holds every one of them exactly (float64 turns 2**53 + 1 into 2**53, 2**63 - 1 into -2**63)."""
+    if values.dtype.kind not in "iu" or values.dtype.itemsize < 8:
+        return np.float64
+    if np.finfo(np.longdouble).nmant >= 63:
+        return np.longdouble
+    if len(values) and np.abs(values.astype(np.float64)).max(initial=0) >= 2.0**53:
+        raise InvalidInputError(
+            f"64-bit integer property values of {2**53} or more with missing property rows cannot be merged "
+            "exactly on this platform (numpy's long double is a double)",
+            hint="give every row a value, or solve the object as a whole (resolve_conflict)",
+        )
+    return np.float64
 
 
 def _states(fc: FeatureClass, geoid: int, rows: Mapping[str, _Rows]) -> dict[str, MeshState]:
