@@ -365,3 +365,30 @@ def test_the_sql_condition_of_cells_on_vertices_cuts_the_spans_as_the_python_rea
         with pytest.raises(psycopg.errors.InvalidParameterValue):
             conn.execute(f"SELECT tgsis.cells_on_vertices_sql(3, '{{1}}', {bad})")
         conn.rollback()
+
+
+def test_the_spans_of_ids_at_both_ends_of_bigint_are_cut_without_overflow(conn: Conn) -> None:
+    """Vertex ids are any bigint (a psql user writes them): a gap wider than bigint between two ids is a gap
+    like any other, not a 22003 from the gap's subtraction."""
+    ids = [-(2**63), -(2**63) + 1, 5, 2**63 - 1]  # gaps 1, 2^63 + 4, 2^63 - 6
+    (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(3, %s, '$3')", (ids,)).fetchone()  # type: ignore[misc]
+    spans = sorted((int(lo), int(hi)) for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text)))
+    assert spans == [(-(2**63), -(2**63) + 1), (5, 5), (2**63 - 1, 2**63 - 1)]
+    # the Python reader cuts them the same way (its differences of int64 must not wrap)
+    assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
+
+
+def test_new_vertices_at_both_ends_of_bigint_give_merge3s_regions_in_sql(conn: Conn) -> None:
+    """A side adds a vertex (and a triangle on it) with an id near -2^63, the other one near 2^63: the SQL
+    detection (its one-ring through the vertex BRIN) finds merge3's regions, as it did before the spans."""
+    from tests.merge_data import make_fault
+    from tests.test_sql_merge_regions import psql
+
+    fault = make_fault(conn)
+    low, high = -(2**63) + 5, 2**63 - 5
+    add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
+    tri = "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)"
+    psql(conn, "e1", (add, (fault, low, 50.0, -300.0, 0.0)), (tri, (fault, 10**6, 1, 0, low)))
+    psql(conn, "DEFAULT", (add, (fault, high, -500.0, 2000.0, 1.0)), (tri, (fault, 10**6 + 1, 3, 2, high)))
+    found = assert_same_regions(conn, "e1", fault)
+    assert {r["changed_by"] for r in found} == {"child", "parent"}

@@ -23,7 +23,7 @@ BEGIN
         RETURN 'false';
     END IF;
     RETURN (
-        WITH ids AS (SELECT u.id, u.id - lag(u.id) OVER (ORDER BY u.id) AS gap
+        WITH ids AS (SELECT u.id, u.id::numeric - lag(u.id) OVER (ORDER BY u.id) AS gap  -- numeric: ids at both ends of bigint
                        FROM (SELECT DISTINCT x AS id FROM unnest(p_ids) AS x WHERE x IS NOT NULL) AS u),
         cuts AS (SELECT i.id FROM ids i WHERE i.gap > 1 ORDER BY i.gap DESC, i.id LIMIT 3),
         spans AS (SELECT min(g.id) AS lo, max(g.id) AS hi
