@@ -392,3 +392,38 @@ def test_new_vertices_at_both_ends_of_bigint_give_merge3s_regions_in_sql(conn: C
     psql(conn, "DEFAULT", (add, (fault, high, -500.0, 2000.0, 1.0)), (tri, (fault, 10**6 + 1, 3, 2, high)))
     found = assert_same_regions(conn, "e1", fault)
     assert {r["changed_by"] for r in found} == {"child", "parent"}
+
+
+def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_versioning_again_keeps_one(
+    conn: Conn,
+) -> None:
+    """Model 1 hash-partitioned (tgsis.partition_model_storage): the vertex BRIN is made on the partitioned
+    storage and so on each partition; disabling and enabling versioning twice leaves exactly one; the regions
+    found through it are merge3's."""
+    tgsis.partition_model_storage(conn, 1, 3)
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    for _ in range(2):
+        tgsis.enable_feature_versioning(conn)
+        conn.commit()
+        tgsis.disable_feature_versioning(conn)
+        conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    brin = [d for am, d in _indexes(conn, "tgsis.trgl_ver") if am == "brin" and "(vrtxid1, vrtxid2, vrtxid3)" in d]
+    assert len(brin) == 1, _indexes(conn, "tgsis.trgl_ver")
+    parts = conn.execute("SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = 'tgsis.trgl_ver'::regclass").fetchall()
+    assert len(parts) == 3
+    for (part,) in parts:
+        found = [d for am, d in _indexes(conn, part) if am == "brin" and "(vrtxid1, vrtxid2, vrtxid3)" in d]
+        assert len(found) == 1, (part, _indexes(conn, part))
+    from tests.merge_data import curved_surface, move
+
+    surface = curved_surface()
+    geoid = F.insert_feature(conn, "faults", tgsis.Surface(surface.vertices, surface.cells))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, [0, 1, 2], (0.0, 0.0, 1.0))
+    move(conn, "DEFAULT", geoid, [60, 61], (0.0, 0.0, -1.0))
+    conn.commit()
+    conn.execute("SET enable_seqscan = off")
+    assert len(assert_same_regions(conn, "e1", geoid)) == 2
