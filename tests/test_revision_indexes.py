@@ -372,7 +372,9 @@ def test_the_spans_of_ids_at_both_ends_of_bigint_are_cut_without_overflow(conn: 
     like any other, not a 22003 from the gap's subtraction."""
     ids = [-(2**63), -(2**63) + 1, 5, 2**63 - 1]  # gaps 1, 2^63 + 4, 2^63 - 6
     (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(3, %s, '$3')", (ids,)).fetchone()  # type: ignore[misc]
-    spans = sorted((int(lo), int(hi)) for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text)))
+    spans = sorted(
+        (int(lo), int(hi)) for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text))
+    )
     assert spans == [(-(2**63), -(2**63) + 1), (5, 5), (2**63 - 1, 2**63 - 1)]
     # the Python reader cuts them the same way (its differences of int64 must not wrap)
     assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
@@ -411,7 +413,9 @@ def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_ver
     conn.commit()
     brin = [d for am, d in _indexes(conn, "tgsis.trgl_ver") if am == "brin" and "(vrtxid1, vrtxid2, vrtxid3)" in d]
     assert len(brin) == 1, _indexes(conn, "tgsis.trgl_ver")
-    parts = conn.execute("SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = 'tgsis.trgl_ver'::regclass").fetchall()
+    parts = conn.execute(
+        "SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = 'tgsis.trgl_ver'::regclass"
+    ).fetchall()
     assert len(parts) == 3
     for (part,) in parts:
         found = [d for am, d in _indexes(conn, part) if am == "brin" and "(vrtxid1, vrtxid2, vrtxid3)" in d]

@@ -26,7 +26,11 @@ Conn = psycopg.Connection[Any]
 
 N = 40  # vertices of tests.test_object_merge._other_kind's meshes
 _pairs = itertools.count()
-_CELLS = {"MULTIPOINT": ("point", "pointid", 1), "MULTILINESTRING": ("segment", "segid", 2), "MULTITETRA": ("tetra", "tetraid", 4)}
+_CELLS = {
+    "MULTIPOINT": ("point", "pointid", 1),
+    "MULTILINESTRING": ("segment", "segid", 2),
+    "MULTITETRA": ("tetra", "tetraid", 4),
+}
 
 # (kind, first, width, step): vertices first, first + step, ... (width of them) moved; or a cell / vertex removed
 _edit = st.tuples(
@@ -37,7 +41,9 @@ _edit = st.tuples(
 )
 
 
-def _apply(conn: Conn, version: str, geoid: int, geotype: str, edits: list[tuple[str, int, int, int]], dz: float) -> None:
+def _apply(
+    conn: Conn, version: str, geoid: int, geotype: str, edits: list[tuple[str, int, int, int]], dz: float
+) -> None:
     table, cellid, k = _CELLS[geotype]
     corners = ", ".join(f"vrtxid{i + 1}" for i in range(k))
     statements: list[tuple[str, tuple[Any, ...]]] = []
@@ -45,7 +51,10 @@ def _apply(conn: Conn, version: str, geoid: int, geotype: str, edits: list[tuple
         if kind == "move":
             ids = [i for i in range(first, first + width * step, step) if i < N]
             statements.append(
-                ("UPDATE tgsis.vrtx SET z = z + %s, x = x + %s WHERE geoid = %s AND vrtxid = ANY (%s)", (dz, dz / 8, geoid, ids))
+                (
+                    "UPDATE tgsis.vrtx SET z = z + %s, x = x + %s WHERE geoid = %s AND vrtxid = ANY (%s)",
+                    (dz, dz / 8, geoid, ids),
+                )
             )
         elif kind == "drop_cell":
             statements.append((f"DELETE FROM tgsis.{table} WHERE geoid = %s AND {cellid} = %s", (geoid, first)))

@@ -92,7 +92,9 @@ def _positions(sorted_ids: IntArray, query: IntArray) -> IntArray:
         lo, hi = int(sorted_ids[0]), int(sorted_ids[-1])
         if hi - lo <= 4 * len(sorted_ids):
             table = np.full(hi - lo + 3, -1, dtype=np.int64)  # a -1 pad on each side: clipped lookups hit it
-            table[np.subtract(sorted_ids, np.int64(lo), dtype=np.int64) + 1] = np.arange(len(sorted_ids), dtype=np.int64)
+            table[np.subtract(sorted_ids, np.int64(lo), dtype=np.int64) + 1] = np.arange(
+                len(sorted_ids), dtype=np.int64
+            )
             return np.take(table, _offsets(query, lo), mode="clip")
     pos = np.searchsorted(sorted_ids, query)
     np.minimum(pos, len(sorted_ids) - 1, out=pos)
