@@ -431,3 +431,26 @@ def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_ver
     conn.commit()
     conn.execute("SET enable_seqscan = off")
     assert len(assert_same_regions(conn, "e1", geoid)) == 2
+
+
+def test_the_sql_condition_of_cells_on_vertices_takes_nulls_and_duplicates(conn: Conn) -> None:
+    """NULL ids are no ids (only NULLs: false, not the text '() AND (...)' that fails where it is run); duplicates
+    are one id; a NULL column count or parameter is refused like a bad one."""
+    for ids, spans in (("{NULL}", None), ("{NULL,NULL}", None), ("{7,NULL,7,7,8}", [(7, 8)])):
+        (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(2, %s::bigint[], '$3')", (ids,)).fetchone()  # type: ignore[misc]
+        if spans is None:
+            assert text == "false"
+        else:
+            assert (
+                sorted(
+                    (int(lo), int(hi))
+                    for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text))
+                )
+                == spans
+            )
+        condition = text.replace("$3", "'{7,8}'::bigint[]")
+        conn.execute(f"SELECT count(*) FROM tgsis.segment v WHERE {condition}")  # it runs
+    for call in ("NULL::integer, '{1}', '$3'", "3, '{1}', NULL::text"):
+        with pytest.raises(psycopg.errors.InvalidParameterValue):
+            conn.execute(f"SELECT tgsis.cells_on_vertices_sql({call})")
+        conn.rollback()

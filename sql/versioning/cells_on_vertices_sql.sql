@@ -4,7 +4,7 @@
 -- storage's vertex BRIN (tgsis.create_revision_indexes) is searched by, and after them the exact test
 -- of the ids, hashed (+ 0: not an index condition: a BRIN searched by an = ANY is searched once per
 -- id, 2,000 ids 0.66 s on a 2M-cell table, where the spans take milliseconds; docs/performance.md).
--- The spans are literals, so the planner sees where the change is. No ids: false. The Python reader
+-- The spans are literals, so the planner sees where the change is. No ids (none but NULLs): false. The Python reader
 -- cuts its spans the same way (tgsis.db._merge_states._id_spans).
 CREATE FUNCTION tgsis.cells_on_vertices_sql(p_k integer, p_ids bigint[], p_param text)
 RETURNS text
@@ -14,12 +14,12 @@ PARALLEL SAFE
 SET search_path = pg_catalog, pg_temp
 AS $$
 BEGIN
-    IF p_param !~ '^\$[0-9]+$' OR p_k NOT BETWEEN 1 AND 4 THEN
+    IF p_param IS NULL OR p_param !~ '^\$[0-9]+$' OR p_k IS NULL OR p_k NOT BETWEEN 1 AND 4 THEN
         RAISE EXCEPTION 'tgsis.cells_on_vertices_sql: % vertex columns bound as % (1 to 4 columns, a parameter such as $3)',
                 p_k, quote_literal(p_param)
             USING ERRCODE = '22023';
     END IF;
-    IF coalesce(cardinality(p_ids), 0) = 0 THEN
+    IF NOT EXISTS (SELECT FROM unnest(p_ids) AS x WHERE x IS NOT NULL) THEN  -- no ids (NULLs are none)
         RETURN 'false';
     END IF;
     RETURN (
