@@ -454,3 +454,14 @@ def test_the_sql_condition_of_cells_on_vertices_takes_nulls_and_duplicates(conn:
         with pytest.raises(psycopg.errors.InvalidParameterValue):
             conn.execute(f"SELECT tgsis.cells_on_vertices_sql({call})")
         conn.rollback()
+
+
+def test_the_sql_merge_checks_validity_on_the_cells_near_the_change_by_spans_of_the_vertex_brin(
+    conn: Conn, two_edits: int
+) -> None:
+    """The psql merge by region (tgsis.merge_mesh_validity): the cells on the vertices near what it changes come
+    from the vertex BRIN by spans, on PostgreSQL 15 as on 18."""
+    plans = _plans_of(conn, lambda: conn.execute("SELECT tgsis.merge_version('e1')"))
+    local = [p for p in plans if "INSERT INTO pg_temp.tgsis_mw_local" in p and "trgl_ver v" in p]
+    assert len(local) == 1, [p[:200] for p in plans]
+    _reads_the_ring_by_spans(local[0])
