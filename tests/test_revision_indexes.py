@@ -199,7 +199,7 @@ def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_
     conn.commit()
     for table, k in (("point", 1), ("segment", 2), ("trgl", 3), ("tetra", 4)):
         columns = ", ".join(f"vrtxid{i + 1}" for i in range(k))
-        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"({columns})" in d]
+        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"(geoid, {columns})" in d]
         assert len(found) == 1, _indexes(conn, f"tgsis.{table}_ver")
         before = _indexes(conn, f"tgsis.{table}_ver")
         conn.execute("SELECT tgsis.create_revision_indexes('tgsis', %s, 'geoid')", (table,))  # as the upgrade calls it
@@ -268,7 +268,7 @@ def two_edits(conn: Conn) -> int:
 def _reads_the_ring_by_spans(plan: str) -> None:
     """The cells on the changed vertices come from the vertex BRIN searched by spans of ids, not value by value."""
     assert "Seq Scan on trgl_ver" not in plan, plan
-    assert re.search(r"Bitmap Index Scan on trgl_ver_vrtxid1_vrtxid2_vrtxid3_idx", plan), plan
+    assert re.search(r"Bitmap Index Scan on trgl_ver_geoid_vrtxid1_vrtxid2_vrtxid3_idx", plan), plan
     conditions = [line for line in plan.splitlines() if "Index Cond:" in line and "vrtxid" in line]
     assert conditions and not any("ANY" in line for line in conditions), plan  # each search one span
     assert not any("Join Filter:" in line and "ANY" in line for line in plan.splitlines()), plan
@@ -411,14 +411,16 @@ def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_ver
         conn.commit()
     tgsis.enable_feature_versioning(conn)
     conn.commit()
-    brin = [d for am, d in _indexes(conn, "tgsis.trgl_ver") if am == "brin" and "(vrtxid1, vrtxid2, vrtxid3)" in d]
+    brin = [
+        d for am, d in _indexes(conn, "tgsis.trgl_ver") if am == "brin" and "(geoid, vrtxid1, vrtxid2, vrtxid3)" in d
+    ]
     assert len(brin) == 1, _indexes(conn, "tgsis.trgl_ver")
     parts = conn.execute(
         "SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = 'tgsis.trgl_ver'::regclass"
     ).fetchall()
     assert len(parts) == 3
     for (part,) in parts:
-        found = [d for am, d in _indexes(conn, part) if am == "brin" and "(vrtxid1, vrtxid2, vrtxid3)" in d]
+        found = [d for am, d in _indexes(conn, part) if am == "brin" and "(geoid, vrtxid1, vrtxid2, vrtxid3)" in d]
         assert len(found) == 1, (part, _indexes(conn, part))
     from tests.merge_data import curved_surface, move
 
@@ -465,3 +467,60 @@ def test_the_sql_merge_checks_validity_on_the_cells_near_the_change_by_spans_of_
     local = [p for p in plans if "INSERT INTO pg_temp.tgsis_mw_local" in p and "trgl_ver v" in p]
     assert len(local) == 1, [p[:200] for p in plans]
     _reads_the_ring_by_spans(local[0])
+
+
+def test_among_many_objects_the_ring_is_read_by_the_objects_ranges_alone(conn: Conn) -> None:
+    """Vertex ids are local to their geometry (0..n-1): every object has the changed ids. With a BRIN on the
+    vertex columns alone, each span matched ranges of every object and the planner ANDed the BRIN with the
+    primary key's scan of all the object's cells (178,802 TIDs here); with geoid first in the BRIN, a span
+    meets the object's own ranges: no scan of the object's cells by key."""
+    side = 300
+    u, v = np.meshgrid(np.linspace(0.0, 9900.0, side), np.linspace(0.0, 9900.0, side))
+    vertices = np.stack([u.ravel(), v.ravel(), np.sin(u.ravel() / 700.0)], axis=1)
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    big = tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+    sub = idx[:150, :150]
+    small = tgsis.Surface(
+        vertices[: 150 * side].reshape(150, side, 3)[:, :150].reshape(-1, 3),
+        np.concatenate([np.stack(p, 1) for p in _grid_triangles(150)]),
+    )
+    assert len(sub.ravel()) == len(small.vertices)
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    for _ in range(10):
+        F.insert_feature(conn, "faults", small)
+    geoid = F.insert_feature(conn, "faults", big)
+    for _ in range(10):
+        F.insert_feature(conn, "faults", small)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for version, ids, dz in (("DEFAULT", idx[16:19, 3:9], 5.0), ("e1", idx[283:286, 289:295], -3.0)):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+                (dz, geoid, [int(i) for i in ids.ravel()]),
+            )
+        conn.commit()
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE tgsis.trgl_ver, tgsis.vrtx_ver")
+    conn.autocommit = False
+    plans = _plans_of(
+        conn, lambda: conn.execute("SELECT count(*) FROM tgsis.mesh_merge_regions('e1', %s)", (geoid,)).fetchall()
+    )
+    (ring,) = [p for p in plans if "INSERT INTO pg_temp.tgsis_mr_margin" in p]
+    _reads_the_ring_by_spans(ring)
+    assert "trgl_ver_pkey" not in ring, ring
+    read: list[Any] = []
+    plans = _plans_of(conn, lambda: read.append(_merge_states.read_merge_change(conn, "e1", geoid)))
+    on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
+    assert len(on_vertices) == 1, plans
+    _reads_the_ring_by_spans(on_vertices[0])
+    assert "trgl_ver_pkey" not in on_vertices[0], on_vertices[0]
+    assert_same_regions(conn, "e1", geoid)
+
+
+def _grid_triangles(side: int) -> tuple[Any, Any]:
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return (a, b, d), (a, d, c)
