@@ -316,7 +316,7 @@ def _revision_indexes(conn: Conn) -> list[tuple[str, str]]:
         " WHERE i.indrelid::regclass::text IN (SELECT tgsis.storage_table(schemaname, tablename)"
         "        FROM tgsis.versioned_tables WHERE objectclass = 'feature')"
         "   AND ((a.amname = 'brin' AND (pg_get_indexdef(i.indexrelid) LIKE '%(revision)%'"
-        "                              OR pg_get_indexdef(i.indexrelid) LIKE '%(vrtxid1, vrtxid2, vrtxid3)%'))"
+        "                              OR pg_get_indexdef(i.indexrelid) LIKE '%(geoid, vrtxid1, vrtxid2, vrtxid3)%'))"
         "        OR pg_get_expr(i.indpred, i.indrelid) = 'revclosed')"
     ).fetchall()
     conn.commit()

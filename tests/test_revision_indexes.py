@@ -199,7 +199,7 @@ def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_
     conn.commit()
     for table, k in (("point", 1), ("segment", 2), ("trgl", 3), ("tetra", 4)):
         columns = ", ".join(f"vrtxid{i + 1}" for i in range(k))
-        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"({columns})" in d]
+        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"(geoid, {columns})" in d]
         assert len(found) == 1, _indexes(conn, f"tgsis.{table}_ver")
         before = _indexes(conn, f"tgsis.{table}_ver")
         conn.execute("SELECT tgsis.create_revision_indexes('tgsis', %s, 'geoid')", (table,))  # as the upgrade calls it
@@ -268,7 +268,7 @@ def two_edits(conn: Conn) -> int:
 def _reads_the_ring_by_spans(plan: str) -> None:
     """The cells on the changed vertices come from the vertex BRIN searched by spans of ids, not value by value."""
     assert "Seq Scan on trgl_ver" not in plan, plan
-    assert re.search(r"Bitmap Index Scan on trgl_ver_vrtxid1_vrtxid2_vrtxid3_idx", plan), plan
+    assert re.search(r"Bitmap Index Scan on trgl_ver_geoid_vrtxid1_vrtxid2_vrtxid3_idx", plan), plan
     conditions = [line for line in plan.splitlines() if "Index Cond:" in line and "vrtxid" in line]
     assert conditions and not any("ANY" in line for line in conditions), plan  # each search one span
     assert not any("Join Filter:" in line and "ANY" in line for line in plan.splitlines()), plan
@@ -289,7 +289,7 @@ def test_sql_region_detection_reads_the_cells_on_changed_vertices_by_spans_of_th
     )
     assert found == [(0, "parent", 30), (1, "child", 36)]
     (ring,) = [
-        p for p in plans if p.split("Query Text:", 1)[-1].lstrip().startswith("INSERT INTO pg_temp.tgsis_mr_margin")
+        p for p in plans if "INSERT INTO pg_temp.tgsis_mr_margin" in p.split("Query Text:", 1)[-1].split("\n\n")[0]
     ]
     _reads_the_ring_by_spans(ring)
     assert_same_regions(conn, "e1", two_edits)  # what it finds is merge3's
@@ -365,3 +365,162 @@ def test_the_sql_condition_of_cells_on_vertices_cuts_the_spans_as_the_python_rea
         with pytest.raises(psycopg.errors.InvalidParameterValue):
             conn.execute(f"SELECT tgsis.cells_on_vertices_sql(3, '{{1}}', {bad})")
         conn.rollback()
+
+
+def test_the_spans_of_ids_at_both_ends_of_bigint_are_cut_without_overflow(conn: Conn) -> None:
+    """Vertex ids are any bigint (a psql user writes them): a gap wider than bigint between two ids is a gap
+    like any other, not a 22003 from the gap's subtraction."""
+    ids = [-(2**63), -(2**63) + 1, 5, 2**63 - 1]  # gaps 1, 2^63 + 4, 2^63 - 6
+    (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(3, %s, '$3')", (ids,)).fetchone()  # type: ignore[misc]
+    spans = sorted(
+        (int(lo), int(hi)) for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text))
+    )
+    assert spans == [(-(2**63), -(2**63) + 1), (5, 5), (2**63 - 1, 2**63 - 1)]
+    # the Python reader cuts them the same way (its differences of int64 must not wrap)
+    assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
+
+
+def test_new_vertices_at_both_ends_of_bigint_give_merge3s_regions_in_sql(conn: Conn) -> None:
+    """A side adds a vertex (and a triangle on it) with an id near -2^63, the other one near 2^63: the SQL
+    detection (its one-ring through the vertex BRIN) finds merge3's regions, as it did before the spans."""
+    from tests.merge_data import make_fault
+    from tests.test_sql_merge_regions import psql
+
+    fault = make_fault(conn)
+    low, high = -(2**63) + 5, 2**63 - 5
+    add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
+    tri = "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)"
+    psql(conn, "e1", (add, (fault, low, 50.0, -300.0, 0.0)), (tri, (fault, 10**6, 1, 0, low)))
+    psql(conn, "DEFAULT", (add, (fault, high, -500.0, 2000.0, 1.0)), (tri, (fault, 10**6 + 1, 3, 2, high)))
+    found = assert_same_regions(conn, "e1", fault)
+    assert {r["changed_by"] for r in found} == {"child", "parent"}
+
+
+def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_versioning_again_keeps_one(
+    conn: Conn,
+) -> None:
+    """Model 1 hash-partitioned (tgsis.partition_model_storage): the vertex BRIN is made on the partitioned
+    storage and so on each partition; disabling and enabling versioning twice leaves exactly one; the regions
+    found through it are merge3's."""
+    tgsis.partition_model_storage(conn, 1, 3)
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    for _ in range(2):
+        tgsis.enable_feature_versioning(conn)
+        conn.commit()
+        tgsis.disable_feature_versioning(conn)
+        conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    brin = [
+        d for am, d in _indexes(conn, "tgsis.trgl_ver") if am == "brin" and "(geoid, vrtxid1, vrtxid2, vrtxid3)" in d
+    ]
+    assert len(brin) == 1, _indexes(conn, "tgsis.trgl_ver")
+    parts = conn.execute(
+        "SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = 'tgsis.trgl_ver'::regclass"
+    ).fetchall()
+    assert len(parts) == 3
+    for (part,) in parts:
+        found = [d for am, d in _indexes(conn, part) if am == "brin" and "(geoid, vrtxid1, vrtxid2, vrtxid3)" in d]
+        assert len(found) == 1, (part, _indexes(conn, part))
+    from tests.merge_data import curved_surface, move
+
+    surface = curved_surface()
+    geoid = F.insert_feature(conn, "faults", tgsis.Surface(surface.vertices, surface.cells))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, [0, 1, 2], (0.0, 0.0, 1.0))
+    move(conn, "DEFAULT", geoid, [60, 61], (0.0, 0.0, -1.0))
+    conn.commit()
+    conn.execute("SET enable_seqscan = off")
+    assert len(assert_same_regions(conn, "e1", geoid)) == 2
+
+
+def test_the_sql_condition_of_cells_on_vertices_takes_nulls_and_duplicates(conn: Conn) -> None:
+    """NULL ids are no ids (only NULLs: false, not the text '() AND (...)' that fails where it is run); duplicates
+    are one id; a NULL column count or parameter is refused like a bad one."""
+    for ids, spans in (("{NULL}", None), ("{NULL,NULL}", None), ("{7,NULL,7,7,8}", [(7, 8)])):
+        (text,) = conn.execute("SELECT tgsis.cells_on_vertices_sql(2, %s::bigint[], '$3')", (ids,)).fetchone()  # type: ignore[misc]
+        if spans is None:
+            assert text == "false"
+        else:
+            assert (
+                sorted(
+                    (int(lo), int(hi))
+                    for lo, hi in set(re.findall(r"v\.vrtxid1 BETWEEN '(-?\d+)' AND '(-?\d+)'", text))
+                )
+                == spans
+            )
+        condition = text.replace("$3", "'{7,8}'::bigint[]")
+        conn.execute(f"SELECT count(*) FROM tgsis.segment v WHERE {condition}")  # it runs
+    for call in ("NULL::integer, '{1}', '$3'", "3, '{1}', NULL::text"):
+        with pytest.raises(psycopg.errors.InvalidParameterValue):
+            conn.execute(f"SELECT tgsis.cells_on_vertices_sql({call})")
+        conn.rollback()
+
+
+def test_the_sql_merge_checks_validity_on_the_cells_near_the_change_by_spans_of_the_vertex_brin(
+    conn: Conn, two_edits: int
+) -> None:
+    """The psql merge by region (tgsis.merge_mesh_validity): the cells on the vertices near what it changes come
+    from the vertex BRIN by spans, on PostgreSQL 15 as on 18."""
+    plans = _plans_of(conn, lambda: conn.execute("SELECT tgsis.merge_version('e1')"))
+    local = [p for p in plans if "INSERT INTO pg_temp.tgsis_mw_local" in p and "trgl_ver v" in p]
+    assert len(local) == 1, [p[:200] for p in plans]
+    _reads_the_ring_by_spans(local[0])
+
+
+def test_among_many_objects_the_ring_is_read_by_the_objects_ranges_alone(conn: Conn) -> None:
+    """Vertex ids are local to their geometry (0..n-1): every object has the changed ids. With a BRIN on the
+    vertex columns alone, each span matched ranges of every object and the planner ANDed the BRIN with the
+    primary key's scan of all the object's cells (178,802 TIDs here); with geoid first in the BRIN, a span
+    meets the object's own ranges: no scan of the object's cells by key."""
+    side = 300
+    u, v = np.meshgrid(np.linspace(0.0, 9900.0, side), np.linspace(0.0, 9900.0, side))
+    vertices = np.stack([u.ravel(), v.ravel(), np.sin(u.ravel() / 700.0)], axis=1)
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    big = tgsis.Surface(vertices, np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]))
+    sub = idx[:150, :150]
+    small = tgsis.Surface(
+        vertices[: 150 * side].reshape(150, side, 3)[:, :150].reshape(-1, 3),
+        np.concatenate([np.stack(p, 1) for p in _grid_triangles(150)]),
+    )
+    assert len(sub.ravel()) == len(small.vertices)
+    tgsis.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    for _ in range(10):
+        F.insert_feature(conn, "faults", small)
+    geoid = F.insert_feature(conn, "faults", big)
+    for _ in range(10):
+        F.insert_feature(conn, "faults", small)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for version, ids, dz in (("DEFAULT", idx[16:19, 3:9], 5.0), ("e1", idx[283:286, 289:295], -3.0)):
+        with tgsis.in_version(conn, version):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
+                (dz, geoid, [int(i) for i in ids.ravel()]),
+            )
+        conn.commit()
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE tgsis.trgl_ver, tgsis.vrtx_ver")
+    conn.autocommit = False
+    plans = _plans_of(
+        conn, lambda: conn.execute("SELECT count(*) FROM tgsis.mesh_merge_regions('e1', %s)", (geoid,)).fetchall()
+    )
+    (ring,) = [p for p in plans if "INSERT INTO pg_temp.tgsis_mr_margin" in p]
+    _reads_the_ring_by_spans(ring)
+    assert "trgl_ver_pkey" not in ring, ring
+    read: list[Any] = []
+    plans = _plans_of(conn, lambda: read.append(_merge_states.read_merge_change(conn, "e1", geoid)))
+    on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
+    assert len(on_vertices) == 1, plans
+    _reads_the_ring_by_spans(on_vertices[0])
+    assert "trgl_ver_pkey" not in on_vertices[0], on_vertices[0]
+    assert_same_regions(conn, "e1", geoid)
+
+
+def _grid_triangles(side: int) -> tuple[Any, Any]:
+    idx = np.arange(side * side).reshape(side, side)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return (a, b, d), (a, d, c)

@@ -4,7 +4,7 @@
 -- storage's vertex BRIN (tgsis.create_revision_indexes) is searched by, and after them the exact test
 -- of the ids, hashed (+ 0: not an index condition: a BRIN searched by an = ANY is searched once per
 -- id, 2,000 ids 0.66 s on a 2M-cell table, where the spans take milliseconds; docs/performance.md).
--- The spans are literals, so the planner sees where the change is. No ids: false. The Python reader
+-- The spans are literals, so the planner sees where the change is. No ids (none but NULLs): false. The Python reader
 -- cuts its spans the same way (tgsis.db._merge_states._id_spans).
 CREATE FUNCTION tgsis.cells_on_vertices_sql(p_k integer, p_ids bigint[], p_param text)
 RETURNS text
@@ -14,16 +14,16 @@ PARALLEL SAFE
 SET search_path = pg_catalog, pg_temp
 AS $$
 BEGIN
-    IF p_param !~ '^\$[0-9]+$' OR p_k NOT BETWEEN 1 AND 4 THEN
+    IF p_param IS NULL OR p_param !~ '^\$[0-9]+$' OR p_k IS NULL OR p_k NOT BETWEEN 1 AND 4 THEN
         RAISE EXCEPTION 'tgsis.cells_on_vertices_sql: % vertex columns bound as % (1 to 4 columns, a parameter such as $3)',
                 p_k, quote_literal(p_param)
             USING ERRCODE = '22023';
     END IF;
-    IF coalesce(cardinality(p_ids), 0) = 0 THEN
+    IF NOT EXISTS (SELECT FROM unnest(p_ids) AS x WHERE x IS NOT NULL) THEN  -- no ids (NULLs are none)
         RETURN 'false';
     END IF;
     RETURN (
-        WITH ids AS (SELECT u.id, u.id - lag(u.id) OVER (ORDER BY u.id) AS gap
+        WITH ids AS (SELECT u.id, u.id::numeric - lag(u.id) OVER (ORDER BY u.id) AS gap  -- numeric: ids at both ends of bigint
                        FROM (SELECT DISTINCT x AS id FROM unnest(p_ids) AS x WHERE x IS NOT NULL) AS u),
         cuts AS (SELECT i.id FROM ids i WHERE i.gap > 1 ORDER BY i.gap DESC, i.id LIMIT 3),
         spans AS (SELECT min(g.id) AS lo, max(g.id) AS hi

@@ -12,7 +12,11 @@
 -- A btree on revision would cost every upload a third more, and one on the
 -- cells' vertex columns double it (docs/performance.md, the merge section).
 -- Model 1's cell tables (tgsis.point, segment, trgl, tetra) get a third, a
--- BRIN on the vertex columns (vrtxid1..k): the merges by region ask "which
+-- BRIN on geoid and the vertex columns (vrtxid1..k): geoid because vertex ids
+-- are local to their geometry (0..n-1), so every object holds the ids of a
+-- change and a BRIN on the vertex columns alone matched ranges of every
+-- object (the planner then read all the object's cells by its key instead).
+-- The merges by region ask "which
 -- cells stand on these vertices" (the one-ring of the change), and a
 -- mesh's cells are stored near the cells that share their vertices (files
 -- and meshers number them so; uploads keep their order), so a few page
@@ -50,8 +54,8 @@ BEGIN
     IF p_schema = 'tgsis' AND p_table IN ('point', 'segment', 'trgl', 'tetra')
        AND NOT EXISTS (SELECT FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam
                         WHERE i.indrelid = v_rel AND a.amname = 'brin'
-                          AND i.indkey[0] = (SELECT attnum FROM pg_attribute WHERE attrelid = v_rel AND attname = 'vrtxid1')) THEN
-        EXECUTE format('CREATE INDEX ON %s USING brin (%s) WITH (pages_per_range = 32)', v_rel,
+                          AND (SELECT attnum FROM pg_attribute WHERE attrelid = v_rel AND attname = 'vrtxid1') = ANY (i.indkey::int2[])) THEN
+        EXECUTE format('CREATE INDEX ON %s USING brin (geoid, %s) WITH (pages_per_range = 32)', v_rel,
                        (SELECT string_agg(quote_ident(a.attname), ', ' ORDER BY a.attnum) FROM pg_attribute a
                          WHERE a.attrelid = v_rel AND a.attname ~ '^vrtxid[0-9]+$' AND NOT a.attisdropped));
     END IF;
@@ -59,4 +63,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.create_revision_indexes(text, text, text) IS
-    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on model 1''s cell tables also a BRIN on the vertex columns (the cells on given vertices); idempotent';
+    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on model 1''s cell tables also a BRIN on geoid and the vertex columns (the cells of an object on given vertices); idempotent';

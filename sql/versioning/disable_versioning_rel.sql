@@ -64,12 +64,12 @@ BEGIN
     EXECUTE format('DROP TRIGGER tgsis_storage_changes ON %I.%I', v_t.schemaname, v_ver);
     EXECUTE format('ALTER TABLE %I.%I DROP CONSTRAINT %I', v_t.schemaname, v_ver, v_ver || '_pkey');
     EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN revclosed, DROP COLUMN lastrevs', v_t.schemaname, v_ver);
-    -- the revision indexes went with the columns; the BRIN on a cell table's vertex columns goes too
+    -- the revision indexes went with the columns; the BRIN on a cell table's geoid and vertex columns goes too
     -- (tgsis.create_revision_indexes made it for the versioned storage)
     FOR v_name IN
         SELECT c.relname FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam
          WHERE i.indrelid = format('%I.%I', v_t.schemaname, v_ver)::regclass AND a.amname = 'brin'
-           AND i.indkey[0] = (SELECT t.attnum FROM pg_attribute t WHERE t.attrelid = i.indrelid AND t.attname = 'vrtxid1')
+           AND (SELECT t.attnum FROM pg_attribute t WHERE t.attrelid = i.indrelid AND t.attname = 'vrtxid1') = ANY (i.indkey::int2[])
     LOOP
         EXECUTE format('DROP INDEX %I.%I', v_t.schemaname, v_name);
     END LOOP;

@@ -115,7 +115,9 @@ BEGIN
               FROM unnest(v_ids) WITH ORDINALITY AS u(k, o)
              WHERE jsonb_typeof(v_r -> k) <> 'array'
                 OR EXISTS (SELECT FROM jsonb_array_elements(v_r -> k) e
-                            WHERE jsonb_typeof(e) <> 'number' OR e::text !~ '^-?[0-9]{1,18}$')
+                            WHERE CASE WHEN jsonb_typeof(e) = 'number' AND e::text ~ '^-?[0-9]{1,19}$'  -- any bigint id
+                                       THEN e::text::numeric NOT BETWEEN -9223372036854775808 AND 9223372036854775807
+                                       ELSE true END)
              ORDER BY o LIMIT 1;
         END IF;
         IF v_name IS NOT NULL THEN

@@ -92,11 +92,24 @@ def _positions(sorted_ids: IntArray, query: IntArray) -> IntArray:
         lo, hi = int(sorted_ids[0]), int(sorted_ids[-1])
         if hi - lo <= 4 * len(sorted_ids):
             table = np.full(hi - lo + 3, -1, dtype=np.int64)  # a -1 pad on each side: clipped lookups hit it
-            table[sorted_ids - (lo - 1)] = np.arange(len(sorted_ids), dtype=np.int64)
-            return np.take(table, np.subtract(query, lo - 1, dtype=np.int64), mode="clip")
+            table[np.subtract(sorted_ids, np.int64(lo), dtype=np.int64) + 1] = np.arange(
+                len(sorted_ids), dtype=np.int64
+            )
+            return np.take(table, _offsets(query, lo), mode="clip")
     pos = np.searchsorted(sorted_ids, query)
     np.minimum(pos, len(sorted_ids) - 1, out=pos)
     return np.where(sorted_ids[pos] == query, pos, -1).astype(np.int64)
+
+
+def _offsets(query: IntArray, lo: int) -> npt.NDArray[np.int64]:
+    """``query - lo + 1`` in int64, for a lookup table over ids from ``lo`` with a pad at each end (clipped).
+
+    Computed modulo 2**64 (numpy's int64 wraps): an id in the table's range
+    lands on its entry, any other outside it, where the clip meets a pad.
+    ``lo - 1`` itself is not an int64 when ``lo`` is -2**63 (a vertex id a
+    psql user may write): an OverflowError before.
+    """
+    return np.subtract(query, np.int64(lo), dtype=np.int64) + np.int64(1)
 
 
 def _contains(sorted_ids: IntArray, query: IntArray) -> BoolArray:
@@ -114,9 +127,8 @@ def _flags(keys: IntArray, flags: npt.NDArray[np.uint8], query: IntArray) -> npt
     lo, hi = int(keys[0]), int(keys[-1])
     if hi - lo < (1 << 27):
         table = np.zeros(hi - lo + 3, dtype=np.uint8)  # one zero pad on each side: clipped lookups hit it
-        table[keys - lo + 1] = flags
-        shifted = np.subtract(query, lo - 1, dtype=np.int64)
-        return np.take(table, shifted, mode="clip")
+        table[np.subtract(keys, np.int64(lo), dtype=np.int64) + 1] = flags
+        return np.take(table, _offsets(query, lo), mode="clip")
     pos = _positions(keys, query)
     return np.where(pos >= 0, flags[np.maximum(pos, 0)], 0).astype(np.uint8)
 

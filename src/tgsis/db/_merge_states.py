@@ -588,8 +588,10 @@ def _id_spans(ids: npt.NDArray[np.int64], cuts: int = 3) -> list[tuple[int, int]
     What a BRIN is searched by: one search per span, the page ranges whose
     values meet it rechecked (as ``tgsis.mesh_merge_work`` cuts them).
     """
-    gaps = np.diff(ids)
-    widest = np.argsort(-gaps, kind="stable")[:cuts]
+    # the differences of sorted int64 ids, exact as uint64 (as int64 they wrap between ids at both ends of the
+    # range); ~gaps sorts them widest first, the first of equal gaps first
+    gaps = np.diff(ids).view(np.uint64)
+    widest = np.argsort(~gaps, kind="stable")[:cuts]
     cut = np.sort(widest[gaps[widest] > 1])
     starts, ends = np.concatenate([[0], cut + 1]), np.concatenate([cut, [len(ids) - 1]])
     return [(int(ids[a]), int(ids[b])) for a, b in zip(starts, ends, strict=True)]
