@@ -56,12 +56,13 @@ BEGIN
     -- changed is in all or none: tgsis_mr_vb holds the base's)
     CREATE TEMPORARY TABLE tgsis_mw_nearv ON COMMIT DROP AS
     SELECT u.id,
-           CASE WHEN NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id)
+           CASE WHEN m.id IS NULL
                 THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id) THEN 15 ELSE 0 END
-                ELSE (SELECT coalesce(sum(DISTINCT m.st), 0) FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id)
-                     + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
+                ELSE m.st + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
            END AS st
-      FROM unnest(v_near) AS u(id);
+      FROM unnest(v_near) AS u(id)
+      -- the states of each near vertex some state changed, grouped once (not a scan of the work table per vertex)
+      LEFT JOIN (SELECT m.id, sum(DISTINCT m.st) AS st FROM pg_temp.tgsis_mr_v m GROUP BY m.id) AS m ON m.id = u.id;
     -- each state's cells on a near vertex: the work tables' rows, and the base's rows of the cells no state changed
     CREATE TEMPORARY TABLE tgsis_mw_local (st smallint NOT NULL, id bigint NOT NULL, v bigint[] NOT NULL) ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mw_local
