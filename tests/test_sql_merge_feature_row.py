@@ -32,6 +32,15 @@ PROPERTIES = [
     ("depth", "float8"),
     ("seen", "timestamptz"),
     ("note", "text"),
+    ("rank", "integer"),
+    ("big", "bigint"),
+    ("extra", "jsonb"),
+    ("day", "date"),
+    ("size", "real"),
+    ("tiny", "smallint"),
+    ("ok", "boolean"),
+    ("ratio", "numeric"),
+    ("born", "timestamptz"),
 ]
 
 
@@ -39,7 +48,8 @@ def feature_rows(conn: Conn) -> list[tuple[Any, ...]]:
     """Every row version of the class's feature storage, exactly: doubles by their bits, instants in UTC microseconds."""
     return conn.execute(
         "SELECT _geoid, owner, float8send(dip), float8send(strike), float8send(depth),"
-        " (extract(epoch FROM seen) * 1000000)::numeric, note, revision, lastrevs"
+        " (extract(epoch FROM seen) * 1000000)::numeric, note, revision, lastrevs, rank, big, extra::text, day - date '2000-01-01',"
+        " float4send(size), tiny, ok, ratio::text, (extract(epoch FROM born) * 1000000)::numeric"
         " FROM public.faults_ver ORDER BY revision, _geoid"
     ).fetchall()
 
@@ -122,7 +132,9 @@ def _parent_edits(conn: Conn, geoid: int, version: str = "DEFAULT") -> None:
         ("SET LOCAL TimeZone = 'Europe/Paris'", ()),
         (
             "UPDATE public.faults SET owner = 'bob é', dip = '-0', strike = 'NaN', seen = '2024-10-27 02:30:00.000001',"
-            " note = NULL WHERE _geoid = %s",
+            " note = NULL, rank = -2147483648, big = 9007199254740993, extra = '{\"k\": [1.50, null]}',"
+            " day = '1999-12-31', size = '0.1', tiny = -32768, ok = false, ratio = 1.2300,"
+            " born = '1850-07-01 00:00:00.5' WHERE _geoid = %s",
             (geoid,),
         ),
     )
