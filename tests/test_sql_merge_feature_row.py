@@ -100,9 +100,12 @@ def assert_same(theirs: tuple[Any, ...], mine: tuple[Any, ...]) -> None:
     assert mine[3] == theirs[3]
 
 
-@pytest.fixture
-def fault(conn: Conn) -> int:
-    """A curved fault whose feature row holds properties of several types, in DEFAULT, and version e1 (committed)."""
+@pytest.fixture(params=[True, False], ids=["parent-mesh-edit", "no-parent-mesh-edit"])
+def fault(conn: Conn, request: pytest.FixtureRequest) -> int:
+    """A curved fault whose feature row holds properties of several types, in DEFAULT, and version e1 (committed).
+
+    The version moves vertices; the parent moves others, or (the second case) changes only the feature row.
+    """
     tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties=PROPERTIES)
     tgsis.enable_feature_versioning(conn)
     geoid = tgsis.insert_feature(conn, "faults", curved_surface(), {"owner": "ann"}, drop_extra_properties=True)
@@ -119,7 +122,8 @@ def fault(conn: Conn) -> int:
     conn.commit()
     # both sides change the mesh in two regions apart
     move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
-    move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
+    if request.param:
+        move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
     conn.commit()
     return geoid
 
@@ -248,3 +252,30 @@ def test_the_feature_row_is_written_as_the_class_owner_never_as_tgsis_owner(
                 log = conn.execute("SELECT who, what FROM public.who_wrote").fetchall()
             conn.rollback()
             assert ("UPDATE" in {w for _, w in log}) and {who for who, _ in log} == {carol}, (action, log)
+
+
+def test_a_writer_of_the_versions_feature_row_during_a_psql_merge(conn: Conn, fault: int, db_dsn: str) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    _parent_edits(conn, fault)
+    expected = feature_rows(conn)
+    writer = connect(db_dsn, "writer")
+    tgsis.goto_version(writer, "e1")
+    # the version's row changed and put back as it was, not committed yet: the merge waits for it
+    writer.execute("UPDATE public.faults SET depth = 99.75 WHERE _geoid = %s", (fault,))
+    writer.execute("UPDATE public.faults SET depth = 12.5 WHERE _geoid = %s", (fault,))
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    wait_until_blocked(conn, merger.pid, writer.info.backend_pid)
+    writer.commit()
+    writer.close()
+    merger.finish()
+    # the parent's values, in the row the writer left in the version's working revision; the parent unchanged
+    rows = feature_rows(conn)
+    conn.commit()
+    parent = [r for r in expected if r[7] == 1]
+    assert parent and all(r in rows for r in parent), (expected, rows)
+    mine = [r for r in rows if r[7] == 2]
+    assert len(mine) == 1 and mine[0][1:7] == parent[0][1:7] and mine[0][9:] == parent[0][9:], (parent, mine)
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            assert conn.execute("SELECT owner, note FROM public.faults").fetchall() == [("bob é", None)]
