@@ -3,7 +3,8 @@
 -- (tgsis.merge_mesh_by_region), as tgsis.db._attribute_edits does in Python:
 -- column by column, the attributes of the geometry row (name, collection,
 -- alive, colour, z convention, CRS, metadata) and every column of the feature
--- row, as exact text (extra_float_digits pinned), in the base (the version's
+-- row, as exact text (extra_float_digits pinned; dates and instants in ISO
+-- form, DateStyle pinned, as the Python reader reads them), in the base (the version's
 -- initial revision set), the parent and the version. A value the parent
 -- changed and the version did not is one to bring (both_sides false); one both
 -- changed to other values is both_sides true (the merge by region is then refused).
@@ -16,6 +17,7 @@ LANGUAGE plpgsql
 STABLE
 SET search_path = pg_catalog, pg_temp
 SET extra_float_digits = 1
+SET DateStyle = 'ISO, YMD'
 AS $$
 #variable_conflict use_column
 DECLARE

@@ -17,22 +17,23 @@
 -- the part runs (tgsis.part) of the merged cells, rewritten when they differ
 -- from the version's; the
 -- geometry row's box and counts follow; the parent's edits of the feature's
--- attributes of the geometry row (name, colour, CRS, ...) are brought in. Then the conflict
+-- attributes of the geometry row (name, colour, CRS, ...) are brought in, and
+-- those of the feature row (tgsis.merge_feature_row: copied from the parent's
+-- row through tgsis.storage_run, as the class's owner). Then the conflict
 -- is recorded 'manual', and the merge or refresh that follows copies the
 -- version's object as for any other solution. NULL, nothing written, when a
 -- conflicting region has no solution (or the regions were not stored: none
 -- could be recorded): the merge's refusal (TG302) names it.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
 -- hint naming the Python command that merges it: a region solved average or
--- manual (their meshes need numpy), the
--- parent's edits of the feature row (the class owner's table; not written in
--- SQL yet), stored regions that are not the
+-- manual (their meshes need numpy), stored regions that are not the
 -- regions of now, attributes changed on both sides, a merged mesh that is not
 -- valid where no state was invalid (merge3's checks: cells on removed vertices,
 -- duplicated cells, non-manifold edges or faces, vertices left without cells),
 -- merged rows of no value for an integer property, a state with non-finite
 -- coordinates (NaN, infinity; merge3 takes no such mesh). TG002 for a role that may
--- not write in the version, 42501 for one that may not change the class. The work tables are made in a
+-- not write in the version, 42501 for one that may not change the class (or
+-- the feature-row columns the parent changed). The work tables are made in a
 -- subtransaction rolled back once the plan (the rows to close and to write) is
 -- in variables: neither they nor their locks outlive the call.
 -- extra_float_digits is pinned: values are compared as text, floats exactly.
@@ -51,7 +52,7 @@ DECLARE
     v_refused  text := format('%s of version %s refused: feature %s does not merge by region in SQL',
                               p_action, quote_literal(p_version), p_geoid);
     v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges it by region '
-                              '(average and manual solutions, feature properties); else solve it as a whole object: '
+                              '(average and manual solutions); else solve it as a whole object: '
                               'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
                               p_action, p_version, p_action, p_version, p_version, p_geoid::text);
     v_why      text;
@@ -110,6 +111,7 @@ DECLARE
     v_aview    text[] := '{}';
     v_akey     text[] := '{}';
     v_aset     text[] := '{}';
+    v_fcols    text[];
     v_i        integer;
     v_unsolved boolean := false;
 BEGIN
@@ -380,7 +382,7 @@ BEGIN
         SELECT e.viewname, e.keycolumn, bool_or(e.both_sides) AS both_sides,
                string_agg(e.columnname, ', ' ORDER BY e.o) FILTER (WHERE e.both_sides) AS both_columns,
                string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
-               string_agg(e.columnname, ', ' ORDER BY e.o) AS all_columns
+               array_agg(e.columnname ORDER BY e.o) AS columns
           FROM (SELECT a.*, row_number() OVER () AS o
                   FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_pset, v_cset) AS a) AS e
          GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
@@ -388,19 +390,16 @@ BEGIN
         IF v_attr.both_sides THEN
             v_why := concat_ws(', ', v_why, v_attr.both_columns);
         END IF;
-        v_aview := v_aview || v_attr.viewname;
-        v_akey := v_akey || v_attr.keycolumn;
-        v_aset := v_aset || v_attr.sets;
+        IF v_attr.viewname = 'tgsis.geometry' THEN
+            v_aview := v_aview || v_attr.viewname;
+            v_akey := v_akey || v_attr.keycolumn;
+            v_aset := v_aset || v_attr.sets;
+        ELSE
+            v_fcols := v_attr.columns;  -- the feature row's: copied from the parent's row (below)
+        END IF;
     END LOOP;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: its attributes were changed both in the version and in its parent, to other values (%): the merge by region merges the mesh only',
-                v_refused, v_why
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
-    -- the feature row is the class owner's table: SQL does not write the parent's edits of it yet (Python does)
-    SELECT string_agg(v_aset[i], '; ') INTO v_why FROM generate_subscripts(v_aview, 1) AS i WHERE v_aview[i] <> 'tgsis.geometry';
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: its parent changed its feature properties (%), which the SQL merge by region does not bring into the version yet',
                 v_refused, v_why
             USING ERRCODE = 'TG302', HINT = v_hint;
     END IF;
@@ -418,6 +417,22 @@ BEGIN
                                 p_version, tgsis.calling_role());
     END IF;
     PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE, DELETE');
+    -- the parent's edits of the feature row: the columns written, as the Python client's UPDATE of the class's view
+    -- needs them (a role granted UPDATE on some columns only)
+    IF v_fcols IS NOT NULL THEN
+        SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
+        SELECT string_agg(quote_ident(u.c), ', ' ORDER BY u.o) INTO v_why
+          FROM unnest(v_fcols) WITH ORDINALITY AS u(c, o)
+         WHERE NOT has_column_privilege(tgsis.calling_role(), format('%I.%I', v_class.schemaname, v_class.featuretable)::regclass,
+                                        u.c, 'UPDATE');
+        IF v_why IS NOT NULL THEN
+            RAISE EXCEPTION 'role % may not change the properties % of feature % of class %: merging it by region brings its parent''s edits of them into the version',
+                    quote_ident(tgsis.calling_role()), v_why, p_geoid, quote_literal(v_class.classname)
+                USING ERRCODE = 'insufficient_privilege',
+                      HINT = format('a DBA may run: GRANT UPDATE ON %I.%I TO %I; else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
+                                    v_class.schemaname, v_class.featuretable, tgsis.calling_role());
+        END IF;
+    END IF;
 
     -- the writes, in the version's working revision, as tgsis.db._state_write writes them
     v_settings := ARRAY[current_setting('tgsis.version', true), current_setting('tgsis.revision', true)];
@@ -527,6 +542,10 @@ BEGIN
         GET DIAGNOSTICS v_count = ROW_COUNT;
         v_written := v_written + v_count;
     END LOOP;
+    IF v_fcols IS NOT NULL THEN
+        v_written := v_written + tgsis.merge_feature_row(p_geoid, v_fcols, v_pset, v_rev,
+                                                         (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
+    END IF;
     PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
             set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
     PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
@@ -535,4 +554,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, the parent''s feature-row edits, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits (geometry and feature rows) brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';

@@ -53,7 +53,9 @@ def attribute_edits(conn: Conn, inputs: MergeInputs | SlicedInputs, version: str
     its geometry and feature rows included. So an attribute only the parent
     changed (a new name, colour, CRS, metadata or feature property) must be
     brought into the version as well, or it is lost. Values are compared as
-    text with exact floats; the session's version settings are put back.
+    text with exact floats, dates and instants in ISO form (which reads back
+    under any DateStyle: the session's, e.g. ``Postgres, YMD``, writes a date
+    its own input refuses); the session's settings are put back.
     """
     fc = inputs.feature_class
     columns = conn.execute(
@@ -68,8 +70,11 @@ def attribute_edits(conn: Conn, inputs: MergeInputs | SlicedInputs, version: str
     base_revision, parent_revision, working = inputs.revisions
     sides = ((version, base_revision), (inputs.parent, parent_revision), (version, working))
     settings = read_version_settings(conn)
-    digits = conn.execute("SELECT current_setting('extra_float_digits')").fetchone()[0]  # type: ignore[index]
-    conn.execute("SELECT set_config('extra_float_digits', '3', true)")  # floats as text, exactly
+    digits, datestyle = conn.execute(
+        "SELECT current_setting('extra_float_digits'), current_setting('DateStyle')"
+    ).fetchone()  # type: ignore[misc]
+    # floats as text, exactly; dates and instants as ISO text
+    conn.execute("SELECT set_config('extra_float_digits', '3', true), set_config('DateStyle', 'ISO, YMD', true)")
     updates, both = [], []
     try:
         for view, keycol, names in tables:
@@ -96,7 +101,10 @@ def attribute_edits(conn: Conn, inputs: MergeInputs | SlicedInputs, version: str
             if take:
                 updates.append((view, keycol, take))
     finally:
-        conn.execute("SELECT set_config('extra_float_digits', %s, true)", (str(digits),))
+        conn.execute(
+            "SELECT set_config('extra_float_digits', %s, true), set_config('DateStyle', %s, true)",
+            (str(digits), str(datestyle)),
+        )
         restore_version_settings(conn, settings, local=True)
     return AttributeEdits(tuple(updates), tuple(both))
 
