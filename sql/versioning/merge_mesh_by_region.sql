@@ -85,6 +85,8 @@ DECLARE
     v_pcsrc    smallint[];
     v_pcfrom   bigint[];
     v_agone    bigint[];
+    v_pv8      text[] := '{}';
+    v_pc8      text[] := '{}';
     v_parts    boolean := false;
     v_runs_old bigint[];
     v_runs_new bigint[];
@@ -174,12 +176,14 @@ BEGIN
       LEFT JOIN pg_temp.tgsis_mr_vx vx ON n.kind = 'v' AND vx.id = n.id
       LEFT JOIN pg_temp.tgsis_mr_cx cx ON n.kind = 'c' AND cx.id = n.id;
     CREATE TEMPORARY TABLE tgsis_mw_region ON COMMIT DROP AS
-    SELECT f.*, r.solution, r.region IS NOT NULL AS stored,
+    SELECT f.*, r.solution, r.region IS NOT NULL AS stored, r.solution_vertex_ids IS NOT NULL AS has_rows,
            -- the stored region is this one (tgsis.db.regions: same ids, all six arrays)
            coalesce(r.vertex_ids = f.vertex_ids AND r.cell_ids = f.cell_ids AND r.parent_vertex_ids = f.pv
                     AND r.parent_cell_ids = f.pc AND r.child_vertex_ids = f.cv AND r.child_cell_ids = f.cc, false) AS holds,
            CASE WHEN NOT f.conflict THEN CASE WHEN f.has_c AND NOT f.has_p THEN 4 ELSE 2 END
                 WHEN r.solution = 'parent' THEN 2 WHEN r.solution = 'child' THEN 4 WHEN r.solution = 'base' THEN 1
+                -- average, manual: the rows recorded with the solution (tgsis.merge_solution_rows)
+                WHEN r.solution IN ('average', 'manual') AND r.solution_vertex_ids IS NOT NULL THEN 8
            END::smallint AS src
       FROM (SELECT d.region, bool_or(d.p_changed) AND bool_or(d.c_changed) AND bool_or(d.differ) AS conflict,
                    bool_or(d.p_changed) AS has_p, bool_or(d.c_changed) AS has_c,
@@ -224,9 +228,9 @@ BEGIN
                   HINT = format('SELECT * FROM tgsis.find_conflicts(%L) finds them again; then solve them (tgsis.resolve_region)', p_version);
     END IF;
     SELECT string_agg(format('region %s solved %s', g.region, g.solution), ', ' ORDER BY g.region) INTO v_why
-      FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.solution IN ('average', 'manual');
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: % (its mesh is applied by the Python client)', v_refused, v_why
+      FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.solution IN ('average', 'manual') AND NOT g.has_rows;
+    IF v_why IS NOT NULL THEN  -- (recorded with the .npz only: before 0.3.0's rows, or by psql)
+        RAISE EXCEPTION '%: % with its mesh only (the Python client applies it)', v_refused, v_why
             USING ERRCODE = 'TG302', HINT = v_hint;
     END IF;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.src IS NULL) THEN
@@ -262,6 +266,18 @@ BEGIN
       LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
                   WHERE n.kind = 'c') AS s ON s.id = k.id
       LEFT JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
+    -- the regions solved average or manual: their recorded rows (no row of theirs: removed), and the new ids they add
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
+        PERFORM tgsis.merge_solution_rows(p_geoid, v_version.versionid, v_refused, v_hint);
+        UPDATE pg_temp.tgsis_mw_v n SET present = false, x = NULL, y = NULL, z = NULL, val = NULL, ref = NULL WHERE n.src = 8;
+        UPDATE pg_temp.tgsis_mw_c n SET present = false, v = NULL, val = NULL, part = NULL WHERE n.src = 8;
+        DELETE FROM pg_temp.tgsis_mw_v n USING pg_temp.tgsis_mw_sv s WHERE s.id = n.id;
+        DELETE FROM pg_temp.tgsis_mw_c n USING pg_temp.tgsis_mw_sc s WHERE s.id = n.id;
+        INSERT INTO pg_temp.tgsis_mw_v (id, src, present, x, y, z, val, ref)
+        SELECT s.id, 8, true, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
+        INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
+        SELECT s.id, 8, true, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
+    END IF;
     -- the version's rows as stored (its own numbering: the renumbering undone)
     CREATE TEMPORARY TABLE tgsis_mw_vold ON COMMIT DROP AS
     SELECT coalesce(p.old, m.id) AS id, m.x, m.y, m.z, m.val, coalesce(q.old, m.ref) AS ref
@@ -351,8 +367,12 @@ BEGIN
                coalesce(array_agg(CASE WHEN n.src = 4 THEN coalesce(p.old, n.id) ELSE n.id END ORDER BY n.id), '{}')
           INTO v_pvid, v_pvsrc, v_pvfrom
           FROM pg_temp.tgsis_mw_v n LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = n.id
-         WHERE n.present AND n.val <> v_vnull
+         WHERE n.present AND n.src <> 8 AND n.val <> v_vnull
            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val);
+        v_pv8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_v n JOIN pg_temp.tgsis_mw_sv s ON s.id = n.id
+                        WHERE n.present AND n.src = 8 AND n.val <> v_vnull
+                          AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val)
+                        ORDER BY n.id);
     END IF;
     IF v_cnull IS NOT NULL THEN
         v_pcgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_cold o
@@ -362,8 +382,12 @@ BEGIN
                coalesce(array_agg(CASE WHEN n.src = 4 THEN coalesce(p.old, n.id) ELSE n.id END ORDER BY n.id), '{}')
           INTO v_pcid, v_pcsrc, v_pcfrom
           FROM pg_temp.tgsis_mw_c n LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = n.id
-         WHERE n.present AND n.val <> v_cnull
+         WHERE n.present AND n.src <> 8 AND n.val <> v_cnull
            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val);
+        v_pc8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_c n JOIN pg_temp.tgsis_mw_sc s ON s.id = n.id
+                        WHERE n.present AND n.src = 8 AND n.val <> v_cnull
+                          AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val)
+                        ORDER BY n.id);
     END IF;
     SELECT i.vpschema, i.vptable, i.cpschema, i.cptable INTO v_vps, v_vpn, v_cps, v_cpn FROM pg_temp.tgsis_mr_info i;
     RAISE EXCEPTION 'tgsis_mw_done';  -- rolls the work tables and their locks back
@@ -440,9 +464,9 @@ BEGIN
     SELECT workingrevision INTO v_rev FROM tgsis.versions WHERE versionid = v_version.versionid;
     PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
        FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'vrtx';
-    FOR v_t IN SELECT * FROM (VALUES ('VERTEX', v_vps, v_vpn, v_pvgone, v_pvid, v_pvsrc, v_pvfrom),
-                                     ('CELL', v_cps, v_cpn, v_pcgone, v_pcid, v_pcsrc, v_pcfrom))
-                                AS t (alignment, schemaname, tablename, gone, ids, src, src_ids)
+    FOR v_t IN SELECT * FROM (VALUES ('VERTEX', v_vps, v_vpn, v_pvgone, v_pvid, v_pvsrc, v_pvfrom, v_pv8),
+                                     ('CELL', v_cps, v_cpn, v_pcgone, v_pcid, v_pcsrc, v_pcfrom, v_pc8))
+                                AS t (alignment, schemaname, tablename, gone, ids, src, src_ids, given)
                 WHERE t.gone IS NOT NULL LOOP
         -- (statements on the class's storage through tgsis.storage_run: as its owner, never as tgsis's)
         SELECT * INTO v_pt FROM tgsis.versioned_tables t WHERE t.schemaname = v_t.schemaname AND t.tablename = v_t.tablename;
@@ -474,7 +498,8 @@ BEGIN
                     AND NOT (s.lastrevs && CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
                   ORDER BY f.id', v_vals, v_pt.schemaname, v_pt.tablename || '_ver'),
                 p_1 => ARRAY[p_geoid::text, v_cset::text], p_2 => v_base, p_3 => v_pset,
-                p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r);
+                p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r)
+                  || v_t.given;  -- the rows of average and manual solutions, their values as the solution gives them
         SELECT string_agg(v_rows[i][1], ', ' ORDER BY i) INTO v_why
           FROM generate_subscripts(v_rows, 1) AS i
          WHERE EXISTS (SELECT FROM generate_subscripts(v_rows, 2) AS j WHERE v_rows[i][j] IS NULL);

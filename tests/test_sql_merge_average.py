@@ -1,0 +1,159 @@
+"""The psql merge by region applies ``average`` and ``manual`` solutions (issue 39, items 3 and 5).
+
+A region solved ``average`` or ``manual`` (from Python or the CLI, which
+compute its mesh) is recorded with its rows in a form SQL reads
+(``tgsis.conflict_regions.solution_*``) beside the .npz; ``SELECT
+tgsis.merge_version(v)`` / ``refresh_version(v)`` then merges the object as
+the Python merge does. The oracle is the Python merge, bit for bit
+(tests/test_sql_merge_write.py: every stored row version, revision notes,
+versions, conflicts and regions afterwards). A solution recorded with its
+.npz only (before this change, or by a psql user) keeps today's refusal
+(TG302 naming the Python command).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tests.merge_data import curved_surface, make_fault, move
+from tests.test_merge_average import _moved, _subdivided, _write
+from tests.test_sql_merge_regions import MIDDLE
+from tests.test_sql_merge_write import _psql_state, assert_same_merge, both_merges, everything
+from tgsis.merge3 import MeshState
+
+Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # tests.merge_data.make_fault's (tests/conftest.py)
+
+
+def _both_moved(conn: Conn, fault: int) -> int:
+    """One conflicting region: the middle moved up in the version, down in DEFAULT; its index."""
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
+    move(conn, "DEFAULT", fault, MIDDLE, (0.5, 0.0, -7.0))
+    conn.commit()
+    (conflict,) = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    (region,) = [r for r in conflict.regions if r.conflict]
+    return region.region
+
+
+def _rows_recorded(conn: Conn, fault: int) -> list[tuple[Any, ...]]:
+    rows = conn.execute(
+        "SELECT region, solution, cardinality(solution_vertex_ids), cardinality(solution_cell_ids)"
+        " FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND objectkey = %s"
+        " AND solution IN ('average', 'manual') ORDER BY region",
+        (str(fault),),
+    ).fetchall()
+    conn.rollback()
+    return rows
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_average_of_a_region_both_sides_moved_merges_in_psql_as_in_python(conn: Conn, fault: int, action: str) -> None:
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    [(_, _, nv, _)] = _rows_recorded(conn, fault)
+    assert nv and nv >= len(MIDDLE)
+    assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_average_of_differently_meshed_sides_merges_in_psql_as_in_python(conn: Conn, action: str) -> None:
+    geoid = make_fault(conn)
+    base = MeshState.from_mesh(curved_surface())  # as uploaded: ids 0..n-1
+    _write(conn, "e1", geoid, base, _subdivided(base))  # new vertices and triangles in the version
+    _write(conn, "DEFAULT", geoid, base, _moved(base))
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    [region] = [r for r in conflict.regions if r.conflict]
+    tgsis.resolve_region(conn, "e1", geoid, region.region, "average")
+    conn.commit()
+    assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_manual_mesh_merges_in_psql_as_in_python(conn: Conn, fault: int, action: str) -> None:
+    index = _both_moved(conn, fault)
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    given = merge.child
+    xyz = given.vertices.copy()
+    at = np.isin(given.vertex_ids, MIDDLE)
+    xyz[at, 2] += np.linspace(0.1, 0.9, int(at.sum()))  # a hand-made shape, values of no side
+    porosity = np.asarray(given.vertex_properties["porosity"], dtype=np.float64).copy()
+    porosity[at] = 0.123456789
+    manual = MeshState(
+        3, given.vertex_ids, xyz, given.cell_ids, given.cells, {"porosity": porosity}, given.cell_properties
+    )
+    tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
+    conn.commit()
+    [(_, solution, nv, _)] = _rows_recorded(conn, fault)
+    assert solution == "manual" and nv
+    assert_same_merge(conn, "e1", action)
+
+
+def test_after_pg_dump_and_restore_an_average_merges_in_psql_as_in_python(
+    conn: Conn, fault: int, pg: Any, db_dsn: str, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
+        assert_same_merge(restored, "e1")
+
+
+def test_a_solution_recorded_with_its_npz_only_is_refused_as_before(conn: Conn, fault: int) -> None:
+    """A psql user's resolve_region with an .npz (or one recorded before the rows were stored): TG302, nothing written."""
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    (mesh,) = conn.execute(
+        "SELECT solution_mesh FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND region = %s",
+        (index,),
+    ).fetchone()  # type: ignore[misc]
+    conn.execute("SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'average', %s)", (str(fault), index, mesh))
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state == "TG302", message
+    assert "average" in message and "tgsis version merge" in (hint or "")
+    assert everything(conn) == before
+    conn.rollback()
+
+
+def test_a_role_without_rights_is_refused_as_in_python_and_nothing_is_written(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    with login_roles(db_dsn, {"ed": "tgsis_editor", "rita": "tgsis_reader"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.faults FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        for role in ("rita", "ed"):
+            session = made.connect(role)
+            with pytest.raises(tgsis.Error) as python:
+                tgsis.merge_version(session, "e1")
+            session.rollback()
+            state, message, _ = _psql_state(session, "SELECT tgsis.merge_version('e1')", ())
+            assert state == python.value.sqlstate and state in ("42501", "TG002"), (role, message)
+            assert everything(conn) == before
+            conn.commit()
