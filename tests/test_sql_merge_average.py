@@ -157,3 +157,42 @@ def test_a_role_without_rights_is_refused_as_in_python_and_nothing_is_written(
             assert state == python.value.sqlstate and state in ("42501", "TG002"), (role, message)
             assert everything(conn) == before
             conn.commit()
+
+
+@pytest.mark.parametrize("solution", ["average", "manual"])
+def test_psql_is_told_what_an_average_or_manual_solution_discards_as_python_says_it(
+    conn: Conn, fault: int, solution: str
+) -> None:
+    index = _both_moved(conn, fault)
+    manual = None
+    if solution == "manual":  # the version's rows, one vertex of the region put back where the parent has it
+        merge = tgsis.object_merge(conn, "e1", fault)
+        conn.rollback()
+        xyz = merge.child.vertices.copy()
+        at = np.searchsorted(merge.child.vertex_ids, MIDDLE[0])
+        xyz[at] = merge.parent.vertices[np.searchsorted(merge.parent.vertex_ids, MIDDLE[0])]
+        manual = MeshState(
+            3,
+            merge.child.vertex_ids,
+            xyz,
+            merge.child.cell_ids,
+            merge.child.cells,
+            merge.child.vertex_properties,
+            merge.child.cell_properties,
+        )
+    tgsis.resolve_region(conn, "e1", fault, index, solution, manual)
+    conn.commit()
+    with conn.transaction(force_rollback=True):
+        (merged,) = tgsis.merge_version(conn, "e1").objects
+    expected = [
+        f"region {d.region}: {d.solution} discards the {d.side}'s edit there: {d.vertices} vertices, {d.cells} cells, "
+        f"largest displacement {d.max_displacement:.6g}"
+        for d in merged.discards
+    ]
+    assert {d.side for d in merged.discards} == {"parent", "child"}
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    with conn.transaction(force_rollback=True):
+        conn.execute("SELECT tgsis.merge_version('e1')")
+    said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {fault} of version 'e1': region")]
+    assert said == expected

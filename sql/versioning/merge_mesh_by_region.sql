@@ -238,9 +238,8 @@ BEGIN
         RAISE EXCEPTION 'tgsis_mw_done';
     END IF;
     -- what the solutions discard, said before it is written (merge3's discards, as the Python client says them)
-    v_notes := ARRAY(
-        SELECT format('region %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
-                      g.region, g.solution, s.side, s.nv, s.nc, tgsis.merge_number_text(s.d))
+    CREATE TEMPORARY TABLE tgsis_mw_notes ON COMMIT DROP AS
+        SELECT g.region, s.o, g.solution, s.side, s.nv, s.nc, s.d
           FROM pg_temp.tgsis_mw_region g
           CROSS JOIN LATERAL (VALUES
               (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
@@ -249,8 +248,7 @@ BEGIN
               (2, 'child', CASE g.solution WHEN 'parent' THEN g.pcv WHEN 'base' THEN g.bcv END,
                            CASE g.solution WHEN 'parent' THEN g.pcc WHEN 'base' THEN g.bcc END,
                            CASE g.solution WHEN 'parent' THEN g.pcd WHEN 'base' THEN g.bcd END)) AS s (o, side, nv, nc, d)
-         WHERE g.conflict AND (s.nv > 0 OR s.nc > 0)
-         ORDER BY g.region, s.o);
+         WHERE g.conflict AND (s.nv > 0 OR s.nc > 0);
 
     -- the merged rows of the keys the states do not all hold alike (the others are the same everywhere):
     -- per id its region's source (a row the source lacks is no row), the parent's outside every region
@@ -277,7 +275,40 @@ BEGIN
         SELECT s.id, 8, true, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
         INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
         SELECT s.id, 8, true, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
+        -- what they discard of each side (merge3's _discards): the side's changed rows the merged rows do not hold
+        -- as the side does (coordinates bit for bit, values; a cell as an oriented cell), the largest distance
+        INSERT INTO pg_temp.tgsis_mw_notes
+        SELECT g.region, s.o, g.solution, s.side,
+               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
+                  LEFT JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
+                  LEFT JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
+                 WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                   AND NOT coalesce(float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
+                                    AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
+                                    AND a.ref IS NOT DISTINCT FROM m.ref, a.id IS NULL AND m.id IS NULL)),
+               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
+                  LEFT JOIN pg_temp.tgsis_mr_c a ON a.id = n.id AND a.st = s.st
+                  LEFT JOIN pg_temp.tgsis_mw_c m ON m.id = n.id AND m.present
+                 WHERE n.region = g.region AND n.kind = 'c' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                   AND NOT coalesce(tgsis.oriented_cell_key(a.v) = tgsis.oriented_cell_key(m.v)
+                                    AND a.val IS NOT DISTINCT FROM m.val AND a.part IS NOT DISTINCT FROM m.part,
+                                    a.id IS NULL AND m.id IS NULL)),
+               coalesce((SELECT max(sqrt((a.x - m.x) * (a.x - m.x) + (a.y - m.y) * (a.y - m.y) + (a.z - m.z) * (a.z - m.z)))
+                           FROM pg_temp.tgsis_mw_node n
+                           JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
+                           JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
+                          WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                            AND NOT (float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
+                                     AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
+                                     AND a.ref IS NOT DISTINCT FROM m.ref)), 0)
+          FROM pg_temp.tgsis_mw_region g
+         CROSS JOIN (VALUES (1, 'parent', 2::smallint), (2, 'child', 4::smallint)) AS s (o, side, st)
+         WHERE g.conflict AND g.src = 8;
+        DELETE FROM pg_temp.tgsis_mw_notes t WHERE t.nv = 0 AND t.nc = 0;
     END IF;
+    v_notes := ARRAY(SELECT format('region %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
+                                   t.region, t.solution, t.side, t.nv, t.nc, tgsis.merge_number_text(t.d))
+                       FROM pg_temp.tgsis_mw_notes t ORDER BY t.region, t.o);
     -- the version's rows as stored (its own numbering: the renumbering undone)
     CREATE TEMPORARY TABLE tgsis_mw_vold ON COMMIT DROP AS
     SELECT coalesce(p.old, m.id) AS id, m.x, m.y, m.z, m.val, coalesce(q.old, m.ref) AS ref
