@@ -196,3 +196,82 @@ def test_psql_is_told_what_an_average_or_manual_solution_discards_as_python_says
         conn.execute("SELECT tgsis.merge_version('e1')")
     said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {fault} of version 'e1': region")]
     assert said == expected
+
+
+def _record_in_sql(conn: Conn, fault: int, index: int, state: MeshState) -> None:
+    """Record a manual state as a psql user may, with its .npz and rows (no check of the Python client's)."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    rows = _sql_rows(state)
+    assert rows is not None
+    conn.execute(
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(fault), index, state_to_npz(state), *rows),
+    )
+    conn.commit()
+
+
+def _with_vertex_moved(state: MeshState, vertex: int, dz: float) -> MeshState:
+    xyz = state.vertices.copy()
+    xyz[np.searchsorted(state.vertex_ids, vertex), 2] += dz
+    return MeshState(
+        3, state.vertex_ids, xyz, state.cell_ids, state.cells, state.vertex_properties, state.cell_properties
+    )
+
+
+def test_recorded_rows_that_change_a_row_outside_the_region_are_refused_as_in_python(conn: Conn, fault: int) -> None:
+    index = _both_moved(conn, fault)
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    (region,) = merge.conflicts
+    outside = int(np.setdiff1d(merge.child.vertex_ids, region.vertex_ids)[0])
+    _record_in_sql(conn, fault, index, _with_vertex_moved(merge.child, outside, 1.0))
+    theirs, mine = both_merges(conn, "e1")
+    # refused both: Python TG100 (merge3's InvalidInputError), psql TG302 (the psql merge's refusal), nothing written
+    assert theirs[:2] == ("refused", "TG100") and mine[:2] == ("refused", "TG302"), mine
+    for said in (theirs[2], mine[2]):
+        assert f"vertices {outside}" in said and "outside the region" in said
+
+
+def test_a_manual_mesh_that_rewrites_a_margin_row_is_refused_in_psql_naming_the_python_command(
+    conn: Conn, fault: int
+) -> None:
+    """A margin cell (in the region, changed by no side) rewritten (rotated): SQL does not merge it (Python does)."""
+    index = _both_moved(conn, fault)
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    (region,) = merge.conflicts
+    margin = int(np.setdiff1d(region.cell_ids, np.union1d(region.parent_cell_ids, region.child_cell_ids))[0])
+    given = merge.child
+    cells = given.cells.copy()
+    at = np.searchsorted(given.cell_ids, margin)
+    cells[at] = np.roll(cells[at], 1)  # the same oriented triangle, another row
+    manual = MeshState(
+        3, given.vertex_ids, given.vertices, given.cell_ids, cells, given.vertex_properties, given.cell_properties
+    )
+    tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state == "TG302", message
+    assert f"cells {margin}" in message and "tgsis version merge" in (hint or "")
+    assert everything(conn) == before
+    conn.rollback()
+    assert tgsis.merge_version(conn, "e1").objects  # the Python merge applies it
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_average_of_all_regions_one_re_meshed_merges_in_psql_as_in_python(conn: Conn, action: str) -> None:
+    from tests.test_resolve_all_regions import _two_conflicts
+
+    fault = _two_conflicts(conn, remesh_west=True)
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    result = tgsis.resolve_all_regions(conn, "e1", fault, "average")
+    conn.commit()
+    assert len(result.regions) == 2
+    assert [r[1] for r in _rows_recorded(conn, fault)] == ["average", "average"]
+    assert all(r[2] for r in _rows_recorded(conn, fault))
+    assert_same_merge(conn, "e1", action)

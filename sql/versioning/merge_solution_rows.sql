@@ -8,7 +8,7 @@
 -- ids, the canonical text of the values as tgsis.merge_value_text makes it,
 -- the texts to write, the atom's refid, the cell's part); a region id it
 -- lacks is removed; its other rows must be the merged state's, else it is
--- refused (TG302) as the Python merge refuses it. Values come as float8 (the
+-- refused (TG302; the Python merge refuses it TG100). Values come as float8 (the
 -- Python client's arrays): a float column is written as the float8 (real: as
 -- numpy rounds it to float4), an integer one truncated, as the Python writer
 -- writes them. Refused too (TG302, p_hint: the Python merge applies it): a
@@ -210,7 +210,7 @@ BEGIN
              GROUP BY s.region) AS q;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: %', p_refused, v_why
-            USING ERRCODE = 'TG302',
+            USING ERRCODE = 'TG302',  -- (the Python merge: TG100; in SQL a TG100 of the merge is a bigint overflow)
                   HINT = 'a manual mesh replaces its region''s rows (and may add rows of new ids); solve the other regions on their own';
     END IF;
     -- what is taken: the region's rows and the new ids

@@ -882,7 +882,10 @@ def _sql_rows(state: MeshState) -> tuple[Any, ...] | None:
     """
     columns: list[list[str]] = []
     values: list[list[float]] = []
-    for props, count in ((state.vertex_properties, len(state.vertex_ids)), (state.cell_properties, len(state.cell_ids))):
+    for props, count in (
+        (state.vertex_properties, len(state.vertex_ids)),
+        (state.cell_properties, len(state.cell_ids)),
+    ):
         names = sorted(props)
         table = np.empty((count, len(names)), dtype=np.float64)
         for j, prop in enumerate(names):
