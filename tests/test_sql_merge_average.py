@@ -275,3 +275,54 @@ def test_average_of_all_regions_one_re_meshed_merges_in_psql_as_in_python(conn: 
     assert [r[1] for r in _rows_recorded(conn, fault)] == ["average", "average"]
     assert all(r[2] for r in _rows_recorded(conn, fault))
     assert_same_merge(conn, "e1", action)
+
+
+def test_rows_given_in_part_or_not_fitting_are_refused_and_nothing_is_recorded(conn: Conn, fault: int) -> None:
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    (mesh, *rows) = conn.execute(
+        "SELECT solution_mesh, solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells,"
+        " solution_vertex_columns, solution_vertex_values, solution_cell_columns, solution_cell_values"
+        " FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND region = %s",
+        (index,),
+    ).fetchone()  # type: ignore[misc]
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    query = (
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, %s, 'average', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])"
+    )
+    for given in (
+        [mesh, rows[0], *[None] * 7],  # ids only
+        [None, *rows],  # rows without the mesh
+        [mesh, rows[0], rows[1][:-1], *rows[2:]],  # a coordinate short
+        [mesh, *rows[:3], rows[3][:-1], *rows[4:]],  # cells not of k vertices
+        [mesh, *rows[:5], rows[5][:-1], *rows[6:]],  # a value short
+        [mesh, rows[0], [float("nan")] * len(rows[1]), *rows[2:]],  # non-finite coordinates
+    ):
+        state, message, _ = _psql_state(conn, query, (str(fault), index, *given))
+        assert state == "TG100", message
+        assert everything(conn) == before
+        conn.rollback()
+
+
+def test_regions_found_again_alike_keep_the_rows_and_merge_in_psql_as_in_python(conn: Conn, fault: int) -> None:
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    recorded = _rows_recorded(conn, fault)
+    tgsis.find_conflicts(conn, "e1")  # Python: records the regions again (the same: solutions kept)
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")  # SQL alike
+    conn.commit()
+    assert _rows_recorded(conn, fault) == recorded
+    assert_same_merge(conn, "e1")
+    tgsis.resolve_region(conn, "e1", fault, index, "unsolved")  # taken back: the rows go with the .npz
+    conn.commit()
+    assert _rows_recorded(conn, fault) == []
+    (rows,) = conn.execute(
+        "SELECT count(*) FROM tgsis.conflict_regions WHERE solution_vertex_ids IS NOT NULL OR solution_mesh IS NOT NULL"
+    ).fetchone()  # type: ignore[misc]
+    conn.rollback()
+    assert rows == 0
