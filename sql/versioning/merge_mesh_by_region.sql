@@ -274,7 +274,7 @@ BEGIN
         INSERT INTO pg_temp.tgsis_mw_v (id, src, present, x, y, z, val, ref)
         SELECT s.id, 8, true, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
         INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
-        SELECT s.id, 8, true, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
+        SELECT s.id, 8, NOT s.gone, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
         -- what they discard of each side (merge3's _discards): the side's changed rows the merged rows do not hold
         -- as the side does (coordinates bit for bit, values; a cell as an oriented cell), the largest distance
         INSERT INTO pg_temp.tgsis_mw_notes
@@ -321,6 +321,10 @@ BEGIN
                    LEFT JOIN pg_temp.tgsis_mr_vmap q ON q.new = u.x ORDER BY u.o) AS v, m.val
       FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id
      WHERE m.st = 4;
+    IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sc') IS NOT NULL THEN  -- margin cells a solution rewrites: the base's
+        INSERT INTO pg_temp.tgsis_mw_cold (id, v, val)
+        SELECT s.id, s.bv, s.bval FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based;
+    END IF;
 
     PERFORM tgsis.merge_mesh_validity(v_name, v_k, v_word, v_table, p_geoid, v_base, v_refused, v_hint);
 
@@ -360,6 +364,7 @@ BEGIN
                  UNION ALL SELECT 4, coalesce(p.old, m.id), m.part
                              FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id WHERE m.st = 4
                  UNION ALL SELECT 8, k.id, k.part FROM kept k
+                            WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = k.id)
                  UNION ALL SELECT 8, n.id, n.part FROM pg_temp.tgsis_mw_c n WHERE n.present),
              breaks AS (
                  SELECT s.st, s.id, s.part,

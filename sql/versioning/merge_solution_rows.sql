@@ -12,8 +12,9 @@
 -- Python client's arrays): a float column is written as the float8 (real: as
 -- numpy rounds it to float4), an integer one truncated, as the Python writer
 -- writes them. Refused too (TG302, p_hint: the Python merge applies it): a
--- solution row of an id no state changed that differs from the base's (a
--- region's one-ring margin re-shaped), a class property column the rows lack
+-- vertex row of the region no state changed that differs from the base's or
+-- that the solution lacks (the region's margin cells are rewritten or
+-- removed as in Python), a class property column the rows lack
 -- or of a type other than float, real or integer.
 CREATE FUNCTION tgsis.merge_solution_rows(p_geoid bigint, p_versionid integer, p_refused text, p_hint text)
 RETURNS void
@@ -39,7 +40,7 @@ BEGIN
            NULL::text AS val, NULL::text[] AS w, NULL::bigint AS ref, NULL::bigint[] AS v, NULL::bigint AS part,
            u.id = ANY (g.vertex_ids) AS inside, EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id) AS changed,
            false AS based, NULL::float8 AS b_x, NULL::float8 AS b_y, NULL::float8 AS b_z, NULL::bigint[] AS bv,
-           NULL::text AS bval
+           NULL::text AS bval, false AS gone
       FROM pg_temp.tgsis_mw_region g
       JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
                                    AND r.region = g.region
@@ -53,7 +54,7 @@ BEGIN
            r.solution_cells[(u.o - 1) * v_info.k + 1 : u.o * v_info.k] AS v, NULL::bigint AS part,
            u.id = ANY (g.cell_ids) AS inside, EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = u.id) AS changed,
            false AS based, NULL::float8 AS b_x, NULL::float8 AS b_y, NULL::float8 AS b_z, NULL::bigint[] AS bv,
-           NULL::text AS bval
+           NULL::text AS bval, false AS gone
       FROM pg_temp.tgsis_mw_region g
       JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
                                    AND r.region = g.region
@@ -78,6 +79,14 @@ BEGIN
             USING ERRCODE = 'TG302', HINT = p_hint;
     END IF;
 
+    -- the region's margin cells (no state changed them) the solution lacks: removed (their base rows read below)
+    INSERT INTO pg_temp.tgsis_mw_sc (region, id, cols, vals, inside, changed, based, gone)
+    SELECT n.region, n.id, r.solution_cell_columns, '{}', true, false, false, true
+      FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g ON g.region = n.region AND g.conflict AND g.src = 8
+      JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
+                                   AND r.region = g.region
+     WHERE n.kind = 'c' AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = n.id)
+       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sc s WHERE s.id = n.id AND s.region = n.region);
     -- the base's rows of the ids no state changed (the region's margin, the rest around it)
     EXECUTE format('UPDATE pg_temp.tgsis_mw_sv s SET based = true, b_x = v.x, b_y = v.y, b_z = v.z FROM %s v
                      WHERE v.geoid = $1 AND v.vrtxid = s.id AND NOT s.changed
@@ -151,8 +160,8 @@ BEGIN
     UPDATE pg_temp.tgsis_mw_sc s SET part = s.vals[array_position(s.cols, 'part')]::bigint
      WHERE s.vals[array_position(s.cols, 'part')] BETWEEN 0 AND 9e18;
 
-    -- a row of an id no state changed, inside its region (the one-ring margin), is the base's: else SQL does not
-    -- merge it (refused); one the solution lacks is refused alike
+    -- a vertex of an id no state changed, inside its region, is the base's: else SQL does not merge it (refused);
+    -- one the solution lacks is refused alike (the margin's cells are rewritten or removed: below)
     SELECT string_agg(format('region %s: %s', q.region, q.what), '; ' ORDER BY q.region) INTO v_why
       FROM (SELECT s.region, format('vertices %s', tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id))) AS what
               FROM pg_temp.tgsis_mw_sv s
@@ -161,25 +170,25 @@ BEGIN
                         AND float8send(s.z) = float8send(s.b_z) AND s.val IS NOT DISTINCT FROM s.bval)
              GROUP BY s.region
             UNION ALL
-            SELECT s.region, format('cells %s', tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))
+            SELECT s.region, format('cells %s (in no state)', tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))
               FROM pg_temp.tgsis_mw_sc s
-             WHERE s.inside AND NOT s.changed AND NOT (s.based AND s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval)
+             WHERE s.inside AND NOT s.changed AND NOT s.based
              GROUP BY s.region
             UNION ALL
-            SELECT n.region, format('%s %s removed', CASE n.kind WHEN 'v' THEN 'vertices' ELSE 'cells' END,
-                                    tgsis.merge_ids_text(array_agg(n.id::text ORDER BY n.id)))
+            SELECT n.region, format('vertices %s removed', tgsis.merge_ids_text(array_agg(n.id::text ORDER BY n.id)))
               FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g ON g.region = n.region AND g.src = 8
-             WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE n.kind = 'v' AND m.id = n.id)
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE n.kind = 'c' AND m.id = n.id)
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sv s WHERE n.kind = 'v' AND s.id = n.id AND s.region = n.region)
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sc s WHERE n.kind = 'c' AND s.id = n.id AND s.region = n.region)
-             GROUP BY n.region, n.kind) AS q;
+             WHERE n.kind = 'v' AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = n.id)
+               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sv s WHERE s.id = n.id AND s.region = n.region)
+             GROUP BY n.region) AS q;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: its solution changes rows of its regions no side changed (%)', p_refused, v_why
             USING ERRCODE = 'TG302', HINT = p_hint;
     END IF;
     DELETE FROM pg_temp.tgsis_mw_sv s WHERE s.inside AND NOT s.changed;
-    DELETE FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed;
+    -- a margin cell as the base has it stays; another is rewritten (tgsis.merge_mesh_by_region: the version's row,
+    -- the base's, closed) or removed (gone)
+    DELETE FROM pg_temp.tgsis_mw_sc s
+     WHERE s.inside AND NOT s.changed AND NOT s.gone AND s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval;
 
     -- the rows outside its region that are no new id and not another such region's: the merged state's, or refused
     -- (merge3: the manual mesh of region r changes rows outside the region)
