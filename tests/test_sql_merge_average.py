@@ -346,3 +346,57 @@ def test_a_manual_mesh_without_a_margin_cell_merges_in_psql_as_in_python(conn: C
     tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
     conn.commit()
     assert_same_merge(conn, "e1")
+
+
+def test_gocad_atoms_in_an_averaged_region_and_a_manual_refid_merge_in_psql_as_in_python(
+    conn: Conn, fault: int
+) -> None:
+    from tests.test_sql_merge_regions import psql
+
+    atom = "INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, %s, %s)"
+    psql(conn, "DEFAULT", (atom, (fault, int(MIDDLE[0]), int(MIDDLE[1]), True)))  # in the base: a PATOM
+    conn.execute("SELECT tgsis.merge_version('e1', true)")
+    conn.commit()
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    psql(conn, "e1", (atom, (fault, int(MIDDLE[2]), int(MIDDLE[3]), False)))  # the version adds one in the region
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+    # manual: the PATOM refers to another vertex of the region, the version's atom is gone
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    given = merge.child
+    refid = np.asarray(given.vertex_properties["refid"], dtype=np.float64).copy()
+    refid[np.searchsorted(given.vertex_ids, MIDDLE[0])] = MIDDLE[3]
+    refid[np.searchsorted(given.vertex_ids, MIDDLE[2])] = -1
+    props = {**given.vertex_properties, "refid": refid}
+    manual = MeshState(3, given.vertex_ids, given.vertices, given.cell_ids, given.cells, props, given.cell_properties)
+    tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
+    conn.commit()
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)
+
+
+def test_parts_kept_as_runs_with_an_average_and_a_manual_part_merge_in_psql_as_in_python(conn: Conn) -> None:
+    from tests.test_sql_merge_write import _parted_fault
+
+    geoid = _parted_fault(conn)
+    index = _both_moved(conn, geoid)
+    tgsis.resolve_region(conn, "e1", geoid, index, "average")
+    conn.commit()
+    assert_same_merge(conn, "e1")
+    merge = tgsis.object_merge(conn, "e1", geoid)
+    conn.rollback()
+    (region,) = merge.conflicts
+    given = merge.child
+    part = np.asarray(given.cell_properties["part"], dtype=np.float64).copy()
+    part[np.isin(given.cell_ids, region.cell_ids[:3])] = 7  # three cells of the region in another part
+    props = {**given.cell_properties, "part": part}
+    manual = MeshState(3, given.vertex_ids, given.vertices, given.cell_ids, given.cells, given.vertex_properties, props)
+    tgsis.resolve_region(conn, "e1", geoid, index, "manual", manual)
+    conn.commit()
+    for action in ("merge", "refresh"):
+        assert_same_merge(conn, "e1", action)

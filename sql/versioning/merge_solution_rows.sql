@@ -40,7 +40,7 @@ BEGIN
            NULL::text AS val, NULL::text[] AS w, NULL::bigint AS ref, NULL::bigint[] AS v, NULL::bigint AS part,
            u.id = ANY (g.vertex_ids) AS inside, EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id) AS changed,
            false AS based, NULL::float8 AS b_x, NULL::float8 AS b_y, NULL::float8 AS b_z, NULL::bigint[] AS bv,
-           NULL::text AS bval, false AS gone
+           NULL::text AS bval, NULL::bigint AS bpart, false AS gone
       FROM pg_temp.tgsis_mw_region g
       JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
                                    AND r.region = g.region
@@ -54,7 +54,7 @@ BEGIN
            r.solution_cells[(u.o - 1) * v_info.k + 1 : u.o * v_info.k] AS v, NULL::bigint AS part,
            u.id = ANY (g.cell_ids) AS inside, EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = u.id) AS changed,
            false AS based, NULL::float8 AS b_x, NULL::float8 AS b_y, NULL::float8 AS b_z, NULL::bigint[] AS bv,
-           NULL::text AS bval, false AS gone
+           NULL::text AS bval, NULL::bigint AS bpart, false AS gone
       FROM pg_temp.tgsis_mw_region g
       JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
                                    AND r.region = g.region
@@ -99,6 +99,13 @@ BEGIN
                    (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, v_info.k) AS i),
                    tgsis.storage_table('tgsis', v_info.simplex), v_info.cellid)
       USING p_geoid, v_info.base;
+    IF v_info.runs THEN  -- the base's part of those cells (tgsis.part's runs)
+        EXECUTE format('UPDATE pg_temp.tgsis_mw_sc s SET bpart = r.part FROM %s r
+                         WHERE s.based AND r.geoid = $1 AND s.id BETWEEN r.firstid AND r.lastid
+                           AND r.revision = ANY ($2) AND NOT (r.revclosed AND r.lastrevs && $2)',
+                       tgsis.storage_table('tgsis', 'part'))
+          USING p_geoid, v_info.base;
+    END IF;
 
     -- the values: canonical texts (as tgsis.merge_value_text) and the texts to write, from the float8 values
     FOR v_side IN SELECT * FROM (VALUES ('vertex', 'tgsis_mw_sv', v_info.vpschema, v_info.vptable),
@@ -188,7 +195,8 @@ BEGIN
     -- a margin cell as the base has it stays; another is rewritten (tgsis.merge_mesh_by_region: the version's row,
     -- the base's, closed) or removed (gone)
     DELETE FROM pg_temp.tgsis_mw_sc s
-     WHERE s.inside AND NOT s.changed AND NOT s.gone AND s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval;
+     WHERE s.inside AND NOT s.changed AND NOT s.gone AND s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval
+       AND (NOT v_info.runs OR s.part IS NOT DISTINCT FROM s.bpart);
 
     -- the rows outside its region that are no new id and not another such region's: the merged state's, or refused
     -- (merge3: the manual mesh of region r changes rows outside the region)
@@ -215,7 +223,8 @@ BEGIN
                AND NOT CASE WHEN s.changed
                             THEN coalesce(n.present AND s.v = n.v AND s.val IS NOT DISTINCT FROM n.val
                                           AND s.part IS NOT DISTINCT FROM n.part, false)
-                            ELSE s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval END
+                            ELSE s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval
+                                 AND (NOT v_info.runs OR s.part IS NOT DISTINCT FROM s.bpart) END
              GROUP BY s.region) AS q;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: %', p_refused, v_why
