@@ -13,16 +13,19 @@ versions, conflicts and regions afterwards). A solution recorded with its
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
 import psycopg
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import tgsis
-from tests.merge_data import curved_surface, make_fault, move
+from tests.merge_data import SIDE, curved_surface, make_fault, move
 from tests.test_merge_average import _moved, _subdivided, _write
-from tests.test_sql_merge_regions import MIDDLE
+from tests.test_sql_merge_regions import MIDDLE, _apply, _edit, property_tables
 from tests.test_sql_merge_write import _psql_state, assert_same_merge, both_merges, everything
 from tgsis.merge3 import MeshState
 
@@ -85,15 +88,13 @@ def test_a_manual_mesh_merges_in_psql_as_in_python(conn: Conn, fault: int, actio
     index = _both_moved(conn, fault)
     merge = tgsis.object_merge(conn, "e1", fault)
     conn.rollback()
-    given = merge.child
-    xyz = given.vertices.copy()
-    at = np.isin(given.vertex_ids, MIDDLE)
+    side = merge.child
+    xyz = side.vertices.copy()
+    at = np.isin(side.vertex_ids, MIDDLE)
     xyz[at, 2] += np.linspace(0.1, 0.9, int(at.sum()))  # a hand-made shape, values of no side
-    porosity = np.asarray(given.vertex_properties["porosity"], dtype=np.float64).copy()
+    porosity = np.asarray(side.vertex_properties["porosity"], dtype=np.float64).copy()
     porosity[at] = 0.123456789
-    manual = MeshState(
-        3, given.vertex_ids, xyz, given.cell_ids, given.cells, {"porosity": porosity}, given.cell_properties
-    )
+    manual = MeshState(3, side.vertex_ids, xyz, side.cell_ids, side.cells, {"porosity": porosity}, side.cell_properties)
     tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
     conn.commit()
     [(_, solution, nv, _)] = _rows_recorded(conn, fault)
@@ -245,14 +246,14 @@ def test_a_manual_mesh_that_rewrites_margin_cells_merges_in_psql_as_in_python(
     (region,) = merge.conflicts
     margin = np.setdiff1d(region.cell_ids, np.union1d(region.parent_cell_ids, region.child_cell_ids))
     assert len(margin) >= 2
-    given = merge.child
-    cells = given.cells.copy()
-    at = np.searchsorted(given.cell_ids, margin[:2])
+    side = merge.child
+    cells = side.cells.copy()
+    at = np.searchsorted(side.cell_ids, margin[:2])
     cells[at[0]] = np.roll(cells[at[0]], 1)  # the same oriented triangle, another row
-    facies = np.asarray(given.cell_properties["facies"]).copy()
+    facies = np.asarray(side.cell_properties["facies"]).copy()
     facies[at[1]] = 42
     manual = MeshState(
-        3, given.vertex_ids, given.vertices, given.cell_ids, cells, given.vertex_properties, {"facies": facies}
+        3, side.vertex_ids, side.vertices, side.cell_ids, cells, side.vertex_properties, {"facies": facies}
     )
     tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
     conn.commit()
@@ -291,7 +292,7 @@ def test_rows_given_in_part_or_not_fitting_are_refused_and_nothing_is_recorded(c
         "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, %s, 'average', %s, %s, %s::float8[], %s, %s,"
         " %s::text[], %s::float8[], %s::text[], %s::float8[])"
     )
-    for given in (
+    for arrays in (
         [mesh, rows[0], *[None] * 7],  # ids only
         [None, *rows],  # rows without the mesh
         [mesh, rows[0], rows[1][:-1], *rows[2:]],  # a coordinate short
@@ -299,7 +300,7 @@ def test_rows_given_in_part_or_not_fitting_are_refused_and_nothing_is_recorded(c
         [mesh, *rows[:5], rows[5][:-1], *rows[6:]],  # a value short
         [mesh, rows[0], [float("nan")] * len(rows[1]), *rows[2:]],  # non-finite coordinates
     ):
-        state, message, _ = _psql_state(conn, query, (str(fault), index, *given))
+        state, message, _ = _psql_state(conn, query, (str(fault), index, *arrays))
         assert state == "TG100", message
         assert everything(conn) == before
         conn.rollback()
@@ -332,16 +333,16 @@ def test_a_manual_mesh_without_a_margin_cell_merges_in_psql_as_in_python(conn: C
     conn.rollback()
     (region,) = merge.conflicts
     margin = np.setdiff1d(region.cell_ids, np.union1d(region.parent_cell_ids, region.child_cell_ids))[0]
-    given = merge.child
-    keep = given.cell_ids != margin
+    side = merge.child
+    keep = side.cell_ids != margin
     manual = MeshState(
         3,
-        given.vertex_ids,
-        given.vertices,
-        given.cell_ids[keep],
-        given.cells[keep],
-        given.vertex_properties,
-        {n: np.asarray(v)[keep] for n, v in given.cell_properties.items()},
+        side.vertex_ids,
+        side.vertices,
+        side.cell_ids[keep],
+        side.cells[keep],
+        side.vertex_properties,
+        {n: np.asarray(v)[keep] for n, v in side.cell_properties.items()},
     )
     tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
     conn.commit()
@@ -368,12 +369,12 @@ def test_gocad_atoms_in_an_averaged_region_and_a_manual_refid_merge_in_psql_as_i
     # manual: the PATOM refers to another vertex of the region, the version's atom is gone
     merge = tgsis.object_merge(conn, "e1", fault)
     conn.rollback()
-    given = merge.child
-    refid = np.asarray(given.vertex_properties["refid"], dtype=np.float64).copy()
-    refid[np.searchsorted(given.vertex_ids, MIDDLE[0])] = MIDDLE[3]
-    refid[np.searchsorted(given.vertex_ids, MIDDLE[2])] = -1
-    props = {**given.vertex_properties, "refid": refid}
-    manual = MeshState(3, given.vertex_ids, given.vertices, given.cell_ids, given.cells, props, given.cell_properties)
+    side = merge.child
+    refid = np.asarray(side.vertex_properties["refid"], dtype=np.float64).copy()
+    refid[np.searchsorted(side.vertex_ids, MIDDLE[0])] = MIDDLE[3]
+    refid[np.searchsorted(side.vertex_ids, MIDDLE[2])] = -1
+    props = {**side.vertex_properties, "refid": refid}
+    manual = MeshState(3, side.vertex_ids, side.vertices, side.cell_ids, side.cells, props, side.cell_properties)
     tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
     conn.commit()
     for action in ("merge", "refresh"):
@@ -391,12 +392,66 @@ def test_parts_kept_as_runs_with_an_average_and_a_manual_part_merge_in_psql_as_i
     merge = tgsis.object_merge(conn, "e1", geoid)
     conn.rollback()
     (region,) = merge.conflicts
-    given = merge.child
-    part = np.asarray(given.cell_properties["part"], dtype=np.float64).copy()
-    part[np.isin(given.cell_ids, region.cell_ids[:3])] = 7  # three cells of the region in another part
-    props = {**given.cell_properties, "part": part}
-    manual = MeshState(3, given.vertex_ids, given.vertices, given.cell_ids, given.cells, given.vertex_properties, props)
+    side = merge.child
+    part = np.asarray(side.cell_properties["part"], dtype=np.float64).copy()
+    part[np.isin(side.cell_ids, region.cell_ids[:3])] = 7  # three cells of the region in another part
+    props = {**side.cell_properties, "part": part}
+    manual = MeshState(3, side.vertex_ids, side.vertices, side.cell_ids, side.cells, side.vertex_properties, props)
     tgsis.resolve_region(conn, "e1", geoid, index, "manual", manual)
     conn.commit()
     for action in ("merge", "refresh"):
         assert_same_merge(conn, "e1", action)
+
+
+_pairs = itertools.count()
+
+
+@settings(
+    max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    child=st.lists(_edit, min_size=0, max_size=2),
+    parent=st.lists(_edit, min_size=0, max_size=2),
+    where=st.integers(0, 2 * (SIDE - 1) ** 2 - 1),
+    shifts=st.sampled_from([(0, 1), (1, 2), (2, 0), (0, 2)]),
+    action=st.sampled_from(["merge", "refresh"]),
+)
+def test_random_edits_solved_average_merge_in_psql_exactly_as_in_python(
+    conn: Conn,
+    fault: int,
+    child: list[tuple[str, int, int]],
+    parent: list[tuple[str, int, int]],
+    where: int,
+    shifts: tuple[int, int],
+    action: str,
+) -> None:
+    """Both sides move one patch, each its own way (a conflict), with random other edits around."""
+    child = [("move", where, shifts[0]), *child]
+    parent = [("move", where, shifts[1]), *parent]
+    n = next(_pairs)
+    parent_version, child_version = f"ap{n}", f"ac{n}"
+    tgsis.create_version(conn, parent_version)
+    conn.commit()
+    tgsis.create_version(conn, child_version, parent=parent_version)
+    conn.commit()
+    vp, cp = property_tables(conn, fault)
+    _apply(conn, child_version, fault, child, vp, cp)
+    _apply(conn, parent_version, fault, parent, vp, cp)
+    conflicts = tgsis.find_conflicts(conn, child_version)
+    conn.commit()
+    if not any(r.conflict for c in conflicts for r in c.regions):
+        return
+    try:
+        tgsis.resolve_all_regions(conn, child_version, fault, "average")
+    except tgsis.Error:  # no average there (a hole, a fold): nothing recorded
+        conn.rollback()
+        return
+    conn.commit()
+    theirs, mine = both_merges(conn, child_version, action)
+    if theirs[0] == "refused":
+        assert mine[0] == "refused" and mine[1] == theirs[1], (theirs, mine)
+        return
+    assert mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
