@@ -4,7 +4,8 @@
 -- regions are tgsis.mesh_merge_work's (the same as tgsis.merge3's); the merged
 -- state is, per region, the rows of the side that changed it (a region both
 -- changed alike: the parent's) or of the solution recorded for it
--- (tgsis.resolve_region: parent, child or base), the parent's elsewhere, with
+-- (tgsis.resolve_region: parent, child or base; average or manual: the rows
+-- recorded with it, tgsis.merge_solution_rows), the parent's elsewhere, with
 -- the version's new ids as merge3 renumbers them (tgsis_mr_vmap / _cmap). It is
 -- written into the VERSION's working revision by an id-keyed difference
 -- against the version's stored rows, as tgsis.db._state_write writes it: a
@@ -26,7 +27,8 @@
 -- could be recorded): the merge's refusal (TG302) names it.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
 -- hint naming the Python command that merges it: a region solved average or
--- manual (their meshes need numpy), stored regions that are not the
+-- manual recorded with its .npz only (no rows SQL reads), or whose rows SQL
+-- does not apply (tgsis.merge_solution_rows says which), stored regions that are not the
 -- regions of now, attributes changed on both sides, a merged mesh that is not
 -- valid where no state was invalid (merge3's checks: cells on removed vertices,
 -- duplicated cells, non-manifold edges or faces, vertices left without cells),
@@ -615,4 +617,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits (geometry and feature rows) brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution or the rows recorded with an average/manual one) written into the version by id-keyed difference, the parent''s attribute edits (geometry and feature rows) brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions with their .npz only, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';

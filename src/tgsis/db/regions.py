@@ -658,6 +658,9 @@ def resolve_region(
         writes: a vertex without an id, NaN or negative, is a new vertex). Its
         rows of the region's ids, and of ids no state has, are the region's;
         its other rows must be those of a state (base, parent or version).
+        An ``average`` or ``manual`` solution is recorded with its rows also
+        in a form SQL reads (``tgsis.conflict_regions.solution_*``), so that
+        a psql ``SELECT tgsis.merge_version(v)`` applies it as well.
     discard_other : bool
         When False, a solution that discards anything is refused.
 
