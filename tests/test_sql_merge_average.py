@@ -455,3 +455,81 @@ def test_random_edits_solved_average_merge_in_psql_exactly_as_in_python(
     assert mine[1] == theirs[1]
     for table in theirs[2]:
         assert mine[2][table] == theirs[2][table], table
+
+
+def test_session_settings_do_not_change_what_a_manual_solution_writes(conn: Conn, fault: int) -> None:
+    from tests.test_sql_merge_write import _outcome
+
+    index = _both_moved(conn, fault)
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    side = merge.child
+    xyz = side.vertices.copy()
+    at = np.isin(side.vertex_ids, MIDDLE)
+    xyz[at, 2] += 0.1 + 1e-13  # digits beyond 15
+    porosity = np.asarray(side.vertex_properties["porosity"], dtype=np.float64).copy()
+    porosity[at] = 1 / 3
+    manual = MeshState(3, side.vertex_ids, xyz, side.cell_ids, side.cells, {"porosity": porosity}, side.cell_properties)
+    conn.execute("SET extra_float_digits = -15")  # the recording too
+    tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
+    conn.commit()
+    conn.execute("RESET ALL")
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    conn.execute("SET extra_float_digits = -15")
+    conn.execute("SET DateStyle = 'SQL, DMY'")
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
+@pytest.mark.parametrize("solution", ["average", "manual"])
+def test_real_and_smallint_properties_are_written_as_python_writes_them(conn: Conn, solution: str) -> None:
+    """A real vertex property given float8 values (rounded to float4 as numpy rounds them), a smallint cell one."""
+    from tests.merge_data import F
+
+    F.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        cell_properties=[("porosity", "real"), tgsis.Property("facies", "smallint", alignment="CELL")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "faults", curved_surface())
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    from tests.test_sql_merge_regions import psql
+
+    psql(
+        conn, "e1", ("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = ANY (%s)", (geoid, MIDDLE.tolist()))
+    )
+    psql(
+        conn,
+        "DEFAULT",
+        ("UPDATE tgsis.vrtx SET z = z - 2.5 WHERE geoid = %s AND vrtxid = ANY (%s)", (geoid, MIDDLE.tolist())),
+    )
+    (conflict,) = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    (region,) = [r for r in conflict.regions if r.conflict]
+    manual = None
+    if solution == "manual":
+        merge = tgsis.object_merge(conn, "e1", geoid)
+        conn.rollback()
+        side = merge.child
+        porosity = np.asarray(side.vertex_properties["porosity"], dtype=np.float64).copy()
+        at = np.isin(side.vertex_ids, region.vertex_ids)
+        porosity[at] = np.linspace(1 / 3, 2 / 3, int(at.sum()))  # no float4 holds them
+        facies = np.asarray(side.cell_properties["facies"], dtype=np.float64).copy()
+        facies[np.isin(side.cell_ids, region.cell_ids)] = 3.75  # truncated to 3, as numpy's astype
+        manual = MeshState(
+            3, side.vertex_ids, side.vertices, side.cell_ids, side.cells, {"porosity": porosity}, {"facies": facies}
+        )
+    tgsis.resolve_region(conn, "e1", geoid, region.region, solution, manual)
+    conn.commit()
+    assert_same_merge(conn, "e1")
