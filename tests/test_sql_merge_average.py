@@ -492,7 +492,7 @@ def test_session_settings_do_not_change_what_a_manual_solution_writes(conn: Conn
 @pytest.mark.parametrize("solution", ["average", "manual"])
 def test_real_and_smallint_properties_are_written_as_python_writes_them(conn: Conn, solution: str) -> None:
     """A real vertex property given float8 values (rounded to float4 as numpy rounds them), a smallint cell one."""
-    from tests.merge_data import F
+    from tgsis.db import features as F
 
     F.create_feature_class(
         conn,
