@@ -533,3 +533,34 @@ def test_real_and_smallint_properties_are_written_as_python_writes_them(conn: Co
     tgsis.resolve_region(conn, "e1", geoid, region.region, solution, manual)
     conn.commit()
     assert_same_merge(conn, "e1")
+
+
+def test_two_solutions_giving_the_same_new_id_are_refused_and_nothing_is_written(conn: Conn) -> None:
+    from tests.test_resolve_all_regions import _two_conflicts
+
+    fault = _two_conflicts(conn)
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    side = merge.child
+    new = int(max(merge.base.vertex_ids.max(), merge.parent.vertex_ids.max(), side.vertex_ids.max())) + 1
+    for region in merge.conflicts:  # each region's vertices (no cells) and the same new vertex: forged rows
+        at = np.flatnonzero(np.isin(side.vertex_ids, region.vertex_ids))
+        state = MeshState(
+            3,
+            np.append(side.vertex_ids[at], new),
+            np.vstack([side.vertices[at], [[1.0, 2.0, float(region.index)]]]),
+            np.empty(0, np.int64),
+            np.empty((0, 3), np.int64),
+            {n: np.append(np.asarray(v, dtype=np.float64)[at], 0.5) for n, v in side.vertex_properties.items()},
+            {n: np.asarray(v)[:0] for n, v in side.cell_properties.items()},
+        )
+        _record_in_sql(conn, fault, region.index, state)
+    before = everything(conn)
+    conn.commit()
+    state_, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state_ == "TG302", message
+    assert f"vertex {new} given by regions" in message and "tgsis version merge" in (hint or "")
+    assert everything(conn) == before
+    conn.rollback()

@@ -234,6 +234,17 @@ BEGIN
     -- what is taken: the region's rows and the new ids
     DELETE FROM pg_temp.tgsis_mw_sv s WHERE NOT s.inside AND (s.changed OR s.based);
     DELETE FROM pg_temp.tgsis_mw_sc s WHERE NOT s.inside AND (s.changed OR s.based);
+    -- a new id two solutions both give would be two rows: refused (nothing tells which is meant)
+    SELECT string_agg(q.what, '; ') INTO v_why
+      FROM (SELECT format('vertex %s given by regions %s', s.id, string_agg(s.region::text, ', ' ORDER BY s.region)) AS what
+              FROM pg_temp.tgsis_mw_sv s GROUP BY s.id HAVING count(*) > 1
+            UNION ALL
+            SELECT format('cell %s given by regions %s', s.id, string_agg(s.region::text, ', ' ORDER BY s.region))
+              FROM pg_temp.tgsis_mw_sc s GROUP BY s.id HAVING count(*) > 1) AS q;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: the solutions of two regions give rows of the same new id (%)', p_refused, v_why
+            USING ERRCODE = 'TG302', HINT = p_hint;
+    END IF;
 END
 $$;
 
