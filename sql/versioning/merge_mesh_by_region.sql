@@ -407,10 +407,12 @@ BEGIN
           FROM pg_temp.tgsis_mw_v n LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = n.id
          WHERE n.present AND n.src <> 8 AND n.val <> v_vnull
            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val);
-        v_pv8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_v n JOIN pg_temp.tgsis_mw_sv s ON s.id = n.id
-                        WHERE n.present AND n.src = 8 AND n.val <> v_vnull
-                          AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val)
-                        ORDER BY n.id);
+        IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sv') IS NOT NULL THEN  -- (an average or manual solution)
+            v_pv8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_v n JOIN pg_temp.tgsis_mw_sv s ON s.id = n.id
+                            WHERE n.present AND n.src = 8 AND n.val <> v_vnull
+                              AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val)
+                            ORDER BY n.id);
+        END IF;
     END IF;
     IF v_cnull IS NOT NULL THEN
         v_pcgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_cold o
@@ -422,10 +424,12 @@ BEGIN
           FROM pg_temp.tgsis_mw_c n LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = n.id
          WHERE n.present AND n.src <> 8 AND n.val <> v_cnull
            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val);
-        v_pc8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_c n JOIN pg_temp.tgsis_mw_sc s ON s.id = n.id
-                        WHERE n.present AND n.src = 8 AND n.val <> v_cnull
-                          AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val)
-                        ORDER BY n.id);
+        IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sc') IS NOT NULL THEN  -- (an average or manual solution)
+            v_pc8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_c n JOIN pg_temp.tgsis_mw_sc s ON s.id = n.id
+                            WHERE n.present AND n.src = 8 AND n.val <> v_cnull
+                              AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val)
+                            ORDER BY n.id);
+        END IF;
     END IF;
     SELECT i.vpschema, i.vptable, i.cpschema, i.cptable INTO v_vps, v_vpn, v_cps, v_cpn FROM pg_temp.tgsis_mr_info i;
     RAISE EXCEPTION 'tgsis_mw_done';  -- rolls the work tables and their locks back
