@@ -555,9 +555,10 @@ def _validity_in_sql(
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_node (kind text, id bigint, region integer)")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_region (region integer, src smallint)")
     conn.execute(
-        "CREATE TEMPORARY TABLE tgsis_mw_v (id bigint, present boolean, x float8, y float8, z float8, val text, ref bigint)"
+        "CREATE TEMPORARY TABLE tgsis_mw_v (id bigint, present boolean, x float8, y float8, z float8, val text, ref bigint,"
+        " src smallint)"
     )
-    conn.execute("CREATE TEMPORARY TABLE tgsis_mw_c (id bigint, present boolean, v bigint[])")
+    conn.execute("CREATE TEMPORARY TABLE tgsis_mw_c (id bigint, present boolean, v bigint[], src smallint)")
     for state in (1, 2, 4):
         for v in _GRID:
             conn.execute("INSERT INTO tgsis_mr_v VALUES (%s, %s, %s, %s, %s, NULL, NULL)", (v, state, *_GRID[v]))
