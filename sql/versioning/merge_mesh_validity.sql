@@ -76,14 +76,15 @@ BEGIN
                              WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
                                AND %4$s) AS c,
                            (VALUES (1::smallint), (2), (4), (8)) AS s (st)
-                     WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.id)
-                       AND NOT (s.st = 8 AND EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = c.id))',
+                     WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.id)',
                    CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END,
                    format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, p_k) AS i)),
                    tgsis.storage_table('tgsis', p_table),
                    -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)
                    tgsis.cells_on_vertices_sql(p_k, v_near, '$3'))
       USING p_geoid, p_base, v_near;
+    -- a cell no state changed that a solution rewrites or removes (a margin cell) is its row in the merged state
+    DELETE FROM pg_temp.tgsis_mw_local l WHERE l.st = 8 AND EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = l.id);
     INSERT INTO pg_temp.tgsis_mw_local
     SELECT m.st, m.id, m.v FROM pg_temp.tgsis_mr_c m WHERE m.v && v_near
     UNION ALL
