@@ -71,7 +71,7 @@ BEGIN
                  p_cell_values) NOT IN (0, 8) OR (p_vertex_ids IS NOT NULL AND p_mesh IS NULL) THEN
         RAISE EXCEPTION 'the rows of the mesh of % are given in part: ids, coordinates, cells, columns and values go together, with the mesh',
                 v_object
-            USING ERRCODE = 'TG100', HINT = 'give all eight arrays after the mesh, or none (tgsis.resolve_region in Python gives them)';
+            USING ERRCODE = 'TG100', HINT = 'give all eight arrays after the mesh, or none';
     END IF;
     IF p_vertex_ids IS NOT NULL AND (
            cardinality(p_vertices) <> 3 * cardinality(p_vertex_ids)
@@ -84,7 +84,7 @@ BEGIN
         RAISE EXCEPTION 'the rows of the mesh of % do not fit together: % vertex ids, % coordinates, % cell ids, % cell vertex ids, % vertex values of % columns, % cell values of % columns (or a NULL id, a non-finite coordinate)',
                 v_object, cardinality(p_vertex_ids), cardinality(p_vertices), cardinality(p_cell_ids), cardinality(p_cells),
                 cardinality(p_vertex_values), cardinality(p_vertex_columns), cardinality(p_cell_values), cardinality(p_cell_columns)
-            USING ERRCODE = 'TG100', HINT = 'three coordinates per vertex, k vertex ids per cell, one value per column per row (tgsis.resolve_region in Python gives them)';
+            USING ERRCODE = 'TG100', HINT = 'three coordinates per vertex, k vertex ids per cell, one value per column per row';
     END IF;
     IF p_region IS NULL THEN
         RAISE EXCEPTION 'the region of object % of class % in version % is NULL', quote_literal(p_objectkey),
