@@ -248,26 +248,6 @@ def test_an_unsolved_region_is_refused_as_today_and_nothing_is_written(conn: Con
     conn.rollback()
 
 
-def test_an_average_solution_is_refused_naming_the_python_command(conn: Conn, fault: int) -> None:
-    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 5.0))
-    move(conn, "DEFAULT", fault, MIDDLE, (0.0, 0.0, -7.0))
-    conn.commit()
-    (conflict,) = tgsis.find_conflicts(conn, "e1")
-    conn.commit()
-    (region,) = [r for r in conflict.regions if r.conflict]
-    tgsis.resolve_region(conn, "e1", fault, region.region, "average")
-    conn.commit()
-    before = everything(conn)
-    conn.commit()
-    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
-    assert state == "TG302", message
-    assert "average" in message and "tgsis version merge" in (hint or "")
-    assert everything(conn) == before
-    conn.rollback()
-    # the Python merge applies it
-    assert tgsis.merge_version(conn, "e1").objects
-
-
 def test_gocad_atoms_added_on_both_sides_and_one_on_a_renumbered_vertex_merge_as_in_python(
     conn: Conn, fault: int
 ) -> None:
@@ -575,9 +555,10 @@ def _validity_in_sql(
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_node (kind text, id bigint, region integer)")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_region (region integer, src smallint)")
     conn.execute(
-        "CREATE TEMPORARY TABLE tgsis_mw_v (id bigint, present boolean, x float8, y float8, z float8, val text, ref bigint)"
+        "CREATE TEMPORARY TABLE tgsis_mw_v (id bigint, present boolean, x float8, y float8, z float8, val text, ref bigint,"
+        " src smallint)"
     )
-    conn.execute("CREATE TEMPORARY TABLE tgsis_mw_c (id bigint, present boolean, v bigint[])")
+    conn.execute("CREATE TEMPORARY TABLE tgsis_mw_c (id bigint, present boolean, v bigint[], src smallint)")
     for state in (1, 2, 4):
         for v in _GRID:
             conn.execute("INSERT INTO tgsis_mr_v VALUES (%s, %s, %s, %s, %s, NULL, NULL)", (v, state, *_GRID[v]))

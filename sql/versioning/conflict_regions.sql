@@ -38,13 +38,33 @@ CREATE TABLE tgsis.conflict_regions (
     solved_by           name,
     times               float8      CHECK (times > '-Infinity' AND times < 'Infinity'),
     timem               float8      CHECK (timem > '-Infinity' AND timem < 'Infinity'),
+    -- the rows of an average or manual solution in a form SQL reads (the psql merge applies them:
+    -- tgsis.merge_mesh_by_region), beside solution_mesh; NULL for a solution recorded with its .npz only
+    solution_vertex_ids     bigint[],
+    solution_vertices       float8[],
+    solution_cell_ids       bigint[],
+    solution_cells          bigint[],
+    solution_vertex_columns text[],
+    solution_vertex_values  float8[],
+    solution_cell_columns   text[],
+    solution_cell_values    float8[],
     PRIMARY KEY (versionid, objectclass, objectkey, region),
     FOREIGN KEY (versionid, objectclass, objectkey) REFERENCES tgsis.conflicts (versionid, objectclass, objectkey)
         ON DELETE CASCADE,
     CONSTRAINT conflict_regions_automatic CHECK ((solution = 'automatic') = (NOT conflict)),
     CONSTRAINT conflict_regions_mesh CHECK ((solution_mesh IS NOT NULL) = (solution IN ('average', 'manual'))),
     CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL)),
-    CONSTRAINT conflict_regions_slice CHECK (timem IS NULL OR times IS NOT NULL)
+    CONSTRAINT conflict_regions_slice CHECK (timem IS NULL OR times IS NOT NULL),
+    -- the rows are all given or none, only with the .npz, each array of its rows' size
+    CONSTRAINT conflict_regions_rows CHECK (
+        num_nulls(solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells, solution_vertex_columns,
+                  solution_vertex_values, solution_cell_columns, solution_cell_values) IN (0, 8)
+        AND (solution_vertex_ids IS NULL OR (solution_mesh IS NOT NULL AND times IS NULL
+             AND cardinality(solution_vertices) = 3 * cardinality(solution_vertex_ids)
+             AND cardinality(solution_cells) % greatest(cardinality(solution_cell_ids), 1) = 0
+             AND cardinality(solution_vertex_values)
+                 = cardinality(solution_vertex_columns) * cardinality(solution_vertex_ids)
+             AND cardinality(solution_cell_values) = cardinality(solution_cell_columns) * cardinality(solution_cell_ids))))
 );
 
 -- Per-class rights (docs/security.md) hold here as at the model tables: a region holds vertex and cell
@@ -83,4 +103,12 @@ COMMENT ON COLUMN tgsis.conflict_regions.solution_mesh IS 'average and manual: t
 COMMENT ON COLUMN tgsis.conflict_regions.solved_at IS 'when the solution was recorded';
 COMMENT ON COLUMN tgsis.conflict_regions.solved_by IS 'role that recorded it';
 COMMENT ON COLUMN tgsis.conflict_regions.times IS 'the slice of a temporal surface the region lies in: the instant (tgsis.times, model 2) or the geometry instant (tgsis.timet, model 3); NULL for a model-1 mesh';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_vertex_ids IS 'average and manual (model 1, recorded by the Python client): the vertex ids of the solution''s rows (those of solution_mesh), ascending; NULL: the .npz only (the psql merge refuses it)';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_vertices IS 'their coordinates, x, y, z per vertex in the order of solution_vertex_ids';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_cell_ids IS 'the cell ids of the solution''s rows, ascending';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_cells IS 'their vertex ids, k per cell in the order of solution_cell_ids';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_vertex_columns IS 'the vertex properties of the solution (scalar ones; refid: the GOCAD atoms)';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_vertex_values IS 'their values, one per column per vertex (row after row), NaN for none';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_cell_columns IS 'the cell properties of the solution (scalar ones; part: the part runs)';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_cell_values IS 'their values, one per column per cell (row after row), NaN for none';
 COMMENT ON COLUMN tgsis.conflict_regions.timem IS 'model 3: the topology period (tgsis.timem) of the region''s geometry instant; NULL otherwise';

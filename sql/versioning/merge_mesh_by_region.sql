@@ -4,7 +4,8 @@
 -- regions are tgsis.mesh_merge_work's (the same as tgsis.merge3's); the merged
 -- state is, per region, the rows of the side that changed it (a region both
 -- changed alike: the parent's) or of the solution recorded for it
--- (tgsis.resolve_region: parent, child or base), the parent's elsewhere, with
+-- (tgsis.resolve_region: parent, child or base; average or manual: the rows
+-- recorded with it, tgsis.merge_solution_rows), the parent's elsewhere, with
 -- the version's new ids as merge3 renumbers them (tgsis_mr_vmap / _cmap). It is
 -- written into the VERSION's working revision by an id-keyed difference
 -- against the version's stored rows, as tgsis.db._state_write writes it: a
@@ -26,7 +27,8 @@
 -- could be recorded): the merge's refusal (TG302) names it.
 -- Refused (TG302, nothing written: the caller's transaction is aborted) with the
 -- hint naming the Python command that merges it: a region solved average or
--- manual (their meshes need numpy), stored regions that are not the
+-- manual recorded with its .npz only (no rows SQL reads), or whose rows SQL
+-- does not apply (tgsis.merge_solution_rows says which), stored regions that are not the
 -- regions of now, attributes changed on both sides, a merged mesh that is not
 -- valid where no state was invalid (merge3's checks: cells on removed vertices,
 -- duplicated cells, non-manifold edges or faces, vertices left without cells),
@@ -85,6 +87,8 @@ DECLARE
     v_pcsrc    smallint[];
     v_pcfrom   bigint[];
     v_agone    bigint[];
+    v_pv8      text[] := '{}';
+    v_pc8      text[] := '{}';
     v_parts    boolean := false;
     v_runs_old bigint[];
     v_runs_new bigint[];
@@ -174,12 +178,14 @@ BEGIN
       LEFT JOIN pg_temp.tgsis_mr_vx vx ON n.kind = 'v' AND vx.id = n.id
       LEFT JOIN pg_temp.tgsis_mr_cx cx ON n.kind = 'c' AND cx.id = n.id;
     CREATE TEMPORARY TABLE tgsis_mw_region ON COMMIT DROP AS
-    SELECT f.*, r.solution, r.region IS NOT NULL AS stored,
+    SELECT f.*, r.solution, r.region IS NOT NULL AS stored, r.solution_vertex_ids IS NOT NULL AS has_rows,
            -- the stored region is this one (tgsis.db.regions: same ids, all six arrays)
            coalesce(r.vertex_ids = f.vertex_ids AND r.cell_ids = f.cell_ids AND r.parent_vertex_ids = f.pv
                     AND r.parent_cell_ids = f.pc AND r.child_vertex_ids = f.cv AND r.child_cell_ids = f.cc, false) AS holds,
            CASE WHEN NOT f.conflict THEN CASE WHEN f.has_c AND NOT f.has_p THEN 4 ELSE 2 END
                 WHEN r.solution = 'parent' THEN 2 WHEN r.solution = 'child' THEN 4 WHEN r.solution = 'base' THEN 1
+                -- average, manual: the rows recorded with the solution (tgsis.merge_solution_rows)
+                WHEN r.solution IN ('average', 'manual') AND r.solution_vertex_ids IS NOT NULL THEN 8
            END::smallint AS src
       FROM (SELECT d.region, bool_or(d.p_changed) AND bool_or(d.c_changed) AND bool_or(d.differ) AS conflict,
                    bool_or(d.p_changed) AS has_p, bool_or(d.c_changed) AS has_c,
@@ -224,9 +230,9 @@ BEGIN
                   HINT = format('SELECT * FROM tgsis.find_conflicts(%L) finds them again; then solve them (tgsis.resolve_region)', p_version);
     END IF;
     SELECT string_agg(format('region %s solved %s', g.region, g.solution), ', ' ORDER BY g.region) INTO v_why
-      FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.solution IN ('average', 'manual');
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: % (its mesh is applied by the Python client)', v_refused, v_why
+      FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.solution IN ('average', 'manual') AND NOT g.has_rows;
+    IF v_why IS NOT NULL THEN  -- (recorded with the .npz only: before 0.3.0's rows, or by psql)
+        RAISE EXCEPTION '%: % with its mesh only (the Python client applies it)', v_refused, v_why
             USING ERRCODE = 'TG302', HINT = v_hint;
     END IF;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict AND g.src IS NULL) THEN
@@ -234,9 +240,8 @@ BEGIN
         RAISE EXCEPTION 'tgsis_mw_done';
     END IF;
     -- what the solutions discard, said before it is written (merge3's discards, as the Python client says them)
-    v_notes := ARRAY(
-        SELECT format('region %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
-                      g.region, g.solution, s.side, s.nv, s.nc, tgsis.merge_number_text(s.d))
+    CREATE TEMPORARY TABLE tgsis_mw_notes ON COMMIT DROP AS
+        SELECT g.region, s.o, g.solution, s.side, s.nv, s.nc, s.d
           FROM pg_temp.tgsis_mw_region g
           CROSS JOIN LATERAL (VALUES
               (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
@@ -245,8 +250,7 @@ BEGIN
               (2, 'child', CASE g.solution WHEN 'parent' THEN g.pcv WHEN 'base' THEN g.bcv END,
                            CASE g.solution WHEN 'parent' THEN g.pcc WHEN 'base' THEN g.bcc END,
                            CASE g.solution WHEN 'parent' THEN g.pcd WHEN 'base' THEN g.bcd END)) AS s (o, side, nv, nc, d)
-         WHERE g.conflict AND (s.nv > 0 OR s.nc > 0)
-         ORDER BY g.region, s.o);
+         WHERE g.conflict AND (s.nv > 0 OR s.nc > 0);
 
     -- the merged rows of the keys the states do not all hold alike (the others are the same everywhere):
     -- per id its region's source (a row the source lacks is no row), the parent's outside every region
@@ -262,6 +266,51 @@ BEGIN
       LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
                   WHERE n.kind = 'c') AS s ON s.id = k.id
       LEFT JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
+    -- the regions solved average or manual: their recorded rows (no row of theirs: removed), and the new ids they add
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
+        PERFORM tgsis.merge_solution_rows(p_geoid, v_version.versionid, v_refused, v_hint);
+        UPDATE pg_temp.tgsis_mw_v n SET present = false, x = NULL, y = NULL, z = NULL, val = NULL, ref = NULL WHERE n.src = 8;
+        UPDATE pg_temp.tgsis_mw_c n SET present = false, v = NULL, val = NULL, part = NULL WHERE n.src = 8;
+        DELETE FROM pg_temp.tgsis_mw_v n USING pg_temp.tgsis_mw_sv s WHERE s.id = n.id;
+        DELETE FROM pg_temp.tgsis_mw_c n USING pg_temp.tgsis_mw_sc s WHERE s.id = n.id;
+        INSERT INTO pg_temp.tgsis_mw_v (id, src, present, x, y, z, val, ref)
+        SELECT s.id, 8, true, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
+        INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
+        SELECT s.id, 8, NOT s.gone, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
+        -- what they discard of each side (merge3's _discards): the side's changed rows the merged rows do not hold
+        -- as the side does (coordinates bit for bit, values; a cell as an oriented cell), the largest distance
+        INSERT INTO pg_temp.tgsis_mw_notes
+        SELECT g.region, s.o, g.solution, s.side,
+               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
+                  LEFT JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
+                  LEFT JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
+                 WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                   AND NOT coalesce(float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
+                                    AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
+                                    AND a.ref IS NOT DISTINCT FROM m.ref, a.id IS NULL AND m.id IS NULL)),
+               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
+                  LEFT JOIN pg_temp.tgsis_mr_c a ON a.id = n.id AND a.st = s.st
+                  LEFT JOIN pg_temp.tgsis_mw_c m ON m.id = n.id AND m.present
+                 WHERE n.region = g.region AND n.kind = 'c' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                   AND NOT coalesce(tgsis.oriented_cell_key(a.v) = tgsis.oriented_cell_key(m.v)
+                                    AND a.val IS NOT DISTINCT FROM m.val AND a.part IS NOT DISTINCT FROM m.part,
+                                    a.id IS NULL AND m.id IS NULL)),
+               coalesce((SELECT max(sqrt((a.x - m.x) * (a.x - m.x) + (a.y - m.y) * (a.y - m.y) + (a.z - m.z) * (a.z - m.z)))
+                           FROM pg_temp.tgsis_mw_node n
+                           JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
+                           JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
+                          WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                            AND NOT (float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
+                                     AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
+                                     AND a.ref IS NOT DISTINCT FROM m.ref)), 0)
+          FROM pg_temp.tgsis_mw_region g
+         CROSS JOIN (VALUES (1, 'parent', 2::smallint), (2, 'child', 4::smallint)) AS s (o, side, st)
+         WHERE g.conflict AND g.src = 8;
+        DELETE FROM pg_temp.tgsis_mw_notes t WHERE t.nv = 0 AND t.nc = 0;
+    END IF;
+    v_notes := ARRAY(SELECT format('region %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
+                                   t.region, t.solution, t.side, t.nv, t.nc, tgsis.merge_number_text(t.d))
+                       FROM pg_temp.tgsis_mw_notes t ORDER BY t.region, t.o);
     -- the version's rows as stored (its own numbering: the renumbering undone)
     CREATE TEMPORARY TABLE tgsis_mw_vold ON COMMIT DROP AS
     SELECT coalesce(p.old, m.id) AS id, m.x, m.y, m.z, m.val, coalesce(q.old, m.ref) AS ref
@@ -274,6 +323,10 @@ BEGIN
                    LEFT JOIN pg_temp.tgsis_mr_vmap q ON q.new = u.x ORDER BY u.o) AS v, m.val
       FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id
      WHERE m.st = 4;
+    IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sc') IS NOT NULL THEN  -- margin cells a solution rewrites: the base's
+        INSERT INTO pg_temp.tgsis_mw_cold (id, v, val)
+        SELECT s.id, s.bv, s.bval FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based;
+    END IF;
 
     PERFORM tgsis.merge_mesh_validity(v_name, v_k, v_word, v_table, p_geoid, v_base, v_refused, v_hint);
 
@@ -313,6 +366,7 @@ BEGIN
                  UNION ALL SELECT 4, coalesce(p.old, m.id), m.part
                              FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id WHERE m.st = 4
                  UNION ALL SELECT 8, k.id, k.part FROM kept k
+                            WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = k.id)
                  UNION ALL SELECT 8, n.id, n.part FROM pg_temp.tgsis_mw_c n WHERE n.present),
              breaks AS (
                  SELECT s.st, s.id, s.part,
@@ -351,8 +405,14 @@ BEGIN
                coalesce(array_agg(CASE WHEN n.src = 4 THEN coalesce(p.old, n.id) ELSE n.id END ORDER BY n.id), '{}')
           INTO v_pvid, v_pvsrc, v_pvfrom
           FROM pg_temp.tgsis_mw_v n LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = n.id
-         WHERE n.present AND n.val <> v_vnull
+         WHERE n.present AND n.src <> 8 AND n.val <> v_vnull
            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val);
+        IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sv') IS NOT NULL THEN  -- (an average or manual solution)
+            v_pv8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_v n JOIN pg_temp.tgsis_mw_sv s ON s.id = n.id
+                            WHERE n.present AND n.src = 8 AND n.val <> v_vnull
+                              AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_vold o WHERE o.id = n.id AND o.val = n.val)
+                            ORDER BY n.id);
+        END IF;
     END IF;
     IF v_cnull IS NOT NULL THEN
         v_pcgone := ARRAY(SELECT o.id FROM pg_temp.tgsis_mw_cold o
@@ -362,8 +422,14 @@ BEGIN
                coalesce(array_agg(CASE WHEN n.src = 4 THEN coalesce(p.old, n.id) ELSE n.id END ORDER BY n.id), '{}')
           INTO v_pcid, v_pcsrc, v_pcfrom
           FROM pg_temp.tgsis_mw_c n LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = n.id
-         WHERE n.present AND n.val <> v_cnull
+         WHERE n.present AND n.src <> 8 AND n.val <> v_cnull
            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val);
+        IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sc') IS NOT NULL THEN  -- (an average or manual solution)
+            v_pc8 := ARRAY(SELECT ARRAY[n.id::text] || s.w FROM pg_temp.tgsis_mw_c n JOIN pg_temp.tgsis_mw_sc s ON s.id = n.id
+                            WHERE n.present AND n.src = 8 AND n.val <> v_cnull
+                              AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.val = n.val)
+                            ORDER BY n.id);
+        END IF;
     END IF;
     SELECT i.vpschema, i.vptable, i.cpschema, i.cptable INTO v_vps, v_vpn, v_cps, v_cpn FROM pg_temp.tgsis_mr_info i;
     RAISE EXCEPTION 'tgsis_mw_done';  -- rolls the work tables and their locks back
@@ -440,9 +506,9 @@ BEGIN
     SELECT workingrevision INTO v_rev FROM tgsis.versions WHERE versionid = v_version.versionid;
     PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
        FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'vrtx';
-    FOR v_t IN SELECT * FROM (VALUES ('VERTEX', v_vps, v_vpn, v_pvgone, v_pvid, v_pvsrc, v_pvfrom),
-                                     ('CELL', v_cps, v_cpn, v_pcgone, v_pcid, v_pcsrc, v_pcfrom))
-                                AS t (alignment, schemaname, tablename, gone, ids, src, src_ids)
+    FOR v_t IN SELECT * FROM (VALUES ('VERTEX', v_vps, v_vpn, v_pvgone, v_pvid, v_pvsrc, v_pvfrom, v_pv8),
+                                     ('CELL', v_cps, v_cpn, v_pcgone, v_pcid, v_pcsrc, v_pcfrom, v_pc8))
+                                AS t (alignment, schemaname, tablename, gone, ids, src, src_ids, given)
                 WHERE t.gone IS NOT NULL LOOP
         -- (statements on the class's storage through tgsis.storage_run: as its owner, never as tgsis's)
         SELECT * INTO v_pt FROM tgsis.versioned_tables t WHERE t.schemaname = v_t.schemaname AND t.tablename = v_t.tablename;
@@ -474,7 +540,8 @@ BEGIN
                     AND NOT (s.lastrevs && CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
                   ORDER BY f.id', v_vals, v_pt.schemaname, v_pt.tablename || '_ver'),
                 p_1 => ARRAY[p_geoid::text, v_cset::text], p_2 => v_base, p_3 => v_pset,
-                p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r);
+                p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r)
+                  || v_t.given;  -- the rows of average and manual solutions, their values as the solution gives them
         SELECT string_agg(v_rows[i][1], ', ' ORDER BY i) INTO v_why
           FROM generate_subscripts(v_rows, 1) AS i
          WHERE EXISTS (SELECT FROM generate_subscripts(v_rows, 2) AS j WHERE v_rows[i][j] IS NULL);
@@ -554,4 +621,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
-    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution) written into the version by id-keyed difference, the parent''s attribute edits (geometry and feature rows) brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+    'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution or the rows recorded with an average/manual one) written into the version by id-keyed difference, the parent''s attribute edits (geometry and feature rows) brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions with their .npz only, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';

@@ -33,7 +33,10 @@ DECLARE
 BEGIN
     -- the rows taken from the version or the base (a parent-only merge is the parent's valid state)
     CREATE TEMPORARY TABLE tgsis_mw_drop ON COMMIT DROP AS
-    SELECT n.kind, n.id FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region) WHERE g.src IN (1, 4);
+    SELECT n.kind, n.id FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region) WHERE g.src IN (1, 4, 8)
+    -- (the new ids of an average or manual solution: taken too)
+    UNION SELECT 'v', n.id FROM pg_temp.tgsis_mw_v n WHERE n.src = 8 AND n.present
+    UNION SELECT 'c', n.id FROM pg_temp.tgsis_mw_c n WHERE n.src = 8 AND n.present;
     IF NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_drop) THEN
         RETURN;
     END IF;
@@ -57,7 +60,9 @@ BEGIN
     CREATE TEMPORARY TABLE tgsis_mw_nearv ON COMMIT DROP AS
     SELECT u.id,
            CASE WHEN m.id IS NULL
-                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id) THEN 15 ELSE 0 END
+                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id) THEN 15
+                          WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8  -- a solution's new id
+                          ELSE 0 END
                 ELSE m.st + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
            END AS st
       FROM unnest(v_near) AS u(id)
@@ -78,6 +83,8 @@ BEGIN
                    -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)
                    tgsis.cells_on_vertices_sql(p_k, v_near, '$3'))
       USING p_geoid, p_base, v_near;
+    -- a cell no state changed that a solution rewrites or removes (a margin cell) is its row in the merged state
+    DELETE FROM pg_temp.tgsis_mw_local l WHERE l.st = 8 AND EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = l.id);
     INSERT INTO pg_temp.tgsis_mw_local
     SELECT m.st, m.id, m.v FROM pg_temp.tgsis_mr_c m WHERE m.v && v_near
     UNION ALL

@@ -11,7 +11,7 @@
 -- into the version, recorded 'manual'). One with a conflicting region without
 -- a solution is left to the merge's refusal (TG302, as before), its regions
 -- stored (tgsis.store_mesh_regions) for the refusal's hint; one SQL does not
--- merge (average or manual solutions) is
+-- merge (average or manual solutions recorded with their .npz only) is
 -- refused by name.
 -- Nothing when the Python client merges by region itself in this transaction
 -- (tgsis.region_detection = 'client': it set it). Afterwards

@@ -172,9 +172,15 @@ BEGIN
            parent_displacement = excluded.parent_displacement, child_displacement = excluded.child_displacement,
            times = excluded.times, timem = excluded.timem,
            -- a solution holds for the region it was given on: the same marks, the same ids
-           (solution, solution_mesh, solved_at, solved_by) = (
+           (solution, solution_mesh, solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells,
+            solution_vertex_columns, solution_vertex_values, solution_cell_columns, solution_cell_values,
+            solved_at, solved_by) = (
                SELECT CASE WHEN same THEN o.solution ELSE excluded.solution END,
                       CASE WHEN same THEN o.solution_mesh END,
+                      CASE WHEN same THEN o.solution_vertex_ids END, CASE WHEN same THEN o.solution_vertices END,
+                      CASE WHEN same THEN o.solution_cell_ids END, CASE WHEN same THEN o.solution_cells END,
+                      CASE WHEN same THEN o.solution_vertex_columns END, CASE WHEN same THEN o.solution_vertex_values END,
+                      CASE WHEN same THEN o.solution_cell_columns END, CASE WHEN same THEN o.solution_cell_values END,
                       CASE WHEN same THEN o.solved_at END,
                       CASE WHEN same THEN o.solved_by END
                  FROM (SELECT (o.childmark, o.parentmark) = (excluded.childmark, excluded.parentmark)

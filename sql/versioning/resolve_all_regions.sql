@@ -136,6 +136,10 @@ BEGIN
     WITH solved AS (
         UPDATE tgsis.conflict_regions r
            SET solution = v_solution, solution_mesh = NULL,
+               (solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells, solution_vertex_columns,
+                solution_vertex_values, solution_cell_columns, solution_cell_values)
+                 = (SELECT NULL::bigint[], NULL::float8[], NULL::bigint[], NULL::bigint[], NULL::text[], NULL::float8[],
+                           NULL::text[], NULL::float8[]),
                solved_at = CASE WHEN v_solution <> 'unsolved' THEN now() END,
                solved_by = CASE WHEN v_solution <> 'unsolved' THEN tgsis.calling_role() END
          WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key AND r.conflict

@@ -4,6 +4,12 @@
 -- rows of p_mesh (an .npz of a tgsis.merge3.MeshState; the Python client
 -- computes the average shape and says what a solution discards before it
 -- records it: tgsis.resolve_region in Python); unsolved takes a solution back.
+-- With the mesh, the Python client gives its rows in a form SQL reads
+-- (p_vertex_ids .. p_cell_values: ids, coordinates, cells' vertex ids, scalar
+-- property values by column, NaN for none), kept in the solution_* columns:
+-- the psql merge (tgsis.merge_mesh_by_region) applies them, and checks them
+-- as the Python merge checks the .npz's rows; a solution without them (the
+-- .npz only) is merged by the Python client only.
 -- The conflict's marks are recomputed first (tgsis.find_conflicts): a region
 -- found on a state either side changed since is stale and refused (TG307),
 -- as is a region that is no conflict (it merges by itself). The key is read
@@ -16,7 +22,11 @@
 -- (tgsis.store_mesh_regions), so that solving n conflicts one by one does
 -- not try every other unsolved mesh n times.
 CREATE FUNCTION tgsis.resolve_region(p_version text, p_objectclass text, p_objectkey text, p_region integer,
-                                     p_solution text, p_mesh bytea DEFAULT NULL)
+                                     p_solution text, p_mesh bytea DEFAULT NULL,
+                                     p_vertex_ids bigint[] DEFAULT NULL, p_vertices float8[] DEFAULT NULL,
+                                     p_cell_ids bigint[] DEFAULT NULL, p_cells bigint[] DEFAULT NULL,
+                                     p_vertex_columns text[] DEFAULT NULL, p_vertex_values float8[] DEFAULT NULL,
+                                     p_cell_columns text[] DEFAULT NULL, p_cell_values float8[] DEFAULT NULL)
 RETURNS tgsis.conflict_regions
 LANGUAGE plpgsql
 VOLATILE
@@ -56,6 +66,25 @@ BEGIN
         RAISE EXCEPTION 'the mesh of % is no .npz file (a zip archive): it starts with %', v_object,
                 encode(substr(p_mesh, 1, 8), 'hex')
             USING ERRCODE = 'TG100', HINT = 'give the bytes numpy.savez writes of a MeshState (tgsis.resolve_region in Python builds them)';
+    END IF;
+    IF num_nulls(p_vertex_ids, p_vertices, p_cell_ids, p_cells, p_vertex_columns, p_vertex_values, p_cell_columns,
+                 p_cell_values) NOT IN (0, 8) OR (p_vertex_ids IS NOT NULL AND p_mesh IS NULL) THEN
+        RAISE EXCEPTION 'the rows of the mesh of % are given in part: ids, coordinates, cells, columns and values go together, with the mesh',
+                v_object
+            USING ERRCODE = 'TG100', HINT = 'give all eight arrays after the mesh, or none';
+    END IF;
+    IF p_vertex_ids IS NOT NULL AND (
+           cardinality(p_vertices) <> 3 * cardinality(p_vertex_ids)
+           OR cardinality(p_cells) % greatest(cardinality(p_cell_ids), 1) <> 0
+           OR cardinality(p_vertex_values) <> cardinality(p_vertex_columns) * cardinality(p_vertex_ids)
+           OR cardinality(p_cell_values) <> cardinality(p_cell_columns) * cardinality(p_cell_ids)
+           OR array_position(p_vertex_ids, NULL) IS NOT NULL OR array_position(p_cell_ids, NULL) IS NOT NULL
+           OR array_position(p_cells, NULL) IS NOT NULL
+           OR EXISTS (SELECT FROM unnest(p_vertices) AS u(x) WHERE x IS NULL OR x IN ('NaN', 'Infinity', '-Infinity'))) THEN
+        RAISE EXCEPTION 'the rows of the mesh of % do not fit together: % vertex ids, % coordinates, % cell ids, % cell vertex ids, % vertex values of % columns, % cell values of % columns (or a NULL id, a non-finite coordinate)',
+                v_object, cardinality(p_vertex_ids), cardinality(p_vertices), cardinality(p_cell_ids), cardinality(p_cells),
+                cardinality(p_vertex_values), cardinality(p_vertex_columns), cardinality(p_cell_values), cardinality(p_cell_columns)
+            USING ERRCODE = 'TG100', HINT = 'three coordinates per vertex, k vertex ids per cell, one value per column per row';
     END IF;
     IF p_region IS NULL THEN
         RAISE EXCEPTION 'the region of object % of class % in version % is NULL', quote_literal(p_objectkey),
@@ -111,6 +140,10 @@ BEGIN
     UPDATE tgsis.conflict_regions
        SET solution = v_solution,
            solution_mesh = p_mesh,
+           (solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells, solution_vertex_columns,
+            solution_vertex_values, solution_cell_columns, solution_cell_values)
+             = (SELECT p_vertex_ids, p_vertices, p_cell_ids, p_cells, p_vertex_columns, p_vertex_values, p_cell_columns,
+                       p_cell_values),
            solved_at = CASE WHEN v_solution <> 'unsolved' THEN now() END,
            solved_by = CASE WHEN v_solution <> 'unsolved' THEN tgsis.calling_role() END
      WHERE versionid = v_id AND objectclass = p_objectclass AND objectkey = v_key AND region = p_region
@@ -119,5 +152,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.resolve_region(text, text, text, integer, text, bytea) IS
-    'record the solution of one conflicting region of a mesh: parent, child, base (that state''s rows), average or manual (with the region''s mesh), or unsolved; refused (TG307) for a region that is no conflict or was found on a state that changed since';
+COMMENT ON FUNCTION tgsis.resolve_region(text, text, text, integer, text, bytea, bigint[], float8[], bigint[], bigint[], text[], float8[], text[], float8[]) IS
+    'record the solution of one conflicting region of a mesh: parent, child, base (that state''s rows), average or manual (with the region''s mesh, and its rows in a form SQL reads for the psql merge), or unsolved; refused (TG307) for a region that is no conflict or was found on a state that changed since';

@@ -658,6 +658,9 @@ def resolve_region(
         writes: a vertex without an id, NaN or negative, is a new vertex). Its
         rows of the region's ids, and of ids no state has, are the region's;
         its other rows must be those of a state (base, parent or version).
+        An ``average`` or ``manual`` solution is recorded with its rows also
+        in a form SQL reads (``tgsis.conflict_regions.solution_*``), so that
+        a psql ``SELECT tgsis.merge_version(v)`` applies it as well.
     discard_other : bool
         When False, a solution that discards anything is refused.
 
@@ -737,7 +740,7 @@ def _resolve(
             hint="call again with discard_other=True to discard them, or choose another solution",
         )
     state = given if isinstance(given, MeshState) else None
-    row = _record(conn, version, key, index, solution, None if state is None else state_to_npz(state))
+    row = _record(conn, version, key, index, solution, state)
     return RegionResolution(row, discards, state)
 
 
@@ -828,7 +831,7 @@ def _resolve_sliced(
             hint="call again with discard_other=True to discard them, or choose another solution",
         )
     state = given if isinstance(given, MeshState) else None
-    row = _record(conn, version, key, index, solution, None if state is None else state_to_npz(state))
+    row = _record(conn, version, key, index, solution, state, sliced=True)
     return RegionResolution(row, discards, state)
 
 
@@ -871,10 +874,54 @@ def _require_regions(
     )
 
 
-def _record(conn: Conn, version: str, key: str, index: int, solution: str, mesh: bytes | None) -> ConflictRegion:
+def _sql_rows(state: MeshState) -> tuple[Any, ...] | None:
+    """A solution's rows as the eight arrays ``tgsis.resolve_region`` keeps for the psql merge, or None.
+
+    Ids, coordinates (x, y, z per vertex), cells (k vertex ids per cell) and
+    the scalar property values column after column per row (float64: exact for
+    every float and for integers up to 2**53). None when a value does not fit
+    (a vector property, an integer beyond 2**53): the psql merge then refuses
+    the solution and the Python merge applies it.
+    """
+    columns: list[list[str]] = []
+    values: list[list[float]] = []
+    for props, count in (
+        (state.vertex_properties, len(state.vertex_ids)),
+        (state.cell_properties, len(state.cell_ids)),
+    ):
+        names = sorted(props)
+        table = np.empty((count, len(names)), dtype=np.float64)
+        for j, prop in enumerate(names):
+            column = np.asarray(props[prop])
+            if column.ndim != 1 or column.dtype.kind not in "biuf":
+                return None
+            if column.dtype.kind in "iu" and len(column) and np.abs(column.astype(np.float64)).max() > 2.0**53:
+                return None
+            table[:, j] = column.astype(np.float64)
+        columns.append(names)
+        values.append(table.ravel().tolist())
+    return (
+        state.vertex_ids.tolist(),
+        np.asarray(state.vertices, dtype=np.float64).ravel().tolist(),
+        state.cell_ids.tolist(),
+        state.cells.ravel().tolist(),
+        columns[0],
+        values[0],
+        columns[1],
+        values[1],
+    )
+
+
+def _record(
+    conn: Conn, version: str, key: str, index: int, solution: str, state: MeshState | None, *, sliced: bool = False
+) -> ConflictRegion:
+    """Record a region's solution; an average or manual one with its .npz and (model 1) its rows for the psql merge."""
+    mesh = None if state is None else state_to_npz(state)
+    rows = None if state is None or sliced else _sql_rows(state)
     row = conn.execute(
-        f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s)",
-        (version, key, index, solution, mesh),
+        f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s,"
+        " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (version, key, index, solution, mesh, *(rows or (None,) * 8)),
     ).fetchone()
     assert row is not None
     return _region_of_row(row)
@@ -1078,6 +1125,8 @@ def _record_all(
     discards: tuple[RegionDiscard, ...],
     discard_other: bool,
     name: str,
+    *,
+    sliced: bool = False,
 ) -> ObjectResolution:
     """Record one solution for every given region, after saying what it discards (refused, nothing recorded,
     when it discards and ``discard_other`` is False)."""
@@ -1091,8 +1140,8 @@ def _record_all(
     rows = []
     for index in sorted(given):
         value = given[index]
-        mesh = state_to_npz(value) if isinstance(value, MeshState) else None
-        rows.append(_record(conn, version, key, index, solution, mesh))
+        state = value if isinstance(value, MeshState) else None
+        rows.append(_record(conn, version, key, index, solution, state, sliced=sliced))
     return ObjectResolution(tuple(rows), discards, totals)
 
 
@@ -1121,7 +1170,7 @@ def _resolve_all_sliced(
         else:
             given[r.index] = cast(Solution, solution)
     discards = _slice_solution(conn, version, key, merge, given, dict.fromkeys(given, solution))
-    return _record_all(conn, version, key, given, solution, discards, discard_other, name)
+    return _record_all(conn, version, key, given, solution, discards, discard_other, name, sliced=True)
 
 
 # --------------------------------------------------------------------------- average of a whole object
