@@ -992,3 +992,22 @@ def test_new_ids_that_would_need_renumbering_past_int64_are_refused_by_name() ->
     # was: OverflowError (Python int too large to convert to C long) out of numpy
     with pytest.raises(tgsis.InvalidMergeError, match=r"fault: .*vertex .*9223372036854775807.*no id"):
         three_way_merge(base, with_vertex(1.0), with_vertex(2.0))
+
+
+def test_two_manual_meshes_adding_one_new_id_differently_are_refused_not_one_silently_kept() -> None:
+    # two conflicting regions, each solved by a manual mesh that adds a vertex no state has, both with id 1000
+    # but at different places: the merged mesh cannot hold both, and neither may silently win
+    base, column = _small_grid(columns=12)
+    parent, child = base.copy(), base.copy()
+    parent.verts[0], child.verts[0] = (0.0, 0.0, 5.0), (0.0, 0.0, 6.0)
+    far = max(v for v, c in column.items() if c == 11)
+    parent.verts[far], child.verts[far] = (11.0, 1.0, 2.0), (11.0, 1.0, 3.0)
+    merge = three_way_merge(base.state(), parent.state(), child.state())
+    first, second = merge.conflicts
+    near_zero, near_far = parent.copy(), parent.copy()
+    near_zero.verts[1000], near_zero.vprop[1000] = (0.5, -1.0, 1.0), 0.0
+    near_zero.cells[2000], near_zero.cprop[2000] = (2, 0, 1000), 0.0
+    near_far.verts[1000], near_far.vprop[1000] = (10.5, 2.0, 1.0), 0.0
+    near_far.cells[2001], near_far.cprop[2001] = (far, far - 1, 1000), 0.0
+    with pytest.raises(tgsis.InvalidMergeError, match="two vertex rows the id 1000"):
+        apply_solutions(merge, {first.index: near_zero.state(), second.index: near_far.state()})
