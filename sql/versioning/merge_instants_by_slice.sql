@@ -31,7 +31,7 @@
 -- the version changed where a row no side changed differs in its bits
 -- between parent and version (-0 against 0, a cell's vertices rotated: merge3
 -- takes it from the side whose region holds it, which SQL does not compute),
--- per-instant feature properties to write. 42501 for a role that may not
+-- 42501 for a role that may not
 -- read the class or change it, TG002 for one that may not write in the
 -- version. extra_float_digits is pinned: values are compared as text, floats
 -- exactly.
@@ -103,7 +103,7 @@ BEGIN
                      ORDER BY 1);
 
     DROP TABLE IF EXISTS pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
-                         pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_pros;
+                         pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
     -- the tables of a slice: tab T the instants, v / c the vertices / triangles, vp / cp their property rows
     CREATE TEMPORARY TABLE tgsis_ms_spec ON COMMIT DROP AS
     SELECT s.tab, t AS vt, s.okey, s.tcol, s.idcol
@@ -289,6 +289,7 @@ BEGIN
                  (SELECT string_agg(format('v.%I::text', c), ', ') FROM unnest(v_pcols) AS c),
                  v_pros.schemaname, v_pros.tablename || '_ver'),
                p_1 => ARRAY[v_key, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
+        CREATE TEMPORARY TABLE tgsis_ms_prow (t float8, m text[], c text[]) ON COMMIT DROP;
         FOR v_attr IN
             SELECT k.t, b.vals AS b, p.vals AS p, c.vals AS c
               FROM (SELECT DISTINCT x.t FROM pg_temp.tgsis_ms_pros x) AS k
@@ -298,29 +299,22 @@ BEGIN
              ORDER BY k.t
         LOOP
             IF v_attr.p IS NOT DISTINCT FROM v_attr.c OR v_attr.c IS NOT DISTINCT FROM v_attr.b THEN
-                CONTINUE;  -- the parent's row: the version's unless the parent changed it
+                INSERT INTO pg_temp.tgsis_ms_prow VALUES (v_attr.t, v_attr.p, v_attr.c);  -- the parent's row
             ELSIF v_attr.p IS NOT DISTINCT FROM v_attr.b THEN
-                CONTINUE;  -- the version's row
+                INSERT INTO pg_temp.tgsis_ms_prow VALUES (v_attr.t, v_attr.c, v_attr.c);  -- the version's row
             ELSIF v_attr.p IS NULL OR v_attr.c IS NULL OR v_attr.b IS NULL THEN
                 RETURN NULL;  -- removed (added) on one side and set otherwise on the other: an object-level conflict
             ELSIF EXISTS (SELECT FROM generate_subscripts(v_attr.b, 1) AS i
                            WHERE v_attr.p[i] IS DISTINCT FROM v_attr.c[i] AND v_attr.c[i] IS DISTINCT FROM v_attr.b[i]
                              AND v_attr.p[i] IS DISTINCT FROM v_attr.b[i]) THEN
                 RETURN NULL;  -- a column changed on both sides to other values: an object-level conflict
+            ELSE  -- column by column: the side that changed it
+                INSERT INTO pg_temp.tgsis_ms_prow
+                VALUES (v_attr.t, ARRAY(SELECT CASE WHEN v_attr.c[i] IS NOT DISTINCT FROM v_attr.b[i] THEN v_attr.p[i]
+                                                    ELSE v_attr.c[i] END
+                                          FROM generate_subscripts(v_attr.b, 1) AS i ORDER BY i), v_attr.c);
             END IF;
         END LOOP;
-        -- the rows the merge would change in the version (the parent's alone changed, or the parent's row kept)
-        SELECT string_agg(k.t::text, ', ' ORDER BY k.t) INTO v_why
-          FROM (SELECT DISTINCT x.t FROM pg_temp.tgsis_ms_pros x) AS k
-          LEFT JOIN pg_temp.tgsis_ms_pros b ON b.st = 1 AND b.t = k.t
-          LEFT JOIN pg_temp.tgsis_ms_pros p ON p.st = 2 AND p.t = k.t
-          LEFT JOIN pg_temp.tgsis_ms_pros c ON c.st = 4 AND c.t = k.t
-         WHERE p.vals IS DISTINCT FROM c.vals AND c.vals IS NOT DISTINCT FROM b.vals;
-        IF v_why IS NOT NULL THEN
-            RAISE EXCEPTION '%: the parent''s per-instant feature properties at instants % would be written into the version',
-                    v_refused, v_why
-                USING ERRCODE = 'TG302', HINT = v_hint;
-        END IF;
     END IF;
 
     -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
@@ -372,6 +366,55 @@ BEGIN
     PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
        FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'geometry';
     PERFORM tgsis.object_write_lock('feature', ARRAY[v_key]);
+    -- the per-instant feature property rows first (as _write_instant_rows: a DELETE, INSERT or UPDATE of the
+    -- class's view per instant, which its trigger writes: a row of the working revision in place, any other
+    -- closed there and written anew)
+    IF pg_catalog.to_regclass('pg_temp.tgsis_ms_prow') IS NOT NULL THEN
+        SELECT string_agg(format('%I', c), ', ' ORDER BY o),
+               string_agg(format('$1[%s]::%s', o + 2, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
+                                                       WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
+                                                         AND a.attname = c)), ', ' ORDER BY o),
+               string_agg(format('%I = $1[%s]::%s', c, o + 2, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
+                                                               WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
+                                                                 AND a.attname = c)), ', ' ORDER BY o)
+          INTO v_cols, v_casts, v_why
+          FROM unnest(v_pcols) WITH ORDINALITY AS u(c, o);
+        FOR v_attr IN SELECT * FROM pg_temp.tgsis_ms_prow r WHERE r.m IS DISTINCT FROM r.c ORDER BY r.t LOOP
+            v_count := 0;
+            IF v_attr.m IS NOT NULL AND v_attr.c IS NOT NULL THEN  -- in place in the working revision
+                SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                    'UPDATE %I.%I v SET %s WHERE v._geoid = $1[1]::bigint AND v._times = $1[2]::float8
+                        AND v.revision = $4 AND NOT (v.lastrevs && $2)',
+                    v_pros.schemaname, v_pros.tablename || '_ver', v_why),
+                    p_1 => ARRAY[v_key, v_attr.t::text] || v_attr.m, p_2 => v_cset, p_4 => v_rev) AS r;
+            END IF;
+            IF v_count = 0 AND v_attr.c IS NOT NULL THEN  -- the version's row goes (closed, or gone if its revision's)
+                SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                    'DELETE FROM %I.%I v WHERE v._geoid = $1[1]::bigint AND v._times = $1[2]::float8 AND v.revision = $4',
+                    v_pros.schemaname, v_pros.tablename || '_ver'),
+                    p_1 => ARRAY[v_key, v_attr.t::text], p_4 => v_rev) AS r;
+                IF v_count = 0 THEN
+                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                        'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
+                          WHERE v._geoid = $1[1]::bigint AND v._times = $1[2]::float8 AND v.revision = ANY ($2)
+                            AND NOT (v.lastrevs && $2)',
+                        v_pros.schemaname, v_pros.tablename || '_ver'),
+                        p_1 => ARRAY[v_key, v_attr.t::text], p_2 => v_cset, p_4 => v_rev) AS r;
+                    PERFORM tgsis.note_changed_objects(v_pros.schemaname, v_pros.tablename, v_rev, ARRAY[v_key]);
+                END IF;
+                IF v_attr.m IS NOT NULL THEN
+                    v_count := 0;  -- (an UPDATE of the view: one row)
+                END IF;
+            END IF;
+            IF v_attr.m IS NOT NULL AND v_count = 0 THEN
+                SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                    'INSERT INTO %I.%I (_geoid, _times, %s, revision) SELECT $1[1]::bigint, $1[2]::float8, %s, $4',
+                    v_pros.schemaname, v_pros.tablename || '_ver', v_cols, v_casts),
+                    p_1 => ARRAY[v_key, v_attr.t::text] || v_attr.m, p_4 => v_rev) AS r;
+            END IF;
+            v_written := v_written + v_count;
+        END LOOP;
+    END IF;
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_ms_spec s
                    ORDER BY array_position(ARRAY['T', 'v', 'c', 'vp', 'cp'], s.tab) LOOP
         -- (old: the version's rows; new: the merged; a property row compared as the state holds it, NaN if none)
@@ -475,7 +518,7 @@ BEGIN
             set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
     DROP TABLE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
                pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_new;
-    DROP TABLE IF EXISTS pg_temp.tgsis_ms_pros;
+    DROP TABLE IF EXISTS pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
     PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
     RETURN v_written;
 END
