@@ -21,7 +21,7 @@ import pytest
 
 import tgsis
 from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, TIMES, make_series, move
-from tests.test_sql_merge_write import assert_same_merge, both_merges, everything
+from tests.test_sql_merge_write import _outcome, assert_same_merge, both_merges, everything
 
 Conn = psycopg.Connection[Any]
 
@@ -164,3 +164,178 @@ def test_what_psql_does_not_merge_instant_by_instant_is_refused_and_nothing_is_w
         assert theirs[:2] == ("refused", "TG302"), theirs
     assert everything(conn) == before
     conn.commit()
+
+
+# ---------------------------------------------------------------------------- hostile cases
+
+
+def _one_side_each(conn: Conn, geoid: int) -> None:
+    """The version moves instant 1 and adds 4, the parent moves 3 and changes a per-instant property of 2."""
+    for version, step in (("e1", "move 1 north"), ("e1", "add 4"), ("DEFAULT", "move 3 south"), ("DEFAULT", "throw 2 25")):
+        _step(conn, version, step, geoid)
+
+
+def test_session_settings_do_not_change_what_psql_writes(conn: Conn, series: int) -> None:
+    _one_side_each(conn, series)
+    theirs, _ = both_merges(conn, "e1")
+    conn.execute("SET extra_float_digits = -15")
+    conn.execute("SET DateStyle = 'SQL, DMY'")
+    conn.execute("SET TimeZone = 'Pacific/Chatham'")
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert theirs[0] == mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
+def test_a_role_without_rights_is_refused_as_in_python_and_nothing_is_written(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    _one_side_each(conn, series)
+    with login_roles(db_dsn, {"ed": "tgsis_editor", "rita": "tgsis_reader", "mo": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        tgsis.grant_version(conn, "e1", "delete", made.name("mo"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("mo"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.horizons FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        for role, action, remove in (
+            ("rita", "merge", False),
+            ("ed", "merge", False),
+            ("ed", "refresh", False),
+            ("mo", "merge", True),  # may delete e1, not write the merged surface in it
+        ):
+            session = made.connect(role)
+            with pytest.raises(tgsis.MissingPrivilegeError) as python:
+                if action == "merge":
+                    tgsis.merge_version(session, "e1", remove=remove)
+                else:
+                    tgsis.refresh_version(session, "e1")
+            session.rollback()
+            query = f"SELECT tgsis.{action}_version('e1'{', true' if remove else ''})"
+            with pytest.raises(psycopg.Error) as caught:
+                session.execute(query)
+            session.rollback()
+            assert caught.value.sqlstate == python.value.sqlstate, (role, query, str(caught.value))
+            assert caught.value.sqlstate in ("42501", "TG002"), (role, query, str(caught.value))
+            assert everything(conn) == before
+            conn.commit()
+
+
+def test_two_psql_sessions_merging_and_refreshing_at_once(conn: Conn, series: int, db_dsn: str) -> None:
+    import time
+
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    _one_side_each(conn, series)
+    theirs, _ = both_merges(conn, "e1")
+    holder = connect(db_dsn, "holder")
+    holder.execute("SELECT tgsis.lock_for_region_merge('e1', 'refresh')")  # both below wait for it
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    wait_until_blocked(conn, merger.pid, holder.info.backend_pid)
+    refresher = Background(db_dsn, "refresher", lambda c: c.execute("SELECT tgsis.refresh_version('e1')"))
+    time.sleep(0.3)
+    holder.rollback()
+    holder.close()
+    merger.finish()
+    refresher.finish()
+    # the merge wrote what the Python merge writes; the refresh after it found nothing to bring
+    after = everything(conn)
+    conn.commit()
+    for table in ("tgsis.times_ver", "tgsis.times_vrtx_ver", "tgsis.times_trgl_ver", "public.horizons_pros_ver",
+                  "public.horizons_cellpros_ver"):
+        assert after[table] == theirs[2][table], table
+
+
+def test_a_writer_of_an_instant_in_the_version_during_a_psql_merge(conn: Conn, series: int, db_dsn: str) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    _one_side_each(conn, series)
+    writer = connect(db_dsn, "writer")
+    tgsis.goto_version(writer, "e1")
+    writer.execute("UPDATE tgsis.times_vrtx SET z = z + 1.5 WHERE geoid = %s AND times = 2 AND vrtxid = 70", (series,))
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    wait_until_blocked(conn, merger.pid, writer.info.backend_pid)
+    writer.commit()
+    writer.close()
+    merger.finish()
+    # the writer's edit (instant 2, which the parent's per-instant property edit also touched) came along
+    z = {}
+    for version in ("DEFAULT", "e1"):
+        with tgsis.in_version(conn, version):
+            z[version] = conn.execute(
+                "SELECT z FROM tgsis.times_vrtx WHERE geoid = %s AND times = 2 AND vrtxid = 70", (series,)
+            ).fetchone()
+            z[version + " throw"] = conn.execute(
+                "SELECT throw FROM horizons_pros WHERE _geoid = %s AND _times = 2", (series,)
+            ).fetchone()
+        conn.commit()
+    assert z["DEFAULT"] == z["e1"] and z["DEFAULT throw"] == z["e1 throw"] == (25.0,)
+    from tests.test_merge_instants import _shape
+
+    assert z["DEFAULT"] == (float(_shape(1)[70, 2] + 1.5),)
+
+
+def test_a_version_with_children_and_a_refresh_after_the_merge(conn: Conn, series: int) -> None:
+    _one_side_each(conn, series)
+    tgsis.create_version(conn, "e2", "e1")  # a child of e1, not merged
+    conn.commit()
+    assert_same_merge(conn, "e1")
+    conn.execute("SELECT tgsis.merge_version('e1')")  # the psql merge, kept
+    conn.commit()
+    for version, step in (("e1", "move 2 south"), ("DEFAULT", "delete 4"), ("DEFAULT", "move 1 south")):
+        _step(conn, version, step, series)
+    assert_same_merge(conn, "e1", "refresh")
+    theirs, mine = both_merges(conn, "e1", "merge", True)  # removing a version with children: refused alike
+    assert theirs[:2] == mine[:2] == ("refused", "TG202"), (theirs, mine)
+
+
+def test_conflicts_of_instants_kept_by_pg_dump_and_restore_then_merged_in_psql(
+    conn: Conn, series: int, db_dsn: str, pg: Any, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    _one_side_each(conn, series)
+    [conflict] = tgsis.find_conflicts(conn, "e1")  # the slices' regions stored by the Python client
+    assert [(r.times, r.changed_by) for r in conflict.regions] == [(1.0, "child"), (3.0, "parent")]
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    for fmt in ("plain", "custom"):
+        with _restored(pg, _bindir_of(pg), db_dsn, fmt, tmp_path) as dsn, psycopg.connect(dsn) as restored:
+            seq = restored.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
+            mine = _outcome(restored, lambda: int(restored.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+            assert seq is not None
+            assert mine[0] == "done", mine
+            assert mine[1] == theirs[1]
+            for table in theirs[2]:
+                assert mine[2][table] == theirs[2][table], (fmt, table)
+
+
+@pytest.mark.parametrize("name", ["north edit", "o'brien \"x\""])
+def test_the_refusal_of_an_instant_both_sides_changed_names_the_commands_with_the_name_quoted(
+    conn: Conn, series: int, name: str
+) -> None:
+    import shlex
+
+    tgsis.create_version(conn, name)
+    conn.commit()
+    move(conn, name, series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    with pytest.raises(psycopg.Error) as caught:
+        conn.execute("SELECT tgsis.merge_version(%s)", (name,))
+    conn.rollback()
+    hint = caught.value.diag.message_hint or ""
+    command = hint.split("`")[1]
+    assert shlex.split(command) == ["tgsis", "version", "merge", name], hint
+    call = hint.split("tgsis.merge_version(conn, ")[1].split(") in Python")[0]
+    import ast
+
+    assert ast.literal_eval(call) == name, hint

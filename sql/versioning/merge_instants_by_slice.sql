@@ -53,10 +53,10 @@ DECLARE
     v_cset     integer[];
     v_refused  text := format('%s of version %s refused: feature %s does not merge instant by instant in SQL',
                               p_action, quote_literal(p_version), p_geoid);
-    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges it instant by instant '
+    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %s) in Python merges it instant by instant '
                               '(its regions); else solve it as a whole object: '
                               'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
-                              p_action, tgsis.shell_quote(p_version), p_action, p_version, p_version, p_geoid::text);
+                              p_action, tgsis.shell_quote(p_version), p_action, pg_catalog.to_json(p_version)::text, p_version, p_geoid::text);
     v_spec     record;
     v_t        tgsis.versioned_tables;
     v_vals     text;
