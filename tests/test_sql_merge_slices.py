@@ -13,9 +13,11 @@ differently (its regions) is still refused from psql (TG302) naming
 
 from __future__ import annotations
 
+import ast
+import shlex
+import time
 from typing import Any
 
-import numpy as np
 import psycopg
 import pytest
 
@@ -108,16 +110,29 @@ def _step(conn: Conn, version: str, step: str, geoid: int) -> None:
     elif what == "delete":
         _delete_instant(conn, version, geoid, float(args[0]))
     elif what == "throw":
-        _sql(conn, version, "UPDATE horizons_pros SET throw = %s WHERE _geoid = %s AND _times = %s",
-             (float(args[1]), geoid, float(args[0])))
+        _sql(
+            conn,
+            version,
+            "UPDATE horizons_pros SET throw = %s WHERE _geoid = %s AND _times = %s",
+            (float(args[1]), geoid, float(args[0])),
+        )
     elif what == "cells":  # a triangle removed, one added on existing vertices, property values changed
         t = float(args[0])
         _sql(conn, version, "DELETE FROM tgsis.times_trgl WHERE geoid = %s AND times = %s AND trglid = 7", (geoid, t))
-        _sql(conn, version, "INSERT INTO tgsis.times_trgl (geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3)"
-             " SELECT geoid, times, 100000, vrtxid1, vrtxid3, vrtxid2 FROM tgsis.times_trgl"
-             " WHERE geoid = %s AND times = %s AND trglid = 40", (geoid, t))
-        _sql(conn, version, "UPDATE horizons_cellpros SET porosity = -0.0 WHERE _geoid = %s AND _times = %s"
-             " AND _idx BETWEEN 30 AND 33", (geoid, t))
+        _sql(
+            conn,
+            version,
+            "INSERT INTO tgsis.times_trgl (geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3)"
+            " SELECT geoid, times, 100000, vrtxid1, vrtxid3, vrtxid2 FROM tgsis.times_trgl"
+            " WHERE geoid = %s AND times = %s AND trglid = 40",
+            (geoid, t),
+        )
+        _sql(
+            conn,
+            version,
+            "UPDATE horizons_cellpros SET porosity = -0.0 WHERE _geoid = %s AND _times = %s AND _idx BETWEEN 30 AND 33",
+            (geoid, t),
+        )
         _sql(conn, version, "DELETE FROM horizons_cellpros WHERE _geoid = %s AND _times = %s AND _idx = 50", (geoid, t))
     else:
         raise AssertionError(step)
@@ -139,7 +154,10 @@ REFUSED: dict[str, tuple[list[tuple[str, str]], str]] = {
         [("e1", "delete 2"), ("DEFAULT", "move 2 south")],
         "TG302",
     ),
-    "an instant added on both sides differently": ([("e1", "add 4"), ("DEFAULT", "add 4"), ("DEFAULT", "move 4 south")], "TG302"),
+    "an instant added on both sides differently": (
+        [("e1", "add 4"), ("DEFAULT", "add 4"), ("DEFAULT", "move 4 south")],
+        "TG302",
+    ),
     "a per-instant property changed on both sides": ([("e1", "throw 2 21"), ("DEFAULT", "throw 2 22")], "TG302"),
     "an instant moved on both sides differently": ([("e1", "move 2 north"), ("DEFAULT", "move 2 south")], "python"),
 }
@@ -171,7 +189,12 @@ def test_what_psql_does_not_merge_instant_by_instant_is_refused_and_nothing_is_w
 
 def _one_side_each(conn: Conn, geoid: int) -> None:
     """The version moves instant 1 and adds 4, the parent moves 3 and changes a per-instant property of 2."""
-    for version, step in (("e1", "move 1 north"), ("e1", "add 4"), ("DEFAULT", "move 3 south"), ("DEFAULT", "throw 2 25")):
+    for version, step in (
+        ("e1", "move 1 north"),
+        ("e1", "add 4"),
+        ("DEFAULT", "move 3 south"),
+        ("DEFAULT", "throw 2 25"),
+    ):
         _step(conn, version, step, geoid)
 
 
@@ -231,8 +254,6 @@ def test_a_role_without_rights_is_refused_as_in_python_and_nothing_is_written(
 
 
 def test_two_psql_sessions_merging_and_refreshing_at_once(conn: Conn, series: int, db_dsn: str) -> None:
-    import time
-
     from tests.sessions import Background, connect, wait_until_blocked
 
     _one_side_each(conn, series)
@@ -250,8 +271,13 @@ def test_two_psql_sessions_merging_and_refreshing_at_once(conn: Conn, series: in
     # the merge wrote what the Python merge writes; the refresh after it found nothing to bring
     after = everything(conn)
     conn.commit()
-    for table in ("tgsis.times_ver", "tgsis.times_vrtx_ver", "tgsis.times_trgl_ver", "public.horizons_pros_ver",
-                  "public.horizons_cellpros_ver"):
+    for table in (
+        "tgsis.times_ver",
+        "tgsis.times_vrtx_ver",
+        "tgsis.times_trgl_ver",
+        "public.horizons_pros_ver",
+        "public.horizons_cellpros_ver",
+    ):
         assert after[table] == theirs[2][table], table
 
 
@@ -310,21 +336,17 @@ def test_conflicts_of_instants_kept_by_pg_dump_and_restore_then_merged_in_psql(
     theirs, _ = both_merges(conn, "e1")
     for fmt in ("plain", "custom"):
         with _restored(pg, _bindir_of(pg), db_dsn, fmt, tmp_path) as dsn, psycopg.connect(dsn) as restored:
-            seq = restored.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
             mine = _outcome(restored, lambda: int(restored.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
-            assert seq is not None
             assert mine[0] == "done", mine
             assert mine[1] == theirs[1]
             for table in theirs[2]:
                 assert mine[2][table] == theirs[2][table], (fmt, table)
 
 
-@pytest.mark.parametrize("name", ["north edit", "o'brien \"x\""])
+@pytest.mark.parametrize("name", ["north edit", 'o\'brien "x"'])
 def test_the_refusal_of_an_instant_both_sides_changed_names_the_commands_with_the_name_quoted(
     conn: Conn, series: int, name: str
 ) -> None:
-    import shlex
-
     tgsis.create_version(conn, name)
     conn.commit()
     move(conn, name, series, 2.0, NORTH, CHILD_SHIFT)
@@ -336,6 +358,4 @@ def test_the_refusal_of_an_instant_both_sides_changed_names_the_commands_with_th
     command = hint.split("`")[1]
     assert shlex.split(command) == ["tgsis", "version", "merge", name], hint
     call = hint.split("tgsis.merge_version(conn, ")[1].split(") in Python")[0]
-    import ast
-
     assert ast.literal_eval(call) == name, hint

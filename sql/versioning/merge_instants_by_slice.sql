@@ -102,8 +102,12 @@ BEGIN
                      EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_cset)
                      ORDER BY 1);
 
-    DROP TABLE IF EXISTS pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
-                         pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
+    -- the work tables an earlier call left (it returned early): dropped without a NOTICE to the psql user
+    FOR v_why IN SELECT u.n FROM unnest(ARRAY['tgsis_ms_spec', 'tgsis_ms_key', 'tgsis_ms_row', 'tgsis_ms_el', 'tgsis_ms_slice',
+                                               'tgsis_ms_new', 'tgsis_ms_pros', 'tgsis_ms_prow']) AS u(n)
+                  WHERE pg_catalog.to_regclass('pg_temp.' || u.n) IS NOT NULL LOOP
+        EXECUTE format('DROP TABLE pg_temp.%I', v_why);
+    END LOOP;
     -- the tables of a slice: tab T the instants, v / c the vertices / triangles, vp / cp their property rows
     CREATE TEMPORARY TABLE tgsis_ms_spec ON COMMIT DROP AS
     SELECT s.tab, t AS vt, s.okey, s.tcol, s.idcol
@@ -131,11 +135,26 @@ BEGIN
                  (v_spec.vt).tablename || '_ver', v_spec.okey),
                p_1 => ARRAY[v_key], p_2 => v_since) AS r;
     END LOOP;
+    -- an instant added or removed somewhere (its tgsis.times row changed): all its rows, also those no set sees
+    -- otherwise (a psql DELETE of the instant's row alone leaves them; the Python writer closes them with it)
+    FOR v_spec IN SELECT * FROM pg_temp.tgsis_ms_spec s WHERE s.tab <> 'T' LOOP
+        INSERT INTO pg_temp.tgsis_ms_key
+        SELECT v_spec.tab, r[1]::float8, r[2]::bigint
+          FROM tgsis.storage_run(v_spec.vt, false, format(
+                 'SELECT DISTINCT ARRAY[v.%1$I::text, v.%2$I::text] FROM %3$I.%4$I v
+                   WHERE v.%5$I = $1[1]::bigint AND v.%1$I = ANY ($1[2]::float8[])',
+                 v_spec.tcol, v_spec.idcol, (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
+               p_1 => ARRAY[v_key, ARRAY(SELECT k.t FROM pg_temp.tgsis_ms_key k WHERE k.tab = 'T')::text]) AS r;
+    END LOOP;
     -- a vertex's (a cell's) rows go together: its geometry row and its property row
     INSERT INTO pg_temp.tgsis_ms_key
     SELECT DISTINCT CASE k.tab WHEN 'v' THEN 'vp' WHEN 'vp' THEN 'v' WHEN 'c' THEN 'cp' ELSE 'c' END, k.t, k.id
       FROM pg_temp.tgsis_ms_key k WHERE k.tab <> 'T';
     INSERT INTO pg_temp.tgsis_ms_key SELECT DISTINCT 'T', k.t, 0 FROM pg_temp.tgsis_ms_key k;
+    CREATE TEMPORARY TABLE tgsis_ms_keys ON COMMIT DROP AS SELECT DISTINCT * FROM pg_temp.tgsis_ms_key;
+    TRUNCATE pg_temp.tgsis_ms_key;
+    INSERT INTO pg_temp.tgsis_ms_key SELECT * FROM pg_temp.tgsis_ms_keys;
+    DROP TABLE pg_temp.tgsis_ms_keys;
 
     -- 2. their rows as each state sees them (st 1 base, 2 parent, 4 version): the values as text (vals, for
     -- writing; bits: exact, NULL as NaN), eq as tgsis._merge_slices.same_state compares them (floats -0 as 0),
