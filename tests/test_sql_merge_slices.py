@@ -18,6 +18,7 @@ import shlex
 import time
 from typing import Any
 
+import numpy as np
 import psycopg
 import pytest
 
@@ -359,3 +360,46 @@ def test_the_refusal_of_an_instant_both_sides_changed_names_the_commands_with_th
     assert shlex.split(command) == ["tgsis", "version", "merge", name], hint
     call = hint.split("tgsis.merge_version(conn, ")[1].split(") in Python")[0]
     assert ast.literal_eval(call) == name, hint
+
+
+def _second_series(conn: Conn) -> int:
+    """Another surface at TIMES in the class of make_series, in DEFAULT and (through the version's base) in e1."""
+    from tests.test_merge_instants import _porosity, _shape
+    from tgsis.temporal import SurfaceSeries
+
+    cells = _new_surface(0).cells
+    surfaces = [tgsis.Surface(_shape(i) + 100.0, cells, vertex_properties={"porosity": _porosity()}) for i in range(3)]
+    series = SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": np.asarray([1.0, 2.0, 3.0])})
+    return int(tgsis.insert_feature(conn, "horizons", series))
+
+
+@pytest.mark.parametrize("first", ["merges", "conflicts"])
+def test_two_surfaces_at_instants_in_one_psql_merge(conn: Conn, first: str) -> None:
+    """Each merged by its own call in one transaction: the work tables of the one before (left when it found an
+    object-level conflict) are no obstacle; a conflict of one refuses the whole merge, as in Python."""
+    tgsis.create_feature_class(
+        conn,
+        "horizons",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "double precision")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    a = _second_series(conn)
+    b = _second_series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    if first == "conflicts":  # an instant removed in the version and moved in the parent: object-level
+        _step(conn, "e1", "delete 2", a)
+        _step(conn, "DEFAULT", "move 2 south", a)
+    else:
+        _step(conn, "e1", "move 1 north", a)
+        _step(conn, "DEFAULT", "move 2 south", a)
+    _step(conn, "e1", "add 4", b)
+    _step(conn, "DEFAULT", "move 3 south", b)
+    if first == "merges":
+        assert_same_merge(conn, "e1")
+    else:
+        theirs, mine = both_merges(conn, "e1")
+        assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
