@@ -403,3 +403,28 @@ def test_two_surfaces_at_instants_in_one_psql_merge(conn: Conn, first: str) -> N
     else:
         theirs, mine = both_merges(conn, "e1")
         assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
+
+
+def test_a_row_the_version_rewrote_alike_at_an_instant_only_it_changed_is_refused_by_name(
+    conn: Conn, series: int
+) -> None:
+    """A triangle's vertices rotated (the same oriented triangle: merge3 sees no change) at an instant the version
+    moved elsewhere: which side's row the merge keeps hangs on its regions, which SQL does not compute there; the
+    psql merge refuses by name (TG302, nothing written) where the Python merge keeps the parent's row."""
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    _sql(
+        conn,
+        "e1",
+        "UPDATE tgsis.times_trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid3, vrtxid3 = vrtxid1"
+        " WHERE geoid = %s AND times = 2 AND trglid = 150",
+        (series,),
+    )
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    assert mine[:2] == ("refused", "TG302"), mine
+    assert "triangle 150 at instant 2" in mine[2] and "`tgsis version merge e1`" in mine[2], mine[2]
+    assert everything(conn) == before
+    conn.commit()
