@@ -102,14 +102,27 @@ BEGIN
                      EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_cset)
                      ORDER BY 1);
 
-    -- the work tables an earlier call left (it returned early): dropped without a NOTICE to the psql user
-    FOR v_why IN SELECT u.n FROM unnest(ARRAY['tgsis_ms_spec', 'tgsis_ms_key', 'tgsis_ms_row', 'tgsis_ms_el', 'tgsis_ms_slice',
-                                               'tgsis_ms_new', 'tgsis_ms_pros', 'tgsis_ms_prow']) AS u(n)
-                  WHERE pg_catalog.to_regclass('pg_temp.' || u.n) IS NOT NULL LOOP
-        EXECUTE format('DROP TABLE pg_temp.%I', v_why);
-    END LOOP;
+    -- the work tables: made by the first call of the transaction, emptied by the others (the same relations:
+    -- a merge of many objects holds their locks once, not once per object)
+    IF pg_catalog.to_regclass('pg_temp.tgsis_ms_spec') IS NULL THEN
+        CREATE TEMPORARY TABLE tgsis_ms_spec (tab text, vt tgsis.versioned_tables, okey text, tcol text, idcol text)
+            ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_key (tab text, t float8, id bigint) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_row (tab text, st smallint, t float8, id bigint, vals text[], bits text, eq text,
+                                             el text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_el (kind text, st smallint, t float8, id bigint, gvals text[], gbits text, geq text,
+                                            gel text, pvals text[], pbits text, peq text, nulls text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_new (LIKE pg_temp.tgsis_ms_el) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_slice (t float8, ib boolean, ip boolean, ic boolean, chp boolean, chc boolean,
+                                               samepc boolean, src text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_pros (st smallint, t float8, vals text[]) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_ms_prow (t float8, m text[], c text[]) ON COMMIT DROP;
+    ELSE
+        TRUNCATE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
+                 pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
+    END IF;
     -- the tables of a slice: tab T the instants, v / c the vertices / triangles, vp / cp their property rows
-    CREATE TEMPORARY TABLE tgsis_ms_spec ON COMMIT DROP AS
+    INSERT INTO pg_temp.tgsis_ms_spec
     SELECT s.tab, t AS vt, s.okey, s.tcol, s.idcol
       FROM (VALUES ('T', 'tgsis', 'times', 'geoid', 'times', NULL),
                    ('v', 'tgsis', 'times_vrtx', 'geoid', 'times', 'vrtxid'),
@@ -120,9 +133,6 @@ BEGIN
                                                                       ELSE v_class.otherprotable END, '_geoid', '_times', '_idx'))
            AS s (tab, schemaname, tablename, okey, tcol, idcol)
       JOIN tgsis.versioned_tables t ON t.schemaname = s.schemaname AND t.tablename = s.tablename;
-    CREATE TEMPORARY TABLE tgsis_ms_key (tab text, t float8, id bigint) ON COMMIT DROP;
-    CREATE TEMPORARY TABLE tgsis_ms_row (tab text, st smallint, t float8, id bigint, vals text[], bits text, eq text, el text)
-        ON COMMIT DROP;
 
     -- 1. the keys (instant, id) of the rows some set sees otherwise than another
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_ms_spec LOOP
@@ -151,10 +161,6 @@ BEGIN
     SELECT DISTINCT CASE k.tab WHEN 'v' THEN 'vp' WHEN 'vp' THEN 'v' WHEN 'c' THEN 'cp' ELSE 'c' END, k.t, k.id
       FROM pg_temp.tgsis_ms_key k WHERE k.tab <> 'T';
     INSERT INTO pg_temp.tgsis_ms_key SELECT DISTINCT 'T', k.t, 0 FROM pg_temp.tgsis_ms_key k;
-    CREATE TEMPORARY TABLE tgsis_ms_keys ON COMMIT DROP AS SELECT DISTINCT * FROM pg_temp.tgsis_ms_key;
-    TRUNCATE pg_temp.tgsis_ms_key;
-    INSERT INTO pg_temp.tgsis_ms_key SELECT * FROM pg_temp.tgsis_ms_keys;
-    DROP TABLE pg_temp.tgsis_ms_keys;
 
     -- 2. their rows as each state sees them (st 1 base, 2 parent, 4 version): the values as text (vals, for
     -- writing; bits: exact, NULL as NaN), eq as tgsis._merge_slices.same_state compares them (floats -0 as 0),
@@ -207,7 +213,7 @@ BEGIN
 
     -- 3. per element (a vertex or triangle of an instant a state has): its geometry row with its property row
     -- (a missing one reads as NaN: nulls)
-    CREATE TEMPORARY TABLE tgsis_ms_el ON COMMIT DROP AS
+    INSERT INTO pg_temp.tgsis_ms_el
     SELECT CASE g.tab WHEN 'v' THEN 'v' ELSE 'c' END AS kind, g.st, g.t, g.id, g.vals AS gvals, g.bits AS gbits,
            g.eq AS geq, g.el AS gel, p.vals AS pvals,
            coalesce(p.bits, n.nulls) AS pbits, coalesce(p.eq, n.nulls) AS peq, n.nulls
@@ -225,7 +231,7 @@ BEGIN
 
     -- 4. each instant: which side it is taken from (tgsis._merge_slices._merge_keys): P parent, C version,
     -- M merge3's merge of the version's edit, N none; X an object-level conflict, R both sides changed it
-    CREATE TEMPORARY TABLE tgsis_ms_slice ON COMMIT DROP AS
+    INSERT INTO pg_temp.tgsis_ms_slice
     WITH sl AS (
         SELECT k.t, bool_or(r.st = 1) AS ib, bool_or(r.st = 2) AS ip, bool_or(r.st = 4) AS ic
           FROM (SELECT DISTINCT t FROM pg_temp.tgsis_ms_key WHERE tab = 'T') AS k
@@ -262,7 +268,7 @@ BEGIN
 
     -- 5. the merged elements: the chosen side's rows; M: the version's rows of the elements it changed (as
     -- merge3 compares them), the parent's elsewhere
-    CREATE TEMPORARY TABLE tgsis_ms_new ON COMMIT DROP AS
+    INSERT INTO pg_temp.tgsis_ms_new
     WITH pv AS (
         SELECT e.kind, e.t, e.id,
                min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 1) AS b,
@@ -299,7 +305,7 @@ BEGIN
      WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.protablename;
     IF FOUND AND jsonb_array_length(v_class.instant_properties) > 0 THEN
         v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
-        CREATE TEMPORARY TABLE tgsis_ms_pros ON COMMIT DROP AS
+        INSERT INTO pg_temp.tgsis_ms_pros
         SELECT r[1]::smallint AS st, r[2]::float8 AS t, r[3:] AS vals
           FROM tgsis.storage_run(v_pros, false, format(
                  'SELECT ARRAY[s.st::text, v._times::text] || ARRAY[%s]
@@ -308,7 +314,6 @@ BEGIN
                  (SELECT string_agg(format('v.%I::text', c), ', ') FROM unnest(v_pcols) AS c),
                  v_pros.schemaname, v_pros.tablename || '_ver'),
                p_1 => ARRAY[v_key, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
-        CREATE TEMPORARY TABLE tgsis_ms_prow (t float8, m text[], c text[]) ON COMMIT DROP;
         FOR v_attr IN
             SELECT k.t, b.vals AS b, p.vals AS p, c.vals AS c
               FROM (SELECT DISTINCT x.t FROM pg_temp.tgsis_ms_pros x) AS k
@@ -388,7 +393,7 @@ BEGIN
     -- the per-instant feature property rows first (as _write_instant_rows: a DELETE, INSERT or UPDATE of the
     -- class's view per instant, which its trigger writes: a row of the working revision in place, any other
     -- closed there and written anew)
-    IF pg_catalog.to_regclass('pg_temp.tgsis_ms_prow') IS NOT NULL THEN
+    IF v_pcols IS NOT NULL THEN
         SELECT string_agg(format('%I', c), ', ' ORDER BY o),
                string_agg(format('$1[%s]::%s', o + 2, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
                                                        WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
@@ -535,9 +540,8 @@ BEGIN
     END IF;
     PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
             set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
-    DROP TABLE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
-               pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_new;
-    DROP TABLE IF EXISTS pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
+    TRUNCATE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
+             pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
     PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
     RETURN v_written;
 END
