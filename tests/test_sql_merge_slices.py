@@ -428,3 +428,30 @@ def test_a_row_the_version_rewrote_alike_at_an_instant_only_it_changed_is_refuse
     assert "triangle 150 at instant 2" in mine[2] and "`tgsis version merge e1`" in mine[2], mine[2]
     assert everything(conn) == before
     conn.commit()
+
+
+def test_a_psql_merge_of_many_surfaces_holds_no_lock_per_surface(conn: Conn) -> None:
+    """Each surface's merge works in the same work tables: a merge of many objects must not run out of the shared
+    lock table (a table created and dropped per object keeps its lock until the transaction ends)."""
+    tgsis.create_feature_class(
+        conn,
+        "horizons",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "double precision")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    ids = [_second_series(conn) for _ in range(4)]
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for geoid in ids:
+        _step(conn, "e1", "move 1 north", geoid)
+        _step(conn, "DEFAULT", "move 3 south", geoid)
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    gone = conn.execute(
+        "SELECT count(*) FROM pg_locks WHERE pid = pg_backend_pid() AND locktype = 'relation'"
+        " AND relation NOT IN (SELECT oid FROM pg_class)"
+    ).fetchone()
+    conn.rollback()
+    assert gone == (0,)
