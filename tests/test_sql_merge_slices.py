@@ -455,3 +455,44 @@ def test_a_psql_merge_of_many_surfaces_holds_no_lock_per_surface(conn: Conn) -> 
     ).fetchone()
     conn.rollback()
     assert gone == (0,)
+
+
+def test_the_class_property_rows_are_written_as_the_class_owner_never_as_tgsis_owner(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from psycopg import sql
+
+    from tests.roles import login_roles
+
+    _one_side_each(conn, series)  # writes vertex property rows (instant 4) and a per-instant row (instant 2)
+    with login_roles(db_dsn, {"carol": "tgsis_admin"}) as made:
+        carol = made.name("carol")
+        # carol owns the class's property storage: tgsis reads and writes it through her runners; her trigger logs
+        conn.execute(
+            """
+            CREATE TABLE public.who_wrote (who name, what text);
+            GRANT INSERT ON public.who_wrote TO PUBLIC;
+            CREATE FUNCTION public.log_who() RETURNS trigger LANGUAGE plpgsql AS $$
+                BEGIN INSERT INTO public.who_wrote VALUES (current_user, TG_TABLE_NAME || ' ' || TG_OP); RETURN NULL; END $$;
+            """
+        )
+        for table in ("horizons_cellpros", "horizons_pros"):
+            conn.execute(
+                sql.SQL("ALTER TABLE {} OWNER TO {}").format(
+                    sql.Identifier("public", f"{table}_ver"), sql.Identifier(carol)
+                )
+            )
+            conn.execute("SELECT tgsis.restore_storage_runner(%s)", (f"public.{table}",))
+            conn.execute(
+                sql.SQL(
+                    "CREATE TRIGGER who AFTER INSERT OR UPDATE OR DELETE ON {} FOR EACH STATEMENT EXECUTE FUNCTION public.log_who()"
+                ).format(sql.Identifier("public", f"{table}_ver"))
+            )
+        conn.commit()
+        assert_same_merge(conn, "e1")
+        with conn.transaction(force_rollback=True):
+            conn.execute("SELECT tgsis.merge_version('e1')")
+            log = conn.execute("SELECT who, what FROM public.who_wrote").fetchall()
+        conn.rollback()
+        assert {what.split()[0] for _, what in log} == {"horizons_cellpros_ver", "horizons_pros_ver"}, log
+        assert {who for who, _ in log} == {carol}, log
