@@ -44,7 +44,7 @@ dropped, in turn, medians of ``--repeat``: what those indexes cost inserts.
 The read of the change and its one-ring (``read_merge_change``, what the
 merges by region read) is timed beside the whole read.
 
-    python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2]
+    python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2 | --model2-only]
     # TGSIS_PG=system|embedded
 """
 
@@ -341,7 +341,7 @@ def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     conn.autocommit = True
     conn.execute("VACUUM ANALYZE")
     conn.autocommit = False
-    print(f"(f) surface at 3 instants: {3 * surface.n_vertices} vertex rows, uploaded in {upload:.2f} s")
+    print(f"(f) surface at 3 instants: {3 * surface.n_vertices} vertex rows, uploaded in {upload:.2f} s", flush=True)
     parent_patch, child_patch = patch(side, 10, 10), patch(side, side - 60, side - 60)
     for version in ("objlevel2", "slices"):
         tgsis.create_version(conn, version)
@@ -354,14 +354,15 @@ def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel2"))())
     t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel2")), repeat)
     psql_merge = "SELECT tgsis.merge_version('slices')"
+    print(f"(f) object-level merge of the version's edit (solved manual):      {t_a:6.3f} s, {rows_a} rows written")
     rows_sql = int(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()[0])())  # type: ignore[index]
     t_sql = timed(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()), repeat)
+    print(
+        f"(f) psql merge_version instant by instant (SQL):                  {t_sql:6.3f} s ({t_sql / t_a:.2f}x), {rows_sql} rows written",
+        flush=True,
+    )
     rows_py = int(rolled_back(conn, lambda: merging.merge_version(conn, "slices"))())
     t_py = timed(rolled_back(conn, lambda: merging.merge_version(conn, "slices")), repeat)
-    print(f"(f) object-level merge of the version's edit (solved manual):      {t_a:6.3f} s, {rows_a} rows written")
-    print(
-        f"(f) psql merge_version instant by instant (SQL):                  {t_sql:6.3f} s ({t_sql / t_a:.2f}x), {rows_sql} rows written"
-    )
     print(
         f"(f) Python merge_version instant by instant:                      {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
     )
@@ -436,14 +437,15 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--upload-cost", action="store_true", help="time uploads with and without the revision indexes")
     parser.add_argument("--model2", action="store_true", help="(f) also the merge of a surface at three instants")
+    parser.add_argument("--model2-only", action="store_true", help="(f) only")
     args = parser.parse_args()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}; medians of {args.repeat}"
     )
     with bench_database() as conn:
-        results = figures(conn, args.side, args.repeat, args.upload_cost)
-        if args.model2:
+        results = {} if args.model2_only else figures(conn, args.side, args.repeat, args.upload_cost)
+        if args.model2 or args.model2_only:
             results.update(model2_figures(conn, args.side, args.repeat))
     for name, value in results.items():
         print(f"{name}: {value}")

@@ -110,6 +110,10 @@ def _step(conn: Conn, version: str, step: str, geoid: int) -> None:
         _add_instant(conn, version, geoid, float(args[0]), 44.0)
     elif what == "delete":
         _delete_instant(conn, version, geoid, float(args[0]))
+    elif what == "drop":  # the whole feature
+        with tgsis.in_version(conn, version):
+            tgsis.delete_feature(conn, "horizons", geoid)
+        conn.commit()
     elif what == "throw":
         _sql(
             conn,
@@ -157,6 +161,14 @@ REFUSED: dict[str, tuple[list[tuple[str, str]], str]] = {
     ),
     "an instant added on both sides differently": (
         [("e1", "add 4"), ("DEFAULT", "add 4"), ("DEFAULT", "move 4 south")],
+        "TG302",
+    ),
+    "the feature deleted in the version, an instant moved in the parent": (
+        [("e1", "drop"), ("DEFAULT", "move 2 south")],
+        "TG302",
+    ),
+    "the feature deleted in the parent, an instant moved in the version": (
+        [("DEFAULT", "drop"), ("e1", "move 2 north")],
         "TG302",
     ),
     "a per-instant property changed on both sides": ([("e1", "throw 2 21"), ("DEFAULT", "throw 2 22")], "TG302"),
