@@ -186,9 +186,8 @@ BEGIN
           FROM tgsis.storage_run(v_spec.vt, false, format(
                  'SELECT ARRAY[s.st::text, v.%1$I::text, %2$s, ARRAY[%3$s]::text[]::text,
                                ARRAY[%4$s]::text[]::text, ARRAY[%5$s]::text[]::text, %6$s]
-                    FROM %7$I.%8$I v, (VALUES (1, $2), (2, $3), (4, $1[3]::integer[])) AS s (st, revs)
+                    FROM %10$s, (VALUES (1, $2), (2, $3), (4, $1[3]::integer[])) AS s (st, revs)
                    WHERE v.%9$I = $1[1]::bigint AND v.%1$I = ANY ($1[2]::float8[])
-                     AND %10$s
                      AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
                  v_spec.tcol, CASE WHEN v_spec.idcol IS NULL THEN '''0''' ELSE format('v.%I::text', v_spec.idcol) END, v_vals,
                  (SELECT coalesce(string_agg(format('coalesce(v.%I::text, ''NaN'')', a.attname), ', ' ORDER BY a.attnum), '')
@@ -198,8 +197,12 @@ BEGIN
                      AND a.attname <> ALL (ARRAY[v_spec.okey, v_spec.tcol, coalesce(v_spec.idcol, v_spec.tcol)])),
                  v_eq, CASE WHEN v_spec.tab = 'T' THEN '''''' ELSE v_el END,
                  (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey,
-                 CASE WHEN v_spec.idcol IS NULL THEN 'true'
-                      ELSE format('(v.%I, v.%I) IN (SELECT * FROM unnest($1[4]::float8[], $5))', v_spec.tcol, v_spec.idcol) END),
+                 -- (the keys first: each found through the primary key, not by a scan of the instants' rows)
+                 CASE WHEN v_spec.idcol IS NULL
+                      THEN format('%I.%I v', (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver')
+                      ELSE format('(SELECT DISTINCT k.t, k.id FROM unnest($1[4]::float8[], $5) AS k (t, id)) AS k
+                                   JOIN %I.%I v ON v.%I = k.t AND v.%I = k.id',
+                                  (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.tcol, v_spec.idcol) END),
                p_1 => ARRAY[v_key, v_spec.ts::text, v_cset::text, v_spec.kts::text], p_2 => v_base,
                p_3 => v_parent.workingset, p_5 => v_spec.ids) AS r;
     END LOOP;
@@ -457,15 +460,17 @@ BEGIN
         END IF;
         IF cardinality(v_ids) > 0 THEN
             SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_spec.vt, true, format(
-                'DELETE FROM %I.%I v WHERE v.%I = $1[1]::bigint AND v.revision = $4 AND (v.%I, %s) IN (SELECT * FROM unnest($1[2]::float8[], $5))',
+                'DELETE FROM %I.%I v USING (SELECT DISTINCT k.t, k.id FROM unnest($1[2]::float8[], $5) AS k (t, id)) AS k
+                  WHERE v.%I = $1[1]::bigint AND v.revision = $4 AND v.%I = k.t AND %s = k.id',
                 (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.tcol,
                 CASE WHEN v_spec.idcol IS NULL THEN '0::bigint' ELSE format('v.%I', v_spec.idcol) END),
                 p_1 => ARRAY[v_key, v_times::text], p_4 => v_rev, p_5 => v_ids) AS r;
             v_written := v_written + v_count;
             SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_spec.vt, true, format(
                 'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
+                   FROM (SELECT DISTINCT k.t, k.id FROM unnest($1[2]::float8[], $5) AS k (t, id)) AS k
                   WHERE v.%I = $1[1]::bigint AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
-                    AND (v.%I, %s) IN (SELECT * FROM unnest($1[2]::float8[], $5))',
+                    AND v.%I = k.t AND %s = k.id',
                 (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.tcol,
                 CASE WHEN v_spec.idcol IS NULL THEN '0::bigint' ELSE format('v.%I', v_spec.idcol) END),
                 p_1 => ARRAY[v_key, v_times::text], p_3 => v_cset, p_4 => v_rev, p_5 => v_ids) AS r;
