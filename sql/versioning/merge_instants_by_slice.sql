@@ -58,7 +58,6 @@ DECLARE
                               'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
                               p_action, tgsis.shell_quote(p_version), p_action, pg_catalog.to_json(p_version)::text, p_version, p_geoid::text);
     v_spec     record;
-    v_t        tgsis.versioned_tables;
     v_vals     text;
     v_eq       text;
     v_el       text;
@@ -86,7 +85,8 @@ BEGIN
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
     SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
     IF v_class.timemodel IS DISTINCT FROM 'INSTANTS' THEN
-        RAISE EXCEPTION 'feature % is not a surface at instants (model 2)', p_geoid USING ERRCODE = 'TG100';
+        RAISE EXCEPTION 'feature % is not a surface at instants (model 2)', p_geoid
+            USING ERRCODE = 'TG100', HINT = format('SELECT tgsis.merge_version(%L) merges it as its model merges', p_version);
     END IF;
     IF p_geoid IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
         RAISE EXCEPTION 'role % may not read feature % (its class): it cannot be merged instant by instant',
