@@ -30,6 +30,13 @@ is then changed on both sides, disjointly. Timed in one process, medians of
   ``merge_version`` (``tgsis.db.merging``) of the two disjoint edits, with
   the rows it writes, each as a ratio to (a).
 
+With ``--model2``: (f) a surface at three instants (the same grid at each,
+model 2), the version moving a 1,000-vertex patch at the first instant and
+DEFAULT another at the last: the psql ``tgsis.merge_version`` merging it
+instant by instant in SQL (``tgsis.merge_instants_by_slice``) and the
+Python merge, each as a ratio to the object-level merge of the same edit
+(the conflict solved ``manual``), with the rows each writes.
+
 The upload of the surface into versioned storage is timed once, then, with
 ``--upload-cost``, paired: uploads of the same surface (rolled back) with the
 storage's revision indexes (``tgsis.create_revision_indexes``) and with them
@@ -37,7 +44,7 @@ dropped, in turn, medians of ``--repeat``: what those indexes cost inserts.
 The read of the change and its one-ring (``read_merge_change``, what the
 merges by region read) is timed beside the whole read.
 
-    python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost]
+    python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2 | --model2-only]
     # TGSIS_PG=system|embedded
 """
 
@@ -307,6 +314,71 @@ def figures(conn: Conn, side: int, repeat: int, upload_cost: bool = False) -> di
     return out
 
 
+def move_at(conn: Conn, version: str, geoid: int, t: float, ids: np.ndarray, dz: float) -> None:
+    """Move vertices ``ids`` of a surface at instants at instant ``t`` by ``dz`` (one committed UPDATE, as in psql)."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.times_vrtx SET z = z + %s WHERE geoid = %s AND times = %s AND vrtxid = ANY(%s)",
+            (dz, geoid, t, ids.tolist()),
+        )
+    conn.commit()
+
+
+def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
+    """(f) the merge of a surface at three instants, edits at different instants, psql and Python against (a)'s kind."""
+    from tgsis.db import merging
+    from tgsis.temporal import SurfaceSeries
+
+    surface = grid_surface(side)
+    F.create_feature_class(conn, "horizons2", "SURFACE", time_model="INSTANTS")
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    series = SurfaceSeries(np.asarray([1.0, 2.0, 3.0]), [tgsis.Surface(surface.vertices, surface.cells)] * 3)
+    start = time.perf_counter()
+    geoid = F.insert_feature(conn, "horizons2", series)
+    conn.commit()
+    upload = time.perf_counter() - start
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE")
+    conn.autocommit = False
+    print(f"(f) surface at 3 instants: {3 * surface.n_vertices} vertex rows, uploaded in {upload:.2f} s", flush=True)
+    parent_patch, child_patch = patch(side, 10, 10), patch(side, side - 60, side - 60)
+    for version in ("objlevel2", "slices"):
+        tgsis.create_version(conn, version)
+        conn.commit()
+        move_at(conn, version, geoid, 1.0, child_patch, -3.0)
+    move_at(conn, "DEFAULT", geoid, 3.0, parent_patch, 5.0)
+    V.find_conflicts(conn, "objlevel2")
+    V.resolve_conflict(conn, "objlevel2", "feature", geoid, "manual")
+    conn.commit()
+    rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel2"))())
+    t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel2")), repeat)
+    psql_merge = "SELECT tgsis.merge_version('slices')"
+    print(f"(f) object-level merge of the version's edit (solved manual):      {t_a:6.3f} s, {rows_a} rows written")
+    rows_sql = int(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()[0])())  # type: ignore[index]
+    t_sql = timed(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()), repeat)
+    print(
+        f"(f) psql merge_version instant by instant (SQL):                  {t_sql:6.3f} s ({t_sql / t_a:.2f}x), {rows_sql} rows written",
+        flush=True,
+    )
+    rows_py = int(rolled_back(conn, lambda: merging.merge_version(conn, "slices"))())
+    t_py = timed(rolled_back(conn, lambda: merging.merge_version(conn, "slices")), repeat)
+    print(
+        f"(f) Python merge_version instant by instant:                      {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
+    )
+    return {
+        "model2_upload_s": round(upload, 3),
+        "model2_objlevel_merge_s": round(t_a, 3),
+        "model2_objlevel_merge_rows": rows_a,
+        "model2_sql_merge_s": round(t_sql, 3),
+        "model2_sql_merge_rows": rows_sql,
+        "model2_sql_merge_vs_objlevel": round(t_sql / t_a, 2),
+        "model2_python_merge_s": round(t_py, 3),
+        "model2_python_merge_rows": rows_py,
+        "model2_sql_vs_python": round(t_sql / t_py, 2),
+    }
+
+
 def _revision_indexes(conn: Conn) -> list[tuple[str, str]]:
     """(index, definition) of the revision indexes of the class's storage (BRINs on revision and on the cells'
     vertex columns, btree WHERE revclosed)."""
@@ -364,13 +436,17 @@ def main() -> None:
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--upload-cost", action="store_true", help="time uploads with and without the revision indexes")
+    parser.add_argument("--model2", action="store_true", help="(f) also the merge of a surface at three instants")
+    parser.add_argument("--model2-only", action="store_true", help="(f) only")
     args = parser.parse_args()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}; medians of {args.repeat}"
     )
     with bench_database() as conn:
-        results = figures(conn, args.side, args.repeat, args.upload_cost)
+        results = {} if args.model2_only else figures(conn, args.side, args.repeat, args.upload_cost)
+        if args.model2 or args.model2_only:
+            results.update(model2_figures(conn, args.side, args.repeat))
     for name, value in results.items():
         print(f"{name}: {value}")
 

@@ -154,6 +154,8 @@ NOT_FROM_THE_CLI = {
     "the command finds and merges the regions in Python",
     "sql/versioning/merge_mesh_by_region.sql": "the psql merge by region: the command merges by region in Python "
     "(tgsis.region_detection = 'client'), which never reaches it",
+    "sql/versioning/merge_instants_by_slice.sql": "the psql merge of surfaces at instants: the command merges them "
+    "in Python (tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/resolve_all_regions.sql": "the psql face of --region all: the command calls the Python "
     "resolve_all_regions",
 }

@@ -53,10 +53,10 @@ DECLARE
     v_name     text := format('feature %s (base)', p_geoid);
     v_refused  text := format('%s of version %s refused: feature %s does not merge by region in SQL',
                               p_action, quote_literal(p_version), p_geoid);
-    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %L) in Python merges it by region '
+    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %s) in Python merges it by region '
                               '(average and manual solutions); else solve it as a whole object: '
                               'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
-                              p_action, p_version, p_action, p_version, p_version, p_geoid::text);
+                              p_action, tgsis.shell_quote(p_version), p_action, pg_catalog.to_json(p_version)::text, p_version, p_geoid::text);
     v_why      text;
     v_word     text;
     v_table    text;

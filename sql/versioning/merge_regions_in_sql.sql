@@ -37,6 +37,16 @@ BEGIN
     -- the conflicts of now; the regions of each mesh are found once, by its merge below
     PERFORM set_config('tgsis.region_detection', 'client', true);
     PERFORM FROM tgsis.find_conflicts(p_version);
+    -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice; NULL: an object-level
+    -- conflict, refused below)
+    FOR v_key IN
+        SELECT k.objectkey FROM tgsis.conflicts k
+         WHERE k.versionid = v_id AND k.objectclass = 'feature' AND k.solution = 'unsolved'
+           AND (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(k.objectkey::bigint)) = 'INSTANTS'
+         ORDER BY k.objectkey::bigint
+    LOOP
+        v_written := v_written + coalesce(tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint), 0);
+    END LOOP;
     FOR v_key IN
         SELECT k.objectkey FROM tgsis.conflicts k
          WHERE k.versionid = v_id AND k.objectclass = 'feature' AND k.solution = 'unsolved'
