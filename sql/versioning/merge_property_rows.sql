@@ -52,3 +52,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[]) IS
     'the property rows of one feature for the merge by region in SQL: the keys whose visibility can differ between the three sets (no keys given), or the rows of the keys given with where they are seen (1 base, 2 parent, 4 version) and their values as a canonical text';
+
+-- internal to the psql merge by region (reached only through the SECURITY DEFINER merge, find_conflicts and
+-- resolve functions): not executable by PUBLIC, like tgsis's other internal helpers
+REVOKE ALL ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[]) FROM PUBLIC;

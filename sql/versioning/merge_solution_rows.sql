@@ -11,7 +11,8 @@
 -- refused (TG302; the Python merge refuses it TG100). Values come as float8 (the
 -- Python client's arrays): a float column is written as the float8 (real: as
 -- numpy rounds it to float4), an integer one truncated, as the Python writer
--- writes them. Refused too (TG302, p_hint: the Python merge applies it): a
+-- writes them; a value an integer column cannot hold (infinite, beyond its
+-- type) is refused (TG302), as the Python writer refuses it. Refused too (TG302, p_hint: the Python merge applies it): a
 -- vertex row of the region no state changed that differs from the base's or
 -- that the solution lacks (the region's margin cells are rewritten or
 -- removed as in Python), a class property column the rows lack
@@ -129,6 +130,29 @@ BEGIN
             IF v_why IS NOT NULL THEN
                 RAISE EXCEPTION '%: the % property columns of its solution rows are not the class''s (%)', p_refused, v_side.word, v_why
                     USING ERRCODE = 'TG302', HINT = p_hint;
+            END IF;
+            -- a value an integer column cannot hold (infinite, or beyond the type once truncated): refused, as the
+            -- Python writer refuses it (not a raw 22003 from the cast below)
+            SELECT string_agg(format('SELECT format(''region %%s: %s property %s (%s) value %%s at ids %%s'', min(s.region),
+                                         min(s.x), tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))
+                                        FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, %L)] AS x
+                                                FROM pg_temp.%I s) AS s
+                                       WHERE s.x <> ''NaN'' AND NOT (trunc(s.x) >= %s::float8 AND trunc(s.x) < %s::float8)
+                                      HAVING count(*) > 0',
+                                     v_side.word, quote_ident(a.attname), format_type(a.atttypid, a.atttypmod), a.attname,
+                                     v_side.work, -(2::numeric ^ (8 * a.attlen - 1)), 2::numeric ^ (8 * a.attlen - 1)),
+                              ' UNION ALL ' ORDER BY a.attnum)
+              INTO v_why
+              FROM pg_catalog.pg_attribute a
+             WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0 AND NOT a.attisdropped
+               AND a.atttypid IN ('smallint'::regtype, 'integer'::regtype, 'bigint'::regtype);
+            IF v_why IS NOT NULL THEN
+                EXECUTE format('SELECT string_agg(w, ''; '') FROM (%s) AS q(w)', v_why) INTO v_why;
+            END IF;
+            IF v_why IS NOT NULL THEN
+                RAISE EXCEPTION '%: its solution rows hold values an integer column cannot hold (%)', p_refused, v_why
+                    USING ERRCODE = 'TG302',
+                          HINT = 'record the solution again with values the columns hold (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
             END IF;
             SELECT 'ARRAY[' || string_agg(
                        CASE WHEN a.atttypid IN ('real'::regtype, 'double precision'::regtype)
@@ -250,3 +274,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_solution_rows(bigint, integer, text, text) IS
     'for tgsis.merge_mesh_by_region: the rows the average and manual solutions (recorded with their rows, tgsis.conflict_regions.solution_*) give a feature, in pg_temp.tgsis_mw_sv / tgsis_mw_sc, checked as tgsis.merge3.apply_solutions checks a manual state (TG302 otherwise)';
+
+-- internal to the psql merge by region (reached only through the SECURITY DEFINER merge, find_conflicts and
+-- resolve functions): not executable by PUBLIC, like tgsis's other internal helpers
+REVOKE ALL ON FUNCTION tgsis.merge_solution_rows(bigint, integer, text, text) FROM PUBLIC;

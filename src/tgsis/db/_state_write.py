@@ -140,6 +140,40 @@ def _values(state: MeshState, alignment: str, name: str, what: str) -> npt.NDArr
     return np.asarray(props[name])
 
 
+#: the values an integer column holds (a float beyond them, or infinite, would be wrapped by the cast to int64)
+_INTEGER_RANGES: dict[str, tuple[int, int]] = {
+    "int2": (-(2**15), 2**15 - 1),
+    "int4": (-(2**31), 2**31 - 1),
+    "int8": (-(2**63), 2**63 - 1),
+}
+
+
+def _check_integer_range(values: npt.NDArray[Any], wire: str, ids: npt.ArrayLike, what: str) -> None:
+    """Refuse values an integer column of ``wire`` cannot hold (infinite, or beyond its range once truncated).
+
+    A float such as an ``average``/``manual`` solution's 1e10 or +inf was cast to int64 and then to the
+    column's width, wrapping silently (1e10 was written 1410065408 into an integer column, inf as 0).
+    """
+    if wire not in _INTEGER_RANGES or not len(values):
+        return
+    low, high = _INTEGER_RANGES[wire]
+    flat = np.asarray(values)
+    if flat.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):
+            bad = ~np.isfinite(flat) | (np.trunc(flat) < float(low)) | (np.trunc(flat) >= float(high) + 1)
+    elif flat.dtype.kind in "iu":
+        bad = (flat < low) | (flat > high)
+    else:
+        return
+    bad = bad.reshape(len(flat), -1).any(axis=1)
+    if bad.any():
+        raise InvalidInputError(
+            f"{what}: values {np.unique(flat.reshape(len(flat), -1)[bad])[:5].tolist()} at ids "
+            f"{np.asarray(ids)[bad][:10].tolist()} do not fit the column ({low} to {high})",
+            hint="give those rows values the column holds (a manual solution) or solve the object as a whole",
+        )
+
+
 def _without_row(values: list[npt.NDArray[Any]], at: npt.NDArray[np.intp]) -> npt.NDArray[np.bool_]:
     """Per position ``at``, whether every property value there is NaN (no property row in the state)."""
     empty = np.ones(len(at), dtype=bool)
@@ -193,6 +227,10 @@ def _write_properties(
                             "the merged rows cannot be written",
                             hint="give those rows values (a manual solution) or solve the object as a whole",
                         )
+                _check_integer_range(
+                    chosen, wire, new_ids[fresh], f"{new.name}: {alignment.lower()} property {p.name} ({p.type})"
+                )
+                if wire not in ("float4", "float8") and chosen.dtype.kind == "f":
                     chosen = chosen.astype(np.int64)
                 columns.append((p.name, chosen, array_wire(wire, p.size)))
             storage.copy(conn, fc.schema, protable, columns)

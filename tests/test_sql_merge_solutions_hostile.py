@@ -1,0 +1,224 @@
+"""A hostile review of the psql merge of regions solved ``average`` / ``manual`` (issue 39, items 3 to 5).
+
+The rows of such a solution (``tgsis.conflict_regions.solution_*``) are
+recorded by any role that may resolve conflicts in the version, from Python
+or straight from psql, and applied by the psql merge of another role later.
+These tests forge, stale, overflow and race them: each case is either merged
+exactly as the Python merge merges it (the oracle: tests/test_sql_merge_write.py)
+or refused, naming what is wrong, with nothing written.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tests.merge_data import move
+from tests.test_sql_merge_average import _both_moved, _record_in_sql
+from tests.test_sql_merge_regions import MIDDLE, psql
+from tests.test_sql_merge_write import _outcome, _psql_state, both_merges, everything
+from tgsis.merge3 import MeshState
+
+Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # tests.merge_data.make_fault's (tests/conftest.py)
+
+
+def _replace(state: MeshState, **changes: Any) -> MeshState:
+    fields = {
+        "cell_size": state.cell_size,
+        "vertex_ids": state.vertex_ids,
+        "vertices": state.vertices,
+        "cell_ids": state.cell_ids,
+        "cells": state.cells,
+        "vertex_properties": state.vertex_properties,
+        "cell_properties": state.cell_properties,
+    }
+    fields.update(changes)
+    return MeshState(
+        fields["cell_size"],
+        fields["vertex_ids"],
+        fields["vertices"],
+        fields["cell_ids"],
+        fields["cells"],
+        fields["vertex_properties"],
+        fields["cell_properties"],
+    )
+
+
+def _conflict(conn: Conn, fault: int, hole: bool = False) -> tuple[int, Any]:
+    """The middle moved on both sides (one conflicting region): its index and the object's merge. ``hole``: the
+    version also removes triangle 48 (corners 52, 53, 65): vertices 52 and 53, which no side changed, are then
+    in the region (the footprint of a removed cell holds its corners)."""
+    if hole:
+        psql(conn, "e1", ("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 48", (fault,)))
+    index = _both_moved(conn, fault)
+    merge = tgsis.object_merge(conn, "e1", fault)
+    conn.rollback()
+    return index, merge
+
+
+def _psql_refuses_what_python_merges(conn: Conn, *words: str) -> str:
+    """Python merges it; psql refuses (TG302, the hint naming the Python command), nothing written; the message."""
+    before = everything(conn)
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    state, message, hint = _psql_state(conn, "SELECT tgsis.merge_version('e1')", ())
+    assert state == "TG302", message
+    assert "tgsis version merge e1" in (hint or ""), hint
+    for word in words:
+        assert word in message, message
+    assert everything(conn) == before
+    conn.rollback()
+    return message
+
+
+def _refused_alike(conn: Conn, *words: str) -> tuple[Any, Any]:
+    """Both merges refuse, nothing written; the psql refusal names ``words``. (Python's outcome, psql's.)"""
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "refused" and mine[0] == "refused", (theirs[:2], mine[:2])
+    for word in words:
+        assert word in mine[2], mine
+    assert everything(conn) == before
+    conn.rollback()
+    return theirs, mine
+
+
+# --------------------------------------------------------------------------- (a) a region row no side changed
+
+
+def test_forged_rows_moving_a_vertex_of_the_region_no_side_changed_are_refused(conn: Conn, fault: int) -> None:
+    """A vertex of the region no side changed, moved by the solution's rows: merge3 takes the manual mesh's rows of
+    the region's ids; psql does not merge it (TG302 naming the vertex, the hint the Python command), writes nothing."""
+    index, merge = _conflict(conn, fault, hole=True)
+    (region,) = merge.conflicts
+    margin = np.setdiff1d(region.vertex_ids, np.union1d(region.parent_vertex_ids, region.child_vertex_ids))
+    assert set(margin.tolist()) >= {52, 53}
+    vertex = int(margin[0])
+    xyz = merge.child.vertices.copy()
+    xyz[np.searchsorted(merge.child.vertex_ids, vertex), 2] += 0.25
+    _record_in_sql(conn, fault, index, _replace(merge.child, vertices=xyz))
+    _psql_refuses_what_python_merges(conn, "no side changed", f"vertices {vertex}")
+
+
+def test_forged_rows_changing_the_value_of_a_region_vertex_no_side_changed_are_refused(conn: Conn, fault: int) -> None:
+    """The same vertex keeps its place but gets a porosity of no side: refused alike by psql (the values compared)."""
+    index, merge = _conflict(conn, fault, hole=True)
+    (region,) = merge.conflicts
+    margin = np.setdiff1d(region.vertex_ids, np.union1d(region.parent_vertex_ids, region.child_vertex_ids))
+    vertex = int(margin[0])
+    porosity = np.asarray(merge.child.vertex_properties["porosity"], dtype=np.float64).copy()
+    porosity[np.searchsorted(merge.child.vertex_ids, vertex)] = 0.987654321
+    _record_in_sql(conn, fault, index, _replace(merge.child, vertex_properties={"porosity": porosity}))
+    _psql_refuses_what_python_merges(conn, "no side changed", f"vertices {vertex}")
+
+
+# --------------------------------------------------------------------------- (b) the internals' rights
+
+_INTERNALS = (
+    "tgsis.cells_on_vertices_sql(integer, bigint[], text)",
+    "tgsis.merge_solution_rows(bigint, integer, text, text)",
+    "tgsis.merge_value_text(text, text)",
+    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[])",
+    "tgsis.merge_geometry_row(bigint, text, integer[])",
+    "tgsis.merge_feature_row(bigint, text[], integer[], integer, integer[])",
+    "tgsis.merge_attribute_edits(text, bigint, integer[], integer[], integer[])",
+)
+
+
+def test_the_psql_merge_internals_are_not_executable_by_public_and_an_editor_still_merges(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    """The helpers of the psql merge by region are reached through the SECURITY DEFINER merge, find_conflicts and
+    resolve functions only (they were executable by PUBLIC); an editor with the rights merges a region solved
+    average in psql as before, exactly as the Python merge does."""
+    from tests.roles import login_roles
+
+    for signature in _INTERNALS:
+        (public,) = conn.execute(
+            "SELECT has_function_privilege('public', %s::regprocedure, 'EXECUTE')", (signature,)
+        ).fetchone()  # type: ignore[misc]
+        assert public is False, signature
+    conn.rollback()
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.commit()
+        session = made.connect("ed")
+        state, message, _ = _psql_state(session, "SELECT tgsis.cells_on_vertices_sql(3, '{1}', '$3')", ())
+        assert state == "42501", message
+        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
+        conn.commit()
+        theirs = _outcome(session, lambda: int(tgsis.merge_version(session, "e1")))
+        conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+        conn.commit()
+        mine = _outcome(session, lambda: int(session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+        assert theirs[0] == "done" and mine[0] == "done", (theirs[:2], mine[:2])
+        assert mine[1] == theirs[1]
+        conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+        conn.commit()
+        assert mine[2] == theirs[2]
+
+
+# --------------------------------------------------------------------------- stale rows, signed zeros
+
+
+def test_an_average_recorded_before_the_version_moved_the_region_again_is_not_applied(conn: Conn, fault: int) -> None:
+    """The version edits the region again after its average was recorded (the same ids: only the marks tell): the
+    stale rows are not merged; both merges leave the conflict unsolved (TG302), nothing written."""
+    index = _both_moved(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    move(conn, "e1", fault, MIDDLE, (0.0, 0.0, 3.0))
+    conn.commit()
+    theirs, mine = _refused_alike(conn, "unsolved conflict")
+    assert theirs[1] == mine[1] == "TG302"
+
+
+@pytest.mark.parametrize(
+    ("value", "shown"), [(1e10, "10000000000"), (float("inf"), "Infinity"), (-1e19, "-1e+19"), (2.0**31, "2147483648")]
+)
+def test_manual_values_an_integer_column_cannot_hold_are_refused_not_wrapped(
+    conn: Conn, fault: int, value: float, shown: str
+) -> None:
+    """A manual solution's cell value beyond the integer column facies (1e10, inf, -1e19, 2**31): the Python merge
+    wrote it wrapped (1e10 as 1410065408, inf as 0) and said done, psql failed with a raw 22003. Both refuse it now
+    (TG302: the object stays an unsolved conflict), naming the property, value and ids; nothing written."""
+    index, merge = _conflict(conn, fault)
+    (region,) = merge.conflicts
+    facies = np.asarray(merge.child.cell_properties["facies"], dtype=np.float64).copy()
+    changed = region.child_cell_ids if len(region.child_cell_ids) else region.cell_ids
+    facies[np.isin(merge.child.cell_ids, changed)] = value
+    _record_in_sql(conn, fault, index, _replace(merge.child, cell_properties={"facies": facies}))
+    theirs, mine = _refused_alike(conn, "facies (integer)", shown)
+    assert theirs[1] == mine[1] == "TG302"
+    assert "cell property facies (integer)" in theirs[2] and "do not fit the column" in theirs[2], theirs
+
+
+def test_minus_zero_in_manual_coordinates_and_values_merges_in_psql_as_in_python(conn: Conn, fault: int) -> None:
+    """-0.0 where the version has other values (x of the region's vertices, porosity): written as Python writes it."""
+    index, merge = _conflict(conn, fault)
+    porosity = np.asarray(merge.child.vertex_properties["porosity"], dtype=np.float64).copy()
+    at = np.isin(merge.child.vertex_ids, MIDDLE)
+    porosity[at] = -0.0
+    xyz = merge.child.vertices.copy()
+    xyz[at, 0] = -0.0
+    manual = _replace(merge.child, vertices=xyz, vertex_properties={"porosity": porosity})
+    tgsis.resolve_region(conn, "e1", fault, index, "manual", manual)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done" and mine[0] == "done"
+    assert mine[2] == theirs[2]
