@@ -222,3 +222,49 @@ def test_minus_zero_in_manual_coordinates_and_values_merges_in_psql_as_in_python
     theirs, mine = both_merges(conn, "e1")
     assert theirs[0] == "done" and mine[0] == "done"
     assert mine[2] == theirs[2]
+
+
+# --------------------------------------------------------------------------- the .npz and the rows disagree
+
+
+def _record_apart(conn: Conn, fault: int, index: int, mesh: MeshState, rows_of: MeshState) -> None:
+    """A psql user's resolve_region with the .npz of one mesh and the rows of another (nothing ties them in SQL)."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    conn.execute(
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(fault), index, state_to_npz(mesh), *(_sql_rows(rows_of) or ())),
+    )
+    conn.commit()
+
+
+def test_a_solution_whose_rows_are_not_its_mesh_is_not_merged_by_python(conn: Conn, fault: int) -> None:
+    """The .npz says the region is 11 m up, the rows say it is where the parent has it: the Python merge applied
+    the .npz and the psql merge the rows, two results of one recorded solution, each said done. The Python merge
+    now refuses it (the object stays an unsolved conflict, naming the region), nothing written."""
+    index, merge = _conflict(conn, fault)
+    xyz = merge.child.vertices.copy()
+    xyz[np.isin(merge.child.vertex_ids, MIDDLE), 2] += 11.0
+    _record_apart(conn, fault, index, _replace(merge.child, vertices=xyz), merge.parent)
+    before = everything(conn)
+    conn.commit()
+    for action in (lambda: tgsis.merge_version(conn, "e1"), lambda: tgsis.refresh_version(conn, "e1")):
+        with pytest.raises(tgsis.Error) as refused:
+            action()
+        conn.rollback()
+        assert f"region {index}" in str(refused.value) and "are not those of its mesh" in str(refused.value)
+        assert everything(conn) == before
+        conn.rollback()
+
+
+def test_a_solution_whose_rows_are_its_mesh_merges_as_before(conn: Conn, fault: int) -> None:
+    """The check compares bit for bit and NaN with NaN: the Python client's own recording (NaN values) passes."""
+    index, merge = _conflict(conn, fault)
+    porosity = np.asarray(merge.child.vertex_properties["porosity"], dtype=np.float64).copy()
+    porosity[np.isin(merge.child.vertex_ids, MIDDLE)] = np.nan
+    manual = _replace(merge.child, vertex_properties={"porosity": porosity})
+    _record_apart(conn, fault, index, manual, manual)
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done" and mine[0] == "done", (theirs[:2], mine[:2])
+    assert mine[1:] == theirs[1:]

@@ -436,22 +436,58 @@ def _solutions_of(
 ) -> dict[int, str | MeshState]:
     """The recorded solutions of the stored regions that hold: a side's name, or the rows of average/manual."""
     with reraise():
-        meshes = dict(
-            conn.execute(
-                "SELECT region, solution_mesh FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
+        meshes = {
+            row[0]: row[1:]
+            for row in conn.execute(
+                "SELECT region, solution_mesh, solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells,"
+                " solution_vertex_columns, solution_vertex_values, solution_cell_columns, solution_cell_values"
+                " FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
                 " AND objectkey = %s AND solution_mesh IS NOT NULL",
                 (versionid, objectclass, objectkey),
             ).fetchall()
-        )
+        }
     solutions: dict[int, str | MeshState] = {}
     for region in stored:
         if not region.conflict or region.solution == "unsolved":
             continue
         if region.solution in ("average", "manual"):
-            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), name)
+            mesh, *rows = meshes[region.region]
+            state = state_from_npz(bytes(mesh), name)
+            _require_same_rows(state, rows, region, objectkey)
+            solutions[region.region] = state
         else:
             solutions[region.region] = region.solution
     return solutions
+
+
+def _require_same_rows(state: MeshState, rows: list[Any], region: ConflictRegion, objectkey: str) -> None:
+    """Refuse a solution whose rows for the psql merge (``solution_*``) are not those of its .npz.
+
+    A psql user records both, and nothing in SQL ties them: the psql merge
+    would apply the rows and this merge the .npz, two results of one
+    solution. Compared bit for bit (NaN with NaN: a value of none).
+    """
+    if rows[0] is None:  # recorded with the .npz only: the psql merge refuses it, no second reading
+        return
+    expected = _sql_rows(state)
+    same = expected is not None and all(_same_array(a, b) for a, b in zip(expected, rows, strict=True))
+    if not same:
+        raise InvalidInputError(
+            f"feature {objectkey}: region {region.region}: the rows recorded with its {region.solution} solution "
+            "(tgsis.conflict_regions.solution_*) are not those of its mesh (solution_mesh): they were recorded apart",
+            hint="record the solution again, both from one mesh: tgsis version resolve VERSION ID average|manual "
+            "--region N [--mesh FILE], or tgsis.resolve_region in Python",
+        )
+
+
+def _same_array(a: list[Any], b: list[Any] | None) -> bool:
+    """Two arrays of ids, names or float8 values the same, floats bit for bit with NaN equal to NaN."""
+    if b is None or len(a) != len(b):
+        return False
+    if not a or not isinstance(a[0], float):
+        return list(a) == list(b)
+    x, y = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return bool(np.all((x.view(np.int64) == y.view(np.int64)) | (np.isnan(x) & np.isnan(y))))
 
 
 def _holds(stored: list[ConflictRegion], marks: tuple[str, str], merge: MeshMerge) -> bool:
