@@ -268,3 +268,69 @@ def test_a_solution_whose_rows_are_its_mesh_merges_as_before(conn: Conn, fault: 
     theirs, mine = both_merges(conn, "e1")
     assert theirs[0] == "done" and mine[0] == "done", (theirs[:2], mine[:2])
     assert mine[1:] == theirs[1:]
+
+
+# --------------------------------------------------------------------------- a cell on one vertex twice
+
+_RECORD = (
+    "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s, %s, %s::float8[], %s, %s,"
+    " %s::text[], %s::float8[], %s::text[], %s::float8[])"
+)
+
+
+def _rows_with_a_cell_on_a_vertex_twice(merge: Any) -> tuple[list[Any], int]:
+    """The version's rows as a solution's, one region triangle (a, b, c) made (a, b, b) and the region triangle
+    across (a, b) left out: no edge of the merged mesh is in three triangles (merge_mesh_validity passes it)."""
+    from tgsis.db.regions import _sql_rows
+
+    (region,) = merge.conflicts
+    side = merge.child
+    rows = list(_sql_rows(side) or ())
+    cells = side.cells.copy()
+    inside = np.flatnonzero(np.isin(side.cell_ids, region.cell_ids))
+    c, d = next(
+        (c, d) for c in inside for d in inside if d != c and cells[c, 0] in cells[d] and cells[c, 1] in cells[d]
+    )
+    cells[c, 2] = cells[c, 1]
+    keep = np.arange(len(side.cell_ids)) != d
+    rows[2] = side.cell_ids[keep].tolist()
+    rows[3] = cells[keep].ravel().tolist()
+    rows[7] = np.asarray(rows[7]).reshape(len(side.cell_ids), len(rows[6]))[keep].ravel().tolist()
+    return rows, int(side.cell_ids[c])
+
+
+def test_rows_with_a_cell_on_one_vertex_twice_are_refused_when_recorded(conn: Conn, fault: int) -> None:
+    """Such rows were recorded; the psql merge then failed with the storage's raw 23514 (trgl_distinct_vertices)."""
+    from tgsis.db.regions import state_to_npz
+
+    index, merge = _conflict(conn, fault)
+    rows, cell = _rows_with_a_cell_on_a_vertex_twice(merge)
+    before = everything(conn)
+    conn.commit()
+    state, message, _ = _psql_state(conn, _RECORD, (str(fault), index, state_to_npz(merge.child), *rows))
+    assert state == "TG100", message
+    assert f"cells {cell} use a vertex twice" in message
+    assert everything(conn) == before
+    conn.rollback()
+
+
+def test_stored_rows_with_a_cell_on_one_vertex_twice_are_refused_by_the_psql_merge(conn: Conn, fault: int) -> None:
+    """Rows stored before resolve_region refused them (an older client, a restored dump): TG302 naming the cell,
+    not a raw 23514 from the storage; nothing written."""
+    index, merge = _conflict(conn, fault)
+    rows, cell = _rows_with_a_cell_on_a_vertex_twice(merge)
+    _record_in_sql(conn, fault, index, merge.child)
+    conn.execute(
+        "UPDATE tgsis.conflict_regions SET solution_cell_ids = %s, solution_cells = %s, solution_cell_values = %s"
+        " WHERE versionid = tgsis.version_id('e1') AND region = %s",
+        (rows[2], rows[3], rows[7], index),
+    )
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    for action in ("merge", "refresh"):
+        state, message, hint = _psql_state(conn, f"SELECT tgsis.{action}_version('e1')", ())
+        assert state == "TG302", message
+        assert f"region {index}: cells {cell} use a vertex twice" in message
+        assert everything(conn) == before
+        conn.rollback()

@@ -75,6 +75,14 @@ BEGIN
             OR cardinality(r.solution_vertex_ids) <> (SELECT count(DISTINCT u) FROM unnest(r.solution_vertex_ids) AS u)
             OR cardinality(r.solution_cell_ids) <> (SELECT count(DISTINCT u) FROM unnest(r.solution_cell_ids) AS u))
      ORDER BY r.region LIMIT 1;
+    IF v_why IS NULL THEN  -- a cell on one vertex twice (no MeshState holds it; the storage's check would fail raw)
+        SELECT string_agg(format('region %s: cells %s use a vertex twice', q.region, tgsis.merge_ids_text(q.ids)), '; '
+                          ORDER BY q.region)
+          INTO v_why
+          FROM (SELECT s.region, array_agg(s.id::text ORDER BY s.id) AS ids FROM pg_temp.tgsis_mw_sc s
+                 WHERE cardinality(s.v) > (SELECT count(DISTINCT x) FROM unnest(s.v) AS x)
+                 GROUP BY s.region) AS q;
+    END IF;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: the recorded rows of its solution are no mesh: %', p_refused, v_why
             USING ERRCODE = 'TG302', HINT = p_hint;

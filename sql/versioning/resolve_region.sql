@@ -42,6 +42,7 @@ DECLARE
     v_marks    text[];
     v_row      tgsis.conflict_regions;
     v_object   text;
+    v_object_bad text;
 BEGIN
     IF v_solution IS NULL OR v_solution NOT IN ('parent', 'child', 'base', 'average', 'manual', 'unsolved') THEN
         RAISE EXCEPTION 'solution % of a region is not parent, child, base, average, manual or unsolved',
@@ -85,6 +86,17 @@ BEGIN
                 v_object, cardinality(p_vertex_ids), cardinality(p_vertices), cardinality(p_cell_ids), cardinality(p_cells),
                 cardinality(p_vertex_values), cardinality(p_vertex_columns), cardinality(p_cell_values), cardinality(p_cell_columns)
             USING ERRCODE = 'TG100', HINT = 'three coordinates per vertex, k vertex ids per cell, one value per column per row';
+    END IF;
+    IF p_vertex_ids IS NOT NULL AND cardinality(p_cell_ids) > 0 THEN  -- a cell on one vertex twice is no mesh's
+        SELECT string_agg(c.id::text, ', ' ORDER BY c.o) INTO v_object_bad
+          FROM unnest(p_cell_ids) WITH ORDINALITY AS c(id, o)
+         WHERE (SELECT count(*) <> count(DISTINCT x)
+                  FROM unnest(p_cells[(c.o - 1) * (cardinality(p_cells) / cardinality(p_cell_ids)) + 1
+                                      : c.o * (cardinality(p_cells) / cardinality(p_cell_ids))]) AS x);
+        IF v_object_bad IS NOT NULL THEN
+            RAISE EXCEPTION 'the rows of the mesh of % are no mesh: cells % use a vertex twice', v_object, v_object_bad
+                USING ERRCODE = 'TG100', HINT = 'give each cell k distinct vertex ids';
+        END IF;
     END IF;
     IF p_region IS NULL THEN
         RAISE EXCEPTION 'the region of object % of class % in version % is NULL', quote_literal(p_objectkey),
