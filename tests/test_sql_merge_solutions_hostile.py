@@ -334,3 +334,89 @@ def test_stored_rows_with_a_cell_on_one_vertex_twice_are_refused_by_the_psql_mer
         assert f"region {index}: cells {cell} use a vertex twice" in message
         assert everything(conn) == before
         conn.rollback()
+
+
+# --------------------------------------------------------------------------- rights, two sessions
+
+
+def test_a_role_that_may_resolve_but_not_change_the_class_records_no_rows(conn: Conn, fault: int, db_dsn: str) -> None:
+    """Rows of an average/manual solution are written into the class by the merge of maybe another role: a role
+    with the version's write right but no UPDATE on the class records none (42501, from Python and psql alike);
+    parent/child stay open to it. A role that may not read the class sees no region rows (the policy)."""
+    from tests.roles import login_roles
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    index, merge = _conflict(conn, fault)
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.faults FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        session = made.connect("ed")
+        with pytest.raises(tgsis.MissingPrivilegeError):
+            tgsis.resolve_region(session, "e1", fault, index, "average")
+        session.rollback()
+        rows = _sql_rows(merge.child) or ()
+        state, message, _ = _psql_state(session, _RECORD, (str(fault), index, state_to_npz(merge.child), *rows))
+        assert state == "42501", message
+        assert everything(conn) == before
+        conn.rollback()
+        session.execute("SELECT FROM tgsis.resolve_region('e1', 'feature', %s, %s, 'child')", (str(fault), index))
+        session.commit()
+        _record_in_sql(conn, fault, index, merge.child)
+        conn.execute("REVOKE SELECT ON public.faults FROM tgsis_reader, tgsis_editor")
+        conn.commit()
+        assert session.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+        session.rollback()
+
+
+def test_a_merge_while_another_session_records_a_solution_waits_and_merges_that_one(
+    conn: Conn, fault: int, db_dsn: str
+) -> None:
+    """Session B records a manual mesh over an average, not committed yet; session A's psql merge waits for it (the
+    regions' rows are locked) and merges B's mesh once B commits: never a mix of the two solutions' rows."""
+    import threading
+    import time
+
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    index, merge = _conflict(conn, fault)
+    tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    xyz = merge.child.vertices.copy()
+    xyz[np.isin(merge.child.vertex_ids, MIDDLE), 2] += 2.0
+    manual = _replace(merge.child, vertices=xyz)
+    with psycopg.connect(db_dsn) as b:
+        b.execute(_RECORD, (str(fault), index, state_to_npz(manual), *(_sql_rows(manual) or ())))
+        done: dict[str, Any] = {}
+
+        def merge_in_a() -> None:
+            with psycopg.connect(db_dsn) as a:
+                done["rows"] = a.execute("SELECT tgsis.merge_version('e1')").fetchone()
+
+        thread = threading.Thread(target=merge_in_a)
+        thread.start()
+        waited = False
+        for _ in range(100):
+            (waiting,) = conn.execute(
+                "SELECT count(*) FROM pg_stat_activity WHERE datname = current_database() AND wait_event_type = 'Lock'"
+                " AND query LIKE 'SELECT tgsis.merge_version%%'"
+            ).fetchone()  # type: ignore[misc]
+            conn.rollback()
+            if waiting:
+                waited = True
+                break
+            time.sleep(0.1)
+        assert waited and thread.is_alive()
+        b.commit()
+        thread.join(60)
+    assert done["rows"] is not None
+    with tgsis.in_version(conn, "DEFAULT"):
+        got = conn.execute(
+            "SELECT vrtxid, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = ANY (%s) ORDER BY vrtxid",
+            (fault, MIDDLE.tolist()),
+        ).fetchall()
+    conn.rollback()
+    at = np.searchsorted(manual.vertex_ids, MIDDLE)
+    assert [(int(i), float(z)) for i, z in got] == list(zip(MIDDLE.tolist(), manual.vertices[at, 2].tolist()))
