@@ -420,3 +420,44 @@ def test_a_merge_while_another_session_records_a_solution_waits_and_merges_that_
     conn.rollback()
     at = np.searchsorted(manual.vertex_ids, MIDDLE)
     assert [(int(i), float(z)) for i, z in got] == list(zip(MIDDLE.tolist(), manual.vertices[at, 2].tolist()))
+
+
+# --------------------------------------------------------------------------- GOCAD atoms and parts that are no whole numbers
+
+
+@pytest.mark.parametrize("ref", [5.5, 5.9, 1e19])
+def test_a_manual_refid_that_is_no_vertex_id_is_refused_by_both_merges(conn: Conn, fault: int, ref: float) -> None:
+    """A manual mesh's atom refid 5.5 or 5.9: Python wrote the atom on vertex 5 (truncated), psql on vertex 6
+    (rounded), each said done; 1e19: Python wrote refid -2**63. Both refuse it now, naming the atom's vertex."""
+    atom = "INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, %s, %s)"
+    psql(conn, "DEFAULT", (atom, (fault, int(MIDDLE[0]), int(MIDDLE[1]), True)))
+    conn.execute("SELECT tgsis.merge_version('e1', true)")
+    conn.commit()
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    index, merge = _conflict(conn, fault)
+    side = merge.child
+    refid = np.asarray(side.vertex_properties["refid"], dtype=np.float64).copy()
+    refid[np.searchsorted(side.vertex_ids, MIDDLE[0])] = ref
+    _record_in_sql(conn, fault, index, _replace(side, vertex_properties={**side.vertex_properties, "refid": refid}))
+    theirs, mine = _refused_alike(conn, f"refid {ref:g}" if ref < 1e6 else "refid", f"ids {MIDDLE[0]}")
+    assert theirs[1] == mine[1] == "TG302"
+    assert "atoms (refid)" in theirs[2] and f"at ids [{MIDDLE[0]}]" in theirs[2], theirs
+
+
+def test_a_manual_part_that_is_no_part_number_is_refused_by_both_merges(conn: Conn) -> None:
+    """Cells of parts 2.5 and 2.7 side by side: Python wrote two runs of part 2, psql one run of part 3."""
+    from tests.test_sql_merge_write import _parted_fault
+
+    geoid = _parted_fault(conn)
+    index, merge = _conflict(conn, geoid)
+    (region,) = merge.conflicts
+    side = merge.child
+    part = np.asarray(side.cell_properties["part"], dtype=np.float64).copy()
+    at = np.flatnonzero(np.isin(side.cell_ids, region.cell_ids))
+    part[at[:2]] = 2.5
+    part[at[2:4]] = 2.7
+    _record_in_sql(conn, geoid, index, _replace(side, cell_properties={**side.cell_properties, "part": part}))
+    theirs, mine = _refused_alike(conn, "part 2.5", f"ids {side.cell_ids[at[0]]}")
+    assert theirs[1] == mine[1] == "TG302"
+    assert "cell parts" in theirs[2] and "no part numbers" in theirs[2], theirs

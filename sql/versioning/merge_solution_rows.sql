@@ -194,10 +194,32 @@ BEGIN
                              WHERE s.based', v_side.work, v_side.s, v_side.t);
         END IF;
     END LOOP;
+    -- an atom's refid is a vertex id and a part a part number: a value of neither (5.5: the cast rounded it where
+    -- the Python writer truncates; beyond the column) is refused, as the Python writer refuses it
+    SELECT string_agg(format('region %s: %s %s at ids %s', q.region, q.what, q.val, tgsis.merge_ids_text(q.ids)), '; '
+                      ORDER BY q.region, q.what)
+      INTO v_why
+      FROM (SELECT s.region, 'refid' AS what, min(s.x) AS val, array_agg(s.id::text ORDER BY s.id) AS ids
+              FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, 'refid')] AS x FROM pg_temp.tgsis_mw_sv s) AS s
+             WHERE s.x >= 0 AND s.x <> 'NaN' AND (s.x <> trunc(s.x) OR s.x >= 9223372036854775808::float8)
+             GROUP BY s.region
+            UNION ALL
+            SELECT s.region, 'part', min(s.x), array_agg(s.id::text ORDER BY s.id)
+              FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, 'part')] AS x FROM pg_temp.tgsis_mw_sc s) AS s
+             WHERE s.x >= 0 AND s.x <> 'NaN' AND (s.x <> trunc(s.x) OR s.x >= 2147483648::float8)
+             GROUP BY s.region) AS q;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: its solution rows hold atoms'' refid or cell parts that are no whole vertex ids or part numbers (%)',
+                p_refused, v_why
+            USING ERRCODE = 'TG302',
+                  HINT = 'record the solution again with whole numbers (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
+    END IF;
     UPDATE pg_temp.tgsis_mw_sv s SET ref = s.vals[array_position(s.cols, 'refid')]::bigint
-     WHERE s.vals[array_position(s.cols, 'refid')] BETWEEN 0 AND 9e18;  -- (NaN is above every number)
+     WHERE s.vals[array_position(s.cols, 'refid')] >= 0
+       AND s.vals[array_position(s.cols, 'refid')] < 9223372036854775808::float8;  -- (NaN is above every number)
     UPDATE pg_temp.tgsis_mw_sc s SET part = s.vals[array_position(s.cols, 'part')]::bigint
-     WHERE s.vals[array_position(s.cols, 'part')] BETWEEN 0 AND 9e18;
+     WHERE s.vals[array_position(s.cols, 'part')] >= 0
+       AND s.vals[array_position(s.cols, 'part')] < 2147483648::float8;
 
     -- a vertex of an id no state changed, inside its region, is the base's: else SQL does not merge it (refused);
     -- one the solution lacks is refused alike (the margin's cells are rewritten or removed: below)

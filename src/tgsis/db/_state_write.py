@@ -245,7 +245,24 @@ def _atoms(state: MeshState) -> tuple[IntArray, IntArray]:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     refid = np.asarray(refid)
     at = np.flatnonzero(~np.isnan(refid) & (refid >= 0)) if refid.dtype.kind == "f" else np.flatnonzero(refid >= 0)
+    _require_whole(refid[at], state.vertex_ids[at], 2.0**63, f"{state.name}: atoms (refid)", "vertex ids")
     return state.vertex_ids[at], refid[at].astype(np.int64)
+
+
+def _require_whole(values: npt.NDArray[Any], ids: npt.NDArray[np.int64], above: float, what: str, word: str) -> None:
+    """Refuse float ids or part numbers that are not whole numbers below ``above`` (a manual mesh's 5.5, 1e19).
+
+    They were cast to int64: truncated (5.5 as 5, where the psql merge rounded it to 6) or, beyond int64,
+    wrapped (1e19 as -2**63): written with a success either way.
+    """
+    if values.dtype.kind != "f" or not len(values):
+        return
+    bad = (values != np.trunc(values)) | (values >= above)
+    if bad.any():
+        raise InvalidInputError(
+            f"{what}: values {np.unique(values[bad])[:5].tolist()} at ids {ids[bad][:10].tolist()} are no {word}",
+            hint="give whole numbers (a manual solution) or solve the object as a whole",
+        )
 
 
 def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage: Storage) -> tuple[int, int]:
@@ -280,6 +297,7 @@ def _part_rows(geoid: int, state: MeshState) -> list[tuple[int, ...]]:
     """The ``tgsis.part`` runs of a state's cells; a cell in no run (part -1 or NaN, as read) stays in none."""
     parts = np.asarray(state.cell_properties[PART_PROPERTY])
     inside = ~np.isnan(parts) & (parts >= 0) if parts.dtype.kind == "f" else parts >= 0
+    _require_whole(parts[inside], state.cell_ids[inside], 2.0**31, f"{state.name}: cell parts", "part numbers")
     return part_rows(geoid, state.cell_ids[inside], parts[inside])
 
 
