@@ -461,3 +461,35 @@ def test_a_manual_part_that_is_no_part_number_is_refused_by_both_merges(conn: Co
     theirs, mine = _refused_alike(conn, "part 2.5", f"ids {side.cell_ids[at[0]]}")
     assert theirs[1] == mine[1] == "TG302"
     assert "cell parts" in theirs[2] and "no part numbers" in theirs[2], theirs
+
+
+# --------------------------------------------------------------------------- a real column
+
+
+@pytest.mark.parametrize(("value", "shown"), [(1e39, "1e+39"), (-1e39, "-1e+39"), (1e-46, "1e-46")])
+def test_manual_values_a_real_column_cannot_hold_are_refused_by_both_merges(
+    conn: Conn, value: float, shown: str
+) -> None:
+    """A real vertex property given 1e39 (float4 overflows) or 1e-46 (float4 underflows to 0): Python wrote inf and 0
+    and said done, psql failed with a raw 22003. Both refuse it now, naming the property; nothing written."""
+    from tests.merge_data import curved_surface
+    from tgsis.db import features as F
+
+    F.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        cell_properties=[("porosity", "real"), tgsis.Property("facies", "int", alignment="CELL")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "faults", curved_surface())
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    index, merge = _conflict(conn, geoid)
+    side = merge.child
+    porosity = np.asarray(side.vertex_properties["porosity"], dtype=np.float64).copy()
+    porosity[np.isin(side.vertex_ids, MIDDLE)] = value
+    _record_in_sql(conn, geoid, index, _replace(side, vertex_properties={"porosity": porosity}))
+    theirs, mine = _refused_alike(conn, "vertex property porosity (real)", shown)
+    assert theirs[1] == mine[1] == "TG302"
+    assert "vertex property porosity (real)" in theirs[2] and "do not fit the column" in theirs[2], theirs

@@ -11,8 +11,9 @@
 -- refused (TG302; the Python merge refuses it TG100). Values come as float8 (the
 -- Python client's arrays): a float column is written as the float8 (real: as
 -- numpy rounds it to float4), an integer one truncated, as the Python writer
--- writes them; a value an integer column cannot hold (infinite, beyond its
--- type) is refused (TG302), as the Python writer refuses it. Refused too (TG302, p_hint: the Python merge applies it): a
+-- writes them; a value a column cannot hold (an integer one: infinite, beyond
+-- its type; a real one: overflowing or underflowing float4) is refused (TG302),
+-- as the Python writer refuses it. Refused too (TG302, p_hint: the Python merge applies it): a
 -- vertex row of the region no state changed that differs from the base's or
 -- that the solution lacks (the region's margin cells are rewritten or
 -- removed as in Python), a class property column the rows lack
@@ -139,26 +140,32 @@ BEGIN
                 RAISE EXCEPTION '%: the % property columns of its solution rows are not the class''s (%)', p_refused, v_side.word, v_why
                     USING ERRCODE = 'TG302', HINT = p_hint;
             END IF;
-            -- a value an integer column cannot hold (infinite, or beyond the type once truncated): refused, as the
-            -- Python writer refuses it (not a raw 22003 from the cast below)
-            SELECT string_agg(format('SELECT format(''region %%s: %s property %s (%s) value %%s at ids %%s'', min(s.region),
+            -- a value the column cannot hold, refused as the Python writer refuses it (not a raw 22003 from the casts
+            -- below): an integer one infinite or beyond the type once truncated; a real one finite that float4 makes
+            -- infinite (from half an ulp above its largest value), or non-zero that it makes 0 (up to 2^-150)
+            SELECT string_agg(format('SELECT format(''region %%s: %s property %s (%s) value %%s at ids %%s'', s.region,
                                          min(s.x), tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))
                                         FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, %L)] AS x
                                                 FROM pg_temp.%I s) AS s
-                                       WHERE s.x <> ''NaN'' AND NOT (trunc(s.x) >= %s::float8 AND trunc(s.x) < %s::float8)
-                                      HAVING count(*) > 0',
+                                       WHERE s.x <> ''NaN'' AND %s
+                                       GROUP BY s.region',
                                      v_side.word, quote_ident(a.attname), format_type(a.atttypid, a.atttypmod), a.attname,
-                                     v_side.work, -(2::numeric ^ (8 * a.attlen - 1)), 2::numeric ^ (8 * a.attlen - 1)),
+                                     v_side.work,
+                                     CASE WHEN a.atttypid = 'real'::regtype
+                                          THEN 'abs(s.x) <> ''Infinity'' AND (abs(s.x) >= 3.4028235677973366e38::float8'
+                                               ' OR (s.x <> 0 AND abs(s.x) <= 7.006492321624085e-46::float8))'
+                                          ELSE format('NOT (trunc(s.x) >= %s::float8 AND trunc(s.x) < %s::float8)',
+                                                      -(2::numeric ^ (8 * a.attlen - 1)), 2::numeric ^ (8 * a.attlen - 1)) END),
                               ' UNION ALL ' ORDER BY a.attnum)
               INTO v_why
               FROM pg_catalog.pg_attribute a
              WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0 AND NOT a.attisdropped
-               AND a.atttypid IN ('smallint'::regtype, 'integer'::regtype, 'bigint'::regtype);
+               AND a.atttypid IN ('smallint'::regtype, 'integer'::regtype, 'bigint'::regtype, 'real'::regtype);
             IF v_why IS NOT NULL THEN
                 EXECUTE format('SELECT string_agg(w, ''; '') FROM (%s) AS q(w)', v_why) INTO v_why;
             END IF;
             IF v_why IS NOT NULL THEN
-                RAISE EXCEPTION '%: its solution rows hold values an integer column cannot hold (%)', p_refused, v_why
+                RAISE EXCEPTION '%: its solution rows hold values a column cannot hold (%)', p_refused, v_why
                     USING ERRCODE = 'TG302',
                           HINT = 'record the solution again with values the columns hold (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
             END IF;

@@ -148,16 +148,29 @@ _INTEGER_RANGES: dict[str, tuple[int, int]] = {
 }
 
 
-def _check_integer_range(values: npt.NDArray[Any], wire: str, ids: npt.ArrayLike, what: str) -> None:
-    """Refuse values an integer column of ``wire`` cannot hold (infinite, or beyond its range once truncated).
+def _check_column_range(values: npt.NDArray[Any], wire: str, ids: npt.ArrayLike, what: str) -> None:
+    """Refuse values an integer column of ``wire`` cannot hold (infinite, or beyond its range once truncated), or
+    a real (float4) one (finite values it would make infinite, non-zero ones it would make 0).
 
     A float such as an ``average``/``manual`` solution's 1e10 or +inf was cast to int64 and then to the
     column's width, wrapping silently (1e10 was written 1410065408 into an integer column, inf as 0).
     """
+    flat = np.asarray(values)
+    if wire == "float4" and flat.dtype.kind == "f" and len(flat):  # as PostgreSQL's float8 -> real cast refuses
+        with np.errstate(over="ignore", under="ignore"):
+            narrow = flat.astype(np.float32)
+        bad = (np.isinf(narrow) & np.isfinite(flat)) | ((narrow == 0) & (flat != 0))
+        bad = bad.reshape(len(flat), -1).any(axis=1)
+        if bad.any():
+            raise InvalidInputError(
+                f"{what}: values {np.unique(flat.reshape(len(flat), -1)[bad])[:5].tolist()} at ids "
+                f"{np.asarray(ids)[bad][:10].tolist()} do not fit the column (float4 overflows or underflows to 0)",
+                hint="give those rows values the column holds (a manual solution) or solve the object as a whole",
+            )
+        return
     if wire not in _INTEGER_RANGES or not len(values):
         return
     low, high = _INTEGER_RANGES[wire]
-    flat = np.asarray(values)
     if flat.dtype.kind == "f":
         with np.errstate(invalid="ignore"):
             bad = ~np.isfinite(flat) | (np.trunc(flat) < float(low)) | (np.trunc(flat) >= float(high) + 1)
@@ -227,7 +240,7 @@ def _write_properties(
                             "the merged rows cannot be written",
                             hint="give those rows values (a manual solution) or solve the object as a whole",
                         )
-                _check_integer_range(
+                _check_column_range(
                     chosen, wire, new_ids[fresh], f"{new.name}: {alignment.lower()} property {p.name} ({p.type})"
                 )
                 if wire not in ("float4", "float8") and chosen.dtype.kind == "f":
@@ -659,6 +672,10 @@ def _write_table_difference(
                     f"feature {geoid}: {new.table}.{name} has no value for some merged rows: they cannot be written",
                     hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )
+        if not wire.endswith("[]"):  # (a value the column cannot hold was cast and wrapped)
+            at = np.asarray(new.keys[0][2])[fresh] if new.keys else fresh
+            _check_column_range(chosen, wire, at, f"feature {geoid}: {new.table}.{name}")
+        if wire not in ("float4", "float8") and chosen.dtype.kind == "f" and not wire.endswith("[]"):
             chosen = chosen.astype(np.int64)
         columns.append((name, chosen, wire))
     storage.copy(conn, new.schema, new.table, columns)
