@@ -32,7 +32,7 @@ def fault(conn: Conn, fault_clone: int) -> int:
 
 
 def _replace(state: MeshState, **changes: Any) -> MeshState:
-    fields = {
+    fields: dict[str, Any] = {
         "cell_size": state.cell_size,
         "vertex_ids": state.vertex_ids,
         "vertices": state.vertices,
@@ -249,9 +249,12 @@ def test_a_solution_whose_rows_are_not_its_mesh_is_not_merged_by_python(conn: Co
     _record_apart(conn, fault, index, _replace(merge.child, vertices=xyz), merge.parent)
     before = everything(conn)
     conn.commit()
-    for action in (lambda: tgsis.merge_version(conn, "e1"), lambda: tgsis.refresh_version(conn, "e1")):
+    for action in ("merge", "refresh"):
         with pytest.raises(tgsis.Error) as refused:
-            action()
+            if action == "merge":
+                tgsis.merge_version(conn, "e1")
+            else:
+                tgsis.refresh_version(conn, "e1")
         conn.rollback()
         assert f"region {index}" in str(refused.value) and "are not those of its mesh" in str(refused.value)
         assert everything(conn) == before
