@@ -496,3 +496,38 @@ def test_manual_values_a_real_column_cannot_hold_are_refused_by_both_merges(
     theirs, mine = _refused_alike(conn, "vertex property porosity (real)", shown)
     assert theirs[1] == mine[1] == "TG302"
     assert "vertex property porosity (real)" in theirs[2] and "do not fit the column" in theirs[2], theirs
+
+
+# --------------------------------------------------------------------------- average of an integer property
+
+
+def test_average_keeps_the_parents_value_of_an_integer_property_read_with_gaps(conn: Conn, fault: int) -> None:
+    """facies is an integer column; one cell of the object has no facies row, so the states read facies as float64
+    (NaN for none). The average took the middle of the two sides' facies there (4 and 1: written 2, a code no side
+    gave, by both merges, each said done); the rule is the middle of real-valued properties only, the parent's
+    value of any other. Now both merges write the parent's 4."""
+    from tests.test_sql_merge_regions import property_tables
+
+    _, cp = property_tables(conn, fault)
+    psql(conn, "DEFAULT", (f"DELETE FROM {cp} WHERE _geoid = %s AND _idx = 0", (fault,)))
+    conn.execute("SELECT tgsis.merge_version('e1', true)")
+    conn.commit()
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    psql(conn, "e1", (f"UPDATE {cp} SET facies = 1 WHERE _geoid = %s AND _idx IN (59, 60)", (fault,)))
+    psql(conn, "DEFAULT", (f"UPDATE {cp} SET facies = 4 WHERE _geoid = %s AND _idx IN (59, 60)", (fault,)))
+    index, merge = _conflict(conn, fault)
+    assert np.asarray(merge.child.cell_properties["facies"]).dtype.kind == "f"  # read with a gap
+    result = tgsis.resolve_region(conn, "e1", fault, index, "average")
+    conn.commit()
+    assert result.state is not None
+    at = np.isin(result.state.cell_ids, [59, 60])
+    assert np.asarray(result.state.cell_properties["facies"])[at].tolist() == [4.0, 4.0]
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == mine[0] == "done", (theirs[:2], mine[:2])
+    assert mine[1:] == theirs[1:]
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    with tgsis.in_version(conn, "DEFAULT"):
+        facies = conn.execute(f"SELECT _idx, facies FROM {cp} WHERE _geoid = %s AND _idx IN (59, 60)", (fault,))
+        assert sorted(facies.fetchall()) == [(59, 4), (60, 4)]
+    conn.rollback()

@@ -28,7 +28,7 @@ import json
 import math
 import shlex
 import zipfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, TypeVar, cast
@@ -51,6 +51,8 @@ from tgsis.db._merge_states import (
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
+from tgsis.db.classes import class_of_feature
+from tgsis.db.copy import SQL_TYPES
 from tgsis.db.versions import CONFLICT_COLUMNS, Conflict, ConflictRegion, show_name
 from tgsis.db.versions import resolve_conflict as resolve_whole_object
 from tgsis.errors import (
@@ -758,7 +760,7 @@ def _resolve(
     target = merge.regions[index]
     given: Solution
     if solution == "average":
-        given = average_region(merge, target)
+        given = average_region(merge, target, _real_properties(conn, feature_id))
     elif solution == "manual":
         assert mesh is not None
         given = _manual_state(merge, target, mesh, name)
@@ -854,7 +856,7 @@ def _resolve_sliced(
     mm = merge.merges[target.key]
     given: Solution
     if solution == "average":
-        given = average_region(mm, target.region)
+        given = average_region(mm, target.region, _real_properties(conn, feature_id))
     elif solution == "manual":
         assert mesh is not None
         given = _manual_state(mm, target.region, mesh, name)
@@ -1137,10 +1139,11 @@ def _resolve_all(
         return _resolve_all_sliced(conn, version, feature_id, key, stored, solution, discard_other, name)
     merge = _checked_merge(conn, version, feature_id, stored, name)
     given: dict[int, Solution] = {}
+    real = _real_properties(conn, feature_id)
     for region in merge.conflicts:
         if solution == "average":
             try:
-                given[region.index] = average_region(merge, region)
+                given[region.index] = average_region(merge, region, real)
             except RegionSolutionError as exc:  # the whole solution is refused: say which region refused it
                 raise RegionSolutionError(
                     f"{name}: average of all its regions refused, nothing recorded: {exc.message}", hint=exc.hint
@@ -1194,10 +1197,11 @@ def _resolve_all_sliced(
     """:func:`_resolve_all` for a model-2/3 object: every conflicting region of every slice, all or nothing."""
     merge = _checked_sliced_merge(conn, version, feature_id, stored, name)
     given: dict[int, Solution] = {}
+    real = _real_properties(conn, feature_id)
     for r in merge.conflicts:
         if solution == "average":
             try:
-                given[r.index] = average_region(merge.merges[r.key], r.region)
+                given[r.index] = average_region(merge.merges[r.key], r.region, real)
             except RegionSolutionError as exc:
                 raise RegionSolutionError(
                     f"{name}: average of all its regions refused, nothing recorded: region {r.index}: {exc.message}",
@@ -1340,9 +1344,10 @@ def _average_object(
             else f"merge it: tgsis version merge {shlex.quote(version)}",
         )
     averages: dict[int, Solution] = {}
+    real = _real_properties(conn, feature_id)
     for region in merge.conflicts:
         try:
-            averages[region.index] = average_region(merge, region)
+            averages[region.index] = average_region(merge, region, real)
         except RegionSolutionError as exc:
             raise RegionSolutionError(
                 f"{name}: average refused, nothing written: {exc.message}", hint=exc.hint
@@ -1420,7 +1425,19 @@ def _rows_state(
     )
 
 
-def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
+def _real_properties(conn: Conn, feature_id: int) -> tuple[frozenset[str], frozenset[str]]:
+    """The names of the feature's real-valued vertex and cell properties (columns real or double precision)."""
+    fc = class_of_feature(conn, feature_id)
+    vertex, cell = (
+        frozenset(p.name for p in fc.aligned(a) if SQL_TYPES.get(p.type) in ("float4", "float8"))
+        for a in ("VERTEX", "CELL")
+    )
+    return vertex, cell
+
+
+def average_region(
+    merge: MeshMerge, region: MergeRegion, real: tuple[Collection[str], Collection[str]] | None = None
+) -> MeshState:
     """The ``average`` solution of a conflicting region: its rows at the middle of the two sides.
 
     The rule (docs/merge.md): when the region's rows are the parent's and
@@ -1438,6 +1455,11 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
     vertices both sides share as control vertices (see
     :func:`_average_of_meshings`): attached to the unchanged rest without a
     seam, with the finer side's ids (no new id, so none clashes).
+
+    ``real`` names the vertex and the cell properties whose column is
+    real-valued (``real``, ``double precision``): an integer column read as
+    floats (NaN where a row is missing) is no real-valued property and keeps
+    the parent's values. None: every float array is taken for one.
 
     Raises
     ------
@@ -1465,13 +1487,13 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
     vertices[at_p] = middle
     vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
     for n, values in vprops.items():
-        if values.dtype.kind == "f":
+        if values.dtype.kind == "f" and (real is None or n in real[0]):
             values[at_p] = (
                 0.5 * np.asarray(parent.vertex_properties[n])[pv] + 0.5 * np.asarray(child.vertex_properties[n])[cv]
             )
     cprops = {n: np.asarray(v).copy() for n, v in rows.cell_properties.items()}
     for n, values in cprops.items():
-        if values.dtype.kind == "f":
+        if values.dtype.kind == "f" and (real is None or n in real[1]):
             values[:] = 0.5 * np.asarray(parent.cell_properties[n])[pc] + 0.5 * np.asarray(child.cell_properties[n])[cc]
     return MeshState(
         rows.cell_size,
