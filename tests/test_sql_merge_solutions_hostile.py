@@ -531,3 +531,53 @@ def test_average_keeps_the_parents_value_of_an_integer_property_read_with_gaps(c
         facies = conn.execute(f"SELECT _idx, facies FROM {cp} WHERE _geoid = %s AND _idx IN (59, 60)", (fault,))
         assert sorted(facies.fetchall()) == [(59, 4), (60, 4)]
     conn.rollback()
+
+
+def test_average_of_two_meshings_keeps_an_integer_vertex_property_read_with_gaps(conn: Conn) -> None:
+    """The two-meshings average (average_shape) carried every float vertex array halfway, an integer column read as
+    floats too: its values became fractions, written truncated (codes no side gave). Now only real columns."""
+    from tests.merge_data import curved_surface
+    from tests.test_merge_average import _moved, _subdivided, _write
+    from tests.test_sql_merge_regions import property_tables
+    from tgsis.db import features as F
+
+    F.create_feature_class(
+        conn,
+        "faults",
+        "SURFACE",
+        cell_properties=[("porosity", "float8"), ("code", "int"), tgsis.Property("facies", "int", alignment="CELL")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    surface.vertex_properties["code"] = np.arange(len(surface.vertices), dtype=np.int64) * 3
+    geoid = F.insert_feature(conn, "faults", surface)
+    conn.commit()
+    vp, _ = property_tables(conn, geoid)
+    psql(conn, "DEFAULT", (f"DELETE FROM {vp} WHERE _geoid = %s AND _idx = 0", (geoid,)))  # vertex 0: no row
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    base = MeshState.from_mesh(surface)
+    props = {n: np.asarray(v, dtype=np.float64).copy() for n, v in base.vertex_properties.items()}
+    for values in props.values():
+        values[0] = np.nan
+    base = _replace(base, vertex_properties=props)
+    code = props["code"]
+    finer = _subdivided(base)
+    new = finer.n_vertices - base.n_vertices
+    finer = _replace(
+        finer, vertex_properties={**finer.vertex_properties, "code": np.concatenate([code, np.full(new, 5.0)])}
+    )
+    _write(conn, "e1", geoid, base, finer)
+    _write(conn, "DEFAULT", geoid, base, _moved(base))
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    [region] = [r for r in conflict.regions if r.conflict]
+    result = tgsis.resolve_region(conn, "e1", geoid, region.region, "average")
+    conn.commit()
+    assert result.state is not None
+    values = np.asarray(result.state.vertex_properties["code"], dtype=np.float64)
+    values = values[~np.isnan(values)]
+    assert np.array_equal(values, np.trunc(values)), values[values != np.trunc(values)][:5]
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == mine[0] == "done", (theirs[:2], mine[:2])
+    assert mine[1:] == theirs[1:]

@@ -1479,7 +1479,7 @@ def average_region(
         and np.array_equal(np.sort(parent.cells[pc], axis=1), np.sort(child.cells[cc], axis=1))
     )
     if not same_topology:
-        return _average_of_meshings(merge, region)
+        return _average_of_meshings(merge, region, real)
     rows = _rows_state(merge, parent, vids, cids, merge.base.name)
     at_p = np.flatnonzero(np.isin(rows.vertex_ids, parent.vertex_ids[pv]))  # the region's own vertices
     middle = 0.5 * parent.vertices[pv] + 0.5 * child.vertices[cv]
@@ -1547,7 +1547,9 @@ def _patch_surface(patch: _Patch) -> Any:
     return Surface(patch.state.vertices[patch.at_vertices], patch.triangles, vertex_properties=props)
 
 
-def _average_of_meshings(merge: MeshMerge, region: MergeRegion) -> MeshState:
+def _average_of_meshings(
+    merge: MeshMerge, region: MergeRegion, real: tuple[Collection[str], Collection[str]] | None = None
+) -> MeshState:
     """``average`` of a region the two sides meshed differently: the morphological average shape of their patches.
 
     Each side's triangles of the region (its patch: the region's own
@@ -1618,13 +1620,19 @@ def _average_of_meshings(merge: MeshMerge, region: MergeRegion) -> MeshState:
         ) from exc
     if middle.n_vertices != len(source.vertex_ids) or not np.array_equal(middle.cells, source.triangles):
         raise RegionSolutionError(f"{name}: the average shape re-meshed the region", hint=_NOT_AVERAGED)
-    state = _averaged_rows(merge, region, source, middle, controls, name)
+    state = _averaged_rows(merge, region, source, middle, controls, name, real)
     _check_average(merge, region, source, state, name)
     return state
 
 
 def _averaged_rows(
-    merge: MeshMerge, region: MergeRegion, source: _Patch, middle: Any, controls: npt.NDArray[np.int64], name: str
+    merge: MeshMerge,
+    region: MergeRegion,
+    source: _Patch,
+    middle: Any,
+    controls: npt.NDArray[np.int64],
+    name: str,
+    real: tuple[Collection[str], Collection[str]] | None = None,
 ) -> MeshState:
     """The source's rows of the region at the average shape; the rest's rows as they are (see _average_of_meshings)."""
     own = source.vertex_ids[np.isin(source.vertex_ids, region.vertex_ids)]
@@ -1633,7 +1641,9 @@ def _averaged_rows(
     vertices = rows.vertices.copy()
     vertices[at_rows] = middle.vertices[at_mid]
     vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
-    for n, values in middle.vertex_properties.items():
+    carried = [n for n in middle.vertex_properties if real is None or n in real[0]]  # (not an integer column's)
+    for n in carried:
+        values = middle.vertex_properties[n]
         vprops[n] = vprops[n].astype(np.float64)
         vprops[n][at_rows] = np.asarray(values)[at_mid]
     # the shared border's region rows: their own straight path, exactly as for one meshing
@@ -1642,7 +1652,7 @@ def _averaged_rows(
     at_c = np.searchsorted(merge.child.vertex_ids, paired)
     at_s = np.searchsorted(rows.vertex_ids, paired)
     vertices[at_s] = 0.5 * merge.parent.vertices[at_p] + 0.5 * merge.child.vertices[at_c]
-    for n in middle.vertex_properties:
+    for n in carried:
         vprops[n][at_s] = (
             0.5 * np.asarray(merge.parent.vertex_properties[n])[at_p]
             + 0.5 * np.asarray(merge.child.vertex_properties[n])[at_c]
