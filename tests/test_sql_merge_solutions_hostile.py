@@ -581,3 +581,37 @@ def test_average_of_two_meshings_keeps_an_integer_vertex_property_read_with_gaps
     theirs, mine = both_merges(conn, "e1")
     assert theirs[0] == mine[0] == "done", (theirs[:2], mine[:2])
     assert mine[1:] == theirs[1:]
+
+
+def test_a_bigint_property_beyond_2_53_records_no_rows_and_python_merges_it_exactly(conn: Conn) -> None:
+    """float8 rows cannot hold 2**53 + 1: the average is recorded with its .npz only; psql refuses it naming the
+    Python command, and the Python merge writes the values exactly."""
+    from tests.merge_data import curved_surface
+    from tgsis.db import features as F
+
+    F.create_feature_class(conn, "faults", "SURFACE", cell_properties=[("code", "bigint")])
+    tgsis.enable_feature_versioning(conn)
+    surface = curved_surface()
+    codes = np.arange(len(surface.vertices), dtype=np.int64) + 2**53 + 1
+    surface = tgsis.Surface(surface.vertices, surface.cells, vertex_properties={"code": codes}, name="fault")
+    geoid = F.insert_feature(conn, "faults", surface)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    index = _both_moved(conn, geoid)
+    tgsis.resolve_region(conn, "e1", geoid, index, "average")
+    conn.commit()
+    (rows,) = conn.execute(
+        "SELECT solution_vertex_ids IS NULL AND solution_mesh IS NOT NULL FROM tgsis.conflict_regions"
+        " WHERE versionid = tgsis.version_id('e1') AND region = %s",
+        (index,),
+    ).fetchone()  # type: ignore[misc]
+    conn.rollback()
+    assert rows
+    message = _psql_refuses_what_python_merges(conn, "average with its mesh only")
+    assert f"feature {geoid}" in message
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        got = dict(conn.execute("SELECT _idx, code FROM public.faults_cellpros WHERE _geoid = %s", (geoid,)).fetchall())
+    conn.rollback()
+    assert got == {i: int(c) for i, c in enumerate(codes)}
