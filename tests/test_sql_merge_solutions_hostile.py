@@ -239,14 +239,33 @@ def _record_apart(conn: Conn, fault: int, index: int, mesh: MeshState, rows_of: 
     conn.commit()
 
 
-def test_a_solution_whose_rows_are_not_its_mesh_is_not_merged_by_python(conn: Conn, fault: int) -> None:
+def test_a_solution_whose_rows_are_not_its_mesh_is_refused_when_recorded_and_by_both_merges(
+    conn: Conn, fault: int
+) -> None:
     """The .npz says the region is 11 m up, the rows say it is where the parent has it: the Python merge applied
-    the .npz and the psql merge the rows, two results of one recorded solution, each said done. The Python merge
-    now refuses it (the object stays an unsolved conflict, naming the region), nothing written."""
+    the .npz and the psql merge the rows, two results of one recorded solution, each said done. resolve_region
+    now refuses such rows (TG100, nothing recorded); rows stored before (an older client, a dump) are refused by
+    both merges, naming the region; nothing written."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
     index, merge = _conflict(conn, fault)
     xyz = merge.child.vertices.copy()
     xyz[np.isin(merge.child.vertex_ids, MIDDLE), 2] += 11.0
-    _record_apart(conn, fault, index, _replace(merge.child, vertices=xyz), merge.parent)
+    shown = _replace(merge.child, vertices=xyz)
+    before = everything(conn)
+    conn.commit()
+    args = (str(fault), index, state_to_npz(shown), *(_sql_rows(merge.parent) or ()))
+    state, message, _ = _psql_state(conn, _RECORD, args)
+    assert state == "TG100" and "are not those of its .npz: its vertices" in message, message
+    assert everything(conn) == before
+    conn.rollback()
+    _record_apart(conn, fault, index, shown, shown)
+    rows = _sql_rows(merge.parent) or ()
+    conn.execute(
+        "UPDATE tgsis.conflict_regions SET solution_vertices = %s WHERE versionid = tgsis.version_id('e1') AND region = %s",
+        (rows[1], index),
+    )
+    conn.commit()
     before = everything(conn)
     conn.commit()
     for action in ("merge", "refresh"):
@@ -257,6 +276,8 @@ def test_a_solution_whose_rows_are_not_its_mesh_is_not_merged_by_python(conn: Co
                 tgsis.refresh_version(conn, "e1")
         conn.rollback()
         assert f"region {index}" in str(refused.value) and "are not those of its mesh" in str(refused.value)
+        state, message, _ = _psql_state(conn, f"SELECT tgsis.{action}_version('e1')", ())
+        assert state == "TG302" and f"not those of its .npz (region {index}: its vertices" in message, message
         assert everything(conn) == before
         conn.rollback()
 
@@ -302,6 +323,29 @@ def _rows_with_a_cell_on_a_vertex_twice(merge: Any) -> tuple[list[Any], int]:
     return rows, int(side.cell_ids[c])
 
 
+def _npz_of_rows(k: int, rows: list[Any]) -> bytes:
+    """An .npz as tgsis.db.regions.state_to_npz writes one, of the eight arrays of rows (float64 property values)."""
+    import io
+
+    arrays: dict[str, Any] = {
+        "cell_size": np.asarray(k, dtype=np.int64),
+        "vertex_ids": np.asarray(rows[0], dtype=np.int64),
+        "vertices": np.asarray(rows[1], dtype=np.float64).reshape(-1, 3),
+        "cell_ids": np.asarray(rows[2], dtype=np.int64),
+        "cells": np.asarray(rows[3], dtype=np.int64).reshape(-1, k),
+    }
+    for prefix, columns, values, count in (
+        ("vertex:", rows[4], rows[5], len(rows[0])),
+        ("cell:", rows[6], rows[7], len(rows[2])),
+    ):
+        table = np.asarray(values, dtype=np.float64).reshape(count, len(columns))
+        for j, name in enumerate(columns):
+            arrays[prefix + name] = table[:, j].copy()
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
 def test_rows_with_a_cell_on_one_vertex_twice_are_refused_when_recorded(conn: Conn, fault: int) -> None:
     """Such rows were recorded; the psql merge then failed with the storage's raw 23514 (trgl_distinct_vertices)."""
     from tgsis.db.regions import state_to_npz
@@ -323,10 +367,10 @@ def test_stored_rows_with_a_cell_on_one_vertex_twice_are_refused_by_the_psql_mer
     index, merge = _conflict(conn, fault)
     rows, cell = _rows_with_a_cell_on_a_vertex_twice(merge)
     _record_in_sql(conn, fault, index, merge.child)
-    conn.execute(
-        "UPDATE tgsis.conflict_regions SET solution_cell_ids = %s, solution_cells = %s, solution_cell_values = %s"
-        " WHERE versionid = tgsis.version_id('e1') AND region = %s",
-        (rows[2], rows[3], rows[7], index),
+    conn.execute(  # with an .npz of the same rows (no MeshState holds them: numpy.savez writes them)
+        "UPDATE tgsis.conflict_regions SET solution_cell_ids = %s, solution_cells = %s, solution_cell_values = %s,"
+        " solution_mesh = %s WHERE versionid = tgsis.version_id('e1') AND region = %s",
+        (rows[2], rows[3], rows[7], _npz_of_rows(3, rows), index),
     )
     conn.commit()
     before = everything(conn)
@@ -615,3 +659,54 @@ def test_a_bigint_property_beyond_2_53_records_no_rows_and_python_merges_it_exac
         got = dict(conn.execute("SELECT _idx, code FROM public.faults_cellpros WHERE _geoid = %s", (geoid,)).fetchall())
     conn.rollback()
     assert got == {i: int(c) for i, c in enumerate(codes)}
+
+
+def test_sql_reads_the_npz_of_every_property_type_the_python_client_records(conn: Conn) -> None:
+    """tgsis.npz_rows_differ: the .npz numpy.savez writes of float64 (NaN, -0.0), float32 (NaN, inf), signed and
+    unsigned integers of each width and booleans holds exactly its rows; one value, id or coordinate changed in the
+    rows is named."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    n = 4
+    vprops: dict[str, Any] = {
+        "f8": np.array([0.1, -0.0, np.nan, 1e300]),
+        "f4": np.array([0.1, np.nan, np.inf, -2.5], dtype=np.float32),
+        "i1": np.array([-128, 127, 0, -1], dtype=np.int8),
+        "u1": np.array([0, 255, 7, 128], dtype=np.uint8),
+        "i2": np.array([-32768, 32767, 5, -2], dtype=np.int16),
+        "u2": np.array([65535, 0, 1, 2], dtype=np.uint16),
+        "i4": np.array([-(2**31), 2**31 - 1, 3, -4], dtype=np.int32),
+        "u4": np.array([2**32 - 1, 0, 1, 2], dtype=np.uint32),
+        "i8": np.array([-(2**53), 2**53, 9, -9], dtype=np.int64),
+        "b1": np.array([True, False, True, False]),
+    }
+    state = MeshState(
+        3,
+        np.array([3, 5, 2**60, 11], dtype=np.int64)[np.argsort([3, 5, 2**60, 11])],
+        np.array([[0.0, 0.0, 0.0], [1.0, 0.0, -0.0], [0.0, 1.0, 0.5], [1.0, 1.0, 1e-300]]),
+        np.array([7, 8], dtype=np.int64),
+        np.array([[3, 5, 2**60], [5, 11, 2**60]], dtype=np.int64),
+        vprops,
+        {"facies": np.array([1, 2], dtype=np.int32)},
+    )
+    mesh = state_to_npz(state)
+    rows = list(_sql_rows(state) or ())
+    query = (
+        "SELECT tgsis.npz_rows_differ(%s, %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])"
+    )
+    assert conn.execute(query, (mesh, *rows)).fetchone() == (None,)
+    columns = rows[4]
+    for name in vprops:
+        for i in range(n):
+            values = list(rows[5])
+            at = i * len(columns) + columns.index(name)
+            values[at] = 0.25 if values[at] != 0.25 else 0.5
+            changed = [*rows[:5], values, *rows[6:]]
+            (why,) = conn.execute(query, (mesh, *changed)).fetchone()  # type: ignore[misc]
+            assert why is not None and f"vertex property {name} " in why, (name, i, why)
+    for k, word in ((0, "vertex_ids"), (1, "vertices"), (2, "cell_ids"), (3, "cells")):
+        changed = list(rows)
+        changed[k] = [*rows[k][:-1], rows[k][-1] + 1]
+        (why,) = conn.execute(query, (mesh, *changed)).fetchone()  # type: ignore[misc]
+        assert why == f"its {word} are not the rows'", why
+    conn.rollback()

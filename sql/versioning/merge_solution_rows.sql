@@ -76,6 +76,21 @@ BEGIN
             OR cardinality(r.solution_vertex_ids) <> (SELECT count(DISTINCT u) FROM unnest(r.solution_vertex_ids) AS u)
             OR cardinality(r.solution_cell_ids) <> (SELECT count(DISTINCT u) FROM unnest(r.solution_cell_ids) AS u))
      ORDER BY r.region LIMIT 1;
+    IF v_why IS NULL THEN  -- the rows are the .npz's mesh (stored before resolve_region compared them: the Python merge
+        -- would apply the .npz, so neither merges two copies that differ)
+        SELECT string_agg(format('region %s: %s', r.region, d.why), '; ' ORDER BY r.region) INTO v_why
+          FROM tgsis.conflict_regions r JOIN pg_temp.tgsis_mw_region g ON g.region = r.region AND g.conflict AND g.src = 8
+         CROSS JOIN LATERAL (SELECT tgsis.npz_rows_differ(r.solution_mesh, r.solution_vertex_ids, r.solution_vertices,
+                                                           r.solution_cell_ids, r.solution_cells, r.solution_vertex_columns,
+                                                           r.solution_vertex_values, r.solution_cell_columns,
+                                                           r.solution_cell_values) AS why) AS d
+         WHERE r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key AND d.why IS NOT NULL;
+        IF v_why IS NOT NULL THEN
+            RAISE EXCEPTION '%: the recorded rows of its solution are not those of its .npz (%)', p_refused, v_why
+                USING ERRCODE = 'TG302',
+                      HINT = 'record the solution again, both from one mesh (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
+        END IF;
+    END IF;
     IF v_why IS NULL THEN  -- a cell on one vertex twice (no MeshState holds it; the storage's check would fail raw)
         SELECT string_agg(format('region %s: cells %s use a vertex twice', q.region, tgsis.merge_ids_text(q.ids)), '; '
                           ORDER BY q.region)

@@ -98,6 +98,15 @@ BEGIN
                 USING ERRCODE = 'TG100', HINT = 'give each cell k distinct vertex ids';
         END IF;
     END IF;
+    IF p_vertex_ids IS NOT NULL THEN  -- the two copies of one mesh: the .npz (Python merge) and the rows (psql merge)
+        v_object_bad := tgsis.npz_rows_differ(p_mesh, p_vertex_ids, p_vertices, p_cell_ids, p_cells, p_vertex_columns,
+                                              p_vertex_values, p_cell_columns, p_cell_values);
+        IF v_object_bad IS NOT NULL THEN
+            RAISE EXCEPTION 'the rows of the mesh of % are not those of its .npz: %', v_object, v_object_bad
+                USING ERRCODE = 'TG100',
+                      HINT = 'give the rows of the mesh the .npz holds (tgsis.resolve_region in Python records both from one mesh)';
+        END IF;
+    END IF;
     IF p_region IS NULL THEN
         RAISE EXCEPTION 'the region of object % of class % in version % is NULL', quote_literal(p_objectkey),
                 quote_literal(p_objectclass), quote_literal(p_version)
