@@ -9,7 +9,9 @@
 -- property values by column, NaN for none), kept in the solution_* columns:
 -- the psql merge (tgsis.merge_mesh_by_region) applies them, and checks them
 -- as the Python merge checks the .npz's rows; a solution without them (the
--- .npz only) is merged by the Python client only.
+-- .npz only) is merged by the Python client only. Rows that are not the
+-- .npz's mesh (tgsis.npz_rows_differ) or have a cell on one vertex twice are
+-- refused (TG100): the two merges never apply two copies that differ.
 -- The conflict's marks are recomputed first (tgsis.find_conflicts): a region
 -- found on a state either side changed since is stale and refused (TG307),
 -- as is a region that is no conflict (it merges by itself). The key is read
