@@ -125,30 +125,38 @@ def test_forged_rows_changing_the_value_of_a_region_vertex_no_side_changed_are_r
 
 # --------------------------------------------------------------------------- (b) the internals' rights
 
+# reached only through the SECURITY DEFINER merge and resolve functions
 _INTERNALS = (
-    "tgsis.cells_on_vertices_sql(integer, bigint[], text)",
     "tgsis.merge_solution_rows(bigint, integer, text, text)",
-    "tgsis.merge_value_text(text, text)",
-    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[])",
+    "tgsis.npz_rows_differ(bytea, bigint[], float8[], bigint[], bigint[], text[], float8[], text[], float8[])",
     "tgsis.merge_geometry_row(bigint, text, integer[])",
     "tgsis.merge_feature_row(bigint, text[], integer[], integer, integer[])",
     "tgsis.merge_attribute_edits(text, bigint, integer[], integer[], integer[])",
+)
+# reached also through tgsis.mesh_merge_regions, which a reader may call directly (as itself)
+_READERS = (
+    "tgsis.cells_on_vertices_sql(integer, bigint[], text)",
+    "tgsis.merge_value_text(text, text)",
+    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[])",
 )
 
 
 def test_the_psql_merge_internals_are_not_executable_by_public_and_an_editor_still_merges(
     conn: Conn, fault: int, db_dsn: str
 ) -> None:
-    """The helpers of the psql merge by region are reached through the SECURITY DEFINER merge, find_conflicts and
-    resolve functions only (they were executable by PUBLIC); an editor with the rights merges a region solved
-    average in psql as before, exactly as the Python merge does."""
+    """The helpers of the psql merge by region were executable by PUBLIC. Now the merge's own are reached through
+    the SECURITY DEFINER merge and resolve functions only; those tgsis.mesh_merge_regions runs are the tgsis
+    roles' (tgsis_reader). An editor with the rights merges a region solved average in psql as before, exactly
+    as the Python merge does, and computes regions with mesh_merge_regions."""
     from tests.roles import login_roles
 
-    for signature in _INTERNALS:
-        (public,) = conn.execute(
-            "SELECT has_function_privilege('public', %s::regprocedure, 'EXECUTE')", (signature,)
+    for signature in (*_INTERNALS, *_READERS):
+        (public, reader) = conn.execute(
+            "SELECT has_function_privilege('public', %s::regprocedure, 'EXECUTE'),"
+            " has_function_privilege('tgsis_reader', %s::regprocedure, 'EXECUTE')",
+            (signature, signature),
         ).fetchone()  # type: ignore[misc]
-        assert public is False, signature
+        assert (public, reader) == (False, signature in _READERS), signature
     conn.rollback()
     index = _both_moved(conn, fault)
     tgsis.resolve_region(conn, "e1", fault, index, "average")
@@ -158,8 +166,11 @@ def test_the_psql_merge_internals_are_not_executable_by_public_and_an_editor_sti
         tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
         conn.commit()
         session = made.connect("ed")
-        state, message, _ = _psql_state(session, "SELECT tgsis.cells_on_vertices_sql(3, '{1}', '$3')", ())
+        state, message, _ = _psql_state(session, "SELECT tgsis.merge_solution_rows(1, 1, 'x', 'y')", ())
         assert state == "42501", message
+        regions = session.execute("SELECT region, conflict FROM tgsis.mesh_merge_regions('e1', %s)", (fault,))
+        assert (index, True) in regions.fetchall()
+        session.rollback()
         seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
         conn.commit()
         theirs = _outcome(session, lambda: int(tgsis.merge_version(session, "e1")))
