@@ -13,7 +13,9 @@
 -- numpy rounds it to float4), an integer one truncated, as the Python writer
 -- writes them; a value a column cannot hold (an integer one: infinite, beyond
 -- its type; a real one: overflowing or underflowing float4) is refused (TG302),
--- as the Python writer refuses it. Refused too (TG302, p_hint: the Python merge applies it): a
+-- as the Python writer refuses it; so are rows that are not the .npz's mesh
+-- (tgsis.npz_rows_differ: the Python merge applies the .npz), a cell on one
+-- vertex twice, an atom's refid or a cell's part that is no whole number. Refused too (TG302, p_hint: the Python merge applies it): a
 -- vertex row of the region no state changed that differs from the base's or
 -- that the solution lacks (the region's margin cells are rewritten or
 -- removed as in Python), a class property column the rows lack
