@@ -39,3 +39,8 @@ $$;
 
 COMMENT ON FUNCTION tgsis.cells_on_vertices_sql(integer, bigint[], text) IS
     'SQL text of the condition "cell row v (vertex columns vrtxid1..k) stands on one of the ids bound as parameter p_param": spans of the ids for the storage''s vertex BRIN, then the exact hashed test';
+
+-- internal to the merge by region: not executable by PUBLIC; the tgsis roles run it through
+-- tgsis.mesh_merge_regions (which a reader may call directly, with its own rights) and the merge's functions
+REVOKE ALL ON FUNCTION tgsis.cells_on_vertices_sql(integer, bigint[], text) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.cells_on_vertices_sql(integer, bigint[], text) TO tgsis_reader;

@@ -73,3 +73,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_attribute_edits(text, bigint, integer[], integer[], integer[]) IS
     'the attributes of a feature (geometry row, feature row) its parent changed since the version''s base and the version did not (both_sides false: to bring into the version), or changed both to other values (both_sides true), as exact text; for the SQL merge by region';
+
+-- internal to the psql merge by region (reached only through the SECURITY DEFINER merge, find_conflicts and
+-- resolve functions): not executable by PUBLIC, like tgsis's other internal helpers
+REVOKE ALL ON FUNCTION tgsis.merge_attribute_edits(text, bigint, integer[], integer[], integer[]) FROM PUBLIC;

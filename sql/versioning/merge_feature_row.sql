@@ -73,3 +73,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_feature_row(bigint, text[], integer[], integer, integer[]) IS
     'bring the parent''s values of some properties of a feature into the row its version''s working set shows, copied from the parent''s row through tgsis.storage_run (in place in the working revision, else closed and written anew), noted in tgsis.revision_objects; for the SQL merge by region; returns 1 when the version shows a row, else 0';
+
+-- internal to the psql merge by region (reached only through the SECURITY DEFINER merge, find_conflicts and
+-- resolve functions): not executable by PUBLIC, like tgsis's other internal helpers
+REVOKE ALL ON FUNCTION tgsis.merge_feature_row(bigint, text[], integer[], integer, integer[]) FROM PUBLIC;

@@ -49,3 +49,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_geometry_row(bigint, text, integer[]) IS
     'bring a feature''s geometry row (box, vertex and cell counts) up to its rows in a revision set (the session''s working set), through the view, when they differ; returns the rows changed (0 or 1)';
+
+-- internal to the psql merge by region (reached only through the SECURITY DEFINER merge, find_conflicts and
+-- resolve functions): not executable by PUBLIC, like tgsis's other internal helpers
+REVOKE ALL ON FUNCTION tgsis.merge_geometry_row(bigint, text, integer[]) FROM PUBLIC;

@@ -52,3 +52,8 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[]) IS
     'the property rows of one feature for the merge by region in SQL: the keys whose visibility can differ between the three sets (no keys given), or the rows of the keys given with where they are seen (1 base, 2 parent, 4 version) and their values as a canonical text';
+
+-- internal to the merge by region: not executable by PUBLIC; the tgsis roles run it through
+-- tgsis.mesh_merge_regions (which a reader may call directly, with its own rights) and the merge's functions
+REVOKE ALL ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[]) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[]) TO tgsis_reader;

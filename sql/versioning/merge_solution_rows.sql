@@ -11,7 +11,11 @@
 -- refused (TG302; the Python merge refuses it TG100). Values come as float8 (the
 -- Python client's arrays): a float column is written as the float8 (real: as
 -- numpy rounds it to float4), an integer one truncated, as the Python writer
--- writes them. Refused too (TG302, p_hint: the Python merge applies it): a
+-- writes them; a value a column cannot hold (an integer one: infinite, beyond
+-- its type; a real one: overflowing or underflowing float4) is refused (TG302),
+-- as the Python writer refuses it; so are rows that are not the .npz's mesh
+-- (tgsis.npz_rows_differ: the Python merge applies the .npz), a cell on one
+-- vertex twice, an atom's refid or a cell's part that is no whole number. Refused too (TG302, p_hint: the Python merge applies it): a
 -- vertex row of the region no state changed that differs from the base's or
 -- that the solution lacks (the region's margin cells are rewritten or
 -- removed as in Python), a class property column the rows lack
@@ -74,6 +78,29 @@ BEGIN
             OR cardinality(r.solution_vertex_ids) <> (SELECT count(DISTINCT u) FROM unnest(r.solution_vertex_ids) AS u)
             OR cardinality(r.solution_cell_ids) <> (SELECT count(DISTINCT u) FROM unnest(r.solution_cell_ids) AS u))
      ORDER BY r.region LIMIT 1;
+    IF v_why IS NULL THEN  -- the rows are the .npz's mesh (stored before resolve_region compared them: the Python merge
+        -- would apply the .npz, so neither merges two copies that differ)
+        SELECT string_agg(format('region %s: %s', r.region, d.why), '; ' ORDER BY r.region) INTO v_why
+          FROM tgsis.conflict_regions r JOIN pg_temp.tgsis_mw_region g ON g.region = r.region AND g.conflict AND g.src = 8
+         CROSS JOIN LATERAL (SELECT tgsis.npz_rows_differ(r.solution_mesh, r.solution_vertex_ids, r.solution_vertices,
+                                                           r.solution_cell_ids, r.solution_cells, r.solution_vertex_columns,
+                                                           r.solution_vertex_values, r.solution_cell_columns,
+                                                           r.solution_cell_values) AS why) AS d
+         WHERE r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key AND d.why IS NOT NULL;
+        IF v_why IS NOT NULL THEN
+            RAISE EXCEPTION '%: the recorded rows of its solution are not those of its .npz (%)', p_refused, v_why
+                USING ERRCODE = 'TG302',
+                      HINT = 'record the solution again, both from one mesh (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
+        END IF;
+    END IF;
+    IF v_why IS NULL THEN  -- a cell on one vertex twice (no MeshState holds it; the storage's check would fail raw)
+        SELECT string_agg(format('region %s: cells %s use a vertex twice', q.region, tgsis.merge_ids_text(q.ids)), '; '
+                          ORDER BY q.region)
+          INTO v_why
+          FROM (SELECT s.region, array_agg(s.id::text ORDER BY s.id) AS ids FROM pg_temp.tgsis_mw_sc s
+                 WHERE cardinality(s.v) > (SELECT count(DISTINCT x) FROM unnest(s.v) AS x)
+                 GROUP BY s.region) AS q;
+    END IF;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: the recorded rows of its solution are no mesh: %', p_refused, v_why
             USING ERRCODE = 'TG302', HINT = p_hint;
@@ -130,6 +157,35 @@ BEGIN
                 RAISE EXCEPTION '%: the % property columns of its solution rows are not the class''s (%)', p_refused, v_side.word, v_why
                     USING ERRCODE = 'TG302', HINT = p_hint;
             END IF;
+            -- a value the column cannot hold, refused as the Python writer refuses it (not a raw 22003 from the casts
+            -- below): an integer one infinite or beyond the type once truncated; a real one finite that float4 makes
+            -- infinite (from half an ulp above its largest value), or non-zero that it makes 0 (up to 2^-150)
+            SELECT string_agg(format('SELECT format(''region %%s: %s property %s (%s) value %%s at ids %%s'', s.region,
+                                         min(s.x), tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))
+                                        FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, %L)] AS x
+                                                FROM pg_temp.%I s) AS s
+                                       WHERE s.x <> ''NaN'' AND %s
+                                       GROUP BY s.region',
+                                     v_side.word, quote_ident(a.attname), format_type(a.atttypid, a.atttypmod), a.attname,
+                                     v_side.work,
+                                     CASE WHEN a.atttypid = 'real'::regtype
+                                          THEN 'abs(s.x) <> ''Infinity'' AND (abs(s.x) >= 3.4028235677973366e38::float8'
+                                               ' OR (s.x <> 0 AND abs(s.x) <= 7.006492321624085e-46::float8))'
+                                          ELSE format('NOT (trunc(s.x) >= %s::float8 AND trunc(s.x) < %s::float8)',
+                                                      -(2::numeric ^ (8 * a.attlen - 1)), 2::numeric ^ (8 * a.attlen - 1)) END),
+                              ' UNION ALL ' ORDER BY a.attnum)
+              INTO v_why
+              FROM pg_catalog.pg_attribute a
+             WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0 AND NOT a.attisdropped
+               AND a.atttypid IN ('smallint'::regtype, 'integer'::regtype, 'bigint'::regtype, 'real'::regtype);
+            IF v_why IS NOT NULL THEN
+                EXECUTE format('SELECT string_agg(w, ''; '') FROM (%s) AS q(w)', v_why) INTO v_why;
+            END IF;
+            IF v_why IS NOT NULL THEN
+                RAISE EXCEPTION '%: its solution rows hold values a column cannot hold (%)', p_refused, v_why
+                    USING ERRCODE = 'TG302',
+                          HINT = 'record the solution again with values the columns hold (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
+            END IF;
             SELECT 'ARRAY[' || string_agg(
                        CASE WHEN a.atttypid IN ('real'::regtype, 'double precision'::regtype)
                             THEN format('(s.vals[array_position(s.cols, %L)] + 0::float8)::text', a.attname)
@@ -162,10 +218,32 @@ BEGIN
                              WHERE s.based', v_side.work, v_side.s, v_side.t);
         END IF;
     END LOOP;
+    -- an atom's refid is a vertex id and a part a part number: a value of neither (5.5: the cast rounded it where
+    -- the Python writer truncates; beyond the column) is refused, as the Python writer refuses it
+    SELECT string_agg(format('region %s: %s %s at ids %s', q.region, q.what, q.val, tgsis.merge_ids_text(q.ids)), '; '
+                      ORDER BY q.region, q.what)
+      INTO v_why
+      FROM (SELECT s.region, 'refid' AS what, min(s.x) AS val, array_agg(s.id::text ORDER BY s.id) AS ids
+              FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, 'refid')] AS x FROM pg_temp.tgsis_mw_sv s) AS s
+             WHERE s.x >= 0 AND s.x <> 'NaN' AND (s.x <> trunc(s.x) OR s.x >= 9223372036854775808::float8)
+             GROUP BY s.region
+            UNION ALL
+            SELECT s.region, 'part', min(s.x), array_agg(s.id::text ORDER BY s.id)
+              FROM (SELECT s.region, s.id, s.vals[array_position(s.cols, 'part')] AS x FROM pg_temp.tgsis_mw_sc s) AS s
+             WHERE s.x >= 0 AND s.x <> 'NaN' AND (s.x <> trunc(s.x) OR s.x >= 2147483648::float8)
+             GROUP BY s.region) AS q;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: its solution rows hold atoms'' refid or cell parts that are no whole vertex ids or part numbers (%)',
+                p_refused, v_why
+            USING ERRCODE = 'TG302',
+                  HINT = 'record the solution again with whole numbers (tgsis.resolve_region), or solve the object as a whole (tgsis.resolve_conflict)';
+    END IF;
     UPDATE pg_temp.tgsis_mw_sv s SET ref = s.vals[array_position(s.cols, 'refid')]::bigint
-     WHERE s.vals[array_position(s.cols, 'refid')] BETWEEN 0 AND 9e18;  -- (NaN is above every number)
+     WHERE s.vals[array_position(s.cols, 'refid')] >= 0
+       AND s.vals[array_position(s.cols, 'refid')] < 9223372036854775808::float8;  -- (NaN is above every number)
     UPDATE pg_temp.tgsis_mw_sc s SET part = s.vals[array_position(s.cols, 'part')]::bigint
-     WHERE s.vals[array_position(s.cols, 'part')] BETWEEN 0 AND 9e18;
+     WHERE s.vals[array_position(s.cols, 'part')] >= 0
+       AND s.vals[array_position(s.cols, 'part')] < 2147483648::float8;
 
     -- a vertex of an id no state changed, inside its region, is the base's: else SQL does not merge it (refused);
     -- one the solution lacks is refused alike (the margin's cells are rewritten or removed: below)
@@ -250,3 +328,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_solution_rows(bigint, integer, text, text) IS
     'for tgsis.merge_mesh_by_region: the rows the average and manual solutions (recorded with their rows, tgsis.conflict_regions.solution_*) give a feature, in pg_temp.tgsis_mw_sv / tgsis_mw_sc, checked as tgsis.merge3.apply_solutions checks a manual state (TG302 otherwise)';
+
+-- internal to the psql merge by region (reached only through the SECURITY DEFINER merge, find_conflicts and
+-- resolve functions): not executable by PUBLIC, like tgsis's other internal helpers
+REVOKE ALL ON FUNCTION tgsis.merge_solution_rows(bigint, integer, text, text) FROM PUBLIC;

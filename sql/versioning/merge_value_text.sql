@@ -27,3 +27,8 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_value_text(text, text) IS
     'the SQL expression (over alias v) of a property row''s values as one canonical text for the merge by region (floats exact, -0 as 0, NULL as NaN), and the text of a missing row; NULLs for no table or no property column';
+
+-- internal to the merge by region: not executable by PUBLIC; the tgsis roles run it through
+-- tgsis.mesh_merge_regions (which a reader may call directly, with its own rights) and the merge's functions
+REVOKE ALL ON FUNCTION tgsis.merge_value_text(text, text) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.merge_value_text(text, text) TO tgsis_reader;

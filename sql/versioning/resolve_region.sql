@@ -9,7 +9,9 @@
 -- property values by column, NaN for none), kept in the solution_* columns:
 -- the psql merge (tgsis.merge_mesh_by_region) applies them, and checks them
 -- as the Python merge checks the .npz's rows; a solution without them (the
--- .npz only) is merged by the Python client only.
+-- .npz only) is merged by the Python client only. Rows that are not the
+-- .npz's mesh (tgsis.npz_rows_differ) or have a cell on one vertex twice are
+-- refused (TG100): the two merges never apply two copies that differ.
 -- The conflict's marks are recomputed first (tgsis.find_conflicts): a region
 -- found on a state either side changed since is stale and refused (TG307),
 -- as is a region that is no conflict (it merges by itself). The key is read
@@ -42,6 +44,7 @@ DECLARE
     v_marks    text[];
     v_row      tgsis.conflict_regions;
     v_object   text;
+    v_object_bad text;
 BEGIN
     IF v_solution IS NULL OR v_solution NOT IN ('parent', 'child', 'base', 'average', 'manual', 'unsolved') THEN
         RAISE EXCEPTION 'solution % of a region is not parent, child, base, average, manual or unsolved',
@@ -85,6 +88,26 @@ BEGIN
                 v_object, cardinality(p_vertex_ids), cardinality(p_vertices), cardinality(p_cell_ids), cardinality(p_cells),
                 cardinality(p_vertex_values), cardinality(p_vertex_columns), cardinality(p_cell_values), cardinality(p_cell_columns)
             USING ERRCODE = 'TG100', HINT = 'three coordinates per vertex, k vertex ids per cell, one value per column per row';
+    END IF;
+    IF p_vertex_ids IS NOT NULL AND cardinality(p_cell_ids) > 0 THEN  -- a cell on one vertex twice is no mesh's
+        SELECT string_agg(c.id::text, ', ' ORDER BY c.o) INTO v_object_bad
+          FROM unnest(p_cell_ids) WITH ORDINALITY AS c(id, o)
+         WHERE (SELECT count(*) <> count(DISTINCT x)
+                  FROM unnest(p_cells[(c.o - 1) * (cardinality(p_cells) / cardinality(p_cell_ids)) + 1
+                                      : c.o * (cardinality(p_cells) / cardinality(p_cell_ids))]) AS x);
+        IF v_object_bad IS NOT NULL THEN
+            RAISE EXCEPTION 'the rows of the mesh of % are no mesh: cells % use a vertex twice', v_object, v_object_bad
+                USING ERRCODE = 'TG100', HINT = 'give each cell k distinct vertex ids';
+        END IF;
+    END IF;
+    IF p_vertex_ids IS NOT NULL THEN  -- the two copies of one mesh: the .npz (Python merge) and the rows (psql merge)
+        v_object_bad := tgsis.npz_rows_differ(p_mesh, p_vertex_ids, p_vertices, p_cell_ids, p_cells, p_vertex_columns,
+                                              p_vertex_values, p_cell_columns, p_cell_values);
+        IF v_object_bad IS NOT NULL THEN
+            RAISE EXCEPTION 'the rows of the mesh of % are not those of its .npz: %', v_object, v_object_bad
+                USING ERRCODE = 'TG100',
+                      HINT = 'give the rows of the mesh the .npz holds (tgsis.resolve_region in Python records both from one mesh)';
+        END IF;
     END IF;
     IF p_region IS NULL THEN
         RAISE EXCEPTION 'the region of object % of class % in version % is NULL', quote_literal(p_objectkey),

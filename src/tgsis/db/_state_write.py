@@ -140,6 +140,53 @@ def _values(state: MeshState, alignment: str, name: str, what: str) -> npt.NDArr
     return np.asarray(props[name])
 
 
+#: the values an integer column holds (a float beyond them, or infinite, would be wrapped by the cast to int64)
+_INTEGER_RANGES: dict[str, tuple[int, int]] = {
+    "int2": (-(2**15), 2**15 - 1),
+    "int4": (-(2**31), 2**31 - 1),
+    "int8": (-(2**63), 2**63 - 1),
+}
+
+
+def _check_column_range(values: npt.NDArray[Any], wire: str, ids: npt.ArrayLike, what: str) -> None:
+    """Refuse values an integer column of ``wire`` cannot hold (infinite, or beyond its range once truncated), or
+    a real (float4) one (finite values it would make infinite, non-zero ones it would make 0).
+
+    A float such as an ``average``/``manual`` solution's 1e10 or +inf was cast to int64 and then to the
+    column's width, wrapping silently (1e10 was written 1410065408 into an integer column, inf as 0).
+    """
+    flat = np.asarray(values)
+    if wire == "float4" and flat.dtype.kind == "f" and len(flat):  # as PostgreSQL's float8 -> real cast refuses
+        with np.errstate(over="ignore", under="ignore"):
+            narrow = flat.astype(np.float32)
+        bad = (np.isinf(narrow) & np.isfinite(flat)) | ((narrow == 0) & (flat != 0))
+        bad = bad.reshape(len(flat), -1).any(axis=1)
+        if bad.any():
+            raise InvalidInputError(
+                f"{what}: values {np.unique(flat.reshape(len(flat), -1)[bad])[:5].tolist()} at ids "
+                f"{np.asarray(ids)[bad][:10].tolist()} do not fit the column (float4 overflows or underflows to 0)",
+                hint="give those rows values the column holds (a manual solution) or solve the object as a whole",
+            )
+        return
+    if wire not in _INTEGER_RANGES or not len(values):
+        return
+    low, high = _INTEGER_RANGES[wire]
+    if flat.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):
+            bad = ~np.isfinite(flat) | (np.trunc(flat) < float(low)) | (np.trunc(flat) >= float(high) + 1)
+    elif flat.dtype.kind in "iu":
+        bad = (flat < low) | (flat > high)
+    else:
+        return
+    bad = bad.reshape(len(flat), -1).any(axis=1)
+    if bad.any():
+        raise InvalidInputError(
+            f"{what}: values {np.unique(flat.reshape(len(flat), -1)[bad])[:5].tolist()} at ids "
+            f"{np.asarray(ids)[bad][:10].tolist()} do not fit the column ({low} to {high})",
+            hint="give those rows values the column holds (a manual solution) or solve the object as a whole",
+        )
+
+
 def _without_row(values: list[npt.NDArray[Any]], at: npt.NDArray[np.intp]) -> npt.NDArray[np.bool_]:
     """Per position ``at``, whether every property value there is NaN (no property row in the state)."""
     empty = np.ones(len(at), dtype=bool)
@@ -193,6 +240,10 @@ def _write_properties(
                             "the merged rows cannot be written",
                             hint="give those rows values (a manual solution) or solve the object as a whole",
                         )
+                _check_column_range(
+                    chosen, wire, new_ids[fresh], f"{new.name}: {alignment.lower()} property {p.name} ({p.type})"
+                )
+                if wire not in ("float4", "float8") and chosen.dtype.kind == "f":
                     chosen = chosen.astype(np.int64)
                 columns.append((p.name, chosen, array_wire(wire, p.size)))
             storage.copy(conn, fc.schema, protable, columns)
@@ -207,7 +258,24 @@ def _atoms(state: MeshState) -> tuple[IntArray, IntArray]:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     refid = np.asarray(refid)
     at = np.flatnonzero(~np.isnan(refid) & (refid >= 0)) if refid.dtype.kind == "f" else np.flatnonzero(refid >= 0)
+    _require_whole(refid[at], state.vertex_ids[at], 2.0**63, f"{state.name}: atoms (refid)", "vertex ids")
     return state.vertex_ids[at], refid[at].astype(np.int64)
+
+
+def _require_whole(values: npt.NDArray[Any], ids: npt.NDArray[np.int64], above: float, what: str, word: str) -> None:
+    """Refuse float ids or part numbers that are not whole numbers below ``above`` (a manual mesh's 5.5, 1e19).
+
+    They were cast to int64: truncated (5.5 as 5, where the psql merge rounded it to 6) or, beyond int64,
+    wrapped (1e19 as -2**63): written with a success either way.
+    """
+    if values.dtype.kind != "f" or not len(values):
+        return
+    bad = (values != np.trunc(values)) | (values >= above)
+    if bad.any():
+        raise InvalidInputError(
+            f"{what}: values {np.unique(values[bad])[:5].tolist()} at ids {ids[bad][:10].tolist()} are no {word}",
+            hint="give whole numbers (a manual solution) or solve the object as a whole",
+        )
 
 
 def _write_atoms(conn: Conn, geoid: int, old: MeshState, new: MeshState, storage: Storage) -> tuple[int, int]:
@@ -242,6 +310,7 @@ def _part_rows(geoid: int, state: MeshState) -> list[tuple[int, ...]]:
     """The ``tgsis.part`` runs of a state's cells; a cell in no run (part -1 or NaN, as read) stays in none."""
     parts = np.asarray(state.cell_properties[PART_PROPERTY])
     inside = ~np.isnan(parts) & (parts >= 0) if parts.dtype.kind == "f" else parts >= 0
+    _require_whole(parts[inside], state.cell_ids[inside], 2.0**31, f"{state.name}: cell parts", "part numbers")
     return part_rows(geoid, state.cell_ids[inside], parts[inside])
 
 
@@ -603,6 +672,10 @@ def _write_table_difference(
                     f"feature {geoid}: {new.table}.{name} has no value for some merged rows: they cannot be written",
                     hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )
+        if not wire.endswith("[]"):  # (a value the column cannot hold was cast and wrapped)
+            at = np.asarray(new.keys[0][2])[fresh] if new.keys else fresh
+            _check_column_range(chosen, wire, at, f"feature {geoid}: {new.table}.{name}")
+        if wire not in ("float4", "float8") and chosen.dtype.kind == "f" and not wire.endswith("[]"):
             chosen = chosen.astype(np.int64)
         columns.append((name, chosen, wire))
     storage.copy(conn, new.schema, new.table, columns)

@@ -28,7 +28,7 @@ import json
 import math
 import shlex
 import zipfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, TypeVar, cast
@@ -51,6 +51,8 @@ from tgsis.db._merge_states import (
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import write_state_difference
 from tgsis.db._transfer import repeatable_read
+from tgsis.db.classes import class_of_feature
+from tgsis.db.copy import SQL_TYPES
 from tgsis.db.versions import CONFLICT_COLUMNS, Conflict, ConflictRegion, show_name
 from tgsis.db.versions import resolve_conflict as resolve_whole_object
 from tgsis.errors import (
@@ -436,22 +438,58 @@ def _solutions_of(
 ) -> dict[int, str | MeshState]:
     """The recorded solutions of the stored regions that hold: a side's name, or the rows of average/manual."""
     with reraise():
-        meshes = dict(
-            conn.execute(
-                "SELECT region, solution_mesh FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
+        meshes = {
+            row[0]: row[1:]
+            for row in conn.execute(
+                "SELECT region, solution_mesh, solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells,"
+                " solution_vertex_columns, solution_vertex_values, solution_cell_columns, solution_cell_values"
+                " FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
                 " AND objectkey = %s AND solution_mesh IS NOT NULL",
                 (versionid, objectclass, objectkey),
             ).fetchall()
-        )
+        }
     solutions: dict[int, str | MeshState] = {}
     for region in stored:
         if not region.conflict or region.solution == "unsolved":
             continue
         if region.solution in ("average", "manual"):
-            solutions[region.region] = state_from_npz(bytes(meshes[region.region]), name)
+            mesh, *rows = meshes[region.region]
+            state = state_from_npz(bytes(mesh), name)
+            _require_same_rows(state, rows, region, objectkey)
+            solutions[region.region] = state
         else:
             solutions[region.region] = region.solution
     return solutions
+
+
+def _require_same_rows(state: MeshState, rows: list[Any], region: ConflictRegion, objectkey: str) -> None:
+    """Refuse a solution whose rows for the psql merge (``solution_*``) are not those of its .npz.
+
+    A psql user records both, and nothing in SQL ties them: the psql merge
+    would apply the rows and this merge the .npz, two results of one
+    solution. Compared bit for bit (NaN with NaN: a value of none).
+    """
+    if rows[0] is None:  # recorded with the .npz only: the psql merge refuses it, no second reading
+        return
+    expected = _sql_rows(state)
+    same = expected is not None and all(_same_array(a, b) for a, b in zip(expected, rows, strict=True))
+    if not same:
+        raise InvalidInputError(
+            f"feature {objectkey}: region {region.region}: the rows recorded with its {region.solution} solution "
+            "(tgsis.conflict_regions.solution_*) are not those of its mesh (solution_mesh): they were recorded apart",
+            hint="record the solution again, both from one mesh: tgsis version resolve VERSION ID average|manual "
+            "--region N [--mesh FILE], or tgsis.resolve_region in Python",
+        )
+
+
+def _same_array(a: list[Any], b: list[Any] | None) -> bool:
+    """Two arrays of ids, names or float8 values the same, floats bit for bit with NaN equal to NaN."""
+    if b is None or len(a) != len(b):
+        return False
+    if not a or not isinstance(a[0], float):
+        return list(a) == list(b)
+    x, y = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return bool(np.all((x.view(np.int64) == y.view(np.int64)) | (np.isnan(x) & np.isnan(y))))
 
 
 def _holds(stored: list[ConflictRegion], marks: tuple[str, str], merge: MeshMerge) -> bool:
@@ -722,7 +760,7 @@ def _resolve(
     target = merge.regions[index]
     given: Solution
     if solution == "average":
-        given = average_region(merge, target)
+        given = average_region(merge, target, _real_properties(conn, feature_id))
     elif solution == "manual":
         assert mesh is not None
         given = _manual_state(merge, target, mesh, name)
@@ -818,7 +856,7 @@ def _resolve_sliced(
     mm = merge.merges[target.key]
     given: Solution
     if solution == "average":
-        given = average_region(mm, target.region)
+        given = average_region(mm, target.region, _real_properties(conn, feature_id))
     elif solution == "manual":
         assert mesh is not None
         given = _manual_state(mm, target.region, mesh, name)
@@ -1101,10 +1139,11 @@ def _resolve_all(
         return _resolve_all_sliced(conn, version, feature_id, key, stored, solution, discard_other, name)
     merge = _checked_merge(conn, version, feature_id, stored, name)
     given: dict[int, Solution] = {}
+    real = _real_properties(conn, feature_id)
     for region in merge.conflicts:
         if solution == "average":
             try:
-                given[region.index] = average_region(merge, region)
+                given[region.index] = average_region(merge, region, real)
             except RegionSolutionError as exc:  # the whole solution is refused: say which region refused it
                 raise RegionSolutionError(
                     f"{name}: average of all its regions refused, nothing recorded: {exc.message}", hint=exc.hint
@@ -1158,10 +1197,11 @@ def _resolve_all_sliced(
     """:func:`_resolve_all` for a model-2/3 object: every conflicting region of every slice, all or nothing."""
     merge = _checked_sliced_merge(conn, version, feature_id, stored, name)
     given: dict[int, Solution] = {}
+    real = _real_properties(conn, feature_id)
     for r in merge.conflicts:
         if solution == "average":
             try:
-                given[r.index] = average_region(merge.merges[r.key], r.region)
+                given[r.index] = average_region(merge.merges[r.key], r.region, real)
             except RegionSolutionError as exc:
                 raise RegionSolutionError(
                     f"{name}: average of all its regions refused, nothing recorded: region {r.index}: {exc.message}",
@@ -1304,9 +1344,10 @@ def _average_object(
             else f"merge it: tgsis version merge {shlex.quote(version)}",
         )
     averages: dict[int, Solution] = {}
+    real = _real_properties(conn, feature_id)
     for region in merge.conflicts:
         try:
-            averages[region.index] = average_region(merge, region)
+            averages[region.index] = average_region(merge, region, real)
         except RegionSolutionError as exc:
             raise RegionSolutionError(
                 f"{name}: average refused, nothing written: {exc.message}", hint=exc.hint
@@ -1384,7 +1425,19 @@ def _rows_state(
     )
 
 
-def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
+def _real_properties(conn: Conn, feature_id: int) -> tuple[frozenset[str], frozenset[str]]:
+    """The names of the feature's real-valued vertex and cell properties (columns real or double precision)."""
+    fc = class_of_feature(conn, feature_id)
+    vertex, cell = (
+        frozenset(p.name for p in fc.aligned(a) if SQL_TYPES.get(p.type) in ("float4", "float8"))
+        for a in ("VERTEX", "CELL")
+    )
+    return vertex, cell
+
+
+def average_region(
+    merge: MeshMerge, region: MergeRegion, real: tuple[Collection[str], Collection[str]] | None = None
+) -> MeshState:
     """The ``average`` solution of a conflicting region: its rows at the middle of the two sides.
 
     The rule (docs/merge.md): when the region's rows are the parent's and
@@ -1402,6 +1455,11 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
     vertices both sides share as control vertices (see
     :func:`_average_of_meshings`): attached to the unchanged rest without a
     seam, with the finer side's ids (no new id, so none clashes).
+
+    ``real`` names the vertex and the cell properties whose column is
+    real-valued (``real``, ``double precision``): an integer column read as
+    floats (NaN where a row is missing) is no real-valued property and keeps
+    the parent's values. None: every float array is taken for one.
 
     Raises
     ------
@@ -1421,7 +1479,7 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
         and np.array_equal(np.sort(parent.cells[pc], axis=1), np.sort(child.cells[cc], axis=1))
     )
     if not same_topology:
-        return _average_of_meshings(merge, region)
+        return _average_of_meshings(merge, region, real)
     rows = _rows_state(merge, parent, vids, cids, merge.base.name)
     at_p = np.flatnonzero(np.isin(rows.vertex_ids, parent.vertex_ids[pv]))  # the region's own vertices
     middle = 0.5 * parent.vertices[pv] + 0.5 * child.vertices[cv]
@@ -1429,13 +1487,13 @@ def average_region(merge: MeshMerge, region: MergeRegion) -> MeshState:
     vertices[at_p] = middle
     vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
     for n, values in vprops.items():
-        if values.dtype.kind == "f":
+        if values.dtype.kind == "f" and (real is None or n in real[0]):
             values[at_p] = (
                 0.5 * np.asarray(parent.vertex_properties[n])[pv] + 0.5 * np.asarray(child.vertex_properties[n])[cv]
             )
     cprops = {n: np.asarray(v).copy() for n, v in rows.cell_properties.items()}
     for n, values in cprops.items():
-        if values.dtype.kind == "f":
+        if values.dtype.kind == "f" and (real is None or n in real[1]):
             values[:] = 0.5 * np.asarray(parent.cell_properties[n])[pc] + 0.5 * np.asarray(child.cell_properties[n])[cc]
     return MeshState(
         rows.cell_size,
@@ -1489,7 +1547,9 @@ def _patch_surface(patch: _Patch) -> Any:
     return Surface(patch.state.vertices[patch.at_vertices], patch.triangles, vertex_properties=props)
 
 
-def _average_of_meshings(merge: MeshMerge, region: MergeRegion) -> MeshState:
+def _average_of_meshings(
+    merge: MeshMerge, region: MergeRegion, real: tuple[Collection[str], Collection[str]] | None = None
+) -> MeshState:
     """``average`` of a region the two sides meshed differently: the morphological average shape of their patches.
 
     Each side's triangles of the region (its patch: the region's own
@@ -1560,13 +1620,19 @@ def _average_of_meshings(merge: MeshMerge, region: MergeRegion) -> MeshState:
         ) from exc
     if middle.n_vertices != len(source.vertex_ids) or not np.array_equal(middle.cells, source.triangles):
         raise RegionSolutionError(f"{name}: the average shape re-meshed the region", hint=_NOT_AVERAGED)
-    state = _averaged_rows(merge, region, source, middle, controls, name)
+    state = _averaged_rows(merge, region, source, middle, controls, name, real)
     _check_average(merge, region, source, state, name)
     return state
 
 
 def _averaged_rows(
-    merge: MeshMerge, region: MergeRegion, source: _Patch, middle: Any, controls: npt.NDArray[np.int64], name: str
+    merge: MeshMerge,
+    region: MergeRegion,
+    source: _Patch,
+    middle: Any,
+    controls: npt.NDArray[np.int64],
+    name: str,
+    real: tuple[Collection[str], Collection[str]] | None = None,
 ) -> MeshState:
     """The source's rows of the region at the average shape; the rest's rows as they are (see _average_of_meshings)."""
     own = source.vertex_ids[np.isin(source.vertex_ids, region.vertex_ids)]
@@ -1575,7 +1641,9 @@ def _averaged_rows(
     vertices = rows.vertices.copy()
     vertices[at_rows] = middle.vertices[at_mid]
     vprops = {n: np.asarray(v).copy() for n, v in rows.vertex_properties.items()}
-    for n, values in middle.vertex_properties.items():
+    carried = [n for n in middle.vertex_properties if real is None or n in real[0]]  # (not an integer column's)
+    for n in carried:
+        values = middle.vertex_properties[n]
         vprops[n] = vprops[n].astype(np.float64)
         vprops[n][at_rows] = np.asarray(values)[at_mid]
     # the shared border's region rows: their own straight path, exactly as for one meshing
@@ -1584,7 +1652,7 @@ def _averaged_rows(
     at_c = np.searchsorted(merge.child.vertex_ids, paired)
     at_s = np.searchsorted(rows.vertex_ids, paired)
     vertices[at_s] = 0.5 * merge.parent.vertices[at_p] + 0.5 * merge.child.vertices[at_c]
-    for n in middle.vertex_properties:
+    for n in carried:
         vprops[n][at_s] = (
             0.5 * np.asarray(merge.parent.vertex_properties[n])[at_p]
             + 0.5 * np.asarray(merge.child.vertex_properties[n])[at_c]
