@@ -1283,7 +1283,10 @@ def _check_valid(
 
     if "refid" in state.vertex_properties:  # GOCAD atoms: a vertex id, which must still be there
         ref = state.vertex_properties["refid"]
-        ref = np.nan_to_num(ref, nan=-1).astype(np.int64) if ref.dtype.kind == "f" else ref.astype(np.int64)
+        if ref.dtype.kind == "f":  # a value no int64 holds (NaN, 1e19) is no vertex: the writer refuses it by name
+            ref = np.where(np.isfinite(ref) & (np.abs(ref) < 2.0**63), ref, -1).astype(np.int64)
+        else:
+            ref = ref.astype(np.int64)
         dangling_ref = (ref >= 0) & ~_contains(state.vertex_ids, ref)
         if dangling_ref.any():  # the parent's own rows are excused: it is the state merged into
             v_same, _ = state_rows_equal(state, merge.parent, state.vertex_ids[dangling_ref], np.empty(0, np.int64))
