@@ -407,7 +407,7 @@ def test_resolving_conflicts_one_by_one_does_not_find_every_other_objects_region
         "extra_float_digits = -15",
         "DateStyle = 'SQL, DMY'",
         "lc_numeric = 'C'",
-        "enable_seqscan = off",
+        "enable_seqscan = off; SET jit = off",
         "jit = on; SET jit_above_cost = 0; SET jit_optimize_above_cost = 0",
         "search_path = pg_temp, public",
     ],

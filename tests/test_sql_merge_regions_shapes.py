@@ -110,11 +110,11 @@ def test_random_edits_of_points_lines_and_solids_give_merge3s_regions_in_sql_and
     conn.rollback()
     if not conflicts:
         return
-    conn.execute("SET enable_seqscan = off")  # the one-ring through the vertex BRIN, as on a large table
+    conn.execute("SET enable_seqscan = off; SET jit = off")  # the one-ring through the vertex BRIN, as on a large table
     mine = sql_regions(conn, child_version, geoid)
     theirs = python_regions(conn, child_version, geoid)
     assert mine == theirs
-    conn.execute("SET enable_seqscan = off")
+    conn.execute("SET enable_seqscan = off; SET jit = off")
     [conflict] = regions.find_conflicts(conn, child_version)  # the Python read of the change and its ring
     conn.rollback()
     assert [sorted(int(i) for i in r.vertex_ids) for r in conflict.regions] == [r["vertex_ids"] for r in theirs]
