@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tests.merge_data import SIDE, make_fault, move
+from tests.merge_data import SIDE, move
 from tgsis.db.classes import class_of_feature
 
 Conn = psycopg.Connection[Any]
@@ -70,8 +70,8 @@ def assert_same_regions(conn: Conn, version: str, geoid: int) -> list[dict[str, 
     return mine
 
 
-def test_three_regions_found_by_sql_as_merge3_finds_them(conn: Conn) -> None:
-    geoid = make_fault(conn)
+def test_three_regions_found_by_sql_as_merge3_finds_them(conn: Conn, fault_clone: int) -> None:
+    geoid = fault_clone
     move(conn, "e1", geoid, NORTH, (0.5, 0.0, 1.25))
     move(conn, "e1", geoid, MIDDLE, (0.0, 0.0, 5.0))
     move(conn, "DEFAULT", geoid, SOUTH, (-1.0, 0.0, -2.0))
@@ -91,8 +91,8 @@ def psql(conn: Conn, version: str, *statements: tuple[str, tuple[Any, ...]]) -> 
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
 def test_disjoint_edits_are_two_regions_that_merge_by_themselves(conn: Conn, fault: int) -> None:
