@@ -420,13 +420,6 @@ def test_a_region_found_again_on_new_marks_is_stale_for_a_solution_given_by_its_
 # ---------------------------------------------------------------------------- step 2: solutions per object in SQL
 
 
-def two_conflicts(conn: Conn) -> int:
-    """Three regions (tests/test_conflict_regions.py) and a fourth, a second conflict in the west (committed)."""
-    from tests.test_resolve_all_regions import _two_conflicts
-
-    return _two_conflicts(conn)
-
-
 def notices(conn: Conn) -> list[str]:
     said: list[str] = []
     conn.add_notice_handler(lambda d: said.append(str(d.message_primary)))
@@ -434,8 +427,10 @@ def notices(conn: Conn) -> list[str]:
 
 
 @pytest.mark.parametrize("solution", ["parent", "child", "base"])
-def test_psql_resolve_all_regions_records_and_says_what_python_says(conn: Conn, solution: str) -> None:
-    fault = two_conflicts(conn)
+def test_psql_resolve_all_regions_records_and_says_what_python_says(
+    conn: Conn, solution: str, two_conflicts_clone: int
+) -> None:
+    fault = two_conflicts_clone
     from tgsis.db import regions as R
 
     # the oracle: Python's resolve_all_regions, rolled back
@@ -463,8 +458,8 @@ def test_psql_resolve_all_regions_records_and_says_what_python_says(conn: Conn, 
     conn.rollback()
 
 
-def test_psql_resolve_all_regions_refusals_record_nothing(conn: Conn, db_dsn: str) -> None:
-    fault = two_conflicts(conn)
+def test_psql_resolve_all_regions_refusals_record_nothing(conn: Conn, db_dsn: str, two_conflicts_clone: int) -> None:
+    fault = two_conflicts_clone
     conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
     conn.commit()
     before = conn.execute("SELECT r::text FROM tgsis.conflict_regions r ORDER BY region").fetchall()
