@@ -37,10 +37,17 @@ def _three_regions(conn: Conn) -> int:
     return three_regions(conn)
 
 
+def _two_conflicts(conn: Conn) -> int:
+    from tests.test_resolve_all_regions import two_conflicts
+
+    return two_conflicts(conn)
+
+
 # fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
 _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
     "fault_clone": _fault,  # tests.merge_data.make_fault: the curved fault in DEFAULT, version e1
     "three_regions_clone": _three_regions,  # tests.test_conflict_regions.three_regions
+    "two_conflicts_clone": _two_conflicts,  # tests.test_resolve_all_regions.two_conflicts
 }
 
 
@@ -85,3 +92,9 @@ def fault_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> in
 def three_regions_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
     """Geoid of ``three_regions``'s fault, already in the test's database (cloned, not built again)."""
     return built_once("three_regions_clone")[1]
+
+
+@pytest.fixture
+def two_conflicts_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+    """Geoid of ``two_conflicts``'s fault, already in the test's database (cloned, not built again)."""
+    return built_once("two_conflicts_clone")[1]

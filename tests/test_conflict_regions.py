@@ -221,8 +221,8 @@ def test_record_refuses_stale_marks_and_unknown_objects(conn: Conn, fault: int) 
     assert stored(conn) == before
 
 
-def test_a_conflict_that_does_not_merge_by_region_says_why(conn: Conn) -> None:
-    geoid = make_fault(conn)
+def test_a_conflict_that_does_not_merge_by_region_says_why(conn: Conn, fault_clone: int) -> None:
+    geoid = fault_clone
     move(conn, "e1", geoid, NORTH, (0.5, 0.0, 1.25))
     with tgsis.in_version(conn, "DEFAULT"):
         tgsis.delete_feature(conn, "faults", geoid)

@@ -170,6 +170,23 @@ def test_surfaces_at_and_features_at(tx: Conn, faults: tgsis.FeatureClass) -> No
     np.testing.assert_array_equal(np.array(row[2]), local.triangles)
 
 
+def test_the_sql_surfaces_at_compiles_no_query(tx: Conn, faults: tgsis.FeatureClass) -> None:
+    """Its query (vertices_at and triangles_at inlined per feature) is costed far above jit_above_cost: on a
+    server with JIT (Debian's PostgreSQL 15) each call compiled it, 2.6 s for a 3-unit scene that runs in ms.
+    The Python snapshot turns JIT off around the same query (tgsis.db._temporal_common); psql users too."""
+    a = tgsis.insert_feature(tx, faults, evolving(np.random.default_rng(5), [-10.0], alive=True, with_properties=True))
+    config = tx.execute("SELECT proconfig FROM pg_proc WHERE oid = 'tgsis.surfaces_at'::regproc").fetchone()
+    assert config is not None and "jit=off" in (config[0] or [])
+    plans: list[str] = []
+    tx.add_notice_handler(lambda d: plans.append(d.message_primary or ""))
+    for setting in ("LOAD 'auto_explain'", "SET auto_explain.log_min_duration = 0", "SET jit_above_cost = 0"):
+        tx.execute(setting)
+    tx.execute("SET auto_explain.log_nested_statements = on; SET auto_explain.log_level = notice")
+    assert [r[0] for r in tx.execute("SELECT geoid FROM tgsis.surfaces_at('moving_faults', -7.0)")] == [a]
+    inner = [p for p in plans if "tgsis.vertices_at" in p]
+    assert inner and not [p for p in inner if "JIT:" in p]  # (JIT is on for the rest of the session)
+
+
 def test_bad_input_changes_nothing(tx: Conn, faults: tgsis.FeatureClass) -> None:
     before = tx.execute("SELECT count(*) FROM tgsis.geometry").fetchone()
     vertices, triangles = grid(3)

@@ -300,7 +300,8 @@ def test_fetch_many_box_query_and_delete(conn: Conn, horizons: F.FeatureClass) -
     assert [f.properties["note"] for f in F.fetch_features(conn, "horizons")] == ["n0", "n1", "n2", "n3"]
     assert F.features_in_box(conn, "horizons", [[-1, -1, 150], [10, 10, 250]]) == [ids[2]]
     assert F.features_in_box(conn, "horizons", [[-1, -1, -1], [10, 10, 500]]) == ids
-    conn.execute("SET enable_seqscan = off")  # 4 rows: only forbidding the seq scan shows the index is usable
+    # 4 rows: only forbidding the seq scan shows the index is usable
+    conn.execute("SET enable_seqscan = off; SET jit = off")
     plan = "\n".join(
         r[0]
         for r in conn.execute(

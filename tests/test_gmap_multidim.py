@@ -102,7 +102,7 @@ def test_box_queries_over_any_axes_use_the_indexes(conn: Conn) -> None:
     expected = np.flatnonzero((history.points[:, 3] >= 1.5) & (history.points[:, 2] <= -115))
     assert np.array_equal(ids, expected) and len(ids) > 0
     with conn.transaction():
-        conn.execute("SET LOCAL enable_seqscan = off")
+        conn.execute("SET LOCAL enable_seqscan = off; SET LOCAL jit = off")
         plan = "\n".join(
             r[0]
             for r in conn.execute(

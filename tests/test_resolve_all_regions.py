@@ -26,6 +26,11 @@ Conn = psycopg.Connection[Any]
 WEST = np.array([6 * SIDE + 1, 6 * SIDE + 2])  # three columns away from MIDDLE: a region of its own
 
 
+def two_conflicts(conn: Conn) -> int:
+    """three_regions and a fourth region, a second conflict in the west (committed; tests/conftest.py clones it)."""
+    return _two_conflicts(conn)
+
+
 def _two_conflicts(conn: Conn, *, remesh_west: bool = False, hole_west: bool = False) -> int:
     geoid = three_regions(conn)
     move(conn, "e1", geoid, WEST, (0.0, 0.0, 3.0))
@@ -83,8 +88,10 @@ def _solved_state(conn: Conn, fault: int) -> Any:
 
 
 @pytest.mark.parametrize("solution", ["parent", "child", "base", "average"])
-def test_every_conflicting_region_is_solved_at_once_as_region_by_region(conn: Conn, solution: str) -> None:
-    fault = _two_conflicts(conn)
+def test_every_conflicting_region_is_solved_at_once_as_region_by_region(
+    conn: Conn, solution: str, two_conflicts_clone: int
+) -> None:
+    fault = two_conflicts_clone
     regions = _conflicting(conn)
     result = tgsis.resolve_all_regions(conn, "e1", fault, solution)
     conn.commit()
@@ -120,8 +127,8 @@ def test_every_conflicting_region_is_solved_at_once_as_region_by_region(conn: Co
     assert ids.tobytes() == at_once.vertex_ids.tobytes() and xyz.tobytes() == at_once.vertices.tobytes()
 
 
-def test_the_discards_are_summed_per_side_before_anything_is_recorded(conn: Conn) -> None:
-    fault = _two_conflicts(conn)
+def test_the_discards_are_summed_per_side_before_anything_is_recorded(conn: Conn, two_conflicts_clone: int) -> None:
+    fault = two_conflicts_clone
     regions = _conflicting(conn)
     before = everything(conn)
     with pytest.raises(RegionSolutionError, match=r"discards .*version's edit of 6 vertices") as refused:
@@ -164,9 +171,9 @@ def test_a_region_that_refuses_records_nothing_and_is_named(conn: Conn) -> None:
 
 
 def test_the_command_line_solves_the_object_with_region_all(
-    conn: Conn, db_dsn: str, capsys: pytest.CaptureFixture[str]
+    conn: Conn, db_dsn: str, capsys: pytest.CaptureFixture[str], two_conflicts_clone: int
 ) -> None:
-    fault = _two_conflicts(conn)
+    fault = two_conflicts_clone
     regions = _conflicting(conn)
     before = everything(conn)
     args = ["--dsn", db_dsn, "version", "resolve", "e1", str(fault), "child", "--region", "all"]
@@ -192,11 +199,13 @@ def test_the_command_line_solves_the_object_with_region_all(
     assert main(["--dsn", db_dsn, "version", "resolve", "e1", "feature", str(fault), "child"]) == 1
 
 
-def test_a_role_without_rights_and_a_stale_state_record_nothing(db_dsn: str, conn: Conn) -> None:
+def test_a_role_without_rights_and_a_stale_state_record_nothing(
+    db_dsn: str, conn: Conn, two_conflicts_clone: int
+) -> None:
     from tests.roles import login_roles
     from tgsis.errors import MissingPrivilegeError
 
-    fault = _two_conflicts(conn)
+    fault = two_conflicts_clone
     regions = _conflicting(conn)
     before = everything(conn)
     with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:

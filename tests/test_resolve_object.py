@@ -19,7 +19,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface, make_fault, move, stored_state
-from tests.test_conflict_regions import MIDDLE, everything, three_regions
+from tests.test_conflict_regions import MIDDLE, everything
 from tests.test_merge_average import _moved, _subdivided
 from tgsis.cli import main
 from tgsis.db import regions as R
@@ -101,8 +101,8 @@ def test_base_in_psql_says_what_it_discards_of_each_side(conn: Conn) -> None:
     assert xyz.tobytes() == _base_rows()[1].tobytes()
 
 
-def test_base_of_a_mesh_with_regions_that_merge_by_themselves_is_refused(conn: Conn) -> None:
-    geoid = three_regions(conn)  # north end in e1, south in DEFAULT (merge by themselves), middle on both
+def test_base_of_a_mesh_with_regions_that_merge_by_themselves_is_refused(conn: Conn, three_regions_clone: int) -> None:
+    geoid = three_regions_clone  # north end in e1, south in DEFAULT (merge by themselves), middle on both
     tgsis.find_conflicts(conn, "e1")
     conn.commit()
     before = everything(conn)
@@ -126,10 +126,12 @@ def test_base_of_a_mesh_with_regions_that_merge_by_themselves_is_refused(conn: C
     assert (xyz[:24, 0] != _base_rows()[1][:24, 0]).all()  # the version's north end kept
 
 
-def test_base_from_psql_finds_the_regions_itself_before_it_drops_every_edit(conn: Conn) -> None:
+def test_base_from_psql_finds_the_regions_itself_before_it_drops_every_edit(
+    conn: Conn, three_regions_clone: int
+) -> None:
     # was: with no regions stored (no Python call, SQL told the client finds them), base was recorded and
     # dropped the two ends each side edited alone, which merge by themselves
-    geoid = three_regions(conn)
+    geoid = three_regions_clone
     conn.execute("SELECT pg_catalog.set_config('tgsis.region_detection', 'client', false)")
     conn.execute("SELECT * FROM tgsis.find_conflicts('e1')")
     conn.commit()
@@ -156,8 +158,8 @@ def test_base_needs_the_right_to_change_the_object(conn: Conn, db_dsn: str) -> N
 # --------------------------------------------------------------------------- average
 
 
-def test_average_of_a_whole_object_is_written_into_the_version(conn: Conn) -> None:
-    geoid = make_fault(conn)
+def test_average_of_a_whole_object_is_written_into_the_version(conn: Conn, fault_clone: int) -> None:
+    geoid = fault_clone
     base = MeshState.from_mesh(curved_surface())
     from tests.test_merge_average import _write
 
@@ -184,8 +186,10 @@ def test_average_of_a_whole_object_is_written_into_the_version(conn: Conn) -> No
     assert xyz.tobytes() == expected.vertices.tobytes()
 
 
-def test_average_of_an_object_with_regions_that_merge_by_themselves_points_to_region_all(conn: Conn) -> None:
-    geoid = three_regions(conn)
+def test_average_of_an_object_with_regions_that_merge_by_themselves_points_to_region_all(
+    conn: Conn, three_regions_clone: int
+) -> None:
+    geoid = three_regions_clone
     before = everything(conn)
     with pytest.raises(RegionSolutionError, match=r"halve the edits of regions") as refused:
         tgsis.resolve_conflict(conn, "e1", "feature", geoid, "average")

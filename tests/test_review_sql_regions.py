@@ -40,11 +40,10 @@ def three_regions(conn: Conn, fault: int) -> None:
     conn.commit()
 
 
-def test_editor_calls_mesh_merge_regions_directly(conn: Conn, db_dsn: str) -> None:
+def test_editor_calls_mesh_merge_regions_directly(conn: Conn, db_dsn: str, three_regions_clone: int) -> None:
     from tests.roles import login_roles
 
-    fault = make_fault(conn)
-    three_regions(conn, fault)
+    fault = three_regions_clone  # make_fault's fault and three_regions' moves (tests/conftest.py)
     with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
         tgsis.grant_version(conn, "e1", "write", made.name("ed"))
         conn.commit()
@@ -105,8 +104,8 @@ def test_vector_bool_real_properties(conn: Conn) -> None:
     assert_same_regions(conn, "e1", geoid)
 
 
-def test_isolated_vertex_moved_both_sides(conn: Conn) -> None:
-    fault = make_fault(conn)
+def test_isolated_vertex_moved_both_sides(conn: Conn, fault_clone: int) -> None:
+    fault = fault_clone
     add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
     with tgsis.in_version(conn, "DEFAULT"):
         conn.execute(add, (fault, 1000, 1.0, 2.0, 3.0))
@@ -120,12 +119,14 @@ def test_isolated_vertex_moved_both_sides(conn: Conn) -> None:
     assert_same_regions(conn, "e2", fault)
 
 
-def test_new_ids_at_the_top_of_bigint_refuse_the_merge_by_region_not_find_conflicts(conn: Conn) -> None:
+def test_new_ids_at_the_top_of_bigint_refuse_the_merge_by_region_not_find_conflicts(
+    conn: Conn, fault_clone: int
+) -> None:
     """Both sides add a different vertex with id 2^63 - 1: the version's must be renumbered above every id,
     which bigint cannot hold. It was: SQL find_conflicts failed (22003 bigint out of range) for the whole
     version, so a psql user could list no conflict at all; now that feature has no regions (it merges as a
     whole object) and mesh_merge_regions refuses it by name (TG100)."""
-    fault = make_fault(conn)
+    fault = fault_clone
     top = 2**63 - 1
     add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
     psql(conn, "e1", (add, (fault, top, 1.0, 2.0, 3.0)))
@@ -278,7 +279,9 @@ def test_more_random_edits_give_merge3s_regions(
 _FAULT: tuple[Conn, int] | None = None
 
 
-def test_a_whole_side_from_a_role_that_may_not_read_the_class_is_not_left_unchecked(conn: Conn, db_dsn: str) -> None:
+def test_a_whole_side_from_a_role_that_may_not_read_the_class_is_not_left_unchecked(
+    conn: Conn, db_dsn: str, three_regions_clone: int
+) -> None:
     """A role that may write in the version but not read the feature's class gets no regions computed (SQL
     region detection reads with its rights). It was: its resolve_conflict(..., 'child') then found no regions,
     so the rule that refuses a whole side dropping the parent's edits in regions that merge by themselves did
@@ -286,8 +289,7 @@ def test_a_whole_side_from_a_role_that_may_not_read_the_class_is_not_left_unchec
     (42501) until the regions are stored; once someone who may read found them, the rule refuses it (TG307)."""
     from tests.roles import login_roles
 
-    fault = make_fault(conn)
-    three_regions(conn, fault)
+    fault = three_regions_clone
     with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
         tgsis.grant_version(conn, "e1", "write", made.name("ed"))
         conn.execute("REVOKE SELECT ON public.faults FROM tgsis_editor, tgsis_reader")
@@ -309,15 +311,16 @@ def test_a_whole_side_from_a_role_that_may_not_read_the_class_is_not_left_unchec
         assert state == "TG307", message
 
 
-def test_many_region_detections_in_one_transaction_hold_no_locks_and_leave_no_tables(conn: Conn) -> None:
+def test_many_region_detections_in_one_transaction_hold_no_locks_and_leave_no_tables(
+    conn: Conn, three_regions_clone: int
+) -> None:
     """Each SQL region detection made about 12 temporary work tables (with indexes and TOAST tables) and dropped
     them: a relation created and dropped keeps its lock until the transaction ends, about 100 locks per mesh.
     It was: 100 detections in one transaction (a find_conflicts over 100 conflicting meshes, or a psql loop)
     held 10,250 locks, beyond the lock table's nominal 6,400 (max_locks_per_transaction 64 x 100 connections):
     some hundreds of meshes fail with 53200 out of shared memory, and take the lock table from every other
     session meanwhile."""
-    fault = make_fault(conn)
-    three_regions(conn, fault)
+    fault = three_regions_clone
     expected = conn.execute("SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,)).fetchall()
     conn.rollback()
     before = conn.execute("SELECT count(*) FROM pg_locks WHERE pid = pg_backend_pid()").fetchone()
@@ -407,16 +410,17 @@ def test_resolving_conflicts_one_by_one_does_not_find_every_other_objects_region
         "extra_float_digits = -15",
         "DateStyle = 'SQL, DMY'",
         "lc_numeric = 'C'",
-        "enable_seqscan = off",
+        "enable_seqscan = off; SET jit = off",
         "jit = on; SET jit_above_cost = 0; SET jit_optimize_above_cost = 0",
         "search_path = pg_temp, public",
     ],
 )
-def test_the_regions_are_the_same_under_other_session_settings(conn: Conn, setting: str) -> None:
+def test_the_regions_are_the_same_under_other_session_settings(
+    conn: Conn, setting: str, three_regions_clone: int
+) -> None:
     """Stored under the setting, read back (and compared with merge3) without it: the text this session
     reads floats in is the setting's, not what was stored."""
-    fault = make_fault(conn)
-    three_regions(conn, fault)
+    fault = three_regions_clone
     conn.execute("SET " + setting)
     conn.commit()
     assert len(conn.execute("SELECT * FROM tgsis.mesh_merge_regions('e1', %s)", (fault,)).fetchall()) == 3

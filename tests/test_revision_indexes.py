@@ -89,7 +89,7 @@ def test_a_merge_finds_the_rows_it_writes_through_the_revision_indexes(conn: Con
         "SET auto_explain.log_min_duration = 0",
         "SET auto_explain.log_nested_statements = on",
         "SET auto_explain.log_level = notice",
-        "SET enable_seqscan = off",  # as on a large table: an index that serves the condition is taken
+        "SET enable_seqscan = off; SET jit = off",  # as on a large table: an index that serves the condition is taken
     ):
         conn.execute(setting)
     written = V.merge_version(conn, "e1")
@@ -133,7 +133,7 @@ def test_the_conflict_check_finds_the_changed_rows_through_the_revision_indexes(
         "SET auto_explain.log_min_duration = 0",
         "SET auto_explain.log_nested_statements = on",
         "SET auto_explain.log_level = notice",
-        "SET enable_seqscan = off",
+        "SET enable_seqscan = off; SET jit = off",
     ):
         conn.execute(setting)
     (conflict,) = V.find_conflicts(conn, "e1")
@@ -168,7 +168,7 @@ def test_what_a_solution_discards_is_read_through_the_revision_indexes(conn: Con
         "SET auto_explain.log_min_duration = 0",
         "SET auto_explain.log_nested_statements = on",
         "SET auto_explain.log_level = notice",
-        "SET enable_seqscan = off",
+        "SET enable_seqscan = off; SET jit = off",
     ):
         conn.execute(setting)
     rows = conn.execute(
@@ -223,7 +223,7 @@ def _plans_of(conn: Conn, action: Any) -> list[str]:
         "SET auto_explain.log_min_duration = 0",
         "SET auto_explain.log_nested_statements = on",
         "SET auto_explain.log_level = warning",
-        "SET enable_seqscan = off",
+        "SET enable_seqscan = off; SET jit = off",
     ):
         conn.execute(setting)
     try:
@@ -327,10 +327,10 @@ def test_scattered_edits_found_through_the_vertex_brin_give_merge3s_regions_in_s
         )
         conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s", (two_edits, 45150))
     conn.commit()
-    conn.execute("SET enable_seqscan = off")  # the index is taken, as on a large table
+    conn.execute("SET enable_seqscan = off; SET jit = off")  # the index is taken, as on a large table
     whole = {tuple(r["vertex_ids"]) for r in assert_same_regions(conn, "e1", two_edits)}
     assert len(whole) > 100
-    conn.execute("SET enable_seqscan = off")
+    conn.execute("SET enable_seqscan = off; SET jit = off")
     [conflict] = regions.find_conflicts(conn, "e1")  # Python, through read_merge_change
     conn.rollback()
     assert {tuple(int(i) for i in r.vertex_ids) for r in conflict.regions} == whole
@@ -431,7 +431,7 @@ def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_ver
     move(conn, "e1", geoid, [0, 1, 2], (0.0, 0.0, 1.0))
     move(conn, "DEFAULT", geoid, [60, 61], (0.0, 0.0, -1.0))
     conn.commit()
-    conn.execute("SET enable_seqscan = off")
+    conn.execute("SET enable_seqscan = off; SET jit = off")
     assert len(assert_same_regions(conn, "e1", geoid)) == 2
 
 

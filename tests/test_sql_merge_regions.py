@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tests.merge_data import SIDE, make_fault, move
+from tests.merge_data import SIDE, move
 from tgsis.db.classes import class_of_feature
 
 Conn = psycopg.Connection[Any]
@@ -70,8 +70,8 @@ def assert_same_regions(conn: Conn, version: str, geoid: int) -> list[dict[str, 
     return mine
 
 
-def test_three_regions_found_by_sql_as_merge3_finds_them(conn: Conn) -> None:
-    geoid = make_fault(conn)
+def test_three_regions_found_by_sql_as_merge3_finds_them(conn: Conn, fault_clone: int) -> None:
+    geoid = fault_clone
     move(conn, "e1", geoid, NORTH, (0.5, 0.0, 1.25))
     move(conn, "e1", geoid, MIDDLE, (0.0, 0.0, 5.0))
     move(conn, "DEFAULT", geoid, SOUTH, (-1.0, 0.0, -2.0))
@@ -91,8 +91,8 @@ def psql(conn: Conn, version: str, *statements: tuple[str, tuple[Any, ...]]) -> 
 
 
 @pytest.fixture
-def fault(conn: Conn) -> int:
-    return make_fault(conn)
+def fault(conn: Conn, fault_clone: int) -> int:
+    return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
 def test_disjoint_edits_are_two_regions_that_merge_by_themselves(conn: Conn, fault: int) -> None:
@@ -420,13 +420,6 @@ def test_a_region_found_again_on_new_marks_is_stale_for_a_solution_given_by_its_
 # ---------------------------------------------------------------------------- step 2: solutions per object in SQL
 
 
-def two_conflicts(conn: Conn) -> int:
-    """Three regions (tests/test_conflict_regions.py) and a fourth, a second conflict in the west (committed)."""
-    from tests.test_resolve_all_regions import _two_conflicts
-
-    return _two_conflicts(conn)
-
-
 def notices(conn: Conn) -> list[str]:
     said: list[str] = []
     conn.add_notice_handler(lambda d: said.append(str(d.message_primary)))
@@ -434,8 +427,10 @@ def notices(conn: Conn) -> list[str]:
 
 
 @pytest.mark.parametrize("solution", ["parent", "child", "base"])
-def test_psql_resolve_all_regions_records_and_says_what_python_says(conn: Conn, solution: str) -> None:
-    fault = two_conflicts(conn)
+def test_psql_resolve_all_regions_records_and_says_what_python_says(
+    conn: Conn, solution: str, two_conflicts_clone: int
+) -> None:
+    fault = two_conflicts_clone
     from tgsis.db import regions as R
 
     # the oracle: Python's resolve_all_regions, rolled back
@@ -463,8 +458,8 @@ def test_psql_resolve_all_regions_records_and_says_what_python_says(conn: Conn, 
     conn.rollback()
 
 
-def test_psql_resolve_all_regions_refusals_record_nothing(conn: Conn, db_dsn: str) -> None:
-    fault = two_conflicts(conn)
+def test_psql_resolve_all_regions_refusals_record_nothing(conn: Conn, db_dsn: str, two_conflicts_clone: int) -> None:
+    fault = two_conflicts_clone
     conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
     conn.commit()
     before = conn.execute("SELECT r::text FROM tgsis.conflict_regions r ORDER BY region").fetchall()

@@ -47,6 +47,7 @@ def _apply(
     table, cellid, k = _CELLS[geotype]
     corners = ", ".join(f"vrtxid{i + 1}" for i in range(k))
     statements: list[tuple[str, tuple[Any, ...]]] = []
+    added: set[int] = set()
     for kind, first, width, step in edits:
         if kind == "move":
             ids = [i for i in range(first, first + width * step, step) if i < N]
@@ -63,11 +64,14 @@ def _apply(
             statements.append(("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s", (geoid, first)))
         else:  # a new vertex on no cell, with an id far from the others (some at the ends of bigint)
             far = 10**12 * (first + 1) if first % 3 else 2**63 - 1 - first
+            new_id = far if dz > 0 else -far - 1
+            if new_id in added:  # the same vertex twice: once (the versioned views refuse ON CONFLICT on a key there)
+                continue
+            added.add(new_id)
             statements.append(
                 (
-                    "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, 0.0, %s)"
-                    " ON CONFLICT DO NOTHING",
-                    (geoid, far if dz > 0 else -far - 1, 100.0 * first, dz),
+                    "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, 0.0, %s)",
+                    (geoid, new_id, 100.0 * first, dz),
                 )
             )
     psql(conn, version, *statements)
@@ -92,6 +96,8 @@ def body(request: pytest.FixtureRequest, conn: Conn) -> tuple[int, str]:
 # the parent's new vertex -2**63 (merge3's id tables overflowed; the regions' record refused 19-digit ids)
 @example(child=[("drop_cell", 0, 1, 1)], parent=[("dangling", 0, 1, 1)])
 @example(child=[("move", 0, 1, 1)], parent=[("dangling", 0, 1, 1)])
+# the same new vertex twice on one side (was: INSERT ... ON CONFLICT DO NOTHING, which the versioned views refuse)
+@example(child=[("move", 0, 1, 1)], parent=[("dangling", 0, 1, 1), ("dangling", 0, 1, 1)])
 # new vertices 2**63 - 1 and -2**63: the spans' gap between them overflowed bigint
 @example(child=[("dangling", 0, 1, 1), ("move", 3, 2, 1)], parent=[("dangling", 0, 1, 1), ("move", 30, 3, 2)])
 def test_random_edits_of_points_lines_and_solids_give_merge3s_regions_in_sql_and_in_the_python_read(
@@ -110,11 +116,11 @@ def test_random_edits_of_points_lines_and_solids_give_merge3s_regions_in_sql_and
     conn.rollback()
     if not conflicts:
         return
-    conn.execute("SET enable_seqscan = off")  # the one-ring through the vertex BRIN, as on a large table
+    conn.execute("SET enable_seqscan = off; SET jit = off")  # the one-ring through the vertex BRIN, as on a large table
     mine = sql_regions(conn, child_version, geoid)
     theirs = python_regions(conn, child_version, geoid)
     assert mine == theirs
-    conn.execute("SET enable_seqscan = off")
+    conn.execute("SET enable_seqscan = off; SET jit = off")
     [conflict] = regions.find_conflicts(conn, child_version)  # the Python read of the change and its ring
     conn.rollback()
     assert [sorted(int(i) for i in r.vertex_ids) for r in conflict.regions] == [r["vertex_ids"] for r in theirs]
