@@ -19,6 +19,7 @@ from psycopg import sql
 
 from tgsis._merge_slices import SlicedState, slice_text
 from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import key_codes
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import Packed, columns_out_all
 from tgsis.db.classes import (
@@ -887,8 +888,7 @@ def _patched_by_keys(
         ]
     )
     if len(words):
-        _, codes = np.unique(words, axis=0, return_inverse=True)
-        codes = codes.reshape(-1).astype(np.int64)
+        codes = key_codes(words)
     else:
         codes = np.zeros(0, dtype=np.int64)
     order = np.argsort(codes[:n], kind="stable")
