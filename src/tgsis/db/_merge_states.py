@@ -954,12 +954,13 @@ def _slice_rows(columns: list[npt.NDArray[Any]], width: int) -> dict[tuple[float
     keys = [np.asarray(c, dtype=np.float64) + 0.0 for c in columns[1 : 1 + width]]
     if not len(keys[0]):
         return {}
-    order = np.lexsort(keys[::-1])
-    sorted_keys = np.stack([k[order] for k in keys], axis=1)
-    starts = np.flatnonzero(np.concatenate([[True], np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)]))
+    codes = key_codes(_key_words(keys))
+    order = np.argsort(codes, kind="stable")  # each slice's positions ascending; a pass when grouped
+    ranked = codes[order]
+    starts = np.flatnonzero(np.concatenate([[True], ranked[1:] != ranked[:-1]]))
     ends = np.append(starts[1:], len(order))
     return {
-        tuple(float(v) for v in sorted_keys[a]): np.sort(order[a:b]) for a, b in zip(starts.tolist(), ends.tolist())
+        tuple(float(k[order[a]]) for k in keys): order[a:b] for a, b in zip(starts.tolist(), ends.tolist())
     }
 
 

@@ -639,12 +639,51 @@ def key_codes(words: npt.NDArray[np.int64]) -> IntArray:
 
     What ``np.unique(words, axis=0, return_inverse=True)`` gives, without its
     sort of the rows as opaque records (tens of seconds for millions of
-    rows): one ``np.lexsort`` of the columns and a pass over the sorted rows.
+    rows). Each column is ranked (an id column by its offset from its least
+    value; one of few values, such as an instant's time, run by run, which
+    costs a pass when the rows come grouped by it, as they do from the
+    storage), the ranks are packed into one int64 when they fit, and that is
+    numbered by a pass when ascending, else by one sort of integers. Rows
+    whose ranks do not fit one int64 are numbered by ``np.lexsort``.
     """
     n = len(words)
     if n == 0:
         return np.zeros(0, dtype=np.int64)
-    columns = [np.ascontiguousarray(words[:, j]) for j in range(words.shape[1])]
+    columns = [np.ascontiguousarray(words[:, j], dtype=np.int64) for j in range(words.shape[1])]
+    packed = np.zeros(n, dtype=np.int64)
+    room = 1
+    for column in columns:
+        rank, size = _column_rank(column)
+        room *= size
+        if room >= 2**62:
+            return _lexsorted_codes(columns)
+        packed = packed * size + rank
+    if _ascending_or_equal(packed):
+        codes = np.zeros(n, dtype=np.int64)
+        np.cumsum(packed[1:] != packed[:-1], out=codes[1:])
+        return codes
+    _, inverse = np.unique(packed, return_inverse=True)
+    return np.asarray(inverse, dtype=np.int64).reshape(-1)
+
+
+def _ascending_or_equal(values: IntArray) -> bool:
+    return len(values) < 2 or bool(np.all(values[1:] >= values[:-1]))
+
+
+def _column_rank(column: IntArray) -> tuple[IntArray, int]:
+    """(ranks, how many ranks) of one column's values, in their order: equal values, equal ranks."""
+    low, high = int(column.min()), int(column.max())
+    if high - low < 2**40:  # ids, integer times: the offset is the rank
+        return column - low, high - low + 1
+    starts = np.flatnonzero(np.concatenate([[True], column[1:] != column[:-1]]))
+    values = column[starts]
+    distinct = np.unique(values)
+    lengths = np.diff(np.append(starts, len(column)))
+    return np.repeat(np.searchsorted(distinct, values), lengths).astype(np.int64), len(distinct)
+
+
+def _lexsorted_codes(columns: list[IntArray]) -> IntArray:
+    n = len(columns[0])
     order = np.lexsort(columns[::-1])  # the last key of lexsort is the primary one
     starts = np.zeros(n, dtype=bool)
     for column in columns:
