@@ -635,16 +635,16 @@ def _key_codes(old: _TableRows, new: _TableRows) -> tuple[IntArray, IntArray]:
 
 
 def key_codes(words: npt.NDArray[np.int64]) -> IntArray:
-    """(n,) numbers of (n, k) rows of int64 words: equal for equal rows, in the rows' lexicographic order.
+    """(n,) numbers of (n, k) rows of int64 words: equal for equal rows, ordered as the rows lexicographically.
 
-    What ``np.unique(words, axis=0, return_inverse=True)`` gives, without its
-    sort of the rows as opaque records (tens of seconds for millions of
+    What ``np.unique(words, axis=0, return_inverse=True)`` gives up to
+    gaps between the numbers (the same order, the same equalities), without
+    its sort of the rows as opaque records (tens of seconds for millions of
     rows). Each column is ranked (an id column by its offset from its least
     value; one of few values, such as an instant's time, run by run, which
     costs a pass when the rows come grouped by it, as they do from the
-    storage), the ranks are packed into one int64 when they fit, and that is
-    numbered by a pass when ascending, else by one sort of integers. Rows
-    whose ranks do not fit one int64 are numbered by ``np.lexsort``.
+    storage) and the ranks are packed into one int64. Rows whose ranks do
+    not fit one int64 are numbered by ``np.lexsort``.
     """
     n = len(words)
     if n == 0:
@@ -658,16 +658,7 @@ def key_codes(words: npt.NDArray[np.int64]) -> IntArray:
         if room >= 2**62:
             return _lexsorted_codes(columns)
         packed = packed * size + rank
-    if _ascending_or_equal(packed):
-        codes = np.zeros(n, dtype=np.int64)
-        np.cumsum(packed[1:] != packed[:-1], out=codes[1:])
-        return codes
-    _, inverse = np.unique(packed, return_inverse=True)
-    return np.asarray(inverse, dtype=np.int64).reshape(-1)
-
-
-def _ascending_or_equal(values: IntArray) -> bool:
-    return len(values) < 2 or bool(np.all(values[1:] >= values[:-1]))
+    return packed
 
 
 def _column_rank(column: IntArray) -> tuple[IntArray, int]:
