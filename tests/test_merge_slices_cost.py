@@ -20,6 +20,7 @@ from psycopg import sql
 
 import tgsis
 from tgsis.db import _merge_states
+from tgsis.db._transfer import columns_out_all
 from tgsis.db.classes import list_feature_classes
 from tgsis.temporal import SurfaceSeries
 
@@ -67,7 +68,9 @@ def series(conn: Conn) -> int:
         vertices, cells = _grid(i)
         surfaces.append(tgsis.Surface(vertices, cells, vertex_properties={"porosity": _porosity(i)}))
     throw = np.asarray([10.0 * (i + 1) for i in range(len(TIMES))])
-    geoid = tgsis.insert_feature(conn, "horizons", SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": throw}))
+    geoid = tgsis.insert_feature(
+        conn, "horizons", SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": throw})
+    )
     tgsis.create_version(conn, "e1")
     conn.commit()
     return geoid
@@ -92,7 +95,7 @@ def _shifted(base: np.ndarray, ids: Any, shift: tuple[float, float, float]) -> n
 def _rows_decoded(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     """A counter of the rows the merge's reads of the states decode (every table's, every request's)."""
     counted = [0]
-    real = _merge_states.columns_out_all
+    real = columns_out_all
 
     def counting(conn: Conn, requests: Any) -> Any:
         read = real(conn, requests)

@@ -980,9 +980,7 @@ def _slice_rows(columns: list[npt.NDArray[Any]], width: int) -> dict[tuple[float
     ranked = codes[order]
     starts = np.flatnonzero(np.concatenate([[True], ranked[1:] != ranked[:-1]]))
     ends = np.append(starts[1:], len(order))
-    return {
-        tuple(float(k[order[a]]) for k in keys): order[a:b] for a, b in zip(starts.tolist(), ends.tolist())
-    }
+    return {tuple(float(k[order[a]]) for k in keys): order[a:b] for a, b in zip(starts.tolist(), ends.tolist())}
 
 
 def _sliced_state(
