@@ -44,7 +44,14 @@ dropped, in turn, medians of ``--repeat``: what those indexes cost inserts.
 The read of the change and its one-ring (``read_merge_change``, what the
 merges by region read) is timed beside the whole read.
 
+With ``--model3``: (g) an evolving surface (model 3: one topology period,
+three geometry instants of the same grid), the version moving a patch at the
+first geometry instant and DEFAULT another at the last: the Python merge
+geometry instant by instant, as a ratio to the object-level merge (psql
+refuses model 3 by region).
+
     python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2 | --model2-only]
+        [--model3 | --model3-only]
     # TGSIS_PG=system|embedded
 """
 
@@ -379,6 +386,65 @@ def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     }
 
 
+def move_at3(conn: Conn, version: str, geoid: int, timet: float, ids: np.ndarray, dz: float) -> None:
+    """Move nodes ``ids`` of an evolving surface at geometry instant ``timet`` by ``dz`` (one committed UPDATE)."""
+    with tgsis.in_version(conn, version):
+        conn.execute(
+            "UPDATE tgsis.d4dvrtx SET z = z + %s WHERE geoid = %s AND timet = %s AND nodeid = ANY(%s)",
+            (dz, geoid, timet, ids.tolist()),
+        )
+    conn.commit()
+
+
+def model3_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
+    """(g) the merge of an evolving surface (one topology period, three geometry instants), edits at different
+    instants: the Python merge against the object-level merge (psql refuses model 3 by region: TG302)."""
+    from tgsis.db import merging
+    from tgsis.temporal import EvolvingSurface, TopologyPeriod
+
+    surface = grid_surface(side)
+    F.create_feature_class(conn, "evolving3", "SURFACE", time_model="EVOLVING")
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    positions = np.stack([surface.vertices] * 3)
+    period = TopologyPeriod(np.asarray([1.0, 2.0, 3.0]), surface.cells, positions)
+    start = time.perf_counter()
+    geoid = F.insert_feature(conn, "evolving3", EvolvingSurface([period]))
+    conn.commit()
+    upload = time.perf_counter() - start
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE")
+    conn.autocommit = False
+    print(
+        f"(g) evolving surface, 3 geometry instants: {3 * surface.n_vertices} node positions, uploaded in {upload:.2f} s"
+    )
+    parent_patch, child_patch = patch(side, 10, 10), patch(side, side - 60, side - 60)
+    for version in ("objlevel3", "slices3"):
+        tgsis.create_version(conn, version)
+        conn.commit()
+        move_at3(conn, version, geoid, 1.0, child_patch, -3.0)
+    move_at3(conn, "DEFAULT", geoid, 3.0, parent_patch, 5.0)
+    V.find_conflicts(conn, "objlevel3")
+    V.resolve_conflict(conn, "objlevel3", "feature", geoid, "manual")
+    conn.commit()
+    rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel3"))())
+    t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel3")), repeat)
+    print(f"(g) object-level merge of the version's edit (solved manual):      {t_a:6.3f} s, {rows_a} rows written")
+    rows_py = int(rolled_back(conn, lambda: merging.merge_version(conn, "slices3"))())
+    t_py = timed(rolled_back(conn, lambda: merging.merge_version(conn, "slices3")), repeat)
+    print(
+        f"(g) Python merge_version geometry instant by instant:             {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
+    )
+    return {
+        "model3_upload_s": round(upload, 3),
+        "model3_objlevel_merge_s": round(t_a, 3),
+        "model3_objlevel_merge_rows": rows_a,
+        "model3_python_merge_s": round(t_py, 3),
+        "model3_python_merge_rows": rows_py,
+        "model3_python_vs_objlevel": round(t_py / t_a, 2),
+    }
+
+
 def _revision_indexes(conn: Conn) -> list[tuple[str, str]]:
     """(index, definition) of the revision indexes of the class's storage (BRINs on revision and on the cells'
     vertex columns, btree WHERE revclosed)."""
@@ -438,15 +504,20 @@ def main() -> None:
     parser.add_argument("--upload-cost", action="store_true", help="time uploads with and without the revision indexes")
     parser.add_argument("--model2", action="store_true", help="(f) also the merge of a surface at three instants")
     parser.add_argument("--model2-only", action="store_true", help="(f) only")
+    parser.add_argument("--model3", action="store_true", help="(g) also the merge of an evolving surface")
+    parser.add_argument("--model3-only", action="store_true", help="(g) only")
     args = parser.parse_args()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}; medians of {args.repeat}"
     )
     with bench_database() as conn:
-        results = {} if args.model2_only else figures(conn, args.side, args.repeat, args.upload_cost)
+        only = args.model2_only or args.model3_only
+        results = {} if only else figures(conn, args.side, args.repeat, args.upload_cost)
         if args.model2 or args.model2_only:
             results.update(model2_figures(conn, args.side, args.repeat))
+        if args.model3 or args.model3_only:
+            results.update(model3_figures(conn, args.side, args.repeat))
     for name, value in results.items():
         print(f"{name}: {value}")
 

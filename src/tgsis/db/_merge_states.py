@@ -19,6 +19,7 @@ from psycopg import sql
 
 from tgsis._merge_slices import SlicedState, slice_text
 from tgsis.db._settings import read_version_settings, restore_version_settings
+from tgsis.db._state_write import key_codes
 from tgsis.db._static import SIMPLEX
 from tgsis.db._transfer import Packed, columns_out_all
 from tgsis.db.classes import (
@@ -887,8 +888,7 @@ def _patched_by_keys(
         ]
     )
     if len(words):
-        _, codes = np.unique(words, axis=0, return_inverse=True)
-        codes = codes.reshape(-1).astype(np.int64)
+        codes = key_codes(words)
     else:
         codes = np.zeros(0, dtype=np.int64)
     order = np.argsort(codes[:n], kind="stable")
@@ -899,7 +899,7 @@ def _patched_by_keys(
 
 
 def _read_sliced_rows(
-    conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]]
+    conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]], changed_only: bool = False
 ) -> dict[str, list[list[npt.NDArray[Any]]]]:
     """Each side's columns of each table of :func:`_sliced_tables` (``[object key, *columns]``).
 
@@ -908,6 +908,13 @@ def _read_sliced_rows(
     closed (``tgsis.storage_table``, the caller's rights and row-level
     security); a role that may not read the storage reads every side in full
     through the views.
+
+    ``changed_only``: the rows of the instants (model 3: the topology
+    periods) some side's revisions since the base touched only, the others
+    left out of all three sides alike (they are the same on all three). The
+    storage rows that changed are read first; their first time key (model
+    2: ``times``; model 3: ``timem``) chooses the base's rows to read. With
+    the full read through the views, everything is read.
     """
     tables = [t for t, _ in _sliced_tables(fc)[0]]
     widths = [w for _, w in _sliced_tables(fc)[0]]
@@ -930,12 +937,17 @@ def _read_sliced_rows(
     since = sorted(
         set(sets["base"]).symmetric_difference(sets["parent"]) | set(sets["base"]).symmetric_difference(sets["child"])
     )
-    requests = full + [
+    changes = [
         Packed(t.changed(storage, sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid])
         for t, storage in zip(tables, storages, strict=True)
     ]
-    read = columns_out_all(conn, requests)
-    base, changed = read[: len(tables)], read[len(tables) :]
+    if changed_only:
+        changed = columns_out_all(conn, changes)
+        touched = sorted({float(v) + 0.0 for c in changed for v in np.asarray(c[1], dtype=np.float64).tolist()})
+        base = columns_out_all(conn, [_within(t, touched, geoid) for t in tables])
+    else:
+        read = columns_out_all(conn, full + changes)
+        base, changed = read[: len(tables)], read[len(tables) :]
     out = {"base": [list(c) for c in base]}
     for side in ("parent", "child"):
         out[side] = [
@@ -943,6 +955,15 @@ def _read_sliced_rows(
             for b, c, w in zip(base, changed, widths, strict=True)
         ]
     return out
+
+
+def _within(table: _Table, touched: list[float], geoid: int) -> Packed:
+    """The request of ``table``'s rows (through its view) whose first time key is one of ``touched``."""
+    first = table.columns[0][0]  # times, timem, _times or _timem
+    source = sql.SQL("(SELECT * FROM {} WHERE {} = ANY ({}::float8[])) AS _touched").format(
+        table.source, sql.Identifier(first), sql.Literal(touched)
+    )
+    return Packed(source, table.key, table.columns, [geoid])
 
 
 def _slice_rows(columns: list[npt.NDArray[Any]], width: int) -> dict[tuple[float, ...], npt.NDArray[np.intp]]:
@@ -954,13 +975,12 @@ def _slice_rows(columns: list[npt.NDArray[Any]], width: int) -> dict[tuple[float
     keys = [np.asarray(c, dtype=np.float64) + 0.0 for c in columns[1 : 1 + width]]
     if not len(keys[0]):
         return {}
-    order = np.lexsort(keys[::-1])
-    sorted_keys = np.stack([k[order] for k in keys], axis=1)
-    starts = np.flatnonzero(np.concatenate([[True], np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)]))
+    codes = key_codes(_key_words(keys))
+    order = np.argsort(codes, kind="stable")  # each slice's positions ascending; a pass when grouped
+    ranked = codes[order]
+    starts = np.flatnonzero(np.concatenate([[True], ranked[1:] != ranked[:-1]]))
     ends = np.append(starts[1:], len(order))
-    return {
-        tuple(float(v) for v in sorted_keys[a]): np.sort(order[a:b]) for a, b in zip(starts.tolist(), ends.tolist())
-    }
+    return {tuple(float(k[order[a]]) for k in keys): order[a:b] for a, b in zip(starts.tolist(), ends.tolist())}
 
 
 def _sliced_state(
@@ -1084,7 +1104,7 @@ def feature_time_model(conn: Conn, version: str, feature_id: int) -> str | None:
             restore_version_settings(conn, settings, local=True)
 
 
-def read_sliced_states(conn: Conn, version: str, feature_id: int) -> SlicedInputs:
+def read_sliced_states(conn: Conn, version: str, feature_id: int, *, changed_only: bool = False) -> SlicedInputs:
     """Read base, parent and child of one model-2 or model-3 object changed on both sides, slice by slice.
 
     As :func:`read_merge_states` (the caller's transaction makes the reads
@@ -1092,6 +1112,12 @@ def read_sliced_states(conn: Conn, version: str, feature_id: int) -> SlicedInput
     refusals), for a surface at instants (model 2: a slice per instant) or an
     evolving surface (model 3: a slice per geometry instant of each topology
     period), with the per-instant feature properties.
+
+    ``changed_only``: the slices of the instants (model 3: periods) some
+    side changed only, the others left out of all three states alike: what
+    a merge that writes by difference needs (they merge as themselves and
+    write nothing), read at the cost of the change. The per-instant feature
+    property rows are read whole.
 
     Raises
     ------
@@ -1106,7 +1132,7 @@ def read_sliced_states(conn: Conn, version: str, feature_id: int) -> SlicedInput
             conn, version, feature_id, _refuse_unless_sliced_surface
         )
         sides = {"base": (version, initrevision), "parent": (parent, parent_working), "child": (version, working)}
-        rows = _read_sliced_rows(conn, fc, feature_id, sides)
+        rows = _read_sliced_rows(conn, fc, feature_id, sides, changed_only)
         instants = {side: _instant_rows(conn, fc, feature_id, v, r) for side, (v, r) in sides.items()}
     finally:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:

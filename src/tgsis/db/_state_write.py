@@ -38,6 +38,7 @@ __all__ = [
     "copy_cell_rows",
     "copy_vertex_rows",
     "delete_rows",
+    "key_codes",
     "update_geometry_row",
     "write_sliced_difference",
     "write_state_difference",
@@ -482,9 +483,16 @@ class _TableRows:
     values: tuple[tuple[str, str, npt.NDArray[Any]], ...]
 
 
-def _slice_rows(fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState]) -> list[_TableRows]:
-    """The rows of every model-2/3 table a state's slices make, in the order they are inserted."""
-    keys = sorted(slices)
+def _slice_rows(
+    fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState], within: set[tuple[float, ...]] | None = None
+) -> list[_TableRows]:
+    """The rows of every model-2/3 table a state's slices make, in the order they are inserted.
+
+    ``within``: the rows of the slices of those keys only (their vertices,
+    cells, nodes, property rows), the instant and period tables whole.
+    """
+    instants = sorted(slices)
+    keys = [k for k in instants if within is None or k in within]
     evolving = fc.time_model == "EVOLVING"
     pcols = _PROPERTY_TIME_KEYS[fc.time_model]
     f8, i8 = "float8", "int8"
@@ -502,17 +510,21 @@ def _slice_rows(fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState])
     xyz = cat([slices[k].vertices for k in keys], np.float64, 3)
     vids = cat([slices[k].vertex_ids for k in keys], np.int64)
     if evolving:
+        all_periods = sorted({k[0] for k in instants})
         periods = sorted({k[0] for k in keys})
         first = [next(k for k in keys if k[0] == m) for m in periods]  # a period's topology: its first instant's
         tables.append(
-            _TableRows("tgsis", "timem", "geoid", (("timem", f8, np.asarray(periods, dtype=np.float64)),), ())
+            _TableRows("tgsis", "timem", "geoid", (("timem", f8, np.asarray(all_periods, dtype=np.float64)),), ())
         )
         tables.append(
             _TableRows(
                 "tgsis",
                 "timet",
                 "geoid",
-                (("timem", f8, times(0, [1] * len(keys), keys)), ("timet", f8, times(1, [1] * len(keys), keys))),
+                (
+                    ("timem", f8, times(0, [1] * len(instants), instants)),
+                    ("timet", f8, times(1, [1] * len(instants), instants)),
+                ),
                 (),
             )
         )
@@ -557,7 +569,7 @@ def _slice_rows(fc: FeatureClass, slices: Mapping[tuple[float, ...], MeshState])
         tri = cat([slices[k].cells for k in keys], np.int64, 3)
         tables.append(
             _TableRows(
-                "tgsis", "times", "geoid", (("times", f8, np.asarray([k[0] for k in keys], dtype=np.float64)),), ()
+                "tgsis", "times", "geoid", (("times", f8, np.asarray([k[0] for k in instants], dtype=np.float64)),), ()
             )
         )
         tables.append(
@@ -618,9 +630,59 @@ def _key_codes(old: _TableRows, new: _TableRows) -> tuple[IntArray, IntArray]:
     n = len(old.keys[0][2])
     if not len(words[0]):
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    _, codes = np.unique(np.stack(words, axis=1), axis=0, return_inverse=True)
-    codes = codes.reshape(-1).astype(np.int64)
+    codes = key_codes(np.stack(words, axis=1))
     return codes[:n], codes[n:]
+
+
+def key_codes(words: npt.NDArray[np.int64]) -> IntArray:
+    """(n,) numbers of (n, k) rows of int64 words: equal for equal rows, ordered as the rows lexicographically.
+
+    What ``np.unique(words, axis=0, return_inverse=True)`` gives up to
+    gaps between the numbers (the same order, the same equalities), without
+    its sort of the rows as opaque records (tens of seconds for millions of
+    rows). Each column is ranked (an id column by its offset from its least
+    value; one of few values, such as an instant's time, run by run, which
+    costs a pass when the rows come grouped by it, as they do from the
+    storage) and the ranks are packed into one int64. Rows whose ranks do
+    not fit one int64 are numbered by ``np.lexsort``.
+    """
+    n = len(words)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    columns = [np.ascontiguousarray(words[:, j], dtype=np.int64) for j in range(words.shape[1])]
+    packed = np.zeros(n, dtype=np.int64)
+    room = 1
+    for column in columns:
+        rank, size = _column_rank(column)
+        room *= size
+        if room >= 2**62:
+            return _lexsorted_codes(columns)
+        packed = packed * size + rank
+    return packed
+
+
+def _column_rank(column: IntArray) -> tuple[IntArray, int]:
+    """(ranks, how many ranks) of one column's values, in their order: equal values, equal ranks."""
+    low, high = int(column.min()), int(column.max())
+    if high - low < 2**40:  # ids, integer times: the offset is the rank
+        return column - low, high - low + 1
+    starts = np.flatnonzero(np.concatenate([[True], column[1:] != column[:-1]]))
+    values = column[starts]
+    distinct = np.unique(values)
+    lengths = np.diff(np.append(starts, len(column)))
+    return np.repeat(np.searchsorted(distinct, values), lengths).astype(np.int64), len(distinct)
+
+
+def _lexsorted_codes(columns: list[IntArray]) -> IntArray:
+    n = len(columns[0])
+    order = np.lexsort(columns[::-1])  # the last key of lexsort is the primary one
+    starts = np.zeros(n, dtype=bool)
+    for column in columns:
+        ranked = column[order]
+        starts[1:] |= ranked[1:] != ranked[:-1]
+    codes = np.empty(n, dtype=np.int64)
+    codes[order] = np.cumsum(starts)
+    return codes
 
 
 def _write_table_difference(
@@ -733,6 +795,55 @@ def _write_instant_rows(
     return written
 
 
+def _same_slice_rows(a: MeshState, b: MeshState) -> bool:
+    """Whether two slices make the same rows as :func:`_write_table_difference` compares them (none to write).
+
+    Ids, cells and property columns alike, coordinates bit for bit (-0.0 is
+    not 0.0 there), property values as the writer compares them.
+    """
+    if a is b:
+        return True
+    if not (
+        np.array_equal(a.vertex_ids, b.vertex_ids)
+        and np.array_equal(a.cell_ids, b.cell_ids)
+        and np.array_equal(a.cells, b.cells)
+        and a.vertices.shape == b.vertices.shape
+        and np.array_equal(_bits(a.vertices), _bits(b.vertices))
+        and a.vertex_properties.keys() == b.vertex_properties.keys()
+        and a.cell_properties.keys() == b.cell_properties.keys()
+    ):
+        return False
+    for ours, theirs in ((a.vertex_properties, b.vertex_properties), (a.cell_properties, b.cell_properties)):
+        for name, values in ours.items():
+            o, n = np.asarray(values), np.asarray(theirs[name])
+            if o.shape != n.shape:
+                return False
+            if o.dtype.kind == "f" and n.dtype.kind == "f" and o.ndim == 1:
+                if not np.array_equal(_bits(o.reshape(-1, 1)), _bits(n.reshape(-1, 1))):
+                    return False
+            elif len(o) and not bool(np.all(_same_values(o, n))):
+                return False
+    return True
+
+
+def _differing_slices(
+    fc: FeatureClass, old: Mapping[tuple[float, ...], MeshState], new: Mapping[tuple[float, ...], MeshState]
+) -> set[tuple[float, ...]]:
+    """The keys of the slices whose rows may differ: the written difference is found among theirs only.
+
+    A slice on one side only, or whose rows differ; model 3: every geometry
+    instant of a period one of whose instants differs (a period's nodes and
+    triangles are its first instant's). The slices left out make the same
+    rows on both sides: none of them would be written. The cost of the
+    difference follows the change, not the object's instants.
+    """
+    differ = {k for k in set(old) | set(new) if k not in old or k not in new or not _same_slice_rows(old[k], new[k])}
+    if fc.time_model != "EVOLVING":
+        return differ
+    periods = {k[0] for k in differ}
+    return {k for k in set(old) | set(new) if k[0] in periods}
+
+
 def write_sliced_difference(
     conn: Conn,
     fc: FeatureClass,
@@ -767,7 +878,8 @@ def write_sliced_difference(
         "WHERE schemaname = 'tgsis' AND tablename = 'geometry'",
         (str(geoid),),
     )
-    olds, news = _slice_rows(fc, old), _slice_rows(fc, new)
+    within = _differing_slices(fc, old, new)
+    olds, news = _slice_rows(fc, old, within), _slice_rows(fc, new, within)
     written = _write_instant_rows(conn, fc, geoid, old_rows or {}, new_rows or {})
     for o, n in zip(olds, news, strict=True):
         deleted, inserted = _write_table_difference(conn, storage, geoid, o, n)

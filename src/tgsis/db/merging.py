@@ -783,7 +783,8 @@ def _merge_sliced_object(
         Model 3: merged instant by instant, a period's geometry instants would have other topologies (TG308).
     """
     try:
-        inputs = read_sliced_states(conn, version, int(key))
+        # the instants (periods) some side touched: the others are alike on all sides and write nothing
+        inputs = read_sliced_states(conn, version, int(key), changed_only=True)
         states = inputs.states
         merge = merge_sliced(states["base"], states["parent"], states["child"])
     except (InvalidInputError, VersioningError) as exc:  # a removal against a change, topology on both sides, ...
@@ -834,7 +835,7 @@ def _merge_sliced_object(
                 merge.instant_rows,
             )
             written += write_attribute_edits(conn, int(key), attributes)
-            if merge.base.kind == "EVOLVING" and len({k[0] for k in slices}) > 1:
+            if merge.base.kind == "EVOLVING" and _stored_periods(conn, int(key)) > 1:  # (slices: the touched only)
                 check_continuity(conn, int(key), None)
             restore_version_settings(conn, settings, local=True)
             conn.execute("SELECT FROM tgsis.resolve_conflict(%s, 'feature', %s, 'manual')", (version, key))
@@ -852,6 +853,12 @@ def _merge_sliced_object(
         written,
     )
     return MergedObject("feature", key, how, len(merge.regions), len(solutions), written, discards)
+
+
+def _stored_periods(conn: Conn, geoid: int) -> int:
+    """How many topology periods the session sees the model-3 object have (after the merge's write)."""
+    row = conn.execute("SELECT count(*) FROM tgsis.timem WHERE geoid = %s", (geoid,)).fetchone()
+    return int(row[0]) if row else 0
 
 
 def _attributes_to_bring(
