@@ -1,0 +1,351 @@
+"""Hostile review of the psql merge of surfaces at instants (model 2; tgsis.merge_instants_by_slice).
+
+Each case sets up a model-2 surface the way a demanding user could (instants at
+times that differ in their last bit, -0.0, huge times, properties of every
+type a class may have, odd schema and class names, partitioned storage, a
+version whose parent is not DEFAULT) and asks: does ``SELECT
+tgsis.merge_version(v)`` write exactly what the Python merge writes (row
+version for row version, tests.test_sql_merge_write.assert_same_merge), or
+refuse by name writing nothing?
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+from psycopg import sql
+
+import tgsis
+from tests.merge_data import curved_surface
+from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, TIMES, _porosity, _shape, move
+from tests.test_sql_merge_write import assert_same_merge, both_merges, everything
+from tgsis.temporal import SurfaceSeries
+
+Conn = psycopg.Connection[Any]
+
+
+def _class(conn: Conn, name: str = "horizons", schema: str = "public", **extra: Any) -> None:
+    tgsis.create_feature_class(
+        conn,
+        name,
+        "SURFACE",
+        time_model="INSTANTS",
+        schema=schema,
+        cell_properties=extra.pop("cell_properties", [("porosity", "float8")]),
+        instant_properties=extra.pop("instant_properties", [("throw", "double precision")]),
+        **extra,
+    )
+    tgsis.enable_feature_versioning(conn)
+
+
+def _series(conn: Conn, name: str = "horizons", times: tuple[float, ...] = TIMES, **props: Any) -> int:
+    cells = curved_surface().cells
+    surfaces = [
+        tgsis.Surface(_shape(i), cells, vertex_properties={"porosity": _porosity()} | props)
+        for i in range(len(times))
+    ]
+    series = SurfaceSeries(np.asarray(times), surfaces, properties={"throw": np.arange(len(times)) * 10.0 + 10.0})
+    return int(tgsis.insert_feature(conn, name, series))
+
+
+def _add(conn: Conn, version: str, geoid: int, t: float, name: str = "horizons") -> None:
+    surface = tgsis.Surface(_shape(5), curved_surface().cells, vertex_properties={"porosity": _porosity() * 3.0})
+    with tgsis.in_version(conn, version):
+        tgsis.add_instant(conn, name, geoid, t, surface, {"throw": 44.0})
+    conn.commit()
+
+
+def _sql(conn: Conn, version: str, text: Any, args: tuple[Any, ...] = ()) -> None:
+    with tgsis.in_version(conn, version):
+        conn.execute(text, args)
+    conn.commit()
+
+
+def _same_or_refused_by_name(conn: Conn, version: str, action: str = "merge") -> tuple[Any, ...]:
+    """The psql merge writes what Python writes, or refuses (TG302) writing nothing."""
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, version, action)
+    if mine[0] == "refused":
+        assert mine[1] == "TG302", mine
+        assert everything(conn) == before
+        conn.commit()
+        return mine
+    assert theirs[0] == "done", (theirs, mine)
+    assert mine[1] == theirs[1], (mine[1], theirs[1])
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+    return mine
+
+
+# ---------------------------------------------------------------------------- times by their bits
+
+
+@pytest.mark.parametrize(
+    ("added", "side"),
+    [
+        (1.0000000000000002, "e1"),  # the next double after instant 1.0
+        (1.0000000000000002, "DEFAULT"),
+        (0.9999999999999999, "DEFAULT"),
+        (-0.0, "DEFAULT"),
+        (-0.0, "e1"),
+        (-1.0e300, "DEFAULT"),
+        (1.0e300, "e1"),
+        (5e-324, "DEFAULT"),  # the smallest subnormal
+    ],
+)
+def test_an_instant_added_at_a_time_a_bit_apart_merges_exactly_as_in_python(
+    conn: Conn, added: float, side: str
+) -> None:
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _add(conn, side, geoid, added)
+    other = "DEFAULT" if side == "e1" else "e1"
+    move(conn, other, geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, side, geoid, 3.0, SOUTH, PARENT_SHIFT)
+    assert_same_merge(conn, "e1")
+
+
+def test_instants_at_zero_and_minus_zero_on_both_sides(conn: Conn) -> None:
+    """The parent adds instant 0.0, the version -0.0 (one instant for PostgreSQL and numpy), alike otherwise."""
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _add(conn, "DEFAULT", geoid, 0.0)
+    _add(conn, "e1", geoid, -0.0)
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    _same_or_refused_by_name(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- storage and names
+
+
+def test_partitioned_storage_merges_exactly_as_in_python(conn: Conn) -> None:
+    conn.execute("SELECT tgsis.partition_model_storage(2::smallint, 4)")
+    conn.commit()
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    _add(conn, "e1", geoid, 4.0)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    _sql(conn, "DEFAULT", "UPDATE horizons_pros SET throw = 25 WHERE _geoid = %s AND _times = 2", (geoid,))
+    assert_same_merge(conn, "e1")
+
+
+def test_odd_schema_and_class_names(conn: Conn) -> None:
+    schema, name = 'Odd "S"; x', "hor_izons"
+    conn.execute(sql.SQL("CREATE SCHEMA {}").format(sql.Identifier(schema)))
+    conn.commit()
+    _class(conn, name, schema, instant_properties=[("Thr_Ow", "double precision")], cell_properties=[("PoRo", "float8")])
+    cells = curved_surface().cells
+    surfaces = [tgsis.Surface(_shape(i), cells, vertex_properties={"PoRo": _porosity()}) for i in range(3)]
+    geoid = int(
+        tgsis.insert_feature(
+            conn, name, SurfaceSeries(np.asarray(TIMES), surfaces, properties={"Thr_Ow": np.asarray([1.0, 2.0, 3.0])})
+        )
+    )
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    fc = conn.execute(
+        "SELECT protablename, cellprotable FROM tgsis.catalog WHERE classname = %s", (name,)
+    ).fetchone()
+    assert fc is not None
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    _sql(
+        conn,
+        "DEFAULT",
+        sql.SQL("UPDATE {} SET {} = 25 WHERE _geoid = %s AND _times = 2").format(
+            sql.Identifier(schema, fc[0]), sql.Identifier("Thr_Ow")
+        ),
+        (geoid,),
+    )
+    _sql(
+        conn,
+        "e1",
+        sql.SQL("UPDATE {} SET {} = -0.0 WHERE _geoid = %s AND _times = 1 AND _idx < 5").format(
+            sql.Identifier(schema, fc[1]), sql.Identifier("PoRo")
+        ),
+        (geoid,),
+    )
+    assert_same_merge(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- properties of every type
+
+INSTANT_TYPES = [
+    ("i2", "smallint"),
+    ("i4", "integer"),
+    ("i8", "bigint"),
+    ("f4", "real"),
+    ("f8", "double precision"),
+    ("b", "boolean"),
+    ("n", "numeric"),
+    ("s", "text"),
+    ("d", "date"),
+    ("ts", "timestamptz"),
+    ("j", "jsonb"),
+]
+
+
+@pytest.mark.parametrize("settings", ["default", "odd"])
+def test_per_instant_properties_of_every_type_merge_column_by_column(conn: Conn, settings: str) -> None:
+    _class(conn, instant_properties=[("throw", "double precision"), *INSTANT_TYPES])
+    geoid = _series(conn)
+    _sql(
+        conn,
+        "DEFAULT",
+        "UPDATE horizons_pros SET i2 = -3, i4 = 7, i8 = 9007199254740993, f4 = 0.1, f8 = 0.1, b = true,"
+        " n = 1.10, s = 'a''b', d = '2026-12-05', ts = '2026-12-05 10:00+00', j = '{\"a\": [1, 2.5]}'"
+        " WHERE _geoid = %s",
+        (geoid,),
+    )
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    # instant 2: the parent changes some columns, the version others (and a big int by one)
+    _sql(
+        conn,
+        "DEFAULT",
+        "UPDATE horizons_pros SET i2 = NULL, f4 = 3.4028235e38, s = 'é\"x', ts = '1999-01-01 00:00+05'"
+        " WHERE _geoid = %s AND _times = 2",
+        (geoid,),
+    )
+    _sql(
+        conn,
+        "e1",
+        "UPDATE horizons_pros SET i8 = 9007199254740994, f8 = -0.0, b = NULL, n = 1.1000, d = 'infinity',"
+        " j = '{\"a\": [1, 2.50]}' WHERE _geoid = %s AND _times = 2",
+        (geoid,),
+    )
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    if settings == "odd":
+        conn.execute("SET DateStyle = 'SQL, DMY'")
+        conn.execute("SET TimeZone = 'Pacific/Chatham'")
+        conn.execute("SET IntervalStyle = 'sql_standard'")
+        conn.commit()
+    assert_same_merge(conn, "e1")
+
+
+@pytest.mark.parametrize(
+    ("kind", "column", "value"),
+    [
+        ("bigint", "big", 9007199254740993),  # 2**53 + 1: no float64 holds it
+        ("bigint", "big", None),
+        ("integer", "n", None),
+        ("boolean", "ok", None),
+        ("real", "r", -0.0),
+        ("real", "r", float("nan")),
+        ("double precision", "porosity", float("inf")),
+    ],
+)
+def test_vertex_properties_of_other_types_merge_exactly_as_in_python(
+    conn: Conn, kind: str, column: str, value: Any
+) -> None:
+    props = [("porosity", "float8")] + ([(column, kind)] if column != "porosity" else [])
+    _class(conn, cell_properties=props)
+    extra = {}
+    if column != "porosity":
+        dtype = {"bigint": np.int64, "integer": np.int32, "boolean": np.bool_, "real": np.float32}[kind]
+        extra[column] = (np.arange(len(_porosity())) * 3 + 2**53 if kind == "bigint" else np.arange(len(_porosity())) % 2).astype(dtype)
+    geoid = _series(conn, **extra)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    table = conn.execute("SELECT cellprotable FROM tgsis.catalog WHERE classname = 'horizons'").fetchone()
+    assert table is not None
+    if value is None:  # (the columns are NOT NULL: a vertex without its property row)
+        _sql(
+            conn,
+            "e1",
+            sql.SQL("DELETE FROM {} WHERE _geoid = %s AND _times = 1 AND _idx BETWEEN 3 AND 6").format(
+                sql.Identifier(table[0])
+            ),
+            (geoid,),
+        )
+    else:
+        _sql(
+            conn,
+            "e1",
+            sql.SQL("UPDATE {} SET {} = %s WHERE _geoid = %s AND _times = 1 AND _idx BETWEEN 3 AND 6").format(
+                sql.Identifier(table[0]), sql.Identifier(column)
+            ),
+            (value, geoid),
+        )
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    _same_or_refused_by_name(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- versions
+
+
+def test_a_version_whose_parent_is_not_default(conn: Conn) -> None:
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    tgsis.create_version(conn, "e2", "e1")
+    conn.commit()
+    move(conn, "e2", geoid, 1.0, NORTH, CHILD_SHIFT)
+    _add(conn, "e2", geoid, 7.5)
+    move(conn, "e1", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", geoid, 2.0, SOUTH, PARENT_SHIFT)  # DEFAULT's edit: not e1's, not merged
+    assert_same_merge(conn, "e2")
+    assert_same_merge(conn, "e2", "refresh")
+
+
+def test_many_instants_and_many_objects(conn: Conn) -> None:
+    _class(conn)
+    times = tuple(float(t) for t in range(1, 41))
+    ids = [_series(conn, times=times) for _ in range(3)]
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for k, geoid in enumerate(ids):
+        for t in times[k::3]:
+            move(conn, "e1", geoid, t, NORTH, CHILD_SHIFT)
+        for t in times[k + 1 :: 3]:
+            move(conn, "DEFAULT", geoid, t, SOUTH, PARENT_SHIFT)
+    assert_same_merge(conn, "e1")
+
+
+@pytest.mark.parametrize("moved", [1.0, 2.0])
+def test_minus_zero_written_over_zero_alone_at_an_instant(conn: Conn, moved: float) -> None:
+    """-0.0 over 0.0 is no change to merge3 (floats -0 as 0) but other bits: at instant 1 alone, the version's only
+    edit there; the version moves instant ``moved``, the parent instant 3."""
+    _class(conn, cell_properties=[("porosity", "float8"), ("r", "real")])
+    n = len(_porosity())
+    geoid = _series(conn, r=np.ones(n, dtype=np.float32))
+    _sql(conn, "DEFAULT", "UPDATE horizons_cellpros SET porosity = 0, r = 0 WHERE _geoid = %s AND _idx < 9", (geoid,))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _sql(
+        conn,
+        "e1",
+        "UPDATE horizons_cellpros SET porosity = -0.0, r = '-0' WHERE _geoid = %s AND _times = 1 AND _idx BETWEEN 3 AND 6",
+        (geoid,),
+    )
+    _sql(conn, "e1", "UPDATE tgsis.times_vrtx SET z = -0.0 WHERE geoid = %s AND times = 1 AND vrtxid = 0", (geoid,))
+    move(conn, "e1", geoid, moved, NORTH[5:], CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    _same_or_refused_by_name(conn, "e1")
+
+
+def test_a_class_without_any_property(conn: Conn) -> None:
+    _class(conn, cell_properties=[], instant_properties=[])
+    surfaces = [tgsis.Surface(_shape(i), curved_surface().cells) for i in range(3)]
+    geoid = int(tgsis.insert_feature(conn, "horizons", SurfaceSeries(np.asarray(TIMES), surfaces)))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    surface = tgsis.Surface(_shape(5), curved_surface().cells)
+    with tgsis.in_version(conn, "e1"):
+        tgsis.add_instant(conn, "horizons", geoid, 9.0, surface)
+    conn.commit()
+    assert_same_merge(conn, "e1")
