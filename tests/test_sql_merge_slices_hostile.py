@@ -349,3 +349,49 @@ def test_a_class_without_any_property(conn: Conn) -> None:
         tgsis.add_instant(conn, "horizons", geoid, 9.0, surface)
     conn.commit()
     assert_same_merge(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- solutions of a slice's region from psql
+
+
+def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_refused_by_name(conn: Conn) -> None:
+    """A psql user records a manual mesh with its rows (as for a model-1 region) for a region of an instant: the
+    psql merge does not merge an instant both sides changed (the Python client does, from the .npz), so the rows
+    are refused in our SQLSTATE naming the instant, not by a raw check violation (23514); the .npz alone is kept."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 2.0, NORTH, PARENT_SHIFT)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    region = next(r for r in conflict.regions if r.conflict)
+    assert region.times == 2.0
+    from tgsis.db._merge_states import read_sliced_states
+
+    states = read_sliced_states(conn, "e1", geoid).states
+    conn.rollback()
+    child = states["child"].slices[(2.0,)]
+    before = everything(conn)
+    conn.commit()
+    with pytest.raises(psycopg.Error) as caught:
+        conn.execute(
+            "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s,"
+            " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
+            (str(geoid), region.region, state_to_npz(child), *(_sql_rows(child) or ())),
+        )
+    conn.rollback()
+    assert caught.value.sqlstate == "TG100", (caught.value.sqlstate, str(caught.value))
+    assert "instant 2" in str(caught.value), str(caught.value)
+    assert "psql" in (caught.value.diag.message_hint or ""), caught.value.diag.message_hint
+    assert everything(conn) == before
+    conn.commit()
+    # the .npz alone (what the Python client records for a slice's region) is taken
+    conn.execute(
+        "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s)",
+        (str(geoid), region.region, state_to_npz(child)),
+    )
+    conn.rollback()
