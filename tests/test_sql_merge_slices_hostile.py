@@ -395,3 +395,49 @@ def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_refused_by_name
         (str(geoid), region.region, state_to_npz(child)),
     )
     conn.rollback()
+
+
+# ---------------------------------------------------------------------------- negative ids
+
+
+@pytest.mark.parametrize("new_id", [-1, -5, -(2**62)])
+def test_a_negative_vertex_id_a_psql_user_stored_merges_exactly_as_in_python_model1(
+    conn: Conn, fault_clone: int, new_id: int
+) -> None:
+    """The storage takes any bigint id (a psql INSERT through tgsis.vrtx stores vrtxid -5): a vertex and triangle the
+    version added with negative ids merge like any other (-1 is no "none" to merge3), in both merges alike."""
+    from tests.merge_data import move as move1
+
+    geoid = fault_clone
+    _sql(conn, "e1", "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 1.5, 2.5, 3.5)", (geoid, new_id))
+    _sql(
+        conn,
+        "e1",
+        "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 0, 1, %s)",
+        (geoid, new_id - 1, new_id),
+    )
+    move1(conn, "e1", geoid, range(0, 12), CHILD_SHIFT)
+    move1(conn, "DEFAULT", geoid, range(120, 144), PARENT_SHIFT)
+    mine = assert_same_merge(conn, "e1")
+    assert any(r[1] == str(new_id) for r in mine[2]["tgsis.vrtx_ver"]), "the new vertex is kept"
+
+
+def test_a_negative_vertex_id_at_an_instant_merges_exactly_as_in_python(conn: Conn) -> None:
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _sql(
+        conn,
+        "e1",
+        "INSERT INTO tgsis.times_vrtx (geoid, times, vrtxid, x, y, z) VALUES (%s, 2, -1, 1.5, 2.5, 3.5)",
+        (geoid,),
+    )
+    _sql(
+        conn,
+        "e1",
+        "INSERT INTO tgsis.times_trgl (geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 2, -2, 0, 1, -1)",
+        (geoid,),
+    )
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    assert_same_merge(conn, "e1")
