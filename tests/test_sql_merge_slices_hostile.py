@@ -70,6 +70,7 @@ def _same_or_refused_by_name(conn: Conn, version: str, action: str = "merge") ->
     conn.commit()
     theirs, mine = both_merges(conn, version, action)
     if mine[0] == "refused":
+        print("\nREFUSED", theirs[:2], mine[2][:300])
         assert mine[1] == "TG302", mine
         assert everything(conn) == before
         conn.commit()
@@ -441,3 +442,101 @@ def test_a_negative_vertex_id_at_an_instant_merges_exactly_as_in_python(conn: Co
     )
     move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
     assert_same_merge(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- more one-sided scenarios
+
+MORE: dict[str, list[tuple[str, str]]] = {
+    "version moves instant 2, parent changes its per-instant property": [("e1", "move 2 north"), ("DEFAULT", "throw 2 25")],
+    "parent moves instant 2, version changes its per-instant property": [("DEFAULT", "move 2 south"), ("e1", "throw 2 25")],
+    "version removes instant 2, parent changes its per-instant property": [("e1", "delete 2"), ("DEFAULT", "throw 2 25")],
+    "both remove instant 2, parent moves 3": [("e1", "delete 2"), ("DEFAULT", "delete 2"), ("DEFAULT", "move 3 south")],
+    "both add instant 4 alike, the parent then changes its property": [
+        ("e1", "add 4"),
+        ("DEFAULT", "add 4"),
+        ("DEFAULT", "throw 4 9"),
+        ("e1", "move 1 north"),
+    ],
+    "version removes instant 2 and adds it anew, parent moves 3": [
+        ("e1", "delete 2"),
+        ("e1", "add 2"),
+        ("DEFAULT", "move 3 south"),
+    ],
+    "parent removes instant 2 and adds it anew, version moves 3": [
+        ("DEFAULT", "delete 2"),
+        ("DEFAULT", "add 2"),
+        ("e1", "move 3 north"),
+    ],
+    "version moves 2 and back, parent moves 2": [
+        ("e1", "move 2 north"),
+        ("e1", "back 2 north"),
+        ("DEFAULT", "move 2 south"),
+    ],
+    "version edits cells of 2 and 3, parent the properties of 1": [
+        ("e1", "cells 2"),
+        ("e1", "cells 3"),
+        ("DEFAULT", "throw 1 5"),
+        ("DEFAULT", "move 1 south"),
+    ],
+}
+
+
+@pytest.mark.parametrize("scenario", list(MORE))
+def test_more_scenarios_merge_in_psql_exactly_as_in_python_or_are_refused_by_name(conn: Conn, scenario: str) -> None:
+    from tests.test_sql_merge_slices import _step
+
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    for version, step in MORE[scenario]:
+        if step.startswith("back"):  # the version's move undone (the same bits again)
+            t = float(step.split()[1])
+            shift = tuple(-s for s in CHILD_SHIFT)
+            move(conn, version, geoid, t, NORTH, shift)  # type: ignore[arg-type]
+        else:
+            _step(conn, version, step, geoid)
+    theirs, mine = both_merges(conn, "e1")
+    if theirs[0] == "refused":
+        assert mine[:2] == theirs[:2], (theirs, mine)
+    else:
+        _same_or_refused_by_name(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- rights on the helpers
+
+
+def test_object_merge_refusal_is_not_public_and_an_editor_still_merges_in_psql(conn: Conn, db_dsn: str) -> None:
+    """tgsis.object_merge_refusal (m23's, asked by the model-1 and model-2 psql merges and by
+    tgsis.mesh_merge_regions, which runs as its caller) was executable by PUBLIC, against the rule that internal
+    functions are not: it is the tgsis roles' (tgsis_reader) only, and an editor with the version's rights still
+    merges a surface at instants from psql, exactly as the Python merge does."""
+    from tests.roles import login_roles
+
+    signature = "tgsis.object_merge_refusal(text, bigint)"
+    rights = conn.execute(
+        "SELECT has_function_privilege('public', %s::regprocedure, 'EXECUTE'),"
+        " has_function_privilege('tgsis_reader', %s::regprocedure, 'EXECUTE')",
+        (signature, signature),
+    ).fetchone()
+    conn.rollback()
+    assert rights == (False, True), rights
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    theirs, _ = both_merges(conn, "e1")
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.commit()
+        session = made.connect("ed")
+        row = session.execute("SELECT tgsis.merge_version('e1')").fetchone()
+        session.commit()
+        assert row is not None and int(row[0]) == theirs[1]
+        after = everything(conn)
+        conn.commit()
+        for table in ("tgsis.times_vrtx_ver", "tgsis.times_ver", "public.horizons_cellpros_ver"):
+            assert after[table] == theirs[2][table], table
