@@ -70,7 +70,6 @@ def _same_or_refused_by_name(conn: Conn, version: str, action: str = "merge") ->
     conn.commit()
     theirs, mine = both_merges(conn, version, action)
     if mine[0] == "refused":
-        print("\nREFUSED", theirs[:2], mine[2][:300])
         assert mine[1] == "TG302", mine
         assert everything(conn) == before
         conn.commit()
@@ -540,3 +539,27 @@ def test_object_merge_refusal_is_not_public_and_an_editor_still_merges_in_psql(c
         conn.commit()
         for table in ("tgsis.times_vrtx_ver", "tgsis.times_ver", "public.horizons_cellpros_ver"):
             assert after[table] == theirs[2][table], table
+
+
+# ---------------------------------------------------------------------------- an instant no state sees
+
+
+@pytest.mark.parametrize("side", ["DEFAULT", "e1"])
+def test_an_instant_added_then_removed_in_a_later_revision_merges_as_in_python(conn: Conn, side: str) -> None:
+    """Instant 4 added on one side, its revision frozen (a version made from it), then removed: its rows are in the
+    storage, seen by none of the three states. No state has it: nothing to merge there, not an object-level
+    conflict."""
+    from tests.test_sql_merge_slices import _step
+
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _step(conn, side, "add 4", geoid)
+    tgsis.create_version(conn, "frozen", side)  # the side's working revision is frozen: the removal closes rows
+    conn.commit()
+    _step(conn, side, "delete 4", geoid)
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    assert_same_merge(conn, "e1")
+    assert_same_merge(conn, "e1", "refresh")

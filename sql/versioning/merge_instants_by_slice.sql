@@ -236,7 +236,9 @@ BEGIN
     -- M merge3's merge of the version's edit, N none; X an object-level conflict, R both sides changed it
     INSERT INTO pg_temp.tgsis_ms_slice
     WITH sl AS (
-        SELECT k.t, bool_or(r.st = 1) AS ib, bool_or(r.st = 2) AS ip, bool_or(r.st = 4) AS ic
+        -- (an instant whose rows no state sees, added and removed in later revisions: in none, not NULL)
+        SELECT k.t, coalesce(bool_or(r.st = 1), false) AS ib, coalesce(bool_or(r.st = 2), false) AS ip,
+               coalesce(bool_or(r.st = 4), false) AS ic
           FROM (SELECT DISTINCT t FROM pg_temp.tgsis_ms_key WHERE tab = 'T') AS k
           LEFT JOIN pg_temp.tgsis_ms_row r ON r.tab = 'T' AND r.t = k.t
          GROUP BY k.t),
