@@ -563,3 +563,21 @@ def test_an_instant_added_then_removed_in_a_later_revision_merges_as_in_python(c
     move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
     assert_same_merge(conn, "e1")
     assert_same_merge(conn, "e1", "refresh")
+
+
+@pytest.mark.parametrize("side", ["DEFAULT", "e1"])
+def test_an_instant_removed_in_psql_by_its_times_row_alone(conn: Conn, side: str) -> None:
+    """A psql user deletes instant 2's tgsis.times row only (its vertex, triangle and property rows stay): the
+    instant is gone on that side; the other side moves another instant."""
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _sql(conn, side, "DELETE FROM tgsis.times WHERE geoid = %s AND times = 2", (geoid,))
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    theirs, mine = both_merges(conn, "e1")
+    if theirs[0] == "refused":
+        assert mine[:2] == theirs[:2], (theirs, mine)
+    else:
+        _same_or_refused_by_name(conn, "e1")
