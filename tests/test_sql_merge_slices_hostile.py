@@ -581,3 +581,41 @@ def test_an_instant_removed_in_psql_by_its_times_row_alone(conn: Conn, side: str
         assert mine[:2] == theirs[:2], (theirs, mine)
     else:
         _same_or_refused_by_name(conn, "e1")
+
+
+@pytest.mark.parametrize("table", ["horizons_cellpros", "horizons_pros"])
+def test_a_role_that_may_not_write_a_property_table_is_refused_as_in_python(
+    conn: Conn, db_dsn: str, table: str
+) -> None:
+    """The editor may change the feature but not the class's vertex (per-instant) property rows: the merge brings
+    the parent's property edits into the version; psql must refuse as the Python merge does, writing nothing."""
+    from tests.roles import login_roles
+    from tests.test_sql_merge_slices import _step
+
+    _class(conn)
+    geoid = _series(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _step(conn, "DEFAULT", "cells 2" if table == "horizons_cellpros" else "throw 2 25", geoid)
+    move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute(sql.SQL("REVOKE INSERT, UPDATE, DELETE ON {} FROM tgsis_editor").format(sql.Identifier(table)))
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        session = made.connect("ed")
+        try:
+            tgsis.merge_version(session, "e1")
+            python = "done"
+        except tgsis.Error as exc:
+            python = str(exc.sqlstate)
+        session.rollback()
+        assert python == "42501", python  # PostgreSQL refuses the Python merge's write through the view
+        with pytest.raises(psycopg.Error) as caught:
+            session.execute("SELECT tgsis.merge_version('e1')")
+        session.rollback()
+        assert caught.value.sqlstate == python, (python, str(caught.value))
+        assert everything(conn) == before
+        conn.commit()
