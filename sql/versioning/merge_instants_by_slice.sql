@@ -517,7 +517,7 @@ BEGIN
             v_width := CASE WHEN cardinality(v_ids) > 0 THEN cardinality(v_flat) / cardinality(v_ids) ELSE 0 END;
         END IF;
         CONTINUE WHEN cardinality(v_ids) = 0;
-        PERFORM tgsis.check_merge_table_write(v_spec.vt, 'INSERT', p_geoid);
+        PERFORM tgsis.check_merge_table_write(v_spec.vt, 'INSERT', p_geoid, true);  -- (the Python client COPYs them there)
         SELECT coalesce(string_agg(format(', %I', c.attname), '' ORDER BY c.attnum), ''),
                coalesce(string_agg(format(', $1[3 + (g.i - 1) * %s + %s]::%s', v_width, c.j,
                                           format_type(c.atttypid, c.atttypmod)), '' ORDER BY c.attnum), ''),
