@@ -44,8 +44,7 @@ def _class(conn: Conn, name: str = "horizons", schema: str = "public", **extra: 
 def _series(conn: Conn, name: str = "horizons", times: tuple[float, ...] = TIMES, **props: Any) -> int:
     cells = curved_surface().cells
     surfaces = [
-        tgsis.Surface(_shape(i), cells, vertex_properties={"porosity": _porosity()} | props)
-        for i in range(len(times))
+        tgsis.Surface(_shape(i), cells, vertex_properties={"porosity": _porosity()} | props) for i in range(len(times))
     ]
     series = SurfaceSeries(np.asarray(times), surfaces, properties={"throw": np.arange(len(times)) * 10.0 + 10.0})
     return int(tgsis.insert_feature(conn, name, series))
@@ -144,7 +143,9 @@ def test_odd_schema_and_class_names(conn: Conn) -> None:
     schema, name = 'Odd "S"; x', "hor_izons"
     conn.execute(sql.SQL("CREATE SCHEMA {}").format(sql.Identifier(schema)))
     conn.commit()
-    _class(conn, name, schema, instant_properties=[("Thr_Ow", "double precision")], cell_properties=[("PoRo", "float8")])
+    _class(
+        conn, name, schema, instant_properties=[("Thr_Ow", "double precision")], cell_properties=[("PoRo", "float8")]
+    )
     cells = curved_surface().cells
     surfaces = [tgsis.Surface(_shape(i), cells, vertex_properties={"PoRo": _porosity()}) for i in range(3)]
     geoid = int(
@@ -154,9 +155,7 @@ def test_odd_schema_and_class_names(conn: Conn) -> None:
     )
     tgsis.create_version(conn, "e1")
     conn.commit()
-    fc = conn.execute(
-        "SELECT protablename, cellprotable FROM tgsis.catalog WHERE classname = %s", (name,)
-    ).fetchone()
+    fc = conn.execute("SELECT protablename, cellprotable FROM tgsis.catalog WHERE classname = %s", (name,)).fetchone()
     assert fc is not None
     move(conn, "e1", geoid, 1.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
@@ -255,7 +254,9 @@ def test_vertex_properties_of_other_types_merge_exactly_as_in_python(
     extra = {}
     if column != "porosity":
         dtype = {"bigint": np.int64, "integer": np.int32, "boolean": np.bool_, "real": np.float32}[kind]
-        extra[column] = (np.arange(len(_porosity())) * 3 + 2**53 if kind == "bigint" else np.arange(len(_porosity())) % 2).astype(dtype)
+        extra[column] = (
+            np.arange(len(_porosity())) * 3 + 2**53 if kind == "bigint" else np.arange(len(_porosity())) % 2
+        ).astype(dtype)
     geoid = _series(conn, **extra)
     tgsis.create_version(conn, "e1")
     conn.commit()
@@ -446,9 +447,18 @@ def test_a_negative_vertex_id_at_an_instant_merges_exactly_as_in_python(conn: Co
 # ---------------------------------------------------------------------------- more one-sided scenarios
 
 MORE: dict[str, list[tuple[str, str]]] = {
-    "version moves instant 2, parent changes its per-instant property": [("e1", "move 2 north"), ("DEFAULT", "throw 2 25")],
-    "parent moves instant 2, version changes its per-instant property": [("DEFAULT", "move 2 south"), ("e1", "throw 2 25")],
-    "version removes instant 2, parent changes its per-instant property": [("e1", "delete 2"), ("DEFAULT", "throw 2 25")],
+    "version moves instant 2, parent changes its per-instant property": [
+        ("e1", "move 2 north"),
+        ("DEFAULT", "throw 2 25"),
+    ],
+    "parent moves instant 2, version changes its per-instant property": [
+        ("DEFAULT", "move 2 south"),
+        ("e1", "throw 2 25"),
+    ],
+    "version removes instant 2, parent changes its per-instant property": [
+        ("e1", "delete 2"),
+        ("DEFAULT", "throw 2 25"),
+    ],
     "both remove instant 2, parent moves 3": [("e1", "delete 2"), ("DEFAULT", "delete 2"), ("DEFAULT", "move 3 south")],
     "both add instant 4 alike, the parent then changes its property": [
         ("e1", "add 4"),
