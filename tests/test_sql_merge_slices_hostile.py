@@ -251,7 +251,7 @@ def test_vertex_properties_of_other_types_merge_exactly_as_in_python(
 ) -> None:
     props = [("porosity", "float8")] + ([(column, kind)] if column != "porosity" else [])
     _class(conn, cell_properties=props)
-    extra = {}
+    extra: dict[str, Any] = {}
     if column != "porosity":
         dtype = {"bigint": np.int64, "integer": np.int32, "boolean": np.bool_, "real": np.float32}[kind]
         extra[column] = (
@@ -690,3 +690,37 @@ def test_a_role_that_may_not_write_a_property_table_is_refused_as_in_python_mode
         assert caught.value.sqlstate == python.value.sqlstate, (str(python.value), str(caught.value))
         assert everything(conn) == before
         conn.commit()
+
+
+def test_a_class_with_triangle_properties(conn: Conn) -> None:
+    """Properties per triangle (alignment CELL) at each instant: the version edits some at instant 1, the parent
+    moves instant 3; both merges write the same rows."""
+    _class(conn, cell_properties=[("facies", "int")], alignment="CELL")
+    cells = curved_surface().cells
+    facies = np.arange(len(cells)) % 5
+    surfaces = [tgsis.Surface(_shape(i), cells, cell_properties={"facies": facies}) for i in range(3)]
+    geoid = int(
+        tgsis.insert_feature(
+            conn, "horizons", SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": np.asarray([1.0, 2, 3])})
+        )
+    )
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    table = conn.execute("SELECT cellprotable FROM tgsis.catalog WHERE classname = 'horizons'").fetchone()
+    assert table is not None
+    _sql(
+        conn,
+        "e1",
+        sql.SQL("UPDATE {} SET facies = 9 WHERE _geoid = %s AND _times = 1 AND _idx BETWEEN 10 AND 14").format(
+            sql.Identifier(table[0])
+        ),
+        (geoid,),
+    )
+    _sql(
+        conn,
+        "e1",
+        sql.SQL("DELETE FROM {} WHERE _geoid = %s AND _times = 1 AND _idx = 20").format(sql.Identifier(table[0])),
+        (geoid,),
+    )
+    move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
+    _same_or_refused_by_name(conn, "e1")
