@@ -32,8 +32,10 @@
 -- between parent and version (-0 against 0, a cell's vertices rotated: merge3
 -- takes it from the side whose region holds it, which SQL does not compute),
 -- 42501 for a role that may not
--- read the class or change it, TG002 for one that may not write in the
--- version. extra_float_digits is pinned: values are compared as text, floats
+-- read the class or change it, or write the rows the merge writes through
+-- their view (tgsis.check_merge_table_write: a property table a DBA took
+-- INSERT, UPDATE or DELETE on from the role), TG002 for one that may not
+-- write in the version. extra_float_digits is pinned: values are compared as text, floats
 -- exactly.
 CREATE FUNCTION tgsis.merge_instants_by_slice(p_version text, p_action text, p_geoid bigint)
 RETURNS bigint
@@ -236,7 +238,9 @@ BEGIN
     -- M merge3's merge of the version's edit, N none; X an object-level conflict, R both sides changed it
     INSERT INTO pg_temp.tgsis_ms_slice
     WITH sl AS (
-        SELECT k.t, bool_or(r.st = 1) AS ib, bool_or(r.st = 2) AS ip, bool_or(r.st = 4) AS ic
+        -- (an instant whose rows no state sees, added and removed in later revisions: in none, not NULL)
+        SELECT k.t, coalesce(bool_or(r.st = 1), false) AS ib, coalesce(bool_or(r.st = 2), false) AS ip,
+               coalesce(bool_or(r.st = 4), false) AS ic
           FROM (SELECT DISTINCT t FROM pg_temp.tgsis_ms_key WHERE tab = 'T') AS k
           LEFT JOIN pg_temp.tgsis_ms_row r ON r.tab = 'T' AND r.t = k.t
          GROUP BY k.t),
@@ -407,6 +411,8 @@ BEGIN
           INTO v_cols, v_casts, v_why
           FROM unnest(v_pcols) WITH ORDINALITY AS u(c, o);
         FOR v_attr IN SELECT * FROM pg_temp.tgsis_ms_prow r WHERE r.m IS DISTINCT FROM r.c ORDER BY r.t LOOP
+            PERFORM tgsis.check_merge_table_write(v_pros, CASE WHEN v_attr.c IS NULL THEN 'INSERT'
+                                                              WHEN v_attr.m IS NULL THEN 'DELETE' ELSE 'UPDATE' END, p_geoid);
             v_count := 0;
             IF v_attr.m IS NOT NULL AND v_attr.c IS NOT NULL THEN  -- in place in the working revision
                 SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
@@ -459,6 +465,7 @@ BEGIN
                                   AND CASE WHEN length(v_spec.tab) = 1 THEN n.gbits = o.gbits ELSE n.pbits = o.pbits END);
         END IF;
         IF cardinality(v_ids) > 0 THEN
+            PERFORM tgsis.check_merge_table_write(v_spec.vt, 'DELETE', p_geoid);
             SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_spec.vt, true, format(
                 'DELETE FROM %I.%I v USING (SELECT DISTINCT k.t, k.id FROM unnest($1[2]::float8[], $5) AS k (t, id)) AS k
                   WHERE v.%I = $1[1]::bigint AND v.revision = $4 AND v.%I = k.t AND %s = k.id',
@@ -510,6 +517,7 @@ BEGIN
             v_width := CASE WHEN cardinality(v_ids) > 0 THEN cardinality(v_flat) / cardinality(v_ids) ELSE 0 END;
         END IF;
         CONTINUE WHEN cardinality(v_ids) = 0;
+        PERFORM tgsis.check_merge_table_write(v_spec.vt, 'INSERT', p_geoid, true);  -- (the Python client COPYs them there)
         SELECT coalesce(string_agg(format(', %I', c.attname), '' ORDER BY c.attnum), ''),
                coalesce(string_agg(format(', $1[3 + (g.i - 1) * %s + %s]::%s', v_width, c.j,
                                           format_type(c.atttypid, c.atttypmod)), '' ORDER BY c.attnum), ''),

@@ -76,5 +76,9 @@ BEGIN
 END
 $$;
 
+-- (an internal: the psql merges ask it, and tgsis.mesh_merge_regions, which a tgsis role may call as itself)
+REVOKE ALL ON FUNCTION tgsis.object_merge_refusal(text, bigint) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.object_merge_refusal(text, bigint) TO tgsis_reader;
+
 COMMENT ON FUNCTION tgsis.object_merge_refusal(text, bigint) IS
     'why a feature changed both in a version and in its parent does not merge by its parts whatever its data model (deleted on one side, attributes changed on both sides), or NULL';
