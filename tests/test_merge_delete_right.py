@@ -87,7 +87,10 @@ def test_delete_object_rows_without_the_delete_right_is_refused_as_postgresql_re
         codes = []
         for statement, args in (
             (sql.SQL("DELETE FROM {} WHERE _geoid = %s AND _idx = 1").format(sql.Identifier(table[0])), (geoid,)),
-            (sql.SQL("SELECT tgsis.delete_object_rows('public', %s, '_geoid', %s, '_idx', '{1}')"), (table[0], [geoid])),
+            (
+                sql.SQL("SELECT tgsis.delete_object_rows('public', %s, '_geoid', %s, '_idx', '{1}')"),
+                (table[0], [geoid]),
+            ),
         ):
             with pytest.raises(psycopg.Error) as caught, tgsis.in_version(session, "e1"):
                 session.execute(statement, args)
