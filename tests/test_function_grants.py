@@ -230,7 +230,6 @@ _INTERNALS_STILL_PUBLIC = frozenset(
         "md_query_box",
         "model_id",
         "model_tables_of",
-        "notice_discards",
         "object_key_kind",
         "object_key_sql",
         "object_key_text_sql",
@@ -277,6 +276,7 @@ _MERGE_INTERNALS = {
     "tgsis.merge_mesh_validity(text,integer,text,text,bigint,integer[],text,text)": False,
     "tgsis.merge_number_text(double precision)": False,
     "tgsis.merge_regions_in_sql(text,text,boolean)": False,
+    "tgsis.notice_discards(text,text,text,text)": False,
     "tgsis.mesh_merge_work(text,bigint)": True,  # run by tgsis.mesh_merge_regions, as its caller
     "tgsis.region_merge_refusal(text,bigint)": True,  # asked by tgsis.mesh_merge_work
     "tgsis.require_merge_privileges(text,text,boolean)": False,
