@@ -48,10 +48,12 @@ BEGIN
         RAISE EXCEPTION 'table %.% has no column %', quote_ident(p_schema), quote_ident(p_table), quote_ident(p_idfield)
             USING ERRCODE = 'TG100';
     END IF;
+    -- (42501 as PostgreSQL refuses the DELETE of the view itself, and as the merges of every data model refuse
+    -- a write of a property view the role may not make: tgsis.check_merge_table_write)
     IF NOT has_table_privilege(tgsis.calling_role(), format('%I.%I', p_schema, p_table)::regclass, 'DELETE') THEN
         RAISE EXCEPTION 'role % may not delete from %.%', quote_ident(tgsis.calling_role()), quote_ident(p_schema),
                 quote_ident(p_table)
-            USING ERRCODE = 'TG002', HINT = 'its owner can GRANT DELETE on it';
+            USING ERRCODE = 'insufficient_privilege', HINT = 'its owner can GRANT DELETE on it';
     END IF;
     -- a model table every feature class shares: the right on each feature's class (42501; a part of a
     -- feature's rows changes it: UPDATE; all its rows go with the feature: UPDATE or DELETE)

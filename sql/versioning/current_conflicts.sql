@@ -30,3 +30,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.current_conflicts(integer) IS
     'objects of a version changed on both sides since its base, with the tables each side changed and fingerprints of the changes; computed now, not stored (tgsis.find_conflicts stores them)';
+
+-- internal to the merges, not executable by PUBLIC (tests/test_function_grants.py); the Python merge and the browser view ask it as the calling tgsis role
+REVOKE ALL ON FUNCTION tgsis.current_conflicts(integer) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.current_conflicts(integer) TO tgsis_reader;

@@ -11,3 +11,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_ids_text(text[]) IS
     'ids for a message as tgsis.merge3.ids_text writes them: the first ten, then how many in all';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.merge_ids_text(text[]) FROM PUBLIC;

@@ -622,3 +622,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) IS
     'merge one model-1 feature changed both in a version and in its parent by region, in SQL, exactly as the Python merge by region does: the merged mesh (regions one side changed from that side, conflicting ones from their recorded parent/child/base solution or the rows recorded with an average/manual one) written into the version by id-keyed difference, the parent''s attribute edits (geometry and feature rows) brought in, the conflict recorded manual; NULL (nothing written) while a conflicting region has no solution; TG302 for what SQL does not merge (average/manual solutions with their .npz only, an invalid merged mesh), TG002 / 42501 without the right to write in the version / to change the class; returns the rows written';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.merge_mesh_by_region(text, text, bigint) FROM PUBLIC;

@@ -180,3 +180,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_mesh_validity(text, integer, text, text, bigint, integer[], text, text) IS
     'refuse (TG302) the merged mesh of the SQL merge by region (work tables of tgsis.merge_mesh_by_region) that tgsis.merge3 refuses: cells on removed vertices, duplicated cells or non-manifold edges/faces no state has, vertices left without cells';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.merge_mesh_validity(text, integer, text, text, bigint, integer[], text, text) FROM PUBLIC;

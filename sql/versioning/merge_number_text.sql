@@ -38,3 +38,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_number_text(double precision) IS
     'a number for a message as Python''s format(x, ''.6g'') writes it (six significant digits), for the NOTICEs of the SQL merge by region';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.merge_number_text(double precision) FROM PUBLIC;

@@ -76,3 +76,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.merge_regions_in_sql(text, text, boolean) IS
     'the merge by region of a psql merge or refresh: lock the versions, find the conflicts and regions of now, and merge (tgsis.merge_mesh_by_region) each unsolved model-1 feature whose conflicting regions all have a parent/child/base solution into the version; nothing when the Python client merges by region itself; returns the rows written';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.merge_regions_in_sql(text, text, boolean) FROM PUBLIC;

@@ -474,3 +474,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.mesh_merge_work(text, bigint) IS
     'the work tables (pg_temp.tgsis_mr_*, left to the caller) of the three-way merge by region of a model-1 feature changed both in a version and in its parent: rows per state, renumbering, edits, footprints, region labels; returns the number of footprint elements; TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
+
+-- internal to the merges, not executable by PUBLIC (tests/test_function_grants.py); tgsis.mesh_merge_regions, which a tgsis role calls as itself, runs it
+REVOKE ALL ON FUNCTION tgsis.mesh_merge_work(text, bigint) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.mesh_merge_work(text, bigint) TO tgsis_reader;

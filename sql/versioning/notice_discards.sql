@@ -46,3 +46,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.notice_discards(text, text, text, text) IS
     'raise a NOTICE per conflict of a version (optionally one class or object) whose recorded solution discards the other side''s edits, with the counts of tgsis.conflict_discards; returns how many';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh and resolve functions, as
+-- their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.notice_discards(text, text, text, text) FROM PUBLIC;

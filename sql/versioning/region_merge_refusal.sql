@@ -42,3 +42,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.region_merge_refusal(text, bigint) IS
     'why a feature changed both in a version and in its parent does not merge by region (no class, not model 1, a geometry collection, deleted on one side, attributes changed on both sides), or NULL: the refusals of the Python reader, for SQL region detection';
+
+-- internal to the merges, not executable by PUBLIC (tests/test_function_grants.py); tgsis.mesh_merge_work asks it as the calling tgsis role
+REVOKE ALL ON FUNCTION tgsis.region_merge_refusal(text, bigint) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.region_merge_refusal(text, bigint) TO tgsis_reader;

@@ -26,3 +26,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.require_merge_privileges(text, text, boolean) IS
     'raise TG002 unless the calling role may merge (merge on the parent, write or with remove delete on the version) or refresh (write on the version) a version';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.require_merge_privileges(text, text, boolean) FROM PUBLIC;

@@ -190,3 +190,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.slice_only_edits(text, bigint, text) IS
     'the slices (instants; geometry instants of topology periods) of a model-2/3 feature that only the given side (parent or child) changed since the version''s base, as text, or NULL (none, not model 2/3, or an object-level conflict): what a whole-object solution taking the other side would drop although it merges by itself; 42501 for a role that may not read the feature''s class';
+
+-- internal to the merges, not executable by PUBLIC (tests/test_function_grants.py); a tgsis role may ask it as itself (docs/versioning.md)
+REVOKE ALL ON FUNCTION tgsis.slice_only_edits(text, bigint, text) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.slice_only_edits(text, bigint, text) TO tgsis_reader;

@@ -50,3 +50,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.store_mesh_regions(text, text) IS
     'find (tgsis.mesh_merge_regions) and store the regions of one conflicting feature of a version that has none stored, when the calling role may read its class and it merges by region; returns the regions stored';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.store_mesh_regions(text, text) FROM PUBLIC;

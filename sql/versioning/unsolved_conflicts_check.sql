@@ -40,3 +40,7 @@ $$;
 
 COMMENT ON FUNCTION tgsis.check_no_unsolved_conflicts(text, text) IS
     'recompute the conflicts of a version and raise TG302 naming the unsolved ones (before a merge or refresh)';
+
+-- internal to the merges: reached only through the SECURITY DEFINER merge, refresh, find_conflicts and
+-- resolve functions, as their owner; not executable by PUBLIC (tests/test_function_grants.py)
+REVOKE ALL ON FUNCTION tgsis.check_no_unsolved_conflicts(text, text) FROM PUBLIC;
