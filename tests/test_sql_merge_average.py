@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import tgsis
@@ -416,6 +416,9 @@ _pairs = itertools.count()
     shifts=st.sampled_from([(0, 1), (1, 2), (2, 0), (0, 2)]),
     action=st.sampled_from(["merge", "refresh"]),
 )
+# found by Hypothesis: the parent removes cells beside the patch both sides move, so the region's average is of
+# two meshings, which resamples vertices of the region no side changed (vertex 86 moves ~90 m)
+@example(child=[], parent=[("delete", 78, 0)], where=176, shifts=(0, 1), action="merge")
 def test_random_edits_solved_average_merge_in_psql_exactly_as_in_python(
     conn: Conn,
     fault: int,
@@ -450,6 +453,12 @@ def test_random_edits_solved_average_merge_in_psql_exactly_as_in_python(
     theirs, mine = both_merges(conn, child_version, action)
     if theirs[0] == "refused":
         assert mine[0] == "refused" and mine[1] == theirs[1], (theirs, mine)
+        return
+    if mine[:2] == ("refused", "TG302") and "its solution changes rows of its regions no side changed" in mine[2]:
+        # the psql merge writes no vertex of a region that no side changed; the average of two meshings moves
+        # some: refused by name, nothing written, the hint naming the Python merge, which writes them
+        # (docs/merge.md, "refused by name"; to be built)
+        assert theirs[0] == "done", (theirs, mine)
         return
     assert mine[0] == "done", mine
     assert mine[1] == theirs[1]
