@@ -275,9 +275,9 @@ def merge_sliced(base: SlicedState, parent: SlicedState, child: SlicedState) -> 
     states = (base, parent, child)
     tops: dict[SliceKey, tuple[int, int]] = {}
     for state in states:
-        for key, (v, c) in state.top_ids.items():
+        for key, (top_v, top_c) in state.top_ids.items():
             old = tops.get(key, (-1, -1))
-            tops[key] = (max(old[0], int(v)), max(old[1], int(c)))
+            tops[key] = (max(old[0], int(top_v)), max(old[1], int(top_c)))
     if kind == "EVOLVING":
         by = dict(zip(("base", "parent", "child"), states, strict=True))
         periods = {s: state.periods() for s, state in by.items()}

@@ -1031,7 +1031,6 @@ def _sliced_ring(
     def in_groups(t: _Table) -> sql.Composable:  # its first time key (times, timem, _times, _timem): the group
         return sql.SQL("v.{} = ANY ({}::float8[])").format(sql.Identifier(t.columns[0][0]), sql.Literal(groups))
 
-    cell_cols = (*cell_t.columns, ("_seen", "int4"))
     corners = [sql.Identifier(n) for n, _ in cell_t.columns[cw : cw + 3]]
 
     def read(t: _Table, s: str, where: sql.Composable) -> list[npt.NDArray[Any]]:
