@@ -1001,7 +1001,9 @@ def _sliced_ring(
     or closed in the group (``changed``), the group's cells of those ids and
     on those vertices, then the vertex, cell and property rows of the ids so
     found, all visible in some side. The instant (period) tables' rows of the
-    touched groups are read whole (few). Returns each side's columns as
+    touched groups are read whole (few), and so is a group whose instant
+    (geometry instant) row a side added or removed (the slice is taken or
+    dropped whole). Returns each side's columns as
     :func:`_read_sliced_rows` does, and per slice key the largest vertex and
     cell ids any side sees there (``top_ids`` of the merge).
     """
@@ -1112,10 +1114,15 @@ def _sliced_ring(
         (t, s, w, v2 if alignment == "VERTEX" else c1)
         for t, s, w, (alignment, _) in zip(prop_ts, prop_ss, widths[3:], properties, strict=True)
     ]
+    # a group whose instant (model 3: geometry instant) row some side added or removed is read whole: its slice
+    # is added or removed as a whole, every row of it written (rows a psql user left without their instant row too)
+    whole = sorted({float(v) + 0.0 for v in np.asarray(changed[0][1], dtype=np.float64).tolist()})
     rows = []
     for t, s, w, ids in wanted:
-        columns = read(t, s, by_ids(t, w, ids))
-        rows.append(only(columns, _in_groups(columns, w, ids)))
+        in_whole = sql.SQL("v.{} = ANY ({}::float8[])").format(sql.Identifier(t.columns[0][0]), sql.Literal(whole))
+        columns = read(t, s, sql.SQL("({}) OR {}").format(by_ids(t, w, ids), in_whole) if whole else by_ids(t, w, ids))
+        mask = _in_groups(columns, w, ids) | np.isin(np.asarray(columns[1], dtype=np.float64) + 0.0, whole)
+        rows.append(only(columns, mask))
     slice_keys = read(keys_t, keys_s, sql.SQL("true"))
     out: dict[str, list[list[npt.NDArray[Any]]]] = {}
     for side, bit in _SIDE_BITS.items():
