@@ -21,7 +21,7 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.db import merging
+from tgsis.db import _merge_states, merging
 from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
@@ -95,7 +95,7 @@ def _merged_both_ways(
 ) -> tuple[dict[str, Any], dict[str, Any], int]:
     """The state after the merge with the one-ring read, and (rolled back first) with the touched slices whole."""
     rows_read: list[int] = []
-    real = merging.read_sliced_states
+    real = _merge_states.read_sliced_states
 
     def counted(*args: Any, **kwargs: Any) -> Any:
         inputs = real(*args, **kwargs)
