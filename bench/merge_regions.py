@@ -35,7 +35,9 @@ model 2), the version moving a 1,000-vertex patch at the first instant and
 DEFAULT another at the last: the psql ``tgsis.merge_version`` merging it
 instant by instant in SQL (``tgsis.merge_instants_by_slice``) and the
 Python merge, each as a ratio to the object-level merge of the same edit
-(the conflict solved ``manual``), with the rows each writes.
+(the conflict solved ``manual``), with the rows each writes; the Python merge
+also with the touched instants read whole (the read before the change's
+one-ring one) as the same run's baseline.
 
 The upload of the surface into versioned storage is timed once, then, with
 ``--upload-cost``, paired: uploads of the same surface (rolled back) with the
@@ -48,7 +50,7 @@ With ``--model3``: (g) an evolving surface (model 3: one topology period,
 three geometry instants of the same grid), the version moving a patch at the
 first geometry instant and DEFAULT another at the last: the Python merge
 geometry instant by instant, as a ratio to the object-level merge (psql
-refuses model 3 by region).
+refuses model 3 by region), and with the touched period read whole (before).
 
     python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2 | --model2-only]
         [--model3 | --model3-only]
@@ -331,6 +333,27 @@ def move_at(conn: Conn, version: str, geoid: int, t: float, ids: np.ndarray, dz:
     conn.commit()
 
 
+def whole_slices(action: Callable[[], Any]) -> Callable[[], Any]:
+    """``action`` with the Python merge reading the touched slices whole (the read before the one-ring one): the
+    baseline of the same run."""
+    from tgsis.db import merging
+
+    def run() -> Any:
+        real = merging.read_sliced_states
+
+        def whole(*args: Any, **kwargs: Any) -> Any:
+            kwargs.pop("ring", None)
+            return real(*args, **kwargs)
+
+        merging.read_sliced_states = whole  # type: ignore[assignment]
+        try:
+            return action()
+        finally:
+            merging.read_sliced_states = real  # type: ignore[assignment]
+
+    return run
+
+
 def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     """(f) the merge of a surface at three instants, edits at different instants, psql and Python against (a)'s kind."""
     from tgsis.db import merging
@@ -368,10 +391,16 @@ def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         f"(f) psql merge_version instant by instant (SQL):                  {t_sql:6.3f} s ({t_sql / t_a:.2f}x), {rows_sql} rows written",
         flush=True,
     )
+    rows_whole = int(whole_slices(rolled_back(conn, lambda: merging.merge_version(conn, "slices")))())
+    t_whole = timed(whole_slices(rolled_back(conn, lambda: merging.merge_version(conn, "slices"))), repeat)
+    print(
+        f"(f) Python merge_version, touched instants read whole (before):  {t_whole:6.3f} s ({t_whole / t_a:.2f}x), {rows_whole} rows written",
+        flush=True,
+    )
     rows_py = int(rolled_back(conn, lambda: merging.merge_version(conn, "slices"))())
     t_py = timed(rolled_back(conn, lambda: merging.merge_version(conn, "slices")), repeat)
     print(
-        f"(f) Python merge_version instant by instant:                      {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
+        f"(f) Python merge_version instant by instant (change + one-ring): {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
     )
     return {
         "model2_upload_s": round(upload, 3),
@@ -382,6 +411,10 @@ def model2_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         "model2_sql_merge_vs_objlevel": round(t_sql / t_a, 2),
         "model2_python_merge_s": round(t_py, 3),
         "model2_python_merge_rows": rows_py,
+        "model2_python_merge_whole_slices_s": round(t_whole, 3),
+        "model2_python_merge_whole_slices_rows": rows_whole,
+        "model2_python_vs_whole_slices": round(t_py / t_whole, 2),
+        "model2_python_vs_sql": round(t_py / t_sql, 2),
         "model2_sql_vs_python": round(t_sql / t_py, 2),
     }
 
@@ -430,10 +463,16 @@ def model3_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel3"))())
     t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel3")), repeat)
     print(f"(g) object-level merge of the version's edit (solved manual):      {t_a:6.3f} s, {rows_a} rows written")
+    rows_whole = int(whole_slices(rolled_back(conn, lambda: merging.merge_version(conn, "slices3")))())
+    t_whole = timed(whole_slices(rolled_back(conn, lambda: merging.merge_version(conn, "slices3"))), repeat)
+    print(
+        f"(g) Python merge_version, touched period read whole (before):    {t_whole:6.3f} s ({t_whole / t_a:.2f}x), {rows_whole} rows written",
+        flush=True,
+    )
     rows_py = int(rolled_back(conn, lambda: merging.merge_version(conn, "slices3"))())
     t_py = timed(rolled_back(conn, lambda: merging.merge_version(conn, "slices3")), repeat)
     print(
-        f"(g) Python merge_version geometry instant by instant:             {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
+        f"(g) Python merge_version geometry instant by instant (one-ring): {t_py:6.3f} s ({t_py / t_a:.2f}x), {rows_py} rows written"
     )
     return {
         "model3_upload_s": round(upload, 3),
@@ -441,6 +480,9 @@ def model3_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         "model3_objlevel_merge_rows": rows_a,
         "model3_python_merge_s": round(t_py, 3),
         "model3_python_merge_rows": rows_py,
+        "model3_python_merge_whole_slices_s": round(t_whole, 3),
+        "model3_python_merge_whole_slices_rows": rows_whole,
+        "model3_python_vs_whole_slices": round(t_py / t_whole, 2),
         "model3_python_vs_objlevel": round(t_py / t_a, 2),
     }
 

@@ -1,12 +1,14 @@
 """The Python merge of a surface at instants reads what changed, not the whole object (issue 39, docs/merge.md).
 
 ``tgsis.merge_version`` of a model-2 object changed on both sides reads the
-storage rows the sides' revisions wrote or closed, and the base's rows of the
-instants those touch only: the instants no side touched are alike on all
-three sides and would write nothing. Counted, not timed: the rows the merge
-decodes from the server (``columns_out_all``) follow the touched instants,
-and the result is the same union of both edits, bit for bit, the untouched
-instants as they were.
+storage rows the sides' revisions wrote or closed, and of the instants those
+touch only the change's one-ring (the cells on the changed vertices, their
+corners, those vertices' property rows), as model 1's ``read_merge_change``:
+the instants no side touched are alike on all three sides and would write
+nothing, and neither would the rest of a touched instant. Counted, not timed:
+the rows the merge decodes from the server (``columns_out_all``) follow the
+change, not the touched instants' size, and the result is the same union of
+both edits, bit for bit, the untouched instants and rows as they were.
 """
 
 from __future__ import annotations
@@ -167,16 +169,28 @@ def _per_instant() -> int:
     return 1 + SIDE * SIDE + 2 * (SIDE - 1) ** 2 + SIDE * SIDE
 
 
+def _ring(moved: int) -> int:
+    """Rows read for an edit moving two whole grid rows (``moved`` vertices) of one instant.
+
+    The rows the sides wrote or closed (the old and new version of each moved
+    vertex), the triangles on the moved vertices (two strips: read to find the
+    ring, then read again with the rest), the vertices of three grid rows
+    (and the old versions of the moved ones) and their property rows. Model
+    1's ``read_merge_change`` reads alike; the whole instant is ``_per_instant``.
+    """
+    strips = 2 * 2 * (SIDE - 1)
+    return 2 * moved + 2 * strips + (3 * SIDE + moved) + 3 * SIDE
+
+
 def test_edits_at_two_instants_read_those_two_only(conn: Conn, series: int, monkeypatch: pytest.MonkeyPatch) -> None:
     _move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     _move(conn, "DEFAULT", series, 6.0, SOUTH, PARENT_SHIFT)
     counted = _rows_decoded(monkeypatch)
     result = tgsis.merge_version(conn, "e1")
     assert [(o.objectkey, o.how) for o in result.objects] == [(str(series), "automatic")]
-    # the base's rows of the two touched instants, and the rows each side's revisions wrote or closed there;
-    # the whole object would be 8 instants' rows
-    changed = 2 * len(NORTH) + 2 * len(SOUTH)
-    assert counted[0] <= 2 * _per_instant() + changed, (counted[0], len(TIMES) * _per_instant())
+    # the change and its one-ring at the two touched instants, and their times rows; the two whole instants
+    # would be 2 * _per_instant() (and the whole object 8 instants' rows)
+    assert counted[0] <= _ring(len(NORTH)) + _ring(len(SOUTH)) + 2, (counted[0], 2 * _per_instant())
     expected = _expected({2.0: [(NORTH, CHILD_SHIFT)], 6.0: [(SOUTH, PARENT_SHIFT)]})
     for version in ("DEFAULT", "e1"):
         assert _state(conn, version, series) == expected, version
@@ -190,8 +204,7 @@ def test_disjoint_edits_of_one_instant_read_that_instant_only(
     _move(conn, "DEFAULT", series, 5.0, SOUTH, PARENT_SHIFT)
     counted = _rows_decoded(monkeypatch)
     tgsis.merge_version(conn, "e1")
-    changed = 2 * len(NORTH) + 2 * len(SOUTH)
-    assert counted[0] <= _per_instant() + changed, (counted[0], len(TIMES) * _per_instant())
+    assert counted[0] <= _ring(len(NORTH)) + _ring(len(SOUTH)) + 1, (counted[0], _per_instant())
     expected = _expected({5.0: [(NORTH, CHILD_SHIFT), (SOUTH, PARENT_SHIFT)]})
     for version in ("DEFAULT", "e1"):
         assert _state(conn, version, series) == expected, version
@@ -205,7 +218,7 @@ def test_refresh_then_merge_reads_the_change_and_keeps_every_instant(
     _move(conn, "DEFAULT", series, 8.0, SOUTH, PARENT_SHIFT)
     counted = _rows_decoded(monkeypatch)
     tgsis.refresh_version(conn, "e1")
-    assert counted[0] <= 2 * _per_instant() + 2 * len(NORTH) + 2 * len(SOUTH), counted[0]
+    assert counted[0] <= _ring(len(NORTH)) + _ring(len(SOUTH)) + 2, (counted[0], 2 * _per_instant())
     tgsis.merge_version(conn, "e1")
     expected = _expected({1.0: [(NORTH, CHILD_SHIFT)], 8.0: [(SOUTH, PARENT_SHIFT)]})
     for version in ("DEFAULT", "e1"):

@@ -80,6 +80,11 @@ class SlicedState:
         The object, as messages name it.
     instant_columns : tuple of str
         The names of the per-instant feature properties (the columns of ``instant_rows``).
+    top_ids : mapping of SliceKey to (int, int)
+        When the slices hold only the change and its one-ring (a read at the
+        cost of the change): each slice's largest vertex and cell ids over the
+        three whole states, :func:`tgsis.merge3.three_way_merge`'s ``top_ids``.
+        Empty: the slices are whole.
     """
 
     kind: Kind
@@ -87,6 +92,7 @@ class SlicedState:
     instant_rows: Mapping[SliceKey, InstantRow]
     name: str
     instant_columns: tuple[str, ...] = ()
+    top_ids: Mapping[SliceKey, tuple[int, int]] = dataclasses.field(default_factory=dict)
 
     def periods(self) -> dict[float, list[SliceKey]]:
         """Model 3: each period's geometry instants (slice keys, ascending)."""
@@ -267,6 +273,11 @@ def merge_sliced(base: SlicedState, parent: SlicedState, child: SlicedState) -> 
     merges: dict[SliceKey, MeshMerge] = {}
     taken: dict[SliceKey, MeshState] = {}
     states = (base, parent, child)
+    tops: dict[SliceKey, tuple[int, int]] = {}
+    for state in states:
+        for key, (top_v, top_c) in state.top_ids.items():
+            old = tops.get(key, (-1, -1))
+            tops[key] = (max(old[0], int(top_v)), max(old[1], int(top_c)))
     if kind == "EVOLVING":
         by = dict(zip(("base", "parent", "child"), states, strict=True))
         periods = {s: state.periods() for s, state in by.items()}
@@ -301,9 +312,9 @@ def merge_sliced(base: SlicedState, parent: SlicedState, child: SlicedState) -> 
                     "topology periods changed on both sides do not merge by region",
                     hint="tgsis.resolve_conflict solves it as a whole object (parent, child or manual)",
                 )
-            _merge_keys(name, kind, slices["base"], slices["parent"], slices["child"], merges, taken)
+            _merge_keys(name, kind, slices["base"], slices["parent"], slices["child"], merges, taken, tops)
     else:
-        _merge_keys(name, kind, dict(base.slices), dict(parent.slices), dict(child.slices), merges, taken)
+        _merge_keys(name, kind, dict(base.slices), dict(parent.slices), dict(child.slices), merges, taken, tops)
     rows = _merge_rows(name, kind, base, parent, child)
     regions: list[SliceRegion] = []
     for key in sorted(merges):
@@ -326,8 +337,12 @@ def _merge_keys(
     child: Mapping[SliceKey, MeshState],
     merges: dict[SliceKey, MeshMerge],
     taken: dict[SliceKey, MeshState],
+    top_ids: Mapping[SliceKey, tuple[int, int]],
 ) -> None:
-    """Slice by slice: taken from the side that changed it, or merged three ways when both did."""
+    """Slice by slice: taken from the side that changed it, or merged three ways when both did.
+
+    ``top_ids``: per slice, the largest ids of the whole states when the slices are restricted to the change.
+    """
     for key in sorted(set(base) | set(parent) | set(child)):
         b, p, c = base.get(key), parent.get(key), child.get(key)
         what = slice_text(kind, key)
@@ -338,6 +353,7 @@ def _merge_keys(
                 dataclasses.replace(b, name=f"{name}, {what}"),
                 dataclasses.replace(p, name=f"{name}, {what}"),
                 dataclasses.replace(c, name=f"{name}, {what}"),
+                top_ids=top_ids.get(key),
             )
             continue
         if side == "parent" or side == "child":

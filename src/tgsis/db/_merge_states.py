@@ -8,6 +8,7 @@ version settings for the reads and putting them back.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -899,8 +900,13 @@ def _patched_by_keys(
 
 
 def _read_sliced_rows(
-    conn: Conn, fc: FeatureClass, geoid: int, sides: Mapping[str, tuple[str, int]], changed_only: bool = False
-) -> dict[str, list[list[npt.NDArray[Any]]]]:
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    sides: Mapping[str, tuple[str, int]],
+    changed_only: bool = False,
+    ring: bool = False,
+) -> tuple[dict[str, list[list[npt.NDArray[Any]]]], dict[tuple[float, ...], tuple[int, int]]]:
     """Each side's columns of each table of :func:`_sliced_tables` (``[object key, *columns]``).
 
     As :func:`_read_states`: the base in full through the views, the sides
@@ -931,7 +937,7 @@ def _read_sliced_rows(
         for side, (version, revision) in sides.items():
             conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
             out[side] = [list(c) for c in columns_out_all(conn, full)]
-        return out
+        return out, {}
     base_version, base_revision = sides["base"]
     conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (base_version, base_revision))
     since = sorted(
@@ -944,6 +950,8 @@ def _read_sliced_rows(
     if changed_only:
         changed = columns_out_all(conn, changes)
         touched = sorted({float(v) + 0.0 for c in changed for v in np.asarray(c[1], dtype=np.float64).tolist()})
+        if ring:
+            return _sliced_ring(conn, fc, geoid, tables, storages, sets, changed, touched)
         base = columns_out_all(conn, [_within(t, touched, geoid) for t in tables])
     else:
         read = columns_out_all(conn, full + changes)
@@ -954,7 +962,214 @@ def _read_sliced_rows(
             _patched_by_keys(list(b), list(c), w, _SIDE_BITS[side])
             for b, c, w in zip(base, changed, widths, strict=True)
         ]
-    return out
+    return out, {}
+
+
+def _in_groups(
+    columns: list[npt.NDArray[Any]], width: int, wanted: Mapping[float, npt.NDArray[np.int64]]
+) -> npt.NDArray[np.bool_]:
+    """Which rows (``[object key, *key columns, ...]``) have an id of their group's ``wanted`` ids.
+
+    A row's group is its first time key (model 2: its instant; model 3: its
+    topology period), its id the last key column (``width``).
+    """
+    group = np.asarray(columns[1], dtype=np.float64) + 0.0
+    ids = np.asarray(columns[width], dtype=np.int64)
+    mask = np.zeros(len(ids), dtype=bool)
+    for g, wanted_ids in wanted.items():
+        at = group == g
+        if at.any() and len(wanted_ids):
+            mask[at] = np.isin(ids[at], wanted_ids)
+    return mask
+
+
+def _sliced_ring(
+    conn: Conn,
+    fc: FeatureClass,
+    geoid: int,
+    tables: list[_Table],
+    storages: list[str],
+    sets: Mapping[str, list[int]],
+    changed: list[list[npt.NDArray[Any]]],
+    touched: list[float],
+) -> tuple[dict[str, list[list[npt.NDArray[Any]]]], dict[tuple[float, ...], tuple[int, int]]]:
+    """The touched slices restricted to the change and its one-ring, group by group, and each slice's largest ids.
+
+    :func:`_read_change` of model 1 per group of slices sharing their
+    triangles (model 2: an instant; model 3: a topology period, so that its
+    geometry instants keep one topology): the ids the sides' revisions wrote
+    or closed in the group (``changed``), the group's cells of those ids and
+    on those vertices, then the vertex, cell and property rows of the ids so
+    found, all visible in some side. The instant (period) tables' rows of the
+    touched groups are read whole (few), and so is a group whose instant
+    (geometry instant) row a side added or removed (the slice is taken or
+    dropped whole). Returns each side's columns as
+    :func:`_read_sliced_rows` does, and per slice key the largest vertex and
+    cell ids any side sees there (``top_ids`` of the merge).
+    """
+    evolving = fc.time_model == "EVOLVING"
+    widths = [w for _, w in _sliced_tables(fc)[0]]
+    properties = _sliced_tables(fc)[1]
+    keys_t, vertex_t, cell_t, *prop_ts = tables
+    keys_s, vertex_s, cell_s, *prop_ss = storages
+    vw, cw = widths[1], widths[2]
+    groups = [float(g) for g in touched]
+    none = np.empty(0, dtype=np.int64)
+
+    def ids_by_group(columns: list[npt.NDArray[Any]], width: int) -> dict[float, npt.NDArray[np.int64]]:
+        group = np.asarray(columns[1], dtype=np.float64) + 0.0
+        ids = np.asarray(columns[width], dtype=np.int64)
+        return {g: ids[group == g] for g in groups}
+
+    def union(*parts: Mapping[float, npt.NDArray[np.int64]]) -> dict[float, npt.NDArray[np.int64]]:
+        return {g: np.unique(np.concatenate([p.get(g, none) for p in parts] + [none])) for g in groups}
+
+    v0 = [ids_by_group(changed[1], vw)]
+    c0 = [ids_by_group(changed[2], cw)]
+    for (alignment, _), columns, w in zip(properties, changed[3:], widths[3:], strict=True):
+        (v0 if alignment == "VERTEX" else c0).append(ids_by_group(columns, w))
+    v0_by, c0_by = union(*v0), union(*c0)
+
+    def in_groups(t: _Table) -> sql.Composable:  # its first time key (times, timem, _times, _timem): the group
+        return sql.SQL("v.{} = ANY ({}::float8[])").format(sql.Identifier(t.columns[0][0]), sql.Literal(groups))
+
+    corners = [sql.Identifier(n) for n, _ in cell_t.columns[cw : cw + 3]]
+
+    def read(t: _Table, s: str, where: sql.Composable) -> list[npt.NDArray[Any]]:
+        return columns_out_all(
+            conn,
+            [
+                Packed(
+                    _rows_where(t, s, sets, sql.SQL("{} AND ({})").format(in_groups(t), where)),
+                    t.key,
+                    (*t.columns, ("_seen", "int4")),
+                    [geoid],
+                )
+            ],
+        )[0]
+
+    def per_group(
+        t: _Table, ids: Mapping[float, npt.NDArray[np.int64]], test: Callable[[npt.NDArray[np.int64]], sql.Composable]
+    ) -> sql.Composable:
+        # each group's own ids (not the union's at every group): the rows read follow each group's change
+        parts = [
+            sql.SQL("(v.{} = {}::float8 AND {})").format(sql.Identifier(t.columns[0][0]), sql.Literal(g), test(i))
+            for g, i in ids.items()
+            if len(i)
+        ]
+        return sql.SQL(" OR ").join(parts) if parts else sql.SQL("false")
+
+    def by_ids(t: _Table, width: int, ids: Mapping[float, npt.NDArray[np.int64]]) -> sql.Composable:
+        column = sql.Identifier(t.columns[width - 1][0])
+        return per_group(t, ids, lambda i: sql.SQL("v.{} = ANY ({})").format(column, _int8_array(i)))
+
+    def on_ids(every: npt.NDArray[np.int64]) -> sql.Composable:
+        # the storage's vertex BRIN (tgsis.create_revision_indexes) searched by a few spans of the ids, each
+        # cell found tested exactly against the hashed ids (+ 0: not an index condition), as model 1's
+        every = np.unique(every)
+        spans = sql.SQL(" OR ").join(
+            sql.SQL("v.{} BETWEEN {} AND {}").format(c, sql.Literal(lo), sql.Literal(hi))
+            for c in corners
+            for lo, hi in _id_spans(every)
+        )
+        exact = sql.SQL(" OR ").join(sql.SQL("(v.{} + 0) = ANY ({})").format(c, _int8_array(every)) for c in corners)
+        return sql.SQL("({}) AND ({})").format(spans, exact)
+
+    def on(ids: Mapping[float, npt.NDArray[np.int64]]) -> sql.Composable:
+        return per_group(cell_t, ids, on_ids)
+
+    def only(columns: list[npt.NDArray[Any]], mask: npt.NDArray[np.bool_]) -> list[npt.NDArray[Any]]:
+        return [np.asarray(c)[mask] for c in columns]
+
+    def cell_corners(columns: list[npt.NDArray[Any]]) -> dict[float, npt.NDArray[np.int64]]:
+        seen = np.asarray(columns[-1]) != 0
+        group = np.asarray(columns[1], dtype=np.float64) + 0.0
+        out = {}
+        for g in groups:
+            at = seen & (group == g)
+            out[g] = np.concatenate([np.asarray(c, dtype=np.int64)[at] for c in columns[1 + cw : 1 + cw + 3]] + [none])
+        return out
+
+    def cells_on(columns: list[npt.NDArray[Any]], vertices: Mapping[float, npt.NDArray[np.int64]]) -> npt.NDArray[Any]:
+        group = np.asarray(columns[1], dtype=np.float64) + 0.0
+        mask = np.zeros(len(group), dtype=bool)
+        for g in groups:
+            at = group == g
+            if at.any() and len(vertices[g]):
+                mask[at] = np.any(
+                    [np.isin(np.asarray(c, dtype=np.int64)[at], vertices[g]) for c in columns[1 + cw : 1 + cw + 3]],
+                    axis=0,
+                )
+        return mask
+
+    by_id = read(cell_t, cell_s, by_ids(cell_t, cw, c0_by))
+    by_id = only(by_id, _in_groups(by_id, cw, c0_by))
+    v1 = union(v0_by, cell_corners(by_id))
+    ring1 = read(cell_t, cell_s, on(v1))
+    ring1 = only(ring1, cells_on(ring1, v1))
+    seen1 = only(ring1, np.asarray(ring1[-1]) != 0)
+    c1 = union(c0_by, ids_by_group(seen1, cw))
+    v2 = union(v1, cell_corners(ring1), cell_corners(by_id))
+    wanted = [(vertex_t, vertex_s, vw, v2), (cell_t, cell_s, cw, c1)] + [
+        (t, s, w, v2 if alignment == "VERTEX" else c1)
+        for t, s, w, (alignment, _) in zip(prop_ts, prop_ss, widths[3:], properties, strict=True)
+    ]
+    # a group whose instant (model 3: geometry instant) row some side added or removed is read whole: its slice
+    # is added or removed as a whole, every row of it written (rows a psql user left without their instant row too)
+    whole = sorted({float(v) + 0.0 for v in np.asarray(changed[0][1], dtype=np.float64).tolist()})
+    rows = []
+    for t, s, w, ids in wanted:
+        in_whole = sql.SQL("v.{} = ANY ({}::float8[])").format(sql.Identifier(t.columns[0][0]), sql.Literal(whole))
+        columns = read(t, s, sql.SQL("({}) OR {}").format(by_ids(t, w, ids), in_whole) if whole else by_ids(t, w, ids))
+        mask = _in_groups(columns, w, ids) | np.isin(np.asarray(columns[1], dtype=np.float64) + 0.0, whole)
+        rows.append(only(columns, mask))
+    slice_keys = read(keys_t, keys_s, sql.SQL("true"))
+    out: dict[str, list[list[npt.NDArray[Any]]]] = {}
+    for side, bit in _SIDE_BITS.items():
+        per_table = []
+        for columns in [slice_keys, *rows]:
+            mine = (np.asarray(columns[-1]) & bit) != 0
+            per_table.append([np.asarray(c)[mine] for c in columns[:-1]])
+        out[side] = per_table
+    # each slice's largest ids some side sees (the storage's primary key searched backwards, one row per slice)
+    seen_keys = sorted(
+        {
+            tuple(float(v) + 0.0 for v in row)
+            for row in zip(*(np.asarray(c).tolist() for c in slice_keys[1 : 1 + (2 if evolving else 1)]))
+        }
+    )
+    return out, _slice_tops(conn, geoid, vertex_t, vertex_s, cell_t, cell_s, sets, seen_keys)
+
+
+def _slice_tops(
+    conn: Conn,
+    geoid: int,
+    vertex_t: _Table,
+    vertex_s: str,
+    cell_t: _Table,
+    cell_s: str,
+    sets: Mapping[str, list[int]],
+    keys: list[tuple[float, ...]],
+) -> dict[tuple[float, ...], tuple[int, int]]:
+    """Per slice key: the largest vertex id and cell id visible in some side there (-1 for none)."""
+    tops = {}
+    for key in keys:
+        top = []
+        for t, s, n in ((vertex_t, vertex_s, len(key)), (cell_t, cell_s, 1)):
+            where = sql.SQL(" AND ").join(sql.SQL("v.{} = %s").format(sql.Identifier(c)) for c, _ in t.columns[:n])
+            idcol = sql.Identifier(t.columns[n][0])
+            row = conn.execute(
+                sql.SQL(
+                    "SELECT v.{id} FROM {storage} v WHERE v.{key} = %s AND {where} AND {visible} "
+                    "ORDER BY v.{id} DESC LIMIT 1"
+                ).format(
+                    id=idcol, storage=sql.SQL(s), key=sql.Identifier(t.key), where=where, visible=_visible_in(sets)
+                ),
+                (geoid, *key[:n]),
+            ).fetchone()
+            top.append(-1 if row is None else int(row[0]))
+        tops[key] = (top[0], top[1])
+    return tops
 
 
 def _within(table: _Table, touched: list[float], geoid: int) -> Packed:
@@ -1104,7 +1319,9 @@ def feature_time_model(conn: Conn, version: str, feature_id: int) -> str | None:
             restore_version_settings(conn, settings, local=True)
 
 
-def read_sliced_states(conn: Conn, version: str, feature_id: int, *, changed_only: bool = False) -> SlicedInputs:
+def read_sliced_states(
+    conn: Conn, version: str, feature_id: int, *, changed_only: bool = False, ring: bool = False
+) -> SlicedInputs:
     """Read base, parent and child of one model-2 or model-3 object changed on both sides, slice by slice.
 
     As :func:`read_merge_states` (the caller's transaction makes the reads
@@ -1119,6 +1336,13 @@ def read_sliced_states(conn: Conn, version: str, feature_id: int, *, changed_onl
     write nothing), read at the cost of the change. The per-instant feature
     property rows are read whole.
 
+    ``ring`` (with ``changed_only``): the touched slices restricted further
+    to the change and its one-ring (:func:`read_merge_change` per instant,
+    model 3 per topology period), with each slice's largest ids as the
+    states' ``top_ids``: the same regions and merged rows, for the merges
+    that need no whole slice (not a recorded average or manual mesh). A role
+    that may not read the storage reads the touched slices whole.
+
     Raises
     ------
     InvalidInputError
@@ -1132,11 +1356,16 @@ def read_sliced_states(conn: Conn, version: str, feature_id: int, *, changed_onl
             conn, version, feature_id, _refuse_unless_sliced_surface
         )
         sides = {"base": (version, initrevision), "parent": (parent, parent_working), "child": (version, working)}
-        rows = _read_sliced_rows(conn, fc, feature_id, sides, changed_only)
+        rows, tops = _read_sliced_rows(conn, fc, feature_id, sides, changed_only, ring)
         instants = {side: _instant_rows(conn, fc, feature_id, v, r) for side, (v, r) in sides.items()}
     finally:
         if conn.info.transaction_status != psycopg.pq.TransactionStatus.INERROR:
             restore_version_settings(conn, settings, local=True)
     properties = _sliced_tables(fc)[1]
-    states = {side: _sliced_state(fc, feature_id, side, rows[side], properties, instants[side]) for side in sides}
+    states = {
+        side: dataclasses.replace(
+            _sliced_state(fc, feature_id, side, rows[side], properties, instants[side]), top_ids=tops
+        )
+        for side in sides
+    }
     return SlicedInputs(fc, versionid, parent, (initrevision, parent_working, working), states)

@@ -784,13 +784,20 @@ def _merge_sliced_object(
     """
     try:
         # the instants (periods) some side touched: the others are alike on all sides and write nothing
-        inputs = read_sliced_states(conn, version, int(key), changed_only=True)
+        # and of those the change and its one-ring (docs/merge.md): the same regions and merged rows, read by key
+        inputs = read_sliced_states(conn, version, int(key), changed_only=True, ring=True)
         states = inputs.states
         merge = merge_sliced(states["base"], states["parent"], states["child"])
     except (InvalidInputError, VersioningError) as exc:  # a removal against a change, topology on both sides, ...
         reasons[key] = exc.message
         return None
     recorded = sliced_region_solutions(conn, version, "feature", key, merge)
+    if any(isinstance(v, MeshState) for v in recorded.values()):
+        # a recorded mesh (average, manual) may hold the slice's other rows, which must equal the merge's: whole
+        inputs = read_sliced_states(conn, version, int(key), changed_only=True)
+        states = inputs.states
+        merge = merge_sliced(states["base"], states["parent"], states["child"])
+        recorded = sliced_region_solutions(conn, version, "feature", key, merge)
     conflicting = {r.index for r in merge.conflicts}
     solutions: dict[int, Solution] = {}
     for i, value in recorded.items():
