@@ -92,6 +92,11 @@ def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
     assert foreign_terms("a DBA may run: in psql: GRANT tgsis_admin TO ana") == []
     assert foreign_terms("e.g. --fill-property porosity=0.2") == []  # a flag's NAME=VALUE is the command's syntax
     assert foreign_terms("pass porosity=0.2") == ["porosity="]
+    slice_rows = (
+        "give the mesh alone (the sixth argument) and merge with `tgsis version merge 'north edit'` or "
+        'tgsis.merge_version(conn, "north edit") in Python; the psql merge refuses a slice both sides changed'
+    )
+    assert to_cli(slice_rows) == "give --mesh FILE, then tgsis version merge 'north edit'"
 
 
 # --------------------------------------------------------------------------- every hint written
@@ -156,6 +161,8 @@ NOT_FROM_THE_CLI = {
     "(tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/merge_instants_by_slice.sql": "the psql merge of surfaces at instants: the command merges them "
     "in Python (tgsis.region_detection = 'client'), which never reaches it",
+    "sql/versioning/merge_solution_rows.sql": "the psql merge's average/manual rows: the command merges in Python "
+    "(tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/resolve_all_regions.sql": "the psql face of --region all: the command calls the Python "
     "resolve_all_regions",
 }

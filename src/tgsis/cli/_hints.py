@@ -123,6 +123,17 @@ _RULES: list[tuple[str, Replacement]] = [
         "give --mesh FILE, a mesh file",
     ),
     (r"give the region's number, as tgsis\.conflict_regions lists it", "give --region N"),
+    (  # resolve_region's rows that are not its .npz's mesh: the command records both from one --mesh
+        r"give the rows of the mesh the \.npz holds \(tgsis\.resolve_region in Python records both from one mesh\)",
+        "give --mesh FILE: the command records the mesh and its rows from it",
+    ),
+    (  # resolve_region's rows for a region of an instant: the command records the mesh alone
+        rf"give the mesh alone \(the sixth argument\) and merge with `tgsis version merge {_SHELL_WORD}` or "
+        rf"tgsis\.merge_version\(conn, (?:{_PY_LITERAL}|(\w+))\) in Python; the psql merge refuses a slice both sides "
+        r"changed",
+        lambda m: f"give --mesh FILE, then tgsis version merge {_py_word(m[1], m[2])}",
+    ),
+    (r", or tgsis\.resolve_region in Python$", ""),
     (
         r"automatic is no choice: find_conflicts records it for the regions that merge by themselves",
         "automatic is no choice: the regions that are no conflict merge by themselves",
