@@ -79,7 +79,6 @@ DECLARE
     v_akey     text[] := '{}';
     v_aset     text[] := '{}';
     v_fcols    text[];
-    v_i        integer;
     v_pros     tgsis.versioned_tables;
     v_pcols    text[];
 BEGIN
@@ -367,27 +366,7 @@ BEGIN
     END LOOP;
 
     -- the rights: to write in the version, to change the class (and the feature-row columns the parent changed)
-    IF NOT tgsis.has_version_privilege(p_version, 'write') THEN
-        RAISE EXCEPTION 'role % may not write in version %: merging feature % instant by instant writes the merged surface into the version first, then merges it',
-                quote_ident(tgsis.calling_role()), quote_literal(p_version), p_geoid
-            USING ERRCODE = 'TG002',
-                  HINT = format('the owner or a tgsis_admin can run SELECT tgsis.grant_version(%L, ''write'', %L); else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
-                                p_version, tgsis.calling_role());
-    END IF;
-    PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE, DELETE');
-    IF v_fcols IS NOT NULL THEN
-        SELECT string_agg(quote_ident(u.c), ', ' ORDER BY u.o) INTO v_why
-          FROM unnest(v_fcols) WITH ORDINALITY AS u(c, o)
-         WHERE NOT has_column_privilege(tgsis.calling_role(), format('%I.%I', v_class.schemaname, v_class.featuretable)::regclass,
-                                        u.c, 'UPDATE');
-        IF v_why IS NOT NULL THEN
-            RAISE EXCEPTION 'role % may not change the properties % of feature % of class %: merging it brings its parent''s edits of them into the version',
-                    quote_ident(tgsis.calling_role()), v_why, p_geoid, quote_literal(v_class.classname)
-                USING ERRCODE = 'insufficient_privilege',
-                      HINT = format('a DBA may run: GRANT UPDATE ON %I.%I TO %I; else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
-                                    v_class.schemaname, v_class.featuretable, tgsis.calling_role());
-        END IF;
-    END IF;
+    PERFORM tgsis.merge_write_rights(p_version, p_geoid, v_fcols, 'instant by instant', 'surface');
 
     -- 7. the writes, in the version's working revision, as write_sliced_difference writes them: per table, the rows
     -- whose key is gone or whose bits differ closed, then the new and differing ones inserted
@@ -543,14 +522,8 @@ BEGIN
         v_written := v_written + v_count;
     END LOOP;
     PERFORM FROM tgsis.refresh_geometry(p_geoid);
-    FOR v_i IN 1 .. cardinality(v_aview) LOOP  -- the parent's attribute edits (a view's columns in one UPDATE)
-        EXECUTE format('UPDATE %s SET %s WHERE %I = $1', v_aview[v_i], v_aset[v_i], v_akey[v_i]) USING p_geoid;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
-        v_written := v_written + v_count;
-    END LOOP;
-    IF v_fcols IS NOT NULL THEN
-        v_written := v_written + tgsis.merge_feature_row(p_geoid, v_fcols, v_parent.workingset, v_rev, v_cset);
-    END IF;
+    v_written := v_written + tgsis.merge_apply_attribute_edits(p_geoid, v_aview, v_akey, v_aset, v_fcols,
+                                                               v_parent.workingset, v_rev, v_cset);
     PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
             set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
     TRUNCATE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,

@@ -49,7 +49,6 @@ AS $$
 DECLARE
     v_key      text := p_geoid::text;
     v_version  tgsis.versions;
-    v_class    tgsis.catalog;
     v_name     text := format('feature %s (base)', p_geoid);
     v_refused  text := format('%s of version %s refused: feature %s does not merge by region in SQL',
                               p_action, quote_literal(p_version), p_geoid);
@@ -116,7 +115,6 @@ DECLARE
     v_akey     text[] := '{}';
     v_aset     text[] := '{}';
     v_fcols    text[];
-    v_i        integer;
     v_unsolved boolean := false;
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
@@ -474,31 +472,9 @@ BEGIN
         RAISE NOTICE 'feature % of version %: %', p_geoid, quote_literal(p_version), v_note;
     END LOOP;
 
-    -- the merged mesh goes into the version first: the right to write there, and to change the class
-    IF NOT tgsis.has_version_privilege(p_version, 'write') THEN
-        RAISE EXCEPTION 'role % may not write in version %: merging feature % by region writes the merged mesh into the version first, then merges it',
-                quote_ident(tgsis.calling_role()), quote_literal(p_version), p_geoid
-            USING ERRCODE = 'TG002',
-                  HINT = format('the owner or a tgsis_admin can run SELECT tgsis.grant_version(%L, ''write'', %L); else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
-                                p_version, tgsis.calling_role());
-    END IF;
-    PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE, DELETE');
-    -- the parent's edits of the feature row: the columns written, as the Python client's UPDATE of the class's view
-    -- needs them (a role granted UPDATE on some columns only)
-    IF v_fcols IS NOT NULL THEN
-        SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
-        SELECT string_agg(quote_ident(u.c), ', ' ORDER BY u.o) INTO v_why
-          FROM unnest(v_fcols) WITH ORDINALITY AS u(c, o)
-         WHERE NOT has_column_privilege(tgsis.calling_role(), format('%I.%I', v_class.schemaname, v_class.featuretable)::regclass,
-                                        u.c, 'UPDATE');
-        IF v_why IS NOT NULL THEN
-            RAISE EXCEPTION 'role % may not change the properties % of feature % of class %: merging it by region brings its parent''s edits of them into the version',
-                    quote_ident(tgsis.calling_role()), v_why, p_geoid, quote_literal(v_class.classname)
-                USING ERRCODE = 'insufficient_privilege',
-                      HINT = format('a DBA may run: GRANT UPDATE ON %I.%I TO %I; else tgsis.resolve_conflict solves it as a whole object (parent, child or manual)',
-                                    v_class.schemaname, v_class.featuretable, tgsis.calling_role());
-        END IF;
-    END IF;
+    -- the merged mesh goes into the version first: the right to write there, to change the class and the
+    -- feature-row columns whose parent's edits come along
+    PERFORM tgsis.merge_write_rights(p_version, p_geoid, v_fcols, 'by region', 'mesh');
 
     -- the writes, in the version's working revision, as tgsis.db._state_write writes them
     v_settings := ARRAY[current_setting('tgsis.version', true), current_setting('tgsis.revision', true)];
@@ -604,15 +580,9 @@ BEGIN
     END IF;
     v_written := v_written + tgsis.merge_geometry_row(p_geoid, v_table,
                                                       (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
-    FOR v_i IN 1 .. cardinality(v_aview) LOOP  -- the parent's attribute edits (a view's columns in one UPDATE)
-        EXECUTE format('UPDATE %s SET %s WHERE %I = $1', v_aview[v_i], v_aset[v_i], v_akey[v_i]) USING p_geoid;
-        GET DIAGNOSTICS v_count = ROW_COUNT;
-        v_written := v_written + v_count;
-    END LOOP;
-    IF v_fcols IS NOT NULL THEN
-        v_written := v_written + tgsis.merge_feature_row(p_geoid, v_fcols, v_pset, v_rev,
-                                                         (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
-    END IF;
+    v_written := v_written + tgsis.merge_apply_attribute_edits(
+        p_geoid, v_aview, v_akey, v_aset, v_fcols, v_pset, v_rev,
+        (SELECT workingset FROM tgsis.versions WHERE versionid = v_version.versionid));
     PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
             set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
     PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
