@@ -266,6 +266,28 @@ def test_a_role_without_rights_is_refused_as_in_python_and_nothing_is_written(
             conn.commit()
 
 
+@pytest.mark.parametrize(
+    "statement",
+    [
+        "WITH m AS (SELECT tgsis.merge_version('e1') AS n) SELECT n FROM m",
+        "SELECT pg_temp.merge_it('e1')",
+    ],
+    ids=["cte", "function"],
+)
+def test_a_psql_merge_in_a_cte_or_a_function_writes_what_python_writes(conn: Conn, series: int, statement: str) -> None:
+    _one_side_each(conn, series)
+    theirs, _ = both_merges(conn, "e1")
+    conn.execute(
+        "CREATE FUNCTION pg_temp.merge_it(v text) RETURNS bigint LANGUAGE sql AS $$ SELECT tgsis.merge_version(v) $$"
+    )
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute(statement).fetchone()[0]))  # type: ignore[index]
+    assert theirs[0] == mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
 def test_two_psql_sessions_merging_and_refreshing_at_once(conn: Conn, series: int, db_dsn: str) -> None:
     from tests.sessions import Background, connect, wait_until_blocked
 
