@@ -31,6 +31,9 @@
 -- the version changed where a row no side changed differs in its bits
 -- between parent and version (-0 against 0, a cell's vertices rotated: merge3
 -- takes it from the side whose region holds it, which SQL does not compute),
+-- p_action 'regions' (tgsis.instants_merge_regions): the analysis alone, nothing written, no right
+-- to write asked: 0 with the instants classified in pg_temp.tgsis_ms_slice (the merged ones: in the three
+-- states and changed on a side), NULL for an object-level conflict.
 -- 42501 for a role that may not
 -- read the class or change it, or write the rows the merge writes through
 -- their view (tgsis.check_merge_table_write: a property table a DBA took
@@ -81,6 +84,9 @@ DECLARE
     v_fcols    text[];
     v_pros     tgsis.versioned_tables;
     v_pcols    text[];
+    v_t        float8;
+    v_plan     jsonb;
+    v_notes    text[] := '{}';
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
@@ -265,12 +271,28 @@ BEGIN
     IF EXISTS (SELECT FROM pg_temp.tgsis_ms_slice s WHERE s.src = 'X') THEN
         RETURN NULL;  -- an instant removed on one side and changed on the other, or added on both differently
     END IF;
-    SELECT string_agg(s.t::text, ', ' ORDER BY s.t) INTO v_why FROM pg_temp.tgsis_ms_slice s WHERE s.src = 'R';
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: instants % were changed both in the version and in its parent, differently: their regions are merged by the Python client',
-                v_refused, v_why
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
+    -- an instant both sides changed differently: merged by region (tgsis.merge_instant_by_region: merge3's regions
+    -- of that instant, the solutions recorded for its conflicting ones), its merged rows taken from the states'
+    -- rows read above (a version's row under its merged id, its triangles' vertex ids renumbered with it)
+    FOR v_t IN SELECT s.t FROM pg_temp.tgsis_ms_slice s WHERE s.src = 'R' AND p_action <> 'regions' ORDER BY s.t LOOP
+        v_plan := tgsis.merge_instant_by_region(p_version, p_geoid, v_t, v_refused, v_hint);
+        IF v_plan IS NULL THEN
+            RETURN NULL;  -- a conflicting region without a solution: the merge refuses it (TG302)
+        END IF;
+        v_notes := v_notes || ARRAY(SELECT n FROM jsonb_array_elements_text(v_plan -> 'notes') AS n);
+        INSERT INTO pg_temp.tgsis_ms_new
+        SELECT e.kind, e.st, e.t, (x ->> 1)::bigint,
+               CASE WHEN jsonb_typeof(x -> 4) = 'array' THEN ARRAY(SELECT jsonb_array_elements_text(x -> 4)) ELSE e.gvals END,
+               CASE WHEN jsonb_typeof(x -> 4) = 'array' THEN ARRAY(SELECT jsonb_array_elements_text(x -> 4))::text ELSE e.gbits END,
+               e.geq, e.gel, e.pvals, e.pbits, e.peq, e.nulls
+          FROM jsonb_array_elements(v_plan -> 'rows') AS x
+          JOIN pg_temp.tgsis_ms_el e ON e.kind = x ->> 0 AND e.st = (x ->> 2)::smallint AND e.t = v_t AND e.id = (x ->> 3)::bigint;
+        GET DIAGNOSTICS v_count = ROW_COUNT;
+        IF v_count <> jsonb_array_length(v_plan -> 'rows') THEN  -- (both read the keys that changed: never)
+            RAISE EXCEPTION '%: the merged rows of instant % are not among the rows read', v_refused, v_t
+                USING ERRCODE = 'XX000';
+        END IF;
+    END LOOP;
 
     -- 5. the merged elements: the chosen side's rows; M: the version's rows of the elements it changed (as
     -- merge3 compares them), the parent's elsewhere
@@ -287,7 +309,7 @@ BEGIN
       FROM pg_temp.tgsis_ms_slice s
       JOIN pg_temp.tgsis_ms_el e ON e.t = s.t
       LEFT JOIN pv ON pv.kind = e.kind AND pv.t = e.t AND pv.id = e.id
-     WHERE e.st = CASE s.src WHEN 'P' THEN 2 WHEN 'C' THEN 4
+     WHERE s.src <> 'R' AND e.st = CASE s.src WHEN 'P' THEN 2 WHEN 'C' THEN 4
                              ELSE CASE WHEN pv.b IS DISTINCT FROM pv.c THEN 4 ELSE 2 END END;
     SELECT string_agg(format('%s %s at instant %s', CASE pv.kind WHEN 'v' THEN 'vertex' ELSE 'triangle' END, pv.id, pv.t),
                       ', ' ORDER BY pv.t, pv.kind DESC, pv.id)
@@ -300,7 +322,7 @@ BEGIN
               FROM pg_temp.tgsis_ms_el e JOIN pg_temp.tgsis_ms_slice s ON s.t = e.t AND s.src = 'M'
              GROUP BY e.kind, e.t, e.id) AS pv
      WHERE pv.b IS NOT DISTINCT FROM pv.c AND pv.pbits IS DISTINCT FROM pv.cbits;
-    IF v_why IS NOT NULL THEN
+    IF v_why IS NOT NULL AND p_action <> 'regions' THEN
         RAISE EXCEPTION '%: rows the version did not change differ in their bits from the parent''s (%): which side''s rows the merge keeps hangs on its regions',
                 v_refused, v_why
             USING ERRCODE = 'TG302', HINT = v_hint;
@@ -347,6 +369,10 @@ BEGIN
         END LOOP;
     END IF;
 
+    IF p_action = 'regions' THEN  -- the analysis only (tgsis.instants_merge_regions reads tgsis_ms_slice): no object-level conflict
+        RETURN 0;
+    END IF;
+
     -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
     FOR v_attr IN
         SELECT e.viewname, e.keycolumn,
@@ -366,6 +392,9 @@ BEGIN
     END LOOP;
 
     -- the rights: to write in the version, to change the class (and the feature-row columns the parent changed)
+    FOREACH v_why IN ARRAY v_notes LOOP  -- what the solutions discard, said before it is written
+        RAISE NOTICE 'feature % of version %: %', p_geoid, quote_literal(p_version), v_why;
+    END LOOP;
     PERFORM tgsis.merge_write_rights(p_version, p_geoid, v_fcols, 'instant by instant', 'surface');
 
     -- 7. the writes, in the version's working revision, as write_sliced_difference writes them: per table, the rows

@@ -1,0 +1,235 @@
+"""The regions of a surface at instants found in SQL (issue 39): SQL find_conflicts stores what Python stores.
+
+A psql user's ``tgsis.find_conflicts`` finds and stores the regions of a
+model-2 feature changed on both sides (``tgsis.store_mesh_regions`` →
+``tgsis.instants_merge_regions``: merge3 per instant the three states have
+and a side changed, through ``tgsis.mesh_merge_work`` on that instant's rows),
+numbered on through the instants. The oracle is the Python
+``tgsis.find_conflicts`` (``tgsis._merge_slices.merge_sliced``): the same
+``tgsis.conflict_regions`` rows, ids, boxes, displacements and instants
+included; an object-level conflict has no regions either way.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+import psycopg
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import tgsis
+from tests.merge_data import SIDE
+from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, make_series, move
+from tests.test_sql_merge_slices import _new_surface, _sql
+from tests.test_sql_merge_write import assert_same_merge, everything, solve
+
+Conn = psycopg.Connection[Any]
+
+_COLUMNS = (
+    "region, times, timem, conflict, changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,"
+    " child_vertex_ids, child_cell_ids, bbox, parent_displacement, child_displacement, solution, childmark, parentmark"
+)
+
+
+def _stored(conn: Conn, version: str, geoid: int) -> list[tuple[Any, ...]]:
+    return conn.execute(
+        f"SELECT {_COLUMNS} FROM tgsis.conflict_regions"
+        " WHERE versionid = tgsis.version_id(%s) AND objectkey = %s ORDER BY region",
+        (version, str(geoid)),
+    ).fetchall()
+
+
+def sql_regions(conn: Conn, version: str, geoid: int) -> list[tuple[Any, ...]]:
+    """What SQL tgsis.find_conflicts stores for the feature, no Python region call (rolled back)."""
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))
+    rows = _stored(conn, version, geoid)
+    conn.rollback()
+    return rows
+
+
+def python_regions(conn: Conn, version: str, geoid: int) -> list[tuple[Any, ...]]:
+    """What the Python tgsis.find_conflicts stores (rolled back)."""
+    tgsis.find_conflicts(conn, version)
+    rows = _stored(conn, version, geoid)
+    conn.rollback()
+    return rows
+
+
+def assert_same_regions(conn: Conn, version: str, geoid: int) -> list[tuple[Any, ...]]:
+    mine, theirs = sql_regions(conn, version, geoid), python_regions(conn, version, geoid)
+    assert mine == theirs
+    return mine
+
+
+@pytest.fixture
+def series(conn: Conn) -> int:
+    return make_series(conn)
+
+
+def test_regions_of_instants_both_sides_changed_are_stored_by_sql_as_by_python(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)  # overlaps the version's: a conflict
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)  # the same instant, apart: merges by itself
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)  # another instant, the parent alone
+    move(conn, "e1", series, 1.0, SOUTH, CHILD_SHIFT)  # another, the version alone
+    regions = assert_same_regions(conn, "e1", series)
+    assert [(r[0], r[1], r[3], r[4]) for r in regions] == [
+        (0, 1.0, False, "child"),
+        (1, 2.0, True, "both"),
+        (2, 2.0, False, "parent"),
+        (3, 3.0, False, "parent"),
+    ]
+    assert [r[14] for r in regions] == ["automatic", "unsolved", "automatic", "automatic"]
+
+
+def test_triangles_and_values_changed_at_an_instant_both_sides_changed(conn: Conn, series: int) -> None:
+    _sql(conn, "e1", "DELETE FROM tgsis.times_trgl WHERE geoid = %s AND times = 2 AND trglid = 7", (series,))
+    _sql(
+        conn,
+        "DEFAULT",
+        "UPDATE horizons_cellpros SET porosity = -0.0 WHERE _geoid = %s AND _times = 2 AND _idx BETWEEN 30 AND 33",
+        (series,),
+    )
+    _sql(
+        conn,
+        "DEFAULT",
+        "UPDATE horizons_cellpros SET porosity = porosity * 2 WHERE _geoid = %s AND _times = 2 AND _idx = 8",
+        (series,),
+    )
+    regions = assert_same_regions(conn, "e1", series)
+    assert len(regions) >= 2
+
+
+def test_an_object_level_conflict_has_no_regions_either_way(conn: Conn, series: int) -> None:
+    with tgsis.in_version(conn, "e1"):
+        tgsis.delete_instant(conn, series, 2.0)
+    conn.commit()
+    move(conn, "DEFAULT", series, 2.0, NORTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, NORTH, PARENT_SHIFT)
+    assert assert_same_regions(conn, "e1", series) == []
+
+
+def test_an_instant_added_on_one_side_has_no_region_but_the_instants_merged_have(conn: Conn, series: int) -> None:
+    with tgsis.in_version(conn, "DEFAULT"):
+        tgsis.add_instant(conn, "horizons", series, 4.0, _new_surface(2), {"throw": 44.0})
+    conn.commit()
+    move(conn, "e1", series, 3.0, NORTH, CHILD_SHIFT)
+    regions = assert_same_regions(conn, "e1", series)
+    assert [(r[1], r[4]) for r in regions] == [(3.0, "child")]
+
+
+def test_a_role_that_may_not_read_the_class_stores_no_regions(conn: Conn, series: int, db_dsn: str) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH, PARENT_SHIFT)
+    conn.execute("CREATE ROLE tgsis_test_blind LOGIN IN ROLE tgsis_editor")
+    conn.execute("SELECT tgsis.grant_version('e1', 'write', 'tgsis_test_blind')")
+    conn.execute("REVOKE SELECT ON horizons FROM tgsis_test_blind, tgsis_editor, tgsis_reader")
+    conn.commit()
+    with psycopg.connect(db_dsn, user="tgsis_test_blind") as other:
+        other.execute("SELECT FROM tgsis.find_conflicts('e1')")
+        other.commit()
+    assert _stored(conn, "e1", series) == []
+
+
+_versions = itertools.count()
+_edit = st.sampled_from(["move", "move", "cells", "values", "delete", "none"])
+
+
+def _apply(conn: Conn, version: str, geoid: int, t: float, edit: str, first: int, shift: float) -> None:
+    ids = list(range(first, first + SIDE))
+    if edit == "move":
+        move(conn, version, geoid, t, ids, (shift, 0.0, -shift))
+    elif edit == "cells":
+        _sql(
+            conn,
+            version,
+            "DELETE FROM tgsis.times_trgl WHERE geoid = %s AND times = %s AND trglid = %s",
+            (geoid, t, first),
+        )
+    elif edit == "values":
+        _sql(
+            conn,
+            version,
+            "UPDATE horizons_cellpros SET porosity = porosity * %s WHERE _geoid = %s AND _times = %s AND _idx = ANY(%s)",
+            (shift, geoid, t, ids),
+        )
+    elif edit == "delete":
+        with tgsis.in_version(conn, version):
+            tgsis.delete_instant(conn, geoid, t)
+        conn.commit()
+
+
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    plan=st.lists(
+        st.tuples(_edit, st.integers(0, SIDE * (SIDE - 1) - 1), _edit, st.integers(0, SIDE * (SIDE - 1) - 1)),
+        min_size=3,
+        max_size=3,
+    )
+)
+def test_random_edits_of_both_sides_give_the_regions_python_gives(
+    conn: Conn, plan: list[tuple[str, int, str, int]]
+) -> None:
+    if not conn.execute("SELECT 1 FROM tgsis.catalog WHERE classname = 'horizons'").fetchone():
+        conn.rollback()
+        make_series(conn)
+    conn.rollback()
+    geoid = int(conn.execute("SELECT geoid FROM tgsis.geometry ORDER BY geoid LIMIT 1").fetchone()[0])  # type: ignore[index]
+    n = next(_versions)
+    version = f"r{n}"
+    tgsis.create_version(conn, version)
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        times = [
+            float(r[0]) for r in conn.execute("SELECT times FROM tgsis.times WHERE geoid = %s ORDER BY 1", (geoid,))
+        ]
+    conn.commit()
+    for t, (pedit, pfirst, cedit, cfirst) in zip(times, plan, strict=False):
+        pedit = "move" if pedit == "delete" else pedit  # (DEFAULT keeps its instants for the next examples)
+        _apply(conn, "DEFAULT", geoid, t, pedit, pfirst, 1.0 + n / 8.0)
+        _apply(conn, version, geoid, t, cedit, cfirst, -0.5 - n / 8.0)
+    assert_same_regions(conn, version, geoid)
+
+
+# ------------------------------------------------------------------- the psql merge of an instant both sides changed
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_an_instant_both_sides_changed_apart_merges_in_psql_exactly_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)  # the same instant, apart: two regions
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    assert_same_merge(conn, "e1", action)
+
+
+def test_an_unsolved_region_of_an_instant_is_refused_and_its_regions_stored(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    before = everything(conn)
+    conn.commit()
+    with pytest.raises(psycopg.Error) as err:
+        conn.execute("SELECT tgsis.merge_version('e1')")
+    assert err.value.sqlstate == "TG302"
+    assert "tgsis version merge e1" in str(err.value.diag.message_hint)
+    conn.rollback()
+    assert everything(conn) == before
+
+
+@pytest.mark.parametrize("solution", ["parent", "child", "base"])
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_conflicting_region_of_an_instant_solved_in_psql_merges_as_in_python(
+    conn: Conn, series: int, solution: str, action: str
+) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)  # overlaps: a conflict
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)  # merges by itself
+    move(conn, "e1", series, 1.0, SOUTH, CHILD_SHIFT)  # another instant, the version alone
+    solve(conn, "e1", series, solution)
+    assert_same_merge(conn, "e1", action)
