@@ -24,7 +24,7 @@ import tgsis
 from tests.merge_data import SIDE
 from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, make_series, move
 from tests.test_sql_merge_slices import _new_surface, _sql
-from tests.test_sql_merge_write import assert_same_merge, everything, solve
+from tests.test_sql_merge_write import _outcome, assert_same_merge, both_merges, everything, solve
 
 Conn = psycopg.Connection[Any]
 
@@ -233,3 +233,168 @@ def test_a_conflicting_region_of_an_instant_solved_in_psql_merges_as_in_python(
     move(conn, "e1", series, 1.0, SOUTH, CHILD_SHIFT)  # another instant, the version alone
     solve(conn, "e1", series, solution)
     assert_same_merge(conn, "e1", action)
+
+
+def test_the_refusal_names_the_unsolved_region_and_its_instant_as_python_does(conn: Conn, series: int) -> None:
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+    with pytest.raises(tgsis.UnsolvedConflictsError, match=r"region 0 at instant 2\.0 unsolved"):
+        tgsis.merge_version(conn, "e1")
+    conn.rollback()
+    with pytest.raises(psycopg.Error, match=r"region 0 at instant 2\.0 unsolved") as err:
+        conn.execute("SELECT tgsis.refresh_version('e1')")
+    assert err.value.sqlstate == "TG302"
+    conn.rollback()
+
+
+# ---------------------------------------------------------------------------- hostile cases of an instant both changed
+
+
+def _both_at_two(conn: Conn, series: int) -> None:
+    """Both sides change instant 2 apart (two regions that merge by themselves), the parent instant 3 too."""
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
+
+
+@pytest.mark.parametrize(
+    "statement",
+    [
+        "WITH m AS (SELECT tgsis.merge_version('e1') AS n) SELECT n FROM m",
+        "SELECT pg_temp.merge_it('e1')",
+        "SELECT pg_temp.refresh_it('e1')",
+    ],
+    ids=["cte", "function", "refresh-function"],
+)
+def test_a_psql_merge_of_an_instant_both_changed_in_a_cte_or_a_function(
+    conn: Conn, series: int, statement: str
+) -> None:
+    _both_at_two(conn, series)
+    theirs, _ = both_merges(conn, "e1", "refresh" if "refresh" in statement else "merge")
+    conn.execute(
+        "CREATE FUNCTION pg_temp.merge_it(v text) RETURNS bigint LANGUAGE sql AS $$ SELECT tgsis.merge_version(v) $$;"
+        "CREATE FUNCTION pg_temp.refresh_it(v text) RETURNS bigint LANGUAGE sql AS $$ SELECT tgsis.refresh_version(v) $$"
+    )
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute(statement).fetchone()[0]))  # type: ignore[index]
+    assert theirs[0] == mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
+def test_a_role_without_rights_on_the_class_is_refused_as_in_python_and_nothing_is_written(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    _both_at_two(conn, series)
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute("REVOKE INSERT, UPDATE, DELETE ON public.horizons FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        for action in ("merge", "refresh"):
+            session = made.connect("ed")
+            with pytest.raises(tgsis.MissingPrivilegeError) as python:
+                if action == "merge":
+                    tgsis.merge_version(session, "e1")
+                else:
+                    tgsis.refresh_version(session, "e1")
+            session.rollback()
+            with pytest.raises(psycopg.Error) as caught:
+                session.execute(f"SELECT tgsis.{action}_version('e1')")
+            session.rollback()
+            assert caught.value.sqlstate == python.value.sqlstate == "42501", str(caught.value)
+            assert everything(conn) == before
+            conn.commit()
+
+
+def test_a_property_view_without_delete_is_refused_as_in_python_and_nothing_is_written(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from tests.roles import login_roles
+
+    _both_at_two(conn, series)
+    _sql(
+        conn,
+        "e1",
+        "UPDATE horizons_cellpros SET porosity = porosity * 3 WHERE _geoid = %s AND _times = 2 AND _idx < 5",
+        (series,),
+    )
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute("REVOKE DELETE ON public.horizons_cellpros FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        session = made.connect("ed")
+        with pytest.raises(tgsis.MissingPrivilegeError) as python:
+            tgsis.merge_version(session, "e1")
+        session.rollback()
+        with pytest.raises(psycopg.Error) as caught:
+            session.execute("SELECT tgsis.merge_version('e1')")
+        session.rollback()
+        assert caught.value.sqlstate == python.value.sqlstate == "42501", str(caught.value)
+        assert everything(conn) == before
+        conn.commit()
+
+
+def test_a_writer_in_the_version_during_the_psql_merge_of_an_instant_both_changed(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+    from tests.test_merge_instants import instants, shifted
+
+    _both_at_two(conn, series)
+    conn.commit()
+    writer = connect(db_dsn, "writer")
+    tgsis.goto_version(writer, "e1")
+    writer.execute("UPDATE tgsis.times_vrtx SET z = z + 1.5 WHERE geoid = %s AND times = 2 AND vrtxid = 70", (series,))
+    merger = Background(db_dsn, "merger", lambda c: c.execute("SELECT tgsis.merge_version('e1')"))
+    wait_until_blocked(conn, merger.pid, holder_pid := writer.info.backend_pid)
+    assert holder_pid
+    writer.commit()
+    writer.close()
+    merger.finish()
+    from tests.test_merge_instants import _shape
+
+    expected = shifted(shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT), [70], (0.0, 0.0, 1.5))
+    for version in ("DEFAULT", "e1"):
+        assert instants(conn, version, series)[2.0][1].tobytes() == expected.tobytes()
+
+
+def test_a_depth_positive_surface_merges_in_psql_exactly_as_in_python(conn: Conn) -> None:
+    import numpy as np
+
+    from tests.test_merge_instants import TIMES, _porosity, _shape
+    from tgsis.temporal import SurfaceSeries
+
+    tgsis.create_feature_class(
+        conn,
+        "horizons",
+        "SURFACE",
+        time_model="INSTANTS",
+        cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "double precision")],
+    )
+    tgsis.enable_feature_versioning(conn)
+    cells = _new_surface(0).cells
+    surfaces = [
+        tgsis.Surface(-_shape(i), cells, vertex_properties={"porosity": _porosity()}, metadata={"zpositive": "Depth"})
+        for i in range(len(TIMES))
+    ]
+    series = SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": np.asarray([10.0, 20.0, 30.0])})
+    geoid = int(tgsis.insert_feature(conn, "horizons", series))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, 2.0, NORTH[:SIDE], PARENT_SHIFT)  # a conflict
+    move(conn, "DEFAULT", geoid, 2.0, SOUTH, PARENT_SHIFT)
+    assert_same_regions(conn, "e1", geoid)
+    solve(conn, "e1", geoid, "child")
+    assert_same_merge(conn, "e1")
