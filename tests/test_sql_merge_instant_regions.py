@@ -410,3 +410,88 @@ def test_a_depth_positive_surface_merges_in_psql_exactly_as_in_python(conn: Conn
     assert_same_regions(conn, "e1", geoid)
     solve(conn, "e1", geoid, "child")
     assert_same_merge(conn, "e1")
+
+
+# ---------------------------------------------------------------------------- random edits of both sides, merged
+
+_wedit = st.sampled_from(["move", "move", "cells", "values", "add", "none"])
+
+
+def _apply_both(conn: Conn, version: str, geoid: int, t: float, edit: str, first: int, shift: float) -> None:
+    if edit != "add":
+        _apply(conn, version, geoid, t, edit, first, shift)
+        return
+    # a new vertex (id 1000 on both sides: a clash the merge renumbers unless its row is the same) and a triangle
+    # on it and two vertices of the grid
+    _sql(
+        conn,
+        version,
+        "INSERT INTO tgsis.times_vrtx (geoid, times, vrtxid, x, y, z)"
+        " SELECT geoid, times, 1000, x + %s, y, z FROM tgsis.times_vrtx WHERE geoid = %s AND times = %s AND vrtxid = %s",
+        (shift, geoid, t, first),
+    )
+    _sql(
+        conn,
+        version,
+        "INSERT INTO tgsis.times_trgl (geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, 5000, %s, %s, 1000)",
+        (geoid, t, first, first + 1),
+    )
+
+
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    plan=st.lists(
+        st.tuples(_wedit, st.integers(0, SIDE * (SIDE - 1) - 2), _wedit, st.integers(0, SIDE * (SIDE - 1) - 2)),
+        min_size=3,
+        max_size=3,
+    ),
+    solution=st.sampled_from(["parent", "child", "base"]),
+    action=st.sampled_from(["merge", "refresh"]),
+)
+def test_random_edits_of_both_sides_merge_in_psql_exactly_as_in_python(
+    conn: Conn, plan: list[tuple[str, int, str, int]], solution: str, action: str
+) -> None:
+    if not conn.execute("SELECT 1 FROM tgsis.catalog WHERE classname = 'horizons'").fetchone():
+        conn.rollback()
+        make_series(conn)
+    conn.rollback()
+    geoid = int(conn.execute("SELECT geoid FROM tgsis.geometry ORDER BY geoid LIMIT 1").fetchone()[0])  # type: ignore[index]
+    n = next(_versions)
+    version = f"m{n}"
+    tgsis.create_version(conn, version)
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        times = [
+            float(r[0]) for r in conn.execute("SELECT times FROM tgsis.times WHERE geoid = %s ORDER BY 1", (geoid,))
+        ]
+        used = conn.execute(
+            "SELECT 1 FROM tgsis.times_vrtx WHERE geoid = %s AND vrtxid = 1000 LIMIT 1", (geoid,)
+        ).fetchone()
+    conn.commit()
+    for t, (pedit, pfirst, cedit, cfirst) in zip(times, plan, strict=False):
+        if used:  # (an earlier example merged a vertex 1000 into DEFAULT: adds are moves from then on)
+            pedit, cedit = ("move" if e == "add" else e for e in (pedit, cedit))
+        _apply_both(conn, "DEFAULT", geoid, t, pedit, pfirst, 1.0 + n / 8.0)
+        _apply_both(conn, version, geoid, t, cedit, cfirst, -0.5 - n / 8.0)
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))
+    conflicting = conn.execute(
+        "SELECT region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%s) AND objectkey = %s"
+        " AND conflict ORDER BY region",
+        (version, str(geoid)),
+    ).fetchall()
+    for (region,) in conflicting:
+        conn.execute("SELECT tgsis.resolve_region(%s, 'feature', %s, %s, %s)", (version, str(geoid), region, solution))
+    conn.commit()
+    if not conn.execute(
+        "SELECT 1 FROM tgsis.find_conflicts(%s) WHERE objectclass = 'feature' AND solution = 'unsolved'", (version,)
+    ).fetchone():  # (no conflict left: nothing to merge by parts)
+        conn.rollback()
+        return
+    conn.rollback()
+    theirs, mine = both_merges(conn, version, action)
+    assert mine[:2] == theirs[:2], (theirs[:3], mine[:3])
+    if theirs[0] == "done":
+        for table in theirs[2]:
+            assert mine[2][table] == theirs[2][table], table
