@@ -495,3 +495,19 @@ def test_random_edits_of_both_sides_merge_in_psql_exactly_as_in_python(
     if theirs[0] == "done":
         for table in theirs[2]:
             assert mine[2][table] == theirs[2][table], table
+
+
+def test_an_average_solution_of_a_region_of_an_instant_is_refused_by_name_in_psql(conn: Conn, series: int) -> None:
+    """The Python client records an average for a region of an instant (its .npz alone): the psql merge does not
+    apply it (TG302, nothing written, the hint naming the command that does); the Python merge does."""
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    assert mine[:2] == ("refused", "TG302"), mine
+    assert "region 0 at instant 2 solved average" in mine[2], mine[2]
+    assert "`tgsis version merge e1`" in mine[2], mine[2]
