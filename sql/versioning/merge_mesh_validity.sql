@@ -60,7 +60,10 @@ BEGIN
     CREATE TEMPORARY TABLE tgsis_mw_nearv ON COMMIT DROP AS
     SELECT u.id,
            CASE WHEN m.id IS NULL
-                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id) THEN 15
+                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id)
+                          -- (one a solution removes: in the three states, not in the merged one)
+                          THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND NOT n.present)
+                                    THEN 7 ELSE 15 END
                           WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8  -- a solution's new id
                           ELSE 0 END
                 ELSE m.st + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
@@ -107,8 +110,9 @@ BEGIN
     v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n
                      WHERE n.present AND n.ref IS NOT NULL
                        AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v r WHERE r.id = n.ref AND r.present)
-                       AND EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref));
-    IF cardinality(v_badv) > 0 THEN  -- refs no state changed are there when the base has them
+                       AND (EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref)
+                            OR EXISTS (SELECT FROM pg_temp.tgsis_mw_v r WHERE r.id = n.ref AND NOT r.present)));
+    IF cardinality(v_badv) > 0 THEN  -- refs no state changed are there when the base has them (and no solution removes them)
         v_bad := ARRAY(
             SELECT n.id FROM pg_temp.tgsis_mw_v n
              WHERE n.present AND n.ref = ANY (v_badv)
