@@ -471,7 +471,7 @@ def test_random_edits_of_both_sides_merge_in_psql_exactly_as_in_python(
         ).fetchone()
     conn.commit()
     for t, (pedit, pfirst, cedit, cfirst) in zip(times, plan, strict=False):
-        if used:  # (an earlier example merged a vertex 1000 into DEFAULT: adds are moves from then on)
+        if used:  # (an earlier example added vertex 1000 in DEFAULT: adds are moves from then on)
             pedit, cedit = ("move" if e == "add" else e for e in (pedit, cedit))
         _apply_both(conn, "DEFAULT", geoid, t, pedit, pfirst, 1.0 + n / 8.0)
         _apply_both(conn, version, geoid, t, cedit, cfirst, -0.5 - n / 8.0)
@@ -511,3 +511,20 @@ def test_an_average_solution_of_a_region_of_an_instant_is_refused_by_name_in_psq
     assert mine[:2] == ("refused", "TG302"), mine
     assert "region 0 at instant 2 solved average" in mine[2], mine[2]
     assert "`tgsis version merge e1`" in mine[2], mine[2]
+
+
+def test_a_whole_side_that_would_drop_the_other_sides_region_of_an_instant_is_refused_in_psql(
+    conn: Conn, series: int
+) -> None:
+    """Both sides changed instant 2 only, apart: no slice only one side changed, so only the regions (which SQL
+    find_conflicts now stores for a surface at instants) show that 'child' drops the parent's edit there."""
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    before = everything(conn)
+    conn.commit()
+    with pytest.raises(psycopg.Error) as caught:
+        conn.execute("SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'child')", (str(series),))
+    assert caught.value.sqlstate == "TG307", str(caught.value)
+    assert "would drop the parent's edits in regions 1" in str(caught.value), str(caught.value)
+    conn.rollback()
+    assert everything(conn) == before
