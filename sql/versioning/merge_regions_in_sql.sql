@@ -38,14 +38,21 @@ BEGIN
     PERFORM set_config('tgsis.region_detection', 'client', true);
     PERFORM FROM tgsis.find_conflicts(p_version);
     -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice; NULL: an object-level
-    -- conflict, refused below)
+    -- conflict or an unsolved region of an instant, refused below)
     FOR v_key IN
         SELECT k.objectkey FROM tgsis.conflicts k
          WHERE k.versionid = v_id AND k.objectclass = 'feature' AND k.solution = 'unsolved'
            AND (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(k.objectkey::bigint)) = 'INSTANTS'
          ORDER BY k.objectkey::bigint
     LOOP
-        v_written := v_written + coalesce(tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint), 0);
+        v_count := tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint);
+        IF v_count IS NULL THEN
+            -- unsolved (a region of an instant without a solution, or an object-level conflict): the regions
+            -- of its instants stored, for the merge's refusal to name them
+            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        ELSE
+            v_written := v_written + v_count;
+        END IF;
     END LOOP;
     FOR v_key IN
         SELECT k.objectkey FROM tgsis.conflicts k
