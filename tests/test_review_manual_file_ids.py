@@ -59,3 +59,31 @@ def test_a_new_vertex_never_gets_the_id_another_file_vertex_gives(
     merge, state = _merged(conn, geoid)
     assert len(np.unique(state.vertex_ids)) == state.n_vertices
     assert state.n_vertices == merge.child.n_vertices + 2
+
+
+@pytest.mark.parametrize("solution", ["child", "average"])
+def test_an_atom_referring_to_a_negative_vertex_id_survives_the_merge(conn: Conn, solution: str) -> None:
+    """Negative stored ids (a psql user's): a GOCAD atom in the patch both sides move refers to vertex -1. The merge
+    rewrites the atom's vertex row: its atom must come along (refid -1 is a vertex, not 'no atom')."""
+    geoid = _negative_fault(conn)
+    atom_v = int(-1 - PATCH[0])
+    conn.execute("INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, -1, true)", (geoid, atom_v))
+    conn.commit()
+    tgsis.create_version(conn, "e2")
+    conn.commit()
+    with tgsis.in_version(conn, "e2"):
+        conn.execute(
+            "UPDATE tgsis.vrtx SET z = z + 5 WHERE geoid = %s AND vrtxid = ANY(%s)", (geoid, (-1 - PATCH).tolist())
+        )
+    conn.commit()
+    _move(conn, "DEFAULT", geoid, -7.0)
+    [conflict] = tgsis.find_conflicts(conn, "e2")
+    conn.commit()
+    [region] = [r for r in conflict.regions if r.conflict]
+    tgsis.resolve_region(conn, "e2", geoid, region.region, solution)
+    conn.commit()
+    tgsis.merge_version(conn, "e2")
+    conn.commit()
+    atoms = conn.execute("SELECT vrtxid, refid FROM tgsis.atom WHERE geoid = %s", (geoid,)).fetchall()
+    conn.rollback()
+    assert atoms == [(atom_v, -1)]
