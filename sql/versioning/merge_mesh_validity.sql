@@ -7,7 +7,8 @@
 -- those can break it: near = the vertices of the taken cells, of the parent's
 -- cells they replace, and the taken vertices. Refused, in merge3's order:
 -- cells on a vertex near the change the merge removes; GOCAD atoms that refer
--- to a vertex it removes (a row as the parent holds it excused); duplicated cells (the
+-- to a vertex it removes (a row as the parent holds it excused only when the parent lacks that vertex
+-- too; the parent's atoms the merge keeps as they are judged as well); duplicated cells (the
 -- same vertices, any order) or, for triangles and tetrahedra, edges or faces
 -- in more than two cells, one of them taken, that no state (base, parent,
 -- version) has so often; vertices near the change left without cells, which no
