@@ -1802,6 +1802,8 @@ def _state_of_file(merge: MeshMerge, mesh: Mesh, name: str) -> MeshState:
         )
     ids, new = _file_ids(mesh, name, np.concatenate([s.vertex_ids for s in states]))
     top_v = max(int(s.vertex_ids.max()) for s in states if s.n_vertices) if any(s.n_vertices for s in states) else -1
+    if (~new).any():  # above the ids the file gives too (a whole vrtxid no state has is taken as given)
+        top_v = max(top_v, int(ids[~new].max()))
     ids[new] = np.arange(top_v + 1, top_v + 1 + int(new.sum()))
     vertices = np.asarray(mesh.vertices, dtype=np.float64).copy()
     if str(mesh.metadata.get("zpositive", "")).lower() == "depth":
