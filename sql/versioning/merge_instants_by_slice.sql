@@ -264,6 +264,7 @@ BEGIN
           FROM sl s)
     SELECT ch.*,
            CASE WHEN NOT ch.chc THEN 'P' WHEN NOT ch.chp THEN CASE WHEN ch.ib AND ch.ip AND ch.ic THEN 'M' ELSE 'C' END
+                WHEN ch.ib AND NOT ch.ip AND NOT ch.ic THEN 'P'  -- removed on both sides: taken (removed)
                 WHEN ch.ib AND NOT (ch.ip AND ch.ic) THEN 'X'
                 WHEN ch.samepc THEN 'P'
                 WHEN ch.ib THEN 'R'
