@@ -460,3 +460,59 @@ def test_an_instant_removed_on_both_sides_is_taken_beside_an_instant_both_change
     conn.execute("SELECT tgsis.merge_version('e1')")
     conn.commit()
     assert sorted(instants(conn, "DEFAULT", series)) == [1.0, 2.0]
+
+
+def test_a_reader_finds_and_stores_the_regions_of_instants_as_python_does_and_may_not_merge(
+    conn: Conn, series: int, db_dsn: str
+) -> None:
+    """A tgsis_reader (reads every class, writes nothing): SQL find_conflicts stores what the Python one stores;
+    the psql merge and resolve_region refuse it as the Python merge does."""
+    from tests.roles import login_roles
+    from tests.test_sql_merge_instant_regions import _stored
+
+    _conflicts_at_every_instant(conn, series)
+    with login_roles(db_dsn, {"rd": "tgsis_reader"}) as made:
+        session = made.connect("rd")
+        session.execute("SELECT FROM tgsis.find_conflicts('e1')")
+        mine = _stored(session, "e1", series)
+        session.rollback()
+        tgsis.find_conflicts(session, "e1")
+        theirs = _stored(session, "e1", series)
+        session.rollback()
+        assert mine == theirs
+        outcomes = []
+        for run in (
+            lambda: tgsis.merge_version(session, "e1"),
+            lambda: session.execute("SELECT tgsis.merge_version('e1')"),
+            lambda: session.execute("SELECT tgsis.resolve_region('e1', 'feature', %s, 0, 'child')", (str(series),)),
+        ):
+            try:
+                run()
+                outcomes.append("done")
+            except (psycopg.Error, tgsis.Error) as exc:
+                outcomes.append(str(exc.sqlstate))
+            session.rollback()
+        assert outcomes[0] == outcomes[1] != "done", outcomes
+        assert outcomes[2] != "done", outcomes
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_new_vertices_clashing_at_the_top_of_bigint_are_refused_alike(conn: Conn, series: int, action: str) -> None:
+    """Both sides add a vertex with id 2**63 - 1 at instant 2, elsewhere: the version's cannot be renumbered. The
+    Python merge leaves the object unsolved (TG302, saying why); the psql merge raised the engine's TG100."""
+    top = 2**63 - 1
+    for version, src, dx in (("e1", 5, 0.25), ("DEFAULT", SIDE * SIDE - 5, -0.5)):
+        _sql(
+            conn,
+            version,
+            "INSERT INTO tgsis.times_vrtx (geoid, times, vrtxid, x, y, z)"
+            " SELECT geoid, times, %s, x + %s, y, z FROM tgsis.times_vrtx WHERE geoid = %s AND times = 2"
+            " AND vrtxid = %s",
+            (top, dx, series, src),
+        )
+    move(conn, "e1", series, 1.0, NORTH, CHILD_SHIFT)
+    regions = assert_same_regions(conn, "e1", series)
+    assert regions == []
+    theirs, mine = both_merges(conn, "e1", action)
+    assert mine[:2] == theirs[:2] == ("refused", "TG302"), (theirs[:3], mine[:3])
+    assert "bigint" in mine[2], mine[2]
