@@ -387,14 +387,7 @@ def test_solved_regions_of_instants_kept_by_pg_dump_and_restore_then_merged_in_p
     "table",
     [
         "horizons_cellpros",
-        pytest.param(
-            "horizons_pros",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="the psql merge of a surface at instants reads the per-instant property rows (<class>_pros) "
-                "as the owner's runner and asks no SELECT right on that view; the Python merge SELECTs it (42501)",
-            ),
-        ),
+        "horizons_pros",  # (the psql merge asked no SELECT right on the per-instant property view: it merged)
     ],
 )
 def test_a_role_that_may_not_read_a_property_view_is_refused_as_in_python(
