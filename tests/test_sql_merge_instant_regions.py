@@ -12,9 +12,11 @@ included; an object-level conflict has no regions either way.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from typing import Any
 
+import numpy as np
 import psycopg
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -497,19 +499,74 @@ def test_random_edits_of_both_sides_merge_in_psql_exactly_as_in_python(
             assert mine[2][table] == theirs[2][table], table
 
 
-def test_an_average_solution_of_a_region_of_an_instant_is_refused_by_name_in_psql(conn: Conn, series: int) -> None:
-    """The Python client records an average for a region of an instant (its .npz alone): the psql merge does not
-    apply it (TG302, nothing written, the hint naming the command that does); the Python merge does."""
+def _conflict_at_two(conn: Conn, series: int) -> None:
+    """Both sides move overlapping blocks of instant 2 (a conflict), the parent also a block apart there."""
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
     tgsis.find_conflicts(conn, "e1")
     conn.commit()
+
+
+def _instant_rows_recorded(conn: Conn, series: int) -> list[tuple[Any, ...]]:
+    return conn.execute(
+        "SELECT region, times, solution, cardinality(solution_vertex_ids) FROM tgsis.conflict_regions"
+        " WHERE versionid = tgsis.version_id('e1') AND objectkey = %s AND solution IN ('average', 'manual')",
+        (str(series),),
+    ).fetchall()
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_an_average_solution_of_a_region_of_an_instant_merges_in_psql_exactly_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """The Python client records an average for a region of an instant with its rows (was: the .npz alone, the
+    psql merge refused it TG302): the psql merge applies them as the Python merge applies the .npz."""
+    _conflict_at_two(conn, series)
+    resolution = tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.commit()
+    assert resolution.state is not None
+    ((region, times, solution, nv),) = _instant_rows_recorded(conn, series)
+    assert (region, times, solution) == (0, 2.0, "average") and nv == len(resolution.state.vertex_ids)
+    conn.commit()
+    assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_manual_mesh_of_a_region_of_an_instant_merges_in_psql_exactly_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """A manual mesh of the region: its average (not recorded), one vertex lifted 3 m further."""
+    _conflict_at_two(conn, series)
+    average = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert average is not None
+    xyz = np.array(average.vertices, dtype=np.float64)
+    xyz[0, 2] += 3.0
+    manual = dataclasses.replace(average, vertices=xyz)
+    tgsis.resolve_region(conn, "e1", series, 0, "manual", manual)
+    conn.commit()
+    assert [r[2] for r in _instant_rows_recorded(conn, series)] == ["manual"]
+    assert_same_merge(conn, "e1", action)
+
+
+def test_an_average_of_an_instant_recorded_with_its_npz_only_is_refused_by_name_in_psql(
+    conn: Conn, series: int
+) -> None:
+    """An average recorded before its rows were taken (the .npz alone): the psql merge does not apply it (TG302,
+    nothing written, the hint naming the command that does); the Python merge does."""
+    _conflict_at_two(conn, series)
     tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.execute(
+        "UPDATE tgsis.conflict_regions SET solution_vertex_ids = NULL, solution_vertices = NULL, solution_cell_ids = NULL,"
+        " solution_cells = NULL, solution_vertex_columns = NULL, solution_vertex_values = NULL,"
+        " solution_cell_columns = NULL, solution_cell_values = NULL WHERE versionid = tgsis.version_id('e1')"
+    )
     conn.commit()
     theirs, mine = both_merges(conn, "e1")
     assert theirs[0] == "done", theirs
     assert mine[:2] == ("refused", "TG302"), mine
-    assert "region 0 at instant 2 solved average" in mine[2], mine[2]
+    assert "region 0 at instant 2 solved average with its mesh only" in mine[2], mine[2]
     assert "`tgsis version merge e1`" in mine[2], mine[2]
 
 
