@@ -570,6 +570,118 @@ def test_an_average_of_an_instant_recorded_with_its_npz_only_is_refused_by_name_
     assert "`tgsis version merge e1`" in mine[2], mine[2]
 
 
+@pytest.mark.parametrize("solution", ["average", "manual"])
+def test_psql_is_told_what_an_average_or_manual_solution_of_an_instant_discards_as_python_says_it(
+    conn: Conn, series: int, solution: str
+) -> None:
+    _conflict_at_two(conn, series)
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    assert state is not None
+    if solution == "manual":  # the average, one vertex put back where the parent has it
+        conn.rollback()
+        xyz = np.array(state.vertices, dtype=np.float64)
+        xyz[0, 2] -= 1.0
+        tgsis.resolve_region(conn, "e1", series, 0, "manual", dataclasses.replace(state, vertices=xyz))
+    conn.commit()
+    with conn.transaction(force_rollback=True):
+        (merged,) = tgsis.merge_version(conn, "e1").objects
+    expected = [
+        f"region {d.region} at instant 2: {d.solution} discards the {d.side}'s edit there: {d.vertices} vertices,"
+        f" {d.cells} cells, largest displacement {d.max_displacement:.6g}"
+        for d in merged.discards
+    ]
+    assert {d.side for d in merged.discards} == {"parent", "child"}
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    with conn.transaction(force_rollback=True):
+        conn.execute("SELECT tgsis.merge_version('e1')")
+    said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {series} of version 'e1': region")]
+    assert said == expected
+
+
+def test_after_pg_dump_and_restore_an_average_of_an_instant_merges_in_psql_as_in_python(
+    conn: Conn, series: int, pg: Any, db_dsn: str, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    _conflict_at_two(conn, series)
+    tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.commit()
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
+        assert_same_merge(restored, "e1")
+
+
+def _record_in_sql(conn: Conn, series: int, state: Any) -> None:
+    """Record a manual state of region 0 as a psql user may, with its .npz and rows (no check of the Python client's)."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    rows = _sql_rows(state)
+    assert rows is not None
+    conn.execute(
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(series), state_to_npz(state), *rows),
+    )
+    conn.commit()
+
+
+def test_a_manual_mesh_that_makes_an_invalid_instant_is_refused_in_psql_as_in_python(conn: Conn, series: int) -> None:
+    """A manual mesh recorded from psql with a second triangle on the vertices of one of its triangles: merge3's
+    validity check refuses the merged instant in Python; the psql merge refuses it too (TG302), naming the same
+    vertices, nothing written (it ran no validity check of an instant before)."""
+    _conflict_at_two(conn, series)
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    twin = int(state.cell_ids.max()) + 1000
+    broken = dataclasses.replace(
+        state,
+        cell_ids=np.append(state.cell_ids, twin),
+        cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
+        cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
+    )
+    _record_in_sql(conn, series, broken)
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "refused" and mine[:2] == ("refused", "TG302"), (theirs, mine)
+    key = ", ".join(str(v) for v in sorted(state.cells[0].tolist()))
+    for said in (theirs[2], mine[2]):
+        assert "invalid merge" in said and "duplicated triangles" in said and f"({key})" in said, said
+    assert everything(conn) == before
+
+
+def test_a_manual_mesh_that_removes_a_cell_no_side_changed_is_refused_by_name_in_psql(conn: Conn, series: int) -> None:
+    """A manual mesh may lack a triangle of its region no side changed (the margin): the Python merge removes it;
+    the psql merge of an instant does not read such rows of the version, so it refuses the solution by name (TG302,
+    nothing written) rather than leave the triangle there."""
+    _conflict_at_two(conn, series)
+    region = tgsis.find_conflicts(conn, "e1")[0].regions[0]
+    conn.commit()
+    margin = np.setdiff1d(region.cell_ids, np.union1d(region.parent_cell_ids, region.child_cell_ids))
+    assert len(margin)
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    keep = state.cell_ids != margin[0]
+    holed = dataclasses.replace(
+        state,
+        cell_ids=state.cell_ids[keep],
+        cells=state.cells[keep],
+        cell_properties={k: np.asarray(v)[keep] for k, v in state.cell_properties.items()},
+    )
+    tgsis.resolve_region(conn, "e1", series, 0, "manual", holed)
+    conn.commit()
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    assert mine[:2] == ("refused", "TG302"), mine
+    assert f"rewrites or removes rows no side changed (region 0: cells {margin[0]})" in mine[2], mine[2]
+    assert "`tgsis version merge e1`" in mine[2], mine[2]
+    assert everything(conn) == before
+
+
 def test_a_whole_side_that_would_drop_the_other_sides_region_of_an_instant_is_refused_in_psql(
     conn: Conn, series: int
 ) -> None:
