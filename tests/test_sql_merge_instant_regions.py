@@ -19,12 +19,21 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import tgsis
 from tests.merge_data import SIDE
-from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, make_series, move
+from tests.test_merge_instants import (
+    CHILD_SHIFT,
+    NORTH,
+    PARENT_SHIFT,
+    SOUTH,
+    make_evolving,
+    make_series,
+    move,
+    move3,
+)
 from tests.test_sql_merge_slices import _new_surface, _sql
 from tests.test_sql_merge_write import _outcome, assert_same_merge, both_merges, everything, solve
 
@@ -499,6 +508,67 @@ def test_random_edits_of_both_sides_merge_in_psql_exactly_as_in_python(
             assert mine[2][table] == theirs[2][table], table
 
 
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    plan=st.lists(
+        st.tuples(_wedit, st.integers(0, SIDE * (SIDE - 1) - 2), _wedit, st.integers(0, SIDE * (SIDE - 1) - 2)),
+        min_size=3,
+        max_size=3,
+    ),
+    action=st.sampled_from(["merge", "refresh"]),
+)
+@example(plan=[("move", 0, "move", 0), ("move", 0, "move", 0), ("move", 1, "cells", 0)], action="merge")
+def test_random_edits_of_both_sides_solved_average_merge_in_psql_exactly_as_in_python(
+    conn: Conn, plan: list[tuple[str, int, str, int]], action: str
+) -> None:
+    """As the random test above, every conflicting region solved ``average`` by the Python client (its rows
+    recorded): the psql merge writes what the Python merge writes, or refuses what it refuses."""
+    if not conn.execute("SELECT 1 FROM tgsis.catalog WHERE classname = 'horizons'").fetchone():
+        conn.rollback()
+        make_series(conn)
+    conn.rollback()
+    geoid = int(conn.execute("SELECT geoid FROM tgsis.geometry ORDER BY geoid LIMIT 1").fetchone()[0])  # type: ignore[index]
+    n = next(_versions)
+    version = f"m{n}"
+    tgsis.create_version(conn, version)
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        times = [
+            float(r[0]) for r in conn.execute("SELECT times FROM tgsis.times WHERE geoid = %s ORDER BY 1", (geoid,))
+        ]
+        used = conn.execute(
+            "SELECT 1 FROM tgsis.times_vrtx WHERE geoid = %s AND vrtxid = 1000 LIMIT 1", (geoid,)
+        ).fetchone()
+    conn.commit()
+    for t, (pedit, pfirst, cedit, cfirst) in zip(times, plan, strict=False):
+        if used:  # (an earlier example added vertex 1000 in DEFAULT: adds are moves from then on)
+            pedit, cedit = ("move" if e == "add" else e for e in (pedit, cedit))
+        _apply_both(conn, "DEFAULT", geoid, t, pedit, pfirst, 1.0 + n / 8.0)
+        _apply_both(conn, version, geoid, t, cedit, cfirst, -0.5 - n / 8.0)
+    conflicts = tgsis.find_conflicts(conn, version)
+    conn.commit()
+    if not any(r.conflict for c in conflicts for r in c.regions):
+        return  # (no conflicting region: nothing to average)
+    try:
+        tgsis.resolve_all_regions(conn, version, geoid, "average")
+    except (tgsis.RegionSolutionError, tgsis.InvalidInputError):
+        # (no average shape of these patches, or merge3 refuses the averaged rows: nothing recorded, nothing to merge)
+        conn.rollback()
+        return
+    conn.commit()
+    theirs, mine = both_merges(conn, version, action)
+    assert mine[:2] == theirs[:2] or (theirs[0] == mine[0] == "refused"), (
+        theirs[:2],
+        mine[:2],
+        [x[2] for x in (theirs, mine) if x[0] == "refused"],
+    )
+    if theirs[0] == "done":
+        for table in theirs[2]:
+            assert mine[2][table] == theirs[2][table], table
+
+
 def _conflict_at_two(conn: Conn, series: int) -> None:
     """Both sides move overlapping blocks of instant 2 (a conflict), the parent also a block apart there."""
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
@@ -651,10 +721,13 @@ def test_a_manual_mesh_that_makes_an_invalid_instant_is_refused_in_psql_as_in_py
     assert everything(conn) == before
 
 
-def test_a_manual_mesh_that_removes_a_cell_no_side_changed_is_refused_by_name_in_psql(conn: Conn, series: int) -> None:
-    """A manual mesh may lack a triangle of its region no side changed (the margin): the Python merge removes it;
-    the psql merge of an instant does not read such rows of the version, so it refuses the solution by name (TG302,
-    nothing written) rather than leave the triangle there."""
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_manual_mesh_that_removes_a_triangle_no_side_changed_merges_in_psql_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """A manual mesh may drop a triangle of its region no side changed (the margin; an average of two meshings
+    moves such vertices: the random test): the version's row there, the base's, is closed as the Python merge
+    closes it (the psql merge read no such row of the instant before)."""
     _conflict_at_two(conn, series)
     region = tgsis.find_conflicts(conn, "e1")[0].regions[0]
     conn.commit()
@@ -672,14 +745,38 @@ def test_a_manual_mesh_that_removes_a_cell_no_side_changed_is_refused_by_name_in
     )
     tgsis.resolve_region(conn, "e1", series, 0, "manual", holed)
     conn.commit()
-    before = everything(conn)
+    assert_same_merge(conn, "e1", action)
+
+
+def test_rows_are_recorded_for_a_region_of_an_instant_and_refused_for_one_of_a_period(conn: Conn) -> None:
+    """Model 2: the Python client records an average's rows beside its .npz (the psql merge applies them). Model 3
+    (a geometry instant of a period): the .npz alone, and rows a psql user gives there are refused (TG100)."""
+    from tgsis.db.regions import _sql_rows
+
+    evolving = make_evolving(conn)
+    move3(conn, "e1", evolving, 1.0, NORTH, CHILD_SHIFT)
+    move3(conn, "DEFAULT", evolving, 1.0, NORTH, PARENT_SHIFT)
+    tgsis.find_conflicts(conn, "e1")
     conn.commit()
-    theirs, mine = both_merges(conn, "e1")
-    assert theirs[0] == "done", theirs
-    assert mine[:2] == ("refused", "TG302"), mine
-    assert f"rewrites or removes rows no side changed (region 0: cells {margin[0]})" in mine[2], mine[2]
-    assert "`tgsis version merge e1`" in mine[2], mine[2]
-    assert everything(conn) == before
+    state = tgsis.resolve_region(conn, "e1", evolving, 0, "average").state
+    conn.commit()
+    assert state is not None
+    recorded = conn.execute(
+        "SELECT timem IS NOT NULL, solution, solution_mesh IS NOT NULL, solution_vertex_ids IS NULL"
+        " FROM tgsis.conflict_regions WHERE objectkey = %s AND region = 0",
+        (str(evolving),),
+    ).fetchall()
+    assert recorded == [(True, "average", True, True)]
+    rows = _sql_rows(state)
+    assert rows is not None
+    with pytest.raises(psycopg.Error, match="geometry instant 1 of period") as err:
+        conn.execute(
+            "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
+            " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+            (str(evolving), tgsis.db.regions.state_to_npz(state), *rows),
+        )
+    assert err.value.sqlstate == "TG100"
+    conn.rollback()
 
 
 def test_a_whole_side_that_would_drop_the_other_sides_region_of_an_instant_is_refused_in_psql(

@@ -7,7 +7,9 @@
 -- the stored region of the object numbered on through its instants, times = the instant), the
 -- parent's elsewhere, the version's new ids as merge3 renumbers them. Returns, without writing
 -- anything, {"rows": [[kind, merged id, source state, id in that state, the cell's vertex ids in the
--- merged numbering or null], ...], "notes": [what each solution discards, as merge3's RegionDiscard]}
+-- merged numbering or null], ...; an average or manual solution's: [kind, id, 8, id, geometry texts,
+-- property texts]], "old": [the version's rows of ids no state changed that such a solution rewrites or
+-- removes], "notes": [what each solution discards, as merge3's RegionDiscard]}
 -- over the keys the states do not all hold alike (a row the source state lacks is left out: removed);
 -- the caller writes them by its (instant, id)-keyed difference. NULL when a conflicting region has no
 -- solution (or no regions are stored): the object stays unsolved. Refused (TG302, with p_refused and
@@ -150,20 +152,6 @@ BEGIN
     -- checked as tgsis.merge_mesh_by_region checks them (TG302 with p_refused, p_hint)
     IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.src = 8) THEN
         PERFORM tgsis.merge_solution_rows(p_geoid, v_id, p_refused, p_hint);
-        -- a row of the instant no state changed that a solution rewrites or removes (a margin row): its row in the
-        -- version is not among the rows tgsis.merge_instants_by_slice read, so it is refused rather than left as is
-        SELECT string_agg(format('region %s: %s %s', q.region, q.what, tgsis.merge_ids_text(q.ids)), '; ' ORDER BY q.region, q.what)
-          INTO v_why
-          FROM (SELECT s.region, 'vertices' AS what, array_agg(s.id::text ORDER BY s.id) AS ids FROM pg_temp.tgsis_mw_sv s
-                 WHERE s.inside AND NOT s.changed AND s.based GROUP BY s.region
-                UNION ALL
-                SELECT s.region, 'cells', array_agg(s.id::text ORDER BY s.id) FROM pg_temp.tgsis_mw_sc s
-                 WHERE s.inside AND NOT s.changed AND s.based GROUP BY s.region) AS q;
-        IF v_why IS NOT NULL THEN
-            RAISE EXCEPTION '%: the solution at instant % rewrites or removes rows no side changed (%): the psql merge of an instant does not write those',
-                    p_refused, p_times, v_why
-                USING ERRCODE = 'TG302', HINT = p_hint;
-        END IF;
         UPDATE pg_temp.tgsis_mw_v n SET present = false, x = NULL, y = NULL, z = NULL, val = NULL, ref = NULL WHERE n.src = 8;
         UPDATE pg_temp.tgsis_mw_c n SET present = false, v = NULL, val = NULL, part = NULL WHERE n.src = 8;
         DELETE FROM pg_temp.tgsis_mw_v n USING pg_temp.tgsis_mw_sv s WHERE s.id = n.id;
@@ -203,8 +191,11 @@ BEGIN
         DELETE FROM pg_temp.tgsis_mi_notes t WHERE t.nv = 0 AND t.nc = 0;
     END IF;
     IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sv') IS NULL THEN  -- (no such solution: none of their rows)
-        CREATE TEMPORARY TABLE tgsis_mw_sv (id bigint, x float8, y float8, z float8, w text[]) ON COMMIT DROP;
-        CREATE TEMPORARY TABLE tgsis_mw_sc (id bigint, w text[]) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mw_sv (id bigint, x float8, y float8, z float8, w text[], inside boolean,
+                                            changed boolean, based boolean, gone boolean, b_x float8, b_y float8,
+                                            b_z float8, val text, bval text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mw_sc (id bigint, v bigint[], w text[], inside boolean, changed boolean,
+                                            based boolean, gone boolean, bv bigint[], val text, bval text) ON COMMIT DROP;
     END IF;
     -- merge3's validity check of the merged instant (as the Python merge checks every slice it merges)
     PERFORM tgsis.merge_mesh_validity(
@@ -245,6 +236,21 @@ BEGIN
                                              SELECT 'c', n.id, n.v::text[], s.w
                                                FROM pg_temp.tgsis_mw_c n JOIN pg_temp.tgsis_mw_sc s ON s.id = n.id
                                               WHERE n.src = 8 AND n.present) AS q), '[]'),
+               -- the rows of the instant no state changed that a solution rewrites or removes (a margin row): the
+               -- version's row is the base's, which tgsis.merge_instants_by_slice did not read: [kind, id, its
+               -- geometry bits, its property bits when the solution's values are the base's (else null: rewritten)]
+               'old', coalesce((SELECT jsonb_agg(jsonb_build_array(q.kind, q.id, q.g, q.p) ORDER BY q.kind DESC, q.id)
+                                  FROM (SELECT 'v' AS kind, s.id, ARRAY[s.b_x::text, s.b_y::text, s.b_z::text]::text AS g,
+                                               CASE WHEN s.val IS NOT DISTINCT FROM s.bval AND NOT s.gone
+                                                    THEN ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(s.w) WITH ORDINALITY AS u(e, o)
+                                                                ORDER BY u.o)::text END AS p
+                                          FROM pg_temp.tgsis_mw_sv s WHERE s.inside AND NOT s.changed AND s.based
+                                        UNION ALL
+                                        SELECT 'c', s.id, s.bv::text,
+                                               CASE WHEN s.val IS NOT DISTINCT FROM s.bval AND NOT s.gone
+                                                    THEN ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(s.w) WITH ORDINALITY AS u(e, o)
+                                                                ORDER BY u.o)::text END
+                                          FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based) AS q), '[]'),
                'notes', coalesce((SELECT jsonb_agg(format('region %s at instant %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
                                                           n.number, p_times, n.solution, n.side, n.nv, n.nc, tgsis.merge_number_text(n.d))
                                                    ORDER BY n.number, n.o)

@@ -312,6 +312,10 @@ BEGIN
                                 AND a.attnum > 0 AND NOT a.attisdropped
                                 AND a.attname NOT IN ('_geoid', '_times', '_idx')) AS n
          WHERE x ->> 2 = '8';
+        -- and the version's rows (the base's) of the ids no state changed that such a solution rewrites or removes
+        INSERT INTO pg_temp.tgsis_ms_el (kind, st, t, id, gbits, pbits, nulls)
+        SELECT x ->> 0, 4, v_t, (x ->> 1)::bigint, x ->> 2, x ->> 3, NULL
+          FROM jsonb_array_elements(coalesce(v_plan -> 'old', '[]')) AS x;
         IF v_count <> (SELECT count(*) FROM jsonb_array_elements(v_plan -> 'rows') AS x WHERE x ->> 2 <> '8') THEN
             -- (both read the keys that changed: never)
             RAISE EXCEPTION '%: the merged rows of instant % are not among the rows read', v_refused, v_t
