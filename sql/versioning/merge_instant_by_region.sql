@@ -197,11 +197,15 @@ BEGIN
         CREATE TEMPORARY TABLE tgsis_mw_sc (id bigint, v bigint[], w text[], inside boolean, changed boolean,
                                             based boolean, gone boolean, bv bigint[], val text, bval text) ON COMMIT DROP;
     END IF;
-    -- merge3's validity check of the merged instant (as the Python merge checks every slice it merges)
+    -- merge3's validity check of the merged instant, where a solution's rows can re-mesh it (the Python merge checks
+    -- every slice it merges; regions taken each from one side, or parent/child/base solutions, cannot break it: a
+    -- cell on a vertex the other side removed, or two new cells on the same vertices, join their regions)
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.src = 8) THEN
     PERFORM tgsis.merge_mesh_validity(
         format('feature %s of class %s, instant %s', p_geoid, (SELECT i.classname FROM pg_temp.tgsis_mr_info i),
                CASE WHEN p_times::text ~ '^-?[0-9]+$' THEN p_times::text || '.0' ELSE p_times::text END),
         3, 'triangle', 'times_trgl', p_geoid, (SELECT i.base FROM pg_temp.tgsis_mr_info i), p_refused, p_hint);
+    END IF;
 
     -- the merged rows of the keys the states do not all hold alike: per id its region's source (a row the source
     -- lacks is no row), the parent's outside every region; a version's row under its merged id (renumbered)
