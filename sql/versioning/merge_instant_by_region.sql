@@ -4,6 +4,7 @@
 -- tgsis.mesh_merge_work's on that instant's rows (the same as merge3's), and the merged state is,
 -- per region, the rows of the side that changed it (a region both changed alike: the parent's), a
 -- conflicting one the rows of the solution tgsis.resolve_region recorded for it (parent, child, base;
+-- average, manual: the rows recorded with it, tgsis.merge_solution_rows;
 -- the stored region of the object numbered on through its instants, times = the instant), the
 -- parent's elsewhere, the version's new ids as merge3 renumbers them. Returns, without writing
 -- anything, {"rows": [[kind, merged id, source state, id in that state, the cell's vertex ids in the
@@ -13,8 +14,9 @@
 -- over the keys the states do not all hold alike (a row the source state lacks is left out: removed);
 -- the caller writes them by its (instant, id)-keyed difference. NULL when a conflicting region has no
 -- solution (or no regions are stored): the object stays unsolved. Refused (TG302, with p_refused and
--- p_hint) when the stored regions of the instant are not its regions of now, or a region is solved
--- average or manual (the Python client applies those). The work tables are made in a subtransaction
+-- p_hint) when the stored regions of the instant are not its regions of now, a region is solved
+-- average or manual with its .npz only (the Python client applies those), its recorded rows are refused
+-- by tgsis.merge_solution_rows, or the merged instant is not valid (tgsis.merge_mesh_validity). The work tables are made in a subtransaction
 -- rolled back before it returns: neither they nor their locks outlive the call.
 -- extra_float_digits is pinned: floats go through jsonb as their exact text.
 CREATE FUNCTION tgsis.merge_instant_by_region(p_version text, p_geoid bigint, p_times float8, p_refused text, p_hint text)
@@ -274,7 +276,7 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_instant_by_region(text, bigint, float8, text, text) IS
-    'the merged rows of one instant of a model-2 feature both sides changed, by region (tgsis.mesh_merge_work on that instant; the solutions recorded for its conflicting regions), as jsonb {rows, notes} for tgsis.merge_instants_by_slice to write; NULL when a conflicting region has no solution; TG302 for stale stored regions or an average or manual solution';
+    'the merged rows of one instant of a model-2 feature both sides changed, by region (tgsis.mesh_merge_work on that instant; the solutions recorded for its conflicting regions), as jsonb {rows, notes} for tgsis.merge_instants_by_slice to write; NULL when a conflicting region has no solution; TG302 for stale stored regions, an average or manual solution recorded with its .npz only or whose rows are refused, an invalid merged instant';
 
 -- internal to the merges: reached only through the SECURITY DEFINER merge and refresh, as their owner; not
 -- executable by PUBLIC (tests/test_function_grants.py)
