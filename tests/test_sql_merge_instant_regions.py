@@ -748,6 +748,42 @@ def test_a_manual_mesh_that_removes_a_triangle_no_side_changed_merges_in_psql_as
     assert_same_merge(conn, "e1", action)
 
 
+def test_session_settings_do_not_change_what_a_manual_solution_of_an_instant_writes(conn: Conn, series: int) -> None:
+    """Coordinates with digits beyond 15 and a third as a value, recorded and merged under extra_float_digits = -15,
+    another DateStyle and an empty search_path: the psql merge writes the bits the Python merge writes."""
+    _conflict_at_two(conn, series)
+    region = tgsis.find_conflicts(conn, "e1")[0].regions[0]
+    conn.commit()
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    at = np.isin(state.vertex_ids, region.vertex_ids)
+    xyz = np.array(state.vertices, dtype=np.float64)
+    xyz[at, 2] += 0.1 + 1e-13  # digits beyond 15
+    values = {}
+    for k, v in state.vertex_properties.items():
+        values[k] = np.array(v, dtype=np.float64)
+        values[k][at] = 1 / 3
+    manual = dataclasses.replace(state, vertices=xyz, vertex_properties=values)
+    conn.execute("SET extra_float_digits = -15")  # the recording too
+    tgsis.resolve_region(conn, "e1", series, 0, "manual", manual)
+    conn.commit()
+    conn.execute("RESET ALL")
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    conn.execute("SET extra_float_digits = -15")
+    conn.execute("SET DateStyle = 'SQL, DMY'")
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert theirs[0] == "done" and mine[0] == "done", (theirs[:2], mine[:3])
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
 def test_rows_are_recorded_for_a_region_of_an_instant_and_refused_for_one_of_a_period(conn: Conn) -> None:
     """Model 2: the Python client records an average's rows beside its .npz (the psql merge applies them). Model 3
     (a geometry instant of a period): the .npz alone, and rows a psql user gives there are refused (TG100)."""

@@ -446,6 +446,7 @@ def _solutions_of(
                 " FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
                 " AND objectkey = %s AND solution_mesh IS NOT NULL",
                 (versionid, objectclass, objectkey),
+                binary=True,  # the float8 rows bit for bit, whatever the session's extra_float_digits
             ).fetchall()
         }
     solutions: dict[int, str | MeshState] = {}
