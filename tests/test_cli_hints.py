@@ -94,8 +94,7 @@ def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
     assert foreign_terms("pass porosity=0.2") == ["porosity="]
     slice_rows = (
         "give the mesh alone (the sixth argument) and merge with `tgsis version merge 'north edit'` or "
-        'tgsis.merge_version(conn, "north edit") in Python; the psql merge applies only parent, child or base to a '
-        "region of a slice"
+        'tgsis.merge_version(conn, "north edit") in Python'
     )
     assert to_cli(slice_rows) == "give --mesh FILE, then tgsis version merge 'north edit'"
 

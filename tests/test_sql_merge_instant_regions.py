@@ -12,17 +12,28 @@ included; an object-level conflict has no regions either way.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from typing import Any
 
+import numpy as np
 import psycopg
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import tgsis
 from tests.merge_data import SIDE
-from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, make_series, move
+from tests.test_merge_instants import (
+    CHILD_SHIFT,
+    NORTH,
+    PARENT_SHIFT,
+    SOUTH,
+    make_evolving,
+    make_series,
+    move,
+    move3,
+)
 from tests.test_sql_merge_slices import _new_surface, _sql
 from tests.test_sql_merge_write import _outcome, assert_same_merge, both_merges, everything, solve
 
@@ -497,20 +508,311 @@ def test_random_edits_of_both_sides_merge_in_psql_exactly_as_in_python(
             assert mine[2][table] == theirs[2][table], table
 
 
-def test_an_average_solution_of_a_region_of_an_instant_is_refused_by_name_in_psql(conn: Conn, series: int) -> None:
-    """The Python client records an average for a region of an instant (its .npz alone): the psql merge does not
-    apply it (TG302, nothing written, the hint naming the command that does); the Python merge does."""
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    plan=st.lists(
+        st.tuples(_wedit, st.integers(0, SIDE * (SIDE - 1) - 2), _wedit, st.integers(0, SIDE * (SIDE - 1) - 2)),
+        min_size=3,
+        max_size=3,
+    ),
+    action=st.sampled_from(["merge", "refresh"]),
+)
+@example(plan=[("move", 0, "move", 0), ("move", 0, "move", 0), ("move", 1, "cells", 0)], action="merge")
+def test_random_edits_of_both_sides_solved_average_merge_in_psql_exactly_as_in_python(
+    conn: Conn, plan: list[tuple[str, int, str, int]], action: str
+) -> None:
+    """As the random test above, every conflicting region solved ``average`` by the Python client (its rows
+    recorded): the psql merge writes what the Python merge writes, or refuses what it refuses."""
+    if not conn.execute("SELECT 1 FROM tgsis.catalog WHERE classname = 'horizons'").fetchone():
+        conn.rollback()
+        make_series(conn)
+    conn.rollback()
+    geoid = int(conn.execute("SELECT geoid FROM tgsis.geometry ORDER BY geoid LIMIT 1").fetchone()[0])  # type: ignore[index]
+    n = next(_versions)
+    version = f"m{n}"
+    tgsis.create_version(conn, version)
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        times = [
+            float(r[0]) for r in conn.execute("SELECT times FROM tgsis.times WHERE geoid = %s ORDER BY 1", (geoid,))
+        ]
+        used = conn.execute(
+            "SELECT 1 FROM tgsis.times_vrtx WHERE geoid = %s AND vrtxid = 1000 LIMIT 1", (geoid,)
+        ).fetchone()
+    conn.commit()
+    for t, (pedit, pfirst, cedit, cfirst) in zip(times, plan, strict=False):
+        if used:  # (an earlier example added vertex 1000 in DEFAULT: adds are moves from then on)
+            pedit, cedit = ("move" if e == "add" else e for e in (pedit, cedit))
+        _apply_both(conn, "DEFAULT", geoid, t, pedit, pfirst, 1.0 + n / 8.0)
+        _apply_both(conn, version, geoid, t, cedit, cfirst, -0.5 - n / 8.0)
+    conflicts = tgsis.find_conflicts(conn, version)
+    conn.commit()
+    if not any(r.conflict for c in conflicts for r in c.regions):
+        return  # (no conflicting region: nothing to average)
+    try:
+        tgsis.resolve_all_regions(conn, version, geoid, "average")
+    except (tgsis.RegionSolutionError, tgsis.InvalidInputError):
+        # (no average shape of these patches, or merge3 refuses the averaged rows: nothing recorded, nothing to merge)
+        conn.rollback()
+        return
+    conn.commit()
+    theirs, mine = both_merges(conn, version, action)
+    assert mine[:2] == theirs[:2] or (theirs[0] == mine[0] == "refused"), (
+        theirs[:2],
+        mine[:2],
+        [x[2] for x in (theirs, mine) if x[0] == "refused"],
+    )
+    if theirs[0] == "done":
+        for table in theirs[2]:
+            assert mine[2][table] == theirs[2][table], table
+
+
+def _conflict_at_two(conn: Conn, series: int) -> None:
+    """Both sides move overlapping blocks of instant 2 (a conflict), the parent also a block apart there."""
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
     tgsis.find_conflicts(conn, "e1")
     conn.commit()
+
+
+def _instant_rows_recorded(conn: Conn, series: int) -> list[tuple[Any, ...]]:
+    return conn.execute(
+        "SELECT region, times, solution, cardinality(solution_vertex_ids) FROM tgsis.conflict_regions"
+        " WHERE versionid = tgsis.version_id('e1') AND objectkey = %s AND solution IN ('average', 'manual')",
+        (str(series),),
+    ).fetchall()
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_an_average_solution_of_a_region_of_an_instant_merges_in_psql_exactly_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """The Python client records an average for a region of an instant with its rows (was: the .npz alone, the
+    psql merge refused it TG302): the psql merge applies them as the Python merge applies the .npz."""
+    _conflict_at_two(conn, series)
+    resolution = tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.commit()
+    assert resolution.state is not None
+    ((region, times, solution, nv),) = _instant_rows_recorded(conn, series)
+    assert (region, times, solution) == (0, 2.0, "average") and nv == len(resolution.state.vertex_ids)
+    conn.commit()
+    assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_manual_mesh_of_a_region_of_an_instant_merges_in_psql_exactly_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """A manual mesh of the region: its average (not recorded), one vertex lifted 3 m further."""
+    _conflict_at_two(conn, series)
+    average = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert average is not None
+    xyz = np.array(average.vertices, dtype=np.float64)
+    xyz[0, 2] += 3.0
+    manual = dataclasses.replace(average, vertices=xyz)
+    tgsis.resolve_region(conn, "e1", series, 0, "manual", manual)
+    conn.commit()
+    assert [r[2] for r in _instant_rows_recorded(conn, series)] == ["manual"]
+    assert_same_merge(conn, "e1", action)
+
+
+def test_an_average_of_an_instant_recorded_with_its_npz_only_is_refused_by_name_in_psql(
+    conn: Conn, series: int
+) -> None:
+    """An average recorded before its rows were taken (the .npz alone): the psql merge does not apply it (TG302,
+    nothing written, the hint naming the command that does); the Python merge does."""
+    _conflict_at_two(conn, series)
     tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.execute(
+        "UPDATE tgsis.conflict_regions SET solution_vertex_ids = NULL, solution_vertices = NULL, solution_cell_ids = NULL,"
+        " solution_cells = NULL, solution_vertex_columns = NULL, solution_vertex_values = NULL,"
+        " solution_cell_columns = NULL, solution_cell_values = NULL WHERE versionid = tgsis.version_id('e1')"
+    )
     conn.commit()
     theirs, mine = both_merges(conn, "e1")
     assert theirs[0] == "done", theirs
     assert mine[:2] == ("refused", "TG302"), mine
-    assert "region 0 at instant 2 solved average" in mine[2], mine[2]
+    assert "region 0 at instant 2 solved average with its mesh only" in mine[2], mine[2]
     assert "`tgsis version merge e1`" in mine[2], mine[2]
+
+
+@pytest.mark.parametrize("solution", ["average", "manual"])
+def test_psql_is_told_what_an_average_or_manual_solution_of_an_instant_discards_as_python_says_it(
+    conn: Conn, series: int, solution: str
+) -> None:
+    _conflict_at_two(conn, series)
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    assert state is not None
+    if solution == "manual":  # the average, one vertex put back where the parent has it
+        conn.rollback()
+        xyz = np.array(state.vertices, dtype=np.float64)
+        xyz[0, 2] -= 1.0
+        tgsis.resolve_region(conn, "e1", series, 0, "manual", dataclasses.replace(state, vertices=xyz))
+    conn.commit()
+    with conn.transaction(force_rollback=True):
+        (merged,) = tgsis.merge_version(conn, "e1").objects
+    expected = [
+        f"region {d.region} at instant 2: {d.solution} discards the {d.side}'s edit there: {d.vertices} vertices,"
+        f" {d.cells} cells, largest displacement {d.max_displacement:.6g}"
+        for d in merged.discards
+    ]
+    assert {d.side for d in merged.discards} == {"parent", "child"}
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    with conn.transaction(force_rollback=True):
+        conn.execute("SELECT tgsis.merge_version('e1')")
+    said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {series} of version 'e1': region")]
+    assert said == expected
+
+
+def test_after_pg_dump_and_restore_an_average_of_an_instant_merges_in_psql_as_in_python(
+    conn: Conn, series: int, pg: Any, db_dsn: str, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    _conflict_at_two(conn, series)
+    tgsis.resolve_region(conn, "e1", series, 0, "average")
+    conn.commit()
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
+        assert_same_merge(restored, "e1")
+
+
+def _record_in_sql(conn: Conn, series: int, state: Any) -> None:
+    """Record a manual state of region 0 as a psql user may, with its .npz and rows (no check of the Python client's)."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    rows = _sql_rows(state)
+    assert rows is not None
+    conn.execute(
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(series), state_to_npz(state), *rows),
+    )
+    conn.commit()
+
+
+def test_a_manual_mesh_that_makes_an_invalid_instant_is_refused_in_psql_as_in_python(conn: Conn, series: int) -> None:
+    """A manual mesh recorded from psql with a second triangle on the vertices of one of its triangles: merge3's
+    validity check refuses the merged instant in Python; the psql merge refuses it too (TG302), naming the same
+    vertices, nothing written (it ran no validity check of an instant before)."""
+    _conflict_at_two(conn, series)
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    twin = int(state.cell_ids.max()) + 1000
+    broken = dataclasses.replace(
+        state,
+        cell_ids=np.append(state.cell_ids, twin),
+        cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
+        cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
+    )
+    _record_in_sql(conn, series, broken)
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "refused" and mine[:2] == ("refused", "TG302"), (theirs, mine)
+    key = ", ".join(str(v) for v in sorted(state.cells[0].tolist()))
+    for said in (theirs[2], mine[2]):
+        assert "invalid merge" in said and "duplicated triangles" in said and f"({key})" in said, said
+    assert everything(conn) == before
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_manual_mesh_that_removes_a_triangle_no_side_changed_merges_in_psql_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """A manual mesh may drop a triangle of its region no side changed (the margin; an average of two meshings
+    moves such vertices: the random test): the version's row there, the base's, is closed as the Python merge
+    closes it (the psql merge read no such row of the instant before)."""
+    _conflict_at_two(conn, series)
+    region = tgsis.find_conflicts(conn, "e1")[0].regions[0]
+    conn.commit()
+    margin = np.setdiff1d(region.cell_ids, np.union1d(region.parent_cell_ids, region.child_cell_ids))
+    assert len(margin)
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    keep = state.cell_ids != margin[0]
+    holed = dataclasses.replace(
+        state,
+        cell_ids=state.cell_ids[keep],
+        cells=state.cells[keep],
+        cell_properties={k: np.asarray(v)[keep] for k, v in state.cell_properties.items()},
+    )
+    tgsis.resolve_region(conn, "e1", series, 0, "manual", holed)
+    conn.commit()
+    assert_same_merge(conn, "e1", action)
+
+
+def test_session_settings_do_not_change_what_a_manual_solution_of_an_instant_writes(conn: Conn, series: int) -> None:
+    """Coordinates with digits beyond 15 and a third as a value, recorded and merged under extra_float_digits = -15,
+    another DateStyle and an empty search_path: the psql merge writes the bits the Python merge writes."""
+    _conflict_at_two(conn, series)
+    region = tgsis.find_conflicts(conn, "e1")[0].regions[0]
+    conn.commit()
+    state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    at = np.isin(state.vertex_ids, region.vertex_ids)
+    xyz = np.array(state.vertices, dtype=np.float64)
+    xyz[at, 2] += 0.1 + 1e-13  # digits beyond 15
+    values = {}
+    for k, v in state.vertex_properties.items():
+        values[k] = np.array(v, dtype=np.float64)
+        values[k][at] = 1 / 3
+    manual = dataclasses.replace(state, vertices=xyz, vertex_properties=values)
+    conn.execute("SET extra_float_digits = -15")  # the recording too
+    tgsis.resolve_region(conn, "e1", series, 0, "manual", manual)
+    conn.commit()
+    conn.execute("RESET ALL")
+    conn.commit()
+    theirs, _ = both_merges(conn, "e1")
+    conn.execute("SET extra_float_digits = -15")
+    conn.execute("SET DateStyle = 'SQL, DMY'")
+    conn.execute("SET search_path = ''")
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert theirs[0] == "done" and mine[0] == "done", (theirs[:2], mine[:3])
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
+def test_rows_are_recorded_for_a_region_of_an_instant_and_refused_for_one_of_a_period(conn: Conn) -> None:
+    """Model 2: the Python client records an average's rows beside its .npz (the psql merge applies them). Model 3
+    (a geometry instant of a period): the .npz alone, and rows a psql user gives there are refused (TG100)."""
+    from tgsis.db.regions import _sql_rows
+
+    evolving = make_evolving(conn)
+    move3(conn, "e1", evolving, 1.0, NORTH, CHILD_SHIFT)
+    move3(conn, "DEFAULT", evolving, 1.0, NORTH, PARENT_SHIFT)
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    state = tgsis.resolve_region(conn, "e1", evolving, 0, "average").state
+    conn.commit()
+    assert state is not None
+    recorded = conn.execute(
+        "SELECT timem IS NOT NULL, solution, solution_mesh IS NOT NULL, solution_vertex_ids IS NULL"
+        " FROM tgsis.conflict_regions WHERE objectkey = %s AND region = 0",
+        (str(evolving),),
+    ).fetchall()
+    assert recorded == [(True, "average", True, True)]
+    rows = _sql_rows(state)
+    assert rows is not None
+    with pytest.raises(psycopg.Error, match="geometry instant 1 of period") as err:
+        conn.execute(
+            "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
+            " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+            (str(evolving), tgsis.db.regions.state_to_npz(state), *rows),
+        )
+    assert err.value.sqlstate == "TG100"
+    conn.rollback()
 
 
 def test_a_whole_side_that_would_drop_the_other_sides_region_of_an_instant_is_refused_in_psql(

@@ -355,11 +355,10 @@ def test_a_class_without_any_property(conn: Conn) -> None:
 # ---------------------------------------------------------------------------- solutions of a slice's region from psql
 
 
-def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_refused_by_name(conn: Conn) -> None:
+def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_taken_and_merges_as_in_python(conn: Conn) -> None:
     """A psql user records a manual mesh with its rows (as for a model-1 region) for a region of an instant: the
-    psql merge applies only parent, child and base solutions there (the Python client applies the .npz), so the
-    rows are refused in our SQLSTATE naming the instant, not by a raw check violation (23514); the .npz alone is
-    kept."""
+    rows are taken (they were refused TG100 while the psql merge applied only parent, child and base there), and
+    the psql merge applies them as the Python merge applies the .npz."""
     from tgsis.db.regions import _sql_rows, state_to_npz
 
     _class(conn)
@@ -377,26 +376,19 @@ def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_refused_by_name
     states = read_sliced_states(conn, "e1", geoid).states
     conn.rollback()
     child = states["child"].slices[(2.0,)]
-    before = everything(conn)
-    conn.commit()
-    with pytest.raises(psycopg.Error) as caught:
-        conn.execute(
-            "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s,"
-            " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
-            (str(geoid), region.region, state_to_npz(child), *(_sql_rows(child) or ())),
-        )
-    conn.rollback()
-    assert caught.value.sqlstate == "TG100", (caught.value.sqlstate, str(caught.value))
-    assert "instant 2" in str(caught.value), str(caught.value)
-    assert "psql" in (caught.value.diag.message_hint or ""), caught.value.diag.message_hint
-    assert everything(conn) == before
-    conn.commit()
-    # the .npz alone (what the Python client records for a slice's region) is taken
     conn.execute(
-        "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s)",
-        (str(geoid), region.region, state_to_npz(child)),
+        "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, 'manual', %s,"
+        " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(geoid), region.region, state_to_npz(child), *(_sql_rows(child) or ())),
     )
-    conn.rollback()
+    conn.commit()
+    (recorded,) = conn.execute(
+        "SELECT cardinality(solution_vertex_ids) FROM tgsis.conflict_regions WHERE objectkey = %s AND region = %s",
+        (str(geoid), region.region),
+    ).fetchone() or (None,)
+    assert recorded == len(child.vertex_ids)
+    conn.commit()
+    assert_same_merge(conn, "e1")
 
 
 # ---------------------------------------------------------------------------- negative ids

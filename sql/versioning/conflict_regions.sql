@@ -55,11 +55,12 @@ CREATE TABLE tgsis.conflict_regions (
     CONSTRAINT conflict_regions_mesh CHECK ((solution_mesh IS NOT NULL) = (solution IN ('average', 'manual'))),
     CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL)),
     CONSTRAINT conflict_regions_slice CHECK (timem IS NULL OR times IS NOT NULL),
-    -- the rows are all given or none, only with the .npz, each array of its rows' size
+    -- the rows are all given or none, only with the .npz and not for a model-3 period (the psql merge does not
+    -- apply them there), each array of its rows' size
     CONSTRAINT conflict_regions_rows CHECK (
         num_nulls(solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells, solution_vertex_columns,
                   solution_vertex_values, solution_cell_columns, solution_cell_values) IN (0, 8)
-        AND (solution_vertex_ids IS NULL OR (solution_mesh IS NOT NULL AND times IS NULL
+        AND (solution_vertex_ids IS NULL OR (solution_mesh IS NOT NULL AND timem IS NULL
              AND cardinality(solution_vertices) = 3 * cardinality(solution_vertex_ids)
              AND cardinality(solution_cells) % greatest(cardinality(solution_cell_ids), 1) = 0
              AND cardinality(solution_vertex_values)
@@ -103,7 +104,7 @@ COMMENT ON COLUMN tgsis.conflict_regions.solution_mesh IS 'average and manual: t
 COMMENT ON COLUMN tgsis.conflict_regions.solved_at IS 'when the solution was recorded';
 COMMENT ON COLUMN tgsis.conflict_regions.solved_by IS 'role that recorded it';
 COMMENT ON COLUMN tgsis.conflict_regions.times IS 'the slice of a temporal surface the region lies in: the instant (tgsis.times, model 2) or the geometry instant (tgsis.timet, model 3); NULL for a model-1 mesh';
-COMMENT ON COLUMN tgsis.conflict_regions.solution_vertex_ids IS 'average and manual (model 1, recorded by the Python client): the vertex ids of the solution''s rows (those of solution_mesh), ascending; NULL: the .npz only (the psql merge refuses it)';
+COMMENT ON COLUMN tgsis.conflict_regions.solution_vertex_ids IS 'average and manual (models 1 and 2, recorded by the Python client): the vertex ids of the solution''s rows (those of solution_mesh), ascending; NULL: the .npz only (the psql merge refuses it)';
 COMMENT ON COLUMN tgsis.conflict_regions.solution_vertices IS 'their coordinates, x, y, z per vertex in the order of solution_vertex_ids';
 COMMENT ON COLUMN tgsis.conflict_regions.solution_cell_ids IS 'the cell ids of the solution''s rows, ascending';
 COMMENT ON COLUMN tgsis.conflict_regions.solution_cells IS 'their vertex ids, k per cell in the order of solution_cell_ids';

@@ -4,17 +4,22 @@
 -- tgsis.mesh_merge_work's on that instant's rows (the same as merge3's), and the merged state is,
 -- per region, the rows of the side that changed it (a region both changed alike: the parent's), a
 -- conflicting one the rows of the solution tgsis.resolve_region recorded for it (parent, child, base;
+-- average, manual: the rows recorded with it, tgsis.merge_solution_rows;
 -- the stored region of the object numbered on through its instants, times = the instant), the
 -- parent's elsewhere, the version's new ids as merge3 renumbers them. Returns, without writing
 -- anything, {"rows": [[kind, merged id, source state, id in that state, the cell's vertex ids in the
--- merged numbering or null], ...], "notes": [what each solution discards, as merge3's RegionDiscard]}
+-- merged numbering or null], ...; an average or manual solution's: [kind, id, 8, id, geometry texts,
+-- property texts]], "old": [the version's rows of ids no state changed that such a solution rewrites or
+-- removes], "notes": [what each solution discards, as merge3's RegionDiscard]}
 -- over the keys the states do not all hold alike (a row the source state lacks is left out: removed);
 -- the caller writes them by its (instant, id)-keyed difference. NULL when a conflicting region has no
 -- solution (or no regions are stored): the object stays unsolved. Refused (TG302, with p_refused and
--- p_hint) when the stored regions of the instant are not its regions of now, or a region is solved
--- average or manual (the Python client applies those); TG302 too (the engine's reason and hint) when the
--- instant does not merge by region (tgsis.mesh_merge_work's TG100: the version's new ids cannot be
--- renumbered within bigint), as the Python merge refuses it. The work tables are made in a subtransaction
+-- p_hint) when the stored regions of the instant are not its regions of now, a region is solved
+-- average or manual with its .npz only (the Python client applies those), its recorded rows are refused
+-- by tgsis.merge_solution_rows, or the merged instant is not valid (tgsis.merge_mesh_validity); TG302
+-- too (the engine's reason and hint) when the instant does not merge by region (tgsis.mesh_merge_work's
+-- TG100: the version's new ids cannot be renumbered within bigint), as the Python merge refuses it. The
+-- work tables are made in a subtransaction
 -- rolled back before it returns: neither they nor their locks outlive the call.
 -- extra_float_digits is pinned: floats go through jsonb as their exact text.
 CREATE FUNCTION tgsis.merge_instant_by_region(p_version text, p_geoid bigint, p_times float8, p_refused text, p_hint text)
@@ -61,12 +66,14 @@ BEGIN
       LEFT JOIN pg_temp.tgsis_mr_vx vx ON n.kind = 'v' AND vx.id = n.id
       LEFT JOIN pg_temp.tgsis_mr_cx cx ON n.kind = 'c' AND cx.id = n.id;
     CREATE TEMPORARY TABLE tgsis_mi_region ON COMMIT DROP AS
-    SELECT f.*, v_first + f.region AS number, r.solution,
+    SELECT f.*, v_first + f.region AS number, r.solution, r.solution_vertex_ids IS NOT NULL AS has_rows,
            coalesce(r.vertex_ids = f.vertex_ids AND r.cell_ids = f.cell_ids AND r.parent_vertex_ids = f.pv
                     AND r.parent_cell_ids = f.pc AND r.child_vertex_ids = f.cv AND r.child_cell_ids = f.cc
                     AND r.conflict = f.conflict, false) AS holds,
            CASE WHEN NOT f.conflict THEN CASE WHEN f.has_c AND NOT f.has_p THEN 4 ELSE 2 END
                 WHEN r.solution = 'parent' THEN 2 WHEN r.solution = 'child' THEN 4 WHEN r.solution = 'base' THEN 1
+                -- average, manual: the rows recorded with the solution (tgsis.merge_solution_rows)
+                WHEN r.solution IN ('average', 'manual') AND r.solution_vertex_ids IS NOT NULL THEN 8
            END::smallint AS src
       FROM (SELECT d.region, bool_or(d.p_changed) AND bool_or(d.c_changed) AND bool_or(d.differ) AS conflict,
                    bool_or(d.p_changed) AS has_p, bool_or(d.c_changed) AS has_c,
@@ -110,15 +117,107 @@ BEGIN
         END IF;
         SELECT string_agg(format('region %s at instant %s solved %s', g.number, p_times, g.solution), ', ' ORDER BY g.region)
           INTO v_why
-          FROM pg_temp.tgsis_mi_region g WHERE g.conflict AND g.solution IN ('average', 'manual');
-        IF v_why IS NOT NULL THEN
-            RAISE EXCEPTION '%: % (the Python client applies it)', p_refused, v_why
+          FROM pg_temp.tgsis_mi_region g WHERE g.conflict AND g.solution IN ('average', 'manual') AND NOT g.has_rows;
+        IF v_why IS NOT NULL THEN  -- (recorded with the .npz only: before its rows were taken, or by psql)
+            RAISE EXCEPTION '%: % with its mesh only (the Python client applies it)', p_refused, v_why
                 USING ERRCODE = 'TG302', HINT = p_hint;
         END IF;
         IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.conflict AND g.src IS NULL) THEN
             v_unsolved := true;  -- a conflicting region without a solution
             RAISE EXCEPTION 'tgsis_mi_done';
         END IF;
+    END IF;
+
+    -- what the whole-region solutions discard of each side (merge3's RegionDiscard)
+    CREATE TEMPORARY TABLE tgsis_mi_notes ON COMMIT DROP AS
+    SELECT g.number, s.o, g.solution, s.side, s.nv, s.nc, s.d
+      FROM pg_temp.tgsis_mi_region g
+     CROSS JOIN LATERAL (VALUES
+         (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
+                       CASE g.solution WHEN 'child' THEN g.cpc WHEN 'base' THEN g.bpc END,
+                       CASE g.solution WHEN 'child' THEN g.cpd WHEN 'base' THEN g.bpd END),
+         (2, 'child', CASE g.solution WHEN 'parent' THEN g.pcv WHEN 'base' THEN g.bcv END,
+                      CASE g.solution WHEN 'parent' THEN g.pcc WHEN 'base' THEN g.bcc END,
+                      CASE g.solution WHEN 'parent' THEN g.pcd WHEN 'base' THEN g.bcd END)) AS s (o, side, nv, nc, d)
+     WHERE g.conflict AND (s.nv > 0 OR s.nc > 0);
+    -- the merged state in the work tables of tgsis.merge_mesh_by_region (regions numbered in the object), which
+    -- tgsis.merge_solution_rows and tgsis.merge_mesh_validity read
+    CREATE TEMPORARY TABLE tgsis_mw_node ON COMMIT DROP AS
+    SELECT n.kind, n.id, v_first + n.region AS region, n.p_changed, n.c_changed, n.differ FROM pg_temp.tgsis_mi_node n;
+    CREATE TEMPORARY TABLE tgsis_mw_region ON COMMIT DROP AS
+    SELECT g.number AS region, g.conflict, g.src, g.solution, g.vertex_ids, g.cell_ids FROM pg_temp.tgsis_mi_region g;
+    CREATE TEMPORARY TABLE tgsis_mw_v ON COMMIT DROP AS
+    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.x, m.y, m.z, m.val, m.ref
+      FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_v m) AS k
+      LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
+                  WHERE n.kind = 'v') AS s ON s.id = k.id
+      LEFT JOIN pg_temp.tgsis_mr_v m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
+    CREATE TEMPORARY TABLE tgsis_mw_c ON COMMIT DROP AS
+    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.v, m.val, m.part
+      FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_c m) AS k
+      LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
+                  WHERE n.kind = 'c') AS s ON s.id = k.id
+      LEFT JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
+    IF pg_catalog.to_regclass('pg_temp.tgsis_mr_vb') IS NULL THEN  -- (not made when there is no region)
+        CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint, x float8, y float8, z float8) ON COMMIT DROP;
+    END IF;
+    -- the regions solved average or manual: their recorded rows (no row of theirs: removed), the new ids they add,
+    -- checked as tgsis.merge_mesh_by_region checks them (TG302 with p_refused, p_hint)
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.src = 8) THEN
+        PERFORM tgsis.merge_solution_rows(p_geoid, v_id, p_refused, p_hint);
+        UPDATE pg_temp.tgsis_mw_v n SET present = false, x = NULL, y = NULL, z = NULL, val = NULL, ref = NULL WHERE n.src = 8;
+        UPDATE pg_temp.tgsis_mw_c n SET present = false, v = NULL, val = NULL, part = NULL WHERE n.src = 8;
+        DELETE FROM pg_temp.tgsis_mw_v n USING pg_temp.tgsis_mw_sv s WHERE s.id = n.id;
+        DELETE FROM pg_temp.tgsis_mw_c n USING pg_temp.tgsis_mw_sc s WHERE s.id = n.id;
+        INSERT INTO pg_temp.tgsis_mw_v (id, src, present, x, y, z, val, ref)
+        SELECT s.id, 8, NOT s.gone, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
+        INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
+        SELECT s.id, 8, NOT s.gone, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
+        -- what they discard of each side (merge3's _discards, as tgsis.merge_mesh_by_region counts them)
+        INSERT INTO pg_temp.tgsis_mi_notes
+        SELECT g.region, s.o, g.solution, s.side,
+               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
+                  LEFT JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
+                  LEFT JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
+                 WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                   AND NOT coalesce(float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
+                                    AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
+                                    AND a.ref IS NOT DISTINCT FROM m.ref, a.id IS NULL AND m.id IS NULL)),
+               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
+                  LEFT JOIN pg_temp.tgsis_mr_c a ON a.id = n.id AND a.st = s.st
+                  LEFT JOIN pg_temp.tgsis_mw_c m ON m.id = n.id AND m.present
+                 WHERE n.region = g.region AND n.kind = 'c' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                   AND NOT coalesce(tgsis.oriented_cell_key(a.v) = tgsis.oriented_cell_key(m.v)
+                                    AND a.val IS NOT DISTINCT FROM m.val AND a.part IS NOT DISTINCT FROM m.part,
+                                    a.id IS NULL AND m.id IS NULL)),
+               coalesce((SELECT max(sqrt((a.x - m.x) * (a.x - m.x) + (a.y - m.y) * (a.y - m.y) + (a.z - m.z) * (a.z - m.z)))
+                           FROM pg_temp.tgsis_mw_node n
+                           JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
+                           JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
+                          WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
+                            AND NOT (float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
+                                     AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
+                                     AND a.ref IS NOT DISTINCT FROM m.ref)), 0)
+          FROM pg_temp.tgsis_mw_region g
+         CROSS JOIN (VALUES (1, 'parent', 2::smallint), (2, 'child', 4::smallint)) AS s (o, side, st)
+         WHERE g.conflict AND g.src = 8;
+        DELETE FROM pg_temp.tgsis_mi_notes t WHERE t.nv = 0 AND t.nc = 0;
+    END IF;
+    IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sv') IS NULL THEN  -- (no such solution: none of their rows)
+        CREATE TEMPORARY TABLE tgsis_mw_sv (id bigint, x float8, y float8, z float8, w text[], inside boolean,
+                                            changed boolean, based boolean, gone boolean, b_x float8, b_y float8,
+                                            b_z float8, val text, bval text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mw_sc (id bigint, v bigint[], w text[], inside boolean, changed boolean,
+                                            based boolean, gone boolean, bv bigint[], val text, bval text) ON COMMIT DROP;
+    END IF;
+    -- merge3's validity check of the merged instant, where a solution's rows can re-mesh it (the Python merge checks
+    -- every slice it merges; regions taken each from one side, or parent/child/base solutions, cannot break it: a
+    -- cell on a vertex the other side removed, or two new cells on the same vertices, join their regions)
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.src = 8) THEN
+    PERFORM tgsis.merge_mesh_validity(
+        format('feature %s of class %s, instant %s', p_geoid, (SELECT i.classname FROM pg_temp.tgsis_mr_info i),
+               CASE WHEN p_times::text ~ '^-?[0-9]+$' THEN p_times::text || '.0' ELSE p_times::text END),
+        3, 'triangle', 'times_trgl', p_geoid, (SELECT i.base FROM pg_temp.tgsis_mr_info i), p_refused, p_hint);
     END IF;
 
     -- the merged rows of the keys the states do not all hold alike: per id its region's source (a row the source
@@ -144,21 +243,35 @@ BEGIN
                                                                 JOIN pg_temp.tgsis_mi_region g USING (region)
                                                                WHERE n.kind = 'c') AS s ON s.id = m.id) AS k
                                            JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = k.src
-                                           LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = k.id) AS q), '[]'),
+                                           LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = k.id) AS q), '[]')
+                        -- the rows of average and manual solutions: [kind, id, 8, id, geometry texts, property texts]
+                        || coalesce((SELECT jsonb_agg(jsonb_build_array(q.kind, q.id, 8, q.id, q.g, q.w) ORDER BY q.kind DESC, q.id)
+                                       FROM (SELECT 'v' AS kind, n.id, ARRAY[s.x::text, s.y::text, s.z::text] AS g, s.w
+                                               FROM pg_temp.tgsis_mw_v n JOIN pg_temp.tgsis_mw_sv s ON s.id = n.id
+                                              WHERE n.src = 8 AND n.present
+                                             UNION ALL
+                                             SELECT 'c', n.id, n.v::text[], s.w
+                                               FROM pg_temp.tgsis_mw_c n JOIN pg_temp.tgsis_mw_sc s ON s.id = n.id
+                                              WHERE n.src = 8 AND n.present) AS q), '[]'),
+               -- the rows of the instant no state changed that a solution rewrites or removes (a margin row): the
+               -- version's row is the base's, which tgsis.merge_instants_by_slice did not read: [kind, id, its
+               -- geometry bits, its property bits when the solution's values are the base's (else null: rewritten)]
+               'old', coalesce((SELECT jsonb_agg(jsonb_build_array(q.kind, q.id, q.g, q.p) ORDER BY q.kind DESC, q.id)
+                                  FROM (SELECT 'v' AS kind, s.id, ARRAY[s.b_x::text, s.b_y::text, s.b_z::text]::text AS g,
+                                               CASE WHEN s.val IS NOT DISTINCT FROM s.bval AND NOT s.gone
+                                                    THEN ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(s.w) WITH ORDINALITY AS u(e, o)
+                                                                ORDER BY u.o)::text END AS p
+                                          FROM pg_temp.tgsis_mw_sv s WHERE s.inside AND NOT s.changed AND s.based
+                                        UNION ALL
+                                        SELECT 'c', s.id, s.bv::text,
+                                               CASE WHEN s.val IS NOT DISTINCT FROM s.bval AND NOT s.gone
+                                                    THEN ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(s.w) WITH ORDINALITY AS u(e, o)
+                                                                ORDER BY u.o)::text END
+                                          FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based) AS q), '[]'),
                'notes', coalesce((SELECT jsonb_agg(format('region %s at instant %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
                                                           n.number, p_times, n.solution, n.side, n.nv, n.nc, tgsis.merge_number_text(n.d))
                                                    ORDER BY n.number, n.o)
-                                    FROM (SELECT g.number, g.solution, s.o, s.side, s.nv, s.nc, s.d
-                                            FROM pg_temp.tgsis_mi_region g
-                                           CROSS JOIN LATERAL (VALUES
-                                               (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
-                                                             CASE g.solution WHEN 'child' THEN g.cpc WHEN 'base' THEN g.bpc END,
-                                                             CASE g.solution WHEN 'child' THEN g.cpd WHEN 'base' THEN g.bpd END),
-                                               (2, 'child', CASE g.solution WHEN 'parent' THEN g.pcv WHEN 'base' THEN g.bcv END,
-                                                            CASE g.solution WHEN 'parent' THEN g.pcc WHEN 'base' THEN g.bcc END,
-                                                            CASE g.solution WHEN 'parent' THEN g.pcd WHEN 'base' THEN g.bcd END))
-                                                AS s (o, side, nv, nc, d)
-                                          WHERE g.conflict AND (s.nv > 0 OR s.nc > 0)) AS n), '[]'))
+                                    FROM pg_temp.tgsis_mi_notes n), '[]'))
       INTO v_out;
     RAISE EXCEPTION 'tgsis_mi_done';  -- rolls the work tables and their locks back
     EXCEPTION WHEN raise_exception THEN
@@ -174,7 +287,7 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.merge_instant_by_region(text, bigint, float8, text, text) IS
-    'the merged rows of one instant of a model-2 feature both sides changed, by region (tgsis.mesh_merge_work on that instant; the solutions recorded for its conflicting regions), as jsonb {rows, notes} for tgsis.merge_instants_by_slice to write; NULL when a conflicting region has no solution; TG302 for stale stored regions or an average or manual solution';
+    'the merged rows of one instant of a model-2 feature both sides changed, by region (tgsis.mesh_merge_work on that instant; the solutions recorded for its conflicting regions), as jsonb {rows, notes} for tgsis.merge_instants_by_slice to write; NULL when a conflicting region has no solution; TG302 for stale stored regions, an average or manual solution recorded with its .npz only or whose rows are refused, an invalid merged instant';
 
 -- internal to the merges: reached only through the SECURITY DEFINER merge and refresh, as their owner; not
 -- executable by PUBLIC (tests/test_function_grants.py)

@@ -28,10 +28,12 @@
 -- other, added on both sides differently, a per-instant property changed on
 -- both sides, attributes changed on both sides, deleted on one side), and
 -- for a conflicting region of an instant without a solution: the merge's
--- refusal (TG302) follows. Refused (TG302, nothing written, the hint naming
--- `tgsis version merge NAME`) what only the Python client merges: a region
--- of an instant solved average or manual, stored regions that are not those
--- of now (tgsis.merge_instant_by_region).
+-- refusal (TG302) follows. A region solved average or manual takes the rows
+-- recorded with its solution (tgsis.merge_instant_by_region, st 8 here).
+-- Refused (TG302, nothing written, the hint naming
+-- `tgsis version merge NAME`) what only the Python client merges: such a
+-- solution recorded with its .npz only, stored regions that are not those
+-- of now, an invalid merged instant (tgsis.merge_instant_by_region).
 -- p_action 'regions' (tgsis.instants_merge_regions): the analysis alone, nothing written, no right
 -- to write asked: 0 with the instants classified in pg_temp.tgsis_ms_slice (the merged ones: in the three
 -- states and changed on a side), NULL for an object-level conflict.
@@ -294,7 +296,30 @@ BEGIN
           FROM jsonb_array_elements(v_plan -> 'rows') AS x
           JOIN pg_temp.tgsis_ms_el e ON e.kind = x ->> 0 AND e.st = (x ->> 2)::smallint AND e.t = v_t AND e.id = (x ->> 3)::bigint;
         GET DIAGNOSTICS v_count = ROW_COUNT;
-        IF v_count <> jsonb_array_length(v_plan -> 'rows') THEN  -- (both read the keys that changed: never)
+        -- the rows of an average or manual solution (st 8): their values as the plan gives them
+        INSERT INTO pg_temp.tgsis_ms_new (kind, st, t, id, gvals, gbits, pvals, pbits, nulls)
+        SELECT x ->> 0, 8, v_t, (x ->> 1)::bigint, g.g, g.g::text, p.p,
+               coalesce(ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(p.p) WITH ORDINALITY AS u(e, o) ORDER BY u.o)::text, n.nulls),
+               n.nulls
+          FROM jsonb_array_elements(v_plan -> 'rows') AS x
+         CROSS JOIN LATERAL (SELECT ARRAY(SELECT jsonb_array_elements_text(x -> 4)) AS g) AS g
+         CROSS JOIN LATERAL (SELECT CASE WHEN jsonb_typeof(x -> 5) = 'array'
+                                         THEN ARRAY(SELECT CASE WHEN jsonb_typeof(e) = 'null' THEN NULL ELSE e #>> '{}' END
+                                                      FROM jsonb_array_elements(x -> 5) WITH ORDINALITY AS u(e, o) ORDER BY u.o)
+                                    END AS p) AS p
+         CROSS JOIN LATERAL (SELECT coalesce(array_fill('NaN'::text, ARRAY[count(*)::integer])::text, '{}') AS nulls
+                               FROM pg_catalog.pg_attribute a, pg_temp.tgsis_ms_spec z
+                              WHERE z.tab = CASE x ->> 0 WHEN 'v' THEN 'vp' ELSE 'cp' END
+                                AND a.attrelid = format('%I.%I', (z.vt).schemaname, (z.vt).tablename)::regclass
+                                AND a.attnum > 0 AND NOT a.attisdropped
+                                AND a.attname NOT IN ('_geoid', '_times', '_idx')) AS n
+         WHERE x ->> 2 = '8';
+        -- and the version's rows (the base's) of the ids no state changed that such a solution rewrites or removes
+        INSERT INTO pg_temp.tgsis_ms_el (kind, st, t, id, gbits, pbits, nulls)
+        SELECT x ->> 0, 4, v_t, (x ->> 1)::bigint, x ->> 2, x ->> 3, NULL
+          FROM jsonb_array_elements(coalesce(v_plan -> 'old', '[]')) AS x;
+        IF v_count <> (SELECT count(*) FROM jsonb_array_elements(v_plan -> 'rows') AS x WHERE x ->> 2 <> '8') THEN
+            -- (both read the keys that changed: never)
             RAISE EXCEPTION '%: the merged rows of instant % are not among the rows read', v_refused, v_t
                 USING ERRCODE = 'XX000';
         END IF;
@@ -547,4 +572,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.merge_instants_by_slice(text, text, bigint) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.merge_instants_by_slice(text, text, bigint) IS
-    'merge one model-2 feature (a surface at instants) changed both in a version and in its parent instant by instant, in SQL, exactly as the Python merge does: an instant one side added, removed or alone changed taken from it, one the version changed merged by region (merge3: tgsis.merge_instant_by_region, the parent/child/base solutions of its conflicting regions), the merged instants written into the version by a difference keyed by (instant, id), the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict or an unsolved region (the merge refuses it), TG302 for what only the Python client merges (average or manual solutions); p_action regions: the analysis only; returns the rows written';
+    'merge one model-2 feature (a surface at instants) changed both in a version and in its parent instant by instant, in SQL, exactly as the Python merge does: an instant one side added, removed or alone changed taken from it, one the version changed merged by region (merge3: tgsis.merge_instant_by_region, the parent/child/base/average/manual solutions of its conflicting regions), the merged instants written into the version by a difference keyed by (instant, id), the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict or an unsolved region (the merge refuses it), TG302 for what only the Python client merges (average or manual solutions recorded with their .npz only); p_action regions: the analysis only; returns the rows written';

@@ -15,7 +15,9 @@
 -- state leaves so. The cells on near vertices are the work tables' rows and,
 -- for the cells no state changed, the base's rows (one pass over its cells,
 -- the vertex columns probed in the few near vertices). TG302 with p_refused
--- and p_hint; nothing is written before.
+-- and p_hint; nothing is written before. For an instant of a surface at
+-- instants (tgsis.merge_instant_by_region: p_table times_trgl, the work
+-- tables of that instant) the base's cells of that instant.
 CREATE FUNCTION tgsis.merge_mesh_validity(p_name text, p_k integer, p_word text, p_table text, p_geoid bigint,
                                           p_base integer[], p_refused text, p_hint text)
 RETURNS void
@@ -78,15 +80,18 @@ BEGIN
                     SELECT s.st, c.id, c.v
                       FROM (SELECT v.%1$I AS id, %2$s AS v FROM %3$s v
                              WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
-                               AND %4$s) AS c,
+                               AND %4$s%5$s) AS c,
                            (VALUES (1::smallint), (2), (4), (8)) AS s (st)
                      WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.id)',
-                   CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END,
+                   CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid'
+                                WHEN 'times_trgl' THEN 'trglid' ELSE 'tetraid' END,
                    format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, p_k) AS i)),
                    tgsis.storage_table('tgsis', p_table),
                    -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)
-                   tgsis.cells_on_vertices_sql(p_k, v_near, '$3'))
-      USING p_geoid, p_base, v_near;
+                   tgsis.cells_on_vertices_sql(p_k, v_near, '$3'),
+                   -- (an instant of a surface at instants, tgsis.merge_instant_by_region: that instant's cells)
+                   CASE WHEN (SELECT i.times FROM pg_temp.tgsis_mr_info i) IS NOT NULL THEN ' AND v.times = $4' ELSE '' END)
+      USING p_geoid, p_base, v_near, (SELECT i.times FROM pg_temp.tgsis_mr_info i);
     -- a cell no state changed that a solution rewrites or removes (a margin cell) is its row in the merged state
     DELETE FROM pg_temp.tgsis_mw_local l WHERE l.st = 8 AND EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = l.id);
     INSERT INTO pg_temp.tgsis_mw_local

@@ -446,6 +446,7 @@ def _solutions_of(
                 " FROM tgsis.conflict_regions WHERE versionid = %s AND objectclass = %s"
                 " AND objectkey = %s AND solution_mesh IS NOT NULL",
                 (versionid, objectclass, objectkey),
+                binary=True,  # the float8 rows bit for bit, whatever the session's extra_float_digits
             ).fetchall()
         }
     solutions: dict[int, str | MeshState] = {}
@@ -869,7 +870,8 @@ def _resolve_sliced(
             hint="call again with discard_other=True to discard them, or choose another solution",
         )
     state = given if isinstance(given, MeshState) else None
-    row = _record(conn, version, key, index, solution, state, sliced=True)
+    # a region of an instant (model 2) with its rows, which the psql merge applies; of a model-3 period without
+    row = _record(conn, version, key, index, solution, state, rows_too=merge.base.kind == "INSTANTS")
     return RegionResolution(row, discards, state)
 
 
@@ -951,11 +953,15 @@ def _sql_rows(state: MeshState) -> tuple[Any, ...] | None:
 
 
 def _record(
-    conn: Conn, version: str, key: str, index: int, solution: str, state: MeshState | None, *, sliced: bool = False
+    conn: Conn, version: str, key: str, index: int, solution: str, state: MeshState | None, *, rows_too: bool = True
 ) -> ConflictRegion:
-    """Record a region's solution; an average or manual one with its .npz and (model 1) its rows for the psql merge."""
+    """Record a region's solution; an average or manual one with its .npz and its rows for the psql merge.
+
+    ``rows_too`` False (a region of a model-3 period: the psql merge does not
+    merge those by region) records the .npz alone.
+    """
     mesh = None if state is None else state_to_npz(state)
-    rows = None if state is None or sliced else _sql_rows(state)
+    rows = None if state is None or not rows_too else _sql_rows(state)
     row = conn.execute(
         f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s,"
         " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
@@ -1165,7 +1171,7 @@ def _record_all(
     discard_other: bool,
     name: str,
     *,
-    sliced: bool = False,
+    rows_too: bool = True,
 ) -> ObjectResolution:
     """Record one solution for every given region, after saying what it discards (refused, nothing recorded,
     when it discards and ``discard_other`` is False)."""
@@ -1180,7 +1186,7 @@ def _record_all(
     for index in sorted(given):
         value = given[index]
         state = value if isinstance(value, MeshState) else None
-        rows.append(_record(conn, version, key, index, solution, state, sliced=sliced))
+        rows.append(_record(conn, version, key, index, solution, state, rows_too=rows_too))
     return ObjectResolution(tuple(rows), discards, totals)
 
 
@@ -1210,7 +1216,10 @@ def _resolve_all_sliced(
         else:
             given[r.index] = cast(Solution, solution)
     discards = _slice_solution(conn, version, key, merge, given, dict.fromkeys(given, solution))
-    return _record_all(conn, version, key, given, solution, discards, discard_other, name, sliced=True)
+    # model 2 (slices keyed by the instant alone): with the rows the psql merge applies; model 3: the .npz alone
+    return _record_all(
+        conn, version, key, given, solution, discards, discard_other, name, rows_too=merge.base.kind == "INSTANTS"
+    )
 
 
 # --------------------------------------------------------------------------- average of a whole object
