@@ -28,6 +28,7 @@ DECLARE
     v_key     text;
     v_written bigint := 0;
     v_count   bigint;
+    v_model   text;
 BEGIN
     IF current_setting('tgsis.region_detection', true) IS NOT DISTINCT FROM 'client' THEN
         RETURN 0;
@@ -37,15 +38,23 @@ BEGIN
     -- the conflicts of now; the regions of each mesh are found once, by its merge below
     PERFORM set_config('tgsis.region_detection', 'client', true);
     PERFORM FROM tgsis.find_conflicts(p_version);
-    -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice; NULL: an object-level
-    -- conflict, refused below)
-    FOR v_key IN
-        SELECT k.objectkey FROM tgsis.conflicts k
+    -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice); evolving surfaces
+    -- (model 3): period by period (tgsis.merge_periods_by_slice, in sql/temporal/ beside the continuity check it
+    -- needs, so named at run time); NULL: an object-level conflict, refused below
+    FOR v_key, v_model IN
+        SELECT k.objectkey, c.timemodel FROM tgsis.conflicts k
+          JOIN tgsis.catalog c ON c.classname = tgsis.class_of_geoid(k.objectkey::bigint)
          WHERE k.versionid = v_id AND k.objectclass = 'feature' AND k.solution = 'unsolved'
-           AND (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(k.objectkey::bigint)) = 'INSTANTS'
+           AND c.timemodel IN ('INSTANTS', 'EVOLVING')
          ORDER BY k.objectkey::bigint
     LOOP
-        v_written := v_written + coalesce(tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint), 0);
+        IF v_model = 'INSTANTS' THEN
+            v_count := tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint);
+        ELSE
+            EXECUTE format('SELECT tgsis.%I($1, $2, $3)', 'merge_periods_by_slice')
+               INTO v_count USING p_version, p_action, v_key::bigint;
+        END IF;
+        v_written := v_written + coalesce(v_count, 0);
     END LOOP;
     FOR v_key IN
         SELECT k.objectkey FROM tgsis.conflicts k

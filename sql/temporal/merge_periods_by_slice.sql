@@ -1,0 +1,542 @@
+-- tgsis.merge_periods_by_slice(version, action, geoid): merge one model-3 feature (an evolving surface) period by period, geometry instant by geometry instant, in SQL, written into the version; returns the rows written.
+-- The psql face of the Python merge of an evolving surface
+-- (tgsis.db.merging._merge_sliced_object over tgsis._merge_slices.merge_sliced,
+-- docs/merge.md "Models 2 and 3"), which is its oracle, row for row, for the
+-- objects whose topology periods and geometry instants were each changed on
+-- one side only, or alike on both. A slice is a geometry instant (timem,
+-- timet): the period's nodes at their positions there (tgsis.d4dvrtx), the
+-- period's triangles (tgsis.d4dtrgl), the property rows keyed (_timem,
+-- _timet, _idx). Per period, as merge_sliced decides: added or removed on one
+-- side, taken whole from that side; added on both sides alike, taken; else,
+-- unless its topology (node ids, triangles) was changed on both sides
+-- differently, per geometry instant as tgsis.merge_instants_by_slice decides
+-- per instant: taken from the side that changed it, or (the three states have
+-- it, only the version changed it) merge3's merge of it (the version's rows of
+-- the elements it changed, the parent's elsewhere). The merged geometry
+-- instants of a period must share one topology (tgsis._merge_slices.check_periods):
+-- else TG308, as the Python merge raises it. The per-instant feature
+-- properties (<class>_pros) merge column by column, the parent's attribute
+-- edits come along. Only the periods with a row whose visibility differs
+-- between the three revision sets are read, whole, as each set sees them.
+-- The result is written into the VERSION's working revision by the Python
+-- writer's keyed difference (tgsis.db._state_write.write_sliced_difference:
+-- tgsis.timem, timet, node and d4dtrgl from each period's first geometry
+-- instant, d4dvrtx and the property rows per geometry instant; rows whose
+-- key is gone or whose bits differ closed, new and differing ones inserted,
+-- tgsis.merge_write_keyed_rows), the geometry row's box and counts follow
+-- (tgsis.refresh_geometry); with more than one period the continuity of the
+-- periods is checked (tgsis.check_period_continuity): a merge that breaks it
+-- is not written (NULL), as the Python merge leaves it unsolved; the conflict
+-- is recorded 'manual'.
+-- NULL, nothing written, for an object-level conflict the Python merge
+-- leaves unsolved too (a period or geometry instant removed on one side and
+-- changed on the other, added on both sides differently, a period's topology
+-- changed on both sides differently, a per-instant property changed on both
+-- sides, attributes changed on both sides, deleted on one side). Refused
+-- (TG302, nothing written, the hint naming `tgsis version merge NAME`) what
+-- only the Python client merges: a geometry instant both sides changed
+-- differently (its regions), one only the version changed where a row no
+-- side changed differs in its bits between parent and version. 42501 for a
+-- role that may not read the class, change it or write the rows through
+-- their view (tgsis.check_merge_table_write), TG002 for one that may not
+-- write in the version. In sql/temporal/ for tgsis.check_period_continuity;
+-- tgsis.merge_regions_in_sql calls it by name. extra_float_digits is pinned:
+-- values are compared as text, floats exactly.
+CREATE FUNCTION tgsis.merge_periods_by_slice(p_version text, p_action text, p_geoid bigint)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1
+AS $$
+#variable_conflict use_column
+DECLARE
+    v_key      text := p_geoid::text;
+    v_version  tgsis.versions;
+    v_parent   tgsis.versions;
+    v_class    tgsis.catalog;
+    v_base     integer[];
+    v_since    integer[];
+    v_cset     integer[];
+    v_periods  float8[];
+    v_refused  text := format('%s of version %s refused: feature %s does not merge period by period in SQL',
+                              p_action, quote_literal(p_version), p_geoid);
+    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %s) in Python merges it geometry instant by geometry instant '
+                              '(its regions); else solve it as a whole object: '
+                              'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                              p_action, tgsis.shell_quote(p_version), p_action, pg_catalog.to_json(p_version)::text, p_version, p_geoid::text);
+    v_spec     record;
+    v_vals     text;
+    v_bits     text;
+    v_eq       text;
+    v_why      text;
+    v_rev      integer;
+    v_settings text[];
+    v_written  bigint := 0;
+    v_count    bigint;
+    v_gone     text[];
+    v_fresh    text[];
+    v_cols     text;
+    v_casts    text;
+    v_attr     record;
+    v_aview    text[] := '{}';
+    v_akey     text[] := '{}';
+    v_aset     text[] := '{}';
+    v_fcols    text[];
+    v_pros     tgsis.versioned_tables;
+    v_pcols    text[];
+BEGIN
+    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
+    SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
+    IF v_class.timemodel IS DISTINCT FROM 'EVOLVING' THEN
+        RAISE EXCEPTION 'feature % is not an evolving surface (model 3)', p_geoid
+            USING ERRCODE = 'TG100', HINT = format('SELECT tgsis.merge_version(%L) merges it as its model merges', p_version);
+    END IF;
+    IF p_geoid IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
+        RAISE EXCEPTION 'role % may not read feature % (its class): it cannot be merged period by period',
+                quote_ident(tgsis.calling_role()), p_geoid
+            USING ERRCODE = '42501', HINT = 'the class''s owner can GRANT SELECT on its feature table';
+    END IF;
+    IF tgsis.object_merge_refusal(p_version, p_geoid) IS NOT NULL THEN
+        RETURN NULL;  -- deleted on one side, attributes changed on both: the Python merge leaves it unsolved too
+    END IF;
+    v_base := tgsis.revision_set(v_version.versionid, v_version.initrevision);
+    v_cset := v_version.workingset;
+    v_since := ARRAY(SELECT r FROM unnest(v_base || v_parent.workingset || v_cset) AS r
+                     EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_cset)
+                     ORDER BY 1);
+
+    -- the work tables: made by the first call of the transaction, emptied by the others
+    IF pg_catalog.to_regclass('pg_temp.tgsis_mp_spec') IS NULL THEN
+        -- a table: its key within the object (mcol the period, tcol the geometry instant, idcol the id; NULL: none)
+        CREATE TEMPORARY TABLE tgsis_mp_spec (tab text, vt tgsis.versioned_tables, okey text, mcol text, tcol text,
+                                              idcol text, keys text[]) ON COMMIT DROP;
+        -- a row as a state sees it (st 1 base, 2 parent, 4 version); t -Infinity: a row of the period, id 0: none
+        CREATE TEMPORARY TABLE tgsis_mp_row (tab text, st smallint, m float8, t float8, id bigint, vals text[], bits text,
+                                             eq text, el text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mp_el (kind text, st smallint, m float8, t float8, id bigint, gvals text[], gbits text,
+                                            geq text, gel text, pvals text[], pbits text, peq text, nulls text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mp_new (LIKE pg_temp.tgsis_mp_el) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mp_slice (m float8, t float8, ib boolean, ip boolean, ic boolean, chp boolean,
+                                               chc boolean, samepc boolean, src text) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mp_pros (st smallint, m float8, t float8, vals text[]) ON COMMIT DROP;
+        CREATE TEMPORARY TABLE tgsis_mp_prow (m float8, t float8, mv text[], cv text[]) ON COMMIT DROP;
+    ELSE
+        TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
+                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_pros, pg_temp.tgsis_mp_prow;
+    END IF;
+    -- the tables of the model (the registry), in the Python writer's order, then the class's vertex and cell
+    -- property rows (vp, cp)
+    INSERT INTO pg_temp.tgsis_mp_spec
+    SELECT s.tab, t AS vt, s.okey, s.mcol, s.tcol, s.idcol,
+           ARRAY[s.mcol] || CASE WHEN s.tcol IS NULL THEN '{}'::text[] ELSE ARRAY[s.tcol] END
+                         || CASE WHEN s.idcol IS NULL THEN '{}'::text[] ELSE ARRAY[s.idcol] END
+      FROM (SELECT CASE m.tablename WHEN 'timem' THEN 'M' WHEN 'timet' THEN 'T' WHEN 'node' THEN 'n'
+                                    WHEN 'd4dtrgl' THEN 'c' WHEN 'd4dvrtx' THEN 'v' END AS tab,
+                   'tgsis' AS schemaname, m.tablename, 'geoid' AS okey, 'timem' AS mcol,
+                   CASE WHEN m.tablename IN ('timet', 'd4dvrtx') THEN 'timet' END AS tcol,
+                   CASE m.tablename WHEN 'node' THEN 'nodeid' WHEN 'd4dvrtx' THEN 'nodeid' WHEN 'd4dtrgl' THEN 'trglid' END AS idcol
+              FROM tgsis.model_tables m JOIN tgsis.data_models d ON d.model = m.model AND d.timemodel = 'EVOLVING'
+            UNION ALL
+            SELECT x.tab, v_class.schemaname, x.tablename, '_geoid', '_timem', '_timet', '_idx'
+              FROM (VALUES ('vp', CASE v_class.proalignment WHEN 'VERTEX' THEN v_class.cellprotable ELSE v_class.otherprotable END),
+                           ('cp', CASE v_class.proalignment WHEN 'CELL' THEN v_class.cellprotable ELSE v_class.otherprotable END))
+                   AS x (tab, tablename)) AS s (tab, schemaname, tablename, okey, mcol, tcol, idcol)
+      JOIN tgsis.versioned_tables t ON t.schemaname = s.schemaname AND t.tablename = s.tablename;
+    IF (SELECT count(*) FROM pg_temp.tgsis_mp_spec s WHERE length(s.tab) = 1) <> 5 THEN
+        RAISE EXCEPTION '%: the model''s tables are not all versioned', v_refused
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+
+    -- 1. the periods with a row some set sees otherwise than another (tgsis.db._merge_states: changed_only)
+    FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
+        v_periods := v_periods || ARRAY(
+            SELECT r[1]::float8
+              FROM tgsis.storage_run(v_spec.vt, false, format(
+                     'SELECT DISTINCT ARRAY[v.%I::text] FROM %I.%I v WHERE v.%I = $1[1]::bigint
+                         AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
+                     v_spec.mcol, (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
+                   p_1 => ARRAY[v_key], p_2 => v_since) AS r);
+    END LOOP;
+    v_periods := ARRAY(SELECT DISTINCT p FROM unnest(v_periods) AS p ORDER BY 1);
+
+    -- 2. their rows as each state sees them: vals (for writing), bits (exact, NULL as NaN), eq as
+    -- tgsis._merge_slices.same_state compares them (floats -0 as 0), el as merge3 compares an element (a triangle
+    -- by its oriented key)
+    FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
+        EXIT WHEN cardinality(v_periods) = 0;
+        CONTINUE WHEN v_spec.tab IN ('M', 'n');  -- (the slices are made of the others, as the Python reader makes them)
+        SELECT coalesce(string_agg(format('v.%I::text', a.attname), ', ' ORDER BY a.attnum), ''),
+               coalesce(string_agg(format('coalesce(v.%I::text, ''NaN'')', a.attname), ', ' ORDER BY a.attnum), ''),
+               coalesce(string_agg(CASE WHEN a.atttypid IN ('real'::regtype, 'double precision'::regtype)
+                                        THEN format('coalesce((v.%I::float8 + 0::float8)::text, ''NaN'')', a.attname)
+                                        ELSE format('coalesce(v.%I::text, ''NaN'')', a.attname) END, ', ' ORDER BY a.attnum), '')
+          INTO v_vals, v_bits, v_eq
+          FROM pg_catalog.pg_attribute a
+         WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
+           AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> v_spec.okey AND a.attname <> ALL (v_spec.keys);
+        INSERT INTO pg_temp.tgsis_mp_row
+        SELECT v_spec.tab, r[1]::smallint, r[2]::float8, r[3]::float8, r[4]::bigint, r[5]::text[], r[6], r[7], r[8]
+          FROM tgsis.storage_run(v_spec.vt, false, format(
+                 'SELECT ARRAY[s.st::text, v.%1$I::text, %2$s, %3$s, ARRAY[%4$s]::text[]::text,
+                               ARRAY[%5$s]::text[]::text, ARRAY[%6$s]::text[]::text, %7$s]
+                    FROM %8$I.%9$I v, (VALUES (1, $2), (2, $3), (4, $1[3]::integer[])) AS s (st, revs)
+                   WHERE v.%10$I = $1[1]::bigint AND v.%1$I = ANY ($1[2]::float8[])
+                     AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
+                 v_spec.mcol,
+                 CASE WHEN v_spec.tcol IS NULL THEN '''-Infinity''' ELSE format('v.%I::text', v_spec.tcol) END,
+                 CASE WHEN v_spec.idcol IS NULL THEN '''0''' ELSE format('v.%I::text', v_spec.idcol) END,
+                 v_vals, v_bits, v_eq,
+                 CASE v_spec.tab WHEN 'c' THEN 'tgsis.oriented_cell_key(ARRAY[v.nodeid1, v.nodeid2, v.nodeid3])::text'
+                                 ELSE format('ARRAY[%s]::text[]::text', v_eq) END,
+                 (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
+               p_1 => ARRAY[v_key, v_periods::text, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
+    END LOOP;
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'v'
+                  AND ('NaN' = ANY (r.vals) OR 'Infinity' = ANY (r.vals) OR '-Infinity' = ANY (r.vals))) THEN
+        RAISE EXCEPTION '%: some nodes have non-finite coordinates', v_refused
+            USING ERRCODE = 'TG302', HINT = 'correct the coordinates in the version or its parent, or solve it as a whole object: '
+                                            || format('SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
+                                                      p_version, v_key);
+    END IF;
+
+    -- 3. per element of a slice a state has (a node at a geometry instant; a triangle of the period at each of its
+    -- geometry instants): its geometry row with its property row at that instant (a missing one reads as NaN)
+    INSERT INTO pg_temp.tgsis_mp_el
+    SELECT g.tab AS kind, g.st, g.m, s.t, g.id, g.vals, g.bits, g.eq, g.el, p.vals,
+           coalesce(p.bits, n.nulls), coalesce(p.eq, n.nulls), n.nulls
+      FROM pg_temp.tgsis_mp_row g
+      JOIN pg_temp.tgsis_mp_row s ON s.tab = 'T' AND s.st = g.st AND s.m = g.m AND (g.tab = 'c' OR s.t = g.t)
+      LEFT JOIN pg_temp.tgsis_mp_row p ON p.tab = g.tab || 'p' AND p.st = g.st AND p.m = g.m AND p.t = s.t AND p.id = g.id
+      CROSS JOIN LATERAL (SELECT coalesce(array_fill('NaN'::text, ARRAY[count(*)::integer])::text, '{}') AS nulls
+                            FROM pg_catalog.pg_attribute a, pg_temp.tgsis_mp_spec x
+                           WHERE x.tab = g.tab || 'p'
+                             AND a.attrelid = format('%I.%I', (x.vt).schemaname, (x.vt).tablename)::regclass
+                             AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> x.okey
+                             AND a.attname <> ALL (x.keys)) AS n
+     WHERE g.tab IN ('v', 'c');
+
+    -- 4. each geometry instant: which side it is taken from. Per period first (merge_sliced): added or removed on
+    -- one side, taken whole from it; added on both, alike or a conflict; its topology changed on both sides
+    -- differently, a conflict; then per geometry instant (_merge_keys): P parent, C version, M merge3's merge of the
+    -- version's edit; X an object-level conflict, R both sides changed it
+    INSERT INTO pg_temp.tgsis_mp_slice
+    WITH sl AS (
+        SELECT k.m, k.t, bool_or(r.st = 1) AS ib, bool_or(r.st = 2) AS ip, bool_or(r.st = 4) AS ic
+          FROM (SELECT DISTINCT m, t FROM pg_temp.tgsis_mp_row WHERE tab = 'T') AS k
+          JOIN pg_temp.tgsis_mp_row r ON r.tab = 'T' AND r.m = k.m AND r.t = k.t
+         GROUP BY k.m, k.t),
+    pivot AS (
+        SELECT e.kind, e.m, e.t, e.id,
+               min(e.geq || '|' || e.peq) FILTER (WHERE e.st = 1) AS b,
+               min(e.geq || '|' || e.peq) FILTER (WHERE e.st = 2) AS p,
+               min(e.geq || '|' || e.peq) FILTER (WHERE e.st = 4) AS c
+          FROM pg_temp.tgsis_mp_el e GROUP BY e.kind, e.m, e.t, e.id),
+    ch AS (
+        SELECT s.*,
+               s.ib <> s.ip OR EXISTS (SELECT FROM pivot x WHERE x.m = s.m AND x.t = s.t AND x.b IS DISTINCT FROM x.p) AS chp,
+               s.ib <> s.ic OR EXISTS (SELECT FROM pivot x WHERE x.m = s.m AND x.t = s.t AND x.b IS DISTINCT FROM x.c) AS chc,
+               s.ip = s.ic AND NOT EXISTS (SELECT FROM pivot x WHERE x.m = s.m AND x.t = s.t AND x.p IS DISTINCT FROM x.c) AS samepc
+          FROM sl s),
+    -- a state's topology of a period: its first geometry instant's node ids and the period's triangles
+    topo AS (
+        SELECT f.st, f.m,
+               (SELECT coalesce(string_agg(e.kind || e.id || CASE e.kind WHEN 'c' THEN ':' || e.geq ELSE '' END,
+                                           ',' ORDER BY e.kind, e.id), '')
+                  FROM pg_temp.tgsis_mp_el e WHERE e.st = f.st AND e.m = f.m AND e.t = f.t) AS sig
+          FROM (SELECT r.st, r.m, min(r.t) AS t FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'T' GROUP BY r.st, r.m) AS f),
+    per AS (
+        SELECT c.m, bool_or(c.ib) AS pb, bool_or(c.ip) AS pp, bool_or(c.ic) AS pc, bool_or(c.chp) AS chp,
+               bool_or(c.chc) AS chc, bool_and(c.samepc) AS samepc
+          FROM ch c GROUP BY c.m),
+    side AS (
+        SELECT p.*,
+               CASE WHEN NOT p.chc THEN 'P' WHEN NOT p.chp THEN 'C'
+                    WHEN p.pb AND NOT (p.pp AND p.pc) THEN 'X' ELSE 'B' END AS side,
+               (SELECT count(DISTINCT coalesce(t.sig, '')) FROM topo t WHERE t.m = p.m) = 3 AS topo3
+          FROM per p)
+    SELECT ch.m, ch.t, ch.ib, ch.ip, ch.ic, ch.chp, ch.chc, ch.samepc,
+           CASE WHEN s.side = 'X' THEN 'X'
+                WHEN s.side <> 'B' AND NOT (s.pb AND s.pp AND s.pc) THEN s.side
+                WHEN NOT (s.pb AND s.pp AND s.pc) THEN CASE WHEN s.samepc THEN 'P' ELSE 'X' END
+                WHEN s.topo3 THEN 'X'
+                WHEN NOT ch.chc THEN 'P' WHEN NOT ch.chp THEN CASE WHEN ch.ib AND ch.ip AND ch.ic THEN 'M' ELSE 'C' END
+                WHEN ch.ib AND NOT (ch.ip AND ch.ic) THEN 'X'
+                WHEN ch.samepc THEN 'P'
+                WHEN ch.ib THEN 'R'
+                ELSE 'X' END AS src
+      FROM ch JOIN side s ON s.m = ch.m;
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mp_slice s WHERE s.src = 'X') THEN
+        RETURN NULL;  -- removed on one side and changed on the other, added on both differently, topology on both
+    END IF;
+    SELECT string_agg(format('(%s, %s)', s.m, s.t), ', ' ORDER BY s.m, s.t) INTO v_why
+      FROM pg_temp.tgsis_mp_slice s WHERE s.src = 'R';
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: geometry instants (timem, timet) % were changed both in the version and in its parent, differently: their regions are merged by the Python client',
+                v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+
+    -- 5. the merged elements: the chosen side's rows (a slice the side lacks: none); M: the version's rows of the
+    -- elements it changed (as merge3 compares them), the parent's elsewhere
+    INSERT INTO pg_temp.tgsis_mp_new
+    WITH pv AS (
+        SELECT e.kind, e.m, e.t, e.id,
+               min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 1) AS b,
+               min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 4) AS c
+          FROM pg_temp.tgsis_mp_el e JOIN pg_temp.tgsis_mp_slice s ON s.m = e.m AND s.t = e.t AND s.src = 'M'
+         GROUP BY e.kind, e.m, e.t, e.id)
+    SELECT e.*
+      FROM pg_temp.tgsis_mp_slice s
+      JOIN pg_temp.tgsis_mp_el e ON e.m = s.m AND e.t = s.t
+      LEFT JOIN pv ON pv.kind = e.kind AND pv.m = e.m AND pv.t = e.t AND pv.id = e.id
+     WHERE e.st = CASE s.src WHEN 'P' THEN 2 WHEN 'C' THEN 4
+                             ELSE CASE WHEN pv.b IS DISTINCT FROM pv.c THEN 4 ELSE 2 END END;
+    SELECT string_agg(format('%s %s at geometry instant %s of the period starting at %s',
+                             CASE pv.kind WHEN 'v' THEN 'node' ELSE 'triangle' END, pv.id, pv.t, pv.m),
+                      ', ' ORDER BY pv.m, pv.t, pv.kind DESC, pv.id)
+      INTO v_why
+      FROM (SELECT e.kind, e.m, e.t, e.id,
+                   min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 1) AS b,
+                   min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 4) AS c,
+                   min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 2) AS pbits,
+                   min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 4) AS cbits
+              FROM pg_temp.tgsis_mp_el e JOIN pg_temp.tgsis_mp_slice s ON s.m = e.m AND s.t = e.t AND s.src = 'M'
+             GROUP BY e.kind, e.m, e.t, e.id) AS pv
+     WHERE pv.b IS NOT DISTINCT FROM pv.c AND pv.pbits IS DISTINCT FROM pv.cbits;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%: rows the version did not change differ in their bits from the parent''s (%): which side''s rows the merge keeps hangs on its regions',
+                v_refused, v_why
+            USING ERRCODE = 'TG302', HINT = v_hint;
+    END IF;
+    -- a period has one topology (tgsis._merge_slices.check_periods): the merged geometry instants of each must
+    -- have the same nodes and triangles, else the Python merge raises TG308
+    SELECT format('feature %s of class %s: merged instant by instant, the topology period starting at %s would have other nodes or triangles at its geometry instant %s than at %s: a period has one topology',
+                  p_geoid, v_class.classname, d.m, d.t, d.first)
+      INTO v_why
+      FROM (SELECT g.m, g.t, first_value(g.t) OVER w AS first, first_value(g.sig) OVER w AS firstsig, g.sig
+              FROM (SELECT s.m, s.t,
+                           (SELECT coalesce(string_agg(n.kind || n.id || CASE n.kind WHEN 'c' THEN ':' || n.geq ELSE '' END,
+                                                       ',' ORDER BY n.kind, n.id), '')
+                              FROM pg_temp.tgsis_mp_new n WHERE n.m = s.m AND n.t = s.t) AS sig
+                      FROM pg_temp.tgsis_mp_slice s
+                     WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END) AS g
+            WINDOW w AS (PARTITION BY g.m ORDER BY g.t)) AS d
+     WHERE d.sig <> d.firstsig
+     ORDER BY d.m, d.t LIMIT 1;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION '%', v_why
+            USING ERRCODE = 'TG308', HINT = 'tgsis.resolve_conflict solves it as a whole object (parent, child or manual)';
+    END IF;
+
+    -- 6. the per-instant feature properties (<class>_pros, keyed (_timem, _timet)), merged column by column
+    -- (tgsis._merge_slices._merge_rows)
+    SELECT t.* INTO v_pros FROM tgsis.versioned_tables t
+     WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.protablename;
+    IF FOUND AND jsonb_array_length(v_class.instant_properties) > 0 THEN
+        v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
+        INSERT INTO pg_temp.tgsis_mp_pros
+        SELECT r[1]::smallint, r[2]::float8, r[3]::float8, r[4:]
+          FROM tgsis.storage_run(v_pros, false, format(
+                 'SELECT ARRAY[s.st::text, v._timem::text, v._timet::text] || ARRAY[%s]
+                    FROM %I.%I v, (VALUES (1, $2), (2, $3), (4, $1[2]::integer[])) AS s (st, revs)
+                   WHERE v._geoid = $1[1]::bigint AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
+                 (SELECT string_agg(format('v.%I::text', c), ', ') FROM unnest(v_pcols) AS c),
+                 v_pros.schemaname, v_pros.tablename || '_ver'),
+               p_1 => ARRAY[v_key, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
+        FOR v_attr IN
+            SELECT k.m, k.t, b.vals AS b, p.vals AS p, c.vals AS c
+              FROM (SELECT DISTINCT x.m, x.t FROM pg_temp.tgsis_mp_pros x) AS k
+              LEFT JOIN pg_temp.tgsis_mp_pros b ON b.st = 1 AND b.m = k.m AND b.t = k.t
+              LEFT JOIN pg_temp.tgsis_mp_pros p ON p.st = 2 AND p.m = k.m AND p.t = k.t
+              LEFT JOIN pg_temp.tgsis_mp_pros c ON c.st = 4 AND c.m = k.m AND c.t = k.t
+             ORDER BY k.m, k.t
+        LOOP
+            IF v_attr.p IS NOT DISTINCT FROM v_attr.c OR v_attr.c IS NOT DISTINCT FROM v_attr.b THEN
+                INSERT INTO pg_temp.tgsis_mp_prow VALUES (v_attr.m, v_attr.t, v_attr.p, v_attr.c);  -- the parent's row
+            ELSIF v_attr.p IS NOT DISTINCT FROM v_attr.b THEN
+                INSERT INTO pg_temp.tgsis_mp_prow VALUES (v_attr.m, v_attr.t, v_attr.c, v_attr.c);  -- the version's row
+            ELSIF v_attr.p IS NULL OR v_attr.c IS NULL OR v_attr.b IS NULL THEN
+                RETURN NULL;  -- removed (added) on one side and set otherwise on the other: an object-level conflict
+            ELSIF EXISTS (SELECT FROM generate_subscripts(v_attr.b, 1) AS i
+                           WHERE v_attr.p[i] IS DISTINCT FROM v_attr.c[i] AND v_attr.c[i] IS DISTINCT FROM v_attr.b[i]
+                             AND v_attr.p[i] IS DISTINCT FROM v_attr.b[i]) THEN
+                RETURN NULL;  -- a column changed on both sides to other values: an object-level conflict
+            ELSE  -- column by column: the side that changed it
+                INSERT INTO pg_temp.tgsis_mp_prow
+                VALUES (v_attr.m, v_attr.t,
+                        ARRAY(SELECT CASE WHEN v_attr.c[i] IS NOT DISTINCT FROM v_attr.b[i] THEN v_attr.p[i] ELSE v_attr.c[i] END
+                                FROM generate_subscripts(v_attr.b, 1) AS i ORDER BY i), v_attr.c);
+            END IF;
+        END LOOP;
+    END IF;
+
+    -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
+    FOR v_attr IN
+        SELECT e.viewname, e.keycolumn,
+               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
+               array_agg(e.columnname ORDER BY e.o) AS columns
+          FROM (SELECT a.*, row_number() OVER () AS o
+                  FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_parent.workingset, v_cset) AS a) AS e
+         GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
+    LOOP
+        IF v_attr.viewname = 'tgsis.geometry' THEN
+            v_aview := v_aview || v_attr.viewname;
+            v_akey := v_akey || v_attr.keycolumn;
+            v_aset := v_aset || v_attr.sets;
+        ELSE
+            v_fcols := v_attr.columns;
+        END IF;
+    END LOOP;
+
+    -- the rights: to write in the version, to change the class (and the feature-row columns the parent changed)
+    PERFORM tgsis.merge_write_rights(p_version, p_geoid, v_fcols, 'period by period', 'surface');
+
+    -- 7. the writes, in the version's working revision, as write_sliced_difference writes them
+    v_settings := ARRAY[current_setting('tgsis.version', true), current_setting('tgsis.revision', true)];
+    PERFORM tgsis.goto_version(p_version, true);
+    SELECT workingrevision, workingset INTO v_rev, v_cset FROM tgsis.versions WHERE versionid = v_version.versionid;
+    PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
+       FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'geometry';
+    PERFORM tgsis.object_write_lock('feature', ARRAY[v_key]);
+    BEGIN  -- (a merge that breaks the periods' continuity is taken back: the Python merge's savepoint)
+        -- the per-instant feature property rows first (as _write_instant_rows: a DELETE, INSERT or UPDATE of the
+        -- class's view per geometry instant, which its trigger writes)
+        IF v_pcols IS NOT NULL THEN
+            SELECT string_agg(format('%I', c), ', ' ORDER BY o),
+                   string_agg(format('$1[%s]::%s', o + 3, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
+                                                           WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
+                                                             AND a.attname = c)), ', ' ORDER BY o),
+                   string_agg(format('%I = $1[%s]::%s', c, o + 3, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
+                                                                   WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
+                                                                     AND a.attname = c)), ', ' ORDER BY o)
+              INTO v_cols, v_casts, v_why
+              FROM unnest(v_pcols) WITH ORDINALITY AS u(c, o);
+            FOR v_attr IN SELECT * FROM pg_temp.tgsis_mp_prow r WHERE r.mv IS DISTINCT FROM r.cv ORDER BY r.m, r.t LOOP
+                PERFORM tgsis.check_merge_table_write(v_pros, CASE WHEN v_attr.cv IS NULL THEN 'INSERT'
+                                                                  WHEN v_attr.mv IS NULL THEN 'DELETE' ELSE 'UPDATE' END, p_geoid);
+                v_count := 0;
+                IF v_attr.mv IS NOT NULL AND v_attr.cv IS NOT NULL THEN  -- in place in the working revision
+                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                        'UPDATE %I.%I v SET %s WHERE v._geoid = $1[1]::bigint AND v._timem = $1[2]::float8
+                            AND v._timet = $1[3]::float8 AND v.revision = $4 AND NOT (v.lastrevs && $2)',
+                        v_pros.schemaname, v_pros.tablename || '_ver', v_why),
+                        p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text] || v_attr.mv, p_2 => v_cset, p_4 => v_rev) AS r;
+                END IF;
+                IF v_count = 0 AND v_attr.cv IS NOT NULL THEN  -- the version's row goes (closed, or gone if its revision's)
+                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                        'DELETE FROM %I.%I v WHERE v._geoid = $1[1]::bigint AND v._timem = $1[2]::float8
+                            AND v._timet = $1[3]::float8 AND v.revision = $4',
+                        v_pros.schemaname, v_pros.tablename || '_ver'),
+                        p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text], p_4 => v_rev) AS r;
+                    IF v_count = 0 THEN
+                        SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                            'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
+                              WHERE v._geoid = $1[1]::bigint AND v._timem = $1[2]::float8 AND v._timet = $1[3]::float8
+                                AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
+                            v_pros.schemaname, v_pros.tablename || '_ver'),
+                            p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text], p_2 => v_cset, p_4 => v_rev) AS r;
+                        PERFORM tgsis.note_changed_objects(v_pros.schemaname, v_pros.tablename, v_rev, ARRAY[v_key]);
+                    END IF;
+                    IF v_attr.mv IS NOT NULL THEN
+                        v_count := 0;  -- (an UPDATE of the view: one row)
+                    END IF;
+                END IF;
+                IF v_attr.mv IS NOT NULL AND v_count = 0 THEN
+                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
+                        'INSERT INTO %I.%I (_geoid, _timem, _timet, %s, revision)
+                         SELECT $1[1]::bigint, $1[2]::float8, $1[3]::float8, %s, $4',
+                        v_pros.schemaname, v_pros.tablename || '_ver', v_cols, v_casts),
+                        p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text] || v_attr.mv, p_4 => v_rev) AS r;
+                END IF;
+                v_written := v_written + v_count;
+            END LOOP;
+        END IF;
+        -- per table, in the Python writer's order: the version's rows (old) against the merged (new), a period's
+        -- topology (timem, node, d4dtrgl) from its first geometry instant; rows compared by their bits (a property
+        -- row as the state holds it, NaN if none); a property row of no value is not written
+        FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec s
+                       ORDER BY array_position(ARRAY['M', 'T', 'n', 'c', 'v', 'vp', 'cp'], s.tab) LOOP
+            WITH merged AS (  -- the merged slices and the version's
+                SELECT s.m, s.t FROM pg_temp.tgsis_mp_slice s WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END),
+            mine AS (SELECT s.m, s.t FROM pg_temp.tgsis_mp_slice s WHERE s.ic),
+            old AS (
+                SELECT e.m, e.t, e.id, e.gbits AS bits, e.gvals AS vals, e.pbits, e.pvals, e.nulls FROM pg_temp.tgsis_mp_el e
+                 WHERE e.st = 4 AND e.kind = CASE v_spec.tab WHEN 'n' THEN 'v' ELSE left(v_spec.tab, 1) END
+                   AND (v_spec.tab NOT IN ('n', 'c') OR e.t = (SELECT min(x.t) FROM mine x WHERE x.m = e.m))),
+            new AS (
+                SELECT e.m, e.t, e.id, e.gbits AS bits, e.gvals AS vals, e.pbits, e.pvals, e.nulls FROM pg_temp.tgsis_mp_new e
+                 WHERE e.kind = CASE v_spec.tab WHEN 'n' THEN 'v' ELSE left(v_spec.tab, 1) END
+                   AND (v_spec.tab NOT IN ('n', 'c') OR e.t = (SELECT min(x.t) FROM merged x WHERE x.m = e.m))),
+            -- the rows of each side as (key, bits, values to write)
+            o AS (
+                SELECT DISTINCT x.m, NULL::float8 AS t, 0::bigint AS id, '' AS bits, '{}'::text[] AS vals FROM mine x WHERE v_spec.tab = 'M'
+                UNION ALL SELECT x.m, x.t, 0, '', '{}' FROM mine x WHERE v_spec.tab = 'T'
+                UNION ALL SELECT e.m, NULL, e.id, CASE v_spec.tab WHEN 'c' THEN e.bits ELSE '' END,
+                                 CASE v_spec.tab WHEN 'c' THEN e.vals ELSE '{}' END
+                            FROM old e WHERE v_spec.tab IN ('n', 'c')
+                UNION ALL SELECT e.m, e.t, e.id, e.bits, e.vals FROM old e WHERE v_spec.tab = 'v'
+                UNION ALL SELECT e.m, e.t, e.id, e.pbits, e.pvals FROM old e WHERE length(v_spec.tab) = 2),
+            n AS (
+                SELECT DISTINCT x.m, NULL::float8 AS t, 0::bigint AS id, '' AS bits, '{}'::text[] AS vals, false AS novalue
+                  FROM merged x WHERE v_spec.tab = 'M'
+                UNION ALL SELECT x.m, x.t, 0, '', '{}', false FROM merged x WHERE v_spec.tab = 'T'
+                UNION ALL SELECT e.m, NULL, e.id, CASE v_spec.tab WHEN 'c' THEN e.bits ELSE '' END,
+                                 CASE v_spec.tab WHEN 'c' THEN e.vals ELSE '{}' END, false
+                            FROM new e WHERE v_spec.tab IN ('n', 'c')
+                UNION ALL SELECT e.m, e.t, e.id, e.bits, e.vals, false FROM new e WHERE v_spec.tab = 'v'
+                UNION ALL SELECT e.m, e.t, e.id, e.pbits, e.pvals, e.pbits = e.nulls FROM new e WHERE length(v_spec.tab) = 2)
+            SELECT ARRAY(SELECT u.v
+                           FROM o CROSS JOIN LATERAL unnest(ARRAY[o.m::text] || CASE WHEN v_spec.tcol IS NULL THEN '{}'::text[] ELSE ARRAY[o.t::text] END
+                                                            || CASE WHEN v_spec.idcol IS NULL THEN '{}'::text[] ELSE ARRAY[o.id::text] END)
+                                                     WITH ORDINALITY AS u(v, k)
+                          WHERE NOT EXISTS (SELECT FROM n WHERE n.m = o.m AND n.t IS NOT DISTINCT FROM o.t AND n.id = o.id
+                                                             AND n.bits = o.bits)
+                          ORDER BY o.m, o.t, o.id, u.k),
+                   ARRAY(SELECT u.v
+                           FROM n CROSS JOIN LATERAL unnest(ARRAY[n.m::text] || CASE WHEN v_spec.tcol IS NULL THEN '{}'::text[] ELSE ARRAY[n.t::text] END
+                                                            || CASE WHEN v_spec.idcol IS NULL THEN '{}'::text[] ELSE ARRAY[n.id::text] END
+                                                            || n.vals)
+                                                     WITH ORDINALITY AS u(v, k)
+                          WHERE NOT n.novalue
+                            AND NOT EXISTS (SELECT FROM o WHERE o.m = n.m AND o.t IS NOT DISTINCT FROM n.t AND o.id = n.id
+                                                            AND o.bits = n.bits)
+                          ORDER BY n.m, n.t, n.id, u.k)
+              INTO v_gone, v_fresh;
+            IF length(v_spec.tab) = 2 AND EXISTS (SELECT FROM unnest(v_fresh) AS f WHERE f IS NULL)
+               AND EXISTS (SELECT FROM pg_catalog.pg_attribute a
+                            WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
+                              AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> ALL (v_spec.keys || v_spec.okey)
+                              AND a.atttypid NOT IN ('real'::regtype, 'double precision'::regtype)) THEN
+                RAISE EXCEPTION '%: its merged rows cannot be written: some property rows have no value for an integer or boolean property',
+                        v_refused
+                    USING ERRCODE = 'TG302', HINT = v_hint;
+            END IF;
+            v_written := v_written + tgsis.merge_write_keyed_rows(v_spec.vt, v_spec.okey, p_geoid, v_spec.keys, v_gone, v_fresh,
+                                                                   v_rev, v_cset);
+        END LOOP;
+        PERFORM FROM tgsis.refresh_geometry(p_geoid);
+        v_written := v_written + tgsis.merge_apply_attribute_edits(p_geoid, v_aview, v_akey, v_aset, v_fcols,
+                                                                   v_parent.workingset, v_rev, v_cset);
+        IF (SELECT count(*) FROM tgsis.timem t WHERE t.geoid = p_geoid) > 1 THEN
+            PERFORM tgsis.check_period_continuity(p_geoid, NULL, NULL);
+        END IF;
+    EXCEPTION WHEN SQLSTATE 'TG204' THEN
+        PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
+                set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
+        RETURN NULL;  -- the periods would not join: the Python merge leaves it unsolved ("its merged rows cannot be written")
+    END;
+    PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
+            set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
+    TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
+             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_pros, pg_temp.tgsis_mp_prow;
+    PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
+    RETURN v_written;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.merge_periods_by_slice(text, text, bigint) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.merge_periods_by_slice(text, text, bigint) IS
+    'merge one model-3 feature (an evolving surface) changed both in a version and in its parent period by period, geometry instant by geometry instant, in SQL, exactly as the Python merge does, when each period and geometry instant was changed on one side only or alike on both: written into the version by a keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict (the merge refuses it), TG308 for periods whose merged geometry instants would not share one topology, TG302 for what only the Python client merges (a geometry instant both sides changed differently); returns the rows written';
