@@ -52,8 +52,8 @@ AS $$
 #variable_conflict use_column
 DECLARE
     v_key      text := p_geoid::text;
-    v_version  tgsis.versions;
-    v_parent   tgsis.versions;
+    v_sets     record;
+    v_pset     integer[];
     v_class    tgsis.catalog;
     v_base     integer[];
     v_since    integer[];
@@ -61,10 +61,7 @@ DECLARE
     v_periods  float8[];
     v_refused  text := format('%s of version %s refused: feature %s does not merge period by period in SQL',
                               p_action, quote_literal(p_version), p_geoid);
-    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %s) in Python merges it geometry instant by geometry instant '
-                              '(its regions); else solve it as a whole object: '
-                              'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
-                              p_action, tgsis.shell_quote(p_version), p_action, pg_catalog.to_json(p_version)::text, p_version, p_geoid::text);
+    v_hint     text := tgsis.merge_sliced_hint(p_version, p_action, p_geoid, 'geometry instant by geometry instant');
     v_spec     record;
     v_vals     text;
     v_bits     text;
@@ -73,11 +70,8 @@ DECLARE
     v_rev      integer;
     v_settings text[];
     v_written  bigint := 0;
-    v_count    bigint;
     v_gone     text[];
     v_fresh    text[];
-    v_cols     text;
-    v_casts    text;
     v_attr     record;
     v_aview    text[] := '{}';
     v_akey     text[] := '{}';
@@ -86,26 +80,16 @@ DECLARE
     v_pros     tgsis.versioned_tables;
     v_pcols    text[];
 BEGIN
-    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
-    SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
-    IF v_class.timemodel IS DISTINCT FROM 'EVOLVING' THEN
-        RAISE EXCEPTION 'feature % is not an evolving surface (model 3)', p_geoid
-            USING ERRCODE = 'TG100', HINT = format('SELECT tgsis.merge_version(%L) merges it as its model merges', p_version);
-    END IF;
-    IF p_geoid IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
-        RAISE EXCEPTION 'role % may not read feature % (its class): it cannot be merged period by period',
-                quote_ident(tgsis.calling_role()), p_geoid
-            USING ERRCODE = '42501', HINT = 'the class''s owner can GRANT SELECT on its feature table';
-    END IF;
-    IF tgsis.object_merge_refusal(p_version, p_geoid) IS NOT NULL THEN
+    SELECT * INTO v_sets
+      FROM tgsis.merge_sliced_sets(p_version, p_geoid, 'EVOLVING', 'an evolving surface (model 3)', 'period by period');
+    IF v_sets.p_refused THEN
         RETURN NULL;  -- deleted on one side, attributes changed on both: the Python merge leaves it unsolved too
     END IF;
-    v_base := tgsis.revision_set(v_version.versionid, v_version.initrevision);
-    v_cset := v_version.workingset;
-    v_since := ARRAY(SELECT r FROM unnest(v_base || v_parent.workingset || v_cset) AS r
-                     EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_cset)
-                     ORDER BY 1);
+    v_class := v_sets.p_class;
+    v_base := v_sets.p_base;
+    v_pset := v_sets.p_parentset;
+    v_cset := v_sets.p_versionset;
+    v_since := v_sets.p_since;
 
     -- the work tables: made by the first call of the transaction, emptied by the others
     IF pg_catalog.to_regclass('pg_temp.tgsis_mp_spec') IS NULL THEN
@@ -120,11 +104,10 @@ BEGIN
         CREATE TEMPORARY TABLE tgsis_mp_new (LIKE pg_temp.tgsis_mp_el) ON COMMIT DROP;
         CREATE TEMPORARY TABLE tgsis_mp_slice (m float8, t float8, ib boolean, ip boolean, ic boolean, chp boolean,
                                                chc boolean, samepc boolean, src text) ON COMMIT DROP;
-        CREATE TEMPORARY TABLE tgsis_mp_pros (st smallint, m float8, t float8, vals text[]) ON COMMIT DROP;
         CREATE TEMPORARY TABLE tgsis_mp_prow (m float8, t float8, mv text[], cv text[]) ON COMMIT DROP;
     ELSE
         TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
-                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_pros, pg_temp.tgsis_mp_prow;
+                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow;
     END IF;
     -- the tables of the model (the registry), in the Python writer's order, then the class's vertex and cell
     -- property rows (vp, cp)
@@ -151,13 +134,9 @@ BEGIN
 
     -- 1. the periods with a row some set sees otherwise than another (tgsis.db._merge_states: changed_only)
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
-        v_periods := v_periods || ARRAY(
-            SELECT r[1]::float8
-              FROM tgsis.storage_run(v_spec.vt, false, format(
-                     'SELECT DISTINCT ARRAY[v.%I::text] FROM %I.%I v WHERE v.%I = $1[1]::bigint
-                         AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
-                     v_spec.mcol, (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
-                   p_1 => ARRAY[v_key], p_2 => v_since) AS r);
+        v_periods := v_periods || ARRAY(SELECT r[1]::float8
+                                          FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey, ARRAY[v_spec.mcol], p_geoid,
+                                                                        v_since) AS r);
     END LOOP;
     v_periods := ARRAY(SELECT DISTINCT p FROM unnest(v_periods) AS p ORDER BY 1);
 
@@ -167,15 +146,9 @@ BEGIN
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
         EXIT WHEN cardinality(v_periods) = 0;
         CONTINUE WHEN v_spec.tab IN ('M', 'n');  -- (the slices are made of the others, as the Python reader makes them)
-        SELECT coalesce(string_agg(format('v.%I::text', a.attname), ', ' ORDER BY a.attnum), ''),
-               coalesce(string_agg(format('coalesce(v.%I::text, ''NaN'')', a.attname), ', ' ORDER BY a.attnum), ''),
-               coalesce(string_agg(CASE WHEN a.atttypid IN ('real'::regtype, 'double precision'::regtype)
-                                        THEN format('coalesce((v.%I::float8 + 0::float8)::text, ''NaN'')', a.attname)
-                                        ELSE format('coalesce(v.%I::text, ''NaN'')', a.attname) END, ', ' ORDER BY a.attnum), '')
-          INTO v_vals, v_bits, v_eq
-          FROM pg_catalog.pg_attribute a
-         WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
-           AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> v_spec.okey AND a.attname <> ALL (v_spec.keys);
+        SELECT t.p_vals, t.p_bits, t.p_eq INTO v_vals, v_bits, v_eq
+          FROM tgsis.merge_row_texts(format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass,
+                                     v_spec.okey || v_spec.keys) AS t;
         INSERT INTO pg_temp.tgsis_mp_row
         SELECT v_spec.tab, r[1]::smallint, r[2]::float8, r[3]::float8, r[4]::bigint, r[5]::text[], r[6], r[7], r[8]
           FROM tgsis.storage_run(v_spec.vt, false, format(
@@ -191,7 +164,7 @@ BEGIN
                  CASE v_spec.tab WHEN 'c' THEN 'tgsis.oriented_cell_key(ARRAY[v.nodeid1, v.nodeid2, v.nodeid3])::text'
                                  ELSE format('ARRAY[%s]::text[]::text', v_eq) END,
                  (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
-               p_1 => ARRAY[v_key, v_periods::text, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
+               p_1 => ARRAY[v_key, v_periods::text, v_cset::text], p_2 => v_base, p_3 => v_pset) AS r;
     END LOOP;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'v'
                   AND ('NaN' = ANY (r.vals) OR 'Infinity' = ANY (r.vals) OR '-Infinity' = ANY (r.vals))) THEN
@@ -336,121 +309,33 @@ BEGIN
      WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.protablename;
     IF FOUND AND jsonb_array_length(v_class.instant_properties) > 0 THEN
         v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
-        INSERT INTO pg_temp.tgsis_mp_pros
-        SELECT r[1]::smallint, r[2]::float8, r[3]::float8, r[4:]
-          FROM tgsis.storage_run(v_pros, false, format(
-                 'SELECT ARRAY[s.st::text, v._timem::text, v._timet::text] || ARRAY[%s]
-                    FROM %I.%I v, (VALUES (1, $2), (2, $3), (4, $1[2]::integer[])) AS s (st, revs)
-                   WHERE v._geoid = $1[1]::bigint AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
-                 (SELECT string_agg(format('v.%I::text', c), ', ') FROM unnest(v_pcols) AS c),
-                 v_pros.schemaname, v_pros.tablename || '_ver'),
-               p_1 => ARRAY[v_key, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
-        FOR v_attr IN
-            SELECT k.m, k.t, b.vals AS b, p.vals AS p, c.vals AS c
-              FROM (SELECT DISTINCT x.m, x.t FROM pg_temp.tgsis_mp_pros x) AS k
-              LEFT JOIN pg_temp.tgsis_mp_pros b ON b.st = 1 AND b.m = k.m AND b.t = k.t
-              LEFT JOIN pg_temp.tgsis_mp_pros p ON p.st = 2 AND p.m = k.m AND p.t = k.t
-              LEFT JOIN pg_temp.tgsis_mp_pros c ON c.st = 4 AND c.m = k.m AND c.t = k.t
-             ORDER BY k.m, k.t
-        LOOP
-            IF v_attr.p IS NOT DISTINCT FROM v_attr.c OR v_attr.c IS NOT DISTINCT FROM v_attr.b THEN
-                INSERT INTO pg_temp.tgsis_mp_prow VALUES (v_attr.m, v_attr.t, v_attr.p, v_attr.c);  -- the parent's row
-            ELSIF v_attr.p IS NOT DISTINCT FROM v_attr.b THEN
-                INSERT INTO pg_temp.tgsis_mp_prow VALUES (v_attr.m, v_attr.t, v_attr.c, v_attr.c);  -- the version's row
-            ELSIF v_attr.p IS NULL OR v_attr.c IS NULL OR v_attr.b IS NULL THEN
-                RETURN NULL;  -- removed (added) on one side and set otherwise on the other: an object-level conflict
-            ELSIF EXISTS (SELECT FROM generate_subscripts(v_attr.b, 1) AS i
-                           WHERE v_attr.p[i] IS DISTINCT FROM v_attr.c[i] AND v_attr.c[i] IS DISTINCT FROM v_attr.b[i]
-                             AND v_attr.p[i] IS DISTINCT FROM v_attr.b[i]) THEN
-                RETURN NULL;  -- a column changed on both sides to other values: an object-level conflict
-            ELSE  -- column by column: the side that changed it
-                INSERT INTO pg_temp.tgsis_mp_prow
-                VALUES (v_attr.m, v_attr.t,
-                        ARRAY(SELECT CASE WHEN v_attr.c[i] IS NOT DISTINCT FROM v_attr.b[i] THEN v_attr.p[i] ELSE v_attr.c[i] END
-                                FROM generate_subscripts(v_attr.b, 1) AS i ORDER BY i), v_attr.c);
+        FOR v_attr IN SELECT * FROM tgsis.merge_instant_rows(v_pros, p_geoid, ARRAY['_timem', '_timet'], v_pcols,
+                                                             v_base, v_pset, v_cset) LOOP
+            IF v_attr.conflict THEN
+                RETURN NULL;  -- removed on one side and set on the other, or a column changed on both: object-level
             END IF;
+            INSERT INTO pg_temp.tgsis_mp_prow VALUES (v_attr.key[1], v_attr.key[2], v_attr.merged, v_attr.version);
         END LOOP;
     END IF;
 
     -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
-    FOR v_attr IN
-        SELECT e.viewname, e.keycolumn,
-               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
-               array_agg(e.columnname ORDER BY e.o) AS columns
-          FROM (SELECT a.*, row_number() OVER () AS o
-                  FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_parent.workingset, v_cset) AS a) AS e
-         GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
-    LOOP
-        IF v_attr.viewname = 'tgsis.geometry' THEN
-            v_aview := v_aview || v_attr.viewname;
-            v_akey := v_akey || v_attr.keycolumn;
-            v_aset := v_aset || v_attr.sets;
-        ELSE
-            v_fcols := v_attr.columns;
-        END IF;
-    END LOOP;
+    SELECT a.p_views, a.p_keys, a.p_sets, a.p_fcols INTO v_aview, v_akey, v_aset, v_fcols
+      FROM tgsis.merge_attribute_writes(p_version, p_geoid, v_base, v_pset, v_cset) AS a;
 
-    -- the rights: to write in the version, to change the class (and the feature-row columns the parent changed)
-    PERFORM tgsis.merge_write_rights(p_version, p_geoid, v_fcols, 'period by period', 'surface');
+    -- the rights (to write in the version, to change the class and the feature-row columns the parent changed),
+    -- then the session in the version's working revision, the object locked
+    SELECT e.p_settings, e.p_revision, e.p_workingset INTO v_settings, v_rev, v_cset
+      FROM tgsis.merge_sliced_enter(p_version, p_geoid, v_sets.p_versionid, v_fcols, 'period by period') AS e;
 
     -- 7. the writes, in the version's working revision, as write_sliced_difference writes them
-    v_settings := ARRAY[current_setting('tgsis.version', true), current_setting('tgsis.revision', true)];
-    PERFORM tgsis.goto_version(p_version, true);
-    SELECT workingrevision, workingset INTO v_rev, v_cset FROM tgsis.versions WHERE versionid = v_version.versionid;
-    PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
-       FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'geometry';
-    PERFORM tgsis.object_write_lock('feature', ARRAY[v_key]);
     BEGIN  -- (a merge that breaks the periods' continuity is taken back: the Python merge's savepoint)
         -- the per-instant feature property rows first (as _write_instant_rows: a DELETE, INSERT or UPDATE of the
         -- class's view per geometry instant, which its trigger writes)
         IF v_pcols IS NOT NULL THEN
-            SELECT string_agg(format('%I', c), ', ' ORDER BY o),
-                   string_agg(format('$1[%s]::%s', o + 3, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
-                                                           WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
-                                                             AND a.attname = c)), ', ' ORDER BY o),
-                   string_agg(format('%I = $1[%s]::%s', c, o + 3, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
-                                                                   WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
-                                                                     AND a.attname = c)), ', ' ORDER BY o)
-              INTO v_cols, v_casts, v_why
-              FROM unnest(v_pcols) WITH ORDINALITY AS u(c, o);
             FOR v_attr IN SELECT * FROM pg_temp.tgsis_mp_prow r WHERE r.mv IS DISTINCT FROM r.cv ORDER BY r.m, r.t LOOP
-                PERFORM tgsis.check_merge_table_write(v_pros, CASE WHEN v_attr.cv IS NULL THEN 'INSERT'
-                                                                  WHEN v_attr.mv IS NULL THEN 'DELETE' ELSE 'UPDATE' END, p_geoid);
-                v_count := 0;
-                IF v_attr.mv IS NOT NULL AND v_attr.cv IS NOT NULL THEN  -- in place in the working revision
-                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                        'UPDATE %I.%I v SET %s WHERE v._geoid = $1[1]::bigint AND v._timem = $1[2]::float8
-                            AND v._timet = $1[3]::float8 AND v.revision = $4 AND NOT (v.lastrevs && $2)',
-                        v_pros.schemaname, v_pros.tablename || '_ver', v_why),
-                        p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text] || v_attr.mv, p_2 => v_cset, p_4 => v_rev) AS r;
-                END IF;
-                IF v_count = 0 AND v_attr.cv IS NOT NULL THEN  -- the version's row goes (closed, or gone if its revision's)
-                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                        'DELETE FROM %I.%I v WHERE v._geoid = $1[1]::bigint AND v._timem = $1[2]::float8
-                            AND v._timet = $1[3]::float8 AND v.revision = $4',
-                        v_pros.schemaname, v_pros.tablename || '_ver'),
-                        p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text], p_4 => v_rev) AS r;
-                    IF v_count = 0 THEN
-                        SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                            'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
-                              WHERE v._geoid = $1[1]::bigint AND v._timem = $1[2]::float8 AND v._timet = $1[3]::float8
-                                AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-                            v_pros.schemaname, v_pros.tablename || '_ver'),
-                            p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text], p_2 => v_cset, p_4 => v_rev) AS r;
-                        PERFORM tgsis.note_changed_objects(v_pros.schemaname, v_pros.tablename, v_rev, ARRAY[v_key]);
-                    END IF;
-                    IF v_attr.mv IS NOT NULL THEN
-                        v_count := 0;  -- (an UPDATE of the view: one row)
-                    END IF;
-                END IF;
-                IF v_attr.mv IS NOT NULL AND v_count = 0 THEN
-                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                        'INSERT INTO %I.%I (_geoid, _timem, _timet, %s, revision)
-                         SELECT $1[1]::bigint, $1[2]::float8, $1[3]::float8, %s, $4',
-                        v_pros.schemaname, v_pros.tablename || '_ver', v_cols, v_casts),
-                        p_1 => ARRAY[v_key, v_attr.m::text, v_attr.t::text] || v_attr.mv, p_4 => v_rev) AS r;
-                END IF;
-                v_written := v_written + v_count;
+                v_written := v_written + tgsis.merge_write_instant_row(v_pros, p_geoid, ARRAY['_timem', '_timet'],
+                                                                       ARRAY[v_attr.m::text, v_attr.t::text], v_pcols,
+                                                                       v_attr.mv, v_attr.cv, v_rev, v_cset);
             END LOOP;
         END IF;
         -- per table, in the Python writer's order: the version's rows (old) against the merged (new), a period's
@@ -504,34 +389,23 @@ BEGIN
                                                             AND o.bits = n.bits)
                           ORDER BY n.m, n.t, n.id, u.k)
               INTO v_gone, v_fresh;
-            IF length(v_spec.tab) = 2 AND EXISTS (SELECT FROM unnest(v_fresh) AS f WHERE f IS NULL)
-               AND EXISTS (SELECT FROM pg_catalog.pg_attribute a
-                            WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
-                              AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> ALL (v_spec.keys || v_spec.okey)
-                              AND a.atttypid NOT IN ('real'::regtype, 'double precision'::regtype)) THEN
-                RAISE EXCEPTION '%: its merged rows cannot be written: some property rows have no value for an integer or boolean property',
-                        v_refused
-                    USING ERRCODE = 'TG302', HINT = v_hint;
-            END IF;
             v_written := v_written + tgsis.merge_write_keyed_rows(v_spec.vt, v_spec.okey, p_geoid, v_spec.keys, v_gone, v_fresh,
-                                                                   v_rev, v_cset);
+                                                                   v_rev, v_cset, CASE WHEN length(v_spec.tab) = 2 THEN v_refused END,
+                                                                   v_hint);
         END LOOP;
         PERFORM FROM tgsis.refresh_geometry(p_geoid);
         v_written := v_written + tgsis.merge_apply_attribute_edits(p_geoid, v_aview, v_akey, v_aset, v_fcols,
-                                                                   v_parent.workingset, v_rev, v_cset);
+                                                                   v_pset, v_rev, v_cset);
         IF (SELECT count(*) FROM tgsis.timem t WHERE t.geoid = p_geoid) > 1 THEN
             PERFORM tgsis.check_period_continuity(p_geoid, NULL, NULL);
         END IF;
     EXCEPTION WHEN SQLSTATE 'TG204' THEN
-        PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
-                set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
+        PERFORM tgsis.merge_sliced_leave(p_version, p_geoid, v_settings, false);
         RETURN NULL;  -- the periods would not join: the Python merge leaves it unsolved ("its merged rows cannot be written")
     END;
-    PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
-            set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
     TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
-             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_pros, pg_temp.tgsis_mp_prow;
-    PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
+             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow;
+    PERFORM tgsis.merge_sliced_leave(p_version, p_geoid, v_settings, true);
     RETURN v_written;
 END
 $$;

@@ -1,6 +1,6 @@
--- tgsis.merge_write_keyed_rows(table, object key, geoid, key columns, gone, fresh, revision, working set): one table's part of a psql merge's keyed difference; rows written.
--- The writer the psql merges of temporal surfaces share (tgsis.merge_periods_by_slice,
--- model 3, slice by slice), as tgsis.db._state_write._write_table_difference
+-- tgsis.merge_write_keyed_rows(table, object key, geoid, key columns, gone, fresh, revision, working set, refusal, hint): one table's part of a psql merge's keyed difference; rows written.
+-- The writer the psql merges of temporal surfaces share (tgsis.merge_instants_by_slice,
+-- model 2; tgsis.merge_periods_by_slice, model 3), as tgsis.db._state_write._write_table_difference
 -- writes one table in Python: the rows of the keys p_gone (the version's rows
 -- whose key is gone from the merge or whose bits differ) are closed in the
 -- version's working revision p_revision (a row of that revision removed, any
@@ -12,11 +12,15 @@
 -- p_fresh the key values then every other column of the table in its
 -- order, one row after the other, as text. The rights the Python merge meets
 -- are asked first (tgsis.check_merge_table_write: DELETE on the view, INSERT
--- on the storage), 42501 and nothing written otherwise. The caller has the
+-- on the storage), 42501 and nothing written otherwise; then, with p_refused,
+-- fresh rows without a value for a column other than a float one (a property
+-- row merged from a vertex without one) are refused (TG302, p_refused and
+-- p_hint worded by the caller), as the Python writer refuses them. The caller has the
 -- session in the version's working revision; the key and value types come
 -- from the table's columns, never from the caller.
 CREATE FUNCTION tgsis.merge_write_keyed_rows(p_table tgsis.versioned_tables, p_okey text, p_geoid bigint, p_keys text[],
-                                             p_gone text[], p_fresh text[], p_revision integer, p_workingset integer[])
+                                             p_gone text[], p_fresh text[], p_revision integer, p_workingset integer[],
+                                             p_refused text DEFAULT NULL, p_hint text DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
@@ -62,6 +66,14 @@ BEGIN
         RETURN v_written;
     END IF;
     PERFORM tgsis.check_merge_table_write(p_table, 'INSERT', p_geoid, true);  -- (the Python client COPYs them there)
+    IF p_refused IS NOT NULL AND EXISTS (SELECT FROM unnest(p_fresh) AS f WHERE f IS NULL)
+       AND EXISTS (SELECT FROM pg_catalog.pg_attribute a
+                    WHERE a.attrelid = v_rel AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> p_okey
+                      AND a.attname <> ALL (p_keys) AND a.atttypid NOT IN ('real'::regtype, 'double precision'::regtype)) THEN
+        RAISE EXCEPTION '%: its merged rows cannot be written: some property rows have no value for an integer or boolean property',
+                p_refused
+            USING ERRCODE = 'TG302', HINT = p_hint;
+    END IF;
     -- the columns: the keys, then the others in the table's order
     SELECT count(*)::integer,
            string_agg(format('%I', c.attname), ', ' ORDER BY c.o),
@@ -80,7 +92,7 @@ END
 $$;
 
 -- internal to the psql merges (their owner's code), not executable by PUBLIC (tests/test_function_grants.py)
-REVOKE ALL ON FUNCTION tgsis.merge_write_keyed_rows(tgsis.versioned_tables, text, bigint, text[], text[], text[], integer, integer[]) FROM PUBLIC;
+REVOKE ALL ON FUNCTION tgsis.merge_write_keyed_rows(tgsis.versioned_tables, text, bigint, text[], text[], text[], integer, integer[], text, text) FROM PUBLIC;
 
-COMMENT ON FUNCTION tgsis.merge_write_keyed_rows(tgsis.versioned_tables, text, bigint, text[], text[], text[], integer, integer[]) IS
+COMMENT ON FUNCTION tgsis.merge_write_keyed_rows(tgsis.versioned_tables, text, bigint, text[], text[], text[], integer, integer[], text, text) IS
     'one table''s part of a psql merge''s keyed difference, as the Python writer writes it: the rows of the gone keys closed in the version''s working revision, the fresh rows inserted into the storage with it, the rights asked first; returns the rows written';
