@@ -498,3 +498,30 @@ def test_random_one_sided_edits_of_periods_merge_in_psql_exactly_as_in_python(
     if theirs[0] == "done":
         for table in theirs[2]:
             assert mine[2][table] == theirs[2][table], table
+
+
+def test_a_class_with_triangle_properties(conn: Conn) -> None:
+    """Integer properties per triangle (alignment CELL) at each geometry instant: the version edits and removes
+    some at one instant, the parent moves nodes at another; both merges write the same rows."""
+    tgsis.create_feature_class(
+        conn, "evolving", "SURFACE", time_model="EVOLVING", cell_properties=[("facies", "int")], alignment="CELL"
+    )
+    tgsis.enable_feature_versioning(conn)
+    cells = curved_surface().cells
+    facies = np.stack([np.arange(len(cells)) % 5] * len(FIRST))
+    positions = np.stack([_shape(i) for i in range(len(FIRST))])
+    period = TopologyPeriod(np.asarray(FIRST), cells, positions, cell_properties={"facies": facies})
+    geoid = tgsis.insert_feature(conn, "evolving", EvolvingSurface([period]))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _sql(
+        conn,
+        "e1",
+        "UPDATE evolving_cellpros SET facies = 9 WHERE _geoid = %s AND _timet = 1 AND _idx BETWEEN 10 AND 14",
+        (geoid,),
+    )
+    _sql(conn, "e1", "DELETE FROM evolving_cellpros WHERE _geoid = %s AND _timet = 1 AND _idx = 20", (geoid,))
+    ids = np.asarray(_node_ids(conn, geoid, 1.0))
+    _move(conn, "DEFAULT", geoid, 1.0, 3.0, ids[SOUTH], PARENT_SHIFT)
+    mine = assert_same_merge(conn, "e1")
+    assert any("9" in row for row in mine[2]["public.evolving_cellpros_ver"])  # (the version's edit kept)

@@ -166,6 +166,7 @@ BEGIN
                  (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
                p_1 => ARRAY[v_key, v_periods::text, v_cset::text], p_2 => v_base, p_3 => v_pset) AS r;
     END LOOP;
+    ANALYZE pg_temp.tgsis_mp_row;  -- (temporary tables have no statistics otherwise: the joins below want them)
     IF EXISTS (SELECT FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'v'
                   AND ('NaN' = ANY (r.vals) OR 'Infinity' = ANY (r.vals) OR '-Infinity' = ANY (r.vals))) THEN
         RAISE EXCEPTION '%: some nodes have non-finite coordinates', v_refused
@@ -177,18 +178,21 @@ BEGIN
     -- 3. per element of a slice a state has (a node at a geometry instant; a triangle of the period at each of its
     -- geometry instants): its geometry row with its property row at that instant (a missing one reads as NaN)
     INSERT INTO pg_temp.tgsis_mp_el
+    WITH nulls AS (  -- per kind, a property row of no value: one NaN per property column
+        SELECT k.kind, coalesce((SELECT array_fill('NaN'::text, ARRAY[count(*)::integer])::text
+                                   FROM pg_catalog.pg_attribute a, pg_temp.tgsis_mp_spec x
+                                  WHERE x.tab = k.kind || 'p'
+                                    AND a.attrelid = format('%I.%I', (x.vt).schemaname, (x.vt).tablename)::regclass
+                                    AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> x.okey
+                                    AND a.attname <> ALL (x.keys)), '{}') AS nulls
+          FROM (VALUES ('v'), ('c')) AS k (kind))
     SELECT g.tab AS kind, g.st, g.m, s.t, g.id, g.vals, g.bits, g.eq, g.el, p.vals,
            coalesce(p.bits, n.nulls), coalesce(p.eq, n.nulls), n.nulls
       FROM pg_temp.tgsis_mp_row g
+      JOIN nulls n ON n.kind = g.tab
       JOIN pg_temp.tgsis_mp_row s ON s.tab = 'T' AND s.st = g.st AND s.m = g.m AND (g.tab = 'c' OR s.t = g.t)
-      LEFT JOIN pg_temp.tgsis_mp_row p ON p.tab = g.tab || 'p' AND p.st = g.st AND p.m = g.m AND p.t = s.t AND p.id = g.id
-      CROSS JOIN LATERAL (SELECT coalesce(array_fill('NaN'::text, ARRAY[count(*)::integer])::text, '{}') AS nulls
-                            FROM pg_catalog.pg_attribute a, pg_temp.tgsis_mp_spec x
-                           WHERE x.tab = g.tab || 'p'
-                             AND a.attrelid = format('%I.%I', (x.vt).schemaname, (x.vt).tablename)::regclass
-                             AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> x.okey
-                             AND a.attname <> ALL (x.keys)) AS n
-     WHERE g.tab IN ('v', 'c');
+      LEFT JOIN pg_temp.tgsis_mp_row p ON p.tab = g.tab || 'p' AND p.st = g.st AND p.m = g.m AND p.t = s.t AND p.id = g.id;
+    ANALYZE pg_temp.tgsis_mp_el;
 
     -- 4. each geometry instant: which side it is taken from. Per period first (merge_sliced): added or removed on
     -- one side, taken whole from it; added on both, alike or a conflict; its topology changed on both sides
@@ -215,10 +219,11 @@ BEGIN
     -- a state's topology of a period: its first geometry instant's node ids and the period's triangles
     topo AS (
         SELECT f.st, f.m,
-               (SELECT coalesce(string_agg(e.kind || e.id || CASE e.kind WHEN 'c' THEN ':' || e.geq ELSE '' END,
-                                           ',' ORDER BY e.kind, e.id), '')
-                  FROM pg_temp.tgsis_mp_el e WHERE e.st = f.st AND e.m = f.m AND e.t = f.t) AS sig
-          FROM (SELECT r.st, r.m, min(r.t) AS t FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'T' GROUP BY r.st, r.m) AS f),
+               coalesce(md5(string_agg(e.kind || e.id || CASE e.kind WHEN 'c' THEN ':' || e.geq ELSE '' END,
+                                       ',' ORDER BY e.kind, e.id)), '') AS sig
+          FROM (SELECT r.st, r.m, min(r.t) AS t FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'T' GROUP BY r.st, r.m) AS f
+          LEFT JOIN pg_temp.tgsis_mp_el e ON e.st = f.st AND e.m = f.m AND e.t = f.t
+         GROUP BY f.st, f.m),
     per AS (
         SELECT c.m, bool_or(c.ib) AS pb, bool_or(c.ip) AS pp, bool_or(c.ic) AS pc, bool_or(c.chp) AS chp,
                bool_or(c.chc) AS chc, bool_and(c.samepc) AS samepc
@@ -266,6 +271,7 @@ BEGIN
       LEFT JOIN pv ON pv.kind = e.kind AND pv.m = e.m AND pv.t = e.t AND pv.id = e.id
      WHERE e.st = CASE s.src WHEN 'P' THEN 2 WHEN 'C' THEN 4
                              ELSE CASE WHEN pv.b IS DISTINCT FROM pv.c THEN 4 ELSE 2 END END;
+    ANALYZE pg_temp.tgsis_mp_new;
     SELECT string_agg(format('%s %s at geometry instant %s of the period starting at %s',
                              CASE pv.kind WHEN 'v' THEN 'node' ELSE 'triangle' END, pv.id, pv.t, pv.m),
                       ', ' ORDER BY pv.m, pv.t, pv.kind DESC, pv.id)
@@ -290,11 +296,12 @@ BEGIN
       INTO v_why
       FROM (SELECT g.m, g.t, first_value(g.t) OVER w AS first, first_value(g.sig) OVER w AS firstsig, g.sig
               FROM (SELECT s.m, s.t,
-                           (SELECT coalesce(string_agg(n.kind || n.id || CASE n.kind WHEN 'c' THEN ':' || n.geq ELSE '' END,
-                                                       ',' ORDER BY n.kind, n.id), '')
-                              FROM pg_temp.tgsis_mp_new n WHERE n.m = s.m AND n.t = s.t) AS sig
+                           coalesce(md5(string_agg(n.kind || n.id || CASE n.kind WHEN 'c' THEN ':' || n.geq ELSE '' END,
+                                                   ',' ORDER BY n.kind, n.id)), '') AS sig
                       FROM pg_temp.tgsis_mp_slice s
-                     WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END) AS g
+                      LEFT JOIN pg_temp.tgsis_mp_new n ON n.m = s.m AND n.t = s.t
+                     WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END
+                     GROUP BY s.m, s.t) AS g
             WINDOW w AS (PARTITION BY g.m ORDER BY g.t)) AS d
      WHERE d.sig <> d.firstsig
      ORDER BY d.m, d.t LIMIT 1;
@@ -346,28 +353,30 @@ BEGIN
             WITH merged AS (  -- the merged slices and the version's
                 SELECT s.m, s.t FROM pg_temp.tgsis_mp_slice s WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END),
             mine AS (SELECT s.m, s.t FROM pg_temp.tgsis_mp_slice s WHERE s.ic),
+            firsts AS (SELECT x.m, min(x.t) AS t, 4 AS st FROM mine x GROUP BY x.m
+                       UNION ALL SELECT x.m, min(x.t), 0 FROM merged x GROUP BY x.m),
             old AS (
                 SELECT e.m, e.t, e.id, e.gbits AS bits, e.gvals AS vals, e.pbits, e.pvals, e.nulls FROM pg_temp.tgsis_mp_el e
                  WHERE e.st = 4 AND e.kind = CASE v_spec.tab WHEN 'n' THEN 'v' ELSE left(v_spec.tab, 1) END
-                   AND (v_spec.tab NOT IN ('n', 'c') OR e.t = (SELECT min(x.t) FROM mine x WHERE x.m = e.m))),
+                   AND (v_spec.tab NOT IN ('n', 'c') OR (e.m, e.t, 4) IN (SELECT f.m, f.t, f.st FROM firsts f))),
             new AS (
                 SELECT e.m, e.t, e.id, e.gbits AS bits, e.gvals AS vals, e.pbits, e.pvals, e.nulls FROM pg_temp.tgsis_mp_new e
                  WHERE e.kind = CASE v_spec.tab WHEN 'n' THEN 'v' ELSE left(v_spec.tab, 1) END
-                   AND (v_spec.tab NOT IN ('n', 'c') OR e.t = (SELECT min(x.t) FROM merged x WHERE x.m = e.m))),
+                   AND (v_spec.tab NOT IN ('n', 'c') OR (e.m, e.t, 0) IN (SELECT f.m, f.t, f.st FROM firsts f))),
             -- the rows of each side as (key, bits, values to write)
             o AS (
-                SELECT DISTINCT x.m, NULL::float8 AS t, 0::bigint AS id, '' AS bits, '{}'::text[] AS vals FROM mine x WHERE v_spec.tab = 'M'
+                SELECT DISTINCT x.m, '-Infinity'::float8 AS t, 0::bigint AS id, '' AS bits, '{}'::text[] AS vals FROM mine x WHERE v_spec.tab = 'M'
                 UNION ALL SELECT x.m, x.t, 0, '', '{}' FROM mine x WHERE v_spec.tab = 'T'
-                UNION ALL SELECT e.m, NULL, e.id, CASE v_spec.tab WHEN 'c' THEN e.bits ELSE '' END,
+                UNION ALL SELECT e.m, '-Infinity', e.id, CASE v_spec.tab WHEN 'c' THEN e.bits ELSE '' END,
                                  CASE v_spec.tab WHEN 'c' THEN e.vals ELSE '{}' END
                             FROM old e WHERE v_spec.tab IN ('n', 'c')
                 UNION ALL SELECT e.m, e.t, e.id, e.bits, e.vals FROM old e WHERE v_spec.tab = 'v'
                 UNION ALL SELECT e.m, e.t, e.id, e.pbits, e.pvals FROM old e WHERE length(v_spec.tab) = 2),
             n AS (
-                SELECT DISTINCT x.m, NULL::float8 AS t, 0::bigint AS id, '' AS bits, '{}'::text[] AS vals, false AS novalue
+                SELECT DISTINCT x.m, '-Infinity'::float8 AS t, 0::bigint AS id, '' AS bits, '{}'::text[] AS vals, false AS novalue
                   FROM merged x WHERE v_spec.tab = 'M'
                 UNION ALL SELECT x.m, x.t, 0, '', '{}', false FROM merged x WHERE v_spec.tab = 'T'
-                UNION ALL SELECT e.m, NULL, e.id, CASE v_spec.tab WHEN 'c' THEN e.bits ELSE '' END,
+                UNION ALL SELECT e.m, '-Infinity', e.id, CASE v_spec.tab WHEN 'c' THEN e.bits ELSE '' END,
                                  CASE v_spec.tab WHEN 'c' THEN e.vals ELSE '{}' END, false
                             FROM new e WHERE v_spec.tab IN ('n', 'c')
                 UNION ALL SELECT e.m, e.t, e.id, e.bits, e.vals, false FROM new e WHERE v_spec.tab = 'v'
@@ -376,7 +385,7 @@ BEGIN
                            FROM o CROSS JOIN LATERAL unnest(ARRAY[o.m::text] || CASE WHEN v_spec.tcol IS NULL THEN '{}'::text[] ELSE ARRAY[o.t::text] END
                                                             || CASE WHEN v_spec.idcol IS NULL THEN '{}'::text[] ELSE ARRAY[o.id::text] END)
                                                      WITH ORDINALITY AS u(v, k)
-                          WHERE NOT EXISTS (SELECT FROM n WHERE n.m = o.m AND n.t IS NOT DISTINCT FROM o.t AND n.id = o.id
+                          WHERE NOT EXISTS (SELECT FROM n WHERE n.m = o.m AND n.t = o.t AND n.id = o.id
                                                              AND n.bits = o.bits)
                           ORDER BY o.m, o.t, o.id, u.k),
                    ARRAY(SELECT u.v
@@ -385,7 +394,7 @@ BEGIN
                                                             || n.vals)
                                                      WITH ORDINALITY AS u(v, k)
                           WHERE NOT n.novalue
-                            AND NOT EXISTS (SELECT FROM o WHERE o.m = n.m AND o.t IS NOT DISTINCT FROM n.t AND o.id = n.id
+                            AND NOT EXISTS (SELECT FROM o WHERE o.m = n.m AND o.t = n.t AND o.id = n.id
                                                             AND o.bits = n.bits)
                           ORDER BY n.m, n.t, n.id, u.k)
               INTO v_gone, v_fresh;
