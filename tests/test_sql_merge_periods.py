@@ -525,3 +525,34 @@ def test_a_class_with_triangle_properties(conn: Conn) -> None:
     _move(conn, "DEFAULT", geoid, 1.0, 3.0, ids[SOUTH], PARENT_SHIFT)
     mine = assert_same_merge(conn, "e1")
     assert any("9" in row for row in mine[2]["public.evolving_cellpros_ver"])  # (the version's edit kept)
+
+
+def test_two_evolving_surfaces_and_a_surface_at_instants_in_one_merge(conn: Conn) -> None:
+    """One psql merge of three features changed on both sides: two evolving surfaces (the work tables made by the
+    first, emptied for the second) and a surface at instants (model 2's merge in the same transaction)."""
+    from tests.test_merge_instants import TIMES, move
+    from tgsis.temporal import SurfaceSeries
+
+    tgsis.create_feature_class(
+        conn, "horizons", "SURFACE", time_model="INSTANTS", cell_properties=[("porosity", "float8")]
+    )
+    cells = curved_surface().cells
+    series = SurfaceSeries(
+        np.asarray(TIMES),
+        [tgsis.Surface(_shape(i), cells, vertex_properties={"porosity": _porosity()}) for i in range(len(TIMES))],
+    )
+    flat = tgsis.insert_feature(conn, "horizons", series)
+    conn.commit()
+    first = make_periods(conn)  # (versions e1 on both)
+    second = tgsis.insert_feature(conn, "evolving", EvolvingSurface([_period(FIRST, 0), _period(SECOND, 2)]))
+    conn.commit()
+    tgsis.create_version(conn, "e2")
+    conn.commit()
+    for geoid in (first, second):
+        step(conn, "e2", "move 3 4 north", geoid)
+        step(conn, "DEFAULT", "move 1 2 south", geoid)
+    step(conn, "e2", "append", second)
+    move(conn, "e2", flat, TIMES[0], NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", flat, TIMES[2], SOUTH, PARENT_SHIFT)
+    mine = assert_same_merge(conn, "e2")
+    assert mine[1] > 0
