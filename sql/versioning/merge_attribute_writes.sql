@@ -5,7 +5,8 @@
 -- geometry row's view, key column and SET list (built with %I / %L),
 -- p_fcols the feature-row columns to copy from the parent's row (NULL:
 -- none), p_both the columns both sides changed to other values (NULL: none).
--- Shared by tgsis.merge_instants_by_slice and tgsis.merge_periods_by_slice.
+-- Shared by tgsis.merge_mesh_by_region (which refuses p_both),
+-- tgsis.merge_instants_by_slice and tgsis.merge_periods_by_slice.
 CREATE FUNCTION tgsis.merge_attribute_writes(p_version text, p_geoid bigint, p_base integer[], p_parentset integer[],
                                              p_versionset integer[], OUT p_views text[], OUT p_keys text[],
                                              OUT p_sets text[], OUT p_fcols text[], OUT p_both text)
@@ -28,7 +29,9 @@ BEGIN
                   FROM tgsis.merge_attribute_edits(p_version, p_geoid, p_base, p_parentset, p_versionset) AS a) AS e
          GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
     LOOP
-        p_both := concat_ws(', ', p_both, v_attr.both_columns);
+        IF v_attr.both_columns IS NOT NULL THEN
+            p_both := concat_ws(', ', p_both, v_attr.both_columns);
+        END IF;
         IF v_attr.viewname = 'tgsis.geometry' THEN
             p_views := p_views || v_attr.viewname;
             p_keys := p_keys || v_attr.keycolumn;
@@ -37,7 +40,6 @@ BEGIN
             p_fcols := v_attr.columns;  -- the feature row's: copied from the parent's row
         END IF;
     END LOOP;
-    p_both := nullif(p_both, '');
 END
 $$;
 
