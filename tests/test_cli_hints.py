@@ -94,7 +94,8 @@ def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
     assert foreign_terms("pass porosity=0.2") == ["porosity="]
     slice_rows = (
         "give the mesh alone (the sixth argument) and merge with `tgsis version merge 'north edit'` or "
-        'tgsis.merge_version(conn, "north edit") in Python; the psql merge refuses a slice both sides changed'
+        'tgsis.merge_version(conn, "north edit") in Python; the psql merge applies only parent, child or base to a '
+        "region of a slice"
     )
     assert to_cli(slice_rows) == "give --mesh FILE, then tgsis version merge 'north edit'"
 
@@ -159,6 +160,10 @@ NOT_FROM_THE_CLI = {
     "the command finds and merges the regions in Python",
     "sql/versioning/merge_mesh_by_region.sql": "the psql merge by region: the command merges by region in Python "
     "(tgsis.region_detection = 'client'), which never reaches it",
+    "sql/versioning/instants_merge_regions.sql": "SQL region detection of surfaces at instants for psql users: the "
+    "command finds the regions in Python, and SQL calls it only through tgsis.store_mesh_regions",
+    "sql/versioning/merge_instant_by_region.sql": "the psql merge of an instant both sides changed: the command merges "
+    "in Python (tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/merge_instants_by_slice.sql": "the psql merge of surfaces at instants: the command merges them "
     "in Python (tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/merge_sliced_hint.sql": "the psql merges of temporal surfaces: the command merges them in Python "

@@ -13,6 +13,8 @@ both edits, bit for bit, the untouched instants and rows as they were.
 
 from __future__ import annotations
 
+import re
+import tempfile
 from typing import Any
 
 import numpy as np
@@ -56,6 +58,10 @@ def _porosity(i: int) -> np.ndarray:
 @pytest.fixture
 def series(conn: Conn) -> int:
     """A model-2 surface at 8 instants (a vertex property, a per-instant property) in DEFAULT, version e1 on it."""
+    return _series(conn, TIMES)
+
+
+def _series(conn: Conn, times: tuple[float, ...]) -> int:
     tgsis.create_feature_class(
         conn,
         "horizons",
@@ -66,12 +72,12 @@ def series(conn: Conn) -> int:
     )
     tgsis.enable_feature_versioning(conn)
     surfaces = []
-    for i in range(len(TIMES)):
+    for i in range(len(times)):
         vertices, cells = _grid(i)
         surfaces.append(tgsis.Surface(vertices, cells, vertex_properties={"porosity": _porosity(i)}))
-    throw = np.asarray([10.0 * (i + 1) for i in range(len(TIMES))])
+    throw = np.asarray([10.0 * (i + 1) for i in range(len(times))])
     geoid = tgsis.insert_feature(
-        conn, "horizons", SurfaceSeries(np.asarray(TIMES), surfaces, properties={"throw": throw})
+        conn, "horizons", SurfaceSeries(np.asarray(times), surfaces, properties={"throw": throw})
     )
     tgsis.create_version(conn, "e1")
     conn.commit()
@@ -146,10 +152,12 @@ def _state(conn: Conn, version: str, geoid: int) -> dict[str, Any]:
     return out
 
 
-def _expected(edits: dict[float, list[tuple[Any, tuple[float, float, float]]]]) -> dict[str, Any]:
+def _expected(
+    edits: dict[float, list[tuple[Any, tuple[float, float, float]]]], times: tuple[float, ...] = TIMES
+) -> dict[str, Any]:
     _, cells = _grid(0)
     out = {}
-    for i, t in enumerate(TIMES):
+    for i, t in enumerate(times):
         vertices = _grid(i)[0]
         for ids, shift in edits.get(t, []):
             vertices = _shifted(vertices, ids, shift)
@@ -223,3 +231,37 @@ def test_refresh_then_merge_reads_the_change_and_keeps_every_instant(
     expected = _expected({1.0: [(NORTH, CHILD_SHIFT)], 8.0: [(SOUTH, PARENT_SHIFT)]})
     for version in ("DEFAULT", "e1"):
         assert _state(conn, version, series) == expected, version
+
+
+def _statements(conn: Conn, run: Any) -> int:
+    """The statements ``run`` sends: libpq's trace of the protocol, a simple Query or an extended query's Bind."""
+    with tempfile.TemporaryFile() as trace:
+        conn.pgconn.trace(trace.fileno())
+        try:
+            run()
+        finally:
+            conn.pgconn.untrace()
+        trace.seek(0)
+        lines = trace.read().decode("utf-8", "replace").splitlines()
+    return sum(1 for line in lines if re.search(r"\tF\t\d+\t(Query|Bind)\b", line))
+
+
+def test_the_statements_of_a_merge_do_not_grow_with_the_touched_instants(conn: Conn) -> None:
+    """The largest ids per touched slice were read by two statements per slice: now one statement for all, as the
+    merge's other reads (per table). A merge touching 2 of 20 instants and one touching all 20 send as many
+    statements; each writes the union of both sides' edits at every touched instant, bit for bit."""
+    times = tuple(float(t) for t in range(1, 21))
+    geoid = _series(conn, times)
+    counts = []
+    edits: dict[float, list[tuple[Any, tuple[float, float, float]]]] = {}
+    for touched in (times[:2], times, times[:2]):
+        for t in touched:
+            _move(conn, "e1", geoid, t, NORTH, CHILD_SHIFT)
+            _move(conn, "DEFAULT", geoid, t, SOUTH, PARENT_SHIFT)
+            edits.setdefault(t, []).extend([(NORTH, CHILD_SHIFT), (SOUTH, PARENT_SHIFT)])
+        counts.append(_statements(conn, lambda: tgsis.merge_version(conn, "e1", remove=True)))
+        conn.commit()
+        assert _state(conn, "DEFAULT", geoid) == _expected(edits, times)
+        tgsis.create_version(conn, "e1")
+        conn.commit()
+    assert counts[0] == counts[1] == counts[2] and counts[0] > 0, counts

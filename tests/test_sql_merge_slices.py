@@ -7,8 +7,9 @@ other side's edits at other instants, the per-instant feature properties
 column by column (docs/merge.md, "Models 2 and 3"). The oracle is the Python
 merge (``tgsis.merge_version(conn, v)``), row version for row version
 (tests.test_sql_merge_write.both_merges). An instant changed on both sides
-differently (its regions) is still refused from psql (TG302) naming
-``tgsis version merge NAME``; what cannot be split is refused as in Python.
+differently merges by region (tests/test_sql_merge_instant_regions.py); one
+with an unsolved conflicting region, and what cannot be split, are refused
+as in Python.
 """
 
 from __future__ import annotations
@@ -152,8 +153,8 @@ def test_instants_changed_on_one_side_merge_in_psql_exactly_as_in_python(
     assert_same_merge(conn, "e1")
 
 
-# what the Python merge leaves unsolved (TG302), or merges where psql refuses naming it (an instant both sides
-# changed differently: its regions)
+# what the Python merge leaves unsolved (TG302), as the psql merge does (an instant both sides changed differently,
+# overlapping: a conflicting region without a solution)
 REFUSED: dict[str, tuple[list[tuple[str, str]], str]] = {
     "an instant removed on one side and changed on the other": (
         [("e1", "delete 2"), ("DEFAULT", "move 2 south")],
@@ -172,7 +173,10 @@ REFUSED: dict[str, tuple[list[tuple[str, str]], str]] = {
         "TG302",
     ),
     "a per-instant property changed on both sides": ([("e1", "throw 2 21"), ("DEFAULT", "throw 2 22")], "TG302"),
-    "an instant moved on both sides differently": ([("e1", "move 2 north"), ("DEFAULT", "move 2 south")], "python"),
+    "an instant moved on both sides differently, overlapping": (
+        [("e1", "move 2 north"), ("DEFAULT", "move 2 north")],
+        "TG302",
+    ),
 }
 
 
@@ -187,12 +191,7 @@ def test_what_psql_does_not_merge_instant_by_instant_is_refused_and_nothing_is_w
     conn.commit()
     theirs, mine = both_merges(conn, "e1")
     assert mine[:2] == ("refused", "TG302"), mine
-    if python == "python":  # Python merges it (the instant's regions); psql names the command that does
-        assert theirs[0] == "done"
-        assert "instants 2 were changed both in the version and in its parent" in mine[2]
-        assert "`tgsis version merge e1`" in mine[2]
-    else:
-        assert theirs[:2] == ("refused", "TG302"), theirs
+    assert theirs[:2] == ("refused", python), theirs
     assert everything(conn) == before
     conn.commit()
 
@@ -379,13 +378,13 @@ def test_conflicts_of_instants_kept_by_pg_dump_and_restore_then_merged_in_psql(
 
 
 @pytest.mark.parametrize("name", ["north edit", 'o\'brien "x"'])
-def test_the_refusal_of_an_instant_both_sides_changed_names_the_commands_with_the_name_quoted(
+def test_the_refusal_of_an_unsolved_region_of_an_instant_names_the_commands_with_the_name_quoted(
     conn: Conn, series: int, name: str
 ) -> None:
     tgsis.create_version(conn, name)
     conn.commit()
     move(conn, name, series, 2.0, NORTH, CHILD_SHIFT)
-    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    move(conn, "DEFAULT", series, 2.0, NORTH[:4], PARENT_SHIFT)  # overlaps: a conflicting region, unsolved
     with pytest.raises(psycopg.Error) as caught:
         conn.execute("SELECT tgsis.merge_version(%s)", (name,))
     conn.rollback()
@@ -439,12 +438,12 @@ def test_two_surfaces_at_instants_in_one_psql_merge(conn: Conn, first: str) -> N
         assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
 
 
-def test_a_row_the_version_rewrote_alike_at_an_instant_only_it_changed_is_refused_by_name(
+def test_a_row_the_version_rewrote_alike_at_an_instant_only_it_changed_merges_as_in_python(
     conn: Conn, series: int
 ) -> None:
     """A triangle's vertices rotated (the same oriented triangle: merge3 sees no change) at an instant the version
-    moved elsewhere: which side's row the merge keeps hangs on its regions, which SQL does not compute there; the
-    psql merge refuses by name (TG302, nothing written) where the Python merge keeps the parent's row."""
+    moved elsewhere: the psql merge runs merge3's regions on that instant (tgsis.merge_instant_by_region), so it
+    keeps the parent's row there as the Python merge does (it refused it by name before)."""
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     _sql(
         conn,
@@ -454,14 +453,7 @@ def test_a_row_the_version_rewrote_alike_at_an_instant_only_it_changed_is_refuse
         (series,),
     )
     move(conn, "DEFAULT", series, 3.0, SOUTH, PARENT_SHIFT)
-    before = everything(conn)
-    conn.commit()
-    theirs, mine = both_merges(conn, "e1")
-    assert theirs[0] == "done", theirs
-    assert mine[:2] == ("refused", "TG302"), mine
-    assert "triangle 150 at instant 2" in mine[2] and "`tgsis version merge e1`" in mine[2], mine[2]
-    assert everything(conn) == before
-    conn.commit()
+    assert_same_merge(conn, "e1")
 
 
 def test_a_psql_merge_of_many_surfaces_holds_no_lock_per_surface(conn: Conn) -> None:

@@ -334,7 +334,7 @@ def test_minus_zero_written_over_zero_alone_at_an_instant(conn: Conn, moved: flo
     _sql(conn, "e1", "UPDATE tgsis.times_vrtx SET z = -0.0 WHERE geoid = %s AND times = 1 AND vrtxid = 0", (geoid,))
     move(conn, "e1", geoid, moved, NORTH[5:], CHILD_SHIFT)
     move(conn, "DEFAULT", geoid, 3.0, SOUTH, PARENT_SHIFT)
-    _same_or_refused_by_name(conn, "e1")
+    assert_same_merge(conn, "e1")  # (merge3's regions at instant 1: refused by name before they were computed in SQL)
 
 
 def test_a_class_without_any_property(conn: Conn) -> None:
@@ -357,8 +357,9 @@ def test_a_class_without_any_property(conn: Conn) -> None:
 
 def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_refused_by_name(conn: Conn) -> None:
     """A psql user records a manual mesh with its rows (as for a model-1 region) for a region of an instant: the
-    psql merge does not merge an instant both sides changed (the Python client does, from the .npz), so the rows
-    are refused in our SQLSTATE naming the instant, not by a raw check violation (23514); the .npz alone is kept."""
+    psql merge applies only parent, child and base solutions there (the Python client applies the .npz), so the
+    rows are refused in our SQLSTATE naming the instant, not by a raw check violation (23514); the .npz alone is
+    kept."""
     from tgsis.db.regions import _sql_rows, state_to_npz
 
     _class(conn)

@@ -20,8 +20,8 @@ import tgsis
 from tests.merge_data import move
 from tests.test_sql_merge_average import _both_moved, _record_in_sql
 from tests.test_sql_merge_regions import MIDDLE, psql
-from tests.test_sql_merge_write import _outcome, _psql_state, both_merges, everything
-from tgsis.merge3 import MeshState
+from tests.test_sql_merge_write import _outcome, _psql_state, assert_same_merge, both_merges, everything
+from tgsis.merge3 import MeshState, restrict_state
 
 Conn = psycopg.Connection[Any]
 
@@ -97,30 +97,86 @@ def _refused_alike(conn: Conn, *words: str) -> tuple[Any, Any]:
 # --------------------------------------------------------------------------- (a) a region row no side changed
 
 
-def test_forged_rows_moving_a_vertex_of_the_region_no_side_changed_are_refused(conn: Conn, fault: int) -> None:
-    """A vertex of the region no side changed, moved by the solution's rows: merge3 takes the manual mesh's rows of
-    the region's ids; psql does not merge it (TG302 naming the vertex, the hint the Python command), writes nothing."""
-    index, merge = _conflict(conn, fault, hole=True)
+def _margin_vertex(merge: Any) -> int:
+    """A vertex of the (one) conflicting region that no side changed: 52 or 53, corners of the removed triangle."""
     (region,) = merge.conflicts
     margin = np.setdiff1d(region.vertex_ids, np.union1d(region.parent_vertex_ids, region.child_vertex_ids))
     assert set(margin.tolist()) >= {52, 53}
-    vertex = int(margin[0])
+    return int(margin[0])
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_rows_moving_a_vertex_of_the_region_no_side_changed_merge_in_psql_as_in_python(
+    conn: Conn, fault: int, action: str
+) -> None:
+    """A vertex of the region no side changed, moved by the solution's rows: merge3 takes the manual mesh's rows of
+    the region's ids; so does psql (was refused, TG302): the base's row closed, the solution's written."""
+    index, merge = _conflict(conn, fault, hole=True)
+    vertex = _margin_vertex(merge)
     xyz = merge.child.vertices.copy()
     xyz[np.searchsorted(merge.child.vertex_ids, vertex), 2] += 0.25
     _record_in_sql(conn, fault, index, _replace(merge.child, vertices=xyz))
-    _psql_refuses_what_python_merges(conn, "no side changed", f"vertices {vertex}")
+    assert_same_merge(conn, "e1", action)
 
 
-def test_forged_rows_changing_the_value_of_a_region_vertex_no_side_changed_are_refused(conn: Conn, fault: int) -> None:
-    """The same vertex keeps its place but gets a porosity of no side: refused alike by psql (the values compared)."""
+def test_rows_changing_the_value_of_a_region_vertex_no_side_changed_merge_in_psql_as_in_python(
+    conn: Conn, fault: int
+) -> None:
+    """The same vertex keeps its place but gets a porosity of no side: written as the Python merge writes it (was
+    refused by psql)."""
     index, merge = _conflict(conn, fault, hole=True)
-    (region,) = merge.conflicts
-    margin = np.setdiff1d(region.vertex_ids, np.union1d(region.parent_vertex_ids, region.child_vertex_ids))
-    vertex = int(margin[0])
+    vertex = _margin_vertex(merge)
     porosity = np.asarray(merge.child.vertex_properties["porosity"], dtype=np.float64).copy()
     porosity[np.searchsorted(merge.child.vertex_ids, vertex)] = 0.987654321
     _record_in_sql(conn, fault, index, _replace(merge.child, vertex_properties={"porosity": porosity}))
-    _psql_refuses_what_python_merges(conn, "no side changed", f"vertices {vertex}")
+    assert_same_merge(conn, "e1")
+
+
+@pytest.mark.parametrize("where", ["inside", "outside"])
+def test_rows_giving_an_atom_to_a_vertex_no_side_changed_merge_or_are_refused_as_in_python(
+    conn: Conn, fault: int, where: str
+) -> None:
+    """An atom (refid) given to a vertex no side changed: inside the region it is written as the Python merge
+    writes it; outside, both refuse it (a row outside the region). psql compared no refid there: the row was
+    taken as the base's and the atom dropped, unsaid."""
+    atom = "INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, %s, %s)"
+    psql(conn, "DEFAULT", (atom, (fault, 0, 1, False)))  # an atom in the base: every state has the refid column
+    conn.execute("SELECT tgsis.merge_version('e1', true)")
+    conn.commit()
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    index, merge = _conflict(conn, fault, hole=True)
+    (region,) = merge.conflicts
+    vertex = (
+        _margin_vertex(merge) if where == "inside" else int(np.setdiff1d(merge.child.vertex_ids, region.vertex_ids)[-1])
+    )
+    refid = np.asarray(merge.child.vertex_properties["refid"], dtype=np.float64).copy()
+    refid[np.searchsorted(merge.child.vertex_ids, vertex)] = int(MIDDLE[0])
+    props = {**merge.child.vertex_properties, "refid": refid}
+    _record_in_sql(conn, fault, index, _replace(merge.child, vertex_properties=props))
+    if where == "inside":
+        assert_same_merge(conn, "e1")
+    else:
+        theirs, mine = _refused_alike(conn, "outside the region", f"vertices {vertex}")
+        assert (theirs[1], mine[1]) == ("TG100", "TG302"), (theirs[:2], mine[:2])
+
+
+def test_rows_lacking_a_vertex_of_the_region_no_side_changed_are_refused_alike(conn: Conn, fault: int) -> None:
+    """The solution lacks such a vertex and its cells in the region: merge3 removes it, and the cells outside the
+    region still on it make the merge invalid: both merges refuse it (was psql's own refusal), nothing written."""
+    index, merge = _conflict(conn, fault, hole=True)
+    (region,) = merge.conflicts
+    vertex = _margin_vertex(merge)
+    side = merge.child
+    on = (side.cells == vertex).any(axis=1)
+    assert (on & ~np.isin(side.cell_ids, region.cell_ids)).any()  # cells on the vertex outside the region: kept
+    cells = np.setdiff1d(region.cell_ids, side.cell_ids[on])
+    corners = side.cells[np.searchsorted(side.cell_ids, cells)].ravel()
+    # the region's rows (and its cells' corners) without the vertex and its cells there
+    state = restrict_state(side, np.setdiff1d(np.union1d(region.vertex_ids, corners), [vertex]), cells)
+    _record_in_sql(conn, fault, index, state)
+    theirs, mine = _refused_alike(conn, "invalid merge", f"on vertices {vertex} that it removes")
+    assert theirs[1] == mine[1] == "TG302", (theirs[:2], mine[:2])
 
 
 # --------------------------------------------------------------------------- (b) the internals' rights
@@ -137,7 +193,7 @@ _INTERNALS = (
 _READERS = (
     "tgsis.cells_on_vertices_sql(integer, bigint[], text)",
     "tgsis.merge_value_text(text, text)",
-    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[])",
+    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8)",
 )
 
 

@@ -2,15 +2,17 @@
 -- The psql face of the Python merge of a surface at instants
 -- (tgsis.db.merging._merge_sliced_object over tgsis._merge_slices.merge_sliced,
 -- docs/merge.md "Models 2 and 3"), which is its oracle, row for row, for the
--- objects whose instants were each changed on one side only, or alike on
--- both: an instant (its tgsis.times row, its times_vrtx / times_trgl rows, its
--- vertex and cell property rows keyed (_times, _idx)) moved, added or
--- removed on one side is taken from that side; one the three states have
--- that only the version changed is merge3's merge of it: the version's rows
--- of the vertices and cells it changed (as merge3 compares them: floats
--- exactly, -0 as 0, a missing property row as NaN, a cell by its oriented
--- key), the parent's elsewhere; the per-instant feature properties
--- (<class>_pros) column by column. Only the rows whose visibility differs
+-- objects whose instants merge by themselves or whose conflicting regions
+-- have a parent, child or base solution: an instant (its tgsis.times row,
+-- its times_vrtx / times_trgl rows, its vertex and cell property rows keyed
+-- (_times, _idx)) added or removed on one side is taken from that side, one
+-- only the parent changed (or both alike) is the parent's; one the three
+-- states have that the version changed (alone, or both sides differently)
+-- is merge3's merge of it (tgsis.merge_instant_by_region: its regions found by
+-- tgsis.mesh_merge_work on that instant's rows, the side's rows on each region
+-- one side changed, the solution's on a conflicting one, the parent's
+-- elsewhere, the version's new ids renumbered); the per-instant feature
+-- properties (<class>_pros) column by column. Only the rows whose visibility differs
 -- between the three revision sets are read (the keys (instant, id) of rows
 -- written or closed since the version was based), then every row of those
 -- keys each set sees. The result is written into the VERSION's working
@@ -24,13 +26,15 @@
 -- NULL, nothing written, for an object-level conflict the Python merge
 -- leaves unsolved too (an instant removed on one side and changed on the
 -- other, added on both sides differently, a per-instant property changed on
--- both sides, attributes changed on both sides, deleted on one side): the
--- merge's refusal (TG302) follows. Refused (TG302, nothing written, the
--- hint naming `tgsis version merge NAME`) what only the Python client merges:
--- an instant both sides changed differently (its regions), an instant only
--- the version changed where a row no side changed differs in its bits
--- between parent and version (-0 against 0, a cell's vertices rotated: merge3
--- takes it from the side whose region holds it, which SQL does not compute),
+-- both sides, attributes changed on both sides, deleted on one side), and
+-- for a conflicting region of an instant without a solution: the merge's
+-- refusal (TG302) follows. Refused (TG302, nothing written, the hint naming
+-- `tgsis version merge NAME`) what only the Python client merges: a region
+-- of an instant solved average or manual, stored regions that are not those
+-- of now (tgsis.merge_instant_by_region).
+-- p_action 'regions' (tgsis.instants_merge_regions): the analysis alone, nothing written, no right
+-- to write asked: 0 with the instants classified in pg_temp.tgsis_ms_slice (the merged ones: in the three
+-- states and changed on a side), NULL for an object-level conflict.
 -- 42501 for a role that may not
 -- read the class or change it, or write the rows the merge writes through
 -- their view (tgsis.check_merge_table_write: a property table a DBA took
@@ -74,6 +78,10 @@ DECLARE
     v_pcols    text[];
     v_gone     text[];
     v_fresh    text[];
+    v_count    bigint;
+    v_t        float8;
+    v_plan     jsonb;
+    v_notes    text[] := '{}';
 BEGIN
     SELECT * INTO v_sets
       FROM tgsis.merge_sliced_sets(p_version, p_geoid, 'INSTANTS', 'a surface at instants (model 2)', 'instant by instant');
@@ -233,46 +241,38 @@ BEGIN
     IF EXISTS (SELECT FROM pg_temp.tgsis_ms_slice s WHERE s.src = 'X') THEN
         RETURN NULL;  -- an instant removed on one side and changed on the other, or added on both differently
     END IF;
-    SELECT string_agg(s.t::text, ', ' ORDER BY s.t) INTO v_why FROM pg_temp.tgsis_ms_slice s WHERE s.src = 'R';
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: instants % were changed both in the version and in its parent, differently: their regions are merged by the Python client',
-                v_refused, v_why
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
+    -- an instant the three states have that the version changed (M: it alone; R: both sides, differently):
+    -- merged by region as merge3 merges it (tgsis.merge_instant_by_region: its regions, the version's rows on
+    -- its regions, the parent's elsewhere, the solutions recorded for conflicting ones; so also the rows no
+    -- side changed whose bits differ, -0 against 0 or a triangle's vertices rotated, are the region's side's),
+    -- its merged rows taken from the states' rows read above (a version's row under its merged id, its
+    -- triangles' vertex ids renumbered with it)
+    FOR v_t IN SELECT s.t FROM pg_temp.tgsis_ms_slice s WHERE s.src IN ('R', 'M') AND p_action <> 'regions' ORDER BY s.t LOOP
+        v_plan := tgsis.merge_instant_by_region(p_version, p_geoid, v_t, v_refused, v_hint);
+        IF v_plan IS NULL THEN
+            RETURN NULL;  -- a conflicting region without a solution: the merge refuses it (TG302)
+        END IF;
+        v_notes := v_notes || ARRAY(SELECT n FROM jsonb_array_elements_text(v_plan -> 'notes') AS n);
+        INSERT INTO pg_temp.tgsis_ms_new
+        SELECT e.kind, e.st, e.t, (x ->> 1)::bigint,
+               CASE WHEN jsonb_typeof(x -> 4) = 'array' THEN ARRAY(SELECT jsonb_array_elements_text(x -> 4)) ELSE e.gvals END,
+               CASE WHEN jsonb_typeof(x -> 4) = 'array' THEN ARRAY(SELECT jsonb_array_elements_text(x -> 4))::text ELSE e.gbits END,
+               e.geq, e.gel, e.pvals, e.pbits, e.peq, e.nulls
+          FROM jsonb_array_elements(v_plan -> 'rows') AS x
+          JOIN pg_temp.tgsis_ms_el e ON e.kind = x ->> 0 AND e.st = (x ->> 2)::smallint AND e.t = v_t AND e.id = (x ->> 3)::bigint;
+        GET DIAGNOSTICS v_count = ROW_COUNT;
+        IF v_count <> jsonb_array_length(v_plan -> 'rows') THEN  -- (both read the keys that changed: never)
+            RAISE EXCEPTION '%: the merged rows of instant % are not among the rows read', v_refused, v_t
+                USING ERRCODE = 'XX000';
+        END IF;
+    END LOOP;
 
-    -- 5. the merged elements: the chosen side's rows; M: the version's rows of the elements it changed (as
-    -- merge3 compares them), the parent's elsewhere
+    -- 5. the merged elements of the instants taken from one side: that side's rows (R and M were merged above)
     INSERT INTO pg_temp.tgsis_ms_new
-    WITH pv AS (
-        SELECT e.kind, e.t, e.id,
-               min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 1) AS b,
-               min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 4) AS c,
-               min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 2) AS pbits,
-               min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 4) AS cbits
-          FROM pg_temp.tgsis_ms_el e JOIN pg_temp.tgsis_ms_slice s ON s.t = e.t AND s.src = 'M'
-         GROUP BY e.kind, e.t, e.id)
     SELECT e.*
       FROM pg_temp.tgsis_ms_slice s
       JOIN pg_temp.tgsis_ms_el e ON e.t = s.t
-      LEFT JOIN pv ON pv.kind = e.kind AND pv.t = e.t AND pv.id = e.id
-     WHERE e.st = CASE s.src WHEN 'P' THEN 2 WHEN 'C' THEN 4
-                             ELSE CASE WHEN pv.b IS DISTINCT FROM pv.c THEN 4 ELSE 2 END END;
-    SELECT string_agg(format('%s %s at instant %s', CASE pv.kind WHEN 'v' THEN 'vertex' ELSE 'triangle' END, pv.id, pv.t),
-                      ', ' ORDER BY pv.t, pv.kind DESC, pv.id)
-      INTO v_why
-      FROM (SELECT e.kind, e.t, e.id,
-                   min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 1) AS b,
-                   min(e.gel || '|' || e.peq) FILTER (WHERE e.st = 4) AS c,
-                   min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 2) AS pbits,
-                   min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 4) AS cbits
-              FROM pg_temp.tgsis_ms_el e JOIN pg_temp.tgsis_ms_slice s ON s.t = e.t AND s.src = 'M'
-             GROUP BY e.kind, e.t, e.id) AS pv
-     WHERE pv.b IS NOT DISTINCT FROM pv.c AND pv.pbits IS DISTINCT FROM pv.cbits;
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: rows the version did not change differ in their bits from the parent''s (%): which side''s rows the merge keeps hangs on its regions',
-                v_refused, v_why
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
+     WHERE s.src IN ('P', 'C') AND e.st = CASE s.src WHEN 'P' THEN 2 ELSE 4 END;
 
     -- 6. the per-instant feature properties (<class>_pros), merged column by column (tgsis._merge_slices._merge_rows)
     SELECT t.* INTO v_pros FROM tgsis.versioned_tables t
@@ -288,10 +288,17 @@ BEGIN
         END LOOP;
     END IF;
 
+    IF p_action = 'regions' THEN  -- the analysis only (tgsis.instants_merge_regions reads tgsis_ms_slice): no object-level conflict
+        RETURN 0;
+    END IF;
+
     -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
     SELECT a.p_views, a.p_keys, a.p_sets, a.p_fcols INTO v_aview, v_akey, v_aset, v_fcols
       FROM tgsis.merge_attribute_writes(p_version, p_geoid, v_base, v_pset, v_cset) AS a;
 
+    FOREACH v_why IN ARRAY v_notes LOOP  -- what the solutions discard, said before it is written
+        RAISE NOTICE 'feature % of version %: %', p_geoid, quote_literal(p_version), v_why;
+    END LOOP;
     -- the rights (to write in the version, to change the class and the feature-row columns the parent changed),
     -- then the session in the version's working revision, the object locked
     SELECT e.p_settings, e.p_revision, e.p_workingset INTO v_settings, v_rev, v_cset
@@ -359,4 +366,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.merge_instants_by_slice(text, text, bigint) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.merge_instants_by_slice(text, text, bigint) IS
-    'merge one model-2 feature (a surface at instants) changed both in a version and in its parent instant by instant, in SQL, exactly as the Python merge does, when each instant was changed on one side only or alike on both: the merged instants written into the version by a difference keyed by (instant, id), the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict (the merge refuses it), TG302 for what only the Python client merges (an instant both sides changed differently); returns the rows written';
+    'merge one model-2 feature (a surface at instants) changed both in a version and in its parent instant by instant, in SQL, exactly as the Python merge does: an instant one side added, removed or alone changed taken from it, one the version changed merged by region (merge3: tgsis.merge_instant_by_region, the parent/child/base solutions of its conflicting regions), the merged instants written into the version by a difference keyed by (instant, id), the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict or an unsolved region (the merge refuses it), TG302 for what only the Python client merges (average or manual solutions); p_action regions: the analysis only; returns the rows written';

@@ -271,7 +271,7 @@ BEGIN
         DELETE FROM pg_temp.tgsis_mw_v n USING pg_temp.tgsis_mw_sv s WHERE s.id = n.id;
         DELETE FROM pg_temp.tgsis_mw_c n USING pg_temp.tgsis_mw_sc s WHERE s.id = n.id;
         INSERT INTO pg_temp.tgsis_mw_v (id, src, present, x, y, z, val, ref)
-        SELECT s.id, 8, true, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
+        SELECT s.id, 8, NOT s.gone, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
         INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
         SELECT s.id, 8, NOT s.gone, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
         -- what they discard of each side (merge3's _discards): the side's changed rows the merged rows do not hold
@@ -323,6 +323,9 @@ BEGIN
     IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sc') IS NOT NULL THEN  -- margin cells a solution rewrites: the base's
         INSERT INTO pg_temp.tgsis_mw_cold (id, v, val)
         SELECT s.id, s.bv, s.bval FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based;
+        -- and the region's vertices no state changed that a solution moves, revalues or removes: the base's
+        INSERT INTO pg_temp.tgsis_mw_vold (id, x, y, z, val, ref)
+        SELECT s.id, s.b_x, s.b_y, s.b_z, s.bval, s.bref FROM pg_temp.tgsis_mw_sv s WHERE s.inside AND NOT s.changed AND s.based;
     END IF;
 
     PERFORM tgsis.merge_mesh_validity(v_name, v_k, v_word, v_table, p_geoid, v_base, v_refused, v_hint);

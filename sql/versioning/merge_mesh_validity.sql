@@ -7,7 +7,8 @@
 -- those can break it: near = the vertices of the taken cells, of the parent's
 -- cells they replace, and the taken vertices. Refused, in merge3's order:
 -- cells on a vertex near the change the merge removes; GOCAD atoms that refer
--- to a vertex it removes (a row as the parent holds it excused); duplicated cells (the
+-- to a vertex it removes (a row as the parent holds it excused only when the parent lacks that vertex
+-- too; the parent's atoms the merge keeps as they are judged as well); duplicated cells (the
 -- same vertices, any order) or, for triangles and tetrahedra, edges or faces
 -- in more than two cells, one of them taken, that no state (base, parent,
 -- version) has so often; vertices near the change left without cells, which no
@@ -60,7 +61,10 @@ BEGIN
     CREATE TEMPORARY TABLE tgsis_mw_nearv ON COMMIT DROP AS
     SELECT u.id,
            CASE WHEN m.id IS NULL
-                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id) THEN 15
+                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id)
+                          -- (one a solution removes: in the three states, not in the merged one)
+                          THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND NOT n.present)
+                                    THEN 7 ELSE 15 END
                           WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8  -- a solution's new id
                           ELSE 0 END
                 ELSE m.st + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
@@ -103,28 +107,51 @@ BEGIN
                   HINT = p_hint;
     END IF;
 
-    -- atoms (refid) that refer to vertices the merge removes (a vertex row the parent holds so is excused)
+    -- atoms (refid) that refer to vertices the merge removes (a vertex row the parent holds so is excused when the
+    -- parent lacks the vertex too): of the rows the merge writes, and of the parent's atoms it keeps as they are
+    -- (the base's of a vertex no state changed) that refer to a vertex the parent has and the merge removes
+    CREATE TEMPORARY TABLE tgsis_mw_atombad (id bigint NOT NULL, ref bigint NOT NULL) ON COMMIT DROP;
     v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n
                      WHERE n.present AND n.ref IS NOT NULL
                        AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v r WHERE r.id = n.ref AND r.present)
-                       AND EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref));
-    IF cardinality(v_badv) > 0 THEN  -- refs no state changed are there when the base has them
-        v_bad := ARRAY(
-            SELECT n.id FROM pg_temp.tgsis_mw_v n
-             WHERE n.present AND n.ref = ANY (v_badv)
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v p
-                                WHERE p.id = n.id AND p.st = 2 AND p.x = n.x AND p.y = n.y AND p.z = n.z
-                                  AND 'NaN'::float8 NOT IN (n.x, n.y, n.z)
-                                  AND p.val IS NOT DISTINCT FROM n.val AND p.ref IS NOT DISTINCT FROM n.ref)
-             ORDER BY n.id);
-        IF cardinality(v_bad) > 0 THEN
-            v_badv := ARRAY(SELECT DISTINCT n.ref FROM pg_temp.tgsis_mw_v n WHERE n.id = ANY (v_bad) ORDER BY n.ref);
-            RAISE EXCEPTION '%: invalid merge: %: the merge would keep vertices %, atoms (refid) that refer to vertices %, which it removes',
-                    p_refused, p_name, tgsis.merge_ids_text(v_bad::text[]), tgsis.merge_ids_text(v_badv::text[])
-                USING ERRCODE = 'TG302',
-                      DETAIL = 'one side removed vertices the other side''s atoms refer to: solve the region with one side''s rows',
-                      HINT = p_hint;
-        END IF;
+                       AND (EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref)
+                            OR EXISTS (SELECT FROM pg_temp.tgsis_mw_v r WHERE r.id = n.ref AND NOT r.present)));
+    IF cardinality(v_badv) > 0 THEN  -- refs no state changed are there when the base has them (and no solution removes them)
+        INSERT INTO pg_temp.tgsis_mw_atombad
+        SELECT n.id, n.ref FROM pg_temp.tgsis_mw_v n
+         WHERE n.present AND n.ref = ANY (v_badv)
+           AND NOT (EXISTS (SELECT FROM pg_temp.tgsis_mr_v p
+                             WHERE p.id = n.id AND p.st = 2 AND p.x = n.x AND p.y = n.y AND p.z = n.z
+                               AND 'NaN'::float8 NOT IN (n.x, n.y, n.z)
+                               AND p.val IS NOT DISTINCT FROM n.val AND p.ref IS NOT DISTINCT FROM n.ref)
+                    -- (the parent lacks the vertex too: a side's change of it, or a row no state changed)
+                    AND NOT (EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref AND r.st = 2)
+                             OR NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v r WHERE r.id = n.ref)));
+    END IF;
+    v_badv := ARRAY(SELECT x.id FROM pg_temp.tgsis_mw_nearv x WHERE x.st & 8 = 0 AND x.st & 2 <> 0);
+    IF cardinality(v_badv) > 0 THEN  -- vertices the parent has and the merge removes: the parent's atoms on them
+        -- (a vertex the merge writes was judged above; one it removes takes its atom along)
+        EXECUTE format('INSERT INTO pg_temp.tgsis_mw_atombad
+                        SELECT k.id, k.ref
+                          FROM (SELECT a.vrtxid AS id, a.refid AS ref FROM %s a
+                                 WHERE a.geoid = $1 AND a.revision = ANY ($2) AND NOT (a.revclosed AND a.lastrevs && $2)
+                                   AND a.refid = ANY ($3)
+                                   AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = a.vrtxid)
+                                UNION
+                                SELECT m.id, m.ref FROM pg_temp.tgsis_mr_v m WHERE m.st = 2 AND m.ref = ANY ($3)) AS k
+                         WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = k.id)
+                           AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_nearv x WHERE x.id = k.id AND x.st & 8 = 0)',
+                       tgsis.storage_table('tgsis', 'atom'))
+          USING p_geoid, p_base, v_badv;
+    END IF;
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_atombad) THEN
+        v_bad := ARRAY(SELECT DISTINCT b.id FROM pg_temp.tgsis_mw_atombad b ORDER BY b.id);
+        v_badv := ARRAY(SELECT DISTINCT b.ref FROM pg_temp.tgsis_mw_atombad b ORDER BY b.ref);
+        RAISE EXCEPTION '%: invalid merge: %: the merge would keep vertices %, atoms (refid) that refer to vertices %, which it removes',
+                p_refused, p_name, tgsis.merge_ids_text(v_bad::text[]), tgsis.merge_ids_text(v_badv::text[])
+            USING ERRCODE = 'TG302',
+                  DETAIL = 'one side removed vertices the other side''s atoms refer to: solve the region with one side''s rows',
+                  HINT = p_hint;
     END IF;
 
     -- duplicated cells (the same vertices), then edges of triangles / faces of tetrahedra in more than two cells:

@@ -40,7 +40,7 @@ BEGIN
     PERFORM FROM tgsis.find_conflicts(p_version);
     -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice); evolving surfaces
     -- (model 3): period by period (tgsis.merge_periods_by_slice, in sql/temporal/ beside the continuity check it
-    -- needs, so named at run time); NULL: an object-level conflict, refused below
+    -- needs, so named at run time); NULL: an object-level conflict or an unsolved region of an instant, refused below
     FOR v_key, v_model IN
         SELECT k.objectkey, c.timemodel FROM tgsis.conflicts k
           JOIN tgsis.catalog c ON c.classname = tgsis.class_of_geoid(k.objectkey::bigint)
@@ -54,7 +54,13 @@ BEGIN
             EXECUTE format('SELECT tgsis.%I($1, $2, $3)', 'merge_periods_by_slice')
                INTO v_count USING p_version, p_action, v_key::bigint;
         END IF;
-        v_written := v_written + coalesce(v_count, 0);
+        IF v_count IS NULL THEN
+            -- unsolved (a region of an instant without a solution, or an object-level conflict): the regions
+            -- of its instants stored, for the merge's refusal to name them (none for other models)
+            PERFORM tgsis.store_mesh_regions(p_version, v_key);
+        ELSE
+            v_written := v_written + v_count;
+        END IF;
     END LOOP;
     FOR v_key IN
         SELECT k.objectkey FROM tgsis.conflicts k

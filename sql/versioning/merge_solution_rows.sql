@@ -15,11 +15,13 @@
 -- its type; a real one: overflowing or underflowing float4) is refused (TG302),
 -- as the Python writer refuses it; so are rows that are not the .npz's mesh
 -- (tgsis.npz_rows_differ: the Python merge applies the .npz), a cell on one
--- vertex twice, an atom's refid or a cell's part that is no whole number. Refused too (TG302, p_hint: the Python merge applies it): a
--- vertex row of the region no state changed that differs from the base's or
--- that the solution lacks (the region's margin cells are rewritten or
--- removed as in Python), a class property column the rows lack
--- or of a type other than float, real or integer.
+-- vertex twice, an atom's refid or a cell's part that is no whole number. The
+-- region's rows no state changed (the corners of cells a side removed, the
+-- one-ring margin cells) are the solution's too, as in Python: a row that
+-- differs from the base's is rewritten, one the solution lacks removed (the
+-- base's rows read here for tgsis.merge_mesh_by_region to close). Refused too
+-- (TG302, p_hint: the Python merge applies it): a class property column the
+-- rows lack or of a type other than float, real or integer.
 CREATE FUNCTION tgsis.merge_solution_rows(p_geoid bigint, p_versionid integer, p_refused text, p_hint text)
 RETURNS void
 LANGUAGE plpgsql
@@ -44,7 +46,7 @@ BEGIN
            NULL::text AS val, NULL::text[] AS w, NULL::bigint AS ref, NULL::bigint[] AS v, NULL::bigint AS part,
            u.id = ANY (g.vertex_ids) AS inside, EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = u.id) AS changed,
            false AS based, NULL::float8 AS b_x, NULL::float8 AS b_y, NULL::float8 AS b_z, NULL::bigint[] AS bv,
-           NULL::text AS bval, NULL::bigint AS bpart, false AS gone
+           NULL::text AS bval, NULL::bigint AS bpart, NULL::bigint AS bref, false AS gone
       FROM pg_temp.tgsis_mw_region g
       JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
                                    AND r.region = g.region
@@ -106,7 +108,15 @@ BEGIN
             USING ERRCODE = 'TG302', HINT = p_hint;
     END IF;
 
-    -- the region's margin cells (no state changed them) the solution lacks: removed (their base rows read below)
+    -- the region's vertices and margin cells no state changed that the solution lacks: removed (their base rows read
+    -- below), as merge3 removes a region row a manual state lacks
+    INSERT INTO pg_temp.tgsis_mw_sv (region, id, cols, vals, inside, changed, based, gone)
+    SELECT n.region, n.id, r.solution_vertex_columns, '{}', true, false, false, true
+      FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g ON g.region = n.region AND g.conflict AND g.src = 8
+      JOIN tgsis.conflict_regions r ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = v_key
+                                   AND r.region = g.region
+     WHERE n.kind = 'v' AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = n.id)
+       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sv s WHERE s.id = n.id AND s.region = n.region);
     INSERT INTO pg_temp.tgsis_mw_sc (region, id, cols, vals, inside, changed, based, gone)
     SELECT n.region, n.id, r.solution_cell_columns, '{}', true, false, false, true
       FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g ON g.region = n.region AND g.conflict AND g.src = 8
@@ -119,6 +129,11 @@ BEGIN
                      WHERE v.geoid = $1 AND v.vrtxid = s.id AND NOT s.changed
                        AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)',
                    tgsis.storage_table('tgsis', 'vrtx'))
+      USING p_geoid, v_info.base;
+    EXECUTE format('UPDATE pg_temp.tgsis_mw_sv s SET bref = a.refid FROM %s a
+                     WHERE s.based AND a.geoid = $1 AND a.vrtxid = s.id
+                       AND a.revision = ANY ($2) AND NOT (a.revclosed AND a.lastrevs && $2)',
+                   tgsis.storage_table('tgsis', 'atom'))
       USING p_geoid, v_info.base;
     EXECUTE format('UPDATE pg_temp.tgsis_mw_sc s SET based = true, bv = ARRAY[%s] FROM %s v
                      WHERE v.geoid = $1 AND v.%I = s.id AND NOT s.changed
@@ -245,33 +260,24 @@ BEGIN
      WHERE s.vals[array_position(s.cols, 'part')] >= 0
        AND s.vals[array_position(s.cols, 'part')] < 2147483648::float8;
 
-    -- a vertex of an id no state changed, inside its region, is the base's: else SQL does not merge it (refused);
-    -- one the solution lacks is refused alike (the margin's cells are rewritten or removed: below)
-    SELECT string_agg(format('region %s: %s', q.region, q.what), '; ' ORDER BY q.region) INTO v_why
-      FROM (SELECT s.region, format('vertices %s', tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id))) AS what
-              FROM pg_temp.tgsis_mw_sv s
-             WHERE s.inside AND NOT s.changed
-               AND NOT (s.based AND float8send(s.x) = float8send(s.b_x) AND float8send(s.y) = float8send(s.b_y)
-                        AND float8send(s.z) = float8send(s.b_z) AND s.val IS NOT DISTINCT FROM s.bval)
-             GROUP BY s.region
+    -- a row of an id no state changed inside its region: the solution's (merge3 takes a manual state's rows of the
+    -- region's ids), the base's row closed (tgsis.merge_mesh_by_region) when it differs or is gone; one as the base
+    -- has it stays. An id inside that no state has cannot be (the region's ids are the states'): refused
+    SELECT string_agg(format('region %s: %s %s (in no state)', q.region, q.what, tgsis.merge_ids_text(q.ids)), '; '
+                      ORDER BY q.region, q.what) INTO v_why
+      FROM (SELECT s.region, 'vertices' AS what, array_agg(s.id::text ORDER BY s.id) AS ids FROM pg_temp.tgsis_mw_sv s
+             WHERE s.inside AND NOT s.changed AND NOT s.based GROUP BY s.region
             UNION ALL
-            SELECT s.region, format('cells %s (in no state)', tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))
-              FROM pg_temp.tgsis_mw_sc s
-             WHERE s.inside AND NOT s.changed AND NOT s.based
-             GROUP BY s.region
-            UNION ALL
-            SELECT n.region, format('vertices %s removed', tgsis.merge_ids_text(array_agg(n.id::text ORDER BY n.id)))
-              FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g ON g.region = n.region AND g.src = 8
-             WHERE n.kind = 'v' AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = n.id)
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sv s WHERE s.id = n.id AND s.region = n.region)
-             GROUP BY n.region) AS q;
+            SELECT s.region, 'cells', array_agg(s.id::text ORDER BY s.id) FROM pg_temp.tgsis_mw_sc s
+             WHERE s.inside AND NOT s.changed AND NOT s.based GROUP BY s.region) AS q;
     IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: its solution changes rows of its regions no side changed (%)', p_refused, v_why
+        RAISE EXCEPTION '%: its solution gives rows of its regions no state has (%)', p_refused, v_why
             USING ERRCODE = 'TG302', HINT = p_hint;
     END IF;
-    DELETE FROM pg_temp.tgsis_mw_sv s WHERE s.inside AND NOT s.changed;
-    -- a margin cell as the base has it stays; another is rewritten (tgsis.merge_mesh_by_region: the version's row,
-    -- the base's, closed) or removed (gone)
+    DELETE FROM pg_temp.tgsis_mw_sv s
+     WHERE s.inside AND NOT s.changed AND NOT s.gone AND float8send(s.x) = float8send(s.b_x)
+       AND float8send(s.y) = float8send(s.b_y) AND float8send(s.z) = float8send(s.b_z)
+       AND s.val IS NOT DISTINCT FROM s.bval AND s.ref IS NOT DISTINCT FROM s.bref;
     DELETE FROM pg_temp.tgsis_mw_sc s
      WHERE s.inside AND NOT s.changed AND NOT s.gone AND s.v = s.bv AND s.val IS NOT DISTINCT FROM s.bval
        AND (NOT v_info.runs OR s.part IS NOT DISTINCT FROM s.bpart);
@@ -290,7 +296,8 @@ BEGIN
                                           AND float8send(s.z) = float8send(n.z) AND s.val IS NOT DISTINCT FROM n.val
                                           AND s.ref IS NOT DISTINCT FROM n.ref, false)
                             ELSE float8send(s.x) = float8send(s.b_x) AND float8send(s.y) = float8send(s.b_y)
-                                 AND float8send(s.z) = float8send(s.b_z) AND s.val IS NOT DISTINCT FROM s.bval END
+                                 AND float8send(s.z) = float8send(s.b_z) AND s.val IS NOT DISTINCT FROM s.bval
+                                 AND s.ref IS NOT DISTINCT FROM s.bref END
              GROUP BY s.region
             UNION ALL
             SELECT s.region, format('cells %s', tgsis.merge_ids_text(array_agg(s.id::text ORDER BY s.id)))

@@ -41,6 +41,12 @@
 --     (discards: {"parent": {"child": [vertices, cells, largest displacement]},
 --     "child": {"parent": [...]}, "base": {"parent": [...], "child": [...]}},
 --     merge3's RegionDiscard).
+-- p_times (model 2, a surface at instants): the same work for one instant of the object, a slice
+-- tgsis._merge_slices merges by merge3: the rows of tgsis.times_vrtx / times_trgl and of the property
+-- tables keyed (_times, _idx) at that instant, the margin, the base's coordinates and the largest ids
+-- (the renumbering's fresh ids: Python's per-slice top_ids) of that instant alone; no GOCAD atoms, no
+-- part runs. The object-level refusals (tgsis.region_merge_refusal) are the caller's then: an instant
+-- the three states have, of an object merged instant by instant (tgsis.merge_instants_by_slice).
 -- The work tables (ON COMMIT DROP, dropped first if an earlier call left them):
 --   tgsis_mr_info   one row: version, parent, the three revision sets, the class, its cell table,
 --                   cell id column, vertices per cell, property tables, whether parts are runs;
@@ -59,7 +65,7 @@
 -- one side, ...) too (TG100), as the Python reader refuses them. extra_float_digits is pinned: values are
 -- compared as text, floats exactly; client_min_messages too: dropping the
 -- work tables of an earlier call says nothing.
-CREATE FUNCTION tgsis.mesh_merge_work(p_version text, p_geoid bigint)
+CREATE FUNCTION tgsis.mesh_merge_work(p_version text, p_geoid bigint, p_times float8 DEFAULT NULL)
 RETURNS integer
 LANGUAGE plpgsql
 VOLATILE
@@ -98,6 +104,9 @@ DECLARE
     v_eb      integer[];
     v_x       integer;
     v_y       integer;
+    v_obj     text := 'v.geoid = $1';
+    v_vtab    text := 'vrtx_ver';
+    v_atoms   text := '';
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
@@ -115,7 +124,14 @@ BEGIN
                 p_geoid, quote_literal(p_version)
             USING ERRCODE = 'TG300', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the objects changed on both sides', p_version);
     END IF;
-    v_refusal := tgsis.region_merge_refusal(p_version, p_geoid);
+    IF p_times IS NOT NULL THEN  -- one instant of a surface at instants: the caller asked the object-level refusals
+        v_refusal := CASE WHEN (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid))
+                               IS DISTINCT FROM 'INSTANTS'
+                          THEN format('feature %s is not a surface at instants (model 2): it has no instant %s', p_geoid, p_times) END;
+        v_refusal := coalesce(v_refusal, tgsis.object_merge_refusal(p_version, p_geoid));
+    ELSE
+        v_refusal := tgsis.region_merge_refusal(p_version, p_geoid);
+    END IF;
     IF v_refusal IS NOT NULL THEN  -- the Python reader's InvalidInputError, with its code
         RAISE EXCEPTION 'feature % does not merge by region in version %: %', p_geoid, quote_literal(p_version), v_refusal
             USING ERRCODE = 'TG100',
@@ -133,9 +149,28 @@ BEGIN
                      EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_version.workingset)
                      ORDER BY 1);
     SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
+    IF p_times IS NOT NULL
+       AND (SELECT count(*) FROM (VALUES (v_base), (v_parent.workingset), (v_version.workingset)) AS s (revs)
+             WHERE EXISTS (SELECT FROM tgsis.times_ver v WHERE v.geoid = p_geoid AND v.times = p_times
+                              AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs))) < 3 THEN
+        RAISE EXCEPTION 'feature % does not merge by region at instant % in version %: the instant is not in all three states (base, parent, version)',
+                p_geoid, p_times, quote_literal(p_version)
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'An instant added or removed on a side is taken from that side as a whole, or is an object-level conflict.',
+                  HINT = format('SELECT tgsis.merge_version(%L) merges it instant by instant', p_version);
+    END IF;
     v_table := tgsis.simplex_table(v_class.geotype);
     v_cellid := CASE v_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid' ELSE 'tetraid' END;
     v_k := CASE v_table WHEN 'point' THEN 1 WHEN 'segment' THEN 2 WHEN 'trgl' THEN 3 ELSE 4 END;
+    IF p_times IS NULL THEN
+        v_atoms := 'UNION SELECT v.vrtxid FROM tgsis.atom_ver v WHERE v.geoid = $1 AND %1$s';
+    ELSE  -- the slice: the instant's rows of the model-2 tables (no GOCAD atoms, no part runs there)
+        v_table := 'times_trgl';
+        v_cellid := 'trglid';
+        v_k := 3;
+        v_vtab := 'times_vrtx_ver';
+        v_obj := format('v.geoid = $1 AND v.times = %L::float8', p_times);
+    END IF;
     v_row := format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ') FROM generate_series(1, v_k) AS i));
     v_changed := '(v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))';
 
@@ -148,8 +183,9 @@ BEGIN
        AND t.tablename = CASE v_class.proalignment WHEN 'CELL' THEN v_class.cellprotable ELSE v_class.otherprotable END;
     SELECT canon, nulls INTO v_vcanon, v_vnull FROM tgsis.merge_value_text(v_vpt.schemaname, v_vpt.tablename);
     SELECT canon, nulls INTO v_ccanon, v_cnull FROM tgsis.merge_value_text(v_cpt.schemaname, v_cpt.tablename);
-    v_runs := NOT EXISTS (SELECT FROM jsonb_array_elements(v_class.cell_properties) AS e
-                           WHERE e ->> 'name' = 'part' AND coalesce(e ->> 'alignment', v_class.proalignment) = 'CELL');
+    v_runs := p_times IS NULL
+              AND NOT EXISTS (SELECT FROM jsonb_array_elements(v_class.cell_properties) AS e
+                               WHERE e ->> 'name' = 'part' AND coalesce(e ->> 'alignment', v_class.proalignment) = 'CELL');
 
 
     DROP TABLE IF EXISTS pg_temp.tgsis_mr_v, pg_temp.tgsis_mr_c, pg_temp.tgsis_mr_vmap, pg_temp.tgsis_mr_cmap,
@@ -162,21 +198,21 @@ BEGIN
            v_parent.workingset AS parentset, v_version.workingset AS versionset, v_since AS since,
            v_class.classname AS classname, v_table AS simplex, v_cellid AS cellid, v_k AS k,
            v_vpt.schemaname AS vpschema, v_vpt.tablename AS vptable, v_cpt.schemaname AS cpschema,
-           v_cpt.tablename AS cptable, v_runs AS runs;
+           v_cpt.tablename AS cptable, v_runs AS runs, p_times AS times;
 
 
     -- 1. the keys of the rows some set sees otherwise than another ($2: the revisions that tell the sets apart)
-    EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM tgsis.vrtx_ver v WHERE v.geoid = $1 AND %1$s
-                                 UNION SELECT v.vrtxid FROM tgsis.atom_ver v WHERE v.geoid = $1 AND %1$s)', v_changed)
+    EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM tgsis.%2$I v WHERE %3$s AND %1$s ' || v_atoms || ')',
+                   v_changed, v_vtab, v_obj)
        INTO v_vkeys USING p_geoid, v_since;
-    EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM tgsis.%2$I v WHERE v.geoid = $1 AND %3$s)',
-                   v_cellid, v_table || '_ver', v_changed)
+    EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM tgsis.%2$I v WHERE %4$s AND %3$s)',
+                   v_cellid, v_table || '_ver', v_changed, v_obj)
        INTO v_ckeys USING p_geoid, v_since;
     IF v_vcanon IS NOT NULL THEN
-        v_vkeys := v_vkeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_vpt, p_geoid, v_since, NULL, NULL, NULL, NULL) AS r);
+        v_vkeys := v_vkeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_vpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times) AS r);
     END IF;
     IF v_ccanon IS NOT NULL THEN
-        v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL) AS r);
+        v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times) AS r);
     END IF;
     IF v_runs THEN  -- the cells of a part run some set sees otherwise may change their part
         EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM tgsis.%2$I c
@@ -194,16 +230,18 @@ BEGIN
     CREATE TEMPORARY TABLE tgsis_mr_v (id bigint NOT NULL, st smallint NOT NULL, x float8, y float8, z float8,
                                        val text, ref bigint) ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_v (id, st, x, y, z)
-                    SELECT v.vrtxid, s.st, v.x, v.y, v.z FROM tgsis.vrtx_ver v, (VALUES (1::smallint), (2), (4)) AS s (st)
-                     WHERE v.geoid = $1 AND v.vrtxid = ANY ($5) AND %s', v_seen)
+                    SELECT v.vrtxid, s.st, v.x, v.y, v.z FROM tgsis.%2$I v, (VALUES (1::smallint), (2), (4)) AS s (st)
+                     WHERE %3$s AND v.vrtxid = ANY ($5) AND %1$s', v_seen, v_vtab, v_obj)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset, v_vkeys;
+    IF p_times IS NULL THEN
     EXECUTE format('UPDATE pg_temp.tgsis_mr_v m SET ref = v.refid
                       FROM tgsis.atom_ver v, (VALUES (1::smallint), (2), (4)) AS s (st)
                      WHERE v.geoid = $1 AND v.vrtxid = m.id AND s.st = m.st AND %s', v_seen)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset;
+    END IF;
     IF v_vcanon IS NOT NULL THEN
         UPDATE pg_temp.tgsis_mr_v m SET val = r.val
-          FROM tgsis.merge_property_rows(v_vpt, p_geoid, NULL, v_vkeys, v_base, v_parent.workingset, v_version.workingset) AS r
+          FROM tgsis.merge_property_rows(v_vpt, p_geoid, NULL, v_vkeys, v_base, v_parent.workingset, v_version.workingset, p_times) AS r
          WHERE r.key = m.id AND r.seen & m.st <> 0;
         UPDATE pg_temp.tgsis_mr_v m SET val = v_vnull WHERE m.val IS NULL;
     END IF;
@@ -211,7 +249,7 @@ BEGIN
         ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_c (id, st, v)
                     SELECT v.%1$I, s.st, %2$s FROM tgsis.%3$I v, (VALUES (1::smallint), (2), (4)) AS s (st)
-                     WHERE v.geoid = $1 AND v.%1$I = ANY ($5) AND %4$s', v_cellid, v_row, v_table || '_ver', v_seen)
+                     WHERE %5$s AND v.%1$I = ANY ($5) AND %4$s', v_cellid, v_row, v_table || '_ver', v_seen, v_obj)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset, v_ckeys;
     IF v_runs THEN
         EXECUTE format('UPDATE pg_temp.tgsis_mr_c m SET part = v.part
@@ -221,7 +259,7 @@ BEGIN
     END IF;
     IF v_ccanon IS NOT NULL THEN
         UPDATE pg_temp.tgsis_mr_c m SET val = r.val
-          FROM tgsis.merge_property_rows(v_cpt, p_geoid, NULL, v_ckeys, v_base, v_parent.workingset, v_version.workingset) AS r
+          FROM tgsis.merge_property_rows(v_cpt, p_geoid, NULL, v_ckeys, v_base, v_parent.workingset, v_version.workingset, p_times) AS r
          WHERE r.key = m.id AND r.seen & m.st <> 0;
         UPDATE pg_temp.tgsis_mr_c m SET val = v_cnull WHERE m.val IS NULL;
     END IF;
@@ -232,12 +270,12 @@ BEGIN
     -- content of a parent's new row takes its id (the k-th of equal contents the k-th), a new id the parent
     -- uses for something else a fresh one above every id of the three states, in ascending order
     EXECUTE format('SELECT greatest((SELECT max(m.id) FROM pg_temp.tgsis_mr_v m),
-                                    (SELECT v.vrtxid FROM tgsis.vrtx_ver v WHERE v.geoid = $1 AND v.revision = ANY ($2)
+                                    (SELECT v.vrtxid FROM tgsis.%3$I v WHERE %4$s AND v.revision = ANY ($2)
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.vrtxid DESC LIMIT 1)),
                            greatest((SELECT max(m.id) FROM pg_temp.tgsis_mr_c m),
-                                    (SELECT v.%1$I FROM tgsis.%2$I v WHERE v.geoid = $1 AND v.revision = ANY ($2)
+                                    (SELECT v.%1$I FROM tgsis.%2$I v WHERE %4$s AND v.revision = ANY ($2)
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.%1$I DESC LIMIT 1))',
-                   v_cellid, v_table || '_ver')
+                   v_cellid, v_table || '_ver', v_vtab, v_obj)
        INTO v_top_v, v_top_c USING p_geoid, v_base;
     BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
         CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
@@ -368,7 +406,7 @@ BEGIN
         -- PostgreSQL 15 read every cell of the object through it rather than the BRIN's few ranges)
         EXECUTE format('WITH c AS MATERIALIZED (
                             SELECT v.%1$I AS id, %2$s AS v FROM tgsis.%3$I v
-                             WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
+                             WHERE %5$s AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
                                AND %4$s)
                         INSERT INTO pg_temp.tgsis_mr_margin (id, v, sides)
                         SELECT c.id, c.v, bit_or(x.p_shape::integer | (x.c_shape::integer << 1))
@@ -376,7 +414,7 @@ BEGIN
                           CROSS JOIN LATERAL unnest(c.v) AS u (vid)
                           JOIN pg_temp.tgsis_mr_vx x ON x.id = u.vid AND (x.p_shape OR x.c_shape)
                          GROUP BY c.id, c.v',
-                       v_cellid, v_row, v_table || '_ver', tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'))
+                       v_cellid, v_row, v_table || '_ver', tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'), v_obj)
            USING p_geoid, v_base, v_shape;
     END IF;
 
@@ -460,21 +498,21 @@ BEGIN
     -- 8. the base's coordinates of the vertices no side changed that a region touches (corners of its cells),
     -- for the boxes of the regions
     CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint, x float8, y float8, z float8) ON COMMIT DROP;
-    EXECUTE 'INSERT INTO pg_temp.tgsis_mr_vb
-             SELECT v.vrtxid, v.x, v.y, v.z FROM tgsis.vrtx_ver v
-              WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
+    EXECUTE format('INSERT INTO pg_temp.tgsis_mr_vb
+             SELECT v.vrtxid, v.x, v.y, v.z FROM tgsis.%I v
+              WHERE %s AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
                 AND v.vrtxid = ANY (ARRAY(SELECT n.id FROM pg_temp.tgsis_mr_node n WHERE n.kind = ''v''
                                           UNION SELECT unnest(g.v) FROM pg_temp.tgsis_mr_margin g
                                           UNION SELECT unnest(c.v) FROM pg_temp.tgsis_mr_c c
-                                          EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m))'
+                                          EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m))', v_vtab, v_obj)
        USING p_geoid, v_base;
     RETURN (SELECT count(*) FROM pg_temp.tgsis_mr_node);
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.mesh_merge_work(text, bigint) IS
-    'the work tables (pg_temp.tgsis_mr_*, left to the caller) of the three-way merge by region of a model-1 feature changed both in a version and in its parent: rows per state, renumbering, edits, footprints, region labels; returns the number of footprint elements; TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
+COMMENT ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8) IS
+    'the work tables (pg_temp.tgsis_mr_*, left to the caller) of the three-way merge by region of a model-1 feature changed both in a version and in its parent: rows per state, renumbering, edits, footprints, region labels; with p_times, of that instant of a model-2 feature (its times_vrtx / times_trgl rows and property rows keyed (_times, _idx)); returns the number of footprint elements; TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
 
 -- internal to the merges, not executable by PUBLIC (tests/test_function_grants.py); tgsis.mesh_merge_regions, which a tgsis role calls as itself, runs it
-REVOKE ALL ON FUNCTION tgsis.mesh_merge_work(text, bigint) FROM PUBLIC;
-GRANT EXECUTE ON FUNCTION tgsis.mesh_merge_work(text, bigint) TO tgsis_reader;
+REVOKE ALL ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8) TO tgsis_reader;

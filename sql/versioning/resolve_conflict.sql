@@ -89,20 +89,7 @@ BEGIN
     -- a mesh whose regions are stored (current marks: find_conflicts just dropped older ones): one side's
     -- whole object would drop the other side's edits in regions that merge by themselves
     IF lower(p_solution) IN ('parent', 'child') THEN
-        SELECT string_agg(r.region::text, ', ' ORDER BY r.region) INTO v_lost
-          FROM tgsis.conflict_regions r
-         WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key AND NOT r.conflict
-           AND r.changed_by = CASE lower(p_solution) WHEN 'parent' THEN 'child' ELSE 'parent' END;
-        IF v_lost IS NOT NULL THEN
-            RAISE EXCEPTION 'solution % of object % of class % in version % would drop the % edits in regions % that are no conflict',
-                    lower(p_solution), quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version),
-                    CASE lower(p_solution) WHEN 'parent' THEN 'version''s' ELSE 'parent''s' END, v_lost
-                USING ERRCODE = 'TG307',
-                      DETAIL = 'Only the other side changed those regions: the merge by region keeps those edits by itself.',
-                      HINT = format('solve the conflicting regions with SELECT tgsis.resolve_region(%L, %L, %L, region, ''%s''); the merge takes the rest by itself (or record manual after writing the merged object)',
-                                    p_version, p_objectclass, v_key, lower(p_solution));
-        END IF;
-        -- models 2 and 3: their regions are the Python client's; a slice only the other side changed merges by
+        -- models 2 and 3 first (the message names the slices): a slice only the other side changed merges by
         -- itself (an instant moved, added or removed on that side alone), which the whole object would drop
         IF p_objectclass = 'feature' AND EXISTS (SELECT FROM tgsis.conflicts c WHERE c.versionid = v_id
                                                     AND c.objectclass = 'feature' AND c.objectkey = v_key) THEN
@@ -117,6 +104,20 @@ BEGIN
                           HINT = format('tgsis version merge %s merges it slice by slice (tgsis version conflicts %s lists its regions, tgsis version resolve solves them); or record manual after writing the merged object',
                                         tgsis.shell_quote(p_version), tgsis.shell_quote(p_version));
             END IF;
+        END IF;
+        -- then a region only the other side changed (model 1, and the regions of a slice both sides changed)
+        SELECT string_agg(r.region::text, ', ' ORDER BY r.region) INTO v_lost
+          FROM tgsis.conflict_regions r
+         WHERE r.versionid = v_id AND r.objectclass = p_objectclass AND r.objectkey = v_key AND NOT r.conflict
+           AND r.changed_by = CASE lower(p_solution) WHEN 'parent' THEN 'child' ELSE 'parent' END;
+        IF v_lost IS NOT NULL THEN
+            RAISE EXCEPTION 'solution % of object % of class % in version % would drop the % edits in regions % that are no conflict',
+                    lower(p_solution), quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version),
+                    CASE lower(p_solution) WHEN 'parent' THEN 'version''s' ELSE 'parent''s' END, v_lost
+                USING ERRCODE = 'TG307',
+                      DETAIL = 'Only the other side changed those regions: the merge by region keeps those edits by itself.',
+                      HINT = format('solve the conflicting regions with SELECT tgsis.resolve_region(%L, %L, %L, region, ''%s''); the merge takes the rest by itself (or record manual after writing the merged object)',
+                                    p_version, p_objectclass, v_key, lower(p_solution));
         END IF;
     END IF;
     UPDATE tgsis.conflicts

@@ -59,6 +59,20 @@ BEGIN
                 quote_literal(p_objectclass), quote_literal(p_version)
             USING ERRCODE = 'TG200', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the conflicts', p_version);
     END IF;
+    IF p_objectclass = 'feature' THEN
+        -- models 2 and 3 first (the message names the slices): a slice one side alone changed merges by itself
+        v_kept := concat_ws('; ', 'the parent''s edits of ' || tgsis.slice_only_edits(p_version, p_key::bigint, 'parent'),
+                            'the version''s edits of ' || tgsis.slice_only_edits(p_version, p_key::bigint, 'child'));
+        IF v_kept <> '' THEN
+            RAISE EXCEPTION 'solution base of object % of class % in version % would drop %, which only that side changed',
+                    quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version), v_kept
+                USING ERRCODE = 'TG307',
+                      DETAIL = 'A surface at instants merges instant by instant, an evolving surface geometry instant by geometry instant: a slice only one side changed merges by itself.',
+                      HINT = format('tgsis version merge %s merges it slice by slice (tgsis version resolve %s %s base --region N solves its conflicting regions)',
+                                    tgsis.shell_quote(p_version), tgsis.shell_quote(p_version), tgsis.shell_quote(p_key));
+        END IF;
+    END IF;
+    -- then a region no side's conflict (model 1, and the regions of a slice both sides changed)
     SELECT string_agg(format('%s (%s)', r.region, CASE r.changed_by WHEN 'child' THEN 'the version''s edit'
                                                                      WHEN 'parent' THEN 'the parent''s edit'
                                                                      ELSE 'both sides'' same edit' END),
@@ -74,17 +88,6 @@ BEGIN
                                 p_version, p_objectclass, p_key);
     END IF;
     IF p_objectclass = 'feature' THEN
-        -- models 2 and 3 (regions found by the Python client only): a slice one side alone changed merges by itself
-        v_kept := concat_ws('; ', 'the parent''s edits of ' || tgsis.slice_only_edits(p_version, p_key::bigint, 'parent'),
-                            'the version''s edits of ' || tgsis.slice_only_edits(p_version, p_key::bigint, 'child'));
-        IF v_kept <> '' THEN
-            RAISE EXCEPTION 'solution base of object % of class % in version % would drop %, which only that side changed',
-                    quote_literal(p_objectkey), quote_literal(p_objectclass), quote_literal(p_version), v_kept
-                USING ERRCODE = 'TG307',
-                      DETAIL = 'A surface at instants merges instant by instant, an evolving surface geometry instant by geometry instant: a slice only one side changed merges by itself.',
-                      HINT = format('tgsis version merge %s merges it slice by slice (tgsis version resolve %s %s base --region N solves its conflicting regions)',
-                                    tgsis.shell_quote(p_version), tgsis.shell_quote(p_version), tgsis.shell_quote(p_key));
-        END IF;
         PERFORM tgsis.check_class_write(ARRAY[p_key::bigint], 'UPDATE');
     END IF;
     PERFORM tgsis.check_objects_unlocked(p_objectclass, ARRAY[p_key], v_version.versionid, true);

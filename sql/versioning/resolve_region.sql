@@ -11,7 +11,8 @@
 -- as the Python merge checks the .npz's rows; a solution without them (the
 -- .npz only) is merged by the Python client only, as is a region of a slice
 -- of a surface at instants or an evolving surface (models 2, 3): its rows are
--- refused (TG100), the psql merge merging no slice both sides changed. Rows that are not the
+-- refused (TG100), the psql merge applying only parent, child and base solutions there
+-- (tgsis.merge_instant_by_region). Rows that are not the
 -- .npz's mesh (tgsis.npz_rows_differ) or have a cell on one vertex twice are
 -- refused (TG100): the two merges never apply two copies that differ.
 -- The conflict's marks are recomputed first (tgsis.find_conflicts): a region
@@ -163,14 +164,15 @@ BEGIN
                                 p_version);
     END IF;
     IF p_vertex_ids IS NOT NULL AND v_row.times IS NOT NULL THEN
-        -- the rows are for the psql merge, which merges no slice both sides changed (tgsis.merge_instants_by_slice
-        -- refuses it): they would never be read; the .npz alone is what the Python merge of a slice applies
-        RAISE EXCEPTION 'the rows of the mesh of % are not taken: the region lies in %, which only the Python client merges by region',
+        -- the rows are for the psql merge, which applies only parent, child and base solutions to a region of a
+        -- slice (tgsis.merge_instant_by_region refuses average and manual ones): they would never be read; the
+        -- .npz alone is what the Python merge of a slice applies
+        RAISE EXCEPTION 'the rows of the mesh of % are not taken: the region lies in %, where only the Python client applies an average or manual mesh',
                 v_object,
                 CASE WHEN v_row.timem IS NULL THEN format('instant %s', v_row.times)
                      ELSE format('geometry instant %s of period %s', v_row.times, v_row.timem) END
             USING ERRCODE = 'TG100',
-                  HINT = format('give the mesh alone (the sixth argument) and merge with `tgsis version merge %s` or tgsis.merge_version(conn, %s) in Python; the psql merge refuses a slice both sides changed',
+                  HINT = format('give the mesh alone (the sixth argument) and merge with `tgsis version merge %s` or tgsis.merge_version(conn, %s) in Python; the psql merge applies only parent, child or base to a region of a slice',
                                 tgsis.shell_quote(p_version), pg_catalog.to_json(p_version)::text);
     END IF;
     UPDATE tgsis.conflict_regions

@@ -9,6 +9,9 @@
 -- or when the feature does not merge by region (tgsis.region_merge_refusal,
 -- or mesh_merge_regions' TG100: new ids that cannot be renumbered within
 -- bigint), so that one such feature does not make find_conflicts fail.
+-- A surface at instants (model 2): the rows of tgsis.instants_merge_regions (each with its
+-- instant, numbered through the object), none for an object-level conflict, as the Python
+-- find_conflicts stores them.
 -- Otherwise the rows of tgsis.mesh_merge_regions go in as found: a conflict
 -- unsolved, the others automatic. Returns the regions stored.
 CREATE FUNCTION tgsis.store_mesh_regions(p_version text, p_objectkey text)
@@ -18,16 +21,39 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_row   tgsis.conflicts;
-    v_count integer;
+    v_row     tgsis.conflicts;
+    v_count   integer;
+    v_instants boolean;
 BEGIN
     SELECT * INTO v_row FROM tgsis.conflicts k
      WHERE k.versionid = tgsis.version_id(p_version) AND k.objectclass = 'feature' AND k.objectkey = p_objectkey;
     IF NOT FOUND
        OR EXISTS (SELECT FROM tgsis.conflict_regions r WHERE r.versionid = v_row.versionid
                      AND r.objectclass = 'feature' AND r.objectkey = p_objectkey)
-       OR p_objectkey::bigint IN (SELECT tgsis.class_denied_geoids('SELECT'))
-       OR tgsis.region_merge_refusal(p_version, p_objectkey::bigint) IS NOT NULL THEN
+       OR p_objectkey::bigint IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
+        RETURN 0;
+    END IF;
+    v_instants := (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_objectkey::bigint))
+                  IS NOT DISTINCT FROM 'INSTANTS';
+    IF v_instants THEN  -- a surface at instants: the regions of its instants, numbered through the object
+        BEGIN
+            INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
+                                                changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
+                                                child_vertex_ids, child_cell_ids, bbox, parent_displacement,
+                                                child_displacement, solution, times)
+            SELECT v_row.versionid, 'feature', p_objectkey, m.region, v_row.childmark, v_row.parentmark, m.conflict,
+                   m.changed_by, m.vertex_ids, m.cell_ids, m.parent_vertex_ids, m.parent_cell_ids, m.child_vertex_ids,
+                   m.child_cell_ids, m.bbox, m.parent_displacement, m.child_displacement,
+                   CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END, m.times
+              FROM tgsis.instants_merge_regions(p_version, p_objectkey::bigint) AS m;
+            GET DIAGNOSTICS v_count = ROW_COUNT;
+        EXCEPTION WHEN SQLSTATE 'TG100' OR SQLSTATE 'TG302' THEN
+            -- an object-level conflict, new ids beyond bigint, non-finite coordinates: no regions, as in Python
+            RETURN 0;
+        END;
+        RETURN v_count;
+    END IF;
+    IF tgsis.region_merge_refusal(p_version, p_objectkey::bigint) IS NOT NULL THEN
         RETURN 0;
     END IF;
     BEGIN

@@ -1288,9 +1288,11 @@ def _check_valid(
         else:
             ref = ref.astype(np.int64)
         dangling_ref = (ref >= 0) & ~_contains(state.vertex_ids, ref)
-        if dangling_ref.any():  # the parent's own rows are excused: it is the state merged into
-            v_same, _ = state_rows_equal(state, merge.parent, state.vertex_ids[dangling_ref], np.empty(0, np.int64))
-            dangling_ref[np.flatnonzero(dangling_ref)[v_same]] = False
+        if dangling_ref.any():  # the parent's own rows are excused where the parent itself lacks the vertex
+            # (it is the state merged into); an unchanged atom whose vertex the merge removes is not
+            at = np.flatnonzero(dangling_ref)
+            v_same, _ = state_rows_equal(state, merge.parent, state.vertex_ids[at], np.empty(0, np.int64))
+            dangling_ref[at[v_same & ~_contains(merge.parent.vertex_ids, ref[at])]] = False
         if dangling_ref.any():
             raise InvalidMergeError(
                 f"{name}: the merge would keep vertices {ids_text(state.vertex_ids[dangling_ref])}, atoms (refid) "

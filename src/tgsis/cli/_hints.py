@@ -129,8 +129,8 @@ _RULES: list[tuple[str, Replacement]] = [
     ),
     (  # resolve_region's rows for a region of an instant: the command records the mesh alone
         rf"give the mesh alone \(the sixth argument\) and merge with `tgsis version merge {_SHELL_WORD}` or "
-        rf"tgsis\.merge_version\(conn, (?:{_PY_LITERAL}|(\w+))\) in Python; the psql merge refuses a slice both sides "
-        r"changed",
+        rf"tgsis\.merge_version\(conn, (?:{_PY_LITERAL}|(\w+))\) in Python; the psql merge applies only parent, child "
+        r"or base to a region of a slice",
         lambda m: f"give --mesh FILE, then tgsis version merge {_py_word(m[1], m[2])}",
     ),
     (r", or tgsis\.resolve_region in Python$", ""),

@@ -1697,34 +1697,50 @@ def _check_average(merge: MeshMerge, region: MergeRegion, source: _Patch, state:
         ) from exc
 
 
-def _file_ids(mesh: Mesh, name: str) -> npt.NDArray[np.int64]:
-    """Per file vertex, its stored id from the vertex property ``vrtxid``; -1 for a vertex without one."""
+def _file_ids(
+    mesh: Mesh, name: str, stored: npt.NDArray[np.int64]
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
+    """Per file vertex, its stored id from the vertex property ``vrtxid``, and whether it is a new vertex.
+
+    A vertex is new when its ``vrtxid`` is NaN, or negative and no id of ``stored`` (the three states'
+    vertex ids): a psql user may store negative ids, which the export writes as they are, so a negative
+    value that is a stored id is that vertex, not a tool's mark of a vertex it added.
+    """
     if "vrtxid" not in mesh.vertex_properties:
         raise InvalidInputError(
             f"{name}: the mesh has no vertex property 'vrtxid': its vertices cannot be matched to the stored ones",
             hint="edit a file written by tgsis version conflicts --export (it keeps the ids as the vertex property "
             "vrtxid), or give a MeshState",
         )
-    given = np.asarray(mesh.vertex_properties["vrtxid"])
-    raw = given.astype(np.float64).ravel()
-    ids = np.full(len(raw), -1, dtype=np.int64)
-    known = np.isfinite(raw) & (raw >= 0)
-    if np.any(raw[known] != np.round(raw[known])):
-        raise InvalidInputError(f"{name}: vertex property 'vrtxid' holds values that are no ids (not integers)")
-    if given.dtype.kind == "f":
-        exact = 2 ** (np.finfo(given.dtype).nmant + 1)  # from there on, neighbouring integers share one value
-        if np.any(raw[known] >= exact):
+    given = np.asarray(mesh.vertex_properties["vrtxid"]).ravel()
+    if given.dtype.kind in "iu":  # integers as they are: through float64 an id past 2**53 would become another
+        if given.dtype.kind == "u" and given.size and int(given.max()) > np.iinfo(np.int64).max:
+            raise InvalidInputError(f"{name}: vertex property 'vrtxid' holds values past the largest id (bigint)")
+        values = given.astype(np.int64)
+        known = (values >= 0) | np.isin(values, stored)
+    else:
+        raw = given.astype(np.float64)
+        finite = np.isfinite(raw)
+        whole = finite & (raw == np.round(raw)) & (np.abs(raw) < 2.0**63)
+        known = finite & (raw >= 0)
+        known[whole] |= np.isin(raw[whole].astype(np.int64), stored)  # a stored negative id
+        if np.any(raw[known] != np.round(raw[known])):
+            raise InvalidInputError(f"{name}: vertex property 'vrtxid' holds values that are no ids (not integers)")
+        exact = 2 ** (np.finfo(given.dtype).nmant + 1) if given.dtype.kind == "f" else 2**53
+        if np.any(np.abs(raw[known]) >= exact):  # from there on, neighbouring integers share one value
             raise InvalidInputError(
                 f"{name}: vertex property 'vrtxid' is stored as {given.dtype} and holds ids of {exact} or more, "
                 f"which {given.dtype} cannot tell apart from their neighbours",
                 hint="write vrtxid as an integer (or float64) property, as tgsis version conflicts --export does",
             )
-    ids[known] = raw[known].astype(np.int64)
+        values = np.where(known, raw, -1).astype(np.int64)
+    ids = np.full(len(given), -1, dtype=np.int64)
+    ids[known] = values[known]
     if len(np.unique(ids[known])) != int(known.sum()):
         raise InvalidInputError(
             f"{name}: two vertices of the mesh have the same 'vrtxid'", hint="give each vertex its own id"
         )
-    return ids
+    return ids, ~known
 
 
 def _manual_state(merge: MeshMerge, region: MergeRegion, mesh: MeshState | Mesh, name: str) -> MeshState:
@@ -1784,9 +1800,10 @@ def _state_of_file(merge: MeshMerge, mesh: Mesh, name: str) -> MeshState:
         raise InvalidInputError(
             f"{name}: the mesh has cells of {mesh.cell_size} vertices, the object of {base.cell_size}"
         )
-    ids = _file_ids(mesh, name)
+    ids, new = _file_ids(mesh, name, np.concatenate([s.vertex_ids for s in states]))
     top_v = max(int(s.vertex_ids.max()) for s in states if s.n_vertices) if any(s.n_vertices for s in states) else -1
-    new = ids < 0
+    if (~new).any():  # above the ids the file gives too (a whole vrtxid no state has is taken as given)
+        top_v = max(top_v, int(ids[~new].max()))
     ids[new] = np.arange(top_v + 1, top_v + 1 + int(new.sum()))
     vertices = np.asarray(mesh.vertices, dtype=np.float64).copy()
     if str(mesh.metadata.get("zpositive", "")).lower() == "depth":
