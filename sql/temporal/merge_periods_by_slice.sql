@@ -40,7 +40,7 @@
 -- role that may not read the class, change it or write the rows through
 -- their view (tgsis.check_merge_table_write), TG002 for one that may not
 -- write in the version. In sql/temporal/ for tgsis.check_period_continuity;
--- tgsis.merge_regions_in_sql calls it by name. extra_float_digits is pinned:
+-- tgsis.merge_regions_in_sql calls it through the registry (tgsis.data_models.merge_function). extra_float_digits is pinned:
 -- values are compared as text, floats exactly.
 CREATE FUNCTION tgsis.merge_periods_by_slice(p_version text, p_action text, p_geoid bigint)
 RETURNS bigint

@@ -28,7 +28,7 @@ DECLARE
     v_key     text;
     v_written bigint := 0;
     v_count   bigint;
-    v_model   text;
+    v_function text;
 BEGIN
     IF current_setting('tgsis.region_detection', true) IS NOT DISTINCT FROM 'client' THEN
         RETURN 0;
@@ -38,22 +38,19 @@ BEGIN
     -- the conflicts of now; the regions of each mesh are found once, by its merge below
     PERFORM set_config('tgsis.region_detection', 'client', true);
     PERFORM FROM tgsis.find_conflicts(p_version);
-    -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice); evolving surfaces
-    -- (model 3): period by period (tgsis.merge_periods_by_slice, in sql/temporal/ beside the continuity check it
-    -- needs, so named at run time); NULL: an object-level conflict or an unsolved region of an instant, refused below
-    FOR v_key, v_model IN
-        SELECT k.objectkey, c.timemodel FROM tgsis.conflicts k
+    -- the features of a model merged slice by slice in SQL (its registry row's merge_function: surfaces at
+    -- instants instant by instant, tgsis.merge_instants_by_slice; evolving surfaces period by period,
+    -- tgsis.merge_periods_by_slice, in sql/temporal/ beside the continuity check it needs); NULL: an
+    -- object-level conflict or an unsolved region of an instant, refused below
+    FOR v_key, v_function IN
+        SELECT k.objectkey, m.merge_function FROM tgsis.conflicts k
           JOIN tgsis.catalog c ON c.classname = tgsis.class_of_geoid(k.objectkey::bigint)
+          JOIN tgsis.data_models m ON m.timemodel = c.timemodel
          WHERE k.versionid = v_id AND k.objectclass = 'feature' AND k.solution = 'unsolved'
-           AND c.timemodel IN ('INSTANTS', 'EVOLVING')
+           AND m.merge_function IS NOT NULL
          ORDER BY k.objectkey::bigint
     LOOP
-        IF v_model = 'INSTANTS' THEN
-            v_count := tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint);
-        ELSE
-            EXECUTE format('SELECT tgsis.%I($1, $2, $3)', 'merge_periods_by_slice')
-               INTO v_count USING p_version, p_action, v_key::bigint;
-        END IF;
+        EXECUTE format('SELECT tgsis.%I($1, $2, $3)', v_function) INTO v_count USING p_version, p_action, v_key::bigint;
         IF v_count IS NULL THEN
             -- unsolved (a region of an instant without a solution, or an object-level conflict): the regions
             -- of its instants stored, for the merge's refusal to name them (none for other models)
