@@ -556,3 +556,46 @@ def test_two_evolving_surfaces_and_a_surface_at_instants_in_one_merge(conn: Conn
     move(conn, "DEFAULT", flat, TIMES[2], SOUTH, PARENT_SHIFT)
     mine = assert_same_merge(conn, "e2")
     assert mine[1] > 0
+
+
+def _rows_read(conn: Conn, schema: str, table: str) -> int:
+    """The rows this transaction has fetched from a table's storage so far (pg_stat_xact_user_tables: rows of
+    sequential scans and rows fetched through an index)."""
+    row = conn.execute(
+        "SELECT coalesce(s.seq_tup_read, 0) + coalesce(s.idx_tup_fetch, 0) FROM pg_stat_xact_user_tables s"
+        " WHERE s.relid = tgsis.storage_table(%s, %s)::regclass",
+        (schema, table),
+    ).fetchone()
+    return int(row[0]) if row is not None else 0
+
+
+def test_the_psql_merge_reads_the_changed_nodes_not_the_whole_period(conn: Conn, periods: int) -> None:
+    """The psql merge of an evolving surface reads, in a touched period, the rows of the nodes some side changed
+    (at every geometry instant of their period: one topology), not the whole period. Counted on the vertex property
+    rows' storage (pg_stat_xact_user_tables) around the model-3 merge itself, as merge_regions_in_sql calls it, with
+    index reads only (enable_seqscan off: a table this small is otherwise scanned whatever is read): the search of
+    the changed keys (which finds them among the object's rows here: one range of the revision BRIN) and the 4
+    changed nodes at 3 geometry instants; reading the touched period whole read one more object's worth. What the
+    merge writes is the Python merge's, row for row."""
+    nodes = _node_ids(conn, periods, 1.0)
+    _move(conn, "e1", periods, 1.0, 1.0, nodes[:2], CHILD_SHIFT)
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, nodes[-2:], PARENT_SHIFT)
+    assert_same_merge(conn, "e1")
+    storage = conn.execute("SELECT tgsis.storage_table('public', 'evolving_cellpros')").fetchone()
+    assert storage is not None
+    stored = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(sql.SQL(str(storage[0])))).fetchone()
+    conn.rollback()
+    with conn.transaction(force_rollback=True):
+        conn.execute("SET LOCAL enable_seqscan = off")
+        conn.execute("SET LOCAL jit = off")
+        conn.execute("SELECT tgsis.lock_for_region_merge('e1', 'merge', false)")
+        conn.execute("SELECT set_config('tgsis.region_detection', 'client', true)")
+        conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+        before = _rows_read(conn, "public", "evolving_cellpros")
+        conn.execute("SELECT tgsis.merge_periods_by_slice('e1', 'merge', %s)", (periods,))
+        read = _rows_read(conn, "public", "evolving_cellpros") - before
+    conn.rollback()
+    assert stored is not None
+    # the object's rows once (the changed keys' search) and the 4 nodes' rows at 3 geometry instants, in up to
+    # 2 row versions each; the whole touched period was 144 nodes at 3 geometry instants more
+    assert 0 < read <= int(stored[0]) + 4 * 3 * 2, (read, stored[0])

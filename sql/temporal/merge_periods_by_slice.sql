@@ -16,8 +16,13 @@
 -- instants of a period must share one topology (tgsis._merge_slices.check_periods):
 -- else TG308, as the Python merge raises it. The per-instant feature
 -- properties (<class>_pros) merge column by column, the parent's attribute
--- edits come along. Only the periods with a row whose visibility differs
--- between the three revision sets are read, whole, as each set sees them.
+-- edits come along. Only what some revision set sees otherwise than another
+-- is read, as each set sees it: a period whose topology instant or geometry
+-- instant rows changed (added, removed) whole; elsewhere the nodes and
+-- triangles with a row that changed, at every geometry instant of their
+-- period (the rows of the others are the same stored rows in the three
+-- states: the decisions, the one-topology check and the writes need them
+-- not), each looked up by its primary key.
 -- The result is written into the VERSION's working revision by the Python
 -- writer's keyed difference (tgsis.db._state_write.write_sliced_difference:
 -- tgsis.timem, timet, node and d4dtrgl from each period's first geometry
@@ -59,6 +64,7 @@ DECLARE
     v_since    integer[];
     v_cset     integer[];
     v_periods  float8[];
+    v_whole    float8[] := '{}';
     v_refused  text := format('%s of version %s refused: feature %s does not merge period by period in SQL',
                               p_action, quote_literal(p_version), p_geoid);
     v_hint     text := tgsis.merge_sliced_hint(p_version, p_action, p_geoid, 'geometry instant by geometry instant');
@@ -105,9 +111,11 @@ BEGIN
         CREATE TEMPORARY TABLE tgsis_mp_slice (m float8, t float8, ib boolean, ip boolean, ic boolean, chp boolean,
                                                chc boolean, samepc boolean, src text) ON COMMIT DROP;
         CREATE TEMPORARY TABLE tgsis_mp_prow (m float8, t float8, mv text[], cv text[]) ON COMMIT DROP;
+        -- the keys (period, id) of a node (kind v) or triangle (c) with a row some set sees otherwise than another
+        CREATE TEMPORARY TABLE tgsis_mp_key (kind text, m float8, id bigint) ON COMMIT DROP;
     ELSE
         TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
-                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow;
+                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow, pg_temp.tgsis_mp_key;
     END IF;
     -- the tables of the model (the registry), in the Python writer's order, then the class's vertex and cell
     -- property rows (vp, cp)
@@ -132,20 +140,49 @@ BEGIN
             USING ERRCODE = 'TG302', HINT = v_hint;
     END IF;
 
-    -- 1. the periods with a row some set sees otherwise than another (tgsis.db._merge_states: changed_only)
+    -- 1. what some set sees otherwise than another (tgsis.db._merge_states: changed_only, read by key as its
+    -- ring read does): a period whose topology instant or geometry instant rows changed (added, removed: taken
+    -- or dropped whole) is read whole; elsewhere the keys (period, id) of the nodes and triangles whose rows
+    -- changed, read at every geometry instant of their period (so that a period's one topology is checked on
+    -- them: the rows of the other keys are the same stored rows in the three states)
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
-        v_periods := v_periods || ARRAY(SELECT r[1]::float8
+        IF v_spec.idcol IS NULL THEN
+            v_whole := v_whole || ARRAY(SELECT r[1]::float8
                                           FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey, ARRAY[v_spec.mcol], p_geoid,
                                                                         v_since) AS r);
+        ELSE
+            INSERT INTO pg_temp.tgsis_mp_key
+            SELECT CASE WHEN v_spec.tab IN ('c', 'cp') THEN 'c' ELSE 'v' END, r[1]::float8, r[2]::bigint
+              FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey, ARRAY[v_spec.mcol, v_spec.idcol], p_geoid, v_since) AS r;
+        END IF;
     END LOOP;
-    v_periods := ARRAY(SELECT DISTINCT p FROM unnest(v_periods) AS p ORDER BY 1);
+    v_whole := ARRAY(SELECT DISTINCT p FROM unnest(v_whole) AS p ORDER BY 1);
+    DELETE FROM pg_temp.tgsis_mp_key k WHERE k.m = ANY (v_whole);
+    v_periods := ARRAY(SELECT p FROM unnest(v_whole) AS p UNION SELECT k.m FROM pg_temp.tgsis_mp_key k ORDER BY 1);
 
     -- 2. their rows as each state sees them: vals (for writing), bits (exact, NULL as NaN), eq as
     -- tgsis._merge_slices.same_state compares them (floats -0 as 0), el as merge3 compares an element (a triangle
-    -- by its oriented key)
-    FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
+    -- by its oriented key). The geometry instants of the periods first (all of them: few), then per table the
+    -- rows of the whole periods and those of the keys, each found through the primary key (period, geometry
+    -- instant, id)
+    FOR v_spec IN SELECT s.*,
+                         (SELECT array_agg(k.m ORDER BY k.m, k.id) FROM (SELECT DISTINCT * FROM pg_temp.tgsis_mp_key) AS k
+                           WHERE k.kind = CASE WHEN s.tab IN ('c', 'cp') THEN 'c' ELSE 'v' END) AS kms,
+                         (SELECT array_agg(k.id ORDER BY k.m, k.id) FROM (SELECT DISTINCT * FROM pg_temp.tgsis_mp_key) AS k
+                           WHERE k.kind = CASE WHEN s.tab IN ('c', 'cp') THEN 'c' ELSE 'v' END) AS kids
+                    FROM pg_temp.tgsis_mp_spec s
+                   ORDER BY array_position(ARRAY['M', 'T', 'n', 'c', 'v', 'vp', 'cp'], s.tab) LOOP
         EXIT WHEN cardinality(v_periods) = 0;
         CONTINUE WHEN v_spec.tab IN ('M', 'n');  -- (the slices are made of the others, as the Python reader makes them)
+        IF v_spec.tcol IS NOT NULL AND v_spec.idcol IS NOT NULL THEN  -- keyed by geometry instant: each key at each
+            SELECT array_agg(k.m ORDER BY k.m, g.t, k.id), array_agg(g.t ORDER BY k.m, g.t, k.id),
+                   array_agg(k.id ORDER BY k.m, g.t, k.id)
+              INTO v_spec.kms, v_gone, v_spec.kids
+              FROM (SELECT DISTINCT k.m, k.id FROM unnest(v_spec.kms, v_spec.kids) AS k (m, id)) AS k
+              JOIN (SELECT DISTINCT r.m, r.t FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'T') AS g ON g.m = k.m;
+        ELSE
+            v_gone := NULL;
+        END IF;
         SELECT t.p_vals, t.p_bits, t.p_eq INTO v_vals, v_bits, v_eq
           FROM tgsis.merge_row_texts(format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass,
                                      v_spec.okey || v_spec.keys) AS t;
@@ -154,17 +191,31 @@ BEGIN
           FROM tgsis.storage_run(v_spec.vt, false, format(
                  'SELECT ARRAY[s.st::text, v.%1$I::text, %2$s, %3$s, ARRAY[%4$s]::text[]::text,
                                ARRAY[%5$s]::text[]::text, ARRAY[%6$s]::text[]::text, %7$s]
-                    FROM %8$I.%9$I v, (VALUES (1, $2), (2, $3), (4, $1[3]::integer[])) AS s (st, revs)
-                   WHERE v.%10$I = $1[1]::bigint AND v.%1$I = ANY ($1[2]::float8[])
-                     AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
+                    FROM (%8$s) AS v, (VALUES (1, $2), (2, $3), (4, $1[3]::integer[])) AS s (st, revs)
+                   WHERE v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
                  v_spec.mcol,
                  CASE WHEN v_spec.tcol IS NULL THEN '''-Infinity''' ELSE format('v.%I::text', v_spec.tcol) END,
                  CASE WHEN v_spec.idcol IS NULL THEN '''0''' ELSE format('v.%I::text', v_spec.idcol) END,
                  v_vals, v_bits, v_eq,
                  CASE v_spec.tab WHEN 'c' THEN 'tgsis.oriented_cell_key(ARRAY[v.nodeid1, v.nodeid2, v.nodeid3])::text'
                                  ELSE format('ARRAY[%s]::text[]::text', v_eq) END,
-                 (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
-               p_1 => ARRAY[v_key, v_periods::text, v_cset::text], p_2 => v_base, p_3 => v_pset) AS r;
+                 -- the rows of the whole periods (the geometry instants: of every period read), then those of the keys,
+                 -- each key looked up alone (OFFSET 0: not joined to the table as a whole, which a small table invites)
+                 format('SELECT w.* FROM %1$I.%2$I w WHERE w.%3$I = $1[1]::bigint AND w.%4$I = ANY ($1[%5$s]::float8[]) %6$s',
+                        (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.mcol,
+                        CASE WHEN v_spec.idcol IS NULL THEN 2 ELSE 4 END,
+                        -- (no whole period: no statement that the planner could answer by a scan of the object)
+                        CASE WHEN v_spec.idcol IS NOT NULL AND cardinality(v_whole) = 0 THEN 'AND false' ELSE '' END)
+                 || CASE WHEN v_spec.idcol IS NULL THEN '' ELSE format(
+                        ' UNION ALL SELECT w.* FROM unnest($1[5]::float8[], $1[6]::float8[], $5) AS k (m, t, id)
+                            CROSS JOIN LATERAL (SELECT w.* FROM %1$I.%2$I w
+                                                 WHERE w.%3$I = $1[1]::bigint AND w.%4$I = k.m %6$s AND w.%5$I = k.id
+                                                 OFFSET 0) AS w',
+                        (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.mcol, v_spec.idcol,
+                        CASE WHEN v_spec.tcol IS NULL THEN '' ELSE format('AND w.%I = k.t', v_spec.tcol) END) END),
+               p_1 => ARRAY[v_key, v_periods::text, v_cset::text, v_whole::text, coalesce(v_spec.kms, '{}')::text,
+                            coalesce(v_gone::text, '{}')],
+               p_2 => v_base, p_3 => v_pset, p_5 => coalesce(v_spec.kids, '{}')) AS r;
     END LOOP;
     ANALYZE pg_temp.tgsis_mp_row;  -- (temporary tables have no statistics otherwise: the joins below want them)
     IF EXISTS (SELECT FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'v'
@@ -413,7 +464,7 @@ BEGIN
         RETURN NULL;  -- the periods would not join: the Python merge leaves it unsolved ("its merged rows cannot be written")
     END;
     TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
-             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow;
+             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow, pg_temp.tgsis_mp_key;
     PERFORM tgsis.merge_sliced_leave(p_version, p_geoid, v_settings, true);
     RETURN v_written;
 END
