@@ -586,8 +586,7 @@ def test_the_psql_merge_reads_the_changed_nodes_not_the_whole_period(conn: Conn,
     stored = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(sql.SQL(str(storage[0])))).fetchone()
     conn.rollback()
     with conn.transaction(force_rollback=True):
-        conn.execute("SET LOCAL enable_seqscan = off")
-        conn.execute("SET LOCAL jit = off")
+        conn.execute("SET LOCAL enable_seqscan = off; SET LOCAL jit = off")
         conn.execute("SELECT tgsis.lock_for_region_merge('e1', 'merge', false)")
         conn.execute("SELECT set_config('tgsis.region_detection', 'client', true)")
         conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
