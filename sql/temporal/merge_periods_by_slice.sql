@@ -65,6 +65,7 @@ DECLARE
     v_cset     integer[];
     v_periods  float8[];
     v_whole    float8[] := '{}';
+    v_kts      float8[];
     v_refused  text := format('%s of version %s refused: feature %s does not merge period by period in SQL',
                               p_action, quote_literal(p_version), p_geoid);
     v_hint     text := tgsis.merge_sliced_hint(p_version, p_action, p_geoid, 'geometry instant by geometry instant');
@@ -177,11 +178,11 @@ BEGIN
         IF v_spec.tcol IS NOT NULL AND v_spec.idcol IS NOT NULL THEN  -- keyed by geometry instant: each key at each
             SELECT array_agg(k.m ORDER BY k.m, g.t, k.id), array_agg(g.t ORDER BY k.m, g.t, k.id),
                    array_agg(k.id ORDER BY k.m, g.t, k.id)
-              INTO v_spec.kms, v_gone, v_spec.kids
+              INTO v_spec.kms, v_kts, v_spec.kids
               FROM (SELECT DISTINCT k.m, k.id FROM unnest(v_spec.kms, v_spec.kids) AS k (m, id)) AS k
               JOIN (SELECT DISTINCT r.m, r.t FROM pg_temp.tgsis_mp_row r WHERE r.tab = 'T') AS g ON g.m = k.m;
         ELSE
-            v_gone := NULL;
+            v_kts := NULL;
         END IF;
         SELECT t.p_vals, t.p_bits, t.p_eq INTO v_vals, v_bits, v_eq
           FROM tgsis.merge_row_texts(format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass,
@@ -214,7 +215,7 @@ BEGIN
                         (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.mcol, v_spec.idcol,
                         CASE WHEN v_spec.tcol IS NULL THEN '' ELSE format('AND w.%I = k.t', v_spec.tcol) END) END),
                p_1 => ARRAY[v_key, v_periods::text, v_cset::text, v_whole::text, coalesce(v_spec.kms, '{}')::text,
-                            coalesce(v_gone::text, '{}')],
+                            coalesce(v_kts, '{}')::text],
                p_2 => v_base, p_3 => v_pset, p_5 => coalesce(v_spec.kids, '{}')) AS r;
     END LOOP;
     ANALYZE pg_temp.tgsis_mp_row;  -- (temporary tables have no statistics otherwise: the joins below want them)
