@@ -28,7 +28,7 @@ Conn = psycopg.Connection[Any]
 PATCH = np.array([5 * SIDE + 5, 5 * SIDE + 6, 6 * SIDE + 5, 6 * SIDE + 6])  # stored as -1 - id
 
 
-def _negative_fault(conn: Conn, corner: int = -1) -> int:
+def negative_fault(conn: Conn, corner: int = -1) -> int:
     """The curved fault, its vertex ids rewritten by a psql user as -1 - id (DEFAULT), version e1 based on it.
 
     Vertex 0 (-1) becomes ``corner``.
@@ -49,7 +49,7 @@ def _negative_fault(conn: Conn, corner: int = -1) -> int:
     return geoid
 
 
-def _move(conn: Conn, version: str, geoid: int, dz: float) -> None:
+def move_patch(conn: Conn, version: str, geoid: int, dz: float) -> None:
     with tgsis.in_version(conn, version):
         conn.execute(
             "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = ANY(%s)",
@@ -58,7 +58,23 @@ def _move(conn: Conn, version: str, geoid: int, dz: float) -> None:
     conn.commit()
 
 
-def _merged(conn: Conn, geoid: int) -> tuple[Any, Any]:
+def exported_conflict(conn: Conn, tmp_path: Path) -> tuple[int, Any, Any, Any]:
+    """The negative fault's patch moved on both sides (one conflicting region), the child's state exported as VTU
+    and read back: (geoid, the region, the file's mesh, its vrtxid as float64)."""
+    geoid = negative_fault(conn)
+    move_patch(conn, "e1", geoid, 5.0)
+    move_patch(conn, "DEFAULT", geoid, -7.0)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    [region] = [r for r in conflict.regions if r.conflict]
+    tgsis.export_conflict(conn, "e1", geoid, tmp_path, format="vtu", picture=False)
+    [child_file] = tmp_path.glob(f"{geoid}_*_child.vtu")
+    mesh = formats.read_one(child_file)
+    ids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64)
+    return geoid, region, mesh, ids
+
+
+def merged_state(conn: Conn, geoid: int) -> tuple[Any, Any]:
     """The object's merge and its state with the recorded solutions applied (what the merge writes)."""
     merge = tgsis.object_merge(conn, "e1", geoid)
     with conn.transaction():
@@ -67,24 +83,15 @@ def _merged(conn: Conn, geoid: int) -> tuple[Any, Any]:
 
 
 def test_an_edited_export_keeps_the_negative_stored_ids(conn: Conn, tmp_path: Path) -> None:
-    geoid = _negative_fault(conn)
-    _move(conn, "e1", geoid, 5.0)
-    _move(conn, "DEFAULT", geoid, -7.0)
-    [conflict] = tgsis.find_conflicts(conn, "e1")
-    conn.commit()
-    [region] = [r for r in conflict.regions if r.conflict]
+    geoid, region, mesh, ids = exported_conflict(conn, tmp_path)
     assert int(region.vertex_ids.max()) < 0  # the ids are the stored negative ones
-    tgsis.export_conflict(conn, "e1", geoid, tmp_path, format="vtu", picture=False)
-    [child_file] = tmp_path.glob(f"{geoid}_*_child.vtu")
-    mesh = formats.read_one(child_file)
-    ids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64)
     assert ids.max() < 0
     vertices = mesh.vertices.copy()
     vertices[np.isin(ids, -1 - PATCH), 2] += 0.5  # the geologist's own choice
     edited = tgsis.Surface(vertices, mesh.cells, vertex_properties=mesh.vertex_properties, name=mesh.name)
     tgsis.resolve_region(conn, "e1", geoid, region.region, "manual", edited)
     conn.commit()
-    merge, state = _merged(conn, geoid)
+    merge, state = merged_state(conn, geoid)
     # the same ids as every state: no vertex renumbered, no cell re-created
     assert np.array_equal(state.vertex_ids, merge.child.vertex_ids)
     assert np.array_equal(state.cell_ids, merge.child.cell_ids)
@@ -95,16 +102,7 @@ def test_an_edited_export_keeps_the_negative_stored_ids(conn: Conn, tmp_path: Pa
 
 def test_a_vertex_added_in_the_tool_still_gets_a_fresh_id(conn: Conn, tmp_path: Path) -> None:
     """NaN (and a negative that is no stored id) still marks a new vertex."""
-    geoid = _negative_fault(conn)
-    _move(conn, "e1", geoid, 5.0)
-    _move(conn, "DEFAULT", geoid, -7.0)
-    [conflict] = tgsis.find_conflicts(conn, "e1")
-    conn.commit()
-    [region] = [r for r in conflict.regions if r.conflict]
-    tgsis.export_conflict(conn, "e1", geoid, tmp_path, format="vtu", picture=False)
-    [child_file] = tmp_path.glob(f"{geoid}_*_child.vtu")
-    mesh = formats.read_one(child_file)
-    ids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64)
+    geoid, region, mesh, ids = exported_conflict(conn, tmp_path)
     inside = set((-1 - PATCH).tolist())
     row = next(i for i, cell in enumerate(mesh.cells.tolist()) if {int(ids[v]) for v in cell} <= inside)
     a, b, c = mesh.cells[row].tolist()
@@ -115,7 +113,7 @@ def test_a_vertex_added_in_the_tool_still_gets_a_fresh_id(conn: Conn, tmp_path: 
     edited = tgsis.Surface(vertices, cells, vertex_properties=props, name=mesh.name)
     tgsis.resolve_region(conn, "e1", geoid, region.region, "manual", edited)
     conn.commit()
-    merge, state = _merged(conn, geoid)
+    merge, state = merged_state(conn, geoid)
     assert state.n_vertices == merge.child.n_vertices + 1
     top = max(int(s.vertex_ids.max()) for s in (merge.base, merge.parent, merge.child))
     assert int(state.vertex_ids.max()) == top + 1
@@ -125,9 +123,9 @@ def test_a_vertex_added_in_the_tool_still_gets_a_fresh_id(conn: Conn, tmp_path: 
 def test_integer_ids_past_float64_precision_are_read_as_they_are(conn: Conn, tmp_path: Path) -> None:
     """An int64 ``vrtxid`` is never rounded through float64 (2**53 + 1 would read as 2**53, another vertex)."""
     big = 2**53
-    geoid = _negative_fault(conn, corner=big + 1)
-    _move(conn, "e1", geoid, 5.0)
-    _move(conn, "DEFAULT", geoid, -7.0)
+    geoid = negative_fault(conn, corner=big + 1)
+    move_patch(conn, "e1", geoid, 5.0)
+    move_patch(conn, "DEFAULT", geoid, -7.0)
     [conflict] = tgsis.find_conflicts(conn, "e1")
     conn.commit()
     [region] = [r for r in conflict.regions if r.conflict]
@@ -139,5 +137,5 @@ def test_integer_ids_past_float64_precision_are_read_as_they_are(conn: Conn, tmp
     mesh.vertices[np.isin(ids, -1 - PATCH), 2] += 0.5
     tgsis.resolve_region(conn, "e1", geoid, region.region, "manual", mesh)
     conn.commit()
-    merge, state = _merged(conn, geoid)
+    merge, state = merged_state(conn, geoid)
     assert np.array_equal(state.vertex_ids, merge.child.vertex_ids)

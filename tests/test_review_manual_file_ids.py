@@ -15,23 +15,13 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.test_manual_file_negative_ids import PATCH, _merged, _move, _negative_fault
-from tgsis import formats
+from tests.test_manual_file_negative_ids import PATCH, exported_conflict, merged_state, move_patch, negative_fault
 
 Conn = psycopg.Connection[Any]
 
 
 def _edited_with_two_new_vertices(conn: Conn, tmp_path: Path, marks: tuple[float, float]) -> tuple[int, int, Any]:
-    geoid = _negative_fault(conn)
-    _move(conn, "e1", geoid, 5.0)
-    _move(conn, "DEFAULT", geoid, -7.0)
-    [conflict] = tgsis.find_conflicts(conn, "e1")
-    conn.commit()
-    [region] = [r for r in conflict.regions if r.conflict]
-    tgsis.export_conflict(conn, "e1", geoid, tmp_path, format="vtu", picture=False)
-    [child_file] = tmp_path.glob(f"{geoid}_*_child.vtu")
-    mesh = formats.read_one(child_file)
-    ids = np.asarray(mesh.vertex_properties["vrtxid"], dtype=np.float64)
+    geoid, region, mesh, ids = exported_conflict(conn, tmp_path)
     inside = set((-1 - PATCH).tolist())
     rows = [i for i, cell in enumerate(mesh.cells.tolist()) if {int(ids[v]) for v in cell} <= inside][:2]
     vertices, cells, n = mesh.vertices, mesh.cells, mesh.n_vertices
@@ -56,7 +46,7 @@ def test_a_new_vertex_never_gets_the_id_another_file_vertex_gives(
     # was refused: "vertex ids 0 are given twice" (the file gives 0 once; the fresh id was 0 too)
     tgsis.resolve_region(conn, "e1", geoid, index, "manual", edited)
     conn.commit()
-    merge, state = _merged(conn, geoid)
+    merge, state = merged_state(conn, geoid)
     assert len(np.unique(state.vertex_ids)) == state.n_vertices
     assert state.n_vertices == merge.child.n_vertices + 2
 
@@ -65,7 +55,7 @@ def test_a_new_vertex_never_gets_the_id_another_file_vertex_gives(
 def test_an_atom_referring_to_a_negative_vertex_id_survives_the_merge(conn: Conn, solution: str) -> None:
     """Negative stored ids (a psql user's): a GOCAD atom in the patch both sides move refers to vertex -1. The merge
     rewrites the atom's vertex row: its atom must come along (refid -1 is a vertex, not 'no atom')."""
-    geoid = _negative_fault(conn)
+    geoid = negative_fault(conn)
     atom_v = int(-1 - PATCH[0])
     conn.execute("INSERT INTO tgsis.atom (geoid, vrtxid, refid, patom) VALUES (%s, %s, -1, true)", (geoid, atom_v))
     conn.commit()
@@ -76,7 +66,7 @@ def test_an_atom_referring_to_a_negative_vertex_id_survives_the_merge(conn: Conn
             "UPDATE tgsis.vrtx SET z = z + 5 WHERE geoid = %s AND vrtxid = ANY(%s)", (geoid, (-1 - PATCH).tolist())
         )
     conn.commit()
-    _move(conn, "DEFAULT", geoid, -7.0)
+    move_patch(conn, "DEFAULT", geoid, -7.0)
     [conflict] = tgsis.find_conflicts(conn, "e2")
     conn.commit()
     [region] = [r for r in conflict.regions if r.conflict]

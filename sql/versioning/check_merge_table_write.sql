@@ -11,6 +11,7 @@
 -- refuses the Python merge's statement: a role the DBA took a right on a
 -- class's property view from does not get those rows written by merging
 -- (tgsis.check_class_write answers for the class's feature table only).
+-- Also asked for SELECT on the per-instant property view, which the Python merge reads.
 CREATE FUNCTION tgsis.check_merge_table_write(p_table tgsis.versioned_tables, p_privilege text, p_geoid bigint,
                                               p_storage boolean DEFAULT false)
 RETURNS void

@@ -12,7 +12,9 @@
 -- the caller writes them by its (instant, id)-keyed difference. NULL when a conflicting region has no
 -- solution (or no regions are stored): the object stays unsolved. Refused (TG302, with p_refused and
 -- p_hint) when the stored regions of the instant are not its regions of now, or a region is solved
--- average or manual (the Python client applies those). The work tables are made in a subtransaction
+-- average or manual (the Python client applies those); TG302 too (the engine's reason and hint) when the
+-- instant does not merge by region (tgsis.mesh_merge_work's TG100: the version's new ids cannot be
+-- renumbered within bigint), as the Python merge refuses it. The work tables are made in a subtransaction
 -- rolled back before it returns: neither they nor their locks outlive the call.
 -- extra_float_digits is pinned: floats go through jsonb as their exact text.
 CREATE FUNCTION tgsis.merge_instant_by_region(p_version text, p_geoid bigint, p_times float8, p_refused text, p_hint text)
@@ -28,13 +30,21 @@ DECLARE
     v_first    integer;
     v_out      jsonb;
     v_why      text;
+    v_hint     text;
     v_unsolved boolean := false;
 BEGIN
     v_first := (SELECT min(r.region) FROM tgsis.conflict_regions r
                  WHERE r.versionid = v_id AND r.objectclass = 'feature' AND r.objectkey = v_key AND r.times = p_times);
     -- the work, in a subtransaction rolled back once the plan is in v_out. The block's body is not indented.
     BEGIN
-    PERFORM tgsis.mesh_merge_work(p_version, p_geoid, p_times);
+    BEGIN
+        PERFORM tgsis.mesh_merge_work(p_version, p_geoid, p_times);
+    EXCEPTION WHEN SQLSTATE 'TG100' THEN
+        -- the instant does not merge by region (the version's new ids cannot be renumbered within bigint): the
+        -- Python merge leaves the object unsolved and the merge refuses it (TG302), saying why
+        GET STACKED DIAGNOSTICS v_why = MESSAGE_TEXT, v_hint = PG_EXCEPTION_HINT;
+        RAISE EXCEPTION '%: %', p_refused, v_why USING ERRCODE = 'TG302', HINT = v_hint;
+    END;
     -- the regions of the instant, numbered as tgsis.mesh_merge_regions numbers them, with what each side changed
     CREATE TEMPORARY TABLE tgsis_mi_node ON COMMIT DROP AS
     SELECT n.kind, n.id, (dense_rank() OVER (ORDER BY n.label) - 1)::integer AS region,

@@ -38,7 +38,8 @@
 -- 42501 for a role that may not
 -- read the class or change it, or write the rows the merge writes through
 -- their view (tgsis.check_merge_table_write: a property table a DBA took
--- INSERT, UPDATE or DELETE on from the role), TG002 for one that may not
+-- INSERT, UPDATE or DELETE on from the role; SELECT on the per-instant
+-- property view, which the Python merge reads), TG002 for one that may not
 -- write in the version. extra_float_digits is pinned: values are compared as text, floats
 -- exactly.
 CREATE FUNCTION tgsis.merge_instants_by_slice(p_version text, p_action text, p_geoid bigint)
@@ -233,6 +234,7 @@ BEGIN
           FROM sl s)
     SELECT ch.*,
            CASE WHEN NOT ch.chc THEN 'P' WHEN NOT ch.chp THEN CASE WHEN ch.ib AND ch.ip AND ch.ic THEN 'M' ELSE 'C' END
+                WHEN ch.ib AND NOT ch.ip AND NOT ch.ic THEN 'P'  -- removed on both sides: taken (removed)
                 WHEN ch.ib AND NOT (ch.ip AND ch.ic) THEN 'X'
                 WHEN ch.samepc THEN 'P'
                 WHEN ch.ib THEN 'R'
@@ -278,6 +280,9 @@ BEGIN
     SELECT t.* INTO v_pros FROM tgsis.versioned_tables t
      WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.protablename;
     IF FOUND AND jsonb_array_length(v_class.instant_properties) > 0 THEN
+        IF p_action <> 'regions' THEN  -- the Python merge SELECTs the class's view of them (42501 without the right)
+            PERFORM tgsis.check_merge_table_write(v_pros, 'SELECT', p_geoid);
+        END IF;
         v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
         FOR v_attr IN SELECT * FROM tgsis.merge_instant_rows(v_pros, p_geoid, ARRAY['_times'], v_pcols,
                                                              v_base, v_pset, v_cset) LOOP

@@ -248,6 +248,8 @@ def _one_side(
         return "parent"
     if not changed_p:
         return "child"
+    if b is not None and p is None and c is None:  # removed on both sides: taken (removed)
+        return "both"
     if b is not None and (p is None or c is None):
         raise InvalidInputError(
             f"{name}: {what} was removed in the {'parent' if p is None else 'version'} and changed in the "
