@@ -225,6 +225,18 @@ SCENARIOS: dict[str, list[tuple[str, str]]] = {
         ("e1", "throw 3 4 35"),
         ("e1", "move 1 1 north"),
     ],
+    "the same period removed on both sides, nodes moved in the other on each": [
+        ("e1", "drop-period 3"),
+        ("DEFAULT", "drop-period 3"),
+        ("e1", "move 1 1 north"),
+        ("DEFAULT", "move 1 2 south"),
+    ],
+    "the same geometry instant removed on both sides, nodes moved at others on each": [
+        ("e1", "drop-instant 1 2"),
+        ("DEFAULT", "drop-instant 1 2"),
+        ("e1", "move 1 1 north"),
+        ("DEFAULT", "move 3 4 south"),
+    ],
     "the same edit on both sides, one more in the version": [
         ("e1", "same 1 2 north"),
         ("DEFAULT", "same 1 2 north"),

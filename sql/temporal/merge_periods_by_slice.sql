@@ -283,6 +283,7 @@ BEGIN
     side AS (
         SELECT p.*,
                CASE WHEN NOT p.chc THEN 'P' WHEN NOT p.chp THEN 'C'
+                    WHEN p.pb AND NOT p.pp AND NOT p.pc THEN 'P'  -- removed on both sides: taken (removed)
                     WHEN p.pb AND NOT (p.pp AND p.pc) THEN 'X' ELSE 'B' END AS side,
                (SELECT count(DISTINCT coalesce(t.sig, '')) FROM topo t WHERE t.m = p.m) = 3 AS topo3
           FROM per p)
@@ -292,6 +293,7 @@ BEGIN
                 WHEN NOT (s.pb AND s.pp AND s.pc) THEN CASE WHEN s.samepc THEN 'P' ELSE 'X' END
                 WHEN s.topo3 THEN 'X'
                 WHEN NOT ch.chc THEN 'P' WHEN NOT ch.chp THEN CASE WHEN ch.ib AND ch.ip AND ch.ic THEN 'M' ELSE 'C' END
+                WHEN ch.ib AND NOT ch.ip AND NOT ch.ic THEN 'P'  -- removed on both sides: taken (removed)
                 WHEN ch.ib AND NOT (ch.ip AND ch.ic) THEN 'X'
                 WHEN ch.samepc THEN 'P'
                 WHEN ch.ib THEN 'R'
@@ -367,6 +369,7 @@ BEGIN
     SELECT t.* INTO v_pros FROM tgsis.versioned_tables t
      WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.protablename;
     IF FOUND AND jsonb_array_length(v_class.instant_properties) > 0 THEN
+        PERFORM tgsis.check_merge_table_write(v_pros, 'SELECT', p_geoid);  -- the Python merge SELECTs the class's view
         v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
         FOR v_attr IN SELECT * FROM tgsis.merge_instant_rows(v_pros, p_geoid, ARRAY['_timem', '_timet'], v_pcols,
                                                              v_base, v_pset, v_cset) LOOP
