@@ -48,9 +48,10 @@ merges by region read) is timed beside the whole read.
 
 With ``--model3``: (g) an evolving surface (model 3: one topology period,
 three geometry instants of the same grid), the version moving a patch at the
-first geometry instant and DEFAULT another at the last: the Python merge
-geometry instant by instant, as a ratio to the object-level merge (psql
-refuses model 3 by region), and with the touched period read whole (before).
+first geometry instant and DEFAULT another at the last: the psql merge
+period by period (``tgsis.merge_periods_by_slice``) and the Python merge
+geometry instant by instant, as ratios to the object-level merge, and the
+Python merge with the touched period read whole (before).
 
     python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2 | --model2-only]
         [--model3 | --model3-only]
@@ -431,7 +432,7 @@ def move_at3(conn: Conn, version: str, geoid: int, timet: float, ids: np.ndarray
 
 def model3_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     """(g) the merge of an evolving surface (one topology period, three geometry instants), edits at different
-    instants: the Python merge against the object-level merge (psql refuses model 3 by region: TG302)."""
+    instants: the psql merge (period by period) and the Python merge against the object-level merge."""
     from tgsis.db import merging
     from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
@@ -463,6 +464,13 @@ def model3_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
     rows_a = int(rolled_back(conn, lambda: V.merge_version(conn, "objlevel3"))())
     t_a = timed(rolled_back(conn, lambda: V.merge_version(conn, "objlevel3")), repeat)
     print(f"(g) object-level merge of the version's edit (solved manual):      {t_a:6.3f} s, {rows_a} rows written")
+    psql_merge = "SELECT tgsis.merge_version('slices3')"
+    rows_sql = int(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()[0])())  # type: ignore[index]
+    t_sql = timed(rolled_back(conn, lambda: conn.execute(psql_merge).fetchone()), repeat)
+    print(
+        f"(g) psql merge_version period by period (SQL):                   {t_sql:6.3f} s ({t_sql / t_a:.2f}x), {rows_sql} rows written",
+        flush=True,
+    )
     rows_whole = int(whole_slices(rolled_back(conn, lambda: merging.merge_version(conn, "slices3")))())
     t_whole = timed(whole_slices(rolled_back(conn, lambda: merging.merge_version(conn, "slices3"))), repeat)
     print(
@@ -484,6 +492,9 @@ def model3_figures(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
         "model3_python_merge_whole_slices_rows": rows_whole,
         "model3_python_vs_whole_slices": round(t_py / t_whole, 2),
         "model3_python_vs_objlevel": round(t_py / t_a, 2),
+        "model3_sql_merge_s": round(t_sql, 3),
+        "model3_sql_merge_rows": rows_sql,
+        "model3_python_vs_sql": round(t_py / t_sql, 2),
     }
 
 

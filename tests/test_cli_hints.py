@@ -165,6 +165,12 @@ NOT_FROM_THE_CLI = {
     "in Python (tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/merge_instants_by_slice.sql": "the psql merge of surfaces at instants: the command merges them "
     "in Python (tgsis.region_detection = 'client'), which never reaches it",
+    "sql/versioning/merge_sliced_hint.sql": "the psql merges of temporal surfaces: the command merges them in Python "
+    "(tgsis.region_detection = 'client'), which never reaches it",
+    "sql/versioning/merge_sliced_sets.sql": "the start of the psql merges of temporal surfaces: the command merges "
+    "them in Python (tgsis.region_detection = 'client'), which never reaches it",
+    "sql/temporal/merge_periods_by_slice.sql": "the psql merge of evolving surfaces: the command merges them "
+    "in Python (tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/merge_solution_rows.sql": "the psql merge's average/manual rows: the command merges in Python "
     "(tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/resolve_all_regions.sql": "the psql face of --region all: the command calls the Python "

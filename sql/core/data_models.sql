@@ -17,6 +17,7 @@ CREATE TABLE tgsis.data_models (
     extent_function text,
     check_function  text,
     description     text     NOT NULL,
+    merge_function  text,
     CONSTRAINT data_models_core CHECK ((model = 0) = (timemodel IS NULL)),
     CONSTRAINT data_models_hooks CHECK (model = 0 OR (extent_function IS NOT NULL AND check_function IS NOT NULL))
 );
@@ -38,6 +39,8 @@ COMMENT ON COLUMN tgsis.data_models.extent_function IS
 COMMENT ON COLUMN tgsis.data_models.check_function IS
     'function (schema tgsis, geoid) returning (problem text, count bigint, example text) for a geometry of this model; read by tgsis.check_geometry';
 COMMENT ON COLUMN tgsis.data_models.description IS 'what the model stores';
+COMMENT ON COLUMN tgsis.data_models.merge_function IS
+    'function (schema tgsis) (version text, action text, geoid bigint) returning bigint that merges a feature of this model changed on both sides slice by slice in SQL (the rows written; NULL: the merge refuses it); read by tgsis.merge_regions_in_sql. NULL: by region or as a whole object';
 
 CREATE TABLE tgsis.model_tables (
     tablename   text     PRIMARY KEY,

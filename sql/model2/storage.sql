@@ -76,11 +76,12 @@ COMMENT ON FUNCTION tgsis.create_model2_storage() IS
 
 -- the registry rows of model 2 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, create_function, extent_function, check_function,
-                               description)
+                               description, merge_function)
 VALUES (2, 'surfaces at instants', 'INSTANTS', '{SURFACE}',
         '[{"name": "_times", "comment": "instant (model time) the values belong to: one of tgsis.times of the feature"}]',
         'create_model2_storage', 'instants_extent', 'check_temporal_geometry',
-        'surfaces known at instants t0 < t1 < ..., constant in between (a shape per instant)');
+        'surfaces known at instants t0 < t1 < ..., constant in between (a shape per instant)',
+        'merge_instants_by_slice');
 INSERT INTO tgsis.model_tables (tablename, model, iudorder, description) VALUES
     ('times',      2, 1, 'an instant at which a surface is known'),
     ('times_vrtx', 2, 2, 'a vertex of a surface at one of its instants'),

@@ -111,12 +111,13 @@ COMMENT ON FUNCTION tgsis.create_model3_storage() IS
 
 -- the registry rows of model 3 (core/data_models.sql says why)
 INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, timekey, create_function, extent_function, check_function,
-                               description)
+                               description, merge_function)
 VALUES (3, 'continuously evolving surfaces', 'EVOLVING', '{SURFACE}',
         '[{"name": "_timem", "comment": "topology period (its start, tgsis.timem) the values belong to"},
           {"name": "_timet", "comment": "geometry instant (tgsis.timet of the period) the values belong to; values are linear in between"}]',
         'create_model3_storage', 'evolving_extent', 'check_temporal_geometry',
-        'surfaces whose nodes move linearly between geometry instants, with topology periods');
+        'surfaces whose nodes move linearly between geometry instants, with topology periods',
+        'merge_periods_by_slice');
 INSERT INTO tgsis.model_tables (tablename, model, iudorder, description) VALUES
     ('timem',   3, 1, 'a topology instant (start of a topology period) of an evolving surface'),
     ('timet',   3, 2, 'a geometry instant of a topology period'),

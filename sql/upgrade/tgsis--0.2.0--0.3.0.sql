@@ -91,6 +91,15 @@ $dump$;
 -- @moved core/config_dump.sql final/config_dump.sql
 -- @moved core/grants.sql final/grants.sql
 
+-- ---- issue39-B: the registry names the function that merges a feature of a model slice by slice in SQL
+-- (tgsis.merge_regions_in_sql calls it): models 2 and 3 ship one
+ALTER TABLE tgsis.data_models ADD COLUMN merge_function text;
+UPDATE tgsis.data_models SET merge_function = 'merge_instants_by_slice' WHERE model = 2;
+UPDATE tgsis.data_models SET merge_function = 'merge_periods_by_slice' WHERE model = 3;
+-- @handled core/data_models.sql
+-- @handled model2/storage.sql
+-- @handled model3/storage.sql
+
 -- ---- issue36-timerange: tgsis.timerange becomes a domain refusing NaN bounds over the range type
 -- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one. The functions over the
 -- old range type are dropped by name (the generated part below makes them again), then the type, without

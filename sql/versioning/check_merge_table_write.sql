@@ -1,5 +1,6 @@
 -- tgsis.check_merge_table_write(table, privilege, geoid, storage): refuse (42501) a psql merge's write of a versioned table's rows the calling role may not make.
--- The psql merge of a surface at instants (tgsis.merge_instants_by_slice)
+-- The psql merges of temporal surfaces (tgsis.merge_instants_by_slice,
+-- tgsis.merge_periods_by_slice)
 -- writes the storage through tgsis.storage_run, as the table owner's runner:
 -- the rights the Python merge meets (tgsis.db._state_write) do not hold
 -- there by themselves. Asked before each kind of write of a table, on the

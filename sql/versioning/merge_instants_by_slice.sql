@@ -54,33 +54,24 @@ AS $$
 #variable_conflict use_column
 DECLARE
     v_key      text := p_geoid::text;
-    v_version  tgsis.versions;
-    v_parent   tgsis.versions;
+    v_sets     record;
+    v_pset     integer[];
     v_class    tgsis.catalog;
     v_base     integer[];
     v_since    integer[];
     v_cset     integer[];
     v_refused  text := format('%s of version %s refused: feature %s does not merge instant by instant in SQL',
                               p_action, quote_literal(p_version), p_geoid);
-    v_hint     text := format('`tgsis version %s %s` or tgsis.%s_version(conn, %s) in Python merges it instant by instant '
-                              '(its regions); else solve it as a whole object: '
-                              'SELECT tgsis.resolve_conflict(%L, ''feature'', %L, ''parent''|''child''|''manual'')',
-                              p_action, tgsis.shell_quote(p_version), p_action, pg_catalog.to_json(p_version)::text, p_version, p_geoid::text);
+    v_hint     text := tgsis.merge_sliced_hint(p_version, p_action, p_geoid, 'instant by instant');
     v_spec     record;
     v_vals     text;
+    v_bits     text;
     v_eq       text;
     v_el       text;
     v_why      text;
     v_rev      integer;
     v_settings text[];
     v_written  bigint := 0;
-    v_count    bigint;
-    v_times    float8[];
-    v_ids      bigint[];
-    v_flat     text[];
-    v_width    integer;
-    v_cols     text;
-    v_casts    text;
     v_attr     record;
     v_aview    text[] := '{}';
     v_akey     text[] := '{}';
@@ -88,30 +79,23 @@ DECLARE
     v_fcols    text[];
     v_pros     tgsis.versioned_tables;
     v_pcols    text[];
+    v_gone     text[];
+    v_fresh    text[];
+    v_count    bigint;
     v_t        float8;
     v_plan     jsonb;
     v_notes    text[] := '{}';
 BEGIN
-    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
-    SELECT * INTO v_parent FROM tgsis.versions WHERE versionid = v_version.parentid;
-    SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
-    IF v_class.timemodel IS DISTINCT FROM 'INSTANTS' THEN
-        RAISE EXCEPTION 'feature % is not a surface at instants (model 2)', p_geoid
-            USING ERRCODE = 'TG100', HINT = format('SELECT tgsis.merge_version(%L) merges it as its model merges', p_version);
-    END IF;
-    IF p_geoid IN (SELECT tgsis.class_denied_geoids('SELECT')) THEN
-        RAISE EXCEPTION 'role % may not read feature % (its class): it cannot be merged instant by instant',
-                quote_ident(tgsis.calling_role()), p_geoid
-            USING ERRCODE = '42501', HINT = 'the class''s owner can GRANT SELECT on its feature table';
-    END IF;
-    IF tgsis.object_merge_refusal(p_version, p_geoid) IS NOT NULL THEN
+    SELECT * INTO v_sets
+      FROM tgsis.merge_sliced_sets(p_version, p_geoid, 'INSTANTS', 'a surface at instants (model 2)', 'instant by instant');
+    IF v_sets.p_refused THEN
         RETURN NULL;  -- deleted on one side, attributes changed on both: the Python merge leaves it unsolved too
     END IF;
-    v_base := tgsis.revision_set(v_version.versionid, v_version.initrevision);
-    v_cset := v_version.workingset;
-    v_since := ARRAY(SELECT r FROM unnest(v_base || v_parent.workingset || v_cset) AS r
-                     EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_cset)
-                     ORDER BY 1);
+    v_class := v_sets.p_class;
+    v_base := v_sets.p_base;
+    v_pset := v_sets.p_parentset;
+    v_cset := v_sets.p_versionset;
+    v_since := v_sets.p_since;
 
     -- the work tables: made by the first call of the transaction, emptied by the others (the same relations:
     -- a merge of many objects holds their locks once, not once per object)
@@ -126,11 +110,10 @@ BEGIN
         CREATE TEMPORARY TABLE tgsis_ms_new (LIKE pg_temp.tgsis_ms_el) ON COMMIT DROP;
         CREATE TEMPORARY TABLE tgsis_ms_slice (t float8, ib boolean, ip boolean, ic boolean, chp boolean, chc boolean,
                                                samepc boolean, src text) ON COMMIT DROP;
-        CREATE TEMPORARY TABLE tgsis_ms_pros (st smallint, t float8, vals text[]) ON COMMIT DROP;
         CREATE TEMPORARY TABLE tgsis_ms_prow (t float8, m text[], c text[]) ON COMMIT DROP;
     ELSE
         TRUNCATE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
-                 pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
+                 pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_prow;
     END IF;
     -- the tables of a slice: tab T the instants, v / c the vertices / triangles, vp / cp their property rows
     INSERT INTO pg_temp.tgsis_ms_spec
@@ -148,13 +131,10 @@ BEGIN
     -- 1. the keys (instant, id) of the rows some set sees otherwise than another
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_ms_spec LOOP
         INSERT INTO pg_temp.tgsis_ms_key
-        SELECT v_spec.tab, r[1]::float8, r[2]::bigint
-          FROM tgsis.storage_run(v_spec.vt, false, format(
-                 'SELECT DISTINCT ARRAY[v.%I::text, %s] FROM %I.%I v WHERE v.%I = $1[1]::bigint
-                     AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
-                 v_spec.tcol, CASE WHEN v_spec.idcol IS NULL THEN '''0''' ELSE format('v.%I::text', v_spec.idcol) END, (v_spec.vt).schemaname,
-                 (v_spec.vt).tablename || '_ver', v_spec.okey),
-               p_1 => ARRAY[v_key], p_2 => v_since) AS r;
+        SELECT v_spec.tab, r[1]::float8, coalesce(r[2]::bigint, 0)
+          FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey,
+                                        ARRAY[v_spec.tcol] || CASE WHEN v_spec.idcol IS NULL THEN '{}'::text[] ELSE ARRAY[v_spec.idcol] END,
+                                        p_geoid, v_since) AS r;
     END LOOP;
     -- an instant added or removed somewhere (its tgsis.times row changed): all its rows, also those no set sees
     -- otherwise (a psql DELETE of the instant's row alone leaves them; the Python writer closes them with it)
@@ -181,15 +161,9 @@ BEGIN
                          (SELECT array_agg(k.t ORDER BY k.t, k.id) FROM pg_temp.tgsis_ms_key k WHERE k.tab = s.tab) AS kts
                     FROM pg_temp.tgsis_ms_spec s LOOP
         CONTINUE WHEN v_spec.ts IS NULL;
-        SELECT coalesce(string_agg(format('v.%I::text', a.attname), ', ' ORDER BY a.attnum), ''),
-               coalesce(string_agg(CASE WHEN a.atttypid IN ('real'::regtype, 'double precision'::regtype)
-                                        THEN format('coalesce((v.%I::float8 + 0::float8)::text, ''NaN'')', a.attname)
-                                        ELSE format('coalesce(v.%I::text, ''NaN'')', a.attname) END, ', ' ORDER BY a.attnum), '')
-          INTO v_vals, v_eq
-          FROM pg_catalog.pg_attribute a
-         WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
-           AND a.attnum > 0 AND NOT a.attisdropped
-           AND a.attname <> ALL (ARRAY[v_spec.okey, v_spec.tcol, coalesce(v_spec.idcol, v_spec.tcol)]);
+        SELECT t.p_vals, t.p_bits, t.p_eq INTO v_vals, v_bits, v_eq
+          FROM tgsis.merge_row_texts(format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass,
+                                     ARRAY[v_spec.okey, v_spec.tcol, coalesce(v_spec.idcol, v_spec.tcol)]) AS t;
         v_el := CASE v_spec.tab WHEN 'c' THEN 'tgsis.oriented_cell_key(ARRAY[v.vrtxid1, v.vrtxid2, v.vrtxid3])::text'
                                 ELSE format('ARRAY[%s]::text[]::text', v_eq) END;
         INSERT INTO pg_temp.tgsis_ms_row
@@ -201,12 +175,7 @@ BEGIN
                    WHERE v.%9$I = $1[1]::bigint AND v.%1$I = ANY ($1[2]::float8[])
                      AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
                  v_spec.tcol, CASE WHEN v_spec.idcol IS NULL THEN '''0''' ELSE format('v.%I::text', v_spec.idcol) END, v_vals,
-                 (SELECT coalesce(string_agg(format('coalesce(v.%I::text, ''NaN'')', a.attname), ', ' ORDER BY a.attnum), '')
-                    FROM pg_catalog.pg_attribute a
-                   WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
-                     AND a.attnum > 0 AND NOT a.attisdropped
-                     AND a.attname <> ALL (ARRAY[v_spec.okey, v_spec.tcol, coalesce(v_spec.idcol, v_spec.tcol)])),
-                 v_eq, CASE WHEN v_spec.tab = 'T' THEN '''''' ELSE v_el END,
+                 v_bits, v_eq, CASE WHEN v_spec.tab = 'T' THEN '''''' ELSE v_el END,
                  (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey,
                  -- (the keys first: each found through the primary key, not by a scan of the instants' rows)
                  CASE WHEN v_spec.idcol IS NULL
@@ -215,7 +184,7 @@ BEGIN
                                    JOIN %I.%I v ON v.%I = k.t AND v.%I = k.id',
                                   (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.tcol, v_spec.idcol) END),
                p_1 => ARRAY[v_key, v_spec.ts::text, v_cset::text, v_spec.kts::text], p_2 => v_base,
-               p_3 => v_parent.workingset, p_5 => v_spec.ids) AS r;
+               p_3 => v_pset, p_5 => v_spec.ids) AS r;
     END LOOP;
     IF EXISTS (SELECT FROM pg_temp.tgsis_ms_row r WHERE r.tab = 'v'
                   AND ('NaN' = ANY (r.vals) OR 'Infinity' = ANY (r.vals) OR '-Infinity' = ANY (r.vals))) THEN
@@ -340,39 +309,12 @@ BEGIN
             PERFORM tgsis.check_merge_table_write(v_pros, 'SELECT', p_geoid);
         END IF;
         v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
-        INSERT INTO pg_temp.tgsis_ms_pros
-        SELECT r[1]::smallint AS st, r[2]::float8 AS t, r[3:] AS vals
-          FROM tgsis.storage_run(v_pros, false, format(
-                 'SELECT ARRAY[s.st::text, v._times::text] || ARRAY[%s]
-                    FROM %I.%I v, (VALUES (1, $2), (2, $3), (4, $1[2]::integer[])) AS s (st, revs)
-                   WHERE v._geoid = $1[1]::bigint AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
-                 (SELECT string_agg(format('v.%I::text', c), ', ') FROM unnest(v_pcols) AS c),
-                 v_pros.schemaname, v_pros.tablename || '_ver'),
-               p_1 => ARRAY[v_key, v_cset::text], p_2 => v_base, p_3 => v_parent.workingset) AS r;
-        FOR v_attr IN
-            SELECT k.t, b.vals AS b, p.vals AS p, c.vals AS c
-              FROM (SELECT DISTINCT x.t FROM pg_temp.tgsis_ms_pros x) AS k
-              LEFT JOIN pg_temp.tgsis_ms_pros b ON b.st = 1 AND b.t = k.t
-              LEFT JOIN pg_temp.tgsis_ms_pros p ON p.st = 2 AND p.t = k.t
-              LEFT JOIN pg_temp.tgsis_ms_pros c ON c.st = 4 AND c.t = k.t
-             ORDER BY k.t
-        LOOP
-            IF v_attr.p IS NOT DISTINCT FROM v_attr.c OR v_attr.c IS NOT DISTINCT FROM v_attr.b THEN
-                INSERT INTO pg_temp.tgsis_ms_prow VALUES (v_attr.t, v_attr.p, v_attr.c);  -- the parent's row
-            ELSIF v_attr.p IS NOT DISTINCT FROM v_attr.b THEN
-                INSERT INTO pg_temp.tgsis_ms_prow VALUES (v_attr.t, v_attr.c, v_attr.c);  -- the version's row
-            ELSIF v_attr.p IS NULL OR v_attr.c IS NULL OR v_attr.b IS NULL THEN
-                RETURN NULL;  -- removed (added) on one side and set otherwise on the other: an object-level conflict
-            ELSIF EXISTS (SELECT FROM generate_subscripts(v_attr.b, 1) AS i
-                           WHERE v_attr.p[i] IS DISTINCT FROM v_attr.c[i] AND v_attr.c[i] IS DISTINCT FROM v_attr.b[i]
-                             AND v_attr.p[i] IS DISTINCT FROM v_attr.b[i]) THEN
-                RETURN NULL;  -- a column changed on both sides to other values: an object-level conflict
-            ELSE  -- column by column: the side that changed it
-                INSERT INTO pg_temp.tgsis_ms_prow
-                VALUES (v_attr.t, ARRAY(SELECT CASE WHEN v_attr.c[i] IS NOT DISTINCT FROM v_attr.b[i] THEN v_attr.p[i]
-                                                    ELSE v_attr.c[i] END
-                                          FROM generate_subscripts(v_attr.b, 1) AS i ORDER BY i), v_attr.c);
+        FOR v_attr IN SELECT * FROM tgsis.merge_instant_rows(v_pros, p_geoid, ARRAY['_times'], v_pcols,
+                                                             v_base, v_pset, v_cset) LOOP
+            IF v_attr.conflict THEN
+                RETURN NULL;  -- removed on one side and set on the other, or a column changed on both: object-level
             END IF;
+            INSERT INTO pg_temp.tgsis_ms_prow VALUES (v_attr.key[1], v_attr.merged, v_attr.version);
         END LOOP;
     END IF;
 
@@ -381,190 +323,72 @@ BEGIN
     END IF;
 
     -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
-    FOR v_attr IN
-        SELECT e.viewname, e.keycolumn,
-               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
-               array_agg(e.columnname ORDER BY e.o) AS columns
-          FROM (SELECT a.*, row_number() OVER () AS o
-                  FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_parent.workingset, v_cset) AS a) AS e
-         GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
-    LOOP
-        IF v_attr.viewname = 'tgsis.geometry' THEN
-            v_aview := v_aview || v_attr.viewname;
-            v_akey := v_akey || v_attr.keycolumn;
-            v_aset := v_aset || v_attr.sets;
-        ELSE
-            v_fcols := v_attr.columns;
-        END IF;
-    END LOOP;
+    SELECT a.p_views, a.p_keys, a.p_sets, a.p_fcols INTO v_aview, v_akey, v_aset, v_fcols
+      FROM tgsis.merge_attribute_writes(p_version, p_geoid, v_base, v_pset, v_cset) AS a;
 
-    -- the rights: to write in the version, to change the class (and the feature-row columns the parent changed)
     FOREACH v_why IN ARRAY v_notes LOOP  -- what the solutions discard, said before it is written
         RAISE NOTICE 'feature % of version %: %', p_geoid, quote_literal(p_version), v_why;
     END LOOP;
-    PERFORM tgsis.merge_write_rights(p_version, p_geoid, v_fcols, 'instant by instant', 'surface');
+    -- the rights (to write in the version, to change the class and the feature-row columns the parent changed),
+    -- then the session in the version's working revision, the object locked
+    SELECT e.p_settings, e.p_revision, e.p_workingset INTO v_settings, v_rev, v_cset
+      FROM tgsis.merge_sliced_enter(p_version, p_geoid, v_sets.p_versionid, v_fcols, 'instant by instant') AS e;
 
     -- 7. the writes, in the version's working revision, as write_sliced_difference writes them: per table, the rows
     -- whose key is gone or whose bits differ closed, then the new and differing ones inserted
-    v_settings := ARRAY[current_setting('tgsis.version', true), current_setting('tgsis.revision', true)];
-    PERFORM tgsis.goto_version(p_version, true);
-    SELECT workingrevision, workingset INTO v_rev, v_cset FROM tgsis.versions WHERE versionid = v_version.versionid;
-    PERFORM tgsis.check_objects_unlocked(t.objectclass, ARRAY[v_key])
-       FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'geometry';
-    PERFORM tgsis.object_write_lock('feature', ARRAY[v_key]);
     -- the per-instant feature property rows first (as _write_instant_rows: a DELETE, INSERT or UPDATE of the
     -- class's view per instant, which its trigger writes: a row of the working revision in place, any other
     -- closed there and written anew)
     IF v_pcols IS NOT NULL THEN
-        SELECT string_agg(format('%I', c), ', ' ORDER BY o),
-               string_agg(format('$1[%s]::%s', o + 2, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
-                                                       WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
-                                                         AND a.attname = c)), ', ' ORDER BY o),
-               string_agg(format('%I = $1[%s]::%s', c, o + 2, (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_catalog.pg_attribute a
-                                                               WHERE a.attrelid = format('%I.%I', v_pros.schemaname, v_pros.tablename)::regclass
-                                                                 AND a.attname = c)), ', ' ORDER BY o)
-          INTO v_cols, v_casts, v_why
-          FROM unnest(v_pcols) WITH ORDINALITY AS u(c, o);
         FOR v_attr IN SELECT * FROM pg_temp.tgsis_ms_prow r WHERE r.m IS DISTINCT FROM r.c ORDER BY r.t LOOP
-            PERFORM tgsis.check_merge_table_write(v_pros, CASE WHEN v_attr.c IS NULL THEN 'INSERT'
-                                                              WHEN v_attr.m IS NULL THEN 'DELETE' ELSE 'UPDATE' END, p_geoid);
-            v_count := 0;
-            IF v_attr.m IS NOT NULL AND v_attr.c IS NOT NULL THEN  -- in place in the working revision
-                SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                    'UPDATE %I.%I v SET %s WHERE v._geoid = $1[1]::bigint AND v._times = $1[2]::float8
-                        AND v.revision = $4 AND NOT (v.lastrevs && $2)',
-                    v_pros.schemaname, v_pros.tablename || '_ver', v_why),
-                    p_1 => ARRAY[v_key, v_attr.t::text] || v_attr.m, p_2 => v_cset, p_4 => v_rev) AS r;
-            END IF;
-            IF v_count = 0 AND v_attr.c IS NOT NULL THEN  -- the version's row goes (closed, or gone if its revision's)
-                SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                    'DELETE FROM %I.%I v WHERE v._geoid = $1[1]::bigint AND v._times = $1[2]::float8 AND v.revision = $4',
-                    v_pros.schemaname, v_pros.tablename || '_ver'),
-                    p_1 => ARRAY[v_key, v_attr.t::text], p_4 => v_rev) AS r;
-                IF v_count = 0 THEN
-                    SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                        'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
-                          WHERE v._geoid = $1[1]::bigint AND v._times = $1[2]::float8 AND v.revision = ANY ($2)
-                            AND NOT (v.lastrevs && $2)',
-                        v_pros.schemaname, v_pros.tablename || '_ver'),
-                        p_1 => ARRAY[v_key, v_attr.t::text], p_2 => v_cset, p_4 => v_rev) AS r;
-                    PERFORM tgsis.note_changed_objects(v_pros.schemaname, v_pros.tablename, v_rev, ARRAY[v_key]);
-                END IF;
-                IF v_attr.m IS NOT NULL THEN
-                    v_count := 0;  -- (an UPDATE of the view: one row)
-                END IF;
-            END IF;
-            IF v_attr.m IS NOT NULL AND v_count = 0 THEN
-                SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pros, true, format(
-                    'INSERT INTO %I.%I (_geoid, _times, %s, revision) SELECT $1[1]::bigint, $1[2]::float8, %s, $4',
-                    v_pros.schemaname, v_pros.tablename || '_ver', v_cols, v_casts),
-                    p_1 => ARRAY[v_key, v_attr.t::text] || v_attr.m, p_4 => v_rev) AS r;
-            END IF;
-            v_written := v_written + v_count;
+            v_written := v_written + tgsis.merge_write_instant_row(v_pros, p_geoid, ARRAY['_times'], ARRAY[v_attr.t::text],
+                                                                   v_pcols, v_attr.m, v_attr.c, v_rev, v_cset);
         END LOOP;
     END IF;
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_ms_spec s
                    ORDER BY array_position(ARRAY['T', 'v', 'c', 'vp', 'cp'], s.tab) LOOP
-        -- (old: the version's rows; new: the merged; a property row compared as the state holds it, NaN if none)
+        -- (old: the version's rows; new: the merged; a property row compared as the state holds it, NaN if none;
+        -- keys and values flattened as tgsis.merge_write_keyed_rows takes them)
         IF v_spec.tab = 'T' THEN
-            SELECT coalesce(array_agg(s.t ORDER BY s.t), '{}'), coalesce(array_agg(0::bigint), '{}') INTO v_times, v_ids
-              FROM pg_temp.tgsis_ms_slice s
-             WHERE s.ic AND NOT CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END;
+            SELECT coalesce(array_agg(s.t::text ORDER BY s.t) FILTER (
+                                WHERE s.ic AND NOT CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END), '{}'),
+                   coalesce(array_agg(s.t::text ORDER BY s.t) FILTER (
+                                WHERE NOT s.ic AND CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE false END), '{}')
+              INTO v_gone, v_fresh
+              FROM pg_temp.tgsis_ms_slice s;
         ELSE
-            SELECT coalesce(array_agg(o.t ORDER BY o.t, o.id), '{}'), coalesce(array_agg(o.id ORDER BY o.t, o.id), '{}')
-              INTO v_times, v_ids
-              FROM pg_temp.tgsis_ms_el o
-             WHERE o.st = 4 AND o.kind = left(v_spec.tab, 1)
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_ms_new n
-                                WHERE n.kind = o.kind AND n.t = o.t AND n.id = o.id
-                                  AND CASE WHEN length(v_spec.tab) = 1 THEN n.gbits = o.gbits ELSE n.pbits = o.pbits END);
+            SELECT ARRAY(SELECT u.v
+                           FROM pg_temp.tgsis_ms_el o CROSS JOIN LATERAL unnest(ARRAY[o.t::text, o.id::text]) WITH ORDINALITY AS u(v, k)
+                          WHERE o.st = 4 AND o.kind = left(v_spec.tab, 1)
+                            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_ms_new n
+                                             WHERE n.kind = o.kind AND n.t = o.t AND n.id = o.id
+                                               AND CASE WHEN length(v_spec.tab) = 1 THEN n.gbits = o.gbits ELSE n.pbits = o.pbits END)
+                          ORDER BY o.t, o.id, u.k),
+                   ARRAY(SELECT u.v
+                           FROM pg_temp.tgsis_ms_new n
+                          CROSS JOIN LATERAL unnest(ARRAY[n.t::text, n.id::text]
+                                                    || CASE WHEN length(v_spec.tab) = 1 THEN n.gvals ELSE n.pvals END)
+                                     WITH ORDINALITY AS u(v, k)
+                          WHERE n.kind = left(v_spec.tab, 1)
+                            AND CASE WHEN length(v_spec.tab) = 1 THEN true ELSE n.pbits <> n.nulls END
+                            AND NOT EXISTS (SELECT FROM pg_temp.tgsis_ms_el o
+                                             WHERE o.st = 4 AND o.kind = n.kind AND o.t = n.t AND o.id = n.id
+                                               AND CASE WHEN length(v_spec.tab) = 1 THEN n.gbits = o.gbits ELSE n.pbits = o.pbits END)
+                          ORDER BY n.t, n.id, u.k)
+              INTO v_gone, v_fresh;
         END IF;
-        IF cardinality(v_ids) > 0 THEN
-            PERFORM tgsis.check_merge_table_write(v_spec.vt, 'DELETE', p_geoid);
-            SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_spec.vt, true, format(
-                'DELETE FROM %I.%I v USING (SELECT DISTINCT k.t, k.id FROM unnest($1[2]::float8[], $5) AS k (t, id)) AS k
-                  WHERE v.%I = $1[1]::bigint AND v.revision = $4 AND v.%I = k.t AND %s = k.id',
-                (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.tcol,
-                CASE WHEN v_spec.idcol IS NULL THEN '0::bigint' ELSE format('v.%I', v_spec.idcol) END),
-                p_1 => ARRAY[v_key, v_times::text], p_4 => v_rev, p_5 => v_ids) AS r;
-            v_written := v_written + v_count;
-            SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_spec.vt, true, format(
-                'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
-                   FROM (SELECT DISTINCT k.t, k.id FROM unnest($1[2]::float8[], $5) AS k (t, id)) AS k
-                  WHERE v.%I = $1[1]::bigint AND v.revision = ANY ($3) AND NOT (v.lastrevs && $3)
-                    AND v.%I = k.t AND %s = k.id',
-                (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.tcol,
-                CASE WHEN v_spec.idcol IS NULL THEN '0::bigint' ELSE format('v.%I', v_spec.idcol) END),
-                p_1 => ARRAY[v_key, v_times::text], p_3 => v_cset, p_4 => v_rev, p_5 => v_ids) AS r;
-            IF v_count > 0 THEN
-                PERFORM tgsis.note_changed_objects((v_spec.vt).schemaname, (v_spec.vt).tablename, v_rev, ARRAY[v_key]);
-            END IF;
-            v_written := v_written + v_count;
-        END IF;
-        -- the rows to insert (a property row of no value is not written)
-        IF v_spec.tab = 'T' THEN
-            SELECT coalesce(array_agg(s.t ORDER BY s.t), '{}'), coalesce(array_agg(0::bigint), '{}'), '{}'
-              INTO v_times, v_ids, v_flat
-              FROM pg_temp.tgsis_ms_slice s
-             WHERE NOT s.ic AND CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE false END;
-            v_width := 0;
-        ELSE
-            SELECT coalesce(array_agg(n.t ORDER BY n.t, n.id), '{}'), coalesce(array_agg(n.id ORDER BY n.t, n.id), '{}'),
-                   coalesce(array_agg(u.v ORDER BY n.t, n.id, u.o), '{}')
-              INTO v_times, v_ids, v_flat
-              FROM pg_temp.tgsis_ms_new n
-              LEFT JOIN LATERAL unnest(CASE WHEN length(v_spec.tab) = 1 THEN n.gvals ELSE n.pvals END)
-                        WITH ORDINALITY AS u(v, o) ON true
-             WHERE n.kind = left(v_spec.tab, 1)
-               AND CASE WHEN length(v_spec.tab) = 1 THEN true ELSE n.pbits <> n.nulls END
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_ms_el o
-                                WHERE o.st = 4 AND o.kind = n.kind AND o.t = n.t AND o.id = n.id
-                                  AND CASE WHEN length(v_spec.tab) = 1 THEN n.gbits = o.gbits ELSE n.pbits = o.pbits END);
-            -- (one id per element: the lateral unnest repeats it per value)
-            SELECT coalesce(array_agg(n.t ORDER BY n.t, n.id), '{}'), coalesce(array_agg(n.id ORDER BY n.t, n.id), '{}')
-              INTO v_times, v_ids
-              FROM pg_temp.tgsis_ms_new n
-             WHERE n.kind = left(v_spec.tab, 1)
-               AND CASE WHEN length(v_spec.tab) = 1 THEN true ELSE n.pbits <> n.nulls END
-               AND NOT EXISTS (SELECT FROM pg_temp.tgsis_ms_el o
-                                WHERE o.st = 4 AND o.kind = n.kind AND o.t = n.t AND o.id = n.id
-                                  AND CASE WHEN length(v_spec.tab) = 1 THEN n.gbits = o.gbits ELSE n.pbits = o.pbits END);
-            v_width := CASE WHEN cardinality(v_ids) > 0 THEN cardinality(v_flat) / cardinality(v_ids) ELSE 0 END;
-        END IF;
-        CONTINUE WHEN cardinality(v_ids) = 0;
-        PERFORM tgsis.check_merge_table_write(v_spec.vt, 'INSERT', p_geoid, true);  -- (the Python client COPYs them there)
-        SELECT coalesce(string_agg(format(', %I', c.attname), '' ORDER BY c.attnum), ''),
-               coalesce(string_agg(format(', $1[3 + (g.i - 1) * %s + %s]::%s', v_width, c.j,
-                                          format_type(c.atttypid, c.atttypmod)), '' ORDER BY c.attnum), ''),
-               string_agg(c.attname, ', ' ORDER BY c.attnum) FILTER (WHERE c.atttypid NOT IN ('real'::regtype, 'double precision'::regtype))
-          INTO v_cols, v_casts, v_why
-          FROM (SELECT a.attname, a.attnum, a.atttypid, a.atttypmod, row_number() OVER (ORDER BY a.attnum) AS j
-                  FROM pg_catalog.pg_attribute a
-                 WHERE a.attrelid = format('%I.%I', (v_spec.vt).schemaname, (v_spec.vt).tablename)::regclass
-                   AND a.attnum > 0 AND NOT a.attisdropped
-                   AND a.attname <> ALL (ARRAY[v_spec.okey, v_spec.tcol, coalesce(v_spec.idcol, v_spec.tcol)])) AS c;
-        IF length(v_spec.tab) = 2 AND v_why IS NOT NULL AND EXISTS (SELECT FROM unnest(v_flat) AS f WHERE f IS NULL) THEN
-            RAISE EXCEPTION '%: its merged rows cannot be written: some property rows have no value for an integer or boolean property',
-                    v_refused
-                USING ERRCODE = 'TG302', HINT = v_hint;
-        END IF;
-        SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_spec.vt, true, format(
-            'INSERT INTO %I.%I (%I, %I%s%s, revision)
-             SELECT $1[1]::bigint, ($1[2]::float8[])[g.i]%s%s, $4 FROM generate_series(1, cardinality($5)) AS g(i)',
-            (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.tcol,
-            CASE WHEN v_spec.idcol IS NULL THEN '' ELSE format(', %I', v_spec.idcol) END, v_cols,
-            CASE WHEN v_spec.idcol IS NULL THEN '' ELSE ', $5[g.i]' END, v_casts),
-            p_1 => ARRAY[v_key, v_times::text, ''] || v_flat, p_4 => v_rev, p_5 => v_ids) AS r;
-        v_written := v_written + v_count;
+        v_written := v_written + tgsis.merge_write_keyed_rows(
+            v_spec.vt, v_spec.okey, p_geoid,
+            ARRAY[v_spec.tcol] || CASE WHEN v_spec.idcol IS NULL THEN '{}'::text[] ELSE ARRAY[v_spec.idcol] END,
+            v_gone, v_fresh, v_rev, v_cset,
+            CASE WHEN length(v_spec.tab) = 2 THEN v_refused END, v_hint);
     END LOOP;
     PERFORM FROM tgsis.refresh_geometry(p_geoid);
     v_written := v_written + tgsis.merge_apply_attribute_edits(p_geoid, v_aview, v_akey, v_aset, v_fcols,
-                                                               v_parent.workingset, v_rev, v_cset);
-    PERFORM set_config('tgsis.version', coalesce(v_settings[1], ''), true),
-            set_config('tgsis.revision', coalesce(v_settings[2], ''), true);
+                                                               v_pset, v_rev, v_cset);
     TRUNCATE pg_temp.tgsis_ms_spec, pg_temp.tgsis_ms_key, pg_temp.tgsis_ms_row, pg_temp.tgsis_ms_el,
-             pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_pros, pg_temp.tgsis_ms_prow;
-    PERFORM FROM tgsis.resolve_conflict(p_version, 'feature', v_key, 'manual');
+             pg_temp.tgsis_ms_new, pg_temp.tgsis_ms_slice, pg_temp.tgsis_ms_prow;
+    PERFORM tgsis.merge_sliced_leave(p_version, p_geoid, v_settings, true);
     RETURN v_written;
 END
 $$;

@@ -110,7 +110,6 @@ DECLARE
     v_pt       tgsis.versioned_tables;
     v_t        record;
     v_note     text;
-    v_attr     record;
     v_aview    text[] := '{}';
     v_akey     text[] := '{}';
     v_aset     text[] := '{}';
@@ -444,27 +443,8 @@ BEGIN
     END IF;
 
     -- the parent's edits of the attributes, and the refusal of attributes changed on both sides
-    v_why := NULL;
-    FOR v_attr IN
-        SELECT e.viewname, e.keycolumn, bool_or(e.both_sides) AS both_sides,
-               string_agg(e.columnname, ', ' ORDER BY e.o) FILTER (WHERE e.both_sides) AS both_columns,
-               string_agg(format('%I = %L', e.columnname, e.value), ', ' ORDER BY e.o) AS sets,
-               array_agg(e.columnname ORDER BY e.o) AS columns
-          FROM (SELECT a.*, row_number() OVER () AS o
-                  FROM tgsis.merge_attribute_edits(p_version, p_geoid, v_base, v_pset, v_cset) AS a) AS e
-         GROUP BY e.viewname, e.keycolumn ORDER BY min(e.o)
-    LOOP
-        IF v_attr.both_sides THEN
-            v_why := concat_ws(', ', v_why, v_attr.both_columns);
-        END IF;
-        IF v_attr.viewname = 'tgsis.geometry' THEN
-            v_aview := v_aview || v_attr.viewname;
-            v_akey := v_akey || v_attr.keycolumn;
-            v_aset := v_aset || v_attr.sets;
-        ELSE
-            v_fcols := v_attr.columns;  -- the feature row's: copied from the parent's row (below)
-        END IF;
-    END LOOP;
+    SELECT a.p_views, a.p_keys, a.p_sets, a.p_fcols, a.p_both INTO v_aview, v_akey, v_aset, v_fcols, v_why
+      FROM tgsis.merge_attribute_writes(p_version, p_geoid, v_base, v_pset, v_cset) AS a;
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: its attributes were changed both in the version and in its parent, to other values (%): the merge by region merges the mesh only',
                 v_refused, v_why

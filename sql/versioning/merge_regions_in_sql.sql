@@ -28,6 +28,7 @@ DECLARE
     v_key     text;
     v_written bigint := 0;
     v_count   bigint;
+    v_function text;
 BEGIN
     IF current_setting('tgsis.region_detection', true) IS NOT DISTINCT FROM 'client' THEN
         RETURN 0;
@@ -37,18 +38,22 @@ BEGIN
     -- the conflicts of now; the regions of each mesh are found once, by its merge below
     PERFORM set_config('tgsis.region_detection', 'client', true);
     PERFORM FROM tgsis.find_conflicts(p_version);
-    -- surfaces at instants (model 2): instant by instant (tgsis.merge_instants_by_slice; NULL: an object-level
-    -- conflict or an unsolved region of an instant, refused below)
-    FOR v_key IN
-        SELECT k.objectkey FROM tgsis.conflicts k
+    -- the features of a model merged slice by slice in SQL (its registry row's merge_function: surfaces at
+    -- instants instant by instant, tgsis.merge_instants_by_slice; evolving surfaces period by period,
+    -- tgsis.merge_periods_by_slice, in sql/temporal/ beside the continuity check it needs); NULL: an
+    -- object-level conflict or an unsolved region of an instant, refused below
+    FOR v_key, v_function IN
+        SELECT k.objectkey, m.merge_function FROM tgsis.conflicts k
+          JOIN tgsis.catalog c ON c.classname = tgsis.class_of_geoid(k.objectkey::bigint)
+          JOIN tgsis.data_models m ON m.timemodel = c.timemodel
          WHERE k.versionid = v_id AND k.objectclass = 'feature' AND k.solution = 'unsolved'
-           AND (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(k.objectkey::bigint)) = 'INSTANTS'
+           AND m.merge_function IS NOT NULL
          ORDER BY k.objectkey::bigint
     LOOP
-        v_count := tgsis.merge_instants_by_slice(p_version, p_action, v_key::bigint);
+        EXECUTE format('SELECT tgsis.%I($1, $2, $3)', v_function) INTO v_count USING p_version, p_action, v_key::bigint;
         IF v_count IS NULL THEN
             -- unsolved (a region of an instant without a solution, or an object-level conflict): the regions
-            -- of its instants stored, for the merge's refusal to name them
+            -- of its instants stored, for the merge's refusal to name them (none for other models)
             PERFORM tgsis.store_mesh_regions(p_version, v_key);
         ELSE
             v_written := v_written + v_count;

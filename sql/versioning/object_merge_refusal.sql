@@ -4,7 +4,7 @@
 -- on one side, or one whose attributes (its feature-table row) both sides
 -- changed to other values (compared as text: floats exactly,
 -- extra_float_digits pinned). tgsis.region_merge_refusal (model 1) and
--- tgsis.merge_instants_by_slice (model 2) ask it. The object's rows are read
+-- tgsis.merge_sliced_sets (the psql merges of models 2 and 3) ask it. The object's rows are read
 -- from the storage at the three revision sets (base: the version at its
 -- initrevision; parent and version: their working sets), the feature table
 -- through tgsis.storage_run (the caller's rights, or the table owner's runner
