@@ -188,6 +188,32 @@ def test_the_same_meshing_keeps_the_exact_midpoint() -> None:
     assert np.array_equal(average.cells, base.cells[np.isin(base.cell_ids, average.cell_ids)])
 
 
+def test_a_value_the_version_changed_on_a_corner_of_the_region_is_kept_by_the_average() -> None:
+    """The version re-values a vertex of the block's ring (a corner of the region's cells, a region of its own:
+    a value change puts no cell in a footprint): the average's corner row is the one the merge gives the rest,
+    the version's, not the parent's (which was refused as "changes rows outside the region")."""
+    base = _base()
+    up = _moved(base)
+    down_xyz = base.vertices.copy()
+    down_xyz[GRID[5:7, 5:7].ravel(), 2] -= 7.0  # inside what the parent lifts: the ring's cells are the parent's
+    ring = int(GRID[3, 5])  # on the block's ring: a corner of triangles on vertices the parent alone moved
+    porosity = np.asarray(base.vertex_properties["porosity"]).copy()
+    porosity[ring] = 0.99
+    down = MeshState(
+        3, base.vertex_ids, down_xyz, base.cell_ids, base.cells, {"porosity": porosity}, base.cell_properties
+    )
+    merge = three_way_merge(base, up, down)
+    [region] = merge.conflicts
+    assert ring not in region.vertex_ids.tolist()
+    average = R.average_region(merge, region)
+    assert ring in average.vertex_ids.tolist()  # a corner of the region's cells
+    state = apply_solutions(merge, {region.index: average}).state
+    assert state.vertex_properties["porosity"][np.searchsorted(state.vertex_ids, ring)] == 0.99
+    moved = region.vertex_ids
+    at = np.searchsorted(state.vertex_ids, moved)
+    assert state.vertices[at].tobytes() == (0.5 * up.vertices[moved] + 0.5 * down.vertices[moved]).tobytes()
+
+
 def _line_merge() -> MeshMerge:
     """A curved line of 20 vertices: the parent lifts its middle, the child splits its middle segments."""
     t = np.linspace(0.0, 3.0, 20)

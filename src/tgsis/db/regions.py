@@ -65,7 +65,16 @@ from tgsis.errors import (
     RegionSolutionError,
     reraise,
 )
-from tgsis.merge3 import MergeRegion, MeshMerge, MeshState, RegionDiscard, Solution, apply_solutions, three_way_merge
+from tgsis.merge3 import (
+    MergeRegion,
+    MeshMerge,
+    MeshState,
+    RegionDiscard,
+    Solution,
+    apply_solutions,
+    state_rows_equal,
+    three_way_merge,
+)
 from tgsis.mesh import Mesh
 
 __all__ = [
@@ -1408,13 +1417,20 @@ def _rows_state(
     cids: npt.NDArray[np.int64],
     name: str,
 ) -> MeshState:
-    """``source``'s rows of these ids, with the rest's vertices its cells use (from the parent)."""
+    """``source``'s rows of these ids, with the rest's vertices its cells use, as the merge gives the rest."""
     at_v = np.flatnonzero(np.isin(source.vertex_ids, vids))
     at_c = np.flatnonzero(np.isin(source.cell_ids, cids))
     cells = source.cells[at_c]
     extra = _closure(merge, source.vertex_ids[at_v], cells)
-    # the rest's vertices the region's cells use: the parent's rows (the merge keeps them), else the version's
-    parts = [(source, at_v)]
+    # the rest's vertices the region's cells use, as the merge gives the rest: the version's row where only the
+    # version changed it (a region of its own the merge takes from the version: a value changed beside the
+    # region, which puts no cell in a footprint), else the parent's (the merge keeps them), else the version's
+    none = np.empty(0, np.int64)
+    parent_same = state_rows_equal(merge.parent, merge.base, extra, none)[0]
+    child_same = state_rows_equal(merge.child, merge.base, extra, none)[0]
+    versions_own = extra[parent_same & ~child_same & np.isin(extra, merge.child.vertex_ids)]
+    parts = [(source, at_v), (merge.child, np.flatnonzero(np.isin(merge.child.vertex_ids, versions_own)))]
+    extra = extra[~np.isin(extra, versions_own)]
     for state in (merge.parent, merge.child):
         at_e = np.flatnonzero(np.isin(state.vertex_ids, extra))
         parts.append((state, at_e))
@@ -1455,8 +1471,10 @@ def average_region(
     the middle of its parent and child positions, ``(p + c) / 2``, which is
     the average shape of two meshes of one topology (every vertex halfway
     along its straight trajectory); a real-valued property the middle of the
-    two values, any other the parent's. Vertices the region shares with the
-    rest are the rest's and are not moved (both sides have them unchanged).
+    two values, any other the parent's. Vertices of the rest that the
+    region's cells use are not moved: their rows are those the merge gives
+    the rest (the version's where only the version changed them, else the
+    parent's).
 
     When the two sides meshed the region differently (a surface only), the
     average is :func:`tgsis.interpolation.average_shape` of the two sides'
@@ -1788,8 +1806,6 @@ def _rows_equal(
     a: MeshState, b: MeshState, vids: npt.NDArray[np.int64], cids: npt.NDArray[np.int64]
 ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
     """Per id, whether both states have the row and it is the same (coordinates, values; a rotated cell alike)."""
-    from tgsis.merge3 import state_rows_equal
-
     same_v, same_c = state_rows_equal(a, b, vids, cids)
     return same_v & np.isin(vids, b.vertex_ids), same_c & np.isin(cids, b.cell_ids)
 
