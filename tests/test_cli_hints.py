@@ -159,6 +159,8 @@ NOT_FROM_THE_CLI = {
     "the command finds and merges the regions in Python",
     "sql/versioning/merge_mesh_by_region.sql": "the psql merge by region: the command merges by region in Python "
     "(tgsis.region_detection = 'client'), which never reaches it",
+    "sql/versioning/merge_region_plan.sql": "the plan of the psql merges by region: the command merges by region in "
+    "Python (tgsis.region_detection = 'client'), which never reaches it",
     "sql/versioning/instants_merge_regions.sql": "SQL region detection of surfaces at instants for psql users: the "
     "command finds the regions in Python, and SQL calls it only through tgsis.store_mesh_regions",
     "sql/versioning/merge_instant_by_region.sql": "the psql merge of an instant both sides changed: the command merges "

@@ -32,14 +32,11 @@ AS $$
 DECLARE
     v_id       integer := tgsis.version_id(p_version);
     v_key      text := p_geoid::text;
-    v_first    integer;
     v_out      jsonb;
     v_why      text;
     v_hint     text;
     v_unsolved boolean := false;
 BEGIN
-    v_first := (SELECT min(r.region) FROM tgsis.conflict_regions r
-                 WHERE r.versionid = v_id AND r.objectclass = 'feature' AND r.objectkey = v_key AND r.times = p_times);
     -- the work, in a subtransaction rolled back once the plan is in v_out. The block's body is not indented.
     BEGIN
     BEGIN
@@ -50,158 +47,12 @@ BEGIN
         GET STACKED DIAGNOSTICS v_why = MESSAGE_TEXT, v_hint = PG_EXCEPTION_HINT;
         RAISE EXCEPTION '%: %', p_refused, v_why USING ERRCODE = 'TG302', HINT = v_hint;
     END;
-    -- the regions of the instant, numbered as tgsis.mesh_merge_regions numbers them, with what each side changed
-    CREATE TEMPORARY TABLE tgsis_mi_node ON COMMIT DROP AS
-    SELECT n.kind, n.id, (dense_rank() OVER (ORDER BY n.label) - 1)::integer AS region,
-           coalesce(vx.p_changed, cx.p_changed, false) AS p_changed,
-           coalesce(vx.c_changed, cx.c_changed, false) AS c_changed,
-           coalesce(vx.differ, cx.differ, false) AS differ,
-           CASE WHEN vx.ip AND vx.ic THEN sqrt((vx.cx - vx.px) * (vx.cx - vx.px) + (vx.cy - vx.py) * (vx.cy - vx.py)
-                                               + (vx.cz - vx.pz) * (vx.cz - vx.pz)) END AS pc_dist,
-           CASE WHEN vx.p_moved THEN sqrt((vx.px - vx.bx) * (vx.px - vx.bx) + (vx.py - vx.by) * (vx.py - vx.by)
-                                          + (vx.pz - vx.bz) * (vx.pz - vx.bz)) END AS p_disp,
-           CASE WHEN vx.c_moved THEN sqrt((vx.cx - vx.bx) * (vx.cx - vx.bx) + (vx.cy - vx.by) * (vx.cy - vx.by)
-                                          + (vx.cz - vx.bz) * (vx.cz - vx.bz)) END AS c_disp
-      FROM pg_temp.tgsis_mr_node n
-      LEFT JOIN pg_temp.tgsis_mr_vx vx ON n.kind = 'v' AND vx.id = n.id
-      LEFT JOIN pg_temp.tgsis_mr_cx cx ON n.kind = 'c' AND cx.id = n.id;
-    CREATE TEMPORARY TABLE tgsis_mi_region ON COMMIT DROP AS
-    SELECT f.*, v_first + f.region AS number, r.solution, r.solution_vertex_ids IS NOT NULL AS has_rows,
-           coalesce(r.vertex_ids = f.vertex_ids AND r.cell_ids = f.cell_ids AND r.parent_vertex_ids = f.pv
-                    AND r.parent_cell_ids = f.pc AND r.child_vertex_ids = f.cv AND r.child_cell_ids = f.cc
-                    AND r.conflict = f.conflict, false) AS holds,
-           CASE WHEN NOT f.conflict THEN CASE WHEN f.has_c AND NOT f.has_p THEN 4 ELSE 2 END
-                WHEN r.solution = 'parent' THEN 2 WHEN r.solution = 'child' THEN 4 WHEN r.solution = 'base' THEN 1
-                -- average, manual: the rows recorded with the solution (tgsis.merge_solution_rows)
-                WHEN r.solution IN ('average', 'manual') AND r.solution_vertex_ids IS NOT NULL THEN 8
-           END::smallint AS src
-      FROM (SELECT d.region, bool_or(d.p_changed) AND bool_or(d.c_changed) AND bool_or(d.differ) AS conflict,
-                   bool_or(d.p_changed) AS has_p, bool_or(d.c_changed) AS has_c,
-                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v'), '{}') AS vertex_ids,
-                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c'), '{}') AS cell_ids,
-                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v' AND d.p_changed), '{}') AS pv,
-                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c' AND d.p_changed), '{}') AS pc,
-                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'v' AND d.c_changed), '{}') AS cv,
-                   coalesce(array_agg(d.id ORDER BY d.id) FILTER (WHERE d.kind = 'c' AND d.c_changed), '{}') AS cc,
-                   -- what a whole-region solution discards of each side (merge3's RegionDiscard)
-                   count(*) FILTER (WHERE d.kind = 'v' AND d.c_changed AND d.differ) AS pcv,
-                   count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed AND d.differ) AS pcc,
-                   coalesce(max(d.pc_dist) FILTER (WHERE d.kind = 'v' AND d.c_changed AND d.differ), 0) AS pcd,
-                   count(*) FILTER (WHERE d.kind = 'v' AND d.p_changed AND d.differ) AS cpv,
-                   count(*) FILTER (WHERE d.kind = 'c' AND d.p_changed AND d.differ) AS cpc,
-                   coalesce(max(d.pc_dist) FILTER (WHERE d.kind = 'v' AND d.p_changed AND d.differ), 0) AS cpd,
-                   count(*) FILTER (WHERE d.kind = 'v' AND d.p_changed) AS bpv,
-                   count(*) FILTER (WHERE d.kind = 'c' AND d.p_changed) AS bpc,
-                   coalesce(max(d.p_disp), 0) AS bpd,
-                   count(*) FILTER (WHERE d.kind = 'v' AND d.c_changed) AS bcv,
-                   count(*) FILTER (WHERE d.kind = 'c' AND d.c_changed) AS bcc,
-                   coalesce(max(d.c_disp), 0) AS bcd
-              FROM pg_temp.tgsis_mi_node d GROUP BY d.region) AS f
-      LEFT JOIN tgsis.conflict_regions r
-        ON r.versionid = v_id AND r.objectclass = 'feature' AND r.objectkey = v_key AND r.times = p_times
-       AND r.region = v_first + f.region;
-
-    IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.conflict) THEN
-        IF v_first IS NULL THEN  -- no regions stored (none could be solved): unsolved
-            v_unsolved := true;
-            RAISE EXCEPTION 'tgsis_mi_done';
-        END IF;
-        -- the recorded solutions hold only for these very regions (else every conflict is unsolved, as in Python)
-        IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE NOT g.holds)
-           OR (SELECT count(*) FROM tgsis.conflict_regions r WHERE r.versionid = v_id AND r.objectclass = 'feature'
-                  AND r.objectkey = v_key AND r.times = p_times) <> (SELECT count(*) FROM pg_temp.tgsis_mi_region) THEN
-            RAISE EXCEPTION '%: its stored regions at instant % are not the regions of its states now: their solutions do not hold',
-                    p_refused, p_times
-                USING ERRCODE = 'TG302',
-                      HINT = format('SELECT * FROM tgsis.find_conflicts(%L) finds them again; then solve them (tgsis.resolve_region)', p_version);
-        END IF;
-        SELECT string_agg(format('region %s at instant %s solved %s', g.number, p_times, g.solution), ', ' ORDER BY g.region)
-          INTO v_why
-          FROM pg_temp.tgsis_mi_region g WHERE g.conflict AND g.solution IN ('average', 'manual') AND NOT g.has_rows;
-        IF v_why IS NOT NULL THEN  -- (recorded with the .npz only: before its rows were taken, or by psql)
-            RAISE EXCEPTION '%: % with its mesh only (the Python client applies it)', p_refused, v_why
-                USING ERRCODE = 'TG302', HINT = p_hint;
-        END IF;
-        IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.conflict AND g.src IS NULL) THEN
-            v_unsolved := true;  -- a conflicting region without a solution
-            RAISE EXCEPTION 'tgsis_mi_done';
-        END IF;
-    END IF;
-
-    -- what the whole-region solutions discard of each side (merge3's RegionDiscard)
-    CREATE TEMPORARY TABLE tgsis_mi_notes ON COMMIT DROP AS
-    SELECT g.number, s.o, g.solution, s.side, s.nv, s.nc, s.d
-      FROM pg_temp.tgsis_mi_region g
-     CROSS JOIN LATERAL (VALUES
-         (1, 'parent', CASE g.solution WHEN 'child' THEN g.cpv WHEN 'base' THEN g.bpv END,
-                       CASE g.solution WHEN 'child' THEN g.cpc WHEN 'base' THEN g.bpc END,
-                       CASE g.solution WHEN 'child' THEN g.cpd WHEN 'base' THEN g.bpd END),
-         (2, 'child', CASE g.solution WHEN 'parent' THEN g.pcv WHEN 'base' THEN g.bcv END,
-                      CASE g.solution WHEN 'parent' THEN g.pcc WHEN 'base' THEN g.bcc END,
-                      CASE g.solution WHEN 'parent' THEN g.pcd WHEN 'base' THEN g.bcd END)) AS s (o, side, nv, nc, d)
-     WHERE g.conflict AND (s.nv > 0 OR s.nc > 0);
-    -- the merged state in the work tables of tgsis.merge_mesh_by_region (regions numbered in the object), which
-    -- tgsis.merge_solution_rows and tgsis.merge_mesh_validity read
-    CREATE TEMPORARY TABLE tgsis_mw_node ON COMMIT DROP AS
-    SELECT n.kind, n.id, v_first + n.region AS region, n.p_changed, n.c_changed, n.differ FROM pg_temp.tgsis_mi_node n;
-    CREATE TEMPORARY TABLE tgsis_mw_region ON COMMIT DROP AS
-    SELECT g.number AS region, g.conflict, g.src, g.solution, g.vertex_ids, g.cell_ids FROM pg_temp.tgsis_mi_region g;
-    CREATE TEMPORARY TABLE tgsis_mw_v ON COMMIT DROP AS
-    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.x, m.y, m.z, m.val, m.ref
-      FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_v m) AS k
-      LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
-                  WHERE n.kind = 'v') AS s ON s.id = k.id
-      LEFT JOIN pg_temp.tgsis_mr_v m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
-    CREATE TEMPORARY TABLE tgsis_mw_c ON COMMIT DROP AS
-    SELECT k.id, coalesce(s.src, 2::smallint) AS src, m.id IS NOT NULL AS present, m.v, m.val, m.part
-      FROM (SELECT DISTINCT m.id FROM pg_temp.tgsis_mr_c m) AS k
-      LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region)
-                  WHERE n.kind = 'c') AS s ON s.id = k.id
-      LEFT JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = coalesce(s.src, 2::smallint);
-    IF pg_catalog.to_regclass('pg_temp.tgsis_mr_vb') IS NULL THEN  -- (not made when there is no region)
-        CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint, x float8, y float8, z float8) ON COMMIT DROP;
-    END IF;
-    -- the regions solved average or manual: their recorded rows (no row of theirs: removed), the new ids they add,
-    -- checked as tgsis.merge_mesh_by_region checks them (TG302 with p_refused, p_hint)
-    IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.src = 8) THEN
-        PERFORM tgsis.merge_solution_rows(p_geoid, v_id, p_refused, p_hint);
-        UPDATE pg_temp.tgsis_mw_v n SET present = false, x = NULL, y = NULL, z = NULL, val = NULL, ref = NULL WHERE n.src = 8;
-        UPDATE pg_temp.tgsis_mw_c n SET present = false, v = NULL, val = NULL, part = NULL WHERE n.src = 8;
-        DELETE FROM pg_temp.tgsis_mw_v n USING pg_temp.tgsis_mw_sv s WHERE s.id = n.id;
-        DELETE FROM pg_temp.tgsis_mw_c n USING pg_temp.tgsis_mw_sc s WHERE s.id = n.id;
-        INSERT INTO pg_temp.tgsis_mw_v (id, src, present, x, y, z, val, ref)
-        SELECT s.id, 8, NOT s.gone, s.x, s.y, s.z, s.val, s.ref FROM pg_temp.tgsis_mw_sv s;
-        INSERT INTO pg_temp.tgsis_mw_c (id, src, present, v, val, part)
-        SELECT s.id, 8, NOT s.gone, s.v, s.val, s.part FROM pg_temp.tgsis_mw_sc s;
-        -- what they discard of each side (merge3's _discards, as tgsis.merge_mesh_by_region counts them)
-        INSERT INTO pg_temp.tgsis_mi_notes
-        SELECT g.region, s.o, g.solution, s.side,
-               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
-                  LEFT JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
-                  LEFT JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
-                 WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
-                   AND NOT coalesce(float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
-                                    AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
-                                    AND a.ref IS NOT DISTINCT FROM m.ref, a.id IS NULL AND m.id IS NULL)),
-               (SELECT count(*) FROM pg_temp.tgsis_mw_node n
-                  LEFT JOIN pg_temp.tgsis_mr_c a ON a.id = n.id AND a.st = s.st
-                  LEFT JOIN pg_temp.tgsis_mw_c m ON m.id = n.id AND m.present
-                 WHERE n.region = g.region AND n.kind = 'c' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
-                   AND NOT coalesce(tgsis.oriented_cell_key(a.v) = tgsis.oriented_cell_key(m.v)
-                                    AND a.val IS NOT DISTINCT FROM m.val AND a.part IS NOT DISTINCT FROM m.part,
-                                    a.id IS NULL AND m.id IS NULL)),
-               coalesce((SELECT max(sqrt((a.x - m.x) * (a.x - m.x) + (a.y - m.y) * (a.y - m.y) + (a.z - m.z) * (a.z - m.z)))
-                           FROM pg_temp.tgsis_mw_node n
-                           JOIN pg_temp.tgsis_mr_v a ON a.id = n.id AND a.st = s.st
-                           JOIN pg_temp.tgsis_mw_v m ON m.id = n.id AND m.present
-                          WHERE n.region = g.region AND n.kind = 'v' AND CASE s.o WHEN 1 THEN n.p_changed ELSE n.c_changed END
-                            AND NOT (float8send(a.x) = float8send(m.x) AND float8send(a.y) = float8send(m.y)
-                                     AND float8send(a.z) = float8send(m.z) AND a.val IS NOT DISTINCT FROM m.val
-                                     AND a.ref IS NOT DISTINCT FROM m.ref)), 0)
-          FROM pg_temp.tgsis_mw_region g
-         CROSS JOIN (VALUES (1, 'parent', 2::smallint), (2, 'child', 4::smallint)) AS s (o, side, st)
-         WHERE g.conflict AND g.src = 8;
-        DELETE FROM pg_temp.tgsis_mi_notes t WHERE t.nv = 0 AND t.nc = 0;
+    -- the regions of the instant (numbered in the object), their sources, the merged rows and what the solutions
+    -- discard, in the work tables tgsis.merge_mesh_by_region uses (pg_temp.tgsis_mw_*), which
+    -- tgsis.merge_mesh_validity reads too
+    IF tgsis.merge_region_plan(v_id, p_version, p_geoid, v_key, p_times, p_refused, p_hint) THEN
+        v_unsolved := true;
+        RAISE EXCEPTION 'tgsis_mi_done';
     END IF;
     IF pg_catalog.to_regclass('pg_temp.tgsis_mw_sv') IS NULL THEN  -- (no such solution: none of their rows)
         CREATE TEMPORARY TABLE tgsis_mw_sv (id bigint, x float8, y float8, z float8, w text[], inside boolean,
@@ -213,7 +64,7 @@ BEGIN
     -- merge3's validity check of the merged instant, where a solution's rows can re-mesh it (the Python merge checks
     -- every slice it merges; regions taken each from one side, or parent/child/base solutions, cannot break it: a
     -- cell on a vertex the other side removed, or two new cells on the same vertices, join their regions)
-    IF EXISTS (SELECT FROM pg_temp.tgsis_mi_region g WHERE g.src = 8) THEN
+    IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
     PERFORM tgsis.merge_mesh_validity(
         format('feature %s of class %s, instant %s', p_geoid, (SELECT i.classname FROM pg_temp.tgsis_mr_info i),
                CASE WHEN p_times::text ~ '^-?[0-9]+$' THEN p_times::text || '.0' ELSE p_times::text END),
@@ -229,8 +80,8 @@ BEGIN
                                                 NULL::bigint[] AS v
                                            FROM (SELECT DISTINCT m.id, coalesce(s.src, 2::smallint) AS src
                                                    FROM pg_temp.tgsis_mr_v m
-                                                   LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mi_node n
-                                                                JOIN pg_temp.tgsis_mi_region g USING (region)
+                                                   LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n
+                                                                JOIN pg_temp.tgsis_mw_region g USING (region)
                                                                WHERE n.kind = 'v') AS s ON s.id = m.id) AS k
                                            LEFT JOIN pg_temp.tgsis_mr_vmap p ON p.new = k.id
                                           WHERE EXISTS (SELECT FROM pg_temp.tgsis_mr_v m WHERE m.id = k.id AND m.st = k.src)
@@ -239,8 +90,8 @@ BEGIN
                                                 CASE WHEN k.src = 4 THEN m.v END
                                            FROM (SELECT DISTINCT m.id, coalesce(s.src, 2::smallint) AS src
                                                    FROM pg_temp.tgsis_mr_c m
-                                                   LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mi_node n
-                                                                JOIN pg_temp.tgsis_mi_region g USING (region)
+                                                   LEFT JOIN (SELECT n.id, g.src FROM pg_temp.tgsis_mw_node n
+                                                                JOIN pg_temp.tgsis_mw_region g USING (region)
                                                                WHERE n.kind = 'c') AS s ON s.id = m.id) AS k
                                            JOIN pg_temp.tgsis_mr_c m ON m.id = k.id AND m.st = k.src
                                            LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = k.id) AS q), '[]')
@@ -269,9 +120,9 @@ BEGIN
                                                                 ORDER BY u.o)::text END
                                           FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based) AS q), '[]'),
                'notes', coalesce((SELECT jsonb_agg(format('region %s at instant %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
-                                                          n.number, p_times, n.solution, n.side, n.nv, n.nc, tgsis.merge_number_text(n.d))
-                                                   ORDER BY n.number, n.o)
-                                    FROM pg_temp.tgsis_mi_notes n), '[]'))
+                                                          n.region, p_times, n.solution, n.side, n.nv, n.nc, tgsis.merge_number_text(n.d))
+                                                   ORDER BY n.region, n.o)
+                                    FROM pg_temp.tgsis_mw_notes n), '[]'))
       INTO v_out;
     RAISE EXCEPTION 'tgsis_mi_done';  -- rolls the work tables and their locks back
     EXCEPTION WHEN raise_exception THEN
