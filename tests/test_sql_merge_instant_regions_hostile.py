@@ -11,6 +11,7 @@ merge (``tgsis._merge_slices``), compared row version by row version.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -509,3 +510,21 @@ def test_new_vertices_clashing_at_the_top_of_bigint_are_refused_alike(conn: Conn
     theirs, mine = both_merges(conn, "e1", action)
     assert mine[:2] == theirs[:2] == ("refused", "TG302"), (theirs[:3], mine[:3])
     assert "bigint" in mine[2], mine[2]
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_non_finite_coordinates_at_an_instant_are_refused_in_psql_as_in_python(
+    conn: Conn, series: int, action: str
+) -> None:
+    """A psql UPDATE stores NaN at an instant both sides changed: merge3 takes no such mesh, so the Python merge
+    leaves the object unsolved; the psql merge refuses it too, by name, nothing written."""
+    move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
+    move(conn, "e1", series, 2.0, NORTH[:1], (0.0, 0.0, math.nan))
+    move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
+    theirs, mine = both_merges(conn, "e1", action)
+    assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs[:3], mine[:3])
+    assert "non-finite coordinates" in theirs[2], theirs[2]
+    assert (
+        f"feature {series} does not merge instant by instant in SQL: some vertices have non-finite coordinates"
+        in (mine[2])
+    ), mine[2]
