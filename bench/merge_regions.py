@@ -549,17 +549,20 @@ def paired_uploads(
         return elapsed
 
     samples: dict[bool, list[float]] = {True: [], False: []}
-    for _ in range(repeat):  # in turn, so that drift of the machine hits both alike
-        samples[True].append(once())
-        for name, _definition in indexes:
-            conn.execute(sql.SQL("DROP INDEX {}").format(sql.SQL(name)))
-        conn.commit()
-        try:
-            samples[False].append(once())
-        finally:
-            for _name, definition in indexes:
-                conn.execute(definition)
+    for i in range(repeat):  # in turn, the order swapped each time, so that drift of the machine hits both alike
+        for indexed in (True, False) if i % 2 == 0 else (False, True):
+            if indexed:
+                samples[True].append(once())
+                continue
+            for name, _definition in indexes:
+                conn.execute(sql.SQL("DROP INDEX {}").format(sql.SQL(name)))
             conn.commit()
+            try:
+                samples[False].append(once())
+            finally:
+                for _name, definition in indexes:
+                    conn.execute(definition)
+                conn.commit()
     print(f"  samples with: {[round(x, 2) for x in samples[True]]}, without: {[round(x, 2) for x in samples[False]]}")
     return statistics.median(samples[True]), statistics.median(samples[False])
 

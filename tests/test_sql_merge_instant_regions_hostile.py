@@ -351,7 +351,7 @@ def test_the_psql_merge_of_a_one_vertex_edit_on_each_side_reads_no_more_rows_tha
     "counts after it writes (tgsis.refresh_geometry -> tgsis.instants_extent: count(*) of tgsis.times_trgl and the "
     "box of tgsis.times_vrtx WHERE geoid = ...); and both steps read, for each search of the rows some revision set "
     "sees otherwise (the digests of tgsis.changed_objects, tgsis.merge_changed_keys, the engine's changed keys), "
-    "the revision BRIN's last page range whole (about 8,500 vertex rows here: 40,000 in find_conflicts). The "
+    "the revision BRIN's last page range whole (about 8,500 vertex rows here; about 40,000 in find_conflicts). The "
     "engine's one-ring now goes through times_trgl's vertex BRIN (a few 32-page ranges, not the whole instant); "
     "known, docs/performance.md (the recount is 'the next step')",
 )
