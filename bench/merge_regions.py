@@ -53,8 +53,14 @@ period by period (``tgsis.merge_periods_by_slice``) and the Python merge
 geometry instant by instant, as ratios to the object-level merge, and the
 Python merge with the touched period read whole (before).
 
+With ``--cell-brin-cost`` (alone): (h) what the cells' vertex BRIN of models
+2 and 3 (``tgsis.times_trgl`` on geoid, times, vrtxid1..3; ``tgsis.d4dtrgl``
+on geoid, timem, nodeid1..3) costs uploads: the grid at three instants and as
+an evolving surface (one period, three geometry instants) uploaded, rolled
+back, with that index and without, in turn, medians of ``--repeat``.
+
     python bench/merge_regions.py [--side 1000] [--repeat 3] [--upload-cost] [--model2 | --model2-only]
-        [--model3 | --model3-only]
+        [--model3 | --model3-only] [--cell-brin-cost]
     # TGSIS_PG=system|embedded
 """
 
@@ -518,27 +524,7 @@ def upload_with_and_without_indexes(conn: Conn, surface: Any, repeat: int) -> di
     """Uploads of the surface (rolled back) with the revision indexes and without, in turn: medians and their ratio."""
     indexes = _revision_indexes(conn)
     assert indexes, "no revision indexes in this checkout"
-
-    def upload() -> float:
-        start = time.perf_counter()
-        F.insert_feature(conn, "horizon", surface)
-        elapsed = time.perf_counter() - start
-        conn.rollback()
-        return elapsed
-
-    samples: dict[bool, list[float]] = {True: [], False: []}
-    for _ in range(repeat):  # in turn, so that drift of the machine hits both alike
-        samples[True].append(upload())
-        for name, _definition in indexes:
-            conn.execute(sql.SQL("DROP INDEX {}").format(sql.SQL(name)))
-        conn.commit()
-        try:
-            samples[False].append(upload())
-        finally:
-            for _name, definition in indexes:
-                conn.execute(definition)
-            conn.commit()
-    with_s, without_s = statistics.median(samples[True]), statistics.median(samples[False])
+    with_s, without_s = paired_uploads(conn, lambda: F.insert_feature(conn, "horizon", surface), indexes, repeat)
     print(
         f"upload with the revision indexes: {with_s:.2f} s, without: {without_s:.2f} s "
         f"({with_s / without_s:.3f}x; {len(indexes)} indexes)"
@@ -550,6 +536,80 @@ def upload_with_and_without_indexes(conn: Conn, surface: Any, repeat: int) -> di
     }
 
 
+def paired_uploads(
+    conn: Conn, upload: Callable[[], Any], indexes: list[tuple[str, str]], repeat: int
+) -> tuple[float, float]:
+    """Medians of ``upload`` (rolled back) with ``indexes`` (name, definition) and with them dropped, in turn."""
+
+    def once() -> float:
+        start = time.perf_counter()
+        upload()
+        elapsed = time.perf_counter() - start
+        conn.rollback()
+        return elapsed
+
+    samples: dict[bool, list[float]] = {True: [], False: []}
+    for i in range(repeat):  # in turn, the order swapped each time, so that drift of the machine hits both alike
+        for indexed in (True, False) if i % 2 == 0 else (False, True):
+            if indexed:
+                samples[True].append(once())
+                continue
+            for name, _definition in indexes:
+                conn.execute(sql.SQL("DROP INDEX {}").format(sql.SQL(name)))
+            conn.commit()
+            try:
+                samples[False].append(once())
+            finally:
+                for _name, definition in indexes:
+                    conn.execute(definition)
+                conn.commit()
+    print(f"  samples with: {[round(x, 2) for x in samples[True]]}, without: {[round(x, 2) for x in samples[False]]}")
+    return statistics.median(samples[True]), statistics.median(samples[False])
+
+
+def cell_brin_upload_cost(conn: Conn, side: int, repeat: int) -> dict[str, Any]:
+    """(h) what the cells' vertex BRIN of models 2 and 3 (tgsis.times_trgl on geoid, times, vrtxid1..3;
+    tgsis.d4dtrgl on geoid, timem, nodeid1..3) costs uploads: a surface at three instants and an evolving surface
+    (one period, three geometry instants) of the grid uploaded (rolled back) with that index and without, in turn."""
+    from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
+
+    surface = grid_surface(side)
+    F.create_feature_class(conn, "upload2", "SURFACE", time_model="INSTANTS")
+    F.create_feature_class(conn, "upload3", "SURFACE", time_model="EVOLVING")
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    out: dict[str, Any] = {}
+    series = SurfaceSeries(np.asarray([1.0, 2.0, 3.0]), [tgsis.Surface(surface.vertices, surface.cells)] * 3)
+    positions = np.stack([surface.vertices] * 3)
+    evolving = EvolvingSurface([TopologyPeriod(np.asarray([1.0, 2.0, 3.0]), surface.cells, positions)])
+    for model, table, upload in (
+        ("model2", "times_trgl", lambda: F.insert_feature(conn, "upload2", series)),
+        ("model3", "d4dtrgl", lambda: F.insert_feature(conn, "upload3", evolving)),
+    ):
+        indexes = [
+            (str(r[0]), str(r[1]))
+            for r in conn.execute(
+                "SELECT i.indexrelid::regclass::text, pg_get_indexdef(i.indexrelid) FROM pg_index i"
+                " JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam"
+                " WHERE i.indrelid = %s::regclass AND a.amname = 'brin'"
+                "   AND pg_get_indexdef(i.indexrelid) ~ '(vrtxid|nodeid)1'",
+                (f"tgsis.{table}_ver",),
+            ).fetchall()
+        ]
+        conn.commit()
+        assert indexes, f"no vertex BRIN on tgsis.{table}_ver in this checkout"
+        with_s, without_s = paired_uploads(conn, upload, indexes, repeat)
+        print(
+            f"(h) {model} upload with the vertex BRIN of tgsis.{table}: {with_s:.2f} s, without: {without_s:.2f} s "
+            f"({with_s / without_s:.3f}x)",
+            flush=True,
+        )
+        out[f"{model}_upload_with_cell_brin_s"] = round(with_s, 3)
+        out[f"{model}_upload_without_cell_brin_s"] = round(without_s, 3)
+        out[f"{model}_upload_cell_brin_ratio"] = round(with_s / without_s, 3)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
@@ -559,12 +619,21 @@ def main() -> None:
     parser.add_argument("--model2-only", action="store_true", help="(f) only")
     parser.add_argument("--model3", action="store_true", help="(g) also the merge of an evolving surface")
     parser.add_argument("--model3-only", action="store_true", help="(g) only")
+    parser.add_argument(
+        "--cell-brin-cost",
+        action="store_true",
+        help="(h) only: uploads of models 2 and 3 with and without the cells' vertex BRIN",
+    )
     args = parser.parse_args()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}; medians of {args.repeat}"
     )
     with bench_database() as conn:
+        if args.cell_brin_cost:
+            for name, value in cell_brin_upload_cost(conn, args.side, args.repeat).items():
+                print(f"{name}: {value}")
+            return
         only = args.model2_only or args.model3_only
         results = {} if only else figures(conn, args.side, args.repeat, args.upload_cost)
         if args.model2 or args.model2_only:

@@ -160,8 +160,9 @@ BEGIN
     -- ---- (blocks of later changes that need the new functions go here)
 
     -- ---- issue39-speed: the indexes that find a versioned table's row versions by revision
-    -- (tgsis.create_revision_indexes: a BRIN on revision, a btree on the object key of closed rows),
-    -- which a fresh tgsis.enable_versioning_rel makes
+    -- (tgsis.create_revision_indexes: a BRIN on revision, a btree on the object key of closed rows;
+    -- on the cell tables of models 1, 2 and 3 the BRIN on geoid, instant or period and vertex columns,
+    -- tgsis.times_trgl's and tgsis.d4dtrgl's since issue39-D), which a fresh tgsis.enable_versioning_rel makes
     FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
         PERFORM tgsis.create_revision_indexes(v_t.schemaname, v_t.tablename, v_t.objectkeyfield);
     END LOOP;

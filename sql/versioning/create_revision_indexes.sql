@@ -12,7 +12,10 @@
 -- A btree on revision would cost every upload a third more, and one on the
 -- cells' vertex columns double it (docs/performance.md, the merge section).
 -- Model 1's cell tables (tgsis.point, segment, trgl, tetra) get a third, a
--- BRIN on geoid and the vertex columns (vrtxid1..k): geoid because vertex ids
+-- BRIN on geoid and the vertex columns (vrtxid1..k), model 2's triangles
+-- (tgsis.times_trgl) on geoid, times and vrtxid1..3, model 3's (tgsis.d4dtrgl)
+-- on geoid, timem and nodeid1..3 (ids repeat at each instant or topology
+-- period): geoid because vertex ids
 -- are local to their geometry (0..n-1), so every object holds the ids of a
 -- change and a BRIN on the vertex columns alone matched ranges of every
 -- object (the planner then read all the object's cells by its key instead).
@@ -51,16 +54,19 @@ BEGIN
                       AND pg_get_expr(i.indpred, i.indrelid) = 'revclosed') THEN
         EXECUTE format('CREATE INDEX ON %s (%I) WHERE revclosed', v_rel, p_keyfield);
     END IF;
-    IF p_schema = 'tgsis' AND p_table IN ('point', 'segment', 'trgl', 'tetra')
+    IF p_schema = 'tgsis' AND p_table IN ('point', 'segment', 'trgl', 'tetra', 'times_trgl', 'd4dtrgl')
        AND NOT EXISTS (SELECT FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam
                         WHERE i.indrelid = v_rel AND a.amname = 'brin'
-                          AND (SELECT attnum FROM pg_attribute WHERE attrelid = v_rel AND attname = 'vrtxid1') = ANY (i.indkey::int2[])) THEN
+                          AND (SELECT attnum FROM pg_attribute
+                                WHERE attrelid = v_rel AND attname IN ('vrtxid1', 'nodeid1')) = ANY (i.indkey::int2[])) THEN
+        -- (model 2's triangles also by their instant, model 3's by their topology period: ids repeat in each)
         EXECUTE format('CREATE INDEX ON %s USING brin (geoid, %s) WITH (pages_per_range = 32)', v_rel,
                        (SELECT string_agg(quote_ident(a.attname), ', ' ORDER BY a.attnum) FROM pg_attribute a
-                         WHERE a.attrelid = v_rel AND a.attname ~ '^vrtxid[0-9]+$' AND NOT a.attisdropped));
+                         WHERE a.attrelid = v_rel AND NOT a.attisdropped
+                           AND (a.attname ~ '^(vrtxid|nodeid)[0-9]+$' OR a.attname IN ('times', 'timem'))));
     END IF;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.create_revision_indexes(text, text, text) IS
-    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on model 1''s cell tables also a BRIN on geoid and the vertex columns (the cells of an object on given vertices); idempotent';
+    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on the cell tables of models 1, 2 and 3 also a BRIN on geoid, the instant or period (times, timem) and the vertex columns (the cells of an object on given vertices); idempotent';
