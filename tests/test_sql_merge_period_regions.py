@@ -13,15 +13,21 @@ period).
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import psycopg
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
+import tgsis
 from tests.merge_data import SIDE
-from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH
-from tests.test_sql_merge_instant_regions import python_regions
-from tests.test_sql_merge_periods import _move, _node_ids, _sql, make_periods
+from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH
+from tests.test_sql_merge_instant_regions import assert_same_regions, python_regions
+from tests.test_sql_merge_periods import FIRST, SECOND, _move, _node_ids, _period, _sql, make_periods
+from tests.test_sql_merge_write import assert_same_merge, both_merges, everything, solve
+from tgsis.temporal import EvolvingSurface
 
 Conn = psycopg.Connection[Any]
 
@@ -123,3 +129,317 @@ def test_the_engine_where_one_side_changed_the_topology_and_the_other_moved_node
     _move(conn, "DEFAULT", periods, 1.0, 3.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
     theirs = _assert_engine_as_python(conn, "e1", periods)
     assert sorted(theirs) == [(1.0, 1.0), (1.0, 2.0), (1.0, 3.0)]
+
+
+# ---------------------------------------------------------------------------- SQL find_conflicts stores them
+
+
+def _conflict_at_two(conn: Conn, geoid: int) -> None:
+    """Geometry instant 2 of the first period: a conflict (north) and the parent's edit apart (south); the second
+    period's geometry instant 4 changed by the version alone."""
+    first, second = _node_ids(conn, geoid, 1.0), _node_ids(conn, geoid, 3.0)
+    _move(conn, "e1", geoid, 1.0, 2.0, [first[i] for i in NORTH], CHILD_SHIFT)
+    _move(conn, "DEFAULT", geoid, 1.0, 2.0, [first[i] for i in NORTH[:SIDE]], PARENT_SHIFT)
+    _move(conn, "DEFAULT", geoid, 1.0, 2.0, [first[i] for i in SOUTH], PARENT_SHIFT)
+    _move(conn, "e1", geoid, 3.0, 4.0, [second[i] for i in SOUTH], CHILD_SHIFT)
+
+
+def test_sql_find_conflicts_stores_the_regions_of_geometry_instants_as_python(conn: Conn, periods: int) -> None:
+    _conflict_at_two(conn, periods)
+    regions = assert_same_regions(conn, "e1", periods)
+    assert [(r[0], r[1], r[2], r[3], r[4]) for r in regions] == [
+        (0, 2.0, 1.0, True, "both"),
+        (1, 2.0, 1.0, False, "parent"),
+        (2, 4.0, 3.0, False, "child"),
+    ]
+    assert [r[14] for r in regions] == ["unsolved", "automatic", "automatic"]
+
+
+def test_sql_find_conflicts_stores_the_regions_of_a_topology_change_beside_moves_as_python(
+    conn: Conn, periods: int
+) -> None:
+    ids = _node_ids(conn, periods, 1.0)
+    _sql(conn, "e1", "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = 1 AND trglid = ANY(%s)", (periods, [7, 8]))
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
+    assert len(assert_same_regions(conn, "e1", periods)) == 4
+
+
+def test_no_regions_either_way_for_a_topology_changed_on_both_sides_or_a_period_two_topologies(
+    conn: Conn, periods: int
+) -> None:
+    ids = _node_ids(conn, periods, 1.0)
+    _sql(conn, "e1", "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = 1 AND trglid = 7", (periods,))
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
+    _sql(conn, "DEFAULT", "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = 1 AND trglid = 9", (periods,))
+    assert assert_same_regions(conn, "e1", periods) == []
+
+
+# ---------------------------------------------------------------------------- the psql merge by region
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_geometry_instants_both_sides_changed_apart_merge_in_psql_exactly_as_in_python(
+    conn: Conn, periods: int, action: str
+) -> None:
+    first, second = _node_ids(conn, periods, 1.0), _node_ids(conn, periods, 3.0)
+    _move(conn, "e1", periods, 1.0, 2.0, [first[i] for i in NORTH], CHILD_SHIFT)
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [first[i] for i in SOUTH], PARENT_SHIFT)
+    _move(conn, "e1", periods, 3.0, 4.0, [second[i] for i in SOUTH], CHILD_SHIFT)
+    _move(conn, "DEFAULT", periods, 3.0, 4.0, [second[i] for i in NORTH], PARENT_SHIFT)
+    _move(conn, "DEFAULT", periods, 3.0, 5.0, [second[i] for i in NORTH], PARENT_SHIFT)
+    assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize("solution", ["parent", "child", "base"])
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_conflicting_region_of_a_geometry_instant_solved_in_psql_merges_as_in_python(
+    conn: Conn, periods: int, solution: str, action: str
+) -> None:
+    _conflict_at_two(conn, periods)
+    solve(conn, "e1", periods, solution)
+    assert_same_merge(conn, "e1", action)
+
+
+def test_an_unsolved_region_of_a_geometry_instant_is_refused_naming_it_and_nothing_is_written(
+    conn: Conn, periods: int
+) -> None:
+    _conflict_at_two(conn, periods)
+    conn.commit()
+    before = everything(conn)
+    conn.rollback()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[:2] == ("refused", "TG302")
+    assert mine[:2] == ("refused", "TG302")
+    assert "region 0 at geometry instant 2.0 of the period starting at 1.0 unsolved" in theirs[2]
+    assert "region 0 at geometry instant 2.0 of the period starting at 1.0 unsolved" in mine[2]
+    assert "tgsis version merge e1" in mine[2]
+    assert everything(conn) == before
+    conn.rollback()
+
+
+def test_one_side_changed_the_topology_the_other_moved_nodes_merges_in_psql_as_in_python(
+    conn: Conn, periods: int
+) -> None:
+    ids = _node_ids(conn, periods, 1.0)
+    _sql(conn, "e1", "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = 1 AND trglid = ANY(%s)", (periods, [7, 8]))
+    _move(conn, "DEFAULT", periods, 1.0, 1.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
+    assert_same_merge(conn, "e1")
+
+
+def test_one_side_changed_the_topology_the_other_moved_its_nodes_a_conflict_then_solved(
+    conn: Conn, periods: int
+) -> None:
+    ids = _node_ids(conn, periods, 1.0)
+    _sql(conn, "e1", "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = 1 AND trglid = ANY(%s)", (periods, [7, 8]))
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [ids[i] for i in NORTH], PARENT_SHIFT)  # the triangles' nodes
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[:2] == mine[:2] == ("refused", "TG302")
+    solve(conn, "e1", periods, "child")
+    assert_same_merge(conn, "e1")
+
+
+def test_a_solution_that_gives_one_geometry_instant_the_old_topology_is_refused_tg308_as_in_python(
+    conn: Conn, periods: int
+) -> None:
+    """The parent removes triangles of the first period, the version moves their nodes at geometry instant 2: a
+    conflict there; solved base, that geometry instant keeps the triangles the others lose (TG308 both ways)."""
+    ids = _node_ids(conn, periods, 1.0)
+    _sql(
+        conn,
+        "DEFAULT",
+        "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = 1 AND trglid = ANY(%s)",
+        (periods, [7, 8]),
+    )
+    _move(conn, "e1", periods, 1.0, 2.0, [ids[i] for i in NORTH], CHILD_SHIFT)
+    solve(conn, "e1", periods, "base")
+    conn.commit()
+    before = everything(conn)
+    conn.rollback()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[:2] == ("refused", "TG308"), theirs
+    assert mine[:2] == ("refused", "TG308"), mine
+    assert "the topology period starting at 1" in mine[2] and "the topology period starting at 1" in theirs[2]
+    assert everything(conn) == before
+    conn.rollback()
+
+
+def test_no_regions_either_way_for_a_geometry_instant_added_where_the_other_side_changed_the_topology(
+    conn: Conn, periods: int
+) -> None:
+    """tgsis._merge_slices.fixed_period_refusal: no solution merges it (TG308), so neither stores regions."""
+    from tests.test_sql_merge_periods import step
+
+    ids = _node_ids(conn, periods, 1.0)
+    step(conn, "DEFAULT", "topology 1 0", periods)
+    step(conn, "e1", "add-instant 1 2 2.5", periods)
+    _move(conn, "e1", periods, 1.0, 2.0, [ids[i] for i in SOUTH], CHILD_SHIFT)
+    assert assert_same_regions(conn, "e1", periods) == []
+
+
+# ---------------------------------------------------------------------------- random edits against Python
+
+_features = itertools.count(1)
+_ROWS = {"north": NORTH, "south": SOUTH, "middle": MIDDLE, "edge": NORTH[:SIDE]}
+# (period, geometry instant) a side may edit: not the first period's last one, where the second starts
+_SLICES = [(1.0, 1.0), (1.0, 2.0), (3.0, 4.0), (3.0, 5.0)]
+_edit = st.tuples(
+    st.sampled_from(["move", "move", "values", "topology"]),
+    st.sampled_from(range(len(_SLICES))),
+    st.sampled_from(sorted(_ROWS)),
+)
+
+
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    edits=st.tuples(st.lists(_edit, min_size=1, max_size=3), st.lists(_edit, min_size=1, max_size=3)),
+    solution=st.sampled_from(["none", "parent", "child", "base"]),
+    action=st.sampled_from(["merge", "refresh"]),
+)
+def test_random_edits_of_geometry_instants_on_both_sides_merge_in_psql_exactly_as_in_python(
+    conn: Conn, edits: tuple[list[tuple[str, int, str]], list[tuple[str, int, str]]], solution: str, action: str
+) -> None:
+    """Each side moves nodes, changes property rows or removes a triangle (the topology) at random geometry
+    instants of two periods; the conflicting regions maybe solved alike. psql merges (or refuses, by SQLSTATE)
+    exactly as Python does."""
+    if not conn.execute("SELECT 1 FROM tgsis.catalog WHERE classname = 'evolving'").fetchone():
+        conn.rollback()
+        make_periods(conn)
+    conn.rollback()
+    n = next(_features)
+    geoid = tgsis.insert_feature(conn, "evolving", EvolvingSurface([_period(FIRST, 0), _period(SECOND, 2)]))
+    version = f"r{n}"
+    tgsis.create_version(conn, version)
+    conn.commit()
+    for v, plan, shift in (("DEFAULT", edits[0], PARENT_SHIFT), (version, edits[1], CHILD_SHIFT)):
+        for what, at, rows in plan:
+            m, t = _SLICES[at]
+            ids = _node_ids(conn, geoid, m)
+            if what == "move":
+                _move(conn, v, geoid, m, t, [ids[i] for i in _ROWS[rows]], shift)
+            elif what == "values":
+                _sql(
+                    conn,
+                    v,
+                    "UPDATE evolving_cellpros SET porosity = porosity + %s WHERE _geoid = %s AND _timem = %s"
+                    " AND _timet = %s AND _idx = ANY(%s)",
+                    (shift[0], geoid, m, t, [ids[i] for i in _ROWS[rows][:3]]),
+                )
+            else:  # a triangle of the period on those rows removed
+                _sql(
+                    conn,
+                    v,
+                    "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = %s AND nodeid1 = ANY(%s)"
+                    " AND trglid = (SELECT min(trglid) FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = %s"
+                    " AND nodeid1 = ANY(%s))",
+                    (geoid, m, [ids[i] for i in _ROWS[rows]], geoid, m, [ids[i] for i in _ROWS[rows]]),
+                )
+    conn.execute("SELECT FROM tgsis.find_conflicts(%s)", (version,))
+    conflicts = conn.execute(
+        "SELECT count(*) FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%s) AND conflict", (version,)
+    ).fetchone()
+    conn.rollback()
+    if solution != "none" and conflicts is not None and conflicts[0] > 0:
+        solve(conn, version, geoid, solution)
+    theirs, mine = both_merges(conn, version, action)
+    assert mine[:2] == theirs[:2], (theirs[:3], mine[:3])
+    if theirs[0] == "done":
+        for table in theirs[2]:
+            assert mine[2][table] == theirs[2][table], table
+
+
+# ---------------------------------------------------------------------------- hostile cases
+
+
+def _apart_at_two(conn: Conn, geoid: int) -> None:
+    """Geometry instant 2 of the first period: each side moves nodes apart, the parent changes property rows there."""
+    ids = _node_ids(conn, geoid, 1.0)
+    _move(conn, "e1", geoid, 1.0, 2.0, [ids[i] for i in NORTH], CHILD_SHIFT)
+    _move(conn, "DEFAULT", geoid, 1.0, 2.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
+    _sql(
+        conn,
+        "DEFAULT",
+        "UPDATE evolving_cellpros SET porosity = porosity * 3 WHERE _geoid = %s AND _timem = 1 AND _timet = 2"
+        " AND _idx = ANY(%s)",
+        (geoid, [ids[i] for i in SOUTH]),
+    )
+
+
+@pytest.mark.parametrize("revoked", ["DELETE", "INSERT, UPDATE, DELETE"])
+def test_a_property_view_the_role_may_not_write_is_refused_as_in_python_and_nothing_is_written(
+    conn: Conn, periods: int, db_dsn: str, revoked: str
+) -> None:
+    from tests.roles import login_roles
+
+    _apart_at_two(conn, periods)
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute(f"REVOKE {revoked} ON public.evolving_cellpros FROM tgsis_editor")
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        session = made.connect("ed")
+        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
+        conn.commit()
+
+        def outcome(run: Any) -> tuple[Any, ...]:
+            try:
+                with session.transaction(force_rollback=True):
+                    return ("done", int(run()))
+            except (psycopg.Error, tgsis.Error) as exc:
+                return ("refused", exc.sqlstate)
+            finally:
+                session.rollback()
+                conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+                conn.commit()
+
+        theirs = outcome(lambda: tgsis.merge_version(session, "e1"))
+        mine = outcome(lambda: session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0])  # type: ignore[index]
+        assert everything(conn) == before
+        conn.commit()
+        assert theirs == ("refused", "42501"), theirs
+        assert mine == theirs, (revoked, theirs, mine)
+
+
+def test_solved_regions_of_geometry_instants_kept_by_pg_dump_and_restore_then_merged_in_psql(
+    conn: Conn, periods: int, db_dsn: str, pg: Any, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+    from tests.test_sql_merge_write import _outcome
+
+    _conflict_at_two(conn, periods)
+    solve(conn, "e1", periods, "child")
+    theirs, _ = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    for fmt in ("plain", "custom"):
+        with _restored(pg, _bindir_of(pg), db_dsn, fmt, tmp_path) as dsn, psycopg.connect(dsn) as restored:
+            mine = _outcome(restored, lambda: int(restored.execute("SELECT tgsis.merge_version('e1')").fetchone()[0]))  # type: ignore[index]  # noqa: B023
+            assert mine[0] == "done", mine
+            assert mine[1] == theirs[1]
+            for table in theirs[2]:
+                assert mine[2][table] == theirs[2][table], (fmt, table)
+
+
+@pytest.mark.parametrize("solution", ["parent", "child", "base"])
+def test_psql_is_told_what_a_solution_of_a_geometry_instant_discards_as_python_says_it(
+    conn: Conn, periods: int, solution: str
+) -> None:
+    _conflict_at_two(conn, periods)
+    solve(conn, "e1", periods, solution)
+    with conn.transaction(force_rollback=True):
+        (merged,) = tgsis.merge_version(conn, "e1").objects
+    expected = [
+        f"region {d.region} at geometry instant 2 of the period starting at 1: {d.solution} discards the {d.side}'s"
+        f" edit there: {d.vertices} vertices, {d.cells} cells, largest displacement {d.max_displacement:.6g}"
+        for d in merged.discards
+    ]
+    assert expected
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    with conn.transaction(force_rollback=True):
+        conn.execute("SELECT tgsis.merge_version('e1')")
+    said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {periods} of version 'e1': region")]
+    assert said == expected
