@@ -443,3 +443,42 @@ def test_psql_is_told_what_a_solution_of_a_geometry_instant_discards_as_python_s
         conn.execute("SELECT tgsis.merge_version('e1')")
     said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {periods} of version 'e1': region")]
     assert said == expected
+
+
+def test_session_settings_do_not_change_what_psql_merges_by_region(conn: Conn, periods: int) -> None:
+    _conflict_at_two(conn, periods)
+    solve(conn, "e1", periods, "parent")
+    theirs, _ = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    conn.execute("SET extra_float_digits = -15")
+    conn.execute("SET search_path = public")
+    conn.execute("SET enable_hashjoin = off")
+    conn.execute("SET jit = off")
+    conn.commit()
+    _, mine = both_merges(conn, "e1")
+    conn.execute("RESET ALL")
+    conn.commit()
+    assert mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
+
+
+def test_an_average_of_a_region_of_a_geometry_instant_is_refused_by_name_in_psql_and_merged_by_python(
+    conn: Conn, periods: int
+) -> None:
+    """No rows are recorded for a region of a period (only its mesh): the psql merge names the region and the
+    command that merges it, and writes nothing; the Python merge applies the mesh."""
+    _conflict_at_two(conn, periods)
+    tgsis.find_conflicts(conn, "e1")
+    tgsis.resolve_region(conn, "e1", periods, 0, "average")
+    conn.commit()
+    before = everything(conn)
+    conn.rollback()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "done", theirs
+    assert mine[:2] == ("refused", "TG302"), mine
+    assert "region 0 at geometry instant 2 of the period starting at 1 solved average with its mesh only" in mine[2]
+    assert "tgsis version merge e1" in mine[2]
+    assert everything(conn) == before
+    conn.rollback()
