@@ -482,3 +482,50 @@ def test_an_average_of_a_region_of_a_geometry_instant_is_refused_by_name_in_psql
     assert "tgsis version merge e1" in mine[2]
     assert everything(conn) == before
     conn.rollback()
+
+
+def test_two_evolving_surfaces_merged_by_region_in_one_psql_merge_one_solved_then_both(conn: Conn) -> None:
+    """Two evolving surfaces with a conflict at a geometry instant each (the work tables of the first reused by
+    the second): one solved, the merge refuses the other by name; both solved, both merge in psql as in Python."""
+    first = make_periods(conn)
+    second = tgsis.insert_feature(conn, "evolving", EvolvingSurface([_period(FIRST, 0), _period(SECOND, 2)]))
+    conn.commit()
+    tgsis.create_version(conn, "e2")
+    conn.commit()
+    for geoid in (first, second):
+        ids = _node_ids(conn, geoid, 1.0)
+        _move(conn, "e2", geoid, 1.0, 2.0, [ids[i] for i in NORTH], CHILD_SHIFT)
+        _move(conn, "DEFAULT", geoid, 1.0, 2.0, [ids[i] for i in NORTH[:SIDE]], PARENT_SHIFT)
+    conn.execute("SELECT FROM tgsis.find_conflicts('e2')")
+    conn.execute("SELECT tgsis.resolve_region('e2', 'feature', %s, 0, 'child')", (str(first),))
+    conn.commit()
+    theirs, mine = both_merges(conn, "e2")
+    assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
+    assert f"feature {second}: region 0 at geometry instant 2.0 of the period starting at 1.0 unsolved" in mine[2]
+    conn.execute("SELECT tgsis.resolve_region('e2', 'feature', %s, 0, 'parent')", (str(second),))
+    conn.commit()
+    assert_same_merge(conn, "e2")
+
+
+@pytest.mark.parametrize(
+    "statement",
+    ["WITH m AS (SELECT tgsis.refresh_version('e1') AS n) SELECT n FROM m", "SELECT pg_temp.merge_it('e1')"],
+    ids=["cte", "function"],
+)
+def test_a_psql_merge_by_region_in_a_cte_or_a_function_writes_what_python_writes(
+    conn: Conn, periods: int, statement: str
+) -> None:
+    from tests.test_sql_merge_write import _outcome
+
+    _conflict_at_two(conn, periods)
+    solve(conn, "e1", periods, "child")
+    theirs, _ = both_merges(conn, "e1", "refresh" if "refresh" in statement else "merge")
+    conn.execute(
+        "CREATE FUNCTION pg_temp.merge_it(v text) RETURNS bigint LANGUAGE sql AS $$ SELECT tgsis.merge_version(v) $$"
+    )
+    conn.commit()
+    mine = _outcome(conn, lambda: int(conn.execute(statement).fetchone()[0]))  # type: ignore[index]
+    assert theirs[0] == mine[0] == "done", mine
+    assert mine[1] == theirs[1]
+    for table in theirs[2]:
+        assert mine[2][table] == theirs[2][table], table
