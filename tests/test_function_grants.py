@@ -277,7 +277,7 @@ _MERGE_INTERNALS = {
     "tgsis.merge_number_text(double precision)": False,
     "tgsis.merge_regions_in_sql(text,text,boolean)": False,
     "tgsis.notice_discards(text,text,text,text)": False,
-    "tgsis.mesh_merge_work(text,bigint,double precision)": True,  # run by tgsis.mesh_merge_regions, as its caller
+    "tgsis.mesh_merge_work(text,bigint,double precision,double precision)": True,  # run by tgsis.mesh_merge_regions, as its caller
     "tgsis.region_merge_refusal(text,bigint)": True,  # asked by tgsis.mesh_merge_work
     "tgsis.require_merge_privileges(text,text,boolean)": False,
     "tgsis.slice_only_edits(text,bigint,text)": True,  # docs/versioning.md shows it to a tgsis role

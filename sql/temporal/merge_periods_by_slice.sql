@@ -37,11 +37,23 @@
 -- leaves unsolved too (a period or geometry instant removed on one side and
 -- changed on the other, added on both sides differently, a period's topology
 -- changed on both sides differently, a per-instant property changed on both
--- sides, attributes changed on both sides, deleted on one side). Refused
--- (TG302, nothing written, the hint naming `tgsis version merge NAME`) what
--- only the Python client merges: a geometry instant both sides changed
--- differently (its regions), one only the version changed where a row no
--- side changed differs in its bits between parent and version. 42501 for a
+-- sides, attributes changed on both sides, deleted on one side), and for a
+-- conflicting region of a geometry instant without a solution. A geometry
+-- instant both sides changed differently (R) merges by its regions, as
+-- model 2's instant (tgsis.merge_instant_by_region with p_timem: the region
+-- engine on that slice, each region the rows of the side that changed it or
+-- of its parent, child or base solution, the parent's elsewhere; the
+-- discards said in NOTICEs), then the one-topology check. Refused (TG302,
+-- nothing written, the hint naming `tgsis version merge NAME`) what only the
+-- Python client merges: a region of a geometry instant solved average or
+-- manual, a geometry instant whose version's new ids would be renumbered,
+-- one only the version changed where a row no side changed differs in its
+-- bits between parent and version. p_action 'regions'
+-- (tgsis.instants_merge_regions): the analysis alone, nothing written, no
+-- right to write asked: 0 with the slices classified in
+-- pg_temp.tgsis_mp_slice, NULL for an object-level conflict or when the
+-- slices without a conflicting region already give a period two topologies
+-- (tgsis._merge_slices.fixed_period_refusal). 42501 for a
 -- role that may not read the class, change it or write the rows through
 -- their view (tgsis.check_merge_table_write), TG002 for one that may not
 -- write in the version. In sql/temporal/ for tgsis.check_period_continuity;
@@ -86,6 +98,11 @@ DECLARE
     v_fcols    text[];
     v_pros     tgsis.versioned_tables;
     v_pcols    text[];
+    v_plan     jsonb;
+    v_notes    text[] := '{}';
+    v_count    bigint;
+    v_m        float8;
+    v_t        float8;
 BEGIN
     SELECT * INTO v_sets
       FROM tgsis.merge_sliced_sets(p_version, p_geoid, 'EVOLVING', 'an evolving surface (model 3)', 'period by period');
@@ -302,13 +319,51 @@ BEGIN
     IF EXISTS (SELECT FROM pg_temp.tgsis_mp_slice s WHERE s.src = 'X') THEN
         RETURN NULL;  -- removed on one side and changed on the other, added on both differently, topology on both
     END IF;
-    SELECT string_agg(format('(%s, %s)', s.m, s.t), ', ' ORDER BY s.m, s.t) INTO v_why
-      FROM pg_temp.tgsis_mp_slice s WHERE s.src = 'R';
-    IF v_why IS NOT NULL THEN
-        RAISE EXCEPTION '%: geometry instants (timem, timet) % were changed both in the version and in its parent, differently: their regions are merged by the Python client',
-                v_refused, v_why
-            USING ERRCODE = 'TG302', HINT = v_hint;
-    END IF;
+
+    -- a geometry instant both sides changed differently (R): merged by region as merge3 merges it
+    -- (tgsis.merge_instant_by_region on that slice, as for an instant of model 2: its regions, each taken from the
+    -- side that changed it or from the solution recorded for it, the parent's rows elsewhere); its merged rows
+    -- taken from the states' rows read above, the keys the engine did not read (their rows the same stored rows in
+    -- the three states) the parent's. A conflicting region without a solution: unsolved (the analysis alone,
+    -- p_action 'regions': the slice is left out of the one-topology check, as fixed_period_refusal leaves it out)
+    FOR v_m, v_t IN SELECT s.m, s.t FROM pg_temp.tgsis_mp_slice s WHERE s.src = 'R' ORDER BY s.m, s.t LOOP
+        v_plan := tgsis.merge_instant_by_region(p_version, p_geoid, v_t, v_refused, v_hint, v_m);
+        IF v_plan IS NULL AND p_action = 'regions' THEN
+            UPDATE pg_temp.tgsis_mp_slice s SET src = 'U' WHERE s.m = v_m AND s.t = v_t;
+            CONTINUE;
+        ELSIF v_plan IS NULL THEN
+            RETURN NULL;  -- a conflicting region without a solution: the merge refuses it (TG302)
+        END IF;
+        -- (the version's new ids renumbered: both sides added elements to the period, alike; not merged here)
+        SELECT string_agg(format('%s %s', CASE x ->> 0 WHEN 'v' THEN 'node' ELSE 'triangle' END, x ->> 3), ', ')
+          INTO v_why
+          FROM jsonb_array_elements(v_plan -> 'rows') AS x WHERE x ->> 2 = '4' AND x ->> 1 <> x ->> 3;
+        IF v_why IS NOT NULL THEN
+            RAISE EXCEPTION '%: the version''s new % at geometry instant % of the period starting at % would be renumbered (merged by the Python client)',
+                    v_refused, v_why, v_t, v_m
+                USING ERRCODE = 'TG302', HINT = v_hint;
+        END IF;
+        v_notes := v_notes || ARRAY(SELECT n FROM jsonb_array_elements_text(v_plan -> 'notes') AS n);
+        INSERT INTO pg_temp.tgsis_mp_new
+        SELECT e.*
+          FROM jsonb_array_elements(v_plan -> 'rows') AS x
+          JOIN pg_temp.tgsis_mp_el e ON e.kind = x ->> 0 AND e.st = (x ->> 2)::smallint AND e.m = v_m AND e.t = v_t
+                                    AND e.id = (x ->> 3)::bigint;
+        GET DIAGNOSTICS v_count = ROW_COUNT;
+        IF v_count <> jsonb_array_length(v_plan -> 'rows') THEN  -- (both read the keys that changed: never)
+            RAISE EXCEPTION '%: the merged rows of geometry instant % of the period starting at % are not among the rows read',
+                    v_refused, v_t, v_m
+                USING ERRCODE = 'XX000';
+        END IF;
+        INSERT INTO pg_temp.tgsis_mp_new
+        SELECT e.*
+          FROM pg_temp.tgsis_mp_el e
+         WHERE e.st = 2 AND e.m = v_m AND e.t = v_t
+           AND NOT EXISTS (SELECT FROM jsonb_array_elements(v_plan -> 'rows') AS x WHERE x ->> 0 = e.kind AND (x ->> 1)::bigint = e.id)
+           AND (SELECT count(*) FROM pg_temp.tgsis_mp_el o
+                 WHERE o.kind = e.kind AND o.m = e.m AND o.t = e.t AND o.id = e.id
+                   AND o.gbits = e.gbits AND o.pbits = e.pbits) = 3;
+    END LOOP;
 
     -- 5. the merged elements: the chosen side's rows (a slice the side lacks: none); M: the version's rows of the
     -- elements it changed (as merge3 compares them), the parent's elsewhere
@@ -321,7 +376,7 @@ BEGIN
          GROUP BY e.kind, e.m, e.t, e.id)
     SELECT e.*
       FROM pg_temp.tgsis_mp_slice s
-      JOIN pg_temp.tgsis_mp_el e ON e.m = s.m AND e.t = s.t
+      JOIN pg_temp.tgsis_mp_el e ON e.m = s.m AND e.t = s.t AND s.src IN ('P', 'C', 'M')
       LEFT JOIN pv ON pv.kind = e.kind AND pv.m = e.m AND pv.t = e.t AND pv.id = e.id
      WHERE e.st = CASE s.src WHEN 'P' THEN 2 WHEN 'C' THEN 4
                              ELSE CASE WHEN pv.b IS DISTINCT FROM pv.c THEN 4 ELSE 2 END END;
@@ -337,7 +392,7 @@ BEGIN
                    min(e.gbits || '|' || e.pbits) FILTER (WHERE e.st = 4) AS cbits
               FROM pg_temp.tgsis_mp_el e JOIN pg_temp.tgsis_mp_slice s ON s.m = e.m AND s.t = e.t AND s.src = 'M'
              GROUP BY e.kind, e.m, e.t, e.id) AS pv
-     WHERE pv.b IS NOT DISTINCT FROM pv.c AND pv.pbits IS DISTINCT FROM pv.cbits;
+     WHERE pv.b IS NOT DISTINCT FROM pv.c AND pv.pbits IS DISTINCT FROM pv.cbits AND p_action <> 'regions';
     IF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%: rows the version did not change differ in their bits from the parent''s (%): which side''s rows the merge keeps hangs on its regions',
                 v_refused, v_why
@@ -354,12 +409,14 @@ BEGIN
                                                    ',' ORDER BY n.kind, n.id)), '') AS sig
                       FROM pg_temp.tgsis_mp_slice s
                       LEFT JOIN pg_temp.tgsis_mp_new n ON n.m = s.m AND n.t = s.t
-                     WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic ELSE true END
+                     WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic WHEN 'U' THEN false ELSE true END
                      GROUP BY s.m, s.t) AS g
             WINDOW w AS (PARTITION BY g.m ORDER BY g.t)) AS d
      WHERE d.sig <> d.firstsig
      ORDER BY d.m, d.t LIMIT 1;
-    IF v_why IS NOT NULL THEN
+    IF v_why IS NOT NULL AND p_action = 'regions' THEN
+        RETURN NULL;  -- no solution merges it (tgsis._merge_slices.fixed_period_refusal): no regions
+    ELSIF v_why IS NOT NULL THEN
         RAISE EXCEPTION '%', v_why
             USING ERRCODE = 'TG308', HINT = 'tgsis.resolve_conflict solves it as a whole object (parent, child or manual)';
     END IF;
@@ -369,7 +426,9 @@ BEGIN
     SELECT t.* INTO v_pros FROM tgsis.versioned_tables t
      WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.protablename;
     IF FOUND AND jsonb_array_length(v_class.instant_properties) > 0 THEN
-        PERFORM tgsis.check_merge_table_write(v_pros, 'SELECT', p_geoid);  -- the Python merge SELECTs the class's view
+        IF p_action <> 'regions' THEN
+            PERFORM tgsis.check_merge_table_write(v_pros, 'SELECT', p_geoid);  -- the Python merge SELECTs the class's view
+        END IF;
         v_pcols := ARRAY(SELECT e ->> 'name' FROM jsonb_array_elements(v_class.instant_properties) AS e);
         FOR v_attr IN SELECT * FROM tgsis.merge_instant_rows(v_pros, p_geoid, ARRAY['_timem', '_timet'], v_pcols,
                                                              v_base, v_pset, v_cset) LOOP
@@ -379,6 +438,13 @@ BEGIN
             INSERT INTO pg_temp.tgsis_mp_prow VALUES (v_attr.key[1], v_attr.key[2], v_attr.merged, v_attr.version);
         END LOOP;
     END IF;
+
+    IF p_action = 'regions' THEN  -- the analysis only (tgsis.instants_merge_regions reads tgsis_mp_slice)
+        RETURN 0;
+    END IF;
+    FOREACH v_why IN ARRAY v_notes LOOP  -- what the solutions discard, said before it is written
+        RAISE NOTICE 'feature % of version %: %', p_geoid, quote_literal(p_version), v_why;
+    END LOOP;
 
     -- the parent's edits of the attributes (geometry row, feature row), as tgsis.merge_mesh_by_region brings them
     SELECT a.p_views, a.p_keys, a.p_sets, a.p_fcols INTO v_aview, v_akey, v_aset, v_fcols
@@ -477,4 +543,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.merge_periods_by_slice(text, text, bigint) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.merge_periods_by_slice(text, text, bigint) IS
-    'merge one model-3 feature (an evolving surface) changed both in a version and in its parent period by period, geometry instant by geometry instant, in SQL, exactly as the Python merge does, when each period and geometry instant was changed on one side only or alike on both: written into the version by a keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict (the merge refuses it), TG308 for periods whose merged geometry instants would not share one topology, TG302 for what only the Python client merges (a geometry instant both sides changed differently); returns the rows written';
+    'merge one model-3 feature (an evolving surface) changed both in a version and in its parent period by period, geometry instant by geometry instant, in SQL, exactly as the Python merge does, a geometry instant both sides changed by its regions (parent, child, base solutions): written into the version by a keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict or an unsolved region (the merge refuses it), TG308 for periods whose merged geometry instants would not share one topology, TG302 for what only the Python client merges (average or manual solutions of a region of a period); p_action regions: the analysis only; returns the rows written';

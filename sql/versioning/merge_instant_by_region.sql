@@ -21,8 +21,13 @@
 -- TG100: the version's new ids cannot be renumbered within bigint), as the Python merge refuses it. The
 -- work tables are made in a subtransaction
 -- rolled back before it returns: neither they nor their locks outlive the call.
+-- p_timem (model 3, tgsis.merge_periods_by_slice): the same for the geometry instant p_times of the
+-- topology period starting at p_timem (the engine on that slice, the stored regions with that times and
+-- timem); a region of it solved average or manual is refused (TG302): no rows are recorded for it, the
+-- Python client applies its mesh.
 -- extra_float_digits is pinned: floats go through jsonb as their exact text.
-CREATE FUNCTION tgsis.merge_instant_by_region(p_version text, p_geoid bigint, p_times float8, p_refused text, p_hint text)
+CREATE FUNCTION tgsis.merge_instant_by_region(p_version text, p_geoid bigint, p_times float8, p_refused text, p_hint text,
+                                              p_timem float8 DEFAULT NULL)
 RETURNS jsonb
 LANGUAGE plpgsql
 VOLATILE
@@ -36,11 +41,13 @@ DECLARE
     v_why      text;
     v_hint     text;
     v_unsolved boolean := false;
+    v_at       text := CASE WHEN p_timem IS NULL THEN format('instant %s', p_times)
+                            ELSE format('geometry instant %s of the period starting at %s', p_times, p_timem) END;
 BEGIN
     -- the work, in a subtransaction rolled back once the plan is in v_out. The block's body is not indented.
     BEGIN
     BEGIN
-        PERFORM tgsis.mesh_merge_work(p_version, p_geoid, p_times);
+        PERFORM tgsis.mesh_merge_work(p_version, p_geoid, p_times, p_timem);
     EXCEPTION WHEN SQLSTATE 'TG100' THEN
         -- the instant does not merge by region (the version's new ids cannot be renumbered within bigint): the
         -- Python merge leaves the object unsolved and the merge refuses it (TG302), saying why
@@ -50,7 +57,7 @@ BEGIN
     -- the regions of the instant (numbered in the object), their sources, the merged rows and what the solutions
     -- discard, in the work tables tgsis.merge_mesh_by_region uses (pg_temp.tgsis_mw_*), which
     -- tgsis.merge_mesh_validity reads too
-    IF tgsis.merge_region_plan(v_id, p_version, p_geoid, v_key, p_times, p_refused, p_hint) THEN
+    IF tgsis.merge_region_plan(v_id, p_version, p_geoid, v_key, p_times, p_refused, p_hint, p_timem) THEN
         v_unsolved := true;
         RAISE EXCEPTION 'tgsis_mi_done';
     END IF;
@@ -64,6 +71,12 @@ BEGIN
     -- merge3's validity check of the merged instant, where a solution's rows can re-mesh it (the Python merge checks
     -- every slice it merges; regions taken each from one side, or parent/child/base solutions, cannot break it: a
     -- cell on a vertex the other side removed, or two new cells on the same vertices, join their regions)
+    IF p_timem IS NOT NULL AND EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
+        -- (tgsis.resolve_region records no rows for a region of a period: only the Python client applies its mesh)
+        RAISE EXCEPTION '%: a region of the % solved average or manual with rows (the Python client applies its mesh)',
+                p_refused, v_at
+            USING ERRCODE = 'TG302', HINT = p_hint;
+    END IF;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
     PERFORM tgsis.merge_mesh_validity(
         format('feature %s of class %s, instant %s', p_geoid, (SELECT i.classname FROM pg_temp.tgsis_mr_info i),
@@ -119,8 +132,8 @@ BEGIN
                                                     THEN ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(s.w) WITH ORDINALITY AS u(e, o)
                                                                 ORDER BY u.o)::text END
                                           FROM pg_temp.tgsis_mw_sc s WHERE s.inside AND NOT s.changed AND s.based) AS q), '[]'),
-               'notes', coalesce((SELECT jsonb_agg(format('region %s at instant %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
-                                                          n.region, p_times, n.solution, n.side, n.nv, n.nc, tgsis.merge_number_text(n.d))
+               'notes', coalesce((SELECT jsonb_agg(format('region %s at %s: %s discards the %s''s edit there: %s vertices, %s cells, largest displacement %s',
+                                                          n.region, v_at, n.solution, n.side, n.nv, n.nc, tgsis.merge_number_text(n.d))
                                                    ORDER BY n.region, n.o)
                                     FROM pg_temp.tgsis_mw_notes n), '[]'))
       INTO v_out;
@@ -137,9 +150,9 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.merge_instant_by_region(text, bigint, float8, text, text) IS
-    'the merged rows of one instant of a model-2 feature both sides changed, by region (tgsis.mesh_merge_work on that instant; the solutions recorded for its conflicting regions), as jsonb {rows, notes} for tgsis.merge_instants_by_slice to write; NULL when a conflicting region has no solution; TG302 for stale stored regions, an average or manual solution recorded with its .npz only or whose rows are refused, an invalid merged instant';
+COMMENT ON FUNCTION tgsis.merge_instant_by_region(text, bigint, float8, text, text, float8) IS
+    'the merged rows of one instant of a model-2 feature (or, p_timem, one geometry instant of a period of a model-3 feature) both sides changed, by region (tgsis.mesh_merge_work on that instant; the solutions recorded for its conflicting regions), as jsonb {rows, notes} for tgsis.merge_instants_by_slice to write; NULL when a conflicting region has no solution; TG302 for stale stored regions, an average or manual solution recorded with its .npz only or whose rows are refused, an invalid merged instant';
 
 -- internal to the merges: reached only through the SECURITY DEFINER merge and refresh, as their owner; not
 -- executable by PUBLIC (tests/test_function_grants.py)
-REVOKE ALL ON FUNCTION tgsis.merge_instant_by_region(text, bigint, float8, text, text) FROM PUBLIC;
+REVOKE ALL ON FUNCTION tgsis.merge_instant_by_region(text, bigint, float8, text, text, float8) FROM PUBLIC;

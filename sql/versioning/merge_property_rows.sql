@@ -11,11 +11,12 @@
 -- values as tgsis.merge3 compares them: NaN equals NaN and a missing row),
 -- any other value as its text, NULL as NaN. nulls (tgsis.merge_value_text)
 -- is the text of a missing row. p_times (model 2): the rows of that instant only (_times), the
--- property tables of a surface at instants being keyed (_times, _idx). extra_float_digits is pinned:
+-- property tables of a surface at instants being keyed (_times, _idx); with p_timem (model 3) the rows of
+-- the geometry instant p_times of the period p_timem (_timem, _timet). extra_float_digits is pinned:
 -- exact floats.
 CREATE FUNCTION tgsis.merge_property_rows(p_t tgsis.versioned_tables, p_geoid bigint, p_since integer[],
                                           p_keys bigint[], p_base integer[], p_parent integer[], p_child integer[],
-                                          p_times float8 DEFAULT NULL)
+                                          p_times float8 DEFAULT NULL, p_timem float8 DEFAULT NULL)
 RETURNS TABLE (key bigint, seen integer, val text)
 LANGUAGE plpgsql
 VOLATILE
@@ -25,7 +26,8 @@ AS $$
 DECLARE
     v_canon text := (SELECT m.canon FROM tgsis.merge_value_text(p_t.schemaname, p_t.tablename) AS m);
     v_vis   text := '(v.revision = ANY (%1$s) AND NOT (v.revclosed AND v.lastrevs && %1$s))';
-    v_slice text := CASE WHEN p_times IS NOT NULL THEN format(' AND v._times = %L::float8', p_times) ELSE '' END;
+    v_slice text := CASE WHEN p_timem IS NOT NULL THEN format(' AND v._timem = %L::float8 AND v._timet = %L::float8', p_timem, p_times)
+                         WHEN p_times IS NOT NULL THEN format(' AND v._times = %L::float8', p_times) ELSE '' END;
 BEGIN
     IF v_canon IS NULL THEN
         RETURN;
@@ -54,10 +56,10 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8) IS
+COMMENT ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8, float8) IS
     'the property rows of one feature for the merge by region in SQL: the keys whose visibility can differ between the three sets (no keys given), or the rows of the keys given with where they are seen (1 base, 2 parent, 4 version) and their values as a canonical text';
 
 -- internal to the merge by region: not executable by PUBLIC; the tgsis roles run it through
 -- tgsis.mesh_merge_regions (which a reader may call directly, with its own rights) and the merge's functions
-REVOKE ALL ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8) FROM PUBLIC;
-GRANT EXECUTE ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8) TO tgsis_reader;
+REVOKE ALL ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8, float8) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8, float8) TO tgsis_reader;

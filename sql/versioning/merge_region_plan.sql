@@ -1,6 +1,7 @@
 -- tgsis.merge_region_plan(versionid, version, geoid, key, times, refused, hint): the merged state of one mesh (or one instant of it) from the region engine's work tables; true when it stays unsolved.
 -- The one plan both psql merges by region make (tgsis.merge_mesh_by_region for a model-1 mesh,
--- tgsis.merge_instant_by_region for an instant of a surface at instants, p_times), after
+-- tgsis.merge_instant_by_region for an instant of a surface at instants, p_times, or for a geometry
+-- instant p_times of the topology period p_timem of an evolving surface), after
 -- tgsis.mesh_merge_work has filled pg_temp.tgsis_mr_*: written once so that the two merge what
 -- the Python merge (merge3.apply_solutions) merges alike and a third (model 3) can call it too.
 -- It makes, ON COMMIT DROP, in the caller's subtransaction:
@@ -21,7 +22,7 @@
 -- regions of the slice are not its regions of now, or a region is solved average or manual with its
 -- .npz only. No subtransaction of its own; reads tgsis.conflict_regions as its caller's owner.
 CREATE FUNCTION tgsis.merge_region_plan(p_versionid integer, p_version text, p_geoid bigint, p_key text,
-                                        p_times float8, p_refused text, p_hint text)
+                                        p_times float8, p_refused text, p_hint text, p_timem float8 DEFAULT NULL)
 RETURNS boolean
 LANGUAGE plpgsql
 VOLATILE
@@ -29,12 +30,14 @@ SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_first integer;
-    v_at    text := CASE WHEN p_times IS NULL THEN '' ELSE format(' at instant %s', p_times) END;
+    v_at    text := CASE WHEN p_times IS NULL THEN ''
+                         WHEN p_timem IS NULL THEN format(' at instant %s', p_times)
+                         ELSE format(' at geometry instant %s of the period starting at %s', p_times, p_timem) END;
     v_why   text;
 BEGIN
     v_first := (SELECT min(r.region) FROM tgsis.conflict_regions r
                  WHERE r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = p_key
-                   AND r.times IS NOT DISTINCT FROM p_times);
+                   AND r.times IS NOT DISTINCT FROM p_times AND r.timem IS NOT DISTINCT FROM p_timem);
     -- the regions, numbered as tgsis.mesh_merge_regions numbers them (on from the slice's first stored one)
     CREATE TEMPORARY TABLE tgsis_mw_node ON COMMIT DROP AS
     SELECT n.kind, n.id, coalesce(v_first, 0) + (dense_rank() OVER (ORDER BY n.label) - 1)::integer AS region,
@@ -86,7 +89,7 @@ BEGIN
               FROM pg_temp.tgsis_mw_node d GROUP BY d.region) AS f
       LEFT JOIN tgsis.conflict_regions r
         ON r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = p_key
-       AND r.times IS NOT DISTINCT FROM p_times AND r.region = f.region;
+       AND r.times IS NOT DISTINCT FROM p_times AND r.timem IS NOT DISTINCT FROM p_timem AND r.region = f.region;
 
     IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.conflict) THEN
         IF v_first IS NULL THEN  -- no region of the slice stored (none could be solved): unsolved
@@ -96,7 +99,7 @@ BEGIN
         IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE NOT g.holds)
            OR (SELECT count(*) FROM tgsis.conflict_regions r
                 WHERE r.versionid = p_versionid AND r.objectclass = 'feature' AND r.objectkey = p_key
-                  AND r.times IS NOT DISTINCT FROM p_times) <> (SELECT count(*) FROM pg_temp.tgsis_mw_region) THEN
+                  AND r.times IS NOT DISTINCT FROM p_times AND r.timem IS NOT DISTINCT FROM p_timem) <> (SELECT count(*) FROM pg_temp.tgsis_mw_region) THEN
             RAISE EXCEPTION '%: its stored regions% are not the regions of its states now: their solutions do not hold',
                     p_refused, v_at
                 USING ERRCODE = 'TG302',
@@ -186,9 +189,9 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.merge_region_plan(integer, text, bigint, text, float8, text, text) IS
-    'the merged state of one mesh (p_times NULL) or one instant of a surface at instants from the region engine''s work tables (tgsis.mesh_merge_work): regions numbered in the object, their sources from the recorded solutions, the merged rows, what the solutions discard, in pg_temp.tgsis_mw_*; true when the object stays unsolved; TG302 for stale stored regions or an average or manual solution recorded with its .npz only';
+COMMENT ON FUNCTION tgsis.merge_region_plan(integer, text, bigint, text, float8, text, text, float8) IS
+    'the merged state of one mesh (p_times NULL), one instant of a surface at instants or one geometry instant (p_times) of a period (p_timem) of an evolving surface from the region engine''s work tables (tgsis.mesh_merge_work): regions numbered in the object, their sources from the recorded solutions, the merged rows, what the solutions discard, in pg_temp.tgsis_mw_*; true when the object stays unsolved; TG302 for stale stored regions or an average or manual solution recorded with its .npz only';
 
 -- internal to the merges: reached only through the SECURITY DEFINER merge and refresh, as their owner; not
 -- executable by PUBLIC (tests/test_function_grants.py)
-REVOKE ALL ON FUNCTION tgsis.merge_region_plan(integer, text, bigint, text, float8, text, text) FROM PUBLIC;
+REVOKE ALL ON FUNCTION tgsis.merge_region_plan(integer, text, bigint, text, float8, text, text, float8) FROM PUBLIC;

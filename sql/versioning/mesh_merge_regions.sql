@@ -40,7 +40,8 @@
 -- p_times: the regions of that instant of a model-2 feature (a surface at
 -- instants) the three states have, merge3's regions of that slice, numbered
 -- from 0 within it (tgsis.store_mesh_regions numbers them on through the
--- object's instants, as tgsis._merge_slices does).
+-- object's instants, as tgsis._merge_slices does). p_timem too: those of the geometry instant p_times of
+-- the topology period starting at p_timem of a model-3 feature (an evolving surface).
 -- The work is tgsis.mesh_merge_work's (its tables, in a subtransaction
 -- rolled back at the end: neither they nor their locks outlive the call);
 -- this is its summary. A role that may not read the
@@ -50,7 +51,8 @@
 -- one side, ...) too (TG100), as the Python reader refuses them. extra_float_digits is pinned: values are
 -- compared as text, floats exactly; client_min_messages too: dropping the
 -- work tables of an earlier call says nothing.
-CREATE FUNCTION tgsis.mesh_merge_regions(p_version text, p_geoid bigint, p_times float8 DEFAULT NULL)
+CREATE FUNCTION tgsis.mesh_merge_regions(p_version text, p_geoid bigint, p_times float8 DEFAULT NULL,
+                                         p_timem float8 DEFAULT NULL)
 RETURNS TABLE (region integer, conflict boolean, changed_by text, vertex_ids bigint[], cell_ids bigint[],
                parent_vertex_ids bigint[], parent_cell_ids bigint[], child_vertex_ids bigint[], child_cell_ids bigint[],
                bbox double precision[], parent_displacement double precision, child_displacement double precision,
@@ -70,7 +72,7 @@ BEGIN
     -- transaction ends: about 100 per call, and a find_conflicts over many meshes ran out of the shared
     -- lock table). The block's body is not indented.
     BEGIN
-    IF tgsis.mesh_merge_work(p_version, p_geoid, p_times) = 0 THEN  -- no region
+    IF tgsis.mesh_merge_work(p_version, p_geoid, p_times, p_timem) = 0 THEN  -- no region
         v_out := '[]';
         RAISE EXCEPTION 'tgsis_mr_done';
     END IF;
@@ -163,5 +165,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.mesh_merge_regions(text, bigint, float8) IS
-    'the regions of the three-way merge of a model-1 feature changed both in a version and in its parent, computed in SQL exactly as tgsis.merge3 finds them (ids per side, box, largest displacements, conflict); with p_times, those of that instant of a model-2 feature, numbered from 0 in the instant (the object numbers them on through its instants); TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
+COMMENT ON FUNCTION tgsis.mesh_merge_regions(text, bigint, float8, float8) IS
+    'the regions of the three-way merge of a model-1 feature changed both in a version and in its parent, computed in SQL exactly as tgsis.merge3 finds them (ids per side, box, largest displacements, conflict); with p_times, those of that instant of a model-2 feature, numbered from 0 in the instant (the object numbers them on through its instants); with p_timem too, those of that geometry instant of that period of a model-3 feature; TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';

@@ -47,6 +47,11 @@
 -- (the renumbering's fresh ids: Python's per-slice top_ids) of that instant alone; no GOCAD atoms, no
 -- part runs. The object-level refusals (tgsis.region_merge_refusal) are the caller's then: an instant
 -- the three states have, of an object merged instant by instant (tgsis.merge_instants_by_slice).
+-- p_timem with p_times (model 3, an evolving surface): the same for the geometry instant p_times of the
+-- topology period starting at p_timem, the slice tgsis._merge_slices merges there: the nodes' rows of
+-- tgsis.d4dvrtx at that geometry instant (their ids the vertex ids), the period's triangles
+-- (tgsis.d4dtrgl), the property rows keyed (_timem, _timet, _idx); the largest ids those of the geometry
+-- instant's nodes and of the period's triangles (Python's per-slice top_ids).
 -- The work tables (ON COMMIT DROP, dropped first if an earlier call left them):
 --   tgsis_mr_info   one row: version, parent, the three revision sets, the class, its cell table,
 --                   cell id column, vertices per cell, property tables, whether parts are runs;
@@ -65,7 +70,8 @@
 -- one side, ...) too (TG100), as the Python reader refuses them. extra_float_digits is pinned: values are
 -- compared as text, floats exactly; client_min_messages too: dropping the
 -- work tables of an earlier call says nothing.
-CREATE FUNCTION tgsis.mesh_merge_work(p_version text, p_geoid bigint, p_times float8 DEFAULT NULL)
+CREATE FUNCTION tgsis.mesh_merge_work(p_version text, p_geoid bigint, p_times float8 DEFAULT NULL,
+                                      p_timem float8 DEFAULT NULL)
 RETURNS integer
 LANGUAGE plpgsql
 VOLATILE
@@ -105,7 +111,9 @@ DECLARE
     v_x       integer;
     v_y       integer;
     v_obj     text := 'v.geoid = $1';
-    v_vtab    text := 'vrtx_ver';
+    v_cobj    text;
+    v_vsrc    text := 'tgsis.vrtx_ver';
+    v_csrc    text;
     v_atoms   text := '';
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
@@ -124,7 +132,17 @@ BEGIN
                 p_geoid, quote_literal(p_version)
             USING ERRCODE = 'TG300', HINT = format('SELECT * FROM tgsis.find_conflicts(%L) lists the objects changed on both sides', p_version);
     END IF;
-    IF p_times IS NOT NULL THEN  -- one instant of a surface at instants: the caller asked the object-level refusals
+    IF p_timem IS NOT NULL AND p_times IS NULL THEN
+        RAISE EXCEPTION 'tgsis.mesh_merge_work: the period % of feature % given without a geometry instant', p_timem, p_geoid
+            USING ERRCODE = '22023', HINT = 'give the geometry instant (timet) as p_times, the period (timem) as p_timem';
+    END IF;
+    IF p_timem IS NOT NULL THEN  -- one geometry instant of an evolving surface: the caller asked the object-level refusals
+        v_refusal := CASE WHEN (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid))
+                               IS DISTINCT FROM 'EVOLVING'
+                          THEN format('feature %s is not an evolving surface (model 3): it has no geometry instant %s of a period starting at %s',
+                                      p_geoid, p_times, p_timem) END;
+        v_refusal := coalesce(v_refusal, tgsis.object_merge_refusal(p_version, p_geoid));
+    ELSIF p_times IS NOT NULL THEN  -- one instant of a surface at instants: the caller asked the object-level refusals
         v_refusal := CASE WHEN (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid))
                                IS DISTINCT FROM 'INSTANTS'
                           THEN format('feature %s is not a surface at instants (model 2): it has no instant %s', p_geoid, p_times) END;
@@ -149,7 +167,17 @@ BEGIN
                      EXCEPT SELECT r FROM unnest(v_base) AS r WHERE r = ANY (v_parent.workingset) AND r = ANY (v_version.workingset)
                      ORDER BY 1);
     SELECT c.* INTO v_class FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_geoid);
-    IF p_times IS NOT NULL
+    IF p_timem IS NOT NULL
+       AND (SELECT count(*) FROM (VALUES (v_base), (v_parent.workingset), (v_version.workingset)) AS s (revs)
+             WHERE EXISTS (SELECT FROM tgsis.timet_ver v WHERE v.geoid = p_geoid AND v.timem = p_timem AND v.timet = p_times
+                              AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs))) < 3 THEN
+        RAISE EXCEPTION 'feature % does not merge by region at geometry instant % of the period starting at % in version %: the geometry instant is not in all three states (base, parent, version)',
+                p_geoid, p_times, p_timem, quote_literal(p_version)
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'A period or geometry instant added or removed on a side is taken from that side as a whole, or is an object-level conflict.',
+                  HINT = format('SELECT tgsis.merge_version(%L) merges it period by period', p_version);
+    END IF;
+    IF p_timem IS NULL AND p_times IS NOT NULL
        AND (SELECT count(*) FROM (VALUES (v_base), (v_parent.workingset), (v_version.workingset)) AS s (revs)
              WHERE EXISTS (SELECT FROM tgsis.times_ver v WHERE v.geoid = p_geoid AND v.times = p_times
                               AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs))) < 3 THEN
@@ -164,13 +192,26 @@ BEGIN
     v_k := CASE v_table WHEN 'point' THEN 1 WHEN 'segment' THEN 2 WHEN 'trgl' THEN 3 ELSE 4 END;
     IF p_times IS NULL THEN
         v_atoms := 'UNION SELECT v.vrtxid FROM tgsis.atom_ver v WHERE v.geoid = $1 AND %1$s';
-    ELSE  -- the slice: the instant's rows of the model-2 tables (no GOCAD atoms, no part runs there)
+    ELSIF p_timem IS NULL THEN  -- the slice: the instant's rows of the model-2 tables (no GOCAD atoms, no part runs there)
         v_table := 'times_trgl';
         v_cellid := 'trglid';
         v_k := 3;
-        v_vtab := 'times_vrtx_ver';
+        v_vsrc := 'tgsis.times_vrtx_ver';
         v_obj := format('v.geoid = $1 AND v.times = %L::float8', p_times);
+    ELSE  -- model 3: the period's nodes at the geometry instant (d4dvrtx), the period's triangles (d4dtrgl), their
+          -- node columns named as the other models' vertex columns (simple subqueries: planned as the tables)
+        v_table := 'd4dtrgl';
+        v_cellid := 'trglid';
+        v_k := 3;
+        v_vsrc := '(SELECT w.geoid, w.timem, w.timet, w.nodeid AS vrtxid, w.x, w.y, w.z, w.revision, w.revclosed, w.lastrevs
+                      FROM tgsis.d4dvrtx_ver w)';
+        v_csrc := '(SELECT w.geoid, w.timem, w.trglid, w.nodeid1 AS vrtxid1, w.nodeid2 AS vrtxid2, w.nodeid3 AS vrtxid3,
+                           w.revision, w.revclosed, w.lastrevs FROM tgsis.d4dtrgl_ver w)';
+        v_obj := format('v.geoid = $1 AND v.timem = %L::float8 AND v.timet = %L::float8', p_timem, p_times);
+        v_cobj := format('v.geoid = $1 AND v.timem = %L::float8', p_timem);
     END IF;
+    v_csrc := coalesce(v_csrc, format('tgsis.%I', v_table || '_ver'));
+    v_cobj := coalesce(v_cobj, v_obj);
     v_row := format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ') FROM generate_series(1, v_k) AS i));
     v_changed := '(v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))';
 
@@ -198,21 +239,21 @@ BEGIN
            v_parent.workingset AS parentset, v_version.workingset AS versionset, v_since AS since,
            v_class.classname AS classname, v_table AS simplex, v_cellid AS cellid, v_k AS k,
            v_vpt.schemaname AS vpschema, v_vpt.tablename AS vptable, v_cpt.schemaname AS cpschema,
-           v_cpt.tablename AS cptable, v_runs AS runs, p_times AS times;
+           v_cpt.tablename AS cptable, v_runs AS runs, p_times AS times, p_timem AS timem;
 
 
     -- 1. the keys of the rows some set sees otherwise than another ($2: the revisions that tell the sets apart)
-    EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM tgsis.%2$I v WHERE %3$s AND %1$s ' || v_atoms || ')',
-                   v_changed, v_vtab, v_obj)
+    EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM %2$s v WHERE %3$s AND %1$s ' || v_atoms || ')',
+                   v_changed, v_vsrc, v_obj)
        INTO v_vkeys USING p_geoid, v_since;
-    EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM tgsis.%2$I v WHERE %4$s AND %3$s)',
-                   v_cellid, v_table || '_ver', v_changed, v_obj)
+    EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM %2$s v WHERE %4$s AND %3$s)',
+                   v_cellid, v_csrc, v_changed, v_cobj)
        INTO v_ckeys USING p_geoid, v_since;
     IF v_vcanon IS NOT NULL THEN
-        v_vkeys := v_vkeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_vpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times) AS r);
+        v_vkeys := v_vkeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_vpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times, p_timem) AS r);
     END IF;
     IF v_ccanon IS NOT NULL THEN
-        v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times) AS r);
+        v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times, p_timem) AS r);
     END IF;
     IF v_runs THEN  -- the cells of a part run some set sees otherwise may change their part
         EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM tgsis.%2$I c
@@ -230,8 +271,8 @@ BEGIN
     CREATE TEMPORARY TABLE tgsis_mr_v (id bigint NOT NULL, st smallint NOT NULL, x float8, y float8, z float8,
                                        val text, ref bigint) ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_v (id, st, x, y, z)
-                    SELECT v.vrtxid, s.st, v.x, v.y, v.z FROM tgsis.%2$I v, (VALUES (1::smallint), (2), (4)) AS s (st)
-                     WHERE %3$s AND v.vrtxid = ANY ($5) AND %1$s', v_seen, v_vtab, v_obj)
+                    SELECT v.vrtxid, s.st, v.x, v.y, v.z FROM %2$s v, (VALUES (1::smallint), (2), (4)) AS s (st)
+                     WHERE %3$s AND v.vrtxid = ANY ($5) AND %1$s', v_seen, v_vsrc, v_obj)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset, v_vkeys;
     IF p_times IS NULL THEN
     EXECUTE format('UPDATE pg_temp.tgsis_mr_v m SET ref = v.refid
@@ -241,15 +282,15 @@ BEGIN
     END IF;
     IF v_vcanon IS NOT NULL THEN
         UPDATE pg_temp.tgsis_mr_v m SET val = r.val
-          FROM tgsis.merge_property_rows(v_vpt, p_geoid, NULL, v_vkeys, v_base, v_parent.workingset, v_version.workingset, p_times) AS r
+          FROM tgsis.merge_property_rows(v_vpt, p_geoid, NULL, v_vkeys, v_base, v_parent.workingset, v_version.workingset, p_times, p_timem) AS r
          WHERE r.key = m.id AND r.seen & m.st <> 0;
         UPDATE pg_temp.tgsis_mr_v m SET val = v_vnull WHERE m.val IS NULL;
     END IF;
     CREATE TEMPORARY TABLE tgsis_mr_c (id bigint NOT NULL, st smallint NOT NULL, v bigint[] NOT NULL, val text, part bigint)
         ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_c (id, st, v)
-                    SELECT v.%1$I, s.st, %2$s FROM tgsis.%3$I v, (VALUES (1::smallint), (2), (4)) AS s (st)
-                     WHERE %5$s AND v.%1$I = ANY ($5) AND %4$s', v_cellid, v_row, v_table || '_ver', v_seen, v_obj)
+                    SELECT v.%1$I, s.st, %2$s FROM %3$s v, (VALUES (1::smallint), (2), (4)) AS s (st)
+                     WHERE %5$s AND v.%1$I = ANY ($5) AND %4$s', v_cellid, v_row, v_csrc, v_seen, v_cobj)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset, v_ckeys;
     IF v_runs THEN
         EXECUTE format('UPDATE pg_temp.tgsis_mr_c m SET part = v.part
@@ -259,7 +300,7 @@ BEGIN
     END IF;
     IF v_ccanon IS NOT NULL THEN
         UPDATE pg_temp.tgsis_mr_c m SET val = r.val
-          FROM tgsis.merge_property_rows(v_cpt, p_geoid, NULL, v_ckeys, v_base, v_parent.workingset, v_version.workingset, p_times) AS r
+          FROM tgsis.merge_property_rows(v_cpt, p_geoid, NULL, v_ckeys, v_base, v_parent.workingset, v_version.workingset, p_times, p_timem) AS r
          WHERE r.key = m.id AND r.seen & m.st <> 0;
         UPDATE pg_temp.tgsis_mr_c m SET val = v_cnull WHERE m.val IS NULL;
     END IF;
@@ -270,12 +311,12 @@ BEGIN
     -- content of a parent's new row takes its id (the k-th of equal contents the k-th), a new id the parent
     -- uses for something else a fresh one above every id of the three states, in ascending order
     EXECUTE format('SELECT greatest((SELECT max(m.id) FROM pg_temp.tgsis_mr_v m),
-                                    (SELECT v.vrtxid FROM tgsis.%3$I v WHERE %4$s AND v.revision = ANY ($2)
+                                    (SELECT v.vrtxid FROM %3$s v WHERE %4$s AND v.revision = ANY ($2)
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.vrtxid DESC LIMIT 1)),
                            greatest((SELECT max(m.id) FROM pg_temp.tgsis_mr_c m),
-                                    (SELECT v.%1$I FROM tgsis.%2$I v WHERE %4$s AND v.revision = ANY ($2)
+                                    (SELECT v.%1$I FROM %2$s v WHERE %5$s AND v.revision = ANY ($2)
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.%1$I DESC LIMIT 1))',
-                   v_cellid, v_table || '_ver', v_vtab, v_obj)
+                   v_cellid, v_csrc, v_vsrc, v_obj, v_cobj)
        INTO v_top_v, v_top_c USING p_geoid, v_base;
     BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
         CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
@@ -405,7 +446,7 @@ BEGIN
         -- (the cells first, MATERIALIZED: planned with the GROUP BY, the primary key's order by cell id made
         -- PostgreSQL 15 read every cell of the object through it rather than the BRIN's few ranges)
         EXECUTE format('WITH c AS MATERIALIZED (
-                            SELECT v.%1$I AS id, %2$s AS v FROM tgsis.%3$I v
+                            SELECT v.%1$I AS id, %2$s AS v FROM %3$s v
                              WHERE %5$s AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
                                AND %4$s)
                         INSERT INTO pg_temp.tgsis_mr_margin (id, v, sides)
@@ -414,7 +455,7 @@ BEGIN
                           CROSS JOIN LATERAL unnest(c.v) AS u (vid)
                           JOIN pg_temp.tgsis_mr_vx x ON x.id = u.vid AND (x.p_shape OR x.c_shape)
                          GROUP BY c.id, c.v',
-                       v_cellid, v_row, v_table || '_ver', tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'), v_obj)
+                       v_cellid, v_row, v_csrc, tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'), v_cobj)
            USING p_geoid, v_base, v_shape;
     END IF;
 
@@ -499,20 +540,20 @@ BEGIN
     -- for the boxes of the regions
     CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint, x float8, y float8, z float8) ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_vb
-             SELECT v.vrtxid, v.x, v.y, v.z FROM tgsis.%I v
+             SELECT v.vrtxid, v.x, v.y, v.z FROM %s v
               WHERE %s AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
                 AND v.vrtxid = ANY (ARRAY(SELECT n.id FROM pg_temp.tgsis_mr_node n WHERE n.kind = ''v''
                                           UNION SELECT unnest(g.v) FROM pg_temp.tgsis_mr_margin g
                                           UNION SELECT unnest(c.v) FROM pg_temp.tgsis_mr_c c
-                                          EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m))', v_vtab, v_obj)
+                                          EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m))', v_vsrc, v_obj)
        USING p_geoid, v_base;
     RETURN (SELECT count(*) FROM pg_temp.tgsis_mr_node);
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8) IS
-    'the work tables (pg_temp.tgsis_mr_*, left to the caller) of the three-way merge by region of a model-1 feature changed both in a version and in its parent: rows per state, renumbering, edits, footprints, region labels; with p_times, of that instant of a model-2 feature (its times_vrtx / times_trgl rows and property rows keyed (_times, _idx)); returns the number of footprint elements; TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
+COMMENT ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8, float8) IS
+    'the work tables (pg_temp.tgsis_mr_*, left to the caller) of the three-way merge by region of a model-1 feature changed both in a version and in its parent: rows per state, renumbering, edits, footprints, region labels; with p_times, of that instant of a model-2 feature (its times_vrtx / times_trgl rows and property rows keyed (_times, _idx)); with p_timem too, of that geometry instant of that period of a model-3 feature (d4dvrtx, d4dtrgl, property rows keyed (_timem, _timet, _idx)); returns the number of footprint elements; TG300 / TG100 for a feature not changed on both sides / that does not merge by region, 42501 for a class the role may not read';
 
 -- internal to the merges, not executable by PUBLIC (tests/test_function_grants.py); tgsis.mesh_merge_regions, which a tgsis role calls as itself, runs it
-REVOKE ALL ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8) FROM PUBLIC;
-GRANT EXECUTE ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8) TO tgsis_reader;
+REVOKE ALL ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8, float8) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION tgsis.mesh_merge_work(text, bigint, float8, float8) TO tgsis_reader;

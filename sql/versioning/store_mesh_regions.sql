@@ -9,9 +9,10 @@
 -- or when the feature does not merge by region (tgsis.region_merge_refusal,
 -- or mesh_merge_regions' TG100: new ids that cannot be renumbered within
 -- bigint), so that one such feature does not make find_conflicts fail.
--- A surface at instants (model 2): the rows of tgsis.instants_merge_regions (each with its
--- instant, numbered through the object), none for an object-level conflict, as the Python
--- find_conflicts stores them.
+-- A surface at instants (model 2) or an evolving surface (model 3): the rows of
+-- tgsis.instants_merge_regions (each with its slice: the instant or geometry instant, times, and the
+-- period, timem; numbered through the object), none for an object-level conflict (or a model-3 object
+-- no solution merges: TG308), as the Python find_conflicts stores them.
 -- Otherwise the rows of tgsis.mesh_merge_regions go in as found: a conflict
 -- unsolved, the others automatic. Returns the regions stored.
 CREATE FUNCTION tgsis.store_mesh_regions(p_version text, p_objectkey text)
@@ -34,21 +35,21 @@ BEGIN
         RETURN 0;
     END IF;
     v_instants := (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_objectkey::bigint))
-                  IS NOT DISTINCT FROM 'INSTANTS';
-    IF v_instants THEN  -- a surface at instants: the regions of its instants, numbered through the object
+                  IN ('INSTANTS', 'EVOLVING');
+    IF v_instants THEN  -- a surface at instants, an evolving surface: the regions of its slices, numbered through the object
         BEGIN
             INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
                                                 changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,
                                                 child_vertex_ids, child_cell_ids, bbox, parent_displacement,
-                                                child_displacement, solution, times)
+                                                child_displacement, solution, times, timem)
             SELECT v_row.versionid, 'feature', p_objectkey, m.region, v_row.childmark, v_row.parentmark, m.conflict,
                    m.changed_by, m.vertex_ids, m.cell_ids, m.parent_vertex_ids, m.parent_cell_ids, m.child_vertex_ids,
                    m.child_cell_ids, m.bbox, m.parent_displacement, m.child_displacement,
-                   CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END, m.times
+                   CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END, m.times, m.timem
               FROM tgsis.instants_merge_regions(p_version, p_objectkey::bigint) AS m;
             GET DIAGNOSTICS v_count = ROW_COUNT;
         EXCEPTION WHEN SQLSTATE 'TG100' OR SQLSTATE 'TG302' THEN
-            -- an object-level conflict, new ids beyond bigint, non-finite coordinates: no regions, as in Python
+            -- an object-level conflict (or TG308), new ids beyond bigint, non-finite coordinates: no regions, as in Python
             RETURN 0;
         END;
         RETURN v_count;

@@ -1,5 +1,6 @@
 -- tgsis.check_no_unsolved_conflicts(version, action): recompute a version's conflicts; TG302 naming the unsolved ones.
--- The unsolved regions of a surface at instants are named with their instant, as the Python merge names them.
+-- The unsolved regions of a surface at instants (an evolving surface) are named with their instant (geometry instant and
+-- period), as the Python merge names them.
 -- Its hint points meshes whose regions are stored (tgsis.conflict_regions) to the Python merge by
 -- region (tgsis version merge / refresh), which also applies average and manual solutions (the SQL
 -- merge by region, tgsis.merge_regions_in_sql, merges the others once their regions are solved).
@@ -28,14 +29,19 @@ BEGIN
          WHERE r.versionid = tgsis.version_id(p_version) AND k.solution = 'unsolved';
         -- the unsolved regions of the instants of surfaces at instants, named as the Python merge names them
         -- (`region 3 at instant 2.0 unsolved`)
-        SELECT string_agg(format('%s %s: region %s at instant %s unsolved', r.objectclass, r.objectkey, r.region,
-                                 CASE WHEN r.times = trunc(r.times) AND abs(r.times) < 1e16
-                                      THEN r.times::numeric::text || '.0' ELSE r.times::text END),
+        SELECT string_agg(format('%s %s: region %s at %s unsolved', r.objectclass, r.objectkey, r.region,
+                                 CASE WHEN r.timem IS NULL THEN 'instant ' ELSE 'geometry instant ' END
+                                 || CASE WHEN r.times = trunc(r.times) AND abs(r.times) < 1e16
+                                         THEN r.times::numeric::text || '.0' ELSE r.times::text END
+                                 || CASE WHEN r.timem IS NULL THEN ''
+                                         ELSE ' of the period starting at '
+                                              || CASE WHEN r.timem = trunc(r.timem) AND abs(r.timem) < 1e16
+                                                      THEN r.timem::numeric::text || '.0' ELSE r.timem::text END END),
                           '; ' ORDER BY r.objectclass, r.objectkey, r.region)
           INTO v_slices
           FROM tgsis.conflict_regions r JOIN tgsis.conflicts k USING (versionid, objectclass, objectkey)
          WHERE r.versionid = tgsis.version_id(p_version) AND k.solution = 'unsolved' AND r.solution = 'unsolved'
-           AND r.times IS NOT NULL AND r.timem IS NULL;
+           AND r.times IS NOT NULL;
         RAISE EXCEPTION '% of version % refused: % unsolved conflict(s): %', p_action, quote_literal(p_version), v_count,
                 v_list || coalesce('; ' || v_slices, '')
             USING ERRCODE = 'TG302',
