@@ -92,11 +92,6 @@ def test_the_python_and_sql_hints_map_to_cli_terms() -> None:
     assert foreign_terms("a DBA may run: in psql: GRANT tgsis_admin TO ana") == []
     assert foreign_terms("e.g. --fill-property porosity=0.2") == []  # a flag's NAME=VALUE is the command's syntax
     assert foreign_terms("pass porosity=0.2") == ["porosity="]
-    slice_rows = (
-        "give the mesh alone (the sixth argument) and merge with `tgsis version merge 'north edit'` or "
-        'tgsis.merge_version(conn, "north edit") in Python'
-    )
-    assert to_cli(slice_rows) == "give --mesh FILE, then tgsis version merge 'north edit'"
 
 
 # --------------------------------------------------------------------------- every hint written

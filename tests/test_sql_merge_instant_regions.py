@@ -787,9 +787,10 @@ def test_session_settings_do_not_change_what_a_manual_solution_of_an_instant_wri
         assert mine[2][table] == theirs[2][table], table
 
 
-def test_rows_are_recorded_for_a_region_of_an_instant_and_refused_for_one_of_a_period(conn: Conn) -> None:
-    """Model 2: the Python client records an average's rows beside its .npz (the psql merge applies them). Model 3
-    (a geometry instant of a period): the .npz alone, and rows a psql user gives there are refused (TG100)."""
+def test_rows_are_recorded_for_a_region_of_a_geometry_instant_of_a_period_too(conn: Conn) -> None:
+    """Model 3 (a geometry instant of a period): the Python client records an average's rows beside its .npz,
+    keyed by the slice's ids (node ids, triangle ids), as for an instant of model 2; a psql user's resolve_region
+    with rows keeps them too."""
     from tgsis.db.regions import _sql_rows
 
     evolving = make_evolving(conn)
@@ -800,21 +801,24 @@ def test_rows_are_recorded_for_a_region_of_an_instant_and_refused_for_one_of_a_p
     state = tgsis.resolve_region(conn, "e1", evolving, 0, "average").state
     conn.commit()
     assert state is not None
-    recorded = conn.execute(
-        "SELECT timem IS NOT NULL, solution, solution_mesh IS NOT NULL, solution_vertex_ids IS NULL"
-        " FROM tgsis.conflict_regions WHERE objectkey = %s AND region = 0",
-        (str(evolving),),
-    ).fetchall()
-    assert recorded == [(True, "average", True, True)]
     rows = _sql_rows(state)
     assert rows is not None
-    with pytest.raises(psycopg.Error, match="geometry instant 1 of period") as err:
-        conn.execute(
-            "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
-            " %s::text[], %s::float8[], %s::text[], %s::float8[])",
-            (str(evolving), tgsis.db.regions.state_to_npz(state), *rows),
-        )
-    assert err.value.sqlstate == "TG100"
+    query = (
+        "SELECT timem, times, solution, solution_mesh IS NOT NULL, solution_vertex_ids, solution_vertices,"
+        " solution_cell_ids, solution_cells, solution_vertex_columns, solution_vertex_values,"
+        " solution_cell_columns, solution_cell_values FROM tgsis.conflict_regions WHERE objectkey = %s AND region = 0"
+    )
+    recorded = conn.execute(query, (str(evolving),)).fetchall()
+    assert recorded == [(1.0, 1.0, "average", True, *rows)], recorded
+    nodes = conn.execute("SELECT nodeid FROM tgsis.node WHERE geoid = %s AND timem = 1", (evolving,)).fetchall()
+    assert set(rows[0]) <= {n for (n,) in nodes}  # the period's node ids
+    conn.execute(
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(evolving), tgsis.db.regions.state_to_npz(state), *rows),
+    )
+    recorded = conn.execute(query, (str(evolving),)).fetchall()
+    assert recorded == [(1.0, 1.0, "manual", True, *rows)], recorded
     conn.rollback()
 
 

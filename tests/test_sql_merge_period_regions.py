@@ -13,9 +13,11 @@ period).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from typing import Any
 
+import numpy as np
 import psycopg
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -464,24 +466,36 @@ def test_session_settings_do_not_change_what_psql_merges_by_region(conn: Conn, p
         assert mine[2][table] == theirs[2][table], table
 
 
-def test_an_average_of_a_region_of_a_geometry_instant_is_refused_by_name_in_psql_and_merged_by_python(
-    conn: Conn, periods: int
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_an_average_of_a_region_of_a_geometry_instant_merges_in_psql_as_in_python(
+    conn: Conn, periods: int, action: str
 ) -> None:
-    """No rows are recorded for a region of a period (only its mesh): the psql merge names the region and the
-    command that merges it, and writes nothing; the Python merge applies the mesh."""
+    """The rows of an average of a region of a period's geometry instant are recorded with its mesh (keyed by the
+    period's node and triangle ids): the psql merge applies them as the Python merge applies the mesh, row for row,
+    and says what the average discards as Python says it."""
     _conflict_at_two(conn, periods)
     tgsis.find_conflicts(conn, "e1")
     tgsis.resolve_region(conn, "e1", periods, 0, "average")
     conn.commit()
-    before = everything(conn)
+    assert conn.execute(
+        "SELECT solution_vertex_ids IS NOT NULL FROM tgsis.conflict_regions WHERE objectkey = %s AND region = 0",
+        (str(periods),),
+    ).fetchall() == [(True,)]
     conn.rollback()
-    theirs, mine = both_merges(conn, "e1")
-    assert theirs[0] == "done", theirs
-    assert mine[:2] == ("refused", "TG302"), mine
-    assert "region 0 at geometry instant 2 of the period starting at 1 solved average with its mesh only" in mine[2]
-    assert "tgsis version merge e1" in mine[2]
-    assert everything(conn) == before
-    conn.rollback()
+    with conn.transaction(force_rollback=True):
+        (merged,) = tgsis.merge_version(conn, "e1").objects
+    expected = [
+        f"region {d.region} at geometry instant 2 of the period starting at 1: {d.solution} discards the {d.side}'s"
+        f" edit there: {d.vertices} vertices, {d.cells} cells, largest displacement {d.max_displacement:.6g}"
+        for d in merged.discards
+    ]
+    assert {d.side for d in merged.discards} == {"parent", "child"}
+    notices: list[str] = []
+    conn.add_notice_handler(lambda d: notices.append(str(d.message_primary)))
+    mine = assert_same_merge(conn, "e1", action)
+    assert mine[1] > 0
+    said = [n.split(": ", 1)[1] for n in notices if n.startswith(f"feature {periods} of version 'e1': region")]
+    assert said == expected
 
 
 def test_two_evolving_surfaces_merged_by_region_in_one_psql_merge_one_solved_then_both(conn: Conn) -> None:
@@ -529,3 +543,125 @@ def test_a_psql_merge_by_region_in_a_cte_or_a_function_writes_what_python_writes
     assert mine[1] == theirs[1]
     for table in theirs[2]:
         assert mine[2][table] == theirs[2][table], table
+
+
+# ---------------------------------------------------------------------------- average and manual of a geometry instant
+
+
+def _average_state(conn: Conn, geoid: int) -> Any:
+    """Region 0's average (geometry instant 2 of the period starting at 1), not recorded."""
+    _conflict_at_two(conn, geoid)
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    state = tgsis.resolve_region(conn, "e1", geoid, 0, "average").state
+    conn.rollback()
+    assert state is not None
+    return state
+
+
+def _record_in_sql(conn: Conn, geoid: int, state: Any) -> None:
+    """Record a manual state of region 0 as a psql user may: its .npz and its rows."""
+    from tgsis.db.regions import _sql_rows, state_to_npz
+
+    rows = _sql_rows(state)
+    assert rows is not None
+    conn.execute(
+        "SELECT FROM tgsis.resolve_region('e1', 'feature', %s, 0, 'manual', %s, %s, %s::float8[], %s, %s,"
+        " %s::text[], %s::float8[], %s::text[], %s::float8[])",
+        (str(geoid), state_to_npz(state), *rows),
+    )
+    conn.commit()
+
+
+@pytest.mark.parametrize("by", ["python", "psql"])
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_a_manual_mesh_of_a_region_of_a_geometry_instant_merges_in_psql_as_in_python(
+    conn: Conn, periods: int, action: str, by: str
+) -> None:
+    """A manual mesh of the region (its average, one node lifted 3 m and its values changed), recorded by the Python
+    client or by a psql user's resolve_region with its rows: both merges write the same rows."""
+    state = _average_state(conn, periods)
+    xyz = np.array(state.vertices, dtype=np.float64)
+    xyz[0, 2] += 3.0
+    values = {k: np.array(v, dtype=np.float64) for k, v in state.vertex_properties.items()}
+    for column in values.values():
+        column[0] += 0.125
+    manual = dataclasses.replace(state, vertices=xyz, vertex_properties=values)
+    if by == "python":
+        tgsis.resolve_region(conn, "e1", periods, 0, "manual", manual)
+        conn.commit()
+    else:
+        _record_in_sql(conn, periods, manual)
+    assert_same_merge(conn, "e1", action)
+
+
+def test_a_manual_mesh_that_re_meshes_one_geometry_instant_of_a_period_with_several_is_refused_as_in_python(
+    conn: Conn, periods: int
+) -> None:
+    """Dropping a triangle of the region no side changed at geometry instant 2 of a period with three: the merged
+    period would have two topologies, TG308 in both merges (the psql merge did not read that triangle at the other
+    geometry instants: what the solution did to it is compared), nothing written."""
+    state = _average_state(conn, periods)
+    stored = conn.execute(
+        "SELECT cell_ids, parent_cell_ids, child_cell_ids FROM tgsis.conflict_regions"
+        " WHERE versionid = tgsis.version_id('e1') AND objectkey = %s AND region = 0",
+        (str(periods),),
+    ).fetchone()
+    conn.rollback()
+    assert stored is not None
+    margin = sorted(set(stored[0]) - set(stored[1]) - set(stored[2]))
+    assert margin
+    keep = state.cell_ids != margin[0]
+    holed = dataclasses.replace(
+        state,
+        cell_ids=state.cell_ids[keep],
+        cells=state.cells[keep],
+        cell_properties={k: np.asarray(v)[keep] for k, v in state.cell_properties.items()},
+    )
+    tgsis.resolve_region(conn, "e1", periods, 0, "manual", holed)
+    conn.commit()
+    before = everything(conn)
+    conn.rollback()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "refused" and "a period has one topology" in theirs[2], theirs
+    assert mine[:2] == ("refused", "TG308"), mine
+    assert "period starting at 1" in mine[2] and "a period has one topology" in mine[2], mine[2]
+    assert everything(conn) == before
+
+
+def test_a_manual_mesh_that_makes_an_invalid_geometry_instant_is_refused_in_psql_as_in_python(
+    conn: Conn, periods: int
+) -> None:
+    """A manual mesh recorded from psql with a second triangle on the nodes of one of its triangles: merge3's
+    validity check refuses the merged geometry instant in both merges, naming the same nodes, nothing written."""
+    state = _average_state(conn, periods)
+    twin = int(state.cell_ids.max()) + 1000
+    broken = dataclasses.replace(
+        state,
+        cell_ids=np.append(state.cell_ids, twin),
+        cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
+        cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
+    )
+    _record_in_sql(conn, periods, broken)
+    before = everything(conn)
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[0] == "refused" and mine[:2] == ("refused", "TG302"), (theirs, mine)
+    key = ", ".join(str(v) for v in sorted(state.cells[0].tolist()))
+    for said in (theirs[2], mine[2]):
+        assert "invalid merge" in said and "duplicated triangles" in said and f"({key})" in said, said
+        assert "geometry instant 2.0 of the period starting at 1.0" in said, said
+    assert everything(conn) == before
+
+
+def test_after_pg_dump_and_restore_an_average_of_a_geometry_instant_merges_in_psql_as_in_python(
+    conn: Conn, periods: int, pg: Any, db_dsn: str, tmp_path: Any
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    _conflict_at_two(conn, periods)
+    tgsis.find_conflicts(conn, "e1")
+    tgsis.resolve_region(conn, "e1", periods, 0, "average")
+    conn.commit()
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
+        assert_same_merge(restored, "e1")

@@ -42,11 +42,18 @@
 -- instant both sides changed differently (R) merges by its regions, as
 -- model 2's instant (tgsis.merge_instant_by_region with p_timem: the region
 -- engine on that slice, each region the rows of the side that changed it or
--- of its parent, child or base solution, the parent's elsewhere; the
--- discards said in NOTICEs), then the one-topology check. Refused (TG302,
+-- of its parent, child or base solution, or the rows recorded with its
+-- average or manual solution (the period's nodes at that geometry instant,
+-- its triangles, keyed by their ids; checked by tgsis.merge_solution_rows,
+-- the merged slice by merge3's validity check), the parent's elsewhere; the
+-- discards said in NOTICEs), then the one-topology check (rows no side
+-- changed that a solution rewrites or removes, not read at the period's
+-- other geometry instants, compared by what the solution does to them: a
+-- solution that re-meshes one geometry instant of a period with several is
+-- TG308, as in Python). Refused (TG302,
 -- nothing written, the hint naming `tgsis version merge NAME`) what only the
 -- Python client merges: a region of a geometry instant solved average or
--- manual, a geometry instant whose version's new ids would be renumbered,
+-- manual with its .npz only, a geometry instant whose version's new ids would be renumbered,
 -- one only the version changed where a row no side changed differs in its
 -- bits between parent and version. p_action 'regions'
 -- (tgsis.instants_merge_regions): the analysis alone, nothing written, no
@@ -131,9 +138,12 @@ BEGIN
         CREATE TEMPORARY TABLE tgsis_mp_prow (m float8, t float8, mv text[], cv text[]) ON COMMIT DROP;
         -- the keys (period, id) of a node (kind v) or triangle (c) with a row some set sees otherwise than another
         CREATE TEMPORARY TABLE tgsis_mp_key (kind text, m float8, id bigint) ON COMMIT DROP;
+        -- the rows no side changed (not read) that an average or manual solution of a slice rewrites or removes: what
+        -- that does to the period's topology (a node: gone or NULL; a triangle: its new node ids or gone)
+        CREATE TEMPORARY TABLE tgsis_mp_margin (m float8, t float8, kind text, id bigint, change text) ON COMMIT DROP;
     ELSE
         TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
-                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow, pg_temp.tgsis_mp_key;
+                 pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow, pg_temp.tgsis_mp_key, pg_temp.tgsis_mp_margin;
     END IF;
     -- the tables of the model (the registry), in the Python writer's order, then the class's vertex and cell
     -- property rows (vp, cp)
@@ -350,16 +360,58 @@ BEGIN
           JOIN pg_temp.tgsis_mp_el e ON e.kind = x ->> 0 AND e.st = (x ->> 2)::smallint AND e.m = v_m AND e.t = v_t
                                     AND e.id = (x ->> 3)::bigint;
         GET DIAGNOSTICS v_count = ROW_COUNT;
-        IF v_count <> jsonb_array_length(v_plan -> 'rows') THEN  -- (both read the keys that changed: never)
+        IF v_count <> (SELECT count(*) FROM jsonb_array_elements(v_plan -> 'rows') AS x WHERE x ->> 2 <> '8') THEN
+            -- (both read the keys that changed: never)
             RAISE EXCEPTION '%: the merged rows of geometry instant % of the period starting at % are not among the rows read',
                     v_refused, v_t, v_m
                 USING ERRCODE = 'XX000';
         END IF;
+        -- the rows of an average or manual solution (st 8): their values as the plan gives them, compared as the
+        -- rows read are (a node's coordinates, a triangle's node ids; property rows NaN for none)
+        INSERT INTO pg_temp.tgsis_mp_new (kind, st, m, t, id, gvals, gbits, geq, gel, pvals, pbits, peq, nulls)
+        SELECT x ->> 0, 8, v_m, v_t, (x ->> 1)::bigint, g.g, g.g::text,
+               CASE x ->> 0 WHEN 'v' THEN ARRAY(SELECT (e::float8 + 0::float8)::text FROM unnest(g.g) WITH ORDINALITY AS u(e, o)
+                                                 ORDER BY u.o)::text
+                            ELSE g.g::text END,
+               CASE x ->> 0 WHEN 'c' THEN tgsis.oriented_cell_key(g.g::bigint[])::text END,
+               p.p, coalesce(ARRAY(SELECT coalesce(e, 'NaN') FROM unnest(p.p) WITH ORDINALITY AS u(e, o) ORDER BY u.o)::text, n.nulls),
+               NULL, n.nulls
+          FROM jsonb_array_elements(v_plan -> 'rows') AS x
+         CROSS JOIN LATERAL (SELECT ARRAY(SELECT jsonb_array_elements_text(x -> 4)) AS g) AS g
+         CROSS JOIN LATERAL (SELECT CASE WHEN jsonb_typeof(x -> 5) = 'array'
+                                         THEN ARRAY(SELECT CASE WHEN jsonb_typeof(e) = 'null' THEN NULL ELSE e #>> '{}' END
+                                                      FROM jsonb_array_elements(x -> 5) WITH ORDINALITY AS u(e, o) ORDER BY u.o)
+                                    END AS p) AS p
+         CROSS JOIN LATERAL (SELECT coalesce(array_fill('NaN'::text, ARRAY[count(*)::integer])::text, '{}') AS nulls
+                               FROM pg_catalog.pg_attribute a, pg_temp.tgsis_mp_spec z
+                              WHERE z.tab = x ->> 0 || 'p'
+                                AND a.attrelid = format('%I.%I', (z.vt).schemaname, (z.vt).tablename)::regclass
+                                AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> z.okey
+                                AND a.attname <> ALL (z.keys)) AS n
+         WHERE x ->> 2 = '8';
+        -- and the version's rows (the base's) of the ids no state changed that such a solution rewrites or removes;
+        -- those not read (their period not read whole): their rows at the period's other geometry instants are not
+        -- known here, so the one-topology check below leaves them out and compares what the solution does to them
+        INSERT INTO pg_temp.tgsis_mp_margin
+        SELECT v_m, v_t, x ->> 0, (x ->> 1)::bigint,
+               CASE WHEN n.id IS NULL THEN 'gone' WHEN x ->> 0 = 'c' THEN n.geq END
+          FROM jsonb_array_elements(coalesce(v_plan -> 'old', '[]')) AS x
+          LEFT JOIN pg_temp.tgsis_mp_new n ON n.st = 8 AND n.m = v_m AND n.t = v_t AND n.kind = x ->> 0
+                                          AND n.id = (x ->> 1)::bigint
+         WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mp_el e
+                            WHERE e.kind = x ->> 0 AND e.st = 4 AND e.m = v_m AND e.t = v_t AND e.id = (x ->> 1)::bigint);
+        INSERT INTO pg_temp.tgsis_mp_el (kind, st, m, t, id, gbits, pbits, nulls)
+        SELECT x ->> 0, 4, v_m, v_t, (x ->> 1)::bigint, x ->> 2, x ->> 3, NULL
+          FROM jsonb_array_elements(coalesce(v_plan -> 'old', '[]')) AS x
+         WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mp_el e
+                            WHERE e.kind = x ->> 0 AND e.st = 4 AND e.m = v_m AND e.t = v_t AND e.id = (x ->> 1)::bigint);
         INSERT INTO pg_temp.tgsis_mp_new
         SELECT e.*
           FROM pg_temp.tgsis_mp_el e
          WHERE e.st = 2 AND e.m = v_m AND e.t = v_t
            AND NOT EXISTS (SELECT FROM jsonb_array_elements(v_plan -> 'rows') AS x WHERE x ->> 0 = e.kind AND (x ->> 1)::bigint = e.id)
+           AND NOT EXISTS (SELECT FROM jsonb_array_elements(coalesce(v_plan -> 'old', '[]')) AS x
+                            WHERE x ->> 0 = e.kind AND (x ->> 1)::bigint = e.id)
            AND (SELECT count(*) FROM pg_temp.tgsis_mp_el o
                  WHERE o.kind = e.kind AND o.m = e.m AND o.t = e.t AND o.id = e.id
                    AND o.gbits = e.gbits AND o.pbits = e.pbits) = 3;
@@ -406,9 +458,15 @@ BEGIN
       FROM (SELECT g.m, g.t, first_value(g.t) OVER w AS first, first_value(g.sig) OVER w AS firstsig, g.sig
               FROM (SELECT s.m, s.t,
                            coalesce(md5(string_agg(n.kind || n.id || CASE n.kind WHEN 'c' THEN ':' || n.geq ELSE '' END,
-                                                   ',' ORDER BY n.kind, n.id)), '') AS sig
+                                                   ',' ORDER BY n.kind, n.id)), '')
+                           -- (the rows no side changed a solution rewrote or removed: left out, what it did said)
+                           || coalesce((SELECT string_agg(x.kind || x.id || ':' || x.change, ',' ORDER BY x.kind, x.id)
+                                          FROM pg_temp.tgsis_mp_margin x
+                                         WHERE x.m = s.m AND x.t = s.t AND x.change IS NOT NULL), '') AS sig
                       FROM pg_temp.tgsis_mp_slice s
                       LEFT JOIN pg_temp.tgsis_mp_new n ON n.m = s.m AND n.t = s.t
+                                                      AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mp_margin x
+                                                                       WHERE x.m = n.m AND x.kind = n.kind AND x.id = n.id)
                      WHERE CASE s.src WHEN 'P' THEN s.ip WHEN 'C' THEN s.ic WHEN 'U' THEN false ELSE true END
                      GROUP BY s.m, s.t) AS g
             WINDOW w AS (PARTITION BY g.m ORDER BY g.t)) AS d
@@ -534,7 +592,7 @@ BEGIN
         RETURN NULL;  -- the periods would not join: the Python merge leaves it unsolved ("its merged rows cannot be written")
     END;
     TRUNCATE pg_temp.tgsis_mp_spec, pg_temp.tgsis_mp_row, pg_temp.tgsis_mp_el, pg_temp.tgsis_mp_new,
-             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow, pg_temp.tgsis_mp_key;
+             pg_temp.tgsis_mp_slice, pg_temp.tgsis_mp_prow, pg_temp.tgsis_mp_key, pg_temp.tgsis_mp_margin;
     PERFORM tgsis.merge_sliced_leave(p_version, p_geoid, v_settings, true);
     RETURN v_written;
 END
@@ -543,4 +601,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.merge_periods_by_slice(text, text, bigint) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.merge_periods_by_slice(text, text, bigint) IS
-    'merge one model-3 feature (an evolving surface) changed both in a version and in its parent period by period, geometry instant by geometry instant, in SQL, exactly as the Python merge does, a geometry instant both sides changed by its regions (parent, child, base solutions): written into the version by a keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict or an unsolved region (the merge refuses it), TG308 for periods whose merged geometry instants would not share one topology, TG302 for what only the Python client merges (average or manual solutions of a region of a period); p_action regions: the analysis only; returns the rows written';
+    'merge one model-3 feature (an evolving surface) changed both in a version and in its parent period by period, geometry instant by geometry instant, in SQL, exactly as the Python merge does, a geometry instant both sides changed by its regions (parent, child, base solutions; average and manual ones by their recorded rows): written into the version by a keyed difference, the parent''s attribute edits brought in, the conflict recorded manual; NULL for an object-level conflict or an unsolved region (the merge refuses it), TG308 for periods whose merged geometry instants would not share one topology, TG302 for what only the Python client merges (average or manual solutions recorded with their .npz only); p_action regions: the analysis only; returns the rows written';

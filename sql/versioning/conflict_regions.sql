@@ -55,12 +55,12 @@ CREATE TABLE tgsis.conflict_regions (
     CONSTRAINT conflict_regions_mesh CHECK ((solution_mesh IS NOT NULL) = (solution IN ('average', 'manual'))),
     CONSTRAINT conflict_regions_solved CHECK ((solution IN ('unsolved', 'automatic')) = (solved_at IS NULL)),
     CONSTRAINT conflict_regions_slice CHECK (timem IS NULL OR times IS NOT NULL),
-    -- the rows are all given or none, only with the .npz and not for a model-3 period (the psql merge does not
-    -- apply them there), each array of its rows' size
+    -- the rows are all given or none, only with the .npz (a region of a slice: keyed by the slice's ids), each
+    -- array of its rows' size
     CONSTRAINT conflict_regions_rows CHECK (
         num_nulls(solution_vertex_ids, solution_vertices, solution_cell_ids, solution_cells, solution_vertex_columns,
                   solution_vertex_values, solution_cell_columns, solution_cell_values) IN (0, 8)
-        AND (solution_vertex_ids IS NULL OR (solution_mesh IS NOT NULL AND timem IS NULL
+        AND (solution_vertex_ids IS NULL OR (solution_mesh IS NOT NULL
              AND cardinality(solution_vertices) = 3 * cardinality(solution_vertex_ids)
              AND cardinality(solution_cells) % greatest(cardinality(solution_cell_ids), 1) = 0
              AND cardinality(solution_vertex_values)

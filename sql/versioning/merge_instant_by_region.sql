@@ -23,8 +23,8 @@
 -- rolled back before it returns: neither they nor their locks outlive the call.
 -- p_timem (model 3, tgsis.merge_periods_by_slice): the same for the geometry instant p_times of the
 -- topology period starting at p_timem (the engine on that slice, the stored regions with that times and
--- timem); a region of it solved average or manual is refused (TG302): no rows are recorded for it, the
--- Python client applies its mesh.
+-- timem; an average or manual solution's rows keyed by the period's node and triangle ids, merge3's
+-- validity check on the period's triangles, tgsis.d4dtrgl).
 -- extra_float_digits is pinned: floats go through jsonb as their exact text.
 CREATE FUNCTION tgsis.merge_instant_by_region(p_version text, p_geoid bigint, p_times float8, p_refused text, p_hint text,
                                               p_timem float8 DEFAULT NULL)
@@ -41,6 +41,7 @@ DECLARE
     v_why      text;
     v_hint     text;
     v_unsolved boolean := false;
+    v_tt       text := CASE WHEN p_times::text ~ '^-?[0-9]+$' THEN p_times::text || '.0' ELSE p_times::text END;
     v_at       text := CASE WHEN p_timem IS NULL THEN format('instant %s', p_times)
                             ELSE format('geometry instant %s of the period starting at %s', p_times, p_timem) END;
 BEGIN
@@ -71,17 +72,14 @@ BEGIN
     -- merge3's validity check of the merged instant, where a solution's rows can re-mesh it (the Python merge checks
     -- every slice it merges; regions taken each from one side, or parent/child/base solutions, cannot break it: a
     -- cell on a vertex the other side removed, or two new cells on the same vertices, join their regions)
-    IF p_timem IS NOT NULL AND EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
-        -- (tgsis.resolve_region records no rows for a region of a period: only the Python client applies its mesh)
-        RAISE EXCEPTION '%: a region of the % solved average or manual with rows (the Python client applies its mesh)',
-                p_refused, v_at
-            USING ERRCODE = 'TG302', HINT = p_hint;
-    END IF;
     IF EXISTS (SELECT FROM pg_temp.tgsis_mw_region g WHERE g.src = 8) THEN
     PERFORM tgsis.merge_mesh_validity(
-        format('feature %s of class %s, instant %s', p_geoid, (SELECT i.classname FROM pg_temp.tgsis_mr_info i),
-               CASE WHEN p_times::text ~ '^-?[0-9]+$' THEN p_times::text || '.0' ELSE p_times::text END),
-        3, 'triangle', 'times_trgl', p_geoid, (SELECT i.base FROM pg_temp.tgsis_mr_info i), p_refused, p_hint);
+        format('feature %s of class %s, %s', p_geoid, (SELECT i.classname FROM pg_temp.tgsis_mr_info i),
+               -- (as tgsis._merge_slices names the slice, its times as Python's repr of a float)
+               CASE WHEN p_timem IS NULL THEN format('instant %s', v_tt)
+                    ELSE format('geometry instant %s of the period starting at %s', v_tt,
+                                CASE WHEN p_timem::text ~ '^-?[0-9]+$' THEN p_timem::text || '.0' ELSE p_timem::text END) END),
+        3, 'triangle', CASE WHEN p_timem IS NULL THEN 'times_trgl' ELSE 'd4dtrgl' END, p_geoid, (SELECT i.base FROM pg_temp.tgsis_mr_info i), p_refused, p_hint);
     END IF;
 
     -- the merged rows of the keys the states do not all hold alike: per id its region's source (a row the source

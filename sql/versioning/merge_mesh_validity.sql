@@ -17,7 +17,8 @@
 -- the vertex columns probed in the few near vertices). TG302 with p_refused
 -- and p_hint; nothing is written before. For an instant of a surface at
 -- instants (tgsis.merge_instant_by_region: p_table times_trgl, the work
--- tables of that instant) the base's cells of that instant.
+-- tables of that instant) the base's cells of that instant; for a geometry
+-- instant of a model-3 period (p_table d4dtrgl) the period's triangles.
 CREATE FUNCTION tgsis.merge_mesh_validity(p_name text, p_k integer, p_word text, p_table text, p_geoid bigint,
                                           p_base integer[], p_refused text, p_hint text)
 RETURNS void
@@ -84,14 +85,21 @@ BEGIN
                            (VALUES (1::smallint), (2), (4), (8)) AS s (st)
                      WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.id)',
                    CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid'
-                                WHEN 'times_trgl' THEN 'trglid' ELSE 'tetraid' END,
+                                WHEN 'times_trgl' THEN 'trglid' WHEN 'd4dtrgl' THEN 'trglid' ELSE 'tetraid' END,
                    format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, p_k) AS i)),
-                   tgsis.storage_table('tgsis', p_table),
+                   CASE WHEN p_table = 'd4dtrgl'  -- (a model-3 period's triangles: node columns named as vertex columns)
+                        THEN format('(SELECT w.geoid, w.timem, w.trglid, w.nodeid1 AS vrtxid1, w.nodeid2 AS vrtxid2,
+                                             w.nodeid3 AS vrtxid3, w.revision, w.revclosed, w.lastrevs FROM %s w)',
+                                    tgsis.storage_table('tgsis', p_table))
+                        ELSE tgsis.storage_table('tgsis', p_table) END,
                    -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)
                    tgsis.cells_on_vertices_sql(p_k, v_near, '$3'),
                    -- (an instant of a surface at instants, tgsis.merge_instant_by_region: that instant's cells)
-                   CASE WHEN (SELECT i.times FROM pg_temp.tgsis_mr_info i) IS NOT NULL THEN ' AND v.times = $4' ELSE '' END)
-      USING p_geoid, p_base, v_near, (SELECT i.times FROM pg_temp.tgsis_mr_info i);
+                   -- (a geometry instant of a model-3 period: the period's triangles)
+                   CASE WHEN p_table = 'd4dtrgl' THEN ' AND v.timem = $5'
+                        WHEN (SELECT i.times FROM pg_temp.tgsis_mr_info i) IS NOT NULL THEN ' AND v.times = $4' ELSE '' END)
+      USING p_geoid, p_base, v_near, (SELECT i.times FROM pg_temp.tgsis_mr_info i),
+            (SELECT i.timem FROM pg_temp.tgsis_mr_info i);
     -- a cell no state changed that a solution rewrites or removes (a margin cell) is its row in the merged state
     DELETE FROM pg_temp.tgsis_mw_local l WHERE l.st = 8 AND EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = l.id);
     INSERT INTO pg_temp.tgsis_mw_local

@@ -24,7 +24,10 @@
 -- rows lack or of a type other than float, real or integer. An instant of a
 -- surface at instants (tgsis_mr_info.times, tgsis.merge_instant_by_region):
 -- the base's rows are that instant's (times_vrtx / times_trgl, property rows
--- keyed (_times, _idx)); no atoms.
+-- keyed (_times, _idx)); no atoms. A geometry instant of a model-3 period
+-- (tgsis_mr_info.timem too): the period's nodes at that geometry instant
+-- (d4dvrtx), the period's triangles (d4dtrgl), property rows keyed (_timem,
+-- _timet, _idx); the ids are node and triangle ids.
 CREATE FUNCTION tgsis.merge_solution_rows(p_geoid bigint, p_versionid integer, p_refused text, p_hint text)
 RETURNS void
 LANGUAGE plpgsql
@@ -128,13 +131,17 @@ BEGIN
      WHERE n.kind = 'c' AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = n.id)
        AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_sc s WHERE s.id = n.id AND s.region = n.region);
     -- the base's rows of the ids no state changed (the region's margin, the rest around it)
-    -- (an instant of a surface at instants, v_info.times: its rows of times_vrtx / times_trgl, no atoms)
+    -- (an instant of a surface at instants, v_info.times: its rows of times_vrtx / times_trgl, no atoms; a geometry
+    -- instant of a model-3 period, v_info.timem too: the period's nodes there, d4dvrtx, and its triangles, d4dtrgl)
     EXECUTE format('UPDATE pg_temp.tgsis_mw_sv s SET based = true, b_x = v.x, b_y = v.y, b_z = v.z FROM %s v
-                     WHERE v.geoid = $1 AND v.vrtxid = s.id AND NOT s.changed%s
+                     WHERE v.geoid = $1 AND v.%s = s.id AND NOT s.changed%s
                        AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)',
-                   tgsis.storage_table('tgsis', CASE WHEN v_info.times IS NULL THEN 'vrtx' ELSE 'times_vrtx' END),
-                   CASE WHEN v_info.times IS NOT NULL THEN ' AND v.times = $3' ELSE '' END)
-      USING p_geoid, v_info.base, v_info.times;
+                   tgsis.storage_table('tgsis', CASE WHEN v_info.times IS NULL THEN 'vrtx'
+                                                     WHEN v_info.timem IS NULL THEN 'times_vrtx' ELSE 'd4dvrtx' END),
+                   CASE WHEN v_info.timem IS NULL THEN 'vrtxid' ELSE 'nodeid' END,
+                   CASE WHEN v_info.timem IS NOT NULL THEN ' AND v.timem = $4 AND v.timet = $3'
+                        WHEN v_info.times IS NOT NULL THEN ' AND v.times = $3' ELSE '' END)
+      USING p_geoid, v_info.base, v_info.times, v_info.timem;
     IF v_info.times IS NULL THEN
         EXECUTE format('UPDATE pg_temp.tgsis_mw_sv s SET bref = a.refid FROM %s a
                          WHERE s.based AND a.geoid = $1 AND a.vrtxid = s.id
@@ -145,10 +152,13 @@ BEGIN
     EXECUTE format('UPDATE pg_temp.tgsis_mw_sc s SET based = true, bv = ARRAY[%s] FROM %s v
                      WHERE v.geoid = $1 AND v.%I = s.id AND NOT s.changed%s
                        AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)',
-                   (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, v_info.k) AS i),
+                   (SELECT string_agg(format('v.%s%s', CASE WHEN v_info.timem IS NULL THEN 'vrtxid' ELSE 'nodeid' END, i),
+                                      ', ' ORDER BY i)
+                      FROM generate_series(1, v_info.k) AS i),
                    tgsis.storage_table('tgsis', v_info.simplex), v_info.cellid,
-                   CASE WHEN v_info.times IS NOT NULL THEN ' AND v.times = $3' ELSE '' END)
-      USING p_geoid, v_info.base, v_info.times;
+                   CASE WHEN v_info.timem IS NOT NULL THEN ' AND v.timem = $4'
+                        WHEN v_info.times IS NOT NULL THEN ' AND v.times = $3' ELSE '' END)
+      USING p_geoid, v_info.base, v_info.times, v_info.timem;
     IF v_info.runs THEN  -- the base's part of those cells (tgsis.part's runs)
         EXECUTE format('UPDATE pg_temp.tgsis_mw_sc s SET bpart = r.part FROM %s r
                          WHERE s.based AND r.geoid = $1 AND s.id BETWEEN r.firstid AND r.lastid
@@ -165,7 +175,7 @@ BEGIN
               INTO v_why
               FROM pg_catalog.pg_attribute a
              WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0 AND NOT a.attisdropped
-               AND a.attname NOT IN ('_geoid', '_times', '_idx')
+               AND a.attname NOT IN ('_geoid', '_times', '_timem', '_timet', '_idx')
                AND a.atttypid NOT IN ('real'::regtype, 'double precision'::regtype, 'smallint'::regtype,
                                       'integer'::regtype, 'bigint'::regtype);
             IF v_why IS NULL THEN
@@ -174,7 +184,7 @@ BEGIN
                    INTO v_why
                   USING ARRAY(SELECT a.attname::text FROM pg_catalog.pg_attribute a
                                WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0
-                                 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_times', '_idx'));
+                                 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_times', '_timem', '_timet', '_idx'));
             END IF;
             IF v_why IS NOT NULL THEN
                 RAISE EXCEPTION '%: the % property columns of its solution rows are not the class''s (%)', p_refused, v_side.word, v_why
@@ -201,7 +211,7 @@ BEGIN
               FROM pg_catalog.pg_attribute a
              WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0 AND NOT a.attisdropped
                AND a.atttypid IN ('smallint'::regtype, 'integer'::regtype, 'bigint'::regtype, 'real'::regtype)
-               AND a.attname NOT IN ('_geoid', '_times', '_idx');
+               AND a.attname NOT IN ('_geoid', '_times', '_timem', '_timet', '_idx');
             IF v_why IS NOT NULL THEN
                 EXECUTE format('SELECT string_agg(w, ''; '') FROM (%s) AS q(w)', v_why) INTO v_why;
             END IF;
@@ -227,16 +237,16 @@ BEGIN
               INTO v_canon, v_write
               FROM pg_catalog.pg_attribute a
              WHERE a.attrelid = format('%I.%I', v_side.s, v_side.t)::regclass AND a.attnum > 0 AND NOT a.attisdropped
-               AND a.attname NOT IN ('_geoid', '_times', '_idx');
+               AND a.attname NOT IN ('_geoid', '_times', '_timem', '_timet', '_idx');
             EXECUTE format('UPDATE pg_temp.%I s SET val = %s, w = %s', v_side.work, v_canon, v_write);
             -- the base's values of the ids no state changed
             DROP TABLE IF EXISTS pg_temp.tgsis_mw_bval;
             EXECUTE format('CREATE TEMPORARY TABLE tgsis_mw_bval ON COMMIT DROP AS
                             SELECT r.key, r.val FROM tgsis.versioned_tables t,
                                    tgsis.merge_property_rows(t, $1, NULL, ARRAY(SELECT s.id FROM pg_temp.%I s WHERE s.based),
-                                                             $2, $2, $2, $3) AS r
+                                                             $2, $2, $2, $3, $4) AS r
                              WHERE t.schemaname = %L AND t.tablename = %L AND r.seen & 1 <> 0', v_side.work, v_side.s, v_side.t)
-              USING p_geoid, v_info.base, v_info.times;
+              USING p_geoid, v_info.base, v_info.times, v_info.timem;
             EXECUTE format('UPDATE pg_temp.%I s SET bval = coalesce((SELECT r.val FROM pg_temp.tgsis_mw_bval r WHERE r.key = s.id),
                                                            (SELECT nulls FROM tgsis.merge_value_text(%L, %L)))
                              WHERE s.based', v_side.work, v_side.s, v_side.t);

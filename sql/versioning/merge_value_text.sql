@@ -1,6 +1,7 @@
 -- tgsis.merge_value_text(schema, table): the SQL expression of a property row's values as one canonical text, and that of a missing row.
 -- For the merge by region in SQL (tgsis.merge_property_rows): the columns of
--- a vertex or cell property table other than _geoid, _times (model 2's key) and _idx, in order, as
+-- a vertex or cell property table other than _geoid, _times (model 2's key), _timem, _timet (model 3's)
+-- and _idx, in order (the values alone: tgsis.merge_solution_rows makes the same text of a solution's), as
 -- a text[] literal over the row alias v: a float (real, double precision)
 -- as float8 text with -0 as 0 (x + 0 is +0 for x = -0) and NULL as NaN, an
 -- array of floats element by element, anything else as its text, NULL as
@@ -21,7 +22,7 @@ AS $$
            array_fill('NaN'::text, ARRAY[count(*)::integer])::text
       FROM pg_catalog.pg_attribute a
      WHERE a.attrelid = CASE WHEN p_table IS NOT NULL THEN pg_catalog.to_regclass(format('%I.%I', p_schema, p_table)) END
-       AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_times', '_idx')
+       AND a.attnum > 0 AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_times', '_timem', '_timet', '_idx')
     HAVING count(*) > 0
 $$;
 

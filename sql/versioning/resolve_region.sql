@@ -9,10 +9,11 @@
 -- property values by column, NaN for none), kept in the solution_* columns:
 -- the psql merge (tgsis.merge_mesh_by_region) applies them, and checks them
 -- as the Python merge checks the .npz's rows; a solution without them (the
--- .npz only) is merged by the Python client only, as is a region of a
--- geometry instant of an evolving surface (model 3): its rows are refused
--- (TG100); those of a region of an instant of a surface at instants (model 2)
--- are kept for tgsis.merge_instant_by_region. Rows that are not the
+-- .npz only) is merged by the Python client only. The rows of a region of a
+-- slice are kept too, keyed by the slice's ids: an instant of a surface at
+-- instants (model 2) and a geometry instant of an evolving surface's period
+-- (model 3: node ids, triangle ids), applied by tgsis.merge_instant_by_region.
+-- Rows that are not the
 -- .npz's mesh (tgsis.npz_rows_differ) or have a cell on one vertex twice are
 -- refused (TG100): the two merges never apply two copies that differ.
 -- The conflict's marks are recomputed first (tgsis.find_conflicts): a region
@@ -162,15 +163,6 @@ BEGIN
                   DETAIL = 'A solution there would drop the other side''s edit nobody needs to choose against.',
                   HINT = format('only a region with conflict = true takes a solution: SELECT region FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id(%L) AND conflict',
                                 p_version);
-    END IF;
-    IF p_vertex_ids IS NOT NULL AND v_row.timem IS NOT NULL THEN
-        -- the rows are for the psql merge, which merges a region of a model-3 period's geometry instant only as
-        -- part of the whole object: they would never be read; the .npz alone is what the Python merge applies
-        RAISE EXCEPTION 'the rows of the mesh of % are not taken: the region lies in geometry instant % of period %, where only the Python client applies an average or manual mesh',
-                v_object, v_row.times, v_row.timem
-            USING ERRCODE = 'TG100',
-                  HINT = format('give the mesh alone (the sixth argument) and merge with `tgsis version merge %s` or tgsis.merge_version(conn, %s) in Python',
-                                tgsis.shell_quote(p_version), pg_catalog.to_json(p_version)::text);
     END IF;
     UPDATE tgsis.conflict_regions
        SET solution = v_solution,

@@ -127,11 +127,6 @@ _RULES: list[tuple[str, Replacement]] = [
         r"give the rows of the mesh the \.npz holds \(tgsis\.resolve_region in Python records both from one mesh\)",
         "give --mesh FILE: the command records the mesh and its rows from it",
     ),
-    (  # resolve_region's rows for a region of a model-3 period: the command records the mesh alone
-        rf"give the mesh alone \(the sixth argument\) and merge with `tgsis version merge {_SHELL_WORD}` or "
-        rf"tgsis\.merge_version\(conn, (?:{_PY_LITERAL}|(\w+))\) in Python",
-        lambda m: f"give --mesh FILE, then tgsis version merge {_py_word(m[1], m[2])}",
-    ),
     (r", or tgsis\.resolve_region in Python$", ""),
     (
         r"automatic is no choice: find_conflicts records it for the regions that merge by themselves",

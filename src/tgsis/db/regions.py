@@ -879,8 +879,8 @@ def _resolve_sliced(
             hint="call again with discard_other=True to discard them, or choose another solution",
         )
     state = given if isinstance(given, MeshState) else None
-    # a region of an instant (model 2) with its rows, which the psql merge applies; of a model-3 period without
-    row = _record(conn, version, key, index, solution, state, rows_too=merge.base.kind == "INSTANTS")
+    # with its rows, keyed by the slice's ids, which the psql merge applies
+    row = _record(conn, version, key, index, solution, state)
     return RegionResolution(row, discards, state)
 
 
@@ -961,16 +961,15 @@ def _sql_rows(state: MeshState) -> tuple[Any, ...] | None:
     )
 
 
-def _record(
-    conn: Conn, version: str, key: str, index: int, solution: str, state: MeshState | None, *, rows_too: bool = True
-) -> ConflictRegion:
+def _record(conn: Conn, version: str, key: str, index: int, solution: str, state: MeshState | None) -> ConflictRegion:
     """Record a region's solution; an average or manual one with its .npz and its rows for the psql merge.
 
-    ``rows_too`` False (a region of a model-3 period: the psql merge does not
-    merge those by region) records the .npz alone.
+    A region of a slice (an instant of model 2, a geometry instant of a
+    model-3 period) too: its rows keyed by the slice's ids (vertex or node ids,
+    triangle ids).
     """
     mesh = None if state is None else state_to_npz(state)
-    rows = None if state is None or not rows_too else _sql_rows(state)
+    rows = None if state is None else _sql_rows(state)
     row = conn.execute(
         f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s,"
         " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
@@ -1179,8 +1178,6 @@ def _record_all(
     discards: tuple[RegionDiscard, ...],
     discard_other: bool,
     name: str,
-    *,
-    rows_too: bool = True,
 ) -> ObjectResolution:
     """Record one solution for every given region, after saying what it discards (refused, nothing recorded,
     when it discards and ``discard_other`` is False)."""
@@ -1195,7 +1192,7 @@ def _record_all(
     for index in sorted(given):
         value = given[index]
         state = value if isinstance(value, MeshState) else None
-        rows.append(_record(conn, version, key, index, solution, state, rows_too=rows_too))
+        rows.append(_record(conn, version, key, index, solution, state))
     return ObjectResolution(tuple(rows), discards, totals)
 
 
@@ -1225,10 +1222,7 @@ def _resolve_all_sliced(
         else:
             given[r.index] = cast(Solution, solution)
     discards = _slice_solution(conn, version, key, merge, given, dict.fromkeys(given, solution))
-    # model 2 (slices keyed by the instant alone): with the rows the psql merge applies; model 3: the .npz alone
-    return _record_all(
-        conn, version, key, given, solution, discards, discard_other, name, rows_too=merge.base.kind == "INSTANTS"
-    )
+    return _record_all(conn, version, key, given, solution, discards, discard_other, name)
 
 
 # --------------------------------------------------------------------------- average of a whole object
