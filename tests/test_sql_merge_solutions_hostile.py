@@ -193,7 +193,7 @@ _INTERNALS = (
 _READERS = (
     "tgsis.cells_on_vertices_sql(integer, bigint[], text)",
     "tgsis.merge_value_text(text, text)",
-    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8)",
+    "tgsis.merge_property_rows(tgsis.versioned_tables, bigint, integer[], bigint[], integer[], integer[], integer[], float8, float8)",
 )
 
 
