@@ -109,11 +109,18 @@ def _two_conflicts(conn: Conn) -> int:
     return two_conflicts(conn)
 
 
+def _series(conn: Conn) -> int:
+    from tests.test_merge_instants import make_series
+
+    return make_series(conn)
+
+
 # fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
 _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
     "fault_clone": _fault,  # tests.merge_data.make_fault: the curved fault in DEFAULT, version e1
     "three_regions_clone": _three_regions,  # tests.test_conflict_regions.three_regions
     "two_conflicts_clone": _two_conflicts,  # tests.test_resolve_all_regions.two_conflicts
+    "series_clone": _series,  # tests.test_merge_instants.make_series: a model-2 surface in DEFAULT, version e1
 }
 
 
@@ -158,6 +165,12 @@ def fault_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> in
 def three_regions_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
     """Geoid of ``three_regions``'s fault, already in the test's database (cloned, not built again)."""
     return built_once("three_regions_clone")[1]
+
+
+@pytest.fixture
+def series_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+    """Geoid of ``make_series``'s surface at instants, already in the test's database (cloned, not built again)."""
+    return built_once("series_clone")[1]
 
 
 @pytest.fixture
