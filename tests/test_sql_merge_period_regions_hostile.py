@@ -358,3 +358,34 @@ def test_a_reader_finds_and_stores_the_regions_of_geometry_instants_as_python(
         theirs = _stored(session, "e1", periods)
         session.rollback()
         assert mine == theirs
+
+
+@pytest.mark.parametrize("digits", ["1", "0", "-15"])
+def test_an_unsolved_region_at_geometry_instants_of_no_short_decimal_is_named_as_python_names_it(
+    conn: Conn, digits: str
+) -> None:
+    """Geometry instants 0.1, 0.2 and 0.1 + 0.2 (0.30000000000000004): the psql refusal names the unsolved region's
+    geometry instant and period as the Python merge does, whatever the session's extra_float_digits; SQL
+    find_conflicts stores the same regions."""
+    from tests.merge_data import curved_surface
+    from tests.test_merge_instants import _shape
+    from tgsis.temporal import EvolvingSurface, TopologyPeriod
+
+    tgsis.create_feature_class(conn, "tenths", "SURFACE", time_model="EVOLVING")
+    tgsis.enable_feature_versioning(conn)
+    times = (0.1, 0.2, 0.1 + 0.2)
+    period = TopologyPeriod(np.asarray(times), curved_surface().cells, np.stack([_shape(i) for i in range(3)]))
+    geoid = int(tgsis.insert_feature(conn, "tenths", EvolvingSurface([period])))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _conflict(conn, geoid, 0.1, 0.1 + 0.2)
+    assert_same_regions(conn, "e1", geoid)
+    conn.execute(f"SET extra_float_digits = {digits}")
+    conn.commit()
+    theirs, mine = both_merges(conn, "e1")
+    conn.execute("RESET extra_float_digits")
+    conn.commit()
+    assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
+    named = "region 0 at geometry instant 0.30000000000000004 of the period starting at 0.1 unsolved"
+    assert named in theirs[2], theirs
+    assert named in mine[2], mine
