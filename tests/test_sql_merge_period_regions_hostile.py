@@ -389,3 +389,112 @@ def test_an_unsolved_region_at_geometry_instants_of_no_short_decimal_is_named_as
     named = "region 0 at geometry instant 0.30000000000000004 of the period starting at 0.1 unsolved"
     assert named in theirs[2], theirs
     assert named in mine[2], mine
+
+
+@pytest.mark.parametrize("action", ["merge", "refresh"])
+def test_regions_stored_by_the_python_find_conflicts_solved_in_psql_then_merged_in_psql(
+    conn: Conn, periods: int, action: str
+) -> None:
+    _conflict(conn, periods, 1.0, 2.0)
+    _conflict(conn, periods, 3.0, 4.0)
+    tgsis.find_conflicts(conn, "e1")
+    conn.commit()
+    rows = conn.execute(
+        "SELECT region, timem FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND conflict"
+        " ORDER BY region"
+    ).fetchall()
+    assert len(rows) == 2, rows
+    for region, m in rows:
+        conn.execute(
+            "SELECT tgsis.resolve_region('e1', 'feature', %s, %s, %s)",
+            (str(periods), region, "child" if m == 1.0 else "base"),
+        )
+    conn.commit()
+    assert_same_merge(conn, "e1", action)
+
+
+@pytest.mark.parametrize("solution", ["none", "parent", "child", "base"])
+def test_new_nodes_far_from_0_to_n_in_a_conflict_with_the_parents_moves(
+    conn: Conn, periods: int, solution: str
+) -> None:
+    """The version adds nodes -7 and 2**53 + 1 and a triangle on them (the first period's topology); the parent moves
+    the nodes around them at geometry instant 2: a conflict there, maybe solved (TG308 when a solution gives that
+    geometry instant another topology than the period's others)."""
+    ids = _node_ids(conn, periods, 1.0)
+    big = 2**53 + 1
+    for t in (1.0, 2.0, 3.0):
+        for nid, dx in ((-7, 0.25), (big, 0.5)):
+            _sql(
+                conn,
+                "e1",
+                "INSERT INTO tgsis.d4dvrtx (geoid, timem, timet, nodeid, x, y, z)"
+                " SELECT geoid, timem, timet, %s, x + %s, y, z FROM tgsis.d4dvrtx"
+                " WHERE geoid = %s AND timem = 1 AND timet = %s AND nodeid = %s",
+                (nid, dx, periods, t, ids[5]),
+            )
+    _sql(
+        conn,
+        "e1",
+        "INSERT INTO tgsis.d4dtrgl (geoid, timem, trglid, nodeid1, nodeid2, nodeid3) VALUES (%s, 1, 9000, %s, -7, %s)",
+        (periods, ids[5], big),
+    )
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [ids[i] for i in range(12)], PARENT_SHIFT)
+    assert_same_regions(conn, "e1", periods)
+    if solution != "none":
+        conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+        n = conn.execute(
+            "SELECT count(*) FROM tgsis.conflict_regions WHERE versionid = tgsis.version_id('e1') AND conflict"
+        ).fetchone()
+        conn.rollback()
+        if n is not None and n[0] > 0:
+            from tests.test_sql_merge_write import solve
+
+            solve(conn, "e1", periods, solution)
+    for action in ("merge", "refresh"):
+        theirs, mine = both_merges(conn, "e1", action)
+        assert mine[:2] == theirs[:2], (theirs[:3], mine[:3])
+        if theirs[0] == "done":
+            for table in theirs[2]:
+                assert mine[2][table] == theirs[2][table], table
+
+
+@pytest.mark.parametrize("remover", ["e1", "DEFAULT"])
+@pytest.mark.parametrize("near", [False, True])
+def test_a_node_removed_from_a_period_on_one_side_the_other_moving_nodes_at_a_geometry_instant(
+    conn: Conn, periods: int, remover: str, near: bool
+) -> None:
+    """One side removes a corner node of the first period (its triangles, its rows at each geometry instant, its
+    property rows, its row in tgsis.node); the other moves nodes at geometry instant 2, near it or apart."""
+    ids = _node_ids(conn, periods, 1.0)
+    for m in (1.0, 3.0):  # (from both periods: the second starts where the first ends)
+        corner = _node_ids(conn, periods, m)[0]
+        _sql(
+            conn,
+            remover,
+            "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = %s AND %s IN (nodeid1, nodeid2, nodeid3)",
+            (periods, m, corner),
+        )
+        for table in ("d4dvrtx", "node"):
+            _sql(
+                conn,
+                remover,
+                f"DELETE FROM tgsis.{table} WHERE geoid = %s AND timem = %s AND nodeid = %s",
+                (periods, m, corner),
+            )
+        _sql(
+            conn,
+            remover,
+            "DELETE FROM evolving_cellpros WHERE _geoid = %s AND _timem = %s AND _idx = %s",
+            (periods, m, corner),
+        )
+    other = "DEFAULT" if remover == "e1" else "e1"
+    rows = [1, 2, SIDE, SIDE + 1] if near else list(SOUTH)
+    _move(conn, other, periods, 1.0, 2.0, [ids[i] for i in rows], PARENT_SHIFT if other == "DEFAULT" else CHILD_SHIFT)
+    _move(conn, remover, periods, 1.0, 2.0, [ids[i] for i in NORTH[SIDE:]], (0.0, 0.0, 0.5))
+    assert_same_regions(conn, "e1", periods)
+    for action in ("merge", "refresh"):
+        theirs, mine = both_merges(conn, "e1", action)
+        assert mine[:2] == theirs[:2], (theirs[:3], mine[:3])
+        if theirs[0] == "done":
+            for table in theirs[2]:
+                assert mine[2][table] == theirs[2][table], table
