@@ -498,3 +498,71 @@ def test_a_node_removed_from_a_period_on_one_side_the_other_moving_nodes_at_a_ge
         if theirs[0] == "done":
             for table in theirs[2]:
                 assert mine[2][table] == theirs[2][table], table
+
+
+@pytest.mark.parametrize("table", ["d4dtrgl", "node", "d4dvrtx"])
+@pytest.mark.parametrize("revoked", ["DELETE", "INSERT"])
+def test_a_role_that_may_not_write_the_triangles_the_parent_removed_beside_a_geometry_instant_merged_by_region(
+    conn: Conn, periods: int, db_dsn: str, table: str, revoked: str
+) -> None:
+    """The parent removes triangles (and a corner node) of both periods and moves nodes at geometry instant 2; the
+    version moves others there: the merge writes the parent's removal into the version through the model's views.
+    A role without that right is refused as the Python merge refuses it (42501), nothing written."""
+    from psycopg import sql
+
+    from tests.roles import login_roles
+    from tests.test_sql_merge_write import everything
+
+    ids = _node_ids(conn, periods, 1.0)
+    for m in (1.0, 3.0):
+        corner = _node_ids(conn, periods, m)[0]
+        _sql(
+            conn,
+            "DEFAULT",
+            "DELETE FROM tgsis.d4dtrgl WHERE geoid = %s AND timem = %s AND %s IN (nodeid1, nodeid2, nodeid3)",
+            (periods, m, corner),
+        )
+        for t in ("d4dvrtx", "node"):
+            _sql(
+                conn,
+                "DEFAULT",
+                f"DELETE FROM tgsis.{t} WHERE geoid = %s AND timem = %s AND nodeid = %s",
+                (periods, m, corner),
+            )
+        _sql(
+            conn,
+            "DEFAULT",
+            "DELETE FROM evolving_cellpros WHERE _geoid = %s AND _timem = %s AND _idx = %s",
+            (periods, m, corner),
+        )
+    _move(conn, "DEFAULT", periods, 1.0, 2.0, [ids[i] for i in SOUTH], PARENT_SHIFT)
+    _move(conn, "e1", periods, 1.0, 2.0, [ids[i] for i in MIDDLE], CHILD_SHIFT)
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        tgsis.grant_version(conn, "e1", "all", made.name("ed"))
+        tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
+        conn.execute(
+            sql.SQL("REVOKE {} ON {} FROM tgsis_editor").format(sql.SQL(revoked), sql.Identifier("tgsis", table))
+        )
+        conn.commit()
+        before = everything(conn)
+        conn.commit()
+        session = made.connect("ed")
+        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
+        conn.commit()
+
+        def outcome(run: Any) -> tuple[Any, ...]:
+            try:
+                with session.transaction(force_rollback=True):
+                    return ("done", int(run()))
+            except (psycopg.Error, tgsis.Error) as exc:
+                return ("refused", exc.sqlstate)
+            finally:
+                session.rollback()
+                conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+                conn.commit()
+
+        theirs = outcome(lambda: tgsis.merge_version(session, "e1"))
+        mine = outcome(lambda: session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0])  # type: ignore[index]
+        assert everything(conn) == before
+        conn.commit()
+        assert mine[:2] == theirs[:2], (theirs, mine)
