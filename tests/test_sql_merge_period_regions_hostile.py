@@ -206,7 +206,8 @@ def test_a_role_that_may_not_read_a_property_view_finds_the_regions_as_python(
         def found(run: Any) -> Any:
             try:
                 run()
-                return _stored(conn, "e1", periods) if session.commit() is None else None
+                session.commit()
+                return _stored(conn, "e1", periods)
             except (psycopg.Error, tgsis.Error) as exc:
                 return ("refused", exc.sqlstate)
             finally:
@@ -274,7 +275,7 @@ def test_integer_and_real_properties_of_an_evolving_surface_merge_by_region_as_i
     cells = curved_surface().cells
     size = SIDE * SIDE if alignment == "VERTEX" else len(cells)
     times = (1.0, 2.0, 3.0)
-    values = {
+    values: dict[str, Any] = {
         "n": np.stack([np.arange(size, dtype=np.int32)] * 3),
         "k": np.stack([np.arange(size, dtype=np.int64) * 3 - 2**40] * 3),
         "w": np.stack([np.linspace(0, 1, size).astype(np.float32)] * 3),
