@@ -6,6 +6,14 @@ Set-ups built once: a test that asks for one of the fixtures of
 (``CREATE DATABASE ... TEMPLATE``) of a database where that set-up was
 built once per session, instead of building it again: the test still has a
 database of its own, which it may change and commit as it likes.
+
+``--server-tests-only`` deselects the pure tests: those that never reach a
+PostgreSQL server, so give the same result on every version. A test reaches
+one when a fixture it uses depends, at any depth, on the server fixture
+``pg`` (``item.fixturenames`` is that closure), or when it starts or reaches
+a server by itself (a local server of its own, a child process that does):
+those carry the mark ``own_server``. ``tools/test-suites`` passes the option
+to the second suite (PostgreSQL 18), so that the pure tests run once.
 """
 
 from __future__ import annotations
@@ -23,6 +31,64 @@ if TYPE_CHECKING:  # (imported at run time as the plugin below, not before it: p
 pytest_plugins = ["tgsis.testing"]
 
 Conn = psycopg.Connection[Any]
+
+SERVER_FIXTURE = "pg"  # tgsis.testing's session server: every database fixture depends on it
+OWN_SERVER = "own_server"  # the mark of a test that starts or reaches a server without that fixture
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--server-tests-only",
+        action="store_true",
+        help="deselect the tests that reach no PostgreSQL server (neither the fixture pg, at any depth, "
+        f"nor the mark {OWN_SERVER}): what they prove does not depend on the server's version",
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers",
+        f"{OWN_SERVER}: the test starts or reaches a PostgreSQL server without the fixture pg "
+        "(its own local server, a child process that starts one): kept by --server-tests-only",
+    )
+
+
+def reaches_server(item: pytest.Item) -> bool:
+    """Whether ``item`` reaches a PostgreSQL server: uses ``pg`` (at any depth) or has the mark ``own_server``.
+
+    An item that is not a test function (no ``fixturenames``) counts as reaching one.
+    """
+    fixturenames = getattr(item, "fixturenames", None)
+    if fixturenames is None:
+        return True
+    return SERVER_FIXTURE in fixturenames or item.get_closest_marker(OWN_SERVER) is not None
+
+
+@pytest.hookimpl(trylast=True)  # after -k and -m: a selection of pure tests alone is told from one of nothing
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not config.getoption("--server-tests-only"):
+        return
+    pure = [item for item in items if not reaches_server(item)]
+    if pure:
+        config.hook.pytest_deselected(items=pure)
+        items[:] = [item for item in items if reaches_server(item)]
+        config.stash[_ONLY_PURE] = not items
+
+
+_ONLY_PURE = pytest.StashKey[bool]()
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """A selection of pure tests alone (``make test PYTEST_ARGS=tests/test_cli_help.py``) passes here: it
+    ran on the other suite. A selection that collects nothing at all still fails (exit 5)."""
+    if session.config.stash.get(_ONLY_PURE, False) and exitstatus == pytest.ExitCode.NO_TESTS_COLLECTED:
+        session.exitstatus = pytest.ExitCode.OK
+
+
+def pytest_report_collectionfinish(config: pytest.Config, items: list[pytest.Item]) -> str | None:
+    if config.getoption("--server-tests-only"):
+        return "--server-tests-only: the tests that reach no PostgreSQL server are deselected (they run on the other suite)"
+    return None
 
 
 def _fault(conn: Conn) -> int:
@@ -43,11 +109,18 @@ def _two_conflicts(conn: Conn) -> int:
     return two_conflicts(conn)
 
 
+def _series(conn: Conn) -> int:
+    from tests.test_merge_instants import make_series
+
+    return make_series(conn)
+
+
 # fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
 _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
     "fault_clone": _fault,  # tests.merge_data.make_fault: the curved fault in DEFAULT, version e1
     "three_regions_clone": _three_regions,  # tests.test_conflict_regions.three_regions
     "two_conflicts_clone": _two_conflicts,  # tests.test_resolve_all_regions.two_conflicts
+    "series_clone": _series,  # tests.test_merge_instants.make_series: a model-2 surface in DEFAULT, version e1
 }
 
 
@@ -92,6 +165,12 @@ def fault_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> in
 def three_regions_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
     """Geoid of ``three_regions``'s fault, already in the test's database (cloned, not built again)."""
     return built_once("three_regions_clone")[1]
+
+
+@pytest.fixture
+def series_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+    """Geoid of ``make_series``'s surface at instants, already in the test's database (cloned, not built again)."""
+    return built_once("series_clone")[1]
 
 
 @pytest.fixture

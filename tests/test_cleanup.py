@@ -16,6 +16,9 @@ import pytest
 from tests.local_helpers import child_env, private_home, process_alive, tgsis_cli, wait_until
 from tgsis.db.local import LocalServer, find_binaries
 
+# every test here starts servers of TGSIS_PG's binaries itself (or a child pytest does), not through pg
+pytestmark = pytest.mark.own_server
+
 HOLD_SERVER = """
 import json, sys, time
 from tgsis.db.local import LocalServer

@@ -67,6 +67,7 @@ def test_dsn_from_environment(db_dsn: str, monkeypatch: pytest.MonkeyPatch, caps
     assert "(from TGSIS_DSN)" in capsys.readouterr().out
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_local_status_and_dsn_without_a_server() -> None:
     with private_home() as home:
         status = tgsis_cli("local", "status", home=home)
@@ -77,6 +78,7 @@ def test_local_status_and_dsn_without_a_server() -> None:
         assert "not running" in dsn.stderr
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_demo_runs_the_release_story(tmp_path: Path) -> None:
     from tgsis.formats.pvd import read_pvd
 
@@ -133,6 +135,7 @@ def test_demo_runs_the_release_story(tmp_path: Path) -> None:
         assert again.stdout.splitlines()[4:] == lines[4:]
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_demo_without_the_shared_data_uses_synthetic_faults(tmp_path: Path) -> None:
     with private_home() as home:
         result = tgsis_cli("demo", "--dir", str(tmp_path / "out"), home=home, TGSIS_DEMO_DATA=str(tmp_path / "none"))

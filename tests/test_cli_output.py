@@ -275,6 +275,7 @@ def test_import_and_checkin(data: dict[str, Any], capsys: pytest.CaptureFixture[
     assert doc["record"] == f"{path}.tgsis-checkout.npz"
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_local_status(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
     monkeypatch.setenv("TGSIS_HOME", str(tmp_path / "home"))
     assert main(["local", "status", "--json"]) == 3

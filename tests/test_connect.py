@@ -49,6 +49,7 @@ def test_connect_through_libpq_environment(db_dsn: str, clean_env: pytest.Monkey
         assert conn.info.dbname == params["dbname"]
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_connect_without_dsn_starts_installs_and_releases_the_local_server(clean_env: pytest.MonkeyPatch) -> None:
     with private_home() as home:
         clean_env.setenv("TGSIS_HOME", str(home))

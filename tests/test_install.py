@@ -270,6 +270,7 @@ def test_reader_role_can_read_the_core_catalog(conn: psycopg.Connection[Any]) ->
         conn.execute("INSERT INTO tgsis.error_codes VALUES ('TG999', 'x', 'core', 'x')")
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_a_role_without_createrole_is_told_what_the_dba_must_run() -> None:
     """Managed PostgreSQL: the tgsis roles do not exist and the installer may not create roles."""
     from psycopg.conninfo import make_conninfo

@@ -184,6 +184,7 @@ def test_a_role_that_may_not_read_the_installation_record_is_not_told_of_another
     assert status.state != "other build" and status.ok, status
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_a_non_superuser_owner_is_made_admin_or_told_the_grant() -> None:
     """The owner registers classes and versions features, which tgsis allows tgsis_admin's members: an install
     by a role that may grant it to itself does; one that may not names the GRANT a DBA must run."""

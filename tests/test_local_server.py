@@ -34,6 +34,7 @@ def test_unknown_binaries_selection_is_refused() -> None:
         find_binaries("/nonexistent/bin")
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_selected_binaries_are_a_real_server() -> None:
     binaries = find_binaries()
     assert binaries.major >= 15
@@ -53,6 +54,7 @@ def test_default_home_follows_tgsis_home(monkeypatch: pytest.MonkeyPatch, tmp_pa
     )
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_throwaway_cluster_settings_and_removal() -> None:
     server = LocalServer.throwaway(in_memory=True)
     try:
@@ -85,6 +87,7 @@ def test_throwaway_cluster_settings_and_removal() -> None:
     assert not process_alive(pid)
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_throwaway_clusters_go_to_memory_when_it_has_room(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv("TMPDIR", raising=False)
     memory = Path("/dev/shm")
@@ -105,6 +108,7 @@ def test_throwaway_clusters_go_to_memory_when_it_has_room(monkeypatch: pytest.Mo
         shutil.rmtree(chosen, ignore_errors=True)
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_a_throwaway_cluster_not_asked_in_memory_stays_in_the_temporary_folder(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -117,6 +121,7 @@ def test_a_throwaway_cluster_not_asked_in_memory_stays_in_the_temporary_folder(
         server.destroy()
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_persistent_cluster_is_durable_and_listens_on_a_socket(home: Path) -> None:
     server = LocalServer.persistent(home=home)
     assert server.root == home / f"pg{server.binaries.major}"
@@ -126,6 +131,7 @@ def test_persistent_cluster_is_durable_and_listens_on_a_socket(home: Path) -> No
             assert conn.execute("SHOW listen_addresses").fetchone() == ("",)
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_last_lease_stops_an_implicitly_started_server(home: Path) -> None:
     first = LocalServer.persistent(home=home).acquire()
     server = first.server
@@ -140,6 +146,7 @@ def test_last_lease_stops_an_implicitly_started_server(home: Path) -> None:
     first.release()  # releasing twice is harmless
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_explicit_start_outlives_leases(home: Path) -> None:
     server = LocalServer.persistent(home=home)
     assert server.start_explicitly() is True
@@ -152,6 +159,7 @@ def test_explicit_start_outlives_leases(home: Path) -> None:
     assert server.stop_explicitly() is False
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_stop_waits_for_users_unless_forced(home: Path) -> None:
     lease = LocalServer.persistent(home=home).acquire()
     other = LocalServer.persistent(home=home)
@@ -163,6 +171,7 @@ def test_stop_waits_for_users_unless_forced(home: Path) -> None:
     lease.release()
 
 
+@pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
 def test_long_cluster_path_gets_a_short_socket_dir(home: Path) -> None:
     deep = home / ("d" * 60) / ("e" * 60)
     deep.mkdir(parents=True)

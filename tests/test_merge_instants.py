@@ -164,8 +164,8 @@ def _cells() -> set[tuple[int, ...]]:
 
 
 @pytest.fixture
-def series(conn: Conn) -> int:
-    return make_series(conn)
+def series(conn: Conn, series_clone: int) -> int:
+    return series_clone  # make_series's, built once (tests/conftest.py)
 
 
 def test_disjoint_edits_of_one_instant_merge_bit_for_bit(conn: Conn, series: int) -> None:

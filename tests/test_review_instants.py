@@ -19,7 +19,6 @@ from tests.test_merge_instants import (
     geometry_instants,
     instants,
     make_evolving,
-    make_series,
     move,
     move3,
     shifted,
@@ -29,8 +28,8 @@ Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def series(conn: Conn) -> int:
-    return make_series(conn)
+def series(conn: Conn, series_clone: int) -> int:
+    return series_clone  # make_series's, built once (tests/conftest.py)
 
 
 def _sql_resolve(conn: Conn, geoid: int, solution: str) -> psycopg.Error | None:

@@ -76,8 +76,8 @@ def assert_same_regions(conn: Conn, version: str, geoid: int) -> list[tuple[Any,
 
 
 @pytest.fixture
-def series(conn: Conn) -> int:
-    return make_series(conn)
+def series(conn: Conn, series_clone: int) -> int:
+    return series_clone  # make_series's, built once (tests/conftest.py)
 
 
 def test_regions_of_instants_both_sides_changed_are_stored_by_sql_as_by_python(conn: Conn, series: int) -> None:

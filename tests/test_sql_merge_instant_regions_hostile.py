@@ -20,7 +20,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import SIDE
-from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH, make_series, move
+from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH, move
 from tests.test_sql_merge_instant_regions import assert_same_regions
 from tests.test_sql_merge_slices import _add_instant, _delete_instant, _sql
 from tests.test_sql_merge_write import assert_same_merge, both_merges
@@ -29,8 +29,8 @@ Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def series(conn: Conn) -> int:
-    return make_series(conn)
+def series(conn: Conn, series_clone: int) -> int:
+    return series_clone  # make_series's, built once (tests/conftest.py)
 
 
 def _conflicts_at_every_instant(conn: Conn, series: int) -> None:

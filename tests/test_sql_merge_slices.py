@@ -24,15 +24,15 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, TIMES, make_series, move
+from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, TIMES, move
 from tests.test_sql_merge_write import _outcome, assert_same_merge, both_merges, everything
 
 Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def series(conn: Conn) -> int:
-    return make_series(conn)
+def series(conn: Conn, series_clone: int) -> int:
+    return series_clone  # make_series's, built once (tests/conftest.py)
 
 
 def _sql(conn: Conn, version: str, text: str, args: tuple[Any, ...] = ()) -> None:

@@ -12,7 +12,8 @@
 -- A surface at instants (model 2) or an evolving surface (model 3): the rows of
 -- tgsis.instants_merge_regions (each with its slice: the instant or geometry instant, times, and the
 -- period, timem; numbered through the object), none for an object-level conflict (or a model-3 object
--- no solution merges: TG308), as the Python find_conflicts stores them.
+-- no solution merges: TG308), as the Python find_conflicts stores them; none when the calling role may
+-- not read one of the class's property views (the Python find_conflicts cannot read their rows).
 -- Otherwise the rows of tgsis.mesh_merge_regions go in as found: a conflict
 -- unsolved, the others automatic. Returns the regions stored.
 CREATE FUNCTION tgsis.store_mesh_regions(p_version text, p_objectkey text)
@@ -37,6 +38,18 @@ BEGIN
     v_instants := (SELECT c.timemodel FROM tgsis.catalog c WHERE c.classname = tgsis.class_of_geoid(p_objectkey::bigint))
                   IN ('INSTANTS', 'EVOLVING');
     IF v_instants THEN  -- a surface at instants, an evolving surface: the regions of its slices, numbered through the object
+        -- a property view of the class the calling role may not read: the Python find_conflicts cannot read its rows
+        -- (MissingPrivilegeError: no regions, the refusal said), so none are found here either (the owner reads them)
+        IF EXISTS (SELECT FROM tgsis.catalog c
+                    CROSS JOIN LATERAL unnest(ARRAY[c.cellprotable, c.otherprotable]
+                                              || CASE WHEN jsonb_array_length(c.instant_properties) > 0
+                                                      THEN ARRAY[c.protablename] ELSE '{}'::text[] END) AS t (name)
+                    WHERE c.classname = tgsis.class_of_geoid(p_objectkey::bigint) AND t.name IS NOT NULL
+                      AND pg_catalog.to_regclass(format('%I.%I', c.schemaname, t.name)) IS NOT NULL
+                      AND NOT has_table_privilege(tgsis.calling_role(), format('%I.%I', c.schemaname, t.name)::regclass,
+                                                  'SELECT')) THEN
+            RETURN 0;
+        END IF;
         BEGIN
             INSERT INTO tgsis.conflict_regions (versionid, objectclass, objectkey, region, childmark, parentmark, conflict,
                                                 changed_by, vertex_ids, cell_ids, parent_vertex_ids, parent_cell_ids,

@@ -1,6 +1,7 @@
 -- tgsis.check_no_unsolved_conflicts(version, action): recompute a version's conflicts; TG302 naming the unsolved ones.
 -- The unsolved regions of a surface at instants (an evolving surface) are named with their instant (geometry instant and
--- period), as the Python merge names them.
+-- period), as the Python merge names them: extra_float_digits is pinned (an instant such as 0.1 + 0.2 is named
+-- 0.30000000000000004, not 0.3, whatever the session's setting).
 -- Its hint points meshes whose regions are stored (tgsis.conflict_regions) to the Python merge by
 -- region (tgsis version merge / refresh), which also applies average and manual solutions (the SQL
 -- merge by region, tgsis.merge_regions_in_sql, merges the others once their regions are solved).
@@ -8,6 +9,7 @@ CREATE FUNCTION tgsis.check_no_unsolved_conflicts(p_version text, p_action text)
 RETURNS void
 LANGUAGE plpgsql
 VOLATILE
+SET extra_float_digits = 1
 AS $$
 DECLARE
     v_count integer;

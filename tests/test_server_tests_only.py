@@ -1,0 +1,177 @@
+"""``--server-tests-only`` (tests/conftest.py) deselects exactly the tests that reach no server.
+
+``make test`` runs the whole suite on PostgreSQL 15 and again on 18; the
+pure tests (no fixture depending, at any depth, on the server fixture ``pg``,
+no mark ``own_server``) give the same result on both, so the second suite
+deselects them (tools/test-suites). Checked here on a tiny tests folder that
+uses the suite's own hooks, with pytest run in a subprocess: which tests are
+kept, that the others are *deselected* (said in the summary line, never
+skipped), and the exit status when a selection holds pure tests alone.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytest_plugins = ["pytester"]
+
+CONFTEST = """
+import pytest
+
+from tests.conftest import (  # the suite's own hooks
+    pytest_addoption,
+    pytest_collection_modifyitems,
+    pytest_configure,
+    pytest_report_collectionfinish,
+    pytest_sessionfinish,
+)
+
+
+@pytest.fixture(scope="session")
+def pg():  # stands for tgsis.testing's server fixture (nothing is started here)
+    return "server"
+
+
+@pytest.fixture
+def db(pg):
+    return pg
+
+
+@pytest.fixture
+def deeper(db):
+    return db
+
+
+@pytest.fixture
+def plain(tmp_path):
+    return tmp_path
+"""
+
+TESTS = """
+import pytest
+
+
+def test_pure():
+    pass
+
+
+def test_pure_with_a_fixture(plain):
+    pass
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_pure_cases(n):
+    pass
+
+
+def test_server(pg):
+    pass
+
+
+def test_server_two_fixtures_deep(deeper):
+    pass
+
+
+@pytest.mark.usefixtures("db")
+def test_server_by_usefixtures():
+    pass
+
+
+@pytest.mark.own_server
+def test_own_server():
+    pass
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_server_cases(db, n):
+    pass
+
+
+class TestGroup:
+    def test_pure_method(self):
+        pass
+
+    def test_server_method(self, plain, deeper):
+        pass
+"""
+
+MARKED_MODULE = """
+import pytest
+
+pytestmark = pytest.mark.own_server
+
+
+def test_marked_by_its_module():
+    pass
+"""
+
+SERVER_TESTS = {
+    "test_cases.py::test_server",
+    "test_cases.py::test_server_two_fixtures_deep",
+    "test_cases.py::test_server_by_usefixtures",
+    "test_cases.py::test_own_server",
+    "test_cases.py::test_server_cases[1]",
+    "test_cases.py::test_server_cases[2]",
+    "test_cases.py::TestGroup::test_server_method",
+    "test_marked.py::test_marked_by_its_module",
+}
+PURE_TESTS = {
+    "test_cases.py::test_pure",
+    "test_cases.py::test_pure_with_a_fixture",
+    "test_cases.py::test_pure_cases[1]",
+    "test_cases.py::test_pure_cases[2]",
+    "test_cases.py::TestGroup::test_pure_method",
+}
+
+
+def _pytest(pytester: pytest.Pytester, *args: str) -> pytest.RunResult:
+    return pytester.runpytest_inprocess("-p", "no:cacheprovider", "-q", "--strict-markers", *args)
+
+
+def _folder(pytester: pytest.Pytester) -> pytest.Pytester:
+    pytester.makeconftest(CONFTEST)
+    pytester.makepyfile(test_cases=TESTS, test_marked=MARKED_MODULE)
+    return pytester
+
+
+def _collected(out: list[str]) -> set[str]:
+    return {line for line in out if "::" in line}
+
+
+def test_the_option_keeps_the_tests_that_reach_a_server_and_deselects_the_others(pytester: pytest.Pytester) -> None:
+    folder = _folder(pytester)
+    everything = _pytest(folder, "--collect-only")
+    assert everything.ret == 0, everything.stdout.str()
+    assert _collected(everything.outlines) == SERVER_TESTS | PURE_TESTS and "deselected" not in everything.stdout.str()
+    kept = _pytest(folder, "--collect-only", "--server-tests-only")
+    assert kept.ret == 0, kept.stdout.str()
+    assert _collected(kept.outlines) == SERVER_TESTS
+    assert f"{len(SERVER_TESTS)}/{len(SERVER_TESTS | PURE_TESTS)} tests collected ({len(PURE_TESTS)} deselected)" in (
+        kept.stdout.str()
+    )
+
+
+def test_the_pure_tests_are_deselected_not_skipped(pytester: pytest.Pytester) -> None:
+    run = _pytest(_folder(pytester), "--server-tests-only", "-rA")
+    assert run.ret == 0, run.stdout.str()
+    summary = run.outlines[-1]
+    assert f"{len(SERVER_TESTS)} passed, {len(PURE_TESTS)} deselected" in summary, summary
+    assert "skipped" not in run.stdout.str()
+    assert "the tests that reach no PostgreSQL server are deselected" in run.stdout.str()
+    passed = {line.removeprefix("PASSED ") for line in run.outlines if line.startswith("PASSED ")}
+    assert passed == SERVER_TESTS
+
+
+def test_a_selection_of_pure_tests_alone_passes_and_a_selection_of_nothing_still_fails(
+    pytester: pytest.Pytester,
+) -> None:
+    folder = _folder(pytester)
+    pure_only = _pytest(folder, "--server-tests-only", "-k", "pure")
+    assert pure_only.ret == 0, pure_only.stdout.str()
+    assert (
+        f"{len(SERVER_TESTS | PURE_TESTS)} deselected" in pure_only.stdout.str()
+    )  # -k the server ones, the option the rest
+    nothing = _pytest(folder, "--server-tests-only", "-k", "no_such_test")
+    assert nothing.ret == 5, nothing.stdout.str()
+    folder.makepyfile(test_failing="def test_pure_but_failing():\n    assert False\n")
+    assert _pytest(folder, "--server-tests-only", "-k", "failing").ret == 0  # deselected: it runs on the other suite
