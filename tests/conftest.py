@@ -14,6 +14,11 @@ one when a fixture it uses depends, at any depth, on the server fixture
 a server by itself (a local server of its own, a child process that does):
 those carry the mark ``own_server``. ``tools/test-suites`` passes the option
 to the second suite (PostgreSQL 18), so that the pure tests run once.
+It deselects as well the tests marked ``one_server``: they reach a server,
+but what they check is the harness's handling of processes (signals, the
+lease watcher, where a throwaway cluster's folder goes), the same code on
+every version; the version-specific part (initdb/pg_ctl flags, installing
+the extension) is checked by other tests that run in both suites.
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ Conn = psycopg.Connection[Any]
 
 SERVER_FIXTURE = "pg"  # tgsis.testing's session server: every database fixture depends on it
 OWN_SERVER = "own_server"  # the mark of a test that starts or reaches a server without that fixture
+ONE_SERVER = "one_server"  # the mark of a test of process handling alone: --server-tests-only deselects it
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -41,7 +47,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         "--server-tests-only",
         action="store_true",
         help="deselect the tests that reach no PostgreSQL server (neither the fixture pg, at any depth, "
-        f"nor the mark {OWN_SERVER}): what they prove does not depend on the server's version",
+        f"nor the mark {OWN_SERVER}) and those marked {ONE_SERVER}: what they prove does not depend on the "
+        "server's version",
     )
 
 
@@ -51,6 +58,17 @@ def pytest_configure(config: pytest.Config) -> None:
         f"{OWN_SERVER}: the test starts or reaches a PostgreSQL server without the fixture pg "
         "(its own local server, a child process that starts one): kept by --server-tests-only",
     )
+    config.addinivalue_line(
+        "markers",
+        f"{ONE_SERVER}: the test checks the harness's handling of processes (signals, the lease watcher, "
+        "where a cluster's folder goes), not what differs between PostgreSQL versions: deselected by "
+        "--server-tests-only, so it runs in one suite",
+    )
+
+
+def runs_on_every_server(item: pytest.Item) -> bool:
+    """Whether --server-tests-only keeps ``item``: it reaches a server and is not marked ``one_server``."""
+    return reaches_server(item) and item.get_closest_marker(ONE_SERVER) is None
 
 
 def reaches_server(item: pytest.Item) -> bool:
@@ -68,10 +86,10 @@ def reaches_server(item: pytest.Item) -> bool:
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     if not config.getoption("--server-tests-only"):
         return
-    pure = [item for item in items if not reaches_server(item)]
+    pure = [item for item in items if not runs_on_every_server(item)]
     if pure:
         config.hook.pytest_deselected(items=pure)
-        items[:] = [item for item in items if reaches_server(item)]
+        items[:] = [item for item in items if runs_on_every_server(item)]
         config.stash[_ONLY_PURE] = not items
 
 
@@ -87,7 +105,10 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
 
 def pytest_report_collectionfinish(config: pytest.Config, items: list[pytest.Item]) -> str | None:
     if config.getoption("--server-tests-only"):
-        return "--server-tests-only: the tests that reach no PostgreSQL server are deselected (they run on the other suite)"
+        return (
+            "--server-tests-only: the tests that reach no PostgreSQL server, and those marked "
+            f"{ONE_SERVER}, are deselected (they run on the other suite)"
+        )
     return None
 
 

@@ -16,8 +16,11 @@ import pytest
 from tests.local_helpers import child_env, private_home, process_alive, tgsis_cli, wait_until
 from tgsis.db.local import LocalServer, find_binaries
 
-# every test here starts servers of TGSIS_PG's binaries itself (or a child pytest does), not through pg
-pytestmark = pytest.mark.own_server
+# every test here starts servers of TGSIS_PG's binaries itself (or a child pytest does), not through pg;
+# what they check is how the harness handles processes (signals, the reaper, the lease watcher, local
+# start/stop), the same code on every version: one suite runs them (one_server, tests/conftest.py). That a
+# CLI command (the demo) stops the server it started is checked in tests/test_cli.py, in both suites.
+pytestmark = [pytest.mark.own_server, pytest.mark.one_server]
 
 HOLD_SERVER = """
 import json, sys, time
@@ -110,15 +113,6 @@ def test_interrupted_test_run_leaves_no_server(tmp_path: Path, signals: tuple[si
             child.kill()
 
 
-def test_cli_command_stops_the_server_it_started(tmp_path: Path) -> None:
-    with private_home() as home:
-        result = tgsis_cli("demo", "--dir", str(tmp_path), home=home)
-        assert result.returncode == 0, result.stderr
-        server = LocalServer.persistent(find_binaries(), home=home)
-        assert server.is_initialized()
-        assert not server.is_running()
-
-
 HOLD_LEASE = "import time, tgsis; tgsis.connect().close(); print('up', flush=True); time.sleep(300)"
 
 # A dying process closes its pipe to the watcher and releases its lease-file lock
@@ -153,12 +147,8 @@ def _kill_lease_holder(home: Path) -> None:
             child.kill()
 
 
-def test_cli_killed_midway_leaves_no_server() -> None:
-    with private_home() as home:
-        _kill_lease_holder(home)
-
-
 def test_killed_lease_holders_never_leave_the_server(tmp_path: Path) -> None:
+    """A CLI process killed midway leaves no server, ten times over (the first round is the plain case)."""
     # before the fix about 1 round in 4 failed, so 10 rounds caught it almost always
     with private_home() as home:
         for _ in range(KILL_ROUNDS):

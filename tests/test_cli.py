@@ -12,6 +12,7 @@ import tgsis
 from tests.local_helpers import private_home, tgsis_cli
 from tests.shared_data import cfm
 from tgsis.cli import main
+from tgsis.db.local import LocalServer, find_binaries
 
 
 def test_version(capsys: pytest.CaptureFixture[str]) -> None:
@@ -85,6 +86,9 @@ def test_demo_runs_the_release_story(tmp_path: Path) -> None:
     with private_home() as home:
         result = tgsis_cli("demo", "--dir", str(tmp_path / "demo"), home=home)
         assert result.returncode == 0, result.stderr
+        # the command stopped the local server it started (its cluster stays)
+        server = LocalServer.persistent(find_binaries(), home=home)
+        assert server.is_initialized() and not server.is_running()
         lines = result.stdout.splitlines()
         assert lines[0].startswith("PostgreSQL ") and "database 'tgsis_demo' (local server)" in lines[0]
         assert lines[1] in (
@@ -133,6 +137,7 @@ def test_demo_runs_the_release_story(tmp_path: Path) -> None:
         again = tgsis_cli("demo", "--dir", str(tmp_path / "demo"), home=home)  # a database of its own, made afresh
         assert again.returncode == 0, again.stderr
         assert again.stdout.splitlines()[4:] == lines[4:]
+        assert not server.is_running()
 
 
 @pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's

@@ -88,6 +88,7 @@ def test_throwaway_cluster_settings_and_removal() -> None:
 
 
 @pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
+@pytest.mark.one_server  # where the cluster's folder goes: the same on every version
 def test_throwaway_clusters_go_to_memory_when_it_has_room(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv("TMPDIR", raising=False)
     memory = Path("/dev/shm")
@@ -109,6 +110,7 @@ def test_throwaway_clusters_go_to_memory_when_it_has_room(monkeypatch: pytest.Mo
 
 
 @pytest.mark.own_server  # a server of TGSIS_PG's binaries, not the fixture pg's
+@pytest.mark.one_server  # where the cluster's folder goes: the same on every version
 def test_a_throwaway_cluster_not_asked_in_memory_stays_in_the_temporary_folder(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

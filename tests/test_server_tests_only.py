@@ -3,7 +3,7 @@
 ``make test`` runs the whole suite on PostgreSQL 15 and again on 18; the
 pure tests (no fixture depending, at any depth, on the server fixture ``pg``,
 no mark ``own_server``) give the same result on both, so the second suite
-deselects them (tools/test-suites). Checked here on a tiny tests folder that
+deselects them (tools/test-suites), and the tests marked ``one_server`` too. Checked here on a tiny tests folder that
 uses the suite's own hooks, with pytest run in a subprocess: which tests are
 kept, that the others are *deselected* (said in the summary line, never
 skipped), and the exit status when a selection holds pure tests alone.
@@ -87,6 +87,17 @@ def test_server_cases(db, n):
     pass
 
 
+@pytest.mark.own_server
+@pytest.mark.one_server
+def test_one_server_of_its_own():
+    pass
+
+
+@pytest.mark.one_server
+def test_one_server_by_the_fixture(db):
+    pass
+
+
 class TestGroup:
     def test_pure_method(self):
         pass
@@ -115,6 +126,10 @@ SERVER_TESTS = {
     "test_cases.py::TestGroup::test_server_method",
     "test_marked.py::test_marked_by_its_module",
 }
+ONE_SERVER_TESTS = {
+    "test_cases.py::test_one_server_of_its_own",
+    "test_cases.py::test_one_server_by_the_fixture",
+}
 PURE_TESTS = {
     "test_cases.py::test_pure",
     "test_cases.py::test_pure_with_a_fixture",
@@ -142,22 +157,22 @@ def test_the_option_keeps_the_tests_that_reach_a_server_and_deselects_the_others
     folder = _folder(pytester)
     everything = _pytest(folder, "--collect-only")
     assert everything.ret == 0, everything.stdout.str()
-    assert _collected(everything.outlines) == SERVER_TESTS | PURE_TESTS and "deselected" not in everything.stdout.str()
+    assert _collected(everything.outlines) == SERVER_TESTS | ONE_SERVER_TESTS | PURE_TESTS
+    assert "deselected" not in everything.stdout.str()
     kept = _pytest(folder, "--collect-only", "--server-tests-only")
     assert kept.ret == 0, kept.stdout.str()
     assert _collected(kept.outlines) == SERVER_TESTS
-    assert f"{len(SERVER_TESTS)}/{len(SERVER_TESTS | PURE_TESTS)} tests collected ({len(PURE_TESTS)} deselected)" in (
-        kept.stdout.str()
-    )
+    total, deselected = len(SERVER_TESTS | ONE_SERVER_TESTS | PURE_TESTS), len(ONE_SERVER_TESTS | PURE_TESTS)
+    assert f"{len(SERVER_TESTS)}/{total} tests collected ({deselected} deselected)" in kept.stdout.str()
 
 
 def test_the_pure_tests_are_deselected_not_skipped(pytester: pytest.Pytester) -> None:
     run = _pytest(_folder(pytester), "--server-tests-only", "-rA")
     assert run.ret == 0, run.stdout.str()
     summary = run.outlines[-1]
-    assert f"{len(SERVER_TESTS)} passed, {len(PURE_TESTS)} deselected" in summary, summary
+    assert f"{len(SERVER_TESTS)} passed, {len(ONE_SERVER_TESTS | PURE_TESTS)} deselected" in summary, summary
     assert "skipped" not in run.stdout.str()
-    assert "the tests that reach no PostgreSQL server are deselected" in run.stdout.str()
+    assert "the tests that reach no PostgreSQL server, and those marked one_server, are deselected" in run.stdout.str()
     passed = {line.removeprefix("PASSED ") for line in run.outlines if line.startswith("PASSED ")}
     assert passed == SERVER_TESTS
 
@@ -169,7 +184,7 @@ def test_a_selection_of_pure_tests_alone_passes_and_a_selection_of_nothing_still
     pure_only = _pytest(folder, "--server-tests-only", "-k", "pure")
     assert pure_only.ret == 0, pure_only.stdout.str()
     assert (
-        f"{len(SERVER_TESTS | PURE_TESTS)} deselected" in pure_only.stdout.str()
+        f"{len(SERVER_TESTS | ONE_SERVER_TESTS | PURE_TESTS)} deselected" in pure_only.stdout.str()
     )  # -k the server ones, the option the rest
     nothing = _pytest(folder, "--server-tests-only", "-k", "no_such_test")
     assert nothing.ret == 5, nothing.stdout.str()
