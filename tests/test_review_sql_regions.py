@@ -335,9 +335,11 @@ def test_many_region_detections_in_one_transaction_hold_no_locks_and_leave_no_ta
     assert_same_regions(conn, "e1", fault)
 
 
-def test_psql_conflicts_of_a_g_map_and_an_evolving_surface_have_no_regions_and_solve_whole(conn: Conn) -> None:
-    """Model 3 (g-map) and model 2 (evolving) features in conflict, from psql only: SQL find_conflicts stores no
-    regions for them and says nothing, resolve_conflict records a whole side, mesh_merge_regions refuses (TG100)."""
+def test_psql_conflicts_of_a_g_map_and_an_evolving_surface_regions_by_slice_and_solve_whole(conn: Conn) -> None:
+    """A g-map and an evolving surface (model 3) in conflict, from psql only: SQL find_conflicts stores no regions
+    for the g-map (it does not merge by region), and for the evolving surface the regions of each geometry instant
+    both sides changed, as the Python find_conflicts stores them (each with its slice: timem, times); the region
+    engine without a slice refuses both (TG100); resolve_conflict records a whole side."""
     from tests.temporal_data import evolving
     from tests.test_gmap_storage import _class, _evolving
     from tests.test_temporal_versioning import STARTS
@@ -356,7 +358,27 @@ def test_psql_conflicts_of_a_g_map_and_an_evolving_surface_have_no_regions_and_s
     psql(conn, "other", (move_g, ([8, 8, 8], geoid)), (move_e, (-1.0, fid)))
     keys = conn.execute("SELECT objectkey FROM tgsis.find_conflicts('other') ORDER BY objectkey::bigint").fetchall()
     assert sorted(int(k) for (k,) in keys) == sorted([geoid, fid])
-    assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions").fetchone() == (0,)
+    assert conn.execute(
+        "SELECT count(*) FROM tgsis.conflict_regions WHERE objectkey = %s", (str(geoid),)
+    ).fetchone() == (0,)
+    stored = conn.execute(
+        "SELECT timem, times, conflict, vertex_ids FROM tgsis.conflict_regions WHERE objectkey = %s ORDER BY region",
+        (str(fid),),
+    ).fetchall()
+    slices = conn.execute(
+        "SELECT timem, timet FROM tgsis.d4dvrtx WHERE geoid = %s AND nodeid = 0 ORDER BY timem, timet", (fid,)
+    ).fetchall()
+    # node 0 moved by each side otherwise at every geometry instant it has: one conflicting region there, on node 0
+    assert [(m, t, c, v) for (m, t, c, v) in stored] == [(m, t, True, [0]) for (m, t) in slices], (stored, slices)
+    mine = sorted(
+        conn.execute("SELECT timem, times, conflict, vertex_ids, cell_ids FROM tgsis.conflict_regions").fetchall()
+    )
+    conn.rollback()  # SQL find_conflicts rolled back: the Python one finds them afresh
+    tgsis.find_conflicts(conn, "other")
+    theirs = sorted(
+        conn.execute("SELECT timem, times, conflict, vertex_ids, cell_ids FROM tgsis.conflict_regions").fetchall()
+    )
+    assert mine == theirs
     for g in (geoid, fid):
         state, message, _ = sqlstate(conn, "SELECT * FROM tgsis.mesh_merge_regions('other', %s)", (g,))
         assert state == "TG100", message
