@@ -51,3 +51,32 @@ def login_roles(dsn: str, groups: dict[str, str]) -> Iterator[Roles]:
             for short in groups:
                 admin.execute(f"DROP OWNED BY {roles.name(short)} CASCADE")
                 admin.execute(f"DROP ROLE {roles.name(short)}")
+
+
+def merges_as(conn: Conn, session: Conn, version: str, *, message: bool = False) -> tuple[tuple[Any, ...], ...]:
+    """The Python merge, then the psql merge, of ``version`` run by ``session`` (a login role), each rolled back.
+
+    ``conn`` (the owner's) puts the revision sequence back after each, so both
+    number their revisions alike. Returns ``(python, psql)``, each
+    ``("done", rows written)`` or ``("refused", SQLSTATE)`` (with the message's
+    first 300 characters as a third item when ``message``).
+    """
+    import tgsis
+
+    seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
+    conn.commit()
+
+    def outcome(run: Any) -> tuple[Any, ...]:
+        try:
+            with session.transaction(force_rollback=True):
+                return ("done", int(run()))
+        except (psycopg.Error, tgsis.Error) as exc:
+            return ("refused", exc.sqlstate, str(exc)[:300]) if message else ("refused", exc.sqlstate)
+        finally:
+            session.rollback()
+            conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
+            conn.commit()
+
+    python = outcome(lambda: tgsis.merge_version(session, version))
+    psql = outcome(lambda: session.execute("SELECT tgsis.merge_version(%s)", (version,)).fetchone()[0])  # type: ignore[index]
+    return python, psql

@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 
 import tgsis
 from tests.merge_data import SIDE
+from tests.roles import merges_as
 from tests.test_merge_instants import (
     CHILD_SHIFT,
     NORTH,
@@ -345,22 +346,7 @@ def test_a_property_view_the_role_may_not_write_is_refused_as_in_python_and_noth
         before = everything(conn)
         conn.commit()
         session = made.connect("ed")
-        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
-        conn.commit()
-
-        def outcome(run: Any) -> tuple[Any, ...]:
-            try:
-                with session.transaction(force_rollback=True):
-                    return ("done", int(run()))
-            except (psycopg.Error, tgsis.Error) as exc:
-                return ("refused", exc.sqlstate)
-            finally:
-                session.rollback()
-                conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
-                conn.commit()
-
-        theirs = outcome(lambda: tgsis.merge_version(session, "e1"))
-        mine = outcome(lambda: session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0])  # type: ignore[index]
+        theirs, mine = merges_as(conn, session, "e1")
         assert everything(conn) == before
         conn.commit()
         assert theirs == ("refused", "42501"), theirs  # PostgreSQL refuses the Python merge's statement

@@ -18,6 +18,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import SIDE
+from tests.roles import merges_as
 from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH
 from tests.test_sql_merge_instant_regions import assert_same_regions
 from tests.test_sql_merge_periods import _move, _node_ids, _sql, make_periods
@@ -169,22 +170,7 @@ def test_a_role_that_may_not_read_a_property_view_merges_by_region_only_as_pytho
         conn.execute(f"REVOKE SELECT ON public.{table} FROM tgsis_editor, tgsis_reader")
         conn.commit()
         session = made.connect("ed")
-        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
-        conn.commit()
-
-        def outcome(run: Any) -> tuple[Any, ...]:
-            try:
-                with session.transaction(force_rollback=True):
-                    return ("done", int(run()))
-            except (psycopg.Error, tgsis.Error) as exc:
-                return ("refused", exc.sqlstate, str(exc)[:300])
-            finally:
-                session.rollback()
-                conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
-                conn.commit()
-
-        theirs = outcome(lambda: tgsis.merge_version(session, "e1"))
-        mine = outcome(lambda: session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0])  # type: ignore[index]
+        theirs, mine = merges_as(conn, session, "e1", message=True)
         assert mine[:2] == theirs[:2], (theirs, mine)
 
 
@@ -548,22 +534,7 @@ def test_a_role_that_may_not_write_the_triangles_the_parent_removed_beside_a_geo
         before = everything(conn)
         conn.commit()
         session = made.connect("ed")
-        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
-        conn.commit()
-
-        def outcome(run: Any) -> tuple[Any, ...]:
-            try:
-                with session.transaction(force_rollback=True):
-                    return ("done", int(run()))
-            except (psycopg.Error, tgsis.Error) as exc:
-                return ("refused", exc.sqlstate)
-            finally:
-                session.rollback()
-                conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
-                conn.commit()
-
-        theirs = outcome(lambda: tgsis.merge_version(session, "e1"))
-        mine = outcome(lambda: session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0])  # type: ignore[index]
+        theirs, mine = merges_as(conn, session, "e1")
         assert everything(conn) == before
         conn.commit()
         assert mine[:2] == theirs[:2], (theirs, mine)

@@ -20,6 +20,7 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import curved_surface
+from tests.roles import merges_as
 from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, TIMES, _porosity, _shape, move
 from tests.test_sql_merge_write import assert_same_merge, both_merges, everything
 from tgsis.temporal import SurfaceSeries
@@ -613,22 +614,7 @@ def test_a_role_that_may_not_write_a_property_table_is_refused_as_in_python(
         before = everything(conn)
         conn.commit()
         session = made.connect("ed")
-        seq = conn.execute("SELECT last_value, is_called FROM tgsis.revision_seq").fetchone()
-        conn.commit()
-
-        def outcome(run: Any) -> tuple[Any, ...]:
-            try:
-                with session.transaction(force_rollback=True):
-                    return ("done", int(run()))
-            except (psycopg.Error, tgsis.Error) as exc:
-                return ("refused", exc.sqlstate)
-            finally:
-                session.rollback()
-                conn.execute("SELECT setval('tgsis.revision_seq', %s, %s)", seq)
-                conn.commit()
-
-        theirs = outcome(lambda: tgsis.merge_version(session, "e1"))
-        mine = outcome(lambda: session.execute("SELECT tgsis.merge_version('e1')").fetchone()[0])  # type: ignore[index]
+        theirs, mine = merges_as(conn, session, "e1")
         assert everything(conn) == before
         conn.commit()
         if revoked == "INSERT, UPDATE, DELETE":
