@@ -204,9 +204,15 @@ def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_
         before = _indexes(conn, f"tgsis.{table}_ver")
         conn.execute("SELECT tgsis.create_revision_indexes('tgsis', %s, 'geoid')", (table,))  # as the upgrade calls it
         assert _indexes(conn, f"tgsis.{table}_ver") == before
-    # the storage of other versioned tables (vertices, the model-2 triangles of instants) gets none
-    for table in ("tgsis.vrtx_ver", "tgsis.times_trgl_ver"):
-        assert not any("vrtxid1" in d for am, d in _indexes(conn, table) if am == "brin"), table
+    # the triangles of models 2 and 3 get theirs by instant or topology period (ids repeat in each); the
+    # vertices' storage gets none
+    for table, columns in (
+        ("tgsis.times_trgl_ver", "(geoid, times, vrtxid1, vrtxid2, vrtxid3)"),
+        ("tgsis.d4dtrgl_ver", "(geoid, timem, nodeid1, nodeid2, nodeid3)"),
+    ):
+        found = [d for am, d in _indexes(conn, table) if am == "brin" and columns in d]
+        assert len(found) == 1, _indexes(conn, table)
+    assert not any("vrtxid1" in d for am, d in _indexes(conn, "tgsis.vrtx_ver") if am == "brin")
     tgsis.disable_feature_versioning(conn)  # what versioning made goes
     conn.commit()
     for table in ("point", "segment", "trgl", "tetra"):
