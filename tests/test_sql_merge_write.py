@@ -550,8 +550,8 @@ def _validity_in_sql(
         "CREATE TEMPORARY TABLE tgsis_mr_v (id bigint, st smallint, x float8, y float8, z float8, val text, ref bigint)"
     )
     conn.execute("CREATE TEMPORARY TABLE tgsis_mr_c (id bigint, st smallint, v bigint[])")
-    # the engine's info row: a model-1 mesh (no instant: the base's cells of the whole object)
-    conn.execute("CREATE TEMPORARY TABLE tgsis_mr_info AS SELECT NULL::float8 AS times")
+    # the engine's info row: a model-1 mesh (no instant, no period: the base's cells of the whole object)
+    conn.execute("CREATE TEMPORARY TABLE tgsis_mr_info AS SELECT NULL::float8 AS times, NULL::float8 AS timem")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint)")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mr_margin (id bigint, v bigint[])")
     conn.execute("CREATE TEMPORARY TABLE tgsis_mw_node (kind text, id bigint, region integer)")
