@@ -440,8 +440,7 @@ def test_session_settings_do_not_change_what_psql_merges_by_region(conn: Conn, p
     assert theirs[0] == "done", theirs
     conn.execute("SET extra_float_digits = -15")
     conn.execute("SET search_path = public")
-    conn.execute("SET enable_hashjoin = off")
-    conn.execute("SET jit = off")
+    conn.execute("SET enable_hashjoin = off; SET jit = off")
     conn.commit()
     _, mine = both_merges(conn, "e1")
     conn.execute("RESET ALL")
