@@ -88,3 +88,16 @@ def moved(vertices: npt.NDArray[np.float64], ids: npt.ArrayLike, shift: tuple[fl
     at = np.asarray(ids)
     for axis in range(3):
         vertices[at, axis] = vertices[at, axis] + shift[axis]
+
+
+def with_duplicated_triangle(state: Any) -> Any:
+    """``state`` (a MeshState) with a second triangle on the nodes of its first, rotated (merge3 refuses it as
+    "duplicated triangles"), a new id past the largest and the first triangle's property values."""
+    import dataclasses
+
+    return dataclasses.replace(
+        state,
+        cell_ids=np.append(state.cell_ids, int(state.cell_ids.max()) + 1000),
+        cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
+        cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
+    )

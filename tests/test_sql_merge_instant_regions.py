@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tests.merge_data import SIDE
+from tests.merge_data import SIDE, with_duplicated_triangle
 from tests.roles import merges_as
 from tests.test_merge_instants import (
     CHILD_SHIFT,
@@ -692,13 +692,7 @@ def test_a_manual_mesh_that_makes_an_invalid_instant_is_refused_in_psql_as_in_py
     state = tgsis.resolve_region(conn, "e1", series, 0, "average").state
     conn.rollback()
     assert state is not None
-    twin = int(state.cell_ids.max()) + 1000
-    broken = dataclasses.replace(
-        state,
-        cell_ids=np.append(state.cell_ids, twin),
-        cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
-        cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
-    )
+    broken = with_duplicated_triangle(state)
     _record_in_sql(conn, series, broken)
     before = everything(conn)
     conn.commit()

@@ -24,7 +24,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tests.merge_data import SIDE
+from tests.merge_data import SIDE, with_duplicated_triangle
 from tests.roles import merges_as
 from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH
 from tests.test_sql_merge_instant_regions import assert_same_regions, python_regions
@@ -620,13 +620,7 @@ def test_a_manual_mesh_that_makes_an_invalid_geometry_instant_is_refused_in_psql
     """A manual mesh recorded from psql with a second triangle on the nodes of one of its triangles: merge3's
     validity check refuses the merged geometry instant in both merges, naming the same nodes, nothing written."""
     state = _average_state(conn, periods)
-    twin = int(state.cell_ids.max()) + 1000
-    broken = dataclasses.replace(
-        state,
-        cell_ids=np.append(state.cell_ids, twin),
-        cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
-        cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
-    )
+    broken = with_duplicated_triangle(state)
     _record_in_sql(conn, periods, broken)
     before = everything(conn)
     conn.commit()
