@@ -35,7 +35,7 @@ from tgsis.errors import (
     PolygonsSplitWarning,
     SkippedObjectWarning,
 )
-from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
+from tgsis.mesh import ORDERS, GeometryCollection, Geotype, Mesh, MeshReport, Surface, spatial_order
 
 # --------------------------------------------------------------------------- features
 
@@ -176,6 +176,11 @@ def _import_instant(
     from tgsis.db.temporal import add_instant
     from tgsis.temporal import SurfaceSeries
 
+    if args.order == "spatial":
+        raise InvalidInputError(
+            f"--order spatial renumbers static features only (model 1); an instant of class {fc.name} "
+            f"({fc.time_model}) keeps the file's order"
+        )
     if fc.time_model != "INSTANTS":
         raise InvalidInputError(
             f"--at and --feature take a class of surfaces at instants (INSTANTS); {fc.name} is {fc.time_model}",
@@ -416,7 +421,14 @@ def cmd_import(args: argparse.Namespace) -> int:
                 with busy(f"uploading {collection.n_vertices} vertices"):
                     if old is not None:
                         delete_feature(conn, fc, old)
-                    fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
+                    fid = insert_feature(
+                        conn,
+                        fc,
+                        collection,
+                        values,
+                        drop_extra_properties=args.drop_extra_properties,
+                        order=args.order,
+                    )
             if same and not args.replace:
                 _warn_same_name(fc, collection.name or "", same)
             result = ImportedCollection(
@@ -444,14 +456,27 @@ def cmd_import(args: argparse.Namespace) -> int:
                 same = _features_named(conn, fc, name)
                 old = _replaced_one(fc, name, same) if args.replace else None
                 if old is not None:
+                    saved = spatial_order(mesh) if args.order == "spatial" else mesh
                     save_feature(
-                        conn, fc, old, mesh, values or None, name=name, drop_extra_properties=args.drop_extra_properties
+                        conn,
+                        fc,
+                        old,
+                        saved,
+                        values or None,
+                        name=name,
+                        drop_extra_properties=args.drop_extra_properties,
                     )
                     ids.append(old)
                 else:
                     ids.append(
                         insert_feature(
-                            conn, fc, mesh, values, name=name, drop_extra_properties=args.drop_extra_properties
+                            conn,
+                            fc,
+                            mesh,
+                            values,
+                            name=name,
+                            drop_extra_properties=args.drop_extra_properties,
+                            order=args.order,
                         )
                     )
                     if same:
@@ -561,6 +586,14 @@ def add_import_parser(commands: Any) -> None:
         action="store_true",
         help="with --at, for a new feature: it still exists after its last instant (keeps its last shape; "
         "default: it exists only from its first to its last instant, as from Python)",
+    )
+    imp.add_argument(
+        "--order",
+        choices=ORDERS,
+        default="file",
+        help="the order of the stored vertex and cell ids: the file's (default), or spatial (vertices along a "
+        "Morton curve, cells by part and smallest corner; recorded as vertex_order in the geometry's metadata, "
+        "and an export gives that order back); static classes only",
     )
 
 
