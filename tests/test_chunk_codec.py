@@ -170,6 +170,26 @@ def test_empty_and_single_rows() -> None:
         assert_same_rows([single], cols, via_copy(chunks).rows())
 
 
+def test_rows_of_a_copy_in_any_chunk_order() -> None:
+    rng = np.random.default_rng(8)
+    ids = rng.choice(6000, size=3000, replace=False).astype(np.int64)
+    corners = rng.choice(2**33, size=(3000, 3), replace=False)
+    low, high = ids < 3072, ids >= 3072  # at a chunk boundary
+    corners[low] = rng.choice(5000, size=(int(low.sum()), 3), replace=False)  # relative; the high chunks wide
+    cols = {f"vrtxid{i + 1}": corners[:, i] for i in range(3)}
+    streams = [
+        _select_stream(to_copy(encode(ids[part], {k: v[part] for k, v in cols.items()}, TRGL), 1), TRGL)
+        for part in (high, low)  # the higher chunks first
+    ]
+    combined = streams[0][:-2] + streams[1][19:]
+    chunks = from_copy(combined, TRGL)
+    assert chunks.chunk.tolist() == sorted(chunks.chunk.tolist())
+    assert chunks.wide.any() and not chunks.wide.all()
+    assert_same_rows(ids, cols, chunks.rows())
+    with pytest.raises(InvalidInputError, match="holds a chunk twice"):
+        from_copy(streams[0][:-2] + streams[0][19:], TRGL)
+
+
 def test_bad_input_is_refused_by_name() -> None:
     cols = {c: np.zeros(2) for c in "xyz"}
     with pytest.raises(InvalidInputError, match=">= 0"):

@@ -29,7 +29,7 @@ million ids). No database here: psycopg is never imported.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -172,17 +172,19 @@ class ChunkSet:
 
     def rows(self) -> tuple[IntArray, dict[str, npt.NDArray[Any]]]:
         """The rows: ids ascending (n,) int64 and each column (n,) (float64, int64; ref columns int64 ids)."""
-        ids = self.ids()[self.present]
+        dense = bool(self.present.all())
+        ids = self.ids() if dense else self.ids()[self.present]
         out: dict[str, npt.NDArray[Any]] = {}
         for name in self.columns.names:
-            if name in self.columns.refs:
-                out[name] = self._ref_values(name)[self.present]
-            else:
-                out[name] = self.values[name][self.present]
+            column = self._ref_values(name) if name in self.columns.refs else self.values[name]
+            out[name] = column.copy() if dense and name not in self.columns.refs else column[self.present]
         return ids, out
 
     def _ref_values(self, name: str) -> IntArray:
         refs = self.columns.ref_order
+        if not self.wide.any():
+            first = np.repeat(self.vbase, self.lengths) + self.relative[refs[0]]
+            return first if name == refs[0] else first + self.relative[name]
         index = self.slot_chunk()
         first = np.where(self.wide, 0, self.vbase)[index] + self.relative[refs[0]].astype(np.int64)
         decoded = first if name == refs[0] else first + self.relative[name].astype(np.int64)
@@ -231,9 +233,10 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
     n = len(id_array)
     if set(columns) != set(spec.names):
         raise InvalidInputError(f"columns {sorted(columns)} are not the chunk columns {list(spec.names)}")
-    order = np.argsort(id_array, kind="stable")
-    sorted_ids = id_array[order]
-    if n > 1 and bool((sorted_ids[1:] == sorted_ids[:-1]).any()):
+    ascending = n < 2 or bool((id_array[1:] > id_array[:-1]).all())  # the usual case: ids 0..n-1 in order
+    order = None if ascending else np.argsort(id_array, kind="stable")
+    sorted_ids = id_array if order is None else id_array[order]
+    if not ascending and bool((sorted_ids[1:] == sorted_ids[:-1]).any()):
         repeated = sorted_ids[1:][sorted_ids[1:] == sorted_ids[:-1]]
         raise InvalidInputError(f"ids repeat: {int(repeated[0])} (and {len(repeated) - 1} more)")
     chunk_of = sorted_ids >> CHUNK_BITS
@@ -244,10 +247,24 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
     lengths = (slot[ends - 1] + 1).astype(np.int64) if n else np.empty(0, dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
     row_chunk = np.repeat(np.arange(len(chunk), dtype=np.int64), ends - starts)
-    position = offsets[:-1][row_chunk] + slot  # each row's slot in the flat arrays
     total = int(offsets[-1])
-    present = np.zeros(total, dtype=bool)
-    present[position] = True
+    dense = total == n  # no hole: row k is slot k
+    position = None if dense else offsets[:-1][row_chunk] + slot  # each row's slot in the flat arrays
+    present = np.ones(total, dtype=bool)
+    if position is not None:
+        present[:] = False
+        present[position] = True
+
+    def slotted(rows: npt.NDArray[Any], dtype: Any) -> npt.NDArray[Any]:
+        """Values in id order (one per row) spread over the slots (0 on holes)."""
+        if position is None:
+            return np.array(rows, dtype=dtype)  # a copy: the caller's arrays are never shared
+        flat = np.zeros(total, dtype=dtype)
+        flat[position] = rows
+        return flat
+
+    def in_id_order(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
+        return values if order is None else values[order]
 
     values: dict[str, npt.NDArray[Any]] = {}
     refs: dict[str, IntArray] = {}
@@ -256,16 +273,14 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
         if raw.shape != (n,):
             raise InvalidInputError(f"column {name!r} has shape {raw.shape}, expected ({n},)")
         if name in spec.refs:
-            refs[name] = _int_ids(raw, f"column {name!r}")[order]
+            refs[name] = in_id_order(_int_ids(raw, f"column {name!r}"))
             continue
         kind = spec.kind(name)
         if kind == "float8" and raw.size and raw.dtype != np.float64:
             raise InvalidInputError(f"column {name!r} must be float64, got {raw.dtype}")
         if kind == "int8" and raw.size and raw.dtype.kind not in "iu":
             raise InvalidInputError(f"column {name!r} must be integers, got {raw.dtype}")
-        flat = np.zeros(total, dtype=np.float64 if kind == "float8" else np.int64)
-        flat[position] = raw[order]
-        values[name] = flat
+        values[name] = slotted(in_id_order(raw), np.float64 if kind == "float8" else np.int64)
 
     c = len(chunk)
     vbase = np.full(c, -1, dtype=np.int64)
@@ -274,24 +289,22 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
     absolute: dict[str, IntArray] = {}
     ref_order = spec.ref_order
     if ref_order and n:
-        smallest = np.minimum.reduce([refs[r] for r in ref_order])
+        smallest = refs[ref_order[0]]
+        for r in ref_order[1:]:
+            smallest = np.minimum(smallest, refs[r])
         vbase = np.minimum.reduceat(smallest, starts).astype(np.int64)
         first = refs[ref_order[0]]
-        diffs = {ref_order[0]: first - vbase[row_chunk]}
+        diffs = {ref_order[0]: first - np.repeat(vbase, ends - starts)}
         diffs.update({r: refs[r] - first for r in ref_order[1:]})
         too_far = np.zeros(n, dtype=bool)
         for d in diffs.values():
             too_far |= (d < _INT4_MIN) | (d > _INT4_MAX)
         wide = np.logical_or.reduceat(too_far, starts).astype(bool)
         vbase[wide] = -1
-        row_wide = wide[row_chunk]
+        row_wide = np.repeat(wide, ends - starts) if wide.any() else None
         for r in ref_order:
-            rel = np.zeros(total, dtype=np.int32)
-            rel[position] = np.where(row_wide, 0, diffs[r])
-            relative[r] = rel
-            ab = np.zeros(total, dtype=np.int64)
-            ab[position] = refs[r]
-            absolute[r] = ab
+            relative[r] = slotted(diffs[r] if row_wide is None else np.where(row_wide, 0, diffs[r]), np.int32)
+            absolute[r] = slotted(refs[r], np.int64)
     else:
         for r in ref_order:
             relative[r] = np.zeros(total, dtype=np.int32)
@@ -356,14 +369,17 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
 
     # every array column's elements, flat over all slots, with the byte end of each slot
     encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None]] = []
+    empty = (np.empty(0, dtype=np.uint8), np.empty(0, dtype=np.int64))
     for name in spec.names:
         if name in spec.refs:
-            encoded.append(("int4", *_element_bytes(chunks.relative[name], "int4", chunks.present), chunks.wide))
+            relative = empty if chunks.wide.all() else _element_bytes(chunks.relative[name], "int4", chunks.present)
+            encoded.append(("int4", *relative, chunks.wide))
         else:
             kind = spec.kind(name)
             encoded.append((kind, *_element_bytes(chunks.values[name], kind, chunks.present), None))
     for name in spec.ref_order:
-        encoded.append(("int8", *_element_bytes(chunks.absolute[name], "int8", chunks.present), ~chunks.wide))
+        wide = _element_bytes(chunks.absolute[name], "int8", chunks.present) if chunks.wide.any() else empty
+        encoded.append(("int8", *wide, ~chunks.wide))
 
     pieces: list[bytes] = [COPY_SIGNATURE, np.array([0, 0], dtype=">i4").tobytes()]
     for k in range(c):
@@ -475,14 +491,17 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     reader.pos += extension  # header extension (none today)
     fields = spec.select_columns()
     refs = spec.ref_order
+    # (column, is a _wide column): its key in the parsed values
+    columns = [(name, name, False) for name in spec.names] + [(f"{r}_wide", r, True) for r in refs]
     chunks: list[int] = []
     presents: list[BoolArray] = []
     vbases: list[int] = []
     wides: list[bool] = []
-    plain: dict[str, list[npt.NDArray[Any]]] = {name: [] for name in spec.names if name not in spec.refs}
-    rel_parts: dict[str, list[npt.NDArray[np.int32]]] = {r: [] for r in refs}
-    abs_parts: dict[str, list[IntArray]] = {r: [] for r in refs}
-    columns = [(name, name, False) for name in spec.names] + [(f"{r}_wide", r, True) for r in refs]
+    # per column: the element bytes of the chunks without NULL elements (joined and converted at the end, in
+    # one numpy pass), and the chunks with holes parsed one by one: {chunk index: values}
+    batched: dict[tuple[str, bool], list[memoryview]] = {(key, w): [] for _, key, w in columns}
+    in_batch: dict[tuple[str, bool], list[bool]] = {(key, w): [] for _, key, w in columns}
+    with_holes: dict[tuple[str, bool], dict[int, npt.NDArray[Any]]] = {(key, w): {} for _, key, w in columns}
     while True:
         count = reader.int(2)
         if count == -1:
@@ -492,6 +511,7 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
         if reader.int(4) != 8:
             raise InvalidInputError("a chunk number is not a bigint")
         number = reader.int(8)
+        k = len(chunks)
         chunks.append(number)
         length = reader.int(4)
         holes = np.empty(0, dtype=np.int64)
@@ -508,58 +528,94 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
         wides.append(is_wide)
         vbases.append(base)
         present: BoolArray | None = None
-        found: dict[tuple[str, bool], npt.NDArray[Any]] = {}
         for name, key, wide_column in columns:
             length = reader.int(4)
             expect_null = key in spec.refs and wide_column != is_wide
+            slot = (key, wide_column)
             if length == -1:
                 if not expect_null:
                     raise InvalidInputError(f"chunk {number}: column {name} is NULL")
+                in_batch[slot].append(False)
                 continue
             if expect_null:
                 raise InvalidInputError(
                     f"chunk {number}: column {name} is not NULL (vbase {'NULL' if is_wide else base})"
                 )
             kind = "int8" if wide_column else spec.kind(key)
+            ndim, hasnull, oid, size, lbound = (
+                int(v) for v in np.frombuffer(reader.buf, dtype=">i4", count=5, offset=reader.pos)
+            )
             if present is None:
-                size = int.from_bytes(reader.buf[reader.pos + 12 : reader.pos + 16], "big", signed=True)
-                present = np.ones(max(size, 0), dtype=bool)
+                present = np.ones(max(size, 0) if ndim == 1 else 0, dtype=bool)
                 if len(holes):
-                    if int(holes.min()) < 1 or int(holes.max()) >= size:
-                        raise InvalidInputError(f"chunk {number}: holes {holes.tolist()} outside 1..{size - 1}")
+                    if int(holes.min()) < 1 or int(holes.max()) >= len(present):
+                        raise InvalidInputError(f"chunk {number}: holes {holes.tolist()} outside 1..{len(present) - 1}")
                     present[holes - 1] = False
+            width = np.dtype(_BIG_ENDIAN[kind]).itemsize
+            if ndim == 1 and not hasnull and oid == _OID[kind] and lbound == 1 and length == 20 + size * (4 + width):
+                if size != len(present) or not present.all():
+                    raise InvalidInputError(f"chunk {number}: column {name} does not match the chunk's holes and size")
+                batched[slot].append(reader.buf[reader.pos + 20 : reader.pos + length])
+                in_batch[slot].append(True)
+                reader.pos += length
+                continue
             parsed, _ = _parse_array(reader, length, kind, present)
             if len(parsed) != len(present):
                 raise InvalidInputError(f"chunk {number}: arrays of different lengths")
-            found[(key, wide_column)] = parsed
+            with_holes[slot][k] = parsed
+            in_batch[slot].append(False)
         if present is None:
             raise InvalidInputError(f"chunk {number}: every array is NULL")
         presents.append(present)
-        size = len(present)
-        for name in plain:
-            plain[name].append(found[(name, False)].astype(np.float64 if spec.kind(name) == "float8" else np.int64))
-        for r in refs:
-            rel = found.get((r, False))
-            ab = found.get((r, True))
-            rel_parts[r].append(np.zeros(size, np.int32) if rel is None else rel.astype(np.int32))
-            abs_parts[r].append(np.zeros(size, np.int64) if ab is None else ab.astype(np.int64))
+
+    lengths = np.array([len(p) for p in presents], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
+
+    def column(slot: tuple[str, bool], kind: str, dtype: Any) -> npt.NDArray[Any]:
+        """One column over all slots in received chunk order (0 where NULL)."""
+        out = np.zeros(int(offsets[-1]), dtype=dtype)
+        parts = batched[slot]
+        if parts:
+            items = np.frombuffer(b"".join(parts), dtype=[("l", ">i4"), ("v", _BIG_ENDIAN[kind])])
+            if bool((items["l"] != np.dtype(_BIG_ENDIAN[kind]).itemsize).any()):
+                raise InvalidInputError(f"a chunk array of column {slot[0]} has an element of an unexpected length")
+            out[np.repeat(np.array(in_batch[slot], dtype=bool), lengths)] = items["v"]
+        for k, values in with_holes[slot].items():
+            out[offsets[k] : offsets[k + 1]] = values
+        return out
 
     chunk = np.array(chunks, dtype=np.int64)
     order = np.argsort(chunk, kind="stable")
-    lengths = np.array([len(p) for p in presents], dtype=np.int64)
+    if len(chunk) > 1 and bool((chunk[order][1:] == chunk[order][:-1]).any()):
+        raise InvalidInputError(
+            "the COPY data holds a chunk twice (two versions of it? select the visible versions of one object)"
+        )
+    in_order = bool((order == np.arange(len(order))).all())
+    slot_order = (
+        None
+        if in_order
+        else np.concatenate([np.arange(offsets[k], offsets[k + 1]) for k in order]).astype(np.int64)
+        if len(order)
+        else None
+    )
 
-    def joined(parts: Sequence[npt.NDArray[Any]], dtype: Any) -> npt.NDArray[Any]:
-        return np.concatenate([parts[i] for i in order]).astype(dtype) if parts else np.empty(0, dtype=dtype)
+    def sorted_slots(values: npt.NDArray[Any]) -> npt.NDArray[Any]:
+        return values if slot_order is None else values[slot_order]
 
-    values = {n: joined(p, np.float64 if spec.kind(n) == "float8" else np.int64) for n, p in plain.items()}
-    relative = {r: joined(rel_parts[r], np.int32) for r in refs}
-    absolute = {r: joined(abs_parts[r], np.int64) for r in refs}
+    present_all = np.concatenate(presents) if presents else np.empty(0, dtype=bool)
+    values = {
+        n: sorted_slots(column((n, False), spec.kind(n), np.float64 if spec.kind(n) == "float8" else np.int64))
+        for n in spec.names
+        if n not in spec.refs
+    }
+    relative = {r: sorted_slots(column((r, False), "int4", np.int32)) for r in refs}
+    absolute = {r: sorted_slots(column((r, True), "int8", np.int64)) for r in refs}
     wide = np.array(wides, dtype=bool)
     return ChunkSet(
         spec,
         chunk[order],
         lengths[order],
-        joined(presents, bool),
+        sorted_slots(present_all),
         values,
         np.array(vbases, dtype=np.int64)[order],
         wide[order],
