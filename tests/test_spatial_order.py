@@ -281,6 +281,10 @@ def test_import_order_option(db_dsn: str, tmp_path: Path, capsys: pytest.Capture
     assert fetched["file"].same_as(read)
     assert fetched["spatial"].same_as(spatial_order(read))
     assert fetched["spatial"].metadata["vertex_order"] == "spatial"
+    # --replace writes by difference, keeping the stored ids: it cannot renumber, so it refuses the spatial order
+    args = ["import", str(path), "--class", "faults", "--name", "file", "--replace", "--order", "spatial"]
+    assert main(["--dsn", db_dsn, *args]) == 1
+    assert "--order spatial does not go with --replace" in capsys.readouterr().err
     # refused: a model-2 instant, and an unknown order (argparse)
     assert main(["--dsn", db_dsn, "class", "create", "tops", "--geotype", "SURFACE", "--time-model", "INSTANTS"]) == 0
     capsys.readouterr()

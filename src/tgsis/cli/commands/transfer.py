@@ -35,7 +35,7 @@ from tgsis.errors import (
     PolygonsSplitWarning,
     SkippedObjectWarning,
 )
-from tgsis.mesh import ORDERS, GeometryCollection, Geotype, Mesh, MeshReport, Surface, spatial_order
+from tgsis.mesh import ORDERS, GeometryCollection, Geotype, Mesh, MeshReport, Surface
 
 # --------------------------------------------------------------------------- features
 
@@ -176,15 +176,15 @@ def _import_instant(
     from tgsis.db.temporal import add_instant
     from tgsis.temporal import SurfaceSeries
 
-    if args.order == "spatial":
-        raise InvalidInputError(
-            f"--order spatial renumbers static features only (model 1); an instant of class {fc.name} "
-            f"({fc.time_model}) keeps the file's order"
-        )
     if fc.time_model != "INSTANTS":
         raise InvalidInputError(
             f"--at and --feature take a class of surfaces at instants (INSTANTS); {fc.name} is {fc.time_model}",
             hint="tgsis interpolate --class CLASS builds evolving surfaces",
+        )
+    if args.order == "spatial":
+        raise InvalidInputError(
+            f"--order spatial renumbers static features only (model 1); a surface at an instant of class {fc.name} "
+            f"({fc.time_model}) keeps the file's order"
         )
     if args.at is None:
         raise InvalidInputError(
@@ -435,6 +435,11 @@ def cmd_import(args: argparse.Namespace) -> int:
                 args.file, fc.name, fid, collection, old, [] if args.replace else same, list(meshes), list(reports)
             )
             return render(args, result, collection_text, collection_json)
+        if args.replace and args.order == "spatial":
+            raise InvalidInputError(
+                "--order spatial does not go with --replace: a replaced feature is written by difference and keeps "
+                "the ids of the vertices it still has, so it cannot be renumbered (delete it and import the file)"
+            )
         if args.name and len(meshes) > 1:
             raise InvalidInputError(
                 f"{args.file} holds {len(meshes)} objects: --name names only one",
@@ -456,15 +461,8 @@ def cmd_import(args: argparse.Namespace) -> int:
                 same = _features_named(conn, fc, name)
                 old = _replaced_one(fc, name, same) if args.replace else None
                 if old is not None:
-                    saved = spatial_order(mesh) if args.order == "spatial" else mesh
                     save_feature(
-                        conn,
-                        fc,
-                        old,
-                        saved,
-                        values or None,
-                        name=name,
-                        drop_extra_properties=args.drop_extra_properties,
+                        conn, fc, old, mesh, values or None, name=name, drop_extra_properties=args.drop_extra_properties
                     )
                     ids.append(old)
                 else:
