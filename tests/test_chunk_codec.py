@@ -277,6 +277,9 @@ def copy_out(conn: psycopg.Connection[Any], table: str, spec: ChunkColumns, geoi
 def test_server_round_trip(tx: psycopg.Connection[Any]) -> None:
     rng = np.random.default_rng(11)
     create_tables(tx)
+    # session settings that change text output of doubles, and the default compression: the binary path ignores them
+    tx.execute("SET LOCAL extra_float_digits = -15")
+    tx.execute("SET LOCAL default_toast_compression = 'pglz'")
     # vertices: holes, ids >= 2**31, one id alone in slot 1023 of its chunk, odd doubles
     ids = np.concatenate(
         [rng.choice(5000, size=3000, replace=False), 2**31 + rng.choice(3000, size=500, replace=False), [2**36 + 1023]]

@@ -16,12 +16,12 @@ import numpy as np
 import psycopg
 import pytest
 
-from tgsis import formats
+from tgsis import formats, gmaps
 from tgsis.cli import main
 from tgsis.db import features as F
 from tgsis.errors import InvalidGeometryError, InvalidInputError
 from tgsis.mesh import GeometryCollection, LineSet, Mesh, PointSet, Surface, TetraMesh, morton_codes, spatial_order
-from tgsis.temporal import SurfaceSeries
+from tgsis.temporal import EvolvingSurface, SurfaceSeries, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
 DATA = Path(__file__).resolve().parent / "data" / "gocad"
@@ -108,6 +108,8 @@ def test_deterministic_with_ties_by_index() -> None:
     mesh = curved()
     one, two = spatial_order(mesh), spatial_order(mesh.copy())
     assert one.same_as(two) and one.metadata == two.metadata
+    again = spatial_order(one)  # idempotent: an ordered mesh stays as it is
+    assert again.same_as(one) and again.metadata == one.metadata
     # equal positions (an atom and its vertex, a duplicate) keep their order: the lower index first
     pairs = [[a, r] for a, r in one.metadata["gocad_atoms"]]
     for atom, ref in pairs:
@@ -256,6 +258,15 @@ def test_order_refused_by_name(conn: Conn, rolled: F.FeatureClass) -> None:
     series = SurfaceSeries([1.0, 2.0], [mesh, mesh])
     with pytest.raises(InvalidInputError, match=r"model 2 \(.*\).*keep their order"):
         F.insert_feature(conn, series_fc, series, order="spatial")
+    evolving_fc = F.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING", cell_properties=[])
+    positions = np.stack([mesh.vertices, mesh.vertices + 1.0])
+    evolving = EvolvingSurface([TopologyPeriod([0.0, 1.0], mesh.cells, positions)])
+    with pytest.raises(InvalidInputError, match=r"EvolvingSurface as model 3 "):
+        F.insert_feature(conn, evolving_fc, evolving, order="spatial")
+    gmap_fc = F.create_feature_class(conn, "solids", "GMAP", time_model="MULTIDIM", cell_level=3)
+    solid = gmaps.GMap.from_tetrahedra(mesh.vertices[:5], [[0, 1, 2, 3], [1, 2, 3, 4]])
+    with pytest.raises(InvalidInputError, match=r"GMap as model 5 "):
+        F.insert_feature(conn, gmap_fc, solid, order="spatial")
     conn.rollback()
     assert conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone() == (0,)
 
