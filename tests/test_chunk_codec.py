@@ -190,6 +190,20 @@ def test_rows_of_a_copy_in_any_chunk_order() -> None:
         from_copy(streams[0][:-2] + streams[0][19:], TRGL)
 
 
+def test_a_stream_that_breaks_the_contract_is_refused() -> None:
+    chunks = encode([0, 2], {c: np.array([1.0, 2.0]) for c in "xyz"}, XYZ)  # chunk 0: slot 2 a hole
+    stream = _select_stream(to_copy(chunks, 1), XYZ)
+    hole = b"\x00\x00\x00\x02\x00\x02"  # the holes array's element: length 2, slot 2
+    assert stream.count(hole) == 1
+    with pytest.raises(InvalidInputError, match="NULL elements are not its chunk's holes"):
+        from_copy(stream.replace(hole, b"\x00\x00\x00\x02\x00\x01"), XYZ)
+    for cut in (3, 10, 40):
+        with pytest.raises(InvalidInputError):
+            from_copy(stream[:-cut], XYZ)
+    with pytest.raises(InvalidInputError, match="fields"):
+        from_copy(stream, TRGL)
+
+
 def test_bad_input_is_refused_by_name() -> None:
     cols = {c: np.zeros(2) for c in "xyz"}
     with pytest.raises(InvalidInputError, match=">= 0"):

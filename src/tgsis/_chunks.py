@@ -428,6 +428,8 @@ def _parse_array(
 ) -> tuple[npt.NDArray[Any], BoolArray]:
     """An array value (array_send form) as (values, present); ``present`` is the chunk's slots when known."""
     end = reader.pos + length
+    if length < 12 or end > len(reader.buf):
+        raise InvalidInputError(f"binary COPY data ends inside an array (byte {reader.pos} of {len(reader.buf)})")
     ndim, hasnull, oid = reader.int(4), reader.int(4), reader.int(4)
     if oid != _OID[kind]:
         raise InvalidInputError(f"a chunk array has element type {oid}, expected {_OID[kind]} ({kind})")
@@ -441,7 +443,12 @@ def _parse_array(
         raise InvalidInputError(f"a chunk array has lower bound {lbound}, expected 1")
     width = np.dtype(_BIG_ENDIAN[kind]).itemsize
     start = reader.pos
+    elements = length - 20
+    if count < 0 or elements < 4 * count or elements > (4 + width) * count:
+        raise InvalidInputError(f"a chunk array of {count} elements takes {elements} bytes: not {kind} elements")
     if not hasnull:
+        if elements != (4 + width) * count:
+            raise InvalidInputError(f"a chunk array of {count} elements takes {elements} bytes: not {kind} elements")
         items = np.frombuffer(reader.buf, dtype=[("l", ">i4"), ("v", _BIG_ENDIAN[kind])], count=count, offset=start)
         if bool((items["l"] != width).any()):
             raise InvalidInputError("a chunk array element has an unexpected length")
@@ -450,6 +457,8 @@ def _parse_array(
     if present is None or len(present) != count:
         raise InvalidInputError("a chunk array has NULL elements but its chunk's holes column does not list them")
     sizes = np.where(present, 4 + width, 4)
+    if int(sizes.sum()) != elements:
+        raise InvalidInputError("a chunk array's NULL elements are not its chunk's holes")
     starts = start + np.concatenate([[0], np.cumsum(sizes)[:-1]])
     raw = np.frombuffer(reader.buf, dtype=np.uint8, count=end - start, offset=start)
     words = raw[(starts - start)[:, None] + np.arange(4)].copy().view(">i4").reshape(-1)
@@ -542,6 +551,8 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
                     f"chunk {number}: column {name} is not NULL (vbase {'NULL' if is_wide else base})"
                 )
             kind = "int8" if wide_column else spec.kind(key)
+            if length < 20 or reader.pos + length > len(reader.buf):
+                raise InvalidInputError(f"chunk {number}: binary COPY data ends inside column {name}")
             ndim, hasnull, oid, size, lbound = (
                 int(v) for v in np.frombuffer(reader.buf, dtype=">i4", count=5, offset=reader.pos)
             )
