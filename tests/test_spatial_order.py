@@ -155,6 +155,11 @@ def test_metadata_that_is_not_vertex_indices_is_refused() -> None:
     mesh.metadata["gocad_atoms"] = [[5, 99]]
     with pytest.raises(InvalidGeometryError, match="gocad_atoms"):
         spatial_order(mesh)
+    mesh = curved(6)
+    for ranges in ([[4, 2]], [[0, 1, 2]], [["a", 2]]):
+        mesh.metadata["gocad_vertex_flags"] = {"CNXYZ": ranges}
+        with pytest.raises(InvalidGeometryError, match="gocad_vertex_flags"):
+            spatial_order(mesh)
 
 
 def test_spatial_order_keeps_regions_in_few_chunks() -> None:

@@ -727,10 +727,18 @@ def _renumbered_metadata(mesh: Mesh, new_of_old: IntArray) -> dict[str, Any]:
     if isinstance(flags, dict) and flags:
         result: dict[str, list[list[int]]] = {}
         for flag, ranges in flags.items():
-            bounds = _vertex_list(ranges, n + 1, "gocad_vertex_flags", name).reshape(-1, 2)
-            has = np.zeros(n, dtype=bool)
-            for start, stop in bounds:
-                has[start:stop] = True
+            flat = _vertex_list(ranges, n + 1, "gocad_vertex_flags", name)
+            bounds = flat.reshape(-1, 2) if len(flat) % 2 == 0 else np.empty((0, 2), dtype=np.int64)
+            if len(bounds) * 2 != len(flat) or bool((bounds[:, 0] > bounds[:, 1]).any()):
+                raise InvalidGeometryError(
+                    f"metadata['gocad_vertex_flags'] of {name or 'the mesh'} holds something else than "
+                    f"[start, stop] ranges of vertex indices 0..{n}: it cannot be renumbered in the spatial order",
+                    hint="correct or remove that metadata entry, or keep the file's order",
+                )
+            depth = np.zeros(n + 1, dtype=np.int64)  # ranges may overlap: count how many cover each vertex
+            np.add.at(depth, bounds[:, 0], 1)
+            np.add.at(depth, bounds[:, 1], -1)
+            has = np.cumsum(depth)[:n] > 0
             where = np.sort(new_of_old[has])
             if len(where) == 0:
                 continue
