@@ -27,7 +27,7 @@ import enum
 import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, TypeAlias
+from typing import Any, ClassVar, TypeAlias, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -47,6 +47,9 @@ __all__ = [
     "MeshReport",
     "mesh_class",
     "PROPERTY_NAME_RE",
+    "ORDERS",
+    "morton_codes",
+    "spatial_order",
 ]
 
 #: Property names: letters (either case, kept as given: feature-class columns are quoted identifiers),
@@ -638,3 +641,183 @@ def mesh_class(geotype: Geotype | str) -> type[Mesh]:
             hint="use MULTIPOINT, MULTILINESTRING, SURFACE or MULTITETRA; a GEOMETRYCOLLECTION is a "
             "GeometryCollection of such meshes",
         ) from None
+
+
+# --------------------------------------------------------------------------- the spatial order of ids (issue 40)
+
+#: The orders of ids :func:`tgsis.insert_feature` and ``tgsis import --order`` take: the mesh's own
+#: (``file``) or :func:`spatial_order`'s (``spatial``).
+ORDERS = ("file", "spatial")
+
+_MORTON_BITS = 21  # per axis: three axes fill 63 bits of a uint64
+
+
+def morton_codes(points: npt.ArrayLike) -> npt.NDArray[np.uint64]:
+    """Morton (Z-order) codes of points, 21 bits per axis, one scale for all axes.
+
+    Parameters
+    ----------
+    points : (n, 3) array_like of float
+        Finite coordinates.
+
+    Returns
+    -------
+    (n,) uint64
+        The code of each point: its coordinates quantized over the points'
+        bounding box with the box's largest extent as the one scale (so the
+        curve is the same in every direction), bits interleaved x, y, z.
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if len(p) == 0:
+        return np.empty(0, dtype=np.uint64)
+    # halves first: the differences of finite doubles then stay finite (1e308 - -1e308 would not)
+    half = p / 2.0
+    low = half.min(axis=0)
+    extent = float((half.max(axis=0) - low).max())
+    top = 2**_MORTON_BITS - 1
+    scaled = (half - low) / extent * top if extent > 0 else np.zeros_like(p)
+    q = np.clip(np.floor(scaled), 0, top).astype(np.uint64)
+
+    def spread(v: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint64]:
+        v = v & np.uint64(0x1FFFFF)
+        for shift, mask in (
+            (32, 0x1F00000000FFFF),
+            (16, 0x1F0000FF0000FF),
+            (8, 0x100F00F00F00F00F),
+            (4, 0x10C30C30C30C30C3),
+            (2, 0x1249249249249249),
+        ):
+            v = (v | (v << np.uint64(shift))) & np.uint64(mask)
+        return v
+
+    codes: npt.NDArray[np.uint64] = (
+        spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
+    )
+    return codes
+
+
+def _vertex_list(value: Any, n: int, key: str, name: str | None) -> IntArray:
+    """A metadata list of vertex indices as int64, each in 0..n-1 (else the metadata cannot be renumbered)."""
+    array = np.asarray(value if isinstance(value, (list, tuple)) else [None])
+    if array.size and (array.dtype.kind not in "iu" or int(array.min()) < 0 or int(array.max()) >= n):
+        raise InvalidGeometryError(
+            f"metadata[{key!r}] of {name or 'the mesh'} holds something else than vertex indices 0..{n - 1}: "
+            "it cannot be renumbered in the spatial order",
+            hint="correct or remove that metadata entry, or keep the file's order",
+        )
+    return array.astype(np.int64).reshape(-1) if array.size else np.empty(0, dtype=np.int64)
+
+
+def _renumbered_metadata(mesh: Mesh, new_of_old: IntArray) -> dict[str, Any]:
+    """The mesh's metadata with its vertex indices renumbered: atoms, patoms, vertex flags, control nodes."""
+    n, name = mesh.n_vertices, mesh.name
+    meta = dict(mesh.metadata)
+    if "gocad_atoms" in meta:
+        pairs = _vertex_list(meta["gocad_atoms"], n, "gocad_atoms", name)
+        if len(pairs) % 2:
+            raise InvalidGeometryError(f"metadata['gocad_atoms'] of {name or 'the mesh'} is not a list of pairs")
+        renumbered = new_of_old[pairs.reshape(-1, 2)]
+        renumbered = renumbered[np.argsort(renumbered[:, 0], kind="stable")]
+        meta["gocad_atoms"] = [[int(a), int(r)] for a, r in renumbered]
+    if "gocad_patoms" in meta:
+        meta["gocad_patoms"] = sorted(
+            int(v) for v in new_of_old[_vertex_list(meta["gocad_patoms"], n, "gocad_patoms", name)]
+        )
+    flags = meta.get("gocad_vertex_flags")
+    if isinstance(flags, dict) and flags:
+        result: dict[str, list[list[int]]] = {}
+        for flag, ranges in flags.items():
+            flat = _vertex_list(ranges, n + 1, "gocad_vertex_flags", name)
+            bounds = flat.reshape(-1, 2) if len(flat) % 2 == 0 else np.empty((0, 2), dtype=np.int64)
+            if len(bounds) * 2 != len(flat) or bool((bounds[:, 0] > bounds[:, 1]).any()):
+                raise InvalidGeometryError(
+                    f"metadata['gocad_vertex_flags'] of {name or 'the mesh'} holds something else than "
+                    f"[start, stop] ranges of vertex indices 0..{n}: it cannot be renumbered in the spatial order",
+                    hint="correct or remove that metadata entry, or keep the file's order",
+                )
+            depth = np.zeros(n + 1, dtype=np.int64)  # ranges may overlap: count how many cover each vertex
+            np.add.at(depth, bounds[:, 0], 1)
+            np.add.at(depth, bounds[:, 1], -1)
+            has = np.cumsum(depth)[:n] > 0
+            where = np.sort(new_of_old[has])
+            if len(where) == 0:
+                continue
+            breaks = np.flatnonzero(np.diff(where) != 1) + 1
+            starts = np.concatenate([where[:1], where[breaks]])
+            stops = np.concatenate([where[breaks - 1], where[-1:]]) + 1
+            result[flag] = [[int(a), int(b)] for a, b in zip(starts, stops)]
+        meta["gocad_vertex_flags"] = result
+    nodes = meta.get("gocad_property_control_nodes")
+    if isinstance(nodes, dict):
+        meta["gocad_property_control_nodes"] = {
+            key: sorted(int(v) for v in new_of_old[_vertex_list(values, n, "gocad_property_control_nodes", name)])
+            for key, values in nodes.items()
+        }
+    meta["vertex_order"] = "spatial"
+    return meta
+
+
+def _spatial_mesh(mesh: Mesh) -> Mesh:
+    n, m = mesh.n_vertices, mesh.n_cells
+    vertex_order = np.argsort(morton_codes(mesh.vertices), kind="stable")  # ties: the original index
+    new_of_old = np.empty(n, dtype=np.int64)
+    new_of_old[vertex_order] = np.arange(n, dtype=np.int64)
+    cells = new_of_old[mesh.cells]  # corners keep their order in the cell (orientation)
+    part = mesh.cell_properties.get("part")
+    keys: list[npt.NDArray[Any]] = [np.arange(m), cells.min(axis=1) if m else np.empty(0, np.int64)]
+    if part is not None and part.ndim == 1:
+        keys.append(part)  # GOCAD parts (TFACE, ILINE, TVOLUME) stay runs of cells, in part order
+    cell_order = np.lexsort(keys)
+    return type(mesh)(
+        mesh.vertices[vertex_order],
+        cells[cell_order],
+        vertex_properties={k: v[vertex_order] for k, v in mesh.vertex_properties.items()},
+        cell_properties={k: v[cell_order] for k, v in mesh.cell_properties.items()},
+        name=mesh.name,
+        metadata=_renumbered_metadata(mesh, new_of_old),
+    )
+
+
+@overload
+def spatial_order(geometry: Mesh) -> Mesh: ...
+
+
+@overload
+def spatial_order(geometry: GeometryCollection) -> GeometryCollection: ...
+
+
+def spatial_order(geometry: Geometry) -> Geometry:
+    """The same geometry with its vertices and cells renumbered in a spatial order (deterministic).
+
+    Vertices are ordered by the Morton code of their position
+    (:func:`morton_codes`: 21 bits per axis, one scale for all axes), ties by
+    their index; cells by their ``part`` cell property when there is one (so
+    GOCAD parts stay runs of cells), then by their smallest new vertex index,
+    then by their index. A cell keeps its corners in their order (a
+    triangle its orientation). Vertex and cell properties follow their
+    vertex or cell; the vertex indices of the metadata (``gocad_atoms``,
+    ``gocad_patoms``, ``gocad_vertex_flags``,
+    ``gocad_property_control_nodes``) are renumbered; ``metadata["vertex_order"]``
+    is set to ``"spatial"``. A collection's members are ordered each on its own.
+
+    Nearby vertices then have nearby ids, so that a region of the surface lives
+    in few chunks of 1,024 ids (docs/storage.md, "Order of ids at upload").
+
+    Parameters
+    ----------
+    geometry : Mesh or GeometryCollection
+
+    Returns
+    -------
+    Mesh or GeometryCollection
+        A new object of the same type; ``geometry`` is not changed.
+
+    Raises
+    ------
+    InvalidGeometryError
+        A metadata entry above that does not hold vertex indices of the mesh.
+    """
+    if isinstance(geometry, GeometryCollection):
+        meta = {**geometry.metadata, "vertex_order": "spatial"}
+        return GeometryCollection([_spatial_mesh(m) for m in geometry.members], name=geometry.name, metadata=meta)
+    return _spatial_mesh(geometry)

@@ -67,7 +67,7 @@ from tgsis.db.meaning import meaning_of, restore_meaning
 from tgsis.drawing import Drawable, StoredSurface, drawable
 from tgsis.errors import InvalidGeometryError, InvalidInputError, NotFoundError, reraise
 from tgsis.gmaps import EvolvingGMap
-from tgsis.mesh import Geometry, GeometryCollection, Geotype
+from tgsis.mesh import ORDERS, Geometry, GeometryCollection, Geotype, Mesh, spatial_order
 from tgsis.temporal import EvolvingSurface
 
 __all__ = [
@@ -132,6 +132,7 @@ def insert_feature(
     drop_extra_properties: bool = False,
     tolerance: float | None = None,
     sudden_change: float | None = None,
+    order: str = "file",
 ) -> int:
     """Store a mesh (or a collection of meshes, or a temporal surface) as a new feature; return its id (geoid).
 
@@ -166,11 +167,24 @@ def insert_feature(
     sudden_change : float, optional
         An EvolvingSurface or EvolvingGMap: store every topology change as a
         short linear transition of this duration (the design's sudden change).
+    order : {"file", "spatial"}
+        The order of the stored vertex and cell ids. ``"file"`` (default):
+        the mesh's own, ids 0..n-1 as given. ``"spatial"``: the mesh is first
+        renumbered by :func:`tgsis.mesh.spatial_order` (vertices along a
+        Morton curve, cells by part and smallest corner; properties, atoms
+        and the metadata's vertex indices follow), and the geometry's
+        metadata records ``"vertex_order": "spatial"``: a fetched feature
+        then comes back in that order, not the file's (docs/storage.md,
+        "Order of ids at upload"). Static features (model 1: meshes and
+        collections, every member renumbered on its own) only.
 
     Raises
     ------
     DiscontinuousPeriodsError
         A topology period starts away from where the one before ends.
+    InvalidInputError
+        ``order`` is not one of ``"file"``, ``"spatial"``; or ``"spatial"``
+        for a feature that is not static (models 2 to 5).
     NotFoundError, InvalidGeometryError, InvalidPropertyError
         Nothing is written.
 
@@ -182,6 +196,8 @@ def insert_feature(
     feature's id is the collection's geoid. One transaction, and one COPY per
     table whatever the number of members.
     """
+    if order not in ORDERS:
+        raise InvalidInputError(f"order {order!r} is not one of {', '.join(map(repr, ORDERS))}")
     fc = resolve_class(conn, feature_class)
     if (tolerance is not None or sudden_change is not None) and not isinstance(mesh, (EvolvingSurface, EvolvingGMap)):
         raise InvalidInputError(
@@ -198,6 +214,14 @@ def insert_feature(
 
         mesh = as_mesh(mesh)
         model = datamodels.data_model("STATIC")
+    if order == "spatial":
+        if model.number != 1 or not isinstance(mesh, (Mesh, GeometryCollection)):
+            raise InvalidInputError(
+                f"order='spatial' renumbers static meshes and collections only (model 1); feature class "
+                f"{fc.name!r} stores this {type(mesh).__name__} as model {model.number} ({model.name}), whose "
+                "ids keep their order"
+            )
+        mesh = spatial_order(mesh)
     return datamodels.storage_of(model).insert(
         conn, fc, mesh, properties, name=name, drop_extra_properties=drop_extra_properties, **options
     )

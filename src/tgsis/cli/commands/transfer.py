@@ -35,7 +35,7 @@ from tgsis.errors import (
     PolygonsSplitWarning,
     SkippedObjectWarning,
 )
-from tgsis.mesh import GeometryCollection, Geotype, Mesh, MeshReport, Surface
+from tgsis.mesh import ORDERS, GeometryCollection, Geotype, Mesh, MeshReport, Surface
 
 # --------------------------------------------------------------------------- features
 
@@ -180,6 +180,11 @@ def _import_instant(
         raise InvalidInputError(
             f"--at and --feature take a class of surfaces at instants (INSTANTS); {fc.name} is {fc.time_model}",
             hint="tgsis interpolate --class CLASS builds evolving surfaces",
+        )
+    if args.order == "spatial":
+        raise InvalidInputError(
+            f"--order spatial renumbers static features only (model 1); a surface at an instant of class {fc.name} "
+            f"({fc.time_model}) keeps the file's order"
         )
     if args.at is None:
         raise InvalidInputError(
@@ -416,13 +421,25 @@ def cmd_import(args: argparse.Namespace) -> int:
                 with busy(f"uploading {collection.n_vertices} vertices"):
                     if old is not None:
                         delete_feature(conn, fc, old)
-                    fid = insert_feature(conn, fc, collection, values, drop_extra_properties=args.drop_extra_properties)
+                    fid = insert_feature(
+                        conn,
+                        fc,
+                        collection,
+                        values,
+                        drop_extra_properties=args.drop_extra_properties,
+                        order=args.order,
+                    )
             if same and not args.replace:
                 _warn_same_name(fc, collection.name or "", same)
             result = ImportedCollection(
                 args.file, fc.name, fid, collection, old, [] if args.replace else same, list(meshes), list(reports)
             )
             return render(args, result, collection_text, collection_json)
+        if args.replace and args.order == "spatial":
+            raise InvalidInputError(
+                "--order spatial does not go with --replace: a replaced feature is written by difference and keeps "
+                "the ids of the vertices it still has, so it cannot be renumbered (delete it and import the file)"
+            )
         if args.name and len(meshes) > 1:
             raise InvalidInputError(
                 f"{args.file} holds {len(meshes)} objects: --name names only one",
@@ -451,7 +468,13 @@ def cmd_import(args: argparse.Namespace) -> int:
                 else:
                     ids.append(
                         insert_feature(
-                            conn, fc, mesh, values, name=name, drop_extra_properties=args.drop_extra_properties
+                            conn,
+                            fc,
+                            mesh,
+                            values,
+                            name=name,
+                            drop_extra_properties=args.drop_extra_properties,
+                            order=args.order,
                         )
                     )
                     if same:
@@ -561,6 +584,14 @@ def add_import_parser(commands: Any) -> None:
         action="store_true",
         help="with --at, for a new feature: it still exists after its last instant (keeps its last shape; "
         "default: it exists only from its first to its last instant, as from Python)",
+    )
+    imp.add_argument(
+        "--order",
+        choices=ORDERS,
+        default="file",
+        help="the order of the stored vertex and cell ids: the file's (default), or spatial (vertices along a "
+        "Morton curve, cells by part and smallest corner; recorded as vertex_order in the geometry's metadata, "
+        "and an export gives that order back); static classes only",
     )
 
 
