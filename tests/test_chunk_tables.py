@@ -23,6 +23,7 @@ from psycopg import sql
 
 import tgsis
 from tests.roles import login_roles
+from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
@@ -585,3 +586,44 @@ def test_two_writers_of_different_slots_of_one_chunk_keep_both(db_dsn: str, conn
     assert _visible(conn, "vrtx") == sorted(expected.values())
     versions = conn.execute("SELECT count(*) FROM tgsis.vrtx_chunk WHERE NOT revclosed").fetchone()
     assert versions == (1,)
+
+
+def test_writer_in_versioned_storage_writes_features_of_unversioned_classes_in_revision_0(conn: Conn) -> None:
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_feature_class(conn, "plain", "SURFACE", versioned=False)
+    tgsis.create_feature_class(conn, "kept", "SURFACE")
+    triangle = Surface(np.eye(3), np.array([[0, 1, 2]]))
+    loose = tgsis.insert_feature(conn, "plain", triangle)
+    kept = tgsis.insert_feature(conn, "kept", triangle)
+    conn.commit()
+    _make_chunks(conn, ["vrtx"])
+    tgsis.create_version(conn, "child")
+    # DEFAULT's working revision is not 0 any more; the unversioned feature's chunks are written in revision 0
+    assert conn.execute("SELECT tgsis.get_working_revision()").fetchone() != (0,)
+    assert _write(conn, "vrtx", _vertices([0, 1], geoid=loose)) == 1
+    assert _write(conn, "vrtx", _vertices([2], geoid=loose)) == 1
+    conn.commit()
+    assert conn.execute("SELECT revision, lastrevs FROM tgsis.vrtx_chunk WHERE geoid = %s", (loose,)).fetchall() == [
+        (0, [])
+    ]
+    # refused as a write of their rows is: mixed with a versioned feature (TG300), or in another version (TG305)
+    with pytest.raises(psycopg.Error) as mixed:
+        _write(conn, "vrtx", [*_vertices([5], geoid=loose), *_vertices([5], geoid=kept)])
+    assert mixed.value.sqlstate == "TG300"
+    conn.rollback()
+    tgsis.goto_version(conn, "child")
+    with pytest.raises(psycopg.Error) as elsewhere:
+        _write(conn, "vrtx", _vertices([3], geoid=loose))
+    assert elsewhere.value.sqlstate == "TG305"
+    conn.rollback()
+    # the child sees what DEFAULT wrote there, the one state of the feature
+    assert _visible(conn, "vrtx", loose) == _vertices([0, 1, 2], geoid=loose)
+
+
+def test_writer_in_plain_storage_refuses_a_session_in_another_version(conn: Conn) -> None:
+    _make_chunks(conn, ["vrtx"])
+    tgsis.create_version(conn, "child")
+    tgsis.goto_version(conn, "child")
+    with pytest.raises(psycopg.Error) as refused:
+        _write(conn, "vrtx", _vertices([0]))
+    assert refused.value.sqlstate == "TG305"
