@@ -488,8 +488,7 @@ def test_a_scan_of_one_object_reads_only_its_chunks(conn: Conn) -> None:
     for geoid in (1, 2, 3):
         _write(conn, "vrtx", _vertices(range(0, 5000), geoid=geoid))
     conn.execute("ANALYZE tgsis.vrtx_chunk")
-    conn.execute("SET enable_seqscan = off")
-    conn.execute("SET jit = off")
+    conn.execute("SET enable_seqscan = off; SET jit = off")
     plan = conn.execute("EXPLAIN (ANALYZE, FORMAT JSON) SELECT * FROM tgsis.vrtx_chunk_rows WHERE geoid = 2").fetchone()
     assert plan is not None
     nodes: list[dict[str, Any]] = []
@@ -509,11 +508,20 @@ def test_a_scan_of_one_object_reads_only_its_chunks(conn: Conn) -> None:
 
 
 def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
+    tgsis.create_feature_class(conn, "alpha", "SURFACE")
+    tgsis.create_feature_class(conn, "beta", "SURFACE")
+    triangle = Surface(np.eye(3), np.array([[0, 1, 2]]))
+    alpha = tgsis.insert_feature(conn, "alpha", triangle)
+    beta = tgsis.insert_feature(conn, "beta", triangle)
+    conn.execute("REVOKE ALL ON beta FROM tgsis_reader, tgsis_editor, tgsis_admin, PUBLIC")
+    conn.commit()
     _make_chunks(conn, ["vrtx"])
-    _write(conn, "vrtx", _vertices(range(10)))
+    _write(conn, "vrtx", [*_vertices(range(10), geoid=alpha), *_vertices(range(4), geoid=beta)])
     conn.commit()
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:
         reader = roles.connect("reader")
+        # the chunk table's row-level security is the row table's: a revoked class's chunks are not seen
+        assert reader.execute("SELECT DISTINCT geoid FROM tgsis.vrtx_chunk").fetchall() == [(alpha,)]
         assert len(reader.execute("SELECT * FROM tgsis.vrtx_chunk_rows").fetchall()) == 10
         reader.rollback()
         for statement in (
@@ -528,8 +536,12 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
             "SELECT tgsis.write_chunk_rows('vrtx', 'tgsis.vrtx')",
             "SELECT tgsis.create_chunk_table('trgl')",
             "SELECT tgsis.chunk_columns('vrtx')",
+            # writes to the storage directly: not into a revoked class's chunks
+            f"INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision) VALUES ({beta}, 7, 0)",
         ):
             assert _sqlstate(editor, statement) == "42501", statement
+        assert editor.execute("UPDATE tgsis.vrtx_chunk SET holes = NULL WHERE geoid = %s", (beta,)).rowcount == 0
+        editor.rollback()
 
 
 def _waits_for_a_lock(conn: Conn, pid: int) -> bool:
