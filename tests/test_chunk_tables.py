@@ -373,6 +373,9 @@ def test_writer_versions_chunks_as_rows_are_versioned(conn: Conn) -> None:
     child_rows = {r[1]: r for r in base}
     child_rows.update({r[1]: r for r in moved})
     assert _visible(conn, "vrtx") == sorted(child_rows.values())
+    # content the chunk holds already, bit for bit, is not written: no version closed, none added
+    assert _write(conn, "vrtx", [*_vertices([3], scale=7.0), *base[1200:1210]], [(1, 5000)]) == 0
+    assert conn.execute("SELECT count(*) FROM tgsis.vrtx_chunk WHERE geoid = 1").fetchone() == (4,)
     # a second write in the same working revision rewrites the child's version in place
     again = _vertices([4], scale=9.0)
     child_rows[4] = again[0]
@@ -390,6 +393,10 @@ def test_writer_versions_chunks_as_rows_are_versioned(conn: Conn) -> None:
     # the parent still sees its content
     tgsis.goto_version(conn, "DEFAULT")
     assert _visible(conn, "vrtx") == sorted(base)
+    # unchanged content of a version another revision wrote is neither closed nor copied
+    assert conn.execute("SELECT tgsis.get_working_revision() <> %s", (parent,)).fetchone() == (True,)
+    assert _write(conn, "vrtx", base[:5]) == 0
+    assert conn.execute("SELECT count(*) FROM tgsis.vrtx_chunk WHERE geoid = 1").fetchone() == (3,)
 
 
 def test_writer_refuses_what_the_row_table_would(conn: Conn) -> None:
@@ -455,10 +462,17 @@ def test_writer_keeps_doubles_bit_exact(conn: Conn) -> None:
     ).fetchall()
     assert [bytes(g[0]) for g in got] == [struct.pack(">q", int(p)) for p in patterns]
     assert [bytes(g[1]) for g in got] == [struct.pack(">q", int(p)) for p in patterns[::-1]]
+    # 0.0 and -0.0 are equal to SQL but not the same content: a change of sign bit is written
+    assert _write(conn, "vrtx", [(1, 1401, 0.0, 0.0, 0.0)]) == 1
+    assert _write(conn, "vrtx", [(1, 1401, -0.0, 0.0, 0.0)]) == 1
+    assert _write(conn, "vrtx", [(1, 1401, -0.0, 0.0, 0.0)]) == 0
+    assert conn.execute("SELECT float8send(x) FROM tgsis.vrtx_chunk_rows WHERE vrtxid = 1401").fetchone() == (
+        struct.pack(">d", -0.0),
+    )
     # and once more through a rewrite in place of the same chunks (another slot changed)
     _write(conn, "vrtx", _vertices([1]))
     got = conn.execute(
-        "SELECT float8send(x) FROM tgsis.vrtx_chunk_rows WHERE geoid = 1 AND vrtxid <> 1 ORDER BY vrtxid"
+        "SELECT float8send(x) FROM tgsis.vrtx_chunk_rows WHERE geoid = 1 AND vrtxid NOT IN (1, 1401) ORDER BY vrtxid"
     ).fetchall()
     assert [bytes(g[0]) for g in got] == [struct.pack(">q", int(p)) for p in patterns]
 

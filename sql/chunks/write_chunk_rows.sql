@@ -22,7 +22,8 @@
 --    fit integer) and writes: in place when the visible version is the working
 --    revision W's, else it is closed (W appended to lastrevs) and the new
 --    content inserted with revision W; a chunk left without a present slot is
---    deleted when W's, closed otherwise, and not inserted. A new chunk that a
+--    deleted when W's, closed otherwise, and not inserted; a chunk whose content
+--    stays the same bit for bit is not written at all. A new chunk that a
 --    concurrent writer inserted meanwhile (its insert waited for it) is done
 --    again by step 1 for those chunks only, reading what it committed.
 -- Refused by name: a p_rows without the row table's columns or _delete, a
@@ -31,7 +32,7 @@
 -- The callers take the objects' write locks and note the changed objects
 -- (tgsis.object_write_lock, tgsis.note_changed_objects), as they do for rows.
 -- Returns the number of chunks written (rewritten in place, closed, inserted
--- or deleted). Runs with the caller's rights (tgsis's owner): internal.
+-- or deleted; an unchanged one is not written). Runs with the caller's rights (tgsis's owner): internal.
 CREATE FUNCTION tgsis.write_chunk_rows(p_table text, p_rows regclass)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -219,6 +220,12 @@ BEGIN
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
+        -- a chunk whose new content is the visible one bit for bit (array_send: -0.0 is not 0.0) is not written
+        'same', array_to_string(ARRAY['n.holes IS NOT DISTINCT FROM v.holes']
+                                || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase IS NOT DISTINCT FROM v.vbase'] ELSE '{}'::text[] END
+                                || ARRAY(SELECT format('array_send(n.%1$I) IS NOT DISTINCT FROM array_send(v.%1$I)', c)
+                                           FROM unnest(v_vals || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
+                                ' AND '),
         'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['$2', 'n.holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c)
@@ -250,9 +257,11 @@ WITH k AS (
       LEFT JOIN m ON {match_m_e} AND m.slot = s.slot
      WHERE e.last IS NOT NULL
      GROUP BY {e_K}, e.vmin, e.fits
+), same AS (
+    SELECT v.vtid FROM v JOIN n ON {match_v_n} WHERE {same}
 ), upd AS (
     UPDATE {chunk} c SET {setcols} FROM v, n
-     WHERE c.ctid = v.vtid AND v.revision = $2 AND {match_v_n}
+     WHERE c.ctid = v.vtid AND v.revision = $2 AND {match_v_n} AND NOT EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)
     RETURNING {c_K}
 ), del AS (
     DELETE FROM {chunk} c USING v, e
@@ -260,18 +269,19 @@ WITH k AS (
     RETURNING {c_K}
 ), cls AS (
     UPDATE {chunk} c SET lastrevs = c.lastrevs || $2 FROM v
-     WHERE c.ctid = v.vtid AND v.revision <> $2
+     WHERE c.ctid = v.vtid AND v.revision <> $2 AND NOT EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)
     RETURNING {c_K}
+), fresh AS (  -- the new versions: no visible one is W's or already holds this content
+    SELECT n.* FROM n
+     WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n} AND (v.revision = $2 OR EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)))
 ), ins AS (
     INSERT INTO {chunk} ({inscols})
-    SELECT {insvals} FROM n
-     WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n} AND v.revision = $2)
+    SELECT {insvals} FROM fresh n
     ON CONFLICT DO NOTHING
     RETURNING {K}
 )
 SELECT (SELECT count(*) FROM (SELECT * FROM upd UNION SELECT * FROM del UNION SELECT * FROM cls UNION SELECT * FROM ins) w),
-       ARRAY(SELECT ROW({n_K})::text FROM n WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n} AND v.revision = $2)
-             EXCEPT SELECT ROW({i_K})::text FROM ins i)
+       ARRAY(SELECT ROW({n_K})::text FROM fresh n EXCEPT SELECT ROW({i_K})::text FROM ins i)
 $q$;
     FOR v_part IN SELECT p.key, p.value FROM jsonb_each_text(v_parts) AS p ORDER BY length(p.key) DESC LOOP
         v_sql := replace(v_sql, '{' || v_part.key || '}', v_part.value);
