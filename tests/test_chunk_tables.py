@@ -653,3 +653,15 @@ def test_writer_in_plain_storage_refuses_a_session_in_another_version(conn: Conn
     with pytest.raises(psycopg.Error) as refused:
         _write(conn, "vrtx", _vertices([0]))
     assert refused.value.sqlstate == "TG305"
+
+
+def test_writer_refuses_a_transaction_above_read_committed(conn: Conn) -> None:
+    """Its lock-then-read steps need a snapshot per statement: under REPEATABLE READ a writer that waited would
+    read the chunk as it was before the one it waited for committed."""
+    _make_chunks(conn, ["vrtx"])
+    conn.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+    with pytest.raises(psycopg.Error) as refused:
+        _write(conn, "vrtx", _vertices([0]))
+    assert refused.value.sqlstate == "TG300"
+    conn.rollback()
+    assert _write(conn, "vrtx", _vertices([0])) == 1
