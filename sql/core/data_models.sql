@@ -51,8 +51,17 @@ CREATE TABLE tgsis.model_tables (
     keycolumn   text     NOT NULL DEFAULT 'geoid',
     geoidcolumn text     DEFAULT 'geoid',
     description text     NOT NULL,
+    chunkcolumn text,
+    chunkrefs   text[]   NOT NULL DEFAULT '{}',
+    chunksize   integer,
     -- rows deleted with their geometry are the geometry's: versioned by its id, in object class feature
-    CONSTRAINT model_tables_per_geometry CHECK (geoidcolumn IS NULL OR (objectclass = 'feature' AND geoidcolumn = keycolumn))
+    CONSTRAINT model_tables_per_geometry CHECK (geoidcolumn IS NULL OR (objectclass = 'feature' AND geoidcolumn = keycolumn)),
+    -- a table stored in chunks (docs/storage.md, "Chunks and the mapping of ids") names its local-id column
+    -- and a block size, a power of two; one stored as rows has neither, nor ref columns
+    CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
+                                          AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
+                                          AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 65536
+                                                                     AND chunksize & (chunksize - 1) = 0)))
 );
 
 COMMENT ON TABLE tgsis.model_tables IS
@@ -68,6 +77,12 @@ COMMENT ON COLUMN tgsis.model_tables.keycolumn IS 'the object key it is versione
 COMMENT ON COLUMN tgsis.model_tables.geoidcolumn IS
     'the column holding geometry ids: the rows of a deleted geometry go with it (NULL: the table is not per geometry)';
 COMMENT ON COLUMN tgsis.model_tables.description IS 'what a row is';
+COMMENT ON COLUMN tgsis.model_tables.chunkcolumn IS
+    'the local-id column the table is chunked by (tgsis.<table>_chunk, made by tgsis.create_chunk_table: blocks of chunksize consecutive ids of one object); NULL: stored as rows';
+COMMENT ON COLUMN tgsis.model_tables.chunkrefs IS
+    'the columns holding vertex ids, stored relative to the chunk''s smallest one (vbase) in its chunk table; empty for a table stored as rows';
+COMMENT ON COLUMN tgsis.model_tables.chunksize IS
+    'ids per chunk (a power of two, 64..65536; 1024 today); NULL when chunkcolumn is NULL';
 
 -- the geometry core: one tgsis.geometry row per stored object of every model
 INSERT INTO tgsis.data_models (model, name, timemodel, create_function, description)

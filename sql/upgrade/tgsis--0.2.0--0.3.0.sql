@@ -100,6 +100,23 @@ UPDATE tgsis.data_models SET merge_function = 'merge_periods_by_slice' WHERE mod
 -- @handled model2/storage.sql
 -- @handled model3/storage.sql
 
+-- ---- issue40-chunks: the registry says which model tables are stored in chunks (core/data_models.sql;
+-- tgsis.create_chunk_table reads it): model 1's vertices and simplices, by their local id, 1024 per chunk
+ALTER TABLE tgsis.model_tables
+    ADD COLUMN chunkcolumn text,
+    ADD COLUMN chunkrefs   text[] NOT NULL DEFAULT '{}',
+    ADD COLUMN chunksize   integer,
+    ADD CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
+                                              AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
+                                              AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 65536
+                                                                         AND chunksize & (chunksize - 1) = 0)));
+UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunkrefs, chunksize = 1024
+  FROM (VALUES ('vrtx', 'vrtxid', '{}'::text[]), ('point', 'pointid', '{vrtxid1}'), ('segment', 'segid', '{vrtxid1,vrtxid2}'),
+               ('trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}'), ('tetra', 'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}'))
+       AS c (tablename, chunkcolumn, chunkrefs)
+ WHERE t.tablename = c.tablename;
+-- @handled model1/storage.sql
+
 -- ---- issue36-timerange: tgsis.timerange becomes a domain refusing NaN bounds over the range type
 -- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one. The functions over the
 -- old range type are dropped by name (the generated part below makes them again), then the type, without

@@ -1,0 +1,159 @@
+-- tgsis.create_chunk_table(table): create tgsis.<table>_chunk, the chunk storage of a model table (issue 40).
+-- The layout is the contract of docs/storage.md ("Chunks and the mapping of
+-- ids", "Compression, bit-exact", "Versioning of chunks"): the row table's key
+-- with its local-id column replaced by chunk (= id >> log2(chunksize)), then
+-- revision, lastrevs, revclosed as in <table>_ver, holes, vbase for a table
+-- with vertex-id columns, one array per other column in the row table's order,
+-- and a <ref>_wide bigint[] per vertex-id column. The columns come from the
+-- registry and the live storage (tgsis.chunk_columns), never from a list typed
+-- here. Compression is chosen now from the server: lz4 on the double
+-- precision[] columns when it was built with lz4, else pglz; pglz on the
+-- integer, bigint and smallint arrays. Indexes: the primary key and the two
+-- revision indexes every versioned storage has (a BRIN on revision, a btree on
+-- the object key of closed versions: tgsis.create_revision_indexes, which
+-- names <table>_ver and so is not reused). Grants and row-level security are
+-- the row table's storage's (tgsis.grant_model_tables, tgsis.protect_model_tables),
+-- copied from the catalog: the same roles reach the same objects' chunks.
+-- Nothing reads or writes chunk tables yet besides tgsis.write_chunk_rows and
+-- the decoded face (tgsis.create_chunk_view); the storage switch comes next.
+-- Not idempotent: a second call refuses by name (TG201). Runs with the
+-- caller's rights (tgsis's owner, who owns the storage).
+CREATE FUNCTION tgsis.create_chunk_table(p_table text)
+RETURNS regclass
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_reg     tgsis.model_tables;
+    v_name    text := p_table || '_chunk';
+    v_storage regclass;
+    v_chunk   regclass;
+    v_float   text;
+    v_coldesc text;
+    v_refs    text[];
+    v_defs    text[] := '{}';
+    v_c       record;
+    v_acl     record;
+    v_pol     record;
+    v_key     text;
+BEGIN
+    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
+    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 when not registered for chunks, TG100 when it does not fit
+    IF v_reg.chunksize > 16384 THEN
+        -- (the registry allows up to 65536, but holes are smallint slots: 1..32767)
+        RAISE EXCEPTION 'tgsis.% has chunksize %, more than the 16384 the holes column can number', quote_ident(p_table),
+                v_reg.chunksize
+            USING ERRCODE = 'TG100', DETAIL = 'holes lists slots as smallint (at most 32767).',
+                  HINT = 'register a chunksize of at most 16384';
+    END IF;
+    IF octet_length(v_name || '_rows') > 63 THEN
+        RAISE EXCEPTION 'table name % is too long for a chunk table', quote_literal(p_table)
+            USING ERRCODE = 'TG101', DETAIL = 'The chunk table <table>_chunk and its face <table>_chunk_rows must fit in 63 bytes.';
+    END IF;
+    IF to_regclass(format('tgsis.%I', v_name)) IS NOT NULL THEN
+        RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_name)
+            USING ERRCODE = 'TG201', DETAIL = format('The chunk table of tgsis.%I was created before.', p_table);
+    END IF;
+    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    -- lz4 when the server was built with it (a build option: default_toast_compression then lists it)
+    v_float := CASE WHEN EXISTS (SELECT FROM pg_settings WHERE name = 'default_toast_compression' AND 'lz4' = ANY (enumvals))
+                    THEN 'lz4' ELSE 'pglz' END;
+
+    -- the key (in the primary key's order, the chunk column replaced), the versioning columns, holes, vbase
+    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NOT NULL ORDER BY c.keyorder LOOP
+        v_key := concat_ws(', ', v_key, CASE WHEN v_c.role = 'chunk' THEN 'chunk' ELSE quote_ident(v_c.name) END);
+        v_defs := v_defs || CASE WHEN v_c.role = 'chunk' THEN 'chunk bigint NOT NULL'
+                                 ELSE format('%I %s NOT NULL', v_c.name,
+                                             (SELECT format_type(a.atttypid, a.atttypmod) FROM pg_attribute a
+                                               WHERE a.attrelid = v_storage AND a.attname = v_c.name)) END;
+    END LOOP;
+    v_defs := v_defs || ARRAY['revision integer NOT NULL',
+                              'lastrevs integer[] COMPRESSION pglz NOT NULL DEFAULT ''{}''',
+                              'revclosed boolean GENERATED ALWAYS AS (cardinality(lastrevs) > 0) STORED',
+                              'holes smallint[] COMPRESSION pglz'];
+    v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
+    IF cardinality(v_refs) > 0 THEN
+        v_defs := v_defs || 'vbase bigint'::text;
+    END IF;
+    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NULL ORDER BY c.colorder LOOP
+        v_defs := v_defs || CASE WHEN v_c.role = 'float' THEN format('%I double precision[] COMPRESSION %s', v_c.name, v_float)
+                                 ELSE format('%I integer[] COMPRESSION pglz', v_c.name) END;
+    END LOOP;
+    v_defs := v_defs || ARRAY(SELECT format('%I bigint[] COMPRESSION pglz', r || '_wide') FROM unnest(v_refs) WITH ORDINALITY AS u(r, o)
+                               ORDER BY o);
+    EXECUTE format('CREATE TABLE tgsis.%I (%s, PRIMARY KEY (%s, revision))', v_name, array_to_string(v_defs, ', '), v_key);
+    v_chunk := format('tgsis.%I', v_name)::regclass;
+    -- the revision indexes of every versioned storage (tgsis.create_revision_indexes says why)
+    EXECUTE format('CREATE INDEX %I ON %s USING brin (revision) WITH (autosummarize = on)', v_name || '_revision_idx', v_chunk);
+    EXECUTE format('CREATE INDEX %I ON %s (%I) WHERE revclosed', v_name || '_closed_idx', v_chunk, v_reg.keycolumn);
+
+    -- comments, generated from the row table's
+    EXECUTE format('COMMENT ON TABLE %s IS %L', v_chunk,
+                   format('chunk storage of tgsis.%s (issue 40, docs/storage.md): one row per block of %s consecutive %s of one object '
+                          'and per chunk version; nothing reads it yet but tgsis.write_chunk_rows and tgsis.%s_rows',
+                          p_table, v_reg.chunksize, v_reg.chunkcolumn, v_name));
+    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
+        v_coldesc := col_description(v_storage, (SELECT a.attnum FROM pg_attribute a WHERE a.attrelid = v_storage AND a.attname = v_c.name)::integer);
+        IF v_c.role = 'chunk' THEN
+            EXECUTE format('COMMENT ON COLUMN %s.chunk IS %L', v_chunk,
+                           format('chunk number: the ids %s = chunk * %s + slot - 1 (slots 1..%s; %s: %s)', v_c.name, v_reg.chunksize,
+                                  v_reg.chunksize, v_c.name, coalesce(v_coldesc, 'local id')));
+        ELSIF v_c.role = 'key' THEN
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name, coalesce(v_coldesc, format('key column %s of tgsis.%s', v_c.name, p_table)));
+        ELSIF v_c.role = 'float' THEN
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
+                           format('%s per slot, bit-exact (NULL: a hole)', coalesce(v_coldesc, v_c.name)));
+        ELSE
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
+                           format('%s per slot, as %s - %s (NULL: a hole, or every value is in %s_wide)', coalesce(v_coldesc, v_c.name),
+                                  v_c.name, CASE WHEN v_c.name = v_refs[1] THEN 'vbase' ELSE v_refs[1] END, v_c.name));
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name || '_wide',
+                           format('%s per slot as absolute ids, only when some difference of the chunk does not fit integer (then vbase is NULL)',
+                                  v_c.name));
+        END IF;
+    END LOOP;
+    EXECUTE format('COMMENT ON COLUMN %s.revision IS %L', v_chunk, 'revision in which this chunk version was written (0: unversioned storage)');
+    EXECUTE format('COMMENT ON COLUMN %s.lastrevs IS %L', v_chunk,
+                   'revisions in which this chunk version stopped being current (rewritten or emptied there); empty while live');
+    EXECUTE format('COMMENT ON COLUMN %s.revclosed IS %L', v_chunk,
+                   'lastrevs is not empty (kept by PostgreSQL): lets reads skip the array for live chunk versions');
+    EXECUTE format('COMMENT ON COLUMN %s.holes IS %L', v_chunk,
+                   'slots (1-based, ascending) of absent ids below the last present slot; NULL when none');
+    IF cardinality(v_refs) > 0 THEN
+        EXECUTE format('COMMENT ON COLUMN %s.vbase IS %L', v_chunk,
+                       'the smallest vertex id among all ref values of the chunk; NULL when the _wide columns hold them');
+    END IF;
+
+    -- the rights of the row table's storage (its grants; its row-level security, policies and their comments)
+    FOR v_acl IN SELECT a.grantee, a.privilege_type, a.is_grantable
+                   FROM pg_class c, aclexplode(c.relacl) AS a
+                  WHERE c.oid = v_storage AND a.grantee <> c.relowner LOOP
+        EXECUTE format('GRANT %s ON %s TO %s%s', v_acl.privilege_type, v_chunk,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
+                       CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
+    END LOOP;
+    IF (SELECT c.relrowsecurity FROM pg_class c WHERE c.oid = v_storage) THEN
+        EXECUTE format('ALTER TABLE %s ENABLE ROW LEVEL SECURITY', v_chunk);
+    END IF;
+    FOR v_pol IN SELECT p.oid, p.polname, p.polpermissive, p.polcmd, p.polroles,
+                        pg_get_expr(p.polqual, p.polrelid) AS qual, pg_get_expr(p.polwithcheck, p.polrelid) AS withcheck
+                   FROM pg_policy p WHERE p.polrelid = v_storage ORDER BY p.polname LOOP
+        EXECUTE format('CREATE POLICY %I ON %s AS %s FOR %s TO %s%s%s', v_pol.polname, v_chunk,
+                       CASE WHEN v_pol.polpermissive THEN 'PERMISSIVE' ELSE 'RESTRICTIVE' END,
+                       CASE v_pol.polcmd WHEN 'r' THEN 'SELECT' WHEN 'a' THEN 'INSERT' WHEN 'w' THEN 'UPDATE'
+                                         WHEN 'd' THEN 'DELETE' ELSE 'ALL' END,
+                       (SELECT string_agg(CASE WHEN r = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(r)) END, ', ')
+                          FROM unnest(v_pol.polroles) AS r),
+                       CASE WHEN v_pol.qual IS NOT NULL THEN format(' USING (%s)', v_pol.qual) ELSE '' END,
+                       CASE WHEN v_pol.withcheck IS NOT NULL THEN format(' WITH CHECK (%s)', v_pol.withcheck) ELSE '' END);
+        EXECUTE format('COMMENT ON POLICY %I ON %s IS %L', v_pol.polname, v_chunk, obj_description(v_pol.oid, 'pg_policy'));
+    END LOOP;
+    RETURN v_chunk;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.create_chunk_table(text) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.create_chunk_table(text) IS
+    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes, comments, the storage''s grants and row-level security; TG200 for a table not registered for chunks, TG201 when it exists';

@@ -1,0 +1,330 @@
+-- tgsis.write_chunk_rows(table, rows): write upserts and deletes of rows into tgsis.<table>_chunk, set-based.
+-- The one writer of chunk contents (docs/storage.md, "Writing an edit"): the
+-- storage switch of the next step routes check-in, merge and the views'
+-- triggers through it. p_rows is a table (a temporary one, usually) with the
+-- row table's columns plus _delete boolean: a row with _delete true deletes
+-- its key, any other row inserts or replaces it. Every touched chunk (key and
+-- chunk = id >> log2(chunksize)) is handled in one set-based pass, whatever
+-- the number of rows (one statement per step, no loop per row or chunk):
+-- 1. which chunk versions are visible: the working set of the session's version
+--    (tgsis.write_revision: the write right, TG301 while an older revision is
+--    viewed) when the table is versioned (tgsis.versioned_tables), with
+--    revision 0 for the features of classes without versioning
+--    (tgsis.unversioned_revision); revision 0 when it is not (after
+--    tgsis.plain_write_check). The registry of versioned tables decides, as
+--    tgsis.storage_table does.
+-- 2. they are locked in key order (SELECT ... ORDER BY key FOR UPDATE), again
+--    until every visible one is locked: in READ COMMITTED a writer that waited
+--    for another finds the version it waited for closed and the new one
+--    committed, which the next statement sees (and locks);
+-- 3. one statement decodes their present slots, merges the upserts and deletes,
+--    re-encodes (holes, vbase and the differences, or _wide when one does not
+--    fit integer) and writes: in place when the visible version is the working
+--    revision W's, else it is closed (W appended to lastrevs) and the new
+--    content inserted with revision W; a chunk left without a present slot is
+--    deleted when W's, closed otherwise, and not inserted; a chunk whose content
+--    stays the same bit for bit is not written at all. A new chunk that a
+--    concurrent writer inserted meanwhile (its insert waited for it) is done
+--    again by step 1 for those chunks only, reading what it committed.
+-- Refused by name: a p_rows without the row table's columns or _delete, a
+-- NULL key, value or _delete, a negative id, a key twice (TG100), a row
+-- breaking a CHECK constraint of the row table (23514, as the table would).
+-- The callers take the objects' write locks and note the changed objects
+-- (tgsis.object_write_lock, tgsis.note_changed_objects), as they do for rows.
+-- Returns the number of chunks written (rewritten in place, closed, inserted
+-- or deleted; an unchanged one is not written). Runs with the caller's rights (tgsis's owner): internal.
+CREATE FUNCTION tgsis.write_chunk_rows(p_table text, p_rows regclass)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_reg      tgsis.model_tables;
+    v_chunk    regclass;
+    v_storage  regclass;
+    v_size     bigint;
+    v_shift    integer;
+    v_w        integer;
+    v_set      integer[];
+    v_geoids   bigint[];
+    v_cc       text;
+    v_keys     text[];    -- key columns but the chunk column, in key order
+    v_floats   text[];
+    v_refs     text[];
+    v_vals     text[];    -- every non-key column, in column order
+    v_missing  text;
+    v_problem  text;
+    v_con      record;
+    v_k        text[];    -- the chunk key's columns (quoted): the keys, then chunk
+    v_parts    jsonb;
+    v_part     record;
+    v_lock     text;
+    v_unlocked text;
+    v_newk     text;      -- the chunk key of a p_rows row r
+    v_vis      text := '(c.revision = ANY ($1)) IS TRUE AND NOT (c.lastrevs && $1)';
+    v_todo     text[];    -- NULL: every touched chunk; else the chunk keys (as text) still to write
+    v_locked   tid[];
+    v_new      tid[];
+    v_more     boolean;
+    v_done     bigint;
+    v_total    bigint := 0;
+    v_round    integer := 0;
+    v_sql      text;
+BEGIN
+    PERFORM tgsis.require_read_committed('a write of chunks');
+    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
+    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
+    v_chunk := to_regclass(format('tgsis.%I', p_table || '_chunk'));
+    IF v_chunk IS NULL THEN
+        RAISE EXCEPTION 'tgsis.% has no chunk table', quote_ident(p_table)
+            USING ERRCODE = 'TG200', HINT = 'create the chunk table first';
+    END IF;
+    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    v_size := v_reg.chunksize;
+    v_shift := round(log(2, v_reg.chunksize))::integer;
+    v_cc := v_reg.chunkcolumn;
+    v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
+    v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float' ORDER BY c.colorder);
+    v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
+    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder);
+
+    -- p_rows: the row table's columns and _delete boolean
+    SELECT string_agg(quote_ident(c.name), ', ' ORDER BY c.colorder) INTO v_missing
+      FROM tgsis.chunk_columns(p_table) c
+     WHERE NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = c.name AND a.attnum > 0
+                                                   AND NOT a.attisdropped);
+    IF v_missing IS NOT NULL OR NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
+                                                                         AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped) THEN
+        RAISE EXCEPTION 'the rows to write into tgsis.% lack columns', quote_ident(p_table)
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('%s needs the columns of tgsis.%I and _delete boolean; missing: %s.', p_rows, p_table,
+                                  concat_ws(', ', v_missing, CASE WHEN NOT EXISTS (
+                                      SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
+                                                                   AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped)
+                                                                  THEN '_delete boolean' END)),
+                  HINT = 'create the table of rows LIKE the row table and add the column _delete boolean';
+    END IF;
+    -- what the row table would refuse, refused by name (NULL marks a hole: a NULL value may not become one)
+    v_newk := array_to_string(ARRAY(SELECT format('r.%I', k) FROM unnest(v_keys) AS k)
+                              || format('r.%I >> %s', v_cc, v_shift), ', ');
+    EXECUTE format(
+        'SELECT CASE WHEN count(*) FILTER (WHERE %s) > 0 THEN %L
+                     WHEN count(*) FILTER (WHERE NOT r._delete AND (%s)) > 0 THEN %L
+                     WHEN count(*) FILTER (WHERE r.%I < 0%s) > 0 THEN %L
+                     WHEN count(*) <> count(DISTINCT (%s, r.%I)) THEN %L END
+           FROM %s r',
+        concat_ws(' OR ', 'r._delete IS NULL',
+                  (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)),
+        'a key or _delete is NULL',
+        coalesce((SELECT string_agg(format('r.%I IS NULL', v), ' OR ') FROM unnest(v_vals) AS v), 'false'),
+        'a row to write has a NULL value',
+        v_cc, (SELECT string_agg(format(' OR (NOT r._delete AND r.%I < 0)', v), '') FROM unnest(v_refs) AS v),
+        'a row has a negative id',
+        array_to_string(ARRAY(SELECT format('r.%I', k) FROM unnest(v_keys) AS k), ', '), v_cc,
+        'a key is given twice',
+        p_rows) INTO v_problem;
+    IF v_problem IS NOT NULL THEN
+        RAISE EXCEPTION 'cannot write these rows into tgsis.%: %', quote_ident(p_table), v_problem
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('Ids are 0 or more, the columns of tgsis.%I are all NOT NULL, and each key is written once by one call.',
+                                  p_table),
+                  HINT = 'give each key once, with all its values';
+    END IF;
+    FOR v_con IN SELECT con.conname, pg_get_expr(con.conbin, con.conrelid) AS expr
+                   FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'c' ORDER BY con.conname LOOP
+        EXECUTE format('SELECT EXISTS (SELECT FROM %s WHERE NOT _delete AND NOT (%s))', p_rows, v_con.expr) INTO v_more;
+        IF v_more THEN
+            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', p_table, v_con.conname
+                USING ERRCODE = 'check_violation', DETAIL = format('Written into tgsis.%I by chunks.', p_table || '_chunk');
+        END IF;
+    END LOOP;
+
+    -- the working revision and the set it sees
+    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN
+        EXECUTE format('SELECT array_agg(DISTINCT r.%I) FROM %s r', v_reg.keycolumn, p_rows) INTO v_geoids;
+        IF v_reg.objectclass = 'feature'
+           AND EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_geoids)) THEN
+            v_w := tgsis.unversioned_revision(v_geoids);  -- TG305, TG300
+            v_set := ARRAY[0];
+        ELSE
+            SELECT w.revision, w.revisions INTO v_w, v_set FROM tgsis.write_revision() AS w;
+        END IF;
+    ELSE
+        PERFORM tgsis.plain_write_check('tgsis', p_table);  -- TG305
+        v_w := 0;
+        v_set := ARRAY[0];
+    END IF;
+
+    -- the writing statement, from a template whose {parts} are made by format() from the column lists
+    v_k := ARRAY(SELECT quote_ident(k) FROM unnest(v_keys) AS k) || 'chunk'::text;
+    v_parts := jsonb_build_object(
+        'rows', p_rows::text,
+        'chunk', v_chunk::text,
+        'vis', v_vis,
+        'todo', format('($3::text[] IS NULL OR ROW(%s)::text = ANY ($3))', v_newk),
+        'newk_as', array_to_string(ARRAY(SELECT format('r.%I AS %I', k, k) FROM unnest(v_keys) AS k)
+                                   || format('r.%I >> %s AS chunk', v_cc, v_shift), ', '),
+        'cc', quote_ident(v_cc),
+        'mask', v_size - 1,
+        'K', array_to_string(v_k, ', '),
+        'v_K', array_to_string(ARRAY(SELECT 'v.' || k FROM unnest(v_k) AS k), ', '),
+        'o_K', array_to_string(ARRAY(SELECT 'o.' || k FROM unnest(v_k) AS k), ', '),
+        'n_K', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k), ', '),
+        'k_K', array_to_string(ARRAY(SELECT 'k.' || k FROM unnest(v_k) AS k), ', '),
+        'e_K', array_to_string(ARRAY(SELECT 'e.' || k FROM unnest(v_k) AS k), ', '),
+        'c_K', array_to_string(ARRAY(SELECT 'c.' || k FROM unnest(v_k) AS k), ', '),
+        'i_K', array_to_string(ARRAY(SELECT 'i.' || k FROM unnest(v_k) AS k), ', '),
+        'match_c_k', array_to_string(ARRAY(SELECT format('c.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'match_n_o', array_to_string(ARRAY(SELECT format('n.%s = o.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'match_m_k', array_to_string(ARRAY(SELECT format('m.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'match_m_e', array_to_string(ARRAY(SELECT format('m.%s = e.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'match_v_n', array_to_string(ARRAY(SELECT format('v.%s = n.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'match_v_e', array_to_string(ARRAY(SELECT format('v.%s = e.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'arrays', array_to_string(ARRAY(SELECT format('v.%I', f) FROM unnest(v_floats) AS f)
+                                  || ARRAY(SELECT format('v.%I, v.%I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
+        'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats) AS f)
+                                 || ARRAY(SELECT format('%I, %I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
+        'present', CASE WHEN cardinality(v_floats) > 0 THEN format('u.%I IS NOT NULL', v_floats[1])
+                        ELSE format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_refs[1], v_refs[1] || '_wide') END,
+        'decoded', array_to_string(
+            ARRAY(SELECT format('u.%I', f) FROM unnest(v_floats) AS f)
+            || ARRAY(SELECT format('CASE WHEN v.vbase IS NOT NULL THEN v.vbase + %s ELSE u.%I END AS %I',
+                                   CASE WHEN r = v_refs[1] THEN format('u.%I', r) ELSE format('u.%I + u.%I', v_refs[1], r) END,
+                                   r || '_wide', r)
+                     FROM unnest(v_refs) AS r), ', '),
+        'rvals', array_to_string(ARRAY(SELECT format('r.%I::double precision AS %I', f, f) FROM unnest(v_floats) AS f)
+                                 || ARRAY(SELECT format('r.%I::bigint AS %I', r, r) FROM unnest(v_refs) AS r), ', '),
+        'o_vals', array_to_string(ARRAY(SELECT 'o.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
+        'n_vals', array_to_string(ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
+        -- a chunk's refs are relative when every difference fits integer, else absolute in the _wide columns
+        'fit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits'
+                    ELSE format('min(least(%1$s)) AS vmin, '
+                                'coalesce(max(m.%2$I) - min(least(%1$s)) <= 2147483647%3$s, true) AS fits',
+                                array_to_string(ARRAY(SELECT format('m.%I', r) FROM unnest(v_refs) AS r), ', '), v_refs[1],
+                                coalesce((SELECT string_agg(format(' AND min(m.%1$I - m.%2$I) >= -2147483648'
+                                                                   ' AND max(m.%1$I - m.%2$I) <= 2147483647', r, v_refs[1]), '')
+                                            FROM unnest(v_refs[2:]) AS r), '')) END,
+        'enc', array_to_string(
+            ARRAY(SELECT format('array_agg(m.%I ORDER BY s.slot) AS %I', f, f) FROM unnest(v_floats) AS f)
+            || ARRAY(SELECT format('CASE WHEN e.fits THEN array_agg(CASE WHEN e.fits THEN (m.%I - %s)::integer END ORDER BY s.slot) END AS %I',
+                                   r, CASE WHEN r = v_refs[1] THEN 'e.vmin' ELSE format('m.%I', v_refs[1]) END, r)
+                     FROM unnest(v_refs) AS r)
+            || ARRAY(SELECT format('CASE WHEN NOT e.fits THEN array_agg(m.%I ORDER BY s.slot) END AS %I', r, r || '_wide')
+                     FROM unnest(v_refs) AS r), ', '),
+        'setcols', array_to_string(ARRAY['holes = n.holes']
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase = n.vbase'] ELSE '{}'::text[] END
+                                   || ARRAY(SELECT format('%I = n.%I', c, c) FROM unnest(v_vals) AS c)
+                                   || ARRAY(SELECT format('%I = n.%I', r || '_wide', r || '_wide') FROM unnest(v_refs) AS r), ', '),
+        'inscols', array_to_string(v_k || ARRAY['revision', 'holes']
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase'] ELSE '{}'::text[] END
+                                   || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c)
+                                   || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
+        -- a chunk whose new content is the visible one bit for bit (array_send: -0.0 is not 0.0) is not written
+        'same', array_to_string(ARRAY['n.holes IS NOT DISTINCT FROM v.holes']
+                                || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase IS NOT DISTINCT FROM v.vbase'] ELSE '{}'::text[] END
+                                || ARRAY(SELECT format('array_send(n.%1$I) IS NOT DISTINCT FROM array_send(v.%1$I)', c)
+                                           FROM unnest(v_vals || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
+                                ' AND '),
+        'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['$2', 'n.holes']
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase'] ELSE '{}'::text[] END
+                                   || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c)
+                                   || ARRAY(SELECT 'n.' || quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '));
+    v_sql := $q$
+WITH k AS (
+    SELECT DISTINCT {newk_as} FROM {rows} r WHERE {todo}
+), v AS (
+    SELECT c.ctid AS vtid, c.* FROM {chunk} c JOIN k ON {match_c_k} WHERE {vis}
+), old AS (
+    SELECT {v_K}, u.o AS slot, {decoded}
+      FROM v CROSS JOIN LATERAL unnest({arrays}) WITH ORDINALITY AS u({alias}, o)
+     WHERE {present}
+), upsert AS (
+    SELECT {newk_as}, (r.{cc} & {mask}) + 1 AS slot, r._delete, {rvals} FROM {rows} r WHERE {todo}
+), m AS (
+    SELECT {o_K}, o.slot, {o_vals} FROM old o
+     WHERE NOT EXISTS (SELECT FROM upsert n WHERE {match_n_o} AND n.slot = o.slot)
+    UNION ALL
+    SELECT {n_K}, n.slot, {n_vals} FROM upsert n WHERE NOT n._delete
+), e AS (
+    SELECT {k_K}, max(m.slot) AS last, {fit}
+      FROM k LEFT JOIN m ON {match_m_k}
+     GROUP BY {k_K}
+), n AS (
+    SELECT {e_K}, CASE WHEN e.fits THEN e.vmin END AS vbase,
+           array_agg(s.slot::smallint ORDER BY s.slot) FILTER (WHERE m.slot IS NULL) AS holes, {enc}
+      FROM e CROSS JOIN LATERAL generate_series(1, e.last::integer) AS s(slot)
+      LEFT JOIN m ON {match_m_e} AND m.slot = s.slot
+     WHERE e.last IS NOT NULL
+     GROUP BY {e_K}, e.vmin, e.fits
+), same AS (
+    SELECT v.vtid FROM v JOIN n ON {match_v_n} WHERE {same}
+), upd AS (
+    UPDATE {chunk} c SET {setcols} FROM v, n
+     WHERE c.ctid = v.vtid AND v.revision = $2 AND {match_v_n} AND NOT EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)
+    RETURNING {c_K}
+), del AS (
+    DELETE FROM {chunk} c USING v, e
+     WHERE c.ctid = v.vtid AND v.revision = $2 AND {match_v_e} AND e.last IS NULL
+    RETURNING {c_K}
+), cls AS (
+    UPDATE {chunk} c SET lastrevs = c.lastrevs || $2 FROM v
+     WHERE c.ctid = v.vtid AND v.revision <> $2 AND NOT EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)
+    RETURNING {c_K}
+), fresh AS (  -- the new versions: no visible one is W's or already holds this content
+    SELECT n.* FROM n
+     WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n} AND (v.revision = $2 OR EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)))
+), ins AS (
+    INSERT INTO {chunk} ({inscols})
+    SELECT {insvals} FROM fresh n
+    ON CONFLICT DO NOTHING
+    RETURNING {K}
+)
+SELECT (SELECT count(*) FROM (SELECT * FROM upd UNION SELECT * FROM del UNION SELECT * FROM cls UNION SELECT * FROM ins) w),
+       ARRAY(SELECT ROW({n_K})::text FROM fresh n EXCEPT SELECT ROW({i_K})::text FROM ins i)
+$q$;
+    FOR v_part IN SELECT p.key, p.value FROM jsonb_each_text(v_parts) AS p ORDER BY length(p.key) DESC LOOP
+        v_sql := replace(v_sql, '{' || v_part.key || '}', v_part.value);
+    END LOOP;
+    v_lock := format(
+        'SELECT coalesce(array_agg(l.t), ''{}'') FROM (
+           SELECT c.ctid AS t FROM %1$s c
+            WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
+              AND %5$s AND c.ctid <> ALL ($4)
+            ORDER BY %2$s FOR UPDATE OF c) l',
+        v_chunk, v_parts->>'c_K', v_newk, p_rows, v_vis);
+    v_unlocked := format(
+        'SELECT EXISTS (SELECT FROM %1$s c
+            WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
+              AND %5$s AND c.ctid <> ALL ($4))',
+        v_chunk, v_parts->>'c_K', v_newk, p_rows, v_vis);
+
+    LOOP
+        v_round := v_round + 1;
+        -- lock the visible versions of the touched chunks in key order, until every visible one is locked
+        v_locked := '{}';
+        LOOP
+            EXECUTE v_lock INTO v_new USING v_set, v_w, v_todo, v_locked;
+            v_locked := v_locked || v_new;
+            EXECUTE v_unlocked INTO v_more USING v_set, v_w, v_todo, v_locked;
+            EXIT WHEN NOT v_more;
+        END LOOP;
+        -- decode, merge, encode and write ($1 the set, $2 W, $3 the chunks still to write: NULL for all)
+        EXECUTE v_sql INTO v_done, v_todo USING v_set, v_w, v_todo;
+        v_total := v_total + v_done;
+        EXIT WHEN cardinality(v_todo) = 0;
+        -- new chunks a concurrent writer inserted first: again, reading what it committed
+        IF v_round >= 5 THEN
+            RAISE EXCEPTION 'chunks of tgsis.% kept changing while this write waited for them', quote_ident(p_table)
+                USING ERRCODE = 'serialization_failure', DETAIL = format('Still to write: %s.', array_to_string(v_todo, ', ')),
+                      HINT = 'retry the transaction';
+        END IF;
+    END LOOP;
+    RETURN v_total;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.write_chunk_rows(text, regclass) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.write_chunk_rows(text, regclass) IS
+    'write the rows of a table (the row table''s columns plus _delete boolean: true deletes the key) into tgsis.<table>_chunk in one set-based pass: the touched chunks'' visible versions locked in key order, merged, re-encoded (holes, vbase, _wide) and written in place when the working revision''s, else closed and inserted anew (emptied: deleted or closed); returns the chunks written';
