@@ -230,6 +230,10 @@ def test_upload_writes_where_a_copy_into_storage_would(conn: Conn) -> None:
     conn.commit()
     assert conn.execute("SELECT revision FROM tgsis.vrtx_chunk WHERE geoid = 2").fetchall() == [(0,)]
     assert conn.execute("SELECT count(*) FROM tgsis.revision_objects WHERE tablename = 'vrtx'").fetchone() == (0,)
+    # revision 0 is seen in every version, as the rows of such features are
+    tgsis.create_version(conn, "other")
+    tgsis.goto_version(conn, "other")
+    assert download_chunks(conn, "vrtx", [2])[2].ids.tolist() == [0, 1, 2]
 
 
 def test_holes_written_by_the_sql_writer_are_read_back(conn: Conn) -> None:

@@ -177,7 +177,8 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
     Raises
     ------
     AlreadyExistsError
-        An object has chunks already in ``tgsis.<table>_chunk`` (any version): nothing is written.
+        An object has chunks already in ``tgsis.<table>_chunk`` (of any version, among those the role may
+        read: a class it may not read cannot be written either): nothing is written.
     NotVersionedError, ReadOnlyRevisionError
         The session may not write here (as for today's COPY into storage).
     InvalidInputError
@@ -234,7 +235,7 @@ def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int]) -> sql.Composed:
     """The COPY of the visible chunk versions of ``geoids``: their columns for :func:`~tgsis._chunks.from_copy`.
 
     For one object the stream is :func:`from_copy`'s as it is; for several, each row starts with
-    ``geoid`` (rows ordered by it), which :func:`split_copy` takes off.
+    ``geoid`` (rows in no order), which :func:`split_copy` takes off.
     """
     columns = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in layout.columns.select_columns())
     if len(geoids) == 1:
@@ -242,9 +243,9 @@ def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int]) -> sql.Composed:
             columns, layout.relation, sql.Literal(int(geoids[0])), _visible(layout)
         )
     else:
-        select = sql.SQL(
-            "SELECT c.geoid, {} FROM {} c WHERE c.geoid = ANY ({}::bigint[]) AND {} ORDER BY c.geoid"
-        ).format(columns, layout.relation, sql.Literal([int(g) for g in geoids]), _visible(layout))
+        select = sql.SQL("SELECT c.geoid, {} FROM {} c WHERE c.geoid = ANY ({}::bigint[]) AND {}").format(
+            columns, layout.relation, sql.Literal([int(g) for g in geoids]), _visible(layout)
+        )
     return sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(select)
 
 
