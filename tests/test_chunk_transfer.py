@@ -10,6 +10,8 @@ back through the module.
 
 from __future__ import annotations
 
+import threading
+import time
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -285,6 +287,44 @@ def test_a_child_downloads_its_change_the_parent_its_content(conn: Conn) -> None
     # back in the child: its content again
     tgsis.goto_version(conn, "child")
     assert len(download_chunks(conn, "vrtx", [11])[11].ids) == 2500
+
+
+def test_two_uploads_of_one_new_object_one_is_refused(db_dsn: str, conn: Conn) -> None:
+    """The second waits for the first's chunk keys, then is refused by name: the object has its chunks."""
+    make_chunks(conn, ["vrtx"])
+    first = psycopg.connect(db_dsn)
+    second = psycopg.connect(db_dsn)
+    try:
+        upload_chunks(first, "vrtx", [vertices(41, range(2000), seed=1)])  # open: holds the new keys
+        result: list[Any] = []
+
+        def run() -> None:
+            try:
+                result.append(upload_chunks(second, "vrtx", [vertices(41, range(10), seed=2)]))
+            except Exception as exc:  # handed to the test's thread
+                result.append(exc)
+
+        worker = threading.Thread(target=run)
+        worker.start()
+        deadline = time.monotonic() + 60
+        while True:
+            row = conn.execute(
+                "SELECT wait_event_type FROM pg_stat_activity WHERE pid = %s", (second.info.backend_pid,)
+            ).fetchone()
+            conn.rollback()
+            if row is not None and row[0] == "Lock":
+                break
+            assert worker.is_alive() and time.monotonic() < deadline, result
+            time.sleep(0.05)
+        first.commit()
+        worker.join(60)
+        assert len(result) == 1 and isinstance(result[0], AlreadyExistsError), result
+        assert result[0].sqlstate == "TG201"
+        second.rollback()
+    finally:
+        first.close()
+        second.close()
+    assert_same(download_chunks(conn, "vrtx", [41])[41], vertices(41, range(2000), seed=1))
 
 
 # --------------------------------------------------------------------------- rights

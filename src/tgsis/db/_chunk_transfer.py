@@ -177,7 +177,7 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
     Raises
     ------
     AlreadyExistsError
-        An object has chunks already in ``tgsis.<table>_chunk`` (of any version, among those the role may
+        An object has chunks already (or a concurrent upload of it in the same revision committed first) in ``tgsis.<table>_chunk`` (of any version, among those the role may
         read: a class it may not read cannot be written either): nothing is written.
     NotVersionedError, ReadOnlyRevisionError
         The session may not write here (as for today's COPY into storage).
@@ -210,12 +210,19 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
         )
     names = layout.columns.copy_columns()
     statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)")
-    with staged(conn, layout.relation, names) as into:
-        with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, names)))) as copy:
-            for k, (chunks, geoid) in enumerate(zip(encoded, geoids)):
-                stream = to_copy(chunks, geoid, revision)
-                # one stream: the header once, the trailer once
-                copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
+    try:
+        with staged(conn, layout.relation, names) as into:
+            with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, names)))) as copy:
+                for k, (chunks, geoid) in enumerate(zip(encoded, geoids)):
+                    stream = to_copy(chunks, geoid, revision)
+                    # one stream: the header once, the trailer once
+                    copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
+    except psycopg.errors.UniqueViolation as exc:
+        # a concurrent upload of the same object in the same revision committed first (this one waited for it)
+        raise AlreadyExistsError(
+            f"objects {geoids} of tgsis.{table}_chunk were written meanwhile by another transaction",
+            detail=f"{(exc.diag.message_detail or '')[:300]}; nothing was written",
+        ) from exc
     if layout.versioned and revision != 0:
         conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, [str(g) for g in geoids]))
     return sum(len(c.chunk) for c in encoded)
