@@ -3,7 +3,7 @@
 The 1000 x 1000 grid of ``bench/transfer.py`` (1,000,000 vertices, 1,996,002
 triangles) in the spatial order (``tgsis.mesh.spatial_order``), vertices and
 triangles only: the property tables are not chunked yet. In one throwaway
-cluster (``TGSIS_PG``: system or embedded), plain (unversioned) storage:
+cluster (``TGSIS_PG``: system or embedded), plain storage unless ``--versioned``:
 
 - upload: ``upload_chunks`` of ``vrtx`` and ``trgl`` (numpy encode, one
   binary COPY per table, commit) into the tables of
@@ -18,9 +18,11 @@ cluster (``TGSIS_PG``: system or embedded), plain (unversioned) storage:
   ``bytea`` row's ``SELECT``.
 
 Each figure is the median of ``--repeat`` runs taken in turn; every path is
-checked bit-exact first. One ``name: value`` line per figure.
+checked bit-exact first. One ``name: value`` line per figure. ``--versioned``:
+versioned storage, in a working revision other than 0 (the uploads note
+their objects; the downloads filter by the session's set).
 
-    python bench/chunk_transfer.py [--side 1000] [--repeat 3]
+    python bench/chunk_transfer.py [--side 1000] [--repeat 3] [--versioned]
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ def copy_bytes(conn: Conn, query: sql.Composed) -> bytes:
 
 
 def union_query(conn: Conn, geoid: int) -> tuple[sql.Composed, dict[int, list[int]]]:
-    """One COPY of both tables' visible chunks: a tag (1 vertices, 2 triangles), ``chunk, holes``, then the
+    """One COPY of both tables' chunks (no visibility filter: every chunk of the bench is live): a tag (1 vertices, 2 triangles), ``chunk, holes``, then the
     vertex arrays, then the triangles' ``vbase`` and arrays, each table's fields NULL in the other's rows."""
     v, t = chunk_table(conn, "vrtx"), chunk_table(conn, "trgl")
     vcols, tcols = v.columns.select_columns()[2:], t.columns.select_columns()[2:]
@@ -104,6 +106,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument(
+        "--versioned", action="store_true", help="versioned storage, DEFAULT's working revision not 0 (notes written)"
+    )
     args = parser.parse_args()
 
     started = time.perf_counter()
@@ -115,6 +120,9 @@ def main() -> None:
 
     with bench_database() as conn:
         conn.autocommit = False
+        if args.versioned:
+            tgsis.enable_feature_versioning(conn)
+            tgsis.create_version(conn, "other")  # DEFAULT's working revision is no longer 0
         tgsis.create_feature_class(conn, "horizon", "SURFACE")
         conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_table('trgl')")
         conn.execute("CREATE TABLE public.bytea_row (id bigint PRIMARY KEY, vertices bytea, triangles bytea)")
@@ -124,6 +132,7 @@ def main() -> None:
         conn.commit()
         row = conn.execute("SELECT version()").fetchone()
         print(f"server version: {row[0].split(',')[0] if row else '?'}")
+        print(f"storage: {'versioned' if args.versioned else 'plain'}")
         geoids = iter(range(10**9, 10**9 + 10_000))
         features: list[int] = []
 
