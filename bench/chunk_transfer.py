@@ -13,7 +13,8 @@ cluster (``TGSIS_PG``: system or embedded), plain storage unless ``--versioned``
 - download, the (n, 3) vertices and (m, 3) corners built each time:
   ``download_tables`` (both tables' COPYs in one snapshot, one after the
   other); the two ideas of docs/storage.md: the two tables on two
-  connections side by side (no common snapshot), and one COPY of both tables
+  connections side by side (``side=``: the second imports the first's
+  snapshot), and one COPY of both tables
   joined by ``UNION ALL`` (split by a tag); today's ``fetch_feature``; the
   ``bytea`` row's ``SELECT``.
 
@@ -28,7 +29,6 @@ their objects; the downloads filter by the session's set).
 from __future__ import annotations
 
 import argparse
-import concurrent.futures
 import time
 from collections.abc import Callable
 from typing import Any
@@ -41,7 +41,7 @@ from transfer import grid_surface
 
 import tgsis
 from tgsis._chunks import from_copy
-from tgsis.db._chunk_transfer import ObjectRows, chunk_copy_query, chunk_table, download_tables, upload_chunks
+from tgsis.db._chunk_transfer import ObjectRows, chunk_table, download_tables, upload_chunks
 from tgsis.mesh import Surface, spatial_order
 
 Conn = psycopg.Connection[Any]
@@ -165,7 +165,6 @@ def main() -> None:
         other = psycopg.connect(conn.info.dsn, password=conn.info.password or None)
         vlayout, tlayout = chunk_table(conn, "vrtx"), chunk_table(conn, "trgl")
         conn.commit()
-        pool = concurrent.futures.ThreadPoolExecutor(1)
 
         def arrays(v: ObjectRows, t: ObjectRows) -> tuple[np.ndarray, np.ndarray]:
             return v.array(), t.array()
@@ -175,17 +174,8 @@ def main() -> None:
             return arrays(got["vrtx"][stored], got["trgl"][stored])
 
         def two_connections() -> tuple[np.ndarray, np.ndarray]:
-            def triangles() -> ObjectRows:
-                payload = copy_bytes(other, chunk_copy_query(tlayout, [stored]))
-                other.commit()
-                ids, cols = from_copy(payload, tlayout.columns).rows()
-                return ObjectRows(stored, ids, cols)
-
-            pending = pool.submit(triangles)
-            payload = copy_bytes(conn, chunk_copy_query(vlayout, [stored]))
-            conn.commit()
-            ids, cols = from_copy(payload, vlayout.columns).rows()
-            return arrays(ObjectRows(stored, ids, cols), pending.result())
+            got = download_tables(conn, {"vrtx": [stored], "trgl": [stored]}, side=other)
+            return arrays(got["vrtx"][stored], got["trgl"][stored])
 
         union, keep = union_query(conn, stored)
         conn.commit()
@@ -224,7 +214,6 @@ def main() -> None:
             assert np.array_equal(cells, surface.cells), down.__name__
         d_chunks, d_two, d_union, d_today, d_bytea = paired(list(downs), args.repeat)
         other.close()
-        pool.shutdown()
         conn.autocommit = True
         conn.execute("VACUUM ANALYZE tgsis.vrtx_chunk, tgsis.trgl_chunk")
         sizes = conn.execute(

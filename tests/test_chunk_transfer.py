@@ -391,12 +391,15 @@ def test_odd_session_settings_change_nothing(conn: Conn) -> None:
     assert conn.execute("SELECT current_setting('search_path')").fetchone() == ('""',)
 
 
-@pytest.mark.parametrize("inside", ["outside a transaction", "inside repeatable read", "inside read committed"])
+@pytest.mark.parametrize(
+    "inside", ["outside a transaction", "with a side connection", "inside repeatable read", "inside read committed"]
+)
 def test_tables_are_read_in_one_snapshot_while_a_writer_commits(
     db_dsn: str, conn: Conn, monkeypatch: pytest.MonkeyPatch, inside: str
 ) -> None:
-    """A writer commits a new object's vertices and triangles between the download's two COPYs: the download
-    sees both or neither, unless the caller's own READ COMMITTED transaction gives a snapshot per statement."""
+    """A writer commits a new object's vertices and triangles after the download's first statement: its COPYs
+    (on one connection, or one of them on a side connection) see neither, unless the caller's own READ COMMITTED
+    transaction gives a snapshot per statement."""
     make_chunks(conn)
     xyz, cells = grid(40)
     upload_chunks(conn, "vrtx", [ObjectRows(31, np.arange(1600), {c: xyz[:, i].copy() for i, c in enumerate("xyz")})])
@@ -411,7 +414,7 @@ def test_tables_are_read_in_one_snapshot_while_a_writer_commits(
         if connection is not reader:  # the writer's own uploads
             return real(connection, table)
         calls.append(table)
-        if table == "trgl":  # after the vertices' COPY, before the triangles'
+        if table == "trgl":  # after the download's first statement, before its COPYs
             upload_chunks(writer, "vrtx", [vertices(32, range(3))])
             upload_chunks(writer, "trgl", [triangles(32, [0], np.array([[0, 1, 2]]))])
             writer.commit()
@@ -424,21 +427,54 @@ def test_tables_are_read_in_one_snapshot_while_a_writer_commits(
         elif inside == "inside read committed":
             reader.execute("SELECT 1")
         monkeypatch.setattr(transfer, "chunk_table", chunk_table_then_a_writer)
-        got = download_tables(reader, {"vrtx": [31, 32], "trgl": [31, 32]})
+        # with a side connection: the triangles' COPY runs there, in the snapshot the reader exports to it
+        side = psycopg.connect(db_dsn) if inside == "with a side connection" else None
+        got = download_tables(reader, {"vrtx": [31, 32], "trgl": [31, 32]}, side=side)
+        if side is not None:
+            assert side.info.transaction_status == psycopg.pq.TransactionStatus.IDLE
+            side.close()
         monkeypatch.undo()
         assert calls == ["vrtx", "trgl"]
         assert len(got["vrtx"][31].ids) == 1600 and len(got["trgl"][31].ids) == len(cells)
-        assert len(got["vrtx"][32].ids) == 0  # begun before the writer's commit
-        if inside == "inside read committed":
-            assert len(got["trgl"][32].ids) == 1  # the caller's choice: a snapshot per statement
+        # the download's first statement (the tables' layouts) ran before the writer's commit, its COPYs after
+        if inside == "inside read committed":  # the caller's choice: a snapshot per statement
+            assert (len(got["vrtx"][32].ids), len(got["trgl"][32].ids)) == (3, 1)
         else:
-            assert len(got["trgl"][32].ids) == 0
+            assert (len(got["vrtx"][32].ids), len(got["trgl"][32].ids)) == (0, 0)
         reader.rollback()
         after = download_tables(reader, {"vrtx": [32], "trgl": [32]})
         assert len(after["vrtx"][32].ids) == 3 and len(after["trgl"][32].ids) == 1
     finally:
         reader.close()
         writer.close()
+
+
+def test_a_side_connection_reads_the_session_s_version_with_the_same_role(db_dsn: str, conn: Conn) -> None:
+    tgsis.enable_feature_versioning(conn)
+    make_chunks(conn)
+    upload_chunks(conn, "vrtx", [vertices(51, np.arange(1500), seed=1)])
+    upload_chunks(conn, "trgl", [triangles(51, np.arange(3), np.arange(9).reshape(3, 3))])
+    conn.commit()
+    tgsis.create_version(conn, "child")
+    tgsis.goto_version(conn, "child")
+    write_rows(conn, "trgl", [(51, 1, 7, 8, 9)], [(51, 0)])
+    conn.commit()
+    side = psycopg.connect(db_dsn)  # its session is in DEFAULT: the child's set is what it reads with
+    try:
+        got = download_tables(conn, {"vrtx": [51], "trgl": [51]}, side=side)
+        assert got["trgl"][51].array().tolist() == [[7, 8, 9], [6, 7, 8]]
+        assert_same(got["vrtx"][51], vertices(51, np.arange(1500), seed=1))
+        assert download_tables(side, {"trgl": [51]})["trgl"][51].array().tolist() == [[0, 1, 2], [3, 4, 5], [6, 7, 8]]
+        side.execute("SELECT 1")  # inside a transaction: refused
+        with pytest.raises(InvalidInputError):
+            download_tables(conn, {"vrtx": [51], "trgl": [51]}, side=side)
+        side.rollback()
+    finally:
+        side.close()
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        other = roles.connect("reader")  # another role: it would read with other rights
+        with pytest.raises(InvalidInputError):
+            download_tables(conn, {"vrtx": [51], "trgl": [51]}, side=other)
 
 
 def test_split_copy_refuses_what_is_not_a_stream_of_geoid_rows() -> None:

@@ -29,6 +29,7 @@ Private to ``tgsis.db``.
 
 from __future__ import annotations
 
+import concurrent.futures
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,7 +40,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis._chunks import CHUNK_SIZE, COPY_SIGNATURE, ChunkColumns, ChunkSet, encode, from_copy, to_copy
-from tgsis.db._transfer import Storage, one_snapshot, staged
+from tgsis.db._transfer import Storage, one_snapshot, read_only_snapshot, staged
 from tgsis.errors import AlreadyExistsError, InvalidInputError, NotFoundError
 
 __all__ = [
@@ -228,30 +229,39 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
     return sum(len(c.chunk) for c in encoded)
 
 
-def _visible(layout: ChunkTable) -> sql.Composable:
-    """The session's visibility test of chunk versions (today's versioned views'), or none when unversioned."""
+def _visible(layout: ChunkTable, revisions: Sequence[int] | None = None) -> sql.Composable:
+    """The session's visibility test of chunk versions (today's versioned views'), or none when unversioned.
+
+    ``revisions``: the set to test with (the session's ``tgsis.get_revisions(true)`` read beforehand), for a
+    statement run on another connection, whose session may be in another version.
+    """
     if not layout.versioned:
         return sql.SQL("true")
+    if revisions is not None:
+        return sql.SQL("(c.revision = ANY ({set})) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && {set}))").format(
+            set=sql.SQL("{}::integer[]").format(sql.Literal([int(r) for r in revisions]))
+        )
     return sql.SQL(
         "(c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
         "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
     )
 
 
-def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int]) -> sql.Composed:
+def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int], revisions: Sequence[int] | None = None) -> sql.Composed:
     """The COPY of the visible chunk versions of ``geoids``: their columns for :func:`~tgsis._chunks.from_copy`.
 
     For one object the stream is :func:`from_copy`'s as it is; for several, each row starts with
-    ``geoid`` (rows in no order), which :func:`split_copy` takes off.
+    ``geoid`` (rows in no order), which :func:`split_copy` takes off. ``revisions``: the set of
+    :func:`_visible` (default: the session's).
     """
     columns = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in layout.columns.select_columns())
     if len(geoids) == 1:
         select = sql.SQL("SELECT {} FROM {} c WHERE c.geoid = {} AND {}").format(
-            columns, layout.relation, sql.Literal(int(geoids[0])), _visible(layout)
+            columns, layout.relation, sql.Literal(int(geoids[0])), _visible(layout, revisions)
         )
     else:
         select = sql.SQL("SELECT c.geoid, {} FROM {} c WHERE c.geoid = ANY ({}::bigint[]) AND {}").format(
-            columns, layout.relation, sql.Literal([int(g) for g in geoids]), _visible(layout)
+            columns, layout.relation, sql.Literal([int(g) for g in geoids]), _visible(layout, revisions)
         )
     return sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(select)
 
@@ -343,20 +353,70 @@ def download_chunks(conn: Conn, table: str, geoids: Sequence[int]) -> dict[int, 
     return download_tables(conn, {table: geoids})[table]
 
 
-def download_tables(conn: Conn, requests: Mapping[str, Sequence[int]]) -> dict[str, dict[int, ObjectRows]]:
+def download_tables(
+    conn: Conn, requests: Mapping[str, Sequence[int]], side: Conn | None = None
+) -> dict[str, dict[int, ObjectRows]]:
     """:func:`download_chunks` of several tables, one COPY each, all in one snapshot (:func:`one_snapshot`).
 
     Outside a transaction the COPYs run in one ``REPEATABLE READ READ ONLY`` transaction: a writer that
     commits between them is seen by none or all of them. Inside the caller's, they see what its isolation
     level gives.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    requests : mapping of str to sequence of int
+        The geoids to read of each table.
+    side : psycopg.Connection, optional
+        A second connection of the same role, outside a transaction: the last table's COPY runs on it,
+        side by side with the others (bench/chunk_transfer.py measures what that gains), in the snapshot
+        ``conn`` exports to it (``pg_export_snapshot``) and with ``conn``'s session's set of revisions.
+        Used only when ``conn`` is outside a transaction too (a snapshot is not exported from a savepoint)
+        and more than one table is asked; else everything runs on ``conn``.
+
+    Raises
+    ------
+    InvalidInputError
+        ``side`` logs in as another role than ``conn``, or is inside a transaction.
     """
+    wanted = {table: list(dict.fromkeys(int(g) for g in geoids)) for table, geoids in requests.items()}
+    idle = psycopg.pq.TransactionStatus.IDLE
+    parallel = side is not None and len(wanted) > 1 and conn.info.transaction_status == idle
     result: dict[str, dict[int, ObjectRows]] = {}
-    with one_snapshot(conn):
-        for table, geoids in requests.items():
-            layout = chunk_table(conn, table)
-            wanted = list(dict.fromkeys(int(g) for g in geoids))
-            if not wanted:
-                result[table] = {}
-                continue
-            result[table] = _objects(layout, wanted, _copy_out(conn, chunk_copy_query(layout, wanted)))
-    return result
+    with one_snapshot(conn), concurrent.futures.ThreadPoolExecutor(1) as pool:
+        layouts = {table: chunk_table(conn, table) for table in wanted}
+        pending = None
+        if parallel and side is not None:
+            row = conn.execute("SELECT pg_export_snapshot(), current_user::text, tgsis.get_revisions(true)").fetchone()
+            assert row is not None
+            snapshot, role, revisions = row
+            last = list(wanted)[-1]
+            pending = pool.submit(_side_copy, side, snapshot, role, layouts[last], wanted[last], revisions)
+            wanted = {table: geoids for table, geoids in wanted.items() if table != last}
+        for table, geoids in wanted.items():
+            layout = layouts[table]
+            result[table] = (
+                _objects(layout, geoids, _copy_out(conn, chunk_copy_query(layout, geoids))) if geoids else {}
+            )
+        if pending is not None:
+            table, payload, geoids = pending.result()
+            result[table] = _objects(layouts[table], geoids, payload) if geoids else {}
+    return {table: result[table] for table in requests}
+
+
+def _side_copy(
+    side: Conn, snapshot: str, role: str, layout: ChunkTable, geoids: list[int], revisions: Sequence[int]
+) -> tuple[str, bytes, list[int]]:
+    """One table's COPY on the second connection of :func:`download_tables`, in the snapshot it was given."""
+    if side.info.transaction_status != psycopg.pq.TransactionStatus.IDLE:
+        raise InvalidInputError("the second connection of a download is inside a transaction")
+    with read_only_snapshot(side):
+        side.execute(sql.SQL("SET TRANSACTION SNAPSHOT {}").format(sql.Literal(snapshot)))
+        row = side.execute("SELECT current_user::text").fetchone()
+        if row is None or row[0] != role:
+            raise InvalidInputError(
+                f"the second connection of a download logs in as {row[0] if row else None!r}, not as {role!r}",
+                detail="it would read with another role's rights",
+            )
+        payload = _copy_out(side, chunk_copy_query(layout, geoids, revisions)) if geoids else b""
+    return layout.table, payload, geoids
